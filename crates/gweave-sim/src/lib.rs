@@ -1,0 +1,1 @@
+//! The gweave virtual printer.

@@ -1,0 +1,1 @@
+//! gweave: a lossless, streaming G-code engine for unconventional 3D printers.
