@@ -13,10 +13,7 @@ pub struct Span {
 
 impl Span {
     pub fn new(start: usize, end: usize) -> Self {
-        Span {
-            start: start as u32,
-            end: end as u32,
-        }
+        Span { start: start as u32, end: end as u32 }
     }
 
     /// The bytes this span covers in `raw`.
@@ -32,11 +29,7 @@ pub enum Command {
     #[default]
     None,
     /// A letter-number command: `G1`, `M104`, `T2`, `G29.1` (`sub` = 1).
-    Code {
-        letter: u8,
-        number: u32,
-        sub: Option<u32>,
-    },
+    Code { letter: u8, number: u32, sub: Option<u32> },
     /// A Klipper/RepRapFirmware extended command such as `SET_VELOCITY_LIMIT` or `echo`; its
     /// arguments are kept as text in [`Block::text`].
     Extended,
@@ -59,11 +52,7 @@ impl Command {
     #[inline]
     pub fn tool(&self) -> Option<u32> {
         match self {
-            Command::Code {
-                letter: b'T',
-                number,
-                sub: None,
-            } => Some(*number),
+            Command::Code { letter: b'T', number, sub: None } => Some(*number),
             _ => None,
         }
     }
