@@ -148,7 +148,8 @@ pub fn drive_reader(
         }
         state.apply(line.bytes, &block);
         let offset = line.offset;
-        pass.line(&Ctx { line, block: &block, effect: &state.effect, state: &state }, out).map_err(write_err)?;
+        pass.line(&Ctx { line, block: &block, effect: &state.effect, state: &state }, out)
+            .map_err(write_err)?;
         if offset >= next_report {
             progress.advance(offset);
             next_report = offset + (4 << 20);

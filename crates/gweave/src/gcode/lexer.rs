@@ -223,7 +223,7 @@ fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
             }
         },
     };
-    block.words.push(Word { letter, value, span: Span::new(start, end) });
+    block.push_word(Word { letter, value, span: Span::new(start, end) });
     end
 }
 

@@ -127,6 +127,8 @@ pub struct Block {
     /// A `%` tape marker line.
     pub tape_marker: bool,
     pub diagnostics: Vec<Diagnostic>,
+    /// For each letter A..=Z, 1 + the index of its last word (0: absent), so lookups are O(1).
+    by_letter: [u8; 26],
 }
 
 impl Block {
@@ -141,12 +143,27 @@ impl Block {
         self.block_delete = false;
         self.tape_marker = false;
         self.diagnostics.clear();
+        self.by_letter = [0; 26];
+    }
+
+    /// Appends a word, keeping the letter index.
+    #[inline]
+    pub(crate) fn push_word(&mut self, word: Word) {
+        if let Some(slot) = self.by_letter.get_mut(word.letter.wrapping_sub(b'A') as usize) {
+            *slot = u8::try_from(self.words.len() + 1).unwrap_or(0);
+        }
+        self.words.push(word);
     }
 
     /// The word with this (upper-case) letter, if present. The last one wins, as in firmware.
     #[inline]
     pub fn word(&self, letter: u8) -> Option<&Word> {
-        self.words.iter().rev().find(|w| w.letter == letter)
+        match self.by_letter.get(letter.wrapping_sub(b'A') as usize) {
+            Some(&0) if self.words.len() < usize::from(u8::MAX) => None,
+            Some(&i) if i > 0 => self.words.get(usize::from(i) - 1),
+            // Past 254 words the index is full: search.
+            _ => self.words.iter().rev().find(|w| w.letter == letter),
+        }
     }
 
     /// The numeric value of a word, if present and numeric.
@@ -158,7 +175,7 @@ impl Block {
     /// Whether the letter is present at all (with or without a value).
     #[inline]
     pub fn has(&self, letter: u8) -> bool {
-        self.words.iter().any(|w| w.letter == letter)
+        self.word(letter).is_some()
     }
 
     /// The comment text (after `;`), from the raw line this block was parsed from.

@@ -29,28 +29,19 @@ pub enum NumberError {
 /// number (the `e` is then the next word's letter, as firmware reads it).
 #[inline]
 pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
-    let (negative, mut i) = match bytes.first() {
+    let (negative, start) = match bytes.first() {
         Some(b'-') => (true, 1),
         Some(b'+') => (false, 1),
         _ => (false, 0),
     };
-    // Up to 19 digits fit a u64 without overflow; more take the slow path below.
     let mut mantissa: u64 = 0;
-    let int_start = i;
-    while let Some(d) = bytes.get(i).map(|b| b.wrapping_sub(b'0')).filter(|d| *d < 10) {
-        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-        i += 1;
-    }
-    let int_digits = i - int_start;
+    let int_digits = digits(&bytes[start..], &mut mantissa);
+    let mut i = start + int_digits;
     let mut frac_digits = 0;
     if bytes.get(i) == Some(&b'.') {
         i += 1;
-        let frac_start = i;
-        while let Some(d) = bytes.get(i).map(|b| b.wrapping_sub(b'0')).filter(|d| *d < 10) {
-            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-            i += 1;
-        }
-        frac_digits = i - frac_start;
+        frac_digits = digits(&bytes[i..], &mut mantissa);
+        i += frac_digits;
     }
     if int_digits + frac_digits == 0 {
         return Err(no_digits(&bytes[i..], i > 0 || bytes.first() == Some(&b'.')));
@@ -59,14 +50,48 @@ pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
     if matches!(bytes.get(i), Some(b'.' | b'+' | b'-')) {
         return Err(NumberError::Malformed);
     }
-    let value = if int_digits + frac_digits <= 15 {
-        // Fewer than 16 digits: the mantissa is below 2^53 and exact; one division rounds.
-        mantissa as f64 / POW10[frac_digits]
-    } else {
-        // Slow path: more significant digits than a double holds. Let std round it correctly.
-        let text = std::str::from_utf8(&bytes[int_start..i]).map_err(|_| NumberError::Malformed)?;
-        text.parse::<f64>().map_err(|_| NumberError::Malformed)?
-    };
+    if int_digits + frac_digits > 15 {
+        return scan_slow(bytes, negative, start);
+    }
+    // At most 15 digits: the mantissa is below 2^53, exact, and one division rounds correctly.
+    let value = (mantissa as i64) as f64 / POW10[frac_digits];
+    Ok((if negative { -value } else { value }, i))
+}
+
+/// Accumulates the leading ASCII digits of `bytes` into `mantissa` (wrapping: callers with more
+/// than 15 digits take the slow path) and returns how many there were.
+#[inline]
+fn digits(bytes: &[u8], mantissa: &mut u64) -> usize {
+    let mut n = 0;
+    for &b in bytes {
+        let d = b.wrapping_sub(b'0');
+        if d >= 10 {
+            break;
+        }
+        *mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+        n += 1;
+    }
+    n
+}
+
+/// Numbers with long digit runs: let std round them correctly.
+#[cold]
+fn scan_slow(bytes: &[u8], negative: bool, start: usize) -> Result<(f64, usize), NumberError> {
+    let mut i = start;
+    while bytes.get(i).is_some_and(u8::is_ascii_digit) {
+        i += 1;
+    }
+    if bytes.get(i) == Some(&b'.') {
+        i += 1;
+        while bytes.get(i).is_some_and(u8::is_ascii_digit) {
+            i += 1;
+        }
+    }
+    if matches!(bytes.get(i), Some(b'.' | b'+' | b'-')) {
+        return Err(NumberError::Malformed);
+    }
+    let text = std::str::from_utf8(&bytes[start..i]).map_err(|_| NumberError::Malformed)?;
+    let value: f64 = text.parse().map_err(|_| NumberError::Malformed)?;
     Ok((if negative { -value } else { value }, i))
 }
 
@@ -210,7 +235,37 @@ mod tests {
         assert_eq!(out, b"E-.4");
     }
 
+    #[test]
+    fn digit_runs_of_every_length() {
+        for int_len in 0..12 {
+            for frac_len in 0..12 {
+                if int_len + frac_len == 0 {
+                    continue;
+                }
+                let int: String = (0..int_len).map(|k| char::from(b'1' + (k % 9) as u8)).collect();
+                let frac: String = (0..frac_len).map(|k| char::from(b'9' - (k % 9) as u8)).collect();
+                for text in [format!("{int}.{frac} "), format!("-{int}.{frac}X"), format!("{int}.{frac}")] {
+                    let body = text.trim_end_matches([' ', 'X']);
+                    let expected: f64 = body.parse().unwrap();
+                    assert_eq!(scan(text.as_bytes()), Ok((expected, body.len())), "{text:?}");
+                }
+            }
+        }
+    }
+
     proptest::proptest! {
+        #[test]
+        fn scan_matches_std_for_any_decimal(text in "[+-]?[0-9]{0,20}(\\.[0-9]{0,20})?") {
+            let digits = text.bytes().filter(u8::is_ascii_digit).count();
+            let result = scan(text.as_bytes());
+            if digits == 0 {
+                proptest::prop_assert!(result.is_err());
+            } else {
+                let expected: f64 = text.trim_start_matches('+').parse().unwrap();
+                proptest::prop_assert_eq!(result, Ok((expected, text.len())));
+            }
+        }
+
         #[test]
         fn scan_matches_std_for_plain_decimals(int in 0u32..100000, frac in 0u32..100000, neg: bool) {
             let text = format!("{}{}.{:05}", if neg { "-" } else { "" }, int, frac);

@@ -413,9 +413,7 @@ impl State {
         let mut to = from;
         let mut any = false;
         for w in &block.words {
-            let Some(i) = AXIS_LETTERS.iter().position(|&l| l == w.letter) else {
-                continue;
-            };
+            let Some(i) = axis_of(w.letter) else { continue };
             let Value::Number(v) = w.value else { continue };
             let v = self.to_mm(v);
             let relative = if i == E { self.relative_e() } else { !self.absolute };
