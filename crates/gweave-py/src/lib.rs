@@ -1,1 +1,211 @@
-//! Python bindings for gweave.
+//! Python bindings for gweave: one module, thin wrappers over the engine. Reports cross as JSON
+//! text (the same documents `--json` prints) and become dicts in `gweave/__init__.py`.
+
+use std::fs::File;
+use std::path::PathBuf;
+
+use gweave::check::{CheckOptions, CheckPass};
+use gweave::gcode::lexer::parse_into;
+use gweave::gcode::line::{Block, Command, Value};
+use gweave::gcode::reader::LineReader;
+use gweave::gcode::state::{Effect, State, E, X, Y, Z};
+use gweave::gcode::writer::Target;
+use gweave::pass::{Identity, Quiet, Run};
+use gweave::stats::StatsPass;
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+fn err(e: gweave::Error) -> PyErr {
+    match e {
+        gweave::Error::Io { .. } => PyOSError::new_err(e.to_string()),
+        _ => PyValueError::new_err(e.to_string()),
+    }
+}
+
+fn to_json<T: serde::Serialize>(value: &T) -> PyResult<String> {
+    serde_json::to_string(value).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// Statistics of a G-code file as JSON text (see `gweave stats --json`).
+#[pyfunction]
+#[pyo3(signature = (path, *, filament_diameter=None))]
+fn stats_json(py: Python<'_>, path: PathBuf, filament_diameter: Option<f64>) -> PyResult<String> {
+    let stats = py.allow_threads(|| {
+        let mut pass = StatsPass::new(filament_diameter);
+        let state = Run::new(&path, &mut Quiet).scan(&mut pass)?;
+        Ok::<_, gweave::Error>(pass.into_stats(&state))
+    });
+    to_json(&stats.map_err(err)?)
+}
+
+/// Lint report of a G-code file as JSON text (see `gweave check --json`).
+#[pyfunction]
+#[pyo3(signature = (path, *, bed=None, max_feed=None))]
+fn check_json(py: Python<'_>, path: PathBuf, bed: Option<[f64; 3]>, max_feed: Option<f64>) -> PyResult<String> {
+    let mut options = CheckOptions { bed_mm: bed, ..CheckOptions::default() };
+    if let Some(f) = max_feed {
+        options.max_feed_mm_min = f;
+    }
+    let report = py.allow_threads(|| {
+        let mut pass = CheckPass::new(options);
+        let mut quiet = Quiet;
+        let mut run = Run::new(&path, &mut quiet);
+        run.strictness = gweave::pass::Strictness::Lenient;
+        run.scan(&mut pass)?;
+        Ok::<_, gweave::Error>(pass.report)
+    });
+    to_json(&report.map_err(err)?)
+}
+
+/// Parse a file and write it back unchanged (atomically); `output=None` with `in_place=True`
+/// replaces the input, keeping `<path>.bak` unless `backup=False`.
+#[pyfunction]
+#[pyo3(signature = (path, output=None, *, in_place=false, backup=true))]
+fn cat(py: Python<'_>, path: PathBuf, output: Option<PathBuf>, in_place: bool, backup: bool) -> PyResult<()> {
+    let target = match (output, in_place) {
+        (_, true) => Target::InPlace { keep_backup: backup },
+        (Some(p), false) => Target::File(p),
+        (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
+    };
+    py.allow_threads(|| Run::new(&path, &mut Quiet).transform(&mut Identity, &target).map(|_| ())).map_err(err)
+}
+
+/// One line of a file, with what it says and the machine state after it.
+#[pyclass(frozen, get_all, module = "gweave")]
+struct Line {
+    /// 1-based line number.
+    number: u64,
+    /// The line's bytes without its line ending.
+    raw: Vec<u8>,
+    /// `"G1"`, `"M104"`, `"T0"`, an extended command name, or None.
+    command: Option<String>,
+    /// Parameter words: letter -> number (float), None for a bare letter, or str for strings.
+    words: Py<PyDict>,
+    /// Text after `;`, or None.
+    comment: Option<String>,
+    /// The string argument of `M117` and the like, or an extended command's arguments.
+    text: Option<String>,
+    /// Diagnostics as (column, message) pairs.
+    diagnostics: Vec<(u32, String)>,
+    /// Position after the line: (x, y, z, e), mm.
+    position: (f64, f64, f64, f64),
+    /// Filament this line fed, mm (negative for a retraction).
+    extruded: f64,
+    /// True when the line moves the head.
+    is_move: bool,
+    tool: u32,
+    /// 0-based layer index, or None before the first layer.
+    layer: Option<u32>,
+    /// Z of the current layer, mm.
+    layer_z: f64,
+    /// Feature type name (`outer_wall`, `infill`, ...).
+    feature: &'static str,
+    /// `start`, `print` or `end`.
+    region: &'static str,
+}
+
+#[pymethods]
+impl Line {
+    fn __repr__(&self) -> String {
+        format!("<gweave.Line {}: {:?}>", self.number, String::from_utf8_lossy(&self.raw))
+    }
+}
+
+/// Iterates a file's lines with parsed words and machine state; memory stays bounded.
+#[pyclass(module = "gweave")]
+struct Reader {
+    lines: LineReader<File>,
+    block: Block,
+    state: State,
+}
+
+#[pymethods]
+impl Reader {
+    #[new]
+    fn new(path: PathBuf) -> PyResult<Self> {
+        let file = File::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        Ok(Reader { lines: LineReader::new(file), block: Block::default(), state: State::default() })
+    }
+
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__(&mut self, py: Python<'_>) -> PyResult<Option<Line>> {
+        let Some(line) = self.lines.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? else {
+            return Ok(None);
+        };
+        let raw = line.bytes;
+        parse_into(raw, &mut self.block);
+        let effect = *self.state.apply(raw, &self.block);
+        let b = &self.block;
+        let words = PyDict::new(py);
+        for w in &b.words {
+            let key = (w.letter as char).to_string();
+            match w.value {
+                Value::Number(v) => words.set_item(key, v)?,
+                Value::Text(s) | Value::Expr(s) => words.set_item(key, String::from_utf8_lossy(s.of(raw)))?,
+                Value::Empty | Value::Invalid => words.set_item(key, py.None())?,
+            }
+        }
+        let lossy = |s: &[u8]| String::from_utf8_lossy(s).into_owned();
+        let command = match b.command {
+            Command::None => None,
+            _ => Some(lossy(b.command_span.of(raw)).to_ascii_uppercase()),
+        };
+        let extruded = match effect {
+            Effect::Move(m) => m.e_mm(),
+            Effect::FirmwareRetract { e_mm } => e_mm,
+            _ => 0.0,
+        };
+        let s = &self.state;
+        Ok(Some(Line {
+            number: line.number,
+            raw: raw.to_vec(),
+            command,
+            words: words.unbind(),
+            comment: b.comment_text(raw).map(lossy),
+            text: b.text_of(raw).map(lossy),
+            diagnostics: b.diagnostics.iter().map(|d| (d.column, d.finding.to_string())).collect(),
+            position: (s.pos[X], s.pos[Y], s.pos[Z], s.pos[E]),
+            extruded,
+            is_move: matches!(effect, Effect::Move(_)),
+            tool: s.tool,
+            layer: s.structure.layer,
+            layer_z: s.structure.layer_z_mm,
+            feature: s.structure.feature.name(),
+            region: match s.structure.region {
+                gweave::gcode::layers::Region::Start => "start",
+                gweave::gcode::layers::Region::Print => "print",
+                gweave::gcode::layers::Region::End => "end",
+            },
+        }))
+    }
+}
+
+/// Runs the `gweave` command line with these arguments (argv[0] included); returns the exit code.
+#[pyfunction]
+fn run_cli(py: Python<'_>, argv: Vec<String>) -> i32 {
+    let code = py.allow_threads(|| gweave_cli::run(argv));
+    // ExitCode is opaque; the CLI only returns SUCCESS, FAILURE (1) or usage errors (2).
+    if code == std::process::ExitCode::SUCCESS {
+        0
+    } else if code == std::process::ExitCode::from(2) {
+        2
+    } else {
+        1
+    }
+}
+
+#[pymodule]
+fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(stats_json, m)?)?;
+    m.add_function(wrap_pyfunction!(check_json, m)?)?;
+    m.add_function(wrap_pyfunction!(cat, m)?)?;
+    m.add_function(wrap_pyfunction!(run_cli, m)?)?;
+    m.add_class::<Line>()?;
+    m.add_class::<Reader>()?;
+    Ok(())
+}

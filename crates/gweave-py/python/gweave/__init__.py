@@ -1,0 +1,83 @@
+"""gweave: a G-code workbench for mixing hotends, rotary printers and binder jetting.
+
+The engine is Rust; this package is a thin, typed layer over it. Reports are plain dicts with
+the same fields as the command line's ``--json`` output.
+
+Example::
+
+    import gweave
+    s = gweave.stats("part.gcode")
+    print(s["layers"], [t["extruded_mm"] for t in s["filament"]])
+    for line in gweave.read("part.gcode"):
+        if line.is_move and line.extruded > 0:
+            print(line.layer, line.position)
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Dict, Optional, Sequence, Union
+
+from . import _gweave
+from ._gweave import Line, Reader
+
+__version__: str = _gweave.__version__
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+__all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
+
+
+def read(path: PathLike) -> Reader:
+    """Iterate a G-code file's lines, each with its parsed words and the machine state after it.
+
+    Memory stays bounded whatever the file size.
+    """
+    return Reader(os.fspath(path))
+
+
+def stats(path: PathLike, *, filament_diameter: Optional[float] = None) -> Dict[str, Any]:
+    """Statistics of a G-code file: slicer, layers, extents, filament per tool, distances, time.
+
+    ``filament_diameter`` (mm) overrides the file's own setting.
+    """
+    return json.loads(_gweave.stats_json(os.fspath(path), filament_diameter=filament_diameter))
+
+
+def check(
+    path: PathLike,
+    *,
+    bed: Optional[Sequence[float]] = None,
+    max_feed: Optional[float] = None,
+) -> Dict[str, Any]:
+    """Lint a G-code file. ``bed`` is the printable volume ``(x, y, z)`` in mm; ``max_feed`` in mm/min.
+
+    The report has ``errors``, ``warnings`` and ``findings`` (line, column, kind, severity).
+    """
+    bed_tuple = None if bed is None else (float(bed[0]), float(bed[1]), float(bed[2]))
+    return json.loads(_gweave.check_json(os.fspath(path), bed=bed_tuple, max_feed=max_feed))
+
+
+def cat(
+    path: PathLike,
+    output: Optional[PathLike] = None,
+    *,
+    in_place: bool = False,
+    backup: bool = True,
+) -> None:
+    """Parse a file and write it back unchanged, atomically (the identity every transform builds on)."""
+    _gweave.cat(
+        os.fspath(path),
+        None if output is None else os.fspath(output),
+        in_place=in_place,
+        backup=backup,
+    )
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the ``gweave`` command line (the same binary as the Rust CLI)."""
+    import sys
+
+    args = list(sys.argv if argv is None else ["gweave", *argv])
+    return _gweave.run_cli(args)

@@ -1,0 +1,85 @@
+"""The core through Python: the same numbers as the Rust tests, from real slicer files."""
+
+import filecmp
+import subprocess
+import sys
+
+import pytest
+
+import gweave
+
+
+def test_stats_match_prusaslicer_figures(data):
+    s = gweave.stats(data / "prusaslicer" / "pr_bunny_3tool_rel.gcode")
+    assert s["slicer"] == "prusaslicer"
+    assert s["layers"] == 535
+    assert s["tool_changes"] == 793
+    ours = [t["extruded_mm"] for t in s["filament"]]
+    theirs = s["slicer_figures"]["filament_used_mm"]
+    assert theirs == [10979.45, 20959.92, 1594.45]
+    for a, b in zip(ours, theirs):
+        assert abs(a - b) <= b * 1e-4
+    assert s["filament_diameter_mm"] == 1.75
+
+
+def test_read_gives_words_and_state(data):
+    lines = list(gweave.read(data / "cura" / "cura_torus.gcode"))
+    assert len(lines) == 18808
+    first_layer = next(l for l in lines if l.comment == "LAYER:0")
+    assert first_layer.layer == 0 and first_layer.region == "print"
+    moves = [l for l in lines if l.is_move and l.extruded > 0 and l.layer == 0]
+    assert moves and all(abs(l.position[2] - 0.3) < 1e-9 for l in moves)
+    g1 = next(l for l in lines if l.command == "G1" and "X" in l.words)
+    assert isinstance(g1.words["X"], float)
+    assert lines[-1].region == "end"
+    outer = {l.feature for l in lines if l.layer == 3 and l.is_move}
+    assert outer == {"inner_wall", "outer_wall", "solid_infill"}
+
+
+def test_words_strings_and_diagnostics(tmp_path):
+    p = tmp_path / "odd.gcode"
+    p.write_bytes(b'M291 P"Hello" S2\nG1 X1..2 Y3\nM117 Printing now ; c\n')
+    lines = list(gweave.read(p))
+    assert lines[0].words == {"P": "Hello", "S": 2.0}
+    assert lines[1].diagnostics == [(5, "malformed number after 'X'")]
+    assert lines[1].words["Y"] == 3.0 and lines[1].words["X"] is None
+    assert lines[2].text == "Printing now" and lines[2].comment == " c"
+
+
+def test_cat_is_byte_exact_and_never_overwrites_input(data, tmp_path):
+    src = data / "slic3r" / "slic3r_cone_2tool.gcode"
+    out = tmp_path / "copy.gcode"
+    gweave.cat(src, out)
+    assert filecmp.cmp(src, out, shallow=False)
+    with pytest.raises(ValueError, match="refusing to overwrite"):
+        gweave.cat(out, out)
+
+
+def test_check_reports_line_and_column(tmp_path):
+    p = tmp_path / "bad.gcode"
+    p.write_bytes(b"M104 S200\nG1 X10 Y10 F1800\nN7 G1 X5*99\nG1 X500 E1\n")
+    report = gweave.check(p, bed=(200, 200, 200))
+    kinds = [(f["line"], f["column"], f["kind"]) for f in report["findings"]]
+    assert (3, 9, "checksum_mismatch") in kinds
+    assert (4, 4, "outside_bed") in kinds
+    assert report["errors"] == 1
+
+
+def test_bad_input_is_a_clear_error_and_no_output(tmp_path):
+    p = tmp_path / "bad.gcode"
+    p.write_bytes(b"G1 X1\nG1 Y2..3\n")
+    out = tmp_path / "out.gcode"
+    with pytest.raises(ValueError, match=r"bad.gcode:2:5: malformed number after 'Y'"):
+        gweave.cat(p, out)
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == [p]
+
+
+def test_console_script_is_the_rust_cli(data, tmp_path):
+    src = data / "prusaslicer" / "pr_torus_pva.gcode"
+    r = subprocess.run([sys.executable, "-m", "gweave", "stats", str(src), "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert '"layers": 28' in r.stdout
+    r = subprocess.run([sys.executable, "-m", "gweave", "check", str(tmp_path / "missing.gcode")], capture_output=True, text=True)
+    assert r.returncode == 1 and "missing.gcode" in r.stderr
+    assert gweave.main(["--version"]) == 0
