@@ -1,1 +1,3 @@
 //! The gweave virtual printer.
+pub mod heater;
+pub mod thermistor;
