@@ -26,13 +26,22 @@
 //!
 //! which [`Heater::step`] uses, so any `dt` is stable.
 //!
-//! # The sensor
+//! # The two lags
 //!
-//! A thermistor pressed into the block lags it; we model that as a
-//! first-order low-pass with time constant `sensor_lag_s`:
-//! `tau dTs/dt = T - Ts`, stepped as `Ts += (T - Ts)(1 - exp(-dt/tau))`.
-//! The lag is what makes a relay (bang-bang) loop oscillate with a finite
-//! period, which M303 autotune measures.
+//! Heat made in the cartridge core reaches the block only after warming the
+//! core itself, and the thermistor pressed into the block lags the block.
+//! Both are modelled as first-order low-passes, `tau dy/dt = x - y`, stepped
+//! exactly for a held input as `y += (x - y)(1 - exp(-dt/tau))`:
+//!
+//! * `heater_lag_s`: the heat flow into the block follows `u P`;
+//! * `sensor_lag_s`: the sensor temperature follows `T`.
+//!
+//! With the block's own time constant `C/k` this makes a third-order plant
+//! whose phase reaches -180 degrees at a finite frequency, so a relay
+//! (bang-bang) loop oscillates with the finite period M303 measures: for
+//! `C/k` much longer than the lags, the phase condition
+//! `atan(w tau_h) + atan(w tau_s) = 90 deg` gives `w = 1/sqrt(tau_h tau_s)`,
+//! a period `Tu ~ 2 pi sqrt(tau_h tau_s)`.
 //!
 //! # Faults
 //!
@@ -97,6 +106,10 @@ pub struct HeaterConfig {
     /// Ambient (and initial) temperature, C.
     #[serde(default = "default_ambient_c")]
     pub ambient_c: f64,
+    /// Lag of the heat flow behind the electrical power (first-order time
+    /// constant of the cartridge core or heater pad), s; 0 for none.
+    #[serde(default)]
+    pub heater_lag_s: f64,
     /// Thermistor lag behind the block (first-order time constant), s;
     /// 0 for none.
     #[serde(default)]
@@ -115,7 +128,10 @@ impl HeaterConfig {
     /// * `loss_w_k = 0.1`: ~18.5 W hold 210 C in still air, so full power
     ///   settles near 425 C and a cold start reaches 200 C in about 70 s;
     /// * `fan_loss_w_k = 0.05`: the part fan at 100 % costs ~9 W at 210 C;
-    /// * `sensor_lag_s = 2`: a cartridge thermistor in a bore.
+    /// * `heater_lag_s = 5`, `sensor_lag_s = 3`: cartridge core and
+    ///   thermistor bore; relay period `2 pi sqrt(15) ~ 24 s`, in the range
+    ///   of M303 logs from real hotends.
+    /// * Cold start to 200 C at full power: about 77 s.
     pub fn hotend_40w() -> Self {
         Self {
             power_w: 40.0,
@@ -123,7 +139,8 @@ impl HeaterConfig {
             loss_w_k: 0.1,
             fan_loss_w_k: 0.05,
             ambient_c: default_ambient_c(),
-            sensor_lag_s: 2.0,
+            heater_lag_s: 5.0,
+            sensor_lag_s: 3.0,
         }
     }
 
@@ -132,7 +149,8 @@ impl HeaterConfig {
     /// * `heat_capacity_j_k = 600`: ~0.45 kg of aluminium plus the sheet;
     /// * `loss_w_k = 1.5`: ~52 W hold 60 C, full power settles near 158 C;
     ///   60 C is reached in about two minutes, 100 C in about five and a half;
-    /// * `sensor_lag_s = 4`: a thermistor glued under the plate.
+    /// * `heater_lag_s = 2`, `sensor_lag_s = 3`: heater pad and a thermistor
+    ///   glued under the plate; relay period ~15 s.
     pub fn bed_200w() -> Self {
         Self {
             power_w: 200.0,
@@ -140,14 +158,15 @@ impl HeaterConfig {
             loss_w_k: 1.5,
             fan_loss_w_k: 0.0,
             ambient_c: default_ambient_c(),
-            sensor_lag_s: 4.0,
+            heater_lag_s: 2.0,
+            sensor_lag_s: 3.0,
         }
     }
 
     /// Check ranges: power, capacity and loss positive; fan loss and lag
     /// non-negative; ambient above absolute zero. All finite.
     pub fn validate(&self) -> Result<(), HeaterError> {
-        let checks: [(&'static str, f64, bool, &'static str); 6] = [
+        let checks: [(&'static str, f64, bool, &'static str); 7] = [
             ("power_w", self.power_w, self.power_w > 0.0, "> 0"),
             (
                 "heat_capacity_j_k",
@@ -167,6 +186,12 @@ impl HeaterConfig {
                 self.ambient_c,
                 self.ambient_c > -273.15,
                 "> -273.15",
+            ),
+            (
+                "heater_lag_s",
+                self.heater_lag_s,
+                self.heater_lag_s >= 0.0,
+                ">= 0",
             ),
             (
                 "sensor_lag_s",
@@ -201,6 +226,7 @@ pub struct Heater {
     cfg: HeaterConfig,
     block_c: f64,
     sensor_c: f64,
+    heat_flow_w: f64,
     fan_fraction: f64,
     cartridge_disconnected: bool,
     sensor_fault: Option<SensorFault>,
@@ -215,6 +241,7 @@ impl Heater {
             cfg,
             block_c: cfg.ambient_c,
             sensor_c: cfg.ambient_c,
+            heat_flow_w: 0.0,
             fan_fraction: 0.0,
             cartridge_disconnected: false,
             sensor_fault: None,
@@ -237,15 +264,22 @@ impl Heater {
         self.sensor_c
     }
 
-    /// Power delivered to the block during the last step, W.
+    /// Electrical power drawn during the last step, W.
     pub fn last_power_w(&self) -> f64 {
         self.last_power_w
     }
 
-    /// Set both block and sensor temperature (for a warm start).
+    /// Heat flowing into the block (the lagged electrical power), W.
+    pub fn heat_flow_w(&self) -> f64 {
+        self.heat_flow_w
+    }
+
+    /// Set both block and sensor temperature (for a warm start); the heat
+    /// flow restarts from zero (the heater was off).
     pub fn set_temperature(&mut self, celsius: f64) {
         self.block_c = celsius;
         self.sensor_c = celsius;
+        self.heat_flow_w = 0.0;
     }
 
     /// Part-cooling fan fraction, clamped to 0..=1.
@@ -292,16 +326,12 @@ impl Heater {
         } else {
             duty * self.cfg.power_w
         };
+        self.heat_flow_w = lag(self.heat_flow_w, power_w, self.cfg.heater_lag_s, dt_s);
         let k_w_k = self.cfg.loss_w_k + self.fan_fraction * self.cfg.fan_loss_w_k;
-        let settle_c = self.cfg.ambient_c + power_w / k_w_k;
+        let settle_c = self.cfg.ambient_c + self.heat_flow_w / k_w_k;
         let decay = (-k_w_k * dt_s / self.cfg.heat_capacity_j_k).exp();
         self.block_c = settle_c + (self.block_c - settle_c) * decay;
-        self.sensor_c = if self.cfg.sensor_lag_s > 0.0 {
-            let follow = 1.0 - (-dt_s / self.cfg.sensor_lag_s).exp();
-            self.sensor_c + (self.block_c - self.sensor_c) * follow
-        } else {
-            self.block_c
-        };
+        self.sensor_c = lag(self.sensor_c, self.block_c, self.cfg.sensor_lag_s, dt_s);
         self.last_power_w = power_w;
     }
 
@@ -316,12 +346,31 @@ impl Heater {
     }
 }
 
+/// One exact step of `tau dy/dt = x - y` with `x` held: `y` moves toward
+/// `x` by the fraction `1 - exp(-dt/tau)`; no lag when `tau` is 0.
+fn lag(y: f64, x: f64, tau_s: f64, dt_s: f64) -> f64 {
+    if tau_s > 0.0 {
+        y + (x - y) * (1.0 - (-dt_s / tau_s).exp())
+    } else {
+        x
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn hotend() -> Heater {
         Heater::new(HeaterConfig::hotend_40w()).unwrap()
+    }
+
+    /// The default hotend without either lag: a pure first-order block.
+    fn no_lag() -> HeaterConfig {
+        HeaterConfig {
+            heater_lag_s: 0.0,
+            sensor_lag_s: 0.0,
+            ..HeaterConfig::hotend_40w()
+        }
     }
 
     /// Seconds of full power until the sensor reaches `target_c`.
@@ -336,21 +385,13 @@ mod tests {
 
     #[test]
     fn step_matches_closed_form() {
-        let mut h = Heater::new(HeaterConfig {
-            sensor_lag_s: 0.0,
-            ..HeaterConfig::hotend_40w()
-        })
-        .unwrap();
+        let mut h = Heater::new(no_lag()).unwrap();
         h.step(1.0, 60.0);
         // T_inf = 25 + 40/0.1 = 425; tau = 12/0.1 = 120 s.
         let expected = 425.0 - 400.0 * (-0.5f64).exp();
         assert!((h.block_c() - expected).abs() < 1e-9);
         // Many small steps give the same answer (exactness in dt).
-        let mut h2 = Heater::new(HeaterConfig {
-            sensor_lag_s: 0.0,
-            ..HeaterConfig::hotend_40w()
-        })
-        .unwrap();
+        let mut h2 = Heater::new(no_lag()).unwrap();
         for _ in 0..600 {
             h2.step(1.0, 0.1);
         }
@@ -361,21 +402,21 @@ mod tests {
     fn hotend_reaches_200_in_plausible_time() {
         let mut h = hotend();
         let t_s = time_to(&mut h, 200.0, 0.1);
-        // -120 ln(1 - 175/400) = 69.0 s, plus ~2 s of sensor lag.
-        assert!((69.0..73.0).contains(&t_s), "{t_s}");
+        // -120 ln(1 - 175/400) = 69.0 s, plus ~5 s + 3 s of lags.
+        assert!((75.0..79.0).contains(&t_s), "{t_s}");
     }
 
     #[test]
     fn bed_reaches_60_in_about_two_minutes() {
         let mut b = Heater::new(HeaterConfig::bed_200w()).unwrap();
         let t_s = time_to(&mut b, 60.0, 0.5);
-        // -400 ln(1 - 35/133.3) = 122 s, plus ~4 s of sensor lag.
-        assert!((120.0..130.0).contains(&t_s), "{t_s}");
+        // -400 ln(1 - 35/133.3) = 122 s, plus ~2 s + 3 s of lags.
+        assert!((125.0..130.0).contains(&t_s), "{t_s}");
     }
 
     #[test]
     fn holds_at_equilibrium_duty() {
-        let mut h = hotend();
+        let mut h = Heater::new(no_lag()).unwrap();
         h.set_temperature(210.0);
         // 0.1 W/K * 185 K = 18.5 W = duty 0.4625.
         for _ in 0..1000 {
@@ -386,7 +427,7 @@ mod tests {
 
     #[test]
     fn fan_cools_the_block() {
-        let mut h = hotend();
+        let mut h = Heater::new(no_lag()).unwrap();
         h.set_temperature(210.0);
         h.set_fan(1.0);
         for _ in 0..10_000 {
@@ -394,6 +435,15 @@ mod tests {
         }
         // Settles at 25 + 18.5 / 0.15 = 148.3 C.
         assert!((h.block_c() - (25.0 + 18.5 / 0.15)).abs() < 1e-3);
+    }
+
+    #[test]
+    fn heat_flow_lags_power() {
+        let mut h = hotend();
+        h.step(1.0, 5.0);
+        // One time constant: 40 W * (1 - 1/e) = 25.3 W.
+        assert!((h.heat_flow_w() - 40.0 * (1.0 - (-1.0f64).exp())).abs() < 1e-9);
+        assert_eq!(h.last_power_w(), 40.0);
     }
 
     #[test]

@@ -1,3 +1,5 @@
 //! The gweave virtual printer.
+pub mod autotune;
+pub mod control;
 pub mod heater;
 pub mod thermistor;
