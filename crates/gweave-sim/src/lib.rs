@@ -2,4 +2,5 @@
 pub mod autotune;
 pub mod control;
 pub mod heater;
+pub mod protection;
 pub mod thermistor;
