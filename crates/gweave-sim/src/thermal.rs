@@ -496,7 +496,10 @@ impl Thermal {
 
     /// Start M303 on `id` (its target is cleared; the relay drives it).
     /// With `apply` (`M303 U1`) the found gains replace the heater's PID
-    /// gains.
+    /// gains, which requires a PID-controlled heater. During the tune the
+    /// target is 0, so MINTEMP/MAXTEMP stay armed but the watch and runaway
+    /// checks do not apply; the tune has its own overshoot and timeout
+    /// aborts.
     pub fn start_autotune(
         &mut self,
         id: HeaterId,
@@ -507,7 +510,11 @@ impl Thermal {
             return Err(ThermalError::Halted(fault));
         }
         let now_s = self.now_s;
-        self.channel_mut(id)?.target_c = 0.0;
+        let ch = self.channel_mut(id)?;
+        if apply && ch.control.pid_gains().is_none() {
+            return Err(ThermalError::NotPid(id));
+        }
+        ch.target_c = 0.0;
         self.autotune = Some((id, Autotune::new(id, cfg, now_s)?, apply));
         self.autotune_result = None;
         Ok(())
@@ -627,6 +634,20 @@ impl Thermal {
             ch.power = 0;
             ch.control.reset();
         }
+    }
+
+    /// Stateless closeness check, without residency: with
+    /// [`WaitMode::Both`] the reading is within `window_c` of the target,
+    /// with [`WaitMode::HeatOnly`] it is above `target - window_c`. M109 and
+    /// M190 should use [`Thermal::begin_wait`] and [`Thermal::poll_wait`],
+    /// which add Marlin's residency time.
+    pub fn is_at_target(&self, id: HeaterId, mode: WaitMode) -> Result<bool, ThermalError> {
+        let ch = self.channel(id)?;
+        let off_c = ch.reading_c - ch.target_c;
+        Ok(match mode {
+            WaitMode::HeatOnly => off_c > -ch.wait.window_c,
+            WaitMode::Both => off_c.abs() < ch.wait.window_c,
+        })
     }
 
     /// Start an M109/M190 wait on `id`.

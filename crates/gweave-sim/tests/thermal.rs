@@ -9,6 +9,7 @@ use gweave_sim::thermal::{
     Thermal, ThermalConfig, ThermalError, WaitMode, WaitStatus, COLD_EXTRUSION_LINE,
 };
 use gweave_sim::thermistor::SensorFault;
+use proptest::prelude::*;
 
 const T0: HeaterId = HeaterId::Hotend(0);
 const BED: HeaterId = HeaterId::Bed;
@@ -296,6 +297,30 @@ fn targets_are_capped_below_maxtemp() {
 }
 
 #[test]
+fn is_at_target_checks_the_window() {
+    let mut th = machine();
+    th.set_target(T0, 210.0).unwrap();
+    assert!(!th.is_at_target(T0, WaitMode::HeatOnly).unwrap());
+    wait_for(&mut th, T0, WaitMode::HeatOnly, 300.0);
+    assert!(th.is_at_target(T0, WaitMode::Both).unwrap());
+    th.set_target(T0, 150.0).unwrap();
+    assert!(th.is_at_target(T0, WaitMode::HeatOnly).unwrap());
+    assert!(!th.is_at_target(T0, WaitMode::Both).unwrap());
+}
+
+#[test]
+fn autotune_apply_needs_a_pid_heater() {
+    let mut th = machine();
+    assert!(matches!(
+        th.start_autotune(BED, AutotuneConfig::new(60.0), true),
+        Err(ThermalError::NotPid(BED))
+    ));
+    assert!(th
+        .start_autotune(BED, AutotuneConfig::new(60.0), false)
+        .is_ok());
+}
+
+#[test]
 fn m303_through_the_facade_finds_and_applies_gains() {
     let mut th = machine();
     th.set_pid_gains(T0, PidGains::MARLIN_HOTEND).unwrap();
@@ -366,4 +391,40 @@ fn config_from_toml_rejects_unknown_keys() {
         Thermal::new(bad),
         Err(ThermalError::BadParameter { .. })
     ));
+}
+
+proptest! {
+    /// Any sequence of targets, fan and step sizes: no panic, every reading
+    /// stays between ambient and the full-power equilibrium (25 + 40/0.1 C;
+    /// 25 + 200/1.5 C for the bed), and a fault switches everything off.
+    /// (Faults can be legitimate here: re-targeting a 40 W hotend to 255 C
+    /// with the fan on, just after it was off, leaves ~12 W of headroom and
+    /// a reading that still falls behind the block, so the +2 C / 20 s
+    /// watch trips, as it does on real printers.)
+    #[test]
+    fn facade_stays_physical(
+        ops in proptest::collection::vec(
+            (0.0f64..300.0, 0.0f64..130.0, 0.0f64..1.0, 0.01f64..30.0),
+            1..30,
+        )
+    ) {
+        let mut th = machine();
+        for (hot_c, bed_c, fan, dt_s) in ops {
+            if th.halted().is_none() {
+                th.set_target(T0, hot_c).unwrap();
+                th.set_target(BED, bed_c).unwrap();
+            }
+            th.set_fan(fan);
+            if th.step(dt_s).is_some() {
+                prop_assert_eq!(th.power(T0).unwrap(), 0);
+                prop_assert_eq!(th.power(BED).unwrap(), 0);
+                prop_assert_eq!(th.target(T0).unwrap(), 0.0);
+            }
+            let t = th.temperature(T0).unwrap();
+            let b = th.temperature(BED).unwrap();
+            prop_assert!((24.9..=425.0).contains(&t), "{}", t);
+            prop_assert!((24.9..=158.4).contains(&b), "{}", b);
+            prop_assert!(th.power(T0).unwrap() <= 127);
+        }
+    }
 }
