@@ -232,6 +232,16 @@ impl TimeSeries {
             let kept = std::mem::take(&mut self.records).into_iter().step_by(2);
             self.records = kept.collect();
             self.period_s *= 2.0;
+            // Continue the even spacing from the last kept record.
+            let last_s = self
+                .records
+                .last()
+                .and_then(|r| r.first())
+                .map_or(0.0, |s| s.t_s);
+            self.next_s = last_s + self.period_s;
+            while self.next_s <= now_s {
+                self.next_s += self.period_s;
+            }
         }
     }
 

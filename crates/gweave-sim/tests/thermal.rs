@@ -371,6 +371,8 @@ fn series_records_every_period_and_decimates() {
     assert_eq!(th.series().period_s(), 16.0);
     assert_eq!(times[0], 0.0);
     assert!(*times.last().unwrap() >= 80.0, "{times:?}");
+    // Evenly spaced at the final period.
+    assert!(times.windows(2).all(|w| w[1] - w[0] == 16.0), "{times:?}");
 }
 
 #[test]
