@@ -1,1 +1,4 @@
 //! The gweave virtual printer.
+pub mod kinematics;
+pub mod limits;
+pub mod planner;
