@@ -2,3 +2,4 @@
 pub mod kinematics;
 pub mod limits;
 pub mod planner;
+pub mod stepper;
