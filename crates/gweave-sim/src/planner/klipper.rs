@@ -283,3 +283,92 @@ impl KlipperLookahead {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::Pos;
+    use crate::limits::MotionProfile;
+    use proptest::prelude::*;
+
+    /// Plan a path; with `full` no lazy flush ever happens before the final flush.
+    fn plan(moves: &[Move], full: bool) -> Vec<PlannedBlock> {
+        let limits = KlipperLimits {
+            max_extrude_only_velocity_mm_s: Some(40.0),
+            max_extrude_only_accel_mm_s2: Some(900.0),
+            ..KlipperLimits::default()
+        };
+        let profile = MotionProfile::klipper(limits);
+        let rotary = (&profile.max_feed_mm_s, &profile.max_accel_mm_s2);
+        let mut k = KlipperLookahead::new(&limits);
+        let mut out: Vec<PlannedBlock> = Vec::new();
+        for mv in moves {
+            if full {
+                k.flush_budget_s = f64::INFINITY;
+            }
+            k.push(mv, mv.geometry().unwrap(), &limits, rotary, &mut out);
+        }
+        k.flush(&mut out);
+        out
+    }
+
+    fn path() -> impl Strategy<Value = Vec<Move>> {
+        let step = (
+            -30.0..30.0f64,
+            -30.0..30.0f64,
+            0..10u8,
+            0.0..0.5f64,
+            2.0..200.0f64,
+        );
+        proptest::collection::vec(step, 1..400).prop_map(|steps| {
+            let mut at = Pos::default();
+            let mut moves = Vec::new();
+            for (i, (dx, dy, kind, de, feed)) in steps.into_iter().enumerate() {
+                let mut to = at;
+                match kind {
+                    // A retract or unretract, or a layer change.
+                    0 => to.e_mm -= de,
+                    1 => to.e_mm += de,
+                    2 => to.z_mm += 0.2,
+                    // Mostly short printing and travel moves.
+                    k => {
+                        let scale = if k < 6 { 0.05 } else { 1.0 };
+                        to.x_mm += dx * scale;
+                        to.y_mm += dy * scale;
+                        to.e_mm += if k % 2 == 0 { de * scale } else { 0.0 };
+                    }
+                }
+                moves.push(Move {
+                    start: at,
+                    end: to,
+                    feed_mm_s: feed,
+                    tag: i as u64,
+                });
+                at = to;
+            }
+            moves
+        })
+    }
+
+    proptest! {
+        /// Klipper's lazy flushing commits a move only once no later move can change its speeds.
+        #[test]
+        fn lazy_flushing_equals_full_lookahead(moves in path()) {
+            let lazy = plan(&moves, false);
+            let full = plan(&moves, true);
+            prop_assert_eq!(lazy.len(), full.len());
+            for (a, b) in lazy.iter().zip(&full) {
+                prop_assert_eq!(a.tag, b.tag);
+                let (ta, tb) = (a.trapezoid, b.trapezoid);
+                for (x, y) in [
+                    (ta.entry_v_mm_s, tb.entry_v_mm_s),
+                    (ta.cruise_v_mm_s, tb.cruise_v_mm_s),
+                    (ta.exit_v_mm_s, tb.exit_v_mm_s),
+                    (ta.duration_s(), tb.duration_s()),
+                ] {
+                    prop_assert!((x - y).abs() <= 1e-9 * y.abs().max(1.0), "{:?} vs {:?}", ta, tb);
+                }
+            }
+        }
+    }
+}

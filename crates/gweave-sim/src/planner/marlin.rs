@@ -33,6 +33,8 @@ struct Block {
     accel: f64,
     nominal_v2: f64,
     max_entry_v2: f64,
+    /// The entry allowed by the reverse pass alone (braking for everything after it).
+    reverse_v2: f64,
     entry_v2: f64,
 }
 
@@ -99,6 +101,7 @@ impl MarlinBuffer {
             accel,
             nominal_v2,
             max_entry_v2,
+            reverse_v2: -1.0,
             entry_v2: 0.0,
         });
         self.replan();
@@ -116,17 +119,33 @@ impl MarlinBuffer {
         self.prev = None;
     }
 
-    /// The reverse and forward passes over the buffer.
+    /// The reverse and forward passes over the buffer. The reverse pass stops at the first
+    /// block whose reverse limit did not change (nothing before it can change either, GRBL's
+    /// "planned" pointer idea), and the forward pass starts there.
     fn replan(&mut self) {
         let fixed = usize::from(self.head_entry_fixed);
+        let n = self.blocks.len();
+        let mut first_changed = fixed;
         let mut exit_v2 = 0.0;
-        for b in self.blocks.iter_mut().skip(fixed).rev() {
-            b.entry_v2 = b.max_entry_v2.min(exit_v2 + 2.0 * b.accel * b.geo.len);
-            exit_v2 = b.entry_v2;
+        for i in (fixed..n).rev() {
+            let b = &mut self.blocks[i];
+            let reverse_v2 = b.max_entry_v2.min(exit_v2 + 2.0 * b.accel * b.geo.len);
+            if reverse_v2 == b.reverse_v2 {
+                first_changed = i;
+                break;
+            }
+            b.reverse_v2 = reverse_v2;
+            exit_v2 = reverse_v2;
         }
-        let mut reach_v2 = f64::INFINITY;
-        for b in self.blocks.iter_mut() {
-            b.entry_v2 = b.entry_v2.min(reach_v2);
+        let mut reach_v2 = match first_changed
+            .checked_sub(1)
+            .and_then(|i| self.blocks.get(i))
+        {
+            Some(prev) => prev.entry_v2 + 2.0 * prev.accel * prev.geo.len,
+            None => f64::INFINITY,
+        };
+        for b in self.blocks.iter_mut().skip(first_changed) {
+            b.entry_v2 = b.reverse_v2.min(reach_v2);
             reach_v2 = b.entry_v2 + 2.0 * b.accel * b.geo.len;
         }
     }
@@ -189,4 +208,38 @@ fn junction_v2(
         v2 = v2.min(len * junction_accel / phi);
     }
     v2
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::Pos;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The early-stopping replan gives the same entry speeds as replanning everything.
+        #[test]
+        fn early_stop_equals_full_replan(
+            steps in proptest::collection::vec((-5.0..5.0f64, -5.0..5.0f64, 5.0..200.0f64), 1..200),
+            capacity in 2usize..40,
+        ) {
+            let profile = MotionProfile::default();
+            let mut buffer = MarlinBuffer::default();
+            let mut sink = |_: &PlannedBlock| {};
+            let mut at = Pos::default();
+            for (dx, dy, feed) in steps {
+                let to = Pos::xyze(at.x_mm + dx, at.y_mm + dy, 0.0, at.e_mm + 0.1);
+                let mv = Move { start: at, end: to, feed_mm_s: feed, tag: 0 };
+                buffer.push(&mv, mv.geometry().unwrap(), &profile, 0.013, capacity, &mut sink);
+                let mut full = buffer.clone();
+                let fixed = usize::from(full.head_entry_fixed);
+                full.blocks.iter_mut().skip(fixed).for_each(|b| b.reverse_v2 = -1.0);
+                full.replan();
+                for (a, b) in buffer.blocks.iter().zip(&full.blocks) {
+                    prop_assert_eq!(a.entry_v2, b.entry_v2);
+                }
+                at = to;
+            }
+        }
+    }
 }

@@ -290,3 +290,59 @@ fn profile_changes_apply_to_later_moves_only() {
     assert_eq!((out[0].accel_mm_s2, out[1].accel_mm_s2), (3000.0, 1000.0));
     assert_eq!(planner.set_profile(marlin()), Err(ProfileError::ModeChange));
 }
+
+fn random_path() -> impl proptest::strategy::Strategy<Value = Vec<([f64; 4], f64)>> {
+    use proptest::prelude::*;
+    let point = (
+        -20.0..20.0f64,
+        -20.0..20.0f64,
+        0.0..2.0f64,
+        -1.0..2.0f64,
+        1.0..250.0f64,
+    );
+    proptest::collection::vec(point, 1..120).prop_map(|v| {
+        v.into_iter()
+            .map(|(x, y, z, e, f)| ([x, y, z, e], f))
+            .collect()
+    })
+}
+
+proptest::proptest! {
+    /// Every plan is physically consistent: speeds continuous across junctions, from and to
+    /// rest, never above the requested feed, and no speed change steeper than the acceleration.
+    #[test]
+    fn plans_are_consistent(path in random_path()) {
+        for profile in [klipper(), marlin()] {
+            let mut planner = Planner::new(profile).unwrap();
+            let mut out: Vec<PlannedBlock> = Vec::new();
+            let mut at = Pos::default();
+            let mut feeds = Vec::new();
+            for (p, f) in &path {
+                let to = Pos::xyze(p[0], p[1], p[2], p[3]);
+                planner.push(&mv(at, to, *f, feeds.len() as u64), &mut out).unwrap();
+                feeds.push(*f);
+                at = to;
+            }
+            planner.flush(&mut out);
+            proptest::prop_assert_eq!(out.len(), path.len());
+            proptest::prop_assert_eq!(out[0].trapezoid.entry_v_mm_s, 0.0);
+            proptest::prop_assert_eq!(out[out.len() - 1].trapezoid.exit_v_mm_s, 0.0);
+            for w in out.windows(2) {
+                let (a, b) = (w[0].trapezoid.exit_v_mm_s, w[1].trapezoid.entry_v_mm_s);
+                proptest::prop_assert!(close(a, b, 1e-9 * a.max(1.0)), "{a} then {b}");
+            }
+            for b in &out {
+                let t = b.trapezoid;
+                let slack = 1e-9 * t.cruise_v_mm_s.max(1.0);
+                proptest::prop_assert!(t.cruise_v_mm_s <= feeds[b.tag as usize] + slack);
+                proptest::prop_assert!(t.entry_v_mm_s <= t.cruise_v_mm_s + slack && t.exit_v_mm_s <= t.cruise_v_mm_s + slack);
+                let dv2 = 2.0 * b.accel_mm_s2 * b.len;
+                let up = t.cruise_v_mm_s.powi(2) - t.entry_v_mm_s.powi(2);
+                let down = t.cruise_v_mm_s.powi(2) - t.exit_v_mm_s.powi(2);
+                proptest::prop_assert!(up + down <= dv2 * (1.0 + 1e-9) + 1e-9, "{b:?}");
+                proptest::prop_assert!(t.accel_t_s >= 0.0 && t.cruise_t_s >= 0.0 && t.decel_t_s >= 0.0);
+                proptest::prop_assert!(b.duration_s().is_finite() && b.duration_s() > 0.0);
+            }
+        }
+    }
+}
