@@ -477,3 +477,56 @@ pub fn estimate<R: Read>(input: R, profile: &MotionProfile) -> Result<Estimate, 
     }
     Ok(est.finish())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() < 1e-9
+    }
+
+    #[test]
+    fn marlin_layers_features_dwell_and_m204() {
+        let text =
+            ";FLAVOR:Marlin\n;LAYER:0\n;TYPE:WALL-OUTER\nG1 X10 E1 F600\n;LAYER:1\n;TYPE:FILL\n\
+                    G1 X20 E2\nG4 P1000\nM204 T500\nG0 X30 F6000\n";
+        let est = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
+        // Two collinear 10 mm moves at 10 mm/s (a = 3000): 1/300 s and 1/60 mm at each end.
+        let leg = 1.0 / 300.0 + (10.0 - 1.0 / 60.0) / 10.0;
+        // The travel with M204 T500: 10 mm cannot reach 100 mm/s; peak v^2 = 500 * 10.
+        let travel = 2.0 * 5000f64.sqrt() / 500.0;
+        assert!(close(est.layer_s[0], leg), "{est:?}");
+        assert!(close(est.layer_s[1], leg + 1.0 + travel), "{est:?}");
+        assert!(close(est.feature_s[&Feature::OuterWall], leg));
+        assert!(close(est.feature_s[&Feature::Infill], leg + 1.0 + travel));
+        assert!(close(est.total_s, 2.0 * leg + 1.0 + travel));
+        assert_eq!((est.dwell_s, est.overhead_s, est.blocks), (1.0, 0.0, 3));
+        assert_eq!(est.steps.axes[0], 30 * 80);
+    }
+
+    #[test]
+    fn arcs_are_cut_into_chords() {
+        // A half circle of radius 10 (31.4 mm) becomes 32 chords, ending exactly at X20.
+        let est = estimate(
+            "G1 X0 Y0 F600\nG2 X20 Y0 I10 J0\n".as_bytes(),
+            &MotionProfile::default(),
+        )
+        .unwrap();
+        assert_eq!(est.blocks, 32);
+        assert_eq!(est.steps.axes[0], 20 * 80);
+    }
+
+    #[test]
+    fn bad_input_is_an_error_with_its_line() {
+        let err = estimate(
+            "G1 X1 F600\nM204 S-5\n".as_bytes(),
+            &MotionProfile::default(),
+        )
+        .unwrap_err();
+        assert!(
+            matches!(err, EstimateError::Profile { line: 2, .. }),
+            "{err}"
+        );
+    }
+}
