@@ -1,7 +1,12 @@
 //! The gweave virtual printer.
 pub mod autotune;
 pub mod control;
+pub mod estimate;
 pub mod heater;
+pub mod kinematics;
+pub mod limits;
+pub mod planner;
 pub mod protection;
+pub mod stepper;
 pub mod thermal;
 pub mod thermistor;

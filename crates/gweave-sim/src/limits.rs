@@ -1,0 +1,647 @@
+//! The machine's motion profile: steps per unit, speed and acceleration limits, and how corners
+//! are taken (Marlin junction deviation or Klipper's square corner velocity).
+//!
+//! The defaults describe a common RAMPS 1.4 printer running Marlin with the values of Marlin's
+//! stock `Configuration.h` (`MarlinFirmware/Marlin:Marlin/Configuration.h`):
+//! `DEFAULT_AXIS_STEPS_PER_UNIT { 80, 80, 4000, 500 }`, `DEFAULT_MAX_FEEDRATE { 300, 300, 5, 25 }`,
+//! `DEFAULT_MAX_ACCELERATION { 3000, 3000, 100, 10000 }`, `DEFAULT_ACCELERATION`,
+//! `DEFAULT_RETRACT_ACCELERATION` and `DEFAULT_TRAVEL_ACCELERATION` 3000, `JUNCTION_DEVIATION_MM`
+//! 0.013. The Klipper defaults are those of `Klipper3d/klipper:docs/Config_Reference.md`
+//! (`square_corner_velocity` 5, `minimum_cruise_ratio` 0.5, `instantaneous_corner_velocity` 1).
+//!
+//! ```toml
+//! [steps]
+//! e = 415.0
+//! [corners]
+//! mode = "klipper"
+//! max_velocity_mm_s = 300.0
+//! max_accel_mm_s2 = 3000.0
+//! ```
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// A value in a motion profile that cannot be used.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ProfileError {
+    /// A limit or step rate that must be a positive, finite number is not.
+    #[error("{name} must be positive and finite, got {value}")]
+    NotPositive {
+        /// The profile field, e.g. `max_feed_mm_s.x`.
+        name: &'static str,
+        /// The rejected value.
+        value: f64,
+    },
+    /// Klipper's `minimum_cruise_ratio` must lie in `[0, 1)`.
+    #[error("minimum_cruise_ratio must be in [0, 1), got {0}")]
+    CruiseRatio(f64),
+    /// Klipper's M204 needs either `S` or both `P` and `T` (it takes the smaller of the two).
+    #[error("M204 needs S, or both P and T, in Klipper mode")]
+    M204NeedsPAndT,
+    /// A running planner cannot switch between Marlin and Klipper planning.
+    #[error("the corner mode (marlin or klipper) cannot change while planning")]
+    ModeChange,
+    /// The profile text is not valid TOML for a motion profile.
+    #[error("motion profile: {0}")]
+    Toml(String),
+}
+
+/// Steps per unit of travel for each motor.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StepsPerUnit {
+    /// X steps per mm.
+    pub x: f64,
+    /// Y steps per mm.
+    pub y: f64,
+    /// Z steps per mm.
+    pub z: f64,
+    /// E steps per mm of filament (the single extruder, or each input when `mixing_e` is empty).
+    pub e: f64,
+    /// Rotary axis A steps per degree, when the machine has one (lathe printers).
+    pub a_per_deg: Option<f64>,
+    /// Steps per mm of each input of a mixing hotend; empty for a plain extruder.
+    pub mixing_e: Vec<f64>,
+}
+
+impl Default for StepsPerUnit {
+    fn default() -> Self {
+        Self {
+            x: 80.0,
+            y: 80.0,
+            z: 4000.0,
+            e: 500.0,
+            a_per_deg: None,
+            mixing_e: Vec::new(),
+        }
+    }
+}
+
+/// One limit per axis; linear axes in mm-based units, the rotary axis A in degree-based units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisLimits {
+    /// X limit.
+    pub x: f64,
+    /// Y limit.
+    pub y: f64,
+    /// Z limit.
+    pub z: f64,
+    /// E limit.
+    pub e: f64,
+    /// Rotary axis A limit (degrees).
+    pub a: f64,
+}
+
+impl AxisLimits {
+    /// The limits in the order X Y Z E A, the order of [`crate::kinematics::Pos::to_array`].
+    pub fn to_array(&self) -> [f64; 5] {
+        [self.x, self.y, self.z, self.e, self.a]
+    }
+
+    fn validate(&self, names: [&'static str; 5]) -> Result<(), ProfileError> {
+        self.to_array()
+            .iter()
+            .zip(names)
+            .try_for_each(|(&v, n)| positive(n, v))
+    }
+
+    /// Replace the values given (an M201/M203 line: `X Y Z E A`), keep the others.
+    fn update(&mut self, new: &AxisUpdate, names: [&'static str; 5]) -> Result<(), ProfileError> {
+        let mut next = *self;
+        let slots = [
+            &mut next.x,
+            &mut next.y,
+            &mut next.z,
+            &mut next.e,
+            &mut next.a,
+        ];
+        for ((slot, value), name) in slots.into_iter().zip(new.to_array()).zip(names) {
+            if let Some(v) = value {
+                positive(name, v)?;
+                *slot = v;
+            }
+        }
+        *self = next;
+        Ok(())
+    }
+}
+
+/// Per-axis values from an M201 or M203 line, `None` where the word is absent.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct AxisUpdate {
+    /// X word.
+    pub x: Option<f64>,
+    /// Y word.
+    pub y: Option<f64>,
+    /// Z word.
+    pub z: Option<f64>,
+    /// E word.
+    pub e: Option<f64>,
+    /// A word.
+    pub a: Option<f64>,
+}
+
+impl AxisUpdate {
+    fn to_array(self) -> [Option<f64>; 5] {
+        [self.x, self.y, self.z, self.e, self.a]
+    }
+}
+
+/// The words of an M204 line, `None` where absent.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct M204 {
+    /// `S`: Marlin's legacy "print and travel"; Klipper's only accel.
+    pub s: Option<f64>,
+    /// `P`: printing moves.
+    pub p: Option<f64>,
+    /// `R`: retract (extrude-only) moves.
+    pub r: Option<f64>,
+    /// `T`: travel moves.
+    pub t: Option<f64>,
+}
+
+/// Marlin's three move accelerations (M204 P R T), mm/s².
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MoveAccel {
+    /// Moves that extrude while moving (M204 P).
+    pub print_mm_s2: f64,
+    /// Extrude-only moves: retracts and primes (M204 R).
+    pub retract_mm_s2: f64,
+    /// Moves without extrusion (M204 T).
+    pub travel_mm_s2: f64,
+}
+
+/// Klipper's `[printer]` and `[extruder]` motion limits (`Klipper3d/klipper:klippy/toolhead.py`,
+/// `kinematics/cartesian.py`, `kinematics/extruder.py`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct KlipperLimits {
+    /// `max_velocity` of the toolhead.
+    pub max_velocity_mm_s: f64,
+    /// `max_accel` of the toolhead; M204 and `SET_VELOCITY_LIMIT ACCEL` change it.
+    pub max_accel_mm_s2: f64,
+    /// `minimum_cruise_ratio`: the share of each move that should cruise, in `[0, 1)`.
+    pub minimum_cruise_ratio: f64,
+    /// `square_corner_velocity`: the speed through a 90 degree corner.
+    pub square_corner_velocity_mm_s: f64,
+    /// `max_z_velocity`; `None` means `max_velocity` as configured at start.
+    pub max_z_velocity_mm_s: Option<f64>,
+    /// `max_z_accel`; `None` means `max_accel` as configured at start.
+    pub max_z_accel_mm_s2: Option<f64>,
+    /// `max_extrude_only_velocity` of the extruder; `None` leaves extrude-only moves unbounded.
+    /// (Klipper's own default derives it from the nozzle and filament diameters; give it here.)
+    pub max_extrude_only_velocity_mm_s: Option<f64>,
+    /// `max_extrude_only_accel`; `None` leaves extrude-only moves unbounded.
+    pub max_extrude_only_accel_mm_s2: Option<f64>,
+    /// The extruder's `instantaneous_corner_velocity`: the largest instant change of E speed.
+    pub instantaneous_corner_velocity_mm_s: f64,
+}
+
+impl Default for KlipperLimits {
+    fn default() -> Self {
+        Self {
+            max_velocity_mm_s: 300.0,
+            max_accel_mm_s2: 3000.0,
+            minimum_cruise_ratio: 0.5,
+            square_corner_velocity_mm_s: 5.0,
+            max_z_velocity_mm_s: None,
+            max_z_accel_mm_s2: None,
+            max_extrude_only_velocity_mm_s: None,
+            max_extrude_only_accel_mm_s2: None,
+            instantaneous_corner_velocity_mm_s: 1.0,
+        }
+    }
+}
+
+impl KlipperLimits {
+    fn validate(&self) -> Result<(), ProfileError> {
+        positive("max_velocity_mm_s", self.max_velocity_mm_s)?;
+        positive("max_accel_mm_s2", self.max_accel_mm_s2)?;
+        if !(0.0..1.0).contains(&self.minimum_cruise_ratio) {
+            return Err(ProfileError::CruiseRatio(self.minimum_cruise_ratio));
+        }
+        non_negative(
+            "square_corner_velocity_mm_s",
+            self.square_corner_velocity_mm_s,
+        )?;
+        non_negative(
+            "instantaneous_corner_velocity_mm_s",
+            self.instantaneous_corner_velocity_mm_s,
+        )?;
+        let optional = [
+            ("max_z_velocity_mm_s", self.max_z_velocity_mm_s),
+            ("max_z_accel_mm_s2", self.max_z_accel_mm_s2),
+            (
+                "max_extrude_only_velocity_mm_s",
+                self.max_extrude_only_velocity_mm_s,
+            ),
+            (
+                "max_extrude_only_accel_mm_s2",
+                self.max_extrude_only_accel_mm_s2,
+            ),
+        ];
+        optional
+            .iter()
+            .filter_map(|(n, v)| v.map(|v| (*n, v)))
+            .try_for_each(|(n, v)| positive(n, v))
+    }
+
+    /// Klipper's `SET_VELOCITY_LIMIT`: change the values given, keep the others.
+    pub fn set_velocity_limit(
+        &mut self,
+        velocity_mm_s: Option<f64>,
+        accel_mm_s2: Option<f64>,
+        square_corner_velocity_mm_s: Option<f64>,
+        minimum_cruise_ratio: Option<f64>,
+    ) -> Result<(), ProfileError> {
+        let mut next = *self;
+        next.max_velocity_mm_s = velocity_mm_s.unwrap_or(next.max_velocity_mm_s);
+        next.max_accel_mm_s2 = accel_mm_s2.unwrap_or(next.max_accel_mm_s2);
+        next.square_corner_velocity_mm_s =
+            square_corner_velocity_mm_s.unwrap_or(next.square_corner_velocity_mm_s);
+        next.minimum_cruise_ratio = minimum_cruise_ratio.unwrap_or(next.minimum_cruise_ratio);
+        next.validate()?;
+        *self = next;
+        Ok(())
+    }
+
+    /// The junction deviation Klipper derives from the square corner velocity:
+    /// `d = scv^2 (sqrt(2) - 1) / max_accel` (`Klipper3d/klipper:klippy/toolhead.py`), chosen so
+    /// that the junction-deviation formula gives exactly `scv` at a 90 degree corner.
+    pub fn junction_deviation_mm(&self) -> f64 {
+        self.square_corner_velocity_mm_s.powi(2) * (std::f64::consts::SQRT_2 - 1.0)
+            / self.max_accel_mm_s2
+    }
+
+    /// The "pseudo acceleration" behind `minimum_cruise_ratio`: lookahead plans the peak speed
+    /// of a run of moves as if only `max_accel * (1 - ratio)` were available, so that at least
+    /// `ratio` of the distance is left to cruise.
+    pub fn mcr_pseudo_accel_mm_s2(&self) -> f64 {
+        self.max_accel_mm_s2 * (1.0 - self.minimum_cruise_ratio)
+    }
+}
+
+/// How the planner limits the speed through a corner, and whose planner it imitates.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "mode", rename_all = "snake_case")]
+pub enum CornerMode {
+    /// Marlin/GRBL: junction deviation, per-axis feed and accel limits, M204 P/R/T.
+    Marlin {
+        /// `JUNCTION_DEVIATION_MM` (M205 J).
+        junction_deviation_mm: f64,
+        /// The planner buffer length (`BLOCK_BUFFER_SIZE`); a block leaves with its speeds
+        /// final when the buffer is full, as in the firmware while the host streams.
+        lookahead_blocks: usize,
+    },
+    /// Klipper: square corner velocity, minimum cruise ratio and the toolhead limits.
+    Klipper(KlipperLimits),
+}
+
+impl Default for CornerMode {
+    fn default() -> Self {
+        Self::Marlin {
+            junction_deviation_mm: 0.013,
+            lookahead_blocks: 16,
+        }
+    }
+}
+
+/// Everything the planner and the steppers need to know about the machine's motion.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MotionProfile {
+    /// Steps per unit of each motor.
+    pub steps: StepsPerUnit,
+    /// Marlin's per-axis maximum feed rate (M203), mm/s (A: deg/s). In Klipper mode only A uses it.
+    pub max_feed_mm_s: AxisLimits,
+    /// Marlin's per-axis maximum acceleration (M201), mm/s² (A: deg/s²). In Klipper mode only A.
+    pub max_accel_mm_s2: AxisLimits,
+    /// Marlin's move accelerations (M204 P R T). Klipper uses `corners.max_accel_mm_s2` instead.
+    pub accel: MoveAccel,
+    /// Corner handling and, in Klipper mode, the toolhead limits.
+    pub corners: CornerMode,
+}
+
+impl Default for MotionProfile {
+    fn default() -> Self {
+        Self {
+            steps: StepsPerUnit::default(),
+            max_feed_mm_s: AxisLimits {
+                x: 300.0,
+                y: 300.0,
+                z: 5.0,
+                e: 25.0,
+                a: 360.0,
+            },
+            max_accel_mm_s2: AxisLimits {
+                x: 3000.0,
+                y: 3000.0,
+                z: 100.0,
+                e: 10000.0,
+                a: 3600.0,
+            },
+            accel: MoveAccel {
+                print_mm_s2: 3000.0,
+                retract_mm_s2: 3000.0,
+                travel_mm_s2: 3000.0,
+            },
+            corners: CornerMode::default(),
+        }
+    }
+}
+
+const FEED_NAMES: [&str; 5] = [
+    "max_feed_mm_s.x",
+    "max_feed_mm_s.y",
+    "max_feed_mm_s.z",
+    "max_feed_mm_s.e",
+    "max_feed_mm_s.a",
+];
+const ACCEL_NAMES: [&str; 5] = [
+    "max_accel_mm_s2.x",
+    "max_accel_mm_s2.y",
+    "max_accel_mm_s2.z",
+    "max_accel_mm_s2.e",
+    "max_accel_mm_s2.a",
+];
+
+impl MotionProfile {
+    /// A Klipper machine with these toolhead limits and Marlin's default step rates.
+    pub fn klipper(limits: KlipperLimits) -> Self {
+        Self {
+            corners: CornerMode::Klipper(limits),
+            ..Self::default()
+        }
+    }
+
+    /// Read a profile from TOML text and check it.
+    pub fn from_toml_str(text: &str) -> Result<Self, ProfileError> {
+        let profile: Self = toml::from_str(text).map_err(|e| ProfileError::Toml(e.to_string()))?;
+        profile.validate()?;
+        Ok(profile)
+    }
+
+    /// Check every value: step rates and limits positive and finite, ratios in range.
+    pub fn validate(&self) -> Result<(), ProfileError> {
+        let s = &self.steps;
+        positive("steps.x", s.x)?;
+        positive("steps.y", s.y)?;
+        positive("steps.z", s.z)?;
+        positive("steps.e", s.e)?;
+        if let Some(a) = s.a_per_deg {
+            positive("steps.a_per_deg", a)?;
+        }
+        s.mixing_e
+            .iter()
+            .try_for_each(|&v| positive("steps.mixing_e", v))?;
+        self.max_feed_mm_s.validate(FEED_NAMES)?;
+        self.max_accel_mm_s2.validate(ACCEL_NAMES)?;
+        positive("accel.print_mm_s2", self.accel.print_mm_s2)?;
+        positive("accel.retract_mm_s2", self.accel.retract_mm_s2)?;
+        positive("accel.travel_mm_s2", self.accel.travel_mm_s2)?;
+        match &self.corners {
+            CornerMode::Marlin {
+                junction_deviation_mm,
+                lookahead_blocks,
+            } => {
+                positive("corners.junction_deviation_mm", *junction_deviation_mm)?;
+                positive("corners.lookahead_blocks", *lookahead_blocks as f64)
+            }
+            CornerMode::Klipper(k) => k.validate(),
+        }
+    }
+
+    /// M201: per-axis maximum acceleration (mm/s², A in deg/s²). Klipper ignores M201.
+    pub fn set_max_accel(&mut self, m201: &AxisUpdate) -> Result<(), ProfileError> {
+        self.max_accel_mm_s2.update(m201, ACCEL_NAMES)
+    }
+
+    /// M203: per-axis maximum feed rate (mm/s, A in deg/s). Klipper ignores M203.
+    pub fn set_max_feed(&mut self, m203: &AxisUpdate) -> Result<(), ProfileError> {
+        self.max_feed_mm_s.update(m203, FEED_NAMES)
+    }
+
+    /// M204. Marlin: `S` sets print and travel, `P` print, `R` retract, `T` travel.
+    /// Klipper (`Klipper3d/klipper:klippy/toolhead.py`): `S` sets `max_accel`, otherwise both `P`
+    /// and `T` must be present and the smaller one is used; `R` is ignored.
+    pub fn set_accel(&mut self, m204: &M204) -> Result<(), ProfileError> {
+        for (name, v) in [
+            ("M204 S", m204.s),
+            ("M204 P", m204.p),
+            ("M204 R", m204.r),
+            ("M204 T", m204.t),
+        ] {
+            if let Some(v) = v {
+                positive(name, v)?;
+            }
+        }
+        match &mut self.corners {
+            CornerMode::Klipper(k) => {
+                let accel = match (m204.s, m204.p, m204.t) {
+                    (Some(s), _, _) => s,
+                    (None, Some(p), Some(t)) => p.min(t),
+                    _ => return Err(ProfileError::M204NeedsPAndT),
+                };
+                k.max_accel_mm_s2 = accel;
+            }
+            CornerMode::Marlin { .. } => {
+                let a = &mut self.accel;
+                if let Some(s) = m204.s {
+                    a.print_mm_s2 = s;
+                    a.travel_mm_s2 = s;
+                }
+                a.print_mm_s2 = m204.p.unwrap_or(a.print_mm_s2);
+                a.retract_mm_s2 = m204.r.unwrap_or(a.retract_mm_s2);
+                a.travel_mm_s2 = m204.t.unwrap_or(a.travel_mm_s2);
+            }
+        }
+        Ok(())
+    }
+
+    /// M205 J: Marlin's junction deviation in mm. Klipper ignores M205, so this changes nothing
+    /// in Klipper mode.
+    pub fn set_junction_deviation(&mut self, j_mm: f64) -> Result<(), ProfileError> {
+        positive("M205 J", j_mm)?;
+        if let CornerMode::Marlin {
+            junction_deviation_mm,
+            ..
+        } = &mut self.corners
+        {
+            *junction_deviation_mm = j_mm;
+        }
+        Ok(())
+    }
+}
+
+fn positive(name: &'static str, value: f64) -> Result<(), ProfileError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(ProfileError::NotPositive { name, value })
+    }
+}
+
+fn non_negative(name: &'static str, value: f64) -> Result<(), ProfileError> {
+    if value == 0.0 {
+        Ok(())
+    } else {
+        positive(name, value)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_profile_is_marlin_ramps() {
+        let p = MotionProfile::default();
+        assert_eq!(p.validate(), Ok(()));
+        assert_eq!(p.steps.z, 4000.0);
+        assert_eq!(p.max_feed_mm_s.z, 5.0);
+        assert_eq!(
+            p.corners,
+            CornerMode::Marlin {
+                junction_deviation_mm: 0.013,
+                lookahead_blocks: 16
+            }
+        );
+    }
+
+    #[test]
+    fn toml_klipper_profile_round_trips_and_rejects_unknown_keys() {
+        let text = "[steps]\ne = 415.0\n[corners]\nmode = \"klipper\"\nmax_velocity_mm_s = 250.0\n\
+                    max_extrude_only_velocity_mm_s = 80.0\n";
+        let p = MotionProfile::from_toml_str(text).unwrap();
+        assert_eq!(p.steps.e, 415.0);
+        let CornerMode::Klipper(k) = p.corners else {
+            panic!("not klipper: {:?}", p.corners)
+        };
+        assert_eq!(k.max_velocity_mm_s, 250.0);
+        assert_eq!(k.max_accel_mm_s2, 3000.0);
+        assert_eq!(k.max_extrude_only_velocity_mm_s, Some(80.0));
+        let again = MotionProfile::from_toml_str(&toml::to_string(&p).unwrap()).unwrap();
+        assert_eq!(again, p);
+        let typo = MotionProfile::from_toml_str("[steps]\nxx = 1.0\n");
+        assert!(
+            matches!(&typo, Err(ProfileError::Toml(m)) if m.contains("xx")),
+            "{typo:?}"
+        );
+        let typo =
+            MotionProfile::from_toml_str("[corners]\nmode = \"klipper\"\nmax_velocty = 1.0\n");
+        assert!(matches!(typo, Err(ProfileError::Toml(_))), "{typo:?}");
+    }
+
+    #[test]
+    fn klipper_junction_deviation_matches_square_corner_formula() {
+        let k = KlipperLimits::default();
+        // 25 * 0.41421356 / 3000
+        assert!((k.junction_deviation_mm() - 0.003_451_779_7).abs() < 1e-9);
+        assert_eq!(k.mcr_pseudo_accel_mm_s2(), 1500.0);
+    }
+
+    #[test]
+    fn m204_marlin_and_klipper_rules() {
+        let mut m = MotionProfile::default();
+        m.set_accel(&M204 {
+            s: Some(1000.0),
+            r: Some(500.0),
+            ..M204::default()
+        })
+        .unwrap();
+        assert_eq!(
+            m.accel,
+            MoveAccel {
+                print_mm_s2: 1000.0,
+                retract_mm_s2: 500.0,
+                travel_mm_s2: 1000.0
+            }
+        );
+        m.set_accel(&M204 {
+            p: Some(800.0),
+            ..M204::default()
+        })
+        .unwrap();
+        assert_eq!(m.accel.print_mm_s2, 800.0);
+        assert_eq!(m.accel.travel_mm_s2, 1000.0);
+
+        let mut k = MotionProfile::klipper(KlipperLimits::default());
+        k.set_accel(&M204 {
+            p: Some(1200.0),
+            t: Some(900.0),
+            ..M204::default()
+        })
+        .unwrap();
+        assert!(matches!(k.corners, CornerMode::Klipper(l) if l.max_accel_mm_s2 == 900.0));
+        assert_eq!(
+            k.set_accel(&M204 {
+                p: Some(1.0),
+                ..M204::default()
+            }),
+            Err(ProfileError::M204NeedsPAndT)
+        );
+        let bad = k.set_accel(&M204 {
+            s: Some(-3.0),
+            ..M204::default()
+        });
+        assert_eq!(
+            bad,
+            Err(ProfileError::NotPositive {
+                name: "M204 S",
+                value: -3.0
+            })
+        );
+    }
+
+    #[test]
+    fn m201_m203_m205_update_only_given_axes_and_reject_bad_values() {
+        let mut m = MotionProfile::default();
+        m.set_max_feed(&AxisUpdate {
+            z: Some(12.0),
+            ..AxisUpdate::default()
+        })
+        .unwrap();
+        assert_eq!(
+            m.max_feed_mm_s.to_array(),
+            [300.0, 300.0, 12.0, 25.0, 360.0]
+        );
+        let err = m.set_max_accel(&AxisUpdate {
+            x: Some(500.0),
+            y: Some(f64::NAN),
+            ..AxisUpdate::default()
+        });
+        assert!(matches!(
+            err,
+            Err(ProfileError::NotPositive {
+                name: "max_accel_mm_s2.y",
+                ..
+            })
+        ));
+        assert_eq!(
+            m.max_accel_mm_s2.x, 3000.0,
+            "a rejected line changes nothing"
+        );
+        m.set_junction_deviation(0.02).unwrap();
+        assert!(
+            matches!(m.corners, CornerMode::Marlin { junction_deviation_mm, .. } if junction_deviation_mm == 0.02)
+        );
+    }
+
+    #[test]
+    fn set_velocity_limit_validates() {
+        let mut k = KlipperLimits::default();
+        k.set_velocity_limit(None, Some(5000.0), Some(8.0), None)
+            .unwrap();
+        assert_eq!(
+            (k.max_accel_mm_s2, k.square_corner_velocity_mm_s),
+            (5000.0, 8.0)
+        );
+        assert_eq!(
+            k.set_velocity_limit(None, None, None, Some(1.0)),
+            Err(ProfileError::CruiseRatio(1.0))
+        );
+        assert_eq!(k.minimum_cruise_ratio, 0.5);
+    }
+}
