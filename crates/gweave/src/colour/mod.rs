@@ -1,4 +1,6 @@
 //! Colour science for mixing extruders.
 pub mod delta_e;
 pub mod lab;
+pub mod mix;
+pub mod mixing;
 pub mod srgb;

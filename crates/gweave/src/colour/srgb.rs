@@ -61,8 +61,8 @@ pub fn encode_channel(l: f64) -> f64 {
 
 /// Encoded `[0, 1]` value to the nearest byte, clamping out-of-range values.
 fn to_byte(c: f64) -> u8 {
-    // NaN clamps to 0 through `max`; the cast then cannot overflow.
-    (c.max(0.0).min(1.0) * 255.0).round() as u8
+    // `as` saturates and maps NaN to 0, so no input can overflow.
+    (c.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
 impl Srgb8 {
