@@ -3,4 +3,5 @@ pub mod delta_e;
 pub mod lab;
 pub mod mix;
 pub mod mixing;
+pub mod solve;
 pub mod srgb;
