@@ -3,5 +3,6 @@ pub mod delta_e;
 pub mod lab;
 pub mod mix;
 pub mod mixing;
+pub mod palette;
 pub mod solve;
 pub mod srgb;
