@@ -1,5 +1,6 @@
 //! Colour science for mixing extruders.
 pub mod delta_e;
+pub mod dialect;
 pub mod lab;
 pub mod mix;
 pub mod mixing;
