@@ -5,5 +5,6 @@ pub mod lab;
 pub mod mix;
 pub mod mixing;
 pub mod palette;
+pub mod purge;
 pub mod solve;
 pub mod srgb;
