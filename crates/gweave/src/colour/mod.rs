@@ -1,6 +1,7 @@
 //! Colour science for mixing extruders.
 pub mod delta_e;
 pub mod dialect;
+mod font;
 pub mod lab;
 pub mod mix;
 pub mod mixing;
@@ -8,3 +9,4 @@ pub mod palette;
 pub mod purge;
 pub mod solve;
 pub mod srgb;
+pub mod swatch;
