@@ -16,6 +16,7 @@
 //! ```
 
 pub mod check;
+pub mod colour;
 pub mod error;
 pub mod gcode;
 pub mod pass;

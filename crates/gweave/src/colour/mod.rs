@@ -1,0 +1,48 @@
+//! Colour science for mixing extruders: which filament ratios print which colour,
+//! and how to tell the firmware.
+//!
+//! - `srgb`, `lab`: `#RRGGBB`, linear light, CIE XYZ (D65) and CIELAB.
+//! - `delta_e`: CIEDE2000, how different two colours look.
+//! - `mix`: `Mix`, validated and normalised ratios per input.
+//! - `mixing`: `MixingModel`, the colour a mix of given filaments prints
+//!   (Kubelka-Munk, subtractive).
+//! - `solve`: the mix whose predicted colour is nearest a target.
+//! - `palette`: the seed's 17 named CMY(K) colours plus user mixes from TOML.
+//! - `dialect`: Marlin `M163`/`M164`/`M165` and RepRapFirmware `M563`/`M567`
+//!   lines from a mix, and `MixingState` following those commands in a stream.
+//! - `purge`: purge volume between two colours, and the washout of a mixing chamber.
+//! - `swatch`: a palette as a PNG chart.
+//!
+//! ```
+//! use gweave::colour::{dialect, palette, solve, MixingModel, Srgb8};
+//!
+//! // E0 cyan, E1 magenta, E2 yellow, E3 white.
+//! let model = MixingModel::new(&palette::CMYW_FILAMENTS).unwrap();
+//! let pink = solve::solve(&model, "#ff88aa".parse::<Srgb8>().unwrap());
+//! assert!(!pink.out_of_gamut);
+//!
+//! // The seed's "Green" with 30 % of a second material on E3, as virtual tool 1.
+//! let green = palette::Palette::seed().resolve("green", &model).unwrap().mix;
+//! let lines = dialect::marlin_m163_m164(
+//!     &green.with_material2(0.3, 3).unwrap(),
+//!     1,
+//!     dialect::Decimals::new(2).unwrap(),
+//! );
+//! assert_eq!(lines, ["M163 S0 P0.35", "M163 S1 P0", "M163 S2 P0.35", "M163 S3 P0.3", "M164 S1"]);
+//! ```
+pub mod delta_e;
+pub mod dialect;
+mod font;
+pub mod lab;
+pub mod mix;
+pub mod mixing;
+pub mod palette;
+pub mod purge;
+pub mod solve;
+pub mod srgb;
+pub mod swatch;
+
+pub use lab::Lab;
+pub use mix::{Mix, MixError};
+pub use mixing::MixingModel;
+pub use srgb::Srgb8;

@@ -1,0 +1,394 @@
+//! Named mixes: the seed's 17-colour CMY(K) palette plus user definitions.
+//!
+//! The built-in palette is Annex A of seed 000 (a 4-in/1-out mixing extruder,
+//! 2016): inputs E0 cyan, E1 magenta, E2 yellow, E3 white/black ("key") or a
+//! second material. Its ratios are kept as printed; two of them sum to 0.99
+//! (Orange 0 : 0.17 : 0.82, Brown 0.33 each) and are normalised like any mix.
+//!
+//! Users add or override mixes in TOML, by ratios or by a colour to solve for:
+//!
+//! ```toml
+//! [mix.Pink]
+//! ratios = [0, 0.6, 0.1, 0.3]
+//!
+//! [mix.Salmon]
+//! colour = "#ff88aa"
+//! ```
+//!
+//! Names are matched without regard to case (`"spring green"` finds `Spring Green`).
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
+use super::mix::{Mix, MixError};
+use super::mixing::MixingModel;
+use super::solve::{solve, OUT_OF_GAMUT_DE};
+use super::srgb::Srgb8;
+
+/// Seed 000, Annex A: name and ratios for E0 cyan, E1 magenta, E2 yellow, E3 key.
+pub const SEED_PALETTE: [(&str, [f64; 4]); 17] = [
+    ("Cyan", [1.0, 0.0, 0.0, 0.0]),
+    ("Ocean", [0.83, 0.17, 0.0, 0.0]),
+    ("Blue", [0.5, 0.5, 0.0, 0.0]),
+    ("Violet", [0.17, 0.83, 0.0, 0.0]),
+    ("Magenta", [0.0, 1.0, 0.0, 0.0]),
+    ("Raspberry", [0.0, 0.83, 0.17, 0.0]),
+    ("Red", [0.0, 0.5, 0.5, 0.0]),
+    ("Orange", [0.0, 0.17, 0.82, 0.0]),
+    ("Yellow", [0.0, 0.0, 1.0, 0.0]),
+    ("Spring Green", [0.17, 0.0, 0.83, 0.0]),
+    ("Green", [0.5, 0.0, 0.5, 0.0]),
+    ("Turquoise", [0.83, 0.0, 0.17, 0.0]),
+    ("Cyan-Brown", [0.5, 0.25, 0.25, 0.0]),
+    ("Magenta-Brown", [0.25, 0.5, 0.25, 0.0]),
+    ("Yellow-Brown", [0.25, 0.25, 0.5, 0.0]),
+    ("Brown", [0.33, 0.33, 0.33, 0.0]),
+    ("Key", [0.0, 0.0, 0.0, 1.0]),
+];
+
+/// Typical PLA filament colours for the seed's inputs with white on E3
+/// (our estimate from vendor swatches; measure your own for accuracy).
+pub const CMYW_FILAMENTS: [Srgb8; 4] = [
+    Srgb8::new(0, 160, 224),
+    Srgb8::new(224, 0, 122),
+    Srgb8::new(255, 224, 0),
+    Srgb8::new(245, 245, 240),
+];
+
+/// As `CMYW_FILAMENTS` with black on E3.
+pub const CMYK_FILAMENTS: [Srgb8; 4] = [
+    CMYW_FILAMENTS[0],
+    CMYW_FILAMENTS[1],
+    CMYW_FILAMENTS[2],
+    Srgb8::new(28, 28, 28),
+];
+
+/// Why a mix definition was rejected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MixSpecError {
+    #[error("give either `ratios` or `colour`, not both")]
+    Both,
+    #[error("give `ratios` or `colour`")]
+    Neither,
+    #[error(transparent)]
+    Ratios(#[from] MixError),
+}
+
+/// Palette errors.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PaletteError {
+    #[error("no colour named {0:?} in the palette")]
+    UnknownName(String),
+    #[error("mix {name:?}: {source}")]
+    Mix {
+        name: String,
+        #[source]
+        source: MixError,
+    },
+    #[error("palette TOML: {0}")]
+    Toml(#[from] toml::de::Error),
+}
+
+/// How a named colour is defined.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(try_from = "RawMixSpec")]
+pub enum MixSpec {
+    /// Fixed ratios, one per input.
+    Ratios(Mix),
+    /// A target colour; the ratios come from `solve` for the loaded filaments.
+    Colour(Srgb8),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMixSpec {
+    ratios: Option<Vec<f64>>,
+    colour: Option<Srgb8>,
+}
+
+impl TryFrom<RawMixSpec> for MixSpec {
+    type Error = MixSpecError;
+    fn try_from(raw: RawMixSpec) -> Result<Self, Self::Error> {
+        match (raw.ratios, raw.colour) {
+            (Some(r), None) => Ok(Self::Ratios(Mix::new(&r)?)),
+            (None, Some(c)) => Ok(Self::Colour(c)),
+            (Some(_), Some(_)) => Err(MixSpecError::Both),
+            (None, None) => Err(MixSpecError::Neither),
+        }
+    }
+}
+
+/// The `[mix.<name>]` tables of a configuration file.
+#[derive(Debug, Clone, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PaletteConfig {
+    #[serde(default)]
+    pub mix: BTreeMap<String, MixSpec>,
+}
+
+/// One named colour.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PaletteEntry {
+    pub name: String,
+    pub spec: MixSpec,
+}
+
+/// A named colour made concrete for a set of filaments.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Resolved {
+    pub name: String,
+    pub mix: Mix,
+    /// What the mixing model predicts the mix prints as.
+    pub predicted: Srgb8,
+    /// The wanted colour, for entries defined by colour.
+    pub target: Option<Srgb8>,
+    /// CIEDE2000 between target and prediction, for entries defined by colour.
+    pub delta_e: Option<f64>,
+    /// The target is further than `OUT_OF_GAMUT_DE` from anything the filaments make.
+    pub out_of_gamut: bool,
+}
+
+/// Named mixes in definition order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Palette {
+    entries: Vec<PaletteEntry>,
+}
+
+fn same_name(a: &str, b: &str) -> bool {
+    a.to_lowercase() == b.to_lowercase()
+}
+
+impl Palette {
+    /// The seed's 17 colours, in Annex A order.
+    pub fn seed() -> Self {
+        let mut palette = Self::default();
+        for (name, ratios) in SEED_PALETTE {
+            let mix = Mix::new(&ratios).expect("seed ratios are valid");
+            palette.insert(name, MixSpec::Ratios(mix));
+        }
+        palette
+    }
+
+    /// The seed palette with the `[mix.<name>]` tables of `text` added on top.
+    pub fn from_toml_str(text: &str) -> Result<Self, PaletteError> {
+        let config: PaletteConfig = toml::from_str(text)?;
+        Ok(Self::seed().with_config(config))
+    }
+
+    /// Add the user's mixes (in name order); a name already present is replaced.
+    pub fn with_config(mut self, config: PaletteConfig) -> Self {
+        for (name, spec) in config.mix {
+            self.insert(&name, spec);
+        }
+        self
+    }
+
+    /// Add a mix, or replace the one with the same name (ignoring case).
+    pub fn insert(&mut self, name: &str, spec: MixSpec) {
+        match self.entries.iter_mut().find(|e| same_name(&e.name, name)) {
+            Some(entry) => {
+                *entry = PaletteEntry {
+                    name: name.to_owned(),
+                    spec,
+                }
+            }
+            None => self.entries.push(PaletteEntry {
+                name: name.to_owned(),
+                spec,
+            }),
+        }
+    }
+
+    /// Look a colour up by name, ignoring case.
+    pub fn get(&self, name: &str) -> Option<&PaletteEntry> {
+        self.entries.iter().find(|e| same_name(&e.name, name))
+    }
+
+    pub fn entries(&self) -> &[PaletteEntry] {
+        &self.entries
+    }
+
+    /// Ratios and predicted colour of `name` for the filaments of `model`.
+    pub fn resolve(&self, name: &str, model: &MixingModel) -> Result<Resolved, PaletteError> {
+        let entry = self
+            .get(name)
+            .ok_or_else(|| PaletteError::UnknownName(name.to_owned()))?;
+        resolve_entry(entry, model)
+    }
+
+    /// Every entry resolved, in palette order.
+    pub fn resolve_all(&self, model: &MixingModel) -> Result<Vec<Resolved>, PaletteError> {
+        self.entries
+            .iter()
+            .map(|e| resolve_entry(e, model))
+            .collect()
+    }
+}
+
+fn resolve_entry(entry: &PaletteEntry, model: &MixingModel) -> Result<Resolved, PaletteError> {
+    match &entry.spec {
+        MixSpec::Ratios(mix) => {
+            let predicted = model.predict(mix).map_err(|source| PaletteError::Mix {
+                name: entry.name.clone(),
+                source,
+            })?;
+            Ok(Resolved {
+                name: entry.name.clone(),
+                mix: mix.clone(),
+                predicted,
+                target: None,
+                delta_e: None,
+                out_of_gamut: false,
+            })
+        }
+        MixSpec::Colour(target) => {
+            let s = solve(model, *target);
+            Ok(Resolved {
+                name: entry.name.clone(),
+                mix: s.mix,
+                predicted: s.predicted,
+                target: Some(*target),
+                delta_e: Some(s.delta_e),
+                out_of_gamut: s.delta_e > OUT_OF_GAMUT_DE,
+            })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::colour::lab::Lab;
+
+    fn ratios(p: &Palette, name: &str) -> Vec<f64> {
+        match &p.get(name).unwrap().spec {
+            MixSpec::Ratios(m) => m.ratios().to_vec(),
+            MixSpec::Colour(c) => panic!("{name} is defined by colour {c}"),
+        }
+    }
+
+    #[test]
+    fn seed_palette_has_annex_a() {
+        let p = Palette::seed();
+        let names: Vec<&str> = p.entries().iter().map(|e| e.name.as_str()).collect();
+        assert_eq!(names.len(), 17);
+        assert_eq!(names[0], "Cyan");
+        assert_eq!(names[16], "Key");
+        assert_eq!(ratios(&p, "ocean"), [0.83, 0.17, 0.0, 0.0]);
+        assert_eq!(ratios(&p, "SPRING GREEN"), [0.17, 0.0, 0.83, 0.0]);
+        assert_eq!(ratios(&p, "cyan-brown"), [0.5, 0.25, 0.25, 0.0]);
+        assert_eq!(ratios(&p, "Key"), [0.0, 0.0, 0.0, 1.0]);
+        // Printed as 0.17 : 0.82, which sums to 0.99.
+        let orange = ratios(&p, "Orange");
+        assert!((orange[1] - 17.0 / 99.0).abs() < 1e-12 && (orange[2] - 82.0 / 99.0).abs() < 1e-12);
+        assert!(p.get("Pink").is_none());
+    }
+
+    #[test]
+    fn seed_colours_print_the_hues_they_are_named_after() {
+        let model = MixingModel::new(&CMYW_FILAMENTS).unwrap();
+        let p = Palette::seed();
+        // Around the CMY ring the predicted hue must turn one way, once round.
+        // (Absolute hues are the model's weak point: its "Orange" is a red-orange.)
+        let ring = [
+            "Magenta",
+            "Raspberry",
+            "Red",
+            "Orange",
+            "Yellow",
+            "Spring Green",
+            "Green",
+            "Turquoise",
+            "Cyan",
+            "Ocean",
+            "Blue",
+            "Violet",
+            "Magenta",
+        ];
+        let hue = |name| Lab::from_srgb8(p.resolve(name, &model).unwrap().predicted).hue_deg();
+        let mut turned = 0.0;
+        for pair in ring.windows(2) {
+            let step = (hue(pair[1]) - hue(pair[0])).rem_euclid(360.0);
+            assert!(step > 0.0 && step < 180.0, "{pair:?} turns by {step}");
+            turned += step;
+        }
+        assert!((turned - 360.0).abs() < 1e-9, "{turned}");
+        let green = hue("Green");
+        assert!((120.0..165.0).contains(&green), "Green hue {green}");
+        let key = p.resolve("key", &model).unwrap();
+        assert_eq!(key.predicted, CMYW_FILAMENTS[3]);
+        assert_eq!((key.target, key.delta_e), (None, None));
+    }
+
+    #[test]
+    fn user_mixes_from_toml() {
+        let text = r##"
+            [mix.Pink]
+            ratios = [0, 0.6, 0.1, 0.3]
+
+            [mix.Salmon]
+            colour = "#ff88aa"
+
+            [mix.blue]
+            ratios = [3, 1, 0, 0]
+        "##;
+        let p = Palette::from_toml_str(text).unwrap();
+        assert_eq!(p.entries().len(), 19);
+        assert_eq!(ratios(&p, "pink"), [0.0, 0.6, 0.1, 0.3]);
+        assert_eq!(ratios(&p, "Blue"), [0.75, 0.25, 0.0, 0.0]);
+        assert_eq!(
+            p.get("salmon").unwrap().spec,
+            MixSpec::Colour(Srgb8::new(0xff, 0x88, 0xaa))
+        );
+        let model = MixingModel::new(&CMYW_FILAMENTS).unwrap();
+        let salmon = p.resolve("Salmon", &model).unwrap();
+        assert_eq!(salmon.target, Some(Srgb8::new(0xff, 0x88, 0xaa)));
+        let de = salmon.delta_e.unwrap();
+        assert_eq!(salmon.out_of_gamut, de > OUT_OF_GAMUT_DE);
+        // Pink is mostly white with a little magenta (strong in this model), no cyan.
+        assert!(de < 2.0, "{salmon:?}");
+        let w = salmon.mix.ratios();
+        assert!(w[0] == 0.0 && w[1] > 0.005 && w[3] > 0.9, "{salmon:?}");
+    }
+
+    #[test]
+    fn bad_definitions_are_rejected() {
+        for text in [
+            "[mix.X]\nratios = [1, 0]\ncolour = \"#000000\"",
+            "[mix.X]\n",
+            "[mix.X]\nratios = [0, 0, 0, 0]",
+            "[mix.X]\nratios = [1, -1, 0, 0]",
+            "[mix.X]\ncolour = \"red\"",
+            "[mix.X]\nratio = [1, 0, 0, 0]",
+            "[colours.X]\nratios = [1, 0, 0, 0]",
+        ] {
+            assert!(
+                matches!(Palette::from_toml_str(text), Err(PaletteError::Toml(_))),
+                "accepted: {text}"
+            );
+        }
+        let err = Palette::from_toml_str("[mix.X]\nratios = [0, 0]").unwrap_err();
+        assert!(err.to_string().contains("all ratios are zero"), "{err}");
+    }
+
+    #[test]
+    fn resolve_errors() {
+        let model = MixingModel::new(&CMYW_FILAMENTS[..3]).unwrap();
+        let p = Palette::seed();
+        assert_eq!(
+            p.resolve("Pink", &model),
+            Err(PaletteError::UnknownName("Pink".into()))
+        );
+        assert!(matches!(
+            p.resolve("Red", &model),
+            Err(PaletteError::Mix {
+                source: MixError::InputCount {
+                    expected: 3,
+                    found: 4
+                },
+                ..
+            })
+        ));
+    }
+}
