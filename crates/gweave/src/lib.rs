@@ -1,1 +1,2 @@
 //! gweave: a lossless, streaming G-code engine for unconventional 3D printers.
+pub mod gen;

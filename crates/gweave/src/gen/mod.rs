@@ -1,0 +1,10 @@
+//! Generators that write G-code from images and meshes.
+//!
+//! Binder-jet (inkjet) raster printing: a [`printhead::PrintheadProfile`] describes the
+//! cartridge, [`bitmap`] loads 1-bit layer images, [`sl1`] reads PrusaSlicer SLA archives,
+//! [`stl`] and [`slice_raster`] turn a mesh into layer images, and [`raster`] writes the
+//! `M700`/`M578` G-code.
+
+pub mod bitmap;
+pub mod printhead;
+pub mod sl1;
