@@ -1,1 +1,2 @@
 //! The gweave virtual printer.
+pub mod inkjet;

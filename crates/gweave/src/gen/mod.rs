@@ -7,4 +7,5 @@
 
 pub mod bitmap;
 pub mod printhead;
+pub mod raster;
 pub mod sl1;
