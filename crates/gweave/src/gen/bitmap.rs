@@ -145,6 +145,28 @@ impl Bitmap {
         true
     }
 
+    /// Sets pixels `x0..x1` of row `y` (clipped to the image), a word at a time.
+    pub fn fill_span(&mut self, y: usize, x0: usize, x1: usize) {
+        let x1 = x1.min(self.width);
+        if y >= self.height || x0 >= x1 {
+            return;
+        }
+        let row = &mut self.words[y * self.words_per_row..(y + 1) * self.words_per_row];
+        let (w0, w1) = (x0 / 64, (x1 - 1) / 64);
+        // Mask of bits >= x0 in the first word and bits < x1 in the last word.
+        let lo = u64::MAX << (x0 % 64);
+        let hi = u64::MAX >> (63 - (x1 - 1) % 64);
+        if w0 == w1 {
+            row[w0] |= lo & hi;
+        } else {
+            row[w0] |= lo;
+            for w in &mut row[w0 + 1..w1] {
+                *w = u64::MAX;
+            }
+            row[w1] |= hi;
+        }
+    }
+
     /// Number of ink pixels.
     pub fn count_ones(&self) -> u64 {
         self.words.iter().map(|w| u64::from(w.count_ones())).sum()
@@ -585,6 +607,16 @@ mod tests {
         assert_eq!(b.count_ones(), 1);
         assert_eq!(b.mirror_x().row(1), &[1, 0]);
         assert_eq!(b.mirror_y().row(0), &[0, 1 << 5]);
+        let mut f = Bitmap::new(200, 1);
+        f.fill_span(0, 3, 3);
+        assert_eq!(f.count_ones(), 0);
+        f.fill_span(0, 62, 130);
+        f.fill_span(0, 5, 7);
+        f.fill_span(0, 190, 999);
+        assert_eq!(f.count_ones(), 68 + 2 + 10);
+        assert!(!f.get(61, 0) && f.get(62, 0) && f.get(129, 0) && !f.get(130, 0));
+        assert!(f.get(5, 0) && f.get(6, 0) && !f.get(7, 0) && f.get(199, 0));
+        assert_eq!(f.row(0)[3] >> 8, 0, "padding past the width stays clear");
     }
 
     #[test]

@@ -9,3 +9,5 @@ pub mod bitmap;
 pub mod printhead;
 pub mod raster;
 pub mod sl1;
+pub mod slice_raster;
+pub mod stl;
