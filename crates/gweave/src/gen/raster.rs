@@ -32,7 +32,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
-use super::printhead::{PrintheadError, PrintheadProfile};
+use super::printhead::{PrintheadError, PrintheadProfile, MAX_NOZZLES};
 use super::sl1::{Sl1Error, Sl1Reader};
 
 /// Layer height used for image stacks when the configuration gives none.
@@ -221,8 +221,10 @@ pub struct RasterWriter<W: Write> {
     layer_height_mm: f64,
     pitch_mm: f64,
     row_to_s_bit: Vec<u32>,
-    /// Pre-formatted ` X<x>` per column for each head (rebuilt when the width grows).
-    x_text: Vec<Vec<Vec<u8>>>,
+    /// Per head: `G1 X<x>` of each column (grown with the widest image) ...
+    x_text: Vec<TextTable>,
+    /// ... and `M700 P<h> S<bits>\n` for every `S` below 2^12 (empty for bigger heads).
+    fire_text: Vec<TextTable>,
     /// Reused per pass: (column, S bits).
     columns: Vec<(usize, u64)>,
     pos_mm: Option<(f64, f64)>,
@@ -255,7 +257,10 @@ impl<W: Write> RasterWriter<W> {
             layer_height_mm,
             pitch_mm: profile.pitch_mm(),
             row_to_s_bit: profile.row_to_s_bit(),
-            x_text: vec![Vec::new(); profile.heads.len()],
+            x_text: vec![TextTable::default(); profile.heads.len()],
+            fire_text: (0..profile.heads.len())
+                .map(|h| fire_table(profile, h))
+                .collect(),
             columns: Vec::new(),
             pos_mm: None,
             last_y_mm: None,
@@ -345,7 +350,7 @@ impl<W: Write> RasterWriter<W> {
                 }
             }
         }
-        self.flush_if_full()
+        Ok(())
     }
 
     /// Fills `self.columns` with the non-empty columns of the band starting at row `j0`,
@@ -354,16 +359,19 @@ impl<W: Write> RasterWriter<W> {
     fn collect_band(&mut self, plane: &Bitmap, j0: usize) {
         self.columns.clear();
         let rows = (plane.height() - j0).min(self.row_to_s_bit.len());
+        let s_bits = &self.row_to_s_bit[..rows];
+        let mut band = [0u64; MAX_NOZZLES as usize];
         for wi in 0..plane.words_per_row() {
             let mut any = 0u64;
-            for k in 0..rows {
-                any |= plane.row(j0 + k)[wi];
+            for (k, w) in band[..rows].iter_mut().enumerate() {
+                *w = plane.row(j0 + k)[wi];
+                any |= *w;
             }
             while any != 0 {
                 let bit = any.trailing_zeros();
                 let mut s = 0u64;
-                for (k, &sb) in self.row_to_s_bit[..rows].iter().enumerate() {
-                    s |= (plane.row(j0 + k)[wi] >> bit & 1) << sb;
+                for (&w, &sb) in band[..rows].iter().zip(s_bits) {
+                    s |= (w >> bit & 1) << sb;
                 }
                 self.columns.push((wi * 64 + bit as usize, s));
                 any &= any - 1;
@@ -371,15 +379,20 @@ impl<W: Write> RasterWriter<W> {
         }
     }
 
-    /// Pre-formats ` X<x>` for head `head` up to `width` columns.
+    /// Carriage X that puts head `head` over the centre of column `i`.
+    fn column_x_mm(&self, head: usize, i: usize) -> f64 {
+        self.cfg.origin_x_mm + (i as f64 + 0.5) * self.pitch_mm
+            - self.profile.heads[head].offset_x_mm
+    }
+
+    /// Pre-formats `G1 X<x>` for head `head` up to `width` columns.
     fn ensure_x_text(&mut self, head: usize, width: usize) {
-        let texts = &mut self.x_text[head];
-        let off = self.profile.heads[head].offset_x_mm;
-        for i in texts.len()..width {
-            let mut t = b" X".to_vec();
-            let x = self.cfg.origin_x_mm + (i as f64 + 0.5) * self.pitch_mm - off;
-            push_num(&mut t, x, self.cfg.decimals);
-            texts.push(t);
+        for i in self.x_text[head].len()..width {
+            let x = self.column_x_mm(head, i);
+            let table = &mut self.x_text[head];
+            table.text.extend_from_slice(b"G1 X");
+            push_num(&mut table.text, x, self.cfg.decimals);
+            table.ends.push(table.text.len());
         }
     }
 
@@ -391,44 +404,51 @@ impl<W: Write> RasterWriter<W> {
         forward: bool,
     ) -> Result<(), RasterError> {
         self.ensure_x_text(head, width);
-        let h = self.profile.heads[head];
-        let offset = (h.offset_x_mm, h.offset_y_mm);
-        let y = self.cfg.origin_y_mm + (j0 as f64 + 0.5) * self.pitch_mm - offset.1;
-        let mut fire = format!("M{} P{} S", self.profile.dialect.fire_code(), head).into_bytes();
-        let fire_len = fire.len();
-        let columns = std::mem::take(&mut self.columns);
-        let count = columns.len();
+        let y = self.cfg.origin_y_mm + (j0 as f64 + 0.5) * self.pitch_mm
+            - self.profile.heads[head].offset_y_mm;
+        let density = u64::from(self.cfg.density);
+        let mut fire = Vec::new();
+        let (mut path_mm, mut drops) = (0.0, 0u64);
+        let count = self.columns.len();
         for idx in 0..count {
-            let (i, s) = columns[if forward { idx } else { count - 1 - idx }];
-            let x = self.cfg.origin_x_mm + (i as f64 + 0.5) * self.pitch_mm - offset.0;
-            self.buf.extend_from_slice(b"G1");
-            self.buf.extend_from_slice(&self.x_text[head][i]);
+            let (i, s) = self.columns[if forward { idx } else { count - 1 - idx }];
+            let x = self.column_x_mm(head, i);
+            self.buf.extend_from_slice(self.x_text[head].get(i));
             if self.last_y_mm != Some(y) {
                 self.buf.extend_from_slice(b" Y");
                 push_num(&mut self.buf, y, self.cfg.decimals);
                 self.last_y_mm = Some(y);
             }
             self.buf.extend_from_slice(b"\nM400\n");
-            fire.truncate(fire_len);
-            push_uint(&mut fire, s);
-            fire.push(b'\n');
-            for _ in 0..self.cfg.density {
-                self.buf.extend_from_slice(&fire);
+            let fire_line = if (s as usize) < self.fire_text[head].len() {
+                self.fire_text[head].get(s as usize)
+            } else {
+                fire.clear();
+                push_fire(&mut fire, self.profile.dialect.fire_code(), head, s);
+                &fire
+            };
+            for _ in 0..density {
+                self.buf.extend_from_slice(fire_line);
             }
             if let Some((px, py)) = self.pos_mm {
-                self.report.xy_path_mm += (x - px).hypot(y - py);
+                // Within a pass only X changes; sqrt only for the move onto a new band.
+                path_mm += if py == y {
+                    (x - px).abs()
+                } else {
+                    ((x - px).powi(2) + (y - py).powi(2)).sqrt()
+                };
             }
             self.pos_mm = Some((x, y));
-            self.report.xy_moves += 1;
-            self.report.columns_fired += 1;
-            self.report.fire_commands += u64::from(self.cfg.density);
-            self.report.drops_per_head[head] +=
-                u64::from(s.count_ones()) * u64::from(self.cfg.density);
-            self.flush_if_full()?;
+            drops += u64::from(s.count_ones());
         }
-        self.columns = columns;
-        self.report.bands_printed += 1;
-        Ok(())
+        let r = &mut self.report;
+        r.xy_path_mm += path_mm;
+        r.xy_moves += count as u64;
+        r.columns_fired += count as u64;
+        r.fire_commands += count as u64 * density;
+        r.drops_per_head[head] += drops * density;
+        r.bands_printed += 1;
+        self.flush_if_full()
     }
 
     /// Writes the end G-code, flushes, and returns the writer and the report.
@@ -445,6 +465,49 @@ impl<W: Write> RasterWriter<W> {
             + self.report.fire_commands as f64 * self.profile.min_fire_interval_us * 1e-6;
         Ok((self.out, self.report))
     }
+}
+
+/// Byte strings stored back to back: entry `i` is `text[ends[i - 1]..ends[i]]`.
+#[derive(Debug, Clone, Default)]
+struct TextTable {
+    text: Vec<u8>,
+    ends: Vec<usize>,
+}
+
+impl TextTable {
+    fn len(&self) -> usize {
+        self.ends.len()
+    }
+
+    fn get(&self, i: usize) -> &[u8] {
+        let start = if i == 0 { 0 } else { self.ends[i - 1] };
+        &self.text[start..self.ends[i]]
+    }
+}
+
+/// Writes `M<code> P<head> S<bits>\n`.
+fn push_fire(buf: &mut Vec<u8>, code: u32, head: usize, s: u64) {
+    buf.push(b'M');
+    push_uint(buf, u64::from(code));
+    buf.extend_from_slice(b" P");
+    push_uint(buf, head as u64);
+    buf.extend_from_slice(b" S");
+    push_uint(buf, s);
+    buf.push(b'\n');
+}
+
+/// Nozzle counts up to this get every fire line pre-formatted (2^12 lines, about 64 KiB).
+const FIRE_TABLE_MAX_NOZZLES: u32 = 12;
+
+fn fire_table(profile: &PrintheadProfile, head: usize) -> TextTable {
+    let mut t = TextTable::default();
+    if profile.nozzle_count <= FIRE_TABLE_MAX_NOZZLES {
+        for s in 0..1u64 << profile.nozzle_count {
+            push_fire(&mut t.text, profile.dialect.fire_code(), head, s);
+            t.ends.push(t.text.len());
+        }
+    }
+    t
 }
 
 /// Appends a user block, making sure it ends with a newline.
