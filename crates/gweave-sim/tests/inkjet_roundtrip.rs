@@ -333,3 +333,104 @@ fn driver_reports_fire_without_m400() {
         ]
     ));
 }
+
+mod prop {
+    use super::*;
+    use gweave::gen::printhead::BitOrder;
+    use gweave::gen::raster::RasterWriter;
+    use proptest::prelude::*;
+
+    /// A profile with a shuffled nozzle map, and random images for its heads.
+    fn case() -> impl Strategy<Value = (PrintheadProfile, Vec<Bitmap>, bool, u32)> {
+        (1u32..20, 1usize..3, any::<bool>(), any::<bool>(), 1u32..3)
+            .prop_flat_map(|(n, heads, msb, serpentine, density)| {
+                let map = Just((0..n).collect::<Vec<u32>>()).prop_shuffle();
+                let images = proptest::collection::vec(
+                    (1usize..140, 1usize..45, any::<u64>(), 1u8..100),
+                    heads,
+                );
+                (
+                    Just(n),
+                    map,
+                    Just(msb),
+                    Just(serpentine),
+                    Just(density),
+                    images,
+                )
+            })
+            .prop_map(|(n, map, msb, serpentine, density, images)| {
+                let profile = PrintheadProfile {
+                    nozzle_count: n,
+                    nozzle_rows: map,
+                    bit_order: if msb {
+                        BitOrder::MsbFirst
+                    } else {
+                        BitOrder::LsbFirst
+                    },
+                    heads: (0..images.len())
+                        .map(|h| HeadOffset {
+                            offset_x_mm: 7.25 * h as f64,
+                            offset_y_mm: -3.5 * h as f64,
+                        })
+                        .collect(),
+                    ..PrintheadProfile::default()
+                };
+                let planes = images
+                    .into_iter()
+                    .map(|(w, h, mut seed, percent)| {
+                        let mut b = Bitmap::new(w, h);
+                        for y in 0..h {
+                            for x in 0..w {
+                                b.set(
+                                    x,
+                                    y,
+                                    u32::from(lcg(&mut seed)) * 100 < u32::from(percent) * 256,
+                                );
+                            }
+                        }
+                        b
+                    })
+                    .collect();
+                (profile, planes, serpentine, density)
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        #[test]
+        fn canvas_equals_input((profile, planes, serpentine, density) in case()) {
+            let cfg = RasterConfig { serpentine, density, ..RasterConfig::default() };
+            let mut w = RasterWriter::new(Vec::new(), &profile, &cfg, None).unwrap();
+            w.layer(&planes).unwrap();
+            let (out, report) = w.finish().unwrap();
+            let gcode = String::from_utf8(out).unwrap();
+            let width = planes.iter().map(Bitmap::width).max().unwrap();
+            let height = planes.iter().map(Bitmap::height).max().unwrap();
+            let geometry = CanvasGeometry {
+                origin_x_mm: 20.0,
+                origin_y_mm: 20.0,
+                width_px: width,
+                height_px: height,
+            };
+            let mut canvas = InkjetCanvas::new(&profile, geometry).unwrap();
+            drive(&gcode, &mut canvas);
+            prop_assert!(canvas.warnings().is_empty());
+            let total: u64 = planes.iter().map(Bitmap::count_ones).sum();
+            prop_assert_eq!(canvas.layers().len(), usize::from(total > 0));
+            for (h, plane) in planes.iter().enumerate() {
+                let want = plane.count_ones();
+                prop_assert_eq!(report.drops_per_head[h], want * u64::from(density));
+                if let Some(layer) = canvas.layers().first() {
+                    let got = &layer.heads[h];
+                    prop_assert_eq!(got.count_ones(), want);
+                    for y in 0..plane.height() {
+                        for x in 0..plane.width() {
+                            prop_assert_eq!(got.get(x, y), plane.get(x, y), "head {} ({}, {})", h, x, y);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
+use super::gcode_text::{push_fire, push_num, push_uint, TextTable};
 use super::printhead::{PrintheadError, PrintheadProfile, MAX_NOZZLES};
 use super::sl1::{Sl1Error, Sl1Reader};
 
@@ -163,53 +164,6 @@ pub struct RasterReport {
     /// Lower bound on print time: path at the feed rate (no acceleration) plus the minimum
     /// fire interval per fire command.
     pub estimated_time_s: f64,
-}
-
-/// Formats `v` with at most `decimals` digits, without trailing zeros: `20.2646`, `20`, `-0.5`.
-fn push_num(buf: &mut Vec<u8>, v: f64, decimals: u32) {
-    let scale = 10i64.pow(decimals);
-    let scaled = (v * scale as f64).round();
-    if scaled.is_nan() || scaled.abs() >= 9.0e18 {
-        // Outside i64 (or NaN): no bed is that large; keep the value readable anyway.
-        buf.extend_from_slice(v.to_string().as_bytes());
-        return;
-    }
-    let n = scaled as i64;
-    if n < 0 {
-        buf.push(b'-');
-    }
-    let n = n.unsigned_abs();
-    let (int, mut frac) = (n / scale as u64, n % scale as u64);
-    push_uint(buf, int);
-    if frac != 0 {
-        buf.push(b'.');
-        let mut digits = decimals;
-        while frac % 10 == 0 {
-            frac /= 10;
-            digits -= 1;
-        }
-        let start = buf.len();
-        push_uint(buf, frac);
-        // Leading zeros of the fraction.
-        let written = (buf.len() - start) as u32;
-        for _ in written..digits {
-            buf.insert(start, b'0');
-        }
-    }
-}
-
-fn push_uint(buf: &mut Vec<u8>, mut n: u64) {
-    let mut tmp = [0u8; 20];
-    let mut i = tmp.len();
-    loop {
-        i -= 1;
-        tmp[i] = b'0' + (n % 10) as u8;
-        n /= 10;
-        if n == 0 {
-            break;
-        }
-    }
-    buf.extend_from_slice(&tmp[i..]);
 }
 
 /// Streaming raster G-code writer: `new`, then `layer` per layer, then `finish`.
@@ -467,35 +421,6 @@ impl<W: Write> RasterWriter<W> {
     }
 }
 
-/// Byte strings stored back to back: entry `i` is `text[ends[i - 1]..ends[i]]`.
-#[derive(Debug, Clone, Default)]
-struct TextTable {
-    text: Vec<u8>,
-    ends: Vec<usize>,
-}
-
-impl TextTable {
-    fn len(&self) -> usize {
-        self.ends.len()
-    }
-
-    fn get(&self, i: usize) -> &[u8] {
-        let start = if i == 0 { 0 } else { self.ends[i - 1] };
-        &self.text[start..self.ends[i]]
-    }
-}
-
-/// Writes `M<code> P<head> S<bits>\n`.
-fn push_fire(buf: &mut Vec<u8>, code: u32, head: usize, s: u64) {
-    buf.push(b'M');
-    push_uint(buf, u64::from(code));
-    buf.extend_from_slice(b" P");
-    push_uint(buf, head as u64);
-    buf.extend_from_slice(b" S");
-    push_uint(buf, s);
-    buf.push(b'\n');
-}
-
 /// Nozzle counts up to this get every fire line pre-formatted (2^12 lines, about 64 KiB).
 const FIRE_TABLE_MAX_NOZZLES: u32 = 12;
 
@@ -616,27 +541,6 @@ pub fn test_pattern<W: Write>(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn num(v: f64, d: u32) -> String {
-        let mut b = Vec::new();
-        push_num(&mut b, v, d);
-        String::from_utf8(b).unwrap()
-    }
-
-    #[test]
-    fn numbers_without_trailing_noise() {
-        assert_eq!(num(20.0 + 25.4 / 96.0, 4), "20.2646");
-        assert_eq!(num(20.0, 4), "20");
-        assert_eq!(num(0.5, 4), "0.5");
-        assert_eq!(num(-0.5, 4), "-0.5");
-        assert_eq!(num(-0.00001, 4), "0");
-        assert_eq!(num(3.0001, 4), "3.0001");
-        assert_eq!(num(3.05, 2), "3.05");
-        assert_eq!(num(7.4, 0), "7");
-        assert_eq!(num(123456.000_000_000_1, 9), "123456");
-        assert_eq!(num(123456.000_000_1, 9), "123456.0000001");
-        assert_eq!(num(1e30, 4), "1000000000000000000000000000000");
-    }
 
     fn gcode(
         profile: &PrintheadProfile,

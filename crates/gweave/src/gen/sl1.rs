@@ -275,15 +275,27 @@ mod tests {
         assert_eq!((info.image_width_px, info.image_height_px), (400, 600));
         assert!((info.pixel_x_mm - 0.2).abs() < 1e-12 && (info.pixel_y_mm - 0.2).abs() < 1e-12);
         assert!(info.mirror_x && !info.mirror_y);
-        // The sphere's equator layer is a disc: its lit area is pi r^2 for the widest layer.
-        let mid = r
-            .layer(info.layer_count / 2, &ThresholdOptions::default())
-            .unwrap();
+        // The equator layer (150) is a disc centred on the 400x600 display: its area must be
+        // pi r^2 for r = half its extent (anti-aliased edges thresholded at 50 %).
+        let mid = r.layer(150, &ThresholdOptions::default()).unwrap();
         assert_eq!((mid.width(), mid.height()), (400, 600));
+        let (mut x0, mut x1, mut y0, mut y1) = (usize::MAX, 0, usize::MAX, 0);
+        for y in 0..mid.height() {
+            for x in (0..mid.width()).filter(|&x| mid.get(x, y)) {
+                (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+            }
+        }
+        assert_eq!((x0 + x1, y0 + y1), (399, 599), "centred");
+        assert_eq!(x1 - x0, y1 - y0, "round");
+        let r_mm = (x1 - x0 + 1) as f64 * 0.2 / 2.0;
         let area_mm2 = mid.count_ones() as f64 * 0.04;
+        let disc = std::f64::consts::PI * r_mm * r_mm;
+        assert!(
+            (area_mm2 - disc).abs() < 0.01 * disc,
+            "{area_mm2} vs {disc}"
+        );
         let first = r.layer(0, &ThresholdOptions::default()).unwrap();
-        assert!(first.count_ones() < mid.count_ones());
-        assert!(area_mm2 > 100.0, "equator area {area_mm2}");
+        assert!(first.count_ones() * 20 < mid.count_ones());
         assert!(matches!(
             r.layer(308, &ThresholdOptions::default()),
             Err(Sl1Error::LayerIndex {

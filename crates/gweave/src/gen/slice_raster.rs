@@ -239,7 +239,8 @@ pub fn slice_to_dir(mesh: &Mesh, cfg: &SliceConfig, dir: &Path) -> Result<SliceR
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gen::bitmap::{list_images, load_image, ThresholdOptions};
+    use crate::gen::bitmap::{load_image, ThresholdOptions};
+    use crate::gen::image_files::list_images;
     use crate::gen::stl::parse_stl;
 
     /// An axis-aligned box as 12 triangles.
