@@ -110,17 +110,17 @@ fn sl1_roundtrip(serpentine: bool) {
     let gcode = String::from_utf8(gcode).unwrap();
 
     let mut reader = Sl1Reader::open(&sphere()).unwrap();
-    let info = reader.info().clone();
+    let (px_x, px_y) = reader.bed_pixel_mm();
     let pitch = profile.pitch_mm();
     let expected: Vec<Vec<Bitmap>> = (0..reader.layer_count())
         .map(|k| {
-            let b = reader.layer(k, &opts).unwrap();
-            vec![b.resample(info.pixel_x_mm, info.pixel_y_mm, pitch).unwrap()]
+            let b = reader.bed_layer(k, &opts).unwrap();
+            vec![b.resample(px_x, px_y, pitch).unwrap()]
         })
         .collect();
     let (w, h) = (expected[0][0].width(), expected[0][0].height());
-    // 80 mm x 120 mm at 25.4/96 mm: round(302.36) x round(453.54) px.
-    assert_eq!((w, h), (302, 454));
+    // The 120 mm x 80 mm display at 25.4/96 mm: round(453.54) x round(302.36) px.
+    assert_eq!((w, h), (454, 302));
     let geometry = CanvasGeometry {
         origin_x_mm: 20.0,
         origin_y_mm: 20.0,

@@ -166,9 +166,45 @@ impl Bitmap {
         }
     }
 
+    /// The ink pixels `(x, y)`, row by row, skipping empty words.
+    pub fn ones(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.words.iter().enumerate().flat_map(move |(wi, &word)| {
+            let (y, x0) = (wi / self.words_per_row, (wi % self.words_per_row) * 64);
+            let mut rest = word;
+            std::iter::from_fn(move || {
+                (rest != 0).then(|| {
+                    let bit = rest.trailing_zeros() as usize;
+                    rest &= rest - 1;
+                    (x0 + bit, y)
+                })
+            })
+        })
+    }
+
     /// Number of ink pixels.
     pub fn count_ones(&self) -> u64 {
         self.words.iter().map(|w| u64::from(w.count_ones())).sum()
+    }
+
+    /// Builds a bitmap from rows of 8-bit levels (`row(y)` has `width` values), ink where
+    /// `level >= cutoff` (xor invert). The fast path for greyscale sources.
+    fn from_level_rows<'a>(
+        width: usize,
+        height: usize,
+        row: impl Fn(usize) -> &'a [u8],
+        cutoff: u16,
+        invert: bool,
+    ) -> Self {
+        let mut b = Bitmap::new(width, height);
+        for y in 0..height {
+            let words = &mut b.words[y * b.words_per_row..(y + 1) * b.words_per_row];
+            for (word, levels) in words.iter_mut().zip(row(y)[..width].chunks(64)) {
+                *word = levels.iter().enumerate().fold(0u64, |v, (bit, &l)| {
+                    v | u64::from((u16::from(l) >= cutoff) != invert) << bit
+                });
+            }
+        }
+        b
     }
 
     /// Builds a bitmap from 8-bit values, row-major, ink where `value >= cutoff` (xor invert).
@@ -209,10 +245,10 @@ impl Bitmap {
             });
         }
         let cutoff = opts.cutoff()?;
-        Ok(Self::from_levels(
+        Ok(Self::from_level_rows(
             width,
             height,
-            |x, y| grey[y * width + x],
+            |y| &grey[y * width..(y + 1) * width],
             cutoff,
             opts.invert,
         ))
@@ -334,6 +370,10 @@ pub fn decode_png<R: Read>(input: R, opts: &ThresholdOptions) -> Result<Bitmap, 
     let channels = frame.color_type.samples();
     let data = &buf[..frame.buffer_size()];
     let channel = opts.channel;
+    if channels == 1 {
+        let row = |y: usize| &data[y * stride..y * stride + w];
+        return Ok(Bitmap::from_level_rows(w, h, row, cutoff, opts.invert));
+    }
     Ok(Bitmap::from_levels(
         w,
         h,
@@ -523,6 +563,8 @@ mod tests {
         assert!(!b.set(70, 1, true));
         assert_eq!(b.row(1), &[0, 1 << 5]);
         assert_eq!(b.count_ones(), 1);
+        b.set(3, 0, true);
+        assert_eq!(b.ones().collect::<Vec<_>>(), [(3, 0), (69, 1)]);
         assert_eq!(b.mirror_x().row(1), &[1, 0]);
         assert_eq!(b.mirror_y().row(0), &[0, 1 << 5]);
         let mut f = Bitmap::new(200, 1);

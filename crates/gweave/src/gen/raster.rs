@@ -485,8 +485,10 @@ pub fn raster_image_stacks<W: Write>(
     Ok(w.finish()?.1)
 }
 
-/// Rasters a PrusaSlicer `.sl1` archive with head 0, resampling its pixels to the nozzle
-/// pitch; the layer height comes from the archive unless the config sets one.
+/// Rasters a PrusaSlicer `.sl1` archive with head 0: each layer is turned into the bed view
+/// (undoing the display's orientation and mirroring, see [`Sl1Reader::bed_layer`]) and
+/// resampled to the nozzle pitch; the layer height comes from the archive unless the config
+/// sets one.
 pub fn raster_sl1<W: Write>(
     out: W,
     profile: &PrintheadProfile,
@@ -495,14 +497,14 @@ pub fn raster_sl1<W: Write>(
     threshold: &ThresholdOptions,
 ) -> Result<RasterReport, RasterError> {
     let mut reader = Sl1Reader::open(path)?;
-    let info = reader.info().clone();
-    let mut w = RasterWriter::new(out, profile, cfg, Some(info.layer_height_mm))?;
+    let layer_height_mm = reader.info().layer_height_mm;
+    let (px_x, px_y) = reader.bed_pixel_mm();
+    let mut w = RasterWriter::new(out, profile, cfg, Some(layer_height_mm))?;
     let pitch = profile.pitch_mm();
     for k in 0..reader.layer_count() {
-        let plane =
-            reader
-                .layer(k, threshold)?
-                .resample(info.pixel_x_mm, info.pixel_y_mm, pitch)?;
+        let plane = reader
+            .bed_layer(k, threshold)?
+            .resample(px_x, px_y, pitch)?;
         w.layer(std::slice::from_ref(&plane))?;
     }
     Ok(w.finish()?.1)

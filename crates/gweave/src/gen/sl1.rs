@@ -5,10 +5,21 @@
 //! mm, `display_mirror_x/y`, `display_orientation`) and one anti-aliased greyscale PNG per layer
 //! named `<jobDir>%05d.png` (REFERENCE §4). Both ini files are `key = value` lines.
 //!
-//! In portrait orientation PrusaSlicer stores the images rotated: the PNG is
-//! `display_pixels_y` wide and `display_pixels_x` tall (the fixture `sphere.sl1`, 600x400 px
-//! display, has 400x600 PNGs). The pixel size along each image axis follows from that.
-//! Images are returned as stored (what the display shows); the mirror flags are reported.
+//! How the stored image relates to the bed (our own measurement: PrusaSlicer 2.5.0 exports of
+//! an L-shaped plate for all eight orientation/mirror settings, `tests/data/raster/L_*.sl1`).
+//! With bed pixel `(i, j)` = bed position `((i + 1/2) w, (j + 1/2) h)`, `W x H` =
+//! `display_pixels_x x display_pixels_y`, and `mx`, `my` the mirror flags:
+//!
+//! ```text
+//! landscape: PNG is W x H,  stored(col, row) = bed(mx ? W-1-col : col,  my ? row : H-1-row)
+//! portrait:  PNG is H x W,  stored(col, row) = bed(my ? row : W-1-row,  mx ? col : H-1-col)
+//! ```
+//!
+//! i.e. unmirrored landscape images are the top view with +Y up (row 0 = far edge), the mirror
+//! flags flip the image's own columns and rows, and portrait turns the top view by 90 degrees.
+//! [`Sl1Reader::layer`] returns the image as stored; [`Sl1Reader::bed_layer`] undoes all of
+//! that and returns the bed view in the raster convention (x right, row 0 = lowest Y), which
+//! is what a binder-jet print of the model needs.
 //!
 //! Layers are decoded one at a time straight from the archive, so memory stays bounded by one
 //! layer whatever the number of layers.
@@ -225,6 +236,42 @@ impl<R: Read + Seek> Sl1Reader<R> {
         self.layer_names.len()
     }
 
+    /// Layer `index` as bed view: `display_pixels_x` wide, `display_pixels_y` tall, pixel
+    /// `(i, j)` at bed `((i + 1/2) display_width / display_pixels_x, (j + 1/2) ...)`, row 0 at
+    /// the lowest Y (see the module docs for the mapping).
+    pub fn bed_layer(&mut self, index: usize, opts: &ThresholdOptions) -> Result<Bitmap, Sl1Error> {
+        let stored = self.layer(index, opts)?;
+        let info = &self.info;
+        let (w, h) = (
+            info.display_pixels_x as usize,
+            info.display_pixels_y as usize,
+        );
+        let (mx, my) = (info.mirror_x, info.mirror_y);
+        let mut bed = Bitmap::new(w, h);
+        for (col, row) in stored.ones() {
+            let (i, j) = match info.orientation {
+                Orientation::Landscape => (
+                    if mx { w - 1 - col } else { col },
+                    if my { row } else { h - 1 - row },
+                ),
+                Orientation::Portrait => (
+                    if my { row } else { w - 1 - row },
+                    if mx { col } else { h - 1 - col },
+                ),
+            };
+            bed.set(i, j, true);
+        }
+        Ok(bed)
+    }
+
+    /// Bed pixel size `(x, y)` in mm for [`Self::bed_layer`] images.
+    pub fn bed_pixel_mm(&self) -> (f64, f64) {
+        (
+            self.info.display_width_mm / f64::from(self.info.display_pixels_x),
+            self.info.display_height_mm / f64::from(self.info.display_pixels_y),
+        )
+    }
+
     /// Decodes and thresholds layer `index` (0-based, the first exposed layer).
     pub fn layer(&mut self, index: usize, opts: &ThresholdOptions) -> Result<Bitmap, Sl1Error> {
         let name = self
@@ -296,6 +343,9 @@ mod tests {
         );
         let first = r.layer(0, &ThresholdOptions::default()).unwrap();
         assert!(first.count_ones() * 20 < mid.count_ones());
+        let bed = r.bed_layer(150, &ThresholdOptions::default()).unwrap();
+        assert_eq!((bed.width(), bed.height()), (600, 400));
+        assert_eq!(bed.count_ones(), mid.count_ones());
         assert!(matches!(
             r.layer(308, &ThresholdOptions::default()),
             Err(Sl1Error::LayerIndex {
@@ -303,5 +353,31 @@ mod tests {
                 count: 308
             })
         ));
+    }
+
+    /// Every orientation and mirror setting gives the same bed view of the L plate:
+    /// bar x 20..40, y 15..19 mm and tab x 36..40, y 19..25 mm at 0.2 mm pixels.
+    #[test]
+    fn bed_layer_undoes_orientation_and_mirror() {
+        let mut want = Bitmap::new(600, 400);
+        for j in 75..95 {
+            want.fill_span(j, 100, 200);
+        }
+        for j in 95..125 {
+            want.fill_span(j, 180, 200);
+        }
+        for o in ["landscape", "portrait"] {
+            for m in ["00", "01", "10", "11"] {
+                let name = format!("L_{o}_{m}.sl1");
+                let path = fixture().with_file_name(&name);
+                let mut r = Sl1Reader::open(&path).unwrap();
+                assert_eq!(r.info().mirror_x, &m[..1] == "1", "{name}");
+                assert_eq!(r.info().mirror_y, &m[1..] == "1", "{name}");
+                assert_eq!(r.bed_pixel_mm(), (0.2, 0.2));
+                let last = r.layer_count() - 1;
+                let bed = r.bed_layer(last, &ThresholdOptions::default()).unwrap();
+                assert_eq!(bed, want, "{name}");
+            }
+        }
     }
 }
