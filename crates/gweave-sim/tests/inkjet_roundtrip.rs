@@ -246,6 +246,7 @@ fn bmp_roundtrip(serpentine: bool, heads: usize) {
                 channel,
                 ..ThresholdOptions::default()
             },
+            flip_y: false,
         })
         .collect();
     let mut gcode = Vec::new();

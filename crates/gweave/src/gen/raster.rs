@@ -450,6 +450,9 @@ fn push_block(buf: &mut Vec<u8>, block: &str) {
 pub struct ImageStack {
     pub paths: Vec<PathBuf>,
     pub threshold: ThresholdOptions,
+    /// The files' first row is the far edge (highest Y), as in a picture viewed with +Y up;
+    /// without it the first row is printed at the lowest Y (seed 004's order).
+    pub flip_y: bool,
 }
 
 /// Rasters image stacks, stack `h` printed by head `h`, layer `k` from image `k` of each stack
@@ -471,6 +474,7 @@ pub fn raster_image_stacks<W: Write>(
             let plane = match s.paths.get(k) {
                 Some(p) => {
                     let b = load_image(p, &s.threshold)?;
+                    let b = if s.flip_y { b.mirror_y() } else { b };
                     match source_pixel_mm {
                         Some(px) => b.resample(px, px, pitch)?,
                         None => b,
@@ -724,5 +728,36 @@ mod tests {
         assert!(RasterConfig::from_toml("serpentin = false").is_err());
         assert!(RasterConfig::from_toml("density = 0").is_err());
         assert!(RasterConfig::from_toml("decimals = 12").is_err());
+    }
+
+    #[test]
+    fn image_stack_flip_y() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("l0.png");
+        // 1 x 2 image, only the first file row inked.
+        let mut b = Bitmap::new(1, 2);
+        b.set(0, 0, true);
+        b.save_png(&path).unwrap();
+        let p = PrintheadProfile {
+            nozzle_count: 1,
+            dpi: 25.4,
+            ..PrintheadProfile::default()
+        };
+        let fire_y = |flip_y| {
+            let stack = ImageStack {
+                paths: vec![path.clone()],
+                threshold: ThresholdOptions::default(),
+                flip_y,
+            };
+            let mut out = Vec::new();
+            raster_image_stacks(&mut out, &p, &bare(), &[stack], None).unwrap();
+            let g = String::from_utf8(out).unwrap();
+            g.lines()
+                .find(|l| l.starts_with("G1 X"))
+                .unwrap()
+                .to_string()
+        };
+        assert_eq!(fire_y(false), "G1 X0.5 Y0.5");
+        assert_eq!(fire_y(true), "G1 X0.5 Y1.5");
     }
 }
