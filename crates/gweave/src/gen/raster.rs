@@ -22,6 +22,12 @@
 //! printed too (the reference generator `sjkelly/image_to_gcode` drops it). Each layer starts
 //! with `;LAYER:<k>`, the recoat block (from the second layer on) and `G1 Z<z>`.
 //!
+//! Several heads (`P0`, `P1`, ...) each print their own plane (an image channel or an image
+//! set): every band is swept once per head, in head order, with that head's offset taken off
+//! the carriage position. `density` repeats the fire command at each column; the firmware
+//! spaces repeated fires by its minimum interval (800 us on the C6602), which the report's
+//! time estimate counts.
+//!
 //! The output is written in 64 KiB chunks to any `Write`; the layers come one at a time,
 //! so memory is bounded by one layer per head.
 
