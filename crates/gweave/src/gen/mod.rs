@@ -6,7 +6,7 @@
 //! `M700`/`M578` G-code.
 
 pub mod bitmap;
-pub mod gcode_text;
+mod gcode_text;
 pub mod image_files;
 pub mod printhead;
 pub mod raster;
