@@ -3,6 +3,7 @@ pub mod autotune;
 pub mod control;
 pub mod estimate;
 pub mod heater;
+pub mod inkjet;
 pub mod kinematics;
 pub mod limits;
 pub mod planner;

@@ -19,6 +19,7 @@ pub mod check;
 pub mod colour;
 pub mod error;
 pub mod gcode;
+pub mod gen;
 pub mod pass;
 pub mod stats;
 

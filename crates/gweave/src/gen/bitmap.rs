@@ -1,0 +1,735 @@
+//! 1-bit layer images for raster printing, packed 64 pixels to a `u64` word.
+//!
+//! Pixel `(x, y)` is bit `x % 64` of word `y * words_per_row + x / 64`; row 0 is the first row
+//! of the file (the top of the picture). Bits past the width are always zero, so whole-word
+//! operations (OR over a band, popcount) need no masking.
+//!
+//! Loading turns a BMP (1/8/24/32-bit, uncompressed) or PNG (grey, grey+alpha, RGB, RGBA,
+//! palette, 1..16-bit) into one 8-bit channel, then thresholds it: a pixel is "ink" when its
+//! value is at least `threshold * 255` (50 % by default), like an SLA mask where lit = solid.
+//! `invert` swaps that for images where dark means binder. Transparent pixels count as dark.
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+/// Errors from reading or writing layer images.
+#[derive(Debug, Error)]
+pub enum BitmapError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("PNG decode: {0}")]
+    PngDecode(#[from] png::DecodingError),
+    #[error("PNG encode: {0}")]
+    PngEncode(#[from] png::EncodingError),
+    #[error("BMP: {0}")]
+    Bmp(String),
+    #[error("unsupported image format (expected BMP or PNG)")]
+    UnknownFormat,
+    #[error("image too large: {width}x{height}")]
+    TooLarge { width: u64, height: u64 },
+    #[error("pixel buffer has {got} values, expected {expected}")]
+    BufferSize { expected: usize, got: usize },
+    #[error("no images match {0}")]
+    NoImages(PathBuf),
+    #[error("invalid threshold {0} (expected 0..=1)")]
+    Threshold(f64),
+    #[error("invalid pixel size {0} mm")]
+    PixelSize(f64),
+}
+
+/// Which channel of a colour image becomes the layer mask.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Channel {
+    /// Rec. 601 luma `(299 R + 587 G + 114 B) / 1000`.
+    #[default]
+    Luma,
+    Red,
+    Green,
+    Blue,
+}
+
+/// How an 8-bit image becomes 1-bit.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ThresholdOptions {
+    /// Fraction of full scale at or above which a pixel is ink (default 0.5).
+    pub threshold: f64,
+    /// Dark pixels are ink instead of light ones.
+    pub invert: bool,
+    /// Channel of colour images to use.
+    pub channel: Channel,
+}
+
+impl Default for ThresholdOptions {
+    fn default() -> Self {
+        ThresholdOptions {
+            threshold: 0.5,
+            invert: false,
+            channel: Channel::Luma,
+        }
+    }
+}
+
+impl ThresholdOptions {
+    /// The smallest 8-bit value counted as lit: `ceil(threshold * 255)`.
+    fn cutoff(&self) -> Result<u16, BitmapError> {
+        if !(0.0..=1.0).contains(&self.threshold) {
+            return Err(BitmapError::Threshold(self.threshold));
+        }
+        Ok((self.threshold * 255.0).ceil() as u16)
+    }
+}
+
+/// A packed 1-bit image.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Bitmap {
+    width: usize,
+    height: usize,
+    words_per_row: usize,
+    words: Vec<u64>,
+}
+
+impl Bitmap {
+    /// An all-empty image.
+    pub fn new(width: usize, height: usize) -> Self {
+        let words_per_row = width.div_ceil(64);
+        Bitmap {
+            width,
+            height,
+            words_per_row,
+            words: vec![0; words_per_row * height],
+        }
+    }
+
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    pub fn words_per_row(&self) -> usize {
+        self.words_per_row
+    }
+
+    /// The packed words of row `y` (bits past the width are zero).
+    pub fn row(&self, y: usize) -> &[u64] {
+        &self.words[y * self.words_per_row..(y + 1) * self.words_per_row]
+    }
+
+    /// Pixel value; outside the image is empty.
+    pub fn get(&self, x: usize, y: usize) -> bool {
+        x < self.width && y < self.height && self.row(y)[x / 64] >> (x % 64) & 1 == 1
+    }
+
+    /// Sets a pixel; outside the image is ignored and returns false.
+    pub fn set(&mut self, x: usize, y: usize, on: bool) -> bool {
+        if x >= self.width || y >= self.height {
+            return false;
+        }
+        let w = &mut self.words[y * self.words_per_row + x / 64];
+        let bit = 1u64 << (x % 64);
+        if on {
+            *w |= bit;
+        } else {
+            *w &= !bit;
+        }
+        true
+    }
+
+    /// Sets pixels `x0..x1` of row `y` (clipped to the image), a word at a time.
+    pub fn fill_span(&mut self, y: usize, x0: usize, x1: usize) {
+        let x1 = x1.min(self.width);
+        if y >= self.height || x0 >= x1 {
+            return;
+        }
+        let row = &mut self.words[y * self.words_per_row..(y + 1) * self.words_per_row];
+        let (w0, w1) = (x0 / 64, (x1 - 1) / 64);
+        // Mask of bits >= x0 in the first word and bits < x1 in the last word.
+        let lo = u64::MAX << (x0 % 64);
+        let hi = u64::MAX >> (63 - (x1 - 1) % 64);
+        if w0 == w1 {
+            row[w0] |= lo & hi;
+        } else {
+            row[w0] |= lo;
+            for w in &mut row[w0 + 1..w1] {
+                *w = u64::MAX;
+            }
+            row[w1] |= hi;
+        }
+    }
+
+    /// The ink pixels `(x, y)`, row by row, skipping empty words.
+    pub fn ones(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.words.iter().enumerate().flat_map(move |(wi, &word)| {
+            let (y, x0) = (wi / self.words_per_row, (wi % self.words_per_row) * 64);
+            let mut rest = word;
+            std::iter::from_fn(move || {
+                (rest != 0).then(|| {
+                    let bit = rest.trailing_zeros() as usize;
+                    rest &= rest - 1;
+                    (x0 + bit, y)
+                })
+            })
+        })
+    }
+
+    /// Number of ink pixels.
+    pub fn count_ones(&self) -> u64 {
+        self.words.iter().map(|w| u64::from(w.count_ones())).sum()
+    }
+
+    /// Builds a bitmap from rows of 8-bit levels (`row(y)` has `width` values), ink where
+    /// `level >= cutoff` (xor invert). The fast path for greyscale sources.
+    fn from_level_rows<'a>(
+        width: usize,
+        height: usize,
+        row: impl Fn(usize) -> &'a [u8],
+        cutoff: u16,
+        invert: bool,
+    ) -> Self {
+        let mut b = Bitmap::new(width, height);
+        for y in 0..height {
+            let words = &mut b.words[y * b.words_per_row..(y + 1) * b.words_per_row];
+            for (word, levels) in words.iter_mut().zip(row(y)[..width].chunks(64)) {
+                *word = levels.iter().enumerate().fold(0u64, |v, (bit, &l)| {
+                    v | u64::from((u16::from(l) >= cutoff) != invert) << bit
+                });
+            }
+        }
+        b
+    }
+
+    /// Builds a bitmap from 8-bit values, row-major, ink where `value >= cutoff` (xor invert).
+    fn from_levels(
+        width: usize,
+        height: usize,
+        levels: impl Fn(usize, usize) -> u8,
+        cutoff: u16,
+        invert: bool,
+    ) -> Self {
+        let mut b = Bitmap::new(width, height);
+        for y in 0..height {
+            let row = &mut b.words[y * b.words_per_row..(y + 1) * b.words_per_row];
+            for (wi, word) in row.iter_mut().enumerate() {
+                let x0 = wi * 64;
+                let mut v = 0u64;
+                for bit in 0..(width - x0).min(64) {
+                    let lit = u16::from(levels(x0 + bit, y)) >= cutoff;
+                    v |= u64::from(lit != invert) << bit;
+                }
+                *word = v;
+            }
+        }
+        b
+    }
+
+    /// Thresholds a single-channel 8-bit image (`grey.len() == width * height`).
+    pub fn from_grey(
+        width: usize,
+        height: usize,
+        grey: &[u8],
+        opts: &ThresholdOptions,
+    ) -> Result<Self, BitmapError> {
+        if grey.len() != width * height {
+            return Err(BitmapError::BufferSize {
+                expected: width * height,
+                got: grey.len(),
+            });
+        }
+        let cutoff = opts.cutoff()?;
+        Ok(Self::from_level_rows(
+            width,
+            height,
+            |y| &grey[y * width..(y + 1) * width],
+            cutoff,
+            opts.invert,
+        ))
+    }
+
+    /// Resamples to a new pixel size by nearest neighbour at target pixel centres: target pixel
+    /// `i` has its centre at `(i + 1/2) * dst_px_mm` and takes the source pixel containing it.
+    /// The target keeps every pixel whose centre lies inside the source extent,
+    /// i.e. `round(width * src / dst)` columns.
+    pub fn resample(
+        &self,
+        src_px_x_mm: f64,
+        src_px_y_mm: f64,
+        dst_px_mm: f64,
+    ) -> Result<Self, BitmapError> {
+        for v in [src_px_x_mm, src_px_y_mm, dst_px_mm] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(BitmapError::PixelSize(v));
+            }
+        }
+        let map = |n: usize, src: f64| -> Vec<usize> {
+            let count = (n as f64 * src / dst_px_mm + 0.5).floor() as usize;
+            (0..count)
+                .map(|i| (((i as f64 + 0.5) * dst_px_mm / src) as usize).min(n - 1))
+                .collect()
+        };
+        if self.width == 0 || self.height == 0 {
+            return Ok(Bitmap::new(0, 0));
+        }
+        let xs = map(self.width, src_px_x_mm);
+        let ys = map(self.height, src_px_y_mm);
+        let mut out = Bitmap::new(xs.len(), ys.len());
+        for (y, &sy) in ys.iter().enumerate() {
+            let src = self.row(sy);
+            let dst = &mut out.words[y * out.words_per_row..(y + 1) * out.words_per_row];
+            for (x, &sx) in xs.iter().enumerate() {
+                dst[x / 64] |= (src[sx / 64] >> (sx % 64) & 1) << (x % 64);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Flips left-right.
+    pub fn mirror_x(&self) -> Self {
+        let mut out = Bitmap::new(self.width, self.height);
+        for y in 0..self.height {
+            for x in 0..self.width {
+                if self.get(x, y) {
+                    out.set(self.width - 1 - x, y, true);
+                }
+            }
+        }
+        out
+    }
+
+    /// Flips top-bottom.
+    pub fn mirror_y(&self) -> Self {
+        let mut out = Bitmap::new(self.width, self.height);
+        for y in 0..self.height {
+            let (a, b) = (
+                y * self.words_per_row,
+                (self.height - 1 - y) * self.words_per_row,
+            );
+            out.words[b..b + self.words_per_row]
+                .copy_from_slice(&self.words[a..a + self.words_per_row]);
+        }
+        out
+    }
+
+    /// Writes a 1-bit greyscale PNG (ink = white, like an SLA mask).
+    pub fn write_png<W: Write>(&self, out: W) -> Result<(), BitmapError> {
+        let mut enc = png::Encoder::new(out, self.width as u32, self.height as u32);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::One);
+        let mut w = enc.write_header()?;
+        let stride = self.width.div_ceil(8);
+        let mut data = vec![0u8; stride * self.height];
+        for y in 0..self.height {
+            for x in 0..self.width {
+                if self.get(x, y) {
+                    // PNG packs the leftmost pixel in the most significant bit.
+                    data[y * stride + x / 8] |= 0x80 >> (x % 8);
+                }
+            }
+        }
+        w.write_image_data(&data)?;
+        w.finish()?;
+        Ok(())
+    }
+
+    /// Writes a 1-bit PNG file.
+    pub fn save_png(&self, path: &Path) -> Result<(), BitmapError> {
+        let file = std::fs::File::create(path).map_err(|e| io_err(path, e))?;
+        self.write_png(std::io::BufWriter::new(file))
+    }
+}
+
+fn io_err(path: &Path, source: std::io::Error) -> BitmapError {
+    BitmapError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Decodes a PNG from a reader and thresholds it.
+pub fn decode_png<R: Read>(input: R, opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
+    let cutoff = opts.cutoff()?;
+    let mut dec = png::Decoder::new(input);
+    // Expand palette and low bit depths to 8 bits, strip 16-bit to 8.
+    dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = dec.read_info()?;
+    let (w, h) = {
+        let info = reader.info();
+        (info.width as usize, info.height as usize)
+    };
+    let mut buf = vec![0u8; reader.output_buffer_size()];
+    let frame = reader.next_frame(&mut buf)?;
+    let stride = frame.line_size;
+    let channels = frame.color_type.samples();
+    let data = &buf[..frame.buffer_size()];
+    let channel = opts.channel;
+    if channels == 1 {
+        let row = |y: usize| &data[y * stride..y * stride + w];
+        return Ok(Bitmap::from_level_rows(w, h, row, cutoff, opts.invert));
+    }
+    Ok(Bitmap::from_levels(
+        w,
+        h,
+        |x, y| {
+            let p = &data[y * stride + x * channels..][..channels];
+            match channels {
+                1 => p[0],
+                2 => scale_alpha(p[0], p[1]),
+                3 => pick(channel, p[0], p[1], p[2]),
+                _ => scale_alpha(pick(channel, p[0], p[1], p[2]), p[3]),
+            }
+        },
+        cutoff,
+        opts.invert,
+    ))
+}
+
+/// Composites over black: transparent pixels are dark.
+fn scale_alpha(v: u8, a: u8) -> u8 {
+    ((u16::from(v) * u16::from(a) + 127) / 255) as u8
+}
+
+fn pick(channel: Channel, r: u8, g: u8, b: u8) -> u8 {
+    match channel {
+        Channel::Luma => {
+            ((299 * u32::from(r) + 587 * u32::from(g) + 114 * u32::from(b) + 500) / 1000) as u8
+        }
+        Channel::Red => r,
+        Channel::Green => g,
+        Channel::Blue => b,
+    }
+}
+
+fn le_u16(d: &[u8], at: usize) -> Result<u16, BitmapError> {
+    d.get(at..at + 2)
+        .map(|b| u16::from_le_bytes([b[0], b[1]]))
+        .ok_or_else(|| BitmapError::Bmp("truncated header".into()))
+}
+
+fn le_u32(d: &[u8], at: usize) -> Result<u32, BitmapError> {
+    d.get(at..at + 4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .ok_or_else(|| BitmapError::Bmp("truncated header".into()))
+}
+
+/// Decodes an uncompressed Windows BMP (BITMAPINFOHEADER or later; 1, 8, 24 or 32 bits per
+/// pixel; bottom-up or top-down) and thresholds it. Layout from the Microsoft
+/// `BITMAPINFOHEADER` documentation: rows padded to 4 bytes, BGR order, palette of BGRA quads.
+pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
+    let cutoff = opts.cutoff()?;
+    if data.get(0..2) != Some(b"BM") {
+        return Err(BitmapError::Bmp("missing BM signature".into()));
+    }
+    let pixel_offset = le_u32(data, 10)? as usize;
+    let header_size = le_u32(data, 14)? as usize;
+    if header_size < 40 {
+        return Err(BitmapError::Bmp(
+            "OS/2 core headers are not supported".into(),
+        ));
+    }
+    let width = le_u32(data, 18)? as i32;
+    let height_signed = le_u32(data, 22)? as i32;
+    let bpp = le_u16(data, 28)?;
+    let compression = le_u32(data, 30)?;
+    // 0 = BI_RGB, 3 = BI_BITFIELDS (accepted for 32-bit with the usual BGRA masks).
+    if compression != 0 && !(compression == 3 && bpp == 32) {
+        return Err(BitmapError::Bmp(format!(
+            "compression {compression} not supported"
+        )));
+    }
+    if width <= 0 || height_signed == 0 || height_signed == i32::MIN {
+        return Err(BitmapError::Bmp(format!(
+            "bad size {width}x{height_signed}"
+        )));
+    }
+    let (w, h) = (width as usize, height_signed.unsigned_abs() as usize);
+    if (w as u64) * (h as u64) > 1 << 32 {
+        return Err(BitmapError::TooLarge {
+            width: w as u64,
+            height: h as u64,
+        });
+    }
+    let top_down = height_signed < 0;
+    let palette: Vec<[u8; 3]> = if bpp <= 8 {
+        let used = le_u32(data, 46)? as usize;
+        let n = if used == 0 {
+            1usize << bpp
+        } else {
+            used.min(256)
+        };
+        let start = 14 + header_size;
+        (0..n)
+            .map(|i| {
+                data.get(start + 4 * i..start + 4 * i + 3)
+                    .map(|q| [q[2], q[1], q[0]])
+                    .ok_or_else(|| BitmapError::Bmp("truncated palette".into()))
+            })
+            .collect::<Result<_, _>>()?
+    } else {
+        Vec::new()
+    };
+    if !matches!(bpp, 1 | 8 | 24 | 32) {
+        return Err(BitmapError::Bmp(format!(
+            "{bpp} bits per pixel not supported"
+        )));
+    }
+    let stride = (w * bpp as usize).div_ceil(32) * 4;
+    let needed = pixel_offset + stride * h;
+    if data.len() < needed {
+        return Err(BitmapError::Bmp("truncated pixel data".into()));
+    }
+    let channel = opts.channel;
+    let colour = |index: usize| -> u8 {
+        palette
+            .get(index)
+            .map_or(0, |c| pick(channel, c[0], c[1], c[2]))
+    };
+    Ok(Bitmap::from_levels(
+        w,
+        h,
+        |x, y| {
+            let file_row = if top_down { y } else { h - 1 - y };
+            let row = &data[pixel_offset + file_row * stride..][..stride];
+            match bpp {
+                1 => colour(usize::from(row[x / 8] >> (7 - x % 8) & 1)),
+                8 => colour(usize::from(row[x])),
+                _ => {
+                    let p = &row[x * (bpp as usize / 8)..];
+                    pick(channel, p[2], p[1], p[0])
+                }
+            }
+        },
+        cutoff,
+        opts.invert,
+    ))
+}
+
+/// Loads a BMP or PNG file (recognised by its signature) and thresholds it.
+pub fn load_image(path: &Path, opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
+    let data = std::fs::read(path).map_err(|e| io_err(path, e))?;
+    if data.starts_with(b"\x89PNG") {
+        decode_png(&data[..], opts)
+    } else if data.starts_with(b"BM") {
+        decode_bmp(&data, opts)
+    } else {
+        Err(BitmapError::UnknownFormat)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn opts() -> ThresholdOptions {
+        ThresholdOptions::default()
+    }
+
+    #[test]
+    fn threshold_is_half_scale() {
+        let b = Bitmap::from_grey(4, 1, &[0, 127, 128, 255], &opts()).unwrap();
+        assert_eq!(
+            (0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(),
+            [false, false, true, true]
+        );
+        let inv = ThresholdOptions {
+            invert: true,
+            ..opts()
+        };
+        let b = Bitmap::from_grey(4, 1, &[0, 127, 128, 255], &inv).unwrap();
+        assert_eq!(b.count_ones(), 2);
+        assert!(b.get(0, 0) && b.get(1, 0));
+        let bad = ThresholdOptions {
+            threshold: 1.5,
+            ..opts()
+        };
+        assert!(matches!(
+            Bitmap::from_grey(1, 1, &[0], &bad),
+            Err(BitmapError::Threshold(_))
+        ));
+    }
+
+    #[test]
+    fn words_are_packed_and_padding_clear() {
+        let mut b = Bitmap::new(70, 2);
+        assert_eq!(b.words_per_row(), 2);
+        assert!(b.set(69, 1, true));
+        assert!(!b.set(70, 1, true));
+        assert_eq!(b.row(1), &[0, 1 << 5]);
+        assert_eq!(b.count_ones(), 1);
+        b.set(3, 0, true);
+        assert_eq!(b.ones().collect::<Vec<_>>(), [(3, 0), (69, 1)]);
+        assert_eq!(b.mirror_x().row(1), &[1, 0]);
+        assert_eq!(b.mirror_y().row(0), &[0, 1 << 5]);
+        let mut f = Bitmap::new(200, 1);
+        f.fill_span(0, 3, 3);
+        assert_eq!(f.count_ones(), 0);
+        f.fill_span(0, 62, 130);
+        f.fill_span(0, 5, 7);
+        f.fill_span(0, 190, 999);
+        assert_eq!(f.count_ones(), 68 + 2 + 10);
+        assert!(!f.get(61, 0) && f.get(62, 0) && f.get(129, 0) && !f.get(130, 0));
+        assert!(f.get(5, 0) && f.get(6, 0) && !f.get(7, 0) && f.get(199, 0));
+        assert_eq!(f.row(0)[3] >> 8, 0, "padding past the width stays clear");
+    }
+
+    #[test]
+    fn resample_nearest_at_centres() {
+        // 0.2 mm source to 0.5 mm target: 10 px * 0.2 = 2 mm -> 4 target px, centres at
+        // 0.25, 0.75, 1.25, 1.75 mm -> source px 1, 3, 6, 8.
+        let mut b = Bitmap::new(10, 1);
+        for x in [1, 6] {
+            b.set(x, 0, true);
+        }
+        let r = b.resample(0.2, 0.2, 0.5).unwrap();
+        assert_eq!((r.width(), r.height()), (4, 0));
+        let mut b = Bitmap::new(10, 3);
+        for x in [1, 6] {
+            b.set(x, 2, true);
+        }
+        let r = b.resample(0.2, 0.4, 0.5).unwrap();
+        assert_eq!((r.width(), r.height()), (4, 2));
+        // target row 1 centre 0.75 mm -> source row 1 (0.4 mm rows): empty.
+        assert_eq!(r.count_ones(), 0);
+        let r = b.resample(0.2, 1.0, 0.5).unwrap();
+        assert_eq!(r.height(), 6);
+        // target rows 4,5 (centres 2.25, 2.75 mm) -> source row 2.
+        assert!(r.get(0, 4) && r.get(2, 5) && !r.get(1, 4) && !r.get(3, 5));
+        assert_eq!(r.count_ones(), 4);
+    }
+
+    #[test]
+    fn png_roundtrip_1bit_and_grey_alpha() {
+        let mut b = Bitmap::new(13, 3);
+        b.set(0, 0, true);
+        b.set(12, 2, true);
+        b.set(7, 1, true);
+        let mut buf = Vec::new();
+        b.write_png(&mut buf).unwrap();
+        assert_eq!(decode_png(&buf[..], &opts()).unwrap(), b);
+
+        let mut buf = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut buf, 3, 1);
+            enc.set_color(png::ColorType::GrayscaleAlpha);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut w = enc.write_header().unwrap();
+            // white opaque, white transparent, white half alpha (255*128/255 = 128 -> lit)
+            w.write_image_data(&[255, 255, 255, 0, 255, 128]).unwrap();
+        }
+        let g = decode_png(&buf[..], &opts()).unwrap();
+        assert_eq!((g.get(0, 0), g.get(1, 0), g.get(2, 0)), (true, false, true));
+    }
+
+    #[test]
+    fn png_rgb_channels() {
+        let mut buf = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut buf, 2, 1);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut w = enc.write_header().unwrap();
+            w.write_image_data(&[255, 0, 0, 0, 0, 255]).unwrap();
+        }
+        let get = |channel| {
+            let b = decode_png(&buf[..], &ThresholdOptions { channel, ..opts() }).unwrap();
+            (b.get(0, 0), b.get(1, 0))
+        };
+        assert_eq!(get(Channel::Red), (true, false));
+        assert_eq!(get(Channel::Blue), (false, true));
+        assert_eq!(get(Channel::Green), (false, false));
+        // luma of pure red = 76, of pure blue = 29: both dark.
+        assert_eq!(get(Channel::Luma), (false, false));
+    }
+
+    /// Builds a BMP file by hand (bottom-up unless `top_down`).
+    fn bmp(
+        w: usize,
+        h: usize,
+        bpp: u16,
+        palette: &[[u8; 4]],
+        rows: &[Vec<u8>],
+        top_down: bool,
+    ) -> Vec<u8> {
+        let stride = (w * bpp as usize).div_ceil(32) * 4;
+        let off = 54 + 4 * palette.len();
+        let mut d = Vec::new();
+        d.extend_from_slice(b"BM");
+        d.extend_from_slice(&((off + stride * h) as u32).to_le_bytes());
+        d.extend_from_slice(&[0; 4]);
+        d.extend_from_slice(&(off as u32).to_le_bytes());
+        d.extend_from_slice(&40u32.to_le_bytes());
+        d.extend_from_slice(&(w as i32).to_le_bytes());
+        let hh = if top_down { -(h as i32) } else { h as i32 };
+        d.extend_from_slice(&hh.to_le_bytes());
+        d.extend_from_slice(&1u16.to_le_bytes());
+        d.extend_from_slice(&bpp.to_le_bytes());
+        d.extend_from_slice(&[0; 4 * 4]);
+        d.extend_from_slice(&(palette.len() as u32).to_le_bytes());
+        d.extend_from_slice(&[0; 4]);
+        for q in palette {
+            d.extend_from_slice(q);
+        }
+        let order: Vec<usize> = if top_down {
+            (0..h).collect()
+        } else {
+            (0..h).rev().collect()
+        };
+        for y in order {
+            let mut r = rows[y].clone();
+            r.resize(stride, 0);
+            d.extend_from_slice(&r);
+        }
+        d
+    }
+
+    #[test]
+    fn bmp_1_8_24_bit() {
+        // 1-bit, palette 0 = black, 1 = white; row 0 = 1010..., row 1 = 0000...1 (x = 9)
+        let pal = [[0, 0, 0, 0], [255, 255, 255, 0]];
+        let rows = vec![vec![0b1010_0000, 0], vec![0, 0b0100_0000]];
+        let b = decode_bmp(&bmp(10, 2, 1, &pal, &rows, false), &opts()).unwrap();
+        assert_eq!((b.width(), b.height(), b.count_ones()), (10, 2, 3));
+        assert!(b.get(0, 0) && b.get(2, 0) && b.get(9, 1));
+        // 8-bit grey ramp, top-down
+        let pal: Vec<[u8; 4]> = (0..=255u8).map(|v| [v, v, v, 0]).collect();
+        let rows = vec![vec![0, 127, 128, 200]];
+        let b = decode_bmp(&bmp(4, 1, 8, &pal, &rows, true), &opts()).unwrap();
+        assert_eq!(
+            (0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(),
+            [false, false, true, true]
+        );
+        // 24-bit BGR: blue pixel, white pixel
+        let rows = vec![vec![255, 0, 0, 255, 255, 255]];
+        let blue = ThresholdOptions {
+            channel: Channel::Blue,
+            ..opts()
+        };
+        let b = decode_bmp(&bmp(2, 1, 24, &[], &rows, false), &blue).unwrap();
+        assert!(b.get(0, 0) && b.get(1, 0));
+        let b = decode_bmp(&bmp(2, 1, 24, &[], &rows, false), &opts()).unwrap();
+        assert!(!b.get(0, 0) && b.get(1, 0));
+        assert!(decode_bmp(b"BMxx", &opts()).is_err());
+        assert!(decode_bmp(&bmp(2, 1, 24, &[], &rows, false)[..60], &opts()).is_err());
+    }
+
+    proptest::proptest! {
+        /// Word-wise span filling equals setting the pixels one by one.
+        #[test]
+        fn fill_span_matches_set(w in 1usize..300, a in 0usize..320, len in 0usize..320) {
+            let mut fast = Bitmap::new(w, 2);
+            fast.fill_span(1, a, a + len);
+            let mut slow = Bitmap::new(w, 2);
+            for x in a..a + len {
+                slow.set(x, 1, true);
+            }
+            proptest::prop_assert_eq!(fast, slow);
+        }
+    }
+}

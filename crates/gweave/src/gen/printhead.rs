@@ -1,0 +1,288 @@
+//! Inkjet printhead profile for binder-jet raster printing.
+//!
+//! The defaults describe the HP C6602 cartridge driven by the `hpc6602` branch of Marlin
+//! (`sjkelly/Marlin:Marlin/Marlin_main.cpp`): 12 nozzles in one column at 96 dpi, fired by
+//! `M700 P<head> S<bits>` where bit `a` of `S` fires nozzle address `a` (LSB = address 0).
+//! RepRapFirmware names the same command `M578 P<head> S<bits>`.
+//!
+//! Geometry: the nozzles of a head form one row-per-nozzle column along +Y. Nozzle row `r`
+//! (0 = the nozzle at the head's reference point) prints the pixel row `r` of the current band.
+//! The pitch is `25.4 / dpi` mm exactly (96 dpi = 0.264583.. mm, REFERENCE §4).
+//! The physical nozzle order of the C6602 is not the address order (PlanB pinout), so the
+//! profile carries a nozzle map from address to physical row; `raster::test_pattern` prints a
+//! pattern that reveals it.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Largest nozzle count: a band's nozzle mask is one `u64`.
+pub const MAX_NOZZLES: u32 = 64;
+
+/// Errors from validating a [`PrintheadProfile`].
+#[derive(Debug, Error, PartialEq)]
+pub enum PrintheadError {
+    #[error("nozzle_count must be 1..={MAX_NOZZLES}, got {0}")]
+    NozzleCount(u32),
+    #[error("dpi must be a positive finite number, got {0}")]
+    Dpi(f64),
+    #[error("at least one head is required")]
+    NoHeads,
+    #[error("nozzle_rows must list each row 0..{count} exactly once (got {rows:?})")]
+    NozzleMap { count: u32, rows: Vec<u32> },
+    #[error("{field} must be a non-negative finite number, got {value}")]
+    Negative { field: &'static str, value: f64 },
+    #[error("head {head} offset must be finite")]
+    HeadOffset { head: usize },
+    #[error("invalid printhead TOML: {0}")]
+    Toml(String),
+}
+
+/// Order of nozzle addresses inside the `S` word.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum BitOrder {
+    /// Address `a` is bit `a` (Marlin hpc6602: LSB = nozzle 0).
+    #[default]
+    LsbFirst,
+    /// Address `a` is bit `nozzle_count - 1 - a`.
+    MsbFirst,
+}
+
+/// Which fire command the firmware understands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FirmwareDialect {
+    /// Marlin hpc6602 branch: `M700 P<head> S<bits>`.
+    #[default]
+    Marlin,
+    /// RepRapFirmware: `M578 P<head> S<bits>`.
+    RepRapFirmware,
+}
+
+impl FirmwareDialect {
+    /// The M-code number of the fire command.
+    pub fn fire_code(self) -> u32 {
+        match self {
+            FirmwareDialect::Marlin => 700,
+            FirmwareDialect::RepRapFirmware => 578,
+        }
+    }
+}
+
+/// One cartridge on the carriage. Its nozzle row 0 sits at carriage position + offset.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct HeadOffset {
+    pub offset_x_mm: f64,
+    pub offset_y_mm: f64,
+}
+
+/// A printhead profile, loaded from TOML (all keys optional, unknown keys rejected).
+///
+/// ```toml
+/// nozzle_count = 12
+/// dpi = 96.0
+/// nozzle_rows = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]
+/// bit_order = "lsb_first"
+/// min_fire_interval_us = 800.0
+/// drop_volume_pl = 160.0
+/// dialect = "marlin"
+/// [[heads]]
+/// offset_x_mm = 0.0
+/// offset_y_mm = 0.0
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PrintheadProfile {
+    /// Nozzles per head (C6602: 12).
+    pub nozzle_count: u32,
+    /// Nozzle pitch as dots per inch (C6602: 96); the pitch is `25.4 / dpi` mm.
+    pub dpi: f64,
+    /// Heads on the carriage, addressed `P0`, `P1`, ... in this order.
+    pub heads: Vec<HeadOffset>,
+    /// `nozzle_rows[a]` = physical row (0 = reference nozzle, rows along +Y) fired by
+    /// address `a`. Empty means identity (address `a` fires row `a`).
+    pub nozzle_rows: Vec<u32>,
+    /// Address order inside the `S` word.
+    pub bit_order: BitOrder,
+    /// Shortest time between two fires of one head (C6602 on Marlin: 800 us).
+    pub min_fire_interval_us: f64,
+    /// Volume of one drop in picolitres, if known (gives the binder volume in reports).
+    pub drop_volume_pl: Option<f64>,
+    /// Fire command dialect.
+    pub dialect: FirmwareDialect,
+}
+
+impl Default for PrintheadProfile {
+    /// The HP C6602 on Marlin hpc6602: 12 nozzles, 96 dpi, one head, identity map.
+    fn default() -> Self {
+        PrintheadProfile {
+            nozzle_count: 12,
+            dpi: 96.0,
+            heads: vec![HeadOffset::default()],
+            nozzle_rows: Vec::new(),
+            bit_order: BitOrder::LsbFirst,
+            min_fire_interval_us: 800.0,
+            drop_volume_pl: None,
+            dialect: FirmwareDialect::Marlin,
+        }
+    }
+}
+
+impl PrintheadProfile {
+    /// Parses and validates a TOML profile.
+    pub fn from_toml(text: &str) -> Result<Self, PrintheadError> {
+        let p: PrintheadProfile =
+            toml::from_str(text).map_err(|e| PrintheadError::Toml(e.to_string()))?;
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Checks ranges and that the nozzle map is a permutation.
+    pub fn validate(&self) -> Result<(), PrintheadError> {
+        if self.nozzle_count == 0 || self.nozzle_count > MAX_NOZZLES {
+            return Err(PrintheadError::NozzleCount(self.nozzle_count));
+        }
+        if !(self.dpi.is_finite() && self.dpi > 0.0) {
+            return Err(PrintheadError::Dpi(self.dpi));
+        }
+        if self.heads.is_empty() {
+            return Err(PrintheadError::NoHeads);
+        }
+        for (i, h) in self.heads.iter().enumerate() {
+            if !(h.offset_x_mm.is_finite() && h.offset_y_mm.is_finite()) {
+                return Err(PrintheadError::HeadOffset { head: i });
+            }
+        }
+        check_non_negative("min_fire_interval_us", self.min_fire_interval_us)?;
+        if let Some(v) = self.drop_volume_pl {
+            check_non_negative("drop_volume_pl", v)?;
+        }
+        if !self.nozzle_rows.is_empty() {
+            let mut seen = vec![false; self.nozzle_count as usize];
+            let bad = || PrintheadError::NozzleMap {
+                count: self.nozzle_count,
+                rows: self.nozzle_rows.clone(),
+            };
+            if self.nozzle_rows.len() != seen.len() {
+                return Err(bad());
+            }
+            for &r in &self.nozzle_rows {
+                match seen.get_mut(r as usize) {
+                    Some(s) if !*s => *s = true,
+                    _ => return Err(bad()),
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Nozzle pitch in mm: `25.4 / dpi`.
+    pub fn pitch_mm(&self) -> f64 {
+        25.4 / self.dpi
+    }
+
+    /// The `S` bit that fires nozzle row `row` (after the nozzle map and bit order).
+    /// Call only on a validated profile with `row < nozzle_count`.
+    pub fn s_bit_of_row(&self, row: u32) -> u32 {
+        let address = if self.nozzle_rows.is_empty() {
+            row
+        } else {
+            // The map is a validated permutation, so the row is present.
+            self.nozzle_rows.iter().position(|&r| r == row).unwrap_or(0) as u32
+        };
+        self.s_bit_of_address(address)
+    }
+
+    /// The `S` bit of nozzle address `address` under the bit order.
+    pub fn s_bit_of_address(&self, address: u32) -> u32 {
+        match self.bit_order {
+            BitOrder::LsbFirst => address,
+            BitOrder::MsbFirst => self.nozzle_count - 1 - address,
+        }
+    }
+
+    /// Table `row -> S bit` for all rows.
+    pub fn row_to_s_bit(&self) -> Vec<u32> {
+        (0..self.nozzle_count)
+            .map(|r| self.s_bit_of_row(r))
+            .collect()
+    }
+
+    /// Converts an `S` word into a mask of physical rows (bit `r` = row `r` fires).
+    /// Bits above `nozzle_count` are ignored, as the firmware does.
+    pub fn rows_of_s_bits(&self, s_bits: u64) -> u64 {
+        self.row_to_s_bit()
+            .iter()
+            .enumerate()
+            .filter(|(_, &b)| s_bits >> b & 1 == 1)
+            .fold(0u64, |m, (r, _)| m | 1 << r)
+    }
+}
+
+fn check_non_negative(field: &'static str, value: f64) -> Result<(), PrintheadError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(PrintheadError::Negative { field, value })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_is_hp_c6602() {
+        let p = PrintheadProfile::default();
+        p.validate().unwrap();
+        assert_eq!(p.nozzle_count, 12);
+        assert_eq!(p.pitch_mm(), 25.4 / 96.0);
+        assert!((p.pitch_mm() - 0.264_583_333).abs() < 1e-9);
+        assert_eq!(p.min_fire_interval_us, 800.0);
+        assert_eq!(p.dialect.fire_code(), 700);
+        assert_eq!(FirmwareDialect::RepRapFirmware.fire_code(), 578);
+    }
+
+    #[test]
+    fn toml_roundtrip_and_unknown_key() {
+        let p = PrintheadProfile::from_toml(
+            "nozzle_count = 4\ndpi = 300.0\nnozzle_rows = [2, 0, 3, 1]\nbit_order = \"msb_first\"\n\
+             dialect = \"rep_rap_firmware\"\n[[heads]]\noffset_x_mm = 1.5\n[[heads]]\noffset_y_mm = -2.0\n",
+        )
+        .unwrap();
+        assert_eq!(p.heads.len(), 2);
+        assert_eq!(p.heads[1].offset_y_mm, -2.0);
+        assert_eq!(p.dialect, FirmwareDialect::RepRapFirmware);
+        // row 2 is address 0 -> msb-first bit 3; row 0 is address 1 -> bit 2.
+        assert_eq!(p.row_to_s_bit(), vec![2, 0, 3, 1]);
+        assert_eq!(p.rows_of_s_bits(0b1000), 0b0100);
+        assert_eq!(p.rows_of_s_bits(0xFFF0), 0);
+        let text = toml::to_string(&p).unwrap();
+        assert_eq!(PrintheadProfile::from_toml(&text).unwrap(), p);
+        assert!(matches!(
+            PrintheadProfile::from_toml("nozzles = 12"),
+            Err(PrintheadError::Toml(_))
+        ));
+    }
+
+    #[test]
+    fn rejects_bad_maps_and_ranges() {
+        let bad = |t: &str| PrintheadProfile::from_toml(t).unwrap_err();
+        assert!(matches!(
+            bad("nozzle_count = 3\nnozzle_rows = [0, 0, 1]"),
+            PrintheadError::NozzleMap { .. }
+        ));
+        assert!(matches!(
+            bad("nozzle_count = 3\nnozzle_rows = [0, 1, 3]"),
+            PrintheadError::NozzleMap { .. }
+        ));
+        assert_eq!(bad("nozzle_count = 65"), PrintheadError::NozzleCount(65));
+        assert_eq!(bad("dpi = 0.0"), PrintheadError::Dpi(0.0));
+        assert_eq!(bad("heads = []"), PrintheadError::NoHeads);
+        assert!(matches!(
+            bad("drop_volume_pl = -1.0"),
+            PrintheadError::Negative { .. }
+        ));
+    }
+}
