@@ -204,7 +204,7 @@ impl Estimator {
     pub fn line(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
         self.line += 1;
         parse_into(raw, &mut self.block);
-        let effect = self.state.apply(raw, &self.block);
+        let effect = *self.state.apply(raw, &self.block);
         match effect {
             Effect::Move(m) => return self.motion(&m),
             Effect::Dwell { t_s } => {
