@@ -1,1 +1,3 @@
 //! gweave: a lossless, streaming G-code engine for unconventional 3D printers.
+
+pub mod rotary;

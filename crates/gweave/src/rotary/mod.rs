@@ -1,0 +1,100 @@
+//! Rotary (lathe-type) printing: a nozzle over a turning mandrel.
+//!
+//! The machine has three motion axes: one **axial** axis along the mandrel (default `X`), one
+//! **rotary** axis that turns it (default `A`, in degrees, or a linear `Y` that the firmware
+//! treats as millimetres of circumference), and one **radial** axis that lifts the nozzle off the
+//! mandrel surface (default `Z`, with `Z = 0` the nozzle touching the mandrel).
+//!
+//! - [`cylinder`]: the machine maths as pure functions: the feed-rate conventions (the trap of
+//!   rotary printing), the flat-to-cylinder unwrap mapping, chord subdivision, the seam.
+//! - [`emit`]: the move writer shared by the generators: fixed decimals, absolute or relative E,
+//!   F converted per convention from the rounded coordinates the firmware will actually see.
+//! - [`helix`]: seam-free helical tubes and custom helical paths (cones, variable pitch).
+//!
+//! ```
+//! use gweave::rotary::{helix::TubeParams, cylinder::RotaryConfig};
+//! let mut params = TubeParams::new(RotaryConfig::new(20.0));
+//! params.length_mm = 5.0;
+//! params.layers = 2;
+//! let mut out = Vec::new();
+//! params.write_gcode(&mut out).unwrap();
+//! let text = String::from_utf8(out).unwrap();
+//! assert!(text.starts_with("; gweave rotary tube"));
+//! ```
+
+pub mod cylinder;
+pub mod emit;
+pub mod helix;
+
+use thiserror::Error;
+
+/// Everything that can go wrong in the rotary module.
+#[derive(Debug, Error)]
+pub enum RotaryError {
+    /// A configuration value is out of range or inconsistent.
+    #[error("invalid rotary setting `{key}`: {reason}")]
+    Config {
+        /// The TOML key (kebab-case) of the offending setting.
+        key: &'static str,
+        /// Why it was rejected.
+        reason: String,
+    },
+    /// The TOML text could not be read (unknown key, wrong type, syntax).
+    #[error("rotary config: {0}")]
+    Toml(#[from] toml::de::Error),
+    /// A profile function returned a value that cannot be printed.
+    #[error("{what} profile gave {value} at axial {axial_mm} mm; it must be finite and > 0")]
+    Profile {
+        /// `pitch` or `radius`.
+        what: &'static str,
+        /// Where along the mandrel it was evaluated.
+        axial_mm: f64,
+        /// The value it returned.
+        value: f64,
+    },
+    /// A point lies on or below the mandrel axis (radius <= 0).
+    #[error("radius {radius_mm} mm is not above the mandrel axis")]
+    BelowAxis {
+        /// The offending radius.
+        radius_mm: f64,
+    },
+    /// A path would need more points than the safety limit (runaway parameters).
+    #[error("path needs more than {limit} points; check pitch and tolerance")]
+    TooManyPoints {
+        /// The limit that was hit.
+        limit: usize,
+    },
+    /// A move was asked for before the machine's position was established.
+    #[error("a move was written before the machine's position was known")]
+    UnknownPosition,
+    /// Writing the output failed.
+    #[error("writing G-code: {0}")]
+    Io(#[from] std::io::Error),
+}
+
+/// Shorthand for results of this module.
+pub type Result<T, E = RotaryError> = std::result::Result<T, E>;
+
+/// Checks that `value` is finite and strictly positive.
+pub(crate) fn positive(key: &'static str, value: f64) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(RotaryError::Config {
+            key,
+            reason: format!("must be a finite number > 0, got {value}"),
+        })
+    }
+}
+
+/// Checks that `value` is finite.
+pub(crate) fn finite(key: &'static str, value: f64) -> Result<()> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(RotaryError::Config {
+            key,
+            reason: format!("must be finite, got {value}"),
+        })
+    }
+}
