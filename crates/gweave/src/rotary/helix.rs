@@ -39,8 +39,8 @@ use super::cylinder::{max_chord_step_deg, surface_length_mm, CylPoint, RotaryCon
 use super::emit::{format_fixed, MoveWriter, NumberFormat};
 use super::{finite, positive, Result, RotaryError};
 
-/// Most points one path may have (a runaway guard: 20 million points is ~500 MB of G-code).
-pub const MAX_POINTS: usize = 20_000_000;
+/// Most points one path may have (a runaway guard: 5 million chords are ~150 MB of G-code).
+pub const MAX_POINTS: usize = 5_000_000;
 
 /// A quantity as a function of the axial position, mm -> mm.
 #[derive(Clone)]
@@ -222,14 +222,15 @@ impl HelicalPath {
             -1.0
         };
         let spin = self.spin();
+        self.check_size(resolution)?;
         let mut x = self.start_axial_mm;
-        let mut theta = self.start_theta_deg;
         let mut points = vec![CylPoint::new(
             x,
-            theta,
+            self.start_theta_deg,
             self.radius_mm.checked("radius", x)?,
         )];
         self.turn_in_place(&mut points, self.lead_in_deg * spin, resolution)?;
+        let mut theta = points.last().map_or(self.start_theta_deg, |p| p.theta_deg);
         loop {
             let remaining = (self.end_axial_mm - x).abs();
             if remaining <= 0.0 {
@@ -257,6 +258,20 @@ impl HelicalPath {
         }
         self.turn_in_place(&mut points, self.lead_out_deg * spin, resolution)?;
         Ok(points)
+    }
+
+    /// Refuses early a path whose estimate from its start (pitch, radius) exceeds
+    /// [`MAX_POINTS`]; variable profiles are also guarded point by point.
+    fn check_size(&self, resolution: Resolution) -> Result<()> {
+        let x = self.start_axial_mm;
+        let step = resolution.step_deg(self.radius_mm.checked("radius", x)?);
+        let turns_deg = (self.end_axial_mm - x).abs() / self.pitch_mm.checked("pitch", x)? * 360.0
+            + self.lead_in_deg
+            + self.lead_out_deg;
+        if turns_deg / step > MAX_POINTS as f64 {
+            return Err(RotaryError::TooManyPoints { limit: MAX_POINTS });
+        }
+        Ok(())
     }
 
     /// Appends a flat turn of `d_theta_deg` at the last point's axial position.
@@ -487,12 +502,12 @@ fn write_program<W: Write>(
         let Some((&first, rest)) = points.split_first() else {
             continue;
         };
-        writer.line(&format!("; {label}"))?;
         if writer.position().is_none() {
             writer.declare_rotary_and_e(first)?;
             writer.approach(first, print.travel_speed_mm_s * 60.0)?;
             writer.enter_feed_mode()?;
         }
+        writer.line(&format!("; {label}"))?;
         writer.move_to(first, 0.0, print.travel_speed_mm_s)?;
         let mut prev = first;
         for &p in rest {
