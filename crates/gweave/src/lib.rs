@@ -1,3 +1,25 @@
 //! gweave: a lossless, streaming G-code engine for unconventional 3D printers.
+//!
+//! Every command is a [`pass::Pass`] over a stream of lines: the [`gcode::lexer`] records what
+//! each line says (with spans), the [`gcode::state`] tracks what the machine would do, and lines a
+//! pass does not change are written back byte for byte.
+//!
+//! ```
+//! use gweave::gcode::{lexer::parse_into, line::Block, state::{State, X}};
+//! let mut block = Block::default();
+//! let mut state = State::default();
+//! for line in ["G90", "G1 X10 Y5 E0.4 F1800", "G1X12.5"] {
+//!     parse_into(line.as_bytes(), &mut block);
+//!     state.apply(line.as_bytes(), &block);
+//! }
+//! assert_eq!(state.pos[X], 12.5);
+//! ```
 
+pub mod check;
+pub mod error;
+pub mod gcode;
+pub mod pass;
 pub mod rotary;
+pub mod stats;
+
+pub use error::{Error, Result};

@@ -1,0 +1,81 @@
+//! `gweave check`: lint a file before it reaches a printer; exit code 1 when errors are found.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Result;
+use clap::Args;
+use gweave::check::{CheckOptions, CheckPass};
+use gweave::pass::{Run, Strictness};
+
+use crate::common::ReportArgs;
+use crate::progress::Bar;
+
+/// Lint G-code: checksums, malformed or unknown commands, cold extrusion, bed bounds, feed rates.
+///
+/// Exit code 0 when no errors were found (warnings allowed), 1 otherwise.
+/// Example: `gweave check part.gcode --bed 220,220,250`.
+#[derive(Args, Debug)]
+pub struct CheckArgs {
+    /// The G-code file to check.
+    pub input: PathBuf,
+    /// Printable volume X,Y,Z in mm; moves outside it are reported.
+    #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 3)]
+    pub bed: Option<Vec<f64>>,
+    /// Feed rates above this are absurd, mm/min.
+    #[arg(long, default_value_t = CheckOptions::default().max_feed_mm_min)]
+    pub max_feed: f64,
+    /// Treat warnings as errors.
+    #[arg(long)]
+    pub strict: bool,
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn run(args: CheckArgs) -> Result<ExitCode> {
+    let options = CheckOptions {
+        bed_mm: args.bed.as_ref().map(|b| [b[0], b[1], b[2]]),
+        max_feed_mm_min: args.max_feed,
+        ..CheckOptions::default()
+    };
+    let mut pass = CheckPass::new(options);
+    let mut bar = Bar::new(args.quiet);
+    let mut run = Run::new(&args.input, &mut bar);
+    run.strictness = Strictness::Lenient;
+    run.scan(&mut pass)?;
+    drop(bar);
+    let report = pass.report;
+    if args.report.emit(&report)? {
+        let name = args.input.display();
+        for f in &report.findings {
+            let level = match f.severity {
+                gweave::gcode::diag::Severity::Error => "error",
+                gweave::gcode::diag::Severity::Warning => "warning",
+            };
+            println!(
+                "{name}:{}:{}: {level}: {}",
+                f.line, f.diagnostic.column, f.diagnostic.finding
+            );
+        }
+        let shown = report.findings.len() as u64;
+        if shown < report.errors + report.warnings {
+            println!(
+                "... {} more findings not shown",
+                report.errors + report.warnings - shown
+            );
+        }
+        println!(
+            "{name}: {} lines, {} errors, {} warnings",
+            report.lines, report.errors, report.warnings
+        );
+    }
+    let failed = report.errors > 0 || (args.strict && report.warnings > 0);
+    Ok(if failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}

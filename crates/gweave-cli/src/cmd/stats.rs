@@ -1,0 +1,102 @@
+//! `gweave stats`: what a file will print, in one streaming pass.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Result;
+use clap::Args;
+use gweave::pass::Run;
+use gweave::stats::{Stats, StatsPass};
+
+use crate::common::ReportArgs;
+use crate::progress::Bar;
+
+/// Statistics of a G-code file: slicer, layers, extents, filament per tool, distances, time.
+///
+/// Filament per tool counts extruding moves, as PrusaSlicer's `; filament used [mm]` does.
+/// Example: `gweave stats part.gcode --json`.
+#[derive(Args, Debug)]
+pub struct StatsArgs {
+    /// The G-code file to read.
+    pub input: PathBuf,
+    /// Filament diameter in mm (default: the file's own setting, else 1.75).
+    #[arg(long, value_name = "MM")]
+    pub filament_diameter: Option<f64>,
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn run(args: StatsArgs) -> Result<ExitCode> {
+    let mut pass = StatsPass::new(args.filament_diameter);
+    let mut bar = Bar::new(args.quiet);
+    let state = Run::new(&args.input, &mut bar).scan(&mut pass)?;
+    drop(bar);
+    let stats = pass.into_stats(&state);
+    if args.report.emit(&stats)? {
+        print_human(&args.input, &stats);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_human(input: &std::path::Path, s: &Stats) {
+    println!("{}", input.display());
+    let flavour = s
+        .flavour
+        .as_deref()
+        .map(|f| format!(" ({f})"))
+        .unwrap_or_default();
+    println!("  slicer          {}{flavour}", s.slicer.name());
+    println!(
+        "  lines           {} ({:.1} MB)",
+        s.lines,
+        s.bytes as f64 / 1e6
+    );
+    println!("  layers          {}", s.layers);
+    if let Some([lo, hi]) = s.z_range_mm {
+        println!("  z range         {lo:.3} .. {hi:.3} mm");
+    }
+    if let Some(b) = s.extrusion_bounds {
+        println!(
+            "  extents         X {:.2}..{:.2}  Y {:.2}..{:.2} mm",
+            b.min[0], b.max[0], b.min[1], b.max[1]
+        );
+    }
+    println!("  tool changes    {}", s.tool_changes);
+    println!("  filament        (diameter {} mm)", s.filament_diameter_mm);
+    for (i, f) in s.filament.iter().enumerate() {
+        let theirs = s
+            .slicer_figures
+            .filament_used_mm
+            .as_ref()
+            .and_then(|l| l.get(i))
+            .map(|v| format!("   slicer says {v:.2} mm"))
+            .unwrap_or_default();
+        println!(
+            "    T{:<3} {:>12.2} mm {:>10.1} mm3{theirs}",
+            f.tool, f.extruded_mm, f.extruded_mm3
+        );
+    }
+    println!(
+        "  print / travel  {:.1} m / {:.1} m",
+        s.print_mm / 1000.0,
+        s.travel_mm / 1000.0
+    );
+    println!("  time (F only)   {}", hms(s.time_s));
+    for (feature, t) in &s.time_by_feature_s {
+        println!("    {feature:<18} {}", hms(*t));
+    }
+    if let Some(t) = s.slicer_figures.estimated_time_s {
+        println!("  slicer estimate {}", hms(t));
+    }
+    for w in &s.warnings {
+        println!("  warning: {w}");
+    }
+}
+
+fn hms(t_s: f64) -> String {
+    let t = t_s.round() as u64;
+    format!("{}h {:02}m {:02}s", t / 3600, t / 60 % 60, t % 60)
+}

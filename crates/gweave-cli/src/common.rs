@@ -1,0 +1,64 @@
+//! Arguments shared by subcommands: where output goes, and machine-readable reports.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use gweave::gcode::writer::Target;
+use serde::Serialize;
+
+/// Where a transform writes.
+#[derive(Args, Debug)]
+pub struct OutputArgs {
+    /// Output file (`-` for standard output). Written to a temporary file and renamed into place.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<PathBuf>,
+    /// Replace the input file (as PrusaSlicer post-processing scripts are called).
+    #[arg(long, conflicts_with = "output")]
+    pub in_place: bool,
+    /// With --in-place, do not keep `<input>.bak`.
+    #[arg(long, requires = "in_place")]
+    pub no_backup: bool,
+}
+
+impl OutputArgs {
+    pub fn target(&self) -> Result<Target> {
+        Ok(match (&self.output, self.in_place) {
+            (_, true) => Target::InPlace {
+                keep_backup: !self.no_backup,
+            },
+            (Some(p), false) if p == Path::new("-") => Target::Stdout,
+            (Some(p), false) => Target::File(p.clone()),
+            (None, false) => {
+                bail!("say where to write: -o OUT, -o - for standard output, or --in-place")
+            }
+        })
+    }
+}
+
+/// Machine-readable output.
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// Print the result as JSON on standard output instead of the human summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the result as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+}
+
+impl ReportArgs {
+    /// Writes the JSON report file if asked; returns whether the human summary should print.
+    pub fn emit<T: Serialize>(&self, value: &T) -> Result<bool> {
+        if let Some(path) = &self.report {
+            let text = serde_json::to_string_pretty(value)?;
+            std::fs::write(path, text + "\n")
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+        if self.json {
+            println!("{}", serde_json::to_string_pretty(value)?);
+            return Ok(false);
+        }
+        Ok(true)
+    }
+}

@@ -1,0 +1,261 @@
+//! `gweave check`: a lint for G-code before it reaches a printer. It reports what would go wrong
+//! on a machine: bad checksums and line numbers, malformed or unknown commands, extrusion before
+//! any hotend temperature, moves off the bed, absurd feed rates, and extrusion values that drift
+//! in single-precision firmware.
+
+use std::io::{self, Write};
+
+use serde::Serialize;
+
+use crate::gcode::diag::{Diagnostic, Finding, Severity};
+use crate::gcode::line::{Command, Value};
+use crate::gcode::state::{Effect, AXIS_LETTERS, E, X, Y, Z};
+use crate::pass::{Ctx, Pass};
+
+/// Lint settings.
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CheckOptions {
+    /// Printable volume `[x, y, z]`, mm, from the origin; `None` skips the bounds check.
+    pub bed_mm: Option<[f64; 3]>,
+    /// Feed rates above this are absurd, mm/min (default 60 000 = 1 m/s).
+    pub max_feed_mm_min: f64,
+    /// Relative extrusion longer than this without `G92 E` drifts in float firmware, mm.
+    pub max_relative_e_mm: f64,
+    /// Absolute E beyond this loses resolution in single precision, mm.
+    pub max_absolute_e_mm: f64,
+    /// At most this many findings are kept (all are counted).
+    pub max_findings: usize,
+}
+
+impl Default for CheckOptions {
+    fn default() -> Self {
+        CheckOptions {
+            bed_mm: None,
+            max_feed_mm_min: 60_000.0,
+            max_relative_e_mm: 100_000.0,
+            max_absolute_e_mm: 100_000.0,
+            max_findings: 1000,
+        }
+    }
+}
+
+/// One finding at a line.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct LineFinding {
+    pub line: u64,
+    #[serde(flatten)]
+    pub diagnostic: Diagnostic,
+    pub severity: Severity,
+}
+
+/// The lint's result.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct CheckReport {
+    pub lines: u64,
+    pub errors: u64,
+    pub warnings: u64,
+    pub findings: Vec<LineFinding>,
+}
+
+impl CheckReport {
+    pub fn passed(&self) -> bool {
+        self.errors == 0
+    }
+}
+
+/// The lint pass.
+#[derive(Debug, Default)]
+pub struct CheckPass {
+    options: CheckOptions,
+    pub report: CheckReport,
+    last_line_number: Option<i64>,
+    relative_e_since_reset_mm: f64,
+    drift_reported: bool,
+    cold_reported: bool,
+}
+
+impl CheckPass {
+    pub fn new(options: CheckOptions) -> Self {
+        CheckPass {
+            options,
+            ..Default::default()
+        }
+    }
+
+    fn add(&mut self, line: u64, diagnostic: Diagnostic) {
+        let severity = diagnostic.finding.severity();
+        match severity {
+            Severity::Error => self.report.errors += 1,
+            Severity::Warning => self.report.warnings += 1,
+        }
+        if self.report.findings.len() < self.options.max_findings {
+            self.report.findings.push(LineFinding {
+                line,
+                diagnostic,
+                severity,
+            });
+        }
+    }
+}
+
+impl Pass for CheckPass {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+        let n = ctx.line.number;
+        self.report.lines = n;
+        let block = ctx.block;
+        for d in &block.diagnostics {
+            self.add(n, d.clone());
+        }
+        if let Some((num, span)) = block.line_number {
+            if let Some(last) = self.last_line_number {
+                let is_reset = block.command.is_m(110);
+                if !is_reset && num != last + 1 {
+                    self.add(
+                        n,
+                        Diagnostic::at(
+                            span.start as usize,
+                            Finding::LineNumberSequence {
+                                expected: last + 1,
+                                found: num,
+                            },
+                        ),
+                    );
+                }
+            }
+            self.last_line_number = Some(if block.command.is_m(110) {
+                block.get(b'N').map_or(num, |v| v as i64)
+            } else {
+                num
+            });
+        }
+        if let Command::Code { letter, number, .. } = block.command {
+            if !is_known(letter, number) {
+                let command = String::from_utf8_lossy(block.command_span.of(ctx.line.bytes))
+                    .to_ascii_uppercase();
+                self.add(
+                    n,
+                    Diagnostic::at(
+                        block.command_span.start as usize,
+                        Finding::UnknownCommand { command },
+                    ),
+                );
+            }
+            let is_motion = letter == b'G' && matches!(number, 0..=3);
+            if is_motion {
+                for w in &block.words {
+                    if w.value == Value::Empty
+                        && (AXIS_LETTERS.contains(&w.letter) || w.letter == b'F')
+                    {
+                        self.add(
+                            n,
+                            Diagnostic::at(
+                                w.span.start as usize,
+                                Finding::MissingValue {
+                                    letter: w.letter as char,
+                                },
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+        if let Some(w) = block.word(b'F') {
+            if let Value::Number(f) = w.value {
+                if f <= 0.0 || f > self.options.max_feed_mm_min {
+                    self.add(
+                        n,
+                        Diagnostic::at(
+                            w.span.start as usize,
+                            Finding::AbsurdFeedRate {
+                                feed_mm_min: fmt(f),
+                            },
+                        ),
+                    );
+                }
+            }
+        }
+        match ctx.effect {
+            Effect::Move(m) => {
+                let e = m.e_mm();
+                if e > 0.0 && !ctx.state.thermal.hotend_set && !self.cold_reported {
+                    self.cold_reported = true;
+                    let col = block.word(b'E').map_or(0, |w| w.span.start as usize);
+                    self.add(n, Diagnostic::at(col, Finding::ExtrusionBeforeHeating));
+                }
+                if let Some(bed) = self.options.bed_mm {
+                    for (axis, limit) in [(X, bed[0]), (Y, bed[1]), (Z, bed[2])] {
+                        let v = m.to[axis];
+                        if v < -1e-9 || v > limit + 1e-9 {
+                            let letter = AXIS_LETTERS[axis];
+                            let col = block.word(letter).map_or(0, |w| w.span.start as usize);
+                            self.add(
+                                n,
+                                Diagnostic::at(
+                                    col,
+                                    Finding::OutsideBed {
+                                        axis: letter as char,
+                                        value_mm: fmt(v),
+                                    },
+                                ),
+                            );
+                        }
+                    }
+                }
+                if ctx.state.relative_e() {
+                    self.relative_e_since_reset_mm += e.abs();
+                    if self.relative_e_since_reset_mm > self.options.max_relative_e_mm
+                        && !self.drift_reported
+                    {
+                        self.drift_reported = true;
+                        self.add(
+                            n,
+                            Diagnostic::at(
+                                0,
+                                Finding::RelativeEDrift {
+                                    since_reset_mm: fmt(self.relative_e_since_reset_mm),
+                                },
+                            ),
+                        );
+                    }
+                } else if m.to[E].abs() > self.options.max_absolute_e_mm && !self.drift_reported {
+                    self.drift_reported = true;
+                    self.add(
+                        n,
+                        Diagnostic::at(0, Finding::AbsoluteEPrecision { e_mm: fmt(m.to[E]) }),
+                    );
+                }
+            }
+            Effect::SetPosition if block.has(b'E') => {
+                self.relative_e_since_reset_mm = 0.0;
+                self.drift_reported = false;
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+fn fmt(v: f64) -> String {
+    format!("{v:.3}")
+}
+
+/// Whether a G/M/T code is one that some mainstream firmware (Marlin, RepRapFirmware, Klipper,
+/// Prusa) understands.
+pub fn is_known(letter: u8, number: u32) -> bool {
+    match letter {
+        b'T' | b'D' => true,
+        b'G' => {
+            matches!(number, 0..=6 | 10..=12 | 17..=21 | 26..=35 | 38 | 53..=61 | 68 | 69 | 75 | 76 | 80 | 90..=94)
+        }
+        b'M' => matches!(
+            number,
+            0..=5 | 7..=10 | 16..=49 | 73 | 75..=92 | 98..=129 | 140..=155 | 163..=166 | 190..=193
+                | 200..=221 | 226 | 232 | 240 | 250..=252 | 260..=261 | 280..=292 | 300..=309
+                | 350..=351 | 355 | 360..=361 | 380..=381 | 400..=431 | 450..=456 | 470..=472 | 486
+                | 500..=505 | 510..=512 | 524 | 540 | 550..=599 | 600..=609 | 650..=674 | 700..=703
+                | 710 | 851 | 862 | 868 | 869 | 871 | 876 | 900..=918 | 928 | 929 | 950..=958 | 997..=999
+        ),
+        _ => false,
+    }
+}

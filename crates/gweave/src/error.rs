@@ -1,0 +1,43 @@
+//! The library's error type: every failure names the file and, for bad input, the line and column.
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+use crate::gcode::diag::Finding;
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: io::Error },
+
+    #[error("{}:{line}:{column}: {finding}", path.display())]
+    Syntax {
+        path: PathBuf,
+        line: u64,
+        column: u32,
+        finding: Finding,
+    },
+
+    #[error("refusing to overwrite the input {} (use --in-place to replace it)", path.display())]
+    WouldOverwriteInput { path: PathBuf },
+
+    #[error("--in-place needs an input file")]
+    InPlaceWithoutInput,
+
+    #[error("{}: {message}", path.display())]
+    Config { path: PathBuf, message: String },
+
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Error {
+    pub fn io(path: impl AsRef<Path>, source: io::Error) -> Self {
+        Error::Io {
+            path: path.as_ref().to_path_buf(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,156 @@
+//! Diagnostics: what is wrong with a line, where, and how bad it is.
+
+use std::fmt;
+
+/// How serious a finding is. Errors make `gweave check` fail and stop transforms.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Severity {
+    Warning,
+    Error,
+}
+
+/// What was found.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Finding {
+    /// A word whose value is not a number (`X1..2`).
+    MalformedNumber {
+        letter: char,
+    },
+    /// `NaN` or `inf` where a number belongs.
+    NotFinite {
+        letter: char,
+    },
+    /// A motion word with no value (`G1 X`).
+    MissingValue {
+        letter: char,
+    },
+    /// A byte that cannot start a word.
+    UnexpectedByte {
+        byte: u8,
+    },
+    UnclosedComment,
+    UnclosedString,
+    UnclosedExpression,
+    ChecksumMismatch {
+        given: u32,
+        computed: u8,
+    },
+    /// `*` not followed by digits, or followed by more words.
+    BadChecksum,
+    /// `N` not followed by an integer.
+    BadLineNumber,
+    /// A line number that does not follow the previous one.
+    LineNumberSequence {
+        expected: i64,
+        found: i64,
+    },
+    UnknownCommand {
+        command: String,
+    },
+    /// Extrusion while no hotend temperature has been set.
+    ExtrusionBeforeHeating,
+    /// A move that leaves the bed given with `--bed`.
+    OutsideBed {
+        axis: char,
+        value_mm: String,
+    },
+    /// A feed rate no printer can do (or zero/negative).
+    AbsurdFeedRate {
+        feed_mm_min: String,
+    },
+    /// Relative extrusion running long without a `G92 E` reset (float drift in the firmware).
+    RelativeEDrift {
+        since_reset_mm: String,
+    },
+    /// Absolute E values so large that single-precision firmware loses resolution.
+    AbsoluteEPrecision {
+        e_mm: String,
+    },
+}
+
+impl Finding {
+    pub fn severity(&self) -> Severity {
+        match self {
+            Finding::UnknownCommand { .. }
+            | Finding::ExtrusionBeforeHeating
+            | Finding::OutsideBed { .. }
+            | Finding::RelativeEDrift { .. }
+            | Finding::AbsoluteEPrecision { .. }
+            | Finding::LineNumberSequence { .. } => Severity::Warning,
+            _ => Severity::Error,
+        }
+    }
+}
+
+impl fmt::Display for Finding {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Finding::MalformedNumber { letter } => write!(f, "malformed number after '{letter}'"),
+            Finding::NotFinite { letter } => write!(f, "'{letter}' is not a finite number"),
+            Finding::MissingValue { letter } => write!(f, "'{letter}' has no number"),
+            Finding::UnexpectedByte { byte } => {
+                if byte.is_ascii_graphic() {
+                    write!(f, "unexpected character '{}'", *byte as char)
+                } else {
+                    write!(f, "unexpected byte 0x{byte:02x}")
+                }
+            }
+            Finding::UnclosedComment => write!(f, "'(' comment is not closed"),
+            Finding::UnclosedString => write!(f, "string is not closed"),
+            Finding::UnclosedExpression => write!(f, "'{{' expression is not closed"),
+            Finding::ChecksumMismatch { given, computed } => {
+                write!(
+                    f,
+                    "checksum mismatch: line says {given}, bytes give {computed}"
+                )
+            }
+            Finding::BadChecksum => write!(f, "'*' must be followed by the checksum digits only"),
+            Finding::BadLineNumber => write!(f, "'N' must be followed by an integer"),
+            Finding::LineNumberSequence { expected, found } => {
+                write!(
+                    f,
+                    "line number N{found} does not follow (expected N{expected})"
+                )
+            }
+            Finding::UnknownCommand { command } => write!(f, "unknown command {command}"),
+            Finding::ExtrusionBeforeHeating => {
+                write!(f, "extrusion before any hotend temperature was set")
+            }
+            Finding::OutsideBed { axis, value_mm } => {
+                write!(f, "move outside the bed: {axis}={value_mm} mm")
+            }
+            Finding::AbsurdFeedRate { feed_mm_min } => {
+                write!(f, "absurd feed rate F{feed_mm_min} mm/min")
+            }
+            Finding::RelativeEDrift { since_reset_mm } => write!(
+                f,
+                "relative extrusion ran {since_reset_mm} mm without a G92 E reset (float drift)"
+            ),
+            Finding::AbsoluteEPrecision { e_mm } => {
+                write!(
+                    f,
+                    "absolute E reached {e_mm} mm without a reset (precision loss)"
+                )
+            }
+        }
+    }
+}
+
+/// A finding at a 1-based column of a line.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct Diagnostic {
+    pub column: u32,
+    #[serde(flatten)]
+    pub finding: Finding,
+}
+
+impl Diagnostic {
+    pub fn at(byte_index: usize, finding: Finding) -> Self {
+        Diagnostic {
+            column: byte_index as u32 + 1,
+            finding,
+        }
+    }
+}

@@ -1,0 +1,457 @@
+//! Turns the bytes of one line into a [`Block`]: one pass, no allocation, never panics.
+//!
+//! The grammar is what real files contain, not only what the RS-274 standard allows:
+//! `[/] [N<int>] [command] {word | (comment)} [*<checksum>] [;comment]`, where a command is
+//! `G`/`M`/`T`/`D` plus an integer (with an optional `.sub`), or a Klipper/RepRapFirmware name
+//! (`SET_VELOCITY_LIMIT ACCEL=3000`, `echo`, `EXCLUDE_OBJECT_DEFINE ...`) whose arguments are kept
+//! as text. Words may be glued (`G1X10Y-2.5E.4`), lower case, signed, start with a point, hold a
+//! quoted string (`P"text"`) or an `{expression}`. String commands (`M117 text`, `M23 name.gcode`)
+//! keep their argument as text. A malformed word becomes a diagnostic and parsing goes on.
+
+use super::diag::{Diagnostic, Finding};
+use super::line::{Block, Checksum, Command, Span, Value, Word};
+use super::number::{scan, NumberError};
+
+/// M-codes whose argument is free text up to the comment (Marlin reads it as a string).
+fn takes_text(number: u32) -> bool {
+    matches!(number, 0 | 1 | 23 | 28 | 30 | 32 | 33 | 117 | 118 | 928)
+}
+
+#[inline]
+fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\r' | b'\x0b' | b'\x0c')
+}
+
+#[inline]
+fn skip_space(raw: &[u8], mut i: usize) -> usize {
+    while i < raw.len() && is_space(raw[i]) {
+        i += 1;
+    }
+    i
+}
+
+/// Parses `raw` (one line without its line ending) into `block`, replacing what it held.
+pub fn parse_into(raw: &[u8], block: &mut Block) {
+    block.clear();
+    let mut i = skip_space(raw, 0);
+    if raw.get(i) == Some(&b'/') {
+        block.block_delete = true;
+        i = skip_space(raw, i + 1);
+    }
+    if raw.get(i) == Some(&b'%') {
+        block.tape_marker = true;
+        return;
+    }
+    if matches!(raw.get(i), Some(b'N' | b'n'))
+        && raw
+            .get(i + 1)
+            .is_some_and(|b| b.is_ascii_digit() || *b == b'-')
+    {
+        i = line_number(raw, i, block);
+    }
+    i = skip_space(raw, i);
+    i = command(raw, i, block);
+    words(raw, i, block);
+}
+
+fn line_number(raw: &[u8], start: usize, block: &mut Block) -> usize {
+    let mut i = start + 1;
+    let negative = raw.get(i) == Some(&b'-');
+    if negative {
+        i += 1;
+    }
+    let digits_start = i;
+    let mut n: i64 = 0;
+    while i < raw.len() && raw[i].is_ascii_digit() {
+        n = n
+            .saturating_mul(10)
+            .saturating_add(i64::from(raw[i] - b'0'));
+        i += 1;
+    }
+    if i == digits_start || raw.get(i) == Some(&b'.') {
+        block
+            .diagnostics
+            .push(Diagnostic::at(start, Finding::BadLineNumber));
+    }
+    block.line_number = Some((if negative { -n } else { n }, Span::new(start, i)));
+    i
+}
+
+/// Reads the command, if the line has one, and returns where its arguments start.
+fn command(raw: &[u8], start: usize, block: &mut Block) -> usize {
+    let Some(&first) = raw.get(start) else {
+        return start;
+    };
+    if !first.is_ascii_alphabetic() {
+        return start;
+    }
+    let letter = first.to_ascii_uppercase();
+    let next = raw.get(start + 1).copied();
+    if matches!(letter, b'G' | b'M' | b'T' | b'D') && next.is_some_and(|b| b.is_ascii_digit()) {
+        let mut i = start + 1;
+        let mut number: u32 = 0;
+        while i < raw.len() && raw[i].is_ascii_digit() {
+            number = number
+                .saturating_mul(10)
+                .saturating_add(u32::from(raw[i] - b'0'));
+            i += 1;
+        }
+        let mut sub = None;
+        if raw.get(i) == Some(&b'.') && raw.get(i + 1).is_some_and(|b| b.is_ascii_digit()) {
+            let mut s: u32 = 0;
+            i += 1;
+            while i < raw.len() && raw[i].is_ascii_digit() {
+                s = s
+                    .saturating_mul(10)
+                    .saturating_add(u32::from(raw[i] - b'0'));
+                i += 1;
+            }
+            sub = Some(s);
+        }
+        block.command = Command::Code {
+            letter,
+            number,
+            sub,
+        };
+        block.command_span = Span::new(start, i);
+        if letter == b'M' && sub.is_none() && takes_text(number) {
+            text_argument(raw, i, block);
+            return raw.len();
+        }
+        return i;
+    }
+    // An extended command: a name of two or more identifier characters whose second character is
+    // not part of a number (so `X10` and `E-2` stay words).
+    if next.is_some_and(|b| b.is_ascii_alphabetic() || b == b'_') {
+        let mut i = start;
+        while i < raw.len() && (raw[i].is_ascii_alphanumeric() || raw[i] == b'_') {
+            i += 1;
+        }
+        block.command = Command::Extended;
+        block.command_span = Span::new(start, i);
+        text_argument(raw, i, block);
+        return raw.len();
+    }
+    start
+}
+
+/// Keeps everything from `start` to the comment or checksum as the line's text argument.
+fn text_argument(raw: &[u8], start: usize, block: &mut Block) {
+    let begin = skip_space(raw, start);
+    let mut end = raw.len();
+    if let Some(semi) = memchr::memchr(b';', &raw[begin..]) {
+        end = begin + semi;
+        block.comment = Some(Span::new(end + 1, raw.len()));
+    }
+    if block.line_number.is_some() {
+        if let Some(star) = memchr::memrchr(b'*', &raw[begin..end]) {
+            let star = begin + star;
+            checksum(raw, star, end, block);
+            end = star;
+        }
+    }
+    while end > begin && is_space(raw[end - 1]) {
+        end -= 1;
+    }
+    if end > begin {
+        block.text = Some(Span::new(begin, end));
+    }
+}
+
+/// Reads `*<digits>` at `star` (digits end before `limit`) and checks the XOR of what precedes it.
+fn checksum(raw: &[u8], star: usize, limit: usize, block: &mut Block) -> usize {
+    let mut i = star + 1;
+    let mut given: u32 = 0;
+    while i < limit && raw[i].is_ascii_digit() {
+        given = given
+            .saturating_mul(10)
+            .saturating_add(u32::from(raw[i] - b'0'));
+        i += 1;
+    }
+    let end = i;
+    if end == star + 1 || skip_space(raw, end) < limit {
+        block
+            .diagnostics
+            .push(Diagnostic::at(star, Finding::BadChecksum));
+    }
+    let computed = raw[..star].iter().fold(0u8, |acc, b| acc ^ b);
+    let sum = Checksum {
+        given,
+        computed,
+        span: Span::new(star, end),
+    };
+    if !sum.is_valid() {
+        block.diagnostics.push(Diagnostic::at(
+            star,
+            Finding::ChecksumMismatch { given, computed },
+        ));
+    }
+    block.checksum = Some(sum);
+    end
+}
+
+fn words(raw: &[u8], mut i: usize, block: &mut Block) {
+    while i < raw.len() {
+        let b = raw[i];
+        match b {
+            _ if is_space(b) => i += 1,
+            b';' => {
+                block.comment = Some(Span::new(i + 1, raw.len()));
+                return;
+            }
+            b'(' => match memchr::memchr(b')', &raw[i..]) {
+                Some(close) => i += close + 1,
+                None => {
+                    block
+                        .diagnostics
+                        .push(Diagnostic::at(i, Finding::UnclosedComment));
+                    return;
+                }
+            },
+            b'*' => {
+                let limit = memchr::memchr(b';', &raw[i..]).map_or(raw.len(), |p| i + p);
+                i = checksum(raw, i, limit, block);
+                i = skip_space(raw, i);
+                if i < limit {
+                    i = limit;
+                }
+            }
+            _ if b.is_ascii_alphabetic() => i = word(raw, i, block),
+            _ => {
+                block
+                    .diagnostics
+                    .push(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
+                i += 1;
+            }
+        }
+    }
+}
+
+/// Reads one word at `start` (a letter) and returns the index after it.
+fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
+    let letter = raw[start].to_ascii_uppercase();
+    let at = start + 1;
+    let (value, end) = match raw.get(at) {
+        Some(b'"') => quoted(raw, at, block),
+        Some(b'{') => expression(raw, at, block),
+        _ => match scan(&raw[at..]) {
+            Ok((v, used)) => (Value::Number(v), at + used),
+            Err(NumberError::Empty) => (Value::Empty, at),
+            Err(e) => {
+                let finding = match e {
+                    NumberError::NotFinite => Finding::NotFinite {
+                        letter: letter as char,
+                    },
+                    _ => Finding::MalformedNumber {
+                        letter: letter as char,
+                    },
+                };
+                block.diagnostics.push(Diagnostic::at(at, finding));
+                // Skip the whole bad token so that its pieces do not read as more words.
+                let mut end = at;
+                while end < raw.len()
+                    && !is_space(raw[end])
+                    && !matches!(raw[end], b';' | b'(' | b'*')
+                {
+                    end += 1;
+                }
+                (Value::Invalid, end)
+            }
+        },
+    };
+    block.words.push(Word {
+        letter,
+        value,
+        span: Span::new(start, end),
+    });
+    end
+}
+
+/// A RepRapFirmware string: `"..."`, with `""` standing for one quote.
+fn quoted(raw: &[u8], open: usize, block: &mut Block) -> (Value, usize) {
+    let mut i = open + 1;
+    while i < raw.len() {
+        if raw[i] == b'"' {
+            if raw.get(i + 1) == Some(&b'"') {
+                i += 2;
+                continue;
+            }
+            return (Value::Text(Span::new(open + 1, i)), i + 1);
+        }
+        i += 1;
+    }
+    block
+        .diagnostics
+        .push(Diagnostic::at(open, Finding::UnclosedString));
+    (Value::Invalid, raw.len())
+}
+
+/// A RepRapFirmware `{expression}`, braces nested.
+fn expression(raw: &[u8], open: usize, block: &mut Block) -> (Value, usize) {
+    let mut depth = 0usize;
+    for (i, &b) in raw.iter().enumerate().skip(open) {
+        match b {
+            b'{' => depth += 1,
+            b'}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return (Value::Expr(Span::new(open, i + 1)), i + 1);
+                }
+            }
+            _ => {}
+        }
+    }
+    block
+        .diagnostics
+        .push(Diagnostic::at(open, Finding::UnclosedExpression));
+    (Value::Invalid, raw.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Block {
+        let mut b = Block::default();
+        parse_into(s.as_bytes(), &mut b);
+        b
+    }
+
+    #[test]
+    fn glued_words_lower_case_and_points() {
+        let b = parse("g1x10Y-2.5E.4 f1800");
+        assert!(b.command.is_g(1));
+        assert_eq!(b.get(b'X'), Some(10.0));
+        assert_eq!(b.get(b'Y'), Some(-2.5));
+        assert_eq!(b.get(b'E'), Some(0.4));
+        assert_eq!(b.get(b'F'), Some(1800.0));
+        assert!(b.diagnostics.is_empty());
+    }
+
+    #[test]
+    fn comments_of_both_kinds() {
+        let raw = "G1 (move) X1 ; to the left";
+        let b = parse(raw);
+        assert_eq!(b.get(b'X'), Some(1.0));
+        assert_eq!(b.comment_text(raw.as_bytes()), Some(&b" to the left"[..]));
+        assert_eq!(
+            parse("G1 (oops X1").diagnostics[0].finding,
+            Finding::UnclosedComment
+        );
+    }
+
+    #[test]
+    fn line_numbers_and_checksums() {
+        let b = parse("N0 M110 N0*125");
+        assert_eq!(b.line_number.map(|n| n.0), Some(0));
+        assert!(b.command.is_m(110));
+        assert!(b.checksum.unwrap().is_valid());
+        assert_eq!(b.get(b'N'), Some(0.0));
+        let b = parse("N1 G28*18");
+        assert!(b.checksum.unwrap().is_valid(), "{:?}", b);
+        let b = parse("N1 G28*19");
+        assert_eq!(
+            b.diagnostics[0].finding,
+            Finding::ChecksumMismatch {
+                given: 19,
+                computed: 18
+            }
+        );
+        assert_eq!(b.diagnostics[0].column, 7);
+    }
+
+    #[test]
+    fn string_commands_keep_their_text() {
+        let raw = "M117 Printing 50% X1 ; done";
+        let b = parse(raw);
+        assert!(b.command.is_m(117));
+        assert_eq!(b.text_of(raw.as_bytes()), Some(&b"Printing 50% X1"[..]));
+        assert!(b.words.is_empty());
+        let raw = "N5 M23 cube.gcode*57";
+        let b = parse(raw);
+        assert_eq!(b.text_of(raw.as_bytes()), Some(&b"cube.gcode"[..]));
+        assert!(b.checksum.is_some());
+    }
+
+    #[test]
+    fn reprap_strings_and_expressions() {
+        let raw = r#"M291 P"Insert ""red"" filament" S2 X{move.axes[0].max - 5}"#;
+        let b = parse(raw);
+        assert!(b.command.is_m(291));
+        match b.word(b'P').unwrap().value {
+            Value::Text(s) => assert_eq!(s.of(raw.as_bytes()), br#"Insert ""red"" filament"#),
+            v => panic!("{v:?}"),
+        }
+        assert_eq!(b.get(b'S'), Some(2.0));
+        assert!(matches!(b.word(b'X').unwrap().value, Value::Expr(_)));
+        assert!(b.diagnostics.is_empty());
+    }
+
+    #[test]
+    fn klipper_extended_commands() {
+        let raw = "EXCLUDE_OBJECT_DEFINE NAME=a POLYGON=[[1,2],[3,4]] ; obj";
+        let b = parse(raw);
+        assert_eq!(b.command, Command::Extended);
+        assert_eq!(b.command_span.of(raw.as_bytes()), b"EXCLUDE_OBJECT_DEFINE");
+        assert_eq!(
+            b.text_of(raw.as_bytes()),
+            Some(&b"NAME=a POLYGON=[[1,2],[3,4]]"[..])
+        );
+        let b = parse("SET_VELOCITY_LIMIT ACCEL=3000");
+        assert_eq!(b.command, Command::Extended);
+    }
+
+    #[test]
+    fn malformed_words_are_diagnostics() {
+        let b = parse("G1 X1..2 Y3");
+        assert_eq!(
+            b.diagnostics[0],
+            Diagnostic {
+                column: 5,
+                finding: Finding::MalformedNumber { letter: 'X' }
+            }
+        );
+        assert_eq!(b.get(b'Y'), Some(3.0));
+        assert_eq!(b.word(b'X').unwrap().value, Value::Invalid);
+        let b = parse("G1 XNaN Yinf");
+        assert_eq!(b.diagnostics.len(), 2);
+        assert_eq!(b.diagnostics[1].finding, Finding::NotFinite { letter: 'Y' });
+        let b = parse("G28 X Y");
+        assert_eq!(b.word(b'X').unwrap().value, Value::Empty);
+        assert!(b.diagnostics.is_empty());
+    }
+
+    #[test]
+    fn subcodes_block_delete_and_tape() {
+        let b = parse("/G29.1 S1");
+        assert!(b.block_delete);
+        assert_eq!(
+            b.command,
+            Command::Code {
+                letter: b'G',
+                number: 29,
+                sub: Some(1)
+            }
+        );
+        assert!(parse("%").tape_marker);
+        assert_eq!(parse("T2").command.tool(), Some(2));
+    }
+
+    #[test]
+    fn odd_bytes_never_panic() {
+        let b = parse("G1 X1 \u{00e9}\u{0000}\u{00ff}");
+        assert!(!b.diagnostics.is_empty());
+        assert_eq!(b.get(b'X'), Some(1.0));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn never_panics(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..200)) {
+            let mut b = Block::default();
+            parse_into(&bytes, &mut b);
+            for w in &b.words {
+                proptest::prop_assert!(w.span.end as usize <= bytes.len());
+            }
+        }
+    }
+}

@@ -1,0 +1,189 @@
+//! What one line of G-code says, as written: the command, its words, comments, line number and
+//! checksum, each with its byte span in the original line. Nothing here knows what the machine
+//! does with it; that is [`crate::gcode::state`].
+
+use super::diag::Diagnostic;
+
+/// A byte range `start..end` inside one line (without its line ending).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Span {
+    pub start: u32,
+    pub end: u32,
+}
+
+impl Span {
+    pub fn new(start: usize, end: usize) -> Self {
+        Span {
+            start: start as u32,
+            end: end as u32,
+        }
+    }
+
+    /// The bytes this span covers in `raw`.
+    pub fn of<'a>(&self, raw: &'a [u8]) -> &'a [u8] {
+        &raw[self.start as usize..self.end as usize]
+    }
+}
+
+/// The command a line starts with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Command {
+    /// No command: an empty line, a comment, or words that continue the modal motion (`X10 Y5`).
+    #[default]
+    None,
+    /// A letter-number command: `G1`, `M104`, `T2`, `G29.1` (`sub` = 1).
+    Code {
+        letter: u8,
+        number: u32,
+        sub: Option<u32>,
+    },
+    /// A Klipper/RepRapFirmware extended command such as `SET_VELOCITY_LIMIT` or `echo`; its
+    /// arguments are kept as text in [`Block::text`].
+    Extended,
+}
+
+impl Command {
+    /// `true` for `G<number>` with no subcode.
+    #[inline]
+    pub fn is_g(&self, n: u32) -> bool {
+        matches!(self, Command::Code { letter: b'G', number, sub: None } if *number == n)
+    }
+
+    /// `true` for `M<number>` with no subcode.
+    #[inline]
+    pub fn is_m(&self, n: u32) -> bool {
+        matches!(self, Command::Code { letter: b'M', number, sub: None } if *number == n)
+    }
+
+    /// The tool number of a `T<n>` command.
+    #[inline]
+    pub fn tool(&self) -> Option<u32> {
+        match self {
+            Command::Code {
+                letter: b'T',
+                number,
+                sub: None,
+            } => Some(*number),
+            _ => None,
+        }
+    }
+}
+
+/// The value of a word.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Value {
+    Number(f64),
+    /// A letter with no value, as in `G28 X Y` or `M84 E`.
+    Empty,
+    /// A quoted string (RepRapFirmware `M291 P"text"`); the span excludes the quotes.
+    Text(Span),
+    /// A RepRapFirmware `{expression}`; the span includes the braces.
+    Expr(Span),
+    /// Not a number (`1..2`, `NaN`); a diagnostic says why.
+    Invalid,
+}
+
+/// One parameter word: a letter (upper-cased) and its value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Word {
+    pub letter: u8,
+    pub value: Value,
+    /// The whole word as written, letter included.
+    pub span: Span,
+}
+
+impl Word {
+    /// The numeric value, if the word has one.
+    #[inline]
+    pub fn number(&self) -> Option<f64> {
+        match self.value {
+            Value::Number(v) => Some(v),
+            _ => None,
+        }
+    }
+}
+
+/// A line's checksum: what was written after `*` and the XOR of every byte before it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Checksum {
+    pub given: u32,
+    pub computed: u8,
+    /// From the `*` to the end of the digits.
+    pub span: Span,
+}
+
+impl Checksum {
+    pub fn is_valid(&self) -> bool {
+        self.given == u32::from(self.computed)
+    }
+}
+
+/// A parsed line (a "block" in G-code terms). Reused from line to line so that parsing a file
+/// allocates nothing once the buffers have grown.
+#[derive(Debug, Clone, Default)]
+pub struct Block {
+    /// `N<n>` line number and its span.
+    pub line_number: Option<(i64, Span)>,
+    pub checksum: Option<Checksum>,
+    pub command: Command,
+    pub command_span: Span,
+    /// Parameter words in written order.
+    pub words: Vec<Word>,
+    /// The string argument of `M117`, `M118`, `M23`... or the raw arguments of an extended command.
+    pub text: Option<Span>,
+    /// The first `;` comment, without the `;`.
+    pub comment: Option<Span>,
+    /// The line starts with `/` (block delete).
+    pub block_delete: bool,
+    /// A `%` tape marker line.
+    pub tape_marker: bool,
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl Block {
+    pub(crate) fn clear(&mut self) {
+        self.line_number = None;
+        self.checksum = None;
+        self.command = Command::None;
+        self.command_span = Span::default();
+        self.words.clear();
+        self.text = None;
+        self.comment = None;
+        self.block_delete = false;
+        self.tape_marker = false;
+        self.diagnostics.clear();
+    }
+
+    /// The word with this (upper-case) letter, if present. The last one wins, as in firmware.
+    #[inline]
+    pub fn word(&self, letter: u8) -> Option<&Word> {
+        self.words.iter().rev().find(|w| w.letter == letter)
+    }
+
+    /// The numeric value of a word, if present and numeric.
+    #[inline]
+    pub fn get(&self, letter: u8) -> Option<f64> {
+        self.word(letter).and_then(Word::number)
+    }
+
+    /// Whether the letter is present at all (with or without a value).
+    #[inline]
+    pub fn has(&self, letter: u8) -> bool {
+        self.words.iter().any(|w| w.letter == letter)
+    }
+
+    /// The comment text (after `;`), from the raw line this block was parsed from.
+    pub fn comment_text<'a>(&self, raw: &'a [u8]) -> Option<&'a [u8]> {
+        self.comment.map(|s| s.of(raw))
+    }
+
+    /// The string argument or extended-command arguments, from the raw line.
+    pub fn text_of<'a>(&self, raw: &'a [u8]) -> Option<&'a [u8]> {
+        self.text.map(|s| s.of(raw))
+    }
+
+    /// `true` when the line carries nothing for the machine (empty, comment only).
+    pub fn is_empty(&self) -> bool {
+        self.command == Command::None && self.words.is_empty()
+    }
+}

@@ -1,0 +1,13 @@
+//! The G-code core: syntax (lexer, line), streaming I/O (reader, writer), and meaning (state,
+//! layers, arc). Syntax and meaning are kept apart: the lexer records what was written, with
+//! spans; the state is a layer above it.
+
+pub mod arc;
+pub mod diag;
+pub mod layers;
+pub mod lexer;
+pub mod line;
+pub mod number;
+pub mod reader;
+pub mod state;
+pub mod writer;

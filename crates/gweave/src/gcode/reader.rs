@@ -1,0 +1,151 @@
+//! Streaming line reader: a fixed buffer refilled from any `Read`, lines handed out as slices of
+//! it, so memory is bounded by the buffer plus the longest line, whatever the file size.
+
+use std::io::{self, Read};
+
+/// One line as it is in the file.
+#[derive(Debug, Clone, Copy)]
+pub struct RawLine<'a> {
+    /// The content, without the line ending.
+    pub bytes: &'a [u8],
+    /// The line ending exactly as written: `b"\n"`, `b"\r\n"`, or empty for a last line without one.
+    pub eol: &'a [u8],
+    /// 1-based line number in the file.
+    pub number: u64,
+    /// Byte offset of the line's first byte in the file.
+    pub offset: u64,
+}
+
+const CHUNK: usize = 1 << 20;
+
+/// Reads lines from `R` without ever holding more than one chunk (1 MiB) plus the longest line.
+pub struct LineReader<R> {
+    inner: R,
+    buf: Vec<u8>,
+    start: usize,
+    end: usize,
+    eof: bool,
+    number: u64,
+    offset: u64,
+}
+
+impl<R: Read> LineReader<R> {
+    pub fn new(inner: R) -> Self {
+        LineReader {
+            inner,
+            buf: vec![0; CHUNK],
+            start: 0,
+            end: 0,
+            eof: false,
+            number: 0,
+            offset: 0,
+        }
+    }
+
+    /// Bytes handed out so far.
+    pub fn position(&self) -> u64 {
+        self.offset
+    }
+
+    /// The next line, or `None` at the end of the input.
+    pub fn next_line(&mut self) -> io::Result<Option<RawLine<'_>>> {
+        loop {
+            if let Some(nl) = memchr::memchr(b'\n', &self.buf[self.start..self.end]) {
+                let line_start = self.start;
+                let nl = line_start + nl;
+                self.start = nl + 1;
+                return Ok(Some(self.emit(line_start, nl + 1)));
+            }
+            if self.eof {
+                if self.start == self.end {
+                    return Ok(None);
+                }
+                let line_start = self.start;
+                self.start = self.end;
+                return Ok(Some(self.emit(line_start, self.end)));
+            }
+            self.refill()?;
+        }
+    }
+
+    /// Builds the line for `buf[from..to]` (`to` is past the `\n`, if any) and advances counters.
+    fn emit(&mut self, from: usize, to: usize) -> RawLine<'_> {
+        let whole = &self.buf[from..to];
+        let content_len = match whole {
+            [.., b'\r', b'\n'] => whole.len() - 2,
+            [.., b'\n'] => whole.len() - 1,
+            _ => whole.len(),
+        };
+        self.number += 1;
+        let offset = self.offset;
+        self.offset += whole.len() as u64;
+        RawLine {
+            bytes: &whole[..content_len],
+            eol: &whole[content_len..],
+            number: self.number,
+            offset,
+        }
+    }
+
+    /// Moves the unread tail to the front, grows the buffer if one line fills it, and reads more.
+    fn refill(&mut self) -> io::Result<()> {
+        if self.start > 0 {
+            self.buf.copy_within(self.start..self.end, 0);
+            self.end -= self.start;
+            self.start = 0;
+        }
+        if self.end == self.buf.len() {
+            self.buf.resize(self.buf.len() * 2, 0);
+        }
+        loop {
+            match self.inner.read(&mut self.buf[self.end..]) {
+                Ok(0) => {
+                    self.eof = true;
+                    return Ok(());
+                }
+                Ok(n) => {
+                    self.end += n;
+                    return Ok(());
+                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(e),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn collect(input: &[u8]) -> Vec<(Vec<u8>, Vec<u8>)> {
+        let mut r = LineReader::new(input);
+        let mut out = Vec::new();
+        while let Some(l) = r.next_line().unwrap() {
+            out.push((l.bytes.to_vec(), l.eol.to_vec()));
+        }
+        out
+    }
+
+    #[test]
+    fn keeps_line_endings_exactly() {
+        let lines = collect(b"G1 X1\r\nG1 X2\n\nlast");
+        assert_eq!(lines[0], (b"G1 X1".to_vec(), b"\r\n".to_vec()));
+        assert_eq!(lines[1], (b"G1 X2".to_vec(), b"\n".to_vec()));
+        assert_eq!(lines[2], (b"".to_vec(), b"\n".to_vec()));
+        assert_eq!(lines[3], (b"last".to_vec(), b"".to_vec()));
+        assert_eq!(lines.len(), 4);
+        assert!(collect(b"").is_empty());
+        assert_eq!(collect(b"\r").len(), 1);
+    }
+
+    #[test]
+    fn lines_longer_than_the_buffer() {
+        let mut input = vec![b'x'; CHUNK * 3 + 7];
+        input.push(b'\n');
+        input.extend_from_slice(b"G1\n");
+        let lines = collect(&input);
+        assert_eq!(lines[0].0.len(), CHUNK * 3 + 7);
+        assert_eq!(lines[1].0, b"G1");
+    }
+}

@@ -1,0 +1,543 @@
+//! The modal machine state: what a printer would know after executing every line so far.
+//!
+//! Positions are kept in millimetres in the file's own (logical) coordinates, with G20 inches,
+//! G91 relative moves and M83 relative extrusion resolved here once, so that every pass above
+//! sees absolute millimetres. `G92` changes the logical origin; the cumulative filament fed per
+//! tool is tracked separately from the E coordinate so that resets do not lose it.
+
+use super::arc::Arc;
+use super::layers::{Markers, Structure};
+use super::line::{Block, Command, Value};
+
+/// Axis indices into a position array.
+pub const X: usize = 0;
+pub const Y: usize = 1;
+pub const Z: usize = 2;
+pub const E: usize = 3;
+pub const A: usize = 4;
+pub const B: usize = 5;
+pub const C: usize = 6;
+/// Number of tracked axes: X Y Z E A B C.
+pub const AXES: usize = 7;
+/// The axis letters in index order.
+pub const AXIS_LETTERS: [u8; AXES] = [b'X', b'Y', b'Z', b'E', b'A', b'B', b'C'];
+
+/// A position on every axis, mm (degrees for rotary A/B/C).
+pub type Position = [f64; AXES];
+
+const MM_PER_INCH: f64 = 25.4;
+
+/// How the firmware treats `G90`/`G91` for the extruder.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Firmware {
+    /// Marlin: `G90` makes every axis absolute, E included (until `M83`); `G91` makes all relative.
+    #[default]
+    Marlin,
+    /// Klipper and RepRapFirmware: `G90`/`G91` leave the M82/M83 extrusion mode alone, but E is
+    /// relative while G91 is in force (Klipper) .
+    Klipper,
+}
+
+/// The motion mode that axis words on a line without a command continue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Motion {
+    Rapid,
+    #[default]
+    Linear,
+    ArcCw,
+    ArcCcw,
+}
+
+/// The geometry of one move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Path {
+    Line,
+    Arc(Arc),
+}
+
+/// A move the line commanded, in absolute logical millimetres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Move {
+    pub from: Position,
+    pub to: Position,
+    pub path: Path,
+    /// `G0`: a rapid (slicers use it for travel).
+    pub rapid: bool,
+    pub feed_mm_min: f64,
+}
+
+impl Move {
+    /// Filament fed by this move, mm (negative for a retraction).
+    #[inline]
+    pub fn e_mm(&self) -> f64 {
+        self.to[E] - self.from[E]
+    }
+
+    /// XY length, following the arc for G2/G3.
+    pub fn xy_len_mm(&self) -> f64 {
+        match &self.path {
+            Path::Line => (self.to[X] - self.from[X]).hypot(self.to[Y] - self.from[Y]),
+            Path::Arc(arc) => arc.xy_len_mm(),
+        }
+    }
+
+    /// Tool-path length in XYZ, mm (a helix for an arc with Z change).
+    pub fn len_mm(&self) -> f64 {
+        self.xy_len_mm().hypot(self.to[Z] - self.from[Z])
+    }
+
+    /// Deposits material while moving in XY: a printing move, not travel or retraction.
+    #[inline]
+    pub fn is_extruding(&self) -> bool {
+        self.e_mm() > 0.0
+            && (self.to[X] != self.from[X]
+                || self.to[Y] != self.from[Y]
+                || matches!(self.path, Path::Arc(_)))
+    }
+}
+
+/// What a line did to the machine.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Effect {
+    /// Nothing that moves or changes modes we track.
+    #[default]
+    None,
+    Move(Move),
+    /// `G28`: the axes homed (bit i = axis i).
+    Home {
+        axes: u8,
+    },
+    /// `G92`: the logical position was set.
+    SetPosition,
+    /// `T<n>`.
+    ToolChange {
+        from: u32,
+        to: u32,
+    },
+    /// `G10` firmware retraction or `G11` recover: filament moved, mm (negative = retract).
+    FirmwareRetract {
+        e_mm: f64,
+    },
+    /// `G4` dwell.
+    Dwell {
+        t_s: f64,
+    },
+}
+
+/// Temperatures and fan the file has asked for.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Thermal {
+    /// Target per hotend, °C (grown on demand).
+    pub hotend_c: Vec<f64>,
+    pub bed_c: f64,
+    /// Any hotend temperature has been set (for the cold-extrusion lint).
+    pub hotend_set: bool,
+    /// Part fan, 0..=1.
+    pub fan: f64,
+}
+
+/// Options fixed for a whole file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateOptions {
+    pub firmware: Firmware,
+    /// Length of a `G10` firmware retraction when the file does not set it with `M207`, mm.
+    pub fw_retract_mm: f64,
+    /// Explicit markers for the print proper.
+    pub markers: Markers,
+}
+
+impl Default for StateOptions {
+    fn default() -> Self {
+        StateOptions {
+            firmware: Firmware::Marlin,
+            fw_retract_mm: 1.0,
+            markers: Markers::default(),
+        }
+    }
+}
+
+/// The modal state. Feed it every line with [`State::apply`].
+#[derive(Debug, Clone)]
+pub struct State {
+    pub pos: Position,
+    /// G90 (true) or G91.
+    pub absolute: bool,
+    /// M82 (true) or M83.
+    pub absolute_e: bool,
+    /// G20 in force.
+    pub inches: bool,
+    pub feed_mm_min: f64,
+    pub motion: Motion,
+    pub tool: u32,
+    /// Filament fed per tool since the start, mm (never reset by G92).
+    pub filament_mm: Vec<f64>,
+    /// A G10 retraction is in force.
+    pub fw_retracted: bool,
+    pub fw_retract_mm: f64,
+    pub thermal: Thermal,
+    pub structure: Structure,
+    pub options: StateOptions,
+}
+
+impl Default for State {
+    fn default() -> Self {
+        State::new(StateOptions::default())
+    }
+}
+
+impl State {
+    pub fn new(options: StateOptions) -> Self {
+        State {
+            pos: [0.0; AXES],
+            absolute: true,
+            absolute_e: true,
+            inches: false,
+            feed_mm_min: 0.0,
+            motion: Motion::Linear,
+            tool: 0,
+            filament_mm: vec![0.0],
+            fw_retracted: false,
+            fw_retract_mm: options.fw_retract_mm,
+            thermal: Thermal::default(),
+            structure: Structure::with_markers(options.markers.clone()),
+            options,
+        }
+    }
+
+    /// E moves relative to the current position on this line.
+    #[inline]
+    pub fn relative_e(&self) -> bool {
+        !self.absolute_e || !self.absolute
+    }
+
+    #[inline]
+    fn to_mm(&self, v: f64) -> f64 {
+        if self.inches {
+            v * MM_PER_INCH
+        } else {
+            v
+        }
+    }
+
+    /// Executes one parsed line (`raw` is its text, for comments) and says what it did.
+    pub fn apply(&mut self, raw: &[u8], block: &Block) -> Effect {
+        self.structure.layer_started = false;
+        if let Some(c) = block.comment {
+            self.structure.observe_comment(c.of(raw));
+        }
+        if block.block_delete {
+            return Effect::None;
+        }
+        if !block.is_empty() && block.comment.is_none() {
+            self.structure.observe_command();
+        }
+        let effect = match block.command {
+            Command::Code {
+                letter: b'G',
+                number,
+                sub: None,
+            } => self.g_code(number, block),
+            Command::Code {
+                letter: b'M',
+                number,
+                sub: None,
+            } => {
+                self.m_code(number, block);
+                Effect::None
+            }
+            Command::Code {
+                letter: b'T',
+                number,
+                sub: None,
+            } => {
+                let from = self.tool;
+                self.tool = number;
+                self.grow_tool(number);
+                Effect::ToolChange { from, to: number }
+            }
+            Command::None if block.words.iter().any(|w| AXIS_LETTERS.contains(&w.letter)) => {
+                self.motion_words(block)
+            }
+            Command::None => {
+                if let Some(f) = block.get(b'F') {
+                    self.feed_mm_min = self.to_mm(f);
+                }
+                Effect::None
+            }
+            _ => Effect::None,
+        };
+        if let Effect::Move(m) = &effect {
+            if let Some(fed) = self.filament_mm.get_mut(self.tool as usize) {
+                *fed += m.e_mm();
+            }
+            if m.is_extruding() {
+                self.structure.observe_extrusion(m.to[Z]);
+            }
+        }
+        if let Effect::FirmwareRetract { e_mm } = effect {
+            if let Some(fed) = self.filament_mm.get_mut(self.tool as usize) {
+                *fed += e_mm;
+            }
+        }
+        effect
+    }
+
+    fn grow_tool(&mut self, tool: u32) {
+        let n = tool as usize + 1;
+        if self.filament_mm.len() < n && n <= 256 {
+            self.filament_mm.resize(n, 0.0);
+        }
+    }
+
+    fn g_code(&mut self, number: u32, block: &Block) -> Effect {
+        match number {
+            0..=3 => {
+                self.motion = match number {
+                    0 => Motion::Rapid,
+                    1 => Motion::Linear,
+                    2 => Motion::ArcCw,
+                    _ => Motion::ArcCcw,
+                };
+                self.motion_words(block)
+            }
+            4 => {
+                let t_s = block.get(b'S').unwrap_or(0.0) + block.get(b'P').unwrap_or(0.0) / 1000.0;
+                Effect::Dwell { t_s }
+            }
+            10 if block.words.is_empty() => self.firmware_retract(true),
+            11 => self.firmware_retract(false),
+            20 => {
+                self.inches = true;
+                Effect::None
+            }
+            21 => {
+                self.inches = false;
+                Effect::None
+            }
+            28 => {
+                let mut axes = 0u8;
+                for (i, letter) in AXIS_LETTERS.iter().enumerate().take(3) {
+                    if block.has(*letter) {
+                        axes |= 1 << i;
+                    }
+                }
+                if axes == 0 {
+                    axes = 0b111;
+                }
+                for i in 0..3 {
+                    if axes & (1 << i) != 0 {
+                        self.pos[i] = 0.0;
+                    }
+                }
+                Effect::Home { axes }
+            }
+            90 => {
+                self.absolute = true;
+                if self.options.firmware == Firmware::Marlin {
+                    self.absolute_e = true;
+                }
+                Effect::None
+            }
+            91 => {
+                self.absolute = false;
+                if self.options.firmware == Firmware::Marlin {
+                    self.absolute_e = false;
+                }
+                Effect::None
+            }
+            92 => {
+                for (i, letter) in AXIS_LETTERS.iter().enumerate() {
+                    if let Some(v) = block.get(*letter) {
+                        self.pos[i] = self.to_mm(v);
+                    }
+                }
+                Effect::SetPosition
+            }
+            _ => Effect::None,
+        }
+    }
+
+    fn m_code(&mut self, number: u32, block: &Block) {
+        match number {
+            82 => self.absolute_e = true,
+            83 => self.absolute_e = false,
+            104 | 109 => {
+                if let Some(s) = block.get(b'S').or_else(|| block.get(b'R')) {
+                    let tool = block
+                        .get(b'T')
+                        .map_or(self.tool as usize, |t| t.max(0.0) as usize);
+                    if tool < 256 {
+                        if self.thermal.hotend_c.len() <= tool {
+                            self.thermal.hotend_c.resize(tool + 1, 0.0);
+                        }
+                        self.thermal.hotend_c[tool] = s;
+                        self.thermal.hotend_set = true;
+                    }
+                }
+            }
+            140 | 190 => {
+                if let Some(s) = block.get(b'S').or_else(|| block.get(b'R')) {
+                    self.thermal.bed_c = s;
+                }
+            }
+            106 => self.thermal.fan = (block.get(b'S').unwrap_or(255.0) / 255.0).clamp(0.0, 1.0),
+            107 => self.thermal.fan = 0.0,
+            207 => {
+                if let Some(s) = block.get(b'S') {
+                    self.fw_retract_mm = self.to_mm(s);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn firmware_retract(&mut self, retract: bool) -> Effect {
+        if self.fw_retracted == retract {
+            return Effect::None;
+        }
+        self.fw_retracted = retract;
+        let e_mm = if retract {
+            -self.fw_retract_mm
+        } else {
+            self.fw_retract_mm
+        };
+        Effect::FirmwareRetract { e_mm }
+    }
+
+    /// Resolves the axis words of a motion line to an absolute target and the move to it.
+    fn motion_words(&mut self, block: &Block) -> Effect {
+        if let Some(f) = block.get(b'F') {
+            self.feed_mm_min = self.to_mm(f);
+        }
+        let from = self.pos;
+        let mut to = from;
+        let mut any = false;
+        for w in &block.words {
+            let Some(i) = AXIS_LETTERS.iter().position(|&l| l == w.letter) else {
+                continue;
+            };
+            let Value::Number(v) = w.value else { continue };
+            let v = self.to_mm(v);
+            let relative = if i == E {
+                self.relative_e()
+            } else {
+                !self.absolute
+            };
+            to[i] = if relative { to[i] + v } else { v };
+            any = true;
+        }
+        let path = match self.motion {
+            Motion::ArcCw | Motion::ArcCcw => {
+                let cw = self.motion == Motion::ArcCw;
+                let start = [from[X], from[Y]];
+                let end = [to[X], to[Y]];
+                let arc = match block.get(b'R') {
+                    Some(r) => Arc::from_radius(start, end, self.to_mm(r), cw),
+                    None => {
+                        let ij = [
+                            self.to_mm(block.get(b'I').unwrap_or(0.0)),
+                            self.to_mm(block.get(b'J').unwrap_or(0.0)),
+                        ];
+                        Arc::from_offset(start, end, ij, cw)
+                    }
+                };
+                match arc {
+                    Some(arc) => {
+                        any = true;
+                        Path::Arc(arc)
+                    }
+                    None => Path::Line,
+                }
+            }
+            _ => Path::Line,
+        };
+        if !any {
+            return Effect::None;
+        }
+        self.pos = to;
+        Effect::Move(Move {
+            from,
+            to,
+            path,
+            rapid: self.motion == Motion::Rapid,
+            feed_mm_min: self.feed_mm_min,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::lexer::parse_into;
+
+    fn run(state: &mut State, text: &str) -> Vec<Effect> {
+        let mut block = Block::default();
+        text.lines()
+            .map(|l| {
+                parse_into(l.as_bytes(), &mut block);
+                state.apply(l.as_bytes(), &block)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn relative_and_absolute_extrusion_agree() {
+        let mut abs = State::default();
+        run(
+            &mut abs,
+            "G90\nM82\nG92 E0\nG1 X10 E1\nG1 X20 E2.5\nG1 E1.5\nG92 E0\nG1 X30 E1",
+        );
+        let mut rel = State::default();
+        run(
+            &mut rel,
+            "G90\nM83\nG1 X10 E1\nG1 X20 E1.5\nG1 E-1\nG1 X30 E1",
+        );
+        assert_eq!(abs.filament_mm[0], 2.5);
+        assert_eq!(rel.filament_mm[0], 2.5);
+        assert_eq!(abs.pos[X], 30.0);
+        assert_eq!(rel.pos[E], 2.5);
+    }
+
+    #[test]
+    fn marlin_g90_resets_extrusion_mode_klipper_does_not() {
+        let mut marlin = State::default();
+        run(&mut marlin, "M83\nG90\nG1 E1\nG1 E1");
+        assert_eq!(marlin.filament_mm[0], 1.0);
+        let mut klipper = State::new(StateOptions {
+            firmware: Firmware::Klipper,
+            ..Default::default()
+        });
+        run(&mut klipper, "M83\nG90\nG1 E1\nG1 E1");
+        assert_eq!(klipper.filament_mm[0], 2.0);
+    }
+
+    #[test]
+    fn g91_moves_and_inches() {
+        let mut s = State::default();
+        run(&mut s, "G21\nG1 X10 Y10\nG91\nG1 X-2 Z0.2\nG90\nG20\nG1 X1");
+        assert_eq!(s.pos[X], 25.4);
+        assert_eq!(s.pos[Y], 10.0);
+        assert!((s.pos[Z] - 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn arcs_tools_and_firmware_retraction() {
+        let mut s = State::default();
+        let fx = run(
+            &mut s,
+            "G1 X10 Y0 F600\nG3 X0 Y10 I-10 J0 E1\nT1\nM207 S2\nG10\nG10\nG11\nX5",
+        );
+        match fx[1] {
+            Effect::Move(m) => assert!((m.xy_len_mm() - 5.0 * std::f64::consts::PI).abs() < 1e-9),
+            e => panic!("{e:?}"),
+        }
+        assert_eq!(fx[2], Effect::ToolChange { from: 0, to: 1 });
+        assert_eq!(fx[4], Effect::FirmwareRetract { e_mm: -2.0 });
+        assert_eq!(fx[5], Effect::None);
+        assert_eq!(fx[6], Effect::FirmwareRetract { e_mm: 2.0 });
+        assert_eq!(s.filament_mm, vec![1.0, 0.0]);
+        // A bare axis word continues the modal G3; with no centre given it is a straight line.
+        assert_eq!(s.pos[X], 5.0);
+    }
+}

@@ -1,0 +1,181 @@
+//! Safe output: every command writes to a temporary file beside the target and renames it into
+//! place only when all went well, so a failure never leaves partial output and the input is only
+//! replaced when the user asks (`--in-place`, keeping a `.bak` unless told not to).
+
+use std::fs;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+
+/// Where a command's output goes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Target {
+    /// A new file (replaced atomically if it exists). Refuses to be the input itself.
+    File(PathBuf),
+    /// Replace the input, optionally keeping `<input>.bak`.
+    InPlace { keep_backup: bool },
+    /// Standard output (`-o -`).
+    Stdout,
+}
+
+/// An output being written. Call [`Output::commit`] at the end; dropping it without committing
+/// deletes the temporary file.
+pub struct Output {
+    sink: Sink,
+}
+
+enum Sink {
+    File {
+        file: BufWriter<tempfile::NamedTempFile>,
+        dest: PathBuf,
+        backup: Option<PathBuf>,
+    },
+    Stdout(BufWriter<io::Stdout>),
+}
+
+const BUFFER: usize = 1 << 20;
+
+impl Output {
+    /// Opens the output for `target`, given the `input` the command reads (for in-place and for
+    /// refusing to overwrite the input by accident).
+    pub fn create(target: &Target, input: Option<&Path>) -> Result<Output> {
+        let (dest, backup) = match target {
+            Target::Stdout => {
+                return Ok(Output {
+                    sink: Sink::Stdout(BufWriter::with_capacity(BUFFER, io::stdout())),
+                })
+            }
+            Target::File(path) => {
+                if let Some(input) = input {
+                    if same_file(input, path) {
+                        return Err(Error::WouldOverwriteInput { path: path.clone() });
+                    }
+                }
+                (path.clone(), None)
+            }
+            Target::InPlace { keep_backup } => {
+                let input = input.ok_or(Error::InPlaceWithoutInput)?;
+                let backup = keep_backup.then(|| backup_path(input));
+                (input.to_path_buf(), backup)
+            }
+        };
+        let dir = match dest.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let tmp = tempfile::Builder::new()
+            .prefix(".gweave-")
+            .suffix(".tmp")
+            .tempfile_in(&dir)
+            .map_err(|e| Error::io(&dir, e))?;
+        Ok(Output {
+            sink: Sink::File {
+                file: BufWriter::with_capacity(BUFFER, tmp),
+                dest,
+                backup,
+            },
+        })
+    }
+
+    /// Flushes, keeps the backup if asked, and renames the temporary file into place.
+    pub fn commit(self) -> Result<()> {
+        match self.sink {
+            Sink::Stdout(mut w) => match w.flush() {
+                Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>", e)),
+                _ => Ok(()),
+            },
+            Sink::File { file, dest, backup } => {
+                let tmp = file
+                    .into_inner()
+                    .map_err(|e| Error::io(&dest, e.into_error()))?;
+                tmp.as_file().sync_all().map_err(|e| Error::io(&dest, e))?;
+                // Keep the permissions of the file being replaced (an executable script stays one).
+                if let Ok(meta) = fs::metadata(&dest) {
+                    let _ = fs::set_permissions(tmp.path(), meta.permissions());
+                }
+                if let Some(backup) = backup {
+                    fs::copy(&dest, &backup).map_err(|e| Error::io(&backup, e))?;
+                }
+                tmp.persist(&dest).map_err(|e| Error::io(&dest, e.error))?;
+                Ok(())
+            }
+        }
+    }
+}
+
+impl Write for Output {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match &mut self.sink {
+            Sink::File { file, .. } => file.write(buf),
+            Sink::Stdout(w) => w.write(buf),
+        }
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
+        match &mut self.sink {
+            Sink::File { file, .. } => file.write_all(buf),
+            Sink::Stdout(w) => w.write_all(buf),
+        }
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        match &mut self.sink {
+            Sink::File { file, .. } => file.flush(),
+            Sink::Stdout(w) => w.flush(),
+        }
+    }
+}
+
+fn backup_path(input: &Path) -> PathBuf {
+    let mut name = input.as_os_str().to_owned();
+    name.push(".bak");
+    PathBuf::from(name)
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (fs::canonicalize(a), fs::canonicalize(b)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nothing_is_left_behind_without_commit() {
+        let dir = tempfile::tempdir().unwrap();
+        let dest = dir.path().join("out.gcode");
+        {
+            let mut out = Output::create(&Target::File(dest.clone()), None).unwrap();
+            out.write_all(b"G1 X1\n").unwrap();
+        }
+        assert!(!dest.exists());
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn in_place_keeps_a_backup() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.gcode");
+        fs::write(&input, b"old\n").unwrap();
+        let mut out = Output::create(&Target::InPlace { keep_backup: true }, Some(&input)).unwrap();
+        out.write_all(b"new\n").unwrap();
+        out.commit().unwrap();
+        assert_eq!(fs::read(&input).unwrap(), b"new\n");
+        assert_eq!(fs::read(dir.path().join("in.gcode.bak")).unwrap(), b"old\n");
+    }
+
+    #[test]
+    fn refuses_to_overwrite_the_input() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.gcode");
+        fs::write(&input, b"old\n").unwrap();
+        let err = Output::create(&Target::File(input.clone()), Some(&input))
+            .err()
+            .unwrap();
+        assert!(matches!(err, Error::WouldOverwriteInput { .. }));
+    }
+}

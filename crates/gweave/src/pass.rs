@@ -1,0 +1,258 @@
+//! One streaming shape for every command: read a line, parse it, advance the machine state, and
+//! hand the line with its state to a [`Pass`], which writes what should come out. A pass that
+//! needs lookahead keeps its own bounded buffer of [`OwnedLine`]s and says how large it may grow.
+
+use std::fs::File;
+use std::io::{self, Read, Write};
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::gcode::diag::Severity;
+use crate::gcode::lexer::parse_into;
+use crate::gcode::line::Block;
+use crate::gcode::reader::{LineReader, RawLine};
+use crate::gcode::state::{Effect, State, StateOptions};
+use crate::gcode::writer::{Output, Target};
+
+/// A line with everything known about it, after its effect on the state.
+pub struct Ctx<'a> {
+    pub line: RawLine<'a>,
+    pub block: &'a Block,
+    pub effect: Effect,
+    pub state: &'a State,
+}
+
+/// Something that watches or rewrites a stream of lines. Every method has a default, so a
+/// read-only pass implements only what it needs.
+pub trait Pass {
+    /// Sees one line; writes what should be output for it (by default, the line unchanged).
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        keep(ctx, out)
+    }
+
+    /// Called after the last line.
+    fn finish(&mut self, _state: &State, _out: &mut dyn Write) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Writes a line exactly as it was read.
+#[inline]
+pub fn keep(ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    out.write_all(ctx.line.bytes)?;
+    out.write_all(ctx.line.eol)
+}
+
+/// A line copied out of the reader's buffer, for passes that hold lines back.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OwnedLine {
+    pub bytes: Vec<u8>,
+    pub eol: Vec<u8>,
+    pub number: u64,
+}
+
+impl OwnedLine {
+    pub fn from_raw(line: &RawLine<'_>) -> Self {
+        OwnedLine {
+            bytes: line.bytes.to_vec(),
+            eol: line.eol.to_vec(),
+            number: line.number,
+        }
+    }
+
+    pub fn write_to(&self, out: &mut dyn Write) -> io::Result<()> {
+        out.write_all(&self.bytes)?;
+        out.write_all(&self.eol)
+    }
+}
+
+/// How strictly to treat malformed lines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Strictness {
+    /// The first error-level diagnostic stops the run with file, line and column.
+    #[default]
+    Strict,
+    /// Diagnostics are left to the pass (lint, lossless copy).
+    Lenient,
+}
+
+/// Reports progress in bytes; the CLI draws a bar with it.
+pub trait Progress {
+    fn set_len(&mut self, _bytes: u64) {}
+    fn advance(&mut self, _done_bytes: u64) {}
+}
+
+/// No progress reporting.
+pub struct Quiet;
+impl Progress for Quiet {}
+
+/// A run's settings.
+pub struct Run<'a> {
+    pub input: &'a Path,
+    pub options: StateOptions,
+    pub strictness: Strictness,
+    pub progress: &'a mut dyn Progress,
+}
+
+impl<'a> Run<'a> {
+    pub fn new(input: &'a Path, progress: &'a mut dyn Progress) -> Self {
+        Run {
+            input,
+            options: StateOptions::default(),
+            strictness: Strictness::Strict,
+            progress,
+        }
+    }
+
+    /// Streams the input through `pass` without output. Returns the final state.
+    pub fn scan(self, pass: &mut dyn Pass) -> Result<State> {
+        self.drive(pass, &mut io::sink())
+    }
+
+    /// Streams the input through `pass` into `target`, committed only if everything succeeded.
+    pub fn transform(self, pass: &mut dyn Pass, target: &Target) -> Result<State> {
+        let input = self.input.to_path_buf();
+        let mut out = Output::create(target, Some(&input))?;
+        let state = self.drive(pass, &mut out)?;
+        out.commit()?;
+        Ok(state)
+    }
+
+    fn drive(self, pass: &mut dyn Pass, out: &mut dyn Write) -> Result<State> {
+        let path = self.input.to_path_buf();
+        let file = File::open(&path).map_err(|e| Error::io(&path, e))?;
+        if let Ok(meta) = file.metadata() {
+            self.progress.set_len(meta.len());
+        }
+        drive_reader(
+            file,
+            &path,
+            self.options,
+            self.strictness,
+            self.progress,
+            pass,
+            out,
+        )
+    }
+}
+
+/// The loop itself, over any reader (files, in-memory text in tests and Python).
+pub fn drive_reader(
+    input: impl Read,
+    path: &Path,
+    options: StateOptions,
+    strictness: Strictness,
+    progress: &mut dyn Progress,
+    pass: &mut dyn Pass,
+    out: &mut dyn Write,
+) -> Result<State> {
+    let mut reader = LineReader::new(input);
+    let mut block = Block::default();
+    let mut state = State::new(options);
+    let write_err = |e: io::Error| Error::io(output_name(path), e);
+    let mut next_report = 0u64;
+    while let Some(line) = reader.next_line().map_err(|e| Error::io(path, e))? {
+        parse_into(line.bytes, &mut block);
+        if strictness == Strictness::Strict {
+            if let Some(d) = block
+                .diagnostics
+                .iter()
+                .find(|d| d.finding.severity() == Severity::Error)
+            {
+                return Err(Error::Syntax {
+                    path: path.to_path_buf(),
+                    line: line.number,
+                    column: d.column,
+                    finding: d.finding.clone(),
+                });
+            }
+        }
+        let effect = state.apply(line.bytes, &block);
+        let offset = line.offset;
+        pass.line(
+            &Ctx {
+                line,
+                block: &block,
+                effect,
+                state: &state,
+            },
+            out,
+        )
+        .map_err(write_err)?;
+        if offset >= next_report {
+            progress.advance(offset);
+            next_report = offset + (4 << 20);
+        }
+    }
+    pass.finish(&state, out).map_err(write_err)?;
+    progress.advance(reader.position());
+    Ok(state)
+}
+
+fn output_name(input: &Path) -> PathBuf {
+    let mut p = input.as_os_str().to_owned();
+    p.push(" (output)");
+    PathBuf::from(p)
+}
+
+/// The identity pass: what `gweave cat` runs.
+pub struct Identity;
+impl Pass for Identity {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn identity(input: &[u8]) -> Vec<u8> {
+        let mut out = Vec::new();
+        drive_reader(
+            input,
+            Path::new("t"),
+            StateOptions::default(),
+            Strictness::Lenient,
+            &mut Quiet,
+            &mut Identity,
+            &mut out,
+        )
+        .unwrap();
+        out
+    }
+
+    #[test]
+    fn identity_is_byte_exact_on_awkward_input() {
+        let input = b"G1 X1 \t\r\n\n;\xff\xfe odd\r\nG1X1..2\n  \nno newline at end";
+        assert_eq!(identity(input), input);
+    }
+
+    #[test]
+    fn strict_runs_name_line_and_column() {
+        let mut out = Vec::new();
+        let err = drive_reader(
+            &b"G1 X1\nG1 Y2..3\n"[..],
+            Path::new("part.gcode"),
+            StateOptions::default(),
+            Strictness::Strict,
+            &mut Quiet,
+            &mut Identity,
+            &mut out,
+        )
+        .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "part.gcode:2:5: malformed number after 'Y'"
+        );
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn identity_round_trips_any_bytes(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..2000)) {
+            proptest::prop_assert_eq!(identity(&bytes), bytes);
+        }
+
+        #[test]
+        fn identity_round_trips_gcode_like_text(lines in proptest::collection::vec("[GMTXYZEFN;() *.0-9a-z\"{}\t\r-]{0,40}", 0..50), crlf: bool) {
+            let text = lines.join(if crlf { "\r\n" } else { "\n" });
+            proptest::prop_assert_eq!(identity(text.as_bytes()), text.as_bytes());
+        }
+    }
+}

@@ -1,0 +1,296 @@
+//! `gweave stats`: what a file will print, from one streaming pass. Filament per tool, extents,
+//! layers, distances and a simple feed-rate time by feature (the virtual printer's planner gives
+//! the real time), plus the slicer's own figures read from its comments for comparison.
+
+use std::collections::BTreeMap;
+use std::io::{self, Write};
+
+use serde::Serialize;
+
+use crate::gcode::layers::{Feature, Region, Slicer};
+use crate::gcode::state::{Effect, State, X, Y, Z};
+use crate::pass::{Ctx, Pass};
+
+/// Filament used by one tool.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ToolFilament {
+    pub tool: u32,
+    /// Filament pushed by extruding moves, mm (retract/unretract pairs not counted).
+    pub extruded_mm: f64,
+    /// Volume of that filament, mm^3.
+    pub extruded_mm3: f64,
+}
+
+/// An axis-aligned box, mm.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct Bounds {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+}
+
+/// What the slicer itself wrote about the print, for comparison.
+#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+pub struct SlicerFigures {
+    /// PrusaSlicer/Slic3r `; filament used [mm] = a, b, c`.
+    pub filament_used_mm: Option<Vec<f64>>,
+    /// PrusaSlicer `; estimated printing time (normal mode) = 1h 2m 3s`, in seconds.
+    pub estimated_time_s: Option<f64>,
+    /// `; filament_diameter = 1.75,1.75` (PrusaSlicer family) or Cura's `;FILAMENT_DIAMETER`.
+    pub filament_diameter_mm: Option<f64>,
+    /// `;FLAVOR:` (Cura) or `; gcode_flavor =` (PrusaSlicer family).
+    pub flavour: Option<String>,
+}
+
+/// The statistics of one file.
+#[derive(Debug, Clone, Serialize)]
+pub struct Stats {
+    pub bytes: u64,
+    pub lines: u64,
+    pub slicer: Slicer,
+    pub flavour: Option<String>,
+    pub layers: u32,
+    /// Z range of extrusion, mm.
+    pub z_range_mm: Option<[f64; 2]>,
+    /// Bounding box of extruding moves, mm.
+    pub extrusion_bounds: Option<Bounds>,
+    pub tool_changes: u32,
+    pub filament_diameter_mm: f64,
+    pub filament: Vec<ToolFilament>,
+    pub print_mm: f64,
+    pub travel_mm: f64,
+    /// Length over feed rate for every move, by feature type, s (no acceleration).
+    pub time_by_feature_s: BTreeMap<&'static str, f64>,
+    pub time_s: f64,
+    /// Lines of start and end G-code detected.
+    pub start_lines: u64,
+    pub end_lines: u64,
+    pub slicer_figures: SlicerFigures,
+    pub warnings: Vec<String>,
+}
+
+/// The pass that gathers [`Stats`].
+#[derive(Debug, Default)]
+pub struct StatsPass {
+    bytes: u64,
+    lines: u64,
+    extruded_mm: Vec<f64>,
+    bounds: Option<Bounds>,
+    tool_changes: u32,
+    print_mm: f64,
+    travel_mm: f64,
+    time_by_feature_s: BTreeMap<Feature, f64>,
+    start_lines: u64,
+    end_lines: u64,
+    figures: SlicerFigures,
+    zero_feed_moves: u64,
+    /// Filament diameter given by the user, overriding the file's.
+    diameter_override_mm: Option<f64>,
+}
+
+/// Filament diameter when neither the file nor the user says, mm.
+pub const DEFAULT_FILAMENT_DIAMETER_MM: f64 = 1.75;
+
+impl StatsPass {
+    pub fn new(diameter_override_mm: Option<f64>) -> Self {
+        StatsPass {
+            diameter_override_mm,
+            ..Default::default()
+        }
+    }
+
+    /// Turns what was gathered into the report, given the state after the last line.
+    pub fn into_stats(self, state: &State) -> Stats {
+        let diameter = self
+            .diameter_override_mm
+            .or(self.figures.filament_diameter_mm)
+            .unwrap_or(DEFAULT_FILAMENT_DIAMETER_MM);
+        let area_mm2 = std::f64::consts::PI * diameter * diameter / 4.0;
+        let filament = self
+            .extruded_mm
+            .iter()
+            .enumerate()
+            .map(|(tool, &mm)| ToolFilament {
+                tool: tool as u32,
+                extruded_mm: mm,
+                extruded_mm3: mm * area_mm2,
+            })
+            .collect();
+        let mut warnings = Vec::new();
+        if self.zero_feed_moves > 0 {
+            warnings.push(format!(
+                "{} moves had no feed rate and were not timed",
+                self.zero_feed_moves
+            ));
+        }
+        if state.structure.region != Region::End {
+            warnings.push(
+                "no end G-code detected (the print proper runs to the end of the file)".into(),
+            );
+        }
+        Stats {
+            bytes: self.bytes,
+            lines: self.lines,
+            slicer: state.structure.slicer,
+            flavour: self.figures.flavour.clone(),
+            layers: state.structure.layer.map_or(0, |l| l + 1),
+            z_range_mm: self.bounds.map(|b| [b.min[2], b.max[2]]),
+            extrusion_bounds: self.bounds,
+            tool_changes: self.tool_changes,
+            filament_diameter_mm: diameter,
+            filament,
+            print_mm: self.print_mm,
+            travel_mm: self.travel_mm,
+            time_s: self.time_by_feature_s.values().sum(),
+            time_by_feature_s: self
+                .time_by_feature_s
+                .iter()
+                .map(|(f, t)| (f.name(), *t))
+                .collect(),
+            start_lines: self.start_lines,
+            end_lines: self.end_lines,
+            slicer_figures: self.figures,
+            warnings,
+        }
+    }
+
+    fn read_figures(&mut self, comment: &[u8]) {
+        let c = comment.trim_ascii();
+        if let Some(v) = c.strip_prefix(b"filament used [mm] =") {
+            self.figures.filament_used_mm = list(v);
+        } else if let Some(v) = c.strip_prefix(b"filament used =") {
+            // Slic3r: one line per extruder, `; filament used = 607.8mm (1.5cm3)`.
+            let mm = v
+                .split(|&b| b == b'm')
+                .next()
+                .and_then(list)
+                .and_then(|l| l.first().copied());
+            if let Some(mm) = mm {
+                self.figures
+                    .filament_used_mm
+                    .get_or_insert_with(Vec::new)
+                    .push(mm);
+            }
+        } else if let Some(v) = c.strip_prefix(b"estimated printing time (normal mode) =") {
+            self.figures.estimated_time_s = duration_s(v);
+        } else if let Some(v) = c
+            .strip_prefix(b"filament_diameter =")
+            .or_else(|| c.strip_prefix(b"FILAMENT_DIAMETER:"))
+        {
+            self.figures.filament_diameter_mm = list(v).and_then(|l| l.first().copied());
+        } else if let Some(v) = c
+            .strip_prefix(b"FLAVOR:")
+            .or_else(|| c.strip_prefix(b"gcode_flavor ="))
+        {
+            self.figures.flavour = Some(String::from_utf8_lossy(v.trim_ascii()).into_owned());
+        }
+    }
+}
+
+impl Pass for StatsPass {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+        self.lines += 1;
+        self.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
+        match ctx.state.structure.region {
+            Region::Start => self.start_lines += 1,
+            Region::End => self.end_lines += 1,
+            Region::Print => {}
+        }
+        if let Some(c) = ctx.block.comment_text(ctx.line.bytes) {
+            if c.len() > 8 {
+                self.read_figures(c);
+            }
+        }
+        match &ctx.effect {
+            Effect::Move(m) => {
+                let len_mm = m.len_mm();
+                let e_mm = m.e_mm();
+                // PrusaSlicer counts filament on moves that extrude while moving (any of X, Y, Z).
+                if e_mm > 0.0 && len_mm > 0.0 {
+                    let tool = ctx.state.tool as usize;
+                    if self.extruded_mm.len() <= tool {
+                        self.extruded_mm.resize(tool + 1, 0.0);
+                    }
+                    self.extruded_mm[tool] += e_mm;
+                    self.print_mm += len_mm;
+                    self.grow_bounds(&[m.from[X], m.from[Y], m.from[Z]]);
+                    self.grow_bounds(&[m.to[X], m.to[Y], m.to[Z]]);
+                } else {
+                    self.travel_mm += len_mm;
+                }
+                let dist_mm = if len_mm > 0.0 { len_mm } else { e_mm.abs() };
+                if m.feed_mm_min > 0.0 {
+                    *self
+                        .time_by_feature_s
+                        .entry(ctx.state.structure.feature)
+                        .or_default() += dist_mm / (m.feed_mm_min / 60.0);
+                } else if dist_mm > 0.0 {
+                    self.zero_feed_moves += 1;
+                }
+            }
+            Effect::ToolChange { from, to } if from != to => self.tool_changes += 1,
+            Effect::Dwell { t_s } => {
+                *self
+                    .time_by_feature_s
+                    .entry(ctx.state.structure.feature)
+                    .or_default() += t_s;
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+impl StatsPass {
+    fn grow_bounds(&mut self, p: &[f64; 3]) {
+        let b = self.bounds.get_or_insert(Bounds { min: *p, max: *p });
+        for (i, &v) in p.iter().enumerate() {
+            b.min[i] = b.min[i].min(v);
+            b.max[i] = b.max[i].max(v);
+        }
+    }
+}
+
+/// `1.75, 2.85` -> [1.75, 2.85].
+fn list(v: &[u8]) -> Option<Vec<f64>> {
+    std::str::from_utf8(v)
+        .ok()?
+        .split([',', ';'])
+        .map(|s| s.trim().parse().ok())
+        .collect()
+}
+
+/// `1d 2h 3m 4s` -> seconds.
+fn duration_s(v: &[u8]) -> Option<f64> {
+    let text = std::str::from_utf8(v).ok()?;
+    let mut total = 0.0;
+    for part in text.split_whitespace() {
+        let (num, unit) = part.split_at(part.len().checked_sub(1)?);
+        let n: f64 = num.parse().ok()?;
+        total += n * match unit {
+            "d" => 86400.0,
+            "h" => 3600.0,
+            "m" => 60.0,
+            "s" => 1.0,
+            _ => return None,
+        };
+    }
+    Some(total)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_prusaslicer_duration() {
+        assert_eq!(
+            duration_s(b" 5h 31m 58s"),
+            Some(5.0 * 3600.0 + 31.0 * 60.0 + 58.0)
+        );
+        assert_eq!(duration_s(b"1d 0h 0m 1s"), Some(86401.0));
+        assert_eq!(
+            list(b" 10979.45, 20959.92, 1594.45"),
+            Some(vec![10979.45, 20959.92, 1594.45])
+        );
+    }
+}

@@ -1,0 +1,136 @@
+//! Every real slicer fixture: byte-exact round trip, slicer and layer structure, and filament
+//! figures equal to the slicer's own to 0.01 %.
+
+use std::path::{Path, PathBuf};
+
+use gweave::gcode::layers::{Region, Slicer};
+use gweave::pass::{drive_reader, Identity, Quiet, Run, Strictness};
+use gweave::stats::{Stats, StatsPass};
+
+fn data(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/data")
+        .join(rel)
+}
+
+const FIXTURES: [&str; 6] = [
+    "prusaslicer/pr_torus_pva.gcode",
+    "prusaslicer/pr_bunny_3tool_rel.gcode",
+    "prusaslicer/pr_sphere_rrf_fwretract.gcode",
+    "cura/cura_torus.gcode",
+    "cura/cura_dual.gcode",
+    "slic3r/slic3r_cone_2tool.gcode",
+];
+
+fn stats(rel: &str) -> (Stats, gweave::gcode::state::State) {
+    let mut pass = StatsPass::new(None);
+    let state = Run::new(&data(rel), &mut Quiet).scan(&mut pass).unwrap();
+    (pass.into_stats(&state), state)
+}
+
+#[test]
+fn every_fixture_round_trips_byte_exact() {
+    for rel in FIXTURES {
+        let bytes = std::fs::read(data(rel)).unwrap();
+        let mut out = Vec::with_capacity(bytes.len());
+        drive_reader(
+            &bytes[..],
+            Path::new(rel),
+            Default::default(),
+            Strictness::Strict,
+            &mut Quiet,
+            &mut Identity,
+            &mut out,
+        )
+        .unwrap();
+        assert!(out == bytes, "{rel} did not round-trip");
+    }
+}
+
+#[test]
+fn filament_equals_the_slicers_own_figures() {
+    for rel in FIXTURES.iter().filter(|r| !r.starts_with("cura")) {
+        let (s, _) = stats(rel);
+        let theirs = s.slicer_figures.filament_used_mm.clone().expect(rel);
+        assert_eq!(theirs.len(), s.filament.len(), "{rel}");
+        for (ours, theirs) in s.filament.iter().zip(&theirs) {
+            // The slicer rounds to 0.01 mm (Slic3r to 0.1 mm): allow that rounding or 0.01 %.
+            let tolerance = (theirs * 1e-4).max(if rel.starts_with("slic3r") {
+                0.05
+            } else {
+                0.005
+            });
+            assert!(
+                (ours.extruded_mm - theirs).abs() <= tolerance,
+                "{rel} T{}: {} vs {theirs}",
+                ours.tool,
+                ours.extruded_mm
+            );
+        }
+    }
+}
+
+#[test]
+fn layers_and_regions_per_slicer() {
+    let expect: [(&str, Slicer, u32, [f64; 2]); 6] = [
+        (
+            "prusaslicer/pr_torus_pva.gcode",
+            Slicer::PrusaSlicer,
+            28,
+            [0.35, 5.75],
+        ),
+        (
+            "prusaslicer/pr_bunny_3tool_rel.gcode",
+            Slicer::PrusaSlicer,
+            535,
+            [0.35, 107.15],
+        ),
+        (
+            "prusaslicer/pr_sphere_rrf_fwretract.gcode",
+            Slicer::PrusaSlicer,
+            154,
+            [0.35, 30.95],
+        ),
+        ("cura/cura_torus.gcode", Slicer::Cura, 28, [0.3, 5.7]),
+        ("cura/cura_dual.gcode", Slicer::Cura, 204, [0.3, 42.9]),
+        (
+            "slic3r/slic3r_cone_2tool.gcode",
+            Slicer::Slic3r,
+            121,
+            [0.35, 24.35],
+        ),
+    ];
+    for (rel, slicer, layers, z) in expect {
+        let (s, state) = stats(rel);
+        assert_eq!(s.slicer, slicer, "{rel}");
+        assert_eq!(s.layers, layers, "{rel}");
+        let [lo, hi] = s.z_range_mm.unwrap();
+        assert!(
+            (lo - z[0]).abs() < 1e-9 && (hi - z[1]).abs() < 1e-9,
+            "{rel}: {lo}..{hi}"
+        );
+        if slicer != Slicer::Slic3r {
+            assert_eq!(
+                state.structure.region,
+                Region::End,
+                "{rel}: end G-code not found"
+            );
+            assert!(
+                s.end_lines > 5 && s.start_lines > 10,
+                "{rel}: {} start, {} end lines",
+                s.start_lines,
+                s.end_lines
+            );
+        }
+    }
+}
+
+#[test]
+fn tool_changes_as_the_fixture_readme_says() {
+    // The README counts `T` commands; the first (`T0` while on tool 0) changes nothing.
+    assert_eq!(stats("prusaslicer/pr_torus_pva.gcode").0.tool_changes, 2);
+    assert_eq!(stats("slic3r/slic3r_cone_2tool.gcode").0.tool_changes, 108);
+    let (bunny, _) = stats("prusaslicer/pr_bunny_3tool_rel.gcode");
+    assert_eq!(bunny.tool_changes, 793);
+    assert!(bunny.filament.len() == 3);
+}
