@@ -153,10 +153,16 @@ fn start_block_is_the_seeds() {
     let lines: Vec<&str> = text.lines().collect();
     assert!(lines[2].starts_with("G28 X Z"));
     assert_eq!(&lines[3..7], ["M109 S190", "G90", "G21", "M82"]);
-    assert_eq!(lines[7], "G92 A0.000 E0");
-    assert_eq!(lines[8], "G0 Z0.200 F3000.000");
-    assert_eq!(lines[9], "G0 X0.200 F3000.000");
-    assert!(lines[10].starts_with("; layer 0 radius 10.100 mm"));
+    assert_eq!(
+        &lines[7..11],
+        [
+            "G92 A0.000",
+            "G92 E0",
+            "G0 Z0.200 F3000.000",
+            "G0 X0.200 F3000.000"
+        ]
+    );
+    assert!(lines[11].starts_with("; layer 0 radius 10.100 mm"));
     assert!(text.ends_with("M104 S0\nG91\nG1 Z5 F600 ; lift off the part\nG90\nM84\n"));
 }
 
@@ -243,6 +249,29 @@ fn surface_speed_holds_for_every_feed_convention() {
         params.machine.rotary_axis = 'Y';
         params.machine.rotary_unit = RotaryUnit::Mm;
         assert_surface_speed(&params);
+    }
+}
+
+#[test]
+fn large_angles_are_rebased_without_changing_the_path() {
+    let mut params = small_tube();
+    params.machine.rotary_rebase_deg = 720.0;
+    let (text, moves) = generate(&params);
+    let rebases = text.lines().filter(|l| l.starts_with("G92 A")).count();
+    // 3 layers of 29.5 turns: about 10 620 degrees, re-declared every 2 turns or so.
+    assert!(rebases > 10, "{rebases}");
+    assert!(moves.iter().all(|mv| mv.to[1].abs() < 730.0));
+    assert_surface_speed(&params);
+    // The same tube unrebased has the same printed points, modulo whole turns.
+    let mut plain = params.clone();
+    plain.machine.rotary_rebase_deg = 0.0;
+    let (_, plain_moves) = generate(&plain);
+    let [a, b] = [&moves, &plain_moves].map(|m| printed(m).map(|mv| mv.to).collect::<Vec<_>>());
+    assert_eq!(a.len(), b.len());
+    for (p, q) in a.iter().zip(&b) {
+        let turns = (q[1] - p[1]) / 360.0;
+        assert_eq!((p[0], p[2]), (q[0], q[2]));
+        assert!((turns - turns.round()).abs() < 1e-6, "{p:?} {q:?}");
     }
 }
 
@@ -362,21 +391,22 @@ fn layers_join_without_travel() {
 #[test]
 fn tube_toml() {
     let params = TubeParams::from_toml_str(
-        "length-mm = 30\nlayers = 2\n[machine]\nmandrel-diameter-mm = 25\n\
-         feed-convention = \"combined\"\n[print]\nrelative-e = true\n[print.numbers]\ndecimals = 4",
+        "length_mm = 30\nlayers = 2\n[machine]\nmandrel_diameter_mm = 25\n\
+         feed_convention = \"combined\"\n[print]\nrelative_e = true\n[print.numbers]\n\
+         position_decimals = 4",
     )
     .unwrap();
     assert_eq!(params.layers, 2);
     assert_eq!(params.machine.feed_convention, FeedConvention::Combined);
-    assert_eq!(params.print.numbers.decimals, 4);
+    assert_eq!(params.print.numbers.position_decimals, 4);
     assert!(params.interweave);
-    let typo = TubeParams::from_toml_str("layer = 2\n[machine]\nmandrel-diameter-mm = 25");
+    let typo = TubeParams::from_toml_str("layer = 2\n[machine]\nmandrel_diameter_mm = 25");
     assert!(matches!(typo, Err(RotaryError::Toml(_))));
-    let dense = TubeParams::from_toml_str("pitch-mm = 0.3\n[machine]\nmandrel-diameter-mm = 25");
+    let dense = TubeParams::from_toml_str("pitch_mm = 0.3\n[machine]\nmandrel_diameter_mm = 25");
     assert!(matches!(
         dense,
         Err(RotaryError::Config {
-            key: "pitch-mm",
+            key: "pitch_mm",
             ..
         })
     ));
@@ -445,7 +475,7 @@ fn bad_profiles_are_errors() {
     assert!(matches!(
         path.points(res),
         Err(RotaryError::Config {
-            key: "radius-mm",
+            key: "radius_mm",
             ..
         })
     ));

@@ -41,14 +41,19 @@
 //! `theta_deg = 360*y/C`, `r = R0 + z` (seed 001, method (a)). A flat step `(dx, dy)` becomes
 //! `(dx, dy*r/R0)` on the surface at radius `r`, so the extrusion scales by
 //! `hypot(dx, dy*r/R0) / hypot(dx, dy)`. The Diabase rotary wizard keeps the arc length instead,
-//! `A = Y*180/(pi*(R0 + z - z1))`, and leaves E and F as they are.
+//! `A = Y*180/(pi*(R0 + z - z1))`, and leaves E as it is; the surface speed is then the flat
+//! speed, so with the combined convention and a rotary axis in mm the F words come out
+//! (nearly) unchanged too.
 //!
 //! # Chords
 //!
 //! A straight chord between two points of a helix at radius `r`, `dTheta` apart, passes inside
 //! the cylinder by its sagitta `s = r*(1 - cos(dTheta/2))` at its midpoint (the axial coordinate
 //! is linear in both, so the helix sagitta equals the circle's). Splitting a segment into pieces
-//! of at most `2*acos(1 - tol/r)` keeps `s <= tol`.
+//! of at most `2*acos(1 - tol/r)` keeps `s <= tol`. The firmware itself interpolates the
+//! rotary axis, so a long rotary move already follows the true helix; the chords bound the
+//! error of anything that draws moves as straight 3D lines (previews, a Cartesian simulator)
+//! and keep the radius linear in time on radial ramps.
 
 use std::f64::consts::PI;
 
@@ -80,19 +85,20 @@ pub enum FeedConvention {
     InverseTime,
 }
 
-/// The rotary machine: mandrel and axes. TOML keys are kebab-case; unknown keys are errors.
+/// The rotary machine: mandrel and axes. Unknown TOML keys are errors.
 ///
 /// ```toml
-/// mandrel-diameter-mm = 50.0   # required
-/// axial-axis = "X"             # default X
-/// rotary-axis = "A"            # default A (use "Y" with rotary-unit = "mm")
-/// radial-axis = "Z"            # default Z
-/// rotary-unit = "degrees"      # or "mm" (circumference at the mandrel surface)
-/// feed-convention = "nist"     # or "combined", "inverse-time"
-/// max-rotary-deg-s = 360.0     # optional cap on the rotary speed, deg/s
+/// mandrel_diameter_mm = 50.0   # required
+/// axial_axis = "X"             # default X
+/// rotary_axis = "A"            # default A (use "Y" with rotary_unit = "mm")
+/// radial_axis = "Z"            # default Z
+/// rotary_unit = "degrees"      # or "mm" (circumference at the mandrel surface)
+/// feed_convention = "nist"     # or "combined", "inverse-time"
+/// max_rotary_deg_s = 360.0     # optional cap on the rotary speed, deg/s
+/// rotary_rebase_deg = 36000.0  # re-declare the angle mod 360 beyond this (0 = never)
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+#[serde(deny_unknown_fields)]
 pub struct RotaryConfig {
     /// Diameter of the mandrel (the print surface of the first layer), mm.
     pub mandrel_diameter_mm: f64,
@@ -114,6 +120,15 @@ pub struct RotaryConfig {
     /// Optional cap on the rotary speed, deg/s: moves that would turn faster are slowed down.
     #[serde(default)]
     pub max_rotary_deg_s: Option<f64>,
+    /// Beyond this many degrees the rotary word is re-declared modulo one turn with `G92`, so
+    /// that 32-bit float firmware keeps its angular resolution (0 = never). Default 36000:
+    /// a float resolves 0.004 degrees there.
+    #[serde(default = "default_rebase")]
+    pub rotary_rebase_deg: f64,
+}
+
+fn default_rebase() -> f64 {
+    36_000.0
 }
 
 fn default_axial() -> char {
@@ -140,6 +155,7 @@ impl RotaryConfig {
             rotary_unit: RotaryUnit::default(),
             feed_convention: FeedConvention::default(),
             max_rotary_deg_s: None,
+            rotary_rebase_deg: default_rebase(),
         }
     }
 
@@ -152,14 +168,20 @@ impl RotaryConfig {
 
     /// Checks ranges and that the three axis letters are distinct motion axes.
     pub fn validate(&self) -> Result<()> {
-        positive("mandrel-diameter-mm", self.mandrel_diameter_mm)?;
+        positive("mandrel_diameter_mm", self.mandrel_diameter_mm)?;
         if let Some(cap) = self.max_rotary_deg_s {
-            positive("max-rotary-deg-s", cap)?;
+            positive("max_rotary_deg_s", cap)?;
+        }
+        if !(self.rotary_rebase_deg.is_finite() && self.rotary_rebase_deg >= 0.0) {
+            return Err(RotaryError::Config {
+                key: "rotary_rebase_deg",
+                reason: format!("must be >= 0, got {}", self.rotary_rebase_deg),
+            });
         }
         let axes = [
-            ("axial-axis", self.axial_axis),
-            ("rotary-axis", self.rotary_axis),
-            ("radial-axis", self.radial_axis),
+            ("axial_axis", self.axial_axis),
+            ("rotary_axis", self.rotary_axis),
+            ("radial_axis", self.radial_axis),
         ];
         for (i, (key, letter)) in axes.iter().enumerate() {
             if !AXIS_LETTERS.contains(*letter) {
@@ -344,19 +366,19 @@ pub fn chord_pieces(radius_mm: f64, d_theta_deg: f64, tolerance_mm: f64) -> usiz
     ((d_theta_deg.abs() / step).ceil() as usize).max(1)
 }
 
-/// How a flat part is wrapped onto the mandrel. TOML keys are kebab-case, all optional.
+/// How a flat part is wrapped onto the mandrel. TOML keys all optional.
 ///
 /// ```toml
-/// keep-arc-length = false             # true: Diabase's A = Y*180/(pi*(R0 + z - z1)), E/F kept
-/// arc-length-z1-mm = 0.0              # z1 of that formula (the first layer's Z in Diabase)
-/// seam-offset-deg = 0.0               # where y = 0 lands on the mandrel
-/// seam-rotation-per-layer-deg = 0.0   # turn each layer further, to stagger the weld line
+/// keep_arc_length = false             # true: Diabase's A = Y*180/(pi*(R0 + z - z1)), E kept
+/// arc_length_z1_mm = 0.0              # z1 of that formula (the first layer's Z in Diabase)
+/// seam_offset_deg = 0.0               # where y = 0 lands on the mandrel
+/// seam_rotation_per_layer_deg = 0.0   # turn each layer further, to stagger the weld line
 /// ```
 ///
 /// The seam rotation turns whole layers: it staggers the weld line of parts that go all the way
 /// round (sleeves) and twists any other part.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case", default)]
+#[serde(deny_unknown_fields, default)]
 pub struct UnwrapConfig {
     /// Keep flat arc lengths (Diabase) instead of wrapping Y onto one circumference.
     pub keep_arc_length: bool,
@@ -371,10 +393,10 @@ pub struct UnwrapConfig {
 impl UnwrapConfig {
     /// Checks that every number is finite.
     pub fn validate(&self) -> Result<()> {
-        finite("arc-length-z1-mm", self.arc_length_z1_mm)?;
-        finite("seam-offset-deg", self.seam_offset_deg)?;
+        finite("arc_length_z1_mm", self.arc_length_z1_mm)?;
+        finite("seam_offset_deg", self.seam_offset_deg)?;
         finite(
-            "seam-rotation-per-layer-deg",
+            "seam_rotation_per_layer_deg",
             self.seam_rotation_per_layer_deg,
         )
     }
@@ -414,7 +436,7 @@ impl UnwrapConfig {
 
     /// Factor by which the extrusion of the flat segment `from -> to` grows on the cylinder:
     /// surface length `|(dx, dy*r/R0, dz)|` over flat length `|(dx, dy, dz)|` with `r = R0 + z`
-    /// at the segment's mean z. 1 for a segment of zero length and with `keep-arc-length`.
+    /// at the segment's mean z. 1 for a segment of zero length and with `keep_arc_length`.
     pub fn e_scale(&self, machine: &RotaryConfig, from: [f64; 3], to: [f64; 3]) -> f64 {
         let [dx, dy, dz] = [to[0] - from[0], to[1] - from[1], to[2] - from[2]];
         let flat = (dx * dx + dy * dy + dz * dz).sqrt();
@@ -438,41 +460,41 @@ mod tests {
 
     #[test]
     fn toml_defaults_and_unknown_keys() {
-        let config = RotaryConfig::from_toml_str("mandrel-diameter-mm = 40.0").unwrap();
+        let config = RotaryConfig::from_toml_str("mandrel_diameter_mm = 40.0").unwrap();
         assert_eq!(config, RotaryConfig::new(40.0));
         assert_eq!(
             (config.axial_axis, config.rotary_axis, config.radial_axis),
             ('X', 'A', 'Z')
         );
-        let err = RotaryConfig::from_toml_str("mandrel-diameter-mm = 40.0\nspeed = 3").unwrap_err();
+        let err = RotaryConfig::from_toml_str("mandrel_diameter_mm = 40.0\nspeed = 3").unwrap_err();
         assert!(err.to_string().contains("unknown field `speed`"), "{err}");
-        let err = RotaryConfig::from_toml_str("axial-axis = \"X\"").unwrap_err();
-        assert!(err.to_string().contains("mandrel-diameter-mm"), "{err}");
+        let err = RotaryConfig::from_toml_str("axial_axis = \"X\"").unwrap_err();
+        assert!(err.to_string().contains("mandrel_diameter_mm"), "{err}");
     }
 
     #[test]
     fn toml_full_and_validation() {
         let config = RotaryConfig::from_toml_str(
-            "mandrel-diameter-mm = 30\nrotary-axis = \"Y\"\nrotary-unit = \"mm\"\n\
-             feed-convention = \"inverse-time\"\nmax-rotary-deg-s = 90",
+            "mandrel_diameter_mm = 30\nrotary_axis = \"Y\"\nrotary_unit = \"mm\"\n\
+             feed_convention = \"inverse-time\"\nmax_rotary_deg_s = 90",
         )
         .unwrap();
         assert_eq!(config.rotary_unit, RotaryUnit::Mm);
         assert_eq!(config.feed_convention, FeedConvention::InverseTime);
         assert_eq!(config.max_rotary_deg_s, Some(90.0));
-        let same = RotaryConfig::from_toml_str("mandrel-diameter-mm = 30\nrotary-axis = \"X\"");
+        let same = RotaryConfig::from_toml_str("mandrel_diameter_mm = 30\nrotary_axis = \"X\"");
         assert!(matches!(
             same,
             Err(RotaryError::Config {
-                key: "rotary-axis",
+                key: "rotary_axis",
                 ..
             })
         ));
-        let bad = RotaryConfig::from_toml_str("mandrel-diameter-mm = 30\nradial-axis = \"E\"");
+        let bad = RotaryConfig::from_toml_str("mandrel_diameter_mm = 30\nradial_axis = \"E\"");
         assert!(matches!(
             bad,
             Err(RotaryError::Config {
-                key: "radial-axis",
+                key: "radial_axis",
                 ..
             })
         ));

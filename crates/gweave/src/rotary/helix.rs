@@ -24,7 +24,7 @@
 //! - Extrusion per segment `E = w h L / A_filament`, `L` measured on the bead's surface.
 //! - No travel and no seam: layer `k + 1` starts where layer `k` ended, after a radial step of
 //!   one layer height.
-//! - `end-turns` flat turns close each end of each layer. A helix leaves a wedge of half a turn
+//! - `end_turns` flat turns close each end of each layer. A helix leaves a wedge of half a turn
 //!   of bead empty at each end; half a flat turn fills half of it and overlaps the next turn by
 //!   the same amount, so with the default 0.5 a closed wall holds exactly the volume of the
 //!   tube, `pi ((R0 + N h)^2 - R0^2) * length`.
@@ -36,8 +36,9 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use super::cylinder::{max_chord_step_deg, surface_length_mm, CylPoint, RotaryConfig};
-use super::emit::{format_fixed, MoveWriter, NumberFormat};
+use super::emit::{rotary_number_format, validate_format, MoveWriter};
 use super::{finite, positive, Result, RotaryError};
+use crate::gcode::number::NumberFormat;
 
 /// Most points one path may have (a runaway guard: 5 million chords are ~150 MB of G-code).
 pub const MAX_POINTS: usize = 5_000_000;
@@ -190,12 +191,12 @@ impl HelicalPath {
     }
 
     fn validate(&self) -> Result<()> {
-        finite("start-axial-mm", self.start_axial_mm)?;
-        finite("end-axial-mm", self.end_axial_mm)?;
-        finite("start-theta-deg", self.start_theta_deg)?;
+        finite("start_axial_mm", self.start_axial_mm)?;
+        finite("end_axial_mm", self.end_axial_mm)?;
+        finite("start_theta_deg", self.start_theta_deg)?;
         for (key, deg) in [
-            ("lead-in-deg", self.lead_in_deg),
-            ("lead-out-deg", self.lead_out_deg),
+            ("lead_in_deg", self.lead_in_deg),
+            ("lead_out_deg", self.lead_out_deg),
         ] {
             if !(deg.is_finite() && deg >= 0.0) {
                 return Err(RotaryError::Config {
@@ -204,8 +205,8 @@ impl HelicalPath {
                 });
             }
         }
-        self.pitch_mm.validate("pitch-mm")?;
-        self.radius_mm.validate("radius-mm")
+        self.pitch_mm.validate("pitch_mm")?;
+        self.radius_mm.validate("radius_mm")
     }
 
     /// The points of the path, each chord within `resolution` of the true helix.
@@ -330,10 +331,10 @@ pub struct Resolution {
 
 impl Resolution {
     fn validate(&self) -> Result<()> {
-        positive("chord-tolerance-mm", self.chord_tolerance_mm)?;
+        positive("chord_tolerance_mm", self.chord_tolerance_mm)?;
         match self.segments_per_turn {
             Some(n) if n < 3 => Err(RotaryError::Config {
-                key: "segments-per-turn",
+                key: "segments_per_turn",
                 reason: format!("at least 3, got {n}"),
             }),
             _ => Ok(()),
@@ -350,10 +351,9 @@ impl Resolution {
     }
 }
 
-/// The bead, the material and how to write the program. TOML keys are kebab-case, all
-/// optional; the defaults are the seed's setup (`G28 X Z`, `M109 S190`, `G90`, `G21`).
+/// The bead, the material and how to write the program. TOML keys are all optional; the defaults are the seed's setup (`G28 X Z`, `M109 S190`, `G90`, `G21`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case", default)]
+#[serde(deny_unknown_fields, default)]
 pub struct PrintSettings {
     /// Bead height = radial step between layers, mm (default 0.2).
     pub layer_height_mm: f64,
@@ -398,7 +398,7 @@ impl Default for PrintSettings {
             segments_per_turn: None,
             start_gcode: None,
             end_gcode: None,
-            numbers: NumberFormat::default(),
+            numbers: rotary_number_format(),
         }
     }
 }
@@ -406,17 +406,17 @@ impl Default for PrintSettings {
 impl PrintSettings {
     /// Checks every range.
     pub fn validate(&self) -> Result<()> {
-        positive("layer-height-mm", self.layer_height_mm)?;
-        positive("bead-width-mm", self.bead_width_mm)?;
-        positive("filament-diameter-mm", self.filament_diameter_mm)?;
-        positive("print-speed-mm-s", self.print_speed_mm_s)?;
-        positive("travel-speed-mm-s", self.travel_speed_mm_s)?;
-        finite("nozzle-temp-c", self.nozzle_temp_c)?;
+        positive("layer_height_mm", self.layer_height_mm)?;
+        positive("bead_width_mm", self.bead_width_mm)?;
+        positive("filament_diameter_mm", self.filament_diameter_mm)?;
+        positive("print_speed_mm_s", self.print_speed_mm_s)?;
+        positive("travel_speed_mm_s", self.travel_speed_mm_s)?;
+        finite("nozzle_temp_c", self.nozzle_temp_c)?;
         if let Some(t) = self.mandrel_temp_c {
-            finite("mandrel-temp-c", t)?;
+            finite("mandrel_temp_c", t)?;
         }
         self.resolution().validate()?;
-        self.numbers.validate()
+        validate_format(&self.numbers)
     }
 
     /// The chord resolution these settings ask for.
@@ -440,9 +440,9 @@ impl PrintSettings {
         let mut lines =
             vec!["G28 X Z ; home axial and radial; the mandrel angle needs no homing".into()];
         if let Some(t) = self.mandrel_temp_c {
-            lines.push(format!("M190 S{}", format_fixed(t, 0)));
+            lines.push(format!("M190 S{t:.0}"));
         }
-        lines.push(format!("M109 S{}", format_fixed(self.nozzle_temp_c, 0)));
+        lines.push(format!("M109 S{:.0}", self.nozzle_temp_c));
         lines.extend(["G90".into(), "G21".into()]);
         lines
     }
@@ -481,21 +481,17 @@ fn write_program<W: Write>(
     print: &PrintSettings,
     header: &[String],
     mut next_path: impl FnMut(Option<CylPoint>) -> Option<Result<(String, Vec<CylPoint>)>>,
-    out: W,
+    mut out: W,
 ) -> Result<ProgramSummary> {
     machine.validate()?;
     print.validate()?;
-    let mut writer = MoveWriter::new(
-        out,
-        machine.clone(),
-        print.numbers,
-        print.relative_e,
-        print.layer_height_mm / 2.0,
-    );
+    let out: &mut dyn Write = &mut out;
+    let mut writer = MoveWriter::new(machine.clone(), print.numbers, print.layer_height_mm / 2.0);
+    writer.set_modes(false, print.relative_e);
     for line in header.iter().chain(&print.start_lines()) {
-        writer.line(line)?;
+        writeln!(out, "{line}")?;
     }
-    writer.line(if print.relative_e { "M83" } else { "M82" })?;
+    writeln!(out, "{}", if print.relative_e { "M83" } else { "M82" })?;
     let mut end = None;
     while let Some(path) = next_path(end) {
         let (label, points) = path?;
@@ -503,30 +499,31 @@ fn write_program<W: Write>(
             continue;
         };
         if writer.position().is_none() {
-            writer.declare_rotary_and_e(first)?;
-            writer.approach(first, print.travel_speed_mm_s * 60.0)?;
-            writer.enter_feed_mode()?;
+            writer.declare(out, first, [false, true, false])?;
+            writeln!(out, "G92 E0")?;
+            writer.set_e(0.0);
+            writer.approach(out, first, print.travel_speed_mm_s * 60.0)?;
+            writer.enter_feed_mode(out)?;
         }
-        writer.line(&format!("; {label}"))?;
-        writer.move_to(first, 0.0, print.travel_speed_mm_s)?;
+        writeln!(out, "; {label}")?;
+        writer.move_to(out, first, 0.0, print.travel_speed_mm_s)?;
         let mut prev = first;
         for &p in rest {
             let e_mm = print.filament_for_mm(surface_length_mm(prev, p));
-            writer.move_to(p, e_mm, print.print_speed_mm_s)?;
+            writer.move_to(out, p, e_mm, print.print_speed_mm_s)?;
             prev = p;
         }
         end = Some(prev);
     }
-    writer.leave_feed_mode()?;
+    writer.leave_feed_mode(out)?;
     for line in print.end_lines(machine.radial_axis) {
-        writer.line(&line)?;
+        writeln!(out, "{line}")?;
     }
-    let summary = ProgramSummary {
+    out.flush()?;
+    Ok(ProgramSummary {
         filament_mm: writer.filament_mm(),
         print_time_s: writer.time_s(),
-    };
-    writer.into_inner()?;
-    Ok(summary)
+    })
 }
 
 /// A complete program printing `paths` in order with one bead (see [`PrintSettings`]).
@@ -548,23 +545,23 @@ pub fn write_paths<W: Write>(
     write_program(machine, print, &header, next, out)
 }
 
-/// A tube of continuous helical layers (see the module docs). TOML keys are kebab-case;
+/// A tube of continuous helical layers (see the module docs). In TOML,
 /// `[machine]` is a [`RotaryConfig`] and `[print]` a [`PrintSettings`].
 ///
 /// ```toml
-/// length-mm = 50.0         # default 50
+/// length_mm = 50.0         # default 50
 /// layers = 4               # default 4
-/// pitch-mm = 0.4           # default: the bead width (closed wall)
+/// pitch_mm = 0.4           # default: the bead width (closed wall)
 /// interweave = true        # default true
-/// end-turns = 0.5          # flat turns closing each end of a layer, default 0.5
-/// axial-start-mm = 0.0     # where the tube starts on the mandrel, default 0
+/// end_turns = 0.5          # flat turns closing each end of a layer, default 0.5
+/// axial_start_mm = 0.0     # where the tube starts on the mandrel, default 0
 /// [machine]
-/// mandrel-diameter-mm = 20.0
+/// mandrel_diameter_mm = 20.0
 /// [print]
-/// layer-height-mm = 0.2
+/// layer_height_mm = 0.2
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+#[serde(deny_unknown_fields)]
 pub struct TubeParams {
     /// The machine.
     pub machine: RotaryConfig,
@@ -630,10 +627,10 @@ impl TubeParams {
     pub fn validate(&self) -> Result<()> {
         self.machine.validate()?;
         self.print.validate()?;
-        finite("axial-start-mm", self.axial_start_mm)?;
+        finite("axial_start_mm", self.axial_start_mm)?;
         if !(self.length_mm.is_finite() && self.length_mm > self.print.bead_width_mm) {
             return Err(RotaryError::Config {
-                key: "length-mm",
+                key: "length_mm",
                 reason: format!("must exceed the bead width, got {}", self.length_mm),
             });
         }
@@ -646,7 +643,7 @@ impl TubeParams {
         let pitch = self.pitch();
         if !(pitch.is_finite() && pitch >= self.print.bead_width_mm) {
             return Err(RotaryError::Config {
-                key: "pitch-mm",
+                key: "pitch_mm",
                 reason: format!(
                     "must be at least the bead width (beads would overlap), got {pitch}"
                 ),
@@ -654,7 +651,7 @@ impl TubeParams {
         }
         if !(self.end_turns.is_finite() && self.end_turns >= 0.0) {
             return Err(RotaryError::Config {
-                key: "end-turns",
+                key: "end_turns",
                 reason: format!("must be >= 0, got {}", self.end_turns),
             });
         }
@@ -750,9 +747,9 @@ impl TubeParams {
             }
             let theta = end.map_or(0.0, |p| p.theta_deg);
             let label = format!(
-                "layer {k} radius {} mm, {} deg/s",
-                format_fixed(self.layer_radius_mm(k), 3),
-                format_fixed(self.angular_speed_deg_s(k), 3)
+                "layer {k} radius {:.3} mm, {:.3} deg/s",
+                self.layer_radius_mm(k),
+                self.angular_speed_deg_s(k)
             );
             let points = self.layer_path(k, theta).points(p.resolution());
             k += 1;
