@@ -10,6 +10,7 @@
 //! - [`emit`]: the move writer shared by the generators: fixed decimals, absolute or relative E,
 //!   F converted per convention from the rounded coordinates the firmware will actually see.
 //! - [`helix`]: seam-free helical tubes and custom helical paths (cones, variable pitch).
+//! - [`wrap`]: the streaming pass that prints a flat-sliced part onto the mandrel.
 //!
 //! ```
 //! use gweave::rotary::{helix::TubeParams, cylinder::RotaryConfig};
@@ -25,6 +26,7 @@
 pub mod cylinder;
 pub mod emit;
 pub mod helix;
+pub mod wrap;
 
 use thiserror::Error;
 
@@ -67,6 +69,17 @@ pub enum RotaryError {
     /// A move was asked for before the machine's position was established.
     #[error("a move was written before the machine's position was known")]
     UnknownPosition,
+    /// A rewritten line failed, at this line of the input.
+    #[error("line {line}: {source}")]
+    AtLine {
+        /// 1-based input line number.
+        line: u64,
+        /// What went wrong.
+        source: Box<RotaryError>,
+    },
+    /// The core engine failed (reading, syntax).
+    #[error(transparent)]
+    Engine(#[from] crate::Error),
     /// Writing the output failed.
     #[error("writing G-code: {0}")]
     Io(#[from] std::io::Error),
