@@ -2,8 +2,7 @@
 //! read back as the firmware would read it and mapped to 3D.
 
 use gweave::rotary::cylinder::{
-    surface_length_mm, to_cartesian, CylPoint, FeedConvention, MachineDelta, RotaryConfig,
-    RotaryUnit,
+    to_cartesian, CylPoint, FeedConvention, MachineDelta, RotaryConfig, RotaryUnit,
 };
 use gweave::rotary::helix::{
     write_paths, Handedness, HelicalPath, PrintSettings, Profile, Resolution, TubeParams,
@@ -121,11 +120,7 @@ fn read_moves(text: &str, m: &RotaryConfig) -> Vec<Move> {
 
 /// The bead-centre point of a set of words: radius = R0 + radial - h/2.
 fn point(m: &RotaryConfig, words: [f64; 3], h: f64) -> CylPoint {
-    CylPoint::new(
-        words[0],
-        m.deg_from_rotary(words[1]),
-        m.mandrel_radius_mm() + words[2] - h / 2.0,
-    )
+    m.point_from_words(words, h / 2.0)
 }
 
 fn small_tube() -> TubeParams {
@@ -226,9 +221,9 @@ fn assert_surface_speed(params: &TubeParams) {
     let v = params.print.print_speed_mm_s;
     let mut n = 0;
     for mv in printed(&moves) {
-        let t_s = m.time_from_feed(&mv.delta(), mv.feed).unwrap();
-        let len = surface_length_mm(point(m, mv.from, h), point(m, mv.to, h));
-        let speed = len / t_s;
+        let speed = m
+            .surface_speed_mm_s(mv.from, mv.to, mv.feed, h / 2.0)
+            .unwrap();
         assert!((speed / v - 1.0).abs() < 0.01, "{mv:?}: {speed} mm/s");
         n += 1;
     }

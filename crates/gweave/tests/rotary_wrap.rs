@@ -72,7 +72,7 @@ fn delta(mv: &OutMove) -> MachineDelta {
 }
 
 fn point(m: &RotaryConfig, w: [f64; 3]) -> CylPoint {
-    CylPoint::new(w[0], m.deg_from_rotary(w[1]), m.mandrel_radius_mm() + w[2])
+    m.point_from_words(w, 0.0)
 }
 
 #[test]

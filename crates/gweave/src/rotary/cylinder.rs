@@ -259,6 +259,41 @@ impl RotaryConfig {
         }
     }
 
+    /// The path point of machine words `[axial, rotary, radial]`, the path running
+    /// `nozzle_above_path_mm` below the nozzle (half the layer height for helix beads, 0 for
+    /// wrapped files): `radius = R0 + radial - nozzle_above_path_mm`.
+    pub fn point_from_words(&self, words: [f64; 3], nozzle_above_path_mm: f64) -> CylPoint {
+        CylPoint::new(
+            words[0],
+            self.deg_from_rotary(words[1]),
+            self.mandrel_radius_mm() + words[2] - nozzle_above_path_mm,
+        )
+    }
+
+    /// The surface speed, mm/s, at which the firmware runs a move between two sets of machine
+    /// words with this F: the path's surface length over [`Self::time_from_feed`]. What a
+    /// virtual printer checks against the speed asked for. `None` for a move of nothing.
+    pub fn surface_speed_mm_s(
+        &self,
+        from: [f64; 3],
+        to: [f64; 3],
+        feed: f64,
+        nozzle_above_path_mm: f64,
+    ) -> Option<f64> {
+        let delta = MachineDelta {
+            axial_mm: to[0] - from[0],
+            rotary: to[1] - from[1],
+            radial_mm: to[2] - from[2],
+            e_mm: 0.0,
+        };
+        let t_s = self.time_from_feed(&delta, feed)?;
+        let len = surface_length_mm(
+            self.point_from_words(from, nozzle_above_path_mm),
+            self.point_from_words(to, nozzle_above_path_mm),
+        );
+        Some(len / t_s)
+    }
+
     /// The F word that makes the firmware take `t_s` seconds over `delta`.
     /// `None` if the time is not positive or nothing moves under this convention.
     pub fn feed_for(&self, delta: &MachineDelta, t_s: f64) -> Option<f64> {

@@ -156,11 +156,9 @@ impl MoveWriter {
     }
 
     fn point_of(&self, w: [f64; 3]) -> CylPoint {
-        CylPoint::new(
-            w[AXIAL],
-            self.machine.deg_from_rotary(w[ROTARY]) + self.rotary_offset_deg,
-            w[RADIAL] + self.machine.mandrel_radius_mm() - self.nozzle_above_path_mm,
-        )
+        let mut p = self.machine.point_from_words(w, self.nozzle_above_path_mm);
+        p.theta_deg += self.rotary_offset_deg;
+        p
     }
 
     fn known(&self) -> Option<[f64; 3]> {

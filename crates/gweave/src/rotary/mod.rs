@@ -21,6 +21,14 @@
 //! params.write_gcode(&mut out).unwrap();
 //! let text = String::from_utf8(out).unwrap();
 //! assert!(text.starts_with("; gweave rotary tube"));
+//!
+//! // A flat part onto a mandrel of 60 mm circumference: Y15 is a quarter turn. The 18.03 mm
+//! // move at 20 mm/s takes 0.9014 s; under the NIST convention F is the X speed in it.
+//! use gweave::rotary::wrap::{wrap_bytes, WrapConfig};
+//! let mut config = WrapConfig::new(RotaryConfig::new(60.0 / std::f64::consts::PI));
+//! config.chord_tolerance_mm = 0.0; // one line per flat move
+//! let out = wrap_bytes(config, b"G1 X10 Y15 F1200\n").unwrap();
+//! assert_eq!(out, b"G92 A0.000\nG1 X10.000 A90.000 F665.640\n");
 //! ```
 
 pub mod cylinder;
@@ -36,7 +44,7 @@ pub enum RotaryError {
     /// A configuration value is out of range or inconsistent.
     #[error("invalid rotary setting `{key}`: {reason}")]
     Config {
-        /// The TOML key (kebab-case) of the offending setting.
+        /// The TOML key (or G-code word) of the offending setting.
         key: &'static str,
         /// Why it was rejected.
         reason: String,
