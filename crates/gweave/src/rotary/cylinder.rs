@@ -396,9 +396,13 @@ pub fn max_chord_step_deg(radius_mm: f64, tolerance_mm: f64) -> f64 {
 /// How many equal pieces a turn of `d_theta_deg` at radius `radius_mm` needs so that each
 /// chord's sagitta is at most `tolerance_mm` (at least 1).
 pub fn chord_pieces(radius_mm: f64, d_theta_deg: f64, tolerance_mm: f64) -> usize {
-    let step = max_chord_step_deg(radius_mm, tolerance_mm);
+    pieces_for_step(d_theta_deg, max_chord_step_deg(radius_mm, tolerance_mm))
+}
+
+/// How many equal pieces of at most `step_deg` a turn of `d_theta_deg` needs (at least 1).
+pub fn pieces_for_step(d_theta_deg: f64, step_deg: f64) -> usize {
     // The ratio is finite and non-negative for validated inputs; float-to-int casts saturate.
-    ((d_theta_deg.abs() / step).ceil() as usize).max(1)
+    ((d_theta_deg.abs() / step_deg).ceil() as usize).max(1)
 }
 
 /// How a flat part is wrapped onto the mandrel. TOML keys all optional.

@@ -35,7 +35,9 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::cylinder::{max_chord_step_deg, surface_length_mm, CylPoint, RotaryConfig};
+use super::cylinder::{
+    max_chord_step_deg, pieces_for_step, surface_length_mm, CylPoint, RotaryConfig,
+};
 use super::emit::{rotary_number_format, validate_format, MoveWriter};
 use super::{finite, positive, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
@@ -177,13 +179,18 @@ impl HelicalPath {
         }
     }
 
-    /// +1 if the angle grows along this path, -1 if it falls.
-    pub fn spin(&self) -> f64 {
-        let axial = if self.end_axial_mm >= self.start_axial_mm {
+    /// +1 if the path runs towards +axial (or stays put), -1 if it runs back.
+    fn axial_dir(&self) -> f64 {
+        if self.end_axial_mm >= self.start_axial_mm {
             1.0
         } else {
             -1.0
-        };
+        }
+    }
+
+    /// +1 if the angle grows along this path, -1 if it falls.
+    pub fn spin(&self) -> f64 {
+        let axial = self.axial_dir();
         match self.handedness {
             Handedness::Right => axial,
             Handedness::Left => -axial,
@@ -217,11 +224,7 @@ impl HelicalPath {
     pub fn points(&self, resolution: Resolution) -> Result<Vec<CylPoint>> {
         self.validate()?;
         resolution.validate()?;
-        let dir = if self.end_axial_mm >= self.start_axial_mm {
-            1.0
-        } else {
-            -1.0
-        };
+        let dir = self.axial_dir();
         let spin = self.spin();
         self.check_size(resolution)?;
         let mut x = self.start_axial_mm;
@@ -288,9 +291,7 @@ impl HelicalPath {
         if d_theta_deg == 0.0 {
             return Ok(());
         }
-        let step = resolution.step_deg(start.radius_mm);
-        // Finite and positive for validated inputs; the cast saturates.
-        let pieces = ((d_theta_deg.abs() / step).ceil() as usize).max(1);
+        let pieces = pieces_for_step(d_theta_deg, resolution.step_deg(start.radius_mm));
         for i in 1..=pieces {
             let theta = start.theta_deg + d_theta_deg * i as f64 / pieces as f64;
             push(
