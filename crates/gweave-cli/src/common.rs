@@ -24,9 +24,7 @@ pub struct OutputArgs {
 impl OutputArgs {
     pub fn target(&self) -> Result<Target> {
         Ok(match (&self.output, self.in_place) {
-            (_, true) => Target::InPlace {
-                keep_backup: !self.no_backup,
-            },
+            (_, true) => Target::InPlace { keep_backup: !self.no_backup },
             (Some(p), false) if p == Path::new("-") => Target::Stdout,
             (Some(p), false) => Target::File(p.clone()),
             (None, false) => {
@@ -52,8 +50,7 @@ impl ReportArgs {
     pub fn emit<T: Serialize>(&self, value: &T) -> Result<bool> {
         if let Some(path) = &self.report {
             let text = serde_json::to_string_pretty(value)?;
-            std::fs::write(path, text + "\n")
-                .with_context(|| format!("writing {}", path.display()))?;
+            std::fs::write(path, text + "\n").with_context(|| format!("writing {}", path.display()))?;
         }
         if self.json {
             println!("{}", serde_json::to_string_pretty(value)?);

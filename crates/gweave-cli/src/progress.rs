@@ -27,10 +27,8 @@ impl gweave::pass::Progress for Bar {
             }
             bar.set_length(bytes);
             bar.set_style(
-                ProgressStyle::with_template(
-                    "{bar:40} {bytes}/{total_bytes} {bytes_per_sec} {eta}",
-                )
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+                ProgressStyle::with_template("{bar:40} {bytes}/{total_bytes} {bytes_per_sec} {eta}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
             );
             bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
         }

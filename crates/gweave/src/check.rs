@@ -77,10 +77,7 @@ pub struct CheckPass {
 
 impl CheckPass {
     pub fn new(options: CheckOptions) -> Self {
-        CheckPass {
-            options,
-            ..Default::default()
-        }
+        CheckPass { options, ..Default::default() }
     }
 
     fn add(&mut self, line: u64, diagnostic: Diagnostic) {
@@ -90,11 +87,7 @@ impl CheckPass {
             Severity::Warning => self.report.warnings += 1,
         }
         if self.report.findings.len() < self.options.max_findings {
-            self.report.findings.push(LineFinding {
-                line,
-                diagnostic,
-                severity,
-            });
+            self.report.findings.push(LineFinding { line, diagnostic, severity });
         }
     }
 }
@@ -115,45 +108,32 @@ impl Pass for CheckPass {
                         n,
                         Diagnostic::at(
                             span.start as usize,
-                            Finding::LineNumberSequence {
-                                expected: last + 1,
-                                found: num,
-                            },
+                            Finding::LineNumberSequence { expected: last + 1, found: num },
                         ),
                     );
                 }
             }
-            self.last_line_number = Some(if block.command.is_m(110) {
-                block.get(b'N').map_or(num, |v| v as i64)
-            } else {
-                num
-            });
+            self.last_line_number =
+                Some(if block.command.is_m(110) { block.get(b'N').map_or(num, |v| v as i64) } else { num });
         }
         if let Command::Code { letter, number, .. } = block.command {
             if !is_known(letter, number) {
-                let command = String::from_utf8_lossy(block.command_span.of(ctx.line.bytes))
-                    .to_ascii_uppercase();
+                let command =
+                    String::from_utf8_lossy(block.command_span.of(ctx.line.bytes)).to_ascii_uppercase();
                 self.add(
                     n,
-                    Diagnostic::at(
-                        block.command_span.start as usize,
-                        Finding::UnknownCommand { command },
-                    ),
+                    Diagnostic::at(block.command_span.start as usize, Finding::UnknownCommand { command }),
                 );
             }
             let is_motion = letter == b'G' && matches!(number, 0..=3);
             if is_motion {
                 for w in &block.words {
-                    if w.value == Value::Empty
-                        && (AXIS_LETTERS.contains(&w.letter) || w.letter == b'F')
-                    {
+                    if w.value == Value::Empty && (AXIS_LETTERS.contains(&w.letter) || w.letter == b'F') {
                         self.add(
                             n,
                             Diagnostic::at(
                                 w.span.start as usize,
-                                Finding::MissingValue {
-                                    letter: w.letter as char,
-                                },
+                                Finding::MissingValue { letter: w.letter as char },
                             ),
                         );
                     }
@@ -167,15 +147,13 @@ impl Pass for CheckPass {
                         n,
                         Diagnostic::at(
                             w.span.start as usize,
-                            Finding::AbsurdFeedRate {
-                                feed_mm_min: fmt(f),
-                            },
+                            Finding::AbsurdFeedRate { feed_mm_min: fmt(f) },
                         ),
                     );
                 }
             }
         }
-        match ctx.effect {
+        match *ctx.effect {
             Effect::Move(m) => {
                 let e = m.e_mm();
                 if e > 0.0 && !ctx.state.thermal.hotend_set && !self.cold_reported {
@@ -193,10 +171,7 @@ impl Pass for CheckPass {
                                 n,
                                 Diagnostic::at(
                                     col,
-                                    Finding::OutsideBed {
-                                        axis: letter as char,
-                                        value_mm: fmt(v),
-                                    },
+                                    Finding::OutsideBed { axis: letter as char, value_mm: fmt(v) },
                                 ),
                             );
                         }
@@ -204,8 +179,7 @@ impl Pass for CheckPass {
                 }
                 if ctx.state.relative_e() {
                     self.relative_e_since_reset_mm += e.abs();
-                    if self.relative_e_since_reset_mm > self.options.max_relative_e_mm
-                        && !self.drift_reported
+                    if self.relative_e_since_reset_mm > self.options.max_relative_e_mm && !self.drift_reported
                     {
                         self.drift_reported = true;
                         self.add(
@@ -220,10 +194,7 @@ impl Pass for CheckPass {
                     }
                 } else if m.to[E].abs() > self.options.max_absolute_e_mm && !self.drift_reported {
                     self.drift_reported = true;
-                    self.add(
-                        n,
-                        Diagnostic::at(0, Finding::AbsoluteEPrecision { e_mm: fmt(m.to[E]) }),
-                    );
+                    self.add(n, Diagnostic::at(0, Finding::AbsoluteEPrecision { e_mm: fmt(m.to[E]) }));
                 }
             }
             Effect::SetPosition if block.has(b'E') => {

@@ -13,12 +13,7 @@ pub enum Error {
     Io { path: PathBuf, source: io::Error },
 
     #[error("{}:{line}:{column}: {finding}", path.display())]
-    Syntax {
-        path: PathBuf,
-        line: u64,
-        column: u32,
-        finding: Finding,
-    },
+    Syntax { path: PathBuf, line: u64, column: u32, finding: Finding },
 
     #[error("refusing to overwrite the input {} (use --in-place to replace it)", path.display())]
     WouldOverwriteInput { path: PathBuf },
@@ -35,9 +30,6 @@ pub enum Error {
 
 impl Error {
     pub fn io(path: impl AsRef<Path>, source: io::Error) -> Self {
-        Error::Io {
-            path: path.as_ref().to_path_buf(),
-            source,
-        }
+        Error::Io { path: path.as_ref().to_path_buf(), source }
     }
 }

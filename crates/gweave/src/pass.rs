@@ -18,7 +18,7 @@ use crate::gcode::writer::{Output, Target};
 pub struct Ctx<'a> {
     pub line: RawLine<'a>,
     pub block: &'a Block,
-    pub effect: Effect,
+    pub effect: &'a Effect,
     pub state: &'a State,
 }
 
@@ -53,11 +53,7 @@ pub struct OwnedLine {
 
 impl OwnedLine {
     pub fn from_raw(line: &RawLine<'_>) -> Self {
-        OwnedLine {
-            bytes: line.bytes.to_vec(),
-            eol: line.eol.to_vec(),
-            number: line.number,
-        }
+        OwnedLine { bytes: line.bytes.to_vec(), eol: line.eol.to_vec(), number: line.number }
     }
 
     pub fn write_to(&self, out: &mut dyn Write) -> io::Result<()> {
@@ -96,12 +92,7 @@ pub struct Run<'a> {
 
 impl<'a> Run<'a> {
     pub fn new(input: &'a Path, progress: &'a mut dyn Progress) -> Self {
-        Run {
-            input,
-            options: StateOptions::default(),
-            strictness: Strictness::Strict,
-            progress,
-        }
+        Run { input, options: StateOptions::default(), strictness: Strictness::Strict, progress }
     }
 
     /// Streams the input through `pass` without output. Returns the final state.
@@ -124,15 +115,7 @@ impl<'a> Run<'a> {
         if let Ok(meta) = file.metadata() {
             self.progress.set_len(meta.len());
         }
-        drive_reader(
-            file,
-            &path,
-            self.options,
-            self.strictness,
-            self.progress,
-            pass,
-            out,
-        )
+        drive_reader(file, &path, self.options, self.strictness, self.progress, pass, out)
     }
 }
 
@@ -154,11 +137,7 @@ pub fn drive_reader(
     while let Some(line) = reader.next_line().map_err(|e| Error::io(path, e))? {
         parse_into(line.bytes, &mut block);
         if strictness == Strictness::Strict {
-            if let Some(d) = block
-                .diagnostics
-                .iter()
-                .find(|d| d.finding.severity() == Severity::Error)
-            {
+            if let Some(d) = block.diagnostics.iter().find(|d| d.finding.severity() == Severity::Error) {
                 return Err(Error::Syntax {
                     path: path.to_path_buf(),
                     line: line.number,
@@ -167,18 +146,10 @@ pub fn drive_reader(
                 });
             }
         }
-        let effect = state.apply(line.bytes, &block);
+        state.apply(line.bytes, &block);
         let offset = line.offset;
-        pass.line(
-            &Ctx {
-                line,
-                block: &block,
-                effect,
-                state: &state,
-            },
-            out,
-        )
-        .map_err(write_err)?;
+        pass.line(&Ctx { line, block: &block, effect: &state.effect, state: &state }, out)
+            .map_err(write_err)?;
         if offset >= next_report {
             progress.advance(offset);
             next_report = offset + (4 << 20);
@@ -237,10 +208,7 @@ mod tests {
             &mut out,
         )
         .unwrap_err();
-        assert_eq!(
-            err.to_string(),
-            "part.gcode:2:5: malformed number after 'Y'"
-        );
+        assert_eq!(err.to_string(), "part.gcode:2:5: malformed number after 'Y'");
     }
 
     proptest::proptest! {

@@ -7,7 +7,7 @@ use std::io::{self, Write};
 
 use serde::Serialize;
 
-use crate::gcode::layers::{Feature, Region, Slicer};
+use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
 use crate::gcode::state::{Effect, State, X, Y, Z};
 use crate::pass::{Ctx, Pass};
 
@@ -78,7 +78,8 @@ pub struct StatsPass {
     tool_changes: u32,
     print_mm: f64,
     travel_mm: f64,
-    time_by_feature_s: BTreeMap<Feature, f64>,
+    /// Indexed by `Feature as usize`.
+    time_by_feature_s: [f64; ALL_FEATURES.len()],
     start_lines: u64,
     end_lines: u64,
     figures: SlicerFigures,
@@ -92,10 +93,7 @@ pub const DEFAULT_FILAMENT_DIAMETER_MM: f64 = 1.75;
 
 impl StatsPass {
     pub fn new(diameter_override_mm: Option<f64>) -> Self {
-        StatsPass {
-            diameter_override_mm,
-            ..Default::default()
-        }
+        StatsPass { diameter_override_mm, ..Default::default() }
     }
 
     /// Turns what was gathered into the report, given the state after the last line.
@@ -117,15 +115,10 @@ impl StatsPass {
             .collect();
         let mut warnings = Vec::new();
         if self.zero_feed_moves > 0 {
-            warnings.push(format!(
-                "{} moves had no feed rate and were not timed",
-                self.zero_feed_moves
-            ));
+            warnings.push(format!("{} moves had no feed rate and were not timed", self.zero_feed_moves));
         }
         if state.structure.region != Region::End {
-            warnings.push(
-                "no end G-code detected (the print proper runs to the end of the file)".into(),
-            );
+            warnings.push("no end G-code detected (the print proper runs to the end of the file)".into());
         }
         Stats {
             bytes: self.bytes,
@@ -140,11 +133,12 @@ impl StatsPass {
             filament,
             print_mm: self.print_mm,
             travel_mm: self.travel_mm,
-            time_s: self.time_by_feature_s.values().sum(),
-            time_by_feature_s: self
-                .time_by_feature_s
+            time_s: self.time_by_feature_s.iter().sum(),
+            time_by_feature_s: ALL_FEATURES
                 .iter()
-                .map(|(f, t)| (f.name(), *t))
+                .zip(self.time_by_feature_s)
+                .filter(|(_, t)| *t > 0.0)
+                .map(|(f, t)| (f.name(), t))
                 .collect(),
             start_lines: self.start_lines,
             end_lines: self.end_lines,
@@ -159,28 +153,17 @@ impl StatsPass {
             self.figures.filament_used_mm = list(v);
         } else if let Some(v) = c.strip_prefix(b"filament used =") {
             // Slic3r: one line per extruder, `; filament used = 607.8mm (1.5cm3)`.
-            let mm = v
-                .split(|&b| b == b'm')
-                .next()
-                .and_then(list)
-                .and_then(|l| l.first().copied());
+            let mm = v.split(|&b| b == b'm').next().and_then(list).and_then(|l| l.first().copied());
             if let Some(mm) = mm {
-                self.figures
-                    .filament_used_mm
-                    .get_or_insert_with(Vec::new)
-                    .push(mm);
+                self.figures.filament_used_mm.get_or_insert_with(Vec::new).push(mm);
             }
         } else if let Some(v) = c.strip_prefix(b"estimated printing time (normal mode) =") {
             self.figures.estimated_time_s = duration_s(v);
-        } else if let Some(v) = c
-            .strip_prefix(b"filament_diameter =")
-            .or_else(|| c.strip_prefix(b"FILAMENT_DIAMETER:"))
+        } else if let Some(v) =
+            c.strip_prefix(b"filament_diameter =").or_else(|| c.strip_prefix(b"FILAMENT_DIAMETER:"))
         {
             self.figures.filament_diameter_mm = list(v).and_then(|l| l.first().copied());
-        } else if let Some(v) = c
-            .strip_prefix(b"FLAVOR:")
-            .or_else(|| c.strip_prefix(b"gcode_flavor ="))
-        {
+        } else if let Some(v) = c.strip_prefix(b"FLAVOR:").or_else(|| c.strip_prefix(b"gcode_flavor =")) {
             self.figures.flavour = Some(String::from_utf8_lossy(v.trim_ascii()).into_owned());
         }
     }
@@ -200,7 +183,7 @@ impl Pass for StatsPass {
                 self.read_figures(c);
             }
         }
-        match &ctx.effect {
+        match ctx.effect {
             Effect::Move(m) => {
                 let len_mm = m.len_mm();
                 let e_mm = m.e_mm();
@@ -219,20 +202,15 @@ impl Pass for StatsPass {
                 }
                 let dist_mm = if len_mm > 0.0 { len_mm } else { e_mm.abs() };
                 if m.feed_mm_min > 0.0 {
-                    *self
-                        .time_by_feature_s
-                        .entry(ctx.state.structure.feature)
-                        .or_default() += dist_mm / (m.feed_mm_min / 60.0);
+                    self.time_by_feature_s[ctx.state.structure.feature as usize] +=
+                        dist_mm * 60.0 / m.feed_mm_min;
                 } else if dist_mm > 0.0 {
                     self.zero_feed_moves += 1;
                 }
             }
             Effect::ToolChange { from, to } if from != to => self.tool_changes += 1,
             Effect::Dwell { t_s } => {
-                *self
-                    .time_by_feature_s
-                    .entry(ctx.state.structure.feature)
-                    .or_default() += t_s;
+                self.time_by_feature_s[ctx.state.structure.feature as usize] += t_s;
             }
             _ => {}
         }
@@ -252,11 +230,7 @@ impl StatsPass {
 
 /// `1.75, 2.85` -> [1.75, 2.85].
 fn list(v: &[u8]) -> Option<Vec<f64>> {
-    std::str::from_utf8(v)
-        .ok()?
-        .split([',', ';'])
-        .map(|s| s.trim().parse().ok())
-        .collect()
+    std::str::from_utf8(v).ok()?.split([',', ';']).map(|s| s.trim().parse().ok()).collect()
 }
 
 /// `1d 2h 3m 4s` -> seconds.
@@ -283,14 +257,8 @@ mod tests {
 
     #[test]
     fn reads_prusaslicer_duration() {
-        assert_eq!(
-            duration_s(b" 5h 31m 58s"),
-            Some(5.0 * 3600.0 + 31.0 * 60.0 + 58.0)
-        );
+        assert_eq!(duration_s(b" 5h 31m 58s"), Some(5.0 * 3600.0 + 31.0 * 60.0 + 58.0));
         assert_eq!(duration_s(b"1d 0h 0m 1s"), Some(86401.0));
-        assert_eq!(
-            list(b" 10979.45, 20959.92, 1594.45"),
-            Some(vec![10979.45, 20959.92, 1594.45])
-        );
+        assert_eq!(list(b" 10979.45, 20959.92, 1594.45"), Some(vec![10979.45, 20959.92, 1594.45]));
     }
 }

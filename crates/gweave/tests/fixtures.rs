@@ -8,9 +8,7 @@ use gweave::pass::{drive_reader, Identity, Quiet, Run, Strictness};
 use gweave::stats::{Stats, StatsPass};
 
 fn data(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/data")
-        .join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel)
 }
 
 const FIXTURES: [&str; 6] = [
@@ -55,11 +53,7 @@ fn filament_equals_the_slicers_own_figures() {
         assert_eq!(theirs.len(), s.filament.len(), "{rel}");
         for (ours, theirs) in s.filament.iter().zip(&theirs) {
             // The slicer rounds to 0.01 mm (Slic3r to 0.1 mm): allow that rounding or 0.01 %.
-            let tolerance = (theirs * 1e-4).max(if rel.starts_with("slic3r") {
-                0.05
-            } else {
-                0.005
-            });
+            let tolerance = (theirs * 1e-4).max(if rel.starts_with("slic3r") { 0.05 } else { 0.005 });
             assert!(
                 (ours.extruded_mm - theirs).abs() <= tolerance,
                 "{rel} T{}: {} vs {theirs}",
@@ -73,48 +67,21 @@ fn filament_equals_the_slicers_own_figures() {
 #[test]
 fn layers_and_regions_per_slicer() {
     let expect: [(&str, Slicer, u32, [f64; 2]); 6] = [
-        (
-            "prusaslicer/pr_torus_pva.gcode",
-            Slicer::PrusaSlicer,
-            28,
-            [0.35, 5.75],
-        ),
-        (
-            "prusaslicer/pr_bunny_3tool_rel.gcode",
-            Slicer::PrusaSlicer,
-            535,
-            [0.35, 107.15],
-        ),
-        (
-            "prusaslicer/pr_sphere_rrf_fwretract.gcode",
-            Slicer::PrusaSlicer,
-            154,
-            [0.35, 30.95],
-        ),
+        ("prusaslicer/pr_torus_pva.gcode", Slicer::PrusaSlicer, 28, [0.35, 5.75]),
+        ("prusaslicer/pr_bunny_3tool_rel.gcode", Slicer::PrusaSlicer, 535, [0.35, 107.15]),
+        ("prusaslicer/pr_sphere_rrf_fwretract.gcode", Slicer::PrusaSlicer, 154, [0.35, 30.95]),
         ("cura/cura_torus.gcode", Slicer::Cura, 28, [0.3, 5.7]),
         ("cura/cura_dual.gcode", Slicer::Cura, 204, [0.3, 42.9]),
-        (
-            "slic3r/slic3r_cone_2tool.gcode",
-            Slicer::Slic3r,
-            121,
-            [0.35, 24.35],
-        ),
+        ("slic3r/slic3r_cone_2tool.gcode", Slicer::Slic3r, 121, [0.35, 24.35]),
     ];
     for (rel, slicer, layers, z) in expect {
         let (s, state) = stats(rel);
         assert_eq!(s.slicer, slicer, "{rel}");
         assert_eq!(s.layers, layers, "{rel}");
         let [lo, hi] = s.z_range_mm.unwrap();
-        assert!(
-            (lo - z[0]).abs() < 1e-9 && (hi - z[1]).abs() < 1e-9,
-            "{rel}: {lo}..{hi}"
-        );
+        assert!((lo - z[0]).abs() < 1e-9 && (hi - z[1]).abs() < 1e-9, "{rel}: {lo}..{hi}");
         if slicer != Slicer::Slic3r {
-            assert_eq!(
-                state.structure.region,
-                Region::End,
-                "{rel}: end G-code not found"
-            );
+            assert_eq!(state.structure.region, Region::End, "{rel}: end G-code not found");
             assert!(
                 s.end_lines > 5 && s.start_lines > 10,
                 "{rel}: {} start, {} end lines",

@@ -55,27 +55,14 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
                 gweave::gcode::diag::Severity::Error => "error",
                 gweave::gcode::diag::Severity::Warning => "warning",
             };
-            println!(
-                "{name}:{}:{}: {level}: {}",
-                f.line, f.diagnostic.column, f.diagnostic.finding
-            );
+            println!("{name}:{}:{}: {level}: {}", f.line, f.diagnostic.column, f.diagnostic.finding);
         }
         let shown = report.findings.len() as u64;
         if shown < report.errors + report.warnings {
-            println!(
-                "... {} more findings not shown",
-                report.errors + report.warnings - shown
-            );
+            println!("... {} more findings not shown", report.errors + report.warnings - shown);
         }
-        println!(
-            "{name}: {} lines, {} errors, {} warnings",
-            report.lines, report.errors, report.warnings
-        );
+        println!("{name}: {} lines, {} errors, {} warnings", report.lines, report.errors, report.warnings);
     }
     let failed = report.errors > 0 || (args.strict && report.warnings > 0);
-    Ok(if failed {
-        ExitCode::FAILURE
-    } else {
-        ExitCode::SUCCESS
-    })
+    Ok(if failed { ExitCode::FAILURE } else { ExitCode::SUCCESS })
 }

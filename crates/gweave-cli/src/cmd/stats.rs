@@ -43,17 +43,9 @@ pub fn run(args: StatsArgs) -> Result<ExitCode> {
 
 fn print_human(input: &std::path::Path, s: &Stats) {
     println!("{}", input.display());
-    let flavour = s
-        .flavour
-        .as_deref()
-        .map(|f| format!(" ({f})"))
-        .unwrap_or_default();
+    let flavour = s.flavour.as_deref().map(|f| format!(" ({f})")).unwrap_or_default();
     println!("  slicer          {}{flavour}", s.slicer.name());
-    println!(
-        "  lines           {} ({:.1} MB)",
-        s.lines,
-        s.bytes as f64 / 1e6
-    );
+    println!("  lines           {} ({:.1} MB)", s.lines, s.bytes as f64 / 1e6);
     println!("  layers          {}", s.layers);
     if let Some([lo, hi]) = s.z_range_mm {
         println!("  z range         {lo:.3} .. {hi:.3} mm");
@@ -74,16 +66,9 @@ fn print_human(input: &std::path::Path, s: &Stats) {
             .and_then(|l| l.get(i))
             .map(|v| format!("   slicer says {v:.2} mm"))
             .unwrap_or_default();
-        println!(
-            "    T{:<3} {:>12.2} mm {:>10.1} mm3{theirs}",
-            f.tool, f.extruded_mm, f.extruded_mm3
-        );
+        println!("    T{:<3} {:>12.2} mm {:>10.1} mm3{theirs}", f.tool, f.extruded_mm, f.extruded_mm3);
     }
-    println!(
-        "  print / travel  {:.1} m / {:.1} m",
-        s.print_mm / 1000.0,
-        s.travel_mm / 1000.0
-    );
+    println!("  print / travel  {:.1} m / {:.1} m", s.print_mm / 1000.0, s.travel_mm / 1000.0);
     println!("  time (F only)   {}", hms(s.time_s));
     for (feature, t) in &s.time_by_feature_s {
         println!("    {feature:<18} {}", hms(*t));

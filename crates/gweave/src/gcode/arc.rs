@@ -22,12 +22,7 @@ pub struct Arc {
 impl Arc {
     /// From start and end points and the I/J centre offset (relative to the start).
     /// Equal start and end points make a full circle, as in Marlin and RepRapFirmware.
-    pub fn from_offset(
-        start: [f64; 2],
-        end: [f64; 2],
-        ij: [f64; 2],
-        clockwise: bool,
-    ) -> Option<Arc> {
+    pub fn from_offset(start: [f64; 2], end: [f64; 2], ij: [f64; 2], clockwise: bool) -> Option<Arc> {
         let center = [start[0] + ij[0], start[1] + ij[1]];
         let radius_mm = ij[0].hypot(ij[1]);
         if !(radius_mm.is_finite() && radius_mm > 0.0) {
@@ -52,12 +47,7 @@ impl Arc {
                 sweep = TAU;
             }
         }
-        Some(Arc {
-            center,
-            radius_mm,
-            start_rad,
-            sweep_rad: sweep,
-        })
+        Some(Arc { center, radius_mm, start_rad, sweep_rad: sweep })
     }
 
     /// From start and end points and a radius; a negative radius asks for the arc longer than half
@@ -76,16 +66,8 @@ impl Arc {
             side = -side;
         }
         let mid = [start[0] + dx / 2.0, start[1] + dy / 2.0];
-        let center = [
-            mid[0] + side * h * dy / chord,
-            mid[1] - side * h * dx / chord,
-        ];
-        Arc::from_offset(
-            start,
-            end,
-            [center[0] - start[0], center[1] - start[1]],
-            clockwise,
-        )
+        let center = [mid[0] + side * h * dy / chord, mid[1] - side * h * dx / chord];
+        Arc::from_offset(start, end, [center[0] - start[0], center[1] - start[1]], clockwise)
     }
 
     /// XY length of the arc, mm.
@@ -96,10 +78,7 @@ impl Arc {
     /// The point at fraction `t` (0..=1) of the sweep.
     pub fn point(&self, t: f64) -> [f64; 2] {
         let a = self.start_rad + self.sweep_rad * t;
-        [
-            self.center[0] + self.radius_mm * a.cos(),
-            self.center[1] + self.radius_mm * a.sin(),
-        ]
+        [self.center[0] + self.radius_mm * a.cos(), self.center[1] + self.radius_mm * a.sin()]
     }
 
     /// Number of chords that keep the path within `tol_mm` of the arc.
@@ -120,15 +99,9 @@ mod tests {
         assert!((a.sweep_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         assert!((a.xy_len_mm() - 5.0 * std::f64::consts::PI).abs() < 1e-9);
         let b = Arc::from_radius([10.0, 0.0], [0.0, 10.0], 10.0, false).unwrap();
-        assert!(
-            (b.center[0]).abs() < 1e-9 && (b.center[1]).abs() < 1e-9,
-            "{b:?}"
-        );
+        assert!((b.center[0]).abs() < 1e-9 && (b.center[1]).abs() < 1e-9, "{b:?}");
         let c = Arc::from_radius([10.0, 0.0], [0.0, 10.0], -10.0, false).unwrap();
-        assert!(
-            (c.sweep_rad - 1.5 * std::f64::consts::PI).abs() < 1e-9,
-            "{c:?}"
-        );
+        assert!((c.sweep_rad - 1.5 * std::f64::consts::PI).abs() < 1e-9, "{c:?}");
     }
 
     #[test]

@@ -101,18 +101,12 @@ impl fmt::Display for Finding {
             Finding::UnclosedString => write!(f, "string is not closed"),
             Finding::UnclosedExpression => write!(f, "'{{' expression is not closed"),
             Finding::ChecksumMismatch { given, computed } => {
-                write!(
-                    f,
-                    "checksum mismatch: line says {given}, bytes give {computed}"
-                )
+                write!(f, "checksum mismatch: line says {given}, bytes give {computed}")
             }
             Finding::BadChecksum => write!(f, "'*' must be followed by the checksum digits only"),
             Finding::BadLineNumber => write!(f, "'N' must be followed by an integer"),
             Finding::LineNumberSequence { expected, found } => {
-                write!(
-                    f,
-                    "line number N{found} does not follow (expected N{expected})"
-                )
+                write!(f, "line number N{found} does not follow (expected N{expected})")
             }
             Finding::UnknownCommand { command } => write!(f, "unknown command {command}"),
             Finding::ExtrusionBeforeHeating => {
@@ -124,15 +118,11 @@ impl fmt::Display for Finding {
             Finding::AbsurdFeedRate { feed_mm_min } => {
                 write!(f, "absurd feed rate F{feed_mm_min} mm/min")
             }
-            Finding::RelativeEDrift { since_reset_mm } => write!(
-                f,
-                "relative extrusion ran {since_reset_mm} mm without a G92 E reset (float drift)"
-            ),
+            Finding::RelativeEDrift { since_reset_mm } => {
+                write!(f, "relative extrusion ran {since_reset_mm} mm without a G92 E reset (float drift)")
+            }
             Finding::AbsoluteEPrecision { e_mm } => {
-                write!(
-                    f,
-                    "absolute E reached {e_mm} mm without a reset (precision loss)"
-                )
+                write!(f, "absolute E reached {e_mm} mm without a reset (precision loss)")
             }
         }
     }
@@ -148,9 +138,6 @@ pub struct Diagnostic {
 
 impl Diagnostic {
     pub fn at(byte_index: usize, finding: Finding) -> Self {
-        Diagnostic {
-            column: byte_index as u32 + 1,
-            finding,
-        }
+        Diagnostic { column: byte_index as u32 + 1, finding }
     }
 }

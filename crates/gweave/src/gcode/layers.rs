@@ -50,10 +50,7 @@ impl Slicer {
             (b"Sliced by ideaMaker", Slicer::IdeaMaker),
             (b"KISSlicer", Slicer::KISSlicer),
         ];
-        pairs
-            .iter()
-            .find(|(p, _)| c.starts_with(p))
-            .map(|&(_, s)| s)
+        pairs.iter().find(|(p, _)| c.starts_with(p)).map(|&(_, s)| s)
     }
 
     pub fn name(&self) -> &'static str {
@@ -105,8 +102,7 @@ impl Feature {
     pub fn from_name(name: &[u8]) -> Feature {
         let n = trim(name);
         let eq = |s: &str| n.eq_ignore_ascii_case(s.as_bytes());
-        if eq("External perimeter") || eq("WALL-OUTER") || eq("Outer wall") || eq("outer perimeter")
-        {
+        if eq("External perimeter") || eq("WALL-OUTER") || eq("Outer wall") || eq("outer perimeter") {
             Feature::OuterWall
         } else if eq("Perimeter") || eq("WALL-INNER") || eq("Inner wall") || eq("inner perimeter") {
             Feature::InnerWall
@@ -114,11 +110,7 @@ impl Feature {
             Feature::OverhangWall
         } else if eq("Internal infill") || eq("FILL") || eq("Sparse infill") || eq("infill") {
             Feature::Infill
-        } else if eq("Solid infill")
-            || eq("Internal solid infill")
-            || eq("SKIN")
-            || eq("solid layer")
-        {
+        } else if eq("Solid infill") || eq("Internal solid infill") || eq("SKIN") || eq("solid layer") {
             Feature::SolidInfill
         } else if eq("Top solid infill") || eq("Top surface") || eq("Bottom surface") {
             Feature::TopSurface
@@ -126,10 +118,7 @@ impl Feature {
             Feature::Bridge
         } else if eq("Support material") || eq("SUPPORT") || eq("Support") || eq("support") {
             Feature::Support
-        } else if eq("Support material interface")
-            || eq("SUPPORT-INTERFACE")
-            || eq("Support interface")
-        {
+        } else if eq("Support material interface") || eq("SUPPORT-INTERFACE") || eq("Support interface") {
             Feature::SupportInterface
         } else if eq("Skirt") || eq("SKIRT") || eq("Skirt/Brim") || eq("Brim") || eq("skirt") {
             Feature::Skirt
@@ -236,10 +225,7 @@ pub struct Structure {
 
 impl Structure {
     pub fn with_markers(markers: Markers) -> Self {
-        Structure {
-            markers,
-            ..Structure::default()
-        }
+        Structure { markers, ..Structure::default() }
     }
 
     /// A layer marker: the file marks its layers, so layers guessed from Z so far (a purge line
@@ -294,18 +280,12 @@ impl Structure {
         }
         if let Some(rest) = c.strip_prefix(b"TYPE:") {
             self.feature = Feature::from_name(rest);
-            if self.feature == Feature::Custom
-                && self.region == Region::Print
-                && self.markers.end.is_none()
-            {
+            if self.feature == Feature::Custom && self.region == Region::Print && self.markers.end.is_none() {
                 self.enter_end();
             }
         } else if c == b"LAYER_CHANGE" || c == b"CHANGE_LAYER" {
             self.marked_layer(None);
-        } else if let Some(z) = c
-            .strip_prefix(b"Z:")
-            .or_else(|| c.strip_prefix(b"Z_HEIGHT:"))
-        {
+        } else if let Some(z) = c.strip_prefix(b"Z:").or_else(|| c.strip_prefix(b"Z_HEIGHT:")) {
             if let Some(z) = number(z) {
                 if self.z_pending {
                     self.layer_z_mm = z;
@@ -381,5 +361,53 @@ fn number(s: &[u8]) -> Option<f64> {
     match super::number::scan(s) {
         Ok((v, used)) if used == s.len() => Some(v),
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn all_features_is_indexed_by_discriminant() {
+        for (i, f) in ALL_FEATURES.iter().enumerate() {
+            assert_eq!(*f as usize, i);
+            assert_eq!(Feature::parse(f.name()), Some(*f));
+        }
+    }
+
+    #[test]
+    fn cura_end_starts_after_the_last_time_elapsed() {
+        let mut s = Structure::default();
+        for c in ["FLAVOR:Marlin", "LAYER:0", "TIME_ELAPSED:1.0", "LAYER:1"] {
+            s.observe_comment(c.as_bytes());
+        }
+        assert_eq!((s.layer, s.region), (Some(1), Region::Print));
+        s.observe_comment(b"TIME_ELAPSED:2.0");
+        s.observe_command();
+        assert_eq!(s.region, Region::End);
+    }
+
+    #[test]
+    fn explicit_markers_win() {
+        let mut s =
+            Structure::with_markers(Markers { begin: Some(b"begin".to_vec()), end: Some(b"end".to_vec()) });
+        s.observe_comment(b"LAYER_CHANGE");
+        assert_eq!(s.region, Region::Start);
+        s.observe_comment(b" begin");
+        assert_eq!(s.region, Region::Print);
+        s.observe_comment(b"TYPE:Custom");
+        assert_eq!(s.region, Region::Print);
+        s.observe_comment(b"end");
+        assert_eq!(s.region, Region::End);
+    }
+
+    #[test]
+    fn z_fallback_for_files_without_markers() {
+        let mut s = Structure::default();
+        s.observe_extrusion(0.2);
+        s.observe_extrusion(0.2);
+        s.observe_extrusion(0.4);
+        assert_eq!((s.layer, s.layer_z_mm), (Some(1), 0.4));
     }
 }

@@ -43,9 +43,7 @@ pub fn parse_into(raw: &[u8], block: &mut Block) {
         return;
     }
     if matches!(raw.get(i), Some(b'N' | b'n'))
-        && raw
-            .get(i + 1)
-            .is_some_and(|b| b.is_ascii_digit() || *b == b'-')
+        && raw.get(i + 1).is_some_and(|b| b.is_ascii_digit() || *b == b'-')
     {
         i = line_number(raw, i, block);
     }
@@ -63,15 +61,11 @@ fn line_number(raw: &[u8], start: usize, block: &mut Block) -> usize {
     let digits_start = i;
     let mut n: i64 = 0;
     while i < raw.len() && raw[i].is_ascii_digit() {
-        n = n
-            .saturating_mul(10)
-            .saturating_add(i64::from(raw[i] - b'0'));
+        n = n.saturating_mul(10).saturating_add(i64::from(raw[i] - b'0'));
         i += 1;
     }
     if i == digits_start || raw.get(i) == Some(&b'.') {
-        block
-            .diagnostics
-            .push(Diagnostic::at(start, Finding::BadLineNumber));
+        block.diagnostics.push(Diagnostic::at(start, Finding::BadLineNumber));
     }
     block.line_number = Some((if negative { -n } else { n }, Span::new(start, i)));
     i
@@ -91,9 +85,7 @@ fn command(raw: &[u8], start: usize, block: &mut Block) -> usize {
         let mut i = start + 1;
         let mut number: u32 = 0;
         while i < raw.len() && raw[i].is_ascii_digit() {
-            number = number
-                .saturating_mul(10)
-                .saturating_add(u32::from(raw[i] - b'0'));
+            number = number.saturating_mul(10).saturating_add(u32::from(raw[i] - b'0'));
             i += 1;
         }
         let mut sub = None;
@@ -101,18 +93,12 @@ fn command(raw: &[u8], start: usize, block: &mut Block) -> usize {
             let mut s: u32 = 0;
             i += 1;
             while i < raw.len() && raw[i].is_ascii_digit() {
-                s = s
-                    .saturating_mul(10)
-                    .saturating_add(u32::from(raw[i] - b'0'));
+                s = s.saturating_mul(10).saturating_add(u32::from(raw[i] - b'0'));
                 i += 1;
             }
             sub = Some(s);
         }
-        block.command = Command::Code {
-            letter,
-            number,
-            sub,
-        };
+        block.command = Command::Code { letter, number, sub };
         block.command_span = Span::new(start, i);
         if letter == b'M' && sub.is_none() && takes_text(number) {
             text_argument(raw, i, block);
@@ -163,28 +149,17 @@ fn checksum(raw: &[u8], star: usize, limit: usize, block: &mut Block) -> usize {
     let mut i = star + 1;
     let mut given: u32 = 0;
     while i < limit && raw[i].is_ascii_digit() {
-        given = given
-            .saturating_mul(10)
-            .saturating_add(u32::from(raw[i] - b'0'));
+        given = given.saturating_mul(10).saturating_add(u32::from(raw[i] - b'0'));
         i += 1;
     }
     let end = i;
     if end == star + 1 || skip_space(raw, end) < limit {
-        block
-            .diagnostics
-            .push(Diagnostic::at(star, Finding::BadChecksum));
+        block.diagnostics.push(Diagnostic::at(star, Finding::BadChecksum));
     }
     let computed = raw[..star].iter().fold(0u8, |acc, b| acc ^ b);
-    let sum = Checksum {
-        given,
-        computed,
-        span: Span::new(star, end),
-    };
+    let sum = Checksum { given, computed, span: Span::new(star, end) };
     if !sum.is_valid() {
-        block.diagnostics.push(Diagnostic::at(
-            star,
-            Finding::ChecksumMismatch { given, computed },
-        ));
+        block.diagnostics.push(Diagnostic::at(star, Finding::ChecksumMismatch { given, computed }));
     }
     block.checksum = Some(sum);
     end
@@ -202,9 +177,7 @@ fn words(raw: &[u8], mut i: usize, block: &mut Block) {
             b'(' => match memchr::memchr(b')', &raw[i..]) {
                 Some(close) => i += close + 1,
                 None => {
-                    block
-                        .diagnostics
-                        .push(Diagnostic::at(i, Finding::UnclosedComment));
+                    block.diagnostics.push(Diagnostic::at(i, Finding::UnclosedComment));
                     return;
                 }
             },
@@ -218,9 +191,7 @@ fn words(raw: &[u8], mut i: usize, block: &mut Block) {
             }
             _ if b.is_ascii_alphabetic() => i = word(raw, i, block),
             _ => {
-                block
-                    .diagnostics
-                    .push(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
+                block.diagnostics.push(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
                 i += 1;
             }
         }
@@ -239,31 +210,20 @@ fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
             Err(NumberError::Empty) => (Value::Empty, at),
             Err(e) => {
                 let finding = match e {
-                    NumberError::NotFinite => Finding::NotFinite {
-                        letter: letter as char,
-                    },
-                    _ => Finding::MalformedNumber {
-                        letter: letter as char,
-                    },
+                    NumberError::NotFinite => Finding::NotFinite { letter: letter as char },
+                    _ => Finding::MalformedNumber { letter: letter as char },
                 };
                 block.diagnostics.push(Diagnostic::at(at, finding));
                 // Skip the whole bad token so that its pieces do not read as more words.
                 let mut end = at;
-                while end < raw.len()
-                    && !is_space(raw[end])
-                    && !matches!(raw[end], b';' | b'(' | b'*')
-                {
+                while end < raw.len() && !is_space(raw[end]) && !matches!(raw[end], b';' | b'(' | b'*') {
                     end += 1;
                 }
                 (Value::Invalid, end)
             }
         },
     };
-    block.words.push(Word {
-        letter,
-        value,
-        span: Span::new(start, end),
-    });
+    block.push_word(Word { letter, value, span: Span::new(start, end) });
     end
 }
 
@@ -280,9 +240,7 @@ fn quoted(raw: &[u8], open: usize, block: &mut Block) -> (Value, usize) {
         }
         i += 1;
     }
-    block
-        .diagnostics
-        .push(Diagnostic::at(open, Finding::UnclosedString));
+    block.diagnostics.push(Diagnostic::at(open, Finding::UnclosedString));
     (Value::Invalid, raw.len())
 }
 
@@ -301,9 +259,7 @@ fn expression(raw: &[u8], open: usize, block: &mut Block) -> (Value, usize) {
             _ => {}
         }
     }
-    block
-        .diagnostics
-        .push(Diagnostic::at(open, Finding::UnclosedExpression));
+    block.diagnostics.push(Diagnostic::at(open, Finding::UnclosedExpression));
     (Value::Invalid, raw.len())
 }
 
@@ -334,10 +290,7 @@ mod tests {
         let b = parse(raw);
         assert_eq!(b.get(b'X'), Some(1.0));
         assert_eq!(b.comment_text(raw.as_bytes()), Some(&b" to the left"[..]));
-        assert_eq!(
-            parse("G1 (oops X1").diagnostics[0].finding,
-            Finding::UnclosedComment
-        );
+        assert_eq!(parse("G1 (oops X1").diagnostics[0].finding, Finding::UnclosedComment);
     }
 
     #[test]
@@ -350,13 +303,7 @@ mod tests {
         let b = parse("N1 G28*18");
         assert!(b.checksum.unwrap().is_valid(), "{:?}", b);
         let b = parse("N1 G28*19");
-        assert_eq!(
-            b.diagnostics[0].finding,
-            Finding::ChecksumMismatch {
-                given: 19,
-                computed: 18
-            }
-        );
+        assert_eq!(b.diagnostics[0].finding, Finding::ChecksumMismatch { given: 19, computed: 18 });
         assert_eq!(b.diagnostics[0].column, 7);
     }
 
@@ -393,10 +340,7 @@ mod tests {
         let b = parse(raw);
         assert_eq!(b.command, Command::Extended);
         assert_eq!(b.command_span.of(raw.as_bytes()), b"EXCLUDE_OBJECT_DEFINE");
-        assert_eq!(
-            b.text_of(raw.as_bytes()),
-            Some(&b"NAME=a POLYGON=[[1,2],[3,4]]"[..])
-        );
+        assert_eq!(b.text_of(raw.as_bytes()), Some(&b"NAME=a POLYGON=[[1,2],[3,4]]"[..]));
         let b = parse("SET_VELOCITY_LIMIT ACCEL=3000");
         assert_eq!(b.command, Command::Extended);
     }
@@ -406,10 +350,7 @@ mod tests {
         let b = parse("G1 X1..2 Y3");
         assert_eq!(
             b.diagnostics[0],
-            Diagnostic {
-                column: 5,
-                finding: Finding::MalformedNumber { letter: 'X' }
-            }
+            Diagnostic { column: 5, finding: Finding::MalformedNumber { letter: 'X' } }
         );
         assert_eq!(b.get(b'Y'), Some(3.0));
         assert_eq!(b.word(b'X').unwrap().value, Value::Invalid);
@@ -425,14 +366,7 @@ mod tests {
     fn subcodes_block_delete_and_tape() {
         let b = parse("/G29.1 S1");
         assert!(b.block_delete);
-        assert_eq!(
-            b.command,
-            Command::Code {
-                letter: b'G',
-                number: 29,
-                sub: Some(1)
-            }
-        );
+        assert_eq!(b.command, Command::Code { letter: b'G', number: 29, sub: Some(1) });
         assert!(parse("%").tape_marker);
         assert_eq!(parse("T2").command.tool(), Some(2));
     }

@@ -13,10 +13,7 @@ pub struct Span {
 
 impl Span {
     pub fn new(start: usize, end: usize) -> Self {
-        Span {
-            start: start as u32,
-            end: end as u32,
-        }
+        Span { start: start as u32, end: end as u32 }
     }
 
     /// The bytes this span covers in `raw`.
@@ -32,11 +29,7 @@ pub enum Command {
     #[default]
     None,
     /// A letter-number command: `G1`, `M104`, `T2`, `G29.1` (`sub` = 1).
-    Code {
-        letter: u8,
-        number: u32,
-        sub: Option<u32>,
-    },
+    Code { letter: u8, number: u32, sub: Option<u32> },
     /// A Klipper/RepRapFirmware extended command such as `SET_VELOCITY_LIMIT` or `echo`; its
     /// arguments are kept as text in [`Block::text`].
     Extended,
@@ -59,11 +52,7 @@ impl Command {
     #[inline]
     pub fn tool(&self) -> Option<u32> {
         match self {
-            Command::Code {
-                letter: b'T',
-                number,
-                sub: None,
-            } => Some(*number),
+            Command::Code { letter: b'T', number, sub: None } => Some(*number),
             _ => None,
         }
     }
@@ -138,6 +127,8 @@ pub struct Block {
     /// A `%` tape marker line.
     pub tape_marker: bool,
     pub diagnostics: Vec<Diagnostic>,
+    /// For each letter A..=Z, 1 + the index of its last word (0: absent), so lookups are O(1).
+    by_letter: [u8; 26],
 }
 
 impl Block {
@@ -152,12 +143,27 @@ impl Block {
         self.block_delete = false;
         self.tape_marker = false;
         self.diagnostics.clear();
+        self.by_letter = [0; 26];
+    }
+
+    /// Appends a word, keeping the letter index.
+    #[inline]
+    pub(crate) fn push_word(&mut self, word: Word) {
+        if let Some(slot) = self.by_letter.get_mut(word.letter.wrapping_sub(b'A') as usize) {
+            *slot = u8::try_from(self.words.len() + 1).unwrap_or(0);
+        }
+        self.words.push(word);
     }
 
     /// The word with this (upper-case) letter, if present. The last one wins, as in firmware.
     #[inline]
     pub fn word(&self, letter: u8) -> Option<&Word> {
-        self.words.iter().rev().find(|w| w.letter == letter)
+        match self.by_letter.get(letter.wrapping_sub(b'A') as usize) {
+            Some(&0) if self.words.len() < usize::from(u8::MAX) => None,
+            Some(&i) if i > 0 => self.words.get(usize::from(i) - 1),
+            // Past 254 words the index is full: search.
+            _ => self.words.iter().rev().find(|w| w.letter == letter),
+        }
     }
 
     /// The numeric value of a word, if present and numeric.
@@ -169,7 +175,7 @@ impl Block {
     /// Whether the letter is present at all (with or without a value).
     #[inline]
     pub fn has(&self, letter: u8) -> bool {
-        self.words.iter().any(|w| w.letter == letter)
+        self.word(letter).is_some()
     }
 
     /// The comment text (after `;`), from the raw line this block was parsed from.

@@ -9,8 +9,8 @@ use serde::{Deserialize, Serialize};
 
 /// Exact powers of ten representable as `f64` (10^0 ..= 10^22).
 const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18,
+    1e19, 1e20, 1e21, 1e22,
 ];
 
 /// Why the bytes after a word letter are not a number.
@@ -29,86 +29,87 @@ pub enum NumberError {
 /// number (the `e` is then the next word's letter, as firmware reads it).
 #[inline]
 pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
-    let mut i = 0;
-    let negative = match bytes.first() {
-        Some(b'-') => {
-            i = 1;
-            true
-        }
-        Some(b'+') => {
-            i = 1;
-            false
-        }
-        _ => false,
+    let (negative, start) = match bytes.first() {
+        Some(b'-') => (true, 1),
+        Some(b'+') => (false, 1),
+        _ => (false, 0),
     };
     let mut mantissa: u64 = 0;
-    let mut digits = 0usize;
-    let mut frac_digits = 0usize;
-    let mut exact = true;
-    while let Some(&b) = bytes.get(i) {
-        if b.is_ascii_digit() {
-            if mantissa < (1 << 53) / 10 {
-                mantissa = mantissa * 10 + u64::from(b - b'0');
-            } else {
-                exact = false;
-            }
-            digits += 1;
-            i += 1;
-        } else {
-            break;
-        }
-    }
+    let int_digits = digits(&bytes[start..], &mut mantissa);
+    let mut i = start + int_digits;
+    let mut frac_digits = 0;
     if bytes.get(i) == Some(&b'.') {
         i += 1;
-        while let Some(&b) = bytes.get(i) {
-            if b.is_ascii_digit() {
-                if mantissa < (1 << 53) / 10 {
-                    mantissa = mantissa * 10 + u64::from(b - b'0');
-                    frac_digits += 1;
-                } else if b != b'0' {
-                    exact = false;
-                }
-                digits += 1;
-                i += 1;
-            } else {
-                break;
-            }
-        }
+        frac_digits = digits(&bytes[i..], &mut mantissa);
+        i += frac_digits;
     }
-    if digits == 0 {
-        let rest = &bytes[i..];
-        let word_end = rest
-            .iter()
-            .position(|b| !b.is_ascii_alphabetic())
-            .unwrap_or(rest.len());
-        let word = &rest[..word_end];
-        return Err(
-            if word.eq_ignore_ascii_case(b"nan")
-                || word.eq_ignore_ascii_case(b"inf")
-                || word.eq_ignore_ascii_case(b"infinity")
-            {
-                NumberError::NotFinite
-            } else if i > 0 || rest.first() == Some(&b'.') {
-                NumberError::Malformed
-            } else {
-                NumberError::Empty
-            },
-        );
+    if int_digits + frac_digits == 0 {
+        return Err(no_digits(&bytes[i..], i > 0 || bytes.first() == Some(&b'.')));
     }
     // A second point or sign glued to the number is a typo, not the start of another word.
     if matches!(bytes.get(i), Some(b'.' | b'+' | b'-')) {
         return Err(NumberError::Malformed);
     }
-    let value = if exact && frac_digits < POW10.len() {
-        mantissa as f64 / POW10[frac_digits]
-    } else {
-        // Slow path: more than 15-16 significant digits. Let std round it correctly.
-        let text = std::str::from_utf8(&bytes[..i]).map_err(|_| NumberError::Malformed)?;
-        text.parse::<f64>()
-            .map_err(|_| NumberError::Malformed)?
-            .abs()
-    };
+    if int_digits + frac_digits > 15 {
+        return scan_slow(bytes, negative, start);
+    }
+    // At most 15 digits: the mantissa is below 2^53, exact, and one division rounds correctly.
+    let value = (mantissa as i64) as f64 / POW10[frac_digits];
     Ok((if negative { -value } else { value }, i))
+}
+
+/// Accumulates the leading ASCII digits of `bytes` into `mantissa` (wrapping: callers with more
+/// than 15 digits take the slow path) and returns how many there were.
+#[inline]
+fn digits(bytes: &[u8], mantissa: &mut u64) -> usize {
+    let mut n = 0;
+    for &b in bytes {
+        let d = b.wrapping_sub(b'0');
+        if d >= 10 {
+            break;
+        }
+        *mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+        n += 1;
+    }
+    n
+}
+
+/// Numbers with long digit runs: let std round them correctly.
+#[cold]
+fn scan_slow(bytes: &[u8], negative: bool, start: usize) -> Result<(f64, usize), NumberError> {
+    let mut i = start;
+    while bytes.get(i).is_some_and(u8::is_ascii_digit) {
+        i += 1;
+    }
+    if bytes.get(i) == Some(&b'.') {
+        i += 1;
+        while bytes.get(i).is_some_and(u8::is_ascii_digit) {
+            i += 1;
+        }
+    }
+    if matches!(bytes.get(i), Some(b'.' | b'+' | b'-')) {
+        return Err(NumberError::Malformed);
+    }
+    let text = std::str::from_utf8(&bytes[start..i]).map_err(|_| NumberError::Malformed)?;
+    let value: f64 = text.parse().map_err(|_| NumberError::Malformed)?;
+    Ok((if negative { -value } else { value }, i))
+}
+
+/// Classifies a word value without digits: `nan`/`inf`, a lone sign or point, or nothing.
+#[cold]
+fn no_digits(rest: &[u8], had_sign_or_point: bool) -> NumberError {
+    let word_end = rest.iter().position(|b| !b.is_ascii_alphabetic()).unwrap_or(rest.len());
+    let word = &rest[..word_end];
+    if word.eq_ignore_ascii_case(b"nan")
+        || word.eq_ignore_ascii_case(b"inf")
+        || word.eq_ignore_ascii_case(b"infinity")
+    {
+        NumberError::NotFinite
+    } else if had_sign_or_point {
+        NumberError::Malformed
+    } else {
+        NumberError::Empty
+    }
 }
 
 /// How new numbers are written: fixed decimals, trailing zeros trimmed, optionally without the
@@ -169,11 +170,7 @@ impl NumberFormat {
             out.push(b'0');
         }
         if self.drop_leading_zero {
-            let body = if out.get(start) == Some(&b'-') {
-                start + 1
-            } else {
-                start
-            };
+            let body = if out.get(start) == Some(&b'-') { start + 1 } else { start };
             if out.get(body) == Some(&b'0') && out.get(body + 1) == Some(&b'.') {
                 out.remove(body);
             }
@@ -215,15 +212,9 @@ mod tests {
     #[test]
     fn long_numbers_round_like_std() {
         let text = "3.14159265358979323846264338327950288";
-        assert_eq!(
-            scan(text.as_bytes()).unwrap().0,
-            text.parse::<f64>().unwrap()
-        );
+        assert_eq!(scan(text.as_bytes()).unwrap().0, text.parse::<f64>().unwrap());
         let text = "123456789012345678901234";
-        assert_eq!(
-            scan(text.as_bytes()).unwrap().0,
-            text.parse::<f64>().unwrap()
-        );
+        assert_eq!(scan(text.as_bytes()).unwrap().0, text.parse::<f64>().unwrap());
     }
 
     #[test]
@@ -238,16 +229,43 @@ mod tests {
         out.push(b' ');
         f.write_word(&mut out, b'F', 1800.4);
         assert_eq!(out, b"X10 E0.12346 Y0 F1800");
-        let prusa = NumberFormat {
-            drop_leading_zero: true,
-            ..f
-        };
+        let prusa = NumberFormat { drop_leading_zero: true, ..f };
         let mut out = Vec::new();
         prusa.write_word(&mut out, b'E', -0.4);
         assert_eq!(out, b"E-.4");
     }
 
+    #[test]
+    fn digit_runs_of_every_length() {
+        for int_len in 0..12 {
+            for frac_len in 0..12 {
+                if int_len + frac_len == 0 {
+                    continue;
+                }
+                let int: String = (0..int_len).map(|k| char::from(b'1' + (k % 9) as u8)).collect();
+                let frac: String = (0..frac_len).map(|k| char::from(b'9' - (k % 9) as u8)).collect();
+                for text in [format!("{int}.{frac} "), format!("-{int}.{frac}X"), format!("{int}.{frac}")] {
+                    let body = text.trim_end_matches([' ', 'X']);
+                    let expected: f64 = body.parse().unwrap();
+                    assert_eq!(scan(text.as_bytes()), Ok((expected, body.len())), "{text:?}");
+                }
+            }
+        }
+    }
+
     proptest::proptest! {
+        #[test]
+        fn scan_matches_std_for_any_decimal(text in "[+-]?[0-9]{0,20}(\\.[0-9]{0,20})?") {
+            let digits = text.bytes().filter(u8::is_ascii_digit).count();
+            let result = scan(text.as_bytes());
+            if digits == 0 {
+                proptest::prop_assert!(result.is_err());
+            } else {
+                let expected: f64 = text.trim_start_matches('+').parse().unwrap();
+                proptest::prop_assert_eq!(result, Ok((expected, text.len())));
+            }
+        }
+
         #[test]
         fn scan_matches_std_for_plain_decimals(int in 0u32..100000, frac in 0u32..100000, neg: bool) {
             let text = format!("{}{}.{:05}", if neg { "-" } else { "" }, int, frac);

@@ -31,15 +31,7 @@ pub struct LineReader<R> {
 
 impl<R: Read> LineReader<R> {
     pub fn new(inner: R) -> Self {
-        LineReader {
-            inner,
-            buf: vec![0; CHUNK],
-            start: 0,
-            end: 0,
-            eof: false,
-            number: 0,
-            offset: 0,
-        }
+        LineReader { inner, buf: vec![0; CHUNK], start: 0, end: 0, eof: false, number: 0, offset: 0 }
     }
 
     /// Bytes handed out so far.
@@ -79,12 +71,7 @@ impl<R: Read> LineReader<R> {
         self.number += 1;
         let offset = self.offset;
         self.offset += whole.len() as u64;
-        RawLine {
-            bytes: &whole[..content_len],
-            eol: &whole[content_len..],
-            number: self.number,
-            offset,
-        }
+        RawLine { bytes: &whole[..content_len], eol: &whole[content_len..], number: self.number, offset }
     }
 
     /// Moves the unread tail to the front, grows the buffer if one line fills it, and reads more.

@@ -22,6 +22,21 @@ pub const AXES: usize = 7;
 /// The axis letters in index order.
 pub const AXIS_LETTERS: [u8; AXES] = [b'X', b'Y', b'Z', b'E', b'A', b'B', b'C'];
 
+/// The axis index of an (upper-case) word letter.
+#[inline]
+pub fn axis_of(letter: u8) -> Option<usize> {
+    match letter {
+        b'X' => Some(X),
+        b'Y' => Some(Y),
+        b'Z' => Some(Z),
+        b'E' => Some(E),
+        b'A' => Some(A),
+        b'B' => Some(B),
+        b'C' => Some(C),
+        _ => None,
+    }
+}
+
 /// A position on every axis, mm (degrees for rotary A/B/C).
 pub type Position = [f64; AXES];
 
@@ -77,23 +92,34 @@ impl Move {
     /// XY length, following the arc for G2/G3.
     pub fn xy_len_mm(&self) -> f64 {
         match &self.path {
-            Path::Line => (self.to[X] - self.from[X]).hypot(self.to[Y] - self.from[Y]),
+            Path::Line => {
+                let (dx, dy) = (self.to[X] - self.from[X], self.to[Y] - self.from[Y]);
+                (dx * dx + dy * dy).sqrt()
+            }
             Path::Arc(arc) => arc.xy_len_mm(),
         }
     }
 
     /// Tool-path length in XYZ, mm (a helix for an arc with Z change).
     pub fn len_mm(&self) -> f64 {
-        self.xy_len_mm().hypot(self.to[Z] - self.from[Z])
+        // sqrt of squares rather than hypot: no overflow is possible at printer scales, and it
+        // is several times faster on the hot path.
+        let dz = self.to[Z] - self.from[Z];
+        let xy2 = match &self.path {
+            Path::Line => {
+                let (dx, dy) = (self.to[X] - self.from[X], self.to[Y] - self.from[Y]);
+                dx * dx + dy * dy
+            }
+            Path::Arc(arc) => arc.xy_len_mm().powi(2),
+        };
+        (xy2 + dz * dz).sqrt()
     }
 
     /// Deposits material while moving in XY: a printing move, not travel or retraction.
     #[inline]
     pub fn is_extruding(&self) -> bool {
         self.e_mm() > 0.0
-            && (self.to[X] != self.from[X]
-                || self.to[Y] != self.from[Y]
-                || matches!(self.path, Path::Arc(_)))
+            && (self.to[X] != self.from[X] || self.to[Y] != self.from[Y] || matches!(self.path, Path::Arc(_)))
     }
 }
 
@@ -149,11 +175,7 @@ pub struct StateOptions {
 
 impl Default for StateOptions {
     fn default() -> Self {
-        StateOptions {
-            firmware: Firmware::Marlin,
-            fw_retract_mm: 1.0,
-            markers: Markers::default(),
-        }
+        StateOptions { firmware: Firmware::Marlin, fw_retract_mm: 1.0, markers: Markers::default() }
     }
 }
 
@@ -178,6 +200,8 @@ pub struct State {
     pub thermal: Thermal,
     pub structure: Structure,
     pub options: StateOptions,
+    /// What the last line did.
+    pub effect: Effect,
 }
 
 impl Default for State {
@@ -202,6 +226,7 @@ impl State {
             thermal: Thermal::default(),
             structure: Structure::with_markers(options.markers.clone()),
             options,
+            effect: Effect::None,
         }
     }
 
@@ -220,67 +245,56 @@ impl State {
         }
     }
 
-    /// Executes one parsed line (`raw` is its text, for comments) and says what it did.
-    pub fn apply(&mut self, raw: &[u8], block: &Block) -> Effect {
+    /// Executes one parsed line (`raw` is its text, for comments) and says what it did. The
+    /// effect is also kept in [`State::effect`] until the next line.
+    pub fn apply(&mut self, raw: &[u8], block: &Block) -> &Effect {
+        // The effect is written in place: a `Move` is large, and copying it per line shows.
+        self.effect = Effect::None;
         self.structure.layer_started = false;
         if let Some(c) = block.comment {
             self.structure.observe_comment(c.of(raw));
         }
         if block.block_delete {
-            return Effect::None;
+            return &self.effect;
         }
         if !block.is_empty() && block.comment.is_none() {
             self.structure.observe_command();
         }
-        let effect = match block.command {
-            Command::Code {
-                letter: b'G',
-                number,
-                sub: None,
-            } => self.g_code(number, block),
-            Command::Code {
-                letter: b'M',
-                number,
-                sub: None,
-            } => {
-                self.m_code(number, block);
-                Effect::None
-            }
-            Command::Code {
-                letter: b'T',
-                number,
-                sub: None,
-            } => {
+        match block.command {
+            Command::Code { letter: b'G', number, sub: None } => self.g_code(number, block),
+            Command::Code { letter: b'M', number, sub: None } => self.m_code(number, block),
+            Command::Code { letter: b'T', number, sub: None } => {
                 let from = self.tool;
                 self.tool = number;
                 self.grow_tool(number);
-                Effect::ToolChange { from, to: number }
+                self.effect = Effect::ToolChange { from, to: number };
             }
-            Command::None if block.words.iter().any(|w| AXIS_LETTERS.contains(&w.letter)) => {
+            Command::None if block.words.iter().any(|w| axis_of(w.letter).is_some()) => {
                 self.motion_words(block)
             }
             Command::None => {
                 if let Some(f) = block.get(b'F') {
                     self.feed_mm_min = self.to_mm(f);
                 }
-                Effect::None
             }
-            _ => Effect::None,
+            _ => {}
+        }
+        let fed_mm = match &self.effect {
+            Effect::Move(m) => {
+                if m.is_extruding() {
+                    self.structure.observe_extrusion(m.to[Z]);
+                }
+                m.e_mm()
+            }
+            Effect::FirmwareRetract { e_mm } => *e_mm,
+            _ => 0.0,
         };
-        if let Effect::Move(m) = &effect {
+        if fed_mm != 0.0 {
             if let Some(fed) = self.filament_mm.get_mut(self.tool as usize) {
-                *fed += m.e_mm();
-            }
-            if m.is_extruding() {
-                self.structure.observe_extrusion(m.to[Z]);
+                *fed += fed_mm;
             }
         }
-        if let Effect::FirmwareRetract { e_mm } = effect {
-            if let Some(fed) = self.filament_mm.get_mut(self.tool as usize) {
-                *fed += e_mm;
-            }
-        }
-        effect
+        &self.effect
     }
 
     fn grow_tool(&mut self, tool: u32) {
@@ -290,7 +304,7 @@ impl State {
         }
     }
 
-    fn g_code(&mut self, number: u32, block: &Block) -> Effect {
+    fn g_code(&mut self, number: u32, block: &Block) {
         match number {
             0..=3 => {
                 self.motion = match number {
@@ -303,18 +317,12 @@ impl State {
             }
             4 => {
                 let t_s = block.get(b'S').unwrap_or(0.0) + block.get(b'P').unwrap_or(0.0) / 1000.0;
-                Effect::Dwell { t_s }
+                self.effect = Effect::Dwell { t_s };
             }
             10 if block.words.is_empty() => self.firmware_retract(true),
             11 => self.firmware_retract(false),
-            20 => {
-                self.inches = true;
-                Effect::None
-            }
-            21 => {
-                self.inches = false;
-                Effect::None
-            }
+            20 => self.inches = true,
+            21 => self.inches = false,
             28 => {
                 let mut axes = 0u8;
                 for (i, letter) in AXIS_LETTERS.iter().enumerate().take(3) {
@@ -330,21 +338,19 @@ impl State {
                         self.pos[i] = 0.0;
                     }
                 }
-                Effect::Home { axes }
+                self.effect = Effect::Home { axes };
             }
             90 => {
                 self.absolute = true;
                 if self.options.firmware == Firmware::Marlin {
                     self.absolute_e = true;
                 }
-                Effect::None
             }
             91 => {
                 self.absolute = false;
                 if self.options.firmware == Firmware::Marlin {
                     self.absolute_e = false;
                 }
-                Effect::None
             }
             92 => {
                 for (i, letter) in AXIS_LETTERS.iter().enumerate() {
@@ -352,9 +358,9 @@ impl State {
                         self.pos[i] = self.to_mm(v);
                     }
                 }
-                Effect::SetPosition
+                self.effect = Effect::SetPosition;
             }
-            _ => Effect::None,
+            _ => {}
         }
     }
 
@@ -364,9 +370,7 @@ impl State {
             83 => self.absolute_e = false,
             104 | 109 => {
                 if let Some(s) = block.get(b'S').or_else(|| block.get(b'R')) {
-                    let tool = block
-                        .get(b'T')
-                        .map_or(self.tool as usize, |t| t.max(0.0) as usize);
+                    let tool = block.get(b'T').map_or(self.tool as usize, |t| t.max(0.0) as usize);
                     if tool < 256 {
                         if self.thermal.hotend_c.len() <= tool {
                             self.thermal.hotend_c.resize(tool + 1, 0.0);
@@ -392,21 +396,16 @@ impl State {
         }
     }
 
-    fn firmware_retract(&mut self, retract: bool) -> Effect {
-        if self.fw_retracted == retract {
-            return Effect::None;
+    fn firmware_retract(&mut self, retract: bool) {
+        if self.fw_retracted != retract {
+            self.fw_retracted = retract;
+            let e_mm = if retract { -self.fw_retract_mm } else { self.fw_retract_mm };
+            self.effect = Effect::FirmwareRetract { e_mm };
         }
-        self.fw_retracted = retract;
-        let e_mm = if retract {
-            -self.fw_retract_mm
-        } else {
-            self.fw_retract_mm
-        };
-        Effect::FirmwareRetract { e_mm }
     }
 
     /// Resolves the axis words of a motion line to an absolute target and the move to it.
-    fn motion_words(&mut self, block: &Block) -> Effect {
+    fn motion_words(&mut self, block: &Block) {
         if let Some(f) = block.get(b'F') {
             self.feed_mm_min = self.to_mm(f);
         }
@@ -414,16 +413,10 @@ impl State {
         let mut to = from;
         let mut any = false;
         for w in &block.words {
-            let Some(i) = AXIS_LETTERS.iter().position(|&l| l == w.letter) else {
-                continue;
-            };
+            let Some(i) = axis_of(w.letter) else { continue };
             let Value::Number(v) = w.value else { continue };
             let v = self.to_mm(v);
-            let relative = if i == E {
-                self.relative_e()
-            } else {
-                !self.absolute
-            };
+            let relative = if i == E { self.relative_e() } else { !self.absolute };
             to[i] = if relative { to[i] + v } else { v };
             any = true;
         }
@@ -453,10 +446,10 @@ impl State {
             _ => Path::Line,
         };
         if !any {
-            return Effect::None;
+            return;
         }
         self.pos = to;
-        Effect::Move(Move {
+        self.effect = Effect::Move(Move {
             from,
             to,
             path,
@@ -476,7 +469,7 @@ mod tests {
         text.lines()
             .map(|l| {
                 parse_into(l.as_bytes(), &mut block);
-                state.apply(l.as_bytes(), &block)
+                *state.apply(l.as_bytes(), &block)
             })
             .collect()
     }
@@ -484,15 +477,9 @@ mod tests {
     #[test]
     fn relative_and_absolute_extrusion_agree() {
         let mut abs = State::default();
-        run(
-            &mut abs,
-            "G90\nM82\nG92 E0\nG1 X10 E1\nG1 X20 E2.5\nG1 E1.5\nG92 E0\nG1 X30 E1",
-        );
+        run(&mut abs, "G90\nM82\nG92 E0\nG1 X10 E1\nG1 X20 E2.5\nG1 E1.5\nG92 E0\nG1 X30 E1");
         let mut rel = State::default();
-        run(
-            &mut rel,
-            "G90\nM83\nG1 X10 E1\nG1 X20 E1.5\nG1 E-1\nG1 X30 E1",
-        );
+        run(&mut rel, "G90\nM83\nG1 X10 E1\nG1 X20 E1.5\nG1 E-1\nG1 X30 E1");
         assert_eq!(abs.filament_mm[0], 2.5);
         assert_eq!(rel.filament_mm[0], 2.5);
         assert_eq!(abs.pos[X], 30.0);
@@ -504,10 +491,7 @@ mod tests {
         let mut marlin = State::default();
         run(&mut marlin, "M83\nG90\nG1 E1\nG1 E1");
         assert_eq!(marlin.filament_mm[0], 1.0);
-        let mut klipper = State::new(StateOptions {
-            firmware: Firmware::Klipper,
-            ..Default::default()
-        });
+        let mut klipper = State::new(StateOptions { firmware: Firmware::Klipper, ..Default::default() });
         run(&mut klipper, "M83\nG90\nG1 E1\nG1 E1");
         assert_eq!(klipper.filament_mm[0], 2.0);
     }
@@ -524,10 +508,7 @@ mod tests {
     #[test]
     fn arcs_tools_and_firmware_retraction() {
         let mut s = State::default();
-        let fx = run(
-            &mut s,
-            "G1 X10 Y0 F600\nG3 X0 Y10 I-10 J0 E1\nT1\nM207 S2\nG10\nG10\nG11\nX5",
-        );
+        let fx = run(&mut s, "G1 X10 Y0 F600\nG3 X0 Y10 I-10 J0 E1\nT1\nM207 S2\nG10\nG10\nG11\nX5");
         match fx[1] {
             Effect::Move(m) => assert!((m.xy_len_mm() - 5.0 * std::f64::consts::PI).abs() < 1e-9),
             e => panic!("{e:?}"),

@@ -26,11 +26,7 @@ pub struct Output {
 }
 
 enum Sink {
-    File {
-        file: BufWriter<tempfile::NamedTempFile>,
-        dest: PathBuf,
-        backup: Option<PathBuf>,
-    },
+    File { file: BufWriter<tempfile::NamedTempFile>, dest: PathBuf, backup: Option<PathBuf> },
     Stdout(BufWriter<io::Stdout>),
 }
 
@@ -42,9 +38,7 @@ impl Output {
     pub fn create(target: &Target, input: Option<&Path>) -> Result<Output> {
         let (dest, backup) = match target {
             Target::Stdout => {
-                return Ok(Output {
-                    sink: Sink::Stdout(BufWriter::with_capacity(BUFFER, io::stdout())),
-                })
+                return Ok(Output { sink: Sink::Stdout(BufWriter::with_capacity(BUFFER, io::stdout())) })
             }
             Target::File(path) => {
                 if let Some(input) = input {
@@ -69,13 +63,7 @@ impl Output {
             .suffix(".tmp")
             .tempfile_in(&dir)
             .map_err(|e| Error::io(&dir, e))?;
-        Ok(Output {
-            sink: Sink::File {
-                file: BufWriter::with_capacity(BUFFER, tmp),
-                dest,
-                backup,
-            },
-        })
+        Ok(Output { sink: Sink::File { file: BufWriter::with_capacity(BUFFER, tmp), dest, backup } })
     }
 
     /// Flushes, keeps the backup if asked, and renames the temporary file into place.
@@ -86,9 +74,7 @@ impl Output {
                 _ => Ok(()),
             },
             Sink::File { file, dest, backup } => {
-                let tmp = file
-                    .into_inner()
-                    .map_err(|e| Error::io(&dest, e.into_error()))?;
+                let tmp = file.into_inner().map_err(|e| Error::io(&dest, e.into_error()))?;
                 tmp.as_file().sync_all().map_err(|e| Error::io(&dest, e))?;
                 // Keep the permissions of the file being replaced (an executable script stays one).
                 if let Ok(meta) = fs::metadata(&dest) {
@@ -173,9 +159,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let input = dir.path().join("in.gcode");
         fs::write(&input, b"old\n").unwrap();
-        let err = Output::create(&Target::File(input.clone()), Some(&input))
-            .err()
-            .unwrap();
+        let err = Output::create(&Target::File(input.clone()), Some(&input)).err().unwrap();
         assert!(matches!(err, Error::WouldOverwriteInput { .. }));
     }
 }
