@@ -58,9 +58,8 @@ fn read_moves(text: &str, m: &RotaryConfig) -> Vec<Move> {
         let Some(command) = words.next() else {
             continue;
         };
-        let words: Vec<(char, Option<f64>)> = words
-            .map(|w| (w.chars().next().unwrap(), w[1..].parse().ok()))
-            .collect();
+        let words: Vec<(char, Option<f64>)> =
+            words.map(|w| (w.chars().next().unwrap(), w[1..].parse().ok())).collect();
         let value = |letter: char| words.iter().find(|(l, _)| *l == letter).and_then(|w| w.1);
         match command {
             "G90" => relative = false,
@@ -103,14 +102,7 @@ fn read_moves(text: &str, m: &RotaryConfig) -> Vec<Move> {
                 if let Some(f) = value('F') {
                     feed = f;
                 }
-                moves.push(Move {
-                    layer,
-                    from,
-                    to: pos,
-                    e_mm,
-                    feed,
-                    rapid: command == "G0",
-                });
+                moves.push(Move { layer, from, to: pos, e_mm, feed, rapid: command == "G0" });
             }
             _ => {}
         }
@@ -148,15 +140,7 @@ fn start_block_is_the_seeds() {
     let lines: Vec<&str> = text.lines().collect();
     assert!(lines[2].starts_with("G28 X Z"));
     assert_eq!(&lines[3..7], ["M109 S190", "G90", "G21", "M82"]);
-    assert_eq!(
-        &lines[7..11],
-        [
-            "G92 A0.000",
-            "G92 E0",
-            "G0 Z0.200 F3000.000",
-            "G0 X0.200 F3000.000"
-        ]
-    );
+    assert_eq!(&lines[7..11], ["G92 A0.000", "G92 E0", "G0 Z0.200 F3000.000", "G0 X0.200 F3000.000"]);
     assert!(lines[11].starts_with("; layer 0 radius 10.100 mm"));
     assert!(text.ends_with("M104 S0\nG91\nG1 Z5 F600 ; lift off the part\nG90\nM84\n"));
 }
@@ -221,9 +205,7 @@ fn assert_surface_speed(params: &TubeParams) {
     let v = params.print.print_speed_mm_s;
     let mut n = 0;
     for mv in printed(&moves) {
-        let speed = m
-            .surface_speed_mm_s(mv.from, mv.to, mv.feed, h / 2.0)
-            .unwrap();
+        let speed = m.surface_speed_mm_s(mv.from, mv.to, mv.feed, h / 2.0).unwrap();
         assert!((speed / v - 1.0).abs() < 0.01, "{mv:?}: {speed} mm/s");
         n += 1;
     }
@@ -232,11 +214,7 @@ fn assert_surface_speed(params: &TubeParams) {
 
 #[test]
 fn surface_speed_holds_for_every_feed_convention() {
-    for convention in [
-        FeedConvention::Nist,
-        FeedConvention::Combined,
-        FeedConvention::InverseTime,
-    ] {
+    for convention in [FeedConvention::Nist, FeedConvention::Combined, FeedConvention::InverseTime] {
         let mut params = small_tube();
         params.machine.feed_convention = convention;
         assert_surface_speed(&params);
@@ -280,10 +258,7 @@ fn inverse_time_brackets_the_print_with_g93_g94() {
     assert!(g93 < text.find("\nG1 ").unwrap() && g94 > text.rfind("E").unwrap());
     // Every G1 inside carries its own F.
     let inside = &text[g93..g94];
-    assert!(inside
-        .lines()
-        .filter(|l| l.starts_with("G1"))
-        .all(|l| l.contains(" F")));
+    assert!(inside.lines().filter(|l| l.starts_with("G1")).all(|l| l.contains(" F")));
 }
 
 #[test]
@@ -295,21 +270,16 @@ fn angular_speed_follows_each_layer_and_the_cap() {
     let (_, moves) = generate(&params);
     let m = params.machine.clone();
     for k in 0..5 {
-        let (deg, t_s) = printed(&moves)
-            .filter(|mv| mv.layer == Some(k) && mv.delta().axial_mm != 0.0)
-            .fold((0.0, 0.0), |(deg, t), mv| {
+        let (deg, t_s) = printed(&moves).filter(|mv| mv.layer == Some(k) && mv.delta().axial_mm != 0.0).fold(
+            (0.0, 0.0),
+            |(deg, t), mv| {
                 let d = mv.delta();
-                (
-                    deg + d.rotary.abs(),
-                    t + m.time_from_feed(&d, mv.feed).unwrap(),
-                )
-            });
+                (deg + d.rotary.abs(), t + m.time_from_feed(&d, mv.feed).unwrap())
+            },
+        );
         let rate = deg / t_s;
         let expected = params.angular_speed_deg_s(k);
-        assert!(
-            (rate / expected - 1.0).abs() < 0.01,
-            "layer {k}: {rate} vs {expected}"
-        );
+        assert!((rate / expected - 1.0).abs() < 0.01, "layer {k}: {rate} vs {expected}");
     }
     // 20 mm/s at r = 11 mm is 104 deg/s; a 60 deg/s cap slows every move down to it.
     params.machine.max_rotary_deg_s = Some(60.0);
@@ -347,10 +317,7 @@ fn extruded_volume_is_the_wall_volume() {
     // Bead centres run over length - w, so the helix covers (L - w)/p turns.
     let ratio = summary.filament_mm * area / params.wall_volume_mm3();
     let expected = 0.4 / 1.6 * (12.0 - 0.4) / 12.0;
-    assert!(
-        (ratio / expected - 1.0).abs() < 0.01,
-        "{ratio} vs {expected}"
-    );
+    assert!((ratio / expected - 1.0).abs() < 0.01, "{ratio} vs {expected}");
 }
 
 #[test]
@@ -359,10 +326,7 @@ fn layers_join_without_travel() {
     let (_, moves) = generate(&params);
     let first = moves.iter().position(Move::extruding).unwrap();
     let last = moves.iter().rposition(Move::extruding).unwrap();
-    let idle: Vec<&Move> = moves[first..last]
-        .iter()
-        .filter(|mv| !mv.extruding())
-        .collect();
+    let idle: Vec<&Move> = moves[first..last].iter().filter(|mv| !mv.extruding()).collect();
     // Only the radial steps between layers, one layer height each, and no G0.
     assert_eq!(idle.len(), params.layers as usize - 1);
     for mv in idle {
@@ -375,10 +339,7 @@ fn layers_join_without_travel() {
     let layers = params.layer_points().unwrap();
     for pair in layers.windows(2) {
         let (end, start) = (pair[0].last().unwrap(), pair[1][0]);
-        assert_eq!(
-            (end.axial_mm, end.theta_deg),
-            (start.axial_mm, start.theta_deg)
-        );
+        assert_eq!((end.axial_mm, end.theta_deg), (start.axial_mm, start.theta_deg));
         assert!((start.radius_mm - end.radius_mm - 0.2).abs() < 1e-12);
     }
 }
@@ -398,23 +359,14 @@ fn tube_toml() {
     let typo = TubeParams::from_toml_str("layer = 2\n[machine]\nmandrel_diameter_mm = 25");
     assert!(matches!(typo, Err(RotaryError::Toml(_))));
     let dense = TubeParams::from_toml_str("pitch_mm = 0.3\n[machine]\nmandrel_diameter_mm = 25");
-    assert!(matches!(
-        dense,
-        Err(RotaryError::Config {
-            key: "pitch_mm",
-            ..
-        })
-    ));
+    assert!(matches!(dense, Err(RotaryError::Config { key: "pitch_mm", .. })));
 }
 
 #[test]
 fn cone_follows_its_radius_profile() {
     let cone = Profile::Table(vec![(0.0, 10.0), (20.0, 15.0)]);
     let path = HelicalPath::new(0.0, 20.0, cone.clone(), Profile::Constant(0.5));
-    let res = Resolution {
-        chord_tolerance_mm: 0.01,
-        segments_per_turn: None,
-    };
+    let res = Resolution { chord_tolerance_mm: 0.01, segments_per_turn: None };
     let points = path.points(res).unwrap();
     let last = points.last().unwrap();
     assert_eq!(last.axial_mm, 20.0);
@@ -438,47 +390,27 @@ fn variable_pitch_integrates_turns() {
     let pitch = Profile::Custom(std::sync::Arc::new(|x: f64| 0.4 + 0.02 * x));
     let mut path = HelicalPath::new(20.0, 0.0, Profile::Constant(12.0), pitch);
     path.handedness = Handedness::Left;
-    let res = Resolution {
-        chord_tolerance_mm: 0.005,
-        segments_per_turn: Some(90),
-    };
+    let res = Resolution { chord_tolerance_mm: 0.005, segments_per_turn: Some(90) };
     let points = path.points(res).unwrap();
     let turns = points.last().unwrap().theta_deg / 360.0;
     let expected = (0.8f64 / 0.4).ln() / 0.02;
     // Backwards and left-handed: the angle grows.
     assert!((turns - expected).abs() < 0.01, "{turns} vs {expected}");
     // 90 segments per turn is finer than the tolerance needs at r = 12 here.
-    assert!(points
-        .windows(2)
-        .all(|p| p[1].theta_deg - p[0].theta_deg <= 4.0 + 1e-9));
+    assert!(points.windows(2).all(|p| p[1].theta_deg - p[0].theta_deg <= 4.0 + 1e-9));
 }
 
 #[test]
 fn bad_profiles_are_errors() {
-    let res = Resolution {
-        chord_tolerance_mm: 0.01,
-        segments_per_turn: None,
-    };
+    let res = Resolution { chord_tolerance_mm: 0.01, segments_per_turn: None };
     let nan = Profile::Custom(std::sync::Arc::new(|_| f64::NAN));
     let path = HelicalPath::new(0.0, 5.0, Profile::Constant(10.0), nan);
-    assert!(matches!(
-        path.points(res),
-        Err(RotaryError::Profile { what: "pitch", .. })
-    ));
+    assert!(matches!(path.points(res), Err(RotaryError::Profile { what: "pitch", .. })));
     let unsorted = Profile::Table(vec![(5.0, 10.0), (1.0, 11.0)]);
     let path = HelicalPath::new(0.0, 5.0, unsorted, Profile::Constant(1.0));
-    assert!(matches!(
-        path.points(res),
-        Err(RotaryError::Config {
-            key: "radius_mm",
-            ..
-        })
-    ));
+    assert!(matches!(path.points(res), Err(RotaryError::Config { key: "radius_mm", .. })));
     let tiny = HelicalPath::new(0.0, 1e6, Profile::Constant(10.0), Profile::Constant(1e-3));
-    assert!(matches!(
-        tiny.points(res),
-        Err(RotaryError::TooManyPoints { .. })
-    ));
+    assert!(matches!(tiny.points(res), Err(RotaryError::TooManyPoints { .. })));
 }
 
 #[test]

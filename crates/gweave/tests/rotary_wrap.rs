@@ -7,8 +7,7 @@ use gweave::gcode::lexer::parse_into;
 use gweave::gcode::line::Block;
 use gweave::gcode::state::{Effect, State, AXIS_LETTERS};
 use gweave::rotary::cylinder::{
-    surface_length_mm, CylPoint, FeedConvention, MachineDelta, RotaryConfig, RotaryUnit,
-    UnwrapConfig,
+    surface_length_mm, CylPoint, FeedConvention, MachineDelta, RotaryConfig, RotaryUnit, UnwrapConfig,
 };
 use gweave::rotary::emit::{number_text, rotary_number_format};
 use gweave::rotary::wrap::{wrap_bytes, WrapConfig};
@@ -56,10 +55,7 @@ fn read(text: &str, m: &RotaryConfig) -> (Vec<OutMove>, State) {
 
 /// The same machine read as a flat printer (Y for the rotary letter).
 fn flat_reader(m: &RotaryConfig) -> RotaryConfig {
-    RotaryConfig {
-        rotary_axis: 'Y',
-        ..m.clone()
-    }
+    RotaryConfig { rotary_axis: 'Y', ..m.clone() }
 }
 
 fn delta(mv: &OutMove) -> MachineDelta {
@@ -105,13 +101,7 @@ fn program() -> String {
     let mut e = 0.0;
     for (layer, z) in [0.2, 0.4].into_iter().enumerate() {
         text += &format!(";LAYER:{layer}\nG1 Z{z} F1800\nG0 X5 Y5 F1800\n");
-        for (x, y) in [
-            (25.0, 5.0),
-            (25.0, 55.0),
-            (5.0, 55.0),
-            (5.0, 5.0),
-            (20.0, 40.0),
-        ] {
+        for (x, y) in [(25.0, 5.0), (25.0, 55.0), (5.0, 55.0), (5.0, 5.0), (20.0, 40.0)] {
             e += 0.05 * 30.0;
             text += &format!("G1 X{x} Y{y} E{e:.5}\n");
         }
@@ -143,9 +133,7 @@ fn surface_speed_holds_for_every_feed_convention() {
             if d == MachineDelta::default() {
                 continue; // a no-op line kept as written (`G1 Z0.2` at Z0.2)
             }
-            let t_s = m
-                .time_from_feed(&d, mv.feed)
-                .unwrap_or_else(|| panic!("{convention:?} {mv:?}"));
+            let t_s = m.time_from_feed(&d, mv.feed).unwrap_or_else(|| panic!("{convention:?} {mv:?}"));
             let moved = d.axial_mm != 0.0 || d.rotary != 0.0 || d.radial_mm != 0.0;
             // Flat moves ran at 1800 mm/min = 30 mm/s, retractions at 2100 = 35 mm/s.
             let (speed, expected) = if moved {
@@ -154,10 +142,7 @@ fn surface_speed_holds_for_every_feed_convention() {
             } else {
                 (d.e_mm.abs() / t_s, 35.0)
             };
-            assert!(
-                (speed / expected - 1.0).abs() < 0.01,
-                "{convention:?} {mv:?}: {speed}"
-            );
+            assert!((speed / expected - 1.0).abs() < 0.01, "{convention:?} {mv:?}: {speed}");
             checked += 1;
         }
         assert!(checked > 100, "{checked}");
@@ -180,10 +165,9 @@ fn points_lie_on_the_mapped_flat_path_and_e_scales() {
     for mv in moves.iter().filter(|mv| mv.e_mm > 0.0) {
         let p = point(&m, mv.to);
         let flat = [p.axial_mm, p.theta_deg / 360.0 * 60.0, p.radius_mm - r0];
-        let on_edge = [flat[0] - 5.0, flat[0] - 25.0, flat[1] - 5.0, flat[1] - 55.0]
-            .iter()
-            .any(|d| d.abs() < 0.002)
-            || ((flat[1] - 5.0) - (flat[0] - 5.0) * 35.0 / 15.0).abs() < 0.01;
+        let on_edge =
+            [flat[0] - 5.0, flat[0] - 25.0, flat[1] - 5.0, flat[1] - 55.0].iter().any(|d| d.abs() < 0.002)
+                || ((flat[1] - 5.0) - (flat[0] - 5.0) * 35.0 / 15.0).abs() < 0.01;
         assert!(on_edge, "{flat:?}");
         // Chord midpoints stay within the tolerance of the cylinder.
         let (a, b) = (point(&m, mv.from).to_cartesian(), p.to_cartesian());
@@ -201,11 +185,7 @@ fn points_lie_on_the_mapped_flat_path_and_e_scales() {
             mv.e_mm * config.unwrap.e_scale(&m, from, to)
         })
         .sum();
-    assert!(
-        (state.filament_mm[0] - expected).abs() < 1e-4,
-        "{} vs {expected}",
-        state.filament_mm[0]
-    );
+    assert!((state.filament_mm[0] - expected).abs() < 1e-4, "{} vs {expected}", state.filament_mm[0]);
     assert!(expected > 15.0 * 1.01, "the scale must show");
 }
 
@@ -228,10 +208,8 @@ fn other_lines_are_kept_byte_for_byte() {
 #[test]
 fn arcs_are_linearised_before_wrapping() {
     let m = machine();
-    let out = wrap(
-        &WrapConfig::new(m.clone()),
-        "G1 X10 Y10 Z0.2 F1200\nG2 X20 Y10 I5 J0 E2\nG3 X10 Y10 R5 E4",
-    );
+    let out =
+        wrap(&WrapConfig::new(m.clone()), "G1 X10 Y10 Z0.2 F1200\nG2 X20 Y10 I5 J0 E2\nG3 X10 Y10 R5 E4");
     assert!(!out.contains("G2") && !out.contains("G3"));
     let (moves, state) = read(&out, &m);
     let printing: Vec<&OutMove> = moves.iter().filter(|mv| mv.e_mm > 0.0).collect();
@@ -239,10 +217,7 @@ fn arcs_are_linearised_before_wrapping() {
     for mv in printing {
         let p = point(&m, mv.to);
         let (x, y) = (p.axial_mm, p.theta_deg / 360.0 * 60.0);
-        assert!(
-            ((x - 15.0).hypot(y - 10.0) - 5.0).abs() < 0.011,
-            "({x}, {y})"
-        );
+        assert!(((x - 15.0).hypot(y - 10.0) - 5.0).abs() < 0.011, "({x}, {y})");
     }
     // A full circle of flat radius 5 at z = 0.2: each flat piece stretched by its Y share.
     assert!(state.filament_mm[0] > 4.0 && state.filament_mm[0] < 4.0 * (1.0 + 0.2 / 9.55));
@@ -255,10 +230,7 @@ fn set_position_and_homing_in_machine_words() {
     // Half a turn and 1 mm axial at r = R0 + 1 at 10 mm/s; NIST F is the axial speed.
     let surface = 1f64.hypot(PI * (30.0 / PI + 1.0));
     let feed = number_text(&rotary_number_format(), b'F', 60.0 / (surface / 10.0));
-    let out = wrap(
-        &config,
-        "G1 Z1 F600\nG92 X1 Y15 E3\nG1 X2 F600\nG28 Y\nG1 X3 Y30 F600\n",
-    );
+    let out = wrap(&config, "G1 Z1 F600\nG92 X1 Y15 E3\nG1 X2 F600\nG28 Y\nG1 X3 Y30 F600\n");
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(
         lines,
@@ -294,24 +266,11 @@ fn errors_name_the_line() {
     let err = wrap_bytes(config.clone(), b"G1 X1 F600\nG20\nG1 X2\n").unwrap_err();
     assert!(matches!(err, RotaryError::AtLine { line: 3, .. }), "{err}");
     let err = wrap_bytes(config.clone(), b"G1 X1 E1\n").unwrap_err();
-    assert_eq!(
-        err.to_string(),
-        "line 1: invalid rotary setting `F`: a move before any feed rate was set"
-    );
+    assert_eq!(err.to_string(), "line 1: invalid rotary setting `F`: a move before any feed rate was set");
     let err = wrap_bytes(config, b"G1 X1 F600\nG1 Z-50\n").unwrap_err();
-    assert!(
-        matches!(*as_inner(&err), RotaryError::BelowAxis { .. }),
-        "{err}"
-    );
-    let bad =
-        WrapConfig::from_toml_str("chord_tolerance_mm = -1\n[machine]\nmandrel_diameter_mm = 20");
-    assert!(matches!(
-        bad,
-        Err(RotaryError::Config {
-            key: "chord_tolerance_mm",
-            ..
-        })
-    ));
+    assert!(matches!(*as_inner(&err), RotaryError::BelowAxis { .. }), "{err}");
+    let bad = WrapConfig::from_toml_str("chord_tolerance_mm = -1\n[machine]\nmandrel_diameter_mm = 20");
+    assert!(matches!(bad, Err(RotaryError::Config { key: "chord_tolerance_mm", .. })));
 }
 
 fn as_inner(err: &RotaryError) -> &RotaryError {
@@ -323,10 +282,7 @@ fn as_inner(err: &RotaryError) -> &RotaryError {
 
 #[test]
 fn real_slicer_file_wraps() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../tests/data/cura/cura_torus.gcode"
-    );
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/data/cura/cura_torus.gcode");
     let input = std::fs::read(path).unwrap();
     // The Ender 3 bed is 220 mm deep: a mandrel of that circumference.
     let m = RotaryConfig::new(220.0 / PI);
@@ -339,22 +295,12 @@ fn real_slicer_file_wraps() {
     // Filament grows by the stretch of each printed segment, at most that of the top layer.
     let top_mm = flat_moves.iter().map(|mv| mv.to[2]).fold(0.0, f64::max);
     let grown = state.filament_mm[0] / flat_state.filament_mm[0];
-    assert!(
-        grown > 1.0 && grown < 1.0 + top_mm / m.mandrel_radius_mm(),
-        "{grown}"
-    );
+    assert!(grown > 1.0 && grown < 1.0 + top_mm / m.mandrel_radius_mm(), "{grown}");
     assert!(moves.len() >= flat_moves.len());
-    let motion = text
-        .lines()
-        .filter(|l| l.starts_with("G0 ") || l.starts_with("G1 "));
-    assert!(
-        motion.clone().all(|l| !l.contains('Y')),
-        "a flat Y word survived"
-    );
+    let motion = text.lines().filter(|l| l.starts_with("G0 ") || l.starts_with("G1 "));
+    assert!(motion.clone().all(|l| !l.contains('Y')), "a flat Y word survived");
     // Every move of the output has its F: none relies on the modal feed.
-    assert!(motion
-        .filter(|l| l.contains(['X', 'A', 'Z', 'E']))
-        .all(|l| l.contains(" F")));
+    assert!(motion.filter(|l| l.contains(['X', 'A', 'Z', 'E'])).all(|l| l.contains(" F")));
 }
 
 proptest! {

@@ -247,9 +247,7 @@ impl RotaryConfig {
                     d.rotary.abs()
                 }
             }
-            FeedConvention::Combined => {
-                (d.axial_mm.powi(2) + d.radial_mm.powi(2) + d.rotary.powi(2)).sqrt()
-            }
+            FeedConvention::Combined => (d.axial_mm.powi(2) + d.radial_mm.powi(2) + d.rotary.powi(2)).sqrt(),
             FeedConvention::InverseTime => 1.0,
         };
         if moved > 0.0 {
@@ -324,11 +322,7 @@ pub struct CylPoint {
 impl CylPoint {
     /// Bundles the three coordinates.
     pub fn new(axial_mm: f64, theta_deg: f64, radius_mm: f64) -> Self {
-        Self {
-            axial_mm,
-            theta_deg,
-            radius_mm,
-        }
+        Self { axial_mm, theta_deg, radius_mm }
     }
 
     /// This point in Cartesian coordinates, see [`to_cartesian`].
@@ -388,9 +382,7 @@ pub fn max_chord_step_deg(radius_mm: f64, tolerance_mm: f64) -> f64 {
     if tolerance_mm >= radius_mm {
         return 180.0;
     }
-    (2.0 * (1.0 - tolerance_mm / radius_mm).acos())
-        .to_degrees()
-        .min(180.0)
+    (2.0 * (1.0 - tolerance_mm / radius_mm).acos()).to_degrees().min(180.0)
 }
 
 /// How many equal pieces a turn of `d_theta_deg` at radius `radius_mm` needs so that each
@@ -434,10 +426,7 @@ impl UnwrapConfig {
     pub fn validate(&self) -> Result<()> {
         finite("arc_length_z1_mm", self.arc_length_z1_mm)?;
         finite("seam_offset_deg", self.seam_offset_deg)?;
-        finite(
-            "seam_rotation_per_layer_deg",
-            self.seam_rotation_per_layer_deg,
-        )
+        finite("seam_rotation_per_layer_deg", self.seam_rotation_per_layer_deg)
     }
 
     /// Angle of the seam (flat y = 0) on layer `layer` (0-based), degrees.
@@ -455,9 +444,7 @@ impl UnwrapConfig {
             // Diabase: the arc at radius R0 + z - z1 has the flat length y.
             let arc_radius = r0 + z - self.arc_length_z1_mm;
             if arc_radius <= 0.0 {
-                return Err(RotaryError::BelowAxis {
-                    radius_mm: arc_radius,
-                });
+                return Err(RotaryError::BelowAxis { radius_mm: arc_radius });
             }
             y * 180.0 / (PI * arc_radius)
         } else {
@@ -466,11 +453,7 @@ impl UnwrapConfig {
         if radius_mm <= 0.0 {
             return Err(RotaryError::BelowAxis { radius_mm });
         }
-        Ok(CylPoint::new(
-            x,
-            theta_deg + self.seam_deg(layer),
-            radius_mm,
-        ))
+        Ok(CylPoint::new(x, theta_deg + self.seam_deg(layer), radius_mm))
     }
 
     /// Factor by which the extrusion of the flat segment `from -> to` grows on the cylinder:
@@ -501,10 +484,7 @@ mod tests {
     fn toml_defaults_and_unknown_keys() {
         let config = RotaryConfig::from_toml_str("mandrel_diameter_mm = 40.0").unwrap();
         assert_eq!(config, RotaryConfig::new(40.0));
-        assert_eq!(
-            (config.axial_axis, config.rotary_axis, config.radial_axis),
-            ('X', 'A', 'Z')
-        );
+        assert_eq!((config.axial_axis, config.rotary_axis, config.radial_axis), ('X', 'A', 'Z'));
         let err = RotaryConfig::from_toml_str("mandrel_diameter_mm = 40.0\nspeed = 3").unwrap_err();
         assert!(err.to_string().contains("unknown field `speed`"), "{err}");
         let err = RotaryConfig::from_toml_str("axial_axis = \"X\"").unwrap_err();
@@ -522,21 +502,9 @@ mod tests {
         assert_eq!(config.feed_convention, FeedConvention::InverseTime);
         assert_eq!(config.max_rotary_deg_s, Some(90.0));
         let same = RotaryConfig::from_toml_str("mandrel_diameter_mm = 30\nrotary_axis = \"X\"");
-        assert!(matches!(
-            same,
-            Err(RotaryError::Config {
-                key: "rotary_axis",
-                ..
-            })
-        ));
+        assert!(matches!(same, Err(RotaryError::Config { key: "rotary_axis", .. })));
         let bad = RotaryConfig::from_toml_str("mandrel_diameter_mm = 30\nradial_axis = \"E\"");
-        assert!(matches!(
-            bad,
-            Err(RotaryError::Config {
-                key: "radial_axis",
-                ..
-            })
-        ));
+        assert!(matches!(bad, Err(RotaryError::Config { key: "radial_axis", .. })));
         assert!(RotaryConfig::new(-1.0).validate().is_err());
         assert!(RotaryConfig::new(f64::NAN).validate().is_err());
     }
@@ -561,11 +529,7 @@ mod tests {
         let mut config = RotaryConfig::new(20.0);
         let t_s = config.move_time_s(from, to, 10.0);
         assert!(close(t_s, 1.862_09, 1e-5));
-        let delta = MachineDelta {
-            axial_mm: 10.0,
-            rotary: 90.0,
-            ..Default::default()
-        };
+        let delta = MachineDelta { axial_mm: 10.0, rotary: 90.0, ..Default::default() };
         // NIST: 10 mm of X in 1.862 s.
         assert!(close(config.feed_for(&delta, t_s).unwrap(), 322.22, 0.01));
         config.feed_convention = FeedConvention::Combined;
@@ -573,39 +537,21 @@ mod tests {
         assert!(close(config.feed_for(&delta, t_s).unwrap(), 2917.8, 0.1));
         config.feed_convention = FeedConvention::InverseTime;
         assert!(close(config.feed_for(&delta, t_s).unwrap(), 32.222, 0.001));
-        for convention in [
-            FeedConvention::Nist,
-            FeedConvention::Combined,
-            FeedConvention::InverseTime,
-        ] {
+        for convention in [FeedConvention::Nist, FeedConvention::Combined, FeedConvention::InverseTime] {
             config.feed_convention = convention;
             let feed = config.feed_for(&delta, t_s).unwrap();
-            assert!(close(
-                config.time_from_feed(&delta, feed).unwrap(),
-                t_s,
-                1e-9
-            ));
+            assert!(close(config.time_from_feed(&delta, feed).unwrap(), t_s, 1e-9));
         }
     }
 
     #[test]
     fn nist_rotary_only_and_extruder_only() {
         let config = RotaryConfig::new(20.0);
-        let spin = MachineDelta {
-            rotary: 180.0,
-            ..Default::default()
-        };
+        let spin = MachineDelta { rotary: 180.0, ..Default::default() };
         // Half a turn in 3 s: 60 deg/s = 3600 deg/min.
         assert!(close(config.feed_for(&spin, 3.0).unwrap(), 3600.0, 1e-9));
-        let retract = MachineDelta {
-            e_mm: -2.0,
-            ..Default::default()
-        };
-        assert!(close(
-            config.feed_for(&retract, 0.05).unwrap(),
-            2400.0,
-            1e-9
-        ));
+        let retract = MachineDelta { e_mm: -2.0, ..Default::default() };
+        assert!(close(config.feed_for(&retract, 0.05).unwrap(), 2400.0, 1e-9));
         assert_eq!(config.feed_for(&MachineDelta::default(), 1.0), None);
         assert_eq!(config.feed_for(&spin, 0.0), None);
     }
@@ -626,10 +572,7 @@ mod tests {
         assert!(close(sagitta_mm(10.0, 180.0), 10.0, 1e-12));
         let step = max_chord_step_deg(10.0, 0.01);
         assert!(close(sagitta_mm(10.0, step), 0.01, 1e-12));
-        assert_eq!(
-            chord_pieces(10.0, 360.0, 0.01),
-            (360.0 / step).ceil() as usize
-        );
+        assert_eq!(chord_pieces(10.0, 360.0, 0.01), (360.0 / step).ceil() as usize);
         assert_eq!(chord_pieces(10.0, 0.0, 0.01), 1);
         assert_eq!(max_chord_step_deg(1.0, 5.0), 180.0);
     }
@@ -652,41 +595,26 @@ mod tests {
         let s = unwrap.e_scale(&machine, [0.0, 0.0, 0.4], [0.0, 3.0, 0.4]);
         assert!(close(s, 1.04, 1e-12));
         // Pure X move: unchanged. Diagonal: hypot(3, 4*1.04)/5.
-        assert_eq!(
-            unwrap.e_scale(&machine, [0.0, 0.0, 0.4], [3.0, 0.0, 0.4]),
-            1.0
-        );
+        assert_eq!(unwrap.e_scale(&machine, [0.0, 0.0, 0.4], [3.0, 0.0, 0.4]), 1.0);
         let s = unwrap.e_scale(&machine, [0.0, 0.0, 0.4], [3.0, 4.0, 0.4]);
         assert!(close(s, (9.0f64 + 4.16 * 4.16).sqrt() / 5.0, 1e-12));
-        assert_eq!(
-            unwrap.e_scale(&machine, [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]),
-            1.0
-        );
+        assert_eq!(unwrap.e_scale(&machine, [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]), 1.0);
         // The scale matches the surface length of the mapped points.
         let (a, b) = ([1.0, 2.0, 0.4], [4.0, 9.0, 0.4]);
         let flat = (9.0f64 + 49.0).sqrt();
-        let mapped = surface_length_mm(
-            unwrap.map(&machine, a, 0).unwrap(),
-            unwrap.map(&machine, b, 0).unwrap(),
-        );
+        let mapped =
+            surface_length_mm(unwrap.map(&machine, a, 0).unwrap(), unwrap.map(&machine, b, 0).unwrap());
         assert!(close(unwrap.e_scale(&machine, a, b) * flat, mapped, 1e-9));
     }
 
     #[test]
     fn keep_arc_length_is_diabase() {
         let machine = RotaryConfig::new(20.0);
-        let unwrap = UnwrapConfig {
-            keep_arc_length: true,
-            arc_length_z1_mm: 0.2,
-            ..Default::default()
-        };
+        let unwrap = UnwrapConfig { keep_arc_length: true, arc_length_z1_mm: 0.2, ..Default::default() };
         // A = Y*180/(pi*(R + z - z1)) with R = 10, z = 1.2, z1 = 0.2: Y = 11 -> 180/pi * 1.
         let p = unwrap.map(&machine, [0.0, 11.0, 1.2], 0).unwrap();
         assert!(close(p.theta_deg, 180.0 / PI, 1e-12));
-        assert_eq!(
-            unwrap.e_scale(&machine, [0.0, 0.0, 1.2], [0.0, 11.0, 1.2]),
-            1.0
-        );
+        assert_eq!(unwrap.e_scale(&machine, [0.0, 0.0, 1.2], [0.0, 11.0, 1.2]), 1.0);
         let low = unwrap.map(&machine, [0.0, 1.0, -10.0], 0);
         assert!(matches!(low, Err(RotaryError::BelowAxis { .. })));
     }
@@ -694,11 +622,8 @@ mod tests {
     #[test]
     fn seam_rotates_per_layer() {
         let machine = RotaryConfig::new(20.0);
-        let unwrap = UnwrapConfig {
-            seam_offset_deg: 10.0,
-            seam_rotation_per_layer_deg: 7.5,
-            ..Default::default()
-        };
+        let unwrap =
+            UnwrapConfig { seam_offset_deg: 10.0, seam_rotation_per_layer_deg: 7.5, ..Default::default() };
         assert_eq!(unwrap.seam_deg(4), 40.0);
         let p = unwrap.map(&machine, [0.0, 0.0, 0.2], 4).unwrap();
         assert_eq!(p.theta_deg, 40.0);

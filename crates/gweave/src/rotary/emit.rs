@@ -40,10 +40,7 @@ pub fn validate_format(format: &NumberFormat) -> Result<()> {
         ("feed_decimals", format.feed_decimals),
     ] {
         if places > 9 {
-            return Err(RotaryError::Config {
-                key,
-                reason: format!("at most 9 places, got {places}"),
-            });
+            return Err(RotaryError::Config { key, reason: format!("at most 9 places, got {places}") });
         }
     }
     Ok(())
@@ -136,19 +133,13 @@ impl MoveWriter {
     }
 
     fn letters(&self) -> [u8; 3] {
-        [
-            self.machine.axial_axis,
-            self.machine.rotary_axis,
-            self.machine.radial_axis,
-        ]
-        .map(|c| c as u8)
+        [self.machine.axial_axis, self.machine.rotary_axis, self.machine.radial_axis].map(|c| c as u8)
     }
 
     fn words_of(&self, p: CylPoint) -> [f64; 3] {
         let raw = [
             p.axial_mm,
-            self.machine
-                .rotary_from_deg(p.theta_deg - self.rotary_offset_deg),
+            self.machine.rotary_from_deg(p.theta_deg - self.rotary_offset_deg),
             p.radius_mm - self.machine.mandrel_radius_mm() + self.nozzle_above_path_mm,
         ];
         let letters = self.letters();
@@ -265,23 +256,8 @@ impl MoveWriter {
 
     /// Writes a `G1` to `to` pushing `e_mm` of filament at surface speed `speed_mm_s`.
     /// See [`Self::write_move`].
-    pub fn move_to(
-        &mut self,
-        out: &mut dyn Write,
-        to: CylPoint,
-        e_mm: f64,
-        speed_mm_s: f64,
-    ) -> Result<()> {
-        self.write_move(
-            out,
-            &MoveSpec {
-                rapid: false,
-                to,
-                e_mm,
-                speed_mm_s,
-                comment: None,
-            },
-        )
+    pub fn move_to(&mut self, out: &mut dyn Write, to: CylPoint, e_mm: f64, speed_mm_s: f64) -> Result<()> {
+        self.write_move(out, &MoveSpec { rapid: false, to, e_mm, speed_mm_s, comment: None })
     }
 
     /// Writes one move. Words that did not change are left out; a move whose axis words round
@@ -295,9 +271,7 @@ impl MoveWriter {
         if words == last {
             return Ok(());
         }
-        let t_s =
-            self.machine
-                .move_time_s(self.point_of(last), self.point_of(words), spec.speed_mm_s);
+        let t_s = self.machine.move_time_s(self.point_of(last), self.point_of(words), spec.speed_mm_s);
         self.finish_line(out, spec.rapid, last, words, t_s, spec.comment)
     }
 
@@ -334,26 +308,15 @@ impl MoveWriter {
         if words == last && delta.e_mm == 0.0 {
             return Ok(());
         }
-        let feed = self
-            .machine
-            .feed_for(&delta, t_s)
-            .ok_or(RotaryError::Config {
-                key: "speed",
-                reason: format!("no feed rate for a move of {t_s} s"),
-            })?;
-        let mut line = if rapid {
-            b"G0".to_vec()
-        } else {
-            b"G1".to_vec()
-        };
+        let feed = self.machine.feed_for(&delta, t_s).ok_or(RotaryError::Config {
+            key: "speed",
+            reason: format!("no feed rate for a move of {t_s} s"),
+        })?;
+        let mut line = if rapid { b"G0".to_vec() } else { b"G1".to_vec() };
         for (i, letter) in self.letters().into_iter().enumerate() {
             if words[i] != last[i] {
                 line.push(b' ');
-                let value = if self.relative_axes {
-                    words[i] - last[i]
-                } else {
-                    words[i]
-                };
+                let value = if self.relative_axes { words[i] - last[i] } else { words[i] };
                 write_word(&self.format, &mut line, letter, value);
             }
         }
@@ -372,10 +335,7 @@ impl MoveWriter {
         out.write_all(&line)?;
         self.e_written_mm = e_total;
         self.words = words.map(Some);
-        self.time_s += self
-            .machine
-            .time_from_feed(&delta, rounded(&self.format, b'F', feed))
-            .unwrap_or(t_s);
+        self.time_s += self.machine.time_from_feed(&delta, rounded(&self.format, b'F', feed)).unwrap_or(t_s);
         Ok(())
     }
 
@@ -410,24 +370,14 @@ mod tests {
     }
 
     fn lines(out: &[u8]) -> Vec<String> {
-        String::from_utf8(out.to_vec())
-            .unwrap()
-            .lines()
-            .map(str::to_owned)
-            .collect()
+        String::from_utf8(out.to_vec()).unwrap().lines().map(str::to_owned).collect()
     }
 
     #[test]
     fn format_limits_and_text() {
         let mut bad = rotary_number_format();
         bad.position_decimals = 12;
-        assert!(matches!(
-            validate_format(&bad),
-            Err(RotaryError::Config {
-                key: "position_decimals",
-                ..
-            })
-        ));
+        assert!(matches!(validate_format(&bad), Err(RotaryError::Config { key: "position_decimals", .. })));
         let f = rotary_number_format();
         assert_eq!(number_text(&f, b'X', -0.0001), "0.000");
         assert_eq!(number_text(&f, b'E', 1.0), "1.00000");
@@ -438,8 +388,7 @@ mod tests {
         let (mut w, mut out) = writer();
         // Bead centre at 10.1 with the nozzle 0.1 above it: radial word 0.2.
         assert_eq!(w.position(), Some(CylPoint::new(1.0, 0.0, 10.1)));
-        w.move_to(&mut out, CylPoint::new(1.0, 90.0, 10.1), 0.5, 10.0)
-            .unwrap();
+        w.move_to(&mut out, CylPoint::new(1.0, 90.0, 10.1), 0.5, 10.0).unwrap();
         // Rotary-only under NIST: 90 deg over 15.865 mm at 10 mm/s = 1.5865 s -> 3403.8 deg/min.
         let feed = 90.0 * 60.0 / (10.1 * std::f64::consts::FRAC_PI_2 / 10.0);
         let f = rotary_number_format();
@@ -466,10 +415,7 @@ mod tests {
         let f = rotary_number_format();
         assert_eq!(
             lines(&out).last().unwrap(),
-            &format!(
-                "G1 X1.004 A5.000 E0.01000 F{}",
-                number_text(&f, b'F', 0.004 * 60.0 / t_s)
-            )
+            &format!("G1 X1.004 A5.000 E0.01000 F{}", number_text(&f, b'F', 0.004 * 60.0 / t_s))
         );
     }
 
@@ -494,16 +440,14 @@ mod tests {
     fn relative_axes_write_deltas() {
         let (mut w, mut out) = writer();
         w.set_modes(true, true);
-        w.move_to(&mut out, CylPoint::new(3.0, 0.0, 10.6), 0.0, 10.0)
-            .unwrap();
+        w.move_to(&mut out, CylPoint::new(3.0, 0.0, 10.6), 0.0, 10.0).unwrap();
         assert_eq!(lines(&out)[3], "G1 X2.000 Z0.500 F600.000");
     }
 
     #[test]
     fn extruder_only_moves() {
         let (mut w, mut out) = writer();
-        w.extrude_only(&mut out, -0.8, 35.0, Some(b" retract"))
-            .unwrap();
+        w.extrude_only(&mut out, -0.8, 35.0, Some(b" retract")).unwrap();
         assert_eq!(lines(&out)[3], "G1 E-0.80000 F2100.000 ; retract");
     }
 
@@ -520,10 +464,8 @@ mod tests {
     #[test]
     fn nothing_moves_nothing_written() {
         let (mut w, mut out) = writer();
-        w.move_to(&mut out, CylPoint::new(1.0, 0.0001, 10.1), 0.25, 10.0)
-            .unwrap();
-        w.move_to(&mut out, CylPoint::new(1.0, 1.0, 10.1), 0.25, 10.0)
-            .unwrap();
+        w.move_to(&mut out, CylPoint::new(1.0, 0.0001, 10.1), 0.25, 10.0).unwrap();
+        w.move_to(&mut out, CylPoint::new(1.0, 1.0, 10.1), 0.25, 10.0).unwrap();
         let lines = lines(&out);
         assert_eq!(lines.len(), 4);
         // The E of the skipped move is carried: 0.5 in all.

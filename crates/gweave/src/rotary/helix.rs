@@ -35,9 +35,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::cylinder::{
-    max_chord_step_deg, pieces_for_step, surface_length_mm, CylPoint, RotaryConfig,
-};
+use super::cylinder::{max_chord_step_deg, pieces_for_step, surface_length_mm, CylPoint, RotaryConfig};
 use super::emit::{rotary_number_format, validate_format, MoveWriter};
 use super::{finite, positive, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
@@ -76,9 +74,7 @@ impl Profile {
             Self::Table(table) => {
                 let i = table.partition_point(|&(x, _)| x <= axial_mm);
                 match (i.checked_sub(1).map(|j| table[j]), table.get(i)) {
-                    (Some((x0, v0)), Some(&(x1, v1))) => {
-                        v0 + (v1 - v0) * (axial_mm - x0) / (x1 - x0)
-                    }
+                    (Some((x0, v0)), Some(&(x1, v1))) => v0 + (v1 - v0) * (axial_mm - x0) / (x1 - x0),
                     (Some((_, v)), None) | (None, Some(&(_, v))) => v,
                     (None, None) => f64::NAN,
                 }
@@ -92,11 +88,7 @@ impl Profile {
         if value.is_finite() && value > 0.0 {
             Ok(value)
         } else {
-            Err(RotaryError::Profile {
-                what,
-                axial_mm,
-                value,
-            })
+            Err(RotaryError::Profile { what, axial_mm, value })
         }
     }
 
@@ -161,12 +153,7 @@ pub struct HelicalPath {
 
 impl HelicalPath {
     /// A right-handed path starting at angle 0 with no flat turns.
-    pub fn new(
-        start_axial_mm: f64,
-        end_axial_mm: f64,
-        radius_mm: Profile,
-        pitch_mm: Profile,
-    ) -> Self {
+    pub fn new(start_axial_mm: f64, end_axial_mm: f64, radius_mm: Profile, pitch_mm: Profile) -> Self {
         Self {
             start_axial_mm,
             end_axial_mm,
@@ -201,10 +188,7 @@ impl HelicalPath {
         finite("start_axial_mm", self.start_axial_mm)?;
         finite("end_axial_mm", self.end_axial_mm)?;
         finite("start_theta_deg", self.start_theta_deg)?;
-        for (key, deg) in [
-            ("lead_in_deg", self.lead_in_deg),
-            ("lead_out_deg", self.lead_out_deg),
-        ] {
+        for (key, deg) in [("lead_in_deg", self.lead_in_deg), ("lead_out_deg", self.lead_out_deg)] {
             if !(deg.is_finite() && deg >= 0.0) {
                 return Err(RotaryError::Config {
                     key,
@@ -228,11 +212,7 @@ impl HelicalPath {
         let spin = self.spin();
         self.check_size(resolution)?;
         let mut x = self.start_axial_mm;
-        let mut points = vec![CylPoint::new(
-            x,
-            self.start_theta_deg,
-            self.radius_mm.checked("radius", x)?,
-        )];
+        let mut points = vec![CylPoint::new(x, self.start_theta_deg, self.radius_mm.checked("radius", x)?)];
         self.turn_in_place(&mut points, self.lead_in_deg * spin, resolution)?;
         let mut theta = points.last().map_or(self.start_theta_deg, |p| p.theta_deg);
         loop {
@@ -242,8 +222,7 @@ impl HelicalPath {
             }
             let r = self.radius_mm.checked("radius", x)?;
             let mut step = resolution.step_deg(r);
-            let ahead =
-                x + dir * (self.pitch_mm.checked("pitch", x)? * step / 360.0).min(remaining);
+            let ahead = x + dir * (self.pitch_mm.checked("pitch", x)? * step / 360.0).min(remaining);
             step = step.min(resolution.step_deg(self.radius_mm.checked("radius", ahead)?));
             let mid = x + dir * (self.pitch_mm.checked("pitch", x)? * step / 720.0).min(remaining);
             let pitch = self.pitch_mm.checked("pitch", mid)?;
@@ -255,10 +234,7 @@ impl HelicalPath {
                 x += dir * advance;
             }
             theta += spin * step;
-            push(
-                &mut points,
-                CylPoint::new(x, theta, self.radius_mm.checked("radius", x)?),
-            )?;
+            push(&mut points, CylPoint::new(x, theta, self.radius_mm.checked("radius", x)?))?;
         }
         self.turn_in_place(&mut points, self.lead_out_deg * spin, resolution)?;
         Ok(points)
@@ -294,10 +270,7 @@ impl HelicalPath {
         let pieces = pieces_for_step(d_theta_deg, resolution.step_deg(start.radius_mm));
         for i in 1..=pieces {
             let theta = start.theta_deg + d_theta_deg * i as f64 / pieces as f64;
-            push(
-                points,
-                CylPoint::new(start.axial_mm, theta, start.radius_mm),
-            )?;
+            push(points, CylPoint::new(start.axial_mm, theta, start.radius_mm))?;
         }
         Ok(())
     }
@@ -334,10 +307,9 @@ impl Resolution {
     fn validate(&self) -> Result<()> {
         positive("chord_tolerance_mm", self.chord_tolerance_mm)?;
         match self.segments_per_turn {
-            Some(n) if n < 3 => Err(RotaryError::Config {
-                key: "segments_per_turn",
-                reason: format!("at least 3, got {n}"),
-            }),
+            Some(n) if n < 3 => {
+                Err(RotaryError::Config { key: "segments_per_turn", reason: format!("at least 3, got {n}") })
+            }
             _ => Ok(()),
         }
     }
@@ -422,10 +394,7 @@ impl PrintSettings {
 
     /// The chord resolution these settings ask for.
     pub fn resolution(&self) -> Resolution {
-        Resolution {
-            chord_tolerance_mm: self.chord_tolerance_mm,
-            segments_per_turn: self.segments_per_turn,
-        }
+        Resolution { chord_tolerance_mm: self.chord_tolerance_mm, segments_per_turn: self.segments_per_turn }
     }
 
     /// Filament for a bead of length `len_mm`: `w h L / (pi d^2 / 4)`, mm.
@@ -438,8 +407,7 @@ impl PrintSettings {
         if let Some(lines) = &self.start_gcode {
             return lines.clone();
         }
-        let mut lines =
-            vec!["G28 X Z ; home axial and radial; the mandrel angle needs no homing".into()];
+        let mut lines = vec!["G28 X Z ; home axial and radial; the mandrel angle needs no homing".into()];
         if let Some(t) = self.mandrel_temp_c {
             lines.push(format!("M190 S{t:.0}"));
         }
@@ -521,10 +489,7 @@ fn write_program<W: Write>(
         writeln!(out, "{line}")?;
     }
     out.flush()?;
-    Ok(ProgramSummary {
-        filament_mm: writer.filament_mm(),
-        print_time_s: writer.time_s(),
-    })
+    Ok(ProgramSummary { filament_mm: writer.filament_mm(), print_time_s: writer.time_s() })
 }
 
 /// A complete program printing `paths` in order with one bead (see [`PrintSettings`]).
@@ -534,14 +499,10 @@ pub fn write_paths<W: Write>(
     paths: &[HelicalPath],
     out: W,
 ) -> Result<ProgramSummary> {
-    let header = [format!(
-        "; gweave rotary paths: {} helical path(s)",
-        paths.len()
-    )];
+    let header = [format!("; gweave rotary paths: {} helical path(s)", paths.len())];
     let mut iter = paths.iter().enumerate();
     let next = |_: Option<CylPoint>| {
-        iter.next()
-            .map(|(i, path)| Ok((format!("path {i}"), path.points(print.resolution())?)))
+        iter.next().map(|(i, path)| Ok((format!("path {i}"), path.points(print.resolution())?)))
     };
     write_program(machine, print, &header, next, out)
 }
@@ -636,18 +597,13 @@ impl TubeParams {
             });
         }
         if self.layers == 0 {
-            return Err(RotaryError::Config {
-                key: "layers",
-                reason: "at least one layer".into(),
-            });
+            return Err(RotaryError::Config { key: "layers", reason: "at least one layer".into() });
         }
         let pitch = self.pitch();
         if !(pitch.is_finite() && pitch >= self.print.bead_width_mm) {
             return Err(RotaryError::Config {
                 key: "pitch_mm",
-                reason: format!(
-                    "must be at least the bead width (beads would overlap), got {pitch}"
-                ),
+                reason: format!("must be at least the bead width (beads would overlap), got {pitch}"),
             });
         }
         if !(self.end_turns.is_finite() && self.end_turns >= 0.0) {
@@ -689,11 +645,7 @@ impl TubeParams {
         let high = self.axial_start_mm + self.length_mm - half_bead;
         let forward = k & 1 == 0; // even layers run towards +axial
         let (start, end) = if forward { (low, high) } else { (high, low) };
-        let handedness = if self.interweave && !forward {
-            Handedness::Left
-        } else {
-            Handedness::Right
-        };
+        let handedness = if self.interweave && !forward { Handedness::Left } else { Handedness::Right };
         HelicalPath {
             start_axial_mm: start,
             end_axial_mm: end,

@@ -101,10 +101,7 @@ pub(crate) fn positive(key: &'static str, value: f64) -> Result<()> {
     if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
-        Err(RotaryError::Config {
-            key,
-            reason: format!("must be a finite number > 0, got {value}"),
-        })
+        Err(RotaryError::Config { key, reason: format!("must be a finite number > 0, got {value}") })
     }
 }
 
@@ -113,9 +110,6 @@ pub(crate) fn finite(key: &'static str, value: f64) -> Result<()> {
     if value.is_finite() {
         Ok(())
     } else {
-        Err(RotaryError::Config {
-            key,
-            reason: format!("must be finite, got {value}"),
-        })
+        Err(RotaryError::Config { key, reason: format!("must be finite, got {value}") })
     }
 }

@@ -136,12 +136,7 @@ impl Wrap {
         let mut writer = MoveWriter::new(config.machine.clone(), config.numbers, 0.0);
         let origin = config.unwrap.map(&config.machine, [0.0; 3], 0)?;
         writer.assume(origin, [true, false, true]);
-        Ok(Self {
-            config,
-            writer,
-            started: false,
-            buffer: Vec::new(),
-        })
+        Ok(Self { config, writer, started: false, buffer: Vec::new() })
     }
 
     fn map(&self, flat: [f64; 3], layer: u32) -> Result<CylPoint> {
@@ -154,7 +149,7 @@ impl Wrap {
         self.writer.set_modes(!state.absolute, state.relative_e());
         let layer = state.structure.layer.unwrap_or(0);
         match ctx.effect {
-            Effect::Move(mv) => self.rewrite_move(ctx, &mv, layer),
+            Effect::Move(mv) => self.rewrite_move(ctx, mv, layer),
             Effect::Home { axes } => {
                 let p = self.map(flat(&state.pos), layer)?;
                 let homed = |i: usize| axes & (1 << i) != 0;
@@ -231,11 +226,7 @@ impl Wrap {
             let (a, b) = (self.map(prev, layer)?, self.map(next, layer)?);
             let cuts = if self.config.chord_tolerance_mm > 0.0 {
                 let radius = a.radius_mm.max(b.radius_mm);
-                chord_pieces(
-                    radius,
-                    b.theta_deg - a.theta_deg,
-                    self.config.chord_tolerance_mm,
-                )
+                chord_pieces(radius, b.theta_deg - a.theta_deg, self.config.chord_tolerance_mm)
             } else {
                 1
             };
@@ -294,21 +285,14 @@ impl Pass for Wrap {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
         self.buffer.clear();
         let rewritten = self.rewrite(ctx).map_err(|e| {
-            io::Error::other(RotaryError::AtLine {
-                line: ctx.line.number,
-                source: Box::new(e),
-            })
+            io::Error::other(RotaryError::AtLine { line: ctx.line.number, source: Box::new(e) })
         })?;
         if !rewritten {
             return keep(ctx, out);
         }
         // The writer ends lines with `\n`; keep the file's own line ending (none after the
         // last line of a file that has none).
-        let eol: &[u8] = if ctx.line.eol.is_empty() {
-            b"\n"
-        } else {
-            ctx.line.eol
-        };
+        let eol: &[u8] = if ctx.line.eol.is_empty() { b"\n" } else { ctx.line.eol };
         let mut lines = self.buffer.split(|&b| b == b'\n').peekable();
         while let Some(line) = lines.next() {
             if lines.peek().is_none() {
@@ -345,9 +329,7 @@ pub fn wrap_bytes(config: WrapConfig, input: &[u8]) -> Result<Vec<u8>> {
     match run {
         Ok(_) => Ok(out),
         // Our own errors travel through the driver as io::Errors: unwrap them again.
-        Err(crate::Error::Io { source, .. })
-            if source.get_ref().is_some_and(|e| e.is::<RotaryError>()) =>
-        {
+        Err(crate::Error::Io { source, .. }) if source.get_ref().is_some_and(|e| e.is::<RotaryError>()) => {
             match source.into_inner().map(|e| e.downcast::<RotaryError>()) {
                 Some(Ok(e)) => Err(*e),
                 _ => unreachable!("checked to be a RotaryError just above"),
