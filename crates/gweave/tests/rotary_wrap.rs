@@ -348,3 +348,49 @@ proptest! {
         prop_assert!((axial - 1.0).abs() < 1e-12);
     }
 }
+
+/// One random line of a slicer-like program.
+fn any_line() -> impl Strategy<Value = String> {
+    let n = || -20.0f64..80.0;
+    prop_oneof![
+        (n(), n(), 0.0f64..3.0).prop_map(|(x, y, e)| format!("G1 X{x:.3} Y{y:.3} E{e:.4}")),
+        (n(), n(), 100.0f64..9000.0).prop_map(|(x, y, f)| format!("G0 X{x:.2} Y{y:.2} F{f:.0}")),
+        (0.0f64..5.0).prop_map(|z| format!("G1 Z{z:.2}")),
+        (n(), n(), -10.0f64..10.0, -10.0f64..10.0)
+            .prop_map(|(x, y, i, j)| format!("G2 X{x:.2} Y{y:.2} I{i:.2} J{j:.2} E1")),
+        (n(), n(), -30.0f64..30.0).prop_map(|(x, y, r)| format!("G3 X{x:.2} Y{y:.2} R{r:.2}")),
+        (-2.0f64..2.0).prop_map(|e| format!("G1 E{e:.3} F2400")),
+        Just("G92 E0".to_owned()),
+        Just("G91".to_owned()),
+        Just("G90".to_owned()),
+        Just("M83".to_owned()),
+        Just("G28 X".to_owned()),
+        Just(";LAYER:1".to_owned()),
+        (n(), n()).prop_map(|(x, y)| format!("G92 X{x:.1} Y{y:.1}")),
+        Just("M106 S128 ; fan".to_owned()),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Any such program wraps without error in every convention, and the lines that carry no
+    /// motion come out unchanged and in order.
+    #[test]
+    fn wrapping_never_panics(lines in proptest::collection::vec(any_line(), 0..40), conv in 0usize..3) {
+        let mut m = machine();
+        m.feed_convention =
+            [FeedConvention::Nist, FeedConvention::Combined, FeedConvention::InverseTime][conv];
+        let input = format!("G1 F1200\n{}\n", lines.join("\n"));
+        // Every program here is valid (radii stay above the axis): wrapping must succeed.
+        let out = wrap_bytes(WrapConfig::new(m), input.as_bytes());
+        prop_assert!(out.is_ok(), "{:?}", out.err());
+        if let Ok(out) = out {
+            let out = String::from_utf8(out).unwrap();
+            let plain = |l: &&str| l.starts_with('M') || l.starts_with(';') || *l == "G92 E0";
+            let kept: Vec<&str> = input.lines().filter(plain).collect();
+            let came: Vec<&str> = out.lines().filter(plain).collect();
+            prop_assert_eq!(kept, came);
+        }
+    }
+}
