@@ -46,7 +46,7 @@ use super::emit::{rotary_number_format, validate_format, MoveSpec, MoveWriter};
 use super::{finite, positive, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::StateOptions;
-use crate::gcode::state::{Effect, Move, Path, State, X, Y, Z};
+use crate::gcode::state::{Effect, Move, Path, State, E, X, Y, Z};
 use crate::pass::{drive_reader, keep, Ctx, Pass, Quiet, Strictness};
 
 /// Settings of the wrap pass. In TOML, top-level keys first, then the tables:
@@ -161,7 +161,7 @@ impl Wrap {
             }
             Effect::SetPosition => {
                 if ctx.block.has(b'E') {
-                    self.writer.set_e(state.pos[crate::gcode::state::E]);
+                    self.writer.set_e(state.pos[E]);
                 }
                 let axes = [X, Y, Z].map(|i| ctx.block.get(b"XYZ"[i]).is_some());
                 if axes == [false; 3] {
