@@ -329,16 +329,6 @@ impl CylPoint {
     pub fn to_cartesian(self) -> [f64; 3] {
         to_cartesian(self.axial_mm, self.theta_deg, self.radius_mm)
     }
-
-    /// The point a fraction `t` of the way to `to`, interpolated as the machine does (linearly
-    /// in every machine coordinate).
-    pub fn lerp(self, to: CylPoint, t: f64) -> CylPoint {
-        CylPoint {
-            axial_mm: self.axial_mm + (to.axial_mm - self.axial_mm) * t,
-            theta_deg: self.theta_deg + (to.theta_deg - self.theta_deg) * t,
-            radius_mm: self.radius_mm + (to.radius_mm - self.radius_mm) * t,
-        }
-    }
 }
 
 /// Cartesian position `[axial, r cos(theta), r sin(theta)]` of a cylindrical point, mm.

@@ -118,16 +118,6 @@ pub enum Handedness {
     Left,
 }
 
-impl Handedness {
-    /// The other hand.
-    pub fn reversed(self) -> Self {
-        match self {
-            Self::Right => Self::Left,
-            Self::Left => Self::Right,
-        }
-    }
-}
-
 /// One helical bead from `start_axial_mm` to `end_axial_mm` (either direction), its
 /// centreline at `radius_mm(axial)`, advancing `pitch_mm(axial)` per turn, optionally with
 /// flat turns (no axial motion) before and after.
