@@ -21,6 +21,7 @@ pub mod error;
 pub mod gcode;
 pub mod gen;
 pub mod pass;
+pub mod rotary;
 pub mod stats;
 
 pub use error::{Error, Result};

@@ -1,0 +1,340 @@
+//! `wrap`: a part sliced flat, printed onto the mandrel (seed 001, method (a)).
+//!
+//! The flat file's X runs along the mandrel, its Y around it (its Y length should be the
+//! circumference `pi * D`), its Z away from it. Each motion line is rewritten:
+//!
+//! 1. G2/G3 arcs are cut into chords in the flat plane first (the core
+//!    [`crate::gcode::arc::Arc`] geometry), since
+//!    an arc in (x, y) is no arc on the cylinder;
+//! 2. every piece is mapped with [`UnwrapConfig::map`] and cut again into chords whose
+//!    sagitta on the cylinder stays within `chord_tolerance_mm` (0 = no cutting);
+//! 3. positive E grows by the stretch of the surface, [`UnwrapConfig::e_scale`] (retractions and
+//!    wipes are filament moves, not beads, and keep their length);
+//! 4. the flat F is the surface speed to keep; the F written is converted per the machine's
+//!    feed convention from the rounded words ([`super::emit`]).
+//!
+//! Every other line is copied byte for byte, except `G92` with axis words (re-declared in
+//! machine words). Before the first move the mandrel angle is declared with `G92 <rotary>`;
+//! with the inverse-time convention `G93` precedes it and `G94` ends the file. Homing that may
+//! move the rotary axis (`G28` with Y, or with no axis) makes the angle unknown, and it is
+//! declared again before the next move. Machine-setup M-codes that name axes (`M92`, `M203`...)
+//! are copied unchanged and still say Y.
+//!
+//! The seam rotation counts layers from the slicer's layer comments (the core
+//! [`crate::gcode::layers`] structure); a file without them is one layer.
+//!
+//! Before and after, on a mandrel of 60 mm circumference (Y15 = a quarter turn), NIST feed,
+//! chords off: at r = R0 + 0.2 the 18.03 mm flat move is 18.29 mm on the surface, so E grows
+//! by 1.45 % and, at the same 20 mm/s, F is the axial speed 10 mm / 0.914 s.
+//!
+//! ```
+//! use gweave::rotary::{cylinder::RotaryConfig, wrap::{wrap_bytes, WrapConfig}};
+//! let mut config = WrapConfig::new(RotaryConfig::new(60.0 / std::f64::consts::PI));
+//! config.chord_tolerance_mm = 0.0;
+//! let before = "G1 Z0.2 F600\nG1 X10 Y15 E1.0 F1200 ; first\nM106 S255\n";
+//! let after = "G92 A0.000\nG1 Z0.200 F600.000\n\
+//!              G1 X10.000 A90.000 E1.01455 F656.097 ; first\nM106 S255\n";
+//! assert_eq!(String::from_utf8(wrap_bytes(config, before.as_bytes()).unwrap()).unwrap(), after);
+//! ```
+
+use std::io::{self, Write};
+
+use serde::{Deserialize, Serialize};
+
+use super::cylinder::{chord_pieces, CylPoint, RotaryConfig, UnwrapConfig};
+use super::emit::{rotary_number_format, validate_format, MoveSpec, MoveWriter};
+use super::{finite, positive, Result, RotaryError};
+use crate::gcode::number::NumberFormat;
+use crate::gcode::state::StateOptions;
+use crate::gcode::state::{Effect, Move, Path, State, E, X, Y, Z};
+use crate::pass::{drive_reader, keep, Ctx, Pass, Quiet, Strictness};
+
+/// Settings of the wrap pass. In TOML, top-level keys first, then the tables:
+///
+/// ```toml
+/// chord_tolerance_mm = 0.01   # sagitta on the cylinder; 0 = do not cut long moves
+/// arc_tolerance_mm = 0.01     # sagitta of G2/G3 chords in the flat
+/// [machine]                   # a RotaryConfig
+/// mandrel_diameter_mm = 50.0
+/// [unwrap]                    # an UnwrapConfig, optional
+/// seam_rotation_per_layer_deg = 5.0
+/// [numbers]                   # the core NumberFormat, optional (default: fixed 3/5/3)
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WrapConfig {
+    /// Largest chord sagitta on the cylinder, mm (0 = one chord per flat move).
+    #[serde(default = "default_tolerance")]
+    pub chord_tolerance_mm: f64,
+    /// Largest chord sagitta when linearising G2/G3 in the flat, mm.
+    #[serde(default = "default_tolerance")]
+    pub arc_tolerance_mm: f64,
+    /// The machine.
+    pub machine: RotaryConfig,
+    /// The mapping.
+    #[serde(default)]
+    pub unwrap: UnwrapConfig,
+    /// Decimal places of rewritten words.
+    #[serde(default = "rotary_number_format")]
+    pub numbers: NumberFormat,
+}
+
+fn default_tolerance() -> f64 {
+    0.01
+}
+
+impl WrapConfig {
+    /// Wrapping onto `machine` with every other setting at its default.
+    pub fn new(machine: RotaryConfig) -> Self {
+        Self {
+            chord_tolerance_mm: default_tolerance(),
+            arc_tolerance_mm: default_tolerance(),
+            machine,
+            unwrap: UnwrapConfig::default(),
+            numbers: rotary_number_format(),
+        }
+    }
+
+    /// Reads and validates a TOML document.
+    pub fn from_toml_str(text: &str) -> Result<Self> {
+        let config: Self = toml::from_str(text)?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Checks every range.
+    pub fn validate(&self) -> Result<()> {
+        finite("chord_tolerance_mm", self.chord_tolerance_mm)?;
+        if self.chord_tolerance_mm < 0.0 {
+            return Err(RotaryError::Config {
+                key: "chord_tolerance_mm",
+                reason: format!("must be >= 0, got {}", self.chord_tolerance_mm),
+            });
+        }
+        positive("arc_tolerance_mm", self.arc_tolerance_mm)?;
+        self.machine.validate()?;
+        self.unwrap.validate()?;
+        validate_format(&self.numbers)
+    }
+}
+
+/// The wrap pass; see the module docs. Errors reach the driver as `io::Error`s whose source
+/// is a [`RotaryError::AtLine`].
+#[derive(Debug)]
+pub struct Wrap {
+    config: WrapConfig,
+    writer: MoveWriter,
+    started: bool,
+    buffer: Vec<u8>,
+}
+
+impl Wrap {
+    /// A pass for a validated configuration. The machine starts where the core state does, at
+    /// flat (0, 0, 0), with the mandrel angle not yet declared.
+    pub fn new(config: WrapConfig) -> Result<Self> {
+        config.validate()?;
+        let mut writer = MoveWriter::new(config.machine.clone(), config.numbers, 0.0);
+        let origin = config.unwrap.map(&config.machine, [0.0; 3], 0)?;
+        writer.assume(origin, [true, false, true]);
+        Ok(Self { config, writer, started: false, buffer: Vec::new() })
+    }
+
+    fn map(&self, flat: [f64; 3], layer: u32) -> Result<CylPoint> {
+        self.config.unwrap.map(&self.config.machine, flat, layer)
+    }
+
+    /// Rewrites one line into `self.buffer`, or returns `false` to keep it as it is.
+    fn rewrite(&mut self, ctx: &Ctx<'_>) -> Result<bool> {
+        let state = ctx.state;
+        self.writer.set_modes(!state.absolute, state.relative_e());
+        let layer = state.structure.layer.unwrap_or(0);
+        match ctx.effect {
+            Effect::Move(mv) => self.rewrite_move(ctx, mv, layer),
+            Effect::Home { axes } => {
+                let p = self.map(flat(&state.pos), layer)?;
+                let homed = |i: usize| axes & (1 << i) != 0;
+                self.writer.assume(p, [homed(X), false, homed(Z)]);
+                if homed(Y) {
+                    self.writer.forget([false, true, false]);
+                }
+                Ok(false)
+            }
+            Effect::SetPosition => {
+                if ctx.block.has(b'E') {
+                    self.writer.set_e(state.pos[E]);
+                }
+                let axes = [X, Y, Z].map(|i| ctx.block.get(b"XYZ"[i]).is_some());
+                if axes == [false; 3] {
+                    return Ok(false);
+                }
+                // Y sets the angle; the flat Z also moves it under keep_arc_length.
+                let machine_axes = [axes[0], axes[1] || axes[2], axes[2]];
+                let p = self.map(flat(&state.pos), layer)?;
+                self.writer.declare(&mut self.buffer, p, machine_axes)?;
+                if ctx.block.has(b'E') {
+                    // Keep the E reset on the same line's meaning: append it as written.
+                    self.buffer.pop();
+                    let e_word = ctx.block.word(b'E').map(|w| w.span.of(ctx.line.bytes));
+                    self.buffer.push(b' ');
+                    self.buffer.extend_from_slice(e_word.unwrap_or(b"E0"));
+                    self.buffer.push(b'\n');
+                }
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+
+    fn rewrite_move(&mut self, ctx: &Ctx<'_>, mv: &Move, layer: u32) -> Result<bool> {
+        if ctx.state.inches {
+            return Err(RotaryError::Config {
+                key: "G20",
+                reason: "wrap writes millimetres; convert the file to G21 first".into(),
+            });
+        }
+        let (from, to) = (flat(&mv.from), flat(&mv.to));
+        let e_mm = mv.e_mm();
+        let moves_axes = from != to || matches!(mv.path, Path::Arc(_));
+        if !moves_axes && e_mm == 0.0 {
+            return Ok(false);
+        }
+        let speed_mm_s = mv.feed_mm_min / 60.0;
+        if speed_mm_s.is_nan() || speed_mm_s <= 0.0 {
+            return Err(RotaryError::Config {
+                key: "F",
+                reason: "a move before any feed rate was set".into(),
+            });
+        }
+        let out = &mut self.buffer;
+        if !self.started {
+            self.writer.enter_feed_mode(out)?;
+            self.started = true;
+        }
+        if !self.writer.rotary_known() {
+            let p = self.config.unwrap.map(&self.config.machine, from, layer)?;
+            self.writer.declare(out, p, [false, true, false])?;
+        }
+        let mut comment = ctx.block.comment_text(ctx.line.bytes);
+        if !moves_axes {
+            self.writer.extrude_only(out, e_mm, speed_mm_s, comment)?;
+            return Ok(true);
+        }
+        let pieces = flat_pieces(mv, self.config.arc_tolerance_mm);
+        let share = 1.0 / pieces.len() as f64;
+        let mut prev = from;
+        for next in pieces {
+            let (a, b) = (self.map(prev, layer)?, self.map(next, layer)?);
+            let cuts = if self.config.chord_tolerance_mm > 0.0 {
+                let radius = a.radius_mm.max(b.radius_mm);
+                chord_pieces(radius, b.theta_deg - a.theta_deg, self.config.chord_tolerance_mm)
+            } else {
+                1
+            };
+            for j in 1..=cuts {
+                let t0 = (j - 1) as f64 / cuts as f64;
+                let t1 = j as f64 / cuts as f64;
+                let (q0, q1) = (lerp3(prev, next, t0), lerp3(prev, next, t1));
+                let mut e_piece = e_mm * share / cuts as f64;
+                if e_piece > 0.0 {
+                    e_piece *= self.config.unwrap.e_scale(&self.config.machine, q0, q1);
+                }
+                let spec = MoveSpec {
+                    rapid: mv.rapid,
+                    to: self.map(q1, layer)?,
+                    e_mm: e_piece,
+                    speed_mm_s,
+                    comment: comment.take(),
+                };
+                self.writer.write_move(&mut self.buffer, &spec)?;
+            }
+            prev = next;
+        }
+        Ok(true)
+    }
+}
+
+/// The flat XYZ of a core position.
+fn flat(pos: &crate::gcode::state::Position) -> [f64; 3] {
+    [pos[X], pos[Y], pos[Z]]
+}
+
+fn lerp3(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
+    [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t)
+}
+
+/// The flat end points of a move's pieces: the end itself for a line, chords within
+/// `tolerance_mm` for an arc (Z rising linearly along it, a helix).
+fn flat_pieces(mv: &Move, tolerance_mm: f64) -> Vec<[f64; 3]> {
+    let to = flat(&mv.to);
+    let Path::Arc(arc) = mv.path else {
+        return vec![to];
+    };
+    let n = arc.segments(tolerance_mm);
+    let mut points: Vec<[f64; 3]> = (1..n)
+        .map(|i| {
+            let t = i as f64 / n as f64;
+            let [x, y] = arc.point(t);
+            [x, y, mv.from[Z] + (mv.to[Z] - mv.from[Z]) * t]
+        })
+        .collect();
+    points.push(to);
+    points
+}
+
+impl Pass for Wrap {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        self.buffer.clear();
+        let rewritten = self.rewrite(ctx).map_err(|e| {
+            io::Error::other(RotaryError::AtLine { line: ctx.line.number, source: Box::new(e) })
+        })?;
+        if !rewritten {
+            return keep(ctx, out);
+        }
+        // The writer ends lines with `\n`; keep the file's own line ending (none after the
+        // last line of a file that has none).
+        let eol: &[u8] = if ctx.line.eol.is_empty() { b"\n" } else { ctx.line.eol };
+        let mut lines = self.buffer.split(|&b| b == b'\n').peekable();
+        while let Some(line) = lines.next() {
+            if lines.peek().is_none() {
+                break; // the empty tail after the final `\n`
+            }
+            out.write_all(line)?;
+            let last = lines.peek().is_some_and(|tail| tail.is_empty());
+            out.write_all(if last { ctx.line.eol } else { eol })?;
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, _state: &State, out: &mut dyn Write) -> io::Result<()> {
+        if self.started {
+            self.writer.leave_feed_mode(out).map_err(io::Error::other)?;
+        }
+        Ok(())
+    }
+}
+
+/// Wraps a whole G-code text in memory (tests, Python): strict parsing, Marlin semantics.
+pub fn wrap_bytes(config: WrapConfig, input: &[u8]) -> Result<Vec<u8>> {
+    let mut pass = Wrap::new(config)?;
+    let mut out = Vec::with_capacity(input.len() * 2);
+    let run = drive_reader(
+        input,
+        std::path::Path::new("<input>"),
+        StateOptions::default(),
+        Strictness::Strict,
+        &mut Quiet,
+        &mut pass,
+        &mut out,
+    );
+    match run {
+        Ok(_) => Ok(out),
+        // Our own errors travel through the driver as io::Errors: unwrap them again.
+        Err(crate::Error::Io { source, .. }) if source.get_ref().is_some_and(|e| e.is::<RotaryError>()) => {
+            match source.into_inner().map(|e| e.downcast::<RotaryError>()) {
+                Some(Ok(e)) => Err(*e),
+                _ => unreachable!("checked to be a RotaryError just above"),
+            }
+        }
+        Err(e) => Err(RotaryError::Engine(e)),
+    }
+}
