@@ -165,9 +165,9 @@ impl NumberFormat {
                 out.pop();
             }
         }
-        if &out[start..] == b"-0" {
-            out.truncate(start);
-            out.push(b'0');
+        // A negative value that rounds to zero prints as `-0` or `-0.000`: drop the sign.
+        if out.get(start) == Some(&b'-') && out[start + 1..].iter().all(|&b| b == b'0' || b == b'.') {
+            out.remove(start);
         }
         if self.drop_leading_zero {
             let body = if out.get(start) == Some(&b'-') { start + 1 } else { start };
@@ -229,6 +229,10 @@ mod tests {
         out.push(b' ');
         f.write_word(&mut out, b'F', 1800.4);
         assert_eq!(out, b"X10 E0.12346 Y0 F1800");
+        let fixed = NumberFormat { trim_zeros: false, ..f };
+        let mut out = Vec::new();
+        fixed.write_word(&mut out, b'Z', -0.0001);
+        assert_eq!(out, b"Z0.000");
         let prusa = NumberFormat { drop_leading_zero: true, ..f };
         let mut out = Vec::new();
         prusa.write_word(&mut out, b'E', -0.4);

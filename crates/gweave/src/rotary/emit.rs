@@ -46,11 +46,9 @@ pub fn validate_format(format: &NumberFormat) -> Result<()> {
     Ok(())
 }
 
-/// Appends the word `letter` carrying `value` to `line`. A value that rounds to zero is
-/// written as `0`, never `-0.000` (the core format only avoids `-0` when trimming zeros).
+/// Appends the word `letter` carrying `value` to `line` (a value that rounds to zero is `0`).
 fn write_word(format: &NumberFormat, line: &mut Vec<u8>, letter: u8, value: f64) {
-    // -0.0 + 0.0 is +0.0.
-    format.write_word(line, letter, rounded(format, letter, value) + 0.0);
+    format.write_word(line, letter, value);
 }
 
 /// `value` written as the word `letter` would carry it, without the letter.
