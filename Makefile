@@ -1,0 +1,59 @@
+# gweave: two set-up commands for a fresh machine.
+#   make demo   installs what is needed, then runs the main jobs on bundled real slicer output
+#   make test   installs what is needed, then runs every test (cargo, pytest, end to end)
+#   make bench  benchmarks on large real files, each figure beside a reference from the same run
+
+SHELL := /bin/bash
+.SHELLFLAGS := -eu -o pipefail -c
+VENV := .venv
+PY := $(VENV)/bin/python
+CARGO := cargo
+GWEAVE := target/release/gweave
+OUT := out
+
+.PHONY: demo test bench deps rust-deps py-deps build python lint cargo-test pytest e2e clean
+
+deps: rust-deps py-deps
+
+rust-deps:
+	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
+
+py-deps: $(VENV)/.deps
+$(VENV)/.deps: crates/gweave-py/requirements-dev.txt
+	python3 -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -r crates/gweave-py/requirements-dev.txt
+	touch $@
+
+build: rust-deps
+	$(CARGO) build --release -p gweave-cli
+
+python: py-deps
+	$(VENV)/bin/maturin develop --release -q -m crates/gweave-py/Cargo.toml
+
+lint: rust-deps
+	$(CARGO) fmt --all -- --check
+	$(CARGO) clippy --workspace --all-targets -- -D warnings
+
+cargo-test: rust-deps
+	$(CARGO) test --workspace --exclude gweave-py
+
+pytest: python
+	# Exit code 5 (no tests collected) is a failure here, as every other non-zero code.
+	$(PY) -m pytest crates/gweave-py/tests -q
+
+e2e: build python
+	bash tests/e2e/run.sh $(GWEAVE)
+
+test: deps lint cargo-test pytest e2e
+	@echo "make test: all passed"
+
+demo: build python
+	bash examples/demo.sh $(GWEAVE) $(OUT)
+
+bench: build python
+	bash bench/run.sh $(GWEAVE)
+
+clean:
+	rm -rf $(OUT) $(VENV)
+	$(CARGO) clean

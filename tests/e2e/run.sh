@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# End-to-end: the installed `gweave` binary and the Python console script on real slicer files.
+# Every check compares values; the script stops at the first failure and prints what differed.
+set -euo pipefail
+GWEAVE=$(realpath "${1:-target/release/gweave}")
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+DATA="$ROOT/tests/data"
+PYGWEAVE="$ROOT/.venv/bin/gweave"
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+passed=0
+failed=0
+ok() { passed=$((passed + 1)); }
+fail() { echo "FAIL: $*"; failed=$((failed + 1)); }
+
+# 1. Every fixture round-trips byte for byte through `cat`, with both front ends.
+for f in "$DATA"/*/*.gcode; do
+  "$GWEAVE" cat "$f" -o "$WORK/copy.gcode" -q
+  cmp -s "$f" "$WORK/copy.gcode" && ok || fail "cat changed $f"
+  "$PYGWEAVE" cat "$f" -o - -q | cmp -s "$f" - && ok || fail "python cat to stdout changed $f"
+done
+
+# 2. stats --json equals PrusaSlicer's own filament figures.
+"$GWEAVE" stats "$DATA/prusaslicer/pr_torus_pva.gcode" --json > "$WORK/s.json"
+python3 - "$WORK/s.json" <<'PY' && ok || fail "stats figures"
+import json, sys
+s = json.load(open(sys.argv[1]))
+ours = [round(t["extruded_mm"], 2) for t in s["filament"]]
+assert ours == [525.88, 123.16], ours
+assert s["layers"] == 28 and s["tool_changes"] == 2, (s["layers"], s["tool_changes"])
+PY
+
+# 3. A malformed file: error names file, line and column; exit 1; no output left behind.
+printf 'G1 X1\nG1 Y2..3\n' > "$WORK/bad.gcode"
+if "$GWEAVE" cat "$WORK/bad.gcode" -o "$WORK/out.gcode" 2> "$WORK/err"; then fail "bad input accepted"; else ok; fi
+grep -q "bad.gcode:2:5: malformed number after 'Y'" "$WORK/err" && ok || fail "error text: $(cat "$WORK/err")"
+[ ! -e "$WORK/out.gcode" ] && ok || fail "partial output left"
+[ "$(ls "$WORK" | grep -c '^\.gweave-')" = 0 ] && ok || fail "temporary file left"
+
+# 4. check: exit code 1 on errors, 0 on a clean real file.
+"$GWEAVE" check "$DATA/prusaslicer/pr_torus_pva.gcode" -q > /dev/null && ok || fail "check on a clean file"
+printf 'N1 G28*18\nN2 G1 X5*99\n' > "$WORK/sum.gcode"
+if "$GWEAVE" check "$WORK/sum.gcode" > "$WORK/check.txt"; then fail "checksum error passed"; else ok; fi
+grep -q "sum.gcode:2:9: error: checksum mismatch" "$WORK/check.txt" && ok || fail "check text: $(cat "$WORK/check.txt")"
+
+# 5. --in-place keeps a .bak, and refusing to overwrite the input without it.
+cp "$DATA/cura/cura_torus.gcode" "$WORK/t.gcode"
+"$GWEAVE" cat "$WORK/t.gcode" --in-place -q
+cmp -s "$WORK/t.gcode" "$WORK/t.gcode.bak" && ok || fail "in-place backup"
+if "$GWEAVE" cat "$WORK/t.gcode" -o "$WORK/t.gcode" 2>/dev/null; then fail "overwrote input"; else ok; fi
+
+# 6. A closed pipe is not an error.
+"$GWEAVE" cat "$DATA/cura/cura_dual.gcode" -o - | head -1 > /dev/null && ok || fail "broken pipe"
+
+for extra in "$ROOT"/tests/e2e/[0-9]*.sh; do
+  [ -e "$extra" ] || continue
+  if GWEAVE="$GWEAVE" PYGWEAVE="$PYGWEAVE" DATA="$DATA" WORK="$WORK" bash "$extra"; then ok; else fail "$(basename "$extra")"; fi
+done
+
+echo "e2e: $passed passed, $failed failed"
+[ "$failed" = 0 ]
