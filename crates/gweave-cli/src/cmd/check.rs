@@ -36,11 +36,8 @@ pub struct CheckArgs {
 }
 
 pub fn run(args: CheckArgs) -> Result<ExitCode> {
-    let options = CheckOptions {
-        bed_mm: args.bed,
-        max_feed_mm_min: args.max_feed,
-        ..CheckOptions::default()
-    };
+    let options =
+        CheckOptions { bed_mm: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
     let mut pass = CheckPass::new(options);
     let mut bar = Bar::new(args.quiet);
     let mut run = Run::new(&args.input, &mut bar);
