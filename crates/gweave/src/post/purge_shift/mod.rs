@@ -123,6 +123,8 @@ pub struct PurgeShift {
     group: Vec<OwnedLine>,
     group_tail: Vec<OwnedLine>,
     group_before: Option<Colour>,
+    /// The group started inside the print proper.
+    group_in_print: bool,
     mixing: MixingState,
     colour: Colour,
     out_lines: u64,
@@ -146,6 +148,7 @@ impl PurgeShift {
             group: Vec::new(),
             group_tail: Vec::new(),
             group_before: None,
+            group_in_print: false,
             mixing,
             colour,
             out_lines: 0,
@@ -249,8 +252,9 @@ impl PurgeShift {
     }
 
     /// The group of change lines has ended: move it if it changed the colour.
-    fn close_group(&mut self, out: &mut dyn Write, in_print: bool) -> io::Result<()> {
+    fn close_group(&mut self, out: &mut dyn Write) -> io::Result<()> {
         let Some(before) = self.group_before.take() else { return Ok(()) };
+        let in_print = self.group_in_print;
         let group = std::mem::take(&mut self.group);
         if before != self.colour && in_print {
             self.shift(out, before.tool, &group)?;
@@ -426,6 +430,7 @@ impl Pass for PurgeShift {
         if is_change_line(ctx.block) {
             if self.group_before.is_none() {
                 self.group_before = Some(self.colour.clone());
+                self.group_in_print = in_print;
             }
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
@@ -438,7 +443,7 @@ impl Pass for PurgeShift {
                 self.group_tail.push(owned);
                 return Ok(());
             }
-            self.close_group(out, in_print)?;
+            self.close_group(out)?;
         }
         if !in_print {
             self.flush(out, "the start of the print proper")?;
@@ -480,8 +485,8 @@ impl Pass for PurgeShift {
         self.push(out, held)
     }
 
-    fn finish(&mut self, state: &crate::gcode::state::State, out: &mut dyn Write) -> io::Result<()> {
-        self.close_group(out, state.structure.region == Region::Print)?;
+    fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> io::Result<()> {
+        self.close_group(out)?;
         self.flush(out, "the end of the file")?;
         let r = &mut self.report;
         r.requested_mm = r.changes.iter().map(|c| c.requested_mm).sum();

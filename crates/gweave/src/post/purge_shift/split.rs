@@ -107,8 +107,13 @@ struct Writer {
 }
 
 impl Writer {
-    fn new() -> Self {
-        Writer { format: NumberFormat::default() }
+    /// Numbers in the file's own style: without the leading zero (`E.4`) if the slicer wrote so.
+    fn new(raw: &[u8], block: &Block) -> Self {
+        let drop_leading_zero = block.words.iter().any(|w| {
+            let text = w.span.of(raw);
+            matches!(text.get(1..3), Some([b'.', _]) | Some([b'-', b'.']))
+        });
+        Writer { format: NumberFormat { drop_leading_zero, ..NumberFormat::default() } }
     }
 
     fn word(&self, out: &mut Vec<u8>, letter: u8, value: f64, decimals: u8) {
@@ -123,7 +128,7 @@ pub(crate) fn split(raw: &[u8], s: &Splittable, t: f64) -> Halves {
     let mut block = Block::default();
     parse_into(raw, &mut block);
     let point = s.point(t);
-    let w = Writer::new();
+    let w = Writer::new(raw, &block);
     let arc = match &s.mv.path {
         Path::Arc(a) => Some(*a),
         Path::Line => None,
@@ -262,8 +267,8 @@ mod tests {
     #[test]
     fn relative_e_is_shared_exactly() {
         let (_, h) = split_after("G90\nM83\nG1 X0 Y0", "G1 X3 Y4 E.33333", 1.0 / 3.0);
-        assert_eq!(text(&h.first), "G1 X1 Y1.33333 E0.11111");
-        assert_eq!(text(h.second.as_deref().unwrap()), "G1 X3 Y4 E0.22222");
+        assert_eq!(text(&h.first), "G1 X1 Y1.33333 E.11111");
+        assert_eq!(text(h.second.as_deref().unwrap()), "G1 X3 Y4 E.22222");
     }
 
     #[test]
