@@ -41,7 +41,7 @@ fn program(steps: &[Step], absolute_e: bool) -> String {
     let mut s = String::from(if absolute_e { "G90\nM82\n" } else { "G90\nM83\n" });
     s.push_str(";LAYER_CHANGE\n;Z:0.2\nG1 Z0.2\n;TYPE:Perimeter\n");
     let (mut x, mut e, mut layer, mut tool, mut dir) = (0.0f64, 0.0f64, 0, 0, 1.0f64);
-    let mut feed = |s: &mut String, words: String, de: f64, e: &mut f64| {
+    let feed = |s: &mut String, words: String, de: f64, e: &mut f64| {
         if absolute_e {
             *e += de;
             s.push_str(&format!("{words} E{:.5}\n", *e));
