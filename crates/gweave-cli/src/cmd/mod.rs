@@ -4,6 +4,9 @@ mod cat;
 mod check;
 mod stats;
 
+// purge-shift
+mod purge_shift;
+
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -14,6 +17,8 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    // purge-shift
+    PurgeShift(purge_shift::PurgeShiftArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -21,5 +26,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        // purge-shift
+        Command::PurgeShift(a) => purge_shift::run(a),
     }
 }
