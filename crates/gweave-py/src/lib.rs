@@ -77,6 +77,54 @@ fn cat(py: Python<'_>, path: PathBuf, output: Option<PathBuf>, in_place: bool, b
         .map_err(err)
 }
 
+// purge-shift
+/// Moves every colour change earlier by the purge (see `gweave purge-shift`); returns the report
+/// as JSON text. `config` is TOML text; the keyword arguments override it.
+#[pyfunction]
+#[pyo3(signature = (path, output=None, *, in_place=false, backup=true, purge=None, purge_mm3=None,
+    config=None, filament_diameter=None, cross_layers=false, allow_features=None, markers=None,
+    fallback=None))]
+#[allow(clippy::too_many_arguments)]
+fn purge_shift_json(
+    py: Python<'_>,
+    path: PathBuf,
+    output: Option<PathBuf>,
+    in_place: bool,
+    backup: bool,
+    purge: Option<f64>,
+    purge_mm3: Option<f64>,
+    config: Option<String>,
+    filament_diameter: Option<f64>,
+    cross_layers: bool,
+    allow_features: Option<Vec<String>>,
+    markers: Option<(String, String)>,
+    fallback: Option<String>,
+) -> PyResult<String> {
+    use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
+    let value_err = |e: gweave::post::purge_shift::ConfigError| PyValueError::new_err(e.to_string());
+    let mut c = match &config {
+        Some(text) => PurgeShiftConfig::parse_toml(text).map_err(value_err)?,
+        None => PurgeShiftConfig::default(),
+    };
+    c.apply(&Overrides {
+        purge_mm: purge,
+        purge_mm3,
+        filament_diameter_mm: filament_diameter,
+        cross_layers,
+        allow_features,
+        markers: markers.map(|(b, e)| [b, e]),
+        fallback,
+    });
+    let rules = c.validate().map_err(value_err)?;
+    let target = match (output, in_place) {
+        (_, true) => Target::InPlace { keep_backup: backup },
+        (Some(p), false) => Target::File(p),
+        (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
+    };
+    let report = py.allow_threads(|| purge_shift_file(rules, &path, &target, &mut Quiet)).map_err(err)?;
+    to_json(&report)
+}
+
 /// One line of a file, with what it says and the machine state after it.
 #[pyclass(frozen, get_all, module = "gweave")]
 struct Line {
@@ -211,6 +259,8 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_json, m)?)?;
     m.add_function(wrap_pyfunction!(cat, m)?)?;
     m.add_function(wrap_pyfunction!(run_cli, m)?)?;
+    // purge-shift
+    m.add_function(wrap_pyfunction!(purge_shift_json, m)?)?;
     m.add_class::<Line>()?;
     m.add_class::<Reader>()?;
     Ok(())

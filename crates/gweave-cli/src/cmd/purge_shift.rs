@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Args;
 use gweave::gcode::writer::Target;
-use gweave::post::purge_shift::{purge_shift_file, PurgeShiftConfig};
+use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
 
 use crate::common::{OutputArgs, ReportArgs};
 use crate::progress::Bar;
@@ -71,28 +71,20 @@ fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
         }
         None => PurgeShiftConfig::default(),
     };
-    if let Some(mm) = args.purge {
-        (c.purge_mm, c.purge_mm3) = (Some(mm), None);
-    }
-    if let Some(v) = args.purge_mm3 {
-        (c.purge_mm, c.purge_mm3) = (None, Some(v));
-    }
-    if let Some(d) = args.filament_diameter {
-        c.filament_diameter_mm = d;
-    }
-    c.cross_layers |= args.cross_layers;
-    if let Some(list) = &args.allow_features {
-        c.allow_features = list.iter().map(|s| s.trim().to_string()).collect();
-    }
-    if let Some(m) = &args.markers {
-        let [begin, end] = m.as_slice() else {
-            anyhow::bail!("--markers takes two comment texts: BEGIN,END");
-        };
-        c.markers = Some([begin.clone(), end.clone()]);
-    }
-    if let Some(f) = &args.fallback {
-        c.fallback = f.clone();
-    }
+    let markers = match args.markers.as_deref() {
+        None => None,
+        Some([begin, end]) => Some([begin.clone(), end.clone()]),
+        Some(_) => anyhow::bail!("--markers takes two comment texts: BEGIN,END"),
+    };
+    c.apply(&Overrides {
+        purge_mm: args.purge,
+        purge_mm3: args.purge_mm3,
+        filament_diameter_mm: args.filament_diameter,
+        cross_layers: args.cross_layers,
+        allow_features: args.allow_features.clone(),
+        markers,
+        fallback: args.fallback.clone(),
+    });
     Ok(c)
 }
 

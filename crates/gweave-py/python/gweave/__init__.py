@@ -27,6 +27,8 @@ __version__: str = _gweave.__version__
 PathLike = Union[str, "os.PathLike[str]"]
 
 __all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
+# purge-shift
+__all__ += ["purge_shift"]
 
 
 def read(path: PathLike) -> Reader:
@@ -72,6 +74,51 @@ def cat(
         None if output is None else os.fspath(output),
         in_place=in_place,
         backup=backup,
+    )
+
+
+# purge-shift
+def purge_shift(
+    path: PathLike,
+    output: Optional[PathLike] = None,
+    *,
+    in_place: bool = False,
+    backup: bool = True,
+    purge: Optional[float] = None,
+    purge_mm3: Optional[float] = None,
+    config: Optional[PathLike] = None,
+    filament_diameter: Optional[float] = None,
+    cross_layers: bool = False,
+    allow_features: Optional[Sequence[str]] = None,
+    markers: Optional[Sequence[str]] = None,
+    fallback: Optional[str] = None,
+) -> Dict[str, Any]:
+    """Move every tool/mix change earlier by the purge so it prints inside the part (no wipe tower).
+
+    ``purge`` is mm of filament (or ``purge_mm3``, mm^3); ``config`` a TOML file with per-pair
+    amounts, colours, the washout model and rules (keyword arguments override it). Returns the
+    report: per change the requested and achieved purge, where the change now sits, and totals.
+    """
+    text = None
+    if config is not None:
+        with open(os.fspath(config), encoding="utf-8") as f:
+            text = f.read()
+    pair = None if markers is None else (str(markers[0]), str(markers[1]))
+    return json.loads(
+        _gweave.purge_shift_json(
+            os.fspath(path),
+            None if output is None else os.fspath(output),
+            in_place=in_place,
+            backup=backup,
+            purge=purge,
+            purge_mm3=purge_mm3,
+            config=text,
+            filament_diameter=filament_diameter,
+            cross_layers=cross_layers,
+            allow_features=None if allow_features is None else list(allow_features),
+            markers=pair,
+            fallback=fallback,
+        )
     )
 
 

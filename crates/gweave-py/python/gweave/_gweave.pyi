@@ -7,6 +7,23 @@ def check_json(path: str, *, bed: Optional[Tuple[float, float, float]] = None, m
 def cat(path: str, output: Optional[str] = None, *, in_place: bool = False, backup: bool = True) -> None: ...
 def run_cli(argv: List[str]) -> int: ...
 
+# purge-shift
+def purge_shift_json(
+    path: str,
+    output: Optional[str] = None,
+    *,
+    in_place: bool = False,
+    backup: bool = True,
+    purge: Optional[float] = None,
+    purge_mm3: Optional[float] = None,
+    config: Optional[str] = None,
+    filament_diameter: Optional[float] = None,
+    cross_layers: bool = False,
+    allow_features: Optional[List[str]] = None,
+    markers: Optional[Tuple[str, str]] = None,
+    fallback: Optional[str] = None,
+) -> str: ...
+
 class Line:
     number: int
     raw: bytes

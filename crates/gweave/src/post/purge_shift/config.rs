@@ -250,6 +250,45 @@ impl PurgeShiftConfig {
     }
 }
 
+/// Settings given as flags or keyword arguments, applied over a TOML file by
+/// [`PurgeShiftConfig::apply`] (the CLI and Python share it).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overrides {
+    pub purge_mm: Option<f64>,
+    pub purge_mm3: Option<f64>,
+    pub filament_diameter_mm: Option<f64>,
+    /// `true` allows crossing; `false` leaves the file's setting.
+    pub cross_layers: bool,
+    pub allow_features: Option<Vec<String>>,
+    pub markers: Option<[String; 2]>,
+    pub fallback: Option<String>,
+}
+
+impl PurgeShiftConfig {
+    /// Applies flags on top: a purge given as a flag replaces the file's (mm or mm^3).
+    pub fn apply(&mut self, o: &Overrides) {
+        if let Some(mm) = o.purge_mm {
+            (self.purge_mm, self.purge_mm3) = (Some(mm), None);
+        }
+        if let Some(v) = o.purge_mm3 {
+            (self.purge_mm, self.purge_mm3) = (None, Some(v));
+        }
+        if let Some(d) = o.filament_diameter_mm {
+            self.filament_diameter_mm = d;
+        }
+        self.cross_layers |= o.cross_layers;
+        if let Some(list) = &o.allow_features {
+            self.allow_features = list.iter().map(|s| s.trim().to_string()).collect();
+        }
+        if let Some(m) = &o.markers {
+            self.markers = Some(m.clone());
+        }
+        if let Some(f) = &o.fallback {
+            self.fallback = f.clone();
+        }
+    }
+}
+
 impl Rules {
     /// The seed's setting: a fixed purge of `purge_mm` of filament, other rules default.
     pub fn fixed(purge_mm: f64) -> Result<Rules, ConfigError> {
@@ -332,6 +371,20 @@ mod tests {
                 .unwrap();
         let want_mm3 = 2.0 + 10.0 * 100f64.ln();
         assert!((r.purge_mm(0, 1).0 * r.area_mm2 - want_mm3).abs() < 1e-9);
+    }
+
+    #[test]
+    fn flags_override_the_file() {
+        let mut c = PurgeShiftConfig::parse_toml("purge_mm3 = 10.0\ncross_layers = true\n").unwrap();
+        c.apply(&Overrides {
+            purge_mm: Some(3.0),
+            allow_features: Some(vec![" infill".into()]),
+            ..Default::default()
+        });
+        let r = c.validate().unwrap();
+        assert_eq!(r.purge_mm(0, 1), (3.0, true));
+        assert!(r.cross_layers);
+        assert_eq!(r.allowed.iter().copied().collect::<Vec<_>>(), [Feature::Infill]);
     }
 
     #[test]

@@ -55,7 +55,7 @@ use std::collections::VecDeque;
 use std::io::{self, Write};
 use std::path::Path;
 
-pub use config::{ConfigError, Fallback, PurgeShiftConfig, Rules};
+pub use config::{ConfigError, Fallback, Overrides, PurgeShiftConfig, Rules};
 pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
 
 use crate::colour::dialect::MixingState;
