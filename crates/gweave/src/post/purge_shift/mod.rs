@@ -63,6 +63,7 @@ use crate::error::Result;
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::line::{Block, Command};
 use crate::gcode::number::scan;
+use crate::gcode::reader::RawLine;
 use crate::gcode::state::{Effect, StateOptions, X, Y, Z};
 use crate::gcode::writer::Target;
 use crate::pass::{drive_reader, Ctx, OwnedLine, Pass, Progress, Quiet, Run, Strictness};
@@ -74,6 +75,8 @@ const EPS_E_MM: f64 = 1e-6;
 /// inputs in `M165` and 16 virtual tools by default; more costs nothing).
 const MIX_INPUTS: usize = 8;
 const MIX_TOOLS: usize = 64;
+/// Line buffers kept for reuse.
+const SPARE_LINES: usize = 4096;
 
 /// What a held line is to the walk back.
 #[derive(Debug, Clone)]
@@ -129,6 +132,8 @@ pub struct PurgeShift {
     colour: Colour,
     out_lines: u64,
     report: PurgeShiftReport,
+    /// Buffers of written lines, reused for new held lines.
+    spare: Vec<OwnedLine>,
 }
 
 impl PurgeShift {
@@ -153,6 +158,7 @@ impl PurgeShift {
             colour,
             out_lines: 0,
             report,
+            spare: Vec::new(),
         }
     }
 
@@ -179,10 +185,39 @@ impl PurgeShift {
         self.emit(out, &line.bytes, &line.eol)
     }
 
+    fn emit_raw(&mut self, out: &mut dyn Write, ctx: &Ctx<'_>) -> io::Result<()> {
+        self.emit(out, ctx.line.bytes, ctx.line.eol)
+    }
+
+    /// A copy of the line, in a buffer of a line written earlier if one is free: held lines
+    /// then cost no allocation once the window has reached its size.
+    fn own(&mut self, raw: &RawLine<'_>) -> OwnedLine {
+        match self.spare.pop() {
+            Some(mut line) => {
+                line.bytes.clear();
+                line.bytes.extend_from_slice(raw.bytes);
+                line.eol.clear();
+                line.eol.extend_from_slice(raw.eol);
+                line.number = raw.number;
+                line
+            }
+            None => OwnedLine::from_raw(raw),
+        }
+    }
+
+    /// Writes a held line and keeps its buffers for reuse.
+    fn retire(&mut self, out: &mut dyn Write, line: OwnedLine) -> io::Result<()> {
+        self.emit_line(out, &line)?;
+        if self.spare.len() < SPARE_LINES {
+            self.spare.push(line);
+        }
+        Ok(())
+    }
+
     /// Writes every held line: nothing before this point can take a change any more.
     fn flush(&mut self, out: &mut dyn Write, reason: &'static str) -> io::Result<()> {
         while let Some(h) = self.window.pop_front() {
-            self.emit_line(out, &h.line)?;
+            self.retire(out, h.line)?;
         }
         self.window_e_mm = 0.0;
         self.floor = reason;
@@ -192,7 +227,7 @@ impl PurgeShift {
     fn pop_front(&mut self, out: &mut dyn Write) -> io::Result<()> {
         if let Some(h) = self.window.pop_front() {
             self.window_e_mm -= h.e_mm();
-            self.emit_line(out, &h.line)?;
+            self.retire(out, h.line)?;
         }
         Ok(())
     }
@@ -373,6 +408,8 @@ impl PurgeShift {
         for h in &held[rest..] {
             self.emit_line(out, &h.line)?;
         }
+        let room = SPARE_LINES.saturating_sub(self.spare.len());
+        self.spare.extend(held.into_iter().take(room).map(|h| h.line));
         self.floor = "the previous change";
         if change.shortfall_mm > 1e-9 {
             self.report.warnings.push(format!(
@@ -424,7 +461,6 @@ fn colon_list(raw: &[u8], block: &Block) -> Vec<f64> {
 
 impl Pass for PurgeShift {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
-        let owned = OwnedLine::from_raw(&ctx.line);
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
         if is_change_line(ctx.block) {
@@ -435,11 +471,13 @@ impl Pass for PurgeShift {
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
             self.group.extend(tail);
+            let owned = self.own(&ctx.line);
             self.group.push(owned);
             return Ok(());
         }
         if self.group_before.is_some() {
             if ctx.block.is_empty() {
+                let owned = self.own(&ctx.line);
                 self.group_tail.push(owned);
                 return Ok(());
             }
@@ -447,7 +485,7 @@ impl Pass for PurgeShift {
         }
         if !in_print {
             self.flush(out, "the start of the print proper")?;
-            return self.emit_line(out, &owned);
+            return self.emit_raw(out, ctx);
         }
         if structure.layer_started {
             self.layer_start(out)?;
@@ -456,11 +494,11 @@ impl Pass for PurgeShift {
             Effect::Move(m) if m.is_extruding() => {
                 if !self.rules.allowed.contains(&structure.feature) {
                     self.flush(out, "a feature that may not take the purge")?;
-                    return self.emit_line(out, &owned);
+                    return self.emit_raw(out, ctx);
                 }
                 if ctx.block.line_number.is_some() || ctx.block.checksum.is_some() {
                     self.flush(out, "a numbered line")?;
-                    return self.emit_line(out, &owned);
+                    return self.emit_raw(out, ctx);
                 }
                 let state = ctx.state;
                 let split = Splittable {
@@ -473,14 +511,15 @@ impl Pass for PurgeShift {
             }
             Effect::Home { .. } => {
                 self.flush(out, "homing")?;
-                return self.emit_line(out, &owned);
+                return self.emit_raw(out, ctx);
             }
             _ if tool_dependent(ctx.block) => {
                 self.flush(out, "a command for the active tool")?;
-                return self.emit_line(out, &owned);
+                return self.emit_raw(out, ctx);
             }
             _ => Kind::Other,
         };
+        let owned = self.own(&ctx.line);
         let held = self.held(owned, kind, structure.layer, structure.feature);
         self.push(out, held)
     }
