@@ -70,7 +70,7 @@ fn prusaslicer_relative_e_splits_the_e_word() {
     assert_eq!(lines(&out, 763, 3), ["G1 X70.82035 Y87.24949 E1.21026", "T0", "G1 X70.555 Y86.738 E0.04197"]);
     // The outer wall is a barrier by default: the change after it cannot move at all.
     assert_eq!(r.changes[0].achieved_mm, 0.0);
-    assert_eq!(r.changes[0].stopped_by.as_deref(), Some("a feature that may not take the purge"));
+    assert_eq!(r.changes[0].stopped_by, Some("a feature that may not take the purge"));
     assert!(r.warnings.iter().any(|w| w.starts_with("layer -, line 172: T0->T2 purge short by 2.500 mm")));
     // Allowing every feature gives more room.
     let (_, all) = run(config(&format!("purge_mm = 2.5\n{ALL}")), &input);
@@ -86,7 +86,7 @@ fn cura_dual_with_and_without_crossing_layers() {
     // T0 right after `;LAYER:1` cannot go back by default...
     let c = &r.changes[1];
     assert_eq!((c.change_lines[0], c.achieved_mm), (4730, 0.0));
-    assert_eq!(c.stopped_by.as_deref(), Some("a layer change"));
+    assert_eq!(c.stopped_by, Some("a layer change"));
     // ...but may move into layer 0 when crossing is allowed.
     let (_, x) = run(config(&format!("purge_mm = 2.5\ncross_layers = true\n{ALL}")), &input);
     assert_eq!((x.changes[1].achieved_mm, x.changes[1].layer), (2.5, Some(0)));

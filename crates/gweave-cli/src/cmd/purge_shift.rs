@@ -97,8 +97,8 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     for w in report.warnings.iter().take(20) {
         eprintln!("gweave: warning: {w}");
     }
-    if report.warnings.len() > 20 {
-        eprintln!("gweave: ... {} more warnings (see --json)", report.warnings.len() - 20);
+    if report.warnings_total > 20 {
+        eprintln!("gweave: ... {} more warnings (see --json)", report.warnings_total - 20);
     }
     if args.report.emit(&report)? {
         // Keep standard output clean when the G-code goes there.

@@ -320,7 +320,7 @@ impl PurgeShift {
         let to_tool = self.colour.tool;
         let (requested_mm, known) = self.rules.purge_mm(from_tool, to_tool);
         if !known {
-            self.report.warnings.push(format!(
+            self.report.warn(format!(
                 "line {}: no purge amount for T{from_tool}->T{to_tool}; using the largest configured, {requested_mm:.3} mm",
                 group[0].number
             ));
@@ -359,7 +359,7 @@ impl PurgeShift {
             feature: Feature::Unknown,
             at_line: group[0].number,
             split: None,
-            stopped_by: (need > 0.0).then(|| self.floor.to_string()),
+            stopped_by: (need > 0.0).then_some(self.floor),
             residual_fraction: None,
             transition_mm: None,
         };
@@ -412,22 +412,18 @@ impl PurgeShift {
         self.spare.extend(held.into_iter().take(room).map(|h| h.line));
         self.floor = "the previous change";
         if change.shortfall_mm > 1e-9 {
-            self.report.warnings.push(format!(
+            self.report.warn(format!(
                 "layer {}, line {}: T{from_tool}->T{to_tool} purge short by {:.3} mm ({:.3} of {:.3} mm; stopped by {})",
                 change.layer.map_or("-".into(), |l| l.to_string()),
                 group[0].number,
                 change.shortfall_mm,
                 achieved_mm,
                 requested_mm,
-                self.floor_reason(&change)
+                change.stopped_by.unwrap_or_default()
             ));
         }
         self.report.changes.push(change);
         Ok(())
-    }
-
-    fn floor_reason(&self, change: &ChangeReport) -> String {
-        change.stopped_by.clone().unwrap_or_default()
     }
 }
 

@@ -36,7 +36,7 @@ pub struct ChangeReport {
     pub at_line: u64,
     pub split: Option<SplitPoint>,
     /// Why the walk back stopped before the full purge, when it did.
-    pub stopped_by: Option<String>,
+    pub stopped_by: Option<&'static str>,
     /// Washout model: fraction of the old colour still coming out where the new colour's own
     /// path begins (1 = no purge at all).
     pub residual_fraction: Option<f64>,
@@ -61,10 +61,23 @@ pub struct PurgeShiftReport {
     pub filament_diameter_mm: f64,
     /// Most lines ever held back at once (the bounded window).
     pub max_window_lines: usize,
+    /// The first warnings (at most [`MAX_WARNINGS`]; every change's shortfall is in `changes`).
     pub warnings: Vec<String>,
+    /// How many warnings there were in all.
+    pub warnings_total: u64,
 }
 
+/// Warnings kept as text: past this they are only counted, so the report stays small.
+pub const MAX_WARNINGS: usize = 1000;
+
 impl PurgeShiftReport {
+    pub(crate) fn warn(&mut self, text: String) {
+        self.warnings_total += 1;
+        if self.warnings.len() < MAX_WARNINGS {
+            self.warnings.push(text);
+        }
+    }
+
     /// A short human summary (what the CLI prints).
     pub fn summary(&self) -> String {
         use std::fmt::Write;
