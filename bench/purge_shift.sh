@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # purge-shift on a large multi-tool file: speed against `gweave cat` on the same file in the same
-# run, and peak memory at 1x and 60x the size (it must not grow with the file).
+# run, and peak memory at 1x and 60x the size: the window does not grow with the file, only the
+# report does (one entry per change).
 # The file is the PrusaSlicer 3-tool bunny (relative E, 793 changes) with its print proper
 # repeated 60 times (about 225 MB, 47 000 changes).
 set -euo pipefail
