@@ -1,0 +1,323 @@
+//! A whole raster job as the CLI and the Python package run it: resolve the inputs (folders,
+//! globs, image lists or one `.sl1`), raster them layer by layer into an atomically written file,
+//! and estimate the print time with the virtual printer's planner while the G-code streams out.
+//!
+//! The G-code generator itself is `gweave::gen::raster`; this module only wires files, heads
+//! and the estimate together, so `gweave raster` and `gweave.raster()` give identical results.
+
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use gweave::gcode::writer::{Output, Target};
+use gweave::gen::bitmap::{load_image, Bitmap, Channel, ThresholdOptions};
+use gweave::gen::image_files::list_images;
+use gweave::gen::printhead::PrintheadProfile;
+use gweave::gen::raster::{self, RasterConfig, RasterReport, RasterWriter};
+use gweave::gen::sl1::Sl1Reader;
+use gweave::pass::Progress;
+use gweave_sim::estimate::{Estimate, Estimator};
+use gweave_sim::limits::MotionProfile;
+use serde::Serialize;
+
+/// Where the layer images of a job come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Source {
+    /// One image stack per head (stack `h` printed by head `h`), each with its channel.
+    Stacks(Vec<raster::ImageStack>),
+    /// A PrusaSlicer SLA archive, printed by head 0.
+    Sl1 { path: PathBuf, threshold: ThresholdOptions },
+}
+
+/// How the inputs on the command line become a [`Source`].
+#[derive(Debug, Clone, Default)]
+pub struct InputSpec {
+    /// Folders, globs (`*`, `?` in the file name), image files, or one `.sl1`.
+    pub inputs: Vec<PathBuf>,
+    /// Heads to use (None: as many as the profile has, but only head 0 unless inputs say more).
+    pub heads: Option<usize>,
+    /// One channel per head: every head prints the same images, head `h` their channel `h`.
+    pub channels: Vec<Channel>,
+    pub threshold: ThresholdOptions,
+    /// The files' first row is the far edge (+Y up), as a picture is drawn.
+    pub flip_y: bool,
+}
+
+fn is_sl1(p: &Path) -> bool {
+    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("sl1"))
+}
+
+fn is_glob(p: &Path) -> bool {
+    p.file_name().is_some_and(|n| n.to_string_lossy().contains(['*', '?']))
+}
+
+/// Parses `r,b` / `red,luma` into channels.
+pub fn parse_channels(text: &str) -> Result<Vec<Channel>> {
+    text.split(',')
+        .map(|c| {
+            Ok(match c.trim().to_ascii_lowercase().as_str() {
+                "r" | "red" => Channel::Red,
+                "g" | "green" => Channel::Green,
+                "b" | "blue" => Channel::Blue,
+                "l" | "luma" | "grey" | "gray" => Channel::Luma,
+                other => bail!("unknown channel {other:?} (use r, g, b or luma)"),
+            })
+        })
+        .collect()
+}
+
+impl InputSpec {
+    /// Resolves the inputs, and returns the source and the number of heads it needs.
+    ///
+    /// Rules: one `.sl1` alone -> head 0. With `channels`, all inputs form one image list and
+    /// head `h` prints channel `h`. Without them and with `heads > 1`, each input is one head's
+    /// folder or glob. Otherwise all inputs form one list for head 0, in the given order (a
+    /// folder or glob contributes its files in natural order: `l2 < l10`).
+    pub fn resolve(&self) -> Result<(Source, usize)> {
+        if self.inputs.is_empty() {
+            bail!("no input: give a folder, a glob, image files, or a .sl1 archive");
+        }
+        if self.inputs.iter().any(|p| is_sl1(p)) {
+            if self.inputs.len() != 1 || !self.channels.is_empty() || self.heads.unwrap_or(1) > 1 {
+                bail!("a .sl1 archive is printed alone by one head (no other inputs, heads or channels)");
+            }
+            return Ok((Source::Sl1 { path: self.inputs[0].clone(), threshold: self.threshold }, 1));
+        }
+        let expand = |p: &PathBuf| -> Result<Vec<PathBuf>> {
+            if p.is_dir() || is_glob(p) {
+                Ok(list_images(p)?)
+            } else if p.is_file() {
+                Ok(vec![p.clone()])
+            } else {
+                bail!("{}: no such file or folder", p.display())
+            }
+        };
+        let stack = |paths: Vec<PathBuf>, channel: Channel| raster::ImageStack {
+            paths,
+            threshold: ThresholdOptions { channel, ..self.threshold },
+            flip_y: self.flip_y,
+        };
+        let all = || -> Result<Vec<PathBuf>> {
+            let mut v = Vec::new();
+            for p in &self.inputs {
+                v.extend(expand(p)?);
+            }
+            Ok(v)
+        };
+        if !self.channels.is_empty() {
+            let heads = self.heads.unwrap_or(self.channels.len());
+            if heads != self.channels.len() {
+                bail!("{} channels given for {heads} heads: give one channel per head", self.channels.len());
+            }
+            let paths = all()?;
+            let stacks = self.channels.iter().map(|&c| stack(paths.clone(), c)).collect();
+            return Ok((Source::Stacks(stacks), heads));
+        }
+        match self.heads {
+            Some(h) if h > 1 => {
+                if self.inputs.len() != h {
+                    bail!("{h} heads need {h} inputs (one folder or glob per head) or --channels");
+                }
+                let stacks = self
+                    .inputs
+                    .iter()
+                    .map(|p| Ok(stack(expand(p)?, self.threshold.channel)))
+                    .collect::<Result<_>>()?;
+                Ok((Source::Stacks(stacks), h))
+            }
+            _ => Ok((Source::Stacks(vec![stack(all()?, self.threshold.channel)]), 1)),
+        }
+    }
+}
+
+/// Makes the profile have exactly `heads` heads: extra heads get zero offsets, which suits
+/// cartridges whose offset the firmware already applies.
+pub fn with_heads(profile: &PrintheadProfile, heads: usize) -> PrintheadProfile {
+    let mut p = profile.clone();
+    p.heads.resize(heads.max(1), Default::default());
+    p
+}
+
+/// The print time of the job.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct TimeEstimate {
+    /// `planner`: gweave-sim's planner on the written G-code (Marlin defaults: 3000 mm/s²,
+    /// junction deviation 0.013 mm, every `M400` a full stop); `feed`: the report's path at the
+    /// feed rate without acceleration.
+    pub method: &'static str,
+    /// Motion (and dwell) time, s.
+    pub motion_s: f64,
+    /// Firing: every fire command counted at the head's minimum fire interval, s.
+    pub fire_s: f64,
+    pub total_s: f64,
+}
+
+/// What a job did.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct JobReport {
+    pub output: String,
+    pub heads: usize,
+    /// Layer images (or archive layers) read.
+    pub images_read: usize,
+    #[serde(flatten)]
+    pub raster: RasterReport,
+    pub time: TimeEstimate,
+}
+
+/// Feeds every complete line written through it to an estimator.
+struct EstimatingWriter<W: Write> {
+    inner: W,
+    est: Option<Estimator>,
+    partial: Vec<u8>,
+    error: Option<gweave_sim::estimate::EstimateError>,
+}
+
+impl<W: Write> EstimatingWriter<W> {
+    fn feed(&mut self, buf: &[u8]) {
+        let Some(est) = self.est.as_mut() else {
+            return;
+        };
+        let mut rest = buf;
+        while let Some(n) = rest.iter().position(|&b| b == b'\n') {
+            let res = if self.partial.is_empty() {
+                est.line(&rest[..n])
+            } else {
+                self.partial.extend_from_slice(&rest[..n]);
+                let r = est.line(&self.partial);
+                self.partial.clear();
+                r
+            };
+            if let Err(e) = res {
+                self.error = Some(e);
+                self.est = None;
+                return;
+            }
+            rest = &rest[n + 1..];
+        }
+        self.partial.extend_from_slice(rest);
+    }
+}
+
+impl<W: Write> Write for EstimatingWriter<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.feed(&buf[..n]);
+        Ok(n)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// A raster job, ready to run.
+#[derive(Debug, Clone)]
+pub struct Job {
+    pub source: Source,
+    pub profile: PrintheadProfile,
+    pub config: RasterConfig,
+    /// Pixel size of image files in mm; they are resampled to the nozzle pitch when given.
+    /// (`.sl1` archives carry their own.)
+    pub pixel_mm: Option<f64>,
+    /// Estimate with the planner (slower) rather than from the path length at the feed rate.
+    pub planner_estimate: bool,
+}
+
+impl Job {
+    /// Writes the G-code to `target` and returns the report. `progress` sees input bytes.
+    pub fn run(&self, target: &Target, progress: &mut dyn Progress) -> Result<JobReport> {
+        let mut out = Output::create(target, None)?;
+        let planner = self.planner_estimate;
+        let est = if planner { Some(Estimator::new(&MotionProfile::default())?) } else { None };
+        let mut tee = EstimatingWriter { inner: &mut out, est, partial: Vec::new(), error: None };
+        let (report, images_read) = self.write(&mut tee, progress)?;
+        if let Some(e) = tee.error.take() {
+            return Err(anyhow::Error::new(e).context("estimating the print time"));
+        }
+        let estimate: Option<Estimate> = tee.est.take().map(|mut e| {
+            if !tee.partial.is_empty() {
+                let _ = e.line(&tee.partial);
+            }
+            e.finish()
+        });
+        out.commit()?;
+        let fire_s = report.fire_commands as f64 * self.profile.min_fire_interval_us * 1e-6;
+        let time = match estimate {
+            Some(e) => {
+                TimeEstimate { method: "planner", motion_s: e.total_s, fire_s, total_s: e.total_s + fire_s }
+            }
+            None => TimeEstimate {
+                method: "feed",
+                motion_s: report.estimated_time_s - fire_s,
+                fire_s,
+                total_s: report.estimated_time_s,
+            },
+        };
+        let output = match target {
+            Target::File(p) => p.display().to_string(),
+            _ => "-".into(),
+        };
+        Ok(JobReport { output, heads: self.profile.heads.len(), images_read, raster: report, time })
+    }
+
+    fn write<W: Write>(&self, out: W, progress: &mut dyn Progress) -> Result<(RasterReport, usize)> {
+        let pitch = self.profile.pitch_mm();
+        match &self.source {
+            Source::Sl1 { path, threshold } => {
+                let mut reader =
+                    Sl1Reader::open(path).with_context(|| format!("reading {}", path.display()))?;
+                let total = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+                progress.set_len(total);
+                let (px_x, px_y) = reader.bed_pixel_mm();
+                let layers = reader.layer_count();
+                let height = reader.info().layer_height_mm;
+                let mut w = RasterWriter::new(out, &self.profile, &self.config, Some(height))?;
+                for k in 0..layers {
+                    let plane = reader.bed_layer(k, threshold)?.resample(px_x, px_y, pitch)?;
+                    w.layer(std::slice::from_ref(&plane))?;
+                    progress.advance(total * (k as u64 + 1) / layers.max(1) as u64);
+                }
+                Ok((w.finish()?.1, layers))
+            }
+            Source::Stacks(stacks) => {
+                if stacks.len() > self.profile.heads.len() {
+                    bail!(
+                        "{} image sets but the printhead profile has {} heads",
+                        stacks.len(),
+                        self.profile.heads.len()
+                    );
+                }
+                let total: u64 = stacks
+                    .iter()
+                    .flat_map(|s| &s.paths)
+                    .map(|p| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0))
+                    .sum();
+                progress.set_len(total);
+                let mut w = RasterWriter::new(out, &self.profile, &self.config, None)?;
+                let layers = stacks.iter().map(|s| s.paths.len()).max().unwrap_or(0);
+                let (mut done, mut read) = (0u64, 0usize);
+                let mut planes = Vec::with_capacity(stacks.len());
+                for k in 0..layers {
+                    planes.clear();
+                    for s in stacks {
+                        let Some(p) = s.paths.get(k) else {
+                            planes.push(Bitmap::new(0, 0));
+                            continue;
+                        };
+                        let b = load_image(p, &s.threshold)
+                            .with_context(|| format!("reading {}", p.display()))?;
+                        let b = if s.flip_y { b.mirror_y() } else { b };
+                        planes.push(match self.pixel_mm {
+                            Some(px) => b.resample(px, px, pitch)?,
+                            None => b,
+                        });
+                        done += std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
+                        read += 1;
+                    }
+                    w.layer(&planes)?;
+                    progress.advance(done);
+                }
+                Ok((w.finish()?.1, read))
+            }
+        }
+    }
+}
