@@ -12,8 +12,8 @@ use anyhow::{bail, Context, Result};
 use gweave::gcode::writer::{Output, Target};
 use gweave::gen::bitmap::{load_image, Bitmap, Channel, ThresholdOptions};
 use gweave::gen::image_files::list_images;
-use gweave::gen::printhead::PrintheadProfile;
-use gweave::gen::raster::{self, RasterConfig, RasterReport, RasterWriter};
+use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
+use gweave::gen::raster::{self, test_pattern, RasterConfig, RasterReport, RasterWriter};
 use gweave::gen::sl1::Sl1Reader;
 use gweave::pass::Progress;
 use gweave_sim::estimate::{Estimate, Estimator};
@@ -319,5 +319,230 @@ impl Job {
                 Ok((w.finish()?.1, read))
             }
         }
+    }
+}
+
+/// Every setting of a job as the user gives it (CLI flags, Python keywords), turned into the
+/// library's validated types by [`JobOptions::job`].
+#[derive(Debug, Clone)]
+pub struct JobOptions {
+    pub inputs: Vec<PathBuf>,
+    /// Printhead profile TOML (None: the HP C6602 defaults).
+    pub head: Option<PathBuf>,
+    pub threshold: f64,
+    pub invert: bool,
+    pub flip_y: bool,
+    pub one_way: bool,
+    pub density: u32,
+    pub origin_mm: (f64, f64),
+    pub layer_height_mm: Option<f64>,
+    pub pixel_mm: Option<f64>,
+    pub dpi: Option<f64>,
+    pub heads: Option<usize>,
+    pub channels: Option<String>,
+    /// Files with G-code blocks.
+    pub recoat: Option<PathBuf>,
+    pub start: Option<PathBuf>,
+    pub end: Option<PathBuf>,
+    pub dialect: Option<FirmwareDialect>,
+    pub feed_mm_min: Option<f64>,
+    pub fast_estimate: bool,
+}
+
+impl Default for JobOptions {
+    fn default() -> Self {
+        let c = RasterConfig::default();
+        JobOptions {
+            inputs: Vec::new(),
+            head: None,
+            threshold: ThresholdOptions::default().threshold,
+            invert: false,
+            flip_y: false,
+            one_way: false,
+            density: c.density,
+            origin_mm: (c.origin_x_mm, c.origin_y_mm),
+            layer_height_mm: None,
+            pixel_mm: None,
+            dpi: None,
+            heads: None,
+            channels: None,
+            recoat: None,
+            start: None,
+            end: None,
+            dialect: None,
+            feed_mm_min: None,
+            fast_estimate: false,
+        }
+    }
+}
+
+fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
+}
+
+impl JobOptions {
+    /// The printhead profile: `head` file or the C6602 defaults, with `dialect` applied.
+    pub fn profile(&self) -> Result<PrintheadProfile> {
+        let mut p = match &self.head {
+            Some(path) => PrintheadProfile::from_toml(&read_text(path)?)
+                .with_context(|| format!("printhead profile {}", path.display()))?,
+            None => PrintheadProfile::default(),
+        };
+        if let Some(d) = self.dialect {
+            p.dialect = d;
+        }
+        Ok(p)
+    }
+
+    /// The validated raster settings.
+    pub fn config(&self) -> Result<RasterConfig> {
+        let mut c = RasterConfig {
+            origin_x_mm: self.origin_mm.0,
+            origin_y_mm: self.origin_mm.1,
+            layer_height_mm: self.layer_height_mm,
+            serpentine: !self.one_way,
+            density: self.density,
+            ..RasterConfig::default()
+        };
+        if let Some(f) = self.feed_mm_min {
+            c.feed_mm_min = f;
+        }
+        for (file, slot) in [
+            (&self.start, &mut c.start_gcode),
+            (&self.end, &mut c.end_gcode),
+            (&self.recoat, &mut c.recoat_gcode),
+        ] {
+            if let Some(path) = file {
+                *slot = read_text(path)?;
+            }
+        }
+        c.validate()?;
+        Ok(c)
+    }
+
+    /// Resolves the inputs and builds the job.
+    pub fn job(&self) -> Result<Job> {
+        if self.pixel_mm.is_some() && self.dpi.is_some() {
+            bail!("give the image resolution once: pixel size or dpi");
+        }
+        let spec = InputSpec {
+            inputs: self.inputs.clone(),
+            heads: self.heads,
+            channels: match &self.channels {
+                Some(c) => parse_channels(c)?,
+                None => Vec::new(),
+            },
+            threshold: ThresholdOptions {
+                threshold: self.threshold,
+                invert: self.invert,
+                ..ThresholdOptions::default()
+            },
+            flip_y: self.flip_y,
+        };
+        let (source, heads) = spec.resolve()?;
+        Ok(Job {
+            source,
+            profile: with_heads(&self.profile()?, self.heads.unwrap_or(heads)),
+            config: self.config()?,
+            pixel_mm: self.pixel_mm.or(self.dpi.map(|d| 25.4 / d)),
+            planner_estimate: !self.fast_estimate,
+        })
+    }
+
+    /// Writes a nozzle test pattern (`columns` columns per nozzle address) to `target`; the
+    /// profile keeps its heads unless `heads` is set.
+    pub fn test_pattern(&self, target: &Target, columns: usize) -> Result<(RasterReport, PrintheadProfile)> {
+        let profile = match self.heads {
+            Some(h) => with_heads(&self.profile()?, h),
+            None => self.profile()?,
+        };
+        let mut out = Output::create(target, None)?;
+        let rep = test_pattern(&mut out, &profile, &self.config()?, columns.max(1))?;
+        out.commit()?;
+        Ok((rep, profile))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gweave::pass::Quiet;
+
+    fn examples() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster")
+    }
+
+    #[test]
+    fn inputs_resolve_to_heads_and_channels() {
+        let layers = examples().join("layers");
+        let spec = |inputs: Vec<PathBuf>, heads, channels: &str| InputSpec {
+            inputs,
+            heads,
+            channels: if channels.is_empty() { Vec::new() } else { parse_channels(channels).unwrap() },
+            ..InputSpec::default()
+        };
+        let (src, heads) = spec(vec![layers.clone()], None, "").resolve().unwrap();
+        let Source::Stacks(s) = src else { panic!("stacks") };
+        assert_eq!((heads, s.len(), s[0].paths.len()), (1, 1, 8));
+        assert!(s[0].paths[7].ends_with("badge_7.bmp"));
+        let (src, heads) = spec(vec![layers.join("badge_?.bmp")], None, "r,b").resolve().unwrap();
+        let Source::Stacks(s) = src else { panic!("stacks") };
+        assert_eq!(heads, 2);
+        assert_eq!((s[0].threshold.channel, s[1].threshold.channel), (Channel::Red, Channel::Blue));
+        assert_eq!(s[1].paths.len(), 8);
+        let (_, heads) = spec(vec![layers.clone(), layers.clone()], Some(2), "").resolve().unwrap();
+        assert_eq!(heads, 2);
+        // Errors: heads without enough inputs, channel count mismatch, a .sl1 with other inputs.
+        assert!(spec(vec![layers.clone()], Some(2), "").resolve().is_err());
+        assert!(spec(vec![layers.clone()], Some(3), "r,b").resolve().is_err());
+        assert!(spec(vec![PathBuf::from("a.sl1"), layers], None, "").resolve().is_err());
+        assert!(parse_channels("r,x").is_err());
+    }
+
+    #[test]
+    fn streamed_estimate_equals_estimating_the_written_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("badge.gcode");
+        let options = JobOptions {
+            inputs: vec![examples().join("layers")],
+            flip_y: true,
+            density: 2,
+            ..JobOptions::default()
+        };
+        let rep = options.job().unwrap().run(&Target::File(out.clone()), &mut Quiet).unwrap();
+        let whole =
+            gweave_sim::estimate::estimate(std::fs::File::open(&out).unwrap(), &MotionProfile::default())
+                .unwrap();
+        assert_eq!(rep.time.method, "planner");
+        assert_eq!(rep.time.motion_s, whole.total_s);
+        // 844 inked columns, each fired twice at >= 800 us.
+        assert_eq!(rep.raster.fire_commands, 2 * 844);
+        assert!((rep.time.fire_s - 2.0 * 844.0 * 800e-6).abs() < 1e-12);
+        assert_eq!(rep.images_read, 8);
+        // The planner's time exceeds the feed-rate bound: every column starts and stops.
+        let fast = JobOptions { fast_estimate: true, ..options }.job().unwrap();
+        let rep_fast = fast.run(&Target::File(out), &mut Quiet).unwrap();
+        assert_eq!(rep_fast.time.method, "feed");
+        assert!(rep.time.total_s > rep_fast.time.total_s, "{:?} {:?}", rep.time, rep_fast.time);
+    }
+
+    #[test]
+    fn writer_splits_lines_across_chunks() {
+        let text = b"G1 X10 F600\nM400\nG1 X20\nG1 Y5\nM400\n";
+        let mut w = EstimatingWriter {
+            inner: Vec::new(),
+            est: Some(Estimator::new(&MotionProfile::default()).unwrap()),
+            partial: Vec::new(),
+            error: None,
+        };
+        for chunk in text.chunks(3) {
+            w.write_all(chunk).unwrap();
+        }
+        assert_eq!(w.inner, text);
+        assert!(w.partial.is_empty());
+        let chunked = w.est.take().unwrap().finish();
+        let whole = gweave_sim::estimate::estimate(&text[..], &MotionProfile::default()).unwrap();
+        assert_eq!(chunked, whole);
+        assert!(whole.total_s > 2.0, "{whole:?}");
     }
 }

@@ -6,13 +6,11 @@ use std::process::ExitCode;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use gweave::gcode::writer::Target;
-use gweave::gen::bitmap::ThresholdOptions;
 use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
-use gweave::gen::raster::{test_pattern, RasterConfig};
 
 use crate::common::ReportArgs;
 use crate::progress::Bar;
-use crate::raster_job::{parse_channels, with_heads, InputSpec, Job, JobReport};
+use crate::raster_job::{JobOptions, JobReport};
 
 /// Layer images to inkjet G-code for binder jetting: bands as tall as the nozzle row, per
 /// inked column `G1 X`, `M400`, `M700 P<head> S<bits>` (Marlin hpc6602) or `M578` (RepRapFirmware).
@@ -104,10 +102,6 @@ pub enum Dialect {
     Reprap,
 }
 
-fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
-}
-
 fn parse_origin(text: &str) -> Result<(f64, f64)> {
     let parts: Vec<&str> = text.split(',').collect();
     let [x, y] = parts[..] else {
@@ -117,46 +111,33 @@ fn parse_origin(text: &str) -> Result<(f64, f64)> {
     Ok((num(x)?, num(y)?))
 }
 
-/// The printhead profile from `--head`, `--dialect`.
-fn profile(args: &RasterArgs) -> Result<PrintheadProfile> {
-    let mut p = match &args.head {
-        Some(path) => PrintheadProfile::from_toml(&read_text(path)?)
-            .with_context(|| format!("printhead profile {}", path.display()))?,
-        None => PrintheadProfile::default(),
-    };
-    if let Some(d) = args.dialect {
-        p.dialect = match d {
-            Dialect::Marlin => FirmwareDialect::Marlin,
-            Dialect::Reprap => FirmwareDialect::RepRapFirmware,
-        };
+impl RasterArgs {
+    fn options(&self) -> Result<JobOptions> {
+        Ok(JobOptions {
+            inputs: self.inputs.clone(),
+            head: self.head.clone(),
+            threshold: self.threshold,
+            invert: self.invert,
+            flip_y: self.flip_y,
+            one_way: self.one_way,
+            density: self.density,
+            origin_mm: parse_origin(&self.origin)?,
+            layer_height_mm: self.layer_height,
+            pixel_mm: self.pixel_mm,
+            dpi: self.dpi,
+            heads: self.heads,
+            channels: self.channels.clone(),
+            recoat: self.recoat.clone(),
+            start: self.start.clone(),
+            end: self.end.clone(),
+            dialect: self.dialect.map(|d| match d {
+                Dialect::Marlin => FirmwareDialect::Marlin,
+                Dialect::Reprap => FirmwareDialect::RepRapFirmware,
+            }),
+            feed_mm_min: self.feed,
+            fast_estimate: self.fast_estimate,
+        })
     }
-    Ok(p)
-}
-
-fn config(args: &RasterArgs) -> Result<RasterConfig> {
-    let (ox, oy) = parse_origin(&args.origin)?;
-    let mut c = RasterConfig {
-        origin_x_mm: ox,
-        origin_y_mm: oy,
-        layer_height_mm: args.layer_height,
-        serpentine: !args.one_way,
-        density: args.density,
-        ..RasterConfig::default()
-    };
-    if let Some(f) = args.feed {
-        c.feed_mm_min = f;
-    }
-    for (file, slot) in [
-        (&args.start, &mut c.start_gcode),
-        (&args.end, &mut c.end_gcode),
-        (&args.recoat, &mut c.recoat_gcode),
-    ] {
-        if let Some(path) = file {
-            *slot = read_text(path)?;
-        }
-    }
-    c.validate()?;
-    Ok(c)
 }
 
 fn target(output: &Path) -> Target {
@@ -168,64 +149,29 @@ fn target(output: &Path) -> Target {
 }
 
 pub fn run(args: RasterArgs) -> Result<ExitCode> {
-    let profile = profile(&args)?;
-    let config = config(&args)?;
+    let options = args.options()?;
+    let to_stdout = args.output == Path::new("-");
     if args.test_pattern {
-        return run_test_pattern(&args, &profile, &config);
+        let (rep, profile) = options.test_pattern(&target(&args.output), args.pattern_columns)?;
+        if args.report.emit(&rep)? && !to_stdout {
+            println!("{}: nozzle test pattern", args.output.display());
+            println!(
+                "  {} head(s) x {} nozzles, {} columns per address, {} fire commands",
+                profile.heads.len(),
+                profile.nozzle_count,
+                args.pattern_columns.max(1),
+                rep.fire_commands
+            );
+            println!("  column group a fires address a alone: the row it prints is nozzle_rows[a]");
+        }
+        return Ok(ExitCode::SUCCESS);
     }
-    let spec = InputSpec {
-        inputs: args.inputs.clone(),
-        heads: args.heads,
-        channels: match &args.channels {
-            Some(c) => parse_channels(c)?,
-            None => Vec::new(),
-        },
-        threshold: ThresholdOptions {
-            threshold: args.threshold,
-            invert: args.invert,
-            ..ThresholdOptions::default()
-        },
-        flip_y: args.flip_y,
-    };
-    let (source, heads) = spec.resolve()?;
-    let job = Job {
-        source,
-        profile: with_heads(&profile, args.heads.unwrap_or(heads)),
-        config,
-        pixel_mm: args.pixel_mm.or(args.dpi.map(|d| 25.4 / d)),
-        planner_estimate: !args.fast_estimate,
-    };
-    let mut bar = Bar::new(args.quiet || args.output == Path::new("-"));
+    let job = options.job()?;
+    let mut bar = Bar::new(args.quiet || to_stdout);
     let report = job.run(&target(&args.output), &mut bar)?;
     drop(bar);
-    if args.report.emit(&report)? && args.output != Path::new("-") {
+    if args.report.emit(&report)? && !to_stdout {
         print_human(&report, &job.profile);
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-fn run_test_pattern(
-    args: &RasterArgs,
-    profile: &PrintheadProfile,
-    config: &RasterConfig,
-) -> Result<ExitCode> {
-    let profile = match args.heads {
-        Some(h) => with_heads(profile, h),
-        None => profile.clone(),
-    };
-    let mut out = gweave::gcode::writer::Output::create(&target(&args.output), None)?;
-    let rep = test_pattern(&mut out, &profile, config, args.pattern_columns.max(1))?;
-    out.commit()?;
-    if args.report.emit(&rep)? && args.output != Path::new("-") {
-        println!("{}: nozzle test pattern", args.output.display());
-        println!(
-            "  {} heads x {} nozzles, {} columns per nozzle, {} fire commands",
-            profile.heads.len(),
-            profile.nozzle_count,
-            args.pattern_columns.max(1),
-            rep.fire_commands
-        );
-        println!("  column group a fires address a alone: the row it prints gives nozzle_rows[a]");
     }
     Ok(ExitCode::SUCCESS)
 }
