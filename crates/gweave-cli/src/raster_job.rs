@@ -223,7 +223,8 @@ pub struct Job {
 }
 
 impl Job {
-    /// Writes the G-code to `target` and returns the report. `progress` sees input bytes.
+    /// Writes the G-code to `target` and returns the report. `progress` counts layers (its
+    /// `set_len` gets the layer count, `advance` the layers done), not bytes.
     pub fn run(&self, target: &Target, progress: &mut dyn Progress) -> Result<JobReport> {
         let mut out = Output::create(target, None)?;
         let planner = self.planner_estimate;
@@ -265,16 +266,15 @@ impl Job {
             Source::Sl1 { path, threshold } => {
                 let mut reader =
                     Sl1Reader::open(path).with_context(|| format!("reading {}", path.display()))?;
-                let total = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
-                progress.set_len(total);
                 let (px_x, px_y) = reader.bed_pixel_mm();
                 let layers = reader.layer_count();
+                progress.set_len(layers as u64);
                 let height = reader.info().layer_height_mm;
                 let mut w = RasterWriter::new(out, &self.profile, &self.config, Some(height))?;
                 for k in 0..layers {
                     let plane = reader.bed_layer(k, threshold)?.resample(px_x, px_y, pitch)?;
                     w.layer(std::slice::from_ref(&plane))?;
-                    progress.advance(total * (k as u64 + 1) / layers.max(1) as u64);
+                    progress.advance(k as u64 + 1);
                 }
                 Ok((w.finish()?.1, layers))
             }
@@ -286,15 +286,10 @@ impl Job {
                         self.profile.heads.len()
                     );
                 }
-                let total: u64 = stacks
-                    .iter()
-                    .flat_map(|s| &s.paths)
-                    .map(|p| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0))
-                    .sum();
-                progress.set_len(total);
                 let mut w = RasterWriter::new(out, &self.profile, &self.config, None)?;
                 let layers = stacks.iter().map(|s| s.paths.len()).max().unwrap_or(0);
-                let (mut done, mut read) = (0u64, 0usize);
+                progress.set_len(layers as u64);
+                let mut read = 0usize;
                 let mut planes = Vec::with_capacity(stacks.len());
                 for k in 0..layers {
                     planes.clear();
@@ -310,11 +305,10 @@ impl Job {
                             Some(px) => b.resample(px, px, pitch)?,
                             None => b,
                         });
-                        done += std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
                         read += 1;
                     }
                     w.layer(&planes)?;
-                    progress.advance(done);
+                    progress.advance(k as u64 + 1);
                 }
                 Ok((w.finish()?.1, read))
             }
@@ -440,6 +434,9 @@ impl JobOptions {
             flip_y: self.flip_y,
         };
         let (source, heads) = spec.resolve()?;
+        if matches!(source, Source::Sl1 { .. }) && (self.pixel_mm.is_some() || self.dpi.is_some()) {
+            bail!("a .sl1 archive carries its own pixel size: drop the pixel size / dpi");
+        }
         Ok(Job {
             source,
             profile: with_heads(&self.profile()?, self.heads.unwrap_or(heads)),
@@ -497,6 +494,12 @@ mod tests {
         assert!(spec(vec![layers.clone()], Some(3), "r,b").resolve().is_err());
         assert!(spec(vec![PathBuf::from("a.sl1"), layers], None, "").resolve().is_err());
         assert!(parse_channels("r,x").is_err());
+        let sl1 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../gweave/tests/data/raster/sphere.sl1");
+        let with_dpi = JobOptions { inputs: vec![sl1.clone()], dpi: Some(300.0), ..JobOptions::default() };
+        assert!(with_dpi.job().is_err());
+        let job = JobOptions { inputs: vec![sl1], ..JobOptions::default() }.job().unwrap();
+        assert!(matches!(job.source, Source::Sl1 { .. }));
+        assert_eq!(job.profile.heads.len(), 1);
     }
 
     #[test]

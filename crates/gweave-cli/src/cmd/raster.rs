@@ -9,7 +9,6 @@ use gweave::gcode::writer::Target;
 use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
 
 use crate::common::ReportArgs;
-use crate::progress::Bar;
 use crate::raster_job::{JobOptions, JobReport};
 
 /// Layer images to inkjet G-code for binder jetting: bands as tall as the nozzle row, per
@@ -167,7 +166,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     let job = options.job()?;
-    let mut bar = Bar::new(args.quiet || to_stdout);
+    let mut bar = LayerBar::new(args.quiet);
     let report = job.run(&target(&args.output), &mut bar)?;
     drop(bar);
     if args.report.emit(&report)? && !to_stdout {
@@ -219,4 +218,50 @@ fn print_human(r: &JobReport, profile: &PrintheadProfile) {
 fn hms(t_s: f64) -> String {
     let t = t_s.round() as u64;
     format!("{}h {:02}m {:02}s", t / 3600, t / 60 % 60, t % 60)
+}
+
+/// A layer-count progress bar on stderr, only when stderr is a terminal and the job has enough
+/// layers to take a while. (`crate::progress::Bar` counts input bytes, which says little here:
+/// 1-bit PNG layers are tiny files that take long to raster.)
+struct LayerBar(Option<indicatif::ProgressBar>);
+
+/// Fewer layers than this finish too fast for a bar to help.
+const MIN_LAYERS: u64 = 50;
+
+impl LayerBar {
+    fn new(quiet: bool) -> Self {
+        use std::io::IsTerminal;
+        LayerBar((!quiet && std::io::stderr().is_terminal()).then(indicatif::ProgressBar::hidden))
+    }
+}
+
+impl gweave::pass::Progress for LayerBar {
+    fn set_len(&mut self, layers: u64) {
+        if let Some(bar) = &self.0 {
+            if layers < MIN_LAYERS {
+                self.0 = None;
+                return;
+            }
+            bar.set_length(layers);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} layers {per_sec} {eta}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+        }
+    }
+
+    fn advance(&mut self, layers_done: u64) {
+        if let Some(bar) = &self.0 {
+            bar.set_position(layers_done);
+        }
+    }
+}
+
+impl Drop for LayerBar {
+    fn drop(&mut self) {
+        if let Some(bar) = &self.0 {
+            bar.finish_and_clear();
+        }
+    }
 }
