@@ -271,11 +271,10 @@ impl Job {
                 progress.set_len(layers as u64);
                 let height = reader.info().layer_height_mm;
                 let mut w = RasterWriter::new(out, &self.profile, &self.config, Some(height))?;
-                for k in 0..layers {
-                    let plane = reader.bed_layer(k, threshold)?.resample(px_x, px_y, pitch)?;
-                    w.layer(std::slice::from_ref(&plane))?;
-                    progress.advance(k as u64 + 1);
-                }
+                let load = |k: usize| -> Result<Vec<Bitmap>> {
+                    Ok(vec![reader.bed_layer(k, threshold)?.resample(px_x, px_y, pitch)?])
+                };
+                pipelined(&mut w, layers, load, progress)?;
                 Ok((w.finish()?.1, layers))
             }
             Source::Stacks(stacks) => {
@@ -289,10 +288,9 @@ impl Job {
                 let mut w = RasterWriter::new(out, &self.profile, &self.config, None)?;
                 let layers = stacks.iter().map(|s| s.paths.len()).max().unwrap_or(0);
                 progress.set_len(layers as u64);
-                let mut read = 0usize;
-                let mut planes = Vec::with_capacity(stacks.len());
-                for k in 0..layers {
-                    planes.clear();
+                let read = stacks.iter().map(|s| s.paths.len()).sum();
+                let load = |k: usize| -> Result<Vec<Bitmap>> {
+                    let mut planes = Vec::with_capacity(stacks.len());
                     for s in stacks {
                         let Some(p) = s.paths.get(k) else {
                             planes.push(Bitmap::new(0, 0));
@@ -305,15 +303,43 @@ impl Job {
                             Some(px) => b.resample(px, px, pitch)?,
                             None => b,
                         });
-                        read += 1;
                     }
-                    w.layer(&planes)?;
-                    progress.advance(k as u64 + 1);
-                }
+                    Ok(planes)
+                };
+                pipelined(&mut w, layers, load, progress)?;
                 Ok((w.finish()?.1, read))
             }
         }
     }
+}
+
+/// Rasters `layers` layers, decoding layer `k + 1` on a second thread while layer `k` is
+/// written (decoding and G-code writing each take about half the time).
+fn pipelined<W: Write>(
+    w: &mut RasterWriter<W>,
+    layers: usize,
+    mut load: impl FnMut(usize) -> Result<Vec<Bitmap>> + Send,
+    progress: &mut dyn Progress,
+) -> Result<()> {
+    std::thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Result<Vec<Bitmap>>>(2);
+        scope.spawn(move || {
+            for k in 0..layers {
+                let planes = load(k);
+                let failed = planes.is_err();
+                // A closed channel means the writer stopped on an error of its own.
+                if tx.send(planes).is_err() || failed {
+                    break;
+                }
+            }
+        });
+        for k in 0..layers {
+            let planes = rx.recv().context("the image decoder stopped")??;
+            w.layer(&planes)?;
+            progress.advance(k as u64 + 1);
+        }
+        Ok(())
+    })
 }
 
 /// Every setting of a job as the user gives it (CLI flags, Python keywords), turned into the
