@@ -4,6 +4,10 @@ mod cat;
 mod check;
 mod stats;
 
+// binder-jet raster
+mod raster;
+mod slice_raster;
+
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -14,6 +18,8 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    Raster(Box<raster::RasterArgs>),
+    SliceRaster(slice_raster::SliceRasterArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -21,5 +27,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        Command::Raster(a) => raster::run(*a),
+        Command::SliceRaster(a) => slice_raster::run(a),
     }
 }
