@@ -8,6 +8,7 @@ pub mod interp;
 pub mod kinematics;
 pub mod limits;
 pub mod planner;
+pub mod plot;
 pub mod profile;
 pub mod protection;
 pub mod stepper;

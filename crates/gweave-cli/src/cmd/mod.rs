@@ -4,6 +4,9 @@ mod cat;
 mod check;
 mod stats;
 
+// gweave-sim: the virtual printer
+mod sim;
+
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -14,6 +17,8 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    // gweave-sim: the virtual printer
+    Sim(sim::SimArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -21,5 +26,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        // gweave-sim: the virtual printer
+        Command::Sim(a) => sim::run(a),
     }
 }
