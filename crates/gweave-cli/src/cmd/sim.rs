@@ -92,7 +92,7 @@ fn run_file(machine: &mut Machine, input: &Path, quiet: bool) -> Result<Vec<Stri
             break;
         }
         n += 1;
-        if n % 65_536 == 0 {
+        if n.is_multiple_of(65_536) {
             bar.advance(reader.position());
         }
     }
