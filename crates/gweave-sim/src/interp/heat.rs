@@ -64,6 +64,20 @@ impl Machine {
                     self.wait_heater(HeaterId::Bed, mode(r.is_some() && s.is_none()), out);
                 }
             }
+            116 => {
+                // RepRapFirmware: wait for every heater that has a target.
+                self.run_core(line, &effect, out);
+                self.core.drain();
+                self.sync(out);
+                let ids = (0..self.thermal.hotend_count())
+                    .map(HeaterId::Hotend)
+                    .chain(self.profile.thermal.bed.map(|_| HeaterId::Bed))
+                    .filter(|&id| self.thermal.target(id).is_ok_and(|t| t > 0.0))
+                    .collect::<Vec<_>>();
+                for id in ids {
+                    self.wait_heater(id, WaitMode::HeatOnly, out);
+                }
+            }
             105 => {
                 let text = format!("ok {}", self.thermal.m105_report());
                 out(self.now_s(), &text);
@@ -82,6 +96,15 @@ impl Machine {
             303 => self.m303(e, s, out),
             _ => {}
         }
+    }
+
+    /// RepRapFirmware `G10 P<tool> S<active> [R<standby>]`: the tool's hotend target (we keep
+    /// the active temperature; tools idle at standby are not simulated).
+    pub(super) fn rrf_tool_temperature(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let b = self.core.block();
+        let hotend = b.get(b'P').map_or(self.active_hotend_index(), |p| p.max(0.0) as u8);
+        let s = b.get(b'S');
+        self.set_target(HeaterId::Hotend(hotend), s, out);
     }
 
     fn active_hotend_index(&self) -> u8 {

@@ -314,6 +314,8 @@ impl Machine {
                 self.run_core(line, &effect, out);
                 self.moved_since_m400 = false;
             }
+            // RepRapFirmware's `G10 P<tool> S<temp>` sets a tool's temperature.
+            10 if self.core.block().has(b'S') => self.rrf_tool_temperature(out),
             10 | 11 | 20 | 21 | 90 | 91 => self.run_core(line, &effect, out),
             28 => self.home(line, effect, before, out),
             92 => {
@@ -342,7 +344,7 @@ impl Machine {
             // layer's), LCD message, gradient mix, RRF tool definition.
             17 | 73 | 110 | 117 | 166 | 563 => {}
             82 | 83 | 201 | 203 | 204 | 205 | 163..=165 | 567 => self.run_core(line, &effect, out),
-            104 | 109 | 140 | 190 | 105 | 106 | 107 | 155 | 301 | 303 => {
+            104 | 109 | 116 | 140 | 190 | 105 | 106 | 107 | 155 | 301 | 303 => {
                 self.heat_command(line, number, effect, out)
             }
             112 => {
@@ -469,10 +471,10 @@ impl Machine {
         let t = self.now_s();
         for l in [
             "echo:gweave-sim commands:",
-            "echo:  G0 G1 G2 G3 move (line, arcs)   G4 dwell   G10 G11 firmware retract",
+            "echo:  G0 G1 G2 G3 move   G4 dwell   G10 G11 firmware retract (G10 P S: RRF tool temp)",
             "echo:  G20 G21 inch/mm   G28 home   G90 G91 absolute/relative   G92 set position",
             "echo:  M0 M1 stop   M17 M18 M84 motors   M82 M83 absolute/relative E",
-            "echo:  M104 M109 hotend   M140 M190 bed   M105 temperatures   M155 auto-report",
+            "echo:  M104 M109 hotend   M140 M190 bed   M116 wait (RRF)   M105 temps   M155 auto-report",
             "echo:  M106 M107 fan   M112 emergency stop   M999 restart",
             "echo:  M114 position   M115 firmware   M117 message   M119 endstops   M110 line no.",
             "echo:  M201 M203 M204 M205 limits   M220 feed %   M221 flow %   M400 finish moves",

@@ -205,3 +205,14 @@ fn feed_and_flow_percentages() {
     // 100 mm at 100 mm/s with a = 3000: 1 s cruise + 1/30 s.
     assert!((m.now_s() - (1.0 + 100.0 / 3000.0)).abs() < 1e-9, "{}", m.now_s());
 }
+
+#[test]
+fn rrf_tool_temperature_and_m116() {
+    let mut m = machine();
+    let (r, _) = run(&mut m, "G10 P0 S200\nM116\nG1 X10 E1 F600\nG10\nM400");
+    assert!(r.iter().all(|l| l.starts_with(" T:")), "{r:?}");
+    assert!(m.thermal().temperature(HeaterId::Hotend(0)).unwrap() > 199.0);
+    // G10 without words is still a firmware retraction (1 mm by default).
+    assert_eq!(m.report().count[3], 0);
+    assert_eq!(m.report().filament_mm, vec![1.0]);
+}
