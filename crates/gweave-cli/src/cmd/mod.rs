@@ -6,6 +6,9 @@ mod stats;
 
 // gweave-sim: the virtual printer
 mod sim;
+// binder-jet raster
+mod raster;
+mod slice_raster;
 
 use std::process::ExitCode;
 
@@ -19,6 +22,8 @@ pub enum Command {
     Cat(cat::CatArgs),
     // gweave-sim: the virtual printer
     Sim(sim::SimArgs),
+    Raster(Box<raster::RasterArgs>),
+    SliceRaster(slice_raster::SliceRasterArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -28,5 +33,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Cat(a) => cat::run(a),
         // gweave-sim: the virtual printer
         Command::Sim(a) => sim::run(a),
+        Command::Raster(a) => raster::run(*a),
+        Command::SliceRaster(a) => slice_raster::run(a),
     }
 }
