@@ -144,3 +144,31 @@ fn rotary_machine_steps_a_and_reports_it() {
     // 450 degrees at 8.888889 steps/degree.
     assert_eq!(replies, ["X:10.00 Y:0.00 Z:0.00 A:450.00 E:1.00 Count X:800 Y:0 Z:0 A:4000"]);
 }
+
+/// The benchmark: a 40-hour print simulated with step counting in under 30 s. Needs
+/// `bench/data/bunny-gyroid.gcode` (made by `make bench`); run with
+/// `cargo test -p gweave-sim --release --test machine -- --ignored --nocapture`.
+#[test]
+#[ignore = "a release-mode benchmark on a 286 MB file"]
+fn forty_hour_print_in_under_30_s() {
+    use std::io::BufReader;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../bench/data/bunny-gyroid.gcode");
+    let Ok(file) = std::fs::File::open(&path) else {
+        eprintln!("skipped: {} is missing (make bench slices it)", path.display());
+        return;
+    };
+    let profile = MachineProfile::from_toml_str("[bed]\nx_mm = 400.0\ny_mm = 400.0\nz_mm = 400.0\n").unwrap();
+    let mut m = Machine::new(profile).unwrap();
+    let started = std::time::Instant::now();
+    let mut reader = gweave::gcode::reader::LineReader::new(BufReader::new(file));
+    let mut out = |_t: f64, _l: &str| {};
+    while let Some(line) = reader.next_line().unwrap() {
+        assert_eq!(m.execute(line.bytes, &mut out), Outcome::Ok);
+    }
+    m.finish(&mut out);
+    let wall_s = started.elapsed().as_secs_f64();
+    let rep = m.report();
+    println!("{:.1} h print simulated in {wall_s:.2} s ({} lines)", rep.time.total_s / 3600.0, rep.lines);
+    assert!(rep.time.total_s > 40.0 * 3600.0);
+    assert!(wall_s < 30.0, "{wall_s} s");
+}
