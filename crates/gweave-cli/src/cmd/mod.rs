@@ -4,6 +4,8 @@ mod cat;
 mod check;
 mod stats;
 
+// gweave-sim: the virtual printer
+mod sim;
 // binder-jet raster
 mod raster;
 mod slice_raster;
@@ -20,6 +22,8 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    // gweave-sim: the virtual printer
+    Sim(sim::SimArgs),
     Raster(Box<raster::RasterArgs>),
     SliceRaster(slice_raster::SliceRasterArgs),
     // purge-shift
@@ -31,6 +35,8 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        // gweave-sim: the virtual printer
+        Command::Sim(a) => sim::run(a),
         Command::Raster(a) => raster::run(*a),
         Command::SliceRaster(a) => slice_raster::run(a),
         // purge-shift

@@ -21,12 +21,14 @@ from typing import Any, Dict, Optional, Sequence, Union
 
 from . import _gweave
 from ._gweave import Line, Reader
+from ._gweave import Machine
 
 __version__: str = _gweave.__version__
 
 PathLike = Union[str, "os.PathLike[str]"]
 
 __all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
+__all__ += ["Machine", "sim"]
 # binder-jet raster
 __all__ += ["raster", "raster_test_pattern", "slice_raster"]
 # purge-shift
@@ -79,6 +81,15 @@ def cat(
     )
 
 
+def sim(path: PathLike, *, machine: Optional[PathLike] = None) -> Dict[str, Any]:
+    """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML.
+
+    The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
+    ``feature_s``, ``filament_mm``, ``mixing_input_mm``, ``steps``, ``position``, ``count``,
+    ``heaters``, ``thermal_faults``, ``halted``, ``unknown_commands`` and ``warnings``.
+    """
+    m = None if machine is None else os.fspath(machine)
+    return json.loads(_gweave.sim_json(os.fspath(path), machine=m))
 # ---- binder-jet raster ----
 
 
