@@ -215,15 +215,17 @@ pub struct PreviewOptions {
     pub width_px: u32,
     /// Image height, pixels.
     pub height_px: u32,
-    /// Line width, pixels.
+    /// Thinnest line, pixels.
     pub line_px: u32,
+    /// Bead width, mm: lines are drawn this wide at the image's scale (0 = `line_px` only).
+    pub bead_width_mm: f64,
     /// The view (its fit is recomputed to the beads).
     pub camera: Camera,
 }
 
 impl Default for PreviewOptions {
     fn default() -> Self {
-        Self { width_px: 800, height_px: 600, line_px: 2, camera: Camera::isometric() }
+        Self { width_px: 800, height_px: 600, line_px: 1, bead_width_mm: 0.4, camera: Camera::isometric() }
     }
 }
 
@@ -252,12 +254,15 @@ pub fn render(beads: &[Bead], options: &PreviewOptions) -> Canvas {
     let points = beads.iter().flat_map(|b| [b.from.to_cartesian(), b.to.to_cartesian()]);
     let camera = options.camera.fitted(points, options.width_px, options.height_px, 12.0);
     let mut canvas = Canvas::new(options.width_px, options.height_px, [255, 255, 255]);
+    // A bead spans its width at any angle; the float-to-int cast saturates on wild values.
+    let bead_px = (options.bead_width_mm * camera.scale_px_mm()).round() as u32;
+    let width_px = options.line_px.max(bead_px);
     for bead in beads {
         let mid_deg = 0.5 * (bead.from.theta_deg + bead.to.theta_deg);
         let (sin, cos) = mid_deg.to_radians().sin_cos();
         let colour = layer_colour(bead.layer, camera.facing([0.0, cos, sin]));
         let (a, b) = (camera.project(bead.from.to_cartesian()), camera.project(bead.to.to_cartesian()));
-        canvas.line(a, b, colour, options.line_px);
+        canvas.line(a, b, colour, width_px);
     }
     canvas
 }
@@ -311,7 +316,13 @@ mod tests {
             text.push_str(&format!("G1 A{} E{i} F600\n", i * 5));
         }
         let p = read_back(&machine, text.as_bytes()).unwrap();
-        let options = PreviewOptions { width_px: 100, height_px: 100, line_px: 1, camera: Camera::top() };
+        let options = PreviewOptions {
+            width_px: 100,
+            height_px: 100,
+            line_px: 1,
+            bead_width_mm: 0.0,
+            camera: Camera::top(),
+        };
         let image = render(&p.beads, &options);
         let lit = layer_colour(0, 1.0);
         assert_eq!(lit, PALETTE[0]);
