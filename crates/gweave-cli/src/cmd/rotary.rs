@@ -4,20 +4,16 @@
 //! continuous helical layers. Both print a summary (or JSON) read back from the written file,
 //! as the machine will execute it, and can draw that path in 3D (`--preview out.png`).
 
-use std::fs::File;
-use std::io::{BufReader, BufWriter};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
-use gweave::gcode::writer::{Output, Target};
-use gweave::pass::Run;
+use gweave::gcode::writer::Target;
 use gweave::rotary::cylinder::{FeedConvention, RotaryConfig, RotaryUnit};
-use gweave::rotary::helix::{Handedness, TubeParams};
-use gweave::rotary::preview::{self, LayerSummary, PreviewOptions, Program};
-use gweave::rotary::wrap::{Wrap, WrapConfig};
-use serde::Serialize;
+use gweave::rotary::helix::TubeParams;
+use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
+use gweave::rotary::wrap::WrapConfig;
 
 use super::stats::hms;
 use crate::common::{OutputArgs, ReportArgs};
@@ -142,71 +138,24 @@ impl MachineArgs {
             (machine.axial_axis, machine.rotary_axis, machine.radial_axis) = (a, r, z);
         }
     }
-
-    /// Reads the written program back and draws the preview if asked.
-    fn read_back(
-        &self,
-        machine: &RotaryConfig,
-        bead_width_mm: f64,
-        output: Option<&Path>,
-    ) -> Result<Option<Program>> {
-        let Some(path) = output else {
-            if self.preview.is_some() {
-                bail!("--preview needs the G-code in a file (-o FILE)");
-            }
-            return Ok(None);
-        };
-        let file = File::open(path).with_context(|| format!("reading back {}", path.display()))?;
-        let program = preview::read_back(machine, BufReader::new(file))
-            .with_context(|| format!("reading back {}", path.display()))?;
-        if let Some(png) = &self.preview {
-            let options = PreviewOptions { bead_width_mm, ..PreviewOptions::default() };
-            let canvas = preview::render(&program.beads, &options);
-            let file = File::create(png).with_context(|| format!("writing {}", png.display()))?;
-            canvas.write_png(BufWriter::new(file)).with_context(|| format!("writing {}", png.display()))?;
-        }
-        Ok(Some(program))
-    }
 }
 
-/// How the machine was set up, for reports.
-#[derive(Serialize)]
-struct MachineReport {
-    mandrel_diameter_mm: f64,
-    circumference_mm: f64,
-    axes: String,
-    rotary_unit: RotaryUnit,
-    feed_convention: FeedConvention,
-}
-
-impl MachineReport {
-    fn of(m: &RotaryConfig) -> Self {
-        Self {
-            mandrel_diameter_mm: m.mandrel_diameter_mm,
-            circumference_mm: m.circumference_mm(),
-            axes: [m.axial_axis, m.rotary_axis, m.radial_axis].iter().collect(),
-            rotary_unit: m.rotary_unit,
-            feed_convention: m.feed_convention,
+fn print_machine(m: &MachineReport) {
+    println!(
+        "  mandrel         {:.3} mm (circumference {:.3} mm), axes {} (rotary in {}), feed {}",
+        m.mandrel_diameter_mm,
+        m.circumference_mm,
+        m.axes,
+        match m.rotary_unit {
+            RotaryUnit::Degrees => "degrees",
+            RotaryUnit::Mm => "mm",
+        },
+        match m.feed_convention {
+            FeedConvention::Nist => "nist",
+            FeedConvention::Combined => "combined",
+            FeedConvention::InverseTime => "inverse-time (G93)",
         }
-    }
-
-    fn print(&self) {
-        println!(
-            "  mandrel         {:.3} mm (circumference {:.3} mm), axes {} (rotary in {}), feed {}",
-            self.mandrel_diameter_mm,
-            self.circumference_mm,
-            self.axes,
-            match self.rotary_unit {
-                RotaryUnit::Degrees => "degrees",
-                RotaryUnit::Mm => "mm",
-            },
-            match self.feed_convention {
-                FeedConvention::Nist => "nist",
-                FeedConvention::Combined => "combined",
-                FeedConvention::InverseTime => "inverse-time (G93)",
-            }
-        );
-    }
+    );
 }
 
 /// Wrap a part sliced flat onto the mandrel of a lathe-type printer.
@@ -243,41 +192,6 @@ pub struct WrapArgs {
     pub quiet: bool,
 }
 
-#[derive(Serialize)]
-struct WrapLayer {
-    #[serde(flatten)]
-    layer: LayerSummary,
-    /// Angle the beads sweep: theta max - theta min, degrees.
-    span_deg: f64,
-    /// Where the flat y = 0 (the weld line) lies on this layer, degrees in [0, 360).
-    seam_deg: f64,
-}
-
-#[derive(Serialize)]
-struct WrapReport {
-    input: PathBuf,
-    output: Option<PathBuf>,
-    machine: MachineReport,
-    keep_arc_length: bool,
-    seam_offset_deg: f64,
-    seam_rotation_per_layer_deg: f64,
-    chord_tolerance_mm: f64,
-    layers: Vec<WrapLayer>,
-    filament_mm: f64,
-    time_s: f64,
-}
-
-/// Bead width drawn in the preview of a wrapped part (the flat file does not say it), mm.
-const PREVIEW_BEAD_MM: f64 = 0.45;
-
-fn output_path(target: &Target, input: &Path) -> Option<PathBuf> {
-    match target {
-        Target::File(p) => Some(p.clone()),
-        Target::InPlace { .. } => Some(input.to_path_buf()),
-        Target::Stdout => None,
-    }
-}
-
 fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
     let mut config = match args.machine.config_text()? {
@@ -294,35 +208,9 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     if let Some(tol) = args.chord_tol {
         config.chord_tolerance_mm = tol;
     }
-    let mut pass = Wrap::new(config.clone())?;
     let mut bar = Bar::new(args.quiet);
-    Run::new(&args.input, &mut bar).transform(&mut pass, &target)?;
+    let report = report::wrap_file(&config, &args.input, &target, args.machine.preview.as_deref(), &mut bar)?;
     drop(bar);
-    let output = output_path(&target, &args.input);
-    let Some(program) = args.machine.read_back(&config.machine, PREVIEW_BEAD_MM, output.as_deref())? else {
-        return Ok(ExitCode::SUCCESS);
-    };
-    let layers = program
-        .layers
-        .iter()
-        .map(|l| WrapLayer {
-            layer: *l,
-            span_deg: l.theta_range_deg[1] - l.theta_range_deg[0],
-            seam_deg: config.unwrap.seam_deg(l.index).rem_euclid(360.0),
-        })
-        .collect();
-    let report = WrapReport {
-        input: args.input.clone(),
-        output,
-        machine: MachineReport::of(&config.machine),
-        keep_arc_length: config.unwrap.keep_arc_length,
-        seam_offset_deg: config.unwrap.seam_offset_deg,
-        seam_rotation_per_layer_deg: config.unwrap.seam_rotation_per_layer_deg,
-        chord_tolerance_mm: config.chord_tolerance_mm,
-        layers,
-        filament_mm: program.filament_mm,
-        time_s: program.time_s,
-    };
     if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
         print_wrap(&report);
     }
@@ -333,7 +221,7 @@ fn print_wrap(r: &WrapReport) {
     if let Some(out) = &r.output {
         println!("{} -> {}", r.input.display(), out.display());
     }
-    r.machine.print();
+    print_machine(&r.machine);
     let mapping = if r.keep_arc_length { "arc length kept (Diabase)" } else { "theta = 360*y/C, E scaled" };
     println!("  mapping         {mapping}");
     println!("  layers          {}", r.layers.len());
@@ -410,37 +298,6 @@ pub struct TubeArgs {
     pub report: ReportArgs,
 }
 
-#[derive(Serialize)]
-struct TubeLayer {
-    index: u32,
-    /// Bead centreline radius, mm.
-    radius_mm: f64,
-    handedness: Handedness,
-    turns: f64,
-    angular_speed_deg_s: f64,
-    axial_mm: [f64; 2],
-    /// Angle where the layer starts and ends (the next layer starts there: no seam), degrees.
-    theta_deg: [f64; 2],
-}
-
-#[derive(Serialize)]
-struct TubeReport {
-    output: Option<PathBuf>,
-    machine: MachineReport,
-    length_mm: f64,
-    layer_height_mm: f64,
-    bead_width_mm: f64,
-    pitch_mm: f64,
-    interweave: bool,
-    layers: Vec<TubeLayer>,
-    filament_mm: f64,
-    extruded_mm3: f64,
-    wall_volume_mm3: f64,
-    print_time_s: f64,
-    /// Extruding moves read back from the written file (absent for standard output).
-    executed_beads: Option<usize>,
-}
-
 fn tube_params(args: &TubeArgs) -> Result<TubeParams> {
     let mut t = match args.machine.config_text()? {
         Some(text) => TubeParams::from_toml_str(&text).context("rotary tube config")?,
@@ -482,47 +339,7 @@ fn run_tube(args: TubeArgs) -> Result<ExitCode> {
     let params = tube_params(&args)?;
     let target =
         if args.output == Path::new("-") { Target::Stdout } else { Target::File(args.output.clone()) };
-    let mut out = Output::create(&target, None)?;
-    let summary = params.write_gcode(BufWriter::new(&mut out))?;
-    out.commit()?;
-    let mut layers = Vec::new();
-    let mut theta = 0.0;
-    for k in 0..params.layers {
-        let path = params.layer_path(k, theta);
-        let points = path.points(params.print.resolution())?;
-        let (first, last) = match (points.first(), points.last()) {
-            (Some(a), Some(b)) => (*a, *b),
-            _ => continue,
-        };
-        theta = last.theta_deg;
-        layers.push(TubeLayer {
-            index: k,
-            radius_mm: params.layer_radius_mm(k),
-            handedness: path.handedness,
-            turns: (last.theta_deg - first.theta_deg).abs() / 360.0,
-            angular_speed_deg_s: params.angular_speed_deg_s(k),
-            axial_mm: [first.axial_mm, last.axial_mm],
-            theta_deg: [first.theta_deg, last.theta_deg],
-        });
-    }
-    let output = output_path(&target, &args.output);
-    let program = args.machine.read_back(&params.machine, params.print.bead_width_mm, output.as_deref())?;
-    let area_mm2 = std::f64::consts::PI * params.print.filament_diameter_mm.powi(2) / 4.0;
-    let report = TubeReport {
-        output,
-        machine: MachineReport::of(&params.machine),
-        length_mm: params.length_mm,
-        layer_height_mm: params.print.layer_height_mm,
-        bead_width_mm: params.print.bead_width_mm,
-        pitch_mm: params.pitch(),
-        interweave: params.interweave,
-        layers,
-        filament_mm: summary.filament_mm,
-        extruded_mm3: summary.filament_mm * area_mm2,
-        wall_volume_mm3: params.wall_volume_mm3(),
-        print_time_s: summary.print_time_s,
-        executed_beads: program.map(|p| p.beads.len()),
-    };
+    let report = report::tube_file(&params, &target, args.machine.preview.as_deref())?;
     if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
         print_tube(&report);
     }
@@ -533,7 +350,7 @@ fn print_tube(r: &TubeReport) {
     if let Some(out) = &r.output {
         println!("{}", out.display());
     }
-    r.machine.print();
+    print_machine(&r.machine);
     println!(
         "  tube            length {:.3} mm, bead {:.3} x {:.3} mm, pitch {:.3} mm, {}",
         r.length_mm,
