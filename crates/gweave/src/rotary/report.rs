@@ -25,8 +25,9 @@ use super::{Result, RotaryError};
 use crate::gcode::writer::{Output, Target};
 use crate::pass::Run;
 
-/// Bead width drawn in the preview of a wrapped part (the flat file does not state one), mm.
-pub const WRAP_PREVIEW_BEAD_MM: f64 = 0.45;
+/// Bead width drawn in the preview of a wrapped part, mm: 0, one-pixel toolpaths, so that
+/// the infill, the layers below and the weld line stay visible through a solid skin.
+pub const WRAP_PREVIEW_BEAD_MM: f64 = 0.0;
 
 /// The machine a program was written for.
 #[derive(Clone, Debug, PartialEq, Serialize)]
