@@ -299,8 +299,16 @@ fn merge(base: &mut serde_json::Value, over: serde_json::Value) {
     match (base, over) {
         (_, Value::Null) => {}
         (Value::Object(b), Value::Object(o)) => {
-            for (key, value) in o {
-                merge(b.entry(key).or_insert(Value::Null), value);
+            for (key, value) in o.into_iter().filter(|(_, v)| !v.is_null()) {
+                match b.get_mut(&key) {
+                    Some(slot) => merge(slot, value),
+                    None => {
+                        let mut fresh = Value::Object(serde_json::Map::new());
+                        merge(&mut fresh, value);
+                        // A table of nulls only adds an empty table (its defaults).
+                        b.insert(key, fresh);
+                    }
+                }
             }
         }
         (b, o) => *b = o,
@@ -325,7 +333,12 @@ mod tests {
             r#"{"layers": 2, "print": {"layer_height_mm": 0.3}, "pitch_mm": null}"#,
         )
         .unwrap();
-        assert_eq!((t.length_mm, t.layers, t.pitch_mm), (30.0, 2, None));
+        assert_eq!((t.length_mm, t.layers, t.pitch_mm, t.interweave), (30.0, 2, None, true));
+        // Nulls everywhere, nested too, leave every default in place.
+        let d: TubeParams =
+            merged_settings(None, r#"{"machine": {"mandrel_diameter_mm": 8, "rotary_unit": null}, "print": {"bead_width_mm": null}}"#)
+                .unwrap();
+        assert_eq!(d, TubeParams::new(RotaryConfig::new(8.0)));
         assert_eq!((t.print.bead_width_mm, t.print.layer_height_mm), (0.5, 0.3));
         let err = merged_settings::<TubeParams>(Some(&file), r#"{"print": {"speed": 3}}"#).unwrap_err();
         assert!(err.to_string().contains("unknown field `speed`"), "{err}");
