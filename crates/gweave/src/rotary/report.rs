@@ -25,7 +25,7 @@ use super::{Result, RotaryError};
 use crate::gcode::writer::{Output, Target};
 use crate::pass::Run;
 
-/// Bead width drawn in the preview of a wrapped part, mm: 0, one-pixel toolpaths, so that
+/// Bead width drawn in the preview of a wrapped part, mm: 0, thin (2 px) toolpaths, so that
 /// the infill, the layers below and the weld line stay visible through a solid skin.
 pub const WRAP_PREVIEW_BEAD_MM: f64 = 0.0;
 
@@ -177,7 +177,7 @@ fn read_back(
     };
     let program = preview::read_back(machine, BufReader::new(File::open(path)?))?;
     if let Some(png) = preview {
-        let options = PreviewOptions { bead_width_mm, ..PreviewOptions::default() };
+        let options = PreviewOptions { bead_width_mm, line_px: 2, ..PreviewOptions::default() };
         preview::render(&program.beads, &options).write_png(BufWriter::new(File::create(png)?))?;
     }
     Ok(Some(program))
