@@ -4,6 +4,11 @@ mod cat;
 mod check;
 mod stats;
 
+// binder-jet raster
+mod raster;
+mod slice_raster;
+
+// rotary (lathe-type) printing
 mod rotary;
 
 use std::process::ExitCode;
@@ -16,6 +21,8 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    Raster(Box<raster::RasterArgs>),
+    SliceRaster(slice_raster::SliceRasterArgs),
 
     Rotary(rotary::RotaryArgs),
 }
@@ -25,6 +32,8 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        Command::Raster(a) => raster::run(*a),
+        Command::SliceRaster(a) => slice_raster::run(a),
 
         Command::Rotary(a) => rotary::run(a),
     }

@@ -357,6 +357,60 @@ pub fn decode_png<R: Read>(input: R, opts: &ThresholdOptions) -> Result<Bitmap, 
     ))
 }
 
+/// Is this a non-interlaced 1-bit greyscale PNG? IHDR is the first chunk (PNG spec 11.2.2):
+/// signature (8), length (4), "IHDR" (4), width (4), height (4), then bit depth at byte 24,
+/// colour type at 25 and interlace method at 28.
+fn is_plain_1bit_grey_png(data: &[u8]) -> bool {
+    data.len() > 28 && &data[12..16] == b"IHDR" && data[24] == 1 && data[25] == 0 && data[28] == 0
+}
+
+/// Fast path for 1-bit greyscale PNGs (what `slice-raster` and most layer exporters write): the
+/// packed rows are moved into the bitmap's words without expanding each pixel to a byte. PNG
+/// packs pixel `x` into bit `7 - x % 8` of byte `x / 8` (MSB first); the bitmap wants bit
+/// `x % 64` of word `x / 64`, so each byte is bit-reversed and eight of them make one
+/// little-endian word. A set bit is level 255, a clear one level 0, thresholded as usual.
+fn decode_png_1bit(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
+    let cutoff = opts.cutoff()?;
+    let mut dec = png::Decoder::new(data);
+    dec.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = dec.read_info()?;
+    let (w, h) = {
+        let info = reader.info();
+        (info.width as usize, info.height as usize)
+    };
+    let mut buf = vec![0u8; reader.output_buffer_size()];
+    let frame = reader.next_frame(&mut buf)?;
+    let stride = frame.line_size;
+    let one_lit = (cutoff <= 255) != opts.invert;
+    let zero_lit = (cutoff == 0) != opts.invert;
+    let mut b = Bitmap::new(w, h);
+    let wpr = b.words_per_row;
+    for y in 0..h {
+        let row = &buf[y * stride..y * stride + w.div_ceil(8)];
+        let words = &mut b.words[y * wpr..(y + 1) * wpr];
+        for (wi, word) in words.iter_mut().enumerate() {
+            let mut bytes = [0u8; 8];
+            for (k, byte) in row.iter().skip(wi * 8).take(8).enumerate() {
+                bytes[k] = byte.reverse_bits();
+            }
+            let packed = u64::from_le_bytes(bytes);
+            let v = match (one_lit, zero_lit) {
+                (true, false) => packed,
+                (false, true) => !packed,
+                (true, true) => u64::MAX,
+                (false, false) => 0,
+            };
+            let valid = (w - wi * 64).min(64);
+            *word = if valid == 64 {
+                v
+            } else {
+                v & ((1u64 << valid) - 1)
+            };
+        }
+    }
+    Ok(b)
+}
+
 /// Composites over black: transparent pixels are dark.
 fn scale_alpha(v: u8, a: u8) -> u8 {
     ((u16::from(v) * u16::from(a) + 127) / 255) as u8
@@ -460,6 +514,9 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
 pub fn load_image(path: &Path, opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
     let data = std::fs::read(path).map_err(|e| io_err(path, e))?;
     if data.starts_with(b"\x89PNG") {
+        if is_plain_1bit_grey_png(&data) {
+            return decode_png_1bit(&data, opts);
+        }
         decode_png(&data[..], opts)
     } else if data.starts_with(b"BM") {
         decode_bmp(&data, opts)
@@ -474,6 +531,51 @@ mod tests {
 
     fn opts() -> ThresholdOptions {
         ThresholdOptions::default()
+    }
+
+    #[test]
+    fn one_bit_png_fast_path_equals_the_expanding_decoder() {
+        // 70 x 3: a row that ends inside a byte and spans two words.
+        let mut src = Bitmap::new(70, 3);
+        for (x, y) in [(0, 0), (7, 0), (8, 1), (63, 1), (64, 2), (69, 2), (33, 0)] {
+            src.set(x, y, true);
+        }
+        let mut png_bytes = Vec::new();
+        src.write_png(&mut png_bytes).unwrap();
+        assert!(is_plain_1bit_grey_png(&png_bytes));
+        for o in [
+            opts(),
+            ThresholdOptions {
+                invert: true,
+                ..opts()
+            },
+            ThresholdOptions {
+                threshold: 0.0,
+                ..opts()
+            },
+            ThresholdOptions {
+                threshold: 0.0,
+                invert: true,
+                ..opts()
+            },
+        ] {
+            let fast = decode_png_1bit(&png_bytes, &o).unwrap();
+            let slow = decode_png(&png_bytes[..], &o).unwrap();
+            assert_eq!(fast, slow, "{o:?}");
+        }
+        assert_eq!(decode_png_1bit(&png_bytes, &opts()).unwrap(), src);
+        assert_eq!(
+            decode_png_1bit(
+                &png_bytes,
+                &ThresholdOptions {
+                    invert: true,
+                    ..opts()
+                }
+            )
+            .unwrap()
+            .count_ones(),
+            70 * 3 - 7
+        );
     }
 
     #[test]
