@@ -12,6 +12,9 @@ mod slice_raster;
 // purge-shift
 mod purge_shift;
 
+// rotary (lathe-type) printing
+mod rotary;
+
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -28,6 +31,8 @@ pub enum Command {
     SliceRaster(slice_raster::SliceRasterArgs),
     // purge-shift
     PurgeShift(purge_shift::PurgeShiftArgs),
+
+    Rotary(rotary::RotaryArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -41,5 +46,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::SliceRaster(a) => slice_raster::run(a),
         // purge-shift
         Command::PurgeShift(a) => purge_shift::run(a),
+
+        Command::Rotary(a) => rotary::run(a),
     }
 }

@@ -23,6 +23,8 @@ from . import _gweave
 from ._gweave import Line, Reader
 from ._gweave import Machine
 
+from ._gweave import HelicalPath
+
 __version__: str = _gweave.__version__
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -33,6 +35,8 @@ __all__ += ["Machine", "sim"]
 __all__ += ["raster", "raster_test_pattern", "slice_raster"]
 # purge-shift
 __all__ += ["purge_shift"]
+
+__all__ += ["rotary_wrap", "rotary_tube", "HelicalPath", "write_helical_paths"]
 
 
 def read(path: PathLike) -> Reader:
@@ -254,3 +258,168 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
     args = list(sys.argv if argv is None else ["gweave", *argv])
     return _gweave.run_cli(args)
+
+
+# ---- rotary (lathe-type) printing ----------------------------------------------------------
+# The keywords below only rename arguments to the library's TOML keys; every default, check and
+# computation is the Rust library's (the same as `gweave rotary ... --json`).
+
+_UNITS = {"deg": "degrees", "degrees": "degrees", "mm": "mm"}
+
+
+def _machine(
+    mandrel_diameter: Optional[float],
+    feed: Optional[str],
+    rotary_unit: Optional[str],
+    axes: Optional[Sequence[str]],
+) -> Dict[str, Any]:
+    machine: Dict[str, Any] = {
+        "mandrel_diameter_mm": mandrel_diameter,
+        "feed_convention": feed,
+        "rotary_unit": None if rotary_unit is None else _UNITS.get(rotary_unit, rotary_unit),
+    }
+    if axes is not None:
+        letters = list(axes.split(",") if isinstance(axes, str) else axes)
+        if len(letters) != 3:
+            raise ValueError("axes: three letters, axial, rotary, radial (e.g. 'X,A,Z')")
+        machine.update(axial_axis=letters[0], rotary_axis=letters[1], radial_axis=letters[2])
+    return machine
+
+
+def _path(p: Optional[PathLike]) -> Optional[str]:
+    return None if p is None else os.fspath(p)
+
+
+def rotary_wrap(
+    input: PathLike,
+    output: PathLike,
+    *,
+    mandrel_diameter: Optional[float] = None,
+    feed: Optional[str] = None,
+    rotary_unit: Optional[str] = None,
+    axes: Optional[Sequence[str]] = None,
+    keep_arc_length: Optional[bool] = None,
+    seam_rotation: Optional[float] = None,
+    chord_tol: Optional[float] = None,
+    config: Optional[PathLike] = None,
+    preview: Optional[PathLike] = None,
+) -> Dict[str, Any]:
+    """Wrap a part sliced flat onto the mandrel of a lathe-type printer (``gweave rotary wrap``).
+
+    Flat X runs along the mandrel, Y around it (``theta = 360*y/(pi*D)``), Z away from it
+    (radius ``D/2 + z``). ``mandrel_diameter`` in mm; ``feed`` is ``"nist"``, ``"combined"`` or
+    ``"inverse-time"``; ``rotary_unit`` ``"deg"`` or ``"mm"``; ``axes`` like ``"X,A,Z"``;
+    ``seam_rotation`` degrees per layer; ``chord_tol`` mm. Keywords override the TOML ``config``.
+    ``preview`` writes a 3D PNG of the executed path. Returns the report (per-layer radius,
+    angles swept, seam angle; filament; time).
+    """
+    settings = {
+        "machine": _machine(mandrel_diameter, feed, rotary_unit, axes),
+        "chord_tolerance_mm": chord_tol,
+        "unwrap": {"keep_arc_length": keep_arc_length, "seam_rotation_per_layer_deg": seam_rotation},
+    }
+    text = _gweave.rotary_wrap_json(
+        os.fspath(input),
+        os.fspath(output),
+        settings=json.dumps(settings),
+        config=_path(config),
+        preview=_path(preview),
+    )
+    return json.loads(text)
+
+
+def rotary_tube(
+    output: PathLike,
+    *,
+    mandrel_diameter: Optional[float] = None,
+    length: Optional[float] = None,
+    layers: Optional[int] = None,
+    layer_height: Optional[float] = None,
+    bead_width: Optional[float] = None,
+    pitch: Optional[float] = None,
+    interweave: Optional[bool] = None,
+    segments_per_turn: Optional[int] = None,
+    chord_tol: Optional[float] = None,
+    speed: Optional[float] = None,
+    temp: Optional[float] = None,
+    filament_diameter: Optional[float] = None,
+    feed: Optional[str] = None,
+    rotary_unit: Optional[str] = None,
+    axes: Optional[Sequence[str]] = None,
+    config: Optional[PathLike] = None,
+    preview: Optional[PathLike] = None,
+) -> Dict[str, Any]:
+    """Generate a seam-free tube of continuous helical layers (``gweave rotary tube``).
+
+    Layer k lies on radius ``D/2 + (k + 1/2)*layer_height``, advancing ``pitch`` mm per turn
+    (default the bead width: a closed wall), reversing its helix every layer unless
+    ``interweave=False``, at surface speed ``speed`` mm/s. Lengths in mm, ``temp`` in degrees C.
+    Keywords override the TOML ``config``. Returns the report (per-layer radius, handedness,
+    turns, spindle speed; filament and its volume against the wall volume; time).
+    """
+    settings = {
+        "machine": _machine(mandrel_diameter, feed, rotary_unit, axes),
+        "length_mm": length,
+        "layers": layers,
+        "pitch_mm": pitch,
+        "interweave": interweave,
+        "print": {
+            "layer_height_mm": layer_height,
+            "bead_width_mm": bead_width,
+            "segments_per_turn": segments_per_turn,
+            "chord_tolerance_mm": chord_tol,
+            "print_speed_mm_s": speed,
+            "nozzle_temp_c": temp,
+            "filament_diameter_mm": filament_diameter,
+        },
+    }
+    text = _gweave.rotary_tube_json(
+        os.fspath(output), settings=json.dumps(settings), config=_path(config), preview=_path(preview)
+    )
+    return json.loads(text)
+
+
+def write_helical_paths(
+    paths: Sequence[HelicalPath],
+    output: PathLike,
+    *,
+    mandrel_diameter: Optional[float] = None,
+    feed: Optional[str] = None,
+    rotary_unit: Optional[str] = None,
+    axes: Optional[Sequence[str]] = None,
+    layer_height: Optional[float] = None,
+    bead_width: Optional[float] = None,
+    speed: Optional[float] = None,
+    temp: Optional[float] = None,
+    filament_diameter: Optional[float] = None,
+    chord_tol: Optional[float] = None,
+    segments_per_turn: Optional[int] = None,
+    config: Optional[PathLike] = None,
+) -> Dict[str, Any]:
+    """Write a program printing custom :class:`HelicalPath` beads in order (one bead each).
+
+    Between paths the nozzle moves without extruding. ``config`` is a TOML file with
+    ``[machine]`` and ``[print]`` tables as in the tube's. Returns ``filament_mm`` and
+    ``print_time_s``.
+
+    A cone from radius 10 down to 5 over 30 mm, one closed layer::
+
+        cone = gweave.HelicalPath(0, 30, radius=[(0, 10.1), (30, 5.1)], pitch=0.4)
+        gweave.write_helical_paths([cone], "cone.gcode", mandrel_diameter=20)
+    """
+    settings = {
+        "machine": _machine(mandrel_diameter, feed, rotary_unit, axes),
+        "print": {
+            "layer_height_mm": layer_height,
+            "bead_width_mm": bead_width,
+            "print_speed_mm_s": speed,
+            "nozzle_temp_c": temp,
+            "filament_diameter_mm": filament_diameter,
+            "chord_tolerance_mm": chord_tol,
+            "segments_per_turn": segments_per_turn,
+        },
+    }
+    text = _gweave.write_helical_paths_json(
+        list(paths), os.fspath(output), settings=json.dumps(settings), config=_path(config)
+    )
+    return json.loads(text)

@@ -1,4 +1,5 @@
 from typing import Any, Dict, List, Optional, Tuple, Union
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 __version__: str
 
@@ -94,3 +95,24 @@ class Machine:
     def now_s(self) -> float: ...
     def finish(self) -> None: ...
     def report(self) -> Dict[str, Any]: ...
+# rotary (lathe-type) printing
+Profile = Union[float, Sequence[Tuple[float, float]], Callable[[float], float]]
+
+def rotary_wrap_json(input: str, output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None) -> str: ...
+def rotary_tube_json(output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None) -> str: ...
+def write_helical_paths_json(paths: List["HelicalPath"], output: str, *, settings: str, config: Optional[str] = None) -> str: ...
+
+class HelicalPath:
+    def __init__(
+        self,
+        start: float,
+        end: float,
+        *,
+        radius: Profile,
+        pitch: Profile,
+        handedness: str = "right",
+        start_theta: float = 0.0,
+        lead_in: float = 0.0,
+        lead_out: float = 0.0,
+    ) -> None: ...
+    def points(self, *, chord_tol: float = 0.01, segments_per_turn: Optional[int] = None) -> List[Tuple[float, float, float]]: ...
