@@ -42,7 +42,12 @@ fn stats_json(py: Python<'_>, path: PathBuf, filament_diameter: Option<f64>) -> 
 /// Lint report of a G-code file as JSON text (see `gweave check --json`).
 #[pyfunction]
 #[pyo3(signature = (path, *, bed=None, max_feed=None))]
-fn check_json(py: Python<'_>, path: PathBuf, bed: Option<[f64; 3]>, max_feed: Option<f64>) -> PyResult<String> {
+fn check_json(
+    py: Python<'_>,
+    path: PathBuf,
+    bed: Option<[f64; 3]>,
+    max_feed: Option<f64>,
+) -> PyResult<String> {
     let mut options = CheckOptions { bed_mm: bed, ..CheckOptions::default() };
     if let Some(f) = max_feed {
         options.max_feed_mm_min = f;
@@ -68,7 +73,8 @@ fn cat(py: Python<'_>, path: PathBuf, output: Option<PathBuf>, in_place: bool, b
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
-    py.allow_threads(|| Run::new(&path, &mut Quiet).transform(&mut Identity, &target).map(|_| ())).map_err(err)
+    py.allow_threads(|| Run::new(&path, &mut Quiet).transform(&mut Identity, &target).map(|_| ()))
+        .map_err(err)
 }
 
 /// One line of a file, with what it says and the machine state after it.
