@@ -178,7 +178,7 @@ mod tests {
             let _stop = StopOnDrop(&stop);
             let server = s.spawn(|| {
                 let mut make = || Ok::<_, io::Error>(Scripted::default());
-                serve(&mut endpoint, &mut make, &ServeOptions::default(), None, &stop)
+                serve(&mut endpoint, &mut make, &mut |_| {}, &ServeOptions::default(), None, &stop)
             });
             let mut host = open_host(&link);
             // Raw mode: CR is not turned into LF, nothing is echoed back.

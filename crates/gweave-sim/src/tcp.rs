@@ -153,7 +153,11 @@ mod tests {
             let _stop = StopOnDrop(&stop);
             let server = s.spawn(|| {
                 let mut make = || Ok::<_, io::Error>(Scripted::default());
-                serve(&mut endpoint, &mut make, &options, Some(&mut transcript), &stop)
+                let mut ended = Vec::new();
+                let mut finished = |d: Scripted| ended.push(d.ran);
+                let summary =
+                    serve(&mut endpoint, &mut make, &mut finished, &options, Some(&mut transcript), &stop);
+                (summary, ended)
             });
             let (mut host, mut reader) = connect(addr);
             host.write_all(b"N1 G28*18\nN3 G28*16\n").unwrap();
@@ -184,7 +188,10 @@ mod tests {
             host.write_all(b"N1 G28*18\n").unwrap();
             assert_eq!(lines_until_ok(&mut reader, 1), ["start", "echo:Marlin test double", "ok"]);
             stop.store(true, Ordering::Relaxed);
-            let summary = server.join().unwrap().unwrap();
+            let (summary, ended) = server.join().unwrap();
+            let summary = summary.unwrap();
+            // Each session's machine comes back when it ends, with what it ran.
+            assert_eq!(ended, [vec!["G28", "G4 S0.6"], vec!["G28"]]);
             assert_eq!(summary.sessions, 2);
             assert_eq!(summary.link.executed, 3);
             assert_eq!(summary.link.errors, 1);

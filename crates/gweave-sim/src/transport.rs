@@ -89,20 +89,24 @@ pub struct ServeSummary {
 }
 
 impl ServeSummary {
-    fn absorb(&mut self, s: LinkStats) {
+    fn end_session<D: Device>(&mut self, link: Protocol<D>, finished: &mut dyn FnMut(D)) {
+        let s = link.stats();
         self.link.lines += s.lines;
         self.link.executed += s.executed;
         self.link.errors += s.errors;
         self.link.duplicates += s.duplicates;
         self.link.busy += s.busy;
+        finished(link.into_device());
     }
 }
 
 /// Serves hosts on `endpoint` until `stop` is raised or the idle limit passes. `make_device`
-/// builds the board afresh for every connection; `log` receives the session transcript.
+/// builds the board afresh for every connection; `finished` gets it back when the session ends
+/// (for a report); `log` receives the session transcript.
 pub fn serve<D, E>(
     endpoint: &mut dyn Endpoint,
     make_device: &mut dyn FnMut() -> Result<D, E>,
+    finished: &mut dyn FnMut(D),
     options: &ServeOptions,
     log: Option<&mut dyn Write>,
     stop: &AtomicBool,
@@ -141,8 +145,8 @@ where
             }
             Event::Disconnected => {
                 if let Some(p) = link.take() {
-                    summary.absorb(p.stats());
                     out.note("host disconnected");
+                    summary.end_session(p, finished);
                 }
             }
             Event::Nothing => {}
@@ -151,7 +155,7 @@ where
             out.note(&format!("send failed ({e}); dropping the host"));
             endpoint.hang_up();
             if let Some(p) = link.take() {
-                summary.absorb(p.stats());
+                summary.end_session(p, finished);
             }
         }
         if options.exit_after_idle.is_some_and(|limit| last_heard.elapsed() >= limit) {
@@ -160,7 +164,7 @@ where
         }
     }
     if let Some(p) = link.take() {
-        summary.absorb(p.stats());
+        summary.end_session(p, finished);
     }
     Ok(summary)
 }
