@@ -100,15 +100,7 @@ pub trait Device {
     }
 }
 
-/// The state a command left the machine in.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Outcome {
-    /// Ready for the next command.
-    Ok,
-    /// Stopped (M112, a thermal fault): the device refuses what it must until `M999`. The link
-    /// still acknowledges every line, as Marlin does while stopped, so the host can send `M999`.
-    Halted,
-}
+pub use crate::interp::Outcome;
 
 /// The protocol's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -444,6 +436,25 @@ pub fn frame_line(n: i64, command: &str) -> String {
     let body = format!("N{n} {command}");
     let sum = body.bytes().fold(0u8, |acc, b| acc ^ b);
     format!("{body}*{sum}")
+}
+
+/// The interpreter is the device behind `gweave serve`.
+impl Device for crate::interp::Machine {
+    fn boot_lines(&self) -> Vec<String> {
+        crate::interp::Machine::boot_lines(self)
+    }
+
+    fn execute(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> Outcome {
+        crate::interp::Machine::execute(self, line, out)
+    }
+
+    fn now_s(&self) -> f64 {
+        crate::interp::Machine::now_s(self)
+    }
+
+    fn acknowledged(&self) -> bool {
+        crate::interp::Machine::acknowledged(self)
+    }
 }
 
 #[cfg(test)]

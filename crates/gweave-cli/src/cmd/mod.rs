@@ -4,6 +4,9 @@ mod cat;
 mod check;
 mod stats;
 
+// serial: the virtual printer on a pty or loopback TCP
+mod serve;
+
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -14,6 +17,7 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    Serve(serve::ServeArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -21,5 +25,6 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        Command::Serve(a) => serve::run(a),
     }
 }
