@@ -14,6 +14,8 @@ mod purge_shift;
 
 // rotary (lathe-type) printing
 mod rotary;
+// serial: the virtual printer on a pty or loopback TCP
+mod serve;
 
 use std::process::ExitCode;
 
@@ -33,6 +35,7 @@ pub enum Command {
     PurgeShift(purge_shift::PurgeShiftArgs),
 
     Rotary(rotary::RotaryArgs),
+    Serve(serve::ServeArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -48,5 +51,6 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::PurgeShift(a) => purge_shift::run(a),
 
         Command::Rotary(a) => rotary::run(a),
+        Command::Serve(a) => serve::run(a),
     }
 }
