@@ -19,10 +19,12 @@ rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
 
 py-deps: $(VENV)/.deps
-$(VENV)/.deps: crates/gweave-py/requirements-dev.txt
+$(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -r crates/gweave-py/requirements-dev.txt
+	# Printrun's printcore without its GUI dependencies (see the file).
+	$(PY) -m pip install -q --no-deps -r crates/gweave-py/requirements-host.txt
 	touch $@
 
 build: rust-deps
