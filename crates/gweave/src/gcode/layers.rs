@@ -294,6 +294,8 @@ impl Structure {
             }
         } else if let Some(n) = c.strip_prefix(b"LAYER:") {
             if number(n).is_some() {
+                // The layer Cura ended was not the last one.
+                self.cura_last_layer_done = false;
                 self.marked_layer(None);
             }
         } else if let Some(n) = c.strip_prefix(b"LAYER_COUNT:") {

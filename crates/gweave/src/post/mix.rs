@@ -53,7 +53,7 @@ use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z};
 use crate::gcode::writer::Target;
 use crate::pass::{drive_reader, Ctx, Pass, Progress, Quiet, Run, Strictness};
-use crate::post::purge_block::{purge_start_pos, write_purge, PurgeMotion, PurgeStart};
+use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
 use crate::post::zcap::ZCap;
 
 use profile::{Dialect, MixProfile, PurgeMode};
@@ -397,7 +397,8 @@ impl MixPass {
         }
         if print {
             if let Some(a) = self.active {
-                self.acc.filament(a, fed_mm, layer, state.structure.layer_z_mm);
+                let printed = mv.is_extruding().then_some((layer, state.structure.layer_z_mm));
+                self.acc.filament(a, fed_mm, printed);
             }
         }
         if !self.replaced {
@@ -439,7 +440,7 @@ impl MixPass {
                 text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
                 fmt.write_word(&mut text, b'E', kept);
                 text.push(b' ');
-                fmt.write_word(&mut text, b'F', mv.feed_mm_min);
+                write_exact_feed(&mut text, &fmt, mv.feed_mm_min);
                 text.push(b'\n');
             } else {
                 text.extend_from_slice(ctx.line.bytes);
@@ -447,7 +448,7 @@ impl MixPass {
             }
         } else if ctx.block.has(b'F') {
             text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
-            fmt.write_word(&mut text, b'F', mv.feed_mm_min);
+            write_exact_feed(&mut text, &fmt, mv.feed_mm_min);
             text.push(b'\n');
         }
         self.repl = text;
@@ -468,7 +469,7 @@ impl MixPass {
         text.extend_from_slice(&self.eol);
         if ctx.block.has(b'F') {
             text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
-            fmt.write_word(&mut text, b'F', mv.feed_mm_min);
+            write_exact_feed(&mut text, fmt, mv.feed_mm_min);
             text.extend_from_slice(&self.eol);
         }
         text

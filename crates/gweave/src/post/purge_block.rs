@@ -151,15 +151,22 @@ pub fn write_purge(
     let mut tail = b"G92 E".to_vec();
     fmt.write(&mut tail, e0, fmt.extrusion_decimals.max(5));
     w.line(&String::from_utf8_lossy(&tail));
-    let mut feed = if start.rapid_mode { b"G0 ".to_vec() } else { b"G1 ".to_vec() };
     if start.feed_mm_min > 0.0 {
-        fmt.write_word(&mut feed, b'F', start.feed_mm_min);
+        let mut feed = if start.rapid_mode { b"G0 ".to_vec() } else { b"G1 ".to_vec() };
+        write_exact_feed(&mut feed, fmt, start.feed_mm_min);
         w.line(&String::from_utf8_lossy(&feed));
     }
     w.line("; gweave mix: end purge");
 }
 
-/// The index helpers keep the axis order of the core state.
+/// Appends `F<feed>` for a feed rate being restored: with at least 3 decimals whatever the
+/// number format, since the lines after it rely on exactly the feed rate the file set.
+pub fn write_exact_feed(out: &mut Vec<u8>, fmt: &NumberFormat, feed_mm_min: f64) {
+    out.push(b'F');
+    fmt.write(out, feed_mm_min, fmt.feed_decimals.max(3));
+}
+
+/// X, Y, Z and E of a core position.
 pub fn purge_start_pos(pos: &crate::gcode::state::Position) -> [f64; 4] {
     [pos[X], pos[Y], pos[Z], pos[E]]
 }

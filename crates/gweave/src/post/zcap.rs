@@ -14,6 +14,7 @@
 use crate::gcode::line::{Block, Command};
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{Move, Path, E, X, Y, Z};
+use crate::post::purge_block::write_exact_feed;
 
 pub use super::mix::profile::ZCapMode;
 
@@ -96,7 +97,7 @@ impl ZCap {
             out.push(b' ');
             match block.word(b'F') {
                 Some(f) => out.extend_from_slice(f.span.of(raw)),
-                None => fmt.write_word(out, b'F', mv.feed_mm_min),
+                None => write_exact_feed(out, fmt, mv.feed_mm_min),
             }
             comment(out);
         } else {
@@ -107,7 +108,7 @@ impl ZCap {
             fmt.write_word(out, b'F', slow);
             comment(out);
             out.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
-            fmt.write_word(out, b'F', mv.feed_mm_min);
+            write_exact_feed(out, fmt, mv.feed_mm_min);
             out.push(b'\n');
         }
         true

@@ -148,15 +148,14 @@ impl Accounting {
         self.mixes[mix].tool = Some(tool);
     }
 
-    /// `e_mm` of filament through the nozzle with `mix`, on `layer` at `z_mm`.
-    pub fn filament(&mut self, mix: usize, e_mm: f64, layer: u32, z_mm: f64) {
+    /// `e_mm` of filament through the nozzle with `mix`; `printed` gives the layer and Z of a
+    /// move that deposits it (not a retraction or unretraction).
+    pub fn filament(&mut self, mix: usize, e_mm: f64, printed: Option<(u32, f64)>) {
         for (acc, r) in self.per_input_mm.iter_mut().zip(&self.ratios[mix]) {
             *acc += e_mm * r;
         }
         self.mixes[mix].filament_mm += e_mm;
-        if e_mm <= 0.0 {
-            return;
-        }
+        let Some((layer, z_mm)) = printed else { return };
         let ranges = &mut self.mixes[mix].layers;
         match ranges.last_mut() {
             Some([_, b]) if *b == layer => {}
