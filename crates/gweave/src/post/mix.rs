@@ -40,7 +40,7 @@
 pub mod profile;
 pub mod report;
 pub mod schedule;
-//WIZ pub mod wizard;
+pub mod wizard;
 
 use std::collections::BTreeMap;
 use std::io::{self, Write};
@@ -118,10 +118,8 @@ impl MixPass {
     /// A pass for `profile`, with every mix resolved up front.
     pub fn new(profile: MixProfile) -> Result<Self, MixPassError> {
         let plan = Plan::new(&profile)?;
-        let zcap = profile
-            .z_cap
-            .max_z_feed_mm_min
-            .map(|cap| ZCap { max_z_feed_mm_min: cap, mode: profile.z_cap.mode });
+        let cap = profile.z_cap.max_z_feed_mm_min;
+        let zcap = (cap > 0.0).then_some(ZCap { max_z_feed_mm_min: cap, mode: profile.z_cap.mode });
         let p = &profile.purge;
         let motion = PurgeMotion {
             retract_mm: p.retract_mm,
@@ -132,10 +130,7 @@ impl MixPass {
             travel_feed_mm_min: p.travel_feed_mm_min,
             extrude_feed_mm_min: p.extrude_feed_mm_min,
             retract_feed_mm_min: p.retract_feed_mm_min,
-            z_feed_mm_min: profile
-                .z_cap
-                .max_z_feed_mm_min
-                .map_or(p.travel_feed_mm_min, |c| c.min(p.travel_feed_mm_min)),
+            z_feed_mm_min: if cap > 0.0 { cap.min(p.travel_feed_mm_min) } else { p.travel_feed_mm_min },
         };
         let acc = Accounting::new(&plan, &profile.hardware);
         Ok(MixPass {

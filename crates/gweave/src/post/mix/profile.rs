@@ -218,14 +218,14 @@ pub enum ZCapMode {
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ZCapConfig {
-    /// Largest Z speed, mm/min (absent: no cap).
-    pub max_z_feed_mm_min: Option<f64>,
+    /// Largest Z speed, mm/min (0: no cap).
+    pub max_z_feed_mm_min: f64,
     pub mode: ZCapMode,
 }
 
 impl Default for ZCapConfig {
     fn default() -> Self {
-        ZCapConfig { max_z_feed_mm_min: Some(200.0), mode: ZCapMode::Split }
+        ZCapConfig { max_z_feed_mm_min: 200.0, mode: ZCapMode::Split }
     }
 }
 
@@ -553,8 +553,9 @@ impl MixProfile {
                 return cfg(format!("purge pair {} -> {}: give length_mm or volume_mm3", pair.from, pair.to));
             }
         }
-        if let Some(z) = self.z_cap.max_z_feed_mm_min {
-            positive("z_cap.max_z_feed_mm_min", z)?;
+        let z = self.z_cap.max_z_feed_mm_min;
+        if !(z.is_finite() && z >= 0.0) {
+            return cfg(format!("z_cap.max_z_feed_mm_min must be >= 0 (0: no cap), got {z}"));
         }
         let scheduled = !(self.schedule.is_empty() && self.gradient.is_empty());
         if !self.map.is_empty() && scheduled {
@@ -622,7 +623,7 @@ mod tests {
         let p = MixProfile::from_toml_str("").unwrap();
         assert_eq!((p.purge.retract_mm, p.purge.lift_mm, p.purge.length_mm), (4.0, 15.0, 25.0));
         assert_eq!((p.purge.x_mm, p.purge.y_mm), (10.0, 10.0));
-        assert_eq!(p.z_cap.max_z_feed_mm_min, Some(200.0));
+        assert_eq!(p.z_cap.max_z_feed_mm_min, 200.0);
         assert_eq!((p.hardware.virtual_tools, p.hardware.inputs.len()), (16, 4));
     }
 
