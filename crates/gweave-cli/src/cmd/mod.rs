@@ -4,6 +4,9 @@ mod cat;
 mod check;
 mod stats;
 
+// mix
+mod mix;
+
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -14,6 +17,8 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    // mix
+    Mix(mix::MixArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -21,5 +26,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        // mix
+        Command::Mix(a) => mix::run(a),
     }
 }
