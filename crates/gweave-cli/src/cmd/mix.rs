@@ -1,6 +1,6 @@
 //! `gweave mix`: rewrite slicer G-code for a mixing hotend (see `docs/mix.md`).
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -94,7 +94,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         eprintln!("gweave: warning: {w}");
     }
     if args.report.emit(&report)? && !args.quiet {
-        print_human(&report);
+        print_human(&mut std::io::stdout().lock(), &report)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -180,8 +180,8 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_human(r: &MixReport) {
-    println!("mixes ({:?})", r.dialect);
+fn print_human(out: &mut dyn Write, r: &MixReport) -> std::io::Result<()> {
+    writeln!(out, "mixes ({:?})", r.dialect)?;
     for m in &r.mixes {
         let tool = m.tool.map_or("-".to_owned(), |t| format!("T{t}"));
         let ratios: Vec<String> = m.ratios.iter().map(|x| format!("{x:.4}")).collect();
@@ -193,20 +193,22 @@ fn print_human(r: &MixReport) {
         };
         let layers: Vec<String> =
             m.layers.iter().map(|[a, b]| if a == b { a.to_string() } else { format!("{a}-{b}") }).collect();
-        println!(
+        writeln!(
+            out,
             "  {tool:<4} {:<22} {:<32} {}  layers {}  {:.1} mm{de}",
             m.name,
             ratios.join(":"),
             m.predicted,
             if layers.is_empty() { "none".to_owned() } else { layers.join(",") },
             m.filament_mm
-        );
+        )?;
     }
-    println!("changes         {}", r.changes);
-    println!(
+    writeln!(out, "changes         {}", r.changes)?;
+    writeln!(
+        out,
         "purge           {} x, {:.1} mm, {:.0} mm3, {:.2} g",
         r.purge.count, r.purge.filament_mm, r.purge.volume_mm3, r.purge.mass_g
-    );
+    )?;
     let per: Vec<String> = r
         .filament_per_input_mm
         .iter()
@@ -214,9 +216,10 @@ fn print_human(r: &MixReport) {
         .enumerate()
         .map(|(i, (mm, g))| format!("E{i} {mm:.1} mm ({g:.2} g)"))
         .collect();
-    println!("filament        {}", per.join(", "));
-    println!("z-capped lines  {}", r.z_capped_lines);
+    writeln!(out, "filament        {}", per.join(", "))?;
+    writeln!(out, "z-capped lines  {}", r.z_capped_lines)?;
     if r.dropped_retractions > 0 {
-        println!("dropped slicer tool-change retractions {}", r.dropped_retractions);
+        writeln!(out, "dropped slicer tool-change retractions {}", r.dropped_retractions)?;
     }
+    Ok(())
 }

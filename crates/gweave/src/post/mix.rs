@@ -368,6 +368,11 @@ impl MixPass {
 
     fn process_move(&mut self, ctx: &Ctx<'_>, mv: &Move) -> Result<(), MixPassError> {
         let state = ctx.state;
+        if state.inches {
+            return Err(MixPassError::Config(
+                "gweave mix writes millimetres; convert the G20 (inch) file first".into(),
+            ));
+        }
         let print = state.structure.region == Region::Print;
         let e_mm = mv.e_mm();
         let layer = state.structure.layer.unwrap_or(0);
@@ -634,4 +639,51 @@ pub fn mix_file(
     let mut pass = MixPass::new(profile)?;
     Run::new(input, progress).transform(&mut pass, target).map_err(unwrap_error)?;
     Ok(pass.into_report())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn profile(extra: &str) -> MixProfile {
+        MixProfile::from_toml_str(&format!(
+            "[[schedule]]\nlayer = 0\nmix = \"Red\"\n[[schedule]]\nlayer = 1\nmix = \"Blue\"\n{extra}"
+        ))
+        .unwrap()
+    }
+
+    const PRINT: &str =
+        ";LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\n;LAYER_CHANGE\nG1 Z0.4 F100\nG1 X0 E2\n";
+
+    #[test]
+    fn crlf_files_stay_crlf() {
+        let input = format!("M83\r\n{}", PRINT.replace('\n', "\r\n"));
+        let (out, report) = mix_bytes(profile(""), input.as_bytes()).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert_eq!(report.changes, 1);
+        assert!(!text.replace("\r\n", "").contains('\n'), "a bare LF in {text:?}");
+    }
+
+    #[test]
+    fn no_change_no_purge_and_direct_mixing() {
+        let same = MixProfile::from_toml_str("[hardware]\ndialect = \"marlin-direct\"\n[[schedule]]\nlayer = 0\nmix = \"Red\"\n[[schedule]]\nlayer = 1\nmix = \"Red@0\"\n").unwrap();
+        let (out, report) = mix_bytes(same, PRINT.as_bytes()).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.contains("M165 A0 B0.5 C0.5 D0\n"), "{text}");
+        assert!(!text.contains("\nT"), "{text}");
+        // Red with no material 2 is Red: the same mix, so no change and no purge.
+        assert_eq!((report.changes, report.purge.count), (0, 0));
+        let (_, r) = mix_bytes(profile("[purge]\nmode = \"off\""), PRINT.as_bytes()).unwrap();
+        assert_eq!((r.changes, r.purge.count), (1, 0));
+    }
+
+    #[test]
+    fn inch_files_and_unmapped_tools_are_refused() {
+        let err = mix_bytes(profile(""), format!("G20\n{PRINT}").as_bytes()).unwrap_err();
+        assert!(err.to_string().contains("G20"), "{err}");
+        let mut p = MixProfile::default();
+        p.add_map("T0=Red").unwrap();
+        let err = mix_bytes(p, format!("{PRINT}T1\nG1 X5 E3\n").as_bytes()).unwrap_err();
+        assert_eq!(err.to_string(), "line 7: the file selects T1, which has no mix: add --map T1=<mix>");
+    }
 }
