@@ -26,7 +26,7 @@ __version__: str = _gweave.__version__
 
 PathLike = Union[str, "os.PathLike[str]"]
 
-__all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
+__all__ = ["Line", "Reader", "read", "stats", "check", "cat", "mix", "main", "__version__"]
 
 
 def read(path: PathLike) -> Reader:
@@ -72,6 +72,45 @@ def cat(
         None if output is None else os.fspath(output),
         in_place=in_place,
         backup=backup,
+    )
+
+
+# mix
+def mix(
+    path: PathLike,
+    output: Optional[PathLike] = None,
+    *,
+    config: Optional[PathLike] = None,
+    at_layer: Sequence[str] = (),
+    at_z: Sequence[str] = (),
+    map: Sequence[str] = (),
+    gradient: Sequence[str] = (),
+    perceived: bool = False,
+    in_place: bool = False,
+    backup: bool = True,
+) -> Dict[str, Any]:
+    """Rewrite a file for a mixing hotend (see ``gweave mix``); returns the report.
+
+    ``config`` is a profile TOML file; ``at_layer=["0=Orange", "10=Pink"]``, ``at_z``,
+    ``map=["T1=PVA"]`` and ``gradient=["0-50=Cyan..Magenta"]`` work as the command line flags.
+    """
+    text = ""
+    if config is not None:
+        with open(os.fspath(config), encoding="utf-8") as f:
+            text = f.read()
+    return json.loads(
+        _gweave.mix_json(
+            os.fspath(path),
+            None if output is None else os.fspath(output),
+            config=text,
+            at_layer=list(at_layer),
+            at_z=list(at_z),
+            map=list(map),
+            gradient=list(gradient),
+            perceived=perceived,
+            in_place=in_place,
+            backup=backup,
+        )
     )
 
 

@@ -7,6 +7,21 @@ def check_json(path: str, *, bed: Optional[Tuple[float, float, float]] = None, m
 def cat(path: str, output: Optional[str] = None, *, in_place: bool = False, backup: bool = True) -> None: ...
 def run_cli(argv: List[str]) -> int: ...
 
+# mix
+def mix_json(
+    path: str,
+    output: Optional[str] = None,
+    *,
+    config: str = "",
+    at_layer: List[str] = ...,
+    at_z: List[str] = ...,
+    map: List[str] = ...,
+    gradient: List[str] = ...,
+    perceived: bool = False,
+    in_place: bool = False,
+    backup: bool = True,
+) -> str: ...
+
 class Line:
     number: int
     raw: bytes
