@@ -316,14 +316,3 @@ fn golden_small_case() {
     mix_file(profile, &dir.join("small.gcode"), &target, &mut gweave::pass::Quiet).unwrap();
     assert_eq!(std::fs::read(dest).unwrap(), std::fs::read(golden).unwrap());
 }
-
-#[test]
-#[ignore]
-fn dump() {
-    let p = std::env::var("DUMP_PROFILE").unwrap();
-    let i = std::env::var("DUMP_INPUT").unwrap();
-    let input = std::fs::read(data(&i)).unwrap();
-    let (out, report) = mix_bytes(profile(&p), &input).unwrap();
-    std::fs::write("/tmp/mixdbg/out.gcode", out).unwrap();
-    std::fs::write("/tmp/mixdbg/report.json", serde_json::to_string_pretty(&report).unwrap()).unwrap();
-}

@@ -52,7 +52,7 @@ use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z};
 use crate::gcode::writer::Target;
-use crate::pass::{drive_reader, Ctx, Pass, Progress, Quiet, Run, Strictness};
+use crate::pass::{drive_reader, keep, Ctx, Pass, Progress, Quiet, Run, Strictness};
 use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
 use crate::post::zcap::ZCap;
 
@@ -538,14 +538,17 @@ impl Pass for MixPass {
         // The slicer tool before this line, for a retraction that a T on this line follows.
         let tool_before = self.slicer_tool;
         self.process(ctx).map_err(at_line(ctx.line.number))?;
-        let mut bytes = Vec::with_capacity(ctx.line.bytes.len() + self.pre.len() + self.repl.len() + 2);
-        self.render(ctx, &mut bytes);
         self.feed_before = ctx.state.feed_mm_min;
         self.rapid_before = ctx.state.motion == Motion::Rapid;
-
         let dropping = !self.profile.tool_change.keep_slicer_retractions
             && self.plan.maps_tools()
             && ctx.state.structure.region == Region::Print;
+        if !dropping && self.held.is_empty() && self.pre.is_empty() && !self.replaced {
+            // The common case: the line as it was, without a copy.
+            return keep(ctx, out);
+        }
+        let mut bytes = Vec::with_capacity(ctx.line.bytes.len() + self.pre.len() + self.repl.len() + 2);
+        self.render(ctx, &mut bytes);
         if !dropping {
             self.write_held(false, out)?;
             return out.write_all(&bytes);

@@ -380,6 +380,26 @@ mod tests {
     }
 
     #[test]
+    fn every_seed_colour_is_written_with_the_seeds_ratios() {
+        let mut p = MixProfile::default();
+        for (t, (name, _)) in crate::colour::palette::SEED_PALETTE.iter().enumerate() {
+            p.add_map(&format!("T{t}={name}")).unwrap();
+        }
+        p.hardware.virtual_tools = 17;
+        let plan = Plan::new(&p).unwrap();
+        for (t, (name, ratios)) in crate::colour::palette::SEED_PALETTE.iter().enumerate() {
+            let m = &plan.mixes[plan.for_tool(t as u32).unwrap()];
+            let sum: f64 = ratios.iter().sum();
+            for (u, r) in m.units.iter().zip(ratios) {
+                // Written to 4 decimals by largest remainder: within one unit of the seed's ratio
+                // over its sum (Brown's three 0.3333.. become 0.3334, 0.3333, 0.3333).
+                assert!((*u as f64 / 1e4 - r / sum).abs() < 1e-4, "{name}: {:?}", m.units);
+            }
+            assert_eq!(m.units.iter().sum::<u64>(), 10000, "{name}");
+        }
+    }
+
+    #[test]
     fn materials_and_support() {
         let mut p = MixProfile::default();
         p.hardware.inputs[3].material = "PVA".into();
