@@ -11,7 +11,7 @@ CARGO := cargo
 GWEAVE := target/release/gweave
 OUT := out
 
-.PHONY: demo test bench deps rust-deps py-deps build python lint cargo-test pytest e2e clean
+.PHONY: demo test bench deps rust-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
 
 deps: rust-deps py-deps
 
@@ -28,8 +28,15 @@ $(VENV)/.deps: crates/gweave-py/requirements-dev.txt
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli
 
+# Tests use debug builds (dependencies are optimised, see Cargo.toml) to keep CI short.
+build-debug: rust-deps
+	$(CARGO) build -p gweave-cli
+
 python: py-deps
 	$(VENV)/bin/maturin develop --release -q -m crates/gweave-py/Cargo.toml
+
+python-debug: py-deps
+	$(VENV)/bin/maturin develop -q -m crates/gweave-py/Cargo.toml
 
 lint: rust-deps
 	$(CARGO) fmt --all -- --check
@@ -38,12 +45,12 @@ lint: rust-deps
 cargo-test: rust-deps
 	$(CARGO) test --workspace --exclude gweave-py
 
-pytest: python
+pytest: python-debug
 	# Exit code 5 (no tests collected) is a failure here, as every other non-zero code.
 	$(PY) -m pytest crates/gweave-py/tests -q
 
-e2e: build python
-	bash tests/e2e/run.sh $(GWEAVE)
+e2e: build-debug python-debug
+	bash tests/e2e/run.sh target/debug/gweave
 
 test: deps lint cargo-test pytest e2e
 	@echo "make test: all passed"

@@ -42,7 +42,12 @@ fn stats_json(py: Python<'_>, path: PathBuf, filament_diameter: Option<f64>) -> 
 /// Lint report of a G-code file as JSON text (see `gweave check --json`).
 #[pyfunction]
 #[pyo3(signature = (path, *, bed=None, max_feed=None))]
-fn check_json(py: Python<'_>, path: PathBuf, bed: Option<[f64; 3]>, max_feed: Option<f64>) -> PyResult<String> {
+fn check_json(
+    py: Python<'_>,
+    path: PathBuf,
+    bed: Option<[f64; 3]>,
+    max_feed: Option<f64>,
+) -> PyResult<String> {
     let mut options = CheckOptions { bed_mm: bed, ..CheckOptions::default() };
     if let Some(f) = max_feed {
         options.max_feed_mm_min = f;
@@ -68,7 +73,8 @@ fn cat(py: Python<'_>, path: PathBuf, output: Option<PathBuf>, in_place: bool, b
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
-    py.allow_threads(|| Run::new(&path, &mut Quiet).transform(&mut Identity, &target).map(|_| ())).map_err(err)
+    py.allow_threads(|| Run::new(&path, &mut Quiet).transform(&mut Identity, &target).map(|_| ()))
+        .map_err(err)
 }
 
 /// One line of a file, with what it says and the machine state after it.
@@ -198,6 +204,140 @@ fn run_cli(py: Python<'_>, argv: Vec<String>) -> i32 {
     }
 }
 
+// ---- binder-jet raster (gweave raster, slice-raster) ----
+
+/// An anyhow error from the CLI's job runner: OSError when a file could not be read or written.
+fn job_err(e: anyhow::Error) -> PyErr {
+    let io = e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some());
+    let text = format!("{e:#}");
+    if io {
+        PyOSError::new_err(text)
+    } else {
+        PyValueError::new_err(text)
+    }
+}
+
+fn dialect_of(name: Option<&str>) -> PyResult<Option<gweave::gen::printhead::FirmwareDialect>> {
+    use gweave::gen::printhead::FirmwareDialect;
+    match name {
+        None => Ok(None),
+        Some("marlin") => Ok(Some(FirmwareDialect::Marlin)),
+        Some("reprap") => Ok(Some(FirmwareDialect::RepRapFirmware)),
+        Some(other) => {
+            Err(PyValueError::new_err(format!("dialect must be 'marlin' or 'reprap', got {other:?}")))
+        }
+    }
+}
+
+/// Rasters layer images or a `.sl1` into inkjet G-code; the report as JSON text (see
+/// `gweave raster --json`).
+#[pyfunction]
+#[pyo3(signature = (inputs, output, *, head=None, threshold=0.5, invert=false, flip_y=false, one_way=false,
+    density=1, origin=(20.0, 20.0), layer_height=None, pixel_mm=None, dpi=None, heads=None, channels=None,
+    recoat=None, start=None, end=None, dialect=None, feed=None, fast_estimate=false))]
+#[allow(clippy::too_many_arguments)]
+fn raster_json(
+    py: Python<'_>,
+    inputs: Vec<PathBuf>,
+    output: PathBuf,
+    head: Option<PathBuf>,
+    threshold: f64,
+    invert: bool,
+    flip_y: bool,
+    one_way: bool,
+    density: u32,
+    origin: (f64, f64),
+    layer_height: Option<f64>,
+    pixel_mm: Option<f64>,
+    dpi: Option<f64>,
+    heads: Option<usize>,
+    channels: Option<String>,
+    recoat: Option<PathBuf>,
+    start: Option<PathBuf>,
+    end: Option<PathBuf>,
+    dialect: Option<&str>,
+    feed: Option<f64>,
+    fast_estimate: bool,
+) -> PyResult<String> {
+    let options = gweave_cli::raster_job::JobOptions {
+        inputs,
+        head,
+        threshold,
+        invert,
+        flip_y,
+        one_way,
+        density,
+        origin_mm: origin,
+        layer_height_mm: layer_height,
+        pixel_mm,
+        dpi,
+        heads,
+        channels,
+        recoat,
+        start,
+        end,
+        dialect: dialect_of(dialect)?,
+        feed_mm_min: feed,
+        fast_estimate,
+    };
+    let report =
+        py.allow_threads(|| options.job()?.run(&Target::File(output), &mut Quiet)).map_err(job_err)?;
+    to_json(&report)
+}
+
+/// Writes a nozzle test pattern; the raster report as JSON text.
+#[pyfunction]
+#[pyo3(signature = (output, *, head=None, heads=None, dialect=None, columns=4, origin=(20.0, 20.0)))]
+fn raster_test_pattern_json(
+    py: Python<'_>,
+    output: PathBuf,
+    head: Option<PathBuf>,
+    heads: Option<usize>,
+    dialect: Option<&str>,
+    columns: usize,
+    origin: (f64, f64),
+) -> PyResult<String> {
+    let options = gweave_cli::raster_job::JobOptions {
+        head,
+        heads,
+        dialect: dialect_of(dialect)?,
+        origin_mm: origin,
+        ..Default::default()
+    };
+    let (report, _) =
+        py.allow_threads(|| options.test_pattern(&Target::File(output), columns)).map_err(job_err)?;
+    to_json(&report)
+}
+
+/// Slices an STL into 1-bit layer PNGs in `out_dir`; the report as JSON text (see
+/// `gweave slice-raster --json`).
+#[pyfunction]
+#[pyo3(signature = (stl, out_dir, *, layer_height, dpi=96.0, pixel_mm=None, margin=0))]
+fn slice_raster_json(
+    py: Python<'_>,
+    stl: PathBuf,
+    out_dir: PathBuf,
+    layer_height: f64,
+    dpi: f64,
+    pixel_mm: Option<f64>,
+    margin: usize,
+) -> PyResult<String> {
+    use gweave::gen::slice_raster::{slice_to_dir, SliceConfig};
+    let cfg = SliceConfig {
+        layer_height_mm: layer_height,
+        pixel_mm: pixel_mm.unwrap_or(25.4 / dpi),
+        margin_px: margin,
+    };
+    let report = py.allow_threads(|| {
+        let mesh = gweave::gen::stl::read_stl(&stl).map_err(|e| match e {
+            gweave::gen::stl::StlError::Io { .. } => PyOSError::new_err(e.to_string()),
+            _ => PyValueError::new_err(format!("{}: {e}", stl.display())),
+        })?;
+        slice_to_dir(&mesh, &cfg, &out_dir).map_err(|e| PyValueError::new_err(e.to_string()))
+    })?;
+    to_json(&report)
+}
+
 // mix
 /// `gweave mix` on a file: returns the report as JSON text (see `gweave mix --json`). The
 /// profile is TOML text (empty: the defaults); the lists add schedule entries, gradients and
@@ -254,6 +394,10 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_json, m)?)?;
     m.add_function(wrap_pyfunction!(cat, m)?)?;
     m.add_function(wrap_pyfunction!(run_cli, m)?)?;
+    // binder-jet raster
+    m.add_function(wrap_pyfunction!(raster_json, m)?)?;
+    m.add_function(wrap_pyfunction!(raster_test_pattern_json, m)?)?;
+    m.add_function(wrap_pyfunction!(slice_raster_json, m)?)?;
     // mix
     m.add_function(wrap_pyfunction!(mix_json, m)?)?;
     m.add_class::<Line>()?;

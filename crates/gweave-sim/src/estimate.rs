@@ -162,13 +162,9 @@ impl Estimator {
     /// An estimator for a machine with this profile.
     pub fn new(profile: &MotionProfile) -> Result<Self, EstimateError> {
         let klipper = matches!(profile.corners, CornerMode::Klipper(_));
-        let firmware = if klipper {
-            Firmware::Klipper
-        } else {
-            Firmware::Marlin
-        };
-        let planner = Planner::new(profile.clone())
-            .map_err(|source| EstimateError::Profile { line: 0, source })?;
+        let firmware = if klipper { Firmware::Klipper } else { Firmware::Marlin };
+        let planner =
+            Planner::new(profile.clone()).map_err(|source| EstimateError::Profile { line: 0, source })?;
         let acc = Accounts {
             keys: Vec::new(),
             key_s: Vec::new(),
@@ -181,10 +177,7 @@ impl Estimator {
         };
         Ok(Self {
             block: Block::default(),
-            state: State::new(StateOptions {
-                firmware,
-                ..StateOptions::default()
-            }),
+            state: State::new(StateOptions { firmware, ..StateOptions::default() }),
             planner,
             acc,
             key_index: HashMap::new(),
@@ -218,11 +211,7 @@ impl Estimator {
             _ => {}
         }
         match self.block.command {
-            Command::Code {
-                letter: b'M',
-                number,
-                sub: None,
-            } => self.m_code(number),
+            Command::Code { letter: b'M', number, sub: None } => self.m_code(number),
             Command::Extended => self.extended(raw),
             _ => Ok(()),
         }
@@ -263,11 +252,7 @@ impl Estimator {
     /// The tag for the current layer, feature and mix.
     fn tag(&mut self) -> u64 {
         let s = &self.state.structure;
-        let key = Key {
-            layer: s.layer,
-            feature: s.feature,
-            mix: self.mix,
-        };
+        let key = Key { layer: s.layer, feature: s.feature, mix: self.mix };
         let acc = &mut self.acc;
         *self.key_index.entry(key).or_insert_with(|| {
             acc.keys.push(key);
@@ -277,11 +262,7 @@ impl Estimator {
     }
 
     fn motion(&mut self, m: &state::Move) -> Result<(), EstimateError> {
-        let feed_mm_s = if m.feed_mm_min > 0.0 {
-            m.feed_mm_min / 60.0
-        } else {
-            DEFAULT_FEED_MM_S
-        };
+        let feed_mm_s = if m.feed_mm_min > 0.0 { m.feed_mm_min / 60.0 } else { DEFAULT_FEED_MM_S };
         let tag = self.tag();
         if !self.started {
             self.started = true;
@@ -310,18 +291,10 @@ impl Estimator {
                 _ => [m.to[state::X], m.to[state::Y]],
             };
             let to = pos(&m.to, xy, t);
-            let mv = Move {
-                start: from,
-                end: to,
-                feed_mm_s,
-                tag,
-            };
+            let mv = Move { start: from, end: to, feed_mm_s, tag };
             self.planner
                 .push(&mv, &mut self.acc)
-                .map_err(|source| EstimateError::Move {
-                    line: self.line,
-                    source,
-                })?;
+                .map_err(|source| EstimateError::Move { line: self.line, source })?;
             from = to;
         }
         Ok(())
@@ -329,13 +302,8 @@ impl Estimator {
 
     fn m_code(&mut self, number: u32) -> Result<(), EstimateError> {
         let b = &self.block;
-        let axes = || AxisUpdate {
-            x: b.get(b'X'),
-            y: b.get(b'Y'),
-            z: b.get(b'Z'),
-            e: b.get(b'E'),
-            a: b.get(b'A'),
-        };
+        let axes =
+            || AxisUpdate { x: b.get(b'X'), y: b.get(b'Y'), z: b.get(b'Z'), e: b.get(b'E'), a: b.get(b'A') };
         let mut profile = self.planner.profile().clone();
         let changed = match number {
             400 | 109 | 190 => {
@@ -373,12 +341,7 @@ impl Estimator {
                 None => return Ok(()),
             },
             204 => {
-                let m204 = M204 {
-                    s: b.get(b'S'),
-                    p: b.get(b'P'),
-                    r: b.get(b'R'),
-                    t: b.get(b'T'),
-                };
+                let m204 = M204 { s: b.get(b'S'), p: b.get(b'P'), r: b.get(b'R'), t: b.get(b'T') };
                 match profile.set_accel(&m204) {
                     // Klipper answers an M204 without S, P and T with a message and goes on.
                     Err(ProfileError::M204NeedsPAndT) => return Ok(()),
@@ -396,15 +359,10 @@ impl Estimator {
         let name = self.block.command_span.of(raw);
         let args = self.block.text_of(raw).unwrap_or_default();
         let arg = |key: &str| -> Option<f64> {
-            std::str::from_utf8(args)
-                .ok()?
-                .split_whitespace()
-                .find_map(|kv| {
-                    let (k, v) = kv.split_once('=')?;
-                    k.eq_ignore_ascii_case(key)
-                        .then(|| v.parse().ok())
-                        .flatten()
-                })
+            std::str::from_utf8(args).ok()?.split_whitespace().find_map(|kv| {
+                let (k, v) = kv.split_once('=')?;
+                k.eq_ignore_ascii_case(key).then(|| v.parse().ok()).flatten()
+            })
         };
         if name.eq_ignore_ascii_case(b"SET_KINEMATIC_POSITION") {
             self.drain();
@@ -431,16 +389,10 @@ impl Estimator {
         }
     }
 
-    fn apply_profile(
-        &mut self,
-        profile: Result<MotionProfile, ProfileError>,
-    ) -> Result<(), EstimateError> {
+    fn apply_profile(&mut self, profile: Result<MotionProfile, ProfileError>) -> Result<(), EstimateError> {
         profile
             .and_then(|p| self.planner.set_profile(p))
-            .map_err(|source| EstimateError::Profile {
-                line: self.line,
-                source,
-            })
+            .map_err(|source| EstimateError::Profile { line: self.line, source })
     }
 
     fn select_mix(&mut self) {
@@ -488,8 +440,7 @@ mod tests {
 
     #[test]
     fn marlin_layers_features_dwell_and_m204() {
-        let text =
-            ";FLAVOR:Marlin\n;LAYER:0\n;TYPE:WALL-OUTER\nG1 X10 E1 F600\n;LAYER:1\n;TYPE:FILL\n\
+        let text = ";FLAVOR:Marlin\n;LAYER:0\n;TYPE:WALL-OUTER\nG1 X10 E1 F600\n;LAYER:1\n;TYPE:FILL\n\
                     G1 X20 E2\nG4 P1000\nM204 T500\nG0 X30 F6000\n";
         let est = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
         // Two collinear 10 mm moves at 10 mm/s (a = 3000): 1/300 s and 1/60 mm at each end.
@@ -508,25 +459,15 @@ mod tests {
     #[test]
     fn arcs_are_cut_into_chords() {
         // A half circle of radius 10 (31.4 mm) becomes 32 chords, ending exactly at X20.
-        let est = estimate(
-            "G1 X0 Y0 F600\nG2 X20 Y0 I10 J0\n".as_bytes(),
-            &MotionProfile::default(),
-        )
-        .unwrap();
+        let est =
+            estimate("G1 X0 Y0 F600\nG2 X20 Y0 I10 J0\n".as_bytes(), &MotionProfile::default()).unwrap();
         assert_eq!(est.blocks, 32);
         assert_eq!(est.steps.axes[0], 20 * 80);
     }
 
     #[test]
     fn bad_input_is_an_error_with_its_line() {
-        let err = estimate(
-            "G1 X1 F600\nM204 S-5\n".as_bytes(),
-            &MotionProfile::default(),
-        )
-        .unwrap_err();
-        assert!(
-            matches!(err, EstimateError::Profile { line: 2, .. }),
-            "{err}"
-        );
+        let err = estimate("G1 X1 F600\nM204 S-5\n".as_bytes(), &MotionProfile::default()).unwrap_err();
+        assert!(matches!(err, EstimateError::Profile { line: 2, .. }), "{err}");
     }
 }

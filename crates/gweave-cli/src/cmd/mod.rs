@@ -4,6 +4,9 @@ mod cat;
 mod check;
 mod stats;
 
+// binder-jet raster
+mod raster;
+mod slice_raster;
 // mix
 mod mix;
 
@@ -17,6 +20,8 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    Raster(Box<raster::RasterArgs>),
+    SliceRaster(slice_raster::SliceRasterArgs),
     // mix
     Mix(mix::MixArgs),
 }
@@ -26,6 +31,8 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        Command::Raster(a) => raster::run(*a),
+        Command::SliceRaster(a) => slice_raster::run(a),
         // mix
         Command::Mix(a) => mix::run(a),
     }

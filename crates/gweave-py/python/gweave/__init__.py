@@ -26,7 +26,11 @@ __version__: str = _gweave.__version__
 
 PathLike = Union[str, "os.PathLike[str]"]
 
-__all__ = ["Line", "Reader", "read", "stats", "check", "cat", "mix", "main", "__version__"]
+__all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
+# binder-jet raster
+__all__ += ["raster", "raster_test_pattern", "slice_raster"]
+# mix
+__all__ += ["mix"]
 
 
 def read(path: PathLike) -> Reader:
@@ -75,6 +79,115 @@ def cat(
     )
 
 
+# ---- binder-jet raster ----
+
+
+def _opt_path(p: Optional[PathLike]) -> Optional[str]:
+    return None if p is None else os.fspath(p)
+
+
+def raster(
+    inputs: Union[PathLike, Sequence[PathLike]],
+    output: PathLike,
+    *,
+    head: Optional[PathLike] = None,
+    threshold: float = 0.5,
+    invert: bool = False,
+    flip_y: bool = False,
+    one_way: bool = False,
+    density: int = 1,
+    origin: Sequence[float] = (20.0, 20.0),
+    layer_height: Optional[float] = None,
+    pixel_mm: Optional[float] = None,
+    dpi: Optional[float] = None,
+    heads: Optional[int] = None,
+    channels: Optional[str] = None,
+    recoat: Optional[PathLike] = None,
+    start: Optional[PathLike] = None,
+    end: Optional[PathLike] = None,
+    dialect: Optional[str] = None,
+    feed: Optional[float] = None,
+    fast_estimate: bool = False,
+) -> Dict[str, Any]:
+    """Layer images (folders, globs, image files) or one ``.sl1`` to binder-jet inkjet G-code.
+
+    Per inked column: ``G1 X``, ``M400``, ``M700 P<head> S<bits>`` (``dialect="reprap"``: M578).
+    Units: ``origin`` mm, ``layer_height`` mm, ``pixel_mm`` mm (or ``dpi``), ``feed`` mm/min;
+    ``recoat``/``start``/``end`` are files of G-code. ``head`` is a printhead profile TOML.
+    Returns the report of ``gweave raster --json`` (layers, bands, columns, drops per head,
+    binder volume, ``time`` with the planner's estimate).
+    """
+    paths = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
+    return json.loads(
+        _gweave.raster_json(
+            [os.fspath(p) for p in paths],
+            os.fspath(output),
+            head=_opt_path(head),
+            threshold=threshold,
+            invert=invert,
+            flip_y=flip_y,
+            one_way=one_way,
+            density=density,
+            origin=(float(origin[0]), float(origin[1])),
+            layer_height=layer_height,
+            pixel_mm=pixel_mm,
+            dpi=dpi,
+            heads=heads,
+            channels=channels,
+            recoat=_opt_path(recoat),
+            start=_opt_path(start),
+            end=_opt_path(end),
+            dialect=dialect,
+            feed=feed,
+            fast_estimate=fast_estimate,
+        )
+    )
+
+
+def raster_test_pattern(
+    output: PathLike,
+    *,
+    head: Optional[PathLike] = None,
+    heads: Optional[int] = None,
+    dialect: Optional[str] = None,
+    columns: int = 4,
+    origin: Sequence[float] = (20.0, 20.0),
+) -> Dict[str, Any]:
+    """Write a nozzle test pattern: ``columns`` columns per nozzle address, each address alone."""
+    return json.loads(
+        _gweave.raster_test_pattern_json(
+            os.fspath(output),
+            head=_opt_path(head),
+            heads=heads,
+            dialect=dialect,
+            columns=columns,
+            origin=(float(origin[0]), float(origin[1])),
+        )
+    )
+
+
+def slice_raster(
+    stl: PathLike,
+    out_dir: PathLike,
+    *,
+    layer_height: float,
+    dpi: float = 96.0,
+    pixel_mm: Optional[float] = None,
+    margin: int = 0,
+) -> Dict[str, Any]:
+    """Slice an STL into 1-bit layer PNGs (pixel centres at mid-layer Z, even-odd fill).
+
+    ``layer_height`` in mm; resolution as ``dpi`` or ``pixel_mm``. Returns the report of
+    ``gweave slice-raster --json`` (grid, files, pixels per layer).
+    """
+    return json.loads(
+        _gweave.slice_raster_json(
+            os.fspath(stl),
+            os.fspath(out_dir),
+            layer_height=layer_height,
+            dpi=dpi,
+            pixel_mm=pixel_mm,
+            margin=margin,
 # mix
 def mix(
     path: PathLike,

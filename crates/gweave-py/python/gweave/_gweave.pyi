@@ -7,6 +7,41 @@ def check_json(path: str, *, bed: Optional[Tuple[float, float, float]] = None, m
 def cat(path: str, output: Optional[str] = None, *, in_place: bool = False, backup: bool = True) -> None: ...
 def run_cli(argv: List[str]) -> int: ...
 
+# binder-jet raster
+def raster_json(
+    inputs: List[str],
+    output: str,
+    *,
+    head: Optional[str] = None,
+    threshold: float = 0.5,
+    invert: bool = False,
+    flip_y: bool = False,
+    one_way: bool = False,
+    density: int = 1,
+    origin: Tuple[float, float] = (20.0, 20.0),
+    layer_height: Optional[float] = None,
+    pixel_mm: Optional[float] = None,
+    dpi: Optional[float] = None,
+    heads: Optional[int] = None,
+    channels: Optional[str] = None,
+    recoat: Optional[str] = None,
+    start: Optional[str] = None,
+    end: Optional[str] = None,
+    dialect: Optional[str] = None,
+    feed: Optional[float] = None,
+    fast_estimate: bool = False,
+) -> str: ...
+def raster_test_pattern_json(
+    output: str,
+    *,
+    head: Optional[str] = None,
+    heads: Optional[int] = None,
+    dialect: Optional[str] = None,
+    columns: int = 4,
+    origin: Tuple[float, float] = (20.0, 20.0),
+) -> str: ...
+def slice_raster_json(
+    stl: str, out_dir: str, *, layer_height: float, dpi: float = 96.0, pixel_mm: Optional[float] = None, margin: int = 0
 # mix
 def mix_json(
     path: str,
