@@ -188,6 +188,10 @@ def slice_raster(
             dpi=dpi,
             pixel_mm=pixel_mm,
             margin=margin,
+        )
+    )
+
+
 # mix
 def mix(
     path: PathLike,

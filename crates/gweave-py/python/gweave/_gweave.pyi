@@ -42,6 +42,8 @@ def raster_test_pattern_json(
 ) -> str: ...
 def slice_raster_json(
     stl: str, out_dir: str, *, layer_height: float, dpi: float = 96.0, pixel_mm: Optional[float] = None, margin: int = 0
+) -> str: ...
+
 # mix
 def mix_json(
     path: str,
