@@ -77,6 +77,54 @@ fn cat(py: Python<'_>, path: PathBuf, output: Option<PathBuf>, in_place: bool, b
         .map_err(err)
 }
 
+// purge-shift
+/// Moves every colour change earlier by the purge (see `gweave purge-shift`); returns the report
+/// as JSON text. `config` is TOML text; the keyword arguments override it.
+#[pyfunction]
+#[pyo3(signature = (path, output=None, *, in_place=false, backup=true, purge=None, purge_mm3=None,
+    config=None, filament_diameter=None, cross_layers=false, allow_features=None, markers=None,
+    fallback=None))]
+#[allow(clippy::too_many_arguments)]
+fn purge_shift_json(
+    py: Python<'_>,
+    path: PathBuf,
+    output: Option<PathBuf>,
+    in_place: bool,
+    backup: bool,
+    purge: Option<f64>,
+    purge_mm3: Option<f64>,
+    config: Option<String>,
+    filament_diameter: Option<f64>,
+    cross_layers: bool,
+    allow_features: Option<Vec<String>>,
+    markers: Option<(String, String)>,
+    fallback: Option<String>,
+) -> PyResult<String> {
+    use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
+    let value_err = |e: gweave::post::purge_shift::ConfigError| PyValueError::new_err(e.to_string());
+    let mut c = match &config {
+        Some(text) => PurgeShiftConfig::parse_toml(text).map_err(value_err)?,
+        None => PurgeShiftConfig::default(),
+    };
+    c.apply(&Overrides {
+        purge_mm: purge,
+        purge_mm3,
+        filament_diameter_mm: filament_diameter,
+        cross_layers,
+        allow_features,
+        markers: markers.map(|(b, e)| [b, e]),
+        fallback,
+    });
+    let rules = c.validate().map_err(value_err)?;
+    let target = match (output, in_place) {
+        (_, true) => Target::InPlace { keep_backup: backup },
+        (Some(p), false) => Target::File(p),
+        (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
+    };
+    let report = py.allow_threads(|| purge_shift_file(rules, &path, &target, &mut Quiet)).map_err(err)?;
+    to_json(&report)
+}
+
 /// One line of a file, with what it says and the machine state after it.
 #[pyclass(frozen, get_all, module = "gweave")]
 struct Line {
@@ -338,6 +386,96 @@ fn slice_raster_json(
     to_json(&report)
 }
 
+// --- gweave-sim: the virtual printer ---
+
+fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::profile::MachineProfile> {
+    match machine {
+        None => Ok(gweave_sim::profile::MachineProfile::default()),
+        Some(path) => {
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+            gweave_sim::profile::MachineProfile::from_toml_str(&text)
+                .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
+        }
+    }
+}
+
+fn sim_err(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// Runs a file through the virtual printer; the report as JSON text (see `gweave sim --json`).
+#[pyfunction]
+#[pyo3(signature = (path, *, machine=None))]
+fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult<String> {
+    let profile = machine_profile(machine)?;
+    let report = py.allow_threads(|| {
+        let mut m = gweave_sim::interp::Machine::new(profile).map_err(sim_err)?;
+        let file = File::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let mut reader = LineReader::new(file);
+        let mut out = |_t: f64, _l: &str| {};
+        while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
+            if m.execute(line.bytes, &mut out) == gweave_sim::interp::Outcome::Halted {
+                break;
+            }
+        }
+        m.finish(&mut out);
+        Ok::<_, PyErr>(m.report())
+    })?;
+    to_json(&report)
+}
+
+/// A virtual printer to drive one command at a time, as a host would over a serial line.
+/// (Unsendable: it stays on the thread that made it; the controllers are not `Sync`.)
+#[pyclass(module = "gweave", unsendable)]
+struct Machine {
+    inner: gweave_sim::interp::Machine,
+}
+
+#[pymethods]
+impl Machine {
+    /// A machine at power-on; `machine` is a profile TOML path (default: RAMPS 1.4 Marlin).
+    #[new]
+    #[pyo3(signature = (*, machine=None))]
+    fn new(machine: Option<PathBuf>) -> PyResult<Self> {
+        let inner = gweave_sim::interp::Machine::new(machine_profile(machine)?).map_err(sim_err)?;
+        Ok(Self { inner })
+    }
+
+    /// The lines printed at power-on (`start`, ...).
+    fn boot_lines(&self) -> Vec<String> {
+        self.inner.boot_lines()
+    }
+
+    /// Executes one command; returns its replies as a serial port would show them, ending
+    /// with `ok` unless the machine is halted (`M105` answers `ok T:...` in one line).
+    fn execute(&mut self, line: &str) -> Vec<String> {
+        let mut replies = Vec::new();
+        let outcome = self.inner.execute(line.as_bytes(), &mut |_t, l| replies.push(l.to_owned()));
+        if outcome == gweave_sim::interp::Outcome::Ok && !self.inner.acknowledged() {
+            replies.push("ok".to_owned());
+        }
+        replies
+    }
+
+    /// Simulated time, s.
+    #[getter]
+    fn now_s(&self) -> f64 {
+        self.inner.now_s()
+    }
+
+    /// Executes everything still queued in the planner (the end of a job).
+    fn finish(&mut self) {
+        self.inner.finish(&mut |_, _| {});
+    }
+
+    /// The report so far as a dict (the same fields as `gweave sim --json`).
+    fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = to_json(&self.inner.report())?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+}
+
 // mix
 /// `gweave mix` on a file: returns the report as JSON text (see `gweave mix --json`). The
 /// profile is TOML text (empty: the defaults); the lists add schedule entries, gradients and
@@ -398,9 +536,14 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(raster_json, m)?)?;
     m.add_function(wrap_pyfunction!(raster_test_pattern_json, m)?)?;
     m.add_function(wrap_pyfunction!(slice_raster_json, m)?)?;
+    // purge-shift
+    m.add_function(wrap_pyfunction!(purge_shift_json, m)?)?;
     // mix
     m.add_function(wrap_pyfunction!(mix_json, m)?)?;
     m.add_class::<Line>()?;
     m.add_class::<Reader>()?;
+    // gweave-sim: the virtual printer
+    m.add_function(wrap_pyfunction!(sim_json, m)?)?;
+    m.add_class::<Machine>()?;
     Ok(())
 }

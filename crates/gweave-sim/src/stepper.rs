@@ -136,6 +136,11 @@ impl Steppers {
         &self.totals
     }
 
+    /// Positions of the mixing inputs' motors, steps (empty without a mixing hotend).
+    pub fn mix_position_steps(&self) -> impl Iterator<Item = i64> + '_ {
+        self.mix.iter().map(|m| m.steps)
+    }
+
     /// Motor positions in steps, X Y Z E A.
     pub fn position_steps(&self) -> [i64; 5] {
         self.axes.map(|a| a.steps)

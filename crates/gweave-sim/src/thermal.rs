@@ -362,6 +362,12 @@ impl Thermal {
         self.halted.as_ref()
     }
 
+    /// M999: leave the halted state. Targets stay at 0 and injected plant faults stay; the
+    /// protection checks run again from the next sample.
+    pub fn clear_halt(&mut self) {
+        self.halted = None;
+    }
+
     /// Set a target (M104/M109/M140/M190), capped at MAXTEMP minus the
     /// overshoot margin; negative means 0. Arms the heating watch.
     pub fn set_target(&mut self, id: HeaterId, celsius: f64) -> Result<(), ThermalError> {

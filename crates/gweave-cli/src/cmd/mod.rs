@@ -4,9 +4,13 @@ mod cat;
 mod check;
 mod stats;
 
+// gweave-sim: the virtual printer
+mod sim;
 // binder-jet raster
 mod raster;
 mod slice_raster;
+// purge-shift
+mod purge_shift;
 // mix
 mod mix;
 
@@ -20,8 +24,12 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    // gweave-sim: the virtual printer
+    Sim(sim::SimArgs),
     Raster(Box<raster::RasterArgs>),
     SliceRaster(slice_raster::SliceRasterArgs),
+    // purge-shift
+    PurgeShift(purge_shift::PurgeShiftArgs),
     // mix
     Mix(mix::MixArgs),
 }
@@ -31,8 +39,12 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        // gweave-sim: the virtual printer
+        Command::Sim(a) => sim::run(a),
         Command::Raster(a) => raster::run(*a),
         Command::SliceRaster(a) => slice_raster::run(a),
+        // purge-shift
+        Command::PurgeShift(a) => purge_shift::run(a),
         // mix
         Command::Mix(a) => mix::run(a),
     }

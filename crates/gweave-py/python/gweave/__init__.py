@@ -21,14 +21,18 @@ from typing import Any, Dict, Optional, Sequence, Union
 
 from . import _gweave
 from ._gweave import Line, Reader
+from ._gweave import Machine
 
 __version__: str = _gweave.__version__
 
 PathLike = Union[str, "os.PathLike[str]"]
 
 __all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
+__all__ += ["Machine", "sim"]
 # binder-jet raster
 __all__ += ["raster", "raster_test_pattern", "slice_raster"]
+# purge-shift
+__all__ += ["purge_shift"]
 # mix
 __all__ += ["mix"]
 
@@ -79,6 +83,15 @@ def cat(
     )
 
 
+def sim(path: PathLike, *, machine: Optional[PathLike] = None) -> Dict[str, Any]:
+    """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML.
+
+    The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
+    ``feature_s``, ``filament_mm``, ``mixing_input_mm``, ``steps``, ``position``, ``count``,
+    ``heaters``, ``thermal_faults``, ``halted``, ``unknown_commands`` and ``warnings``.
+    """
+    m = None if machine is None else os.fspath(machine)
+    return json.loads(_gweave.sim_json(os.fspath(path), machine=m))
 # ---- binder-jet raster ----
 
 
@@ -188,6 +201,51 @@ def slice_raster(
             dpi=dpi,
             pixel_mm=pixel_mm,
             margin=margin,
+        )
+    )
+
+
+# purge-shift
+def purge_shift(
+    path: PathLike,
+    output: Optional[PathLike] = None,
+    *,
+    in_place: bool = False,
+    backup: bool = True,
+    purge: Optional[float] = None,
+    purge_mm3: Optional[float] = None,
+    config: Optional[PathLike] = None,
+    filament_diameter: Optional[float] = None,
+    cross_layers: bool = False,
+    allow_features: Optional[Sequence[str]] = None,
+    markers: Optional[Sequence[str]] = None,
+    fallback: Optional[str] = None,
+) -> Dict[str, Any]:
+    """Move every tool/mix change earlier by the purge so it prints inside the part (no wipe tower).
+
+    ``purge`` is mm of filament (or ``purge_mm3``, mm^3); ``config`` a TOML file with per-pair
+    amounts, colours, the washout model and rules (keyword arguments override it). Returns the
+    report: per change the requested and achieved purge, where the change now sits, and totals.
+    """
+    text = None
+    if config is not None:
+        with open(os.fspath(config), encoding="utf-8") as f:
+            text = f.read()
+    pair = None if markers is None else (str(markers[0]), str(markers[1]))
+    return json.loads(
+        _gweave.purge_shift_json(
+            os.fspath(path),
+            None if output is None else os.fspath(output),
+            in_place=in_place,
+            backup=backup,
+            purge=purge,
+            purge_mm3=purge_mm3,
+            config=text,
+            filament_diameter=filament_diameter,
+            cross_layers=cross_layers,
+            allow_features=None if allow_features is None else list(allow_features),
+            markers=pair,
+            fallback=fallback,
         )
     )
 

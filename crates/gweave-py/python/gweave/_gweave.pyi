@@ -1,4 +1,4 @@
-from typing import Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 __version__: str
 
@@ -44,6 +44,23 @@ def slice_raster_json(
     stl: str, out_dir: str, *, layer_height: float, dpi: float = 96.0, pixel_mm: Optional[float] = None, margin: int = 0
 ) -> str: ...
 
+# purge-shift
+def purge_shift_json(
+    path: str,
+    output: Optional[str] = None,
+    *,
+    in_place: bool = False,
+    backup: bool = True,
+    purge: Optional[float] = None,
+    purge_mm3: Optional[float] = None,
+    config: Optional[str] = None,
+    filament_diameter: Optional[float] = None,
+    cross_layers: bool = False,
+    allow_features: Optional[List[str]] = None,
+    markers: Optional[Tuple[str, str]] = None,
+    fallback: Optional[str] = None,
+) -> str: ...
+
 # mix
 def mix_json(
     path: str,
@@ -80,3 +97,15 @@ class Reader:
     def __init__(self, path: str) -> None: ...
     def __iter__(self) -> "Reader": ...
     def __next__(self) -> Line: ...
+
+# gweave-sim: the virtual printer
+def sim_json(path: str, *, machine: Optional[str] = None) -> str: ...
+
+class Machine:
+    def __init__(self, *, machine: Optional[str] = None) -> None: ...
+    def boot_lines(self) -> List[str]: ...
+    def execute(self, line: str) -> List[str]: ...
+    @property
+    def now_s(self) -> float: ...
+    def finish(self) -> None: ...
+    def report(self) -> Dict[str, Any]: ...

@@ -401,11 +401,7 @@ fn decode_png_1bit(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitma
                 (false, false) => 0,
             };
             let valid = (w - wi * 64).min(64);
-            *word = if valid == 64 {
-                v
-            } else {
-                v & ((1u64 << valid) - 1)
-            };
+            *word = if valid == 64 { v } else { v & ((1u64 << valid) - 1) };
         }
     }
     Ok(b)
@@ -545,19 +541,9 @@ mod tests {
         assert!(is_plain_1bit_grey_png(&png_bytes));
         for o in [
             opts(),
-            ThresholdOptions {
-                invert: true,
-                ..opts()
-            },
-            ThresholdOptions {
-                threshold: 0.0,
-                ..opts()
-            },
-            ThresholdOptions {
-                threshold: 0.0,
-                invert: true,
-                ..opts()
-            },
+            ThresholdOptions { invert: true, ..opts() },
+            ThresholdOptions { threshold: 0.0, ..opts() },
+            ThresholdOptions { threshold: 0.0, invert: true, ..opts() },
         ] {
             let fast = decode_png_1bit(&png_bytes, &o).unwrap();
             let slow = decode_png(&png_bytes[..], &o).unwrap();
@@ -565,15 +551,7 @@ mod tests {
         }
         assert_eq!(decode_png_1bit(&png_bytes, &opts()).unwrap(), src);
         assert_eq!(
-            decode_png_1bit(
-                &png_bytes,
-                &ThresholdOptions {
-                    invert: true,
-                    ..opts()
-                }
-            )
-            .unwrap()
-            .count_ones(),
+            decode_png_1bit(&png_bytes, &ThresholdOptions { invert: true, ..opts() }).unwrap().count_ones(),
             70 * 3 - 7
         );
     }
