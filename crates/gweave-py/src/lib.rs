@@ -653,6 +653,55 @@ fn write_helical_paths_json(
     to_json(&serde_json::json!({ "filament_mm": summary.filament_mm, "print_time_s": summary.print_time_s }))
 }
 
+// mix
+/// `gweave mix` on a file: returns the report as JSON text (see `gweave mix --json`). The
+/// profile is TOML text (empty: the defaults); the lists add schedule entries, gradients and
+/// tool maps as the command line flags do.
+#[pyfunction]
+#[pyo3(signature = (path, output=None, *, config="", at_layer=Vec::new(), at_z=Vec::new(), map=Vec::new(), gradient=Vec::new(), perceived=false, in_place=false, backup=true))]
+#[allow(clippy::too_many_arguments)]
+fn mix_json(
+    py: Python<'_>,
+    path: PathBuf,
+    output: Option<PathBuf>,
+    config: &str,
+    at_layer: Vec<String>,
+    at_z: Vec<String>,
+    map: Vec<String>,
+    gradient: Vec<String>,
+    perceived: bool,
+    in_place: bool,
+    backup: bool,
+) -> PyResult<String> {
+    use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
+    let bad = |e: gweave::post::mix::MixPassError| PyValueError::new_err(e.to_string());
+    let target = match (output, in_place) {
+        (_, true) => Target::InPlace { keep_backup: backup },
+        (Some(p), false) => Target::File(p),
+        (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
+    };
+    let mut profile = MixProfile::from_toml_str(config).map_err(bad)?;
+    let space = if perceived { GradientSpace::Perceived } else { GradientSpace::Mix };
+    for s in &at_layer {
+        profile.schedule.push(ScheduleEntry::parse_layer(s).map_err(bad)?);
+    }
+    for s in &at_z {
+        profile.schedule.push(ScheduleEntry::parse_z(s).map_err(bad)?);
+    }
+    for s in &gradient {
+        profile.gradient.push(GradientSpec::parse(s, space).map_err(bad)?);
+    }
+    for s in &map {
+        profile.add_map(s).map_err(bad)?;
+    }
+    let report = py.allow_threads(|| gweave::post::mix::mix_file(profile, &path, &target, &mut Quiet));
+    match report {
+        Ok(r) => to_json(&r),
+        Err(gweave::post::mix::MixPassError::Engine(e)) => Err(err(e)),
+        Err(e) => Err(bad(e)),
+    }
+}
+
 #[pymodule]
 fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -666,6 +715,8 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(slice_raster_json, m)?)?;
     // purge-shift
     m.add_function(wrap_pyfunction!(purge_shift_json, m)?)?;
+    // mix
+    m.add_function(wrap_pyfunction!(mix_json, m)?)?;
     m.add_class::<Line>()?;
     m.add_class::<Reader>()?;
     // gweave-sim: the virtual printer

@@ -11,6 +11,8 @@ mod raster;
 mod slice_raster;
 // purge-shift
 mod purge_shift;
+// mix
+mod mix;
 
 // rotary (lathe-type) printing
 mod rotary;
@@ -36,6 +38,8 @@ pub enum Command {
 
     Rotary(rotary::RotaryArgs),
     Serve(serve::ServeArgs),
+    // mix
+    Mix(mix::MixArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -52,5 +56,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
 
         Command::Rotary(a) => rotary::run(a),
         Command::Serve(a) => serve::run(a),
+        // mix
+        Command::Mix(a) => mix::run(a),
     }
 }

@@ -35,6 +35,8 @@ __all__ += ["Machine", "sim"]
 __all__ += ["raster", "raster_test_pattern", "slice_raster"]
 # purge-shift
 __all__ += ["purge_shift"]
+# mix
+__all__ += ["mix"]
 
 __all__ += ["rotary_wrap", "rotary_tube", "HelicalPath", "write_helical_paths"]
 
@@ -248,6 +250,45 @@ def purge_shift(
             allow_features=None if allow_features is None else list(allow_features),
             markers=pair,
             fallback=fallback,
+        )
+    )
+
+
+# mix
+def mix(
+    path: PathLike,
+    output: Optional[PathLike] = None,
+    *,
+    config: Optional[PathLike] = None,
+    at_layer: Sequence[str] = (),
+    at_z: Sequence[str] = (),
+    map: Sequence[str] = (),
+    gradient: Sequence[str] = (),
+    perceived: bool = False,
+    in_place: bool = False,
+    backup: bool = True,
+) -> Dict[str, Any]:
+    """Rewrite a file for a mixing hotend (see ``gweave mix``); returns the report.
+
+    ``config`` is a profile TOML file; ``at_layer=["0=Orange", "10=Pink"]``, ``at_z``,
+    ``map=["T1=PVA"]`` and ``gradient=["0-50=Cyan..Magenta"]`` work as the command line flags.
+    """
+    text = ""
+    if config is not None:
+        with open(os.fspath(config), encoding="utf-8") as f:
+            text = f.read()
+    return json.loads(
+        _gweave.mix_json(
+            os.fspath(path),
+            None if output is None else os.fspath(output),
+            config=text,
+            at_layer=list(at_layer),
+            at_z=list(at_z),
+            map=list(map),
+            gradient=list(gradient),
+            perceived=perceived,
+            in_place=in_place,
+            backup=backup,
         )
     )
 

@@ -62,6 +62,21 @@ def purge_shift_json(
     fallback: Optional[str] = None,
 ) -> str: ...
 
+# mix
+def mix_json(
+    path: str,
+    output: Optional[str] = None,
+    *,
+    config: str = "",
+    at_layer: List[str] = ...,
+    at_z: List[str] = ...,
+    map: List[str] = ...,
+    gradient: List[str] = ...,
+    perceived: bool = False,
+    in_place: bool = False,
+    backup: bool = True,
+) -> str: ...
+
 class Line:
     number: int
     raw: bytes

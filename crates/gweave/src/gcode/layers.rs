@@ -395,6 +395,16 @@ mod tests {
     }
 
     #[test]
+    fn cura_layers_after_the_first_stay_in_the_print() {
+        let mut s = Structure::default();
+        for c in ["FLAVOR:Marlin", "LAYER:0", "TIME_ELAPSED:1.0", "LAYER:1"] {
+            s.observe_comment(c.as_bytes());
+        }
+        s.observe_command();
+        assert_eq!((s.layer, s.region), (Some(1), Region::Print));
+    }
+
+    #[test]
     fn explicit_markers_win() {
         let mut s =
             Structure::with_markers(Markers { begin: Some(b"begin".to_vec()), end: Some(b"end".to_vec()) });

@@ -1,0 +1,225 @@
+//! `gweave mix`: rewrite slicer G-code for a mixing hotend (see `docs/mix.md`).
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use gweave::colour::palette::{Palette, PaletteConfig};
+use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
+use gweave::colour::{MixingModel, Srgb8};
+use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
+use gweave::post::mix::report::MixReport;
+use gweave::post::mix::schedule::Plan;
+use gweave::post::mix::{mix_file, wizard::run_wizard};
+
+use crate::common::{OutputArgs, ReportArgs};
+use crate::progress::Bar;
+
+/// Colour a print on a mixing hotend: define mixes as virtual tools, change them by layer, by
+/// height, along a gradient or per slicer tool, purge at each change, cap the Z feed rate.
+///
+/// Examples:
+///   gweave mix part.gcode -c mix.toml -o part.mix.gcode
+///   gweave mix part.gcode --at-layer 0=Orange --at-layer 10=Pink -o out.gcode
+///   gweave mix dual.gcode --map T0=Orange --map T1=PVA --in-place
+///   gweave mix --wizard -c mix.toml
+/// As a PrusaSlicer post-processing script: `/path/to/gweave mix -c /path/mix.toml --in-place
+/// --no-backup` (PrusaSlicer adds the G-code path last).
+#[derive(Args, Debug)]
+pub struct MixArgs {
+    /// The G-code file (may come last, as PrusaSlicer passes it).
+    pub input: Option<PathBuf>,
+    /// The hardware profile and job (TOML); with --wizard, where to write it.
+    #[arg(short = 'c', long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub out: OutputArgs,
+    /// From this layer (0-based) on, print this mix: `10=Pink`, `0=#ff8800`, `5=Orange@0.3`.
+    #[arg(long = "at-layer", value_name = "LAYER=MIX")]
+    pub at_layer: Vec<String>,
+    /// From this height (mm) on, print this mix: `2.5=Blue`.
+    #[arg(long = "at-z", value_name = "Z=MIX")]
+    pub at_z: Vec<String>,
+    /// Slicer tool to mix: `T1=PVA`, `T0=Orange`.
+    #[arg(long, value_name = "TN=MIX")]
+    pub map: Vec<String>,
+    /// A gradient: `0-50=Cyan..Magenta`, `0-50/2=...` (every 2 layers), `z1-8=...` (heights).
+    #[arg(long, value_name = "RANGE=MIX..MIX")]
+    pub gradient: Vec<String>,
+    /// How --gradient blends.
+    #[arg(long, value_enum, default_value = "mix")]
+    pub gradient_space: Space,
+    /// Purge length at each change, mm of filament (0: no purge); overrides the profile.
+    #[arg(long, value_name = "MM")]
+    pub purge_mm: Option<f64>,
+    /// Draw the job's mixes (or the whole palette without a job) as a PNG swatch chart.
+    #[arg(long, value_name = "PNG")]
+    pub palette_png: Option<PathBuf>,
+    /// Ask the seed's questions on the terminal and write the profile to -c (or print it).
+    #[arg(long)]
+    pub wizard: bool,
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub enum Space {
+    Mix,
+    Perceived,
+}
+
+pub fn run(args: MixArgs) -> Result<ExitCode> {
+    if args.wizard {
+        return wizard(&args);
+    }
+    let profile = profile(&args)?;
+    let has_job = !(profile.schedule.is_empty() && profile.gradient.is_empty() && profile.map.is_empty());
+    if let Some(png) = &args.palette_png {
+        write_swatch(&profile, has_job, png)?;
+        if args.input.is_none() {
+            return Ok(ExitCode::SUCCESS);
+        }
+    }
+    let Some(input) = &args.input else { bail!("give the G-code file to rewrite") };
+    let target = args.out.target()?;
+    let mut bar = Bar::new(args.quiet);
+    let report = mix_file(profile, input, &target, &mut bar)?;
+    drop(bar);
+    for w in &report.warnings {
+        eprintln!("gweave: warning: {w}");
+    }
+    if args.report.emit(&report)? && !args.quiet {
+        print_human(&mut std::io::stdout().lock(), &report)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The profile file with the flags added on top.
+fn profile(args: &MixArgs) -> Result<MixProfile> {
+    let mut profile = match &args.config {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            MixProfile::from_toml_str(&text).with_context(|| format!("in {}", path.display()))?
+        }
+        None => MixProfile::default(),
+    };
+    let space = match args.gradient_space {
+        Space::Mix => GradientSpace::Mix,
+        Space::Perceived => GradientSpace::Perceived,
+    };
+    for s in &args.at_layer {
+        profile.schedule.push(ScheduleEntry::parse_layer(s)?);
+    }
+    for s in &args.at_z {
+        profile.schedule.push(ScheduleEntry::parse_z(s)?);
+    }
+    for s in &args.gradient {
+        profile.gradient.push(GradientSpec::parse(s, space)?);
+    }
+    for s in &args.map {
+        profile.add_map(s)?;
+    }
+    if let Some(mm) = args.purge_mm {
+        profile.purge.length_mm = mm;
+        profile.purge.mode = if mm > 0.0 {
+            gweave::post::mix::profile::PurgeMode::Length
+        } else {
+            gweave::post::mix::profile::PurgeMode::Off
+        };
+    }
+    profile.validate()?;
+    Ok(profile)
+}
+
+fn write_swatch(profile: &MixProfile, has_job: bool, png: &PathBuf) -> Result<()> {
+    let layout = SwatchLayout::default();
+    let bytes = if has_job {
+        let plan = Plan::new(profile)?;
+        let entries: Vec<SwatchEntry> = plan
+            .mixes
+            .iter()
+            .map(|m| SwatchEntry { name: m.label.clone(), predicted: m.predicted, target: m.target })
+            .collect();
+        render_png(&entries, &layout)?
+    } else {
+        let colours: Vec<Srgb8> = profile.hardware.inputs.iter().map(|i| i.colour).collect();
+        let model = MixingModel::new(&colours)?;
+        let palette = Palette::seed().with_config(PaletteConfig { mix: profile.mix.clone() });
+        render_resolved_png(&palette.resolve_all(&model)?, &layout)?
+    };
+    std::fs::write(png, bytes).with_context(|| format!("writing {}", png.display()))
+}
+
+fn wizard(args: &MixArgs) -> Result<ExitCode> {
+    let stdin = std::io::stdin();
+    let interactive = stdin.is_terminal();
+    let mut input = stdin.lock();
+    let mut stdout = std::io::stdout();
+    let text = run_wizard(&mut input, &mut stdout)?;
+    println!();
+    match &args.config {
+        Some(path) => {
+            std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
+            println!(
+                "Wrote {}. Next: gweave mix part.gcode -c {} -o part.mix.gcode",
+                path.display(),
+                path.display()
+            );
+        }
+        None => print!("{text}"),
+    }
+    if interactive && args.input.is_some() {
+        eprintln!("gweave: the wizard only writes the profile; run again with -c to process the file");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_human(out: &mut dyn Write, r: &MixReport) -> std::io::Result<()> {
+    writeln!(out, "mixes ({:?})", r.dialect)?;
+    for m in &r.mixes {
+        let tool = m.tool.map_or("-".to_owned(), |t| format!("T{t}"));
+        let ratios: Vec<String> = m.ratios.iter().map(|x| format!("{x:.4}")).collect();
+        let de = match (m.target.as_deref(), m.delta_e) {
+            (Some(t), Some(d)) => {
+                format!("  target {t} dE {d:.1}{}", if m.out_of_gamut { " (out of gamut)" } else { "" })
+            }
+            _ => String::new(),
+        };
+        let layers: Vec<String> =
+            m.layers.iter().map(|[a, b]| if a == b { a.to_string() } else { format!("{a}-{b}") }).collect();
+        writeln!(
+            out,
+            "  {tool:<4} {:<22} {:<32} {}  layers {}  {:.1} mm{de}",
+            m.name,
+            ratios.join(":"),
+            m.predicted,
+            if layers.is_empty() { "none".to_owned() } else { layers.join(",") },
+            m.filament_mm
+        )?;
+    }
+    writeln!(out, "changes         {}", r.changes)?;
+    writeln!(
+        out,
+        "purge           {} x, {:.1} mm, {:.0} mm3, {:.2} g",
+        r.purge.count, r.purge.filament_mm, r.purge.volume_mm3, r.purge.mass_g
+    )?;
+    let per: Vec<String> = r
+        .filament_per_input_mm
+        .iter()
+        .zip(&r.filament_per_input_g)
+        .enumerate()
+        .map(|(i, (mm, g))| format!("E{i} {mm:.1} mm ({g:.2} g)"))
+        .collect();
+    writeln!(out, "filament        {}", per.join(", "))?;
+    writeln!(out, "z-capped lines  {}", r.z_capped_lines)?;
+    if r.dropped_retractions > 0 {
+        writeln!(out, "dropped slicer tool-change retractions {}", r.dropped_retractions)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,692 @@
+//! `gweave mix`: slicer G-code for a mixing hotend (seed 000). The slicer knows one extruder, or
+//! several; the printer has one nozzle fed by N filaments whose ratios the firmware mixes.
+//!
+//! What the pass does, streaming, one line at a time:
+//!
+//! 1. At the start of the print proper (the first layer, after the start G-code) it defines the
+//!    mixes as virtual tools (Marlin `M163`/`M164`, RepRapFirmware `M563`/`M567`) and selects
+//!    the first. With `M165` direct mixing the mix itself is written at each change instead.
+//! 2. It decides the wanted mix: per layer (or height) from the schedule and gradients for a
+//!    single-tool file; per slicer tool from the map for a multi-tool file. The slicer's `T<n>`
+//!    lines become comments: the virtual tool is selected right before the next extrusion, after
+//!    the slicer's own heating, travel and unretraction, so nothing ever changes mid-move and the
+//!    purge happens where the nozzle is about to print.
+//! 3. When the wanted mix differs from the one in force, before that extrusion it writes the
+//!    selection (and, for gradients that outgrow the firmware's tools, the redefinition of a
+//!    free tool) and a purge block ([`crate::post::purge_block`]). No change, no purge.
+//! 4. Moves faster in Z than the cap are split or slowed ([`crate::post::zcap`]).
+//! 5. Optionally, the slicer's tool-change retraction (the retraction right before a `T<n>`) and
+//!    the matching unretraction after the tool is next selected are removed: one nozzle needs no
+//!    multi-material unload. Removed E moves become `G92 E` so the file's E positions still hold.
+//!    This looks back over at most [`HOLD_LINES`] lines (between a retraction and a `T<n>`).
+//!
+//! Every other line is copied byte for byte; new lines use the profile's number format and the
+//! file's line endings.
+//!
+//! Before and after (the seed's schedule, layer 10 turns Pink):
+//!
+//! ```text
+//! ;LAYER:10                        ;LAYER:10
+//! G0 F9000 X120 Y80 Z2.1           G0 Z2.1 F200
+//!                                  G0 X120 Y80 F9000
+//! G1 F1800 X125 Y80 E410.2         ; gweave mix: Orange -> Pink
+//!                                  T1
+//!                                  ; gweave mix: purge Orange -> Pink, 25 mm
+//!                                  ... (see purge_block)
+//!                                  ; gweave mix: end purge
+//!                                  G1 F1800 X125 Y80 E410.2
+//! ```
+
+pub mod profile;
+pub mod report;
+pub mod schedule;
+pub mod wizard;
+
+use std::collections::BTreeMap;
+use std::io::{self, Write};
+use std::path::Path;
+
+use crate::colour::dialect::{marlin_m163_m164, marlin_m165, rrf_m563, rrf_m567};
+use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
+use crate::gcode::layers::Region;
+use crate::gcode::number::NumberFormat;
+use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z};
+use crate::gcode::writer::Target;
+use crate::pass::{drive_reader, keep, Ctx, Pass, Progress, Quiet, Run, Strictness};
+use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
+use crate::post::zcap::ZCap;
+
+use profile::{Dialect, MixProfile, PurgeMode};
+use report::{Accounting, MixReport};
+use schedule::{Plan, Slot};
+
+/// Lines held back, at most, between a slicer retraction and the `T<n>` it may belong to.
+pub const HOLD_LINES: usize = 32;
+
+/// Errors of the mix pass.
+#[derive(Debug, thiserror::Error)]
+pub enum MixPassError {
+    #[error("mix profile: {0}")]
+    Config(String),
+    #[error("line {line}: {message}")]
+    AtLine { line: u64, message: String },
+    #[error(transparent)]
+    Mix(#[from] crate::colour::MixError),
+    #[error(transparent)]
+    Engine(#[from] crate::Error),
+}
+
+/// A held line: its output, and what to write instead if it turns out to be a tool-change
+/// retraction (its retraction in mm).
+struct Held {
+    bytes: Vec<u8>,
+    retraction: Option<(Vec<u8>, f64)>,
+}
+
+/// The `gweave mix` pass; see the module docs.
+pub struct MixPass {
+    plan: Plan,
+    profile: MixProfile,
+    zcap: Option<ZCap>,
+    motion: PurgeMotion,
+    started: bool,
+    /// The mix the firmware prints with now.
+    active: Option<usize>,
+    wanted: Option<usize>,
+    active_tool: Option<u32>,
+    /// What the two shared tools hold.
+    rotating: [Option<usize>; 2],
+    slicer_tool: u32,
+    decided_layer: Option<u32>,
+    /// Retraction in force (E-only moves since the last extrusion), mm.
+    retracted_mm: f64,
+    /// Dropped tool-change retraction per slicer tool, to drop again from its unretraction, mm.
+    owed_mm: BTreeMap<u32, f64>,
+    held: Vec<Held>,
+    feed_before: f64,
+    rapid_before: bool,
+    eol: Vec<u8>,
+    /// Lines before the current line, `\n`-separated.
+    pre: Vec<u8>,
+    /// The current line's replacement, `\n`-separated (empty: keep the line).
+    repl: Vec<u8>,
+    replaced: bool,
+    acc: Accounting,
+}
+
+impl MixPass {
+    /// A pass for `profile`, with every mix resolved up front.
+    pub fn new(profile: MixProfile) -> Result<Self, MixPassError> {
+        let plan = Plan::new(&profile)?;
+        let cap = profile.z_cap.max_z_feed_mm_min;
+        let zcap = (cap > 0.0).then_some(ZCap { max_z_feed_mm_min: cap, mode: profile.z_cap.mode });
+        let p = &profile.purge;
+        let motion = PurgeMotion {
+            retract_mm: p.retract_mm,
+            lift_mm: p.lift_mm,
+            x_mm: p.x_mm,
+            y_mm: p.y_mm,
+            wipe_mm: p.wipe_mm,
+            travel_feed_mm_min: p.travel_feed_mm_min,
+            extrude_feed_mm_min: p.extrude_feed_mm_min,
+            retract_feed_mm_min: p.retract_feed_mm_min,
+            z_feed_mm_min: if cap > 0.0 { cap.min(p.travel_feed_mm_min) } else { p.travel_feed_mm_min },
+        };
+        let acc = Accounting::new(&plan, &profile.hardware);
+        Ok(MixPass {
+            plan,
+            profile,
+            zcap,
+            motion,
+            started: false,
+            active: None,
+            wanted: None,
+            active_tool: None,
+            rotating: [None; 2],
+            slicer_tool: 0,
+            decided_layer: None,
+            retracted_mm: 0.0,
+            owed_mm: BTreeMap::new(),
+            held: Vec::new(),
+            feed_before: 0.0,
+            rapid_before: false,
+            eol: b"\n".to_vec(),
+            pre: Vec::new(),
+            repl: Vec::new(),
+            replaced: false,
+            acc,
+        })
+    }
+
+    /// The resolved mixes and schedule.
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// The mix the firmware prints with after the lines seen so far (an index into
+    /// [`Plan::mixes`]), for passes that colour the print line by line.
+    pub fn active_mix(&self) -> Option<usize> {
+        self.active
+    }
+
+    /// The report, after the run.
+    pub fn into_report(self) -> MixReport {
+        self.acc.finish(&self.profile.hardware)
+    }
+
+    fn fmt(&self) -> &NumberFormat {
+        &self.profile.numbers
+    }
+
+    fn decimals(&self) -> crate::colour::dialect::Decimals {
+        self.plan.decimals
+    }
+
+    /// Mix definitions and the first selection, before the first line of the print proper.
+    fn start_print(&mut self, state: &State) -> Result<(), MixPassError> {
+        self.started = true;
+        let hw = &self.profile.hardware;
+        let n = hw.inputs.len();
+        let mut text = format!(
+            "; gweave mix: {} mixes, {} inputs, {:?} dialect\n",
+            self.plan.mixes.len(),
+            n,
+            hw.dialect
+        );
+        let drives: Vec<u32> = (0..n as u32).collect();
+        let define_rrf_tool = |t: u32, text: &mut String| -> Result<(), MixPassError> {
+            let line =
+                rrf_m563(t, &drives, hw.rrf_heater).map_err(|e| MixPassError::Config(e.to_string()))?;
+            text.push_str(&line);
+            text.push('\n');
+            // A new RepRapFirmware tool heats to its own active temperature (0 unless set).
+            if let Some(&c) = state.thermal.hotend_c.first().filter(|c| **c > 0.0) {
+                text.push_str(&format!("M568 P{t} S{c} R{c}\n"));
+            }
+            Ok(())
+        };
+        for m in &self.plan.mixes {
+            let Slot::Fixed(t) = m.slot else { continue };
+            text.push_str(&format!("; {} = T{t}, predicted {}\n", m.label, m.predicted.to_hex()));
+            match hw.dialect {
+                Dialect::Marlin => {
+                    for l in marlin_m163_m164(&m.mix, t as usize, self.plan.decimals) {
+                        text.push_str(&l);
+                        text.push('\n');
+                    }
+                }
+                Dialect::Reprap => {
+                    define_rrf_tool(t, &mut text)?;
+                    text.push_str(&rrf_m567(&m.mix, t, self.plan.decimals));
+                    text.push('\n');
+                }
+                Dialect::MarlinDirect => {}
+            }
+        }
+        if hw.dialect == Dialect::Reprap && self.plan.mixes.iter().any(|m| m.slot == Slot::Rotating) {
+            for t in self.plan.rotating_tools {
+                define_rrf_tool(t, &mut text)?;
+            }
+        }
+        self.pre.extend_from_slice(text.as_bytes());
+        let first = self.plan.initial(self.slicer_tool)?;
+        self.select(first)?;
+        self.wanted = Some(first);
+        Ok(())
+    }
+
+    /// Writes what makes `mix` the active one (definition if needed, then selection).
+    fn select(&mut self, mix: usize) -> Result<(), MixPassError> {
+        let m = &self.plan.mixes[mix];
+        let mut text = String::new();
+        match m.slot {
+            Slot::Fixed(t) => {
+                text.push_str(&format!("T{t}\n"));
+                self.active_tool = Some(t);
+            }
+            Slot::Direct => {
+                let line =
+                    marlin_m165(&m.mix, self.decimals()).map_err(|e| MixPassError::Config(e.to_string()))?;
+                text.push_str(&line);
+                text.push('\n');
+            }
+            Slot::Rotating => {
+                let tools = self.plan.rotating_tools;
+                let k = match self.rotating.iter().position(|r| *r == Some(mix)) {
+                    Some(k) => k,
+                    // The shared tool not printing now.
+                    None => usize::from(self.active_tool == Some(tools[0])),
+                };
+                let t = tools[k];
+                if self.rotating[k] != Some(mix) {
+                    text.push_str(&format!("; {} = T{t}, predicted {}\n", m.label, m.predicted.to_hex()));
+                    if self.profile.hardware.dialect == Dialect::Reprap {
+                        text.push_str(&rrf_m567(&m.mix, t, self.decimals()));
+                        text.push('\n');
+                    } else {
+                        for l in marlin_m163_m164(&m.mix, t as usize, self.decimals()) {
+                            text.push_str(&l);
+                            text.push('\n');
+                        }
+                    }
+                    self.rotating[k] = Some(mix);
+                }
+                text.push_str(&format!("T{t}\n"));
+                self.active_tool = Some(t);
+                self.acc.set_tool(mix, t);
+            }
+        }
+        self.pre.extend_from_slice(text.as_bytes());
+        self.active = Some(mix);
+        Ok(())
+    }
+
+    /// Purge length for a change from `from` to `to`, mm of filament.
+    fn purge_mm(&self, from: usize, to: usize) -> Result<f64, MixPassError> {
+        let p = &self.profile.purge;
+        let (a, b) = (&self.plan.mixes[from], &self.plan.mixes[to]);
+        if p.mode == PurgeMode::Off || ((a.gradient_step || b.gradient_step) && !p.on_gradient_steps) {
+            return Ok(0.0);
+        }
+        let dia = self.profile.hardware.filament_diameter_mm;
+        let mm3 = |v: f64| mm3_to_filament_mm(v, dia).map_err(|e| MixPassError::Config(e.to_string()));
+        let same = |x: &str, y: &str| x.eq_ignore_ascii_case(y);
+        if let Some(pair) = p.pair.iter().find(|q| same(&q.from, &a.label) && same(&q.to, &b.label)) {
+            return match (pair.length_mm, pair.volume_mm3) {
+                (Some(l), _) => Ok(l),
+                (None, Some(v)) => mm3(v),
+                (None, None) => unreachable!("validated: a pair has a length or a volume"),
+            };
+        }
+        match p.mode {
+            PurgeMode::Off => Ok(0.0),
+            PurgeMode::Length => Ok(p.length_mm),
+            PurgeMode::Volume => mm3(p.volume_mm3),
+            PurgeMode::Colours => mm3(p.multiplier * flush_volume_mm3(a.predicted, b.predicted)),
+            PurgeMode::Washout => {
+                let w = Washout::new(p.chamber_mm3, p.dead_mm3)
+                    .map_err(|e| MixPassError::Config(e.to_string()))?;
+                mm3(w
+                    .purge_for_tolerance_mm3(p.tolerance)
+                    .map_err(|e| MixPassError::Config(e.to_string()))?)
+            }
+        }
+    }
+
+    /// The change of mix before an extruding move `mv`.
+    fn change(&mut self, to: usize, mv: &Move, state: &State) -> Result<(), MixPassError> {
+        let from = self.active;
+        let label = match from {
+            Some(f) => format!("{} -> {}", self.plan.mixes[f].label, self.plan.mixes[to].label),
+            None => self.plan.mixes[to].label.clone(),
+        };
+        self.pre.extend_from_slice(format!("; gweave mix: {label}\n").as_bytes());
+        self.select(to)?;
+        let Some(from) = from else { return Ok(()) };
+        self.acc.changes += 1;
+        let purge_mm = self.purge_mm(from, to)?;
+        if purge_mm > 0.0 {
+            let start = PurgeStart {
+                pos: purge_start_pos(&mv.from),
+                absolute_xyz: state.absolute,
+                relative_e: state.relative_e(),
+                feed_mm_min: self.feed_before,
+                rapid_mode: self.rapid_before,
+                retracted_mm: self.retracted_mm,
+            };
+            let mut block = Vec::new();
+            write_purge(&mut block, &self.profile.numbers, &self.motion, &start, purge_mm, &label);
+            self.pre.extend_from_slice(&block);
+            self.acc.purge(to, purge_mm);
+        }
+        Ok(())
+    }
+
+    /// Decides what comes out for one line, into `pre` and `repl`.
+    fn process(&mut self, ctx: &Ctx<'_>) -> Result<(), MixPassError> {
+        let state = ctx.state;
+        let print = state.structure.region == Region::Print;
+        if !self.started && print {
+            self.start_print(state)?;
+        }
+        match ctx.effect {
+            Effect::ToolChange { to, .. } => {
+                if self.plan.maps_tools() && print {
+                    self.wanted = Some(self.plan.for_tool(*to)?);
+                }
+                self.slicer_tool = *to;
+                self.repl.push(b';');
+                self.repl.extend_from_slice(ctx.line.bytes);
+                self.repl.extend_from_slice(b" ; gweave mix: the mix is selected at the next extrusion\n");
+                self.replaced = true;
+            }
+            Effect::Move(mv) => self.process_move(ctx, mv)?,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn process_move(&mut self, ctx: &Ctx<'_>, mv: &Move) -> Result<(), MixPassError> {
+        let state = ctx.state;
+        if state.inches {
+            return Err(MixPassError::Config(
+                "gweave mix writes millimetres; convert the G20 (inch) file first".into(),
+            ));
+        }
+        let print = state.structure.region == Region::Print;
+        let e_mm = mv.e_mm();
+        let layer = state.structure.layer.unwrap_or(0);
+        if print && self.started && mv.is_extruding() {
+            if !self.plan.maps_tools() && self.decided_layer != Some(layer) {
+                self.wanted = self.plan.mix_at(layer, mv.to[Z]);
+                self.decided_layer = Some(layer);
+            }
+            if let Some(w) = self.wanted.filter(|w| Some(*w) != self.active) {
+                self.change(w, mv, state)?;
+            }
+        }
+        let e_only = mv.from[X] == mv.to[X] && mv.from[Y] == mv.to[Y] && mv.from[Z] == mv.to[Z];
+        let mut fed_mm = e_mm;
+        if e_only && e_mm > 0.0 {
+            fed_mm = self.unretract(ctx, mv)?;
+            self.retracted_mm = (self.retracted_mm - fed_mm).max(0.0);
+        } else if e_only {
+            self.retracted_mm -= e_mm;
+        } else if mv.is_extruding() {
+            self.retracted_mm = 0.0;
+        }
+        if print {
+            if let Some(a) = self.active {
+                let printed = mv.is_extruding().then_some((layer, state.structure.layer_z_mm));
+                self.acc.filament(a, fed_mm, printed);
+            }
+        }
+        if !self.replaced {
+            if let Some(zc) = self.zcap {
+                if zc.rewrite(ctx.line.bytes, ctx.block, mv, &self.profile.numbers, &mut self.repl) {
+                    self.replaced = true;
+                    self.acc.z_capped_lines += 1;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// An E-only forward move with tool-change retractions being dropped: the part of it that
+    /// undoes the retraction in force is kept, the part that undoes a dropped tool-change
+    /// retraction of this slicer tool is dropped. Returns the filament the output feeds.
+    fn unretract(&mut self, ctx: &Ctx<'_>, mv: &Move) -> Result<f64, MixPassError> {
+        let amount = mv.e_mm();
+        let owed = self.owed_mm.get(&self.slicer_tool).copied().unwrap_or(0.0);
+        if self.profile.tool_change.keep_slicer_retractions || owed <= 0.0 {
+            return Ok(amount);
+        }
+        let keep_for_retraction = amount.min(self.retracted_mm.max(0.0));
+        let dropped = (amount - keep_for_retraction).min(owed);
+        if dropped <= 1e-9 {
+            return Ok(amount);
+        }
+        self.owed_mm.insert(self.slicer_tool, owed - dropped);
+        self.acc.dropped_retractions += 1;
+        let kept = amount - dropped;
+        let fmt = self.profile.numbers;
+        let mut text = b";".to_vec();
+        text.extend_from_slice(ctx.line.bytes);
+        text.extend_from_slice(b" ; gweave mix: slicer tool-change unretraction dropped\nG92 E");
+        fmt.write(&mut text, mv.from[E] + dropped, fmt.extrusion_decimals.max(5));
+        text.push(b'\n');
+        if kept > 1e-9 {
+            if ctx.state.relative_e() {
+                text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
+                fmt.write_word(&mut text, b'E', kept);
+                text.push(b' ');
+                write_exact_feed(&mut text, &fmt, mv.feed_mm_min);
+                text.push(b'\n');
+            } else {
+                text.extend_from_slice(ctx.line.bytes);
+                text.push(b'\n');
+            }
+        } else if ctx.block.has(b'F') {
+            text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
+            write_exact_feed(&mut text, &fmt, mv.feed_mm_min);
+            text.push(b'\n');
+        }
+        self.repl = text;
+        self.replaced = true;
+        Ok(kept)
+    }
+
+    /// What a held retraction line becomes if dropped: a comment, the E position it reached,
+    /// and the feed rate it set.
+    fn dropped_retraction(&self, ctx: &Ctx<'_>, mv: &Move) -> Vec<u8> {
+        let fmt = self.fmt();
+        let mut text = b";".to_vec();
+        text.extend_from_slice(ctx.line.bytes);
+        text.extend_from_slice(b" ; gweave mix: slicer tool-change retraction dropped");
+        text.extend_from_slice(&self.eol);
+        text.extend_from_slice(b"G92 E");
+        fmt.write(&mut text, mv.to[E], fmt.extrusion_decimals.max(5));
+        text.extend_from_slice(&self.eol);
+        if ctx.block.has(b'F') {
+            text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
+            write_exact_feed(&mut text, fmt, mv.feed_mm_min);
+            text.extend_from_slice(&self.eol);
+        }
+        text
+    }
+
+    /// Renders `pre` and the line (or its replacement) with the file's line endings.
+    fn render(&mut self, ctx: &Ctx<'_>, into: &mut Vec<u8>) {
+        push_lines(into, &self.pre, &self.eol, &self.eol);
+        if self.replaced {
+            push_lines(into, &self.repl, &self.eol, ctx.line.eol);
+        } else {
+            into.extend_from_slice(ctx.line.bytes);
+            into.extend_from_slice(ctx.line.eol);
+        }
+    }
+
+    fn write_held(&mut self, drop: bool, out: &mut dyn Write) -> io::Result<()> {
+        for h in std::mem::take(&mut self.held) {
+            match h.retraction {
+                Some((instead, mm)) if drop => {
+                    out.write_all(&instead)?;
+                    *self.owed_mm.entry(self.slicer_tool).or_insert(0.0) += mm;
+                    self.retracted_mm = (self.retracted_mm - mm).max(0.0);
+                    self.acc.dropped_retractions += 1;
+                }
+                _ => out.write_all(&h.bytes)?,
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Appends `\n`-separated `text` to `into` with `eol` after each line and `last_eol` after the
+/// last one.
+fn push_lines(into: &mut Vec<u8>, text: &[u8], eol: &[u8], last_eol: &[u8]) {
+    if text.is_empty() {
+        return;
+    }
+    let body = text.strip_suffix(b"\n").unwrap_or(text);
+    let mut lines = body.split(|&b| b == b'\n').peekable();
+    while let Some(l) = lines.next() {
+        into.extend_from_slice(l);
+        into.extend_from_slice(if lines.peek().is_some() { eol } else { last_eol });
+    }
+}
+
+fn at_line(line: u64) -> impl Fn(MixPassError) -> io::Error {
+    move |e| {
+        let e = match e {
+            MixPassError::Config(message) => MixPassError::AtLine { line, message },
+            other => other,
+        };
+        io::Error::other(e)
+    }
+}
+
+impl Pass for MixPass {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        if !ctx.line.eol.is_empty() {
+            self.eol.clear();
+            self.eol.extend_from_slice(ctx.line.eol);
+        }
+        self.pre.clear();
+        self.repl.clear();
+        self.replaced = false;
+        // The slicer tool before this line, for a retraction that a T on this line follows.
+        let tool_before = self.slicer_tool;
+        self.process(ctx).map_err(at_line(ctx.line.number))?;
+        self.feed_before = ctx.state.feed_mm_min;
+        self.rapid_before = ctx.state.motion == Motion::Rapid;
+        let dropping = !self.profile.tool_change.keep_slicer_retractions
+            && self.plan.maps_tools()
+            && ctx.state.structure.region == Region::Print;
+        if !dropping && self.held.is_empty() && self.pre.is_empty() && !self.replaced {
+            // The common case: the line as it was, without a copy.
+            return keep(ctx, out);
+        }
+        let mut bytes = Vec::with_capacity(ctx.line.bytes.len() + self.pre.len() + self.repl.len() + 2);
+        self.render(ctx, &mut bytes);
+        if !dropping {
+            self.write_held(false, out)?;
+            return out.write_all(&bytes);
+        }
+        let retraction = match ctx.effect {
+            Effect::Move(mv)
+                if mv.e_mm() < 0.0
+                    && mv.from[X] == mv.to[X]
+                    && mv.from[Y] == mv.to[Y]
+                    && mv.from[Z] == mv.to[Z] =>
+            {
+                Some((self.dropped_retraction(ctx, mv), -mv.e_mm()))
+            }
+            _ => None,
+        };
+        if retraction.is_some() {
+            self.held.push(Held { bytes, retraction });
+            return Ok(());
+        }
+        if self.held.is_empty() {
+            return out.write_all(&bytes);
+        }
+        match ctx.effect {
+            Effect::ToolChange { .. } => {
+                // The held retractions belonged to the tool being left.
+                let now = std::mem::replace(&mut self.slicer_tool, tool_before);
+                self.write_held(true, out)?;
+                self.slicer_tool = now;
+                out.write_all(&bytes)
+            }
+            Effect::Move(mv) if mv.from[X] != mv.to[X] || mv.from[Y] != mv.to[Y] || mv.e_mm() != 0.0 => {
+                self.write_held(false, out)?;
+                out.write_all(&bytes)
+            }
+            _ if self.held.len() < HOLD_LINES => {
+                self.held.push(Held { bytes, retraction: None });
+                Ok(())
+            }
+            _ => {
+                self.write_held(false, out)?;
+                out.write_all(&bytes)
+            }
+        }
+    }
+
+    fn finish(&mut self, _state: &State, out: &mut dyn Write) -> io::Result<()> {
+        self.write_held(false, out)?;
+        if !self.started {
+            self.acc.warnings.push("the file never reached its first layer: no mix was defined".into());
+        }
+        Ok(())
+    }
+}
+
+fn unwrap_error(e: crate::Error) -> MixPassError {
+    match e {
+        crate::Error::Io { source, .. } if source.get_ref().is_some_and(|e| e.is::<MixPassError>()) => {
+            match source.into_inner().map(|e| e.downcast::<MixPassError>()) {
+                Some(Ok(e)) => *e,
+                _ => unreachable!("checked to be a MixPassError just above"),
+            }
+        }
+        e => MixPassError::Engine(e),
+    }
+}
+
+/// Runs the pass over a whole text in memory (tests, Python): strict parsing, Marlin semantics.
+pub fn mix_bytes(profile: MixProfile, input: &[u8]) -> Result<(Vec<u8>, MixReport), MixPassError> {
+    let mut pass = MixPass::new(profile)?;
+    let mut out = Vec::with_capacity(input.len() + input.len() / 8);
+    drive_reader(
+        input,
+        Path::new("<input>"),
+        StateOptions::default(),
+        Strictness::Strict,
+        &mut Quiet,
+        &mut pass,
+        &mut out,
+    )
+    .map_err(unwrap_error)?;
+    Ok((out, pass.into_report()))
+}
+
+/// Runs the pass from a file into `target` (committed only on success), streaming.
+pub fn mix_file(
+    profile: MixProfile,
+    input: &Path,
+    target: &Target,
+    progress: &mut dyn Progress,
+) -> Result<MixReport, MixPassError> {
+    let mut pass = MixPass::new(profile)?;
+    Run::new(input, progress).transform(&mut pass, target).map_err(unwrap_error)?;
+    Ok(pass.into_report())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn profile(extra: &str) -> MixProfile {
+        MixProfile::from_toml_str(&format!(
+            "[[schedule]]\nlayer = 0\nmix = \"Red\"\n[[schedule]]\nlayer = 1\nmix = \"Blue\"\n{extra}"
+        ))
+        .unwrap()
+    }
+
+    const PRINT: &str =
+        ";LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\n;LAYER_CHANGE\nG1 Z0.4 F100\nG1 X0 E2\n";
+
+    #[test]
+    fn crlf_files_stay_crlf() {
+        let input = format!("M83\r\n{}", PRINT.replace('\n', "\r\n"));
+        let (out, report) = mix_bytes(profile(""), input.as_bytes()).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert_eq!(report.changes, 1);
+        assert!(!text.replace("\r\n", "").contains('\n'), "a bare LF in {text:?}");
+    }
+
+    #[test]
+    fn no_change_no_purge_and_direct_mixing() {
+        let same = MixProfile::from_toml_str("[hardware]\ndialect = \"marlin-direct\"\n[[schedule]]\nlayer = 0\nmix = \"Red\"\n[[schedule]]\nlayer = 1\nmix = \"Red@0\"\n").unwrap();
+        let (out, report) = mix_bytes(same, PRINT.as_bytes()).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.contains("M165 A0 B0.5 C0.5 D0\n"), "{text}");
+        assert!(!text.contains("\nT"), "{text}");
+        // Red with no material 2 is Red: the same mix, so no change and no purge.
+        assert_eq!((report.changes, report.purge.count), (0, 0));
+        let (_, r) = mix_bytes(profile("[purge]\nmode = \"off\""), PRINT.as_bytes()).unwrap();
+        assert_eq!((r.changes, r.purge.count), (1, 0));
+    }
+
+    #[test]
+    fn inch_files_and_unmapped_tools_are_refused() {
+        let err = mix_bytes(profile(""), format!("G20\n{PRINT}").as_bytes()).unwrap_err();
+        assert!(err.to_string().contains("G20"), "{err}");
+        let mut p = MixProfile::default();
+        p.add_map("T0=Red").unwrap();
+        let err = mix_bytes(p, format!("{PRINT}T1\nG1 X5 E3\n").as_bytes()).unwrap_err();
+        assert_eq!(err.to_string(), "line 7: the file selects T1, which has no mix: add --map T1=<mix>");
+    }
+}

@@ -1,0 +1,638 @@
+//! The hardware profile and the job: what the mixing hotend is loaded with, how its firmware
+//! speaks, how to purge, the Z feed cap, and which colour goes where. One TOML file holds it all
+//! (see `examples/mix/*.toml`); every key is checked and unknown keys are rejected.
+//!
+//! ```toml
+//! [hardware]
+//! dialect = "marlin"            # marlin | marlin-direct | reprap
+//! virtual_tools = 16
+//! filament_diameter_mm = 1.75
+//! material2_input = 3           # the input holding "material 2" (default: the last)
+//! [[hardware.inputs]]
+//! colour = "#00a0e0"
+//! material = "PLA"
+//! # ... one table per input, E0 first
+//!
+//! [purge]
+//! mode = "length"               # off | length | volume | colours | washout
+//! length_mm = 25.0
+//!
+//! [z_cap]
+//! max_z_feed_mm_min = 200.0
+//! mode = "split"                # split | slow
+//!
+//! [mix.Pink]                    # user colours, as in the colour palette
+//! ratios = [0, 0.6, 0.1, 0.3]
+//!
+//! [[schedule]]                  # single-tool input: colour by layer (or z_mm)
+//! layer = 0
+//! mix = "Orange"
+//!
+//! [map]                         # multi-tool input: slicer tool -> mix
+//! T1 = "PVA"
+//! ```
+//!
+//! A mix is named by a palette name (`Orange`), a colour (`#ff8800`, solved for the loaded
+//! filaments), or a material (`PVA`: 100 % of the input loaded with it; `support` is the
+//! material-2 input), optionally with a proportion of material 2: `Orange@0.3`.
+
+use std::collections::BTreeMap;
+use std::str::FromStr;
+
+use serde::{Deserialize, Serialize};
+
+use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
+use crate::colour::Srgb8;
+use crate::gcode::number::NumberFormat;
+
+use super::MixPassError;
+
+/// How the firmware is told the mix.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Dialect {
+    /// Marlin MIXING_EXTRUDER: `M163 S<i> P<f>` ... `M164 S<t>`, then `T<t>`.
+    #[default]
+    Marlin,
+    /// Marlin with direct mixing: `M165 A B C D H I` sets the active tool's mix at each change.
+    MarlinDirect,
+    /// RepRapFirmware: `M563 P<t> D0:1:.. H<h>` and `M567 P<t> E<a:b:..>`, then `T<t>`.
+    Reprap,
+}
+
+/// One filament input of the hotend.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Input {
+    /// The filament's colour (sRGB), for the mixing model.
+    pub colour: Srgb8,
+    #[serde(default = "default_material")]
+    pub material: String,
+    /// For purge waste in grams, g/cm^3 (PLA about 1.24, PVA about 1.23).
+    #[serde(default = "default_density")]
+    pub density_g_cm3: f64,
+}
+
+fn default_material() -> String {
+    "PLA".into()
+}
+fn default_density() -> f64 {
+    1.24
+}
+
+/// The mixing hotend and its firmware.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Hardware {
+    /// Input 0 first. Default: the seed's cyan, magenta, yellow and white PLA.
+    pub inputs: Vec<Input>,
+    pub dialect: Dialect,
+    /// Virtual tools the firmware stores (Marlin MIXING_VIRTUAL_TOOLS, default 16).
+    pub virtual_tools: usize,
+    pub filament_diameter_mm: f64,
+    /// The input holding "material 2" (default: the last input).
+    pub material2_input: Option<usize>,
+    /// Decimals of the ratios written (they always sum to exactly 1).
+    pub ratio_decimals: u32,
+    /// RepRapFirmware: the heater of the mixing tools (`M563 ... H<h>`).
+    pub rrf_heater: u32,
+}
+
+impl Default for Hardware {
+    fn default() -> Self {
+        let names = ["PLA"; 4];
+        Hardware {
+            inputs: CMYW_FILAMENTS
+                .iter()
+                .zip(names)
+                .map(|(&colour, m)| Input { colour, material: m.into(), density_g_cm3: default_density() })
+                .collect(),
+            dialect: Dialect::Marlin,
+            virtual_tools: crate::colour::dialect::MARLIN_VIRTUAL_TOOLS,
+            filament_diameter_mm: 1.75,
+            material2_input: None,
+            ratio_decimals: 4,
+            rrf_heater: 1,
+        }
+    }
+}
+
+impl Hardware {
+    /// The input that holds material 2.
+    pub fn material2_index(&self) -> usize {
+        self.material2_input.unwrap_or(self.inputs.len().saturating_sub(1))
+    }
+}
+
+/// How the purge length is found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum PurgeMode {
+    /// No purge.
+    Off,
+    /// `length_mm` of filament.
+    #[default]
+    Length,
+    /// `volume_mm3` of plastic.
+    Volume,
+    /// OrcaSlicer's formula from the two predicted colours, times `multiplier`.
+    Colours,
+    /// The washout model: `dead_mm3 + chamber_mm3 * ln(1 / tolerance)`.
+    Washout,
+}
+
+/// A purge amount for one change of colour, overriding the mode.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairPurge {
+    pub from: String,
+    pub to: String,
+    pub length_mm: Option<f64>,
+    pub volume_mm3: Option<f64>,
+}
+
+/// The purge at each change of mix. Defaults are the seed's: retract 4 mm, lift 15 mm, go to
+/// X10 Y10, extrude 25 mm.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PurgeConfig {
+    pub mode: PurgeMode,
+    pub length_mm: f64,
+    pub volume_mm3: f64,
+    /// Scales OrcaSlicer's volume (`colours` mode).
+    pub multiplier: f64,
+    pub chamber_mm3: f64,
+    pub dead_mm3: f64,
+    /// Old-colour fraction left after the purge (`washout` mode).
+    pub tolerance: f64,
+    pub retract_mm: f64,
+    pub lift_mm: f64,
+    pub x_mm: f64,
+    pub y_mm: f64,
+    /// Move along +X after the purge, to wipe the nozzle on the purge blob's side.
+    pub wipe_mm: f64,
+    pub travel_feed_mm_min: f64,
+    pub extrude_feed_mm_min: f64,
+    pub retract_feed_mm_min: f64,
+    /// Purge at every step of a gradient too (normally the blend is the point).
+    pub on_gradient_steps: bool,
+    pub pair: Vec<PairPurge>,
+}
+
+impl Default for PurgeConfig {
+    fn default() -> Self {
+        PurgeConfig {
+            mode: PurgeMode::Length,
+            length_mm: 25.0,
+            volume_mm3: 90.0,
+            multiplier: 1.0,
+            chamber_mm3: 40.0,
+            dead_mm3: 10.0,
+            tolerance: 0.02,
+            retract_mm: 4.0,
+            lift_mm: 15.0,
+            x_mm: 10.0,
+            y_mm: 10.0,
+            wipe_mm: 5.0,
+            travel_feed_mm_min: 1320.0,
+            extrude_feed_mm_min: 200.0,
+            retract_feed_mm_min: 2400.0,
+            on_gradient_steps: false,
+            pair: Vec::new(),
+        }
+    }
+}
+
+/// What to do with a move whose Z speed is over the cap.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ZCapMode {
+    /// Z alone at the cap first, then XY at the original feed rate (as the seed did).
+    #[default]
+    Split,
+    /// Slow the whole move until its Z component is at the cap.
+    Slow,
+}
+
+/// The Z feed-rate cap. The seed's printer could not move Z faster than F200 (mm/min).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ZCapConfig {
+    /// Largest Z speed, mm/min (0: no cap).
+    pub max_z_feed_mm_min: f64,
+    pub mode: ZCapMode,
+}
+
+impl Default for ZCapConfig {
+    fn default() -> Self {
+        ZCapConfig { max_z_feed_mm_min: 200.0, mode: ZCapMode::Split }
+    }
+}
+
+/// What the slicer's own tool-change retractions become.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ToolChangeConfig {
+    /// Keep the retraction before a slicer `T<n>` and the unretraction after it. A mixing hotend
+    /// has one melt zone, so a multi-material unload (10 mm and more) only wastes time.
+    pub keep_slicer_retractions: bool,
+}
+
+impl Default for ToolChangeConfig {
+    fn default() -> Self {
+        ToolChangeConfig { keep_slicer_retractions: true }
+    }
+}
+
+/// A mix as the user names it: palette name, `#RRGGBB` or material, with a proportion of
+/// material 2 (`Orange@0.3`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(try_from = "String")]
+pub struct MixRef {
+    pub base: MixBase,
+    /// Proportion of material 2, 0..=1.
+    pub material2: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum MixBase {
+    Name(String),
+    Colour(Srgb8),
+}
+
+impl MixRef {
+    /// How the mix is shown in reports and comments.
+    pub fn label(&self) -> String {
+        let base = match &self.base {
+            MixBase::Name(n) => n.clone(),
+            MixBase::Colour(c) => c.to_hex(),
+        };
+        match self.material2 {
+            Some(p) => format!("{base}@{p}"),
+            None => base,
+        }
+    }
+}
+
+impl FromStr for MixRef {
+    type Err = MixPassError;
+    fn from_str(s: &str) -> Result<Self, MixPassError> {
+        let bad = |why: &str| MixPassError::Config(format!("mix {s:?}: {why}"));
+        let (base, material2) = match s.rsplit_once('@') {
+            Some((b, p)) => {
+                let p: f64 = p.trim().parse().map_err(|_| bad("the proportion after @ is not a number"))?;
+                if !(0.0..=1.0).contains(&p) {
+                    return Err(bad("the proportion of material 2 must be within 0..1"));
+                }
+                (b.trim(), Some(p))
+            }
+            None => (s.trim(), None),
+        };
+        if base.is_empty() {
+            return Err(bad("empty name"));
+        }
+        let base = if base.starts_with('#') {
+            MixBase::Colour(Srgb8::parse_hex(base).map_err(|e| bad(&e.to_string()))?)
+        } else {
+            MixBase::Name(base.to_owned())
+        };
+        Ok(MixRef { base, material2 })
+    }
+}
+
+impl TryFrom<String> for MixRef {
+    type Error = MixPassError;
+    fn try_from(s: String) -> Result<Self, MixPassError> {
+        s.parse()
+    }
+}
+
+/// Where a schedule entry or gradient starts: a layer index (0 = first) or a height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum At {
+    Layer(u32),
+    Z(f64),
+}
+
+/// From this layer (or Z) on, print with this mix.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScheduleEntry {
+    pub layer: Option<u32>,
+    pub z_mm: Option<f64>,
+    pub mix: MixRef,
+}
+
+impl ScheduleEntry {
+    pub fn at(&self) -> Result<At, MixPassError> {
+        match (self.layer, self.z_mm) {
+            (Some(l), None) => Ok(At::Layer(l)),
+            (None, Some(z)) if z.is_finite() => Ok(At::Z(z)),
+            _ => Err(MixPassError::Config(format!(
+                "schedule entry {}: give exactly one of `layer` or `z_mm`",
+                self.mix.label()
+            ))),
+        }
+    }
+
+    /// `10=Pink` (a layer) for `--at-layer`.
+    pub fn parse_layer(s: &str) -> Result<Self, MixPassError> {
+        let (at, mix) = split_eq(s)?;
+        let layer = at.parse().map_err(|_| MixPassError::Config(format!("{s:?}: {at:?} is not a layer")))?;
+        Ok(ScheduleEntry { layer: Some(layer), z_mm: None, mix: mix.parse()? })
+    }
+
+    /// `2.5=Blue` (a height, mm) for `--at-z`.
+    pub fn parse_z(s: &str) -> Result<Self, MixPassError> {
+        let (at, mix) = split_eq(s)?;
+        let z = at.parse().map_err(|_| MixPassError::Config(format!("{s:?}: {at:?} is not a height")))?;
+        Ok(ScheduleEntry { layer: None, z_mm: Some(z), mix: mix.parse()? })
+    }
+}
+
+fn split_eq(s: &str) -> Result<(&str, &str), MixPassError> {
+    s.split_once('=')
+        .map(|(a, b)| (a.trim(), b.trim()))
+        .ok_or_else(|| MixPassError::Config(format!("{s:?}: expected <where>=<mix>")))
+}
+
+/// How a gradient interpolates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum GradientSpace {
+    /// A straight line between the two mixes' ratios (what firmware gradients do).
+    #[default]
+    Mix,
+    /// Equal steps of perceived colour (CIELAB), each solved for the filaments.
+    Perceived,
+}
+
+/// A blend from one mix to another over a layer range (or Z range), inclusive.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GradientSpec {
+    pub from_layer: Option<u32>,
+    pub to_layer: Option<u32>,
+    pub from_z_mm: Option<f64>,
+    pub to_z_mm: Option<f64>,
+    pub start: MixRef,
+    pub end: MixRef,
+    #[serde(default)]
+    pub space: GradientSpace,
+    /// A new step every this many layers (layer ranges).
+    #[serde(default = "one")]
+    pub every_layers: u32,
+    /// A new step every this many mm (Z ranges).
+    #[serde(default = "default_z_step")]
+    pub z_step_mm: f64,
+}
+
+fn one() -> u32 {
+    1
+}
+fn default_z_step() -> f64 {
+    0.2
+}
+
+impl GradientSpec {
+    /// The range, checked.
+    pub fn range(&self) -> Result<(At, At), MixPassError> {
+        let bad = |why: &str| {
+            MixPassError::Config(format!("gradient {}..{}: {why}", self.start.label(), self.end.label()))
+        };
+        match (self.from_layer, self.to_layer, self.from_z_mm, self.to_z_mm) {
+            (Some(a), Some(b), None, None) if a < b => {
+                if self.every_layers == 0 {
+                    return Err(bad("every_layers must be at least 1"));
+                }
+                Ok((At::Layer(a), At::Layer(b)))
+            }
+            (None, None, Some(a), Some(b)) if a.is_finite() && b.is_finite() && a < b => {
+                if !(self.z_step_mm.is_finite() && self.z_step_mm > 0.0) {
+                    return Err(bad("z_step_mm must be positive"));
+                }
+                Ok((At::Z(a), At::Z(b)))
+            }
+            _ => Err(bad("give from_layer < to_layer, or from_z_mm < to_z_mm")),
+        }
+    }
+
+    /// `0-50=Cyan..Magenta`, `0-50/2=Cyan..Magenta` (every 2 layers) or `z1-5=Cyan..Magenta`.
+    pub fn parse(s: &str, space: GradientSpace) -> Result<Self, MixPassError> {
+        let bad = |why: &str| MixPassError::Config(format!("gradient {s:?}: {why}"));
+        let (range, mixes) = split_eq(s)?;
+        let (start, end) = mixes.split_once("..").ok_or_else(|| bad("expected <from>-<to>=<mix>..<mix>"))?;
+        let (range, every) = match range.split_once('/') {
+            Some((r, n)) => (r, Some(n.parse::<u32>().map_err(|_| bad("the step after / is not a count"))?)),
+            None => (range, None),
+        };
+        let (is_z, range) = match range.strip_prefix('z').or_else(|| range.strip_prefix('Z')) {
+            Some(r) => (true, r),
+            None => (false, range),
+        };
+        let (a, b) = range.split_once('-').ok_or_else(|| bad("expected a range like 0-50"))?;
+        let mut spec = GradientSpec {
+            from_layer: None,
+            to_layer: None,
+            from_z_mm: None,
+            to_z_mm: None,
+            start: start.parse()?,
+            end: end.parse()?,
+            space,
+            every_layers: 1,
+            z_step_mm: default_z_step(),
+        };
+        if is_z {
+            spec.from_z_mm = Some(a.parse().map_err(|_| bad("bad start height"))?);
+            spec.to_z_mm = Some(b.parse().map_err(|_| bad("bad end height"))?);
+            if let Some(n) = every {
+                spec.z_step_mm = f64::from(n);
+            }
+        } else {
+            spec.from_layer = Some(a.parse().map_err(|_| bad("bad start layer"))?);
+            spec.to_layer = Some(b.parse().map_err(|_| bad("bad end layer"))?);
+            spec.every_layers = every.unwrap_or(1);
+        }
+        spec.range()?;
+        Ok(spec)
+    }
+}
+
+/// Everything `gweave mix` needs.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct MixProfile {
+    pub hardware: Hardware,
+    pub purge: PurgeConfig,
+    pub z_cap: ZCapConfig,
+    pub tool_change: ToolChangeConfig,
+    /// Format of the numbers in new lines.
+    pub numbers: NumberFormat,
+    /// User colours by name (`[mix.Pink] ratios = [...]` or `colour = "#..."`).
+    pub mix: BTreeMap<String, MixSpec>,
+    pub schedule: Vec<ScheduleEntry>,
+    pub gradient: Vec<GradientSpec>,
+    /// Slicer tool (`T1`) to mix.
+    pub map: BTreeMap<String, MixRef>,
+}
+
+impl MixProfile {
+    /// Reads and validates a profile.
+    pub fn from_toml_str(text: &str) -> Result<Self, MixPassError> {
+        let profile: MixProfile = toml::from_str(text).map_err(|e| MixPassError::Config(e.to_string()))?;
+        profile.validate()?;
+        Ok(profile)
+    }
+
+    /// Adds `--map T1=PVA`.
+    pub fn add_map(&mut self, s: &str) -> Result<(), MixPassError> {
+        let (tool, mix) = split_eq(s)?;
+        parse_tool(tool)?;
+        self.map.insert(tool.to_ascii_uppercase(), mix.parse()?);
+        Ok(())
+    }
+
+    /// The slicer tool map with tool numbers.
+    pub fn tool_map(&self) -> Result<BTreeMap<u32, MixRef>, MixPassError> {
+        self.map.iter().map(|(k, v)| Ok((parse_tool(k)?, v.clone()))).collect()
+    }
+
+    /// Checks every range and the combination of settings.
+    pub fn validate(&self) -> Result<(), MixPassError> {
+        let cfg = |m: String| Err(MixPassError::Config(m));
+        let hw = &self.hardware;
+        if hw.inputs.is_empty() {
+            return cfg("hardware.inputs: at least one input".into());
+        }
+        if hw.dialect == Dialect::MarlinDirect && hw.inputs.len() > 6 {
+            return cfg("marlin-direct (M165) has letters for 6 inputs at most".into());
+        }
+        if hw.virtual_tools == 0 && hw.dialect != Dialect::MarlinDirect {
+            return cfg("hardware.virtual_tools must be at least 1".into());
+        }
+        if hw.material2_index() >= hw.inputs.len() {
+            return cfg(format!("hardware.material2_input {} does not exist", hw.material2_index()));
+        }
+        if hw.ratio_decimals > crate::colour::dialect::Decimals::MAX {
+            return cfg("hardware.ratio_decimals: at most 9".into());
+        }
+        for (i, input) in hw.inputs.iter().enumerate() {
+            positive(&format!("hardware.inputs[{i}].density_g_cm3"), input.density_g_cm3)?;
+        }
+        positive("hardware.filament_diameter_mm", hw.filament_diameter_mm)?;
+        let p = &self.purge;
+        for (name, v) in [
+            ("purge.travel_feed_mm_min", p.travel_feed_mm_min),
+            ("purge.extrude_feed_mm_min", p.extrude_feed_mm_min),
+            ("purge.retract_feed_mm_min", p.retract_feed_mm_min),
+            ("purge.multiplier", p.multiplier),
+            ("purge.chamber_mm3", p.chamber_mm3),
+        ] {
+            positive(name, v)?;
+        }
+        for (name, v) in [
+            ("purge.length_mm", p.length_mm),
+            ("purge.volume_mm3", p.volume_mm3),
+            ("purge.dead_mm3", p.dead_mm3),
+            ("purge.retract_mm", p.retract_mm),
+            ("purge.lift_mm", p.lift_mm),
+            ("purge.wipe_mm", p.wipe_mm),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return cfg(format!("{name} must be >= 0, got {v}"));
+            }
+        }
+        if !(p.x_mm.is_finite() && p.y_mm.is_finite()) {
+            return cfg("purge.x_mm / y_mm must be numbers".into());
+        }
+        if !(p.tolerance > 0.0 && p.tolerance < 1.0) {
+            return cfg(format!("purge.tolerance must be within (0, 1), got {}", p.tolerance));
+        }
+        for pair in &p.pair {
+            if pair.length_mm.is_some() == pair.volume_mm3.is_some() {
+                return cfg(format!("purge pair {} -> {}: give length_mm or volume_mm3", pair.from, pair.to));
+            }
+        }
+        let z = self.z_cap.max_z_feed_mm_min;
+        if !(z.is_finite() && z >= 0.0) {
+            return cfg(format!("z_cap.max_z_feed_mm_min must be >= 0 (0: no cap), got {z}"));
+        }
+        let scheduled = !(self.schedule.is_empty() && self.gradient.is_empty());
+        if !self.map.is_empty() && scheduled {
+            return cfg("use either a layer/Z schedule (with gradients) or a tool map, not both".into());
+        }
+        for s in &self.schedule {
+            s.at()?;
+        }
+        for g in &self.gradient {
+            g.range()?;
+        }
+        self.tool_map()?;
+        Ok(())
+    }
+}
+
+fn positive(name: &str, v: f64) -> Result<(), MixPassError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(MixPassError::Config(format!("{name} must be positive, got {v}")))
+    }
+}
+
+/// `T1` -> 1.
+fn parse_tool(s: &str) -> Result<u32, MixPassError> {
+    s.strip_prefix(['T', 't'])
+        .and_then(|n| n.parse().ok())
+        .ok_or_else(|| MixPassError::Config(format!("{s:?} is not a slicer tool like T1")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mix_refs_parse() {
+        let r: MixRef = "Orange@0.3".parse().unwrap();
+        assert_eq!((r.base, r.material2), (MixBase::Name("Orange".into()), Some(0.3)));
+        let r: MixRef = "#FF8800".parse().unwrap();
+        assert_eq!(r.base, MixBase::Colour(Srgb8::new(255, 136, 0)));
+        assert!("Orange@1.5".parse::<MixRef>().is_err());
+        assert!("#12".parse::<MixRef>().is_err());
+        assert!("@0.5".parse::<MixRef>().is_err());
+    }
+
+    #[test]
+    fn flags_parse() {
+        let e = ScheduleEntry::parse_layer("10=Pink").unwrap();
+        assert_eq!((e.at().unwrap(), e.mix.label()), (At::Layer(10), "Pink".into()));
+        assert_eq!(ScheduleEntry::parse_z("2.5=Blue").unwrap().at().unwrap(), At::Z(2.5));
+        let g = GradientSpec::parse("0-50/2=Cyan..Magenta", GradientSpace::Mix).unwrap();
+        assert_eq!((g.from_layer, g.to_layer, g.every_layers), (Some(0), Some(50), 2));
+        let g = GradientSpec::parse("z1-5=Cyan..#ff0000", GradientSpace::Perceived).unwrap();
+        assert_eq!((g.from_z_mm, g.to_z_mm), (Some(1.0), Some(5.0)));
+        assert!(GradientSpec::parse("5-1=Cyan..Magenta", GradientSpace::Mix).is_err());
+        let mut p = MixProfile::default();
+        p.add_map("T1=PVA").unwrap();
+        assert_eq!(p.tool_map().unwrap()[&1].label(), "PVA");
+        assert!(p.add_map("X1=PVA").is_err());
+    }
+
+    #[test]
+    fn defaults_are_the_seeds() {
+        let p = MixProfile::from_toml_str("").unwrap();
+        assert_eq!((p.purge.retract_mm, p.purge.lift_mm, p.purge.length_mm), (4.0, 15.0, 25.0));
+        assert_eq!((p.purge.x_mm, p.purge.y_mm), (10.0, 10.0));
+        assert_eq!(p.z_cap.max_z_feed_mm_min, 200.0);
+        assert_eq!((p.hardware.virtual_tools, p.hardware.inputs.len()), (16, 4));
+    }
+
+    #[test]
+    fn rejects_bad_profiles() {
+        assert!(MixProfile::from_toml_str("[purge]\nlenght_mm = 3").is_err());
+        assert!(MixProfile::from_toml_str("[purge]\nretract_mm = -1").is_err());
+        assert!(MixProfile::from_toml_str("[[schedule]]\nlayer = 1\nz_mm = 2\nmix = \"Red\"").is_err());
+        let both = "[[schedule]]\nlayer = 0\nmix = \"Red\"\n[map]\nT1 = \"Blue\"";
+        assert!(MixProfile::from_toml_str(both).is_err());
+    }
+}

@@ -1,0 +1,216 @@
+//! What `gweave mix` did: per mix its virtual tool, the layers it printed and the filament it
+//! took; per input the filament used (print plus purges); the purge waste in mm, mm^3 and g; the
+//! number of changes; and per layer the dominant mix and its predicted colour, which is what a
+//! preview colours the print with ([`MixReport::layer_colours`]).
+//!
+//! Filament counts every E move of the print proper (retractions subtract, their unretraction
+//! adds back) split by the ratios of the mix in force; the start and end G-code are not counted.
+
+use serde::Serialize;
+
+use crate::colour::Srgb8;
+
+use super::profile::{Dialect, Hardware};
+use super::schedule::{Plan, Slot};
+
+/// One mix of the job and where it went.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MixUse {
+    pub name: String,
+    /// Ratios per input as written, summing to 1.
+    pub ratios: Vec<f64>,
+    /// The colour the mixing model predicts, `#rrggbb`.
+    pub predicted: String,
+    /// The colour asked for, when solved from one.
+    pub target: Option<String>,
+    /// CIEDE2000 between target and prediction.
+    pub delta_e: Option<f64>,
+    pub out_of_gamut: bool,
+    /// The virtual tool (none for M165 direct mixing); a gradient step shares one of two tools.
+    pub tool: Option<u32>,
+    pub gradient_step: bool,
+    /// Layer ranges (0-based, inclusive) where this mix extruded.
+    pub layers: Vec<[u32; 2]>,
+    /// Net filament through the nozzle with this mix, mm.
+    pub filament_mm: f64,
+}
+
+/// Purge waste.
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+pub struct PurgeTotals {
+    pub count: u32,
+    pub filament_mm: f64,
+    pub volume_mm3: f64,
+    pub mass_g: f64,
+    pub per_input_mm: Vec<f64>,
+}
+
+/// The dominant mix of one layer.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LayerMix {
+    pub layer: u32,
+    pub z_mm: f64,
+    /// Index into [`MixReport::mixes`].
+    pub mix: usize,
+    pub colour: String,
+}
+
+/// The report; see the module docs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MixReport {
+    pub dialect: Dialect,
+    pub mixes: Vec<MixUse>,
+    /// Print plus purges, mm, per input.
+    pub filament_per_input_mm: Vec<f64>,
+    /// Print plus purges, g, per input (with each input's density).
+    pub filament_per_input_g: Vec<f64>,
+    pub purge: PurgeTotals,
+    /// Changes of mix during the print (the first selection is not one).
+    pub changes: u32,
+    /// Lines rewritten for the Z feed cap.
+    pub z_capped_lines: u64,
+    /// Slicer tool-change retractions and unretractions removed.
+    pub dropped_retractions: u64,
+    pub layers: Vec<LayerMix>,
+    pub warnings: Vec<String>,
+}
+
+impl MixReport {
+    /// Predicted colour of each layer's dominant mix, for a preview.
+    pub fn layer_colours(&self) -> Vec<(u32, Srgb8)> {
+        self.layers.iter().filter_map(|l| l.colour.parse().ok().map(|c| (l.layer, c))).collect()
+    }
+}
+
+/// A layer being printed: index, Z, and filament per mix in it.
+type OpenLayer = (u32, f64, Vec<(usize, f64)>);
+
+/// Collects the figures while the pass runs.
+#[derive(Debug, Clone)]
+pub(crate) struct Accounting {
+    area_mm2: f64,
+    pub mixes: Vec<MixUse>,
+    ratios: Vec<Vec<f64>>,
+    pub per_input_mm: Vec<f64>,
+    pub purge: PurgeTotals,
+    pub changes: u32,
+    pub z_capped_lines: u64,
+    pub dropped_retractions: u64,
+    layers: Vec<LayerMix>,
+    /// The layer being printed.
+    current: Option<OpenLayer>,
+    pub warnings: Vec<String>,
+}
+
+impl Accounting {
+    pub fn new(plan: &Plan, hw: &Hardware) -> Self {
+        let scale = 10f64.powi(hw.ratio_decimals as i32);
+        let ratios: Vec<Vec<f64>> =
+            plan.mixes.iter().map(|m| m.units.iter().map(|&u| u as f64 / scale).collect()).collect();
+        let mixes = plan
+            .mixes
+            .iter()
+            .zip(&ratios)
+            .map(|(m, r)| MixUse {
+                name: m.label.clone(),
+                ratios: r.clone(),
+                predicted: m.predicted.to_hex(),
+                target: m.target.map(Srgb8::to_hex),
+                delta_e: m.delta_e,
+                out_of_gamut: m.out_of_gamut,
+                tool: match m.slot {
+                    Slot::Fixed(t) => Some(t),
+                    Slot::Rotating | Slot::Direct => None,
+                },
+                gradient_step: m.gradient_step,
+                layers: Vec::new(),
+                filament_mm: 0.0,
+            })
+            .collect();
+        let d = hw.filament_diameter_mm;
+        Accounting {
+            area_mm2: std::f64::consts::PI * d * d / 4.0,
+            mixes,
+            ratios,
+            per_input_mm: vec![0.0; hw.inputs.len()],
+            purge: PurgeTotals { per_input_mm: vec![0.0; hw.inputs.len()], ..PurgeTotals::default() },
+            changes: 0,
+            z_capped_lines: 0,
+            dropped_retractions: 0,
+            layers: Vec::new(),
+            current: None,
+            warnings: plan.warnings.clone(),
+        }
+    }
+
+    /// A rotating tool now holds `mix`.
+    pub fn set_tool(&mut self, mix: usize, tool: u32) {
+        self.mixes[mix].tool = Some(tool);
+    }
+
+    /// `e_mm` of filament through the nozzle with `mix`; `printed` gives the layer and Z of a
+    /// move that deposits it (not a retraction or unretraction).
+    pub fn filament(&mut self, mix: usize, e_mm: f64, printed: Option<(u32, f64)>) {
+        for (acc, r) in self.per_input_mm.iter_mut().zip(&self.ratios[mix]) {
+            *acc += e_mm * r;
+        }
+        self.mixes[mix].filament_mm += e_mm;
+        let Some((layer, z_mm)) = printed else { return };
+        let ranges = &mut self.mixes[mix].layers;
+        match ranges.last_mut() {
+            Some([_, b]) if *b == layer => {}
+            Some([_, b]) if *b + 1 == layer => *b = layer,
+            _ => ranges.push([layer, layer]),
+        }
+        if self.current.as_ref().is_some_and(|c| c.0 != layer) {
+            self.close_layer();
+        }
+        let cur = self.current.get_or_insert((layer, z_mm, Vec::new()));
+        match cur.2.iter_mut().find(|(m, _)| *m == mix) {
+            Some((_, e)) => *e += e_mm,
+            None => cur.2.push((mix, e_mm)),
+        }
+    }
+
+    fn close_layer(&mut self) {
+        if let Some((layer, z_mm, per_mix)) = self.current.take() {
+            if let Some(&(mix, _)) = per_mix.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
+                let colour = self.mixes[mix].predicted.clone();
+                self.layers.push(LayerMix { layer, z_mm, mix, colour });
+            }
+        }
+    }
+
+    /// A purge of `mm` with `mix`.
+    pub fn purge(&mut self, mix: usize, mm: f64) {
+        self.purge.count += 1;
+        self.purge.filament_mm += mm;
+        self.purge.volume_mm3 += mm * self.area_mm2;
+        for ((acc, total), r) in
+            self.purge.per_input_mm.iter_mut().zip(&mut self.per_input_mm).zip(&self.ratios[mix])
+        {
+            *acc += mm * r;
+            *total += mm * r;
+        }
+    }
+
+    pub fn finish(mut self, hw: &Hardware) -> MixReport {
+        self.close_layer();
+        let grams = |mm: &[f64]| -> Vec<f64> {
+            mm.iter().zip(&hw.inputs).map(|(l, i)| l * self.area_mm2 / 1000.0 * i.density_g_cm3).collect()
+        };
+        self.purge.mass_g = grams(&self.purge.per_input_mm).iter().sum();
+        MixReport {
+            dialect: hw.dialect,
+            filament_per_input_g: grams(&self.per_input_mm),
+            mixes: self.mixes,
+            filament_per_input_mm: self.per_input_mm,
+            purge: self.purge,
+            changes: self.changes,
+            z_capped_lines: self.z_capped_lines,
+            dropped_retractions: self.dropped_retractions,
+            layers: self.layers,
+            warnings: self.warnings,
+        }
+    }
+}

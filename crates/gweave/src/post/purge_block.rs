@@ -1,0 +1,260 @@
+//! The purge sequence a mixing hotend needs after a change of mix, as the seed's post-processor
+//! did it: retract, lift, travel to the purge spot, extrude, retract, wipe, come back, lower,
+//! unretract, restore the extruder position.
+//!
+//! E bookkeeping. Let `r` be the block's own retraction and `d` the retraction the slicer already
+//! has in force (an E-only retract not yet undone). At the spot the block primes `r + d` and
+//! purges `p`, then retracts `r + d` again, and after lowering undoes only its own `r`:
+//!
+//! ```text
+//!   -r  (retract)   +(r + d + p) (prime, purge)   -(r + d) (retract)   +r (unretract)
+//!   net: p of filament at the spot; retraction in force afterwards: d, as before
+//! ```
+//!
+//! In absolute extrusion (M82) the block starts with `G92 E0`, so its numbers are small and
+//! exact; in relative extrusion (M83, or G91 on Marlin) it writes increments. Either way it ends
+//! with `G92 E<e>`, the position the file had before the block, so the next line of the file
+//! extrudes exactly what the slicer meant. XYZ follow the file's own G90/G91. The feed rate and
+//! the G0/G1 motion mode are restored at the end, since the next line may rely on them.
+//!
+//! ```text
+//! ; gweave mix: purge Orange -> Pink, 25 mm
+//! G92 E0
+//! G1 E-4 F2400
+//! G0 Z15.3 F200
+//! G0 X10 Y10 F1320
+//! G1 E25 F200
+//! G1 E21 F2400
+//! G0 X15 F1320
+//! G0 X120.5 Y80 F1320
+//! G0 Z0.3 F200
+//! G1 E25 F2400
+//! G92 E12.3456
+//! G1 F1800
+//! ; gweave mix: end purge
+//! ```
+
+use crate::gcode::number::NumberFormat;
+use crate::gcode::state::{E, X, Y, Z};
+
+/// Where and how to purge (the purge settings of the profile, with the Z feed capped).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PurgeMotion {
+    pub retract_mm: f64,
+    pub lift_mm: f64,
+    pub x_mm: f64,
+    pub y_mm: f64,
+    pub wipe_mm: f64,
+    pub travel_feed_mm_min: f64,
+    pub extrude_feed_mm_min: f64,
+    pub retract_feed_mm_min: f64,
+    /// Feed of the Z lift and lower (at most the Z cap).
+    pub z_feed_mm_min: f64,
+}
+
+/// The machine where the block starts, in the file's logical millimetres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PurgeStart {
+    /// X, Y, Z, E.
+    pub pos: [f64; 4],
+    /// G90 in force.
+    pub absolute_xyz: bool,
+    /// E relative (M83, or G91 on Marlin).
+    pub relative_e: bool,
+    /// The feed rate in force, restored at the end, mm/min.
+    pub feed_mm_min: f64,
+    /// G0 was the modal motion (restored with it).
+    pub rapid_mode: bool,
+    /// Retraction the slicer has in force, mm.
+    pub retracted_mm: f64,
+}
+
+/// Writes G-code lines (`\n`-terminated) for one purge block.
+struct Emitter<'a> {
+    out: &'a mut Vec<u8>,
+    fmt: &'a NumberFormat,
+    start: PurgeStart,
+    /// XYZ now.
+    xyz: [f64; 3],
+    /// E now, counted from the block's `G92 E0` (absolute) or its start (relative).
+    e: f64,
+}
+
+impl Emitter<'_> {
+    fn line(&mut self, text: &str) {
+        self.out.extend_from_slice(text.as_bytes());
+        self.out.push(b'\n');
+    }
+
+    /// A move to `xyz` (None: unchanged) extruding `de`, at `feed`.
+    fn go(&mut self, rapid: bool, xyz: [Option<f64>; 3], de: f64, feed: f64) {
+        self.out.extend_from_slice(if rapid { b"G0" } else { b"G1" });
+        for (i, letter) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
+            if let Some(v) = xyz[i] {
+                let word = if self.start.absolute_xyz { v } else { v - self.xyz[i] };
+                self.out.push(b' ');
+                self.fmt.write_word(self.out, letter, word);
+                self.xyz[i] = v;
+            }
+        }
+        if de != 0.0 {
+            self.e += de;
+            let word = if self.start.relative_e { de } else { self.e };
+            self.out.push(b' ');
+            self.fmt.write_word(self.out, b'E', word);
+        }
+        self.out.push(b' ');
+        self.fmt.write_word(self.out, b'F', feed);
+        self.out.push(b'\n');
+    }
+}
+
+/// Appends the purge block for `purge_mm` of filament to `out`; `label` names the change.
+pub fn write_purge(
+    out: &mut Vec<u8>,
+    fmt: &NumberFormat,
+    m: &PurgeMotion,
+    start: &PurgeStart,
+    purge_mm: f64,
+    label: &str,
+) {
+    let [x, y, z, e0] = start.pos;
+    let mut w = Emitter { out, fmt, start: *start, xyz: [x, y, z], e: 0.0 };
+    let mut head = Vec::new();
+    fmt.write(&mut head, purge_mm, 2);
+    w.line(&format!("; gweave mix: purge {label}, {} mm", String::from_utf8_lossy(&head)));
+    if !start.relative_e {
+        w.line("G92 E0");
+    }
+    let (r, d) = (m.retract_mm, start.retracted_mm.max(0.0));
+    if r > 0.0 {
+        w.go(false, [None; 3], -r, m.retract_feed_mm_min);
+    }
+    if m.lift_mm > 0.0 {
+        w.go(true, [None, None, Some(z + m.lift_mm)], 0.0, m.z_feed_mm_min);
+    }
+    w.go(true, [Some(m.x_mm), Some(m.y_mm), None], 0.0, m.travel_feed_mm_min);
+    w.go(false, [None; 3], r + d + purge_mm, m.extrude_feed_mm_min);
+    if r + d > 0.0 {
+        w.go(false, [None; 3], -(r + d), m.retract_feed_mm_min);
+    }
+    if m.wipe_mm > 0.0 {
+        w.go(true, [Some(m.x_mm + m.wipe_mm), None, None], 0.0, m.travel_feed_mm_min);
+    }
+    w.go(true, [Some(x), Some(y), None], 0.0, m.travel_feed_mm_min);
+    if m.lift_mm > 0.0 {
+        w.go(true, [None, None, Some(z)], 0.0, m.z_feed_mm_min);
+    }
+    if r > 0.0 {
+        w.go(false, [None; 3], r, m.retract_feed_mm_min);
+    }
+    let mut tail = b"G92 E".to_vec();
+    fmt.write(&mut tail, e0, fmt.extrusion_decimals.max(5));
+    w.line(&String::from_utf8_lossy(&tail));
+    if start.feed_mm_min > 0.0 {
+        let mut feed = if start.rapid_mode { b"G0 ".to_vec() } else { b"G1 ".to_vec() };
+        write_exact_feed(&mut feed, fmt, start.feed_mm_min);
+        w.line(&String::from_utf8_lossy(&feed));
+    }
+    w.line("; gweave mix: end purge");
+}
+
+/// Appends `F<feed>` for a feed rate being restored: with at least 3 decimals whatever the
+/// number format, since the lines after it rely on exactly the feed rate the file set.
+pub fn write_exact_feed(out: &mut Vec<u8>, fmt: &NumberFormat, feed_mm_min: f64) {
+    out.push(b'F');
+    fmt.write(out, feed_mm_min, fmt.feed_decimals.max(3));
+}
+
+/// X, Y, Z and E of a core position.
+pub fn purge_start_pos(pos: &crate::gcode::state::Position) -> [f64; 4] {
+    [pos[X], pos[Y], pos[Z], pos[E]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::lexer::parse_into;
+    use crate::gcode::line::Block;
+    use crate::gcode::state::{Effect, State};
+
+    const SEED: PurgeMotion = PurgeMotion {
+        retract_mm: 4.0,
+        lift_mm: 15.0,
+        x_mm: 10.0,
+        y_mm: 10.0,
+        wipe_mm: 5.0,
+        travel_feed_mm_min: 1320.0,
+        extrude_feed_mm_min: 200.0,
+        retract_feed_mm_min: 2400.0,
+        z_feed_mm_min: 200.0,
+    };
+
+    /// Runs `prefix`, then the block from the resulting state; returns the text, the state after,
+    /// and the filament the block fed.
+    fn run(prefix: &str, retracted_mm: f64) -> (String, State, f64) {
+        let mut state = State::default();
+        let mut block = Block::default();
+        for l in prefix.lines() {
+            parse_into(l.as_bytes(), &mut block);
+            state.apply(l.as_bytes(), &block);
+        }
+        let start = PurgeStart {
+            pos: purge_start_pos(&state.pos),
+            absolute_xyz: state.absolute,
+            relative_e: state.relative_e(),
+            feed_mm_min: state.feed_mm_min,
+            rapid_mode: false,
+            retracted_mm,
+        };
+        let mut out = Vec::new();
+        write_purge(&mut out, &NumberFormat::default(), &SEED, &start, 25.0, "A -> B");
+        let text = String::from_utf8(out).unwrap();
+        let before = state.filament_mm[0];
+        let mut max_z_feed: f64 = 0.0;
+        for l in text.lines() {
+            parse_into(l.as_bytes(), &mut block);
+            if let Effect::Move(m) = state.apply(l.as_bytes(), &block) {
+                if m.to[Z] != m.from[Z] {
+                    max_z_feed = max_z_feed.max(m.feed_mm_min);
+                }
+            }
+        }
+        assert_eq!(max_z_feed, 200.0);
+        let fed = state.filament_mm[0] - before;
+        (text, state, fed)
+    }
+
+    #[test]
+    fn absolute_extrusion_returns_to_the_same_state() {
+        let (text, s, fed) = run("M82\nG1 X120.5 Y80 Z0.3 E12.3456 F1800", 0.0);
+        assert_eq!(
+            text,
+            "; gweave mix: purge A -> B, 25 mm\nG92 E0\nG1 E-4 F2400\nG0 Z15.3 F200\nG0 X10 Y10 F1320\n\
+             G1 E25 F200\nG1 E21 F2400\nG0 X15 F1320\nG0 X120.5 Y80 F1320\nG0 Z0.3 F200\nG1 E25 F2400\n\
+             G92 E12.3456\nG1 F1800\n; gweave mix: end purge\n"
+        );
+        assert_eq!([s.pos[X], s.pos[Y], s.pos[Z], s.pos[E]], [120.5, 80.0, 0.3, 12.3456]);
+        assert!((fed - 25.0).abs() < 1e-9);
+        assert_eq!(s.feed_mm_min, 1800.0);
+    }
+
+    #[test]
+    fn relative_extrusion_and_a_slicer_retraction() {
+        let (text, s, fed) = run("M83\nG1 X20 Y30 Z1 E0.5 F1500\nG1 E-2", 2.0);
+        assert!(text.contains("\nG1 E-4 F2400\n"), "{text}");
+        assert!(text.contains("\nG1 E31 F200\n"), "{text}");
+        assert!(text.contains("\nG1 E-6 F2400\n"), "{text}");
+        // Back where it was: same XYZ, same logical E, the slicer's 2 mm still retracted.
+        assert_eq!([s.pos[X], s.pos[Y], s.pos[Z]], [20.0, 30.0, 1.0]);
+        assert!((s.pos[E] - -1.5).abs() < 1e-9);
+        assert!((fed - 25.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn relative_axes_follow_g91() {
+        let (text, s, _) = run("G1 X20 Y30 Z1 F1500\nG91", 0.0);
+        assert!(text.contains("\nG0 Z15 F200\nG0 X-10 Y-20 F1320\n"), "{text}");
+        assert_eq!([s.pos[X], s.pos[Y], s.pos[Z]], [20.0, 30.0, 1.0]);
+    }
+}

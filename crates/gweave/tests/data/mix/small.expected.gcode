@@ -1,0 +1,55 @@
+;FLAVOR:Marlin
+;Generated with Cura_SteamEngine 4.13.0
+M82 ;absolute extrusion mode
+G28
+G0 Z0.3 F200
+G0 X1 Y1 F9000
+G1 F1500 E2 ;prime
+;LAYER_COUNT:3
+; gweave mix: 2 mixes, 4 inputs, Marlin dialect
+; Orange = T0, predicted #f22e12
+M163 S0 P0
+M163 S1 P0.1717
+M163 S2 P0.8283
+M163 S3 P0
+M164 S0
+; Pink = T1, predicted #e6163a
+M163 S0 P0
+M163 S1 P0.6
+M163 S2 P0.1
+M163 S3 P0.3
+M164 S1
+T0
+;LAYER:0
+G0 F9000 X20 Y20 Z0.3
+;TYPE:WALL-OUTER
+G1 F1800 X40 Y20 E3.5
+G1 X40 Y40 E5
+G1 F2400 E1 ;retract
+;LAYER:1
+G0 F9000 X20.5 Y20.5 Z0.6
+G1 F2400 E5
+; gweave mix: Orange -> Pink
+T1
+; gweave mix: purge Orange -> Pink, 25 mm
+G92 E0
+G1 E-4 F2400
+G0 Z15.6 F200
+G0 X10 Y10 F1320
+G1 E25 F200
+G1 E21 F2400
+G0 X15 F1320
+G0 X20.5 Y20.5 F1320
+G0 Z0.6 F200
+G1 E25 F2400
+G92 E5
+G1 F2400
+; gweave mix: end purge
+G1 F1800 X40 Y20 E6.5
+G1 X40 Y40 E8
+;LAYER:2
+G0 F9000 X20.5 Y20.5 Z0.9
+G1 F1800 X40 Y20 E9.5
+;TIME_ELAPSED:12.0
+G1 E7
+M84

@@ -1,0 +1,318 @@
+//! `gweave mix` on real slicer files. Each output is parsed again with the core and checked:
+//! every model move (one that moves XYZ) keeps its end point and its extrusion, in order, outside
+//! the inserted purge blocks; every virtual tool is defined (M163/M164 or M567) before `T<n>`
+//! selects it; the E position is the same after each purge block as before it, and the block fed
+//! exactly its purge length; no move runs Z faster than the cap; every input line not
+//! deliberately rewritten is in the output byte for byte; and the mix in force at each extrusion
+//! is the one the schedule or tool map asks for.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use gweave::gcode::lexer::parse_into;
+use gweave::gcode::line::Block;
+use gweave::gcode::state::{Effect, State, E, X, Y, Z};
+use gweave::post::mix::profile::{Dialect, MixProfile};
+use gweave::post::mix::report::MixReport;
+use gweave::post::mix::{mix_bytes, mix_file};
+use gweave::post::zcap::z_feed_mm_min;
+
+fn data(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel)
+}
+
+fn examples(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/mix").join(rel)
+}
+
+/// A move as the core sees it: end point and filament.
+#[derive(Debug, Clone, Copy)]
+struct Mv {
+    to: [f64; 3],
+    e_mm: f64,
+    line: usize,
+}
+
+fn moves_xyz(text: &str, skip_purges: bool) -> Vec<Mv> {
+    let mut state = State::default();
+    let mut block = Block::default();
+    let mut out = Vec::new();
+    let mut in_purge = false;
+    for (i, l) in text.lines().enumerate() {
+        if l.starts_with("; gweave mix: purge") {
+            in_purge = true;
+        }
+        parse_into(l.as_bytes(), &mut block);
+        if let Effect::Move(m) = state.apply(l.as_bytes(), &block) {
+            let moves_xyz = (0..3).any(|a| m.from[a] != m.to[a]);
+            if moves_xyz && !(skip_purges && in_purge) {
+                out.push(Mv { to: [m.to[X], m.to[Y], m.to[Z]], e_mm: m.e_mm(), line: i + 1 });
+            }
+        }
+        if l.starts_with("; gweave mix: end purge") {
+            in_purge = false;
+        }
+    }
+    out
+}
+
+/// What the output says, checked line by line.
+struct Checked {
+    report: MixReport,
+    /// Per layer (0-based) the ratios in force at its extrusions (all distinct sets, in order).
+    ratios_by_layer: BTreeMap<u32, Vec<Vec<f64>>>,
+    purges: usize,
+}
+
+fn run(rel: &str, profile: MixProfile) -> Checked {
+    let input = std::fs::read(data(rel)).unwrap();
+    let cap = profile.z_cap.max_z_feed_mm_min;
+    let dialect = profile.hardware.dialect;
+    let keep = profile.tool_change.keep_slicer_retractions;
+    let purge_on = profile.purge.mode != gweave::post::mix::profile::PurgeMode::Off;
+    let (out, report) = mix_bytes(profile, &input).unwrap();
+    let (input, out) = (String::from_utf8(input).unwrap(), String::from_utf8(out).unwrap());
+
+    // Model moves: same end points and extrusion, in order. The Z cap adds Z-only moves (at
+    // most the cap) in front of split travels; those are skipped.
+    let (a, b) = (moves_xyz(&input, false), moves_xyz(&out, true));
+    let same =
+        |p: &Mv, q: &Mv| (0..3).all(|k| (p.to[k] - q.to[k]).abs() < 1e-9) && (p.e_mm - q.e_mm).abs() < 1e-4;
+    let mut j = 0;
+    for p in &a {
+        while j < b.len() && !same(p, &b[j]) {
+            assert!(
+                j + 1 < b.len() && same(p, &b[j + 1]),
+                "input line {} vs output line {}",
+                p.line,
+                b[j].line
+            );
+            j += 1;
+        }
+        assert!(j < b.len(), "input line {} missing from the output", p.line);
+        j += 1;
+    }
+    assert_eq!(j, b.len(), "extra moves in the output");
+
+    // Line by line through the output.
+    let mut state = State::default();
+    let mut block = Block::default();
+    let mut collector = [0.0f64; 8];
+    let mut tools: BTreeMap<u32, Vec<f64>> = BTreeMap::new();
+    let mut active: Option<Vec<f64>> = None;
+    let mut ratios_by_layer: BTreeMap<u32, Vec<Vec<f64>>> = BTreeMap::new();
+    let mut purge_start: Option<([f64; 4], f64, f64)> = None;
+    let mut purges = 0;
+    for l in out.lines() {
+        parse_into(l.as_bytes(), &mut block);
+        let effect = *state.apply(l.as_bytes(), &block);
+        let fed = state.filament_mm.iter().sum::<f64>();
+        let word = |c: u8| block.get(c).unwrap();
+        if block.command.is_m(163) {
+            collector[word(b'S') as usize] = word(b'P');
+        } else if block.command.is_m(164) {
+            tools.insert(word(b'S') as u32, collector[..4].to_vec());
+        } else if block.command.is_m(165) {
+            active = Some(vec![word(b'A'), word(b'B'), word(b'C'), word(b'D')]);
+        } else if block.command.is_m(567) {
+            let e = l.split_once(" E").unwrap().1;
+            let r: Vec<f64> = e.split(':').map(|v| v.parse().unwrap()).collect();
+            assert!((r.iter().sum::<f64>() - 1.0).abs() < 1e-12, "RRF ratios must sum to 1: {l}");
+            tools.insert(word(b'P') as u32, r);
+        } else if let Some(t) = block.command.tool() {
+            assert!(dialect != Dialect::MarlinDirect, "a T line with direct mixing: {l}");
+            active = Some(tools.get(&t).unwrap_or_else(|| panic!("T{t} used before it was defined")).clone());
+        }
+        if let Effect::Move(m) = effect {
+            let z = z_feed_mm_min(&m);
+            assert!(z <= cap * (1.0 + 1e-9), "Z at {z} mm/min > {cap}: {l}");
+            if m.is_extruding() && state.structure.region == gweave::gcode::layers::Region::Print {
+                let r = active.clone().expect("an extrusion before any mix was selected");
+                let layer = state.structure.layer.unwrap();
+                let seen = ratios_by_layer.entry(layer).or_default();
+                if seen.last() != Some(&r) {
+                    seen.push(r);
+                }
+            }
+        }
+        if l.starts_with("; gweave mix: purge") {
+            purge_start =
+                Some(([state.pos[X], state.pos[Y], state.pos[Z], state.pos[E]], fed, state.feed_mm_min));
+        }
+        if l.starts_with("; gweave mix: end purge") {
+            let (pos, fed0, feed0) = purge_start.take().unwrap();
+            let now = [state.pos[X], state.pos[Y], state.pos[Z], state.pos[E]];
+            for k in 0..4 {
+                assert!((pos[k] - now[k]).abs() < 1e-5, "purge moved axis {k}: {pos:?} -> {now:?}");
+            }
+            assert!((fed - fed0 - 25.0).abs() < 1e-6, "the purge fed {} mm", fed - fed0);
+            assert_eq!(state.feed_mm_min, feed0);
+            purges += 1;
+        }
+    }
+    assert_eq!(purges as u32, report.purge.count);
+    assert!(purges as u32 <= report.changes);
+    if !purge_on {
+        assert_eq!(purges, 0);
+    }
+
+    // Untouched lines: the input is a subsequence of the output except for rewritten lines.
+    let outl: Vec<&str> = out.lines().collect();
+    let mut k = 0;
+    let mut rewritten = 0u64;
+    // Lines the pass writes of its own; only these may stand between two input lines.
+    let inserted = |o: &str| {
+        ["; gweave", ";T", ";G", "M16", "M56", "T", "G92 E", "G0 ", "G1 ", "; ", "M568"]
+            .iter()
+            .any(|p| o.starts_with(p))
+    };
+    for l in input.lines() {
+        let t = l.trim_start();
+        let found = if t.starts_with('T') {
+            None
+        } else {
+            let mut found = None;
+            for (d, o) in outl[k..].iter().enumerate() {
+                if *o == l {
+                    found = Some(d);
+                    break;
+                }
+                if !inserted(o) {
+                    break;
+                }
+            }
+            found
+        };
+        match found {
+            Some(d) => k += d + 1,
+            None => {
+                assert!(t.starts_with('T') || t.starts_with("G0") || t.starts_with("G1"), "changed: {l}");
+                rewritten += 1;
+            }
+        }
+    }
+    let t_lines = input.lines().filter(|l| l.starts_with('T')).count() as u64;
+    let dropped = if keep { 0 } else { report.dropped_retractions };
+    assert_eq!(rewritten, report.z_capped_lines + t_lines + dropped);
+    Checked { report, ratios_by_layer, purges }
+}
+
+fn profile(name: &str) -> MixProfile {
+    MixProfile::from_toml_str(&std::fs::read_to_string(examples(name)).unwrap()).unwrap()
+}
+
+const ORANGE: [f64; 4] = [0.0, 0.1717, 0.8283, 0.0];
+const PINK: [f64; 4] = [0.0, 0.6, 0.1, 0.3];
+const BLUE: [f64; 4] = [0.5, 0.5, 0.0, 0.0];
+
+#[test]
+fn cura_torus_with_the_seeds_layer_schedule() {
+    let c = run("cura/cura_torus.gcode", profile("seed_layers.toml"));
+    assert_eq!(c.ratios_by_layer.len(), 28);
+    for (layer, ratios) in &c.ratios_by_layer {
+        let want = if (10..25).contains(layer) { PINK } else { ORANGE };
+        assert_eq!(ratios, &[want.to_vec()], "layer {layer}");
+    }
+    // Orange -> Pink at 10, Pink -> Orange at 25; Blue (from 75) is past the 28 layers.
+    assert_eq!((c.report.changes, c.purges), (2, 2));
+    let names: Vec<&str> = c.report.mixes.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["Orange", "Pink", "Blue"]);
+    assert_eq!(c.report.mixes[0].layers, [[0, 9], [25, 27]]);
+    assert_eq!(c.report.mixes[1].layers, [[10, 24]]);
+    assert!(c.report.mixes[2].layers.is_empty());
+    assert_eq!(c.report.mixes[0].ratios, ORANGE);
+    assert_eq!(c.report.mixes[2].ratios, BLUE);
+    // Purges: 2 x 25 mm of Orange then Pink... by the new mix's ratios.
+    assert!((c.report.purge.filament_mm - 50.0).abs() < 1e-9);
+    let p = &c.report.purge.per_input_mm;
+    assert!((p[1] - 25.0 * (0.6 + 0.1717)).abs() < 1e-9 && (p[3] - 7.5).abs() < 1e-9, "{p:?}");
+    // The preview colours: layer 10 is Pink's predicted colour.
+    let colours = c.report.layer_colours();
+    assert_eq!(colours[10].1.to_hex(), c.report.mixes[1].predicted);
+}
+
+#[test]
+fn cura_torus_with_a_gradient_over_more_steps_than_tools() {
+    let c = run("cura/cura_torus.gcode", profile("gradient.toml"));
+    // Cyan at layer 0 to Magenta at layer 27, one step per layer: 28 mixes on 16 tools.
+    for (layer, ratios) in &c.ratios_by_layer {
+        let t = f64::from(*layer) / 27.0;
+        let r = &ratios[0];
+        assert_eq!(ratios.len(), 1);
+        assert!((r[0] - (1.0 - t)).abs() <= 5e-5 && (r[1] - t).abs() <= 5e-5, "layer {layer}: {r:?}");
+    }
+    assert_eq!(c.report.changes, 27);
+    assert_eq!(c.purges, 0, "gradient steps are not purged");
+    assert_eq!(c.report.mixes.len(), 28);
+    // Steps alternate on the last two tools.
+    let tools: Vec<Option<u32>> = c.report.mixes.iter().map(|m| m.tool).collect();
+    assert_eq!(tools[..4], [Some(0), Some(1), Some(14), Some(15)]);
+}
+
+#[test]
+fn cura_dual_with_a_tool_map() {
+    let mut p = profile("tool_map.toml");
+    p.hardware.dialect = Dialect::Reprap;
+    let c = run("cura/cura_dual.gcode", p);
+    let m = &c.report.mixes;
+    assert_eq!((m[0].name.as_str(), m[1].name.as_str()), ("Orange", "#2060c0"));
+    assert!(m[1].delta_e.unwrap() < 10.0);
+    // 78 T lines: T0 in the start G-code, then each change.
+    assert_eq!(c.report.changes, 77);
+    assert_eq!(c.purges, 77);
+}
+
+#[test]
+fn slic3r_cone_with_a_tool_map_and_direct_mixing() {
+    let mut p = profile("tool_map.toml");
+    p.hardware.dialect = Dialect::MarlinDirect;
+    let c = run("slic3r/slic3r_cone_2tool.gcode", p);
+    assert_eq!(c.report.changes, 108);
+}
+
+#[test]
+fn prusa_bunny_relative_e_with_three_tools_and_dropped_retractions() {
+    let mut p = profile("tool_map.toml");
+    p.add_map("T2=Yellow").unwrap();
+    p.tool_change.keep_slicer_retractions = false;
+    let c = run("prusaslicer/pr_bunny_3tool_rel.gcode", p);
+    assert_eq!(c.report.changes, 793);
+    // Every change of tool retracted 10 mm before and unretracted 10 mm when the tool came back.
+    assert!(c.report.dropped_retractions > 1000, "{}", c.report.dropped_retractions);
+}
+
+#[test]
+fn prusa_torus_with_soluble_support() {
+    let c = run("prusaslicer/pr_torus_pva.gcode", profile("pva_support.toml"));
+    assert_eq!(c.report.changes, 2);
+    let pva = c.report.mixes.iter().find(|m| m.name == "PVA").unwrap();
+    assert_eq!(pva.ratios, [0.0, 0.0, 0.0, 1.0]);
+    let support_layers: Vec<u32> = pva.layers.iter().flat_map(|r| r[0]..=r[1]).collect();
+    for l in &support_layers {
+        assert!(c.ratios_by_layer[l].contains(&vec![0.0, 0.0, 0.0, 1.0]));
+    }
+    assert!(!support_layers.is_empty());
+    // The part: Orange with 20 % material 2 is Orange's pigments scaled by 0.8.
+    let part = &c.report.mixes[0];
+    assert_eq!(part.ratios, [0.0, 0.1374, 0.6626, 0.2]);
+}
+
+#[test]
+fn golden_small_case() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mix");
+    let profile =
+        MixProfile::from_toml_str(&std::fs::read_to_string(dir.join("small.toml")).unwrap()).unwrap();
+    let input = std::fs::read(dir.join("small.gcode")).unwrap();
+    let (out, _) = mix_bytes(profile.clone(), &input).unwrap();
+    let golden = dir.join("small.expected.gcode");
+    if std::env::var_os("GWEAVE_BLESS").is_some() {
+        std::fs::write(&golden, &out).unwrap();
+    }
+    assert_eq!(String::from_utf8(out).unwrap(), std::fs::read_to_string(&golden).unwrap());
+    // The streaming file path gives the same bytes.
+    let tmp = tempfile::tempdir().unwrap();
+    let dest = tmp.path().join("out.gcode");
+    let target = gweave::gcode::writer::Target::File(dest.clone());
+    mix_file(profile, &dir.join("small.gcode"), &target, &mut gweave::pass::Quiet).unwrap();
+    assert_eq!(std::fs::read(dest).unwrap(), std::fs::read(golden).unwrap());
+}

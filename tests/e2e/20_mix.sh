@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# gweave mix end to end: the seed's layer schedule on Cura's torus, a tool map as a PrusaSlicer
+# post-processing script (--in-place, path last), the wizard fed by a pipe, and the swatch PNG.
+# Variables from run.sh: GWEAVE, PYGWEAVE, DATA, WORK.
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+EX="$ROOT/examples/mix"
+
+# 1. The seed's schedule: two changes (layers 10 and 25), two 25 mm purges, Z capped.
+"$GWEAVE" mix "$DATA/cura/cura_torus.gcode" -c "$EX/seed_layers.toml" -o "$WORK/torus.mix.gcode" -q \
+  --report "$WORK/torus.json"
+python3 - "$WORK/torus.json" "$WORK/torus.mix.gcode" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["changes"] == 2 and r["purge"]["count"] == 2, (r["changes"], r["purge"])
+assert abs(r["purge"]["filament_mm"] - 50.0) < 1e-9
+names = [m["name"] for m in r["mixes"]]
+assert names == ["Orange", "Pink", "Blue"], names
+assert r["mixes"][1]["layers"] == [[10, 24]], r["mixes"][1]["layers"]
+text = open(sys.argv[2]).read().splitlines()
+# Orange defined with the seed's ratios (normalised, 4 decimals) before the first T0.
+i = text.index("M164 S0")
+assert text[i - 4:i] == ["M163 S0 P0", "M163 S1 P0.1717", "M163 S2 P0.8283", "M163 S3 P0"], text[i - 4:i]
+assert text.index("T0") > i
+# Pink selected right after layer 10 starts, before its first extrusion.
+l10 = text.index(";LAYER:10")
+t1 = text.index("T1")
+assert l10 < t1 < text.index(";LAYER:11")
+PY
+
+# 2. Flags alone (default profile: the seed's CMYW inputs, purge and Z cap).
+"$GWEAVE" mix "$DATA/cura/cura_torus.gcode" --at-layer 0=Orange --at-layer 10=Magenta -o "$WORK/flags.gcode" \
+  --json -q > "$WORK/flags.json"
+python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert (r['changes'], r['purge']['count']) == (1, 1), r" \
+  "$WORK/flags.json"
+
+# 3. As PrusaSlicer calls a post-processing script: options first, the file path last, in place.
+cp "$DATA/prusaslicer/pr_torus_pva.gcode" "$WORK/pva.gcode"
+"$GWEAVE" mix -c "$EX/pva_support.toml" --in-place --no-backup -q "$WORK/pva.gcode"
+[ ! -e "$WORK/pva.gcode.bak" ]
+grep -q "^M163 S3 P1$" "$WORK/pva.gcode"
+[ "$(grep -c '^; gweave mix: purge' "$WORK/pva.gcode")" = 2 ]
+
+# 4. The wizard, answers piped: the seed's session.
+printf '1\nn\nOrange\n0\nPink\ny\n0 0.6 0.1 0.3\n10\nBlue\n20\n\n\n\n' \
+  | "$GWEAVE" mix --wizard -c "$WORK/wiz.toml" > /dev/null
+grep -q 'mix = "Pink"' "$WORK/wiz.toml"
+"$GWEAVE" mix "$DATA/cura/cura_torus.gcode" -c "$WORK/wiz.toml" -o "$WORK/wiz.gcode" --json -q > "$WORK/wiz.json"
+python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert r['changes'] == 2, r['changes']" "$WORK/wiz.json"
+
+# 5. The job's mixes as a PNG swatch chart: a real PNG file.
+"$GWEAVE" mix -c "$EX/seed_layers.toml" --palette-png "$WORK/palette.png"
+head -c 8 "$WORK/palette.png" | od -An -tx1 | grep -q "89 50 4e 47 0d 0a 1a 0a"
+
+# 6. The Python front end gives the same bytes.
+if [ -x "$PYGWEAVE" ]; then
+  "$PYGWEAVE" mix "$DATA/cura/cura_torus.gcode" -c "$EX/seed_layers.toml" -o "$WORK/py.gcode" -q > /dev/null
+  cmp -s "$WORK/py.gcode" "$WORK/torus.mix.gcode"
+fi
+echo "20_mix: ok"
