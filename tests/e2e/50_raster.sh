@@ -96,9 +96,9 @@ PY
 
 # 6. Bad input: a non-image file fails with the file named, and leaves no output.
 echo "not an image" > "$WORK/bad.png"
-if "$GWEAVE" raster "$WORK/bad.png" -o "$WORK/bad.gcode" 2> "$WORK/err"; then fail "bad image accepted"; fi
+if "$GWEAVE" raster "$WORK/bad.png" -o "$WORK/bad-raster.gcode" 2> "$WORK/err"; then fail "bad image accepted"; fi
 grep -q "bad.png" "$WORK/err" || fail "error text: $(cat "$WORK/err")"
-[ ! -e "$WORK/bad.gcode" ] || fail "partial output left"
+[ ! -e "$WORK/bad-raster.gcode" ] || fail "partial output left"
 
 # 7. The Python console script gives the same report.
 if [ -x "$PYGWEAVE" ]; then
