@@ -27,6 +27,9 @@ pub struct Output {
 
 enum Sink {
     File { file: BufWriter<tempfile::NamedTempFile>, dest: PathBuf, backup: Option<PathBuf> },
+    /// A device or pipe (`/dev/null`, a FIFO): written directly, since renaming a file over it
+    /// would replace the device itself.
+    Special { file: BufWriter<fs::File>, dest: PathBuf },
     Stdout(BufWriter<io::Stdout>),
 }
 
@@ -45,6 +48,11 @@ impl Output {
                     if same_file(input, path) {
                         return Err(Error::WouldOverwriteInput { path: path.clone() });
                     }
+                }
+                if fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+                    let file = fs::OpenOptions::new().write(true).open(path).map_err(|e| Error::io(path, e))?;
+                    let file = BufWriter::with_capacity(BUFFER, file);
+                    return Ok(Output { sink: Sink::Special { file, dest: path.clone() } });
                 }
                 (path.clone(), None)
             }
@@ -69,6 +77,7 @@ impl Output {
     /// Flushes, keeps the backup if asked, and renames the temporary file into place.
     pub fn commit(self) -> Result<()> {
         match self.sink {
+            Sink::Special { mut file, dest } => file.flush().map_err(|e| Error::io(&dest, e)),
             Sink::Stdout(mut w) => match w.flush() {
                 Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>", e)),
                 _ => Ok(()),
@@ -97,6 +106,7 @@ impl Write for Output {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         match &mut self.sink {
             Sink::File { file, .. } => file.write(buf),
+            Sink::Special { file, .. } => file.write(buf),
             Sink::Stdout(w) => w.write(buf),
         }
     }
@@ -104,6 +114,7 @@ impl Write for Output {
     fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
         match &mut self.sink {
             Sink::File { file, .. } => file.write_all(buf),
+            Sink::Special { file, .. } => file.write_all(buf),
             Sink::Stdout(w) => w.write_all(buf),
         }
     }
@@ -111,6 +122,7 @@ impl Write for Output {
     fn flush(&mut self) -> io::Result<()> {
         match &mut self.sink {
             Sink::File { file, .. } => file.flush(),
+            Sink::Special { file, .. } => file.flush(),
             Sink::Stdout(w) => w.flush(),
         }
     }
@@ -166,6 +178,17 @@ mod tests {
         out.commit().unwrap();
         assert_eq!(fs::read(&input).unwrap(), b"new\n");
         assert_eq!(fs::read(dir.path().join("in.gcode.bak")).unwrap(), b"old\n");
+    }
+
+    /// Regression: `-o /dev/null` once renamed a regular file over the device.
+    #[cfg(unix)]
+    #[test]
+    fn devices_are_written_not_replaced() {
+        use std::os::unix::fs::FileTypeExt;
+        let mut out = Output::create(&Target::File(PathBuf::from("/dev/null")), None).unwrap();
+        out.write_all(b"G1 X1\n").unwrap();
+        out.commit().unwrap();
+        assert!(fs::metadata("/dev/null").unwrap().file_type().is_char_device());
     }
 
     #[cfg(unix)]
