@@ -21,6 +21,7 @@ pub mod error;
 pub mod gcode;
 pub mod gen;
 pub mod pass;
+pub mod render;
 pub mod rotary;
 pub mod stats;
 

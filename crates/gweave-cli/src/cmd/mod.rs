@@ -4,6 +4,8 @@ mod cat;
 mod check;
 mod stats;
 
+mod preview;
+
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -14,6 +16,8 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+
+    Preview(preview::PreviewArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -21,5 +25,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+
+        Command::Preview(a) => preview::run(a),
     }
 }
