@@ -97,7 +97,7 @@ impl Image {
     pub fn text(&mut self, x: i32, y: i32, s: &str, scale: u32, c: [u8; 3]) -> u32 {
         for (i, ch) in s.chars().enumerate() {
             let gx = x + (i as u32 * ADVANCE * scale) as i32;
-            for (row, bits) in glyph(ch).iter().enumerate() {
+            for (row, bits) in extra_glyph(ch).unwrap_or_else(|| glyph(ch)).iter().enumerate() {
                 for col in 0..5 {
                     if bits & (0x10 >> col) != 0 {
                         self.rect(
@@ -119,6 +119,20 @@ impl Image {
     pub fn text_height(scale: u32) -> u32 {
         GLYPH_H * scale
     }
+}
+
+/// Glyphs legends need beyond the swatch font's: `: / ( ) % + ,` (rows top first, bit 4 left).
+fn extra_glyph(c: char) -> Option<[u8; 7]> {
+    Some(match c {
+        ':' => [0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00],
+        '/' => [0x01, 0x01, 0x02, 0x04, 0x08, 0x10, 0x10],
+        '(' => [0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02],
+        ')' => [0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08],
+        '%' => [0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03],
+        '+' => [0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00],
+        ',' => [0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08],
+        _ => return None,
+    })
 }
 
 #[cfg(test)]
@@ -163,5 +177,10 @@ mod tests {
         assert_eq!(img.pixel(1, 1), [0, 0, 0, 255]);
         assert_eq!(img.pixel(5, 1), [0, 0, 0, 255]);
         assert_eq!(img.pixel(1, 3), [255, 255, 255, 255]);
+        // A slash runs from the bottom left to the top right.
+        let mut img = Image::new(6, 8, [255, 255, 255]);
+        img.text(0, 0, "/", 1, [0, 0, 0]);
+        assert_eq!((img.pixel(4, 0), img.pixel(0, 6)), ([0, 0, 0, 255], [0, 0, 0, 255]));
+        assert_eq!(img.pixel(0, 0), [255, 255, 255, 255]);
     }
 }

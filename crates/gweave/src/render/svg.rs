@@ -56,7 +56,7 @@ pub fn write_svg(d: &Drawing) -> String {
     }
     s.push_str("</g>\n");
     let text = r##"font-family="sans-serif" font-size="14" fill="#202020""##;
-    for p in &d.panels {
+    for p in d.panels.iter().filter(|p| !p.title.is_empty()) {
         let _ = writeln!(s, r#"<text x="{}" y="{}" {text}>{}</text>"#, p.x_px + 12, h - 12, escape(&p.title));
     }
     if !d.legend.is_empty() {

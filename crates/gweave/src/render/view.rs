@@ -98,12 +98,15 @@ pub struct Stroke {
     pub alpha: f32,
 }
 
-/// A labelled part of the picture (one side of a comparison).
+/// A part of the picture with its own projection (the whole picture, or one side of a
+/// comparison) and a title (empty for a single view).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Panel {
     pub x_px: u32,
     pub width_px: u32,
     pub title: String,
+    /// Where a point in mm lands in the picture.
+    pub projection: Projection,
 }
 
 /// Everything a PNG or SVG writer needs: strokes in drawing order, legend, titles.
@@ -273,6 +276,7 @@ pub fn draw(tp: &Toolpath, options: &ViewOptions) -> Drawing {
     let proj = Projection::fit(options.kind, lo, hi, 0, options.width_px, options.height_px);
     d.strokes = strokes(tp, None, options, &proj, &colouring);
     d.legend = colouring.legend(&[tp]);
+    d.panels.push(Panel { x_px: 0, width_px: options.width_px, title: String::new(), projection: proj });
     d
 }
 
@@ -290,7 +294,12 @@ pub fn draw_compare(before: &Toolpath, after: &Toolpath, options: &ViewOptions) 
         let changed = changed_moves(this, other);
         let n = this.segments.iter().zip(&changed).filter(|(s, c)| **c && in_layers(options, s)).count();
         d.strokes.extend(strokes(this, Some(&changed), options, &proj, &colouring));
-        d.panels.push(Panel { x_px, width_px: half, title: format!("{name}: {n} moves changed") });
+        d.panels.push(Panel {
+            x_px,
+            width_px: half,
+            title: format!("{name} - {n} moves changed"),
+            projection: proj,
+        });
     }
     d.legend = colouring.legend(&[before, after]);
     d
@@ -417,7 +426,7 @@ mod tests {
         assert_eq!(changed_moves(&dup, &a), [false, false, false, true], "multiset");
         let d = draw_compare(&a, &b, &ViewOptions::default());
         assert_eq!(d.panels.len(), 2);
-        assert_eq!(d.panels[1].title, "after: 1 moves changed");
+        assert_eq!(d.panels[1].title, "after - 1 moves changed");
         let grey = d.strokes.iter().filter(|s| s.colour == UNCHANGED).count();
         assert_eq!(grey, 4);
     }
