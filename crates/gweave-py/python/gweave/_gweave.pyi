@@ -1,4 +1,4 @@
-from typing import Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 __version__: str
 
@@ -6,6 +6,20 @@ def stats_json(path: str, *, filament_diameter: Optional[float] = None) -> str: 
 def check_json(path: str, *, bed: Optional[Tuple[float, float, float]] = None, max_feed: Optional[float] = None) -> str: ...
 def cat(path: str, output: Optional[str] = None, *, in_place: bool = False, backup: bool = True) -> None: ...
 def run_cli(argv: List[str]) -> int: ...
+
+def preview_bytes(
+    path: str,
+    *,
+    format: str,
+    layers: Optional[Tuple[int, int]] = None,
+    view: str = "top",
+    colour_by: str = "tool",
+    size: Tuple[int, int] = (1200, 900),
+    compare: Optional[str] = None,
+    tool_colours: Optional[List[str]] = None,
+    travel: bool = False,
+) -> bytes: ...
+def toolpath_columns(path: str, *, travel: bool = True, min_len: float = 0.0) -> Tuple[int, Dict[str, Any]]: ...
 
 class Line:
     number: int

@@ -58,7 +58,7 @@ pub struct ToolpathOptions {
     pub layers: Option<RangeInclusive<u32>>,
     /// Keep travel moves (non-extruding) too.
     pub travel: bool,
-    /// Only moves of the print proper: no start G-code (purge lines), no end G-code travel.
+    /// Leave out the start G-code (purge lines before the first layer).
     pub print_only: bool,
     /// Merge chained moves shorter than this, mm (0: keep every move).
     pub min_len_mm: f32,
@@ -209,15 +209,10 @@ impl Pass for ToolpathPass {
                 self.out.tools = self.out.tools.max((*to).min(u16::MAX as u32 - 1) as u16 + 1);
             }
             Effect::Move(m) => {
-                // The end G-code is recognised by its travel only: the core marks Cura files
-                // as ending after their first layer (a `;LAYER:` after `;TIME_ELAPSED:` does not
-                // clear its end-of-print flag), so extrusion there is kept.
-                let skip = match st.region {
-                    Region::Start => true,
-                    Region::End => !m.is_extruding(),
-                    Region::Print => false,
-                };
-                if self.options.print_only && skip {
+                // Only the start G-code is left out. The end G-code is kept (parking is travel,
+                // drawn only on request): the core marks Cura files as ending after their first
+                // layer (a `;LAYER:` after `;TIME_ELAPSED:` does not clear its end flag).
+                if self.options.print_only && st.region == Region::Start {
                     return Ok(());
                 }
                 let layer = st.layer.unwrap_or(0);
