@@ -5,7 +5,7 @@ import pytest
 import gweave
 from _png import read_png
 
-# Layer 60 (Z 12.5): T0 extrudes over X 117.6..145.4, Y 108.6..136.4 (the cylinder) and T1 over
+# Layer 60 (Z 12.3): T0 extrudes over X 117.6..145.4, Y 108.6..136.4 (the cylinder) and T1 over
 # X 110.7..126.3, Y 119.7..135.3 (the sphere), read from the file.
 T0_BOX = ((117.6, 145.4), (108.6, 136.4))
 T1_BOX = ((110.69, 126.31), (119.69, 135.31))
@@ -52,7 +52,7 @@ def test_toolpath_arrays(data):
         xy = np.concatenate([tp["start"][sel], tp["end"][sel]])
         assert xy[:, 0].min() >= x0 - 0.01 and xy[:, 0].max() <= x1 + 0.01
         assert xy[:, 1].min() >= y0 - 0.01 and xy[:, 1].max() <= y1 + 0.01
-        assert np.allclose(xy[:, 2], 12.5, atol=1e-4)
+        assert np.allclose(xy[:, 2], 12.3, atol=1e-4)
     names = tp["feature_names"]
     used = {names[i] for i in np.unique(tp["feature"][tp["extruding"]])}
     assert {"outer_wall", "inner_wall", "infill"} <= used

@@ -1,7 +1,7 @@
 //! `gweave preview` on real slicer files, asserting on the pixels.
 //!
 //! `cura/cura_dual.gcode` prints a cylinder with T0 and a sphere with T1. From the file, layer
-//! 60 (Z 12.5) extrudes T0 over X 117.6..145.4, Y 108.6..136.4 (the cylinder, centre
+//! 60 (Z 12.3) extrudes T0 over X 117.6..145.4, Y 108.6..136.4 (the cylinder, centre
 //! (131.5, 122.5), radius 13.9) and T1 over X 110.7..126.3, Y 119.7..135.3 (the sphere's
 //! section, centre (118.5, 127.5), radius 7.8).
 
@@ -67,15 +67,15 @@ fn the_two_tools_of_cura_dual_draw_in_their_own_colours_where_they_print() {
     let (t0, t1) = (rgb(TOOL_COLOURS[0]), rgb(TOOL_COLOURS[1]));
     assert_ne!(t0, t1);
     // Inside the sphere's section, away from the cylinder: T1.
-    let sphere = proj.project([114.0, 128.0, 12.5]);
+    let sphere = proj.project([114.0, 128.0, 12.3]);
     assert!(count_near(&img, sphere, t1) > 150, "{}", count_near(&img, sphere, t1));
     assert_eq!(count_near(&img, sphere, t0), 0);
     // On the cylinder's outer wall at its lowest Y, away from the sphere: T0.
-    let wall = proj.project([131.5, 108.8, 12.5]);
+    let wall = proj.project([131.5, 108.8, 12.3]);
     assert!(count_near(&img, wall, t0) > 40, "{}", count_near(&img, wall, t0));
     assert_eq!(count_near(&img, wall, t1), 0);
     // Far outside both objects: background.
-    let outside = proj.project([146.0, 140.0, 12.5]);
+    let outside = proj.project([146.0, 140.0, 12.3]);
     assert!(is_background(&img, outside[0] as u32, outside[1] as u32));
     // The same picture through the file-level API, as PNG bytes.
     let png = preview(&dual(), None, Format::Png, &options(layer(60))).unwrap();
@@ -150,9 +150,9 @@ fn compare_highlights_only_the_changed_layer() {
     assert!(moved.segments.len() > 300, "{}", moved.segments.len());
     // Highlighted moves are drawn in their tool colours on both sides.
     let t1 = rgb(TOOL_COLOURS[1]);
-    let sphere_after = d.panels[1].projection.project([114.0 + 3.0, 128.0, 12.5]);
+    let sphere_after = d.panels[1].projection.project([114.0 + 3.0, 128.0, 12.3]);
     assert!(count_near(&img, sphere_after, t1) > 100);
-    let sphere_before = d.panels[0].projection.project([114.0, 128.0, 12.5]);
+    let sphere_before = d.panels[0].projection.project([114.0, 128.0, 12.3]);
     assert!(count_near(&img, sphere_before, t1) > 100);
 
     // An unchanged layer: everything drawn is grey.
