@@ -324,7 +324,10 @@ fn strokes(
     proj: &Projection,
     colouring: &Colouring,
 ) -> Vec<Stroke> {
-    let width_px = (options.line_width_mm * proj.scale_px_mm()).clamp(1.0, 12.0);
+    // At least 2 px in the isometric view, where layers 0.1 to 0.3 mm apart are a pixel or less
+    // apart: the walls then close up, and the rasteriser can skip what they hide.
+    let min_px = if options.kind == ViewKind::Iso { 2.0 } else { 1.0 };
+    let width_px = (options.line_width_mm * proj.scale_px_mm()).clamp(min_px, 12.0);
     let mut order: Vec<(f32, Stroke)> = Vec::new();
     for (i, s) in tp.segments.iter().enumerate() {
         if !in_layers(options, s) {
