@@ -13,10 +13,10 @@ const TEXT_SCALE: u32 = 2;
 /// Strokes hidden under later opaque strokes are skipped: a whole print seen from above is
 /// mostly covered by its top layers, and skipping what cannot show makes a picture of a
 /// 17-million-segment file several times faster. A reverse pass keeps a mask of the pixels that
-/// later opaque strokes cover fully; a stroke is hidden when sample points every half pixel along
-/// it (ends included), at five offsets across its width, are all in the mask. Then the visible strokes are drawn in
-/// order. The test is sampled (a hole in the mask narrower than a pixel between two samples
-/// could hide a sliver), so the picture equals drawing everything up to such slivers.
+/// later opaque strokes cover fully; a stroke is hidden when a grid of samples (finer than 0.7 px)
+/// over every pixel square it touches is all in the mask, so every pixel it would change is one
+/// that a later stroke overwrites. Then the visible strokes are drawn in order: the picture is
+/// the one drawing everything gives.
 pub fn rasterise(d: &Drawing) -> Image {
     let mut img = Image::new(d.width_px, d.height_px, d.background);
     let visible = visible_strokes(&d.strokes, d.width_px, d.height_px);
@@ -58,17 +58,21 @@ fn visible_strokes(strokes: &[Stroke], width: u32, height: u32) -> Vec<bool> {
     for (i, s) in strokes.iter().enumerate().rev() {
         let d = [s.to[0] - s.from[0], s.to[1] - s.from[1]];
         let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
-        // Unit normal times the half width plus the anti-aliasing fringe.
-        let reach = s.width_px / 2.0 + 0.5;
-        let n = if len > 0.0 { [-d[1] / len * reach, d[0] / len * reach] } else { [reach, 0.0] };
-        // Every half pixel along, the round ends included, at five offsets across (centre, half
-        // reach, reach).
-        let ext = if len > 0.0 { reach / len } else { 0.0 };
-        let steps = (2.0 * (len + 2.0 * reach)).ceil().max(1.0) as usize;
-        let hidden = (0..=steps).all(|k| {
-            let t = -ext + (1.0 + 2.0 * ext) * k as f32 / steps as f32;
-            let p = [s.from[0] + d[0] * t, s.from[1] + d[1] * t];
-            [-1.0, -0.5, 0.0, 0.5, 1.0].iter().all(|f| at(&covered, p[0] + n[0] * f, p[1] + n[1] * f))
+        // The stroke touches pixels whose centres are within `reach` of the segment; their
+        // squares reach a further half diagonal (0.71 px). Sample that whole rounded rectangle
+        // on a grid finer than 0.7 px, so every such pixel square holds a sample.
+        let reach = s.width_px.max(0.5) / 2.0 + 0.5 + 0.71;
+        let unit = if len > 0.0 { [d[0] / len, d[1] / len] } else { [1.0, 0.0] };
+        let along = ((len + 2.0 * reach) / 0.7).ceil().max(1.0) as usize;
+        let across = (2.0 * reach / 0.7).ceil().max(1.0) as usize;
+        let hidden = (0..=along).all(|a| {
+            let u = -reach + (len + 2.0 * reach) * a as f32 / along as f32;
+            (0..=across).all(|c| {
+                let v = -reach + 2.0 * reach * c as f32 / across as f32;
+                let x = s.from[0] + unit[0] * u - unit[1] * v;
+                let y = s.from[1] + unit[1] * u + unit[0] * v;
+                at(&covered, x, y)
+            })
         });
         if hidden {
             continue;
