@@ -18,7 +18,10 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum BitmapError {
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("PNG decode: {0}")]
     PngDecode(#[from] png::DecodingError),
     #[error("PNG encode: {0}")]
@@ -65,7 +68,11 @@ pub struct ThresholdOptions {
 
 impl Default for ThresholdOptions {
     fn default() -> Self {
-        ThresholdOptions { threshold: 0.5, invert: false, channel: Channel::Luma }
+        ThresholdOptions {
+            threshold: 0.5,
+            invert: false,
+            channel: Channel::Luma,
+        }
     }
 }
 
@@ -92,7 +99,12 @@ impl Bitmap {
     /// An all-empty image.
     pub fn new(width: usize, height: usize) -> Self {
         let words_per_row = width.div_ceil(64);
-        Bitmap { width, height, words_per_row, words: vec![0; words_per_row * height] }
+        Bitmap {
+            width,
+            height,
+            words_per_row,
+            words: vec![0; words_per_row * height],
+        }
     }
 
     pub fn width(&self) -> usize {
@@ -187,10 +199,9 @@ impl Bitmap {
         for y in 0..height {
             let words = &mut b.words[y * b.words_per_row..(y + 1) * b.words_per_row];
             for (word, levels) in words.iter_mut().zip(row(y)[..width].chunks(64)) {
-                *word = levels
-                    .iter()
-                    .enumerate()
-                    .fold(0u64, |v, (bit, &l)| v | u64::from((u16::from(l) >= cutoff) != invert) << bit);
+                *word = levels.iter().enumerate().fold(0u64, |v, (bit, &l)| {
+                    v | u64::from((u16::from(l) >= cutoff) != invert) << bit
+                });
             }
         }
         b
@@ -228,17 +239,31 @@ impl Bitmap {
         opts: &ThresholdOptions,
     ) -> Result<Self, BitmapError> {
         if grey.len() != width * height {
-            return Err(BitmapError::BufferSize { expected: width * height, got: grey.len() });
+            return Err(BitmapError::BufferSize {
+                expected: width * height,
+                got: grey.len(),
+            });
         }
         let cutoff = opts.cutoff()?;
-        Ok(Self::from_level_rows(width, height, |y| &grey[y * width..(y + 1) * width], cutoff, opts.invert))
+        Ok(Self::from_level_rows(
+            width,
+            height,
+            |y| &grey[y * width..(y + 1) * width],
+            cutoff,
+            opts.invert,
+        ))
     }
 
     /// Resamples to a new pixel size by nearest neighbour at target pixel centres: target pixel
     /// `i` has its centre at `(i + 1/2) * dst_px_mm` and takes the source pixel containing it.
     /// The target keeps every pixel whose centre lies inside the source extent,
     /// i.e. `round(width * src / dst)` columns.
-    pub fn resample(&self, src_px_x_mm: f64, src_px_y_mm: f64, dst_px_mm: f64) -> Result<Self, BitmapError> {
+    pub fn resample(
+        &self,
+        src_px_x_mm: f64,
+        src_px_y_mm: f64,
+        dst_px_mm: f64,
+    ) -> Result<Self, BitmapError> {
         for v in [src_px_x_mm, src_px_y_mm, dst_px_mm] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(BitmapError::PixelSize(v));
@@ -246,7 +271,9 @@ impl Bitmap {
         }
         let map = |n: usize, src: f64| -> Vec<usize> {
             let count = (n as f64 * src / dst_px_mm + 0.5).floor() as usize;
-            (0..count).map(|i| (((i as f64 + 0.5) * dst_px_mm / src) as usize).min(n - 1)).collect()
+            (0..count)
+                .map(|i| (((i as f64 + 0.5) * dst_px_mm / src) as usize).min(n - 1))
+                .collect()
         };
         if self.width == 0 || self.height == 0 {
             return Ok(Bitmap::new(0, 0));
@@ -281,8 +308,12 @@ impl Bitmap {
     pub fn mirror_y(&self) -> Self {
         let mut out = Bitmap::new(self.width, self.height);
         for y in 0..self.height {
-            let (a, b) = (y * self.words_per_row, (self.height - 1 - y) * self.words_per_row);
-            out.words[b..b + self.words_per_row].copy_from_slice(&self.words[a..a + self.words_per_row]);
+            let (a, b) = (
+                y * self.words_per_row,
+                (self.height - 1 - y) * self.words_per_row,
+            );
+            out.words[b..b + self.words_per_row]
+                .copy_from_slice(&self.words[a..a + self.words_per_row]);
         }
         out
     }
@@ -316,7 +347,10 @@ impl Bitmap {
 }
 
 fn io_err(path: &Path, source: std::io::Error) -> BitmapError {
-    BitmapError::Io { path: path.to_path_buf(), source }
+    BitmapError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
 }
 
 /// Decodes a PNG from a reader and thresholds it.
@@ -364,7 +398,9 @@ fn scale_alpha(v: u8, a: u8) -> u8 {
 
 fn pick(channel: Channel, r: u8, g: u8, b: u8) -> u8 {
     match channel {
-        Channel::Luma => ((299 * u32::from(r) + 587 * u32::from(g) + 114 * u32::from(b) + 500) / 1000) as u8,
+        Channel::Luma => {
+            ((299 * u32::from(r) + 587 * u32::from(g) + 114 * u32::from(b) + 500) / 1000) as u8
+        }
         Channel::Red => r,
         Channel::Green => g,
         Channel::Blue => b,
@@ -394,7 +430,9 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
     let pixel_offset = le_u32(data, 10)? as usize;
     let header_size = le_u32(data, 14)? as usize;
     if header_size < 40 {
-        return Err(BitmapError::Bmp("OS/2 core headers are not supported".into()));
+        return Err(BitmapError::Bmp(
+            "OS/2 core headers are not supported".into(),
+        ));
     }
     let width = le_u32(data, 18)? as i32;
     let height_signed = le_u32(data, 22)? as i32;
@@ -402,19 +440,30 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
     let compression = le_u32(data, 30)?;
     // 0 = BI_RGB, 3 = BI_BITFIELDS (accepted for 32-bit with the usual BGRA masks).
     if compression != 0 && !(compression == 3 && bpp == 32) {
-        return Err(BitmapError::Bmp(format!("compression {compression} not supported")));
+        return Err(BitmapError::Bmp(format!(
+            "compression {compression} not supported"
+        )));
     }
     if width <= 0 || height_signed == 0 || height_signed == i32::MIN {
-        return Err(BitmapError::Bmp(format!("bad size {width}x{height_signed}")));
+        return Err(BitmapError::Bmp(format!(
+            "bad size {width}x{height_signed}"
+        )));
     }
     let (w, h) = (width as usize, height_signed.unsigned_abs() as usize);
     if (w as u64) * (h as u64) > 1 << 32 {
-        return Err(BitmapError::TooLarge { width: w as u64, height: h as u64 });
+        return Err(BitmapError::TooLarge {
+            width: w as u64,
+            height: h as u64,
+        });
     }
     let top_down = height_signed < 0;
     let palette: Vec<[u8; 3]> = if bpp <= 8 {
         let used = le_u32(data, 46)? as usize;
-        let n = if used == 0 { 1usize << bpp } else { used.min(256) };
+        let n = if used == 0 {
+            1usize << bpp
+        } else {
+            used.min(256)
+        };
         let start = 14 + header_size;
         (0..n)
             .map(|i| {
@@ -427,7 +476,9 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
         Vec::new()
     };
     if !matches!(bpp, 1 | 8 | 24 | 32) {
-        return Err(BitmapError::Bmp(format!("{bpp} bits per pixel not supported")));
+        return Err(BitmapError::Bmp(format!(
+            "{bpp} bits per pixel not supported"
+        )));
     }
     let stride = (w * bpp as usize).div_ceil(32) * 4;
     let needed = pixel_offset + stride * h;
@@ -435,7 +486,11 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
         return Err(BitmapError::Bmp("truncated pixel data".into()));
     }
     let channel = opts.channel;
-    let colour = |index: usize| -> u8 { palette.get(index).map_or(0, |c| pick(channel, c[0], c[1], c[2])) };
+    let colour = |index: usize| -> u8 {
+        palette
+            .get(index)
+            .map_or(0, |c| pick(channel, c[0], c[1], c[2]))
+    };
     Ok(Bitmap::from_levels(
         w,
         h,
@@ -479,13 +534,25 @@ mod tests {
     #[test]
     fn threshold_is_half_scale() {
         let b = Bitmap::from_grey(4, 1, &[0, 127, 128, 255], &opts()).unwrap();
-        assert_eq!((0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(), [false, false, true, true]);
-        let inv = ThresholdOptions { invert: true, ..opts() };
+        assert_eq!(
+            (0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(),
+            [false, false, true, true]
+        );
+        let inv = ThresholdOptions {
+            invert: true,
+            ..opts()
+        };
         let b = Bitmap::from_grey(4, 1, &[0, 127, 128, 255], &inv).unwrap();
         assert_eq!(b.count_ones(), 2);
         assert!(b.get(0, 0) && b.get(1, 0));
-        let bad = ThresholdOptions { threshold: 1.5, ..opts() };
-        assert!(matches!(Bitmap::from_grey(1, 1, &[0], &bad), Err(BitmapError::Threshold(_))));
+        let bad = ThresholdOptions {
+            threshold: 1.5,
+            ..opts()
+        };
+        assert!(matches!(
+            Bitmap::from_grey(1, 1, &[0], &bad),
+            Err(BitmapError::Threshold(_))
+        ));
     }
 
     #[test]
@@ -582,7 +649,14 @@ mod tests {
     }
 
     /// Builds a BMP file by hand (bottom-up unless `top_down`).
-    fn bmp(w: usize, h: usize, bpp: u16, palette: &[[u8; 4]], rows: &[Vec<u8>], top_down: bool) -> Vec<u8> {
+    fn bmp(
+        w: usize,
+        h: usize,
+        bpp: u16,
+        palette: &[[u8; 4]],
+        rows: &[Vec<u8>],
+        top_down: bool,
+    ) -> Vec<u8> {
         let stride = (w * bpp as usize).div_ceil(32) * 4;
         let off = 54 + 4 * palette.len();
         let mut d = Vec::new();
@@ -602,7 +676,11 @@ mod tests {
         for q in palette {
             d.extend_from_slice(q);
         }
-        let order: Vec<usize> = if top_down { (0..h).collect() } else { (0..h).rev().collect() };
+        let order: Vec<usize> = if top_down {
+            (0..h).collect()
+        } else {
+            (0..h).rev().collect()
+        };
         for y in order {
             let mut r = rows[y].clone();
             r.resize(stride, 0);
@@ -623,10 +701,16 @@ mod tests {
         let pal: Vec<[u8; 4]> = (0..=255u8).map(|v| [v, v, v, 0]).collect();
         let rows = vec![vec![0, 127, 128, 200]];
         let b = decode_bmp(&bmp(4, 1, 8, &pal, &rows, true), &opts()).unwrap();
-        assert_eq!((0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(), [false, false, true, true]);
+        assert_eq!(
+            (0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(),
+            [false, false, true, true]
+        );
         // 24-bit BGR: blue pixel, white pixel
         let rows = vec![vec![255, 0, 0, 255, 255, 255]];
-        let blue = ThresholdOptions { channel: Channel::Blue, ..opts() };
+        let blue = ThresholdOptions {
+            channel: Channel::Blue,
+            ..opts()
+        };
         let b = decode_bmp(&bmp(2, 1, 24, &[], &rows, false), &blue).unwrap();
         assert!(b.get(0, 0) && b.get(1, 0));
         let b = decode_bmp(&bmp(2, 1, 24, &[], &rows, false), &opts()).unwrap();
