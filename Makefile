@@ -11,7 +11,7 @@ CARGO := cargo
 GWEAVE := target/release/gweave
 OUT := out
 
-.PHONY: demo test bench deps rust-deps py-deps build python lint cargo-test pytest e2e clean
+.PHONY: demo test bench deps rust-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
 .PHONY: browser-deps
 
 deps: rust-deps py-deps browser-deps
@@ -20,10 +20,12 @@ rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
 
 py-deps: $(VENV)/.deps
-$(VENV)/.deps: crates/gweave-py/requirements-dev.txt
+$(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -r crates/gweave-py/requirements-dev.txt
+	# Printrun's printcore without its GUI dependencies (see the file).
+	$(PY) -m pip install -q --no-deps -r crates/gweave-py/requirements-host.txt
 	touch $@
 
 # Headless chromium for the HTML viewer test (crates/gweave-py/tests/test_viewer.py); installed only
@@ -37,8 +39,15 @@ browser-deps:
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli
 
+# Tests use debug builds (dependencies are optimised, see Cargo.toml) to keep CI short.
+build-debug: rust-deps
+	$(CARGO) build -p gweave-cli
+
 python: py-deps
 	$(VENV)/bin/maturin develop --release -q -m crates/gweave-py/Cargo.toml
+
+python-debug: py-deps
+	$(VENV)/bin/maturin develop -q -m crates/gweave-py/Cargo.toml
 
 lint: rust-deps
 	$(CARGO) fmt --all -- --check
@@ -47,12 +56,12 @@ lint: rust-deps
 cargo-test: rust-deps
 	$(CARGO) test --workspace --exclude gweave-py
 
-pytest: python
+pytest: python-debug
 	# Exit code 5 (no tests collected) is a failure here, as every other non-zero code.
 	$(PY) -m pytest crates/gweave-py/tests -q
 
-e2e: build python
-	bash tests/e2e/run.sh $(GWEAVE)
+e2e: build-debug python-debug
+	bash tests/e2e/run.sh target/debug/gweave
 
 test: deps lint cargo-test pytest e2e
 	@echo "make test: all passed"

@@ -59,3 +59,15 @@ impl ReportArgs {
         Ok(true)
     }
 }
+
+/// Parses `X,Y,Z` (three numbers, mm) for flags such as `--bed 220,220,250`.
+pub fn parse_xyz(text: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<f64> = text
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().map_err(|e| format!("{p:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match parts[..] {
+        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok([x, y, z]),
+        _ => Err(format!("expected three numbers X,Y,Z, got {text:?}")),
+    }
+}

@@ -6,6 +6,7 @@
 mod cmd;
 mod common;
 mod progress;
+pub mod raster_job;
 
 use std::ffi::OsString;
 use std::process::ExitCode;

@@ -84,6 +84,54 @@ fn cat(py: Python<'_>, path: PathBuf, output: Option<PathBuf>, in_place: bool, b
         .map_err(err)
 }
 
+// purge-shift
+/// Moves every colour change earlier by the purge (see `gweave purge-shift`); returns the report
+/// as JSON text. `config` is TOML text; the keyword arguments override it.
+#[pyfunction]
+#[pyo3(signature = (path, output=None, *, in_place=false, backup=true, purge=None, purge_mm3=None,
+    config=None, filament_diameter=None, cross_layers=false, allow_features=None, markers=None,
+    fallback=None))]
+#[allow(clippy::too_many_arguments)]
+fn purge_shift_json(
+    py: Python<'_>,
+    path: PathBuf,
+    output: Option<PathBuf>,
+    in_place: bool,
+    backup: bool,
+    purge: Option<f64>,
+    purge_mm3: Option<f64>,
+    config: Option<String>,
+    filament_diameter: Option<f64>,
+    cross_layers: bool,
+    allow_features: Option<Vec<String>>,
+    markers: Option<(String, String)>,
+    fallback: Option<String>,
+) -> PyResult<String> {
+    use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
+    let value_err = |e: gweave::post::purge_shift::ConfigError| PyValueError::new_err(e.to_string());
+    let mut c = match &config {
+        Some(text) => PurgeShiftConfig::parse_toml(text).map_err(value_err)?,
+        None => PurgeShiftConfig::default(),
+    };
+    c.apply(&Overrides {
+        purge_mm: purge,
+        purge_mm3,
+        filament_diameter_mm: filament_diameter,
+        cross_layers,
+        allow_features,
+        markers: markers.map(|(b, e)| [b, e]),
+        fallback,
+    });
+    let rules = c.validate().map_err(value_err)?;
+    let target = match (output, in_place) {
+        (_, true) => Target::InPlace { keep_backup: backup },
+        (Some(p), false) => Target::File(p),
+        (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
+    };
+    let report = py.allow_threads(|| purge_shift_file(rules, &path, &target, &mut Quiet)).map_err(err)?;
+    to_json(&report)
+}
+
 /// One line of a file, with what it says and the machine state after it.
 #[pyclass(frozen, get_all, module = "gweave")]
 struct Line {
@@ -303,6 +351,407 @@ fn run_cli(py: Python<'_>, argv: Vec<String>) -> i32 {
     }
 }
 
+// ---- binder-jet raster (gweave raster, slice-raster) ----
+
+/// An anyhow error from the CLI's job runner: OSError when a file could not be read or written.
+fn job_err(e: anyhow::Error) -> PyErr {
+    let io = e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some());
+    let text = format!("{e:#}");
+    if io {
+        PyOSError::new_err(text)
+    } else {
+        PyValueError::new_err(text)
+    }
+}
+
+fn dialect_of(name: Option<&str>) -> PyResult<Option<gweave::gen::printhead::FirmwareDialect>> {
+    use gweave::gen::printhead::FirmwareDialect;
+    match name {
+        None => Ok(None),
+        Some("marlin") => Ok(Some(FirmwareDialect::Marlin)),
+        Some("reprap") => Ok(Some(FirmwareDialect::RepRapFirmware)),
+        Some(other) => {
+            Err(PyValueError::new_err(format!("dialect must be 'marlin' or 'reprap', got {other:?}")))
+        }
+    }
+}
+
+/// Rasters layer images or a `.sl1` into inkjet G-code; the report as JSON text (see
+/// `gweave raster --json`).
+#[pyfunction]
+#[pyo3(signature = (inputs, output, *, head=None, threshold=0.5, invert=false, flip_y=false, one_way=false,
+    density=1, origin=(20.0, 20.0), layer_height=None, pixel_mm=None, dpi=None, heads=None, channels=None,
+    recoat=None, start=None, end=None, dialect=None, feed=None, fast_estimate=false))]
+#[allow(clippy::too_many_arguments)]
+fn raster_json(
+    py: Python<'_>,
+    inputs: Vec<PathBuf>,
+    output: PathBuf,
+    head: Option<PathBuf>,
+    threshold: f64,
+    invert: bool,
+    flip_y: bool,
+    one_way: bool,
+    density: u32,
+    origin: (f64, f64),
+    layer_height: Option<f64>,
+    pixel_mm: Option<f64>,
+    dpi: Option<f64>,
+    heads: Option<usize>,
+    channels: Option<String>,
+    recoat: Option<PathBuf>,
+    start: Option<PathBuf>,
+    end: Option<PathBuf>,
+    dialect: Option<&str>,
+    feed: Option<f64>,
+    fast_estimate: bool,
+) -> PyResult<String> {
+    let options = gweave_cli::raster_job::JobOptions {
+        inputs,
+        head,
+        threshold,
+        invert,
+        flip_y,
+        one_way,
+        density,
+        origin_mm: origin,
+        layer_height_mm: layer_height,
+        pixel_mm,
+        dpi,
+        heads,
+        channels,
+        recoat,
+        start,
+        end,
+        dialect: dialect_of(dialect)?,
+        feed_mm_min: feed,
+        fast_estimate,
+    };
+    let report =
+        py.allow_threads(|| options.job()?.run(&Target::File(output), &mut Quiet)).map_err(job_err)?;
+    to_json(&report)
+}
+
+/// Writes a nozzle test pattern; the raster report as JSON text.
+#[pyfunction]
+#[pyo3(signature = (output, *, head=None, heads=None, dialect=None, columns=4, origin=(20.0, 20.0)))]
+fn raster_test_pattern_json(
+    py: Python<'_>,
+    output: PathBuf,
+    head: Option<PathBuf>,
+    heads: Option<usize>,
+    dialect: Option<&str>,
+    columns: usize,
+    origin: (f64, f64),
+) -> PyResult<String> {
+    let options = gweave_cli::raster_job::JobOptions {
+        head,
+        heads,
+        dialect: dialect_of(dialect)?,
+        origin_mm: origin,
+        ..Default::default()
+    };
+    let (report, _) =
+        py.allow_threads(|| options.test_pattern(&Target::File(output), columns)).map_err(job_err)?;
+    to_json(&report)
+}
+
+/// Slices an STL into 1-bit layer PNGs in `out_dir`; the report as JSON text (see
+/// `gweave slice-raster --json`).
+#[pyfunction]
+#[pyo3(signature = (stl, out_dir, *, layer_height, dpi=96.0, pixel_mm=None, margin=0))]
+fn slice_raster_json(
+    py: Python<'_>,
+    stl: PathBuf,
+    out_dir: PathBuf,
+    layer_height: f64,
+    dpi: f64,
+    pixel_mm: Option<f64>,
+    margin: usize,
+) -> PyResult<String> {
+    use gweave::gen::slice_raster::{slice_to_dir, SliceConfig};
+    let cfg = SliceConfig {
+        layer_height_mm: layer_height,
+        pixel_mm: pixel_mm.unwrap_or(25.4 / dpi),
+        margin_px: margin,
+    };
+    let report = py.allow_threads(|| {
+        let mesh = gweave::gen::stl::read_stl(&stl).map_err(|e| match e {
+            gweave::gen::stl::StlError::Io { .. } => PyOSError::new_err(e.to_string()),
+            _ => PyValueError::new_err(format!("{}: {e}", stl.display())),
+        })?;
+        slice_to_dir(&mesh, &cfg, &out_dir).map_err(|e| PyValueError::new_err(e.to_string()))
+    })?;
+    to_json(&report)
+}
+
+// --- gweave-sim: the virtual printer ---
+
+fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::profile::MachineProfile> {
+    match machine {
+        None => Ok(gweave_sim::profile::MachineProfile::default()),
+        Some(path) => {
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+            gweave_sim::profile::MachineProfile::from_toml_str(&text)
+                .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
+        }
+    }
+}
+
+fn sim_err(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// Runs a file through the virtual printer; the report as JSON text (see `gweave sim --json`).
+#[pyfunction]
+#[pyo3(signature = (path, *, machine=None))]
+fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult<String> {
+    let profile = machine_profile(machine)?;
+    let report = py.allow_threads(|| {
+        let mut m = gweave_sim::interp::Machine::new(profile).map_err(sim_err)?;
+        let file = File::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let mut reader = LineReader::new(file);
+        let mut out = |_t: f64, _l: &str| {};
+        while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
+            if m.execute(line.bytes, &mut out) == gweave_sim::interp::Outcome::Halted {
+                break;
+            }
+        }
+        m.finish(&mut out);
+        Ok::<_, PyErr>(m.report())
+    })?;
+    to_json(&report)
+}
+
+/// A virtual printer to drive one command at a time, as a host would over a serial line.
+/// (Unsendable: it stays on the thread that made it; the controllers are not `Sync`.)
+#[pyclass(module = "gweave", unsendable)]
+struct Machine {
+    inner: gweave_sim::interp::Machine,
+}
+
+#[pymethods]
+impl Machine {
+    /// A machine at power-on; `machine` is a profile TOML path (default: RAMPS 1.4 Marlin).
+    #[new]
+    #[pyo3(signature = (*, machine=None))]
+    fn new(machine: Option<PathBuf>) -> PyResult<Self> {
+        let inner = gweave_sim::interp::Machine::new(machine_profile(machine)?).map_err(sim_err)?;
+        Ok(Self { inner })
+    }
+
+    /// The lines printed at power-on (`start`, ...).
+    fn boot_lines(&self) -> Vec<String> {
+        self.inner.boot_lines()
+    }
+
+    /// Executes one command; returns its replies as a serial port would show them, ending
+    /// with `ok` unless the machine is halted (`M105` answers `ok T:...` in one line).
+    fn execute(&mut self, line: &str) -> Vec<String> {
+        let mut replies = Vec::new();
+        let outcome = self.inner.execute(line.as_bytes(), &mut |_t, l| replies.push(l.to_owned()));
+        if outcome == gweave_sim::interp::Outcome::Ok && !self.inner.acknowledged() {
+            replies.push("ok".to_owned());
+        }
+        replies
+    }
+
+    /// Simulated time, s.
+    #[getter]
+    fn now_s(&self) -> f64 {
+        self.inner.now_s()
+    }
+
+    /// Executes everything still queued in the planner (the end of a job).
+    fn finish(&mut self) {
+        self.inner.finish(&mut |_, _| {});
+    }
+
+    /// The report so far as a dict (the same fields as `gweave sim --json`).
+    fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = to_json(&self.inner.report())?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+}
+
+// ---- rotary (lathe-type) printing: gweave::rotary ----
+
+use std::sync::{Arc, Mutex};
+
+use gweave::rotary::cylinder::RotaryConfig;
+use gweave::rotary::helix::{
+    self, Handedness, HelicalPath as RustHelicalPath, PrintSettings, Profile, Resolution,
+};
+use gweave::rotary::report::{merged_settings, tube_file, wrap_file};
+use gweave::rotary::wrap::WrapConfig;
+use gweave::rotary::RotaryError;
+
+fn rotary_err(e: RotaryError) -> PyErr {
+    match e {
+        RotaryError::Io(_) => PyOSError::new_err(e.to_string()),
+        _ => PyValueError::new_err(e.to_string()),
+    }
+}
+
+/// Wraps a flat G-code file onto the mandrel; `settings` is a JSON object of `WrapConfig` keys
+/// merged over the TOML file `config`. Returns the report as JSON text (`rotary wrap --json`).
+#[pyfunction]
+#[pyo3(signature = (input, output, *, settings, config=None, preview=None))]
+fn rotary_wrap_json(
+    py: Python<'_>,
+    input: PathBuf,
+    output: PathBuf,
+    settings: String,
+    config: Option<PathBuf>,
+    preview: Option<PathBuf>,
+) -> PyResult<String> {
+    let wrap: WrapConfig = merged_settings(config.as_deref(), &settings).map_err(rotary_err)?;
+    let report =
+        py.allow_threads(|| wrap_file(&wrap, &input, &Target::File(output), preview.as_deref(), &mut Quiet));
+    to_json(&report.map_err(rotary_err)?)
+}
+
+/// Generates a helical tube; `settings` is a JSON object of `TubeParams` keys merged over the
+/// TOML file `config`. Returns the report as JSON text (`rotary tube --json`).
+#[pyfunction]
+#[pyo3(signature = (output, *, settings, config=None, preview=None))]
+fn rotary_tube_json(
+    py: Python<'_>,
+    output: PathBuf,
+    settings: String,
+    config: Option<PathBuf>,
+    preview: Option<PathBuf>,
+) -> PyResult<String> {
+    let params: helix::TubeParams = merged_settings(config.as_deref(), &settings).map_err(rotary_err)?;
+    let report = py.allow_threads(|| tube_file(&params, &Target::File(output), preview.as_deref()));
+    to_json(&report.map_err(rotary_err)?)
+}
+
+/// The first exception a Python profile function raised, re-raised after the path fails.
+type ErrorSlot = Arc<Mutex<Option<PyErr>>>;
+
+/// A radius or pitch profile from Python: a number, a list of `(axial, value)` pairs, or a
+/// callable `f(axial) -> value`.
+fn profile(value: &Bound<'_, PyAny>, slot: &ErrorSlot) -> PyResult<Profile> {
+    if value.is_callable() {
+        let f = value.clone().unbind();
+        let slot = slot.clone();
+        return Ok(Profile::Custom(Arc::new(move |x: f64| {
+            Python::with_gil(|py| match f.call1(py, (x,)).and_then(|v| v.extract::<f64>(py)) {
+                Ok(v) => v,
+                Err(e) => {
+                    if let Ok(mut first) = slot.lock() {
+                        first.get_or_insert(e);
+                    }
+                    f64::NAN
+                }
+            })
+        })));
+    }
+    if let Ok(v) = value.extract::<f64>() {
+        return Ok(Profile::Constant(v));
+    }
+    Ok(Profile::Table(value.extract::<Vec<(f64, f64)>>()?))
+}
+
+/// One helical bead on the mandrel from `start` to `end` (axial, mm), its centreline at
+/// `radius` and advancing `pitch` per turn; each is a number, a list of `(axial, value)` pairs
+/// (linear in between) or a callable of the axial position.
+#[pyclass(module = "gweave", name = "HelicalPath")]
+struct HelicalPath {
+    path: RustHelicalPath,
+    errors: ErrorSlot,
+}
+
+impl HelicalPath {
+    /// Turns a failed path into the Python exception a profile raised, if any.
+    fn fail(&self, e: RotaryError) -> PyErr {
+        match self.errors.lock().ok().and_then(|mut slot| slot.take()) {
+            Some(raised) => raised,
+            None => rotary_err(e),
+        }
+    }
+}
+
+#[pymethods]
+impl HelicalPath {
+    #[new]
+    #[pyo3(signature = (start, end, *, radius, pitch, handedness="right", start_theta=0.0, lead_in=0.0, lead_out=0.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        start: f64,
+        end: f64,
+        radius: &Bound<'_, PyAny>,
+        pitch: &Bound<'_, PyAny>,
+        handedness: &str,
+        start_theta: f64,
+        lead_in: f64,
+        lead_out: f64,
+    ) -> PyResult<Self> {
+        let handedness = match handedness {
+            "right" => Handedness::Right,
+            "left" => Handedness::Left,
+            other => {
+                return Err(PyValueError::new_err(format!("handedness is 'right' or 'left', not {other:?}")))
+            }
+        };
+        let errors = ErrorSlot::default();
+        let mut path = RustHelicalPath::new(start, end, profile(radius, &errors)?, profile(pitch, &errors)?);
+        path.handedness = handedness;
+        path.start_theta_deg = start_theta;
+        path.lead_in_deg = lead_in;
+        path.lead_out_deg = lead_out;
+        Ok(Self { path, errors })
+    }
+
+    /// The points `(axial_mm, theta_deg, radius_mm)`, chords within `chord_tol` mm of the helix.
+    #[pyo3(signature = (*, chord_tol=0.01, segments_per_turn=None))]
+    fn points(&self, chord_tol: f64, segments_per_turn: Option<u32>) -> PyResult<Vec<(f64, f64, f64)>> {
+        let resolution = Resolution { chord_tolerance_mm: chord_tol, segments_per_turn };
+        let points = self.path.points(resolution).map_err(|e| self.fail(e))?;
+        Ok(points.into_iter().map(|p| (p.axial_mm, p.theta_deg, p.radius_mm)).collect())
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<gweave.HelicalPath {} -> {} mm, {:?}>",
+            self.path.start_axial_mm, self.path.end_axial_mm, self.path.handedness
+        )
+    }
+}
+
+/// `{"machine": RotaryConfig, "print": PrintSettings}` for custom paths.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PathsSettings {
+    machine: RotaryConfig,
+    #[serde(default)]
+    print: PrintSettings,
+}
+
+/// Writes a program printing `paths` in order; `settings` as for the tube's `machine` and
+/// `print` tables. Returns `{"filament_mm", "print_time_s"}` as JSON text.
+#[pyfunction]
+#[pyo3(signature = (paths, output, *, settings, config=None))]
+fn write_helical_paths_json(
+    paths: Vec<PyRef<'_, HelicalPath>>,
+    output: PathBuf,
+    settings: String,
+    config: Option<PathBuf>,
+) -> PyResult<String> {
+    let s: PathsSettings = merged_settings(config.as_deref(), &settings).map_err(rotary_err)?;
+    let rust: Vec<RustHelicalPath> = paths.iter().map(|p| p.path.clone()).collect();
+    let mut out = gweave::gcode::writer::Output::create(&Target::File(output), None).map_err(err)?;
+    let summary = helix::write_paths(&s.machine, &s.print, &rust, std::io::BufWriter::new(&mut out));
+    let summary = summary.map_err(|e| match paths.iter().find_map(|p| p.errors.lock().ok()?.take()) {
+        Some(raised) => raised,
+        None => rotary_err(e),
+    })?;
+    out.commit().map_err(err)?;
+    to_json(&serde_json::json!({ "filament_mm": summary.filament_mm, "print_time_s": summary.print_time_s }))
+}
+
 #[pymodule]
 fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -310,8 +759,22 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_json, m)?)?;
     m.add_function(wrap_pyfunction!(cat, m)?)?;
     m.add_function(wrap_pyfunction!(run_cli, m)?)?;
+    // binder-jet raster
+    m.add_function(wrap_pyfunction!(raster_json, m)?)?;
+    m.add_function(wrap_pyfunction!(raster_test_pattern_json, m)?)?;
+    m.add_function(wrap_pyfunction!(slice_raster_json, m)?)?;
+    // purge-shift
+    m.add_function(wrap_pyfunction!(purge_shift_json, m)?)?;
     m.add_class::<Line>()?;
     m.add_class::<Reader>()?;
+    // gweave-sim: the virtual printer
+    m.add_function(wrap_pyfunction!(sim_json, m)?)?;
+    m.add_class::<Machine>()?;
+    // rotary (lathe-type) printing
+    m.add_function(wrap_pyfunction!(rotary_wrap_json, m)?)?;
+    m.add_function(wrap_pyfunction!(rotary_tube_json, m)?)?;
+    m.add_function(wrap_pyfunction!(write_helical_paths_json, m)?)?;
+    m.add_class::<HelicalPath>()?;
 
     m.add_function(wrap_pyfunction!(preview_bytes, m)?)?;
     m.add_function(wrap_pyfunction!(toolpath_columns, m)?)?;

@@ -66,11 +66,7 @@ pub enum AutotuneFailure {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum AutotuneError {
     #[error("autotune parameter `{name}` must be {rule}, got {value}")]
-    BadParameter {
-        name: &'static str,
-        rule: &'static str,
-        value: f64,
-    },
+    BadParameter { name: &'static str, rule: &'static str, value: f64 },
     #[error("{failure}")]
     Failed {
         failure: AutotuneFailure,
@@ -275,11 +271,7 @@ impl Autotune {
         } else if self.completed > self.cfg.cycles {
             self.finished_status()
         } else {
-            let counts = if self.heating {
-                self.bias + self.d
-            } else {
-                self.bias - self.d
-            };
+            let counts = if self.heating { self.bias + self.d } else { self.bias - self.d };
             // Halved to the soft-PWM scale like every Marlin heater output.
             let power = (counts.clamp(0, i64::from(self.cfg.max_power)) >> 1) as u8;
             return AutotuneStatus::Running { power };
@@ -299,15 +291,9 @@ impl Autotune {
             self.bias += self.d * (self.t_high_ms - self.t_low_ms) / period_ms;
         }
         self.bias = self.bias.clamp(20, max_power - 20);
-        self.d = if self.bias > max_power / 2 {
-            max_power - 1 - self.bias
-        } else {
-            self.bias
-        };
-        let mut line = format!(
-            " bias: {} d: {} min: {:.2} max: {:.2}",
-            self.bias, self.d, self.min_c, self.max_c
-        );
+        self.d = if self.bias > max_power / 2 { max_power - 1 - self.bias } else { self.bias };
+        let mut line =
+            format!(" bias: {} d: {} min: {:.2} max: {:.2}", self.bias, self.d, self.min_c, self.max_c);
         let mut cycle = Cycle {
             bias: self.bias,
             d: self.d,
@@ -322,18 +308,11 @@ impl Autotune {
             let ku = 4.0 * self.d as f64 / (PI * amplitude_c);
             let tu_s = period_ms as f64 / 1000.0;
             let kp = 0.6 * ku;
-            let gains = PidGains {
-                kp,
-                ki: 2.0 * kp / tu_s,
-                kd: kp * tu_s / 8.0,
-            };
+            let gains = PidGains { kp, ki: 2.0 * kp / tu_s, kd: kp * tu_s / 8.0 };
             line.push_str(&format!(" Ku: {ku:.2} Tu: {tu_s:.2}"));
             self.lines.push(line);
             self.lines.push(" Classic PID".to_owned());
-            self.lines.push(format!(
-                " Kp: {:.2} Ki: {:.2} Kd: {:.2}",
-                gains.kp, gains.ki, gains.kd
-            ));
+            self.lines.push(format!(" Kp: {:.2} Ki: {:.2} Kd: {:.2}", gains.kp, gains.ki, gains.kd));
             cycle.ku = Some(ku);
             cycle.tu_s = Some(tu_s);
             cycle.gains = Some(gains);
@@ -356,12 +335,9 @@ impl Autotune {
             "PID Autotune finished! Put the last Kp, Ki and Kd constants from below into Configuration.h"
                 .to_owned(),
         );
-        self.lines
-            .push(format!("#define DEFAULT_{prefix}Kp {:.2}", gains.kp));
-        self.lines
-            .push(format!("#define DEFAULT_{prefix}Ki {:.2}", gains.ki));
-        self.lines
-            .push(format!("#define DEFAULT_{prefix}Kd {:.2}", gains.kd));
+        self.lines.push(format!("#define DEFAULT_{prefix}Kp {:.2}", gains.kp));
+        self.lines.push(format!("#define DEFAULT_{prefix}Ki {:.2}", gains.ki));
+        self.lines.push(format!("#define DEFAULT_{prefix}Kd {:.2}", gains.kd));
         AutotuneStatus::Finished(gains)
     }
 }
@@ -392,11 +368,7 @@ pub fn run_on_heater(
     sample_s: f64,
 ) -> Result<AutotuneRun, AutotuneError> {
     if !(sample_s.is_finite() && sample_s > 0.0) {
-        return Err(AutotuneError::BadParameter {
-            name: "sample_s",
-            rule: "> 0",
-            value: sample_s,
-        });
+        return Err(AutotuneError::BadParameter { name: "sample_s", rule: "> 0", value: sample_s });
     }
     let mut tune = Autotune::new(id, cfg, 0.0)?;
     let mut lines = Vec::new();
@@ -409,16 +381,9 @@ pub fn run_on_heater(
         match status {
             AutotuneStatus::Running { power } => heater.step(crate::control::duty(power), sample_s),
             AutotuneStatus::Finished(gains) => {
-                return Ok(AutotuneRun {
-                    gains,
-                    cycles: tune.cycles().to_vec(),
-                    lines,
-                    elapsed_s: now_s,
-                })
+                return Ok(AutotuneRun { gains, cycles: tune.cycles().to_vec(), lines, elapsed_s: now_s })
             }
-            AutotuneStatus::Failed(failure) => {
-                return Err(AutotuneError::Failed { failure, lines })
-            }
+            AutotuneStatus::Failed(failure) => return Err(AutotuneError::Failed { failure, lines }),
         }
         step += 1;
     }
@@ -441,15 +406,7 @@ mod tests {
     fn tune(cfg: HeaterConfig, id: HeaterId, target_c: f64) -> AutotuneRun {
         let (th, table) = sensor();
         let mut h = Heater::new(cfg).unwrap();
-        run_on_heater(
-            &mut h,
-            id,
-            &th,
-            &table,
-            AutotuneConfig::new(target_c),
-            SAMPLE_S,
-        )
-        .unwrap()
+        run_on_heater(&mut h, id, &th, &table, AutotuneConfig::new(target_c), SAMPLE_S).unwrap()
     }
 
     /// Worst deviation of the reading from target over 600..1200 s of PID
@@ -480,11 +437,7 @@ mod tests {
     #[test]
     fn hotend_autotune_converges_and_holds_target() {
         let run = tune(HeaterConfig::hotend_40w(), HeaterId::Hotend(0), 210.0);
-        let measured: Vec<(f64, f64)> = run
-            .cycles
-            .iter()
-            .filter_map(|c| Some((c.ku?, c.tu_s?)))
-            .collect();
+        let measured: Vec<(f64, f64)> = run.cycles.iter().filter_map(|c| Some((c.ku?, c.tu_s?))).collect();
         // Cycles 3, 4 and 5 give Ku/Tu.
         assert_eq!(measured.len(), 3, "{:?}", run.lines);
         for &(ku, tu) in &measured {
@@ -504,11 +457,7 @@ mod tests {
         let err = hold_error(HeaterConfig::hotend_40w(), run.gains, 210.0);
         assert!(err <= 1.0, "worst {err} C with {:?}", run.gains);
         // ...which a P-only controller with the same Kp does not.
-        let p_only = PidGains {
-            ki: 0.0,
-            kd: 0.0,
-            ..run.gains
-        };
+        let p_only = PidGains { ki: 0.0, kd: 0.0, ..run.gains };
         let err = hold_error(HeaterConfig::hotend_40w(), p_only, 210.0);
         assert!(err > 3.0, "P-only held within {err} C");
         // Deterministic: the documented default gains are this result.
@@ -525,10 +474,7 @@ mod tests {
         let run = tune(HeaterConfig::bed_200w(), HeaterId::Bed, 60.0);
         let err = hold_error(HeaterConfig::bed_200w(), run.gains, 60.0);
         assert!(err <= 1.0, "worst {err} C with {:?}", run.gains);
-        assert!(run
-            .lines
-            .iter()
-            .any(|l| l.starts_with("#define DEFAULT_bedKp ")));
+        assert!(run.lines.iter().any(|l| l.starts_with("#define DEFAULT_bedKp ")));
     }
 
     #[test]
@@ -561,22 +507,13 @@ mod tests {
         let mut h = Heater::new(HeaterConfig::hotend_40w()).unwrap();
         // Start already 25 C above the target.
         h.set_temperature(125.0);
-        let err = run_on_heater(
-            &mut h,
-            HeaterId::Hotend(0),
-            &th,
-            &table,
-            AutotuneConfig::new(100.0),
-            SAMPLE_S,
-        )
-        .unwrap_err();
+        let err =
+            run_on_heater(&mut h, HeaterId::Hotend(0), &th, &table, AutotuneConfig::new(100.0), SAMPLE_S)
+                .unwrap_err();
         match err {
             AutotuneError::Failed { failure, lines } => {
                 assert_eq!(failure, AutotuneFailure::TemperatureTooHigh);
-                assert_eq!(
-                    lines.last().unwrap(),
-                    "PID Autotune failed! Temperature too high"
-                );
+                assert_eq!(lines.last().unwrap(), "PID Autotune failed! Temperature too high");
             }
             other => panic!("{other:?}"),
         }
@@ -587,15 +524,8 @@ mod tests {
         let (th, table) = sensor();
         let mut h = Heater::new(HeaterConfig::hotend_40w()).unwrap();
         h.inject(HeaterFault::CartridgeDisconnected);
-        let err = run_on_heater(
-            &mut h,
-            HeaterId::Hotend(0),
-            &th,
-            &table,
-            AutotuneConfig::new(210.0),
-            1.0,
-        )
-        .unwrap_err();
+        let err = run_on_heater(&mut h, HeaterId::Hotend(0), &th, &table, AutotuneConfig::new(210.0), 1.0)
+            .unwrap_err();
         assert!(matches!(
             err,
             AutotuneError::Failed { failure: AutotuneFailure::Timeout, ref lines }
@@ -605,10 +535,7 @@ mod tests {
 
     #[test]
     fn rejects_fewer_than_three_cycles() {
-        let cfg = AutotuneConfig {
-            cycles: 2,
-            ..AutotuneConfig::new(200.0)
-        };
+        let cfg = AutotuneConfig { cycles: 2, ..AutotuneConfig::new(200.0) };
         assert!(matches!(
             Autotune::new(HeaterId::Hotend(0), cfg, 0.0),
             Err(AutotuneError::BadParameter { name: "cycles", .. })

@@ -56,11 +56,7 @@ pub fn duty(power: u8) -> f64 {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ControlError {
     #[error("control parameter `{name}` must be {rule}, got {value}")]
-    BadParameter {
-        name: &'static str,
-        rule: &'static str,
-        value: f64,
-    },
+    BadParameter { name: &'static str, rule: &'static str, value: f64 },
 }
 
 fn check(name: &'static str, value: f64, ok: bool, rule: &'static str) -> Result<(), ControlError> {
@@ -128,11 +124,7 @@ pub struct BangBangConfig {
 
 impl Default for BangBangConfig {
     fn default() -> Self {
-        Self {
-            hysteresis_c: 0.0,
-            idle_period_s: 0.5,
-            moving_period_s: 0.25,
-        }
+        Self { hysteresis_c: 0.0, idle_period_s: 0.5, moving_period_s: 0.25 }
     }
 }
 
@@ -147,30 +139,10 @@ pub struct BangBang {
 
 impl BangBang {
     pub fn new(cfg: BangBangConfig) -> Result<Self, ControlError> {
-        check(
-            "hysteresis_c",
-            cfg.hysteresis_c,
-            cfg.hysteresis_c >= 0.0,
-            ">= 0",
-        )?;
-        check(
-            "idle_period_s",
-            cfg.idle_period_s,
-            cfg.idle_period_s > 0.0,
-            "> 0",
-        )?;
-        check(
-            "moving_period_s",
-            cfg.moving_period_s,
-            cfg.moving_period_s > 0.0,
-            "> 0",
-        )?;
-        Ok(Self {
-            cfg,
-            moving: false,
-            on: false,
-            next_eval_s: None,
-        })
+        check("hysteresis_c", cfg.hysteresis_c, cfg.hysteresis_c >= 0.0, ">= 0")?;
+        check("idle_period_s", cfg.idle_period_s, cfg.idle_period_s > 0.0, "> 0")?;
+        check("moving_period_s", cfg.moving_period_s, cfg.moving_period_s > 0.0, "> 0")?;
+        Ok(Self { cfg, moving: false, on: false, next_eval_s: None })
     }
 }
 
@@ -188,11 +160,7 @@ impl Control for BangBang {
             } else if measured_c <= target_c - h {
                 self.on = true;
             }
-            let period = if self.moving {
-                self.cfg.moving_period_s
-            } else {
-                self.cfg.idle_period_s
-            };
+            let period = if self.moving { self.cfg.moving_period_s } else { self.cfg.idle_period_s };
             self.next_eval_s = Some(now_s + period);
         }
         if self.on {
@@ -227,28 +195,17 @@ pub struct PidGains {
 impl PidGains {
     /// Marlin's shipped hotend defaults (`DEFAULT_Kp 22.2`, `Ki 1.08`,
     /// `Kd 114`), for reference; tune the real plant with M303.
-    pub const MARLIN_HOTEND: PidGains = PidGains {
-        kp: 22.2,
-        ki: 1.08,
-        kd: 114.0,
-    };
+    pub const MARLIN_HOTEND: PidGains = PidGains { kp: 22.2, ki: 1.08, kd: 114.0 };
 
     /// Gains found by M303 (this crate's autotune, 5 cycles at 210 C) on the
     /// default plant [`crate::heater::HeaterConfig::hotend_40w`].
-    pub const DEFAULT_HOTEND_40W: PidGains = PidGains {
-        kp: 25.66,
-        ki: 2.15,
-        kd: 76.67,
-    };
+    pub const DEFAULT_HOTEND_40W: PidGains = PidGains { kp: 25.66, ki: 2.15, kd: 76.67 };
 
     /// The M301/M503-style report line, e.g.
     /// `echo:  M301 P22.20 I1.08 D114.00` (`M304` for the bed).
     pub fn report_line(&self, bed: bool) -> String {
         let code = if bed { "M304" } else { "M301" };
-        format!(
-            "echo:  {code} P{:.2} I{:.2} D{:.2}",
-            self.kp, self.ki, self.kd
-        )
+        format!("echo:  {code} P{:.2} I{:.2} D{:.2}", self.kp, self.ki, self.kd)
     }
 
     fn validate(&self) -> Result<(), ControlError> {
@@ -308,18 +265,8 @@ impl Pid {
         if let Some(r) = cfg.functional_range_c {
             check("functional_range_c", r, r > 0.0, "> 0")?;
         }
-        check(
-            "derivative_filter_s",
-            cfg.derivative_filter_s,
-            cfg.derivative_filter_s >= 0.0,
-            ">= 0",
-        )?;
-        Ok(Self {
-            cfg,
-            integral: 0.0,
-            derivative: 0.0,
-            last: None,
-        })
+        check("derivative_filter_s", cfg.derivative_filter_s, cfg.derivative_filter_s >= 0.0, ">= 0")?;
+        Ok(Self { cfg, integral: 0.0, derivative: 0.0, last: None })
     }
 
     /// The output on the 0..=255 scale (before halving), for inspection.
@@ -400,11 +347,8 @@ mod tests {
 
     #[test]
     fn bang_bang_hysteresis_holds_inside_band() {
-        let mut bb = BangBang::new(BangBangConfig {
-            hysteresis_c: 2.0,
-            ..BangBangConfig::default()
-        })
-        .unwrap();
+        let mut bb =
+            BangBang::new(BangBangConfig { hysteresis_c: 2.0, ..BangBangConfig::default() }).unwrap();
         assert_eq!(bb.update(0.0, 57.0, 60.0), POWER_MAX);
         assert_eq!(bb.update(0.5, 61.5, 60.0), POWER_MAX);
         assert_eq!(bb.update(1.0, 62.5, 60.0), 0);
@@ -424,20 +368,12 @@ mod tests {
     #[test]
     fn pid_terms_in_per_second_units() {
         // P only: 10 counts/K * 5 K = 50 of 255 -> power 25.
-        let mut p = pid(PidGains {
-            kp: 10.0,
-            ki: 0.0,
-            kd: 0.0,
-        });
+        let mut p = pid(PidGains { kp: 10.0, ki: 0.0, kd: 0.0 });
         assert_eq!(p.update(0.0, 205.0, 210.0), 25);
         // I only: 2 counts/(K s) * 5 K * 3 s = 30 of 255 -> 15, whatever the
         // sample period.
         for steps in [3usize, 30] {
-            let mut i = pid(PidGains {
-                kp: 0.0,
-                ki: 2.0,
-                kd: 0.0,
-            });
+            let mut i = pid(PidGains { kp: 0.0, ki: 2.0, kd: 0.0 });
             let dt = 3.0 / steps as f64;
             let mut power = i.update(0.0, 205.0, 210.0);
             for k in 1..=steps {
@@ -447,22 +383,14 @@ mod tests {
         }
         // D only, on the measurement: rising 2 K/s with Kd 20 counts s/K
         // subtracts 40 counts; with P 100 counts -> (100 - 40)/2 = 30.
-        let mut d = pid(PidGains {
-            kp: 10.0,
-            ki: 0.0,
-            kd: 20.0,
-        });
+        let mut d = pid(PidGains { kp: 10.0, ki: 0.0, kd: 20.0 });
         d.update(0.0, 198.0, 210.0);
         assert_eq!(d.update(1.0, 200.0, 210.0), 30);
     }
 
     #[test]
     fn pid_integral_windup_is_clamped() {
-        let mut i = pid(PidGains {
-            kp: 0.0,
-            ki: 10.0,
-            kd: 0.0,
-        });
+        let mut i = pid(PidGains { kp: 0.0, ki: 10.0, kd: 0.0 });
         // A long time far below target would integrate to 10*50*1000.
         i.update(0.0, 160.0, 210.0);
         assert_eq!(i.update(1000.0, 160.0, 210.0), POWER_MAX);
@@ -482,47 +410,29 @@ mod tests {
 
     #[test]
     fn m301_set_and_report() {
-        let mut c = ControlConfig::Pid(PidConfig::with_gains(PidGains::MARLIN_HOTEND))
-            .build()
-            .unwrap();
-        assert_eq!(
-            c.pid_gains().unwrap().report_line(false),
-            "echo:  M301 P22.20 I1.08 D114.00"
-        );
-        let new = PidGains {
-            kp: 19.54,
-            ki: 1.63,
-            kd: 58.61,
-        };
+        let mut c = ControlConfig::Pid(PidConfig::with_gains(PidGains::MARLIN_HOTEND)).build().unwrap();
+        assert_eq!(c.pid_gains().unwrap().report_line(false), "echo:  M301 P22.20 I1.08 D114.00");
+        let new = PidGains { kp: 19.54, ki: 1.63, kd: 58.61 };
         assert!(c.set_pid_gains(new));
         assert_eq!(c.pid_gains(), Some(new));
         assert!(!c.set_pid_gains(PidGains { kp: -1.0, ..new }));
-        let mut bb = ControlConfig::BangBang(BangBangConfig::default())
-            .build()
-            .unwrap();
+        let mut bb = ControlConfig::BangBang(BangBangConfig::default()).build().unwrap();
         assert_eq!(bb.pid_gains(), None);
         assert!(!bb.set_pid_gains(new));
     }
 
     #[test]
     fn config_parses_and_rejects_unknown_keys() {
-        let c: ControlConfig =
-            toml::from_str("kind = \"bang_bang\"\nhysteresis_c = 1.5\n").unwrap();
+        let c: ControlConfig = toml::from_str("kind = \"bang_bang\"\nhysteresis_c = 1.5\n").unwrap();
         assert_eq!(
             c,
-            ControlConfig::BangBang(BangBangConfig {
-                hysteresis_c: 1.5,
-                ..BangBangConfig::default()
-            })
+            ControlConfig::BangBang(BangBangConfig { hysteresis_c: 1.5, ..BangBangConfig::default() })
         );
         let p: ControlConfig =
             toml::from_str("kind = \"pid\"\ngains = { kp = 1.0, ki = 0.1, kd = 5.0 }\n").unwrap();
         assert!(matches!(p, ControlConfig::Pid(c) if c.functional_range_c == Some(10.0)));
         assert!(toml::from_str::<ControlConfig>("kind = \"bang_bang\"\nperiod = 1.0\n").is_err());
-        let bad = ControlConfig::BangBang(BangBangConfig {
-            idle_period_s: 0.0,
-            ..BangBangConfig::default()
-        });
+        let bad = ControlConfig::BangBang(BangBangConfig { idle_period_s: 0.0, ..BangBangConfig::default() });
         assert!(bad.build().is_err());
     }
 }

@@ -25,13 +25,21 @@
 //! (`BGFLUSH_EXTRA_TIME`) past the last motion plus twice the 1 ms step-generation window, which
 //! Klipper's reported print time includes. These go to `overhead_s`, not to any layer.
 //!
-//! Mixing hotends: `M163 S<input> P<weight>` sets a weight and `M164` makes the weights the
-//! current mix, which splits the E steps of the following moves (virtual tool numbers are not
-//! tracked).
+//! Mixing hotends (a profile with `steps.mixing_e`): the mixing commands are followed with the
+//! core's [`MixingState`] (Marlin `M163`/`M164`/`M165` virtual tools selected by `T<n>`,
+//! RepRapFirmware `M567` mixes of tools), and the active mix splits the E steps of the
+//! following moves. Firmware retraction (`G10`/`G11`) is an extrude-only move of the `M207`
+//! length at Marlin's `RETRACT_FEEDRATE` (45 mm/s) and `RETRACT_RECOVER_FEEDRATE` (8 mm/s).
+//!
+//! [`Estimator`] is also the motion core of the virtual printer ([`crate::interp::Machine`]):
+//! it splits a line into [`Estimator::parse`] (syntax and modal state) and [`Estimator::run`]
+//! (planning), so the machine can look at, or change, what a line does in between (refuse a
+//! cold extrusion, scale the feed by `M220`).
 
 use std::collections::{BTreeMap, HashMap};
 use std::io::Read;
 
+use gweave::colour::dialect::{DialectError, MixingState, MARLIN_VIRTUAL_TOOLS};
 use gweave::gcode::layers::Feature;
 use gweave::gcode::lexer::parse_into;
 use gweave::gcode::line::{Block, Command};
@@ -52,6 +60,9 @@ pub const ARC_CHORD_MM: f64 = 1.0;
 const KLIPPER_START_BUFFER_S: f64 = 0.25;
 /// Klipper's two `DISABLE_STALL_TIME` dwells around `M84`, s.
 const KLIPPER_MOTOR_OFF_S: f64 = 0.2;
+/// Marlin's `RETRACT_FEEDRATE` and `RETRACT_RECOVER_FEEDRATE` for `G10`/`G11`, mm/s.
+const FW_RETRACT_FEED_MM_S: f64 = 45.0;
+const FW_RECOVER_FEED_MM_S: f64 = 8.0;
 /// Klipper's step generation at exit: `BGFLUSH_EXTRA_TIME` past the last motion plus twice the
 /// 1 ms `SDS_CHECK_TIME` scan window, s.
 const KLIPPER_EXIT_FLUSH_S: f64 = 0.25 + 2.0 * 0.001;
@@ -78,6 +89,15 @@ pub enum EstimateError {
         line: u64,
         /// What is wrong with it.
         source: ProfileError,
+    },
+    /// A mixing command (`M163`-`M165`, `M567`, `T<n>` on a mixing hotend) that the firmware
+    /// would refuse. [`Estimator::line`] ignores these; the virtual printer reports them.
+    #[error("line {line}: {source}")]
+    Mixing {
+        /// 1-based line number.
+        line: u64,
+        /// What is wrong with it.
+        source: DialectError,
     },
 }
 
@@ -147,8 +167,8 @@ pub struct Estimator {
     acc: Accounts,
     key_index: HashMap<Key, u64>,
     mix_index: HashMap<Vec<u64>, usize>,
-    /// M163 weights waiting for M164.
-    mix_pending: Vec<f64>,
+    /// The mixing commands' state, for a profile with mixing inputs.
+    mixing: Option<MixingState>,
     mix: usize,
     klipper: bool,
     started: bool,
@@ -162,13 +182,16 @@ impl Estimator {
     /// An estimator for a machine with this profile.
     pub fn new(profile: &MotionProfile) -> Result<Self, EstimateError> {
         let klipper = matches!(profile.corners, CornerMode::Klipper(_));
-        let firmware = if klipper {
-            Firmware::Klipper
-        } else {
-            Firmware::Marlin
+        let firmware = if klipper { Firmware::Klipper } else { Firmware::Marlin };
+        let planner =
+            Planner::new(profile.clone()).map_err(|source| EstimateError::Profile { line: 0, source })?;
+        let mixing = match profile.steps.mixing_e.len() {
+            0 => None,
+            n => Some(
+                MixingState::new(n, MARLIN_VIRTUAL_TOOLS)
+                    .map_err(|source| EstimateError::Mixing { line: 0, source })?,
+            ),
         };
-        let planner = Planner::new(profile.clone())
-            .map_err(|source| EstimateError::Profile { line: 0, source })?;
         let acc = Accounts {
             keys: Vec::new(),
             key_s: Vec::new(),
@@ -179,17 +202,14 @@ impl Estimator {
             last_motion_end_s: 0.0,
             blocks: 0,
         };
-        Ok(Self {
+        let mut est = Self {
             block: Block::default(),
-            state: State::new(StateOptions {
-                firmware,
-                ..StateOptions::default()
-            }),
+            state: State::new(StateOptions { firmware, ..StateOptions::default() }),
             planner,
             acc,
             key_index: HashMap::new(),
             mix_index: HashMap::new(),
-            mix_pending: Vec::new(),
+            mixing,
             mix: 0,
             klipper,
             started: false,
@@ -197,16 +217,35 @@ impl Estimator {
             dwell_s: 0.0,
             overhead_s: 0.0,
             line: 0,
-        })
+        };
+        est.refresh_mix();
+        Ok(est)
     }
 
-    /// Execute one line (without its line ending).
+    /// Execute one line (without its line ending). Mixing commands the firmware would refuse
+    /// are skipped.
     pub fn line(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
+        let effect = self.parse(raw);
+        match self.run(raw, &effect) {
+            Err(EstimateError::Mixing { .. }) => Ok(()),
+            other => other,
+        }
+    }
+
+    /// First half of [`Estimator::line`]: parse the line and apply it to the modal state; say
+    /// what it does. Nothing is planned yet.
+    pub fn parse(&mut self, raw: &[u8]) -> Effect {
         self.line += 1;
         parse_into(raw, &mut self.block);
-        let effect = *self.state.apply(raw, &self.block);
+        *self.state.apply(raw, &self.block)
+    }
+
+    /// Second half of [`Estimator::line`]: carry out `effect` (normally what
+    /// [`Estimator::parse`] returned for `raw`, possibly changed by the caller) and the line's
+    /// motion-related commands.
+    pub fn run(&mut self, raw: &[u8], effect: &Effect) -> Result<(), EstimateError> {
         match effect {
-            Effect::Move(m) => return self.motion(&m),
+            Effect::Move(m) => return self.motion(m),
             Effect::Dwell { t_s } => {
                 self.drain();
                 self.dwell_s += t_s;
@@ -215,26 +254,98 @@ impl Estimator {
                 self.acc.key_s[tag as usize] += t_s;
             }
             Effect::Home { .. } => self.drain(),
+            Effect::FirmwareRetract { e_mm } => return self.firmware_retract(*e_mm),
+            Effect::ToolChange { to, .. } => return self.select_tool(*to),
             _ => {}
         }
         match self.block.command {
-            Command::Code {
-                letter: b'M',
-                number,
-                sub: None,
-            } => self.m_code(number),
+            Command::Code { letter: b'M', number, sub: None } => self.m_code(raw, number),
             Command::Extended => self.extended(raw),
             _ => Ok(()),
         }
     }
 
+    /// The line last parsed.
+    pub fn block(&self) -> &Block {
+        &self.block
+    }
+
+    /// The modal state after the line last parsed.
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// The modal state, to set what the machine found out itself (the position after homing).
+    pub fn state_mut(&mut self) -> &mut State {
+        &mut self.state
+    }
+
+    /// Lines parsed so far (the 1-based number of the last one).
+    pub fn line_number(&self) -> u64 {
+        self.line
+    }
+
+    /// The clock: the end of the last block executed plus dwells and waits, s. Queued moves
+    /// are not counted until they leave the planner.
+    pub fn now_s(&self) -> f64 {
+        self.acc.t_s
+    }
+
+    /// Moves waiting in the lookahead queue.
+    pub fn queued(&self) -> usize {
+        self.planner.queued()
+    }
+
+    /// The motion profile in force (M201-M205 change it).
+    pub fn profile(&self) -> &MotionProfile {
+        self.planner.profile()
+    }
+
+    /// The motors.
+    pub fn steppers(&self) -> &Steppers {
+        &self.acc.steppers
+    }
+
+    /// The motors, to step what the planner does not plan (homing).
+    pub fn steppers_mut(&mut self) -> &mut Steppers {
+        &mut self.acc.steppers
+    }
+
+    /// The mixing state, for a profile with mixing inputs.
+    pub fn mixing(&self) -> Option<&MixingState> {
+        self.mixing.as_ref()
+    }
+
+    /// Let `t_s` pass with the machine standing still, attributed to no layer (heating,
+    /// homing). Plan the queue first with [`Estimator::drain`].
+    pub fn idle(&mut self, t_s: f64) {
+        if t_s > 0.0 {
+            self.acc.t_s += t_s;
+        }
+    }
+
+    /// Plan every queued move to a stop and execute it (what `M400` waits for).
+    pub fn drain(&mut self) {
+        self.planner.flush(&mut self.acc);
+    }
+
     /// Plan the rest and return the estimate.
     pub fn finish(mut self) -> Estimate {
+        self.end();
+        self.summary()
+    }
+
+    /// The end of the file: plan the rest and, in Klipper mode, add its exit flush. Call once.
+    pub fn end(&mut self) {
         self.drain();
         if self.klipper && self.acc.blocks > 0 {
             let exit_s = self.acc.last_motion_end_s + KLIPPER_EXIT_FLUSH_S;
             self.add_overhead((exit_s - self.acc.t_s).max(0.0));
         }
+    }
+
+    /// The times so far (moves still queued in the planner are not counted).
+    pub fn summary(&self) -> Estimate {
         let mut est = Estimate {
             total_s: self.acc.t_s,
             motion_s: self.acc.motion_s,
@@ -263,11 +374,7 @@ impl Estimator {
     /// The tag for the current layer, feature and mix.
     fn tag(&mut self) -> u64 {
         let s = &self.state.structure;
-        let key = Key {
-            layer: s.layer,
-            feature: s.feature,
-            mix: self.mix,
-        };
+        let key = Key { layer: s.layer, feature: s.feature, mix: self.mix };
         let acc = &mut self.acc;
         *self.key_index.entry(key).or_insert_with(|| {
             acc.keys.push(key);
@@ -277,11 +384,7 @@ impl Estimator {
     }
 
     fn motion(&mut self, m: &state::Move) -> Result<(), EstimateError> {
-        let feed_mm_s = if m.feed_mm_min > 0.0 {
-            m.feed_mm_min / 60.0
-        } else {
-            DEFAULT_FEED_MM_S
-        };
+        let feed_mm_s = if m.feed_mm_min > 0.0 { m.feed_mm_min / 60.0 } else { DEFAULT_FEED_MM_S };
         let tag = self.tag();
         if !self.started {
             self.started = true;
@@ -310,32 +413,19 @@ impl Estimator {
                 _ => [m.to[state::X], m.to[state::Y]],
             };
             let to = pos(&m.to, xy, t);
-            let mv = Move {
-                start: from,
-                end: to,
-                feed_mm_s,
-                tag,
-            };
+            let mv = Move { start: from, end: to, feed_mm_s, tag };
             self.planner
                 .push(&mv, &mut self.acc)
-                .map_err(|source| EstimateError::Move {
-                    line: self.line,
-                    source,
-                })?;
+                .map_err(|source| EstimateError::Move { line: self.line, source })?;
             from = to;
         }
         Ok(())
     }
 
-    fn m_code(&mut self, number: u32) -> Result<(), EstimateError> {
+    fn m_code(&mut self, raw: &[u8], number: u32) -> Result<(), EstimateError> {
         let b = &self.block;
-        let axes = || AxisUpdate {
-            x: b.get(b'X'),
-            y: b.get(b'Y'),
-            z: b.get(b'Z'),
-            e: b.get(b'E'),
-            a: b.get(b'A'),
-        };
+        let axes =
+            || AxisUpdate { x: b.get(b'X'), y: b.get(b'Y'), z: b.get(b'Z'), e: b.get(b'E'), a: b.get(b'A') };
         let mut profile = self.planner.profile().clone();
         let changed = match number {
             400 | 109 | 190 => {
@@ -349,23 +439,7 @@ impl Estimator {
                 }
                 return Ok(());
             }
-            163 => {
-                let (Some(input), Some(w)) = (b.get(b'S'), b.get(b'P')) else {
-                    return Ok(());
-                };
-                let i = input.max(0.0) as usize;
-                if i < 64 {
-                    if self.mix_pending.len() <= i {
-                        self.mix_pending.resize(i + 1, 0.0);
-                    }
-                    self.mix_pending[i] = w;
-                }
-                return Ok(());
-            }
-            164 => {
-                self.select_mix();
-                return Ok(());
-            }
+            163..=165 | 567 => return self.mixing_command(raw, number),
             201 if !self.klipper => profile.set_max_accel(&axes()),
             203 if !self.klipper => profile.set_max_feed(&axes()),
             205 if !self.klipper => match b.get(b'J') {
@@ -373,12 +447,7 @@ impl Estimator {
                 None => return Ok(()),
             },
             204 => {
-                let m204 = M204 {
-                    s: b.get(b'S'),
-                    p: b.get(b'P'),
-                    r: b.get(b'R'),
-                    t: b.get(b'T'),
-                };
+                let m204 = M204 { s: b.get(b'S'), p: b.get(b'P'), r: b.get(b'R'), t: b.get(b'T') };
                 match profile.set_accel(&m204) {
                     // Klipper answers an M204 without S, P and T with a message and goes on.
                     Err(ProfileError::M204NeedsPAndT) => return Ok(()),
@@ -396,15 +465,10 @@ impl Estimator {
         let name = self.block.command_span.of(raw);
         let args = self.block.text_of(raw).unwrap_or_default();
         let arg = |key: &str| -> Option<f64> {
-            std::str::from_utf8(args)
-                .ok()?
-                .split_whitespace()
-                .find_map(|kv| {
-                    let (k, v) = kv.split_once('=')?;
-                    k.eq_ignore_ascii_case(key)
-                        .then(|| v.parse().ok())
-                        .flatten()
-                })
+            std::str::from_utf8(args).ok()?.split_whitespace().find_map(|kv| {
+                let (k, v) = kv.split_once('=')?;
+                k.eq_ignore_ascii_case(key).then(|| v.parse().ok()).flatten()
+            })
         };
         if name.eq_ignore_ascii_case(b"SET_KINEMATIC_POSITION") {
             self.drain();
@@ -431,31 +495,85 @@ impl Estimator {
         }
     }
 
-    fn apply_profile(
-        &mut self,
-        profile: Result<MotionProfile, ProfileError>,
-    ) -> Result<(), EstimateError> {
+    fn apply_profile(&mut self, profile: Result<MotionProfile, ProfileError>) -> Result<(), EstimateError> {
         profile
             .and_then(|p| self.planner.set_profile(p))
-            .map_err(|source| EstimateError::Profile {
-                line: self.line,
-                source,
-            })
+            .map_err(|source| EstimateError::Profile { line: self.line, source })
     }
 
-    fn select_mix(&mut self) {
-        let weights = std::mem::take(&mut self.mix_pending);
+    /// `M163`-`M165` and `M567` on a mixing hotend (ignored without one).
+    fn mixing_command(&mut self, raw: &[u8], number: u32) -> Result<(), EstimateError> {
+        let Some(mixing) = &mut self.mixing else {
+            return Ok(());
+        };
+        let b = &self.block;
+        let words: Vec<(char, f64)> =
+            b.words.iter().filter_map(|w| Some((char::from(w.letter), w.number()?))).collect();
+        // M567's `E0.2:0.8`: the lexer does not read the colon list, so split the word's text.
+        let e_list: Vec<f64> = match (number, b.word(b'E')) {
+            (567, Some(w)) => std::str::from_utf8(&w.span.of(raw)[1..])
+                .unwrap_or("")
+                .split(':')
+                .map(|v| v.trim().parse().unwrap_or(f64::NAN))
+                .collect(),
+            _ => Vec::new(),
+        };
+        let line = self.line;
+        mixing
+            .apply(number as u16, &words, &e_list)
+            .map_err(|source| EstimateError::Mixing { line, source })?;
+        self.refresh_mix();
+        Ok(())
+    }
+
+    /// `T<n>`: on a mixing hotend, select virtual tool n (Marlin) or the tool's `M567` mix
+    /// (RepRapFirmware).
+    fn select_tool(&mut self, tool: u32) -> Result<(), EstimateError> {
+        let Some(mixing) = &mut self.mixing else {
+            return Ok(());
+        };
+        if mixing.rrf_mix(tool).is_none() {
+            let line = self.line;
+            mixing.select_tool(tool as usize).map_err(|source| EstimateError::Mixing { line, source })?;
+        }
+        self.refresh_mix();
+        Ok(())
+    }
+
+    /// Make the mix in force the one that splits the E steps of the following moves.
+    fn refresh_mix(&mut self) {
+        let Some(mixing) = &self.mixing else {
+            return;
+        };
+        let weights = match mixing.rrf_mix(self.state.tool) {
+            Some(rrf) => rrf,
+            None => mixing.active_mix().ratios(),
+        };
         let bits: Vec<u64> = weights.iter().map(|w| w.to_bits()).collect();
         let mixes = &mut self.acc.mixes;
         self.mix = *self.mix_index.entry(bits).or_insert_with(|| {
-            mixes.push(weights.clone());
+            mixes.push(weights.to_vec());
             mixes.len() - 1
         });
-        self.mix_pending = weights;
     }
 
-    fn drain(&mut self) {
-        self.planner.flush(&mut self.acc);
+    /// `G10`/`G11`: an extrude-only move of the retraction length.
+    fn firmware_retract(&mut self, e_mm: f64) -> Result<(), EstimateError> {
+        let p = &self.state.pos;
+        let start = Pos {
+            x_mm: p[state::X],
+            y_mm: p[state::Y],
+            z_mm: p[state::Z],
+            e_mm: p[state::E],
+            a_deg: p[state::A],
+        };
+        let end = Pos { e_mm: start.e_mm + e_mm, ..start };
+        let feed_mm_s = if e_mm < 0.0 { FW_RETRACT_FEED_MM_S } else { FW_RECOVER_FEED_MM_S };
+        let mv = Move { start, end, feed_mm_s, tag: self.tag() };
+        self.motors_on = true;
+        self.planner
+            .push(&mv, &mut self.acc)
+            .map_err(|source| EstimateError::Move { line: self.line, source })
     }
 
     fn add_overhead(&mut self, t_s: f64) {
@@ -488,8 +606,7 @@ mod tests {
 
     #[test]
     fn marlin_layers_features_dwell_and_m204() {
-        let text =
-            ";FLAVOR:Marlin\n;LAYER:0\n;TYPE:WALL-OUTER\nG1 X10 E1 F600\n;LAYER:1\n;TYPE:FILL\n\
+        let text = ";FLAVOR:Marlin\n;LAYER:0\n;TYPE:WALL-OUTER\nG1 X10 E1 F600\n;LAYER:1\n;TYPE:FILL\n\
                     G1 X20 E2\nG4 P1000\nM204 T500\nG0 X30 F6000\n";
         let est = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
         // Two collinear 10 mm moves at 10 mm/s (a = 3000): 1/300 s and 1/60 mm at each end.
@@ -508,25 +625,15 @@ mod tests {
     #[test]
     fn arcs_are_cut_into_chords() {
         // A half circle of radius 10 (31.4 mm) becomes 32 chords, ending exactly at X20.
-        let est = estimate(
-            "G1 X0 Y0 F600\nG2 X20 Y0 I10 J0\n".as_bytes(),
-            &MotionProfile::default(),
-        )
-        .unwrap();
+        let est =
+            estimate("G1 X0 Y0 F600\nG2 X20 Y0 I10 J0\n".as_bytes(), &MotionProfile::default()).unwrap();
         assert_eq!(est.blocks, 32);
         assert_eq!(est.steps.axes[0], 20 * 80);
     }
 
     #[test]
     fn bad_input_is_an_error_with_its_line() {
-        let err = estimate(
-            "G1 X1 F600\nM204 S-5\n".as_bytes(),
-            &MotionProfile::default(),
-        )
-        .unwrap_err();
-        assert!(
-            matches!(err, EstimateError::Profile { line: 2, .. }),
-            "{err}"
-        );
+        let err = estimate("G1 X1 F600\nM204 S-5\n".as_bytes(), &MotionProfile::default()).unwrap_err();
+        assert!(matches!(err, EstimateError::Profile { line: 2, .. }), "{err}");
     }
 }

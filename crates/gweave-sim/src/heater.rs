@@ -80,11 +80,7 @@ impl fmt::Display for HeaterId {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum HeaterError {
     #[error("heater parameter `{name}` must be {rule}, got {value}")]
-    BadParameter {
-        name: &'static str,
-        rule: &'static str,
-        value: f64,
-    },
+    BadParameter { name: &'static str, rule: &'static str, value: f64 },
 }
 
 /// Physical parameters of one heater. Deserialized with unknown keys
@@ -168,37 +164,12 @@ impl HeaterConfig {
     pub fn validate(&self) -> Result<(), HeaterError> {
         let checks: [(&'static str, f64, bool, &'static str); 7] = [
             ("power_w", self.power_w, self.power_w > 0.0, "> 0"),
-            (
-                "heat_capacity_j_k",
-                self.heat_capacity_j_k,
-                self.heat_capacity_j_k > 0.0,
-                "> 0",
-            ),
+            ("heat_capacity_j_k", self.heat_capacity_j_k, self.heat_capacity_j_k > 0.0, "> 0"),
             ("loss_w_k", self.loss_w_k, self.loss_w_k > 0.0, "> 0"),
-            (
-                "fan_loss_w_k",
-                self.fan_loss_w_k,
-                self.fan_loss_w_k >= 0.0,
-                ">= 0",
-            ),
-            (
-                "ambient_c",
-                self.ambient_c,
-                self.ambient_c > -273.15,
-                "> -273.15",
-            ),
-            (
-                "heater_lag_s",
-                self.heater_lag_s,
-                self.heater_lag_s >= 0.0,
-                ">= 0",
-            ),
-            (
-                "sensor_lag_s",
-                self.sensor_lag_s,
-                self.sensor_lag_s >= 0.0,
-                ">= 0",
-            ),
+            ("fan_loss_w_k", self.fan_loss_w_k, self.fan_loss_w_k >= 0.0, ">= 0"),
+            ("ambient_c", self.ambient_c, self.ambient_c > -273.15, "> -273.15"),
+            ("heater_lag_s", self.heater_lag_s, self.heater_lag_s >= 0.0, ">= 0"),
+            ("sensor_lag_s", self.sensor_lag_s, self.sensor_lag_s >= 0.0, ">= 0"),
         ];
         for (name, value, ok, rule) in checks {
             if !(ok && value.is_finite()) {
@@ -284,11 +255,7 @@ impl Heater {
 
     /// Part-cooling fan fraction, clamped to 0..=1.
     pub fn set_fan(&mut self, fraction: f64) {
-        self.fan_fraction = if fraction.is_nan() {
-            0.0
-        } else {
-            fraction.clamp(0.0, 1.0)
-        };
+        self.fan_fraction = if fraction.is_nan() { 0.0 } else { fraction.clamp(0.0, 1.0) };
     }
 
     /// Inject a fault. A sensor fault replaces any earlier sensor fault.
@@ -316,16 +283,8 @@ impl Heater {
         if !(dt_s > 0.0 && dt_s.is_finite()) {
             return;
         }
-        let duty = if duty.is_nan() {
-            0.0
-        } else {
-            duty.clamp(0.0, 1.0)
-        };
-        let power_w = if self.cartridge_disconnected {
-            0.0
-        } else {
-            duty * self.cfg.power_w
-        };
+        let duty = if duty.is_nan() { 0.0 } else { duty.clamp(0.0, 1.0) };
+        let power_w = if self.cartridge_disconnected { 0.0 } else { duty * self.cfg.power_w };
         self.heat_flow_w = lag(self.heat_flow_w, power_w, self.cfg.heater_lag_s, dt_s);
         let k_w_k = self.cfg.loss_w_k + self.fan_fraction * self.cfg.fan_loss_w_k;
         let settle_c = self.cfg.ambient_c + self.heat_flow_w / k_w_k;
@@ -366,11 +325,7 @@ mod tests {
 
     /// The default hotend without either lag: a pure first-order block.
     fn no_lag() -> HeaterConfig {
-        HeaterConfig {
-            heater_lag_s: 0.0,
-            sensor_lag_s: 0.0,
-            ..HeaterConfig::hotend_40w()
-        }
+        HeaterConfig { heater_lag_s: 0.0, sensor_lag_s: 0.0, ..HeaterConfig::hotend_40w() }
     }
 
     /// Seconds of full power until the sensor reaches `target_c`.
@@ -485,17 +440,10 @@ mod tests {
         assert_eq!(cfg.sensor_lag_s, 0.0);
         let unknown = format!("{toml_ok}watts = 3\n");
         assert!(toml::from_str::<HeaterConfig>(&unknown).is_err());
-        let bad = HeaterConfig {
-            loss_w_k: 0.0,
-            ..HeaterConfig::hotend_40w()
-        };
+        let bad = HeaterConfig { loss_w_k: 0.0, ..HeaterConfig::hotend_40w() };
         assert_eq!(
             Heater::new(bad).unwrap_err(),
-            HeaterError::BadParameter {
-                name: "loss_w_k",
-                rule: "> 0",
-                value: 0.0
-            }
+            HeaterError::BadParameter { name: "loss_w_k", rule: "> 0", value: 0.0 }
         );
     }
 

@@ -35,10 +35,7 @@ pub enum InkjetError {
     #[error(transparent)]
     Image(#[from] BitmapError),
     #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Io { path: PathBuf, source: std::io::Error },
 }
 
 /// Something the G-code asked for that a real printer would do wrongly.
@@ -52,12 +49,7 @@ pub enum InkjetWarning {
     /// `P` names a head the profile does not have: nothing is fired.
     UnknownHead { head: u32 },
     /// Some drops of this fire fall outside the canvas (`lost` of them).
-    OffCanvas {
-        head: u32,
-        x_mm: f64,
-        y_mm: f64,
-        lost: u32,
-    },
+    OffCanvas { head: u32, x_mm: f64, y_mm: f64, lost: u32 },
 }
 
 /// The bed area recorded, in nozzle pitches (one pixel = one pitch square).
@@ -102,11 +94,7 @@ impl InkjetCanvas {
         Ok(InkjetCanvas {
             geometry,
             pitch_mm: profile.pitch_mm(),
-            offsets: profile
-                .heads
-                .iter()
-                .map(|h| (h.offset_x_mm, h.offset_y_mm))
-                .collect(),
+            offsets: profile.heads.iter().map(|h| (h.offset_x_mm, h.offset_y_mm)).collect(),
             row_to_s_bit: profile.row_to_s_bit(),
             layers: Vec::new(),
             warnings: Vec::new(),
@@ -127,8 +115,7 @@ impl InkjetCanvas {
         moved_since_m400: bool,
     ) {
         let Some(head) = head else {
-            self.warnings
-                .push(InkjetWarning::MissingHead { x_mm, y_mm });
+            self.warnings.push(InkjetWarning::MissingHead { x_mm, y_mm });
             return;
         };
         let Some(&(off_x, off_y)) = self.offsets.get(head as usize) else {
@@ -136,18 +123,13 @@ impl InkjetCanvas {
             return;
         };
         if moved_since_m400 {
-            self.warnings
-                .push(InkjetWarning::FireWithoutM400 { head, x_mm, y_mm });
+            self.warnings.push(InkjetWarning::FireWithoutM400 { head, x_mm, y_mm });
         }
         let heads = self.offsets.len();
         let g = self.geometry;
-        let same_layer =
-            matches!(self.layers.last(), Some(l) if (l.z_mm - z_mm).abs() <= SAME_Z_MM);
+        let same_layer = matches!(self.layers.last(), Some(l) if (l.z_mm - z_mm).abs() <= SAME_Z_MM);
         if !same_layer {
-            self.layers.push(InkjetLayer {
-                z_mm,
-                heads: vec![Bitmap::new(g.width_px, g.height_px); heads],
-            });
+            self.layers.push(InkjetLayer { z_mm, heads: vec![Bitmap::new(g.width_px, g.height_px); heads] });
         }
         let canvas = match self.layers.last_mut() {
             Some(layer) => &mut layer.heads[head as usize],
@@ -168,12 +150,7 @@ impl InkjetCanvas {
             }
         }
         if lost > 0 {
-            self.warnings.push(InkjetWarning::OffCanvas {
-                head,
-                x_mm,
-                y_mm,
-                lost,
-            });
+            self.warnings.push(InkjetWarning::OffCanvas { head, x_mm, y_mm, lost });
         }
     }
 
@@ -199,10 +176,7 @@ impl InkjetCanvas {
     /// Writes every layer and head as a 1-bit PNG `layer_<k>_head<h>.png` (k from 0, five
     /// digits) into `dir` and returns the paths.
     pub fn write_layer_pngs(&self, dir: &Path) -> Result<Vec<PathBuf>, InkjetError> {
-        std::fs::create_dir_all(dir).map_err(|source| InkjetError::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
+        std::fs::create_dir_all(dir).map_err(|source| InkjetError::Io { path: dir.to_path_buf(), source })?;
         let mut paths = Vec::new();
         for (k, layer) in self.layers.iter().enumerate() {
             for (h, bitmap) in layer.heads.iter().enumerate() {
@@ -221,12 +195,7 @@ mod tests {
     use gweave::gen::printhead::HeadOffset;
 
     fn canvas(profile: &PrintheadProfile) -> InkjetCanvas {
-        let geometry = CanvasGeometry {
-            origin_x_mm: 10.0,
-            origin_y_mm: 20.0,
-            width_px: 8,
-            height_px: 6,
-        };
+        let geometry = CanvasGeometry { origin_x_mm: 10.0, origin_y_mm: 20.0, width_px: 8, height_px: 6 };
         InkjetCanvas::new(profile, geometry).unwrap()
     }
 
@@ -236,13 +205,7 @@ mod tests {
             nozzle_count: 3,
             dpi: 25.4, // 1 mm pitch
             nozzle_rows: vec![2, 0, 1],
-            heads: vec![
-                HeadOffset::default(),
-                HeadOffset {
-                    offset_x_mm: 2.0,
-                    offset_y_mm: 1.0,
-                },
-            ],
+            heads: vec![HeadOffset::default(), HeadOffset { offset_x_mm: 2.0, offset_y_mm: 1.0 }],
             ..PrintheadProfile::default()
         };
         let mut c = canvas(&profile);
@@ -264,10 +227,7 @@ mod tests {
 
     #[test]
     fn typed_warnings() {
-        let profile = PrintheadProfile {
-            dpi: 25.4,
-            ..PrintheadProfile::default()
-        };
+        let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
         c.on_m700(None, 1, 10.5, 20.5, 0.1, false);
         c.on_m700(Some(3), 1, 10.5, 20.5, 0.1, false);
@@ -278,28 +238,11 @@ mod tests {
         assert_eq!(
             c.warnings(),
             &[
-                InkjetWarning::MissingHead {
-                    x_mm: 10.5,
-                    y_mm: 20.5
-                },
+                InkjetWarning::MissingHead { x_mm: 10.5, y_mm: 20.5 },
                 InkjetWarning::UnknownHead { head: 3 },
-                InkjetWarning::FireWithoutM400 {
-                    head: 0,
-                    x_mm: 10.5,
-                    y_mm: 20.5
-                },
-                InkjetWarning::OffCanvas {
-                    head: 0,
-                    x_mm: 10.5,
-                    y_mm: 20.5,
-                    lost: 6
-                },
-                InkjetWarning::OffCanvas {
-                    head: 0,
-                    x_mm: 9.5,
-                    y_mm: 20.5,
-                    lost: 1
-                },
+                InkjetWarning::FireWithoutM400 { head: 0, x_mm: 10.5, y_mm: 20.5 },
+                InkjetWarning::OffCanvas { head: 0, x_mm: 10.5, y_mm: 20.5, lost: 6 },
+                InkjetWarning::OffCanvas { head: 0, x_mm: 9.5, y_mm: 20.5, lost: 1 },
             ]
         );
         // The fire without M400 still lands where it was asked (here: pixel (0, 0)).
@@ -308,10 +251,7 @@ mod tests {
 
     #[test]
     fn layer_pngs_read_back() {
-        let profile = PrintheadProfile {
-            dpi: 25.4,
-            ..PrintheadProfile::default()
-        };
+        let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
         c.on_m700(Some(0), 0b101, 13.5, 20.5, 0.1, false);
         let dir = tempfile::tempdir().unwrap();

@@ -29,13 +29,7 @@ pub struct Pos {
 impl Pos {
     /// A position from X Y Z E, with A at 0.
     pub fn xyze(x_mm: f64, y_mm: f64, z_mm: f64, e_mm: f64) -> Self {
-        Self {
-            x_mm,
-            y_mm,
-            z_mm,
-            e_mm,
-            a_deg: 0.0,
-        }
+        Self { x_mm, y_mm, z_mm, e_mm, a_deg: 0.0 }
     }
 
     /// The coordinates in the order X Y Z E A.
@@ -127,12 +121,7 @@ impl Geometry {
         }
         let inv = if len > 0.0 { 1.0 / len } else { 0.0 };
         let ratio = delta.map(|d| d * inv);
-        Self {
-            delta,
-            len,
-            ratio,
-            kind,
-        }
+        Self { delta, len, ratio, kind }
     }
 }
 
@@ -158,55 +147,30 @@ mod tests {
     fn kinematic_length_ignores_e_and_a() {
         let g = Geometry::between(
             Pos::xyze(0.0, 0.0, 0.0, 0.0),
-            Pos {
-                a_deg: 9.0,
-                ..Pos::xyze(3.0, 4.0, 0.0, 1.0)
-            },
+            Pos { a_deg: 9.0, ..Pos::xyze(3.0, 4.0, 0.0, 1.0) },
         );
         assert_eq!(g.kind, MoveKind::Kinematic);
         assert_eq!(g.len, 5.0);
         let want = [0.6, 0.8, 0.0, 0.2, 1.8];
-        assert!(
-            g.ratio.iter().zip(want).all(|(r, w)| (r - w).abs() < 1e-15),
-            "{:?}",
-            g.ratio
-        );
+        assert!(g.ratio.iter().zip(want).all(|(r, w)| (r - w).abs() < 1e-15), "{:?}", g.ratio);
     }
 
     #[test]
     fn extrude_only_and_rotary_only_lengths() {
-        let g = Geometry::between(
-            Pos::xyze(1.0, 1.0, 1.0, 5.0),
-            Pos::xyze(1.0, 1.0, 1.0 + 1e-12, 3.0),
-        );
+        let g = Geometry::between(Pos::xyze(1.0, 1.0, 1.0, 5.0), Pos::xyze(1.0, 1.0, 1.0 + 1e-12, 3.0));
         assert_eq!(g.kind, MoveKind::ExtrudeOnly);
         assert_eq!((g.len, g.delta[2], g.ratio[3]), (2.0, 0.0, -1.0));
-        let g = Geometry::between(
-            Pos::default(),
-            Pos {
-                a_deg: -90.0,
-                e_mm: 2.0,
-                ..Pos::default()
-            },
-        );
+        let g = Geometry::between(Pos::default(), Pos { a_deg: -90.0, e_mm: 2.0, ..Pos::default() });
         assert_eq!(g.kind, MoveKind::RotaryOnly);
         assert_eq!((g.len, g.ratio[4], g.ratio[3]), (90.0, -1.0, 2.0 / 90.0));
     }
 
     #[test]
     fn bad_moves_are_errors() {
-        let m = Move {
-            start: Pos::default(),
-            end: Pos::xyze(f64::NAN, 0.0, 0.0, 0.0),
-            feed_mm_s: 1.0,
-            tag: 0,
-        };
+        let m =
+            Move { start: Pos::default(), end: Pos::xyze(f64::NAN, 0.0, 0.0, 0.0), feed_mm_s: 1.0, tag: 0 };
         assert_eq!(m.geometry(), Err(MoveError::NonFinitePosition));
-        let m = Move {
-            end: Pos::xyze(1.0, 0.0, 0.0, 0.0),
-            feed_mm_s: 0.0,
-            ..m
-        };
+        let m = Move { end: Pos::xyze(1.0, 0.0, 0.0, 0.0), feed_mm_s: 0.0, ..m };
         assert_eq!(m.geometry(), Err(MoveError::BadFeed(0.0)));
     }
 }

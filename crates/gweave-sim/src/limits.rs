@@ -66,14 +66,7 @@ pub struct StepsPerUnit {
 
 impl Default for StepsPerUnit {
     fn default() -> Self {
-        Self {
-            x: 80.0,
-            y: 80.0,
-            z: 4000.0,
-            e: 500.0,
-            a_per_deg: None,
-            mixing_e: Vec::new(),
-        }
+        Self { x: 80.0, y: 80.0, z: 4000.0, e: 500.0, a_per_deg: None, mixing_e: Vec::new() }
     }
 }
 
@@ -100,22 +93,13 @@ impl AxisLimits {
     }
 
     fn validate(&self, names: [&'static str; 5]) -> Result<(), ProfileError> {
-        self.to_array()
-            .iter()
-            .zip(names)
-            .try_for_each(|(&v, n)| positive(n, v))
+        self.to_array().iter().zip(names).try_for_each(|(&v, n)| positive(n, v))
     }
 
     /// Replace the values given (an M201/M203 line: `X Y Z E A`), keep the others.
     fn update(&mut self, new: &AxisUpdate, names: [&'static str; 5]) -> Result<(), ProfileError> {
         let mut next = *self;
-        let slots = [
-            &mut next.x,
-            &mut next.y,
-            &mut next.z,
-            &mut next.e,
-            &mut next.a,
-        ];
+        let slots = [&mut next.x, &mut next.y, &mut next.z, &mut next.e, &mut next.a];
         for ((slot, value), name) in slots.into_iter().zip(new.to_array()).zip(names) {
             if let Some(v) = value {
                 positive(name, v)?;
@@ -222,30 +206,15 @@ impl KlipperLimits {
         if !(0.0..1.0).contains(&self.minimum_cruise_ratio) {
             return Err(ProfileError::CruiseRatio(self.minimum_cruise_ratio));
         }
-        non_negative(
-            "square_corner_velocity_mm_s",
-            self.square_corner_velocity_mm_s,
-        )?;
-        non_negative(
-            "instantaneous_corner_velocity_mm_s",
-            self.instantaneous_corner_velocity_mm_s,
-        )?;
+        non_negative("square_corner_velocity_mm_s", self.square_corner_velocity_mm_s)?;
+        non_negative("instantaneous_corner_velocity_mm_s", self.instantaneous_corner_velocity_mm_s)?;
         let optional = [
             ("max_z_velocity_mm_s", self.max_z_velocity_mm_s),
             ("max_z_accel_mm_s2", self.max_z_accel_mm_s2),
-            (
-                "max_extrude_only_velocity_mm_s",
-                self.max_extrude_only_velocity_mm_s,
-            ),
-            (
-                "max_extrude_only_accel_mm_s2",
-                self.max_extrude_only_accel_mm_s2,
-            ),
+            ("max_extrude_only_velocity_mm_s", self.max_extrude_only_velocity_mm_s),
+            ("max_extrude_only_accel_mm_s2", self.max_extrude_only_accel_mm_s2),
         ];
-        optional
-            .iter()
-            .filter_map(|(n, v)| v.map(|v| (*n, v)))
-            .try_for_each(|(n, v)| positive(n, v))
+        optional.iter().filter_map(|(n, v)| v.map(|v| (*n, v))).try_for_each(|(n, v)| positive(n, v))
     }
 
     /// Klipper's `SET_VELOCITY_LIMIT`: change the values given, keep the others.
@@ -271,8 +240,7 @@ impl KlipperLimits {
     /// `d = scv^2 (sqrt(2) - 1) / max_accel` (`Klipper3d/klipper:klippy/toolhead.py`), chosen so
     /// that the junction-deviation formula gives exactly `scv` at a 90 degree corner.
     pub fn junction_deviation_mm(&self) -> f64 {
-        self.square_corner_velocity_mm_s.powi(2) * (std::f64::consts::SQRT_2 - 1.0)
-            / self.max_accel_mm_s2
+        self.square_corner_velocity_mm_s.powi(2) * (std::f64::consts::SQRT_2 - 1.0) / self.max_accel_mm_s2
     }
 
     /// The "pseudo acceleration" behind `minimum_cruise_ratio`: lookahead plans the peak speed
@@ -301,10 +269,7 @@ pub enum CornerMode {
 
 impl Default for CornerMode {
     fn default() -> Self {
-        Self::Marlin {
-            junction_deviation_mm: 0.013,
-            lookahead_blocks: 16,
-        }
+        Self::Marlin { junction_deviation_mm: 0.013, lookahead_blocks: 16 }
     }
 }
 
@@ -328,52 +293,23 @@ impl Default for MotionProfile {
     fn default() -> Self {
         Self {
             steps: StepsPerUnit::default(),
-            max_feed_mm_s: AxisLimits {
-                x: 300.0,
-                y: 300.0,
-                z: 5.0,
-                e: 25.0,
-                a: 360.0,
-            },
-            max_accel_mm_s2: AxisLimits {
-                x: 3000.0,
-                y: 3000.0,
-                z: 100.0,
-                e: 10000.0,
-                a: 3600.0,
-            },
-            accel: MoveAccel {
-                print_mm_s2: 3000.0,
-                retract_mm_s2: 3000.0,
-                travel_mm_s2: 3000.0,
-            },
+            max_feed_mm_s: AxisLimits { x: 300.0, y: 300.0, z: 5.0, e: 25.0, a: 360.0 },
+            max_accel_mm_s2: AxisLimits { x: 3000.0, y: 3000.0, z: 100.0, e: 10000.0, a: 3600.0 },
+            accel: MoveAccel { print_mm_s2: 3000.0, retract_mm_s2: 3000.0, travel_mm_s2: 3000.0 },
             corners: CornerMode::default(),
         }
     }
 }
 
-const FEED_NAMES: [&str; 5] = [
-    "max_feed_mm_s.x",
-    "max_feed_mm_s.y",
-    "max_feed_mm_s.z",
-    "max_feed_mm_s.e",
-    "max_feed_mm_s.a",
-];
-const ACCEL_NAMES: [&str; 5] = [
-    "max_accel_mm_s2.x",
-    "max_accel_mm_s2.y",
-    "max_accel_mm_s2.z",
-    "max_accel_mm_s2.e",
-    "max_accel_mm_s2.a",
-];
+const FEED_NAMES: [&str; 5] =
+    ["max_feed_mm_s.x", "max_feed_mm_s.y", "max_feed_mm_s.z", "max_feed_mm_s.e", "max_feed_mm_s.a"];
+const ACCEL_NAMES: [&str; 5] =
+    ["max_accel_mm_s2.x", "max_accel_mm_s2.y", "max_accel_mm_s2.z", "max_accel_mm_s2.e", "max_accel_mm_s2.a"];
 
 impl MotionProfile {
     /// A Klipper machine with these toolhead limits and Marlin's default step rates.
     pub fn klipper(limits: KlipperLimits) -> Self {
-        Self {
-            corners: CornerMode::Klipper(limits),
-            ..Self::default()
-        }
+        Self { corners: CornerMode::Klipper(limits), ..Self::default() }
     }
 
     /// Read a profile from TOML text and check it.
@@ -393,19 +329,14 @@ impl MotionProfile {
         if let Some(a) = s.a_per_deg {
             positive("steps.a_per_deg", a)?;
         }
-        s.mixing_e
-            .iter()
-            .try_for_each(|&v| positive("steps.mixing_e", v))?;
+        s.mixing_e.iter().try_for_each(|&v| positive("steps.mixing_e", v))?;
         self.max_feed_mm_s.validate(FEED_NAMES)?;
         self.max_accel_mm_s2.validate(ACCEL_NAMES)?;
         positive("accel.print_mm_s2", self.accel.print_mm_s2)?;
         positive("accel.retract_mm_s2", self.accel.retract_mm_s2)?;
         positive("accel.travel_mm_s2", self.accel.travel_mm_s2)?;
         match &self.corners {
-            CornerMode::Marlin {
-                junction_deviation_mm,
-                lookahead_blocks,
-            } => {
+            CornerMode::Marlin { junction_deviation_mm, lookahead_blocks } => {
                 positive("corners.junction_deviation_mm", *junction_deviation_mm)?;
                 positive("corners.lookahead_blocks", *lookahead_blocks as f64)
             }
@@ -427,12 +358,7 @@ impl MotionProfile {
     /// Klipper (`Klipper3d/klipper:klippy/toolhead.py`): `S` sets `max_accel`, otherwise both `P`
     /// and `T` must be present and the smaller one is used; `R` is ignored.
     pub fn set_accel(&mut self, m204: &M204) -> Result<(), ProfileError> {
-        for (name, v) in [
-            ("M204 S", m204.s),
-            ("M204 P", m204.p),
-            ("M204 R", m204.r),
-            ("M204 T", m204.t),
-        ] {
+        for (name, v) in [("M204 S", m204.s), ("M204 P", m204.p), ("M204 R", m204.r), ("M204 T", m204.t)] {
             if let Some(v) = v {
                 positive(name, v)?;
             }
@@ -464,11 +390,7 @@ impl MotionProfile {
     /// in Klipper mode.
     pub fn set_junction_deviation(&mut self, j_mm: f64) -> Result<(), ProfileError> {
         positive("M205 J", j_mm)?;
-        if let CornerMode::Marlin {
-            junction_deviation_mm,
-            ..
-        } = &mut self.corners
-        {
+        if let CornerMode::Marlin { junction_deviation_mm, .. } = &mut self.corners {
             *junction_deviation_mm = j_mm;
         }
         Ok(())
@@ -501,13 +423,7 @@ mod tests {
         assert_eq!(p.validate(), Ok(()));
         assert_eq!(p.steps.z, 4000.0);
         assert_eq!(p.max_feed_mm_s.z, 5.0);
-        assert_eq!(
-            p.corners,
-            CornerMode::Marlin {
-                junction_deviation_mm: 0.013,
-                lookahead_blocks: 16
-            }
-        );
+        assert_eq!(p.corners, CornerMode::Marlin { junction_deviation_mm: 0.013, lookahead_blocks: 16 });
     }
 
     #[test]
@@ -516,21 +432,15 @@ mod tests {
                     max_extrude_only_velocity_mm_s = 80.0\n";
         let p = MotionProfile::from_toml_str(text).unwrap();
         assert_eq!(p.steps.e, 415.0);
-        let CornerMode::Klipper(k) = p.corners else {
-            panic!("not klipper: {:?}", p.corners)
-        };
+        let CornerMode::Klipper(k) = p.corners else { panic!("not klipper: {:?}", p.corners) };
         assert_eq!(k.max_velocity_mm_s, 250.0);
         assert_eq!(k.max_accel_mm_s2, 3000.0);
         assert_eq!(k.max_extrude_only_velocity_mm_s, Some(80.0));
         let again = MotionProfile::from_toml_str(&toml::to_string(&p).unwrap()).unwrap();
         assert_eq!(again, p);
         let typo = MotionProfile::from_toml_str("[steps]\nxx = 1.0\n");
-        assert!(
-            matches!(&typo, Err(ProfileError::Toml(m)) if m.contains("xx")),
-            "{typo:?}"
-        );
-        let typo =
-            MotionProfile::from_toml_str("[corners]\nmode = \"klipper\"\nmax_velocty = 1.0\n");
+        assert!(matches!(&typo, Err(ProfileError::Toml(m)) if m.contains("xx")), "{typo:?}");
+        let typo = MotionProfile::from_toml_str("[corners]\nmode = \"klipper\"\nmax_velocty = 1.0\n");
         assert!(matches!(typo, Err(ProfileError::Toml(_))), "{typo:?}");
     }
 
@@ -545,84 +455,28 @@ mod tests {
     #[test]
     fn m204_marlin_and_klipper_rules() {
         let mut m = MotionProfile::default();
-        m.set_accel(&M204 {
-            s: Some(1000.0),
-            r: Some(500.0),
-            ..M204::default()
-        })
-        .unwrap();
-        assert_eq!(
-            m.accel,
-            MoveAccel {
-                print_mm_s2: 1000.0,
-                retract_mm_s2: 500.0,
-                travel_mm_s2: 1000.0
-            }
-        );
-        m.set_accel(&M204 {
-            p: Some(800.0),
-            ..M204::default()
-        })
-        .unwrap();
+        m.set_accel(&M204 { s: Some(1000.0), r: Some(500.0), ..M204::default() }).unwrap();
+        assert_eq!(m.accel, MoveAccel { print_mm_s2: 1000.0, retract_mm_s2: 500.0, travel_mm_s2: 1000.0 });
+        m.set_accel(&M204 { p: Some(800.0), ..M204::default() }).unwrap();
         assert_eq!(m.accel.print_mm_s2, 800.0);
         assert_eq!(m.accel.travel_mm_s2, 1000.0);
 
         let mut k = MotionProfile::klipper(KlipperLimits::default());
-        k.set_accel(&M204 {
-            p: Some(1200.0),
-            t: Some(900.0),
-            ..M204::default()
-        })
-        .unwrap();
+        k.set_accel(&M204 { p: Some(1200.0), t: Some(900.0), ..M204::default() }).unwrap();
         assert!(matches!(k.corners, CornerMode::Klipper(l) if l.max_accel_mm_s2 == 900.0));
-        assert_eq!(
-            k.set_accel(&M204 {
-                p: Some(1.0),
-                ..M204::default()
-            }),
-            Err(ProfileError::M204NeedsPAndT)
-        );
-        let bad = k.set_accel(&M204 {
-            s: Some(-3.0),
-            ..M204::default()
-        });
-        assert_eq!(
-            bad,
-            Err(ProfileError::NotPositive {
-                name: "M204 S",
-                value: -3.0
-            })
-        );
+        assert_eq!(k.set_accel(&M204 { p: Some(1.0), ..M204::default() }), Err(ProfileError::M204NeedsPAndT));
+        let bad = k.set_accel(&M204 { s: Some(-3.0), ..M204::default() });
+        assert_eq!(bad, Err(ProfileError::NotPositive { name: "M204 S", value: -3.0 }));
     }
 
     #[test]
     fn m201_m203_m205_update_only_given_axes_and_reject_bad_values() {
         let mut m = MotionProfile::default();
-        m.set_max_feed(&AxisUpdate {
-            z: Some(12.0),
-            ..AxisUpdate::default()
-        })
-        .unwrap();
-        assert_eq!(
-            m.max_feed_mm_s.to_array(),
-            [300.0, 300.0, 12.0, 25.0, 360.0]
-        );
-        let err = m.set_max_accel(&AxisUpdate {
-            x: Some(500.0),
-            y: Some(f64::NAN),
-            ..AxisUpdate::default()
-        });
-        assert!(matches!(
-            err,
-            Err(ProfileError::NotPositive {
-                name: "max_accel_mm_s2.y",
-                ..
-            })
-        ));
-        assert_eq!(
-            m.max_accel_mm_s2.x, 3000.0,
-            "a rejected line changes nothing"
-        );
+        m.set_max_feed(&AxisUpdate { z: Some(12.0), ..AxisUpdate::default() }).unwrap();
+        assert_eq!(m.max_feed_mm_s.to_array(), [300.0, 300.0, 12.0, 25.0, 360.0]);
+        let err = m.set_max_accel(&AxisUpdate { x: Some(500.0), y: Some(f64::NAN), ..AxisUpdate::default() });
+        assert!(matches!(err, Err(ProfileError::NotPositive { name: "max_accel_mm_s2.y", .. })));
+        assert_eq!(m.max_accel_mm_s2.x, 3000.0, "a rejected line changes nothing");
         m.set_junction_deviation(0.02).unwrap();
         assert!(
             matches!(m.corners, CornerMode::Marlin { junction_deviation_mm, .. } if junction_deviation_mm == 0.02)
@@ -632,16 +486,9 @@ mod tests {
     #[test]
     fn set_velocity_limit_validates() {
         let mut k = KlipperLimits::default();
-        k.set_velocity_limit(None, Some(5000.0), Some(8.0), None)
-            .unwrap();
-        assert_eq!(
-            (k.max_accel_mm_s2, k.square_corner_velocity_mm_s),
-            (5000.0, 8.0)
-        );
-        assert_eq!(
-            k.set_velocity_limit(None, None, None, Some(1.0)),
-            Err(ProfileError::CruiseRatio(1.0))
-        );
+        k.set_velocity_limit(None, Some(5000.0), Some(8.0), None).unwrap();
+        assert_eq!((k.max_accel_mm_s2, k.square_corner_velocity_mm_s), (5000.0, 8.0));
+        assert_eq!(k.set_velocity_limit(None, None, None, Some(1.0)), Err(ProfileError::CruiseRatio(1.0)));
         assert_eq!(k.minimum_cruise_ratio, 0.5);
     }
 }

@@ -112,11 +112,7 @@ impl ThermalFault {
     /// `Error:Thermal Runaway, system stopped! Heater_ID: 0` or
     /// `Error:Heating failed, system stopped! Heater_ID: bed`.
     pub fn error_line(&self) -> String {
-        format!(
-            "Error:{}, system stopped! Heater_ID: {}",
-            self.kind.marlin_text(),
-            self.heater
-        )
+        format!("Error:{}, system stopped! Heater_ID: {}", self.kind.marlin_text(), self.heater)
     }
 
     /// The error line followed by [`KILL_LINE`], as Marlin prints them.
@@ -156,13 +152,7 @@ pub struct Protection {
 
 impl Protection {
     pub fn new(heater: HeaterId, cfg: ProtectionConfig) -> Self {
-        Self {
-            heater,
-            cfg,
-            runaway: Runaway::Inactive,
-            runaway_target_c: 0.0,
-            watch: None,
-        }
+        Self { heater, cfg, runaway: Runaway::Inactive, runaway_target_c: 0.0, watch: None }
     }
 
     pub fn config(&self) -> &ProtectionConfig {
@@ -174,24 +164,14 @@ impl Protection {
     /// `increase + hysteresis + 1` above what the increase would reach.
     pub fn start_watching(&mut self, now_s: f64, temp_c: f64, target_c: f64) {
         let must_reach_c = temp_c + self.cfg.watch_increase_c;
-        self.watch = (target_c > 0.0
-            && must_reach_c < target_c - self.cfg.runaway_hysteresis_c - 1.0)
-            .then_some(Watch {
-                must_reach_c,
-                deadline_s: now_s + self.cfg.watch_period_s,
-            });
+        self.watch = (target_c > 0.0 && must_reach_c < target_c - self.cfg.runaway_hysteresis_c - 1.0)
+            .then_some(Watch { must_reach_c, deadline_s: now_s + self.cfg.watch_period_s });
     }
 
     /// Run every check on a reading at `now_s`; the first fault found.
     pub fn check(&mut self, now_s: f64, temp_c: f64, target_c: f64) -> Option<ThermalFault> {
         let heater = self.heater;
-        let fault = |kind| {
-            Some(ThermalFault {
-                kind,
-                heater,
-                at_s: now_s,
-            })
-        };
+        let fault = |kind| Some(ThermalFault { kind, heater, at_s: now_s });
         if temp_c > self.cfg.max_temp_c {
             return fault(FaultKind::MaxTemp);
         }
@@ -206,34 +186,25 @@ impl Protection {
                 self.start_watching(now_s, temp_c, target_c);
             }
         }
-        self.check_runaway(now_s, temp_c, target_c)
-            .and_then(|()| fault(FaultKind::ThermalRunaway))
+        self.check_runaway(now_s, temp_c, target_c).and_then(|()| fault(FaultKind::ThermalRunaway))
     }
 
     /// Marlin's runaway state machine; `Some(())` on a runaway.
     fn check_runaway(&mut self, now_s: f64, temp_c: f64, target_c: f64) -> Option<()> {
         if target_c != self.runaway_target_c {
             self.runaway_target_c = target_c;
-            self.runaway = if target_c > 0.0 {
-                Runaway::FirstHeating
-            } else {
-                Runaway::Inactive
-            };
+            self.runaway = if target_c > 0.0 { Runaway::FirstHeating } else { Runaway::Inactive };
         }
         let floor_c = target_c - self.cfg.runaway_hysteresis_c;
         match self.runaway {
             Runaway::Inactive => None,
             Runaway::FirstHeating if temp_c < target_c => None,
             Runaway::FirstHeating => {
-                self.runaway = Runaway::Stable {
-                    deadline_s: now_s + self.cfg.runaway_period_s,
-                };
+                self.runaway = Runaway::Stable { deadline_s: now_s + self.cfg.runaway_period_s };
                 None
             }
             Runaway::Stable { .. } if temp_c >= floor_c => {
-                self.runaway = Runaway::Stable {
-                    deadline_s: now_s + self.cfg.runaway_period_s,
-                };
+                self.runaway = Runaway::Stable { deadline_s: now_s + self.cfg.runaway_period_s };
                 None
             }
             Runaway::Stable { deadline_s } if now_s < deadline_s => None,
@@ -252,11 +223,7 @@ mod tests {
 
     #[test]
     fn error_lines_match_marlin() {
-        let f = |kind, heater| ThermalFault {
-            kind,
-            heater,
-            at_s: 0.0,
-        };
+        let f = |kind, heater| ThermalFault { kind, heater, at_s: 0.0 };
         assert_eq!(
             f(FaultKind::ThermalRunaway, HeaterId::Hotend(0)).error_line(),
             "Error:Thermal Runaway, system stopped! Heater_ID: 0"
@@ -286,14 +253,8 @@ mod tests {
     fn min_and_max_temp() {
         let mut p = hotend();
         assert_eq!(p.check(0.0, 25.0, 0.0), None);
-        assert_eq!(
-            p.check(1.0, 276.0, 0.0).map(|f| f.kind),
-            Some(FaultKind::MaxTemp)
-        );
-        assert_eq!(
-            p.check(2.0, -20.0, 0.0).map(|f| f.kind),
-            Some(FaultKind::MinTemp)
-        );
+        assert_eq!(p.check(1.0, 276.0, 0.0).map(|f| f.kind), Some(FaultKind::MaxTemp));
+        assert_eq!(p.check(2.0, -20.0, 0.0).map(|f| f.kind), Some(FaultKind::MinTemp));
         assert_eq!(p.check(3.0, 275.0, 0.0), None);
         assert_eq!(p.check(3.0, 5.0, 0.0), None);
     }
@@ -311,10 +272,7 @@ mod tests {
         p.start_watching(0.0, 25.0, 210.0);
         assert_eq!(p.check(20.0, 27.0, 210.0), None);
         // Re-armed from 27 C: 29 C by 40 s.
-        assert_eq!(
-            p.check(40.0, 28.0, 210.0).map(|f| f.kind),
-            Some(FaultKind::HeatingFailed)
-        );
+        assert_eq!(p.check(40.0, 28.0, 210.0).map(|f| f.kind), Some(FaultKind::HeatingFailed));
     }
 
     #[test]

@@ -53,8 +53,7 @@ impl AxisCounter {
             self.anchor_pos = start;
             self.anchor_steps = self.steps;
         }
-        let target =
-            self.anchor_steps + ((end - self.anchor_pos) * self.steps_per_unit).round() as i64;
+        let target = self.anchor_steps + ((end - self.anchor_pos) * self.steps_per_unit).round() as i64;
         let delta = target - self.steps;
         self.steps = target;
         self.last_pos = end;
@@ -88,31 +87,13 @@ impl Steppers {
     /// Motors for these step rates, all at position 0 (a machine without an A axis gets an A
     /// counter with 1 step/degree that should never move).
     pub fn new(steps: &StepsPerUnit) -> Self {
-        let spu = [
-            steps.x,
-            steps.y,
-            steps.z,
-            steps.e,
-            steps.a_per_deg.unwrap_or(1.0),
-        ];
-        let mix: Vec<MixInput> = steps
-            .mixing_e
-            .iter()
-            .map(|&s| MixInput {
-                scale: s / steps.e,
-                ..MixInput::default()
-            })
-            .collect();
+        let spu = [steps.x, steps.y, steps.z, steps.e, steps.a_per_deg.unwrap_or(1.0)];
+        let mix: Vec<MixInput> =
+            steps.mixing_e.iter().map(|&s| MixInput { scale: s / steps.e, ..MixInput::default() }).collect();
         Self {
-            axes: spu.map(|steps_per_unit| AxisCounter {
-                steps_per_unit,
-                ..AxisCounter::default()
-            }),
+            axes: spu.map(|steps_per_unit| AxisCounter { steps_per_unit, ..AxisCounter::default() }),
             mix_delta: vec![0; mix.len()],
-            totals: StepTotals {
-                axes: [0; 5],
-                mixing: vec![0; mix.len()],
-            },
+            totals: StepTotals { axes: [0; 5], mixing: vec![0; mix.len()] },
             mix,
         }
     }
@@ -155,6 +136,11 @@ impl Steppers {
         &self.totals
     }
 
+    /// Positions of the mixing inputs' motors, steps (empty without a mixing hotend).
+    pub fn mix_position_steps(&self) -> impl Iterator<Item = i64> + '_ {
+        self.mix.iter().map(|m| m.steps)
+    }
+
     /// Motor positions in steps, X Y Z E A.
     pub fn position_steps(&self) -> [i64; 5] {
         self.axes.map(|a| a.steps)
@@ -165,13 +151,7 @@ impl Steppers {
             return;
         }
         let n = self.mix.len();
-        let weight = |k: usize| {
-            weights
-                .get(k)
-                .copied()
-                .filter(|w| w.is_finite() && *w > 0.0)
-                .unwrap_or(0.0)
-        };
+        let weight = |k: usize| weights.get(k).copied().filter(|w| w.is_finite() && *w > 0.0).unwrap_or(0.0);
         let sum: f64 = (0..n).map(weight).sum();
         let share = |k: usize| {
             if sum > 0.0 {
@@ -188,11 +168,7 @@ impl Steppers {
             let m = &mut self.mix[k];
             m.ideal_e_steps += share(k) * e_steps as f64;
             prefix_ideal += m.ideal_e_steps;
-            let prefix = if k + 1 == n {
-                total
-            } else {
-                prefix_ideal.round() as i64
-            };
+            let prefix = if k + 1 == n { total } else { prefix_ideal.round() as i64 };
             let new_e_steps = prefix - prefix_given;
             prefix_given = prefix;
             m.e_steps = new_e_steps;
@@ -220,12 +196,7 @@ impl BresenhamWalk {
     pub fn new(steps: &[i64]) -> Self {
         let counts: Vec<u64> = steps.iter().take(32).map(|s| s.unsigned_abs()).collect();
         let dominant = counts.iter().copied().max().unwrap_or(0);
-        Self {
-            errors: vec![dominant / 2; counts.len()],
-            counts,
-            dominant,
-            tick: 0,
-        }
+        Self { errors: vec![dominant / 2; counts.len()], counts, dominant, tick: 0 }
     }
 
     /// Ticks in the walk: the dominant motor's step count.
@@ -281,11 +252,7 @@ mod tests {
         let mut x = 0.0;
         for i in 0..1_000_000 {
             let nx = (i + 1) as f64 * 0.01;
-            s.step_move(
-                Pos::xyze(x, 0.0, 0.0, 0.0),
-                Pos::xyze(nx, 0.0, 0.0, 0.0),
-                &[],
-            );
+            s.step_move(Pos::xyze(x, 0.0, 0.0, 0.0), Pos::xyze(nx, 0.0, 0.0, 0.0), &[]);
             x = nx;
         }
         assert_eq!(s.position_steps()[0], 800_000);
@@ -295,17 +262,9 @@ mod tests {
     #[test]
     fn g92_reanchors_without_moving() {
         let mut s = Steppers::new(&steps());
-        s.step_move(
-            Pos::xyze(0.0, 0.0, 0.0, 0.0),
-            Pos::xyze(0.0, 0.0, 0.0, 10.0),
-            &[],
-        );
+        s.step_move(Pos::xyze(0.0, 0.0, 0.0, 0.0), Pos::xyze(0.0, 0.0, 0.0, 10.0), &[]);
         // G92 E0, then extrude 1 mm: E motor 5000 -> 5500.
-        let d = s.step_move(
-            Pos::xyze(0.0, 0.0, 0.0, 0.0),
-            Pos::xyze(0.0, 0.0, 0.0, 1.0),
-            &[],
-        );
+        let d = s.step_move(Pos::xyze(0.0, 0.0, 0.0, 0.0), Pos::xyze(0.0, 0.0, 0.0, 1.0), &[]);
         assert_eq!(d[3], 500);
         assert_eq!(s.position_steps()[3], 5500);
         assert_eq!(s.totals().axes[3], 5500);
@@ -320,20 +279,9 @@ mod tests {
         let mut given = [0i64; 3];
         for i in 0..1000 {
             let ne = e + 0.0137 * (1 + i % 7) as f64;
-            s.step_move(
-                Pos::xyze(0.0, 0.0, 0.0, e),
-                Pos::xyze(0.0, 0.0, 0.0, ne),
-                &[0.5, 0.3, 0.2],
-            );
-            given
-                .iter_mut()
-                .zip(s.mix_steps())
-                .for_each(|(g, d)| *g += d);
-            assert_eq!(
-                given.iter().sum::<i64>(),
-                s.position_steps()[3],
-                "inputs add up to E at every block"
-            );
+            s.step_move(Pos::xyze(0.0, 0.0, 0.0, e), Pos::xyze(0.0, 0.0, 0.0, ne), &[0.5, 0.3, 0.2]);
+            given.iter_mut().zip(s.mix_steps()).for_each(|(g, d)| *g += d);
+            assert_eq!(given.iter().sum::<i64>(), s.position_steps()[3], "inputs add up to E at every block");
             e = ne;
         }
         let total = s.position_steps()[3] as f64;

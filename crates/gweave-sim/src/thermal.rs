@@ -53,11 +53,7 @@ pub enum ThermalError {
     #[error("printer halted: {}", .0.error_line())]
     Halted(ThermalFault),
     #[error("thermal parameter `{name}` must be {rule}, got {value}")]
-    BadParameter {
-        name: &'static str,
-        rule: &'static str,
-        value: f64,
-    },
+    BadParameter { name: &'static str, rule: &'static str, value: f64 },
 }
 
 /// Marlin's M109/M190 settle rule: the reading must stay near the target
@@ -76,11 +72,7 @@ pub struct WaitConfig {
 
 impl Default for WaitConfig {
     fn default() -> Self {
-        Self {
-            residency_s: 10.0,
-            window_c: 1.0,
-            hysteresis_c: 3.0,
-        }
+        Self { residency_s: 10.0, window_c: 1.0, hysteresis_c: 3.0 }
     }
 }
 
@@ -211,12 +203,7 @@ pub struct TimeSeries {
 
 impl TimeSeries {
     fn new(period_s: f64, max_samples: usize) -> Self {
-        Self {
-            period_s,
-            max_samples,
-            next_s: 0.0,
-            records: Vec::new(),
-        }
+        Self { period_s, max_samples, next_s: 0.0, records: Vec::new() }
     }
 
     fn record(&mut self, now_s: f64, samples: Vec<Sample>) {
@@ -233,11 +220,7 @@ impl TimeSeries {
             self.records = kept.collect();
             self.period_s *= 2.0;
             // Continue the even spacing from the last kept record.
-            let last_s = self
-                .records
-                .last()
-                .and_then(|r| r.first())
-                .map_or(0.0, |s| s.t_s);
+            let last_s = self.records.last().and_then(|r| r.first()).map_or(0.0, |s| s.t_s);
             self.next_s = last_s + self.period_s;
             while self.next_s <= now_s {
                 self.next_s += self.period_s;
@@ -296,11 +279,7 @@ impl Thermal {
             if value.is_finite() && value > 0.0 {
                 Ok(())
             } else {
-                Err(ThermalError::BadParameter {
-                    name,
-                    rule: "> 0",
-                    value,
-                })
+                Err(ThermalError::BadParameter { name, rule: "> 0", value })
             }
         };
         positive("sample_period_s", cfg.sample_period_s)?;
@@ -313,9 +292,7 @@ impl Thermal {
                 value: cfg.hotends.len() as f64,
             });
         }
-        let table = cfg
-            .thermistor
-            .table(TABLE_MIN_C, TABLE_MAX_C, cfg.table_step_c)?;
+        let table = cfg.thermistor.table(TABLE_MIN_C, TABLE_MAX_C, cfg.table_step_c)?;
         let mut channels = Vec::new();
         let plants = cfg
             .hotends
@@ -325,18 +302,10 @@ impl Thermal {
             .chain(cfg.bed.iter().map(|b| (HeaterId::Bed, b)));
         for (id, plant_cfg) in plants {
             let (control, protection, wait, overshoot) = match id {
-                HeaterId::Bed => (
-                    &cfg.bed_control,
-                    cfg.bed_protection,
-                    cfg.bed_wait,
-                    cfg.bed_overshoot_c,
-                ),
-                HeaterId::Hotend(_) => (
-                    &cfg.hotend_control,
-                    cfg.hotend_protection,
-                    cfg.hotend_wait,
-                    cfg.hotend_overshoot_c,
-                ),
+                HeaterId::Bed => (&cfg.bed_control, cfg.bed_protection, cfg.bed_wait, cfg.bed_overshoot_c),
+                HeaterId::Hotend(_) => {
+                    (&cfg.hotend_control, cfg.hotend_protection, cfg.hotend_wait, cfg.hotend_overshoot_c)
+                }
             };
             let plant = Heater::new(*plant_cfg)?;
             let reading_c = table.celsius(plant.read_adc(&cfg.thermistor));
@@ -371,17 +340,11 @@ impl Thermal {
     }
 
     fn channel(&self, id: HeaterId) -> Result<&Channel, ThermalError> {
-        self.channels
-            .iter()
-            .find(|c| c.id == id)
-            .ok_or(ThermalError::UnknownHeater(id))
+        self.channels.iter().find(|c| c.id == id).ok_or(ThermalError::UnknownHeater(id))
     }
 
     fn channel_mut(&mut self, id: HeaterId) -> Result<&mut Channel, ThermalError> {
-        self.channels
-            .iter_mut()
-            .find(|c| c.id == id)
-            .ok_or(ThermalError::UnknownHeater(id))
+        self.channels.iter_mut().find(|c| c.id == id).ok_or(ThermalError::UnknownHeater(id))
     }
 
     /// Simulated time, s.
@@ -397,6 +360,12 @@ impl Thermal {
     /// The fault that halted the printer, if any.
     pub fn halted(&self) -> Option<&ThermalFault> {
         self.halted.as_ref()
+    }
+
+    /// M999: leave the halted state. Targets stay at 0 and injected plant faults stay; the
+    /// protection checks run again from the next sample.
+    pub fn clear_halt(&mut self) {
+        self.halted = None;
     }
 
     /// Set a target (M104/M109/M140/M190), capped at MAXTEMP minus the
@@ -463,10 +432,7 @@ impl Thermal {
 
     /// M301/M304 query.
     pub fn pid_gains(&self, id: HeaterId) -> Result<PidGains, ThermalError> {
-        self.channel(id)?
-            .control
-            .pid_gains()
-            .ok_or(ThermalError::NotPid(id))
+        self.channel(id)?.control.pid_gains().ok_or(ThermalError::NotPid(id))
     }
 
     /// M301/M304 set.
@@ -490,15 +456,9 @@ impl Thermal {
         let Some(min_c) = self.extrude_min_c else {
             return Ok(());
         };
-        let temp_c = self
-            .channel(HeaterId::Hotend(hotend))
-            .map_or(f64::NEG_INFINITY, |c| c.reading_c);
+        let temp_c = self.channel(HeaterId::Hotend(hotend)).map_or(f64::NEG_INFINITY, |c| c.reading_c);
         if temp_c < min_c {
-            Err(ColdExtrusion {
-                hotend,
-                temp_c,
-                min_c,
-            })
+            Err(ColdExtrusion { hotend, temp_c, min_c })
         } else {
             Ok(())
         }
@@ -663,12 +623,7 @@ impl Thermal {
     /// Start an M109/M190 wait on `id`.
     pub fn begin_wait(&self, id: HeaterId, mode: WaitMode) -> Result<TempWait, ThermalError> {
         self.channel(id)?;
-        Ok(TempWait {
-            heater: id,
-            mode,
-            first_poll: true,
-            residency_start_s: None,
-        })
+        Ok(TempWait { heater: id, mode, first_poll: true, residency_start_s: None })
     }
 
     /// Poll a wait after stepping. Marlin's rule: with `S` (heat only) a
@@ -712,11 +667,8 @@ impl Thermal {
     pub fn m105_report(&self) -> String {
         use std::fmt::Write;
         let mut out = String::new();
-        let hotends: Vec<&Channel> = self
-            .channels
-            .iter()
-            .filter(|c| matches!(c.id, HeaterId::Hotend(_)))
-            .collect();
+        let hotends: Vec<&Channel> =
+            self.channels.iter().filter(|c| matches!(c.id, HeaterId::Hotend(_))).collect();
         let bed = self.channels.iter().find(|c| c.id == HeaterId::Bed);
         let active = hotends[usize::from(self.active)];
         let _ = write!(out, "T:{:.2} /{:.2}", active.reading_c, active.target_c);

@@ -58,11 +58,7 @@ pub enum ThermistorError {
     #[error("thermistor table temperatures must be strictly monotonic (entry {index})")]
     TempNotMonotonic { index: usize },
     #[error("table range {t_min_c}..{t_max_c} C with step {step_c} C is empty or invalid")]
-    BadRange {
-        t_min_c: f64,
-        t_max_c: f64,
-        step_c: f64,
-    },
+    BadRange { t_min_c: f64, t_max_c: f64, step_c: f64 },
 }
 
 /// A physical NTC thermistor on a pull-up divider read by an oversampling ADC.
@@ -85,13 +81,7 @@ impl Default for BetaThermistor {
     /// Marlin thermistor type 1: 100 kOhm, B 4092, 4.7 kOhm pull-up, 10-bit
     /// ADC, oversampling 16.
     fn default() -> Self {
-        Self {
-            r25_ohm: 100_000.0,
-            beta_k: 4092.0,
-            pullup_ohm: 4_700.0,
-            adc_max: 1023,
-            oversample: 16,
-        }
+        Self { r25_ohm: 100_000.0, beta_k: 4092.0, pullup_ohm: 4_700.0, adc_max: 1023, oversample: 16 }
     }
 }
 
@@ -156,18 +146,9 @@ impl BetaThermistor {
     /// from `t_min_c` to `t_max_c` (inclusive), sorted by adc. Temperatures
     /// whose rounded adc collides with a neighbour's are dropped, so adc
     /// strictly increases.
-    pub fn table(
-        &self,
-        t_min_c: f64,
-        t_max_c: f64,
-        step_c: f64,
-    ) -> Result<ThermistorTable, ThermistorError> {
+    pub fn table(&self, t_min_c: f64, t_max_c: f64, step_c: f64) -> Result<ThermistorTable, ThermistorError> {
         self.validate()?;
-        let bad_range = ThermistorError::BadRange {
-            t_min_c,
-            t_max_c,
-            step_c,
-        };
+        let bad_range = ThermistorError::BadRange { t_min_c, t_max_c, step_c };
         if !(t_min_c.is_finite() && t_max_c.is_finite() && step_c.is_finite())
             || step_c <= 0.0
             || t_max_c <= t_min_c
@@ -338,10 +319,7 @@ mod tests {
 
     #[test]
     fn rejects_bad_tables() {
-        assert_eq!(
-            ThermistorTable::new(vec![(1, 2.0)]),
-            Err(ThermistorError::TooShort(1))
-        );
+        assert_eq!(ThermistorTable::new(vec![(1, 2.0)]), Err(ThermistorError::TooShort(1)));
         assert_eq!(
             ThermistorTable::new(vec![(1, 2.0), (1, 1.0)]),
             Err(ThermistorError::AdcNotIncreasing { index: 1 })
@@ -351,10 +329,7 @@ mod tests {
             Err(ThermistorError::TempNotMonotonic { index: 2 })
         );
         assert!(BetaThermistor::default().table(10.0, 5.0, 1.0).is_err());
-        let bad = BetaThermistor {
-            beta_k: -1.0,
-            ..BetaThermistor::default()
-        };
+        let bad = BetaThermistor { beta_k: -1.0, ..BetaThermistor::default() };
         assert!(matches!(
             bad.table(0.0, 100.0, 5.0),
             Err(ThermistorError::BadParameter { name: "beta_k", .. })

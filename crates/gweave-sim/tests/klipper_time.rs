@@ -11,13 +11,7 @@ fn prepared() -> String {
     let text = include_str!("data/cura_torus.gcode");
     let mut out = String::with_capacity(text.len());
     for line in text.lines() {
-        let command = line
-            .split(';')
-            .next()
-            .unwrap_or("")
-            .split_whitespace()
-            .next()
-            .unwrap_or("");
+        let command = line.split(';').next().unwrap_or("").split_whitespace().next().unwrap_or("");
         match command {
             "G28" => out.push_str("SET_KINEMATIC_POSITION X=0 Y=0 Z=0"),
             "M109" | "M190" => continue,
@@ -34,11 +28,7 @@ fn run(limits: KlipperLimits) -> Estimate {
 
 fn assert_within_0_01_percent(got_s: f64, want_s: f64) {
     let rel = (got_s - want_s).abs() / want_s;
-    assert!(
-        rel < 1e-4,
-        "got {got_s:.4} s, Klipper {want_s} s ({:.5} %)",
-        rel * 100.0
-    );
+    assert!(rel < 1e-4, "got {got_s:.4} s, Klipper {want_s} s ({:.5} %)", rel * 100.0);
 }
 
 #[test]
@@ -70,11 +60,7 @@ fn end_gcode_g91_is_relative() {
     // Cura's end G-code after printing to E747: G91, `G1 E-2`, `G1 E-2 Z0.2`, `G1 Z10`. Read as
     // absolute (klipper_estimator's mistake) E would run back 749 mm to -2 and Z stop at 10.
     let text = "G1 X1 E747 F1500\nG91\nG1 E-2 F2700\nG1 E-2 Z0.2 F2400\nG1 Z10\nG90\n";
-    let est = estimate(
-        text.as_bytes(),
-        &MotionProfile::klipper(KlipperLimits::default()),
-    )
-    .unwrap();
+    let est = estimate(text.as_bytes(), &MotionProfile::klipper(KlipperLimits::default())).unwrap();
     // E: 747 mm out and 4 mm back at 500 steps/mm; Z: 10.2 mm at 4000 steps/mm.
     assert_eq!(est.steps.axes[3], (747 + 4) * 500);
     assert_eq!(est.steps.axes[2], 40_800);

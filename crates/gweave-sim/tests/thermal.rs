@@ -5,9 +5,7 @@ use gweave_sim::autotune::AutotuneConfig;
 use gweave_sim::control::PidGains;
 use gweave_sim::heater::{HeaterConfig, HeaterFault, HeaterId};
 use gweave_sim::protection::{FaultKind, ThermalFault, KILL_LINE};
-use gweave_sim::thermal::{
-    Thermal, ThermalConfig, ThermalError, WaitMode, WaitStatus, COLD_EXTRUSION_LINE,
-};
+use gweave_sim::thermal::{Thermal, ThermalConfig, ThermalError, WaitMode, WaitStatus, COLD_EXTRUSION_LINE};
 use gweave_sim::thermistor::SensorFault;
 use proptest::prelude::*;
 
@@ -83,9 +81,7 @@ fn hot_bed_heat_up_to_100_does_not_trip_the_watch() {
 #[test]
 fn cartridge_off_from_cold_is_heating_failed() {
     let mut th = machine();
-    th.heater_mut(T0)
-        .unwrap()
-        .inject(HeaterFault::CartridgeDisconnected);
+    th.heater_mut(T0).unwrap().inject(HeaterFault::CartridgeDisconnected);
     th.set_target(T0, 210.0).unwrap();
     let f = run_until_fault(&mut th, 100.0);
     assert_eq!(f.kind, FaultKind::HeatingFailed);
@@ -93,18 +89,12 @@ fn cartridge_off_from_cold_is_heating_failed() {
     assert!((20.0..=20.1).contains(&f.at_s), "{}", f.at_s);
     assert_eq!(
         f.lines(),
-        [
-            "Error:Heating failed, system stopped! Heater_ID: 0".to_owned(),
-            KILL_LINE.to_owned()
-        ]
+        ["Error:Heating failed, system stopped! Heater_ID: 0".to_owned(), KILL_LINE.to_owned()]
     );
     // Halted: heaters off, no new targets, waits end.
     assert_eq!(th.power(T0).unwrap(), 0);
     assert_eq!(th.target(T0).unwrap(), 0.0);
-    assert!(matches!(
-        th.set_target(T0, 200.0),
-        Err(ThermalError::Halted(_))
-    ));
+    assert!(matches!(th.set_target(T0, 200.0), Err(ThermalError::Halted(_))));
     let mut w = th.begin_wait(T0, WaitMode::Both).unwrap();
     assert_eq!(th.poll_wait(&mut w), WaitStatus::Halted);
     // The fault is reported once.
@@ -114,16 +104,11 @@ fn cartridge_off_from_cold_is_heating_failed() {
 #[test]
 fn bed_cartridge_off_is_heating_failed_after_60_s() {
     let mut th = machine();
-    th.heater_mut(BED)
-        .unwrap()
-        .inject(HeaterFault::CartridgeDisconnected);
+    th.heater_mut(BED).unwrap().inject(HeaterFault::CartridgeDisconnected);
     th.set_target(BED, 60.0).unwrap();
     let f = run_until_fault(&mut th, 200.0);
     assert!((60.0..=60.1).contains(&f.at_s), "{}", f.at_s);
-    assert_eq!(
-        f.error_line(),
-        "Error:Heating failed, system stopped! Heater_ID: bed"
-    );
+    assert_eq!(f.error_line(), "Error:Heating failed, system stopped! Heater_ID: bed");
 }
 
 #[test]
@@ -132,9 +117,7 @@ fn cartridge_lost_at_temperature_is_thermal_runaway() {
     th.set_target(T0, 210.0).unwrap();
     wait_for(&mut th, T0, WaitMode::HeatOnly, 300.0);
     th.step(60.0);
-    th.heater_mut(T0)
-        .unwrap()
-        .inject(HeaterFault::CartridgeDisconnected);
+    th.heater_mut(T0).unwrap().inject(HeaterFault::CartridgeDisconnected);
     let lost_s = th.now_s();
     // Find when the reading drops below 210 - 4 C.
     let mut below_s = None;
@@ -152,10 +135,7 @@ fn cartridge_lost_at_temperature_is_thermal_runaway() {
     // 40 s after the last sample within the hysteresis.
     let after_s = fault.at_s - below_s;
     assert!((39.8..=40.2).contains(&after_s), "{after_s}");
-    assert_eq!(
-        fault.error_line(),
-        "Error:Thermal Runaway, system stopped! Heater_ID: 0"
-    );
+    assert_eq!(fault.error_line(), "Error:Thermal Runaway, system stopped! Heater_ID: 0");
 }
 
 #[test]
@@ -163,37 +143,22 @@ fn bed_lost_at_temperature_is_thermal_runaway() {
     let mut th = machine();
     th.set_target(BED, 60.0).unwrap();
     wait_for(&mut th, BED, WaitMode::HeatOnly, 600.0);
-    th.heater_mut(BED)
-        .unwrap()
-        .inject(HeaterFault::CartridgeDisconnected);
+    th.heater_mut(BED).unwrap().inject(HeaterFault::CartridgeDisconnected);
     let f = run_until_fault(&mut th, 600.0);
-    assert_eq!(
-        f.error_line(),
-        "Error:Thermal Runaway, system stopped! Heater_ID: bed"
-    );
+    assert_eq!(f.error_line(), "Error:Thermal Runaway, system stopped! Heater_ID: bed");
 }
 
 #[test]
 fn sensor_faults_trip_min_and_max_temp() {
     let mut th = machine();
-    th.heater_mut(T0)
-        .unwrap()
-        .inject(HeaterFault::Sensor(SensorFault::Open));
+    th.heater_mut(T0).unwrap().inject(HeaterFault::Sensor(SensorFault::Open));
     let f = run_until_fault(&mut th, 1.0);
-    assert_eq!(
-        f.error_line(),
-        "Error:MINTEMP triggered, system stopped! Heater_ID: 0"
-    );
+    assert_eq!(f.error_line(), "Error:MINTEMP triggered, system stopped! Heater_ID: 0");
 
     let mut th = machine();
-    th.heater_mut(BED)
-        .unwrap()
-        .inject(HeaterFault::Sensor(SensorFault::Shorted));
+    th.heater_mut(BED).unwrap().inject(HeaterFault::Sensor(SensorFault::Shorted));
     let f = run_until_fault(&mut th, 1.0);
-    assert_eq!(
-        f.error_line(),
-        "Error:MAXTEMP triggered, system stopped! Heater_ID: bed"
-    );
+    assert_eq!(f.error_line(), "Error:MAXTEMP triggered, system stopped! Heater_ID: bed");
 }
 
 #[test]
@@ -204,28 +169,16 @@ fn m105_formats_like_marlin() {
     th.set_target(T0, 210.0).unwrap();
     th.set_target(BED, 60.0).unwrap();
     th.step(0.1);
-    assert_eq!(
-        th.m105_report(),
-        "T:25.00 /210.00 B:25.00 /60.00 @:127 B@:127"
-    );
+    assert_eq!(th.m105_report(), "T:25.00 /210.00 B:25.00 /60.00 @:127 B@:127");
     wait_for(&mut th, T0, WaitMode::HeatOnly, 300.0);
     th.step(300.0);
     // Holding 210 C takes 18.5 W of 40 W: @ ~ 0.46 * 127 = 59.
     let report = th.m105_report();
-    let power: u8 = report
-        .split(" @:")
-        .nth(1)
-        .and_then(|s| s.split(' ').next())
-        .unwrap()
-        .parse()
-        .unwrap();
+    let power: u8 = report.split(" @:").nth(1).and_then(|s| s.split(' ').next()).unwrap().parse().unwrap();
     assert!((50..=68).contains(&power), "{report}");
     assert!(report.starts_with("T:2"), "{report}");
 
-    let two = ThermalConfig {
-        hotends: vec![HeaterConfig::hotend_40w(); 2],
-        ..ThermalConfig::default()
-    };
+    let two = ThermalConfig { hotends: vec![HeaterConfig::hotend_40w(); 2], ..ThermalConfig::default() };
     let mut th = Thermal::new(two).unwrap();
     th.set_target(HeaterId::Hotend(1), 200.0).unwrap();
     th.set_active_extruder(1).unwrap();
@@ -234,16 +187,10 @@ fn m105_formats_like_marlin() {
         th.m105_report(),
         "T:25.00 /200.00 B:25.00 /0.00 T0:25.00 /0.00 T1:25.00 /200.00 @:127 B@:0 @0:0 @1:127"
     );
-    let no_bed = ThermalConfig {
-        bed: None,
-        ..ThermalConfig::default()
-    };
+    let no_bed = ThermalConfig { bed: None, ..ThermalConfig::default() };
     let th = Thermal::new(no_bed).unwrap();
     assert_eq!(th.m105_report(), "T:25.00 /0.00 @:0");
-    assert!(matches!(
-        th.target(BED),
-        Err(ThermalError::UnknownHeater(_))
-    ));
+    assert!(matches!(th.target(BED), Err(ThermalError::UnknownHeater(_))));
 }
 
 #[test]
@@ -315,17 +262,14 @@ fn autotune_apply_needs_a_pid_heater() {
         th.start_autotune(BED, AutotuneConfig::new(60.0), true),
         Err(ThermalError::NotPid(BED))
     ));
-    assert!(th
-        .start_autotune(BED, AutotuneConfig::new(60.0), false)
-        .is_ok());
+    assert!(th.start_autotune(BED, AutotuneConfig::new(60.0), false).is_ok());
 }
 
 #[test]
 fn m303_through_the_facade_finds_and_applies_gains() {
     let mut th = machine();
     th.set_pid_gains(T0, PidGains::MARLIN_HOTEND).unwrap();
-    th.start_autotune(T0, AutotuneConfig::new(210.0), true)
-        .unwrap();
+    th.start_autotune(T0, AutotuneConfig::new(210.0), true).unwrap();
     let mut lines = Vec::new();
     while th.autotune_running() {
         assert_eq!(th.step(1.0), None);
@@ -334,10 +278,7 @@ fn m303_through_the_facade_finds_and_applies_gains() {
     }
     let gains = th.take_autotune_result().unwrap().unwrap();
     assert_eq!(lines[0], "PID Autotune start");
-    assert_eq!(
-        lines.last().unwrap(),
-        &format!("#define DEFAULT_Kd {:.2}", gains.kd)
-    );
+    assert_eq!(lines.last().unwrap(), &format!("#define DEFAULT_Kd {:.2}", gains.kd));
     // Same plant, same sampling: the documented default gains.
     let d = PidGains::DEFAULT_HOTEND_40W;
     assert!((gains.kp - d.kp).abs() < 0.005, "{gains:?}");
@@ -359,10 +300,7 @@ fn series_records_every_period_and_decimates() {
     assert!(hot[10].temp_c > 25.0 && hot[10].target_c == 210.0 && hot[10].power == 127);
     assert!(hot.windows(2).all(|w| w[1].t_s > w[0].t_s));
 
-    let small = ThermalConfig {
-        record_max_samples: 20,
-        ..ThermalConfig::default()
-    };
+    let small = ThermalConfig { record_max_samples: 20, ..ThermalConfig::default() };
     let mut th = Thermal::new(small).unwrap();
     th.step(100.0);
     // Two heaters: at most 10 times kept, the period doubled until it fits.
@@ -385,14 +323,8 @@ fn config_from_toml_rejects_unknown_keys() {
     let th = Thermal::new(cfg).unwrap();
     assert_eq!(th.pid_gains(BED).unwrap().kp, 300.0);
     assert!(toml::from_str::<ThermalConfig>("sample_rate = 3\n").is_err());
-    let bad = ThermalConfig {
-        hotends: vec![],
-        ..ThermalConfig::default()
-    };
-    assert!(matches!(
-        Thermal::new(bad),
-        Err(ThermalError::BadParameter { .. })
-    ));
+    let bad = ThermalConfig { hotends: vec![], ..ThermalConfig::default() };
+    assert!(matches!(Thermal::new(bad), Err(ThermalError::BadParameter { .. })));
 }
 
 proptest! {

@@ -21,28 +21,9 @@ fn run(profile: MotionProfile, n: u64) -> (f64, f64) {
     for i in 0..n {
         // 0.4 mm segments turning by 30 degrees, alternating, along a 100 mm row.
         let angle: f64 = if i % 2 == 0 { 0.26 } else { -0.26 };
-        let to = Pos::xyze(
-            at.x_mm + 0.4 * angle.cos(),
-            at.y_mm + 0.4 * angle.sin(),
-            0.2,
-            at.e_mm + 0.013,
-        );
-        let to = if to.x_mm > 100.0 {
-            Pos { x_mm: 0.0, ..to }
-        } else {
-            to
-        };
-        planner
-            .push(
-                &Move {
-                    start: at,
-                    end: to,
-                    feed_mm_s: 60.0,
-                    tag: i,
-                },
-                &mut sink,
-            )
-            .unwrap();
+        let to = Pos::xyze(at.x_mm + 0.4 * angle.cos(), at.y_mm + 0.4 * angle.sin(), 0.2, at.e_mm + 0.013);
+        let to = if to.x_mm > 100.0 { Pos { x_mm: 0.0, ..to } } else { to };
+        planner.push(&Move { start: at, end: to, feed_mm_s: 60.0, tag: i }, &mut sink).unwrap();
         at = to;
     }
     planner.flush(&mut sink);
@@ -52,14 +33,11 @@ fn run(profile: MotionProfile, n: u64) -> (f64, f64) {
 #[test]
 #[ignore = "a release-mode benchmark"]
 fn ten_million_moves() {
-    for (name, profile) in [
-        ("klipper", MotionProfile::klipper(KlipperLimits::default())),
-        ("marlin", MotionProfile::default()),
-    ] {
+    for (name, profile) in
+        [("klipper", MotionProfile::klipper(KlipperLimits::default())), ("marlin", MotionProfile::default())]
+    {
         let (wall_s, print_s) = run(profile, 10_000_000);
-        println!(
-            "{name}: 10 M moves planned and stepped in {wall_s:.2} s (print time {print_s:.0} s)"
-        );
+        println!("{name}: 10 M moves planned and stepped in {wall_s:.2} s (print time {print_s:.0} s)");
         assert!(wall_s < 10.0);
     }
 }

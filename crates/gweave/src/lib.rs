@@ -21,6 +21,8 @@ pub mod error;
 pub mod gcode;
 pub mod gen;
 pub mod pass;
+// purge-shift and other post-processing passes
+pub mod post;
 pub mod render;
 pub mod rotary;
 pub mod stats;

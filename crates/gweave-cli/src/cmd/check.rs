@@ -20,8 +20,8 @@ pub struct CheckArgs {
     /// The G-code file to check.
     pub input: PathBuf,
     /// Printable volume X,Y,Z in mm; moves outside it are reported.
-    #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 3)]
-    pub bed: Option<Vec<f64>>,
+    #[arg(long, value_name = "X,Y,Z", value_parser = crate::common::parse_xyz)]
+    pub bed: Option<[f64; 3]>,
     /// Feed rates above this are absurd, mm/min.
     #[arg(long, default_value_t = CheckOptions::default().max_feed_mm_min)]
     pub max_feed: f64,
@@ -36,11 +36,8 @@ pub struct CheckArgs {
 }
 
 pub fn run(args: CheckArgs) -> Result<ExitCode> {
-    let options = CheckOptions {
-        bed_mm: args.bed.as_ref().map(|b| [b[0], b[1], b[2]]),
-        max_feed_mm_min: args.max_feed,
-        ..CheckOptions::default()
-    };
+    let options =
+        CheckOptions { bed_mm: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
     let mut pass = CheckPass::new(options);
     let mut bar = Bar::new(args.quiet);
     let mut run = Run::new(&args.input, &mut bar);

@@ -4,6 +4,19 @@ mod cat;
 mod check;
 mod stats;
 
+// gweave-sim: the virtual printer
+mod sim;
+// binder-jet raster
+mod raster;
+mod slice_raster;
+// purge-shift
+mod purge_shift;
+
+// rotary (lathe-type) printing
+mod rotary;
+// serial: the virtual printer on a pty or loopback TCP
+mod serve;
+
 mod preview;
 
 use std::process::ExitCode;
@@ -16,6 +29,15 @@ pub enum Command {
     Stats(stats::StatsArgs),
     Check(check::CheckArgs),
     Cat(cat::CatArgs),
+    // gweave-sim: the virtual printer
+    Sim(sim::SimArgs),
+    Raster(Box<raster::RasterArgs>),
+    SliceRaster(slice_raster::SliceRasterArgs),
+    // purge-shift
+    PurgeShift(purge_shift::PurgeShiftArgs),
+
+    Rotary(rotary::RotaryArgs),
+    Serve(serve::ServeArgs),
 
     Preview(preview::PreviewArgs),
 }
@@ -25,6 +47,15 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Stats(a) => stats::run(a),
         Command::Check(a) => check::run(a),
         Command::Cat(a) => cat::run(a),
+        // gweave-sim: the virtual printer
+        Command::Sim(a) => sim::run(a),
+        Command::Raster(a) => raster::run(*a),
+        Command::SliceRaster(a) => slice_raster::run(a),
+        // purge-shift
+        Command::PurgeShift(a) => purge_shift::run(a),
+
+        Command::Rotary(a) => rotary::run(a),
+        Command::Serve(a) => serve::run(a),
 
         Command::Preview(a) => preview::run(a),
     }

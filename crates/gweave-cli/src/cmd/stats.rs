@@ -81,7 +81,8 @@ fn print_human(input: &std::path::Path, s: &Stats) {
     }
 }
 
-fn hms(t_s: f64) -> String {
+/// A duration as `1h 02m 03s`.
+pub(crate) fn hms(t_s: f64) -> String {
     let t = t_s.round() as u64;
     format!("{}h {:02}m {:02}s", t / 3600, t / 60 % 60, t % 60)
 }

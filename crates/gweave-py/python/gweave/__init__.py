@@ -21,12 +21,23 @@ from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 from . import _gweave
 from ._gweave import Line, Reader
+from ._gweave import Machine
+
+from ._gweave import HelicalPath
 
 __version__: str = _gweave.__version__
 
 PathLike = Union[str, "os.PathLike[str]"]
 
 __all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
+__all__ += ["Machine", "sim"]
+# binder-jet raster
+__all__ += ["raster", "raster_test_pattern", "slice_raster"]
+# purge-shift
+__all__ += ["purge_shift"]
+
+__all__ += ["rotary_wrap", "rotary_tube", "HelicalPath", "write_helical_paths"]
+
 __all__ += ["preview", "toolpath"]
 
 
@@ -75,6 +86,172 @@ def cat(
         backup=backup,
     )
 
+
+def sim(path: PathLike, *, machine: Optional[PathLike] = None) -> Dict[str, Any]:
+    """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML.
+
+    The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
+    ``feature_s``, ``filament_mm``, ``mixing_input_mm``, ``steps``, ``position``, ``count``,
+    ``heaters``, ``thermal_faults``, ``halted``, ``unknown_commands`` and ``warnings``.
+    """
+    m = None if machine is None else os.fspath(machine)
+    return json.loads(_gweave.sim_json(os.fspath(path), machine=m))
+# ---- binder-jet raster ----
+
+
+def _opt_path(p: Optional[PathLike]) -> Optional[str]:
+    return None if p is None else os.fspath(p)
+
+
+def raster(
+    inputs: Union[PathLike, Sequence[PathLike]],
+    output: PathLike,
+    *,
+    head: Optional[PathLike] = None,
+    threshold: float = 0.5,
+    invert: bool = False,
+    flip_y: bool = False,
+    one_way: bool = False,
+    density: int = 1,
+    origin: Sequence[float] = (20.0, 20.0),
+    layer_height: Optional[float] = None,
+    pixel_mm: Optional[float] = None,
+    dpi: Optional[float] = None,
+    heads: Optional[int] = None,
+    channels: Optional[str] = None,
+    recoat: Optional[PathLike] = None,
+    start: Optional[PathLike] = None,
+    end: Optional[PathLike] = None,
+    dialect: Optional[str] = None,
+    feed: Optional[float] = None,
+    fast_estimate: bool = False,
+) -> Dict[str, Any]:
+    """Layer images (folders, globs, image files) or one ``.sl1`` to binder-jet inkjet G-code.
+
+    Per inked column: ``G1 X``, ``M400``, ``M700 P<head> S<bits>`` (``dialect="reprap"``: M578).
+    Units: ``origin`` mm, ``layer_height`` mm, ``pixel_mm`` mm (or ``dpi``), ``feed`` mm/min;
+    ``recoat``/``start``/``end`` are files of G-code. ``head`` is a printhead profile TOML.
+    Returns the report of ``gweave raster --json`` (layers, bands, columns, drops per head,
+    binder volume, ``time`` with the planner's estimate).
+    """
+    paths = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
+    return json.loads(
+        _gweave.raster_json(
+            [os.fspath(p) for p in paths],
+            os.fspath(output),
+            head=_opt_path(head),
+            threshold=threshold,
+            invert=invert,
+            flip_y=flip_y,
+            one_way=one_way,
+            density=density,
+            origin=(float(origin[0]), float(origin[1])),
+            layer_height=layer_height,
+            pixel_mm=pixel_mm,
+            dpi=dpi,
+            heads=heads,
+            channels=channels,
+            recoat=_opt_path(recoat),
+            start=_opt_path(start),
+            end=_opt_path(end),
+            dialect=dialect,
+            feed=feed,
+            fast_estimate=fast_estimate,
+        )
+    )
+
+
+def raster_test_pattern(
+    output: PathLike,
+    *,
+    head: Optional[PathLike] = None,
+    heads: Optional[int] = None,
+    dialect: Optional[str] = None,
+    columns: int = 4,
+    origin: Sequence[float] = (20.0, 20.0),
+) -> Dict[str, Any]:
+    """Write a nozzle test pattern: ``columns`` columns per nozzle address, each address alone."""
+    return json.loads(
+        _gweave.raster_test_pattern_json(
+            os.fspath(output),
+            head=_opt_path(head),
+            heads=heads,
+            dialect=dialect,
+            columns=columns,
+            origin=(float(origin[0]), float(origin[1])),
+        )
+    )
+
+
+def slice_raster(
+    stl: PathLike,
+    out_dir: PathLike,
+    *,
+    layer_height: float,
+    dpi: float = 96.0,
+    pixel_mm: Optional[float] = None,
+    margin: int = 0,
+) -> Dict[str, Any]:
+    """Slice an STL into 1-bit layer PNGs (pixel centres at mid-layer Z, even-odd fill).
+
+    ``layer_height`` in mm; resolution as ``dpi`` or ``pixel_mm``. Returns the report of
+    ``gweave slice-raster --json`` (grid, files, pixels per layer).
+    """
+    return json.loads(
+        _gweave.slice_raster_json(
+            os.fspath(stl),
+            os.fspath(out_dir),
+            layer_height=layer_height,
+            dpi=dpi,
+            pixel_mm=pixel_mm,
+            margin=margin,
+        )
+    )
+
+
+# purge-shift
+def purge_shift(
+    path: PathLike,
+    output: Optional[PathLike] = None,
+    *,
+    in_place: bool = False,
+    backup: bool = True,
+    purge: Optional[float] = None,
+    purge_mm3: Optional[float] = None,
+    config: Optional[PathLike] = None,
+    filament_diameter: Optional[float] = None,
+    cross_layers: bool = False,
+    allow_features: Optional[Sequence[str]] = None,
+    markers: Optional[Sequence[str]] = None,
+    fallback: Optional[str] = None,
+) -> Dict[str, Any]:
+    """Move every tool/mix change earlier by the purge so it prints inside the part (no wipe tower).
+
+    ``purge`` is mm of filament (or ``purge_mm3``, mm^3); ``config`` a TOML file with per-pair
+    amounts, colours, the washout model and rules (keyword arguments override it). Returns the
+    report: per change the requested and achieved purge, where the change now sits, and totals.
+    """
+    text = None
+    if config is not None:
+        with open(os.fspath(config), encoding="utf-8") as f:
+            text = f.read()
+    pair = None if markers is None else (str(markers[0]), str(markers[1]))
+    return json.loads(
+        _gweave.purge_shift_json(
+            os.fspath(path),
+            None if output is None else os.fspath(output),
+            in_place=in_place,
+            backup=backup,
+            purge=purge,
+            purge_mm3=purge_mm3,
+            config=text,
+            filament_diameter=filament_diameter,
+            cross_layers=cross_layers,
+            allow_features=None if allow_features is None else list(allow_features),
+            markers=pair,
+            fallback=fallback,
+        )
+    )
 
 # ---- preview (render) ----
 
@@ -155,3 +332,168 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
     args = list(sys.argv if argv is None else ["gweave", *argv])
     return _gweave.run_cli(args)
+
+
+# ---- rotary (lathe-type) printing ----------------------------------------------------------
+# The keywords below only rename arguments to the library's TOML keys; every default, check and
+# computation is the Rust library's (the same as `gweave rotary ... --json`).
+
+_UNITS = {"deg": "degrees", "degrees": "degrees", "mm": "mm"}
+
+
+def _machine(
+    mandrel_diameter: Optional[float],
+    feed: Optional[str],
+    rotary_unit: Optional[str],
+    axes: Optional[Sequence[str]],
+) -> Dict[str, Any]:
+    machine: Dict[str, Any] = {
+        "mandrel_diameter_mm": mandrel_diameter,
+        "feed_convention": feed,
+        "rotary_unit": None if rotary_unit is None else _UNITS.get(rotary_unit, rotary_unit),
+    }
+    if axes is not None:
+        letters = list(axes.split(",") if isinstance(axes, str) else axes)
+        if len(letters) != 3:
+            raise ValueError("axes: three letters, axial, rotary, radial (e.g. 'X,A,Z')")
+        machine.update(axial_axis=letters[0], rotary_axis=letters[1], radial_axis=letters[2])
+    return machine
+
+
+def _path(p: Optional[PathLike]) -> Optional[str]:
+    return None if p is None else os.fspath(p)
+
+
+def rotary_wrap(
+    input: PathLike,
+    output: PathLike,
+    *,
+    mandrel_diameter: Optional[float] = None,
+    feed: Optional[str] = None,
+    rotary_unit: Optional[str] = None,
+    axes: Optional[Sequence[str]] = None,
+    keep_arc_length: Optional[bool] = None,
+    seam_rotation: Optional[float] = None,
+    chord_tol: Optional[float] = None,
+    config: Optional[PathLike] = None,
+    preview: Optional[PathLike] = None,
+) -> Dict[str, Any]:
+    """Wrap a part sliced flat onto the mandrel of a lathe-type printer (``gweave rotary wrap``).
+
+    Flat X runs along the mandrel, Y around it (``theta = 360*y/(pi*D)``), Z away from it
+    (radius ``D/2 + z``). ``mandrel_diameter`` in mm; ``feed`` is ``"nist"``, ``"combined"`` or
+    ``"inverse-time"``; ``rotary_unit`` ``"deg"`` or ``"mm"``; ``axes`` like ``"X,A,Z"``;
+    ``seam_rotation`` degrees per layer; ``chord_tol`` mm. Keywords override the TOML ``config``.
+    ``preview`` writes a 3D PNG of the executed path. Returns the report (per-layer radius,
+    angles swept, seam angle; filament; time).
+    """
+    settings = {
+        "machine": _machine(mandrel_diameter, feed, rotary_unit, axes),
+        "chord_tolerance_mm": chord_tol,
+        "unwrap": {"keep_arc_length": keep_arc_length, "seam_rotation_per_layer_deg": seam_rotation},
+    }
+    text = _gweave.rotary_wrap_json(
+        os.fspath(input),
+        os.fspath(output),
+        settings=json.dumps(settings),
+        config=_path(config),
+        preview=_path(preview),
+    )
+    return json.loads(text)
+
+
+def rotary_tube(
+    output: PathLike,
+    *,
+    mandrel_diameter: Optional[float] = None,
+    length: Optional[float] = None,
+    layers: Optional[int] = None,
+    layer_height: Optional[float] = None,
+    bead_width: Optional[float] = None,
+    pitch: Optional[float] = None,
+    interweave: Optional[bool] = None,
+    segments_per_turn: Optional[int] = None,
+    chord_tol: Optional[float] = None,
+    speed: Optional[float] = None,
+    temp: Optional[float] = None,
+    filament_diameter: Optional[float] = None,
+    feed: Optional[str] = None,
+    rotary_unit: Optional[str] = None,
+    axes: Optional[Sequence[str]] = None,
+    config: Optional[PathLike] = None,
+    preview: Optional[PathLike] = None,
+) -> Dict[str, Any]:
+    """Generate a seam-free tube of continuous helical layers (``gweave rotary tube``).
+
+    Layer k lies on radius ``D/2 + (k + 1/2)*layer_height``, advancing ``pitch`` mm per turn
+    (default the bead width: a closed wall), reversing its helix every layer unless
+    ``interweave=False``, at surface speed ``speed`` mm/s. Lengths in mm, ``temp`` in degrees C.
+    Keywords override the TOML ``config``. Returns the report (per-layer radius, handedness,
+    turns, spindle speed; filament and its volume against the wall volume; time).
+    """
+    settings = {
+        "machine": _machine(mandrel_diameter, feed, rotary_unit, axes),
+        "length_mm": length,
+        "layers": layers,
+        "pitch_mm": pitch,
+        "interweave": interweave,
+        "print": {
+            "layer_height_mm": layer_height,
+            "bead_width_mm": bead_width,
+            "segments_per_turn": segments_per_turn,
+            "chord_tolerance_mm": chord_tol,
+            "print_speed_mm_s": speed,
+            "nozzle_temp_c": temp,
+            "filament_diameter_mm": filament_diameter,
+        },
+    }
+    text = _gweave.rotary_tube_json(
+        os.fspath(output), settings=json.dumps(settings), config=_path(config), preview=_path(preview)
+    )
+    return json.loads(text)
+
+
+def write_helical_paths(
+    paths: Sequence[HelicalPath],
+    output: PathLike,
+    *,
+    mandrel_diameter: Optional[float] = None,
+    feed: Optional[str] = None,
+    rotary_unit: Optional[str] = None,
+    axes: Optional[Sequence[str]] = None,
+    layer_height: Optional[float] = None,
+    bead_width: Optional[float] = None,
+    speed: Optional[float] = None,
+    temp: Optional[float] = None,
+    filament_diameter: Optional[float] = None,
+    chord_tol: Optional[float] = None,
+    segments_per_turn: Optional[int] = None,
+    config: Optional[PathLike] = None,
+) -> Dict[str, Any]:
+    """Write a program printing custom :class:`HelicalPath` beads in order (one bead each).
+
+    Between paths the nozzle moves without extruding. ``config`` is a TOML file with
+    ``[machine]`` and ``[print]`` tables as in the tube's. Returns ``filament_mm`` and
+    ``print_time_s``.
+
+    A cone from radius 10 down to 5 over 30 mm, one closed layer::
+
+        cone = gweave.HelicalPath(0, 30, radius=[(0, 10.1), (30, 5.1)], pitch=0.4)
+        gweave.write_helical_paths([cone], "cone.gcode", mandrel_diameter=20)
+    """
+    settings = {
+        "machine": _machine(mandrel_diameter, feed, rotary_unit, axes),
+        "print": {
+            "layer_height_mm": layer_height,
+            "bead_width_mm": bead_width,
+            "print_speed_mm_s": speed,
+            "nozzle_temp_c": temp,
+            "filament_diameter_mm": filament_diameter,
+            "chord_tolerance_mm": chord_tol,
+            "segments_per_turn": segments_per_turn,
+        },
+    }
+    text = _gweave.write_helical_paths_json(
+        list(paths), os.fspath(output), settings=json.dumps(settings), config=_path(config)
+    )
+    return json.loads(text)

@@ -1,4 +1,4 @@
-from typing import Any, Dict, List, Optional, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 __version__: str
 
@@ -6,6 +6,60 @@ def stats_json(path: str, *, filament_diameter: Optional[float] = None) -> str: 
 def check_json(path: str, *, bed: Optional[Tuple[float, float, float]] = None, max_feed: Optional[float] = None) -> str: ...
 def cat(path: str, output: Optional[str] = None, *, in_place: bool = False, backup: bool = True) -> None: ...
 def run_cli(argv: List[str]) -> int: ...
+
+# binder-jet raster
+def raster_json(
+    inputs: List[str],
+    output: str,
+    *,
+    head: Optional[str] = None,
+    threshold: float = 0.5,
+    invert: bool = False,
+    flip_y: bool = False,
+    one_way: bool = False,
+    density: int = 1,
+    origin: Tuple[float, float] = (20.0, 20.0),
+    layer_height: Optional[float] = None,
+    pixel_mm: Optional[float] = None,
+    dpi: Optional[float] = None,
+    heads: Optional[int] = None,
+    channels: Optional[str] = None,
+    recoat: Optional[str] = None,
+    start: Optional[str] = None,
+    end: Optional[str] = None,
+    dialect: Optional[str] = None,
+    feed: Optional[float] = None,
+    fast_estimate: bool = False,
+) -> str: ...
+def raster_test_pattern_json(
+    output: str,
+    *,
+    head: Optional[str] = None,
+    heads: Optional[int] = None,
+    dialect: Optional[str] = None,
+    columns: int = 4,
+    origin: Tuple[float, float] = (20.0, 20.0),
+) -> str: ...
+def slice_raster_json(
+    stl: str, out_dir: str, *, layer_height: float, dpi: float = 96.0, pixel_mm: Optional[float] = None, margin: int = 0
+) -> str: ...
+
+# purge-shift
+def purge_shift_json(
+    path: str,
+    output: Optional[str] = None,
+    *,
+    in_place: bool = False,
+    backup: bool = True,
+    purge: Optional[float] = None,
+    purge_mm3: Optional[float] = None,
+    config: Optional[str] = None,
+    filament_diameter: Optional[float] = None,
+    cross_layers: bool = False,
+    allow_features: Optional[List[str]] = None,
+    markers: Optional[Tuple[str, str]] = None,
+    fallback: Optional[str] = None,
+) -> str: ...
 
 def preview_bytes(
     path: str,
@@ -42,3 +96,36 @@ class Reader:
     def __init__(self, path: str) -> None: ...
     def __iter__(self) -> "Reader": ...
     def __next__(self) -> Line: ...
+
+# gweave-sim: the virtual printer
+def sim_json(path: str, *, machine: Optional[str] = None) -> str: ...
+
+class Machine:
+    def __init__(self, *, machine: Optional[str] = None) -> None: ...
+    def boot_lines(self) -> List[str]: ...
+    def execute(self, line: str) -> List[str]: ...
+    @property
+    def now_s(self) -> float: ...
+    def finish(self) -> None: ...
+    def report(self) -> Dict[str, Any]: ...
+# rotary (lathe-type) printing
+Profile = Union[float, Sequence[Tuple[float, float]], Callable[[float], float]]
+
+def rotary_wrap_json(input: str, output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None) -> str: ...
+def rotary_tube_json(output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None) -> str: ...
+def write_helical_paths_json(paths: List["HelicalPath"], output: str, *, settings: str, config: Optional[str] = None) -> str: ...
+
+class HelicalPath:
+    def __init__(
+        self,
+        start: float,
+        end: float,
+        *,
+        radius: Profile,
+        pitch: Profile,
+        handedness: str = "right",
+        start_theta: float = 0.0,
+        lead_in: float = 0.0,
+        lead_out: float = 0.0,
+    ) -> None: ...
+    def points(self, *, chord_tol: float = 0.01, segments_per_turn: Optional[int] = None) -> List[Tuple[float, float, float]]: ...

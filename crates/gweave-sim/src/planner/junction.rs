@@ -34,18 +34,14 @@ pub struct HalfAngle {
 impl HalfAngle {
     /// From `c`, the negated dot product of the previous and the next unit direction.
     pub fn from_neg_cos(c: f64) -> Self {
-        Self {
-            sin: (0.5 * (1.0 - c)).max(0.0).sqrt(),
-            cos: (0.5 * (1.0 + c)).max(0.0).sqrt(),
-        }
+        Self { sin: (0.5 * (1.0 - c)).max(0.0).sqrt(), cos: (0.5 * (1.0 + c)).max(0.0).sqrt() }
     }
 
     /// The junction-deviation limit `a d sin/(1 - sin)`; `None` straight on (`sin = 1`,
     /// `cos = 0`), where the circle's radius is infinite and nothing limits the speed.
     pub fn deviation_v2(&self, accel: f64, deviation_mm: f64) -> Option<f64> {
         let one_minus_sin = 1.0 - self.sin;
-        (one_minus_sin > 0.0 && self.cos > 0.0)
-            .then(|| self.sin / one_minus_sin * deviation_mm * accel)
+        (one_minus_sin > 0.0 && self.cos > 0.0).then(|| self.sin / one_minus_sin * deviation_mm * accel)
     }
 
     /// Klipper's mid-move contact limit for a move with `delta_v2 = 2 a len`.
@@ -78,23 +74,14 @@ mod tests {
     #[test]
     fn marlin_square_corner_hand_computed() {
         // sin 45 = 0.70711: v^2 = 3000 * 0.013 * 0.70711 / 0.29289 = 94.155, v = 9.703 mm/s.
-        let v = HalfAngle::from_neg_cos(0.0)
-            .deviation_v2(3000.0, 0.013)
-            .unwrap()
-            .sqrt();
+        let v = HalfAngle::from_neg_cos(0.0).deviation_v2(3000.0, 0.013).unwrap().sqrt();
         assert!((v - 9.7033).abs() < 1e-4, "{v}");
     }
 
     #[test]
     fn straight_is_unlimited_and_reversal_stops() {
-        assert_eq!(
-            HalfAngle::from_neg_cos(-1.0).deviation_v2(3000.0, 0.013),
-            None
-        );
-        assert_eq!(
-            HalfAngle::from_neg_cos(1.0).deviation_v2(3000.0, 0.013),
-            Some(0.0)
-        );
+        assert_eq!(HalfAngle::from_neg_cos(-1.0).deviation_v2(3000.0, 0.013), None);
+        assert_eq!(HalfAngle::from_neg_cos(1.0).deviation_v2(3000.0, 0.013), Some(0.0));
     }
 
     #[test]

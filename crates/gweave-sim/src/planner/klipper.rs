@@ -78,11 +78,8 @@ impl QueuedMove {
         }
         let (r, pr) = (&self.geo.ratio, &prev.geo.ratio);
         let e_v2 = extruder_v2(icv_mm_s, pr[axis::E], r[axis::E]).unwrap_or(self.max_cruise_v2);
-        let mut v2 = self
-            .max_cruise_v2
-            .min(prev.max_cruise_v2)
-            .min(prev.max_start_v2 + prev.delta_v2)
-            .min(e_v2);
+        let mut v2 =
+            self.max_cruise_v2.min(prev.max_cruise_v2).min(prev.max_start_v2 + prev.delta_v2).min(e_v2);
         let half = HalfAngle::from_neg_cos(-(r[0] * pr[0] + r[1] * pr[1] + r[2] * pr[2]));
         if let (Some(jd_v2), Some(prev_jd_v2)) = (
             half.deviation_v2(self.accel, self.junction_deviation_mm),
@@ -131,9 +128,7 @@ impl KlipperLookahead {
             queue: VecDeque::new(),
             walk: Vec::new(),
             flush_budget_s: FLUSH_AFTER_FULL_S,
-            z_velocity_mm_s: limits
-                .max_z_velocity_mm_s
-                .unwrap_or(limits.max_velocity_mm_s),
+            z_velocity_mm_s: limits.max_z_velocity_mm_s.unwrap_or(limits.max_velocity_mm_s),
             z_accel_mm_s2: limits.max_z_accel_mm_s2.unwrap_or(limits.max_accel_mm_s2),
         }
     }
@@ -206,12 +201,8 @@ impl KlipperLookahead {
         let extrude_only_or_retract = (d[axis::X] == 0.0 && d[axis::Y] == 0.0) || e_ratio < 0.0;
         if d[axis::E] != 0.0 && extrude_only_or_retract {
             let inv = 1.0 / e_ratio.abs();
-            let v = k
-                .max_extrude_only_velocity_mm_s
-                .map_or(f64::INFINITY, |v| v * inv);
-            let a = k
-                .max_extrude_only_accel_mm_s2
-                .map_or(f64::INFINITY, |a| a * inv);
+            let v = k.max_extrude_only_velocity_mm_s.map_or(f64::INFINITY, |v| v * inv);
+            let a = k.max_extrude_only_accel_mm_s2.map_or(f64::INFINITY, |a| a * inv);
             q.limit_speed(v, a);
         }
         // The rotary axis, as one of Klipper's extra axes: its own speed and accel limits.
@@ -251,18 +242,11 @@ impl KlipperLookahead {
                     }
                     peak_cruise_v2 = (mcr_start_v2 + reachable_mcr_v2) * 0.5;
                 }
-                cruise_v2 = Some(
-                    ((start_v2 + reachable_start_v2) * 0.5)
-                        .min(m.max_cruise_v2)
-                        .min(peak_cruise_v2),
-                );
+                cruise_v2 =
+                    Some(((start_v2 + reachable_start_v2) * 0.5).min(m.max_cruise_v2).min(peak_cruise_v2));
                 pending = 0;
             }
-            self.walk[i] = Walk {
-                start_v2,
-                cruise_v2,
-                next_start_v2,
-            };
+            self.walk[i] = Walk { start_v2, cruise_v2, next_start_v2 };
             next_start_v2 = start_v2;
             next_mcr_start_v2 = mcr_start_v2;
         }
@@ -271,14 +255,8 @@ impl KlipperLookahead {
         }
         let mut prev_cruise_v2: f64 = 0.0;
         for (m, w) in self.queue.drain(..flush_count).zip(&self.walk) {
-            let cruise_v2 = w
-                .cruise_v2
-                .unwrap_or_else(|| prev_cruise_v2.min(w.start_v2));
-            sink.block(&m.block(
-                w.start_v2.min(cruise_v2),
-                cruise_v2,
-                w.next_start_v2.min(cruise_v2),
-            ));
+            let cruise_v2 = w.cruise_v2.unwrap_or_else(|| prev_cruise_v2.min(w.start_v2));
+            sink.block(&m.block(w.start_v2.min(cruise_v2), cruise_v2, w.next_start_v2.min(cruise_v2)));
             prev_cruise_v2 = cruise_v2;
         }
     }
@@ -313,13 +291,7 @@ mod tests {
     }
 
     fn path() -> impl Strategy<Value = Vec<Move>> {
-        let step = (
-            -30.0..30.0f64,
-            -30.0..30.0f64,
-            0..10u8,
-            0.0..0.5f64,
-            2.0..200.0f64,
-        );
+        let step = (-30.0..30.0f64, -30.0..30.0f64, 0..10u8, 0.0..0.5f64, 2.0..200.0f64);
         proptest::collection::vec(step, 1..400).prop_map(|steps| {
             let mut at = Pos::default();
             let mut moves = Vec::new();
@@ -338,12 +310,7 @@ mod tests {
                         to.e_mm += if k % 2 == 0 { de * scale } else { 0.0 };
                     }
                 }
-                moves.push(Move {
-                    start: at,
-                    end: to,
-                    feed_mm_s: feed,
-                    tag: i as u64,
-                });
+                moves.push(Move { start: at, end: to, feed_mm_s: feed, tag: i as u64 });
                 at = to;
             }
             moves

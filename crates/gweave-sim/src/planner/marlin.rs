@@ -82,14 +82,7 @@ impl MarlinBuffer {
         let unit = geo.delta.map(|d| d / norm);
         let max_entry_v2 = match self.prev {
             Some(prev) => {
-                let v2 = junction_v2(
-                    &prev.unit,
-                    &unit,
-                    accel,
-                    &max_accel,
-                    junction_deviation_mm,
-                    geo.len,
-                );
+                let v2 = junction_v2(&prev.unit, &unit, accel, &max_accel, junction_deviation_mm, geo.len);
                 v2.min(nominal_v2).min(prev.nominal_v2)
             }
             None => 0.0,
@@ -137,10 +130,7 @@ impl MarlinBuffer {
             b.reverse_v2 = reverse_v2;
             exit_v2 = reverse_v2;
         }
-        let mut reach_v2 = match first_changed
-            .checked_sub(1)
-            .and_then(|i| self.blocks.get(i))
-        {
+        let mut reach_v2 = match first_changed.checked_sub(1).and_then(|i| self.blocks.get(i)) {
             Some(prev) => prev.entry_v2 + 2.0 * prev.accel * prev.geo.len,
             None => f64::INFINITY,
         };
@@ -155,9 +145,7 @@ impl MarlinBuffer {
             return;
         };
         let exit_v2 = self.blocks.front().map_or(0.0, |next| next.entry_v2);
-        let cruise_v2 = b
-            .nominal_v2
-            .min(peak_v2(b.geo.len, b.accel, b.entry_v2, exit_v2));
+        let cruise_v2 = b.nominal_v2.min(peak_v2(b.geo.len, b.accel, b.entry_v2, exit_v2));
         let trapezoid = Trapezoid::from_v2(b.geo.len, b.accel, b.entry_v2, cruise_v2, exit_v2);
         sink.block(&PlannedBlock::new(&b.mv, &b.geo, b.accel, trapezoid));
         self.head_entry_fixed = !self.blocks.is_empty();
@@ -167,11 +155,7 @@ impl MarlinBuffer {
 /// Scale `value` (a speed or an acceleration along the path) down until no axis, moving at
 /// `ratio[i] * value`, exceeds its own limit.
 fn axis_limited(value: f64, ratio: &[f64; 5], limit: &[f64; 5]) -> f64 {
-    ratio
-        .iter()
-        .zip(limit)
-        .filter(|(r, _)| **r != 0.0)
-        .fold(value, |v, (r, l)| v.min(l / r.abs()))
+    ratio.iter().zip(limit).filter(|(r, _)| **r != 0.0).fold(value, |v, (r, l)| v.min(l / r.abs()))
 }
 
 /// Marlin's junction speed limit between unit directions `prev` and `next`.
@@ -198,9 +182,7 @@ fn junction_v2(
         accel
     };
     let half = HalfAngle::from_neg_cos(neg_cos);
-    let mut v2 = half
-        .deviation_v2(junction_accel, deviation_mm)
-        .unwrap_or(f64::INFINITY);
+    let mut v2 = half.deviation_v2(junction_accel, deviation_mm).unwrap_or(f64::INFINITY);
     if len < 1.0 {
         // Short segments approximate arcs: turning by phi over len is a circle of radius
         // len / phi, whose centripetal limit is v^2 = a len / phi.

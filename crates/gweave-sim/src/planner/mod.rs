@@ -67,15 +67,7 @@ impl PlannedBlock {
         if geo.kind != MoveKind::Kinematic {
             (end.x_mm, end.y_mm, end.z_mm) = (mv.start.x_mm, mv.start.y_mm, mv.start.z_mm);
         }
-        Self {
-            tag: mv.tag,
-            start: mv.start,
-            end,
-            len: geo.len,
-            accel_mm_s2,
-            kind: geo.kind,
-            trapezoid,
-        }
+        Self { tag: mv.tag, start: mv.start, end, len: geo.len, accel_mm_s2, kind: geo.kind, trapezoid }
     }
 
     /// Time the block takes, s.
@@ -161,21 +153,8 @@ impl Planner {
                 let rotary = (&self.profile.max_feed_mm_s, &self.profile.max_accel_mm_s2);
                 k.push(mv, geo, limits, rotary, sink);
             }
-            (
-                Engine::Marlin(m),
-                &CornerMode::Marlin {
-                    junction_deviation_mm,
-                    lookahead_blocks,
-                },
-            ) => {
-                m.push(
-                    mv,
-                    geo,
-                    &self.profile,
-                    junction_deviation_mm,
-                    lookahead_blocks,
-                    sink,
-                );
+            (Engine::Marlin(m), &CornerMode::Marlin { junction_deviation_mm, lookahead_blocks }) => {
+                m.push(mv, geo, &self.profile, junction_deviation_mm, lookahead_blocks, sink);
             }
             _ => unreachable!("set_profile keeps the corner mode of the engine"),
         }

@@ -8,12 +8,7 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
 }
 
 fn mv(from: Pos, to: Pos, feed_mm_s: f64, tag: u64) -> Move {
-    Move {
-        start: from,
-        end: to,
-        feed_mm_s,
-        tag,
-    }
+    Move { start: from, end: to, feed_mm_s, tag }
 }
 
 /// Plan a path through `points` (XYZE) at one feed rate, then flush.
@@ -22,9 +17,7 @@ fn plan(profile: MotionProfile, points: &[[f64; 4]], feed_mm_s: f64) -> Vec<Plan
     let mut out = Vec::new();
     for (i, w) in points.windows(2).enumerate() {
         let p = |a: [f64; 4]| Pos::xyze(a[0], a[1], a[2], a[3]);
-        planner
-            .push(&mv(p(w[0]), p(w[1]), feed_mm_s, i as u64), &mut out)
-            .unwrap();
+        planner.push(&mv(p(w[0]), p(w[1]), feed_mm_s, i as u64), &mut out).unwrap();
     }
     planner.flush(&mut out);
     assert_eq!(planner.queued(), 0);
@@ -49,14 +42,8 @@ fn single_move_trapezoid_in_both_modes() {
         // 100 mm at 50 mm/s, a = 3000: 0 -> 50 in 1/60 s over 5/12 mm, same down.
         let b = plan(profile, &[[0.0; 4], [100.0, 0.0, 0.0, 0.0]], 50.0);
         let t = b[0].trapezoid;
-        assert!(
-            close(t.accel_t_s, 1.0 / 60.0, 1e-12) && close(t.decel_t_s, 1.0 / 60.0, 1e-12),
-            "{t:?}"
-        );
-        assert!(
-            close(t.cruise_t_s, (100.0 - 5.0 / 6.0) / 50.0, 1e-12),
-            "{t:?}"
-        );
+        assert!(close(t.accel_t_s, 1.0 / 60.0, 1e-12) && close(t.decel_t_s, 1.0 / 60.0, 1e-12), "{t:?}");
+        assert!(close(t.cruise_t_s, (100.0 - 5.0 / 6.0) / 50.0, 1e-12), "{t:?}");
         assert_eq!((t.entry_v_mm_s, t.exit_v_mm_s), (0.0, 0.0));
     }
 }
@@ -64,10 +51,7 @@ fn single_move_trapezoid_in_both_modes() {
 #[test]
 fn short_move_is_a_triangle() {
     // 3 mm, a = 3000, wants 200 mm/s: peak v^2 = 3000 * 3 = 9000 (94.87 mm/s), no cruise.
-    let no_cruise_ratio = KlipperLimits {
-        minimum_cruise_ratio: 0.0,
-        ..KlipperLimits::default()
-    };
+    let no_cruise_ratio = KlipperLimits { minimum_cruise_ratio: 0.0, ..KlipperLimits::default() };
     for profile in [MotionProfile::klipper(no_cruise_ratio), marlin()] {
         let b = plan(profile, &[[0.0; 4], [3.0, 0.0, 0.0, 0.0]], 200.0);
         let t = b[0].trapezoid;
@@ -85,24 +69,13 @@ fn klipper_minimum_cruise_ratio_keeps_half_the_move_cruising() {
     let t = b[0].trapezoid;
     let v = 4500f64.sqrt();
     assert!(close(t.cruise_v_mm_s, v, 1e-9), "{t:?}");
-    assert!(
-        close(t.cruise_t_s, 1.5 / v, 1e-12) && close(t.accel_t_s, v / 3000.0, 1e-12),
-        "{t:?}"
-    );
+    assert!(close(t.cruise_t_s, 1.5 / v, 1e-12) && close(t.accel_t_s, v / 3000.0, 1e-12), "{t:?}");
 }
 
 #[test]
 fn klipper_square_corner_runs_at_square_corner_velocity() {
-    let b = plan(
-        klipper(),
-        &[[0.0; 4], [50.0, 0.0, 0.0, 0.0], [50.0, 50.0, 0.0, 0.0]],
-        100.0,
-    );
-    assert!(
-        close(b[0].trapezoid.exit_v_mm_s, 5.0, 1e-9),
-        "{:?}",
-        b[0].trapezoid
-    );
+    let b = plan(klipper(), &[[0.0; 4], [50.0, 0.0, 0.0, 0.0], [50.0, 50.0, 0.0, 0.0]], 100.0);
+    assert!(close(b[0].trapezoid.exit_v_mm_s, 5.0, 1e-9), "{:?}", b[0].trapezoid);
     assert!(close(b[1].trapezoid.entry_v_mm_s, 5.0, 1e-9));
     // Each leg: 0/5 -> 100 and back with a = 3000; speeds are capped at 100 mm/s.
     let leg = |v0: f64, v1: f64| {
@@ -115,18 +88,10 @@ fn klipper_square_corner_runs_at_square_corner_velocity() {
 #[test]
 fn marlin_square_corner_uses_junction_deviation() {
     // v^2 = 3000 * 0.013 * sin45 / (1 - sin45) = 94.155, v = 9.7033 mm/s.
-    let b = plan(
-        marlin(),
-        &[[0.0; 4], [50.0, 0.0, 0.0, 0.0], [50.0, 50.0, 0.0, 0.0]],
-        100.0,
-    );
+    let b = plan(marlin(), &[[0.0; 4], [50.0, 0.0, 0.0, 0.0], [50.0, 50.0, 0.0, 0.0]], 100.0);
     let s = std::f64::consts::FRAC_1_SQRT_2;
     let v = (3000.0 * 0.013 * s / (1.0 - s)).sqrt();
-    assert!(
-        close(b[0].trapezoid.exit_v_mm_s, v, 1e-9),
-        "{:?}",
-        b[0].trapezoid
-    );
+    assert!(close(b[0].trapezoid.exit_v_mm_s, v, 1e-9), "{:?}", b[0].trapezoid);
     assert!(close(v, 9.7033, 1e-4));
 }
 
@@ -137,37 +102,19 @@ fn collinear_chain_does_not_slow_down() {
         let b = plan(profile, &pts, 50.0);
         assert_eq!(b.len(), 10);
         for blk in &b[1..9] {
-            assert_eq!(
-                (blk.trapezoid.entry_v_mm_s, blk.trapezoid.exit_v_mm_s),
-                (50.0, 50.0)
-            );
+            assert_eq!((blk.trapezoid.entry_v_mm_s, blk.trapezoid.exit_v_mm_s), (50.0, 50.0));
         }
         // Like one 100 mm move: L/v + v/a.
-        assert!(
-            close(total_s(&b), 2.0 + 50.0 / 3000.0, 1e-12),
-            "{}",
-            total_s(&b)
-        );
-        assert_eq!(
-            b.iter().map(|b| b.tag).collect::<Vec<_>>(),
-            (0..10).collect::<Vec<_>>()
-        );
+        assert!(close(total_s(&b), 2.0 + 50.0 / 3000.0, 1e-12), "{}", total_s(&b));
+        assert_eq!(b.iter().map(|b| b.tag).collect::<Vec<_>>(), (0..10).collect::<Vec<_>>());
     }
 }
 
 #[test]
 fn klipper_extruder_corner_limit() {
     // Straight on, but E per mm jumps from 0 to 0.04: v <= 1 / 0.04 = 25 mm/s.
-    let b = plan(
-        klipper(),
-        &[[0.0; 4], [50.0, 0.0, 0.0, 0.0], [100.0, 0.0, 0.0, 2.0]],
-        100.0,
-    );
-    assert!(
-        close(b[0].trapezoid.exit_v_mm_s, 25.0, 1e-9),
-        "{:?}",
-        b[0].trapezoid
-    );
+    let b = plan(klipper(), &[[0.0; 4], [50.0, 0.0, 0.0, 0.0], [100.0, 0.0, 0.0, 2.0]], 100.0);
+    assert!(close(b[0].trapezoid.exit_v_mm_s, 25.0, 1e-9), "{:?}", b[0].trapezoid);
 }
 
 #[test]
@@ -177,17 +124,9 @@ fn klipper_extrude_only_limits() {
         max_extrude_only_accel_mm_s2: Some(800.0),
         ..KlipperLimits::default()
     };
-    let b = plan(
-        MotionProfile::klipper(limits),
-        &[[0.0; 4], [0.0, 0.0, 0.0, -2.0]],
-        45.0,
-    );
+    let b = plan(MotionProfile::klipper(limits), &[[0.0; 4], [0.0, 0.0, 0.0, -2.0]], 45.0);
     // 30 mm/s at 800: 0.5625 mm each way in 0.0375 s, 0.875 mm cruise.
-    assert!(
-        close(b[0].duration_s(), 0.075 + 0.875 / 30.0, 1e-12),
-        "{:?}",
-        b[0]
-    );
+    assert!(close(b[0].duration_s(), 0.075 + 0.875 / 30.0, 1e-12), "{:?}", b[0]);
     assert_eq!(b[0].kind, MoveKind::ExtrudeOnly);
     // Unbounded: 45 mm/s with Klipper's 1e8 mm/s^2 placeholder.
     let b = plan(klipper(), &[[0.0; 4], [0.0, 0.0, 0.0, -2.0]], 45.0);
@@ -196,23 +135,12 @@ fn klipper_extrude_only_limits() {
 
 #[test]
 fn z_limits() {
-    let limits = KlipperLimits {
-        max_z_velocity_mm_s: Some(5.0),
-        ..KlipperLimits::default()
-    };
-    let b = plan(
-        MotionProfile::klipper(limits),
-        &[[0.0; 4], [0.0, 0.0, 10.0, 0.0]],
-        50.0,
-    );
+    let limits = KlipperLimits { max_z_velocity_mm_s: Some(5.0), ..KlipperLimits::default() };
+    let b = plan(MotionProfile::klipper(limits), &[[0.0; 4], [0.0, 0.0, 10.0, 0.0]], 50.0);
     assert!(close(b[0].trapezoid.cruise_v_mm_s, 5.0, 1e-12));
     // Marlin: Z at most 5 mm/s and 100 mm/s^2: 0.05 s and 0.125 mm each way.
     let b = plan(marlin(), &[[0.0; 4], [0.0, 0.0, 10.0, 0.0]], 50.0);
-    assert!(
-        close(b[0].duration_s(), 0.1 + 9.75 / 5.0, 1e-12),
-        "{:?}",
-        b[0]
-    );
+    assert!(close(b[0].duration_s(), 0.1 + 9.75 / 5.0, 1e-12), "{:?}", b[0]);
 }
 
 #[test]
@@ -221,10 +149,7 @@ fn marlin_buffer_is_bounded_and_emits_early() {
     let mut n = 0usize;
     let mut count = |_: &PlannedBlock| n += 1;
     for i in 0..100 {
-        let (a, b) = (
-            Pos::xyze(i as f64, 0.0, 0.0, 0.0),
-            Pos::xyze(i as f64 + 1.0, 0.0, 0.0, 0.0),
-        );
+        let (a, b) = (Pos::xyze(i as f64, 0.0, 0.0, 0.0), Pos::xyze(i as f64 + 1.0, 0.0, 0.0, 0.0));
         planner.push(&mv(a, b, 50.0, 0), &mut count).unwrap();
         assert!(planner.queued() <= 16);
     }
@@ -235,34 +160,17 @@ fn marlin_buffer_is_bounded_and_emits_early() {
 #[test]
 fn marlin_travel_print_and_retract_accelerations() {
     let mut p = marlin();
-    p.accel = crate::limits::MoveAccel {
-        print_mm_s2: 500.0,
-        retract_mm_s2: 1000.0,
-        travel_mm_s2: 2000.0,
-    };
-    let b = plan(
-        p,
-        &[
-            [0.0; 4],
-            [100.0, 0.0, 0.0, 0.0],
-            [200.0, 0.0, 0.0, 1.0],
-            [200.0, 0.0, 0.0, 0.0],
-        ],
-        20.0,
-    );
-    assert_eq!(
-        b.iter().map(|b| b.accel_mm_s2).collect::<Vec<_>>(),
-        vec![2000.0, 500.0, 1000.0]
-    );
+    p.accel = crate::limits::MoveAccel { print_mm_s2: 500.0, retract_mm_s2: 1000.0, travel_mm_s2: 2000.0 };
+    let b =
+        plan(p, &[[0.0; 4], [100.0, 0.0, 0.0, 0.0], [200.0, 0.0, 0.0, 1.0], [200.0, 0.0, 0.0, 0.0]], 20.0);
+    assert_eq!(b.iter().map(|b| b.accel_mm_s2).collect::<Vec<_>>(), vec![2000.0, 500.0, 1000.0]);
 }
 
 #[test]
 fn zero_length_moves_are_dropped_and_bad_moves_rejected() {
     let mut planner = Planner::new(klipper()).unwrap();
     let mut out: Vec<PlannedBlock> = Vec::new();
-    planner
-        .push(&mv(Pos::default(), Pos::default(), 10.0, 0), &mut out)
-        .unwrap();
+    planner.push(&mv(Pos::default(), Pos::default(), 10.0, 0), &mut out).unwrap();
     assert_eq!(planner.queued(), 0);
     let bad = mv(Pos::default(), Pos::xyze(1.0, 0.0, 0.0, 0.0), -1.0, 0);
     assert_eq!(planner.push(&bad, &mut out), Err(MoveError::BadFeed(-1.0)));
@@ -272,20 +180,12 @@ fn zero_length_moves_are_dropped_and_bad_moves_rejected() {
 fn profile_changes_apply_to_later_moves_only() {
     let mut planner = Planner::new(klipper()).unwrap();
     let mut p = planner.profile().clone();
-    p.set_accel(&crate::limits::M204 {
-        s: Some(1000.0),
-        ..Default::default()
-    })
-    .unwrap();
+    p.set_accel(&crate::limits::M204 { s: Some(1000.0), ..Default::default() }).unwrap();
     let mut out: Vec<PlannedBlock> = Vec::new();
     let a = Pos::xyze(10.0, 0.0, 0.0, 0.0);
-    planner
-        .push(&mv(Pos::default(), a, 50.0, 0), &mut out)
-        .unwrap();
+    planner.push(&mv(Pos::default(), a, 50.0, 0), &mut out).unwrap();
     planner.set_profile(p).unwrap();
-    planner
-        .push(&mv(a, Pos::xyze(10.0, 10.0, 0.0, 0.0), 50.0, 1), &mut out)
-        .unwrap();
+    planner.push(&mv(a, Pos::xyze(10.0, 10.0, 0.0, 0.0), 50.0, 1), &mut out).unwrap();
     planner.flush(&mut out);
     assert_eq!((out[0].accel_mm_s2, out[1].accel_mm_s2), (3000.0, 1000.0));
     assert_eq!(planner.set_profile(marlin()), Err(ProfileError::ModeChange));
@@ -293,18 +193,9 @@ fn profile_changes_apply_to_later_moves_only() {
 
 fn random_path() -> impl proptest::strategy::Strategy<Value = Vec<([f64; 4], f64)>> {
     use proptest::prelude::*;
-    let point = (
-        -20.0..20.0f64,
-        -20.0..20.0f64,
-        0.0..2.0f64,
-        -1.0..2.0f64,
-        1.0..250.0f64,
-    );
-    proptest::collection::vec(point, 1..120).prop_map(|v| {
-        v.into_iter()
-            .map(|(x, y, z, e, f)| ([x, y, z, e], f))
-            .collect()
-    })
+    let point = (-20.0..20.0f64, -20.0..20.0f64, 0.0..2.0f64, -1.0..2.0f64, 1.0..250.0f64);
+    proptest::collection::vec(point, 1..120)
+        .prop_map(|v| v.into_iter().map(|(x, y, z, e, f)| ([x, y, z, e], f)).collect())
 }
 
 proptest::proptest! {

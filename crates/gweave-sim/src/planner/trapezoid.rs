@@ -94,10 +94,7 @@ mod tests {
         // 100 mm at 50 mm/s, a = 1000: accelerating 0 -> 50 takes 0.05 s over 1.25 mm,
         // decelerating the same; 97.5 mm cruise at 50 mm/s = 1.95 s.
         let t = Trapezoid::from_v2(100.0, 1000.0, 0.0, 2500.0, 0.0);
-        assert!(
-            close(t.accel_t_s, 0.05) && close(t.decel_t_s, 0.05),
-            "{t:?}"
-        );
+        assert!(close(t.accel_t_s, 0.05) && close(t.decel_t_s, 0.05), "{t:?}");
         assert!(close(t.cruise_t_s, 1.95), "{t:?}");
         assert!(close(t.duration_s(), 2.05));
     }
@@ -110,10 +107,7 @@ mod tests {
         assert_eq!(p, 2000.0);
         let t = Trapezoid::from_v2(2.0, 1000.0, 0.0, p.min(2500.0), 0.0);
         let half = 2000f64.sqrt() / 1000.0;
-        assert!(
-            close(t.accel_t_s, half) && close(t.decel_t_s, half),
-            "{t:?}"
-        );
+        assert!(close(t.accel_t_s, half) && close(t.decel_t_s, half), "{t:?}");
         assert_eq!(t.cruise_t_s, 0.0);
     }
 
@@ -123,13 +117,7 @@ mod tests {
         // accel_d = (900-100)/1000 = 0.8 mm in 0.8/20 = 0.04 s,
         // decel_d = (900-400)/1000 = 0.5 mm in 0.5/25 = 0.02 s, cruise 8.7/30 = 0.29 s.
         let t = Trapezoid::from_v2(10.0, 500.0, 100.0, 900.0, 400.0);
-        assert!(
-            close(t.accel_t_s, 0.04) && close(t.decel_t_s, 0.02) && close(t.cruise_t_s, 0.29),
-            "{t:?}"
-        );
-        assert_eq!(
-            (t.entry_v_mm_s, t.cruise_v_mm_s, t.exit_v_mm_s),
-            (10.0, 30.0, 20.0)
-        );
+        assert!(close(t.accel_t_s, 0.04) && close(t.decel_t_s, 0.02) && close(t.cruise_t_s, 0.29), "{t:?}");
+        assert_eq!((t.entry_v_mm_s, t.cruise_v_mm_s, t.exit_v_mm_s), (10.0, 30.0, 20.0));
     }
 }

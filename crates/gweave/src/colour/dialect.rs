@@ -97,11 +97,7 @@ pub fn round_to_units(mix: &Mix, decimals: Decimals) -> Vec<u64> {
     });
     // A normalised mix sums to 1 within rounding, so the floors fall short of
     // `scale` by less than the number of inputs.
-    for &i in order
-        .iter()
-        .cycle()
-        .take(scale.saturating_sub(given) as usize)
-    {
+    for &i in order.iter().cycle().take(scale.saturating_sub(given) as usize) {
         units[i] += 1;
     }
     units
@@ -119,19 +115,13 @@ fn format_units(units: u64, decimals: Decimals) -> String {
 }
 
 fn formatted(mix: &Mix, decimals: Decimals) -> Vec<String> {
-    round_to_units(mix, decimals)
-        .into_iter()
-        .map(|u| format_units(u, decimals))
-        .collect()
+    round_to_units(mix, decimals).into_iter().map(|u| format_units(u, decimals)).collect()
 }
 
 /// Marlin: `M163 S<i> P<f>` for every input, then `M164 S<tool>`.
 pub fn marlin_m163_m164(mix: &Mix, tool: usize, decimals: Decimals) -> Vec<String> {
-    let mut lines: Vec<String> = formatted(mix, decimals)
-        .into_iter()
-        .enumerate()
-        .map(|(i, p)| format!("M163 S{i} P{p}"))
-        .collect();
+    let mut lines: Vec<String> =
+        formatted(mix, decimals).into_iter().enumerate().map(|(i, p)| format!("M163 S{i} P{p}")).collect();
     lines.push(format!("M164 S{tool}"));
     lines
 }
@@ -170,11 +160,7 @@ pub enum MixingUpdate {
     /// M164 / M165: a Marlin virtual tool now holds this mix.
     Stored { tool: usize, mix: Mix },
     /// M567: a RepRapFirmware tool's ratios as written; `sum` should be 1.
-    RrfMix {
-        tool: u32,
-        ratios: Vec<f64>,
-        sum: f64,
-    },
+    RrfMix { tool: u32, ratios: Vec<f64>, sum: f64 },
 }
 
 /// The mixing part of the machine state, fed one command at a time.
@@ -191,19 +177,12 @@ pub struct MixingState {
 }
 
 fn word(words: &[(char, f64)], letter: char) -> Option<f64> {
-    words
-        .iter()
-        .find(|(l, _)| l.eq_ignore_ascii_case(&letter))
-        .map(|&(_, v)| v)
+    words.iter().find(|(l, _)| l.eq_ignore_ascii_case(&letter)).map(|&(_, v)| v)
 }
 
 fn number(code: u16, words: &[(char, f64)], letter: char) -> Result<Option<f64>, DialectError> {
     match word(words, letter) {
-        Some(value) if !value.is_finite() => Err(DialectError::NotFinite {
-            code,
-            letter,
-            value,
-        }),
+        Some(value) if !value.is_finite() => Err(DialectError::NotFinite { code, letter, value }),
         other => Ok(other),
     }
 }
@@ -211,11 +190,7 @@ fn number(code: u16, words: &[(char, f64)], letter: char) -> Result<Option<f64>,
 fn index(code: u16, words: &[(char, f64)], letter: char) -> Result<Option<usize>, DialectError> {
     match number(code, words, letter)? {
         Some(value) if value < 0.0 || value.fract() != 0.0 || value > u32::MAX as f64 => {
-            Err(DialectError::BadIndex {
-                code,
-                letter,
-                value,
-            })
+            Err(DialectError::BadIndex { code, letter, value })
         }
         other => Ok(other.map(|v| v as usize)),
     }
@@ -237,12 +212,7 @@ impl MixingState {
         let tools = (0..virtual_tools)
             .map(|t| single(if t < inputs { t } else { 0 }))
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Self {
-            collector: tools[0].ratios().to_vec(),
-            tools,
-            active: 0,
-            rrf: BTreeMap::new(),
-        })
+        Ok(Self { collector: tools[0].ratios().to_vec(), tools, active: 0, rrf: BTreeMap::new() })
     }
 
     pub fn inputs(&self) -> usize {
@@ -283,10 +253,7 @@ impl MixingState {
         if tool < self.tools.len() {
             Ok(())
         } else {
-            Err(DialectError::NoSuchTool {
-                tool,
-                tools: self.tools.len(),
-            })
+            Err(DialectError::NoSuchTool { tool, tools: self.tools.len() })
         }
     }
 
@@ -294,10 +261,7 @@ impl MixingState {
         if index < self.inputs() {
             Ok(())
         } else {
-            Err(DialectError::NoSuchInput {
-                index,
-                inputs: self.inputs(),
-            })
+            Err(DialectError::NoSuchInput { index, inputs: self.inputs() })
         }
     }
 
@@ -313,11 +277,10 @@ impl MixingState {
     ) -> Result<MixingUpdate, DialectError> {
         match code {
             163 => {
-                let input = index(code, words, 'S')?
-                    .ok_or(DialectError::MissingWord { code, letter: 'S' })?;
+                let input =
+                    index(code, words, 'S')?.ok_or(DialectError::MissingWord { code, letter: 'S' })?;
                 self.check_input(input)?;
-                let p = number(code, words, 'P')?
-                    .ok_or(DialectError::MissingWord { code, letter: 'P' })?;
+                let p = number(code, words, 'P')?.ok_or(DialectError::MissingWord { code, letter: 'P' })?;
                 let factor = p.max(0.0);
                 self.collector[input] = factor;
                 Ok(MixingUpdate::Factor { input, factor })
@@ -338,19 +301,14 @@ impl MixingState {
                 self.store(code, self.active, factors)
             }
             567 => {
-                let tool = index(code, words, 'P')?
-                    .ok_or(DialectError::MissingWord { code, letter: 'P' })?;
+                let tool = index(code, words, 'P')?.ok_or(DialectError::MissingWord { code, letter: 'P' })?;
                 let ratios = match (e_list, number(code, words, 'E')?) {
                     ([], Some(e)) => vec![e],
                     ([], None) => return Err(DialectError::MissingWord { code, letter: 'E' }),
                     (list, _) => list.to_vec(),
                 };
                 if let Some(&value) = ratios.iter().find(|v| !v.is_finite()) {
-                    return Err(DialectError::NotFinite {
-                        code,
-                        letter: 'E',
-                        value,
-                    });
+                    return Err(DialectError::NotFinite { code, letter: 'E', value });
                 }
                 let sum = ratios.iter().sum();
                 let tool = tool as u32; // `index` keeps it within u32.
@@ -361,12 +319,7 @@ impl MixingState {
         }
     }
 
-    fn store(
-        &mut self,
-        code: u16,
-        tool: usize,
-        factors: Vec<f64>,
-    ) -> Result<MixingUpdate, DialectError> {
+    fn store(&mut self, code: u16, tool: usize, factors: Vec<f64>) -> Result<MixingUpdate, DialectError> {
         let mix = Mix::new(&factors).map_err(|e| match e {
             MixError::AllZero => DialectError::AllZero { code },
             other => DialectError::Mix(other),
@@ -387,10 +340,7 @@ mod tests {
 
     fn close(got: &[f64], want: &[f64]) {
         assert_eq!(got.len(), want.len());
-        assert!(
-            got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-12),
-            "{got:?} != {want:?}"
-        );
+        assert!(got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-12), "{got:?} != {want:?}");
     }
 
     fn d(n: u32) -> Decimals {
@@ -403,22 +353,10 @@ mod tests {
         let orange = mix(&[0.0, 0.17, 0.82, 0.0]);
         assert_eq!(
             marlin_m163_m164(&orange, 2, d(3)),
-            [
-                "M163 S0 P0",
-                "M163 S1 P0.172",
-                "M163 S2 P0.828",
-                "M163 S3 P0",
-                "M164 S2"
-            ]
+            ["M163 S0 P0", "M163 S1 P0.172", "M163 S2 P0.828", "M163 S3 P0", "M164 S2"]
         );
-        assert_eq!(
-            marlin_m165(&orange, d(2)).unwrap(),
-            "M165 A0 B0.17 C0.83 D0"
-        );
-        assert_eq!(
-            marlin_m165(&mix(&[1.0; 7]), d(2)),
-            Err(DialectError::TooManyInputsForM165(7))
-        );
+        assert_eq!(marlin_m165(&orange, d(2)).unwrap(), "M165 A0 B0.17 C0.83 D0");
+        assert_eq!(marlin_m165(&mix(&[1.0; 7]), d(2)), Err(DialectError::TooManyInputsForM165(7)));
     }
 
     #[test]
@@ -427,14 +365,8 @@ mod tests {
         // 0.33 * 3 = 0.99: the missing unit goes to the first input (ties in order).
         assert_eq!(rrf_m567(&thirds, 1, d(2)), "M567 P1 E0.34:0.33:0.33");
         assert_eq!(rrf_m567(&thirds, 1, d(0)), "M567 P1 E1:0:0");
-        assert_eq!(
-            rrf_m567(&mix(&[1.0, 3.0]), 0, Decimals::default()),
-            "M567 P0 E0.25:0.75"
-        );
-        assert_eq!(
-            rrf_m563(0, &[0, 1, 2, 3], 1).unwrap(),
-            "M563 P0 D0:1:2:3 H1"
-        );
+        assert_eq!(rrf_m567(&mix(&[1.0, 3.0]), 0, Decimals::default()), "M567 P0 E0.25:0.75");
+        assert_eq!(rrf_m563(0, &[0, 1, 2, 3], 1).unwrap(), "M563 P0 D0:1:2:3 H1");
         assert_eq!(rrf_m563(0, &[], 1), Err(DialectError::NoDrives));
         assert_eq!(Decimals::new(10), Err(DialectError::Decimals(10)));
     }
@@ -454,18 +386,13 @@ mod tests {
         assert_eq!(s.tool(9).unwrap().ratios(), [1.0, 0.0, 0.0, 0.0]);
         assert_eq!(
             s.apply(163, &[('S', 1.0), ('P', -2.0)], &[]),
-            Ok(MixingUpdate::Factor {
-                input: 1,
-                factor: 0.0
-            })
+            Ok(MixingUpdate::Factor { input: 1, factor: 0.0 })
         );
         s.apply(163, &[('S', 0.0), ('P', 60.0)], &[]).unwrap();
         s.apply(163, &[('s', 2.0), ('p', 40.0)], &[]).unwrap();
         assert_eq!(s.collector(), [60.0, 0.0, 40.0, 0.0]);
         let stored = s.apply(164, &[('S', 3.0)], &[]).unwrap();
-        let MixingUpdate::Stored { tool: 3, mix: m } = stored else {
-            panic!("{stored:?}")
-        };
+        let MixingUpdate::Stored { tool: 3, mix: m } = stored else { panic!("{stored:?}") };
         close(m.ratios(), &[0.6, 0.0, 0.4, 0.0]);
         // Storing does not select.
         assert_eq!(s.active_tool(), 0);
@@ -486,60 +413,30 @@ mod tests {
             s.apply(163, &[('S', i as f64), ('P', 0.0)], &[]).unwrap();
         }
         let before = s.clone();
-        assert_eq!(
-            s.apply(164, &[('S', 5.0)], &[]),
-            Err(DialectError::AllZero { code: 164 })
-        );
-        assert_eq!(
-            s.apply(165, &[('A', 0.0)], &[]),
-            Err(DialectError::AllZero { code: 165 })
-        );
+        assert_eq!(s.apply(164, &[('S', 5.0)], &[]), Err(DialectError::AllZero { code: 164 }));
+        assert_eq!(s.apply(165, &[('A', 0.0)], &[]), Err(DialectError::AllZero { code: 165 }));
         assert_eq!(
             s.apply(163, &[('S', 4.0), ('P', 1.0)], &[]),
-            Err(DialectError::NoSuchInput {
-                index: 4,
-                inputs: 4
-            })
+            Err(DialectError::NoSuchInput { index: 4, inputs: 4 })
         );
         assert_eq!(
             s.apply(163, &[('S', 1.5), ('P', 1.0)], &[]),
-            Err(DialectError::BadIndex {
-                code: 163,
-                letter: 'S',
-                value: 1.5
-            })
+            Err(DialectError::BadIndex { code: 163, letter: 'S', value: 1.5 })
         );
         assert_eq!(
             s.apply(163, &[('S', 1.0)], &[]),
-            Err(DialectError::MissingWord {
-                code: 163,
-                letter: 'P'
-            })
+            Err(DialectError::MissingWord { code: 163, letter: 'P' })
         );
         assert!(matches!(
             s.apply(163, &[('S', 1.0), ('P', f64::NAN)], &[]),
             Err(DialectError::NotFinite { .. })
         ));
+        assert_eq!(s.apply(164, &[('S', 16.0)], &[]), Err(DialectError::NoSuchTool { tool: 16, tools: 16 }));
         assert_eq!(
-            s.apply(164, &[('S', 16.0)], &[]),
-            Err(DialectError::NoSuchTool {
-                tool: 16,
-                tools: 16
-            })
+            MixingState::new(4, 2).unwrap().apply(165, &[('H', 1.0)], &[]),
+            Err(DialectError::NoSuchInput { index: 4, inputs: 4 })
         );
-        assert_eq!(
-            MixingState::new(4, 2)
-                .unwrap()
-                .apply(165, &[('H', 1.0)], &[]),
-            Err(DialectError::NoSuchInput {
-                index: 4,
-                inputs: 4
-            })
-        );
-        assert_eq!(
-            s.apply(104, &[], &[]),
-            Err(DialectError::NotMixing { code: 104 })
-        );
+        assert_eq!(s.apply(104, &[], &[]), Err(DialectError::NotMixing { code: 104 }));
         assert_eq!(s, before);
     }
 
@@ -547,23 +444,13 @@ mod tests {
     fn rrf_mix_is_kept_as_written() {
         let mut s = MixingState::new(4, 1).unwrap();
         let u = s.apply(567, &[('P', 0.0)], &[0.2, 0.3]).unwrap();
-        assert_eq!(
-            u,
-            MixingUpdate::RrfMix {
-                tool: 0,
-                ratios: vec![0.2, 0.3],
-                sum: 0.5
-            }
-        );
+        assert_eq!(u, MixingUpdate::RrfMix { tool: 0, ratios: vec![0.2, 0.3], sum: 0.5 });
         assert_eq!(s.rrf_mix(0), Some(&[0.2, 0.3][..]));
         s.apply(567, &[('P', 2.0), ('E', 1.0)], &[]).unwrap();
         assert_eq!(s.rrf_mix(2), Some(&[1.0][..]));
         assert_eq!(
             s.apply(567, &[('E', 1.0)], &[]),
-            Err(DialectError::MissingWord {
-                code: 567,
-                letter: 'P'
-            })
+            Err(DialectError::MissingWord { code: 567, letter: 'P' })
         );
     }
 

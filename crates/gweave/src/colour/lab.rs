@@ -24,11 +24,7 @@ pub struct Lab {
 }
 
 /// D65 reference white, the XYZ of linear sRGB (1, 1, 1).
-pub const D65_WHITE: Xyz = Xyz {
-    x: 0.950_47,
-    y: 1.0,
-    z: 1.088_83,
-};
+pub const D65_WHITE: Xyz = Xyz { x: 0.950_47, y: 1.0, z: 1.088_83 };
 
 const RGB_TO_XYZ: [[f64; 3]; 3] = [
     [0.412_456_4, 0.357_576_1, 0.180_437_5],
@@ -76,11 +72,7 @@ impl Lab {
         let fx = f(c.x / D65_WHITE.x);
         let fy = f(c.y / D65_WHITE.y);
         let fz = f(c.z / D65_WHITE.z);
-        Self {
-            l: 116.0 * fy - 16.0,
-            a: 500.0 * (fx - fy),
-            b: 200.0 * (fy - fz),
-        }
+        Self { l: 116.0 * fy - 16.0, a: 500.0 * (fx - fy), b: 200.0 * (fy - fz) }
     }
 
     pub fn to_xyz(self) -> Xyz {
@@ -95,16 +87,8 @@ impl Lab {
                 (116.0 * f - 16.0) / KAPPA
             }
         };
-        let y = if self.l > KAPPA * EPSILON {
-            fy * fy * fy
-        } else {
-            self.l / KAPPA
-        };
-        Xyz {
-            x: inv(fx) * D65_WHITE.x,
-            y: y * D65_WHITE.y,
-            z: inv(fz) * D65_WHITE.z,
-        }
+        let y = if self.l > KAPPA * EPSILON { fy * fy * fy } else { self.l / KAPPA };
+        Xyz { x: inv(fx) * D65_WHITE.x, y: y * D65_WHITE.y, z: inv(fz) * D65_WHITE.z }
     }
 
     pub fn from_srgb8(c: Srgb8) -> Self {
@@ -150,42 +134,12 @@ mod tests {
     #[test]
     fn known_lab_values() {
         // Reference values: B. Lindbloom's calculator, sRGB, D65, no adaptation.
-        close(
-            Lab::from_srgb8(Srgb8::new(255, 255, 255)),
-            100.0,
-            0.0,
-            0.0,
-            0.01,
-        );
+        close(Lab::from_srgb8(Srgb8::new(255, 255, 255)), 100.0, 0.0, 0.0, 0.01);
         close(Lab::from_srgb8(Srgb8::new(0, 0, 0)), 0.0, 0.0, 0.0, 1e-9);
-        close(
-            Lab::from_srgb8(Srgb8::new(255, 0, 0)),
-            53.2408,
-            80.0925,
-            67.2032,
-            0.01,
-        );
-        close(
-            Lab::from_srgb8(Srgb8::new(0, 255, 0)),
-            87.7347,
-            -86.1827,
-            83.1793,
-            0.01,
-        );
-        close(
-            Lab::from_srgb8(Srgb8::new(0, 0, 255)),
-            32.2970,
-            79.1875,
-            -107.8602,
-            0.01,
-        );
-        close(
-            Lab::from_srgb8(Srgb8::new(128, 128, 128)),
-            53.5850,
-            0.0,
-            0.0,
-            0.01,
-        );
+        close(Lab::from_srgb8(Srgb8::new(255, 0, 0)), 53.2408, 80.0925, 67.2032, 0.01);
+        close(Lab::from_srgb8(Srgb8::new(0, 255, 0)), 87.7347, -86.1827, 83.1793, 0.01);
+        close(Lab::from_srgb8(Srgb8::new(0, 0, 255)), 32.2970, 79.1875, -107.8602, 0.01);
+        close(Lab::from_srgb8(Srgb8::new(128, 128, 128)), 53.5850, 0.0, 0.0, 0.01);
     }
 
     #[test]
@@ -202,21 +156,10 @@ mod tests {
 
     #[test]
     fn hue_and_chroma() {
-        let lab = Lab {
-            l: 50.0,
-            a: 0.0,
-            b: -20.0,
-        };
+        let lab = Lab { l: 50.0, a: 0.0, b: -20.0 };
         assert_eq!(lab.hue_deg(), 270.0);
         assert_eq!(lab.chroma(), 20.0);
-        let mid = lab.lerp(
-            Lab {
-                l: 70.0,
-                a: 10.0,
-                b: 0.0,
-            },
-            0.25,
-        );
+        let mid = lab.lerp(Lab { l: 70.0, a: 10.0, b: 0.0 }, 0.25);
         close(mid, 55.0, 2.5, -15.0, 1e-12);
     }
 }

@@ -59,9 +59,7 @@ impl Mix {
             return Err(MixError::AllZero);
         }
         let sum: f64 = ratios.iter().map(|r| r / max).sum();
-        Ok(Self {
-            ratios: ratios.iter().map(|r| r / max / sum).collect(),
-        })
+        Ok(Self { ratios: ratios.iter().map(|r| r / max / sum).collect() })
     }
 
     /// The normalised ratios, one per input, summing to 1.
@@ -79,10 +77,7 @@ impl Mix {
         if self.inputs() == inputs {
             Ok(())
         } else {
-            Err(MixError::InputCount {
-                expected: inputs,
-                found: self.inputs(),
-            })
+            Err(MixError::InputCount { expected: inputs, found: self.inputs() })
         }
     }
 
@@ -93,29 +88,12 @@ impl Mix {
     pub fn with_material2(&self, p: f64, index: usize) -> Result<Self, MixError> {
         let p = check_unit("proportion of material 2", p)?;
         if index >= self.inputs() {
-            return Err(MixError::NoSuchInput {
-                index,
-                inputs: self.inputs(),
-            });
+            return Err(MixError::NoSuchInput { index, inputs: self.inputs() });
         }
-        let others: f64 = self
-            .ratios
-            .iter()
-            .enumerate()
-            .filter(|&(i, _)| i != index)
-            .map(|(_, r)| r)
-            .sum();
-        let scale = if others > 0.0 {
-            (1.0 - p) / others
-        } else {
-            0.0
-        };
-        let ratios: Vec<f64> = self
-            .ratios
-            .iter()
-            .enumerate()
-            .map(|(i, r)| if i == index { p } else { r * scale })
-            .collect();
+        let others: f64 = self.ratios.iter().enumerate().filter(|&(i, _)| i != index).map(|(_, r)| r).sum();
+        let scale = if others > 0.0 { (1.0 - p) / others } else { 0.0 };
+        let ratios: Vec<f64> =
+            self.ratios.iter().enumerate().map(|(i, r)| if i == index { p } else { r * scale }).collect();
         Self::new(&ratios)
     }
 
@@ -125,12 +103,7 @@ impl Mix {
     pub fn lerp(&self, other: &Mix, t: f64) -> Result<Self, MixError> {
         other.expect_inputs(self.inputs())?;
         let t = check_unit("interpolation parameter", t)?;
-        let ratios: Vec<f64> = self
-            .ratios
-            .iter()
-            .zip(&other.ratios)
-            .map(|(a, b)| a + (b - a) * t)
-            .collect();
+        let ratios: Vec<f64> = self.ratios.iter().zip(&other.ratios).map(|(a, b)| a + (b - a) * t).collect();
         Self::new(&ratios)
     }
 }
@@ -142,21 +115,14 @@ mod tests {
     fn assert_ratios(mix: &Mix, expected: &[f64]) {
         assert_eq!(mix.inputs(), expected.len());
         for (got, want) in mix.ratios().iter().zip(expected) {
-            assert!(
-                (got - want).abs() < 1e-12,
-                "{:?} != {expected:?}",
-                mix.ratios()
-            );
+            assert!((got - want).abs() < 1e-12, "{:?} != {expected:?}", mix.ratios());
         }
     }
 
     #[test]
     fn normalises_any_scale() {
         assert_ratios(&Mix::new(&[60.0, 40.0]).unwrap(), &[0.6, 0.4]);
-        assert_ratios(
-            &Mix::new(&[0.0, 0.17, 0.82, 0.0]).unwrap(),
-            &[0.0, 17.0 / 99.0, 82.0 / 99.0, 0.0],
-        );
+        assert_ratios(&Mix::new(&[0.0, 0.17, 0.82, 0.0]).unwrap(), &[0.0, 17.0 / 99.0, 82.0 / 99.0, 0.0]);
         assert_ratios(&Mix::new(&[f64::MAX, f64::MAX]).unwrap(), &[0.5, 0.5]);
         assert_ratios(&Mix::new(&[5e-324, 0.0]).unwrap(), &[1.0, 0.0]);
     }
@@ -165,21 +131,9 @@ mod tests {
     fn rejects_bad_ratios() {
         assert_eq!(Mix::new(&[]), Err(MixError::NoInputs));
         assert_eq!(Mix::new(&[0.0, 0.0]), Err(MixError::AllZero));
-        assert_eq!(
-            Mix::new(&[0.5, -0.1]),
-            Err(MixError::Negative {
-                index: 1,
-                value: -0.1
-            })
-        );
-        assert!(matches!(
-            Mix::new(&[1.0, f64::NAN]),
-            Err(MixError::NotFinite { index: 1, .. })
-        ));
-        assert!(matches!(
-            Mix::new(&[f64::INFINITY]),
-            Err(MixError::NotFinite { index: 0, .. })
-        ));
+        assert_eq!(Mix::new(&[0.5, -0.1]), Err(MixError::Negative { index: 1, value: -0.1 }));
+        assert!(matches!(Mix::new(&[1.0, f64::NAN]), Err(MixError::NotFinite { index: 1, .. })));
+        assert!(matches!(Mix::new(&[f64::INFINITY]), Err(MixError::NotFinite { index: 0, .. })));
     }
 
     #[test]
@@ -189,16 +143,10 @@ mod tests {
         let m = orange.with_material2(0.3, 3).unwrap();
         assert_ratios(&m, &[0.0, 0.7 * 17.0 / 99.0, 0.7 * 82.0 / 99.0, 0.3]);
         // Supports: 100 % material 2.
-        assert_ratios(
-            &orange.with_material2(1.0, 3).unwrap(),
-            &[0.0, 0.0, 0.0, 1.0],
-        );
+        assert_ratios(&orange.with_material2(1.0, 3).unwrap(), &[0.0, 0.0, 0.0, 1.0]);
         // An existing share on the material-2 input is replaced, not added to.
         let pink = Mix::new(&[0.0, 0.6, 0.1, 0.3]).unwrap();
-        assert_ratios(
-            &pink.with_material2(0.5, 3).unwrap(),
-            &[0.0, 0.5 * 6.0 / 7.0, 0.5 / 7.0, 0.5],
-        );
+        assert_ratios(&pink.with_material2(0.5, 3).unwrap(), &[0.0, 0.5 * 6.0 / 7.0, 0.5 / 7.0, 0.5]);
     }
 
     #[test]
@@ -206,13 +154,7 @@ mod tests {
         let key = Mix::new(&[0.0, 0.0, 0.0, 1.0]).unwrap();
         // Nothing left but material 2, and it was asked to be 0.
         assert_eq!(key.with_material2(0.0, 3), Err(MixError::AllZero));
-        assert_eq!(
-            key.with_material2(0.5, 4),
-            Err(MixError::NoSuchInput {
-                index: 4,
-                inputs: 4
-            })
-        );
+        assert_eq!(key.with_material2(0.5, 4), Err(MixError::NoSuchInput { index: 4, inputs: 4 }));
         assert!(matches!(
             key.with_material2(1.5, 3),
             Err(MixError::OutOfUnitRange { value, .. }) if value == 1.5
@@ -227,10 +169,7 @@ mod tests {
         assert_ratios(&a.lerp(&b, 1.0).unwrap(), &[0.0, 0.5, 0.5]);
         assert_eq!(
             a.lerp(&Mix::new(&[1.0]).unwrap(), 0.5),
-            Err(MixError::InputCount {
-                expected: 3,
-                found: 1
-            })
+            Err(MixError::InputCount { expected: 3, found: 1 })
         );
         assert!(a.lerp(&b, -0.1).is_err());
     }

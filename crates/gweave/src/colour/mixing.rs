@@ -74,10 +74,7 @@ impl MixingModel {
                 [l.r, l.g, l.b].map(k_over_s)
             })
             .collect();
-        Ok(Self {
-            inputs: inputs.to_vec(),
-            k_over_s,
-        })
+        Ok(Self { inputs: inputs.to_vec(), k_over_s })
     }
 
     /// The filament colours, input 0 first.
@@ -138,10 +135,7 @@ mod tests {
         let model = MixingModel::new(&[CYAN, orange]).unwrap();
         assert_eq!(model.predict(&Mix::new(&[0.0, 1.0]).unwrap()), Ok(orange));
         // Channels darker than R_MIN (byte 16) are lifted to it.
-        assert_eq!(
-            model.predict(&Mix::new(&[1.0, 0.0]).unwrap()),
-            Ok(Srgb8::new(16, 160, 224))
-        );
+        assert_eq!(model.predict(&Mix::new(&[1.0, 0.0]).unwrap()), Ok(Srgb8::new(16, 160, 224)));
     }
 
     #[test]
@@ -172,12 +166,7 @@ mod tests {
         ];
         for (w, hues) in cases {
             let lab = predict(&model, &w);
-            assert!(
-                hues.contains(&lab.hue_deg()),
-                "{w:?}: {} h={}",
-                lab.to_srgb8(),
-                lab.hue_deg()
-            );
+            assert!(hues.contains(&lab.hue_deg()), "{w:?}: {} h={}", lab.to_srgb8(), lab.hue_deg());
         }
     }
 
@@ -186,12 +175,7 @@ mod tests {
         let model = MixingModel::new(&[CYAN, MAGENTA, YELLOW]).unwrap();
         let lab = predict(&model, &[1.0, 1.0, 1.0]);
         // Dark but not black, and nearly neutral.
-        assert!(
-            lab.l < 20.0 && lab.l > 8.0,
-            "{} L={}",
-            lab.to_srgb8(),
-            lab.l
-        );
+        assert!(lab.l < 20.0 && lab.l > 8.0, "{} L={}", lab.to_srgb8(), lab.l);
         assert!(lab.chroma() < 3.0, "{} C={}", lab.to_srgb8(), lab.chroma());
     }
 
@@ -215,13 +199,7 @@ mod tests {
     fn input_count_is_checked() {
         let model = MixingModel::new(&[CYAN, MAGENTA]).unwrap();
         let mix = Mix::new(&[1.0, 1.0, 1.0]).unwrap();
-        assert_eq!(
-            model.predict(&mix),
-            Err(MixError::InputCount {
-                expected: 2,
-                found: 3
-            })
-        );
+        assert_eq!(model.predict(&mix), Err(MixError::InputCount { expected: 2, found: 3 }));
         assert!(matches!(MixingModel::new(&[]), Err(MixError::NoInputs)));
     }
 }

@@ -49,20 +49,12 @@ pub const SEED_PALETTE: [(&str, [f64; 4]); 17] = [
 
 /// Typical PLA filament colours for the seed's inputs with white on E3
 /// (our estimate from vendor swatches; measure your own for accuracy).
-pub const CMYW_FILAMENTS: [Srgb8; 4] = [
-    Srgb8::new(0, 160, 224),
-    Srgb8::new(224, 0, 122),
-    Srgb8::new(255, 224, 0),
-    Srgb8::new(245, 245, 240),
-];
+pub const CMYW_FILAMENTS: [Srgb8; 4] =
+    [Srgb8::new(0, 160, 224), Srgb8::new(224, 0, 122), Srgb8::new(255, 224, 0), Srgb8::new(245, 245, 240)];
 
 /// As `CMYW_FILAMENTS` with black on E3.
-pub const CMYK_FILAMENTS: [Srgb8; 4] = [
-    CMYW_FILAMENTS[0],
-    CMYW_FILAMENTS[1],
-    CMYW_FILAMENTS[2],
-    Srgb8::new(28, 28, 28),
-];
+pub const CMYK_FILAMENTS: [Srgb8; 4] =
+    [CMYW_FILAMENTS[0], CMYW_FILAMENTS[1], CMYW_FILAMENTS[2], Srgb8::new(28, 28, 28)];
 
 /// Why a mix definition was rejected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -187,16 +179,8 @@ impl Palette {
     /// Add a mix, or replace the one with the same name (ignoring case).
     pub fn insert(&mut self, name: &str, spec: MixSpec) {
         match self.entries.iter_mut().find(|e| same_name(&e.name, name)) {
-            Some(entry) => {
-                *entry = PaletteEntry {
-                    name: name.to_owned(),
-                    spec,
-                }
-            }
-            None => self.entries.push(PaletteEntry {
-                name: name.to_owned(),
-                spec,
-            }),
+            Some(entry) => *entry = PaletteEntry { name: name.to_owned(), spec },
+            None => self.entries.push(PaletteEntry { name: name.to_owned(), spec }),
         }
     }
 
@@ -211,28 +195,22 @@ impl Palette {
 
     /// Ratios and predicted colour of `name` for the filaments of `model`.
     pub fn resolve(&self, name: &str, model: &MixingModel) -> Result<Resolved, PaletteError> {
-        let entry = self
-            .get(name)
-            .ok_or_else(|| PaletteError::UnknownName(name.to_owned()))?;
+        let entry = self.get(name).ok_or_else(|| PaletteError::UnknownName(name.to_owned()))?;
         resolve_entry(entry, model)
     }
 
     /// Every entry resolved, in palette order.
     pub fn resolve_all(&self, model: &MixingModel) -> Result<Vec<Resolved>, PaletteError> {
-        self.entries
-            .iter()
-            .map(|e| resolve_entry(e, model))
-            .collect()
+        self.entries.iter().map(|e| resolve_entry(e, model)).collect()
     }
 }
 
 fn resolve_entry(entry: &PaletteEntry, model: &MixingModel) -> Result<Resolved, PaletteError> {
     match &entry.spec {
         MixSpec::Ratios(mix) => {
-            let predicted = model.predict(mix).map_err(|source| PaletteError::Mix {
-                name: entry.name.clone(),
-                source,
-            })?;
+            let predicted = model
+                .predict(mix)
+                .map_err(|source| PaletteError::Mix { name: entry.name.clone(), source })?;
             Ok(Resolved {
                 name: entry.name.clone(),
                 mix: mix.clone(),
@@ -337,10 +315,7 @@ mod tests {
         assert_eq!(p.entries().len(), 19);
         assert_eq!(ratios(&p, "pink"), [0.0, 0.6, 0.1, 0.3]);
         assert_eq!(ratios(&p, "Blue"), [0.75, 0.25, 0.0, 0.0]);
-        assert_eq!(
-            p.get("salmon").unwrap().spec,
-            MixSpec::Colour(Srgb8::new(0xff, 0x88, 0xaa))
-        );
+        assert_eq!(p.get("salmon").unwrap().spec, MixSpec::Colour(Srgb8::new(0xff, 0x88, 0xaa)));
         let model = MixingModel::new(&CMYW_FILAMENTS).unwrap();
         let salmon = p.resolve("Salmon", &model).unwrap();
         assert_eq!(salmon.target, Some(Srgb8::new(0xff, 0x88, 0xaa)));
@@ -363,10 +338,7 @@ mod tests {
             "[mix.X]\nratio = [1, 0, 0, 0]",
             "[colours.X]\nratios = [1, 0, 0, 0]",
         ] {
-            assert!(
-                matches!(Palette::from_toml_str(text), Err(PaletteError::Toml(_))),
-                "accepted: {text}"
-            );
+            assert!(matches!(Palette::from_toml_str(text), Err(PaletteError::Toml(_))), "accepted: {text}");
         }
         let err = Palette::from_toml_str("[mix.X]\nratios = [0, 0]").unwrap_err();
         assert!(err.to_string().contains("all ratios are zero"), "{err}");
@@ -376,19 +348,10 @@ mod tests {
     fn resolve_errors() {
         let model = MixingModel::new(&CMYW_FILAMENTS[..3]).unwrap();
         let p = Palette::seed();
-        assert_eq!(
-            p.resolve("Pink", &model),
-            Err(PaletteError::UnknownName("Pink".into()))
-        );
+        assert_eq!(p.resolve("Pink", &model), Err(PaletteError::UnknownName("Pink".into())));
         assert!(matches!(
             p.resolve("Red", &model),
-            Err(PaletteError::Mix {
-                source: MixError::InputCount {
-                    expected: 3,
-                    found: 4
-                },
-                ..
-            })
+            Err(PaletteError::Mix { source: MixError::InputCount { expected: 3, found: 4 }, .. })
         ));
     }
 }

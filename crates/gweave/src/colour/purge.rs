@@ -82,14 +82,8 @@ pub fn flush_volume_mm3(from: Srgb8, to: Srgb8) -> f64 {
     let (x2, y2) = (s2 * v2 * h2.cos(), s2 * v2 * h2.sin());
     let hs = 230.0 * (x1 - x2).hypot(y1 - y2).min(1.2);
     let dl = luminance(to) - luminance(from);
-    let lumi = if dl >= 0.0 {
-        560.0 * dl.powf(0.7)
-    } else {
-        -80.0 * dl
-    };
-    (hs * hs + lumi * lumi + hs * lumi)
-        .sqrt()
-        .max(MIN_FLUSH_MM3)
+    let lumi = if dl >= 0.0 { 560.0 * dl.powf(0.7) } else { -80.0 * dl };
+    (hs * hs + lumi * lumi + hs * lumi).sqrt().max(MIN_FLUSH_MM3)
 }
 
 /// A mixing chamber as a washout system (see module docs).
@@ -165,11 +159,7 @@ mod tests {
         // Yellow to green: 60 degrees apart -> |z1 - z2| = 1 -> hs 230;
         // luminance 0.89 -> 0.59, darker by 0.3 -> 24.
         let y_g = flush_volume_mm3(Srgb8::new(255, 255, 0), Srgb8::new(0, 255, 0));
-        close(
-            y_g,
-            (230.0f64 * 230.0 + 24.0 * 24.0 + 230.0 * 24.0).sqrt(),
-            1e-6,
-        );
+        close(y_g, (230.0f64 * 230.0 + 24.0 * 24.0 + 230.0 * 24.0).sqrt(), 1e-6);
     }
 
     #[test]
@@ -188,11 +178,7 @@ mod tests {
         let w = Washout::new(100.0, 0.0).unwrap();
         close(w.residual_fraction(100.0), (-1.0f64).exp(), 1e-12);
         assert_eq!(w.residual_fraction(0.0), 1.0);
-        close(
-            w.purge_for_tolerance_mm3(0.01).unwrap(),
-            100.0 * 100f64.ln(),
-            1e-9,
-        );
+        close(w.purge_for_tolerance_mm3(0.01).unwrap(), 100.0 * 100f64.ln(), 1e-9);
         // The purge for a tolerance leaves exactly that tolerance.
         let laminar = Washout::new(30.0, 20.0).unwrap();
         let p = laminar.purge_for_tolerance_mm3(0.05).unwrap();
@@ -208,10 +194,7 @@ mod tests {
         assert!(Washout::new(f64::NAN, 0.0).is_err());
         assert!(Washout::new(10.0, -1.0).is_err());
         let w = Washout::new(10.0, 0.0).unwrap();
-        assert_eq!(
-            w.purge_for_tolerance_mm3(0.0),
-            Err(PurgeError::Tolerance(0.0))
-        );
+        assert_eq!(w.purge_for_tolerance_mm3(0.0), Err(PurgeError::Tolerance(0.0)));
         assert!(w.purge_for_tolerance_mm3(f64::NAN).is_err());
         assert!(w.purge_for_tolerance_mm3(1.5).is_err());
     }

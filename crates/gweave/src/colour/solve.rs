@@ -63,10 +63,7 @@ pub fn solve_lab(model: &MixingModel, target: Lab) -> Solution {
 /// Unlike `Mix::lerp`, equal steps of `t` look like equal steps of colour.
 pub fn lerp_perceived(model: &MixingModel, a: &Mix, b: &Mix, t: f64) -> Result<Solution, MixError> {
     if !(0.0..=1.0).contains(&t) {
-        return Err(MixError::OutOfUnitRange {
-            what: "interpolation parameter",
-            value: t,
-        });
+        return Err(MixError::OutOfUnitRange { what: "interpolation parameter", value: t });
     }
     let lab_a = model.predict_lab(a)?;
     let lab_b = model.predict_lab(b)?;
@@ -82,11 +79,7 @@ struct Search<'a> {
 
 impl<'a> Search<'a> {
     fn new(model: &'a MixingModel, target: Lab) -> Self {
-        Self {
-            model,
-            target,
-            evaluations: 0,
-        }
+        Self { model, target, evaluations: 0 }
     }
 
     fn error(&mut self, w: &[f64]) -> f64 {
@@ -173,10 +166,7 @@ fn grid_points(parts: usize, divisions: usize) -> usize {
 
 /// The finest grid within `GRID_BUDGET` points (at least 1 division).
 fn grid_divisions(inputs: usize) -> usize {
-    (1..=MAX_DIVISIONS)
-        .take_while(|&d| d == 1 || grid_points(inputs, d) <= GRID_BUDGET)
-        .last()
-        .unwrap_or(1)
+    (1..=MAX_DIVISIONS).take_while(|&d| d == 1 || grid_points(inputs, d) <= GRID_BUDGET).last().unwrap_or(1)
 }
 
 /// Calls `f` with every way of writing `left` as the sum of `units[at..]`.
@@ -275,16 +265,10 @@ mod tests {
         let lab_a = model.predict_lab(&a).unwrap();
         let lab_b = model.predict_lab(&b).unwrap();
         let mid = lerp_perceived(&model, &a, &b, 0.5).unwrap();
-        assert!(
-            ciede2000(mid.predicted_lab, lab_a.lerp(lab_b, 0.5)) < 1.0,
-            "{mid:?}"
-        );
+        assert!(ciede2000(mid.predicted_lab, lab_a.lerp(lab_b, 0.5)) < 1.0, "{mid:?}");
         assert!(lerp_perceived(&model, &a, &b, 1.5).is_err());
         let three = Mix::new(&[1.0, 1.0, 1.0]).unwrap();
-        assert!(matches!(
-            lerp_perceived(&model, &a, &three, 0.5),
-            Err(MixError::InputCount { .. })
-        ));
+        assert!(matches!(lerp_perceived(&model, &a, &three, 0.5), Err(MixError::InputCount { .. })));
     }
 
     proptest! {

@@ -88,20 +88,12 @@ impl Srgb8 {
 
     pub fn to_linear(self) -> LinearRgb {
         let ch = |v: u8| decode_channel(f64::from(v) / 255.0);
-        LinearRgb {
-            r: ch(self.r),
-            g: ch(self.g),
-            b: ch(self.b),
-        }
+        LinearRgb { r: ch(self.r), g: ch(self.g), b: ch(self.b) }
     }
 
     /// Nearest 8-bit colour; channels outside `[0, 1]` are clamped (out of the sRGB gamut).
     pub fn from_linear(c: LinearRgb) -> Self {
-        Self::new(
-            to_byte(encode_channel(c.r)),
-            to_byte(encode_channel(c.g)),
-            to_byte(encode_channel(c.b)),
-        )
+        Self::new(to_byte(encode_channel(c.r)), to_byte(encode_channel(c.g)), to_byte(encode_channel(c.b)))
     }
 }
 
@@ -131,15 +123,10 @@ mod tests {
 
     #[test]
     fn parses_and_formats_hex() {
-        assert_eq!(
-            Srgb8::parse_hex("#FF88aa").unwrap(),
-            Srgb8::new(255, 136, 170)
-        );
+        assert_eq!(Srgb8::parse_hex("#FF88aa").unwrap(), Srgb8::new(255, 136, 170));
         assert_eq!(Srgb8::parse_hex("00ff01").unwrap(), Srgb8::new(0, 255, 1));
         assert_eq!(Srgb8::new(255, 136, 170).to_hex(), "#ff88aa");
-        for bad in [
-            "", "#", "#12345", "#1234567", "#gg0000", "#+12345", "#ÿ1234",
-        ] {
+        for bad in ["", "#", "#12345", "#1234567", "#gg0000", "#+12345", "#ÿ1234"] {
             assert!(Srgb8::parse_hex(bad).is_err(), "{bad:?} accepted");
         }
     }
@@ -162,11 +149,7 @@ mod tests {
 
     #[test]
     fn out_of_gamut_linear_values_clamp() {
-        let c = LinearRgb {
-            r: -0.2,
-            g: 1.7,
-            b: f64::NAN,
-        };
+        let c = LinearRgb { r: -0.2, g: 1.7, b: f64::NAN };
         assert_eq!(Srgb8::from_linear(c), Srgb8::new(0, 255, 0));
     }
 }

@@ -47,11 +47,7 @@ pub struct SwatchEntry {
 
 impl From<&Resolved> for SwatchEntry {
     fn from(r: &Resolved) -> Self {
-        Self {
-            name: r.name.clone(),
-            predicted: r.predicted,
-            target: r.target,
-        }
+        Self { name: r.name.clone(), predicted: r.predicted, target: r.target }
     }
 }
 
@@ -67,11 +63,7 @@ pub struct SwatchLayout {
 
 impl Default for SwatchLayout {
     fn default() -> Self {
-        Self {
-            cell_px: 96,
-            columns: 6,
-            labels: true,
-        }
+        Self { cell_px: 96, columns: 6, labels: true }
     }
 }
 
@@ -136,11 +128,7 @@ pub fn render_png(entries: &[SwatchEntry], layout: &SwatchLayout) -> Result<Vec<
     let label_px = if layout.labels { LABEL_PX } else { 0 };
     let pitch_x = layout.cell_px + GAP_PX;
     let pitch_y = layout.cell_px + label_px + GAP_PX;
-    let mut canvas = Canvas::new(
-        GAP_PX + columns * pitch_x,
-        GAP_PX + rows * pitch_y,
-        BACKGROUND,
-    );
+    let mut canvas = Canvas::new(GAP_PX + columns * pitch_x, GAP_PX + rows * pitch_y, BACKGROUND);
     for (k, entry) in (0u32..).zip(entries) {
         let x = GAP_PX + (k % columns) * pitch_x;
         let y = GAP_PX + (k / columns) * pitch_y;
@@ -160,10 +148,7 @@ pub fn render_png(entries: &[SwatchEntry], layout: &SwatchLayout) -> Result<Vec<
 }
 
 /// Palette colours resolved for some filaments, straight to a PNG.
-pub fn render_resolved_png(
-    resolved: &[Resolved],
-    layout: &SwatchLayout,
-) -> Result<Vec<u8>, SwatchError> {
+pub fn render_resolved_png(resolved: &[Resolved], layout: &SwatchLayout) -> Result<Vec<u8>, SwatchError> {
     let entries: Vec<SwatchEntry> = resolved.iter().map(SwatchEntry::from).collect();
     render_png(&entries, layout)
 }
@@ -207,19 +192,11 @@ mod tests {
         let info = reader.next_frame(&mut rgb).unwrap();
         assert_eq!(info.color_type, png::ColorType::Rgb);
         rgb.truncate(info.buffer_size());
-        Decoded {
-            width: info.width,
-            height: info.height,
-            rgb,
-        }
+        Decoded { width: info.width, height: info.height, rgb }
     }
 
     fn entry(name: &str, predicted: Srgb8, target: Option<Srgb8>) -> SwatchEntry {
-        SwatchEntry {
-            name: name.into(),
-            predicted,
-            target,
-        }
+        SwatchEntry { name: name.into(), predicted, target }
     }
 
     #[test]
@@ -227,11 +204,7 @@ mod tests {
         let red = Srgb8::new(200, 30, 40);
         let pink = Srgb8::new(255, 136, 170);
         let near_pink = Srgb8::new(244, 136, 167);
-        let layout = SwatchLayout {
-            cell_px: 40,
-            columns: 2,
-            labels: true,
-        };
+        let layout = SwatchLayout { cell_px: 40, columns: 2, labels: true };
         let entries = [
             entry("Red", red, None),
             entry("Pink", near_pink, Some(pink)),
@@ -257,11 +230,7 @@ mod tests {
 
     #[test]
     fn without_labels_the_chart_is_shorter() {
-        let layout = SwatchLayout {
-            cell_px: 16,
-            columns: 10,
-            labels: false,
-        };
+        let layout = SwatchLayout { cell_px: 16, columns: 10, labels: false };
         let img = decode(&render_png(&[entry("X", Srgb8::new(1, 2, 3), None)], &layout).unwrap());
         assert_eq!((img.width, img.height), (6 + 22, 6 + 22));
     }
@@ -284,19 +253,10 @@ mod tests {
     #[test]
     fn bad_layouts() {
         let e = [entry("A", Srgb8::new(0, 0, 0), None)];
-        assert_eq!(
-            render_png(&[], &SwatchLayout::default()),
-            Err(SwatchError::Empty)
-        );
-        let tiny = SwatchLayout {
-            cell_px: 8,
-            ..SwatchLayout::default()
-        };
+        assert_eq!(render_png(&[], &SwatchLayout::default()), Err(SwatchError::Empty));
+        let tiny = SwatchLayout { cell_px: 8, ..SwatchLayout::default() };
         assert_eq!(render_png(&e, &tiny), Err(SwatchError::CellSize(8)));
-        let no_columns = SwatchLayout {
-            columns: 0,
-            ..SwatchLayout::default()
-        };
+        let no_columns = SwatchLayout { columns: 0, ..SwatchLayout::default() };
         assert_eq!(render_png(&e, &no_columns), Err(SwatchError::NoColumns));
     }
 }

@@ -294,6 +294,8 @@ impl Structure {
             }
         } else if let Some(n) = c.strip_prefix(b"LAYER:") {
             if number(n).is_some() {
+                // The layer Cura ended was not the last one.
+                self.cura_last_layer_done = false;
                 self.marked_layer(None);
             }
         } else if let Some(n) = c.strip_prefix(b"LAYER_COUNT:") {
@@ -383,6 +385,10 @@ mod tests {
             s.observe_comment(c.as_bytes());
         }
         assert_eq!((s.layer, s.region), (Some(1), Region::Print));
+        // A command or a feature comment after the next `;LAYER:` is still the print.
+        s.observe_command();
+        s.observe_comment(b"TYPE:WALL-INNER");
+        assert_eq!(s.region, Region::Print);
         s.observe_comment(b"TIME_ELAPSED:2.0");
         s.observe_command();
         assert_eq!(s.region, Region::End);

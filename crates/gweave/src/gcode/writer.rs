@@ -76,10 +76,13 @@ impl Output {
             Sink::File { file, dest, backup } => {
                 let tmp = file.into_inner().map_err(|e| Error::io(&dest, e.into_error()))?;
                 tmp.as_file().sync_all().map_err(|e| Error::io(&dest, e))?;
-                // Keep the permissions of the file being replaced (an executable script stays one).
-                if let Ok(meta) = fs::metadata(&dest) {
-                    let _ = fs::set_permissions(tmp.path(), meta.permissions());
+                // Keep the permissions of the file being replaced (an executable script stays
+                // one); a new file gets the usual rw-r--r-- instead of the temporary file's 0600.
+                match fs::metadata(&dest) {
+                    Ok(meta) => fs::set_permissions(tmp.path(), meta.permissions()),
+                    Err(_) => set_new_file_mode(tmp.path()),
                 }
+                .map_err(|e| Error::io(&dest, e))?;
                 if let Some(backup) = backup {
                     fs::copy(&dest, &backup).map_err(|e| Error::io(&backup, e))?;
                 }
@@ -111,6 +114,17 @@ impl Write for Output {
             Sink::Stdout(w) => w.flush(),
         }
     }
+}
+
+#[cfg(unix)]
+fn set_new_file_mode(path: &Path) -> io::Result<()> {
+    use std::os::unix::fs::PermissionsExt;
+    fs::set_permissions(path, fs::Permissions::from_mode(0o644))
+}
+
+#[cfg(not(unix))]
+fn set_new_file_mode(_path: &Path) -> io::Result<()> {
+    Ok(())
 }
 
 fn backup_path(input: &Path) -> PathBuf {
@@ -152,6 +166,18 @@ mod tests {
         out.commit().unwrap();
         assert_eq!(fs::read(&input).unwrap(), b"new\n");
         assert_eq!(fs::read(dir.path().join("in.gcode.bak")).unwrap(), b"old\n");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn new_files_are_readable_by_others() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let dest = dir.path().join("new.gcode");
+        let mut out = Output::create(&Target::File(dest.clone()), None).unwrap();
+        out.write_all(b"G1\n").unwrap();
+        out.commit().unwrap();
+        assert_eq!(fs::metadata(&dest).unwrap().permissions().mode() & 0o777, 0o644);
     }
 
     #[test]

@@ -18,10 +18,7 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum BitmapError {
     #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Io { path: PathBuf, source: std::io::Error },
     #[error("PNG decode: {0}")]
     PngDecode(#[from] png::DecodingError),
     #[error("PNG encode: {0}")]
@@ -68,11 +65,7 @@ pub struct ThresholdOptions {
 
 impl Default for ThresholdOptions {
     fn default() -> Self {
-        ThresholdOptions {
-            threshold: 0.5,
-            invert: false,
-            channel: Channel::Luma,
-        }
+        ThresholdOptions { threshold: 0.5, invert: false, channel: Channel::Luma }
     }
 }
 
@@ -99,12 +92,7 @@ impl Bitmap {
     /// An all-empty image.
     pub fn new(width: usize, height: usize) -> Self {
         let words_per_row = width.div_ceil(64);
-        Bitmap {
-            width,
-            height,
-            words_per_row,
-            words: vec![0; words_per_row * height],
-        }
+        Bitmap { width, height, words_per_row, words: vec![0; words_per_row * height] }
     }
 
     pub fn width(&self) -> usize {
@@ -199,9 +187,10 @@ impl Bitmap {
         for y in 0..height {
             let words = &mut b.words[y * b.words_per_row..(y + 1) * b.words_per_row];
             for (word, levels) in words.iter_mut().zip(row(y)[..width].chunks(64)) {
-                *word = levels.iter().enumerate().fold(0u64, |v, (bit, &l)| {
-                    v | u64::from((u16::from(l) >= cutoff) != invert) << bit
-                });
+                *word = levels
+                    .iter()
+                    .enumerate()
+                    .fold(0u64, |v, (bit, &l)| v | u64::from((u16::from(l) >= cutoff) != invert) << bit);
             }
         }
         b
@@ -239,31 +228,17 @@ impl Bitmap {
         opts: &ThresholdOptions,
     ) -> Result<Self, BitmapError> {
         if grey.len() != width * height {
-            return Err(BitmapError::BufferSize {
-                expected: width * height,
-                got: grey.len(),
-            });
+            return Err(BitmapError::BufferSize { expected: width * height, got: grey.len() });
         }
         let cutoff = opts.cutoff()?;
-        Ok(Self::from_level_rows(
-            width,
-            height,
-            |y| &grey[y * width..(y + 1) * width],
-            cutoff,
-            opts.invert,
-        ))
+        Ok(Self::from_level_rows(width, height, |y| &grey[y * width..(y + 1) * width], cutoff, opts.invert))
     }
 
     /// Resamples to a new pixel size by nearest neighbour at target pixel centres: target pixel
     /// `i` has its centre at `(i + 1/2) * dst_px_mm` and takes the source pixel containing it.
     /// The target keeps every pixel whose centre lies inside the source extent,
     /// i.e. `round(width * src / dst)` columns.
-    pub fn resample(
-        &self,
-        src_px_x_mm: f64,
-        src_px_y_mm: f64,
-        dst_px_mm: f64,
-    ) -> Result<Self, BitmapError> {
+    pub fn resample(&self, src_px_x_mm: f64, src_px_y_mm: f64, dst_px_mm: f64) -> Result<Self, BitmapError> {
         for v in [src_px_x_mm, src_px_y_mm, dst_px_mm] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(BitmapError::PixelSize(v));
@@ -271,9 +246,7 @@ impl Bitmap {
         }
         let map = |n: usize, src: f64| -> Vec<usize> {
             let count = (n as f64 * src / dst_px_mm + 0.5).floor() as usize;
-            (0..count)
-                .map(|i| (((i as f64 + 0.5) * dst_px_mm / src) as usize).min(n - 1))
-                .collect()
+            (0..count).map(|i| (((i as f64 + 0.5) * dst_px_mm / src) as usize).min(n - 1)).collect()
         };
         if self.width == 0 || self.height == 0 {
             return Ok(Bitmap::new(0, 0));
@@ -308,12 +281,8 @@ impl Bitmap {
     pub fn mirror_y(&self) -> Self {
         let mut out = Bitmap::new(self.width, self.height);
         for y in 0..self.height {
-            let (a, b) = (
-                y * self.words_per_row,
-                (self.height - 1 - y) * self.words_per_row,
-            );
-            out.words[b..b + self.words_per_row]
-                .copy_from_slice(&self.words[a..a + self.words_per_row]);
+            let (a, b) = (y * self.words_per_row, (self.height - 1 - y) * self.words_per_row);
+            out.words[b..b + self.words_per_row].copy_from_slice(&self.words[a..a + self.words_per_row]);
         }
         out
     }
@@ -347,10 +316,7 @@ impl Bitmap {
 }
 
 fn io_err(path: &Path, source: std::io::Error) -> BitmapError {
-    BitmapError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
+    BitmapError::Io { path: path.to_path_buf(), source }
 }
 
 /// Decodes a PNG from a reader and thresholds it.
@@ -391,6 +357,56 @@ pub fn decode_png<R: Read>(input: R, opts: &ThresholdOptions) -> Result<Bitmap, 
     ))
 }
 
+/// Is this a non-interlaced 1-bit greyscale PNG? IHDR is the first chunk (PNG spec 11.2.2):
+/// signature (8), length (4), "IHDR" (4), width (4), height (4), then bit depth at byte 24,
+/// colour type at 25 and interlace method at 28.
+fn is_plain_1bit_grey_png(data: &[u8]) -> bool {
+    data.len() > 28 && &data[12..16] == b"IHDR" && data[24] == 1 && data[25] == 0 && data[28] == 0
+}
+
+/// Fast path for 1-bit greyscale PNGs (what `slice-raster` and most layer exporters write): the
+/// packed rows are moved into the bitmap's words without expanding each pixel to a byte. PNG
+/// packs pixel `x` into bit `7 - x % 8` of byte `x / 8` (MSB first); the bitmap wants bit
+/// `x % 64` of word `x / 64`, so each byte is bit-reversed and eight of them make one
+/// little-endian word. A set bit is level 255, a clear one level 0, thresholded as usual.
+fn decode_png_1bit(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
+    let cutoff = opts.cutoff()?;
+    let mut dec = png::Decoder::new(data);
+    dec.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = dec.read_info()?;
+    let (w, h) = {
+        let info = reader.info();
+        (info.width as usize, info.height as usize)
+    };
+    let mut buf = vec![0u8; reader.output_buffer_size()];
+    let frame = reader.next_frame(&mut buf)?;
+    let stride = frame.line_size;
+    let one_lit = (cutoff <= 255) != opts.invert;
+    let zero_lit = (cutoff == 0) != opts.invert;
+    let mut b = Bitmap::new(w, h);
+    let wpr = b.words_per_row;
+    for y in 0..h {
+        let row = &buf[y * stride..y * stride + w.div_ceil(8)];
+        let words = &mut b.words[y * wpr..(y + 1) * wpr];
+        for (wi, word) in words.iter_mut().enumerate() {
+            let mut bytes = [0u8; 8];
+            for (k, byte) in row.iter().skip(wi * 8).take(8).enumerate() {
+                bytes[k] = byte.reverse_bits();
+            }
+            let packed = u64::from_le_bytes(bytes);
+            let v = match (one_lit, zero_lit) {
+                (true, false) => packed,
+                (false, true) => !packed,
+                (true, true) => u64::MAX,
+                (false, false) => 0,
+            };
+            let valid = (w - wi * 64).min(64);
+            *word = if valid == 64 { v } else { v & ((1u64 << valid) - 1) };
+        }
+    }
+    Ok(b)
+}
+
 /// Composites over black: transparent pixels are dark.
 fn scale_alpha(v: u8, a: u8) -> u8 {
     ((u16::from(v) * u16::from(a) + 127) / 255) as u8
@@ -398,9 +414,7 @@ fn scale_alpha(v: u8, a: u8) -> u8 {
 
 fn pick(channel: Channel, r: u8, g: u8, b: u8) -> u8 {
     match channel {
-        Channel::Luma => {
-            ((299 * u32::from(r) + 587 * u32::from(g) + 114 * u32::from(b) + 500) / 1000) as u8
-        }
+        Channel::Luma => ((299 * u32::from(r) + 587 * u32::from(g) + 114 * u32::from(b) + 500) / 1000) as u8,
         Channel::Red => r,
         Channel::Green => g,
         Channel::Blue => b,
@@ -430,9 +444,7 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
     let pixel_offset = le_u32(data, 10)? as usize;
     let header_size = le_u32(data, 14)? as usize;
     if header_size < 40 {
-        return Err(BitmapError::Bmp(
-            "OS/2 core headers are not supported".into(),
-        ));
+        return Err(BitmapError::Bmp("OS/2 core headers are not supported".into()));
     }
     let width = le_u32(data, 18)? as i32;
     let height_signed = le_u32(data, 22)? as i32;
@@ -440,30 +452,19 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
     let compression = le_u32(data, 30)?;
     // 0 = BI_RGB, 3 = BI_BITFIELDS (accepted for 32-bit with the usual BGRA masks).
     if compression != 0 && !(compression == 3 && bpp == 32) {
-        return Err(BitmapError::Bmp(format!(
-            "compression {compression} not supported"
-        )));
+        return Err(BitmapError::Bmp(format!("compression {compression} not supported")));
     }
     if width <= 0 || height_signed == 0 || height_signed == i32::MIN {
-        return Err(BitmapError::Bmp(format!(
-            "bad size {width}x{height_signed}"
-        )));
+        return Err(BitmapError::Bmp(format!("bad size {width}x{height_signed}")));
     }
     let (w, h) = (width as usize, height_signed.unsigned_abs() as usize);
     if (w as u64) * (h as u64) > 1 << 32 {
-        return Err(BitmapError::TooLarge {
-            width: w as u64,
-            height: h as u64,
-        });
+        return Err(BitmapError::TooLarge { width: w as u64, height: h as u64 });
     }
     let top_down = height_signed < 0;
     let palette: Vec<[u8; 3]> = if bpp <= 8 {
         let used = le_u32(data, 46)? as usize;
-        let n = if used == 0 {
-            1usize << bpp
-        } else {
-            used.min(256)
-        };
+        let n = if used == 0 { 1usize << bpp } else { used.min(256) };
         let start = 14 + header_size;
         (0..n)
             .map(|i| {
@@ -476,9 +477,7 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
         Vec::new()
     };
     if !matches!(bpp, 1 | 8 | 24 | 32) {
-        return Err(BitmapError::Bmp(format!(
-            "{bpp} bits per pixel not supported"
-        )));
+        return Err(BitmapError::Bmp(format!("{bpp} bits per pixel not supported")));
     }
     let stride = (w * bpp as usize).div_ceil(32) * 4;
     let needed = pixel_offset + stride * h;
@@ -486,11 +485,7 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
         return Err(BitmapError::Bmp("truncated pixel data".into()));
     }
     let channel = opts.channel;
-    let colour = |index: usize| -> u8 {
-        palette
-            .get(index)
-            .map_or(0, |c| pick(channel, c[0], c[1], c[2]))
-    };
+    let colour = |index: usize| -> u8 { palette.get(index).map_or(0, |c| pick(channel, c[0], c[1], c[2])) };
     Ok(Bitmap::from_levels(
         w,
         h,
@@ -515,6 +510,9 @@ pub fn decode_bmp(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitmap
 pub fn load_image(path: &Path, opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
     let data = std::fs::read(path).map_err(|e| io_err(path, e))?;
     if data.starts_with(b"\x89PNG") {
+        if is_plain_1bit_grey_png(&data) {
+            return decode_png_1bit(&data, opts);
+        }
         decode_png(&data[..], opts)
     } else if data.starts_with(b"BM") {
         decode_bmp(&data, opts)
@@ -532,27 +530,42 @@ mod tests {
     }
 
     #[test]
+    fn one_bit_png_fast_path_equals_the_expanding_decoder() {
+        // 70 x 3: a row that ends inside a byte and spans two words.
+        let mut src = Bitmap::new(70, 3);
+        for (x, y) in [(0, 0), (7, 0), (8, 1), (63, 1), (64, 2), (69, 2), (33, 0)] {
+            src.set(x, y, true);
+        }
+        let mut png_bytes = Vec::new();
+        src.write_png(&mut png_bytes).unwrap();
+        assert!(is_plain_1bit_grey_png(&png_bytes));
+        for o in [
+            opts(),
+            ThresholdOptions { invert: true, ..opts() },
+            ThresholdOptions { threshold: 0.0, ..opts() },
+            ThresholdOptions { threshold: 0.0, invert: true, ..opts() },
+        ] {
+            let fast = decode_png_1bit(&png_bytes, &o).unwrap();
+            let slow = decode_png(&png_bytes[..], &o).unwrap();
+            assert_eq!(fast, slow, "{o:?}");
+        }
+        assert_eq!(decode_png_1bit(&png_bytes, &opts()).unwrap(), src);
+        assert_eq!(
+            decode_png_1bit(&png_bytes, &ThresholdOptions { invert: true, ..opts() }).unwrap().count_ones(),
+            70 * 3 - 7
+        );
+    }
+
+    #[test]
     fn threshold_is_half_scale() {
         let b = Bitmap::from_grey(4, 1, &[0, 127, 128, 255], &opts()).unwrap();
-        assert_eq!(
-            (0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(),
-            [false, false, true, true]
-        );
-        let inv = ThresholdOptions {
-            invert: true,
-            ..opts()
-        };
+        assert_eq!((0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(), [false, false, true, true]);
+        let inv = ThresholdOptions { invert: true, ..opts() };
         let b = Bitmap::from_grey(4, 1, &[0, 127, 128, 255], &inv).unwrap();
         assert_eq!(b.count_ones(), 2);
         assert!(b.get(0, 0) && b.get(1, 0));
-        let bad = ThresholdOptions {
-            threshold: 1.5,
-            ..opts()
-        };
-        assert!(matches!(
-            Bitmap::from_grey(1, 1, &[0], &bad),
-            Err(BitmapError::Threshold(_))
-        ));
+        let bad = ThresholdOptions { threshold: 1.5, ..opts() };
+        assert!(matches!(Bitmap::from_grey(1, 1, &[0], &bad), Err(BitmapError::Threshold(_))));
     }
 
     #[test]
@@ -649,14 +662,7 @@ mod tests {
     }
 
     /// Builds a BMP file by hand (bottom-up unless `top_down`).
-    fn bmp(
-        w: usize,
-        h: usize,
-        bpp: u16,
-        palette: &[[u8; 4]],
-        rows: &[Vec<u8>],
-        top_down: bool,
-    ) -> Vec<u8> {
+    fn bmp(w: usize, h: usize, bpp: u16, palette: &[[u8; 4]], rows: &[Vec<u8>], top_down: bool) -> Vec<u8> {
         let stride = (w * bpp as usize).div_ceil(32) * 4;
         let off = 54 + 4 * palette.len();
         let mut d = Vec::new();
@@ -676,11 +682,7 @@ mod tests {
         for q in palette {
             d.extend_from_slice(q);
         }
-        let order: Vec<usize> = if top_down {
-            (0..h).collect()
-        } else {
-            (0..h).rev().collect()
-        };
+        let order: Vec<usize> = if top_down { (0..h).collect() } else { (0..h).rev().collect() };
         for y in order {
             let mut r = rows[y].clone();
             r.resize(stride, 0);
@@ -701,16 +703,10 @@ mod tests {
         let pal: Vec<[u8; 4]> = (0..=255u8).map(|v| [v, v, v, 0]).collect();
         let rows = vec![vec![0, 127, 128, 200]];
         let b = decode_bmp(&bmp(4, 1, 8, &pal, &rows, true), &opts()).unwrap();
-        assert_eq!(
-            (0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(),
-            [false, false, true, true]
-        );
+        assert_eq!((0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(), [false, false, true, true]);
         // 24-bit BGR: blue pixel, white pixel
         let rows = vec![vec![255, 0, 0, 255, 255, 255]];
-        let blue = ThresholdOptions {
-            channel: Channel::Blue,
-            ..opts()
-        };
+        let blue = ThresholdOptions { channel: Channel::Blue, ..opts() };
         let b = decode_bmp(&bmp(2, 1, 24, &[], &rows, false), &blue).unwrap();
         assert!(b.get(0, 0) && b.get(1, 0));
         let b = decode_bmp(&bmp(2, 1, 24, &[], &rows, false), &opts()).unwrap();

@@ -6,10 +6,7 @@ use std::path::{Path, PathBuf};
 use super::bitmap::BitmapError;
 
 fn io_err(path: &Path, source: std::io::Error) -> BitmapError {
-    BitmapError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
+    BitmapError::Io { path: path.to_path_buf(), source }
 }
 
 /// Compares names so that digit runs sort by value: `l2.png < l10.png`.
@@ -63,10 +60,7 @@ pub fn list_images(spec: &Path) -> Result<Vec<PathBuf>, BitmapError> {
     let (dir, pattern) = if spec.is_dir() {
         (spec.to_path_buf(), None)
     } else {
-        let dir = spec
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
+        let dir = spec.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
         let name = spec.file_name().map(|n| n.to_string_lossy().into_owned());
         (dir.to_path_buf(), name)
     };
@@ -110,21 +104,10 @@ mod tests {
             std::fs::write(dir.path().join(n), b"").unwrap();
         }
         let names = |v: Vec<PathBuf>| -> Vec<String> {
-            v.iter()
-                .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
-                .collect()
+            v.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect()
         };
-        assert_eq!(
-            names(list_images(dir.path()).unwrap()),
-            ["s9.png", "s10.png"]
-        );
-        assert_eq!(
-            names(list_images(&dir.path().join("s1*")).unwrap()),
-            ["s10.png"]
-        );
-        assert!(matches!(
-            list_images(&dir.path().join("q*")),
-            Err(BitmapError::NoImages(_))
-        ));
+        assert_eq!(names(list_images(dir.path()).unwrap()), ["s9.png", "s10.png"]);
+        assert_eq!(names(list_images(&dir.path().join("s1*")).unwrap()), ["s10.png"]);
+        assert!(matches!(list_images(&dir.path().join("q*")), Err(BitmapError::NoImages(_))));
     }
 }

@@ -132,8 +132,7 @@ impl Default for PrintheadProfile {
 impl PrintheadProfile {
     /// Parses and validates a TOML profile.
     pub fn from_toml(text: &str) -> Result<Self, PrintheadError> {
-        let p: PrintheadProfile =
-            toml::from_str(text).map_err(|e| PrintheadError::Toml(e.to_string()))?;
+        let p: PrintheadProfile = toml::from_str(text).map_err(|e| PrintheadError::Toml(e.to_string()))?;
         p.validate()?;
         Ok(p)
     }
@@ -160,10 +159,8 @@ impl PrintheadProfile {
         }
         if !self.nozzle_rows.is_empty() {
             let mut seen = vec![false; self.nozzle_count as usize];
-            let bad = || PrintheadError::NozzleMap {
-                count: self.nozzle_count,
-                rows: self.nozzle_rows.clone(),
-            };
+            let bad =
+                || PrintheadError::NozzleMap { count: self.nozzle_count, rows: self.nozzle_rows.clone() };
             if self.nozzle_rows.len() != seen.len() {
                 return Err(bad());
             }
@@ -204,9 +201,7 @@ impl PrintheadProfile {
 
     /// Table `row -> S bit` for all rows.
     pub fn row_to_s_bit(&self) -> Vec<u32> {
-        (0..self.nozzle_count)
-            .map(|r| self.s_bit_of_row(r))
-            .collect()
+        (0..self.nozzle_count).map(|r| self.s_bit_of_row(r)).collect()
     }
 
     /// Converts an `S` word into a mask of physical rows (bit `r` = row `r` fires).
@@ -260,29 +255,17 @@ mod tests {
         assert_eq!(p.rows_of_s_bits(0xFFF0), 0);
         let text = toml::to_string(&p).unwrap();
         assert_eq!(PrintheadProfile::from_toml(&text).unwrap(), p);
-        assert!(matches!(
-            PrintheadProfile::from_toml("nozzles = 12"),
-            Err(PrintheadError::Toml(_))
-        ));
+        assert!(matches!(PrintheadProfile::from_toml("nozzles = 12"), Err(PrintheadError::Toml(_))));
     }
 
     #[test]
     fn rejects_bad_maps_and_ranges() {
         let bad = |t: &str| PrintheadProfile::from_toml(t).unwrap_err();
-        assert!(matches!(
-            bad("nozzle_count = 3\nnozzle_rows = [0, 0, 1]"),
-            PrintheadError::NozzleMap { .. }
-        ));
-        assert!(matches!(
-            bad("nozzle_count = 3\nnozzle_rows = [0, 1, 3]"),
-            PrintheadError::NozzleMap { .. }
-        ));
+        assert!(matches!(bad("nozzle_count = 3\nnozzle_rows = [0, 0, 1]"), PrintheadError::NozzleMap { .. }));
+        assert!(matches!(bad("nozzle_count = 3\nnozzle_rows = [0, 1, 3]"), PrintheadError::NozzleMap { .. }));
         assert_eq!(bad("nozzle_count = 65"), PrintheadError::NozzleCount(65));
         assert_eq!(bad("dpi = 0.0"), PrintheadError::Dpi(0.0));
         assert_eq!(bad("heads = []"), PrintheadError::NoHeads);
-        assert!(matches!(
-            bad("drop_volume_pl = -1.0"),
-            PrintheadError::Negative { .. }
-        ));
+        assert!(matches!(bad("drop_volume_pl = -1.0"), PrintheadError::Negative { .. }));
     }
 }

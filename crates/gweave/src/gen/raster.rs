@@ -111,8 +111,7 @@ impl Default for RasterConfig {
 impl RasterConfig {
     /// Parses and validates a TOML job file.
     pub fn from_toml(text: &str) -> Result<Self, RasterError> {
-        let c: RasterConfig =
-            toml::from_str(text).map_err(|e| RasterError::Config(e.to_string()))?;
+        let c: RasterConfig = toml::from_str(text).map_err(|e| RasterError::Config(e.to_string()))?;
         c.validate()?;
         Ok(c)
     }
@@ -205,10 +204,8 @@ impl<W: Write> RasterWriter<W> {
     ) -> Result<Self, RasterError> {
         profile.validate()?;
         cfg.validate()?;
-        let layer_height_mm = cfg
-            .layer_height_mm
-            .or(source_layer_height_mm)
-            .unwrap_or(DEFAULT_LAYER_HEIGHT_MM);
+        let layer_height_mm =
+            cfg.layer_height_mm.or(source_layer_height_mm).unwrap_or(DEFAULT_LAYER_HEIGHT_MM);
         let mut w = RasterWriter {
             out,
             buf: Vec::with_capacity(FLUSH_BYTES + 4096),
@@ -218,19 +215,13 @@ impl<W: Write> RasterWriter<W> {
             pitch_mm: profile.pitch_mm(),
             row_to_s_bit: profile.row_to_s_bit(),
             x_text: vec![TextTable::default(); profile.heads.len()],
-            fire_text: (0..profile.heads.len())
-                .map(|h| fire_table(profile, h))
-                .collect(),
+            fire_text: (0..profile.heads.len()).map(|h| fire_table(profile, h)).collect(),
             columns: Vec::new(),
             pos_mm: None,
             last_y_mm: None,
-            report: RasterReport {
-                drops_per_head: vec![0; profile.heads.len()],
-                ..RasterReport::default()
-            },
+            report: RasterReport { drops_per_head: vec![0; profile.heads.len()], ..RasterReport::default() },
         };
-        w.buf
-            .extend_from_slice(b"; gweave raster: binder-jet inkjet\n");
+        w.buf.extend_from_slice(b"; gweave raster: binder-jet inkjet\n");
         push_block(&mut w.buf, &cfg.start_gcode);
         w.buf.extend_from_slice(b"G1 F");
         push_num(&mut w.buf, cfg.feed_mm_min, cfg.decimals);
@@ -280,18 +271,11 @@ impl<W: Write> RasterWriter<W> {
     /// than heads leave the remaining heads idle).
     pub fn layer(&mut self, planes: &[Bitmap]) -> Result<(), RasterError> {
         if planes.len() > self.profile.heads.len() {
-            return Err(RasterError::TooManyPlanes {
-                planes: planes.len(),
-                heads: self.profile.heads.len(),
-            });
+            return Err(RasterError::TooManyPlanes { planes: planes.len(), heads: self.profile.heads.len() });
         }
         self.begin_layer();
         let n = self.profile.nozzle_count as usize;
-        let bands = planes
-            .iter()
-            .map(|p| p.height().div_ceil(n))
-            .max()
-            .unwrap_or(0);
+        let bands = planes.iter().map(|p| p.height().div_ceil(n)).max().unwrap_or(0);
         let mut forward = true;
         for band in 0..bands {
             for (head, plane) in planes.iter().enumerate() {
@@ -341,8 +325,7 @@ impl<W: Write> RasterWriter<W> {
 
     /// Carriage X that puts head `head` over the centre of column `i`.
     fn column_x_mm(&self, head: usize, i: usize) -> f64 {
-        self.cfg.origin_x_mm + (i as f64 + 0.5) * self.pitch_mm
-            - self.profile.heads[head].offset_x_mm
+        self.cfg.origin_x_mm + (i as f64 + 0.5) * self.pitch_mm - self.profile.heads[head].offset_x_mm
     }
 
     /// Pre-formats `G1 X<x>` for head `head` up to `width` columns.
@@ -356,16 +339,10 @@ impl<W: Write> RasterWriter<W> {
         }
     }
 
-    fn write_pass(
-        &mut self,
-        head: usize,
-        j0: usize,
-        width: usize,
-        forward: bool,
-    ) -> Result<(), RasterError> {
+    fn write_pass(&mut self, head: usize, j0: usize, width: usize, forward: bool) -> Result<(), RasterError> {
         self.ensure_x_text(head, width);
-        let y = self.cfg.origin_y_mm + (j0 as f64 + 0.5) * self.pitch_mm
-            - self.profile.heads[head].offset_y_mm;
+        let y =
+            self.cfg.origin_y_mm + (j0 as f64 + 0.5) * self.pitch_mm - self.profile.heads[head].offset_y_mm;
         let density = u64::from(self.cfg.density);
         let mut fire = Vec::new();
         let (mut path_mm, mut drops) = (0.0, 0u64);
@@ -392,11 +369,8 @@ impl<W: Write> RasterWriter<W> {
             }
             if let Some((px, py)) = self.pos_mm {
                 // Within a pass only X changes; sqrt only for the move onto a new band.
-                path_mm += if py == y {
-                    (x - px).abs()
-                } else {
-                    ((x - px).powi(2) + (y - py).powi(2)).sqrt()
-                };
+                path_mm +=
+                    if py == y { (x - px).abs() } else { ((x - px).powi(2) + (y - py).powi(2)).sqrt() };
             }
             self.pos_mm = Some((x, y));
             drops += u64::from(s.count_ones());
@@ -417,10 +391,7 @@ impl<W: Write> RasterWriter<W> {
         self.out.write_all(&self.buf)?;
         self.out.flush()?;
         let drops: u64 = self.report.drops_per_head.iter().sum();
-        self.report.binder_volume_ul = self
-            .profile
-            .drop_volume_pl
-            .map(|pl| drops as f64 * pl * 1e-6);
+        self.report.binder_volume_ul = self.profile.drop_volume_pl.map(|pl| drops as f64 * pl * 1e-6);
         self.report.estimated_time_s = self.report.xy_path_mm / (self.cfg.feed_mm_min / 60.0)
             + self.report.fire_commands as f64 * self.profile.min_fire_interval_us * 1e-6;
         Ok((self.out, self.report))
@@ -512,9 +483,7 @@ pub fn raster_sl1<W: Write>(
     let mut w = RasterWriter::new(out, profile, cfg, Some(layer_height_mm))?;
     let pitch = profile.pitch_mm();
     for k in 0..reader.layer_count() {
-        let plane = reader
-            .bed_layer(k, threshold)?
-            .resample(px_x, px_y, pitch)?;
+        let plane = reader.bed_layer(k, threshold)?.resample(px_x, px_y, pitch)?;
         w.layer(std::slice::from_ref(&plane))?;
     }
     Ok(w.finish()?.1)
@@ -554,11 +523,7 @@ pub fn test_pattern<W: Write>(
 mod tests {
     use super::*;
 
-    fn gcode(
-        profile: &PrintheadProfile,
-        cfg: &RasterConfig,
-        planes: &[Bitmap],
-    ) -> (String, RasterReport) {
+    fn gcode(profile: &PrintheadProfile, cfg: &RasterConfig, planes: &[Bitmap]) -> (String, RasterReport) {
         let mut w = RasterWriter::new(Vec::new(), profile, cfg, None).unwrap();
         w.layer(planes).unwrap();
         let (out, rep) = w.finish().unwrap();
@@ -577,11 +542,7 @@ mod tests {
 
     #[test]
     fn one_band_exact_output() {
-        let p = PrintheadProfile {
-            nozzle_count: 2,
-            dpi: 25.4,
-            ..PrintheadProfile::default()
-        };
+        let p = PrintheadProfile { nozzle_count: 2, dpi: 25.4, ..PrintheadProfile::default() };
         // pitch 1 mm; 3 rows -> bands {0,1} and the partial top band {2}.
         let mut b = Bitmap::new(4, 3);
         for (x, y) in [(0, 0), (0, 1), (2, 1), (3, 2)] {
@@ -604,11 +565,7 @@ mod tests {
 
     #[test]
     fn serpentine_reverses_and_one_way_does_not() {
-        let p = PrintheadProfile {
-            nozzle_count: 1,
-            dpi: 25.4,
-            ..PrintheadProfile::default()
-        };
+        let p = PrintheadProfile { nozzle_count: 1, dpi: 25.4, ..PrintheadProfile::default() };
         let mut b = Bitmap::new(3, 3);
         for (x, y) in [(0, 0), (2, 0), (0, 2), (2, 2)] {
             b.set(x, y, true);
@@ -624,10 +581,7 @@ mod tests {
         // Row 1 is empty: skipped without any move.
         assert_eq!(rep.bands_skipped, 1);
         assert!(!g.contains("Y1.5"));
-        let one_way = RasterConfig {
-            serpentine: false,
-            ..bare()
-        };
+        let one_way = RasterConfig { serpentine: false, ..bare() };
         let (g, _) = gcode(&p, &one_way, &[b]);
         assert_eq!(xs(&g), ["X0.5", "X2.5", "X0.5", "X2.5"]);
     }
@@ -641,10 +595,7 @@ mod tests {
             dialect: super::super::printhead::FirmwareDialect::RepRapFirmware,
             heads: vec![
                 Default::default(),
-                super::super::printhead::HeadOffset {
-                    offset_x_mm: 10.0,
-                    offset_y_mm: 1.0,
-                },
+                super::super::printhead::HeadOffset { offset_x_mm: 10.0, offset_y_mm: 1.0 },
             ],
             drop_volume_pl: Some(100.0),
             ..PrintheadProfile::default()
@@ -653,29 +604,17 @@ mod tests {
         a.set(0, 0, true); // row 0 -> address 1
         let mut b = Bitmap::new(1, 3);
         b.set(0, 2, true); // row 2 -> address 0
-        let cfg = RasterConfig {
-            density: 2,
-            ..bare()
-        };
+        let cfg = RasterConfig { density: 2, ..bare() };
         let (g, rep) = gcode(&p, &cfg, &[a, b]);
-        assert!(
-            g.contains("G1 X0.5 Y0.5\nM400\nM578 P0 S2\nM578 P0 S2\n"),
-            "{g}"
-        );
+        assert!(g.contains("G1 X0.5 Y0.5\nM400\nM578 P0 S2\nM578 P0 S2\n"), "{g}");
         // Head 1 sits 10 mm right and 1 mm up: carriage at 0.5 - 10, 0.5 - 1.
-        assert!(
-            g.contains("G1 X-9.5 Y-0.5\nM400\nM578 P1 S1\nM578 P1 S1\n"),
-            "{g}"
-        );
+        assert!(g.contains("G1 X-9.5 Y-0.5\nM400\nM578 P1 S1\nM578 P1 S1\n"), "{g}");
         assert_eq!(rep.drops_per_head, vec![2, 2]);
         assert_eq!(rep.fire_commands, 4);
         assert!((rep.binder_volume_ul.unwrap() - 4.0 * 100e-6).abs() < 1e-15);
         let three = [Bitmap::new(1, 1), Bitmap::new(1, 1), Bitmap::new(1, 1)];
         let mut w = RasterWriter::new(Vec::new(), &p, &cfg, None).unwrap();
-        assert!(matches!(
-            w.layer(&three),
-            Err(RasterError::TooManyPlanes { .. })
-        ));
+        assert!(matches!(w.layer(&three), Err(RasterError::TooManyPlanes { .. })));
     }
 
     #[test]
@@ -693,11 +632,13 @@ mod tests {
         }
         let (out, rep) = w.finish().unwrap();
         let g = String::from_utf8(out).unwrap();
-        assert!(g.ends_with(";LAYER:0\nG1 Z0.3\n;LAYER:1\nRECOAT 1 0.55\nG1 Z0.55\n;LAYER:2\nRECOAT 2 0.8\nG1 Z0.8\n"), "{g}");
-        assert_eq!(
-            (rep.layers, rep.z_moves, rep.xy_moves, rep.bands_skipped),
-            (3, 3, 0, 3)
+        assert!(
+            g.ends_with(
+                ";LAYER:0\nG1 Z0.3\n;LAYER:1\nRECOAT 1 0.55\nG1 Z0.55\n;LAYER:2\nRECOAT 2 0.8\nG1 Z0.8\n"
+            ),
+            "{g}"
         );
+        assert_eq!((rep.layers, rep.z_moves, rep.xy_moves, rep.bands_skipped), (3, 3, 0, 3));
     }
 
     #[test]
@@ -744,24 +685,14 @@ mod tests {
         let mut b = Bitmap::new(1, 2);
         b.set(0, 0, true);
         b.save_png(&path).unwrap();
-        let p = PrintheadProfile {
-            nozzle_count: 1,
-            dpi: 25.4,
-            ..PrintheadProfile::default()
-        };
+        let p = PrintheadProfile { nozzle_count: 1, dpi: 25.4, ..PrintheadProfile::default() };
         let fire_y = |flip_y| {
-            let stack = ImageStack {
-                paths: vec![path.clone()],
-                threshold: ThresholdOptions::default(),
-                flip_y,
-            };
+            let stack =
+                ImageStack { paths: vec![path.clone()], threshold: ThresholdOptions::default(), flip_y };
             let mut out = Vec::new();
             raster_image_stacks(&mut out, &p, &bare(), &[stack], None).unwrap();
             let g = String::from_utf8(out).unwrap();
-            g.lines()
-                .find(|l| l.starts_with("G1 X"))
-                .unwrap()
-                .to_string()
+            g.lines().find(|l| l.starts_with("G1 X")).unwrap().to_string()
         };
         assert_eq!(fire_y(false), "G1 X0.5 Y0.5");
         assert_eq!(fire_y(true), "G1 X0.5 Y1.5");

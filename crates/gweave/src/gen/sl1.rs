@@ -36,17 +36,11 @@ use super::bitmap::{decode_png, Bitmap, BitmapError, ThresholdOptions};
 #[derive(Debug, Error)]
 pub enum Sl1Error {
     #[error("{path}: {source}")]
-    Io {
-        path: std::path::PathBuf,
-        source: std::io::Error,
-    },
+    Io { path: std::path::PathBuf, source: std::io::Error },
     #[error("sl1 archive: {0}")]
     Zip(#[from] zip::result::ZipError),
     #[error("sl1 {file}: missing or invalid key {key}")]
-    Key {
-        file: &'static str,
-        key: &'static str,
-    },
+    Key { file: &'static str, key: &'static str },
     #[error("sl1 has no layer images {0}NNNNN.png")]
     NoLayers(String),
     #[error("sl1 layer {index} out of range (count {count})")]
@@ -54,13 +48,7 @@ pub enum Sl1Error {
     #[error("sl1 layer {name}: {source}")]
     Image { name: String, source: BitmapError },
     #[error("sl1 layer {name}: {width}x{height} px, expected {expected_w}x{expected_h}")]
-    LayerSize {
-        name: String,
-        width: usize,
-        height: usize,
-        expected_w: usize,
-        expected_h: usize,
-    },
+    LayerSize { name: String, width: usize, height: usize, expected_w: usize, expected_h: usize },
 }
 
 /// Display orientation from `display_orientation`.
@@ -120,12 +108,7 @@ fn read_entry<R: Read + Seek>(
         Err(e) => return Err(e.into()),
     };
     let mut s = String::new();
-    entry
-        .read_to_string(&mut s)
-        .map_err(|source| Sl1Error::Io {
-            path: name.into(),
-            source,
-        })?;
+    entry.read_to_string(&mut s).map_err(|source| Sl1Error::Io { path: name.into(), source })?;
     Ok(Some(s))
 }
 
@@ -134,18 +117,14 @@ fn key<T: std::str::FromStr>(
     file: &'static str,
     key: &'static str,
 ) -> Result<T, Sl1Error> {
-    map.get(key)
-        .and_then(|v| v.parse().ok())
-        .ok_or(Sl1Error::Key { file, key })
+    map.get(key).and_then(|v| v.parse().ok()).ok_or(Sl1Error::Key { file, key })
 }
 
 impl Sl1Reader<std::io::BufReader<std::fs::File>> {
     /// Opens an `.sl1` file.
     pub fn open(path: &Path) -> Result<Self, Sl1Error> {
-        let file = std::fs::File::open(path).map_err(|source| Sl1Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let file =
+            std::fs::File::open(path).map_err(|source| Sl1Error::Io { path: path.to_path_buf(), source })?;
         Self::new(std::io::BufReader::new(file))
     }
 }
@@ -155,10 +134,8 @@ impl<R: Read + Seek> Sl1Reader<R> {
     pub fn new(reader: R) -> Result<Self, Sl1Error> {
         let mut archive = zip::ZipArchive::new(reader)?;
         let job = parse_ini(
-            &read_entry(&mut archive, "config.ini")?.ok_or(Sl1Error::Key {
-                file: "config.ini",
-                key: "(file)",
-            })?,
+            &read_entry(&mut archive, "config.ini")?
+                .ok_or(Sl1Error::Key { file: "config.ini", key: "(file)" })?,
         );
         let printer = parse_ini(&read_entry(&mut archive, "prusaslicer.ini")?.unwrap_or_default());
         // Printer keys may also appear in config.ini in hand-made archives.
@@ -173,10 +150,7 @@ impl<R: Read + Seek> Sl1Reader<R> {
         let display_width_mm = pick("display_width")?;
         let display_height_mm = pick("display_height")?;
         if display_pixels_x == 0 || display_pixels_y == 0 || display_width_mm <= 0.0 {
-            return Err(Sl1Error::Key {
-                file: "prusaslicer.ini",
-                key: "display_pixels_x",
-            });
+            return Err(Sl1Error::Key { file: "prusaslicer.ini", key: "display_pixels_x" });
         }
         let orientation = match printer.get("display_orientation").map(String::as_str) {
             Some("portrait") => Orientation::Portrait,
@@ -221,11 +195,7 @@ impl<R: Read + Seek> Sl1Reader<R> {
             pixel_y_mm,
             layer_count: layers.len(),
         };
-        Ok(Sl1Reader {
-            archive,
-            info,
-            layer_names: layers.into_iter().map(|(_, n)| n).collect(),
-        })
+        Ok(Sl1Reader { archive, info, layer_names: layers.into_iter().map(|(_, n)| n).collect() })
     }
 
     pub fn info(&self) -> &Sl1Info {
@@ -242,22 +212,17 @@ impl<R: Read + Seek> Sl1Reader<R> {
     pub fn bed_layer(&mut self, index: usize, opts: &ThresholdOptions) -> Result<Bitmap, Sl1Error> {
         let stored = self.layer(index, opts)?;
         let info = &self.info;
-        let (w, h) = (
-            info.display_pixels_x as usize,
-            info.display_pixels_y as usize,
-        );
+        let (w, h) = (info.display_pixels_x as usize, info.display_pixels_y as usize);
         let (mx, my) = (info.mirror_x, info.mirror_y);
         let mut bed = Bitmap::new(w, h);
         for (col, row) in stored.ones() {
             let (i, j) = match info.orientation {
-                Orientation::Landscape => (
-                    if mx { w - 1 - col } else { col },
-                    if my { row } else { h - 1 - row },
-                ),
-                Orientation::Portrait => (
-                    if my { row } else { w - 1 - row },
-                    if mx { col } else { h - 1 - col },
-                ),
+                Orientation::Landscape => {
+                    (if mx { w - 1 - col } else { col }, if my { row } else { h - 1 - row })
+                }
+                Orientation::Portrait => {
+                    (if my { row } else { w - 1 - row }, if mx { col } else { h - 1 - col })
+                }
             };
             bed.set(i, j, true);
         }
@@ -277,17 +242,11 @@ impl<R: Read + Seek> Sl1Reader<R> {
         let name = self
             .layer_names
             .get(index)
-            .ok_or(Sl1Error::LayerIndex {
-                index,
-                count: self.layer_names.len(),
-            })?
+            .ok_or(Sl1Error::LayerIndex { index, count: self.layer_names.len() })?
             .clone();
         let entry = self.archive.by_name(&name)?;
-        let bitmap =
-            decode_png(std::io::BufReader::new(entry), opts).map_err(|source| Sl1Error::Image {
-                name: name.clone(),
-                source,
-            })?;
+        let bitmap = decode_png(std::io::BufReader::new(entry), opts)
+            .map_err(|source| Sl1Error::Image { name: name.clone(), source })?;
         let (w, h) = (self.info.image_width_px, self.info.image_height_px);
         if (bitmap.width(), bitmap.height()) != (w, h) {
             return Err(Sl1Error::LayerSize {
@@ -337,10 +296,7 @@ mod tests {
         let r_mm = (x1 - x0 + 1) as f64 * 0.2 / 2.0;
         let area_mm2 = mid.count_ones() as f64 * 0.04;
         let disc = std::f64::consts::PI * r_mm * r_mm;
-        assert!(
-            (area_mm2 - disc).abs() < 0.01 * disc,
-            "{area_mm2} vs {disc}"
-        );
+        assert!((area_mm2 - disc).abs() < 0.01 * disc, "{area_mm2} vs {disc}");
         let first = r.layer(0, &ThresholdOptions::default()).unwrap();
         assert!(first.count_ones() * 20 < mid.count_ones());
         let bed = r.bed_layer(150, &ThresholdOptions::default()).unwrap();
@@ -348,10 +304,7 @@ mod tests {
         assert_eq!(bed.count_ones(), mid.count_ones());
         assert!(matches!(
             r.layer(308, &ThresholdOptions::default()),
-            Err(Sl1Error::LayerIndex {
-                index: 308,
-                count: 308
-            })
+            Err(Sl1Error::LayerIndex { index: 308, count: 308 })
         ));
     }
 

@@ -30,10 +30,7 @@ pub enum SliceError {
     #[error(transparent)]
     Image(#[from] BitmapError),
     #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Io { path: PathBuf, source: std::io::Error },
 }
 
 /// Slicing settings (TOML, unknown keys rejected).
@@ -50,11 +47,7 @@ pub struct SliceConfig {
 
 impl Default for SliceConfig {
     fn default() -> Self {
-        SliceConfig {
-            layer_height_mm: 0.1,
-            pixel_mm: 25.4 / 96.0,
-            margin_px: 0,
-        }
+        SliceConfig { layer_height_mm: 0.1, pixel_mm: 25.4 / 96.0, margin_px: 0 }
     }
 }
 
@@ -76,10 +69,7 @@ pub struct SliceGrid {
 impl SliceGrid {
     /// Plans the grid for a mesh.
     pub fn for_mesh(mesh: &Mesh, cfg: &SliceConfig) -> Result<Self, SliceError> {
-        for (name, v) in [
-            ("layer_height_mm", cfg.layer_height_mm),
-            ("pixel_mm", cfg.pixel_mm),
-        ] {
+        for (name, v) in [("layer_height_mm", cfg.layer_height_mm), ("pixel_mm", cfg.pixel_mm)] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(SliceError::Config(format!("{name} must be > 0, got {v}")));
             }
@@ -98,9 +88,7 @@ impl SliceGrid {
             height_px: cells(hi[1] - lo[1]) + 2 * m,
             z_min_mm: lo[2],
             layer_height_mm: cfg.layer_height_mm,
-            layers: ((hi[2] - lo[2]) / cfg.layer_height_mm - 1e-6)
-                .ceil()
-                .max(0.0) as usize,
+            layers: ((hi[2] - lo[2]) / cfg.layer_height_mm - 1e-6).ceil().max(0.0) as usize,
         })
     }
 
@@ -120,11 +108,7 @@ pub struct Slicer<'m> {
 impl<'m> Slicer<'m> {
     pub fn new(mesh: &'m Mesh, cfg: &SliceConfig) -> Result<Self, SliceError> {
         let grid = SliceGrid::for_mesh(mesh, cfg)?;
-        Ok(Slicer {
-            mesh,
-            grid,
-            crossings: vec![Vec::new(); grid.height_px],
-        })
+        Ok(Slicer { mesh, grid, crossings: vec![Vec::new(); grid.height_px] })
     }
 
     pub fn grid(&self) -> &SliceGrid {
@@ -151,9 +135,7 @@ impl<'m> Slicer<'m> {
             }
             let (ylo, yhi) = if y0 < y1 { (y0, y1) } else { (y1, y0) };
             let j0 = self.first_centre_at_or_after(ylo, g.origin_y_mm).max(0);
-            let j1 = self
-                .first_centre_at_or_after(yhi, g.origin_y_mm)
-                .min(g.height_px as isize);
+            let j1 = self.first_centre_at_or_after(yhi, g.origin_y_mm).min(g.height_px as isize);
             for j in j0..j1 {
                 let yc = g.origin_y_mm + (j as f64 + 0.5) * g.pixel_mm;
                 let x = x0 + (yc - y0) * (x1 - x0) / (y1 - y0);
@@ -193,10 +175,7 @@ fn section_segment(t: &[[f32; 3]; 3], z: f64) -> Option<[(f64, f64); 2]> {
     for (a, b) in [(0, 1), (1, 2), (2, 0)] {
         if above[a] != above[b] {
             let s = (z - v[a][2]) / (v[b][2] - v[a][2]);
-            pts[n] = (
-                v[a][0] + s * (v[b][0] - v[a][0]),
-                v[a][1] + s * (v[b][1] - v[a][1]),
-            );
+            pts[n] = (v[a][0] + s * (v[b][0] - v[a][0]), v[a][1] + s * (v[b][1] - v[a][1]));
             n += 1;
         }
     }
@@ -215,10 +194,7 @@ pub struct SliceReport {
 /// Slices every layer and writes `layer_<k>.png` (five digits) into `dir`, one at a time.
 pub fn slice_to_dir(mesh: &Mesh, cfg: &SliceConfig, dir: &Path) -> Result<SliceReport, SliceError> {
     let mut slicer = Slicer::new(mesh, cfg)?;
-    std::fs::create_dir_all(dir).map_err(|source| SliceError::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    std::fs::create_dir_all(dir).map_err(|source| SliceError::Io { path: dir.to_path_buf(), source })?;
     let grid = *slicer.grid();
     let mut files = Vec::with_capacity(grid.layers);
     let mut pixels_per_layer = Vec::with_capacity(grid.layers);
@@ -229,11 +205,7 @@ pub fn slice_to_dir(mesh: &Mesh, cfg: &SliceConfig, dir: &Path) -> Result<SliceR
         pixels_per_layer.push(img.count_ones());
         files.push(path);
     }
-    Ok(SliceReport {
-        grid,
-        files,
-        pixels_per_layer,
-    })
+    Ok(SliceReport { grid, files, pixels_per_layer })
 }
 
 #[cfg(test)]
@@ -252,29 +224,16 @@ mod tests {
                 if i & 4 == 0 { lo[2] } else { hi[2] },
             ]
         };
-        let quads = [
-            [0, 1, 3, 2],
-            [4, 6, 7, 5],
-            [0, 4, 5, 1],
-            [2, 3, 7, 6],
-            [0, 2, 6, 4],
-            [1, 5, 7, 3],
-        ];
-        let triangles = quads
-            .iter()
-            .flat_map(|q| [[c(q[0]), c(q[1]), c(q[2])], [c(q[0]), c(q[2]), c(q[3])]])
-            .collect();
+        let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+        let triangles =
+            quads.iter().flat_map(|q| [[c(q[0]), c(q[1]), c(q[2])], [c(q[0]), c(q[2]), c(q[3])]]).collect();
         Mesh { triangles }
     }
 
     #[test]
     fn cube_gives_exact_pixel_counts() {
         let mesh = cuboid([2.0, -1.0, 0.5], [12.0, 4.0, 4.5]);
-        let cfg = SliceConfig {
-            layer_height_mm: 1.0,
-            pixel_mm: 0.3,
-            margin_px: 2,
-        };
+        let cfg = SliceConfig { layer_height_mm: 1.0, pixel_mm: 0.3, margin_px: 2 };
         // Through ASCII and binary STL too.
         let mut ascii = Vec::new();
         mesh.write_ascii(&mut ascii).unwrap();
@@ -323,11 +282,7 @@ mod tests {
     fn sphere_areas_within_one_percent() {
         let (r, c) = (10.0, [3.0, 4.0, 10.0]);
         let mesh = sphere(r, c, 180, 360);
-        let cfg = SliceConfig {
-            layer_height_mm: 0.5,
-            pixel_mm: 0.1,
-            margin_px: 1,
-        };
+        let cfg = SliceConfig { layer_height_mm: 0.5, pixel_mm: 0.1, margin_px: 1 };
         let mut s = Slicer::new(&mesh, &cfg).unwrap();
         let g = *s.grid();
         assert_eq!(g.layers, 40);
@@ -338,10 +293,7 @@ mod tests {
             let want = std::f64::consts::PI * rz2;
             let got = s.layer(k).count_ones() as f64 * 0.01;
             if rz2 >= 9.0 {
-                assert!(
-                    (got - want).abs() < 0.01 * want,
-                    "layer {k}: {got} vs {want}"
-                );
+                assert!((got - want).abs() < 0.01 * want, "layer {k}: {got} vs {want}");
                 checked += 1;
             } else {
                 assert!(got <= want * 1.05 + 0.05, "layer {k}: {got} vs {want}");
@@ -353,11 +305,7 @@ mod tests {
     #[test]
     fn slice_to_dir_writes_readable_pngs() {
         let mesh = cuboid([0.0, 0.0, 0.0], [2.0, 1.0, 0.3]);
-        let cfg = SliceConfig {
-            layer_height_mm: 0.1,
-            pixel_mm: 0.25,
-            margin_px: 0,
-        };
+        let cfg = SliceConfig { layer_height_mm: 0.1, pixel_mm: 0.25, margin_px: 0 };
         let dir = tempfile::tempdir().unwrap();
         let rep = slice_to_dir(&mesh, &cfg, dir.path()).unwrap();
         assert_eq!(rep.pixels_per_layer, vec![32, 32, 32]);
@@ -365,10 +313,7 @@ mod tests {
         assert_eq!(listed, rep.files);
         let img = load_image(&listed[2], &ThresholdOptions::default()).unwrap();
         assert_eq!((img.width(), img.height(), img.count_ones()), (8, 4, 32));
-        assert!(matches!(
-            slice_to_dir(&Mesh::default(), &cfg, dir.path()),
-            Err(SliceError::EmptyMesh)
-        ));
+        assert!(matches!(slice_to_dir(&Mesh::default(), &cfg, dir.path()), Err(SliceError::EmptyMesh)));
     }
 
     /// Differential check against PrusaSlicer 2.5.0: the L plate (`tests/data/raster/L.stl`)
@@ -378,16 +323,9 @@ mod tests {
     fn l_plate_matches_prusaslicer() {
         let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/raster");
         let mesh = crate::gen::stl::read_stl(&data.join("L.stl")).unwrap();
-        let cfg = SliceConfig {
-            layer_height_mm: 0.1,
-            pixel_mm: 0.2,
-            margin_px: 0,
-        };
+        let cfg = SliceConfig { layer_height_mm: 0.1, pixel_mm: 0.2, margin_px: 0 };
         let mut s = Slicer::new(&mesh, &cfg).unwrap();
-        assert_eq!(
-            (s.grid().width_px, s.grid().height_px, s.grid().layers),
-            (100, 50, 10)
-        );
+        assert_eq!((s.grid().width_px, s.grid().height_px, s.grid().layers), (100, 50, 10));
         let ours = s.layer(5);
         let mut r = crate::gen::sl1::Sl1Reader::open(&data.join("L_portrait_10.sl1")).unwrap();
         let last = r.layer_count() - 1;

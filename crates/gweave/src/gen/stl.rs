@@ -16,10 +16,7 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum StlError {
     #[error("{path}: {source}")]
-    Io {
-        path: std::path::PathBuf,
-        source: std::io::Error,
-    },
+    Io { path: std::path::PathBuf, source: std::io::Error },
     #[error("binary STL truncated: {len} bytes for {count} triangles")]
     Truncated { len: usize, count: u64 },
     #[error("ASCII STL line {line}: {message}")]
@@ -85,10 +82,7 @@ impl Mesh {
 
 /// Reads an STL file.
 pub fn read_stl(path: &Path) -> Result<Mesh, StlError> {
-    let data = std::fs::read(path).map_err(|source| StlError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let data = std::fs::read(path).map_err(|source| StlError::Io { path: path.to_path_buf(), source })?;
     parse_stl(&data)
 }
 
@@ -100,19 +94,13 @@ pub fn parse_stl(data: &[u8]) -> Result<Mesh, StlError> {
             return Ok(parse_binary(&data[84..]));
         }
     }
-    let text_start = data
-        .iter()
-        .position(|b| !b.is_ascii_whitespace())
-        .unwrap_or(0);
+    let text_start = data.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(0);
     if data[text_start..].starts_with(b"solid") {
         return parse_ascii(data);
     }
     if data.len() >= 84 {
         let count = u64::from(u32::from_le_bytes([data[80], data[81], data[82], data[83]]));
-        return Err(StlError::Truncated {
-            len: data.len(),
-            count,
-        });
+        return Err(StlError::Truncated { len: data.len(), count });
     }
     Err(StlError::NotStl)
 }
@@ -144,11 +132,9 @@ fn parse_ascii(data: &[u8]) -> Result<Mesh, StlError> {
             Some("vertex") => {
                 let mut v = [0f32; 3];
                 for c in &mut v {
-                    *c = words.next().and_then(|w| w.parse().ok()).ok_or_else(|| {
-                        StlError::Parse {
-                            line: n + 1,
-                            message: "vertex needs three numbers".into(),
-                        }
+                    *c = words.next().and_then(|w| w.parse().ok()).ok_or_else(|| StlError::Parse {
+                        line: n + 1,
+                        message: "vertex needs three numbers".into(),
                     })?;
                 }
                 vertices.push(v);
@@ -204,10 +190,7 @@ mod tests {
         let mut bin = Vec::new();
         m.write_binary(&mut bin).unwrap();
         bin.truncate(120);
-        assert!(matches!(
-            parse_stl(&bin),
-            Err(StlError::Truncated { count: 2, .. })
-        ));
+        assert!(matches!(parse_stl(&bin), Err(StlError::Truncated { count: 2, .. })));
         assert!(matches!(
             parse_stl(b"solid x\nfacet\nouter loop\nvertex 1 2\n"),
             Err(StlError::Parse { line: 4, .. })

@@ -1,5 +1,8 @@
-//! Pictures of what a file prints: `gweave preview`.
+//! Pictures of what a file prints: `gweave preview`, and the drawing tools other commands use.
 //!
+//! - [`canvas`] and [`camera`]: a z-buffered RGB canvas with line drawing and PNG output, and an
+//!   orthographic camera (isometric or top view) mapping 3D millimetres to pixels (the rotary
+//!   pictures use them).
 //! - [`toolpath`]: the segments of a file (start, end, tool, feature, feed, layer, extruding),
 //!   collected in one streaming pass, with decimation for huge files.
 //! - [`colour_by`]: colour by tool, feature type, speed, layer or predicted mix colour.
@@ -15,6 +18,8 @@
 //! std::fs::write("part.png", png).unwrap();
 //! ```
 
+pub mod camera;
+pub mod canvas;
 pub mod colour_by;
 pub mod html;
 pub mod png_out;

@@ -11,6 +11,8 @@
 //!   F converted per convention from the rounded coordinates the firmware will actually see.
 //! - [`helix`]: seam-free helical tubes and custom helical paths (cones, variable pitch).
 //! - [`wrap`]: the streaming pass that prints a flat-sliced part onto the mandrel.
+//! - [`preview`]: any rotary program read back as the machine runs it, and drawn in 3D.
+//! - [`report`]: both jobs end to end (write, read back, draw, report) for the CLI and Python.
 //!
 //! ```
 //! use gweave::rotary::{helix::TubeParams, cylinder::RotaryConfig};
@@ -34,6 +36,8 @@
 pub mod cylinder;
 pub mod emit;
 pub mod helix;
+pub mod preview;
+pub mod report;
 pub mod wrap;
 
 use thiserror::Error;

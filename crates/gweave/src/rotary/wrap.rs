@@ -326,15 +326,19 @@ pub fn wrap_bytes(config: WrapConfig, input: &[u8]) -> Result<Vec<u8>> {
         &mut pass,
         &mut out,
     );
-    match run {
-        Ok(_) => Ok(out),
-        // Our own errors travel through the driver as io::Errors: unwrap them again.
-        Err(crate::Error::Io { source, .. }) if source.get_ref().is_some_and(|e| e.is::<RotaryError>()) => {
-            match source.into_inner().map(|e| e.downcast::<RotaryError>()) {
-                Some(Ok(e)) => Err(*e),
+    run.map(|_| out).map_err(from_engine)
+}
+
+/// The pass's own errors travel through the engine's driver as I/O errors: brings them back
+/// as the [`RotaryError`] they are; any other engine error is wrapped.
+pub fn from_engine(e: crate::Error) -> RotaryError {
+    match e {
+        crate::Error::Io { source, .. } if source.get_ref().is_some_and(|s| s.is::<RotaryError>()) => {
+            match source.into_inner().map(|s| s.downcast::<RotaryError>()) {
+                Some(Ok(inner)) => *inner,
                 _ => unreachable!("checked to be a RotaryError just above"),
             }
         }
-        Err(e) => Err(RotaryError::Engine(e)),
+        other => RotaryError::Engine(other),
     }
 }

@@ -1,0 +1,113 @@
+//! `gweave purge-shift`: move every colour change earlier by the purge amount, splitting the
+//! move, so the purge prints inside the part instead of a wipe tower (docs/purge-shift.md).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use gweave::gcode::writer::Target;
+use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
+
+use crate::common::{OutputArgs, ReportArgs};
+use crate::progress::Bar;
+
+/// Move each tool/mix change earlier by the purge, so the old colour is purged inside the part.
+///
+/// For every `T<n>` (and `M163`/`M164`, `M165`, `M567` mix change) the old colour's extruding
+/// moves are walked back until the purge amount of filament is found; that move is split at the
+/// exact point and the change goes there. Works with absolute and relative E, `G92 E` resets,
+/// retractions and firmware retraction; never crosses a layer change (unless --cross-layers),
+/// the outer wall (unless allowed) or the previous change.
+///
+/// As a PrusaSlicer post-processing script: `/path/to/gweave purge-shift --purge 2.5 --in-place
+/// --no-backup` (PrusaSlicer appends the file name). Chains after `gweave mix`.
+/// Example: `gweave purge-shift part.gcode -o part.shifted.gcode --purge 2.5`.
+#[derive(Args, Debug)]
+pub struct PurgeShiftArgs {
+    /// The G-code file to read.
+    pub input: PathBuf,
+    #[command(flatten)]
+    pub out: OutputArgs,
+    /// Purge per change, mm of filament.
+    #[arg(long, value_name = "MM")]
+    pub purge: Option<f64>,
+    /// Purge per change as a volume, mm^3 (converted with --filament-diameter).
+    #[arg(long, value_name = "MM3", conflicts_with = "purge")]
+    pub purge_mm3: Option<f64>,
+    /// TOML settings: per-pair table, colours, washout model, rules (flags override it).
+    #[arg(short, long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Filament diameter, mm (default 1.75).
+    #[arg(long, value_name = "MM")]
+    pub filament_diameter: Option<f64>,
+    /// Allow a change to move back into the previous layer.
+    #[arg(long)]
+    pub cross_layers: bool,
+    /// Features the change may move through, comma separated (default: all but outer_wall).
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub allow_features: Option<Vec<String>>,
+    /// Explicit print-proper markers: the comment texts `begin,end`.
+    #[arg(long, value_name = "BEGIN,END", value_delimiter = ',', num_args = 1)]
+    pub markers: Option<Vec<String>>,
+    /// Too little room: `partial` (accept the shortfall; the only fallback implemented).
+    #[arg(long, value_name = "NAME")]
+    pub fallback: Option<String>,
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Builds the library settings: the TOML file first, then the flags on top.
+fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
+    let mut c = match &args.config {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            PurgeShiftConfig::parse_toml(&text).with_context(|| format!("in {}", path.display()))?
+        }
+        None => PurgeShiftConfig::default(),
+    };
+    let markers = match args.markers.as_deref() {
+        None => None,
+        Some([begin, end]) => Some([begin.clone(), end.clone()]),
+        Some(_) => anyhow::bail!("--markers takes two comment texts: BEGIN,END"),
+    };
+    c.apply(&Overrides {
+        purge_mm: args.purge,
+        purge_mm3: args.purge_mm3,
+        filament_diameter_mm: args.filament_diameter,
+        cross_layers: args.cross_layers,
+        allow_features: args.allow_features.clone(),
+        markers,
+        fallback: args.fallback.clone(),
+    });
+    Ok(c)
+}
+
+pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
+    let rules = config(&args)?.validate()?;
+    let target = args.out.target()?;
+    let mut bar = Bar::new(args.quiet);
+    let report = purge_shift_file(rules, &args.input, &target, &mut bar)?;
+    drop(bar);
+    for w in report.warnings.iter().take(20) {
+        eprintln!("gweave: warning: {w}");
+    }
+    if report.warnings_total > 20 {
+        eprintln!("gweave: ... {} more warnings (see --json)", report.warnings_total - 20);
+    }
+    if args.report.emit(&report)? {
+        // Keep standard output clean when the G-code goes there.
+        if target == Target::Stdout {
+            eprint!("{}", report.summary());
+        } else {
+            let mut stdout = std::io::stdout().lock();
+            write!(stdout, "{}", report.summary())?;
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,267 @@
+//! `gweave raster`: layer images (or a PrusaSlicer `.sl1`) to binder-jet inkjet G-code.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use gweave::gcode::writer::Target;
+use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
+
+use crate::common::ReportArgs;
+use crate::raster_job::{JobOptions, JobReport};
+
+/// Layer images to inkjet G-code for binder jetting: bands as tall as the nozzle row, per
+/// inked column `G1 X`, `M400`, `M700 P<head> S<bits>` (Marlin hpc6602) or `M578` (RepRapFirmware).
+///
+/// Serpentine passes by default; empty columns and bands are skipped; Z and a powder recoat
+/// block between layers. Pixels lit at or above the threshold are binder (`--invert` for black on
+/// white). Example: `gweave raster layers/ -o part.gcode --head examples/raster/c6602.toml`.
+#[derive(Args, Debug)]
+pub struct RasterArgs {
+    /// Folders, globs (`'slices/*.png'`), image files (BMP, PNG) in layer order, or one `.sl1`.
+    #[arg(required_unless_present = "test_pattern")]
+    pub inputs: Vec<PathBuf>,
+    /// Output G-code file (`-` for standard output).
+    #[arg(short, long, value_name = "OUT.gcode")]
+    pub output: PathBuf,
+    /// Printhead profile (TOML; default: HP C6602, 12 nozzles at 96 dpi, one head).
+    #[arg(long, value_name = "PROFILE.toml")]
+    pub head: Option<PathBuf>,
+    /// Fraction of full scale at or above which a pixel gets binder.
+    #[arg(long, default_value_t = 0.5, value_name = "0..1")]
+    pub threshold: f64,
+    /// Dark pixels get binder (black-on-white drawings, as in seed 004's BMPs).
+    #[arg(long)]
+    pub invert: bool,
+    /// The images' first row is the far edge (+Y up, as pictures are drawn); default: the first
+    /// row is printed at the lowest Y, as `gweave slice-raster` writes them.
+    #[arg(long)]
+    pub flip_y: bool,
+    /// Print every pass left to right (default: serpentine).
+    #[arg(long)]
+    pub one_way: bool,
+    /// Fires per pixel (binder saturation).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub density: u32,
+    /// Bed position of the image corner, mm.
+    #[arg(long, value_name = "X,Y", default_value = "20,20")]
+    pub origin: String,
+    /// Layer thickness, mm (default: the .sl1's own, else 0.1).
+    #[arg(long, value_name = "MM")]
+    pub layer_height: Option<f64>,
+    /// Pixel size of the images, mm; they are resampled to the nozzle pitch.
+    #[arg(long, value_name = "MM", conflicts_with = "dpi")]
+    pub pixel_mm: Option<f64>,
+    /// Resolution of the images, dots per inch (pixel = 25.4 / D mm).
+    #[arg(long, value_name = "D")]
+    pub dpi: Option<f64>,
+    /// Heads to use (the profile's offsets; missing heads get zero offsets).
+    #[arg(long, value_name = "N")]
+    pub heads: Option<usize>,
+    /// One image channel per head, e.g. `r,b` (r, g, b, luma).
+    #[arg(long, value_name = "LIST")]
+    pub channels: Option<String>,
+    /// G-code between layers (powder recoat); `{layer}` and `{z}` are replaced.
+    #[arg(long, value_name = "FILE")]
+    pub recoat: Option<PathBuf>,
+    /// G-code before the first layer.
+    #[arg(long, value_name = "FILE")]
+    pub start: Option<PathBuf>,
+    /// G-code after the last layer.
+    #[arg(long, value_name = "FILE")]
+    pub end: Option<PathBuf>,
+    /// Fire command dialect (default: the profile's).
+    #[arg(long, value_enum)]
+    pub dialect: Option<Dialect>,
+    /// Carriage feed rate, mm/min.
+    #[arg(long, value_name = "MM_MIN")]
+    pub feed: Option<f64>,
+    /// Estimate time from the path at the feed rate instead of running the planner (faster).
+    #[arg(long)]
+    pub fast_estimate: bool,
+    /// Write a nozzle test pattern instead (each nozzle address fired alone, in order).
+    #[arg(long)]
+    pub test_pattern: bool,
+    /// Columns per nozzle in the test pattern.
+    #[arg(long, default_value_t = 4, value_name = "N")]
+    pub pattern_columns: usize,
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub enum Dialect {
+    /// `M700 P S` (Marlin hpc6602).
+    Marlin,
+    /// `M578 P S` (RepRapFirmware).
+    Reprap,
+}
+
+fn parse_origin(text: &str) -> Result<(f64, f64)> {
+    let parts: Vec<&str> = text.split(',').collect();
+    let [x, y] = parts[..] else {
+        bail!("--origin wants X,Y in mm, got {text:?}");
+    };
+    let num = |s: &str| s.trim().parse::<f64>().with_context(|| format!("--origin: {s:?} is not a number"));
+    Ok((num(x)?, num(y)?))
+}
+
+impl RasterArgs {
+    fn options(&self) -> Result<JobOptions> {
+        Ok(JobOptions {
+            inputs: self.inputs.clone(),
+            head: self.head.clone(),
+            threshold: self.threshold,
+            invert: self.invert,
+            flip_y: self.flip_y,
+            one_way: self.one_way,
+            density: self.density,
+            origin_mm: parse_origin(&self.origin)?,
+            layer_height_mm: self.layer_height,
+            pixel_mm: self.pixel_mm,
+            dpi: self.dpi,
+            heads: self.heads,
+            channels: self.channels.clone(),
+            recoat: self.recoat.clone(),
+            start: self.start.clone(),
+            end: self.end.clone(),
+            dialect: self.dialect.map(|d| match d {
+                Dialect::Marlin => FirmwareDialect::Marlin,
+                Dialect::Reprap => FirmwareDialect::RepRapFirmware,
+            }),
+            feed_mm_min: self.feed,
+            fast_estimate: self.fast_estimate,
+        })
+    }
+}
+
+fn target(output: &Path) -> Target {
+    if output == Path::new("-") {
+        Target::Stdout
+    } else {
+        Target::File(output.to_path_buf())
+    }
+}
+
+pub fn run(args: RasterArgs) -> Result<ExitCode> {
+    let options = args.options()?;
+    let to_stdout = args.output == Path::new("-");
+    if args.test_pattern {
+        let (rep, profile) = options.test_pattern(&target(&args.output), args.pattern_columns)?;
+        if args.report.emit(&rep)? && !to_stdout {
+            println!("{}: nozzle test pattern", args.output.display());
+            println!(
+                "  {} head(s) x {} nozzles, {} columns per address, {} fire commands",
+                profile.heads.len(),
+                profile.nozzle_count,
+                args.pattern_columns.max(1),
+                rep.fire_commands
+            );
+            println!("  column group a fires address a alone: the row it prints is nozzle_rows[a]");
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let job = options.job()?;
+    let mut bar = LayerBar::new(args.quiet);
+    let report = job.run(&target(&args.output), &mut bar)?;
+    drop(bar);
+    if args.report.emit(&report)? && !to_stdout {
+        print_human(&report, &job.profile);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_human(r: &JobReport, profile: &PrintheadProfile) {
+    let rr = &r.raster;
+    println!("{}", r.output);
+    println!(
+        "  head            {} nozzles at {} dpi ({:.6} mm), {} head(s), M{}",
+        profile.nozzle_count,
+        profile.dpi,
+        profile.pitch_mm(),
+        r.heads,
+        profile.dialect.fire_code()
+    );
+    println!("  layers          {} ({} images read)", rr.layers, r.images_read);
+    println!("  bands           {} printed, {} empty skipped", rr.bands_printed, rr.bands_skipped);
+    println!("  columns         {} fired, {} empty skipped", rr.columns_fired, rr.columns_skipped);
+    println!("  fire commands   {}", rr.fire_commands);
+    for (h, d) in rr.drops_per_head.iter().enumerate() {
+        println!("    P{h} drops      {d}");
+    }
+    match rr.binder_volume_ul {
+        Some(v) => println!("  binder          {v:.3} uL ({:.4} mL)", v / 1000.0),
+        None => println!("  binder          (set drop_volume_pl in the profile)"),
+    }
+    println!(
+        "  path            {:.1} m, {} XY moves, {} Z moves",
+        rr.xy_path_mm / 1000.0,
+        rr.xy_moves,
+        rr.z_moves
+    );
+    let method = match r.time.method {
+        "planner" => "planner, Marlin defaults",
+        _ => "path at feed rate, no acceleration",
+    };
+    println!(
+        "  time            {} ({method}: motion {}, firing {})",
+        hms(r.time.total_s),
+        hms(r.time.motion_s),
+        hms(r.time.fire_s)
+    );
+}
+
+fn hms(t_s: f64) -> String {
+    let t = t_s.round() as u64;
+    format!("{}h {:02}m {:02}s", t / 3600, t / 60 % 60, t % 60)
+}
+
+/// A layer-count progress bar on stderr, only when stderr is a terminal and the job has enough
+/// layers to take a while. (`crate::progress::Bar` counts input bytes, which says little here:
+/// 1-bit PNG layers are tiny files that take long to raster.)
+struct LayerBar(Option<indicatif::ProgressBar>);
+
+/// Fewer layers than this finish too fast for a bar to help.
+const MIN_LAYERS: u64 = 50;
+
+impl LayerBar {
+    fn new(quiet: bool) -> Self {
+        use std::io::IsTerminal;
+        LayerBar((!quiet && std::io::stderr().is_terminal()).then(indicatif::ProgressBar::hidden))
+    }
+}
+
+impl gweave::pass::Progress for LayerBar {
+    fn set_len(&mut self, layers: u64) {
+        if let Some(bar) = &self.0 {
+            if layers < MIN_LAYERS {
+                self.0 = None;
+                return;
+            }
+            bar.set_length(layers);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} layers {per_sec} {eta}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+        }
+    }
+
+    fn advance(&mut self, layers_done: u64) {
+        if let Some(bar) = &self.0 {
+            bar.set_position(layers_done);
+        }
+    }
+}
+
+impl Drop for LayerBar {
+    fn drop(&mut self) {
+        if let Some(bar) = &self.0 {
+            bar.finish_and_clear();
+        }
+    }
+}

@@ -1,0 +1,389 @@
+//! `gweave rotary`: lathe-type printers (a nozzle over a turning mandrel).
+//!
+//! `wrap` prints a part sliced flat onto the mandrel; `tube` generates a seam-free tube of
+//! continuous helical layers. Both print a summary (or JSON) read back from the written file,
+//! as the machine will execute it, and can draw that path in 3D (`--preview out.png`).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Subcommand, ValueEnum};
+use gweave::gcode::writer::Target;
+use gweave::rotary::cylinder::{FeedConvention, RotaryConfig, RotaryUnit};
+use gweave::rotary::helix::TubeParams;
+use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
+use gweave::rotary::wrap::WrapConfig;
+
+use super::stats::hms;
+use crate::common::{OutputArgs, ReportArgs};
+use crate::progress::Bar;
+
+/// Rotary (lathe-type) printing: wrap flat G-code onto a mandrel, or generate helical tubes.
+#[derive(Args, Debug)]
+pub struct RotaryArgs {
+    #[command(subcommand)]
+    pub command: RotaryCommand,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum RotaryCommand {
+    Wrap(WrapArgs),
+    Tube(TubeArgs),
+}
+
+pub fn run(args: RotaryArgs) -> Result<ExitCode> {
+    match args.command {
+        RotaryCommand::Wrap(a) => run_wrap(a),
+        RotaryCommand::Tube(a) => run_tube(a),
+    }
+}
+
+/// How the firmware reads F on rotary moves.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum FeedArg {
+    /// F is the linear (X, Z) speed; rotary-only moves in deg/min (LinuxCNC, Marlin default).
+    Nist,
+    /// F = sqrt(dX^2 + dZ^2 + dA^2)/T (Marlin ARTICULATED_ROBOT_ARM, RRF `M584 S0`).
+    Combined,
+    /// G93: F = 1/T, T in minutes.
+    InverseTime,
+}
+
+/// The unit of the rotary word.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum UnitArg {
+    /// Degrees (a true rotary axis such as A).
+    Deg,
+    /// Millimetres of circumference at the mandrel surface (a rotary axis set up as Y).
+    Mm,
+}
+
+/// The machine, shared by both commands; flags override the TOML file.
+#[derive(Args, Debug)]
+pub struct MachineArgs {
+    /// Mandrel diameter, mm (required unless the config file gives `[machine] mandrel_diameter_mm`).
+    #[arg(long, value_name = "MM")]
+    pub mandrel_diameter: Option<f64>,
+    /// How the firmware reads F [default: nist].
+    #[arg(long, value_enum)]
+    pub feed: Option<FeedArg>,
+    /// Unit of the rotary word [default: deg].
+    #[arg(long, value_enum)]
+    pub rotary_unit: Option<UnitArg>,
+    /// Axis letters: axial, rotary, radial [default: X,A,Z].
+    #[arg(long, value_name = "X,A,Z", value_parser = parse_axes)]
+    pub axes: Option<[char; 3]>,
+    /// Configuration file (TOML; see examples/rotary/).
+    #[arg(short = 'c', long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Draw the executed path in 3D to this PNG (isometric, one colour per layer).
+    #[arg(long, value_name = "PNG")]
+    pub preview: Option<PathBuf>,
+}
+
+fn parse_axes(text: &str) -> Result<[char; 3], String> {
+    let letters: Vec<char> = text.split(',').map(str::trim).flat_map(str::chars).collect();
+    match letters[..] {
+        [a, r, z] => Ok([a, r, z].map(|c| c.to_ascii_uppercase())),
+        _ => Err(format!("three axis letters are needed (axial,rotary,radial), got `{text}`")),
+    }
+}
+
+impl MachineArgs {
+    /// The config file's text with the mandrel diameter from the command line filled in (the
+    /// `[machine]` table requires it), or `None` without a file.
+    fn config_text(&self) -> Result<Option<String>> {
+        let Some(path) = &self.config else {
+            return Ok(None);
+        };
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let mut table: toml::Table = text.parse().with_context(|| format!("reading {}", path.display()))?;
+        if let Some(d) = self.mandrel_diameter {
+            let machine = table.entry("machine").or_insert_with(|| toml::Table::new().into());
+            if let Some(machine) = machine.as_table_mut() {
+                machine.insert("mandrel_diameter_mm".into(), d.into());
+            }
+        }
+        Ok(Some(table.to_string()))
+    }
+
+    /// A machine from the flags alone.
+    fn machine(&self) -> Result<RotaryConfig> {
+        match self.mandrel_diameter {
+            Some(d) => Ok(RotaryConfig::new(d)),
+            None => bail!("give --mandrel-diameter MM (or a config file with [machine] mandrel_diameter_mm)"),
+        }
+    }
+
+    /// Applies the flags over a machine read from a file or built by [`Self::machine`].
+    fn apply(&self, machine: &mut RotaryConfig) {
+        if let Some(d) = self.mandrel_diameter {
+            machine.mandrel_diameter_mm = d;
+        }
+        if let Some(feed) = self.feed {
+            machine.feed_convention = match feed {
+                FeedArg::Nist => FeedConvention::Nist,
+                FeedArg::Combined => FeedConvention::Combined,
+                FeedArg::InverseTime => FeedConvention::InverseTime,
+            };
+        }
+        if let Some(unit) = self.rotary_unit {
+            machine.rotary_unit = match unit {
+                UnitArg::Deg => RotaryUnit::Degrees,
+                UnitArg::Mm => RotaryUnit::Mm,
+            };
+        }
+        if let Some([a, r, z]) = self.axes {
+            (machine.axial_axis, machine.rotary_axis, machine.radial_axis) = (a, r, z);
+        }
+    }
+}
+
+fn print_machine(m: &MachineReport) {
+    println!(
+        "  mandrel         {:.3} mm (circumference {:.3} mm), axes {} (rotary in {}), feed {}",
+        m.mandrel_diameter_mm,
+        m.circumference_mm,
+        m.axes,
+        match m.rotary_unit {
+            RotaryUnit::Degrees => "degrees",
+            RotaryUnit::Mm => "mm",
+        },
+        match m.feed_convention {
+            FeedConvention::Nist => "nist",
+            FeedConvention::Combined => "combined",
+            FeedConvention::InverseTime => "inverse-time (G93)",
+        }
+    );
+}
+
+/// Wrap a part sliced flat onto the mandrel of a lathe-type printer.
+///
+/// The flat X runs along the mandrel, Y around it (model the part unwrapped with its Y length
+/// equal to the circumference pi*D) and Z away from it: theta = 360*y/(pi*D), radius D/2 + z.
+/// Extrusion grows with the surface at each radius; F keeps the slicer's surface speed in the
+/// machine's feed convention; arcs are linearised and long moves cut into chords.
+///
+/// Example: `gweave rotary wrap plate.gcode -o sleeve.gcode --mandrel-diameter 30
+/// --seam-rotation 7.5 --preview sleeve.png`. Before: `G1 X10 Y15 E1.0 F1200`; after, on a
+/// 60 mm circumference at Z0.2: `G1 X10.000 A90.000 E1.01455 F656.097`.
+#[derive(Args, Debug)]
+pub struct WrapArgs {
+    /// The flat G-code file.
+    pub input: PathBuf,
+    #[command(flatten)]
+    pub out: OutputArgs,
+    #[command(flatten)]
+    pub machine: MachineArgs,
+    /// Keep flat arc lengths (the Diabase wizard: A = Y*180/(pi*(R + z - z1)), E unchanged).
+    #[arg(long)]
+    pub keep_arc_length: bool,
+    /// Turn every layer this much further than the one below, degrees, so seams do not stack.
+    #[arg(long, value_name = "DEG")]
+    pub seam_rotation: Option<f64>,
+    /// Largest chord sagitta on the cylinder, mm (0: one move per flat move) [default: 0.01].
+    #[arg(long, value_name = "MM")]
+    pub chord_tol: Option<f64>,
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
+    let target = args.out.target()?;
+    let mut config = match args.machine.config_text()? {
+        Some(text) => WrapConfig::from_toml_str(&text).context("rotary wrap config")?,
+        None => WrapConfig::new(args.machine.machine()?),
+    };
+    args.machine.apply(&mut config.machine);
+    if args.keep_arc_length {
+        config.unwrap.keep_arc_length = true;
+    }
+    if let Some(deg) = args.seam_rotation {
+        config.unwrap.seam_rotation_per_layer_deg = deg;
+    }
+    if let Some(tol) = args.chord_tol {
+        config.chord_tolerance_mm = tol;
+    }
+    let mut bar = Bar::new(args.quiet);
+    let report = report::wrap_file(&config, &args.input, &target, args.machine.preview.as_deref(), &mut bar)?;
+    drop(bar);
+    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
+        print_wrap(&report);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_wrap(r: &WrapReport) {
+    if let Some(out) = &r.output {
+        println!("{} -> {}", r.input.display(), out.display());
+    }
+    print_machine(&r.machine);
+    let mapping = if r.keep_arc_length { "arc length kept (Diabase)" } else { "theta = 360*y/C, E scaled" };
+    println!("  mapping         {mapping}");
+    println!("  layers          {}", r.layers.len());
+    for l in &r.layers {
+        println!(
+            "    layer {:<4} r {:>8.3} mm  theta {:>9.3} .. {:>9.3} deg (span {:>7.3})  seam {:>7.3} deg  {:>9.2} mm",
+            l.layer.index,
+            l.layer.radius_mm,
+            l.layer.theta_range_deg[0],
+            l.layer.theta_range_deg[1],
+            l.span_deg,
+            l.seam_deg,
+            l.layer.filament_mm
+        );
+    }
+    println!(
+        "  seam            at flat y = 0: {:.3} deg, turning {:.3} deg per layer",
+        r.seam_offset_deg, r.seam_rotation_per_layer_deg
+    );
+    println!("  filament        {:.2} mm", r.filament_mm);
+    println!("  time (F only)   {}", hms(r.time_s));
+}
+
+/// Generate a seam-free tube of continuous helical layers on the mandrel.
+///
+/// Layer k lies on radius D/2 + (k + 1/2)*h and advances one pitch per turn (the bead width
+/// closes the wall, more leaves an open lattice); the helix reverses its handedness every
+/// layer (interweaving) unless --no-interweave; the spindle speed is recomputed per layer to
+/// keep the surface speed; E = w*h*L/A_filament; layers join without travel.
+///
+/// Example: `gweave rotary tube -o tube.gcode --mandrel-diameter 20 --length 40 --layers 4
+/// --pitch 3 --preview tube.png` (an open, interwoven lattice).
+#[derive(Args, Debug)]
+pub struct TubeArgs {
+    /// Output file (`-` for standard output).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub machine: MachineArgs,
+    /// Tube length along the mandrel, mm [default: 50].
+    #[arg(long, value_name = "MM")]
+    pub length: Option<f64>,
+    /// Number of layers [default: 4].
+    #[arg(long, value_name = "N")]
+    pub layers: Option<u32>,
+    /// Layer height (radial step), mm [default: 0.2].
+    #[arg(long, value_name = "MM")]
+    pub layer_height: Option<f64>,
+    /// Bead width, mm [default: 0.4].
+    #[arg(long, value_name = "MM")]
+    pub bead_width: Option<f64>,
+    /// Axial advance per turn, mm [default: the bead width, a closed wall].
+    #[arg(long, value_name = "MM")]
+    pub pitch: Option<f64>,
+    /// Keep one handedness for every layer (the spindle reverses instead).
+    #[arg(long)]
+    pub no_interweave: bool,
+    /// At least this many chords per turn.
+    #[arg(long, value_name = "N")]
+    pub segments_per_turn: Option<u32>,
+    /// Largest chord sagitta, mm [default: 0.01].
+    #[arg(long, value_name = "MM")]
+    pub chord_tol: Option<f64>,
+    /// Surface speed while printing, mm/s [default: 20].
+    #[arg(long, value_name = "MM_S")]
+    pub speed: Option<f64>,
+    /// Nozzle temperature, degrees C [default: 190].
+    #[arg(long, value_name = "C")]
+    pub temp: Option<f64>,
+    /// Filament diameter, mm [default: 1.75].
+    #[arg(long, value_name = "MM")]
+    pub filament_diameter: Option<f64>,
+    #[command(flatten)]
+    pub report: ReportArgs,
+}
+
+fn tube_params(args: &TubeArgs) -> Result<TubeParams> {
+    let mut t = match args.machine.config_text()? {
+        Some(text) => TubeParams::from_toml_str(&text).context("rotary tube config")?,
+        None => TubeParams::new(args.machine.machine()?),
+    };
+    args.machine.apply(&mut t.machine);
+    let p = &mut t.print;
+    let overrides = [
+        (&mut t.length_mm, args.length),
+        (&mut p.layer_height_mm, args.layer_height),
+        (&mut p.bead_width_mm, args.bead_width),
+        (&mut p.chord_tolerance_mm, args.chord_tol),
+        (&mut p.print_speed_mm_s, args.speed),
+        (&mut p.nozzle_temp_c, args.temp),
+        (&mut p.filament_diameter_mm, args.filament_diameter),
+    ];
+    for (slot, value) in overrides {
+        if let Some(v) = value {
+            *slot = v;
+        }
+    }
+    if let Some(n) = args.layers {
+        t.layers = n;
+    }
+    if args.pitch.is_some() {
+        t.pitch_mm = args.pitch;
+    }
+    if args.no_interweave {
+        t.interweave = false;
+    }
+    if args.segments_per_turn.is_some() {
+        t.print.segments_per_turn = args.segments_per_turn;
+    }
+    t.validate()?;
+    Ok(t)
+}
+
+fn run_tube(args: TubeArgs) -> Result<ExitCode> {
+    let params = tube_params(&args)?;
+    let target =
+        if args.output == Path::new("-") { Target::Stdout } else { Target::File(args.output.clone()) };
+    let report = report::tube_file(&params, &target, args.machine.preview.as_deref())?;
+    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
+        print_tube(&report);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_tube(r: &TubeReport) {
+    if let Some(out) = &r.output {
+        println!("{}", out.display());
+    }
+    print_machine(&r.machine);
+    println!(
+        "  tube            length {:.3} mm, bead {:.3} x {:.3} mm, pitch {:.3} mm, {}",
+        r.length_mm,
+        r.bead_width_mm,
+        r.layer_height_mm,
+        r.pitch_mm,
+        if r.interweave { "interwoven" } else { "one handedness" }
+    );
+    println!("  layers          {}", r.layers.len());
+    for l in &r.layers {
+        println!(
+            "    layer {:<3} r {:>8.3} mm  {:<5} {:>8.2} turns  {:>8.3} deg/s  X {:.3} -> {:.3}  A {:.1} -> {:.1}",
+            l.index,
+            l.radius_mm,
+            format!("{:?}", l.handedness).to_lowercase(),
+            l.turns,
+            l.angular_speed_deg_s,
+            l.axial_mm[0],
+            l.axial_mm[1],
+            l.theta_deg[0],
+            l.theta_deg[1]
+        );
+    }
+    println!("  seam            none: each layer starts where the one below ended, no travel");
+    let share = 100.0 * r.extruded_mm3 / r.wall_volume_mm3;
+    let versus = if r.pitch_mm == r.bead_width_mm {
+        format!("tube wall {:.1} mm3, {:+.2} %", r.wall_volume_mm3, share - 100.0)
+    } else {
+        format!("lattice: {share:.1} % of the closed wall's {:.1} mm3", r.wall_volume_mm3)
+    };
+    println!("  filament        {:.2} mm = {:.1} mm3 ({versus})", r.filament_mm, r.extruded_mm3);
+    println!("  time (F only)   {}", hms(r.print_time_s));
+    if let Some(n) = r.executed_beads {
+        println!("  read back       {n} extruding moves");
+    }
+}

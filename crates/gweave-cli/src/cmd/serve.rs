@@ -1,0 +1,142 @@
+//! `gweave serve`: the virtual printer on a serial line, for real hosts.
+
+use std::fs::File;
+use std::io::{LineWriter, Write};
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use gweave_sim::interp::Machine;
+use gweave_sim::profile::MachineProfile;
+use gweave_sim::pty::PtyEndpoint;
+use gweave_sim::serial::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
+use gweave_sim::tcp::TcpEndpoint;
+use gweave_sim::transport::{serve, Endpoint, ServeOptions, ServeSummary};
+
+/// Run the virtual printer as a Marlin board behind a pty or a loopback TCP port.
+///
+/// Hosts (Printrun, OctoPrint, Repetier) connect as to a USB printer: `start` at connection,
+/// line numbers and checksums with `Resend:` on errors, `ok` after each command,
+/// `echo:busy: processing` every 2 s of a long command. Each connection boots a fresh machine.
+/// Example: `gweave serve --pty /tmp/gweave0`, then `printcore.py /tmp/gweave0 part.gcode`.
+#[derive(Args, Debug)]
+pub struct ServeArgs {
+    /// Create a pseudo-terminal and link this path to it (removed on exit).
+    #[arg(long, value_name = "PATH", required_unless_present = "tcp", conflicts_with = "tcp")]
+    pub pty: Option<PathBuf>,
+    /// Listen on this loopback address instead (`127.0.0.1:PORT`).
+    #[arg(long, value_name = "ADDR")]
+    pub tcp: Option<SocketAddr>,
+    /// Machine profile (TOML); default: the built-in RAMPS/Marlin printer.
+    #[arg(long, value_name = "FILE")]
+    pub machine: Option<PathBuf>,
+    /// Pace replies to the simulated clock (default: as fast as the simulation runs).
+    #[arg(long)]
+    pub realtime: bool,
+    /// Write the session transcript (received `>` and sent `<` lines, simulated seconds).
+    #[arg(long, value_name = "FILE")]
+    pub log: Option<PathBuf>,
+    /// Exit after this many wall-clock seconds without a byte from the host.
+    #[arg(long, value_name = "SECS")]
+    pub exit_after_idle: Option<f64>,
+    /// When a host disconnects, write the simulator's report of its session here (JSON, as
+    /// `gweave sim --report`; a later session replaces it).
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Acknowledge a repeat of one of the last N line numbers with `ok` without running it again
+    /// (0: answer it with a resend request, as stock Marlin).
+    #[arg(long, value_name = "N", default_value_t = ProtocolConfig::default().duplicate_window)]
+    pub duplicate_window: u32,
+}
+
+pub fn run(args: ServeArgs) -> Result<ExitCode> {
+    let profile = match &args.machine {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            MachineProfile::from_toml_str(&text).with_context(|| format!("in {}", path.display()))?
+        }
+        None => MachineProfile::default(),
+    };
+    // Build one machine now so that a bad profile fails before any host connects.
+    Machine::new(profile.clone()).context("building the virtual printer")?;
+    let options = ServeOptions {
+        protocol: ProtocolConfig {
+            keepalive_s: DEFAULT_KEEPALIVE_S,
+            duplicate_window: args.duplicate_window,
+        },
+        realtime: args.realtime,
+        exit_after_idle: match args.exit_after_idle {
+            Some(s) if !(s.is_finite() && s > 0.0) => {
+                bail!("--exit-after-idle takes a positive number of seconds")
+            }
+            Some(s) => Some(Duration::from_secs_f64(s)),
+            None => None,
+        },
+    };
+    let mut log = match &args.log {
+        Some(path) => {
+            Some(LineWriter::new(File::create(path).with_context(|| format!("creating {}", path.display()))?))
+        }
+        None => None,
+    };
+    // Ctrl-C and SIGTERM raise the flag; the serve loop sees it within a tick and returns, so the
+    // pty link is removed by its endpoint's Drop.
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(signal, Arc::clone(&stop)).context("installing the signal handler")?;
+    }
+    let mut endpoint: Box<dyn Endpoint> = match (&args.pty, args.tcp) {
+        (Some(link), _) => {
+            let pty = PtyEndpoint::open(link)?;
+            eprintln!("gweave serve: {} -> {} (Ctrl-C to stop)", link.display(), pty.slave_path().display());
+            Box::new(pty)
+        }
+        (None, Some(addr)) => {
+            let tcp = TcpEndpoint::bind(addr)?;
+            eprintln!("gweave serve: listening on {} (Ctrl-C to stop)", tcp.local_addr()?);
+            Box::new(tcp)
+        }
+        (None, None) => bail!("say where to serve: --pty PATH or --tcp 127.0.0.1:PORT"),
+    };
+    let mut make = || Machine::new(profile.clone());
+    let mut report_error = None;
+    let mut finished = |mut machine: Machine| {
+        if let Some(path) = &args.report {
+            machine.finish(&mut |_, _| {});
+            let written = serde_json::to_string_pretty(&machine.report())
+                .map_err(anyhow::Error::from)
+                .and_then(|text| std::fs::write(path, text + "\n").map_err(anyhow::Error::from));
+            if let Err(e) = written {
+                report_error = Some(e.context(format!("writing {}", path.display())));
+            }
+        }
+    };
+    let summary = serve(
+        endpoint.as_mut(),
+        &mut make,
+        &mut finished,
+        &options,
+        log.as_mut().map(|w| w as &mut dyn Write),
+        &stop,
+    )?;
+    drop(endpoint);
+    print_summary(&summary);
+    match report_error {
+        Some(e) => Err(e),
+        None => Ok(ExitCode::SUCCESS),
+    }
+}
+
+fn print_summary(s: &ServeSummary) {
+    let l = &s.link;
+    eprintln!(
+        "gweave serve: {} session(s), {} lines, {} executed, {} refused with a resend or error, {} duplicates, {} busy",
+        s.sessions, l.lines, l.executed, l.errors, l.duplicates, l.busy
+    );
+}

@@ -1,0 +1,184 @@
+//! `gweave sim`: run a file through the virtual printer and report what the machine did.
+
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use gweave::gcode::reader::LineReader;
+use gweave::pass::Progress;
+use gweave_sim::heater::HeaterId;
+use gweave_sim::interp::{Machine, Outcome, SimReport};
+use gweave_sim::plot::save_temperature_png;
+use gweave_sim::profile::{FaultSpec, MachineProfile};
+
+use crate::common::ReportArgs;
+use crate::progress::Bar;
+
+/// Simulate a print on a virtual Marlin-like printer: time per layer and feature (planner),
+/// filament per tool and mixing input, exact step counts per motor (Bresenham), heaters
+/// (thermal plant, PID, protection), warnings (out of bounds, cold extrusion, unknown
+/// commands). Exits with 1 when the machine halted (a thermal fault or M112).
+///
+/// Example: `gweave sim part.gcode --machine examples/machines/marlin-ramps.toml --plot t.png`.
+#[derive(Args, Debug)]
+pub struct SimArgs {
+    /// The G-code file to run.
+    pub input: PathBuf,
+    /// Machine profile (TOML, see docs/machine.md); default: a RAMPS 1.4 printer on Marlin.
+    #[arg(long, value_name = "TOML")]
+    pub machine: Option<PathBuf>,
+    /// Inject a heater fault, e.g. `hotend-cartridge-off@120s`, `bed-thermistor-open@30s`,
+    /// `hotend1-thermistor-shorted@5s` (repeatable).
+    #[arg(long = "fault", value_name = "SPEC")]
+    pub faults: Vec<String>,
+    /// Draw temperature and target over time into this PNG.
+    #[arg(long, value_name = "PNG")]
+    pub plot: Option<PathBuf>,
+    /// Write the inkjet canvases (one PNG per layer and head) into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub raster_out: Option<PathBuf>,
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn run(args: SimArgs) -> Result<ExitCode> {
+    let mut profile = match &args.machine {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            MachineProfile::from_toml_str(&text).with_context(|| format!("in {}", path.display()))?
+        }
+        None => MachineProfile::default(),
+    };
+    for spec in &args.faults {
+        profile.faults.push(spec.parse::<FaultSpec>()?);
+    }
+    let mut machine = Machine::new(profile)?;
+    let errors = run_file(&mut machine, &args.input, args.quiet)?;
+    let report = machine.report();
+    if let Some(path) = &args.plot {
+        save_temperature_png(machine.thermal().series(), path)?;
+    }
+    if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
+        canvas.write_layer_pngs(dir)?;
+    }
+    if args.report.emit(&report)? {
+        print_human(&args.input, &report, &errors);
+    }
+    Ok(if report.halted { ExitCode::from(1) } else { ExitCode::SUCCESS })
+}
+
+/// Executes every line until the end or a halt; returns the machine's `Error:` replies.
+fn run_file(machine: &mut Machine, input: &Path, quiet: bool) -> Result<Vec<String>> {
+    let file = File::open(input).with_context(|| format!("opening {}", input.display()))?;
+    let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut bar = Bar::new(quiet);
+    bar.set_len(len);
+    let mut reader = LineReader::new(file);
+    let mut errors = Vec::new();
+    let mut out = |_t: f64, line: &str| {
+        if line.starts_with("Error:") {
+            errors.push(line.to_owned());
+        }
+    };
+    let mut n = 0u64;
+    while let Some(line) = reader.next_line().with_context(|| format!("reading {}", input.display()))? {
+        if machine.execute(line.bytes, &mut out) == Outcome::Halted {
+            break;
+        }
+        n += 1;
+        if n.is_multiple_of(65_536) {
+            bar.advance(reader.position());
+        }
+    }
+    machine.finish(&mut out);
+    Ok(errors)
+}
+
+fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
+    let t = &r.time;
+    println!("{} on {}", input.display(), r.machine);
+    println!("  lines           {}  ({} planned blocks)", r.lines, r.blocks);
+    println!("  time            {}", hms(t.total_s));
+    println!(
+        "    motion {}  dwell {}  heating {}  homing {}  overhead {}",
+        hms(t.motion_s),
+        hms(t.dwell_s),
+        hms(t.heating_s),
+        hms(t.homing_s),
+        hms(t.overhead_s)
+    );
+    if let Some((slowest, max)) = r.layer_s.iter().copied().enumerate().max_by(|a, b| a.1.total_cmp(&b.1)) {
+        let min = r.layer_s.iter().copied().fold(f64::INFINITY, f64::min);
+        let mean = r.layer_s.iter().sum::<f64>() / r.layer_s.len() as f64;
+        println!(
+            "  layers          {}: min {min:.1} s, mean {mean:.1} s, max {max:.1} s (layer {slowest}); before the first {:.1} s",
+            r.layer_s.len(),
+            r.unlayered_s
+        );
+    }
+    for (feature, t) in &r.feature_s {
+        println!("    {:<18} {}", feature.name(), hms(*t));
+    }
+    for (tool, mm) in r.filament_mm.iter().enumerate() {
+        println!("  filament T{tool:<3}  {mm:.2} mm");
+    }
+    for (input, mm) in r.mixing_input_mm.iter().enumerate() {
+        println!("  mixing input {input}  {mm:.2} mm");
+    }
+    let s = &r.steps.axes;
+    println!("  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4]);
+    if !r.steps.mixing.is_empty() {
+        println!("    mixing inputs {:?}", r.steps.mixing);
+    }
+    let [x, y, z, e, _] = r.position;
+    println!(
+        "  end position    X {x:.2} Y {y:.2} Z {z:.2} E {e:.2}  (Count X {} Y {} Z {})",
+        r.count[0], r.count[1], r.count[2]
+    );
+    for h in &r.heaters {
+        println!(
+            "  heater {:<8} max {:.1} C, end {:.1} / {:.1} C, duty {:.0} %, {:.1} Wh",
+            match h.heater {
+                HeaterId::Hotend(n) => format!("T{n}"),
+                HeaterId::Bed => "bed".to_owned(),
+            },
+            h.max_c,
+            h.temp_c,
+            h.target_c,
+            h.mean_duty * 100.0,
+            h.energy_wh
+        );
+    }
+    if let Some(ink) = &r.inkjet {
+        println!("  inkjet          {} layers, drops per head {:?}", ink.layers, ink.drops_per_head);
+    }
+    if !r.unknown_commands.is_empty() {
+        let list: Vec<String> = r.unknown_commands.iter().map(|(c, n)| format!("{c} x{n}")).collect();
+        println!("  unknown         {}", list.join(", "));
+    }
+    for e in errors {
+        println!("  {e}");
+    }
+    if r.halted {
+        println!("  HALTED");
+    }
+    let total: u64 = r.warning_counts.values().sum();
+    if total > 0 {
+        let kinds: Vec<String> = r.warning_counts.iter().map(|(k, n)| format!("{k} {n}")).collect();
+        println!("  warnings        {total} ({})", kinds.join(", "));
+        for w in r.warnings.iter().filter(|w| w.kind.name() != "unknown_command").take(10) {
+            println!("    line {}: {}", w.line, serde_json::to_string(&w.kind).unwrap_or_default());
+        }
+    }
+}
+
+fn hms(t_s: f64) -> String {
+    let t = t_s.round() as u64;
+    format!("{}h {:02}m {:02}s", t / 3600, t / 60 % 60, t % 60)
+}

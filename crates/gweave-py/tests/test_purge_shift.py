@@ -1,0 +1,35 @@
+"""purge-shift through Python: the same numbers as the Rust tests and the CLI."""
+
+import pytest
+
+import gweave
+
+
+def test_slic3r_first_change_is_split_by_hand(data, tmp_path):
+    out = tmp_path / "cone.gcode"
+    r = gweave.purge_shift(data / "slic3r" / "slic3r_cone_2tool.gcode", out, purge=2.5)
+    assert len(r["changes"]) == 108
+    c = r["changes"][0]
+    assert c["change_lines"] == [553] and c["output_line"] == 510
+    assert c["achieved_mm"] == 2.5 and c["split"]["line"] == 509
+    lines = out.read_text().splitlines()
+    # 24.30781 - 2.5 = 21.80781, inside the move from E21.79225 to E21.85317.
+    assert lines[508:511] == ["G1 X104.44317 Y87.09572 E21.80781", "T1", "G1 X104.913 Y87.264 E21.85317"]
+
+
+def test_config_and_keywords(data, tmp_path):
+    cfg = tmp_path / "purge.toml"
+    cfg.write_text("purge_mm = 2.5\n[[pair]]\nfrom = 1\nto = 0\npurge_mm = 1.0\n")
+    r = gweave.purge_shift(
+        data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode", config=cfg, cross_layers=True
+    )
+    assert {c["requested_mm"] for c in r["changes"] if c["from_tool"] == 1} == {1.0}
+    assert all(abs(c["achieved_mm"] + c["shortfall_mm"] - c["requested_mm"]) < 1e-9 for c in r["changes"])
+
+
+def test_refusals(data, tmp_path):
+    with pytest.raises(ValueError, match="not implemented"):
+        gweave.purge_shift(data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode", purge=2, fallback="tower")
+    with pytest.raises(ValueError, match="no purge amount"):
+        gweave.purge_shift(data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode")
+    assert not (tmp_path / "o.gcode").exists()

@@ -1,0 +1,71 @@
+"""Binder-jet raster through Python: the same figures as the CLI's end-to-end checks."""
+
+from pathlib import Path
+
+import pytest
+
+import gweave
+
+ROOT = Path(__file__).resolve().parents[3]
+EXAMPLES = ROOT / "examples" / "raster"
+RDATA = ROOT / "crates" / "gweave" / "tests" / "data" / "raster"
+
+
+def fire_lines(path: Path, code: str = "M700"):
+    lines = path.read_text().splitlines()
+    return lines, [i for i, l in enumerate(lines) if l.startswith(code + " ")]
+
+
+def test_raster_bmp_stack(tmp_path):
+    out = tmp_path / "badge.gcode"
+    r = gweave.raster(EXAMPLES / "layers", out, flip_y=True, head=EXAMPLES / "c6602.toml")
+    assert (r["layers"], r["bands_printed"], r["bands_skipped"]) == (8, 29, 3)
+    assert (r["columns_fired"], r["drops_per_head"]) == (844, [6508])
+    assert r["binder_volume_ul"] == pytest.approx(6508 * 160e-6)
+    assert r["time"]["method"] == "planner"
+    lines, fires = fire_lines(out)
+    assert len(fires) == 844
+    assert all(lines[i - 1] == "M400" and " P0 S" in lines[i] for i in fires)
+
+
+def test_raster_options_density_dialect_two_heads(tmp_path):
+    out = tmp_path / "two.gcode"
+    r = gweave.raster(
+        [EXAMPLES / "layers", EXAMPLES / "layers"],
+        out,
+        heads=2,
+        head=EXAMPLES / "c6602_2head.toml",
+        density=2,
+        dialect="reprap",
+        one_way=True,
+        fast_estimate=True,
+    )
+    assert r["heads"] == 2 and r["drops_per_head"] == [2 * 6508, 2 * 6508]
+    assert r["fire_commands"] == 2 * r["columns_fired"]
+    assert r["time"]["method"] == "feed"
+    _, fires = fire_lines(out, "M578")
+    assert len(fires) == r["fire_commands"]
+
+
+def test_raster_sl1_and_errors(tmp_path):
+    r = gweave.raster(RDATA / "sphere.sl1", tmp_path / "s.gcode", fast_estimate=True)
+    assert (r["layers"], r["drops_per_head"]) == (308, [2199541])
+    with pytest.raises(ValueError, match="dialect"):
+        gweave.raster(EXAMPLES / "layers", tmp_path / "x.gcode", dialect="klipper")
+    with pytest.raises(ValueError, match="no such file"):
+        gweave.raster(tmp_path / "missing", tmp_path / "x.gcode")
+
+
+def test_test_pattern(tmp_path):
+    out = tmp_path / "p.gcode"
+    r = gweave.raster_test_pattern(out, columns=2)
+    assert r["fire_commands"] == 24
+    s = [int(l.split("S")[1]) for l in out.read_text().splitlines() if l.startswith("M700")]
+    assert s == [1 << a for a in range(12) for _ in range(2)]
+
+
+def test_slice_raster_then_raster(tmp_path):
+    s = gweave.slice_raster(RDATA / "torus.stl", tmp_path / "layers", layer_height=0.1, dpi=96)
+    assert s["grid"]["layers"] == 57 and len(s["files"]) == 57
+    r = gweave.raster(tmp_path / "layers", tmp_path / "t.gcode", fast_estimate=True)
+    assert r["drops_per_head"] == [sum(s["pixels_per_layer"])]

@@ -1,0 +1,75 @@
+"""Rotary printing through Python: the same numbers as the CLI and the Rust tests."""
+
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+import gweave
+
+
+def test_tube_report_matches_the_wall_and_the_cli(tmp_path):
+    r = gweave.rotary_tube(tmp_path / "t.gcode", mandrel_diameter=20, length=30, layers=3, preview=tmp_path / "t.png")
+    wall = math.pi * ((10 + 3 * 0.2) ** 2 - 10**2) * 30
+    assert r["wall_volume_mm3"] == pytest.approx(wall, rel=1e-12)
+    assert r["extruded_mm3"] == pytest.approx(wall, rel=0.01)
+    assert [l["handedness"] for l in r["layers"]] == ["right", "left", "right"]
+    assert [l["radius_mm"] for l in r["layers"]] == pytest.approx([10.1, 10.3, 10.5])
+    assert (tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"
+    cli = tmp_path / "cli.gcode"
+    code = gweave.main(["rotary", "tube", "-o", str(cli), "--mandrel-diameter", "20", "--length", "30", "--layers", "3", "--json"])
+    assert code == 0
+    assert cli.read_bytes() == (tmp_path / "t.gcode").read_bytes()
+
+
+def test_tube_keywords_override_the_config(tmp_path):
+    toml = tmp_path / "tube.toml"
+    toml.write_text("length_mm = 12\nlayers = 5\n[machine]\nmandrel_diameter_mm = 16\n[print]\nbead_width_mm = 0.5\n")
+    r = gweave.rotary_tube(tmp_path / "t.gcode", config=toml, layers=2, pitch=4.0, interweave=False, feed="combined")
+    assert len(r["layers"]) == 2 and r["pitch_mm"] == 4.0 and r["bead_width_mm"] == 0.5
+    assert r["machine"]["feed_convention"] == "combined" and r["machine"]["mandrel_diameter_mm"] == 16
+    assert {l["handedness"] for l in r["layers"]} == {"right"}
+    with pytest.raises(ValueError, match="pitch_mm"):
+        gweave.rotary_tube(tmp_path / "bad.gcode", mandrel_diameter=20, pitch=0.1)
+
+
+def test_wrap_closes_every_layer(data, tmp_path):
+    r = gweave.rotary_wrap(
+        data / "rotary" / "plate.gcode", tmp_path / "s.gcode", mandrel_diameter=30, seam_rotation=7.5, axes="X,A,Z"
+    )
+    assert len(r["layers"]) == 10
+    bead_deg = 360 * 0.45 / (math.pi * 30)
+    for k, layer in enumerate(r["layers"]):
+        assert layer["span_deg"] + bead_deg == pytest.approx(360, abs=0.005)
+        assert layer["seam_deg"] == pytest.approx(7.5 * k)
+        assert layer["radius_mm"] == pytest.approx(15 + 0.2 * (k + 1))
+
+
+def test_cone_path_points_follow_the_radius_table():
+    cone = gweave.HelicalPath(0, 30, radius=[(0, 10.1), (30, 5.1)], pitch=0.4)
+    pts = cone.points(chord_tol=0.01)
+    assert pts[0] == pytest.approx((0, 0, 10.1)) and pts[-1][0] == pytest.approx(30)
+    for axial, theta, radius in pts:
+        assert radius == pytest.approx(10.1 - axial / 6, abs=1e-9)
+    # 30 mm at 0.4 mm per turn: 75 turns, right-handed (the angle grows with the axial position).
+    assert pts[-1][1] == pytest.approx(75 * 360, rel=1e-9)
+
+
+def test_callable_profiles_and_their_errors(tmp_path):
+    wavy = gweave.HelicalPath(10, 0, radius=lambda x: 10 + 0.5 * math.sin(x), pitch=lambda x: 1 + x / 10, handedness="left")
+    pts = wavy.points(segments_per_turn=36)
+    assert all(abs(r - (10 + 0.5 * math.sin(a))) < 1e-9 for a, _, r in pts)
+    # Backwards and left-handed: the angle grows while the axial position falls.
+    assert pts[-1][0] == pytest.approx(0) and pts[-1][1] > 0
+    s = gweave.write_helical_paths([wavy], tmp_path / "w.gcode", mandrel_diameter=19, speed=15)
+    assert s["filament_mm"] > 0 and s["print_time_s"] > 0
+
+    def broken(x):
+        raise ZeroDivisionError("profile says no")
+
+    with pytest.raises(ZeroDivisionError, match="profile says no"):
+        gweave.HelicalPath(0, 5, radius=broken, pitch=1.0).points()
+    with pytest.raises(ValueError, match="handedness"):
+        gweave.HelicalPath(0, 5, radius=10, pitch=1, handedness="up")

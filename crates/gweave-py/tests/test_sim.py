@@ -1,0 +1,36 @@
+"""The virtual printer from Python: whole-file reports and one command at a time."""
+
+from pathlib import Path
+
+import gweave
+
+MACHINES = Path(__file__).resolve().parents[3] / "examples" / "machines"
+
+
+def test_sim_report_of_a_real_file(data: Path) -> None:
+    r = gweave.sim(data / "cura" / "cura_torus.gcode")
+    f = r["filament_mm"][0]
+    assert abs(f - 773.6185) < 1e-6
+    assert r["count"][3] == round(f * 500)
+    assert len(r["layer_s"]) == 28
+    t = r["time"]
+    assert t["heating_s"] > 60 and not r["halted"]
+
+
+def test_sim_with_a_machine_profile(data: Path) -> None:
+    r = gweave.sim(data / "cura" / "cura_torus.gcode", machine=MACHINES / "klipper.toml")
+    assert r["machine"] == "Klipper cartesian"
+    assert r["time"]["overhead_s"] > 0.25
+
+
+def test_machine_replies_like_marlin() -> None:
+    m = gweave.Machine()
+    assert m.boot_lines()[0] == "start"
+    assert m.execute("G1 X10 F3000") == ["ok"]
+    assert m.execute("M114") == ["X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0", "ok"]
+    assert m.execute("G123") == ['echo:Unknown command: "G123"', "ok"]
+    assert m.execute("M105") == ["ok T:25.00 /0.00 B:25.00 /0.00 @:0 B@:0"]
+    assert m.execute("G1 X20 E1") == ["echo: cold extrusion prevented", "ok"]
+    assert m.execute("M112") == ["Error:Printer halted. kill() called!"]
+    assert m.now_s > 0
+    assert m.report()["halted"] is True

@@ -1,0 +1,293 @@
+//! The heater commands of the interpreter and the clock that drives the thermal plant.
+//!
+//! After every command the heaters are stepped up to the machine clock ([`Machine::sync`]);
+//! the step is split at the times of injected faults and of `M155` auto-reports, so both happen
+//! at their exact simulated time. `M109`/`M190` wait in steps of the firmware's sample period
+//! until Marlin's settle rule ([`Thermal::poll_wait`]) is met, printing the status once a second
+//! as Marlin does (` T:.. /.. B:.. /.. @:.. B@:..`).
+
+use gweave::gcode::state::Effect;
+
+use super::{Halt, Machine, WarningKind};
+use crate::autotune::AutotuneConfig;
+use crate::control::PidGains;
+use crate::heater::HeaterId;
+use crate::thermal::{Thermal, ThermalError, WaitMode, WaitStatus};
+
+/// The longest `M109`/`M190`/`M303` the machine waits before giving up, simulated s. Marlin
+/// has no such limit (its protection ends a hopeless wait); this only bounds a run whose
+/// protection was configured away.
+const MAX_WAIT_S: f64 = 3.0 * 3600.0;
+/// Period of the status lines during a wait, s.
+const WAIT_REPORT_S: f64 = 1.0;
+
+impl Machine {
+    pub(super) fn heat_command(
+        &mut self,
+        line: &[u8],
+        number: u32,
+        effect: Effect,
+        out: &mut dyn FnMut(f64, &str),
+    ) {
+        let b = self.core.block();
+        let s = b.get(b'S');
+        let r = b.get(b'R');
+        let t = b.get(b'T');
+        let e = b.get(b'E');
+        match number {
+            104 | 109 => {
+                let hotend = t.map_or(self.active_hotend_index(), |t| t.max(0.0) as u8);
+                let id = HeaterId::Hotend(hotend);
+                if self.thermal.target(id).is_err() {
+                    let code = format!("M{number}");
+                    out(self.now_s(), &format!("echo:{code} Invalid extruder {hotend}"));
+                    self.warn(WarningKind::InvalidExtruder { tool: u32::from(hotend) });
+                    return;
+                }
+                self.set_target(id, s.or(r), out);
+                if number == 109 {
+                    self.run_core(line, &effect, out);
+                    self.sync(out);
+                    let mode = mode(r.is_some() && s.is_none());
+                    self.wait_heater(id, mode, out);
+                }
+            }
+            140 | 190 => {
+                if self.thermal.target(HeaterId::Bed).is_err() {
+                    self.unknown_command(line, out);
+                    return;
+                }
+                self.set_target(HeaterId::Bed, s.or(r), out);
+                if number == 190 {
+                    self.run_core(line, &effect, out);
+                    self.sync(out);
+                    self.wait_heater(HeaterId::Bed, mode(r.is_some() && s.is_none()), out);
+                }
+            }
+            116 => {
+                // RepRapFirmware: wait for every heater that has a target.
+                self.run_core(line, &effect, out);
+                self.core.drain();
+                self.sync(out);
+                let ids = (0..self.thermal.hotend_count())
+                    .map(HeaterId::Hotend)
+                    .chain(self.profile.thermal.bed.map(|_| HeaterId::Bed))
+                    .filter(|&id| self.thermal.target(id).is_ok_and(|t| t > 0.0))
+                    .collect::<Vec<_>>();
+                for id in ids {
+                    self.wait_heater(id, WaitMode::HeatOnly, out);
+                }
+            }
+            105 => {
+                let text = format!("ok {}", self.thermal.m105_report());
+                out(self.now_s(), &text);
+                self.acknowledged = true;
+            }
+            106 | 107 => {
+                let fan = self.core.state().thermal.fan;
+                self.thermal.set_fan(fan);
+            }
+            155 => {
+                let period = s.unwrap_or(0.0);
+                self.autoreport_s = if period.is_finite() && period > 0.0 { period } else { 0.0 };
+                self.next_report_s = self.now_s() + self.autoreport_s;
+            }
+            301 => self.m301(e, out),
+            303 => self.m303(e, s, out),
+            _ => {}
+        }
+    }
+
+    /// RepRapFirmware `G10 P<tool> S<active> [R<standby>]`: the tool's hotend target (we keep
+    /// the active temperature; tools idle at standby are not simulated).
+    pub(super) fn rrf_tool_temperature(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let b = self.core.block();
+        let hotend = b.get(b'P').map_or(self.active_hotend_index(), |p| p.max(0.0) as u8);
+        let s = b.get(b'S');
+        self.set_target(HeaterId::Hotend(hotend), s, out);
+    }
+
+    fn active_hotend_index(&self) -> u8 {
+        if self.profile.mixing_inputs > 0 {
+            0
+        } else {
+            self.tool.min(usize::from(u8::MAX)) as u8
+        }
+    }
+
+    fn set_target(&mut self, id: HeaterId, celsius: Option<f64>, out: &mut dyn FnMut(f64, &str)) {
+        let Some(c) = celsius else { return };
+        if let Err(e) = self.thermal.set_target(id, c) {
+            self.thermal_refused(e, out);
+        }
+    }
+
+    fn thermal_refused(&mut self, e: ThermalError, out: &mut dyn FnMut(f64, &str)) {
+        let message = e.to_string();
+        out(self.now_s(), &format!("echo:{message}"));
+        self.warn(WarningKind::Refused { message });
+    }
+
+    /// `M109`/`M190`: wait with the machine standing still, printing the status every second.
+    fn wait_heater(&mut self, id: HeaterId, mode: WaitMode, out: &mut dyn FnMut(f64, &str)) {
+        self.thermal.set_moving(false);
+        let Ok(mut wait) = self.thermal.begin_wait(id, mode) else {
+            return;
+        };
+        let step_s = self.profile.thermal.sample_period_s;
+        let start_s = self.now_s();
+        let mut report_s = start_s + WAIT_REPORT_S;
+        loop {
+            match self.thermal.poll_wait(&mut wait) {
+                WaitStatus::Reached | WaitStatus::Halted => break,
+                WaitStatus::Waiting => {}
+            }
+            if self.now_s() - start_s > MAX_WAIT_S {
+                self.warn(WarningKind::WaitTimeout { heater: id });
+                out(self.now_s(), "echo:gweave-sim: wait abandoned after 3 h");
+                break;
+            }
+            self.idle_for(step_s, out);
+            if self.now_s() + 1e-9 >= report_s {
+                let text = format!(" {}", self.thermal.m105_report());
+                out(self.now_s(), &text);
+                report_s += WAIT_REPORT_S;
+            }
+        }
+    }
+
+    /// Let time pass with the machine standing still (heating waits, autotune).
+    fn idle_for(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
+        self.core.idle(t_s);
+        self.heating_s += t_s;
+        self.sync(out);
+    }
+
+    /// `M301 [E<n>] [P] [I] [D]`: set the given gains, print them all.
+    fn m301(&mut self, e: Option<f64>, out: &mut dyn FnMut(f64, &str)) {
+        let id = HeaterId::Hotend(e.map_or(0, |e| e.max(0.0) as u8));
+        let b = self.core.block();
+        let (p, i, d) = (b.get(b'P'), b.get(b'I'), b.get(b'D'));
+        let result = self.thermal.pid_gains(id).and_then(|g| {
+            let gains = PidGains { kp: p.unwrap_or(g.kp), ki: i.unwrap_or(g.ki), kd: d.unwrap_or(g.kd) };
+            self.thermal.set_pid_gains(id, gains).map(|()| gains)
+        });
+        match result {
+            Ok(g) => out(self.now_s(), &g.report_line(false)),
+            Err(e) => self.thermal_refused(e, out),
+        }
+    }
+
+    /// `M303 E<heater> S<temp> [C<cycles>] [U1]`: relay autotune on the plant (E-1 is the bed).
+    fn m303(&mut self, e: Option<f64>, s: Option<f64>, out: &mut dyn FnMut(f64, &str)) {
+        let id = match e {
+            Some(e) if e < 0.0 => HeaterId::Bed,
+            e => HeaterId::Hotend(e.map_or(0, |e| e as u8)),
+        };
+        let default_c = if id == HeaterId::Bed { 70.0 } else { 150.0 };
+        let b = self.core.block();
+        let mut cfg = AutotuneConfig::new(s.unwrap_or(default_c));
+        if let Some(c) = b.get(b'C') {
+            cfg.cycles = c.max(0.0) as u32;
+        }
+        let apply = b.get(b'U').is_some_and(|u| u != 0.0);
+        self.core.drain();
+        self.sync(out);
+        self.thermal.set_moving(false);
+        if let Err(e) = self.thermal.start_autotune(id, cfg, apply) {
+            self.thermal_refused(e, out);
+            return;
+        }
+        let step_s = self.profile.thermal.sample_period_s;
+        let start_s = self.now_s();
+        while self.thermal.autotune_running() && self.now_s() - start_s <= MAX_WAIT_S {
+            self.idle_for(step_s, out);
+            for l in self.thermal.take_autotune_lines() {
+                out(self.now_s(), &l);
+            }
+        }
+        for l in self.thermal.take_autotune_lines() {
+            out(self.now_s(), &l);
+        }
+        self.thermal.take_autotune_result();
+    }
+
+    /// Step the heaters up to the machine clock, injecting faults and auto-reporting on time.
+    pub(super) fn sync(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let target_s = self.core.now_s();
+        loop {
+            let now_s = self.thermal.now_s();
+            if let Some(f) = self.faults.get(self.next_fault) {
+                if f.at_s <= now_s + 1e-12 {
+                    let spec = *f;
+                    self.next_fault += 1;
+                    if let Ok(h) = self.thermal.heater_mut(spec.heater) {
+                        h.inject(spec.fault);
+                    }
+                    continue;
+                }
+            }
+            if self.autoreport_s > 0.0 && self.next_report_s <= now_s + 1e-12 {
+                let text = format!(" {}", self.thermal.m105_report());
+                out(now_s, &text);
+                self.next_report_s += self.autoreport_s;
+                continue;
+            }
+            if target_s - now_s <= 1e-12 {
+                break;
+            }
+            let mut until_s = target_s;
+            if let Some(f) = self.faults.get(self.next_fault) {
+                until_s = until_s.min(f.at_s);
+            }
+            if self.autoreport_s > 0.0 {
+                until_s = until_s.min(self.next_report_s);
+            }
+            if let Some(fault) = self.thermal.step(until_s - now_s) {
+                for l in fault.lines() {
+                    out(fault.at_s, &l);
+                }
+                self.thermal_faults.push(fault);
+                self.warn(WarningKind::Thermal { message: fault.error_line() });
+                if self.halt.is_none() {
+                    self.halt = Some(Halt::Thermal(fault));
+                }
+            }
+        }
+    }
+}
+
+fn mode(both: bool) -> WaitMode {
+    if both {
+        WaitMode::Both
+    } else {
+        WaitMode::HeatOnly
+    }
+}
+
+/// Per-heater statistics from the recorded series.
+pub(super) fn heater_stats(thermal: &Thermal, ids: &[HeaterId]) -> Vec<super::HeaterStats> {
+    ids.iter()
+        .filter_map(|&id| {
+            let mut n = 0u64;
+            let mut power_sum = 0.0;
+            let mut max_c = f64::NEG_INFINITY;
+            for s in thermal.series().of(id) {
+                n += 1;
+                power_sum += f64::from(s.power);
+                max_c = max_c.max(s.temp_c);
+            }
+            let power_w = thermal.heater(id).ok()?.config().power_w;
+            let duty =
+                if n > 0 { power_sum / (n as f64 * f64::from(crate::control::POWER_MAX)) } else { 0.0 };
+            Some(super::HeaterStats {
+                heater: id,
+                temp_c: thermal.temperature(id).ok()?,
+                target_c: thermal.target(id).ok()?,
+                max_c: if n > 0 { max_c } else { thermal.temperature(id).ok()? },
+                mean_duty: duty,
+                energy_wh: duty * power_w * thermal.now_s() / 3600.0,
+            })
+        })
+        .collect()
+}

@@ -1,0 +1,538 @@
+//! The interpreter: a virtual Marlin-like printer that executes one command at a time on a
+//! simulated clock.
+//!
+//! A line goes through the core parser and modal state ([`Estimator::parse`]), the machine
+//! looks at what it does (refuses a cold extrusion, scales the feed by `M220` and the flow by
+//! `M221`, warns about moves outside the build volume), and the motion core plans it
+//! ([`Estimator::run`]): the lookahead planner streams blocks to the steppers, and the clock is
+//! the end of the last executed block, as on a real board whose planner buffer runs behind the
+//! commands it has acknowledged. Whatever makes the firmware wait (`G4`, `M400`, `M109`, `M190`,
+//! `G28`, `M303`) drains the planner first. The heaters ([`Thermal`]) are advanced to the clock
+//! after every command, so they heat, cool and trip their protection while the machine moves.
+//!
+//! ```
+//! use gweave_sim::interp::{Machine, Outcome};
+//! use gweave_sim::profile::MachineProfile;
+//!
+//! let mut m = Machine::new(MachineProfile::default()).unwrap();
+//! let mut replies = Vec::new();
+//! let mut out = |_t: f64, line: &str| replies.push(line.to_owned());
+//! assert_eq!(m.execute(b"G1 X10 F3000", &mut out), Outcome::Ok);
+//! assert_eq!(m.execute(b"M114", &mut out), Outcome::Ok);
+//! assert_eq!(m.execute(b"G123", &mut out), Outcome::Ok);
+//! assert_eq!(replies, [
+//!     "X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0",
+//!     "echo:Unknown command: \"G123\"",
+//! ]);
+//! ```
+//!
+//! Replies follow Marlin (REFERENCE.md §5, `Marlin/src/core/language.h`): `M105` answers
+//! `ok T:.. /.. B:.. /.. @:.. B@:..` itself (see [`Machine::acknowledged`]); every other command
+//! leaves the final `ok` to the caller (the serial protocol or `gweave sim`).
+
+mod heat;
+mod motion;
+mod report;
+
+use std::collections::BTreeMap;
+
+use gweave::gcode::line::Command;
+use gweave::gcode::state::{self, Effect};
+use thiserror::Error;
+
+use crate::estimate::{EstimateError, Estimator};
+use crate::heater::HeaterId;
+use crate::inkjet::{CanvasGeometry, InkjetCanvas, InkjetError};
+use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
+use crate::protection::{ThermalFault, KILL_LINE};
+use crate::thermal::{Thermal, ThermalError};
+
+pub use report::{HeaterStats, InkjetSummary, SimReport, SimTimes, SimWarning, WarningKind};
+
+/// Marlin's reply to any command while stopped (`STR_ERR_STOPPED`).
+pub const STOPPED_LINE: &str = "Error:Printer stopped due to errors. Fix the error and use M999 to restart. (Temperature is reset. Set it after restarting)";
+
+/// Warnings kept with their details; later ones are only counted.
+const MAX_WARNINGS: usize = 1000;
+
+/// Why a machine cannot be built.
+#[derive(Debug, Error)]
+pub enum SimError {
+    /// The profile is invalid.
+    #[error(transparent)]
+    Profile(#[from] MachineProfileError),
+    /// The motion core rejected the motion profile.
+    #[error(transparent)]
+    Motion(#[from] EstimateError),
+    /// The heaters could not be built.
+    #[error(transparent)]
+    Thermal(#[from] ThermalError),
+    /// The inkjet canvas could not be built.
+    #[error(transparent)]
+    Inkjet(#[from] InkjetError),
+}
+
+/// What the machine is in after a command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Ready for the next command.
+    Ok,
+    /// Stopped by a thermal fault or `M112`; every command but `M999` and the queries
+    /// (`M105`, `M114`, `M115`, `M119`) is refused until `M999`.
+    Halted,
+}
+
+/// Why the machine stopped.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Halt {
+    Thermal(ThermalFault),
+    Emergency,
+}
+
+/// The virtual printer.
+#[derive(Debug)]
+pub struct Machine {
+    profile: MachineProfile,
+    core: Estimator,
+    thermal: Thermal,
+    inkjet: Option<InkjetCanvas>,
+    /// Physical minus logical X Y Z: `G92` moves the logical origin, homing resets it.
+    shift_mm: [f64; 3],
+    moved_since_m400: bool,
+    halt: Option<Halt>,
+    /// Faults to inject, by time; `next_fault` is the first not yet injected.
+    faults: Vec<FaultSpec>,
+    next_fault: usize,
+    /// `M155 S`: temperature auto-report period (0 = off) and the next report time.
+    autoreport_s: f64,
+    next_report_s: f64,
+    feed_pct: f64,
+    flow_pct: f64,
+    /// The tool filament is counted for (`T<n>`), and the filament fed per tool, mm.
+    tool: usize,
+    filament_mm: Vec<f64>,
+    homed: [bool; 3],
+    acknowledged: bool,
+    ended: bool,
+    heating_s: f64,
+    homing_s: f64,
+    thermal_faults: Vec<ThermalFault>,
+    unknown: BTreeMap<String, u64>,
+    warnings: Vec<SimWarning>,
+    warning_counts: BTreeMap<&'static str, u64>,
+}
+
+impl Machine {
+    /// A machine at power-on: every axis at 0 (the endstops of the default profile), heaters at
+    /// ambient, nothing homed.
+    pub fn new(profile: MachineProfile) -> Result<Machine, SimError> {
+        let mut profile = profile;
+        profile.normalize()?;
+        let core = Estimator::new(&profile.motion)?;
+        let thermal = Thermal::new(profile.thermal.clone())?;
+        let inkjet = match &profile.inkjet {
+            None => None,
+            Some(ink) => {
+                let pitch = ink.printhead.pitch_mm();
+                let [(_, x_max), (_, y_max), _] = profile.bed.ranges();
+                let fit = |from: f64, to: f64| ((to - from) / pitch).ceil().max(1.0) as usize;
+                let geometry = CanvasGeometry {
+                    origin_x_mm: ink.origin_x_mm,
+                    origin_y_mm: ink.origin_y_mm,
+                    width_px: ink.width_px.unwrap_or_else(|| fit(ink.origin_x_mm, x_max)),
+                    height_px: ink.height_px.unwrap_or_else(|| fit(ink.origin_y_mm, y_max)),
+                };
+                Some(InkjetCanvas::new(&ink.printhead, geometry)?)
+            }
+        };
+        let mut faults = profile.faults.clone();
+        faults.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+        Ok(Machine {
+            profile,
+            core,
+            thermal,
+            inkjet,
+            shift_mm: [0.0; 3],
+            moved_since_m400: true,
+            halt: None,
+            faults,
+            next_fault: 0,
+            autoreport_s: 0.0,
+            next_report_s: 0.0,
+            feed_pct: 100.0,
+            flow_pct: 100.0,
+            tool: 0,
+            filament_mm: vec![0.0],
+            homed: [false; 3],
+            acknowledged: false,
+            ended: false,
+            heating_s: 0.0,
+            homing_s: 0.0,
+            thermal_faults: Vec::new(),
+            unknown: BTreeMap::new(),
+            warnings: Vec::new(),
+            warning_counts: BTreeMap::new(),
+        })
+    }
+
+    /// Lines printed at power-on, as Marlin does: `start`, then `echo:` lines.
+    pub fn boot_lines(&self) -> Vec<String> {
+        vec![
+            "start".to_owned(),
+            format!("echo:gweave-sim {} (Marlin compatible)", env!("CARGO_PKG_VERSION")),
+            format!("echo:Machine: {}", self.profile.name),
+        ]
+    }
+
+    /// Executes ONE command (no N/checksum; comments allowed) at the current simulated time,
+    /// advancing the simulated clock by what the command takes (moves through the planner,
+    /// G4, M400, M109/M190 waits with the thermal plant, M303 autotune). Replies other than
+    /// the final "ok" go to `out` with their simulated timestamps (e.g. M109 status lines once a
+    /// second, M105/M114/M119 texts, `echo:Unknown command: "G123"`, Error: lines).
+    pub fn execute(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> Outcome {
+        self.acknowledged = false;
+        let line = trim_line_end(line);
+        if trim(line) == b"?" {
+            self.help(out);
+            return self.outcome();
+        }
+        let before = self.core.state().pos;
+        let effect = self.core.parse(line);
+        let command = self.core.block().command;
+        if self.halt.is_some() && !allowed_while_halted(command) {
+            out(self.now_s(), STOPPED_LINE);
+            return Outcome::Halted;
+        }
+        match command {
+            Command::None => self.motion(line, effect, out),
+            Command::Code { letter: b'G', number, sub: None } => {
+                self.g_code(line, number, effect, &before, out)
+            }
+            Command::Code { letter: b'M', number, sub: None } => self.m_code(line, number, effect, out),
+            Command::Code { letter: b'T', number, sub: None } => self.tool_change(line, number, effect, out),
+            Command::Extended if self.is_klipper() => {
+                let name = self.core.block().command_span.of(line);
+                let known = [&b"SET_VELOCITY_LIMIT"[..], b"SET_KINEMATIC_POSITION"]
+                    .iter()
+                    .any(|k| name.eq_ignore_ascii_case(k));
+                if known {
+                    self.run_core(line, &effect, out);
+                } else {
+                    self.unknown_command(line, out);
+                }
+            }
+            _ => self.unknown_command(line, out),
+        }
+        self.sync(out);
+        self.outcome()
+    }
+
+    /// Simulated time, s.
+    pub fn now_s(&self) -> f64 {
+        self.core.now_s()
+    }
+
+    /// Whether the last [`Machine::execute`] already sent its own `ok` line (`M105`, as Marlin
+    /// answers `ok T:...` in one line): the caller must not send another.
+    pub fn acknowledged(&self) -> bool {
+        self.acknowledged
+    }
+
+    /// The profile the machine was built with (after filling derived defaults).
+    pub fn profile(&self) -> &MachineProfile {
+        &self.profile
+    }
+
+    /// The heaters, e.g. to read temperatures or inject a fault now
+    /// (`thermal_mut().heater_mut(HeaterId::Hotend(0))?.inject(..)`).
+    pub fn thermal(&self) -> &Thermal {
+        &self.thermal
+    }
+
+    /// See [`Machine::thermal`].
+    pub fn thermal_mut(&mut self) -> &mut Thermal {
+        &mut self.thermal
+    }
+
+    /// The inkjet canvases, on a machine with a printhead.
+    pub fn inkjet(&self) -> Option<&InkjetCanvas> {
+        self.inkjet.as_ref()
+    }
+
+    /// The logical position X Y Z E A (what `M114` prints), mm and degrees.
+    pub fn position(&self) -> [f64; 5] {
+        let p = self.core.state().pos;
+        [p[state::X], p[state::Y], p[state::Z], p[state::E], p[state::A]]
+    }
+
+    /// The end of a job: plan and execute everything still queued (and, in Klipper mode, add
+    /// Klipper's exit flush). Later calls do nothing.
+    pub fn finish(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        if !std::mem::replace(&mut self.ended, true) {
+            self.core.end();
+            self.sync(out);
+        }
+    }
+
+    fn outcome(&self) -> Outcome {
+        if self.halt.is_some() {
+            Outcome::Halted
+        } else {
+            Outcome::Ok
+        }
+    }
+
+    fn is_klipper(&self) -> bool {
+        matches!(self.profile.motion.corners, crate::limits::CornerMode::Klipper(_))
+    }
+
+    /// Plans what the line does; a refusal becomes an `echo:` reply and a warning.
+    fn run_core(&mut self, line: &[u8], effect: &Effect, out: &mut dyn FnMut(f64, &str)) {
+        if let Err(e) = self.core.run(line, effect) {
+            let message = match &e {
+                EstimateError::Mixing { source, .. } => source.to_string(),
+                EstimateError::Profile { source, .. } => source.to_string(),
+                other => other.to_string(),
+            };
+            out(self.now_s(), &format!("echo:{message}"));
+            self.warn(WarningKind::Refused { message });
+        }
+    }
+
+    fn g_code(
+        &mut self,
+        line: &[u8],
+        number: u32,
+        effect: Effect,
+        before: &state::Position,
+        out: &mut dyn FnMut(f64, &str),
+    ) {
+        match number {
+            0..=3 => self.motion(line, effect, out),
+            4 => {
+                self.thermal.set_moving(false);
+                self.run_core(line, &effect, out);
+                self.moved_since_m400 = false;
+            }
+            // RepRapFirmware's `G10 P<tool> S<temp>` sets a tool's temperature.
+            10 if self.core.block().has(b'S') => self.rrf_tool_temperature(out),
+            10 | 11 | 20 | 21 | 90 | 91 => self.run_core(line, &effect, out),
+            28 => self.home(line, effect, before, out),
+            92 => {
+                // The machine stays where it is: what changes is the logical origin.
+                let pos = self.core.state().pos;
+                for i in 0..3 {
+                    self.shift_mm[i] += before[i] - pos[i];
+                }
+                self.run_core(line, &effect, out);
+            }
+            _ => self.unknown_command(line, out),
+        }
+    }
+
+    fn m_code(&mut self, line: &[u8], number: u32, effect: Effect, out: &mut dyn FnMut(f64, &str)) {
+        match number {
+            // Program stop (the seed controller's "end of program"): finish the moves, motors off.
+            0 | 1 | 18 | 84 => {
+                self.run_core(line, &effect, out);
+                self.core.drain();
+                if number <= 1 || !self.core.block().has(b'S') {
+                    self.homed = [false; 3];
+                }
+            }
+            // Accepted, nothing to simulate: enable motors, progress, line numbers (the serial
+            // layer's), LCD message, gradient mix, RRF tool definition.
+            17 | 73 | 110 | 117 | 166 | 563 => {}
+            82 | 83 | 201 | 203 | 204 | 205 | 163..=165 | 567 => self.run_core(line, &effect, out),
+            104 | 109 | 116 | 140 | 190 | 105 | 106 | 107 | 155 | 301 | 303 => {
+                self.heat_command(line, number, effect, out)
+            }
+            112 => {
+                self.halt = Some(Halt::Emergency);
+                self.heaters_off();
+                out(self.now_s(), KILL_LINE);
+            }
+            114 => {
+                self.core.drain();
+                self.sync(out);
+                let text = self.m114_text();
+                out(self.now_s(), &text);
+            }
+            115 => {
+                let t = self.now_s();
+                out(
+                    t,
+                    &format!(
+                        "FIRMWARE_NAME:gweave-sim {} (Marlin compatible) PROTOCOL_VERSION:1.0 \
+                         MACHINE_TYPE:{} EXTRUDER_COUNT:{}",
+                        env!("CARGO_PKG_VERSION"),
+                        self.profile.name,
+                        self.thermal.hotend_count()
+                    ),
+                );
+                for cap in ["AUTOREPORT_TEMP:1", "EEPROM:0", "EMERGENCY_PARSER:0"] {
+                    out(t, &format!("Cap:{cap}"));
+                }
+            }
+            119 => {
+                self.core.drain();
+                self.sync(out);
+                for l in self.m119_lines() {
+                    out(self.now_s(), &l);
+                }
+            }
+            220 => self.percentage(b'S', "FR:", out, |m| &mut m.feed_pct),
+            221 => self.percentage(b'S', "E0 Flow: ", out, |m| &mut m.flow_pct),
+            400 => {
+                self.thermal.set_moving(false);
+                self.run_core(line, &effect, out);
+                self.moved_since_m400 = false;
+            }
+            578 | 700 if self.inkjet.is_some() => self.fire(),
+            999 => {
+                self.halt = None;
+                self.thermal.clear_halt();
+            }
+            _ => self.unknown_command(line, out),
+        }
+    }
+
+    /// `M220`/`M221`: set the percentage given by `letter`, or report it.
+    fn percentage(
+        &mut self,
+        letter: u8,
+        label: &str,
+        out: &mut dyn FnMut(f64, &str),
+        field: impl Fn(&mut Self) -> &mut f64,
+    ) {
+        match self.core.block().get(letter) {
+            Some(v) if v.is_finite() && v > 0.0 => *field(self) = v,
+            Some(_) => {}
+            None => {
+                let v = *field(self);
+                out(self.now_s(), &format!("echo:{label}{v:.0}%"));
+            }
+        }
+    }
+
+    fn tool_change(&mut self, line: &[u8], number: u32, effect: Effect, out: &mut dyn FnMut(f64, &str)) {
+        let mixing = self.profile.mixing_inputs > 0;
+        let valid = if mixing {
+            (number as usize) < gweave::colour::dialect::MARLIN_VIRTUAL_TOOLS
+                || self.core.mixing().is_some_and(|m| m.rrf_mix(number).is_some())
+        } else {
+            number < u32::from(self.thermal.hotend_count())
+        };
+        if !valid {
+            out(self.now_s(), &format!("echo:T{number} Invalid extruder"));
+            self.warn(WarningKind::InvalidExtruder { tool: number });
+            return;
+        }
+        // Marlin finishes the moves before a tool change.
+        self.core.drain();
+        self.run_core(line, &effect, out);
+        if !mixing {
+            // Checked above: the hotend exists.
+            let _ = self.thermal.set_active_extruder(number as u8);
+        }
+        self.tool = number as usize;
+        if self.filament_mm.len() <= self.tool {
+            self.filament_mm.resize(self.tool + 1, 0.0);
+        }
+    }
+
+    /// `M700 P<head> S<bits>` / `M578`: record the drops at the carriage position.
+    fn fire(&mut self) {
+        let b = self.core.block();
+        let head = b.get(b'P').map(|p| p.max(0.0) as u32);
+        let bits = b.get(b'S').map_or(0, |s| s.max(0.0) as u64);
+        let [x, y, z] = self.physical_xyz();
+        let moved = self.moved_since_m400;
+        let Some(canvas) = &mut self.inkjet else {
+            return;
+        };
+        let seen = canvas.warnings().len();
+        canvas.on_m700(head, bits, x, y, z, moved);
+        let new: Vec<_> = canvas.warnings()[seen..].to_vec();
+        for detail in new {
+            self.warn(WarningKind::Inkjet { detail });
+        }
+    }
+
+    fn unknown_command(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        let text = String::from_utf8_lossy(command_text(line)).into_owned();
+        out(self.now_s(), &format!("echo:Unknown command: \"{text}\""));
+        let name = text.split_whitespace().next().unwrap_or("").to_owned();
+        *self.unknown.entry(name).or_default() += 1;
+        self.warn(WarningKind::UnknownCommand { command: text });
+    }
+
+    fn help(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let t = self.now_s();
+        for l in [
+            "echo:gweave-sim commands:",
+            "echo:  G0 G1 G2 G3 move   G4 dwell   G10 G11 firmware retract (G10 P S: RRF tool temp)",
+            "echo:  G20 G21 inch/mm   G28 home   G90 G91 absolute/relative   G92 set position",
+            "echo:  M0 M1 stop   M17 M18 M84 motors   M82 M83 absolute/relative E",
+            "echo:  M104 M109 hotend   M140 M190 bed   M116 wait (RRF)   M105 temps   M155 auto-report",
+            "echo:  M106 M107 fan   M112 emergency stop   M999 restart",
+            "echo:  M114 position   M115 firmware   M117 message   M119 endstops   M110 line no.",
+            "echo:  M201 M203 M204 M205 limits   M220 feed %   M221 flow %   M400 finish moves",
+            "echo:  M301 PID gains   M303 PID autotune   T<n> tool",
+            "echo:  M163 M164 M165 M166 mixing (Marlin)   M563 M567 mixing (RepRapFirmware)",
+            "echo:  M700 M578 inkjet fire (machines with a printhead)   ? this help",
+        ] {
+            out(t, l);
+        }
+    }
+
+    fn warn(&mut self, kind: WarningKind) {
+        *self.warning_counts.entry(kind.name()).or_default() += 1;
+        if self.warnings.len() < MAX_WARNINGS {
+            self.warnings.push(SimWarning { line: self.core.line_number(), t_s: self.now_s(), kind });
+        }
+    }
+
+    fn heaters_off(&mut self) {
+        let ids = (0..self.thermal.hotend_count())
+            .map(HeaterId::Hotend)
+            .chain(self.profile.thermal.bed.map(|_| HeaterId::Bed));
+        for id in ids.collect::<Vec<_>>() {
+            // Only fails when already halted by a fault, which switched everything off.
+            let _ = self.thermal.set_target(id, 0.0);
+        }
+    }
+
+    fn physical_xyz(&self) -> [f64; 3] {
+        let p = self.core.state().pos;
+        std::array::from_fn(|i| p[i] + self.shift_mm[i])
+    }
+}
+
+/// Commands a halted Marlin still answers.
+fn allowed_while_halted(command: Command) -> bool {
+    matches!(
+        command,
+        Command::Code { letter: b'M', number: 105 | 110 | 112 | 114 | 115 | 119 | 999, sub: None }
+    )
+}
+
+fn trim_line_end(line: &[u8]) -> &[u8] {
+    let end = line.iter().rposition(|&b| b != b'\n' && b != b'\r').map_or(0, |i| i + 1);
+    &line[..end]
+}
+
+fn trim(s: &[u8]) -> &[u8] {
+    let start = s.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(s.len());
+    let end = s.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(start, |i| i + 1);
+    &s[start..end]
+}
+
+/// The command as Marlin quotes it: the line without its comment, trimmed.
+fn command_text(line: &[u8]) -> &[u8] {
+    let code = line.split(|&b| b == b';').next().unwrap_or(line);
+    trim(code)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,202 @@
+//! Moves, homing and the position reports of the interpreter.
+//!
+//! Homing (`G28`) drives each axis in the profile's order to its endstop at the homing speed,
+//! backs off by the bump distance and touches again at `feed / bump_divisor`, as Marlin's
+//! `homeaxis()` does. Each of the three legs is a single-axis move from rest to rest: with
+//! speed `v` and acceleration `a`, a leg of length `d` takes `d / v + v / a` when it is long
+//! enough to cruise (`d >= v^2 / a`), and `2 sqrt(d / a)` (a triangle) otherwise. The motors
+//! step the legs too, so the step totals include homing.
+
+use gweave::gcode::state::{self, Effect};
+
+use super::{Machine, WarningKind};
+use crate::kinematics::Pos;
+use crate::limits::CornerMode;
+use crate::profile::EndstopSide;
+use crate::thermal::COLD_EXTRUSION_LINE;
+
+/// Axis letters X Y Z.
+const XYZ: [char; 3] = ['X', 'Y', 'Z'];
+/// Tolerance of the bounds check, mm: coordinates are written with a few decimals.
+const BOUNDS_EPS_MM: f64 = 1e-6;
+
+/// Time of a single-axis move of `d` from rest to rest at speed `v` and acceleration `a`, s.
+pub(super) fn rest_to_rest_s(d: f64, v: f64, a: f64) -> f64 {
+    if d <= 0.0 {
+        0.0
+    } else if d >= v * v / a {
+        d / v + v / a
+    } else {
+        2.0 * (d / a).sqrt()
+    }
+}
+
+impl Machine {
+    /// A line that moves (or a motion command without axis words, which only sets F).
+    pub(super) fn motion(&mut self, line: &[u8], effect: Effect, out: &mut dyn FnMut(f64, &str)) {
+        let Effect::Move(mut m) = effect else {
+            self.run_core(line, &effect, out);
+            return;
+        };
+        self.check_bounds(&m.from, &m.to);
+        if self.feed_pct != 100.0 {
+            m.feed_mm_min *= self.feed_pct / 100.0;
+        }
+        let de = m.to[state::E] - m.from[state::E];
+        if de != 0.0 {
+            let hotend = self.active_hotend();
+            if let Err(cold) = self.thermal.check_extrude(hotend) {
+                // Marlin drops the E part and goes on as if it had extruded.
+                out(self.now_s(), COLD_EXTRUSION_LINE);
+                self.warn(WarningKind::ColdExtrusion {
+                    hotend: cold.hotend,
+                    temp_c: cold.temp_c,
+                    min_c: cold.min_c,
+                });
+                m.to[state::E] = m.from[state::E];
+            } else if self.flow_pct != 100.0 {
+                m.to[state::E] = m.from[state::E] + de * self.flow_pct / 100.0;
+            }
+            self.filament_mm[self.tool] += m.to[state::E] - m.from[state::E];
+        }
+        self.thermal.set_moving(true);
+        self.moved_since_m400 = true;
+        self.run_core(line, &Effect::Move(m), out);
+    }
+
+    /// The hotend that extrudes: the tool's on a multi-hotend machine, the only one otherwise.
+    fn active_hotend(&self) -> u8 {
+        if self.profile.mixing_inputs > 0 {
+            0
+        } else {
+            self.tool.min(usize::from(u8::MAX)) as u8
+        }
+    }
+
+    /// Warns about a target outside the build volume (below the bed separately). Only the axes
+    /// the move changes are checked, so one excursion is reported once.
+    fn check_bounds(&mut self, from: &state::Position, to: &state::Position) {
+        let ranges = self.profile.bed.ranges();
+        for (i, &(min_mm, max_mm)) in ranges.iter().enumerate() {
+            if to[i] == from[i] {
+                continue;
+            }
+            let value_mm = to[i] + self.shift_mm[i];
+            if i == state::Z && value_mm < -BOUNDS_EPS_MM {
+                self.warn(WarningKind::BelowBed { z_mm: value_mm });
+            } else if value_mm < min_mm - BOUNDS_EPS_MM || value_mm > max_mm + BOUNDS_EPS_MM {
+                self.warn(WarningKind::OutOfBounds { axis: XYZ[i], value_mm, min_mm, max_mm });
+            }
+        }
+    }
+
+    /// `G28 [X] [Y] [Z]`.
+    pub(super) fn home(
+        &mut self,
+        line: &[u8],
+        effect: Effect,
+        before: &state::Position,
+        out: &mut dyn FnMut(f64, &str),
+    ) {
+        let Effect::Home { axes } = effect else {
+            return;
+        };
+        // Drains the planner.
+        self.run_core(line, &effect, out);
+        self.thermal.set_moving(true);
+        let ranges = self.profile.bed.ranges();
+        let sides = self.profile.endstops.to_array();
+        let homing = self.profile.homing.clone();
+        let mut logical = *before;
+        let mut t_s = 0.0;
+        for axis in homing.axes() {
+            if axes & (1 << axis) == 0 {
+                continue;
+            }
+            let (min_mm, max_mm) = ranges[axis];
+            let (stop_mm, away) = match sides[axis] {
+                EndstopSide::Min => (min_mm, 1.0),
+                EndstopSide::Max => (max_mm, -1.0),
+            };
+            let accel = self.homing_accel(axis);
+            let feed = homing.feed_mm_s[axis];
+            let bump = homing.bump_mm[axis];
+            let start = logical[axis];
+            let at_stop = stop_mm - self.shift_mm[axis];
+            let physical = start + self.shift_mm[axis];
+            t_s += rest_to_rest_s((physical - stop_mm).abs(), feed, accel)
+                + rest_to_rest_s(bump, feed, accel)
+                + rest_to_rest_s(bump, feed / homing.bump_divisor[axis], accel);
+            for (from, to) in
+                [(start, at_stop), (at_stop, at_stop + away * bump), (at_stop + away * bump, at_stop)]
+            {
+                let mut a = logical;
+                a[axis] = from;
+                let mut b = logical;
+                b[axis] = to;
+                self.core.steppers_mut().step_move(pos(&a), pos(&b), &[]);
+            }
+            // At the endstop the logical and physical positions agree again.
+            self.shift_mm[axis] = 0.0;
+            logical[axis] = stop_mm;
+            self.core.state_mut().pos[axis] = stop_mm;
+            self.homed[axis] = true;
+        }
+        self.core.idle(t_s);
+        self.homing_s += t_s;
+        self.moved_since_m400 = true;
+    }
+
+    /// The acceleration homing moves use on `axis`: the axis limit, capped by Marlin's travel
+    /// acceleration or Klipper's toolhead limit.
+    fn homing_accel(&self, axis: usize) -> f64 {
+        let p = self.core.profile();
+        let axis_max = p.max_accel_mm_s2.to_array()[axis];
+        match &p.corners {
+            CornerMode::Marlin { .. } => axis_max.min(p.accel.travel_mm_s2),
+            CornerMode::Klipper(k) => match (axis, k.max_z_accel_mm_s2) {
+                (state::Z, Some(z)) => z,
+                _ => k.max_accel_mm_s2,
+            },
+        }
+    }
+
+    /// `M114`: `X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0` (and `A:` on a rotary
+    /// machine).
+    pub(super) fn m114_text(&self) -> String {
+        let [x, y, z, e, a] = self.position();
+        let count = self.core.steppers().position_steps();
+        let rotary = self.profile.rotary.is_some();
+        let a_pos = if rotary { format!(" A:{a:.2}") } else { String::new() };
+        let a_count = if rotary { format!(" A:{}", count[4]) } else { String::new() };
+        format!(
+            "X:{x:.2} Y:{y:.2} Z:{z:.2}{a_pos} E:{e:.2} Count X:{} Y:{} Z:{}{a_count}",
+            count[0], count[1], count[2]
+        )
+    }
+
+    /// `M119`: `Reporting endstop status`, then `x_min: open` or `x_min: TRIGGERED` per
+    /// endstop. An endstop is triggered when the carriage is within half a step of it, or past.
+    pub(super) fn m119_lines(&self) -> Vec<String> {
+        let ranges = self.profile.bed.ranges();
+        let steps = &self.profile.motion.steps;
+        let spu = [steps.x, steps.y, steps.z];
+        let physical = self.physical_xyz();
+        let mut lines = vec!["Reporting endstop status".to_owned()];
+        for (i, side) in self.profile.endstops.to_array().into_iter().enumerate() {
+            let half_step = 0.5 / spu[i];
+            let (name, hit) = match side {
+                EndstopSide::Min => ("min", physical[i] <= ranges[i].0 + half_step),
+                EndstopSide::Max => ("max", physical[i] >= ranges[i].1 - half_step),
+            };
+            let state = if hit { "TRIGGERED" } else { "open" };
+            let axis = XYZ[i].to_ascii_lowercase();
+            lines.push(format!("{axis}_{name}: {state}"));
+        }
+        lines
+    }
+}
+
+fn pos(p: &state::Position) -> Pos {
+    Pos { x_mm: p[state::X], y_mm: p[state::Y], z_mm: p[state::Z], e_mm: p[state::E], a_deg: p[state::A] }
+}

@@ -1,0 +1,218 @@
+use super::motion::rest_to_rest_s;
+use super::*;
+use crate::profile::MachineProfile;
+
+/// Runs lines, returning the replies and the last outcome.
+fn run(m: &mut Machine, text: &str) -> (Vec<String>, Outcome) {
+    let mut replies = Vec::new();
+    let mut outcome = Outcome::Ok;
+    for line in text.lines() {
+        let mut out = |_t: f64, l: &str| replies.push(l.to_owned());
+        outcome = m.execute(line.as_bytes(), &mut out);
+    }
+    (replies, outcome)
+}
+
+fn machine() -> Machine {
+    Machine::new(MachineProfile::default()).unwrap()
+}
+
+/// A machine that may extrude cold (no heating in motion tests).
+fn warm_machine() -> Machine {
+    let mut p = MachineProfile::default();
+    p.thermal.extrude_min_c = None;
+    Machine::new(p).unwrap()
+}
+
+#[test]
+fn boot_and_query_replies() {
+    let mut m = machine();
+    assert_eq!(m.boot_lines()[0], "start");
+    let (r, o) = run(&mut m, "M105\nM119\nG123 X5 ; comment\nM114");
+    assert_eq!(o, Outcome::Ok);
+    assert!(!m.acknowledged(), "M114 leaves the ok to the caller");
+    assert_eq!(
+        r,
+        [
+            "ok T:25.00 /0.00 B:25.00 /0.00 @:0 B@:0",
+            "Reporting endstop status",
+            "x_min: TRIGGERED",
+            "y_min: TRIGGERED",
+            "z_min: TRIGGERED",
+            "echo:Unknown command: \"G123 X5\"",
+            "X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0",
+        ]
+    );
+    let (r, _) = run(&mut m, "M105");
+    assert!(m.acknowledged());
+    assert!(r[0].starts_with("ok T:"));
+    let (r, _) = run(&mut m, "?");
+    assert!(r.iter().any(|l| l.contains("M119 endstops")), "{r:?}");
+    assert_eq!(m.report().unknown_commands["G123"], 1);
+}
+
+#[test]
+fn moves_count_steps_and_m114_reports_them() {
+    let mut m = warm_machine();
+    let (r, _) = run(&mut m, "G1 X10 Y5.0125 Z0.3 E2 F3000\nG91\nG1 X-2.5 E-0.5\nG90\nM114\nM119");
+    assert_eq!(
+        r,
+        [
+            "X:7.50 Y:5.01 Z:0.30 E:1.50 Count X:600 Y:401 Z:1200",
+            "Reporting endstop status",
+            "x_min: open",
+            "y_min: open",
+            "z_min: open",
+        ]
+    );
+    let rep = m.report();
+    // E: 2 mm out, 0.5 mm back at 500 steps/mm.
+    assert_eq!(rep.steps.axes, [1000, 401, 1200, 1250, 0]);
+    assert_eq!(rep.filament_mm, vec![1.5]);
+    assert!(rep.warnings.is_empty(), "{:?}", rep.warnings);
+}
+
+#[test]
+fn cold_extrusion_is_refused_with_marlins_line() {
+    let mut m = machine();
+    let (r, _) = run(&mut m, "G1 X10 E5 F600\nM114");
+    assert_eq!(r[0], "echo: cold extrusion prevented");
+    // The logical E moved on; the motor did not.
+    assert_eq!(r[1], "X:10.00 Y:0.00 Z:0.00 E:5.00 Count X:800 Y:0 Z:0");
+    let rep = m.report();
+    assert_eq!(rep.steps.axes[3], 0);
+    assert_eq!(rep.filament_mm, vec![0.0]);
+    assert_eq!(rep.warning_counts["cold_extrusion"], 1);
+    assert_eq!(rep.warnings[0].line, 1);
+}
+
+#[test]
+fn homing_drives_to_the_endstops_with_marlins_bump() {
+    let mut m = warm_machine();
+    run(&mut m, "G1 X50 Y20 F6000\nM400");
+    let t0 = m.now_s();
+    let (r, _) = run(&mut m, "G28 X\nM114\nM119");
+    assert_eq!(r[0], "X:0.00 Y:20.00 Z:0.00 E:0.00 Count X:0 Y:1600 Z:0");
+    assert_eq!(&r[2..4], ["x_min: TRIGGERED", "y_min: open"]);
+    // 50 mm at 50 mm/s, 5 mm back, 5 mm again at 25 mm/s; a = 3000 mm/s^2.
+    let want = (1.0 + 50.0 / 3000.0) + (0.1 + 50.0 / 3000.0) + (0.2 + 25.0 / 3000.0);
+    assert!((m.now_s() - t0 - want).abs() < 1e-9, "{}", m.now_s() - t0);
+    assert!((m.report().time.homing_s - want).abs() < 1e-12);
+    // 50 mm in, 5 out and 5 back in at 80 steps/mm.
+    assert_eq!(m.report().steps.axes[0], (50 + 50 + 10) * 80);
+    assert!((rest_to_rest_s(0.5, 50.0, 3000.0) - 2.0 * (0.5f64 / 3000.0).sqrt()).abs() < 1e-15);
+}
+
+#[test]
+fn g92_shifts_the_logical_origin_only() {
+    let mut m = warm_machine();
+    let (r, _) = run(&mut m, "G1 X100 F6000\nG92 X0\nG1 X-50\nM114\nG28 X\nM114");
+    assert_eq!(r[0], "X:-50.00 Y:0.00 Z:0.00 E:0.00 Count X:4000 Y:0 Z:0");
+    assert_eq!(r[1], "X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0");
+    // X-50 after G92 X0 at 100 is machine X50: inside the bed, no warning.
+    assert!(m.report().warnings.is_empty());
+}
+
+#[test]
+fn out_of_bounds_and_below_bed_are_reported_not_clamped() {
+    let mut m = warm_machine();
+    let (_, o) = run(&mut m, "G1 X250 F6000\nG1 Z-0.4\nG1 X10\nM114");
+    assert_eq!(o, Outcome::Ok);
+    let rep = m.report();
+    assert_eq!(
+        rep.warnings.iter().map(|w| (w.line, w.kind.clone())).collect::<Vec<_>>(),
+        [
+            (1, WarningKind::OutOfBounds { axis: 'X', value_mm: 250.0, min_mm: 0.0, max_mm: 200.0 }),
+            (2, WarningKind::BelowBed { z_mm: -0.4 }),
+        ]
+    );
+    assert_eq!(rep.position[2], -0.4);
+    assert_eq!(rep.count[2], -1600);
+}
+
+#[test]
+fn m109_waits_reporting_every_second() {
+    let mut m = machine();
+    let mut stamped = Vec::new();
+    let mut out = |t: f64, l: &str| stamped.push((t, l.to_owned()));
+    assert_eq!(m.execute(b"M109 S200", &mut out), Outcome::Ok);
+    let waited = m.now_s();
+    // The default 40 W hotend reaches 200 C in about 70 s, then the residency.
+    assert!((70.0..100.0).contains(&waited), "{waited}");
+    assert!(stamped.iter().all(|(_, l)| l.starts_with(" T:")));
+    assert_eq!(stamped.len(), waited.floor() as usize);
+    assert!((stamped[0].0 - 1.0).abs() < 1e-9 && (stamped[1].0 - 2.0).abs() < 1e-9);
+    assert!(m.thermal().temperature(HeaterId::Hotend(0)).unwrap() > 199.0);
+    assert_eq!(m.report().time.heating_s, waited);
+}
+
+#[test]
+fn injected_cartridge_fault_trips_thermal_runaway() {
+    let p = MachineProfile {
+        faults: vec!["hotend-cartridge-off@100s".parse().unwrap()],
+        ..MachineProfile::default()
+    };
+    let mut m = Machine::new(p).unwrap();
+    let mut stamped = Vec::new();
+    let mut out = |t: f64, l: &str| stamped.push((t, l.to_owned()));
+    assert_eq!(m.execute(b"M109 S200", &mut out), Outcome::Ok);
+    assert_eq!(m.execute(b"G4 S120", &mut out), Outcome::Halted);
+    let errors: Vec<&(f64, String)> = stamped.iter().filter(|(_, l)| l.starts_with("Error:")).collect();
+    assert_eq!(errors[0].1, "Error:Thermal Runaway, system stopped! Heater_ID: 0");
+    assert_eq!(errors[1].1, "Error:Printer halted. kill() called!");
+    // Runaway: more than 4 C below target for 40 s after the cartridge went at 100 s.
+    assert!((140.0..170.0).contains(&errors[0].0), "{}", errors[0].0);
+    let (r, o) = run(&mut m, "G1 X10\nM105");
+    assert_eq!(o, Outcome::Halted);
+    assert_eq!(r[0], STOPPED_LINE);
+    assert!(r[1].starts_with("ok T:"), "queries still work: {r:?}");
+    assert_eq!(run(&mut m, "M999").1, Outcome::Ok);
+    assert_eq!(m.report().thermal_faults.len(), 1);
+}
+
+#[test]
+fn m112_halts_until_m999() {
+    let mut m = machine();
+    let (r, o) = run(&mut m, "M104 S200\nM112");
+    assert_eq!((r, o), (vec![KILL_LINE.to_owned()], Outcome::Halted));
+    assert_eq!(m.thermal().target(HeaterId::Hotend(0)).unwrap(), 0.0);
+    assert_eq!(run(&mut m, "G28").1, Outcome::Halted);
+    assert_eq!(run(&mut m, "M999\nG28").1, Outcome::Ok);
+}
+
+#[test]
+fn mixing_inputs_share_e_by_the_virtual_tool() {
+    let mut p = MachineProfile::from_toml_str("mixing_inputs = 4\n").unwrap();
+    p.thermal.extrude_min_c = None;
+    let mut m = Machine::new(p).unwrap();
+    let (r, _) = run(
+        &mut m,
+        "M163 S0 P0.5\nM163 S1 P0.3\nM163 S2 P0.2\nM163 S3 P0\nM164 S2\nT2\nG1 X10 E100 F600\nT0\nG1 X20 E110\nT99\nM400",
+    );
+    assert_eq!(r, ["echo:T99 Invalid extruder"]);
+    let rep = m.report();
+    assert_eq!(rep.mixing_input_mm, vec![60.0, 30.0, 20.0, 0.0]);
+    assert_eq!(rep.filament_mm, vec![10.0, 0.0, 100.0]);
+    assert_eq!(rep.steps.mixing, vec![30_000, 15_000, 10_000, 0]);
+}
+
+#[test]
+fn feed_and_flow_percentages() {
+    let mut m = warm_machine();
+    let (r, _) = run(&mut m, "M221 S50\nG1 X100 E10 F6000\nM220 S50\nM220\nM400");
+    assert_eq!(r, ["echo:FR:50%"]);
+    assert_eq!(m.report().filament_mm, vec![5.0]);
+    // 100 mm at 100 mm/s with a = 3000: 1 s cruise + 1/30 s.
+    assert!((m.now_s() - (1.0 + 100.0 / 3000.0)).abs() < 1e-9, "{}", m.now_s());
+}
+
+#[test]
+fn rrf_tool_temperature_and_m116() {
+    let mut m = machine();
+    let (r, _) = run(&mut m, "G10 P0 S200\nM116\nG1 X10 E1 F600\nG10\nM400");
+    assert!(r.iter().all(|l| l.starts_with(" T:")), "{r:?}");
+    assert!(m.thermal().temperature(HeaterId::Hotend(0)).unwrap() > 199.0);
+    // G10 without words is still a firmware retraction (1 mm by default).
+    assert_eq!(m.report().count[3], 0);
+    assert_eq!(m.report().filament_mm, vec![1.0]);
+}

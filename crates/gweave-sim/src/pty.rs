@@ -1,0 +1,229 @@
+//! A pseudo-terminal endpoint: the virtual printer looks like a USB serial port to any host that
+//! opens a device path (Printrun, OctoPrint, `screen`).
+//!
+//! The pty's slave side gets a random name (`/dev/pts/7`), so a stable symlink (`/tmp/gweave0`)
+//! points at it; it is removed when the endpoint is dropped. The line discipline is put in raw
+//! mode (no echo, no CR/LF translation, no signals) as a real serial port would be.
+//!
+//! Connection tracking relies on Linux pty semantics: while no process holds the slave open the
+//! master reports `POLLHUP` (reads fail with `EIO`); the first open clears it. So a host opening
+//! the path is a [`Event::Connected`] (a board reset), its last close an [`Event::Disconnected`].
+
+use std::fs::OpenOptions;
+use std::io::{self, Read};
+use std::os::unix::fs::OpenOptionsExt;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use nix::fcntl::{fcntl, FcntlArg, OFlag};
+use nix::poll::PollFlags;
+use nix::pty::{grantpt, posix_openpt, ptsname_r, unlockpt, PtyMaster};
+use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
+
+use crate::transport::{wait_readable, write_all_fd, Endpoint, Event, TransportError};
+
+/// A pty with a symlink to its slave side.
+pub struct PtyEndpoint {
+    master: PtyMaster,
+    slave: PathBuf,
+    link: PathBuf,
+    connected: bool,
+}
+
+impl PtyEndpoint {
+    /// Opens a pty in raw mode and links `link` to its slave. An existing symlink at `link` (left
+    /// by a killed run) is replaced; any other file there is an error.
+    pub fn open(link: &Path) -> Result<PtyEndpoint, TransportError> {
+        let master = posix_openpt(OFlag::O_RDWR | OFlag::O_NOCTTY)
+            .and_then(|m| grantpt(&m).and_then(|()| unlockpt(&m)).map(|()| m))
+            .map_err(|e| TransportError::Io { context: "opening a pty".into(), source: e.into() })?;
+        let slave = ptsname_r(&master)
+            .map(PathBuf::from)
+            .map_err(|e| TransportError::Io { context: "naming the pty".into(), source: e.into() })?;
+        // Set raw mode through the slave, then close it: with no slave open the master reports
+        // a hang-up until a host opens the link.
+        let file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            // The printer must not become the serving process's controlling terminal.
+            .custom_flags(OFlag::O_NOCTTY.bits())
+            .open(&slave)
+            .map_err(TransportError::io(format!("opening {}", slave.display())))?;
+        let raw = tcgetattr(&file).and_then(|mut t| {
+            cfmakeraw(&mut t);
+            tcsetattr(&file, SetArg::TCSANOW, &t)
+        });
+        raw.map_err(|e| TransportError::Io { context: "setting raw mode".into(), source: e.into() })?;
+        drop(file);
+        fcntl(&master, FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
+            .map_err(|e| TransportError::Io { context: "pty non-blocking".into(), source: e.into() })?;
+        match std::fs::symlink_metadata(link) {
+            Ok(m) if m.file_type().is_symlink() => std::fs::remove_file(link)
+                .map_err(TransportError::io(format!("replacing {}", link.display())))?,
+            Ok(_) => return Err(TransportError::LinkExists(link.to_path_buf())),
+            Err(_) => {}
+        }
+        std::os::unix::fs::symlink(&slave, link)
+            .map_err(TransportError::io(format!("linking {}", link.display())))?;
+        Ok(PtyEndpoint { master, slave, link: link.to_path_buf(), connected: false })
+    }
+
+    /// The pty's own device path (`/dev/pts/N`).
+    pub fn slave_path(&self) -> &Path {
+        &self.slave
+    }
+
+    /// The stable symlink hosts open.
+    pub fn link_path(&self) -> &Path {
+        &self.link
+    }
+}
+
+impl Endpoint for PtyEndpoint {
+    fn wait(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<Event> {
+        let ready = wait_readable(&self.master, timeout)?;
+        if ready.contains(PollFlags::POLLHUP) && !ready.contains(PollFlags::POLLIN) {
+            if self.connected {
+                self.connected = false;
+                return Ok(Event::Disconnected);
+            }
+            // No host: poll returns at once, so wait out the tick here.
+            std::thread::sleep(timeout);
+            return Ok(Event::Nothing);
+        }
+        if !self.connected {
+            self.connected = true;
+            return Ok(Event::Connected);
+        }
+        if !ready.contains(PollFlags::POLLIN) {
+            return Ok(Event::Nothing);
+        }
+        match self.master.read(buf) {
+            Ok(n) => Ok(Event::Data(n)),
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(Event::Nothing),
+            // EIO: the host closed the slave between the poll and the read.
+            Err(e) if e.raw_os_error() == Some(nix::libc::EIO) => {
+                self.connected = false;
+                Ok(Event::Disconnected)
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    fn send(&mut self, bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
+        write_all_fd(&self.master, bytes, stop)
+    }
+
+    fn hang_up(&mut self) {
+        self.connected = false;
+    }
+}
+
+impl Drop for PtyEndpoint {
+    fn drop(&mut self) {
+        // Remove the link only if it is still ours.
+        if std::fs::read_link(&self.link).is_ok_and(|target| target == self.slave) {
+            let _ = std::fs::remove_file(&self.link);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::fs::File;
+    use std::io::Write;
+    use std::sync::atomic::Ordering;
+    use std::time::Instant;
+
+    use super::*;
+    use crate::serial::tests::Scripted;
+    use crate::transport::{serve, ServeOptions, StopOnDrop};
+
+    fn open_host(link: &Path) -> File {
+        OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags((OFlag::O_NOCTTY | OFlag::O_NONBLOCK).bits())
+            .open(link)
+            .unwrap()
+    }
+
+    /// Reads reply lines until `oks` of them are `ok`, failing after 10 s.
+    fn lines_until_ok(host: &mut File, oks: usize) -> Vec<String> {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let mut text = String::new();
+        let mut buf = [0u8; 256];
+        while text.lines().filter(|l| *l == "ok").count() < oks {
+            assert!(Instant::now() < deadline, "timed out after {text:?}");
+            wait_readable(&*host, Duration::from_millis(100)).unwrap();
+            match host.read(&mut buf) {
+                Ok(n) => text.push_str(std::str::from_utf8(&buf[..n]).unwrap()),
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
+                Err(e) => panic!("{e}"),
+            }
+        }
+        text.lines().map(str::to_string).collect()
+    }
+
+    #[test]
+    fn serves_a_host_through_the_link_and_removes_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let link = dir.path().join("gweave0");
+        let mut endpoint = PtyEndpoint::open(&link).unwrap();
+        assert_eq!(std::fs::read_link(&link).unwrap(), endpoint.slave_path());
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            // A failed assertion must still stop the server, or the scope never ends.
+            let _stop = StopOnDrop(&stop);
+            let server = s.spawn(|| {
+                let mut make = || Ok::<_, io::Error>(Scripted::default());
+                serve(&mut endpoint, &mut make, &mut |_| {}, &ServeOptions::default(), None, &stop)
+            });
+            let mut host = open_host(&link);
+            // Raw mode: CR is not turned into LF, nothing is echoed back.
+            host.write_all(b"N1 G28*18\r\nN2 G28*19\nG4 S5\n").unwrap();
+            let got = lines_until_ok(&mut host, 3);
+            assert_eq!(
+                got,
+                [
+                    "start",
+                    "echo:Marlin test double",
+                    "ok",
+                    "Error:checksum mismatch, Last Line: 1",
+                    "Resend: 2",
+                    "ok",
+                    "echo:busy: processing",
+                    "echo:busy: processing",
+                    "ok"
+                ]
+            );
+            drop(host);
+            // Reopening the port reboots the board (the hang-up is seen within a tick; a host
+            // that closes and reopens faster than that keeps its session).
+            std::thread::sleep(3 * crate::transport::TICK);
+            let mut host = open_host(&link);
+            host.write_all(b"G28\n").unwrap();
+            assert_eq!(lines_until_ok(&mut host, 1), ["start", "echo:Marlin test double", "ok"]);
+            stop.store(true, Ordering::Relaxed);
+            let summary = server.join().unwrap().unwrap();
+            assert_eq!(summary.sessions, 2);
+            assert_eq!(summary.link.busy, 2);
+        });
+        drop(endpoint);
+        assert!(std::fs::symlink_metadata(&link).is_err(), "the link is removed");
+    }
+
+    #[test]
+    fn replaces_a_stale_link_but_not_a_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let link = dir.path().join("gweave0");
+        std::os::unix::fs::symlink("/nonexistent", &link).unwrap();
+        let endpoint = PtyEndpoint::open(&link).unwrap();
+        assert_eq!(std::fs::read_link(&link).unwrap(), endpoint.slave_path());
+        let file = dir.path().join("plain");
+        std::fs::write(&file, "keep").unwrap();
+        assert!(matches!(PtyEndpoint::open(&file), Err(TransportError::LinkExists(_))));
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "keep");
+    }
+}

@@ -1,0 +1,314 @@
+//! Moving the serial protocol's bytes: the serve loop shared by the pty ([`crate::pty`]) and TCP
+//! ([`crate::tcp`]) endpoints, real-time pacing and the session log.
+//!
+//! Each host connection is one power-on of the virtual board, as a USB serial adapter resets an
+//! Arduino-based Marlin board when a host opens the port: the loop builds a fresh device, prints
+//! its boot lines (`start`), and feeds the host's bytes to a new [`Protocol`]. When the host
+//! leaves, the device is dropped. Only one host is served at a time.
+//!
+//! By default replies go out as fast as the simulation produces them. In real-time mode each
+//! reply waits until its simulated time, measured from the moment the command's bytes arrived:
+//! `G4 S5` answers `ok` five wall-clock seconds later, with keepalive lines at 2 s and 4 s.
+
+use std::io::{self, Write};
+use std::os::fd::AsFd;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use nix::errno::Errno;
+use nix::poll::{poll, PollFd, PollFlags};
+
+use crate::serial::{Device, LinkStats, Protocol, ProtocolConfig};
+
+/// How long one wait for the host lasts before the loop looks at the stop flag again.
+pub const TICK: Duration = Duration::from_millis(100);
+
+/// What a wait on an endpoint brought.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Event {
+    /// A host opened the port.
+    Connected,
+    /// The host sent this many bytes (into the caller's buffer).
+    Data(usize),
+    /// The host closed the port.
+    Disconnected,
+    /// Nothing happened within the wait.
+    Nothing,
+}
+
+/// A place a host connects to.
+pub trait Endpoint {
+    /// Waits at most `timeout` for the host; reads what it sent into `buf`.
+    fn wait(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<Event>;
+    /// Sends bytes to the connected host, giving up when `stop` is raised.
+    fn send(&mut self, bytes: &[u8], stop: &AtomicBool) -> io::Result<()>;
+    /// Forgets the current host after a failed send.
+    fn hang_up(&mut self);
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum TransportError {
+    #[error("{context}")]
+    Io {
+        context: String,
+        #[source]
+        source: io::Error,
+    },
+    #[error("{0} is not a loopback address; the virtual printer listens on 127.0.0.1 or ::1 only")]
+    NotLoopback(std::net::SocketAddr),
+    #[error("{0} exists and is not a symlink; not replacing it")]
+    LinkExists(std::path::PathBuf),
+    #[error("building the virtual printer failed")]
+    Device(#[source] Box<dyn std::error::Error + Send + Sync>),
+}
+
+impl TransportError {
+    pub(crate) fn io(context: impl Into<String>) -> impl FnOnce(io::Error) -> TransportError {
+        let context = context.into();
+        move |source| TransportError::Io { context, source }
+    }
+}
+
+/// How to serve.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ServeOptions {
+    pub protocol: ProtocolConfig,
+    /// Pace replies to the simulated clock.
+    pub realtime: bool,
+    /// Stop when the host has sent nothing for this long (wall clock).
+    pub exit_after_idle: Option<Duration>,
+}
+
+/// What a serve run did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ServeSummary {
+    /// Host connections (device boots).
+    pub sessions: u64,
+    /// Link counts summed over all sessions.
+    pub link: LinkStats,
+}
+
+impl ServeSummary {
+    fn end_session<D: Device>(&mut self, link: Protocol<D>, finished: &mut dyn FnMut(D)) {
+        let s = link.stats();
+        self.link.lines += s.lines;
+        self.link.executed += s.executed;
+        self.link.errors += s.errors;
+        self.link.duplicates += s.duplicates;
+        self.link.busy += s.busy;
+        finished(link.into_device());
+    }
+}
+
+/// Serves hosts on `endpoint` until `stop` is raised or the idle limit passes. `make_device`
+/// builds the board afresh for every connection; `finished` gets it back when the session ends
+/// (for a report); `log` receives the session transcript.
+pub fn serve<D, E>(
+    endpoint: &mut dyn Endpoint,
+    make_device: &mut dyn FnMut() -> Result<D, E>,
+    finished: &mut dyn FnMut(D),
+    options: &ServeOptions,
+    log: Option<&mut dyn Write>,
+    stop: &AtomicBool,
+) -> Result<ServeSummary, TransportError>
+where
+    D: Device,
+    E: std::error::Error + Send + Sync + 'static,
+{
+    let mut summary = ServeSummary::default();
+    let mut link: Option<Protocol<D>> = None;
+    let mut out = Output::new(options.realtime, log, stop);
+    let mut received = LineLog::default();
+    let mut buf = vec![0u8; 4096];
+    let mut last_heard = Instant::now();
+    while !stop.load(Ordering::Relaxed) {
+        let event = endpoint.wait(&mut buf, TICK).map_err(TransportError::io("waiting for the host"))?;
+        match event {
+            Event::Connected => {
+                let device = make_device().map_err(|e| TransportError::Device(Box::new(e)))?;
+                let mut fresh = Protocol::new(device, options.protocol);
+                summary.sessions += 1;
+                out.note(&format!("host connected, session {}", summary.sessions));
+                out.rebase(fresh.device().now_s());
+                fresh.boot(&mut |t_s, line| out.line(endpoint, t_s, line));
+                link = Some(fresh);
+                last_heard = Instant::now();
+            }
+            Event::Data(n) => {
+                last_heard = Instant::now();
+                // Bytes before a connection (a pty buffer from an earlier host) are dropped.
+                let Some(p) = link.as_mut() else { continue };
+                let bytes = &buf[..n];
+                received.push(bytes, p.device().now_s(), &mut out);
+                out.rebase(p.device().now_s());
+                p.feed(bytes, &mut |t_s, line| out.line(endpoint, t_s, line));
+            }
+            Event::Disconnected => {
+                if let Some(p) = link.take() {
+                    out.note("host disconnected");
+                    summary.end_session(p, finished);
+                }
+            }
+            Event::Nothing => {}
+        }
+        if let Some(e) = out.failed.take() {
+            out.note(&format!("send failed ({e}); dropping the host"));
+            endpoint.hang_up();
+            if let Some(p) = link.take() {
+                summary.end_session(p, finished);
+            }
+        }
+        if options.exit_after_idle.is_some_and(|limit| last_heard.elapsed() >= limit) {
+            out.note("idle limit reached");
+            break;
+        }
+    }
+    if let Some(p) = link.take() {
+        summary.end_session(p, finished);
+    }
+    Ok(summary)
+}
+
+/// Where replies go: paced, logged, sent; the first send error is kept for the loop.
+struct Output<'a, 's> {
+    realtime: bool,
+    /// Wall-clock instant and simulated time that correspond.
+    anchor: (Instant, f64),
+    log: Option<&'a mut dyn Write>,
+    stop: &'s AtomicBool,
+    failed: Option<io::Error>,
+    bytes: Vec<u8>,
+}
+
+impl<'a, 's> Output<'a, 's> {
+    fn new(realtime: bool, log: Option<&'a mut dyn Write>, stop: &'s AtomicBool) -> Self {
+        Output { realtime, anchor: (Instant::now(), 0.0), log, stop, failed: None, bytes: Vec::new() }
+    }
+
+    /// New bytes arrived with the device at `sim_s`: if the pacing has fallen behind the wall
+    /// clock (the host was quiet, the simulated clock stood still), the next command starts now.
+    fn rebase(&mut self, sim_s: f64) {
+        let now = Instant::now();
+        if self.wall_at(sim_s) < now {
+            self.anchor = (now, sim_s);
+        }
+    }
+
+    fn wall_at(&self, sim_s: f64) -> Instant {
+        let ahead_s = (sim_s - self.anchor.1).max(0.0);
+        self.anchor.0 + Duration::from_secs_f64(ahead_s.min(1e9))
+    }
+
+    fn line(&mut self, endpoint: &mut dyn Endpoint, t_s: f64, text: &str) {
+        if self.failed.is_some() {
+            return;
+        }
+        if self.realtime {
+            let due = self.wall_at(t_s);
+            // Sleep in ticks so that a stop request is seen.
+            while !self.stop.load(Ordering::Relaxed) {
+                let now = Instant::now();
+                if now >= due {
+                    break;
+                }
+                std::thread::sleep((due - now).min(TICK));
+            }
+        }
+        self.write_log(&format!("{t_s:>12.3} < {text}"));
+        // Marlin ends every line with a bare newline.
+        self.bytes.clear();
+        self.bytes.extend_from_slice(text.as_bytes());
+        self.bytes.push(b'\n');
+        if let Err(e) = endpoint.send(&self.bytes, self.stop) {
+            self.failed = Some(e);
+        }
+    }
+
+    fn note(&mut self, text: &str) {
+        self.write_log(&format!("# {text}"));
+    }
+
+    fn write_log(&mut self, entry: &str) {
+        if let Some(log) = self.log.as_mut() {
+            // A log that cannot be written must not stop the printer; the first failure ends it.
+            if writeln!(log, "{entry}").is_err() {
+                self.log = None;
+            }
+        }
+    }
+}
+
+/// Splits received bytes into lines for the log.
+#[derive(Default)]
+struct LineLog {
+    partial: Vec<u8>,
+}
+
+impl LineLog {
+    fn push(&mut self, bytes: &[u8], t_s: f64, out: &mut Output<'_, '_>) {
+        if out.log.is_none() {
+            return;
+        }
+        for &b in bytes {
+            if b == b'\n' || b == b'\r' {
+                if !self.partial.is_empty() {
+                    let text = String::from_utf8_lossy(&self.partial).into_owned();
+                    out.write_log(&format!("{t_s:>12.3} > {text}"));
+                    self.partial.clear();
+                }
+            } else {
+                self.partial.push(b);
+            }
+        }
+    }
+}
+
+/// Writes all of `bytes` to a non-blocking descriptor, waiting for room in ticks and giving up
+/// with `Interrupted` when `stop` is raised.
+pub(crate) fn write_all_fd(fd: impl AsFd, mut bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
+    while !bytes.is_empty() {
+        match nix::unistd::write(&fd, bytes) {
+            Ok(n) => bytes = &bytes[n..],
+            Err(Errno::EAGAIN) => {
+                if stop.load(Ordering::Relaxed) {
+                    return Err(io::Error::from(io::ErrorKind::Interrupted));
+                }
+                let mut fds = [PollFd::new(fd.as_fd(), PollFlags::POLLOUT)];
+                match poll(&mut fds, tick_ms()) {
+                    Ok(_) | Err(Errno::EINTR) => {}
+                    Err(e) => return Err(e.into()),
+                }
+            }
+            Err(Errno::EINTR) => {}
+            Err(e) => return Err(e.into()),
+        }
+    }
+    Ok(())
+}
+
+/// Waits for `fd` to become readable (or hang up) for at most `timeout`: the revents, if any.
+pub(crate) fn wait_readable(fd: impl AsFd, timeout: Duration) -> io::Result<PollFlags> {
+    let ms = u16::try_from(timeout.as_millis()).unwrap_or(u16::MAX);
+    let mut fds = [PollFd::new(fd.as_fd(), PollFlags::POLLIN)];
+    match poll(&mut fds, ms) {
+        Ok(_) => Ok(fds[0].revents().unwrap_or(PollFlags::empty())),
+        Err(Errno::EINTR) => Ok(PollFlags::empty()),
+        Err(e) => Err(e.into()),
+    }
+}
+
+fn tick_ms() -> u16 {
+    u16::try_from(TICK.as_millis()).unwrap_or(u16::MAX)
+}
+
+/// Raises a stop flag when dropped: a server thread started in a test scope ends even when the
+/// test body panics.
+#[cfg(test)]
+pub(crate) struct StopOnDrop<'a>(pub &'a AtomicBool);
+
+#[cfg(test)]
+impl Drop for StopOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+}

@@ -1,0 +1,174 @@
+//! The virtual printer on a real slicer file: exact step counts, the same times as the
+//! estimator, and the example machine profiles.
+
+use std::path::Path;
+
+use gweave_sim::estimate::estimate;
+use gweave_sim::interp::{Machine, Outcome, SimReport};
+use gweave_sim::limits::{CornerMode, KlipperLimits};
+use gweave_sim::profile::MachineProfile;
+
+const TORUS: &str = include_str!("data/cura_torus.gcode");
+
+/// Runs a whole file; every command must succeed. Returns the report and the replies.
+fn sim(text: &str, profile: MachineProfile) -> (SimReport, Vec<String>) {
+    let mut m = Machine::new(profile).unwrap();
+    let mut replies = Vec::new();
+    let mut out = |_t: f64, l: &str| replies.push(l.to_owned());
+    for line in text.lines() {
+        assert_eq!(m.execute(line.as_bytes(), &mut out), Outcome::Ok, "{line}");
+    }
+    m.finish(&mut out);
+    (m.report(), replies)
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * b.abs().max(1.0)
+}
+
+#[test]
+fn cura_torus_steps_are_exact() {
+    let (rep, replies) = sim(TORUS, MachineProfile::default());
+    // Cura's `{machine_depth}` placeholder is not a number: Marlin drops the word.
+    assert!(replies.iter().all(|r| !r.starts_with("Error")), "{replies:?}");
+    assert!(rep.warnings.iter().all(|w| w.kind.name() != "cold_extrusion"), "{:?}", rep.warnings);
+    // One G92 E0 after the 30 mm purge lines, then absolute E to the end: the E motor is at
+    // round(filament * 500) and every mm of filament went through it.
+    let filament = rep.filament_mm[0];
+    assert!(close(filament, 30.0 + 747.6185 - 4.0), "{filament}");
+    assert_eq!(rep.count[3], (filament * 500.0).round() as i64);
+    // X Y Z end where the file leaves them, at 80 / 80 / 4000 steps per mm.
+    for (i, spu) in [80.0, 80.0, 4000.0].into_iter().enumerate() {
+        assert_eq!(rep.count[i], (rep.position[i] * spu).round() as i64, "axis {i}");
+    }
+    // Cura's end G-code raises Z by 0.2 and 10 mm, relative (G91).
+    assert!(close(rep.position[2], rep_last_layer_z() + 10.2), "{}", rep.position[2]);
+    // The motors stepped at least their net travel; homing adds 2 x bump per axis.
+    assert!(rep.steps.axes[3] >= rep.count[3].unsigned_abs());
+    assert_eq!(rep.layer_s.len(), 28);
+    assert!(rep.time.heating_s > 60.0 && rep.time.homing_s > 0.0, "{:?}", rep.time);
+}
+
+/// The Z of the torus' last layer (Cura writes it in the last `G0 ... Z` of the print).
+fn rep_last_layer_z() -> f64 {
+    TORUS
+        .lines()
+        .take_while(|l| !l.starts_with(";TIME_ELAPSED:688"))
+        .filter(|l| l.starts_with("G0") || l.starts_with("G1"))
+        .filter_map(|l| l.split_whitespace().find_map(|w| w.strip_prefix('Z')))
+        .last()
+        .unwrap()
+        .parse()
+        .unwrap()
+}
+
+#[test]
+fn sim_time_equals_estimate_marlin() {
+    let profile = MachineProfile::default();
+    let est = estimate(TORUS.as_bytes(), &profile.motion).unwrap();
+    let (rep, _) = sim(TORUS, profile);
+    assert!(close(rep.time.motion_s, est.motion_s), "{} vs {}", rep.time.motion_s, est.motion_s);
+    assert_eq!(rep.time.dwell_s, est.dwell_s);
+    assert_eq!(rep.blocks, est.blocks);
+    assert_eq!(rep.layer_s.len(), est.layer_s.len());
+    for (a, b) in rep.layer_s.iter().zip(&est.layer_s) {
+        assert!(close(*a, *b), "{a} vs {b}");
+    }
+    for (f, t) in &est.feature_s {
+        assert!(close(rep.feature_s[f], *t), "{f:?}");
+    }
+    // The simulator adds what the estimator leaves out: heating and homing.
+    let t = &rep.time;
+    assert!(close(t.total_s, est.total_s + t.heating_s + t.homing_s));
+    assert!(close(t.total_s, t.motion_s + t.dwell_s + t.heating_s + t.homing_s + t.overhead_s));
+}
+
+#[test]
+fn sim_time_equals_estimate_klipper() {
+    let text = std::fs::read_to_string(machines().join("klipper.toml")).unwrap();
+    let mut profile = MachineProfile::from_toml_str(&text).unwrap();
+    // Klipper's batch mode did not heat: let the cold hotend extrude, as it did there.
+    profile.thermal.extrude_min_c = None;
+    let prepared: String = TORUS
+        .lines()
+        .filter(|l| !l.starts_with("M109") && !l.starts_with("M190"))
+        .map(|l| if l.starts_with("G28") { "SET_KINEMATIC_POSITION X=0 Y=0 Z=0" } else { l })
+        .map(|l| l.replace("{machine_depth}", "220") + "\n")
+        .collect();
+    let est = estimate(prepared.as_bytes(), &profile.motion).unwrap();
+    let (rep, _) = sim(&prepared, profile);
+    assert!(close(rep.time.total_s, est.total_s), "{} vs {}", rep.time.total_s, est.total_s);
+    // Klipper's own batch mode: 749.631 s (tests/data README).
+    assert!((rep.time.total_s - 749.631).abs() / 749.631 < 1e-4, "{}", rep.time.total_s);
+}
+
+fn machines() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines")
+}
+
+#[test]
+fn example_machines_load() {
+    let load = |name: &str| {
+        let text = std::fs::read_to_string(machines().join(name)).unwrap();
+        MachineProfile::from_toml_str(&text).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let ramps = load("marlin-ramps.toml");
+    assert_eq!(MachineProfile { name: ramps.name.clone(), ..MachineProfile::default() }, ramps);
+    let klipper = load("klipper.toml");
+    assert_eq!(
+        klipper.motion.corners,
+        CornerMode::Klipper(KlipperLimits::default()),
+        "the README's ground-truth limits are Klipper's defaults"
+    );
+    assert_eq!(load("mixing-4in.toml").motion.steps.mixing_e.len(), 4);
+    let rotary = load("rotary.toml");
+    assert!(rotary.rotary.is_some() && rotary.motion.steps.a_per_deg.is_some());
+    let ink = load("inkjet-c6602.toml");
+    assert_eq!(ink.inkjet.unwrap().printhead.nozzle_count, 12);
+    for name in ["rotary.toml", "mixing-4in.toml", "inkjet-c6602.toml"] {
+        Machine::new(load(name)).unwrap();
+    }
+}
+
+#[test]
+fn rotary_machine_steps_a_and_reports_it() {
+    let text = std::fs::read_to_string(machines().join("rotary.toml")).unwrap();
+    let mut profile = MachineProfile::from_toml_str(&text).unwrap();
+    profile.thermal.extrude_min_c = None;
+    let mut m = Machine::new(profile).unwrap();
+    let mut replies = Vec::new();
+    let mut out = |_t: f64, l: &str| replies.push(l.to_owned());
+    for l in ["G28 X Z", "G1 X10 A90 E1 F1200", "G1 A450", "M114"] {
+        assert_eq!(m.execute(l.as_bytes(), &mut out), Outcome::Ok);
+    }
+    // 450 degrees at 8.888889 steps/degree.
+    assert_eq!(replies, ["X:10.00 Y:0.00 Z:0.00 A:450.00 E:1.00 Count X:800 Y:0 Z:0 A:4000"]);
+}
+
+/// The benchmark: a 40-hour print simulated with step counting in under 30 s. Needs
+/// `bench/data/bunny-gyroid.gcode` (made by `make bench`); run with
+/// `cargo test -p gweave-sim --release --test machine -- --ignored --nocapture`.
+#[test]
+#[ignore = "a release-mode benchmark on a 286 MB file"]
+fn forty_hour_print_in_under_30_s() {
+    use std::io::BufReader;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../bench/data/bunny-gyroid.gcode");
+    let Ok(file) = std::fs::File::open(&path) else {
+        eprintln!("skipped: {} is missing (make bench slices it)", path.display());
+        return;
+    };
+    let profile = MachineProfile::from_toml_str("[bed]\nx_mm = 400.0\ny_mm = 400.0\nz_mm = 400.0\n").unwrap();
+    let mut m = Machine::new(profile).unwrap();
+    let started = std::time::Instant::now();
+    let mut reader = gweave::gcode::reader::LineReader::new(BufReader::new(file));
+    let mut out = |_t: f64, _l: &str| {};
+    while let Some(line) = reader.next_line().unwrap() {
+        assert_eq!(m.execute(line.bytes, &mut out), Outcome::Ok);
+    }
+    m.finish(&mut out);
+    let wall_s = started.elapsed().as_secs_f64();
+    let rep = m.report();
+    println!("{:.1} h print simulated in {wall_s:.2} s ({} lines)", rep.time.total_s / 3600.0, rep.lines);
+    assert!(rep.time.total_s > 40.0 * 3600.0);
+    assert!(wall_s < 30.0, "{wall_s} s");
+}

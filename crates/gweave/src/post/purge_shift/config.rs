@@ -1,0 +1,401 @@
+//! Settings of the purge-shift pass: how much to purge for each change, and the rules for where
+//! a change may go. Read from TOML (unknown keys rejected) or built in code; validated once in
+//! [`PurgeShiftConfig::validate`], so the pass itself never meets a bad number.
+//!
+//! ```toml
+//! purge_mm = 2.5                 # filament, mm (or purge_mm3 = 6.0)
+//! filament_diameter_mm = 1.75
+//! cross_layers = false           # may a change move back into the previous layer?
+//! allow_features = ["inner_wall", "infill", "solid_infill"]   # default: all but outer_wall
+//! markers = ["begin", "end"]     # explicit print-proper markers (comment text)
+//! fallback = "partial"           # too little room: accept the shortfall
+//! colours = ["#ff0000", "#0000ff"]   # per tool: purge from the colours (OrcaSlicer's rule)
+//! [[pair]]                       # a per-pair amount wins over everything else
+//! from = 0
+//! to = 1
+//! purge_mm = 4.0
+//! [washout]                      # the mixing chamber, for the report and the tolerance source
+//! chamber_mm3 = 4.0
+//! dead_mm3 = 1.0
+//! tolerance = 0.05               # if set and no purge_mm/purge_mm3: purge = V ln(1/eps) + Vd
+//! ```
+
+use std::collections::BTreeSet;
+
+use serde::{Deserialize, Serialize};
+
+use crate::colour::purge::{filament_mm_to_mm3, flush_volume_mm3, mm3_to_filament_mm, Washout};
+use crate::colour::Srgb8;
+use crate::gcode::layers::{Feature, Markers, ALL_FEATURES};
+
+/// Why a purge-shift configuration was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConfigError {
+    #[error("{what} must be a positive number, got {value}")]
+    NotPositive { what: &'static str, value: f64 },
+    #[error("no purge amount: give purge_mm, purge_mm3, colours, pairs or a washout tolerance")]
+    NoPurge,
+    #[error("give either purge_mm or purge_mm3, not both")]
+    BothPurges,
+    #[error("pair {from}->{to} needs exactly one of purge_mm and purge_mm3")]
+    Pair { from: u32, to: u32 },
+    #[error("unknown feature {0:?} (known: {known})", known = feature_names())]
+    Feature(String),
+    #[error("fallback {0:?} is not implemented; only \"partial\" is (accept the shortfall)")]
+    Fallback(String),
+    #[error("markers need non-empty begin and end text")]
+    Markers,
+    #[error("washout: {0}")]
+    Washout(String),
+    #[error("TOML: {0}")]
+    Toml(String),
+}
+
+fn feature_names() -> String {
+    ALL_FEATURES.iter().map(Feature::name).collect::<Vec<_>>().join(", ")
+}
+
+/// A purge amount for one tool pair.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairPurge {
+    pub from: u32,
+    pub to: u32,
+    #[serde(default)]
+    pub purge_mm: Option<f64>,
+    #[serde(default)]
+    pub purge_mm3: Option<f64>,
+}
+
+/// The mixing chamber as a washout system ([`Washout`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WashoutConfig {
+    pub chamber_mm3: f64,
+    #[serde(default)]
+    pub dead_mm3: f64,
+    /// Old-colour fraction that counts as clean; also the purge source when no amount is given.
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+}
+
+/// What to do when there is too little room before a change for the whole purge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Fallback {
+    /// Move the change as far as the rules allow and report the shortfall.
+    #[default]
+    Partial,
+}
+
+/// All settings of the pass. `Default` is the seed's: 2.5 mm of 1.75 mm filament, no crossing
+/// of layers, every feature but the outer wall, no explicit markers, partial fallback.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PurgeShiftConfig {
+    pub purge_mm: Option<f64>,
+    pub purge_mm3: Option<f64>,
+    pub filament_diameter_mm: f64,
+    pub pair: Vec<PairPurge>,
+    /// Colour of each tool (`#RRGGBB`), for purge volumes derived from colours.
+    pub colours: Vec<String>,
+    pub washout: Option<WashoutConfig>,
+    pub cross_layers: bool,
+    /// Feature names a change may move through (see [`Feature::name`]).
+    pub allow_features: Vec<String>,
+    /// `[begin, end]` comment texts that delimit the print proper.
+    pub markers: Option<[String; 2]>,
+    pub fallback: String,
+    /// Hard cap on held lines, whatever the purge: past it the oldest line is written out and the
+    /// walk back stops there (a bound for pathological files with huge runs of non-extrusion).
+    pub max_window_lines: usize,
+}
+
+impl Default for PurgeShiftConfig {
+    fn default() -> Self {
+        PurgeShiftConfig {
+            purge_mm: None,
+            purge_mm3: None,
+            filament_diameter_mm: 1.75,
+            pair: Vec::new(),
+            colours: Vec::new(),
+            washout: None,
+            cross_layers: false,
+            allow_features: ALL_FEATURES
+                .iter()
+                .filter(|f| **f != Feature::OuterWall)
+                .map(|f| f.name().to_string())
+                .collect(),
+            markers: None,
+            fallback: "partial".into(),
+            max_window_lines: 200_000,
+        }
+    }
+}
+
+/// The validated settings the pass runs with: all amounts in mm of filament.
+#[derive(Debug, Clone)]
+pub struct Rules {
+    pub(crate) default_mm: Option<f64>,
+    pub(crate) pairs: Vec<(u32, u32, f64)>,
+    pub(crate) colours: Vec<Srgb8>,
+    pub(crate) washout: Option<Washout>,
+    pub(crate) tolerance: f64,
+    pub(crate) area_mm2: f64,
+    pub(crate) diameter_mm: f64,
+    pub(crate) cross_layers: bool,
+    pub(crate) allowed: BTreeSet<Feature>,
+    pub(crate) markers: Markers,
+    pub(crate) fallback: Fallback,
+    pub(crate) max_window_lines: usize,
+    /// The largest purge any change can ask for: the window never needs more extrusion.
+    pub(crate) max_purge_mm: f64,
+}
+
+fn positive(what: &'static str, value: f64) -> Result<f64, ConfigError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(ConfigError::NotPositive { what, value })
+    }
+}
+
+impl PurgeShiftConfig {
+    /// Parses TOML and validates it.
+    pub fn from_toml(text: &str) -> Result<Rules, ConfigError> {
+        let config: Self = toml::from_str(text).map_err(|e| ConfigError::Toml(e.to_string()))?;
+        config.validate()
+    }
+
+    /// Parses TOML into the raw settings (for merging with command-line flags).
+    pub fn parse_toml(text: &str) -> Result<Self, ConfigError> {
+        toml::from_str(text).map_err(|e| ConfigError::Toml(e.to_string()))
+    }
+
+    /// Checks every value and converts volumes to filament length.
+    pub fn validate(&self) -> Result<Rules, ConfigError> {
+        let diameter_mm = positive("filament_diameter_mm", self.filament_diameter_mm)?;
+        let to_mm = |v: f64| mm3_to_filament_mm(v, diameter_mm).unwrap_or(f64::NAN);
+        let area_mm2 = filament_mm_to_mm3(1.0, diameter_mm).unwrap_or(f64::NAN);
+        let washout = match &self.washout {
+            Some(w) => Some(
+                Washout::new(w.chamber_mm3, w.dead_mm3).map_err(|e| ConfigError::Washout(e.to_string()))?,
+            ),
+            None => None,
+        };
+        let tolerance = self.washout.and_then(|w| w.tolerance);
+        let default_mm = match (self.purge_mm, self.purge_mm3, tolerance, washout) {
+            (Some(_), Some(_), ..) => return Err(ConfigError::BothPurges),
+            (Some(mm), None, ..) => Some(positive("purge_mm", mm)?),
+            (None, Some(v), ..) => Some(to_mm(positive("purge_mm3", v)?)),
+            (None, None, Some(eps), Some(w)) => {
+                Some(to_mm(w.purge_for_tolerance_mm3(eps).map_err(|e| ConfigError::Washout(e.to_string()))?))
+            }
+            _ => None,
+        };
+        if let Some(eps) = tolerance {
+            if !(eps > 0.0 && eps <= 1.0) {
+                return Err(ConfigError::Washout(format!("tolerance must be within (0, 1], got {eps}")));
+            }
+        }
+        let mut pairs = Vec::new();
+        for p in &self.pair {
+            let mm = match (p.purge_mm, p.purge_mm3) {
+                (Some(mm), None) => positive("pair purge_mm", mm)?,
+                (None, Some(v)) => to_mm(positive("pair purge_mm3", v)?),
+                _ => return Err(ConfigError::Pair { from: p.from, to: p.to }),
+            };
+            pairs.push((p.from, p.to, mm));
+        }
+        let colours = self
+            .colours
+            .iter()
+            .map(|c| c.parse::<Srgb8>().map_err(|e| ConfigError::Toml(e.to_string())))
+            .collect::<Result<Vec<_>, _>>()?;
+        if default_mm.is_none() && pairs.is_empty() && colours.is_empty() {
+            return Err(ConfigError::NoPurge);
+        }
+        let mut allowed = BTreeSet::new();
+        for name in &self.allow_features {
+            allowed.insert(Feature::parse(name).ok_or_else(|| ConfigError::Feature(name.clone()))?);
+        }
+        let markers = match &self.markers {
+            None => Markers::default(),
+            Some([b, e]) if !b.trim().is_empty() && !e.trim().is_empty() => {
+                Markers { begin: Some(b.trim().as_bytes().to_vec()), end: Some(e.trim().as_bytes().to_vec()) }
+            }
+            Some(_) => return Err(ConfigError::Markers),
+        };
+        let fallback = match self.fallback.as_str() {
+            "partial" => Fallback::Partial,
+            other => return Err(ConfigError::Fallback(other.to_string())),
+        };
+        let mut rules = Rules {
+            default_mm,
+            pairs,
+            colours,
+            washout,
+            tolerance: tolerance.unwrap_or(0.05),
+            area_mm2,
+            diameter_mm,
+            cross_layers: self.cross_layers,
+            allowed,
+            markers,
+            fallback,
+            max_window_lines: self.max_window_lines.max(16),
+            max_purge_mm: 0.0,
+        };
+        rules.max_purge_mm = rules.all_amounts_mm().fold(0.0, f64::max);
+        Ok(rules)
+    }
+}
+
+/// Settings given as flags or keyword arguments, applied over a TOML file by
+/// [`PurgeShiftConfig::apply`] (the CLI and Python share it).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overrides {
+    pub purge_mm: Option<f64>,
+    pub purge_mm3: Option<f64>,
+    pub filament_diameter_mm: Option<f64>,
+    /// `true` allows crossing; `false` leaves the file's setting.
+    pub cross_layers: bool,
+    pub allow_features: Option<Vec<String>>,
+    pub markers: Option<[String; 2]>,
+    pub fallback: Option<String>,
+}
+
+impl PurgeShiftConfig {
+    /// Applies flags on top: a purge given as a flag replaces the file's (mm or mm^3).
+    pub fn apply(&mut self, o: &Overrides) {
+        if let Some(mm) = o.purge_mm {
+            (self.purge_mm, self.purge_mm3) = (Some(mm), None);
+        }
+        if let Some(v) = o.purge_mm3 {
+            (self.purge_mm, self.purge_mm3) = (None, Some(v));
+        }
+        if let Some(d) = o.filament_diameter_mm {
+            self.filament_diameter_mm = d;
+        }
+        self.cross_layers |= o.cross_layers;
+        if let Some(list) = &o.allow_features {
+            self.allow_features = list.iter().map(|s| s.trim().to_string()).collect();
+        }
+        if let Some(m) = &o.markers {
+            self.markers = Some(m.clone());
+        }
+        if let Some(f) = &o.fallback {
+            self.fallback = f.clone();
+        }
+    }
+}
+
+impl Rules {
+    /// The seed's setting: a fixed purge of `purge_mm` of filament, other rules default.
+    pub fn fixed(purge_mm: f64) -> Result<Rules, ConfigError> {
+        PurgeShiftConfig { purge_mm: Some(purge_mm), ..PurgeShiftConfig::default() }.validate()
+    }
+
+    fn colour_mm(&self, from: u32, to: u32) -> Option<f64> {
+        let a = self.colours.get(from as usize)?;
+        let b = self.colours.get(to as usize)?;
+        Some(flush_volume_mm3(*a, *b) / self.area_mm2)
+    }
+
+    fn all_amounts_mm(&self) -> impl Iterator<Item = f64> + '_ {
+        let n = self.colours.len() as u32;
+        let colour = (0..n).flat_map(move |a| (0..n).filter_map(move |b| self.colour_mm(a, b)));
+        self.default_mm.into_iter().chain(self.pairs.iter().map(|p| p.2)).chain(colour)
+    }
+
+    /// The purge for a change from tool `from` to tool `to`, mm of filament: a pair entry, else
+    /// the colours, else the global amount, else the largest amount configured (the caller warns).
+    pub fn purge_mm(&self, from: u32, to: u32) -> (f64, bool) {
+        if let Some(p) = self.pairs.iter().find(|p| p.0 == from && p.1 == to) {
+            return (p.2, true);
+        }
+        if let Some(mm) = self.colour_mm(from, to) {
+            return (mm, true);
+        }
+        match self.default_mm {
+            Some(mm) => (mm, true),
+            None => (self.max_purge_mm, false),
+        }
+    }
+
+    pub fn markers(&self) -> &Markers {
+        &self.markers
+    }
+
+    pub fn fallback(&self) -> Fallback {
+        self.fallback
+    }
+
+    pub fn filament_diameter_mm(&self) -> f64 {
+        self.diameter_mm
+    }
+
+    pub(crate) fn mm3(&self, mm: f64) -> f64 {
+        mm * self.area_mm2
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_and_sources() {
+        let r = Rules::fixed(2.5).unwrap();
+        assert_eq!(r.purge_mm(0, 1), (2.5, true));
+        assert!(!r.allowed.contains(&Feature::OuterWall));
+        assert!(r.allowed.contains(&Feature::Infill));
+        let r = PurgeShiftConfig::from_toml(
+            "purge_mm3 = 24.0525\nfilament_diameter_mm = 1.75\n[[pair]]\nfrom = 0\nto = 1\npurge_mm = 4.0\n",
+        )
+        .unwrap();
+        assert!((r.purge_mm(1, 0).0 - 10.0).abs() < 1e-3, "{:?}", r.purge_mm(1, 0));
+        assert_eq!(r.purge_mm(0, 1), (4.0, true));
+        assert!((r.max_purge_mm - 10.0).abs() < 1e-3);
+        // White to black is 80 mm^3 = 33.26 mm of 1.75 mm filament.
+        let r = PurgeShiftConfig::from_toml("colours = [\"#ffffff\", \"#000000\"]\n").unwrap();
+        assert!((r.purge_mm(0, 1).0 - 80.0 / (std::f64::consts::PI * 1.75 * 1.75 / 4.0)).abs() < 1e-9);
+        assert!(!r.purge_mm(0, 5).1);
+        // Black to white (560 mm^3) is the largest amount.
+        assert!((r.max_purge_mm - 560.0 / r.area_mm2).abs() < 1e-9);
+    }
+
+    #[test]
+    fn washout_tolerance_is_a_source() {
+        let r =
+            PurgeShiftConfig::from_toml("[washout]\nchamber_mm3 = 10.0\ndead_mm3 = 2.0\ntolerance = 0.01\n")
+                .unwrap();
+        let want_mm3 = 2.0 + 10.0 * 100f64.ln();
+        assert!((r.purge_mm(0, 1).0 * r.area_mm2 - want_mm3).abs() < 1e-9);
+    }
+
+    #[test]
+    fn flags_override_the_file() {
+        let mut c = PurgeShiftConfig::parse_toml("purge_mm3 = 10.0\ncross_layers = true\n").unwrap();
+        c.apply(&Overrides {
+            purge_mm: Some(3.0),
+            allow_features: Some(vec![" infill".into()]),
+            ..Default::default()
+        });
+        let r = c.validate().unwrap();
+        assert_eq!(r.purge_mm(0, 1), (3.0, true));
+        assert!(r.cross_layers);
+        assert_eq!(r.allowed.iter().copied().collect::<Vec<_>>(), [Feature::Infill]);
+    }
+
+    #[test]
+    fn refusals() {
+        let err = |t: &str| PurgeShiftConfig::from_toml(t).unwrap_err();
+        assert_eq!(err(""), ConfigError::NoPurge);
+        assert_eq!(err("purge_mm = -1.0"), ConfigError::NotPositive { what: "purge_mm", value: -1.0 });
+        assert_eq!(err("purge_mm = 1.0\npurge_mm3 = 2.0"), ConfigError::BothPurges);
+        assert_eq!(err("purge_mm = 1.0\nfallback = \"tower\""), ConfigError::Fallback("tower".into()));
+        assert!(matches!(err("purge_mm = 1.0\nallow_features = [\"walls\"]"), ConfigError::Feature(_)));
+        assert!(matches!(err("purge_mm = 1.0\nbogus = 1"), ConfigError::Toml(_)));
+        assert_eq!(err("purge_mm = 1.0\nmarkers = [\"\", \"end\"]"), ConfigError::Markers);
+    }
+}

@@ -1,0 +1,564 @@
+//! `purge-shift`: multi-colour on a mixing hotend without a wipe tower (seed 003).
+//!
+//! After a change of tool or mix the old colour still fills the nozzle. Instead of purging it
+//! into a tower, this pass moves every change *earlier* in the file by the purge amount: it walks
+//! back along the old colour's extruding moves, summing their positive extrusion, until the purge
+//! is reached, splits that move at the exact point ([`split`] explains the maths) and puts the
+//! change lines there. The purge is then printed inside the part, with the old colour's path, and
+//! the new colour comes out clean where its own path begins.
+//!
+//! ## What moves and what stays
+//! Only the *change lines* move: the `T<n>` and the mixing lines that belong to it (`M163`,
+//! `M164`, `M165`, `M567`, `M563` directly before or after it, with nothing but comments in
+//! between). Whether such a group is a change is decided by following the mixing state
+//! ([`crate::colour::dialect::MixingState`]): the tool number, the active Marlin mix and the
+//! active RepRapFirmware mix before and after the group must differ. Everything else a slicer
+//! writes around a tool change (retract, `G92 E0`, travel, temperature for the next tool,
+//! unretract) stays where it is: retracts and `G92` are E bookkeeping that does not depend on the
+//! tool of a mixing hotend, and the travel belongs to the new colour's path.
+//!
+//! ## Rules
+//! - Only extruding moves (positive E with XY motion) count; retractions, unretractions,
+//!   `G10`/`G11`, travels and extrude-only primes do not. The change is always put inside or
+//!   directly before an extruding move, never inside a retract/travel/unretract sequence.
+//! - The walk back stops at a layer change (unless `cross_layers`, then at the second one), at an
+//!   extruding move whose feature is not allowed (default: the outer wall, so the colour seam stays
+//!   inside), at the previous change, at homing, at a line whose meaning depends on the active tool
+//!   (`M104`/`M109`/`M221`/`M900` without `T`), at mixing lines that are not part of the change
+//!   (the change must not be moved before the definition of its own tool), at numbered or
+//!   checksummed moves (which cannot be rewritten), and outside the print proper.
+//! - Too little room: the change goes as far back as allowed, a warning names layer, line and
+//!   shortfall, and the shortfall is accepted (`partial`, the only fallback implemented).
+//!
+//! ## Bounded memory
+//! The pass streams. It holds back only the lines a later change could still be moved before:
+//! a line is written out as soon as the positive extrusion held after it reaches the largest purge
+//! any change can ask for, or when a barrier above passes. With layer crossing the window also
+//! never reaches back past the previous layer's start, and `max_window_lines` caps it in any case.
+//! So memory is the purge length plus at most one layer of lines, whatever the file size; the
+//! report's `max_window_lines` says how many lines were ever held at once.
+//!
+//! ```
+//! use gweave::post::purge_shift::{purge_shift_bytes, Rules};
+//! let input = "M83\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X0 Y0\nG1 X10 E1\nG1 X20 E1\nT1\nG1 X30 E1\n";
+//! let (out, report) = purge_shift_bytes(Rules::fixed(1.5).unwrap(), input.as_bytes()).unwrap();
+//! let out = String::from_utf8(out).unwrap();
+//! assert_eq!(out, "M83\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X0 Y0\nG1 X5 E0.5\nT1\nG1 X10 E0.5\nG1 X20 E1\nG1 X30 E1\n");
+//! assert_eq!(report.changes[0].achieved_mm, 1.5);
+//! ```
+
+pub mod config;
+pub mod report;
+mod split;
+
+use std::collections::VecDeque;
+use std::io::{self, Write};
+use std::path::Path;
+
+pub use config::{ConfigError, Fallback, Overrides, PurgeShiftConfig, Rules};
+pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
+
+use crate::colour::dialect::MixingState;
+use crate::error::Result;
+use crate::gcode::layers::{Feature, Region};
+use crate::gcode::line::{Block, Command};
+use crate::gcode::number::scan;
+use crate::gcode::reader::RawLine;
+use crate::gcode::state::{Effect, StateOptions, X, Y, Z};
+use crate::gcode::writer::Target;
+use crate::pass::{drive_reader, Ctx, OwnedLine, Pass, Progress, Quiet, Run, Strictness};
+use split::{split, Splittable};
+
+/// Extrusion below this is a rounding remainder, not a piece of move worth splitting off, mm.
+const EPS_E_MM: f64 = 1e-6;
+/// Mixing inputs and virtual tools followed to recognise changes of mix (Marlin allows up to 6
+/// inputs in `M165` and 16 virtual tools by default; more costs nothing).
+const MIX_INPUTS: usize = 8;
+const MIX_TOOLS: usize = 64;
+/// Line buffers kept for reuse.
+const SPARE_LINES: usize = 4096;
+
+/// What a held line is to the walk back.
+#[derive(Debug, Clone)]
+enum Kind {
+    /// An extruding move of an allowed feature: counts, and may be split.
+    Extrude { e_mm: f64, split: Splittable },
+    /// Passed over by the walk (travel, retraction, comments, `G92`...).
+    Other,
+}
+
+#[derive(Debug, Clone)]
+struct Held {
+    line: OwnedLine,
+    kind: Kind,
+    layer: Option<u32>,
+    feature: Feature,
+    seq: u64,
+}
+
+impl Held {
+    fn e_mm(&self) -> f64 {
+        match self.kind {
+            Kind::Extrude { e_mm, .. } => e_mm,
+            Kind::Other => 0.0,
+        }
+    }
+}
+
+/// What selects the colour: the tool, the active Marlin mix, the active RepRapFirmware mix.
+#[derive(Debug, Clone, PartialEq)]
+struct Colour {
+    tool: u32,
+    marlin: Vec<f64>,
+    rrf: Option<Vec<f64>>,
+}
+
+/// The purge-shift pass. Feed it a file with [`crate::pass::Run`] using
+/// [`PurgeShift::state_options`], or use [`purge_shift_bytes`] / [`purge_shift_file`].
+pub struct PurgeShift {
+    rules: Rules,
+    window: VecDeque<Held>,
+    window_e_mm: f64,
+    /// Why the window starts where it does (the last barrier).
+    floor: &'static str,
+    layer_start_seq: Option<u64>,
+    seq: u64,
+    group: Vec<OwnedLine>,
+    group_tail: Vec<OwnedLine>,
+    group_before: Option<Colour>,
+    /// The group started inside the print proper.
+    group_in_print: bool,
+    mixing: MixingState,
+    colour: Colour,
+    out_lines: u64,
+    report: PurgeShiftReport,
+    /// Buffers of written lines, reused for new held lines.
+    spare: Vec<OwnedLine>,
+}
+
+impl PurgeShift {
+    pub fn new(rules: Rules) -> Self {
+        // MixingState::new only fails for zero tools.
+        let mixing = MixingState::new(MIX_INPUTS, MIX_TOOLS).expect("constant sizes are valid");
+        let colour = Colour { tool: 0, marlin: mixing.active_mix().ratios().to_vec(), rrf: None };
+        let report =
+            PurgeShiftReport { filament_diameter_mm: rules.filament_diameter_mm(), ..Default::default() };
+        PurgeShift {
+            rules,
+            window: VecDeque::new(),
+            window_e_mm: 0.0,
+            floor: "start of the print",
+            layer_start_seq: None,
+            seq: 0,
+            group: Vec::new(),
+            group_tail: Vec::new(),
+            group_before: None,
+            group_in_print: false,
+            mixing,
+            colour,
+            out_lines: 0,
+            report,
+            spare: Vec::new(),
+        }
+    }
+
+    /// The state options the input must be read with (the print-proper markers).
+    pub fn state_options(&self) -> StateOptions {
+        StateOptions { markers: self.rules.markers().clone(), ..StateOptions::default() }
+    }
+
+    pub fn report(&self) -> &PurgeShiftReport {
+        &self.report
+    }
+
+    pub fn into_report(self) -> PurgeShiftReport {
+        self.report
+    }
+
+    fn emit(&mut self, out: &mut dyn Write, bytes: &[u8], eol: &[u8]) -> io::Result<()> {
+        self.out_lines += 1;
+        out.write_all(bytes)?;
+        out.write_all(eol)
+    }
+
+    fn emit_line(&mut self, out: &mut dyn Write, line: &OwnedLine) -> io::Result<()> {
+        self.emit(out, &line.bytes, &line.eol)
+    }
+
+    fn emit_raw(&mut self, out: &mut dyn Write, ctx: &Ctx<'_>) -> io::Result<()> {
+        self.emit(out, ctx.line.bytes, ctx.line.eol)
+    }
+
+    /// A copy of the line, in a buffer of a line written earlier if one is free: held lines
+    /// then cost no allocation once the window has reached its size.
+    fn own(&mut self, raw: &RawLine<'_>) -> OwnedLine {
+        match self.spare.pop() {
+            Some(mut line) => {
+                line.bytes.clear();
+                line.bytes.extend_from_slice(raw.bytes);
+                line.eol.clear();
+                line.eol.extend_from_slice(raw.eol);
+                line.number = raw.number;
+                line
+            }
+            None => OwnedLine::from_raw(raw),
+        }
+    }
+
+    /// Writes a held line and keeps its buffers for reuse.
+    fn retire(&mut self, out: &mut dyn Write, line: OwnedLine) -> io::Result<()> {
+        self.emit_line(out, &line)?;
+        if self.spare.len() < SPARE_LINES {
+            self.spare.push(line);
+        }
+        Ok(())
+    }
+
+    /// Writes every held line: nothing before this point can take a change any more.
+    fn flush(&mut self, out: &mut dyn Write, reason: &'static str) -> io::Result<()> {
+        while let Some(h) = self.window.pop_front() {
+            self.retire(out, h.line)?;
+        }
+        self.window_e_mm = 0.0;
+        self.floor = reason;
+        Ok(())
+    }
+
+    fn pop_front(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        if let Some(h) = self.window.pop_front() {
+            self.window_e_mm -= h.e_mm();
+            self.retire(out, h.line)?;
+        }
+        Ok(())
+    }
+
+    fn push(&mut self, out: &mut dyn Write, held: Held) -> io::Result<()> {
+        self.window_e_mm += held.e_mm();
+        self.window.push_back(held);
+        self.report.max_window_lines = self.report.max_window_lines.max(self.window.len());
+        // The front line is no longer needed once the moves after it hold the largest purge.
+        while let Some(front) = self.window.front() {
+            let after_front = self.window_e_mm - front.e_mm();
+            if after_front >= self.rules.max_purge_mm + EPS_E_MM {
+                self.pop_front(out)?;
+            } else if self.window.len() > self.rules.max_window_lines {
+                self.pop_front(out)?;
+                self.floor = "the window limit (max_window_lines)";
+            } else {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// A line starts a layer: changes may not move before it (or, crossing layers, not before the
+    /// previous layer's start).
+    fn layer_start(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        if !self.rules.cross_layers {
+            return self.flush(out, "a layer change");
+        }
+        if let Some(prev) = self.layer_start_seq {
+            while self.window.front().is_some_and(|h| h.seq < prev) {
+                self.pop_front(out)?;
+                self.floor = "the second layer change back";
+            }
+        }
+        self.layer_start_seq = Some(self.seq);
+        Ok(())
+    }
+
+    fn follow_mixing(&mut self, ctx: &Ctx<'_>) {
+        let Command::Code { letter, number, sub: None } = ctx.block.command else { return };
+        if letter == b'T' {
+            // A tool beyond the followed virtual tools is still a change of tool number.
+            let _ = self.mixing.select_tool(number as usize);
+        } else if matches!(number, 163..=165 | 567) {
+            let words: Vec<(char, f64)> =
+                ctx.block.words.iter().filter_map(|w| w.number().map(|v| (w.letter as char, v))).collect();
+            let e_list = if number == 567 { colon_list(ctx.line.bytes, ctx.block) } else { Vec::new() };
+            // A malformed mixing line changes nothing in the firmware either.
+            let _ = self.mixing.apply(number as u16, &words, &e_list);
+        }
+        self.colour = Colour {
+            tool: ctx.state.tool,
+            marlin: self.mixing.active_mix().ratios().to_vec(),
+            rrf: self.mixing.rrf_mix(ctx.state.tool).map(<[f64]>::to_vec),
+        };
+    }
+
+    /// The group of change lines has ended: move it if it changed the colour.
+    fn close_group(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        let Some(before) = self.group_before.take() else { return Ok(()) };
+        let in_print = self.group_in_print;
+        let group = std::mem::take(&mut self.group);
+        if before != self.colour && in_print {
+            self.shift(out, before.tool, &group)?;
+        } else {
+            if before != self.colour {
+                self.report.untouched_changes += 1;
+            }
+            self.flush(out, "mixing lines that are not a change")?;
+            for line in &group {
+                self.emit_line(out, line)?;
+            }
+        }
+        let tail = std::mem::take(&mut self.group_tail);
+        for line in tail {
+            let held = self.held(line, Kind::Other, None, Feature::Unknown);
+            self.push(out, held)?;
+        }
+        Ok(())
+    }
+
+    fn held(&mut self, line: OwnedLine, kind: Kind, layer: Option<u32>, feature: Feature) -> Held {
+        self.seq += 1;
+        Held { line, kind, layer, feature, seq: self.seq }
+    }
+
+    /// Walks back from the change, places it, writes the window and the group.
+    fn shift(&mut self, out: &mut dyn Write, from_tool: u32, group: &[OwnedLine]) -> io::Result<()> {
+        let to_tool = self.colour.tool;
+        let (requested_mm, known) = self.rules.purge_mm(from_tool, to_tool);
+        if !known {
+            self.report.warn(format!(
+                "line {}: no purge amount for T{from_tool}->T{to_tool}; using the largest configured, {requested_mm:.3} mm",
+                group[0].number
+            ));
+        }
+        // Walk back: `need` is what is still to be found.
+        let mut need = requested_mm;
+        let mut place: Option<(usize, Option<f64>)> = None;
+        let mut earliest = None;
+        for i in (0..self.window.len()).rev() {
+            let e_mm = self.window[i].e_mm();
+            if e_mm <= 0.0 {
+                continue;
+            }
+            if e_mm >= need - EPS_E_MM {
+                let head = e_mm - need;
+                place = Some(if head <= EPS_E_MM { (i, None) } else { (i, Some(head / e_mm)) });
+                need = 0.0;
+                break;
+            }
+            need -= e_mm;
+            earliest = Some(i);
+        }
+        let place = place.or(earliest.map(|i| (i, None)));
+        let achieved_mm = requested_mm - need;
+        let mut change = ChangeReport {
+            from_tool,
+            to_tool,
+            change_lines: group.iter().map(|l| l.number).collect(),
+            output_line: 0,
+            requested_mm,
+            achieved_mm,
+            shortfall_mm: need,
+            requested_mm3: self.rules.mm3(requested_mm),
+            achieved_mm3: self.rules.mm3(achieved_mm),
+            layer: None,
+            feature: Feature::Unknown,
+            at_line: group[0].number,
+            split: None,
+            stopped_by: (need > 0.0).then_some(self.floor),
+            residual_fraction: None,
+            transition_mm: None,
+        };
+        if let Some(w) = &self.rules.washout {
+            let achieved_mm3 = self.rules.mm3(achieved_mm);
+            change.residual_fraction = Some(w.residual_fraction(achieved_mm3));
+            let clean_mm3 = w.purge_for_tolerance_mm3(self.rules.tolerance).unwrap_or(0.0);
+            change.transition_mm = Some((clean_mm3 - achieved_mm3).max(0.0) / self.rules.mm3(1.0));
+        }
+        let held: Vec<Held> = self.window.drain(..).collect();
+        self.window_e_mm = 0.0;
+        let (at, fraction) = place.unwrap_or((held.len(), None));
+        if let Some(h) = held.get(at) {
+            change.layer = h.layer;
+            change.feature = h.feature;
+            change.at_line = h.line.number;
+        }
+        for h in &held[..at] {
+            self.emit_line(out, &h.line)?;
+        }
+        let mut rest = at;
+        if let (Some(t), Some(h)) = (fraction, held.get(at)) {
+            if let Kind::Extrude { split: s, .. } = &h.kind {
+                let halves = split(&h.line.bytes, s, t);
+                self.emit(out, &halves.first, &h.line.eol)?;
+                change.output_line = self.out_lines + 1;
+                for line in group {
+                    self.emit_line(out, line)?;
+                }
+                match &halves.second {
+                    Some(second) => self.emit(out, second, &h.line.eol)?,
+                    None => self.emit_line(out, &h.line)?,
+                }
+                let p = halves.point;
+                change.split =
+                    Some(SplitPoint { line: h.line.number, fraction: t, point_mm: [p[X], p[Y], p[Z]] });
+                rest = at + 1;
+            }
+        }
+        if change.split.is_none() {
+            change.output_line = self.out_lines + 1;
+            for line in group {
+                self.emit_line(out, line)?;
+            }
+        }
+        for h in &held[rest..] {
+            self.emit_line(out, &h.line)?;
+        }
+        let room = SPARE_LINES.saturating_sub(self.spare.len());
+        self.spare.extend(held.into_iter().take(room).map(|h| h.line));
+        self.floor = "the previous change";
+        if change.shortfall_mm > 1e-9 {
+            self.report.warn(format!(
+                "layer {}, line {}: T{from_tool}->T{to_tool} purge short by {:.3} mm ({:.3} of {:.3} mm; stopped by {})",
+                change.layer.map_or("-".into(), |l| l.to_string()),
+                group[0].number,
+                change.shortfall_mm,
+                achieved_mm,
+                requested_mm,
+                change.stopped_by.unwrap_or_default()
+            ));
+        }
+        self.report.changes.push(change);
+        Ok(())
+    }
+}
+
+/// `M104`/`M109`/`M221`/`M900` without `T` act on the active tool: a change must not pass them.
+fn tool_dependent(block: &Block) -> bool {
+    let c = block.command;
+    (c.is_m(104) || c.is_m(109) || c.is_m(221) || c.is_m(900)) && !block.has(b'T')
+}
+
+/// A line that belongs to a change group.
+fn is_change_line(block: &Block) -> bool {
+    let c = block.command;
+    c.tool().is_some() || [163, 164, 165, 563, 567].iter().any(|&n| c.is_m(n))
+}
+
+/// The colon-separated list of an `M567` `E` word (`E0.2:0.8`), read from the raw line.
+fn colon_list(raw: &[u8], block: &Block) -> Vec<f64> {
+    let Some(word) = block.word(b'E') else { return Vec::new() };
+    let mut i = word.span.start as usize + 1;
+    let mut list = Vec::new();
+    while let Ok((v, used)) = scan(&raw[i.min(raw.len())..]) {
+        list.push(v);
+        i += used;
+        if raw.get(i) != Some(&b':') {
+            break;
+        }
+        i += 1;
+    }
+    list
+}
+
+impl Pass for PurgeShift {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        let structure = &ctx.state.structure;
+        let in_print = structure.region == Region::Print;
+        if is_change_line(ctx.block) {
+            if self.group_before.is_none() {
+                self.group_before = Some(self.colour.clone());
+                self.group_in_print = in_print;
+            }
+            self.follow_mixing(ctx);
+            let tail = std::mem::take(&mut self.group_tail);
+            self.group.extend(tail);
+            let owned = self.own(&ctx.line);
+            self.group.push(owned);
+            return Ok(());
+        }
+        if self.group_before.is_some() {
+            if ctx.block.is_empty() {
+                let owned = self.own(&ctx.line);
+                self.group_tail.push(owned);
+                return Ok(());
+            }
+            self.close_group(out)?;
+        }
+        if !in_print {
+            self.flush(out, "the start of the print proper")?;
+            return self.emit_raw(out, ctx);
+        }
+        if structure.layer_started {
+            self.layer_start(out)?;
+        }
+        let kind = match ctx.effect {
+            Effect::Move(m) if m.is_extruding() => {
+                if !self.rules.allowed.contains(&structure.feature) {
+                    self.flush(out, "a feature that may not take the purge")?;
+                    return self.emit_raw(out, ctx);
+                }
+                if ctx.block.line_number.is_some() || ctx.block.checksum.is_some() {
+                    self.flush(out, "a numbered line")?;
+                    return self.emit_raw(out, ctx);
+                }
+                let state = ctx.state;
+                let split = Splittable {
+                    mv: *m,
+                    relative_axes: !state.absolute,
+                    relative_e: state.relative_e(),
+                    inches: state.inches,
+                };
+                Kind::Extrude { e_mm: m.e_mm(), split }
+            }
+            Effect::Home { .. } => {
+                self.flush(out, "homing")?;
+                return self.emit_raw(out, ctx);
+            }
+            _ if tool_dependent(ctx.block) => {
+                self.flush(out, "a command for the active tool")?;
+                return self.emit_raw(out, ctx);
+            }
+            _ => Kind::Other,
+        };
+        let owned = self.own(&ctx.line);
+        let held = self.held(owned, kind, structure.layer, structure.feature);
+        self.push(out, held)
+    }
+
+    fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> io::Result<()> {
+        self.close_group(out)?;
+        self.flush(out, "the end of the file")?;
+        let r = &mut self.report;
+        r.requested_mm = r.changes.iter().map(|c| c.requested_mm).sum();
+        r.achieved_mm = r.changes.iter().map(|c| c.achieved_mm).sum();
+        r.shortfall_mm = r.changes.iter().map(|c| c.shortfall_mm).sum();
+        r.saved_mm = r.achieved_mm;
+        r.saved_mm3 = self.rules.mm3(r.achieved_mm);
+        Ok(())
+    }
+}
+
+/// Runs the pass over in-memory G-code.
+pub fn purge_shift_bytes(rules: Rules, input: &[u8]) -> Result<(Vec<u8>, PurgeShiftReport)> {
+    let mut pass = PurgeShift::new(rules);
+    let mut out = Vec::with_capacity(input.len() + 1024);
+    drive_reader(
+        input,
+        Path::new("<input>"),
+        pass.state_options(),
+        Strictness::Lenient,
+        &mut Quiet,
+        &mut pass,
+        &mut out,
+    )?;
+    Ok((out, pass.into_report()))
+}
+
+/// Runs the pass over a file into `target` (a file, in place, or standard output).
+pub fn purge_shift_file(
+    rules: Rules,
+    input: &Path,
+    target: &Target,
+    progress: &mut dyn Progress,
+) -> Result<PurgeShiftReport> {
+    let mut pass = PurgeShift::new(rules);
+    let mut run = Run::new(input, progress);
+    run.options = pass.state_options();
+    run.transform(&mut pass, target)?;
+    Ok(pass.into_report())
+}

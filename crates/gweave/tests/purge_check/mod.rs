@@ -1,0 +1,165 @@
+//! Invariant checks for purge-shift output, independent of how the pass works: both files are
+//! replayed through the machine state and compared line by line.
+
+use std::io::Write;
+use std::path::Path;
+
+use gweave::gcode::state::{Effect, Move, Path as MovePath, StateOptions, E, X, Y};
+use gweave::pass::{drive_reader, Ctx, Pass, Quiet, Strictness};
+use gweave::post::purge_shift::PurgeShiftReport;
+
+/// What one line did, in a replay.
+#[derive(Debug, Clone)]
+pub struct Seen {
+    pub text: Vec<u8>,
+    /// Positive extrusion of extruding moves before this line, mm.
+    pub printed_before_mm: f64,
+    pub pos_after: [f64; 7],
+    pub mv: Option<Move>,
+}
+
+#[derive(Default)]
+pub struct Replay {
+    pub lines: Vec<Seen>,
+    pub printed_mm: f64,
+    /// Net filament fed over the whole file, all tools, retractions included.
+    pub net_mm: f64,
+}
+
+struct Recorder(Replay);
+
+impl Pass for Recorder {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> std::io::Result<()> {
+        let mut text = ctx.line.bytes.to_vec();
+        text.extend_from_slice(ctx.line.eol);
+        let mv = match ctx.effect {
+            Effect::Move(m) => Some(*m),
+            _ => None,
+        };
+        self.0.lines.push(Seen { text, printed_before_mm: self.0.printed_mm, pos_after: ctx.state.pos, mv });
+        if let Some(m) = mv.filter(Move::is_extruding) {
+            self.0.printed_mm += m.e_mm();
+        }
+        Ok(())
+    }
+}
+
+pub fn replay(bytes: &[u8], options: &StateOptions) -> Replay {
+    let mut rec = Recorder(Replay::default());
+    let state = drive_reader(
+        bytes,
+        Path::new("replay"),
+        options.clone(),
+        Strictness::Lenient,
+        &mut Quiet,
+        &mut rec,
+        &mut std::io::sink(),
+    )
+    .unwrap();
+    rec.0.net_mm = state.filament_mm.iter().sum();
+    rec.0
+}
+
+fn is_change_text(t: &[u8]) -> bool {
+    let t = t.trim_ascii_start();
+    (t.first() == Some(&b'T') && t.get(1).is_some_and(u8::is_ascii_digit))
+        || [&b"M163"[..], b"M164", b"M165", b"M567"].iter().any(|m| t.starts_with(m))
+}
+
+/// Distance of `p` from the path of `mv` in XY, and whether it lies within the move.
+fn off_path_mm(mv: &Move, p: [f64; 2]) -> (f64, bool) {
+    match &mv.path {
+        MovePath::Line => {
+            let (a, b) = ([mv.from[X], mv.from[Y]], [mv.to[X], mv.to[Y]]);
+            let d = [b[0] - a[0], b[1] - a[1]];
+            let len2 = d[0] * d[0] + d[1] * d[1];
+            let t = ((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2;
+            let q = [a[0] + t * d[0], a[1] + t * d[1]];
+            ((p[0] - q[0]).hypot(p[1] - q[1]), (-1e-9..=1.0 + 1e-9).contains(&t))
+        }
+        MovePath::Arc(arc) => {
+            let r = (p[0] - arc.center[0]).hypot(p[1] - arc.center[1]);
+            let ang = (p[1] - arc.center[1]).atan2(p[0] - arc.center[0]);
+            let mut swept = (ang - arc.start_rad) * arc.sweep_rad.signum();
+            swept = swept.rem_euclid(std::f64::consts::TAU);
+            ((r - arc.radius_mm).abs(), swept <= arc.sweep_rad.abs() + 1e-9)
+        }
+    }
+}
+
+/// Checks every invariant; panics with a description on the first failure. Returns the
+/// per-change purge measured from the files themselves.
+pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &StateOptions) -> Vec<f64> {
+    let a = replay(input, options);
+    let b = replay(output, options);
+    // Extrusion over the whole file is unchanged, printed and net.
+    assert!((a.printed_mm - b.printed_mm).abs() < 1e-6, "printed {} -> {}", a.printed_mm, b.printed_mm);
+    assert!((a.net_mm - b.net_mm).abs() < 1e-6, "net {} -> {}", a.net_mm, b.net_mm);
+    // The number of change lines is unchanged.
+    let count = |r: &Replay| r.lines.iter().filter(|l| is_change_text(&l.text)).count();
+    assert_eq!(count(&a), count(&b), "change lines");
+    // Lines that were not touched are byte-identical, in order.
+    let mut removed_in = std::collections::BTreeSet::new();
+    let mut removed_out = std::collections::BTreeSet::new();
+    let mut measured = Vec::new();
+    for c in &report.changes {
+        let n = c.change_lines.len() as u64;
+        removed_in.extend(c.change_lines.iter().copied());
+        removed_out.extend(c.output_line..c.output_line + n);
+        for (k, &l) in c.change_lines.iter().enumerate() {
+            assert_eq!(
+                b.lines[(c.output_line - 1) as usize + k].text,
+                a.lines[(l - 1) as usize].text,
+                "moved line"
+            );
+        }
+        assert!(
+            c.shortfall_mm >= 0.0 && (c.achieved_mm + c.shortfall_mm - c.requested_mm).abs() < 1e-9,
+            "{c:?}"
+        );
+        // The old colour's extrusion between the new and the old position of the change.
+        let got = a.lines[(c.change_lines[0] - 1) as usize].printed_before_mm
+            - b.lines[(c.output_line - 1) as usize].printed_before_mm;
+        assert!((got - c.achieved_mm).abs() < 1e-5, "measured {got} vs reported {} for {c:?}", c.achieved_mm);
+        if c.shortfall_mm == 0.0 {
+            assert!((got - c.requested_mm).abs() < 1e-5, "measured {got} vs requested for {c:?}");
+        }
+        measured.push(got);
+        if let Some(s) = &c.split {
+            removed_in.insert(s.line);
+            removed_out.insert(c.output_line - 1);
+            removed_out.insert(c.output_line + n);
+            // The split point (where the output is when the change runs) lies on the original move.
+            let mv = a.lines[(s.line - 1) as usize].mv.expect("split line is a move");
+            let p = b.lines[(c.output_line - 2) as usize].pos_after;
+            let (off, within) = off_path_mm(&mv, [p[X], p[Y]]);
+            assert!(off < 2e-5 && within, "split point {p:?} off the move {mv:?} by {off}");
+            let t = s.fraction;
+            let e_at = mv.from[E] + t * (mv.to[E] - mv.from[E]);
+            assert!((p[E] - e_at).abs() < 2e-6, "E at the split {} vs {e_at}", p[E]);
+            // The second half ends where the original move ended.
+            let end = b.lines[(c.output_line + n - 1) as usize].pos_after;
+            for axis in 0..3 {
+                assert!((end[axis] - mv.to[axis]).abs() < 1e-9, "end {end:?} vs {:?}", mv.to);
+            }
+        }
+    }
+    let kept = |r: &Replay, removed: &std::collections::BTreeSet<u64>| -> Vec<Vec<u8>> {
+        r.lines
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !removed.contains(&(*i as u64 + 1)))
+            .map(|(_, l)| l.text.clone())
+            .collect()
+    };
+    let (ka, kb) = (kept(&a, &removed_in), kept(&b, &removed_out));
+    assert_eq!(ka.len(), kb.len(), "untouched line count");
+    if let Some(i) = (0..ka.len()).find(|&i| ka[i] != kb[i]) {
+        panic!(
+            "untouched line {i} differs: {:?} vs {:?}",
+            String::from_utf8_lossy(&ka[i]),
+            String::from_utf8_lossy(&kb[i])
+        );
+    }
+    measured
+}

@@ -1,0 +1,179 @@
+//! purge-shift on real slicer output and hand-built cases: every invariant of
+//! `purge_check::check` on every change, plus hand-computed split lines.
+
+mod purge_check;
+
+use std::path::PathBuf;
+
+use gweave::gcode::layers::Feature;
+use gweave::post::purge_shift::{purge_shift_bytes, PurgeShift, PurgeShiftConfig, PurgeShiftReport, Rules};
+
+fn fixture(rel: &str) -> Vec<u8> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel);
+    std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// Runs the pass and checks every invariant against the input.
+fn run(rules: Rules, input: &[u8]) -> (Vec<u8>, PurgeShiftReport) {
+    let options = PurgeShift::new(rules.clone()).state_options();
+    let (out, report) = purge_shift_bytes(rules, input).unwrap();
+    purge_check::check(input, &out, &report, &options);
+    (out, report)
+}
+
+fn config(toml: &str) -> Rules {
+    PurgeShiftConfig::from_toml(toml).unwrap()
+}
+
+fn lines(out: &[u8], from_1based: u64, n: usize) -> Vec<String> {
+    String::from_utf8_lossy(out).lines().skip(from_1based as usize - 1).take(n).map(String::from).collect()
+}
+
+const ALL: &str = "allow_features = [\"unknown\", \"outer_wall\", \"inner_wall\", \"overhang_wall\", \"infill\", \
+    \"solid_infill\", \"top_surface\", \"bridge\", \"support\", \"support_interface\", \"skirt\", \"wipe_tower\", \
+    \"ironing\", \"gap_fill\", \"custom\"]\n";
+
+#[test]
+fn slic3r_absolute_e_first_change_by_hand() {
+    let input = fixture("slic3r/slic3r_cone_2tool.gcode");
+    let (out, r) = run(Rules::fixed(2.5).unwrap(), &input);
+    assert_eq!(r.changes.len(), 108);
+    let c = &r.changes[0];
+    // T1 was at line 553 after `G1 X109.750 Y109.550 E24.30781`; 2.5 mm back is E21.80781, inside
+    // `G1 X104.913 Y87.264 E21.85317` (line 509, from X104.282 Y87.038 E21.79225).
+    assert_eq!((c.change_lines.as_slice(), c.output_line, c.at_line), (&[553][..], 510, 509));
+    let t = (21.80781 - 21.79225) / (21.85317 - 21.79225);
+    assert!((c.split.as_ref().unwrap().fraction - t).abs() < 1e-9);
+    assert_eq!(
+        lines(&out, 509, 3),
+        ["G1 X104.44317 Y87.09572 E21.80781", "T1", "G1 X104.913 Y87.264 E21.85317"],
+        "x = 104.282 + {t} * 0.631"
+    );
+    // The slicer's toolchange block stays: retract, G92 E0, (T1 gone), G92 E0, retract, travel.
+    assert_eq!(
+        lines(&out, 553, 4),
+        ["G1 E14.30781 F2400.00000", "G92 E0", "G92 E0", "G1 E-2.00000 F2400.00000"]
+    );
+    assert!(r.changes.iter().all(|c| c.feature == Feature::Unknown));
+    assert_eq!(r.changes.iter().filter(|c| c.shortfall_mm == 0.0).count(), 79);
+}
+
+#[test]
+fn prusaslicer_relative_e_splits_the_e_word() {
+    let input = fixture("prusaslicer/pr_bunny_3tool_rel.gcode");
+    let (out, r) = run(Rules::fixed(2.5).unwrap(), &input);
+    assert_eq!(r.changes.len(), 793);
+    let c = &r.changes[1];
+    assert_eq!((c.from_tool, c.to_tool, c.feature), (2, 0, Feature::Bridge));
+    // `G1 X70.555 Y86.738 E1.25223`: the last 0.04197 mm of it, after the change, completes 2.5 mm
+    // with the three moves after it (0.02048 + 0.02501 + 1.20551 + 1.15498 + 0.05205).
+    assert_eq!(lines(&out, 763, 3), ["G1 X70.82035 Y87.24949 E1.21026", "T0", "G1 X70.555 Y86.738 E0.04197"]);
+    // The outer wall is a barrier by default: the change after it cannot move at all.
+    assert_eq!(r.changes[0].achieved_mm, 0.0);
+    assert_eq!(r.changes[0].stopped_by, Some("a feature that may not take the purge"));
+    assert!(r.warnings.iter().any(|w| w.starts_with("layer -, line 172: T0->T2 purge short by 2.500 mm")));
+    // Allowing every feature gives more room.
+    let (_, all) = run(config(&format!("purge_mm = 2.5\n{ALL}")), &input);
+    assert!(all.achieved_mm > r.achieved_mm + 100.0, "{} vs {}", all.achieved_mm, r.achieved_mm);
+    assert_eq!(all.changes[0].achieved_mm, 2.5);
+}
+
+#[test]
+fn cura_dual_with_and_without_crossing_layers() {
+    let input = fixture("cura/cura_dual.gcode");
+    let (_, r) = run(Rules::fixed(2.5).unwrap(), &input);
+    assert_eq!((r.changes.len(), r.untouched_changes), (77, 0));
+    // T0 right after `;LAYER:1` cannot go back by default...
+    let c = &r.changes[1];
+    assert_eq!((c.change_lines[0], c.achieved_mm), (4730, 0.0));
+    assert_eq!(c.stopped_by, Some("a layer change"));
+    // ...but may move into layer 0 when crossing is allowed.
+    let (_, x) = run(config(&format!("purge_mm = 2.5\ncross_layers = true\n{ALL}")), &input);
+    assert_eq!((x.changes[1].achieved_mm, x.changes[1].layer), (2.5, Some(0)));
+    assert!(x.achieved_mm > r.achieved_mm);
+    assert!(x.max_window_lines < 2000, "{}", x.max_window_lines);
+}
+
+#[test]
+fn marlin_mix_groups_move_together() {
+    // Virtual tool 1 is defined (M163/M164) right before T1: the four lines move as one.
+    let input = "M83\n;LAYER:0\n;TYPE:FILL\nG1 X0 Y0\nG1 X10 E1\nG1 X20 E1\nG1 E-1\nG0 X30\nG1 E1\n\
+                 M163 S0 P0.5\nM163 S1 P0.5\n; blue\nM164 S1\nT1\nG1 X40 E1\n";
+    let (out, r) = run(Rules::fixed(1.5).unwrap(), input.as_bytes());
+    assert_eq!(r.changes[0].change_lines, [10, 11, 12, 13, 14]);
+    let text = String::from_utf8(out).unwrap();
+    assert!(
+        text.contains("G1 X5 E0.5\nM163 S0 P0.5\nM163 S1 P0.5\n; blue\nM164 S1\nT1\nG1 X10 E0.5\nG1 X20 E1\nG1 E-1\nG0 X30\nG1 E1\nG1 X40"),
+        "{text}"
+    );
+    // M165 changes the active mix without a T; M567 the RepRapFirmware one.
+    let m165 = "M83\n;LAYER:0\nG1 X0 Y0\nG1 X10 E2\nM165 A0.2 B0.8\nG1 X20 E1\n";
+    let (out, r) = run(Rules::fixed(1.0).unwrap(), m165.as_bytes());
+    assert_eq!((r.changes.len(), r.changes[0].achieved_mm), (1, 1.0));
+    assert!(String::from_utf8(out).unwrap().contains("G1 X5 E1\nM165 A0.2 B0.8\nG1 X10 E1\n"));
+    let m567 = "M83\n;LAYER:0\nG1 X0 Y0\nG1 X10 E2\nM567 P0 E0.3:0.7\nG1 X20 E1\n";
+    let (_, r) = run(Rules::fixed(1.0).unwrap(), m567.as_bytes());
+    assert_eq!(r.changes.len(), 1);
+    // Re-selecting the active tool, or storing a mix into an idle tool, is not a change, and a
+    // later T1 may not move before the definition of tool 1.
+    let idle = "M83\n;LAYER:0\nG1 X0 Y0\nG1 X10 E2\nT0\nM163 S0 P1\nM164 S1\nG1 X20 E1\nT1\nG1 X30 E1\n";
+    let (out, r) = run(Rules::fixed(1.5).unwrap(), idle.as_bytes());
+    assert_eq!(r.changes.len(), 1);
+    assert_eq!((r.changes[0].achieved_mm, r.changes[0].shortfall_mm), (1.0, 0.5));
+    assert!(String::from_utf8(out).unwrap().contains("M164 S1\nT1\nG1 X20 E1\n"));
+}
+
+#[test]
+fn arcs_split_on_the_circle_absolute_and_relative() {
+    for (mode, e1, e2, second) in [("M82", "E2", "E3", "E2"), ("M83", "E2", "E1", "E0.5")] {
+        let input = format!(
+            "G90\n{mode}\n;LAYER:0\nG1 X10 Y0 F600\nG3 X0 Y10 I-10 J0 {e1}\nG2 X-10 Y0 R10 {e2}\nT1\nG1 X-20 E1\n"
+        );
+        let (out, r) = run(Rules::fixed(1.5).unwrap(), input.as_bytes());
+        let s = r.changes[0].split.as_ref().unwrap();
+        assert_eq!(s.line, 5);
+        assert!((s.point_mm[0].hypot(s.point_mm[1]) - 10.0).abs() < 1e-9, "{s:?}");
+        // 1 mm from the G2, 0.5 mm from the end of the G3 (t = 0.75), around the same centre.
+        // The split is at 67.5 degrees: (10 cos, 10 sin) = (3.82683, 9.23880).
+        let want = format!("G3 X3.82683 Y9.2388 E1.5 I-10 J0\nT1\nG3 X0 Y10 {second} I-3.82683 J-9.2388\n");
+        assert!(String::from_utf8(out).unwrap().contains(&want), "{mode}");
+    }
+}
+
+#[test]
+fn retract_travel_unretract_is_never_split() {
+    // Too little room: the change goes before the first extruding move of the layer, after the
+    // unretract, never between retract, travel and unretract.
+    let input =
+        ";LAYER:0\nM83\nG1 E-1\nG0 X10 Y10\nG1 E1\nG1 X20 E0.5\nG1 E-1\nG0 X0\nG1 E1\nG1 X5 E0.25\nT1\n";
+    let (out, r) = run(Rules::fixed(2.0).unwrap(), input.as_bytes());
+    let c = &r.changes[0];
+    assert_eq!((c.achieved_mm, c.shortfall_mm, c.at_line), (0.75, 1.25, 6));
+    assert!(String::from_utf8(out).unwrap().contains("G0 X10 Y10\nG1 E1\nT1\nG1 X20 E0.5\n"));
+    assert!(r.warnings[0].contains("line 11: T0->T1 purge short by 1.250 mm"), "{:?}", r.warnings);
+}
+
+#[test]
+fn markers_limit_the_work_to_the_print_proper() {
+    let input = "M83\nG1 X0 Y0\nG1 X10 E5\nT1\n;begin\nG1 X20 E5\nT0\n;end\nG1 X30 E5\nT1\n";
+    let rules = config("purge_mm = 1.0\nmarkers = [\"begin\", \"end\"]\n");
+    let (out, r) = run(rules, input.as_bytes());
+    assert_eq!((r.changes.len(), r.untouched_changes), (1, 2));
+    assert!(String::from_utf8(out)
+        .unwrap()
+        .starts_with("M83\nG1 X0 Y0\nG1 X10 E5\nT1\n;begin\nG1 X18 E4\nT0\n"));
+}
+
+#[test]
+fn washout_predicts_the_transition() {
+    // 1 mm^3 chamber, no dead volume, 2.5 mm of 1.75 mm filament = 6.013 mm^3 purge.
+    let rules = config("purge_mm = 2.5\n[washout]\nchamber_mm3 = 1.0\ntolerance = 0.001\n");
+    let input = ";LAYER:0\nM83\nG1 X0 Y0\nG1 X10 E1\nG1 X20 E1\nT1\nG1 X30 E1\n";
+    let (_, r) = run(rules, input.as_bytes());
+    let c = &r.changes[0];
+    assert!((c.residual_fraction.unwrap() - (-2.0 * 2.405_281_875_404_685f64).exp()).abs() < 1e-9, "{c:?}");
+    // Clean at 1000 ln(1000)... here V ln(1/eps) = 6.9078 mm^3; 2.4053 mm^3 was purged.
+    let area = std::f64::consts::PI * 1.75 * 1.75 / 4.0;
+    assert!((c.transition_mm.unwrap() - (1000f64.ln() - 2.0 * area) / area).abs() < 1e-9);
+    assert!((r.saved_mm - 2.0).abs() < 1e-12 && (r.saved_mm3 - 2.0 * area).abs() < 1e-9);
+}

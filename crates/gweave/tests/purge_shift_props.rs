@@ -1,0 +1,172 @@
+//! purge-shift on synthetic programs: the invariants hold and the pass never panics, and the
+//! window does not grow with the file.
+
+mod purge_check;
+
+use gweave::post::purge_shift::{purge_shift_bytes, PurgeShift, PurgeShiftConfig, Rules};
+use proptest::prelude::*;
+
+/// One step of a synthetic program.
+#[derive(Debug, Clone)]
+enum Step {
+    /// An extruding move of this XY length (E = 0.05 mm per mm), optionally as an arc.
+    Extrude {
+        len_mm: f64,
+        arc: bool,
+    },
+    Retract,
+    ResetE,
+    Travel(f64),
+    Change,
+    Layer,
+    OuterWall,
+    FwRetract,
+}
+
+fn step() -> impl Strategy<Value = Step> {
+    prop_oneof![
+        8 => (0.01f64..30.0, proptest::bool::weighted(0.2)).prop_map(|(len_mm, arc)| Step::Extrude { len_mm, arc }),
+        1 => Just(Step::Retract),
+        1 => Just(Step::ResetE),
+        1 => (0.1f64..20.0).prop_map(Step::Travel),
+        2 => Just(Step::Change),
+        1 => Just(Step::Layer),
+        1 => Just(Step::OuterWall),
+        1 => Just(Step::FwRetract),
+    ]
+}
+
+/// Writes the program; `absolute_e` picks M82 or M83.
+fn program(steps: &[Step], absolute_e: bool) -> String {
+    let mut s = String::from(if absolute_e { "G90\nM82\n" } else { "G90\nM83\n" });
+    s.push_str(";LAYER_CHANGE\n;Z:0.2\nG1 Z0.2\n;TYPE:Perimeter\n");
+    let (mut x, mut e, mut layer, mut tool, mut dir) = (0.0f64, 0.0f64, 0, 0, 1.0f64);
+    let feed = |s: &mut String, words: String, de: f64, e: &mut f64| {
+        if absolute_e {
+            *e += de;
+            s.push_str(&format!("{words} E{:.5}\n", *e));
+        } else {
+            s.push_str(&format!("{words} E{de:.5}\n"));
+        }
+    };
+    for st in steps {
+        match st {
+            Step::Extrude { len_mm, arc } => {
+                let de = (len_mm * 0.05 * 1e5).round() / 1e5;
+                if de <= 0.0 {
+                    continue;
+                }
+                if *arc {
+                    // A half circle of diameter len_mm along X (never a zero-length move).
+                    let r = len_mm / 2.0;
+                    feed(&mut s, format!("G2 X{:.3} Y0 I{:.3} J0", x + dir * len_mm, dir * r), de, &mut e);
+                } else {
+                    feed(&mut s, format!("G1 X{:.3} Y0", x + dir * len_mm), de, &mut e);
+                }
+                x = ((x + dir * len_mm) * 1000.0).round() / 1000.0;
+                if x.abs() > 100.0 {
+                    dir = -dir;
+                }
+            }
+            Step::Retract => {
+                feed(&mut s, "G1".into(), -0.8, &mut e);
+                s.push_str("G0 Y5\nG0 Y0\n");
+                feed(&mut s, "G1".into(), 0.8, &mut e);
+            }
+            Step::ResetE => {
+                s.push_str("G92 E0\n");
+                e = 0.0;
+            }
+            Step::Travel(d) => {
+                x = ((x - dir * d) * 1000.0).round() / 1000.0;
+                s.push_str(&format!("G0 X{x:.3} Y0\n"));
+            }
+            Step::Change => {
+                tool = 1 - tool;
+                s.push_str(&format!("T{tool}\n"));
+            }
+            Step::Layer => {
+                layer += 1;
+                let z = 0.2 * f64::from(layer + 1);
+                s.push_str(&format!(";LAYER_CHANGE\n;Z:{z:.1}\nG1 Z{z:.1}\n;TYPE:Perimeter\n"));
+            }
+            Step::OuterWall => s.push_str(";TYPE:External perimeter\n"),
+            Step::FwRetract => s.push_str("G10\nG0 Y3\nG0 Y0\nG11\n;TYPE:Perimeter\n"),
+        }
+    }
+    s
+}
+
+fn check(text: &str, rules: Rules) -> gweave::post::purge_shift::PurgeShiftReport {
+    let options = PurgeShift::new(rules.clone()).state_options();
+    let (out, report) = purge_shift_bytes(rules, text.as_bytes()).unwrap();
+    purge_check::check(text.as_bytes(), &out, &report, &options);
+    report
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+
+    #[test]
+    fn invariants_hold(steps in proptest::collection::vec(step(), 0..120), absolute_e: bool,
+                       purge_mm in 0.05f64..4.0, cross_layers: bool) {
+        let text = program(&steps, absolute_e);
+        let rules = PurgeShiftConfig { purge_mm: Some(purge_mm), cross_layers, ..PurgeShiftConfig::default() }
+            .validate()
+            .unwrap();
+        let report = check(&text, rules);
+        // `T` lines with only comments between are one group: it changes the colour if it
+        // toggles an odd number of times.
+        let mut changes = 0;
+        let mut run = 0;
+        for line in text.lines().chain(std::iter::once("")) {
+            if line.starts_with('T') {
+                run += 1;
+            } else if !line.starts_with(';') {
+                changes += run % 2;
+                run = 0;
+            }
+        }
+        prop_assert_eq!(report.changes.len(), changes);
+    }
+
+    #[test]
+    fn never_panics_on_gcode_like_text(lines in proptest::collection::vec(
+        "(G[0-3]|G92|G10|G11|M8[23]|T[0-2]|M16[345]|M567|;LAYER:[0-9]|;TYPE:WALL-OUTER)?( [XYZEIJRSP]-?[0-9]{0,3}(\\.[0-9]{0,3})?){0,4}",
+        0..60)) {
+        let text = lines.join("\n");
+        let _ = purge_shift_bytes(Rules::fixed(1.0).unwrap(), text.as_bytes()).unwrap();
+    }
+}
+
+/// The window holds the purge plus at most one layer: as many lines for 2 000 layers as for 20.
+#[test]
+fn window_does_not_grow_with_the_file() {
+    let layers = |n: usize| {
+        let mut s = String::from("G90\nM83\n");
+        for layer in 0..n {
+            s.push_str(&format!(";LAYER_CHANGE\n;Z:{}\nG1 Z{}\n;TYPE:Perimeter\n", layer + 1, layer + 1));
+            for i in 0..50 {
+                s.push_str(&format!("G1 X{} Y{} E0.05\n", i % 2 * 10, layer));
+            }
+            s.push_str(&format!("T{}\n", (layer + 1) % 2));
+        }
+        s
+    };
+    for cross_layers in [false, true] {
+        let max = |n: usize| {
+            let rules = PurgeShiftConfig { purge_mm: Some(1.0), cross_layers, ..PurgeShiftConfig::default() }
+                .validate()
+                .unwrap();
+            let (_, r) = purge_shift_bytes(rules, layers(n).as_bytes()).unwrap();
+            assert_eq!(r.changes.len(), n);
+            assert!(r.changes.iter().all(|c| (c.achieved_mm - 1.0).abs() < 1e-9));
+            r.max_window_lines
+        };
+        let (small, big) = (max(20), max(2000));
+        assert_eq!(small, big, "cross_layers {cross_layers}");
+        // 1 mm of purge is 20 moves of 0.05 mm; the window holds those, the one before (the
+        // sum after it must exceed the purge) and the layer's 4 header lines.
+        assert!((20..=27).contains(&big), "cross_layers {cross_layers}: {big}");
+    }
+}
