@@ -209,9 +209,8 @@ impl Pass for ToolpathPass {
                 self.out.tools = self.out.tools.max((*to).min(u16::MAX as u32 - 1) as u16 + 1);
             }
             Effect::Move(m) => {
-                // Only the start G-code is left out. The end G-code is kept (parking is travel,
-                // drawn only on request): the core marks Cura files as ending after their first
-                // layer (a `;LAYER:` after `;TIME_ELAPSED:` does not clear its end flag).
+                // Only the start G-code (purge lines) is left out: the end G-code's parking is
+                // travel, drawn only on request, and any extrusion there is really printed.
                 if self.options.print_only && st.region == Region::Start {
                     return Ok(());
                 }
