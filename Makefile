@@ -12,8 +12,9 @@ GWEAVE := target/release/gweave
 OUT := out
 
 .PHONY: demo test bench deps rust-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
+.PHONY: browser-deps
 
-deps: rust-deps py-deps
+deps: rust-deps py-deps browser-deps
 
 rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
@@ -26,6 +27,14 @@ $(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requiremen
 	# Printrun's printcore without its GUI dependencies (see the file).
 	$(PY) -m pip install -q --no-deps -r crates/gweave-py/requirements-host.txt
 	touch $@
+
+# Headless chromium for the HTML viewer test (crates/gweave-py/tests/test_viewer.py); installed only
+# when running as root, otherwise the test says why it skips.
+browser-deps:
+	@if [ -x /usr/bin/chromium ]; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  apt-get install -y -q chromium || { apt-get update -q && apt-get install -y -q chromium; }; \
+	else echo "browser-deps: no /usr/bin/chromium and not root: the viewer test will be skipped"; fi
 
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli

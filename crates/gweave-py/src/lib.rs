@@ -16,6 +16,13 @@ use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use gweave::colour::Srgb8;
+use gweave::gcode::layers::ALL_FEATURES;
+use gweave::render::{
+    self, ColourBy, Format, PreviewOptions, Toolpath, ToolpathOptions, ViewKind, ViewOptions,
+};
+use pyo3::types::PyBytes;
+
 fn err(e: gweave::Error) -> PyErr {
     match e {
         gweave::Error::Io { .. } => PyOSError::new_err(e.to_string()),
@@ -236,6 +243,98 @@ impl Reader {
             },
         }))
     }
+}
+
+// ---- preview (render) ----
+
+/// A picture or viewer page of a file as bytes (`format`: png, svg or html); see `gweave preview`.
+#[pyfunction]
+#[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false))]
+#[allow(clippy::too_many_arguments)]
+fn preview_bytes(
+    py: Python<'_>,
+    path: PathBuf,
+    format: &str,
+    layers: Option<(u32, u32)>,
+    view: &str,
+    colour_by: &str,
+    size: (u32, u32),
+    compare: Option<PathBuf>,
+    tool_colours: Option<Vec<String>>,
+    travel: bool,
+) -> PyResult<Py<PyBytes>> {
+    let format = Format::from_path(std::path::Path::new(&format!("x.{format}"))).map_err(render_err)?;
+    let tool_colours = tool_colours
+        .unwrap_or_default()
+        .iter()
+        .map(|c| c.parse::<Srgb8>().map_err(|e| PyValueError::new_err(e.to_string())))
+        .collect::<PyResult<Vec<_>>>()?;
+    let options = PreviewOptions {
+        view: ViewOptions {
+            kind: view.parse::<ViewKind>().map_err(PyValueError::new_err)?,
+            layers: layers.map(|(a, b)| a..=b),
+            width_px: size.0,
+            height_px: size.1,
+            colour_by: colour_by.parse::<ColourBy>().map_err(PyValueError::new_err)?,
+            tool_colours,
+            travel,
+            ..ViewOptions::default()
+        },
+        min_len_mm: None,
+    };
+    let bytes = py
+        .allow_threads(|| render::preview(&path, compare.as_deref(), format, &options))
+        .map_err(render_err)?;
+    Ok(PyBytes::new(py, &bytes).unbind())
+}
+
+fn render_err(e: render::RenderError) -> PyErr {
+    match e {
+        render::RenderError::Gcode(e) => err(e),
+        other => PyValueError::new_err(other.to_string()),
+    }
+}
+
+/// A file's toolpath as little-endian column bytes: (segment count, {name: bytes}) with start
+/// and end (f32 x 3 each), tool (u16), feature (u8, index into `feature_names`), feed_mm_s (f32),
+/// layer (u32), extruding (u8 0/1). `gweave.toolpath` turns them into NumPy arrays.
+#[pyfunction]
+#[pyo3(signature = (path, *, travel=true, min_len=0.0))]
+fn toolpath_columns(
+    py: Python<'_>,
+    path: PathBuf,
+    travel: bool,
+    min_len: f32,
+) -> PyResult<(usize, Py<PyDict>)> {
+    let options = ToolpathOptions { travel, min_len_mm: min_len, ..ToolpathOptions::default() };
+    let tp = py.allow_threads(|| Toolpath::from_file(&path, options)).map_err(err)?;
+    let n = tp.segments.len();
+    let mut cols: [(&str, Vec<u8>); 7] = [
+        ("start", Vec::with_capacity(n * 12)),
+        ("end", Vec::with_capacity(n * 12)),
+        ("tool", Vec::with_capacity(n * 2)),
+        ("feature", Vec::with_capacity(n)),
+        ("feed_mm_s", Vec::with_capacity(n * 4)),
+        ("layer", Vec::with_capacity(n * 4)),
+        ("extruding", Vec::with_capacity(n)),
+    ];
+    for s in &tp.segments {
+        cols[0].1.extend(s.start.iter().flat_map(|v| v.to_le_bytes()));
+        cols[1].1.extend(s.end.iter().flat_map(|v| v.to_le_bytes()));
+        cols[2].1.extend(s.tool.to_le_bytes());
+        cols[3].1.push(s.feature as u8);
+        cols[4].1.extend(s.feed_mm_s.to_le_bytes());
+        cols[5].1.extend(s.layer.to_le_bytes());
+        cols[6].1.push(u8::from(s.extruding));
+    }
+    let dict = PyDict::new(py);
+    for (name, bytes) in cols {
+        dict.set_item(name, PyBytes::new(py, &bytes))?;
+    }
+    let names: Vec<&str> = ALL_FEATURES.iter().map(|f| f.name()).collect();
+    dict.set_item("feature_names", names)?;
+    dict.set_item("layer_z", tp.layer_z_mm.clone())?;
+    Ok((n, dict.unbind()))
 }
 
 /// Runs the `gweave` command line with these arguments (argv[0] included); returns the exit code.
@@ -727,5 +826,8 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rotary_tube_json, m)?)?;
     m.add_function(wrap_pyfunction!(write_helical_paths_json, m)?)?;
     m.add_class::<HelicalPath>()?;
+
+    m.add_function(wrap_pyfunction!(preview_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(toolpath_columns, m)?)?;
     Ok(())
 }

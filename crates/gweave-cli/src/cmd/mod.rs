@@ -19,6 +19,8 @@ mod rotary;
 // serial: the virtual printer on a pty or loopback TCP
 mod serve;
 
+mod preview;
+
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -40,6 +42,8 @@ pub enum Command {
     Serve(serve::ServeArgs),
     // mix
     Mix(mix::MixArgs),
+
+    Preview(preview::PreviewArgs),
 }
 
 pub fn run(command: Command) -> Result<ExitCode> {
@@ -58,5 +62,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Serve(a) => serve::run(a),
         // mix
         Command::Mix(a) => mix::run(a),
+
+        Command::Preview(a) => preview::run(a),
     }
 }

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Dict, Optional, Sequence, Union
+from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 from . import _gweave
 from ._gweave import Line, Reader
@@ -39,6 +39,8 @@ __all__ += ["purge_shift"]
 __all__ += ["mix"]
 
 __all__ += ["rotary_wrap", "rotary_tube", "HelicalPath", "write_helical_paths"]
+
+__all__ += ["preview", "toolpath"]
 
 
 def read(path: PathLike) -> Reader:
@@ -252,6 +254,78 @@ def purge_shift(
             fallback=fallback,
         )
     )
+
+# ---- preview (render) ----
+
+_PREVIEW_FORMATS = {".png": "png", ".svg": "svg", ".html": "html", ".htm": "html"}
+
+
+def preview(
+    path: PathLike,
+    *,
+    output: Optional[PathLike] = None,
+    layer: Union[int, Tuple[int, int], None] = None,
+    view: str = "top",
+    colour_by: str = "tool",
+    size: Tuple[int, int] = (1200, 900),
+    compare: Optional[PathLike] = None,
+    tool_colours: Optional[Sequence[str]] = None,
+    travel: bool = False,
+) -> bytes:
+    """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None).
+
+    ``output`` picks the format by extension (``.png``, ``.svg``, ``.html``) and is written.
+    ``layer`` is one 0-based layer or an inclusive ``(first, last)`` range; ``view`` is ``"top"`` or
+    ``"iso"``; ``colour_by`` is ``tool``, ``feature``, ``speed``, ``layer`` or ``mix`` (per-tool
+    ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``); ``compare`` highlights moves that differ
+    from another file; ``size`` is ``(width, height)`` in pixels.
+    """
+    fmt = "png"
+    if output is not None:
+        ext = os.path.splitext(os.fspath(output))[1].lower()
+        if ext not in _PREVIEW_FORMATS:
+            raise ValueError(f"unknown output format {ext!r} (.png, .svg or .html)")
+        fmt = _PREVIEW_FORMATS[ext]
+    layers = (layer, layer) if isinstance(layer, int) else None if layer is None else (int(layer[0]), int(layer[1]))
+    data = _gweave.preview_bytes(
+        os.fspath(path),
+        format=fmt,
+        layers=layers,
+        view=view,
+        colour_by=colour_by,
+        size=(int(size[0]), int(size[1])),
+        compare=None if compare is None else os.fspath(compare),
+        tool_colours=None if tool_colours is None else list(tool_colours),
+        travel=travel,
+    )
+    if output is not None:
+        with open(output, "wb") as f:
+            f.write(data)
+    return data
+
+
+def toolpath(path: PathLike, *, travel: bool = True, min_len: float = 0.0) -> Dict[str, Any]:
+    """A file's segments as NumPy arrays (NumPy is needed for this function only).
+
+    Keys: ``start`` and ``end`` (float32, shape (n, 3), mm), ``tool`` (uint16), ``feature`` (uint8,
+    an index into ``feature_names``), ``feed_mm_s`` (float32), ``layer`` (uint32), ``extruding``
+    (bool); plus ``feature_names`` and ``layer_z`` (lists). ``min_len`` (mm) merges chained moves
+    shorter than that, for huge files; ``travel=False`` keeps extruding moves only.
+    """
+    import numpy as np
+
+    n, cols = _gweave.toolpath_columns(os.fspath(path), travel=travel, min_len=min_len)
+    dtypes = {"tool": "<u2", "feature": "u1", "feed_mm_s": "<f4", "layer": "<u4", "extruding": "u1"}
+    out: Dict[str, Any] = {
+        "start": np.frombuffer(cols["start"], dtype="<f4").reshape(n, 3),
+        "end": np.frombuffer(cols["end"], dtype="<f4").reshape(n, 3),
+    }
+    for name, dtype in dtypes.items():
+        out[name] = np.frombuffer(cols[name], dtype=dtype)
+    out["extruding"] = out["extruding"].astype(bool)
+    out["feature_names"] = cols["feature_names"]
+    out["layer_z"] = cols["layer_z"]
+    return out
 
 
 # mix

@@ -1,5 +1,4 @@
-from typing import Any, Dict, List, Optional, Tuple, Union
-from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 __version__: str
 
@@ -76,6 +75,19 @@ def mix_json(
     in_place: bool = False,
     backup: bool = True,
 ) -> str: ...
+def preview_bytes(
+    path: str,
+    *,
+    format: str,
+    layers: Optional[Tuple[int, int]] = None,
+    view: str = "top",
+    colour_by: str = "tool",
+    size: Tuple[int, int] = (1200, 900),
+    compare: Optional[str] = None,
+    tool_colours: Optional[List[str]] = None,
+    travel: bool = False,
+) -> bytes: ...
+def toolpath_columns(path: str, *, travel: bool = True, min_len: float = 0.0) -> Tuple[int, Dict[str, Any]]: ...
 
 class Line:
     number: int

@@ -32,7 +32,7 @@
 //! ```
 pub mod delta_e;
 pub mod dialect;
-mod font;
+pub(crate) mod font;
 pub mod lab;
 pub mod mix;
 pub mod mixing;

@@ -26,10 +26,17 @@ pub struct Output {
 }
 
 enum Sink {
-    File { file: BufWriter<tempfile::NamedTempFile>, dest: PathBuf, backup: Option<PathBuf> },
+    File {
+        file: BufWriter<tempfile::NamedTempFile>,
+        dest: PathBuf,
+        backup: Option<PathBuf>,
+    },
     /// A device or pipe (`/dev/null`, a FIFO): written directly, since renaming a file over it
     /// would replace the device itself.
-    Special { file: BufWriter<fs::File>, dest: PathBuf },
+    Special {
+        file: BufWriter<fs::File>,
+        dest: PathBuf,
+    },
     Stdout(BufWriter<io::Stdout>),
 }
 
@@ -50,7 +57,8 @@ impl Output {
                     }
                 }
                 if fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
-                    let file = fs::OpenOptions::new().write(true).open(path).map_err(|e| Error::io(path, e))?;
+                    let file =
+                        fs::OpenOptions::new().write(true).open(path).map_err(|e| Error::io(path, e))?;
                     let file = BufWriter::with_capacity(BUFFER, file);
                     return Ok(Output { sink: Sink::Special { file, dest: path.clone() } });
                 }

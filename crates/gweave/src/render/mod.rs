@@ -1,17 +1,200 @@
-//! Drawing G-code paths as images: a z-buffered RGB [`canvas::Canvas`] with line drawing and
-//! PNG output, and an orthographic [`camera::Camera`] (isometric or top view) that maps 3D
-//! millimetres to pixels.
+//! Pictures of what a file prints: `gweave preview`, and the drawing tools other commands use.
 //!
-//! ```
-//! use gweave::render::{camera::Camera, canvas::Canvas};
-//! let points = [[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [10.0, 10.0, 5.0]];
-//! let camera = Camera::isometric().fitted(points, 200, 100, 4.0);
-//! let mut canvas = Canvas::new(200, 100, [255, 255, 255]);
-//! canvas.line(camera.project(points[0]), camera.project(points[1]), [200, 0, 0], 1);
-//! let mut png = Vec::new();
-//! canvas.write_png(&mut png).unwrap();
-//! assert_eq!(&png[1..4], b"PNG");
+//! - [`canvas`] and [`camera`]: a z-buffered RGB canvas with line drawing and PNG output, and an
+//!   orthographic camera (isometric or top view) mapping 3D millimetres to pixels (the rotary
+//!   pictures use them).
+//! - [`toolpath`]: the segments of a file (start, end, tool, feature, feed, layer, extruding),
+//!   collected in one streaming pass, with decimation for huge files.
+//! - [`colour_by`]: colour by tool, feature type, speed, layer or predicted mix colour.
+//! - [`view`]: top view of a layer or layer range, isometric view, before/after comparison;
+//!   turns segments into pixel [`view::Stroke`]s.
+//! - [`raster`] and [`png_out`]: a software rasteriser (wide anti-aliased lines, alpha) and PNG.
+//! - [`svg`]: the same drawing as SVG paths.
+//! - [`html`]: a self-contained interactive viewer page.
+//!
+//! ```no_run
+//! use gweave::render::{preview, Format, PreviewOptions};
+//! let png = preview("part.gcode".as_ref(), None, Format::Png, &PreviewOptions::default()).unwrap();
+//! std::fs::write("part.png", png).unwrap();
 //! ```
 
 pub mod camera;
 pub mod canvas;
+pub mod colour_by;
+pub mod html;
+pub mod png_out;
+pub mod raster;
+pub mod svg;
+pub mod toolpath;
+pub mod view;
+
+use std::io::{self, Write};
+use std::path::Path;
+
+use crate::gcode::state::State;
+use crate::pass::{Ctx, Pass, Progress, Quiet, Run};
+use crate::stats::{Stats, StatsPass};
+
+pub use colour_by::ColourBy;
+pub use toolpath::{Segment, Toolpath, ToolpathOptions};
+pub use view::{ViewKind, ViewOptions};
+
+/// Why a preview could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Gcode(#[from] crate::Error),
+    #[error("picture size must be 16 to 16384 px on each side, got {0}x{1}")]
+    Size(u32, u32),
+    #[error("unknown output format {0:?} (png, svg or html)")]
+    Format(String),
+    #[error("the HTML viewer shows one file; compare as PNG or SVG")]
+    CompareHtml,
+    #[error("image encoding failed: {0}")]
+    Encode(String),
+}
+
+/// What the preview is written as.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    Png,
+    Svg,
+    Html,
+}
+
+impl Format {
+    /// From an output file's extension.
+    pub fn from_path(path: &Path) -> Result<Format, RenderError> {
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        match ext.as_str() {
+            "png" => Ok(Format::Png),
+            "svg" => Ok(Format::Svg),
+            "html" | "htm" => Ok(Format::Html),
+            _ => Err(RenderError::Format(ext)),
+        }
+    }
+}
+
+/// Everything `gweave preview` can be asked.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PreviewOptions {
+    pub view: ViewOptions,
+    /// Merge chained moves shorter than this, mm; `None` picks by file size
+    /// ([`ToolpathOptions::min_len_for_file_size`]).
+    pub min_len_mm: Option<f32>,
+}
+
+impl PreviewOptions {
+    fn check(&self) -> Result<(), RenderError> {
+        let (w, h) = (self.view.width_px, self.view.height_px);
+        if !(16..=16384).contains(&w) || !(16..=16384).contains(&h) {
+            return Err(RenderError::Size(w, h));
+        }
+        Ok(())
+    }
+
+    fn toolpath_options(&self, path: &Path, keep_all_layers: bool) -> ToolpathOptions {
+        let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+        ToolpathOptions {
+            // The viewer shows every layer; pictures need only theirs.
+            layers: if keep_all_layers { None } else { self.view.layers.clone() },
+            travel: keep_all_layers || self.view.travel,
+            min_len_mm: self.min_len_mm.unwrap_or_else(|| ToolpathOptions::min_len_for_file_size(bytes)),
+            ..ToolpathOptions::default()
+        }
+    }
+}
+
+/// Feeds every line to two passes (a toolpath and the statistics, in one read of the file).
+struct Both<'a>(&'a mut dyn Pass, &'a mut dyn Pass);
+
+impl Pass for Both<'_> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        self.0.line(ctx, &mut io::sink())?;
+        self.1.line(ctx, out)
+    }
+    fn finish(&mut self, state: &State, out: &mut dyn Write) -> io::Result<()> {
+        self.0.finish(state, &mut io::sink())?;
+        self.1.finish(state, out)
+    }
+}
+
+/// Collects a file's toolpath and statistics in one pass.
+pub fn toolpath_with_stats(
+    path: &Path,
+    options: ToolpathOptions,
+    progress: &mut dyn Progress,
+) -> crate::Result<(Toolpath, Stats)> {
+    let mut tp = toolpath::ToolpathPass::new(options);
+    let mut st = StatsPass::new(None);
+    let state = Run::new(path, progress).scan(&mut Both(&mut tp, &mut st))?;
+    Ok((tp.finish_toolpath(), st.into_stats(&state)))
+}
+
+/// The preview of `path` (compared with `compare` when given) in `format`, as file bytes.
+pub fn preview(
+    path: &Path,
+    compare: Option<&Path>,
+    format: Format,
+    options: &PreviewOptions,
+) -> Result<Vec<u8>, RenderError> {
+    preview_with_progress(path, compare, format, options, &mut Quiet)
+}
+
+/// [`preview`], reporting reading progress.
+pub fn preview_with_progress(
+    path: &Path,
+    compare: Option<&Path>,
+    format: Format,
+    options: &PreviewOptions,
+    progress: &mut dyn Progress,
+) -> Result<Vec<u8>, RenderError> {
+    options.check()?;
+    let drawing = match format {
+        Format::Html => return html_page(path, compare, options, progress),
+        Format::Png | Format::Svg => drawing(path, compare, options, progress)?,
+    };
+    if format == Format::Svg {
+        return Ok(svg::write_svg(&drawing).into_bytes());
+    }
+    png_out::encode(&png_out::rasterise(&drawing))
+}
+
+/// The picture of one file, or of two compared.
+pub fn drawing(
+    path: &Path,
+    compare: Option<&Path>,
+    options: &PreviewOptions,
+    progress: &mut dyn Progress,
+) -> Result<view::Drawing, RenderError> {
+    let mut read = |p: &Path| -> crate::Result<Toolpath> {
+        let mut pass = toolpath::ToolpathPass::new(options.toolpath_options(p, false));
+        Run::new(p, &mut *progress).scan(&mut pass)?;
+        Ok(pass.finish_toolpath())
+    };
+    let before = read(path)?;
+    Ok(match compare {
+        Some(other) => view::draw_compare(&before, &read(other)?, &options.view),
+        None => view::draw(&before, &options.view),
+    })
+}
+
+fn html_page(
+    path: &Path,
+    compare: Option<&Path>,
+    options: &PreviewOptions,
+    progress: &mut dyn Progress,
+) -> Result<Vec<u8>, RenderError> {
+    if compare.is_some() {
+        return Err(RenderError::CompareHtml);
+    }
+    let (tp, stats) = toolpath_with_stats(path, options.toolpath_options(path, true), progress)?;
+    let html_options = html::HtmlOptions {
+        title: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+        colour_by: options.view.colour_by,
+        view: options.view.kind,
+        layer: options.view.layers.as_ref().map(|r| *r.end()),
+        tool_colours: options.view.tool_colours.clone(),
+    };
+    Ok(html::write_html(&tp, Some(&stats), &html_options).into_bytes())
+}

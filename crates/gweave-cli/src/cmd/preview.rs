@@ -1,0 +1,104 @@
+//! `gweave preview`: a picture (PNG, SVG) or an interactive page (HTML) of what a file prints.
+
+use std::ops::RangeInclusive;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use gweave::colour::Srgb8;
+use gweave::render::{preview_with_progress, ColourBy, Format, PreviewOptions, ViewKind, ViewOptions};
+
+use crate::progress::Bar;
+
+/// Draw a file: top view of a layer, isometric view of the print, or a before/after comparison.
+///
+/// The output format follows the extension of -o: `.png` and `.svg` are pictures, `.html` is one
+/// self-contained page (no network) with a layer slider, pan, zoom, rotate, legend and stats.
+/// Layers are numbered from 0 as the core counts them (Cura's `;LAYER:n`).
+/// Examples: `gweave preview part.gcode -o part.png --layer 12`,
+/// `gweave preview part.gcode -o part.png --view iso --colour-by feature`,
+/// `gweave preview before.gcode --compare after.gcode -o diff.png --layers 10-20`.
+#[derive(Args, Debug)]
+pub struct PreviewArgs {
+    /// The G-code file to draw.
+    pub input: PathBuf,
+    /// Output file: .png, .svg or .html.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Draw only this layer (0-based).
+    #[arg(long, value_name = "N", conflicts_with = "layers")]
+    pub layer: Option<u32>,
+    /// Draw this layer range, inclusive, e.g. 10-20.
+    #[arg(long, value_name = "A-B", value_parser = parse_range)]
+    pub layers: Option<RangeInclusive<u32>>,
+    /// top (from above) or iso (isometric 3D).
+    #[arg(long, default_value = "top", value_parser = |s: &str| s.parse::<ViewKind>())]
+    pub view: ViewKind,
+    /// tool, feature, speed, layer or mix (predicted mix colour per tool, from --tool-colours).
+    #[arg(long, default_value = "tool", value_parser = |s: &str| s.parse::<ColourBy>())]
+    pub colour_by: ColourBy,
+    /// Picture size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1200x900", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Compare with this file (e.g. the output of a transform): changed moves are highlighted.
+    #[arg(long, value_name = "B")]
+    pub compare: Option<PathBuf>,
+    /// Colours of tools 0, 1, ... as #rrggbb, comma separated (e.g. predicted mix colours).
+    #[arg(long, value_name = "COLOURS", value_delimiter = ',')]
+    pub tool_colours: Vec<Srgb8>,
+    /// Draw travel moves too.
+    #[arg(long)]
+    pub travel: bool,
+    /// Merge chained moves shorter than this, mm (default: 0, or 0.2 for files over 32 MB).
+    #[arg(long, value_name = "MM")]
+    pub min_len: Option<f32>,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+fn parse_range(s: &str) -> Result<RangeInclusive<u32>, String> {
+    let (a, b) = s.split_once('-').ok_or_else(|| format!("expected A-B, got {s:?}"))?;
+    let a: u32 = a.trim().parse().map_err(|_| format!("bad layer {a:?}"))?;
+    let b: u32 = b.trim().parse().map_err(|_| format!("bad layer {b:?}"))?;
+    if a > b {
+        return Err(format!("empty layer range {s:?}"));
+    }
+    Ok(a..=b)
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
+    match (w.parse(), h.parse()) {
+        (Ok(w), Ok(h)) => Ok((w, h)),
+        _ => Err(format!("expected WIDTHxHEIGHT, got {s:?}")),
+    }
+}
+
+pub fn run(args: PreviewArgs) -> Result<ExitCode> {
+    let format = Format::from_path(&args.output)?;
+    if let Some(m) = args.min_len {
+        if !(m.is_finite() && m >= 0.0) {
+            bail!("--min-len must be 0 or more mm, got {m}");
+        }
+    }
+    let options = PreviewOptions {
+        view: ViewOptions {
+            kind: args.view,
+            layers: args.layer.map(|l| l..=l).or(args.layers),
+            width_px: args.size.0,
+            height_px: args.size.1,
+            colour_by: args.colour_by,
+            tool_colours: args.tool_colours,
+            travel: args.travel,
+            ..ViewOptions::default()
+        },
+        min_len_mm: args.min_len,
+    };
+    let mut bar = Bar::new(args.quiet);
+    let bytes = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
+    drop(bar);
+    std::fs::write(&args.output, bytes).with_context(|| format!("writing {}", args.output.display()))?;
+    Ok(ExitCode::SUCCESS)
+}

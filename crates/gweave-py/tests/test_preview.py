@@ -1,0 +1,60 @@
+"""gweave.preview and gweave.toolpath on cura/cura_dual.gcode (cylinder on T0, sphere on T1)."""
+
+import pytest
+
+import gweave
+from _png import read_png
+
+# Layer 60 (Z 12.3): T0 extrudes over X 117.6..145.4, Y 108.6..136.4 (the cylinder) and T1 over
+# X 110.7..126.3, Y 119.7..135.3 (the sphere), read from the file.
+T0_BOX = ((117.6, 145.4), (108.6, 136.4))
+T1_BOX = ((110.69, 126.31), (119.69, 135.31))
+ORANGE, BLUE, BACKGROUND = (0xE6, 0x9F, 0x00), (0x00, 0x72, 0xB2), (0xF7, 0xF7, 0xF5)
+
+
+def test_preview_png_shows_both_tools(data):
+    png = gweave.preview(data / "cura" / "cura_dual.gcode", layer=60, size=(400, 300))
+    w, h, px = read_png(png)
+    assert (w, h) == (400, 300)
+    assert px.count(ORANGE) > 2000 and px.count(BLUE) > 2000, (px.count(ORANGE), px.count(BLUE))
+
+
+def test_preview_beyond_the_last_layer_is_blank(data):
+    png = gweave.preview(data / "cura" / "cura_dual.gcode", layer=(500, 600), size=(200, 100))
+    w, h, px = read_png(png)
+    assert set(px) == {BACKGROUND}
+
+
+def test_preview_writes_svg_and_html(data, tmp_path):
+    svg = gweave.preview(data / "cura" / "cura_dual.gcode", output=tmp_path / "l.svg", layer=60)
+    assert (tmp_path / "l.svg").read_bytes() == svg
+    assert svg.count(b"<path ") > 10
+    html = gweave.preview(data / "cura" / "cura_dual.gcode", output=tmp_path / "v.html")
+    assert html.startswith(b"<!DOCTYPE html>") and b"https://" not in html
+    with pytest.raises(ValueError, match="unknown output format"):
+        gweave.preview(data / "cura" / "cura_dual.gcode", output=tmp_path / "x.jpg")
+    with pytest.raises(ValueError, match="unknown view"):
+        gweave.preview(data / "cura" / "cura_dual.gcode", view="side")
+
+
+def test_toolpath_arrays(data):
+    np = pytest.importorskip("numpy")
+    tp = gweave.toolpath(data / "cura" / "cura_dual.gcode")
+    n = len(tp["tool"])
+    assert tp["start"].shape == (n, 3) and tp["end"].shape == (n, 3) and n > 50_000
+    assert tp["start"].dtype == np.float32 and tp["extruding"].dtype == np.bool_
+    assert len(tp["layer_z"]) == 204
+    # Chained: each segment starts where the one before ended.
+    assert np.array_equal(tp["start"][1:], tp["end"][:-1])
+    for tool, ((x0, x1), (y0, y1)) in ((0, T0_BOX), (1, T1_BOX)):
+        sel = tp["extruding"] & (tp["layer"] == 60) & (tp["tool"] == tool)
+        assert sel.sum() > 50
+        xy = np.concatenate([tp["start"][sel], tp["end"][sel]])
+        assert xy[:, 0].min() >= x0 - 0.01 and xy[:, 0].max() <= x1 + 0.01
+        assert xy[:, 1].min() >= y0 - 0.01 and xy[:, 1].max() <= y1 + 0.01
+        assert np.allclose(xy[:, 2], 12.3, atol=1e-4)
+    names = tp["feature_names"]
+    used = {names[i] for i in np.unique(tp["feature"][tp["extruding"]])}
+    assert {"outer_wall", "inner_wall", "infill"} <= used
+    fewer = gweave.toolpath(data / "cura" / "cura_dual.gcode", travel=False, min_len=1.0)
+    assert fewer["extruding"].all() and len(fewer["tool"]) < (tp["extruding"]).sum()

@@ -1,0 +1,186 @@
+//! A small software rasteriser: an RGBA8 image, anti-aliased wide lines with alpha blending,
+//! filled rectangles and 5 x 7 bitmap text.
+//!
+//! A line of width `w` is the set of points within `w/2` of the segment (a capsule). Each pixel
+//! in the capsule's bounding box gets coverage `clamp(w/2 + 1/2 - d, 0, 1)`, where `d` is the
+//! distance from the pixel centre to the segment: a one-pixel linear ramp across the edge, the
+//! usual cheap approximation of box-filtered area coverage. The colour is blended "over" the
+//! image: `dst = src * a + dst * (1 - a)` with `a = alpha * coverage` (Porter and Duff, 1984).
+
+use crate::colour::font::{glyph, ADVANCE, GLYPH_H};
+
+/// An RGBA8 image, rows top first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    /// `width * height * 4` bytes.
+    pub rgba: Vec<u8>,
+}
+
+impl Image {
+    /// An opaque image filled with `background`.
+    pub fn new(width: u32, height: u32, background: [u8; 3]) -> Image {
+        let px = [background[0], background[1], background[2], 255];
+        Image { width, height, rgba: px.repeat(width as usize * height as usize) }
+    }
+
+    /// The pixel at (x, y) as RGBA.
+    pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
+        let i = (y as usize * self.width as usize + x as usize) * 4;
+        [self.rgba[i], self.rgba[i + 1], self.rgba[i + 2], self.rgba[i + 3]]
+    }
+
+    #[inline]
+    fn blend(&mut self, x: usize, y: usize, c: [u8; 3], a: f32) {
+        let i = (y * self.width as usize + x) * 4;
+        let px = &mut self.rgba[i..i + 3];
+        for k in 0..3 {
+            px[k] = (c[k] as f32 * a + px[k] as f32 * (1.0 - a) + 0.5) as u8;
+        }
+    }
+
+    /// An anti-aliased line from `p0` to `p1` (pixel coordinates, centres at +0.5), `width_px`
+    /// wide, with round ends.
+    pub fn line(&mut self, p0: [f32; 2], p1: [f32; 2], width_px: f32, c: [u8; 3], alpha: f32) {
+        let half = width_px.max(0.5) / 2.0;
+        let reach = half + 0.5;
+        let x_lo = (p0[0].min(p1[0]) - reach).floor().max(0.0);
+        let y_lo = (p0[1].min(p1[1]) - reach).floor().max(0.0);
+        let x_hi = (p0[0].max(p1[0]) + reach).ceil().min(self.width as f32);
+        let y_hi = (p0[1].max(p1[1]) + reach).ceil().min(self.height as f32);
+        // NaN coordinates fail every comparison and draw nothing.
+        if !(x_lo < x_hi && y_lo < y_hi) {
+            return;
+        }
+        let d = [p1[0] - p0[0], p1[1] - p0[1]];
+        let len2 = d[0] * d[0] + d[1] * d[1];
+        let thin = width_px < 1.0;
+        for y in y_lo as usize..y_hi as usize {
+            let py = y as f32 + 0.5;
+            for x in x_lo as usize..x_hi as usize {
+                let px = x as f32 + 0.5;
+                // Distance from the pixel centre to the nearest point of the segment.
+                let t = if len2 > 0.0 {
+                    (((px - p0[0]) * d[0] + (py - p0[1]) * d[1]) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let (qx, qy) = (p0[0] + d[0] * t - px, p0[1] + d[1] * t - py);
+                let dist = (qx * qx + qy * qy).sqrt();
+                let mut cover = (reach - dist).clamp(0.0, 1.0);
+                if thin {
+                    cover *= width_px;
+                }
+                if cover > 0.0 {
+                    self.blend(x, y, c, alpha * cover);
+                }
+            }
+        }
+    }
+
+    /// A filled rectangle, clipped to the image.
+    pub fn rect(&mut self, x: i32, y: i32, w: u32, h: u32, c: [u8; 3], alpha: f32) {
+        let x0 = x.max(0) as usize;
+        let y0 = y.max(0) as usize;
+        let x1 = (x + w as i32).clamp(0, self.width as i32) as usize;
+        let y1 = (y + h as i32).clamp(0, self.height as i32) as usize;
+        for yy in y0..y1 {
+            for xx in x0..x1 {
+                self.blend(xx, yy, c, alpha);
+            }
+        }
+    }
+
+    /// Text in the built-in 5 x 7 font (upper case), each font pixel `scale` pixels square.
+    /// Returns the width drawn, px.
+    pub fn text(&mut self, x: i32, y: i32, s: &str, scale: u32, c: [u8; 3]) -> u32 {
+        for (i, ch) in s.chars().enumerate() {
+            let gx = x + (i as u32 * ADVANCE * scale) as i32;
+            for (row, bits) in extra_glyph(ch).unwrap_or_else(|| glyph(ch)).iter().enumerate() {
+                for col in 0..5 {
+                    if bits & (0x10 >> col) != 0 {
+                        self.rect(
+                            gx + (col * scale) as i32,
+                            y + (row as u32 * scale) as i32,
+                            scale,
+                            scale,
+                            c,
+                            1.0,
+                        );
+                    }
+                }
+            }
+        }
+        s.chars().count() as u32 * ADVANCE * scale
+    }
+
+    /// Height of a text line at `scale`, px.
+    pub fn text_height(scale: u32) -> u32 {
+        GLYPH_H * scale
+    }
+}
+
+/// Glyphs legends need beyond the swatch font's: `: / ( ) % + ,` (rows top first, bit 4 left).
+fn extra_glyph(c: char) -> Option<[u8; 7]> {
+    Some(match c {
+        ':' => [0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00],
+        '/' => [0x01, 0x01, 0x02, 0x04, 0x08, 0x10, 0x10],
+        '(' => [0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02],
+        ')' => [0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08],
+        '%' => [0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03],
+        '+' => [0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00],
+        ',' => [0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08],
+        _ => return None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_wide_line_covers_its_body_and_nothing_far_away() {
+        let mut img = Image::new(40, 20, [255, 255, 255]);
+        img.line([5.0, 10.5], [35.0, 10.5], 4.0, [255, 0, 0], 1.0);
+        assert_eq!(img.pixel(20, 10), [255, 0, 0, 255]);
+        assert_eq!(img.pixel(20, 9), [255, 0, 0, 255]);
+        assert_eq!(img.pixel(20, 14), [255, 255, 255, 255], "3.5 px from the axis, width 4");
+        assert_eq!(img.pixel(1, 10), [255, 255, 255, 255], "beyond the round end");
+        // Row 12 (centre 12.5) is 2 px from the axis, on the edge: half covered.
+        let edge = img.pixel(20, 12);
+        assert!(edge[1] > 0 && edge[1] < 255, "{edge:?}");
+    }
+
+    #[test]
+    fn alpha_blends_over_the_background() {
+        let mut img = Image::new(10, 10, [0, 0, 0]);
+        img.line([0.0, 5.0], [10.0, 5.0], 3.0, [200, 100, 0], 0.5);
+        assert_eq!(img.pixel(5, 5), [100, 50, 0, 255]);
+    }
+
+    #[test]
+    fn offscreen_and_nan_lines_draw_nothing() {
+        let mut img = Image::new(10, 10, [1, 2, 3]);
+        let before = img.clone();
+        img.line([-50.0, -50.0], [-20.0, -30.0], 3.0, [255, 0, 0], 1.0);
+        img.line([f32::NAN, 1.0], [5.0, 5.0], 3.0, [255, 0, 0], 1.0);
+        assert_eq!(img, before);
+    }
+
+    #[test]
+    fn text_draws_glyph_pixels() {
+        let mut img = Image::new(20, 10, [255, 255, 255]);
+        let w = img.text(1, 1, "T1", 1, [0, 0, 0]);
+        assert_eq!(w, 12);
+        // T's top bar runs across its first row.
+        assert_eq!(img.pixel(1, 1), [0, 0, 0, 255]);
+        assert_eq!(img.pixel(5, 1), [0, 0, 0, 255]);
+        assert_eq!(img.pixel(1, 3), [255, 255, 255, 255]);
+        // A slash runs from the bottom left to the top right.
+        let mut img = Image::new(6, 8, [255, 255, 255]);
+        img.text(0, 0, "/", 1, [0, 0, 0]);
+        assert_eq!((img.pixel(4, 0), img.pixel(0, 6)), ([0, 0, 0, 255], [0, 0, 0, 255]));
+        assert_eq!(img.pixel(0, 0), [255, 255, 255, 255]);
+    }
+}

@@ -1,0 +1,436 @@
+//! From segments in millimetres to strokes in pixels: the top view of a layer or a layer range,
+//! the isometric view of the whole print, and the before/after comparison of two files.
+//!
+//! Top view: `x_px = W/2 + (x - cx) * s`, `y_px = H/2 - (y - cy) * s` (Y up, as on the bed),
+//! with the scale `s` fitting the extruded extents into the picture with a margin.
+//!
+//! Isometric view: the print is turned 45 degrees about Z and tilted so that the eye looks down
+//! at `atan(1/sqrt 2) = 35.26` degrees, the angle at which X, Y and Z are foreshortened alike:
+//! `u = (x - y) / sqrt 2`, `w = (x + y) / sqrt 2`, `v = w sin(e) + z cos(e)`. Strokes are drawn
+//! from low to high Z (painter's algorithm): for an eye above every layer, a horizontal layer can
+//! only hide the layers below it, so this order is exact for planar layers. Walls are shaded by
+//! their direction so that the shape reads.
+//!
+//! Comparison: a move is unchanged when the other file has a move with the same end points (to
+//! 0.01 mm), tool, feed rate (to 0.1 mm/s) and extruding flag; moves are counted as a multiset,
+//! so a move repeated in one file and not the other is a change. The two files are drawn side by
+//! side in one projection; unchanged moves grey, changed moves in their colours and wider.
+
+use std::collections::HashMap;
+use std::fmt;
+use std::ops::RangeInclusive;
+use std::str::FromStr;
+
+use crate::colour::Srgb8;
+
+use super::colour_by::{ColourBy, Colouring, LegendEntry};
+use super::toolpath::{Segment, Toolpath};
+
+/// Which way the print is looked at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ViewKind {
+    /// From above, Y up.
+    #[default]
+    Top,
+    /// Isometric, from the front left and above.
+    Iso,
+}
+
+impl FromStr for ViewKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "top" => Ok(ViewKind::Top),
+            "iso" => Ok(ViewKind::Iso),
+            _ => Err(format!("unknown view {s:?} (top or iso)")),
+        }
+    }
+}
+
+impl fmt::Display for ViewKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ViewKind::Top => "top",
+            ViewKind::Iso => "iso",
+        })
+    }
+}
+
+/// What to draw and how.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ViewOptions {
+    pub kind: ViewKind,
+    /// Layers drawn (all when `None`).
+    pub layers: Option<RangeInclusive<u32>>,
+    pub width_px: u32,
+    pub height_px: u32,
+    pub colour_by: ColourBy,
+    /// Per-tool colours for the tool and mix colourings (see [`super::colour_by`]).
+    pub tool_colours: Vec<Srgb8>,
+    /// Draw travel moves (thin, translucent).
+    pub travel: bool,
+    /// Extrusion width drawn, mm.
+    pub line_width_mm: f32,
+}
+
+impl Default for ViewOptions {
+    fn default() -> Self {
+        ViewOptions {
+            kind: ViewKind::Top,
+            layers: None,
+            width_px: 1200,
+            height_px: 900,
+            colour_by: ColourBy::Tool,
+            tool_colours: Vec::new(),
+            travel: false,
+            line_width_mm: 0.45,
+        }
+    }
+}
+
+/// One line to draw, in pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stroke {
+    pub from: [f32; 2],
+    pub to: [f32; 2],
+    pub colour: [u8; 3],
+    pub width_px: f32,
+    pub alpha: f32,
+}
+
+/// A part of the picture with its own projection (the whole picture, or one side of a
+/// comparison) and a title (empty for a single view).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Panel {
+    pub x_px: u32,
+    pub width_px: u32,
+    pub title: String,
+    /// Where a point in mm lands in the picture.
+    pub projection: Projection,
+}
+
+/// Everything a PNG or SVG writer needs: strokes in drawing order, legend, titles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Drawing {
+    pub width_px: u32,
+    pub height_px: u32,
+    pub background: [u8; 3],
+    pub strokes: Vec<Stroke>,
+    pub legend: Vec<LegendEntry>,
+    pub panels: Vec<Panel>,
+}
+
+impl Drawing {
+    /// Nothing to draw: the picture is the background only.
+    pub fn is_blank(&self) -> bool {
+        self.strokes.is_empty()
+    }
+}
+
+pub const BACKGROUND: [u8; 3] = [0xf7, 0xf7, 0xf5];
+/// Unchanged moves in a comparison.
+pub const UNCHANGED: [u8; 3] = [0xc4, 0xc4, 0xc4];
+const ISO_ELEVATION_RAD: f32 = 0.615_479_7; // atan(1 / sqrt 2)
+const MARGIN: f32 = 0.06;
+
+/// Millimetres to pixels for one view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Projection {
+    kind: ViewKind,
+    scale_px_mm: f32,
+    /// Centre of the fitted extents in view coordinates (u, v).
+    centre: [f32; 2],
+    /// Pixel centre of the panel.
+    origin_px: [f32; 2],
+}
+
+impl Projection {
+    /// Fits the extents `lo..hi` into a panel `width x height` px whose left edge is at `x_px`.
+    pub fn fit(kind: ViewKind, lo: [f32; 3], hi: [f32; 3], x_px: u32, width: u32, height: u32) -> Projection {
+        let mut umin = [f32::INFINITY; 2];
+        let mut umax = [f32::NEG_INFINITY; 2];
+        for i in 0..8 {
+            let p = [
+                if i & 1 == 0 { lo[0] } else { hi[0] },
+                if i & 2 == 0 { lo[1] } else { hi[1] },
+                if i & 4 == 0 { lo[2] } else { hi[2] },
+            ];
+            let uv = view_coords(kind, p);
+            for k in 0..2 {
+                umin[k] = umin[k].min(uv[k]);
+                umax[k] = umax[k].max(uv[k]);
+            }
+        }
+        let span = [(umax[0] - umin[0]).max(1.0), (umax[1] - umin[1]).max(1.0)];
+        let usable = 1.0 - 2.0 * MARGIN;
+        let scale_px_mm = (width as f32 * usable / span[0]).min(height as f32 * usable / span[1]);
+        Projection {
+            kind,
+            scale_px_mm,
+            centre: [(umin[0] + umax[0]) / 2.0, (umin[1] + umax[1]) / 2.0],
+            origin_px: [x_px as f32 + width as f32 / 2.0, height as f32 / 2.0],
+        }
+    }
+
+    /// A point in mm to pixels.
+    pub fn project(&self, p: [f32; 3]) -> [f32; 2] {
+        let uv = view_coords(self.kind, p);
+        [
+            self.origin_px[0] + (uv[0] - self.centre[0]) * self.scale_px_mm,
+            self.origin_px[1] - (uv[1] - self.centre[1]) * self.scale_px_mm,
+        ]
+    }
+
+    pub fn scale_px_mm(&self) -> f32 {
+        self.scale_px_mm
+    }
+}
+
+/// View-plane coordinates (u right, v up), mm.
+fn view_coords(kind: ViewKind, p: [f32; 3]) -> [f32; 2] {
+    match kind {
+        ViewKind::Top => [p[0], p[1]],
+        ViewKind::Iso => {
+            let (u, w) = iso_turn(p);
+            [u, w * ISO_ELEVATION_RAD.sin() + p[2] * ISO_ELEVATION_RAD.cos()]
+        }
+    }
+}
+
+/// Turned 45 degrees about Z: (right, into the picture).
+fn iso_turn(p: [f32; 3]) -> (f32, f32) {
+    let r = std::f32::consts::FRAC_1_SQRT_2;
+    ((p[0] - p[1]) * r, (p[0] + p[1]) * r)
+}
+
+/// Light from the front left, in the XY plane.
+const LIGHT_XY: [f32; 2] = [-0.8, -0.6];
+
+/// Shading for the isometric view: an extruded line is a wall whose face is normal to the
+/// segment in XY; faces turned to the light are lighter (Lambert's cosine law, with the sign
+/// dropped because the side the face looks to depends on the print direction).
+fn shade(s: &Segment, c: [u8; 3]) -> [u8; 3] {
+    let (dx, dy) = (s.end[0] - s.start[0], s.end[1] - s.start[1]);
+    let len = (dx * dx + dy * dy).sqrt();
+    let lambert = if len > 0.0 { ((dy * LIGHT_XY[0] - dx * LIGHT_XY[1]) / len).abs() } else { 1.0 };
+    c.map(|v| (v as f32 * (0.6 + 0.4 * lambert)) as u8)
+}
+
+fn in_layers(options: &ViewOptions, s: &Segment) -> bool {
+    options.layers.as_ref().is_none_or(|r| r.contains(&s.layer)) && (s.extruding || options.travel)
+}
+
+/// Extents of what will be drawn from these toolpaths.
+fn extents<'a>(
+    options: &ViewOptions,
+    toolpaths: impl Iterator<Item = &'a Toolpath>,
+) -> Option<([f32; 3], [f32; 3])> {
+    let mut b: Option<([f32; 3], [f32; 3])> = None;
+    for s in toolpaths.flat_map(|t| &t.segments).filter(|s| s.extruding && in_layers(options, s)) {
+        for p in [s.start, s.end] {
+            let (lo, hi) = b.get_or_insert((p, p));
+            for i in 0..3 {
+                lo[i] = lo[i].min(p[i]);
+                hi[i] = hi[i].max(p[i]);
+            }
+        }
+    }
+    b
+}
+
+/// Whether each segment of `a` also appears in `b` (see the module notes), in `a`'s order.
+pub fn changed_moves(a: &Toolpath, b: &Toolpath) -> Vec<bool> {
+    type Key = ([i32; 6], u16, i32, bool);
+    let key = |s: &Segment| -> Key {
+        let q = |v: f32| (v * 100.0).round() as i32;
+        (
+            [q(s.start[0]), q(s.start[1]), q(s.start[2]), q(s.end[0]), q(s.end[1]), q(s.end[2])],
+            s.tool,
+            (s.feed_mm_s * 10.0).round() as i32,
+            s.extruding,
+        )
+    };
+    let mut in_b: HashMap<Key, u32> = HashMap::with_capacity(b.segments.len());
+    for s in &b.segments {
+        *in_b.entry(key(s)).or_default() += 1;
+    }
+    a.segments
+        .iter()
+        .map(|s| match in_b.get_mut(&key(s)) {
+            Some(n) if *n > 0 => {
+                *n -= 1;
+                false
+            }
+            _ => true,
+        })
+        .collect()
+}
+
+/// Draws one toolpath.
+pub fn draw(tp: &Toolpath, options: &ViewOptions) -> Drawing {
+    let colouring = Colouring::new(options.colour_by, options.tool_colours.clone(), &[tp]);
+    let mut d = empty(options);
+    let Some((lo, hi)) = extents(options, std::iter::once(tp)) else {
+        return d;
+    };
+    let proj = Projection::fit(options.kind, lo, hi, 0, options.width_px, options.height_px);
+    d.strokes = strokes(tp, None, options, &proj, &colouring);
+    d.legend = colouring.legend(&[tp]);
+    d.panels.push(Panel { x_px: 0, width_px: options.width_px, title: String::new(), projection: proj });
+    d
+}
+
+/// Draws `before` and `after` side by side, highlighting the moves that differ.
+pub fn draw_compare(before: &Toolpath, after: &Toolpath, options: &ViewOptions) -> Drawing {
+    let colouring = Colouring::new(options.colour_by, options.tool_colours.clone(), &[before, after]);
+    let mut d = empty(options);
+    let Some((lo, hi)) = extents(options, [before, after].into_iter()) else {
+        return d;
+    };
+    let half = options.width_px / 2;
+    let sides = [(before, after, 0, "before"), (after, before, half, "after")];
+    for (this, other, x_px, name) in sides {
+        let proj = Projection::fit(options.kind, lo, hi, x_px, half, options.height_px);
+        let changed = changed_moves(this, other);
+        let n = this.segments.iter().zip(&changed).filter(|(s, c)| **c && in_layers(options, s)).count();
+        d.strokes.extend(strokes(this, Some(&changed), options, &proj, &colouring));
+        d.panels.push(Panel {
+            x_px,
+            width_px: half,
+            title: format!("{name} - {n} moves changed"),
+            projection: proj,
+        });
+    }
+    d.legend = colouring.legend(&[before, after]);
+    d
+}
+
+fn empty(options: &ViewOptions) -> Drawing {
+    Drawing {
+        width_px: options.width_px,
+        height_px: options.height_px,
+        background: BACKGROUND,
+        strokes: Vec::new(),
+        legend: Vec::new(),
+        panels: Vec::new(),
+    }
+}
+
+/// The strokes of one toolpath in drawing order; with `changed`, unchanged moves are grey.
+fn strokes(
+    tp: &Toolpath,
+    changed: Option<&[bool]>,
+    options: &ViewOptions,
+    proj: &Projection,
+    colouring: &Colouring,
+) -> Vec<Stroke> {
+    // At least 2 px in the isometric view, where layers 0.1 to 0.3 mm apart are a pixel or less
+    // apart: the walls then close up, and the rasteriser can skip what they hide.
+    let min_px = if options.kind == ViewKind::Iso { 2.0 } else { 1.0 };
+    let width_px = (options.line_width_mm * proj.scale_px_mm()).clamp(min_px, 12.0);
+    let mut order: Vec<(f32, Stroke)> = Vec::new();
+    for (i, s) in tp.segments.iter().enumerate() {
+        if !in_layers(options, s) {
+            continue;
+        }
+        let is_changed = changed.map(|c| c[i]);
+        let mut colour = match is_changed {
+            Some(false) => UNCHANGED,
+            _ => colouring.colour(s),
+        };
+        let mid_z = (s.start[2] + s.end[2]) / 2.0;
+        if options.kind == ViewKind::Iso && s.extruding {
+            colour = shade(s, colour);
+        }
+        let (w, alpha) = match (s.extruding, is_changed) {
+            (false, _) => (1.0, 0.35),
+            (true, Some(true)) => (width_px.max(2.0) * 1.6, 1.0),
+            (true, _) => (width_px, 1.0),
+        };
+        order.push((
+            mid_z,
+            Stroke { from: proj.project(s.start), to: proj.project(s.end), colour, width_px: w, alpha },
+        ));
+    }
+    if options.kind == ViewKind::Iso {
+        // Low to high; stable, so equal heights keep file order.
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    if changed.is_some() {
+        // Changed moves on top of the grey ones.
+        order.sort_by_key(|(_, st)| st.colour != UNCHANGED);
+    }
+    order.into_iter().map(|(_, st)| st).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::layers::Feature;
+
+    fn seg(start: [f32; 3], end: [f32; 3], tool: u16, layer: u32) -> Segment {
+        Segment { start, end, tool, feature: Feature::Infill, feed_mm_s: 30.0, layer, extruding: true }
+    }
+
+    fn square() -> Toolpath {
+        let s = vec![
+            seg([0.0, 0.0, 0.2], [10.0, 0.0, 0.2], 0, 0),
+            seg([10.0, 0.0, 0.2], [10.0, 10.0, 0.2], 0, 0),
+            seg([10.0, 10.0, 0.4], [0.0, 10.0, 0.4], 1, 1),
+        ];
+        Toolpath { segments: s, layer_z_mm: vec![0.2, 0.4], tools: 2 }
+    }
+
+    #[test]
+    fn top_view_fits_and_keeps_y_up() {
+        let options = ViewOptions { width_px: 200, height_px: 100, ..Default::default() };
+        let d = draw(&square(), &options);
+        assert_eq!(d.strokes.len(), 3);
+        // 10 mm fits 100 px * 0.88 = 88 px; the square is centred.
+        let p = d.strokes[0].from;
+        assert!((p[0] - 56.0).abs() < 1e-3 && (p[1] - 94.0).abs() < 1e-3, "{p:?}");
+        assert!(d.strokes[1].to[1] < d.strokes[1].from[1], "Y up on the bed is up in the picture");
+    }
+
+    #[test]
+    fn layer_selection_and_empty_layers() {
+        let options = ViewOptions { layers: Some(1..=1), ..Default::default() };
+        assert_eq!(draw(&square(), &options).strokes.len(), 1);
+        let beyond = ViewOptions { layers: Some(7..=9), ..Default::default() };
+        let d = draw(&square(), &beyond);
+        assert!(d.is_blank() && d.legend.is_empty());
+    }
+
+    #[test]
+    fn iso_view_draws_low_to_high_and_shades_by_direction() {
+        let mut tp = square();
+        tp.segments.swap(0, 2); // the top layer first in the file
+        let options = ViewOptions { kind: ViewKind::Iso, ..Default::default() };
+        let d = draw(&tp, &options);
+        assert_eq!(d.strokes.len(), 3);
+        let proj = Projection::fit(ViewKind::Iso, [0.0, 0.0, 0.2], [10.0, 10.0, 0.4], 0, 1200, 900);
+        assert_eq!(d.strokes[2].from, proj.project([10.0, 10.0, 0.4]), "the highest drawn last");
+        // Layer 0 keeps file order: the Y edge, then the X edge. A line along Y is a face
+        // looking along X: cos = 0.8 to the light; along X it looks along Y: cos = 0.6.
+        let c = super::super::colour_by::TOOL_COLOURS[0];
+        assert_eq!(d.strokes[0].colour, [c.r, c.g, c.b].map(|v| (v as f32 * (0.6 + 0.4 * 0.8)) as u8));
+        assert_eq!(d.strokes[1].colour, [c.r, c.g, c.b].map(|v| (v as f32 * (0.6 + 0.4 * 0.6)) as u8));
+    }
+
+    #[test]
+    fn compare_finds_the_moved_segment() {
+        let a = square();
+        let mut b = square();
+        b.segments[1].end[0] += 1.0;
+        assert_eq!(changed_moves(&a, &b), [false, true, false]);
+        assert_eq!(changed_moves(&b, &a), [false, true, false]);
+        let mut dup = square();
+        dup.segments.push(dup.segments[0]);
+        assert_eq!(changed_moves(&dup, &a), [false, false, false, true], "multiset");
+        let d = draw_compare(&a, &b, &ViewOptions::default());
+        assert_eq!(d.panels.len(), 2);
+        assert_eq!(d.panels[1].title, "after - 1 moves changed");
+        let grey = d.strokes.iter().filter(|s| s.colour == UNCHANGED).count();
+        assert_eq!(grey, 4);
+    }
+}
