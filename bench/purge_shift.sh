@@ -7,22 +7,9 @@
 set -euo pipefail
 GWEAVE=$(realpath "${1:-target/release/gweave}")
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-DATA="$ROOT/bench/data"
 SRC="$ROOT/tests/data/prusaslicer/pr_bunny_3tool_rel.gcode"
-BIG="$DATA/bunny-3tool-x60.gcode"
-mkdir -p "$DATA"
-if [ ! -s "$BIG" ]; then
-  first=$(grep -n -m1 '^;LAYER_CHANGE' "$SRC" | cut -d: -f1)
-  last=$(grep -n '^;TYPE:Custom' "$SRC" | tail -1 | cut -d: -f1)
-  {
-    head -n $((first - 1)) "$SRC"
-    for _ in $(seq 60); do sed -n "${first},$((last - 1))p" "$SRC"; done
-    tail -n +"$last" "$SRC"
-  } > "$BIG"
-fi
-best() { python3 "$ROOT/bench/besttime.py" "$@"; }
-peak_mb() { /usr/bin/time -f %M "$@" 2>&1 >/dev/null | tail -1 | awk '{printf "%.1f", $1/1024}'; }
-ratio() { python3 -c "import sys; print(f'{float(sys.argv[1])/float(sys.argv[2]):.2f}')" "$1" "$2"; }
+source "$ROOT/bench/lib.sh"
+BIG=$(multitool_file)
 size=$(stat -c %s "$BIG")
 cat "$BIG" > /dev/null
 echo "file: $(basename "$BIG"), $(python3 -c "print(f'{$size/1e6:.0f}')") MB, $(grep -c '^T' "$BIG") T lines"

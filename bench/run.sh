@@ -19,10 +19,8 @@ if [ ! -s "$BIG" ]; then
 fi
 "$PY" -m pip install -q gcodeparser gcode-lib
 
-best() { python3 "$ROOT/bench/besttime.py" "$@"; }
-peak_mb() { /usr/bin/time -f %M "$@" 2>&1 >/dev/null | tail -1 | awk '{printf "%.1f", $1/1024}'; }
+source "$ROOT/bench/lib.sh"
 mbps() { python3 -c "import sys; print(f'{float(sys.argv[1])/1e6/float(sys.argv[2]):.0f}')" "$1" "$2"; }
-ratio() { python3 -c "import sys; print(f'{float(sys.argv[1])/float(sys.argv[2]):.2f}')" "$1" "$2"; }
 
 size=$(stat -c %s "$BIG")
 cat "$BIG" > /dev/null  # warm the page cache so every tool reads from memory
@@ -49,7 +47,7 @@ printf "%-22s %8.3f s %8s MB/s   %sx faster than gcodeparser, %sx faster than gc
   "gweave stats" "$t_small" "$(mbps "$ssize" "$t_small")" "$(ratio "$t_gp" "$t_small")" "$(ratio "$t_gl" "$t_small")"
 
 for extra in "$ROOT"/bench/[a-z]*.sh; do
-  [ "$(basename "$extra")" = run.sh ] && continue
+  case "$(basename "$extra")" in run.sh | lib.sh) continue ;; esac
   echo "== $(basename "$extra" .sh)"
   bash "$extra" "$GWEAVE"
 done

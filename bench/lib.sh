@@ -1,0 +1,23 @@
+# Shared by the benchmark scripts (sourced, not run): timing helpers and the large multi-tool file.
+best() { python3 "$ROOT/bench/besttime.py" "$@"; }
+peak_mb() { /usr/bin/time -f %M "$@" 2>&1 >/dev/null | tail -1 | awk '{printf "%.1f", $1/1024}'; }
+ratio() { python3 -c "import sys; print(f'{float(sys.argv[1])/float(sys.argv[2]):.2f}')" "$1" "$2"; }
+
+# The PrusaSlicer 3-tool bunny (relative E, 793 changes) with its print proper repeated 60 times
+# (about 225 MB, 47 000 changes). Prints the path.
+multitool_file() {
+  local src="$ROOT/tests/data/prusaslicer/pr_bunny_3tool_rel.gcode"
+  local big="$ROOT/bench/data/bunny-3tool-x60.gcode"
+  mkdir -p "$ROOT/bench/data"
+  if [ ! -s "$big" ]; then
+    local first last
+    first=$(grep -n -m1 '^;LAYER_CHANGE' "$src" | cut -d: -f1)
+    last=$(grep -n '^;TYPE:Custom' "$src" | tail -1 | cut -d: -f1)
+    {
+      head -n $((first - 1)) "$src"
+      for _ in $(seq 60); do sed -n "${first},$((last - 1))p" "$src"; done
+      tail -n +"$last" "$src"
+    } > "$big"
+  fi
+  echo "$big"
+}
