@@ -34,6 +34,10 @@ printf "%-22s %8s s %8s MB/s   %sx the floor's time, peak %s MB\n" "gweave stats
 printf "%-22s %8s s %8s MB/s   %sx the floor's time, peak %s MB\n" "gweave cat (identity)" "$t_cat" "$(mbps "$size" "$t_cat")" "$(ratio "$t_cat" "$t_wc")" "$(peak_mb "$GWEAVE" cat "$BIG" -o /dev/null -q)"
 printf "%-22s %8s s %8s MB/s   %sx the floor's time\n" "gweave check" "$t_check" "$(mbps "$size" "$t_check")" "$(ratio "$t_check" "$t_wc")"
 
+echo "== virtual printer: the same file is a 46-hour print (target: under 30 s with step counting)"
+t_sim=$(best 1 "$GWEAVE" sim "$BIG" -q --machine "$ROOT/bench/big-bed.toml")
+printf "%-22s %8s s %8s MB/s   peak %s MB\n" "gweave sim" "$t_sim" "$(mbps "$size" "$t_sim")" "$(peak_mb "$GWEAVE" sim "$BIG" -q --machine "$ROOT/bench/big-bed.toml")"
+
 SMALL="$ROOT/tests/data/prusaslicer/pr_bunny_3tool_rel.gcode"
 ssize=$(stat -c %s "$SMALL")
 echo "== peers: $(basename "$SMALL"), $(python3 -c "print(f'{$ssize/1e6:.1f}')") MB"
