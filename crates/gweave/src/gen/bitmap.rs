@@ -319,22 +319,47 @@ fn io_err(path: &Path, source: std::io::Error) -> BitmapError {
     BitmapError::Io { path: path.to_path_buf(), source }
 }
 
-/// Decodes a PNG from a reader and thresholds it.
-pub fn decode_png<R: Read>(input: R, opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
-    let cutoff = opts.cutoff()?;
+/// One decoded PNG frame: its bytes and their layout.
+struct PngFrame {
+    buf: Vec<u8>,
+    /// Bytes of `buf` the frame fills.
+    len: usize,
+    width: usize,
+    height: usize,
+    /// Bytes per row.
+    stride: usize,
+    /// Samples per pixel after the transformations.
+    channels: usize,
+}
+
+/// Reads the first frame of a PNG with the given decoder transformations.
+fn read_png<R: Read>(input: R, transformations: png::Transformations) -> Result<PngFrame, BitmapError> {
     let mut dec = png::Decoder::new(input);
-    // Expand palette and low bit depths to 8 bits, strip 16-bit to 8.
-    dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    dec.set_transformations(transformations);
     let mut reader = dec.read_info()?;
-    let (w, h) = {
+    let (width, height) = {
         let info = reader.info();
         (info.width as usize, info.height as usize)
     };
     let mut buf = vec![0u8; reader.output_buffer_size()];
     let frame = reader.next_frame(&mut buf)?;
-    let stride = frame.line_size;
-    let channels = frame.color_type.samples();
-    let data = &buf[..frame.buffer_size()];
+    Ok(PngFrame {
+        len: frame.buffer_size(),
+        width,
+        height,
+        stride: frame.line_size,
+        channels: frame.color_type.samples(),
+        buf,
+    })
+}
+
+/// Decodes a PNG from a reader and thresholds it.
+pub fn decode_png<R: Read>(input: R, opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
+    let cutoff = opts.cutoff()?;
+    // Expand palette and low bit depths to 8 bits, strip 16-bit to 8.
+    let frame = read_png(input, png::Transformations::EXPAND | png::Transformations::STRIP_16)?;
+    let (w, h, stride, channels) = (frame.width, frame.height, frame.stride, frame.channels);
+    let data = &frame.buf[..frame.len];
     let channel = opts.channel;
     if channels == 1 {
         let row = |y: usize| &data[y * stride..y * stride + w];
@@ -371,16 +396,8 @@ fn is_plain_1bit_grey_png(data: &[u8]) -> bool {
 /// little-endian word. A set bit is level 255, a clear one level 0, thresholded as usual.
 fn decode_png_1bit(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
     let cutoff = opts.cutoff()?;
-    let mut dec = png::Decoder::new(data);
-    dec.set_transformations(png::Transformations::IDENTITY);
-    let mut reader = dec.read_info()?;
-    let (w, h) = {
-        let info = reader.info();
-        (info.width as usize, info.height as usize)
-    };
-    let mut buf = vec![0u8; reader.output_buffer_size()];
-    let frame = reader.next_frame(&mut buf)?;
-    let stride = frame.line_size;
+    let frame = read_png(data, png::Transformations::IDENTITY)?;
+    let (w, h, stride, buf) = (frame.width, frame.height, frame.stride, &frame.buf);
     let one_lit = (cutoff <= 255) != opts.invert;
     let zero_lit = (cutoff == 0) != opts.invert;
     let mut b = Bitmap::new(w, h);
