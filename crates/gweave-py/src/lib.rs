@@ -215,11 +215,7 @@ impl Reader {
             Command::None => None,
             _ => Some(lossy(b.command_span.of(raw)).to_ascii_uppercase()),
         };
-        let extruded = match effect {
-            Effect::Move(m) => m.e_mm(),
-            Effect::FirmwareRetract { e_mm } => e_mm,
-            _ => 0.0,
-        };
+        let extruded = effect.filament_mm();
         let s = &self.state;
         Ok(Some(Line {
             number: line.number,

@@ -47,7 +47,6 @@ pub struct Stats {
     pub bytes: u64,
     pub lines: u64,
     pub slicer: Slicer,
-    pub flavour: Option<String>,
     pub layers: u32,
     /// Z range of extrusion, mm.
     pub z_range_mm: Option<[f64; 2]>,
@@ -124,7 +123,6 @@ impl StatsPass {
             bytes: self.bytes,
             lines: self.lines,
             slicer: state.structure.slicer,
-            flavour: self.figures.flavour.clone(),
             layers: state.structure.layer.map_or(0, |l| l + 1),
             z_range_mm: self.bounds.map(|b| [b.min[2], b.max[2]]),
             extrusion_bounds: self.bounds,

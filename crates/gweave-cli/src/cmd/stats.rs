@@ -43,7 +43,7 @@ pub fn run(args: StatsArgs) -> Result<ExitCode> {
 
 fn print_human(input: &std::path::Path, s: &Stats) {
     println!("{}", input.display());
-    let flavour = s.flavour.as_deref().map(|f| format!(" ({f})")).unwrap_or_default();
+    let flavour = s.slicer_figures.flavour.as_deref().map(|f| format!(" ({f})")).unwrap_or_default();
     println!("  slicer          {}{flavour}", s.slicer.name());
     println!("  lines           {} ({:.1} MB)", s.lines, s.bytes as f64 / 1e6);
     println!("  layers          {}", s.layers);

@@ -151,6 +151,18 @@ pub enum Effect {
     },
 }
 
+impl Effect {
+    /// Filament this line fed, mm (negative for a retraction): a move's E or a firmware retract.
+    #[inline]
+    pub fn filament_mm(&self) -> f64 {
+        match self {
+            Effect::Move(m) => m.e_mm(),
+            Effect::FirmwareRetract { e_mm } => *e_mm,
+            _ => 0.0,
+        }
+    }
+}
+
 /// Temperatures and fan the file has asked for.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Thermal {
@@ -279,16 +291,12 @@ impl State {
             }
             _ => {}
         }
-        let fed_mm = match &self.effect {
-            Effect::Move(m) => {
-                if m.is_extruding() {
-                    self.structure.observe_extrusion(m.to[Z]);
-                }
-                m.e_mm()
+        if let Effect::Move(m) = &self.effect {
+            if m.is_extruding() {
+                self.structure.observe_extrusion(m.to[Z]);
             }
-            Effect::FirmwareRetract { e_mm } => *e_mm,
-            _ => 0.0,
-        };
+        }
+        let fed_mm = self.effect.filament_mm();
         if fed_mm != 0.0 {
             if let Some(fed) = self.filament_mm.get_mut(self.tool as usize) {
                 *fed += fed_mm;
