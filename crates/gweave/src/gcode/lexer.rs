@@ -10,7 +10,7 @@
 
 use super::diag::{Diagnostic, Finding};
 use super::line::{Block, Checksum, Command, Span, Value, Word};
-use super::number::{scan, NumberError};
+use super::number::{scan_within, NumberError};
 
 /// M-codes whose argument is free text up to the comment (Marlin reads it as a string).
 fn takes_text(number: u32) -> bool {
@@ -32,6 +32,14 @@ fn skip_space(raw: &[u8], mut i: usize) -> usize {
 
 /// Parses `raw` (one line without its line ending) into `block`, replacing what it held.
 pub fn parse_into(raw: &[u8], block: &mut Block) {
+    parse_in_window(raw, raw.len(), block);
+}
+
+/// Parses the line `window[..len]` into `block`. The bytes after it (its line ending and the
+/// lines that follow, as a reader's buffer holds them) are never part of the result; they only
+/// let numbers near the end of the line be read eight bytes at a time.
+pub fn parse_in_window(window: &[u8], len: usize, block: &mut Block) {
+    let raw = &window[..len];
     block.clear();
     let mut i = skip_space(raw, 0);
     if raw.get(i) == Some(&b'/') {
@@ -49,7 +57,7 @@ pub fn parse_into(raw: &[u8], block: &mut Block) {
     }
     i = skip_space(raw, i);
     i = command(raw, i, block);
-    words(raw, i, block);
+    words(raw, window, i, block);
 }
 
 fn line_number(raw: &[u8], start: usize, block: &mut Block) -> usize {
@@ -165,66 +173,84 @@ fn checksum(raw: &[u8], star: usize, limit: usize, block: &mut Block) -> usize {
     end
 }
 
-fn words(raw: &[u8], mut i: usize, block: &mut Block) {
-    while i < raw.len() {
-        let b = raw[i];
-        match b {
-            _ if is_space(b) => i += 1,
-            b';' => {
-                block.comment = Some(Span::new(i + 1, raw.len()));
-                return;
-            }
-            b'(' => match memchr::memchr(b')', &raw[i..]) {
-                Some(close) => i += close + 1,
-                None => {
-                    block.diagnostics.push(Diagnostic::at(i, Finding::UnclosedComment));
-                    return;
-                }
-            },
-            b'*' => {
-                let limit = memchr::memchr(b';', &raw[i..]).map_or(raw.len(), |p| i + p);
-                i = checksum(raw, i, limit, block);
-                i = skip_space(raw, i);
-                if i < limit {
-                    i = limit;
-                }
-            }
-            _ if b.is_ascii_alphabetic() => i = word(raw, i, block),
-            _ => {
-                block.diagnostics.push(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
-                i += 1;
+fn words(raw: &[u8], window: &[u8], mut i: usize, block: &mut Block) {
+    // Words and single spaces are nearly every byte of a real file: test for them first and
+    // leave the rest to `separator`.
+    while let Some(&b) = raw.get(i) {
+        if b.is_ascii_alphabetic() {
+            i = word(raw, window, i, block);
+        } else if b == b' ' {
+            i += 1;
+        } else {
+            match separator(raw, i, block) {
+                Some(next) => i = next,
+                None => return,
             }
         }
     }
 }
 
+/// Whatever may stand between words: other blanks, comments, a checksum, or a stray byte.
+/// Returns where to go on, or `None` when the rest of the line is a comment or unreadable.
+fn separator(raw: &[u8], i: usize, block: &mut Block) -> Option<usize> {
+    let b = raw[i];
+    match b {
+        _ if is_space(b) => Some(i + 1),
+        b';' => {
+            block.comment = Some(Span::new(i + 1, raw.len()));
+            None
+        }
+        b'(' => match memchr::memchr(b')', &raw[i..]) {
+            Some(close) => Some(i + close + 1),
+            None => {
+                block.diagnostics.push(Diagnostic::at(i, Finding::UnclosedComment));
+                None
+            }
+        },
+        b'*' => {
+            let limit = memchr::memchr(b';', &raw[i..]).map_or(raw.len(), |p| i + p);
+            let end = skip_space(raw, checksum(raw, i, limit, block));
+            Some(end.max(limit))
+        }
+        _ => {
+            block.diagnostics.push(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
+            Some(i + 1)
+        }
+    }
+}
+
 /// Reads one word at `start` (a letter) and returns the index after it.
-fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
+#[inline(always)]
+fn word(raw: &[u8], window: &[u8], start: usize, block: &mut Block) -> usize {
     let letter = raw[start].to_ascii_uppercase();
     let at = start + 1;
     let (value, end) = match raw.get(at) {
         Some(b'"') => quoted(raw, at, block),
         Some(b'{') => expression(raw, at, block),
-        _ => match scan(&raw[at..]) {
+        _ => match scan_within(&window[at..], raw.len() - at) {
             Ok((v, used)) => (Value::Number(v), at + used),
-            Err(NumberError::Empty) => (Value::Empty, at),
-            Err(e) => {
-                let finding = match e {
-                    NumberError::NotFinite => Finding::NotFinite { letter: letter as char },
-                    _ => Finding::MalformedNumber { letter: letter as char },
-                };
-                block.diagnostics.push(Diagnostic::at(at, finding));
-                // Skip the whole bad token so that its pieces do not read as more words.
-                let mut end = at;
-                while end < raw.len() && !is_space(raw[end]) && !matches!(raw[end], b';' | b'(' | b'*') {
-                    end += 1;
-                }
-                (Value::Invalid, end)
-            }
+            Err(e) => bad_number(raw, letter, at, e, block),
         },
     };
     block.push_word(Word { letter, value, span: Span::new(start, end) });
     end
+}
+
+/// A word whose value is not a number: empty (`G28 X`) or malformed, with its diagnostic.
+#[cold]
+fn bad_number(raw: &[u8], letter: u8, at: usize, e: NumberError, block: &mut Block) -> (Value, usize) {
+    let finding = match e {
+        NumberError::Empty => return (Value::Empty, at),
+        NumberError::NotFinite => Finding::NotFinite { letter: letter as char },
+        NumberError::Malformed => Finding::MalformedNumber { letter: letter as char },
+    };
+    block.diagnostics.push(Diagnostic::at(at, finding));
+    // Skip the whole bad token so that its pieces do not read as more words.
+    let mut end = at;
+    while end < raw.len() && !is_space(raw[end]) && !matches!(raw[end], b';' | b'(' | b'*') {
+        end += 1;
+    }
+    (Value::Invalid, end)
 }
 
 /// A RepRapFirmware string: `"..."`, with `""` standing for one quote.

@@ -22,17 +22,24 @@ pub const AXES: usize = 7;
 /// The axis letters in index order.
 pub const AXIS_LETTERS: [u8; AXES] = [b'X', b'Y', b'Z', b'E', b'A', b'B', b'C'];
 
+/// Axis index per letter `A..=Z` (`NOT_AXIS` for the others): a table rather than a `match`,
+/// as it is looked up for every word of every motion line and a jump table mispredicts.
+const AXIS_BY_LETTER: [u8; 26] = {
+    let mut table = [NOT_AXIS; 26];
+    let mut i = 0;
+    while i < AXES {
+        table[(AXIS_LETTERS[i] - b'A') as usize] = i as u8;
+        i += 1;
+    }
+    table
+};
+const NOT_AXIS: u8 = u8::MAX;
+
 /// The axis index of an (upper-case) word letter.
 #[inline]
 pub fn axis_of(letter: u8) -> Option<usize> {
-    match letter {
-        b'X' => Some(X),
-        b'Y' => Some(Y),
-        b'Z' => Some(Z),
-        b'E' => Some(E),
-        b'A' => Some(A),
-        b'B' => Some(B),
-        b'C' => Some(C),
+    match AXIS_BY_LETTER.get(letter.wrapping_sub(b'A') as usize) {
+        Some(&i) if i != NOT_AXIS => Some(usize::from(i)),
         _ => None,
     }
 }
@@ -420,11 +427,14 @@ impl State {
         let from = self.pos;
         let mut to = from;
         let mut any = false;
+        // Hoisted out of the word loop; scaling by exactly 1.0 leaves millimetres unchanged.
+        let scale = if self.inches { MM_PER_INCH } else { 1.0 };
+        let (relative_xyz, relative_e) = (!self.absolute, self.relative_e());
         for w in &block.words {
             let Some(i) = axis_of(w.letter) else { continue };
             let Value::Number(v) = w.value else { continue };
-            let v = self.to_mm(v);
-            let relative = if i == E { self.relative_e() } else { !self.absolute };
+            let v = v * scale;
+            let relative = if i == E { relative_e } else { relative_xyz };
             to[i] = if relative { to[i] + v } else { v };
             any = true;
         }
