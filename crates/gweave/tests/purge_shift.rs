@@ -194,3 +194,83 @@ fn unmoved_changes_report_their_layer_in_repeated_layers() {
     assert!(r.warnings.iter().all(|w| !w.starts_with("layer -")), "{:?}", r.warnings);
     assert!(r.warnings[4].starts_with("layer 2, line 24: T0->T1"), "{:?}", r.warnings);
 }
+
+/// `block` and `tower` purge exactly the shortfall right after the change and come back: the
+/// checker verifies the return, the fed amount, the moved part and every untouched line, on
+/// absolute E (Slic3r, with `G92 E0` at each change), relative E (PrusaSlicer) and Cura.
+#[test]
+fn fallbacks_purge_the_shortfall_and_return() {
+    for (file, changes) in [
+        ("slic3r/slic3r_cone_2tool.gcode", 108),
+        ("prusaslicer/pr_bunny_3tool_rel.gcode", 793),
+        ("cura/cura_dual.gcode", 77),
+    ] {
+        let input = fixture(file);
+        let (_, partial) = run(Rules::fixed(2.5).unwrap(), &input);
+        for fallback in ["block", "tower"] {
+            let (out, r) = run(config(&format!("purge_mm = 2.5\nfallback = \"{fallback}\"\n")), &input);
+            assert_eq!(r.changes.len(), changes, "{file}");
+            // Every change gets its whole purge; the moved part is the same as without fallback.
+            assert!(r.changes.iter().all(|c| c.shortfall_mm == 0.0 && (c.achieved_mm - 2.5).abs() < 1e-12));
+            assert!((r.moved_mm - partial.achieved_mm).abs() < 1e-9, "{file}");
+            assert!((r.fallback_mm - partial.shortfall_mm).abs() < 1e-9, "{file}");
+            assert!(r.fallback_mm > 1.0, "{file}: {}", r.fallback_mm);
+            let short = r.changes.iter().filter(|c| c.fallback_mm > 0.0).count();
+            assert_eq!(short, partial.changes.iter().filter(|c| c.shortfall_mm > 1e-9).count());
+            assert!(r.changes.iter().all(|c| (c.fallback_mm > 0.0) == (c.fallback_lines > 0)));
+            let text = String::from_utf8_lossy(&out);
+            assert_eq!(text.matches("; gweave purge-shift: purge T").count(), short, "{file} {fallback}");
+            assert_eq!(r.saved_mm, r.moved_mm);
+        }
+    }
+}
+
+/// The block by hand, relative E: right after the change, the seed's purge block extrudes the
+/// shortfall at X10 Y10 and `G92 E` puts E back where the file had it.
+#[test]
+fn block_fallback_by_hand() {
+    let input = "M83\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X0 Y0 Z0.3 F1800\nG1 X10 E1\nT1\nG1 X30 E1\n";
+    let (out, r) = run(config("purge_mm = 1.5\nfallback = \"block\"\n"), input.as_bytes());
+    let c = &r.changes[0];
+    assert_eq!((c.moved_mm, c.fallback_mm, c.fallback_lines, c.output_line), (1.0, 0.5, 13, 5));
+    assert_eq!(
+        String::from_utf8(out).unwrap(),
+        "M83\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X0 Y0 Z0.3 F1800\nT1\n\
+         ; gweave purge-shift: purge T0->T1 shortfall, 0.5 mm\nG1 E-4 F2400\nG0 Z15.3 F200\nG0 X10 Y10 F1320\n\
+         G1 E4.5 F200\nG1 E-4 F2400\nG0 X15 F1320\nG0 X0 Y0 F1320\nG0 Z0.3 F200\nG1 E4 F2400\nG92 E0\n\
+         G1 F1800\n; gweave purge-shift: end purge\nG1 X10 E1\nG1 X30 E1\n"
+    );
+    assert!(r.warnings[0].ends_with("; the rest purged by the block fallback"), "{:?}", r.warnings);
+}
+
+/// The tower: beside the print's extent, at the layer's Z, with the file's retraction around
+/// the travels; a configured corner wins.
+#[test]
+fn tower_fallback_beside_the_part() {
+    let input = "G90\nM82\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X50 Y60 Z0.3 F1800\nG1 X70 E1\nG1 Y80 E2\nG1 E1.2 F2100\n\
+                 T1\nG0 X50\nG1 E2\nG1 Y60 E3\n";
+    let (_, r) = run(config("purge_mm = 1.5\nfallback = \"tower\"\n"), input.as_bytes());
+    let c = &r.changes[0];
+    assert_eq!((c.moved_mm, c.fallback_mm, c.fallback_lines), (1.5, 0.0, 0), "the full purge moved");
+    let (out, r) = run(config("purge_mm = 3.5\nfallback = \"tower\"\n"), input.as_bytes());
+    let c = &r.changes[0];
+    assert!((c.moved_mm - 2.0).abs() < 1e-12 && (c.fallback_mm - 1.5).abs() < 1e-12, "{c:?}");
+    let text = String::from_utf8(out).unwrap();
+    // 1.5 mm of 1.75 mm filament at 0.5 x 0.2 mm is a 36.08 mm path: 9 rows of 3.564 mm.
+    let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("G1 X7") && l.ends_with(" F1200")).collect();
+    assert_eq!(rows.len(), 9, "{text}");
+    assert!(rows.iter().all(|l| l.starts_with("G1 X78.56436 E") || l.starts_with("G1 X75 E")), "{rows:?}");
+    // 5 mm right of the extent seen so far (X 50..70, Y 60..80), the file's 0.8 mm retraction
+    // at its feed around the travels, then E back to 0 for the file's own next move.
+    assert!(text.contains("T1\n; gweave purge-shift: purge T0->T1 shortfall, 1.5 mm\nG92 E0\nG1 E-0.8 F2100\nG0 X75 Y60 F6000\n"), "{text}");
+    assert!(
+        text.contains("\nG1 X78.56436 E1.5 F1200\nG1 E0.7 F2100\nG0 X50 Y60 F6000\nG1 E1.5 F2100\nG92 E0\n"),
+        "{text}"
+    );
+    // A configured corner.
+    let (out, _) = run(
+        config("purge_mm = 3.5\nfallback = \"tower\"\n[tower]\nx_mm = 150.0\ny_mm = 5.0\n"),
+        input.as_bytes(),
+    );
+    assert!(String::from_utf8(out).unwrap().contains("\nG0 X150 Y5 F6000\n"));
+}
