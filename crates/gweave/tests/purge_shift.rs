@@ -274,3 +274,53 @@ fn tower_fallback_beside_the_part() {
     );
     assert!(String::from_utf8(out).unwrap().contains("\nG0 X150 Y5 F6000\n"));
 }
+
+/// Chained after `gweave mix` (the fourth file): the torus with the seed's layer
+/// schedule, and with a change every other layer written as Marlin virtual tools and as `M165`
+/// direct mixes. Mix changes at a layer's first extrusion, so the change can only move back into
+/// the previous layer: without `cross_layers` none moves (all shortfall), with it every one
+/// does. Mix's own purge blocks stay where mix put them, and every invariant holds; with
+/// `block`, the shortfall is purged too.
+#[test]
+fn after_gweave_mix_on_the_cura_torus() {
+    use gweave::post::mix::{mix_bytes, profile::MixProfile};
+    let seed = std::fs::read_to_string(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/mix/seed_layers.toml"),
+    )
+    .unwrap();
+    let every_other: String = (0..28)
+        .map(|l| format!("[[schedule]]\nlayer = {l}\nmix = \"{}\"\n", ["Orange", "Blue"][l % 2]))
+        .collect();
+    let torus = fixture("cura/cura_torus.gcode");
+    for (profile, changes, want_moved, want_moved_mm) in [
+        (seed.clone(), 2, 1, 2.5),
+        (format!("[hardware]\ndialect = \"marlin\"\n{every_other}"), 27, 16, 38.23664),
+        (format!("[hardware]\ndialect = \"marlin-direct\"\n{every_other}"), 27, 16, 38.23664),
+    ] {
+        let (mixed, mix_report) = mix_bytes(MixProfile::from_toml_str(&profile).unwrap(), &torus).unwrap();
+        assert_eq!(mix_report.changes, changes);
+        let direct = String::from_utf8_lossy(&mixed).lines().filter(|l| l.starts_with("M165 ")).count();
+        assert_eq!(direct > changes as usize, profile.contains("marlin-direct"), "{direct} M165 lines");
+        let (_, r) = run(Rules::fixed(2.5).unwrap(), &mixed);
+        assert_eq!(r.changes.len(), changes as usize, "{profile}");
+        assert!(r.changes.iter().all(|c| c.moved_mm == 0.0 && c.stopped_by == Some("a layer change")));
+        for fallback in ["partial", "block"] {
+            let (out, r) = run(
+                config(&format!("purge_mm = 2.5\ncross_layers = true\nfallback = \"{fallback}\"\n")),
+                &mixed,
+            );
+            assert_eq!(r.changes.len(), changes as usize, "{profile}");
+            // Where the previous layer ends in an outer wall (layers 8-18 of Cura's torus) the
+            // change cannot move; elsewhere it finds the purge.
+            let moved = r.changes.iter().filter(|c| c.moved_mm > 0.0).count();
+            assert_eq!((moved, r.changes.iter().all(|c| c.layer.is_some())), (want_moved, true));
+            assert!((r.moved_mm - want_moved_mm).abs() < 1e-9, "{}", r.moved_mm);
+            // Mix's purge blocks are all still there, one per change.
+            let text = String::from_utf8_lossy(&out);
+            assert_eq!(text.matches("; gweave mix: purge").count(), changes as usize);
+            if fallback == "block" {
+                assert!(r.changes.iter().all(|c| c.shortfall_mm == 0.0 && c.achieved_mm == 2.5));
+            }
+        }
+    }
+}
