@@ -243,12 +243,15 @@ fn block_fallback_by_hand() {
     assert!(r.warnings[0].ends_with("; the rest purged by the block fallback"), "{:?}", r.warnings);
 }
 
-/// The tower: beside the print's extent, at the layer's Z, with the file's retraction around
-/// the travels; a configured corner wins.
+/// The tower: beside the print's extent, at the layer's Z, with the file's ordinary retraction
+/// around the travels; a configured corner wins.
 #[test]
 fn tower_fallback_beside_the_part() {
-    let input = "G90\nM82\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X50 Y60 Z0.3 F1800\nG1 X70 E1\nG1 Y80 E2\nG1 E1.2 F2100\n\
-                 T1\nG0 X50\nG1 E2\nG1 Y60 E3\n";
+    // An ordinary retraction (0.8 mm at F2100) mid-layer, and the slicer's tool-change one
+    // (not taken as the file's retraction).
+    let input =
+        "G90\nM82\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X50 Y60 Z0.3 F1800\nG1 X70 E1\nG1 E0.2 F2100\nG0 Y62\n\
+                 G1 E1 F2100\nG1 Y80 E2\nG1 E-3 F3000\nT1\nG0 X50\nG1 E2\nG1 Y60 E3\n";
     let (_, r) = run(config("purge_mm = 1.5\nfallback = \"tower\"\n"), input.as_bytes());
     let c = &r.changes[0];
     assert_eq!((c.moved_mm, c.fallback_mm, c.fallback_lines), (1.5, 0.0, 0), "the full purge moved");

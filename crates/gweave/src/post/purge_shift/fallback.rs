@@ -48,9 +48,13 @@ pub(crate) struct Spot {
 pub(crate) struct Surroundings {
     /// XY extent of the print's extrusion so far: min X, min Y, max X, max Y, mm.
     extent: Option<[f64; 4]>,
-    /// The file's last retraction (an E-only move backwards), mm, and its feed, mm/min.
+    /// The file's last ordinary retraction (an E-only move backwards between two extrusions of
+    /// one tool), mm, and its feed, mm/min; a retraction before a tool change (often much
+    /// longer, to unload) does not count.
     retract_mm: f64,
     retract_feed_mm_min: Option<f64>,
+    /// The last retraction since the last extrusion: ordinary if an extrusion comes before a change.
+    pending: Option<(f64, f64)>,
     /// Retraction in force now (E-only moves since the last extrusion), mm.
     retracted_mm: f64,
     /// The layer of the last tower, and the Y its towers take up so far on that layer, mm.
@@ -64,6 +68,10 @@ impl Surroundings {
         let e_mm = mv.e_mm();
         if mv.is_extruding() {
             self.retracted_mm = 0.0;
+            if let Some((mm, feed)) = self.pending.take() {
+                self.retract_mm = mm;
+                self.retract_feed_mm_min = Some(feed).filter(|f| *f > 0.0);
+            }
             if in_print {
                 let [x0, y0, x1, y1] = self.extent.unwrap_or([
                     f64::INFINITY,
@@ -80,11 +88,15 @@ impl Surroundings {
             }
         } else if mv.to[X] == mv.from[X] && mv.to[Y] == mv.from[Y] && e_mm != 0.0 {
             if e_mm < 0.0 {
-                self.retract_mm = -e_mm;
-                self.retract_feed_mm_min = Some(mv.feed_mm_min).filter(|f| *f > 0.0);
+                self.pending = Some((-e_mm, mv.feed_mm_min));
             }
             self.retracted_mm = (self.retracted_mm - e_mm).max(0.0);
         }
+    }
+
+    /// A change of tool or mix: the retraction before it was the slicer's tool-change one.
+    pub fn tool_change(&mut self) {
+        self.pending = None;
     }
 
     /// Retraction the file has in force now, mm.

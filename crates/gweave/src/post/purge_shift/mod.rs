@@ -552,6 +552,7 @@ impl Pass for PurgeShift {
             self.env.observe(m, in_print);
         }
         if is_change_line(ctx.block) {
+            self.env.tool_change();
             if self.group_before.is_none() {
                 self.group_before = Some(self.colour.clone());
                 self.group_in_print = in_print;
