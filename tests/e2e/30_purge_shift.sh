@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # purge-shift end to end: the CLI as a PrusaSlicer post-processing script (in place, file name
-# last), the JSON report, the config file and the refusal of unimplemented fallbacks.
+# last), the JSON report, the config file, the block fallback through the virtual printer, and
+# the refusal of unknown fallbacks.
 # Gets GWEAVE, PYGWEAVE, DATA, WORK from run.sh.
 set -euo pipefail
 
@@ -49,9 +50,37 @@ for c in r["changes"]:
     assert abs(c["achieved_mm"] + c["shortfall_mm"] - want) < 1e-9, c
 PY
 
-# 4. Unimplemented fallbacks are refused with a clear error and no output.
-if "$GWEAVE" purge-shift "$DATA/cura/cura_dual.gcode" -o "$WORK/x.gcode" --purge 2 --fallback tower 2> "$WORK/err"; then
-  echo "tower fallback accepted"; exit 1
+# 4. --fallback block: every change gets the whole purge, the block sits right after the change
+#    and returns: the virtual printer feeds exactly the fallback purge more, ends where the
+#    original does, and no move leaves the default machine's bed.
+"$GWEAVE" purge-shift "$DATA/slic3r/slic3r_cone_2tool.gcode" -o "$WORK/cone_block.gcode" --purge 2.5 \
+  --fallback block -q --report "$WORK/cone_block.json" > /dev/null 2>&1
+"$GWEAVE" sim "$DATA/slic3r/slic3r_cone_2tool.gcode" --json -q > "$WORK/sim_in.json"
+"$GWEAVE" sim "$WORK/cone_block.gcode" --json -q > "$WORK/sim_block.json"
+python3 - "$WORK/cone_block.json" "$WORK/sim_in.json" "$WORK/sim_block.json" "$WORK/cone_block.gcode" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+a, b = json.load(open(sys.argv[2])), json.load(open(sys.argv[3]))
+changes = r["changes"]
+assert len(changes) == 108 and all(c["shortfall_mm"] == 0 and c["achieved_mm"] == 2.5 for c in changes)
+assert abs(r["moved_mm"] - 241.02) < 0.01 and abs(r["fallback_mm"] - 28.98) < 0.01, r
+blocks = [c for c in changes if c["fallback_mm"] > 0]
+assert len(blocks) == 29, len(blocks)
+lines = open(sys.argv[4]).read().split("\n")
+for c in blocks:
+    first = c["output_line"] + len(c["change_lines"]) - 1  # 0-based index of the block's first line
+    assert lines[first].startswith("; gweave purge-shift: purge T"), (c, lines[first])
+    assert lines[first + c["fallback_lines"] - 1] == "; gweave purge-shift: end purge", c
+fed = sum(b["filament_mm"]) - sum(a["filament_mm"])
+assert abs(fed - r["fallback_mm"]) < 1e-6, (fed, r["fallback_mm"])
+assert b["position"][:3] == a["position"][:3] and b["count"][:3] == a["count"][:3], (a["position"], b["position"])
+for kind in ("out_of_bounds", "below_bed"):
+    assert b["warning_counts"].get(kind, 0) == a["warning_counts"].get(kind, 0), kind
+PY
+
+# 5. An unknown fallback is refused with a clear error and no output.
+if "$GWEAVE" purge-shift "$DATA/cura/cura_dual.gcode" -o "$WORK/x.gcode" --purge 2 --fallback wipe 2> "$WORK/err"; then
+  echo "unknown fallback accepted"; exit 1
 fi
-grep -q 'fallback "tower" is not implemented' "$WORK/err" || { echo "error text: $(cat "$WORK/err")"; exit 1; }
+grep -q 'unknown fallback "wipe" (known: partial, block, tower)' "$WORK/err" || { echo "error text: $(cat "$WORK/err")"; exit 1; }
 [ ! -e "$WORK/x.gcode" ] || { echo "output written"; exit 1; }

@@ -47,13 +47,24 @@ pub struct ReportArgs {
 
 impl ReportArgs {
     /// Writes the JSON report file if asked; returns whether the human summary should print.
+    /// The JSON is streamed to its destination, never held whole in memory (a report may carry
+    /// an entry per line or per change of a large file).
     pub fn emit<T: Serialize>(&self, value: &T) -> Result<bool> {
+        use std::io::Write as _;
         if let Some(path) = &self.report {
-            let text = serde_json::to_string_pretty(value)?;
-            std::fs::write(path, text + "\n").with_context(|| format!("writing {}", path.display()))?;
+            let write = || -> Result<()> {
+                let mut file = std::io::BufWriter::new(std::fs::File::create(path)?);
+                serde_json::to_writer_pretty(&mut file, value)?;
+                writeln!(file)?;
+                Ok(file.flush()?)
+            };
+            write().with_context(|| format!("writing {}", path.display()))?;
         }
         if self.json {
-            println!("{}", serde_json::to_string_pretty(value)?);
+            let mut stdout = std::io::BufWriter::new(std::io::stdout().lock());
+            serde_json::to_writer_pretty(&mut stdout, value)?;
+            writeln!(stdout)?;
+            stdout.flush()?;
             return Ok(false);
         }
         Ok(true)

@@ -90,7 +90,7 @@ fn cat(py: Python<'_>, path: PathBuf, output: Option<PathBuf>, in_place: bool, b
 #[pyfunction]
 #[pyo3(signature = (path, output=None, *, in_place=false, backup=true, purge=None, purge_mm3=None,
     config=None, filament_diameter=None, cross_layers=false, allow_features=None, markers=None,
-    fallback=None))]
+    fallback=None, tower_at=None))]
 #[allow(clippy::too_many_arguments)]
 fn purge_shift_json(
     py: Python<'_>,
@@ -106,6 +106,7 @@ fn purge_shift_json(
     allow_features: Option<Vec<String>>,
     markers: Option<(String, String)>,
     fallback: Option<String>,
+    tower_at: Option<(f64, f64)>,
 ) -> PyResult<String> {
     use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
     let value_err = |e: gweave::post::purge_shift::ConfigError| PyValueError::new_err(e.to_string());
@@ -121,6 +122,7 @@ fn purge_shift_json(
         allow_features,
         markers: markers.map(|(b, e)| [b, e]),
         fallback,
+        tower_xy_mm: tower_at.map(|(x, y)| [x, y]),
     });
     let rules = c.validate().map_err(value_err)?;
     let target = match (output, in_place) {

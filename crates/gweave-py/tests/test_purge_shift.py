@@ -27,9 +27,24 @@ def test_config_and_keywords(data, tmp_path):
     assert all(abs(c["achieved_mm"] + c["shortfall_mm"] - c["requested_mm"]) < 1e-9 for c in r["changes"])
 
 
+def test_fallbacks_purge_the_shortfall(data, tmp_path):
+    src = data / "slic3r" / "slic3r_cone_2tool.gcode"
+    out = tmp_path / "tower.gcode"
+    r = gweave.purge_shift(src, out, purge=2.5, fallback="tower", tower_at=(150, 20))
+    assert all(c["shortfall_mm"] == 0 and c["achieved_mm"] == 2.5 for c in r["changes"])
+    assert abs(r["moved_mm"] - 241.02) < 0.01 and abs(r["fallback_mm"] - 28.98) < 0.01
+    towers = [c for c in r["changes"] if c["fallback_mm"] > 0]
+    assert len(towers) == 29 and all(c["fallback_lines"] > 0 for c in towers)
+    text = out.read_text()
+    assert text.count("; gweave purge-shift: purge T") == 29
+    assert "\nG0 X150 Y20 F6000\n" in text
+    b = gweave.purge_shift(src, tmp_path / "block.gcode", purge=2.5, fallback="block")
+    assert b["fallback_mm"] == r["fallback_mm"] and b["moved_mm"] == r["moved_mm"]
+
+
 def test_refusals(data, tmp_path):
-    with pytest.raises(ValueError, match="not implemented"):
-        gweave.purge_shift(data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode", purge=2, fallback="tower")
+    with pytest.raises(ValueError, match="unknown fallback"):
+        gweave.purge_shift(data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode", purge=2, fallback="wipe")
     with pytest.raises(ValueError, match="no purge amount"):
         gweave.purge_shift(data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode")
     assert not (tmp_path / "o.gcode").exists()

@@ -19,7 +19,8 @@ use crate::progress::Bar;
 /// moves are walked back until the purge amount of filament is found; that move is split at the
 /// exact point and the change goes there. Works with absolute and relative E, `G92 E` resets,
 /// retractions and firmware retraction; never crosses a layer change (unless --cross-layers),
-/// the outer wall (unless allowed) or the previous change.
+/// the outer wall (unless allowed) or the previous change. With too little room the rest of
+/// the purge is accepted as missing, or purged in a block or on a small tower (--fallback).
 ///
 /// As a PrusaSlicer post-processing script: `/path/to/gweave purge-shift --purge 2.5 --in-place
 /// --no-backup` (PrusaSlicer appends the file name). Chains after `gweave mix`.
@@ -51,9 +52,13 @@ pub struct PurgeShiftArgs {
     /// Explicit print-proper markers: the comment texts `begin,end`.
     #[arg(long, value_name = "BEGIN,END", value_delimiter = ',', num_args = 1)]
     pub markers: Option<Vec<String>>,
-    /// Too little room: `partial` (accept the shortfall; the only fallback implemented).
+    /// Too little room: `partial` (accept the shortfall), `block` (purge the rest in a purge
+    /// block, as `gweave mix` does) or `tower` (purge the rest on a small tower beside the part).
     #[arg(long, value_name = "NAME")]
     pub fallback: Option<String>,
+    /// The tower's corner `X,Y`, mm (default: beside the print's extent so far).
+    #[arg(long, value_name = "X,Y", value_delimiter = ',', num_args = 1)]
+    pub tower_at: Option<Vec<f64>>,
     #[command(flatten)]
     pub report: ReportArgs,
     /// No progress bar.
@@ -76,6 +81,11 @@ fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
         Some([begin, end]) => Some([begin.clone(), end.clone()]),
         Some(_) => anyhow::bail!("--markers takes two comment texts: BEGIN,END"),
     };
+    let tower_xy_mm = match args.tower_at.as_deref() {
+        None => None,
+        Some(&[x, y]) => Some([x, y]),
+        Some(_) => anyhow::bail!("--tower-at takes two numbers: X,Y"),
+    };
     c.apply(&Overrides {
         purge_mm: args.purge,
         purge_mm3: args.purge_mm3,
@@ -84,6 +94,7 @@ fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
         allow_features: args.allow_features.clone(),
         markers,
         fallback: args.fallback.clone(),
+        tower_xy_mm,
     });
     Ok(c)
 }

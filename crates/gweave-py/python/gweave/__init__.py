@@ -226,12 +226,16 @@ def purge_shift(
     allow_features: Optional[Sequence[str]] = None,
     markers: Optional[Sequence[str]] = None,
     fallback: Optional[str] = None,
+    tower_at: Optional[Sequence[float]] = None,
 ) -> Dict[str, Any]:
     """Move every tool/mix change earlier by the purge so it prints inside the part (no wipe tower).
 
     ``purge`` is mm of filament (or ``purge_mm3``, mm^3); ``config`` a TOML file with per-pair
-    amounts, colours, the washout model and rules (keyword arguments override it). Returns the
-    report: per change the requested and achieved purge, where the change now sits, and totals.
+    amounts, colours, the washout model and rules (keyword arguments override it). With too
+    little room, ``fallback`` is ``"partial"`` (accept the shortfall), ``"block"`` (purge the rest
+    in a purge block, as ``mix`` does) or ``"tower"`` (on a small tower beside the part, its
+    corner ``tower_at`` = (x, y) mm if given). Returns the report: per change the requested,
+    moved and fallback purge, where the change now sits, and totals.
     """
     text = None
     if config is not None:
@@ -252,6 +256,7 @@ def purge_shift(
             allow_features=None if allow_features is None else list(allow_features),
             markers=pair,
             fallback=fallback,
+            tower_at=None if tower_at is None else (float(tower_at[0]), float(tower_at[1])),
         )
     )
 

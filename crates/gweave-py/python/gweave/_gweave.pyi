@@ -59,6 +59,7 @@ def purge_shift_json(
     allow_features: Optional[List[str]] = None,
     markers: Optional[Tuple[str, str]] = None,
     fallback: Optional[str] = None,
+    tower_at: Optional[Tuple[float, float]] = None,
 ) -> str: ...
 
 # mix

@@ -33,12 +33,20 @@
 //! G1 F1800
 //! ; gweave mix: end purge
 //! ```
+//!
+//! The same block serves `gweave purge-shift`'s fallbacks: `block` is exactly this (a blob at
+//! the spot), `tower` replaces the blob by a compact zigzag at the current Z ([`PurgePattern`]),
+//! a layer of a small purge tower next to the part.
+
+use serde::{Deserialize, Serialize};
 
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{E, X, Y, Z};
 
-/// Where and how to purge (the purge settings of the profile, with the Z feed capped).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Where and how to purge (the purge settings of the profile, with the Z feed capped). The
+/// default is the seed's: retract 4 mm, lift 15 mm, purge at X10 Y10, wipe 5 mm along +X.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct PurgeMotion {
     pub retract_mm: f64,
     pub lift_mm: f64,
@@ -50,6 +58,44 @@ pub struct PurgeMotion {
     pub retract_feed_mm_min: f64,
     /// Feed of the Z lift and lower (at most the Z cap).
     pub z_feed_mm_min: f64,
+}
+
+impl Default for PurgeMotion {
+    fn default() -> Self {
+        PurgeMotion {
+            retract_mm: 4.0,
+            lift_mm: 15.0,
+            x_mm: 10.0,
+            y_mm: 10.0,
+            wipe_mm: 5.0,
+            travel_feed_mm_min: 1320.0,
+            extrude_feed_mm_min: 200.0,
+            retract_feed_mm_min: 2400.0,
+            z_feed_mm_min: 200.0,
+        }
+    }
+}
+
+/// What the nozzle does at the purge spot.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PurgePattern {
+    /// Extrude in place, a blob (the seed's purge, what `gweave mix` writes).
+    Blob,
+    /// A compact zigzag from the spot at the current Z: `rows` rows of `row_mm`, alternately
+    /// along +X and -X, `pitch_mm` apart along +Y. E is fed in proportion to the path length,
+    /// rows and steps alike: the flow of a printed line whose width is the pitch.
+    Zigzag { rows: u32, row_mm: f64, pitch_mm: f64 },
+}
+
+/// One purge: how much, how, and the names in its comment lines
+/// (`; gweave <by>: purge <label>, <purge_mm> mm` ... `; gweave <by>: end purge`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PurgeJob<'a> {
+    pub purge_mm: f64,
+    pub pattern: PurgePattern,
+    /// The command that writes it (`mix`, `purge-shift`).
+    pub by: &'a str,
+    pub label: &'a str,
 }
 
 /// The machine where the block starts, in the file's logical millimetres.
@@ -107,9 +153,35 @@ impl Emitter<'_> {
         self.fmt.write_word(self.out, b'F', feed);
         self.out.push(b'\n');
     }
+
+    /// Extrudes `purge_mm` along the zigzag of [`PurgePattern::Zigzag`] from the current point.
+    /// Each segment feeds the difference of the cumulative feed rounded to the written decimals,
+    /// so in relative E the written words add up to the rounded purge exactly.
+    fn zigzag(&mut self, m: &PurgeMotion, purge_mm: f64, rows: u32, row_mm: f64, pitch_mm: f64) {
+        let path_mm = rows as f64 * row_mm + (rows - 1) as f64 * pitch_mm;
+        let scale = 10f64.powi(self.fmt.extrusion_decimals as i32);
+        let fed_at = |len_mm: f64| (purge_mm * len_mm / path_mm * scale).round() / scale;
+        let [x0, y0, _] = self.xyz;
+        let (mut done_mm, mut fed_mm) = (0.0, 0.0);
+        for row in 0..rows {
+            let y = y0 + row as f64 * pitch_mm;
+            if row > 0 {
+                done_mm += pitch_mm;
+                let de = fed_at(done_mm) - fed_mm;
+                fed_mm += de;
+                self.go(false, [None, Some(y), None], de, m.extrude_feed_mm_min);
+            }
+            done_mm += row_mm;
+            let de = if row + 1 == rows { fed_at(path_mm) - fed_mm } else { fed_at(done_mm) - fed_mm };
+            fed_mm += de;
+            let x = if row % 2 == 0 { x0 + row_mm } else { x0 };
+            self.go(false, [Some(x), None, None], de, m.extrude_feed_mm_min);
+        }
+    }
 }
 
-/// Appends the purge block for `purge_mm` of filament to `out`; `label` names the change.
+/// Appends `gweave mix`'s purge block for `purge_mm` of filament to `out`; `label` names the
+/// change.
 pub fn write_purge(
     out: &mut Vec<u8>,
     fmt: &NumberFormat,
@@ -118,11 +190,24 @@ pub fn write_purge(
     purge_mm: f64,
     label: &str,
 ) {
+    let job = PurgeJob { purge_mm, pattern: PurgePattern::Blob, by: "mix", label };
+    write_purge_job(out, fmt, m, start, &job);
+}
+
+/// Appends a purge block to `out`, with the pattern and comment names of `job`.
+pub fn write_purge_job(
+    out: &mut Vec<u8>,
+    fmt: &NumberFormat,
+    m: &PurgeMotion,
+    start: &PurgeStart,
+    job: &PurgeJob,
+) {
     let [x, y, z, e0] = start.pos;
+    let purge_mm = job.purge_mm;
     let mut w = Emitter { out, fmt, start: *start, xyz: [x, y, z], e: 0.0 };
     let mut head = Vec::new();
     fmt.write(&mut head, purge_mm, 2);
-    w.line(&format!("; gweave mix: purge {label}, {} mm", String::from_utf8_lossy(&head)));
+    w.line(&format!("; gweave {}: purge {}, {} mm", job.by, job.label, String::from_utf8_lossy(&head)));
     if !start.relative_e {
         w.line("G92 E0");
     }
@@ -134,7 +219,15 @@ pub fn write_purge(
         w.go(true, [None, None, Some(z + m.lift_mm)], 0.0, m.z_feed_mm_min);
     }
     w.go(true, [Some(m.x_mm), Some(m.y_mm), None], 0.0, m.travel_feed_mm_min);
-    w.go(false, [None; 3], r + d + purge_mm, m.extrude_feed_mm_min);
+    match job.pattern {
+        PurgePattern::Blob => w.go(false, [None; 3], r + d + purge_mm, m.extrude_feed_mm_min),
+        PurgePattern::Zigzag { rows, row_mm, pitch_mm } => {
+            if r + d > 0.0 {
+                w.go(false, [None; 3], r + d, m.retract_feed_mm_min);
+            }
+            w.zigzag(m, purge_mm, rows.max(1), row_mm, pitch_mm);
+        }
+    }
     if r + d > 0.0 {
         w.go(false, [None; 3], -(r + d), m.retract_feed_mm_min);
     }
@@ -156,7 +249,7 @@ pub fn write_purge(
         write_exact_feed(&mut feed, fmt, start.feed_mm_min);
         w.line(&String::from_utf8_lossy(&feed));
     }
-    w.line("; gweave mix: end purge");
+    w.line(&format!("; gweave {}: end purge", job.by));
 }
 
 /// Appends `F<feed>` for a feed rate being restored: with at least 3 decimals whatever the
@@ -256,5 +349,58 @@ mod tests {
         let (text, s, _) = run("G1 X20 Y30 Z1 F1500\nG91", 0.0);
         assert!(text.contains("\nG0 Z15 F200\nG0 X-10 Y-20 F1320\n"), "{text}");
         assert_eq!([s.pos[X], s.pos[Y], s.pos[Z]], [20.0, 30.0, 1.0]);
+    }
+
+    #[test]
+    fn zigzag_feeds_the_purge_exactly_and_comes_back() {
+        for prefix in
+            ["M82\nG1 X120.5 Y80 Z0.3 E12.3456 F1800", "M83\nG1 X120.5 Y80 Z0.3 E0.5 F1800\nG1 E-0.8"]
+        {
+            let mut state = State::default();
+            let mut block = Block::default();
+            for l in prefix.lines() {
+                parse_into(l.as_bytes(), &mut block);
+                state.apply(l.as_bytes(), &block);
+            }
+            let pos = purge_start_pos(&state.pos);
+            let retracted_mm = if state.relative_e() { 0.8 } else { 0.0 };
+            let start = PurgeStart {
+                pos,
+                absolute_xyz: true,
+                relative_e: state.relative_e(),
+                feed_mm_min: 1800.0,
+                rapid_mode: false,
+                retracted_mm,
+            };
+            let m =
+                PurgeMotion { retract_mm: 0.8, lift_mm: 0.0, x_mm: 130.0, y_mm: 70.0, wipe_mm: 0.0, ..SEED };
+            let fmt = NumberFormat { extrusion_decimals: 6, position_decimals: 5, ..NumberFormat::default() };
+            let pattern = PurgePattern::Zigzag { rows: 7, row_mm: 3.1, pitch_mm: 0.5 };
+            let job = PurgeJob { purge_mm: 1.2345678, pattern, by: "purge-shift", label: "T0->T1" };
+            let mut out = Vec::new();
+            write_purge_job(&mut out, &fmt, &m, &start, &job);
+            let text = String::from_utf8(out).unwrap();
+            assert!(text.starts_with("; gweave purge-shift: purge T0->T1, 1.23 mm\n"), "{text}");
+            assert!(text.ends_with("; gweave purge-shift: end purge\n"), "{text}");
+            let before = state.filament_mm[0];
+            let (mut printed, mut rows) = (0.0, 0);
+            for l in text.lines() {
+                parse_into(l.as_bytes(), &mut block);
+                if let Effect::Move(mv) = state.apply(l.as_bytes(), &block) {
+                    if mv.is_extruding() {
+                        printed += mv.e_mm();
+                        rows += usize::from(mv.to[Y] == mv.from[Y]);
+                        // The zigzag stays in its footprint, at the layer's Z.
+                        assert!((130.0..=133.1).contains(&mv.to[X]) && (70.0..=73.0).contains(&mv.to[Y]));
+                        assert_eq!(mv.to[Z], 0.3);
+                    }
+                }
+            }
+            assert_eq!(rows, 7);
+            assert!((printed - 1.234568).abs() < 1e-9, "{printed}");
+            assert!((state.filament_mm[0] - before - 1.234568).abs() < 1e-9);
+            assert_eq!([state.pos[X], state.pos[Y], state.pos[Z]], [pos[0], pos[1], pos[2]], "{text}");
+            assert!((state.pos[E] - pos[3]).abs() < 1e-12, "{text}");
+        }
     }
 }

@@ -87,14 +87,44 @@ fn off_path_mm(mv: &Move, p: [f64; 2]) -> (f64, bool) {
     }
 }
 
+/// The printed extrusion before each output line, and in all, without the fallbacks' lines.
+fn printed_without_fallbacks(b: &Replay, report: &PurgeShiftReport) -> (Vec<f64>, f64) {
+    let mut inserted = std::collections::BTreeSet::new();
+    for c in report.changes.iter() {
+        let first = (c.output_line - 1) as usize + c.change_lines.len();
+        inserted.extend(first..first + c.fallback_lines as usize);
+    }
+    let mut printed_before = Vec::with_capacity(b.lines.len());
+    let mut printed = 0.0;
+    for (i, l) in b.lines.iter().enumerate() {
+        printed_before.push(printed);
+        if let Some(m) = l.mv.filter(|m| m.is_extruding() && !inserted.contains(&i)) {
+            printed += m.e_mm();
+        }
+    }
+    (printed_before, printed)
+}
+
 /// Checks every invariant; panics with a description on the first failure. Returns the
-/// per-change purge measured from the files themselves.
+/// per-change purge measured from the files themselves (the moved part).
+///
+/// A fallback's lines must come right after the change lines, start and end at the same
+/// position (XYZ exactly, E to the 1e-6 mm the lines are written with), and feed exactly the
+/// reported `fallback_mm`: the file's net extrusion grows by their sum, nothing else changes.
 pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &StateOptions) -> Vec<f64> {
     let a = replay(input, options);
     let b = replay(output, options);
-    // Extrusion over the whole file is unchanged, printed and net.
-    assert!((a.printed_mm - b.printed_mm).abs() < 1e-6, "printed {} -> {}", a.printed_mm, b.printed_mm);
-    assert!((a.net_mm - b.net_mm).abs() < 1e-6, "net {} -> {}", a.net_mm, b.net_mm);
+    let (b_printed_before, b_printed) = printed_without_fallbacks(&b, report);
+    let fallback_mm: f64 = report.changes.iter().map(|c| c.fallback_mm).sum();
+    assert!((fallback_mm - report.fallback_mm).abs() < 1e-9, "fallback total {}", report.fallback_mm);
+    // Extrusion over the whole file is unchanged, printed and net, but for the fallback purges.
+    assert!((a.printed_mm - b_printed).abs() < 1e-6, "printed {} -> {}", a.printed_mm, b_printed);
+    assert!(
+        (a.net_mm + fallback_mm - b.net_mm).abs() < 1e-5,
+        "net {} + fallback {fallback_mm} -> {}",
+        a.net_mm,
+        b.net_mm
+    );
     // The number of change lines is unchanged.
     let count = |r: &Replay| r.lines.iter().filter(|l| is_change_text(&l.text)).count();
     assert_eq!(count(&a), count(&b), "change lines");
@@ -102,10 +132,29 @@ pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &S
     let mut removed_in = std::collections::BTreeSet::new();
     let mut removed_out = std::collections::BTreeSet::new();
     let mut measured = Vec::new();
-    for c in &report.changes {
+    for c in report.changes.iter() {
         let n = c.change_lines.len() as u64;
+        let k = c.fallback_lines;
         removed_in.extend(c.change_lines.iter().copied());
-        removed_out.extend(c.output_line..c.output_line + n);
+        removed_out.extend(c.output_line..c.output_line + n + k);
+        if k > 0 {
+            // The fallback returns to where it started.
+            let (start, end) = (
+                b.lines[(c.output_line + n - 2) as usize].pos_after,
+                b.lines[(c.output_line + n + k - 2) as usize].pos_after,
+            );
+            assert_eq!(start[..3], end[..3], "fallback of {c:?} does not return");
+            assert!(
+                (start[E] - end[E]).abs() < 2e-6,
+                "E {} after the fallback vs {} before",
+                end[E],
+                start[E]
+            );
+            let fed: f64 = (0..k)
+                .map(|j| b.lines[(c.output_line + n - 1 + j) as usize].mv.map_or(0.0, |m| m.e_mm()))
+                .sum();
+            assert!((fed - c.fallback_mm).abs() < 1e-5, "fallback fed {fed} vs {}", c.fallback_mm);
+        }
         for (k, &l) in c.change_lines.iter().enumerate() {
             assert_eq!(
                 b.lines[(c.output_line - 1) as usize + k].text,
@@ -114,21 +163,23 @@ pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &S
             );
         }
         assert!(
-            c.shortfall_mm >= 0.0 && (c.achieved_mm + c.shortfall_mm - c.requested_mm).abs() < 1e-9,
+            c.shortfall_mm >= 0.0
+                && (c.achieved_mm + c.shortfall_mm - c.requested_mm).abs() < 1e-9
+                && (c.moved_mm + c.fallback_mm - c.achieved_mm).abs() < 1e-9,
             "{c:?}"
         );
         // The old colour's extrusion between the new and the old position of the change.
         let got = a.lines[(c.change_lines[0] - 1) as usize].printed_before_mm
-            - b.lines[(c.output_line - 1) as usize].printed_before_mm;
-        assert!((got - c.achieved_mm).abs() < 1e-5, "measured {got} vs reported {} for {c:?}", c.achieved_mm);
-        if c.shortfall_mm == 0.0 {
+            - b_printed_before[(c.output_line - 1) as usize];
+        assert!((got - c.moved_mm).abs() < 1e-5, "measured {got} vs reported {} for {c:?}", c.moved_mm);
+        if c.fallback_mm == 0.0 && c.shortfall_mm == 0.0 {
             assert!((got - c.requested_mm).abs() < 1e-5, "measured {got} vs requested for {c:?}");
         }
         measured.push(got);
         if let Some(s) = &c.split {
             removed_in.insert(s.line);
             removed_out.insert(c.output_line - 1);
-            removed_out.insert(c.output_line + n);
+            removed_out.insert(c.output_line + n + k);
             // The split point (where the output is when the change runs) lies on the original move.
             let mv = a.lines[(s.line - 1) as usize].mv.expect("split line is a move");
             let p = b.lines[(c.output_line - 2) as usize].pos_after;
@@ -138,7 +189,7 @@ pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &S
             let e_at = mv.from[E] + t * (mv.to[E] - mv.from[E]);
             assert!((p[E] - e_at).abs() < 2e-6, "E at the split {} vs {e_at}", p[E]);
             // The second half ends where the original move ended.
-            let end = b.lines[(c.output_line + n - 1) as usize].pos_after;
+            let end = b.lines[(c.output_line + n + k - 1) as usize].pos_after;
             for axis in 0..3 {
                 assert!((end[axis] - mv.to[axis]).abs() < 1e-9, "end {end:?} vs {:?}", mv.to);
             }

@@ -8,7 +8,7 @@
 //! cross_layers = false           # may a change move back into the previous layer?
 //! allow_features = ["inner_wall", "infill", "solid_infill"]   # default: all but outer_wall
 //! markers = ["begin", "end"]     # explicit print-proper markers (comment text)
-//! fallback = "partial"           # too little room: accept the shortfall
+//! fallback = "partial"           # too little room: accept the shortfall ("block", "tower")
 //! colours = ["#ff0000", "#0000ff"]   # per tool: purge from the colours (OrcaSlicer's rule)
 //! [[pair]]                       # a per-pair amount wins over everything else
 //! from = 0
@@ -18,6 +18,14 @@
 //! chamber_mm3 = 4.0
 //! dead_mm3 = 1.0
 //! tolerance = 0.05               # if set and no purge_mm/purge_mm3: purge = V ln(1/eps) + Vd
+//! [block]                        # fallback "block": gweave mix's purge block (the seed's defaults)
+//! retract_mm = 4.0
+//! lift_mm = 15.0
+//! x_mm = 10.0
+//! y_mm = 10.0
+//! [tower]                        # fallback "tower": a zigzag next to the part at the layer's Z
+//! x_mm = 150.0                   # its corner; default: gap_mm beside the print's extent so far
+//! y_mm = 20.0
 //! ```
 
 use std::collections::BTreeSet;
@@ -27,12 +35,15 @@ use serde::{Deserialize, Serialize};
 use crate::colour::purge::{filament_mm_to_mm3, flush_volume_mm3, mm3_to_filament_mm, Washout};
 use crate::colour::Srgb8;
 use crate::gcode::layers::{Feature, Markers, ALL_FEATURES};
+use crate::post::purge_block::PurgeMotion;
 
 /// Why a purge-shift configuration was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ConfigError {
     #[error("{what} must be a positive number, got {value}")]
     NotPositive { what: &'static str, value: f64 },
+    #[error("{what} must be zero or more, got {value}")]
+    Negative { what: &'static str, value: f64 },
     #[error("no purge amount: give purge_mm, purge_mm3, colours, pairs or a washout tolerance")]
     NoPurge,
     #[error("give either purge_mm or purge_mm3, not both")]
@@ -41,8 +52,10 @@ pub enum ConfigError {
     Pair { from: u32, to: u32 },
     #[error("unknown feature {0:?} (known: {known})", known = feature_names())]
     Feature(String),
-    #[error("fallback {0:?} is not implemented; only \"partial\" is (accept the shortfall)")]
+    #[error("unknown fallback {0:?} (known: partial, block, tower)")]
     Fallback(String),
+    #[error("tower: give both x_mm and y_mm, or neither (placed beside the print)")]
+    Tower,
     #[error("markers need non-empty begin and end text")]
     Markers,
     #[error("washout: {0}")]
@@ -86,6 +99,63 @@ pub enum Fallback {
     /// Move the change as far as the rules allow and report the shortfall.
     #[default]
     Partial,
+    /// Also purge the shortfall in a purge block after the change, as `gweave mix` does.
+    Block,
+    /// Also purge the shortfall as a zigzag on a small tower next to the part.
+    Tower,
+}
+
+impl Fallback {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Fallback::Partial => "partial",
+            Fallback::Block => "block",
+            Fallback::Tower => "tower",
+        }
+    }
+}
+
+/// Where and how the `tower` fallback purges. The zigzag is a square-ish patch of lines
+/// `line_width_mm` apart whose volume is the shortfall: path length
+/// `L = shortfall * A_filament / (line_width * layer_height)`, side `sqrt(L * line_width)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TowerConfig {
+    /// The tower's corner (smallest X and Y), mm; unset: `gap_mm` to the right of the print's
+    /// XY extent known so far (to the left when the bed ends there).
+    pub x_mm: Option<f64>,
+    pub y_mm: Option<f64>,
+    /// Distance from the print's extent, mm.
+    pub gap_mm: f64,
+    /// The bed the tower stays on, X and Y from 0, mm (the default machine profile's).
+    pub bed_mm: [f64; 2],
+    /// Line pitch of the zigzag, mm.
+    pub line_width_mm: f64,
+    /// Layer height the zigzag's flow is computed for, mm.
+    pub layer_height_mm: f64,
+    /// Z lift for the travels, mm (0: travel at the layer's Z, as the slicer's own travels do).
+    pub lift_mm: f64,
+    pub travel_feed_mm_min: f64,
+    pub extrude_feed_mm_min: f64,
+    /// Feed of the retraction around the travels when the file's own is not known yet.
+    pub retract_feed_mm_min: f64,
+}
+
+impl Default for TowerConfig {
+    fn default() -> Self {
+        TowerConfig {
+            x_mm: None,
+            y_mm: None,
+            gap_mm: 5.0,
+            bed_mm: [200.0, 200.0],
+            line_width_mm: 0.5,
+            layer_height_mm: 0.2,
+            lift_mm: 0.0,
+            travel_feed_mm_min: 6000.0,
+            extrude_feed_mm_min: 1200.0,
+            retract_feed_mm_min: 2400.0,
+        }
+    }
 }
 
 /// All settings of the pass. `Default` is the seed's: 2.5 mm of 1.75 mm filament, no crossing
@@ -106,6 +176,10 @@ pub struct PurgeShiftConfig {
     /// `[begin, end]` comment texts that delimit the print proper.
     pub markers: Option<[String; 2]>,
     pub fallback: String,
+    /// The `block` fallback's purge block (as in `gweave mix`'s `[purge]`).
+    pub block: PurgeMotion,
+    /// The `tower` fallback.
+    pub tower: TowerConfig,
     /// Hard cap on held lines, whatever the purge: past it the oldest line is written out and the
     /// walk back stops there (a bound for pathological files with huge runs of non-extrusion).
     pub max_window_lines: usize,
@@ -128,6 +202,8 @@ impl Default for PurgeShiftConfig {
                 .collect(),
             markers: None,
             fallback: "partial".into(),
+            block: PurgeMotion::default(),
+            tower: TowerConfig::default(),
             max_window_lines: 200_000,
         }
     }
@@ -147,6 +223,8 @@ pub struct Rules {
     pub(crate) allowed: BTreeSet<Feature>,
     pub(crate) markers: Markers,
     pub(crate) fallback: Fallback,
+    pub(crate) block: PurgeMotion,
+    pub(crate) tower: TowerConfig,
     pub(crate) max_window_lines: usize,
     /// The largest purge any change can ask for: the window never needs more extrusion.
     pub(crate) max_purge_mm: f64,
@@ -228,8 +306,45 @@ impl PurgeShiftConfig {
         };
         let fallback = match self.fallback.as_str() {
             "partial" => Fallback::Partial,
+            "block" => Fallback::Block,
+            "tower" => Fallback::Tower,
             other => return Err(ConfigError::Fallback(other.to_string())),
         };
+        let b = &self.block;
+        for (what, v) in [
+            ("block.travel_feed_mm_min", b.travel_feed_mm_min),
+            ("block.extrude_feed_mm_min", b.extrude_feed_mm_min),
+            ("block.retract_feed_mm_min", b.retract_feed_mm_min),
+            ("block.z_feed_mm_min", b.z_feed_mm_min),
+        ] {
+            positive(what, v)?;
+        }
+        let t = &self.tower;
+        for (what, v) in [
+            ("tower.bed_mm", t.bed_mm[0]),
+            ("tower.bed_mm", t.bed_mm[1]),
+            ("tower.line_width_mm", t.line_width_mm),
+            ("tower.layer_height_mm", t.layer_height_mm),
+            ("tower.travel_feed_mm_min", t.travel_feed_mm_min),
+            ("tower.extrude_feed_mm_min", t.extrude_feed_mm_min),
+            ("tower.retract_feed_mm_min", t.retract_feed_mm_min),
+        ] {
+            positive(what, v)?;
+        }
+        for (what, v) in [
+            ("block.retract_mm", b.retract_mm),
+            ("block.lift_mm", b.lift_mm),
+            ("block.wipe_mm", b.wipe_mm),
+            ("tower.lift_mm", t.lift_mm),
+            ("tower.gap_mm", t.gap_mm),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(ConfigError::Negative { what, value: v });
+            }
+        }
+        if t.x_mm.is_some() != t.y_mm.is_some() {
+            return Err(ConfigError::Tower);
+        }
         let mut rules = Rules {
             default_mm,
             pairs,
@@ -242,6 +357,8 @@ impl PurgeShiftConfig {
             allowed,
             markers,
             fallback,
+            block: self.block,
+            tower: self.tower,
             max_window_lines: self.max_window_lines.max(16),
             max_purge_mm: 0.0,
         };
@@ -262,6 +379,8 @@ pub struct Overrides {
     pub allow_features: Option<Vec<String>>,
     pub markers: Option<[String; 2]>,
     pub fallback: Option<String>,
+    /// The tower fallback's corner, mm.
+    pub tower_xy_mm: Option<[f64; 2]>,
 }
 
 impl PurgeShiftConfig {
@@ -285,6 +404,9 @@ impl PurgeShiftConfig {
         }
         if let Some(f) = &o.fallback {
             self.fallback = f.clone();
+        }
+        if let Some([x, y]) = o.tower_xy_mm {
+            (self.tower.x_mm, self.tower.y_mm) = (Some(x), Some(y));
         }
     }
 }
@@ -393,7 +515,12 @@ mod tests {
         assert_eq!(err(""), ConfigError::NoPurge);
         assert_eq!(err("purge_mm = -1.0"), ConfigError::NotPositive { what: "purge_mm", value: -1.0 });
         assert_eq!(err("purge_mm = 1.0\npurge_mm3 = 2.0"), ConfigError::BothPurges);
-        assert_eq!(err("purge_mm = 1.0\nfallback = \"tower\""), ConfigError::Fallback("tower".into()));
+        assert_eq!(err("purge_mm = 1.0\nfallback = \"wipe\""), ConfigError::Fallback("wipe".into()));
+        assert_eq!(err("purge_mm = 1.0\n[tower]\nx_mm = 5.0"), ConfigError::Tower);
+        assert!(matches!(
+            err("purge_mm = 1.0\n[block]\nlift_mm = -1.0"),
+            ConfigError::Negative { what: "block.lift_mm", .. }
+        ));
         assert!(matches!(err("purge_mm = 1.0\nallow_features = [\"walls\"]"), ConfigError::Feature(_)));
         assert!(matches!(err("purge_mm = 1.0\nbogus = 1"), ConfigError::Toml(_)));
         assert_eq!(err("purge_mm = 1.0\nmarkers = [\"\", \"end\"]"), ConfigError::Markers);

@@ -28,7 +28,9 @@
 //!   (the change must not be moved before the definition of its own tool), at numbered or
 //!   checksummed moves (which cannot be rewritten), and outside the print proper.
 //! - Too little room: the change goes as far back as allowed, a warning names layer, line and
-//!   shortfall, and the shortfall is accepted (`partial`, the only fallback implemented).
+//!   shortfall, and the fallback applies: accept the shortfall (`partial`), or purge it right
+//!   after the change in a purge block (`block`) or on a small tower beside the part (`tower`),
+//!   returning to the exact position ([`fallback`]).
 //!
 //! ## Bounded memory
 //! The pass streams. It holds back only the lines a later change could still be moved before:
@@ -48,6 +50,7 @@
 //! ```
 
 pub mod config;
+mod fallback;
 pub mod report;
 mod split;
 
@@ -55,7 +58,7 @@ use std::collections::VecDeque;
 use std::io::{self, Write};
 use std::path::Path;
 
-pub use config::{ConfigError, Fallback, Overrides, PurgeShiftConfig, Rules};
+pub use config::{ConfigError, Fallback, Overrides, PurgeShiftConfig, Rules, TowerConfig};
 pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
 
 use crate::colour::dialect::MixingState;
@@ -67,6 +70,8 @@ use crate::gcode::reader::RawLine;
 use crate::gcode::state::{Effect, StateOptions, X, Y, Z};
 use crate::gcode::writer::Target;
 use crate::pass::{drive_reader, Ctx, OwnedLine, Pass, Progress, Quiet, Run, Strictness};
+use crate::post::purge_block::{purge_start_pos, PurgeStart};
+use fallback::{write_fallback, Spot, Surroundings};
 use split::{split, Splittable};
 
 /// Extrusion below this is a rounding remainder, not a piece of move worth splitting off, mm.
@@ -128,6 +133,11 @@ pub struct PurgeShift {
     group_before: Option<Colour>,
     /// The group started inside the print proper.
     group_in_print: bool,
+    /// Where the group stands in the input: the machine, the layer and the feature there.
+    group_spot: Option<Spot>,
+    group_layer: Option<u32>,
+    group_feature: Feature,
+    env: Surroundings,
     mixing: MixingState,
     colour: Colour,
     out_lines: u64,
@@ -154,6 +164,10 @@ impl PurgeShift {
             group_tail: Vec::new(),
             group_before: None,
             group_in_print: false,
+            group_spot: None,
+            group_layer: None,
+            group_feature: Feature::Unknown,
+            env: Surroundings::default(),
             mixing,
             colour,
             out_lines: 0,
@@ -310,6 +324,23 @@ impl PurgeShift {
         Ok(())
     }
 
+    /// The machine as `state` leaves it, with the retraction in force (the file's E-only
+    /// retractions and a firmware `G10`).
+    fn spot_here(&self, state: &crate::gcode::state::State) -> Spot {
+        let fw_mm = if state.fw_retracted { state.fw_retract_mm } else { 0.0 };
+        Spot {
+            start: PurgeStart {
+                pos: purge_start_pos(&state.pos),
+                absolute_xyz: state.absolute,
+                relative_e: state.relative_e(),
+                feed_mm_min: state.feed_mm_min,
+                rapid_mode: state.motion == crate::gcode::state::Motion::Rapid,
+                retracted_mm: self.env.retracted_mm() + fw_mm,
+            },
+            inches: state.inches,
+        }
+    }
+
     fn held(&mut self, line: OwnedLine, kind: Kind, layer: Option<u32>, feature: Feature) -> Held {
         self.seq += 1;
         Held { line, kind, layer, feature, seq: self.seq }
@@ -344,38 +375,41 @@ impl PurgeShift {
             earliest = Some(i);
         }
         let place = place.or(earliest.map(|i| (i, None)));
-        let achieved_mm = requested_mm - need;
+        let moved_mm = requested_mm - need;
         let mut change = ChangeReport {
             from_tool,
             to_tool,
             change_lines: group.iter().map(|l| l.number).collect(),
             output_line: 0,
             requested_mm,
-            achieved_mm,
+            achieved_mm: moved_mm,
             shortfall_mm: need,
+            moved_mm,
+            fallback_mm: 0.0,
+            fallback_lines: 0,
             requested_mm3: self.rules.mm3(requested_mm),
-            achieved_mm3: self.rules.mm3(achieved_mm),
-            layer: None,
-            feature: Feature::Unknown,
+            achieved_mm3: 0.0,
+            layer: self.group_layer,
+            feature: self.group_feature,
             at_line: group[0].number,
             split: None,
             stopped_by: (need > 0.0).then_some(self.floor),
             residual_fraction: None,
             transition_mm: None,
         };
-        if let Some(w) = &self.rules.washout {
-            let achieved_mm3 = self.rules.mm3(achieved_mm);
-            change.residual_fraction = Some(w.residual_fraction(achieved_mm3));
-            let clean_mm3 = w.purge_for_tolerance_mm3(self.rules.tolerance).unwrap_or(0.0);
-            change.transition_mm = Some((clean_mm3 - achieved_mm3).max(0.0) / self.rules.mm3(1.0));
-        }
         let held: Vec<Held> = self.window.drain(..).collect();
         self.window_e_mm = 0.0;
         let (at, fraction) = place.unwrap_or((held.len(), None));
+        // Where the machine is when the change runs: before the move it now precedes, at the
+        // split point, or (not moved) where the change was.
+        let mut spot = self.group_spot;
         if let Some(h) = held.get(at) {
             change.layer = h.layer;
             change.feature = h.feature;
             change.at_line = h.line.number;
+            if let Kind::Extrude { split: s, .. } = &h.kind {
+                spot = Some(spot_of(s, &s.mv.from));
+            }
         }
         for h in &held[..at] {
             self.emit_line(out, &h.line)?;
@@ -386,9 +420,7 @@ impl PurgeShift {
                 let halves = split(&h.line.bytes, s, t);
                 self.emit(out, &halves.first, &h.line.eol)?;
                 change.output_line = self.out_lines + 1;
-                for line in group {
-                    self.emit_line(out, line)?;
-                }
+                self.emit_change(out, group, &mut change, Some(spot_of(s, &s.end_of(&halves.first))))?;
                 match &halves.second {
                     Some(second) => self.emit(out, second, &h.line.eol)?,
                     None => self.emit_line(out, &h.line)?,
@@ -401,9 +433,7 @@ impl PurgeShift {
         }
         if change.split.is_none() {
             change.output_line = self.out_lines + 1;
-            for line in group {
-                self.emit_line(out, line)?;
-            }
+            self.emit_change(out, group, &mut change, spot)?;
         }
         for h in &held[rest..] {
             self.emit_line(out, &h.line)?;
@@ -411,19 +441,78 @@ impl PurgeShift {
         let room = SPARE_LINES.saturating_sub(self.spare.len());
         self.spare.extend(held.into_iter().take(room).map(|h| h.line));
         self.floor = "the previous change";
-        if change.shortfall_mm > 1e-9 {
-            self.report.warn(format!(
-                "layer {}, line {}: T{from_tool}->T{to_tool} purge short by {:.3} mm ({:.3} of {:.3} mm; stopped by {})",
-                change.layer.map_or("-".into(), |l| l.to_string()),
-                group[0].number,
-                change.shortfall_mm,
-                achieved_mm,
-                requested_mm,
-                change.stopped_by.unwrap_or_default()
-            ));
+        change.achieved_mm3 = self.rules.mm3(change.achieved_mm);
+        if let Some(w) = &self.rules.washout {
+            change.residual_fraction = Some(w.residual_fraction(change.achieved_mm3));
+            let clean_mm3 = w.purge_for_tolerance_mm3(self.rules.tolerance).unwrap_or(0.0);
+            change.transition_mm = Some((clean_mm3 - change.achieved_mm3).max(0.0) / self.rules.mm3(1.0));
         }
-        self.report.changes.push(change);
+        self.report.add(change)
+    }
+
+    /// Writes the change lines, then the fallback purge of what the move back could not find,
+    /// and warns about that shortfall.
+    fn emit_change(
+        &mut self,
+        out: &mut dyn Write,
+        group: &[OwnedLine],
+        change: &mut ChangeReport,
+        spot: Option<Spot>,
+    ) -> io::Result<()> {
+        for line in group {
+            self.emit_line(out, line)?;
+        }
+        let short_mm = change.shortfall_mm;
+        if short_mm <= 1e-9 {
+            return Ok(());
+        }
+        let (from, to) = (change.from_tool, change.to_tool);
+        let label = format!("T{from}->T{to} shortfall");
+        let text = spot.and_then(|spot| {
+            write_fallback(&self.rules, &mut self.env, &spot, change.layer, short_mm, &label)
+        });
+        let how = match (&text, spot) {
+            (Some(_), _) => format!("; the rest purged by the {} fallback", self.rules.fallback.name()),
+            (None, Some(s)) if s.inches && self.rules.fallback != Fallback::Partial => {
+                "; no fallback purge: the file is in inches".into()
+            }
+            _ => String::new(),
+        };
+        self.report.warn(format!(
+            "layer {}, line {}: T{from}->T{to} purge short by {short_mm:.3} mm ({:.3} of {:.3} mm; stopped by {}){how}",
+            change.layer.map_or("-".into(), |l| l.to_string()),
+            change.change_lines[0],
+            change.moved_mm,
+            change.requested_mm,
+            change.stopped_by.unwrap_or_default(),
+        ));
+        if let Some(text) = text {
+            let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
+            for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
+                self.emit(out, line, &eol)?;
+                change.fallback_lines += 1;
+            }
+            change.fallback_mm = short_mm;
+            change.achieved_mm += short_mm;
+            change.shortfall_mm = 0.0;
+        }
         Ok(())
+    }
+}
+
+/// The machine at `pos` on the held move `s` (the move's own modes; no retraction in force
+/// before an extruding move).
+fn spot_of(s: &Splittable, pos: &crate::gcode::state::Position) -> Spot {
+    Spot {
+        start: PurgeStart {
+            pos: purge_start_pos(pos),
+            absolute_xyz: !s.relative_axes,
+            relative_e: s.relative_e,
+            feed_mm_min: s.mv.feed_mm_min,
+            rapid_mode: s.mv.rapid,
+            retracted_mm: 0.0,
+        },
+        inches: s.inches,
     }
 }
 
@@ -459,10 +548,17 @@ impl Pass for PurgeShift {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
+        if let Effect::Move(m) = ctx.effect {
+            self.env.observe(m, in_print);
+        }
         if is_change_line(ctx.block) {
+            self.env.tool_change();
             if self.group_before.is_none() {
                 self.group_before = Some(self.colour.clone());
                 self.group_in_print = in_print;
+                self.group_spot = Some(self.spot_here(ctx.state));
+                self.group_layer = structure.layer;
+                self.group_feature = structure.feature;
             }
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
@@ -524,12 +620,9 @@ impl Pass for PurgeShift {
         self.close_group(out)?;
         self.flush(out, "the end of the file")?;
         let r = &mut self.report;
-        r.requested_mm = r.changes.iter().map(|c| c.requested_mm).sum();
-        r.achieved_mm = r.changes.iter().map(|c| c.achieved_mm).sum();
-        r.shortfall_mm = r.changes.iter().map(|c| c.shortfall_mm).sum();
-        r.saved_mm = r.achieved_mm;
-        r.saved_mm3 = self.rules.mm3(r.achieved_mm);
-        Ok(())
+        r.saved_mm = r.moved_mm;
+        r.saved_mm3 = self.rules.mm3(r.moved_mm);
+        r.changes.flush()
     }
 }
 

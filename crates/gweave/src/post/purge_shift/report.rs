@@ -1,6 +1,16 @@
 //! What the pass did: one entry per change, and totals against a wipe tower.
+//!
+//! The entries are the only part of the pass that grows with the file (about 230 bytes of JSON
+//! a change). [`ChangeLog`] keeps the first [`KEPT_CHANGES`] in memory and writes the rest, as
+//! they come, as JSON lines to an unnamed temporary file, read back one at a time when the
+//! report is serialised: memory stays bounded, and the JSON report still has every entry.
 
-use serde::Serialize;
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, BufWriter, Seek, SeekFrom, Write};
+use std::ops::Deref;
+
+use serde::ser::{Error as _, SerializeSeq};
+use serde::{Serialize, Serializer};
 
 use crate::gcode::layers::Feature;
 
@@ -25,8 +35,16 @@ pub struct ChangeReport {
     /// Output line number of the first moved line.
     pub output_line: u64,
     pub requested_mm: f64,
+    /// Purge done: `moved_mm + fallback_mm`.
     pub achieved_mm: f64,
+    /// What is missing of the purge after the fallback (`partial`: all that could not move).
     pub shortfall_mm: f64,
+    /// Purge printed along the old colour's path, by moving the change.
+    pub moved_mm: f64,
+    /// Purge extruded by the `block` or `tower` fallback right after the change.
+    pub fallback_mm: f64,
+    /// Lines the fallback inserted right after the change lines (in the output).
+    pub fallback_lines: u64,
     pub requested_mm3: f64,
     pub achieved_mm3: f64,
     /// Layer (0-based) and feature where the change now sits.
@@ -45,17 +63,102 @@ pub struct ChangeReport {
     pub transition_mm: Option<f64>,
 }
 
+/// Entries held in memory; later ones go to a temporary file.
+pub const KEPT_CHANGES: usize = 1000;
+
+/// The per-change entries: the first [`KEPT_CHANGES`] in memory (this dereferences to them),
+/// the rest spilled to a temporary file; all of them serialise, in order, as one JSON array.
+#[derive(Debug, Default)]
+pub struct ChangeLog {
+    kept: Vec<ChangeReport>,
+    spill: Option<BufWriter<File>>,
+    total: usize,
+}
+
+impl ChangeLog {
+    /// Adds an entry: in memory while there is room, else as a JSON line in the spill file.
+    pub fn push(&mut self, change: ChangeReport) -> io::Result<()> {
+        self.total += 1;
+        if self.kept.len() < KEPT_CHANGES {
+            self.kept.push(change);
+            return Ok(());
+        }
+        let spill = match &mut self.spill {
+            Some(s) => s,
+            None => self.spill.insert(BufWriter::new(tempfile::tempfile()?)),
+        };
+        serde_json::to_writer(&mut *spill, &change)?;
+        spill.write_all(b"\n")
+    }
+
+    /// All entries, those in memory and those spilled.
+    pub fn total(&self) -> usize {
+        self.total
+    }
+
+    /// Entries in the spill file (0 for a file with up to [`KEPT_CHANGES`] changes).
+    pub fn spilled(&self) -> usize {
+        self.total - self.kept.len()
+    }
+
+    /// Writes out what is buffered of the spill file (the pass calls it at the end).
+    pub fn flush(&mut self) -> io::Result<()> {
+        self.spill.as_mut().map_or(Ok(()), |s| s.flush())
+    }
+}
+
+impl Deref for ChangeLog {
+    type Target = [ChangeReport];
+    fn deref(&self) -> &[ChangeReport] {
+        &self.kept
+    }
+}
+
+impl<'a> IntoIterator for &'a ChangeLog {
+    type Item = &'a ChangeReport;
+    type IntoIter = std::slice::Iter<'a, ChangeReport>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.kept.iter()
+    }
+}
+
+impl Serialize for ChangeLog {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut seq = serializer.serialize_seq(Some(self.total))?;
+        for c in &self.kept {
+            seq.serialize_element(c)?;
+        }
+        if let Some(spill) = &self.spill {
+            // `&File` reads and seeks through a shared reference; the pass flushed the buffer.
+            let mut file = spill.get_ref();
+            file.seek(SeekFrom::Start(0)).map_err(S::Error::custom)?;
+            for line in BufReader::new(file).lines() {
+                let line = line.map_err(S::Error::custom)?;
+                let entry: serde_json::Value = serde_json::from_str(&line).map_err(S::Error::custom)?;
+                seq.serialize_element(&entry)?;
+            }
+        }
+        seq.end()
+    }
+}
+
 /// The whole run.
-#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+#[derive(Debug, Serialize, Default)]
 pub struct PurgeShiftReport {
-    pub changes: Vec<ChangeReport>,
+    pub changes: ChangeLog,
     /// Changes outside the print proper (start/end G-code), left alone.
     pub untouched_changes: u64,
     pub requested_mm: f64,
     pub achieved_mm: f64,
     pub shortfall_mm: f64,
+    /// Of the achieved purge: moved into the old colour's path, and purged by the fallback.
+    pub moved_mm: f64,
+    pub fallback_mm: f64,
+    /// Changes that got the whole purge (moved and fallback together).
+    pub full_changes: u64,
     /// Filament a wipe tower purging the same amount would have wasted, and so what printing the
-    /// purge inside the part saves: mm of filament and mm^3.
+    /// purge inside the part saves: mm of filament and mm^3 (the moved purge; a fallback's
+    /// purge is waste like the tower's).
     pub saved_mm: f64,
     pub saved_mm3: f64,
     pub filament_diameter_mm: f64,
@@ -71,6 +174,17 @@ pub struct PurgeShiftReport {
 pub const MAX_WARNINGS: usize = 1000;
 
 impl PurgeShiftReport {
+    /// Counts a change into the totals and logs its entry.
+    pub(crate) fn add(&mut self, c: ChangeReport) -> io::Result<()> {
+        self.requested_mm += c.requested_mm;
+        self.achieved_mm += c.achieved_mm;
+        self.shortfall_mm += c.shortfall_mm;
+        self.moved_mm += c.moved_mm;
+        self.fallback_mm += c.fallback_mm;
+        self.full_changes += u64::from(c.shortfall_mm <= 1e-9);
+        self.changes.push(c)
+    }
+
     pub(crate) fn warn(&mut self, text: String) {
         self.warnings_total += 1;
         if self.warnings.len() < MAX_WARNINGS {
@@ -82,13 +196,20 @@ impl PurgeShiftReport {
     pub fn summary(&self) -> String {
         use std::fmt::Write;
         let mut s = String::new();
-        let full = self.changes.iter().filter(|c| c.shortfall_mm <= 1e-9).count();
-        let _ = writeln!(s, "changes moved    {} ({} with the full purge)", self.changes.len(), full);
+        let total = self.changes.total();
+        let _ = writeln!(s, "changes moved    {} ({} with the full purge)", total, self.full_changes);
         let _ = writeln!(
             s,
             "purge            {:.2} of {:.2} mm requested (short by {:.2} mm)",
             self.achieved_mm, self.requested_mm, self.shortfall_mm
         );
+        if self.fallback_mm > 0.0 {
+            let _ = writeln!(
+                s,
+                "fallback         {:.2} mm purged after the change ({:.2} mm moved into the part)",
+                self.fallback_mm, self.moved_mm
+            );
+        }
         let _ = writeln!(
             s,
             "saved vs tower   {:.2} mm of filament ({:.1} mm3, {} mm filament)",
@@ -114,8 +235,8 @@ impl PurgeShiftReport {
                 c.residual_fraction.map(|r| format!("  residual {:.1} %", r * 100.0)).unwrap_or_default()
             );
         }
-        if self.changes.len() > 20 {
-            let _ = writeln!(s, "  ... {} more (see --json)", self.changes.len() - 20);
+        if total > 20 {
+            let _ = writeln!(s, "  ... {} more (see --json)", total - 20);
         }
         s
     }

@@ -76,6 +76,21 @@ impl Splittable {
         p
     }
 
+    /// Where the machine is after `line`, a half [`split`] wrote for this move: its words read
+    /// back as the firmware reads them (rounded as written), so what is inserted after the half
+    /// starts from exactly the position the file has there.
+    pub fn end_of(&self, line: &[u8]) -> Position {
+        let mut block = Block::default();
+        parse_into(line, &mut block);
+        let mut p = self.mv.from;
+        for w in &block.words {
+            let (Some(axis), Some(v)) = (axis_of(w.letter), w.number()) else { continue };
+            let v = v * self.unit();
+            p[axis] = if self.relative(axis) { self.mv.from[axis] + v } else { v };
+        }
+        p
+    }
+
     /// Millimetres per file unit (G20 makes every axis, E included, inches).
     fn unit(&self) -> f64 {
         if self.inches {

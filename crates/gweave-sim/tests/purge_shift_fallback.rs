@@ -1,0 +1,57 @@
+//! purge-shift's `block` and `tower` fallbacks through the virtual printer: on the default
+//! machine the shifted file feeds exactly the fallback purge more filament than the original,
+//! ends at the same place with the same step counts on X Y Z, and no move leaves the bed.
+
+use std::path::PathBuf;
+
+use gweave::post::purge_shift::{purge_shift_bytes, PurgeShiftConfig};
+use gweave_sim::interp::{Machine, SimReport};
+use gweave_sim::profile::MachineProfile;
+
+fn fixture(rel: &str) -> Vec<u8> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel);
+    std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+fn sim(text: &[u8]) -> SimReport {
+    let mut m = Machine::new(MachineProfile::default()).unwrap();
+    let mut out = |_t: f64, _l: &str| {};
+    for line in text.split(|&b| b == b'\n') {
+        m.execute(line, &mut out);
+    }
+    m.finish(&mut out);
+    m.report()
+}
+
+fn warnings(r: &SimReport, kind: &str) -> u64 {
+    r.warning_counts.get(kind).copied().unwrap_or(0)
+}
+
+#[test]
+fn fallbacks_feed_the_shortfall_and_stay_on_the_bed() {
+    for file in ["slic3r/slic3r_cone_2tool.gcode", "prusaslicer/pr_bunny_3tool_rel.gcode"] {
+        let input = fixture(file);
+        let before = sim(&input);
+        for fallback in ["block", "tower"] {
+            let rules =
+                PurgeShiftConfig::from_toml(&format!("purge_mm = 2.5\nfallback = \"{fallback}\"\n")).unwrap();
+            let (out, report) = purge_shift_bytes(rules, &input).unwrap();
+            assert!(report.fallback_mm > 10.0, "{file} {fallback}: {}", report.fallback_mm);
+            let after = sim(&out);
+            let fed = |r: &SimReport| r.filament_mm.iter().sum::<f64>();
+            assert!(
+                (fed(&after) - fed(&before) - report.fallback_mm).abs() < 1e-6,
+                "{file} {fallback}: {} -> {} (+{})",
+                fed(&before),
+                fed(&after),
+                report.fallback_mm
+            );
+            assert_eq!(after.position[..3], before.position[..3], "{file} {fallback}");
+            assert_eq!(after.count[..3], before.count[..3], "{file} {fallback}");
+            for kind in ["out_of_bounds", "below_bed"] {
+                assert_eq!(warnings(&after, kind), warnings(&before, kind), "{file} {fallback}: {kind}");
+            }
+            assert!(!after.halted);
+        }
+    }
+}
