@@ -313,7 +313,7 @@ impl Thermal {
                 id,
                 plant,
                 control: control.build()?,
-                protection: Protection::new(id, protection),
+                protection: Protection::new(id, protection, wait.hysteresis_c),
                 wait,
                 max_target_c: protection.max_temp_c - overshoot,
                 target_c: 0.0,
