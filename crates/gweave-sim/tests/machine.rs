@@ -150,6 +150,8 @@ fn every_slicer_fixture_runs_without_a_thermal_error() {
         // It ran to the end: every line was executed, and the hotend heated.
         assert_eq!(lines, text.split(|&b| b == b'\n').count(), "{name}");
         assert!(rep.heaters[0].max_c > 190.0, "{name}: {:?}", rep.heaters[0]);
+        // Every E step belongs to exactly one tool.
+        assert_eq!(rep.steps.tools.iter().sum::<u64>(), rep.steps.axes[3], "{name}");
     }
 }
 

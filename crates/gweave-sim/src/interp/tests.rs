@@ -194,6 +194,41 @@ fn mixing_inputs_share_e_by_the_virtual_tool() {
     assert_eq!(rep.mixing_input_mm, vec![60.0, 30.0, 20.0, 0.0]);
     assert_eq!(rep.filament_mm, vec![10.0, 0.0, 100.0]);
     assert_eq!(rep.steps.mixing, vec![30_000, 15_000, 10_000, 0]);
+    // E steps by virtual tool: 100 mm under T2, 10 mm under T0; the invalid T99 changed nothing.
+    assert_eq!(rep.steps.tools, vec![5_000, 0, 50_000]);
+}
+
+#[test]
+fn e_steps_and_filament_per_tool_on_two_hotends() {
+    let mut p = MachineProfile::default();
+    p.thermal.hotends = vec![crate::heater::HeaterConfig::hotend_40w(); 2];
+    p.thermal.extrude_min_c = None;
+    let mut m = Machine::new(p).unwrap();
+    // Relative E at 500 steps/mm. T0: 2.5 out, 0.8 back, 0.8 out; T1: 1.2 and 0.0031 (the motor
+    // goes from 1850 to round(3.7031 * 500) = 1852: 2 steps); T0 again: 1 mm; T2 does not exist.
+    let (r, _) = run(
+        &mut m,
+        "M83
+T0
+G1 X10 E2.5 F1200
+G1 E-0.8
+G1 E0.8
+T1
+G1 X20 E1.2
+G1 X30 E0.0031
+T2
+         T0
+G1 X40 E1
+M400",
+    );
+    assert_eq!(r, ["echo:T2 Invalid extruder"]);
+    let rep = m.report();
+    assert_eq!(rep.steps.tools, vec![1250 + 400 + 400 + 500, 600 + 2]);
+    assert_eq!(rep.steps.axes[3], 2550 + 602);
+    assert_eq!(rep.count[3], 2352);
+    assert!((rep.filament_mm[0] - 3.5).abs() < 1e-12, "{:?}", rep.filament_mm);
+    assert!((rep.filament_mm[1] - 1.2031).abs() < 1e-12, "{:?}", rep.filament_mm);
+    assert_eq!(rep.filament_mm.len(), 2);
 }
 
 #[test]
