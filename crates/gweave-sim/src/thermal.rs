@@ -627,7 +627,8 @@ impl Thermal {
     }
 
     /// Poll a wait after stepping. Marlin's rule: with `S` (heat only) a
-    /// heater already above its target is done at once; otherwise a
+    /// heater already above its target when the wait starts is done at
+    /// once; otherwise a
     /// residency timer starts once the reading is within `window_c` of the
     /// target (starting `residency_s / 3` late if it already was at the
     /// first poll), restarts whenever the reading strays beyond
@@ -641,7 +642,9 @@ impl Thermal {
         };
         let now_s = self.now_s;
         let first = std::mem::replace(&mut wait.first_poll, false);
-        if wait.mode == WaitMode::HeatOnly && ch.reading_c > ch.target_c {
+        // Marlin decides "wants to cool" when the wait starts (and again only if the target
+        // changes); later the residency alone ends the wait, overshoot or not.
+        if first && wait.mode == WaitMode::HeatOnly && ch.reading_c > ch.target_c {
             return WaitStatus::Reached;
         }
         let off_c = (ch.target_c - ch.reading_c).abs();
@@ -658,6 +661,17 @@ impl Thermal {
             Some(start_s) if now_s - start_s >= w.residency_s => WaitStatus::Reached,
             _ => WaitStatus::Waiting,
         }
+    }
+
+    /// Whole seconds of residency left in a wait, as Marlin prints after ` W:` in the M109/M190
+    /// status lines: `None` (printed `?`) until the residency timer has started. Marlin computes
+    /// it in milliseconds and divides by 1000, truncating.
+    pub fn residency_left_s(&self, wait: &TempWait) -> Option<u64> {
+        let start_s = wait.residency_start_s?;
+        let residency_s = self.channel(wait.heater).map_or(0.0, |c| c.wait.residency_s);
+        let ms = |t_s: f64| (t_s * 1000.0).round() as i64;
+        let left_ms = ms(residency_s) - (ms(self.now_s) - ms(start_s));
+        Some((left_ms.max(0) / 1000) as u64)
     }
 
     /// The M105 status, exactly as Marlin formats it (without the leading

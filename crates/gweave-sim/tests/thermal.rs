@@ -249,6 +249,10 @@ fn is_at_target_checks_the_window() {
     th.set_target(T0, 210.0).unwrap();
     assert!(!th.is_at_target(T0, WaitMode::HeatOnly).unwrap());
     wait_for(&mut th, T0, WaitMode::HeatOnly, 300.0);
+    // The residency ends the wait within TEMP_HYSTERESIS; a minute later the PID holds the
+    // window.
+    assert!((th.temperature(T0).unwrap() - 210.0).abs() < 3.0);
+    assert_eq!(th.step(60.0), None);
     assert!(th.is_at_target(T0, WaitMode::Both).unwrap());
     th.set_target(T0, 150.0).unwrap();
     assert!(th.is_at_target(T0, WaitMode::HeatOnly).unwrap());

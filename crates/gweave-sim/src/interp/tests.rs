@@ -142,7 +142,18 @@ fn m109_waits_reporting_every_second() {
     assert!(stamped.iter().all(|(_, l)| l.starts_with(" T:")));
     assert_eq!(stamped.len(), waited.floor() as usize);
     assert!((stamped[0].0 - 1.0).abs() < 1e-9 && (stamped[1].0 - 2.0).abs() < 1e-9);
-    assert!(m.thermal().temperature(HeaterId::Hotend(0)).unwrap() > 199.0);
+    // Marlin's ` W:`: `?` until the reading is within TEMP_WINDOW (1 C) of the target, then the
+    // residency (10 s) counting down in whole seconds to the end of the wait.
+    let w: Vec<&str> = stamped.iter().map(|(_, l)| l.rsplit_once(" W:").unwrap().1).collect();
+    let first = w.iter().position(|x| *x != "?").unwrap();
+    let counted: Vec<u64> = w[first..].iter().map(|x| x.parse().unwrap()).collect();
+    assert_eq!(counted, (0..counted.len() as u64).rev().collect::<Vec<_>>(), "{w:?}");
+    assert!((9..=10).contains(&counted.len()), "{w:?}");
+    let at_start: f64 = stamped[first].1[3..].split(' ').next().unwrap().parse().unwrap();
+    assert!((at_start - 200.0).abs() < 1.0, "{at_start}");
+    assert!(waited - stamped[first].0 > 9.0, "{waited}");
+    // The residency ends it, overshoot or not: within TEMP_HYSTERESIS (3 C) of the target.
+    assert!((m.thermal().temperature(HeaterId::Hotend(0)).unwrap() - 200.0).abs() < 3.0);
     assert_eq!(m.report().time.heating_s, waited);
 }
 
@@ -246,7 +257,7 @@ fn rrf_tool_temperature_and_m116() {
     let mut m = machine();
     let (r, _) = run(&mut m, "G10 P0 S200\nM116\nG1 X10 E1 F600\nG10\nM400");
     assert!(r.iter().all(|l| l.starts_with(" T:")), "{r:?}");
-    assert!(m.thermal().temperature(HeaterId::Hotend(0)).unwrap() > 199.0);
+    assert!((m.thermal().temperature(HeaterId::Hotend(0)).unwrap() - 200.0).abs() < 3.0);
     // G10 without words is still a firmware retraction (1 mm by default).
     assert_eq!(m.report().count[3], 0);
     assert_eq!(m.report().filament_mm, vec![1.0]);
