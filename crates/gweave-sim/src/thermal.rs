@@ -679,12 +679,32 @@ impl Thermal {
     /// hotends the active one as `T:` then `T0:`, `T1:`... after the bed,
     /// and `@0:`, `@1:`... after `B@:`.
     pub fn m105_report(&self) -> String {
+        self.status(self.active)
+    }
+
+    /// The status line Marlin 2.x prints every second during M109/M190
+    /// (`wait_for_hotend`/`wait_for_bed`), with its leading space: the
+    /// M105 status of the hotend waited for (the active one for the bed)
+    /// and ` W:` with [`Thermal::residency_left_s`], `?` before it starts:
+    /// ` T:199.48 /200.00 B:25.00 /0.00 @:22 B@:0 W:9`.
+    pub fn wait_status_line(&self, wait: &TempWait) -> String {
+        let hotend = match wait.heater {
+            HeaterId::Hotend(n) => n,
+            HeaterId::Bed => self.active,
+        };
+        let left = self.residency_left_s(wait).map_or("?".to_owned(), |s| s.to_string());
+        format!(" {} W:{left}", self.status(hotend))
+    }
+
+    /// The M105 fields with `hotend` as `T:` and `@:` (Marlin's
+    /// `print_heater_states(target_extruder)`).
+    fn status(&self, hotend: u8) -> String {
         use std::fmt::Write;
         let mut out = String::new();
         let hotends: Vec<&Channel> =
             self.channels.iter().filter(|c| matches!(c.id, HeaterId::Hotend(_))).collect();
         let bed = self.channels.iter().find(|c| c.id == HeaterId::Bed);
-        let active = hotends[usize::from(self.active)];
+        let active = hotends[usize::from(hotend).min(hotends.len() - 1)];
         let _ = write!(out, "T:{:.2} /{:.2}", active.reading_c, active.target_c);
         if let Some(b) = bed {
             let _ = write!(out, " B:{:.2} /{:.2}", b.reading_c, b.target_c);

@@ -152,8 +152,7 @@ impl Machine {
             }
             self.idle_for(step_s, out);
             if self.now_s() + 1e-9 >= report_s {
-                let left = self.thermal.residency_left_s(&wait).map_or("?".to_owned(), |s| s.to_string());
-                let text = format!(" {} W:{left}", self.thermal.m105_report());
+                let text = self.thermal.wait_status_line(&wait);
                 out(self.now_s(), &text);
                 report_s += WAIT_REPORT_S;
             }
