@@ -124,12 +124,14 @@ pub struct Estimate {
     pub steps: StepTotals,
 }
 
-/// What a block's time is attributed to, and the mix its E steps are split by.
+/// What a block's time is attributed to, the mix its E steps are split by and the tool they
+/// are counted for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct Key {
     layer: Option<u32>,
     feature: Feature,
     mix: usize,
+    tool: u32,
 }
 
 /// The sink side: times per key, steppers, the timeline.
@@ -150,6 +152,7 @@ impl BlockSink for Accounts {
         let d = block.duration_s();
         let key = self.keys[block.tag as usize];
         self.key_s[block.tag as usize] += d;
+        self.steppers.select_tool(key.tool as usize);
         self.steppers.step_block(block, &self.mixes[key.mix]);
         self.motion_s += d;
         self.t_s += d;
@@ -170,6 +173,8 @@ pub struct Estimator {
     /// The mixing commands' state, for a profile with mixing inputs.
     mixing: Option<MixingState>,
     mix: usize,
+    /// The selected tool (`T<n>` carried out by [`Estimator::run`]), for per-tool E steps.
+    tool: u32,
     klipper: bool,
     started: bool,
     motors_on: bool,
@@ -211,6 +216,7 @@ impl Estimator {
             mix_index: HashMap::new(),
             mixing,
             mix: 0,
+            tool: 0,
             klipper,
             started: false,
             motors_on: false,
@@ -374,7 +380,7 @@ impl Estimator {
     /// The tag for the current layer, feature and mix.
     fn tag(&mut self) -> u64 {
         let s = &self.state.structure;
-        let key = Key { layer: s.layer, feature: s.feature, mix: self.mix };
+        let key = Key { layer: s.layer, feature: s.feature, mix: self.mix, tool: self.tool };
         let acc = &mut self.acc;
         *self.key_index.entry(key).or_insert_with(|| {
             acc.keys.push(key);
@@ -529,13 +535,13 @@ impl Estimator {
     /// `T<n>`: on a mixing hotend, select virtual tool n (Marlin) or the tool's `M567` mix
     /// (RepRapFirmware).
     fn select_tool(&mut self, tool: u32) -> Result<(), EstimateError> {
-        let Some(mixing) = &mut self.mixing else {
-            return Ok(());
-        };
-        if mixing.rrf_mix(tool).is_none() {
-            let line = self.line;
-            mixing.select_tool(tool as usize).map_err(|source| EstimateError::Mixing { line, source })?;
+        if let Some(mixing) = &mut self.mixing {
+            if mixing.rrf_mix(tool).is_none() {
+                let line = self.line;
+                mixing.select_tool(tool as usize).map_err(|source| EstimateError::Mixing { line, source })?;
+            }
         }
+        self.tool = tool;
         self.refresh_mix();
         Ok(())
     }

@@ -10,11 +10,18 @@
 //!   open one reads cold and trips MINTEMP. We check MINTEMP whether or not
 //!   the heater has a target (our reading of Marlin's behaviour at boot with
 //!   a disconnected sensor).
-//! * **Heating watch** (`WATCH_TEMP_PERIOD`/`INCREASE`): when a target is
-//!   set well above the current reading (more than
-//!   `increase + hysteresis + 1` away), the reading must rise by `increase`
-//!   within `period`; if it did, the watch re-arms from the new reading,
-//!   otherwise "Heating failed". Catches a heater that never heats.
+//! * **Heating watch** (`WATCH_TEMP_PERIOD`/`INCREASE`, bed
+//!   `WATCH_BED_TEMP_*`): when a target is set well above the current
+//!   reading, the reading must rise by `increase` within `period`; if it
+//!   did, the watch re-arms from the new reading, otherwise "Heating
+//!   failed". Catches a heater that never heats. As in Marlin 2.x
+//!   (`HeaterWatch::restart` in `Marlin/src/module/temperature.h`) the
+//!   watch works in whole degrees (the float reading is truncated into a
+//!   `celsius_t`) and arms only when `reading + increase` is below
+//!   `target - TEMP_HYSTERESIS - 1`; `TEMP_HYSTERESIS` (3 C, bed
+//!   `TEMP_BED_HYSTERESIS` 3 C) is the M109/M190 settle band, not the
+//!   runaway hysteresis. A target more than `increase + 4` C above the
+//!   reading arms it; a closer one is left to the runaway check.
 //! * **Thermal runaway** (`THERMAL_PROTECTION_PERIOD`/`HYSTERESIS`): once
 //!   the reading has first reached the target, it may drop more than
 //!   `hysteresis` below the target for at most `period`; longer is a
@@ -133,11 +140,17 @@ enum Runaway {
     Stable { deadline_s: f64 },
 }
 
-/// An armed heating watch.
+/// An armed heating watch, in Marlin's whole degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Watch {
-    must_reach_c: f64,
+    must_reach_c: i32,
     deadline_s: f64,
+}
+
+/// A temperature as Marlin's `celsius_t` holds it: the float truncated
+/// toward zero into an integer.
+fn whole_degrees(celsius: f64) -> i32 {
+    celsius.trunc().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i32
 }
 
 /// The protection state of one heater.
@@ -145,14 +158,26 @@ struct Watch {
 pub struct Protection {
     heater: HeaterId,
     cfg: ProtectionConfig,
+    /// `TEMP_HYSTERESIS`: the watch arms only this far (plus 1 C) beyond
+    /// the increase.
+    watch_hysteresis_c: f64,
     runaway: Runaway,
     runaway_target_c: f64,
     watch: Option<Watch>,
 }
 
 impl Protection {
-    pub fn new(heater: HeaterId, cfg: ProtectionConfig) -> Self {
-        Self { heater, cfg, runaway: Runaway::Inactive, runaway_target_c: 0.0, watch: None }
+    /// The checks of `heater`; `watch_hysteresis_c` is Marlin's
+    /// `TEMP_HYSTERESIS` (the M109/M190 settle band, 3 C by default).
+    pub fn new(heater: HeaterId, cfg: ProtectionConfig, watch_hysteresis_c: f64) -> Self {
+        Self {
+            heater,
+            cfg,
+            watch_hysteresis_c,
+            runaway: Runaway::Inactive,
+            runaway_target_c: 0.0,
+            watch: None,
+        }
     }
 
     pub fn config(&self) -> &ProtectionConfig {
@@ -160,11 +185,13 @@ impl Protection {
     }
 
     /// Arm (or disarm) the heating watch after a new target was set
-    /// (M104/M109/M140/M190): armed only when the target is more than
-    /// `increase + hysteresis + 1` above what the increase would reach.
+    /// (M104/M109/M140/M190): in whole degrees, armed only when
+    /// `reading + increase < target - TEMP_HYSTERESIS - 1`.
     pub fn start_watching(&mut self, now_s: f64, temp_c: f64, target_c: f64) {
-        let must_reach_c = temp_c + self.cfg.watch_increase_c;
-        self.watch = (target_c > 0.0 && must_reach_c < target_c - self.cfg.runaway_hysteresis_c - 1.0)
+        let target = whole_degrees(target_c);
+        let must_reach_c = whole_degrees(temp_c) + whole_degrees(self.cfg.watch_increase_c);
+        let margin = whole_degrees(self.watch_hysteresis_c) + 1;
+        self.watch = (target != 0 && must_reach_c < target - margin)
             .then_some(Watch { must_reach_c, deadline_s: now_s + self.cfg.watch_period_s });
     }
 
@@ -180,7 +207,7 @@ impl Protection {
         }
         if let Some(w) = self.watch {
             if now_s >= w.deadline_s {
-                if temp_c < w.must_reach_c {
+                if whole_degrees(temp_c) < w.must_reach_c {
                     return fault(FaultKind::HeatingFailed);
                 }
                 self.start_watching(now_s, temp_c, target_c);
@@ -218,7 +245,7 @@ mod tests {
     use super::*;
 
     fn hotend() -> Protection {
-        Protection::new(HeaterId::Hotend(0), ProtectionConfig::hotend())
+        Protection::new(HeaterId::Hotend(0), ProtectionConfig::hotend(), 3.0)
     }
 
     #[test]
@@ -265,6 +292,7 @@ mod tests {
         p.start_watching(0.0, 25.0, 210.0);
         // Must reach 27 C by 20 s.
         assert_eq!(p.check(19.9, 25.0, 210.0), None);
+        // Whole degrees: 26.9 C counts as 26.
         let f = p.check(20.0, 26.9, 210.0).unwrap();
         assert_eq!((f.kind, f.at_s), (FaultKind::HeatingFailed, 20.0));
 
@@ -278,9 +306,13 @@ mod tests {
     #[test]
     fn watch_not_armed_close_to_target() {
         let mut p = hotend();
-        // 203 + 2 = 205 is not below 210 - 4 - 1 = 205: no watch.
-        p.start_watching(0.0, 203.0, 210.0);
-        assert_eq!(p.check(100.0, 203.0, 210.0), None);
+        // 204 + 2 = 206 is not below 210 - 3 - 1 = 206: no watch.
+        p.start_watching(0.0, 204.0, 210.0);
+        assert_eq!(p.check(100.0, 204.0, 210.0), None);
+        // 203.9 C is 203 in whole degrees: 205 < 206 arms it, and 204.99
+        // (204) by the deadline is not 205.
+        p.start_watching(0.0, 203.9, 210.0);
+        assert_eq!(p.check(20.0, 204.99, 210.0).map(|f| f.kind), Some(FaultKind::HeatingFailed));
         // Target 0 disarms.
         p.start_watching(0.0, 25.0, 0.0);
         assert_eq!(p.check(100.0, 25.0, 0.0), None);
@@ -305,7 +337,7 @@ mod tests {
 
     #[test]
     fn new_target_restarts_runaway_tracking() {
-        let mut p = Protection::new(HeaterId::Bed, ProtectionConfig::bed());
+        let mut p = Protection::new(HeaterId::Bed, ProtectionConfig::bed(), 3.0);
         assert_eq!(p.check(0.0, 60.0, 60.0), None);
         // Raising the target goes back to first heating: no runaway while
         // climbing towards 100 C.

@@ -372,3 +372,41 @@ proptest! {
         prop_assert_eq!(checksum_verdict(&line).is_none(), lexer_ok);
     }
 }
+
+/// `M109` over the protocol with the real interpreter: Marlin 2.x's status line every simulated
+/// second, ` T:<reading> /<target> B:.. /.. @:<power> B@:.. W:<residency left or ?>`, with the
+/// busy keepalive every 2 s, and `ok` when the residency has run out.
+#[test]
+fn m109_over_serial_prints_status_with_residency_countdown() {
+    let machine = crate::interp::Machine::new(Default::default()).unwrap();
+    let mut p = Protocol::new(machine, ProtocolConfig::default());
+    let mut log = Log::new();
+    p.feed(framed(1, &["M109 S200"]).as_bytes(), &mut |t, l| log.push((t, l.to_string())));
+    assert_eq!(log.last().unwrap().1, "ok");
+    let (status, other): (Log, Log) =
+        log[..log.len() - 1].iter().cloned().partition(|(_, l)| l.starts_with(" T:"));
+    // Keepalives every 2 s and nothing else.
+    assert!(other.iter().all(|(_, l)| l == "echo:busy: processing"), "{other:?}");
+    for (k, (t, _)) in other.iter().enumerate() {
+        assert!((t - 2.0 * (k + 1) as f64).abs() < 1e-9, "{other:?}");
+    }
+    let mut w = Vec::new();
+    for (k, (t, line)) in status.iter().enumerate() {
+        assert!((t - (k + 1) as f64).abs() < 1e-9, "{t} {line}");
+        let words: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(words.len(), 7, "{line}");
+        let reading: f64 = words[0].strip_prefix("T:").unwrap().parse().unwrap();
+        assert!(reading > 20.0 && reading < 205.0, "{line}");
+        assert_eq!(&words[1..4], ["/200.00", "B:25.00", "/0.00"], "{line}");
+        let power: u8 = words[4].strip_prefix("@:").unwrap().parse().unwrap();
+        assert!(power <= 127, "{line}");
+        assert_eq!(words[5], "B@:0", "{line}");
+        w.push(words[6].strip_prefix("W:").unwrap().to_owned());
+    }
+    // `?` while heating (about 74 s from 25 C), then 10 s of residency counted down to 0.
+    let first = w.iter().position(|x| x != "?").unwrap();
+    assert!((70..80).contains(&first), "{w:?}");
+    let counted: Vec<u64> = w[first..].iter().map(|x| x.parse().unwrap()).collect();
+    assert_eq!(counted, (0..counted.len() as u64).rev().collect::<Vec<_>>(), "{w:?}");
+    assert!((9..=10).contains(&counted.len()), "{w:?}");
+}

@@ -19,6 +19,10 @@
 //! inputs' totals always add up to exactly the E motor's total and each is within one step of
 //! its ideal. An input with its own steps/mm converts its share of E steps to its own steps from
 //! its cumulative total, again without drift.
+//!
+//! Tools: the E motor's steps are also counted per tool (`T<n>`, a virtual tool on a mixing
+//! hotend), for the tool the block was planned under ([`Steppers::select_tool`]), so the
+//! per-tool counts add up to the E motor's total.
 
 use crate::kinematics::Pos;
 use crate::limits::StepsPerUnit;
@@ -31,6 +35,8 @@ pub struct StepTotals {
     pub axes: [u64; 5],
     /// Steps per mixing input (empty without a mixing hotend).
     pub mixing: Vec<u64>,
+    /// E motor steps per tool T0..Tn (both directions count); they add up to `axes[3]`.
+    pub tools: Vec<u64>,
 }
 
 /// One axis' integer position and its anchor in the logical coordinates.
@@ -80,6 +86,8 @@ pub struct Steppers {
     axes: [AxisCounter; 5],
     mix: Vec<MixInput>,
     mix_delta: Vec<i64>,
+    /// The tool E steps are counted for.
+    tool: usize,
     totals: StepTotals,
 }
 
@@ -93,7 +101,8 @@ impl Steppers {
         Self {
             axes: spu.map(|steps_per_unit| AxisCounter { steps_per_unit, ..AxisCounter::default() }),
             mix_delta: vec![0; mix.len()],
-            totals: StepTotals { axes: [0; 5], mixing: vec![0; mix.len()] },
+            tool: 0,
+            totals: StepTotals { axes: [0; 5], mixing: vec![0; mix.len()], tools: vec![0] },
             mix,
         }
     }
@@ -117,8 +126,17 @@ impl Steppers {
         for (t, d) in self.totals.axes.iter_mut().zip(delta) {
             *t += d.unsigned_abs();
         }
+        self.totals.tools[self.tool] += delta[3].unsigned_abs();
         self.split_e(delta[3], mix_weights);
         delta
+    }
+
+    /// Count the E steps of the following moves for tool `tool` (T0 until called).
+    pub fn select_tool(&mut self, tool: usize) {
+        if self.totals.tools.len() <= tool {
+            self.totals.tools.resize(tool + 1, 0);
+        }
+        self.tool = tool;
     }
 
     /// [`Steppers::step_move`] for a planned block.

@@ -313,7 +313,7 @@ impl Thermal {
                 id,
                 plant,
                 control: control.build()?,
-                protection: Protection::new(id, protection),
+                protection: Protection::new(id, protection, wait.hysteresis_c),
                 wait,
                 max_target_c: protection.max_temp_c - overshoot,
                 target_c: 0.0,
@@ -627,7 +627,8 @@ impl Thermal {
     }
 
     /// Poll a wait after stepping. Marlin's rule: with `S` (heat only) a
-    /// heater already above its target is done at once; otherwise a
+    /// heater already above its target when the wait starts is done at
+    /// once; otherwise a
     /// residency timer starts once the reading is within `window_c` of the
     /// target (starting `residency_s / 3` late if it already was at the
     /// first poll), restarts whenever the reading strays beyond
@@ -641,7 +642,9 @@ impl Thermal {
         };
         let now_s = self.now_s;
         let first = std::mem::replace(&mut wait.first_poll, false);
-        if wait.mode == WaitMode::HeatOnly && ch.reading_c > ch.target_c {
+        // Marlin decides "wants to cool" when the wait starts (and again only if the target
+        // changes); later the residency alone ends the wait, overshoot or not.
+        if first && wait.mode == WaitMode::HeatOnly && ch.reading_c > ch.target_c {
             return WaitStatus::Reached;
         }
         let off_c = (ch.target_c - ch.reading_c).abs();
@@ -660,17 +663,48 @@ impl Thermal {
         }
     }
 
+    /// Whole seconds of residency left in a wait, as Marlin prints after ` W:` in the M109/M190
+    /// status lines: `None` (printed `?`) until the residency timer has started. Marlin computes
+    /// it in milliseconds and divides by 1000, truncating.
+    pub fn residency_left_s(&self, wait: &TempWait) -> Option<u64> {
+        let start_s = wait.residency_start_s?;
+        let residency_s = self.channel(wait.heater).map_or(0.0, |c| c.wait.residency_s);
+        let ms = |t_s: f64| (t_s * 1000.0).round() as i64;
+        let left_ms = ms(residency_s) - (ms(self.now_s) - ms(start_s));
+        Some((left_ms.max(0) / 1000) as u64)
+    }
+
     /// The M105 status, exactly as Marlin formats it (without the leading
     /// `ok `): `T:210.00 /210.00 B:60.00 /60.00 @:64 B@:0`; with several
     /// hotends the active one as `T:` then `T0:`, `T1:`... after the bed,
     /// and `@0:`, `@1:`... after `B@:`.
     pub fn m105_report(&self) -> String {
+        self.status(self.active)
+    }
+
+    /// The status line Marlin 2.x prints every second during M109/M190
+    /// (`wait_for_hotend`/`wait_for_bed`), with its leading space: the
+    /// M105 status of the hotend waited for (the active one for the bed)
+    /// and ` W:` with [`Thermal::residency_left_s`], `?` before it starts:
+    /// ` T:199.48 /200.00 B:25.00 /0.00 @:22 B@:0 W:9`.
+    pub fn wait_status_line(&self, wait: &TempWait) -> String {
+        let hotend = match wait.heater {
+            HeaterId::Hotend(n) => n,
+            HeaterId::Bed => self.active,
+        };
+        let left = self.residency_left_s(wait).map_or("?".to_owned(), |s| s.to_string());
+        format!(" {} W:{left}", self.status(hotend))
+    }
+
+    /// The M105 fields with `hotend` as `T:` and `@:` (Marlin's
+    /// `print_heater_states(target_extruder)`).
+    fn status(&self, hotend: u8) -> String {
         use std::fmt::Write;
         let mut out = String::new();
         let hotends: Vec<&Channel> =
             self.channels.iter().filter(|c| matches!(c.id, HeaterId::Hotend(_))).collect();
         let bed = self.channels.iter().find(|c| c.id == HeaterId::Bed);
-        let active = hotends[usize::from(self.active)];
+        let active = hotends[usize::from(hotend).min(hotends.len() - 1)];
         let _ = write!(out, "T:{:.2} /{:.2}", active.reading_c, active.target_c);
         if let Some(b) = bed {
             let _ = write!(out, " B:{:.2} /{:.2}", b.reading_c, b.target_c);

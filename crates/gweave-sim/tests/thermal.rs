@@ -187,6 +187,14 @@ fn m105_formats_like_marlin() {
         th.m105_report(),
         "T:25.00 /200.00 B:25.00 /0.00 T0:25.00 /0.00 T1:25.00 /200.00 @:127 B@:0 @0:0 @1:127"
     );
+    // M109 T0 while T1 is active: Marlin's wait line shows the hotend waited for.
+    th.set_target(T0, 100.0).unwrap();
+    let wait = th.begin_wait(T0, WaitMode::HeatOnly).unwrap();
+    th.step(0.1);
+    assert_eq!(
+        th.wait_status_line(&wait),
+        " T:25.00 /100.00 B:25.00 /0.00 T0:25.00 /100.00 T1:25.00 /200.00 @:127 B@:0 @0:127 @1:127 W:?"
+    );
     let no_bed = ThermalConfig { bed: None, ..ThermalConfig::default() };
     let th = Thermal::new(no_bed).unwrap();
     assert_eq!(th.m105_report(), "T:25.00 /0.00 @:0");
@@ -249,6 +257,10 @@ fn is_at_target_checks_the_window() {
     th.set_target(T0, 210.0).unwrap();
     assert!(!th.is_at_target(T0, WaitMode::HeatOnly).unwrap());
     wait_for(&mut th, T0, WaitMode::HeatOnly, 300.0);
+    // The residency ends the wait within TEMP_HYSTERESIS; a minute later the PID holds the
+    // window.
+    assert!((th.temperature(T0).unwrap() - 210.0).abs() < 3.0);
+    assert_eq!(th.step(60.0), None);
     assert!(th.is_at_target(T0, WaitMode::Both).unwrap());
     th.set_target(T0, 150.0).unwrap();
     assert!(th.is_at_target(T0, WaitMode::HeatOnly).unwrap());

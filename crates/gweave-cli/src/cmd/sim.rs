@@ -126,16 +126,15 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
         println!("    {:<18} {}", feature.name(), hms(*t));
     }
     for (tool, mm) in r.filament_mm.iter().enumerate() {
-        println!("  filament T{tool:<3}  {mm:.2} mm");
+        let steps = r.steps.tools.get(tool).copied().unwrap_or(0);
+        println!("  filament T{tool:<3}  {mm:.2} mm  ({steps} E steps)");
     }
     for (input, mm) in r.mixing_input_mm.iter().enumerate() {
-        println!("  mixing input {input}  {mm:.2} mm");
+        let steps = r.steps.mixing.get(input).copied().unwrap_or(0);
+        println!("  mixing input {input}  {mm:.2} mm  ({steps} steps)");
     }
     let s = &r.steps.axes;
     println!("  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4]);
-    if !r.steps.mixing.is_empty() {
-        println!("    mixing inputs {:?}", r.steps.mixing);
-    }
     let [x, y, z, e, _] = r.position;
     println!(
         "  end position    X {x:.2} Y {y:.2} Z {z:.2} E {e:.2}  (Count X {} Y {} Z {})",

@@ -4,7 +4,10 @@
 //! the step is split at the times of injected faults and of `M155` auto-reports, so both happen
 //! at their exact simulated time. `M109`/`M190` wait in steps of the firmware's sample period
 //! until Marlin's settle rule ([`Thermal::poll_wait`]) is met, printing the status once a second
-//! as Marlin does (` T:.. /.. B:.. /.. @:.. B@:..`).
+//! as Marlin 2.x does (`wait_for_hotend`/`wait_for_bed` in `Marlin/src/module/temperature.cpp`):
+//! ` T:.. /.. B:.. /.. @:.. B@:.. W:?`, where `W:` counts the residency time down in whole
+//! seconds once the reading is within `TEMP_WINDOW` of the target and is `?` before. (Marlin
+//! 1.x printed a shorter `T:.. E:0 W:?`; hosts read the `T:` either way.)
 
 use gweave::gcode::state::Effect;
 
@@ -149,7 +152,7 @@ impl Machine {
             }
             self.idle_for(step_s, out);
             if self.now_s() + 1e-9 >= report_s {
-                let text = format!(" {}", self.thermal.m105_report());
+                let text = self.thermal.wait_status_line(&wait);
                 out(self.now_s(), &text);
                 report_s += WAIT_REPORT_S;
             }

@@ -30,6 +30,7 @@
 //! `ok T:.. /.. B:.. /.. @:.. B@:..` itself (see [`Machine::acknowledged`]); every other command
 //! leaves the final `ok` to the caller (the serial protocol or `gweave sim`).
 
+mod commands;
 mod heat;
 mod motion;
 mod report;
@@ -47,6 +48,7 @@ use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
 use crate::protection::{ThermalFault, KILL_LINE};
 use crate::thermal::{Thermal, ThermalError};
 
+pub use commands::{help_lines, CommandHelp, COMMANDS};
 pub use report::{HeaterStats, InkjetSummary, SimReport, SimTimes, SimWarning, WarningKind};
 
 /// Marlin's reply to any command while stopped (`STR_ERR_STOPPED`).
@@ -467,22 +469,11 @@ impl Machine {
         self.warn(WarningKind::UnknownCommand { command: text });
     }
 
+    /// `?`: the command list ([`COMMANDS`]), as the seed controller answers it.
     fn help(&mut self, out: &mut dyn FnMut(f64, &str)) {
         let t = self.now_s();
-        for l in [
-            "echo:gweave-sim commands:",
-            "echo:  G0 G1 G2 G3 move   G4 dwell   G10 G11 firmware retract (G10 P S: RRF tool temp)",
-            "echo:  G20 G21 inch/mm   G28 home   G90 G91 absolute/relative   G92 set position",
-            "echo:  M0 M1 stop   M17 M18 M84 motors   M82 M83 absolute/relative E",
-            "echo:  M104 M109 hotend   M140 M190 bed   M116 wait (RRF)   M105 temps   M155 auto-report",
-            "echo:  M106 M107 fan   M112 emergency stop   M999 restart",
-            "echo:  M114 position   M115 firmware   M117 message   M119 endstops   M110 line no.",
-            "echo:  M201 M203 M204 M205 limits   M220 feed %   M221 flow %   M400 finish moves",
-            "echo:  M301 PID gains   M303 PID autotune   T<n> tool",
-            "echo:  M163 M164 M165 M166 mixing (Marlin)   M563 M567 mixing (RepRapFirmware)",
-            "echo:  M700 M578 inkjet fire (machines with a printhead)   ? this help",
-        ] {
-            out(t, l);
+        for l in help_lines() {
+            out(t, &l);
         }
     }
 

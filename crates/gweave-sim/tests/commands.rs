@@ -1,0 +1,71 @@
+//! The command list of the virtual printer is one source: the `?` reply, the table in
+//! `docs/gcode.md` and what the interpreter dispatches all agree with `interp::COMMANDS`.
+
+use std::path::{Path, PathBuf};
+
+use gweave_sim::interp::{help_lines, Machine, COMMANDS};
+use gweave_sim::profile::MachineProfile;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn example_machine(name: &str) -> MachineProfile {
+    let text = std::fs::read_to_string(repo().join("examples/machines").join(name)).unwrap();
+    MachineProfile::from_toml_str(&text).unwrap()
+}
+
+/// Runs one line on a fresh machine; returns its replies.
+fn replies(profile: MachineProfile, line: &str) -> Vec<String> {
+    let mut m = Machine::new(profile).unwrap();
+    let mut out = Vec::new();
+    m.execute(line.as_bytes(), &mut |_t, l| out.push(l.to_owned()));
+    assert!(m.report().unknown_commands.is_empty(), "{line}: {out:?}");
+    out
+}
+
+#[test]
+fn help_reply_is_the_command_list() {
+    let out = replies(MachineProfile::default(), "?");
+    assert_eq!(out, help_lines());
+    assert_eq!(out.len(), COMMANDS.len() + 1);
+    assert_eq!(out[1], format!("echo:  {:<19}  {}", "G0 G1", COMMANDS[0].what));
+}
+
+#[test]
+fn docs_gcode_md_lists_the_same_commands() {
+    let text = std::fs::read_to_string(repo().join("docs/gcode.md")).unwrap();
+    let section = text.split("## The virtual printer's commands").nth(1).expect("section in docs/gcode.md");
+    let rows: Vec<(String, String)> = section
+        .lines()
+        .filter_map(|l| l.strip_prefix("| `"))
+        .map(|l| {
+            let (codes, rest) = l.split_once("` | ").unwrap_or_else(|| panic!("bad row: {l}"));
+            (codes.to_owned(), rest.trim_end_matches(" |").to_owned())
+        })
+        .collect();
+    let want: Vec<(String, String)> =
+        COMMANDS.iter().map(|c| (c.codes.to_owned(), c.what.to_owned())).collect();
+    assert_eq!(rows, want);
+}
+
+#[test]
+fn every_listed_command_is_carried_out() {
+    for entry in COMMANDS {
+        for code in entry.codes.split_whitespace() {
+            let (profile, line) = match code {
+                "T<n>" => (MachineProfile::default(), "T0".to_owned()),
+                "M578" | "M700" => (example_machine("inkjet-c6602.toml"), format!("{code} P0 S1")),
+                "SET_VELOCITY_LIMIT" => (example_machine("klipper.toml"), format!("{code} ACCEL=1000")),
+                "SET_KINEMATIC_POSITION" => (example_machine("klipper.toml"), format!("{code} X=0")),
+                _ => (MachineProfile::default(), code.to_owned()),
+            };
+            let out = replies(profile, &line);
+            assert!(out.iter().all(|l| !l.contains("Unknown command")), "{line}: {out:?}");
+        }
+    }
+    // And the check can fail: a command outside the list is unknown.
+    let mut m = Machine::new(MachineProfile::default()).unwrap();
+    m.execute(b"M302 P1", &mut |_t, _l| {});
+    assert_eq!(m.report().unknown_commands["M302"], 1);
+}
