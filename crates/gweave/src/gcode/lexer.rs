@@ -40,6 +40,8 @@ pub fn parse_into(raw: &[u8], block: &mut Block) {
 /// let numbers near the end of the line be read eight bytes at a time.
 pub fn parse_in_window(window: &[u8], len: usize, block: &mut Block) {
     let raw = &window[..len];
+    // Numbers may be read past the line only where a line ending stops them.
+    let window = if matches!(window.get(len), Some(b'\r' | b'\n')) { window } else { raw };
     block.clear();
     let mut i = skip_space(raw, 0);
     if raw.get(i) == Some(&b'/') {
@@ -222,13 +224,20 @@ fn separator(raw: &[u8], i: usize, block: &mut Block) -> Option<usize> {
 /// Reads one word at `start` (a letter) and returns the index after it.
 #[inline(always)]
 fn word(raw: &[u8], window: &[u8], start: usize, block: &mut Block) -> usize {
-    let letter = raw[start].to_ascii_uppercase();
+    // `raw[start]` is a letter: clearing bit 5 upper-cases it.
+    let letter = raw[start] & !0x20;
     let at = start + 1;
+    // Numbers first and pushed in place: building the value apart and moving it costs more than
+    // the rest of the word.
     let (value, end) = match raw.get(at) {
         Some(b'"') => quoted(raw, at, block),
         Some(b'{') => expression(raw, at, block),
         _ => match scan_within(&window[at..], raw.len() - at) {
-            Ok((v, used)) => (Value::Number(v), at + used),
+            Ok((v, used)) => {
+                let end = at + used;
+                block.push_word(Word { letter, value: Value::Number(v), span: Span::new(start, end) });
+                return end;
+            }
             Err(e) => bad_number(raw, letter, at, e, block),
         },
     };

@@ -68,12 +68,14 @@ pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
 }
 
 /// Like [`scan`], for a number inside a longer buffer: `bytes` starts at the number and may run
-/// past its line, of which only the first `line_len` bytes count. Reading on into the line ending
+/// past its line, whose remaining length is `line_len`; the byte after the line, if there is one,
+/// must end it (`\r` or `\n`), so that no number runs on into it. Reading on into the line ending
 /// and the next line lets the digits be read eight bytes at a time wherever the number stands on
 /// the line; whatever the fast path does not cover goes to [`scan`].
 #[inline(always)]
 pub fn scan_within(bytes: &[u8], line_len: usize) -> Result<(f64, usize), NumberError> {
-    match scan_runs(bytes, line_len) {
+    debug_assert!(matches!(bytes.get(line_len), None | Some(b'\r' | b'\n')));
+    match scan_runs(bytes) {
         Some(found) => Ok(found),
         None => scan(&bytes[..line_len.min(bytes.len())]),
     }
@@ -83,24 +85,23 @@ pub fn scan_within(bytes: &[u8], line_len: usize) -> Result<(f64, usize), Number
 /// [`digit_run`]: no loop, so no branch mispredicted at the end of every number as a byte loop
 /// has. `None` means "not sure" (no digits, a run of eight, a malformed end, too few bytes).
 #[inline(always)]
-fn scan_runs(bytes: &[u8], line_len: usize) -> Option<(f64, usize)> {
+fn scan_runs(bytes: &[u8]) -> Option<(f64, usize)> {
     let negative = bytes.first() == Some(&b'-');
     let start = usize::from(negative);
-    let (int, int_digits) = digit_run(bytes, start, line_len)?;
+    let (int, int_digits) = digit_run(bytes, start)?;
     let mut end = start + int_digits;
     let (mut mantissa, mut frac_digits) = (int, 0);
-    if end < line_len && bytes.get(end) == Some(&b'.') {
-        let (frac, n) = digit_run(bytes, end + 1, line_len)?;
+    if bytes.get(end) == Some(&b'.') {
+        let (frac, n) = digit_run(bytes, end + 1)?;
         // At most 14 digits in all: exact in the u64 and, below 2^53, in the f64.
         mantissa = int * POW10_INT[n] + frac;
         frac_digits = n;
         end += 1 + n;
     }
-    if int_digits + frac_digits == 0 || (end < line_len && matches!(bytes.get(end), Some(b'.' | b'+' | b'-')))
-    {
+    if int_digits + frac_digits == 0 || matches!(bytes.get(end), Some(b'.' | b'+' | b'-')) {
         return None;
     }
-    let value = mantissa as f64 / POW10[frac_digits];
+    let value = (mantissa as i64) as f64 / POW10[frac_digits];
     Some((if negative { -value } else { value }, end))
 }
 
@@ -109,23 +110,17 @@ const TOPS: u64 = ONES * 0x80;
 /// 10^0 ..= 10^7 as integers.
 const POW10_INT: [u64; 8] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000];
 
-/// The value and count of the ASCII digits starting at `bytes[at]` (at most seven, and none at or
-/// past `line_len`), SWAR style: the eight bytes are classified at once and the digits combined
+/// The value and count of the ASCII digits starting at `bytes[at]` (at most seven), SWAR style: the eight bytes are classified at once and the digits combined
 /// pairwise in three multiplications. `None` if eight bytes are not there or all eight are digits.
 #[inline(always)]
-fn digit_run(bytes: &[u8], at: usize, line_len: usize) -> Option<(u64, usize)> {
+fn digit_run(bytes: &[u8], at: usize) -> Option<(u64, usize)> {
     let chunk: [u8; 8] = bytes.get(at..at + 8)?.try_into().ok()?;
     let x = u64::from_le_bytes(chunk);
     // The top bit of each byte, set where that byte is not a digit. Setting every byte's top bit
     // before subtracting keeps borrows from crossing into the next byte.
     let at_least_0 = (x | TOPS).wrapping_sub(ONES * u64::from(b'0')) & TOPS;
     let above_9 = (x | TOPS).wrapping_sub(ONES * u64::from(b'9' + 1)) & TOPS;
-    let mut not_digit = !(at_least_0 & !above_9 & !x) & TOPS;
-    // Bytes past the line's end never count as digits.
-    let in_line = line_len.saturating_sub(at);
-    if in_line < 8 {
-        not_digit |= TOPS << (8 * in_line);
-    }
+    let not_digit = !(at_least_0 & !above_9 & !x) & TOPS;
     let count = (not_digit.trailing_zeros() / 8) as usize;
     if count == 8 {
         return None;
