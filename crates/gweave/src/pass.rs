@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::gcode::diag::Severity;
-use crate::gcode::lexer::parse_in_window;
+use crate::gcode::lexer::parse_into;
 use crate::gcode::line::Block;
 use crate::gcode::reader::{LineReader, RawLine};
 use crate::gcode::state::{Effect, State, StateOptions};
@@ -135,7 +135,7 @@ pub fn drive_reader(
     let write_err = |e: io::Error| Error::io(output_name(path), e);
     let mut next_report = 0u64;
     while let Some(line) = reader.next_line().map_err(|e| Error::io(path, e))? {
-        parse_in_window(line.window, line.bytes.len(), &mut block);
+        parse_into(line.bytes, &mut block);
         if strictness == Strictness::Strict {
             if let Some(d) = block.diagnostics.iter().find(|d| d.finding.severity() == Severity::Error) {
                 return Err(Error::Syntax {

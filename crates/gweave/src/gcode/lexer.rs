@@ -10,7 +10,7 @@
 
 use super::diag::{Diagnostic, Finding};
 use super::line::{Block, Checksum, Command, Span, Value, Word};
-use super::number::{scan_within, NumberError};
+use super::number::{scan, NumberError};
 
 /// M-codes whose argument is free text up to the comment (Marlin reads it as a string).
 fn takes_text(number: u32) -> bool {
@@ -32,16 +32,6 @@ fn skip_space(raw: &[u8], mut i: usize) -> usize {
 
 /// Parses `raw` (one line without its line ending) into `block`, replacing what it held.
 pub fn parse_into(raw: &[u8], block: &mut Block) {
-    parse_in_window(raw, raw.len(), block);
-}
-
-/// Parses the line `window[..len]` into `block`. The bytes after it (its line ending and the
-/// lines that follow, as a reader's buffer holds them) are never part of the result; they only
-/// let numbers near the end of the line be read eight bytes at a time.
-pub fn parse_in_window(window: &[u8], len: usize, block: &mut Block) {
-    let raw = &window[..len];
-    // Numbers may be read past the line only where a line ending stops them.
-    let window = if matches!(window.get(len), Some(b'\r' | b'\n')) { window } else { raw };
     block.clear();
     let mut i = skip_space(raw, 0);
     if raw.get(i) == Some(&b'/') {
@@ -59,7 +49,7 @@ pub fn parse_in_window(window: &[u8], len: usize, block: &mut Block) {
     }
     i = skip_space(raw, i);
     i = command(raw, i, block);
-    words(raw, window, i, block);
+    words(raw, i, block);
 }
 
 fn line_number(raw: &[u8], start: usize, block: &mut Block) -> usize {
@@ -175,12 +165,12 @@ fn checksum(raw: &[u8], star: usize, limit: usize, block: &mut Block) -> usize {
     end
 }
 
-fn words(raw: &[u8], window: &[u8], mut i: usize, block: &mut Block) {
+fn words(raw: &[u8], mut i: usize, block: &mut Block) {
     // Words and single spaces are nearly every byte of a real file: test for them first and
     // leave the rest to `separator`.
     while let Some(&b) = raw.get(i) {
         if b.is_ascii_alphabetic() {
-            i = word(raw, window, i, block);
+            i = word(raw, i, block);
         } else if b == b' ' {
             i += 1;
         } else {
@@ -223,7 +213,7 @@ fn separator(raw: &[u8], i: usize, block: &mut Block) -> Option<usize> {
 
 /// Reads one word at `start` (a letter) and returns the index after it.
 #[inline(always)]
-fn word(raw: &[u8], window: &[u8], start: usize, block: &mut Block) -> usize {
+fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
     // `raw[start]` is a letter: clearing bit 5 upper-cases it.
     let letter = raw[start] & !0x20;
     let at = start + 1;
@@ -232,7 +222,7 @@ fn word(raw: &[u8], window: &[u8], start: usize, block: &mut Block) -> usize {
     let (value, end) = match raw.get(at) {
         Some(b'"') => quoted(raw, at, block),
         Some(b'{') => expression(raw, at, block),
-        _ => match scan_within(&window[at..], raw.len() - at) {
+        _ => match scan(&raw[at..]) {
             Ok((v, used)) => {
                 let end = at + used;
                 block.push_word(Word { letter, value: Value::Number(v), span: Span::new(start, end) });

@@ -67,74 +67,6 @@ pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
     Ok((if negative { -value } else { value }, i))
 }
 
-/// Like [`scan`], for a number inside a longer buffer: `bytes` starts at the number and may run
-/// past its line, whose remaining length is `line_len`; the byte after the line, if there is one,
-/// must end it (`\r` or `\n`), so that no number runs on into it. Reading on into the line ending
-/// and the next line lets the digits be read eight bytes at a time wherever the number stands on
-/// the line; whatever the fast path does not cover goes to [`scan`].
-#[inline(always)]
-pub fn scan_within(bytes: &[u8], line_len: usize) -> Result<(f64, usize), NumberError> {
-    debug_assert!(matches!(bytes.get(line_len), None | Some(b'\r' | b'\n')));
-    match scan_runs(bytes) {
-        Some(found) => Ok(found),
-        None => scan(&bytes[..line_len.min(bytes.len())]),
-    }
-}
-
-/// `-?digits[.digits]` with at most seven digits on each side of the point, each run read with
-/// [`digit_run`]: no loop, so no branch mispredicted at the end of every number as a byte loop
-/// has. `None` means "not sure" (no digits, a run of eight, a malformed end, too few bytes).
-#[inline(always)]
-fn scan_runs(bytes: &[u8]) -> Option<(f64, usize)> {
-    let negative = bytes.first() == Some(&b'-');
-    let start = usize::from(negative);
-    let (int, int_digits) = digit_run(bytes, start)?;
-    let mut end = start + int_digits;
-    let (mut mantissa, mut frac_digits) = (int, 0);
-    if bytes.get(end) == Some(&b'.') {
-        let (frac, n) = digit_run(bytes, end + 1)?;
-        // At most 14 digits in all: exact in the u64 and, below 2^53, in the f64.
-        mantissa = int * POW10_INT[n] + frac;
-        frac_digits = n;
-        end += 1 + n;
-    }
-    if int_digits + frac_digits == 0 || matches!(bytes.get(end), Some(b'.' | b'+' | b'-')) {
-        return None;
-    }
-    let value = (mantissa as i64) as f64 / POW10[frac_digits];
-    Some((if negative { -value } else { value }, end))
-}
-
-const ONES: u64 = 0x0101_0101_0101_0101;
-const TOPS: u64 = ONES * 0x80;
-/// 10^0 ..= 10^7 as integers.
-const POW10_INT: [u64; 8] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000];
-
-/// The value and count of the ASCII digits starting at `bytes[at]` (at most seven), SWAR style: the eight bytes are classified at once and the digits combined
-/// pairwise in three multiplications. `None` if eight bytes are not there or all eight are digits.
-#[inline(always)]
-fn digit_run(bytes: &[u8], at: usize) -> Option<(u64, usize)> {
-    let chunk: [u8; 8] = bytes.get(at..at + 8)?.try_into().ok()?;
-    let x = u64::from_le_bytes(chunk);
-    // The top bit of each byte, set where that byte is not a digit. Setting every byte's top bit
-    // before subtracting keeps borrows from crossing into the next byte.
-    let at_least_0 = (x | TOPS).wrapping_sub(ONES * u64::from(b'0')) & TOPS;
-    let above_9 = (x | TOPS).wrapping_sub(ONES * u64::from(b'9' + 1)) & TOPS;
-    let not_digit = !(at_least_0 & !above_9 & !x) & TOPS;
-    let count = (not_digit.trailing_zeros() / 8) as usize;
-    if count == 8 {
-        return None;
-    }
-    // Left-align the digits, so the bytes in front are leading zeros (in two shifts, as a shift
-    // by 64 is not defined), then merge neighbours: pairs, quads, the whole; each multiply-and-
-    // shift adds a lane's upper half to ten-to-its-width times its lower half.
-    let mut v = ((x & (ONES * 0x0f)) << (8 * (7 - count))) << 8;
-    v = (v.wrapping_mul(10 << 8 | 1) >> 8) & 0x00ff_00ff_00ff_00ff;
-    v = (v.wrapping_mul(100 << 16 | 1) >> 16) & 0x0000_ffff_0000_ffff;
-    v = v.wrapping_mul(10_000 << 32 | 1) >> 32;
-    Some((v, count))
-}
-
 /// Numbers with long digit runs: let std round them correctly.
 #[cold]
 fn scan_slow(bytes: &[u8], negative: bool, start: usize) -> Result<(f64, usize), NumberError> {
@@ -318,35 +250,6 @@ mod tests {
         }
     }
 
-    #[test]
-    fn eight_at_a_time_agrees_with_scan() {
-        // A number, then what may follow it on the line, then the next line.
-        for text in [
-            "220.832",
-            "-3.58551",
-            ".01234",
-            "1800",
-            "0",
-            "1234567",
-            "12345678",
-            "1.",
-            "-.5",
-            "1..2",
-            "1.2345678",
-            "123.45678",
-            "1234567.1234567",
-            "12.345678901",
-        ] {
-            for after in ["", " Y1", "\n", "\r\nG1 X5", "*12", ";c", "-1", ".5", "E2"] {
-                let line = format!("{text}{after}");
-                let window = format!("{line}\nG1 X123456789 Y2\n");
-                let expected = scan(line.as_bytes());
-                assert_eq!(scan_within(window.as_bytes(), line.len()), expected, "{line:?}");
-                assert_eq!(scan_within(line.as_bytes(), line.len()), expected, "{line:?}");
-            }
-        }
-    }
-
     proptest::proptest! {
         #[test]
         fn scan_matches_std_for_any_decimal(text in "[+-]?[0-9]{0,20}(\\.[0-9]{0,20})?") {
@@ -358,12 +261,6 @@ mod tests {
                 let expected: f64 = text.trim_start_matches('+').parse().unwrap();
                 proptest::prop_assert_eq!(result, Ok((expected, text.len())));
             }
-        }
-
-        #[test]
-        fn eight_at_a_time_never_disagrees(line in "[-+0-9.]{0,12}[ XE;.+-]?[0-9]{0,3}", next in "[0-9. ]{0,10}") {
-            let window = format!("{line}\n{next}");
-            proptest::prop_assert_eq!(scan_within(window.as_bytes(), line.len()), scan(line.as_bytes()));
         }
 
         #[test]

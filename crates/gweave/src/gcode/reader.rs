@@ -14,9 +14,6 @@ pub struct RawLine<'a> {
     pub number: u64,
     /// Byte offset of the line's first byte in the file.
     pub offset: u64,
-    /// The line, its ending and whatever the buffer holds after them: lets the lexer look past
-    /// the end of the line ([`crate::gcode::lexer::parse_in_window`]).
-    pub window: &'a [u8],
 }
 
 const CHUNK: usize = 1 << 20;
@@ -65,8 +62,7 @@ impl<R: Read> LineReader<R> {
 
     /// Builds the line for `buf[from..to]` (`to` is past the `\n`, if any) and advances counters.
     fn emit(&mut self, from: usize, to: usize) -> RawLine<'_> {
-        let window = &self.buf[from..self.end];
-        let whole = &window[..to - from];
+        let whole = &self.buf[from..to];
         let content_len = match whole {
             [.., b'\r', b'\n'] => whole.len() - 2,
             [.., b'\n'] => whole.len() - 1,
@@ -75,13 +71,7 @@ impl<R: Read> LineReader<R> {
         self.number += 1;
         let offset = self.offset;
         self.offset += whole.len() as u64;
-        RawLine {
-            bytes: &whole[..content_len],
-            eol: &whole[content_len..],
-            number: self.number,
-            offset,
-            window,
-        }
+        RawLine { bytes: &whole[..content_len], eol: &whole[content_len..], number: self.number, offset }
     }
 
     /// Moves the unread tail to the front, grows the buffer if one line fills it, and reads more.
