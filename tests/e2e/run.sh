@@ -49,8 +49,12 @@ cp "$DATA/cura/cura_torus.gcode" "$WORK/t.gcode"
 cmp -s "$WORK/t.gcode" "$WORK/t.gcode.bak" && ok || fail "in-place backup"
 if "$GWEAVE" cat "$WORK/t.gcode" -o "$WORK/t.gcode" 2>/dev/null; then fail "overwrote input"; else ok; fi
 
-# 6. A closed pipe is not an error.
+# 6. A closed pipe is not an error, for the output file and for a summary, with both front ends.
 "$GWEAVE" cat "$DATA/cura/cura_dual.gcode" -o - | head -1 > /dev/null && ok || fail "broken pipe"
+for g in "$GWEAVE" "$PYGWEAVE"; do
+  { "$g" stats "$DATA/cura/cura_dual.gcode" 2> "$WORK/pipe.err" || true; } | true
+  [ ! -s "$WORK/pipe.err" ] && ok || fail "$g stats | head: $(head -3 "$WORK/pipe.err")"
+done
 
 for extra in "$ROOT"/tests/e2e/[0-9]*.sh; do
   [ -e "$extra" ] || continue
