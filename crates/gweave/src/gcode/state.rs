@@ -424,19 +424,28 @@ impl State {
         if let Some(f) = block.get(b'F') {
             self.feed_mm_min = self.to_mm(f);
         }
-        let from = self.pos;
-        let mut to = from;
-        let mut any = false;
-        // Hoisted out of the word loop; scaling by exactly 1.0 leaves millimetres unchanged.
-        let scale = if self.inches { MM_PER_INCH } else { 1.0 };
-        let (relative_xyz, relative_e) = (!self.absolute, self.relative_e());
+        // Gather the axis words first (the last of a letter wins, as with `Block::get`), then
+        // resolve every axis in one straight pass: the target stays in registers instead of
+        // being stored one axis at a time and reloaded as a whole, which stalls the CPU's store
+        // forwarding on every motion line.
+        let mut given = [0.0; AXES];
+        let mut seen = 0u8;
         for w in &block.words {
             let Some(i) = axis_of(w.letter) else { continue };
             let Value::Number(v) = w.value else { continue };
-            let v = v * scale;
-            let relative = if i == E { relative_e } else { relative_xyz };
-            to[i] = if relative { to[i] + v } else { v };
-            any = true;
+            given[i] = v;
+            seen |= 1 << i;
+        }
+        let mut any = seen != 0;
+        let from = self.pos;
+        let mut to = from;
+        // Scaling by exactly 1.0 leaves millimetres unchanged.
+        let scale = if self.inches { MM_PER_INCH } else { 1.0 };
+        for (i, to) in to.iter_mut().enumerate() {
+            if seen & (1 << i) != 0 {
+                let relative = if i == E { self.relative_e() } else { !self.absolute };
+                *to = if relative { *to + given[i] * scale } else { given[i] * scale };
+            }
         }
         let path = match self.motion {
             Motion::ArcCw | Motion::ArcCcw => {
