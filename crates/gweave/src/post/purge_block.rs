@@ -60,19 +60,24 @@ pub struct PurgeMotion {
     pub z_feed_mm_min: f64,
 }
 
+impl PurgeMotion {
+    /// The seed's purge: 4 mm retraction, 15 mm lift, at X10 Y10, 5 mm wipe.
+    pub const SEED: PurgeMotion = PurgeMotion {
+        retract_mm: 4.0,
+        lift_mm: 15.0,
+        x_mm: 10.0,
+        y_mm: 10.0,
+        wipe_mm: 5.0,
+        travel_feed_mm_min: 1320.0,
+        extrude_feed_mm_min: 200.0,
+        retract_feed_mm_min: 2400.0,
+        z_feed_mm_min: 200.0,
+    };
+}
+
 impl Default for PurgeMotion {
     fn default() -> Self {
-        PurgeMotion {
-            retract_mm: 4.0,
-            lift_mm: 15.0,
-            x_mm: 10.0,
-            y_mm: 10.0,
-            wipe_mm: 5.0,
-            travel_feed_mm_min: 1320.0,
-            extrude_feed_mm_min: 200.0,
-            retract_feed_mm_min: 2400.0,
-            z_feed_mm_min: 200.0,
-        }
+        PurgeMotion::SEED
     }
 }
 
@@ -271,17 +276,7 @@ mod tests {
     use crate::gcode::line::Block;
     use crate::gcode::state::{Effect, State};
 
-    const SEED: PurgeMotion = PurgeMotion {
-        retract_mm: 4.0,
-        lift_mm: 15.0,
-        x_mm: 10.0,
-        y_mm: 10.0,
-        wipe_mm: 5.0,
-        travel_feed_mm_min: 1320.0,
-        extrude_feed_mm_min: 200.0,
-        retract_feed_mm_min: 2400.0,
-        z_feed_mm_min: 200.0,
-    };
+    const SEED: PurgeMotion = PurgeMotion::SEED;
 
     /// Runs `prefix`, then the block from the resulting state; returns the text, the state after,
     /// and the filament the block fed.

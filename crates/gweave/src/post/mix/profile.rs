@@ -44,6 +44,7 @@ use serde::{Deserialize, Serialize};
 use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
 use crate::colour::Srgb8;
 use crate::gcode::number::NumberFormat;
+use crate::post::purge_block::PurgeMotion;
 
 use super::MixPassError;
 
@@ -189,14 +190,14 @@ impl Default for PurgeConfig {
             chamber_mm3: 40.0,
             dead_mm3: 10.0,
             tolerance: 0.02,
-            retract_mm: 4.0,
-            lift_mm: 15.0,
-            x_mm: 10.0,
-            y_mm: 10.0,
-            wipe_mm: 5.0,
-            travel_feed_mm_min: 1320.0,
-            extrude_feed_mm_min: 200.0,
-            retract_feed_mm_min: 2400.0,
+            retract_mm: PurgeMotion::SEED.retract_mm,
+            lift_mm: PurgeMotion::SEED.lift_mm,
+            x_mm: PurgeMotion::SEED.x_mm,
+            y_mm: PurgeMotion::SEED.y_mm,
+            wipe_mm: PurgeMotion::SEED.wipe_mm,
+            travel_feed_mm_min: PurgeMotion::SEED.travel_feed_mm_min,
+            extrude_feed_mm_min: PurgeMotion::SEED.extrude_feed_mm_min,
+            retract_feed_mm_min: PurgeMotion::SEED.retract_feed_mm_min,
             on_gradient_steps: false,
             pair: Vec::new(),
         }
