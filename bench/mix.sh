@@ -2,10 +2,7 @@
 # gweave mix on a large multi-tool file (each slicer tool mapped to a mix, purge at every change):
 # speed against `gweave cat` on the same file in the same run, and peak memory at 1x and 60x.
 set -euo pipefail
-GWEAVE=$(realpath "${1:-target/release/gweave}")
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
-SRC="$ROOT/tests/data/prusaslicer/pr_bunny_3tool_rel.gcode"
-source "$ROOT/bench/lib.sh"
+source "$(dirname "$0")/lib.sh"
 BIG=$(multitool_file)
 MAP=(--map T0=Cyan --map T1=Magenta --map T2=Yellow)
 size=$(stat -c %s "$BIG")

@@ -6,10 +6,7 @@
 # The file is the PrusaSlicer 3-tool bunny (relative E, 793 changes) with its print proper
 # repeated 60 times (about 225 MB, 47 000 changes).
 set -euo pipefail
-GWEAVE=$(realpath "${1:-target/release/gweave}")
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
-SRC="$ROOT/tests/data/prusaslicer/pr_bunny_3tool_rel.gcode"
-source "$ROOT/bench/lib.sh"
+source "$(dirname "$0")/lib.sh"
 BIG=$(multitool_file)
 size=$(stat -c %s "$BIG")
 cat "$BIG" > /dev/null

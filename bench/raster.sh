@@ -7,8 +7,7 @@
 # I/O floor) and Python's zlib decompressing every PNG's image data (the decode floor of any
 # PNG reader).
 set -euo pipefail
-GWEAVE=$(realpath "${1:?usage: bench/raster.sh path/to/gweave}")
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
+source "$(dirname "$0")/lib.sh"
 DATA="$ROOT/bench/data/raster"
 LAYERS="$DATA/layers"
 mkdir -p "$DATA"

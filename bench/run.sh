@@ -2,8 +2,7 @@
 # Benchmarks on large real files. Every figure is printed beside a reference measured in the
 # same run: `wc -l` on the same file (the I/O floor) and the Python parsers as peers.
 set -euo pipefail
-GWEAVE=$(realpath "${1:-target/release/gweave}")
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
+source "$(dirname "$0")/lib.sh"
 DATA="$ROOT/bench/data"
 PY="$ROOT/.venv/bin/python"
 mkdir -p "$DATA"
@@ -19,7 +18,6 @@ if [ ! -s "$BIG" ]; then
 fi
 "$PY" -m pip install -q gcodeparser gcode-lib
 
-source "$ROOT/bench/lib.sh"
 mbps() { python3 -c "import sys; print(f'{float(sys.argv[1])/1e6/float(sys.argv[2]):.0f}')" "$1" "$2"; }
 
 size=$(stat -c %s "$BIG")
