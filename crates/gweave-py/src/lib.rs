@@ -245,7 +245,7 @@ impl Reader {
 
 /// A picture or viewer page of a file as bytes (`format`: png, svg or html); see `gweave preview`.
 #[pyfunction]
-#[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false))]
+#[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None))]
 #[allow(clippy::too_many_arguments)]
 fn preview_bytes(
     py: Python<'_>,
@@ -258,7 +258,17 @@ fn preview_bytes(
     compare: Option<PathBuf>,
     tool_colours: Option<Vec<String>>,
     travel: bool,
+    mix_profile: Option<PathBuf>,
 ) -> PyResult<Py<PyBytes>> {
+    let mix = match mix_profile {
+        Some(p) => {
+            let text = std::fs::read_to_string(&p)?;
+            let profile = gweave::post::mix::profile::MixProfile::from_toml_str(&text)
+                .map_err(|e| PyValueError::new_err(e.to_string()))?;
+            Some(render::MixColours::from_profile(&profile).map_err(|e| PyValueError::new_err(e.to_string()))?)
+        }
+        None => None,
+    };
     let format = Format::from_path(std::path::Path::new(&format!("x.{format}"))).map_err(render_err)?;
     let tool_colours = tool_colours
         .unwrap_or_default()
@@ -277,6 +287,7 @@ fn preview_bytes(
             ..ViewOptions::default()
         },
         min_len_mm: None,
+        mix,
     };
     let bytes = py
         .allow_threads(|| render::preview(&path, compare.as_deref(), format, &options))

@@ -271,13 +271,16 @@ def preview(
     compare: Optional[PathLike] = None,
     tool_colours: Optional[Sequence[str]] = None,
     travel: bool = False,
+    mix_profile: Optional[PathLike] = None,
 ) -> bytes:
     """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None).
 
     ``output`` picks the format by extension (``.png``, ``.svg``, ``.html``) and is written.
     ``layer`` is one 0-based layer or an inclusive ``(first, last)`` range; ``view`` is ``"top"`` or
-    ``"iso"``; ``colour_by`` is ``tool``, ``feature``, ``speed``, ``layer`` or ``mix`` (per-tool
-    ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``); ``compare`` highlights moves that differ
+    ``"iso"``; ``colour_by`` is ``tool``, ``feature``, ``speed``, ``layer`` or ``mix`` (the colour
+    each move is predicted to print, from the file's mixing commands and the filaments of the
+    ``gweave mix`` profile ``mix_profile``); ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``
+    colour the tools; ``compare`` highlights moves that differ
     from another file; ``size`` is ``(width, height)`` in pixels.
     """
     fmt = "png"
@@ -297,6 +300,7 @@ def preview(
         compare=None if compare is None else os.fspath(compare),
         tool_colours=None if tool_colours is None else list(tool_colours),
         travel=travel,
+        mix_profile=None if mix_profile is None else os.fspath(mix_profile),
     )
     if output is not None:
         with open(output, "wb") as f:

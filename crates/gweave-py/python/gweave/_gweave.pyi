@@ -86,6 +86,7 @@ def preview_bytes(
     compare: Optional[str] = None,
     tool_colours: Optional[List[str]] = None,
     travel: bool = False,
+    mix_profile: Optional[str] = None,
 ) -> bytes: ...
 def toolpath_columns(path: str, *, travel: bool = True, min_len: float = 0.0) -> Tuple[int, Dict[str, Any]]: ...
 

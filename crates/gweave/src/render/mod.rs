@@ -6,6 +6,7 @@
 //! - [`toolpath`]: the segments of a file (start, end, tool, feature, feed, layer, extruding),
 //!   collected in one streaming pass, with decimation for huge files.
 //! - [`colour_by`]: colour by tool, feature type, speed, layer or predicted mix colour.
+//! - [`mix_colour`]: the predicted mix colour of each move (mixing model and chamber washout).
 //! - [`view`]: top view of a layer or layer range, isometric view, before/after comparison;
 //!   turns segments into pixel [`view::Stroke`]s.
 //! - [`raster`] and [`png_out`]: a software rasteriser (wide anti-aliased lines, alpha) and PNG.
@@ -22,6 +23,7 @@ pub mod camera;
 pub mod canvas;
 pub mod colour_by;
 pub mod html;
+pub mod mix_colour;
 pub mod png_out;
 pub mod raster;
 pub mod svg;
@@ -36,6 +38,7 @@ use crate::pass::{Ctx, Pass, Progress, Quiet, Run};
 use crate::stats::{Stats, StatsPass};
 
 pub use colour_by::ColourBy;
+pub use mix_colour::MixColours;
 pub use toolpath::{Segment, Toolpath, ToolpathOptions};
 pub use view::{ViewKind, ViewOptions};
 
@@ -82,6 +85,8 @@ pub struct PreviewOptions {
     /// Merge chained moves shorter than this, mm; `None` picks by file size
     /// ([`ToolpathOptions::min_len_for_file_size`]).
     pub min_len_mm: Option<f32>,
+    /// Mixing hardware for the `mix` colouring (default: [`MixColours::cmyw`]).
+    pub mix: Option<MixColours>,
 }
 
 impl PreviewOptions {
@@ -100,6 +105,8 @@ impl PreviewOptions {
             layers: if keep_all_layers { None } else { self.view.layers.clone() },
             travel: keep_all_layers || self.view.travel,
             min_len_mm: self.min_len_mm.unwrap_or_else(|| ToolpathOptions::min_len_for_file_size(bytes)),
+            mix: (self.view.colour_by == ColourBy::Mix)
+                .then(|| self.mix.clone().unwrap_or_else(MixColours::cmyw)),
             ..ToolpathOptions::default()
         }
     }

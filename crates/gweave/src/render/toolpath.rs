@@ -17,8 +17,10 @@ use std::ops::RangeInclusive;
 use std::path::Path;
 
 use crate::gcode::layers::{Feature, Region};
-use crate::gcode::state::{Effect, Move, Path as MovePath, X, Y, Z};
+use crate::gcode::state::{Effect, Move, Path as MovePath, E, X, Y, Z};
 use crate::pass::{Ctx, Pass, Quiet, Run};
+
+use super::mix_colour::{MixColours, MixTracker};
 
 /// One straight piece of tool path, mm and mm/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,6 +34,9 @@ pub struct Segment {
     pub layer: u32,
     /// Deposits material (not travel or retraction).
     pub extruding: bool,
+    /// Predicted printed colour (sRGB), when the toolpath was read with
+    /// [`ToolpathOptions::mix`]; black otherwise.
+    pub mix_rgb: [u8; 3],
 }
 
 impl Segment {
@@ -48,6 +53,7 @@ impl Segment {
             && self.feed_mm_s == o.feed_mm_s
             && self.layer == o.layer
             && self.extruding == o.extruding
+            && self.mix_rgb == o.mix_rgb
     }
 }
 
@@ -64,11 +70,20 @@ pub struct ToolpathOptions {
     pub min_len_mm: f32,
     /// Largest distance of an arc's chords from the arc, mm.
     pub arc_tol_mm: f64,
+    /// Predict each move's printed colour with this mixing hardware ([`Segment::mix_rgb`]).
+    pub mix: Option<MixColours>,
 }
 
 impl Default for ToolpathOptions {
     fn default() -> Self {
-        ToolpathOptions { layers: None, travel: true, print_only: true, min_len_mm: 0.0, arc_tol_mm: 0.02 }
+        ToolpathOptions {
+            layers: None,
+            travel: true,
+            print_only: true,
+            min_len_mm: 0.0,
+            arc_tol_mm: 0.02,
+            mix: None,
+        }
     }
 }
 
@@ -134,11 +149,13 @@ pub struct ToolpathPass {
     out: Toolpath,
     /// A merged piece still growing (decimation).
     pending: Option<Segment>,
+    mix: Option<MixTracker>,
 }
 
 impl ToolpathPass {
     pub fn new(options: ToolpathOptions) -> Self {
-        ToolpathPass { options, out: Toolpath { tools: 1, ..Toolpath::default() }, pending: None }
+        let mix = options.mix.clone().map(MixTracker::new);
+        ToolpathPass { options, out: Toolpath { tools: 1, ..Toolpath::default() }, pending: None, mix }
     }
 
     /// The collected toolpath.
@@ -204,11 +221,23 @@ impl Pass for ToolpathPass {
             // The slicer may state Z after the marker (`;Z:`) or at the first extrusion.
             self.out.layer_z_mm[layer as usize] = st.layer_z_mm as f32;
         }
+        if let Some(mix) = &mut self.mix {
+            mix.line(ctx.line.bytes, ctx.block, ctx.state.tool);
+        }
         match ctx.effect {
             Effect::ToolChange { to, .. } => {
                 self.out.tools = self.out.tools.max((*to).min(u16::MAX as u32 - 1) as u16 + 1);
             }
             Effect::Move(m) => {
+                // Every extrusion of the print washes the mixing chamber, drawn or not (the start
+                // G-code's primes are taken to load the first colour, see `mix_colour`).
+                let mix_rgb = match &mut self.mix {
+                    Some(mix) if m.to[E] > m.from[E] && st.region != Region::Start => {
+                        let c = mix.extrude(m.to[E] - m.from[E]);
+                        [c.r, c.g, c.b]
+                    }
+                    _ => [0; 3],
+                };
                 // Only the start G-code (purge lines) is left out: the end G-code's parking is
                 // travel, drawn only on request, and any extrusion there is really printed.
                 if self.options.print_only && st.region == Region::Start {
@@ -235,6 +264,7 @@ impl Pass for ToolpathPass {
                     feed_mm_s: (m.feed_mm_min / 60.0) as f32,
                     layer,
                     extruding,
+                    mix_rgb,
                 };
                 self.add_move(m, template);
             }

@@ -369,7 +369,16 @@ mod tests {
     use crate::gcode::layers::Feature;
 
     fn seg(start: [f32; 3], end: [f32; 3], tool: u16, layer: u32) -> Segment {
-        Segment { start, end, tool, feature: Feature::Infill, feed_mm_s: 30.0, layer, extruding: true }
+        Segment {
+            start,
+            end,
+            tool,
+            feature: Feature::Infill,
+            feed_mm_s: 30.0,
+            layer,
+            extruding: true,
+            mix_rgb: [0; 3],
+        }
     }
 
     fn square() -> Toolpath {
