@@ -286,8 +286,8 @@ fn preview_bytes(
             travel,
             ..ViewOptions::default()
         },
-        min_len_mm: None,
         mix,
+        ..PreviewOptions::default()
     };
     let bytes = py
         .allow_threads(|| render::preview(&path, compare.as_deref(), format, &options))

@@ -64,8 +64,8 @@ fn draw_layer(path: &Path, colours: &MixColours, layer: u32) -> (Drawing, Image)
             height_px: 300,
             ..ViewOptions::default()
         },
-        min_len_mm: None,
         mix: Some(colours.clone()),
+        ..PreviewOptions::default()
     };
     let d = drawing(path, None, &options, &mut gweave::pass::Quiet).unwrap();
     let img = rasterise(&d);

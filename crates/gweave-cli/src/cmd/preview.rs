@@ -11,6 +11,7 @@ use gweave::post::mix::profile::MixProfile;
 use gweave::render::{
     preview_with_progress, ColourBy, Format, MixColours, PreviewOptions, ViewKind, ViewOptions,
 };
+use gweave::rotary::cylinder::RotaryConfig;
 
 use crate::progress::Bar;
 
@@ -55,6 +56,11 @@ pub struct PreviewArgs {
     /// (purge.chamber_mm3, dead_mm3) for --colour-by mix (default: cyan, magenta, yellow, white).
     #[arg(long, value_name = "PROFILE.toml")]
     pub mix_profile: Option<PathBuf>,
+    /// Draw the file as a rotary program on a mandrel of this diameter, mm (axes X along, A
+    /// around in degrees, Z away from it). Not needed for `gweave rotary` output: its header
+    /// names the machine.
+    #[arg(long, value_name = "MM")]
+    pub mandrel_diameter: Option<f64>,
     /// Draw travel moves too.
     #[arg(long)]
     pub travel: bool,
@@ -114,6 +120,7 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         },
         min_len_mm: args.min_len,
         mix,
+        rotary: args.mandrel_diameter.map(RotaryConfig::new),
     };
     let mut bar = Bar::new(args.quiet);
     let bytes = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;

@@ -279,6 +279,7 @@ mod tests {
             segments: vec![seg(0, 10.0, 0), seg(0, 50.0, 9)],
             layer_z_mm: vec![0.0; 10],
             tools: 1,
+            on_cylinder: false,
         };
         let c = Colouring::new(ColourBy::Speed, vec![], &[&tp]);
         let slow = c.colour(&tp.segments[0]);
@@ -296,7 +297,12 @@ mod tests {
         let mut long = seg(2, 10.0, 0);
         long.end = [5.0, 0.0, 0.0];
         long.mix_rgb = [200, 0, 0];
-        let tp = Toolpath { segments: vec![seg(1, 10.0, 0), long], layer_z_mm: vec![0.0], tools: 3 };
+        let tp = Toolpath {
+            segments: vec![seg(1, 10.0, 0), long],
+            layer_z_mm: vec![0.0],
+            tools: 3,
+            on_cylinder: false,
+        };
         let c = Colouring::new(ColourBy::Tool, vec![TOOL_COLOURS[0], red], &[&tp]);
         assert_eq!(c.colour(&tp.segments[0]), [200, 10, 10]);
         let t2 = TOOL_COLOURS[2];

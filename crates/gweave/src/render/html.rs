@@ -232,7 +232,7 @@ mod tests {
             extruding: true,
             mix_rgb: [0; 3],
         };
-        let tp = Toolpath { segments: vec![s], layer_z_mm: vec![0.2], tools: 2 };
+        let tp = Toolpath { segments: vec![s], layer_z_mm: vec![0.2], tools: 2, on_cylinder: false };
         let options = HtmlOptions {
             title: "a</script>b".into(),
             colour_by: ColourBy::Tool,

@@ -13,6 +13,10 @@
 //! - [`svg`]: the same drawing as SVG paths.
 //! - [`html`]: a self-contained interactive viewer page.
 //!
+//! Rotary programs (`gweave rotary wrap`/`tube` output, whose header names the machine, or any
+//! file with [`PreviewOptions::rotary`]) are read back with [`crate::rotary::preview::read_back`]
+//! and drawn in 3D on their cylinder, in the pictures and in the viewer.
+//!
 //! ```no_run
 //! use gweave::render::{preview, Format, PreviewOptions};
 //! let png = preview("part.gcode".as_ref(), None, Format::Png, &PreviewOptions::default()).unwrap();
@@ -30,11 +34,13 @@ pub mod svg;
 pub mod toolpath;
 pub mod view;
 
-use std::io::{self, Write};
+use std::io::{self, Read, Write};
+use std::ops::RangeInclusive;
 use std::path::Path;
 
 use crate::gcode::state::State;
 use crate::pass::{Ctx, Pass, Progress, Quiet, Run};
+use crate::rotary::cylinder::RotaryConfig;
 use crate::stats::{Stats, StatsPass};
 
 pub use colour_by::ColourBy;
@@ -55,6 +61,8 @@ pub enum RenderError {
     CompareHtml,
     #[error("image encoding failed: {0}")]
     Encode(String),
+    #[error(transparent)]
+    Rotary(#[from] crate::rotary::RotaryError),
 }
 
 /// What the preview is written as.
@@ -87,6 +95,9 @@ pub struct PreviewOptions {
     pub min_len_mm: Option<f32>,
     /// Mixing hardware for the `mix` colouring (default: [`MixColours::cmyw`]).
     pub mix: Option<MixColours>,
+    /// Draw the file as a rotary program on this machine's cylinder (default: the machine its
+    /// header names, [`RotaryConfig::from_header`], if any).
+    pub rotary: Option<RotaryConfig>,
 }
 
 impl PreviewOptions {
@@ -110,6 +121,30 @@ impl PreviewOptions {
             ..ToolpathOptions::default()
         }
     }
+}
+
+/// Bytes at the start of a file searched for a rotary header.
+const HEADER_BYTES: u64 = 4096;
+
+/// The rotary machine `path` is drawn on: `options.rotary`, else the one its header names.
+pub fn rotary_machine(path: &Path, options: &PreviewOptions) -> Option<RotaryConfig> {
+    if let Some(m) = &options.rotary {
+        return Some(m.clone());
+    }
+    let mut head = Vec::new();
+    std::fs::File::open(path).ok()?.take(HEADER_BYTES).read_to_end(&mut head).ok()?;
+    RotaryConfig::from_header(&String::from_utf8_lossy(&head))
+}
+
+/// A rotary program's toolpath, in 3D on its cylinder.
+fn rotary_toolpath(
+    path: &Path,
+    machine: &RotaryConfig,
+    layers: Option<&RangeInclusive<u32>>,
+) -> Result<Toolpath, RenderError> {
+    let file = std::fs::File::open(path).map_err(|e| crate::Error::io(path, e))?;
+    let program = crate::rotary::preview::read_back(machine, io::BufReader::new(file))?;
+    Ok(Toolpath::from_rotary(&program, layers))
 }
 
 /// Feeds every line to two passes (a toolpath and the statistics, in one read of the file).
@@ -174,7 +209,10 @@ pub fn drawing(
     options: &PreviewOptions,
     progress: &mut dyn Progress,
 ) -> Result<view::Drawing, RenderError> {
-    let mut read = |p: &Path| -> crate::Result<Toolpath> {
+    let mut read = |p: &Path| -> Result<Toolpath, RenderError> {
+        if let Some(machine) = rotary_machine(p, options) {
+            return rotary_toolpath(p, &machine, options.view.layers.as_ref());
+        }
         let mut pass = toolpath::ToolpathPass::new(options.toolpath_options(p, false));
         Run::new(p, &mut *progress).scan(&mut pass)?;
         Ok(pass.finish_toolpath())
@@ -195,7 +233,14 @@ fn html_page(
     if compare.is_some() {
         return Err(RenderError::CompareHtml);
     }
-    let (tp, stats) = toolpath_with_stats(path, options.toolpath_options(path, true), progress)?;
+    let (tp, stats) = match rotary_machine(path, options) {
+        Some(machine) => {
+            let mut st = StatsPass::new(None);
+            let state = Run::new(path, progress).scan(&mut st)?;
+            (rotary_toolpath(path, &machine, None)?, st.into_stats(&state))
+        }
+        None => toolpath_with_stats(path, options.toolpath_options(path, true), progress)?,
+    };
     let html_options = html::HtmlOptions {
         title: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
         colour_by: options.view.colour_by,

@@ -19,6 +19,8 @@ use std::path::Path;
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::state::{Effect, Move, Path as MovePath, E, X, Y, Z};
 use crate::pass::{Ctx, Pass, Quiet, Run};
+use crate::rotary::cylinder::CylPoint;
+use crate::rotary::preview::Program;
 
 use super::mix_colour::{MixColours, MixTracker};
 
@@ -107,6 +109,8 @@ pub struct Toolpath {
     pub layer_z_mm: Vec<f32>,
     /// Number of tools the file selected (highest `T` + 1, at least 1).
     pub tools: u16,
+    /// A rotary program: the segments lie on cylinders about the X axis (see [`Self::from_rotary`]).
+    pub on_cylinder: bool,
 }
 
 impl Toolpath {
@@ -115,6 +119,35 @@ impl Toolpath {
         let mut pass = ToolpathPass::new(options);
         Run::new(path, &mut Quiet).scan(&mut pass)?;
         Ok(pass.finish_toolpath())
+    }
+
+    /// A rotary program as the machine prints it ([`crate::rotary::preview::read_back`]): each
+    /// bead from `(x, r cos theta, r sin theta)` to the same of its end, with the mandrel along
+    /// X; a bead is a short helix drawn as its chord. Layers not in `layers` are left out.
+    pub fn from_rotary(program: &Program, layers: Option<&RangeInclusive<u32>>) -> Toolpath {
+        let point = |p: CylPoint| p.to_cartesian().map(|v| v as f32);
+        let segments = program
+            .beads
+            .iter()
+            .filter(|b| layers.is_none_or(|r| r.contains(&b.layer)))
+            .map(|b| Segment {
+                start: point(b.from),
+                end: point(b.to),
+                tool: 0,
+                feature: b.feature,
+                feed_mm_s: b.speed_mm_s as f32,
+                layer: b.layer,
+                extruding: true,
+                mix_rgb: [0; 3],
+            })
+            .collect();
+        let layer_count = program.layers.last().map_or(0, |l| l.index as usize + 1);
+        let mut layer_z_mm = vec![0.0; layer_count];
+        // A layer's "height" is its radius.
+        for l in &program.layers {
+            layer_z_mm[l.index as usize] = l.radius_mm as f32;
+        }
+        Toolpath { segments, layer_z_mm, tools: 1, on_cylinder: true }
     }
 
     /// Number of layers the file has (kept or not).
