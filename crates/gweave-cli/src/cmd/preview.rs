@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::colour::Srgb8;
+use gweave::gen::printhead::PrintheadProfile;
 use gweave::post::mix::profile::MixProfile;
 use gweave::render::{
     preview_with_progress, ColourBy, Format, MixColours, PreviewOptions, ViewKind, ViewOptions,
@@ -61,6 +62,10 @@ pub struct PreviewArgs {
     /// names the machine.
     #[arg(long, value_name = "MM")]
     pub mandrel_diameter: Option<f64>,
+    /// Printhead profile of binder-jet raster output (TOML, as for `gweave raster --head`;
+    /// default: HP C6602, 12 nozzles at 96 dpi): its fire commands are drawn as drops.
+    #[arg(long, value_name = "PROFILE.toml")]
+    pub head: Option<PathBuf>,
     /// Draw travel moves too.
     #[arg(long)]
     pub travel: bool,
@@ -107,6 +112,14 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         }
         None => None,
     };
+    let printhead = match &args.head {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            Some(PrintheadProfile::from_toml(&text).with_context(|| format!("in {}", path.display()))?)
+        }
+        None => None,
+    };
     let options = PreviewOptions {
         view: ViewOptions {
             kind: args.view,
@@ -121,6 +134,7 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         min_len_mm: args.min_len,
         mix,
         rotary: args.mandrel_diameter.map(RotaryConfig::new),
+        printhead,
     };
     let mut bar = Bar::new(args.quiet);
     let bytes = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;

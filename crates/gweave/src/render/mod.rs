@@ -13,6 +13,9 @@
 //! - [`svg`]: the same drawing as SVG paths.
 //! - [`html`]: a self-contained interactive viewer page.
 //!
+//! Binder-jet raster output (`gweave raster`) draws the drops of each layer
+//! ([`toolpath`] decodes the fire commands with [`PreviewOptions::printhead`]).
+//!
 //! Rotary programs (`gweave rotary wrap`/`tube` output, whose header names the machine, or any
 //! file with [`PreviewOptions::rotary`]) are read back with [`crate::rotary::preview::read_back`]
 //! and drawn in 3D on their cylinder, in the pictures and in the viewer.
@@ -39,6 +42,7 @@ use std::ops::RangeInclusive;
 use std::path::Path;
 
 use crate::gcode::state::State;
+use crate::gen::printhead::PrintheadProfile;
 use crate::pass::{Ctx, Pass, Progress, Quiet, Run};
 use crate::rotary::cylinder::RotaryConfig;
 use crate::stats::{Stats, StatsPass};
@@ -98,6 +102,9 @@ pub struct PreviewOptions {
     /// Draw the file as a rotary program on this machine's cylinder (default: the machine its
     /// header names, [`RotaryConfig::from_header`], if any).
     pub rotary: Option<RotaryConfig>,
+    /// The inkjet head of binder-jet raster output, whose fire commands are drawn as dots
+    /// (default: the HP C6602, as `gweave raster` assumes).
+    pub printhead: Option<PrintheadProfile>,
 }
 
 impl PreviewOptions {
@@ -118,6 +125,7 @@ impl PreviewOptions {
             min_len_mm: self.min_len_mm.unwrap_or_else(|| ToolpathOptions::min_len_for_file_size(bytes)),
             mix: (self.view.colour_by == ColourBy::Mix)
                 .then(|| self.mix.clone().unwrap_or_else(MixColours::cmyw)),
+            printhead: self.printhead.clone().unwrap_or_default(),
             ..ToolpathOptions::default()
         }
     }

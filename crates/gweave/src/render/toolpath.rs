@@ -5,6 +5,12 @@
 //! [`crate::gcode::arc`] for the chord count). Each segment carries what a preview colours by:
 //! the tool, the feature type the slicer marked, the feed rate, the layer and whether it extrudes.
 //!
+//! Inkjet raster output (`gweave raster`): each fire command `M700 P<head> S<bits>` (or the
+//! profile's `M578`) is a set of drops, where [`PrintheadProfile::drops_mm`] puts them with the
+//! carriage where it is; each drop becomes an extruding segment one nozzle pitch long along X,
+//! centred on it, with the head as its tool. Neighbouring drops then close up into the area
+//! they wet, as the binder does in the powder.
+//!
 //! Huge files: memory is bounded by keeping only the layers asked for, and by decimation. With
 //! `min_len_mm > 0`, consecutive chained moves that agree on every attribute are merged until the
 //! merged piece is at least that long. The merged piece is the chord from the first start to the
@@ -18,6 +24,7 @@ use std::path::Path;
 
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::state::{Effect, Move, Path as MovePath, E, X, Y, Z};
+use crate::gen::printhead::PrintheadProfile;
 use crate::pass::{Ctx, Pass, Quiet, Run};
 use crate::rotary::cylinder::CylPoint;
 use crate::rotary::preview::Program;
@@ -74,6 +81,9 @@ pub struct ToolpathOptions {
     pub arc_tol_mm: f64,
     /// Predict each move's printed colour with this mixing hardware ([`Segment::mix_rgb`]).
     pub mix: Option<MixColours>,
+    /// The inkjet head whose fire commands (`M700`/`M578 P<head> S<bits>`, binder-jet raster
+    /// output) are drawn as dots (see the module notes).
+    pub printhead: PrintheadProfile,
 }
 
 impl Default for ToolpathOptions {
@@ -85,6 +95,7 @@ impl Default for ToolpathOptions {
             min_len_mm: 0.0,
             arc_tol_mm: 0.02,
             mix: None,
+            printhead: PrintheadProfile::default(),
         }
     }
 }
@@ -243,6 +254,42 @@ impl ToolpathPass {
     }
 }
 
+impl ToolpathPass {
+    /// A fire command of an inkjet head: its drops as dots.
+    fn fire(&mut self, ctx: &Ctx<'_>) {
+        let st = &ctx.state.structure;
+        let layer = st.layer.unwrap_or(0);
+        let skipped = self.options.print_only && st.region == Region::Start;
+        if skipped || self.options.layers.as_ref().is_some_and(|r| !r.contains(&layer)) {
+            return;
+        }
+        let word = |l: u8| ctx.block.word(l).and_then(|w| w.number());
+        // The firmware reads S only with P (REFERENCE section 4).
+        let (Some(head), Some(bits)) = (word(b'P'), word(b'S')) else { return };
+        if !(head >= 0.0 && bits >= 0.0 && head < 64.0 && bits < u64::MAX as f64) {
+            return;
+        }
+        let head = head as usize;
+        let pos = &ctx.state.pos;
+        let half = (self.options.printhead.pitch_mm() / 2.0) as f32;
+        let z = pos[Z] as f32;
+        for [x, y] in self.options.printhead.drops_mm(head, bits as u64, [pos[X], pos[Y]]) {
+            let (x, y) = (x as f32, y as f32);
+            self.out.tools = self.out.tools.max(head as u16 + 1);
+            self.push(Segment {
+                start: [x - half, y, z],
+                end: [x + half, y, z],
+                tool: head as u16,
+                feature: Feature::Unknown,
+                feed_mm_s: 0.0,
+                layer,
+                extruding: true,
+                mix_rgb: [0; 3],
+            });
+        }
+    }
+}
+
 impl Pass for ToolpathPass {
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
         let st = &ctx.state.structure;
@@ -256,6 +303,9 @@ impl Pass for ToolpathPass {
         }
         if let Some(mix) = &mut self.mix {
             mix.line(ctx.line.bytes, ctx.block, ctx.state.tool);
+        }
+        if ctx.block.command.is_m(self.options.printhead.dialect.fire_code()) {
+            self.fire(ctx);
         }
         match ctx.effect {
             Effect::ToolChange { to, .. } => {
@@ -396,5 +446,20 @@ mod tests {
         let ext: Vec<_> = tp.segments.iter().filter(|s| s.extruding).collect();
         assert_eq!(ext.len(), 1);
         assert_eq!(ext[0].end, [20.0, 10.0, 0.2]);
+    }
+
+    #[test]
+    fn inkjet_fires_become_dots_at_the_nozzles() {
+        // C6602 default: 12 nozzles at 96 dpi; S5 fires rows 0 and 2.
+        let text = ";LAYER:0\nG1 Z0.1\nG1 X10 Y20 F3000\nM400\nM700 P0 S5\nM700 S1\nM700 P1 S1\n";
+        let tp = collect(text, ToolpathOptions::default());
+        let pitch = 25.4f32 / 96.0;
+        assert_eq!(tp.segments.iter().filter(|s| s.extruding).count(), 2, "no P: no fire; no head 1");
+        let dots: Vec<_> = tp.segments.iter().filter(|s| s.extruding).collect();
+        for (d, row) in dots.iter().zip([0.0, 2.0]) {
+            assert_eq!(d.start, [10.0 - pitch / 2.0, 20.0 + row * pitch, 0.1]);
+            assert_eq!(d.end, [10.0 + pitch / 2.0, 20.0 + row * pitch, 0.1]);
+            assert_eq!((d.tool, d.layer), (0, 0));
+        }
     }
 }
