@@ -14,6 +14,9 @@ use std::path::Path;
 
 use thiserror::Error;
 
+use gweave::render::png_out::encode as encode_image;
+use gweave::render::raster::Image;
+
 use crate::heater::HeaterId;
 use crate::speed_trace::SpeedTrace;
 use crate::thermal::TimeSeries;
@@ -24,6 +27,12 @@ pub enum PlotError {
     /// The PNG encoder failed.
     #[error("writing the plot: {0}")]
     Png(#[from] png::EncodingError),
+    /// The chart could not be encoded.
+    #[error(transparent)]
+    Render(#[from] gweave::render::RenderError),
+    /// Writing the bytes failed.
+    #[error("writing the plot: {0}")]
+    Write(#[from] std::io::Error),
     /// The file could not be created.
     #[error("{path}: {source}")]
     Io {
@@ -115,55 +124,62 @@ pub fn speed_px(t_s: f64, v_mm_s: f64, end_s: f64, top_mm_s: f64) -> (f64, f64) 
 }
 
 /// The speed chart (see the module docs): speed over time above, the time of each layer below
-/// (`layer_s[k]`, s, left to right). Returns the speed axis top, mm/s.
-pub fn write_speed_png<W: Write>(trace: &SpeedTrace, layer_s: &[f64], out: W) -> Result<f64, PlotError> {
+/// (`layer_s[k]`, s, left to right), with axis labels. Returns the speed axis top, mm/s.
+pub fn write_speed_png<W: Write>(trace: &SpeedTrace, layer_s: &[f64], mut out: W) -> Result<f64, PlotError> {
     let end_s = trace.end_s().max(1.0);
     let peak = trace.buckets().iter().map(|b| b.max_mm_s).fold(10.0, f64::max);
     let top = peak * 1.1;
-    let px = |t_s: f64, v: f64| speed_px(t_s, v, end_s, top);
-    let mut canvas = Canvas::new();
+    let px = |t_s: f64, v: f64| {
+        let (x, y) = speed_px(t_s, v, end_s, top);
+        [x as f32, y as f32]
+    };
+    let mut img = Image::new(WIDTH as u32, HEIGHT as u32, [255; 3]);
+    let tick_s = time_tick_s(end_s);
     let mut t = 0.0;
     while t <= end_s {
-        canvas.line(px(t, 0.0), px(t, top), GRID, false);
-        t += time_tick_s(end_s);
+        img.line(px(t, 0.0), px(t, top), 1.0, GRID, 1.0);
+        let [x, y] = px(t, 0.0);
+        img.text(x as i32 + 2, y as i32 + 3, &format!("{}", (t / 60.0).round()), 1, AXIS);
+        t += tick_s;
     }
     let mut v = 0.0;
     while v <= top {
-        canvas.line(px(0.0, v), px(end_s, v), GRID, false);
+        img.line(px(0.0, v), px(end_s, v), 1.0, GRID, 1.0);
+        let [x, y] = px(0.0, v);
+        img.text(x as i32 - 24, y as i32 - 3, &format!("{v:>3.0}"), 1, AXIS);
         v += 50.0;
     }
-    canvas.line(px(0.0, 0.0), px(end_s, 0.0), AXIS, false);
-    canvas.line(px(0.0, 0.0), px(0.0, top), AXIS, false);
+    img.line(px(0.0, 0.0), px(end_s, 0.0), 1.0, AXIS, 1.0);
+    img.line(px(0.0, 0.0), px(0.0, top), 1.0, AXIS, 1.0);
     let w = trace.bucket_s();
     for (i, b) in trace.buckets().iter().enumerate() {
         let t = (i as f64 + 0.5) * w;
-        canvas.line(px(t, 0.0), px(t, b.max_mm_s), SPEED_PEAK, false);
+        img.line(px(t, 0.0), px(t, b.max_mm_s), 1.0, SPEED_PEAK, 1.0);
     }
-    let mut last: Option<(f64, f64)> = None;
+    let mut last: Option<[f32; 2]> = None;
     for i in 0..trace.buckets().len() {
         let p = px((i as f64 + 0.5) * w, trace.mean_mm_s(i));
-        canvas.line(last.unwrap_or(p), p, SPEED_MEAN, true);
+        img.line(last.unwrap_or(p), p, 2.0, SPEED_MEAN, 1.0);
         last = Some(p);
     }
+    img.text(MARGIN as i32 + 6, 8, "SPEED MM/S: MEAN (DARK), PEAK (LIGHT), TIME IN MIN", 1, AXIS);
     // Layers: one bar each, as tall as its time is long against the longest.
-    let y0 = (HEIGHT - MARGIN) as f64;
+    let y0 = (HEIGHT - MARGIN) as i32;
     let (x0, x1) = (MARGIN as f64, (WIDTH - MARGIN) as f64);
     let longest = layer_s.iter().copied().fold(0.0, f64::max);
     if longest > 0.0 {
         let bar_w = (x1 - x0) / layer_s.len() as f64;
-        let h = LAYER_BAR_MAX_H as f64;
         for (k, &t) in layer_s.iter().enumerate() {
-            let top_y = y0 - t / longest * h;
-            let (a, b) = (x0 + k as f64 * bar_w, x0 + (k + 1) as f64 * bar_w - 1.0);
-            let mut x = a;
-            while x <= b.max(a) {
-                canvas.line((x, y0), (x, top_y), LAYER_BAR, false);
-                x += 1.0;
-            }
+            let h = (t / longest * LAYER_BAR_MAX_H as f64).round() as i32;
+            let a = (x0 + k as f64 * bar_w).round() as i32;
+            let b = ((x0 + (k + 1) as f64 * bar_w).round() as i32 - 1).max(a + 1);
+            img.rect(a, y0 - h, (b - a) as u32, h as u32, LAYER_BAR, 1.0);
         }
+        let label = format!("TIME PER LAYER, {} LAYERS, LONGEST {longest:.0} S", layer_s.len());
+        img.text(MARGIN as i32 + 6, (SPEED_PANEL_H + MARGIN / 2) as i32 - 4, &label, 1, AXIS);
     }
-    canvas.line((x0, y0), (x1, y0), AXIS, false);
-    encode(&canvas, out)?;
+    img.line([x0 as f32, y0 as f32], [x1 as f32, y0 as f32], 1.0, AXIS, 1.0);
+    out.write_all(&encode_image(&img)?)?;
     Ok(top)
 }
 
