@@ -58,3 +58,42 @@ def test_toolpath_arrays(data):
     assert {"outer_wall", "inner_wall", "infill"} <= used
     fewer = gweave.toolpath(data / "cura" / "cura_dual.gcode", travel=False, min_len=1.0)
     assert fewer["extruding"].all() and len(fewer["tool"]) < (tp["extruding"]).sum()
+
+
+BANDS = """
+[hardware]
+dialect = "marlin"
+[[hardware.inputs]]
+colour = "#00a0e0"
+[[hardware.inputs]]
+colour = "#e0007a"
+[[hardware.inputs]]
+colour = "#ffe000"
+[[hardware.inputs]]
+colour = "#f5f5f0"
+[purge]
+mode = "off"
+[[schedule]]
+layer = 0
+mix = "Blue"
+[[schedule]]
+layer = 10
+mix = "Yellow"
+"""
+
+
+def test_preview_colours_a_mixed_file_by_its_predicted_mixes(data, tmp_path):
+    profile = tmp_path / "bands.toml"
+    profile.write_text(BANDS)
+    out = tmp_path / "bands.gcode"
+    gweave.mix(data / "cura" / "cura_torus.gcode", out, config=profile)
+
+    def dominant(layer):
+        png = gweave.preview(out, layer=layer, colour_by="mix", mix_profile=profile, size=(300, 300))
+        _, _, px = read_png(png)
+        colours = [c for c in px if c != BACKGROUND]
+        return max(set(colours), key=colours.count)
+
+    blue, yellow = dominant(5), dominant(15)
+    assert blue[2] > max(blue[0], blue[1]), blue
+    assert yellow[0] > 200 and yellow[1] > 180 and yellow[2] < 80, yellow
