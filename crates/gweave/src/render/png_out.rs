@@ -132,8 +132,10 @@ fn visible_strokes(strokes: &[Stroke], width: u32, height: u32) -> Vec<bool> {
 fn mark_core(coverage: &mut Coverage, s: &Stroke) {
     let core = s.width_px / 2.0 - 0.5;
     let (w, h) = (coverage.w as u32, coverage.h as u32);
-    within(s.from, s.to, core, w, h, |x, y, dist| {
-        if dist <= core {
+    // A hair inside the core, so that rounding never marks a pixel that is not fully covered.
+    let core2 = core * core * 0.9999;
+    within(s.from, s.to, core, w, h, |x, y, dist2| {
+        if dist2 <= core2 {
             coverage.cover(x, y);
         }
         true

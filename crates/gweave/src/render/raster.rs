@@ -105,9 +105,14 @@ pub(crate) fn line_pixels(
     mut f: impl FnMut(usize, usize, f32) -> bool,
 ) -> bool {
     let reach = width_px.max(0.5) / 2.0 + 0.5;
+    // Squared distances at or beyond this are surely past `reach`: no square root for them.
+    let beyond2 = reach * reach * 1.0001;
     let thin = width_px < 1.0;
-    within(p0, p1, reach, width, height, |x, y, dist| {
-        let mut cover = (reach - dist).clamp(0.0, 1.0);
+    within(p0, p1, reach, width, height, |x, y, dist2| {
+        if dist2 >= beyond2 {
+            return true;
+        }
+        let mut cover = (reach - dist2.sqrt()).clamp(0.0, 1.0);
         if thin {
             cover *= width_px;
         }
@@ -120,9 +125,10 @@ pub(crate) fn line_pixels(
     })
 }
 
-/// Calls `f(x, y, dist)` for the pixels of a `width` x `height` image whose centres may lie
+/// Calls `f(x, y, dist2)` for the pixels of a `width` x `height` image whose centres may lie
 /// within `reach` of the segment `p0`-`p1` (every one that does, and a few that do not),
-/// `dist` being the centre's distance to the segment; stops when `f` returns `false`.
+/// `dist2` being the square of the centre's distance to the segment; stops when `f` returns
+/// `false`.
 ///
 /// Each row is scanned only where the capsule can be: a point within `reach` of the segment is
 /// within `reach` of its line, and on the row `y` those points are
@@ -168,7 +174,7 @@ pub(crate) fn within(
                 0.0
             };
             let (qx, qy) = (p0[0] + d[0] * t - px, p0[1] + d[1] * t - py);
-            if !f(x, y, (qx * qx + qy * qy).sqrt()) {
+            if !f(x, y, qx * qx + qy * qy) {
                 return false;
             }
         }
