@@ -5,29 +5,8 @@
 set -euo pipefail
 P="$WORK/kinds"
 mkdir -p "$P"
-cat > "$P/bands.toml" <<'TOML'
-[hardware]
-dialect = "marlin"
-[[hardware.inputs]]
-colour = "#00a0e0"
-[[hardware.inputs]]
-colour = "#e0007a"
-[[hardware.inputs]]
-colour = "#ffe000"
-[[hardware.inputs]]
-colour = "#f5f5f0"
-[purge]
-mode = "off"
-[[schedule]]
-layer = 0
-mix = "Blue"
-[[schedule]]
-layer = 10
-mix = "Yellow"
-[[schedule]]
-layer = 19
-mix = "Magenta"
-TOML
+ROOT_DIR=$(cd "$DATA/../.." && pwd)
+cp "$ROOT_DIR/examples/mix/bands.toml" "$P/bands.toml"
 cat > "$P/png.py" <<'PY'
 import struct, sys, zlib
 def read(path):
@@ -101,7 +80,7 @@ length_px = cols[-1] - cols[0] + 1
 assert abs(width_px / length_px - 20.8 / 30.0) < 0.05, (width_px, length_px)
 PY
 # 4. Raster: the drops of a layer of the badge cover the image's black pixels.
-"$GWEAVE" raster "$(cd "$DATA/../.." && pwd)/examples/raster/layers" -o "$P/badge.gcode" --invert > /dev/null
+"$GWEAVE" raster "$ROOT_DIR/examples/raster/layers" -o "$P/badge.gcode" --invert > /dev/null
 "$GWEAVE" preview "$P/badge.gcode" -o "$P/badge.png" --layer 0 --size 300x300 -q
 python3 - "$P" <<'PY'
 import sys; sys.path.insert(0, sys.argv[1]); from png import histogram

@@ -265,7 +265,10 @@ fn preview_bytes(
             let text = std::fs::read_to_string(&p)?;
             let profile = gweave::post::mix::profile::MixProfile::from_toml_str(&text)
                 .map_err(|e| PyValueError::new_err(e.to_string()))?;
-            Some(render::MixColours::from_profile(&profile).map_err(|e| PyValueError::new_err(e.to_string()))?)
+            Some(
+                render::MixColours::from_profile(&profile)
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?,
+            )
         }
         None => None,
     };

@@ -60,31 +60,11 @@ def test_toolpath_arrays(data):
     assert fewer["extruding"].all() and len(fewer["tool"]) < (tp["extruding"]).sum()
 
 
-BANDS = """
-[hardware]
-dialect = "marlin"
-[[hardware.inputs]]
-colour = "#00a0e0"
-[[hardware.inputs]]
-colour = "#e0007a"
-[[hardware.inputs]]
-colour = "#ffe000"
-[[hardware.inputs]]
-colour = "#f5f5f0"
-[purge]
-mode = "off"
-[[schedule]]
-layer = 0
-mix = "Blue"
-[[schedule]]
-layer = 10
-mix = "Yellow"
-"""
 
 
 def test_preview_colours_a_mixed_file_by_its_predicted_mixes(data, tmp_path):
-    profile = tmp_path / "bands.toml"
-    profile.write_text(BANDS)
+    # examples/mix/bands.toml: Blue from layer 0, Yellow from 10, Magenta from 19.
+    profile = data.parent.parent / "examples" / "mix" / "bands.toml"
     out = tmp_path / "bands.gcode"
     gweave.mix(data / "cura" / "cura_torus.gcode", out, config=profile)
 

@@ -3,7 +3,7 @@
 //!
 //! `cura/cura_torus.gcode` (28 layers, one extruder) is mixed with a layer schedule: Blue
 //! (50 % cyan, 50 % magenta) from layer 0, Yellow from layer 10, Magenta from layer 19, no
-//! purge. Each layer of a band must draw in the colour the mixing model predicts for its mix.
+//! purge (`examples/mix/bands.toml`). Each layer of a band must draw in the colour the mixing model predicts for its mix.
 //! Purge-shift (60 mm, across layers) then moves the change to Magenta back into layer 18: that
 //! layer must show the washout's blend of yellow into magenta, which the unshifted file does not.
 
@@ -18,29 +18,7 @@ use gweave::render::raster::Image;
 use gweave::render::view::{Drawing, BACKGROUND};
 use gweave::render::{drawing, ColourBy, MixColours, PreviewOptions, ViewOptions};
 
-const BANDS: &str = r##"
-[hardware]
-dialect = "marlin"
-[[hardware.inputs]]
-colour = "#00a0e0"
-[[hardware.inputs]]
-colour = "#e0007a"
-[[hardware.inputs]]
-colour = "#ffe000"
-[[hardware.inputs]]
-colour = "#f5f5f0"
-[purge]
-mode = "off"
-[[schedule]]
-layer = 0
-mix = "Blue"
-[[schedule]]
-layer = 10
-mix = "Yellow"
-[[schedule]]
-layer = 19
-mix = "Magenta"
-"##;
+const BANDS: &str = include_str!("../../../examples/mix/bands.toml");
 
 fn torus() -> Vec<u8> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/cura/cura_torus.gcode");

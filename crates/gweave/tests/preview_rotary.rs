@@ -10,6 +10,7 @@
 use std::path::PathBuf;
 
 use gweave::render::png_out::rasterise;
+use gweave::render::raster::Image;
 use gweave::render::view::BACKGROUND;
 use gweave::render::{drawing, ColourBy, Format, PreviewOptions, ViewKind, ViewOptions};
 use gweave::rotary::cylinder::RotaryConfig;
@@ -25,6 +26,16 @@ fn tube_file(name: &str) -> (PathBuf, TubeParams) {
     let path = dir.join(name);
     std::fs::write(&path, gcode).unwrap();
     (path, tube)
+}
+
+/// Rows of column `x` that are not background.
+fn lit_rows(img: &Image, x: f32) -> Vec<u32> {
+    (0..img.height)
+        .filter(|&y| {
+            let p = img.pixel(x as u32, y);
+            [p[0], p[1], p[2]] != BACKGROUND
+        })
+        .collect()
 }
 
 fn options(kind: ViewKind) -> PreviewOptions {
@@ -46,12 +57,7 @@ fn a_tube_is_drawn_round_on_its_cylinder() {
     let [col, axis_row] = proj.project([x_mm, 0.0, 0.0]);
     let top = proj.project([x_mm, r_mm, 0.0])[1];
     let bottom = proj.project([x_mm, -r_mm, 0.0])[1];
-    let lit: Vec<u32> = (0..img.height)
-        .filter(|&y| {
-            let p = img.pixel(col as u32, y);
-            [p[0], p[1], p[2]] != BACKGROUND
-        })
-        .collect();
+    let lit = lit_rows(&img, col);
     let (first, last) = (*lit.first().unwrap() as f32, *lit.last().unwrap() as f32);
     // Half a bead width (0.45 mm drawn) plus a pixel of anti-aliasing beyond the centre line.
     let slack = 0.45 / 2.0 * proj.scale_px_mm() + 1.5;
@@ -72,12 +78,7 @@ fn a_tube_is_drawn_round_on_its_cylinder() {
     let [ax, ay] = proj.project([x_mm, 0.0, 0.0]);
     // A cylinder's outline is a band between two lines parallel to its projected axis: a
     // vertical line through the axis crosses them at equal distances on either side.
-    let lit: Vec<u32> = (0..img.height)
-        .filter(|&y| {
-            let p = img.pixel(ax as u32, y);
-            [p[0], p[1], p[2]] != BACKGROUND
-        })
-        .collect();
+    let lit = lit_rows(&img, ax);
     let (first, last) = (*lit.first().unwrap() as f32, *lit.last().unwrap() as f32);
     assert!(((first + last) / 2.0 - ay).abs() < 2.0, "{first}..{last} about {ay}");
     // At least the radius on each side (the band is wider along a vertical than across).
