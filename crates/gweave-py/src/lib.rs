@@ -245,7 +245,7 @@ impl Reader {
 
 /// A picture or viewer page of a file as bytes (`format`: png, svg or html); see `gweave preview`.
 #[pyfunction]
-#[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None))]
+#[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None))]
 #[allow(clippy::too_many_arguments)]
 fn preview_bytes(
     py: Python<'_>,
@@ -259,7 +259,16 @@ fn preview_bytes(
     tool_colours: Option<Vec<String>>,
     travel: bool,
     mix_profile: Option<PathBuf>,
+    mandrel_diameter: Option<f64>,
+    head: Option<PathBuf>,
 ) -> PyResult<Py<PyBytes>> {
+    let printhead = match head {
+        Some(p) => Some(
+            gweave::gen::printhead::PrintheadProfile::from_toml(&std::fs::read_to_string(&p)?)
+                .map_err(|e| PyValueError::new_err(e.to_string()))?,
+        ),
+        None => None,
+    };
     let mix = match mix_profile {
         Some(p) => {
             let text = std::fs::read_to_string(&p)?;
@@ -290,6 +299,8 @@ fn preview_bytes(
             ..ViewOptions::default()
         },
         mix,
+        rotary: mandrel_diameter.map(gweave::rotary::cylinder::RotaryConfig::new),
+        printhead,
         ..PreviewOptions::default()
     };
     let bytes = py

@@ -272,6 +272,8 @@ def preview(
     tool_colours: Optional[Sequence[str]] = None,
     travel: bool = False,
     mix_profile: Optional[PathLike] = None,
+    mandrel_diameter: Optional[float] = None,
+    head: Optional[PathLike] = None,
 ) -> bytes:
     """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None).
 
@@ -280,7 +282,8 @@ def preview(
     ``"iso"``; ``colour_by`` is ``tool``, ``feature``, ``speed``, ``layer`` or ``mix`` (the colour
     each move is predicted to print, from the file's mixing commands and the filaments of the
     ``gweave mix`` profile ``mix_profile``); ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``
-    colour the tools; ``compare`` highlights moves that differ
+    colour the tools; ``mandrel_diameter`` (mm) draws a rotary program without a gweave header on
+    its cylinder; ``head`` is the printhead profile of raster output; ``compare`` highlights moves that differ
     from another file; ``size`` is ``(width, height)`` in pixels.
     """
     fmt = "png"
@@ -301,6 +304,8 @@ def preview(
         tool_colours=None if tool_colours is None else list(tool_colours),
         travel=travel,
         mix_profile=None if mix_profile is None else os.fspath(mix_profile),
+        mandrel_diameter=mandrel_diameter,
+        head=None if head is None else os.fspath(head),
     )
     if output is not None:
         with open(output, "wb") as f:
