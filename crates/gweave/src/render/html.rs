@@ -249,4 +249,42 @@ mod tests {
         assert!(html.contains(&format!("\"pos\":\"{pos}\"")), "z span is 0: quantised to 0");
         assert!(html.contains("\"feed\":\"+gA=\""), "250 tenths of mm/s");
     }
+
+    #[test]
+    fn mix_colours_travel_as_a_palette_of_at_most_255() {
+        let seg = |i: u32| Segment {
+            start: [i as f32, 0.0, 0.2],
+            end: [i as f32 + 1.0, 0.0, 0.2],
+            tool: 0,
+            feature: Feature::Infill,
+            feed_mm_s: 20.0,
+            layer: 0,
+            extruding: true,
+            mix_rgb: [(i % 256) as u8, (i / 256) as u8 * 100, 7],
+        };
+        let few = Toolpath {
+            segments: (0..3).map(seg).collect(),
+            layer_z_mm: vec![0.2],
+            tools: 1,
+            on_cylinder: false,
+        };
+        let (index, colours) = mix_palette(&few);
+        assert_eq!(index, [0, 1, 2]);
+        assert_eq!(colours, ["#000007", "#010007", "#020007"], "exact while they fit");
+        let many = Toolpath { segments: (0..300).map(seg).collect(), ..few.clone() };
+        let (index, colours) = mix_palette(&many);
+        assert!(colours.len() <= 255 && colours.len() > 100, "{}", colours.len());
+        // 300 colours do not fit: one low bit dropped per channel, 150 remain; (5, 0, 7) maps
+        // to (4, 0, 6).
+        assert_eq!(colours[index[5] as usize], "#040006");
+        let options = HtmlOptions {
+            title: "m".into(),
+            colour_by: ColourBy::Mix,
+            view: ViewKind::Top,
+            layer: None,
+            tool_colours: vec![],
+        };
+        let html = write_html(&few, None, &options);
+        assert!(html.contains("\"mix_colours\":[\"#000007\",\"#010007\",\"#020007\"]"));
+    }
 }
