@@ -247,7 +247,7 @@ impl Reader {
 
 /// A picture or viewer page of a file as bytes (`format`: png, svg or html); see `gweave preview`.
 #[pyfunction]
-#[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false))]
+#[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None))]
 #[allow(clippy::too_many_arguments)]
 fn preview_bytes(
     py: Python<'_>,
@@ -260,7 +260,29 @@ fn preview_bytes(
     compare: Option<PathBuf>,
     tool_colours: Option<Vec<String>>,
     travel: bool,
+    mix_profile: Option<PathBuf>,
+    mandrel_diameter: Option<f64>,
+    head: Option<PathBuf>,
 ) -> PyResult<Py<PyBytes>> {
+    let printhead = match head {
+        Some(p) => Some(
+            gweave::gen::printhead::PrintheadProfile::from_toml(&std::fs::read_to_string(&p)?)
+                .map_err(|e| PyValueError::new_err(e.to_string()))?,
+        ),
+        None => None,
+    };
+    let mix = match mix_profile {
+        Some(p) => {
+            let text = std::fs::read_to_string(&p)?;
+            let profile = gweave::post::mix::profile::MixProfile::from_toml_str(&text)
+                .map_err(|e| PyValueError::new_err(e.to_string()))?;
+            Some(
+                render::MixColours::from_profile(&profile)
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?,
+            )
+        }
+        None => None,
+    };
     let format = Format::from_path(std::path::Path::new(&format!("x.{format}"))).map_err(render_err)?;
     let tool_colours = tool_colours
         .unwrap_or_default()
@@ -278,7 +300,10 @@ fn preview_bytes(
             travel,
             ..ViewOptions::default()
         },
-        min_len_mm: None,
+        mix,
+        rotary: mandrel_diameter.map(gweave::rotary::cylinder::RotaryConfig::new),
+        printhead,
+        ..PreviewOptions::default()
     };
     let bytes = py
         .allow_threads(|| render::preview(&path, compare.as_deref(), format, &options))

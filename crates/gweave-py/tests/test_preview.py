@@ -58,3 +58,36 @@ def test_toolpath_arrays(data):
     assert {"outer_wall", "inner_wall", "infill"} <= used
     fewer = gweave.toolpath(data / "cura" / "cura_dual.gcode", travel=False, min_len=1.0)
     assert fewer["extruding"].all() and len(fewer["tool"]) < (tp["extruding"]).sum()
+
+
+
+
+def test_preview_colours_a_mixed_file_by_its_predicted_mixes(data, tmp_path):
+    # examples/mix/bands.toml: Blue from layer 0, Yellow from 10, Magenta from 19.
+    profile = data.parent.parent / "examples" / "mix" / "bands.toml"
+    out = tmp_path / "bands.gcode"
+    gweave.mix(data / "cura" / "cura_torus.gcode", out, config=profile)
+
+    def dominant(layer):
+        png = gweave.preview(out, layer=layer, colour_by="mix", mix_profile=profile, size=(300, 300))
+        _, _, px = read_png(png)
+        colours = [c for c in px if c != BACKGROUND]
+        return max(set(colours), key=colours.count)
+
+    blue, yellow = dominant(5), dominant(15)
+    assert blue[2] > max(blue[0], blue[1]), blue
+    assert yellow[0] > 200 and yellow[1] > 180 and yellow[2] < 80, yellow
+
+
+def test_preview_draws_rotary_output_on_its_cylinder(tmp_path):
+    # A tube on a 20 mm mandrel, 30 mm long: seen from the top, 2 x 10.4 mm across (the outer
+    # layer's nozzle radius), not the 65 mm of the circumference.
+    out = tmp_path / "tube.gcode"
+    gweave.rotary_tube(out, mandrel_diameter=20, length=30, layers=2)
+    w, h, px = read_png(gweave.preview(out, size=(400, 400)))
+    column = [px[y * w + w // 2] for y in range(h)]
+    lit = [y for y, c in enumerate(column) if c != BACKGROUND]
+    row = [px[(h // 2) * w + x] for x in range(w)]
+    cols = [x for x, c in enumerate(row) if c != BACKGROUND]
+    ratio = (lit[-1] - lit[0] + 1) / (cols[-1] - cols[0] + 1)
+    assert abs(ratio - 20.8 / 30.0) < 0.05, ratio

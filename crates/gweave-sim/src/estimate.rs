@@ -50,6 +50,7 @@ use thiserror::Error;
 use crate::kinematics::{Move, MoveError, Pos};
 use crate::limits::{AxisUpdate, CornerMode, MotionProfile, ProfileError, M204};
 use crate::planner::{BlockSink, PlannedBlock, Planner};
+use crate::speed_trace::SpeedTrace;
 use crate::stepper::{StepTotals, Steppers};
 
 /// Feed rate before the file sets one, mm/s (Klipper `gcode_move`, Marlin `feedrate_mm_s`).
@@ -145,11 +146,16 @@ struct Accounts {
     motion_s: f64,
     last_motion_end_s: f64,
     blocks: u64,
+    /// The speed over time, when asked for ([`Estimator::record_speed`]).
+    speed: Option<Box<SpeedTrace>>,
 }
 
 impl BlockSink for Accounts {
     fn block(&mut self, block: &PlannedBlock) {
         let d = block.duration_s();
+        if let Some(trace) = &mut self.speed {
+            trace.add(self.t_s, block);
+        }
         let key = self.keys[block.tag as usize];
         self.key_s[block.tag as usize] += d;
         self.steppers.select_tool(key.tool as usize);
@@ -206,6 +212,7 @@ impl Estimator {
             motion_s: 0.0,
             last_motion_end_s: 0.0,
             blocks: 0,
+            speed: None,
         };
         let mut est = Self {
             block: Block::default(),
@@ -315,6 +322,16 @@ impl Estimator {
     /// The motors, to step what the planner does not plan (homing).
     pub fn steppers_mut(&mut self) -> &mut Steppers {
         &mut self.acc.steppers
+    }
+
+    /// Record the planned speed over time from now on ([`Estimator::speed_trace`]).
+    pub fn record_speed(&mut self) {
+        self.acc.speed.get_or_insert_with(Default::default);
+    }
+
+    /// The planned speed over time, if [`Estimator::record_speed`] was called.
+    pub fn speed_trace(&self) -> Option<&SpeedTrace> {
+        self.acc.speed.as_deref()
     }
 
     /// The mixing state, for a profile with mixing inputs.

@@ -13,6 +13,7 @@ pub mod profile;
 pub mod protection;
 pub mod pty;
 pub mod serial;
+pub mod speed_trace;
 pub mod stepper;
 pub mod tcp;
 pub mod thermal;

@@ -24,7 +24,7 @@ fn dual() -> PathBuf {
 }
 
 fn options(view: ViewOptions) -> PreviewOptions {
-    PreviewOptions { view, min_len_mm: None }
+    PreviewOptions { view, ..PreviewOptions::default() }
 }
 
 fn layer(n: u32) -> ViewOptions {

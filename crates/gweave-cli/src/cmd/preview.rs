@@ -7,7 +7,12 @@ use std::process::ExitCode;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::colour::Srgb8;
-use gweave::render::{preview_with_progress, ColourBy, Format, PreviewOptions, ViewKind, ViewOptions};
+use gweave::gen::printhead::PrintheadProfile;
+use gweave::post::mix::profile::MixProfile;
+use gweave::render::{
+    preview_with_progress, ColourBy, Format, MixColours, PreviewOptions, ViewKind, ViewOptions,
+};
+use gweave::rotary::cylinder::RotaryConfig;
 
 use crate::progress::Bar;
 
@@ -35,7 +40,8 @@ pub struct PreviewArgs {
     /// top (from above) or iso (isometric 3D).
     #[arg(long, default_value = "top", value_parser = |s: &str| s.parse::<ViewKind>())]
     pub view: ViewKind,
-    /// tool, feature, speed, layer or mix (predicted mix colour per tool, from --tool-colours).
+    /// tool, feature, speed, layer or mix (the colour each move is predicted to print, from the
+    /// file's mixing commands, the filaments of --mix-profile and its chamber's washout).
     #[arg(long, default_value = "tool", value_parser = |s: &str| s.parse::<ColourBy>())]
     pub colour_by: ColourBy,
     /// Picture size in pixels, WIDTHxHEIGHT.
@@ -47,6 +53,19 @@ pub struct PreviewArgs {
     /// Colours of tools 0, 1, ... as #rrggbb, comma separated (e.g. predicted mix colours).
     #[arg(long, value_name = "COLOURS", value_delimiter = ',')]
     pub tool_colours: Vec<Srgb8>,
+    /// A `gweave mix` profile: the filament colours of its inputs and its mixing chamber
+    /// (purge.chamber_mm3, dead_mm3) for --colour-by mix (default: cyan, magenta, yellow, white).
+    #[arg(long, value_name = "PROFILE.toml")]
+    pub mix_profile: Option<PathBuf>,
+    /// Draw the file as a rotary program on a mandrel of this diameter, mm (axes X along, A
+    /// around in degrees, Z away from it). Not needed for `gweave rotary` output: its header
+    /// names the machine.
+    #[arg(long, value_name = "MM")]
+    pub mandrel_diameter: Option<f64>,
+    /// Printhead profile of binder-jet raster output (TOML, as for `gweave raster --head`;
+    /// default: HP C6602, 12 nozzles at 96 dpi): its fire commands are drawn as drops.
+    #[arg(long, value_name = "PROFILE.toml")]
+    pub head: Option<PathBuf>,
     /// Draw travel moves too.
     #[arg(long)]
     pub travel: bool,
@@ -83,6 +102,24 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
             bail!("--min-len must be 0 or more mm, got {m}");
         }
     }
+    let mix = match &args.mix_profile {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            let profile =
+                MixProfile::from_toml_str(&text).with_context(|| format!("in {}", path.display()))?;
+            Some(MixColours::from_profile(&profile)?)
+        }
+        None => None,
+    };
+    let printhead = match &args.head {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            Some(PrintheadProfile::from_toml(&text).with_context(|| format!("in {}", path.display()))?)
+        }
+        None => None,
+    };
     let options = PreviewOptions {
         view: ViewOptions {
             kind: args.view,
@@ -95,6 +132,9 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
             ..ViewOptions::default()
         },
         min_len_mm: args.min_len,
+        mix,
+        rotary: args.mandrel_diameter.map(RotaryConfig::new),
+        printhead,
     };
     let mut bar = Bar::new(args.quiet);
     let bytes = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;

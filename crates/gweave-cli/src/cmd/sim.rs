@@ -10,7 +10,7 @@ use gweave::gcode::reader::LineReader;
 use gweave::pass::Progress;
 use gweave_sim::heater::HeaterId;
 use gweave_sim::interp::{Machine, Outcome, SimReport};
-use gweave_sim::plot::save_temperature_png;
+use gweave_sim::plot::{save_speed_png, save_temperature_png};
 use gweave_sim::profile::{FaultSpec, MachineProfile};
 
 use crate::common::ReportArgs;
@@ -21,7 +21,8 @@ use crate::progress::Bar;
 /// (thermal plant, PID, protection), warnings (out of bounds, cold extrusion, unknown
 /// commands). Exits with 1 when the machine halted (a thermal fault or M112).
 ///
-/// Example: `gweave sim part.gcode --machine examples/machines/marlin-ramps.toml --plot t.png`.
+/// Example: `gweave sim part.gcode --machine examples/machines/marlin-ramps.toml --plot t.png
+/// --plot-speed speed.png`.
 #[derive(Args, Debug)]
 pub struct SimArgs {
     /// The G-code file to run.
@@ -36,6 +37,10 @@ pub struct SimArgs {
     /// Draw temperature and target over time into this PNG.
     #[arg(long, value_name = "PNG")]
     pub plot: Option<PathBuf>,
+    /// Draw the planned toolhead speed over time (mean and peak of each time slice) and the
+    /// time of each layer into this PNG.
+    #[arg(long, value_name = "PNG")]
+    pub plot_speed: Option<PathBuf>,
     /// Write the inkjet canvases (one PNG per layer and head) into this directory.
     #[arg(long, value_name = "DIR")]
     pub raster_out: Option<PathBuf>,
@@ -59,10 +64,16 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
         profile.faults.push(spec.parse::<FaultSpec>()?);
     }
     let mut machine = Machine::new(profile)?;
+    if args.plot_speed.is_some() {
+        machine.record_speed();
+    }
     let errors = run_file(&mut machine, &args.input, args.quiet)?;
     let report = machine.report();
     if let Some(path) = &args.plot {
         save_temperature_png(machine.thermal().series(), path)?;
+    }
+    if let (Some(path), Some(trace)) = (&args.plot_speed, machine.speed_trace()) {
+        save_speed_png(trace, &report.layer_s, path)?;
     }
     if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
         canvas.write_layer_pngs(dir)?;

@@ -276,13 +276,19 @@ def preview(
     compare: Optional[PathLike] = None,
     tool_colours: Optional[Sequence[str]] = None,
     travel: bool = False,
+    mix_profile: Optional[PathLike] = None,
+    mandrel_diameter: Optional[float] = None,
+    head: Optional[PathLike] = None,
 ) -> bytes:
     """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None).
 
     ``output`` picks the format by extension (``.png``, ``.svg``, ``.html``) and is written.
     ``layer`` is one 0-based layer or an inclusive ``(first, last)`` range; ``view`` is ``"top"`` or
-    ``"iso"``; ``colour_by`` is ``tool``, ``feature``, ``speed``, ``layer`` or ``mix`` (per-tool
-    ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``); ``compare`` highlights moves that differ
+    ``"iso"``; ``colour_by`` is ``tool``, ``feature``, ``speed``, ``layer`` or ``mix`` (the colour
+    each move is predicted to print, from the file's mixing commands and the filaments of the
+    ``gweave mix`` profile ``mix_profile``); ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``
+    colour the tools; ``mandrel_diameter`` (mm) draws a rotary program without a gweave header on
+    its cylinder; ``head`` is the printhead profile of raster output; ``compare`` highlights moves that differ
     from another file; ``size`` is ``(width, height)`` in pixels.
     """
     fmt = "png"
@@ -302,6 +308,9 @@ def preview(
         compare=None if compare is None else os.fspath(compare),
         tool_colours=None if tool_colours is None else list(tool_colours),
         travel=travel,
+        mix_profile=None if mix_profile is None else os.fspath(mix_profile),
+        mandrel_diameter=mandrel_diameter,
+        head=None if head is None else os.fspath(head),
     )
     if output is not None:
         with open(output, "wb") as f:

@@ -87,6 +87,9 @@ def preview_bytes(
     compare: Optional[str] = None,
     tool_colours: Optional[List[str]] = None,
     travel: bool = False,
+    mix_profile: Optional[str] = None,
+    mandrel_diameter: Optional[float] = None,
+    head: Optional[str] = None,
 ) -> bytes: ...
 def toolpath_columns(path: str, *, travel: bool = True, min_len: float = 0.0) -> Tuple[int, Dict[str, Any]]: ...
 

@@ -46,6 +46,7 @@ use crate::heater::HeaterId;
 use crate::inkjet::{CanvasGeometry, InkjetCanvas, InkjetError};
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
 use crate::protection::{ThermalFault, KILL_LINE};
+use crate::speed_trace::SpeedTrace;
 use crate::thermal::{Thermal, ThermalError};
 
 pub use commands::{help_lines, CommandHelp, COMMANDS};
@@ -259,6 +260,16 @@ impl Machine {
     /// The inkjet canvases, on a machine with a printhead.
     pub fn inkjet(&self) -> Option<&InkjetCanvas> {
         self.inkjet.as_ref()
+    }
+
+    /// Record the planned toolhead speed over time from now on (for the speed chart).
+    pub fn record_speed(&mut self) {
+        self.core.record_speed();
+    }
+
+    /// The planned speed over time, if [`Machine::record_speed`] was called.
+    pub fn speed_trace(&self) -> Option<&SpeedTrace> {
+        self.core.speed_trace()
     }
 
     /// The logical position X Y Z E A (what `M114` prints), mm and degrees.

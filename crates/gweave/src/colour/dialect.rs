@@ -20,6 +20,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write;
 
 use super::mix::{Mix, MixError};
+use crate::gcode::line::{Block, Command};
+use crate::gcode::number::scan;
 
 /// Marlin's M165 letters, inputs 0 to 5.
 pub const M165_LETTERS: [char; 6] = ['A', 'B', 'C', 'D', 'H', 'I'];
@@ -319,6 +321,24 @@ impl MixingState {
         }
     }
 
+    /// Follows one parsed G-code line (`raw` is its text, `block` the parse): `T<n>` selects a
+    /// virtual tool, `M163`-`M165` and `M567` are applied, anything else is ignored (`Ok(None)`).
+    /// On error nothing changed, as in the firmware, which refuses the line.
+    pub fn follow_line(&mut self, raw: &[u8], block: &Block) -> Result<Option<MixingUpdate>, DialectError> {
+        let Command::Code { letter, number, sub: None } = block.command else { return Ok(None) };
+        if letter == b'T' {
+            let tool = number as usize;
+            return self.select_tool(tool).map(|mix| Some(MixingUpdate::Stored { tool, mix: mix.clone() }));
+        }
+        if letter != b'M' || !matches!(number, 163..=165 | 567) {
+            return Ok(None);
+        }
+        let words: Vec<(char, f64)> =
+            block.words.iter().filter_map(|w| w.number().map(|v| (w.letter as char, v))).collect();
+        let e_list = if number == 567 { colon_list(raw, block) } else { Vec::new() };
+        self.apply(number as u16, &words, &e_list).map(Some)
+    }
+
     fn store(&mut self, code: u16, tool: usize, factors: Vec<f64>) -> Result<MixingUpdate, DialectError> {
         let mix = Mix::new(&factors).map_err(|e| match e {
             MixError::AllZero => DialectError::AllZero { code },
@@ -329,6 +349,23 @@ impl MixingState {
     }
 }
 
+/// The colon-separated list of an `M567` `E` word (`E0.2:0.8`), read from the raw line (the
+/// lexer reads only the first number of a word).
+fn colon_list(raw: &[u8], block: &Block) -> Vec<f64> {
+    let Some(word) = block.word(b'E') else { return Vec::new() };
+    let mut i = word.span.start as usize + 1;
+    let mut list = Vec::new();
+    while let Ok((v, used)) = scan(&raw[i.min(raw.len())..]) {
+        list.push(v);
+        i += used;
+        if raw.get(i) != Some(&b':') {
+            break;
+        }
+        i += 1;
+    }
+    list
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -336,6 +373,29 @@ mod tests {
 
     fn mix(r: &[f64]) -> Mix {
         Mix::new(r).unwrap()
+    }
+
+    #[test]
+    fn follows_parsed_lines_including_m567_lists() {
+        let mut state = MixingState::new(2, 4).unwrap();
+        let mut block = Block::default();
+        let mut follow = |state: &mut MixingState, text: &str| {
+            crate::gcode::lexer::parse_into(text.as_bytes(), &mut block);
+            state.follow_line(text.as_bytes(), &block)
+        };
+        assert_eq!(follow(&mut state, "G1 X1 E2"), Ok(None));
+        follow(&mut state, "M163 S0 P0.25").unwrap();
+        follow(&mut state, "M163 S1 P0.75").unwrap();
+        follow(&mut state, "M164 S2").unwrap();
+        assert_eq!(
+            follow(&mut state, "T2"),
+            Ok(Some(MixingUpdate::Stored { tool: 2, mix: mix(&[0.25, 0.75]) }))
+        );
+        assert_eq!(state.active_mix(), &mix(&[0.25, 0.75]));
+        follow(&mut state, "M567 P1 E0.2:0.8").unwrap();
+        assert_eq!(state.rrf_mix(1), Some(&[0.2, 0.8][..]));
+        assert!(follow(&mut state, "T9").is_err(), "no such virtual tool");
+        assert_eq!(state.active_tool(), 2, "a refused line changes nothing");
     }
 
     fn close(got: &[f64], want: &[f64]) {

@@ -204,6 +204,20 @@ impl PrintheadProfile {
         (0..self.nozzle_count).map(|r| self.s_bit_of_row(r)).collect()
     }
 
+    /// Where the drops of a fire command `P<head> S<s_bits>` land, mm, with the carriage at
+    /// `carriage_mm` (X, Y): nozzle row `r` of a head sits at carriage + head offset + `r`
+    /// pitches along Y. Bits above `nozzle_count` and unknown heads fire nothing, as in the
+    /// firmware. Call only on a validated profile.
+    pub fn drops_mm(&self, head: usize, s_bits: u64, carriage_mm: [f64; 2]) -> Vec<[f64; 2]> {
+        let Some(offset) = self.heads.get(head) else { return Vec::new() };
+        let rows = self.rows_of_s_bits(s_bits);
+        let x = carriage_mm[0] + offset.offset_x_mm;
+        (0..self.nozzle_count)
+            .filter(|r| rows >> r & 1 == 1)
+            .map(|r| [x, carriage_mm[1] + offset.offset_y_mm + f64::from(r) * self.pitch_mm()])
+            .collect()
+    }
+
     /// Converts an `S` word into a mask of physical rows (bit `r` = row `r` fires).
     /// Bits above `nozzle_count` are ignored, as the firmware does.
     pub fn rows_of_s_bits(&self, s_bits: u64) -> u64 {
@@ -226,6 +240,21 @@ fn check_non_negative(field: &'static str, value: f64) -> Result<(), PrintheadEr
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn drops_land_at_offset_plus_row_pitches() {
+        let p = PrintheadProfile {
+            nozzle_count: 4,
+            nozzle_rows: vec![3, 2, 1, 0],
+            heads: vec![HeadOffset::default(), HeadOffset { offset_x_mm: 2.0, offset_y_mm: 1.0 }],
+            ..PrintheadProfile::default()
+        };
+        let pitch = 25.4 / 96.0;
+        // Address 0 fires row 3 (reversed map); bit 9 is beyond the nozzles.
+        assert_eq!(p.drops_mm(1, 1 | 1 << 9, [10.0, 20.0]), vec![[12.0, 21.0 + 3.0 * pitch]]);
+        assert_eq!(p.drops_mm(0, 0b0110, [0.0, 0.0]), vec![[0.0, pitch], [0.0, 2.0 * pitch]]);
+        assert!(p.drops_mm(2, 1, [0.0, 0.0]).is_empty(), "no head 2");
+    }
 
     #[test]
     fn default_is_hp_c6602() {

@@ -5,16 +5,15 @@
 //! so that equal steps look equally different, precomputed into a 256-entry table so that the
 //! per-segment cost is one lookup.
 //!
-//! The mix hook: [`ColourBy::Mix`] colours each segment by its tool's entry in a per-tool table
-//! of predicted colours. [`mix_table`] fills that table from the mixing model
-//! ([`crate::colour::MixingModel::predict`]) for one [`Mix`] per virtual tool; the mix pass (and
-//! its washout model, which makes the colour change gradually after a tool change) will hand
-//! over a table or, later, per-segment colours through the same [`Colouring::tool_colours`].
+//! The mix colouring draws each segment in its [`Segment::mix_rgb`], the colour the mixing model
+//! and the chamber's washout predict for it ([`super::mix_colour`]): read the toolpath with
+//! [`super::ToolpathOptions::mix`] set.
 
+use std::collections::HashMap;
 use std::fmt;
 use std::str::FromStr;
 
-use crate::colour::{Lab, Mix, MixError, MixingModel, Srgb8};
+use crate::colour::{Lab, Srgb8};
 use crate::gcode::layers::{Feature, ALL_FEATURES};
 
 use super::toolpath::{Segment, Toolpath};
@@ -27,7 +26,7 @@ pub enum ColourBy {
     Feature,
     Speed,
     Layer,
-    /// Predicted printed colour of each tool's mix (from [`Colouring::tool_colours`]).
+    /// Predicted printed colour of each move ([`Segment::mix_rgb`]).
     Mix,
 }
 
@@ -95,6 +94,11 @@ pub const FEATURE_COLOURS: [Srgb8; 15] = [
     Srgb8::new(0x5e, 0xd1, 0x94), // custom
 ];
 
+/// Colours listed in the legend of the mix colouring.
+const MIX_LEGEND_ENTRIES: usize = 6;
+/// Colours closer than this on every channel share a legend entry.
+const MIX_LEGEND_NEAR: u8 = 12;
+
 /// Travel moves, when drawn.
 pub const TRAVEL_COLOUR: Srgb8 = Srgb8::new(0x40, 0x60, 0xa0);
 
@@ -121,11 +125,6 @@ fn ramp_table() -> Vec<[u8; 3]> {
         .collect()
 }
 
-/// Predicted colours for one mix per virtual tool (the `mix` colouring's table).
-pub fn mix_table(model: &MixingModel, tool_mixes: &[Mix]) -> Result<Vec<Srgb8>, MixError> {
-    tool_mixes.iter().map(|m| model.predict(m)).collect()
-}
-
 /// One entry of a legend.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LegendEntry {
@@ -137,7 +136,7 @@ pub struct LegendEntry {
 #[derive(Debug, Clone)]
 pub struct Colouring {
     pub by: ColourBy,
-    /// Per-tool colours (tool and mix colourings); missing tools fall back to [`TOOL_COLOURS`].
+    /// Per-tool colours (tool colouring); missing tools fall back to [`TOOL_COLOURS`].
     pub tool_colours: Vec<Srgb8>,
     /// Extruding feed-rate range, mm/s.
     speed_mm_s: (f32, f32),
@@ -178,7 +177,8 @@ impl Colouring {
             return [TRAVEL_COLOUR.r, TRAVEL_COLOUR.g, TRAVEL_COLOUR.b];
         }
         let c = match self.by {
-            ColourBy::Tool | ColourBy::Mix => self.tool_colour(s.tool),
+            ColourBy::Tool => self.tool_colour(s.tool),
+            ColourBy::Mix => return s.mix_rgb,
             ColourBy::Feature => FEATURE_COLOURS[s.feature as usize],
             ColourBy::Speed => return self.ramp_at(s.feed_mm_s, self.speed_mm_s.0, self.speed_mm_s.1),
             ColourBy::Layer => {
@@ -193,18 +193,33 @@ impl Colouring {
         let entry = |label: String, c: [u8; 3]| LegendEntry { label, colour: Srgb8::new(c[0], c[1], c[2]) };
         let extruding = || toolpaths.iter().flat_map(|t| &t.segments).filter(|s| s.extruding);
         match self.by {
-            ColourBy::Tool | ColourBy::Mix => {
+            ColourBy::Tool => {
                 let mut used: Vec<u16> = extruding().map(|s| s.tool).collect();
                 used.sort_unstable();
                 used.dedup();
                 used.into_iter()
                     .map(|t| {
                         let c = self.tool_colour(t);
-                        let label =
-                            if self.by == ColourBy::Mix { format!("T{t} {c}") } else { format!("T{t}") };
-                        entry(label, [c.r, c.g, c.b])
+                        entry(format!("T{t}"), [c.r, c.g, c.b])
                     })
                     .collect()
+            }
+            ColourBy::Mix => {
+                // The colours printed longest (settled mixes; transitions are short).
+                let mut length_mm: HashMap<[u8; 3], f32> = HashMap::new();
+                extruding().for_each(|s| *length_mm.entry(s.mix_rgb).or_default() += s.len_mm());
+                let mut by_length: Vec<([u8; 3], f32)> = length_mm.into_iter().collect();
+                by_length.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+                // The tail of a washout differs from the settled colour by a level or two: one
+                // entry for colours closer than that.
+                let mut shown: Vec<[u8; 3]> = Vec::new();
+                for (c, _) in by_length {
+                    let near = |o: &[u8; 3]| (0..3).all(|k| c[k].abs_diff(o[k]) <= MIX_LEGEND_NEAR);
+                    if shown.len() < MIX_LEGEND_ENTRIES && !shown.iter().any(near) {
+                        shown.push(c);
+                    }
+                }
+                shown.into_iter().map(|c| entry(Srgb8::new(c[0], c[1], c[2]).to_string(), c)).collect()
             }
             ColourBy::Feature => {
                 let mut seen = [false; ALL_FEATURES.len()];
@@ -254,6 +269,7 @@ mod tests {
             feed_mm_s: feed,
             layer,
             extruding: true,
+            mix_rgb: [tool as u8, 0, 0],
         }
     }
 
@@ -263,6 +279,7 @@ mod tests {
             segments: vec![seg(0, 10.0, 0), seg(0, 50.0, 9)],
             layer_z_mm: vec![0.0; 10],
             tools: 1,
+            on_cylinder: false,
         };
         let c = Colouring::new(ColourBy::Speed, vec![], &[&tp]);
         let slow = c.colour(&tp.segments[0]);
@@ -275,21 +292,33 @@ mod tests {
     }
 
     #[test]
-    fn tool_table_overrides_defaults_and_mix_uses_the_model() {
-        let model = MixingModel::new(&[Srgb8::new(0, 255, 255), Srgb8::new(255, 255, 0)]).unwrap();
-        let table =
-            mix_table(&model, &[Mix::new(&[1.0, 0.0]).unwrap(), Mix::new(&[0.5, 0.5]).unwrap()]).unwrap();
-        assert_eq!(table[0], model.predict(&Mix::new(&[1.0, 0.0]).unwrap()).unwrap());
-        // Cyan and yellow mix subtractively to a green: green channel dominates.
-        assert!(table[1].g > table[1].r && table[1].g > table[1].b, "{}", table[1]);
-        let tp =
-            Toolpath { segments: vec![seg(1, 10.0, 0), seg(2, 10.0, 0)], layer_z_mm: vec![0.0], tools: 3 };
-        let c = Colouring::new(ColourBy::Mix, table.clone(), &[&tp]);
-        assert_eq!(c.colour(&tp.segments[0]), [table[1].r, table[1].g, table[1].b]);
+    fn tool_table_overrides_defaults_and_mix_draws_each_segments_colour() {
+        let red = Srgb8::new(200, 10, 10);
+        let mut long = seg(2, 10.0, 0);
+        long.end = [5.0, 0.0, 0.0];
+        long.mix_rgb = [200, 0, 0];
+        let tp = Toolpath {
+            segments: vec![seg(1, 10.0, 0), long],
+            layer_z_mm: vec![0.0],
+            tools: 3,
+            on_cylinder: false,
+        };
+        let c = Colouring::new(ColourBy::Tool, vec![TOOL_COLOURS[0], red], &[&tp]);
+        assert_eq!(c.colour(&tp.segments[0]), [200, 10, 10]);
         let t2 = TOOL_COLOURS[2];
         assert_eq!(c.colour(&tp.segments[1]), [t2.r, t2.g, t2.b], "no table entry: default colour");
-        let legend = c.legend(&[&tp]);
-        assert_eq!(legend[0].label, format!("T1 {}", table[1]));
+        let m = Colouring::new(ColourBy::Mix, vec![], &[&tp]);
+        assert_eq!(m.colour(&tp.segments[0]), [1, 0, 0]);
+        let mut near = tp.clone();
+        near.segments[1].mix_rgb = [9, 2, 0];
+        assert_eq!(m.legend(&[&near]).len(), 1, "a washout's tail shares its colour's entry");
+        let legend = m.legend(&[&tp]);
+        assert_eq!(legend.len(), 2);
+        assert_eq!(
+            (legend[0].label.as_str(), legend[0].colour),
+            ("#c80000", Srgb8::new(200, 0, 0)),
+            "longest first"
+        );
     }
 
     #[test]

@@ -8,7 +8,13 @@
 //! - `tool`, `feature` (index into `features`), `flags` (bit 0: extruding): u8 each;
 //! - `layer`: u32; `feed`: u16, tenths of mm/s.
 //!
+//! - `mix` (only when the toolpath was read with the mix colouring): u8 index into
+//!   `mix_colours`, the distinct predicted colours (at most 255: channels are coarsened until
+//!   they fit), with `mix_legend` the colours printed longest.
+//!
 //! 15 bytes per segment before base64 (x 4/3): a 3 MB slicer file becomes about 2.5 MB of HTML.
+
+use std::collections::HashMap;
 
 use serde::Serialize;
 
@@ -16,7 +22,7 @@ use crate::colour::Srgb8;
 use crate::gcode::layers::ALL_FEATURES;
 use crate::stats::Stats;
 
-use super::colour_by::{ColourBy, FEATURE_COLOURS, TOOL_COLOURS, TRAVEL_COLOUR};
+use super::colour_by::{ColourBy, Colouring, FEATURE_COLOURS, TOOL_COLOURS, TRAVEL_COLOUR};
 use super::toolpath::Toolpath;
 use super::view::ViewKind;
 
@@ -55,6 +61,9 @@ struct Payload<'a> {
     flags: String,
     layer_of: String,
     feed: String,
+    mix: Option<String>,
+    mix_colours: Vec<String>,
+    mix_legend: Vec<String>,
 }
 
 /// The page for a toolpath, with the file's stats when given.
@@ -93,6 +102,13 @@ pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -
             options.tool_colours.get(t).copied().unwrap_or(TOOL_COLOURS[t % TOOL_COLOURS.len()]).to_hex()
         })
         .collect();
+    let (mix, mix_colours, mix_legend) = if options.colour_by == ColourBy::Mix {
+        let (index, colours) = mix_palette(tp);
+        let legend = Colouring::new(ColourBy::Mix, Vec::new(), &[tp]).legend(&[tp]);
+        (Some(base64(&index)), colours, legend.iter().map(|e| e.colour.to_hex()).collect())
+    } else {
+        (None, Vec::new(), Vec::new())
+    };
     let payload = Payload {
         title: &options.title,
         n,
@@ -113,6 +129,9 @@ pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -
         flags: base64(&flags),
         layer_of: base64(&layer_of),
         feed: base64(&feed),
+        mix,
+        mix_colours,
+        mix_legend,
     };
     // Serialising plain numbers and strings cannot fail; `</` is escaped so that no text in the
     // data (a file name, a stats string) can close the script element.
@@ -120,6 +139,34 @@ pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -
     TEMPLATE
         .replacen("<title>gweave preview</title>", &format!("<title>{}</title>", escape(&options.title)), 1)
         .replacen(DATA_SLOT, &json, 1)
+}
+
+/// Each segment's index into a palette of its predicted mix colours, and the palette: at most
+/// 255 colours, the low bits of each channel dropped until they fit (a gradient then shows in
+/// steps of 2, 4, ... levels).
+fn mix_palette(tp: &Toolpath) -> (Vec<u8>, Vec<String>) {
+    for shift in 0..8 {
+        let coarse = |c: [u8; 3]| c.map(|v| (v >> shift) << shift);
+        let mut index: HashMap<[u8; 3], u8> = HashMap::new();
+        let mut colours = Vec::new();
+        let fits = tp.segments.iter().all(|s| {
+            let c = coarse(s.mix_rgb);
+            if index.contains_key(&c) {
+                return true;
+            }
+            if colours.len() == 255 {
+                return false;
+            }
+            index.insert(c, colours.len() as u8);
+            colours.push(Srgb8::new(c[0], c[1], c[2]).to_hex());
+            true
+        });
+        if fits {
+            return (tp.segments.iter().map(|s| index[&coarse(s.mix_rgb)]).collect(), colours);
+        }
+    }
+    // Channels of one bit give 8 colours: the loop has returned by now.
+    (vec![0; tp.segments.len()], vec![Srgb8::new(0, 0, 0).to_hex()])
 }
 
 fn escape(s: &str) -> String {
@@ -183,8 +230,9 @@ mod tests {
             feed_mm_s: 25.0,
             layer: 0,
             extruding: true,
+            mix_rgb: [0; 3],
         };
-        let tp = Toolpath { segments: vec![s], layer_z_mm: vec![0.2], tools: 2 };
+        let tp = Toolpath { segments: vec![s], layer_z_mm: vec![0.2], tools: 2, on_cylinder: false };
         let options = HtmlOptions {
             title: "a</script>b".into(),
             colour_by: ColourBy::Tool,
@@ -200,5 +248,43 @@ mod tests {
         let pos = base64(&[0, 0, 0, 0, 0, 0, 255, 255, 255, 255, 0, 0]);
         assert!(html.contains(&format!("\"pos\":\"{pos}\"")), "z span is 0: quantised to 0");
         assert!(html.contains("\"feed\":\"+gA=\""), "250 tenths of mm/s");
+    }
+
+    #[test]
+    fn mix_colours_travel_as_a_palette_of_at_most_255() {
+        let seg = |i: u32| Segment {
+            start: [i as f32, 0.0, 0.2],
+            end: [i as f32 + 1.0, 0.0, 0.2],
+            tool: 0,
+            feature: Feature::Infill,
+            feed_mm_s: 20.0,
+            layer: 0,
+            extruding: true,
+            mix_rgb: [(i % 256) as u8, (i / 256) as u8 * 100, 7],
+        };
+        let few = Toolpath {
+            segments: (0..3).map(seg).collect(),
+            layer_z_mm: vec![0.2],
+            tools: 1,
+            on_cylinder: false,
+        };
+        let (index, colours) = mix_palette(&few);
+        assert_eq!(index, [0, 1, 2]);
+        assert_eq!(colours, ["#000007", "#010007", "#020007"], "exact while they fit");
+        let many = Toolpath { segments: (0..300).map(seg).collect(), ..few.clone() };
+        let (index, colours) = mix_palette(&many);
+        assert!(colours.len() <= 255 && colours.len() > 100, "{}", colours.len());
+        // 300 colours do not fit: one low bit dropped per channel, 150 remain; (5, 0, 7) maps
+        // to (4, 0, 6).
+        assert_eq!(colours[index[5] as usize], "#040006");
+        let options = HtmlOptions {
+            title: "m".into(),
+            colour_by: ColourBy::Mix,
+            view: ViewKind::Top,
+            layer: None,
+            tool_colours: vec![],
+        };
+        let html = write_html(&few, None, &options);
+        assert!(html.contains("\"mix_colours\":[\"#000007\",\"#010007\",\"#020007\"]"));
     }
 }

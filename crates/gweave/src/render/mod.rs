@@ -6,11 +6,19 @@
 //! - [`toolpath`]: the segments of a file (start, end, tool, feature, feed, layer, extruding),
 //!   collected in one streaming pass, with decimation for huge files.
 //! - [`colour_by`]: colour by tool, feature type, speed, layer or predicted mix colour.
+//! - [`mix_colour`]: the predicted mix colour of each move (mixing model and chamber washout).
 //! - [`view`]: top view of a layer or layer range, isometric view, before/after comparison;
 //!   turns segments into pixel [`view::Stroke`]s.
 //! - [`raster`] and [`png_out`]: a software rasteriser (wide anti-aliased lines, alpha) and PNG.
 //! - [`svg`]: the same drawing as SVG paths.
 //! - [`html`]: a self-contained interactive viewer page.
+//!
+//! Binder-jet raster output (`gweave raster`) draws the drops of each layer
+//! ([`toolpath`] decodes the fire commands with [`PreviewOptions::printhead`]).
+//!
+//! Rotary programs (`gweave rotary wrap`/`tube` output, whose header names the machine, or any
+//! file with [`PreviewOptions::rotary`]) are read back with [`crate::rotary::preview::read_back`]
+//! and drawn in 3D on their cylinder, in the pictures and in the viewer.
 //!
 //! ```no_run
 //! use gweave::render::{preview, Format, PreviewOptions};
@@ -22,20 +30,25 @@ pub mod camera;
 pub mod canvas;
 pub mod colour_by;
 pub mod html;
+pub mod mix_colour;
 pub mod png_out;
 pub mod raster;
 pub mod svg;
 pub mod toolpath;
 pub mod view;
 
-use std::io::{self, Write};
+use std::io::{self, Read, Write};
+use std::ops::RangeInclusive;
 use std::path::Path;
 
 use crate::gcode::state::State;
+use crate::gen::printhead::PrintheadProfile;
 use crate::pass::{Ctx, Pass, Progress, Quiet, Run};
+use crate::rotary::cylinder::RotaryConfig;
 use crate::stats::{Stats, StatsPass};
 
 pub use colour_by::ColourBy;
+pub use mix_colour::MixColours;
 pub use toolpath::{Segment, Toolpath, ToolpathOptions};
 pub use view::{ViewKind, ViewOptions};
 
@@ -52,6 +65,8 @@ pub enum RenderError {
     CompareHtml,
     #[error("image encoding failed: {0}")]
     Encode(String),
+    #[error(transparent)]
+    Rotary(#[from] crate::rotary::RotaryError),
 }
 
 /// What the preview is written as.
@@ -82,6 +97,14 @@ pub struct PreviewOptions {
     /// Merge chained moves shorter than this, mm; `None` picks by file size
     /// ([`ToolpathOptions::min_len_for_file_size`]).
     pub min_len_mm: Option<f32>,
+    /// Mixing hardware for the `mix` colouring (default: [`MixColours::cmyw`]).
+    pub mix: Option<MixColours>,
+    /// Draw the file as a rotary program on this machine's cylinder (default: the machine its
+    /// header names, [`RotaryConfig::from_header`], if any).
+    pub rotary: Option<RotaryConfig>,
+    /// The inkjet head of binder-jet raster output, whose fire commands are drawn as dots
+    /// (default: the HP C6602, as `gweave raster` assumes).
+    pub printhead: Option<PrintheadProfile>,
 }
 
 impl PreviewOptions {
@@ -100,9 +123,36 @@ impl PreviewOptions {
             layers: if keep_all_layers { None } else { self.view.layers.clone() },
             travel: keep_all_layers || self.view.travel,
             min_len_mm: self.min_len_mm.unwrap_or_else(|| ToolpathOptions::min_len_for_file_size(bytes)),
+            mix: (self.view.colour_by == ColourBy::Mix)
+                .then(|| self.mix.clone().unwrap_or_else(MixColours::cmyw)),
+            printhead: self.printhead.clone().unwrap_or_default(),
             ..ToolpathOptions::default()
         }
     }
+}
+
+/// Bytes at the start of a file searched for a rotary header.
+const HEADER_BYTES: u64 = 4096;
+
+/// The rotary machine `path` is drawn on: `options.rotary`, else the one its header names.
+pub fn rotary_machine(path: &Path, options: &PreviewOptions) -> Option<RotaryConfig> {
+    if let Some(m) = &options.rotary {
+        return Some(m.clone());
+    }
+    let mut head = Vec::new();
+    std::fs::File::open(path).ok()?.take(HEADER_BYTES).read_to_end(&mut head).ok()?;
+    RotaryConfig::from_header(&String::from_utf8_lossy(&head))
+}
+
+/// A rotary program's toolpath, in 3D on its cylinder.
+fn rotary_toolpath(
+    path: &Path,
+    machine: &RotaryConfig,
+    layers: Option<&RangeInclusive<u32>>,
+) -> Result<Toolpath, RenderError> {
+    let file = std::fs::File::open(path).map_err(|e| crate::Error::io(path, e))?;
+    let program = crate::rotary::preview::read_back(machine, io::BufReader::new(file))?;
+    Ok(Toolpath::from_rotary(&program, layers))
 }
 
 /// Feeds every line to two passes (a toolpath and the statistics, in one read of the file).
@@ -167,7 +217,10 @@ pub fn drawing(
     options: &PreviewOptions,
     progress: &mut dyn Progress,
 ) -> Result<view::Drawing, RenderError> {
-    let mut read = |p: &Path| -> crate::Result<Toolpath> {
+    let mut read = |p: &Path| -> Result<Toolpath, RenderError> {
+        if let Some(machine) = rotary_machine(p, options) {
+            return rotary_toolpath(p, &machine, options.view.layers.as_ref());
+        }
         let mut pass = toolpath::ToolpathPass::new(options.toolpath_options(p, false));
         Run::new(p, &mut *progress).scan(&mut pass)?;
         Ok(pass.finish_toolpath())
@@ -188,7 +241,14 @@ fn html_page(
     if compare.is_some() {
         return Err(RenderError::CompareHtml);
     }
-    let (tp, stats) = toolpath_with_stats(path, options.toolpath_options(path, true), progress)?;
+    let (tp, stats) = match rotary_machine(path, options) {
+        Some(machine) => {
+            let mut st = StatsPass::new(None);
+            let state = Run::new(path, progress).scan(&mut st)?;
+            (rotary_toolpath(path, &machine, None)?, st.into_stats(&state))
+        }
+        None => toolpath_with_stats(path, options.toolpath_options(path, true), progress)?,
+    };
     let html_options = html::HtmlOptions {
         title: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
         colour_by: options.view.colour_by,

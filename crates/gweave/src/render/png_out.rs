@@ -1,6 +1,6 @@
 //! A [`Drawing`] as a PNG: strokes rasterised in order, then the legend and panel titles.
 
-use super::raster::Image;
+use super::raster::{line_pixels, within, Image};
 use super::view::{Drawing, Stroke};
 use super::RenderError;
 
@@ -13,10 +13,10 @@ const TEXT_SCALE: u32 = 2;
 /// Strokes hidden under later opaque strokes are skipped: a whole print seen from above is
 /// mostly covered by its top layers, and skipping what cannot show makes a picture of a
 /// 17-million-segment file several times faster. A reverse pass keeps a mask of the pixels that
-/// later opaque strokes cover fully; a stroke is hidden when a grid of samples (finer than 0.7 px)
-/// over every pixel square it touches is all in the mask, so every pixel it would change is one
-/// that a later stroke overwrites. Then the visible strokes are drawn in order: the picture is
-/// the one drawing everything gives.
+/// later opaque strokes cover fully (with a count per 8 x 8 tile); a stroke is hidden when every
+/// pixel it would change is in the mask (checked tile by tile first, then pixel by pixel), so
+/// every pixel it would change is one that a later stroke overwrites. Then the visible strokes
+/// are drawn in order: the picture is the one drawing everything gives.
 pub fn rasterise(d: &Drawing) -> Image {
     let mut img = Image::new(d.width_px, d.height_px, d.background);
     let visible = visible_strokes(&d.strokes, d.width_px, d.height_px);
@@ -45,70 +45,101 @@ pub fn rasterise(d: &Drawing) -> Image {
     img
 }
 
-/// Which strokes are not fully hidden under later opaque ones (see [`rasterise`]).
-fn visible_strokes(strokes: &[Stroke], width: u32, height: u32) -> Vec<bool> {
-    let (w, h) = (width as usize, height as usize);
-    let mut covered = vec![false; w * h];
-    let mut visible = vec![false; strokes.len()];
-    let at = |covered: &[bool], x: f32, y: f32| -> bool {
-        // Outside the picture counts as covered: nothing there can show.
-        !(x >= 0.0 && y >= 0.0 && (x as usize) < w && (y as usize) < h)
-            || covered[y as usize * w + x as usize]
-    };
-    for (i, s) in strokes.iter().enumerate().rev() {
-        let d = [s.to[0] - s.from[0], s.to[1] - s.from[1]];
-        let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
-        // The stroke touches pixels whose centres are within `reach` of the segment; their
-        // squares reach a further half diagonal (0.71 px). Sample that whole rounded rectangle
-        // on a grid finer than 0.7 px, so every such pixel square holds a sample.
-        let reach = s.width_px.max(0.5) / 2.0 + 0.5 + 0.71;
-        let unit = if len > 0.0 { [d[0] / len, d[1] / len] } else { [1.0, 0.0] };
-        let along = ((len + 2.0 * reach) / 0.7).ceil().max(1.0) as usize;
-        let across = (2.0 * reach / 0.7).ceil().max(1.0) as usize;
-        let hidden = (0..=along).all(|a| {
-            let u = -reach + (len + 2.0 * reach) * a as f32 / along as f32;
-            (0..=across).all(|c| {
-                let v = -reach + 2.0 * reach * c as f32 / across as f32;
-                let x = s.from[0] + unit[0] * u - unit[1] * v;
-                let y = s.from[1] + unit[1] * u + unit[0] * v;
-                at(&covered, x, y)
+/// Side of the square tiles of the coverage mask, px.
+const TILE: usize = 8;
+
+/// The pixels later opaque strokes cover, with a count per tile so that a stroke lying on fully
+/// covered tiles is found hidden without looking at its pixels.
+struct Coverage {
+    w: usize,
+    h: usize,
+    covered: Vec<bool>,
+    tiles_x: usize,
+    /// Covered pixels per tile, and pixels each tile has inside the image.
+    count: Vec<u16>,
+    size: Vec<u16>,
+}
+
+impl Coverage {
+    fn new(w: usize, h: usize) -> Self {
+        let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let size = (0..tiles_x * tiles_y)
+            .map(|i| {
+                let (tx, ty) = (i % tiles_x, i / tiles_x);
+                ((w - tx * TILE).min(TILE) * (h - ty * TILE).min(TILE)) as u16
             })
-        });
-        if hidden {
+            .collect();
+        Coverage { w, h, covered: vec![false; w * h], tiles_x, count: vec![0; tiles_x * tiles_y], size }
+    }
+
+    fn cover(&mut self, x: usize, y: usize) {
+        let i = y * self.w + x;
+        if !self.covered[i] {
+            self.covered[i] = true;
+            self.count[(y / TILE) * self.tiles_x + x / TILE] += 1;
+        }
+    }
+
+    /// Every tile the pixel box `x0..x1, y0..y1` touches is fully covered.
+    fn tiles_full(&self, x0: usize, y0: usize, x1: usize, y1: usize) -> bool {
+        (y0 / TILE..y1.div_ceil(TILE)).all(|ty| {
+            (x0 / TILE..x1.div_ceil(TILE)).all(|tx| {
+                let t = ty * self.tiles_x + tx;
+                self.count[t] == self.size[t]
+            })
+        })
+    }
+
+    /// Nothing `s` would draw can show: every pixel it changes is covered (off-picture pixels
+    /// are not drawn at all).
+    fn hides(&self, s: &Stroke) -> bool {
+        let reach = s.width_px.max(0.5) / 2.0 + 0.5;
+        let x0 = (s.from[0].min(s.to[0]) - reach).floor().max(0.0);
+        let y0 = (s.from[1].min(s.to[1]) - reach).floor().max(0.0);
+        let x1 = (s.from[0].max(s.to[0]) + reach).ceil().min(self.w as f32);
+        let y1 = (s.from[1].max(s.to[1]) + reach).ceil().min(self.h as f32);
+        // Off the picture (or NaN): draws nothing.
+        if !(x0 < x1 && y0 < y1) {
+            return true;
+        }
+        if self.tiles_full(x0 as usize, y0 as usize, x1 as usize, y1 as usize) {
+            return true;
+        }
+        let (w, h) = (self.w as u32, self.h as u32);
+        line_pixels(s.from, s.to, s.width_px, w, h, |x, y, _| self.covered[y * self.w + x])
+    }
+}
+
+/// Which strokes are not fully hidden under later opaque ones (see [`rasterise`]): a reverse
+/// pass over the strokes; a stroke is hidden when every pixel it would change (the same pixels
+/// [`Image::line`] visits) is covered by a later opaque stroke.
+fn visible_strokes(strokes: &[Stroke], width: u32, height: u32) -> Vec<bool> {
+    let mut coverage = Coverage::new(width as usize, height as usize);
+    let mut visible = vec![false; strokes.len()];
+    for (i, s) in strokes.iter().enumerate().rev() {
+        if coverage.hides(s) {
             continue;
         }
         visible[i] = true;
         if s.alpha >= 1.0 && s.width_px >= 2.0 {
-            mark_core(&mut covered, w, h, s);
+            mark_core(&mut coverage, s);
         }
     }
     visible
 }
 
 /// Marks the pixels whose centres are at least half a pixel inside the stroke (fully covered).
-fn mark_core(covered: &mut [bool], w: usize, h: usize, s: &Stroke) {
+fn mark_core(coverage: &mut Coverage, s: &Stroke) {
     let core = s.width_px / 2.0 - 0.5;
-    let x_lo = (s.from[0].min(s.to[0]) - core).floor().max(0.0) as usize;
-    let y_lo = (s.from[1].min(s.to[1]) - core).floor().max(0.0) as usize;
-    let x_hi = ((s.from[0].max(s.to[0]) + core).ceil().max(0.0) as usize).min(w);
-    let y_hi = ((s.from[1].max(s.to[1]) + core).ceil().max(0.0) as usize).min(h);
-    let d = [s.to[0] - s.from[0], s.to[1] - s.from[1]];
-    let len2 = d[0] * d[0] + d[1] * d[1];
-    for y in y_lo..y_hi {
-        let py = y as f32 + 0.5;
-        for x in x_lo..x_hi {
-            let px = x as f32 + 0.5;
-            let t = if len2 > 0.0 {
-                (((px - s.from[0]) * d[0] + (py - s.from[1]) * d[1]) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let (qx, qy) = (s.from[0] + d[0] * t - px, s.from[1] + d[1] * t - py);
-            if qx * qx + qy * qy <= core * core {
-                covered[y * w + x] = true;
-            }
+    let (w, h) = (coverage.w as u32, coverage.h as u32);
+    // A hair inside the core, so that rounding never marks a pixel that is not fully covered.
+    let core2 = core * core * 0.9999;
+    within(s.from, s.to, core, w, h, |x, y, dist2| {
+        if dist2 <= core2 {
+            coverage.cover(x, y);
         }
-    }
+        true
+    });
 }
 
 /// Encodes an image as an 8-bit RGB PNG marked sRGB.

@@ -43,40 +43,11 @@ impl Image {
     /// An anti-aliased line from `p0` to `p1` (pixel coordinates, centres at +0.5), `width_px`
     /// wide, with round ends.
     pub fn line(&mut self, p0: [f32; 2], p1: [f32; 2], width_px: f32, c: [u8; 3], alpha: f32) {
-        let half = width_px.max(0.5) / 2.0;
-        let reach = half + 0.5;
-        let x_lo = (p0[0].min(p1[0]) - reach).floor().max(0.0);
-        let y_lo = (p0[1].min(p1[1]) - reach).floor().max(0.0);
-        let x_hi = (p0[0].max(p1[0]) + reach).ceil().min(self.width as f32);
-        let y_hi = (p0[1].max(p1[1]) + reach).ceil().min(self.height as f32);
-        // NaN coordinates fail every comparison and draw nothing.
-        if !(x_lo < x_hi && y_lo < y_hi) {
-            return;
-        }
-        let d = [p1[0] - p0[0], p1[1] - p0[1]];
-        let len2 = d[0] * d[0] + d[1] * d[1];
-        let thin = width_px < 1.0;
-        for y in y_lo as usize..y_hi as usize {
-            let py = y as f32 + 0.5;
-            for x in x_lo as usize..x_hi as usize {
-                let px = x as f32 + 0.5;
-                // Distance from the pixel centre to the nearest point of the segment.
-                let t = if len2 > 0.0 {
-                    (((px - p0[0]) * d[0] + (py - p0[1]) * d[1]) / len2).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                let (qx, qy) = (p0[0] + d[0] * t - px, p0[1] + d[1] * t - py);
-                let dist = (qx * qx + qy * qy).sqrt();
-                let mut cover = (reach - dist).clamp(0.0, 1.0);
-                if thin {
-                    cover *= width_px;
-                }
-                if cover > 0.0 {
-                    self.blend(x, y, c, alpha * cover);
-                }
-            }
-        }
+        let (w, h) = (self.width, self.height);
+        line_pixels(p0, p1, width_px, w, h, |x, y, cover| {
+            self.blend(x, y, c, alpha * cover);
+            true
+        });
     }
 
     /// A filled rectangle, clipped to the image.
@@ -119,6 +90,96 @@ impl Image {
     pub fn text_height(scale: u32) -> u32 {
         GLYPH_H * scale
     }
+}
+
+/// Calls `f(x, y, cover)` for every pixel of a `width` x `height` image that a line from `p0`
+/// to `p1`, `width_px` wide, covers (`cover > 0`; see the module notes), rows top first, until
+/// `f` returns `false`. Returns whether every call returned `true`. NaN coordinates cover
+/// nothing.
+pub(crate) fn line_pixels(
+    p0: [f32; 2],
+    p1: [f32; 2],
+    width_px: f32,
+    width: u32,
+    height: u32,
+    mut f: impl FnMut(usize, usize, f32) -> bool,
+) -> bool {
+    let reach = width_px.max(0.5) / 2.0 + 0.5;
+    // Squared distances at or beyond this are surely past `reach`: no square root for them.
+    let beyond2 = reach * reach * 1.0001;
+    let thin = width_px < 1.0;
+    within(p0, p1, reach, width, height, |x, y, dist2| {
+        if dist2 >= beyond2 {
+            return true;
+        }
+        let mut cover = (reach - dist2.sqrt()).clamp(0.0, 1.0);
+        if thin {
+            cover *= width_px;
+        }
+        // NaN coordinates give a NaN cover: nothing drawn.
+        if cover > 0.0 {
+            f(x, y, cover)
+        } else {
+            true
+        }
+    })
+}
+
+/// Calls `f(x, y, dist2)` for the pixels of a `width` x `height` image whose centres may lie
+/// within `reach` of the segment `p0`-`p1` (every one that does, and a few that do not),
+/// `dist2` being the square of the centre's distance to the segment; stops when `f` returns
+/// `false`.
+///
+/// Each row is scanned only where the capsule can be: a point within `reach` of the segment is
+/// within `reach` of its line, and on the row `y` those points are
+/// `|x - x_line(y)| <= reach * len / |dy|`. For a long diagonal this visits about `len * width`
+/// pixels instead of the `len^2 / 2` of its bounding box.
+pub(crate) fn within(
+    p0: [f32; 2],
+    p1: [f32; 2],
+    reach: f32,
+    width: u32,
+    height: u32,
+    mut f: impl FnMut(usize, usize, f32) -> bool,
+) -> bool {
+    let x_lo = (p0[0].min(p1[0]) - reach).floor().max(0.0);
+    let y_lo = (p0[1].min(p1[1]) - reach).floor().max(0.0);
+    let x_hi = (p0[0].max(p1[0]) + reach).ceil().min(width as f32);
+    let y_hi = (p0[1].max(p1[1]) + reach).ceil().min(height as f32);
+    if !(x_lo < x_hi && y_lo < y_hi) {
+        return true;
+    }
+    let d = [p1[0] - p0[0], p1[1] - p0[1]];
+    let len2 = d[0] * d[0] + d[1] * d[1];
+    // Half the row's span around the line, when the line is steep enough for it to help.
+    let span = (d[1].abs() > 1e-3).then(|| (reach * len2.sqrt() / d[1].abs(), d[0] / d[1]));
+    for y in y_lo as usize..y_hi as usize {
+        let py = y as f32 + 0.5;
+        let (mut xa, mut xb) = (x_lo, x_hi);
+        if let Some((half_span, slope)) = span {
+            let x_line = p0[0] + slope * (py - p0[1]);
+            // Pixel x has its centre at x + 0.5; one pixel to spare for rounding.
+            xa = xa.max((x_line - half_span - 1.5).floor());
+            xb = xb.min((x_line + half_span + 0.5).ceil());
+        }
+        if xa >= xb {
+            continue;
+        }
+        for x in xa as usize..xb as usize {
+            let px = x as f32 + 0.5;
+            // Distance from the pixel centre to the nearest point of the segment.
+            let t = if len2 > 0.0 {
+                (((px - p0[0]) * d[0] + (py - p0[1]) * d[1]) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let (qx, qy) = (p0[0] + d[0] * t - px, p0[1] + d[1] * t - py);
+            if !f(x, y, qx * qx + qy * qy) {
+                return false;
+            }
+        }
+    }
+    true
 }
 
 /// Glyphs legends need beyond the swatch font's: `: / ( ) % + ,` (rows top first, bit 4 left).
@@ -182,5 +243,48 @@ mod tests {
         img.text(0, 0, "/", 1, [0, 0, 0]);
         assert_eq!((img.pixel(4, 0), img.pixel(0, 6)), ([0, 0, 0, 255], [0, 0, 0, 255]));
         assert_eq!(img.pixel(0, 0), [255, 255, 255, 255]);
+    }
+
+    #[test]
+    fn row_spans_visit_every_covered_pixel_of_the_bounding_box() {
+        // The same pixels and coverage as testing every pixel of the bounding box, for lines in
+        // all directions, widths and lengths.
+        let cases = [
+            ([3.3, 4.1], [60.2, 41.7], 3.0),
+            ([50.0, 2.0], [51.0, 60.0], 0.7),
+            ([10.0, 30.0], [60.0, 30.2], 5.0),
+            ([40.0, 40.0], [40.0, 40.0], 4.0),
+            ([61.0, 3.0], [2.0, 58.0], 2.2),
+        ];
+        for (p0, p1, w) in cases {
+            let mut fast = Vec::new();
+            line_pixels(p0, p1, w, 64, 64, |x, y, c| {
+                fast.push((x, y, c));
+                true
+            });
+            let (reach, d) = (w.max(0.5) / 2.0 + 0.5, [p1[0] - p0[0], p1[1] - p0[1]]);
+            let len2 = d[0] * d[0] + d[1] * d[1];
+            let mut slow = Vec::new();
+            for y in 0..64 {
+                for x in 0..64 {
+                    let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
+                    let t = if len2 > 0.0 {
+                        (((px - p0[0]) * d[0] + (py - p0[1]) * d[1]) / len2).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    };
+                    let dist = (p0[0] + d[0] * t - px).hypot(p0[1] + d[1] * t - py);
+                    let c = (reach - dist).clamp(0.0, 1.0) * if w < 1.0 { w } else { 1.0 };
+                    if c > 0.0 {
+                        slow.push((x, y, c));
+                    }
+                }
+            }
+            assert_eq!(fast.len(), slow.len(), "{p0:?} {p1:?} {w}");
+            assert!(fast
+                .iter()
+                .zip(&slow)
+                .all(|(a, b)| a.0 == b.0 && a.1 == b.1 && (a.2 - b.2).abs() < 1e-5));
+        }
     }
 }

@@ -5,6 +5,12 @@
 //! [`crate::gcode::arc`] for the chord count). Each segment carries what a preview colours by:
 //! the tool, the feature type the slicer marked, the feed rate, the layer and whether it extrudes.
 //!
+//! Inkjet raster output (`gweave raster`): each fire command `M700 P<head> S<bits>` (or the
+//! profile's `M578`) is a set of drops, where [`PrintheadProfile::drops_mm`] puts them with the
+//! carriage where it is; each drop becomes an extruding segment one nozzle pitch long along X,
+//! centred on it, with the head as its tool. Neighbouring drops then close up into the area
+//! they wet, as the binder does in the powder.
+//!
 //! Huge files: memory is bounded by keeping only the layers asked for, and by decimation. With
 //! `min_len_mm > 0`, consecutive chained moves that agree on every attribute are merged until the
 //! merged piece is at least that long. The merged piece is the chord from the first start to the
@@ -17,8 +23,13 @@ use std::ops::RangeInclusive;
 use std::path::Path;
 
 use crate::gcode::layers::{Feature, Region};
-use crate::gcode::state::{Effect, Move, Path as MovePath, X, Y, Z};
+use crate::gcode::state::{Effect, Move, Path as MovePath, E, X, Y, Z};
+use crate::gen::printhead::PrintheadProfile;
 use crate::pass::{Ctx, Pass, Quiet, Run};
+use crate::rotary::cylinder::CylPoint;
+use crate::rotary::preview::Program;
+
+use super::mix_colour::{MixColours, MixTracker};
 
 /// One straight piece of tool path, mm and mm/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,6 +43,9 @@ pub struct Segment {
     pub layer: u32,
     /// Deposits material (not travel or retraction).
     pub extruding: bool,
+    /// Predicted printed colour (sRGB), when the toolpath was read with
+    /// [`ToolpathOptions::mix`]; black otherwise.
+    pub mix_rgb: [u8; 3],
 }
 
 impl Segment {
@@ -48,6 +62,7 @@ impl Segment {
             && self.feed_mm_s == o.feed_mm_s
             && self.layer == o.layer
             && self.extruding == o.extruding
+            && self.mix_rgb == o.mix_rgb
     }
 }
 
@@ -64,11 +79,24 @@ pub struct ToolpathOptions {
     pub min_len_mm: f32,
     /// Largest distance of an arc's chords from the arc, mm.
     pub arc_tol_mm: f64,
+    /// Predict each move's printed colour with this mixing hardware ([`Segment::mix_rgb`]).
+    pub mix: Option<MixColours>,
+    /// The inkjet head whose fire commands (`M700`/`M578 P<head> S<bits>`, binder-jet raster
+    /// output) are drawn as dots (see the module notes).
+    pub printhead: PrintheadProfile,
 }
 
 impl Default for ToolpathOptions {
     fn default() -> Self {
-        ToolpathOptions { layers: None, travel: true, print_only: true, min_len_mm: 0.0, arc_tol_mm: 0.02 }
+        ToolpathOptions {
+            layers: None,
+            travel: true,
+            print_only: true,
+            min_len_mm: 0.0,
+            arc_tol_mm: 0.02,
+            mix: None,
+            printhead: PrintheadProfile::default(),
+        }
     }
 }
 
@@ -92,6 +120,8 @@ pub struct Toolpath {
     pub layer_z_mm: Vec<f32>,
     /// Number of tools the file selected (highest `T` + 1, at least 1).
     pub tools: u16,
+    /// A rotary program: the segments lie on cylinders about the X axis (see [`Self::from_rotary`]).
+    pub on_cylinder: bool,
 }
 
 impl Toolpath {
@@ -100,6 +130,35 @@ impl Toolpath {
         let mut pass = ToolpathPass::new(options);
         Run::new(path, &mut Quiet).scan(&mut pass)?;
         Ok(pass.finish_toolpath())
+    }
+
+    /// A rotary program as the machine prints it ([`crate::rotary::preview::read_back`]): each
+    /// bead from `(x, r cos theta, r sin theta)` to the same of its end, with the mandrel along
+    /// X; a bead is a short helix drawn as its chord. Layers not in `layers` are left out.
+    pub fn from_rotary(program: &Program, layers: Option<&RangeInclusive<u32>>) -> Toolpath {
+        let point = |p: CylPoint| p.to_cartesian().map(|v| v as f32);
+        let segments = program
+            .beads
+            .iter()
+            .filter(|b| layers.is_none_or(|r| r.contains(&b.layer)))
+            .map(|b| Segment {
+                start: point(b.from),
+                end: point(b.to),
+                tool: 0,
+                feature: b.feature,
+                feed_mm_s: b.speed_mm_s as f32,
+                layer: b.layer,
+                extruding: true,
+                mix_rgb: [0; 3],
+            })
+            .collect();
+        let layer_count = program.layers.last().map_or(0, |l| l.index as usize + 1);
+        let mut layer_z_mm = vec![0.0; layer_count];
+        // A layer's "height" is its radius.
+        for l in &program.layers {
+            layer_z_mm[l.index as usize] = l.radius_mm as f32;
+        }
+        Toolpath { segments, layer_z_mm, tools: 1, on_cylinder: true }
     }
 
     /// Number of layers the file has (kept or not).
@@ -134,11 +193,13 @@ pub struct ToolpathPass {
     out: Toolpath,
     /// A merged piece still growing (decimation).
     pending: Option<Segment>,
+    mix: Option<MixTracker>,
 }
 
 impl ToolpathPass {
     pub fn new(options: ToolpathOptions) -> Self {
-        ToolpathPass { options, out: Toolpath { tools: 1, ..Toolpath::default() }, pending: None }
+        let mix = options.mix.clone().map(MixTracker::new);
+        ToolpathPass { options, out: Toolpath { tools: 1, ..Toolpath::default() }, pending: None, mix }
     }
 
     /// The collected toolpath.
@@ -193,6 +254,42 @@ impl ToolpathPass {
     }
 }
 
+impl ToolpathPass {
+    /// A fire command of an inkjet head: its drops as dots.
+    fn fire(&mut self, ctx: &Ctx<'_>) {
+        let st = &ctx.state.structure;
+        let layer = st.layer.unwrap_or(0);
+        let skipped = self.options.print_only && st.region == Region::Start;
+        if skipped || self.options.layers.as_ref().is_some_and(|r| !r.contains(&layer)) {
+            return;
+        }
+        let word = |l: u8| ctx.block.word(l).and_then(|w| w.number());
+        // The firmware reads S only with P (REFERENCE section 4).
+        let (Some(head), Some(bits)) = (word(b'P'), word(b'S')) else { return };
+        if !(head >= 0.0 && bits >= 0.0 && head < 64.0 && bits < u64::MAX as f64) {
+            return;
+        }
+        let head = head as usize;
+        let pos = &ctx.state.pos;
+        let half = (self.options.printhead.pitch_mm() / 2.0) as f32;
+        let z = pos[Z] as f32;
+        for [x, y] in self.options.printhead.drops_mm(head, bits as u64, [pos[X], pos[Y]]) {
+            let (x, y) = (x as f32, y as f32);
+            self.out.tools = self.out.tools.max(head as u16 + 1);
+            self.push(Segment {
+                start: [x - half, y, z],
+                end: [x + half, y, z],
+                tool: head as u16,
+                feature: Feature::Unknown,
+                feed_mm_s: 0.0,
+                layer,
+                extruding: true,
+                mix_rgb: [0; 3],
+            });
+        }
+    }
+}
+
 impl Pass for ToolpathPass {
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
         let st = &ctx.state.structure;
@@ -204,11 +301,26 @@ impl Pass for ToolpathPass {
             // The slicer may state Z after the marker (`;Z:`) or at the first extrusion.
             self.out.layer_z_mm[layer as usize] = st.layer_z_mm as f32;
         }
+        if let Some(mix) = &mut self.mix {
+            mix.line(ctx.line.bytes, ctx.block, ctx.state.tool);
+        }
+        if ctx.block.command.is_m(self.options.printhead.dialect.fire_code()) {
+            self.fire(ctx);
+        }
         match ctx.effect {
             Effect::ToolChange { to, .. } => {
                 self.out.tools = self.out.tools.max((*to).min(u16::MAX as u32 - 1) as u16 + 1);
             }
             Effect::Move(m) => {
+                // Every extrusion of the print washes the mixing chamber, drawn or not (the start
+                // G-code's primes are taken to load the first colour, see `mix_colour`).
+                let mix_rgb = match &mut self.mix {
+                    Some(mix) if m.to[E] > m.from[E] && st.region != Region::Start => {
+                        let c = mix.extrude(m.to[E] - m.from[E]);
+                        [c.r, c.g, c.b]
+                    }
+                    _ => [0; 3],
+                };
                 // Only the start G-code (purge lines) is left out: the end G-code's parking is
                 // travel, drawn only on request, and any extrusion there is really printed.
                 if self.options.print_only && st.region == Region::Start {
@@ -235,6 +347,7 @@ impl Pass for ToolpathPass {
                     feed_mm_s: (m.feed_mm_min / 60.0) as f32,
                     layer,
                     extruding,
+                    mix_rgb,
                 };
                 self.add_move(m, template);
             }
@@ -333,5 +446,20 @@ mod tests {
         let ext: Vec<_> = tp.segments.iter().filter(|s| s.extruding).collect();
         assert_eq!(ext.len(), 1);
         assert_eq!(ext[0].end, [20.0, 10.0, 0.2]);
+    }
+
+    #[test]
+    fn inkjet_fires_become_dots_at_the_nozzles() {
+        // C6602 default: 12 nozzles at 96 dpi; S5 fires rows 0 and 2.
+        let text = ";LAYER:0\nG1 Z0.1\nG1 X10 Y20 F3000\nM400\nM700 P0 S5\nM700 S1\nM700 P1 S1\n";
+        let tp = collect(text, ToolpathOptions::default());
+        let pitch = 25.4f32 / 96.0;
+        assert_eq!(tp.segments.iter().filter(|s| s.extruding).count(), 2, "no P: no fire; no head 1");
+        let dots: Vec<_> = tp.segments.iter().filter(|s| s.extruding).collect();
+        for (d, row) in dots.iter().zip([0.0, 2.0]) {
+            assert_eq!(d.start, [10.0 - pitch / 2.0, 20.0 + row * pitch, 0.1]);
+            assert_eq!(d.end, [10.0 + pitch / 2.0, 20.0 + row * pitch, 0.1]);
+            assert_eq!((d.tool, d.layer), (0, 0));
+        }
     }
 }

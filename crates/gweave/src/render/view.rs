@@ -11,6 +11,12 @@
 //! only hide the layers below it, so this order is exact for planar layers. Walls are shaded by
 //! their direction so that the shape reads.
 //!
+//! Rotary programs ([`Toolpath::on_cylinder`]): the layers are cylinders about X, so no order
+//! of layers is right; strokes are drawn from far to near along the line of sight (painter's
+//! algorithm by depth, exact for strokes that do not overlap in depth), and shaded by how much
+//! the cylinder's normal `(0, y, z) / r` faces the eye (35 % ambient, 65 % diffuse, as
+//! [`crate::rotary::preview`] draws).
+//!
 //! Comparison: a move is unchanged when the other file has a move with the same end points (to
 //! 0.01 mm), tool, feed rate (to 0.1 mm/s) and extruding flag; moves are counted as a multiset,
 //! so a move repeated in one file and not the other is a change. The two files are drawn side by
@@ -216,6 +222,30 @@ fn shade(s: &Segment, c: [u8; 3]) -> [u8; 3] {
     c.map(|v| (v as f32 * (0.6 + 0.4 * lambert)) as u8)
 }
 
+/// Unit vector from the scene to the eye.
+fn toward_eye(kind: ViewKind) -> [f32; 3] {
+    match kind {
+        ViewKind::Top => [0.0, 0.0, 1.0],
+        ViewKind::Iso => {
+            let (sin_e, cos_e) = ISO_ELEVATION_RAD.sin_cos();
+            let r = std::f32::consts::FRAC_1_SQRT_2;
+            [-cos_e * r, -cos_e * r, sin_e]
+        }
+    }
+}
+
+/// Shading of a bead on a cylinder about X, seen from `eye` (see the module notes).
+fn shade_cylinder(s: &Segment, eye: [f32; 3], c: [u8; 3]) -> [u8; 3] {
+    let (y, z) = ((s.start[1] + s.end[1]) / 2.0, (s.start[2] + s.end[2]) / 2.0);
+    let r = y.hypot(z);
+    let facing = if r > 0.0 { ((y * eye[1] + z * eye[2]) / r).max(0.0) } else { 1.0 };
+    c.map(|v| (v as f32 * (0.35 + 0.65 * facing)).round() as u8)
+}
+
+fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
 fn in_layers(options: &ViewOptions, s: &Segment) -> bool {
     options.layers.as_ref().is_none_or(|r| r.contains(&s.layer)) && (s.extruding || options.travel)
 }
@@ -328,6 +358,7 @@ fn strokes(
     // apart: the walls then close up, and the rasteriser can skip what they hide.
     let min_px = if options.kind == ViewKind::Iso { 2.0 } else { 1.0 };
     let width_px = (options.line_width_mm * proj.scale_px_mm()).clamp(min_px, 12.0);
+    let eye = toward_eye(options.kind);
     let mut order: Vec<(f32, Stroke)> = Vec::new();
     for (i, s) in tp.segments.iter().enumerate() {
         if !in_layers(options, s) {
@@ -338,8 +369,12 @@ fn strokes(
             Some(false) => UNCHANGED,
             _ => colouring.colour(s),
         };
-        let mid_z = (s.start[2] + s.end[2]) / 2.0;
-        if options.kind == ViewKind::Iso && s.extruding {
+        let mid = [0, 1, 2].map(|k| (s.start[k] + s.end[k]) / 2.0);
+        // Drawing order: height for flat layers, nearness to the eye on a cylinder.
+        let key = if tp.on_cylinder { dot3(mid, eye) } else { mid[2] };
+        if tp.on_cylinder && s.extruding && is_changed != Some(false) {
+            colour = shade_cylinder(s, eye, colour);
+        } else if options.kind == ViewKind::Iso && s.extruding {
             colour = shade(s, colour);
         }
         let (w, alpha) = match (s.extruding, is_changed) {
@@ -348,12 +383,12 @@ fn strokes(
             (true, _) => (width_px, 1.0),
         };
         order.push((
-            mid_z,
+            key,
             Stroke { from: proj.project(s.start), to: proj.project(s.end), colour, width_px: w, alpha },
         ));
     }
-    if options.kind == ViewKind::Iso {
-        // Low to high; stable, so equal heights keep file order.
+    if options.kind == ViewKind::Iso || tp.on_cylinder {
+        // Low to high (far to near); stable, so equal keys keep file order.
         order.sort_by(|a, b| a.0.total_cmp(&b.0));
     }
     if changed.is_some() {
@@ -369,7 +404,16 @@ mod tests {
     use crate::gcode::layers::Feature;
 
     fn seg(start: [f32; 3], end: [f32; 3], tool: u16, layer: u32) -> Segment {
-        Segment { start, end, tool, feature: Feature::Infill, feed_mm_s: 30.0, layer, extruding: true }
+        Segment {
+            start,
+            end,
+            tool,
+            feature: Feature::Infill,
+            feed_mm_s: 30.0,
+            layer,
+            extruding: true,
+            mix_rgb: [0; 3],
+        }
     }
 
     fn square() -> Toolpath {
@@ -378,7 +422,7 @@ mod tests {
             seg([10.0, 0.0, 0.2], [10.0, 10.0, 0.2], 0, 0),
             seg([10.0, 10.0, 0.4], [0.0, 10.0, 0.4], 1, 1),
         ];
-        Toolpath { segments: s, layer_z_mm: vec![0.2, 0.4], tools: 2 }
+        Toolpath { segments: s, layer_z_mm: vec![0.2, 0.4], tools: 2, on_cylinder: false }
     }
 
     #[test]

@@ -489,7 +489,8 @@ pub fn write_paths<W: Write>(
     paths: &[HelicalPath],
     out: W,
 ) -> Result<ProgramSummary> {
-    let header = [format!("; gweave rotary paths: {} helical path(s)", paths.len())];
+    let [machine_line, axes_line] = machine.header_lines("paths");
+    let header = [format!("{machine_line}, {} helical path(s)", paths.len()), axes_line];
     let mut iter = paths.iter().enumerate();
     let next = |_: Option<CylPoint>| {
         iter.next().map(|(i, path)| Ok((format!("path {i}"), path.points(print.resolution())?)))
@@ -666,11 +667,10 @@ impl TubeParams {
         self.validate()?;
         let m = &self.machine;
         let p = &self.print;
+        let [machine_line, axes_line] = m.header_lines("tube");
         let header = [
             format!(
-                "; gweave rotary tube: mandrel {} mm, length {} mm, {} layers of {} x {} mm, \
-                 pitch {} mm, interweave {}",
-                m.mandrel_diameter_mm,
+                "{machine_line}, length {} mm, {} layers of {} x {} mm, pitch {} mm, interweave {}",
                 self.length_mm,
                 self.layers,
                 p.bead_width_mm,
@@ -678,10 +678,7 @@ impl TubeParams {
                 self.pitch(),
                 self.interweave
             ),
-            format!(
-                "; axes: axial {}, rotary {} ({:?}), radial {} (0 = on the mandrel); feed {:?}",
-                m.axial_axis, m.rotary_axis, m.rotary_unit, m.radial_axis, m.feed_convention
-            ),
+            axes_line,
         ];
         let mut k = 0;
         let next = |end: Option<CylPoint>| {

@@ -29,8 +29,9 @@ use std::io::{self, Read, Write};
 
 use serde::Serialize;
 
-use super::cylinder::{CylPoint, MachineDelta, RotaryConfig};
+use super::cylinder::{surface_length_mm, CylPoint, MachineDelta, RotaryConfig};
 use super::{Result, RotaryError};
+use crate::gcode::layers::Feature;
 use crate::gcode::state::{axis_of, Effect, Position, StateOptions, E};
 use crate::pass::{drive_reader, Ctx, Pass, Quiet, Strictness};
 use crate::render::camera::Camera;
@@ -45,6 +46,10 @@ pub struct Bead {
     pub to: CylPoint,
     /// Filament pushed, mm.
     pub e_mm: f64,
+    /// Surface speed the firmware runs it at (its F under the machine's feed convention), mm/s.
+    pub speed_mm_s: f64,
+    /// The feature type the slicer marked (a wrapped slicer file keeps its comments).
+    pub feature: Feature,
     /// 0-based layer: the slicer's layer comments if the file has them, else the rank of the
     /// nozzle radius among the radii beads were laid at.
     pub layer: u32,
@@ -102,14 +107,13 @@ impl Pass for Reader<'_> {
         let (a, b) = (self.words(&mv.from), self.words(&mv.to));
         let e_mm = mv.to[E] - mv.from[E];
         let delta = MachineDelta { axial_mm: b[0] - a[0], rotary: b[1] - a[1], radial_mm: b[2] - a[2], e_mm };
-        self.time_s += self.machine.time_from_feed(&delta, mv.feed_mm_min).unwrap_or(0.0);
+        let t_s = self.machine.time_from_feed(&delta, mv.feed_mm_min).unwrap_or(0.0);
+        self.time_s += t_s;
         if e_mm > 0.0 && a != b {
-            let bead = Bead {
-                from: self.machine.point_from_words(a, 0.0),
-                to: self.machine.point_from_words(b, 0.0),
-                e_mm,
-                layer: 0,
-            };
+            let (from, to) = (self.machine.point_from_words(a, 0.0), self.machine.point_from_words(b, 0.0));
+            let speed_mm_s = if t_s > 0.0 { surface_length_mm(from, to) / t_s } else { 0.0 };
+            let feature = ctx.state.structure.feature;
+            let bead = Bead { from, to, e_mm, speed_mm_s, feature, layer: 0 };
             self.beads.push((bead, ctx.state.structure.layer));
         }
         Ok(())
@@ -282,6 +286,9 @@ mod tests {
         assert_eq!(p.beads.len(), 3, "{:?}", p.beads);
         assert_eq!(p.beads.iter().map(|b| b.layer).collect::<Vec<_>>(), [0, 0, 1]);
         assert_eq!(p.beads[0].to, CylPoint::new(10.0, 90.0, 10.2));
+        // 1 s for the first bead: its surface length per second.
+        let surface = surface_length_mm(p.beads[0].from, p.beads[0].to);
+        assert!((p.beads[0].speed_mm_s - surface).abs() < 1e-9, "{}", p.beads[0].speed_mm_s);
         assert!((p.filament_mm - 2.5).abs() < 1e-12);
         // Z0.2 at F600 (0.02 s) + 1 s + 6 s + Z0.4 at the modal F900 (0.0133 s) + 1 s.
         assert!((p.time_s - (8.02 + 0.2 / 15.0)).abs() < 1e-9, "{}", p.time_s);

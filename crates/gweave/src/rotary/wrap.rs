@@ -13,7 +13,9 @@
 //! 4. the flat F is the surface speed to keep; the F written is converted per the machine's
 //!    feed convention from the rounded words ([`super::emit`]).
 //!
-//! Every other line is copied byte for byte, except `G92` with axis words (re-declared in
+//! The output starts with two comment lines naming the machine
+//! ([`RotaryConfig::header_lines`]), so that `gweave preview` draws it on its cylinder. Every
+//! other line is copied byte for byte, except `G92` with axis words (re-declared in
 //! machine words). Before the first move the mandrel angle is declared with `G92 <rotary>`;
 //! with the inverse-time convention `G93` precedes it and `G94` ends the file. Homing that may
 //! move the rotary axis (`G28` with Y, or with no axis) makes the angle unknown, and it is
@@ -32,7 +34,9 @@
 //! let mut config = WrapConfig::new(RotaryConfig::new(60.0 / std::f64::consts::PI));
 //! config.chord_tolerance_mm = 0.0;
 //! let before = "G1 Z0.2 F600\nG1 X10 Y15 E1.0 F1200 ; first\nM106 S255\n";
-//! let after = "G92 A0.000\nG1 Z0.200 F600.000\n\
+//! let after = "; gweave rotary wrap: mandrel 19.098593171027442 mm\n\
+//!              ; axes: axial X, rotary A (Degrees), radial Z (0 = on the mandrel); feed Nist\n\
+//!              G92 A0.000\nG1 Z0.200 F600.000\n\
 //!              G1 X10.000 A90.000 E1.01455 F656.097 ; first\nM106 S255\n";
 //! assert_eq!(String::from_utf8(wrap_bytes(config, before.as_bytes()).unwrap()).unwrap(), after);
 //! ```
@@ -125,6 +129,8 @@ pub struct Wrap {
     config: WrapConfig,
     writer: MoveWriter,
     started: bool,
+    /// The header naming the machine ([`RotaryConfig::header_lines`]) is out.
+    headed: bool,
     buffer: Vec<u8>,
 }
 
@@ -136,7 +142,7 @@ impl Wrap {
         let mut writer = MoveWriter::new(config.machine.clone(), config.numbers, 0.0);
         let origin = config.unwrap.map(&config.machine, [0.0; 3], 0)?;
         writer.assume(origin, [true, false, true]);
-        Ok(Self { config, writer, started: false, buffer: Vec::new() })
+        Ok(Self { config, writer, started: false, headed: false, buffer: Vec::new() })
     }
 
     fn map(&self, flat: [f64; 3], layer: u32) -> Result<CylPoint> {
@@ -283,6 +289,14 @@ fn flat_pieces(mv: &Move, tolerance_mm: f64) -> Vec<[f64; 3]> {
 
 impl Pass for Wrap {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        if !self.headed {
+            self.headed = true;
+            let eol: &[u8] = if ctx.line.eol.is_empty() { b"\n" } else { ctx.line.eol };
+            for line in self.config.machine.header_lines("wrap") {
+                out.write_all(line.as_bytes())?;
+                out.write_all(eol)?;
+            }
+        }
         self.buffer.clear();
         let rewritten = self.rewrite(ctx).map_err(|e| {
             io::Error::other(RotaryError::AtLine { line: ctx.line.number, source: Box::new(e) })

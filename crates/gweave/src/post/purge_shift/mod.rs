@@ -64,8 +64,7 @@ pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
 use crate::colour::dialect::MixingState;
 use crate::error::Result;
 use crate::gcode::layers::{Feature, Region};
-use crate::gcode::line::{Block, Command};
-use crate::gcode::number::scan;
+use crate::gcode::line::Block;
 use crate::gcode::reader::RawLine;
 use crate::gcode::state::{Effect, StateOptions, X, Y, Z};
 use crate::gcode::writer::Target;
@@ -282,17 +281,9 @@ impl PurgeShift {
     }
 
     fn follow_mixing(&mut self, ctx: &Ctx<'_>) {
-        let Command::Code { letter, number, sub: None } = ctx.block.command else { return };
-        if letter == b'T' {
-            // A tool beyond the followed virtual tools is still a change of tool number.
-            let _ = self.mixing.select_tool(number as usize);
-        } else if matches!(number, 163..=165 | 567) {
-            let words: Vec<(char, f64)> =
-                ctx.block.words.iter().filter_map(|w| w.number().map(|v| (w.letter as char, v))).collect();
-            let e_list = if number == 567 { colon_list(ctx.line.bytes, ctx.block) } else { Vec::new() };
-            // A malformed mixing line changes nothing in the firmware either.
-            let _ = self.mixing.apply(number as u16, &words, &e_list);
-        }
+        // A malformed mixing line changes nothing in the firmware either, and a tool beyond the
+        // followed virtual tools is still a change of tool number (the colour records it).
+        let _ = self.mixing.follow_line(ctx.line.bytes, ctx.block);
         self.colour = Colour {
             tool: ctx.state.tool,
             marlin: self.mixing.active_mix().ratios().to_vec(),
@@ -526,22 +517,6 @@ fn tool_dependent(block: &Block) -> bool {
 fn is_change_line(block: &Block) -> bool {
     let c = block.command;
     c.tool().is_some() || [163, 164, 165, 563, 567].iter().any(|&n| c.is_m(n))
-}
-
-/// The colon-separated list of an `M567` `E` word (`E0.2:0.8`), read from the raw line.
-fn colon_list(raw: &[u8], block: &Block) -> Vec<f64> {
-    let Some(word) = block.word(b'E') else { return Vec::new() };
-    let mut i = word.span.start as usize + 1;
-    let mut list = Vec::new();
-    while let Ok((v, used)) = scan(&raw[i.min(raw.len())..]) {
-        list.push(v);
-        i += used;
-        if raw.get(i) != Some(&b':') {
-            break;
-        }
-        i += 1;
-    }
-    list
 }
 
 impl Pass for PurgeShift {

@@ -1,0 +1,233 @@
+//! The colour a mixing hotend is predicted to print, move by move: the `mix` colouring.
+//!
+//! The file says the mix: its `T<n>`, `M163`/`M164`/`M165` and `M567` lines are followed with
+//! the core's [`MixingState`]. The hardware says the colours: the filaments loaded on each
+//! input (a `gweave mix` profile's `[[hardware.inputs]]`, or cyan, magenta, yellow, white), and
+//! the Kubelka-Munk [`MixingModel`] predicts what a mix of them looks like.
+//!
+//! Between two mixes the nozzle does not switch at once: the mixing chamber still holds the old
+//! mix and is washed out by the new one ([`Washout`], a stirred chamber behind a plug-flow dead
+//! volume). After a change, with `V` mm^3 extruded since, the old mix's share of what comes out
+//! is `c = residual_fraction(V)`, and the ratios printed are `c * old + (1 - c) * new`. The
+//! colour of a move is taken at the middle of its volume. A second change before the first has
+//! washed out starts from the blend then coming out (exact for the stirred chamber, a close
+//! approximation while the dead volume is still flushing). Every extruding move counts, also
+//! the ones a picture leaves out (purges, other layers), since they all wash the chamber. This is what makes a purge-shifted transition visible: the old colour
+//! fades into the new one along the part's own path, where `purge-shift` put it. The nozzle is
+//! taken to be loaded with the mix the print's first extrusion uses (a printer is loaded and
+//! primed with its first colour; the toolpath does not count the start G-code's prime lines),
+//! so the first layer shows no transition.
+
+use std::collections::HashMap;
+
+use crate::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use crate::colour::purge::{filament_mm_to_mm3, PurgeError, Washout};
+use crate::colour::{Mix, MixError, MixingModel, Srgb8};
+use crate::gcode::line::Block;
+use crate::post::mix::profile::MixProfile;
+
+/// Below this old-colour share a transition is over: 1/512 moves no 8-bit channel.
+const SETTLED: f64 = 1.0 / 512.0;
+
+/// Why the mix colouring cannot be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum MixColourError {
+    #[error(transparent)]
+    Mix(#[from] MixError),
+    #[error(transparent)]
+    Purge(#[from] PurgeError),
+}
+
+/// The hardware side of the prediction: filaments, chamber, filament diameter.
+#[derive(Debug, Clone)]
+pub struct MixColours {
+    model: MixingModel,
+    washout: Washout,
+    filament_diameter_mm: f64,
+}
+
+impl MixColours {
+    /// `filaments` loaded on inputs 0, 1, ...; the chamber's washout; filament diameter, mm.
+    pub fn new(
+        filaments: &[Srgb8],
+        washout: Washout,
+        filament_diameter_mm: f64,
+    ) -> Result<Self, MixColourError> {
+        filament_mm_to_mm3(1.0, filament_diameter_mm)?;
+        Ok(MixColours { model: MixingModel::new(filaments)?, washout, filament_diameter_mm })
+    }
+
+    /// The hardware of a `gweave mix` profile (its inputs, `purge.chamber_mm3`/`dead_mm3`).
+    pub fn from_profile(profile: &MixProfile) -> Result<Self, MixColourError> {
+        let hw = &profile.hardware;
+        let filaments: Vec<Srgb8> = hw.inputs.iter().map(|i| i.colour).collect();
+        let washout = Washout::new(profile.purge.chamber_mm3, profile.purge.dead_mm3)?;
+        Self::new(&filaments, washout, hw.filament_diameter_mm)
+    }
+
+    /// The defaults of a `gweave mix` profile: cyan, magenta, yellow, white on 1.75 mm.
+    pub fn cmyw() -> Self {
+        Self::from_profile(&MixProfile::default()).expect("the default profile is valid")
+    }
+
+    pub fn model(&self) -> &MixingModel {
+        &self.model
+    }
+
+    /// The predicted colour of `ratios` (one per input, summing to 1).
+    pub fn predict(&self, ratios: &[f64]) -> Result<Srgb8, MixError> {
+        self.model.predict(&Mix::new(ratios)?)
+    }
+}
+
+impl PartialEq for MixColours {
+    /// The model follows from the filaments.
+    fn eq(&self, o: &Self) -> bool {
+        self.model.inputs() == o.model.inputs()
+            && self.washout == o.washout
+            && self.filament_diameter_mm == o.filament_diameter_mm
+    }
+}
+
+/// Follows a file's mixing lines and extrusion (see the module docs).
+#[derive(Debug, Clone)]
+pub struct MixTracker {
+    colours: MixColours,
+    state: MixingState,
+    /// Ratios coming out when the last change happened, and the mix changed to.
+    from: Vec<f64>,
+    to: Vec<f64>,
+    /// Extruded since that change, mm^3.
+    purged_mm3: f64,
+    /// Nothing extruded yet: the nozzle is taken to be loaded with the first mix used.
+    loaded: bool,
+    /// The colour of each settled mix (quantised ratios), predicted once.
+    cache: HashMap<Vec<u16>, Srgb8>,
+}
+
+impl MixTracker {
+    pub fn new(colours: MixColours) -> Self {
+        let inputs = colours.model.inputs().len();
+        // At least one virtual tool: `new` cannot fail.
+        let state = MixingState::new(inputs, MARLIN_VIRTUAL_TOOLS).expect("16 virtual tools");
+        let to = state.active_mix().ratios().to_vec();
+        MixTracker {
+            colours,
+            state,
+            from: to.clone(),
+            to,
+            purged_mm3: f64::INFINITY,
+            loaded: false,
+            cache: HashMap::new(),
+        }
+    }
+
+    /// One line of the file; `tool` is the core state's tool after it (RepRapFirmware mixes
+    /// are per tool).
+    pub fn line(&mut self, raw: &[u8], block: &Block, tool: u32) {
+        // A line the firmware would refuse changes nothing.
+        if !matches!(self.state.follow_line(raw, block), Ok(Some(_))) {
+            return;
+        }
+        let target = self.active_ratios(tool);
+        if target != self.to && self.loaded {
+            self.from = self.output(self.purged_mm3);
+            self.purged_mm3 = 0.0;
+        }
+        self.to = target;
+    }
+
+    /// The ratios the firmware now extrudes: the tool's M567 mix if it has one, else Marlin's
+    /// active virtual tool; normalised over the inputs the model knows.
+    fn active_ratios(&self, tool: u32) -> Vec<f64> {
+        let n = self.colours.model.inputs().len();
+        let raw = self.state.rrf_mix(tool).unwrap_or(self.state.active_mix().ratios());
+        let mut r: Vec<f64> = (0..n).map(|i| raw.get(i).copied().unwrap_or(0.0).max(0.0)).collect();
+        let sum: f64 = r.iter().sum();
+        if sum > 0.0 && sum.is_finite() {
+            r.iter_mut().for_each(|v| *v /= sum);
+            r
+        } else {
+            self.to.clone()
+        }
+    }
+
+    /// Ratios coming out after `purged_mm3` of the current mix.
+    fn output(&self, purged_mm3: f64) -> Vec<f64> {
+        let c = self.colours.washout.residual_fraction(purged_mm3);
+        if c < SETTLED {
+            return self.to.clone();
+        }
+        self.from.iter().zip(&self.to).map(|(a, b)| c * a + (1.0 - c) * b).collect()
+    }
+
+    /// An extruding move of `e_mm` filament (retractions, `e_mm <= 0`, wash nothing): its
+    /// predicted colour.
+    pub fn extrude(&mut self, e_mm: f64) -> Srgb8 {
+        self.loaded = true;
+        let v_mm3 = filament_mm_to_mm3(e_mm.max(0.0), self.colours.filament_diameter_mm).unwrap_or(0.0);
+        let ratios = self.output(self.purged_mm3 + v_mm3 / 2.0);
+        self.purged_mm3 += v_mm3;
+        // 1/4096 steps: finer than any colour difference the model can show in 8 bits.
+        let key: Vec<u16> = ratios.iter().map(|r| (r * 4096.0).round() as u16).collect();
+        if let Some(&c) = self.cache.get(&key) {
+            return c;
+        }
+        let c = self.colours.predict(&ratios).unwrap_or(Srgb8::new(0x80, 0x80, 0x80));
+        if self.cache.len() < 1 << 16 {
+            self.cache.insert(key, c);
+        }
+        c
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::lexer::parse_into;
+
+    fn feed(t: &mut MixTracker, text: &str) {
+        let mut block = Block::default();
+        parse_into(text.as_bytes(), &mut block);
+        t.line(text.as_bytes(), &block, 0);
+    }
+
+    #[test]
+    fn a_change_fades_in_with_the_washout() {
+        let cyan = Srgb8::new(0, 160, 224);
+        let yellow = Srgb8::new(255, 224, 0);
+        let washout = Washout::new(40.0, 10.0).unwrap();
+        let colours = MixColours::new(&[cyan, yellow], washout, 1.75).unwrap();
+        let mut t = MixTracker::new(colours.clone());
+        feed(&mut t, "T1");
+        feed(&mut t, "T0");
+        let pure0 = colours.predict(&[1.0, 0.0]).unwrap();
+        let pure1 = colours.predict(&[0.0, 1.0]).unwrap();
+        assert_eq!(t.extrude(1.0), pure0, "T0 is input 0 at reset");
+        feed(&mut t, "T1");
+        // 1 mm of 1.75 mm filament is 2.405 mm^3: its middle is still in the dead volume.
+        assert_eq!(t.extrude(1.0), pure0);
+        // 30 mm more: the middle at 2.405 + 36.08 = 38.49 mm^3, 28.49 past the dead volume.
+        let c = (-(2.405_281_5 + 15.0 * 2.405_281_5 - 10.0) / 40.0_f64).exp();
+        let mid = colours.predict(&[c, 1.0 - c]).unwrap();
+        assert_eq!(t.extrude(30.0), mid);
+        assert_ne!(mid, pure0);
+        assert_ne!(mid, pure1);
+        t.extrude(200.0);
+        assert_eq!(t.extrude(1.0), pure1, "washed out");
+    }
+
+    #[test]
+    fn marlin_mixes_are_followed_and_refused_lines_ignored() {
+        let mut t = MixTracker::new(MixColours::cmyw());
+        feed(&mut t, "M163 S0 P0.5");
+        feed(&mut t, "M163 S2 P0.5");
+        feed(&mut t, "M164 S3");
+        feed(&mut t, "T3");
+        feed(&mut t, "M163 S9 P1"); // no input 9: refused
+        t.extrude(1000.0);
+        let green = MixColours::cmyw().predict(&[0.5, 0.0, 0.5, 0.0]).unwrap();
+        assert_eq!(t.extrude(1.0), green);
+        assert!(green.g > green.r, "cyan and yellow print green: {green}");
+    }
+}

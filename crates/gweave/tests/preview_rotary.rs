@@ -1,0 +1,98 @@
+//! `gweave preview` of rotary programs: drawn in 3D on their cylinder, asserting on the pixels.
+//!
+//! A tube of 2 layers of 0.2 mm on a 20 mm mandrel, 20 mm long along X. The beads are drawn
+//! where the nozzle runs, on top of their layer: radii 10.2 and 10.4 mm. Seen from the top the
+//! outer layer spans Y = -10.4..10.4 mm: the lit pixels of a column across
+//! the tube must reach the projected radius on both sides of the axis and no further, and the
+//! shading must fall off towards the silhouette, where the surface turns away from the eye. Read
+//! flat (the rotary word as a coordinate) it would span the 65 mm of the circumference instead.
+
+use std::path::PathBuf;
+
+use gweave::render::png_out::rasterise;
+use gweave::render::raster::Image;
+use gweave::render::view::BACKGROUND;
+use gweave::render::{drawing, ColourBy, Format, PreviewOptions, ViewKind, ViewOptions};
+use gweave::rotary::cylinder::RotaryConfig;
+use gweave::rotary::helix::TubeParams;
+
+fn tube_file(name: &str) -> (PathBuf, TubeParams) {
+    let mut tube = TubeParams::new(RotaryConfig::new(20.0));
+    (tube.length_mm, tube.layers) = (20.0, 2);
+    let mut gcode = Vec::new();
+    tube.write_gcode(&mut gcode).unwrap();
+    let dir = std::env::temp_dir().join(format!("gweave-preview-rotary-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, gcode).unwrap();
+    (path, tube)
+}
+
+/// Rows of column `x` that are not background.
+fn lit_rows(img: &Image, x: f32) -> Vec<u32> {
+    (0..img.height)
+        .filter(|&y| {
+            let p = img.pixel(x as u32, y);
+            [p[0], p[1], p[2]] != BACKGROUND
+        })
+        .collect()
+}
+
+fn options(kind: ViewKind) -> PreviewOptions {
+    let view =
+        ViewOptions { kind, width_px: 400, height_px: 400, colour_by: ColourBy::Layer, ..Default::default() };
+    PreviewOptions { view, ..PreviewOptions::default() }
+}
+
+#[test]
+fn a_tube_is_drawn_round_on_its_cylinder() {
+    let (path, tube) = tube_file("tube.gcode");
+    let r_mm = (tube.layer_radius_mm(1) + tube.print.layer_height_mm / 2.0) as f32;
+    assert!((r_mm - 10.4).abs() < 1e-4, "{r_mm}");
+    // The header names the machine: no rotary option needed.
+    let d = drawing(&path, None, &options(ViewKind::Top), &mut gweave::pass::Quiet).unwrap();
+    let img = rasterise(&d);
+    let proj = d.panels[0].projection;
+    let x_mm = 10.0;
+    let [col, axis_row] = proj.project([x_mm, 0.0, 0.0]);
+    let top = proj.project([x_mm, r_mm, 0.0])[1];
+    let bottom = proj.project([x_mm, -r_mm, 0.0])[1];
+    let lit = lit_rows(&img, col);
+    let (first, last) = (*lit.first().unwrap() as f32, *lit.last().unwrap() as f32);
+    // Half a bead width (0.45 mm drawn) plus a pixel of anti-aliasing beyond the centre line.
+    let slack = 0.45 / 2.0 * proj.scale_px_mm() + 1.5;
+    assert!((first - top).abs() <= slack, "top edge at row {first}, expected {top} +- {slack}");
+    assert!((last - bottom).abs() <= slack, "bottom edge at row {last}, expected {bottom} +- {slack}");
+    assert!((first + last) / 2.0 - axis_row < 1.5, "symmetric about the axis");
+    assert_eq!(lit.len() as f32, last - first + 1.0, "a closed wall: every row between lit");
+    // Facing the eye over the axis, turned away at the silhouette: darker there.
+    let brightness = |y: f32| img.pixel(col as u32, y as u32)[..3].iter().map(|&v| v as u32).sum::<u32>();
+    let centre = brightness(axis_row);
+    let near_edge = brightness(top + 0.1 * (axis_row - top));
+    assert!(centre > near_edge + 60, "centre {centre}, near the edge {near_edge}");
+
+    // Isometric: the outline is symmetric about the projected axis.
+    let d = drawing(&path, None, &options(ViewKind::Iso), &mut gweave::pass::Quiet).unwrap();
+    let img = rasterise(&d);
+    let proj = d.panels[0].projection;
+    let [ax, ay] = proj.project([x_mm, 0.0, 0.0]);
+    // A cylinder's outline is a band between two lines parallel to its projected axis: a
+    // vertical line through the axis crosses them at equal distances on either side.
+    let lit = lit_rows(&img, ax);
+    let (first, last) = (*lit.first().unwrap() as f32, *lit.last().unwrap() as f32);
+    assert!(((first + last) / 2.0 - ay).abs() < 2.0, "{first}..{last} about {ay}");
+    // At least the radius on each side (the band is wider along a vertical than across).
+    assert!((last - first) / 2.0 >= r_mm * proj.scale_px_mm() - 1.0);
+}
+
+#[test]
+fn the_viewer_page_of_a_tube_carries_its_3d_segments() {
+    let (path, _) = tube_file("tube_html.gcode");
+    let html = gweave::render::preview(&path, None, Format::Html, &options(ViewKind::Iso)).unwrap();
+    let html = String::from_utf8(html).unwrap();
+    // Quantisation bounds of the 3D segments: Y and Z span the outer diameter, not the
+    // circumference or the radial word.
+    let lo = html.split("\"lo\":[").nth(1).unwrap().split(']').next().unwrap().to_owned();
+    let lo: Vec<f32> = lo.split(',').map(|v| v.parse().unwrap()).collect();
+    assert!((lo[1] + 10.4).abs() < 0.01 && (lo[2] + 10.4).abs() < 0.01, "{lo:?}");
+}
