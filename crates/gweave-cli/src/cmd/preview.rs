@@ -50,7 +50,7 @@ pub struct PreviewArgs {
     /// Compare with this file (e.g. the output of a transform): changed moves are highlighted.
     #[arg(long, value_name = "B")]
     pub compare: Option<PathBuf>,
-    /// Colours of tools 0, 1, ... as #rrggbb, comma separated (e.g. predicted mix colours).
+    /// Colours of tools 0, 1, ... as #rrggbb, comma separated, for --colour-by tool.
     #[arg(long, value_name = "COLOURS", value_delimiter = ',')]
     pub tool_colours: Vec<Srgb8>,
     /// A `gweave mix` profile: the filament colours of its inputs and its mixing chamber
