@@ -166,90 +166,65 @@ fn checksum(raw: &[u8], star: usize, limit: usize, block: &mut Block) -> usize {
 }
 
 fn words(raw: &[u8], mut i: usize, block: &mut Block) {
-    // Words and single spaces are nearly every byte of a real file: test for them first and
-    // leave the rest to `separator`.
-    while let Some(&b) = raw.get(i) {
-        if b.is_ascii_alphabetic() {
-            i = word(raw, i, block);
-        } else if b == b' ' {
-            i += 1;
-        } else {
-            match separator(raw, i, block) {
-                Some(next) => i = next,
-                None => return,
+    while i < raw.len() {
+        let b = raw[i];
+        match b {
+            _ if is_space(b) => i += 1,
+            b';' => {
+                block.comment = Some(Span::new(i + 1, raw.len()));
+                return;
             }
-        }
-    }
-}
-
-/// Whatever may stand between words: other blanks, comments, a checksum, or a stray byte.
-/// Returns where to go on, or `None` when the rest of the line is a comment or unreadable.
-fn separator(raw: &[u8], i: usize, block: &mut Block) -> Option<usize> {
-    let b = raw[i];
-    match b {
-        _ if is_space(b) => Some(i + 1),
-        b';' => {
-            block.comment = Some(Span::new(i + 1, raw.len()));
-            None
-        }
-        b'(' => match memchr::memchr(b')', &raw[i..]) {
-            Some(close) => Some(i + close + 1),
-            None => {
-                block.diagnostics.push(Diagnostic::at(i, Finding::UnclosedComment));
-                None
+            b'(' => match memchr::memchr(b')', &raw[i..]) {
+                Some(close) => i += close + 1,
+                None => {
+                    block.diagnostics.push(Diagnostic::at(i, Finding::UnclosedComment));
+                    return;
+                }
+            },
+            b'*' => {
+                let limit = memchr::memchr(b';', &raw[i..]).map_or(raw.len(), |p| i + p);
+                i = checksum(raw, i, limit, block);
+                i = skip_space(raw, i);
+                if i < limit {
+                    i = limit;
+                }
             }
-        },
-        b'*' => {
-            let limit = memchr::memchr(b';', &raw[i..]).map_or(raw.len(), |p| i + p);
-            let end = skip_space(raw, checksum(raw, i, limit, block));
-            Some(end.max(limit))
-        }
-        _ => {
-            block.diagnostics.push(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
-            Some(i + 1)
+            _ if b.is_ascii_alphabetic() => i = word(raw, i, block),
+            _ => {
+                block.diagnostics.push(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
+                i += 1;
+            }
         }
     }
 }
 
 /// Reads one word at `start` (a letter) and returns the index after it.
-#[inline(always)]
 fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
-    // `raw[start]` is a letter: clearing bit 5 upper-cases it.
-    let letter = raw[start] & !0x20;
+    let letter = raw[start].to_ascii_uppercase();
     let at = start + 1;
-    // Numbers first and pushed in place: building the value apart and moving it costs more than
-    // the rest of the word.
     let (value, end) = match raw.get(at) {
         Some(b'"') => quoted(raw, at, block),
         Some(b'{') => expression(raw, at, block),
         _ => match scan(&raw[at..]) {
-            Ok((v, used)) => {
-                let end = at + used;
-                block.push_word(Word { letter, value: Value::Number(v), span: Span::new(start, end) });
-                return end;
+            Ok((v, used)) => (Value::Number(v), at + used),
+            Err(NumberError::Empty) => (Value::Empty, at),
+            Err(e) => {
+                let finding = match e {
+                    NumberError::NotFinite => Finding::NotFinite { letter: letter as char },
+                    _ => Finding::MalformedNumber { letter: letter as char },
+                };
+                block.diagnostics.push(Diagnostic::at(at, finding));
+                // Skip the whole bad token so that its pieces do not read as more words.
+                let mut end = at;
+                while end < raw.len() && !is_space(raw[end]) && !matches!(raw[end], b';' | b'(' | b'*') {
+                    end += 1;
+                }
+                (Value::Invalid, end)
             }
-            Err(e) => bad_number(raw, letter, at, e, block),
         },
     };
     block.push_word(Word { letter, value, span: Span::new(start, end) });
     end
-}
-
-/// A word whose value is not a number: empty (`G28 X`) or malformed, with its diagnostic.
-#[cold]
-fn bad_number(raw: &[u8], letter: u8, at: usize, e: NumberError, block: &mut Block) -> (Value, usize) {
-    let finding = match e {
-        NumberError::Empty => return (Value::Empty, at),
-        NumberError::NotFinite => Finding::NotFinite { letter: letter as char },
-        NumberError::Malformed => Finding::MalformedNumber { letter: letter as char },
-    };
-    block.diagnostics.push(Diagnostic::at(at, finding));
-    // Skip the whole bad token so that its pieces do not read as more words.
-    let mut end = at;
-    while end < raw.len() && !is_space(raw[end]) && !matches!(raw[end], b';' | b'(' | b'*') {
-        end += 1;
-    }
-    (Value::Invalid, end)
 }
 
 /// A RepRapFirmware string: `"..."`, with `""` standing for one quote.

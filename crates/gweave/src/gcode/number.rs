@@ -27,44 +27,51 @@ pub enum NumberError {
 /// Scans a G-code number at the start of `bytes`: `[+-]? digits? (. digits?)?` with at least one
 /// digit. Returns the value and how many bytes it used. Exponents are not G-code and end the
 /// number (the `e` is then the next word's letter, as firmware reads it).
-#[inline(always)]
+#[inline]
 pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
     let (negative, start) = match bytes.first() {
         Some(b'-') => (true, 1),
         Some(b'+') => (false, 1),
         _ => (false, 0),
     };
-    // One loop over digits and at most one point: the point is rare next to the digits, so it is
-    // tested only when a byte is not a digit. `point` is the index just after the point.
     let mut mantissa: u64 = 0;
-    let mut point = 0;
-    let mut i = start;
-    while let Some(&b) = bytes.get(i) {
-        let d = b.wrapping_sub(b'0');
-        if d < 10 {
-            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-        } else if b == b'.' && point == 0 {
-            point = i + 1;
-        } else {
-            break;
-        }
+    let int_digits = digits(&bytes[start..], &mut mantissa);
+    let mut i = start + int_digits;
+    let mut frac_digits = 0;
+    if bytes.get(i) == Some(&b'.') {
         i += 1;
+        frac_digits = digits(&bytes[i..], &mut mantissa);
+        i += frac_digits;
     }
-    let frac_digits = if point == 0 { 0 } else { i - point };
-    let all_digits = i - start - usize::from(point != 0);
-    if all_digits == 0 {
-        return Err(no_digits(&bytes[i..], i > 0));
+    if int_digits + frac_digits == 0 {
+        return Err(no_digits(&bytes[i..], i > 0 || bytes.first() == Some(&b'.')));
     }
     // A second point or sign glued to the number is a typo, not the start of another word.
     if matches!(bytes.get(i), Some(b'.' | b'+' | b'-')) {
         return Err(NumberError::Malformed);
     }
-    if all_digits > 15 {
+    if int_digits + frac_digits > 15 {
         return scan_slow(bytes, negative, start);
     }
     // At most 15 digits: the mantissa is below 2^53, exact, and one division rounds correctly.
     let value = (mantissa as i64) as f64 / POW10[frac_digits];
     Ok((if negative { -value } else { value }, i))
+}
+
+/// Accumulates the leading ASCII digits of `bytes` into `mantissa` (wrapping: callers with more
+/// than 15 digits take the slow path) and returns how many there were.
+#[inline]
+fn digits(bytes: &[u8], mantissa: &mut u64) -> usize {
+    let mut n = 0;
+    for &b in bytes {
+        let d = b.wrapping_sub(b'0');
+        if d >= 10 {
+            break;
+        }
+        *mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+        n += 1;
+    }
+    n
 }
 
 /// Numbers with long digit runs: let std round them correctly.

@@ -22,24 +22,17 @@ pub const AXES: usize = 7;
 /// The axis letters in index order.
 pub const AXIS_LETTERS: [u8; AXES] = [b'X', b'Y', b'Z', b'E', b'A', b'B', b'C'];
 
-/// Axis index per letter `A..=Z` (`NOT_AXIS` for the others): a table rather than a `match`,
-/// as it is looked up for every word of every motion line and a jump table mispredicts.
-const AXIS_BY_LETTER: [u8; 26] = {
-    let mut table = [NOT_AXIS; 26];
-    let mut i = 0;
-    while i < AXES {
-        table[(AXIS_LETTERS[i] - b'A') as usize] = i as u8;
-        i += 1;
-    }
-    table
-};
-const NOT_AXIS: u8 = u8::MAX;
-
 /// The axis index of an (upper-case) word letter.
 #[inline]
 pub fn axis_of(letter: u8) -> Option<usize> {
-    match AXIS_BY_LETTER.get(letter.wrapping_sub(b'A') as usize) {
-        Some(&i) if i != NOT_AXIS => Some(usize::from(i)),
+    match letter {
+        b'X' => Some(X),
+        b'Y' => Some(Y),
+        b'Z' => Some(Z),
+        b'E' => Some(E),
+        b'A' => Some(A),
+        b'B' => Some(B),
+        b'C' => Some(C),
         _ => None,
     }
 }
@@ -424,28 +417,16 @@ impl State {
         if let Some(f) = block.get(b'F') {
             self.feed_mm_min = self.to_mm(f);
         }
-        // Gather the axis words first (the last of a letter wins, as with `Block::get`), then
-        // resolve every axis in one straight pass: the target stays in registers instead of
-        // being stored one axis at a time and reloaded as a whole, which stalls the CPU's store
-        // forwarding on every motion line.
-        let mut given = [0.0; AXES];
-        let mut seen = 0u8;
+        let from = self.pos;
+        let mut to = from;
+        let mut any = false;
         for w in &block.words {
             let Some(i) = axis_of(w.letter) else { continue };
             let Value::Number(v) = w.value else { continue };
-            given[i] = v;
-            seen |= 1 << i;
-        }
-        let mut any = seen != 0;
-        let from = self.pos;
-        let mut to = from;
-        // Scaling by exactly 1.0 leaves millimetres unchanged.
-        let scale = if self.inches { MM_PER_INCH } else { 1.0 };
-        for (i, to) in to.iter_mut().enumerate() {
-            if seen & (1 << i) != 0 {
-                let relative = if i == E { self.relative_e() } else { !self.absolute };
-                *to = if relative { *to + given[i] * scale } else { given[i] * scale };
-            }
+            let v = self.to_mm(v);
+            let relative = if i == E { self.relative_e() } else { !self.absolute };
+            to[i] = if relative { to[i] + v } else { v };
+            any = true;
         }
         let path = match self.motion {
             Motion::ArcCw | Motion::ArcCcw => {
