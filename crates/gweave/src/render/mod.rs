@@ -123,6 +123,7 @@ impl PreviewOptions {
             layers: if keep_all_layers { None } else { self.view.layers.clone() },
             travel: keep_all_layers || self.view.travel,
             min_len_mm: self.min_len_mm.unwrap_or_else(|| ToolpathOptions::min_len_for_file_size(bytes)),
+            max_segments: Some(MAX_SEGMENTS),
             mix: (self.view.colour_by == ColourBy::Mix)
                 .then(|| self.mix.clone().unwrap_or_else(MixColours::cmyw)),
             printhead: self.printhead.clone().unwrap_or_default(),
@@ -130,6 +131,11 @@ impl PreviewOptions {
         }
     }
 }
+
+/// The most segments a picture or viewer keeps (about 80 MB with their strokes): twice the
+/// pixels of a 1200 x 900 picture, so a file of any size is drawn in bounded memory and loses only
+/// detail finer than a pixel or two (see [`ToolpathOptions::max_segments`]).
+const MAX_SEGMENTS: usize = 1 << 21;
 
 /// Bytes at the start of a file searched for a rotary header.
 const HEADER_BYTES: u64 = 4096;

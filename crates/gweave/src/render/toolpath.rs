@@ -16,7 +16,11 @@
 //! merged piece is at least that long. The merged piece is the chord from the first start to the
 //! last end, so no drawn point is further than `min_len_mm` from the true path; choose it below
 //! the size of a pixel and the picture does not change. A 230 MB file has ~8 M moves, 36 bytes
-//! each kept: merging to 0.2 mm typically keeps a fifth of them.
+//! each kept: merging to 0.2 mm typically keeps a fifth of them. Denser files (gyroid infill)
+//! keep more, so pictures also set [`ToolpathOptions::max_segments`]: when the toolpath reaches
+//! it, the merge length doubles and the segments kept so far are merged again, as often as
+//! needed. Memory then has a ceiling whatever the file's size, and the picture loses only detail
+//! finer than the final merge length (reported by [`ToolpathPass::min_len_mm`]).
 
 use std::io::{self, Write};
 use std::ops::RangeInclusive;
@@ -77,6 +81,8 @@ pub struct ToolpathOptions {
     pub print_only: bool,
     /// Merge chained moves shorter than this, mm (0: keep every move).
     pub min_len_mm: f32,
+    /// Keep at most this many segments: past it the merge length doubles (see the module notes).
+    pub max_segments: Option<usize>,
     /// Largest distance of an arc's chords from the arc, mm.
     pub arc_tol_mm: f64,
     /// Predict each move's printed colour with this mixing hardware ([`Segment::mix_rgb`]).
@@ -93,6 +99,7 @@ impl Default for ToolpathOptions {
             travel: true,
             print_only: true,
             min_len_mm: 0.0,
+            max_segments: None,
             arc_tol_mm: 0.02,
             mix: None,
             printhead: PrintheadProfile::default(),
@@ -208,15 +215,54 @@ impl ToolpathPass {
         self.out
     }
 
+    /// The merge length in force: the option's, or more once [`ToolpathOptions::max_segments`]
+    /// was reached.
+    pub fn min_len_mm(&self) -> f32 {
+        self.options.min_len_mm
+    }
+
     fn flush(&mut self) {
         if let Some(p) = self.pending.take() {
-            self.out.segments.push(p);
+            self.keep(p);
+        }
+    }
+
+    fn keep(&mut self, s: Segment) {
+        self.out.segments.push(s);
+        if self.options.max_segments.is_some_and(|max| self.out.segments.len() >= max) {
+            self.coarsen();
+        }
+    }
+
+    /// Doubles the merge length and merges the segments kept so far again, with the rule of
+    /// [`Self::push`], until at most three quarters of the ceiling are used.
+    fn coarsen(&mut self) {
+        let max = self.options.max_segments.unwrap_or(usize::MAX).max(4);
+        while self.out.segments.len() > max / 4 * 3 {
+            // 0.05 mm: the first step when the file was read without merging.
+            self.options.min_len_mm = (self.options.min_len_mm * 2.0).max(0.05);
+            let min_len = self.options.min_len_mm;
+            let segments = &mut self.out.segments;
+            let mut kept = 0;
+            for i in 0..segments.len() {
+                let s = segments[i];
+                if kept > 0 {
+                    let p = &mut segments[kept - 1];
+                    if p.same_kind(&s) && p.end == s.start && p.len_mm() < min_len {
+                        p.end = s.end;
+                        continue;
+                    }
+                }
+                segments[kept] = s;
+                kept += 1;
+            }
+            segments.truncate(kept);
         }
     }
 
     fn push(&mut self, s: Segment) {
         if self.options.min_len_mm <= 0.0 {
-            self.out.segments.push(s);
+            self.keep(s);
             return;
         }
         match &mut self.pending {
@@ -363,18 +409,15 @@ mod tests {
     use crate::gcode::state::StateOptions;
     use crate::pass::{drive_reader, Strictness};
 
+    fn read(text: &str, pass: &mut ToolpathPass) {
+        let (path, options) = (Path::new("t.gcode"), StateOptions::default());
+        drive_reader(text.as_bytes(), path, options, Strictness::Strict, &mut Quiet, pass, &mut io::sink())
+            .unwrap();
+    }
+
     pub(crate) fn collect(text: &str, options: ToolpathOptions) -> Toolpath {
         let mut pass = ToolpathPass::new(options);
-        drive_reader(
-            text.as_bytes(),
-            Path::new("t.gcode"),
-            StateOptions::default(),
-            Strictness::Strict,
-            &mut Quiet,
-            &mut pass,
-            &mut io::sink(),
-        )
-        .unwrap();
+        read(text, &mut pass);
         pass.finish_toolpath()
     }
 
@@ -437,6 +480,32 @@ mod tests {
         assert_eq!(merged.segments.len(), 10, "5 mm in pieces of 0.5 mm");
         assert_eq!(merged.segments[0].start, [0.0, 0.0, 0.2]);
         assert_eq!(merged.segments.last().unwrap().end, all.segments.last().unwrap().end);
+    }
+
+    #[test]
+    fn a_segment_ceiling_coarsens_the_merge_and_keeps_the_ends() {
+        // A zigzag of 2000 moves of 0.05 mm: far more than a ceiling of 100 segments.
+        let mut text = String::from("G1 X0 Y0 Z0.2 F600\n");
+        for i in 1..=2000 {
+            text.push_str(&format!("G1 X{:.2} Y{:.3} E{i}\n", i as f64 * 0.05, (i % 2) as f64 * 0.01));
+        }
+        let options = ToolpathOptions {
+            print_only: false,
+            travel: false,
+            max_segments: Some(100),
+            ..Default::default()
+        };
+        let mut pass = ToolpathPass::new(options);
+        read(&text, &mut pass);
+        let min_len = pass.min_len_mm();
+        let tp = pass.finish_toolpath();
+        assert!(tp.segments.len() <= 100, "{}", tp.segments.len());
+        // 100 mm in at most 100 pieces needs pieces of 1 mm or more: 0.05 doubled five times.
+        assert_eq!(min_len, 1.6);
+        assert_eq!(tp.segments[0].start, [0.0, 0.0, 0.2]);
+        assert_eq!(tp.segments.last().unwrap().end, [100.0, 0.0, 0.2]);
+        // Still one chained path: each piece starts where the last ended.
+        assert!(tp.segments.windows(2).all(|w| w[0].end == w[1].start));
     }
 
     #[test]
