@@ -462,7 +462,7 @@ impl Estimator {
                 }
                 return Ok(());
             }
-            163..=165 | 567 => return self.mixing_command(raw, number),
+            163..=165 | 567 => return self.mixing_command(raw),
             201 if !self.klipper => profile.set_max_accel(&axes()),
             203 if !self.klipper => profile.set_max_feed(&axes()),
             205 if !self.klipper => match b.get(b'J') {
@@ -525,26 +525,12 @@ impl Estimator {
     }
 
     /// `M163`-`M165` and `M567` on a mixing hotend (ignored without one).
-    fn mixing_command(&mut self, raw: &[u8], number: u32) -> Result<(), EstimateError> {
+    fn mixing_command(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
         let Some(mixing) = &mut self.mixing else {
             return Ok(());
         };
-        let b = &self.block;
-        let words: Vec<(char, f64)> =
-            b.words.iter().filter_map(|w| Some((char::from(w.letter), w.number()?))).collect();
-        // M567's `E0.2:0.8`: the lexer does not read the colon list, so split the word's text.
-        let e_list: Vec<f64> = match (number, b.word(b'E')) {
-            (567, Some(w)) => std::str::from_utf8(&w.span.of(raw)[1..])
-                .unwrap_or("")
-                .split(':')
-                .map(|v| v.trim().parse().unwrap_or(f64::NAN))
-                .collect(),
-            _ => Vec::new(),
-        };
         let line = self.line;
-        mixing
-            .apply(number as u16, &words, &e_list)
-            .map_err(|source| EstimateError::Mixing { line, source })?;
+        mixing.follow_line(raw, &self.block).map_err(|source| EstimateError::Mixing { line, source })?;
         self.refresh_mix();
         Ok(())
     }
