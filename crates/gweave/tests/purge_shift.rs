@@ -307,6 +307,11 @@ fn after_gweave_mix_on_the_cura_torus() {
         let (_, r) = run(Rules::fixed(2.5).unwrap(), &mixed);
         assert_eq!(r.changes.len(), changes as usize, "{profile}");
         assert!(r.changes.iter().all(|c| c.moved_mm == 0.0 && c.stopped_by == Some("a layer change")));
+        // ... and the warnings say what to do about it.
+        assert!(r
+            .warnings
+            .iter()
+            .all(|w| w.ends_with("--cross-layers lets the purge reach the layer below")));
         for fallback in ["partial", "block"] {
             let (out, r) = run(
                 config(&format!("purge_mm = 2.5\ncross_layers = true\nfallback = \"{fallback}\"\n")),

@@ -73,6 +73,8 @@ use crate::post::purge_block::{purge_start_pos, PurgeStart};
 use fallback::{write_fallback, Spot, Surroundings};
 use split::{split, Splittable};
 
+/// What stops the walk back at a layer change (the report's `stopped_by`).
+const LAYER_CHANGE: &str = "a layer change";
 /// Extrusion below this is a rounding remainder, not a piece of move worth splitting off, mm.
 const EPS_E_MM: f64 = 1e-6;
 /// Mixing inputs and virtual tools followed to recognise changes of mix (Marlin allows up to 6
@@ -268,7 +270,7 @@ impl PurgeShift {
     /// previous layer's start).
     fn layer_start(&mut self, out: &mut dyn Write) -> io::Result<()> {
         if !self.rules.cross_layers {
-            return self.flush(out, "a layer change");
+            return self.flush(out, LAYER_CHANGE);
         }
         if let Some(prev) = self.layer_start_seq {
             while self.window.front().is_some_and(|h| h.seq < prev) {
@@ -466,6 +468,11 @@ impl PurgeShift {
             (Some(_), _) => format!("; the rest purged by the {} fallback", self.rules.fallback.name()),
             (None, Some(s)) if s.inches && self.rules.fallback != Fallback::Partial => {
                 "; no fallback purge: the file is in inches".into()
+            }
+            // A change that opens its layer, as `gweave mix` writes them, cannot move at all
+            // unless the purge may reach into the layer below.
+            _ if change.moved_mm == 0.0 && change.stopped_by == Some(LAYER_CHANGE) => {
+                "; it opens its layer: --cross-layers lets the purge reach the layer below".into()
             }
             _ => String::new(),
         };
