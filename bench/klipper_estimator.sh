@@ -28,22 +28,25 @@ trap 'rm -rf "$TMP"' EXIT
 cat "$BIG" > /dev/null
 
 # measure NAME CMD...: run CMD twice, keep its standard output of the first run in $TMP/NAME.out,
-# print "best-wall-seconds peak-MB".
+# print "wall-s user-s sys-s" of the faster run and the peak memory in MB. Wall time depends on
+# the machine's load; user time is the steadier figure.
 measure() {
   local name=$1
   shift
-  /usr/bin/time -f "%e %M" -o "$TMP/$name.t1" "$@" > "$TMP/$name.out"
-  /usr/bin/time -f "%e %M" -o "$TMP/$name.t2" "$@" > /dev/null
+  /usr/bin/time -f "%e %U %S %M" -o "$TMP/$name.t1" "$@" > "$TMP/$name.out"
+  /usr/bin/time -f "%e %U %S %M" -o "$TMP/$name.t2" "$@" > /dev/null
   python3 - "$TMP/$name.t1" "$TMP/$name.t2" <<'EOF'
 import sys
-runs = [open(p).read().split()[-2:] for p in sys.argv[1:]]
-print(f"{min(float(r[0]) for r in runs):.2f} {max(int(r[1]) for r in runs) / 1024:.0f}")
+runs = [open(p).read().split()[-4:] for p in sys.argv[1:]]
+best = min(runs, key=lambda r: float(r[0]))
+peak = max(int(r[3]) for r in runs) / 1024
+print(f"{float(best[0]):.2f} {float(best[1]):.2f} {float(best[2]):.2f} {peak:.0f}")
 EOF
 }
 
-read -r t_ke m_ke < <(measure ke "$KE" --config_file "$ROOT/bench/klipper_estimator.json5" \
+read -r t_ke u_ke s_ke_sys m_ke < <(measure ke "$KE" --config_file "$ROOT/bench/klipper_estimator.json5" \
   estimate --format json "$BIG")
-read -r t_gw m_gw < <(measure gw "$GWEAVE" sim "$BIG" --machine "$ROOT/bench/klipper-big-bed.toml" -q --json)
+read -r t_gw u_gw s_gw_sys m_gw < <(measure gw "$GWEAVE" sim "$BIG" --machine "$ROOT/bench/klipper-big-bed.toml" -q --json)
 
 totals=$(python3 - "$TMP/ke.out" "$TMP/gw.out" <<'EOF'
 import json, sys
@@ -52,14 +55,15 @@ ke_total = sum(s["total_time"] for s in ke)
 ke_motion = ke_total - sum(s["kind_times"].get("Indeterminate time", 0.0) for s in ke)
 t = json.load(open(sys.argv[2]))["time"]
 gw_motion = t["motion_s"] + t["dwell_s"] + t["overhead_s"]
-print(f"{ke_motion:.1f} {gw_motion:.1f} {t['total_s']:.1f} {gw_motion - ke_motion:+.1f} "
-      f"{100 * (gw_motion - ke_motion) / ke_motion:+.3f}")
+print(f"{ke_motion:.2f} {gw_motion:.2f} {t['total_s']:.1f} {gw_motion - ke_motion:+.3f} "
+      f"{1e6 * (gw_motion - ke_motion) / ke_motion:+.2f}")
 EOF
 )
-read -r s_ke s_gw s_gw_all d_s d_pct <<< "$totals"
+read -r s_ke s_gw s_gw_all d_s d_ppm <<< "$totals"
 echo "file: $(basename "$BIG"), Klipper limits: max_velocity 300, max_accel 3000, minimum_cruise_ratio 0.5, scv 5"
-printf "%-30s %7s s %7s MB   estimate %s s\n" "klipper_estimator estimate" "$t_ke" "$m_ke" "$s_ke"
-printf "%-30s %7s s %7s MB   estimate %s s (%s s with heating and homing)\n" "gweave sim (+ steps, heaters)" \
-  "$t_gw" "$m_gw" "$s_gw" "$s_gw_all"
-printf "%-30s %7s x time  %6s x memory   estimates differ by %s s (%s %%)\n" "klipper_estimator / gweave" \
-  "$(ratio "$t_ke" "$t_gw")" "$(ratio "$m_ke" "$m_gw")" "$d_s" "$d_pct"
+row() { printf "%-30s %7s s wall %6s s user %6s s sys %6s MB   %s\n" "$@"; }
+row "klipper_estimator estimate" "$t_ke" "$u_ke" "$s_ke_sys" "$m_ke" "estimate $s_ke s"
+row "gweave sim (+ steps, heaters)" "$t_gw" "$u_gw" "$s_gw_sys" "$m_gw" \
+  "estimate $s_gw s ($s_gw_all s with heating and homing)"
+echo "klipper_estimator / gweave: $(ratio "$t_ke" "$t_gw")x wall time, $(ratio "$u_ke" "$u_gw")x user time," \
+  "$(ratio "$m_ke" "$m_gw")x peak memory; estimates differ by $d_s s ($d_ppm per million)"
