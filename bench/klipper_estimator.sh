@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# Print-time estimate against klipper_estimator (dalegaard/klipper_estimator, a Rust estimator
+# of Klipper's motion planner) on the large benchmark file, both with the same Klipper limits
+# (bench/klipper-big-bed.toml, bench/klipper_estimator.json5): wall time, peak memory and the
+# estimated time. Runs only where a klipper_estimator binary is found.
+#
+# The totals compared are motion time: gweave's motion + dwell + Klipper's fixed overheads
+# (start buffer, M84 stalls, exit flush), against klipper_estimator's total less its
+# "Indeterminate time" (0.1 s it puts in for each G28, M109, M190). gweave sim's own total also
+# holds the heating and homing it simulates, which klipper_estimator does not model.
+set -euo pipefail
+source "$(dirname "$0")/lib.sh"
+KE=${KLIPPER_ESTIMATOR:-$(command -v klipper_estimator || true)}
+if [ -z "$KE" ] && [ -x /work/kest-src/target/release/klipper_estimator ]; then
+  KE=/work/kest-src/target/release/klipper_estimator
+fi
+if [ -z "$KE" ] || [ ! -x "$KE" ]; then
+  echo "skipped: build dalegaard/klipper_estimator and set KLIPPER_ESTIMATOR"
+  exit 0
+fi
+BIG="$ROOT/bench/data/bunny-gyroid.gcode"
+if [ ! -s "$BIG" ]; then
+  echo "skipped: $BIG is missing (bench/run.sh slices it)"
+  exit 0
+fi
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+cat "$BIG" > /dev/null
+
+# measure NAME CMD...: run CMD twice, keep its standard output of the first run in $TMP/NAME.out,
+# print "wall-s user-s sys-s" of the faster run and the peak memory in MB. Wall time depends on
+# the machine's load; user time is the steadier figure.
+measure() {
+  local name=$1
+  shift
+  /usr/bin/time -f "%e %U %S %M" -o "$TMP/$name.t1" "$@" > "$TMP/$name.out"
+  /usr/bin/time -f "%e %U %S %M" -o "$TMP/$name.t2" "$@" > /dev/null
+  python3 - "$TMP/$name.t1" "$TMP/$name.t2" <<'EOF'
+import sys
+runs = [open(p).read().split()[-4:] for p in sys.argv[1:]]
+best = min(runs, key=lambda r: float(r[0]))
+peak = max(int(r[3]) for r in runs) / 1024
+print(f"{float(best[0]):.2f} {float(best[1]):.2f} {float(best[2]):.2f} {peak:.0f}")
+EOF
+}
+
+read -r t_ke u_ke s_ke_sys m_ke < <(measure ke "$KE" --config_file "$ROOT/bench/klipper_estimator.json5" \
+  estimate --format json "$BIG")
+read -r t_gw u_gw s_gw_sys m_gw < <(measure gw "$GWEAVE" sim "$BIG" --machine "$ROOT/bench/klipper-big-bed.toml" -q --json)
+
+totals=$(python3 - "$TMP/ke.out" "$TMP/gw.out" <<'EOF'
+import json, sys
+ke = json.load(open(sys.argv[1]))["sequences"]
+ke_total = sum(s["total_time"] for s in ke)
+ke_motion = ke_total - sum(s["kind_times"].get("Indeterminate time", 0.0) for s in ke)
+t = json.load(open(sys.argv[2]))["time"]
+gw_motion = t["motion_s"] + t["dwell_s"] + t["overhead_s"]
+print(f"{ke_motion:.2f} {gw_motion:.2f} {t['total_s']:.1f} {gw_motion - ke_motion:+.3f} "
+      f"{1e6 * (gw_motion - ke_motion) / ke_motion:+.2f}")
+EOF
+)
+read -r s_ke s_gw s_gw_all d_s d_ppm <<< "$totals"
+echo "file: $(basename "$BIG"), Klipper limits: max_velocity 300, max_accel 3000, minimum_cruise_ratio 0.5, scv 5"
+row() { printf "%-30s %7s s wall %6s s user %6s s sys %6s MB   %s\n" "$@"; }
+row "klipper_estimator estimate" "$t_ke" "$u_ke" "$s_ke_sys" "$m_ke" "estimate $s_ke s"
+row "gweave sim (+ steps, heaters)" "$t_gw" "$u_gw" "$s_gw_sys" "$m_gw" \
+  "estimate $s_gw s ($s_gw_all s with heating and homing)"
+echo "klipper_estimator / gweave: $(ratio "$t_ke" "$t_gw")x wall time, $(ratio "$u_ke" "$u_gw")x user time," \
+  "$(ratio "$m_ke" "$m_gw")x peak memory; estimates differ by $d_s s ($d_ppm per million)"
