@@ -37,8 +37,8 @@ const ALL: &str = "allow_features = [\"unknown\", \"outer_wall\", \"inner_wall\"
 fn slic3r_absolute_e_first_change_by_hand() {
     let input = fixture("slic3r/slic3r_cone_2tool.gcode");
     let (out, r) = run(Rules::fixed(2.5).unwrap(), &input);
-    assert_eq!(r.changes.len(), 108);
-    let c = &r.changes[0];
+    assert_eq!(r.changes.total(), 108);
+    let c = &r.changes.kept()[0];
     // T1 was at line 553 after `G1 X109.750 Y109.550 E24.30781`; 2.5 mm back is E21.80781, inside
     // `G1 X104.913 Y87.264 E21.85317` (line 509, from X104.282 Y87.038 E21.79225).
     assert_eq!((c.change_lines.as_slice(), c.output_line, c.at_line), (&[553][..], 510, 509));
@@ -54,45 +54,45 @@ fn slic3r_absolute_e_first_change_by_hand() {
         lines(&out, 553, 4),
         ["G1 E14.30781 F2400.00000", "G92 E0", "G92 E0", "G1 E-2.00000 F2400.00000"]
     );
-    assert!(r.changes.iter().all(|c| c.feature == Feature::Unknown));
-    assert_eq!(r.changes.iter().filter(|c| c.shortfall_mm == 0.0).count(), 79);
+    assert!(r.changes.kept().iter().all(|c| c.feature == Feature::Unknown));
+    assert_eq!(r.changes.kept().iter().filter(|c| c.shortfall_mm == 0.0).count(), 79);
 }
 
 #[test]
 fn prusaslicer_relative_e_splits_the_e_word() {
     let input = fixture("prusaslicer/pr_bunny_3tool_rel.gcode");
     let (out, r) = run(Rules::fixed(2.5).unwrap(), &input);
-    assert_eq!(r.changes.len(), 793);
-    let c = &r.changes[1];
+    assert_eq!(r.changes.total(), 793);
+    let c = &r.changes.kept()[1];
     assert_eq!((c.from_tool, c.to_tool, c.feature), (2, 0, Feature::Bridge));
     // `G1 X70.555 Y86.738 E1.25223`: the last 0.04197 mm of it, after the change, completes 2.5 mm
     // with the three moves after it (0.02048 + 0.02501 + 1.20551 + 1.15498 + 0.05205).
     assert_eq!(lines(&out, 763, 3), ["G1 X70.82035 Y87.24949 E1.21026", "T0", "G1 X70.555 Y86.738 E0.04197"]);
     // The outer wall is a barrier by default: the change after it cannot move at all.
-    assert_eq!(r.changes[0].achieved_mm, 0.0);
-    assert_eq!(r.changes[0].stopped_by, Some("a feature that may not take the purge"));
+    assert_eq!(r.changes.kept()[0].achieved_mm, 0.0);
+    assert_eq!(r.changes.kept()[0].stopped_by, Some("a feature that may not take the purge"));
     // A change that cannot move still names its layer (the bench's "layer -" warnings).
-    assert_eq!(r.changes[0].layer, Some(0));
+    assert_eq!(r.changes.kept()[0].layer, Some(0));
     assert!(r.warnings.iter().any(|w| w.starts_with("layer 0, line 172: T0->T2 purge short by 2.500 mm")));
-    assert!(r.changes.iter().all(|c| c.layer.is_some()));
+    assert!(r.changes.kept().iter().all(|c| c.layer.is_some()));
     // Allowing every feature gives more room.
     let (_, all) = run(config(&format!("purge_mm = 2.5\n{ALL}")), &input);
     assert!(all.achieved_mm > r.achieved_mm + 100.0, "{} vs {}", all.achieved_mm, r.achieved_mm);
-    assert_eq!(all.changes[0].achieved_mm, 2.5);
+    assert_eq!(all.changes.kept()[0].achieved_mm, 2.5);
 }
 
 #[test]
 fn cura_dual_with_and_without_crossing_layers() {
     let input = fixture("cura/cura_dual.gcode");
     let (_, r) = run(Rules::fixed(2.5).unwrap(), &input);
-    assert_eq!((r.changes.len(), r.untouched_changes), (77, 0));
+    assert_eq!((r.changes.total(), r.untouched_changes), (77, 0));
     // T0 right after `;LAYER:1` cannot go back by default...
-    let c = &r.changes[1];
+    let c = &r.changes.kept()[1];
     assert_eq!((c.change_lines[0], c.achieved_mm), (4730, 0.0));
     assert_eq!(c.stopped_by, Some("a layer change"));
     // ...but may move into layer 0 when crossing is allowed.
     let (_, x) = run(config(&format!("purge_mm = 2.5\ncross_layers = true\n{ALL}")), &input);
-    assert_eq!((x.changes[1].achieved_mm, x.changes[1].layer), (2.5, Some(0)));
+    assert_eq!((x.changes.kept()[1].achieved_mm, x.changes.kept()[1].layer), (2.5, Some(0)));
     assert!(x.achieved_mm > r.achieved_mm);
     assert!(x.max_window_lines < 2000, "{}", x.max_window_lines);
 }
@@ -103,7 +103,7 @@ fn marlin_mix_groups_move_together() {
     let input = "M83\n;LAYER:0\n;TYPE:FILL\nG1 X0 Y0\nG1 X10 E1\nG1 X20 E1\nG1 E-1\nG0 X30\nG1 E1\n\
                  M163 S0 P0.5\nM163 S1 P0.5\n; blue\nM164 S1\nT1\nG1 X40 E1\n";
     let (out, r) = run(Rules::fixed(1.5).unwrap(), input.as_bytes());
-    assert_eq!(r.changes[0].change_lines, [10, 11, 12, 13, 14]);
+    assert_eq!(r.changes.kept()[0].change_lines, [10, 11, 12, 13, 14]);
     let text = String::from_utf8(out).unwrap();
     assert!(
         text.contains("G1 X5 E0.5\nM163 S0 P0.5\nM163 S1 P0.5\n; blue\nM164 S1\nT1\nG1 X10 E0.5\nG1 X20 E1\nG1 E-1\nG0 X30\nG1 E1\nG1 X40"),
@@ -112,17 +112,17 @@ fn marlin_mix_groups_move_together() {
     // M165 changes the active mix without a T; M567 the RepRapFirmware one.
     let m165 = "M83\n;LAYER:0\nG1 X0 Y0\nG1 X10 E2\nM165 A0.2 B0.8\nG1 X20 E1\n";
     let (out, r) = run(Rules::fixed(1.0).unwrap(), m165.as_bytes());
-    assert_eq!((r.changes.len(), r.changes[0].achieved_mm), (1, 1.0));
+    assert_eq!((r.changes.total(), r.changes.kept()[0].achieved_mm), (1, 1.0));
     assert!(String::from_utf8(out).unwrap().contains("G1 X5 E1\nM165 A0.2 B0.8\nG1 X10 E1\n"));
     let m567 = "M83\n;LAYER:0\nG1 X0 Y0\nG1 X10 E2\nM567 P0 E0.3:0.7\nG1 X20 E1\n";
     let (_, r) = run(Rules::fixed(1.0).unwrap(), m567.as_bytes());
-    assert_eq!(r.changes.len(), 1);
+    assert_eq!(r.changes.total(), 1);
     // Re-selecting the active tool, or storing a mix into an idle tool, is not a change, and a
     // later T1 may not move before the definition of tool 1.
     let idle = "M83\n;LAYER:0\nG1 X0 Y0\nG1 X10 E2\nT0\nM163 S0 P1\nM164 S1\nG1 X20 E1\nT1\nG1 X30 E1\n";
     let (out, r) = run(Rules::fixed(1.5).unwrap(), idle.as_bytes());
-    assert_eq!(r.changes.len(), 1);
-    assert_eq!((r.changes[0].achieved_mm, r.changes[0].shortfall_mm), (1.0, 0.5));
+    assert_eq!(r.changes.total(), 1);
+    assert_eq!((r.changes.kept()[0].achieved_mm, r.changes.kept()[0].shortfall_mm), (1.0, 0.5));
     assert!(String::from_utf8(out).unwrap().contains("M164 S1\nT1\nG1 X20 E1\n"));
 }
 
@@ -133,7 +133,7 @@ fn arcs_split_on_the_circle_absolute_and_relative() {
             "G90\n{mode}\n;LAYER:0\nG1 X10 Y0 F600\nG3 X0 Y10 I-10 J0 {e1}\nG2 X-10 Y0 R10 {e2}\nT1\nG1 X-20 E1\n"
         );
         let (out, r) = run(Rules::fixed(1.5).unwrap(), input.as_bytes());
-        let s = r.changes[0].split.as_ref().unwrap();
+        let s = r.changes.kept()[0].split.as_ref().unwrap();
         assert_eq!(s.line, 5);
         assert!((s.point_mm[0].hypot(s.point_mm[1]) - 10.0).abs() < 1e-9, "{s:?}");
         // 1 mm from the G2, 0.5 mm from the end of the G3 (t = 0.75), around the same centre.
@@ -150,7 +150,7 @@ fn retract_travel_unretract_is_never_split() {
     let input =
         ";LAYER:0\nM83\nG1 E-1\nG0 X10 Y10\nG1 E1\nG1 X20 E0.5\nG1 E-1\nG0 X0\nG1 E1\nG1 X5 E0.25\nT1\n";
     let (out, r) = run(Rules::fixed(2.0).unwrap(), input.as_bytes());
-    let c = &r.changes[0];
+    let c = &r.changes.kept()[0];
     assert_eq!((c.achieved_mm, c.shortfall_mm, c.at_line), (0.75, 1.25, 6));
     assert!(String::from_utf8(out).unwrap().contains("G0 X10 Y10\nG1 E1\nT1\nG1 X20 E0.5\n"));
     assert!(r.warnings[0].contains("line 11: T0->T1 purge short by 1.250 mm"), "{:?}", r.warnings);
@@ -161,7 +161,7 @@ fn markers_limit_the_work_to_the_print_proper() {
     let input = "M83\nG1 X0 Y0\nG1 X10 E5\nT1\n;begin\nG1 X20 E5\nT0\n;end\nG1 X30 E5\nT1\n";
     let rules = config("purge_mm = 1.0\nmarkers = [\"begin\", \"end\"]\n");
     let (out, r) = run(rules, input.as_bytes());
-    assert_eq!((r.changes.len(), r.untouched_changes), (1, 2));
+    assert_eq!((r.changes.total(), r.untouched_changes), (1, 2));
     assert!(String::from_utf8(out)
         .unwrap()
         .starts_with("M83\nG1 X0 Y0\nG1 X10 E5\nT1\n;begin\nG1 X18 E4\nT0\n"));
@@ -173,7 +173,7 @@ fn washout_predicts_the_transition() {
     let rules = config("purge_mm = 2.5\n[washout]\nchamber_mm3 = 1.0\ntolerance = 0.001\n");
     let input = ";LAYER:0\nM83\nG1 X0 Y0\nG1 X10 E1\nG1 X20 E1\nT1\nG1 X30 E1\n";
     let (_, r) = run(rules, input.as_bytes());
-    let c = &r.changes[0];
+    let c = &r.changes.kept()[0];
     assert!((c.residual_fraction.unwrap() - (-2.0 * 2.405_281_875_404_685f64).exp()).abs() < 1e-9, "{c:?}");
     // Clean at 1000 ln(1000)... here V ln(1/eps) = 6.9078 mm^3; 2.4053 mm^3 was purged.
     let area = std::f64::consts::PI * 1.75 * 1.75 / 4.0;
@@ -188,7 +188,7 @@ fn unmoved_changes_report_their_layer_in_repeated_layers() {
     let layer = ";LAYER_CHANGE\n;Z:0.2\n;TYPE:External perimeter\nG1 X0 Y0\nG1 X10 E1\nT1\nG1 X20 E1\nT0\n";
     let input = format!(";generated by PrusaSlicer\nM83\n{}", layer.repeat(3));
     let (_, r) = run(Rules::fixed(1.0).unwrap(), input.as_bytes());
-    let got: Vec<_> = r.changes.iter().map(|c| (c.layer, c.moved_mm, c.feature)).collect();
+    let got: Vec<_> = r.changes.kept().iter().map(|c| (c.layer, c.moved_mm, c.feature)).collect();
     let want: Vec<_> = [0, 0, 1, 1, 2, 2].iter().map(|&l| (Some(l), 0.0, Feature::OuterWall)).collect();
     assert_eq!(got, want);
     assert!(r.warnings.iter().all(|w| !w.starts_with("layer -")), "{:?}", r.warnings);
@@ -209,15 +209,19 @@ fn fallbacks_purge_the_shortfall_and_return() {
         let (_, partial) = run(Rules::fixed(2.5).unwrap(), &input);
         for fallback in ["block", "tower"] {
             let (out, r) = run(config(&format!("purge_mm = 2.5\nfallback = \"{fallback}\"\n")), &input);
-            assert_eq!(r.changes.len(), changes, "{file}");
+            assert_eq!(r.changes.total(), changes, "{file}");
             // Every change gets its whole purge; the moved part is the same as without fallback.
-            assert!(r.changes.iter().all(|c| c.shortfall_mm == 0.0 && (c.achieved_mm - 2.5).abs() < 1e-12));
+            assert!(r
+                .changes
+                .kept()
+                .iter()
+                .all(|c| c.shortfall_mm == 0.0 && (c.achieved_mm - 2.5).abs() < 1e-12));
             assert!((r.moved_mm - partial.achieved_mm).abs() < 1e-9, "{file}");
             assert!((r.fallback_mm - partial.shortfall_mm).abs() < 1e-9, "{file}");
             assert!(r.fallback_mm > 1.0, "{file}: {}", r.fallback_mm);
-            let short = r.changes.iter().filter(|c| c.fallback_mm > 0.0).count();
-            assert_eq!(short, partial.changes.iter().filter(|c| c.shortfall_mm > 1e-9).count());
-            assert!(r.changes.iter().all(|c| (c.fallback_mm > 0.0) == (c.fallback_lines > 0)));
+            let short = r.changes.kept().iter().filter(|c| c.fallback_mm > 0.0).count();
+            assert_eq!(short, partial.changes.kept().iter().filter(|c| c.shortfall_mm > 1e-9).count());
+            assert!(r.changes.kept().iter().all(|c| (c.fallback_mm > 0.0) == (c.fallback_lines > 0)));
             let text = String::from_utf8_lossy(&out);
             assert_eq!(text.matches("; gweave purge-shift: purge T").count(), short, "{file} {fallback}");
             assert_eq!(r.saved_mm, r.moved_mm);
@@ -231,7 +235,7 @@ fn fallbacks_purge_the_shortfall_and_return() {
 fn block_fallback_by_hand() {
     let input = "M83\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X0 Y0 Z0.3 F1800\nG1 X10 E1\nT1\nG1 X30 E1\n";
     let (out, r) = run(config("purge_mm = 1.5\nfallback = \"block\"\n"), input.as_bytes());
-    let c = &r.changes[0];
+    let c = &r.changes.kept()[0];
     assert_eq!((c.moved_mm, c.fallback_mm, c.fallback_lines, c.output_line), (1.0, 0.5, 13, 5));
     assert_eq!(
         String::from_utf8(out).unwrap(),
@@ -253,10 +257,10 @@ fn tower_fallback_beside_the_part() {
         "G90\nM82\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X50 Y60 Z0.3 F1800\nG1 X70 E1\nG1 E0.2 F2100\nG0 Y62\n\
                  G1 E1 F2100\nG1 Y80 E2\nG1 E-3 F3000\nT1\nG0 X50\nG1 E2\nG1 Y60 E3\n";
     let (_, r) = run(config("purge_mm = 1.5\nfallback = \"tower\"\n"), input.as_bytes());
-    let c = &r.changes[0];
+    let c = &r.changes.kept()[0];
     assert_eq!((c.moved_mm, c.fallback_mm, c.fallback_lines), (1.5, 0.0, 0), "the full purge moved");
     let (out, r) = run(config("purge_mm = 3.5\nfallback = \"tower\"\n"), input.as_bytes());
-    let c = &r.changes[0];
+    let c = &r.changes.kept()[0];
     assert!((c.moved_mm - 2.0).abs() < 1e-12 && (c.fallback_mm - 1.5).abs() < 1e-12, "{c:?}");
     let text = String::from_utf8(out).unwrap();
     // 1.5 mm of 1.75 mm filament at 0.5 x 0.2 mm is a 36.08 mm path: 9 rows of 3.564 mm.
@@ -305,9 +309,10 @@ fn after_gweave_mix_on_the_cura_torus() {
         let direct = String::from_utf8_lossy(&mixed).lines().filter(|l| l.starts_with("M165 ")).count();
         assert_eq!(direct > changes as usize, profile.contains("marlin-direct"), "{direct} M165 lines");
         let (_, r) = run(Rules::fixed(2.5).unwrap(), &mixed);
-        assert_eq!(r.changes.len(), changes as usize, "{profile}");
-        assert!(r.changes.iter().all(|c| c.moved_mm == 0.0 && c.stopped_by == Some("a layer change")));
+        assert_eq!(r.changes.total(), changes as usize, "{profile}");
+        assert!(r.changes.kept().iter().all(|c| c.moved_mm == 0.0 && c.stopped_by == Some("a layer change")));
         // ... and the warnings say what to do about it.
+        assert_eq!(r.warnings.len(), changes as usize);
         assert!(r
             .warnings
             .iter()
@@ -317,17 +322,17 @@ fn after_gweave_mix_on_the_cura_torus() {
                 config(&format!("purge_mm = 2.5\ncross_layers = true\nfallback = \"{fallback}\"\n")),
                 &mixed,
             );
-            assert_eq!(r.changes.len(), changes as usize, "{profile}");
+            assert_eq!(r.changes.total(), changes as usize, "{profile}");
             // Where the previous layer ends in an outer wall (layers 8-18 of Cura's torus) the
             // change cannot move; elsewhere it finds the purge.
-            let moved = r.changes.iter().filter(|c| c.moved_mm > 0.0).count();
-            assert_eq!((moved, r.changes.iter().all(|c| c.layer.is_some())), (want_moved, true));
+            let moved = r.changes.kept().iter().filter(|c| c.moved_mm > 0.0).count();
+            assert_eq!((moved, r.changes.kept().iter().all(|c| c.layer.is_some())), (want_moved, true));
             assert!((r.moved_mm - want_moved_mm).abs() < 1e-9, "{}", r.moved_mm);
             // Mix's purge blocks are all still there, one per change.
             let text = String::from_utf8_lossy(&out);
             assert_eq!(text.matches("; gweave mix: purge").count(), changes as usize);
             if fallback == "block" {
-                assert!(r.changes.iter().all(|c| c.shortfall_mm == 0.0 && c.achieved_mm == 2.5));
+                assert!(r.changes.kept().iter().all(|c| c.shortfall_mm == 0.0 && c.achieved_mm == 2.5));
             }
         }
     }

@@ -256,7 +256,7 @@ def purge_shift(
             allow_features=None if allow_features is None else list(allow_features),
             markers=pair,
             fallback=fallback,
-            tower_at=None if tower_at is None else (float(tower_at[0]), float(tower_at[1])),
+            tower_at=None if tower_at is None else tuple(map(float, tower_at)),
         )
     )
 

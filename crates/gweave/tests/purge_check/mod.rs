@@ -90,7 +90,7 @@ fn off_path_mm(mv: &Move, p: [f64; 2]) -> (f64, bool) {
 /// The printed extrusion before each output line, and in all, without the fallbacks' lines.
 fn printed_without_fallbacks(b: &Replay, report: &PurgeShiftReport) -> (Vec<f64>, f64) {
     let mut inserted = std::collections::BTreeSet::new();
-    for c in report.changes.iter() {
+    for c in report.changes.kept().iter() {
         let first = (c.output_line - 1) as usize + c.change_lines.len();
         inserted.extend(first..first + c.fallback_lines as usize);
     }
@@ -112,10 +112,12 @@ fn printed_without_fallbacks(b: &Replay, report: &PurgeShiftReport) -> (Vec<f64>
 /// position (XYZ exactly, E to the 1e-6 mm the lines are written with), and feed exactly the
 /// reported `fallback_mm`: the file's net extrusion grows by their sum, nothing else changes.
 pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &StateOptions) -> Vec<f64> {
+    // Every change is checked, so every change must be in memory (test files are small).
+    assert_eq!(report.changes.spilled(), 0, "the checker sees only the changes kept in memory");
     let a = replay(input, options);
     let b = replay(output, options);
     let (b_printed_before, b_printed) = printed_without_fallbacks(&b, report);
-    let fallback_mm: f64 = report.changes.iter().map(|c| c.fallback_mm).sum();
+    let fallback_mm: f64 = report.changes.kept().iter().map(|c| c.fallback_mm).sum();
     assert!((fallback_mm - report.fallback_mm).abs() < 1e-9, "fallback total {}", report.fallback_mm);
     // Extrusion over the whole file is unchanged, printed and net, but for the fallback purges.
     assert!((a.printed_mm - b_printed).abs() < 1e-6, "printed {} -> {}", a.printed_mm, b_printed);
@@ -132,7 +134,7 @@ pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &S
     let mut removed_in = std::collections::BTreeSet::new();
     let mut removed_out = std::collections::BTreeSet::new();
     let mut measured = Vec::new();
-    for c in report.changes.iter() {
+    for c in report.changes.kept().iter() {
         let n = c.change_lines.len() as u64;
         let k = c.fallback_lines;
         removed_in.extend(c.change_lines.iter().copied());

@@ -517,10 +517,10 @@ mod tests {
         assert_eq!(err("purge_mm = 1.0\npurge_mm3 = 2.0"), ConfigError::BothPurges);
         assert_eq!(err("purge_mm = 1.0\nfallback = \"wipe\""), ConfigError::Fallback("wipe".into()));
         assert_eq!(err("purge_mm = 1.0\n[tower]\nx_mm = 5.0"), ConfigError::Tower);
-        assert!(matches!(
+        assert_eq!(
             err("purge_mm = 1.0\n[block]\nlift_mm = -1.0"),
-            ConfigError::Negative { what: "block.lift_mm", .. }
-        ));
+            ConfigError::Negative { what: "block.lift_mm", value: -1.0 }
+        );
         assert!(matches!(err("purge_mm = 1.0\nallow_features = [\"walls\"]"), ConfigError::Feature(_)));
         assert!(matches!(err("purge_mm = 1.0\nbogus = 1"), ConfigError::Toml(_)));
         assert_eq!(err("purge_mm = 1.0\nmarkers = [\"\", \"end\"]"), ConfigError::Markers);

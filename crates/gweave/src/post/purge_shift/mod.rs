@@ -46,7 +46,7 @@
 //! let (out, report) = purge_shift_bytes(Rules::fixed(1.5).unwrap(), input.as_bytes()).unwrap();
 //! let out = String::from_utf8(out).unwrap();
 //! assert_eq!(out, "M83\n;LAYER_CHANGE\n;TYPE:Perimeter\nG1 X0 Y0\nG1 X5 E0.5\nT1\nG1 X10 E0.5\nG1 X20 E1\nG1 X30 E1\n");
-//! assert_eq!(report.changes[0].achieved_mm, 1.5);
+//! assert_eq!(report.changes.kept()[0].achieved_mm, 1.5);
 //! ```
 
 pub mod config;

@@ -7,7 +7,6 @@
 
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, BufWriter, Seek, SeekFrom, Write};
-use std::ops::Deref;
 
 use serde::ser::{Error as _, SerializeSeq};
 use serde::{Serialize, Serializer};
@@ -96,6 +95,12 @@ impl ChangeLog {
         self.total
     }
 
+    /// The entries held in memory: the first [`KEPT_CHANGES`] changes (all of them when
+    /// [`Self::spilled`] is 0; the rest are only in the JSON report).
+    pub fn kept(&self) -> &[ChangeReport] {
+        &self.kept
+    }
+
     /// Entries in the spill file (0 for a file with up to [`KEPT_CHANGES`] changes).
     pub fn spilled(&self) -> usize {
         self.total - self.kept.len()
@@ -104,21 +109,6 @@ impl ChangeLog {
     /// Writes out what is buffered of the spill file (the pass calls it at the end).
     pub fn flush(&mut self) -> io::Result<()> {
         self.spill.as_mut().map_or(Ok(()), |s| s.flush())
-    }
-}
-
-impl Deref for ChangeLog {
-    type Target = [ChangeReport];
-    fn deref(&self) -> &[ChangeReport] {
-        &self.kept
-    }
-}
-
-impl<'a> IntoIterator for &'a ChangeLog {
-    type Item = &'a ChangeReport;
-    type IntoIter = std::slice::Iter<'a, ChangeReport>;
-    fn into_iter(self) -> Self::IntoIter {
-        self.kept.iter()
     }
 }
 
@@ -219,7 +209,7 @@ impl PurgeShiftReport {
             let _ = writeln!(s, "outside print    {} changes left alone", self.untouched_changes);
         }
         let _ = writeln!(s, "window           at most {} lines held", self.max_window_lines);
-        for c in self.changes.iter().take(20) {
+        for c in self.changes.kept().iter().take(20) {
             let layer = c.layer.map_or("-".to_string(), |l| l.to_string());
             let _ = writeln!(
                 s,
