@@ -156,10 +156,11 @@ mod tests {
         assert!((trace.mean_mm_s(mid) - 50.0).abs() < 1e-9);
         assert_eq!(trace.buckets()[mid].max_mm_s, 50.0);
         // Extrude-only moves take time at speed 0.
-        trace.add(3.1, &block(5.0, 500.0, 30.0, MoveKind::ExtrudeOnly));
+        let extrude = block(5.0, 500.0, 30.0, MoveKind::ExtrudeOnly);
+        trace.add(3.1, &extrude);
         let total_after: f64 = trace.buckets().iter().map(|b| b.distance_mm).sum();
         assert_eq!(total_after, total);
-        assert!(trace.end_s() > 3.1);
+        assert_eq!(trace.end_s(), 3.1 + extrude.duration_s());
     }
 
     #[test]
@@ -172,7 +173,13 @@ mod tests {
             t += b.duration_s();
         }
         assert!(trace.buckets().len() <= MAX_BUCKETS);
-        assert!(trace.bucket_s() > FIRST_BUCKET_S);
+        // The first bucket width doubled until the run fits in MAX_BUCKETS.
+        let mut want_s = FIRST_BUCKET_S;
+        while (t / want_s).ceil() as usize > MAX_BUCKETS {
+            want_s *= 2.0;
+        }
+        assert!(want_s > FIRST_BUCKET_S);
+        assert_eq!(trace.bucket_s(), want_s);
         let total: f64 = trace.buckets().iter().map(|b| b.distance_mm).sum();
         assert!((total - 500_000.0).abs() < 1e-6, "{total}");
         assert!(trace.buckets().iter().all(|b| b.max_mm_s <= 100.0 + 1e-9));

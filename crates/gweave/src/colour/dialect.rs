@@ -327,6 +327,12 @@ impl MixingState {
     pub fn follow_line(&mut self, raw: &[u8], block: &Block) -> Result<Option<MixingUpdate>, DialectError> {
         let Command::Code { letter, number, sub: None } = block.command else { return Ok(None) };
         if letter == b'T' {
+            // A RepRapFirmware tool with an M567 mix selects that mix, whatever Marlin's virtual
+            // tools hold (and however many there are).
+            if let Some(ratios) = self.rrf_mix(number) {
+                let (ratios, sum) = (ratios.to_vec(), ratios.iter().sum());
+                return Ok(Some(MixingUpdate::RrfMix { tool: number, ratios, sum }));
+            }
             let tool = number as usize;
             return self.select_tool(tool).map(|mix| Some(MixingUpdate::Stored { tool, mix: mix.clone() }));
         }
@@ -396,6 +402,12 @@ mod tests {
         assert_eq!(state.rrf_mix(1), Some(&[0.2, 0.8][..]));
         assert!(follow(&mut state, "T9").is_err(), "no such virtual tool");
         assert_eq!(state.active_tool(), 2, "a refused line changes nothing");
+        // A tool with an M567 mix selects it, even past the virtual tools.
+        follow(&mut state, "M567 P20 E0.6:0.4").unwrap();
+        assert_eq!(
+            follow(&mut state, "T20"),
+            Ok(Some(MixingUpdate::RrfMix { tool: 20, ratios: vec![0.6, 0.4], sum: 1.0 }))
+        );
     }
 
     fn close(got: &[f64], want: &[f64]) {

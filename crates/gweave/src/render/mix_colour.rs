@@ -70,10 +70,6 @@ impl MixColours {
         Self::from_profile(&MixProfile::default()).expect("the default profile is valid")
     }
 
-    pub fn model(&self) -> &MixingModel {
-        &self.model
-    }
-
     /// The predicted colour of `ratios` (one per input, summing to 1).
     pub fn predict(&self, ratios: &[f64]) -> Result<Srgb8, MixError> {
         self.model.predict(&Mix::new(ratios)?)

@@ -132,7 +132,7 @@ impl PreviewOptions {
     }
 }
 
-/// The most segments a picture or viewer keeps (about 80 MB with their strokes): twice the
+/// The most segments a picture or viewer keeps (80 MB, 140 MB with their strokes): twice the
 /// pixels of a 1200 x 900 picture, so a file of any size is drawn in bounded memory and loses only
 /// detail finer than a pixel or two (see [`ToolpathOptions::max_segments`]).
 const MAX_SEGMENTS: usize = 1 << 21;
