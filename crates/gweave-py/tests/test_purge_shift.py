@@ -40,6 +40,10 @@ def test_fallbacks_purge_the_shortfall(data, tmp_path):
     assert "\nG0 X150 Y20 F6000\n" in text
     b = gweave.purge_shift(src, tmp_path / "block.gcode", purge=2.5, fallback="block")
     assert b["fallback_mm"] == r["fallback_mm"] and b["moved_mm"] == r["moved_mm"]
+    # A corner is two numbers, as for `--tower-at X,Y`.
+    for corner in [(150,), (150, 20, 0)]:
+        with pytest.raises(ValueError, match="tuple of length 2"):
+            gweave.purge_shift(src, tmp_path / "x.gcode", purge=2.5, fallback="tower", tower_at=corner)
 
 
 def test_refusals(data, tmp_path):
