@@ -44,6 +44,8 @@ pub enum ConfigError {
     NotPositive { what: &'static str, value: f64 },
     #[error("{what} must be zero or more, got {value}")]
     Negative { what: &'static str, value: f64 },
+    #[error("{what} must be a number, got {value}")]
+    NotFinite { what: &'static str, value: f64 },
     #[error("no purge amount: give purge_mm, purge_mm3, colours, pairs or a washout tolerance")]
     NoPurge,
     #[error("give either purge_mm or purge_mm3, not both")]
@@ -345,6 +347,17 @@ impl PurgeShiftConfig {
         if t.x_mm.is_some() != t.y_mm.is_some() {
             return Err(ConfigError::Tower);
         }
+        // TOML reads `inf` and `nan`: a purge spot must be a place on the bed.
+        for (what, v) in [
+            ("block.x_mm", Some(b.x_mm)),
+            ("block.y_mm", Some(b.y_mm)),
+            ("tower.x_mm", t.x_mm),
+            ("tower.y_mm", t.y_mm),
+        ] {
+            if let Some(value) = v.filter(|v| !v.is_finite()) {
+                return Err(ConfigError::NotFinite { what, value });
+            }
+        }
         let mut rules = Rules {
             default_mm,
             pairs,
@@ -521,6 +534,14 @@ mod tests {
             err("purge_mm = 1.0\n[block]\nlift_mm = -1.0"),
             ConfigError::Negative { what: "block.lift_mm", value: -1.0 }
         );
+        assert_eq!(
+            err("purge_mm = 1.0\n[block]\nx_mm = inf"),
+            ConfigError::NotFinite { what: "block.x_mm", value: f64::INFINITY }
+        );
+        assert!(matches!(
+            err("purge_mm = 1.0\n[tower]\nx_mm = 5.0\ny_mm = nan"),
+            ConfigError::NotFinite { what: "tower.y_mm", value } if value.is_nan()
+        ));
         assert!(matches!(err("purge_mm = 1.0\nallow_features = [\"walls\"]"), ConfigError::Feature(_)));
         assert!(matches!(err("purge_mm = 1.0\nbogus = 1"), ConfigError::Toml(_)));
         assert_eq!(err("purge_mm = 1.0\nmarkers = [\"\", \"end\"]"), ConfigError::Markers);
