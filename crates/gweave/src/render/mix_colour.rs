@@ -99,6 +99,9 @@ pub struct MixTracker {
     loaded: bool,
     /// The colour of each settled mix (quantised ratios), predicted once.
     cache: HashMap<Vec<u16>, Srgb8>,
+    /// The colour of `to` once the washout has settled, until the mix changes: most moves
+    /// print it, and need neither a ratio vector nor a cache lookup.
+    settled: Option<Srgb8>,
 }
 
 impl MixTracker {
@@ -115,6 +118,7 @@ impl MixTracker {
             purged_mm3: f64::INFINITY,
             loaded: false,
             cache: HashMap::new(),
+            settled: None,
         }
     }
 
@@ -129,6 +133,9 @@ impl MixTracker {
         if target != self.to && self.loaded {
             self.from = self.output(self.purged_mm3);
             self.purged_mm3 = 0.0;
+        }
+        if target != self.to {
+            self.settled = None;
         }
         self.to = target;
     }
@@ -162,14 +169,27 @@ impl MixTracker {
     pub fn extrude(&mut self, e_mm: f64) -> Srgb8 {
         self.loaded = true;
         let v_mm3 = filament_mm_to_mm3(e_mm.max(0.0), self.colours.filament_diameter_mm).unwrap_or(0.0);
-        let ratios = self.output(self.purged_mm3 + v_mm3 / 2.0);
+        let mid_mm3 = self.purged_mm3 + v_mm3 / 2.0;
         self.purged_mm3 += v_mm3;
+        let settled = self.colours.washout.residual_fraction(mid_mm3) < SETTLED;
+        if let (true, Some(c)) = (settled, self.settled) {
+            return c;
+        }
+        let c = self.colour_of(&self.output(mid_mm3));
+        if settled {
+            self.settled = Some(c);
+        }
+        c
+    }
+
+    /// The predicted colour of `ratios`, through the cache.
+    fn colour_of(&mut self, ratios: &[f64]) -> Srgb8 {
         // 1/4096 steps: finer than any colour difference the model can show in 8 bits.
         let key: Vec<u16> = ratios.iter().map(|r| (r * 4096.0).round() as u16).collect();
         if let Some(&c) = self.cache.get(&key) {
             return c;
         }
-        let c = self.colours.predict(&ratios).unwrap_or(Srgb8::new(0x80, 0x80, 0x80));
+        let c = self.colours.predict(ratios).unwrap_or(Srgb8::new(0x80, 0x80, 0x80));
         if self.cache.len() < 1 << 16 {
             self.cache.insert(key, c);
         }
