@@ -74,6 +74,8 @@ pub struct StatsPass {
     lines: u64,
     extruded_mm: Vec<f64>,
     bounds: Option<Bounds>,
+    /// The last point added to `bounds`.
+    last_grown: [f64; 3],
     tool_changes: u32,
     print_mm: f64,
     travel_mm: f64,
@@ -193,8 +195,13 @@ impl Pass for StatsPass {
                     }
                     self.extruded_mm[tool] += e_mm;
                     self.print_mm += len_mm;
-                    self.grow_bounds(&[m.from[X], m.from[Y], m.from[Z]]);
-                    self.grow_bounds(&[m.to[X], m.to[Y], m.to[Z]]);
+                    // Extrusions mostly follow one another: the start is the last end, already in.
+                    let from = [m.from[X], m.from[Y], m.from[Z]];
+                    if self.bounds.is_none() || from != self.last_grown {
+                        self.grow_bounds(from);
+                    }
+                    self.last_grown = [m.to[X], m.to[Y], m.to[Z]];
+                    self.grow_bounds(self.last_grown);
                 } else {
                     self.travel_mm += len_mm;
                 }
@@ -217,11 +224,18 @@ impl Pass for StatsPass {
 }
 
 impl StatsPass {
-    fn grow_bounds(&mut self, p: &[f64; 3]) {
-        let b = self.bounds.get_or_insert(Bounds { min: *p, max: *p });
-        for (i, &v) in p.iter().enumerate() {
-            b.min[i] = b.min[i].min(v);
-            b.max[i] = b.max[i].max(v);
+    #[inline]
+    fn grow_bounds(&mut self, p: [f64; 3]) {
+        let b = self.bounds.get_or_insert(Bounds { min: p, max: p });
+        // Plain comparisons rather than f64::min/max: positions are finite (the lexer refuses
+        // NaN and infinities), and these compile to single min/max instructions.
+        for (i, v) in p.into_iter().enumerate() {
+            if v < b.min[i] {
+                b.min[i] = v;
+            }
+            if v > b.max[i] {
+                b.max[i] = v;
+            }
         }
     }
 }

@@ -29,38 +29,192 @@ pub enum NumberError {
 /// number (the `e` is then the next word's letter, as firmware reads it).
 #[inline]
 pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
+    scan_at(bytes, 0)
+}
+
+/// [`scan`] for the number that starts at `at` in `line`; returns the value and the index in
+/// `line` where the number ends. Seeing the whole line lets short numbers near its end be read
+/// eight bytes at a time too.
+#[inline(always)]
+pub fn scan_at(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
+    let negative = line.get(at) == Some(&b'-');
+    if let Some((value, end)) = eight(line, at + usize::from(negative)) {
+        return Ok((if negative { -value } else { value }, end));
+    }
+    scan_any(&line[at..]).map(|(value, used)| (value, at + used))
+}
+
+/// 10^0 ..= 10^7, for joining an integer part to a fraction of up to seven digits.
+const POW10_INT: [u64; 8] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000];
+
+const ONES: u64 = 0x0101_0101_0101_0101;
+const HIGH_BITS: u64 = 0x8080_8080_8080_8080;
+
+/// Reads `digits? (. digits?)?` with 1 to 7 digits, all within the 8 bytes from `start`, in a
+/// few register operations instead of a loop per digit (SWAR: SIMD within a register). Most
+/// numbers slicers write fit (`142.303`, `2.43766`, `.04235`, `1800`). Anything else (longer,
+/// glued to a second point or a sign, no digits) is `None` and goes through [`scan_any`].
+#[inline(always)]
+fn eight(line: &[u8], start: usize) -> Option<(f64, usize)> {
+    let w = window(line, start)?;
+    // Byte k of `w` is line[start + k]; XOR with '0' maps digits to 0..=9.
+    let mut t = w ^ (ONES * u64::from(b'0'));
+    let non_digit = non_digits(t);
+    let first = non_digit.trailing_zeros() / 8;
+    if first == 8 {
+        return None;
+    }
+    let (digits, frac_digits, end) = if (w >> (8 * first)) as u8 == b'.' {
+        let stop = (non_digit & !(0x80 << (8 * first))).trailing_zeros() / 8;
+        if stop == 8 {
+            return long_fraction(line, start, first, t);
+        }
+        // Close the gap of the point: the bytes above it move down one.
+        let below = (1u64 << (8 * first)) - 1;
+        t = (t & below) | ((t >> 8) & !below);
+        (stop - 1, stop - first - 1, stop)
+    } else {
+        (first, 0, first)
+    };
+    if digits == 0 || is_glued((w >> (8 * end)) as u8) {
+        return None;
+    }
+    // Keep the digits, most significant first in byte 0, padded with leading zeros to eight.
+    let mantissa = eight_digits(t << (8 * (8 - digits)));
+    Some((mantissa as f64 / POW10[frac_digits as usize], start + end as usize))
+}
+
+/// A number whose fraction runs past the first eight bytes (`19.25233`, `123.45678`): the
+/// fraction is read from a second window just past the point and joined to the integer part.
+#[inline(always)]
+fn long_fraction(line: &[u8], start: usize, int_digits: u32, t: u64) -> Option<(f64, usize)> {
+    let frac_at = start + int_digits as usize + 1;
+    let w = window(line, frac_at)?;
+    let tf = w ^ (ONES * u64::from(b'0'));
+    let frac_digits = non_digits(tf).trailing_zeros() / 8;
+    if frac_digits == 8 || frac_digits == 0 || int_digits + frac_digits > 15 {
+        return None;
+    }
+    if is_glued((w >> (8 * frac_digits)) as u8) {
+        return None;
+    }
+    let int = if int_digits == 0 { 0 } else { eight_digits(t << (8 * (8 - int_digits))) };
+    let frac = eight_digits(tf << (8 * (8 - frac_digits)));
+    let mantissa = int * POW10_INT[frac_digits as usize] + frac;
+    Some(((mantissa as i64) as f64 / POW10[frac_digits as usize], frac_at + frac_digits as usize))
+}
+
+/// The high bit of every byte of `t` (digits XOR '0') that is not a digit: a digit is below 10
+/// after the XOR, so adding 0x76 (0x80 - 10) to a byte's low 7 bits sets its high bit otherwise.
+#[inline(always)]
+fn non_digits(t: u64) -> u64 {
+    (((t & !HIGH_BITS) + ONES * 0x76) | t) & HIGH_BITS
+}
+
+/// A second point or a sign right after a number: a typo that [`scan_any`] reports.
+#[inline(always)]
+fn is_glued(next: u8) -> bool {
+    matches!(next, b'.' | b'+' | b'-')
+}
+
+/// The 8 bytes of `line` from `start`, as a little-endian word; past the end of the line the
+/// bytes read as 0 (not a digit, so a number ends there). `None` for lines under 8 bytes.
+#[inline(always)]
+fn window(line: &[u8], start: usize) -> Option<u64> {
+    if let Some(bytes) = line.get(start..start + 8) {
+        return Some(u64::from_le_bytes(bytes.try_into().ok()?));
+    }
+    let len = line.len();
+    if start >= len {
+        return None;
+    }
+    let last: [u8; 8] = line.get(len.checked_sub(8)?..)?.try_into().ok()?;
+    Some(u64::from_le_bytes(last) >> (8 * (start + 8 - len)))
+}
+
+/// Eight decimal digits (byte 0 the most significant, each 0..=9) to their value: pairs, then
+/// fours, then all eight, each step one multiply that adds neighbours at their weights.
+#[inline(always)]
+fn eight_digits(t: u64) -> u64 {
+    let pairs = t.wrapping_mul(10).wrapping_add(t >> 8);
+    let low = (pairs & 0x0000_00FF_0000_00FF).wrapping_mul(100 + (1_000_000 << 32));
+    let high = ((pairs >> 16) & 0x0000_00FF_0000_00FF).wrapping_mul(1 + (10_000 << 32));
+    low.wrapping_add(high) >> 32
+}
+
+/// Every number [`eight`] leaves: signs, long numbers, and the errors.
+#[cold]
+#[inline(never)]
+fn scan_any(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
     let (negative, start) = match bytes.first() {
         Some(b'-') => (true, 1),
         Some(b'+') => (false, 1),
         _ => (false, 0),
     };
-    let mut mantissa: u64 = 0;
-    let int_digits = digits(&bytes[start..], &mut mantissa);
-    let mut i = start + int_digits;
-    let mut frac_digits = 0;
-    if bytes.get(i) == Some(&b'.') {
-        i += 1;
-        frac_digits = digits(&bytes[i..], &mut mantissa);
-        i += frac_digits;
-    }
-    if int_digits + frac_digits == 0 {
-        return Err(no_digits(&bytes[i..], i > 0 || bytes.first() == Some(&b'.')));
+    let d = Decimal::read(bytes, start);
+    if d.int_digits + d.frac_digits == 0 {
+        return Err(no_digits(&bytes[d.end..], d.end > 0 || bytes.first() == Some(&b'.')));
     }
     // A second point or sign glued to the number is a typo, not the start of another word.
-    if matches!(bytes.get(i), Some(b'.' | b'+' | b'-')) {
+    if d.is_glued(bytes) {
         return Err(NumberError::Malformed);
     }
-    if int_digits + frac_digits > 15 {
+    if d.is_long() {
         return scan_slow(bytes, negative, start);
     }
-    // At most 15 digits: the mantissa is below 2^53, exact, and one division rounds correctly.
-    let value = (mantissa as i64) as f64 / POW10[frac_digits];
-    Ok((if negative { -value } else { value }, i))
+    Ok((d.value(negative), d.end))
+}
+
+/// The digits of `digits? (. digits?)?` read as one integer mantissa, and where they end.
+struct Decimal {
+    mantissa: u64,
+    int_digits: usize,
+    frac_digits: usize,
+    end: usize,
+}
+
+impl Decimal {
+    #[inline(always)]
+    fn read(bytes: &[u8], start: usize) -> Decimal {
+        let mut mantissa: u64 = 0;
+        let int_digits = digits(&bytes[start..], &mut mantissa);
+        let mut end = start + int_digits;
+        let mut frac_digits = 0;
+        if bytes.get(end) == Some(&b'.') {
+            end += 1;
+            frac_digits = digits(&bytes[end..], &mut mantissa);
+            end += frac_digits;
+        }
+        Decimal { mantissa, int_digits, frac_digits, end }
+    }
+
+    /// Over 15 digits the mantissa may not be exact (or may have wrapped).
+    #[inline(always)]
+    fn is_long(&self) -> bool {
+        self.int_digits + self.frac_digits > 15
+    }
+
+    /// Followed by a second point or a sign: a typo, not the start of another word.
+    #[inline(always)]
+    fn is_glued(&self, bytes: &[u8]) -> bool {
+        bytes.get(self.end).is_some_and(|&b| is_glued(b))
+    }
+
+    /// At most 15 digits: the mantissa is below 2^53, exact, and one division rounds correctly.
+    #[inline(always)]
+    fn value(&self, negative: bool) -> f64 {
+        let value = (self.mantissa as i64) as f64 / POW10[self.frac_digits];
+        if negative {
+            -value
+        } else {
+            value
+        }
+    }
 }
 
 /// Accumulates the leading ASCII digits of `bytes` into `mantissa` (wrapping: callers with more
 /// than 15 digits take the slow path) and returns how many there were.
-#[inline]
+#[inline(always)]
 fn digits(bytes: &[u8], mantissa: &mut u64) -> usize {
     let mut n = 0;
     for &b in bytes {
@@ -257,7 +411,28 @@ mod tests {
         }
     }
 
+    #[test]
+    fn numbers_near_the_end_of_a_line_and_past_eight_bytes() {
+        let line = b"G1 X142.303 Y-175.1 E19.25233 F1234567.1234567 Z.5";
+        for (at, value, end) in
+            [(4, 142.303, 11), (13, -175.1, 19), (21, 19.25233, 29), (31, 1234567.1234567, 46), (48, 0.5, 50)]
+        {
+            assert_eq!(scan_at(line, at), Ok((value, end)), "at {at}");
+        }
+        assert_eq!(scan_at(b"X1", 1), Ok((1.0, 2)));
+        assert_eq!(scan_at(b"G1 X1234567.", 4), Ok((1234567.0, 12)));
+    }
+
     proptest::proptest! {
+        /// The eight-byte reader gives what the general rules give, for any bytes at any place.
+        #[test]
+        fn scan_at_agrees_with_the_general_rules(prefix in "[ XG0-9.]{0,10}", number in "[+-]?[0-9]{0,17}(\\.[0-9]{0,17})?", suffix in "[ .+-X0-9]{0,3}") {
+            let line = format!("{prefix}{number}{suffix}");
+            let at = prefix.len();
+            let general = scan_any(&line.as_bytes()[at..]).map(|(v, used)| (v, at + used));
+            proptest::prop_assert_eq!(scan_at(line.as_bytes(), at), general);
+        }
+
         #[test]
         fn scan_matches_std_for_any_decimal(text in "[+-]?[0-9]{0,20}(\\.[0-9]{0,20})?") {
             let digits = text.bytes().filter(u8::is_ascii_digit).count();

@@ -18,6 +18,36 @@ pub struct RawLine<'a> {
 
 const CHUNK: usize = 1 << 20;
 
+/// Finds the `\n` that ends a line. G-code lines are a few dozen bytes, so the generic
+/// `memchr` (a call, a dispatch and an alignment prologue before its 64-byte loop) costs more
+/// than the search: on x86-64 the first 256 bytes are tested 16 at a time inline, with SSE2
+/// (part of the architecture), and only longer lines go to `memchr`.
+#[inline(always)]
+fn find_newline(haystack: &[u8]) -> Option<usize> {
+    #[allow(unused_mut)]
+    let mut i = 0;
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cmpeq_epi8, _mm_loadu_si128, _mm_movemask_epi8, _mm_set1_epi8};
+        while let Some(chunk) = haystack.get(i..i + 16) {
+            // SAFETY: SSE2 is always present on x86-64, and `chunk` holds the 16 bytes the
+            // unaligned load reads.
+            let mask = unsafe {
+                let bytes = _mm_loadu_si128(chunk.as_ptr().cast());
+                _mm_movemask_epi8(_mm_cmpeq_epi8(bytes, _mm_set1_epi8(b'\n' as i8)))
+            };
+            if mask != 0 {
+                return Some(i + mask.trailing_zeros() as usize);
+            }
+            i += 16;
+            if i == 256 {
+                break;
+            }
+        }
+    }
+    memchr::memchr(b'\n', &haystack[i..]).map(|at| i + at)
+}
+
 /// Reads lines from `R` without ever holding more than one chunk (1 MiB) plus the longest line.
 pub struct LineReader<R> {
     inner: R,
@@ -40,9 +70,10 @@ impl<R: Read> LineReader<R> {
     }
 
     /// The next line, or `None` at the end of the input.
+    #[inline]
     pub fn next_line(&mut self) -> io::Result<Option<RawLine<'_>>> {
         loop {
-            if let Some(nl) = memchr::memchr(b'\n', &self.buf[self.start..self.end]) {
+            if let Some(nl) = find_newline(&self.buf[self.start..self.end]) {
                 let line_start = self.start;
                 let nl = line_start + nl;
                 self.start = nl + 1;
@@ -61,6 +92,7 @@ impl<R: Read> LineReader<R> {
     }
 
     /// Builds the line for `buf[from..to]` (`to` is past the `\n`, if any) and advances counters.
+    #[inline]
     fn emit(&mut self, from: usize, to: usize) -> RawLine<'_> {
         let whole = &self.buf[from..to];
         let content_len = match whole {
@@ -75,6 +107,7 @@ impl<R: Read> LineReader<R> {
     }
 
     /// Moves the unread tail to the front, grows the buffer if one line fills it, and reads more.
+    #[inline(never)]
     fn refill(&mut self) -> io::Result<()> {
         if self.start > 0 {
             self.buf.copy_within(self.start..self.end, 0);
@@ -124,6 +157,17 @@ mod tests {
         assert_eq!(lines.len(), 4);
         assert!(collect(b"").is_empty());
         assert_eq!(collect(b"\r").len(), 1);
+    }
+
+    #[test]
+    fn finds_the_newline_at_every_offset() {
+        for len in 0..600 {
+            let mut text = vec![b'x'; len];
+            assert_eq!(find_newline(&text), None);
+            text.push(b'\n');
+            text.extend_from_slice(b"tail\n");
+            assert_eq!(find_newline(&text), Some(len), "line of {len} bytes");
+        }
     }
 
     #[test]

@@ -417,53 +417,55 @@ impl State {
         if let Some(f) = block.get(b'F') {
             self.feed_mm_min = self.to_mm(f);
         }
-        let from = self.pos;
-        let mut to = from;
+        let mut to = self.pos;
         let mut any = false;
+        // Multiplying by 1 is exact, so one multiply serves both units without a branch.
+        let scale = if self.inches { MM_PER_INCH } else { 1.0 };
+        let (relative_xyz, relative_e) = (!self.absolute, self.relative_e());
         for w in &block.words {
             let Some(i) = axis_of(w.letter) else { continue };
             let Value::Number(v) = w.value else { continue };
-            let v = self.to_mm(v);
-            let relative = if i == E { self.relative_e() } else { !self.absolute };
+            let v = v * scale;
+            let relative = if i == E { relative_e } else { relative_xyz };
             to[i] = if relative { to[i] + v } else { v };
             any = true;
         }
-        let path = match self.motion {
-            Motion::ArcCw | Motion::ArcCcw => {
-                let cw = self.motion == Motion::ArcCw;
-                let start = [from[X], from[Y]];
-                let end = [to[X], to[Y]];
-                let arc = match block.get(b'R') {
-                    Some(r) => Arc::from_radius(start, end, self.to_mm(r), cw),
-                    None => {
-                        let ij = [
-                            self.to_mm(block.get(b'I').unwrap_or(0.0)),
-                            self.to_mm(block.get(b'J').unwrap_or(0.0)),
-                        ];
-                        Arc::from_offset(start, end, ij, cw)
-                    }
-                };
-                match arc {
-                    Some(arc) => {
-                        any = true;
-                        Path::Arc(arc)
-                    }
-                    None => Path::Line,
-                }
+        let mut path = Path::Line;
+        if matches!(self.motion, Motion::ArcCw | Motion::ArcCcw) {
+            if let Some(arc) = self.arc(block, &to) {
+                path = Path::Arc(arc);
+                any = true;
             }
-            _ => Path::Line,
-        };
+        }
         if !any {
             return;
         }
-        self.pos = to;
+        // Built in place from the current position: a `Move` is large, and copies of it show.
         self.effect = Effect::Move(Move {
-            from,
+            from: self.pos,
             to,
             path,
             rapid: self.motion == Motion::Rapid,
             feed_mm_min: self.feed_mm_min,
-        })
+        });
+        self.pos = to;
+    }
+
+    /// The arc of a G2/G3 from the current position to `to`, from its R or I/J words; `None`
+    /// when they describe no arc (the move is then straight).
+    #[inline(never)]
+    fn arc(&self, block: &Block, to: &Position) -> Option<Arc> {
+        let cw = self.motion == Motion::ArcCw;
+        let start = [self.pos[X], self.pos[Y]];
+        let end = [to[X], to[Y]];
+        match block.get(b'R') {
+            Some(r) => Arc::from_radius(start, end, self.to_mm(r), cw),
+            None => {
+                let ij =
+                    [self.to_mm(block.get(b'I').unwrap_or(0.0)), self.to_mm(block.get(b'J').unwrap_or(0.0))];
+                Arc::from_offset(start, end, ij, cw)
+            }
+        }
     }
 }
 
