@@ -32,6 +32,17 @@ printf "%-22s %8s s %8s MB/s   %sx the floor's time, peak %s MB\n" "gweave stats
 printf "%-22s %8s s %8s MB/s   %sx the floor's time, peak %s MB\n" "gweave cat (identity)" "$t_cat" "$(mbps "$size" "$t_cat")" "$(ratio "$t_cat" "$t_wc")" "$(peak_mb "$GWEAVE" cat "$BIG" -o /dev/null -q)"
 printf "%-22s %8s s %8s MB/s   %sx the floor's time\n" "gweave check" "$t_check" "$(mbps "$size" "$t_check")" "$(ratio "$t_check" "$t_wc")"
 
+# Instructions per line do not depend on the machine's load, unlike the times above.
+command -v valgrind >/dev/null || { [ "$(id -u)" = 0 ] && apt-get install -y -qq valgrind >/dev/null || true; }
+if command -v valgrind >/dev/null; then
+  head -c 5000000 "$BIG" > "$DATA/first-5MB.gcode"
+  lines=$(wc -l < "$DATA/first-5MB.gcode")
+  for cmd in stats check; do
+    ir=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null "$GWEAVE" "$cmd" "$DATA/first-5MB.gcode" -q 2>&1 >/dev/null | awk '/refs:/ {gsub(",", "", $NF); print $NF}')
+    printf "%-22s %8s instructions per line (callgrind, first 5 MB)\n" "gweave $cmd" "$((ir / lines))"
+  done
+fi
+
 echo "== virtual printer: the same file is a 46-hour print (target: under 30 s with step counting)"
 t_sim=$(best 1 "$GWEAVE" sim "$BIG" -q --machine "$ROOT/bench/big-bed.toml")
 printf "%-22s %8s s %8s MB/s   peak %s MB\n" "gweave sim" "$t_sim" "$(mbps "$size" "$t_sim")" "$(peak_mb "$GWEAVE" sim "$BIG" -q --machine "$ROOT/bench/big-bed.toml")"
