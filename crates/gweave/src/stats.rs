@@ -227,8 +227,8 @@ impl StatsPass {
     #[inline]
     fn grow_bounds(&mut self, p: [f64; 3]) {
         let b = self.bounds.get_or_insert(Bounds { min: p, max: p });
-        // Plain comparisons rather than f64::min/max: positions are finite (the lexer refuses
-        // NaN and infinities), and these compile to single min/max instructions.
+        // Plain comparisons rather than f64::min/max (which also handle NaN, in several
+        // instructions): positions come from numbers the lexer has checked to be finite.
         for (i, v) in p.into_iter().enumerate() {
             if v < b.min[i] {
                 b.min[i] = v;

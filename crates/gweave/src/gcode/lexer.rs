@@ -40,6 +40,7 @@ pub fn parse_into(raw: &[u8], block: &mut Block) {
 
 /// The whole grammar, for every line [`plain_motion`] leaves.
 fn parse_general(raw: &[u8], block: &mut Block) {
+    // The fast path may have pushed words before it met something it does not take.
     block.clear();
     let mut i = skip_space(raw, 0);
     if raw.get(i) == Some(&b'/') {
@@ -209,7 +210,7 @@ fn checksum(raw: &[u8], star: usize, limit: usize, block: &mut Block) -> usize {
 
 fn words(raw: &[u8], mut i: usize, block: &mut Block) {
     while let Some(&b) = raw.get(i) {
-        // Letters and single spaces are nearly every byte here: test them first, cheaply.
+        // A letter starts nearly every token here: test for it first, with one comparison.
         if (b | 0x20).wrapping_sub(b'a') < 26 {
             i = word(raw, i, block);
             continue;

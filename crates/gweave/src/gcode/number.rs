@@ -92,7 +92,8 @@ fn long_fraction(line: &[u8], start: usize, int_digits: u32, t: u64) -> Option<(
     let w = window(line, frac_at)?;
     let tf = w ^ (ONES * u64::from(b'0'));
     let frac_digits = non_digits(tf).trailing_zeros() / 8;
-    if frac_digits == 8 || frac_digits == 0 || int_digits + frac_digits > 15 {
+    // At most 7 + 7 digits: the mantissa stays below 10^14 < 2^53, exact.
+    if frac_digits == 8 || frac_digits == 0 {
         return None;
     }
     if is_glued((w >> (8 * frac_digits)) as u8) {
