@@ -465,6 +465,25 @@ mod tests {
             }
         }
 
+        /// Every line of the plain shape does take the fast path (so the test above is not
+        /// passed by a fast path that refuses everything), with the general grammar's block.
+        #[test]
+        fn plain_lines_always_take_the_fast_path(
+            g in 0u8..2,
+            words in proptest::collection::vec(("[XYZEF]", "-?[0-9]{1,9}(\\.[0-9]{1,6})?", " {1,2}"), 0..6),
+        ) {
+            let mut raw = format!("G{g}");
+            for (letter, number, gap) in &words {
+                raw.push_str(gap);
+                raw.push_str(letter);
+                raw.push_str(number);
+            }
+            let mut fast = Block::default();
+            proptest::prop_assert!(plain_motion(raw.as_bytes(), &mut fast), "{}", raw);
+            proptest::prop_assert_eq!(fast.words.len(), words.len());
+            proptest::prop_assert_eq!(format!("{fast:?}"), format!("{:?}", general(raw.as_bytes())));
+        }
+
         #[test]
         fn never_panics(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..200)) {
             let mut b = Block::default();
