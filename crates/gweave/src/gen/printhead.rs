@@ -208,24 +208,29 @@ impl PrintheadProfile {
     /// `carriage_mm` (X, Y): nozzle row `r` of a head sits at carriage + head offset + `r`
     /// pitches along Y. Bits above `nozzle_count` and unknown heads fire nothing, as in the
     /// firmware. Call only on a validated profile.
-    pub fn drops_mm(&self, head: usize, s_bits: u64, carriage_mm: [f64; 2]) -> Vec<[f64; 2]> {
-        let Some(offset) = self.heads.get(head) else { return Vec::new() };
-        let rows = self.rows_of_s_bits(s_bits);
-        let x = carriage_mm[0] + offset.offset_x_mm;
+    pub fn drops_mm(
+        &self,
+        head: usize,
+        s_bits: u64,
+        carriage_mm: [f64; 2],
+    ) -> impl Iterator<Item = [f64; 2]> {
+        // An unknown head fires nothing: no rows, and the offset does not matter.
+        let (rows, offset) = match self.heads.get(head) {
+            Some(offset) => (self.rows_of_s_bits(s_bits), [offset.offset_x_mm, offset.offset_y_mm]),
+            None => (0, [0.0; 2]),
+        };
+        let (x, y0, pitch) = (carriage_mm[0] + offset[0], carriage_mm[1] + offset[1], self.pitch_mm());
         (0..self.nozzle_count)
-            .filter(|r| rows >> r & 1 == 1)
-            .map(|r| [x, carriage_mm[1] + offset.offset_y_mm + f64::from(r) * self.pitch_mm()])
-            .collect()
+            .filter(move |r| rows >> r & 1 == 1)
+            .map(move |r| [x, y0 + f64::from(r) * pitch])
     }
 
     /// Converts an `S` word into a mask of physical rows (bit `r` = row `r` fires).
     /// Bits above `nozzle_count` are ignored, as the firmware does.
     pub fn rows_of_s_bits(&self, s_bits: u64) -> u64 {
-        self.row_to_s_bit()
-            .iter()
-            .enumerate()
-            .filter(|(_, &b)| s_bits >> b & 1 == 1)
-            .fold(0u64, |m, (r, _)| m | 1 << r)
+        (0..self.nozzle_count)
+            .filter(|&r| s_bits >> self.s_bit_of_row(r) & 1 == 1)
+            .fold(0u64, |m, r| m | 1 << r)
     }
 }
 
@@ -251,9 +256,10 @@ mod tests {
         };
         let pitch = 25.4 / 96.0;
         // Address 0 fires row 3 (reversed map); bit 9 is beyond the nozzles.
-        assert_eq!(p.drops_mm(1, 1 | 1 << 9, [10.0, 20.0]), vec![[12.0, 21.0 + 3.0 * pitch]]);
-        assert_eq!(p.drops_mm(0, 0b0110, [0.0, 0.0]), vec![[0.0, pitch], [0.0, 2.0 * pitch]]);
-        assert!(p.drops_mm(2, 1, [0.0, 0.0]).is_empty(), "no head 2");
+        let drops = |head, bits, at| p.drops_mm(head, bits, at).collect::<Vec<_>>();
+        assert_eq!(drops(1, 1 | 1 << 9, [10.0, 20.0]), vec![[12.0, 21.0 + 3.0 * pitch]]);
+        assert_eq!(drops(0, 0b0110, [0.0, 0.0]), vec![[0.0, pitch], [0.0, 2.0 * pitch]]);
+        assert!(drops(2, 1, [0.0, 0.0]).is_empty(), "no head 2");
     }
 
     #[test]
