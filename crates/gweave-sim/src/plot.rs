@@ -107,14 +107,14 @@ fn encode<W: Write>(canvas: &Canvas, out: W) -> Result<(), PlotError> {
 }
 
 /// Speed chart colours: mean, peak, layer bars.
-pub const SPEED_MEAN: [u8; 3] = [30, 90, 200];
-pub const SPEED_PEAK: [u8; 3] = [170, 195, 240];
-pub const LAYER_BAR: [u8; 3] = [230, 140, 20];
+const SPEED_MEAN: [u8; 3] = [30, 90, 200];
+const SPEED_PEAK: [u8; 3] = [170, 195, 240];
+const LAYER_BAR: [u8; 3] = [230, 140, 20];
 /// Height of each of the two panels of the speed chart, px.
-pub const SPEED_PANEL_H: usize = HEIGHT / 2;
+const SPEED_PANEL_H: usize = HEIGHT / 2;
 
 /// Height of the longest layer's bar, px (the lower panel, below a margin).
-pub const LAYER_BAR_MAX_H: usize = SPEED_PANEL_H - 2 * MARGIN;
+const LAYER_BAR_MAX_H: usize = SPEED_PANEL_H - 2 * MARGIN;
 
 /// Where (x, y) of the speed panel a speed `v` at time `t_s` is drawn, for a run of `end_s` and
 /// an axis up to `top_mm_s`.

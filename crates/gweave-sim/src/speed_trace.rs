@@ -14,7 +14,7 @@ use crate::kinematics::MoveKind;
 use crate::planner::PlannedBlock;
 
 /// Most buckets kept; the chart is at most this many pixels wide anyway.
-pub const MAX_BUCKETS: usize = 2048;
+const MAX_BUCKETS: usize = 2048;
 /// Width of a bucket at the start, s.
 const FIRST_BUCKET_S: f64 = 0.05;
 

@@ -666,7 +666,7 @@ impl Thermal {
     /// Whole seconds of residency left in a wait, as Marlin prints after ` W:` in the M109/M190
     /// status lines: `None` (printed `?`) until the residency timer has started. Marlin computes
     /// it in milliseconds and divides by 1000, truncating.
-    pub fn residency_left_s(&self, wait: &TempWait) -> Option<u64> {
+    fn residency_left_s(&self, wait: &TempWait) -> Option<u64> {
         let start_s = wait.residency_start_s?;
         let residency_s = self.channel(wait.heater).map_or(0.0, |c| c.wait.residency_s);
         let ms = |t_s: f64| (t_s * 1000.0).round() as i64;

@@ -141,7 +141,7 @@ const MAX_SEGMENTS: usize = 1 << 21;
 const HEADER_BYTES: u64 = 4096;
 
 /// The rotary machine `path` is drawn on: `options.rotary`, else the one its header names.
-pub fn rotary_machine(path: &Path, options: &PreviewOptions) -> Option<RotaryConfig> {
+fn rotary_machine(path: &Path, options: &PreviewOptions) -> Option<RotaryConfig> {
     if let Some(m) = &options.rotary {
         return Some(m.clone());
     }
