@@ -82,3 +82,27 @@ pub fn parse_xyz(text: &str) -> Result<[f64; 3], String> {
         _ => Err(format!("expected three numbers X,Y,Z, got {text:?}")),
     }
 }
+
+/// A text file the user named (a profile, a G-code snippet), with its name in the error.
+pub fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
+}
+
+/// The settings file at `path` read with `parse`, naming the file in either error.
+pub fn load<T, E>(path: &Path, parse: impl FnOnce(&str) -> std::result::Result<T, E>) -> Result<T>
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    parse(&read_text(path)?).with_context(|| format!("in {}", path.display()))
+}
+
+/// [`load`] for an optional file: its default without one.
+pub fn load_or_default<T: Default, E>(
+    path: Option<&PathBuf>,
+    parse: impl FnOnce(&str) -> std::result::Result<T, E>,
+) -> Result<T>
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    path.map_or_else(|| Ok(T::default()), |path| load(path, parse))
+}

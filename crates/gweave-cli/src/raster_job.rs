@@ -20,6 +20,8 @@ use gweave_sim::estimate::{Estimate, Estimator};
 use gweave_sim::limits::MotionProfile;
 use serde::Serialize;
 
+use crate::common::{load_or_default, read_text};
+
 /// Where the layer images of a job come from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Source {
@@ -396,18 +398,10 @@ impl Default for JobOptions {
     }
 }
 
-fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
-}
-
 impl JobOptions {
     /// The printhead profile: `head` file or the C6602 defaults, with `dialect` applied.
     pub fn profile(&self) -> Result<PrintheadProfile> {
-        let mut p = match &self.head {
-            Some(path) => PrintheadProfile::from_toml(&read_text(path)?)
-                .with_context(|| format!("printhead profile {}", path.display()))?,
-            None => PrintheadProfile::default(),
-        };
+        let mut p = load_or_default(self.head.as_ref(), PrintheadProfile::from_toml)?;
         if let Some(d) = self.dialect {
             p.dialect = d;
         }

@@ -14,7 +14,7 @@ use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{mix_file, wizard::run_wizard};
 
-use crate::common::{OutputArgs, ReportArgs};
+use crate::common::{load_or_default, OutputArgs, ReportArgs};
 use crate::progress::Bar;
 
 /// Colour a print on a mixing hotend: define mixes as virtual tools, change them by layer, by
@@ -101,14 +101,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
 
 /// The profile file with the flags added on top.
 fn profile(args: &MixArgs) -> Result<MixProfile> {
-    let mut profile = match &args.config {
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            MixProfile::from_toml_str(&text).with_context(|| format!("in {}", path.display()))?
-        }
-        None => MixProfile::default(),
-    };
+    let mut profile = load_or_default(args.config.as_ref(), MixProfile::from_toml_str)?;
     let space = match args.gradient_space {
         Space::Mix => GradientSpace::Mix,
         Space::Perceived => GradientSpace::Perceived,

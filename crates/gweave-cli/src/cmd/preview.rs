@@ -14,6 +14,7 @@ use gweave::render::{
 };
 use gweave::rotary::cylinder::RotaryConfig;
 
+use crate::common::load;
 use crate::progress::Bar;
 
 /// Draw a file: top view of a layer, isometric view of the print, or a before/after comparison.
@@ -103,23 +104,10 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         }
     }
     let mix = match &args.mix_profile {
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            let profile =
-                MixProfile::from_toml_str(&text).with_context(|| format!("in {}", path.display()))?;
-            Some(MixColours::from_profile(&profile)?)
-        }
+        Some(path) => Some(MixColours::from_profile(&load(path, MixProfile::from_toml_str)?)?),
         None => None,
     };
-    let printhead = match &args.head {
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            Some(PrintheadProfile::from_toml(&text).with_context(|| format!("in {}", path.display()))?)
-        }
-        None => None,
-    };
+    let printhead = args.head.as_ref().map(|path| load(path, PrintheadProfile::from_toml)).transpose()?;
     let options = PreviewOptions {
         view: ViewOptions {
             kind: args.view,

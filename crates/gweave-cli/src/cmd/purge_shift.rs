@@ -5,12 +5,12 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use gweave::gcode::writer::Target;
 use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
 
-use crate::common::{OutputArgs, ReportArgs};
+use crate::common::{load_or_default, OutputArgs, ReportArgs};
 use crate::progress::Bar;
 
 /// Move each tool/mix change earlier by the purge, so the old colour is purged inside the part.
@@ -68,14 +68,7 @@ pub struct PurgeShiftArgs {
 
 /// Builds the library settings: the TOML file first, then the flags on top.
 fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
-    let mut c = match &args.config {
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            PurgeShiftConfig::parse_toml(&text).with_context(|| format!("in {}", path.display()))?
-        }
-        None => PurgeShiftConfig::default(),
-    };
+    let mut c = load_or_default(args.config.as_ref(), PurgeShiftConfig::parse_toml)?;
     let markers = match args.markers.as_deref() {
         None => None,
         Some([begin, end]) => Some([begin.clone(), end.clone()]),

@@ -16,7 +16,7 @@ use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 
 use super::stats::hms;
-use crate::common::{OutputArgs, ReportArgs};
+use crate::common::{load, OutputArgs, ReportArgs};
 use crate::progress::Bar;
 
 /// Rotary (lathe-type) printing: wrap flat G-code onto a mandrel, or generate helical tubes.
@@ -97,8 +97,7 @@ impl MachineArgs {
         let Some(path) = &self.config else {
             return Ok(None);
         };
-        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        let mut table: toml::Table = text.parse().with_context(|| format!("reading {}", path.display()))?;
+        let mut table = load(path, str::parse::<toml::Table>)?;
         if let Some(d) = self.mandrel_diameter {
             let machine = table.entry("machine").or_insert_with(|| toml::Table::new().into());
             if let Some(machine) = machine.as_table_mut() {

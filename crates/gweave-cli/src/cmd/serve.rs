@@ -18,6 +18,8 @@ use gweave_sim::serial::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
 use gweave_sim::tcp::TcpEndpoint;
 use gweave_sim::transport::{serve, Endpoint, ServeOptions, ServeSummary};
 
+use crate::common::load_or_default;
+
 /// Run the virtual printer as a Marlin board behind a pty or a loopback TCP port.
 ///
 /// Hosts (Printrun, OctoPrint, Repetier) connect as to a USB printer: `start` at connection,
@@ -55,14 +57,7 @@ pub struct ServeArgs {
 }
 
 pub fn run(args: ServeArgs) -> Result<ExitCode> {
-    let profile = match &args.machine {
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            MachineProfile::from_toml_str(&text).with_context(|| format!("in {}", path.display()))?
-        }
-        None => MachineProfile::default(),
-    };
+    let profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
     // Build one machine now so that a bad profile fails before any host connects.
     Machine::new(profile.clone()).context("building the virtual printer")?;
     let options = ServeOptions {

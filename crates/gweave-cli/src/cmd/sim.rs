@@ -13,7 +13,7 @@ use gweave_sim::interp::{Machine, Outcome, SimReport};
 use gweave_sim::plot::{save_speed_png, save_temperature_png};
 use gweave_sim::profile::{FaultSpec, MachineProfile};
 
-use crate::common::ReportArgs;
+use crate::common::{load_or_default, ReportArgs};
 use crate::progress::Bar;
 
 /// Simulate a print on a virtual Marlin-like printer: time per layer and feature (planner),
@@ -52,14 +52,7 @@ pub struct SimArgs {
 }
 
 pub fn run(args: SimArgs) -> Result<ExitCode> {
-    let mut profile = match &args.machine {
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            MachineProfile::from_toml_str(&text).with_context(|| format!("in {}", path.display()))?
-        }
-        None => MachineProfile::default(),
-    };
+    let mut profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
     for spec in &args.faults {
         profile.faults.push(spec.parse::<FaultSpec>()?);
     }
