@@ -199,7 +199,7 @@ impl PidGains {
 
     /// Gains found by M303 (this crate's autotune, 5 cycles at 210 C) on the
     /// default plant [`crate::heater::HeaterConfig::hotend_40w`].
-    pub const DEFAULT_HOTEND_40W: PidGains = PidGains { kp: 40.41, ki: 5.35, kd: 76.27 };
+    pub const DEFAULT_HOTEND_40W: PidGains = PidGains { kp: 37.17, ki: 4.74, kd: 72.95 };
 
     /// The M301/M503-style report line, e.g.
     /// `echo:  M301 P22.20 I1.08 D114.00` (`M304` for the bed).

@@ -24,17 +24,21 @@
 //!   T(dt) = T_inf + (T(0) - T_inf) exp(-k dt / C)
 //! ```
 //!
-//! which [`Heater::step`] uses, so any `dt` is stable.
+//! which [`Heater::step`] extends to the lags below, so any `dt` is exact.
 //!
 //! # The two lags
 //!
 //! Heat made in the cartridge core reaches the block only after warming the
 //! core itself, and the thermistor pressed into the block lags the block.
-//! Both are modelled as first-order low-passes, `tau dy/dt = x - y`, stepped
-//! exactly for a held input as `y += (x - y)(1 - exp(-dt/tau))`:
+//! Both are modelled as first-order low-passes, `tau dy/dt = x - y`:
 //!
 //! * `heater_lag_s`: the heat flow into the block follows `u P`;
 //! * `sensor_lag_s`: the sensor temperature follows `T`.
+//!
+//! The three stages in series still have an exact solution for power held
+//! over a step (a sum of the three stages' exponentials, see `cascade`), so a
+//! step of any length, or the same time cut into any number of steps, gives
+//! the same temperatures.
 //!
 //! With the block's own time constant `C/k` this makes a third-order plant
 //! whose phase reaches -180 degrees at a finite frequency, so a relay
@@ -55,6 +59,10 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::thermistor::{BetaThermistor, SensorFault};
+
+use cascade::Decay;
+
+mod cascade;
 
 /// Which heater: a hotend by index, or the bed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -130,7 +138,7 @@ impl HeaterConfig {
     ///   bore. Together 5 s, close to the single lag Marlin's MPC measures
     ///   on this class of hotend (`MPC_SENSOR_RESPONSIVENESS 0.22`/s, i.e.
     ///   4.5 s, Marlin `Configuration.h`). Relay period
-    ///   `2 pi sqrt(2 * 3) ~ 15 s` (M303 finds 15.1 s), the low end of M303
+    ///   `2 pi sqrt(2 * 3) ~ 15 s` (M303 finds 15.7 s), the low end of M303
     ///   logs from real hotends (18 s on an Artillery Volcano block,
     ///   MarlinFirmware/Configurations#641).
     /// * Cold start to 200 C at full power: about 74 s.
@@ -217,6 +225,56 @@ pub struct Heater {
     cartridge_disconnected: bool,
     sensor_fault: Option<SensorFault>,
     last_power_w: f64,
+    /// The response to the last step's length and fan.
+    response: Option<Response>,
+}
+
+/// The plant's exact response over one step of `t_s` with loss conductance `k_w_k`: measured
+/// from where the chain settles for the held power, the fraction of each stage's distance left
+/// at the end, and what each stage passes on to the next (see `cascade`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Response {
+    t_s: f64,
+    k_w_k: f64,
+    flow: f64,
+    block: f64,
+    block_from_flow: f64,
+    sensor: f64,
+    sensor_from_block: f64,
+    sensor_from_flow: f64,
+}
+
+impl Response {
+    fn new(cfg: &HeaterConfig, k_w_k: f64, t_s: f64) -> Self {
+        let block = Decay::new(k_w_k / cfg.heat_capacity_j_k, t_s);
+        let lagged = |tau_s: f64| (tau_s > 0.0).then(|| Decay::new(1.0 / tau_s, t_s));
+        let heater = lagged(cfg.heater_lag_s);
+        let sensor = lagged(cfg.sensor_lag_s);
+        // A watt of heat-flow shortfall pulls the block toward ambient at b/k kelvin per second.
+        let pull = block.rate / k_w_k;
+        let mut r = Self {
+            t_s,
+            k_w_k,
+            flow: 0.0,
+            block: block.factor,
+            block_from_flow: 0.0,
+            sensor: 0.0,
+            sensor_from_block: 0.0,
+            sensor_from_flow: 0.0,
+        };
+        if let Some(h) = heater {
+            r.flow = h.factor;
+            r.block_from_flow = -pull * cascade::divided2(h, block, t_s);
+        }
+        if let Some(s) = sensor {
+            r.sensor = s.factor;
+            r.sensor_from_block = -s.rate * cascade::divided2(block, s, t_s);
+            if let Some(h) = heater {
+                r.sensor_from_flow = s.rate * pull * cascade::divided3(h, block, s, t_s);
+            }
+        }
+        r
+    }
 }
 
 impl Heater {
@@ -232,6 +290,7 @@ impl Heater {
             cartridge_disconnected: false,
             sensor_fault: None,
             last_power_w: 0.0,
+            response: None,
         })
     }
 
@@ -300,12 +359,29 @@ impl Heater {
         }
         let duty = if duty.is_nan() { 0.0 } else { duty.clamp(0.0, 1.0) };
         let power_w = if self.cartridge_disconnected { 0.0 } else { duty * self.cfg.power_w };
-        self.heat_flow_w = lag(self.heat_flow_w, power_w, self.cfg.heater_lag_s, dt_s);
         let k_w_k = self.cfg.loss_w_k + self.fan_fraction * self.cfg.fan_loss_w_k;
-        let settle_c = self.cfg.ambient_c + self.heat_flow_w / k_w_k;
-        let decay = (-k_w_k * dt_s / self.cfg.heat_capacity_j_k).exp();
-        self.block_c = settle_c + (self.block_c - settle_c) * decay;
-        self.sensor_c = lag(self.sensor_c, self.block_c, self.cfg.sensor_lag_s, dt_s);
+        // The firmware loop steps every heater by the same sample period, so the response is
+        // worked out once and reused until the period or the fan changes. The clock's sample
+        // instants are multiples of the period in floating point, so the periods between them
+        // differ in their last bits (more so as the clock grows: parts in 1e11 after two
+        // days); a step within 1e-9 of the cached one reuses it, an error of that fraction of
+        // one step's change of temperature.
+        let r = match self.response {
+            Some(r) if (r.t_s - dt_s).abs() <= 1e-9 * dt_s && r.k_w_k == k_w_k => r,
+            _ => *self.response.insert(Response::new(&self.cfg, k_w_k, dt_s)),
+        };
+        // Everything is measured from where the chain settles with this power held.
+        let settle_c = self.cfg.ambient_c + power_w / k_w_k;
+        let flow0_w = if self.cfg.heater_lag_s > 0.0 { self.heat_flow_w - power_w } else { 0.0 };
+        let block0_c = self.block_c - settle_c;
+        let sensor0_c = self.sensor_c - settle_c;
+        self.heat_flow_w = power_w + flow0_w * r.flow;
+        self.block_c = settle_c + block0_c * r.block + flow0_w * r.block_from_flow;
+        self.sensor_c = if self.cfg.sensor_lag_s > 0.0 {
+            settle_c + sensor0_c * r.sensor + block0_c * r.sensor_from_block + flow0_w * r.sensor_from_flow
+        } else {
+            self.block_c
+        };
         self.last_power_w = power_w;
     }
 
@@ -317,16 +393,6 @@ impl Heater {
             Some(fault) => fault.adc(thermistor.raw_max()),
             None => thermistor.adc_at(self.sensor_c),
         }
-    }
-}
-
-/// One exact step of `tau dy/dt = x - y` with `x` held: `y` moves toward
-/// `x` by the fraction `1 - exp(-dt/tau)`; no lag when `tau` is 0.
-fn lag(y: f64, x: f64, tau_s: f64, dt_s: f64) -> f64 {
-    if tau_s > 0.0 {
-        y + (x - y) * (1.0 - (-dt_s / tau_s).exp())
-    } else {
-        x
     }
 }
 
@@ -366,6 +432,64 @@ mod tests {
             h2.step(1.0, 0.1);
         }
         assert!((h2.block_c() - expected).abs() < 1e-9);
+    }
+
+    /// The plant with both lags, integrated by fourth-order Runge-Kutta in steps of 1 ms.
+    fn runge_kutta(cfg: &HeaterConfig, duty: f64, fan: f64, start: [f64; 3], t_s: f64) -> [f64; 3] {
+        let k = cfg.loss_w_k + fan * cfg.fan_loss_w_k;
+        let p = duty * cfg.power_w;
+        let f = |y: [f64; 3]| {
+            [
+                (p - y[0]) / cfg.heater_lag_s,
+                (y[0] - k * (y[1] - cfg.ambient_c)) / cfg.heat_capacity_j_k,
+                (y[1] - y[2]) / cfg.sensor_lag_s,
+            ]
+        };
+        let add = |y: [f64; 3], d: [f64; 3], h: f64| [y[0] + h * d[0], y[1] + h * d[1], y[2] + h * d[2]];
+        let h = 1e-3;
+        let mut y = start;
+        for _ in 0..(t_s / h).round() as usize {
+            let k1 = f(y);
+            let k2 = f(add(y, k1, h / 2.0));
+            let k3 = f(add(y, k2, h / 2.0));
+            let k4 = f(add(y, k3, h));
+            y = std::array::from_fn(|i| y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
+        }
+        y
+    }
+
+    #[test]
+    fn lagged_step_matches_numerical_integration() {
+        let equal_lags = HeaterConfig { heater_lag_s: 2.5, sensor_lag_s: 2.5, ..HeaterConfig::hotend_40w() };
+        for cfg in [HeaterConfig::hotend_40w(), HeaterConfig::bed_200w(), equal_lags] {
+            for (duty, fan) in [(1.0, 0.0), (0.3, 1.0), (0.0, 0.5)] {
+                let mut h = Heater::new(cfg).unwrap();
+                h.set_fan(fan);
+                // A state off every equilibrium: flow, block and sensor all different.
+                h.heat_flow_w = 0.6 * cfg.power_w;
+                h.block_c = 180.0;
+                h.sensor_c = 150.0;
+                let want = runge_kutta(&cfg, duty, fan, [h.heat_flow_w, 180.0, 150.0], 7.0);
+                h.step(duty, 7.0);
+                let got = [h.heat_flow_w(), h.block_c(), h.sensor_c()];
+                for (g, w) in got.iter().zip(want) {
+                    assert!((g - w).abs() < 1e-8, "{cfg:?} duty {duty} fan {fan}: {got:?} vs {want:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn split_steps_give_the_same_temperatures() {
+        let mut whole = hotend();
+        let mut split = hotend();
+        whole.step(0.8, 10.0);
+        for dt in [0.013, 2.5, 0.1, 4.387, 3.0] {
+            split.step(0.8, dt);
+        }
+        assert!((whole.block_c() - split.block_c()).abs() < 1e-10);
+        assert!((whole.sensor_c() - split.sensor_c()).abs() < 1e-10);
+        assert!((whole.heat_flow_w() - split.heat_flow_w()).abs() < 1e-10);
     }
 
     #[test]

@@ -135,6 +135,13 @@ impl Default for ThermalConfig {
     }
 }
 
+/// A time on Marlin's `millis()` clock. The residency of a wait is counted in whole milliseconds
+/// as the firmware does, so a simulated clock made of many 0.1 s steps (which drifts by parts
+/// in 1e13) ends a wait on the step where the firmware would.
+fn millis(t_s: f64) -> i64 {
+    (t_s * 1000.0).round() as i64
+}
+
 /// Span of the generated firmware table, C.
 const TABLE_MIN_C: f64 = -20.0;
 const TABLE_MAX_C: f64 = 400.0;
@@ -206,10 +213,13 @@ impl TimeSeries {
         Self { period_s, max_samples, next_s: 0.0, records: Vec::new() }
     }
 
+    /// Whether a record is due at `now_s`.
+    fn due(&self, now_s: f64) -> bool {
+        now_s + 1e-9 >= self.next_s
+    }
+
+    /// Keep `samples` taken at `now_s`, when [`TimeSeries::due`].
     fn record(&mut self, now_s: f64, samples: Vec<Sample>) {
-        if now_s + 1e-9 < self.next_s {
-            return;
-        }
         self.records.push(samples);
         self.next_s += self.period_s;
         while self.next_s <= now_s {
@@ -264,6 +274,9 @@ pub struct Thermal {
     hotends: u8,
     active: u8,
     now_s: f64,
+    /// The plants are integrated up to here; between firmware samples nothing changes their
+    /// inputs, so they are advanced only when a sample (or a change of input) needs them.
+    plant_s: f64,
     samples_taken: u64,
     halted: Option<ThermalFault>,
     autotune: Option<(HeaterId, Autotune, bool)>,
@@ -330,6 +343,7 @@ impl Thermal {
             channels,
             active: 0,
             now_s: 0.0,
+            plant_s: 0.0,
             samples_taken: 0,
             halted: None,
             autotune: None,
@@ -397,13 +411,15 @@ impl Thermal {
         Ok(self.channel(id)?.power)
     }
 
-    /// The plant, for inspection.
+    /// The plant, for inspection, as of the last firmware sample or change of its inputs (the
+    /// plants are integrated lazily, see [`Thermal::step`]).
     pub fn heater(&self, id: HeaterId) -> Result<&Heater, ThermalError> {
         Ok(&self.channel(id)?.plant)
     }
 
     /// The plant, for fault injection.
     pub fn heater_mut(&mut self, id: HeaterId) -> Result<&mut Heater, ThermalError> {
+        self.settle_plants();
         Ok(&mut self.channel_mut(id)?.plant)
     }
 
@@ -416,6 +432,7 @@ impl Thermal {
 
     /// Part-cooling fan fraction (0..=1), cooling every hotend.
     pub fn set_fan(&mut self, fraction: f64) {
+        self.settle_plants();
         for ch in &mut self.channels {
             if let HeaterId::Hotend(_) = ch.id {
                 ch.plant.set_fan(fraction);
@@ -510,8 +527,13 @@ impl Thermal {
         &self.series
     }
 
-    /// Advance the simulated clock by `dt_s`. Returns the fault if the
-    /// printer halted during this step.
+    /// Advance the simulated clock by `dt_s`, running the firmware loop at every sample instant
+    /// on the way. Returns the fault if the printer halted during this step.
+    ///
+    /// The heater power changes only at samples, and the plant's step is exact for any length
+    /// (see the heater module), so the plants are integrated from sample to sample, however
+    /// many moves (calls) lie between: a long print costs one plant step per sample, not one
+    /// per move.
     pub fn step(&mut self, dt_s: f64) -> Option<ThermalFault> {
         if !(dt_s.is_finite() && dt_s > 0.0) {
             return None;
@@ -520,20 +542,13 @@ impl Thermal {
         let was_halted = self.halted.is_some();
         loop {
             let next_sample_s = self.samples_taken as f64 * self.sample_period_s;
-            if next_sample_s <= self.now_s + 1e-9 {
-                self.sample();
-                self.samples_taken += 1;
-                continue;
-            }
-            let until_s = next_sample_s.min(end_s);
-            let h_s = until_s - self.now_s;
-            if h_s <= 1e-12 {
+            if next_sample_s > end_s + 1e-9 {
                 break;
             }
-            for ch in &mut self.channels {
-                ch.plant.step(control::duty(ch.power), h_s);
-            }
-            self.now_s = until_s;
+            self.now_s = self.now_s.max(next_sample_s);
+            self.settle_plants();
+            self.sample();
+            self.samples_taken += 1;
         }
         self.now_s = end_s;
         if was_halted {
@@ -541,6 +556,17 @@ impl Thermal {
         } else {
             self.halted
         }
+    }
+
+    /// Integrate the plants up to the clock, with the power of the last sample.
+    fn settle_plants(&mut self) {
+        let h_s = self.now_s - self.plant_s;
+        if h_s > 1e-12 {
+            for ch in &mut self.channels {
+                ch.plant.step(control::duty(ch.power), h_s);
+            }
+        }
+        self.plant_s = self.now_s;
     }
 
     /// One firmware loop at `now_s`: read, protect, control, record.
@@ -580,6 +606,9 @@ impl Thermal {
                 }
                 _ => ch.control.update(now_s, ch.reading_c, ch.target_c),
             };
+        }
+        if !self.series.due(now_s) {
+            return;
         }
         let samples = self
             .channels
@@ -658,7 +687,7 @@ impl Thermal {
             _ => {}
         }
         match wait.residency_start_s {
-            Some(start_s) if now_s - start_s >= w.residency_s => WaitStatus::Reached,
+            Some(start_s) if millis(now_s) - millis(start_s) >= millis(w.residency_s) => WaitStatus::Reached,
             _ => WaitStatus::Waiting,
         }
     }
@@ -669,8 +698,7 @@ impl Thermal {
     fn residency_left_s(&self, wait: &TempWait) -> Option<u64> {
         let start_s = wait.residency_start_s?;
         let residency_s = self.channel(wait.heater).map_or(0.0, |c| c.wait.residency_s);
-        let ms = |t_s: f64| (t_s * 1000.0).round() as i64;
-        let left_ms = ms(residency_s) - (ms(self.now_s) - ms(start_s));
+        let left_ms = millis(residency_s) - (millis(self.now_s) - millis(start_s));
         Some((left_ms.max(0) / 1000) as u64)
     }
 

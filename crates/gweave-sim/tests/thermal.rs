@@ -374,3 +374,37 @@ proptest! {
         }
     }
 }
+
+/// The plants are integrated from sample to sample whatever the caller's steps: a print's
+/// moves of a few milliseconds, or half seconds, give the same samples, temperatures and
+/// powers, with a fan change between samples.
+#[test]
+fn move_sized_steps_give_the_same_history_as_sample_steps() {
+    let run = |steps: &[f64]| {
+        let mut th = machine();
+        th.set_target(T0, 210.0).unwrap();
+        th.set_target(BED, 60.0).unwrap();
+        let mut fan_on = false;
+        let mut k = 0;
+        while th.now_s() < 300.0 - 1e-6 {
+            if !fan_on && th.now_s() >= 150.0 - 1e-6 {
+                th.set_fan(0.7);
+                fan_on = true;
+            }
+            assert_eq!(th.step(steps[k % steps.len()]), None);
+            k += 1;
+        }
+        let history: Vec<(i64, u8, i64)> = th
+            .series()
+            .samples()
+            .map(|s| ((s.t_s * 1e3).round() as i64, s.power, (s.temp_c * 1e6).round() as i64))
+            .collect();
+        (history, th.heater_mut(T0).unwrap().block_c())
+    };
+    let (coarse, coarse_c) = run(&[0.5]);
+    let (fine, fine_c) = run(&[0.02, 0.03, 0.05, 0.013, 0.087]);
+    // One record a second for each heater, from 0 s to 300 s.
+    assert_eq!(coarse.len(), 2 * 301);
+    assert_eq!(coarse, fine);
+    assert!((coarse_c - fine_c).abs() < 1e-9, "{coarse_c} {fine_c}");
+}
