@@ -74,7 +74,7 @@ impl AxisCounter {
 #[inline]
 fn round_steps(x: f64) -> i64 {
     // From 2^52 on every float is a whole number (and NaN goes to 0 either way).
-    if !(x.abs() < 4_503_599_627_370_496.0) {
+    if x.is_nan() || x.abs() >= 4_503_599_627_370_496.0 {
         return x as i64;
     }
     let whole = x as i64;
