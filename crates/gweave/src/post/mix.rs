@@ -54,6 +54,7 @@ use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z}
 use crate::gcode::writer::Target;
 use crate::pass::{drive_reader, keep, Ctx, Pass, Progress, Quiet, Run, Strictness};
 use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
+use crate::post::retraction::Retraction;
 use crate::post::zcap::ZCap;
 
 use profile::{Dialect, MixProfile, PurgeMode};
@@ -98,8 +99,7 @@ pub struct MixPass {
     rotating: [Option<usize>; 2],
     slicer_tool: u32,
     decided_layer: Option<u32>,
-    /// Retraction in force (E-only moves since the last extrusion), mm.
-    retracted_mm: f64,
+    retraction: Retraction,
     /// Dropped tool-change retraction per slicer tool, to drop again from its unretraction, mm.
     owed_mm: BTreeMap<u32, f64>,
     held: Vec<Held>,
@@ -145,7 +145,7 @@ impl MixPass {
             rotating: [None; 2],
             slicer_tool: 0,
             decided_layer: None,
-            retracted_mm: 0.0,
+            retraction: Retraction::default(),
             owed_mm: BTreeMap::new(),
             held: Vec::new(),
             feed_before: 0.0,
@@ -332,7 +332,7 @@ impl MixPass {
                 relative_e: state.relative_e(),
                 feed_mm_min: self.feed_before,
                 rapid_mode: self.rapid_before,
-                retracted_mm: self.retracted_mm,
+                retracted_mm: self.retraction.in_force_mm(),
             };
             let mut block = Vec::new();
             write_purge(&mut block, &self.profile.numbers, &self.motion, &start, purge_mm, &label);
@@ -385,16 +385,11 @@ impl MixPass {
                 self.change(w, mv, state)?;
             }
         }
-        let e_only = mv.from[X] == mv.to[X] && mv.from[Y] == mv.to[Y] && mv.from[Z] == mv.to[Z];
-        let mut fed_mm = e_mm;
-        if e_only && e_mm > 0.0 {
-            fed_mm = self.unretract(ctx, mv)?;
-            self.retracted_mm = (self.retracted_mm - fed_mm).max(0.0);
-        } else if e_only {
-            self.retracted_mm -= e_mm;
-        } else if mv.is_extruding() {
-            self.retracted_mm = 0.0;
-        }
+        // Only a plain unretraction (no Z in the same move) is rewritten when a dropped
+        // tool-change retraction is owed; the rewrite keeps E and F alone.
+        let unretraction = e_mm > 0.0 && Retraction::moves_filament_only(mv) && mv.from[Z] == mv.to[Z];
+        let fed_mm = if unretraction { self.unretract(ctx, mv)? } else { e_mm };
+        self.retraction.observe(mv, fed_mm);
         if print {
             if let Some(a) = self.active {
                 let printed = mv.is_extruding().then_some((layer, state.structure.layer_z_mm));
@@ -421,7 +416,7 @@ impl MixPass {
         if self.profile.tool_change.keep_slicer_retractions || owed <= 0.0 {
             return Ok(amount);
         }
-        let keep_for_retraction = amount.min(self.retracted_mm.max(0.0));
+        let keep_for_retraction = amount.min(self.retraction.in_force_mm());
         let dropped = (amount - keep_for_retraction).min(owed);
         if dropped <= 1e-9 {
             return Ok(amount);
@@ -492,7 +487,7 @@ impl MixPass {
                 Some((instead, mm)) if drop => {
                     out.write_all(&instead)?;
                     *self.owed_mm.entry(self.slicer_tool).or_insert(0.0) += mm;
-                    self.retracted_mm = (self.retracted_mm - mm).max(0.0);
+                    self.retraction.withdraw(mm);
                     self.acc.dropped_retractions += 1;
                 }
                 _ => out.write_all(&h.bytes)?,

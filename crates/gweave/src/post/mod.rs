@@ -12,3 +12,6 @@ pub mod purge_shift;
 pub mod mix;
 pub mod purge_block;
 pub mod zcap;
+
+// The retraction in force, followed alike by the passes that insert purges.
+mod retraction;

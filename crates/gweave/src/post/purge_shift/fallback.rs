@@ -25,6 +25,7 @@ use super::config::{Fallback, Rules, TowerConfig};
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{Move, X, Y};
 use crate::post::purge_block::{write_purge_job, PurgeJob, PurgeMotion, PurgePattern, PurgeStart};
+use crate::post::retraction::Retraction;
 
 /// Inserted lines carry the split's precision: 0.01 um positions, 1e-6 mm of filament.
 const FORMAT: NumberFormat = NumberFormat {
@@ -55,8 +56,7 @@ pub(crate) struct Surroundings {
     retract_feed_mm_min: Option<f64>,
     /// The last retraction since the last extrusion: ordinary if an extrusion comes before a change.
     pending: Option<(f64, f64)>,
-    /// Retraction in force now (E-only moves since the last extrusion), mm.
-    retracted_mm: f64,
+    retraction: Retraction,
     /// The layer of the last tower, and the Y its towers take up so far on that layer, mm.
     tower_layer: Option<u32>,
     tower_used_y_mm: f64,
@@ -66,8 +66,8 @@ impl Surroundings {
     /// Follows one move of the file.
     pub fn observe(&mut self, mv: &Move, in_print: bool) {
         let e_mm = mv.e_mm();
+        self.retraction.observe(mv, e_mm);
         if mv.is_extruding() {
-            self.retracted_mm = 0.0;
             if let Some((mm, feed)) = self.pending.take() {
                 self.retract_mm = mm;
                 self.retract_feed_mm_min = Some(feed).filter(|f| *f > 0.0);
@@ -86,11 +86,8 @@ impl Surroundings {
                     y1.max(mv.from[Y]).max(mv.to[Y]),
                 ]);
             }
-        } else if mv.to[X] == mv.from[X] && mv.to[Y] == mv.from[Y] && e_mm != 0.0 {
-            if e_mm < 0.0 {
-                self.pending = Some((-e_mm, mv.feed_mm_min));
-            }
-            self.retracted_mm = (self.retracted_mm - e_mm).max(0.0);
+        } else if e_mm < 0.0 && Retraction::moves_filament_only(mv) {
+            self.pending = Some((-e_mm, mv.feed_mm_min));
         }
     }
 
@@ -101,7 +98,7 @@ impl Surroundings {
 
     /// Retraction the file has in force now, mm.
     pub fn retracted_mm(&self) -> f64 {
-        self.retracted_mm
+        self.retraction.in_force_mm()
     }
 
     /// The tower's zigzag for `purge_mm` and its corner on layer `layer`.
