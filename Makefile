@@ -52,6 +52,8 @@ python-debug: py-deps
 lint: rust-deps
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
+	# Broken or private links in the API docs fail too.
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --exclude gweave-py -q
 
 cargo-test: rust-deps
 	$(CARGO) test --workspace --exclude gweave-py

@@ -3,7 +3,8 @@
 //! The interpreter calls [`InkjetCanvas::on_m700`] for every `M700 P<head> S<bits>` (Marlin
 //! hpc6602) or `M578 P S` (RepRapFirmware) with the carriage position at that moment. Each set
 //! bit of `S` is a nozzle address; the profile's bit order and nozzle map turn it into a
-//! physical nozzle row `r`, whose drop lands at
+//! physical nozzle row `r`, whose drop lands
+//! ([`PrintheadProfile::drops_mm`], the same rule the previews draw with) at
 //!
 //! ```text
 //! x = carriage_x + head_offset_x            y = carriage_y + head_offset_y + r * pitch
@@ -72,11 +73,9 @@ pub struct InkjetLayer {
 #[derive(Debug, Clone)]
 pub struct InkjetCanvas {
     geometry: CanvasGeometry,
+    /// The heads, which say where a fire command's drops land.
+    printhead: PrintheadProfile,
     pitch_mm: f64,
-    /// `(offset_x_mm, offset_y_mm)` per head.
-    offsets: Vec<(f64, f64)>,
-    /// `row_to_s_bit[r]` = bit of `S` that fires nozzle row `r`.
-    row_to_s_bit: Vec<u32>,
     layers: Vec<InkjetLayer>,
     warnings: Vec<InkjetWarning>,
     drops_per_head: Vec<u64>,
@@ -93,9 +92,8 @@ impl InkjetCanvas {
         }
         Ok(InkjetCanvas {
             geometry,
+            printhead: profile.clone(),
             pitch_mm: profile.pitch_mm(),
-            offsets: profile.heads.iter().map(|h| (h.offset_x_mm, h.offset_y_mm)).collect(),
-            row_to_s_bit: profile.row_to_s_bit(),
             layers: Vec::new(),
             warnings: Vec::new(),
             drops_per_head: vec![0; profile.heads.len()],
@@ -118,14 +116,14 @@ impl InkjetCanvas {
             self.warnings.push(InkjetWarning::MissingHead { x_mm, y_mm });
             return;
         };
-        let Some(&(off_x, off_y)) = self.offsets.get(head as usize) else {
+        let heads = self.printhead.heads.len();
+        if head as usize >= heads {
             self.warnings.push(InkjetWarning::UnknownHead { head });
             return;
-        };
+        }
         if moved_since_m400 {
             self.warnings.push(InkjetWarning::FireWithoutM400 { head, x_mm, y_mm });
         }
-        let heads = self.offsets.len();
         let g = self.geometry;
         let same_layer = matches!(self.layers.last(), Some(l) if (l.z_mm - z_mm).abs() <= SAME_Z_MM);
         if !same_layer {
@@ -135,14 +133,10 @@ impl InkjetCanvas {
             Some(layer) => &mut layer.heads[head as usize],
             None => return,
         };
-        let px = ((x_mm + off_x - g.origin_x_mm) / self.pitch_mm).floor();
         let mut lost = 0;
-        for (row, &s_bit) in self.row_to_s_bit.iter().enumerate() {
-            if bits >> s_bit & 1 == 0 {
-                continue;
-            }
+        for [x, y] in self.printhead.drops_mm(head as usize, bits, [x_mm, y_mm]) {
             self.drops_per_head[head as usize] += 1;
-            let y = y_mm + off_y + row as f64 * self.pitch_mm;
+            let px = ((x - g.origin_x_mm) / self.pitch_mm).floor();
             let py = ((y - g.origin_y_mm) / self.pitch_mm).floor();
             let inside = px >= 0.0 && py >= 0.0 && canvas.set(px as usize, py as usize, true);
             if !inside {

@@ -5,7 +5,7 @@
 //! deceleration phases the speed is linear in time, so the distance over any interval
 //! `[ta, tb]` of a phase is `(v(ta) + v(tb)) / 2 * (tb - ta)` and the highest speed is at one
 //! of its ends. The mean speed of a bucket is its distance over its width (standing still,
-//! heating, counts as 0). When a run outgrows [`MAX_BUCKETS`], neighbouring buckets are merged
+//! heating, counts as 0). When a run outgrows `MAX_BUCKETS`, neighbouring buckets are merged
 //! in pairs and the width doubles, so a 46-hour print costs the same memory as a minute.
 //!
 //! Only moves with XYZ travel count; extrude-only and rotary-only moves take time at speed 0.

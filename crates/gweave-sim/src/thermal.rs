@@ -713,7 +713,7 @@ impl Thermal {
     /// The status line Marlin 2.x prints every second during M109/M190
     /// (`wait_for_hotend`/`wait_for_bed`), with its leading space: the
     /// M105 status of the hotend waited for (the active one for the bed)
-    /// and ` W:` with [`Thermal::residency_left_s`], `?` before it starts:
+    /// and ` W:` with the residency left in whole seconds, `?` before it starts:
     /// ` T:199.48 /200.00 B:25.00 /0.00 @:22 B@:0 W:9`.
     pub fn wait_status_line(&self, wait: &TempWait) -> String {
         let hotend = match wait.heater {

@@ -66,7 +66,7 @@ impl fmt::Debug for Profile {
 }
 
 impl Profile {
-    /// The raw value at `axial_mm` (not checked; see [`Self::checked`]).
+    /// The raw value at `axial_mm` (not checked; see `checked`).
     pub fn at(&self, axial_mm: f64) -> f64 {
         match self {
             Self::Constant(v) => *v,

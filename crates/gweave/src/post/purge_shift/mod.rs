@@ -3,7 +3,7 @@
 //! After a change of tool or mix the old colour still fills the nozzle. Instead of purging it
 //! into a tower, this pass moves every change *earlier* in the file by the purge amount: it walks
 //! back along the old colour's extruding moves, summing their positive extrusion, until the purge
-//! is reached, splits that move at the exact point ([`split`] explains the maths) and puts the
+//! is reached, splits that move at the exact point (the `split` module explains the maths) and puts the
 //! change lines there. The purge is then printed inside the part, with the old colour's path, and
 //! the new colour comes out clean where its own path begins.
 //!
@@ -30,7 +30,7 @@
 //! - Too little room: the change goes as far back as allowed, a warning names layer, line and
 //!   shortfall, and the fallback applies: accept the shortfall (`partial`), or purge it right
 //!   after the change in a purge block (`block`) or on a small tower beside the part (`tower`),
-//!   returning to the exact position ([`fallback`]).
+//!   returning to the exact position (the `fallback` module).
 //!
 //! ## Bounded memory
 //! The pass streams. It holds back only the lines a later change could still be moved before:
