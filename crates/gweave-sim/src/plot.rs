@@ -4,10 +4,10 @@
 //!   light, from [`SpeedTrace`]) above the time of each layer as bars (the planner's per-layer
 //!   figures), grid lines every 50 mm/s and every minute (10 / 60 minutes on long runs).
 //!
-//! The axes are fixed: time from 0 to the end of the run on X, 0 C to 10 % above the hottest
-//! value on Y, with grid lines every minute (or every 10 / 60 minutes on long runs) and every
-//! 50 C. Lines are drawn between consecutive samples with a simple DDA (one pixel per step of
-//! the longer axis).
+//! The axes are fixed: time from 0 to the end of the run on X, from 0 to 10 % above the highest
+//! value on Y, with labelled grid lines every minute (or every 10 / 60 minutes on long runs)
+//! and every 50 C or 50 mm/s. Both charts are drawn with gweave's rasteriser
+//! ([`gweave::render::raster::Image`]) and written by its PNG encoder.
 
 use std::io::Write;
 use std::path::Path;
@@ -52,36 +52,6 @@ const AXIS: [u8; 3] = [90, 90, 90];
 const COLOURS: [[u8; 3]; 4] = [[200, 40, 30], [30, 90, 200], [30, 150, 60], [150, 60, 170]];
 const BED: [u8; 3] = [230, 140, 20];
 
-/// An RGB image being drawn.
-struct Canvas {
-    rgb: Vec<u8>,
-}
-
-impl Canvas {
-    fn new() -> Self {
-        Self { rgb: vec![255; WIDTH * HEIGHT * 3] }
-    }
-
-    fn set(&mut self, x: i64, y: i64, c: [u8; 3]) {
-        if (0..WIDTH as i64).contains(&x) && (0..HEIGHT as i64).contains(&y) {
-            let i = (y as usize * WIDTH + x as usize) * 3;
-            self.rgb[i..i + 3].copy_from_slice(&c);
-        }
-    }
-
-    fn line(&mut self, (x0, y0): (f64, f64), (x1, y1): (f64, f64), c: [u8; 3], thick: bool) {
-        let n = (x1 - x0).abs().max((y1 - y0).abs()).ceil().max(1.0) as usize;
-        for k in 0..=n {
-            let t = k as f64 / n as f64;
-            let (x, y) = ((x0 + (x1 - x0) * t).round() as i64, (y0 + (y1 - y0) * t).round() as i64);
-            self.set(x, y, c);
-            if thick {
-                self.set(x, y + 1, c);
-            }
-        }
-    }
-}
-
 /// Lighter shade of a colour, for targets.
 fn light(c: [u8; 3]) -> [u8; 3] {
     c.map(|v| (u16::from(v) + 2 * 255).div_euclid(3) as u8)
@@ -96,14 +66,26 @@ fn time_tick_s(end_s: f64) -> f64 {
     }
 }
 
-fn encode<W: Write>(canvas: &Canvas, out: W) -> Result<(), PlotError> {
-    let mut enc = png::Encoder::new(out, WIDTH as u32, HEIGHT as u32);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let mut writer = enc.write_header()?;
-    writer.write_image_data(&canvas.rgb)?;
-    writer.finish()?;
-    Ok(())
+/// Grid lines with their labels, and the two axes, for a chart whose point at time `t_s` and
+/// value `v` is drawn at `px(t_s, v)`; the values run from 0 to `top`, the time to `end_s`.
+fn grid(img: &mut Image, px: &dyn Fn(f64, f64) -> [f32; 2], end_s: f64, top: f64) {
+    let mut t = 0.0;
+    let tick_s = time_tick_s(end_s);
+    while t <= end_s {
+        img.line(px(t, 0.0), px(t, top), 1.0, GRID, 1.0);
+        let [x, y] = px(t, 0.0);
+        img.text(x as i32 + 2, y as i32 + 3, &format!("{}", (t / 60.0).round()), 1, AXIS);
+        t += tick_s;
+    }
+    let mut v = 0.0;
+    while v <= top {
+        img.line(px(0.0, v), px(end_s, v), 1.0, GRID, 1.0);
+        let [x, y] = px(0.0, v);
+        img.text(x as i32 - 24, y as i32 - 3, &format!("{v:>3.0}"), 1, AXIS);
+        v += 50.0;
+    }
+    img.line(px(0.0, 0.0), px(end_s, 0.0), 1.0, AXIS, 1.0);
+    img.line(px(0.0, 0.0), px(0.0, top), 1.0, AXIS, 1.0);
 }
 
 /// Speed chart colours: mean, peak, layer bars.
@@ -134,23 +116,7 @@ pub fn write_speed_png<W: Write>(trace: &SpeedTrace, layer_s: &[f64], mut out: W
         [x as f32, y as f32]
     };
     let mut img = Image::new(WIDTH as u32, HEIGHT as u32, [255; 3]);
-    let tick_s = time_tick_s(end_s);
-    let mut t = 0.0;
-    while t <= end_s {
-        img.line(px(t, 0.0), px(t, top), 1.0, GRID, 1.0);
-        let [x, y] = px(t, 0.0);
-        img.text(x as i32 + 2, y as i32 + 3, &format!("{}", (t / 60.0).round()), 1, AXIS);
-        t += tick_s;
-    }
-    let mut v = 0.0;
-    while v <= top {
-        img.line(px(0.0, v), px(end_s, v), 1.0, GRID, 1.0);
-        let [x, y] = px(0.0, v);
-        img.text(x as i32 - 24, y as i32 - 3, &format!("{v:>3.0}"), 1, AXIS);
-        v += 50.0;
-    }
-    img.line(px(0.0, 0.0), px(end_s, 0.0), 1.0, AXIS, 1.0);
-    img.line(px(0.0, 0.0), px(0.0, top), 1.0, AXIS, 1.0);
+    grid(&mut img, &px, end_s, top);
     let w = trace.bucket_s();
     for (i, b) in trace.buckets().iter().enumerate() {
         let t = (i as f64 + 0.5) * w;
@@ -193,7 +159,7 @@ pub fn save_speed_png(trace: &SpeedTrace, layer_s: &[f64], path: &Path) -> Resul
 }
 
 /// Draws the series and writes a PNG to `out`.
-pub fn write_temperature_png<W: Write>(series: &TimeSeries, out: W) -> Result<(), PlotError> {
+pub fn write_temperature_png<W: Write>(series: &TimeSeries, mut out: W) -> Result<(), PlotError> {
     let mut heaters: Vec<HeaterId> = Vec::new();
     let mut end_s: f64 = 1.0;
     let mut max_c: f64 = 50.0;
@@ -206,33 +172,25 @@ pub fn write_temperature_png<W: Write>(series: &TimeSeries, out: W) -> Result<()
     }
     let top_c = max_c * 1.1;
     let (w, h) = ((WIDTH - 2 * MARGIN) as f64, (HEIGHT - 2 * MARGIN) as f64);
-    let px = |t_s: f64, c: f64| (MARGIN as f64 + t_s / end_s * w, MARGIN as f64 + (1.0 - c / top_c) * h);
-    let mut canvas = Canvas::new();
-    let tick_s = time_tick_s(end_s);
-    let mut t = 0.0;
-    while t <= end_s {
-        canvas.line(px(t, 0.0), px(t, top_c), GRID, false);
-        t += tick_s;
-    }
-    let mut c = 0.0;
-    while c <= top_c {
-        canvas.line(px(0.0, c), px(end_s, c), GRID, false);
-        c += 50.0;
-    }
-    canvas.line(px(0.0, 0.0), px(end_s, 0.0), AXIS, false);
-    canvas.line(px(0.0, 0.0), px(0.0, top_c), AXIS, false);
+    let px = |t_s: f64, c: f64| {
+        [(MARGIN as f64 + t_s / end_s * w) as f32, (MARGIN as f64 + (1.0 - c / top_c) * h) as f32]
+    };
+    let mut img = Image::new(WIDTH as u32, HEIGHT as u32, [255; 3]);
+    grid(&mut img, &px, end_s, top_c);
+    img.text(MARGIN as i32 + 6, 8, "TEMPERATURE C: READING (DARK), TARGET (LIGHT), TIME IN MIN", 1, AXIS);
     for (k, &id) in heaters.iter().enumerate() {
         let colour = if id == HeaterId::Bed { BED } else { COLOURS[k % COLOURS.len()] };
         let mut last: Option<(f64, f64, f64)> = None;
         for s in series.of(id) {
             if let Some((t0, temp0, target0)) = last {
-                canvas.line(px(t0, target0), px(s.t_s, s.target_c), light(colour), false);
-                canvas.line(px(t0, temp0), px(s.t_s, s.temp_c), colour, true);
+                img.line(px(t0, target0), px(s.t_s, s.target_c), 1.0, light(colour), 1.0);
+                img.line(px(t0, temp0), px(s.t_s, s.temp_c), 2.0, colour, 1.0);
             }
             last = Some((s.t_s, s.temp_c, s.target_c));
         }
     }
-    encode(&canvas, out)
+    out.write_all(&encode_image(&img)?)?;
+    Ok(())
 }
 
 /// [`write_temperature_png`] into a file.
