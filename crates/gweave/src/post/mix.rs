@@ -676,6 +676,28 @@ mod tests {
     }
 
     #[test]
+    fn purge_refills_a_retraction_made_with_its_lift() {
+        // The file retracts 0.8 mm while lifting, in one move, and reaches the change of mix
+        // still retracted: the purge must refill those 0.8 mm before its 25 mm count (the
+        // seed's 4 mm retraction, then 4 + 0.8 + 25 back out) and leave them retracted again.
+        let input = "M83\n;LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\nG1 Z0.6 E-0.8 F2100\n\
+                     ;LAYER_CHANGE\nG1 Z0.4 F100\nG1 X0 E2 F1800\n";
+        let (out, report) = mix_bytes(profile(""), input.as_bytes()).unwrap();
+        assert_eq!(report.purge.count, 1);
+        let text = String::from_utf8(out).unwrap();
+        let e_moves: Vec<&str> = text
+            .lines()
+            .skip_while(|l| !l.starts_with("; gweave mix: purge"))
+            .filter(|l| l.starts_with("G1 E"))
+            .take(3)
+            .collect();
+        assert_eq!(e_moves.len(), 3, "{text}");
+        assert!(e_moves[0].starts_with("G1 E-4 "), "{text}");
+        assert!(e_moves[1].starts_with("G1 E29.8 "), "{text}");
+        assert!(e_moves[2].starts_with("G1 E-4.8 "), "{text}");
+    }
+
+    #[test]
     fn inch_files_and_unmapped_tools_are_refused() {
         let err = mix_bytes(profile(""), format!("G20\n{PRINT}").as_bytes()).unwrap_err();
         assert!(err.to_string().contains("G20"), "{err}");
