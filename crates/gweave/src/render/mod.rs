@@ -17,8 +17,10 @@
 //! ([`toolpath`] decodes the fire commands with [`PreviewOptions::printhead`]).
 //!
 //! Rotary programs (`gweave rotary wrap`/`tube` output, whose header names the machine, or any
-//! file with [`PreviewOptions::rotary`]) are read back with [`crate::rotary::preview::read_back`]
-//! and drawn in 3D on their cylinder, in the pictures and in the viewer.
+//! file with [`PreviewOptions::rotary`]) go through the same toolpath pass, each move's machine
+//! words read back on the cylinder ([`crate::rotary::preview::RotaryReading`]), and are drawn in
+//! 3D there, in the pictures and in the viewer, with the same colourings, travel and bounded
+//! memory as flat files.
 //!
 //! ```no_run
 //! use gweave::render::{preview, Format, PreviewOptions};
@@ -38,13 +40,13 @@ pub mod toolpath;
 pub mod view;
 
 use std::io::{self, Read, Write};
-use std::ops::RangeInclusive;
 use std::path::Path;
 
 use crate::gcode::state::State;
 use crate::gen::printhead::PrintheadProfile;
 use crate::pass::{Ctx, Pass, Progress, Quiet, Run};
 use crate::rotary::cylinder::RotaryConfig;
+use crate::rotary::preview::RotaryReading;
 use crate::stats::{Stats, StatsPass};
 
 pub use colour_by::ColourBy;
@@ -116,9 +118,10 @@ impl PreviewOptions {
         Ok(())
     }
 
-    fn toolpath_options(&self, path: &Path, keep_all_layers: bool) -> ToolpathOptions {
+    fn toolpath_options(&self, path: &Path, keep_all_layers: bool) -> Result<ToolpathOptions, RenderError> {
         let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
-        ToolpathOptions {
+        let rotary = rotary_machine(path, self).map(|m| RotaryReading::new(&m)).transpose()?;
+        Ok(ToolpathOptions {
             // The viewer shows every layer; pictures need only theirs.
             layers: if keep_all_layers { None } else { self.view.layers.clone() },
             travel: keep_all_layers || self.view.travel,
@@ -127,8 +130,9 @@ impl PreviewOptions {
             mix: (self.view.colour_by == ColourBy::Mix)
                 .then(|| self.mix.clone().unwrap_or_else(MixColours::cmyw)),
             printhead: self.printhead.clone().unwrap_or_default(),
+            rotary,
             ..ToolpathOptions::default()
-        }
+        })
     }
 }
 
@@ -148,17 +152,6 @@ fn rotary_machine(path: &Path, options: &PreviewOptions) -> Option<RotaryConfig>
     let mut head = Vec::new();
     std::fs::File::open(path).ok()?.take(HEADER_BYTES).read_to_end(&mut head).ok()?;
     RotaryConfig::from_header(&String::from_utf8_lossy(&head))
-}
-
-/// A rotary program's toolpath, in 3D on its cylinder.
-fn rotary_toolpath(
-    path: &Path,
-    machine: &RotaryConfig,
-    layers: Option<&RangeInclusive<u32>>,
-) -> Result<Toolpath, RenderError> {
-    let file = std::fs::File::open(path).map_err(|e| crate::Error::io(path, e))?;
-    let program = crate::rotary::preview::read_back(machine, io::BufReader::new(file))?;
-    Ok(Toolpath::from_rotary(&program, layers))
 }
 
 /// Feeds every line to two passes (a toolpath and the statistics, in one read of the file).
@@ -224,10 +217,7 @@ pub fn drawing(
     progress: &mut dyn Progress,
 ) -> Result<view::Drawing, RenderError> {
     let mut read = |p: &Path| -> Result<Toolpath, RenderError> {
-        if let Some(machine) = rotary_machine(p, options) {
-            return rotary_toolpath(p, &machine, options.view.layers.as_ref());
-        }
-        let mut pass = toolpath::ToolpathPass::new(options.toolpath_options(p, false));
+        let mut pass = toolpath::ToolpathPass::new(options.toolpath_options(p, false)?);
         Run::new(p, &mut *progress).scan(&mut pass)?;
         Ok(pass.finish_toolpath())
     };
@@ -247,14 +237,7 @@ fn html_page(
     if compare.is_some() {
         return Err(RenderError::CompareHtml);
     }
-    let (tp, stats) = match rotary_machine(path, options) {
-        Some(machine) => {
-            let mut st = StatsPass::new(None);
-            let state = Run::new(path, progress).scan(&mut st)?;
-            (rotary_toolpath(path, &machine, None)?, st.into_stats(&state))
-        }
-        None => toolpath_with_stats(path, options.toolpath_options(path, true), progress)?,
-    };
+    let (tp, stats) = toolpath_with_stats(path, options.toolpath_options(path, true)?, progress)?;
     let html_options = html::HtmlOptions {
         title: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
         colour_by: options.view.colour_by,

@@ -11,6 +11,12 @@
 //! centred on it, with the head as its tool. Neighbouring drops then close up into the area
 //! they wet, as the binder does in the powder.
 //!
+//! Rotary programs ([`ToolpathOptions::rotary`]): each move's machine words are read back as
+//! the nozzle's points on the cylinder and the segment is the chord between them, in 3D with the
+//! mandrel along X; its speed is the surface speed the firmware runs at. Layers are the slicer's
+//! comments when a wrapped file has them, else the bead radii ranked from the mandrel out
+//! (`cylinder`).
+//!
 //! Huge files: memory is bounded by keeping only the layers asked for, and by decimation. With
 //! `min_len_mm > 0`, consecutive chained moves that agree on every attribute are merged until the
 //! merged piece is at least that long. The merged piece is the chord from the first start to the
@@ -31,9 +37,12 @@ use crate::gcode::state::{Effect, Move, Path as MovePath, E, X, Y, Z};
 use crate::gen::printhead::PrintheadProfile;
 use crate::pass::{Ctx, Pass, Quiet, Run};
 use crate::rotary::cylinder::CylPoint;
-use crate::rotary::preview::Program;
+use crate::rotary::preview::{RotaryMove, RotaryReading};
 
 use super::mix_colour::{MixColours, MixTracker};
+use cylinder::{CylinderLayers, PROVISIONAL};
+
+mod cylinder;
 
 /// One straight piece of tool path, mm and mm/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -90,6 +99,8 @@ pub struct ToolpathOptions {
     /// The inkjet head whose fire commands (`M700`/`M578 P<head> S<bits>`, binder-jet raster
     /// output) are drawn as dots (see the module notes).
     pub printhead: PrintheadProfile,
+    /// Read the file as a rotary program on this machine (see the module notes).
+    pub rotary: Option<RotaryReading>,
 }
 
 impl Default for ToolpathOptions {
@@ -103,6 +114,7 @@ impl Default for ToolpathOptions {
             arc_tol_mm: 0.02,
             mix: None,
             printhead: PrintheadProfile::default(),
+            rotary: None,
         }
     }
 }
@@ -127,7 +139,8 @@ pub struct Toolpath {
     pub layer_z_mm: Vec<f32>,
     /// Number of tools the file selected (highest `T` + 1, at least 1).
     pub tools: u16,
-    /// A rotary program: the segments lie on cylinders about the X axis (see [`Self::from_rotary`]).
+    /// A rotary program: the segments lie on cylinders about the X axis (see
+    /// [`ToolpathOptions::rotary`]).
     pub on_cylinder: bool,
 }
 
@@ -137,35 +150,6 @@ impl Toolpath {
         let mut pass = ToolpathPass::new(options);
         Run::new(path, &mut Quiet).scan(&mut pass)?;
         Ok(pass.finish_toolpath())
-    }
-
-    /// A rotary program as the machine prints it ([`crate::rotary::preview::read_back`]): each
-    /// bead from `(x, r cos theta, r sin theta)` to the same of its end, with the mandrel along
-    /// X; a bead is a short helix drawn as its chord. Layers not in `layers` are left out.
-    pub fn from_rotary(program: &Program, layers: Option<&RangeInclusive<u32>>) -> Toolpath {
-        let point = |p: CylPoint| p.to_cartesian().map(|v| v as f32);
-        let segments = program
-            .beads
-            .iter()
-            .filter(|b| layers.is_none_or(|r| r.contains(&b.layer)))
-            .map(|b| Segment {
-                start: point(b.from),
-                end: point(b.to),
-                tool: 0,
-                feature: b.feature,
-                feed_mm_s: b.speed_mm_s as f32,
-                layer: b.layer,
-                extruding: true,
-                mix_rgb: [0; 3],
-            })
-            .collect();
-        let layer_count = program.layers.last().map_or(0, |l| l.index as usize + 1);
-        let mut layer_z_mm = vec![0.0; layer_count];
-        // A layer's "height" is its radius.
-        for l in &program.layers {
-            layer_z_mm[l.index as usize] = l.radius_mm as f32;
-        }
-        Toolpath { segments, layer_z_mm, tools: 1, on_cylinder: true }
     }
 
     /// Number of layers the file has (kept or not).
@@ -201,17 +185,23 @@ pub struct ToolpathPass {
     /// A merged piece still growing (decimation).
     pending: Option<Segment>,
     mix: Option<MixTracker>,
+    cylinder: CylinderLayers,
 }
 
 impl ToolpathPass {
     pub fn new(options: ToolpathOptions) -> Self {
         let mix = options.mix.clone().map(MixTracker::new);
-        ToolpathPass { options, out: Toolpath { tools: 1, ..Toolpath::default() }, pending: None, mix }
+        let out = Toolpath { tools: 1, ..Toolpath::default() };
+        ToolpathPass { options, out, pending: None, mix, cylinder: CylinderLayers::default() }
     }
 
     /// The collected toolpath.
     pub fn finish_toolpath(mut self) -> Toolpath {
         self.flush();
+        if self.options.rotary.is_some() {
+            self.out.layer_z_mm = self.cylinder.finish(&mut self.out.segments, self.options.layers.as_ref());
+            self.out.on_cylinder = true;
+        }
         self.out
     }
 
@@ -301,6 +291,24 @@ impl ToolpathPass {
 }
 
 impl ToolpathPass {
+    /// A move of a rotary program: the chord between the nozzle's points on the cylinder (a
+    /// bead is a short helix). Nothing is left out as start G-code: a wrapped purge line is
+    /// printed on the mandrel too.
+    fn cylinder_move(&mut self, m: &RotaryMove, layer: Option<u32>, template: Segment) {
+        let extruding = m.is_bead();
+        if !m.moved || (!extruding && !self.options.travel) {
+            return;
+        }
+        let layer = self.cylinder.layer(layer, m);
+        let ranked = layer & PROVISIONAL == 0;
+        if ranked && self.options.layers.as_ref().is_some_and(|r| !r.contains(&layer)) {
+            return;
+        }
+        let point = |p: CylPoint| p.to_cartesian().map(|v| v as f32);
+        let (start, end, feed_mm_s) = (point(m.from), point(m.to), m.speed_mm_s() as f32);
+        self.push(Segment { start, end, feed_mm_s, layer, extruding, ..template });
+    }
+
     /// A fire command of an inkjet head: its drops as dots.
     fn fire(&mut self, ctx: &Ctx<'_>) {
         let st = &ctx.state.structure;
@@ -367,6 +375,21 @@ impl Pass for ToolpathPass {
                     }
                     _ => [0; 3],
                 };
+                let tool = ctx.state.tool.min(u16::MAX as u32) as u16;
+                if let Some(m) = self.options.rotary.as_ref().map(|r| r.read(m)) {
+                    let template = Segment {
+                        start: [0.0; 3],
+                        end: [0.0; 3],
+                        tool,
+                        feature: st.feature,
+                        feed_mm_s: 0.0,
+                        layer: 0,
+                        extruding: false,
+                        mix_rgb,
+                    };
+                    self.cylinder_move(&m, st.layer, template);
+                    return Ok(());
+                }
                 // Only the start G-code (purge lines) is left out: the end G-code's parking is
                 // travel, drawn only on request, and any extrusion there is really printed.
                 if self.options.print_only && st.region == Region::Start {
@@ -388,7 +411,7 @@ impl Pass for ToolpathPass {
                 let template = Segment {
                     start: [0.0; 3],
                     end: [0.0; 3],
-                    tool: ctx.state.tool.min(u16::MAX as u32) as u16,
+                    tool,
                     feature: st.feature,
                     feed_mm_s: (m.feed_mm_min / 60.0) as f32,
                     layer,

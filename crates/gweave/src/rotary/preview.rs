@@ -32,7 +32,7 @@ use serde::Serialize;
 use super::cylinder::{surface_length_mm, CylPoint, MachineDelta, RotaryConfig};
 use super::{Result, RotaryError};
 use crate::gcode::layers::Feature;
-use crate::gcode::state::{axis_of, Effect, Position, StateOptions, E};
+use crate::gcode::state::{axis_of, Effect, Move, Position, StateOptions, E};
 use crate::pass::{drive_reader, Ctx, Pass, Quiet, Strictness};
 use crate::render::camera::Camera;
 use crate::render::canvas::Canvas;
@@ -85,35 +85,100 @@ pub struct Program {
     pub time_s: f64,
 }
 
-/// The pass behind [`read_back`].
-struct Reader<'a> {
-    machine: &'a RotaryConfig,
+/// How a rotary machine's words read back: which of the core's axes carry the axial, rotary
+/// and radial words, and the machine that turns them into nozzle points and times. Shared by
+/// [`read_back`] and the preview's toolpath pass ([`crate::render::toolpath`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RotaryReading {
+    machine: RotaryConfig,
     axes: [usize; 3],
+}
+
+/// One move as the machine runs it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotaryMove {
+    /// Where the nozzle starts and ends.
+    pub from: CylPoint,
+    pub to: CylPoint,
+    /// Filament pushed, mm.
+    pub e_mm: f64,
+    /// Time the firmware takes at the move's F under the machine's feed convention, s (0 for a
+    /// move of nothing or without a feed).
+    pub t_s: f64,
+    /// Whether any of the three machine words changed.
+    pub moved: bool,
+}
+
+impl RotaryMove {
+    /// An extruding move that goes somewhere: a bead.
+    pub fn is_bead(&self) -> bool {
+        self.e_mm > 0.0 && self.moved
+    }
+
+    /// Surface speed, mm/s (0 when the move takes no time).
+    pub fn speed_mm_s(&self) -> f64 {
+        if self.t_s > 0.0 {
+            surface_length_mm(self.from, self.to) / self.t_s
+        } else {
+            0.0
+        }
+    }
+}
+
+impl RotaryReading {
+    /// The reading of `machine`, whose axis letters must be ones the core tracks (X, Y, Z, A,
+    /// B, C).
+    pub fn new(machine: &RotaryConfig) -> Result<Self> {
+        machine.validate()?;
+        let letters = [
+            ("axial_axis", machine.axial_axis),
+            ("rotary_axis", machine.rotary_axis),
+            ("radial_axis", machine.radial_axis),
+        ];
+        let mut axes = [0; 3];
+        for (slot, (key, letter)) in axes.iter_mut().zip(letters) {
+            *slot = axis_of(letter as u8).ok_or_else(|| RotaryError::Config {
+                key,
+                reason: format!("`{letter}` cannot be read back (only X, Y, Z, A, B, C)"),
+            })?;
+        }
+        Ok(Self { machine: machine.clone(), axes })
+    }
+
+    /// `mv` as the machine runs it.
+    pub fn read(&self, mv: &Move) -> RotaryMove {
+        let words = |pos: &Position| self.axes.map(|i| pos[i]);
+        let (a, b) = (words(&mv.from), words(&mv.to));
+        let e_mm = mv.to[E] - mv.from[E];
+        let delta = MachineDelta { axial_mm: b[0] - a[0], rotary: b[1] - a[1], radial_mm: b[2] - a[2], e_mm };
+        RotaryMove {
+            from: self.machine.point_from_words(a, 0.0),
+            to: self.machine.point_from_words(b, 0.0),
+            e_mm,
+            t_s: self.machine.time_from_feed(&delta, mv.feed_mm_min).unwrap_or(0.0),
+            moved: a != b,
+        }
+    }
+}
+
+/// The pass behind [`read_back`].
+struct Reader {
+    reading: RotaryReading,
     beads: Vec<(Bead, Option<u32>)>,
     time_s: f64,
 }
 
-impl Reader<'_> {
-    fn words(&self, pos: &Position) -> [f64; 3] {
-        self.axes.map(|i| pos[i])
-    }
-}
-
-impl Pass for Reader<'_> {
+impl Pass for Reader {
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
         let Effect::Move(mv) = ctx.effect else {
             return Ok(());
         };
-        let (a, b) = (self.words(&mv.from), self.words(&mv.to));
-        let e_mm = mv.to[E] - mv.from[E];
-        let delta = MachineDelta { axial_mm: b[0] - a[0], rotary: b[1] - a[1], radial_mm: b[2] - a[2], e_mm };
-        let t_s = self.machine.time_from_feed(&delta, mv.feed_mm_min).unwrap_or(0.0);
-        self.time_s += t_s;
-        if e_mm > 0.0 && a != b {
-            let (from, to) = (self.machine.point_from_words(a, 0.0), self.machine.point_from_words(b, 0.0));
-            let speed_mm_s = if t_s > 0.0 { surface_length_mm(from, to) / t_s } else { 0.0 };
+        let m = self.reading.read(mv);
+        self.time_s += m.t_s;
+        if m.is_bead() {
             let feature = ctx.state.structure.feature;
-            let bead = Bead { from, to, e_mm, speed_mm_s, feature, layer: 0 };
+            let bead =
+                Bead { from: m.from, to: m.to, e_mm: m.e_mm, speed_mm_s: m.speed_mm_s(), feature, layer: 0 };
             self.beads.push((bead, ctx.state.structure.layer));
         }
         Ok(())
@@ -123,20 +188,7 @@ impl Pass for Reader<'_> {
 /// Reads a rotary program (see the module docs). The machine's axis letters must be ones the
 /// core tracks (X, Y, Z, A, B, C).
 pub fn read_back(machine: &RotaryConfig, input: impl Read) -> Result<Program> {
-    machine.validate()?;
-    let letters = [
-        ("axial_axis", machine.axial_axis),
-        ("rotary_axis", machine.rotary_axis),
-        ("radial_axis", machine.radial_axis),
-    ];
-    let mut axes = [0; 3];
-    for (slot, (key, letter)) in axes.iter_mut().zip(letters) {
-        *slot = axis_of(letter as u8).ok_or_else(|| RotaryError::Config {
-            key,
-            reason: format!("`{letter}` cannot be read back (only X, Y, Z, A, B, C)"),
-        })?;
-    }
-    let mut reader = Reader { machine, axes, beads: Vec::new(), time_s: 0.0 };
+    let mut reader = Reader { reading: RotaryReading::new(machine)?, beads: Vec::new(), time_s: 0.0 };
     drive_reader(
         input,
         std::path::Path::new("<rotary program>"),
@@ -172,7 +224,7 @@ pub fn read_back(machine: &RotaryConfig, input: impl Read) -> Result<Program> {
 }
 
 /// A radius in whole microns, to group beads by the radial word (written to 1 micron).
-fn micron(mm: f64) -> i64 {
+pub(crate) fn micron(mm: f64) -> i64 {
     (mm * 1000.0).round() as i64
 }
 
