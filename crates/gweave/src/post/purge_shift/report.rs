@@ -10,6 +10,7 @@ use std::io::{self, BufRead, BufReader, BufWriter, Seek, SeekFrom, Write};
 
 use serde::ser::{Error as _, SerializeSeq};
 use serde::{Serialize, Serializer};
+use serde_json::value::RawValue;
 
 use crate::gcode::layers::Feature;
 
@@ -124,8 +125,10 @@ impl Serialize for ChangeLog {
             file.seek(SeekFrom::Start(0)).map_err(S::Error::custom)?;
             for line in BufReader::new(file).lines() {
                 let line = line.map_err(S::Error::custom)?;
-                let entry: serde_json::Value = serde_json::from_str(&line).map_err(S::Error::custom)?;
-                seq.serialize_element(&entry)?;
+                // Written by `push` as one JSON object per line: passed on as it is, checked
+                // but not rebuilt into a tree.
+                let entry: &RawValue = serde_json::from_str(&line).map_err(S::Error::custom)?;
+                seq.serialize_element(entry)?;
             }
         }
         seq.end()
