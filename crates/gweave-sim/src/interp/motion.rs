@@ -33,8 +33,10 @@ pub(super) fn rest_to_rest_s(d: f64, v: f64, a: f64) -> f64 {
 
 impl Machine {
     /// A line that moves (or a motion command without axis words, which only sets F).
-    pub(super) fn motion(&mut self, line: &[u8], effect: Effect, out: &mut dyn FnMut(f64, &str)) {
-        let Effect::Move(mut m) = effect else {
+    pub(super) fn motion(&mut self, line: &[u8], mut effect: Effect, out: &mut dyn FnMut(f64, &str)) {
+        // The move is changed in place (feed and flow overrides, a refused extrusion): an
+        // `Effect` is two 7-axis positions and an arc, not worth copying twice per line.
+        let Effect::Move(m) = &mut effect else {
             self.run_core(line, &effect, out);
             return;
         };
@@ -61,7 +63,7 @@ impl Machine {
         }
         self.thermal.set_moving(true);
         self.moved_since_m400 = true;
-        self.run_core(line, &Effect::Move(m), out);
+        self.run_core(line, &effect, out);
     }
 
     /// The hotend that extrudes: the tool's on a multi-hotend machine, the only one otherwise.
