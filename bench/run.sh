@@ -37,10 +37,15 @@ command -v valgrind >/dev/null || { [ "$(id -u)" = 0 ] && apt-get install -y -qq
 if command -v valgrind >/dev/null; then
   head -c 5000000 "$BIG" > "$DATA/first-5MB.gcode"
   lines=$(wc -l < "$DATA/first-5MB.gcode")
-  for cmd in stats check; do
-    ir=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null "$GWEAVE" "$cmd" "$DATA/first-5MB.gcode" -q 2>&1 >/dev/null | awk '/refs:/ {gsub(",", "", $NF); print $NF}')
-    printf "%-22s %8s instructions per line (callgrind, first 5 MB)\n" "gweave $cmd" "$((ir / lines))"
-  done
+  per_line() {
+    local name=$1
+    shift
+    ir=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null "$GWEAVE" "$@" -q 2>&1 >/dev/null | awk '/refs:/ {gsub(",", "", $NF); print $NF}')
+    printf "%-22s %8s instructions per line (callgrind, first 5 MB)\n" "$name" "$((ir / lines))"
+  }
+  per_line "gweave stats" stats "$DATA/first-5MB.gcode"
+  per_line "gweave check" check "$DATA/first-5MB.gcode"
+  per_line "gweave sim (Klipper)" sim "$DATA/first-5MB.gcode" --machine "$ROOT/bench/klipper-big-bed.toml"
 fi
 
 echo "== virtual printer: the same file is a 46-hour print (target: under 30 s with step counting)"
