@@ -12,6 +12,7 @@ pub mod plot;
 pub mod profile;
 pub mod protection;
 pub mod pty;
+mod rounding;
 pub mod serial;
 pub mod speed_trace;
 pub mod stepper;

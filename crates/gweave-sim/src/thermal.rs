@@ -157,6 +157,8 @@ struct Channel {
     max_target_c: f64,
     target_c: f64,
     reading_c: f64,
+    /// The firmware table's bracket of the last reading (see [`ThermistorTable::celsius_near`]).
+    bracket: usize,
     power: u8,
 }
 
@@ -331,6 +333,7 @@ impl Thermal {
                 max_target_c: protection.max_temp_c - overshoot,
                 target_c: 0.0,
                 reading_c,
+                bracket: 0,
                 power: 0,
             });
         }
@@ -574,7 +577,7 @@ impl Thermal {
         let now_s = self.now_s;
         for i in 0..self.channels.len() {
             let ch = &mut self.channels[i];
-            ch.reading_c = self.table.celsius(ch.plant.read_adc(&self.thermistor));
+            ch.reading_c = self.table.celsius_near(ch.plant.read_adc(&self.thermistor), &mut ch.bracket);
             if self.halted.is_some() {
                 ch.power = 0;
                 continue;

@@ -41,6 +41,8 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::rounding::round_i64;
+
 /// 0 degrees Celsius in kelvin.
 const KELVIN_OFFSET: f64 = 273.15;
 /// Reference temperature of `r25_ohm`, in Celsius.
@@ -122,9 +124,8 @@ impl BetaThermistor {
     pub fn adc_at(&self, celsius: f64) -> u32 {
         let r = self.resistance_ohm(celsius);
         let frac = r / (r + self.pullup_ohm);
-        let raw = (frac * f64::from(self.raw_max())).round();
         // `frac` is within [0, 1], so the product fits the raw range.
-        raw.clamp(0.0, f64::from(self.raw_max())) as u32
+        round_i64(frac * f64::from(self.raw_max())).clamp(0, i64::from(self.raw_max())) as u32
     }
 
     /// Exact model temperature for a raw reading (inverse of [`adc_at`]
@@ -228,9 +229,30 @@ impl ThermistorTable {
     /// then linear interpolation; readings outside the table clamp to the
     /// end entries.
     pub fn celsius(&self, adc: u32) -> f64 {
+        self.interpolate(adc, self.bracket(adc))
+    }
+
+    /// [`Self::celsius`] for a reading near the last one: `hint` is the bracket the last
+    /// reading fell in, and is updated. A heater's reading moves by a fraction of a table step
+    /// between two samples, so the bracket is usually checked, not searched for.
+    pub fn celsius_near(&self, adc: u32, hint: &mut usize) -> f64 {
         let e = &self.entries;
-        // Index of the first entry whose adc is >= the reading.
-        let hi = e.partition_point(|&(a, _)| a < adc);
+        let h = *hint;
+        let fits = h < e.len() && e[h].0 >= adc && (h == 0 || e[h - 1].0 < adc);
+        if !fits {
+            *hint = self.bracket(adc);
+        }
+        self.interpolate(adc, *hint)
+    }
+
+    /// Index of the first entry whose adc is >= the reading.
+    fn bracket(&self, adc: u32) -> usize {
+        self.entries.partition_point(|&(a, _)| a < adc)
+    }
+
+    /// The reading between entries `hi - 1` and `hi`, clamped to the ends.
+    fn interpolate(&self, adc: u32, hi: usize) -> f64 {
+        let e = &self.entries;
         if hi == 0 {
             return e[0].1;
         }
@@ -369,6 +391,17 @@ mod tests {
             let counts_per_c = th.adc_at(celsius - 0.5) - th.adc_at(celsius + 0.5);
             let tol = 0.15 + 1.0 / f64::from(counts_per_c.max(1));
             prop_assert!((read - celsius).abs() < tol, "{celsius} read as {read}, tol {tol}");
+        }
+
+        /// Starting from any bracket gives the reading a full search gives.
+        #[test]
+        fn a_hint_never_changes_the_reading(adc in 0u32..16_400, hint in 0usize..200) {
+            let t = marlin_1_table();
+            let mut h = hint;
+            prop_assert_eq!(t.celsius_near(adc, &mut h), t.celsius(adc));
+            let mut again = h;
+            prop_assert_eq!(t.celsius_near(adc, &mut again), t.celsius(adc));
+            prop_assert_eq!(again, h);
         }
 
         /// Forward and inverse lookups agree to one count.
