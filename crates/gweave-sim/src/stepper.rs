@@ -56,6 +56,10 @@ struct AxisCounter {
 impl AxisCounter {
     /// Steps to reach `end`, starting the block at logical `start`.
     fn advance(&mut self, start: f64, end: f64) -> i64 {
+        // An axis the move leaves alone (Z and A on most moves) stays where it is.
+        if start == self.last_pos && end == start {
+            return 0;
+        }
         if start != self.last_pos {
             self.anchor_pos = start;
             self.anchor_steps = self.steps;
