@@ -320,16 +320,22 @@ fn render_err(e: render::RenderError) -> PyErr {
 
 /// A file's toolpath as little-endian column bytes: (segment count, {name: bytes}) with start
 /// and end (f32 x 3 each), tool (u16), feature (u8, index into `feature_names`), feed_mm_s (f32),
-/// layer (u32), extruding (u8 0/1). `gweave.toolpath` turns them into NumPy arrays.
+/// layer (u32), extruding (u8 0/1). `gweave.toolpath` turns them into NumPy arrays. A rotary
+/// program (its header names the machine, or `mandrel_diameter` is given) comes out in 3D on its
+/// cylinder, mandrel along X, with `on_cylinder` true.
 #[pyfunction]
-#[pyo3(signature = (path, *, travel=true, min_len=0.0))]
+#[pyo3(signature = (path, *, travel=true, min_len=0.0, mandrel_diameter=None))]
 fn toolpath_columns(
     py: Python<'_>,
     path: PathBuf,
     travel: bool,
     min_len: f32,
+    mandrel_diameter: Option<f64>,
 ) -> PyResult<(usize, Py<PyDict>)> {
-    let options = ToolpathOptions { travel, min_len_mm: min_len, ..ToolpathOptions::default() };
+    let machine = mandrel_diameter.map(gweave::rotary::cylinder::RotaryConfig::new);
+    let rotary = gweave::rotary::preview::RotaryReading::for_file(&path, machine.as_ref())
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let options = ToolpathOptions { travel, min_len_mm: min_len, rotary, ..ToolpathOptions::default() };
     let tp = py.allow_threads(|| Toolpath::from_file(&path, options)).map_err(err)?;
     let n = tp.segments.len();
     let mut cols: [(&str, Vec<u8>); 7] = [
@@ -357,6 +363,7 @@ fn toolpath_columns(
     let names: Vec<&str> = ALL_FEATURES.iter().map(|f| f.name()).collect();
     dict.set_item("feature_names", names)?;
     dict.set_item("layer_z", tp.layer_z_mm.clone())?;
+    dict.set_item("on_cylinder", tp.on_cylinder)?;
     Ok((n, dict.unbind()))
 }
 

@@ -58,6 +58,32 @@ def test_toolpath_arrays(data):
     assert {"outer_wall", "inner_wall", "infill"} <= used
     fewer = gweave.toolpath(data / "cura" / "cura_dual.gcode", travel=False, min_len=1.0)
     assert fewer["extruding"].all() and len(fewer["tool"]) < (tp["extruding"]).sum()
+    assert tp["on_cylinder"] is False
+
+
+def test_toolpath_of_a_rotary_program_lies_on_its_cylinders(tmp_path):
+    np = pytest.importorskip("numpy")
+    tube = tmp_path / "tube.gcode"
+    gweave.rotary_tube(tube, mandrel_diameter=20, length=30, layers=2)
+    # The header names the machine: the beads come out in 3D, layer k at the nozzle radius
+    # 10 + 0.2 (k + 1) mm from the mandrel's axis (X), from X 0 to 30.
+    tp = gweave.toolpath(tube, travel=False)
+    assert tp["on_cylinder"] is True
+    assert np.allclose(tp["layer_z"], [10.2, 10.4], atol=1e-6)
+    for k, radius in enumerate((10.2, 10.4)):
+        # A bead's layer is the radius it starts at (the tube climbs to the next layer while
+        # extruding, so the last bead of a layer ends on the next one).
+        pts = tp["start"][tp["layer"] == k]
+        assert len(pts) > 100
+        assert np.allclose(np.hypot(pts[:, 1], pts[:, 2]), radius, atol=1e-4)
+        assert pts[:, 0].min() >= -1e-4 and pts[:, 0].max() <= 30 + 1e-4
+    # Read flat, the rotary word would be a coordinate: nothing on a cylinder.
+    assert gweave.toolpath(tube, travel=False, mandrel_diameter=None)["on_cylinder"] is True
+    flat = tmp_path / "flat.gcode"
+    flat.write_bytes(b"".join(l for l in tube.read_bytes().splitlines(keepends=True) if not l.startswith(b"; ")))
+    assert gweave.toolpath(flat, travel=False)["on_cylinder"] is False
+    again = gweave.toolpath(flat, travel=False, mandrel_diameter=20)
+    assert again["on_cylinder"] is True and np.array_equal(again["start"], tp["start"])
 
 
 

@@ -318,17 +318,24 @@ def preview(
     return data
 
 
-def toolpath(path: PathLike, *, travel: bool = True, min_len: float = 0.0) -> Dict[str, Any]:
+def toolpath(
+    path: PathLike, *, travel: bool = True, min_len: float = 0.0, mandrel_diameter: Optional[float] = None
+) -> Dict[str, Any]:
     """A file's segments as NumPy arrays (NumPy is needed for this function only).
 
     Keys: ``start`` and ``end`` (float32, shape (n, 3), mm), ``tool`` (uint16), ``feature`` (uint8,
     an index into ``feature_names``), ``feed_mm_s`` (float32), ``layer`` (uint32), ``extruding``
-    (bool); plus ``feature_names`` and ``layer_z`` (lists). ``min_len`` (mm) merges chained moves
-    shorter than that, for huge files; ``travel=False`` keeps extruding moves only.
+    (bool); plus ``feature_names`` and ``layer_z`` (lists) and ``on_cylinder``. ``min_len`` (mm)
+    merges chained moves shorter than that, for huge files; ``travel=False`` keeps extruding moves
+    only. A rotary program (``gweave rotary`` output, whose header names the machine, or any file
+    with ``mandrel_diameter``) comes out in 3D on its cylinder, the mandrel along X: ``on_cylinder``
+    is true, ``layer_z`` holds each layer's radius and ``feed_mm_s`` the surface speed.
     """
     import numpy as np
 
-    n, cols = _gweave.toolpath_columns(os.fspath(path), travel=travel, min_len=min_len)
+    n, cols = _gweave.toolpath_columns(
+        os.fspath(path), travel=travel, min_len=min_len, mandrel_diameter=mandrel_diameter
+    )
     dtypes = {"tool": "<u2", "feature": "u1", "feed_mm_s": "<f4", "layer": "<u4", "extruding": "u1"}
     out: Dict[str, Any] = {
         "start": np.frombuffer(cols["start"], dtype="<f4").reshape(n, 3),
@@ -339,6 +346,7 @@ def toolpath(path: PathLike, *, travel: bool = True, min_len: float = 0.0) -> Di
     out["extruding"] = out["extruding"].astype(bool)
     out["feature_names"] = cols["feature_names"]
     out["layer_z"] = cols["layer_z"]
+    out["on_cylinder"] = cols["on_cylinder"]
     return out
 
 

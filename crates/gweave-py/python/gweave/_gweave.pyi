@@ -91,7 +91,9 @@ def preview_bytes(
     mandrel_diameter: Optional[float] = None,
     head: Optional[str] = None,
 ) -> bytes: ...
-def toolpath_columns(path: str, *, travel: bool = True, min_len: float = 0.0) -> Tuple[int, Dict[str, Any]]: ...
+def toolpath_columns(
+    path: str, *, travel: bool = True, min_len: float = 0.0, mandrel_diameter: Optional[float] = None
+) -> Tuple[int, Dict[str, Any]]: ...
 
 class Line:
     number: int

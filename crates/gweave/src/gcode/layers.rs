@@ -228,6 +228,13 @@ impl Structure {
         Structure { markers, ..Structure::default() }
     }
 
+    /// The current layer when the file marks its layers with comments; `None` when it does not
+    /// (layers are then only guessed from Z changes, which mean nothing in, say, a rotary
+    /// program whose Z is the radius).
+    pub fn commented_layer(&self) -> Option<u32> {
+        self.layer.filter(|_| self.marked_layers)
+    }
+
     /// A layer marker: the file marks its layers, so layers guessed from Z so far (a purge line
     /// in the start G-code) did not count.
     fn marked_layer(&mut self, z_mm: Option<f64>) {

@@ -39,7 +39,7 @@ pub mod svg;
 pub mod toolpath;
 pub mod view;
 
-use std::io::{self, Read, Write};
+use std::io::{self, Write};
 use std::path::Path;
 
 use crate::gcode::state::State;
@@ -120,7 +120,7 @@ impl PreviewOptions {
 
     fn toolpath_options(&self, path: &Path, keep_all_layers: bool) -> Result<ToolpathOptions, RenderError> {
         let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
-        let rotary = rotary_machine(path, self).map(|m| RotaryReading::new(&m)).transpose()?;
+        let rotary = RotaryReading::for_file(path, self.rotary.as_ref())?;
         Ok(ToolpathOptions {
             // The viewer shows every layer; pictures need only theirs.
             layers: if keep_all_layers { None } else { self.view.layers.clone() },
@@ -140,19 +140,6 @@ impl PreviewOptions {
 /// pixels of a 1200 x 900 picture, so a file of any size is drawn in bounded memory and loses only
 /// detail finer than a pixel or two (see [`ToolpathOptions::max_segments`]).
 const MAX_SEGMENTS: usize = 1 << 21;
-
-/// Bytes at the start of a file searched for a rotary header.
-const HEADER_BYTES: u64 = 4096;
-
-/// The rotary machine `path` is drawn on: `options.rotary`, else the one its header names.
-fn rotary_machine(path: &Path, options: &PreviewOptions) -> Option<RotaryConfig> {
-    if let Some(m) = &options.rotary {
-        return Some(m.clone());
-    }
-    let mut head = Vec::new();
-    std::fs::File::open(path).ok()?.take(HEADER_BYTES).read_to_end(&mut head).ok()?;
-    RotaryConfig::from_header(&String::from_utf8_lossy(&head))
-}
 
 /// Feeds every line to two passes (a toolpath and the statistics, in one read of the file).
 struct Both<'a>(&'a mut dyn Pass, &'a mut dyn Pass);

@@ -387,7 +387,7 @@ impl Pass for ToolpathPass {
                         extruding: false,
                         mix_rgb,
                     };
-                    self.cylinder_move(&m, st.layer, template);
+                    self.cylinder_move(&m, st.commented_layer(), template);
                     return Ok(());
                 }
                 // Only the start G-code (purge lines) is left out: the end G-code's parking is

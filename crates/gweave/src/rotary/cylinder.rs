@@ -322,6 +322,15 @@ impl RotaryConfig {
         ]
     }
 
+    /// The machine named by the header of the file at `path`, read from its first 4 KiB;
+    /// `None` if it cannot be read or has no such header.
+    pub fn from_file_header(path: &std::path::Path) -> Option<RotaryConfig> {
+        use std::io::Read;
+        let mut head = Vec::new();
+        std::fs::File::open(path).ok()?.take(4096).read_to_end(&mut head).ok()?;
+        Self::from_header(&String::from_utf8_lossy(&head))
+    }
+
     /// The machine named by a program's header ([`Self::header_lines`]) in `text`, the start
     /// of a file; `None` if it has no such header (or a malformed one).
     pub fn from_header(text: &str) -> Option<RotaryConfig> {

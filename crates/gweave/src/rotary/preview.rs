@@ -145,6 +145,15 @@ impl RotaryReading {
         Ok(Self { machine: machine.clone(), axes })
     }
 
+    /// How the file at `path` reads: on `machine` when given, else on the machine its header
+    /// names ([`RotaryConfig::from_file_header`]); `None` for a flat file.
+    pub fn for_file(path: &std::path::Path, machine: Option<&RotaryConfig>) -> Result<Option<Self>> {
+        match machine.cloned().or_else(|| RotaryConfig::from_file_header(path)) {
+            Some(m) => Self::new(&m).map(Some),
+            None => Ok(None),
+        }
+    }
+
     /// `mv` as the machine runs it.
     pub fn read(&self, mv: &Move) -> RotaryMove {
         let words = |pos: &Position| self.axes.map(|i| pos[i]);
@@ -179,7 +188,7 @@ impl Pass for Reader {
             let feature = ctx.state.structure.feature;
             let bead =
                 Bead { from: m.from, to: m.to, e_mm: m.e_mm, speed_mm_s: m.speed_mm_s(), feature, layer: 0 };
-            self.beads.push((bead, ctx.state.structure.layer));
+            self.beads.push((bead, ctx.state.structure.commented_layer()));
         }
         Ok(())
     }
