@@ -444,6 +444,17 @@ mod tests {
         }
     }
 
+    /// `G<g>` followed by each word as (letter, number, the gap before it).
+    fn motion_line(g: u8, words: &[(String, String, String)]) -> String {
+        let mut raw = format!("G{g}");
+        for (letter, number, gap) in words {
+            raw.push_str(gap);
+            raw.push_str(letter);
+            raw.push_str(number);
+        }
+        raw
+    }
+
     proptest::proptest! {
         /// The fast path and the general grammar agree on every line the fast path accepts,
         /// numbers of every length and position in the line included.
@@ -452,12 +463,7 @@ mod tests {
             g in 0u8..2,
             words in proptest::collection::vec(("[XYZEFIx]", "-?[0-9]{0,9}(\\.[0-9]{0,9})?[.+-]?", " {1,2}"), 0..6),
         ) {
-            let mut raw = format!("G{g}");
-            for (letter, number, gap) in &words {
-                raw.push_str(gap);
-                raw.push_str(letter);
-                raw.push_str(number);
-            }
+            let raw = motion_line(g, &words);
             let mut fast = Block::default();
             fast.clear();
             if plain_motion(raw.as_bytes(), &mut fast) {
@@ -472,12 +478,7 @@ mod tests {
             g in 0u8..2,
             words in proptest::collection::vec(("[XYZEF]", "-?[0-9]{1,9}(\\.[0-9]{1,6})?", " {1,2}"), 0..6),
         ) {
-            let mut raw = format!("G{g}");
-            for (letter, number, gap) in &words {
-                raw.push_str(gap);
-                raw.push_str(letter);
-                raw.push_str(number);
-            }
+            let raw = motion_line(g, &words);
             let mut fast = Block::default();
             proptest::prop_assert!(plain_motion(raw.as_bytes(), &mut fast), "{}", raw);
             proptest::prop_assert_eq!(fast.words.len(), words.len());
