@@ -32,7 +32,7 @@ use std::io::{self, Write};
 use std::ops::RangeInclusive;
 use std::path::Path;
 
-use crate::gcode::layers::{Feature, Region};
+use crate::gcode::layers::{Feature, Region, Structure};
 use crate::gcode::state::{Effect, Move, Path as MovePath, E, X, Y, Z};
 use crate::gen::printhead::PrintheadProfile;
 use crate::pass::{Ctx, Pass, Quiet, Run};
@@ -294,19 +294,19 @@ impl ToolpathPass {
     /// A move of a rotary program: the chord between the nozzle's points on the cylinder (a
     /// bead is a short helix). Nothing is left out as start G-code: a wrapped purge line is
     /// printed on the mandrel too.
-    fn cylinder_move(&mut self, m: &RotaryMove, layer: Option<u32>, template: Segment) {
+    fn cylinder_move(&mut self, m: &RotaryMove, st: &Structure, tool: u16, mix_rgb: [u8; 3]) {
         let extruding = m.is_bead();
         if !m.moved || (!extruding && !self.options.travel) {
             return;
         }
-        let layer = self.cylinder.layer(layer, m);
+        let layer = self.cylinder.layer(st.commented_layer(), m);
         let ranked = layer & PROVISIONAL == 0;
         if ranked && self.options.layers.as_ref().is_some_and(|r| !r.contains(&layer)) {
             return;
         }
         let point = |p: CylPoint| p.to_cartesian().map(|v| v as f32);
         let (start, end, feed_mm_s) = (point(m.from), point(m.to), m.speed_mm_s() as f32);
-        self.push(Segment { start, end, feed_mm_s, layer, extruding, ..template });
+        self.push(Segment { start, end, tool, feature: st.feature, feed_mm_s, layer, extruding, mix_rgb });
     }
 
     /// A fire command of an inkjet head: its drops as dots.
@@ -377,17 +377,7 @@ impl Pass for ToolpathPass {
                 };
                 let tool = ctx.state.tool.min(u16::MAX as u32) as u16;
                 if let Some(m) = self.options.rotary.as_ref().map(|r| r.read(m)) {
-                    let template = Segment {
-                        start: [0.0; 3],
-                        end: [0.0; 3],
-                        tool,
-                        feature: st.feature,
-                        feed_mm_s: 0.0,
-                        layer: 0,
-                        extruding: false,
-                        mix_rgb,
-                    };
-                    self.cylinder_move(&m, st.commented_layer(), template);
+                    self.cylinder_move(&m, st, tool, mix_rgb);
                     return Ok(());
                 }
                 // Only the start G-code (purge lines) is left out: the end G-code's parking is
