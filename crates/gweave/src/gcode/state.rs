@@ -328,6 +328,13 @@ impl State {
                 self.effect = Effect::Dwell { t_s };
             }
             10 if block.words.is_empty() => self.firmware_retract(true),
+            // RepRapFirmware `G10 P<tool> S<active> [R<standby>]` (PrusaSlicer's way of heating
+            // for that flavour, then `M116` waits): the tool's working temperature.
+            10 => {
+                if let Some(s) = block.get(b'S') {
+                    self.set_hotend(block.get(b'P'), s);
+                }
+            }
             11 => self.firmware_retract(false),
             20 => self.inches = true,
             21 => self.inches = false,
@@ -378,14 +385,7 @@ impl State {
             83 => self.absolute_e = false,
             104 | 109 => {
                 if let Some(s) = block.get(b'S').or_else(|| block.get(b'R')) {
-                    let tool = block.get(b'T').map_or(self.tool as usize, |t| t.max(0.0) as usize);
-                    if tool < 256 {
-                        if self.thermal.hotend_c.len() <= tool {
-                            self.thermal.hotend_c.resize(tool + 1, 0.0);
-                        }
-                        self.thermal.hotend_c[tool] = s;
-                        self.thermal.hotend_set = true;
-                    }
+                    self.set_hotend(block.get(b'T'), s);
                 }
             }
             140 | 190 => {
@@ -401,6 +401,18 @@ impl State {
                 }
             }
             _ => {}
+        }
+    }
+
+    /// The hotend target of `tool` (the current tool when the command names none), °C.
+    fn set_hotend(&mut self, tool: Option<f64>, celsius: f64) {
+        let tool = tool.map_or(self.tool as usize, |t| t.max(0.0) as usize);
+        if tool < 256 {
+            if self.thermal.hotend_c.len() <= tool {
+                self.thermal.hotend_c.resize(tool + 1, 0.0);
+            }
+            self.thermal.hotend_c[tool] = celsius;
+            self.thermal.hotend_set = true;
         }
     }
 
@@ -494,6 +506,17 @@ mod tests {
         assert_eq!(rel.filament_mm[0], 2.5);
         assert_eq!(abs.pos[X], 30.0);
         assert_eq!(rel.pos[E], 2.5);
+    }
+
+    #[test]
+    fn reprapfirmware_g10_with_words_sets_a_tool_temperature_not_a_retraction() {
+        let mut s = State::default();
+        let effects = run(&mut s, "T1\nG10 P0 S215 R170\nG10 S190\nM116\nG1 X10 E1 F600");
+        assert_eq!(s.thermal.hotend_c, vec![215.0, 190.0]);
+        assert!(s.thermal.hotend_set);
+        assert!(!s.fw_retracted);
+        assert_eq!(effects[1], Effect::None);
+        assert_eq!(s.filament_mm[1], 1.0);
     }
 
     #[test]
