@@ -46,7 +46,10 @@ pub enum ConfigError {
     Negative { what: &'static str, value: f64 },
     #[error("{what} must be a number, got {value}")]
     NotFinite { what: &'static str, value: f64 },
-    #[error("no purge amount: give purge_mm, purge_mm3, colours, pairs or a washout tolerance")]
+    #[error(
+        "no purge amount: give `--purge MM` or `--purge-mm3 MM3` (Python: `purge=`, `purge_mm3=`), or in the config \
+         purge_mm, purge_mm3, colours, pairs or a washout tolerance"
+    )]
     NoPurge,
     #[error("give either purge_mm or purge_mm3, not both")]
     BothPurges,
