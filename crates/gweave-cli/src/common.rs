@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use gweave::gcode::writer::Target;
+use gweave::gcode::writer::{write_file, Target};
 use serde::Serialize;
 
 /// Where a transform writes.
@@ -52,13 +52,11 @@ impl ReportArgs {
     pub fn emit<T: Serialize>(&self, value: &T) -> Result<bool> {
         use std::io::Write as _;
         if let Some(path) = &self.report {
-            let write = || -> Result<()> {
-                let mut file = std::io::BufWriter::new(std::fs::File::create(path)?);
-                serde_json::to_writer_pretty(&mut file, value)?;
-                writeln!(file)?;
-                Ok(file.flush()?)
-            };
-            write().with_context(|| format!("writing {}", path.display()))?;
+            write_file(path, |out| -> Result<()> {
+                serde_json::to_writer_pretty(&mut *out, value)?;
+                Ok(writeln!(out)?)
+            })
+            .with_context(|| format!("writing {}", path.display()))?;
         }
         if self.json {
             let mut stdout = std::io::BufWriter::new(std::io::stdout().lock());

@@ -14,6 +14,7 @@ use std::path::Path;
 
 use thiserror::Error;
 
+use gweave::gcode::writer::write_file;
 use gweave::render::png_out::encode as encode_image;
 use gweave::render::raster::Image;
 
@@ -33,14 +34,9 @@ pub enum PlotError {
     /// Writing the bytes failed.
     #[error("writing the plot: {0}")]
     Write(#[from] std::io::Error),
-    /// The file could not be created.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: std::path::PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
+    /// The file could not be created or renamed into place.
+    #[error(transparent)]
+    Output(#[from] gweave::Error),
 }
 
 const WIDTH: usize = 900;
@@ -151,11 +147,7 @@ pub fn write_speed_png<W: Write>(trace: &SpeedTrace, layer_s: &[f64], mut out: W
 
 /// [`write_speed_png`] into a file.
 pub fn save_speed_png(trace: &SpeedTrace, layer_s: &[f64], path: &Path) -> Result<(), PlotError> {
-    let io = |source| PlotError::Io { path: path.to_path_buf(), source };
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut out = std::io::BufWriter::new(file);
-    write_speed_png(trace, layer_s, &mut out)?;
-    out.flush().map_err(io)
+    write_file(path, |out| write_speed_png(trace, layer_s, out).map(drop))
 }
 
 /// Draws the series and writes a PNG to `out`.
@@ -195,11 +187,7 @@ pub fn write_temperature_png<W: Write>(series: &TimeSeries, mut out: W) -> Resul
 
 /// [`write_temperature_png`] into a file.
 pub fn save_temperature_png(series: &TimeSeries, path: &Path) -> Result<(), PlotError> {
-    let io = |source| PlotError::Io { path: path.to_path_buf(), source };
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut out = std::io::BufWriter::new(file);
-    write_temperature_png(series, &mut out)?;
-    out.flush().map_err(io)
+    write_file(path, |out| write_temperature_png(series, out))
 }
 
 #[cfg(test)]

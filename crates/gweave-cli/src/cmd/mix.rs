@@ -1,7 +1,7 @@
 //! `gweave mix`: rewrite slicer G-code for a mixing hotend (see `docs/mix.md`).
 
 use std::io::{IsTerminal, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
@@ -9,6 +9,7 @@ use clap::{Args, ValueEnum};
 use gweave::colour::palette::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
 use gweave::colour::{MixingModel, Srgb8};
+use gweave::gcode::writer::write_file;
 use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
@@ -130,7 +131,7 @@ fn profile(args: &MixArgs) -> Result<MixProfile> {
     Ok(profile)
 }
 
-fn write_swatch(profile: &MixProfile, has_job: bool, png: &PathBuf) -> Result<()> {
+fn write_swatch(profile: &MixProfile, has_job: bool, png: &Path) -> Result<()> {
     let layout = SwatchLayout::default();
     let bytes = if has_job {
         let plan = Plan::new(profile)?;
@@ -146,7 +147,8 @@ fn write_swatch(profile: &MixProfile, has_job: bool, png: &PathBuf) -> Result<()
         let palette = Palette::seed().with_config(PaletteConfig { mix: profile.mix.clone() });
         render_resolved_png(&palette.resolve_all(&model)?, &layout)?
     };
-    std::fs::write(png, bytes).with_context(|| format!("writing {}", png.display()))
+    write_file(png, |out| -> Result<()> { Ok(out.write_all(&bytes)?) })
+        .with_context(|| format!("writing {}", png.display()))
 }
 
 fn wizard(args: &MixArgs) -> Result<ExitCode> {
@@ -158,7 +160,8 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
     println!();
     match &args.config {
         Some(path) => {
-            std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
+            write_file(path, |out| -> Result<()> { Ok(out.write_all(text.as_bytes())?) })
+                .with_context(|| format!("writing {}", path.display()))?;
             println!(
                 "Wrote {}. Next: gweave mix part.gcode -c {} -o part.mix.gcode",
                 path.display(),

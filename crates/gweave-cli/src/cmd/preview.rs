@@ -1,5 +1,6 @@
 //! `gweave preview`: a picture (PNG, SVG) or an interactive page (HTML) of what a file prints.
 
+use std::io::Write;
 use std::ops::RangeInclusive;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -7,6 +8,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::colour::Srgb8;
+use gweave::gcode::writer::write_file;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::post::mix::profile::MixProfile;
 use gweave::render::{
@@ -127,6 +129,7 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
     let mut bar = Bar::new(args.quiet);
     let bytes = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
     drop(bar);
-    std::fs::write(&args.output, bytes).with_context(|| format!("writing {}", args.output.display()))?;
+    write_file(&args.output, |out| -> Result<()> { Ok(out.write_all(&bytes)?) })
+        .with_context(|| format!("writing {}", args.output.display()))?;
     Ok(ExitCode::SUCCESS)
 }

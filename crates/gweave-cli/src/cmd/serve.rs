@@ -11,6 +11,7 @@ use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use gweave::gcode::writer::write_file;
 use gweave_sim::interp::Machine;
 use gweave_sim::profile::MachineProfile;
 use gweave_sim::pty::PtyEndpoint;
@@ -106,7 +107,7 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
             machine.finish(&mut |_, _| {});
             let written = serde_json::to_string_pretty(&machine.report())
                 .map_err(anyhow::Error::from)
-                .and_then(|text| std::fs::write(path, text + "\n").map_err(anyhow::Error::from));
+                .and_then(|text| write_file(path, |out| -> Result<()> { Ok(writeln!(out, "{text}")?) }));
             if let Err(e) = written {
                 report_error = Some(e.context(format!("writing {}", path.display())));
             }

@@ -110,6 +110,18 @@ impl Output {
     }
 }
 
+/// Writes a whole side file (a JSON report, an image, a profile) the way every output is
+/// written: into a temporary file beside `path`, renamed into place only once `write` has
+/// succeeded, so a failure leaves the old file (or none) rather than part of a new one.
+pub fn write_file<E: From<Error>>(
+    path: &Path,
+    write: impl FnOnce(&mut Output) -> Result<(), E>,
+) -> Result<(), E> {
+    let mut out = Output::create(&Target::File(path.to_path_buf()), None)?;
+    write(&mut out)?;
+    Ok(out.commit()?)
+}
+
 impl Write for Output {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         match &mut self.sink {
@@ -174,6 +186,23 @@ mod tests {
         }
         assert!(!dest.exists());
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    /// A report or image whose writing fails half-way leaves the previous file whole.
+    #[test]
+    fn a_side_file_is_replaced_only_when_written_whole() {
+        let dir = tempfile::tempdir().unwrap();
+        let report = dir.path().join("r.json");
+        fs::write(&report, b"{\"old\": 1}\n").unwrap();
+        let failed: Result<(), Error> = write_file(&report, |out| {
+            out.write_all(b"{\"new\":").map_err(|e| Error::io("r.json", e))?;
+            Err(Error::io("r.json", io::Error::other("encoder failed")))
+        });
+        assert!(failed.is_err());
+        assert_eq!(fs::read(&report).unwrap(), b"{\"old\": 1}\n");
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1);
+        write_file(&report, |out| out.write_all(b"{}\n").map_err(|e| Error::io("r.json", e))).unwrap();
+        assert_eq!(fs::read(&report).unwrap(), b"{}\n");
     }
 
     #[test]

@@ -19,6 +19,9 @@ use thiserror::Error;
 pub enum BitmapError {
     #[error("{path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
+    /// Writing the image file (see [`crate::gcode::writer::write_file`]).
+    #[error(transparent)]
+    Output(#[from] crate::error::Error),
     #[error("PNG decode: {0}")]
     PngDecode(#[from] png::DecodingError),
     #[error("PNG encode: {0}")]
@@ -310,8 +313,7 @@ impl Bitmap {
 
     /// Writes a 1-bit PNG file.
     pub fn save_png(&self, path: &Path) -> Result<(), BitmapError> {
-        let file = std::fs::File::create(path).map_err(|e| io_err(path, e))?;
-        self.write_png(std::io::BufWriter::new(file))
+        crate::gcode::writer::write_file(path, |out| self.write_png(out))
     }
 }
 

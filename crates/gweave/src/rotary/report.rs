@@ -22,7 +22,7 @@ use super::helix::{Handedness, ProgramSummary, TubeParams};
 use super::preview::{self, LayerSummary, PreviewOptions, Program};
 use super::wrap::{from_engine, Wrap, WrapConfig};
 use super::{Result, RotaryError};
-use crate::gcode::writer::{Output, Target};
+use crate::gcode::writer::{write_file, Output, Target};
 use crate::pass::Run;
 
 /// Bead width drawn in the preview of a wrapped part, mm: 0, thin (2 px) toolpaths, so that
@@ -178,7 +178,8 @@ fn read_back(
     let program = preview::read_back(machine, BufReader::new(File::open(path)?))?;
     if let Some(png) = preview {
         let options = PreviewOptions { bead_width_mm, line_px: 2, ..PreviewOptions::default() };
-        preview::render(&program.beads, &options).write_png(BufWriter::new(File::create(png)?))?;
+        let image = preview::render(&program.beads, &options);
+        write_file(png, |out| -> Result<()> { Ok(image.write_png(out)?) })?;
     }
     Ok(Some(program))
 }
