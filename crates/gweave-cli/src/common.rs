@@ -81,6 +81,13 @@ pub fn parse_xyz(text: &str) -> Result<[f64; 3], String> {
     }
 }
 
+/// Writes `bytes` to `path` through a temporary file renamed into place (see `write_file`).
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    use std::io::Write as _;
+    write_file(path, |out| -> Result<()> { Ok(out.write_all(bytes)?) })
+        .with_context(|| format!("writing {}", path.display()))
+}
+
 /// A text file the user named (a profile, a G-code snippet), with its name in the error.
 pub fn read_text(path: &Path) -> Result<String> {
     std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))

@@ -4,18 +4,17 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use gweave::colour::palette::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
 use gweave::colour::{MixingModel, Srgb8};
-use gweave::gcode::writer::write_file;
 use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{mix_file, wizard::run_wizard};
 
-use crate::common::{load_or_default, OutputArgs, ReportArgs};
+use crate::common::{load_or_default, write_bytes, OutputArgs, ReportArgs};
 use crate::progress::Bar;
 
 /// Colour a print on a mixing hotend: define mixes as virtual tools, change them by layer, by
@@ -147,8 +146,7 @@ fn write_swatch(profile: &MixProfile, has_job: bool, png: &Path) -> Result<()> {
         let palette = Palette::seed().with_config(PaletteConfig { mix: profile.mix.clone() });
         render_resolved_png(&palette.resolve_all(&model)?, &layout)?
     };
-    write_file(png, |out| -> Result<()> { Ok(out.write_all(&bytes)?) })
-        .with_context(|| format!("writing {}", png.display()))
+    write_bytes(png, &bytes)
 }
 
 fn wizard(args: &MixArgs) -> Result<ExitCode> {
@@ -160,8 +158,7 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
     println!();
     match &args.config {
         Some(path) => {
-            write_file(path, |out| -> Result<()> { Ok(out.write_all(text.as_bytes())?) })
-                .with_context(|| format!("writing {}", path.display()))?;
+            write_bytes(path, text.as_bytes())?;
             println!(
                 "Wrote {}. Next: gweave mix part.gcode -c {} -o part.mix.gcode",
                 path.display(),

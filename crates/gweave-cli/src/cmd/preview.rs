@@ -1,14 +1,12 @@
 //! `gweave preview`: a picture (PNG, SVG) or an interactive page (HTML) of what a file prints.
 
-use std::io::Write;
 use std::ops::RangeInclusive;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::Args;
 use gweave::colour::Srgb8;
-use gweave::gcode::writer::write_file;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::post::mix::profile::MixProfile;
 use gweave::render::{
@@ -16,7 +14,7 @@ use gweave::render::{
 };
 use gweave::rotary::cylinder::RotaryConfig;
 
-use crate::common::load;
+use crate::common::{load, write_bytes};
 use crate::progress::Bar;
 
 /// Draw a file: top view of a layer, isometric view of the print, or a before/after comparison.
@@ -129,7 +127,6 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
     let mut bar = Bar::new(args.quiet);
     let bytes = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
     drop(bar);
-    write_file(&args.output, |out| -> Result<()> { Ok(out.write_all(&bytes)?) })
-        .with_context(|| format!("writing {}", args.output.display()))?;
+    write_bytes(&args.output, &bytes)?;
     Ok(ExitCode::SUCCESS)
 }
