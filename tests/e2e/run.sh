@@ -48,6 +48,14 @@ cp "$DATA/cura/cura_torus.gcode" "$WORK/t.gcode"
 "$GWEAVE" cat "$WORK/t.gcode" --in-place -q
 cmp -s "$WORK/t.gcode" "$WORK/t.gcode.bak" && ok || fail "in-place backup"
 if "$GWEAVE" cat "$WORK/t.gcode" -o "$WORK/t.gcode" 2>/dev/null; then fail "overwrote input"; else ok; fi
+#    A --report naming the input is refused too, and the input stays as it was.
+cp "$WORK/t.gcode" "$WORK/t.orig"
+if "$GWEAVE" stats "$WORK/t.gcode" --report "$WORK/t.gcode" 2> "$WORK/rep.err" > /dev/null; then
+  fail "stats --report replaced its input"
+else
+  cmp -s "$WORK/t.gcode" "$WORK/t.orig" && grep -q "would overwrite the input" "$WORK/rep.err" && ok \
+    || fail "stats --report onto its input: $(cat "$WORK/rep.err")"
+fi
 
 # 6. A closed pipe ends gweave quietly, as it does `cat`: by SIGPIPE (status 141) or status 0,
 #    nothing on stderr; for the output file and for a summary, with both front ends.

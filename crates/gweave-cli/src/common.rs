@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use gweave::gcode::writer::{write_file, Target};
+use gweave::gcode::writer::{same_file, write_file, Target};
 use serde::Serialize;
 
 /// Where a transform writes.
@@ -48,10 +48,14 @@ pub struct ReportArgs {
 impl ReportArgs {
     /// Writes the JSON report file if asked; returns whether the human summary should print.
     /// The JSON is streamed to its destination, never held whole in memory (a report may carry
-    /// an entry per line or per change of a large file).
-    pub fn emit<T: Serialize>(&self, value: &T) -> Result<bool> {
+    /// an entry per line or per change of a large file). `reads` are the command's input files:
+    /// a report path naming one of them is refused rather than replacing it.
+    pub fn emit<T: Serialize>(&self, value: &T, reads: &[&Path]) -> Result<bool> {
         use std::io::Write as _;
         if let Some(path) = &self.report {
+            if reads.iter().any(|input| same_file(input, path)) {
+                bail!("--report {} would overwrite the input; name another file", path.display());
+            }
             write_file(path, |out| -> Result<()> {
                 serde_json::to_writer_pretty(&mut *out, value)?;
                 Ok(writeln!(out)?)

@@ -45,7 +45,7 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
     run.scan(&mut pass)?;
     drop(bar);
     let report = pass.report;
-    if args.report.emit(&report)? {
+    if args.report.emit(&report, &[&args.input])? {
         let name = args.input.display();
         for f in &report.findings {
             let level = match f.severity {

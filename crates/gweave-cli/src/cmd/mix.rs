@@ -93,7 +93,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");
     }
-    if args.report.emit(&report)? && !args.quiet {
+    if args.report.emit(&report, &[input])? && !args.quiet {
         print_human(&mut std::io::stdout().lock(), &report)?;
     }
     Ok(ExitCode::SUCCESS)

@@ -104,7 +104,7 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     if report.warnings_total > 20 {
         eprintln!("gweave: ... {} more warnings (see --json)", report.warnings_total - 20);
     }
-    if args.report.emit(&report)? {
+    if args.report.emit(&report, &[&args.input])? {
         // Keep standard output clean when the G-code goes there.
         if target == Target::Stdout {
             eprint!("{}", report.summary());

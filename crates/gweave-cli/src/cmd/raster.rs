@@ -152,7 +152,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     let to_stdout = args.output == Path::new("-");
     if args.test_pattern {
         let (rep, profile) = options.test_pattern(&target(&args.output), args.pattern_columns)?;
-        if args.report.emit(&rep)? && !to_stdout {
+        if args.report.emit(&rep, &[])? && !to_stdout {
             println!("{}: nozzle test pattern", args.output.display());
             println!(
                 "  {} head(s) x {} nozzles, {} columns per address, {} fire commands",
@@ -169,7 +169,8 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     let mut bar = LayerBar::new(args.quiet);
     let report = job.run(&target(&args.output), &mut bar)?;
     drop(bar);
-    if args.report.emit(&report)? && !to_stdout {
+    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    if args.report.emit(&report, &inputs)? && !to_stdout {
         print_human(&report, &job.profile);
     }
     Ok(ExitCode::SUCCESS)

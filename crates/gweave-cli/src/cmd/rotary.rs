@@ -210,7 +210,7 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     let mut bar = Bar::new(args.quiet);
     let report = report::wrap_file(&config, &args.input, &target, args.machine.preview.as_deref(), &mut bar)?;
     drop(bar);
-    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
+    if args.report.emit(&report, &[&args.input])? && !matches!(target, Target::Stdout) {
         print_wrap(&report);
     }
     Ok(ExitCode::SUCCESS)
@@ -339,7 +339,7 @@ fn run_tube(args: TubeArgs) -> Result<ExitCode> {
     let target =
         if args.output == Path::new("-") { Target::Stdout } else { Target::File(args.output.clone()) };
     let report = report::tube_file(&params, &target, args.machine.preview.as_deref())?;
-    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
+    if args.report.emit(&report, &[])? && !matches!(target, Target::Stdout) {
         print_tube(&report);
     }
     Ok(ExitCode::SUCCESS)

@@ -71,7 +71,7 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
         canvas.write_layer_pngs(dir)?;
     }
-    if args.report.emit(&report)? {
+    if args.report.emit(&report, &[&args.input])? {
         print_human(&args.input, &report, &errors);
     }
     Ok(if report.halted { ExitCode::from(1) } else { ExitCode::SUCCESS })

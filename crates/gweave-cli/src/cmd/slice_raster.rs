@@ -45,7 +45,7 @@ pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
         margin_px: args.margin,
     };
     let rep = slice_to_dir(&mesh, &cfg, &args.output)?;
-    if args.report.emit(&rep)? {
+    if args.report.emit(&rep, &[&args.model])? {
         print_human(&args, &rep, mesh.triangles.len());
     }
     Ok(ExitCode::SUCCESS)

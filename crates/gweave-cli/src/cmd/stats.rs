@@ -35,7 +35,7 @@ pub fn run(args: StatsArgs) -> Result<ExitCode> {
     let state = Run::new(&args.input, &mut bar).scan(&mut pass)?;
     drop(bar);
     let stats = pass.into_stats(&state);
-    if args.report.emit(&stats)? {
+    if args.report.emit(&stats, &[&args.input])? {
         print_human(&args.input, &stats);
     }
     Ok(ExitCode::SUCCESS)
