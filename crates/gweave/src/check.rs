@@ -73,6 +73,8 @@ pub struct CheckPass {
     relative_e_since_reset_mm: f64,
     drift_reported: bool,
     cold_reported: bool,
+    /// The file says it is for Ultimaker's Griffin firmware (Cura's `;FLAVOR:Griffin`).
+    griffin: bool,
 }
 
 impl CheckPass {
@@ -116,8 +118,11 @@ impl Pass for CheckPass {
             self.last_line_number =
                 Some(if block.command.is_m(110) { block.get(b'N').map_or(num, |v| v as i64) } else { num });
         }
+        if block.command == Command::None && block.comment_text(ctx.line.bytes) == Some(b"FLAVOR:Griffin") {
+            self.griffin = true;
+        }
         if let Command::Code { letter, number, .. } = block.command {
-            if !is_known(letter, number) {
+            if !is_known(letter, number) && !(self.griffin && is_griffin(letter, number)) {
                 let command =
                     String::from_utf8_lossy(block.command_span.of(ctx.line.bytes)).to_ascii_uppercase();
                 self.add(
@@ -228,5 +233,34 @@ pub fn is_known(letter: u8, number: u32) -> bool {
                 | 710 | 851 | 862 | 868 | 869 | 871 | 876 | 900..=918 | 928 | 929 | 950..=958 | 997..=999
         ),
         _ => false,
+    }
+}
+
+/// Codes only Ultimaker's Griffin firmware has: `G280` primes the nozzle (Cura writes it at
+/// the start and after each tool's first use on Ultimaker 3 and S-series printers).
+fn is_griffin(letter: u8, number: u32) -> bool {
+    letter == b'G' && number == 280
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pass::{drive_reader, Quiet, Strictness};
+    use std::path::Path;
+
+    fn unknown_commands(text: &str) -> Vec<(u64, String)> {
+        let mut pass = CheckPass::new(CheckOptions::default());
+        let (options, strict) = (Default::default(), Strictness::Lenient);
+        drive_reader(text.as_bytes(), Path::new("t.gcode"), options, strict, &mut Quiet, &mut pass, &mut io::sink())
+            .unwrap();
+        pass.report.findings.iter().map(|f| (f.line, f.diagnostic.finding.to_string())).collect()
+    }
+
+    #[test]
+    fn g280_is_known_only_to_griffin_files() {
+        let found = unknown_commands(";FLAVOR:Marlin\nG280\nG281\n");
+        assert_eq!(found, [(2, "unknown command G280".into()), (3, "unknown command G281".into())]);
+        let found = unknown_commands(";FLAVOR:Griffin\nG280\nG281\n");
+        assert_eq!(found, [(3, "unknown command G281".to_string())]);
     }
 }
