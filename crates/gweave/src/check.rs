@@ -122,7 +122,7 @@ impl Pass for CheckPass {
             self.griffin = true;
         }
         if let Command::Code { letter, number, .. } = block.command {
-            if !is_known(letter, number) && !(self.griffin && is_griffin(letter, number)) {
+            if !(is_known(letter, number) || self.griffin && is_griffin(letter, number)) {
                 let command =
                     String::from_utf8_lossy(block.command_span.of(ctx.line.bytes)).to_ascii_uppercase();
                 self.add(
