@@ -33,6 +33,10 @@ PY
   --json -q > "$WORK/flags.json"
 python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert (r['changes'], r['purge']['count']) == (1, 1), r" \
   "$WORK/flags.json"
+#    To standard output: the G-code alone (the summary goes to stderr), the same bytes as -o FILE.
+"$GWEAVE" mix "$DATA/cura/cura_torus.gcode" --at-layer 0=Orange --at-layer 10=Magenta -o - \
+  2> "$WORK/flags.err" | cmp - "$WORK/flags.gcode"
+grep -q '^changes *1$' "$WORK/flags.err"
 
 # 3. As PrusaSlicer calls a post-processing script: options first, the file path last, in place.
 cp "$DATA/prusaslicer/pr_torus_pva.gcode" "$WORK/pva.gcode"

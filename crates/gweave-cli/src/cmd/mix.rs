@@ -9,6 +9,7 @@ use clap::{Args, ValueEnum};
 use gweave::colour::palette::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
 use gweave::colour::{MixingModel, Srgb8};
+use gweave::gcode::writer::Target;
 use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
@@ -94,7 +95,12 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         eprintln!("gweave: warning: {w}");
     }
     if args.report.emit(&report, &[input])? && !args.quiet {
-        print_human(&mut std::io::stdout().lock(), &report)?;
+        // Keep standard output clean when the G-code goes there.
+        if target == Target::Stdout {
+            print_human(&mut std::io::stderr().lock(), &report)?;
+        } else {
+            print_human(&mut std::io::stdout().lock(), &report)?;
+        }
     }
     Ok(ExitCode::SUCCESS)
 }
