@@ -20,6 +20,13 @@ for f in "$DATA"/*/*.gcode; do
   "$PYGWEAVE" cat "$f" -o - -q | cmp -s "$f" - && ok || fail "python cat to stdout changed $f"
 done
 
+#    The summary counts what was copied (here with --lenient past a malformed line).
+printf 'G1 X1\r\nG1 Y2..3\nG1 X2' > "$WORK/lenient.gcode"
+"$GWEAVE" cat "$WORK/lenient.gcode" -o "$WORK/lenient.out" --lenient --json > "$WORK/cat.json"
+cmp -s "$WORK/lenient.gcode" "$WORK/lenient.out" && ok || fail "cat --lenient changed the file"
+python3 -c 'import json,sys; r=json.load(open(sys.argv[1])); assert r == {"lines": 3, "bytes": 21, "malformed_lines": 1, "first_malformed_line": 2}, r' \
+  "$WORK/cat.json" && ok || fail "cat --json: $(cat "$WORK/cat.json")"
+
 # 2. stats --json equals PrusaSlicer's own filament figures.
 "$GWEAVE" stats "$DATA/prusaslicer/pr_torus_pva.gcode" --json > "$WORK/s.json"
 python3 - "$WORK/s.json" <<'PY' && ok || fail "stats figures"

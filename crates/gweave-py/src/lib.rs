@@ -71,17 +71,27 @@ fn check_json(
 }
 
 /// Parse a file and write it back unchanged (atomically); `output=None` with `in_place=True`
-/// replaces the input, keeping `<path>.bak` unless `backup=False`.
+/// replaces the input, keeping `<path>.bak` unless `backup=False`. Returns what was copied as
+/// JSON text (see `gweave cat --json`).
 #[pyfunction]
 #[pyo3(signature = (path, output=None, *, in_place=false, backup=true))]
-fn cat(py: Python<'_>, path: PathBuf, output: Option<PathBuf>, in_place: bool, backup: bool) -> PyResult<()> {
+fn cat_json(
+    py: Python<'_>,
+    path: PathBuf,
+    output: Option<PathBuf>,
+    in_place: bool,
+    backup: bool,
+) -> PyResult<String> {
     let target = match (output, in_place) {
         (_, true) => Target::InPlace { keep_backup: backup },
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
-    py.allow_threads(|| Run::new(&path, &mut Quiet).transform(&mut Identity, &target).map(|_| ()))
-        .map_err(err)
+    let report = py.allow_threads(|| {
+        let mut copy = Identity::default();
+        Run::new(&path, &mut Quiet).transform(&mut copy, &target).map(|_| copy.report)
+    });
+    to_json(&report.map_err(err)?)
 }
 
 // purge-shift
@@ -836,7 +846,7 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(stats_json, m)?)?;
     m.add_function(wrap_pyfunction!(check_json, m)?)?;
-    m.add_function(wrap_pyfunction!(cat, m)?)?;
+    m.add_function(wrap_pyfunction!(cat_json, m)?)?;
     m.add_function(wrap_pyfunction!(run_cli, m)?)?;
     // binder-jet raster
     m.add_function(wrap_pyfunction!(raster_json, m)?)?;

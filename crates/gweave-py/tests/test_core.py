@@ -49,8 +49,10 @@ def test_words_strings_and_diagnostics(tmp_path):
 def test_cat_is_byte_exact_and_never_overwrites_input(data, tmp_path):
     src = data / "slic3r" / "slic3r_cone_2tool.gcode"
     out = tmp_path / "copy.gcode"
-    gweave.cat(src, out)
+    copied = gweave.cat(src, out)
     assert filecmp.cmp(src, out, shallow=False)
+    raw = src.read_bytes()
+    assert copied == {"lines": raw.count(b"\n"), "bytes": len(raw), "malformed_lines": 0, "first_malformed_line": None}
     with pytest.raises(ValueError, match="refusing to overwrite"):
         gweave.cat(out, out)
 

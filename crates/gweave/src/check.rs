@@ -251,8 +251,16 @@ mod tests {
     fn unknown_commands(text: &str) -> Vec<(u64, String)> {
         let mut pass = CheckPass::new(CheckOptions::default());
         let (options, strict) = (Default::default(), Strictness::Lenient);
-        drive_reader(text.as_bytes(), Path::new("t.gcode"), options, strict, &mut Quiet, &mut pass, &mut io::sink())
-            .unwrap();
+        drive_reader(
+            text.as_bytes(),
+            Path::new("t.gcode"),
+            options,
+            strict,
+            &mut Quiet,
+            &mut pass,
+            &mut io::sink(),
+        )
+        .unwrap();
         pass.report.findings.iter().map(|f| (f.line, f.diagnostic.finding.to_string())).collect()
     }
 

@@ -6,6 +6,8 @@ use std::fs::File;
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 
+use serde::Serialize;
+
 use crate::error::{Error, Result};
 use crate::gcode::diag::Severity;
 use crate::gcode::lexer::parse_into;
@@ -166,33 +168,69 @@ fn output_name(input: &Path) -> PathBuf {
     PathBuf::from(p)
 }
 
-/// The identity pass: what `gweave cat` runs.
-pub struct Identity;
-impl Pass for Identity {}
+/// The identity pass: what `gweave cat` runs. It copies every line as read and counts them.
+#[derive(Debug, Default)]
+pub struct Identity {
+    pub report: CopyReport,
+}
+
+/// What [`Identity`] copied.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct CopyReport {
+    pub lines: u64,
+    /// Bytes copied, line endings included (the size of the input).
+    pub bytes: u64,
+    /// Lines with an error (a malformed word, a bad checksum...), copied as written. Only a
+    /// [`Strictness::Lenient`] run gets past one; a strict run stops at the first.
+    pub malformed_lines: u64,
+    /// The first of them, 1-based.
+    pub first_malformed_line: Option<u64>,
+}
+
+impl Pass for Identity {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        let r = &mut self.report;
+        r.lines += 1;
+        r.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
+        if ctx.block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error) {
+            r.malformed_lines += 1;
+            r.first_malformed_line.get_or_insert(ctx.line.number);
+        }
+        keep(ctx, out)
+    }
+}
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn identity(input: &[u8]) -> Vec<u8> {
-        let mut out = Vec::new();
+    fn identity(input: &[u8]) -> (Vec<u8>, CopyReport) {
+        let (mut out, mut pass) = (Vec::new(), Identity::default());
         drive_reader(
             input,
             Path::new("t"),
             StateOptions::default(),
             Strictness::Lenient,
             &mut Quiet,
-            &mut Identity,
+            &mut pass,
             &mut out,
         )
         .unwrap();
-        out
+        (out, pass.report)
     }
 
     #[test]
     fn identity_is_byte_exact_on_awkward_input() {
         let input = b"G1 X1 \t\r\n\n;\xff\xfe odd\r\nG1X1..2\n  \nno newline at end";
-        assert_eq!(identity(input), input);
+        let (out, report) = identity(input);
+        assert_eq!(out, input);
+        let expected = CopyReport {
+            lines: 6,
+            bytes: input.len() as u64,
+            malformed_lines: 1,
+            first_malformed_line: Some(4),
+        };
+        assert_eq!(report, expected);
     }
 
     #[test]
@@ -204,7 +242,7 @@ mod tests {
             StateOptions::default(),
             Strictness::Strict,
             &mut Quiet,
-            &mut Identity,
+            &mut Identity::default(),
             &mut out,
         )
         .unwrap_err();
@@ -214,13 +252,15 @@ mod tests {
     proptest::proptest! {
         #[test]
         fn identity_round_trips_any_bytes(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..2000)) {
-            proptest::prop_assert_eq!(identity(&bytes), bytes);
+            let (out, report) = identity(&bytes);
+            proptest::prop_assert_eq!(report.bytes, bytes.len() as u64);
+            proptest::prop_assert_eq!(out, bytes);
         }
 
         #[test]
         fn identity_round_trips_gcode_like_text(lines in proptest::collection::vec("[GMTXYZEFN;() *.0-9a-z\"{}\t\r-]{0,40}", 0..50), crlf: bool) {
             let text = lines.join(if crlf { "\r\n" } else { "\n" });
-            proptest::prop_assert_eq!(identity(text.as_bytes()), text.as_bytes());
+            proptest::prop_assert_eq!(identity(text.as_bytes()).0, text.as_bytes());
         }
     }
 }

@@ -30,18 +30,22 @@ fn stats(rel: &str) -> (Stats, gweave::gcode::state::State) {
 fn every_fixture_round_trips_byte_exact() {
     for rel in FIXTURES {
         let bytes = std::fs::read(data(rel)).unwrap();
-        let mut out = Vec::with_capacity(bytes.len());
+        let (mut out, mut copy) = (Vec::with_capacity(bytes.len()), Identity::default());
         drive_reader(
             &bytes[..],
             Path::new(rel),
             Default::default(),
             Strictness::Strict,
             &mut Quiet,
-            &mut Identity,
+            &mut copy,
             &mut out,
         )
         .unwrap();
         assert!(out == bytes, "{rel} did not round-trip");
+        let newlines = bytes.iter().filter(|&&b| b == b'\n').count() as u64;
+        let lines = newlines + u64::from(bytes.last() != Some(&b'\n'));
+        assert_eq!((copy.report.lines, copy.report.bytes), (lines, bytes.len() as u64), "{rel}");
+        assert_eq!(copy.report.malformed_lines, 0, "{rel}");
     }
 }
 

@@ -1,19 +1,21 @@
 //! `gweave cat`: parse and write back, unchanged. The identity every transform builds on, and a
 //! quick proof that gweave reads a file: the output is byte-identical to the input.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::pass::{Identity, Run, Strictness};
+use gweave::gcode::writer::Target;
+use gweave::pass::{CopyReport, Identity, Run, Strictness};
 
-use crate::common::OutputArgs;
+use crate::common::{OutputArgs, ReportArgs};
 use crate::progress::Bar;
 
 /// Parse a file and write it back byte for byte (checks that it parses).
 ///
-/// Example: `gweave cat part.gcode -o copy.gcode` (then `cmp part.gcode copy.gcode`).
+/// Example: `gweave cat part.gcode -o copy.gcode` (then `cmp part.gcode copy.gcode`). With
+/// `-o -` the copy goes to standard output and nothing else is printed.
 #[derive(Args, Debug)]
 pub struct CatArgs {
     /// The G-code file to read.
@@ -23,6 +25,8 @@ pub struct CatArgs {
     /// Copy malformed lines too instead of stopping at the first one.
     #[arg(long)]
     pub lenient: bool,
+    #[command(flatten)]
+    pub report: ReportArgs,
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
@@ -35,6 +39,26 @@ pub fn run(args: CatArgs) -> Result<ExitCode> {
     if args.lenient {
         run.strictness = Strictness::Lenient;
     }
-    run.transform(&mut Identity, &target)?;
+    let mut copy = Identity::default();
+    run.transform(&mut copy, &target)?;
+    drop(bar);
+    if args.report.emit(&copy.report, &[&args.input])? && target != Target::Stdout {
+        print_human(&args.input, &target, &copy.report);
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+fn print_human(input: &Path, target: &Target, r: &CopyReport) {
+    match target {
+        Target::File(out) => println!("{} -> {}", input.display(), out.display()),
+        Target::InPlace { keep_backup: true } => {
+            println!("{} (in place, kept {}.bak)", input.display(), input.display())
+        }
+        Target::InPlace { keep_backup: false } => println!("{} (in place)", input.display()),
+        Target::Stdout => {}
+    }
+    println!("  lines           {} ({:.1} MB), copied byte for byte", r.lines, r.bytes as f64 / 1e6);
+    if let Some(first) = r.first_malformed_line {
+        println!("  malformed       {} (copied as written; the first at line {first})", r.malformed_lines);
+    }
 }
