@@ -46,7 +46,7 @@ PY
 # 1. Mix colours: layer 5 is Blue, layer 15 Yellow (the dominant colour of each picture).
 "$GWEAVE" mix "$DATA/cura/cura_torus.gcode" -c "$P/bands.toml" -o "$P/bands.gcode" > /dev/null
 for l in 5 15; do
-  "$GWEAVE" preview "$P/bands.gcode" -o "$P/mix$l.png" --layer $l --colour-by mix --mix-profile "$P/bands.toml" --size 300x300 -q
+  "$GWEAVE" preview "$P/bands.gcode" -o "$P/mix$l.png" --layer $l --colour-by mix --mix-profile "$P/bands.toml" --size 300x300 -q > /dev/null
 done
 python3 - "$P" <<'PY'
 import sys; sys.path.insert(0, sys.argv[1]); from png import histogram
@@ -57,8 +57,8 @@ assert yellow[0] > 200 and yellow[1] > 180 and yellow[2] < 80, yellow
 PY
 # 2. Purge-shift moves the change to Magenta back into layer 18: that layer now shows the blend.
 "$GWEAVE" purge-shift "$P/bands.gcode" -o "$P/shifted.gcode" --purge 60 --cross-layers > /dev/null 2>&1
-"$GWEAVE" preview "$P/bands.gcode" -o "$P/l9.png" --layer 18 --colour-by mix --mix-profile "$P/bands.toml" --size 300x300 -q
-"$GWEAVE" preview "$P/shifted.gcode" -o "$P/l9s.png" --layer 18 --colour-by mix --mix-profile "$P/bands.toml" --size 300x300 -q
+"$GWEAVE" preview "$P/bands.gcode" -o "$P/l9.png" --layer 18 --colour-by mix --mix-profile "$P/bands.toml" --size 300x300 -q > /dev/null
+"$GWEAVE" preview "$P/shifted.gcode" -o "$P/l9s.png" --layer 18 --colour-by mix --mix-profile "$P/bands.toml" --size 300x300 -q > /dev/null
 python3 - "$P" <<'PY'
 import sys; sys.path.insert(0, sys.argv[1]); from png import histogram
 def orange(hist):  # blends of yellow (G 224) into magenta (G 16): red, green in between
@@ -68,7 +68,7 @@ assert before < 50 and after > 500, (before, after)
 PY
 # 3. Rotary: a tube drawn from the top is as wide as its diameter, not its circumference.
 "$GWEAVE" rotary tube -o "$P/tube.gcode" --mandrel-diameter 20 --length 30 --layers 2 > /dev/null
-"$GWEAVE" preview "$P/tube.gcode" -o "$P/tube.png" --size 400x400 -q
+"$GWEAVE" preview "$P/tube.gcode" -o "$P/tube.png" --size 400x400 -q > /dev/null
 python3 - "$P" <<'PY'
 import sys; sys.path.insert(0, sys.argv[1]); from png import read
 w, h, rows = read(sys.argv[1] + "/tube.png")
@@ -81,7 +81,7 @@ assert abs(width_px / length_px - 20.8 / 30.0) < 0.05, (width_px, length_px)
 PY
 # 4. Raster: the drops of a layer of the badge cover the image's black pixels.
 "$GWEAVE" raster "$ROOT_DIR/examples/raster/layers" -o "$P/badge.gcode" --invert > /dev/null
-"$GWEAVE" preview "$P/badge.gcode" -o "$P/badge.png" --layer 0 --size 300x300 -q
+"$GWEAVE" preview "$P/badge.gcode" -o "$P/badge.png" --layer 0 --size 300x300 -q > /dev/null
 python3 - "$P" <<'PY'
 import sys; sys.path.insert(0, sys.argv[1]); from png import histogram
 lit = sum(histogram(sys.argv[1] + "/badge.png").values())

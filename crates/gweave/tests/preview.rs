@@ -7,12 +7,14 @@
 
 use std::path::{Path, PathBuf};
 
+use gweave::pass::Quiet;
 use gweave::render::colour_by::TOOL_COLOURS;
 use gweave::render::png_out::{decode, rasterise};
 use gweave::render::raster::Image;
 use gweave::render::view::{Drawing, BACKGROUND, UNCHANGED};
 use gweave::render::{
-    drawing, preview, svg, Format, PreviewOptions, Toolpath, ToolpathOptions, ViewKind, ViewOptions,
+    drawing, preview, preview_with_progress, svg, Format, PreviewOptions, Toolpath, ToolpathOptions,
+    ViewKind, ViewOptions,
 };
 
 fn data(rel: &str) -> PathBuf {
@@ -148,6 +150,17 @@ fn compare_highlights_only_the_changed_layer() {
     .unwrap();
     assert_eq!(d.panels[1].title, format!("after - {} moves changed", moved.segments.len()));
     assert!(moved.segments.len() > 300, "{}", moved.segments.len());
+    // The report of the same preview: the moves changed on each side (layer 60 of both files,
+    // one for one), what was drawn, the legend.
+    let report = preview_with_progress(&dual(), Some(&after), Format::Svg, &options(layer(60)), &mut Quiet)
+        .unwrap()
+        .report;
+    let n = moved.segments.len();
+    assert_eq!(report.changed_moves, Some([n, n]));
+    assert_eq!(
+        (report.format, report.layers_drawn, report.strokes),
+        ("svg", Some([60, 60]), Some(d.strokes.len()))
+    );
     // Highlighted moves are drawn in their tool colours on both sides.
     let t1 = rgb(TOOL_COLOURS[1]);
     let sphere_after = d.panels[1].projection.project([114.0 + 3.0, 128.0, 12.3]);
@@ -257,4 +270,40 @@ fn skipping_hidden_strokes_leaves_the_pixels_unchanged() {
             .count();
         assert_eq!(differ, 0, "{kind}");
     }
+}
+
+/// What `gweave preview` says it drew: the layers (clipped to the file's `;LAYER:0` to `;LAYER:203`;
+/// its `;LAYER_COUNT:205` counts one more than Cura writes), the lines in the
+/// picture, the legend; the whole file in the viewer page; nothing for layers the file lacks.
+#[test]
+fn the_report_says_what_the_preview_shows() {
+    let (d, _) = draw(&dual(), None, layer(60));
+    let png = preview_with_progress(&dual(), None, Format::Png, &options(layer(60)), &mut Quiet).unwrap();
+    let r = png.report;
+    assert_eq!((r.format, r.bytes, r.width_px, r.height_px), ("png", png.bytes.len(), 1200, 900));
+    assert_eq!(
+        (r.layers_drawn, r.strokes, r.moves, r.changed_moves),
+        (Some([60, 60]), Some(d.strokes.len()), None, None)
+    );
+    assert!(d.strokes.len() > 500, "{}", d.strokes.len());
+    let legend: Vec<(&str, gweave::colour::Srgb8)> =
+        r.legend.iter().map(|e| (e.label.as_str(), e.colour)).collect();
+    assert_eq!(legend, [("T0", TOOL_COLOURS[0]), ("T1", TOOL_COLOURS[1])]);
+
+    let tail = ViewOptions { layers: Some(200..=300), ..ViewOptions::default() };
+    let r = preview_with_progress(&dual(), None, Format::Png, &options(tail), &mut Quiet).unwrap().report;
+    assert_eq!(r.layers_drawn, Some([200, 203]));
+    let past = ViewOptions { layers: Some(300..=400), ..ViewOptions::default() };
+    let r = preview_with_progress(&dual(), None, Format::Png, &options(past), &mut Quiet).unwrap().report;
+    assert_eq!((r.layers_drawn, r.strokes), (None, Some(0)));
+
+    let html =
+        preview_with_progress(&dual(), None, Format::Html, &options(ViewOptions::default()), &mut Quiet)
+            .unwrap()
+            .report;
+    let all = Toolpath::from_file(&dual(), ToolpathOptions::default()).unwrap();
+    assert_eq!(
+        (html.format, html.layers_drawn, html.moves),
+        ("html", Some([0, 203]), Some(all.segments.len()))
+    );
 }

@@ -10,11 +10,11 @@ use gweave::colour::Srgb8;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::post::mix::profile::MixProfile;
 use gweave::render::{
-    preview_with_progress, ColourBy, Format, MixColours, PreviewOptions, ViewKind, ViewOptions,
+    preview_with_progress, ColourBy, Format, MixColours, PreviewOptions, PreviewReport, ViewKind, ViewOptions,
 };
 use gweave::rotary::cylinder::RotaryConfig;
 
-use crate::common::{load, write_bytes};
+use crate::common::{load, write_bytes, ReportArgs};
 use crate::progress::Bar;
 
 /// Draw a file: top view of a layer, isometric view of the print, or a before/after comparison.
@@ -73,6 +73,8 @@ pub struct PreviewArgs {
     /// Merge chained moves shorter than this, mm (default: 0, or 0.2 for files over 32 MB).
     #[arg(long, value_name = "MM")]
     pub min_len: Option<f32>,
+    #[command(flatten)]
+    pub report: ReportArgs,
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
@@ -111,11 +113,11 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
     let options = PreviewOptions {
         view: ViewOptions {
             kind: args.view,
-            layers: args.layer.map(|l| l..=l).or(args.layers),
+            layers: args.layer.map(|l| l..=l).or(args.layers.clone()),
             width_px: args.size.0,
             height_px: args.size.1,
             colour_by: args.colour_by,
-            tool_colours: args.tool_colours,
+            tool_colours: args.tool_colours.clone(),
             travel: args.travel,
             ..ViewOptions::default()
         },
@@ -125,8 +127,49 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         printhead,
     };
     let mut bar = Bar::new(args.quiet);
-    let bytes = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
+    let preview = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
     drop(bar);
-    write_bytes(&args.output, &bytes)?;
+    write_bytes(&args.output, &preview.bytes)?;
+    let mut reads = vec![args.input.as_path()];
+    reads.extend(args.compare.as_deref());
+    if args.report.emit(&preview.report, &reads)? {
+        print_human(&args, &preview.report);
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+fn print_human(args: &PreviewArgs, r: &PreviewReport) {
+    let format = r.format.to_uppercase();
+    match &args.compare {
+        Some(b) => println!("{} vs {} -> {}", args.input.display(), b.display(), args.output.display()),
+        None => println!("{} -> {}", args.input.display(), args.output.display()),
+    }
+    let size = format!("{:.1} KB", r.bytes as f64 / 1e3);
+    println!(
+        "  {:<15} {format} {}x{} px, {size}, {} view, colour by {}",
+        "picture", r.width_px, r.height_px, r.view, r.colour_by
+    );
+    match &r.layers_drawn {
+        Some([a, b]) if a == b => println!("  layer           {a}"),
+        Some([a, b]) => println!("  layers          {a}-{b}"),
+        None => println!("  layers          none in range: the picture is empty"),
+    }
+    if let Some(n) = r.strokes {
+        println!("  drawn           {n} lines");
+    }
+    if let Some(n) = r.moves {
+        println!("  moves           {n} (a slider steps through the layers)");
+    }
+    if let Some([before, after]) = r.changed_moves {
+        println!("  changed         {before} moves of the first file, {after} of the second");
+    }
+    const SHOWN: usize = 8;
+    if !r.legend.is_empty() {
+        let mut entries: Vec<String> =
+            r.legend.iter().take(SHOWN).map(|e| format!("{} {}", e.label, e.colour)).collect();
+        if r.legend.len() > SHOWN {
+            entries.push(format!("... {} more", r.legend.len() - SHOWN));
+        }
+        println!("  legend          {}", entries.join(", "));
+    }
 }

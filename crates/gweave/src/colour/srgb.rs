@@ -14,7 +14,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// Why a `#RRGGBB` string was rejected.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -25,8 +25,8 @@ pub enum HexColourError {
 }
 
 /// An 8-bit, gamma-encoded sRGB colour.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]
-#[serde(try_from = "String")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
+#[serde(try_from = "String", into = "String")]
 pub struct Srgb8 {
     pub r: u8,
     pub g: u8,
@@ -107,6 +107,12 @@ impl FromStr for Srgb8 {
     type Err = HexColourError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Self::parse_hex(s)
+    }
+}
+
+impl From<Srgb8> for String {
+    fn from(c: Srgb8) -> String {
+        c.to_string()
     }
 }
 

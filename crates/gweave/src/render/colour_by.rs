@@ -126,7 +126,7 @@ fn ramp_table() -> Vec<[u8; 3]> {
 }
 
 /// One entry of a legend.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct LegendEntry {
     pub label: String,
     pub colour: Srgb8,

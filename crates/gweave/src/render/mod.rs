@@ -42,6 +42,8 @@ pub mod view;
 use std::io::{self, Write};
 use std::path::Path;
 
+use serde::Serialize;
+
 use crate::gcode::state::State;
 use crate::gen::printhead::PrintheadProfile;
 use crate::pass::{Ctx, Pass, Progress, Quiet, Run};
@@ -174,26 +176,87 @@ pub fn preview(
     format: Format,
     options: &PreviewOptions,
 ) -> Result<Vec<u8>, RenderError> {
-    preview_with_progress(path, compare, format, options, &mut Quiet)
+    preview_with_progress(path, compare, format, options, &mut Quiet).map(|p| p.bytes)
 }
 
-/// [`preview`], reporting reading progress.
+/// A preview's file bytes and what they show.
+pub struct Preview {
+    pub bytes: Vec<u8>,
+    pub report: PreviewReport,
+}
+
+/// What a preview shows, for `gweave preview`'s summary and `--json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PreviewReport {
+    /// `png`, `svg` or `html`.
+    pub format: &'static str,
+    pub bytes: usize,
+    /// `top` or `iso`.
+    pub view: String,
+    pub colour_by: &'static str,
+    /// Picture size (for HTML, the initial canvas), pixels.
+    pub width_px: u32,
+    pub height_px: u32,
+    /// Layers drawn, first and last, as the file numbers them (HTML: all, with a slider).
+    pub layers_drawn: Option<[u32; 2]>,
+    /// Lines drawn in the picture (PNG, SVG), after merging short chained moves; binder-jet
+    /// drops count one each.
+    pub strokes: Option<usize>,
+    /// Moves the page holds (HTML).
+    pub moves: Option<usize>,
+    /// With `--compare`: the moves of the first file the second does not have, and the reverse.
+    pub changed_moves: Option<[usize; 2]>,
+    pub legend: Vec<colour_by::LegendEntry>,
+}
+
+impl PreviewReport {
+    fn new(format: Format, bytes: usize, options: &PreviewOptions) -> Self {
+        PreviewReport {
+            format: match format {
+                Format::Png => "png",
+                Format::Svg => "svg",
+                Format::Html => "html",
+            },
+            bytes,
+            view: options.view.kind.to_string(),
+            colour_by: options.view.colour_by.name(),
+            width_px: options.view.width_px,
+            height_px: options.view.height_px,
+            layers_drawn: None,
+            strokes: None,
+            moves: None,
+            changed_moves: None,
+            legend: Vec::new(),
+        }
+    }
+}
+
+/// [`preview`], reporting reading progress, with what the preview shows.
 pub fn preview_with_progress(
     path: &Path,
     compare: Option<&Path>,
     format: Format,
     options: &PreviewOptions,
     progress: &mut dyn Progress,
-) -> Result<Vec<u8>, RenderError> {
+) -> Result<Preview, RenderError> {
     options.check()?;
-    let drawing = match format {
-        Format::Html => return html_page(path, compare, options, progress),
-        Format::Png | Format::Svg => drawing(path, compare, options, progress)?,
-    };
-    if format == Format::Svg {
-        return Ok(svg::write_svg(&drawing).into_bytes());
+    if format == Format::Html {
+        return html_page(path, compare, options, progress);
     }
-    png_out::encode(&png_out::rasterise(&drawing))
+    let d = drawing(path, compare, options, progress)?;
+    let bytes = match format {
+        Format::Svg => svg::write_svg(&d).into_bytes(),
+        _ => png_out::encode(&png_out::rasterise(&d))?,
+    };
+    let changed: Vec<usize> = d.panels.iter().filter_map(|p| p.changed_moves).collect();
+    let report = PreviewReport {
+        layers_drawn: d.layers_drawn.as_ref().map(|r| [*r.start(), *r.end()]),
+        strokes: Some(d.strokes.len()),
+        changed_moves: <[usize; 2]>::try_from(changed).ok(),
+        legend: d.legend,
+        ..PreviewReport::new(format, bytes.len(), options)
+    };
+    Ok(Preview { bytes, report })
 }
 
 /// The picture of one file, or of two compared.
@@ -220,7 +283,7 @@ fn html_page(
     compare: Option<&Path>,
     options: &PreviewOptions,
     progress: &mut dyn Progress,
-) -> Result<Vec<u8>, RenderError> {
+) -> Result<Preview, RenderError> {
     if compare.is_some() {
         return Err(RenderError::CompareHtml);
     }
@@ -232,5 +295,14 @@ fn html_page(
         layer: options.view.layers.as_ref().map(|r| *r.end()),
         tool_colours: options.view.tool_colours.clone(),
     };
-    Ok(html::write_html(&tp, Some(&stats), &html_options).into_bytes())
+    let bytes = html::write_html(&tp, Some(&stats), &html_options).into_bytes();
+    let colouring =
+        colour_by::Colouring::new(options.view.colour_by, options.view.tool_colours.clone(), &[&tp]);
+    let report = PreviewReport {
+        layers_drawn: tp.layer_count().checked_sub(1).map(|last| [0, last]),
+        moves: Some(tp.segments.len()),
+        legend: colouring.legend(&[&tp]),
+        ..PreviewReport::new(Format::Html, bytes.len(), options)
+    };
+    Ok(Preview { bytes, report })
 }

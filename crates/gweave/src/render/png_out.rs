@@ -189,6 +189,7 @@ mod tests {
             strokes: vec![],
             legend: vec![],
             panels: vec![],
+            layers_drawn: None,
         };
         d.strokes.push(Stroke {
             from: [2.0, 10.0],
@@ -227,6 +228,7 @@ mod tests {
             strokes,
             legend: vec![],
             panels: vec![],
+            layers_drawn: None,
         };
         let mut all = Image::new(60, 40, BACKGROUND);
         for s in &d.strokes {

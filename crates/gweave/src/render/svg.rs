@@ -103,6 +103,7 @@ mod tests {
             strokes,
             legend: vec![],
             panels: vec![],
+            layers_drawn: None,
         };
         let svg = write_svg(&d);
         assert_eq!(svg.matches("<path ").count(), 3);

@@ -111,6 +111,8 @@ pub struct Panel {
     pub x_px: u32,
     pub width_px: u32,
     pub title: String,
+    /// In a comparison, the moves of this side that the other file does not have.
+    pub changed_moves: Option<usize>,
     /// Where a point in mm lands in the picture.
     pub projection: Projection,
 }
@@ -124,6 +126,8 @@ pub struct Drawing {
     pub strokes: Vec<Stroke>,
     pub legend: Vec<LegendEntry>,
     pub panels: Vec<Panel>,
+    /// The layers drawn, as the file numbers them (`None`: no layer of the file is in range).
+    pub layers_drawn: Option<RangeInclusive<u32>>,
 }
 
 impl Drawing {
@@ -299,21 +303,27 @@ pub fn changed_moves(a: &Toolpath, b: &Toolpath) -> Vec<bool> {
 /// Draws one toolpath.
 pub fn draw(tp: &Toolpath, options: &ViewOptions) -> Drawing {
     let colouring = Colouring::new(options.colour_by, options.tool_colours.clone(), &[tp]);
-    let mut d = empty(options);
+    let mut d = empty(options, tp.layer_count());
     let Some((lo, hi)) = extents(options, std::iter::once(tp)) else {
         return d;
     };
     let proj = Projection::fit(options.kind, lo, hi, 0, options.width_px, options.height_px);
     d.strokes = strokes(tp, None, options, &proj, &colouring);
     d.legend = colouring.legend(&[tp]);
-    d.panels.push(Panel { x_px: 0, width_px: options.width_px, title: String::new(), projection: proj });
+    d.panels.push(Panel {
+        x_px: 0,
+        width_px: options.width_px,
+        title: String::new(),
+        changed_moves: None,
+        projection: proj,
+    });
     d
 }
 
 /// Draws `before` and `after` side by side, highlighting the moves that differ.
 pub fn draw_compare(before: &Toolpath, after: &Toolpath, options: &ViewOptions) -> Drawing {
     let colouring = Colouring::new(options.colour_by, options.tool_colours.clone(), &[before, after]);
-    let mut d = empty(options);
+    let mut d = empty(options, before.layer_count().max(after.layer_count()));
     let Some((lo, hi)) = extents(options, [before, after].into_iter()) else {
         return d;
     };
@@ -328,6 +338,7 @@ pub fn draw_compare(before: &Toolpath, after: &Toolpath, options: &ViewOptions) 
             x_px,
             width_px: half,
             title: format!("{name} - {n} moves changed"),
+            changed_moves: Some(n),
             projection: proj,
         });
     }
@@ -335,8 +346,10 @@ pub fn draw_compare(before: &Toolpath, after: &Toolpath, options: &ViewOptions) 
     d
 }
 
-fn empty(options: &ViewOptions) -> Drawing {
+/// A drawing with nothing on it yet, of a file with `layers` layers.
+fn empty(options: &ViewOptions, layers: u32) -> Drawing {
     Drawing {
+        layers_drawn: layers_drawn(options, layers),
         width_px: options.width_px,
         height_px: options.height_px,
         background: BACKGROUND,
@@ -344,6 +357,16 @@ fn empty(options: &ViewOptions) -> Drawing {
         legend: Vec::new(),
         panels: Vec::new(),
     }
+}
+
+/// The layers `options` asks for that a file with `layers` layers has.
+pub fn layers_drawn(options: &ViewOptions, layers: u32) -> Option<RangeInclusive<u32>> {
+    let last = layers.checked_sub(1)?;
+    let (first, end) = match &options.layers {
+        Some(asked) => (*asked.start(), (*asked.end()).min(last)),
+        None => (0, last),
+    };
+    (first <= end).then_some(first..=end)
 }
 
 /// The strokes of one toolpath in drawing order; with `changed`, unchanged moves are grey.
