@@ -45,6 +45,25 @@ cp "$DATA/prusaslicer/pr_torus_pva.gcode" "$WORK/pva.gcode"
 grep -q "^M163 S3 P1$" "$WORK/pva.gcode"
 [ "$(grep -c '^; gweave mix: purge' "$WORK/pva.gcode")" = 2 ]
 
+#    PrusaSlicer's RepRapFirmware flavour (said only at the end of the file), no dialect in the
+#    profile: RepRapFirmware tools (M563/M567/M568), which the virtual printer with a 4-input
+#    mixing hotend runs without an unknown command, splitting E as the report says.
+"$GWEAVE" mix "$DATA/prusaslicer/pr_sphere_rrf_fwretract.gcode" --at-layer 0=Orange --at-layer 50=Blue \
+  -o "$WORK/rrf.gcode" --json -q > "$WORK/rrf.json"
+grep -q "^M567 P1 E0.5:0.5:0:0$" "$WORK/rrf.gcode"
+! grep -q "^M16[34] " "$WORK/rrf.gcode"
+"$GWEAVE" sim "$WORK/rrf.gcode" --machine "$ROOT/examples/machines/mixing-4in.toml" --json -q > "$WORK/rrf.sim.json"
+python3 - "$WORK/rrf.json" "$WORK/rrf.sim.json" <<'PY'
+import json, sys
+mix, sim = (json.load(open(p)) for p in sys.argv[1:])
+assert (mix["dialect"], mix["flavour"]) == ("reprap", "reprapfirmware"), (mix["dialect"], mix["flavour"])
+assert sim["unknown_commands"] == {} and sim["warning_counts"] == {}, sim["warning_counts"]
+# The sim counts net filament: the file's last firmware retraction (1 mm of Blue, 0.5:0.5:0:0)
+# is never undone. Beyond that, whole steps of each input (500 per mm) and the report's 3 decimals.
+for want, got, retracted in zip(mix["filament_per_input_mm"], sim["mixing_input_mm"], [0.5, 0.5, 0, 0]):
+    assert abs(want - retracted - got) <= 0.01, (mix["filament_per_input_mm"], sim["mixing_input_mm"])
+PY
+
 # 4. The wizard, answers piped: the seed's session.
 printf '1\nn\nOrange\n0\nPink\ny\n0 0.6 0.1 0.3\n10\nBlue\n20\n\n\n\n' \
   | "$GWEAVE" mix --wizard -c "$WORK/wiz.toml" > /dev/null

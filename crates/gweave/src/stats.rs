@@ -7,6 +7,7 @@ use std::io::{self, Write};
 
 use serde::Serialize;
 
+use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
 use crate::gcode::state::{Effect, State, X, Y, Z};
 use crate::pass::{Ctx, Pass};
@@ -163,8 +164,8 @@ impl StatsPass {
             c.strip_prefix(b"filament_diameter =").or_else(|| c.strip_prefix(b"FILAMENT_DIAMETER:"))
         {
             self.figures.filament_diameter_mm = list(v).and_then(|l| l.first().copied());
-        } else if let Some(v) = c.strip_prefix(b"FLAVOR:").or_else(|| c.strip_prefix(b"gcode_flavor =")) {
-            self.figures.flavour = Some(String::from_utf8_lossy(v.trim_ascii()).into_owned());
+        } else if let Some(v) = flavour_of_comment(c) {
+            self.figures.flavour = Some(String::from_utf8_lossy(v).into_owned());
         }
     }
 }

@@ -67,7 +67,6 @@ struct Checked {
 fn run(rel: &str, profile: MixProfile) -> Checked {
     let input = std::fs::read(data(rel)).unwrap();
     let cap = profile.z_cap.max_z_feed_mm_min;
-    let dialect = profile.hardware.dialect;
     let keep = profile.tool_change.keep_slicer_retractions;
     let purge_on = profile.purge.mode != gweave::post::mix::profile::PurgeMode::Off;
     let (out, report) = mix_bytes(profile, &input).unwrap();
@@ -120,7 +119,7 @@ fn run(rel: &str, profile: MixProfile) -> Checked {
             assert!((r.iter().sum::<f64>() - 1.0).abs() < 1e-12, "RRF ratios must sum to 1: {l}");
             tools.insert(word(b'P') as u32, r);
         } else if let Some(t) = block.command.tool() {
-            assert!(dialect != Dialect::MarlinDirect, "a T line with direct mixing: {l}");
+            assert!(report.dialect != Dialect::MarlinDirect, "a T line with direct mixing: {l}");
             active = Some(tools.get(&t).unwrap_or_else(|| panic!("T{t} used before it was defined")).clone());
         }
         if let Effect::Move(m) = effect {
@@ -252,7 +251,7 @@ fn cura_torus_with_a_gradient_over_more_steps_than_tools() {
 #[test]
 fn cura_dual_with_a_tool_map() {
     let mut p = profile("tool_map.toml");
-    p.hardware.dialect = Dialect::Reprap;
+    p.hardware.dialect = Some(Dialect::Reprap);
     let c = run("cura/cura_dual.gcode", p);
     let m = &c.report.mixes;
     assert_eq!((m[0].name.as_str(), m[1].name.as_str()), ("Orange", "#2060c0"));
@@ -265,7 +264,7 @@ fn cura_dual_with_a_tool_map() {
 #[test]
 fn slic3r_cone_with_a_tool_map_and_direct_mixing() {
     let mut p = profile("tool_map.toml");
-    p.hardware.dialect = Dialect::MarlinDirect;
+    p.hardware.dialect = Some(Dialect::MarlinDirect);
     let c = run("slic3r/slic3r_cone_2tool.gcode", p);
     assert_eq!(c.report.changes, 108);
 }
@@ -315,4 +314,27 @@ fn golden_small_case() {
     let target = gweave::gcode::writer::Target::File(dest.clone());
     mix_file(profile, &dir.join("small.gcode"), &target, &mut gweave::pass::Quiet).unwrap();
     assert_eq!(std::fs::read(dest).unwrap(), std::fs::read(golden).unwrap());
+}
+
+/// A profile that names no dialect follows the file: PrusaSlicer's RepRapFirmware flavour says
+/// so only in its settings block at the very end, yet gets `M563`/`M567` from the first line of
+/// the print; a Marlin file keeps `M163`/`M164`; a dialect in the profile wins over the file.
+#[test]
+fn the_files_flavour_chooses_the_dialect_a_profile_leaves_unset() {
+    let job = "[[schedule]]\nlayer = 0\nmix = \"Orange\"\n[[schedule]]\nlayer = 50\nmix = \"Blue\"\n";
+    let sphere = "prusaslicer/pr_sphere_rrf_fwretract.gcode";
+    let c = run(sphere, MixProfile::from_toml_str(job).unwrap());
+    assert_eq!((c.report.dialect, c.report.flavour.as_deref()), (Dialect::Reprap, Some("reprapfirmware")));
+    // The ratios in force were read back from the M567 lines.
+    assert_eq!(
+        (c.ratios_by_layer[&49].as_slice(), c.ratios_by_layer[&50].as_slice()),
+        (&[ORANGE.to_vec()][..], &[BLUE.to_vec()][..])
+    );
+    assert_eq!(c.report.changes, 1);
+
+    let c = run("prusaslicer/pr_torus_pva.gcode", MixProfile::from_toml_str(job).unwrap());
+    assert_eq!((c.report.dialect, c.report.flavour.as_deref()), (Dialect::Marlin, Some("marlin2")));
+    let c =
+        run(sphere, MixProfile::from_toml_str(&format!("[hardware]\ndialect = \"marlin\"\n{job}")).unwrap());
+    assert_eq!(c.report.dialect, Dialect::Marlin);
 }

@@ -180,7 +180,10 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
 }
 
 fn print_human(out: &mut dyn Write, r: &MixReport) -> std::io::Result<()> {
-    writeln!(out, "mixes ({:?})", r.dialect)?;
+    match &r.flavour {
+        Some(f) => writeln!(out, "mixes ({:?}; the file's flavour: {f})", r.dialect)?,
+        None => writeln!(out, "mixes ({:?})", r.dialect)?,
+    }
     for m in &r.mixes {
         let tool = m.tool.map_or("-".to_owned(), |t| format!("T{t}"));
         let ratios: Vec<String> = m.ratios.iter().map(|x| format!("{x:.4}")).collect();

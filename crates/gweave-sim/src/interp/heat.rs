@@ -101,11 +101,15 @@ impl Machine {
         }
     }
 
-    /// RepRapFirmware `G10 P<tool> S<active> [R<standby>]`: the tool's hotend target (we keep
-    /// the active temperature; tools idle at standby are not simulated).
+    /// RepRapFirmware `G10 P<tool> S<active> [R<standby>]` and its successor `M568` (same
+    /// words): the tool's hotend target (we keep the active temperature; tools idle at standby
+    /// are not simulated). On a mixing hotend every tool is the one nozzle.
     pub(super) fn rrf_tool_temperature(&mut self, out: &mut dyn FnMut(f64, &str)) {
         let b = self.core.block();
-        let hotend = b.get(b'P').map_or(self.active_hotend_index(), |p| p.max(0.0) as u8);
+        let hotend = match b.get(b'P') {
+            Some(tool) if self.profile.mixing_inputs == 0 => tool.max(0.0) as u8,
+            _ => self.active_hotend_index(),
+        };
         let s = b.get(b'S');
         self.set_target(HeaterId::Hotend(hotend), s, out);
     }

@@ -356,6 +356,8 @@ impl Machine {
             // Accepted, nothing to simulate: enable motors, progress, line numbers (the serial
             // layer's), LCD message, gradient mix, RRF tool definition.
             17 | 73 | 110 | 117 | 166 | 563 => {}
+            // RepRapFirmware 3.3+ sets a tool's temperatures with M568 (as G10 P S before).
+            568 => self.rrf_tool_temperature(out),
             82 | 83 | 201 | 203 | 204 | 205 | 163..=165 | 567 => self.run_core(line, &effect, out),
             104 | 109 | 116 | 140 | 190 | 105 | 106 | 107 | 155 | 301 | 303 => {
                 self.heat_command(line, number, effect, out)

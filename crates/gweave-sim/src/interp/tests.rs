@@ -262,3 +262,27 @@ fn rrf_tool_temperature_and_m116() {
     assert_eq!(m.report().count[3], 0);
     assert_eq!(m.report().filament_mm, vec![1.0]);
 }
+
+/// `M568` (RepRapFirmware 3.3+, and what `gweave mix` writes for its RRF tools) heats like
+/// `G10 P S`; on a mixing hotend every tool's temperature is the one nozzle's.
+#[test]
+fn rrf_m568_heats_the_tools_nozzle() {
+    let mut m = machine();
+    let (r, _) = run(
+        &mut m,
+        "M568 P0 S200 R150
+M116
+G1 X10 E1 F600
+M400",
+    );
+    assert!(r.iter().all(|l| l.starts_with(" T:")), "{r:?}");
+    assert!((m.thermal().temperature(HeaterId::Hotend(0)).unwrap() - 200.0).abs() < 3.0);
+    assert_eq!(m.report().filament_mm, vec![1.0]);
+    let mut mixing = Machine::new(MachineProfile::from_toml_str("mixing_inputs = 4\n").unwrap()).unwrap();
+    let (r, _) = run(&mut mixing, "M563 P1 D0:1:2:3 H1\nM568 P1 S210 R210\nT1\nM116\nG1 X10 E1 F600\nM400");
+    assert!(r.iter().all(|l| l.starts_with(" T:")), "{r:?}");
+    assert!((mixing.thermal().temperature(HeaterId::Hotend(0)).unwrap() - 210.0).abs() < 3.0);
+    let report = mixing.report();
+    assert!(report.warning_counts.is_empty(), "{:?}", report.warning_counts);
+    assert_eq!(report.filament_mm, vec![0.0, 1.0]);
+}

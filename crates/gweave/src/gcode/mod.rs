@@ -4,6 +4,7 @@
 
 pub mod arc;
 pub mod diag;
+pub mod flavour;
 pub mod layers;
 pub mod lexer;
 pub mod line;

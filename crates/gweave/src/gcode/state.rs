@@ -330,11 +330,7 @@ impl State {
             10 if block.words.is_empty() => self.firmware_retract(true),
             // RepRapFirmware `G10 P<tool> S<active> [R<standby>]` (PrusaSlicer's way of heating
             // for that flavour, then `M116` waits): the tool's working temperature.
-            10 => {
-                if let Some(s) = block.get(b'S') {
-                    self.set_hotend(block.get(b'P'), s);
-                }
-            }
+            10 => self.rrf_tool_temperature(block),
             11 => self.firmware_retract(false),
             20 => self.inches = true,
             21 => self.inches = false,
@@ -400,7 +396,16 @@ impl State {
                     self.fw_retract_mm = self.to_mm(s);
                 }
             }
+            // RepRapFirmware 3.3+: `M568 P<tool> S<active> R<standby>`, as `G10 P S` before.
+            568 => self.rrf_tool_temperature(block),
             _ => {}
+        }
+    }
+
+    /// A RepRapFirmware tool temperature: the active one (`S`) of tool `P` (default: the current).
+    fn rrf_tool_temperature(&mut self, block: &Block) {
+        if let Some(s) = block.get(b'S') {
+            self.set_hotend(block.get(b'P'), s);
         }
     }
 
@@ -517,6 +522,19 @@ mod tests {
         assert!(!s.fw_retracted);
         assert_eq!(effects[1], Effect::None);
         assert_eq!(s.filament_mm[1], 1.0);
+    }
+
+    #[test]
+    fn reprapfirmware_m568_sets_a_tool_temperature() {
+        let mut s = State::default();
+        run(
+            &mut s,
+            "M568 P1 S205 R180
+T0
+M568 S199",
+        );
+        assert_eq!(s.thermal.hotend_c, vec![199.0, 205.0]);
+        assert!(s.thermal.hotend_set);
     }
 
     #[test]

@@ -48,6 +48,7 @@ use std::path::Path;
 
 use crate::colour::dialect::{marlin_m163_m164, marlin_m165, rrf_m563, rrf_m567};
 use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
+use crate::gcode::flavour::{flavour_in, read_flavour};
 use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z};
@@ -191,7 +192,7 @@ impl MixPass {
             "; gweave mix: {} mixes, {} inputs, {:?} dialect\n",
             self.plan.mixes.len(),
             n,
-            hw.dialect
+            hw.dialect()
         );
         let drives: Vec<u32> = (0..n as u32).collect();
         let define_rrf_tool = |t: u32, text: &mut String| -> Result<(), MixPassError> {
@@ -208,7 +209,7 @@ impl MixPass {
         for m in &self.plan.mixes {
             let Slot::Fixed(t) = m.slot else { continue };
             text.push_str(&format!("; {} = T{t}, predicted {}\n", m.label, m.predicted.to_hex()));
-            match hw.dialect {
+            match hw.dialect() {
                 Dialect::Marlin => {
                     for l in marlin_m163_m164(&m.mix, t as usize, self.plan.decimals) {
                         text.push_str(&l);
@@ -223,7 +224,7 @@ impl MixPass {
                 Dialect::MarlinDirect => {}
             }
         }
-        if hw.dialect == Dialect::Reprap && self.plan.mixes.iter().any(|m| m.slot == Slot::Rotating) {
+        if hw.dialect() == Dialect::Reprap && self.plan.mixes.iter().any(|m| m.slot == Slot::Rotating) {
             for t in self.plan.rotating_tools {
                 define_rrf_tool(t, &mut text)?;
             }
@@ -260,7 +261,7 @@ impl MixPass {
                 let t = tools[k];
                 if self.rotating[k] != Some(mix) {
                     text.push_str(&format!("; {} = T{t}, predicted {}\n", m.label, m.predicted.to_hex()));
-                    if self.profile.hardware.dialect == Dialect::Reprap {
+                    if self.profile.hardware.dialect() == Dialect::Reprap {
                         text.push_str(&rrf_m567(&m.mix, t, self.decimals()));
                         text.push('\n');
                     } else {
@@ -611,7 +612,10 @@ fn unwrap_error(e: crate::Error) -> MixPassError {
 }
 
 /// Runs the pass over a whole text in memory (tests, Python): strict parsing, Marlin semantics.
-pub fn mix_bytes(profile: MixProfile, input: &[u8]) -> Result<(Vec<u8>, MixReport), MixPassError> {
+/// A profile without a dialect takes the one the text's flavour implies.
+pub fn mix_bytes(mut profile: MixProfile, input: &[u8]) -> Result<(Vec<u8>, MixReport), MixPassError> {
+    let flavour = flavour_in(input);
+    profile.dialect_for_file(flavour.as_deref());
     let mut pass = MixPass::new(profile)?;
     let mut out = Vec::with_capacity(input.len() + input.len() / 8);
     drive_reader(
@@ -624,19 +628,22 @@ pub fn mix_bytes(profile: MixProfile, input: &[u8]) -> Result<(Vec<u8>, MixRepor
         &mut out,
     )
     .map_err(unwrap_error)?;
-    Ok((out, pass.into_report()))
+    Ok((out, MixReport { flavour, ..pass.into_report() }))
 }
 
-/// Runs the pass from a file into `target` (committed only on success), streaming.
+/// Runs the pass from a file into `target` (committed only on success), streaming. A profile
+/// without a dialect takes the one the file's flavour implies (read from both ends first).
 pub fn mix_file(
-    profile: MixProfile,
+    mut profile: MixProfile,
     input: &Path,
     target: &Target,
     progress: &mut dyn Progress,
 ) -> Result<MixReport, MixPassError> {
+    let flavour = read_flavour(input).map_err(|e| crate::Error::io(input, e))?;
+    profile.dialect_for_file(flavour.as_deref());
     let mut pass = MixPass::new(profile)?;
     Run::new(input, progress).transform(&mut pass, target).map_err(unwrap_error)?;
-    Ok(pass.into_report())
+    Ok(MixReport { flavour, ..pass.into_report() })
 }
 
 #[cfg(test)]

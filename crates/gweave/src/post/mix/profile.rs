@@ -4,7 +4,7 @@
 //!
 //! ```toml
 //! [hardware]
-//! dialect = "marlin"            # marlin | marlin-direct | reprap
+//! dialect = "marlin"            # marlin | marlin-direct | reprap (unset: from the file)
 //! virtual_tools = 16
 //! filament_diameter_mm = 1.75
 //! material2_input = 3           # the input holding "material 2" (default: the last)
@@ -61,6 +61,19 @@ pub enum Dialect {
     Reprap,
 }
 
+impl Dialect {
+    /// The dialect of a file sliced for `flavour` (its `gcode_flavor`): RepRapFirmware's for
+    /// `reprapfirmware`, Marlin's for everything else (Klipper has no mixing extruder; Slic3r's
+    /// `reprap` is the Marlin/Sprinter family).
+    pub fn for_flavour(flavour: &str) -> Dialect {
+        if flavour.eq_ignore_ascii_case("reprapfirmware") {
+            Dialect::Reprap
+        } else {
+            Dialect::Marlin
+        }
+    }
+}
+
 /// One filament input of the hotend.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -87,7 +100,9 @@ fn default_density() -> f64 {
 pub struct Hardware {
     /// Input 0 first. Default: the seed's cyan, magenta, yellow and white PLA.
     pub inputs: Vec<Input>,
-    pub dialect: Dialect,
+    /// How the firmware is told the mix; unset, the file's flavour decides
+    /// ([`MixProfile::dialect_for_file`]), and Marlin when the file does not say.
+    pub dialect: Option<Dialect>,
     /// Virtual tools the firmware stores (Marlin MIXING_VIRTUAL_TOOLS, default 16).
     pub virtual_tools: usize,
     pub filament_diameter_mm: f64,
@@ -108,7 +123,7 @@ impl Default for Hardware {
                 .zip(names)
                 .map(|(&colour, m)| Input { colour, material: m.into(), density_g_cm3: default_density() })
                 .collect(),
-            dialect: Dialect::Marlin,
+            dialect: None,
             virtual_tools: crate::colour::dialect::MARLIN_VIRTUAL_TOOLS,
             filament_diameter_mm: 1.75,
             material2_input: None,
@@ -119,6 +134,11 @@ impl Default for Hardware {
 }
 
 impl Hardware {
+    /// The dialect written: the profile's, or Marlin's if it is still unset.
+    pub fn dialect(&self) -> Dialect {
+        self.dialect.unwrap_or_default()
+    }
+
     /// The input that holds material 2.
     pub fn material2_index(&self) -> usize {
         self.material2_input.unwrap_or(self.inputs.len().saturating_sub(1))
@@ -485,6 +505,16 @@ impl MixProfile {
         Ok(profile)
     }
 
+    /// Settles the dialect for a file sliced for `flavour` (see [`flavour_in`]) when the profile
+    /// leaves it unset.
+    ///
+    /// [`flavour_in`]: crate::gcode::flavour::flavour_in
+    pub fn dialect_for_file(&mut self, flavour: Option<&str>) {
+        let hw = &mut self.hardware;
+        hw.dialect =
+            Some(hw.dialect.unwrap_or_else(|| flavour.map_or(Dialect::Marlin, Dialect::for_flavour)));
+    }
+
     /// Adds `--map T1=PVA`.
     pub fn add_map(&mut self, s: &str) -> Result<(), MixPassError> {
         let (tool, mix) = split_eq(s)?;
@@ -505,10 +535,10 @@ impl MixProfile {
         if hw.inputs.is_empty() {
             return cfg("hardware.inputs: at least one input".into());
         }
-        if hw.dialect == Dialect::MarlinDirect && hw.inputs.len() > 6 {
+        if hw.dialect() == Dialect::MarlinDirect && hw.inputs.len() > 6 {
             return cfg("marlin-direct (M165) has letters for 6 inputs at most".into());
         }
-        if hw.virtual_tools == 0 && hw.dialect != Dialect::MarlinDirect {
+        if hw.virtual_tools == 0 && hw.dialect() != Dialect::MarlinDirect {
             return cfg("hardware.virtual_tools must be at least 1".into());
         }
         if hw.material2_index() >= hw.inputs.len() {

@@ -59,6 +59,9 @@ pub struct LayerMix {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MixReport {
     pub dialect: Dialect,
+    /// The firmware flavour the file names (`gcode_flavor`, Cura's `;FLAVOR:`); a profile that
+    /// sets no dialect follows it.
+    pub flavour: Option<String>,
     pub mixes: Vec<MixUse>,
     /// Print plus purges, mm, per input.
     pub filament_per_input_mm: Vec<f64>,
@@ -201,7 +204,8 @@ impl Accounting {
         };
         self.purge.mass_g = grams(&self.purge.per_input_mm).iter().sum();
         MixReport {
-            dialect: hw.dialect,
+            dialect: hw.dialect(),
+            flavour: None,
             filament_per_input_g: grams(&self.per_input_mm),
             mixes: self.mixes,
             filament_per_input_mm: self.per_input_mm,

@@ -241,7 +241,7 @@ impl Plan {
         let mut mixes = r.mixes;
         let tools = hw.virtual_tools as u32;
         let mut rotating_tools = [0, 0];
-        if hw.dialect != Dialect::MarlinDirect {
+        if hw.dialect() != Dialect::MarlinDirect {
             if mixes.len() as u32 <= tools {
                 for (t, m) in (0u32..).zip(mixes.iter_mut()) {
                     m.slot = Slot::Fixed(t);

@@ -195,7 +195,9 @@ pub fn run_wizard(input: &mut dyn BufRead, out: &mut dyn Write) -> Result<String
         "[purge]\nmode = \"off\"\n".to_owned()
     };
     let text = format!(
-        "# Written by gweave mix --wizard.\n[hardware]\ndialect = \"marlin\"\n{inputs}\n{purge_table}\n\
+        "# Written by gweave mix --wizard.\n[hardware]\n\
+         # dialect: marlin | marlin-direct | reprap; unset, the G-code file's flavour decides.\n\
+         {inputs}\n{purge_table}\n\
          [z_cap]\nmax_z_feed_mm_min = {cap:?}\n\n{mixes}\n{job}"
     );
     let profile = MixProfile::from_toml_str(&text)?;
