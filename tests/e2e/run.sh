@@ -43,6 +43,21 @@ if "$GWEAVE" cat "$WORK/bad.gcode" -o "$WORK/out.gcode" 2> "$WORK/err"; then fai
 grep -q "bad.gcode:2:5: malformed number after 'Y'" "$WORK/err" && ok || fail "error text: $(cat "$WORK/err")"
 [ ! -e "$WORK/out.gcode" ] && ok || fail "partial output left"
 [ "$(ls "$WORK" | grep -c '^\.gweave-')" = 0 ] && ok || fail "temporary file left"
+#    A line a transform cannot handle: one error line naming file and line, exit 1, no output.
+printf 'G1 X1 E1\n' > "$WORK/nofeed.gcode"
+if "$GWEAVE" rotary wrap "$WORK/nofeed.gcode" --mandrel-diameter 30 -o "$WORK/out.gcode" 2> "$WORK/err"; then
+  fail "rotary wrap accepted a move without a feed rate"
+else
+  [ "$(cat "$WORK/err")" = "gweave: error: $WORK/nofeed.gcode:1: invalid rotary setting \`F\`: a move before any feed rate was set" ] \
+    && [ ! -e "$WORK/out.gcode" ] && ok || fail "rotary error text: $(cat "$WORK/err")"
+fi
+printf 'M83\n;LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\nT1\nG1 X5 E3\n' > "$WORK/t1.gcode"
+if "$GWEAVE" mix "$WORK/t1.gcode" --map T0=Red -o "$WORK/out.gcode" 2> "$WORK/err" > /dev/null; then
+  fail "mix accepted an unmapped tool"
+else
+  grep -q "^gweave: error: $WORK/t1.gcode:5: the file selects T1, which has no mix" "$WORK/err" && [ ! -e "$WORK/out.gcode" ] \
+    && ok || fail "mix error text: $(cat "$WORK/err")"
+fi
 
 # 4. check: exit code 1 on errors, 0 on a clean real file.
 "$GWEAVE" check "$DATA/prusaslicer/pr_torus_pva.gcode" -q > /dev/null && ok || fail "check on a clean file"

@@ -272,7 +272,7 @@ fn errors_name_the_line() {
     let err = wrap_bytes(config.clone(), b"G1 X1 F600\nG20\nG1 X2\n").unwrap_err();
     assert!(matches!(err, RotaryError::AtLine { line: 3, .. }), "{err}");
     let err = wrap_bytes(config.clone(), b"G1 X1 E1\n").unwrap_err();
-    assert_eq!(err.to_string(), "line 1: invalid rotary setting `F`: a move before any feed rate was set");
+    assert_eq!(err.to_string(), "<input>:1: invalid rotary setting `F`: a move before any feed rate was set");
     let err = wrap_bytes(config, b"G1 X1 F600\nG1 Z-50\n").unwrap_err();
     assert!(matches!(*as_inner(&err), RotaryError::BelowAxis { .. }), "{err}");
     let bad = WrapConfig::from_toml_str("chord_tolerance_mm = -1\n[machine]\nmandrel_diameter_mm = 20");
@@ -281,7 +281,7 @@ fn errors_name_the_line() {
 
 fn as_inner(err: &RotaryError) -> &RotaryError {
     match err {
-        RotaryError::AtLine { source, .. } => source,
+        RotaryError::AtLine { error, .. } => error,
         other => other,
     }
 }

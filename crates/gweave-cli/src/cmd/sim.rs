@@ -162,7 +162,15 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
         println!("  inkjet          {} layers, drops per head {:?}", ink.layers, ink.drops_per_head);
     }
     if !r.unknown_commands.is_empty() {
-        let list: Vec<String> = r.unknown_commands.iter().map(|(c, n)| format!("{c} x{n}")).collect();
+        // The most frequent first; names escaped, since they come from whatever the file holds.
+        let mut by_count: Vec<(&String, &u64)> = r.unknown_commands.iter().collect();
+        by_count.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
+        const SHOWN: usize = 10;
+        let mut list: Vec<String> =
+            by_count.iter().take(SHOWN).map(|(c, n)| format!("{} x{n}", c.escape_debug())).collect();
+        if by_count.len() > SHOWN {
+            list.push(format!("... {} more (see --json)", by_count.len() - SHOWN));
+        }
         println!("  unknown         {}", list.join(", "));
     }
     for e in errors {

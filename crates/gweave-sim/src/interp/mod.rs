@@ -125,6 +125,14 @@ pub struct Machine {
     warning_counts: BTreeMap<&'static str, u64>,
 }
 
+/// Distinct unknown command names the report counts one by one; the rest count together as
+/// [`UNKNOWN_OTHERS`].
+pub const UNKNOWN_KINDS: usize = 256;
+/// The report's name for unknown commands past the first [`UNKNOWN_KINDS`].
+pub const UNKNOWN_OTHERS: &str = "(others)";
+/// An unknown command's name is kept to this many characters.
+const UNKNOWN_NAME_CHARS: usize = 32;
+
 impl Machine {
     /// A machine at power-on: every axis at 0 (the endstops of the default profile), heaters at
     /// ambient, nothing homed.
@@ -474,10 +482,16 @@ impl Machine {
         }
     }
 
+    /// Counts an unknown command by its name in the report (the first [`UNKNOWN_KINDS`] names;
+    /// a file of garbage would otherwise grow the table without bound) and says so, as Marlin.
     fn unknown_command(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
         let text = String::from_utf8_lossy(command_text(line)).into_owned();
         out(self.now_s(), &format!("echo:Unknown command: \"{text}\""));
-        let name = text.split_whitespace().next().unwrap_or("").to_owned();
+        let mut name: String =
+            text.split_whitespace().next().unwrap_or("").chars().take(UNKNOWN_NAME_CHARS).collect();
+        if self.unknown.len() >= UNKNOWN_KINDS - 1 && !self.unknown.contains_key(&name) {
+            name = UNKNOWN_OTHERS.to_owned();
+        }
         *self.unknown.entry(name).or_default() += 1;
         self.warn(WarningKind::UnknownCommand { command: text });
     }

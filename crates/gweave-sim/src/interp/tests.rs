@@ -51,6 +51,21 @@ fn boot_and_query_replies() {
     assert_eq!(m.report().unknown_commands["G123"], 1);
 }
 
+/// A file of garbage cannot grow the report without bound: past 255 distinct unknown names the
+/// rest are counted together, and a name is kept to 32 characters.
+#[test]
+fn unknown_commands_are_counted_in_bounded_memory() {
+    use super::{UNKNOWN_KINDS, UNKNOWN_OTHERS};
+    let mut m = machine();
+    let text: String = (0..1000).map(|i| format!("G{}{}\n", 1000 + i, "9".repeat(40))).collect();
+    run(&mut m, &text);
+    let unknown = m.report().unknown_commands;
+    assert_eq!(unknown.len(), UNKNOWN_KINDS);
+    assert_eq!(unknown[UNKNOWN_OTHERS], 1000 - (UNKNOWN_KINDS as u64 - 1));
+    assert_eq!(unknown.values().sum::<u64>(), 1000);
+    assert!(unknown.keys().all(|k| k.chars().count() <= 32), "{:?}", unknown.keys().next());
+}
+
 #[test]
 fn moves_count_steps_and_m114_reports_them() {
     let mut m = warm_machine();

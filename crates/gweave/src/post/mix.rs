@@ -70,8 +70,9 @@ pub const HOLD_LINES: usize = 32;
 pub enum MixPassError {
     #[error("mix profile: {0}")]
     Config(String),
-    #[error("line {line}: {message}")]
-    AtLine { line: u64, message: String },
+    /// A line of the input the profile cannot handle (`<input>` for text in memory).
+    #[error("{}:{line}: {message}", path.display())]
+    AtLine { path: std::path::PathBuf, line: u64, message: String },
     #[error(transparent)]
     Mix(#[from] crate::colour::MixError),
     #[error(transparent)]
@@ -515,7 +516,8 @@ fn push_lines(into: &mut Vec<u8>, text: &[u8], eol: &[u8], last_eol: &[u8]) {
 fn at_line(line: u64) -> impl Fn(MixPassError) -> io::Error {
     move |e| {
         let e = match e {
-            MixPassError::Config(message) => MixPassError::AtLine { line, message },
+            // The driver knows the file: [`unwrap_error`] names it.
+            MixPassError::Config(message) => MixPassError::AtLine { path: Default::default(), line, message },
             other => other,
         };
         io::Error::other(e)
@@ -599,11 +601,18 @@ impl Pass for MixPass {
     }
 }
 
-fn unwrap_error(e: crate::Error) -> MixPassError {
+/// The pass's own errors come back through the driver as I/O errors: the [`MixPassError`] they
+/// are, a line's error naming `input`.
+fn unwrap_error(e: crate::Error, input: &Path) -> MixPassError {
     match e {
         crate::Error::Io { source, .. } if source.get_ref().is_some_and(|e| e.is::<MixPassError>()) => {
             match source.into_inner().map(|e| e.downcast::<MixPassError>()) {
-                Some(Ok(e)) => *e,
+                Some(Ok(e)) => match *e {
+                    MixPassError::AtLine { line, message, .. } => {
+                        MixPassError::AtLine { path: input.to_path_buf(), line, message }
+                    }
+                    other => other,
+                },
                 _ => unreachable!("checked to be a MixPassError just above"),
             }
         }
@@ -627,7 +636,7 @@ pub fn mix_bytes(mut profile: MixProfile, input: &[u8]) -> Result<(Vec<u8>, MixR
         &mut pass,
         &mut out,
     )
-    .map_err(unwrap_error)?;
+    .map_err(|e| unwrap_error(e, Path::new("<input>")))?;
     Ok((out, MixReport { flavour, ..pass.into_report() }))
 }
 
@@ -642,7 +651,7 @@ pub fn mix_file(
     let flavour = read_flavour(input).map_err(|e| crate::Error::io(input, e))?;
     profile.dialect_for_file(flavour.as_deref());
     let mut pass = MixPass::new(profile)?;
-    Run::new(input, progress).transform(&mut pass, target).map_err(unwrap_error)?;
+    Run::new(input, progress).transform(&mut pass, target).map_err(|e| unwrap_error(e, input))?;
     Ok(MixReport { flavour, ..pass.into_report() })
 }
 
@@ -711,6 +720,6 @@ mod tests {
         let mut p = MixProfile::default();
         p.add_map("T0=Red").unwrap();
         let err = mix_bytes(p, format!("{PRINT}T1\nG1 X5 E3\n").as_bytes()).unwrap_err();
-        assert_eq!(err.to_string(), "line 7: the file selects T1, which has no mix: add --map T1=<mix>");
+        assert_eq!(err.to_string(), "<input>:7: the file selects T1, which has no mix: add --map T1=<mix>");
     }
 }

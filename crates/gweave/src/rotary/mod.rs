@@ -84,12 +84,14 @@ pub enum RotaryError {
     #[error("a move was written before the machine's position was known")]
     UnknownPosition,
     /// A rewritten line failed, at this line of the input.
-    #[error("line {line}: {source}")]
+    #[error("{}:{line}: {error}", path.display())]
     AtLine {
+        /// The input file (`<input>` for text in memory).
+        path: std::path::PathBuf,
         /// 1-based input line number.
         line: u64,
         /// What went wrong.
-        source: Box<RotaryError>,
+        error: Box<RotaryError>,
     },
     /// The core engine failed (reading, syntax).
     #[error(transparent)]

@@ -194,7 +194,7 @@ pub fn wrap_file(
 ) -> Result<WrapReport> {
     check_preview(target, preview)?;
     let mut pass = Wrap::new(config.clone())?;
-    Run::new(input, progress).transform(&mut pass, target).map_err(from_engine)?;
+    Run::new(input, progress).transform(&mut pass, target).map_err(|e| from_engine(e, input))?;
     let output = written_path(target, Some(input));
     let program = read_back(&config.machine, output.as_deref(), preview, WRAP_PREVIEW_BEAD_MM)?;
     let program = program.unwrap_or_default();

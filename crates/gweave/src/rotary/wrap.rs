@@ -299,7 +299,9 @@ impl Pass for Wrap {
         }
         self.buffer.clear();
         let rewritten = self.rewrite(ctx).map_err(|e| {
-            io::Error::other(RotaryError::AtLine { line: ctx.line.number, source: Box::new(e) })
+            // The driver knows the file: [`from_engine`] names it.
+            let path = std::path::PathBuf::new();
+            io::Error::other(RotaryError::AtLine { path, line: ctx.line.number, error: Box::new(e) })
         })?;
         if !rewritten {
             return keep(ctx, out);
@@ -340,16 +342,22 @@ pub fn wrap_bytes(config: WrapConfig, input: &[u8]) -> Result<Vec<u8>> {
         &mut pass,
         &mut out,
     );
-    run.map(|_| out).map_err(from_engine)
+    run.map(|_| out).map_err(|e| from_engine(e, std::path::Path::new("<input>")))
 }
 
 /// The pass's own errors travel through the engine's driver as I/O errors: brings them back
-/// as the [`RotaryError`] they are; any other engine error is wrapped.
-pub fn from_engine(e: crate::Error) -> RotaryError {
+/// as the [`RotaryError`] they are, a line's error naming `input`; any other engine error is
+/// wrapped.
+pub fn from_engine(e: crate::Error, input: &std::path::Path) -> RotaryError {
     match e {
         crate::Error::Io { source, .. } if source.get_ref().is_some_and(|s| s.is::<RotaryError>()) => {
             match source.into_inner().map(|s| s.downcast::<RotaryError>()) {
-                Some(Ok(inner)) => *inner,
+                Some(Ok(inner)) => match *inner {
+                    RotaryError::AtLine { line, error, .. } => {
+                        RotaryError::AtLine { path: input.to_path_buf(), line, error }
+                    }
+                    other => other,
+                },
                 _ => unreachable!("checked to be a RotaryError just above"),
             }
         }
