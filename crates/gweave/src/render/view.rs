@@ -111,7 +111,7 @@ pub struct Panel {
     pub x_px: u32,
     pub width_px: u32,
     pub title: String,
-    /// In a comparison, the moves of this side that the other file does not have.
+    /// In a comparison, the moves of this side (in the layers drawn) the other file does not have.
     pub changed_moves: Option<usize>,
     /// Where a point in mm lands in the picture.
     pub projection: Projection,
@@ -360,7 +360,7 @@ fn empty(options: &ViewOptions, layers: u32) -> Drawing {
 }
 
 /// The layers `options` asks for that a file with `layers` layers has.
-pub fn layers_drawn(options: &ViewOptions, layers: u32) -> Option<RangeInclusive<u32>> {
+fn layers_drawn(options: &ViewOptions, layers: u32) -> Option<RangeInclusive<u32>> {
     let last = layers.checked_sub(1)?;
     let (first, end) = match &options.layers {
         Some(asked) => (*asked.start(), (*asked.end()).min(last)),
