@@ -10,6 +10,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::gcode::diag::Severity;
+use crate::gcode::flavour::read_flavour;
 use crate::gcode::lexer::parse_into;
 use crate::gcode::line::Block;
 use crate::gcode::reader::{LineReader, RawLine};
@@ -111,13 +112,17 @@ impl<'a> Run<'a> {
         Ok(state)
     }
 
+    /// Streams the file, with the options its flavour implies (read from its ends first: the
+    /// PrusaSlicer family names it only in the settings block after the last move).
     fn drive(self, pass: &mut dyn Pass, out: &mut dyn Write) -> Result<State> {
         let path = self.input.to_path_buf();
+        let flavour = read_flavour(&path).map_err(|e| Error::io(&path, e))?;
         let file = File::open(&path).map_err(|e| Error::io(&path, e))?;
         if let Ok(meta) = file.metadata() {
             self.progress.set_len(meta.len());
         }
-        drive_reader(file, &path, self.options, self.strictness, self.progress, pass, out)
+        let options = self.options.for_flavour(flavour.as_deref());
+        drive_reader(file, &path, options, self.strictness, self.progress, pass, out)
     }
 }
 

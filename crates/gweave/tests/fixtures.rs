@@ -11,8 +11,9 @@ fn data(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel)
 }
 
-const FIXTURES: [&str; 6] = [
+const FIXTURES: [&str; 7] = [
     "prusaslicer/pr_torus_pva.gcode",
+    "prusaslicer/pr_box_mach3.gcode",
     "prusaslicer/pr_bunny_3tool_rel.gcode",
     "prusaslicer/pr_sphere_rrf_fwretract.gcode",
     "cura/cura_torus.gcode",

@@ -47,6 +47,7 @@ pub const COMMANDS: &[CommandHelp] = &[
     c("M303", "PID autotune on the thermal plant (relay method), U1 applies the gains"),
     c("M400", "wait for the queued moves to finish"),
     c("M563 M567", "tool definition (accepted) and mix ratios (RepRapFirmware)"),
+    c("M568", "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)"),
     c("M578 M700", "inkjet fire at the carriage position (machines with a printhead)"),
     c("M999", "restart after a halt"),
     c("T<n>", "select a tool (a virtual mixing tool on a mixing hotend)"),

@@ -14,6 +14,16 @@ const HEAD_BYTES: usize = 64 * 1024;
 /// OrcaSlicer's a few times more.
 const TAIL_BYTES: usize = 256 * 1024;
 
+/// The word a flavour extrudes with: `A` for PrusaSlicer's `mach3` and `machinekit` (LinuxCNC
+/// machines have no E axis), `E` for every other.
+pub fn extrusion_letter(flavour: &str) -> u8 {
+    if flavour.eq_ignore_ascii_case("mach3") || flavour.eq_ignore_ascii_case("machinekit") {
+        b'A'
+    } else {
+        b'E'
+    }
+}
+
 /// The flavour a comment (the text after `;`) names, if it is a flavour comment.
 pub fn flavour_of_comment(comment: &[u8]) -> Option<&[u8]> {
     let c = comment.trim_ascii();
@@ -29,9 +39,15 @@ pub fn flavour_in(text: &[u8]) -> Option<String> {
 }
 
 /// The flavour named in the first 64 KB or the last 256 KB of a file; `None` when neither says.
+/// Anything but a regular file (a pipe, a terminal) is not read: its bytes would be gone for the
+/// pass that follows.
 pub fn read_flavour(path: &Path) -> io::Result<Option<String>> {
     let mut file = File::open(path)?;
-    let len = file.metadata()?.len();
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        return Ok(None);
+    }
+    let len = meta.len();
     let mut buf = Vec::with_capacity(HEAD_BYTES);
     (&mut file).take(HEAD_BYTES as u64).read_to_end(&mut buf)?;
     if let Some(flavour) = first_flavour(&buf) {
@@ -73,5 +89,13 @@ mod tests {
         std::fs::write(&path, [&prusa[..], &b"G1 X2\n".repeat(50_000)].concat()).unwrap();
         assert_eq!(read_flavour(&path).unwrap(), None);
         assert_eq!(flavour_in(b"M117 ; gcode_flavor = klipper\n"), None);
+    }
+
+    #[test]
+    fn linuxcnc_flavours_extrude_with_a() {
+        assert_eq!(extrusion_letter("mach3"), b'A');
+        assert_eq!(extrusion_letter("machinekit"), b'A');
+        assert_eq!(extrusion_letter("marlin2"), b'E');
+        assert_eq!(extrusion_letter("reprapfirmware"), b'E');
     }
 }

@@ -183,11 +183,28 @@ pub struct StateOptions {
     pub fw_retract_mm: f64,
     /// Explicit markers for the print proper.
     pub markers: Markers,
+    /// The word that drives the extruder: `E`, or `A` in PrusaSlicer's `mach3` and `machinekit`
+    /// flavours (LinuxCNC has no E axis), where `E` then means nothing.
+    pub extrusion_letter: u8,
 }
 
 impl Default for StateOptions {
     fn default() -> Self {
-        StateOptions { firmware: Firmware::Marlin, fw_retract_mm: 1.0, markers: Markers::default() }
+        StateOptions {
+            firmware: Firmware::Marlin,
+            fw_retract_mm: 1.0,
+            markers: Markers::default(),
+            extrusion_letter: b'E',
+        }
+    }
+}
+
+impl StateOptions {
+    /// These options for a file sliced for `flavour` (its `gcode_flavor`, see
+    /// [`crate::gcode::flavour`]): the extrusion word it uses.
+    pub fn for_flavour(self, flavour: Option<&str>) -> Self {
+        let extrusion_letter = flavour.map_or(self.extrusion_letter, super::flavour::extrusion_letter);
+        StateOptions { extrusion_letter, ..self }
     }
 }
 
@@ -240,6 +257,16 @@ impl State {
             options,
             effect: Effect::None,
         }
+    }
+
+    /// The axis a word moves: as [`axis_of`], but the extrusion word ([`StateOptions::
+    /// extrusion_letter`]) is E, and `E` is no axis where another letter extrudes.
+    #[inline]
+    fn axis_of_word(&self, letter: u8) -> Option<usize> {
+        if letter == self.options.extrusion_letter {
+            return Some(E);
+        }
+        axis_of(letter).filter(|&i| i != E)
     }
 
     /// E moves relative to the current position on this line.
@@ -364,8 +391,8 @@ impl State {
                 }
             }
             92 => {
-                for (i, letter) in AXIS_LETTERS.iter().enumerate() {
-                    if let Some(v) = block.get(*letter) {
+                for w in &block.words {
+                    if let (Some(i), Some(v)) = (self.axis_of_word(w.letter), w.number()) {
                         self.pos[i] = self.to_mm(v);
                     }
                 }
@@ -379,13 +406,15 @@ impl State {
         match number {
             82 => self.absolute_e = true,
             83 => self.absolute_e = false,
+            // The temperature is S (R: Marlin's wait in both directions); PrusaSlicer's mach3 and
+            // machinekit flavours write it as P, LinuxCNC's word for an M-code's parameter.
             104 | 109 => {
-                if let Some(s) = block.get(b'S').or_else(|| block.get(b'R')) {
+                if let Some(s) = block.get(b'S').or_else(|| block.get(b'R')).or_else(|| block.get(b'P')) {
                     self.set_hotend(block.get(b'T'), s);
                 }
             }
             140 | 190 => {
-                if let Some(s) = block.get(b'S').or_else(|| block.get(b'R')) {
+                if let Some(s) = block.get(b'S').or_else(|| block.get(b'R')).or_else(|| block.get(b'P')) {
                     self.thermal.bed_c = s;
                 }
             }
@@ -440,7 +469,7 @@ impl State {
         let scale = if self.inches { MM_PER_INCH } else { 1.0 };
         let (relative_xyz, relative_e) = (!self.absolute, self.relative_e());
         for w in &block.words {
-            let Some(i) = axis_of(w.letter) else { continue };
+            let Some(i) = self.axis_of_word(w.letter) else { continue };
             let Value::Number(v) = w.value else { continue };
             let v = v * scale;
             let relative = if i == E { relative_e } else { relative_xyz };
@@ -522,6 +551,20 @@ mod tests {
         assert!(!s.fw_retracted);
         assert_eq!(effects[1], Effect::None);
         assert_eq!(s.filament_mm[1], 1.0);
+    }
+
+    /// PrusaSlicer's mach3/machinekit flavours extrude with `A` (in the XYZ distance mode), set
+    /// it with `G92 A`, and write no `E`.
+    #[test]
+    fn a_as_the_extrusion_word() {
+        let options = StateOptions::default().for_flavour(Some("mach3"));
+        let mut s = State::new(options);
+        run(&mut s, "M104 P200\nG90\nG1 X10 A1 F600\nG1 A-1\nG1 A1\nG92 A0\nG1 X20 A2\nG1 E5");
+        assert_eq!(s.thermal.hotend_c, vec![200.0]);
+        assert_eq!(s.filament_mm[0], 3.0);
+        assert_eq!((s.pos[E], s.pos[A], s.pos[X]), (2.0, 0.0, 20.0));
+        // A file that names no flavour keeps the caller's choice, E by default.
+        assert_eq!(StateOptions::default().for_flavour(None).extrusion_letter, b'E');
     }
 
     #[test]
