@@ -5,10 +5,11 @@ use std::fs::File;
 use std::path::PathBuf;
 
 use gweave::check::{CheckOptions, CheckPass};
+use gweave::gcode::flavour::read_flavour;
 use gweave::gcode::lexer::parse_into;
 use gweave::gcode::line::{Block, Command, Value};
 use gweave::gcode::reader::LineReader;
-use gweave::gcode::state::{Effect, State, E, X, Y, Z};
+use gweave::gcode::state::{Effect, State, StateOptions, E, X, Y, Z};
 use gweave::gcode::writer::Target;
 use gweave::pass::{Identity, Quiet, Run};
 use gweave::stats::StatsPass;
@@ -197,8 +198,12 @@ struct Reader {
 impl Reader {
     #[new]
     fn new(path: PathBuf) -> PyResult<Self> {
-        let file = File::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
-        Ok(Reader { lines: LineReader::new(file), block: Block::default(), state: State::default() })
+        let os_err = |e: std::io::Error| PyOSError::new_err(format!("{}: {e}", path.display()));
+        // The state reads the file's words as its flavour means them, as every command does.
+        let flavour = read_flavour(&path).map_err(os_err)?;
+        let file = File::open(&path).map_err(os_err)?;
+        let state = State::new(StateOptions::default().for_flavour(flavour.as_deref()));
+        Ok(Reader { lines: LineReader::new(file), block: Block::default(), state })
     }
 
     fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {

@@ -36,6 +36,15 @@ def test_read_gives_words_and_state(data):
     assert outer == {"inner_wall", "outer_wall", "solid_infill"}
 
 
+def test_read_follows_the_files_flavour(data):
+    """PrusaSlicer's mach3 flavour extrudes with A; the file says so only in its last lines."""
+    src = data / "prusaslicer" / "pr_box_mach3.gcode"
+    # Extruding moves in XY, as PrusaSlicer counts (retractions and their recoveries stay apart).
+    extruded = sum(l.extruded for l in gweave.read(src) if l.extruded > 0 and ("X" in l.words or "Y" in l.words))
+    theirs = gweave.stats(src)["slicer_figures"]["filament_used_mm"][0]
+    assert theirs == 2604.63 and abs(extruded - theirs) < 0.01
+
+
 def test_words_strings_and_diagnostics(tmp_path):
     p = tmp_path / "odd.gcode"
     p.write_bytes(b'M291 P"Hello" S2\nG1 X1..2 Y3\nM117 Printing now ; c\n')
