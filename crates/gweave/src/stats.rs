@@ -7,7 +7,7 @@ use std::io::{self, Write};
 
 use serde::Serialize;
 
-use crate::gcode::flavour::flavour_of_comment;
+use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
 use crate::gcode::state::{Effect, State, X, Y, Z};
 use crate::pass::{Ctx, Pass};
@@ -118,6 +118,17 @@ impl StatsPass {
         let mut warnings = Vec::new();
         if self.zero_feed_moves > 0 {
             warnings.push(format!("{} moves had no feed rate and were not timed", self.zero_feed_moves));
+        }
+        if let Some(flavour) = &self.figures.flavour {
+            let letter = extrusion_letter(flavour);
+            if letter != state.options.extrusion_letter {
+                // Only a stream (a pipe) is read without looking at its end first.
+                warnings.push(format!(
+                    "the file's flavour ({flavour}) extrudes with {}, but it was read with {}: read it from a file, not a pipe",
+                    char::from(letter),
+                    char::from(state.options.extrusion_letter)
+                ));
+            }
         }
         if state.structure.region != Region::End {
             warnings.push("no end G-code detected (the print proper runs to the end of the file)".into());
@@ -273,5 +284,36 @@ mod tests {
         assert_eq!(duration_s(b" 5h 31m 58s"), Some(5.0 * 3600.0 + 31.0 * 60.0 + 58.0));
         assert_eq!(duration_s(b"1d 0h 0m 1s"), Some(86401.0));
         assert_eq!(list(b" 10979.45, 20959.92, 1594.45"), Some(vec![10979.45, 20959.92, 1594.45]));
+    }
+
+    /// A mach3-flavour file read as a stream (its flavour unknown until its last line) counts
+    /// no filament, and says why; read with its flavour it counts the A moves.
+    #[test]
+    fn a_stream_read_with_the_wrong_extrusion_word_is_a_warning() {
+        use crate::gcode::state::StateOptions;
+        use crate::pass::{drive_reader, Quiet, Strictness};
+        let text = b"M104 P200\nG1 X10 A1 F600\nG1 X20 A2\n; gcode_flavor = mach3\n";
+        let run = |options: StateOptions| {
+            let mut pass = StatsPass::new(None);
+            let path = std::path::Path::new("t.gcode");
+            let state = drive_reader(
+                &text[..],
+                path,
+                options,
+                Strictness::Strict,
+                &mut Quiet,
+                &mut pass,
+                &mut io::sink(),
+            )
+            .unwrap();
+            pass.into_stats(&state)
+        };
+        let blind = run(StateOptions::default());
+        assert!(blind.filament.iter().all(|t| t.extruded_mm == 0.0), "{:?}", blind.filament);
+        let warning = "the file's flavour (mach3) extrudes with A, but it was read with E: read it from a file, not a pipe";
+        assert!(blind.warnings.iter().any(|w| w == warning), "{:?}", blind.warnings);
+        let seen = run(StateOptions::default().for_flavour(Some("mach3")));
+        assert_eq!(seen.filament[0].extruded_mm, 2.0);
+        assert!(!seen.warnings.iter().any(|w| w.contains("flavour")), "{:?}", seen.warnings);
     }
 }
