@@ -283,13 +283,7 @@ fn rrf_tool_temperature_and_m116() {
 #[test]
 fn rrf_m568_heats_the_tools_nozzle() {
     let mut m = machine();
-    let (r, _) = run(
-        &mut m,
-        "M568 P0 S200 R150
-M116
-G1 X10 E1 F600
-M400",
-    );
+    let (r, _) = run(&mut m, "M568 P0 S200 R150\nM116\nG1 X10 E1 F600\nM400");
     assert!(r.iter().all(|l| l.starts_with(" T:")), "{r:?}");
     assert!((m.thermal().temperature(HeaterId::Hotend(0)).unwrap() - 200.0).abs() < 3.0);
     assert_eq!(m.report().filament_mm, vec![1.0]);

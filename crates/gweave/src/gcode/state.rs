@@ -553,8 +553,8 @@ mod tests {
         assert_eq!(s.filament_mm[1], 1.0);
     }
 
-    /// PrusaSlicer's mach3/machinekit flavours extrude with `A` (in the XYZ distance mode), set
-    /// it with `G92 A`, and write no `E`.
+    /// PrusaSlicer's mach3/machinekit flavours extrude with `A` (absolute under G90, as they
+    /// write it), set it with `G92 A`, heat with `M104 P`, and write no `E`.
     #[test]
     fn a_as_the_extrusion_word() {
         let options = StateOptions::default().for_flavour(Some("mach3"));
@@ -570,12 +570,7 @@ mod tests {
     #[test]
     fn reprapfirmware_m568_sets_a_tool_temperature() {
         let mut s = State::default();
-        run(
-            &mut s,
-            "M568 P1 S205 R180
-T0
-M568 S199",
-        );
+        run(&mut s, "M568 P1 S205 R180\nT0\nM568 S199");
         assert_eq!(s.thermal.hotend_c, vec![199.0, 205.0]);
         assert!(s.thermal.hotend_set);
     }
