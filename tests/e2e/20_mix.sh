@@ -64,6 +64,12 @@ for want, got, retracted in zip(mix["filament_per_input_mm"], sim["mixing_input_
     assert abs(want - retracted - got) <= 0.01, (mix["filament_per_input_mm"], sim["mixing_input_mm"])
 PY
 
+#    Through a pipe the flavour shows only at the end: Marlin's commands, and a warning that says so.
+"$GWEAVE" mix <(cat "$DATA/prusaslicer/pr_sphere_rrf_fwretract.gcode") --at-layer 0=Orange -o "$WORK/piped.gcode" \
+  2> "$WORK/piped.err" > /dev/null
+grep -q "^M163 " "$WORK/piped.gcode"
+grep -q "^gweave: warning: the file's flavour (reprapfirmware) wants the Reprap dialect, but Marlin was written" "$WORK/piped.err"
+
 # 4. The wizard, answers piped: the seed's session.
 printf '1\nn\nOrange\n0\nPink\ny\n0 0.6 0.1 0.3\n10\nBlue\n20\n\n\n\n' \
   | "$GWEAVE" mix --wizard -c "$WORK/wiz.toml" > /dev/null

@@ -48,7 +48,7 @@ use std::path::Path;
 
 use crate::colour::dialect::{marlin_m163_m164, marlin_m165, rrf_m563, rrf_m567};
 use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
-use crate::gcode::flavour::{flavour_in, read_flavour};
+use crate::gcode::flavour::{flavour_in, flavour_of_comment, read_flavour};
 use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z};
@@ -114,6 +114,8 @@ pub struct MixPass {
     repl: Vec<u8>,
     replaced: bool,
     acc: Accounting,
+    /// The flavour the file names in a comment, as the pass met it.
+    flavour: Option<String>,
 }
 
 impl MixPass {
@@ -157,6 +159,7 @@ impl MixPass {
             repl: Vec::new(),
             replaced: false,
             acc,
+            flavour: None,
         })
     }
 
@@ -173,7 +176,7 @@ impl MixPass {
 
     /// The report, after the run.
     pub fn into_report(self) -> MixReport {
-        self.acc.finish(&self.profile.hardware)
+        MixReport { flavour: self.flavour, ..self.acc.finish(&self.profile.hardware) }
     }
 
     fn fmt(&self) -> &NumberFormat {
@@ -533,6 +536,9 @@ impl Pass for MixPass {
         self.pre.clear();
         self.repl.clear();
         self.replaced = false;
+        if let Some(f) = ctx.block.comment_text(ctx.line.bytes).and_then(flavour_of_comment) {
+            self.flavour = Some(String::from_utf8_lossy(f).into_owned());
+        }
         // The slicer tool before this line, for a retraction that a T on this line follows.
         let tool_before = self.slicer_tool;
         self.process(ctx).map_err(at_line(ctx.line.number))?;
@@ -637,7 +643,7 @@ pub fn mix_bytes(mut profile: MixProfile, input: &[u8]) -> Result<(Vec<u8>, MixR
         &mut out,
     )
     .map_err(|e| unwrap_error(e, Path::new("<input>")))?;
-    Ok((out, MixReport { flavour, ..pass.into_report() }))
+    Ok((out, pass.into_report()))
 }
 
 /// Runs the pass from a file into `target` (committed only on success), streaming. A profile
@@ -649,10 +655,22 @@ pub fn mix_file(
     progress: &mut dyn Progress,
 ) -> Result<MixReport, MixPassError> {
     let flavour = read_flavour(input).map_err(|e| crate::Error::io(input, e))?;
+    let chosen_blind = profile.hardware.dialect.is_none() && flavour.is_none();
     profile.dialect_for_file(flavour.as_deref());
     let mut pass = MixPass::new(profile)?;
     Run::new(input, progress).transform(&mut pass, target).map_err(|e| unwrap_error(e, input))?;
-    Ok(MixReport { flavour, ..pass.into_report() })
+    let mut report = pass.into_report();
+    // A pipe cannot be read ahead: its flavour shows only once the dialect is written.
+    if let Some(f) =
+        report.flavour.as_deref().filter(|f| chosen_blind && Dialect::for_flavour(f) != report.dialect)
+    {
+        report.warnings.push(format!(
+            "the file's flavour ({f}) wants the {:?} dialect, but {:?} was written: give it as a file, not a pipe, or set hardware.dialect",
+            Dialect::for_flavour(f),
+            report.dialect
+        ));
+    }
+    Ok(report)
 }
 
 #[cfg(test)]
