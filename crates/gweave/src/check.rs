@@ -8,6 +8,7 @@ use std::io::{self, Write};
 use serde::Serialize;
 
 use crate::gcode::diag::{Diagnostic, Finding, Severity};
+use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
 use crate::gcode::state::{Effect, AXIS_LETTERS, E, X, Y, Z};
 use crate::pass::{Ctx, Pass};
@@ -118,8 +119,8 @@ impl Pass for CheckPass {
             self.last_line_number =
                 Some(if block.command.is_m(110) { block.get(b'N').map_or(num, |v| v as i64) } else { num });
         }
-        if block.command == Command::None && block.comment_text(ctx.line.bytes) == Some(b"FLAVOR:Griffin") {
-            self.griffin = true;
+        if let Some(flavour) = block.comment_text(ctx.line.bytes).and_then(flavour_of_comment) {
+            self.griffin = flavour.eq_ignore_ascii_case(b"Griffin");
         }
         if let Command::Code { letter, number, .. } = block.command {
             if !(is_known(letter, number) || self.griffin && is_griffin(letter, number)) {

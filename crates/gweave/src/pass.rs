@@ -91,11 +91,20 @@ pub struct Run<'a> {
     pub options: StateOptions,
     pub strictness: Strictness,
     pub progress: &'a mut dyn Progress,
+    /// The file's flavour when the caller has read it already ([`read_flavour`]); `None`: the
+    /// run reads it.
+    pub flavour: Option<Option<String>>,
 }
 
 impl<'a> Run<'a> {
     pub fn new(input: &'a Path, progress: &'a mut dyn Progress) -> Self {
-        Run { input, options: StateOptions::default(), strictness: Strictness::Strict, progress }
+        Run {
+            input,
+            options: StateOptions::default(),
+            strictness: Strictness::Strict,
+            progress,
+            flavour: None,
+        }
     }
 
     /// Streams the input through `pass` without output. Returns the final state.
@@ -116,7 +125,10 @@ impl<'a> Run<'a> {
     /// PrusaSlicer family names it only in the settings block after the last move).
     fn drive(self, pass: &mut dyn Pass, out: &mut dyn Write) -> Result<State> {
         let path = self.input.to_path_buf();
-        let flavour = read_flavour(&path).map_err(|e| Error::io(&path, e))?;
+        let flavour = match self.flavour {
+            Some(known) => known,
+            None => read_flavour(&path).map_err(|e| Error::io(&path, e))?,
+        };
         let file = File::open(&path).map_err(|e| Error::io(&path, e))?;
         if let Ok(meta) = file.metadata() {
             self.progress.set_len(meta.len());

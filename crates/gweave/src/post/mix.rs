@@ -658,7 +658,8 @@ pub fn mix_file(
     let chosen_blind = profile.hardware.dialect.is_none() && flavour.is_none();
     profile.dialect_for_file(flavour.as_deref());
     let mut pass = MixPass::new(profile)?;
-    Run::new(input, progress).transform(&mut pass, target).map_err(|e| unwrap_error(e, input))?;
+    let run = Run { flavour: Some(flavour), ..Run::new(input, progress) };
+    run.transform(&mut pass, target).map_err(|e| unwrap_error(e, input))?;
     let mut report = pass.into_report();
     // A pipe cannot be read ahead: its flavour shows only once the dialect is written.
     if let Some(f) =
