@@ -59,6 +59,17 @@ else
     && ok || fail "mix error text: $(cat "$WORK/err")"
 fi
 
+#    Transforms that write E moves refuse a file whose extruder is A (PrusaSlicer's mach3 flavour).
+for cmd in "mix --at-layer 0=Orange" "purge-shift --purge 20"; do
+  # shellcheck disable=SC2086
+  if "$GWEAVE" $cmd "$DATA/prusaslicer/pr_box_mach3.gcode" -o "$WORK/out.gcode" 2> "$WORK/err" > /dev/null; then
+    fail "$cmd accepted a mach3 file"
+  else
+    grep -q "the file is for mach3, whose extruder is the A axis" "$WORK/err" && [ ! -e "$WORK/out.gcode" ] \
+      && ok || fail "$cmd on mach3: $(cat "$WORK/err")"
+  fi
+done
+
 # 4. check: exit code 1 on errors, 0 on a clean real file.
 "$GWEAVE" check "$DATA/prusaslicer/pr_torus_pva.gcode" -q > /dev/null && ok || fail "check on a clean file"
 printf 'N1 G28*18\nN2 G1 X5*99\n' > "$WORK/sum.gcode"

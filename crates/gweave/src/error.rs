@@ -26,6 +26,14 @@ pub enum Error {
 
     #[error("{0}")]
     Invalid(String),
+
+    /// A command that writes `E` words was given a file whose extruder is another axis.
+    #[error(
+        "{}: the file is for {flavour}, whose extruder is the {} axis; this command writes E moves, which that machine would not extrude",
+        path.display(),
+        char::from(*letter)
+    )]
+    ForeignExtruder { path: PathBuf, flavour: String, letter: u8 },
 }
 
 impl Error {

@@ -24,6 +24,19 @@ pub fn extrusion_letter(flavour: &str) -> u8 {
     }
 }
 
+/// For commands that write `E` words (purges, split moves): refuses a file whose flavour extrudes
+/// with another word, rather than write moves its machine would not extrude.
+pub fn require_e_extruder(path: &Path, flavour: Option<&str>) -> crate::Result<()> {
+    match flavour.map(|f| (f, extrusion_letter(f))) {
+        Some((flavour, letter)) if letter != b'E' => Err(crate::Error::ForeignExtruder {
+            path: path.to_path_buf(),
+            flavour: flavour.to_owned(),
+            letter,
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// The flavour a comment (the text after `;`) names, if it is a flavour comment.
 pub fn flavour_of_comment(comment: &[u8]) -> Option<&[u8]> {
     let c = comment.trim_ascii();
@@ -97,5 +110,9 @@ mod tests {
         assert_eq!(extrusion_letter("machinekit"), b'A');
         assert_eq!(extrusion_letter("marlin2"), b'E');
         assert_eq!(extrusion_letter("reprapfirmware"), b'E');
+        let p = Path::new("box.gcode");
+        assert!(require_e_extruder(p, Some("marlin2")).is_ok() && require_e_extruder(p, None).is_ok());
+        let err = require_e_extruder(p, Some("machinekit")).unwrap_err().to_string();
+        assert_eq!(err, "box.gcode: the file is for machinekit, whose extruder is the A axis; this command writes E moves, which that machine would not extrude");
     }
 }

@@ -48,7 +48,7 @@ use std::path::Path;
 
 use crate::colour::dialect::{marlin_m163_m164, marlin_m165, rrf_m563, rrf_m567};
 use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
-use crate::gcode::flavour::{flavour_in, flavour_of_comment, read_flavour};
+use crate::gcode::flavour::{flavour_in, flavour_of_comment, read_flavour, require_e_extruder};
 use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z};
@@ -655,6 +655,7 @@ pub fn mix_file(
     progress: &mut dyn Progress,
 ) -> Result<MixReport, MixPassError> {
     let flavour = read_flavour(input).map_err(|e| crate::Error::io(input, e))?;
+    require_e_extruder(input, flavour.as_deref())?;
     let chosen_blind = profile.hardware.dialect.is_none() && flavour.is_none();
     profile.dialect_for_file(flavour.as_deref());
     let mut pass = MixPass::new(profile)?;

@@ -63,6 +63,7 @@ pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
 
 use crate::colour::dialect::MixingState;
 use crate::error::Result;
+use crate::gcode::flavour::{read_flavour, require_e_extruder};
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::line::Block;
 use crate::gcode::reader::RawLine;
@@ -631,9 +632,12 @@ pub fn purge_shift_file(
     target: &Target,
     progress: &mut dyn Progress,
 ) -> Result<PurgeShiftReport> {
+    let flavour = read_flavour(input).map_err(|e| crate::Error::io(input, e))?;
+    require_e_extruder(input, flavour.as_deref())?;
     let mut pass = PurgeShift::new(rules);
     let mut run = Run::new(input, progress);
     run.options = pass.state_options();
+    run.flavour = Some(flavour);
     run.transform(&mut pass, target)?;
     Ok(pass.into_report())
 }
