@@ -64,6 +64,16 @@ for want, got, retracted in zip(mix["filament_per_input_mm"], sim["mixing_input_
     assert abs(want - retracted - got) <= 0.01, (mix["filament_per_input_mm"], sim["mixing_input_mm"])
 PY
 
+#    --dialect overrides the file's flavour, and Python's dialect= does the same.
+"$GWEAVE" mix "$DATA/prusaslicer/pr_sphere_rrf_fwretract.gcode" --at-layer 0=Orange --dialect marlin \
+  -o "$WORK/rrf-marlin.gcode" -q > /dev/null
+grep -q "^M164 S0$" "$WORK/rrf-marlin.gcode"
+! grep -q "^M567 " "$WORK/rrf-marlin.gcode"
+if [ -x "$PYGWEAVE" ]; then
+  "$(dirname "$PYGWEAVE")/python" -c 'import sys, gweave; r = gweave.mix(sys.argv[1], sys.argv[2], at_layer=["0=Orange"], dialect="reprap"); assert r["dialect"] == "reprap", r["dialect"]' \
+    "$DATA/cura/cura_torus.gcode" "$WORK/torus-rrf.gcode"
+  grep -q "^M567 P0 E0:0.1717:0.8283:0$" "$WORK/torus-rrf.gcode"
+fi
 #    Through a pipe the flavour shows only at the end: Marlin's commands, and a warning that says so.
 "$GWEAVE" mix <(cat "$DATA/prusaslicer/pr_sphere_rrf_fwretract.gcode") --at-layer 0=Orange -o "$WORK/piped.gcode" \
   2> "$WORK/piped.err" > /dev/null

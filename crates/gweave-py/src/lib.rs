@@ -802,7 +802,7 @@ fn write_helical_paths_json(
 /// profile is TOML text (empty: the defaults); the lists add schedule entries, gradients and
 /// tool maps as the command line flags do.
 #[pyfunction]
-#[pyo3(signature = (path, output=None, *, config="", at_layer=Vec::new(), at_z=Vec::new(), map=Vec::new(), gradient=Vec::new(), perceived=false, in_place=false, backup=true))]
+#[pyo3(signature = (path, output=None, *, config="", at_layer=Vec::new(), at_z=Vec::new(), map=Vec::new(), gradient=Vec::new(), perceived=false, dialect=None, in_place=false, backup=true))]
 #[allow(clippy::too_many_arguments)]
 fn mix_json(
     py: Python<'_>,
@@ -814,10 +814,11 @@ fn mix_json(
     map: Vec<String>,
     gradient: Vec<String>,
     perceived: bool,
+    dialect: Option<&str>,
     in_place: bool,
     backup: bool,
 ) -> PyResult<String> {
-    use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
+    use gweave::post::mix::profile::{Dialect, GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
     let bad = |e: gweave::post::mix::MixPassError| PyValueError::new_err(e.to_string());
     let target = match (output, in_place) {
         (_, true) => Target::InPlace { keep_backup: backup },
@@ -837,6 +838,9 @@ fn mix_json(
     }
     for s in &map {
         profile.add_map(s).map_err(bad)?;
+    }
+    if let Some(d) = dialect {
+        profile.hardware.dialect = Some(d.parse::<Dialect>().map_err(bad)?);
     }
     let report = py.allow_threads(|| gweave::post::mix::mix_file(profile, &path, &target, &mut Quiet));
     match report {

@@ -10,7 +10,7 @@ use gweave::colour::palette::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
 use gweave::colour::{MixingModel, Srgb8};
 use gweave::gcode::writer::Target;
-use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
+use gweave::post::mix::profile::{Dialect, GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{mix_file, wizard::run_wizard};
@@ -52,6 +52,11 @@ pub struct MixArgs {
     /// How --gradient blends.
     #[arg(long, value_enum, default_value = "mix")]
     pub gradient_space: Space,
+    /// Firmware dialect: marlin (M163/M164), marlin-direct (M165) or reprap (M563/M567);
+    /// overrides the profile. Default: the profile's, else the file's flavour (reprap for
+    /// `gcode_flavor = reprapfirmware`), else marlin.
+    #[arg(long, value_name = "DIALECT", value_parser = |s: &str| s.parse::<Dialect>().map_err(|e| e.to_string()))]
+    pub dialect: Option<Dialect>,
     /// Purge length at each change, mm of filament (0: no purge); overrides the profile.
     #[arg(long, value_name = "MM")]
     pub purge_mm: Option<f64>,
@@ -123,6 +128,9 @@ fn profile(args: &MixArgs) -> Result<MixProfile> {
     }
     for s in &args.map {
         profile.add_map(s)?;
+    }
+    if let Some(d) = args.dialect {
+        profile.hardware.dialect = Some(d);
     }
     if let Some(mm) = args.purge_mm {
         profile.purge.length_mm = mm;

@@ -367,13 +367,16 @@ def mix(
     map: Sequence[str] = (),
     gradient: Sequence[str] = (),
     perceived: bool = False,
+    dialect: Optional[str] = None,
     in_place: bool = False,
     backup: bool = True,
 ) -> Dict[str, Any]:
     """Rewrite a file for a mixing hotend (see ``gweave mix``); returns the report.
 
     ``config`` is a profile TOML file; ``at_layer=["0=Orange", "10=Pink"]``, ``at_z``,
-    ``map=["T1=PVA"]`` and ``gradient=["0-50=Cyan..Magenta"]`` work as the command line flags.
+    ``map=["T1=PVA"]``, ``gradient=["0-50=Cyan..Magenta"]`` and ``dialect`` (``"marlin"``,
+    ``"marlin-direct"``, ``"reprap"``; default: the profile's, else the file's flavour) work as
+    the command line flags.
     """
     text = ""
     if config is not None:
@@ -389,6 +392,7 @@ def mix(
             map=list(map),
             gradient=list(gradient),
             perceived=perceived,
+            dialect=dialect,
             in_place=in_place,
             backup=backup,
         )

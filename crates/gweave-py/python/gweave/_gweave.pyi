@@ -73,6 +73,7 @@ def mix_json(
     map: List[str] = ...,
     gradient: List[str] = ...,
     perceived: bool = False,
+    dialect: Optional[str] = None,
     in_place: bool = False,
     backup: bool = True,
 ) -> str: ...

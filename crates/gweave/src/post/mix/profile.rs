@@ -61,6 +61,21 @@ pub enum Dialect {
     Reprap,
 }
 
+impl FromStr for Dialect {
+    type Err = MixPassError;
+    /// The profile's names: `marlin`, `marlin-direct`, `reprap`.
+    fn from_str(s: &str) -> Result<Self, MixPassError> {
+        match s {
+            "marlin" => Ok(Dialect::Marlin),
+            "marlin-direct" => Ok(Dialect::MarlinDirect),
+            "reprap" => Ok(Dialect::Reprap),
+            _ => {
+                Err(MixPassError::Config(format!("unknown dialect {s:?} (marlin, marlin-direct or reprap)")))
+            }
+        }
+    }
+}
+
 impl Dialect {
     /// The dialect of a file sliced for `flavour` (its `gcode_flavor`): RepRapFirmware's for
     /// `reprapfirmware`, Marlin's for everything else (Klipper has no mixing extruder; Slic3r's
