@@ -63,16 +63,11 @@ pub enum Dialect {
 
 impl FromStr for Dialect {
     type Err = MixPassError;
-    /// The profile's names: `marlin`, `marlin-direct`, `reprap`.
+    /// The profile's names (`marlin`, `marlin-direct`, `reprap`), as its TOML reads them.
     fn from_str(s: &str) -> Result<Self, MixPassError> {
-        match s {
-            "marlin" => Ok(Dialect::Marlin),
-            "marlin-direct" => Ok(Dialect::MarlinDirect),
-            "reprap" => Ok(Dialect::Reprap),
-            _ => {
-                Err(MixPassError::Config(format!("unknown dialect {s:?} (marlin, marlin-direct or reprap)")))
-            }
-        }
+        use serde::de::{value::Error, IntoDeserializer};
+        Dialect::deserialize(s.into_deserializer())
+            .map_err(|e: Error| MixPassError::Config(format!("dialect: {e}")))
     }
 }
 
@@ -636,6 +631,14 @@ fn parse_tool(s: &str) -> Result<u32, MixPassError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dialect_names_are_the_profiles() {
+        let names = ["marlin", "marlin-direct", "reprap"].map(|n| n.parse::<Dialect>().unwrap());
+        assert_eq!(names, [Dialect::Marlin, Dialect::MarlinDirect, Dialect::Reprap]);
+        let err = "rrf".parse::<Dialect>().unwrap_err().to_string();
+        assert!(err.contains("unknown variant `rrf`"), "{err}");
+    }
 
     #[test]
     fn mix_refs_parse() {
