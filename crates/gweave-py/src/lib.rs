@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use gweave::check::{CheckOptions, CheckPass};
 use gweave::gcode::flavour::read_flavour;
-use gweave::gcode::lexer::parse_into;
+use gweave::gcode::lexer::parse_line;
 use gweave::gcode::line::{Block, Command, Value};
 use gweave::gcode::reader::LineReader;
 use gweave::gcode::state::{Effect, State, StateOptions, E, X, Y, Z};
@@ -215,7 +215,7 @@ impl Reader {
             return Ok(None);
         };
         let raw = line.bytes;
-        parse_into(raw, &mut self.block);
+        parse_line(&line, &mut self.block);
         let effect = *self.state.apply(raw, &self.block);
         let b = &self.block;
         let words = PyDict::new(py);

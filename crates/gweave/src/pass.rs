@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 use crate::gcode::diag::Severity;
 use crate::gcode::flavour::read_flavour;
-use crate::gcode::lexer::parse_into;
+use crate::gcode::lexer::parse_line;
 use crate::gcode::line::Block;
 use crate::gcode::reader::{LineReader, RawLine};
 use crate::gcode::state::{Effect, State, StateOptions};
@@ -154,7 +154,7 @@ pub fn drive_reader(
     let write_err = |e: io::Error| Error::io(output_name(path), e);
     let mut next_report = 0u64;
     while let Some(line) = reader.next_line().map_err(|e| Error::io(path, e))? {
-        parse_into(line.bytes, &mut block);
+        parse_line(&line, &mut block);
         if strictness == Strictness::Strict {
             if let Some(d) = block.diagnostics.iter().find(|d| d.finding.severity() == Severity::Error) {
                 return Err(Error::Syntax {

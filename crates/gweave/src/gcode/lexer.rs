@@ -11,6 +11,7 @@
 use super::diag::{Diagnostic, Finding};
 use super::line::{Block, Checksum, Command, Span, Value, Word};
 use super::number::{scan_at, NumberError};
+use super::reader::RawLine;
 
 /// M-codes whose argument is free text up to the comment (Marlin reads it as a string).
 fn takes_text(number: u32) -> bool {
@@ -32,8 +33,22 @@ fn skip_space(raw: &[u8], mut i: usize) -> usize {
 
 /// Parses `raw` (one line without its line ending) into `block`, replacing what it held.
 pub fn parse_into(raw: &[u8], block: &mut Block) {
+    parse_ahead(raw, raw, block);
+}
+
+/// [`parse_into`] for a line from a [`LineReader`](super::reader::LineReader): the bytes it can
+/// read past the line let numbers be loaded eight bytes at a time up to the line's end.
+#[inline]
+pub fn parse_line(line: &RawLine<'_>, block: &mut Block) {
+    parse_ahead(line.bytes, line.with_lookahead(), block);
+}
+
+/// Parses `raw`; `ahead` is `raw` followed by any bytes that may be read past it, the first of
+/// which (if any) is not part of a number.
+#[inline(always)]
+fn parse_ahead(raw: &[u8], ahead: &[u8], block: &mut Block) {
     block.clear();
-    if !plain_motion(raw, block) {
+    if !plain_motion(raw, ahead, block) {
         parse_general(raw, block);
     }
 }
@@ -67,7 +82,7 @@ fn parse_general(raw: &[u8], block: &mut Block) {
 /// would; `false` means the line is something else (a comment, a glued or lower-case word, a
 /// malformed number...) and the general lexer reads it from the start.
 #[inline(always)]
-fn plain_motion(raw: &[u8], block: &mut Block) -> bool {
+fn plain_motion(raw: &[u8], ahead: &[u8], block: &mut Block) -> bool {
     let number = match raw {
         [b'G', b'0', ..] => 0,
         [b'G', b'1', ..] => 1,
@@ -86,7 +101,10 @@ fn plain_motion(raw: &[u8], block: &mut Block) -> bool {
         if !matches!(letter, b'X' | b'Y' | b'Z' | b'E' | b'F') {
             return false;
         }
-        let Ok((value, end)) = scan_at(raw, i + 1) else { return false };
+        // Read from `ahead`: the number still ends at the end of `raw`, whose next byte is no
+        // part of one.
+        let Ok((value, end)) = scan_at(ahead, i + 1) else { return false };
+        debug_assert!(end <= raw.len());
         block.push_word(Word { letter, value: Value::Number(value), span: Span::new(i, end) });
         i = end;
     }
@@ -436,11 +454,11 @@ mod tests {
     fn plain_moves_take_the_fast_path_and_others_do_not() {
         for raw in ["G1 X142.303 Y175.183 E2.43766", "G0  F9000 X1 ", "G1 E-.8 F2100", "G1"] {
             let mut b = Block::default();
-            assert!(plain_motion(raw.as_bytes(), &mut b), "{raw}");
+            assert!(plain_motion(raw.as_bytes(), raw.as_bytes(), &mut b), "{raw}");
             assert_eq!(format!("{b:?}"), format!("{:?}", general(raw.as_bytes())), "{raw}");
         }
         for raw in ["G1X1", "G1 x1", "G1 X1 ; c", "G10", "G1 I1", "G1 X1..2", "G1\tX1", " G1 X1", "G1 X"] {
-            assert!(!plain_motion(raw.as_bytes(), &mut Block::default()), "{raw}");
+            assert!(!plain_motion(raw.as_bytes(), raw.as_bytes(), &mut Block::default()), "{raw}");
         }
     }
 
@@ -466,9 +484,28 @@ mod tests {
             let raw = motion_line(g, &words);
             let mut fast = Block::default();
             fast.clear();
-            if plain_motion(raw.as_bytes(), &mut fast) {
+            if plain_motion(raw.as_bytes(), raw.as_bytes(), &mut fast) {
                 proptest::prop_assert_eq!(format!("{fast:?}"), format!("{:?}", general(raw.as_bytes())));
             }
+        }
+
+        /// A line from the reader is read as the same line alone: digits after its ending (the
+        /// next line, in the reader's buffer) never join its last number.
+        #[test]
+        fn what_follows_a_line_is_not_read(
+            g in 0u8..2,
+            words in proptest::collection::vec(("[XYZEFIx]", "-?[0-9]{0,9}(\\.[0-9]{0,9})?[.+-]?", " {1,2}"), 0..6),
+            eol in "(\r?\n)?",
+            next in "[0-9.+-]{0,12}",
+        ) {
+            let raw = motion_line(g, &words);
+            let text = format!("{raw}{eol}{next}");
+            let mut reader = crate::gcode::reader::LineReader::new(text.as_bytes());
+            let line = reader.next_line().unwrap().unwrap();
+            let (mut from_reader, mut alone) = (Block::default(), Block::default());
+            parse_line(&line, &mut from_reader);
+            parse_into(line.bytes, &mut alone);
+            proptest::prop_assert_eq!(format!("{from_reader:?}"), format!("{alone:?}"));
         }
 
         /// Every line of the plain shape does take the fast path (so the test above is not
@@ -480,7 +517,7 @@ mod tests {
         ) {
             let raw = motion_line(g, &words);
             let mut fast = Block::default();
-            proptest::prop_assert!(plain_motion(raw.as_bytes(), &mut fast), "{}", raw);
+            proptest::prop_assert!(plain_motion(raw.as_bytes(), raw.as_bytes(), &mut fast), "{}", raw);
             proptest::prop_assert_eq!(fast.words.len(), words.len());
             proptest::prop_assert_eq!(format!("{fast:?}"), format!("{:?}", general(raw.as_bytes())));
         }

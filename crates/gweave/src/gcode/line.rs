@@ -132,6 +132,7 @@ pub struct Block {
 }
 
 impl Block {
+    #[inline]
     pub(crate) fn clear(&mut self) {
         self.line_number = None;
         self.checksum = None;

@@ -60,28 +60,33 @@ fn eight(line: &[u8], start: usize) -> Option<(f64, usize)> {
     // Byte k of `w` is line[start + k]; XOR with '0' maps digits to 0..=9.
     let mut t = w ^ (ONES * u64::from(b'0'));
     let non_digit = non_digits(t);
-    let first = non_digit.trailing_zeros() / 8;
-    if first == 8 {
+    // Bit 8k + 7 is set for the first non-digit byte k; shifts count bits, eight per byte.
+    let first_bit = non_digit.trailing_zeros();
+    if first_bit == 64 {
         return None;
     }
-    let (digits, frac_digits, end) = if (w >> (8 * first)) as u8 == b'.' {
-        let stop = (non_digit & !(0x80 << (8 * first))).trailing_zeros() / 8;
-        if stop == 8 {
-            return long_fraction(line, start, first, t);
+    let first_shift = first_bit & !7;
+    let (digits, frac_digits, end_shift) = if (w >> first_shift) as u8 == b'.' {
+        // The next non-digit after the point: clear the point's bit, the lowest one set.
+        let stop_bit = (non_digit & (non_digit - 1)).trailing_zeros();
+        if stop_bit == 64 {
+            return long_fraction(line, start, first_bit / 8, t);
         }
         // Close the gap of the point: the bytes above it move down one.
-        let below = (1u64 << (8 * first)) - 1;
+        let below = (1u64 << first_shift) - 1;
         t = (t & below) | ((t >> 8) & !below);
-        (stop - 1, stop - first - 1, stop)
+        let stop_shift = stop_bit & !7;
+        ((stop_shift - 8) / 8, (stop_shift - first_shift - 8) / 8, stop_shift)
     } else {
-        (first, 0, first)
+        (first_shift / 8, 0, first_shift)
     };
-    if digits == 0 || is_glued((w >> (8 * end)) as u8) {
+    if digits == 0 || is_glued((w >> end_shift) as u8) {
         return None;
     }
     // Keep the digits, most significant first in byte 0, padded with leading zeros to eight.
-    let mantissa = eight_digits(t << (8 * (8 - digits)));
-    Some((mantissa as f64 / POW10[frac_digits as usize], start + end as usize))
+    let mantissa = eight_digits(t << (64 - 8 * digits));
+    // At most six fraction digits here; the mask spares a bounds check.
+    Some((mantissa as f64 / POW10[(frac_digits & 7) as usize], start + (end_shift / 8) as usize))
 }
 
 /// A number whose fraction runs past the first eight bytes (`19.25233`, `123.45678`): the

@@ -14,7 +14,23 @@ pub struct RawLine<'a> {
     pub number: u64,
     /// Byte offset of the line's first byte in the file.
     pub offset: u64,
+    /// The content followed by at least [`LOOKAHEAD`] more bytes: the line ending and what comes
+    /// after it in the buffer, or zeros past the end of the input. The byte right after the
+    /// content is never a digit, so a number read from here stops where the line does.
+    ahead: &'a [u8],
 }
+
+impl<'a> RawLine<'a> {
+    /// The content with at least [`LOOKAHEAD`] bytes after it, for readers that load a fixed
+    /// number of bytes at a time (see [`RawLine::ahead`]).
+    #[inline]
+    pub fn with_lookahead(&self) -> &'a [u8] {
+        self.ahead
+    }
+}
+
+/// Bytes readable past the end of every line's content.
+pub const LOOKAHEAD: usize = 8;
 
 const CHUNK: usize = 1 << 20;
 
@@ -49,6 +65,8 @@ fn find_newline(haystack: &[u8]) -> Option<usize> {
 }
 
 /// Reads lines from `R` without ever holding more than one chunk (1 MiB) plus the longest line.
+/// The buffer keeps [`LOOKAHEAD`] zero bytes past the data read, so that every line has that many
+/// readable bytes after its content.
 pub struct LineReader<R> {
     inner: R,
     buf: Vec<u8>,
@@ -61,7 +79,15 @@ pub struct LineReader<R> {
 
 impl<R: Read> LineReader<R> {
     pub fn new(inner: R) -> Self {
-        LineReader { inner, buf: vec![0; CHUNK], start: 0, end: 0, eof: false, number: 0, offset: 0 }
+        LineReader {
+            inner,
+            buf: vec![0; CHUNK + LOOKAHEAD],
+            start: 0,
+            end: 0,
+            eof: false,
+            number: 0,
+            offset: 0,
+        }
     }
 
     /// Bytes handed out so far.
@@ -103,7 +129,16 @@ impl<R: Read> LineReader<R> {
         self.number += 1;
         let offset = self.offset;
         self.offset += whole.len() as u64;
-        RawLine { bytes: &whole[..content_len], eol: &whole[content_len..], number: self.number, offset }
+        // `to <= end`, and the buffer holds LOOKAHEAD bytes past `end`.
+        let ahead = &self.buf[from..from + content_len + LOOKAHEAD];
+        let whole = &ahead[..to - from];
+        RawLine {
+            bytes: &whole[..content_len],
+            eol: &whole[content_len..],
+            number: self.number,
+            offset,
+            ahead,
+        }
     }
 
     /// Moves the unread tail to the front, grows the buffer if one line fills it, and reads more.
@@ -113,18 +148,22 @@ impl<R: Read> LineReader<R> {
             self.buf.copy_within(self.start..self.end, 0);
             self.end -= self.start;
             self.start = 0;
+            self.buf[self.end..self.end + LOOKAHEAD].fill(0);
         }
-        if self.end == self.buf.len() {
-            self.buf.resize(self.buf.len() * 2, 0);
+        if self.end + LOOKAHEAD == self.buf.len() {
+            self.buf.resize((self.buf.len() - LOOKAHEAD) * 2 + LOOKAHEAD, 0);
         }
+        let room = self.buf.len() - LOOKAHEAD;
         loop {
-            match self.inner.read(&mut self.buf[self.end..]) {
+            match self.inner.read(&mut self.buf[self.end..room]) {
                 Ok(0) => {
                     self.eof = true;
                     return Ok(());
                 }
                 Ok(n) => {
                     self.end += n;
+                    // What an earlier read left past the new end must not read as a number.
+                    self.buf[self.end..self.end + LOOKAHEAD].fill(0);
                     return Ok(());
                 }
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
@@ -167,6 +206,41 @@ mod tests {
             text.push(b'\n');
             text.extend_from_slice(b"tail\n");
             assert_eq!(find_newline(&text), Some(len), "line of {len} bytes");
+        }
+    }
+
+    /// Hands out its bytes a few at a time, as a pipe may.
+    struct Trickle<'a>(&'a [u8], usize);
+
+    impl Read for Trickle<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            let n = self.1.min(buf.len()).min(self.0.len());
+            buf[..n].copy_from_slice(&self.0[..n]);
+            self.0 = &self.0[n..];
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn every_line_has_its_lookahead() {
+        // Long lines then a short last one without a line ending: the buffer is compacted over
+        // digits, which must not show past the last line's content.
+        let mut input = Vec::new();
+        for i in 0..3000 {
+            input.extend_from_slice(format!("G1 X{i}.123456789 Y987654321\n").as_bytes());
+        }
+        input.extend_from_slice(b"G1 X1");
+        for step in [1, 3, 7, 4096, CHUNK] {
+            let mut r = LineReader::new(Trickle(&input, step));
+            let mut last = Vec::new();
+            while let Some(l) = r.next_line().unwrap() {
+                let ahead = l.with_lookahead();
+                assert!(ahead.len() >= l.bytes.len() + LOOKAHEAD);
+                assert_eq!(&ahead[..l.bytes.len() + l.eol.len()], [l.bytes, l.eol].concat().as_slice());
+                assert!(!ahead[l.bytes.len()].is_ascii_digit(), "step {step}, line {}", l.number);
+                last = ahead[l.bytes.len()..l.bytes.len() + LOOKAHEAD].to_vec();
+            }
+            assert_eq!(last, [0; LOOKAHEAD], "step {step}");
         }
     }
 
