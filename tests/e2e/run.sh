@@ -59,8 +59,9 @@ else
     && ok || fail "mix error text: $(cat "$WORK/err")"
 fi
 
-#    Transforms that write E moves refuse a file whose extruder is A (PrusaSlicer's mach3 flavour).
-for cmd in "mix --at-layer 0=Orange" "purge-shift --purge 20"; do
+#    Transforms that write E moves refuse a file whose extruder is A (PrusaSlicer's mach3 flavour);
+#    the rotary wrap also because it writes A as the mandrel's turn.
+for cmd in "mix --at-layer 0=Orange" "purge-shift --purge 20" "rotary wrap --mandrel-diameter 30"; do
   # shellcheck disable=SC2086
   if "$GWEAVE" $cmd "$DATA/prusaslicer/pr_box_mach3.gcode" -o "$WORK/out.gcode" 2> "$WORK/err" > /dev/null; then
     fail "$cmd accepted a mach3 file"

@@ -14,10 +14,16 @@ const HEAD_BYTES: usize = 64 * 1024;
 /// OrcaSlicer's a few times more.
 const TAIL_BYTES: usize = 256 * 1024;
 
-/// The word a flavour extrudes with: `A` for PrusaSlicer's `mach3` and `machinekit` (LinuxCNC
-/// machines have no E axis), `E` for every other.
+/// PrusaSlicer's `mach3` and `machinekit` flavours, for LinuxCNC-style machines: no E axis, and
+/// M-codes take their value as `P` (`M104 P200`, `M106 P237.15`).
+pub fn is_linuxcnc(flavour: &str) -> bool {
+    flavour.eq_ignore_ascii_case("mach3") || flavour.eq_ignore_ascii_case("machinekit")
+}
+
+/// The word a flavour extrudes with: `A` for the LinuxCNC flavours ([`is_linuxcnc`]), `E` for
+/// every other.
 pub fn extrusion_letter(flavour: &str) -> u8 {
-    if flavour.eq_ignore_ascii_case("mach3") || flavour.eq_ignore_ascii_case("machinekit") {
+    if is_linuxcnc(flavour) {
         b'A'
     } else {
         b'E'

@@ -186,6 +186,9 @@ pub struct StateOptions {
     /// The word that drives the extruder: `E`, or `A` in PrusaSlicer's `mach3` and `machinekit`
     /// flavours (LinuxCNC has no E axis), where `E` then means nothing.
     pub extrusion_letter: u8,
+    /// The file is for a LinuxCNC-style machine ([`super::flavour::is_linuxcnc`]), whose M-codes
+    /// take their value as `P`: there `M106 P` is the fan speed, not Marlin's fan index.
+    pub linuxcnc: bool,
 }
 
 impl Default for StateOptions {
@@ -195,6 +198,7 @@ impl Default for StateOptions {
             fw_retract_mm: 1.0,
             markers: Markers::default(),
             extrusion_letter: b'E',
+            linuxcnc: false,
         }
     }
 }
@@ -204,7 +208,8 @@ impl StateOptions {
     /// [`crate::gcode::flavour`]): the extrusion word it uses.
     pub fn for_flavour(self, flavour: Option<&str>) -> Self {
         let extrusion_letter = flavour.map_or(self.extrusion_letter, super::flavour::extrusion_letter);
-        StateOptions { extrusion_letter, ..self }
+        let linuxcnc = flavour.map_or(self.linuxcnc, super::flavour::is_linuxcnc);
+        StateOptions { extrusion_letter, linuxcnc, ..self }
     }
 }
 
@@ -418,7 +423,10 @@ impl State {
                     self.thermal.bed_c = s;
                 }
             }
-            106 => self.thermal.fan = (block.get(b'S').unwrap_or(255.0) / 255.0).clamp(0.0, 1.0),
+            106 => {
+                let speed = block.get(b'S').or_else(|| block.get(b'P').filter(|_| self.options.linuxcnc));
+                self.thermal.fan = (speed.unwrap_or(255.0) / 255.0).clamp(0.0, 1.0);
+            }
             107 => self.thermal.fan = 0.0,
             207 => {
                 if let Some(s) = block.get(b'S') {
@@ -565,6 +573,20 @@ mod tests {
         assert_eq!((s.pos[E], s.pos[A], s.pos[X]), (2.0, 0.0, 20.0));
         // A file that names no flavour keeps the caller's choice, E by default.
         assert_eq!(StateOptions::default().for_flavour(None).extrusion_letter, b'E');
+    }
+
+    /// `M106 P` is the fan speed in the LinuxCNC flavours (PrusaSlicer writes `M106 P237.15`),
+    /// and Marlin's fan index elsewhere, where a missing `S` means full speed.
+    #[test]
+    fn fan_speed_word_follows_the_flavour() {
+        let mut s = State::new(StateOptions::default().for_flavour(Some("mach3")));
+        run(&mut s, "M106 P191.25");
+        assert_eq!(s.thermal.fan, 0.75);
+        let mut s = State::new(StateOptions::default().for_flavour(Some("marlin2")));
+        run(&mut s, "M106 P1");
+        assert_eq!(s.thermal.fan, 1.0);
+        run(&mut s, "M106 P0 S127.5");
+        assert_eq!(s.thermal.fan, 0.5);
     }
 
     #[test]

@@ -22,6 +22,7 @@ use super::helix::{Handedness, ProgramSummary, TubeParams};
 use super::preview::{self, LayerSummary, PreviewOptions, Program};
 use super::wrap::{from_engine, Wrap, WrapConfig};
 use super::{Result, RotaryError};
+use crate::gcode::flavour::{read_flavour, require_e_extruder};
 use crate::gcode::writer::{write_file, Output, Target};
 use crate::pass::Run;
 
@@ -193,8 +194,13 @@ pub fn wrap_file(
     progress: &mut dyn crate::pass::Progress,
 ) -> Result<WrapReport> {
     check_preview(target, preview)?;
+    // The wrap writes the rotary axis as A: a file that extrudes with A (PrusaSlicer's mach3
+    // and machinekit flavours) cannot be wrapped without losing its extrusion.
+    let flavour = read_flavour(input).map_err(|e| RotaryError::Engine(crate::Error::io(input, e)))?;
+    require_e_extruder(input, flavour.as_deref()).map_err(RotaryError::Engine)?;
     let mut pass = Wrap::new(config.clone())?;
-    Run::new(input, progress).transform(&mut pass, target).map_err(|e| from_engine(e, input))?;
+    let run = Run { flavour: Some(flavour), ..Run::new(input, progress) };
+    run.transform(&mut pass, target).map_err(|e| from_engine(e, input))?;
     let output = written_path(target, Some(input));
     let program = read_back(&config.machine, output.as_deref(), preview, WRAP_PREVIEW_BEAD_MM)?;
     let program = program.unwrap_or_default();
