@@ -159,6 +159,8 @@ impl StatsPass {
         }
     }
 
+    #[cold]
+    #[inline(never)]
     fn read_figures(&mut self, comment: &[u8]) {
         let c = comment.trim_ascii();
         if let Some(v) = c.strip_prefix(b"filament used [mm] =") {
