@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::gcode::diag::{Diagnostic, Finding, Severity};
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
-use crate::gcode::state::{Effect, AXIS_LETTERS, E, X, Y, Z};
+use crate::gcode::state::{Effect, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
 use crate::pass::{Ctx, Pass};
 
 /// Lint settings.
@@ -131,6 +131,10 @@ impl Pass for CheckPass {
                     Diagnostic::at(block.command_span.start as usize, Finding::UnknownCommand { command }),
                 );
             }
+            if letter == b'T' && number >= MAX_TOOLS {
+                let at = block.command_span.start as usize;
+                self.add(n, Diagnostic::at(at, Finding::ToolOutOfRange { tool: number }));
+            }
             let is_motion = letter == b'G' && matches!(number, 0..=3);
             if is_motion {
                 for w in &block.words {
@@ -249,7 +253,7 @@ mod tests {
     use crate::pass::{drive_reader, Quiet, Strictness};
     use std::path::Path;
 
-    fn unknown_commands(text: &str) -> Vec<(u64, String)> {
+    fn findings(text: &str) -> Vec<(u64, String)> {
         let mut pass = CheckPass::new(CheckOptions::default());
         let (options, strict) = (Default::default(), Strictness::Lenient);
         drive_reader(
@@ -267,9 +271,33 @@ mod tests {
 
     #[test]
     fn g280_is_known_only_to_griffin_files() {
-        let found = unknown_commands(";FLAVOR:Marlin\nG280\nG281\n");
+        let found = findings(";FLAVOR:Marlin\nG280\nG281\n");
         assert_eq!(found, [(2, "unknown command G280".into()), (3, "unknown command G281".into())]);
-        let found = unknown_commands(";FLAVOR:Griffin\nG280\nG281\n");
+        let found = findings(";FLAVOR:Griffin\nG280\nG281\n");
         assert_eq!(found, [(3, "unknown command G281".to_string())]);
+    }
+
+    /// A tool number past what anything has is an error, and the machine state keeps the tool
+    /// it had (a huge `T` once made the per-tool tables of `stats` ask for 32 GB).
+    #[test]
+    fn tools_out_of_range() {
+        let found = findings("M104 S200\nT255\nT256\nT4294967295\n");
+        let message = |t: u32| format!("T{t} names no tool (at most 256 are read; the tool stays as it was)");
+        assert_eq!(found, [(3, message(256)), (4, message(4294967295))]);
+        let mut pass = crate::stats::StatsPass::new(None);
+        let text = "T2\nG1 X1 E1 F600\nT4294967295\nG1 X2 E2\n";
+        let state = crate::pass::drive_reader(
+            text.as_bytes(),
+            Path::new("t.gcode"),
+            Default::default(),
+            Strictness::Strict,
+            &mut Quiet,
+            &mut pass,
+            &mut io::sink(),
+        )
+        .unwrap();
+        assert_eq!(state.tool, 2);
+        let stats = pass.into_stats(&state);
+        assert_eq!(stats.filament.iter().map(|f| f.extruded_mm).collect::<Vec<_>>(), [0.0, 0.0, 2.0]);
     }
 }

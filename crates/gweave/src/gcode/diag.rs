@@ -68,6 +68,10 @@ pub enum Finding {
     AbsoluteEPrecision {
         e_mm: String,
     },
+    /// `T<n>` past [`crate::gcode::state::MAX_TOOLS`]: no machine has that tool.
+    ToolOutOfRange {
+        tool: u32,
+    },
 }
 
 impl Finding {
@@ -124,6 +128,11 @@ impl fmt::Display for Finding {
             Finding::AbsoluteEPrecision { e_mm } => {
                 write!(f, "absolute E reached {e_mm} mm without a reset (precision loss)")
             }
+            Finding::ToolOutOfRange { tool } => write!(
+                f,
+                "T{tool} names no tool (at most {} are read; the tool stays as it was)",
+                crate::gcode::state::MAX_TOOLS
+            ),
         }
     }
 }

@@ -37,6 +37,10 @@ pub fn axis_of(letter: u8) -> Option<usize> {
     }
 }
 
+/// Tools a file may select: `T<n>` for larger `n` names no tool (firmware answers "Invalid
+/// extruder") and leaves the current one selected, so per-tool tables stay small.
+pub const MAX_TOOLS: u32 = 256;
+
 /// A position on every axis, mm (degrees for rotary A/B/C).
 pub type Position = [f64; AXES];
 
@@ -307,7 +311,7 @@ impl State {
         match block.command {
             Command::Code { letter: b'G', number, sub: None } => self.g_code(number, block),
             Command::Code { letter: b'M', number, sub: None } => self.m_code(number, block),
-            Command::Code { letter: b'T', number, sub: None } => {
+            Command::Code { letter: b'T', number, sub: None } if number < MAX_TOOLS => {
                 let from = self.tool;
                 self.tool = number;
                 self.grow_tool(number);
@@ -339,7 +343,7 @@ impl State {
 
     fn grow_tool(&mut self, tool: u32) {
         let n = tool as usize + 1;
-        if self.filament_mm.len() < n && n <= 256 {
+        if self.filament_mm.len() < n {
             self.filament_mm.resize(n, 0.0);
         }
     }
@@ -449,7 +453,7 @@ impl State {
     /// The hotend target of `tool` (the current tool when the command names none), °C.
     fn set_hotend(&mut self, tool: Option<f64>, celsius: f64) {
         let tool = tool.map_or(self.tool as usize, |t| t.max(0.0) as usize);
-        if tool < 256 {
+        if tool < MAX_TOOLS as usize {
             if self.thermal.hotend_c.len() <= tool {
                 self.thermal.hotend_c.resize(tool + 1, 0.0);
             }
