@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::gcode::diag::{Diagnostic, Finding, Severity};
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
-use crate::gcode::state::{Effect, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
+use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
 use crate::pass::{Ctx, Pass};
 
 /// Lint settings.
@@ -172,8 +172,17 @@ impl Pass for CheckPass {
                     self.add(n, Diagnostic::at(col, Finding::ExtrusionBeforeHeating));
                 }
                 if let Some(bed) = self.options.bed_mm {
+                    // An arc reaches past its end point: check the box around it in X and Y.
+                    let arc_box = match &m.path {
+                        Path::Arc(arc) => Some(arc.bounds()),
+                        Path::Line => None,
+                    };
                     for (axis, limit) in [(X, bed[0]), (Y, bed[1]), (Z, bed[2])] {
-                        let v = m.to[axis];
+                        let (lo, hi) = match arc_box {
+                            Some([min, max]) if axis != Z => (min[axis], max[axis]),
+                            _ => (m.to[axis], m.to[axis]),
+                        };
+                        let v = if lo < -1e-9 { lo } else { hi };
                         if v < -1e-9 || v > limit + 1e-9 {
                             let letter = AXIS_LETTERS[axis];
                             let col = block.word(letter).map_or(0, |w| w.span.start as usize);
@@ -254,7 +263,11 @@ mod tests {
     use std::path::Path;
 
     fn findings(text: &str) -> Vec<(u64, String)> {
-        let mut pass = CheckPass::new(CheckOptions::default());
+        findings_with(text, CheckOptions::default())
+    }
+
+    fn findings_with(text: &str, options: CheckOptions) -> Vec<(u64, String)> {
+        let mut pass = CheckPass::new(options);
         let (options, strict) = (Default::default(), Strictness::Lenient);
         drive_reader(
             text.as_bytes(),
@@ -275,6 +288,15 @@ mod tests {
         assert_eq!(found, [(2, "unknown command G280".into()), (3, "unknown command G281".into())]);
         let found = findings(";FLAVOR:Griffin\nG280\nG281\n");
         assert_eq!(found, [(3, "unknown command G281".to_string())]);
+    }
+
+    /// An arc whose ends are on the bed but whose bulge is not.
+    #[test]
+    fn arcs_leave_the_bed_between_their_ends() {
+        let options = CheckOptions { bed_mm: Some([100.0, 100.0, 100.0]), ..Default::default() };
+        let text = "M104 S200\nG1 X5 Y2 F600\nG2 X15 Y2 I5 J0 E1\nG3 X5 Y2 I-5 J0 E2\nG3 X15 Y2 I5 J0 E3\n";
+        let found = findings_with(text, options);
+        assert_eq!(found, [(5, "move outside the bed: Y=-3.000 mm".to_string())]);
     }
 
     /// A tool number past what anything has is an error, and the machine state keeps the tool

@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
-use crate::gcode::state::{Effect, State, X, Y, Z};
+use crate::gcode::state::{Effect, Path, State, X, Y, Z};
 use crate::pass::{Ctx, Pass};
 
 /// Filament used by one tool.
@@ -216,6 +216,12 @@ impl Pass for StatsPass {
                     }
                     self.last_grown = [m.to[X], m.to[Y], m.to[Z]];
                     self.grow_bounds(self.last_grown);
+                    // An arc bulges past its end points (its Z stays between theirs).
+                    if let Path::Arc(arc) = &m.path {
+                        let [min, max] = arc.bounds();
+                        self.grow_bounds([min[0], min[1], m.to[Z]]);
+                        self.grow_bounds([max[0], max[1], m.to[Z]]);
+                    }
                 } else {
                     self.travel_mm += len_mm;
                 }
@@ -317,5 +323,28 @@ mod tests {
         let seen = run(StateOptions::default().for_flavour(Some("mach3")));
         assert_eq!(seen.filament[0].extruded_mm, 2.0);
         assert!(!seen.warnings.iter().any(|w| w.contains("flavour")), "{:?}", seen.warnings);
+    }
+
+    /// The extrusion box holds the whole of an arc, not only its end points.
+    #[test]
+    fn extents_hold_arcs() {
+        let mut pass = StatsPass::new(None);
+        let text = b"G1 X5 Y5 Z0.2 F600
+G2 X5 Y5 I10 J0 E5
+G3 X25 Y5 I10 J0 E6
+";
+        let state = crate::pass::drive_reader(
+            &text[..],
+            std::path::Path::new("t.gcode"),
+            Default::default(),
+            crate::pass::Strictness::Strict,
+            &mut crate::pass::Quiet,
+            &mut pass,
+            &mut io::sink(),
+        )
+        .unwrap();
+        let b = pass.into_stats(&state).extrusion_bounds.unwrap();
+        // The full circle around (15, 5), then the lower half of it, counter-clockwise.
+        assert_eq!((b.min, b.max), ([5.0, -5.0, 0.2], [25.0, 15.0, 0.2]));
     }
 }

@@ -81,6 +81,30 @@ impl Arc {
         [self.center[0] + self.radius_mm * a.cos(), self.center[1] + self.radius_mm * a.sin()]
     }
 
+    /// The smallest axis-aligned box `[min, max]` holding the arc: its end points, and each
+    /// point where it crosses the circle's right, top, left or bottom, if the sweep reaches it.
+    pub fn bounds(&self) -> [[f64; 2]; 2] {
+        let (a, b) = (self.point(0.0), self.point(1.0));
+        let mut min = [a[0].min(b[0]), a[1].min(b[1])];
+        let mut max = [a[0].max(b[0]), a[1].max(b[1])];
+        let (from, to) = if self.sweep_rad >= 0.0 {
+            (self.start_rad, self.start_rad + self.sweep_rad)
+        } else {
+            (self.start_rad + self.sweep_rad, self.start_rad)
+        };
+        let [cx, cy] = self.center;
+        let r = self.radius_mm;
+        for (k, [x, y]) in [[cx + r, cy], [cx, cy + r], [cx - r, cy], [cx, cy - r]].into_iter().enumerate() {
+            // The first angle at or after `from` that points this way.
+            let angle = k as f64 * TAU / 4.0;
+            if angle + TAU * ((from - angle) / TAU).ceil() <= to {
+                min = [min[0].min(x), min[1].min(y)];
+                max = [max[0].max(x), max[1].max(y)];
+            }
+        }
+        [min, max]
+    }
+
     /// Number of chords that keep the path within `tol_mm` of the arc.
     pub fn segments(&self, tol_mm: f64) -> usize {
         let tol = tol_mm.clamp(1e-9, self.radius_mm);
@@ -110,6 +134,27 @@ mod tests {
         assert!((a.sweep_rad + TAU).abs() < 1e-12);
         let p = a.point(0.25);
         assert!((p[0]).abs() < 1e-9 && (p[1] + 5.0).abs() < 1e-9, "{p:?}");
+    }
+
+    #[test]
+    fn bounds_reach_the_bulge() {
+        let close = |a: [[f64; 2]; 2], b: [[f64; 2]; 2]| {
+            a.iter().flatten().zip(b.iter().flatten()).all(|(x, y)| (x - y).abs() < 1e-9)
+        };
+        // A quarter from the right to the top: its end points are its extremes.
+        let a = Arc::from_offset([10.0, 0.0], [0.0, 10.0], [-10.0, 0.0], false).unwrap();
+        assert!(close(a.bounds(), [[0.0, 0.0], [10.0, 10.0]]), "{:?}", a.bounds());
+        // Half a circle over the top, counter-clockwise, and the other half clockwise.
+        let a = Arc::from_offset([10.0, 0.0], [-10.0, 0.0], [-10.0, 0.0], false).unwrap();
+        assert!(close(a.bounds(), [[-10.0, 0.0], [10.0, 10.0]]), "{:?}", a.bounds());
+        let a = Arc::from_offset([10.0, 0.0], [-10.0, 0.0], [-10.0, 0.0], true).unwrap();
+        assert!(close(a.bounds(), [[-10.0, -10.0], [10.0, 0.0]]), "{:?}", a.bounds());
+        // A full circle around (5, 5), and a short arc that crosses the left point only.
+        let a = Arc::from_offset([5.0, 0.0], [5.0, 0.0], [0.0, 5.0], true).unwrap();
+        assert!(close(a.bounds(), [[0.0, 0.0], [10.0, 10.0]]), "{:?}", a.bounds());
+        let (s, c) = (0.1f64.sin(), 0.1f64.cos());
+        let a = Arc::from_offset([-c, s], [-c, -s], [c, -s], false).unwrap();
+        assert!(close(a.bounds(), [[-1.0, -s], [-c, s]]), "{:?}", a.bounds());
     }
 
     #[test]
