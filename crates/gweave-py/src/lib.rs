@@ -260,11 +260,12 @@ impl Reader {
 
 // ---- preview (render) ----
 
-/// A picture or viewer page of a file as bytes (`format`: png, svg or html); see `gweave preview`.
+/// A picture or viewer page of a file as bytes (`format`: png, svg or html) and the report of
+/// what it shows as JSON; see `gweave preview`.
 #[pyfunction]
 #[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None))]
 #[allow(clippy::too_many_arguments)]
-fn preview_bytes(
+fn preview_json(
     py: Python<'_>,
     path: PathBuf,
     format: &str,
@@ -278,7 +279,7 @@ fn preview_bytes(
     mix_profile: Option<PathBuf>,
     mandrel_diameter: Option<f64>,
     head: Option<PathBuf>,
-) -> PyResult<Py<PyBytes>> {
+) -> PyResult<(Py<PyBytes>, String)> {
     let printhead = match head {
         Some(p) => Some(
             gweave::gen::printhead::PrintheadProfile::from_toml(&std::fs::read_to_string(&p)?)
@@ -320,10 +321,12 @@ fn preview_bytes(
         printhead,
         ..PreviewOptions::default()
     };
-    let bytes = py
-        .allow_threads(|| render::preview(&path, compare.as_deref(), format, &options))
+    let preview = py
+        .allow_threads(|| {
+            render::preview_with_progress(&path, compare.as_deref(), format, &options, &mut Quiet)
+        })
         .map_err(render_err)?;
-    Ok(PyBytes::new(py, &bytes).unbind())
+    Ok((PyBytes::new(py, &preview.bytes).unbind(), to_json(&preview.report)?))
 }
 
 fn render_err(e: render::RenderError) -> PyErr {
@@ -876,7 +879,7 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_helical_paths_json, m)?)?;
     m.add_class::<HelicalPath>()?;
 
-    m.add_function(wrap_pyfunction!(preview_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(preview_json, m)?)?;
     m.add_function(wrap_pyfunction!(toolpath_columns, m)?)?;
     Ok(())
 }

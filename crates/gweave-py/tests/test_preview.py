@@ -19,6 +19,15 @@ def test_preview_png_shows_both_tools(data):
     assert px.count(ORANGE) > 2000 and px.count(BLUE) > 2000, (px.count(ORANGE), px.count(BLUE))
 
 
+def test_preview_report_names_the_colours(data, tmp_path):
+    png, report = gweave.preview(data / "cura" / "cura_dual.gcode", layer=60, size=(400, 300), report=True)
+    assert png.startswith(b"\x89PNG") and report["bytes"] == len(png)
+    assert report["layers_drawn"] == [60, 60] and report["strokes"] > 100
+    assert report["legend"] == [{"label": "T0", "colour": "#e69f00"}, {"label": "T1", "colour": "#0072b2"}]
+    # The same picture as without the report.
+    assert png == gweave.preview(data / "cura" / "cura_dual.gcode", layer=60, size=(400, 300))
+
+
 def test_preview_beyond_the_last_layer_is_blank(data):
     png = gweave.preview(data / "cura" / "cura_dual.gcode", layer=(500, 600), size=(200, 100))
     w, h, px = read_png(png)

@@ -285,8 +285,11 @@ def preview(
     mix_profile: Optional[PathLike] = None,
     mandrel_diameter: Optional[float] = None,
     head: Optional[PathLike] = None,
-) -> bytes:
-    """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None).
+    report: bool = False,
+) -> Union[bytes, Tuple[bytes, Dict[str, Any]]]:
+    """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None),
+    or with ``report=True`` the bytes and the report ``gweave preview --json`` prints (format, view,
+    layers drawn, strokes, moves, and the ``legend``: each colour and what it stands for).
 
     ``output`` picks the format by extension (``.png``, ``.svg``, ``.html``) and is written.
     ``layer`` is one 0-based layer or an inclusive ``(first, last)`` range; ``view`` is ``"top"`` or
@@ -304,7 +307,7 @@ def preview(
             raise ValueError(f"unknown output format {ext!r} (.png, .svg or .html)")
         fmt = _PREVIEW_FORMATS[ext]
     layers = (layer, layer) if isinstance(layer, int) else None if layer is None else (int(layer[0]), int(layer[1]))
-    data = _gweave.preview_bytes(
+    data, report_json = _gweave.preview_json(
         os.fspath(path),
         format=fmt,
         layers=layers,
@@ -321,7 +324,7 @@ def preview(
     if output is not None:
         with open(output, "wb") as f:
             f.write(data)
-    return data
+    return (data, json.loads(report_json)) if report else data
 
 
 def toolpath(

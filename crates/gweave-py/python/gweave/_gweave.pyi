@@ -77,7 +77,7 @@ def mix_json(
     in_place: bool = False,
     backup: bool = True,
 ) -> str: ...
-def preview_bytes(
+def preview_json(
     path: str,
     *,
     format: str,
@@ -91,7 +91,7 @@ def preview_bytes(
     mix_profile: Optional[str] = None,
     mandrel_diameter: Optional[float] = None,
     head: Optional[str] = None,
-) -> bytes: ...
+) -> Tuple[bytes, str]: ...
 def toolpath_columns(
     path: str, *, travel: bool = True, min_len: float = 0.0, mandrel_diameter: Optional[float] = None
 ) -> Tuple[int, Dict[str, Any]]: ...

@@ -14,15 +14,15 @@ pub struct RawLine<'a> {
     pub number: u64,
     /// Byte offset of the line's first byte in the file.
     pub offset: u64,
-    /// The content followed by at least [`LOOKAHEAD`] more bytes: the line ending and what comes
-    /// after it in the buffer, or zeros past the end of the input. The byte right after the
-    /// content is never a digit, so a number read from here stops where the line does.
+    /// See [`RawLine::with_lookahead`].
     ahead: &'a [u8],
 }
 
 impl<'a> RawLine<'a> {
-    /// The content with at least [`LOOKAHEAD`] bytes after it, for readers that load a fixed
-    /// number of bytes at a time (see [`RawLine::ahead`]).
+    /// The content followed by at least [`LOOKAHEAD`] more bytes, for readers that load a fixed
+    /// number of bytes at a time: the line ending and what comes after it in the buffer, or
+    /// zeros past the end of the input. The byte right after the content is never a digit, so a
+    /// number read from here stops where the line does.
     #[inline]
     pub fn with_lookahead(&self) -> &'a [u8] {
         self.ahead
