@@ -53,9 +53,12 @@ pub enum Firmware {
     /// Marlin: `G90` makes every axis absolute, E included (until `M83`); `G91` makes all relative.
     #[default]
     Marlin,
-    /// Klipper and RepRapFirmware: `G90`/`G91` leave the M82/M83 extrusion mode alone, but E is
-    /// relative while G91 is in force (Klipper) .
+    /// Klipper: `G90`/`G91` leave the M82/M83 extrusion mode alone, but E is relative while G91
+    /// is in force.
     Klipper,
+    /// RepRapFirmware: only M82/M83 decide E; `G91` leaves extrusion absolute under `M82`.
+    #[serde(rename = "reprapfirmware")]
+    RepRapFirmware,
 }
 
 /// The motion mode that axis words on a line without a command continue.
@@ -209,11 +212,18 @@ impl Default for StateOptions {
 
 impl StateOptions {
     /// These options for a file sliced for `flavour` (its `gcode_flavor`, see
-    /// [`crate::gcode::flavour`]): the extrusion word it uses.
+    /// [`crate::gcode::flavour`]): the extrusion word it uses, and the firmware's rule for
+    /// `G90`/`G91` where the flavour names Klipper or RepRapFirmware (the Marlin rule stays
+    /// for every other).
     pub fn for_flavour(self, flavour: Option<&str>) -> Self {
         let extrusion_letter = flavour.map_or(self.extrusion_letter, super::flavour::extrusion_letter);
         let linuxcnc = flavour.map_or(self.linuxcnc, super::flavour::is_linuxcnc);
-        StateOptions { extrusion_letter, linuxcnc, ..self }
+        let firmware = match flavour {
+            Some(f) if f.eq_ignore_ascii_case("klipper") => Firmware::Klipper,
+            Some(f) if f.eq_ignore_ascii_case("reprapfirmware") => Firmware::RepRapFirmware,
+            _ => self.firmware,
+        };
+        StateOptions { extrusion_letter, linuxcnc, firmware, ..self }
     }
 }
 
@@ -281,7 +291,7 @@ impl State {
     /// E moves relative to the current position on this line.
     #[inline]
     pub fn relative_e(&self) -> bool {
-        !self.absolute_e || !self.absolute
+        !self.absolute_e || (!self.absolute && self.options.firmware != Firmware::RepRapFirmware)
     }
 
     #[inline]
@@ -609,6 +619,29 @@ mod tests {
         let mut klipper = State::new(StateOptions { firmware: Firmware::Klipper, ..Default::default() });
         run(&mut klipper, "M83\nG90\nG1 E1\nG1 E1");
         assert_eq!(klipper.filament_mm[0], 2.0);
+    }
+
+    /// Under M82, G91 makes E relative in Marlin and Klipper but not in RepRapFirmware; the
+    /// file's flavour picks the rule.
+    #[test]
+    fn g91_and_extrusion_by_flavour() {
+        let text = "M82\nG1 E1\nG91\nG1 E1\nG1 E1";
+        for (flavour, firmware, filament_mm) in [
+            (Some("marlin2"), Firmware::Marlin, 3.0),
+            (None, Firmware::Marlin, 3.0),
+            (Some("klipper"), Firmware::Klipper, 3.0),
+            (Some("reprapfirmware"), Firmware::RepRapFirmware, 1.0),
+        ] {
+            let options = StateOptions::default().for_flavour(flavour);
+            assert_eq!(options.firmware, firmware, "{flavour:?}");
+            let mut s = State::new(options);
+            run(&mut s, text);
+            assert_eq!(s.filament_mm[0], filament_mm, "{flavour:?}");
+        }
+        // RepRapFirmware: M83 alone makes E relative, whatever G90 says.
+        let mut rrf = State::new(StateOptions::default().for_flavour(Some("reprapfirmware")));
+        run(&mut rrf, "M83\nG90\nG1 E1\nG1 E1");
+        assert_eq!(rrf.filament_mm[0], 2.0);
     }
 
     #[test]
