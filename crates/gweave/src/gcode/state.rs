@@ -250,6 +250,8 @@ pub struct State {
     pub options: StateOptions,
     /// What the last line did.
     pub effect: Effect,
+    /// G91 makes E relative too (every firmware but RepRapFirmware), fixed by the options.
+    g91_moves_e: bool,
 }
 
 impl Default for State {
@@ -273,6 +275,7 @@ impl State {
             fw_retract_mm: options.fw_retract_mm,
             thermal: Thermal::default(),
             structure: Structure::with_markers(options.markers.clone()),
+            g91_moves_e: options.firmware != Firmware::RepRapFirmware,
             options,
             effect: Effect::None,
         }
@@ -291,7 +294,7 @@ impl State {
     /// E moves relative to the current position on this line.
     #[inline]
     pub fn relative_e(&self) -> bool {
-        !self.absolute_e || (!self.absolute && self.options.firmware != Firmware::RepRapFirmware)
+        !self.absolute_e || (!self.absolute & self.g91_moves_e)
     }
 
     #[inline]
