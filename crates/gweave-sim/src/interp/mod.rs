@@ -335,8 +335,11 @@ impl Machine {
                 self.run_core(line, &effect, out);
                 self.moved_since_m400 = false;
             }
-            // RepRapFirmware's `G10 P<tool> S<temp>` sets a tool's temperature.
-            10 if self.core.block().has(b'S') => self.rrf_tool_temperature(out),
+            // RepRapFirmware's `G10 P<tool> S<temp>` sets a tool's temperature; Marlin's
+            // `G10 S1` (no `P`) is the swap retraction, which the state reads as a retraction.
+            10 if self.core.block().has(b'P') && self.core.block().has(b'S') => {
+                self.rrf_tool_temperature(out)
+            }
             10 | 11 | 20 | 21 | 90 | 91 => self.run_core(line, &effect, out),
             28 => self.home(line, effect, before, out),
             92 => {

@@ -278,6 +278,19 @@ fn rrf_tool_temperature_and_m116() {
     assert_eq!(m.report().filament_mm, vec![1.0]);
 }
 
+/// Marlin's `G10 S1` (Cura writes it before a tool change with firmware retraction) retracts;
+/// it does not set the hotend to 1 °C, which would refuse the next extrusion as cold.
+#[test]
+fn marlin_swap_retraction_is_not_a_temperature() {
+    let mut m = machine();
+    let (r, _) = run(&mut m, "M104 S200\nM109 S200\nG1 X10 E1 F600\nG10 S1\nG11\nG1 X20 E2\nM400");
+    assert!(r.iter().all(|l| l.starts_with("ok") || l.starts_with(" T:")), "{r:?}");
+    assert_eq!(m.thermal().target(HeaterId::Hotend(0)).unwrap(), 200.0);
+    let report = m.report();
+    assert!(report.warning_counts.is_empty(), "{:?}", report.warning_counts);
+    assert_eq!(report.filament_mm, vec![2.0]);
+}
+
 /// `M568` (RepRapFirmware 3.3+, and what `gweave mix` writes for its RRF tools) heats like
 /// `G10 P S`; on a mixing hotend every tool's temperature is the one nozzle's.
 #[test]

@@ -376,10 +376,18 @@ impl State {
                 let t_s = block.get(b'S').unwrap_or(0.0) + block.get(b'P').unwrap_or(0.0) / 1000.0;
                 self.effect = Effect::Dwell { t_s };
             }
-            10 if block.words.is_empty() => self.firmware_retract(true),
             // RepRapFirmware `G10 P<tool> S<active> [R<standby>]` (PrusaSlicer's way of heating
-            // for that flavour, then `M116` waits): the tool's working temperature.
-            10 => self.rrf_tool_temperature(block),
+            // for that flavour, then `M116` waits) sets a tool's working temperature; with `L` it
+            // sets offsets or a coordinate system. Neither moves filament.
+            10 if block.has(b'P')
+                || block.has(b'L')
+                || (self.options.firmware == Firmware::RepRapFirmware && block.has(b'S')) =>
+            {
+                self.rrf_tool_temperature(block)
+            }
+            // Otherwise a firmware retraction, also Marlin's `G10 S1` (the longer one before a
+            // tool swap, as Cura writes it with firmware retraction on several extruders).
+            10 => self.firmware_retract(true),
             11 => self.firmware_retract(false),
             20 => self.inches = true,
             21 => self.inches = false,
@@ -569,7 +577,7 @@ mod tests {
 
     #[test]
     fn reprapfirmware_g10_with_words_sets_a_tool_temperature_not_a_retraction() {
-        let mut s = State::default();
+        let mut s = State::new(StateOptions::default().for_flavour(Some("reprapfirmware")));
         let effects = run(&mut s, "T1\nG10 P0 S215 R170\nG10 S190\nM116\nG1 X10 E1 F600");
         assert_eq!(s.thermal.hotend_c, vec![215.0, 190.0]);
         assert!(s.thermal.hotend_set);
@@ -626,6 +634,21 @@ mod tests {
 
     /// Under M82, G91 makes E relative in Marlin and Klipper but not in RepRapFirmware; the
     /// file's flavour picks the rule.
+    /// `G10 S1` is Marlin's swap retraction, not a 1 °C tool temperature; `G10 P S` is
+    /// RepRapFirmware's tool temperature, and so is `G10 S` alone in a RepRapFirmware file.
+    #[test]
+    fn g10_retracts_or_sets_a_tool_temperature() {
+        let mut s = State::default();
+        run(&mut s, "M104 S200\nG1 X10 E1 F600");
+        let effects = run(&mut s, "G10 S1\nG11");
+        assert_eq!(effects, [Effect::FirmwareRetract { e_mm: -1.0 }, Effect::FirmwareRetract { e_mm: 1.0 }]);
+        run(&mut s, "G10 P1 S215\nG10 L2 P1 X5");
+        assert_eq!((s.thermal.hotend_c.as_slice(), s.pos[X]), (&[200.0, 215.0][..], 10.0));
+        let mut rrf = State::new(StateOptions::default().for_flavour(Some("reprapfirmware")));
+        run(&mut rrf, "G10 S190");
+        assert_eq!(rrf.thermal.hotend_c, vec![190.0]);
+    }
+
     #[test]
     fn g91_and_extrusion_by_flavour() {
         let text = "M82\nG1 E1\nG91\nG1 E1\nG1 E1";
