@@ -20,7 +20,7 @@ pub const COMMANDS: &[CommandHelp] = &[
     c("G0 G1", "linear move (G0 a travel), through the lookahead planner and the steppers"),
     c("G2 G3", "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords"),
     c("G4", "dwell P milliseconds or S seconds, after the queued moves"),
-    c("G10 G11", "firmware retract / recover (45 / 8 mm/s); G10 with P (tool) and S sets a tool temperature (RepRapFirmware)"),
+    c("G10 G11", "firmware retract / recover (45 / 8 mm/s), Marlin's `G10 S1` too; G10 with P (tool) and S sets a tool temperature (RepRapFirmware)"),
     c("G20 G21", "inches / millimetres"),
     c("G28", "home the named axes (all without words) against the endstops, with Marlin's bump"),
     c("G90 G91", "absolute / relative coordinates (E too)"),
