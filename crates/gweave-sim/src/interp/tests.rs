@@ -278,8 +278,8 @@ fn rrf_tool_temperature_and_m116() {
     assert_eq!(m.report().filament_mm, vec![1.0]);
 }
 
-/// Marlin's `G10 S1` (Cura writes it before a tool change with firmware retraction) retracts;
-/// it does not set the hotend to 1 °C, which would refuse the next extrusion as cold.
+/// Marlin's `G10 S1` (the swap retraction before a tool change on a multi-extruder machine)
+/// retracts; it does not set the hotend to 1 °C, which would refuse the next extrusion as cold.
 #[test]
 fn marlin_swap_retraction_is_not_a_temperature() {
     let mut m = machine();

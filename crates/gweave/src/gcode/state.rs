@@ -386,7 +386,7 @@ impl State {
                 self.rrf_tool_temperature(block)
             }
             // Otherwise a firmware retraction, also Marlin's `G10 S1` (the longer one before a
-            // tool swap, as Cura writes it with firmware retraction on several extruders).
+            // tool swap, on machines with several extruders).
             10 => self.firmware_retract(true),
             11 => self.firmware_retract(false),
             20 => self.inches = true,
