@@ -130,9 +130,7 @@ impl Machine {
     }
 
     fn thermal_refused(&mut self, e: ThermalError, out: &mut dyn FnMut(f64, &str)) {
-        let message = e.to_string();
-        out(self.now_s(), &format!("echo:{message}"));
-        self.warn(WarningKind::Refused { message });
+        self.refuse(e.to_string(), out);
     }
 
     /// `M109`/`M190`: wait with the machine standing still, printing the status every second.

@@ -315,9 +315,14 @@ impl Machine {
                 EstimateError::Profile { source, .. } => source.to_string(),
                 other => other.to_string(),
             };
-            out(self.now_s(), &format!("echo:{message}"));
-            self.warn(WarningKind::Refused { message });
+            self.refuse(message, out);
         }
+    }
+
+    /// Says on the serial line and in the report that a command was not carried out.
+    fn refuse(&mut self, message: String, out: &mut dyn FnMut(f64, &str)) {
+        out(self.now_s(), &format!("echo:{message}"));
+        self.warn(WarningKind::Refused { message });
     }
 
     fn g_code(
@@ -330,11 +335,16 @@ impl Machine {
     ) {
         match number {
             0..=3 => self.motion(line, effect, out),
-            4 => {
-                self.thermal.set_moving(false);
-                self.run_core(line, &effect, out);
-                self.moved_since_m400 = false;
-            }
+            4 => match effect {
+                Effect::Dwell { t_s } if t_s > motion::MAX_COMMAND_S => {
+                    self.refuse(format!("a dwell of {t_s:.0} s: refused"), out)
+                }
+                _ => {
+                    self.thermal.set_moving(false);
+                    self.run_core(line, &effect, out);
+                    self.moved_since_m400 = false;
+                }
+            },
             // RepRapFirmware's `G10 P<tool> S<temp>` sets a tool's temperature; Marlin's
             // `G10 S1` (no `P`) is the swap retraction, which the state reads as a retraction.
             10 if self.core.block().has(b'P') && self.core.block().has(b'S') => {

@@ -10,13 +10,18 @@
 use gweave::gcode::state::{self, Effect};
 
 use super::{Machine, WarningKind};
-use crate::kinematics::Pos;
+use crate::kinematics::{Geometry, Pos};
 use crate::limits::CornerMode;
 use crate::profile::EndstopSide;
 use crate::thermal::COLD_EXTRUSION_LINE;
 
 /// Axis letters X Y Z.
 const XYZ: [char; 3] = ['X', 'Y', 'Z'];
+/// Longest time one command may hold the simulated clock, s (a week; a 40-hour print is
+/// 144 000 s). Heaters are simulated tick by tick through every second of it, so a stray
+/// digit in a feed rate or a dwell (`F0.0001`, `G4 S99999999`) would otherwise keep the virtual
+/// printer busy for hours; such a command is refused instead.
+pub(super) const MAX_COMMAND_S: f64 = 7.0 * 24.0 * 3600.0;
 /// Tolerance of the bounds check, mm: coordinates are written with a few decimals.
 const BOUNDS_EPS_MM: f64 = 1e-6;
 
@@ -43,6 +48,12 @@ impl Machine {
         self.check_bounds(&m.from, &m.to);
         if self.feed_pct != 100.0 {
             m.feed_mm_min *= self.feed_pct / 100.0;
+        }
+        if let Some(message) = self.out_of_reach(&m.to).or_else(|| too_long(m)) {
+            // The machine stays where it was, as firmware that refuses a move does.
+            self.core.state_mut().pos = m.from;
+            self.refuse(message, out);
+            return;
         }
         let de = m.to[state::E] - m.from[state::E];
         if de != 0.0 {
@@ -73,6 +84,21 @@ impl Machine {
         } else {
             self.tool.min(usize::from(u8::MAX)) as u8
         }
+    }
+
+    /// Why a target cannot be driven at all: more than the machine's own travel outside it on
+    /// some axis (a coordinate with stray digits, `X999999999`). Such a move would run for
+    /// days of simulated time, every heater tick of it simulated; a smaller excursion is only
+    /// reported by [`Machine::check_bounds`] and carried out.
+    fn out_of_reach(&self, to: &state::Position) -> Option<String> {
+        let ranges = self.profile.bed.ranges();
+        ranges.iter().enumerate().find_map(|(i, &(min_mm, max_mm))| {
+            let span = max_mm - min_mm;
+            let value_mm = to[i] + self.shift_mm[i];
+            (value_mm < min_mm - span || value_mm > max_mm + span).then(|| {
+                format!("{}{value_mm:.3} is out of reach ({min_mm:.0}..{max_mm:.0} mm): move refused", XYZ[i])
+            })
+        })
     }
 
     /// Warns about a target outside the build volume (below the bed separately). Only the axes
@@ -197,6 +223,15 @@ impl Machine {
         }
         lines
     }
+}
+
+/// Why a move would hold the simulated clock for more than [`MAX_COMMAND_S`] at its own feed
+/// rate (acceleration and the machine's limits only make it longer), if it would.
+fn too_long(m: &state::Move) -> Option<String> {
+    let len = m.len_mm().max(Geometry::between(pos(&m.from), pos(&m.to)).len);
+    let t_s = len / (m.feed_mm_min / 60.0);
+    (m.feed_mm_min > 0.0 && t_s > MAX_COMMAND_S)
+        .then(|| format!("a {len:.3} mm move at F{} would take {t_s:.0} s: move refused", m.feed_mm_min))
 }
 
 fn pos(p: &state::Position) -> Pos {

@@ -278,6 +278,42 @@ fn rrf_tool_temperature_and_m116() {
     assert_eq!(m.report().filament_mm, vec![1.0]);
 }
 
+/// A target with stray digits, far beyond the machine, is refused and the machine stays put
+/// (simulating the move would take days of heater ticks); a near miss is carried out.
+#[test]
+fn moves_out_of_reach_are_refused() {
+    let mut m = machine();
+    let (r, _) = run(&mut m, "G28\nG1 X10 F6000\nG1 X999999999999 Y5\nG1 X20\nG1 X250\nM400");
+    let refused = "echo:X999999999999.000 is out of reach (0..200 mm): move refused";
+    assert_eq!(r.iter().filter(|l| l.as_str() == refused).count(), 1, "{r:?}");
+    let report = m.report();
+    assert_eq!(report.warning_counts.get("refused"), Some(&1), "{:?}", report.warning_counts);
+    assert_eq!(report.warning_counts.get("out_of_bounds"), Some(&2), "{:?}", report.warning_counts);
+    // X went 10 -> 20 -> 250; the refused move changed nothing.
+    assert_eq!(m.report().position[0], 250.0);
+    assert!(m.now_s() < 60.0, "{}", m.now_s());
+}
+
+/// A stray digit in a feed rate or a dwell would hold the simulated clock for years: refused,
+/// as the simulated heaters would need hours to step through it. A long but sane dwell runs.
+#[test]
+fn commands_longer_than_a_week_are_refused() {
+    let mut m = machine();
+    let (r, _) = run(&mut m, "G28\nG1 X100 F0.0001\nG4 S99999999\nG4 S600\nG1 X50 F6000\nM400");
+    let refusals: Vec<_> = r.iter().filter(|l| l.starts_with("echo:")).collect();
+    assert_eq!(
+        refusals,
+        [
+            "echo:a 100.000 mm move at F0.0001 would take 60000000 s: move refused",
+            "echo:a dwell of 99999999 s: refused"
+        ],
+        "{r:?}"
+    );
+    // The slow move did not happen: X went from 0 to 50 in one move, after the 600 s dwell.
+    assert_eq!(m.report().position[0], 50.0);
+    assert!(m.now_s() > 600.0 && m.now_s() < 700.0, "{}", m.now_s());
+}
+
 /// Marlin's `G10 S1` (the swap retraction before a tool change on a multi-extruder machine)
 /// retracts; it does not set the hotend to 1 °C, which would refuse the next extrusion as cold.
 #[test]

@@ -252,6 +252,10 @@ fn scan_slow(bytes: &[u8], negative: bool, start: usize) -> Result<(f64, usize),
     }
     let text = std::str::from_utf8(&bytes[start..i]).map_err(|_| NumberError::Malformed)?;
     let value: f64 = text.parse().map_err(|_| NumberError::Malformed)?;
+    // Over 309 digits the nearest double is infinity, which no machine can reach.
+    if !value.is_finite() {
+        return Err(NumberError::NotFinite);
+    }
     Ok((if negative { -value } else { value }, i))
 }
 
@@ -367,6 +371,12 @@ mod tests {
         assert_eq!(scan(b"NaN"), Err(NumberError::NotFinite));
         assert_eq!(scan(b"-inf"), Err(NumberError::NotFinite));
         assert_eq!(scan(b"1.2.3"), Err(NumberError::Malformed));
+        // Digits past the largest double round to infinity: not a number a machine can reach.
+        let huge = "9".repeat(400);
+        assert_eq!(scan(huge.as_bytes()), Err(NumberError::NotFinite));
+        assert_eq!(scan(format!("-{huge}.5").as_bytes()), Err(NumberError::NotFinite));
+        let largest = format!("{}", f64::MAX);
+        assert_eq!(scan(largest.as_bytes()), Ok((f64::MAX, largest.len())));
     }
 
     #[test]
