@@ -345,9 +345,9 @@ impl Machine {
                     self.moved_since_m400 = false;
                 }
             },
-            // RepRapFirmware's `G10 P<tool> S<temp>` sets a tool's temperature; Marlin's
-            // `G10 S1` (no `P`) is the swap retraction, which the state reads as a retraction.
-            10 if self.core.block().has(b'P') && self.core.block().has(b'S') => {
+            // RepRapFirmware's `G10 P<tool> S<temp>` sets a tool's temperature; the state says
+            // which `G10` is which (Marlin's `G10 S1` is a retraction).
+            10 if self.core.state().g10_is_not_a_retraction(self.core.block()) => {
                 self.rrf_tool_temperature(out)
             }
             10 | 11 | 20 | 21 | 90 | 91 => self.run_core(line, &effect, out),

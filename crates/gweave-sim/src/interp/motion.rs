@@ -45,11 +45,11 @@ impl Machine {
             self.run_core(line, &effect, out);
             return;
         };
-        self.check_bounds(&m.from, &m.to);
+        let out_of_reach = self.check_bounds(&m.from, &m.to);
         if self.feed_pct != 100.0 {
             m.feed_mm_min *= self.feed_pct / 100.0;
         }
-        if let Some(message) = self.out_of_reach(&m.to).or_else(|| too_long(m)) {
+        if let Some(message) = out_of_reach.or_else(|| too_long(m)) {
             // The machine stays where it was, as firmware that refuses a move does.
             self.core.state_mut().pos = m.from;
             self.refuse(message, out);
@@ -86,25 +86,16 @@ impl Machine {
         }
     }
 
-    /// Why a target cannot be driven at all: more than the machine's own travel outside it on
-    /// some axis (a coordinate with stray digits, `X999999999`). Such a move would run for
-    /// days of simulated time, every heater tick of it simulated; a smaller excursion is only
-    /// reported by [`Machine::check_bounds`] and carried out.
-    fn out_of_reach(&self, to: &state::Position) -> Option<String> {
-        let ranges = self.profile.bed.ranges();
-        ranges.iter().enumerate().find_map(|(i, &(min_mm, max_mm))| {
-            let span = max_mm - min_mm;
-            let value_mm = to[i] + self.shift_mm[i];
-            (value_mm < min_mm - span || value_mm > max_mm + span).then(|| {
-                format!("{}{value_mm:.3} is out of reach ({min_mm:.0}..{max_mm:.0} mm): move refused", XYZ[i])
-            })
-        })
-    }
-
     /// Warns about a target outside the build volume (below the bed separately). Only the axes
     /// the move changes are checked, so one excursion is reported once.
-    fn check_bounds(&mut self, from: &state::Position, to: &state::Position) {
+    ///
+    /// Returns why the target cannot be driven at all, if it is more than the machine's own
+    /// travel outside it on some axis (a coordinate with stray digits, `X999999999`): such a move
+    /// would run for days of simulated time, every heater tick of it simulated. A smaller
+    /// excursion is only reported, and carried out.
+    fn check_bounds(&mut self, from: &state::Position, to: &state::Position) -> Option<String> {
         let ranges = self.profile.bed.ranges();
+        let mut out_of_reach = None;
         for (i, &(min_mm, max_mm)) in ranges.iter().enumerate() {
             if to[i] == from[i] {
                 continue;
@@ -114,8 +105,15 @@ impl Machine {
                 self.warn(WarningKind::BelowBed { z_mm: value_mm });
             } else if value_mm < min_mm - BOUNDS_EPS_MM || value_mm > max_mm + BOUNDS_EPS_MM {
                 self.warn(WarningKind::OutOfBounds { axis: XYZ[i], value_mm, min_mm, max_mm });
+            } else {
+                continue;
+            }
+            let span = max_mm - min_mm;
+            if out_of_reach.is_none() && (value_mm < min_mm - span || value_mm > max_mm + span) {
+                out_of_reach = Some(unreachable(XYZ[i], value_mm, min_mm, max_mm));
             }
         }
+        out_of_reach
     }
 
     /// `G28 [X] [Y] [Z]`.
@@ -225,9 +223,36 @@ impl Machine {
     }
 }
 
+/// Why a target on `axis` cannot be driven (see [`Machine::check_bounds`]).
+#[cold]
+#[inline(never)]
+fn unreachable(axis: char, value_mm: f64, min_mm: f64, max_mm: f64) -> String {
+    format!("{axis}{value_mm:.3} is out of reach ({min_mm:.0}..{max_mm:.0} mm): move refused")
+}
+
 /// Why a move would hold the simulated clock for more than [`MAX_COMMAND_S`] at its own feed
 /// rate (acceleration and the machine's limits only make it longer), if it would.
 fn too_long(m: &state::Move) -> Option<String> {
+    // First a bound that costs no square root: no path is longer than the sum of its axes'
+    // travels (plus the arc, for G2/G3), so most moves are cleared here.
+    let travel: f64 = [state::X, state::Y, state::Z, state::E, state::A]
+        .iter()
+        .map(|&i| (m.to[i] - m.from[i]).abs())
+        .sum::<f64>()
+        + match &m.path {
+            state::Path::Arc(arc) => arc.xy_len_mm(),
+            state::Path::Line => 0.0,
+        };
+    if travel * 60.0 <= MAX_COMMAND_S * m.feed_mm_min {
+        return None;
+    }
+    too_long_exactly(m)
+}
+
+/// [`too_long`] with the move's real length, for the few moves the quick bound leaves.
+#[cold]
+#[inline(never)]
+fn too_long_exactly(m: &state::Move) -> Option<String> {
     let len = m.len_mm().max(Geometry::between(pos(&m.from), pos(&m.to)).len);
     let t_s = len / (m.feed_mm_min / 60.0);
     (m.feed_mm_min > 0.0 && t_s > MAX_COMMAND_S)

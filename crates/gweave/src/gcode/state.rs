@@ -250,8 +250,6 @@ pub struct State {
     pub options: StateOptions,
     /// What the last line did.
     pub effect: Effect,
-    /// G91 makes E relative too (every firmware but RepRapFirmware), fixed by the options.
-    g91_moves_e: bool,
 }
 
 impl Default for State {
@@ -275,7 +273,6 @@ impl State {
             fw_retract_mm: options.fw_retract_mm,
             thermal: Thermal::default(),
             structure: Structure::with_markers(options.markers.clone()),
-            g91_moves_e: options.firmware != Firmware::RepRapFirmware,
             options,
             effect: Effect::None,
         }
@@ -294,7 +291,7 @@ impl State {
     /// E moves relative to the current position on this line.
     #[inline]
     pub fn relative_e(&self) -> bool {
-        !self.absolute_e || (!self.absolute & self.g91_moves_e)
+        !self.absolute_e || (!self.absolute && self.options.firmware != Firmware::RepRapFirmware)
     }
 
     #[inline]
@@ -376,17 +373,7 @@ impl State {
                 let t_s = block.get(b'S').unwrap_or(0.0) + block.get(b'P').unwrap_or(0.0) / 1000.0;
                 self.effect = Effect::Dwell { t_s };
             }
-            // RepRapFirmware `G10 P<tool> S<active> [R<standby>]` (PrusaSlicer's way of heating
-            // for that flavour, then `M116` waits) sets a tool's working temperature; with `L` it
-            // sets offsets or a coordinate system. Neither moves filament.
-            10 if block.has(b'P')
-                || block.has(b'L')
-                || (self.options.firmware == Firmware::RepRapFirmware && block.has(b'S')) =>
-            {
-                self.rrf_tool_temperature(block)
-            }
-            // Otherwise a firmware retraction, also Marlin's `G10 S1` (the longer one before a
-            // tool swap, on machines with several extruders).
+            10 if self.g10_is_not_a_retraction(block) => self.rrf_tool_temperature(block),
             10 => self.firmware_retract(true),
             11 => self.firmware_retract(false),
             20 => self.inches = true,
@@ -462,6 +449,18 @@ impl State {
             568 => self.rrf_tool_temperature(block),
             _ => {}
         }
+    }
+
+    /// Whether this `G10` is RepRapFirmware's tool temperature, `G10 P<tool> S<active>
+    /// [R<standby>]` (PrusaSlicer's way of heating for that flavour, then `M116` waits; `S`
+    /// alone in a RepRapFirmware file), or with `L` offsets or a coordinate system: none moves
+    /// filament. Otherwise it is a firmware retraction, Marlin's `G10 S1` (the longer one
+    /// before a tool swap on machines with several extruders) included. The virtual printer
+    /// asks the same question.
+    pub fn g10_is_not_a_retraction(&self, block: &Block) -> bool {
+        block.has(b'P')
+            || block.has(b'L')
+            || (self.options.firmware == Firmware::RepRapFirmware && block.has(b'S'))
     }
 
     /// A RepRapFirmware tool temperature: the active one (`S`) of tool `P` (default: the current).
