@@ -7,7 +7,8 @@
 # The totals compared are motion time: gweave's motion + dwell + Klipper's fixed overheads
 # (start buffer, M84 stalls, exit flush), against klipper_estimator's total less its
 # "Indeterminate time" (0.1 s it puts in for each G28, M109, M190). gweave sim's own total also
-# holds the heating and homing it simulates, which klipper_estimator does not model.
+# holds the heating and homing it simulates, which klipper_estimator does not model; gweave
+# estimate (the same planner on two threads, no heaters) is the like-for-like comparison.
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
 KE=${KLIPPER_ESTIMATOR:-$(command -v klipper_estimator || true)}
@@ -47,23 +48,28 @@ EOF
 read -r t_ke u_ke s_ke_sys m_ke < <(measure ke "$KE" --config_file "$ROOT/bench/klipper_estimator.json5" \
   estimate --format json "$BIG")
 read -r t_gw u_gw s_gw_sys m_gw < <(measure gw "$GWEAVE" sim "$BIG" --machine "$ROOT/bench/klipper-big-bed.toml" -q --json)
+read -r t_ge u_ge s_ge_sys m_ge < <(measure ge "$GWEAVE" estimate "$BIG" --machine "$ROOT/bench/klipper-big-bed.toml" -q --json)
 
-totals=$(python3 - "$TMP/ke.out" "$TMP/gw.out" <<'EOF'
+totals=$(python3 - "$TMP/ke.out" "$TMP/gw.out" "$TMP/ge.out" <<'EOF'
 import json, sys
 ke = json.load(open(sys.argv[1]))["sequences"]
 ke_total = sum(s["total_time"] for s in ke)
 ke_motion = ke_total - sum(s["kind_times"].get("Indeterminate time", 0.0) for s in ke)
 t = json.load(open(sys.argv[2]))["time"]
 gw_motion = t["motion_s"] + t["dwell_s"] + t["overhead_s"]
+ge_total = json.load(open(sys.argv[3]))["total_s"]
 print(f"{ke_motion:.2f} {gw_motion:.2f} {t['total_s']:.1f} {gw_motion - ke_motion:+.3f} "
-      f"{1e6 * (gw_motion - ke_motion) / ke_motion:+.2f}")
+      f"{1e6 * (gw_motion - ke_motion) / ke_motion:+.2f} {ge_total:.2f} {ge_total - ke_motion:+.3f}")
 EOF
 )
-read -r s_ke s_gw s_gw_all d_s d_ppm <<< "$totals"
+read -r s_ke s_gw s_gw_all d_s d_ppm s_ge d_ge <<< "$totals"
 echo "file: $(basename "$BIG"), Klipper limits: max_velocity 300, max_accel 3000, minimum_cruise_ratio 0.5, scv 5"
 row() { printf "%-30s %7s s wall %6s s user %6s s sys %6s MB   %s\n" "$@"; }
 row "klipper_estimator estimate" "$t_ke" "$u_ke" "$s_ke_sys" "$m_ke" "estimate $s_ke s"
 row "gweave sim (+ steps, heaters)" "$t_gw" "$u_gw" "$s_gw_sys" "$m_gw" \
   "estimate $s_gw s ($s_gw_all s with heating and homing)"
-echo "klipper_estimator / gweave: $(ratio "$t_ke" "$t_gw")x wall time, $(ratio "$u_ke" "$u_gw")x user time," \
+row "gweave estimate (2 threads)" "$t_ge" "$u_ge" "$s_ge_sys" "$m_ge" "estimate $s_ge s"
+echo "klipper_estimator / gweave sim: $(ratio "$t_ke" "$t_gw")x wall time, $(ratio "$u_ke" "$u_gw")x user time," \
   "$(ratio "$m_ke" "$m_gw")x peak memory; estimates differ by $d_s s ($d_ppm per million)"
+echo "klipper_estimator / gweave estimate: $(ratio "$t_ke" "$t_ge")x wall time (target 10x)," \
+  "$(ratio "$u_ke" "$u_ge")x user time (both threads), $(ratio "$m_ke" "$m_ge")x peak memory; estimates differ by $d_ge s"

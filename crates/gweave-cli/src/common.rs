@@ -115,3 +115,9 @@ where
 {
     path.map_or_else(|| Ok(T::default()), |path| load(path, parse))
 }
+
+/// A duration as `1h 02m 03s`.
+pub fn hms(t_s: f64) -> String {
+    let t = t_s.round() as u64;
+    format!("{}h {:02}m {:02}s", t / 3600, t / 60 % 60, t % 60)
+}

@@ -572,6 +572,20 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult
     to_json(&report)
 }
 
+/// Estimates a file's print time with the virtual printer's planner alone, on two threads; the
+/// report as JSON text (see `gweave estimate --json`).
+#[pyfunction]
+#[pyo3(signature = (path, *, machine=None, steps=false))]
+fn estimate_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, steps: bool) -> PyResult<String> {
+    let profile = machine_profile(machine)?;
+    let report = py.allow_threads(|| {
+        let file = File::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        gweave_sim::estimate::estimate_report(file, &profile, steps)
+            .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
+    })?;
+    to_json(&report)
+}
+
 /// A virtual printer to drive one command at a time, as a host would over a serial line.
 /// (Unsendable: it stays on the thread that made it; the controllers are not `Sync`.)
 #[pyclass(module = "gweave", unsendable)]
@@ -872,6 +886,7 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Reader>()?;
     // gweave-sim: the virtual printer
     m.add_function(wrap_pyfunction!(sim_json, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate_json, m)?)?;
     m.add_class::<Machine>()?;
     // rotary (lathe-type) printing
     m.add_function(wrap_pyfunction!(rotary_wrap_json, m)?)?;

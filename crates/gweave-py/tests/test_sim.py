@@ -23,6 +23,20 @@ def test_sim_with_a_machine_profile(data: Path) -> None:
     assert r["time"]["overhead_s"] > 0.25
 
 
+def test_estimate_plans_like_the_virtual_printer(data: Path) -> None:
+    path = data / "cura" / "cura_torus.gcode"
+    klipper = MACHINES / "klipper.toml"
+    e = gweave.estimate(path, machine=klipper, steps=True)
+    s = gweave.sim(path, machine=klipper)
+    assert (e["machine"], e["planner"], e["steps_counted"]) == ("Klipper cartesian", "klipper", True)
+    # The same planner on the same moves: the same motion time, to rounding.
+    assert abs(e["motion_s"] - s["time"]["motion_s"]) < 1e-6
+    assert len(e["layer_s"]) == 28
+    assert e["steps"]["axes"][3] == s["steps"]["axes"][3] > 0
+    fast = gweave.estimate(path, machine=klipper)
+    assert fast["total_s"] == e["total_s"] and fast["steps"]["axes"] == [0, 0, 0, 0, 0]
+
+
 def test_machine_replies_like_marlin() -> None:
     m = gweave.Machine()
     assert m.boot_lines()[0] == "start"

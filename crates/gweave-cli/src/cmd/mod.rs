@@ -5,6 +5,7 @@ mod check;
 mod stats;
 
 // gweave-sim: the virtual printer
+mod estimate;
 mod sim;
 // binder-jet raster
 mod raster;
@@ -33,6 +34,7 @@ pub enum Command {
     Cat(cat::CatArgs),
     // gweave-sim: the virtual printer
     Sim(sim::SimArgs),
+    Estimate(estimate::EstimateArgs),
     Raster(Box<raster::RasterArgs>),
     SliceRaster(slice_raster::SliceRasterArgs),
     // purge-shift
@@ -53,6 +55,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Cat(a) => cat::run(a),
         // gweave-sim: the virtual printer
         Command::Sim(a) => sim::run(a),
+        Command::Estimate(a) => estimate::run(a),
         Command::Raster(a) => raster::run(*a),
         Command::SliceRaster(a) => slice_raster::run(a),
         // purge-shift

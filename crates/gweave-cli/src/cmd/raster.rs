@@ -8,7 +8,7 @@ use clap::{Args, ValueEnum};
 use gweave::gcode::writer::Target;
 use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
 
-use crate::common::ReportArgs;
+use crate::common::{hms, ReportArgs};
 use crate::raster_job::{JobOptions, JobReport};
 
 /// Layer images to inkjet G-code for binder jetting: bands as tall as the nozzle row, per
@@ -214,11 +214,6 @@ fn print_human(r: &JobReport, profile: &PrintheadProfile) {
         hms(r.time.motion_s),
         hms(r.time.fire_s)
     );
-}
-
-fn hms(t_s: f64) -> String {
-    let t = t_s.round() as u64;
-    format!("{}h {:02}m {:02}s", t / 3600, t / 60 % 60, t % 60)
 }
 
 /// A layer-count progress bar on stderr, only when stderr is a terminal and the job has enough

@@ -15,7 +15,7 @@ use gweave::rotary::helix::TubeParams;
 use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 
-use super::stats::hms;
+use crate::common::hms;
 use crate::common::{load, OutputArgs, ReportArgs};
 use crate::progress::Bar;
 

@@ -1,11 +1,13 @@
 //! `gweave sim`: run a file through the virtual printer and report what the machine did.
 
+use std::collections::BTreeMap;
 use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use gweave::gcode::layers::Feature;
 use gweave::gcode::reader::LineReader;
 use gweave::pass::Progress;
 use gweave_sim::heater::HeaterId;
@@ -13,7 +15,7 @@ use gweave_sim::interp::{Machine, Outcome, SimReport};
 use gweave_sim::plot::{save_speed_png, save_temperature_png};
 use gweave_sim::profile::{FaultSpec, MachineProfile};
 
-use crate::common::{load_or_default, ReportArgs};
+use crate::common::{hms, load_or_default, ReportArgs};
 use crate::progress::Bar;
 
 /// Simulate a print on a virtual Marlin-like printer: time per layer and feature (planner),
@@ -117,18 +119,7 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
         hms(t.homing_s),
         hms(t.overhead_s)
     );
-    if let Some((slowest, max)) = r.layer_s.iter().copied().enumerate().max_by(|a, b| a.1.total_cmp(&b.1)) {
-        let min = r.layer_s.iter().copied().fold(f64::INFINITY, f64::min);
-        let mean = r.layer_s.iter().sum::<f64>() / r.layer_s.len() as f64;
-        println!(
-            "  layers          {}: min {min:.1} s, mean {mean:.1} s, max {max:.1} s (layer {slowest}); before the first {:.1} s",
-            r.layer_s.len(),
-            r.unlayered_s
-        );
-    }
-    for (feature, t) in &r.feature_s {
-        println!("    {:<18} {}", feature.name(), hms(*t));
-    }
+    print_layers_and_features(&r.layer_s, r.unlayered_s, &r.feature_s);
     for (tool, mm) in r.filament_mm.iter().enumerate() {
         let steps = r.steps.tools.get(tool).copied().unwrap_or(0);
         println!("  filament T{tool:<3}  {mm:.2} mm  ({steps} E steps)");
@@ -189,7 +180,21 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
     }
 }
 
-fn hms(t_s: f64) -> String {
-    let t = t_s.round() as u64;
-    format!("{}h {:02}m {:02}s", t / 3600, t / 60 % 60, t % 60)
+/// The planner's time per layer (shortest, mean, longest) and per feature.
+pub(super) fn print_layers_and_features(
+    layer_s: &[f64],
+    unlayered_s: f64,
+    feature_s: &BTreeMap<Feature, f64>,
+) {
+    if let Some((slowest, max)) = layer_s.iter().copied().enumerate().max_by(|a, b| a.1.total_cmp(&b.1)) {
+        let min = layer_s.iter().copied().fold(f64::INFINITY, f64::min);
+        let mean = layer_s.iter().sum::<f64>() / layer_s.len() as f64;
+        println!(
+            "  layers          {}: min {min:.1} s, mean {mean:.1} s, max {max:.1} s (layer {slowest}); before the first {unlayered_s:.1} s",
+            layer_s.len(),
+        );
+    }
+    for (feature, t) in feature_s {
+        println!("    {:<18} {}", feature.name(), hms(*t));
+    }
 }

@@ -8,7 +8,7 @@ use clap::Args;
 use gweave::pass::Run;
 use gweave::stats::{Stats, StatsPass};
 
-use crate::common::ReportArgs;
+use crate::common::{hms, ReportArgs};
 use crate::progress::Bar;
 
 /// Statistics of a G-code file: slicer, layers, extents, filament per tool, distances, time.
@@ -79,10 +79,4 @@ fn print_human(input: &std::path::Path, s: &Stats) {
     for w in &s.warnings {
         println!("  warning: {w}");
     }
-}
-
-/// A duration as `1h 02m 03s`.
-pub(crate) fn hms(t_s: f64) -> String {
-    let t = t_s.round() as u64;
-    format!("{}h {:02}m {:02}s", t / 3600, t / 60 % 60, t % 60)
 }

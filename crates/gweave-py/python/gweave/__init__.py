@@ -30,7 +30,7 @@ __version__: str = _gweave.__version__
 PathLike = Union[str, "os.PathLike[str]"]
 
 __all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
-__all__ += ["Machine", "sim"]
+__all__ += ["Machine", "sim", "estimate"]
 # binder-jet raster
 __all__ += ["raster", "raster_test_pattern", "slice_raster"]
 # purge-shift
@@ -104,6 +104,17 @@ def sim(path: PathLike, *, machine: Optional[PathLike] = None) -> Dict[str, Any]
     """
     m = None if machine is None else os.fspath(machine)
     return json.loads(_gweave.sim_json(os.fspath(path), machine=m))
+
+
+def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool = False) -> Dict[str, Any]:
+    """Estimate the print time with the virtual printer's planner alone (``gweave estimate``).
+
+    Faster than :func:`sim` (two threads, no heaters): ``total_s``, ``motion_s``, ``dwell_s``,
+    ``overhead_s``, ``blocks``, ``layer_s``, ``feature_s``, and ``steps`` when ``steps=True``.
+    Heating waits and homing are not timed.
+    """
+    m = None if machine is None else os.fspath(machine)
+    return json.loads(_gweave.estimate_json(os.fspath(path), machine=m, steps=steps))
 # ---- binder-jet raster ----
 
 

@@ -128,17 +128,25 @@ impl Planner {
     /// pushed from now on use it, queued moves keep their limits, as in both firmwares. The
     /// corner mode (Marlin or Klipper) cannot change.
     pub fn set_profile(&mut self, profile: MotionProfile) -> Result<(), ProfileError> {
-        profile.validate()?;
+        Self::check_change(&self.profile, &profile)?;
+        self.profile = profile;
+        Ok(())
+    }
+
+    /// Whether a planner running `current` would take `next` ([`Planner::set_profile`]'s rule),
+    /// for a caller that keeps its own copy of the profile.
+    pub fn check_change(current: &MotionProfile, next: &MotionProfile) -> Result<(), ProfileError> {
+        next.validate()?;
         let same_mode = matches!(
-            (&self.profile.corners, &profile.corners),
+            (&current.corners, &next.corners),
             (CornerMode::Klipper(_), CornerMode::Klipper(_))
                 | (CornerMode::Marlin { .. }, CornerMode::Marlin { .. })
         );
-        if !same_mode {
-            return Err(ProfileError::ModeChange);
+        if same_mode {
+            Ok(())
+        } else {
+            Err(ProfileError::ModeChange)
         }
-        self.profile = profile;
-        Ok(())
     }
 
     /// Queue a move; blocks whose speeds became final go to `sink`. A move that goes nowhere is

@@ -1,0 +1,84 @@
+//! `gweave estimate`: the print time from the virtual printer's planner alone, fast.
+
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{anyhow, Context, Result};
+use clap::Args;
+use gweave::pass::Progress;
+use gweave_sim::estimate::{estimate_report, EstimateReport};
+use gweave_sim::profile::MachineProfile;
+
+use super::sim::print_layers_and_features;
+use crate::common::{hms, load_or_default, ReportArgs};
+use crate::progress::Bar;
+
+/// Estimate the print time with the virtual printer's lookahead planner (Klipper or Marlin
+/// mode, from the machine profile), per layer and per feature, without heaters or the serial
+/// face: what `gweave sim` reports as motion, dwell and overhead, on two threads. Heating waits
+/// and homing are not timed (`gweave sim` simulates them).
+///
+/// Example: `gweave estimate part.gcode --machine examples/machines/klipper.toml`.
+#[derive(Args, Debug)]
+pub struct EstimateArgs {
+    /// The G-code file to estimate.
+    pub input: PathBuf,
+    /// Machine profile (TOML, see docs/machine.md); only its motion limits are used. Default: a
+    /// RAMPS 1.4 printer on Marlin.
+    #[arg(long, value_name = "TOML")]
+    pub machine: Option<PathBuf>,
+    /// Also count the steps of every motor (Bresenham, as `gweave sim` does); a fifth slower.
+    #[arg(long)]
+    pub steps: bool,
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn run(args: EstimateArgs) -> Result<ExitCode> {
+    let profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
+    let file = File::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
+    let mut bar = Bar::new(args.quiet);
+    bar.set_len(file.metadata().map(|m| m.len()).unwrap_or(0));
+    let input = Counted { inner: file, bar, done: 0 };
+    let report = estimate_report(input, &profile, args.steps).map_err(|e| match e.line() {
+        Some(line) if line > 0 => anyhow!("{}:{line}: {}", args.input.display(), e.reason()),
+        _ => anyhow!("{}: {}", args.input.display(), e.reason()),
+    })?;
+    if args.report.emit(&report, &[&args.input])? {
+        print_human(&args.input, &report);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The input file, moving the progress bar as it is read.
+struct Counted {
+    inner: File,
+    bar: Bar,
+    done: u64,
+}
+
+impl Read for Counted {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.done += n as u64;
+        self.bar.advance(self.done);
+        Ok(n)
+    }
+}
+
+fn print_human(input: &Path, r: &EstimateReport) {
+    let e = &r.estimate;
+    println!("{} on {} ({} planner)", input.display(), r.machine, r.planner);
+    println!("  time            {}  ({:.1} s, {} planned blocks)", hms(e.total_s), e.total_s, e.blocks);
+    println!("    motion {}  dwell {}  overhead {}", hms(e.motion_s), hms(e.dwell_s), hms(e.overhead_s));
+    print_layers_and_features(&e.layer_s, e.unlayered_s, &e.feature_s);
+    if r.steps_counted {
+        let s = &e.steps.axes;
+        println!("  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4]);
+    }
+}

@@ -1,0 +1,331 @@
+//! The parse side of the estimator: lines go through the core lexer and modal state, and come
+//! out as [`Job`]s for the plan side ([`super::back::Back`]): moves cut to straight chords, waits
+//! for the queue to drain, dwells, limit changes. Everything the G-code file decides lives
+//! here; nothing here depends on what the planner has done, so the two sides can run on two
+//! threads ([`super::estimate`]).
+
+use std::collections::HashMap;
+
+use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use gweave::gcode::lexer::{parse_into, parse_line};
+use gweave::gcode::line::{Block, Command};
+use gweave::gcode::reader::RawLine;
+use gweave::gcode::state::{self, Effect, Firmware, Path, State, StateOptions};
+
+use super::{
+    EstimateError, Job, Key, ARC_CHORD_MM, DEFAULT_FEED_MM_S, FW_RECOVER_FEED_MM_S, FW_RETRACT_FEED_MM_S,
+    KLIPPER_MOTOR_OFF_S, KLIPPER_START_BUFFER_S,
+};
+use crate::kinematics::{Move, Pos};
+use crate::limits::{AxisUpdate, CornerMode, MotionProfile, ProfileError, M204};
+use crate::planner::Planner;
+
+/// Parser, modal state and the bookkeeping that turns lines into jobs.
+#[derive(Debug)]
+pub(super) struct Front {
+    pub(super) block: Block,
+    pub(super) state: State,
+    /// The profile the plan side runs with, kept in step through [`Job::Profile`].
+    pub(super) profile: MotionProfile,
+    key_index: HashMap<Key, u64>,
+    /// The last key looked up and its tag.
+    last_tag: Option<(Key, u64)>,
+    mix_index: HashMap<Vec<u64>, usize>,
+    /// The mixing commands' state, for a profile with mixing inputs.
+    pub(super) mixing: Option<MixingState>,
+    mix: usize,
+    /// The selected tool (`T<n>` carried out by [`Front::run`]), for per-tool E steps.
+    tool: u32,
+    klipper: bool,
+    started: bool,
+    motors_on: bool,
+    pub(super) line: u64,
+}
+
+impl Front {
+    /// The parse side for `profile`, with the jobs that set up the plan side (the first mix).
+    pub(super) fn new(profile: &MotionProfile, jobs: &mut Vec<Job>) -> Result<Self, EstimateError> {
+        let klipper = matches!(profile.corners, CornerMode::Klipper(_));
+        let firmware = if klipper { Firmware::Klipper } else { Firmware::Marlin };
+        let mixing = match profile.steps.mixing_e.len() {
+            0 => None,
+            n => Some(
+                MixingState::new(n, MARLIN_VIRTUAL_TOOLS)
+                    .map_err(|source| EstimateError::Mixing { line: 0, source })?,
+            ),
+        };
+        let mut front = Self {
+            block: Block::default(),
+            state: State::new(StateOptions { firmware, ..StateOptions::default() }),
+            profile: profile.clone(),
+            key_index: HashMap::new(),
+            last_tag: None,
+            mix_index: HashMap::new(),
+            mixing,
+            mix: 0,
+            tool: 0,
+            klipper,
+            started: false,
+            motors_on: false,
+            line: 0,
+        };
+        front.refresh_mix(jobs);
+        Ok(front)
+    }
+
+    /// Parse `raw` and apply it to the modal state.
+    pub(super) fn parse(&mut self, raw: &[u8]) -> Effect {
+        self.line += 1;
+        parse_into(raw, &mut self.block);
+        *self.state.apply(raw, &self.block)
+    }
+
+    /// [`Front::parse`] for a line from a reader, whose look-ahead bytes speed up the lexer.
+    #[inline]
+    pub(super) fn parse_raw(&mut self, line: &RawLine<'_>) -> Effect {
+        self.line += 1;
+        parse_line(line, &mut self.block);
+        *self.state.apply(line.bytes, &self.block)
+    }
+
+    /// Turn `effect` (what [`Front::parse`] said `raw` does, possibly changed by the caller)
+    /// and the line's motion-related commands into jobs.
+    #[inline]
+    pub(super) fn run(
+        &mut self,
+        raw: &[u8],
+        effect: &Effect,
+        jobs: &mut Vec<Job>,
+    ) -> Result<(), EstimateError> {
+        match effect {
+            Effect::Move(m) => {
+                self.motion(m, jobs);
+                return Ok(());
+            }
+            Effect::Dwell { t_s } => {
+                jobs.push(Job::Drain);
+                let tag = self.tag(jobs);
+                jobs.push(Job::Dwell { t_s: *t_s, tag });
+            }
+            Effect::Home { .. } => jobs.push(Job::Drain),
+            Effect::FirmwareRetract { e_mm } => {
+                self.firmware_retract(*e_mm, jobs);
+                return Ok(());
+            }
+            Effect::ToolChange { to, .. } => return self.select_tool(*to, jobs),
+            _ => {}
+        }
+        match self.block.command {
+            Command::Code { letter: b'M', number, sub: None } => self.m_code(raw, number, jobs),
+            Command::Extended => self.extended(raw, jobs),
+            _ => Ok(()),
+        }
+    }
+
+    /// The tag for the current layer, feature and mix. The key changes only at a new layer,
+    /// feature, mix or tool, so the last one is kept: hashing it for every move cost a tenth
+    /// of the whole simulation.
+    #[inline]
+    fn tag(&mut self, jobs: &mut Vec<Job>) -> u64 {
+        let s = &self.state.structure;
+        let key = Key { layer: s.layer, feature: s.feature, mix: self.mix, tool: self.tool };
+        match self.last_tag {
+            Some((last, tag)) if last == key => tag,
+            _ => self.new_tag(key, jobs),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn new_tag(&mut self, key: Key, jobs: &mut Vec<Job>) -> u64 {
+        let next = self.key_index.len() as u64;
+        let tag = *self.key_index.entry(key).or_insert_with(|| {
+            jobs.push(Job::Key(key));
+            next
+        });
+        self.last_tag = Some((key, tag));
+        tag
+    }
+
+    /// Motion is about to start: Klipper's start buffer before the first move.
+    fn moving(&mut self, jobs: &mut Vec<Job>) {
+        if !self.started {
+            self.started = true;
+            if self.klipper {
+                jobs.push(Job::Overhead { t_s: KLIPPER_START_BUFFER_S });
+            }
+        }
+        self.motors_on = true;
+    }
+
+    #[inline]
+    fn motion(&mut self, m: &state::Move, jobs: &mut Vec<Job>) {
+        let feed_mm_s = if m.feed_mm_min > 0.0 { m.feed_mm_min / 60.0 } else { DEFAULT_FEED_MM_S };
+        let tag = self.tag(jobs);
+        self.moving(jobs);
+        let (start, end) = (at(&m.from), at(&m.to));
+        let Path::Arc(arc) = &m.path else {
+            jobs.push(Job::Move { mv: Move { start, end, feed_mm_s, tag }, line: self.line });
+            return;
+        };
+        let chords = (m.len_mm() / ARC_CHORD_MM).ceil().max(1.0) as usize;
+        let mut from = start;
+        for k in 1..=chords {
+            let t = k as f64 / chords as f64;
+            let to = if k < chords {
+                let [x_mm, y_mm] = arc.point(t);
+                let lerp = |axis: usize| m.from[axis] + (m.to[axis] - m.from[axis]) * t;
+                Pos { x_mm, y_mm, z_mm: lerp(state::Z), e_mm: lerp(state::E), a_deg: lerp(state::A) }
+            } else {
+                end
+            };
+            jobs.push(Job::Move { mv: Move { start: from, end: to, feed_mm_s, tag }, line: self.line });
+            from = to;
+        }
+    }
+
+    fn m_code(&mut self, raw: &[u8], number: u32, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        let b = &self.block;
+        let axes =
+            || AxisUpdate { x: b.get(b'X'), y: b.get(b'Y'), z: b.get(b'Z'), e: b.get(b'E'), a: b.get(b'A') };
+        let mut profile = self.profile.clone();
+        let changed = match number {
+            400 | 109 | 190 => {
+                jobs.push(Job::Drain);
+                return Ok(());
+            }
+            18 | 84 => {
+                jobs.push(Job::Drain);
+                if self.klipper && std::mem::take(&mut self.motors_on) {
+                    jobs.push(Job::Overhead { t_s: KLIPPER_MOTOR_OFF_S });
+                }
+                return Ok(());
+            }
+            163..=165 | 567 => return self.mixing_command(raw, jobs),
+            201 if !self.klipper => profile.set_max_accel(&axes()),
+            203 if !self.klipper => profile.set_max_feed(&axes()),
+            205 if !self.klipper => match b.get(b'J') {
+                Some(j) => profile.set_junction_deviation(j),
+                None => return Ok(()),
+            },
+            204 => {
+                let m204 = M204 { s: b.get(b'S'), p: b.get(b'P'), r: b.get(b'R'), t: b.get(b'T') };
+                match profile.set_accel(&m204) {
+                    // Klipper answers an M204 without S, P and T with a message and goes on.
+                    Err(ProfileError::M204NeedsPAndT) => return Ok(()),
+                    other => other,
+                }
+            }
+            _ => return Ok(()),
+        };
+        self.change_profile(changed.map(|()| profile), jobs)
+    }
+
+    /// Klipper's extended commands that change motion: `SET_KINEMATIC_POSITION` and
+    /// `SET_VELOCITY_LIMIT`.
+    fn extended(&mut self, raw: &[u8], jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        let name = self.block.command_span.of(raw);
+        let args = self.block.text_of(raw).unwrap_or_default();
+        let arg = |key: &str| -> Option<f64> {
+            std::str::from_utf8(args).ok()?.split_whitespace().find_map(|kv| {
+                let (k, v) = kv.split_once('=')?;
+                k.eq_ignore_ascii_case(key).then(|| v.parse().ok()).flatten()
+            })
+        };
+        if name.eq_ignore_ascii_case(b"SET_KINEMATIC_POSITION") {
+            jobs.push(Job::Drain);
+            for (axis, key) in [(state::X, "X"), (state::Y, "Y"), (state::Z, "Z")] {
+                if let Some(v) = arg(key) {
+                    self.state.pos[axis] = v;
+                }
+            }
+            Ok(())
+        } else if name.eq_ignore_ascii_case(b"SET_VELOCITY_LIMIT") {
+            let mut profile = self.profile.clone();
+            let result = match &mut profile.corners {
+                CornerMode::Klipper(k) => k.set_velocity_limit(
+                    arg("VELOCITY"),
+                    arg("ACCEL"),
+                    arg("SQUARE_CORNER_VELOCITY"),
+                    arg("MINIMUM_CRUISE_RATIO"),
+                ),
+                CornerMode::Marlin { .. } => return Ok(()),
+            };
+            self.change_profile(result.map(|()| profile), jobs)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Take a changed profile if the planner would, and pass it on.
+    fn change_profile(
+        &mut self,
+        profile: Result<MotionProfile, ProfileError>,
+        jobs: &mut Vec<Job>,
+    ) -> Result<(), EstimateError> {
+        let profile = profile
+            .and_then(|p| Planner::check_change(&self.profile, &p).map(|()| p))
+            .map_err(|source| EstimateError::Profile { line: self.line, source })?;
+        self.profile = profile.clone();
+        jobs.push(Job::Profile { profile: Box::new(profile), line: self.line });
+        Ok(())
+    }
+
+    /// `M163`-`M165` and `M567` on a mixing hotend (ignored without one).
+    fn mixing_command(&mut self, raw: &[u8], jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        let Some(mixing) = &mut self.mixing else {
+            return Ok(());
+        };
+        let line = self.line;
+        mixing.follow_line(raw, &self.block).map_err(|source| EstimateError::Mixing { line, source })?;
+        self.refresh_mix(jobs);
+        Ok(())
+    }
+
+    /// `T<n>`: on a mixing hotend, select virtual tool n (Marlin) or the tool's `M567` mix
+    /// (RepRapFirmware).
+    fn select_tool(&mut self, tool: u32, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        if let Some(mixing) = &mut self.mixing {
+            if mixing.rrf_mix(tool).is_none() {
+                let line = self.line;
+                mixing.select_tool(tool as usize).map_err(|source| EstimateError::Mixing { line, source })?;
+            }
+        }
+        self.tool = tool;
+        self.refresh_mix(jobs);
+        Ok(())
+    }
+
+    /// Make the mix in force the one that splits the E steps of the following moves.
+    fn refresh_mix(&mut self, jobs: &mut Vec<Job>) {
+        let Some(mixing) = &self.mixing else {
+            return;
+        };
+        let weights = match mixing.rrf_mix(self.state.tool) {
+            Some(rrf) => rrf,
+            None => mixing.active_mix().ratios(),
+        };
+        let bits: Vec<u64> = weights.iter().map(|w| w.to_bits()).collect();
+        // Index 0 is the plan side's "no mix" entry.
+        let next = self.mix_index.len() + 1;
+        self.mix = *self.mix_index.entry(bits).or_insert_with(|| {
+            jobs.push(Job::Mix(weights.to_vec()));
+            next
+        });
+    }
+
+    /// `G10`/`G11`: an extrude-only move of the retraction length.
+    fn firmware_retract(&mut self, e_mm: f64, jobs: &mut Vec<Job>) {
+        let start = at(&self.state.pos);
+        let end = Pos { e_mm: start.e_mm + e_mm, ..start };
+        let feed_mm_s = if e_mm < 0.0 { FW_RETRACT_FEED_MM_S } else { FW_RECOVER_FEED_MM_S };
+        let tag = self.tag(jobs);
+        self.motors_on = true;
+        jobs.push(Job::Move { mv: Move { start, end, feed_mm_s, tag }, line: self.line });
+    }
+}
+
+/// The machine position of the core's modal position.
+fn at(p: &state::Position) -> Pos {
+    Pos { x_mm: p[state::X], y_mm: p[state::Y], z_mm: p[state::Z], e_mm: p[state::E], a_deg: p[state::A] }
+}

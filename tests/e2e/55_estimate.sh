@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# gweave estimate on real files: the same motion time and E steps as the virtual printer with
+# the same profile, the human summary, and a bad file stopping with its line and exit 1.
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+KLIPPER="$ROOT/examples/machines/klipper.toml"
+
+for F in "$DATA/cura/cura_torus.gcode" "$DATA/prusaslicer/pr_bunny_3tool_rel.gcode"; do
+  "$GWEAVE" estimate "$F" --machine "$KLIPPER" --steps --json -q > "$WORK/est.json"
+  "$GWEAVE" sim "$F" --machine "$KLIPPER" --json -q > "$WORK/sim.json"
+  python3 - "$WORK/est.json" "$WORK/sim.json" <<'PY'
+import json, sys
+e, s = (json.load(open(p)) for p in sys.argv[1:])
+assert (e["planner"], e["steps_counted"]) == ("klipper", True), e["planner"]
+assert e["motion_s"] == s["time"]["motion_s"], (e["motion_s"], s["time"]["motion_s"])
+assert e["dwell_s"] == s["time"]["dwell_s"]
+assert e["steps"]["axes"][3] == s["steps"]["axes"][3] > 0
+assert len(e["layer_s"]) == len(s["layer_s"])
+parts = e["motion_s"] + e["dwell_s"] + e["overhead_s"]
+assert abs(parts - e["total_s"]) < 1e-6, e
+PY
+done
+
+"$GWEAVE" estimate "$DATA/cura/cura_torus.gcode" -q > "$WORK/est.txt"
+grep -q "on RAMPS 1.4 Marlin (default) (marlin planner)" "$WORK/est.txt"
+grep -Eq "^  time +0h 12m 05s" "$WORK/est.txt"
+
+printf 'G1 X1 F600\nG1 X2\nM204 S-5\n' > "$WORK/bad.gcode"
+if "$GWEAVE" estimate "$WORK/bad.gcode" 2> "$WORK/err" > /dev/null; then
+  echo "an invalid M204 was accepted"; exit 1
+fi
+grep -qx "gweave: error: $WORK/bad.gcode:3: M204 S must be positive and finite, got -5" "$WORK/err" || { cat "$WORK/err"; exit 1; }
