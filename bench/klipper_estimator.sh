@@ -8,7 +8,8 @@
 # (start buffer, M84 stalls, exit flush), against klipper_estimator's total less its
 # "Indeterminate time" (0.1 s it puts in for each G28, M109, M190). gweave sim's own total also
 # holds the heating and homing it simulates, which klipper_estimator does not model; gweave
-# estimate (the same planner on two threads, no heaters) is the like-for-like comparison.
+# estimate (the same planner without heaters; reading, parsing and planning on three threads) is
+# the like-for-like comparison.
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
 KE=${KLIPPER_ESTIMATOR:-$(command -v klipper_estimator || true)}
@@ -68,7 +69,7 @@ row() { printf "%-30s %7s s wall %6s s user %6s s sys %6s MB   %s\n" "$@"; }
 row "klipper_estimator estimate" "$t_ke" "$u_ke" "$s_ke_sys" "$m_ke" "estimate $s_ke s"
 row "gweave sim (+ steps, heaters)" "$t_gw" "$u_gw" "$s_gw_sys" "$m_gw" \
   "estimate $s_gw s ($s_gw_all s with heating and homing)"
-row "gweave estimate (2 threads)" "$t_ge" "$u_ge" "$s_ge_sys" "$m_ge" "estimate $s_ge s"
+row "gweave estimate (3 threads)" "$t_ge" "$u_ge" "$s_ge_sys" "$m_ge" "estimate $s_ge s"
 echo "klipper_estimator / gweave sim: $(ratio "$t_ke" "$t_gw")x wall time, $(ratio "$u_ke" "$u_gw")x user time," \
   "$(ratio "$m_ke" "$m_gw")x peak memory; estimates differ by $d_s s ($d_ppm per million)"
 echo "klipper_estimator / gweave estimate: $(ratio "$t_ke" "$t_ge")x wall time (target 10x)," \

@@ -572,7 +572,7 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult
     to_json(&report)
 }
 
-/// Estimates a file's print time with the virtual printer's planner alone, on two threads; the
+/// Estimates a file's print time with the virtual printer's planner alone, on three threads; the
 /// report as JSON text (see `gweave estimate --json`).
 #[pyfunction]
 #[pyo3(signature = (path, *, machine=None, steps=false))]

@@ -109,8 +109,9 @@ def sim(path: PathLike, *, machine: Optional[PathLike] = None) -> Dict[str, Any]
 def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool = False) -> Dict[str, Any]:
     """Estimate the print time with the virtual printer's planner alone (``gweave estimate``).
 
-    Faster than :func:`sim` (two threads, no heaters): ``total_s``, ``motion_s``, ``dwell_s``,
-    ``overhead_s``, ``blocks``, ``layer_s``, ``feature_s``, and ``steps`` when ``steps=True``.
+    Faster than :func:`sim` (reading, parsing and planning on three threads, no heaters):
+    ``total_s``, ``motion_s``, ``dwell_s``, ``overhead_s``, ``blocks``, ``layer_s``,
+    ``feature_s``, and ``steps`` when ``steps=True``.
     Heating waits and homing are not timed.
     """
     m = None if machine is None else os.fspath(machine)

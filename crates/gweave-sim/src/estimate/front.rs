@@ -90,7 +90,7 @@ impl Front {
 
     /// Turn `effect` (what [`Front::parse`] said `raw` does, possibly changed by the caller)
     /// and the line's motion-related commands into jobs.
-    #[inline]
+    #[inline(always)]
     pub(super) fn run(
         &mut self,
         raw: &[u8],

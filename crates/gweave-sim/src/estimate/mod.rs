@@ -37,13 +37,13 @@
 //! cold extrusion, scale the feed by `M220`).
 
 use std::collections::BTreeMap;
-use std::io::Read;
+use std::io::{self, Read};
 use std::sync::mpsc;
 
 use gweave::colour::dialect::{DialectError, MixingState};
 use gweave::gcode::layers::Feature;
 use gweave::gcode::line::Block;
-use gweave::gcode::reader::LineReader;
+use gweave::gcode::reader::{Chunk, ChunkReader};
 use gweave::gcode::state::{Effect, State};
 use thiserror::Error;
 
@@ -344,39 +344,50 @@ fn skip_mixing_errors(result: Result<(), EstimateError>) -> Result<(), EstimateE
 /// nothing per line, small enough to stay in the cache.
 const BATCH: usize = 1024;
 /// Batches in flight between the threads; with [`BATCH`] this bounds the memory in between
-/// (about 110 bytes a job, under 1 MB).
+/// (under 1 MB).
 const BATCHES_IN_FLIGHT: usize = 4;
+/// Chunks of the file (about 1 MiB each) read ahead of the parser.
+const CHUNKS_IN_FLIGHT: usize = 2;
 
-/// Estimate a whole file read from `input`, step counts included, on two threads: this one
-/// reads, parses and follows the modal state; a second one plans and steps. The result is the
-/// same, to the bit, as feeding every line to one [`Estimator`] (the plan side sees the same
-/// jobs in the same order); the memory is bounded by the batches in flight.
-pub fn estimate<R: Read>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    on_two_threads(input, Estimator::with_steps(profile, true)?)
+/// Estimate a whole file read from `input`, step counts included. Three threads share the work:
+/// one reads the file in chunks of whole lines, one parses them and follows the modal state,
+/// one plans and steps. The result is the same, to the bit, as feeding every line to one
+/// [`Estimator`] (the plan side sees the same jobs in the same order); the memory is bounded by
+/// the chunks and batches in flight.
+pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
+    on_threads(input, Estimator::with_steps(profile, true)?)
 }
 
 /// [`estimate`] without the step counts (all zero), a fifth faster.
-pub fn estimate_time<R: Read>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    on_two_threads(input, Estimator::with_steps(profile, false)?)
+pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
+    on_threads(input, Estimator::with_steps(profile, false)?)
 }
 
-fn on_two_threads<R: Read>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
+fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
     let Estimator { mut front, mut back, jobs } = estimator;
     debug_assert!(jobs.is_empty());
+    let (to_front, chunks) = mpsc::sync_channel::<io::Result<Chunk>>(CHUNKS_IN_FLIGHT);
+    let (return_chunk, spare_chunks) = mpsc::channel::<Vec<u8>>();
     let (to_back, batches) = mpsc::sync_channel::<Vec<Job>>(BATCHES_IN_FLIGHT);
-    let (give_back, spare) = mpsc::channel::<Vec<Job>>();
+    let (return_batch, spare_batches) = mpsc::channel::<Vec<Job>>();
     std::thread::scope(|scope| {
+        scope.spawn(move || read_chunks(input, &to_front, &spare_chunks));
         let planning = scope.spawn(move || -> Result<Back, EstimateError> {
             for mut batch in batches {
                 for job in batch.drain(..) {
                     back.execute(job)?;
                 }
                 // The parse side may have finished and gone: then the batch is not needed.
-                let _ = give_back.send(batch);
+                let _ = return_batch.send(batch);
             }
             Ok(back)
         });
-        let parsed = parse_all(input, &mut front, &to_back, &spare);
+        let mut batch = Vec::with_capacity(BATCH + 64);
+        let handover = Handover { to_back: &to_back, spare: &spare_batches, return_chunk: &return_chunk };
+        let parsed = parse_chunks(chunks, &mut front, &mut batch, &handover);
+        // The lines before an error are planned too: one of them may hold an earlier error. A
+        // closed channel means the plan side stopped on an error, which it returns.
+        let _ = to_back.send(batch);
         drop(to_back);
         // The plan side is behind the parse side: its error, if any, is on an earlier line.
         let mut back = planning.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
@@ -386,45 +397,62 @@ fn on_two_threads<R: Read>(input: R, estimator: Estimator) -> Result<Estimate, E
     })
 }
 
-/// The parse side of [`estimate`]: every line of `input` into jobs, sent in batches.
-fn parse_all<R: Read>(
+/// The reading thread: the file in chunks of whole lines, until the end, an error (passed on)
+/// or the parser stops taking them.
+fn read_chunks<R: Read>(
     input: R,
-    front: &mut Front,
-    to_back: &mpsc::SyncSender<Vec<Job>>,
-    spare: &mpsc::Receiver<Vec<Job>>,
-) -> Result<(), EstimateError> {
-    let mut batch = Vec::with_capacity(BATCH + 64);
-    let result = parse_lines(input, front, &mut batch, to_back, spare);
-    // The lines before an error are planned too: one of them may hold an earlier error. A
-    // closed channel means the plan side stopped on an error, which it returns.
-    let _ = to_back.send(batch);
-    result
+    to_front: &mpsc::SyncSender<io::Result<Chunk>>,
+    spare: &mpsc::Receiver<Vec<u8>>,
+) {
+    let mut reader = ChunkReader::new(input);
+    while let Some(next) = reader.next_chunk(spare.try_recv().unwrap_or_default()).transpose() {
+        let failed = next.is_err();
+        if to_front.send(next).is_err() || failed {
+            break;
+        }
+    }
 }
 
-/// The loop of [`parse_all`]; stops early, with `Ok`, when the plan side has stopped.
-fn parse_lines<R: Read>(
-    input: R,
+/// Where the parse side hands its batches and takes empty ones, and returns read chunks.
+struct Handover<'a> {
+    to_back: &'a mpsc::SyncSender<Vec<Job>>,
+    spare: &'a mpsc::Receiver<Vec<Job>>,
+    return_chunk: &'a mpsc::Sender<Vec<u8>>,
+}
+
+/// The parse side: every line into jobs, sent in batches. Stops early, with `Ok`, when the plan
+/// side has stopped (it reports its error itself).
+fn parse_chunks(
+    chunks: mpsc::Receiver<io::Result<Chunk>>,
     front: &mut Front,
     batch: &mut Vec<Job>,
-    to_back: &mpsc::SyncSender<Vec<Job>>,
-    spare: &mpsc::Receiver<Vec<Job>>,
+    handover: &Handover,
 ) -> Result<(), EstimateError> {
-    let mut reader = LineReader::new(input);
-    while let Some(line) = reader.next_line()? {
-        let effect = front.parse_raw(&line);
-        skip_mixing_errors(front.run(line.bytes, &effect, batch))?;
-        if batch.len() >= BATCH {
-            let next = spare.try_recv().unwrap_or_else(|_| Vec::with_capacity(BATCH + 64));
-            if to_back.send(std::mem::replace(batch, next)).is_err() {
-                break;
+    let mut lines_before = 0;
+    for chunk in chunks {
+        let chunk = chunk?;
+        let mut lines = chunk.lines(lines_before);
+        while let Some(line) = lines.next_line() {
+            let effect = front.parse_raw(&line);
+            skip_mixing_errors(front.run(line.bytes, &effect, batch))?;
+            if batch.len() >= BATCH {
+                let next = handover.spare.try_recv().unwrap_or_else(|_| Vec::with_capacity(BATCH + 64));
+                if handover.to_back.send(std::mem::replace(batch, next)).is_err() {
+                    return Ok(());
+                }
             }
         }
+        lines_before = lines.number();
+        // The reader may have finished and gone: then the buffer is not needed.
+        let _ = handover.return_chunk.send(chunk.into_buffer());
     }
     Ok(())
 }
 
 #[cfg(test)]
 mod tests {
+    use gweave::gcode::reader::LineReader;
+
     use super::*;
 
     fn close(a: f64, b: f64) -> bool {

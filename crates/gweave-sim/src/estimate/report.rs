@@ -22,7 +22,7 @@ pub struct EstimateReport {
 }
 
 /// Estimate the file read from `input` on `machine`, counting steps if asked.
-pub fn estimate_report<R: Read>(
+pub fn estimate_report<R: Read + Send>(
     input: R,
     machine: &MachineProfile,
     count_steps: bool,

@@ -64,6 +64,24 @@ fn find_newline(haystack: &[u8]) -> Option<usize> {
     memchr::memchr(b'\n', &haystack[i..]).map(|at| i + at)
 }
 
+/// The line `buf[from..to]` (`to` past its `\n`, if any; `buf` readable [`LOOKAHEAD`] bytes past
+/// `to`), numbered after `number` and starting at file offset `offset`; advances both.
+#[inline(always)]
+fn raw_line<'a>(buf: &'a [u8], from: usize, to: usize, number: &mut u64, offset: &mut u64) -> RawLine<'a> {
+    let len = to - from;
+    let content_len = match &buf[from..to] {
+        [.., b'\r', b'\n'] => len - 2,
+        [.., b'\n'] => len - 1,
+        _ => len,
+    };
+    *number += 1;
+    let at = *offset;
+    *offset += len as u64;
+    let ahead = &buf[from..from + content_len + LOOKAHEAD];
+    let whole = &ahead[..len];
+    RawLine { bytes: &whole[..content_len], eol: &whole[content_len..], number: *number, offset: at, ahead }
+}
+
 /// Reads lines from `R` without ever holding more than one chunk (1 MiB) plus the longest line.
 /// The buffer keeps [`LOOKAHEAD`] zero bytes past the data read, so that every line has that many
 /// readable bytes after its content.
@@ -96,7 +114,7 @@ impl<R: Read> LineReader<R> {
     }
 
     /// The next line, or `None` at the end of the input.
-    #[inline]
+    #[inline(always)]
     pub fn next_line(&mut self) -> io::Result<Option<RawLine<'_>>> {
         loop {
             if let Some(nl) = find_newline(&self.buf[self.start..self.end]) {
@@ -118,27 +136,10 @@ impl<R: Read> LineReader<R> {
     }
 
     /// Builds the line for `buf[from..to]` (`to` is past the `\n`, if any) and advances counters.
-    #[inline]
+    #[inline(always)]
     fn emit(&mut self, from: usize, to: usize) -> RawLine<'_> {
-        let whole = &self.buf[from..to];
-        let content_len = match whole {
-            [.., b'\r', b'\n'] => whole.len() - 2,
-            [.., b'\n'] => whole.len() - 1,
-            _ => whole.len(),
-        };
-        self.number += 1;
-        let offset = self.offset;
-        self.offset += whole.len() as u64;
         // `to <= end`, and the buffer holds LOOKAHEAD bytes past `end`.
-        let ahead = &self.buf[from..from + content_len + LOOKAHEAD];
-        let whole = &ahead[..to - from];
-        RawLine {
-            bytes: &whole[..content_len],
-            eol: &whole[content_len..],
-            number: self.number,
-            offset,
-            ahead,
-        }
+        raw_line(&self.buf, from, to, &mut self.number, &mut self.offset)
     }
 
     /// Moves the unread tail to the front, grows the buffer if one line fills it, and reads more.
@@ -170,6 +171,122 @@ impl<R: Read> LineReader<R> {
                 Err(e) => return Err(e),
             }
         }
+    }
+}
+
+/// Whole lines read ahead of their use, possibly on another thread ([`ChunkReader`]), followed
+/// by [`LOOKAHEAD`] zero bytes.
+#[derive(Debug)]
+pub struct Chunk {
+    buf: Vec<u8>,
+    len: usize,
+    offset: u64,
+}
+
+impl Chunk {
+    /// The chunk's lines; `before` is the number of lines in the chunks before it.
+    pub fn lines(&self, before: u64) -> ChunkLines<'_> {
+        ChunkLines { buf: &self.buf, start: 0, end: self.len, number: before, offset: self.offset }
+    }
+
+    /// The bytes of the chunk's lines.
+    pub fn bytes(&self) -> &[u8] {
+        &self.buf[..self.len]
+    }
+
+    /// The buffer, to be handed back to [`ChunkReader::next_chunk`].
+    pub fn into_buffer(self) -> Vec<u8> {
+        self.buf
+    }
+}
+
+/// The lines of a [`Chunk`], as [`LineReader`] gives them.
+pub struct ChunkLines<'a> {
+    buf: &'a [u8],
+    start: usize,
+    end: usize,
+    number: u64,
+    offset: u64,
+}
+
+impl<'a> ChunkLines<'a> {
+    /// The next line, or `None` at the end of the chunk.
+    #[inline(always)]
+    pub fn next_line(&mut self) -> Option<RawLine<'a>> {
+        if self.start == self.end {
+            return None;
+        }
+        let from = self.start;
+        self.start = match find_newline(&self.buf[from..self.end]) {
+            Some(nl) => from + nl + 1,
+            None => self.end,
+        };
+        Some(raw_line(self.buf, from, self.start, &mut self.number, &mut self.offset))
+    }
+
+    /// Lines handed out so far, counting those before the chunk.
+    pub fn number(&self) -> u64 {
+        self.number
+    }
+}
+
+/// Cuts `R` into [`Chunk`]s of whole lines of about 1 MiB (more for a longer line), so that
+/// one thread can read while another parses. Buffers are reused: each call takes one back.
+pub struct ChunkReader<R> {
+    inner: R,
+    /// The start of a line that the last chunk could not end.
+    carry: Vec<u8>,
+    offset: u64,
+    eof: bool,
+}
+
+impl<R: Read> ChunkReader<R> {
+    pub fn new(inner: R) -> Self {
+        Self { inner, carry: Vec::new(), offset: 0, eof: false }
+    }
+
+    /// The next chunk, read into `buf` (whose contents are dropped); `None` at the end.
+    pub fn next_chunk(&mut self, mut buf: Vec<u8>) -> io::Result<Option<Chunk>> {
+        buf.clear();
+        buf.append(&mut self.carry);
+        let mut want = CHUNK.max(buf.len() * 2);
+        let len = loop {
+            self.fill(&mut buf, want)?;
+            // The scan from the end stops at the chunk's last line ending.
+            match memchr::memrchr(b'\n', &buf) {
+                Some(nl) => {
+                    self.carry.extend_from_slice(&buf[nl + 1..]);
+                    break nl + 1;
+                }
+                None if self.eof => break buf.len(),
+                // One line longer than the chunk: read on.
+                None => want = buf.len() * 2,
+            }
+        };
+        if len == 0 {
+            return Ok(None);
+        }
+        buf.truncate(len);
+        buf.resize(len + LOOKAHEAD, 0);
+        let offset = self.offset;
+        self.offset += len as u64;
+        Ok(Some(Chunk { buf, len, offset }))
+    }
+
+    /// Reads until `buf` holds `want` bytes or the input ends.
+    fn fill(&mut self, buf: &mut Vec<u8>, want: usize) -> io::Result<()> {
+        let mut filled = buf.len();
+        buf.resize(want.max(filled), 0);
+        while filled < buf.len() && !self.eof {
+            match self.inner.read(&mut buf[filled..]) {
+                Ok(0) => self.eof = true,
+                Ok(n) => filled += n,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        buf.truncate(filled);
+        Ok(())
     }
 }
 
@@ -242,6 +359,63 @@ mod tests {
             }
             assert_eq!(last, [0; LOOKAHEAD], "step {step}");
         }
+    }
+
+    proptest::proptest! {
+        /// Chunks give the lines, numbers and offsets of the line reader, each with its
+        /// look-ahead bytes, for any input read in any pieces.
+        #[test]
+        fn chunks_give_the_same_lines(
+            lines in proptest::collection::vec(("[ -~]{0,40}", 0..3u8), 0..60),
+            last_eol in proptest::bool::ANY,
+            step in 1usize..50,
+        ) {
+            let mut input = Vec::new();
+            for (i, (text, eol)) in lines.iter().enumerate() {
+                input.extend_from_slice(text.as_bytes());
+                if i + 1 < lines.len() || last_eol {
+                    input.extend_from_slice([&b"\n"[..], b"\r\n", b"\r\r\n"][*eol as usize]);
+                }
+            }
+            let mut want = Vec::new();
+            let mut r = LineReader::new(&input[..]);
+            while let Some(l) = r.next_line().unwrap() {
+                want.push((l.bytes.to_vec(), l.eol.to_vec(), l.number, l.offset));
+            }
+            let mut got = Vec::new();
+            let mut chunks = ChunkReader::new(Trickle(&input, step));
+            let mut buf = Vec::new();
+            let mut number = 0;
+            while let Some(chunk) = chunks.next_chunk(std::mem::take(&mut buf)).unwrap() {
+                let mut lines = chunk.lines(number);
+                while let Some(l) = lines.next_line() {
+                    // What follows the line ending may differ (the next line, or zeros at a chunk's end).
+                    let ahead = l.with_lookahead();
+                    proptest::prop_assert!(ahead.len() >= l.bytes.len() + LOOKAHEAD);
+                    let whole = [l.bytes, l.eol].concat();
+                    proptest::prop_assert_eq!(&ahead[..whole.len()], whole.as_slice());
+                    got.push((l.bytes.to_vec(), l.eol.to_vec(), l.number, l.offset));
+                }
+                number = lines.number();
+                buf = chunk.into_buffer();
+            }
+            proptest::prop_assert_eq!(got, want);
+        }
+    }
+
+    #[test]
+    fn chunks_hold_whole_lines_however_long() {
+        let mut input = vec![b'x'; CHUNK * 3 + 7];
+        input.push(b'\n');
+        input.extend_from_slice(b"G1\nG2");
+        let mut chunks = ChunkReader::new(&input[..]);
+        let first = chunks.next_chunk(Vec::new()).unwrap().unwrap();
+        assert_eq!(first.bytes().len(), input.len() - 2);
+        let second = chunks.next_chunk(first.into_buffer()).unwrap().unwrap();
+        assert_eq!(second.bytes(), b"G2");
+        let mut lines = second.lines(2);
+        assert_eq!((lines.next_line().unwrap().number, lines.next_line().is_none()), (3, true));
+        assert!(chunks.next_chunk(second.into_buffer()).unwrap().is_none());
     }
 
     #[test]
