@@ -73,4 +73,4 @@ row "gweave estimate (3 threads)" "$t_ge" "$u_ge" "$s_ge_sys" "$m_ge" "estimate 
 echo "klipper_estimator / gweave sim: $(ratio "$t_ke" "$t_gw")x wall time, $(ratio "$u_ke" "$u_gw")x user time," \
   "$(ratio "$m_ke" "$m_gw")x peak memory; estimates differ by $d_s s ($d_ppm per million)"
 echo "klipper_estimator / gweave estimate: $(ratio "$t_ke" "$t_ge")x wall time (target 10x)," \
-  "$(ratio "$u_ke" "$u_ge")x user time (both threads), $(ratio "$m_ke" "$m_ge")x peak memory; estimates differ by $d_ge s"
+  "$(ratio "$u_ke" "$u_ge")x user time (all threads), $(ratio "$m_ke" "$m_ge")x peak memory; estimates differ by $d_ge s"

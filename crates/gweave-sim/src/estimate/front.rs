@@ -7,6 +7,7 @@
 use std::collections::HashMap;
 
 use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use gweave::gcode::layers::Structure;
 use gweave::gcode::lexer::{parse_into, parse_line};
 use gweave::gcode::line::{Block, Command};
 use gweave::gcode::reader::RawLine;
@@ -27,19 +28,27 @@ pub(super) struct Front {
     pub(super) state: State,
     /// The profile the plan side runs with, kept in step through [`Job::Profile`].
     pub(super) profile: MotionProfile,
-    key_index: HashMap<Key, u64>,
-    /// The last key looked up and its tag.
-    last_tag: Option<(Key, u64)>,
+    book: Bookkeeping,
     mix_index: HashMap<Vec<u64>, usize>,
     /// The mixing commands' state, for a profile with mixing inputs.
     pub(super) mixing: Option<MixingState>,
+    pub(super) line: u64,
+}
+
+/// What turns a move into jobs besides the move itself: its time account (tag) and the
+/// firmware's fixed overheads. Apart from the state, so that a move can be read in place from
+/// the state's effect while this changes.
+#[derive(Debug)]
+struct Bookkeeping {
+    key_index: HashMap<Key, u64>,
+    /// The last key looked up and its tag.
+    last_tag: Option<(Key, u64)>,
     mix: usize,
     /// The selected tool (`T<n>` carried out by [`Front::run`]), for per-tool E steps.
     tool: u32,
     klipper: bool,
     started: bool,
     motors_on: bool,
-    pub(super) line: u64,
 }
 
 impl Front {
@@ -54,19 +63,22 @@ impl Front {
                     .map_err(|source| EstimateError::Mixing { line: 0, source })?,
             ),
         };
-        let mut front = Self {
-            block: Block::default(),
-            state: State::new(StateOptions { firmware, ..StateOptions::default() }),
-            profile: profile.clone(),
+        let book = Bookkeeping {
             key_index: HashMap::new(),
             last_tag: None,
-            mix_index: HashMap::new(),
-            mixing,
             mix: 0,
             tool: 0,
             klipper,
             started: false,
             motors_on: false,
+        };
+        let mut front = Self {
+            block: Block::default(),
+            state: State::new(StateOptions { firmware, ..StateOptions::default() }),
+            profile: profile.clone(),
+            book,
+            mix_index: HashMap::new(),
+            mixing,
             line: 0,
         };
         front.refresh_mix(jobs);
@@ -80,17 +92,23 @@ impl Front {
         *self.state.apply(raw, &self.block)
     }
 
-    /// [`Front::parse`] for a line from a reader, whose look-ahead bytes speed up the lexer.
-    #[inline]
-    pub(super) fn parse_raw(&mut self, line: &RawLine<'_>) -> Effect {
+    /// [`Front::parse`] and [`Front::run`] for a line from a reader, whose look-ahead bytes
+    /// speed up the lexer. A move is read in place from the state (it is large).
+    #[inline(always)]
+    pub(super) fn step(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
         self.line += 1;
         parse_line(line, &mut self.block);
-        *self.state.apply(line.bytes, &self.block)
+        self.state.apply(line.bytes, &self.block);
+        if let Effect::Move(m) = &self.state.effect {
+            self.book.motion(&self.state.structure, m, self.line, jobs);
+            return Ok(());
+        }
+        let effect = self.state.effect;
+        self.run(line.bytes, &effect, jobs)
     }
 
     /// Turn `effect` (what [`Front::parse`] said `raw` does, possibly changed by the caller)
     /// and the line's motion-related commands into jobs.
-    #[inline(always)]
     pub(super) fn run(
         &mut self,
         raw: &[u8],
@@ -99,12 +117,12 @@ impl Front {
     ) -> Result<(), EstimateError> {
         match effect {
             Effect::Move(m) => {
-                self.motion(m, jobs);
+                self.book.motion(&self.state.structure, m, self.line, jobs);
                 return Ok(());
             }
             Effect::Dwell { t_s } => {
                 jobs.push(Job::Drain);
-                let tag = self.tag(jobs);
+                let tag = self.book.tag(&self.state.structure, jobs);
                 jobs.push(Job::Dwell { t_s: *t_s, tag });
             }
             Effect::Home { .. } => jobs.push(Job::Drain),
@@ -122,68 +140,6 @@ impl Front {
         }
     }
 
-    /// The tag for the current layer, feature and mix. The key changes only at a new layer,
-    /// feature, mix or tool, so the last one is kept: hashing it for every move cost a tenth
-    /// of the whole simulation.
-    #[inline]
-    fn tag(&mut self, jobs: &mut Vec<Job>) -> u64 {
-        let s = &self.state.structure;
-        let key = Key { layer: s.layer, feature: s.feature, mix: self.mix, tool: self.tool };
-        match self.last_tag {
-            Some((last, tag)) if last == key => tag,
-            _ => self.new_tag(key, jobs),
-        }
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn new_tag(&mut self, key: Key, jobs: &mut Vec<Job>) -> u64 {
-        let next = self.key_index.len() as u64;
-        let tag = *self.key_index.entry(key).or_insert_with(|| {
-            jobs.push(Job::Key(key));
-            next
-        });
-        self.last_tag = Some((key, tag));
-        tag
-    }
-
-    /// Motion is about to start: Klipper's start buffer before the first move.
-    fn moving(&mut self, jobs: &mut Vec<Job>) {
-        if !self.started {
-            self.started = true;
-            if self.klipper {
-                jobs.push(Job::Overhead { t_s: KLIPPER_START_BUFFER_S });
-            }
-        }
-        self.motors_on = true;
-    }
-
-    #[inline]
-    fn motion(&mut self, m: &state::Move, jobs: &mut Vec<Job>) {
-        let feed_mm_s = if m.feed_mm_min > 0.0 { m.feed_mm_min / 60.0 } else { DEFAULT_FEED_MM_S };
-        let tag = self.tag(jobs);
-        self.moving(jobs);
-        let (start, end) = (at(&m.from), at(&m.to));
-        let Path::Arc(arc) = &m.path else {
-            jobs.push(Job::Move { mv: Move { start, end, feed_mm_s, tag }, line: self.line });
-            return;
-        };
-        let chords = (m.len_mm() / ARC_CHORD_MM).ceil().max(1.0) as usize;
-        let mut from = start;
-        for k in 1..=chords {
-            let t = k as f64 / chords as f64;
-            let to = if k < chords {
-                let [x_mm, y_mm] = arc.point(t);
-                let lerp = |axis: usize| m.from[axis] + (m.to[axis] - m.from[axis]) * t;
-                Pos { x_mm, y_mm, z_mm: lerp(state::Z), e_mm: lerp(state::E), a_deg: lerp(state::A) }
-            } else {
-                end
-            };
-            jobs.push(Job::Move { mv: Move { start: from, end: to, feed_mm_s, tag }, line: self.line });
-            from = to;
-        }
-    }
-
     fn m_code(&mut self, raw: &[u8], number: u32, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
         let b = &self.block;
         let axes =
@@ -196,15 +152,15 @@ impl Front {
             }
             18 | 84 => {
                 jobs.push(Job::Drain);
-                if self.klipper && std::mem::take(&mut self.motors_on) {
+                if self.book.klipper && std::mem::take(&mut self.book.motors_on) {
                     jobs.push(Job::Overhead { t_s: KLIPPER_MOTOR_OFF_S });
                 }
                 return Ok(());
             }
             163..=165 | 567 => return self.mixing_command(raw, jobs),
-            201 if !self.klipper => profile.set_max_accel(&axes()),
-            203 if !self.klipper => profile.set_max_feed(&axes()),
-            205 if !self.klipper => match b.get(b'J') {
+            201 if !self.book.klipper => profile.set_max_accel(&axes()),
+            203 if !self.book.klipper => profile.set_max_feed(&axes()),
+            205 if !self.book.klipper => match b.get(b'J') {
                 Some(j) => profile.set_junction_deviation(j),
                 None => return Ok(()),
             },
@@ -291,7 +247,7 @@ impl Front {
                 mixing.select_tool(tool as usize).map_err(|source| EstimateError::Mixing { line, source })?;
             }
         }
-        self.tool = tool;
+        self.book.tool = tool;
         self.refresh_mix(jobs);
         Ok(())
     }
@@ -308,7 +264,7 @@ impl Front {
         let bits: Vec<u64> = weights.iter().map(|w| w.to_bits()).collect();
         // Index 0 is the plan side's "no mix" entry.
         let next = self.mix_index.len() + 1;
-        self.mix = *self.mix_index.entry(bits).or_insert_with(|| {
+        self.book.mix = *self.mix_index.entry(bits).or_insert_with(|| {
             jobs.push(Job::Mix(weights.to_vec()));
             next
         });
@@ -319,9 +275,73 @@ impl Front {
         let start = at(&self.state.pos);
         let end = Pos { e_mm: start.e_mm + e_mm, ..start };
         let feed_mm_s = if e_mm < 0.0 { FW_RETRACT_FEED_MM_S } else { FW_RECOVER_FEED_MM_S };
-        let tag = self.tag(jobs);
-        self.motors_on = true;
+        let tag = self.book.tag(&self.state.structure, jobs);
+        self.book.motors_on = true;
         jobs.push(Job::Move { mv: Move { start, end, feed_mm_s, tag }, line: self.line });
+    }
+}
+
+impl Bookkeeping {
+    /// The tag for the current layer, feature and mix. The key changes only at a new layer,
+    /// feature, mix or tool, so the last one is kept: hashing it for every move cost a tenth
+    /// of the whole simulation.
+    #[inline]
+    fn tag(&mut self, s: &Structure, jobs: &mut Vec<Job>) -> u64 {
+        let key = Key { layer: s.layer, feature: s.feature, mix: self.mix, tool: self.tool };
+        match self.last_tag {
+            Some((last, tag)) if last == key => tag,
+            _ => self.new_tag(key, jobs),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn new_tag(&mut self, key: Key, jobs: &mut Vec<Job>) -> u64 {
+        let next = self.key_index.len() as u64;
+        let tag = *self.key_index.entry(key).or_insert_with(|| {
+            jobs.push(Job::Key(key));
+            next
+        });
+        self.last_tag = Some((key, tag));
+        tag
+    }
+
+    /// Motion is about to start: Klipper's start buffer before the first move.
+    fn moving(&mut self, jobs: &mut Vec<Job>) {
+        if !self.started {
+            self.started = true;
+            if self.klipper {
+                jobs.push(Job::Overhead { t_s: KLIPPER_START_BUFFER_S });
+            }
+        }
+        self.motors_on = true;
+    }
+
+    /// A move of the file, on line `line`: straight, or an arc cut into chords.
+    #[inline]
+    fn motion(&mut self, s: &Structure, m: &state::Move, line: u64, jobs: &mut Vec<Job>) {
+        let feed_mm_s = if m.feed_mm_min > 0.0 { m.feed_mm_min / 60.0 } else { DEFAULT_FEED_MM_S };
+        let tag = self.tag(s, jobs);
+        self.moving(jobs);
+        let (start, end) = (at(&m.from), at(&m.to));
+        let Path::Arc(arc) = &m.path else {
+            jobs.push(Job::Move { mv: Move { start, end, feed_mm_s, tag }, line });
+            return;
+        };
+        let chords = (m.len_mm() / ARC_CHORD_MM).ceil().max(1.0) as usize;
+        let mut from = start;
+        for k in 1..=chords {
+            let t = k as f64 / chords as f64;
+            let to = if k < chords {
+                let [x_mm, y_mm] = arc.point(t);
+                let lerp = |axis: usize| m.from[axis] + (m.to[axis] - m.from[axis]) * t;
+                Pos { x_mm, y_mm, z_mm: lerp(state::Z), e_mm: lerp(state::E), a_deg: lerp(state::A) }
+            } else {
+                end
+            };
+            jobs.push(Job::Move { mv: Move { start: from, end: to, feed_mm_s, tag }, line });
+            from = to;
+        }
     }
 }
 

@@ -433,8 +433,7 @@ fn parse_chunks(
         let chunk = chunk?;
         let mut lines = chunk.lines(lines_before);
         while let Some(line) = lines.next_line() {
-            let effect = front.parse_raw(&line);
-            skip_mixing_errors(front.run(line.bytes, &effect, batch))?;
+            skip_mixing_errors(front.step(&line, batch))?;
             if batch.len() >= BATCH {
                 let next = handover.spare.try_recv().unwrap_or_else(|_| Vec::with_capacity(BATCH + 64));
                 if handover.to_back.send(std::mem::replace(batch, next)).is_err() {

@@ -27,7 +27,7 @@
 use std::collections::VecDeque;
 
 use super::junction::{extruder_v2, HalfAngle};
-use super::{BlockSink, PlannedBlock};
+use super::{BlockSink, Lesser, PlannedBlock};
 use crate::kinematics::{axis, Geometry, Move, MoveKind};
 use crate::limits::{AxisLimits, KlipperLimits};
 use crate::planner::trapezoid::Trapezoid;
@@ -62,9 +62,9 @@ impl QueuedMove {
             self.max_cruise_v2 = speed2;
             self.min_move_t = self.geo.len / speed;
         }
-        self.accel = self.accel.min(accel);
+        self.accel = self.accel.lesser(accel);
         self.delta_v2 = 2.0 * self.geo.len * self.accel;
-        self.mcr_delta_v2 = self.mcr_delta_v2.min(self.delta_v2);
+        self.mcr_delta_v2 = self.mcr_delta_v2.lesser(self.delta_v2);
     }
 
     fn is_kinematic(&self) -> bool {
@@ -78,21 +78,24 @@ impl QueuedMove {
         }
         let (r, pr) = (&self.geo.ratio, &prev.geo.ratio);
         let e_v2 = extruder_v2(icv_mm_s, pr[axis::E], r[axis::E]).unwrap_or(self.max_cruise_v2);
-        let mut v2 =
-            self.max_cruise_v2.min(prev.max_cruise_v2).min(prev.max_start_v2 + prev.delta_v2).min(e_v2);
+        let mut v2 = self
+            .max_cruise_v2
+            .lesser(prev.max_cruise_v2)
+            .lesser(prev.max_start_v2 + prev.delta_v2)
+            .lesser(e_v2);
         let half = HalfAngle::from_neg_cos(-(r[0] * pr[0] + r[1] * pr[1] + r[2] * pr[2]));
         if let (Some(jd_v2), Some(prev_jd_v2)) = (
             half.deviation_v2(self.accel, self.junction_deviation_mm),
             half.deviation_v2(prev.accel, prev.junction_deviation_mm),
         ) {
             v2 = v2
-                .min(jd_v2)
-                .min(prev_jd_v2)
-                .min(half.centripetal_v2(self.delta_v2))
-                .min(half.centripetal_v2(prev.delta_v2));
+                .lesser(jd_v2)
+                .lesser(prev_jd_v2)
+                .lesser(half.centripetal_v2(self.delta_v2))
+                .lesser(half.centripetal_v2(prev.delta_v2));
         }
         self.max_start_v2 = v2;
-        self.max_mcr_start_v2 = v2.min(prev.max_mcr_start_v2 + prev.mcr_delta_v2);
+        self.max_mcr_start_v2 = v2.lesser(prev.max_mcr_start_v2 + prev.mcr_delta_v2);
     }
 
     fn block(&self, entry_v2: f64, cruise_v2: f64, exit_v2: f64) -> PlannedBlock {
@@ -175,7 +178,7 @@ impl KlipperLookahead {
     ) -> QueuedMove {
         let kinematic = geo.kind == MoveKind::Kinematic;
         let (velocity, accel) = if kinematic {
-            (mv.feed_mm_s.min(k.max_velocity_mm_s), k.max_accel_mm_s2)
+            (mv.feed_mm_s.lesser(k.max_velocity_mm_s), k.max_accel_mm_s2)
         } else {
             (mv.feed_mm_s, EXTRUDE_ONLY_ACCEL_MM_S2)
         };
@@ -227,9 +230,9 @@ impl KlipperLookahead {
         for i in (0..n).rev() {
             let m = &self.queue[i];
             let reachable_start_v2 = next_start_v2 + m.delta_v2;
-            let start_v2 = m.max_start_v2.min(reachable_start_v2);
+            let start_v2 = m.max_start_v2.lesser(reachable_start_v2);
             let reachable_mcr_v2 = next_mcr_start_v2 + m.mcr_delta_v2;
-            let mcr_start_v2 = m.max_mcr_start_v2.min(reachable_mcr_v2);
+            let mcr_start_v2 = m.max_mcr_start_v2.lesser(reachable_mcr_v2);
             pending += 1;
             let mut cruise_v2 = None;
             if mcr_start_v2 < reachable_mcr_v2 {
@@ -242,8 +245,9 @@ impl KlipperLookahead {
                     }
                     peak_cruise_v2 = (mcr_start_v2 + reachable_mcr_v2) * 0.5;
                 }
-                cruise_v2 =
-                    Some(((start_v2 + reachable_start_v2) * 0.5).min(m.max_cruise_v2).min(peak_cruise_v2));
+                cruise_v2 = Some(
+                    ((start_v2 + reachable_start_v2) * 0.5).lesser(m.max_cruise_v2).lesser(peak_cruise_v2),
+                );
                 pending = 0;
             }
             self.walk[i] = Walk { start_v2, cruise_v2, next_start_v2 };
@@ -255,8 +259,8 @@ impl KlipperLookahead {
         }
         let mut prev_cruise_v2: f64 = 0.0;
         for (m, w) in self.queue.drain(..flush_count).zip(&self.walk) {
-            let cruise_v2 = w.cruise_v2.unwrap_or_else(|| prev_cruise_v2.min(w.start_v2));
-            sink.block(&m.block(w.start_v2.min(cruise_v2), cruise_v2, w.next_start_v2.min(cruise_v2)));
+            let cruise_v2 = w.cruise_v2.unwrap_or_else(|| prev_cruise_v2.lesser(w.start_v2));
+            sink.block(&m.block(w.start_v2.lesser(cruise_v2), cruise_v2, w.next_start_v2.lesser(cruise_v2)));
             prev_cruise_v2 = cruise_v2;
         }
     }

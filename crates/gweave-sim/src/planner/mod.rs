@@ -76,6 +76,24 @@ impl PlannedBlock {
     }
 }
 
+/// The smaller of two speeds or accelerations, in one `minsd`. `f64::min` also sorts out NaN,
+/// which costs a few instructions per call and showed in the planner's profile; a planned
+/// move's numbers are never NaN (its positions and feed rate are checked finite first).
+pub(crate) trait Lesser {
+    fn lesser(self, other: f64) -> f64;
+}
+
+impl Lesser for f64 {
+    #[inline(always)]
+    fn lesser(self, other: f64) -> f64 {
+        if self < other {
+            self
+        } else {
+            other
+        }
+    }
+}
+
 /// Receives planned blocks in order. Closures `FnMut(&PlannedBlock)` and `Vec<PlannedBlock>` are
 /// sinks.
 pub trait BlockSink {
