@@ -68,7 +68,8 @@ pub struct Move {
 /// A move that cannot be planned.
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
 pub enum MoveError {
-    /// A coordinate is NaN or infinite.
+    /// A coordinate is NaN or infinite (or the distance between two is past the largest
+    /// number).
     #[error("move has a non-finite coordinate")]
     NonFinitePosition,
     /// The feed rate is zero, negative or not finite.
@@ -104,8 +105,12 @@ pub struct Geometry {
 impl Geometry {
     /// The geometry of a move from `start` to `end`.
     pub fn between(start: Pos, end: Pos) -> Self {
-        let (s, e) = (start.to_array(), end.to_array());
-        let delta: [f64; 5] = std::array::from_fn(|i| e[i] - s[i]);
+        Self::of_delta(deltas(start, end))
+    }
+
+    /// The geometry of a move by `delta` (end minus start, X Y Z E A).
+    #[inline]
+    fn of_delta(delta: [f64; 5]) -> Self {
         let xyz = (delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2]).sqrt();
         let (len, kind) = if xyz >= MIN_KINEMATIC_LEN_MM {
             (xyz, MoveKind::Kinematic)
@@ -127,16 +132,26 @@ impl Geometry {
 
 impl Move {
     /// Check the move's numbers and compute its geometry.
+    #[inline]
     pub fn geometry(&self) -> Result<Geometry, MoveError> {
-        let finite = |p: Pos| p.to_array().iter().all(|v| v.is_finite());
-        if !finite(self.start) || !finite(self.end) {
+        // A difference is finite exactly when both ends are (inf - inf is NaN): one test per
+        // axis instead of two.
+        let delta = deltas(self.start, self.end);
+        if !delta.iter().fold(true, |finite, d| finite & d.is_finite()) {
             return Err(MoveError::NonFinitePosition);
         }
         if !(self.feed_mm_s.is_finite() && self.feed_mm_s > 0.0) {
             return Err(MoveError::BadFeed(self.feed_mm_s));
         }
-        Ok(Geometry::between(self.start, self.end))
+        Ok(Geometry::of_delta(delta))
     }
+}
+
+/// End minus start, X Y Z E A.
+#[inline]
+fn deltas(start: Pos, end: Pos) -> [f64; 5] {
+    let (s, e) = (start.to_array(), end.to_array());
+    std::array::from_fn(|i| e[i] - s[i])
 }
 
 #[cfg(test)]
@@ -170,6 +185,15 @@ mod tests {
         let m =
             Move { start: Pos::default(), end: Pos::xyze(f64::NAN, 0.0, 0.0, 0.0), feed_mm_s: 1.0, tag: 0 };
         assert_eq!(m.geometry(), Err(MoveError::NonFinitePosition));
+        // Infinite at both ends, at one end, and finite ends too far apart to measure.
+        for (from, to) in [(f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, 1.0), (-f64::MAX, f64::MAX)] {
+            let m = Move {
+                start: Pos { a_deg: from, ..Pos::default() },
+                end: Pos { a_deg: to, ..Pos::default() },
+                ..m
+            };
+            assert_eq!(m.geometry(), Err(MoveError::NonFinitePosition), "{from} -> {to}");
+        }
         let m = Move { end: Pos::xyze(1.0, 0.0, 0.0, 0.0), feed_mm_s: 0.0, ..m };
         assert_eq!(m.geometry(), Err(MoveError::BadFeed(0.0)));
     }

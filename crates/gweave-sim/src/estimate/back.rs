@@ -77,30 +77,30 @@ impl Back {
         })
     }
 
-    /// Carry out one job.
+    /// Carry out one job, read in place (a move is large); what it owns is taken.
     #[inline]
-    pub(super) fn execute(&mut self, job: Job) -> Result<(), EstimateError> {
+    pub(super) fn execute(&mut self, job: &mut Job) -> Result<(), EstimateError> {
         match job {
             Job::Move { mv, line } => self
                 .planner
-                .push(&mv, &mut self.acc)
-                .map_err(|source| EstimateError::Move { line, source })?,
+                .push(mv, &mut self.acc)
+                .map_err(|source| EstimateError::Move { line: *line, source })?,
             Job::Drain => self.drain(),
             Job::Dwell { t_s, tag } => {
-                self.dwell_s += t_s;
-                self.acc.t_s += t_s;
-                self.acc.key_s[tag as usize] += t_s;
+                self.dwell_s += *t_s;
+                self.acc.t_s += *t_s;
+                self.acc.key_s[*tag as usize] += *t_s;
             }
-            Job::Overhead { t_s } => self.add_overhead(t_s),
+            Job::Overhead { t_s } => self.add_overhead(*t_s),
             Job::Key(key) => {
-                self.acc.keys.push(key);
+                self.acc.keys.push(*key);
                 self.acc.key_s.push(0.0);
             }
-            Job::Mix(weights) => self.acc.mixes.push(weights),
+            Job::Mix(weights) => self.acc.mixes.push(std::mem::take(weights)),
             Job::Profile { profile, line } => self
                 .planner
-                .set_profile(*profile)
-                .map_err(|source| EstimateError::Profile { line, source })?,
+                .set_profile((**profile).clone())
+                .map_err(|source| EstimateError::Profile { line: *line, source })?,
         }
         Ok(())
     }

@@ -232,12 +232,8 @@ impl Estimator {
 
     /// Hand the pending jobs to the plan side.
     fn execute(&mut self) -> Result<(), EstimateError> {
-        let mut result = Ok(());
-        for job in self.jobs.drain(..) {
-            if result.is_ok() {
-                result = self.back.execute(job);
-            }
-        }
+        let result = self.jobs.iter_mut().try_for_each(|job| self.back.execute(job));
+        self.jobs.clear();
         result
     }
 
@@ -374,9 +370,10 @@ fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate
         scope.spawn(move || read_chunks(input, &to_front, &spare_chunks));
         let planning = scope.spawn(move || -> Result<Back, EstimateError> {
             for mut batch in batches {
-                for job in batch.drain(..) {
+                for job in &mut batch {
                     back.execute(job)?;
                 }
+                batch.clear();
                 // The parse side may have finished and gone: then the batch is not needed.
                 let _ = return_batch.send(batch);
             }
