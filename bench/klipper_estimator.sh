@@ -29,15 +29,20 @@ TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 cat "$BIG" > /dev/null
 
-# measure NAME CMD...: run CMD twice, keep its standard output of the first run in $TMP/NAME.out,
-# print "wall-s user-s sys-s" of the faster run and the peak memory in MB. Wall time depends on
-# the machine's load; user time is the steadier figure.
-measure() {
-  local name=$1
-  shift
-  /usr/bin/time -f "%e %U %S %M" -o "$TMP/$name.t1" "$@" > "$TMP/$name.out"
-  /usr/bin/time -f "%e %U %S %M" -o "$TMP/$name.t2" "$@" > /dev/null
-  python3 - "$TMP/$name.t1" "$TMP/$name.t2" <<'EOF'
+# This machine's speed drifts by tens of percent within minutes, so the three tools run in turn,
+# three rounds, and each keeps its fastest run (its wall, user and system time) and its highest
+# peak memory; the first run's standard output is kept in $TMP/NAME.out.
+# run_once NAME ROUND CMD...
+run_once() {
+  local name=$1 round=$2
+  shift 2
+  local out=/dev/null
+  [ "$round" = 1 ] && out="$TMP/$name.out"
+  /usr/bin/time -f "%e %U %S %M" -o "$TMP/$name.t$round" "$@" > "$out"
+}
+# fastest NAME: "wall-s user-s sys-s peak-MB" of NAME's runs.
+fastest() {
+  python3 - "$TMP/$1".t* <<'EOF'
 import sys
 runs = [open(p).read().split()[-4:] for p in sys.argv[1:]]
 best = min(runs, key=lambda r: float(r[0]))
@@ -46,10 +51,14 @@ print(f"{float(best[0]):.2f} {float(best[1]):.2f} {float(best[2]):.2f} {peak:.0f
 EOF
 }
 
-read -r t_ke u_ke s_ke_sys m_ke < <(measure ke "$KE" --config_file "$ROOT/bench/klipper_estimator.json5" \
-  estimate --format json "$BIG")
-read -r t_gw u_gw s_gw_sys m_gw < <(measure gw "$GWEAVE" sim "$BIG" --machine "$ROOT/bench/klipper-big-bed.toml" -q --json)
-read -r t_ge u_ge s_ge_sys m_ge < <(measure ge "$GWEAVE" estimate "$BIG" --machine "$ROOT/bench/klipper-big-bed.toml" -q --json)
+for round in 1 2 3; do
+  run_once ke "$round" "$KE" --config_file "$ROOT/bench/klipper_estimator.json5" estimate --format json "$BIG"
+  run_once gw "$round" "$GWEAVE" sim "$BIG" --machine "$ROOT/bench/klipper-big-bed.toml" -q --json
+  run_once ge "$round" "$GWEAVE" estimate "$BIG" --machine "$ROOT/bench/klipper-big-bed.toml" -q --json
+done
+read -r t_ke u_ke s_ke_sys m_ke < <(fastest ke)
+read -r t_gw u_gw s_gw_sys m_gw < <(fastest gw)
+read -r t_ge u_ge s_ge_sys m_ge < <(fastest ge)
 
 totals=$(python3 - "$TMP/ke.out" "$TMP/gw.out" "$TMP/ge.out" <<'EOF'
 import json, sys
