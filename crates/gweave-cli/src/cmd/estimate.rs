@@ -30,7 +30,7 @@ pub struct EstimateArgs {
     /// RAMPS 1.4 printer on Marlin.
     #[arg(long, value_name = "TOML")]
     pub machine: Option<PathBuf>,
-    /// Also count the steps of every motor (Bresenham, as `gweave sim` does); a fifth slower.
+    /// Also count the steps of every motor (Bresenham, as `gweave sim` does); up to a fifth slower.
     #[arg(long)]
     pub steps: bool,
     #[command(flatten)]

@@ -354,7 +354,7 @@ pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Est
     on_threads(input, Estimator::with_steps(profile, true)?)
 }
 
-/// [`estimate`] without the step counts (all zero), a fifth faster.
+/// [`estimate`] without the step counts (all zero), up to a fifth faster.
 pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
     on_threads(input, Estimator::with_steps(profile, false)?)
 }
