@@ -35,6 +35,12 @@
 //! it splits a line into [`Estimator::parse`] (syntax and modal state) and [`Estimator::run`]
 //! (planning), so the machine can look at, or change, what a line does in between (refuse a
 //! cold extrusion, scale the feed by `M220`).
+//!
+//! Inside, the work has two sides that share nothing but a queue of jobs: the parse
+//! side (`front`: lexer, modal state, time accounts, moves cut to straight chords) and the plan
+//! side (`back`: planner, steppers, clock). [`Estimator`] runs them one after the other on each
+//! line; [`estimate`] runs them on threads of their own, with a third one reading the file, and
+//! gets the same result to the bit.
 
 use std::collections::BTreeMap;
 use std::io::{self, Read};
