@@ -99,7 +99,7 @@ impl Back {
             Job::Mix(weights) => self.acc.mixes.push(std::mem::take(weights)),
             Job::Profile { profile, line } => self
                 .planner
-                .set_profile((**profile).clone())
+                .set_profile(std::mem::take(&mut **profile))
                 .map_err(|source| EstimateError::Profile { line: *line, source })?,
         }
         Ok(())
