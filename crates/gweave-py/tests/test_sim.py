@@ -29,8 +29,8 @@ def test_estimate_plans_like_the_virtual_printer(data: Path) -> None:
     e = gweave.estimate(path, machine=klipper, steps=True)
     s = gweave.sim(path, machine=klipper)
     assert (e["machine"], e["planner"], e["steps_counted"]) == ("Klipper cartesian", "klipper", True)
-    # The same planner on the same moves: the same motion time, to rounding.
-    assert abs(e["motion_s"] - s["time"]["motion_s"]) < 1e-6
+    # The same planner on the same moves: the same motion time, to the bit.
+    assert e["motion_s"] == s["time"]["motion_s"]
     assert len(e["layer_s"]) == 28
     assert e["steps"]["axes"][3] == s["steps"]["axes"][3] > 0
     fast = gweave.estimate(path, machine=klipper)

@@ -345,6 +345,11 @@ fn skip_mixing_errors(result: Result<(), EstimateError>) -> Result<(), EstimateE
 /// Jobs handed from one thread to the other at a time: large enough that the hand-over costs
 /// nothing per line, small enough to stay in the cache.
 const BATCH: usize = 1024;
+/// An empty batch. The room past [`BATCH`] takes the last line's jobs (an arc's chords, a
+/// few dozen at most on real files) without growing.
+fn new_batch() -> Vec<Job> {
+    Vec::with_capacity(BATCH + 64)
+}
 /// Batches in flight between the threads; with [`BATCH`] this bounds the memory in between
 /// (under 1 MB).
 const BATCHES_IN_FLIGHT: usize = 4;
@@ -385,7 +390,7 @@ fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate
             }
             Ok(back)
         });
-        let mut batch = Vec::with_capacity(BATCH + 64);
+        let mut batch = new_batch();
         let handover = Handover { to_back: &to_back, spare: &spare_batches, return_chunk: &return_chunk };
         let parsed = parse_chunks(chunks, &mut front, &mut batch, &handover);
         // The lines before an error are planned too: one of them may hold an earlier error. A
@@ -438,7 +443,7 @@ fn parse_chunks(
         while let Some(line) = lines.next_line() {
             skip_mixing_errors(front.step(&line, batch))?;
             if batch.len() >= BATCH {
-                let next = handover.spare.try_recv().unwrap_or_else(|_| Vec::with_capacity(BATCH + 64));
+                let next = handover.spare.try_recv().unwrap_or_else(|_| new_batch());
                 if handover.to_back.send(std::mem::replace(batch, next)).is_err() {
                     return Ok(());
                 }
@@ -503,7 +508,7 @@ mod tests {
     }
 
     #[test]
-    fn two_threads_give_the_one_thread_result_to_the_bit() {
+    fn threads_give_the_one_thread_result_to_the_bit() {
         let klipper = MotionProfile::klipper(crate::limits::KlipperLimits::default());
         for path in [
             "prusaslicer/pr_bunny_3tool_rel.gcode",

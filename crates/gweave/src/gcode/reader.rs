@@ -273,19 +273,13 @@ impl<R: Read> ChunkReader<R> {
         Ok(Some(Chunk { buf, len, offset }))
     }
 
-    /// Reads until `buf` holds `want` bytes or the input ends.
+    /// Reads until `buf` holds `want` bytes or the input ends (into the spare capacity: the
+    /// bytes are not zeroed first).
     fn fill(&mut self, buf: &mut Vec<u8>, want: usize) -> io::Result<()> {
-        let mut filled = buf.len();
-        buf.resize(want.max(filled), 0);
-        while filled < buf.len() && !self.eof {
-            match self.inner.read(&mut buf[filled..]) {
-                Ok(0) => self.eof = true,
-                Ok(n) => filled += n,
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e),
-            }
+        let need = want.saturating_sub(buf.len());
+        if (&mut self.inner).take(need as u64).read_to_end(buf)? < need {
+            self.eof = true;
         }
-        buf.truncate(filled);
         Ok(())
     }
 }
