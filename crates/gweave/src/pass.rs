@@ -108,12 +108,12 @@ impl<'a> Run<'a> {
     }
 
     /// Streams the input through `pass` without output. Returns the final state.
-    pub fn scan(self, pass: &mut dyn Pass) -> Result<State> {
+    pub fn scan<P: Pass + ?Sized>(self, pass: &mut P) -> Result<State> {
         self.drive(pass, &mut io::sink())
     }
 
     /// Streams the input through `pass` into `target`, committed only if everything succeeded.
-    pub fn transform(self, pass: &mut dyn Pass, target: &Target) -> Result<State> {
+    pub fn transform<P: Pass + ?Sized>(self, pass: &mut P, target: &Target) -> Result<State> {
         let input = self.input.to_path_buf();
         let mut out = Output::create(target, Some(&input))?;
         let state = self.drive(pass, &mut out)?;
@@ -123,7 +123,7 @@ impl<'a> Run<'a> {
 
     /// Streams the file, with the options its flavour implies (read from its ends first: the
     /// PrusaSlicer family names it only in the settings block after the last move).
-    fn drive(self, pass: &mut dyn Pass, out: &mut dyn Write) -> Result<State> {
+    fn drive<P: Pass + ?Sized>(self, pass: &mut P, out: &mut dyn Write) -> Result<State> {
         let path = self.input.to_path_buf();
         let flavour = match self.flavour {
             Some(known) => known,
@@ -139,13 +139,13 @@ impl<'a> Run<'a> {
 }
 
 /// The loop itself, over any reader (files, in-memory text in tests and Python).
-pub fn drive_reader(
+pub fn drive_reader<P: Pass + ?Sized>(
     input: impl Read,
     path: &Path,
     options: StateOptions,
     strictness: Strictness,
     progress: &mut dyn Progress,
-    pass: &mut dyn Pass,
+    pass: &mut P,
     out: &mut dyn Write,
 ) -> Result<State> {
     let mut reader = LineReader::new(input);

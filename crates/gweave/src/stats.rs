@@ -29,6 +29,33 @@ pub struct Bounds {
     pub max: [f64; 3],
 }
 
+impl Bounds {
+    /// The box that holds no point: growing it by one point gives that point.
+    pub const EMPTY: Bounds = Bounds { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3] };
+
+    pub fn is_empty(&self) -> bool {
+        self.min[0] > self.max[0]
+    }
+
+    /// Grows the box to hold `p`. Plain comparisons rather than f64::min/max (which also
+    /// handle NaN, in several instructions): positions come from numbers the lexer has checked
+    /// to be finite. Written as selections, they become one min and one max instruction per
+    /// axis, no branch.
+    #[inline]
+    pub fn grow(&mut self, p: [f64; 3]) {
+        for (i, v) in p.into_iter().enumerate() {
+            self.min[i] = if v < self.min[i] { v } else { self.min[i] };
+            self.max[i] = if v > self.max[i] { v } else { self.max[i] };
+        }
+    }
+}
+
+impl Default for Bounds {
+    fn default() -> Self {
+        Bounds::EMPTY
+    }
+}
+
 /// What the slicer itself wrote about the print, for comparison.
 #[derive(Debug, Clone, Default, Serialize, PartialEq)]
 pub struct SlicerFigures {
@@ -74,9 +101,8 @@ pub struct StatsPass {
     bytes: u64,
     lines: u64,
     extruded_mm: Vec<f64>,
-    bounds: Option<Bounds>,
-    /// The last point added to `bounds`.
-    last_grown: [f64; 3],
+    /// The box of extruding moves so far: empty (min above max) until the first.
+    bounds: Bounds,
     tool_changes: u32,
     print_mm: f64,
     travel_mm: f64,
@@ -121,25 +147,26 @@ impl StatsPass {
         }
         if let Some(flavour) = &self.figures.flavour {
             let letter = extrusion_letter(flavour);
-            if letter != state.options.extrusion_letter {
+            if letter != state.options().extrusion_letter {
                 // Only a stream (a pipe) is read without looking at its end first.
                 warnings.push(format!(
                     "the file's flavour ({flavour}) extrudes with {}, but it was read with {}: read it from a file, not a pipe",
                     char::from(letter),
-                    char::from(state.options.extrusion_letter)
+                    char::from(state.options().extrusion_letter)
                 ));
             }
         }
         if state.structure.region != Region::End {
             warnings.push("no end G-code detected (the print proper runs to the end of the file)".into());
         }
+        let extrusion_bounds = (!self.bounds.is_empty()).then_some(self.bounds);
         Stats {
             bytes: self.bytes,
             lines: self.lines,
             slicer: state.structure.slicer,
             layers: state.structure.layer.map_or(0, |l| l + 1),
-            z_range_mm: self.bounds.map(|b| [b.min[2], b.max[2]]),
-            extrusion_bounds: self.bounds,
+            z_range_mm: extrusion_bounds.map(|b| [b.min[2], b.max[2]]),
+            extrusion_bounds,
             tool_changes: self.tool_changes,
             filament_diameter_mm: diameter,
             filament,
@@ -184,6 +211,7 @@ impl StatsPass {
 }
 
 impl Pass for StatsPass {
+    #[inline(always)]
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
         self.lines += 1;
         self.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
@@ -209,18 +237,13 @@ impl Pass for StatsPass {
                     }
                     self.extruded_mm[tool] += e_mm;
                     self.print_mm += len_mm;
-                    // Extrusions mostly follow one another: the start is the last end, already in.
-                    let from = [m.from[X], m.from[Y], m.from[Z]];
-                    if self.bounds.is_none() || from != self.last_grown {
-                        self.grow_bounds(from);
-                    }
-                    self.last_grown = [m.to[X], m.to[Y], m.to[Z]];
-                    self.grow_bounds(self.last_grown);
+                    self.bounds.grow([m.from[X], m.from[Y], m.from[Z]]);
+                    self.bounds.grow([m.to[X], m.to[Y], m.to[Z]]);
                     // An arc bulges past its end points (its Z stays between theirs).
                     if let Path::Arc(arc) = &m.path {
                         let [min, max] = arc.bounds();
-                        self.grow_bounds([min[0], min[1], m.to[Z]]);
-                        self.grow_bounds([max[0], max[1], m.to[Z]]);
+                        self.bounds.grow([min[0], min[1], m.to[Z]]);
+                        self.bounds.grow([max[0], max[1], m.to[Z]]);
                     }
                 } else {
                     self.travel_mm += len_mm;
@@ -240,23 +263,6 @@ impl Pass for StatsPass {
             _ => {}
         }
         Ok(())
-    }
-}
-
-impl StatsPass {
-    #[inline]
-    fn grow_bounds(&mut self, p: [f64; 3]) {
-        let b = self.bounds.get_or_insert(Bounds { min: p, max: p });
-        // Plain comparisons rather than f64::min/max (which also handle NaN, in several
-        // instructions): positions come from numbers the lexer has checked to be finite.
-        for (i, v) in p.into_iter().enumerate() {
-            if v < b.min[i] {
-                b.min[i] = v;
-            }
-            if v > b.max[i] {
-                b.max[i] = v;
-            }
-        }
     }
 }
 

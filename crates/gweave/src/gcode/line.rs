@@ -128,7 +128,8 @@ pub struct Block {
     pub tape_marker: bool,
     pub diagnostics: Vec<Diagnostic>,
     /// For each letter A..=Z, 1 + the index of its last word (0: absent), so lookups are O(1).
-    by_letter: [u8; 26],
+    /// Six more entries (always 0) let a word's letter index it without a bounds check.
+    by_letter: [u8; 32],
 }
 
 impl Block {
@@ -144,15 +145,16 @@ impl Block {
         self.block_delete = false;
         self.tape_marker = false;
         self.diagnostics.clear();
-        self.by_letter = [0; 26];
+        self.by_letter = [0; 32];
     }
 
     /// Appends a word, keeping the letter index.
     #[inline]
     pub(crate) fn push_word(&mut self, word: Word) {
-        if let Some(slot) = self.by_letter.get_mut(word.letter.wrapping_sub(b'A') as usize) {
-            *slot = u8::try_from(self.words.len() + 1).unwrap_or(0);
-        }
+        // A word's letter is one of A..=Z (the lexer upper-cases it).
+        debug_assert!(word.letter.is_ascii_uppercase());
+        self.by_letter[usize::from(word.letter.wrapping_sub(b'A') & 31)] =
+            u8::try_from(self.words.len() + 1).unwrap_or(0);
         self.words.push(word);
     }
 

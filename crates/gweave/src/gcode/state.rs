@@ -7,7 +7,7 @@
 
 use super::arc::Arc;
 use super::layers::{Markers, Structure};
-use super::line::{Block, Command, Value};
+use super::line::{Block, Command, Value, Word};
 
 /// Axis indices into a position array.
 pub const X: usize = 0;
@@ -35,6 +35,16 @@ pub fn axis_of(letter: u8) -> Option<usize> {
         b'C' => Some(C),
         _ => None,
     }
+}
+
+/// The axis a word moves: as [`axis_of`], but the extrusion word ([`StateOptions::
+/// extrusion_letter`]) is E, and `E` is no axis where another letter extrudes.
+#[inline]
+fn axis_of_word(letter: u8, extrusion_letter: u8) -> Option<usize> {
+    if letter == extrusion_letter {
+        return Some(E);
+    }
+    axis_of(letter).filter(|&i| i != E)
 }
 
 /// Tools a file may select: `T<n>` for larger `n` names no tool (firmware answers "Invalid
@@ -247,10 +257,20 @@ pub struct State {
     pub fw_retract_mm: f64,
     pub thermal: Thermal,
     pub structure: Structure,
-    pub options: StateOptions,
+    /// Fixed at creation: [`State::options`].
+    options: StateOptions,
+    /// For each word letter (a byte), where its word goes on a motion line (from the options).
+    slots: [u8; 256],
     /// What the last line did.
     pub effect: Effect,
 }
+
+/// On a motion line a word fills a slot: an axis of the target (`X`..`C`, `0..AXES`), the feed
+/// rate, or none.
+const FEED_SLOT: usize = AXES;
+const NO_SLOT: u8 = u8::MAX;
+/// Slot bits of the axes other than E, which G91 makes relative.
+const XYZ_ABC_BITS: u8 = (1 << AXES) - 1 - (1 << E);
 
 impl Default for State {
     fn default() -> Self {
@@ -273,19 +293,22 @@ impl State {
             fw_retract_mm: options.fw_retract_mm,
             thermal: Thermal::default(),
             structure: Structure::with_markers(options.markers.clone()),
+            slots: std::array::from_fn(|i| {
+                let letter = i as u8;
+                match axis_of_word(letter, options.extrusion_letter) {
+                    Some(axis) => axis as u8,
+                    None if letter == b'F' => FEED_SLOT as u8,
+                    None => NO_SLOT,
+                }
+            }),
             options,
             effect: Effect::None,
         }
     }
 
-    /// The axis a word moves: as [`axis_of`], but the extrusion word ([`StateOptions::
-    /// extrusion_letter`]) is E, and `E` is no axis where another letter extrudes.
-    #[inline]
-    fn axis_of_word(&self, letter: u8) -> Option<usize> {
-        if letter == self.options.extrusion_letter {
-            return Some(E);
-        }
-        axis_of(letter).filter(|&i| i != E)
+    /// The options the state was made with.
+    pub fn options(&self) -> &StateOptions {
+        &self.options
     }
 
     /// E moves relative to the current position on this line.
@@ -305,6 +328,7 @@ impl State {
 
     /// Executes one parsed line (`raw` is its text, for comments) and says what it did. The
     /// effect is also kept in [`State::effect`] until the next line.
+    #[inline(always)]
     pub fn apply(&mut self, raw: &[u8], block: &Block) -> &Effect {
         // The effect is written in place: a `Move` is large, and copying it per line shows.
         self.effect = Effect::None;
@@ -318,6 +342,36 @@ impl State {
         if !block.is_empty() && block.comment.is_none() {
             self.structure.observe_command();
         }
+        match block.command {
+            // The lines a print is made of, apart from the rest so that this part is inlined.
+            Command::Code { letter: b'G', number: number @ 0..=3, sub: None } => {
+                self.motion = match number {
+                    0 => Motion::Rapid,
+                    1 => Motion::Linear,
+                    2 => Motion::ArcCw,
+                    _ => Motion::ArcCcw,
+                };
+                self.motion_words(block)
+            }
+            _ => self.command(block),
+        }
+        if let Effect::Move(m) = &self.effect {
+            if m.is_extruding() {
+                self.structure.observe_extrusion(m.to[Z]);
+            }
+        }
+        let fed_mm = self.effect.filament_mm();
+        if fed_mm != 0.0 {
+            if let Some(fed) = self.filament_mm.get_mut(self.tool as usize) {
+                *fed += fed_mm;
+            }
+        }
+        &self.effect
+    }
+
+    /// Every command but the motion commands G0..G3.
+    #[inline(never)]
+    fn command(&mut self, block: &Block) {
         match block.command {
             Command::Code { letter: b'G', number, sub: None } => self.g_code(number, block),
             Command::Code { letter: b'M', number, sub: None } => self.m_code(number, block),
@@ -337,18 +391,6 @@ impl State {
             }
             _ => {}
         }
-        if let Effect::Move(m) = &self.effect {
-            if m.is_extruding() {
-                self.structure.observe_extrusion(m.to[Z]);
-            }
-        }
-        let fed_mm = self.effect.filament_mm();
-        if fed_mm != 0.0 {
-            if let Some(fed) = self.filament_mm.get_mut(self.tool as usize) {
-                *fed += fed_mm;
-            }
-        }
-        &self.effect
     }
 
     fn grow_tool(&mut self, tool: u32) {
@@ -360,15 +402,6 @@ impl State {
 
     fn g_code(&mut self, number: u32, block: &Block) {
         match number {
-            0..=3 => {
-                self.motion = match number {
-                    0 => Motion::Rapid,
-                    1 => Motion::Linear,
-                    2 => Motion::ArcCw,
-                    _ => Motion::ArcCcw,
-                };
-                self.motion_words(block)
-            }
             4 => {
                 let t_s = block.get(b'S').unwrap_or(0.0) + block.get(b'P').unwrap_or(0.0) / 1000.0;
                 self.effect = Effect::Dwell { t_s };
@@ -409,7 +442,9 @@ impl State {
             }
             92 => {
                 for w in &block.words {
-                    if let (Some(i), Some(v)) = (self.axis_of_word(w.letter), w.number()) {
+                    if let (Some(i), Some(v)) =
+                        (axis_of_word(w.letter, self.options.extrusion_letter), w.number())
+                    {
                         self.pos[i] = self.to_mm(v);
                     }
                 }
@@ -491,42 +526,40 @@ impl State {
     }
 
     /// Resolves the axis words of a motion line to an absolute target and the move to it.
+    #[inline(always)]
     fn motion_words(&mut self, block: &Block) {
-        if let Some(f) = block.get(b'F') {
-            self.feed_mm_min = self.to_mm(f);
-        }
-        let mut to = self.pos;
-        let mut any = false;
         // Multiplying by 1 is exact, so one multiply serves both units without a branch.
         let scale = if self.inches { MM_PER_INCH } else { 1.0 };
-        let (relative_xyz, relative_e) = (!self.absolute, self.relative_e());
-        for w in &block.words {
-            let Some(i) = self.axis_of_word(w.letter) else { continue };
-            let Value::Number(v) = w.value else { continue };
-            let v = v * scale;
-            let relative = if i == E { relative_e } else { relative_xyz };
-            to[i] = if relative { to[i] + v } else { v };
-            any = true;
-        }
-        let mut path = Path::Line;
-        if matches!(self.motion, Motion::ArcCw | Motion::ArcCcw) {
-            if let Some(arc) = self.arc(block, &to) {
-                path = Path::Arc(arc);
-                any = true;
-            }
-        }
-        if !any {
-            return;
-        }
-        // Built in place from the current position: a `Move` is large, and copies of it show.
+        // Bit i: axis i adds to the current position on this line.
+        let relative = if self.absolute { 0 } else { XYZ_ABC_BITS } | u8::from(self.relative_e()) << E;
+        // Built in place: a `Move` is large, and copies of it show.
         self.effect = Effect::Move(Move {
             from: self.pos,
-            to,
-            path,
+            to: self.pos,
+            path: Path::Line,
             rapid: self.motion == Motion::Rapid,
             feed_mm_min: self.feed_mm_min,
         });
-        self.pos = to;
+        let Effect::Move(m) = &mut self.effect else { return };
+        let (mut moved, feed) = targets(&block.words, &self.slots, scale, relative, &mut m.to);
+        if let Some(feed) = feed {
+            m.feed_mm_min = feed;
+            self.feed_mm_min = feed;
+        }
+        let to = m.to;
+        if matches!(self.motion, Motion::ArcCw | Motion::ArcCcw) {
+            if let Some(arc) = self.arc(block, &to) {
+                if let Effect::Move(m) = &mut self.effect {
+                    m.path = Path::Arc(arc);
+                }
+                moved = true;
+            }
+        }
+        if moved {
+            self.pos = to;
+        } else {
+            self.effect = Effect::None;
+        }
     }
 
     /// The arc of a G2/G3 from the current position to `to`, from its R or I/J words; `None`
@@ -545,6 +578,32 @@ impl State {
             }
         }
     }
+}
+
+/// Writes the numeric axis words of a motion line into `to` (absolute, or added where bit i of
+/// `relative` is set), in millimetres. Returns whether any axis word was written, and the F word.
+#[inline(always)]
+fn targets(
+    words: &[Word],
+    slots: &[u8; 256],
+    scale: f64,
+    relative: u8,
+    to: &mut Position,
+) -> (bool, Option<f64>) {
+    let (mut moved, mut feed) = (false, None);
+    for w in words {
+        let Value::Number(v) = w.value else { continue };
+        let v = v * scale;
+        match usize::from(slots[usize::from(w.letter)]) {
+            FEED_SLOT => feed = Some(v),
+            i if i < AXES => {
+                to[i] = if relative >> i & 1 != 0 { to[i] + v } else { v };
+                moved = true;
+            }
+            _ => {}
+        }
+    }
+    (moved, feed)
 }
 
 #[cfg(test)]
