@@ -10,7 +10,7 @@
 
 use super::diag::{Diagnostic, Finding};
 use super::line::{Block, Checksum, Command, Span, Value, Word};
-use super::number::{scan_at, NumberError};
+use super::number::{scan_at, scan_before_space, NumberError};
 use super::reader::RawLine;
 
 /// M-codes whose argument is free text up to the comment (Marlin reads it as a string).
@@ -90,6 +90,8 @@ fn plain_motion(raw: &[u8], ahead: &[u8], block: &mut Block) -> bool {
     };
     let mut i = 2;
     while let Some(&b) = raw.get(i) {
+        // Spaces, then a letter; anything else (a tab, a comment, a sign or a second point glued
+        // to the last number) takes the general way.
         if b != b' ' {
             return false;
         }
@@ -102,8 +104,8 @@ fn plain_motion(raw: &[u8], ahead: &[u8], block: &mut Block) -> bool {
             return false;
         }
         // Read from `ahead`: the number still ends at the end of `raw`, whose next byte is no
-        // part of one.
-        let Ok((value, end)) = scan_at(ahead, i + 1) else { return false };
+        // part of one. What follows it is tested as the loop goes on.
+        let Ok((value, end)) = scan_before_space(ahead, i + 1) else { return false };
         debug_assert!(end <= raw.len());
         block.push_word(Word { letter, value: Value::Number(value), span: Span::new(i, end) });
         i = end;

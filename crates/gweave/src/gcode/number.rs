@@ -37,8 +37,21 @@ pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
 /// eight bytes at a time too.
 #[inline(always)]
 pub fn scan_at(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
+    scan_from::<true>(line, at)
+}
+
+/// [`scan_at`] for a caller that reads the line again with the general rules unless the byte
+/// after the number is a space or the line's end: the test for a second point or a sign glued
+/// to the number (a typo [`scan_at`] reports) is left to it, since such a byte is neither.
+#[inline(always)]
+pub fn scan_before_space(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
+    scan_from::<false>(line, at)
+}
+
+#[inline(always)]
+fn scan_from<const TEST_GLUED: bool>(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
     let negative = line.get(at) == Some(&b'-');
-    if let Some((value, end)) = eight(line, at + usize::from(negative)) {
+    if let Some((value, end)) = eight::<TEST_GLUED>(line, at + usize::from(negative)) {
         return Ok((if negative { -value } else { value }, end));
     }
     scan_any(&line[at..]).map(|(value, used)| (value, at + used))
@@ -53,9 +66,10 @@ const HIGH_BITS: u64 = 0x8080_8080_8080_8080;
 /// Reads `digits? (. digits?)?` with 1 to 7 digits, all within the 8 bytes from `start`, in a
 /// few register operations instead of a loop per digit (SWAR: SIMD within a register). Most
 /// numbers slicers write fit (`142.303`, `2.43766`, `.04235`, `1800`). Anything else (longer,
-/// glued to a second point or a sign, no digits) is `None` and goes through [`scan_any`].
+/// glued to a second point or a sign when `TEST_GLUED`, no digits) is `None` and goes through
+/// [`scan_any`].
 #[inline(always)]
-fn eight(line: &[u8], start: usize) -> Option<(f64, usize)> {
+fn eight<const TEST_GLUED: bool>(line: &[u8], start: usize) -> Option<(f64, usize)> {
     let w = window(line, start)?;
     // Byte k of `w` is line[start + k]; XOR with '0' maps digits to 0..=9.
     let mut t = w ^ (ONES * u64::from(b'0'));
@@ -70,7 +84,7 @@ fn eight(line: &[u8], start: usize) -> Option<(f64, usize)> {
         // The next non-digit after the point: clear the point's bit, the lowest one set.
         let stop_bit = (non_digit & (non_digit - 1)).trailing_zeros();
         if stop_bit == 64 {
-            return long_fraction(line, start, first_bit / 8, t);
+            return long_fraction::<TEST_GLUED>(line, start, first_bit / 8, t);
         }
         // Close the gap of the point: the bytes above it move down one.
         let below = (1u64 << first_shift) - 1;
@@ -80,7 +94,7 @@ fn eight(line: &[u8], start: usize) -> Option<(f64, usize)> {
     } else {
         (first_shift / 8, 0, first_shift)
     };
-    if digits == 0 || is_glued((w >> end_shift) as u8) {
+    if digits == 0 || (TEST_GLUED && is_glued((w >> end_shift) as u8)) {
         return None;
     }
     // Keep the digits, most significant first in byte 0, padded with leading zeros to eight.
@@ -92,7 +106,7 @@ fn eight(line: &[u8], start: usize) -> Option<(f64, usize)> {
 /// A number whose fraction runs past the first eight bytes (`19.25233`, `123.45678`): the
 /// fraction is read from a second window just past the point and joined to the integer part.
 #[inline(always)]
-fn long_fraction(line: &[u8], start: usize, int_digits: u32, t: u64) -> Option<(f64, usize)> {
+fn long_fraction<const TEST_GLUED: bool>(line: &[u8], start: usize, int_digits: u32, t: u64) -> Option<(f64, usize)> {
     let frac_at = start + int_digits as usize + 1;
     let w = window(line, frac_at)?;
     let tf = w ^ (ONES * u64::from(b'0'));
@@ -101,7 +115,7 @@ fn long_fraction(line: &[u8], start: usize, int_digits: u32, t: u64) -> Option<(
     if frac_digits == 8 || frac_digits == 0 {
         return None;
     }
-    if is_glued((w >> (8 * frac_digits)) as u8) {
+    if TEST_GLUED && is_glued((w >> (8 * frac_digits)) as u8) {
         return None;
     }
     let int = if int_digits == 0 { 0 } else { eight_digits(t << (8 * (8 - int_digits))) };

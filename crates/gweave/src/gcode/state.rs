@@ -242,9 +242,12 @@ impl StateOptions {
 pub struct State {
     pub pos: Position,
     /// G90 (true) or G91.
-    pub absolute: bool,
+    absolute: bool,
     /// M82 (true) or M83.
-    pub absolute_e: bool,
+    absolute_e: bool,
+    /// Bit i: axis i moves relative to the current position, from the two above and the
+    /// firmware's rule ([`State::relative_e`]); kept so a move does not work it out again.
+    relative_axes: u8,
     /// G20 in force.
     pub inches: bool,
     pub feed_mm_min: f64,
@@ -284,6 +287,7 @@ impl State {
             pos: [0.0; AXES],
             absolute: true,
             absolute_e: true,
+            relative_axes: 0,
             inches: false,
             feed_mm_min: 0.0,
             motion: Motion::Linear,
@@ -311,10 +315,21 @@ impl State {
         &self.options
     }
 
+    /// G90 (true) or G91 in force.
+    pub fn absolute(&self) -> bool {
+        self.absolute
+    }
+
     /// E moves relative to the current position on this line.
     #[inline]
     pub fn relative_e(&self) -> bool {
         !self.absolute_e || (!self.absolute && self.options.firmware != Firmware::RepRapFirmware)
+    }
+
+    /// Sets G90/G91 and M82/M83.
+    fn set_modes(&mut self, absolute: bool, absolute_e: bool) {
+        (self.absolute, self.absolute_e) = (absolute, absolute_e);
+        self.relative_axes = if absolute { 0 } else { XYZ_ABC_BITS } | u8::from(self.relative_e()) << E;
     }
 
     #[inline]
@@ -428,17 +443,11 @@ impl State {
                 }
                 self.effect = Effect::Home { axes };
             }
-            90 => {
-                self.absolute = true;
-                if self.options.firmware == Firmware::Marlin {
-                    self.absolute_e = true;
-                }
-            }
-            91 => {
-                self.absolute = false;
-                if self.options.firmware == Firmware::Marlin {
-                    self.absolute_e = false;
-                }
+            // Marlin's G90/G91 set the extrusion mode too.
+            90 | 91 => {
+                let absolute = number == 90;
+                let marlin = self.options.firmware == Firmware::Marlin;
+                self.set_modes(absolute, if marlin { absolute } else { self.absolute_e });
             }
             92 => {
                 for w in &block.words {
@@ -456,8 +465,7 @@ impl State {
 
     fn m_code(&mut self, number: u32, block: &Block) {
         match number {
-            82 => self.absolute_e = true,
-            83 => self.absolute_e = false,
+            82 | 83 => self.set_modes(self.absolute, number == 82),
             // The temperature is S (R: Marlin's wait in both directions); PrusaSlicer's mach3 and
             // machinekit flavours write it as P, LinuxCNC's word for an M-code's parameter.
             104 | 109 => {
@@ -530,8 +538,6 @@ impl State {
     fn motion_words(&mut self, block: &Block) {
         // Multiplying by 1 is exact, so one multiply serves both units without a branch.
         let scale = if self.inches { MM_PER_INCH } else { 1.0 };
-        // Bit i: axis i adds to the current position on this line.
-        let relative = if self.absolute { 0 } else { XYZ_ABC_BITS } | u8::from(self.relative_e()) << E;
         // Built in place: a `Move` is large, and copies of it show.
         self.effect = Effect::Move(Move {
             from: self.pos,
@@ -541,7 +547,7 @@ impl State {
             feed_mm_min: self.feed_mm_min,
         });
         let Effect::Move(m) = &mut self.effect else { return };
-        let (mut moved, feed) = targets(&block.words, &self.slots, scale, relative, &mut m.to);
+        let (mut moved, feed) = targets(&block.words, &self.slots, scale, self.relative_axes, &mut m.to);
         if let Some(feed) = feed {
             m.feed_mm_min = feed;
             self.feed_mm_min = feed;

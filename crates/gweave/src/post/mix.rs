@@ -333,7 +333,7 @@ impl MixPass {
         if purge_mm > 0.0 {
             let start = PurgeStart {
                 pos: purge_start_pos(&mv.from),
-                absolute_xyz: state.absolute,
+                absolute_xyz: state.absolute(),
                 relative_e: state.relative_e(),
                 feed_mm_min: self.feed_before,
                 rapid_mode: self.rapid_before,

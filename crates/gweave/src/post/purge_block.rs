@@ -289,7 +289,7 @@ mod tests {
         }
         let start = PurgeStart {
             pos: purge_start_pos(&state.pos),
-            absolute_xyz: state.absolute,
+            absolute_xyz: state.absolute(),
             relative_e: state.relative_e(),
             feed_mm_min: state.feed_mm_min,
             rapid_mode: false,

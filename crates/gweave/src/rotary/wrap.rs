@@ -152,7 +152,7 @@ impl Wrap {
     /// Rewrites one line into `self.buffer`, or returns `false` to keep it as it is.
     fn rewrite(&mut self, ctx: &Ctx<'_>) -> Result<bool> {
         let state = ctx.state;
-        self.writer.set_modes(!state.absolute, state.relative_e());
+        self.writer.set_modes(!state.absolute(), state.relative_e());
         let layer = state.structure.layer.unwrap_or(0);
         match ctx.effect {
             Effect::Move(mv) => self.rewrite_move(ctx, mv, layer),

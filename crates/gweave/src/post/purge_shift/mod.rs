@@ -325,7 +325,7 @@ impl PurgeShift {
         Spot {
             start: PurgeStart {
                 pos: purge_start_pos(&state.pos),
-                absolute_xyz: state.absolute,
+                absolute_xyz: state.absolute(),
                 relative_e: state.relative_e(),
                 feed_mm_min: state.feed_mm_min,
                 rapid_mode: state.motion == crate::gcode::state::Motion::Rapid,
@@ -578,7 +578,7 @@ impl Pass for PurgeShift {
                 let state = ctx.state;
                 let split = Splittable {
                     mv: *m,
-                    relative_axes: !state.absolute,
+                    relative_axes: !state.absolute(),
                     relative_e: state.relative_e(),
                     inches: state.inches,
                 };

@@ -259,7 +259,7 @@ mod tests {
             parse_into(l.as_bytes(), &mut block);
             state.apply(l.as_bytes(), &block);
         }
-        let (relative_axes, relative_e, inches) = (!state.absolute, state.relative_e(), state.inches);
+        let (relative_axes, relative_e, inches) = (!state.absolute(), state.relative_e(), state.inches);
         parse_into(line.as_bytes(), &mut block);
         let Effect::Move(mv) = *state.apply(line.as_bytes(), &block) else { panic!("not a move: {line}") };
         let s = Splittable { mv, relative_axes, relative_e, inches };
