@@ -321,9 +321,11 @@ impl Structure {
         }
     }
 
-    /// A line with no comment that carries a command: ends Cura's trailing state machine.
-    pub fn observe_command(&mut self) {
-        if self.cura_last_layer_done {
+    /// A line with no comment that carries a command ends Cura's trailing state machine;
+    /// `is_bare_command` (whether this line is one) is asked only while that machine runs.
+    #[inline]
+    pub fn observe_command(&mut self, is_bare_command: impl FnOnce() -> bool) {
+        if self.cura_last_layer_done && is_bare_command() {
             self.enter_end();
         }
     }
@@ -393,11 +395,11 @@ mod tests {
         }
         assert_eq!((s.layer, s.region), (Some(1), Region::Print));
         // A command or a feature comment after the next `;LAYER:` is still the print.
-        s.observe_command();
+        s.observe_command(|| true);
         s.observe_comment(b"TYPE:WALL-INNER");
         assert_eq!(s.region, Region::Print);
         s.observe_comment(b"TIME_ELAPSED:2.0");
-        s.observe_command();
+        s.observe_command(|| true);
         assert_eq!(s.region, Region::End);
     }
 
@@ -407,7 +409,7 @@ mod tests {
         for c in ["FLAVOR:Marlin", "LAYER:0", "TIME_ELAPSED:1.0", "LAYER:1"] {
             s.observe_comment(c.as_bytes());
         }
-        s.observe_command();
+        s.observe_command(|| true);
         assert_eq!((s.layer, s.region), (Some(1), Region::Print));
     }
 

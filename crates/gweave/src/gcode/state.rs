@@ -354,9 +354,7 @@ impl State {
         if block.block_delete {
             return &self.effect;
         }
-        if !block.is_empty() && block.comment.is_none() {
-            self.structure.observe_command();
-        }
+        self.structure.observe_command(|| !block.is_empty() && block.comment.is_none());
         match block.command {
             // The lines a print is made of, apart from the rest so that this part is inlined.
             Command::Code { letter: b'G', number: number @ 0..=3, sub: None } => {
