@@ -536,43 +536,39 @@ impl State {
     fn motion_words(&mut self, block: &Block) {
         // Multiplying by 1 is exact, so one multiply serves both units without a branch.
         let scale = if self.inches { MM_PER_INCH } else { 1.0 };
-        // Built in place: a `Move` is large, and copies of it show.
+        let from = self.pos;
+        let (mut moved, feed) = targets(&block.words, &self.slots, scale, self.relative_axes, &mut self.pos);
+        if let Some(feed) = feed {
+            self.feed_mm_min = feed;
+        }
+        let arc = match self.motion {
+            Motion::ArcCw | Motion::ArcCcw => self.arc(block, &from),
+            _ => None,
+        };
+        moved |= arc.is_some();
+        if !moved {
+            return;
+        }
         self.effect = Effect::Move(Move {
-            from: self.pos,
+            from,
             to: self.pos,
             path: Path::Line,
             rapid: self.motion == Motion::Rapid,
             feed_mm_min: self.feed_mm_min,
         });
-        let Effect::Move(m) = &mut self.effect else { return };
-        let (mut moved, feed) = targets(&block.words, &self.slots, scale, self.relative_axes, &mut m.to);
-        if let Some(feed) = feed {
-            m.feed_mm_min = feed;
-            self.feed_mm_min = feed;
-        }
-        let to = m.to;
-        if matches!(self.motion, Motion::ArcCw | Motion::ArcCcw) {
-            if let Some(arc) = self.arc(block, &to) {
-                if let Effect::Move(m) = &mut self.effect {
-                    m.path = Path::Arc(arc);
-                }
-                moved = true;
-            }
-        }
-        if moved {
-            self.pos = to;
-        } else {
-            self.effect = Effect::None;
+        // Set apart: a `Path` holds a whole arc, and copying it on every straight move shows.
+        if let (Some(arc), Effect::Move(m)) = (arc, &mut self.effect) {
+            m.path = Path::Arc(arc);
         }
     }
 
-    /// The arc of a G2/G3 from the current position to `to`, from its R or I/J words; `None`
+    /// The arc of a G2/G3 from `from` to the current position, from its R or I/J words; `None`
     /// when they describe no arc (the move is then straight).
     #[inline(never)]
-    fn arc(&self, block: &Block, to: &Position) -> Option<Arc> {
+    fn arc(&self, block: &Block, from: &Position) -> Option<Arc> {
         let cw = self.motion == Motion::ArcCw;
-        let start = [self.pos[X], self.pos[Y]];
-        let end = [to[X], to[Y]];
+        let start = [from[X], from[Y]];
+        let end = [self.pos[X], self.pos[Y]];
         match block.get(b'R') {
             Some(r) => Arc::from_radius(start, end, self.to_mm(r), cw),
             None => {
