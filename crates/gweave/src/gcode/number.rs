@@ -81,26 +81,31 @@ fn eight<const TEST_GLUED: bool>(line: &[u8], start: usize) -> Option<(f64, usiz
     }
     let first_shift = first_bit & !7;
     let (digits, frac_digits, end_shift) = if (w >> first_shift) as u8 == b'.' {
-        // The next non-digit after the point: clear the point's bit, the lowest one set.
-        let stop_bit = (non_digit & (non_digit - 1)).trailing_zeros();
-        if stop_bit == 64 {
+        // The next non-digit after the point: clear the point's bit, the lowest one set. None
+        // in the window: the number fills it (`17.70252`) if the byte after is no digit.
+        let after_point = non_digit & (non_digit - 1);
+        let stop_shift = if after_point != 0 {
+            after_point.trailing_zeros() & !7
+        } else if !line.get(start + 8).is_some_and(u8::is_ascii_digit) {
+            64
+        } else {
             return long_fraction::<TEST_GLUED>(line, start, first_bit / 8, t);
-        }
+        };
         // Close the gap of the point: the bytes above it move down one.
         let below = (1u64 << first_shift) - 1;
         t = (t & below) | ((t >> 8) & !below);
-        let stop_shift = stop_bit & !7;
         ((stop_shift - 8) / 8, (stop_shift - first_shift - 8) / 8, stop_shift)
     } else {
         (first_shift / 8, 0, first_shift)
     };
-    if digits == 0 || (TEST_GLUED && is_glued((w >> end_shift) as u8)) {
+    let end = start + (end_shift / 8) as usize;
+    if digits == 0 || (TEST_GLUED && line.get(end).is_some_and(|&b| is_glued(b))) {
         return None;
     }
     // Keep the digits, most significant first in byte 0, padded with leading zeros to eight.
     let mantissa = eight_digits(t << (64 - 8 * digits));
-    // At most six fraction digits here; the mask spares a bounds check.
-    Some((mantissa as f64 / POW10[(frac_digits & 7) as usize], start + (end_shift / 8) as usize))
+    // At most seven fraction digits here; the mask spares a bounds check.
+    Some((mantissa as f64 / POW10[(frac_digits & 7) as usize], end))
 }
 
 /// A number whose fraction runs past the first eight bytes (`19.25233`, `123.45678`): the
@@ -461,6 +466,19 @@ mod tests {
             let at = prefix.len();
             let general = scan_any(&line.as_bytes()[at..]).map(|(v, used)| (v, at + used));
             proptest::prop_assert_eq!(scan_at(line.as_bytes(), at), general);
+        }
+
+        /// What the plain-motion path relies on: wherever the lighter scan ends at a space or
+        /// at the line's end, the full scan gives the same number.
+        #[test]
+        fn scan_before_space_agrees_where_a_space_follows(prefix in "[ XG0-9.]{0,10}", number in "[+-]?[0-9]{0,17}(\\.[0-9]{0,17})?", suffix in "[ .+-X0-9]{0,3}") {
+            let line = format!("{prefix}{number}{suffix}");
+            let at = prefix.len();
+            if let Ok((value, end)) = scan_before_space(line.as_bytes(), at) {
+                if matches!(line.as_bytes().get(end), None | Some(b' ')) {
+                    proptest::prop_assert_eq!(scan_at(line.as_bytes(), at), Ok((value, end)));
+                }
+            }
         }
 
         #[test]
