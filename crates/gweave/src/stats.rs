@@ -99,7 +99,8 @@ pub struct Stats {
 #[derive(Debug, Default)]
 pub struct StatsPass {
     bytes: u64,
-    lines: u64,
+    /// Lines in each region of the file, indexed by `Region as usize`.
+    lines_by_region: [u64; 3],
     extruded_mm: Vec<f64>,
     /// The box of extruding moves so far: empty (min above max) until the first.
     bounds: Bounds,
@@ -108,8 +109,6 @@ pub struct StatsPass {
     travel_mm: f64,
     /// Indexed by `Feature as usize`.
     time_by_feature_s: [f64; ALL_FEATURES.len()],
-    start_lines: u64,
-    end_lines: u64,
     figures: SlicerFigures,
     zero_feed_moves: u64,
     /// Filament diameter given by the user, overriding the file's.
@@ -162,7 +161,7 @@ impl StatsPass {
         let extrusion_bounds = (!self.bounds.is_empty()).then_some(self.bounds);
         Stats {
             bytes: self.bytes,
-            lines: self.lines,
+            lines: self.lines_by_region.iter().sum(),
             slicer: state.structure.slicer,
             layers: state.structure.layer.map_or(0, |l| l + 1),
             z_range_mm: extrusion_bounds.map(|b| [b.min[2], b.max[2]]),
@@ -179,8 +178,8 @@ impl StatsPass {
                 .filter(|(_, t)| *t > 0.0)
                 .map(|(f, t)| (f.name(), t))
                 .collect(),
-            start_lines: self.start_lines,
-            end_lines: self.end_lines,
+            start_lines: self.lines_by_region[Region::Start as usize],
+            end_lines: self.lines_by_region[Region::End as usize],
             slicer_figures: self.figures,
             warnings,
         }
@@ -213,13 +212,8 @@ impl StatsPass {
 impl Pass for StatsPass {
     #[inline(always)]
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
-        self.lines += 1;
         self.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
-        match ctx.state.structure.region {
-            Region::Start => self.start_lines += 1,
-            Region::End => self.end_lines += 1,
-            Region::Print => {}
-        }
+        self.lines_by_region[ctx.state.structure.region as usize] += 1;
         if let Some(c) = ctx.block.comment_text(ctx.line.bytes) {
             if c.len() > 8 {
                 self.read_figures(c);

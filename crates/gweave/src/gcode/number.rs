@@ -80,7 +80,8 @@ fn eight<const TEST_GLUED: bool>(line: &[u8], start: usize) -> Option<(f64, usiz
         return None;
     }
     let first_shift = first_bit & !7;
-    let (digits, frac_digits, end_shift) = if (w >> first_shift) as u8 == b'.' {
+    // Bits the digits take (eight each), digits after the point, and where the number ends.
+    let (digit_bits, frac_digits, end_shift) = if (w >> first_shift) as u8 == b'.' {
         // The next non-digit after the point: clear the point's bit, the lowest one set. None
         // in the window: the number fills it (`17.70252`) if the byte after is no digit.
         let after_point = non_digit & (non_digit - 1);
@@ -94,16 +95,16 @@ fn eight<const TEST_GLUED: bool>(line: &[u8], start: usize) -> Option<(f64, usiz
         // Close the gap of the point: the bytes above it move down one.
         let below = (1u64 << first_shift) - 1;
         t = (t & below) | ((t >> 8) & !below);
-        ((stop_shift - 8) / 8, (stop_shift - first_shift - 8) / 8, stop_shift)
+        (stop_shift - 8, (stop_shift - first_shift) / 8 - 1, stop_shift)
     } else {
-        (first_shift / 8, 0, first_shift)
+        (first_shift, 0, first_shift)
     };
     let end = start + (end_shift / 8) as usize;
-    if digits == 0 || (TEST_GLUED && line.get(end).is_some_and(|&b| is_glued(b))) {
+    if digit_bits == 0 || (TEST_GLUED && line.get(end).is_some_and(|&b| is_glued(b))) {
         return None;
     }
     // Keep the digits, most significant first in byte 0, padded with leading zeros to eight.
-    let mantissa = eight_digits(t << (64 - 8 * digits));
+    let mantissa = eight_digits(t << (64 - digit_bits));
     // At most seven fraction digits here; the mask spares a bounds check.
     Some((mantissa as f64 / POW10[(frac_digits & 7) as usize], end))
 }
