@@ -112,7 +112,12 @@ fn eight<const TEST_GLUED: bool>(line: &[u8], start: usize) -> Option<(f64, usiz
 /// A number whose fraction runs past the first eight bytes (`19.25233`, `123.45678`): the
 /// fraction is read from a second window just past the point and joined to the integer part.
 #[inline(always)]
-fn long_fraction<const TEST_GLUED: bool>(line: &[u8], start: usize, int_digits: u32, t: u64) -> Option<(f64, usize)> {
+fn long_fraction<const TEST_GLUED: bool>(
+    line: &[u8],
+    start: usize,
+    int_digits: u32,
+    t: u64,
+) -> Option<(f64, usize)> {
     let frac_at = start + int_digits as usize + 1;
     let w = window(line, frac_at)?;
     let tf = w ^ (ONES * u64::from(b'0'));
