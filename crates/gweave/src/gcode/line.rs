@@ -127,9 +127,6 @@ pub struct Block {
     /// A `%` tape marker line.
     pub tape_marker: bool,
     pub diagnostics: Vec<Diagnostic>,
-    /// For each letter A..=Z, 1 + the index of its last word (0: absent), so lookups are O(1).
-    /// Six more entries (always 0) let a word's letter index it without a bounds check.
-    by_letter: [u8; 32],
 }
 
 impl Block {
@@ -145,28 +142,20 @@ impl Block {
         self.block_delete = false;
         self.tape_marker = false;
         self.diagnostics.clear();
-        self.by_letter = [0; 32];
     }
 
-    /// Appends a word, keeping the letter index.
+    /// Appends a word.
     #[inline]
     pub(crate) fn push_word(&mut self, word: Word) {
-        // A word's letter is one of A..=Z (the lexer upper-cases it).
-        debug_assert!(word.letter.is_ascii_uppercase());
-        self.by_letter[usize::from(word.letter.wrapping_sub(b'A') & 31)] =
-            u8::try_from(self.words.len() + 1).unwrap_or(0);
         self.words.push(word);
     }
 
     /// The word with this (upper-case) letter, if present. The last one wins, as in firmware.
+    /// A search from the end: lines hold a handful of words, and keeping an index by letter
+    /// cost every word of every line more than the lookups it saved.
     #[inline]
     pub fn word(&self, letter: u8) -> Option<&Word> {
-        match self.by_letter.get(letter.wrapping_sub(b'A') as usize) {
-            Some(&0) if self.words.len() < usize::from(u8::MAX) => None,
-            Some(&i) if i > 0 => self.words.get(usize::from(i) - 1),
-            // Past 254 words the index is full: search.
-            _ => self.words.iter().rev().find(|w| w.letter == letter),
-        }
+        self.words.iter().rev().find(|w| w.letter == letter)
     }
 
     /// The numeric value of a word, if present and numeric.
