@@ -138,7 +138,9 @@ impl<'a> Run<'a> {
     }
 }
 
-/// The loop itself, over any reader (files, in-memory text in tests and Python).
+/// The loop itself, over any reader (files, in-memory text in tests and Python). Generic over
+/// the pass, so that a pass known at the call (`stats`) has its per-line code inlined into the
+/// loop; `&mut dyn Pass` works as well.
 pub fn drive_reader<P: Pass + ?Sized>(
     input: impl Read,
     path: &Path,
