@@ -30,9 +30,7 @@ pub struct Bounds {
 }
 
 impl Bounds {
-    /// The box that holds no point: growing it by one point gives that point.
-    pub const EMPTY: Bounds = Bounds { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3] };
-
+    /// Whether the box holds no point yet ([`Bounds::default`]).
     pub fn is_empty(&self) -> bool {
         self.min[0] > self.max[0]
     }
@@ -50,9 +48,10 @@ impl Bounds {
     }
 }
 
+/// The box that holds no point (min above max): growing it by one point gives that point.
 impl Default for Bounds {
     fn default() -> Self {
-        Bounds::EMPTY
+        Bounds { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3] }
     }
 }
 
@@ -318,10 +317,14 @@ mod tests {
         };
         let blind = run(StateOptions::default());
         assert!(blind.filament.iter().all(|t| t.extruded_mm == 0.0), "{:?}", blind.filament);
+        // Nothing extruded: no box, not the empty box's infinities.
+        assert_eq!((blind.extrusion_bounds, blind.z_range_mm), (None, None));
         let warning = "the file's flavour (mach3) extrudes with A, but it was read with E: read it from a file, not a pipe";
         assert!(blind.warnings.iter().any(|w| w == warning), "{:?}", blind.warnings);
         let seen = run(StateOptions::default().for_flavour(Some("mach3")));
         assert_eq!(seen.filament[0].extruded_mm, 2.0);
+        let bounds = seen.extrusion_bounds.unwrap();
+        assert_eq!((bounds.min, bounds.max), ([0.0; 3], [20.0, 0.0, 0.0]));
         assert!(!seen.warnings.iter().any(|w| w.contains("flavour")), "{:?}", seen.warnings);
     }
 

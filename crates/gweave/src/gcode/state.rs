@@ -246,7 +246,7 @@ pub struct State {
     /// M82 (true) or M83.
     absolute_e: bool,
     /// Bit i: axis i moves relative to the current position, from the two above and the
-    /// firmware's rule ([`State::relative_e`]); kept so a move does not work it out again.
+    /// firmware's rule for E ([`State::set_modes`]); kept so a move does not work it out again.
     relative_axes: u8,
     /// G20 in force.
     pub inches: bool,
@@ -323,13 +323,15 @@ impl State {
     /// E moves relative to the current position on this line.
     #[inline]
     pub fn relative_e(&self) -> bool {
-        !self.absolute_e || (!self.absolute && self.options.firmware != Firmware::RepRapFirmware)
+        self.relative_axes >> E & 1 != 0
     }
 
-    /// Sets G90/G91 and M82/M83.
+    /// Sets G90/G91 and M82/M83, and which axes they make relative: G91 every axis but E; E
+    /// under M83, or under G91 except in RepRapFirmware, where only M82/M83 decide it.
     fn set_modes(&mut self, absolute: bool, absolute_e: bool) {
         (self.absolute, self.absolute_e) = (absolute, absolute_e);
-        self.relative_axes = if absolute { 0 } else { XYZ_ABC_BITS } | u8::from(self.relative_e()) << E;
+        let relative_e = !absolute_e || (!absolute && self.options.firmware != Firmware::RepRapFirmware);
+        self.relative_axes = if absolute { 0 } else { XYZ_ABC_BITS } | u8::from(relative_e) << E;
     }
 
     #[inline]
