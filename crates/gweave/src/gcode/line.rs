@@ -107,6 +107,41 @@ impl Checksum {
     }
 }
 
+/// The numbers of a plain move (`G0`/`G1` with only X, Y, Z, E and F words, each a number), by
+/// letter: what the lexer's fast path read, kept so that the machine state need not go through
+/// the words again for the lines a print is made of. The words are in [`Block::words`] too.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PlainMove {
+    /// Bit i: a word with letter [`PlainMove::LETTERS`]`[i]` was read (the last one wins).
+    /// 0 on every other line, and on a plain `G1` without words.
+    pub present: u8,
+    /// The values by letter; only those whose bit is set mean anything.
+    pub values: [f64; 5],
+}
+
+impl PlainMove {
+    /// The letters, in the order of the machine's axes (X Y Z E), then the feed rate.
+    pub const LETTERS: [u8; 5] = [b'X', b'Y', b'Z', b'E', b'F'];
+
+    /// The index of a plain move's letter in [`PlainMove::LETTERS`]. A table lookup: a `match`
+    /// compiles to a jump through a table, which the processor guesses wrong word after word.
+    #[inline(always)]
+    pub fn index_of(letter: u8) -> Option<usize> {
+        const NONE: u8 = u8::MAX;
+        const INDEX: [u8; 256] = {
+            let mut t = [NONE; 256];
+            let mut i = 0;
+            while i < PlainMove::LETTERS.len() {
+                t[PlainMove::LETTERS[i] as usize] = i as u8;
+                i += 1;
+            }
+            t
+        };
+        let index = INDEX[usize::from(letter)];
+        (index != NONE).then_some(usize::from(index))
+    }
+}
+
 /// A parsed line (a "block" in G-code terms). Reused from line to line so that parsing a file
 /// allocates nothing once the buffers have grown.
 #[derive(Debug, Clone, Default)]
@@ -127,6 +162,9 @@ pub struct Block {
     /// A `%` tape marker line.
     pub tape_marker: bool,
     pub diagnostics: Vec<Diagnostic>,
+    /// The line's words by letter when it is a plain move ([`PlainMove`]); `present` is 0
+    /// otherwise.
+    pub plain: PlainMove,
 }
 
 impl Block {
@@ -142,6 +180,7 @@ impl Block {
         self.block_delete = false;
         self.tape_marker = false;
         self.diagnostics.clear();
+        self.plain.present = 0;
     }
 
     /// Appends a word.

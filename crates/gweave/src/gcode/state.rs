@@ -7,7 +7,7 @@
 
 use super::arc::Arc;
 use super::layers::{Markers, Structure};
-use super::line::{Block, Command, Value, Word};
+use super::line::{Block, Command, PlainMove, Value, Word};
 
 /// Axis indices into a position array.
 pub const X: usize = 0;
@@ -264,6 +264,8 @@ pub struct State {
     options: StateOptions,
     /// For each word letter (a byte), where its word goes on a motion line (from the options).
     slots: [u8; 256],
+    /// The lexer's words by letter ([`PlainMove`]) mean what they say: E extrudes.
+    reads_plain_moves: bool,
     /// What the last line did.
     pub effect: Effect,
 }
@@ -305,6 +307,7 @@ impl State {
                     None => NO_SLOT,
                 }
             }),
+            reads_plain_moves: options.extrusion_letter == b'E',
             options,
             effect: Effect::None,
         }
@@ -539,7 +542,11 @@ impl State {
         // Multiplying by 1 is exact, so one multiply serves both units without a branch.
         let scale = if self.inches { MM_PER_INCH } else { 1.0 };
         let from = self.pos;
-        let (mut moved, feed) = targets(&block.words, &self.slots, scale, self.relative_axes, &mut self.pos);
+        let (mut moved, feed) = if block.plain.present != 0 && self.reads_plain_moves {
+            plain_targets(&block.plain, scale, self.relative_axes, &mut self.pos)
+        } else {
+            targets(&block.words, &self.slots, scale, self.relative_axes, &mut self.pos)
+        };
         if let Some(feed) = feed {
             self.feed_mm_min = feed;
         }
@@ -584,6 +591,8 @@ impl State {
 
 /// Writes the numeric axis words of a motion line into `to` (absolute, or added where bit i of
 /// `relative` is set), in millimetres. Returns whether any axis word was written, and the F word.
+/// A letter given twice counts once, by its last word, as firmware reads a line (Marlin keeps
+/// one value per letter) and as [`Block::get`] answers: `G91` then `G1 X1 X2` moves 2 mm, not 3.
 #[inline(always)]
 fn targets(
     words: &[Word],
@@ -593,19 +602,39 @@ fn targets(
     to: &mut Position,
 ) -> (bool, Option<f64>) {
     let (mut moved, mut feed) = (false, None);
-    for w in words {
+    // Bit i: slot i has had its last word (words are read from the end).
+    let mut seen = 0u8;
+    for w in words.iter().rev() {
+        let slot = slots[usize::from(w.letter)];
+        if slot == NO_SLOT || seen >> slot & 1 != 0 {
+            continue;
+        }
+        seen |= 1 << slot;
         let Value::Number(v) = w.value else { continue };
         let v = v * scale;
-        match usize::from(slots[usize::from(w.letter)]) {
+        match usize::from(slot) {
             FEED_SLOT => feed = Some(v),
-            i if i < AXES => {
+            i => {
                 to[i] = if relative >> i & 1 != 0 { to[i] + v } else { v };
                 moved = true;
             }
-            _ => {}
         }
     }
     (moved, feed)
+}
+
+/// [`targets`] for a plain move, from its words by letter: X Y Z E are the first four axes, in
+/// the same order, and F comes last. No loop over the words: each axis is one test of a bit.
+#[inline(always)]
+fn plain_targets(plain: &PlainMove, scale: f64, relative: u8, to: &mut Position) -> (bool, Option<f64>) {
+    for (i, (to, value)) in to[X..=E].iter_mut().zip(plain.values).enumerate() {
+        if plain.present >> i & 1 != 0 {
+            let v = value * scale;
+            *to = if relative >> i & 1 != 0 { *to + v } else { v };
+        }
+    }
+    let feed = plain.present >> 4 & 1 != 0;
+    (plain.present & 0b1111 != 0, feed.then(|| plain.values[4] * scale))
 }
 
 #[cfg(test)]
@@ -737,6 +766,11 @@ mod tests {
         assert_eq!(s.pos[X], 25.4);
         assert_eq!(s.pos[Y], 10.0);
         assert!((s.pos[Z] - 0.2).abs() < 1e-12);
+        // A letter given twice counts once, by its last word (as firmware reads it), on the
+        // fast path (plain moves) and on the general one (a comment sends the line there).
+        run(&mut s, "G21\nG91\nG1 X1 X2\nG1 Y1 Y2 ; c\nG1 Y1 Y");
+        assert_eq!(s.pos[X], 25.4 + 2.0);
+        assert_eq!(s.pos[Y], 12.0);
     }
 
     #[test]
@@ -754,5 +788,32 @@ mod tests {
         assert_eq!(s.filament_mm, vec![1.0, 0.0]);
         // A bare axis word continues the modal G3; with no centre given it is a straight line.
         assert_eq!(s.pos[X], 5.0);
+    }
+
+    proptest::proptest! {
+        /// A plain move read from its words by letter (the lexer's fast path) does what the
+        /// same line read word by word does, whatever the modes before it (G90/G91, M82/M83,
+        /// G20/G21, firmware) and however its words repeat.
+        #[test]
+        fn plain_moves_by_letter_match_the_words(
+            modes in proptest::collection::vec("(G90|G91|M82|M83|G20|G21|G92 X1 E2)", 0..4),
+            line in "G[01]( [XYZEF]-?[0-9]{1,3}\\.[0-9]{1,3}){0,6}",
+            firmware in 0usize..3,
+        ) {
+            let firmware = [Firmware::Marlin, Firmware::Klipper, Firmware::RepRapFirmware][firmware];
+            let mut by_letter = State::new(StateOptions { firmware, ..StateOptions::default() });
+            run(&mut by_letter, &format!("G1 X3 Y4 Z5 E6 F100\n{}", modes.join("\n")));
+            let mut by_word = by_letter.clone();
+            let mut block = Block::default();
+            parse_into(line.as_bytes(), &mut block);
+            proptest::prop_assert!(block.plain.present != 0 || block.words.is_empty(), "{}", line);
+            let fast = *by_letter.apply(line.as_bytes(), &block);
+            block.plain = PlainMove::default();
+            let slow = *by_word.apply(line.as_bytes(), &block);
+            proptest::prop_assert_eq!(fast, slow);
+            proptest::prop_assert_eq!(by_letter.pos.map(f64::to_bits), by_word.pos.map(f64::to_bits));
+            proptest::prop_assert_eq!(by_letter.feed_mm_min, by_word.feed_mm_min);
+            proptest::prop_assert_eq!(&by_letter.filament_mm, &by_word.filament_mm);
+        }
     }
 }
