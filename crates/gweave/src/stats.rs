@@ -103,6 +103,9 @@ pub struct StatsPass {
     extruded_mm: Vec<f64>,
     /// The box of extruding moves so far: empty (min above max) until the first.
     bounds: Bounds,
+    /// The last move extruded and nothing has set the position since: the next move starts
+    /// where that one ended, a point the box holds already.
+    start_in_bounds: bool,
     tool_changes: u32,
     print_mm: f64,
     travel_mm: f64,
@@ -230,8 +233,13 @@ impl Pass for StatsPass {
                     }
                     self.extruded_mm[tool] += e_mm;
                     self.print_mm += len_mm;
-                    self.bounds.grow([m.from[X], m.from[Y], m.from[Z]]);
+                    // Extrusions come in runs, each starting where the last ended: the start
+                    // is needed only after a travel (a test the processor guesses right).
+                    if !self.start_in_bounds {
+                        self.bounds.grow([m.from[X], m.from[Y], m.from[Z]]);
+                    }
                     self.bounds.grow([m.to[X], m.to[Y], m.to[Z]]);
+                    self.start_in_bounds = true;
                     // An arc bulges past its end points (its Z stays between theirs).
                     if let Path::Arc(arc) = &m.path {
                         let [min, max] = arc.bounds();
@@ -240,6 +248,7 @@ impl Pass for StatsPass {
                     }
                 } else {
                     self.travel_mm += len_mm;
+                    self.start_in_bounds = false;
                 }
                 let dist_mm = if len_mm > 0.0 { len_mm } else { e_mm.abs() };
                 if m.feed_mm_min > 0.0 {
@@ -253,6 +262,8 @@ impl Pass for StatsPass {
             Effect::Dwell { t_s } => {
                 self.time_by_feature_s[ctx.state.structure.feature as usize] += t_s;
             }
+            // The logical position changed without a move.
+            Effect::SetPosition | Effect::Home { .. } => self.start_in_bounds = false,
             _ => {}
         }
         Ok(())

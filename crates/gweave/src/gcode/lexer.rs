@@ -112,6 +112,7 @@ fn plain_motion(raw: &[u8], ahead: &[u8], block: &mut Block) -> bool {
     }
     block.command = Command::Code { letter: b'G', number, sub: None };
     block.command_span = Span::new(0, 2);
+    block.plain.rapid = number == 0;
     true
 }
 

@@ -110,13 +110,31 @@ impl Checksum {
 /// The numbers of a plain move (`G0`/`G1` with only X, Y, Z, E and F words, each a number), by
 /// letter: what the lexer's fast path read, kept so that the machine state need not go through
 /// the words again for the lines a print is made of. The words are in [`Block::words`] too.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Clone, Copy, Default)]
 pub struct PlainMove {
     /// Bit i: a word with letter [`PlainMove::LETTERS`]`[i]` was read (the last one wins).
     /// 0 on every other line, and on a plain `G1` without words.
     pub present: u8,
     /// The values by letter; only those whose bit is set mean anything.
     pub values: [f64; 5],
+    /// `G0` (else `G1`), meaningful when `present` is not 0.
+    pub rapid: bool,
+}
+
+/// Shows the words read, not what earlier lines left in the other fields.
+impl std::fmt::Debug for PlainMove {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut s = f.debug_struct("PlainMove");
+        for (i, letter) in PlainMove::LETTERS.iter().enumerate() {
+            if self.present >> i & 1 != 0 {
+                s.field(&char::from(*letter).to_string(), &self.values[i]);
+            }
+        }
+        if self.present != 0 {
+            s.field("rapid", &self.rapid);
+        }
+        s.finish()
+    }
 }
 
 impl PlainMove {

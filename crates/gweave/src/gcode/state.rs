@@ -360,18 +360,12 @@ impl State {
             return &self.effect;
         }
         self.structure.observe_command(|| !block.is_empty() && block.comment.is_none());
-        match block.command {
-            // The lines a print is made of, apart from the rest so that this part is inlined.
-            Command::Code { letter: b'G', number: number @ 0..=3, sub: None } => {
-                self.motion = match number {
-                    0 => Motion::Rapid,
-                    1 => Motion::Linear,
-                    2 => Motion::ArcCw,
-                    _ => Motion::ArcCcw,
-                };
-                self.motion_words(block)
-            }
-            _ => self.command(block),
+        if block.plain.present != 0 && self.reads_plain_moves {
+            // Most lines of a print: a plain G0/G1, its words sorted by letter by the lexer.
+            self.motion = if block.plain.rapid { Motion::Rapid } else { Motion::Linear };
+            self.motion_words(block);
+        } else {
+            self.command(block);
         }
         if let Effect::Move(m) = &self.effect {
             if m.is_extruding() {
@@ -387,10 +381,20 @@ impl State {
         &self.effect
     }
 
-    /// Every command but the motion commands G0..G3.
+    /// Every line but a plain move: out of line, so that [`State::apply`] stays small enough
+    /// to be inlined into the loops that call it.
     #[inline(never)]
     fn command(&mut self, block: &Block) {
         match block.command {
+            Command::Code { letter: b'G', number: number @ 0..=3, sub: None } => {
+                self.motion = match number {
+                    0 => Motion::Rapid,
+                    1 => Motion::Linear,
+                    2 => Motion::ArcCw,
+                    _ => Motion::ArcCcw,
+                };
+                self.motion_words(block)
+            }
             Command::Code { letter: b'G', number, sub: None } => self.g_code(number, block),
             Command::Code { letter: b'M', number, sub: None } => self.m_code(number, block),
             Command::Code { letter: b'T', number, sub: None } if number < MAX_TOOLS => {
