@@ -306,26 +306,34 @@ mod tests {
 
     /// A mach3-flavour file read as a stream (its flavour unknown until its last line) counts
     /// no filament, and says why; read with its flavour it counts the A moves.
+    use crate::gcode::state::StateOptions;
+
+    fn stats_of(text: &[u8], options: StateOptions) -> Stats {
+        use crate::pass::{drive_reader, Quiet, Strictness};
+        let mut pass = StatsPass::new(None);
+        let path = std::path::Path::new("t.gcode");
+        let state =
+            drive_reader(text, path, options, Strictness::Strict, &mut Quiet, &mut pass, &mut io::sink())
+                .unwrap();
+        pass.into_stats(&state)
+    }
+
+    /// The box holds where every extrusion starts, also when the one before did not end there:
+    /// after a travel, and after G92 moved the logical origin under the nozzle.
+    #[test]
+    fn the_box_holds_every_extrusion_start() {
+        let text = b"M104 S200\nG1 X0 Y0 F600\nG1 X10 E1\nG0 X-20\nG1 X-15 E2\nG92 X-50\nG1 X-45 Y1 E3\nG1 X-44 E4\n";
+        let stats = stats_of(text, StateOptions::default());
+        let bounds = stats.extrusion_bounds.unwrap();
+        assert_eq!((bounds.min, bounds.max), ([-50.0, 0.0, 0.0], [10.0, 1.0, 0.0]));
+        let text = b"M104 S200\nG1 X0 Y0 F600\nG1 X10 E1\nG0 X-20\nG1 X-15 E2\n";
+        assert_eq!(stats_of(text, StateOptions::default()).extrusion_bounds.unwrap().min[0], -20.0);
+    }
+
     #[test]
     fn a_stream_read_with_the_wrong_extrusion_word_is_a_warning() {
-        use crate::gcode::state::StateOptions;
-        use crate::pass::{drive_reader, Quiet, Strictness};
         let text = b"M104 P200\nG1 X10 A1 F600\nG1 X20 A2\n; gcode_flavor = mach3\n";
-        let run = |options: StateOptions| {
-            let mut pass = StatsPass::new(None);
-            let path = std::path::Path::new("t.gcode");
-            let state = drive_reader(
-                &text[..],
-                path,
-                options,
-                Strictness::Strict,
-                &mut Quiet,
-                &mut pass,
-                &mut io::sink(),
-            )
-            .unwrap();
-            pass.into_stats(&state)
-        };
+        let run = |options: StateOptions| stats_of(text, options);
         let blind = run(StateOptions::default());
         assert!(blind.filament.iter().all(|t| t.extruded_mm == 0.0), "{:?}", blind.filament);
         // Nothing extruded: no box, not the empty box's infinities.
