@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 use crate::gcode::diag::Severity;
 use crate::gcode::flavour::read_flavour;
-use crate::gcode::lexer::parse_line;
+use crate::gcode::lexer::{parse_line, parse_line_lean};
 use crate::gcode::line::Block;
 use crate::gcode::reader::{LineReader, RawLine};
 use crate::gcode::state::{Effect, State, StateOptions};
@@ -36,6 +36,13 @@ pub trait Pass {
     /// Called after the last line.
     fn finish(&mut self, _state: &State, _out: &mut dyn Write) -> io::Result<()> {
         Ok(())
+    }
+
+    /// Whether the pass reads [`Block::words`] of plain moves (`G0`/`G1` with only X, Y, Z, E
+    /// and F numbers). `false`: those lines come with their numbers in [`Block::plain`] and no
+    /// words listed ([`parse_line_lean`]), which is faster; the machine state is the same.
+    fn reads_words(&self) -> bool {
+        true
     }
 }
 
@@ -150,35 +157,65 @@ pub fn drive_reader<P: Pass + ?Sized>(
     pass: &mut P,
     out: &mut dyn Write,
 ) -> Result<State> {
-    let mut reader = LineReader::new(input);
-    let mut block = Block::default();
-    let mut state = State::new(options);
-    let write_err = |e: io::Error| Error::io(output_name(path), e);
-    let mut next_report = 0u64;
-    while let Some(line) = reader.next_line().map_err(|e| Error::io(path, e))? {
-        parse_line(&line, &mut block);
-        if strictness == Strictness::Strict {
-            if let Some(d) = block.diagnostics.iter().find(|d| d.finding.severity() == Severity::Error) {
-                return Err(Error::Syntax {
-                    path: path.to_path_buf(),
-                    line: line.number,
-                    column: d.column,
-                    finding: d.finding.clone(),
-                });
+    let lines = Lines { reader: LineReader::new(input), path, strictness, progress };
+    let state = State::new(options);
+    if pass.reads_words() || state.reads_words() {
+        lines.drive::<true, P>(state, pass, out)
+    } else {
+        lines.drive::<false, P>(state, pass, out)
+    }
+}
+
+/// What the loop reads from, and how.
+struct Lines<'a, R> {
+    reader: LineReader<R>,
+    path: &'a Path,
+    strictness: Strictness,
+    progress: &'a mut dyn Progress,
+}
+
+impl<R: Read> Lines<'_, R> {
+    /// Every line through the state and the pass; `LIST_WORDS`: plain moves with their words
+    /// listed ([`Pass::reads_words`]).
+    fn drive<const LIST_WORDS: bool, P: Pass + ?Sized>(
+        mut self,
+        mut state: State,
+        pass: &mut P,
+        out: &mut dyn Write,
+    ) -> Result<State> {
+        let path = self.path;
+        let mut block = Block::default();
+        let write_err = |e: io::Error| Error::io(output_name(path), e);
+        let mut next_report = 0u64;
+        while let Some(line) = self.reader.next_line().map_err(|e| Error::io(path, e))? {
+            if LIST_WORDS {
+                parse_line(&line, &mut block);
+            } else {
+                parse_line_lean(&line, &mut block);
+            }
+            if self.strictness == Strictness::Strict {
+                if let Some(d) = block.diagnostics.iter().find(|d| d.finding.severity() == Severity::Error) {
+                    return Err(Error::Syntax {
+                        path: path.to_path_buf(),
+                        line: line.number,
+                        column: d.column,
+                        finding: d.finding.clone(),
+                    });
+                }
+            }
+            state.apply(line.bytes, &block);
+            let offset = line.offset;
+            pass.line(&Ctx { line, block: &block, effect: &state.effect, state: &state }, out)
+                .map_err(write_err)?;
+            if offset >= next_report {
+                self.progress.advance(offset);
+                next_report = offset + (4 << 20);
             }
         }
-        state.apply(line.bytes, &block);
-        let offset = line.offset;
-        pass.line(&Ctx { line, block: &block, effect: &state.effect, state: &state }, out)
-            .map_err(write_err)?;
-        if offset >= next_report {
-            progress.advance(offset);
-            next_report = offset + (4 << 20);
-        }
+        pass.finish(&state, out).map_err(write_err)?;
+        self.progress.advance(self.reader.position());
+        Ok(state)
     }
-    pass.finish(&state, out).map_err(write_err)?;
-    progress.advance(reader.position());
-    Ok(state)
 }
 
 fn output_name(input: &Path) -> PathBuf {
@@ -207,6 +244,10 @@ pub struct CopyReport {
 }
 
 impl Pass for Identity {
+    fn reads_words(&self) -> bool {
+        false
+    }
+
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
         let r = &mut self.report;
         r.lines += 1;
@@ -266,6 +307,59 @@ mod tests {
         )
         .unwrap_err();
         assert_eq!(err.to_string(), "part.gcode:2:5: malformed number after 'Y'");
+    }
+
+    /// Records what every line did, reading plain moves' words or not.
+    struct Effects {
+        reads_words: bool,
+        seen: Vec<(Effect, Option<u32>, bool)>,
+    }
+
+    impl Pass for Effects {
+        fn reads_words(&self) -> bool {
+            self.reads_words
+        }
+
+        fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+            let unlisted = ctx.block.plain.present != 0 && ctx.block.words.is_empty();
+            self.seen.push((*ctx.effect, ctx.state.structure.layer, unlisted));
+            Ok(())
+        }
+    }
+
+    /// A pass that does not read plain moves' words sees the same effects, line by line, on
+    /// real files of every slicer; the words are missing from exactly the plain moves.
+    #[test]
+    fn leaving_plain_words_unlisted_changes_no_effect() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data");
+        for file in
+            ["prusaslicer/pr_bunny_3tool_rel.gcode", "cura/cura_dual.gcode", "slic3r/slic3r_cone_2tool.gcode"]
+        {
+            let text = std::fs::read(dir.join(file)).unwrap();
+            let run = |reads_words: bool| {
+                let mut pass = Effects { reads_words, seen: Vec::new() };
+                let options = StateOptions::default();
+                drive_reader(
+                    &text[..],
+                    Path::new(file),
+                    options,
+                    Strictness::Lenient,
+                    &mut Quiet,
+                    &mut pass,
+                    &mut io::sink(),
+                )
+                .unwrap();
+                pass.seen
+            };
+            let (listed, lean) = (run(true), run(false));
+            assert!(listed.len() > 1000, "{file}");
+            assert!(listed.iter().all(|s| !s.2), "{file}: a plain move's words were not listed");
+            let plain_moves = lean.iter().filter(|s| s.2).count();
+            assert!(plain_moves > listed.len() / 2, "{file}: {plain_moves} plain moves");
+            let strip =
+                |v: Vec<(Effect, Option<u32>, bool)>| v.into_iter().map(|s| (s.0, s.1)).collect::<Vec<_>>();
+            assert!(strip(listed) == strip(lean), "{file}");
+        }
     }
 
     proptest::proptest! {

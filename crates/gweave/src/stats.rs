@@ -212,6 +212,10 @@ impl StatsPass {
 }
 
 impl Pass for StatsPass {
+    fn reads_words(&self) -> bool {
+        false
+    }
+
     #[inline(always)]
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
         self.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;

@@ -33,22 +33,32 @@ fn skip_space(raw: &[u8], mut i: usize) -> usize {
 
 /// Parses `raw` (one line without its line ending) into `block`, replacing what it held.
 pub fn parse_into(raw: &[u8], block: &mut Block) {
-    parse_ahead(raw, raw, block);
+    parse_ahead::<true>(raw, raw, block);
 }
 
 /// [`parse_into`] for a line from a [`LineReader`](super::reader::LineReader): the bytes it can
 /// read past the line let numbers be loaded eight bytes at a time up to the line's end.
 #[inline]
 pub fn parse_line(line: &RawLine<'_>, block: &mut Block) {
-    parse_ahead(line.bytes, line.with_lookahead(), block);
+    parse_ahead::<true>(line.bytes, line.with_lookahead(), block);
+}
+
+/// [`parse_line`] for a reader that takes a plain move's numbers from [`Block::plain`] alone:
+/// the words of such a line (`G0`/`G1` with X, Y, Z, E and F numbers) are not listed in
+/// [`Block::words`], which saves writing them out, word by word, on most lines of a print.
+/// Every other line is parsed in full.
+#[inline]
+pub fn parse_line_lean(line: &RawLine<'_>, block: &mut Block) {
+    parse_ahead::<false>(line.bytes, line.with_lookahead(), block);
 }
 
 /// Parses `raw`; `ahead` is `raw` followed by any bytes that may be read past it, the first of
-/// which (if any) is not part of a number.
+/// which (if any) is not part of a number. `LIST_WORDS`: a plain move's words are listed in
+/// [`Block::words`] too.
 #[inline(always)]
-fn parse_ahead(raw: &[u8], ahead: &[u8], block: &mut Block) {
+fn parse_ahead<const LIST_WORDS: bool>(raw: &[u8], ahead: &[u8], block: &mut Block) {
     block.clear();
-    if !plain_motion(raw, ahead, block) {
+    if !plain_motion::<LIST_WORDS>(raw, ahead, block) {
         parse_general(raw, block);
     }
 }
@@ -82,7 +92,7 @@ fn parse_general(raw: &[u8], block: &mut Block) {
 /// would; `false` means the line is something else (a comment, a glued or lower-case word, a
 /// malformed number...) and the general lexer reads it from the start.
 #[inline(always)]
-fn plain_motion(raw: &[u8], ahead: &[u8], block: &mut Block) -> bool {
+fn plain_motion<const LIST_WORDS: bool>(raw: &[u8], ahead: &[u8], block: &mut Block) -> bool {
     let number = match raw {
         [b'G', b'0', ..] => 0,
         [b'G', b'1', ..] => 1,
@@ -105,7 +115,9 @@ fn plain_motion(raw: &[u8], ahead: &[u8], block: &mut Block) -> bool {
         // part of one. What follows it is tested as the loop goes on.
         let Ok((value, end)) = scan_before_space(ahead, i + 1) else { return false };
         debug_assert!(end <= raw.len());
-        block.push_word(Word { letter, value: Value::Number(value), span: Span::new(i, end) });
+        if LIST_WORDS {
+            block.push_word(Word { letter, value: Value::Number(value), span: Span::new(i, end) });
+        }
         block.plain.values[index] = value;
         block.plain.present |= 1 << index;
         i = end;
@@ -470,11 +482,11 @@ mod tests {
     fn plain_moves_take_the_fast_path_and_others_do_not() {
         for raw in ["G1 X142.303 Y175.183 E2.43766", "G0  F9000 X1 ", "G1 E-.8 F2100", "G1"] {
             let mut b = Block::default();
-            assert!(plain_motion(raw.as_bytes(), raw.as_bytes(), &mut b), "{raw}");
+            assert!(plain_motion::<true>(raw.as_bytes(), raw.as_bytes(), &mut b), "{raw}");
             assert_eq!(as_general(&b), format!("{:?}", general(raw.as_bytes())), "{raw}");
         }
         for raw in ["G1X1", "G1 x1", "G1 X1 ; c", "G10", "G1 I1", "G1 X1..2", "G1\tX1", " G1 X1", "G1 X"] {
-            assert!(!plain_motion(raw.as_bytes(), raw.as_bytes(), &mut Block::default()), "{raw}");
+            assert!(!plain_motion::<true>(raw.as_bytes(), raw.as_bytes(), &mut Block::default()), "{raw}");
         }
     }
 
@@ -500,7 +512,7 @@ mod tests {
             let raw = motion_line(g, &words);
             let mut fast = Block::default();
             fast.clear();
-            if plain_motion(raw.as_bytes(), raw.as_bytes(), &mut fast) {
+            if plain_motion::<true>(raw.as_bytes(), raw.as_bytes(), &mut fast) {
                 proptest::prop_assert_eq!(as_general(&fast), format!("{:?}", general(raw.as_bytes())));
             }
         }
@@ -533,7 +545,7 @@ mod tests {
         ) {
             let raw = motion_line(g, &words);
             let mut fast = Block::default();
-            proptest::prop_assert!(plain_motion(raw.as_bytes(), raw.as_bytes(), &mut fast), "{}", raw);
+            proptest::prop_assert!(plain_motion::<true>(raw.as_bytes(), raw.as_bytes(), &mut fast), "{}", raw);
             proptest::prop_assert_eq!(fast.words.len(), words.len());
             proptest::prop_assert_eq!(as_general(&fast), format!("{:?}", general(raw.as_bytes())));
         }

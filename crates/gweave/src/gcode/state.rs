@@ -313,6 +313,12 @@ impl State {
         }
     }
 
+    /// Whether plain moves must come with their words listed ([`Block::words`]): they are
+    /// read from [`Block::plain`] only where E is the extrusion word.
+    pub fn reads_words(&self) -> bool {
+        !self.reads_plain_moves
+    }
+
     /// The options the state was made with.
     pub fn options(&self) -> &StateOptions {
         &self.options
