@@ -155,8 +155,9 @@ impl PlainMove {
             }
             t
         };
-        let index = INDEX[usize::from(letter)];
-        (index != NONE).then_some(usize::from(index))
+        // Tested against the length, not `NONE`: the compiler then knows the index fits.
+        let index = usize::from(INDEX[usize::from(letter)]);
+        (index < PlainMove::LETTERS.len()).then_some(index)
     }
 }
 
