@@ -8,7 +8,7 @@ use std::collections::HashMap;
 
 use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
 use gweave::gcode::layers::Structure;
-use gweave::gcode::lexer::{parse_into, parse_line};
+use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
 use gweave::gcode::line::{Block, Command};
 use gweave::gcode::reader::RawLine;
 use gweave::gcode::state::{self, Effect, Firmware, Path, State, StateOptions};
@@ -97,7 +97,13 @@ impl Front {
     #[inline(always)]
     pub(super) fn step(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
         self.line += 1;
-        parse_line(line, &mut self.block);
+        // A plain move's words are read by no one here (only M-codes and extended commands
+        // are, below): leave them unlisted where the state does without them.
+        if self.state.reads_words() {
+            parse_line(line, &mut self.block);
+        } else {
+            parse_line_lean(line, &mut self.block);
+        }
         self.state.apply(line.bytes, &self.block);
         if let Effect::Move(m) = &self.state.effect {
             self.book.motion(&self.state.structure, m, self.line, jobs);
