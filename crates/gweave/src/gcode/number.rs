@@ -50,11 +50,19 @@ pub fn scan_before_space(line: &[u8], at: usize) -> Result<(f64, usize), NumberE
 
 #[inline(always)]
 fn scan_from<const TEST_GLUED: bool>(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
-    let negative = line.get(at) == Some(&b'-');
-    if let Some((value, end)) = eight::<TEST_GLUED>(line, at + usize::from(negative)) {
-        return Ok((if negative { -value } else { value }, end));
+    // The sign is read from the number's own window: most numbers have none, and a negative
+    // one (a retraction) takes a second window, past the sign.
+    let found = match window(line, at) {
+        Some(w) if w as u8 != b'-' => eight::<TEST_GLUED>(line, at, w),
+        Some(_) => window(line, at + 1)
+            .and_then(|w| eight::<TEST_GLUED>(line, at + 1, w))
+            .map(|(value, end)| (-value, end)),
+        None => None,
+    };
+    match found {
+        Some(number) => Ok(number),
+        None => scan_any(&line[at..]).map(|(value, used)| (value, at + used)),
     }
-    scan_any(&line[at..]).map(|(value, used)| (value, at + used))
 }
 
 /// 10^0 ..= 10^7, for joining an integer part to a fraction of up to seven digits.
@@ -63,14 +71,14 @@ const POW10_INT: [u64; 8] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_0
 const ONES: u64 = 0x0101_0101_0101_0101;
 const HIGH_BITS: u64 = 0x8080_8080_8080_8080;
 
-/// Reads `digits? (. digits?)?` with 1 to 7 digits, all within the 8 bytes from `start`, in a
+/// Reads `digits? (. digits?)?` with 1 to 7 digits, all within the 8 bytes from `start` (`w`,
+/// as [`window`] reads them), in a
 /// few register operations instead of a loop per digit (SWAR: SIMD within a register). Most
 /// numbers slicers write fit (`142.303`, `2.43766`, `.04235`, `1800`). Anything else (longer,
 /// glued to a second point or a sign when `TEST_GLUED`, no digits) is `None` and goes through
 /// [`scan_any`].
 #[inline(always)]
-fn eight<const TEST_GLUED: bool>(line: &[u8], start: usize) -> Option<(f64, usize)> {
-    let w = window(line, start)?;
+fn eight<const TEST_GLUED: bool>(line: &[u8], start: usize, w: u64) -> Option<(f64, usize)> {
     // Byte k of `w` is line[start + k]; XOR with '0' maps digits to 0..=9.
     let mut t = w ^ (ONES * u64::from(b'0'));
     let non_digit = non_digits(t);
