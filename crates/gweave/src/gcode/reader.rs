@@ -82,9 +82,36 @@ fn raw_line<'a>(buf: &'a [u8], from: usize, to: usize, number: &mut u64, offset:
     RawLine { bytes: &whole[..content_len], eol: &whole[content_len..], number: *number, offset: at, ahead }
 }
 
+/// Zero bytes the line reader keeps past the data it has read: [`LOOKAHEAD`] for every line,
+/// and as many as the first look for a line's end reads at once ([`newline_in_head`]).
+const PAD: usize = 32;
+
+/// Finds a `\n` in the 32 bytes from `start`, the length of most G-code lines, with two 16-byte
+/// comparisons and no test of where the data ends: the reader's zero padding ([`PAD`]) past its
+/// data holds no `\n`. `None`: no line ends there (a long line, or the data has run out).
+#[inline(always)]
+fn newline_in_head(buf: &[u8], start: usize) -> Option<usize> {
+    let head: &[u8; PAD] = buf.get(start..start + PAD)?.try_into().ok()?;
+    #[cfg(target_arch = "x86_64")]
+    let mask = {
+        use std::arch::x86_64::{_mm_cmpeq_epi8, _mm_loadu_si128, _mm_movemask_epi8, _mm_set1_epi8};
+        // SAFETY: SSE2 is always present on x86-64, and `head` holds the 32 bytes the two
+        // unaligned loads read.
+        unsafe {
+            let nl = _mm_set1_epi8(b'\n' as i8);
+            let low = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(head.as_ptr().cast()), nl));
+            let high = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(head[16..].as_ptr().cast()), nl));
+            (low as u32) | (high as u32) << 16
+        }
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let mask = head.iter().enumerate().fold(0u32, |m, (i, &b)| m | u32::from(b == b'\n') << i);
+    (mask != 0).then(|| mask.trailing_zeros() as usize)
+}
+
 /// Reads lines from `R` without ever holding more than one chunk (1 MiB) plus the longest line.
-/// The buffer keeps [`LOOKAHEAD`] zero bytes past the data read, so that every line has that many
-/// readable bytes after its content.
+/// The buffer keeps [`PAD`] zero bytes past the data read, so that every line has at least
+/// [`LOOKAHEAD`] readable bytes after its content.
 pub struct LineReader<R> {
     inner: R,
     buf: Vec<u8>,
@@ -97,15 +124,7 @@ pub struct LineReader<R> {
 
 impl<R: Read> LineReader<R> {
     pub fn new(inner: R) -> Self {
-        LineReader {
-            inner,
-            buf: vec![0; CHUNK + LOOKAHEAD],
-            start: 0,
-            end: 0,
-            eof: false,
-            number: 0,
-            offset: 0,
-        }
+        LineReader { inner, buf: vec![0; CHUNK + PAD], start: 0, end: 0, eof: false, number: 0, offset: 0 }
     }
 
     /// Bytes handed out so far.
@@ -116,6 +135,41 @@ impl<R: Read> LineReader<R> {
     /// The next line, or `None` at the end of the input.
     #[inline(always)]
     pub fn next_line(&mut self) -> io::Result<Option<RawLine<'_>>> {
+        // Most lines end within the first look. A `\n` found there is before `end` (past it
+        // lie only zeros); the test stays as the guard of that rule.
+        let from = self.start;
+        if let Some(len) = newline_in_head(&self.buf, from) {
+            if from + len < self.end {
+                self.start = from + len + 1;
+                return Ok(Some(self.ended_line(from, len)));
+            }
+        }
+        self.next_line_searching()
+    }
+
+    /// The line from `from` whose `\n` is `len` bytes on.
+    #[inline(always)]
+    fn ended_line(&mut self, from: usize, len: usize) -> RawLine<'_> {
+        // One slice, checked once: every part below is cut from it at offsets the compiler
+        // sees are within it.
+        let line = &self.buf[from..][..len + 1 + LOOKAHEAD];
+        let content = if len > 0 && line[len - 1] == b'\r' { len - 1 } else { len };
+        self.number += 1;
+        let at = self.offset;
+        self.offset += len as u64 + 1;
+        RawLine {
+            bytes: &line[..content],
+            eol: &line[content..len + 1],
+            number: self.number,
+            offset: at,
+            ahead: &line[..content + LOOKAHEAD],
+        }
+    }
+
+    /// [`LineReader::next_line`] for a line the first look did not end: a long one, or one that
+    /// needs more data read.
+    #[inline(never)]
+    fn next_line_searching(&mut self) -> io::Result<Option<RawLine<'_>>> {
         loop {
             if let Some(nl) = find_newline(&self.buf[self.start..self.end]) {
                 let line_start = self.start;
@@ -138,7 +192,7 @@ impl<R: Read> LineReader<R> {
     /// Builds the line for `buf[from..to]` (`to` is past the `\n`, if any) and advances counters.
     #[inline(always)]
     fn emit(&mut self, from: usize, to: usize) -> RawLine<'_> {
-        // `to <= end`, and the buffer holds LOOKAHEAD bytes past `end`.
+        // `to <= end`, and the buffer holds PAD >= LOOKAHEAD bytes past `end`.
         raw_line(&self.buf, from, to, &mut self.number, &mut self.offset)
     }
 
@@ -149,12 +203,12 @@ impl<R: Read> LineReader<R> {
             self.buf.copy_within(self.start..self.end, 0);
             self.end -= self.start;
             self.start = 0;
-            self.buf[self.end..self.end + LOOKAHEAD].fill(0);
+            self.buf[self.end..self.end + PAD].fill(0);
         }
-        if self.end + LOOKAHEAD == self.buf.len() {
-            self.buf.resize((self.buf.len() - LOOKAHEAD) * 2 + LOOKAHEAD, 0);
+        if self.end + PAD == self.buf.len() {
+            self.buf.resize((self.buf.len() - PAD) * 2 + PAD, 0);
         }
-        let room = self.buf.len() - LOOKAHEAD;
+        let room = self.buf.len() - PAD;
         loop {
             match self.inner.read(&mut self.buf[self.end..room]) {
                 Ok(0) => {
@@ -163,8 +217,9 @@ impl<R: Read> LineReader<R> {
                 }
                 Ok(n) => {
                     self.end += n;
-                    // What an earlier read left past the new end must not read as a number.
-                    self.buf[self.end..self.end + LOOKAHEAD].fill(0);
+                    // What an earlier read left past the new end must not read as a number
+                    // or a line's end.
+                    self.buf[self.end..self.end + PAD].fill(0);
                     return Ok(());
                 }
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
@@ -356,6 +411,36 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// The line reader gives every line with its ending as written, numbered and placed,
+        /// however the input arrives: lines short enough for its first look for the end and
+        /// longer ones, ends falling at the edge of what has been read so far.
+        #[test]
+        fn lines_come_whole_in_any_pieces(
+            lines in proptest::collection::vec(("[ -~]{0,70}", 0..3u8), 0..60),
+            last_eol in proptest::bool::ANY,
+            step in 1usize..80,
+        ) {
+            let mut input = Vec::new();
+            let mut want = Vec::new();
+            for (i, (text, eol)) in lines.iter().enumerate() {
+                let eol: &[u8] = if i + 1 < lines.len() || last_eol { [&b"\n"[..], b"\r\n", b"\r\r\n"][*eol as usize] } else { b"" };
+                // The line's content keeps a `\r` that is not right before its `\n`.
+                let (content, ending) = match eol { b"\r\r\n" => ([text.as_bytes(), b"\r"].concat(), &b"\r\n"[..]), e => (text.as_bytes().to_vec(), e) };
+                if !(content.is_empty() && ending.is_empty()) {
+                    want.push((content, ending.to_vec(), want.len() as u64 + 1, input.len() as u64));
+                }
+                input.extend_from_slice(text.as_bytes());
+                input.extend_from_slice(eol);
+            }
+            let mut got = Vec::new();
+            let mut r = LineReader::new(Trickle(&input, step));
+            while let Some(l) = r.next_line().unwrap() {
+                proptest::prop_assert!(l.with_lookahead().len() >= l.bytes.len() + LOOKAHEAD);
+                got.push((l.bytes.to_vec(), l.eol.to_vec(), l.number, l.offset));
+            }
+            proptest::prop_assert_eq!(got, want);
+        }
+
         /// Chunks give the lines, numbers and offsets of the line reader, each with its
         /// look-ahead bytes, for any input read in any pieces.
         #[test]
