@@ -110,7 +110,7 @@ fn newline_in_head(buf: &[u8], start: usize) -> Option<usize> {
 }
 
 /// Reads lines from `R` without ever holding more than one chunk (1 MiB) plus the longest line.
-/// The buffer keeps [`PAD`] zero bytes past the data read, so that every line has at least
+/// The buffer keeps 32 zero bytes past the data read (`PAD`), so that every line has at least
 /// [`LOOKAHEAD`] readable bytes after its content.
 pub struct LineReader<R> {
     inner: R,
