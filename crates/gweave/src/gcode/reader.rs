@@ -410,6 +410,19 @@ mod tests {
         }
     }
 
+    /// Each line's text and ending: `\n`, `\r\n` or `\r\r\n` by its number, none after the last
+    /// one unless `last_eol`.
+    fn joined(lines: &[(String, u8)], last_eol: bool) -> impl Iterator<Item = (&[u8], &'static [u8])> {
+        lines.iter().enumerate().map(move |(i, (text, eol))| {
+            let ending: &'static [u8] = if i + 1 < lines.len() || last_eol {
+                [&b"\n"[..], b"\r\n", b"\r\r\n"][*eol as usize]
+            } else {
+                b""
+            };
+            (text.as_bytes(), ending)
+        })
+    }
+
     proptest::proptest! {
         /// The line reader gives every line with its ending as written, numbered and placed,
         /// however the input arrives: lines short enough for its first look for the end and
@@ -420,16 +433,14 @@ mod tests {
             last_eol in proptest::bool::ANY,
             step in 1usize..80,
         ) {
-            let mut input = Vec::new();
-            let mut want = Vec::new();
-            for (i, (text, eol)) in lines.iter().enumerate() {
-                let eol: &[u8] = if i + 1 < lines.len() || last_eol { [&b"\n"[..], b"\r\n", b"\r\r\n"][*eol as usize] } else { b"" };
+            let (mut input, mut want) = (Vec::new(), Vec::new());
+            for (text, eol) in joined(&lines, last_eol) {
                 // The line's content keeps a `\r` that is not right before its `\n`.
-                let (content, ending) = match eol { b"\r\r\n" => ([text.as_bytes(), b"\r"].concat(), &b"\r\n"[..]), e => (text.as_bytes().to_vec(), e) };
+                let (content, ending) = match eol { b"\r\r\n" => ([text, b"\r"].concat(), &b"\r\n"[..]), e => (text.to_vec(), e) };
                 if !(content.is_empty() && ending.is_empty()) {
                     want.push((content, ending.to_vec(), want.len() as u64 + 1, input.len() as u64));
                 }
-                input.extend_from_slice(text.as_bytes());
+                input.extend_from_slice(text);
                 input.extend_from_slice(eol);
             }
             let mut got = Vec::new();
@@ -449,13 +460,7 @@ mod tests {
             last_eol in proptest::bool::ANY,
             step in 1usize..50,
         ) {
-            let mut input = Vec::new();
-            for (i, (text, eol)) in lines.iter().enumerate() {
-                input.extend_from_slice(text.as_bytes());
-                if i + 1 < lines.len() || last_eol {
-                    input.extend_from_slice([&b"\n"[..], b"\r\n", b"\r\r\n"][*eol as usize]);
-                }
-            }
+            let input: Vec<u8> = joined(&lines, last_eol).flat_map(|(text, eol)| [text, eol].concat()).collect();
             let mut want = Vec::new();
             let mut r = LineReader::new(&input[..]);
             while let Some(l) = r.next_line().unwrap() {
