@@ -34,31 +34,39 @@ pub const LOOKAHEAD: usize = 8;
 
 const CHUNK: usize = 1 << 20;
 
-/// Finds the `\n` that ends a line. G-code lines are a few dozen bytes, so the generic
-/// `memchr` (a call, a dispatch and an alignment prologue before its 64-byte loop) costs more
-/// than the search: on x86-64 the first 256 bytes are tested 16 at a time inline, with SSE2
-/// (part of the architecture), and only longer lines go to `memchr`.
+/// Bit i set where byte i of the 16 is a `\n`: one comparison of all 16 with SSE2 (part of the
+/// x86-64 architecture), a loop elsewhere.
 #[inline(always)]
-fn find_newline(haystack: &[u8]) -> Option<usize> {
-    #[allow(unused_mut)]
-    let mut i = 0;
+fn newlines16(chunk: &[u8; 16]) -> u32 {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_cmpeq_epi8, _mm_loadu_si128, _mm_movemask_epi8, _mm_set1_epi8};
-        while let Some(chunk) = haystack.get(i..i + 16) {
-            // SAFETY: SSE2 is always present on x86-64, and `chunk` holds the 16 bytes the
-            // unaligned load reads.
-            let mask = unsafe {
-                let bytes = _mm_loadu_si128(chunk.as_ptr().cast());
-                _mm_movemask_epi8(_mm_cmpeq_epi8(bytes, _mm_set1_epi8(b'\n' as i8)))
-            };
-            if mask != 0 {
-                return Some(i + mask.trailing_zeros() as usize);
-            }
-            i += 16;
-            if i == 256 {
-                break;
-            }
+        // SAFETY: SSE2 is always present on x86-64, and `chunk` holds the 16 bytes the
+        // unaligned load reads.
+        unsafe {
+            let bytes = _mm_loadu_si128(chunk.as_ptr().cast());
+            _mm_movemask_epi8(_mm_cmpeq_epi8(bytes, _mm_set1_epi8(b'\n' as i8))) as u32
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    chunk.iter().enumerate().fold(0, |m, (i, &b)| m | u32::from(b == b'\n') << i)
+}
+
+/// Finds the `\n` that ends a line. G-code lines are a few dozen bytes, so the generic
+/// `memchr` (a call, a dispatch and an alignment prologue before its 64-byte loop) costs more
+/// than the search: the first 256 bytes are tested 16 at a time inline, and only longer lines
+/// go to `memchr`.
+#[inline(always)]
+fn find_newline(haystack: &[u8]) -> Option<usize> {
+    let mut i = 0;
+    while let Some(chunk) = haystack.get(i..i + 16) {
+        let mask = newlines16(chunk.try_into().expect("16 bytes"));
+        if mask != 0 {
+            return Some(i + mask.trailing_zeros() as usize);
+        }
+        i += 16;
+        if i == 256 {
+            break;
         }
     }
     memchr::memchr(b'\n', &haystack[i..]).map(|at| i + at)
@@ -86,26 +94,14 @@ fn raw_line<'a>(buf: &'a [u8], from: usize, to: usize, number: &mut u64, offset:
 /// and as many as the first look for a line's end reads at once ([`newline_in_head`]).
 const PAD: usize = 32;
 
-/// Finds a `\n` in the 32 bytes from `start`, the length of most G-code lines, with two 16-byte
-/// comparisons and no test of where the data ends: the reader's zero padding ([`PAD`]) past its
+/// Finds a `\n` in the 32 bytes from `start`, the length of most G-code lines, with two
+/// [`newlines16`] and no test of where the data ends: the reader's zero padding ([`PAD`]) past its
 /// data holds no `\n`. `None`: no line ends there (a long line, or the data has run out).
 #[inline(always)]
 fn newline_in_head(buf: &[u8], start: usize) -> Option<usize> {
     let head: &[u8; PAD] = buf.get(start..start + PAD)?.try_into().ok()?;
-    #[cfg(target_arch = "x86_64")]
-    let mask = {
-        use std::arch::x86_64::{_mm_cmpeq_epi8, _mm_loadu_si128, _mm_movemask_epi8, _mm_set1_epi8};
-        // SAFETY: SSE2 is always present on x86-64, and `head` holds the 32 bytes the two
-        // unaligned loads read.
-        unsafe {
-            let nl = _mm_set1_epi8(b'\n' as i8);
-            let low = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(head.as_ptr().cast()), nl));
-            let high = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(head[16..].as_ptr().cast()), nl));
-            (low as u32) | (high as u32) << 16
-        }
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let mask = head.iter().enumerate().fold(0u32, |m, (i, &b)| m | u32::from(b == b'\n') << i);
+    let (low, high) = head.split_at(16);
+    let mask = newlines16(low.try_into().ok()?) | newlines16(high.try_into().ok()?) << 16;
     (mask != 0).then(|| mask.trailing_zeros() as usize)
 }
 

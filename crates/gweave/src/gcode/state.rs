@@ -366,9 +366,9 @@ impl State {
             return &self.effect;
         }
         self.structure.observe_command(|| !block.is_empty() && block.comment.is_none());
-        if block.plain.present != 0 && self.reads_plain_moves {
+        if let Some(plain) = self.plain_move(block) {
             // Most lines of a print: a plain G0/G1, its words sorted by letter by the lexer.
-            self.motion = if block.plain.rapid { Motion::Rapid } else { Motion::Linear };
+            self.motion = if plain.rapid { Motion::Rapid } else { Motion::Linear };
             self.motion_words(block);
         } else {
             self.command(block);
@@ -385,6 +385,13 @@ impl State {
             }
         }
         &self.effect
+    }
+
+    /// The line's words by letter, if it is a plain move read that way ([`PlainMove`]) and they
+    /// mean what they say here (E extrudes).
+    #[inline(always)]
+    fn plain_move<'b>(&self, block: &'b Block) -> Option<&'b PlainMove> {
+        (block.plain.present != 0 && self.reads_plain_moves).then_some(&block.plain)
     }
 
     /// Every line but a plain move: out of line, so that [`State::apply`] stays small enough
@@ -552,10 +559,9 @@ impl State {
         // Multiplying by 1 is exact, so one multiply serves both units without a branch.
         let scale = if self.inches { MM_PER_INCH } else { 1.0 };
         let from = self.pos;
-        let (mut moved, feed) = if block.plain.present != 0 && self.reads_plain_moves {
-            plain_targets(&block.plain, scale, self.relative_axes, &mut self.pos)
-        } else {
-            targets(&block.words, &self.slots, scale, self.relative_axes, &mut self.pos)
+        let (mut moved, feed) = match self.plain_move(block) {
+            Some(plain) => plain_targets(plain, scale, self.relative_axes, &mut self.pos),
+            None => targets(&block.words, &self.slots, scale, self.relative_axes, &mut self.pos),
         };
         if let Some(feed) = feed {
             self.feed_mm_min = feed;
