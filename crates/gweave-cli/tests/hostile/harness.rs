@@ -1,0 +1,230 @@
+//! Runs the `gweave` binary as a user would, with a wall-clock limit, and measures its peak
+//! memory (the child's maximum resident set, from `wait4`).
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::thread;
+use std::time::{Duration, Instant};
+
+/// What one run did.
+#[derive(Debug)]
+pub struct Outcome {
+    /// Exit code; `None` when a signal ended the process (see `signal`).
+    pub code: Option<i32>,
+    pub signal: Option<i32>,
+    pub stdout: Vec<u8>,
+    pub stderr: String,
+    /// Peak resident memory of the process, in MiB.
+    pub peak_mib: f64,
+    pub elapsed: Duration,
+}
+
+impl Outcome {
+    /// The run ended by itself, without a panic, an abort or a signal, within its time limit.
+    #[track_caller]
+    pub fn assert_sound(&self) -> &Self {
+        assert!(self.signal.is_none(), "ended by signal {:?}; stderr: {}", self.signal, self.stderr);
+        assert_ne!(self.code, Some(101), "panicked: {}", self.stderr);
+        assert!(!self.stderr.contains("panicked"), "panicked: {}", self.stderr);
+        self
+    }
+
+    /// Sound, and refused with exit code 1 and a message containing `needle`.
+    #[track_caller]
+    pub fn assert_refused(&self, needle: &str) -> &Self {
+        self.assert_sound();
+        assert_eq!(self.code, Some(1), "expected a refusal; stderr: {}", self.stderr);
+        assert!(self.stderr.contains(needle), "expected {needle:?} in the error; stderr: {}", self.stderr);
+        self
+    }
+
+    /// Sound and successful.
+    #[track_caller]
+    pub fn assert_ok(&self) -> &Self {
+        self.assert_sound();
+        assert_eq!(self.code, Some(0), "expected success; stderr: {}", self.stderr);
+        self
+    }
+
+    /// Peak memory under `mib`.
+    #[track_caller]
+    pub fn assert_peak_under(&self, mib: f64) -> &Self {
+        assert!(self.peak_mib < mib, "peak memory {:.1} MiB, limit {mib} MiB", self.peak_mib);
+        self
+    }
+
+    pub fn stdout_text(&self) -> String {
+        String::from_utf8_lossy(&self.stdout).into_owned()
+    }
+}
+
+/// A run of `gweave` with arguments, in a working directory, with a time limit.
+pub struct Run {
+    cmd: Command,
+    limit: Duration,
+    stdin: Option<PathBuf>,
+    stdout: Option<PathBuf>,
+}
+
+/// `gweave ARGS...` run in `dir`, limited to 60 s unless told otherwise.
+pub fn gweave<S: AsRef<std::ffi::OsStr>>(dir: &Path, args: &[S]) -> Run {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_gweave"));
+    cmd.args(args).current_dir(dir).env_remove("COLUMNS");
+    Run { cmd, limit: Duration::from_secs(60), stdin: None, stdout: None }
+}
+
+impl Run {
+    pub fn limit(mut self, limit: Duration) -> Self {
+        self.limit = limit;
+        self
+    }
+
+    /// Standard input read from this file (default: none, `/dev/null`).
+    pub fn stdin_file(mut self, path: &Path) -> Self {
+        self.stdin = Some(path.to_path_buf());
+        self
+    }
+
+    /// Standard output written to this file (default: captured), e.g. `/dev/full`.
+    pub fn stdout_file(mut self, path: &Path) -> Self {
+        self.stdout = Some(path.to_path_buf());
+        self
+    }
+
+    pub fn spawn(mut self) -> Running {
+        match &self.stdin {
+            Some(path) => self.cmd.stdin(fs::File::open(path).expect("stdin file")),
+            None => self.cmd.stdin(Stdio::null()),
+        };
+        match &self.stdout {
+            Some(path) => {
+                self.cmd.stdout(fs::OpenOptions::new().write(true).open(path).expect("stdout file"))
+            }
+            None => self.cmd.stdout(Stdio::piped()),
+        };
+        let mut child = self.cmd.stderr(Stdio::piped()).spawn().expect("gweave runs");
+        let stdout = drain(child.stdout.take());
+        let stderr = drain(child.stderr.take());
+        Running { child, started: Instant::now(), limit: self.limit, stdout, stderr }
+    }
+
+    /// Runs to the end (or the time limit, which fails the test as a hang).
+    #[track_caller]
+    pub fn run(self) -> Outcome {
+        self.spawn().wait()
+    }
+}
+
+/// A started run, for tests that signal it part-way.
+pub struct Running {
+    child: Child,
+    started: Instant,
+    limit: Duration,
+    stdout: thread::JoinHandle<Vec<u8>>,
+    stderr: thread::JoinHandle<Vec<u8>>,
+}
+
+fn drain<R: Read + Send + 'static>(pipe: Option<R>) -> thread::JoinHandle<Vec<u8>> {
+    thread::spawn(move || {
+        let mut bytes = Vec::new();
+        if let Some(mut pipe) = pipe {
+            let _ = pipe.read_to_end(&mut bytes);
+        }
+        bytes
+    })
+}
+
+impl Running {
+    pub fn pid(&self) -> i32 {
+        self.child.id() as i32
+    }
+
+    /// Sends `signal` to the process.
+    pub fn signal(&self, signal: i32) {
+        // SAFETY: kill(2) on our own child's pid; no memory is touched.
+        unsafe {
+            libc::kill(self.pid(), signal);
+        }
+    }
+
+    #[track_caller]
+    pub fn wait(self) -> Outcome {
+        let pid = self.pid();
+        loop {
+            let mut status = 0;
+            // SAFETY: an all-zero rusage is a valid value for wait4 to fill.
+            let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+            // SAFETY: wait4 on our own child with valid pointers to locals.
+            let done = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
+            if done == pid {
+                let elapsed = self.started.elapsed();
+                let stdout = self.stdout.join().unwrap_or_default();
+                let stderr = String::from_utf8_lossy(&self.stderr.join().unwrap_or_default()).into_owned();
+                let (code, signal) = if libc::WIFEXITED(status) {
+                    (Some(libc::WEXITSTATUS(status)), None)
+                } else {
+                    (None, Some(libc::WTERMSIG(status)))
+                };
+                // Linux reports ru_maxrss in KiB.
+                let peak_mib = usage.ru_maxrss as f64 / 1024.0;
+                return Outcome { code, signal, stdout, stderr, peak_mib, elapsed };
+            }
+            if self.started.elapsed() > self.limit {
+                // SAFETY: as in `signal`.
+                unsafe {
+                    libc::kill(pid, libc::SIGKILL);
+                    libc::waitpid(pid, &mut status, 0);
+                }
+                panic!("hang: still running after {:?}", self.limit);
+            }
+            thread::sleep(Duration::from_millis(5));
+        }
+    }
+}
+
+/// Every file below `dir` with its bytes' length and a hash, to prove inputs unchanged.
+pub fn snapshot(dir: &Path) -> BTreeMap<PathBuf, (u64, u64)> {
+    use std::hash::{Hash, Hasher};
+    let mut files = BTreeMap::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for entry in fs::read_dir(&d).expect("readable dir").flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                todo.push(path);
+            } else if let Ok(bytes) = fs::read(&path) {
+                let mut h = std::collections::hash_map::DefaultHasher::new();
+                bytes.hash(&mut h);
+                files.insert(path, (bytes.len() as u64, h.finish()));
+            }
+        }
+    }
+    files
+}
+
+/// No temporary file of gweave's is left below `dir`.
+#[track_caller]
+pub fn assert_no_temp_left(dir: &Path) {
+    let left: Vec<_> = snapshot(dir).into_keys().filter(|p| is_temp(p)).collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
+}
+
+fn is_temp(path: &Path) -> bool {
+    path.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with(".gweave-"))
+}
+
+/// A fresh directory holding a copy of a real fixture under `name`.
+pub fn dir_with_fixture(fixture: &str, name: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join(name);
+    fs::copy(fixture_path(fixture), &path).expect("fixture copies");
+    (dir, path)
+}
+
+/// A real slicer file from `tests/data` (e.g. `cura/cura_torus.gcode`).
+pub fn fixture_path(fixture: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(fixture)
+}

@@ -1,0 +1,13 @@
+//! The hostile-input suite: every command run on generated hostile input (long lines, NUL runs,
+//! CR-only files, huge numbers and arcs, output paths that name inputs, signals, a full disk)
+//! under a time and memory limit. Each case asserts what a user must be able to rely on: no
+//! panic, no hang, bounded memory, no input changed, no temporary file left, and the values
+//! the command should give. Inputs are generated here, never checked in.
+//!
+//! One module per finding area; `harness` runs the binary and measures it.
+
+// Helpers the area modules use as they need them.
+#[allow(dead_code)]
+mod harness;
+
+mod outputs;
