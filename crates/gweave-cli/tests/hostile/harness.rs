@@ -20,12 +20,15 @@ pub struct Outcome {
     /// Peak resident memory of the process, in MiB.
     pub peak_mib: f64,
     pub elapsed: Duration,
+    /// Killed at the time limit.
+    pub hung: bool,
 }
 
 impl Outcome {
     /// The run ended by itself, without a panic, an abort or a signal, within its time limit.
     #[track_caller]
     pub fn assert_sound(&self) -> &Self {
+        assert!(!self.hung, "hang: still running after {:?}", self.elapsed);
         assert!(self.signal.is_none(), "ended by signal {:?}; stderr: {}", self.signal, self.stderr);
         assert_ne!(self.code, Some(101), "panicked: {}", self.stderr);
         assert!(!self.stderr.contains("panicked"), "panicked: {}", self.stderr);
@@ -111,7 +114,7 @@ impl Run {
         Running { child, started: Instant::now(), limit: self.limit, stdout, stderr }
     }
 
-    /// Runs to the end (or the time limit, which fails the test as a hang).
+    /// Runs to the end, or to the time limit (then killed, and `hung`).
     #[track_caller]
     pub fn run(self) -> Outcome {
         self.spawn().wait()
@@ -150,9 +153,10 @@ impl Running {
         }
     }
 
-    #[track_caller]
+    /// Waits for the end, killing the process at the time limit (then `hung`).
     pub fn wait(self) -> Outcome {
         let pid = self.pid();
+        let mut hung = false;
         loop {
             let mut status = 0;
             // SAFETY: an all-zero rusage is a valid value for wait4 to fill.
@@ -170,15 +174,11 @@ impl Running {
                 };
                 // Linux reports ru_maxrss in KiB.
                 let peak_mib = usage.ru_maxrss as f64 / 1024.0;
-                return Outcome { code, signal, stdout, stderr, peak_mib, elapsed };
+                return Outcome { code, signal, stdout, stderr, peak_mib, elapsed, hung };
             }
-            if self.started.elapsed() > self.limit {
-                // SAFETY: as in `signal`.
-                unsafe {
-                    libc::kill(pid, libc::SIGKILL);
-                    libc::waitpid(pid, &mut status, 0);
-                }
-                panic!("hang: still running after {:?}", self.limit);
+            if !hung && self.started.elapsed() > self.limit {
+                hung = true;
+                self.signal(libc::SIGKILL);
             }
             thread::sleep(Duration::from_millis(5));
         }
