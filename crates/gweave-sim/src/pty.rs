@@ -21,7 +21,7 @@ use nix::poll::PollFlags;
 use nix::pty::{grantpt, posix_openpt, ptsname_r, unlockpt, PtyMaster};
 use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
 
-use crate::transport::{wait_readable, write_all_fd, Endpoint, Event, TransportError};
+use crate::transport::{wait_readable, write_all_nonblocking, Endpoint, Event, TransportError};
 
 /// A pty with a symlink to its slave side.
 pub struct PtyEndpoint {
@@ -112,7 +112,7 @@ impl Endpoint for PtyEndpoint {
     }
 
     fn send(&mut self, bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
-        write_all_fd(&self.master, bytes, stop)
+        write_all_nonblocking(&self.master, bytes, stop)
     }
 
     fn hang_up(&mut self) {

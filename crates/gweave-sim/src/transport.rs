@@ -263,24 +263,33 @@ impl LineLog {
     }
 }
 
-/// Writes all of `bytes` to a non-blocking descriptor, waiting for room in ticks and giving up
-/// with `Interrupted` when `stop` is raised.
-pub(crate) fn write_all_fd(fd: impl AsFd, mut bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
+/// Writes all of `bytes` to a non-blocking writer, waiting for room in ticks and giving up with
+/// `Interrupted` when `stop` is raised. A hang-up while waiting (`POLLHUP`/`POLLERR`: a pty host
+/// that closed with replies unread, a reset socket) is `BrokenPipe` at once: such a descriptor
+/// never becomes writable, and polling it again would return at once, for ever (a busy loop).
+/// Sockets must be written through `TcpStream` (which sends with `MSG_NOSIGNAL`), not `write(2)`:
+/// the CLI restores the default SIGPIPE action, which would kill the server on a reset peer.
+pub(crate) fn write_all_nonblocking<W: Write + AsFd>(mut w: W, mut bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
     while !bytes.is_empty() {
-        match nix::unistd::write(&fd, bytes) {
+        match w.write(bytes) {
+            Ok(0) => return Err(io::Error::from(io::ErrorKind::WriteZero)),
             Ok(n) => bytes = &bytes[n..],
-            Err(Errno::EAGAIN) => {
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
                 if stop.load(Ordering::Relaxed) {
                     return Err(io::Error::from(io::ErrorKind::Interrupted));
                 }
-                let mut fds = [PollFd::new(fd.as_fd(), PollFlags::POLLOUT)];
+                let mut fds = [PollFd::new(w.as_fd(), PollFlags::POLLOUT)];
                 match poll(&mut fds, tick_ms()) {
                     Ok(_) | Err(Errno::EINTR) => {}
                     Err(e) => return Err(e.into()),
                 }
+                let gone = PollFlags::POLLHUP | PollFlags::POLLERR;
+                if fds[0].revents().is_some_and(|r| r.intersects(gone)) {
+                    return Err(io::Error::from(io::ErrorKind::BrokenPipe));
+                }
             }
-            Err(Errno::EINTR) => {}
-            Err(e) => return Err(e.into()),
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
         }
     }
     Ok(())
