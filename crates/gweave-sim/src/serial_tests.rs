@@ -245,6 +245,22 @@ fn overlong_lines_are_refused() {
 }
 
 #[test]
+fn a_20_mb_line_is_refused_without_being_buffered() {
+    let mut p = session(ProtocolConfig::default());
+    let chunk = vec![b'G'; 1 << 20];
+    let mut log = Log::new();
+    for _ in 0..20 {
+        p.feed(&chunk, &mut |t, l| log.push((t, l.to_string())));
+    }
+    // Nothing is answered before the line ends, and the line buffer never grew past Marlin's.
+    assert!(log.is_empty());
+    assert!(p.line.capacity() <= MAX_LINE_BYTES, "{}", p.line.capacity());
+    let log = send(&mut p, "\nM105\n");
+    assert_eq!(texts(&log), ["Error:Line too long, Last Line: 0", "ok", "ok T:20.00 /0.00"]);
+    assert_eq!(p.device().ran, ["M105"]);
+}
+
+#[test]
 fn busy_every_two_simulated_seconds() {
     let mut p = session(ProtocolConfig::default());
     let log = send(&mut p, "G4 S5\n");

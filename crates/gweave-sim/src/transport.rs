@@ -238,10 +238,19 @@ impl<'a, 's> Output<'a, 's> {
     }
 }
 
+/// The most bytes of one received line the log keeps: a line longer than that (a host gone wrong
+/// can send megabytes without a newline) is logged as its first bytes and its length, so the log
+/// and the server's memory stay small whatever the host sends. Marlin keeps 95 bytes of a line,
+/// so any line a host means seriously is logged whole.
+pub const LOG_LINE_BYTES: usize = 256;
+
 /// Splits received bytes into lines for the log.
 #[derive(Default)]
 struct LineLog {
-    partial: Vec<u8>,
+    /// The line's first bytes, at most [`LOG_LINE_BYTES`].
+    head: Vec<u8>,
+    /// The line's whole length so far.
+    len: u64,
 }
 
 impl LineLog {
@@ -251,13 +260,21 @@ impl LineLog {
         }
         for &b in bytes {
             if b == b'\n' || b == b'\r' {
-                if !self.partial.is_empty() {
-                    let text = String::from_utf8_lossy(&self.partial).into_owned();
-                    out.write_log(&format!("{t_s:>12.3} > {text}"));
-                    self.partial.clear();
+                if self.len > 0 {
+                    let text = String::from_utf8_lossy(&self.head);
+                    if self.len > LOG_LINE_BYTES as u64 {
+                        out.write_log(&format!("{t_s:>12.3} > {text}... ({} bytes, cut at {LOG_LINE_BYTES})", self.len));
+                    } else {
+                        out.write_log(&format!("{t_s:>12.3} > {text}"));
+                    }
+                    self.head.clear();
+                    self.len = 0;
                 }
             } else {
-                self.partial.push(b);
+                if self.head.len() < LOG_LINE_BYTES {
+                    self.head.push(b);
+                }
+                self.len += 1;
             }
         }
     }
@@ -308,6 +325,30 @@ pub(crate) fn wait_readable(fd: impl AsFd, timeout: Duration) -> io::Result<Poll
 
 fn tick_ms() -> u16 {
     u16::try_from(TICK.as_millis()).unwrap_or(u16::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_a_150_mb_line_is_cut_to_its_head_and_length() {
+        let stop = AtomicBool::new(false);
+        let mut log = Vec::new();
+        let mut out = Output::new(false, Some(&mut log), &stop);
+        let mut lines = LineLog::default();
+        let chunk = vec![b'G'; 1 << 20];
+        for _ in 0..150 {
+            lines.push(&chunk, 1.5, &mut out);
+        }
+        assert!(lines.head.capacity() <= 2 * LOG_LINE_BYTES, "the head stays small");
+        lines.push(b"\nM105\r\n", 2.0, &mut out);
+        let expected = format!(
+            "       2.000 > {}... (157286400 bytes, cut at 256)\n       2.000 > M105\n",
+            "G".repeat(LOG_LINE_BYTES)
+        );
+        assert_eq!(String::from_utf8(log).unwrap(), expected);
+    }
 }
 
 /// Raises a stop flag when dropped: a server thread started in a test scope ends even when the
