@@ -255,7 +255,9 @@ mod tests {
                     sent += n;
                     last_progress = Instant::now();
                 }
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => std::thread::sleep(Duration::from_millis(5)),
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                    std::thread::sleep(Duration::from_millis(5))
+                }
                 Err(e) => panic!("{e}"),
             }
         }
@@ -274,7 +276,8 @@ mod tests {
                 let mut make = || Ok::<_, io::Error>(Scripted::default());
                 let mut ended = Vec::new();
                 let mut finished = |d: Scripted| ended.push(d.ran);
-                let summary = serve(&mut endpoint, &mut make, &mut finished, &ServeOptions::default(), None, &stop);
+                let summary =
+                    serve(&mut endpoint, &mut make, &mut finished, &ServeOptions::default(), None, &stop);
                 (summary.unwrap(), ended)
             });
             body(&link);

@@ -248,7 +248,10 @@ mod tests {
             drop((idle, reader));
             let (mut next, mut reader) = connect(addr);
             next.write_all(b"M105\n").unwrap();
-            assert_eq!(lines_through(&mut reader, "ok"), ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]);
+            assert_eq!(
+                lines_through(&mut reader, "ok"),
+                ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]
+            );
         });
     }
 

@@ -263,7 +263,10 @@ impl LineLog {
                 if self.len > 0 {
                     let text = String::from_utf8_lossy(&self.head);
                     if self.len > LOG_LINE_BYTES as u64 {
-                        out.write_log(&format!("{t_s:>12.3} > {text}... ({} bytes, cut at {LOG_LINE_BYTES})", self.len));
+                        out.write_log(&format!(
+                            "{t_s:>12.3} > {text}... ({} bytes, cut at {LOG_LINE_BYTES})",
+                            self.len
+                        ));
                     } else {
                         out.write_log(&format!("{t_s:>12.3} > {text}"));
                     }
@@ -286,7 +289,11 @@ impl LineLog {
 /// never becomes writable, and polling it again would return at once, for ever (a busy loop).
 /// Sockets must be written through `TcpStream` (which sends with `MSG_NOSIGNAL`), not `write(2)`:
 /// the CLI restores the default SIGPIPE action, which would kill the server on a reset peer.
-pub(crate) fn write_all_nonblocking<W: Write + AsFd>(mut w: W, mut bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
+pub(crate) fn write_all_nonblocking<W: Write + AsFd>(
+    mut w: W,
+    mut bytes: &[u8],
+    stop: &AtomicBool,
+) -> io::Result<()> {
     while !bytes.is_empty() {
         match w.write(bytes) {
             Ok(0) => return Err(io::Error::from(io::ErrorKind::WriteZero)),
@@ -327,6 +334,18 @@ fn tick_ms() -> u16 {
     u16::try_from(TICK.as_millis()).unwrap_or(u16::MAX)
 }
 
+/// Raises a stop flag when dropped: a server thread started in a test scope ends even when the
+/// test body panics.
+#[cfg(test)]
+pub(crate) struct StopOnDrop<'a>(pub &'a AtomicBool);
+
+#[cfg(test)]
+impl Drop for StopOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -348,17 +367,5 @@ mod tests {
             "G".repeat(LOG_LINE_BYTES)
         );
         assert_eq!(String::from_utf8(log).unwrap(), expected);
-    }
-}
-
-/// Raises a stop flag when dropped: a server thread started in a test scope ends even when the
-/// test body panics.
-#[cfg(test)]
-pub(crate) struct StopOnDrop<'a>(pub &'a AtomicBool);
-
-#[cfg(test)]
-impl Drop for StopOnDrop<'_> {
-    fn drop(&mut self) {
-        self.0.store(true, Ordering::Relaxed);
     }
 }
