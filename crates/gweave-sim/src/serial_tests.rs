@@ -6,11 +6,12 @@ use proptest::prelude::*;
 /// A device whose commands take scripted simulated time:
 /// `G4 S<s>` dwells `s` seconds, `M109` reports a temperature every second for 5 s,
 /// `M112` halts until `M999`, `M105` prints its own `ok T:`, `G1` takes 0.5 s, anything else is
-/// instant and silent.
+/// instant and silent. Idle time passes on its clock and is counted in `idle_s`.
 #[derive(Default)]
 pub(crate) struct Scripted {
     pub t_s: f64,
     pub ran: Vec<String>,
+    pub idle_s: f64,
     halted: bool,
     acknowledged: bool,
 }
@@ -56,6 +57,11 @@ impl Device for Scripted {
 
     fn acknowledged(&self) -> bool {
         self.acknowledged
+    }
+
+    fn idle(&mut self, t_s: f64, _out: &mut dyn FnMut(f64, &str)) {
+        self.t_s += t_s;
+        self.idle_s += t_s;
     }
 }
 

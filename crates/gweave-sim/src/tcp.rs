@@ -202,19 +202,24 @@ mod tests {
         said
     }
 
-    /// Runs a server of `Scripted` boards on a free loopback port for the body.
-    fn with_server(options: ServeOptions, body: impl FnOnce(SocketAddr)) {
+    /// Runs a server of `Scripted` boards on a free loopback port for the body; the boards of
+    /// the sessions, as they ended.
+    fn with_server(options: ServeOptions, body: impl FnOnce(SocketAddr)) -> Vec<Scripted> {
         let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
         let addr = endpoint.local_addr().unwrap();
         let stop = AtomicBool::new(false);
         std::thread::scope(|s| {
             let _stop = StopOnDrop(&stop);
-            s.spawn(|| {
+            let server = s.spawn(|| {
                 let mut make = || Ok::<_, io::Error>(Scripted::default());
-                serve(&mut endpoint, &mut make, &mut |_| {}, &options, None, &stop).unwrap()
+                let mut ended = Vec::new();
+                serve(&mut endpoint, &mut make, &mut |d| ended.push(d), &options, None, &stop).unwrap();
+                ended
             });
             body(addr);
-        });
+            stop.store(true, Ordering::Relaxed);
+            server.join().unwrap()
+        })
     }
 
     #[test]
@@ -253,6 +258,27 @@ mod tests {
                 ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]
             );
         });
+    }
+
+    #[test]
+    fn tcp_a_quiet_host_leaves_the_board_living_in_wall_time() {
+        let started = Instant::now();
+        let ended = with_server(ServeOptions::default(), |addr| {
+            let (mut host, mut reader) = connect(addr);
+            host.write_all(b"G4 S100\n").unwrap();
+            lines_through(&mut reader, "ok");
+            // Short gaps (a streaming host) are not idle time; a long one is, as it passes.
+            host.write_all(b"G1\n").unwrap();
+            lines_through(&mut reader, "ok");
+            std::thread::sleep(crate::transport::QUIET_AFTER + Duration::from_millis(700));
+            host.write_all(b"M105\n").unwrap();
+            lines_through(&mut reader, "ok T:");
+        });
+        let board = &ended[0];
+        let wall_s = started.elapsed().as_secs_f64();
+        assert!(board.idle_s >= 1.1 && board.idle_s <= wall_s, "{} of {wall_s}", board.idle_s);
+        // The simulated clock ran its own commands (100.5 s) and then the quiet wall time.
+        assert!((board.t_s - (100.5 + board.idle_s)).abs() < 1e-9, "{}", board.t_s);
     }
 
     #[test]

@@ -9,6 +9,12 @@
 //! By default replies go out as fast as the simulation produces them. In real-time mode each
 //! reply waits until its simulated time, measured from the moment the command's bytes arrived:
 //! `G4 S5` answers `ok` five wall-clock seconds later, with keepalive lines at 2 s and 4 s.
+//!
+//! Two clocks, one board: while commands come, the board runs on its simulated clock (as fast
+//! as it can, or paced); once the host has been quiet for [`QUIET_AFTER`], the board lives in
+//! wall time ([`Device::idle`]): heaters heat and cool, `M155` auto-reports go out on time, and
+//! the next `M105` reads the temperature of that moment. The simulated clock only ever moves
+//! forward, by the wall time the host left the board alone.
 
 use std::io::{self, Write};
 use std::os::fd::AsFd;
@@ -22,6 +28,12 @@ use crate::serial::{Device, LinkStats, Protocol, ProtocolConfig};
 
 /// How long one wait for the host lasts before the loop looks at the stop flag again.
 pub const TICK: Duration = Duration::from_millis(100);
+
+/// How long the host must stay silent before the board lives in wall time. A streaming host
+/// answers an `ok` within milliseconds; a gap this long means nothing is coming (and draining
+/// the planner at a shorter gap would put stops into a print that Marlin, with its buffer of
+/// queued moves, would not make).
+pub const QUIET_AFTER: Duration = Duration::from_millis(500);
 
 /// What a wait on an endpoint brought.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -121,6 +133,7 @@ where
     let mut received = LineLog::default();
     let mut buf = vec![0u8; 4096];
     let mut last_heard = Instant::now();
+    let mut clock = IdleClock::new();
     while !stop.load(Ordering::Relaxed) {
         let event = endpoint.wait(&mut buf, TICK).map_err(TransportError::io("waiting for the host"))?;
         match event {
@@ -133,15 +146,19 @@ where
                 fresh.boot(&mut |t_s, line| out.line(endpoint, t_s, line));
                 link = Some(fresh);
                 last_heard = Instant::now();
+                clock.busy();
             }
             Event::Data(n) => {
                 last_heard = Instant::now();
                 // Bytes before a connection (a pty buffer from an earlier host) are dropped.
                 let Some(p) = link.as_mut() else { continue };
+                // The quiet time before these bytes, lived first: an M105 reads the present.
+                clock.catch_up(p, &mut out, endpoint);
                 let bytes = &buf[..n];
                 received.push(bytes, p.device().now_s(), &mut out);
                 out.rebase(p.device().now_s());
                 p.feed(bytes, &mut |t_s, line| out.line(endpoint, t_s, line));
+                clock.busy();
             }
             Event::Disconnected => {
                 if let Some(p) = link.take() {
@@ -149,7 +166,11 @@ where
                     summary.end_session(p, finished);
                 }
             }
-            Event::Nothing => {}
+            Event::Nothing => {
+                if let Some(p) = link.as_mut() {
+                    clock.catch_up(p, &mut out, endpoint);
+                }
+            }
         }
         if let Some(e) = out.failed.take() {
             out.note(&format!("send failed ({e}); dropping the host"));
@@ -167,6 +188,43 @@ where
         summary.end_session(p, finished);
     }
     Ok(summary)
+}
+
+/// The board's wall-clock life while its host is quiet.
+struct IdleClock {
+    /// When the board last heard from the host or finished answering it.
+    active: Instant,
+    /// The wall-clock instant up to which the board's clock has accounted for idle time.
+    accounted: Instant,
+}
+
+impl IdleClock {
+    fn new() -> Self {
+        let now = Instant::now();
+        IdleClock { active: now, accounted: now }
+    }
+
+    /// The host spoke and was answered: the board's own clock covered that time.
+    fn busy(&mut self) {
+        *self = IdleClock::new();
+    }
+
+    /// Once the host has been quiet for [`QUIET_AFTER`], lets the board live the wall time since
+    /// the last account (all of the quiet time, the first time), sending what it prints.
+    fn catch_up<D: Device>(
+        &mut self,
+        link: &mut Protocol<D>,
+        out: &mut Output<'_, '_>,
+        endpoint: &mut dyn Endpoint,
+    ) {
+        let now = Instant::now();
+        if now.duration_since(self.active) < QUIET_AFTER {
+            return;
+        }
+        let quiet_s = now.duration_since(self.accounted).as_secs_f64();
+        self.accounted = now;
+        link.idle(quiet_s, &mut |t_s, line| out.line(endpoint, t_s, line));
+    }
 }
 
 /// Where replies go: paced, logged, sent; the first send error is kept for the loop.

@@ -270,3 +270,57 @@ fn serve_a_20_mb_line_keeps_memory_and_log_small() {
     assert!(log.len() < 4096, "log of {} bytes", log.len());
     assert!(log.contains("... (20971520 bytes, cut at 256)\n"), "{log}");
 }
+
+/// Every line a TCP host receives within `limit` (the host stays quiet meanwhile).
+fn lines_within(reader: &mut BufReader<TcpStream>, limit: Duration) -> Vec<String> {
+    let deadline = Instant::now() + limit;
+    let mut got = Vec::new();
+    let mut line = String::new();
+    while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+        reader.get_ref().set_read_timeout(Some(left.max(Duration::from_millis(1)))).unwrap();
+        match reader.read_line(&mut line) {
+            Ok(0) => break,
+            Ok(_) if line.ends_with('\n') => got.push(std::mem::take(&mut line).trim_end().to_string()),
+            Ok(_) => {}
+            Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+            Err(e) => panic!("{e}"),
+        }
+    }
+    got
+}
+
+/// Regression (#20 item 1): the board's clock stood still while the host was idle, so the
+/// `M155` auto-reports that M115 promises never came and OctoPrint declared the printer dead.
+#[test]
+fn serve_an_idle_host_receives_m155_auto_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let (server, addr) = Server::tcp(dir.path(), &[]);
+    let (mut host, mut reader) = connect(addr);
+    lines_through(&mut reader, "echo:Machine");
+    host.write_all(b"M155 S1\n").unwrap();
+    assert_eq!(lines_through(&mut reader, "ok"), ["ok"]);
+    let got = lines_within(&mut reader, Duration::from_millis(2500));
+    let reports = got.iter().filter(|l| l.starts_with(" T:25.00 /0.00 B:25.00")).count();
+    assert!(reports >= 2, "{got:?}");
+    drop((host, reader));
+    server.stop().assert_ok();
+}
+
+/// Regression (#20 item 1): a target set while the host was idle never heated (M105 still read
+/// `T:25.00 /200.00` after 10 s).
+#[test]
+fn serve_a_target_set_while_idle_heats() {
+    let dir = tempfile::tempdir().unwrap();
+    let (server, addr) = Server::tcp(dir.path(), &[]);
+    let (mut host, mut reader) = connect(addr);
+    lines_through(&mut reader, "echo:Machine");
+    host.write_all(b"M104 S200\n").unwrap();
+    lines_through(&mut reader, "ok");
+    thread::sleep(Duration::from_secs(3));
+    host.write_all(b"M105\n").unwrap();
+    let got = lines_through(&mut reader, "ok T:");
+    let reading: f64 = got.last().unwrap()["ok T:".len()..].split(' ').next().unwrap().parse().unwrap();
+    assert!(reading > 25.0, "{got:?}");
+    drop((host, reader));
+    server.stop().assert_ok();
+}
