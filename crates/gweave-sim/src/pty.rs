@@ -136,11 +136,20 @@ impl Endpoint for PtyEndpoint {
     }
 
     fn send(&mut self, bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
+        // Writing to a master whose slave is closed succeeds while the pty has room: the bytes
+        // would wait there for the next host. Refuse instead, so the session ends now.
+        if self.host_gone() {
+            return Err(io::Error::from(io::ErrorKind::BrokenPipe));
+        }
         write_all_nonblocking(&self.master, bytes, stop)
     }
 
     fn hang_up(&mut self) {
         self.discard_session();
+    }
+
+    fn host_gone(&mut self) -> bool {
+        wait_readable(&self.master, Duration::ZERO).is_ok_and(|r| r.contains(PollFlags::POLLHUP))
     }
 }
 
@@ -265,7 +274,10 @@ mod tests {
     }
 
     /// Serves `Scripted` boards on a fresh link for the body; each ended session's commands.
-    fn with_server(body: impl FnOnce(&Path)) -> (crate::transport::ServeSummary, Vec<Vec<String>>) {
+    fn with_server(
+        options: ServeOptions,
+        body: impl FnOnce(&Path),
+    ) -> (crate::transport::ServeSummary, Vec<Vec<String>>) {
         let dir = tempfile::tempdir().unwrap();
         let link = dir.path().join("gweave0");
         let mut endpoint = PtyEndpoint::open(&link).unwrap();
@@ -276,8 +288,7 @@ mod tests {
                 let mut make = || Ok::<_, io::Error>(Scripted::default());
                 let mut ended = Vec::new();
                 let mut finished = |d: Scripted| ended.push(d.ran);
-                let summary =
-                    serve(&mut endpoint, &mut make, &mut finished, &ServeOptions::default(), None, &stop);
+                let summary = serve(&mut endpoint, &mut make, &mut finished, &options, None, &stop);
                 (summary.unwrap(), ended)
             });
             body(&link);
@@ -288,7 +299,7 @@ mod tests {
 
     #[test]
     fn pty_a_host_that_hangs_up_with_replies_unread_leaves_a_fresh_board() {
-        let (summary, ended) = with_server(|link| {
+        let (summary, ended) = with_server(ServeOptions::default(), |link| {
             let mut host = open_host(link);
             // The replies that nobody reads fill the pty, then the server waits to write and
             // stops reading, and the host's commands fill the pty the other way.
@@ -309,8 +320,29 @@ mod tests {
     }
 
     #[test]
+    fn pty_a_hang_up_during_a_paced_command_is_seen_at_once() {
+        let started = Instant::now();
+        let options = ServeOptions { realtime: true, ..ServeOptions::default() };
+        let (summary, ended) = with_server(options, |link| {
+            let mut host = open_host(link);
+            // Thirty seconds of replies paced to the wall clock; the host leaves after the boot.
+            host.write_all(b"G4 S30\n").unwrap();
+            lines_until(&mut host, |text| text.contains("echo:Marlin test double\n"));
+            drop(host);
+            std::thread::sleep(3 * crate::transport::TICK);
+            let mut host = open_host(link);
+            host.write_all(b"M105\n").unwrap();
+            let got = lines_until(&mut host, |text| text.contains("ok T:"));
+            assert_eq!(got, ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]);
+        });
+        assert!(started.elapsed() < Duration::from_secs(5), "{:?}", started.elapsed());
+        assert_eq!(summary.sessions, 2);
+        assert_eq!(ended[0], ["G4 S30"]);
+    }
+
+    #[test]
     fn pty_a_host_may_toggle_dtr_through_termios() {
-        with_server(|link| {
+        with_server(ServeOptions::default(), |link| {
             let mut host = open_host(link);
             // A host drops and raises DTR by setting the speed to 0 and back (termios(3)).
             let mut t = tcgetattr(&host).unwrap();

@@ -56,6 +56,11 @@ pub trait Endpoint {
     fn send(&mut self, bytes: &[u8], stop: &AtomicBool) -> io::Result<()>;
     /// Forgets the current host after a failed send.
     fn hang_up(&mut self);
+    /// Whether the host is known to have gone, checked while replies wait for their time (a
+    /// paced command can last minutes). By default a hang-up is found by the next send or wait.
+    fn host_gone(&mut self) -> bool {
+        false
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -263,11 +268,15 @@ impl<'a, 's> Output<'a, 's> {
         }
         if self.realtime {
             let due = self.wall_at(t_s);
-            // Sleep in ticks so that a stop request is seen.
+            // Sleep in ticks so that a stop request and a hang-up are seen.
             while !self.stop.load(Ordering::Relaxed) {
                 let now = Instant::now();
                 if now >= due {
                     break;
+                }
+                if endpoint.host_gone() {
+                    self.failed = Some(io::Error::from(io::ErrorKind::BrokenPipe));
+                    return;
                 }
                 std::thread::sleep((due - now).min(TICK));
             }
