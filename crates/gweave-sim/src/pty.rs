@@ -87,11 +87,11 @@ fn open_raw(slave: &Path) -> Result<File, TransportError> {
 
 impl PtyEndpoint {
     /// Forgets a host that hung up, as a board reset would: the bytes it sent that were not read
-    /// yet (in the master's buffer) and the replies it did not read (in the slave's buffer, up to
-    /// 4 KiB in the line discipline plus the pty's queue, which would otherwise greet the next
-    /// host) are dropped, and the line is raw again whatever the host set. Flushing the master's
-    /// output only empties the pty's queue, so the slave is opened for a moment to flush its line
-    /// discipline too.
+    /// yet (the master's input) and the replies it did not read (the slave's input: up to 4 KiB
+    /// in its line discipline plus the pty's queue, which would otherwise greet the next host)
+    /// are dropped, and the line is raw again whatever the host set. A flush on the master
+    /// cannot reach the slave's line discipline, so the slave is opened for a moment and
+    /// flushed from its own side.
     fn discard_session(&mut self) {
         self.connected = false;
         // Best effort: if this fails, the next host sees stale bytes, and nothing worse.
