@@ -9,7 +9,7 @@
 //! master reports `POLLHUP` (reads fail with `EIO`); the first open clears it. So a host opening
 //! the path is a [`Event::Connected`] (a board reset), its last close an [`Event::Disconnected`].
 
-use std::fs::OpenOptions;
+use std::fs::{File, OpenOptions};
 use std::io::{self, Read};
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
@@ -19,9 +19,9 @@ use std::time::Duration;
 use nix::fcntl::{fcntl, FcntlArg, OFlag};
 use nix::poll::PollFlags;
 use nix::pty::{grantpt, posix_openpt, ptsname_r, unlockpt, PtyMaster};
-use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
+use nix::sys::termios::{cfmakeraw, tcflush, tcgetattr, tcsetattr, FlushArg, SetArg};
 
-use crate::transport::{wait_readable, write_all_fd, Endpoint, Event, TransportError};
+use crate::transport::{wait_readable, write_all_nonblocking, Endpoint, Event, TransportError};
 
 /// A pty with a symlink to its slave side.
 pub struct PtyEndpoint {
@@ -43,19 +43,7 @@ impl PtyEndpoint {
             .map_err(|e| TransportError::Io { context: "naming the pty".into(), source: e.into() })?;
         // Set raw mode through the slave, then close it: with no slave open the master reports
         // a hang-up until a host opens the link.
-        let file = OpenOptions::new()
-            .read(true)
-            .write(true)
-            // The printer must not become the serving process's controlling terminal.
-            .custom_flags(OFlag::O_NOCTTY.bits())
-            .open(&slave)
-            .map_err(TransportError::io(format!("opening {}", slave.display())))?;
-        let raw = tcgetattr(&file).and_then(|mut t| {
-            cfmakeraw(&mut t);
-            tcsetattr(&file, SetArg::TCSANOW, &t)
-        });
-        raw.map_err(|e| TransportError::Io { context: "setting raw mode".into(), source: e.into() })?;
-        drop(file);
+        drop(open_raw(&slave)?);
         fcntl(&master, FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
             .map_err(|e| TransportError::Io { context: "pty non-blocking".into(), source: e.into() })?;
         match std::fs::symlink_metadata(link) {
@@ -80,12 +68,48 @@ impl PtyEndpoint {
     }
 }
 
+/// Opens the slave side (never as the server's controlling terminal) and puts its line discipline
+/// in raw mode: no echo, no CR/LF translation, no signals, as a real serial port.
+fn open_raw(slave: &Path) -> Result<File, TransportError> {
+    let file = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags((OFlag::O_NOCTTY | OFlag::O_NONBLOCK).bits())
+        .open(slave)
+        .map_err(TransportError::io(format!("opening {}", slave.display())))?;
+    let raw = tcgetattr(&file).and_then(|mut t| {
+        cfmakeraw(&mut t);
+        tcsetattr(&file, SetArg::TCSANOW, &t)
+    });
+    raw.map_err(|e| TransportError::Io { context: "setting raw mode".into(), source: e.into() })?;
+    Ok(file)
+}
+
+impl PtyEndpoint {
+    /// Forgets a host that hung up, as a board reset would: the bytes it sent that were not read
+    /// yet (the master's input) and the replies it did not read (the slave's input: up to 4 KiB
+    /// in its line discipline plus the pty's queue, which would otherwise greet the next host)
+    /// are dropped, and the line is raw again whatever the host set. A flush on the master
+    /// cannot reach the slave's line discipline, so the slave is opened for a moment and
+    /// flushed from its own side.
+    fn discard_session(&mut self) {
+        self.connected = false;
+        // Best effort: if this fails, the next host sees stale bytes, and nothing worse.
+        let _ = tcflush(&self.master, FlushArg::TCIFLUSH);
+        if let Ok(slave) = open_raw(&self.slave) {
+            let _ = tcflush(&slave, FlushArg::TCIOFLUSH);
+        }
+    }
+}
+
 impl Endpoint for PtyEndpoint {
     fn wait(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<Event> {
         let ready = wait_readable(&self.master, timeout)?;
-        if ready.contains(PollFlags::POLLHUP) && !ready.contains(PollFlags::POLLIN) {
+        // POLLHUP on the master means no process holds the slave open now, even if the host's last
+        // bytes are still unread (POLLIN): the host has gone, and so has its session.
+        if ready.contains(PollFlags::POLLHUP) {
             if self.connected {
-                self.connected = false;
+                self.discard_session();
                 return Ok(Event::Disconnected);
             }
             // No host: poll returns at once, so wait out the tick here.
@@ -104,7 +128,7 @@ impl Endpoint for PtyEndpoint {
             Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(Event::Nothing),
             // EIO: the host closed the slave between the poll and the read.
             Err(e) if e.raw_os_error() == Some(nix::libc::EIO) => {
-                self.connected = false;
+                self.discard_session();
                 Ok(Event::Disconnected)
             }
             Err(e) => Err(e),
@@ -112,11 +136,20 @@ impl Endpoint for PtyEndpoint {
     }
 
     fn send(&mut self, bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
-        write_all_fd(&self.master, bytes, stop)
+        // Writing to a master whose slave is closed succeeds while the pty has room: the bytes
+        // would wait there for the next host. Refuse instead, so the session ends now.
+        if self.host_gone() {
+            return Err(io::Error::from(io::ErrorKind::BrokenPipe));
+        }
+        write_all_nonblocking(&self.master, bytes, stop)
     }
 
     fn hang_up(&mut self) {
-        self.connected = false;
+        self.discard_session();
+    }
+
+    fn host_gone(&mut self) -> bool {
+        wait_readable(&self.master, Duration::ZERO).is_ok_and(|r| r.contains(PollFlags::POLLHUP))
     }
 }
 
@@ -136,6 +169,8 @@ mod tests {
     use std::sync::atomic::Ordering;
     use std::time::Instant;
 
+    use nix::sys::termios::{cfsetspeed, BaudRate};
+
     use super::*;
     use crate::serial::tests::Scripted;
     use crate::transport::{serve, ServeOptions, StopOnDrop};
@@ -151,10 +186,15 @@ mod tests {
 
     /// Reads reply lines until `oks` of them are `ok`, failing after 10 s.
     fn lines_until_ok(host: &mut File, oks: usize) -> Vec<String> {
+        lines_until(host, |text| text.lines().filter(|l| *l == "ok").count() >= oks)
+    }
+
+    /// Reads reply lines until `done` holds for all that came, failing after 10 s.
+    fn lines_until(host: &mut File, done: impl Fn(&str) -> bool) -> Vec<String> {
         let deadline = Instant::now() + Duration::from_secs(10);
         let mut text = String::new();
         let mut buf = [0u8; 256];
-        while text.lines().filter(|l| *l == "ok").count() < oks {
+        while !done(&text) {
             assert!(Instant::now() < deadline, "timed out after {text:?}");
             wait_readable(&*host, Duration::from_millis(100)).unwrap();
             match host.read(&mut buf) {
@@ -212,6 +252,108 @@ mod tests {
         });
         drop(endpoint);
         assert!(std::fs::symlink_metadata(&link).is_err(), "the link is removed");
+    }
+
+    /// Writes as much of `bytes` as the pty takes until it stays full for 0.3 s; how much it took.
+    fn write_until_full(host: &mut File, bytes: &[u8]) -> usize {
+        let mut sent = 0;
+        let mut last_progress = Instant::now();
+        while sent < bytes.len() && last_progress.elapsed() < Duration::from_millis(300) {
+            match host.write(&bytes[sent..]) {
+                Ok(n) => {
+                    sent += n;
+                    last_progress = Instant::now();
+                }
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                    std::thread::sleep(Duration::from_millis(5))
+                }
+                Err(e) => panic!("{e}"),
+            }
+        }
+        sent
+    }
+
+    /// Serves `Scripted` boards on a fresh link for the body; each ended session's commands.
+    fn with_server(
+        options: ServeOptions,
+        body: impl FnOnce(&Path),
+    ) -> (crate::transport::ServeSummary, Vec<Vec<String>>) {
+        let dir = tempfile::tempdir().unwrap();
+        let link = dir.path().join("gweave0");
+        let mut endpoint = PtyEndpoint::open(&link).unwrap();
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            let _stop = StopOnDrop(&stop);
+            let server = s.spawn(|| {
+                let mut make = || Ok::<_, io::Error>(Scripted::default());
+                let mut ended = Vec::new();
+                let mut finished = |d: Scripted| ended.push(d.ran);
+                let summary = serve(&mut endpoint, &mut make, &mut finished, &options, None, &stop);
+                (summary.unwrap(), ended)
+            });
+            body(&link);
+            stop.store(true, Ordering::Relaxed);
+            server.join().unwrap()
+        })
+    }
+
+    #[test]
+    fn pty_a_host_that_hangs_up_with_replies_unread_leaves_a_fresh_board() {
+        let (summary, ended) = with_server(ServeOptions::default(), |link| {
+            let mut host = open_host(link);
+            // The replies that nobody reads fill the pty, then the server waits to write and
+            // stops reading, and the host's commands fill the pty the other way.
+            let burst = b"M105\n".repeat(20_000);
+            let sent = write_until_full(&mut host, &burst);
+            assert!(sent < burst.len(), "the pty took all of it: {sent} bytes");
+            drop(host);
+            std::thread::sleep(3 * crate::transport::TICK);
+            let mut host = open_host(link);
+            host.write_all(b"M105\n").unwrap();
+            let got = lines_until(&mut host, |text| text.contains("ok T:"));
+            // A fresh power-on: no stale replies, no fragment glued to the first command.
+            assert_eq!(got, ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]);
+        });
+        assert_eq!(summary.sessions, 2);
+        assert_eq!(ended[1], ["M105"]);
+        assert!(ended[0].iter().all(|c| c == "M105"), "the fragment never ran");
+    }
+
+    #[test]
+    fn pty_a_hang_up_during_a_paced_command_is_seen_at_once() {
+        let started = Instant::now();
+        let options = ServeOptions { realtime: true, ..ServeOptions::default() };
+        let (summary, ended) = with_server(options, |link| {
+            let mut host = open_host(link);
+            // Thirty seconds of replies paced to the wall clock; the host leaves after the boot.
+            host.write_all(b"G4 S30\n").unwrap();
+            lines_until(&mut host, |text| text.contains("echo:Marlin test double\n"));
+            drop(host);
+            std::thread::sleep(3 * crate::transport::TICK);
+            let mut host = open_host(link);
+            host.write_all(b"M105\n").unwrap();
+            let got = lines_until(&mut host, |text| text.contains("ok T:"));
+            assert_eq!(got, ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]);
+        });
+        assert!(started.elapsed() < Duration::from_secs(5), "{:?}", started.elapsed());
+        assert_eq!(summary.sessions, 2);
+        assert_eq!(ended[0], ["G4 S30"]);
+    }
+
+    #[test]
+    fn pty_a_host_may_toggle_dtr_through_termios() {
+        with_server(ServeOptions::default(), |link| {
+            let mut host = open_host(link);
+            // A host drops and raises DTR by setting the speed to 0 and back (termios(3)).
+            let mut t = tcgetattr(&host).unwrap();
+            for speed in [BaudRate::B0, BaudRate::B115200] {
+                cfsetspeed(&mut t, speed).unwrap();
+                tcsetattr(&host, SetArg::TCSANOW, &t).unwrap();
+            }
+            host.write_all(b"M105\n").unwrap();
+            let got = lines_until(&mut host, |text| text.contains("ok T:"));
+            assert_eq!(got, ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]);
+        });
     }
 
     #[test]

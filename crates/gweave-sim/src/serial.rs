@@ -98,6 +98,9 @@ pub trait Device {
     fn acknowledged(&self) -> bool {
         false
     }
+    /// Lets `t_s` seconds pass with no command waiting (the host is quiet), calling `out` with
+    /// what the board prints meanwhile (auto-reports). By default the clock stands still.
+    fn idle(&mut self, _t_s: f64, _out: &mut dyn FnMut(f64, &str)) {}
 }
 
 pub use crate::interp::Outcome;
@@ -227,6 +230,12 @@ impl<D: Device> Protocol<D> {
 
     pub fn device(&self) -> &D {
         &self.device
+    }
+
+    /// The host has been quiet for `t_s` seconds: the board lives them ([`Device::idle`]). A
+    /// half-received line stays as it is.
+    pub fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
+        self.device.idle(t_s, out);
     }
 
     /// Gives the device back, for a report after the session.
@@ -454,6 +463,10 @@ impl Device for crate::interp::Machine {
 
     fn acknowledged(&self) -> bool {
         crate::interp::Machine::acknowledged(self)
+    }
+
+    fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
+        crate::interp::Machine::idle(self, t_s, out)
     }
 }
 

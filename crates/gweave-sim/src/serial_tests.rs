@@ -6,11 +6,12 @@ use proptest::prelude::*;
 /// A device whose commands take scripted simulated time:
 /// `G4 S<s>` dwells `s` seconds, `M109` reports a temperature every second for 5 s,
 /// `M112` halts until `M999`, `M105` prints its own `ok T:`, `G1` takes 0.5 s, anything else is
-/// instant and silent.
+/// instant and silent. Idle time passes on its clock and is counted in `idle_s`.
 #[derive(Default)]
 pub(crate) struct Scripted {
     pub t_s: f64,
     pub ran: Vec<String>,
+    pub idle_s: f64,
     halted: bool,
     acknowledged: bool,
 }
@@ -56,6 +57,11 @@ impl Device for Scripted {
 
     fn acknowledged(&self) -> bool {
         self.acknowledged
+    }
+
+    fn idle(&mut self, t_s: f64, _out: &mut dyn FnMut(f64, &str)) {
+        self.t_s += t_s;
+        self.idle_s += t_s;
     }
 }
 
@@ -242,6 +248,22 @@ fn overlong_lines_are_refused() {
     let log = send(&mut p, &format!("{numbered}\n"));
     assert_eq!(texts(&log), ["Error:Line too long, Last Line: 0", "Resend: 1", "ok"]);
     assert_eq!(p.device().ran.len(), 2);
+}
+
+#[test]
+fn a_20_mb_line_is_refused_without_being_buffered() {
+    let mut p = session(ProtocolConfig::default());
+    let chunk = vec![b'G'; 1 << 20];
+    let mut log = Log::new();
+    for _ in 0..20 {
+        p.feed(&chunk, &mut |t, l| log.push((t, l.to_string())));
+    }
+    // Nothing is answered before the line ends, and the line buffer never grew past Marlin's.
+    assert!(log.is_empty());
+    assert!(p.line.capacity() <= MAX_LINE_BYTES, "{}", p.line.capacity());
+    let log = send(&mut p, "\nM105\n");
+    assert_eq!(texts(&log), ["Error:Line too long, Last Line: 0", "ok", "ok T:20.00 /0.00"]);
+    assert_eq!(p.device().ran, ["M105"]);
 }
 
 #[test]

@@ -2,18 +2,27 @@
 //! OctoPrint with a `socket://` serial URL, `nc`) connect to `127.0.0.1:PORT`.
 //!
 //! Only loopback addresses are accepted: the virtual printer has no authentication and must not
-//! be reachable from other machines. One host at a time; a second connection while one is served
-//! is accepted and closed at once, so that it fails fast instead of hanging in the backlog.
+//! be reachable from other machines.
+//!
+//! One host at a time. A second connection while a host is served is accepted, told
+//! [`REFUSAL`] and closed, so that it fails fast with a reason instead of hanging in the backlog.
+//! A newcomer is only refused while the current host is known to be there: when the current
+//! host's socket also has news in the same wait (bytes, or an abrupt close that follows its last
+//! bytes), the newcomer stays in the backlog until the current host's news is read, so a host
+//! that connects right after another one reset its connection is served, not refused.
 
-use std::io::{self, Read};
-use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::io::{self, Read, Write};
+use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::os::fd::AsFd;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use nix::poll::{poll, PollFd, PollFlags};
 
-use crate::transport::{wait_readable, write_all_fd, Endpoint, Event, TransportError};
+use crate::transport::{wait_readable, write_all_nonblocking, Endpoint, Event, TransportError};
+
+/// What a host that connects while another is served reads before the server closes it.
+pub const REFUSAL: &str = "echo:busy: another host is connected\n";
 
 pub struct TcpEndpoint {
     listener: TcpListener,
@@ -37,18 +46,40 @@ impl TcpEndpoint {
     }
 }
 
-/// Accepts a waiting connection, if any, ready for the serve loop.
+/// Accepts a waiting connection, if any, ready for the serve loop. A connection that died in the
+/// backlog (reset before it was accepted) is no connection, not an error of the server.
 fn accept(listener: &TcpListener) -> io::Result<Option<TcpStream>> {
     match listener.accept() {
         Ok((stream, _)) => {
-            stream.set_nonblocking(true)?;
             // Replies are single short lines; do not hold them back (Nagle).
-            stream.set_nodelay(true)?;
-            Ok(Some(stream))
+            let ready = stream.set_nonblocking(true).and_then(|()| stream.set_nodelay(true));
+            Ok(ready.is_ok().then_some(stream))
         }
-        Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(None),
+        Err(e) if gone_before_accept(&e) => Ok(None),
         Err(e) => Err(e),
     }
+}
+
+fn gone_before_accept(e: &io::Error) -> bool {
+    use io::ErrorKind::{ConnectionAborted, ConnectionReset, Interrupted, WouldBlock};
+    matches!(e.kind(), WouldBlock | ConnectionAborted | ConnectionReset | Interrupted)
+}
+
+/// Accepts a waiting newcomer and turns it away with [`REFUSAL`].
+fn refuse_newcomer(listener: &TcpListener) -> io::Result<()> {
+    let Some(stream) = accept(listener)? else { return Ok(()) };
+    // Best effort, never blocking: a fresh socket's send buffer has room for one short line.
+    let _ = (&stream).write(REFUSAL.as_bytes());
+    let _ = stream.shutdown(Shutdown::Write);
+    // Closing a socket with unread bytes sends a reset, which may make the newcomer's kernel
+    // discard the line before it is read; read what it already sent (a bounded amount) first.
+    let mut sink = [0u8; 4096];
+    for _ in 0..16 {
+        if !matches!((&stream).read(&mut sink), Ok(n) if n > 0) {
+            break;
+        }
+    }
+    Ok(())
 }
 
 impl Endpoint for TcpEndpoint {
@@ -73,32 +104,30 @@ impl Endpoint for TcpEndpoint {
         }
         let client_ready = !fds[0].revents().unwrap_or(PollFlags::empty()).is_empty();
         let newcomer = fds[1].revents().unwrap_or(PollFlags::empty()).contains(PollFlags::POLLIN);
-        let event = if client_ready {
-            match client.read(buf) {
-                Ok(0) => None,
-                Ok(n) => Some(Event::Data(n)),
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => Some(Event::Nothing),
-                Err(e) if e.kind() == io::ErrorKind::ConnectionReset => None,
-                Err(e) => return Err(e),
+        if !client_ready {
+            // A socket that was closed or reset always polls ready, so the host is still there.
+            if newcomer {
+                refuse_newcomer(&self.listener)?;
             }
-        } else {
-            Some(Event::Nothing)
-        };
-        let Some(event) = event else {
-            // The host left; a newcomer waiting in the backlog is accepted on the next wait.
-            self.client = None;
-            return Ok(Event::Disconnected);
-        };
-        if newcomer {
-            // Dropping the stream closes it: one host at a time.
-            drop(accept(&self.listener)?);
+            return Ok(Event::Nothing);
         }
-        Ok(event)
+        // A newcomer waits in the backlog: the host's news may be that it has gone.
+        match client.read(buf) {
+            Ok(0) => {}
+            Ok(n) => return Ok(Event::Data(n)),
+            Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted) => {
+                return Ok(Event::Nothing)
+            }
+            // Reset, timed out...: whatever the error, this host's connection is over.
+            Err(_) => {}
+        }
+        self.client = None;
+        Ok(Event::Disconnected)
     }
 
     fn send(&mut self, bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
         match self.client.as_ref() {
-            Some(client) => write_all_fd(client, bytes, stop),
+            Some(client) => write_all_nonblocking(client, bytes, stop),
             None => Err(io::Error::from(io::ErrorKind::NotConnected)),
         }
     }
@@ -111,6 +140,7 @@ impl Endpoint for TcpEndpoint {
 #[cfg(test)]
 mod tests {
     use std::io::{BufRead, BufReader, Write};
+    use std::net::TcpStream;
     use std::sync::atomic::Ordering;
     use std::time::Instant;
 
@@ -133,6 +163,122 @@ mod tests {
         stream.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
         let reader = BufReader::new(stream.try_clone().unwrap());
         (stream, reader)
+    }
+
+    /// Reads reply lines up to the first that starts with `last`.
+    fn lines_through(reader: &mut BufReader<TcpStream>, last: &str) -> Vec<String> {
+        let mut got = Vec::new();
+        while !got.last().is_some_and(|l: &String| l.starts_with(last)) {
+            let mut line = String::new();
+            assert!(reader.read_line(&mut line).unwrap() > 0, "closed after {got:?}");
+            got.push(line.trim_end().to_string());
+        }
+        got
+    }
+
+    /// Closes `stream` abruptly: with a zero linger time, close sends a reset (RST), not a FIN.
+    fn reset(stream: TcpStream) {
+        let linger = libc::linger { l_onoff: 1, l_linger: 0 };
+        // SAFETY: setsockopt on a socket we own, with a pointer to a local of the stated size.
+        let rc = unsafe {
+            libc::setsockopt(
+                std::os::fd::AsRawFd::as_raw_fd(&stream),
+                libc::SOL_SOCKET,
+                libc::SO_LINGER,
+                (&linger as *const libc::linger).cast(),
+                std::mem::size_of::<libc::linger>() as libc::socklen_t,
+            )
+        };
+        assert_eq!(rc, 0, "{}", io::Error::last_os_error());
+    }
+
+    /// Connects while another host is served: everything the server says before it closes.
+    fn turned_away(addr: SocketAddr) -> String {
+        let (mut other, _) = connect(addr);
+        // A newcomer that talks at once must still read the reason.
+        other.write_all(b"M105\n").unwrap();
+        let mut said = String::new();
+        other.read_to_string(&mut said).unwrap();
+        said
+    }
+
+    /// Runs a server of `Scripted` boards on a free loopback port for the body; the boards of
+    /// the sessions, as they ended.
+    fn with_server(options: ServeOptions, body: impl FnOnce(SocketAddr)) -> Vec<Scripted> {
+        let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
+        let addr = endpoint.local_addr().unwrap();
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            let _stop = StopOnDrop(&stop);
+            let server = s.spawn(|| {
+                let mut make = || Ok::<_, io::Error>(Scripted::default());
+                let mut ended = Vec::new();
+                serve(&mut endpoint, &mut make, &mut |d| ended.push(d), &options, None, &stop).unwrap();
+                ended
+            });
+            body(addr);
+            stop.store(true, Ordering::Relaxed);
+            server.join().unwrap()
+        })
+    }
+
+    #[test]
+    fn tcp_a_connection_right_after_an_abrupt_close_is_served() {
+        with_server(ServeOptions::default(), |addr| {
+            // The reset follows the host's last bytes; the newcomer arrives in the same instant.
+            for _ in 0..5 {
+                let (mut host, mut reader) = connect(addr);
+                lines_through(&mut reader, "echo:Marlin");
+                host.write_all(b"M105\n").unwrap();
+                drop(reader);
+                reset(host);
+                let (mut next, mut reader) = connect(addr);
+                next.write_all(b"M105\n").unwrap();
+                let got = lines_through(&mut reader, "ok");
+                assert_eq!(got, ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]);
+            }
+        });
+    }
+
+    #[test]
+    fn tcp_a_second_host_is_refused_while_an_idle_one_is_connected() {
+        with_server(ServeOptions::default(), |addr| {
+            let (mut idle, mut reader) = connect(addr);
+            assert_eq!(lines_through(&mut reader, "echo:Marlin"), ["start", "echo:Marlin test double"]);
+            std::thread::sleep(Duration::from_millis(300));
+            assert_eq!(turned_away(addr), REFUSAL);
+            // The idle host keeps its board; once it leaves, the next host is served.
+            idle.write_all(b"M105\n").unwrap();
+            assert_eq!(lines_through(&mut reader, "ok"), ["ok T:20.00 /0.00"]);
+            drop((idle, reader));
+            let (mut next, mut reader) = connect(addr);
+            next.write_all(b"M105\n").unwrap();
+            assert_eq!(
+                lines_through(&mut reader, "ok"),
+                ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]
+            );
+        });
+    }
+
+    #[test]
+    fn tcp_a_quiet_host_leaves_the_board_living_in_wall_time() {
+        let started = Instant::now();
+        let ended = with_server(ServeOptions::default(), |addr| {
+            let (mut host, mut reader) = connect(addr);
+            host.write_all(b"G4 S100\n").unwrap();
+            lines_through(&mut reader, "ok");
+            // Short gaps (a streaming host) are not idle time; a long one is, as it passes.
+            host.write_all(b"G1\n").unwrap();
+            lines_through(&mut reader, "ok");
+            std::thread::sleep(crate::transport::QUIET_AFTER + Duration::from_millis(700));
+            host.write_all(b"M105\n").unwrap();
+            lines_through(&mut reader, "ok T:");
+        });
+        let board = &ended[0];
+        let wall_s = started.elapsed().as_secs_f64();
+        assert!(board.idle_s >= 1.1 && board.idle_s <= wall_s, "{} of {wall_s}", board.idle_s);
+        // The simulated clock ran its own commands (100.5 s) and then the quiet wall time.
+        assert!((board.t_s - (100.5 + board.idle_s)).abs() < 1e-9, "{}", board.t_s);
     }
 
     #[test]
@@ -173,10 +319,8 @@ mod tests {
                     "ok"
                 ]
             );
-            // A second host is turned away while the first is served.
-            let (_other, mut other_reader) = connect(addr);
-            let mut line = String::new();
-            assert_eq!(other_reader.read_line(&mut line).unwrap(), 0);
+            // A second host is turned away, with a reason, while the first is served.
+            assert_eq!(turned_away(addr), REFUSAL);
             // Real time: a 0.6 s dwell answers after 0.6 s of wall clock, not at once.
             let sent = Instant::now();
             host.write_all(b"G4 S0.6\n").unwrap();

@@ -9,6 +9,12 @@
 //! By default replies go out as fast as the simulation produces them. In real-time mode each
 //! reply waits until its simulated time, measured from the moment the command's bytes arrived:
 //! `G4 S5` answers `ok` five wall-clock seconds later, with keepalive lines at 2 s and 4 s.
+//!
+//! Two clocks, one board: while commands come, the board runs on its simulated clock (as fast
+//! as it can, or paced); once the host has been quiet for [`QUIET_AFTER`], the board lives in
+//! wall time ([`Device::idle`]): heaters heat and cool, `M155` auto-reports go out on time, and
+//! the next `M105` reads the temperature of that moment. The simulated clock only ever moves
+//! forward, by the wall time the host left the board alone.
 
 use std::io::{self, Write};
 use std::os::fd::AsFd;
@@ -22,6 +28,12 @@ use crate::serial::{Device, LinkStats, Protocol, ProtocolConfig};
 
 /// How long one wait for the host lasts before the loop looks at the stop flag again.
 pub const TICK: Duration = Duration::from_millis(100);
+
+/// How long the host must stay silent before the board lives in wall time. A streaming host
+/// answers an `ok` within milliseconds; a gap this long means nothing is coming (and draining
+/// the planner at a shorter gap would put stops into a print that Marlin, with its buffer of
+/// queued moves, would not make).
+pub const QUIET_AFTER: Duration = Duration::from_millis(500);
 
 /// What a wait on an endpoint brought.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -44,6 +56,11 @@ pub trait Endpoint {
     fn send(&mut self, bytes: &[u8], stop: &AtomicBool) -> io::Result<()>;
     /// Forgets the current host after a failed send.
     fn hang_up(&mut self);
+    /// Whether the host is known to have gone, checked while replies wait for their time (a
+    /// paced command can last minutes). By default a hang-up is found by the next send or wait.
+    fn host_gone(&mut self) -> bool {
+        false
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -121,6 +138,7 @@ where
     let mut received = LineLog::default();
     let mut buf = vec![0u8; 4096];
     let mut last_heard = Instant::now();
+    let mut clock = IdleClock::new();
     while !stop.load(Ordering::Relaxed) {
         let event = endpoint.wait(&mut buf, TICK).map_err(TransportError::io("waiting for the host"))?;
         match event {
@@ -133,15 +151,19 @@ where
                 fresh.boot(&mut |t_s, line| out.line(endpoint, t_s, line));
                 link = Some(fresh);
                 last_heard = Instant::now();
+                clock.busy();
             }
             Event::Data(n) => {
                 last_heard = Instant::now();
                 // Bytes before a connection (a pty buffer from an earlier host) are dropped.
                 let Some(p) = link.as_mut() else { continue };
+                // The quiet time before these bytes, lived first: an M105 reads the present.
+                clock.catch_up(p, &mut out, endpoint);
                 let bytes = &buf[..n];
                 received.push(bytes, p.device().now_s(), &mut out);
                 out.rebase(p.device().now_s());
                 p.feed(bytes, &mut |t_s, line| out.line(endpoint, t_s, line));
+                clock.busy();
             }
             Event::Disconnected => {
                 if let Some(p) = link.take() {
@@ -149,7 +171,11 @@ where
                     summary.end_session(p, finished);
                 }
             }
-            Event::Nothing => {}
+            Event::Nothing => {
+                if let Some(p) = link.as_mut() {
+                    clock.catch_up(p, &mut out, endpoint);
+                }
+            }
         }
         if let Some(e) = out.failed.take() {
             out.note(&format!("send failed ({e}); dropping the host"));
@@ -167,6 +193,43 @@ where
         summary.end_session(p, finished);
     }
     Ok(summary)
+}
+
+/// The board's wall-clock life while its host is quiet.
+struct IdleClock {
+    /// When the board last heard from the host or finished answering it.
+    active: Instant,
+    /// The wall-clock instant up to which the board's clock has accounted for idle time.
+    accounted: Instant,
+}
+
+impl IdleClock {
+    fn new() -> Self {
+        let now = Instant::now();
+        IdleClock { active: now, accounted: now }
+    }
+
+    /// The host spoke and was answered: the board's own clock covered that time.
+    fn busy(&mut self) {
+        *self = IdleClock::new();
+    }
+
+    /// Once the host has been quiet for [`QUIET_AFTER`], lets the board live the wall time since
+    /// the last account (all of the quiet time, the first time), sending what it prints.
+    fn catch_up<D: Device>(
+        &mut self,
+        link: &mut Protocol<D>,
+        out: &mut Output<'_, '_>,
+        endpoint: &mut dyn Endpoint,
+    ) {
+        let now = Instant::now();
+        if now.duration_since(self.active) < QUIET_AFTER {
+            return;
+        }
+        let quiet_s = now.duration_since(self.accounted).as_secs_f64();
+        self.accounted = now;
+        link.idle(quiet_s, &mut |t_s, line| out.line(endpoint, t_s, line));
+    }
 }
 
 /// Where replies go: paced, logged, sent; the first send error is kept for the loop.
@@ -205,11 +268,15 @@ impl<'a, 's> Output<'a, 's> {
         }
         if self.realtime {
             let due = self.wall_at(t_s);
-            // Sleep in ticks so that a stop request is seen.
+            // Sleep in ticks so that a stop request and a hang-up are seen.
             while !self.stop.load(Ordering::Relaxed) {
                 let now = Instant::now();
                 if now >= due {
                     break;
+                }
+                if endpoint.host_gone() {
+                    self.failed = Some(io::Error::from(io::ErrorKind::BrokenPipe));
+                    return;
                 }
                 std::thread::sleep((due - now).min(TICK));
             }
@@ -238,10 +305,19 @@ impl<'a, 's> Output<'a, 's> {
     }
 }
 
+/// The most bytes of one received line the log keeps: a line longer than that (a host gone wrong
+/// can send megabytes without a newline) is logged as its first bytes and its length, so the log
+/// and the server's memory stay small whatever the host sends. Marlin keeps 95 bytes of a line,
+/// so any line a host means seriously is logged whole.
+pub const LOG_LINE_BYTES: usize = 256;
+
 /// Splits received bytes into lines for the log.
 #[derive(Default)]
 struct LineLog {
-    partial: Vec<u8>,
+    /// The line's first bytes, at most [`LOG_LINE_BYTES`].
+    head: Vec<u8>,
+    /// The line's whole length so far.
+    len: u64,
 }
 
 impl LineLog {
@@ -251,36 +327,60 @@ impl LineLog {
         }
         for &b in bytes {
             if b == b'\n' || b == b'\r' {
-                if !self.partial.is_empty() {
-                    let text = String::from_utf8_lossy(&self.partial).into_owned();
-                    out.write_log(&format!("{t_s:>12.3} > {text}"));
-                    self.partial.clear();
+                if self.len > 0 {
+                    let text = String::from_utf8_lossy(&self.head);
+                    if self.len > LOG_LINE_BYTES as u64 {
+                        out.write_log(&format!(
+                            "{t_s:>12.3} > {text}... ({} bytes, cut at {LOG_LINE_BYTES})",
+                            self.len
+                        ));
+                    } else {
+                        out.write_log(&format!("{t_s:>12.3} > {text}"));
+                    }
+                    self.head.clear();
+                    self.len = 0;
                 }
             } else {
-                self.partial.push(b);
+                if self.head.len() < LOG_LINE_BYTES {
+                    self.head.push(b);
+                }
+                self.len += 1;
             }
         }
     }
 }
 
-/// Writes all of `bytes` to a non-blocking descriptor, waiting for room in ticks and giving up
-/// with `Interrupted` when `stop` is raised.
-pub(crate) fn write_all_fd(fd: impl AsFd, mut bytes: &[u8], stop: &AtomicBool) -> io::Result<()> {
+/// Writes all of `bytes` to a non-blocking writer, waiting for room in ticks and giving up with
+/// `Interrupted` when `stop` is raised. A hang-up while waiting (`POLLHUP`/`POLLERR`: a pty host
+/// that closed with replies unread, a reset socket) is `BrokenPipe` at once: such a descriptor
+/// never becomes writable, and polling it again would return at once, for ever (a busy loop).
+/// Sockets must be written through `TcpStream` (which sends with `MSG_NOSIGNAL`), not `write(2)`:
+/// the CLI restores the default SIGPIPE action, which would kill the server on a reset peer.
+pub(crate) fn write_all_nonblocking<W: Write + AsFd>(
+    mut w: W,
+    mut bytes: &[u8],
+    stop: &AtomicBool,
+) -> io::Result<()> {
     while !bytes.is_empty() {
-        match nix::unistd::write(&fd, bytes) {
+        match w.write(bytes) {
+            Ok(0) => return Err(io::Error::from(io::ErrorKind::WriteZero)),
             Ok(n) => bytes = &bytes[n..],
-            Err(Errno::EAGAIN) => {
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
                 if stop.load(Ordering::Relaxed) {
                     return Err(io::Error::from(io::ErrorKind::Interrupted));
                 }
-                let mut fds = [PollFd::new(fd.as_fd(), PollFlags::POLLOUT)];
+                let mut fds = [PollFd::new(w.as_fd(), PollFlags::POLLOUT)];
                 match poll(&mut fds, tick_ms()) {
                     Ok(_) | Err(Errno::EINTR) => {}
                     Err(e) => return Err(e.into()),
                 }
+                let gone = PollFlags::POLLHUP | PollFlags::POLLERR;
+                if fds[0].revents().is_some_and(|r| r.intersects(gone)) {
+                    return Err(io::Error::from(io::ErrorKind::BrokenPipe));
+                }
             }
-            Err(Errno::EINTR) => {}
-            Err(e) => return Err(e.into()),
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
         }
     }
     Ok(())
@@ -310,5 +410,29 @@ pub(crate) struct StopOnDrop<'a>(pub &'a AtomicBool);
 impl Drop for StopOnDrop<'_> {
     fn drop(&mut self) {
         self.0.store(true, Ordering::Relaxed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_a_150_mb_line_is_cut_to_its_head_and_length() {
+        let stop = AtomicBool::new(false);
+        let mut log = Vec::new();
+        let mut out = Output::new(false, Some(&mut log), &stop);
+        let mut lines = LineLog::default();
+        let chunk = vec![b'G'; 1 << 20];
+        for _ in 0..150 {
+            lines.push(&chunk, 1.5, &mut out);
+        }
+        assert!(lines.head.capacity() <= 2 * LOG_LINE_BYTES, "the head stays small");
+        lines.push(b"\nM105\r\n", 2.0, &mut out);
+        let expected = format!(
+            "       2.000 > {}... (157286400 bytes, cut at 256)\n       2.000 > M105\n",
+            "G".repeat(LOG_LINE_BYTES)
+        );
+        assert_eq!(String::from_utf8(log).unwrap(), expected);
     }
 }

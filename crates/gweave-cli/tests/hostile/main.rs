@@ -11,4 +11,5 @@
 mod harness;
 
 mod outputs;
+mod serve;
 mod sweep;

@@ -161,6 +161,25 @@ impl Machine {
         }
     }
 
+    /// The host is quiet: `t_s` seconds of its wall clock pass on a board with no command
+    /// waiting (`gweave serve` calls this while the line is silent, so that a board left alone
+    /// lives in real time). Moves still queued run to a stop first, as Marlin's planner empties
+    /// its buffer when nothing follows; then the heaters (with thermal protection) and the
+    /// `M155` auto-reports run through the rest. A time that is not positive and finite changes
+    /// nothing: the clock never runs backwards.
+    pub fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
+        if !(t_s > 0.0 && t_s.is_finite()) {
+            return;
+        }
+        if self.core.queued() > 0 {
+            self.core.drain();
+            self.sync(out);
+        }
+        self.core.idle(t_s);
+        self.idle_s += t_s;
+        self.sync(out);
+    }
+
     /// Let time pass with the machine standing still (heating waits, autotune).
     fn idle_for(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
         self.core.idle(t_s);

@@ -119,6 +119,8 @@ pub struct Machine {
     ended: bool,
     heating_s: f64,
     homing_s: f64,
+    /// Time the host left the board alone ([`Machine::idle`]).
+    idle_s: f64,
     thermal_faults: Vec<ThermalFault>,
     unknown: BTreeMap<String, u64>,
     warnings: Vec<SimWarning>,
@@ -179,6 +181,7 @@ impl Machine {
             ended: false,
             heating_s: 0.0,
             homing_s: 0.0,
+            idle_s: 0.0,
             thermal_faults: Vec::new(),
             unknown: BTreeMap::new(),
             warnings: Vec::new(),

@@ -26,6 +26,9 @@ pub struct SimTimes {
     pub homing_s: f64,
     /// Firmware bookkeeping of Klipper mode (start buffer, motor-off stalls, exit flush).
     pub overhead_s: f64,
+    /// Waiting for the host: time `gweave serve` let pass while the line was silent (0 in a run
+    /// of a file).
+    pub idle_s: f64,
 }
 
 /// One heater at the end of the run.
@@ -215,6 +218,7 @@ impl Machine {
                 heating_s: self.heating_s,
                 homing_s: self.homing_s,
                 overhead_s: est.overhead_s,
+                idle_s: self.idle_s,
             },
             blocks: est.blocks,
             unlayered_s: est.unlayered_s,

@@ -344,3 +344,44 @@ fn rrf_m568_heats_the_tools_nozzle() {
     assert!(report.warning_counts.is_empty(), "{:?}", report.warning_counts);
     assert_eq!(report.filament_mm, vec![0.0, 1.0]);
 }
+
+#[test]
+fn idle_time_heats_and_auto_reports_on_the_clock() {
+    let mut m = machine();
+    run(&mut m, "M155 S1\nM104 S200");
+    let mut stamped = Vec::new();
+    m.idle(2.5, &mut |t, l| stamped.push((t, l.to_owned())));
+    let times: Vec<f64> = stamped.iter().map(|(t, _)| *t).collect();
+    assert_eq!(times, [1.0, 2.0]);
+    assert!(stamped.iter().all(|(_, l)| l.starts_with(" T:") && l.contains("/200.00")), "{stamped:?}");
+    // A target set while idle heats, and M105 reads the present.
+    m.idle(0.5, &mut |_, _| {});
+    let (r, _) = run(&mut m, "M105");
+    let now_c: f64 = r[0]["ok T:".len()..].split(' ').next().unwrap().parse().unwrap();
+    assert!(now_c > 25.5, "{r:?}");
+    assert_eq!(m.now_s(), 3.0);
+    let t = m.report().time;
+    assert_eq!(t.idle_s, 3.0);
+    assert_eq!(t.total_s, t.motion_s + t.dwell_s + t.heating_s + t.homing_s + t.overhead_s + t.idle_s);
+}
+
+#[test]
+fn idle_never_runs_the_clock_backwards() {
+    let mut m = machine();
+    for t_s in [-1.0, 0.0, f64::NAN, f64::INFINITY] {
+        m.idle(t_s, &mut |_, l| panic!("{l}"));
+    }
+    assert_eq!(m.now_s(), 0.0);
+}
+
+#[test]
+fn idle_runs_queued_moves_to_a_stop_first() {
+    let mut m = warm_machine();
+    run(&mut m, "G28\nG1 X100 F6000");
+    let before_s = m.now_s();
+    m.idle(1.0, &mut |_, _| {});
+    let report = m.report();
+    assert!(report.time.motion_s > 0.5, "{:?}", report.time);
+    assert!(m.now_s() > before_s + 1.5, "the move and then the idle second");
+    assert_eq!(report.count[0], 100 * 80);
+}
