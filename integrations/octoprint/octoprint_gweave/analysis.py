@@ -46,46 +46,59 @@ def analyse(
     machine_args = ["--machine", machine] if machine else []
     done = 0.0
     parts: Dict[str, Any] = {}
+    refused: Dict[str, str] = {}
     for step, share in STEPS:
         def report(f: float, base=done, share=share) -> None:
             if progress:
                 progress(base + share * f)
 
-        if step == "check":
-            parts[step] = runner.check(job, path, bed=bed, timeout_s=timeout_s, progress=report)
-        else:
-            args = [step, path, *(machine_args if step in ("estimate", "sim") else [])]
-            parts[step] = job.json(args, timeout_s=timeout_s, watch=path, progress=report)
+        try:
+            if step == "check":
+                parts[step] = runner.check(job, path, bed=bed, timeout_s=timeout_s, progress=report)
+            else:
+                args = [step, path, *(machine_args if step in ("estimate", "sim") else [])]
+                parts[step] = job.json(args, timeout_s=timeout_s, watch=path, progress=report)
+        except runner.GweaveError as e:
+            if job.aborted:
+                raise
+            # A file gweave refuses (stats stops at a checksum error) is the check's first error.
+            refused[step] = str(e)
         done += share
         if progress:
             progress(done)
-    return document(parts["stats"], parts["estimate"], parts["check"], parts["sim"], machine)
+    return document(parts, refused, machine)
 
 
-def document(stats: Dict[str, Any], estimate: Dict[str, Any], check, sim: Dict[str, Any], machine) -> Dict[str, Any]:
-    result: Dict[str, Any] = {
-        "estimatedPrintTime": estimate["total_s"],
-        "filament": {
+def document(parts: Dict[str, Any], refused: Dict[str, str], machine: Optional[str]) -> Dict[str, Any]:
+    """The analysis from the parts that ran; a part gweave refused is an error of the check."""
+    result: Dict[str, Any] = {}
+    stats, estimate = parts.get("stats"), parts.get("estimate")
+    if estimate:
+        result["estimatedPrintTime"] = estimate["total_s"]
+    if stats:
+        result["filament"] = {
             f"tool{t['tool']}": {"length": t["extruded_mm"], "volume": t["extruded_mm3"] / 1000.0}
             for t in stats["filament"]
-        },
-        "layers": stats["layers"],
-    }
-    bounds = stats.get("extrusion_bounds")
-    if bounds:
-        lo, hi = bounds["min"], bounds["max"]
-        result["printingArea"] = {
-            "minX": lo[0], "minY": lo[1], "minZ": lo[2], "maxX": hi[0], "maxY": hi[1], "maxZ": hi[2]
         }
-        result["dimensions"] = {"width": hi[0] - lo[0], "depth": hi[1] - lo[1], "height": hi[2] - lo[2]}
+        result["layers"] = stats["layers"]
+        bounds = stats.get("extrusion_bounds")
+        if bounds:
+            lo, hi = bounds["min"], bounds["max"]
+            result["printingArea"] = {
+                "minX": lo[0], "minY": lo[1], "minZ": lo[2], "maxX": hi[0], "maxY": hi[1], "maxZ": hi[2]
+            }
+            result["dimensions"] = {"width": hi[0] - lo[0], "depth": hi[1] - lo[1], "height": hi[2] - lo[2]}
+    summary = summarise(parts.get("check") or runner.CheckSummary(), parts.get("sim") or {})
+    summary["errors"] = [f"gweave {step}: {msg}" for step, msg in refused.items()] + summary["errors"]
     result["gweave"] = {
-        "machine": estimate.get("machine"),
+        "machine": (estimate or {}).get("machine"),
         "machine_path": machine or None,
-        "planner": estimate.get("planner"),
-        "estimate": {k: estimate[k] for k in ("total_s", "motion_s", "dwell_s", "overhead_s", "blocks")},
-        "sim_total_s": sim["time"]["total_s"],
-        "slicer": stats.get("slicer"),
-        **summarise(check, sim),
+        "planner": (estimate or {}).get("planner"),
+        "estimate": {k: estimate[k] for k in ("total_s", "motion_s", "dwell_s", "overhead_s", "blocks")}
+        if estimate else None,
+        "sim_total_s": parts["sim"]["time"]["total_s"] if "sim" in parts else None,
+        "slicer": (stats or {}).get("slicer"),
+        **summary,
     }
     return result
 
@@ -117,17 +130,17 @@ class GweaveAnalysisQueue(AbstractAnalysisQueue):
                 job=self._job,
                 progress=lambda f: self._plugin.analysis_progress(entry.path, f),
             )
-        except runner.GweaveError as e:
+        except Exception as e:
             if self._job.aborted:
                 raise AnalysisAborted(reenqueue=self._reenqueue)
-            # OctoPrint logs a RuntimeError from an analysis and keeps the file without one.
+            # OctoPrint's queue survives a RuntimeError only (it logs it; the file has no analysis).
             self._plugin.analysis_failed(entry.path, str(e))
-            raise RuntimeError(f"gweave: {e}")
+            raise RuntimeError(f"gweave: {e}") from e
         finally:
             self._job = None
         self._logger.info(
-            "gweave analysed %s in %.2f s: %.0f s print time", entry.path, time.monotonic() - started,
-            result["estimatedPrintTime"],
+            "gweave analysed %s in %.2f s: %s s print time, errors: %s", entry.path, time.monotonic() - started,
+            result.get("estimatedPrintTime"), result["gweave"]["errors"] or "none",
         )
         self._plugin.analysis_progress(entry.path, 1.0)
         return result

@@ -25,9 +25,9 @@ def summarise(check, sim: Dict[str, Any]) -> Dict[str, Any]:
     errors: List[str] = []
     warnings: List[str] = []
     if check.errors:
-        errors.append(f"gweave check: {check.errors} errors")
+        errors.append(f"gweave check: {count(check.errors, 'error')}")
     if check.warnings:
-        warnings.append(f"gweave check: {check.warnings} warnings")
+        warnings.append(f"gweave check: {count(check.warnings, 'warning')}")
     if sim.get("halted"):
         faults = "; ".join(f.get("message", str(f)) if isinstance(f, dict) else str(f) for f in sim["thermal_faults"])
         errors.append(f"virtual printer halted{': ' + faults if faults else ''}")
@@ -43,6 +43,10 @@ def summarise(check, sim: Dict[str, Any]) -> Dict[str, Any]:
             "first": [describe(w) for w in sim.get("warnings", [])[:KEEP_SIM]],
         },
     }
+
+
+def count(n: int, what: str) -> str:
+    return f"{n} {what}{'' if n == 1 else 's'}"
 
 
 def describe(w: Dict[str, Any]) -> str:

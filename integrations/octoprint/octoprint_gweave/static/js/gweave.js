@@ -5,11 +5,12 @@
  * refused on errors). The settings page binds to OctoPrint's settings view model directly.
  */
 $(function () {
-    // The badge goes into the file list's own template, before Knockout first renders it.
+    // The badge goes into the file list's own template, before Knockout first renders it, under
+    // the file's name (the action buttons take the bottom right of an entry).
     var template = document.getElementById("files_template_machinecode");
     if (template && template.innerHTML.indexOf("gweave-badge") < 0) {
         template.innerHTML = template.innerHTML.replace(
-            /(<div class="size">[\s\S]*?<\/div>)/,
+            /(<div class="internal"[\s\S]*?<\/div>)/,
             '$1<div class="gweave-badge" data-bind="html: window.gweaveBadge ? window.gweaveBadge($data) : \'\'"></div>'
         );
     }
@@ -24,6 +25,10 @@ $(function () {
             return '<span class="label ' + kind + '" title="' + _.escape(title || "") + '">' + _.escape(text) + "</span> ";
         }
 
+        function count(n, what) {
+            return n + " " + what + (n === 1 ? "" : "s");
+        }
+
         window.gweaveBadge = function (file) {
             var out = "";
             var p = self.progress()[file.path];
@@ -32,12 +37,12 @@ $(function () {
             }
             var a = file.gcodeAnalysis && file.gcodeAnalysis.gweave;
             if (a) {
-                var t = formatDuration(file.gcodeAnalysis.estimatedPrintTime);
+                var secs = file.gcodeAnalysis.estimatedPrintTime;
                 var lines = (a.errors || []).concat(a.warnings || []);
                 var kind = a.errors && a.errors.length ? "label-important" : lines.length ? "label-warning" : "label-success";
-                var text = "gweave " + t;
-                if (a.errors && a.errors.length) text += ", " + a.errors.length + " errors";
-                else if (lines.length) text += ", " + lines.length + " warnings";
+                var text = "gweave" + (secs !== undefined ? " " + formatDuration(secs) : "");
+                if (a.errors && a.errors.length) text += ", " + count(a.errors.length, "error");
+                else if (lines.length) text += ", " + count(lines.length, "warning");
                 out += label(kind, text, (a.machine ? a.machine + ": " : "") + (lines.join("\n") || "no warnings"));
             }
             var u = file.gweave && file.gweave.upload;
