@@ -80,10 +80,15 @@ class OctoPrint:
 
 
 @pytest.fixture(scope="module")
-def octoprint(tmp_path_factory):
-    octoprint_bin = BIN / "octoprint"
-    assert octoprint_bin.exists(), "OctoPrint is not in this environment: run `make py-deps`"
+def plugin():
+    """The plugin pip-installed here, as a user installs it into OctoPrint's environment."""
+    assert (BIN / "octoprint").exists(), "OctoPrint is not in this environment: run `make py-deps`"
     subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-warn-conflicts", str(PLUGIN)], check=True)
+
+
+@pytest.fixture(scope="module")
+def octoprint(plugin, tmp_path_factory):
+    octoprint_bin = BIN / "octoprint"
     base = tmp_path_factory.mktemp("octoprint")
     port = free_port()
     (base / "config.yaml").write_text(config(port))  # JSON is YAML
@@ -123,6 +128,36 @@ def octoprint(tmp_path_factory):
             server.kill()
             server.wait()
         log.close()
+
+
+# Runs the plugin's analysis in a fresh process: its progress, and the largest memory any gweave
+# run it started took (resource.RUSAGE_CHILDREN of that process alone).
+ANALYSE = """
+import json, resource, sys
+from octoprint_gweave import analysis
+seen = []
+r = analysis.analyse(sys.argv[1], machine=None, bed=(200, 200, 200), timeout_s=600, progress=seen.append)
+print(json.dumps({"progress": seen, "peak_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
+                  "time": r["estimatedPrintTime"]}))
+"""
+
+
+def test_octoprint_analysis_reports_progress_in_bounded_memory(plugin, data, tmp_path):
+    dual = (data / "cura" / "cura_dual.gcode").read_bytes()
+    runs = {}
+    for copies in (1, 4):
+        big = tmp_path / f"x{copies}.gcode"
+        big.write_bytes(dual * copies)
+        out = subprocess.run([sys.executable, "-c", ANALYSE, str(big)], capture_output=True, text=True, check=True)
+        runs[copies] = json.loads(out.stdout)
+    progress = runs[4]["progress"]
+    # Read positions sampled while gweave reads: many steps, never backwards, ending at 1.
+    assert len(set(progress)) >= 8, progress
+    assert progress == sorted(progress) and progress[-1] == 1.0, progress
+    assert any(0 < p < 0.15 for p in progress), "progress within the first step (stats), not only between steps"
+    # Four times the file, the same memory (to within the noise of a process start).
+    assert runs[4]["peak_mb"] < runs[1]["peak_mb"] + 10, runs
+    assert runs[4]["time"] > 3.9 * runs[1]["time"]
 
 
 def analysed(f: dict) -> bool:

@@ -92,8 +92,10 @@ class Job:
         err_thread = threading.Thread(target=_tail, args=(proc.stderr, stderr_tail), daemon=True)
         err_thread.start()
         stop = threading.Event()
+        watcher = None
         if watch and progress:
-            threading.Thread(target=_watch, args=(proc.pid, watch, progress, stop), daemon=True).start()
+            watcher = threading.Thread(target=_watch, args=(proc.pid, watch, progress, stop), daemon=True)
+            watcher.start()
         timer = threading.Timer(timeout_s, proc.kill)
         timer.start()
         try:
@@ -107,6 +109,9 @@ class Job:
         finally:
             timer.cancel()
             stop.set()
+            # Joined, so no late sample follows what the caller reports next.
+            if watcher is not None:
+                watcher.join()
             err_thread.join(timeout=5)
         if self.aborted:
             raise GweaveError("aborted")
