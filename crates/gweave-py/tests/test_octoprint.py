@@ -45,7 +45,8 @@ def config(port: int) -> str:
                    "host": "127.0.0.1", "port": port},
         "accessControl": {"autologinLocal": True, "autologinAs": USER, "localNetworks": ["127.0.0.0/8"],
                           "autologinHeadsupAcknowledged": True},
-        "plugins": {"_disabled": plugins_off},
+        # OctoPrint's own virtual printer, for a connected printer (selecting a file needs one).
+        "plugins": {"_disabled": plugins_off, "virtual_printer": {"enabled": True}},
         # Nothing to connect to: a short serial timeout keeps a stray connection attempt short.
         "serial": {"autoconnect": False, "timeout": {"connection": 2, "detection": 1}},
         "gcodeAnalysis": {"runAt": "always"},
@@ -73,6 +74,14 @@ class OctoPrint:
             if r.ok and until(r.json()):
                 return r.json()
             assert time.monotonic() < deadline, f"{name}: {r.status_code} {r.text[:2000]}"
+            time.sleep(0.3)
+
+    def connect(self) -> None:
+        r = self.http.post(f"{self.url}/api/connection", json={"command": "connect", "port": "VIRTUAL"})
+        assert r.status_code == 204, r.text
+        deadline = time.monotonic() + 30
+        while self.http.get(f"{self.url}/api/connection").json()["current"]["state"] != "Operational":
+            assert time.monotonic() < deadline, self.http.get(f"{self.url}/api/connection").text
             time.sleep(0.3)
 
     def stored(self, name: str) -> bytes:
@@ -160,6 +169,10 @@ def test_octoprint_analysis_reports_progress_in_bounded_memory(plugin, data, tmp
     assert runs[4]["time"] > 3.9 * runs[1]["time"]
 
 
+# A checksum error on line 2 (gweave check: an error; gweave stats refuses the file).
+BAD = b"M104 S200\nN1 G1 X10 Y10*99\nG1 X20 E1\n"
+
+
 def analysed(f: dict) -> bool:
     return "gweave" in (f.get("gcodeAnalysis") or {})
 
@@ -220,7 +233,7 @@ def test_octoprint_refused_upload_is_kept_and_says_why(octoprint, data):
 
 def test_octoprint_refuses_to_print_a_file_with_errors(octoprint, tmp_path):
     bad = tmp_path / "bad.gcode"
-    bad.write_bytes(b"M104 S200\nN1 G1 X10 Y10*99\nG1 X20 E1\n")
+    bad.write_bytes(BAD)
     assert octoprint.upload(bad, "bad.gcode").status_code == 201
     a = octoprint.file("bad.gcode", analysed)["gcodeAnalysis"]["gweave"]
     # `gweave stats` refuses the file (no time or filament then), `gweave check` finds the error.
@@ -307,8 +320,11 @@ def test_octoprint_page_shows_the_badge_and_settings(octoprint, data, tmp_path):
     """
     chromium()
     # Files with each kind of badge: analysed, purge-shifted on upload, refused by the check.
-    octoprint.file("torus.gcode", analysed)
-    octoprint.file("bad.gcode", analysed)
+    bad = tmp_path / "bad.gcode"
+    bad.write_bytes(BAD)
+    for path, name in ((data / "cura" / "cura_torus.gcode", "torus.gcode"), (bad, "bad.gcode")):
+        assert octoprint.upload(path, name).status_code == 201
+        octoprint.file(name, analysed)
     octoprint.settings(on_upload="purge-shift --purge 2.5")
     try:
         octoprint.upload(data / "slic3r" / "slic3r_cone_2tool.gcode", "cone.gcode")
@@ -323,8 +339,17 @@ def test_octoprint_page_shows_the_badge_and_settings(octoprint, data, tmp_path):
         assert any(b.startswith("gweave 00:12:05") for b in badges), badges  # torus: 725.5 s
         assert any("gweave purge-shift" in b for b in badges), badges
         assert any(b.startswith("gweave 00:00:00, 2 errors") for b in badges), badges  # bad.gcode
+        # The check of a selected file, as a notification on the page.
+        octoprint.connect()
+        r = octoprint.http.post(f"{octoprint.url}/api/files/local/bad.gcode", json={"command": "select"})
+        assert r.status_code == 204, r.text
+        browser.wait("$('.ui-pnotify:contains(\"gweave: bad.gcode\")').length > 0")
+        note = browser.js("$('.ui-pnotify:contains(\"gweave: bad.gcode\")').text()")
+        assert "gweave check: 1 error" in note and "checksum mismatch" in note, note
+        time.sleep(1)  # the notification's fade-in
         shots = [tmp_path / "octoprint.png", tmp_path / "octoprint_settings.png"]
         browser.screenshot(shots[0])
+        browser.js("PNotify.removeAll(), true")
         browser.js("$('#navbar_show_settings').click(), true")
         browser.wait("$('#settings_plugin_gweave_link a').length > 0")
         browser.js("$('#settings_plugin_gweave_link a').click(), true")
