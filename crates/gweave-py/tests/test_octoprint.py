@@ -195,6 +195,20 @@ def test_octoprint_shows_gweave_time_and_filament(octoprint, data):
     assert a["gweave"]["errors"] == [] and a["gweave"]["planner"] == "marlin"
 
 
+def test_octoprint_times_with_the_machine_profile_set(octoprint, data):
+    fixture = data / "cura" / "cura_torus.gcode"
+    klipper = ROOT / "examples" / "machines" / "klipper.toml"
+    octoprint.settings(machine=str(klipper))
+    try:
+        assert octoprint.upload(fixture, "torus_klipper.gcode").status_code == 201
+        a = octoprint.file("torus_klipper.gcode", analysed)["gcodeAnalysis"]
+    finally:
+        octoprint.settings(machine="")
+    est = gweave.estimate(fixture, machine=klipper)
+    assert a["estimatedPrintTime"] == est["total_s"] != gweave.estimate(fixture)["total_s"]
+    assert a["gweave"]["planner"] == "klipper" and a["gweave"]["machine_path"] == str(klipper)
+
+
 def test_octoprint_upload_is_purge_shifted_like_the_cli(octoprint, data, tmp_path):
     fixture = data / "slic3r" / "slic3r_cone_2tool.gcode"
     octoprint.settings(on_upload="purge-shift --purge 2.5")

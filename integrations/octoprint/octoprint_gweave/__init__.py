@@ -58,12 +58,6 @@ class GweavePlugin(
     def get_settings_defaults(self) -> Dict[str, Any]:
         return {"machine": "", "on_upload": "", "block_on_errors": False, "timeout_s": 600}
 
-    def on_settings_save(self, data):
-        # A transform the plugin cannot run is refused here, before any upload meets it.
-        if "on_upload" in data:
-            upload.parse(data["on_upload"])
-        return octoprint.plugin.SettingsPlugin.on_settings_save(self, data)
-
     def machine(self) -> Optional[str]:
         return (self._settings.get(["machine"]) or "").strip() or None
 
