@@ -56,23 +56,20 @@ class Gweave(Script):
             }
         }"""
 
-    def arguments(self) -> List[str]:
-        """The gweave command line this script runs, without the input and output."""
-        if self.getSettingValueByKey("mode") == "mix":
-            profile = (self.getSettingValueByKey("mix_profile") or "").strip()
-            if not profile:
-                raise ValueError("gweave: set the mix profile (a TOML file) in the script's settings")
-            return ["mix", "-c", profile]
-        return ["purge-shift", "--purge", repr(float(self.getSettingValueByKey("purge_mm")))]
-
     def execute(self, data: List[str]) -> List[str]:
-        args = self.arguments()
+        mode = self.getSettingValueByKey("mode")
+        if mode == "mix":
+            value = (self.getSettingValueByKey("mix_profile") or "").strip()
+            if not value:
+                raise ValueError("gweave: set the mix profile (a TOML file) in the script's settings")
+        else:
+            value = float(self.getSettingValueByKey("purge_mm"))
         tmp = tempfile.mkdtemp(prefix="gweave-cura-")
         try:
             src, dst = os.path.join(tmp, "cura.gcode"), os.path.join(tmp, "gweave.gcode")
             with open(src, "w", encoding="utf-8", newline="") as f:
                 f.writelines(data)
-            run(args, src, dst)
+            run(mode, value, src, dst)
             with open(dst, encoding="utf-8", newline="") as f:
                 out = f.read()
         finally:
@@ -80,21 +77,27 @@ class Gweave(Script):
         return split_like(out, data)
 
 
-def run(args: List[str], src: str, dst: str) -> None:
-    """``gweave ARGS[0] SRC -o DST ARGS[1:]`` through the Python package, or the command on PATH."""
+def run(mode: str, value, src: str, dst: str) -> None:
+    """``gweave purge-shift SRC -o DST --purge MM`` or ``gweave mix SRC -o DST -c PROFILE``.
+
+    Through the Python package (its errors are exceptions with gweave's message, which Cura logs),
+    or the ``gweave`` command on PATH when Cura's Python cannot import the package.
+    """
     try:
         import gweave
     except ImportError:
         exe = shutil.which("gweave")
         if exe is None:
             raise RuntimeError("gweave: neither the gweave Python package nor the gweave command is installed")
-        done = subprocess.run([exe, args[0], src, "-o", dst, *args[1:]], capture_output=True, text=True)
+        args = ["mix", src, "-o", dst, "-c", value] if mode == "mix" else ["purge-shift", src, "-o", dst, "--purge", repr(value)]
+        done = subprocess.run([exe, *args], capture_output=True, text=True)
         if done.returncode != 0:
             raise RuntimeError(done.stderr.strip())
         return
-    code = gweave.main([args[0], src, "-o", dst, *args[1:]])
-    if code != 0:
-        raise RuntimeError(f"gweave {' '.join(args)} failed (exit {code}); see Cura's log")
+    if mode == "mix":
+        gweave.mix(src, dst, config=value)
+    else:
+        gweave.purge_shift(src, dst, purge=value)
 
 
 def split_like(text: str, pieces: List[str]) -> List[str]:

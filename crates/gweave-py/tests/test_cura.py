@@ -10,6 +10,7 @@ Cura's layer list. What Cura would save must equal what the CLI writes on the sa
 import json
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -38,11 +39,13 @@ def cura_python(tmp_path_factory):
     return pkgs
 
 
+def harness(gcode: Path, out: Path, settings: dict, env: dict) -> subprocess.CompletedProcess:
+    return subprocess.run([SYSTEM_PYTHON, str(HARNESS), str(gcode), str(out), json.dumps(settings)],
+                          capture_output=True, text=True, timeout=300, env=env)
+
+
 def in_cura(pkgs: Path, gcode: Path, out: Path, settings: dict) -> dict:
-    r = subprocess.run(
-        [SYSTEM_PYTHON, str(HARNESS), str(gcode), str(out), json.dumps(settings)],
-        capture_output=True, text=True, timeout=300, env={"PYTHONPATH": str(pkgs), "PATH": "/usr/bin:/bin"},
-    )
+    r = harness(gcode, out, settings, {"PYTHONPATH": str(pkgs), "PATH": "/usr/bin:/bin"})
     assert r.returncode == 0, r.stderr[-3000:]
     return json.loads(r.stdout.strip().splitlines()[-1])
 
@@ -68,10 +71,25 @@ def test_cura_script_mix_equals_the_cli(cura_python, data, tmp_path):
 
 
 def test_cura_script_without_a_mix_profile_says_so(cura_python, data, tmp_path):
-    r = subprocess.run(
-        [SYSTEM_PYTHON, str(HARNESS), str(data / "cura" / "cura_torus.gcode"), str(tmp_path / "o.gcode"),
-         json.dumps({"mode": "mix"})],
-        capture_output=True, text=True, timeout=120, env={"PYTHONPATH": str(cura_python), "PATH": "/usr/bin:/bin"},
-    )
+    r = harness(data / "cura" / "cura_torus.gcode", tmp_path / "o.gcode", {"mode": "mix"},
+                {"PYTHONPATH": str(cura_python), "PATH": "/usr/bin:/bin"})
     assert r.returncode == 1
     assert "gweave: set the mix profile (a TOML file) in the script's settings" in r.stderr
+
+
+def test_cura_script_reports_gweave_error(cura_python, data, tmp_path):
+    r = harness(data / "cura" / "cura_torus.gcode", tmp_path / "o.gcode",
+                {"mode": "mix", "mix_profile": "/nonexistent/mix.toml"},
+                {"PYTHONPATH": str(cura_python), "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 1 and not (tmp_path / "o.gcode").exists()
+    assert "No such file or directory: '/nonexistent/mix.toml'" in r.stderr, r.stderr[-2000:]
+
+
+def test_cura_script_falls_back_to_the_gweave_command(cura_python, data, tmp_path):
+    """Cura's Python without the package (the AppImage): the `gweave` command on PATH does the job."""
+    fixture = data / "cura" / "cura_dual.gcode"
+    r = harness(fixture, tmp_path / "cura.gcode", {"mode": "purge-shift", "purge_mm": 2.5},
+                {"PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin"})
+    assert r.returncode == 0, r.stderr[-3000:]
+    gweave.purge_shift(fixture, tmp_path / "cli.gcode", purge=2.5)
+    assert (tmp_path / "cura.gcode").read_bytes() == (tmp_path / "cli.gcode").read_bytes()
