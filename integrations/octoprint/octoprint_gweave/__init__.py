@@ -36,7 +36,7 @@ __plugin_pythoncompat__ = ">=3.8,<4"
 PROGRESS_EVERY_S = 0.5
 # Upload reports kept for GET /api/plugin/gweave.
 KEEP_UPLOADS = 20
-# A request that would start a print: POST /api/files/<origin>/<path> (select + print) or /api/job.
+# A request that would start a print: POST /api/files/local/<path> (select + print) or /api/job.
 _FILES_API = re.compile(r"^/api/files/(local)/(.+)$")
 
 
