@@ -12,18 +12,20 @@ GWEAVE := target/release/gweave
 OUT := out
 
 .PHONY: demo test bench deps rust-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
-.PHONY: browser-deps
+.PHONY: browser-deps cura-deps
 
-deps: rust-deps py-deps browser-deps
+deps: rust-deps py-deps browser-deps cura-deps
 
 rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
 
 py-deps: $(VENV)/.deps
-$(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt
+$(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt crates/gweave-py/requirements-integrations.txt
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -r crates/gweave-py/requirements-dev.txt
+	# OctoPrint, for the plugin's test (integrations/octoprint).
+	$(PY) -m pip install -q -r crates/gweave-py/requirements-integrations.txt
 	# Printrun's printcore without its GUI dependencies (see the file).
 	$(PY) -m pip install -q --no-deps -r crates/gweave-py/requirements-host.txt
 	touch $@
@@ -35,6 +37,15 @@ browser-deps:
 	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
 	  apt-get install -y -q chromium || { apt-get update -q && apt-get install -y -q chromium; }; \
 	else echo "browser-deps: no /usr/bin/chromium and not root: the viewer test will be skipped"; fi
+
+# Debian's Cura 4.13 (its PostProcessingPlugin and Uranium) for the Cura script's test
+# (crates/gweave-py/tests/test_cura.py); installed only when running as root, otherwise the test
+# says why it skips.
+cura-deps:
+	@if [ -f /usr/lib/cura/plugins/PostProcessingPlugin/Script.py ]; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  apt-get install -y -q --no-install-recommends cura || { apt-get update -q && apt-get install -y -q --no-install-recommends cura; }; \
+	else echo "cura-deps: no Debian cura package and not root: the Cura script test will be skipped"; fi
 
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli
