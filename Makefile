@@ -2,6 +2,7 @@
 #   make demo   installs what is needed, then runs the main jobs on bundled real slicer output
 #   make test   installs what is needed, then runs every test (cargo, pytest, end to end)
 #   make bench  benchmarks on large real files, each figure beside a reference from the same run
+#   make fuzz   coverage-guided fuzzing of the reader, lexer and profile loaders (not in make test)
 
 SHELL := /bin/bash
 .SHELLFLAGS := -eu -o pipefail -c
@@ -12,7 +13,7 @@ GWEAVE := target/release/gweave
 OUT := out
 
 .PHONY: demo test bench deps rust-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
-.PHONY: browser-deps cura-deps
+.PHONY: browser-deps cura-deps fuzz
 
 deps: rust-deps py-deps browser-deps cura-deps
 
@@ -84,6 +85,32 @@ demo: build python
 
 bench: build python
 	bash bench/run.sh $(GWEAVE)
+
+# Coverage-guided fuzzing with AFL++ (cargo-afl, stable toolchain), FUZZ_SECONDS per target, one
+# process at a time, niced. Each run starts from the kept corpus (fuzz/corpus/<target>/) and leaves
+# its queue and findings in fuzz/out/<target>/; a crash fails the run, to be kept in
+# fuzz/crashes/<target>/ (docs/reliability.md, "Fuzzing").
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS := gcode machine_profile mix_profile printhead_profile
+FUZZ_ENV := AFL_NO_UI=1 AFL_SKIP_CPUFREQ=1 AFL_NO_AFFINITY=1 AFL_AUTORESUME=1 \
+	AFL_I_DONT_CARE_ABOUT_MISSING_CRASHES=1
+
+fuzz: rust-deps
+	@command -v cargo-afl >/dev/null || $(CARGO) install --locked cargo-afl
+	@# Installing cargo-afl builds AFL++; this builds it only where that did not happen.
+	@$(CARGO) afl config --build >/dev/null 2>&1 || true
+	cd fuzz && nice -n 19 $(CARGO) afl build --release
+	@mkdir -p fuzz/out
+	@for t in $(FUZZ_TARGETS); do \
+	  echo "fuzz: $$t for $(FUZZ_SECONDS) s (log: fuzz/out/$$t.log)"; \
+	  (cd fuzz && $(FUZZ_ENV) nice -n 19 $(CARGO) afl fuzz -V $(FUZZ_SECONDS) -t 2000 \
+	    -i corpus/$$t -o out/$$t target/release/$$t >out/$$t.log 2>&1) \
+	    || { tail -20 fuzz/out/$$t.log; exit 1; }; \
+	done
+	@found=$$(find fuzz/out/*/default/crashes fuzz/out/*/default/hangs -name 'id:*' 2>/dev/null); \
+	if [ -n "$$found" ]; then \
+	  echo "fuzz: found (keep each in fuzz/crashes/<target>/ and fix):"; echo "$$found"; exit 1; \
+	fi; echo "fuzz: no crash and no hang in $(FUZZ_TARGETS)"
 
 clean:
 	rm -rf $(OUT) $(VENV)
