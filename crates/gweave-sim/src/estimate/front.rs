@@ -7,10 +7,11 @@
 use std::collections::HashMap;
 
 use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use gweave::gcode::diag::Severity;
 use gweave::gcode::layers::Structure;
 use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
 use gweave::gcode::line::{Block, Command};
-use gweave::gcode::reader::RawLine;
+use gweave::gcode::reader::{Part, RawLine};
 use gweave::gcode::state::{self, Effect, Firmware, Path, State, StateOptions};
 
 use super::{
@@ -33,6 +34,24 @@ pub(super) struct Front {
     /// The mixing commands' state, for a profile with mixing inputs.
     pub(super) mixing: Option<MixingState>,
     pub(super) line: u64,
+    /// Lines with an error, skipped as firmware skips them.
+    pub(super) malformed: Malformed,
+}
+
+/// Lines that could not be read (a malformed word, a line longer than
+/// [`MAX_LINE`](gweave::gcode::reader::MAX_LINE)): counted, with the first, never dropped silently.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Malformed {
+    pub malformed_lines: u64,
+    /// The first of them, 1-based.
+    pub first_malformed_line: Option<u64>,
+}
+
+impl Malformed {
+    fn add(&mut self, line: u64) {
+        self.malformed_lines += 1;
+        self.first_malformed_line.get_or_insert(line);
+    }
 }
 
 /// What turns a move into jobs besides the move itself: its time account (tag) and the
@@ -80,6 +99,7 @@ impl Front {
             mix_index: HashMap::new(),
             mixing,
             line: 0,
+            malformed: Malformed::default(),
         };
         front.refresh_mix(jobs);
         Ok(front)
@@ -89,13 +109,36 @@ impl Front {
     pub(super) fn parse(&mut self, raw: &[u8]) -> Effect {
         self.line += 1;
         parse_into(raw, &mut self.block);
+        self.count_malformed();
         *self.state.apply(raw, &self.block)
+    }
+
+    /// Counts the line just parsed if it has an error.
+    #[inline(always)]
+    fn count_malformed(&mut self) {
+        if !self.block.diagnostics.is_empty()
+            && self.block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error)
+        {
+            self.malformed.add(self.line);
+        }
+    }
+
+    /// A line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE), which is not read:
+    /// counted as malformed.
+    pub(super) fn skip_long_line(&mut self) {
+        self.line += 1;
+        self.malformed.add(self.line);
     }
 
     /// [`Front::parse`] and [`Front::run`] for a line from a reader, whose look-ahead bytes
     /// speed up the lexer. A move is read in place from the state (it is large).
     #[inline(always)]
     pub(super) fn step(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        match line.part {
+            Part::Whole => {}
+            Part::Last { .. } => return Ok(self.skip_long_line()),
+            Part::Piece => return Ok(()),
+        }
         self.line += 1;
         // A plain move's words are read by no one here (only M-codes and extended commands
         // are, below): leave them unlisted where the state does without them.
@@ -104,6 +147,7 @@ impl Front {
         } else {
             parse_line_lean(line, &mut self.block);
         }
+        self.count_malformed();
         self.state.apply(line.bytes, &self.block);
         if let Effect::Move(m) = &self.state.effect {
             self.book.motion(&self.state.structure, m, self.line, jobs);

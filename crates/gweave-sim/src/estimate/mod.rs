@@ -64,6 +64,7 @@ mod report;
 
 use back::Back;
 use front::Front;
+pub use front::Malformed;
 pub use report::{estimate_report, EstimateReport};
 
 /// Feed rate before the file sets one, mm/s (Klipper `gcode_move`, Marlin `feedrate_mm_s`).
@@ -156,6 +157,9 @@ pub struct Estimate {
     pub feature_s: BTreeMap<Feature, f64>,
     /// Steps per motor.
     pub steps: StepTotals,
+    /// Lines skipped because they could not be read.
+    #[serde(flatten)]
+    pub malformed: Malformed,
 }
 
 /// What a block's time is attributed to, the mix its E steps are split by and the tool they
@@ -330,7 +334,13 @@ impl Estimator {
 
     /// The times so far (moves still queued in the planner are not counted).
     pub fn summary(&self) -> Estimate {
-        self.back.summary()
+        Estimate { malformed: self.front.malformed, ..self.back.summary() }
+    }
+
+    /// Counts a line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE) (given in
+    /// pieces by the line reader; call this for its last) as a malformed line, not read.
+    pub fn skip_long_line(&mut self) {
+        self.front.skip_long_line();
     }
 }
 
@@ -401,7 +411,7 @@ fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate
         let mut back = planning.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
         parsed?;
         back.end();
-        Ok(back.summary())
+        Ok(Estimate { malformed: front.malformed, ..back.summary() })
     })
 }
 

@@ -6,6 +6,7 @@ use gweave::gcode::layers::Feature;
 use serde::Serialize;
 
 use super::{heat, Machine};
+use crate::estimate::Malformed;
 use crate::heater::HeaterId;
 use crate::inkjet::InkjetWarning;
 use crate::protection::ThermalFault;
@@ -186,6 +187,9 @@ pub struct SimReport {
     pub warnings: Vec<SimWarning>,
     /// The inkjet canvases, on a machine with a printhead.
     pub inkjet: Option<InkjetSummary>,
+    /// Lines skipped because they could not be read.
+    #[serde(flatten)]
+    pub malformed: Malformed,
 }
 
 impl Machine {
@@ -235,6 +239,7 @@ impl Machine {
                 layers: c.layers().len(),
                 drops_per_head: c.drops_per_head().to_vec(),
             }),
+            malformed: est.malformed,
         }
     }
 }
