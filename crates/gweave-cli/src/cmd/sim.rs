@@ -10,7 +10,7 @@ use clap::Args;
 use gweave::gcode::layers::Feature;
 use gweave::gcode::reader::{LineReader, Part};
 use gweave::pass::Progress;
-use gweave_sim::estimate::Malformed;
+use gweave_sim::estimate::{HugeArcs, Malformed, MAX_ARC_CHORDS};
 use gweave_sim::heater::HeaterId;
 use gweave_sim::interp::{Machine, Outcome, SimReport};
 use gweave_sim::plot::{save_speed_png, save_temperature_png};
@@ -171,7 +171,7 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
         }
         println!("  unknown         {}", list.join(", "));
     }
-    print_malformed(&r.malformed);
+    print_malformed(&r.malformed, &r.huge_arcs);
     for e in errors {
         println!("  {e}");
     }

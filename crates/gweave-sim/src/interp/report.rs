@@ -6,7 +6,7 @@ use gweave::gcode::layers::Feature;
 use serde::Serialize;
 
 use super::{heat, Machine};
-use crate::estimate::Malformed;
+use crate::estimate::{HugeArcs, Malformed};
 use crate::heater::HeaterId;
 use crate::inkjet::InkjetWarning;
 use crate::protection::ThermalFault;
@@ -190,6 +190,9 @@ pub struct SimReport {
     /// Lines skipped because they could not be read.
     #[serde(flatten)]
     pub malformed: Malformed,
+    /// Arcs too long to cut into chords of 1 mm.
+    #[serde(flatten)]
+    pub huge_arcs: HugeArcs,
 }
 
 impl Machine {
@@ -240,6 +243,7 @@ impl Machine {
                 drops_per_head: c.drops_per_head().to_vec(),
             }),
             malformed: est.malformed,
+            huge_arcs: est.huge_arcs,
         }
     }
 }
