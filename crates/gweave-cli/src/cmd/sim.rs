@@ -188,12 +188,19 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
     }
 }
 
-/// Lines that could not be read, as `check` reports them: skipped, but never silently.
-pub(super) fn print_malformed(m: &Malformed) {
+/// Lines that could not be read, as `check` reports them, and arcs too long to plan finely:
+/// handled, but never silently.
+pub(super) fn print_malformed(m: &Malformed, arcs: &HugeArcs) {
     if let Some(first) = m.first_malformed_line {
         println!(
             "  malformed       {} lines skipped (first: line {first}; see gweave check)",
             m.malformed_lines
+        );
+    }
+    if let Some(first) = arcs.first_huge_arc_line {
+        println!(
+            "  huge arcs       {} of more than {MAX_ARC_CHORDS} chords, planned with longer ones (first: line {first})",
+            arcs.huge_arcs
         );
     }
 }

@@ -10,4 +10,5 @@
 #[allow(dead_code)]
 mod harness;
 
+mod bytes;
 mod outputs;
