@@ -165,7 +165,10 @@ impl Front {
     pub(super) fn step(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
         match line.part {
             Part::Whole => {}
-            Part::Last { .. } => return Ok(self.skip_long_line()),
+            Part::Last { .. } => {
+                self.skip_long_line();
+                return Ok(());
+            }
             Part::Piece => return Ok(()),
         }
         self.line += 1;
