@@ -5,6 +5,10 @@
 
 use std::io;
 
+/// The bytes [`refuse_utf16`] looks at: a reader gives it this many, or the whole input if
+/// shorter, so that the answer does not depend on how the input arrives.
+pub const ENCODING_HEAD: usize = 32;
+
 /// An error if `head` (the first bytes of the input) is UTF-16: a byte order mark, or ASCII
 /// with a NUL after (little-endian) or before (big-endian) every character, which no G-code
 /// file holds.
@@ -22,9 +26,10 @@ pub fn refuse_utf16(head: &[u8]) -> io::Result<()> {
     ))
 }
 
-/// Whether the first (up to 16) pairs of bytes are ASCII characters with the NUL at `nul`.
+/// Whether the first pairs of bytes (up to [`ENCODING_HEAD`]) are ASCII characters with the NUL
+/// at `nul`.
 fn nul_interleaved(head: &[u8], nul: usize) -> bool {
-    let mut pairs = head.chunks_exact(2).take(16).peekable();
+    let mut pairs = head[..head.len().min(ENCODING_HEAD)].chunks_exact(2).peekable();
     pairs.peek().is_some() && pairs.all(|pair| pair[nul] == 0 && matches!(pair[1 - nul], 1..=0x7f))
 }
 

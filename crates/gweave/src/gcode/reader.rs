@@ -7,7 +7,7 @@
 
 use std::io::{self, Read};
 
-use super::encoding::refuse_utf16;
+use super::encoding::{refuse_utf16, ENCODING_HEAD};
 
 /// One line as it is in the file, or a piece of a line longer than [`MAX_LINE`].
 #[derive(Debug, Clone, Copy)]
@@ -292,7 +292,7 @@ impl<R: Read> LineReader<R> {
     /// [`MAX_LINE`] (a longer one is handed out in pieces first), so the buffer never grows.
     #[inline(never)]
     fn refill(&mut self) -> io::Result<()> {
-        let first = self.offset == 0 && self.end == 0;
+        let first = self.offset == 0 && self.end == 0 && !self.eof;
         if self.start > 0 {
             self.buf.copy_within(self.start..self.end, 0);
             self.end -= self.start;
@@ -312,8 +312,8 @@ impl<R: Read> LineReader<R> {
                     // What an earlier read left past the new end must not read as a number
                     // or a line's end.
                     self.buf[self.end..self.end + PAD].fill(0);
-                    // The first bytes tell the encoding: read at least two before any line.
-                    if !first || self.end >= 2 {
+                    // The first bytes tell the encoding: read all it looks at before any line.
+                    if !first || self.end >= ENCODING_HEAD {
                         break;
                     }
                 }
