@@ -198,10 +198,10 @@ impl<R: Read> LineReader<R> {
     /// The next line, or `None` at the end of the input.
     #[inline(always)]
     pub fn next_line(&mut self) -> io::Result<Option<RawLine<'_>>> {
-        // Most lines end within the first look, at a `\n` (or the `\r` of a `\r\n`). A line end
+        // Most lines end within the first look, at a `\n`, a `\r\n` or a lone `\r`. A line end
         // found there is before `end` (past it lie only zeros); the test stays as the guard of
-        // that rule. A lone `\r`, or a `\r` at the end of the data, goes the long way. So does
-        // the rest of a long line: its pieces take all the data read, up to a last `\r`.
+        // that rule. A `\r` at the end of the data goes the long way. So does the rest of a
+        // long line: its pieces take all the data read, up to a last `\r`.
         let from = self.start;
         if let Some(len) = line_end_in_head(&self.buf, from) {
             let at = from + len;
@@ -209,8 +209,11 @@ impl<R: Read> LineReader<R> {
                 let eol = match self.buf[at] {
                     b'\n' => 1,
                     _ if self.buf[at + 1] == b'\n' => 2,
+                    // A lone `\r`; one at the end of the data may be half of a `\r\n`.
+                    _ if at + 1 < self.end => 1,
                     _ => return self.next_line_searching(),
                 };
+                debug_assert!(self.long.is_none(), "a long line's piece left data in the buffer");
                 self.start = at + eol;
                 self.number += 1;
                 let offset = self.offset;
