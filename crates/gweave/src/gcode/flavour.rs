@@ -114,7 +114,10 @@ mod tests {
     #[test]
     fn a_flavour_in_a_cr_only_file_is_found() {
         assert_eq!(flavour_in(b";FLAVOR:Griffin\rG28\r").as_deref(), Some("Griffin"));
-        assert_eq!(flavour_in(b"G28\r; gcode_flavor = klipper\r; z_offset = 0\r").as_deref(), Some("klipper"));
+        assert_eq!(
+            flavour_in(b"G28\r; gcode_flavor = klipper\r; z_offset = 0\r").as_deref(),
+            Some("klipper")
+        );
     }
 
     #[test]
