@@ -5,10 +5,11 @@ use std::fs::File;
 use std::path::PathBuf;
 
 use gweave::check::{CheckOptions, CheckPass};
+use gweave::gcode::diag::{Diagnostic, Finding};
 use gweave::gcode::flavour::read_flavour;
-use gweave::gcode::lexer::parse_line;
+use gweave::gcode::lexer::{parse_into, parse_line};
 use gweave::gcode::line::{Block, Command, Value};
-use gweave::gcode::reader::LineReader;
+use gweave::gcode::reader::{LineReader, Part};
 use gweave::gcode::state::{Effect, State, StateOptions, E, X, Y, Z};
 use gweave::gcode::writer::Target;
 use gweave::pass::{Identity, Quiet, Run};
@@ -211,11 +212,37 @@ impl Reader {
     }
 
     fn __next__(&mut self, py: Python<'_>) -> PyResult<Option<Line>> {
-        let Some(line) = self.lines.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? else {
+        let os_err = |e: std::io::Error| PyOSError::new_err(e.to_string());
+        let Some(line) = self.lines.next_line().map_err(os_err)? else {
             return Ok(None);
         };
-        let raw = line.bytes;
-        parse_line(&line, &mut self.block);
+        let (raw, number) = match line.part {
+            Part::Whole => {
+                parse_line(&line, &mut self.block);
+                (line.bytes, line.number)
+            }
+            // A line longer than MAX_LINE comes in pieces: it is given once, empty, with its
+            // finding, and leaves the state as it was.
+            mut part => {
+                let number = line.number;
+                // The reader always ends a long line with its last piece.
+                let len = loop {
+                    match part {
+                        Part::Last { len } => break len,
+                        _ => {
+                            part = self
+                                .lines
+                                .next_line()
+                                .map_err(os_err)?
+                                .map_or(Part::Last { len: 0 }, |l| l.part)
+                        }
+                    }
+                };
+                parse_into(b"", &mut self.block);
+                self.block.diagnostics.push(Diagnostic::at(0, Finding::LineTooLong { len }));
+                (&b""[..], number)
+            }
+        };
         let effect = *self.state.apply(raw, &self.block);
         let b = &self.block;
         let words = PyDict::new(py);
@@ -235,7 +262,7 @@ impl Reader {
         let extruded = effect.filament_mm();
         let s = &self.state;
         Ok(Some(Line {
-            number: line.number,
+            number,
             raw: raw.to_vec(),
             command,
             words: words.unbind(),
@@ -562,8 +589,14 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult
         let mut reader = LineReader::new(file);
         let mut out = |_t: f64, _l: &str| {};
         while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
-            if m.execute(line.bytes, &mut out) == gweave_sim::interp::Outcome::Halted {
-                break;
+            match line.part {
+                Part::Whole => {
+                    if m.execute(line.bytes, &mut out) == gweave_sim::interp::Outcome::Halted {
+                        break;
+                    }
+                }
+                Part::Piece => {}
+                Part::Last { .. } => m.skip_long_line(),
             }
         }
         m.finish(&mut out);

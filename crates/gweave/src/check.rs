@@ -10,6 +10,7 @@ use serde::Serialize;
 use crate::gcode::diag::{Diagnostic, Finding, Severity};
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
+use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
 use crate::pass::{Ctx, Pass};
 
@@ -96,6 +97,14 @@ impl CheckPass {
 }
 
 impl Pass for CheckPass {
+    fn long_line(&mut self, piece: &RawLine<'_>, _out: &mut dyn Write) -> io::Result<()> {
+        if let Part::Last { len } = piece.part {
+            self.report.lines = piece.number;
+            self.add(piece.number, Diagnostic::at(0, Finding::LineTooLong { len }));
+        }
+        Ok(())
+    }
+
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
         let n = ctx.line.number;
         self.report.lines = n;

@@ -9,11 +9,11 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::gcode::diag::Severity;
+use crate::gcode::diag::{Finding, Severity};
 use crate::gcode::flavour::read_flavour;
 use crate::gcode::lexer::{parse_line, parse_line_lean};
 use crate::gcode::line::Block;
-use crate::gcode::reader::{LineReader, RawLine};
+use crate::gcode::reader::{LineReader, Part, RawLine};
 use crate::gcode::state::{Effect, State, StateOptions};
 use crate::gcode::writer::{Output, Target};
 
@@ -31,6 +31,15 @@ pub trait Pass {
     /// Sees one line; writes what should be output for it (by default, the line unchanged).
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
         keep(ctx, out)
+    }
+
+    /// Sees a piece of a line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE) ([`Part`]), in a lenient run (a
+    /// strict one stops at such a line). The line is not parsed and leaves the state as it
+    /// was. By default the piece is written unchanged, so that a copy keeps the line byte for
+    /// byte without ever holding it whole.
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> io::Result<()> {
+        out.write_all(piece.bytes)?;
+        out.write_all(piece.eol)
     }
 
     /// Called after the last line.
@@ -188,6 +197,22 @@ impl<R: Read> Lines<'_, R> {
         let write_err = |e: io::Error| Error::io(output_name(path), e);
         let mut next_report = 0u64;
         while let Some(line) = self.reader.next_line().map_err(|e| Error::io(path, e))? {
+            if line.part != Part::Whole {
+                match (self.strictness, line.part) {
+                    (Strictness::Lenient, _) => pass.long_line(&line, out).map_err(write_err)?,
+                    (Strictness::Strict, Part::Last { len }) => {
+                        return Err(Error::Syntax {
+                            path: path.to_path_buf(),
+                            line: line.number,
+                            column: 1,
+                            finding: Finding::LineTooLong { len },
+                        })
+                    }
+                    // Read through, to give the line's length.
+                    (Strictness::Strict, _) => {}
+                }
+                continue;
+            }
             if LIST_WORDS {
                 parse_line(&line, &mut block);
             } else {
@@ -236,7 +261,8 @@ pub struct CopyReport {
     pub lines: u64,
     /// Bytes copied, line endings included (the size of the input).
     pub bytes: u64,
-    /// Lines with an error (a malformed word, a bad checksum...), copied as written. Only a
+    /// Lines with an error (a malformed word, a bad checksum, a line longer than
+    /// [`MAX_LINE`](crate::gcode::reader::MAX_LINE)...), copied as written. Only a
     /// [`Strictness::Lenient`] run gets past one; a strict run stops at the first.
     pub malformed_lines: u64,
     /// The first of them, 1-based.
@@ -253,10 +279,27 @@ impl Pass for Identity {
         r.lines += 1;
         r.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
         if ctx.block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error) {
-            r.malformed_lines += 1;
-            r.first_malformed_line.get_or_insert(ctx.line.number);
+            r.malformed(ctx.line.number);
         }
         keep(ctx, out)
+    }
+
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> io::Result<()> {
+        let r = &mut self.report;
+        r.bytes += (piece.bytes.len() + piece.eol.len()) as u64;
+        if let Part::Last { .. } = piece.part {
+            r.lines += 1;
+            r.malformed(piece.number);
+        }
+        out.write_all(piece.bytes)?;
+        out.write_all(piece.eol)
+    }
+}
+
+impl CopyReport {
+    fn malformed(&mut self, line: u64) {
+        self.malformed_lines += 1;
+        self.first_malformed_line.get_or_insert(line);
     }
 }
 
@@ -307,6 +350,43 @@ mod tests {
         )
         .unwrap_err();
         assert_eq!(err.to_string(), "part.gcode:2:5: malformed number after 'Y'");
+    }
+
+    #[test]
+    fn a_line_longer_than_the_limit_stops_a_strict_run_with_its_length() {
+        let mut input = b"G1 X1\n".to_vec();
+        input.extend(std::iter::repeat_n(0u8, 3 << 20));
+        input.extend_from_slice(b"\rG1 X2\n");
+        let err = drive_reader(
+            &input[..],
+            Path::new("zeros.gcode"),
+            StateOptions::default(),
+            Strictness::Strict,
+            &mut Quiet,
+            &mut Identity::default(),
+            &mut io::sink(),
+        )
+        .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "zeros.gcode:2:1: line of 3145728 bytes is longer than the limit of 262144 (not read)"
+        );
+    }
+
+    #[test]
+    fn a_line_longer_than_the_limit_is_copied_through_by_a_lenient_copy() {
+        let mut input = b"G1 X1\r".to_vec();
+        input.extend(std::iter::repeat_n(b"G1 X1 Y1 E1 ", 300_000).flatten());
+        input.extend_from_slice(b"\r\nM104 S0");
+        let (out, report) = identity(&input);
+        assert!(out == input);
+        let expected = CopyReport {
+            lines: 3,
+            bytes: input.len() as u64,
+            malformed_lines: 1,
+            first_malformed_line: Some(2),
+        };
+        assert_eq!(report, expected);
     }
 
     /// Records what every line did, reading plain moves' words or not.

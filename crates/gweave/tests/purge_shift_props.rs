@@ -182,3 +182,16 @@ fn window_does_not_grow_with_the_file() {
         assert!((20..=27).contains(&big), "cross_layers {cross_layers}: {big}");
     }
 }
+
+/// A line longer than the reader's limit is copied through by the lenient in-memory run, in
+/// its place: the moves held back for a later change go out before it.
+#[test]
+fn a_long_line_keeps_its_place_in_a_lenient_shift() {
+    let mut text = b";TYPE:Perimeter\nG1 X1 E1 F600\nG1 X2 E2\n;".to_vec();
+    text.extend(std::iter::repeat_n(b'x', gweave::gcode::reader::MAX_LINE + 1));
+    text.extend_from_slice(b"\nG1 X3 E3\nT1\nG1 X4 E4\n");
+    let (out, _) = purge_shift_bytes(Rules::fixed(0.5).unwrap(), &text).unwrap();
+    let long_at = |bytes: &[u8]| bytes.windows(3).position(|w| w == b";xx").unwrap();
+    assert_eq!(long_at(&out), long_at(&text));
+    assert_eq!(&out[..long_at(&out)], &text[..long_at(&text)]);
+}

@@ -11,7 +11,7 @@ use gweave::pass::Progress;
 use gweave_sim::estimate::{estimate_report, EstimateReport};
 use gweave_sim::profile::MachineProfile;
 
-use super::sim::print_layers_and_features;
+use super::sim::{print_layers_and_features, print_malformed};
 use crate::common::{hms, load_or_default, ReportArgs};
 use crate::progress::Bar;
 
@@ -78,6 +78,7 @@ fn print_human(input: &Path, r: &EstimateReport) {
     println!("  time            {}  ({:.1} s, {} planned blocks)", hms(e.total_s), e.total_s, e.blocks);
     println!("    motion {}  dwell {}  overhead {}", hms(e.motion_s), hms(e.dwell_s), hms(e.overhead_s));
     print_layers_and_features(&e.layer_s, e.unlayered_s, &e.feature_s);
+    print_malformed(&e.malformed, &e.huge_arcs);
     if r.steps_counted {
         let s = &e.steps.axes;
         println!("  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4]);

@@ -8,8 +8,9 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Args;
 use gweave::gcode::layers::Feature;
-use gweave::gcode::reader::LineReader;
+use gweave::gcode::reader::{LineReader, Part};
 use gweave::pass::Progress;
+use gweave_sim::estimate::{HugeArcs, Malformed, MAX_ARC_CHORDS};
 use gweave_sim::heater::HeaterId;
 use gweave_sim::interp::{Machine, Outcome, SimReport};
 use gweave_sim::plot::{save_speed_png, save_temperature_png};
@@ -94,8 +95,14 @@ fn run_file(machine: &mut Machine, input: &Path, quiet: bool) -> Result<Vec<Stri
     };
     let mut n = 0u64;
     while let Some(line) = reader.next_line().with_context(|| format!("reading {}", input.display()))? {
-        if machine.execute(line.bytes, &mut out) == Outcome::Halted {
-            break;
+        match line.part {
+            Part::Whole => {
+                if machine.execute(line.bytes, &mut out) == Outcome::Halted {
+                    break;
+                }
+            }
+            Part::Piece => continue,
+            Part::Last { .. } => machine.skip_long_line(),
         }
         n += 1;
         if n.is_multiple_of(65_536) {
@@ -164,6 +171,7 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
         }
         println!("  unknown         {}", list.join(", "));
     }
+    print_malformed(&r.malformed, &r.huge_arcs);
     for e in errors {
         println!("  {e}");
     }
@@ -177,6 +185,23 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
         for w in r.warnings.iter().filter(|w| w.kind.name() != "unknown_command").take(10) {
             println!("    line {}: {}", w.line, serde_json::to_string(&w.kind).unwrap_or_default());
         }
+    }
+}
+
+/// Lines that could not be read, as `check` reports them, and arcs too long to plan finely:
+/// handled, but never silently.
+pub(super) fn print_malformed(m: &Malformed, arcs: &HugeArcs) {
+    if let Some(first) = m.first_malformed_line {
+        println!(
+            "  malformed       {} lines skipped (first: line {first}; see gweave check)",
+            m.malformed_lines
+        );
+    }
+    if let Some(first) = arcs.first_huge_arc_line {
+        println!(
+            "  huge arcs       {} of more than {MAX_ARC_CHORDS} chords, planned with longer ones (first: line {first})",
+            arcs.huge_arcs
+        );
     }
 }
 

@@ -85,6 +85,13 @@ impl Back {
                 .planner
                 .push(mv, &mut self.acc)
                 .map_err(|source| EstimateError::Move { line: *line, source })?,
+            Job::Arc { chords, line } => {
+                for mv in chords.moves() {
+                    self.planner
+                        .push(&mv, &mut self.acc)
+                        .map_err(|source| EstimateError::Move { line: *line, source })?;
+                }
+            }
             Job::Drain => self.drain(),
             Job::Dwell { t_s, tag } => {
                 self.dwell_s += *t_s;

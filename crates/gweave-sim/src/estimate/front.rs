@@ -7,10 +7,12 @@
 use std::collections::HashMap;
 
 use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use gweave::gcode::arc::Arc;
+use gweave::gcode::diag::Severity;
 use gweave::gcode::layers::Structure;
 use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
 use gweave::gcode::line::{Block, Command};
-use gweave::gcode::reader::RawLine;
+use gweave::gcode::reader::{Part, RawLine};
 use gweave::gcode::state::{self, Effect, Firmware, Path, State, StateOptions};
 
 use super::{
@@ -33,6 +35,44 @@ pub(super) struct Front {
     /// The mixing commands' state, for a profile with mixing inputs.
     pub(super) mixing: Option<MixingState>,
     pub(super) line: u64,
+    /// Lines with an error, skipped as firmware skips them.
+    pub(super) malformed: Malformed,
+}
+
+/// Arcs longer than [`MAX_ARC_CHORDS`] chords of [`ARC_CHORD_MM`] (over 100 m: no printer's
+/// bed), planned with that many longer chords, and counted with the first one's line.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct HugeArcs {
+    pub huge_arcs: u64,
+    /// The line of the first, 1-based.
+    pub first_huge_arc_line: Option<u64>,
+}
+
+impl HugeArcs {
+    fn add(&mut self, line: u64) {
+        self.huge_arcs += 1;
+        self.first_huge_arc_line.get_or_insert(line);
+    }
+}
+
+/// The most chords an arc is cut into: 100 m of arc at [`ARC_CHORD_MM`]. A `G2` with
+/// `I10000000` would otherwise be 63 million chords, half a minute of planning.
+pub const MAX_ARC_CHORDS: u32 = 100_000;
+
+/// Lines that could not be read (a malformed word, a line longer than
+/// [`MAX_LINE`](gweave::gcode::reader::MAX_LINE)): counted, with the first, never dropped silently.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Malformed {
+    pub malformed_lines: u64,
+    /// The first of them, 1-based.
+    pub first_malformed_line: Option<u64>,
+}
+
+impl Malformed {
+    fn add(&mut self, line: u64) {
+        self.malformed_lines += 1;
+        self.first_malformed_line.get_or_insert(line);
+    }
 }
 
 /// What turns a move into jobs besides the move itself: its time account (tag) and the
@@ -49,6 +89,8 @@ struct Bookkeeping {
     klipper: bool,
     started: bool,
     motors_on: bool,
+    /// Arcs of more than [`MAX_ARC_CHORDS`] chords.
+    huge_arcs: HugeArcs,
 }
 
 impl Front {
@@ -71,6 +113,7 @@ impl Front {
             klipper,
             started: false,
             motors_on: false,
+            huge_arcs: HugeArcs::default(),
         };
         let mut front = Self {
             block: Block::default(),
@@ -80,6 +123,7 @@ impl Front {
             mix_index: HashMap::new(),
             mixing,
             line: 0,
+            malformed: Malformed::default(),
         };
         front.refresh_mix(jobs);
         Ok(front)
@@ -89,13 +133,44 @@ impl Front {
     pub(super) fn parse(&mut self, raw: &[u8]) -> Effect {
         self.line += 1;
         parse_into(raw, &mut self.block);
+        self.count_malformed();
         *self.state.apply(raw, &self.block)
+    }
+
+    /// Counts the line just parsed if it has an error.
+    #[inline(always)]
+    fn count_malformed(&mut self) {
+        if !self.block.diagnostics.is_empty()
+            && self.block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error)
+        {
+            self.malformed.add(self.line);
+        }
+    }
+
+    /// The arcs too long for chords of [`ARC_CHORD_MM`] so far.
+    pub(super) fn huge_arcs(&self) -> HugeArcs {
+        self.book.huge_arcs
+    }
+
+    /// A line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE), which is not read:
+    /// counted as malformed.
+    pub(super) fn skip_long_line(&mut self) {
+        self.line += 1;
+        self.malformed.add(self.line);
     }
 
     /// [`Front::parse`] and [`Front::run`] for a line from a reader, whose look-ahead bytes
     /// speed up the lexer. A move is read in place from the state (it is large).
     #[inline(always)]
     pub(super) fn step(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        match line.part {
+            Part::Whole => {}
+            Part::Last { .. } => {
+                self.skip_long_line();
+                return Ok(());
+            }
+            Part::Piece => return Ok(()),
+        }
         self.line += 1;
         // A plain move's words are read by no one here (only M-codes and extended commands
         // are, below): leave them unlisted where the state does without them.
@@ -104,6 +179,7 @@ impl Front {
         } else {
             parse_line_lean(line, &mut self.block);
         }
+        self.count_malformed();
         self.state.apply(line.bytes, &self.block);
         if let Effect::Move(m) = &self.state.effect {
             self.book.motion(&self.state.structure, m, self.line, jobs);
@@ -334,20 +410,49 @@ impl Bookkeeping {
             jobs.push(Job::Move { mv: Move { start, end, feed_mm_s, tag }, line });
             return;
         };
-        let chords = (m.len_mm() / ARC_CHORD_MM).ceil().max(1.0) as usize;
-        let mut from = start;
-        for k in 1..=chords {
-            let t = k as f64 / chords as f64;
-            let to = if k < chords {
-                let [x_mm, y_mm] = arc.point(t);
-                let lerp = |axis: usize| m.from[axis] + (m.to[axis] - m.from[axis]) * t;
-                Pos { x_mm, y_mm, z_mm: lerp(state::Z), e_mm: lerp(state::E), a_deg: lerp(state::A) }
-            } else {
-                end
-            };
-            jobs.push(Job::Move { mv: Move { start: from, end: to, feed_mm_s, tag }, line });
-            from = to;
+        // The chords are cut as the plan side takes them ([`Chords`]): a huge arc costs time,
+        // never memory. Past MAX_ARC_CHORDS they are longer than ARC_CHORD_MM, and counted.
+        let wanted = (m.len_mm() / ARC_CHORD_MM).ceil();
+        if wanted > MAX_ARC_CHORDS as f64 {
+            self.huge_arcs.add(line);
         }
+        let count = wanted.clamp(1.0, MAX_ARC_CHORDS as f64) as u32;
+        let chords = Chords { arc: *arc, from: m.from, to: m.to, start, end, feed_mm_s, tag, count };
+        jobs.push(Job::Arc { chords: Box::new(chords), line });
+    }
+}
+
+/// An arc's chords, computed one at a time: chord `k` of `count` ends at fraction `k / count`
+/// of the sweep (Z, E and A moving linearly along it, a helix), the last exactly at the end.
+#[derive(Debug)]
+pub(super) struct Chords {
+    arc: Arc,
+    from: state::Position,
+    to: state::Position,
+    start: Pos,
+    end: Pos,
+    feed_mm_s: f64,
+    tag: u64,
+    count: u32,
+}
+
+impl Chords {
+    pub(super) fn moves(&self) -> impl Iterator<Item = Move> + '_ {
+        let point = move |k: u32| {
+            if k == self.count {
+                return self.end;
+            }
+            let t = f64::from(k) / f64::from(self.count);
+            let [x_mm, y_mm] = self.arc.point(t);
+            let lerp = |axis: usize| self.from[axis] + (self.to[axis] - self.from[axis]) * t;
+            Pos { x_mm, y_mm, z_mm: lerp(state::Z), e_mm: lerp(state::E), a_deg: lerp(state::A) }
+        };
+        (1..=self.count).scan(self.start, move |from, k| {
+            let to = point(k);
+            let mv = Move { start: *from, end: to, feed_mm_s: self.feed_mm_s, tag: self.tag };
+            *from = to;
+            Some(mv)
+        })
     }
 }
 

@@ -63,7 +63,8 @@ mod front;
 mod report;
 
 use back::Back;
-use front::Front;
+use front::{Chords, Front};
+pub use front::{HugeArcs, Malformed, MAX_ARC_CHORDS};
 pub use report::{estimate_report, EstimateReport};
 
 /// Feed rate before the file sets one, mm/s (Klipper `gcode_move`, Marlin `feedrate_mm_s`).
@@ -156,6 +157,12 @@ pub struct Estimate {
     pub feature_s: BTreeMap<Feature, f64>,
     /// Steps per motor.
     pub steps: StepTotals,
+    /// Lines skipped because they could not be read.
+    #[serde(flatten)]
+    pub malformed: Malformed,
+    /// Arcs too long to cut into chords of [`ARC_CHORD_MM`].
+    #[serde(flatten)]
+    pub huge_arcs: HugeArcs,
 }
 
 /// What a block's time is attributed to, the mix its E steps are split by and the tool they
@@ -171,8 +178,10 @@ struct Key {
 /// What the parse side asks of the plan side, in file order.
 #[derive(Debug)]
 enum Job {
-    /// Plan a straight move (an arc comes as its chords); `line` for its error.
+    /// Plan a straight move; `line` for its error.
     Move { mv: Move, line: u64 },
+    /// Plan an arc's chords, cut as they are planned.
+    Arc { chords: Box<Chords>, line: u64 },
     /// Plan every queued move to a stop (the firmware waits for its queue to drain).
     Drain,
     /// A `G4` dwell, attributed to `tag` (after a [`Job::Drain`]).
@@ -330,7 +339,13 @@ impl Estimator {
 
     /// The times so far (moves still queued in the planner are not counted).
     pub fn summary(&self) -> Estimate {
-        self.back.summary()
+        Estimate { malformed: self.front.malformed, huge_arcs: self.front.huge_arcs(), ..self.back.summary() }
+    }
+
+    /// Counts a line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE) (given in
+    /// pieces by the line reader; call this for its last) as a malformed line, not read.
+    pub fn skip_long_line(&mut self) {
+        self.front.skip_long_line();
     }
 }
 
@@ -401,7 +416,7 @@ fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate
         let mut back = planning.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
         parsed?;
         back.end();
-        Ok(back.summary())
+        Ok(Estimate { malformed: front.malformed, huge_arcs: front.huge_arcs(), ..back.summary() })
     })
 }
 
@@ -491,6 +506,31 @@ mod tests {
             estimate("G1 X0 Y0 F600\nG2 X20 Y0 I10 J0\n".as_bytes(), &MotionProfile::default()).unwrap();
         assert_eq!(est.blocks, 32);
         assert_eq!(est.steps.axes[0], 20 * 80);
+    }
+
+    #[test]
+    fn a_huge_arc_is_planned_without_a_vec_of_chords() {
+        // A radius of 10 km: 63 million chords of 1 mm.
+        let text = "G1 X0 Y0 F600\nG2 X0 Y0 I10000000 J0 E1\nG1 X10\n";
+        let mut est = Estimator::new(&MotionProfile::default()).unwrap();
+        for line in text.lines() {
+            est.line(line.as_bytes()).unwrap();
+            assert!(est.jobs.capacity() < 64, "{} jobs held", est.jobs.capacity());
+        }
+        let sequential = est.finish();
+        assert_eq!(sequential.huge_arcs, HugeArcs { huge_arcs: 1, first_huge_arc_line: Some(2) });
+        // The first move goes nowhere: the arc's chords and the last move.
+        assert_eq!(sequential.blocks, u64::from(MAX_ARC_CHORDS) + 1);
+        let threaded = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
+        assert_eq!(threaded, sequential);
+    }
+
+    #[test]
+    fn malformed_lines_are_counted_not_dropped() {
+        let text = "G1 X10 F600\nG1 X1..2\n\0\0\0\nG1 X20\n";
+        let est = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
+        assert_eq!(est.malformed, Malformed { malformed_lines: 2, first_malformed_line: Some(2) });
+        assert_eq!(est.blocks, 2);
     }
 
     /// Every line through one [`Estimator`], on this thread.

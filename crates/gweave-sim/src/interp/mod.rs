@@ -198,6 +198,12 @@ impl Machine {
         ]
     }
 
+    /// Skips a line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE), as firmware
+    /// would refuse it: counted as malformed (call this for its last piece).
+    pub fn skip_long_line(&mut self) {
+        self.core.skip_long_line();
+    }
+
     /// Executes ONE command (no N/checksum; comments allowed) at the current simulated time,
     /// advancing the simulated clock by what the command takes (moves through the planner,
     /// G4, M400, M109/M190 waits with the thermal plant, M303 autotune). Replies other than

@@ -6,6 +6,7 @@ use gweave::gcode::layers::Feature;
 use serde::Serialize;
 
 use super::{heat, Machine};
+use crate::estimate::{HugeArcs, Malformed};
 use crate::heater::HeaterId;
 use crate::inkjet::InkjetWarning;
 use crate::protection::ThermalFault;
@@ -189,6 +190,12 @@ pub struct SimReport {
     pub warnings: Vec<SimWarning>,
     /// The inkjet canvases, on a machine with a printhead.
     pub inkjet: Option<InkjetSummary>,
+    /// Lines skipped because they could not be read.
+    #[serde(flatten)]
+    pub malformed: Malformed,
+    /// Arcs too long to cut into chords of 1 mm.
+    #[serde(flatten)]
+    pub huge_arcs: HugeArcs,
 }
 
 impl Machine {
@@ -239,6 +246,8 @@ impl Machine {
                 layers: c.layers().len(),
                 drops_per_head: c.drops_per_head().to_vec(),
             }),
+            malformed: est.malformed,
+            huge_arcs: est.huge_arcs,
         }
     }
 }

@@ -72,6 +72,14 @@ pub enum Finding {
     ToolOutOfRange {
         tool: u32,
     },
+    /// A line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE): not parsed.
+    LineTooLong {
+        len: u64,
+    },
+    /// More findings on the line than are kept ([`MAX_LINE_DIAGNOSTICS`]).
+    MoreFindings {
+        count: u32,
+    },
 }
 
 impl Finding {
@@ -83,6 +91,8 @@ impl Finding {
             | Finding::RelativeEDrift { .. }
             | Finding::AbsoluteEPrecision { .. }
             | Finding::LineNumberSequence { .. } => Severity::Warning,
+            // The findings it stands for were errors, each counted when kept.
+            Finding::MoreFindings { .. } => Severity::Error,
             _ => Severity::Error,
         }
     }
@@ -128,6 +138,12 @@ impl fmt::Display for Finding {
             Finding::AbsoluteEPrecision { e_mm } => {
                 write!(f, "absolute E reached {e_mm} mm without a reset (precision loss)")
             }
+            Finding::LineTooLong { len } => write!(
+                f,
+                "line of {len} bytes is longer than the limit of {} (not read)",
+                crate::gcode::reader::MAX_LINE
+            ),
+            Finding::MoreFindings { count } => write!(f, "{count} more findings on this line"),
             Finding::ToolOutOfRange { tool } => write!(
                 f,
                 "T{tool} names no tool (at most {} are read; the tool stays as it was)",
@@ -136,6 +152,10 @@ impl fmt::Display for Finding {
         }
     }
 }
+
+/// Findings kept per line; the rest are counted in one [`Finding::MoreFindings`]. A line of
+/// NUL bytes would otherwise make one finding per byte.
+pub const MAX_LINE_DIAGNOSTICS: usize = 16;
 
 /// A finding at a 1-based column of a line.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]

@@ -82,9 +82,10 @@ pub fn read_flavour(path: &Path) -> io::Result<Option<String>> {
     Ok(first_flavour(&buf))
 }
 
-/// The first flavour comment on a line of its own in `text`.
+/// The first flavour comment on a line of its own in `text` (lines end at `\n` or `\r`, as the
+/// line reader ends them).
 fn first_flavour(text: &[u8]) -> Option<String> {
-    text.split(|&b| b == b'\n')
+    text.split(|&b| b == b'\n' || b == b'\r')
         .find_map(|line| flavour_of_comment(line.trim_ascii_start().strip_prefix(b";")?))
         .map(|f| String::from_utf8_lossy(f).into_owned())
 }
@@ -108,6 +109,15 @@ mod tests {
         std::fs::write(&path, [&prusa[..], &b"G1 X2\n".repeat(50_000)].concat()).unwrap();
         assert_eq!(read_flavour(&path).unwrap(), None);
         assert_eq!(flavour_in(b"M117 ; gcode_flavor = klipper\n"), None);
+    }
+
+    #[test]
+    fn a_flavour_in_a_cr_only_file_is_found() {
+        assert_eq!(flavour_in(b";FLAVOR:Griffin\rG28\r").as_deref(), Some("Griffin"));
+        assert_eq!(
+            flavour_in(b"G28\r; gcode_flavor = klipper\r; z_offset = 0\r").as_deref(),
+            Some("klipper")
+        );
     }
 
     #[test]

@@ -13,6 +13,8 @@ use super::line::{Block, Checksum, Command, PlainMove, Span, Value, Word};
 use super::number::{scan_at, scan_before_space, NumberError};
 use super::reader::RawLine;
 
+const UTF8_BOM: &[u8] = b"\xef\xbb\xbf";
+
 /// M-codes whose argument is free text up to the comment (Marlin reads it as a string).
 fn takes_text(number: u32) -> bool {
     matches!(number, 0 | 1 | 23 | 28 | 30 | 32 | 33 | 117 | 118 | 928)
@@ -67,7 +69,8 @@ fn parse_ahead<const LIST_WORDS: bool>(raw: &[u8], ahead: &[u8], block: &mut Blo
 fn parse_general(raw: &[u8], block: &mut Block) {
     // The fast path may have pushed words before it met something it does not take.
     block.clear();
-    let mut i = skip_space(raw, 0);
+    // A UTF-8 byte order mark (at the start of a file) is no part of the line.
+    let mut i = skip_space(raw, if raw.starts_with(UTF8_BOM) { UTF8_BOM.len() } else { 0 });
     if raw.get(i) == Some(&b'/') {
         block.block_delete = true;
         i = skip_space(raw, i + 1);
@@ -141,7 +144,7 @@ fn line_number(raw: &[u8], start: usize, block: &mut Block) -> usize {
         i += 1;
     }
     if i == digits_start || raw.get(i) == Some(&b'.') {
-        block.diagnostics.push(Diagnostic::at(start, Finding::BadLineNumber));
+        block.diagnose(Diagnostic::at(start, Finding::BadLineNumber));
     }
     block.line_number = Some((if negative { -n } else { n }, Span::new(start, i)));
     i
@@ -230,12 +233,12 @@ fn checksum(raw: &[u8], star: usize, limit: usize, block: &mut Block) -> usize {
     }
     let end = i;
     if end == star + 1 || skip_space(raw, end) < limit {
-        block.diagnostics.push(Diagnostic::at(star, Finding::BadChecksum));
+        block.diagnose(Diagnostic::at(star, Finding::BadChecksum));
     }
     let computed = raw[..star].iter().fold(0u8, |acc, b| acc ^ b);
     let sum = Checksum { given, computed, span: Span::new(star, end) };
     if !sum.is_valid() {
-        block.diagnostics.push(Diagnostic::at(star, Finding::ChecksumMismatch { given, computed }));
+        block.diagnose(Diagnostic::at(star, Finding::ChecksumMismatch { given, computed }));
     }
     block.checksum = Some(sum);
     end
@@ -257,7 +260,7 @@ fn words(raw: &[u8], mut i: usize, block: &mut Block) {
             b'(' => match memchr::memchr(b')', &raw[i..]) {
                 Some(close) => i += close + 1,
                 None => {
-                    block.diagnostics.push(Diagnostic::at(i, Finding::UnclosedComment));
+                    block.diagnose(Diagnostic::at(i, Finding::UnclosedComment));
                     return;
                 }
             },
@@ -270,7 +273,7 @@ fn words(raw: &[u8], mut i: usize, block: &mut Block) {
                 }
             }
             _ => {
-                block.diagnostics.push(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
+                block.diagnose(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
                 i += 1;
             }
         }
@@ -293,7 +296,7 @@ fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
                     NumberError::NotFinite => Finding::NotFinite { letter: letter as char },
                     _ => Finding::MalformedNumber { letter: letter as char },
                 };
-                block.diagnostics.push(Diagnostic::at(at, finding));
+                block.diagnose(Diagnostic::at(at, finding));
                 // Skip the whole bad token so that its pieces do not read as more words.
                 let mut end = at;
                 while end < raw.len() && !is_space(raw[end]) && !matches!(raw[end], b';' | b'(' | b'*') {
@@ -320,7 +323,7 @@ fn quoted(raw: &[u8], open: usize, block: &mut Block) -> (Value, usize) {
         }
         i += 1;
     }
-    block.diagnostics.push(Diagnostic::at(open, Finding::UnclosedString));
+    block.diagnose(Diagnostic::at(open, Finding::UnclosedString));
     (Value::Invalid, raw.len())
 }
 
@@ -339,13 +342,14 @@ fn expression(raw: &[u8], open: usize, block: &mut Block) -> (Value, usize) {
             _ => {}
         }
     }
-    block.diagnostics.push(Diagnostic::at(open, Finding::UnclosedExpression));
+    block.diagnose(Diagnostic::at(open, Finding::UnclosedExpression));
     (Value::Invalid, raw.len())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gcode::diag::MAX_LINE_DIAGNOSTICS;
 
     fn parse(s: &str) -> Block {
         let mut b = Block::default();
@@ -440,6 +444,26 @@ mod tests {
         let b = parse("G28 X Y");
         assert_eq!(b.word(b'X').unwrap().value, Value::Empty);
         assert!(b.diagnostics.is_empty());
+    }
+
+    #[test]
+    fn a_line_of_malformed_tokens_keeps_a_few_findings_and_a_count() {
+        let b = parse(&"\0".repeat(100_000));
+        assert_eq!(b.diagnostics.len(), MAX_LINE_DIAGNOSTICS + 1);
+        assert_eq!(b.diagnostics[0], Diagnostic::at(0, Finding::UnexpectedByte { byte: 0 }));
+        let more = &b.diagnostics[MAX_LINE_DIAGNOSTICS];
+        assert_eq!(more.finding, Finding::MoreFindings { count: 100_000 - MAX_LINE_DIAGNOSTICS as u32 });
+        assert_eq!(more.finding.to_string(), "99984 more findings on this line");
+    }
+
+    #[test]
+    fn a_utf8_bom_is_skipped() {
+        let b = parse("\u{feff}G1 X10 ; first");
+        assert!(b.diagnostics.is_empty(), "{:?}", b.diagnostics);
+        assert_eq!(
+            (b.command, b.get(b'X')),
+            (Command::Code { letter: b'G', number: 1, sub: None }, Some(10.0))
+        );
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! checksum, each with its byte span in the original line. Nothing here knows what the machine
 //! does with it; that is [`crate::gcode::state`].
 
-use super::diag::Diagnostic;
+use super::diag::{Diagnostic, Finding, MAX_LINE_DIAGNOSTICS};
 
 /// A byte range `start..end` inside one line (without its line ending).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -200,6 +200,24 @@ impl Block {
         self.tape_marker = false;
         self.diagnostics.clear();
         self.plain.present = 0;
+    }
+
+    /// Records a finding: the first [`MAX_LINE_DIAGNOSTICS`], then a count of the rest in one
+    /// more.
+    pub(crate) fn diagnose(&mut self, diagnostic: Diagnostic) {
+        match self.diagnostics.len() {
+            n if n < MAX_LINE_DIAGNOSTICS => self.diagnostics.push(diagnostic),
+            MAX_LINE_DIAGNOSTICS => self
+                .diagnostics
+                .push(Diagnostic { finding: Finding::MoreFindings { count: 1 }, ..diagnostic }),
+            _ => {
+                if let Some(Finding::MoreFindings { count }) =
+                    self.diagnostics.last_mut().map(|d| &mut d.finding)
+                {
+                    *count += 1;
+                }
+            }
+        }
     }
 
     /// Appends a word.

@@ -4,6 +4,7 @@
 
 pub mod arc;
 pub mod diag;
+pub mod encoding;
 pub mod flavour;
 pub mod layers;
 pub mod lexer;

@@ -528,6 +528,15 @@ fn is_change_line(block: &Block) -> bool {
 }
 
 impl Pass for PurgeShift {
+    /// A line too long to read (only a lenient run gets here): nothing is moved across it, and
+    /// the lines held back go out before it, so that it keeps its place.
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> io::Result<()> {
+        self.close_group(out)?;
+        self.flush(out, "a line too long to read")?;
+        out.write_all(piece.bytes)?;
+        out.write_all(piece.eol)
+    }
+
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
