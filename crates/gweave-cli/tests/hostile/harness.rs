@@ -1,5 +1,7 @@
 //! Runs the `gweave` binary as a user would, with a wall-clock limit, and measures its peak
-//! memory (the child's maximum resident set, from `wait4`).
+//! memory: the high-water mark of its resident set (`VmHWM` in `/proc/PID/status`), read while
+//! it runs. `wait4`'s `ru_maxrss` is no use here: Linux carries the resident set the child had
+//! before `exec` (a copy of this test process, which may hold large inputs) into it.
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -157,12 +159,14 @@ impl Running {
     pub fn wait(self) -> Outcome {
         let pid = self.pid();
         let mut hung = false;
+        let mut peak_kib = 0;
         loop {
+            // The mark only rises while the process lives; the last read is its peak to within
+            // one poll.
+            peak_kib = high_water_kib(pid).unwrap_or(peak_kib).max(peak_kib);
             let mut status = 0;
-            // SAFETY: an all-zero rusage is a valid value for wait4 to fill.
-            let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-            // SAFETY: wait4 on our own child with valid pointers to locals.
-            let done = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
+            // SAFETY: waitpid on our own child with a valid pointer to a local.
+            let done = unsafe { libc::waitpid(pid, &mut status, libc::WNOHANG) };
             if done == pid {
                 let elapsed = self.started.elapsed();
                 let stdout = self.stdout.join().unwrap_or_default();
@@ -172,17 +176,23 @@ impl Running {
                 } else {
                     (None, Some(libc::WTERMSIG(status)))
                 };
-                // Linux reports ru_maxrss in KiB.
-                let peak_mib = usage.ru_maxrss as f64 / 1024.0;
+                let peak_mib = peak_kib as f64 / 1024.0;
                 return Outcome { code, signal, stdout, stderr, peak_mib, elapsed, hung };
             }
             if !hung && self.started.elapsed() > self.limit {
                 hung = true;
                 self.signal(libc::SIGKILL);
             }
-            thread::sleep(Duration::from_millis(5));
+            thread::sleep(Duration::from_millis(2));
         }
     }
+}
+
+/// `VmHWM` of a running process, KiB; `None` once it has exited.
+fn high_water_kib(pid: i32) -> Option<u64> {
+    let status = fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 /// Every file below `dir` with its bytes' length and a hash, to prove inputs unchanged.
