@@ -26,11 +26,12 @@ use std::fmt;
 use std::str::FromStr;
 
 use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
+use gweave::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::heater::{HeaterFault, HeaterId};
-use crate::limits::{MotionProfile, ProfileError};
+use crate::limits::MotionProfile;
 use crate::thermal::ThermalConfig;
 use crate::thermistor::SensorFault;
 
@@ -40,22 +41,15 @@ pub enum MachineProfileError {
     /// The text is not a valid machine profile (syntax, unknown key, wrong type).
     #[error("machine profile: {0}")]
     Toml(String),
-    /// A motion value is out of range.
-    #[error("machine profile: motion: {0}")]
-    Motion(#[from] ProfileError),
-    /// A printhead value is out of range.
-    #[error("machine profile: inkjet: {0}")]
-    Printhead(#[from] PrintheadError),
-    /// Any other value out of range.
-    #[error("machine profile: `{name}` must be {rule}, got {value}")]
-    Bad {
-        /// The key.
-        name: &'static str,
-        /// What it must be.
-        rule: &'static str,
-        /// What it is.
-        value: f64,
-    },
+    /// A value out of its range (it names the table and the key).
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
+    /// The printhead is not usable (no head, a nozzle map that is no permutation).
+    #[error("machine profile: [inkjet.printhead] {0}")]
+    Printhead(PrintheadError),
+    /// `homing.order` is not some of `XYZ`, each at most once.
+    #[error("machine profile: [homing] order = {0:?}: give some of XYZ, each at most once")]
+    HomingOrder(String),
     /// A rotary axis needs its steps per degree (`motion.steps.a_per_deg`).
     #[error("machine profile: [rotary] needs motion.steps.a_per_deg")]
     RotaryWithoutSteps,
@@ -86,6 +80,44 @@ pub struct Bed {
     pub y_mm: f64,
     /// Highest Z (`Z_MAX_POS`), mm.
     pub z_mm: f64,
+}
+
+/// A machine with a few inputs more than the largest mixing hotends (6 inputs).
+const MIXING_INPUTS: Range = Range::new(0.0, 16.0, "inputs");
+/// The slow second touch of homing runs at `feed / divisor` (Marlin ships 2 to 10).
+const BUMP_DIVISOR: Range = Range::new(1.0, 100.0, "");
+/// The inkjet canvas: 20 000 pitches per side (5.3 m at 96 dpi) is more than any bed.
+const CANVAS_PX: Range = Range::new(1.0, 20_000.0, "px");
+
+impl CheckRanges for MachineProfile {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        self.motion.check_ranges(&t.sub("motion"))?;
+        self.thermal.check_ranges(&t.sub("thermal"))?;
+        let bed = t.sub("bed");
+        let b = &self.bed;
+        bed.check("x_min_mm", b.x_min_mm, ranges::POS_MM)?;
+        bed.check("y_min_mm", b.y_min_mm, ranges::POS_MM)?;
+        bed.check("x_mm", b.x_mm, ranges::SIZE_MM)?;
+        bed.check("y_mm", b.y_mm, ranges::SIZE_MM)?;
+        bed.check("z_mm", b.z_mm, ranges::SIZE_MM)?;
+        let homing = t.sub("homing");
+        homing.each("feed_mm_s", &self.homing.feed_mm_s, ranges::SPEED_MM_S)?;
+        homing.each("bump_mm", &self.homing.bump_mm, ranges::LEN_MM)?;
+        homing.each("bump_divisor", &self.homing.bump_divisor, BUMP_DIVISOR)?;
+        t.count("mixing_inputs", self.mixing_inputs as u64, MIXING_INPUTS)?;
+        if let Some(r) = &self.rotary {
+            t.sub("rotary").check("cylinder_radius_mm", r.cylinder_radius_mm, ranges::SIZE_MM)?;
+        }
+        if let Some(ink) = &self.inkjet {
+            let inkjet = t.sub("inkjet");
+            ink.printhead.check_ranges(&inkjet.sub("printhead"))?;
+            inkjet.check("origin_x_mm", ink.origin_x_mm, ranges::POS_MM)?;
+            inkjet.check("origin_y_mm", ink.origin_y_mm, ranges::POS_MM)?;
+            inkjet.check_opt("width_px", ink.width_px.map(|w| w as f64), CANVAS_PX)?;
+            inkjet.check_opt("height_px", ink.height_px.map(|h| h as f64), CANVAS_PX)?;
+        }
+        Ok(())
+    }
 }
 
 impl Default for Bed {
@@ -354,48 +386,26 @@ impl MachineProfile {
         self.validate()
     }
 
-    /// Check every value.
+    /// Check every value: each key against its range (the motion, heaters and printhead
+    /// included, so `sim`, `estimate` and `serve` refuse the same profile with the same
+    /// message), then the keys that must agree with each other.
     pub fn validate(&self) -> Result<(), MachineProfileError> {
-        self.motion.validate()?;
-        let check = |name, value: f64, ok: bool, rule| {
-            if ok && value.is_finite() {
-                Ok(())
-            } else {
-                Err(MachineProfileError::Bad { name, rule, value })
-            }
-        };
-        let b = &self.bed;
-        check("bed.x_min_mm", b.x_min_mm, true, "finite")?;
-        check("bed.y_min_mm", b.y_min_mm, true, "finite")?;
-        check("bed.x_mm", b.x_mm, b.x_mm > 0.0, "> 0")?;
-        check("bed.y_mm", b.y_mm, b.y_mm > 0.0, "> 0")?;
-        check("bed.z_mm", b.z_mm, b.z_mm > 0.0, "> 0")?;
+        self.check_ranges(&Table::root())?;
         let h = &self.homing;
-        for i in 0..3 {
-            check("homing.feed_mm_s", h.feed_mm_s[i], h.feed_mm_s[i] > 0.0, "> 0")?;
-            check("homing.bump_mm", h.bump_mm[i], h.bump_mm[i] >= 0.0, ">= 0")?;
-            let d = h.bump_divisor[i];
-            check("homing.bump_divisor", d, d >= 1.0, ">= 1")?;
-        }
         let axes = h.axes();
         let unique = (0..3).all(|a| axes.iter().filter(|&&x| x == a).count() <= 1);
-        let ok = unique && axes.len() == h.order.len();
-        check("homing.order (XYZ each at most once)", 0.0, ok, "valid")?;
+        if !(unique && axes.len() == h.order.len()) {
+            return Err(MachineProfileError::HomingOrder(h.order.clone()));
+        }
         let mixing = self.motion.steps.mixing_e.len();
         if mixing != self.mixing_inputs {
             return Err(MachineProfileError::MixingSteps { inputs: self.mixing_inputs, steps: mixing });
         }
-        if let Some(r) = &self.rotary {
-            if self.motion.steps.a_per_deg.is_none() {
-                return Err(MachineProfileError::RotaryWithoutSteps);
-            }
-            let radius = r.cylinder_radius_mm;
-            check("rotary.cylinder_radius_mm", radius, radius > 0.0, "> 0")?;
+        if self.rotary.is_some() && self.motion.steps.a_per_deg.is_none() {
+            return Err(MachineProfileError::RotaryWithoutSteps);
         }
         if let Some(ink) = &self.inkjet {
-            ink.printhead.validate()?;
-            check("inkjet.origin_x_mm", ink.origin_x_mm, true, "finite")?;
-            check("inkjet.origin_y_mm", ink.origin_y_mm, true, "finite")?;
+            ink.printhead.validate().map_err(MachineProfileError::Printhead)?;
         }
         Ok(())
     }
@@ -432,12 +442,10 @@ mod tests {
     #[test]
     fn rotary_needs_steps_and_bad_values_are_named() {
         assert_eq!(MachineProfile::from_toml_str("[rotary]\n"), Err(MachineProfileError::RotaryWithoutSteps));
-        let err = MachineProfile::from_toml_str("[homing]\nfeed_mm_s = [50.0, 0.0, 4.0]\n");
-        assert!(
-            matches!(err, Err(MachineProfileError::Bad { name: "homing.feed_mm_s", value, .. }) if value == 0.0)
-        );
+        let err = MachineProfile::from_toml_str("[homing]\nfeed_mm_s = [50.0, 0.0, 4.0]\n").unwrap_err();
+        assert_eq!(err.to_string(), "[homing] feed_mm_s[1] = 0 is out of range: 0.001 to 10000 mm/s");
         let err = MachineProfile::from_toml_str("[homing]\norder = \"XXZ\"\n");
-        assert!(matches!(err, Err(MachineProfileError::Bad { .. })), "{err:?}");
+        assert_eq!(err, Err(MachineProfileError::HomingOrder("XXZ".into())));
     }
 
     #[test]

@@ -336,7 +336,8 @@ fn config_from_toml_rejects_unknown_keys() {
     assert_eq!(th.pid_gains(BED).unwrap().kp, 300.0);
     assert!(toml::from_str::<ThermalConfig>("sample_rate = 3\n").is_err());
     let bad = ThermalConfig { hotends: vec![], ..ThermalConfig::default() };
-    assert!(matches!(Thermal::new(bad), Err(ThermalError::BadParameter { .. })));
+    let err = Thermal::new(bad).unwrap_err().to_string();
+    assert_eq!(err, "[thermal] hotends (count) = 0 is out of range: 1 to 8 hotends");
 }
 
 proptest! {
