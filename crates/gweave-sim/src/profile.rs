@@ -448,6 +448,44 @@ mod tests {
         assert_eq!(err, Err(MachineProfileError::HomingOrder("XXZ".into())));
     }
 
+    /// The example profile with one key's value replaced.
+    fn ramps_with(key: &str, value: &str) -> Result<MachineProfile, MachineProfileError> {
+        let text = include_str!("../../../examples/machines/marlin-ramps.toml");
+        let line = text.lines().find(|l| l.starts_with(&format!("{key} ="))).expect(key);
+        MachineProfile::from_toml_str(&text.replace(line, &format!("{key} = {value}")))
+    }
+
+    #[test]
+    fn every_numeric_key_has_a_range_nan_inf_huge_and_negative_are_refused() {
+        let cases = [
+            ("x_min_mm", "1e308", "[bed] x_min_mm = 1e308 is out of range: -10000 to 10000 mm"),
+            ("sample_period_s", "1e308", "[thermal] sample_period_s = 1e308 is out of range: 0.001 to 10 s"),
+            ("extrude_min_c", "nan", "[thermal] extrude_min_c = nan is out of range: 0 to 500 °C"),
+            ("extrude_min_c", "-1", "[thermal] extrude_min_c = -1 is out of range: 0 to 500 °C"),
+            ("power_w", "inf", "[thermal.hotends[0]] power_w = inf is out of range: 0.1 to 5000 W"),
+            ("junction_deviation_mm", "-1", "[motion.corners] junction_deviation_mm = -1 is out of range: 0.0001 to 10 mm"),
+            ("e", "1e308", "[motion.steps] e = 1e308 is out of range: 0.001 to 1000000 steps/unit"),
+            ("mixing_inputs", "99", "mixing_inputs = 99 is out of range: 0 to 16 inputs"),
+        ];
+        for (key, value, message) in cases {
+            let err = ramps_with(key, value).unwrap_err();
+            assert_eq!(err.to_string(), message, "{key} = {value}");
+        }
+        let text = "[[thermal.hotends]]\npower_w = 40.0\nheat_capacity_j_k = 12.0\nloss_w_k = 0.1\n\
+                    [thermal.hotend_protection]\nrunaway_period_s = 40.0\nrunaway_hysteresis_c = 4.0\n\
+                    watch_period_s = 20.0\nwatch_increase_c = 2.0\nmin_temp_c = 5.0\nmax_temp_c = 1e308\n";
+        let err = MachineProfile::from_toml_str(text).unwrap_err().to_string();
+        assert_eq!(err, "[thermal.hotend_protection] max_temp_c = 1e308 is out of range: 0 to 500 °C");
+    }
+
+    #[test]
+    fn unknown_key_in_marlin_corners_is_refused() {
+        let err = ramps_with("lookahead_blocks", "16\njunction_deviaton_mm = 0.02").unwrap_err().to_string();
+        assert!(err.contains("unknown field `junction_deviaton_mm`"), "{err}");
+        let err = MachineProfile::from_toml_str("[thermal.hotend_control]\nkind = \"bang_bang\"\nhyst = 1\n");
+        assert!(err.unwrap_err().to_string().contains("unknown field `hyst`"));
+    }
+
     #[test]
     fn fault_specs_parse_and_print() {
         let f: FaultSpec = "hotend-cartridge-off@120s".parse().unwrap();
