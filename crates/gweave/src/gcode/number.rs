@@ -326,6 +326,17 @@ pub struct NumberFormat {
     pub drop_leading_zero: bool,
 }
 
+/// Decimals G-code numbers are written with (beyond 12 a float has nothing left to say).
+const DECIMALS: crate::settings::Range = crate::settings::Range::new(0.0, 12.0, "decimals");
+
+impl crate::settings::CheckRanges for NumberFormat {
+    fn check_ranges(&self, t: &crate::settings::Table) -> Result<(), crate::settings::OutOfRange> {
+        t.count("position_decimals", self.position_decimals, DECIMALS)?;
+        t.count("extrusion_decimals", self.extrusion_decimals, DECIMALS)?;
+        t.count("feed_decimals", self.feed_decimals, DECIMALS)
+    }
+}
+
 impl Default for NumberFormat {
     fn default() -> Self {
         NumberFormat {
