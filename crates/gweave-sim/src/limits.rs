@@ -322,7 +322,7 @@ impl MotionProfile {
 
     /// Read a profile from TOML text and check it.
     pub fn from_toml_str(text: &str) -> Result<Self, ProfileError> {
-        let profile: Self = toml::from_str(text).map_err(|e| ProfileError::Toml(e.to_string()))?;
+        let profile: Self = toml::from_str(text).map_err(|e| ProfileError::Toml(gweave::settings::toml_message(&e)))?;
         profile.validate()?;
         Ok(profile)
     }

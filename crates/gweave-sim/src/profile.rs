@@ -372,7 +372,7 @@ impl Default for MachineProfile {
 impl MachineProfile {
     /// Read a profile from TOML text, fill derived defaults and check it.
     pub fn from_toml_str(text: &str) -> Result<Self, MachineProfileError> {
-        let mut p: Self = toml::from_str(text).map_err(|e| MachineProfileError::Toml(e.to_string()))?;
+        let mut p: Self = toml::from_str(text).map_err(|e| MachineProfileError::Toml(gweave::settings::toml_message(&e)))?;
         p.normalize()?;
         Ok(p)
     }

@@ -192,6 +192,30 @@ impl fmt::Display for Num {
     }
 }
 
+/// The TOML reader's message for `e`, with any number of more than 20 digits (serde prints
+/// the float `1e308` of an integer key in full) written short, as [`Num`] does.
+pub fn toml_message(e: &toml::de::Error) -> String {
+    short_numbers(&e.to_string())
+}
+
+fn short_numbers(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        out.push_str(&rest[..start]);
+        let run = &rest[start..];
+        let len = run.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(run.len());
+        let number = &run[..len];
+        match number.parse::<f64>() {
+            Ok(v) if len > 20 => out.push_str(&Num(v).to_string()),
+            _ => out.push_str(number),
+        }
+        rest = &run[len..];
+    }
+    out.push_str(rest);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,6 +225,12 @@ mod tests {
         let shown = [1e308, -1e308, 0.013, 500.0, f64::NAN, f64::NEG_INFINITY, 1e-9, -1.0, 0.0]
             .map(|v| Num(v).to_string());
         assert_eq!(shown, ["1e308", "-1e308", "0.013", "500", "nan", "-inf", "1e-9", "-1", "0"]);
+    }
+
+    #[test]
+    fn long_numbers_in_reader_messages_are_shortened() {
+        let long = format!("invalid type: floating point `1{}.0`, expected u32 at line 3", "0".repeat(308));
+        assert_eq!(short_numbers(&long), "invalid type: floating point `1e308`, expected u32 at line 3");
     }
 
     #[test]

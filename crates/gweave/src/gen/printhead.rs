@@ -128,7 +128,7 @@ impl Default for PrintheadProfile {
 impl PrintheadProfile {
     /// Parses and validates a TOML profile.
     pub fn from_toml(text: &str) -> Result<Self, PrintheadError> {
-        let p: PrintheadProfile = toml::from_str(text).map_err(|e| PrintheadError::Toml(e.to_string()))?;
+        let p: PrintheadProfile = toml::from_str(text).map_err(|e| PrintheadError::Toml(crate::settings::toml_message(&e)))?;
         p.validate()?;
         Ok(p)
     }

@@ -59,7 +59,7 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-use super::{finite, positive, Result, RotaryError};
+use super::{finite, in_range, Result, RotaryError};
 
 /// How the firmware reads the rotary word.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -168,9 +168,10 @@ impl RotaryConfig {
 
     /// Checks ranges and that the three axis letters are distinct motion axes.
     pub fn validate(&self) -> Result<()> {
-        positive("mandrel_diameter_mm", self.mandrel_diameter_mm)?;
+        use crate::settings::{ranges, Range};
+        in_range("machine", "mandrel_diameter_mm", self.mandrel_diameter_mm, ranges::SIZE_MM)?;
         if let Some(cap) = self.max_rotary_deg_s {
-            positive("max_rotary_deg_s", cap)?;
+            in_range("machine", "max_rotary_deg_s", cap, Range::new(0.001, 100_000.0, "°/s"))?;
         }
         if !(self.rotary_rebase_deg.is_finite() && self.rotary_rebase_deg >= 0.0) {
             return Err(RotaryError::Config {

@@ -37,7 +37,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cylinder::{max_chord_step_deg, pieces_for_step, surface_length_mm, CylPoint, RotaryConfig};
 use super::emit::{rotary_number_format, validate_format, MoveWriter};
-use super::{finite, positive, Result, RotaryError};
+use super::{finite, in_range, positive, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
 
 /// Most points one path may have (a runaway guard: 5 million chords are ~150 MB of G-code).
@@ -369,14 +369,18 @@ impl Default for PrintSettings {
 impl PrintSettings {
     /// Checks every range.
     pub fn validate(&self) -> Result<()> {
-        positive("layer_height_mm", self.layer_height_mm)?;
-        positive("bead_width_mm", self.bead_width_mm)?;
-        positive("filament_diameter_mm", self.filament_diameter_mm)?;
-        positive("print_speed_mm_s", self.print_speed_mm_s)?;
-        positive("travel_speed_mm_s", self.travel_speed_mm_s)?;
-        finite("nozzle_temp_c", self.nozzle_temp_c)?;
+        use crate::settings::{ranges, Range};
+        /// A bead's height and width.
+        const BEAD_MM: Range = Range::new(0.01, 10.0, "mm");
+        const FILAMENT_DIAMETER_MM: Range = Range::new(0.1, 5.0, "mm");
+        in_range("print", "layer_height_mm", self.layer_height_mm, BEAD_MM)?;
+        in_range("print", "bead_width_mm", self.bead_width_mm, BEAD_MM)?;
+        in_range("print", "filament_diameter_mm", self.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;
+        in_range("print", "print_speed_mm_s", self.print_speed_mm_s, ranges::SPEED_MM_S)?;
+        in_range("print", "travel_speed_mm_s", self.travel_speed_mm_s, ranges::SPEED_MM_S)?;
+        in_range("print", "nozzle_temp_c", self.nozzle_temp_c, ranges::TEMP_C)?;
         if let Some(t) = self.mandrel_temp_c {
-            finite("mandrel_temp_c", t)?;
+            in_range("print", "mandrel_temp_c", t, ranges::TEMP_C)?;
         }
         self.resolution().validate()?;
         validate_format(&self.numbers)

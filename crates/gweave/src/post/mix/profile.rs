@@ -511,7 +511,7 @@ pub struct MixProfile {
 impl MixProfile {
     /// Reads and validates a profile.
     pub fn from_toml_str(text: &str) -> Result<Self, MixPassError> {
-        let profile: MixProfile = toml::from_str(text).map_err(|e| MixPassError::Config(e.to_string()))?;
+        let profile: MixProfile = toml::from_str(text).map_err(|e| MixPassError::Config(crate::settings::toml_message(&e)))?;
         profile.validate()?;
         Ok(profile)
     }
