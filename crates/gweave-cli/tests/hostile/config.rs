@@ -1,0 +1,106 @@
+//! Settings files: mutated copies of every shipped profile (each numeric key set to 1e308, -1,
+//! nan and 0) run through the command that reads them, under a time limit: refused cleanly with
+//! a one-line message naming the file, or run fine; never a hang or a panic.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use crate::harness::*;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// A copy of `example` in `dir` with line `key = ...` set to `value`.
+fn mutated(dir: &Path, example: &str, key: &str, value: &str) -> PathBuf {
+    let text = std::fs::read_to_string(repo().join(example)).unwrap();
+    let line = text.lines().find(|l| l.starts_with(&format!("{key} ="))).unwrap_or_else(|| panic!("{key}"));
+    let path = dir.join("printer.toml");
+    std::fs::write(&path, text.replace(line, &format!("{key} = {value}"))).unwrap();
+    path
+}
+
+/// The numeric `key = value` lines of a TOML file (index, key).
+fn numeric_keys(text: &str) -> Vec<(usize, String)> {
+    text.lines()
+        .enumerate()
+        .filter_map(|(i, line)| {
+            let (key, value) = line.split_once(" = ")?;
+            let value = value.split('#').next()?.trim();
+            value.parse::<f64>().ok().map(|_| (i, key.trim().to_owned()))
+        })
+        .collect()
+}
+
+const MOVES: &str = "G28\nM104 S200\nM109 S200\nG1 X10 Y10 Z0.2 F3000\nG1 X20 Y10 E1 F1200\nM104 S0\n";
+
+/// Regression: `x_min_mm = 1e308` made `sim` loop for ever in the thermal loop (homing across
+/// 1e308 mm); a sample period of 1e308 s did the same. Both are refused, by `sim` and by
+/// `estimate` with the same message (one validation path).
+#[test]
+fn huge_bed_origin_and_sample_period_are_refused_not_hung() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("in.gcode"), MOVES).unwrap();
+    let cases = [
+        ("x_min_mm", "printer.toml: [bed] x_min_mm = 1e308 is out of range: -10000 to 10000 mm"),
+        ("sample_period_s", "printer.toml: [thermal] sample_period_s = 1e308 is out of range: 0.001 to 10 s"),
+    ];
+    for (key, message) in cases {
+        mutated(dir.path(), "examples/machines/marlin-ramps.toml", key, "1e308");
+        for command in ["sim", "estimate"] {
+            let out = gweave(dir.path(), &[command, "in.gcode", "--machine", "printer.toml"])
+                .limit(Duration::from_secs(20))
+                .run();
+            out.assert_refused(message);
+            assert_eq!(out.stderr.lines().count(), 1, "{command}: one line: {}", out.stderr);
+        }
+    }
+}
+
+/// Regression: `estimate` accepted NaN heater values that `sim` refused.
+#[test]
+fn estimate_and_sim_refuse_a_nan_heater_alike() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("in.gcode"), MOVES).unwrap();
+    mutated(dir.path(), "examples/machines/marlin-ramps.toml", "heater_lag_s", "nan");
+    let run = |command| {
+        gweave(dir.path(), &[command, "in.gcode", "--machine", "printer.toml"]).limit(Duration::from_secs(20)).run()
+    };
+    let (sim, estimate) = (run("sim"), run("estimate"));
+    sim.assert_refused("printer.toml: [thermal.hotends[0]] heater_lag_s = nan is out of range: 0 to 600 s");
+    estimate.assert_refused("heater_lag_s = nan");
+    assert_eq!(sim.stderr, estimate.stderr);
+}
+
+/// Every numeric key of every example machine profile set to 1e308, -1, nan and 0, run through
+/// `sim`: refused naming the file, or simulated, within 20 s each.
+#[test]
+fn every_machine_profile_key_mutated_is_refused_or_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("in.gcode"), MOVES).unwrap();
+    let mut failures = Vec::new();
+    for example in ["marlin-ramps.toml", "klipper.toml", "mixing-4in.toml", "rotary.toml", "inkjet-c6602.toml"] {
+        let source = repo().join("examples/machines").join(example);
+        let text = std::fs::read_to_string(&source).unwrap();
+        for (index, key) in numeric_keys(&text) {
+            for bad in ["1e308", "-1", "nan", "0"] {
+                let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+                lines[index] = format!("{key} = {bad}");
+                std::fs::write(dir.path().join("printer.toml"), lines.join("\n")).unwrap();
+                let out = gweave(dir.path(), &["sim", "in.gcode", "--machine", "printer.toml", "-q"])
+                    .limit(Duration::from_secs(20))
+                    .run();
+                let sound = !out.hung && out.signal.is_none() && !out.stderr.contains("panicked");
+                let clean = match out.code {
+                    Some(0) => true,
+                    Some(1) => out.stderr.starts_with("gweave: error: printer.toml: "),
+                    _ => false,
+                };
+                if !(sound && clean) {
+                    failures.push(format!("{example}: {key} = {bad}: {:?} {}", out.code, out.stderr));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
