@@ -72,35 +72,71 @@ fn estimate_and_sim_refuse_a_nan_heater_alike() {
     assert_eq!(sim.stderr, estimate.stderr);
 }
 
-/// Every numeric key of every example machine profile set to 1e308, -1, nan and 0, run through
-/// `sim`: refused naming the file, or simulated, within 20 s each.
+/// Each numeric key of `example` set to 1e308, -1, nan and 0 in `dir/name`, then `args` run in
+/// `dir`: refused naming the file, or run fine, within 20 s. Returns what went wrong.
+fn sweep(dir: &Path, example: &Path, name: &str, args: &[&str]) -> Vec<String> {
+    let text = std::fs::read_to_string(example).unwrap();
+    let mut failures = Vec::new();
+    for (index, key) in numeric_keys(&text) {
+        for bad in ["1e308", "-1", "nan", "0"] {
+            let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+            lines[index] = format!("{key} = {bad}");
+            std::fs::write(dir.join(name), lines.join("\n")).unwrap();
+            let out = gweave(dir, args).limit(Duration::from_secs(20)).run();
+            let sound = !out.hung && out.signal.is_none() && !out.stderr.contains("panicked");
+            let clean = match out.code {
+                Some(0) => true,
+                Some(1) => out.stderr.starts_with(&format!("gweave: error: {name}: ")),
+                _ => false,
+            };
+            if !(sound && clean) {
+                failures.push(format!("{}: {key} = {bad}: {:?} {}", example.display(), out.code, out.stderr));
+            }
+        }
+    }
+    failures
+}
+
+fn examples(folder: &str) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(repo().join(folder))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    files
+}
+
+/// Every example machine profile through `sim`.
 #[test]
 fn every_machine_profile_key_mutated_is_refused_or_runs() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("in.gcode"), MOVES).unwrap();
-    let mut failures = Vec::new();
-    for example in ["marlin-ramps.toml", "klipper.toml", "mixing-4in.toml", "rotary.toml", "inkjet-c6602.toml"] {
-        let source = repo().join("examples/machines").join(example);
-        let text = std::fs::read_to_string(&source).unwrap();
-        for (index, key) in numeric_keys(&text) {
-            for bad in ["1e308", "-1", "nan", "0"] {
-                let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
-                lines[index] = format!("{key} = {bad}");
-                std::fs::write(dir.path().join("printer.toml"), lines.join("\n")).unwrap();
-                let out = gweave(dir.path(), &["sim", "in.gcode", "--machine", "printer.toml", "-q"])
-                    .limit(Duration::from_secs(20))
-                    .run();
-                let sound = !out.hung && out.signal.is_none() && !out.stderr.contains("panicked");
-                let clean = match out.code {
-                    Some(0) => true,
-                    Some(1) => out.stderr.starts_with("gweave: error: printer.toml: "),
-                    _ => false,
-                };
-                if !(sound && clean) {
-                    failures.push(format!("{example}: {key} = {bad}: {:?} {}", out.code, out.stderr));
-                }
-            }
-        }
-    }
+    let args = ["sim", "in.gcode", "--machine", "printer.toml", "-q"];
+    let failures: Vec<String> =
+        examples("examples/machines").iter().flat_map(|e| sweep(dir.path(), e, "printer.toml", &args)).collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Every example mix profile through `mix`.
+#[test]
+fn every_mix_profile_key_mutated_is_refused_or_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("in.gcode"), MOVES).unwrap();
+    let args = ["mix", "in.gcode", "-c", "mix.toml", "-o", "out.gcode"];
+    let failures: Vec<String> =
+        examples("examples/mix").iter().flat_map(|e| sweep(dir.path(), e, "mix.toml", &args)).collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Every example printhead profile through `raster`.
+#[test]
+fn every_printhead_profile_key_mutated_is_refused_or_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = repo().join("examples/raster/layers/badge_0.bmp");
+    std::fs::copy(image, dir.path().join("badge.bmp")).unwrap();
+    let args = ["raster", "badge.bmp", "-o", "out.gcode", "--head", "head.toml"];
+    let failures: Vec<String> =
+        examples("examples/raster").iter().flat_map(|e| sweep(dir.path(), e, "head.toml", &args)).collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
