@@ -140,3 +140,21 @@ fn every_printhead_profile_key_mutated_is_refused_or_runs() {
         examples("examples/raster").iter().flat_map(|e| sweep(dir.path(), e, "head.toml", &args)).collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// Every example rotary settings file through `rotary tube` or `rotary wrap`.
+#[test]
+fn every_rotary_settings_key_mutated_is_refused_or_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(repo().join("tests/data/rotary/plate.gcode"), dir.path().join("plate.gcode")).unwrap();
+    let mut failures = Vec::new();
+    for example in examples("examples/rotary") {
+        let wrap = example.file_name().unwrap().to_str().unwrap().starts_with("wrap");
+        let args: &[&str] = if wrap {
+            &["rotary", "wrap", "plate.gcode", "-c", "rotary.toml", "-o", "out.gcode"]
+        } else {
+            &["rotary", "tube", "-c", "rotary.toml", "-o", "out.gcode"]
+        };
+        failures.extend(sweep(dir.path(), &example, "rotary.toml", args));
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -326,8 +326,9 @@ pub struct NumberFormat {
     pub drop_leading_zero: bool,
 }
 
-/// Decimals G-code numbers are written with (beyond 12 a float has nothing left to say).
-const DECIMALS: crate::settings::Range = crate::settings::Range::new(0.0, 12.0, "decimals");
+/// Decimals G-code numbers are written with: an f64 holds about 15 significant digits, so 9
+/// places leave 6 for the integer part.
+const DECIMALS: crate::settings::Range = crate::settings::Range::new(0.0, 9.0, "decimals");
 
 impl crate::settings::CheckRanges for NumberFormat {
     fn check_ranges(&self, t: &crate::settings::Table) -> Result<(), crate::settings::OutOfRange> {
