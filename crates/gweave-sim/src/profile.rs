@@ -113,8 +113,14 @@ impl CheckRanges for MachineProfile {
             ink.printhead.check_ranges(&inkjet.sub("printhead"))?;
             inkjet.check("origin_x_mm", ink.origin_x_mm, ranges::POS_MM)?;
             inkjet.check("origin_y_mm", ink.origin_y_mm, ranges::POS_MM)?;
-            inkjet.check_opt("width_px", ink.width_px.map(|w| w as f64), CANVAS_PX)?;
-            inkjet.check_opt("height_px", ink.height_px.map(|h| h as f64), CANVAS_PX)?;
+            // The canvas is allocated at this size, so a computed size is held to the range too.
+            let [width, height] = ink.canvas_px(&self.bed);
+            let key = |name: &str, given: Option<usize>| match given {
+                Some(_) => name.to_owned(),
+                None => format!("{name} (unset: the bed in nozzle pitches)"),
+            };
+            inkjet.check(&key("width_px", ink.width_px), width as f64, CANVAS_PX)?;
+            inkjet.check(&key("height_px", ink.height_px), height as f64, CANVAS_PX)?;
         }
         Ok(())
     }
@@ -242,6 +248,21 @@ pub struct Inkjet {
     pub width_px: Option<usize>,
     /// Canvas height in nozzle pitches; `None`: to the end of the bed.
     pub height_px: Option<usize>,
+}
+
+impl Inkjet {
+    /// The canvas size in nozzle pitches: `width_px` and `height_px`, or from the origin to the
+    /// end of the bed.
+    pub fn canvas_px(&self, bed: &Bed) -> [usize; 2] {
+        let pitch = self.printhead.pitch_mm();
+        let [(_, x_max), (_, y_max), _] = bed.ranges();
+        // A saturating cast: a NaN or huge size becomes 0 or usize::MAX, both out of range.
+        let fit = |from: f64, to: f64| ((to - from) / pitch).ceil().max(1.0) as usize;
+        [
+            self.width_px.unwrap_or_else(|| fit(self.origin_x_mm, x_max)),
+            self.height_px.unwrap_or_else(|| fit(self.origin_y_mm, y_max)),
+        ]
+    }
 }
 
 impl Default for Inkjet {
@@ -476,6 +497,27 @@ mod tests {
                     watch_period_s = 20.0\nwatch_increase_c = 2.0\nmin_temp_c = 5.0\nmax_temp_c = 1e308\n";
         let err = MachineProfile::from_toml_str(text).unwrap_err().to_string();
         assert_eq!(err, "[thermal.hotend_protection] max_temp_c = 1e308 is out of range: 0 to 500 °C");
+    }
+
+    /// Regression: an inkjet canvas of 1e308 mm (or a bed at 10 000 dpi) aborted `sim` on its
+    /// allocation; the canvas size, given or computed, is bounded.
+    #[test]
+    fn inkjet_canvas_size_is_bounded_given_or_computed() {
+        let text = include_str!("../../../examples/machines/inkjet-c6602.toml");
+        let p = MachineProfile::from_toml_str(text).unwrap();
+        let mut wide = p.clone();
+        wide.inkjet.as_mut().unwrap().width_px = Some(1_000_000);
+        let err = wide.validate().unwrap_err().to_string();
+        assert_eq!(err, "[inkjet] width_px = 1000000 is out of range: 1 to 20000 px");
+        let mut fine = p;
+        let ink = fine.inkjet.as_mut().unwrap();
+        (ink.width_px, ink.height_px, ink.printhead.dpi) = (None, None, 10_000.0);
+        fine.bed.x_mm = 5_000.0;
+        let err = fine.validate().unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "[inkjet] width_px (unset: the bed in nozzle pitches) = 1960630 is out of range: 1 to 20000 px"
+        );
     }
 
     #[test]
