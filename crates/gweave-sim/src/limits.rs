@@ -214,16 +214,23 @@ impl CheckRanges for KlipperLimits {
         t.check("max_accel_mm_s2", self.max_accel_mm_s2, ranges::ACCEL_MM_S2)?;
         t.check("minimum_cruise_ratio", self.minimum_cruise_ratio, CRUISE_RATIO)?;
         t.check("square_corner_velocity_mm_s", self.square_corner_velocity_mm_s, CORNER_SPEED_MM_S)?;
-        t.check("instantaneous_corner_velocity_mm_s", self.instantaneous_corner_velocity_mm_s, CORNER_SPEED_MM_S)?;
+        t.check(
+            "instantaneous_corner_velocity_mm_s",
+            self.instantaneous_corner_velocity_mm_s,
+            CORNER_SPEED_MM_S,
+        )?;
         t.check_opt("max_z_velocity_mm_s", self.max_z_velocity_mm_s, ranges::SPEED_MM_S)?;
         t.check_opt("max_z_accel_mm_s2", self.max_z_accel_mm_s2, ranges::ACCEL_MM_S2)?;
-        t.check_opt("max_extrude_only_velocity_mm_s", self.max_extrude_only_velocity_mm_s, ranges::SPEED_MM_S)?;
+        t.check_opt(
+            "max_extrude_only_velocity_mm_s",
+            self.max_extrude_only_velocity_mm_s,
+            ranges::SPEED_MM_S,
+        )?;
         t.check_opt("max_extrude_only_accel_mm_s2", self.max_extrude_only_accel_mm_s2, ranges::ACCEL_MM_S2)
     }
 }
 
 impl KlipperLimits {
-
     /// Klipper's `SET_VELOCITY_LIMIT`: change the values given, keep the others.
     pub fn set_velocity_limit(
         &mut self,
@@ -322,7 +329,8 @@ impl MotionProfile {
 
     /// Read a profile from TOML text and check it.
     pub fn from_toml_str(text: &str) -> Result<Self, ProfileError> {
-        let profile: Self = toml::from_str(text).map_err(|e| ProfileError::Toml(gweave::settings::toml_message(&e)))?;
+        let profile: Self =
+            toml::from_str(text).map_err(|e| ProfileError::Toml(gweave::settings::toml_message(&e)))?;
         profile.validate()?;
         Ok(profile)
     }

@@ -393,7 +393,8 @@ impl Default for MachineProfile {
 impl MachineProfile {
     /// Read a profile from TOML text, fill derived defaults and check it.
     pub fn from_toml_str(text: &str) -> Result<Self, MachineProfileError> {
-        let mut p: Self = toml::from_str(text).map_err(|e| MachineProfileError::Toml(gweave::settings::toml_message(&e)))?;
+        let mut p: Self = toml::from_str(text)
+            .map_err(|e| MachineProfileError::Toml(gweave::settings::toml_message(&e)))?;
         p.normalize()?;
         Ok(p)
     }
@@ -484,7 +485,11 @@ mod tests {
             ("extrude_min_c", "nan", "[thermal] extrude_min_c = nan is out of range: 0 to 500 °C"),
             ("extrude_min_c", "-1", "[thermal] extrude_min_c = -1 is out of range: 0 to 500 °C"),
             ("power_w", "inf", "[thermal.hotends[0]] power_w = inf is out of range: 0.1 to 5000 W"),
-            ("junction_deviation_mm", "-1", "[motion.corners] junction_deviation_mm = -1 is out of range: 0.0001 to 10 mm"),
+            (
+                "junction_deviation_mm",
+                "-1",
+                "[motion.corners] junction_deviation_mm = -1 is out of range: 0.0001 to 10 mm",
+            ),
             ("e", "1e308", "[motion.steps] e = 1e308 is out of range: 0.001 to 1000000 steps/unit"),
             ("mixing_inputs", "99", "mixing_inputs = 99 is out of range: 0 to 16 inputs"),
         ];

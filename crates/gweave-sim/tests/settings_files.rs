@@ -33,7 +33,9 @@ fn load(file: &Path) -> Result<(), String> {
         "machines" | "bench" => MachineProfile::from_toml_str(&text).map(drop).map_err(|e| e.to_string()),
         "mix" => MixProfile::from_toml_str(&text).map(drop).map_err(|e| e.to_string()),
         "raster" => PrintheadProfile::from_toml(&text).map(drop).map_err(|e| e.to_string()),
-        "rotary" if name.starts_with("wrap") => WrapConfig::from_toml_str(&text).map(drop).map_err(|e| e.to_string()),
+        "rotary" if name.starts_with("wrap") => {
+            WrapConfig::from_toml_str(&text).map(drop).map_err(|e| e.to_string())
+        }
         "rotary" => TubeParams::from_toml_str(&text).map(drop).map_err(|e| e.to_string()),
         _ => panic!("no loader for {}", file.display()),
     }
@@ -79,7 +81,8 @@ fn every_numeric_key_of_every_file_is_bounded() {
                     Err(e) => {
                         let key = key.trim();
                         // An integer key given a float is a type error of the TOML reader.
-                        let named = ["out of range", "invalid type", "invalid value"].iter().any(|m| e.contains(m));
+                        let named =
+                            ["out of range", "invalid type", "invalid value"].iter().any(|m| e.contains(m));
                         // The reader's errors point at the line (or, for a tagged table such as
                         // [motion.corners], at the table) rather than naming the key.
                         let located = e.contains(key) || e.contains("TOML parse error at line");

@@ -64,7 +64,9 @@ fn estimate_and_sim_refuse_a_nan_heater_alike() {
     std::fs::write(dir.path().join("in.gcode"), MOVES).unwrap();
     mutated(dir.path(), "examples/machines/marlin-ramps.toml", "heater_lag_s", "nan");
     let run = |command| {
-        gweave(dir.path(), &[command, "in.gcode", "--machine", "printer.toml"]).limit(Duration::from_secs(20)).run()
+        gweave(dir.path(), &[command, "in.gcode", "--machine", "printer.toml"])
+            .limit(Duration::from_secs(20))
+            .run()
     };
     let (sim, estimate) = (run("sim"), run("estimate"));
     sim.assert_refused("printer.toml: [thermal.hotends[0]] heater_lag_s = nan is out of range: 0 to 600 s");
@@ -113,8 +115,10 @@ fn every_machine_profile_key_mutated_is_refused_or_runs() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("in.gcode"), MOVES).unwrap();
     let args = ["sim", "in.gcode", "--machine", "printer.toml", "-q"];
-    let failures: Vec<String> =
-        examples("examples/machines").iter().flat_map(|e| sweep(dir.path(), e, "printer.toml", &args)).collect();
+    let failures: Vec<String> = examples("examples/machines")
+        .iter()
+        .flat_map(|e| sweep(dir.path(), e, "printer.toml", &args))
+        .collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 

@@ -238,8 +238,9 @@ impl Machine {
                 self.next_report_s += self.autoreport_s;
                 continue;
             }
-            // Written so that a NaN gap (an infinite clock) also ends the loop.
-            if !(target_s - now_s > 1e-12) {
+            // A NaN gap (an infinite clock) also ends the loop.
+            let gap_s = target_s - now_s;
+            if gap_s.is_nan() || gap_s <= 1e-12 {
                 break;
             }
             let mut until_s = target_s;

@@ -145,8 +145,12 @@ impl Machine {
             None => None,
             Some(ink) => {
                 let [width_px, height_px] = ink.canvas_px(&profile.bed);
-                let geometry =
-                    CanvasGeometry { origin_x_mm: ink.origin_x_mm, origin_y_mm: ink.origin_y_mm, width_px, height_px };
+                let geometry = CanvasGeometry {
+                    origin_x_mm: ink.origin_x_mm,
+                    origin_y_mm: ink.origin_y_mm,
+                    width_px,
+                    height_px,
+                };
                 Some(InkjetCanvas::new(&ink.printhead, geometry)?)
             }
         };

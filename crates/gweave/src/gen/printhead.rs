@@ -128,7 +128,8 @@ impl Default for PrintheadProfile {
 impl PrintheadProfile {
     /// Parses and validates a TOML profile.
     pub fn from_toml(text: &str) -> Result<Self, PrintheadError> {
-        let p: PrintheadProfile = toml::from_str(text).map_err(|e| PrintheadError::Toml(crate::settings::toml_message(&e)))?;
+        let p: PrintheadProfile =
+            toml::from_str(text).map_err(|e| PrintheadError::Toml(crate::settings::toml_message(&e)))?;
         p.validate()?;
         Ok(p)
     }
@@ -295,7 +296,10 @@ mod tests {
         let bad = |t: &str| PrintheadProfile::from_toml(t).unwrap_err();
         assert!(matches!(bad("nozzle_count = 3\nnozzle_rows = [0, 0, 1]"), PrintheadError::NozzleMap { .. }));
         assert!(matches!(bad("nozzle_count = 3\nnozzle_rows = [0, 1, 3]"), PrintheadError::NozzleMap { .. }));
-        assert_eq!(bad("nozzle_count = 65").to_string(), "nozzle_count = 65 is out of range: 1 to 64 nozzles");
+        assert_eq!(
+            bad("nozzle_count = 65").to_string(),
+            "nozzle_count = 65 is out of range: 1 to 64 nozzles"
+        );
         assert_eq!(bad("dpi = 0.0").to_string(), "dpi = 0 is out of range: 1 to 10000 dpi");
         assert_eq!(bad("heads = []"), PrintheadError::NoHeads);
         assert!(matches!(bad("drop_volume_pl = -1.0"), PrintheadError::Range(_)));

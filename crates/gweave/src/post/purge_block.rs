@@ -41,8 +41,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::gcode::number::NumberFormat;
-use crate::settings::{ranges, CheckRanges, OutOfRange, Table};
 use crate::gcode::state::{E, X, Y, Z};
+use crate::settings::{ranges, CheckRanges, OutOfRange, Table};
 
 /// Where and how to purge (the purge settings of the profile, with the Z feed capped). The
 /// default is the seed's: retract 4 mm, lift 15 mm, purge at X10 Y10, wipe 5 mm along +X.

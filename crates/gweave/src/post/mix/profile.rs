@@ -511,7 +511,8 @@ pub struct MixProfile {
 impl MixProfile {
     /// Reads and validates a profile.
     pub fn from_toml_str(text: &str) -> Result<Self, MixPassError> {
-        let profile: MixProfile = toml::from_str(text).map_err(|e| MixPassError::Config(crate::settings::toml_message(&e)))?;
+        let profile: MixProfile =
+            toml::from_str(text).map_err(|e| MixPassError::Config(crate::settings::toml_message(&e)))?;
         profile.validate()?;
         Ok(profile)
     }
@@ -721,7 +722,10 @@ mod tests {
     #[test]
     fn every_numeric_key_has_a_range() {
         let msg = |text: &str| MixProfile::from_toml_str(text).unwrap_err().to_string();
-        assert_eq!(msg("[purge]\nlength_mm = 1e308"), "[purge] length_mm = 1e308 is out of range: 0 to 2000 mm");
+        assert_eq!(
+            msg("[purge]\nlength_mm = 1e308"),
+            "[purge] length_mm = 1e308 is out of range: 0 to 2000 mm"
+        );
         assert_eq!(msg("[purge]\nretract_mm = -1"), "[purge] retract_mm = -1 is out of range: 0 to 10000 mm");
         assert_eq!(msg("[purge]\nx_mm = nan"), "[purge] x_mm = nan is out of range: -10000 to 10000 mm");
         assert_eq!(
@@ -737,6 +741,8 @@ mod tests {
             "[numbers] position_decimals = 200 is out of range: 0 to 12 decimals"
         );
         assert!(msg("[z_cap]\nmax_z_feed = 1").contains("unknown field `max_z_feed`"));
-        assert!(msg("[[hardware.inputs]]\ncolour = \"#ffffff\"\ndensity = 1").contains("unknown field `density`"));
+        assert!(
+            msg("[[hardware.inputs]]\ncolour = \"#ffffff\"\ndensity = 1").contains("unknown field `density`")
+        );
     }
 }

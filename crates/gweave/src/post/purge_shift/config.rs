@@ -280,13 +280,15 @@ impl CheckRanges for PurgeShiftConfig {
 impl PurgeShiftConfig {
     /// Parses TOML and validates it.
     pub fn from_toml(text: &str) -> Result<Rules, ConfigError> {
-        let config: Self = toml::from_str(text).map_err(|e| ConfigError::Toml(crate::settings::toml_message(&e)))?;
+        let config: Self =
+            toml::from_str(text).map_err(|e| ConfigError::Toml(crate::settings::toml_message(&e)))?;
         config.validate()
     }
 
     /// Parses TOML into the raw settings (for merging with command-line flags).
     pub fn parse_toml(text: &str) -> Result<Self, ConfigError> {
-        let config: Self = toml::from_str(text).map_err(|e| ConfigError::Toml(crate::settings::toml_message(&e)))?;
+        let config: Self =
+            toml::from_str(text).map_err(|e| ConfigError::Toml(crate::settings::toml_message(&e)))?;
         // The file's own values, so that their errors name the file (flags are checked again
         // by `validate`).
         config.check_ranges(&Table::root())?;
