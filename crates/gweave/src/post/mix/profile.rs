@@ -738,7 +738,7 @@ mod tests {
         );
         assert_eq!(
             msg("[numbers]\nposition_decimals = 200"),
-            "[numbers] position_decimals = 200 is out of range: 0 to 12 decimals"
+            "[numbers] position_decimals = 200 is out of range: 0 to 9 decimals"
         );
         assert!(msg("[z_cap]\nmax_z_feed = 1").contains("unknown field `max_z_feed`"));
         assert!(
