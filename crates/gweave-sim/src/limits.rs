@@ -25,10 +25,11 @@ use thiserror::Error;
 /// A value in a motion profile that cannot be used.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ProfileError {
-    /// A limit or step rate that must be a positive, finite number is not.
+    /// A limit set by a G-code command (M201, M203, M204, M205) that must be a positive,
+    /// finite number is not. (A profile's keys are checked against their ranges instead.)
     #[error("{name} must be positive and finite, got {value}")]
     NotPositive {
-        /// The profile field, e.g. `max_feed_mm_s.x`.
+        /// The limit, e.g. `max_feed_mm_s.x` or `M204 S`.
         name: &'static str,
         /// The rejected value.
         value: f64,

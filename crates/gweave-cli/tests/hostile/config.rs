@@ -162,3 +162,25 @@ fn every_rotary_settings_key_mutated_is_refused_or_runs() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// A purge-shift config with every numeric key written out (no example ships one), each key
+/// mutated through `purge-shift`.
+#[test]
+fn every_purge_shift_config_key_mutated_is_refused_or_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = "purge_mm = 20.0\nfilament_diameter_mm = 1.75\nmax_window_lines = 1000\nfallback = \"tower\"\n\
+                  [[pair]]\nfrom = 0\nto = 1\npurge_mm = 30.0\n\
+                  [block]\nretract_mm = 4.0\nlift_mm = 15.0\nx_mm = 10.0\ny_mm = 10.0\nwipe_mm = 5.0\n\
+                  travel_feed_mm_min = 1320.0\nextrude_feed_mm_min = 200.0\nretract_feed_mm_min = 2400.0\n\
+                  z_feed_mm_min = 200.0\n\
+                  [tower]\nx_mm = 150.0\ny_mm = 150.0\ngap_mm = 5.0\nbed_mm = [200.0, 200.0]\nline_width_mm = 0.5\n\
+                  layer_height_mm = 0.2\nlift_mm = 0.0\ntravel_feed_mm_min = 6000.0\nextrude_feed_mm_min = 1200.0\n\
+                  retract_feed_mm_min = 2400.0\n";
+    let example = dir.path().join("example.toml");
+    std::fs::write(&example, config).unwrap();
+    let gcode = "G21\nG90\nM82\nT0\nG1 Z0.2 F600\nG1 X10 Y10 E1 F1200\nT1\nG1 X20 Y10 E2\nG1 X30 Y10 E3\n";
+    std::fs::write(dir.path().join("in.gcode"), gcode).unwrap();
+    let args = ["purge-shift", "in.gcode", "-c", "ps.toml", "-o", "out.gcode"];
+    let failures = sweep(dir.path(), &example, "ps.toml", &args);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
