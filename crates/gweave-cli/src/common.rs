@@ -98,11 +98,26 @@ pub fn read_text(path: &Path) -> Result<String> {
 }
 
 /// The settings file at `path` read with `parse`, naming the file in either error.
+///
+/// A settings error is one line, `printer.toml: [bed] x_mm = -1 is out of range: ...`: the
+/// causes are joined after the file name, each once (a cause its parent already prints is not
+/// repeated).
 pub fn load<T, E>(path: &Path, parse: impl FnOnce(&str) -> std::result::Result<T, E>) -> Result<T>
 where
     E: std::error::Error + Send + Sync + 'static,
 {
-    parse(&read_text(path)?).with_context(|| format!("in {}", path.display()))
+    parse(&read_text(path)?).map_err(|e| {
+        let mut message = e.to_string();
+        let mut cause = std::error::Error::source(&e);
+        while let Some(c) = cause {
+            let text = c.to_string();
+            if !message.contains(&text) {
+                message = format!("{message}: {text}");
+            }
+            cause = c.source();
+        }
+        anyhow::anyhow!("{}: {message}", path.display())
+    })
 }
 
 /// [`load`] for an optional file: its default without one.

@@ -38,6 +38,7 @@
 
 use std::fmt;
 
+use gweave::settings::{CheckRanges, OutOfRange, Range, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -55,15 +56,41 @@ pub fn duty(power: u8) -> f64 {
 /// Errors in a controller configuration.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ControlError {
-    #[error("control parameter `{name}` must be {rule}, got {value}")]
-    BadParameter { name: &'static str, rule: &'static str, value: f64 },
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
 }
 
-fn check(name: &'static str, value: f64, ok: bool, rule: &'static str) -> Result<(), ControlError> {
-    if ok && value.is_finite() {
-        Ok(())
-    } else {
-        Err(ControlError::BadParameter { name, rule, value })
+/// A switching band or PID functional range, C.
+const BAND_C: Range = Range::new(0.0, 100.0, "°C");
+/// How often bang-bang decides (must advance the clock).
+const EVAL_PERIOD_S: Range = Range::new(0.001, 60.0, "s");
+/// PID gains in counts (of 255) per kelvin (per second, times seconds); tuned beds reach a
+/// few thousand.
+const GAIN: Range = Range::new(0.0, 100_000.0, "");
+const FILTER_S: Range = Range::new(0.0, 600.0, "s");
+
+impl CheckRanges for ControlConfig {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        match self {
+            ControlConfig::BangBang(c) => {
+                t.check("hysteresis_c", c.hysteresis_c, BAND_C)?;
+                t.check("idle_period_s", c.idle_period_s, EVAL_PERIOD_S)?;
+                t.check("moving_period_s", c.moving_period_s, EVAL_PERIOD_S)
+            }
+            ControlConfig::Pid(c) => {
+                c.gains.check_ranges(&t.sub("gains"))?;
+                t.check_opt("functional_range_c", c.functional_range_c, BAND_C)?;
+                t.check("derivative_filter_s", c.derivative_filter_s, FILTER_S)
+            }
+        }
+    }
+}
+
+impl CheckRanges for PidGains {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.check("kp", self.kp, GAIN)?;
+        t.check("ki", self.ki, GAIN)?;
+        t.check("kd", self.kd, GAIN)
     }
 }
 
@@ -139,9 +166,7 @@ pub struct BangBang {
 
 impl BangBang {
     pub fn new(cfg: BangBangConfig) -> Result<Self, ControlError> {
-        check("hysteresis_c", cfg.hysteresis_c, cfg.hysteresis_c >= 0.0, ">= 0")?;
-        check("idle_period_s", cfg.idle_period_s, cfg.idle_period_s > 0.0, "> 0")?;
-        check("moving_period_s", cfg.moving_period_s, cfg.moving_period_s > 0.0, "> 0")?;
+        ControlConfig::BangBang(cfg).check_ranges(&Table::root())?;
         Ok(Self { cfg, moving: false, on: false, next_eval_s: None })
     }
 }
@@ -209,9 +234,7 @@ impl PidGains {
     }
 
     fn validate(&self) -> Result<(), ControlError> {
-        check("kp", self.kp, self.kp >= 0.0, ">= 0")?;
-        check("ki", self.ki, self.ki >= 0.0, ">= 0")?;
-        check("kd", self.kd, self.kd >= 0.0, ">= 0")
+        Ok(self.check_ranges(&Table::root())?)
     }
 }
 
@@ -261,11 +284,7 @@ pub struct Pid {
 
 impl Pid {
     pub fn new(cfg: PidConfig) -> Result<Self, ControlError> {
-        cfg.gains.validate()?;
-        if let Some(r) = cfg.functional_range_c {
-            check("functional_range_c", r, r > 0.0, "> 0")?;
-        }
-        check("derivative_filter_s", cfg.derivative_filter_s, cfg.derivative_filter_s >= 0.0, ">= 0")?;
+        ControlConfig::Pid(cfg).check_ranges(&Table::root())?;
         Ok(Self { cfg, integral: 0.0, derivative: 0.0, last: None })
     }
 

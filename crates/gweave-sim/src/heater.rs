@@ -55,6 +55,7 @@
 
 use std::fmt;
 
+use gweave::settings::{CheckRanges, OutOfRange, Range, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -87,8 +88,8 @@ impl fmt::Display for HeaterId {
 /// Errors in a heater configuration.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum HeaterError {
-    #[error("heater parameter `{name}` must be {rule}, got {value}")]
-    BadParameter { name: &'static str, rule: &'static str, value: f64 },
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
 }
 
 /// Physical parameters of one heater. Deserialized with unknown keys
@@ -182,24 +183,31 @@ impl HeaterConfig {
         }
     }
 
-    /// Check ranges: power, capacity and loss positive; fan loss and lag
-    /// non-negative; ambient above absolute zero. All finite.
+    /// Check every value against its range (see [`CheckRanges`]).
     pub fn validate(&self) -> Result<(), HeaterError> {
-        let checks: [(&'static str, f64, bool, &'static str); 7] = [
-            ("power_w", self.power_w, self.power_w > 0.0, "> 0"),
-            ("heat_capacity_j_k", self.heat_capacity_j_k, self.heat_capacity_j_k > 0.0, "> 0"),
-            ("loss_w_k", self.loss_w_k, self.loss_w_k > 0.0, "> 0"),
-            ("fan_loss_w_k", self.fan_loss_w_k, self.fan_loss_w_k >= 0.0, ">= 0"),
-            ("ambient_c", self.ambient_c, self.ambient_c > -273.15, "> -273.15"),
-            ("heater_lag_s", self.heater_lag_s, self.heater_lag_s >= 0.0, ">= 0"),
-            ("sensor_lag_s", self.sensor_lag_s, self.sensor_lag_s >= 0.0, ">= 0"),
-        ];
-        for (name, value, ok, rule) in checks {
-            if !(ok && value.is_finite()) {
-                return Err(HeaterError::BadParameter { name, rule, value });
-            }
-        }
-        Ok(())
+        Ok(self.check_ranges(&Table::root())?)
+    }
+}
+
+/// From a cartridge of a few watts to a large mains bed.
+const POWER_W: Range = Range::new(0.1, 5_000.0, "W");
+/// From a tiny nozzle block (~1 J/K) to a heavy cast bed.
+const HEAT_CAPACITY_J_K: Range = Range::new(0.01, 1_000_000.0, "J/K");
+const LOSS_W_K: Range = Range::new(0.000_1, 1_000.0, "W/K");
+const FAN_LOSS_W_K: Range = Range::new(0.0, 1_000.0, "W/K");
+/// A room a printer works in.
+const AMBIENT_C: Range = Range::new(-50.0, 100.0, "°C");
+const LAG_S: Range = Range::new(0.0, 600.0, "s");
+
+impl CheckRanges for HeaterConfig {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.check("power_w", self.power_w, POWER_W)?;
+        t.check("heat_capacity_j_k", self.heat_capacity_j_k, HEAT_CAPACITY_J_K)?;
+        t.check("loss_w_k", self.loss_w_k, LOSS_W_K)?;
+        t.check("fan_loss_w_k", self.fan_loss_w_k, FAN_LOSS_W_K)?;
+        t.check("ambient_c", self.ambient_c, AMBIENT_C)?;
+        t.check("heater_lag_s", self.heater_lag_s, LAG_S)?;
+        t.check("sensor_lag_s", self.sensor_lag_s, LAG_S)
     }
 }
 
@@ -603,8 +611,8 @@ mod tests {
         assert!(toml::from_str::<HeaterConfig>(&unknown).is_err());
         let bad = HeaterConfig { loss_w_k: 0.0, ..HeaterConfig::hotend_40w() };
         assert_eq!(
-            Heater::new(bad).unwrap_err(),
-            HeaterError::BadParameter { name: "loss_w_k", rule: "> 0", value: 0.0 }
+            Heater::new(bad).unwrap_err().to_string(),
+            "loss_w_k = 0 is out of range: 0.0001 to 1000 W/K"
         );
     }
 

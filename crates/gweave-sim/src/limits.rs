@@ -18,23 +18,25 @@
 //! max_accel_mm_s2 = 3000.0
 //! ```
 
+use gweave::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 /// A value in a motion profile that cannot be used.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ProfileError {
-    /// A limit or step rate that must be a positive, finite number is not.
+    /// A limit set by a G-code command (M201, M203, M204, M205) that must be a positive,
+    /// finite number is not. (A profile's keys are checked against their ranges instead.)
     #[error("{name} must be positive and finite, got {value}")]
     NotPositive {
-        /// The profile field, e.g. `max_feed_mm_s.x`.
+        /// The limit, e.g. `max_feed_mm_s.x` or `M204 S`.
         name: &'static str,
         /// The rejected value.
         value: f64,
     },
-    /// Klipper's `minimum_cruise_ratio` must lie in `[0, 1)`.
-    #[error("minimum_cruise_ratio must be in [0, 1), got {0}")]
-    CruiseRatio(f64),
+    /// A profile key out of its range (see [`MotionProfile::check_ranges`]).
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
     /// Klipper's M204 needs either `S` or both `P` and `T` (it takes the smaller of the two).
     #[error("M204 needs S, or both P and T, in Klipper mode")]
     M204NeedsPAndT,
@@ -90,10 +92,6 @@ impl AxisLimits {
     /// The limits in the order X Y Z E A, the order of [`crate::kinematics::Pos::to_array`].
     pub fn to_array(&self) -> [f64; 5] {
         [self.x, self.y, self.z, self.e, self.a]
-    }
-
-    fn validate(&self, names: [&'static str; 5]) -> Result<(), ProfileError> {
-        self.to_array().iter().zip(names).try_for_each(|(&v, n)| positive(n, v))
     }
 
     /// Replace the values given (an M201/M203 line: `X Y Z E A`), keep the others.
@@ -199,24 +197,41 @@ impl Default for KlipperLimits {
     }
 }
 
-impl KlipperLimits {
-    fn validate(&self) -> Result<(), ProfileError> {
-        positive("max_velocity_mm_s", self.max_velocity_mm_s)?;
-        positive("max_accel_mm_s2", self.max_accel_mm_s2)?;
-        if !(0.0..1.0).contains(&self.minimum_cruise_ratio) {
-            return Err(ProfileError::CruiseRatio(self.minimum_cruise_ratio));
-        }
-        non_negative("square_corner_velocity_mm_s", self.square_corner_velocity_mm_s)?;
-        non_negative("instantaneous_corner_velocity_mm_s", self.instantaneous_corner_velocity_mm_s)?;
-        let optional = [
-            ("max_z_velocity_mm_s", self.max_z_velocity_mm_s),
-            ("max_z_accel_mm_s2", self.max_z_accel_mm_s2),
-            ("max_extrude_only_velocity_mm_s", self.max_extrude_only_velocity_mm_s),
-            ("max_extrude_only_accel_mm_s2", self.max_extrude_only_accel_mm_s2),
-        ];
-        optional.iter().filter_map(|(n, v)| v.map(|v| (*n, v))).try_for_each(|(n, v)| positive(n, v))
-    }
+/// `minimum_cruise_ratio`: a share of each move, below 1 (a move must be able to accelerate).
+const CRUISE_RATIO: Range = Range::new(0.0, 0.99, "");
+/// A corner speed (square corner or instantaneous E change); 0 stops at every corner.
+const CORNER_SPEED_MM_S: Range = Range::new(0.0, 1_000.0, "mm/s");
+/// Marlin's junction deviation (`JUNCTION_DEVIATION_MM`, typically 0.005 to 0.3).
+const JUNCTION_DEVIATION_MM: Range = Range::new(0.000_1, 10.0, "mm");
+/// Marlin's planner buffer (`BLOCK_BUFFER_SIZE`, 8 to 64 on real boards).
+const LOOKAHEAD_BLOCKS: Range = Range::new(1.0, 1_024.0, "blocks");
+/// The rotary axis' speed and acceleration, degree based.
+const SPEED_DEG_S: Range = Range::new(0.001, 100_000.0, "°/s");
+const ACCEL_DEG_S2: Range = Range::new(0.001, 10_000_000.0, "°/s²");
 
+impl CheckRanges for KlipperLimits {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.check("max_velocity_mm_s", self.max_velocity_mm_s, ranges::SPEED_MM_S)?;
+        t.check("max_accel_mm_s2", self.max_accel_mm_s2, ranges::ACCEL_MM_S2)?;
+        t.check("minimum_cruise_ratio", self.minimum_cruise_ratio, CRUISE_RATIO)?;
+        t.check("square_corner_velocity_mm_s", self.square_corner_velocity_mm_s, CORNER_SPEED_MM_S)?;
+        t.check(
+            "instantaneous_corner_velocity_mm_s",
+            self.instantaneous_corner_velocity_mm_s,
+            CORNER_SPEED_MM_S,
+        )?;
+        t.check_opt("max_z_velocity_mm_s", self.max_z_velocity_mm_s, ranges::SPEED_MM_S)?;
+        t.check_opt("max_z_accel_mm_s2", self.max_z_accel_mm_s2, ranges::ACCEL_MM_S2)?;
+        t.check_opt(
+            "max_extrude_only_velocity_mm_s",
+            self.max_extrude_only_velocity_mm_s,
+            ranges::SPEED_MM_S,
+        )?;
+        t.check_opt("max_extrude_only_accel_mm_s2", self.max_extrude_only_accel_mm_s2, ranges::ACCEL_MM_S2)
+    }
+}
+
+impl KlipperLimits {
     /// Klipper's `SET_VELOCITY_LIMIT`: change the values given, keep the others.
     pub fn set_velocity_limit(
         &mut self,
@@ -231,7 +246,8 @@ impl KlipperLimits {
         next.square_corner_velocity_mm_s =
             square_corner_velocity_mm_s.unwrap_or(next.square_corner_velocity_mm_s);
         next.minimum_cruise_ratio = minimum_cruise_ratio.unwrap_or(next.minimum_cruise_ratio);
-        next.validate()?;
+        // The profile's ranges bound the command too; the message names the profile key.
+        next.check_ranges(&Table::root().sub("motion.corners"))?;
         *self = next;
         Ok(())
     }
@@ -253,7 +269,7 @@ impl KlipperLimits {
 
 /// How the planner limits the speed through a corner, and whose planner it imitates.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "mode", rename_all = "snake_case")]
+#[serde(tag = "mode", rename_all = "snake_case", deny_unknown_fields)]
 pub enum CornerMode {
     /// Marlin/GRBL: junction deviation, per-axis feed and accel limits, M204 P/R/T.
     Marlin {
@@ -314,34 +330,15 @@ impl MotionProfile {
 
     /// Read a profile from TOML text and check it.
     pub fn from_toml_str(text: &str) -> Result<Self, ProfileError> {
-        let profile: Self = toml::from_str(text).map_err(|e| ProfileError::Toml(e.to_string()))?;
+        let profile: Self =
+            toml::from_str(text).map_err(|e| ProfileError::Toml(gweave::settings::toml_message(&e)))?;
         profile.validate()?;
         Ok(profile)
     }
 
-    /// Check every value: step rates and limits positive and finite, ratios in range.
+    /// Check every value against its range (see [`CheckRanges`]), as a standalone file.
     pub fn validate(&self) -> Result<(), ProfileError> {
-        let s = &self.steps;
-        positive("steps.x", s.x)?;
-        positive("steps.y", s.y)?;
-        positive("steps.z", s.z)?;
-        positive("steps.e", s.e)?;
-        if let Some(a) = s.a_per_deg {
-            positive("steps.a_per_deg", a)?;
-        }
-        s.mixing_e.iter().try_for_each(|&v| positive("steps.mixing_e", v))?;
-        self.max_feed_mm_s.validate(FEED_NAMES)?;
-        self.max_accel_mm_s2.validate(ACCEL_NAMES)?;
-        positive("accel.print_mm_s2", self.accel.print_mm_s2)?;
-        positive("accel.retract_mm_s2", self.accel.retract_mm_s2)?;
-        positive("accel.travel_mm_s2", self.accel.travel_mm_s2)?;
-        match &self.corners {
-            CornerMode::Marlin { junction_deviation_mm, lookahead_blocks } => {
-                positive("corners.junction_deviation_mm", *junction_deviation_mm)?;
-                positive("corners.lookahead_blocks", *lookahead_blocks as f64)
-            }
-            CornerMode::Klipper(k) => k.validate(),
-        }
+        Ok(self.check_ranges(&Table::root())?)
     }
 
     /// M201: per-axis maximum acceleration (mm/s², A in deg/s²). Klipper ignores M201.
@@ -397,19 +394,45 @@ impl MotionProfile {
     }
 }
 
+impl CheckRanges for MotionProfile {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        let steps = t.sub("steps");
+        let s = &self.steps;
+        for (key, v) in [("x", s.x), ("y", s.y), ("z", s.z), ("e", s.e)] {
+            steps.check(key, v, ranges::STEPS_PER_UNIT)?;
+        }
+        steps.check_opt("a_per_deg", s.a_per_deg, ranges::STEPS_PER_UNIT)?;
+        steps.each("mixing_e", &s.mixing_e, ranges::STEPS_PER_UNIT)?;
+        let linear_and_a = |table: Table, limits: &AxisLimits, linear: Range, a: Range| {
+            let l = limits;
+            [("x", l.x), ("y", l.y), ("z", l.z), ("e", l.e)]
+                .into_iter()
+                .try_for_each(|(key, v)| table.check(key, v, linear))?;
+            table.check("a", l.a, a)
+        };
+        linear_and_a(t.sub("max_feed_mm_s"), &self.max_feed_mm_s, ranges::SPEED_MM_S, SPEED_DEG_S)?;
+        linear_and_a(t.sub("max_accel_mm_s2"), &self.max_accel_mm_s2, ranges::ACCEL_MM_S2, ACCEL_DEG_S2)?;
+        let accel = t.sub("accel");
+        accel.check("print_mm_s2", self.accel.print_mm_s2, ranges::ACCEL_MM_S2)?;
+        accel.check("retract_mm_s2", self.accel.retract_mm_s2, ranges::ACCEL_MM_S2)?;
+        accel.check("travel_mm_s2", self.accel.travel_mm_s2, ranges::ACCEL_MM_S2)?;
+        let corners = t.sub("corners");
+        match &self.corners {
+            CornerMode::Marlin { junction_deviation_mm, lookahead_blocks } => {
+                corners.check("junction_deviation_mm", *junction_deviation_mm, JUNCTION_DEVIATION_MM)?;
+                corners.count("lookahead_blocks", *lookahead_blocks as u64, LOOKAHEAD_BLOCKS)
+            }
+            CornerMode::Klipper(k) => k.check_ranges(&corners),
+        }
+    }
+}
+
+/// A value of a G-code command (M201, M203, M204, M205) that changes a limit at run time.
 fn positive(name: &'static str, value: f64) -> Result<(), ProfileError> {
     if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
         Err(ProfileError::NotPositive { name, value })
-    }
-}
-
-fn non_negative(name: &'static str, value: f64) -> Result<(), ProfileError> {
-    if value == 0.0 {
-        Ok(())
-    } else {
-        positive(name, value)
     }
 }
 
@@ -488,7 +511,8 @@ mod tests {
         let mut k = KlipperLimits::default();
         k.set_velocity_limit(None, Some(5000.0), Some(8.0), None).unwrap();
         assert_eq!((k.max_accel_mm_s2, k.square_corner_velocity_mm_s), (5000.0, 8.0));
-        assert_eq!(k.set_velocity_limit(None, None, None, Some(1.0)), Err(ProfileError::CruiseRatio(1.0)));
+        let err = k.set_velocity_limit(None, None, None, Some(1.0)).unwrap_err().to_string();
+        assert_eq!(err, "[motion.corners] minimum_cruise_ratio = 1 is out of range: 0 to 0.99");
         assert_eq!(k.minimum_cruise_ratio, 0.5);
     }
 }

@@ -26,11 +26,12 @@ use std::fmt;
 use std::str::FromStr;
 
 use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
+use gweave::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::heater::{HeaterFault, HeaterId};
-use crate::limits::{MotionProfile, ProfileError};
+use crate::limits::MotionProfile;
 use crate::thermal::ThermalConfig;
 use crate::thermistor::SensorFault;
 
@@ -40,22 +41,15 @@ pub enum MachineProfileError {
     /// The text is not a valid machine profile (syntax, unknown key, wrong type).
     #[error("machine profile: {0}")]
     Toml(String),
-    /// A motion value is out of range.
-    #[error("machine profile: motion: {0}")]
-    Motion(#[from] ProfileError),
-    /// A printhead value is out of range.
-    #[error("machine profile: inkjet: {0}")]
-    Printhead(#[from] PrintheadError),
-    /// Any other value out of range.
-    #[error("machine profile: `{name}` must be {rule}, got {value}")]
-    Bad {
-        /// The key.
-        name: &'static str,
-        /// What it must be.
-        rule: &'static str,
-        /// What it is.
-        value: f64,
-    },
+    /// A value out of its range (it names the table and the key).
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
+    /// The printhead is not usable (no head, a nozzle map that is no permutation).
+    #[error("machine profile: [inkjet.printhead] {0}")]
+    Printhead(PrintheadError),
+    /// `homing.order` is not some of `XYZ`, each at most once.
+    #[error("machine profile: [homing] order = {0:?}: give some of XYZ, each at most once")]
+    HomingOrder(String),
     /// A rotary axis needs its steps per degree (`motion.steps.a_per_deg`).
     #[error("machine profile: [rotary] needs motion.steps.a_per_deg")]
     RotaryWithoutSteps,
@@ -86,6 +80,50 @@ pub struct Bed {
     pub y_mm: f64,
     /// Highest Z (`Z_MAX_POS`), mm.
     pub z_mm: f64,
+}
+
+/// A machine with a few inputs more than the largest mixing hotends (6 inputs).
+const MIXING_INPUTS: Range = Range::new(0.0, 16.0, "inputs");
+/// The slow second touch of homing runs at `feed / divisor` (Marlin ships 2 to 10).
+const BUMP_DIVISOR: Range = Range::new(1.0, 100.0, "");
+/// The inkjet canvas: 20 000 pitches per side (5.3 m at 96 dpi) is more than any bed.
+const CANVAS_PX: Range = Range::new(1.0, 20_000.0, "px");
+
+impl CheckRanges for MachineProfile {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        self.motion.check_ranges(&t.sub("motion"))?;
+        self.thermal.check_ranges(&t.sub("thermal"))?;
+        let bed = t.sub("bed");
+        let b = &self.bed;
+        bed.check("x_min_mm", b.x_min_mm, ranges::POS_MM)?;
+        bed.check("y_min_mm", b.y_min_mm, ranges::POS_MM)?;
+        bed.check("x_mm", b.x_mm, ranges::SIZE_MM)?;
+        bed.check("y_mm", b.y_mm, ranges::SIZE_MM)?;
+        bed.check("z_mm", b.z_mm, ranges::SIZE_MM)?;
+        let homing = t.sub("homing");
+        homing.each("feed_mm_s", &self.homing.feed_mm_s, ranges::SPEED_MM_S)?;
+        homing.each("bump_mm", &self.homing.bump_mm, ranges::LEN_MM)?;
+        homing.each("bump_divisor", &self.homing.bump_divisor, BUMP_DIVISOR)?;
+        t.count("mixing_inputs", self.mixing_inputs as u64, MIXING_INPUTS)?;
+        if let Some(r) = &self.rotary {
+            t.sub("rotary").check("cylinder_radius_mm", r.cylinder_radius_mm, ranges::SIZE_MM)?;
+        }
+        if let Some(ink) = &self.inkjet {
+            let inkjet = t.sub("inkjet");
+            ink.printhead.check_ranges(&inkjet.sub("printhead"))?;
+            inkjet.check("origin_x_mm", ink.origin_x_mm, ranges::POS_MM)?;
+            inkjet.check("origin_y_mm", ink.origin_y_mm, ranges::POS_MM)?;
+            // The canvas is allocated at this size, so a computed size is held to the range too.
+            let [width, height] = ink.canvas_px(&self.bed);
+            let key = |name: &str, given: Option<usize>| match given {
+                Some(_) => name.to_owned(),
+                None => format!("{name} (unset: the bed in nozzle pitches)"),
+            };
+            inkjet.check(&key("width_px", ink.width_px), width as f64, CANVAS_PX)?;
+            inkjet.check(&key("height_px", ink.height_px), height as f64, CANVAS_PX)?;
+        }
+        Ok(())
+    }
 }
 
 impl Default for Bed {
@@ -210,6 +248,21 @@ pub struct Inkjet {
     pub width_px: Option<usize>,
     /// Canvas height in nozzle pitches; `None`: to the end of the bed.
     pub height_px: Option<usize>,
+}
+
+impl Inkjet {
+    /// The canvas size in nozzle pitches: `width_px` and `height_px`, or from the origin to the
+    /// end of the bed.
+    pub fn canvas_px(&self, bed: &Bed) -> [usize; 2] {
+        let pitch = self.printhead.pitch_mm();
+        let [(_, x_max), (_, y_max), _] = bed.ranges();
+        // A saturating cast: a NaN or huge size becomes 0 or usize::MAX, both out of range.
+        let fit = |from: f64, to: f64| ((to - from) / pitch).ceil().max(1.0) as usize;
+        [
+            self.width_px.unwrap_or_else(|| fit(self.origin_x_mm, x_max)),
+            self.height_px.unwrap_or_else(|| fit(self.origin_y_mm, y_max)),
+        ]
+    }
 }
 
 impl Default for Inkjet {
@@ -340,7 +393,8 @@ impl Default for MachineProfile {
 impl MachineProfile {
     /// Read a profile from TOML text, fill derived defaults and check it.
     pub fn from_toml_str(text: &str) -> Result<Self, MachineProfileError> {
-        let mut p: Self = toml::from_str(text).map_err(|e| MachineProfileError::Toml(e.to_string()))?;
+        let mut p: Self = toml::from_str(text)
+            .map_err(|e| MachineProfileError::Toml(gweave::settings::toml_message(&e)))?;
         p.normalize()?;
         Ok(p)
     }
@@ -354,48 +408,26 @@ impl MachineProfile {
         self.validate()
     }
 
-    /// Check every value.
+    /// Check every value: each key against its range (the motion, heaters and printhead
+    /// included, so `sim`, `estimate` and `serve` refuse the same profile with the same
+    /// message), then the keys that must agree with each other.
     pub fn validate(&self) -> Result<(), MachineProfileError> {
-        self.motion.validate()?;
-        let check = |name, value: f64, ok: bool, rule| {
-            if ok && value.is_finite() {
-                Ok(())
-            } else {
-                Err(MachineProfileError::Bad { name, rule, value })
-            }
-        };
-        let b = &self.bed;
-        check("bed.x_min_mm", b.x_min_mm, true, "finite")?;
-        check("bed.y_min_mm", b.y_min_mm, true, "finite")?;
-        check("bed.x_mm", b.x_mm, b.x_mm > 0.0, "> 0")?;
-        check("bed.y_mm", b.y_mm, b.y_mm > 0.0, "> 0")?;
-        check("bed.z_mm", b.z_mm, b.z_mm > 0.0, "> 0")?;
+        self.check_ranges(&Table::root())?;
         let h = &self.homing;
-        for i in 0..3 {
-            check("homing.feed_mm_s", h.feed_mm_s[i], h.feed_mm_s[i] > 0.0, "> 0")?;
-            check("homing.bump_mm", h.bump_mm[i], h.bump_mm[i] >= 0.0, ">= 0")?;
-            let d = h.bump_divisor[i];
-            check("homing.bump_divisor", d, d >= 1.0, ">= 1")?;
-        }
         let axes = h.axes();
         let unique = (0..3).all(|a| axes.iter().filter(|&&x| x == a).count() <= 1);
-        let ok = unique && axes.len() == h.order.len();
-        check("homing.order (XYZ each at most once)", 0.0, ok, "valid")?;
+        if !(unique && axes.len() == h.order.len()) {
+            return Err(MachineProfileError::HomingOrder(h.order.clone()));
+        }
         let mixing = self.motion.steps.mixing_e.len();
         if mixing != self.mixing_inputs {
             return Err(MachineProfileError::MixingSteps { inputs: self.mixing_inputs, steps: mixing });
         }
-        if let Some(r) = &self.rotary {
-            if self.motion.steps.a_per_deg.is_none() {
-                return Err(MachineProfileError::RotaryWithoutSteps);
-            }
-            let radius = r.cylinder_radius_mm;
-            check("rotary.cylinder_radius_mm", radius, radius > 0.0, "> 0")?;
+        if self.rotary.is_some() && self.motion.steps.a_per_deg.is_none() {
+            return Err(MachineProfileError::RotaryWithoutSteps);
         }
         if let Some(ink) = &self.inkjet {
-            ink.printhead.validate()?;
-            check("inkjet.origin_x_mm", ink.origin_x_mm, true, "finite")?;
-            check("inkjet.origin_y_mm", ink.origin_y_mm, true, "finite")?;
+            ink.printhead.validate().map_err(MachineProfileError::Printhead)?;
         }
         Ok(())
     }
@@ -432,12 +464,73 @@ mod tests {
     #[test]
     fn rotary_needs_steps_and_bad_values_are_named() {
         assert_eq!(MachineProfile::from_toml_str("[rotary]\n"), Err(MachineProfileError::RotaryWithoutSteps));
-        let err = MachineProfile::from_toml_str("[homing]\nfeed_mm_s = [50.0, 0.0, 4.0]\n");
-        assert!(
-            matches!(err, Err(MachineProfileError::Bad { name: "homing.feed_mm_s", value, .. }) if value == 0.0)
-        );
+        let err = MachineProfile::from_toml_str("[homing]\nfeed_mm_s = [50.0, 0.0, 4.0]\n").unwrap_err();
+        assert_eq!(err.to_string(), "[homing] feed_mm_s[1] = 0 is out of range: 0.001 to 10000 mm/s");
         let err = MachineProfile::from_toml_str("[homing]\norder = \"XXZ\"\n");
-        assert!(matches!(err, Err(MachineProfileError::Bad { .. })), "{err:?}");
+        assert_eq!(err, Err(MachineProfileError::HomingOrder("XXZ".into())));
+    }
+
+    /// The example profile with one key's value replaced.
+    fn ramps_with(key: &str, value: &str) -> Result<MachineProfile, MachineProfileError> {
+        let text = include_str!("../../../examples/machines/marlin-ramps.toml");
+        let line = text.lines().find(|l| l.starts_with(&format!("{key} ="))).expect(key);
+        MachineProfile::from_toml_str(&text.replace(line, &format!("{key} = {value}")))
+    }
+
+    #[test]
+    fn every_numeric_key_has_a_range_nan_inf_huge_and_negative_are_refused() {
+        let cases = [
+            ("x_min_mm", "1e308", "[bed] x_min_mm = 1e308 is out of range: -10000 to 10000 mm"),
+            ("sample_period_s", "1e308", "[thermal] sample_period_s = 1e308 is out of range: 0.001 to 10 s"),
+            ("extrude_min_c", "nan", "[thermal] extrude_min_c = nan is out of range: 0 to 500 °C"),
+            ("extrude_min_c", "-1", "[thermal] extrude_min_c = -1 is out of range: 0 to 500 °C"),
+            ("power_w", "inf", "[thermal.hotends[0]] power_w = inf is out of range: 0.1 to 5000 W"),
+            (
+                "junction_deviation_mm",
+                "-1",
+                "[motion.corners] junction_deviation_mm = -1 is out of range: 0.0001 to 10 mm",
+            ),
+            ("e", "1e308", "[motion.steps] e = 1e308 is out of range: 0.001 to 1000000 steps/unit"),
+            ("mixing_inputs", "99", "mixing_inputs = 99 is out of range: 0 to 16 inputs"),
+        ];
+        for (key, value, message) in cases {
+            let err = ramps_with(key, value).unwrap_err();
+            assert_eq!(err.to_string(), message, "{key} = {value}");
+        }
+        let text = "[[thermal.hotends]]\npower_w = 40.0\nheat_capacity_j_k = 12.0\nloss_w_k = 0.1\n\
+                    [thermal.hotend_protection]\nrunaway_period_s = 40.0\nrunaway_hysteresis_c = 4.0\n\
+                    watch_period_s = 20.0\nwatch_increase_c = 2.0\nmin_temp_c = 5.0\nmax_temp_c = 1e308\n";
+        let err = MachineProfile::from_toml_str(text).unwrap_err().to_string();
+        assert_eq!(err, "[thermal.hotend_protection] max_temp_c = 1e308 is out of range: 0 to 500 °C");
+    }
+
+    /// Regression: an inkjet canvas of 1e308 mm (or a bed at 10 000 dpi) aborted `sim` on its
+    /// allocation; the canvas size, given or computed, is bounded.
+    #[test]
+    fn inkjet_canvas_size_is_bounded_given_or_computed() {
+        let text = include_str!("../../../examples/machines/inkjet-c6602.toml");
+        let p = MachineProfile::from_toml_str(text).unwrap();
+        let mut wide = p.clone();
+        wide.inkjet.as_mut().unwrap().width_px = Some(1_000_000);
+        let err = wide.validate().unwrap_err().to_string();
+        assert_eq!(err, "[inkjet] width_px = 1000000 is out of range: 1 to 20000 px");
+        let mut fine = p;
+        let ink = fine.inkjet.as_mut().unwrap();
+        (ink.width_px, ink.height_px, ink.printhead.dpi) = (None, None, 10_000.0);
+        fine.bed.x_mm = 5_000.0;
+        let err = fine.validate().unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "[inkjet] width_px (unset: the bed in nozzle pitches) = 1960630 is out of range: 1 to 20000 px"
+        );
+    }
+
+    #[test]
+    fn unknown_key_in_marlin_corners_is_refused() {
+        let err = ramps_with("lookahead_blocks", "16\njunction_deviaton_mm = 0.02").unwrap_err().to_string();
+        assert!(err.contains("unknown field `junction_deviaton_mm`"), "{err}");
+        let err = MachineProfile::from_toml_str("[thermal.hotend_control]\nkind = \"bang_bang\"\nhyst = 1\n");
+        assert!(err.unwrap_err().to_string().contains("unknown field `hyst`"));
     }
 
     #[test]

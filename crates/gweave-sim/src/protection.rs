@@ -30,6 +30,7 @@
 //! Defaults (REFERENCE.md §5): hotend runaway 40 s / 4 C and watch
 //! 20 s / +2 C; bed runaway 20 s / 2 C and watch 60 s / +2 C.
 
+use gweave::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
 use serde::{Deserialize, Serialize};
 
 use crate::heater::HeaterId;
@@ -53,6 +54,24 @@ pub struct ProtectionConfig {
     pub min_temp_c: f64,
     /// MAXTEMP, C.
     pub max_temp_c: f64,
+}
+
+/// A protection period (Marlin ships 20 to 60 s; 0 disables the check).
+const PROTECT_PERIOD_S: Range = Range::new(0.0, 3_600.0, "s");
+/// A protection band in kelvin.
+const PROTECT_BAND_C: Range = Range::new(0.0, 100.0, "°C");
+/// MINTEMP may sit below 0 °C for a printer in the cold.
+const MIN_TEMP_C: Range = Range::new(-50.0, 500.0, "°C");
+
+impl CheckRanges for ProtectionConfig {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.check("runaway_period_s", self.runaway_period_s, PROTECT_PERIOD_S)?;
+        t.check("runaway_hysteresis_c", self.runaway_hysteresis_c, PROTECT_BAND_C)?;
+        t.check("watch_period_s", self.watch_period_s, PROTECT_PERIOD_S)?;
+        t.check("watch_increase_c", self.watch_increase_c, PROTECT_BAND_C)?;
+        t.check("min_temp_c", self.min_temp_c, MIN_TEMP_C)?;
+        t.check("max_temp_c", self.max_temp_c, ranges::TEMP_C)
+    }
 }
 
 impl ProtectionConfig {

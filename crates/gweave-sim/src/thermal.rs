@@ -23,6 +23,7 @@
 //! assert!(th.m105_report().starts_with("T:2"));
 //! ```
 
+use gweave::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -52,8 +53,8 @@ pub enum ThermalError {
     NotPid(HeaterId),
     #[error("printer halted: {}", .0.error_line())]
     Halted(ThermalFault),
-    #[error("thermal parameter `{name}` must be {rule}, got {value}")]
-    BadParameter { name: &'static str, rule: &'static str, value: f64 },
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
 }
 
 /// Marlin's M109/M190 settle rule: the reading must stay near the target
@@ -73,6 +74,17 @@ pub struct WaitConfig {
 impl Default for WaitConfig {
     fn default() -> Self {
         Self { residency_s: 10.0, window_c: 1.0, hysteresis_c: 3.0 }
+    }
+}
+
+const RESIDENCY_S: Range = Range::new(0.0, 3_600.0, "s");
+const WAIT_BAND_C: Range = Range::new(0.0, 100.0, "°C");
+
+impl CheckRanges for WaitConfig {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.check("residency_s", self.residency_s, RESIDENCY_S)?;
+        t.check("window_c", self.window_c, WAIT_BAND_C)?;
+        t.check("hysteresis_c", self.hysteresis_c, WAIT_BAND_C)
     }
 }
 
@@ -134,6 +146,48 @@ impl Default for ThermalConfig {
         }
     }
 }
+
+/// Hotends of one machine (`T0` to `T7`, as Marlin's `HOTENDS` allows).
+const HOTENDS: Range = Range::new(1.0, 8.0, "hotends");
+/// Step of the generated table: finer than 0.1 °C adds nothing, coarser than 50 °C misreads.
+const TABLE_STEP_C: Range = Range::new(0.1, 50.0, "°C");
+const OVERSHOOT_C: Range = Range::new(0.0, 100.0, "°C");
+/// The firmware's temperature loop; it must advance the clock, and a period longer than a few
+/// seconds no longer controls anything.
+const SAMPLE_PERIOD_S: Range = Range::new(0.001, 10.0, "s");
+const RECORD_PERIOD_S: Range = Range::new(0.001, 86_400.0, "s");
+/// Samples kept in memory (about 40 bytes each).
+const RECORD_SAMPLES: Range = Range::new(2.0, 1_000_000.0, "samples");
+
+impl CheckRanges for ThermalConfig {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.count("hotends (count)", self.hotends.len() as u64, HOTENDS)?;
+        for (i, h) in self.hotends.iter().enumerate() {
+            h.check_ranges(&t.sub("hotends").item(i))?;
+        }
+        if let Some(bed) = &self.bed {
+            bed.check_ranges(&t.sub("bed"))?;
+        }
+        self.thermistor.check_ranges(&t.sub("thermistor"))?;
+        t.check("table_step_c", self.table_step_c, TABLE_STEP_C)?;
+        self.hotend_control.check_ranges(&t.sub("hotend_control"))?;
+        self.bed_control.check_ranges(&t.sub("bed_control"))?;
+        self.hotend_protection.check_ranges(&t.sub("hotend_protection"))?;
+        self.bed_protection.check_ranges(&t.sub("bed_protection"))?;
+        self.hotend_wait.check_ranges(&t.sub("hotend_wait"))?;
+        self.bed_wait.check_ranges(&t.sub("bed_wait"))?;
+        t.check("hotend_overshoot_c", self.hotend_overshoot_c, OVERSHOOT_C)?;
+        t.check("bed_overshoot_c", self.bed_overshoot_c, OVERSHOOT_C)?;
+        t.check("sample_period_s", self.sample_period_s, SAMPLE_PERIOD_S)?;
+        t.check_opt("extrude_min_c", self.extrude_min_c, ranges::TEMP_C)?;
+        t.check("record_period_s", self.record_period_s, RECORD_PERIOD_S)?;
+        t.count("record_max_samples", self.record_max_samples as u64, RECORD_SAMPLES)
+    }
+}
+
+/// Firmware loops one [`Thermal::step`] runs before it integrates the rest of the step in one
+/// go: 1 000 000 samples, 28 h of simulated time at the default 0.1 s period.
+pub const MAX_SAMPLES_PER_STEP: u32 = 1_000_000;
 
 /// A time on Marlin's `millis()` clock. The residency of a wait is counted in whole milliseconds
 /// as the firmware does, so a simulated clock made of many 0.1 s steps (which drifts by parts
@@ -290,23 +344,8 @@ pub struct Thermal {
 impl Thermal {
     /// Build every heater from `cfg`, validating all of it.
     pub fn new(cfg: ThermalConfig) -> Result<Self, ThermalError> {
-        let positive = |name, value: f64| {
-            if value.is_finite() && value > 0.0 {
-                Ok(())
-            } else {
-                Err(ThermalError::BadParameter { name, rule: "> 0", value })
-            }
-        };
-        positive("sample_period_s", cfg.sample_period_s)?;
-        positive("record_period_s", cfg.record_period_s)?;
-        positive("hotends (count)", cfg.hotends.len() as f64)?;
-        if cfg.hotends.len() > 8 {
-            return Err(ThermalError::BadParameter {
-                name: "hotends (count)",
-                rule: "<= 8",
-                value: cfg.hotends.len() as f64,
-            });
-        }
+        // The same check as the machine profile's, so a config built in code is held to it too.
+        cfg.check_ranges(&Table::root().sub("thermal"))?;
         let table = cfg.thermistor.table(TABLE_MIN_C, TABLE_MAX_C, cfg.table_step_c)?;
         let mut channels = Vec::new();
         let plants = cfg
@@ -537,17 +576,29 @@ impl Thermal {
     /// (see the heater module), so the plants are integrated from sample to sample, however
     /// many moves (calls) lie between: a long print costs one plant step per sample, not one
     /// per move.
+    ///
+    /// One call runs at most [`MAX_SAMPLES_PER_STEP`] firmware loops: past them the heaters
+    /// have long settled, so the rest of the step is integrated with the last power and the
+    /// loop resumes at its end. A dwell of a century (or a clock pushed to 1e308 s by a huge
+    /// move) then costs a bounded time instead of hanging.
     pub fn step(&mut self, dt_s: f64) -> Option<ThermalFault> {
-        if !(dt_s.is_finite() && dt_s > 0.0) {
+        let end_s = self.now_s + dt_s;
+        if !(dt_s > 0.0 && end_s.is_finite()) {
             return None;
         }
-        let end_s = self.now_s + dt_s;
         let was_halted = self.halted.is_some();
+        let mut budget = MAX_SAMPLES_PER_STEP;
         loop {
             let next_sample_s = self.samples_taken as f64 * self.sample_period_s;
             if next_sample_s > end_s + 1e-9 {
                 break;
             }
+            if budget == 0 {
+                // A saturating cast: a clock beyond u64 samples simply never samples again.
+                self.samples_taken = (end_s / self.sample_period_s).ceil() as u64;
+                break;
+            }
+            budget -= 1;
             self.now_s = self.now_s.max(next_sample_s);
             self.settle_plants();
             self.sample();

@@ -38,6 +38,7 @@
 //! entry and MINTEMP fires); a **shorted** one pulls the input to ground, the
 //! ADC reads ~0 (the table clamps to its hottest entry and MAXTEMP fires).
 
+use gweave::settings::{CheckRanges, OutOfRange, Range, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -48,11 +49,30 @@ const KELVIN_OFFSET: f64 = 273.15;
 /// Reference temperature of `r25_ohm`, in Celsius.
 const T25_C: f64 = 25.0;
 
+/// Resistances of NTC thermistors and pull-ups on printer boards (1 kOhm to 10 MOhm).
+const RESISTANCE_OHM: Range = Range::new(1.0, 10_000_000.0, "Ω");
+/// Beta coefficients of NTC thermistors (about 3000 to 5000 K).
+const BETA_K: Range = Range::new(100.0, 20_000.0, "K");
+/// Up to a 16-bit ADC.
+const ADC_MAX: Range = Range::new(1.0, 65_535.0, "");
+/// `OVERSAMPLENR`; with a 16-bit ADC the sum still fits 32 bits.
+const OVERSAMPLE: Range = Range::new(1.0, 1_024.0, "");
+
+impl CheckRanges for BetaThermistor {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.check("r25_ohm", self.r25_ohm, RESISTANCE_OHM)?;
+        t.check("beta_k", self.beta_k, BETA_K)?;
+        t.check("pullup_ohm", self.pullup_ohm, RESISTANCE_OHM)?;
+        t.count("adc_max", self.adc_max, ADC_MAX)?;
+        t.count("oversample", self.oversample, OVERSAMPLE)
+    }
+}
+
 /// Errors building a thermistor model or table.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ThermistorError {
-    #[error("thermistor parameter `{name}` must be a positive finite number, got {value}")]
-    BadParameter { name: &'static str, value: f64 },
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
     #[error("thermistor table needs at least two entries, got {0}")]
     TooShort(usize),
     #[error("thermistor table adc values must strictly increase (entry {index})")]
@@ -88,20 +108,9 @@ impl Default for BetaThermistor {
 }
 
 impl BetaThermistor {
-    /// Check every parameter is positive and finite.
+    /// Check every parameter against its range (see [`CheckRanges`]).
     pub fn validate(&self) -> Result<(), ThermistorError> {
-        for (name, value) in [
-            ("r25_ohm", self.r25_ohm),
-            ("beta_k", self.beta_k),
-            ("pullup_ohm", self.pullup_ohm),
-            ("adc_max", f64::from(self.adc_max)),
-            ("oversample", f64::from(self.oversample)),
-        ] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(ThermistorError::BadParameter { name, value });
-            }
-        }
-        Ok(())
+        Ok(self.check_ranges(&Table::root())?)
     }
 
     /// Largest raw reading: `adc_max * oversample` (16368 for Marlin).
@@ -352,10 +361,8 @@ mod tests {
         );
         assert!(BetaThermistor::default().table(10.0, 5.0, 1.0).is_err());
         let bad = BetaThermistor { beta_k: -1.0, ..BetaThermistor::default() };
-        assert!(matches!(
-            bad.table(0.0, 100.0, 5.0),
-            Err(ThermistorError::BadParameter { name: "beta_k", .. })
-        ));
+        let err = bad.table(0.0, 100.0, 5.0).unwrap_err().to_string();
+        assert_eq!(err, "beta_k = -1 is out of range: 100 to 20000 K");
     }
 
     #[test]

@@ -336,7 +336,8 @@ fn config_from_toml_rejects_unknown_keys() {
     assert_eq!(th.pid_gains(BED).unwrap().kp, 300.0);
     assert!(toml::from_str::<ThermalConfig>("sample_rate = 3\n").is_err());
     let bad = ThermalConfig { hotends: vec![], ..ThermalConfig::default() };
-    assert!(matches!(Thermal::new(bad), Err(ThermalError::BadParameter { .. })));
+    let err = Thermal::new(bad).unwrap_err().to_string();
+    assert_eq!(err, "[thermal] hotends (count) = 0 is out of range: 1 to 8 hotends");
 }
 
 proptest! {
@@ -407,4 +408,21 @@ fn move_sized_steps_give_the_same_history_as_sample_steps() {
     assert_eq!(coarse.len(), 2 * 301);
     assert_eq!(coarse, fine);
     assert!((coarse_c - fine_c).abs() < 1e-9, "{coarse_c} {fine_c}");
+}
+
+/// A step of 1e300 s (a dwell of `G4 S1e300`, a move across a bed of 1e308 mm) used to run
+/// 1e301 firmware loops: it now runs `MAX_SAMPLES_PER_STEP` of them and integrates the rest.
+#[test]
+fn a_step_of_1e300_s_ends() {
+    let mut th = Thermal::new(ThermalConfig::default()).unwrap();
+    th.set_target(T0, 200.0).unwrap();
+    let start = std::time::Instant::now();
+    assert!(th.step(1e300).is_none());
+    assert_eq!(th.now_s(), 1e300);
+    assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
+    let t = th.temperature(T0).unwrap();
+    assert!((195.0..205.0).contains(&t), "settled at the target: {t}");
+    // A step to an infinite clock changes nothing.
+    assert!(th.step(f64::INFINITY).is_none());
+    assert_eq!(th.now_s(), 1e300);
 }

@@ -25,6 +25,7 @@ pub mod pass;
 pub mod post;
 pub mod render;
 pub mod rotary;
+pub mod settings;
 pub mod stats;
 
 pub use error::{Error, Result};

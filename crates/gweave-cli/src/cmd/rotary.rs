@@ -7,13 +7,14 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use gweave::gcode::writer::Target;
 use gweave::rotary::cylinder::{FeedConvention, RotaryConfig, RotaryUnit};
 use gweave::rotary::helix::TubeParams;
 use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
+use gweave::rotary::RotaryError;
 
 use crate::common::hms;
 use crate::common::{load, OutputArgs, ReportArgs};
@@ -91,20 +92,25 @@ fn parse_axes(text: &str) -> Result<[char; 3], String> {
 }
 
 impl MachineArgs {
-    /// The config file's text with the mandrel diameter from the command line filled in (the
-    /// `[machine]` table requires it), or `None` without a file.
-    fn config_text(&self) -> Result<Option<String>> {
+    /// The config file read with `parse`, with the mandrel diameter from the command line
+    /// filled in (the `[machine]` table requires it), or `None` without a file. Its errors name
+    /// the file.
+    fn config<T>(&self, parse: impl FnOnce(&str) -> Result<T, RotaryError>) -> Result<Option<T>> {
         let Some(path) = &self.config else {
             return Ok(None);
         };
-        let mut table = load(path, str::parse::<toml::Table>)?;
-        if let Some(d) = self.mandrel_diameter {
-            let machine = table.entry("machine").or_insert_with(|| toml::Table::new().into());
-            if let Some(machine) = machine.as_table_mut() {
-                machine.insert("mandrel_diameter_mm".into(), d.into());
+        let diameter = self.mandrel_diameter;
+        let read = |text: &str| {
+            let mut table: toml::Table = text.parse()?;
+            if let Some(d) = diameter {
+                let machine = table.entry("machine").or_insert_with(|| toml::Table::new().into());
+                if let Some(machine) = machine.as_table_mut() {
+                    machine.insert("mandrel_diameter_mm".into(), d.into());
+                }
             }
-        }
-        Ok(Some(table.to_string()))
+            parse(&table.to_string())
+        };
+        load(path, read).map(Some)
     }
 
     /// A machine from the flags alone.
@@ -193,8 +199,8 @@ pub struct WrapArgs {
 
 fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
-    let mut config = match args.machine.config_text()? {
-        Some(text) => WrapConfig::from_toml_str(&text).context("rotary wrap config")?,
+    let mut config = match args.machine.config(WrapConfig::from_toml_str)? {
+        Some(config) => config,
         None => WrapConfig::new(args.machine.machine()?),
     };
     args.machine.apply(&mut config.machine);
@@ -298,8 +304,8 @@ pub struct TubeArgs {
 }
 
 fn tube_params(args: &TubeArgs) -> Result<TubeParams> {
-    let mut t = match args.machine.config_text()? {
-        Some(text) => TubeParams::from_toml_str(&text).context("rotary tube config")?,
+    let mut t = match args.machine.config(TubeParams::from_toml_str)? {
+        Some(params) => params,
         None => TubeParams::new(args.machine.machine()?),
     };
     args.machine.apply(&mut t.machine);

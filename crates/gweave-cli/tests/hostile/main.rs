@@ -11,6 +11,7 @@
 mod harness;
 
 mod bytes;
+mod config;
 mod outputs;
 mod serve;
 mod sweep;

@@ -257,7 +257,9 @@ impl Machine {
                 self.next_report_s += self.autoreport_s;
                 continue;
             }
-            if target_s - now_s <= 1e-12 {
+            // A NaN gap (an infinite clock) also ends the loop.
+            let gap_s = target_s - now_s;
+            if gap_s.is_nan() || gap_s <= 1e-12 {
                 break;
             }
             let mut until_s = target_s;
@@ -267,7 +269,13 @@ impl Machine {
             if self.autoreport_s > 0.0 {
                 until_s = until_s.min(self.next_report_s);
             }
-            if let Some(fault) = self.thermal.step(until_s - now_s) {
+            let fault = self.thermal.step(until_s - now_s);
+            if self.thermal.now_s() <= now_s {
+                // The thermal clock cannot advance (the machine clock is beyond any finite
+                // time): stop here rather than spin.
+                break;
+            }
+            if let Some(fault) = fault {
                 for l in fault.lines() {
                     out(fault.at_s, &l);
                 }

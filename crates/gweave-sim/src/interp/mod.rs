@@ -146,14 +146,12 @@ impl Machine {
         let inkjet = match &profile.inkjet {
             None => None,
             Some(ink) => {
-                let pitch = ink.printhead.pitch_mm();
-                let [(_, x_max), (_, y_max), _] = profile.bed.ranges();
-                let fit = |from: f64, to: f64| ((to - from) / pitch).ceil().max(1.0) as usize;
+                let [width_px, height_px] = ink.canvas_px(&profile.bed);
                 let geometry = CanvasGeometry {
                     origin_x_mm: ink.origin_x_mm,
                     origin_y_mm: ink.origin_y_mm,
-                    width_px: ink.width_px.unwrap_or_else(|| fit(ink.origin_x_mm, x_max)),
-                    height_px: ink.height_px.unwrap_or_else(|| fit(ink.origin_y_mm, y_max)),
+                    width_px,
+                    height_px,
                 };
                 Some(InkjetCanvas::new(&ink.printhead, geometry)?)
             }

@@ -15,24 +15,20 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
+
 /// Largest nozzle count: a band's nozzle mask is one `u64`.
 pub const MAX_NOZZLES: u32 = 64;
 
 /// Errors from validating a [`PrintheadProfile`].
 #[derive(Debug, Error, PartialEq)]
 pub enum PrintheadError {
-    #[error("nozzle_count must be 1..={MAX_NOZZLES}, got {0}")]
-    NozzleCount(u32),
-    #[error("dpi must be a positive finite number, got {0}")]
-    Dpi(f64),
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
     #[error("at least one head is required")]
     NoHeads,
     #[error("nozzle_rows must list each row 0..{count} exactly once (got {rows:?})")]
     NozzleMap { count: u32, rows: Vec<u32> },
-    #[error("{field} must be a non-negative finite number, got {value}")]
-    Negative { field: &'static str, value: f64 },
-    #[error("head {head} offset must be finite")]
-    HeadOffset { head: usize },
     #[error("invalid printhead TOML: {0}")]
     Toml(String),
 }
@@ -132,30 +128,17 @@ impl Default for PrintheadProfile {
 impl PrintheadProfile {
     /// Parses and validates a TOML profile.
     pub fn from_toml(text: &str) -> Result<Self, PrintheadError> {
-        let p: PrintheadProfile = toml::from_str(text).map_err(|e| PrintheadError::Toml(e.to_string()))?;
+        let p: PrintheadProfile =
+            toml::from_str(text).map_err(|e| PrintheadError::Toml(crate::settings::toml_message(&e)))?;
         p.validate()?;
         Ok(p)
     }
 
     /// Checks ranges and that the nozzle map is a permutation.
     pub fn validate(&self) -> Result<(), PrintheadError> {
-        if self.nozzle_count == 0 || self.nozzle_count > MAX_NOZZLES {
-            return Err(PrintheadError::NozzleCount(self.nozzle_count));
-        }
-        if !(self.dpi.is_finite() && self.dpi > 0.0) {
-            return Err(PrintheadError::Dpi(self.dpi));
-        }
+        self.check_ranges(&Table::root())?;
         if self.heads.is_empty() {
             return Err(PrintheadError::NoHeads);
-        }
-        for (i, h) in self.heads.iter().enumerate() {
-            if !(h.offset_x_mm.is_finite() && h.offset_y_mm.is_finite()) {
-                return Err(PrintheadError::HeadOffset { head: i });
-            }
-        }
-        check_non_negative("min_fire_interval_us", self.min_fire_interval_us)?;
-        if let Some(v) = self.drop_volume_pl {
-            check_non_negative("drop_volume_pl", v)?;
         }
         if !self.nozzle_rows.is_empty() {
             let mut seen = vec![false; self.nozzle_count as usize];
@@ -234,11 +217,26 @@ impl PrintheadProfile {
     }
 }
 
-fn check_non_negative(field: &'static str, value: f64) -> Result<(), PrintheadError> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(())
-    } else {
-        Err(PrintheadError::Negative { field, value })
+const NOZZLES: Range = Range::new(1.0, MAX_NOZZLES as f64, "nozzles");
+/// Heads on one carriage (each is a `P` address).
+const HEADS: Range = Range::new(0.0, 16.0, "heads");
+/// Up to a second between two fires.
+const FIRE_INTERVAL_US: Range = Range::new(0.0, 1_000_000.0, "µs");
+/// Inkjet drops are 1 to a few hundred picolitres.
+const DROP_VOLUME_PL: Range = Range::new(0.0, 100_000.0, "pl");
+
+impl CheckRanges for PrintheadProfile {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.count("nozzle_count", self.nozzle_count, NOZZLES)?;
+        t.check("dpi", self.dpi, ranges::DPI)?;
+        t.count("heads (count)", self.heads.len() as u64, HEADS)?;
+        for (i, h) in self.heads.iter().enumerate() {
+            let head = t.sub("heads").item(i);
+            head.check("offset_x_mm", h.offset_x_mm, ranges::POS_MM)?;
+            head.check("offset_y_mm", h.offset_y_mm, ranges::POS_MM)?;
+        }
+        t.check("min_fire_interval_us", self.min_fire_interval_us, FIRE_INTERVAL_US)?;
+        t.check_opt("drop_volume_pl", self.drop_volume_pl, DROP_VOLUME_PL)
     }
 }
 
@@ -298,9 +296,12 @@ mod tests {
         let bad = |t: &str| PrintheadProfile::from_toml(t).unwrap_err();
         assert!(matches!(bad("nozzle_count = 3\nnozzle_rows = [0, 0, 1]"), PrintheadError::NozzleMap { .. }));
         assert!(matches!(bad("nozzle_count = 3\nnozzle_rows = [0, 1, 3]"), PrintheadError::NozzleMap { .. }));
-        assert_eq!(bad("nozzle_count = 65"), PrintheadError::NozzleCount(65));
-        assert_eq!(bad("dpi = 0.0"), PrintheadError::Dpi(0.0));
+        assert_eq!(
+            bad("nozzle_count = 65").to_string(),
+            "nozzle_count = 65 is out of range: 1 to 64 nozzles"
+        );
+        assert_eq!(bad("dpi = 0.0").to_string(), "dpi = 0 is out of range: 1 to 10000 dpi");
         assert_eq!(bad("heads = []"), PrintheadError::NoHeads);
-        assert!(matches!(bad("drop_volume_pl = -1.0"), PrintheadError::Negative { .. }));
+        assert!(matches!(bad("drop_volume_pl = -1.0"), PrintheadError::Range(_)));
     }
 }

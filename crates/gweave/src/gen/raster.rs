@@ -111,7 +111,8 @@ impl Default for RasterConfig {
 impl RasterConfig {
     /// Parses and validates a TOML job file.
     pub fn from_toml(text: &str) -> Result<Self, RasterError> {
-        let c: RasterConfig = toml::from_str(text).map_err(|e| RasterError::Config(e.to_string()))?;
+        let c: RasterConfig =
+            toml::from_str(text).map_err(|e| RasterError::Config(crate::settings::toml_message(&e)))?;
         c.validate()?;
         Ok(c)
     }

@@ -70,6 +70,9 @@ pub const HOLD_LINES: usize = 32;
 pub enum MixPassError {
     #[error("mix profile: {0}")]
     Config(String),
+    /// A profile key out of its range (it names the table and the key).
+    #[error(transparent)]
+    Range(#[from] crate::settings::OutOfRange),
     /// A line of the input the profile cannot handle (`<input>` for text in memory).
     #[error("{}:{line}: {message}", path.display())]
     AtLine { path: std::path::PathBuf, line: u64, message: String },

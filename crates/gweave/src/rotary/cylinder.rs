@@ -59,7 +59,7 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-use super::{finite, positive, Result, RotaryError};
+use super::{in_range, Result, RotaryError};
 
 /// How the firmware reads the rotary word.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -168,16 +168,14 @@ impl RotaryConfig {
 
     /// Checks ranges and that the three axis letters are distinct motion axes.
     pub fn validate(&self) -> Result<()> {
-        positive("mandrel_diameter_mm", self.mandrel_diameter_mm)?;
+        use crate::settings::{ranges, Range};
+        in_range("machine", "mandrel_diameter_mm", self.mandrel_diameter_mm, ranges::SIZE_MM)?;
         if let Some(cap) = self.max_rotary_deg_s {
-            positive("max_rotary_deg_s", cap)?;
+            in_range("machine", "max_rotary_deg_s", cap, Range::new(0.001, 100_000.0, "°/s"))?;
         }
-        if !(self.rotary_rebase_deg.is_finite() && self.rotary_rebase_deg >= 0.0) {
-            return Err(RotaryError::Config {
-                key: "rotary_rebase_deg",
-                reason: format!("must be >= 0, got {}", self.rotary_rebase_deg),
-            });
-        }
+        // Where A is brought back near 0 (G92); far beyond 1e8 degrees the 3 decimals of A
+        // run out of digits.
+        in_range("machine", "rotary_rebase_deg", self.rotary_rebase_deg, Range::new(0.0, 1e8, "°"))?;
         let axes = [
             ("axial_axis", self.axial_axis),
             ("rotary_axis", self.rotary_axis),
@@ -466,11 +464,12 @@ pub struct UnwrapConfig {
 }
 
 impl UnwrapConfig {
-    /// Checks that every number is finite.
+    /// Checks every number against its range.
     pub fn validate(&self) -> Result<()> {
-        finite("arc_length_z1_mm", self.arc_length_z1_mm)?;
-        finite("seam_offset_deg", self.seam_offset_deg)?;
-        finite("seam_rotation_per_layer_deg", self.seam_rotation_per_layer_deg)
+        use crate::settings::ranges;
+        in_range("unwrap", "arc_length_z1_mm", self.arc_length_z1_mm, ranges::POS_MM)?;
+        in_range("unwrap", "seam_offset_deg", self.seam_offset_deg, ranges::ANGLE_DEG)?;
+        in_range("unwrap", "seam_rotation_per_layer_deg", self.seam_rotation_per_layer_deg, ranges::ANGLE_DEG)
     }
 
     /// Angle of the seam (flat y = 0) on layer `layer` (0-based), degrees.

@@ -32,18 +32,10 @@ pub fn rotary_number_format() -> NumberFormat {
     }
 }
 
-/// Checks that no decimal count exceeds 9 places (an f64 holds about 15 significant digits).
-pub fn validate_format(format: &NumberFormat) -> Result<()> {
-    for (key, places) in [
-        ("position_decimals", format.position_decimals),
-        ("extrusion_decimals", format.extrusion_decimals),
-        ("feed_decimals", format.feed_decimals),
-    ] {
-        if places > 9 {
-            return Err(RotaryError::Config { key, reason: format!("at most 9 places, got {places}") });
-        }
-    }
-    Ok(())
+/// Checks the decimal counts of the `[table]` (see [`NumberFormat`]'s ranges).
+pub fn validate_format(table: &str, format: &NumberFormat) -> Result<()> {
+    use crate::settings::{CheckRanges, Table};
+    Ok(format.check_ranges(&Table::root().sub(table))?)
 }
 
 /// Appends the word `letter` carrying `value` to `line` (a value that rounds to zero is `0`).
@@ -375,7 +367,8 @@ mod tests {
     fn format_limits_and_text() {
         let mut bad = rotary_number_format();
         bad.position_decimals = 12;
-        assert!(matches!(validate_format(&bad), Err(RotaryError::Config { key: "position_decimals", .. })));
+        let err = validate_format("numbers", &bad).unwrap_err().to_string();
+        assert_eq!(err, "[numbers] position_decimals = 12 is out of range: 0 to 9 decimals");
         let f = rotary_number_format();
         assert_eq!(number_text(&f, b'X', -0.0001), "0.000");
         assert_eq!(number_text(&f, b'E', 1.0), "1.00000");

@@ -37,7 +37,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cylinder::{max_chord_step_deg, pieces_for_step, surface_length_mm, CylPoint, RotaryConfig};
 use super::emit::{rotary_number_format, validate_format, MoveWriter};
-use super::{finite, positive, Result, RotaryError};
+use super::{finite, in_range, positive, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
 
 /// Most points one path may have (a runaway guard: 5 million chords are ~150 MB of G-code).
@@ -284,6 +284,9 @@ fn push(points: &mut Vec<CylPoint>, p: CylPoint) -> Result<()> {
     Ok(())
 }
 
+/// Chords per turn of a helix: a triangle at least, and no finer than 0.004 degrees.
+const SEGMENTS: crate::settings::Range = crate::settings::Range::new(3.0, 100_000.0, "chords");
+
 /// How finely a helix is cut into straight G1 chords.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolution {
@@ -369,17 +372,24 @@ impl Default for PrintSettings {
 impl PrintSettings {
     /// Checks every range.
     pub fn validate(&self) -> Result<()> {
-        positive("layer_height_mm", self.layer_height_mm)?;
-        positive("bead_width_mm", self.bead_width_mm)?;
-        positive("filament_diameter_mm", self.filament_diameter_mm)?;
-        positive("print_speed_mm_s", self.print_speed_mm_s)?;
-        positive("travel_speed_mm_s", self.travel_speed_mm_s)?;
-        finite("nozzle_temp_c", self.nozzle_temp_c)?;
+        use crate::settings::{ranges, Range};
+        /// A bead's height and width.
+        const BEAD_MM: Range = Range::new(0.01, 10.0, "mm");
+        const FILAMENT_DIAMETER_MM: Range = Range::new(0.1, 5.0, "mm");
+        in_range("print", "layer_height_mm", self.layer_height_mm, BEAD_MM)?;
+        in_range("print", "bead_width_mm", self.bead_width_mm, BEAD_MM)?;
+        in_range("print", "filament_diameter_mm", self.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;
+        in_range("print", "print_speed_mm_s", self.print_speed_mm_s, ranges::SPEED_MM_S)?;
+        in_range("print", "travel_speed_mm_s", self.travel_speed_mm_s, ranges::SPEED_MM_S)?;
+        in_range("print", "nozzle_temp_c", self.nozzle_temp_c, ranges::TEMP_C)?;
         if let Some(t) = self.mandrel_temp_c {
-            finite("mandrel_temp_c", t)?;
+            in_range("print", "mandrel_temp_c", t, ranges::TEMP_C)?;
         }
-        self.resolution().validate()?;
-        validate_format(&self.numbers)
+        in_range("print", "chord_tolerance_mm", self.chord_tolerance_mm, super::wrap::TOLERANCE_MM)?;
+        if let Some(n) = self.segments_per_turn {
+            in_range("print", "segments_per_turn", f64::from(n), SEGMENTS)?;
+        }
+        validate_format("print.numbers", &self.numbers)
     }
 
     /// The chord resolution these settings ask for.
@@ -578,29 +588,28 @@ impl TubeParams {
 
     /// Checks every range: the tube must be longer than a bead and the pitch at least a bead.
     pub fn validate(&self) -> Result<()> {
+        use crate::settings::{ranges, Range};
         self.machine.validate()?;
         self.print.validate()?;
-        finite("axial_start_mm", self.axial_start_mm)?;
+        in_range("", "axial_start_mm", self.axial_start_mm, ranges::POS_MM)?;
+        in_range("", "length_mm", self.length_mm, ranges::LEN_MM)?;
+        // The generators' layer limit (a tube of 100 000 layers is 20 m thick at 0.2 mm).
+        in_range("", "layers", f64::from(self.layers), Range::new(1.0, 100_000.0, "layers"))?;
+        in_range("", "end_turns", self.end_turns, Range::new(0.0, 1_000.0, "turns"))?;
+        if let Some(p) = self.pitch_mm {
+            in_range("", "pitch_mm", p, ranges::LEN_MM)?;
+        }
         if !(self.length_mm.is_finite() && self.length_mm > self.print.bead_width_mm) {
             return Err(RotaryError::Config {
                 key: "length_mm",
                 reason: format!("must exceed the bead width, got {}", self.length_mm),
             });
         }
-        if self.layers == 0 {
-            return Err(RotaryError::Config { key: "layers", reason: "at least one layer".into() });
-        }
         let pitch = self.pitch();
         if !(pitch.is_finite() && pitch >= self.print.bead_width_mm) {
             return Err(RotaryError::Config {
                 key: "pitch_mm",
                 reason: format!("must be at least the bead width (beads would overlap), got {pitch}"),
-            });
-        }
-        if !(self.end_turns.is_finite() && self.end_turns >= 0.0) {
-            return Err(RotaryError::Config {
-                key: "end_turns",
-                reason: format!("must be >= 0, got {}", self.end_turns),
             });
         }
         Ok(())

@@ -57,7 +57,7 @@ pub enum RotaryError {
     },
     /// The TOML text could not be read (unknown key, wrong type, syntax).
     #[error("rotary config: {0}")]
-    Toml(#[from] toml::de::Error),
+    Toml(String),
     /// A profile function returned a value that cannot be printed.
     #[error("{what} profile gave {value} at axial {axial_mm} mm; it must be finite and > 0")]
     Profile {
@@ -93,12 +93,21 @@ pub enum RotaryError {
         /// What went wrong.
         error: Box<RotaryError>,
     },
+    /// A setting out of its range (it names the table and the key).
+    #[error(transparent)]
+    Range(#[from] crate::settings::OutOfRange),
     /// The core engine failed (reading, syntax).
     #[error(transparent)]
     Engine(#[from] crate::Error),
     /// Writing the output failed.
     #[error("writing G-code: {0}")]
     Io(#[from] std::io::Error),
+}
+
+impl From<toml::de::Error> for RotaryError {
+    fn from(e: toml::de::Error) -> Self {
+        RotaryError::Toml(crate::settings::toml_message(&e))
+    }
 }
 
 /// Shorthand for results of this module.
@@ -111,6 +120,11 @@ pub(crate) fn positive(key: &'static str, value: f64) -> Result<()> {
     } else {
         Err(RotaryError::Config { key, reason: format!("must be a finite number > 0, got {value}") })
     }
+}
+
+/// Checks `[table] key = value` against its range (see [`crate::settings`]).
+pub(crate) fn in_range(table: &str, key: &str, value: f64, range: crate::settings::Range) -> Result<()> {
+    Ok(crate::settings::Table::root().sub(table).check(key, value, range)?)
 }
 
 /// Checks that `value` is finite.

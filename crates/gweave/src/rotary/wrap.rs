@@ -47,7 +47,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cylinder::{chord_pieces, CylPoint, RotaryConfig, UnwrapConfig};
 use super::emit::{rotary_number_format, validate_format, MoveSpec, MoveWriter};
-use super::{finite, positive, Result, RotaryError};
+use super::{in_range, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::StateOptions;
 use crate::gcode::state::{Effect, Move, Path, State, E, X, Y, Z};
@@ -83,6 +83,9 @@ pub struct WrapConfig {
     pub numbers: NumberFormat,
 }
 
+/// A chord's sagitta: 0.1 um is far below any nozzle, 10 mm a polygon.
+pub(crate) const TOLERANCE_MM: crate::settings::Range = crate::settings::Range::new(0.000_1, 10.0, "mm");
+
 fn default_tolerance() -> f64 {
     0.01
 }
@@ -108,17 +111,14 @@ impl WrapConfig {
 
     /// Checks every range.
     pub fn validate(&self) -> Result<()> {
-        finite("chord_tolerance_mm", self.chord_tolerance_mm)?;
-        if self.chord_tolerance_mm < 0.0 {
-            return Err(RotaryError::Config {
-                key: "chord_tolerance_mm",
-                reason: format!("must be >= 0, got {}", self.chord_tolerance_mm),
-            });
+        // 0 is one chord per flat move; a finer tolerance than 0.1 um only multiplies chords.
+        if self.chord_tolerance_mm != 0.0 {
+            in_range("", "chord_tolerance_mm", self.chord_tolerance_mm, TOLERANCE_MM)?;
         }
-        positive("arc_tolerance_mm", self.arc_tolerance_mm)?;
+        in_range("", "arc_tolerance_mm", self.arc_tolerance_mm, TOLERANCE_MM)?;
         self.machine.validate()?;
         self.unwrap.validate()?;
-        validate_format(&self.numbers)
+        validate_format("numbers", &self.numbers)
     }
 }
 

@@ -45,6 +45,7 @@ use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
 use crate::colour::Srgb8;
 use crate::gcode::number::NumberFormat;
 use crate::post::purge_block::PurgeMotion;
+use crate::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
 
 use super::MixPassError;
 
@@ -510,7 +511,8 @@ pub struct MixProfile {
 impl MixProfile {
     /// Reads and validates a profile.
     pub fn from_toml_str(text: &str) -> Result<Self, MixPassError> {
-        let profile: MixProfile = toml::from_str(text).map_err(|e| MixPassError::Config(e.to_string()))?;
+        let profile: MixProfile =
+            toml::from_str(text).map_err(|e| MixPassError::Config(crate::settings::toml_message(&e)))?;
         profile.validate()?;
         Ok(profile)
     }
@@ -554,49 +556,11 @@ impl MixProfile {
         if hw.material2_index() >= hw.inputs.len() {
             return cfg(format!("hardware.material2_input {} does not exist", hw.material2_index()));
         }
-        if hw.ratio_decimals > crate::colour::dialect::Decimals::MAX {
-            return cfg("hardware.ratio_decimals: at most 9".into());
-        }
-        for (i, input) in hw.inputs.iter().enumerate() {
-            positive(&format!("hardware.inputs[{i}].density_g_cm3"), input.density_g_cm3)?;
-        }
-        positive("hardware.filament_diameter_mm", hw.filament_diameter_mm)?;
-        let p = &self.purge;
-        for (name, v) in [
-            ("purge.travel_feed_mm_min", p.travel_feed_mm_min),
-            ("purge.extrude_feed_mm_min", p.extrude_feed_mm_min),
-            ("purge.retract_feed_mm_min", p.retract_feed_mm_min),
-            ("purge.multiplier", p.multiplier),
-            ("purge.chamber_mm3", p.chamber_mm3),
-        ] {
-            positive(name, v)?;
-        }
-        for (name, v) in [
-            ("purge.length_mm", p.length_mm),
-            ("purge.volume_mm3", p.volume_mm3),
-            ("purge.dead_mm3", p.dead_mm3),
-            ("purge.retract_mm", p.retract_mm),
-            ("purge.lift_mm", p.lift_mm),
-            ("purge.wipe_mm", p.wipe_mm),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return cfg(format!("{name} must be >= 0, got {v}"));
-            }
-        }
-        if !(p.x_mm.is_finite() && p.y_mm.is_finite()) {
-            return cfg("purge.x_mm / y_mm must be numbers".into());
-        }
-        if !(p.tolerance > 0.0 && p.tolerance < 1.0) {
-            return cfg(format!("purge.tolerance must be within (0, 1), got {}", p.tolerance));
-        }
-        for pair in &p.pair {
+        self.check_ranges(&Table::root())?;
+        for pair in &self.purge.pair {
             if pair.length_mm.is_some() == pair.volume_mm3.is_some() {
                 return cfg(format!("purge pair {} -> {}: give length_mm or volume_mm3", pair.from, pair.to));
             }
-        }
-        let z = self.z_cap.max_z_feed_mm_min;
-        if !(z.is_finite() && z >= 0.0) {
-            return cfg(format!("z_cap.max_z_feed_mm_min must be >= 0 (0: no cap), got {z}"));
         }
         let scheduled = !(self.schedule.is_empty() && self.gradient.is_empty());
         if !self.map.is_empty() && scheduled {
@@ -613,11 +577,81 @@ impl MixProfile {
     }
 }
 
-fn positive(name: &str, v: f64) -> Result<(), MixPassError> {
-    if v.is_finite() && v > 0.0 {
+const INPUTS: Range = Range::new(1.0, 16.0, "inputs");
+/// Filament densities, from foams to metal-filled filaments.
+const DENSITY_G_CM3: Range = Range::new(0.1, 25.0, "g/cm³");
+const VIRTUAL_TOOLS: Range = Range::new(0.0, 1_000.0, "tools");
+const FILAMENT_DIAMETER_MM: Range = Range::new(0.1, 5.0, "mm");
+const RATIO_DECIMALS: Range = Range::new(0.0, crate::colour::dialect::Decimals::MAX as f64, "");
+/// RepRapFirmware heater numbers.
+const RRF_HEATER: Range = Range::new(0.0, 255.0, "");
+/// Filament pushed through for one change (2 m is far beyond any real purge).
+const PURGE_MM: Range = Range::new(0.0, 2_000.0, "mm");
+const PURGE_MM3: Range = Range::new(0.0, 5_000.0, "mm³");
+const CHAMBER_MM3: Range = Range::new(0.001, 10_000.0, "mm³");
+const MULTIPLIER: Range = Range::new(0.001, 100.0, "");
+/// The washout tolerance: the share of the old colour left, below 1.
+const TOLERANCE: Range = Range::new(0.000_001, 0.999, "");
+/// 0 turns the Z feed cap off.
+const Z_CAP_MM_MIN: Range = Range::new(0.0, 600_000.0, "mm/min");
+/// Layer numbers, as far as any generator goes.
+const LAYER: Range = Range::new(0.0, 1_000_000.0, "");
+const EVERY_LAYERS: Range = Range::new(1.0, 1_000_000.0, "layers");
+
+impl CheckRanges for MixProfile {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        let hw = &self.hardware;
+        let hardware = t.sub("hardware");
+        hardware.count("inputs (count)", hw.inputs.len() as u64, INPUTS)?;
+        for (i, input) in hw.inputs.iter().enumerate() {
+            hardware.sub("inputs").item(i).check("density_g_cm3", input.density_g_cm3, DENSITY_G_CM3)?;
+        }
+        hardware.count("virtual_tools", hw.virtual_tools as u64, VIRTUAL_TOOLS)?;
+        hardware.check("filament_diameter_mm", hw.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;
+        hardware.count("ratio_decimals", hw.ratio_decimals, RATIO_DECIMALS)?;
+        hardware.count("rrf_heater", hw.rrf_heater, RRF_HEATER)?;
+        let p = &self.purge;
+        let purge = t.sub("purge");
+        purge.check("length_mm", p.length_mm, PURGE_MM)?;
+        purge.check("volume_mm3", p.volume_mm3, PURGE_MM3)?;
+        purge.check("multiplier", p.multiplier, MULTIPLIER)?;
+        purge.check("chamber_mm3", p.chamber_mm3, CHAMBER_MM3)?;
+        purge.check("dead_mm3", p.dead_mm3, PURGE_MM3)?;
+        purge.check("tolerance", p.tolerance, TOLERANCE)?;
+        let motion = PurgeMotion {
+            retract_mm: p.retract_mm,
+            lift_mm: p.lift_mm,
+            x_mm: p.x_mm,
+            y_mm: p.y_mm,
+            wipe_mm: p.wipe_mm,
+            travel_feed_mm_min: p.travel_feed_mm_min,
+            extrude_feed_mm_min: p.extrude_feed_mm_min,
+            retract_feed_mm_min: p.retract_feed_mm_min,
+            z_feed_mm_min: PurgeMotion::SEED.z_feed_mm_min,
+        };
+        motion.check_ranges(&purge)?;
+        for (i, pair) in p.pair.iter().enumerate() {
+            let table = purge.sub("pair").item(i);
+            table.check_opt("length_mm", pair.length_mm, PURGE_MM)?;
+            table.check_opt("volume_mm3", pair.volume_mm3, PURGE_MM3)?;
+        }
+        t.sub("z_cap").check("max_z_feed_mm_min", self.z_cap.max_z_feed_mm_min, Z_CAP_MM_MIN)?;
+        self.numbers.check_ranges(&t.sub("numbers"))?;
+        for (i, s) in self.schedule.iter().enumerate() {
+            let table = t.sub("schedule").item(i);
+            table.check_opt("layer", s.layer.map(f64::from), LAYER)?;
+            table.check_opt("z_mm", s.z_mm, ranges::LEN_MM)?;
+        }
+        for (i, g) in self.gradient.iter().enumerate() {
+            let table = t.sub("gradient").item(i);
+            table.check_opt("from_layer", g.from_layer.map(f64::from), LAYER)?;
+            table.check_opt("to_layer", g.to_layer.map(f64::from), LAYER)?;
+            table.check_opt("from_z_mm", g.from_z_mm, ranges::LEN_MM)?;
+            table.check_opt("to_z_mm", g.to_z_mm, ranges::LEN_MM)?;
+            table.count("every_layers", g.every_layers, EVERY_LAYERS)?;
+            table.check("z_step_mm", g.z_step_mm, ranges::SIZE_MM)?;
+        }
         Ok(())
-    } else {
-        Err(MixPassError::Config(format!("{name} must be positive, got {v}")))
     }
 }
 
@@ -683,5 +717,32 @@ mod tests {
         assert!(MixProfile::from_toml_str("[[schedule]]\nlayer = 1\nz_mm = 2\nmix = \"Red\"").is_err());
         let both = "[[schedule]]\nlayer = 0\nmix = \"Red\"\n[map]\nT1 = \"Blue\"";
         assert!(MixProfile::from_toml_str(both).is_err());
+    }
+
+    #[test]
+    fn every_numeric_key_has_a_range() {
+        let msg = |text: &str| MixProfile::from_toml_str(text).unwrap_err().to_string();
+        assert_eq!(
+            msg("[purge]\nlength_mm = 1e308"),
+            "[purge] length_mm = 1e308 is out of range: 0 to 2000 mm"
+        );
+        assert_eq!(msg("[purge]\nretract_mm = -1"), "[purge] retract_mm = -1 is out of range: 0 to 10000 mm");
+        assert_eq!(msg("[purge]\nx_mm = nan"), "[purge] x_mm = nan is out of range: -10000 to 10000 mm");
+        assert_eq!(
+            msg("[hardware]\nfilament_diameter_mm = inf"),
+            "[hardware] filament_diameter_mm = inf is out of range: 0.1 to 5 mm"
+        );
+        assert_eq!(
+            msg("[[gradient]]\nfrom_z_mm = 0\nto_z_mm = 1e308\nstart = \"Red\"\nend = \"Blue\""),
+            "[gradient[0]] to_z_mm = 1e308 is out of range: 0 to 10000 mm"
+        );
+        assert_eq!(
+            msg("[numbers]\nposition_decimals = 200"),
+            "[numbers] position_decimals = 200 is out of range: 0 to 9 decimals"
+        );
+        assert!(msg("[z_cap]\nmax_z_feed = 1").contains("unknown field `max_z_feed`"));
+        assert!(
+            msg("[[hardware.inputs]]\ncolour = \"#ffffff\"\ndensity = 1").contains("unknown field `density`")
+        );
     }
 }

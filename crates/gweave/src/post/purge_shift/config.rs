@@ -36,16 +36,13 @@ use crate::colour::purge::{filament_mm_to_mm3, flush_volume_mm3, mm3_to_filament
 use crate::colour::Srgb8;
 use crate::gcode::layers::{Feature, Markers, ALL_FEATURES};
 use crate::post::purge_block::PurgeMotion;
+use crate::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
 
 /// Why a purge-shift configuration was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ConfigError {
-    #[error("{what} must be a positive number, got {value}")]
-    NotPositive { what: &'static str, value: f64 },
-    #[error("{what} must be zero or more, got {value}")]
-    Negative { what: &'static str, value: f64 },
-    #[error("{what} must be a number, got {value}")]
-    NotFinite { what: &'static str, value: f64 },
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
     #[error(
         "no purge amount: give `--purge MM` or `--purge-mm3 MM3` (Python: `purge=`, `purge_mm3=`), or in the config \
          purge_mm, purge_mm3, colours, pairs or a washout tolerance"
@@ -235,29 +232,73 @@ pub struct Rules {
     pub(crate) max_purge_mm: f64,
 }
 
-fn positive(what: &'static str, value: f64) -> Result<f64, ConfigError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        Err(ConfigError::NotPositive { what, value })
+/// Filament pushed through for one change: 2 m is far beyond any real purge (a tower of such
+/// purges would not fit a bed).
+const PURGE_MM: Range = Range::new(0.001, 2_000.0, "mm");
+const PURGE_MM3: Range = Range::new(0.001, 5_000.0, "mm³");
+const FILAMENT_DIAMETER_MM: Range = Range::new(0.1, 5.0, "mm");
+const WASHOUT_MM3: Range = Range::new(0.0, 10_000.0, "mm³");
+const TOLERANCE: Range = Range::new(0.000_001, 1.0, "");
+/// A tower's line width and layer height.
+const LINE_MM: Range = Range::new(0.01, 10.0, "mm");
+/// Lines held while looking for a place to purge.
+const WINDOW_LINES: Range = Range::new(1.0, 10_000_000.0, "lines");
+
+impl CheckRanges for PurgeShiftConfig {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.check_opt("purge_mm", self.purge_mm, PURGE_MM)?;
+        t.check_opt("purge_mm3", self.purge_mm3, PURGE_MM3)?;
+        t.check("filament_diameter_mm", self.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;
+        for (i, p) in self.pair.iter().enumerate() {
+            let pair = t.sub("pair").item(i);
+            pair.check_opt("purge_mm", p.purge_mm, PURGE_MM)?;
+            pair.check_opt("purge_mm3", p.purge_mm3, PURGE_MM3)?;
+        }
+        if let Some(w) = &self.washout {
+            let washout = t.sub("washout");
+            washout.check("chamber_mm3", w.chamber_mm3, WASHOUT_MM3)?;
+            washout.check("dead_mm3", w.dead_mm3, WASHOUT_MM3)?;
+            washout.check_opt("tolerance", w.tolerance, TOLERANCE)?;
+        }
+        self.block.check_ranges(&t.sub("block"))?;
+        let tower = t.sub("tower");
+        let tw = &self.tower;
+        tower.check_opt("x_mm", tw.x_mm, ranges::POS_MM)?;
+        tower.check_opt("y_mm", tw.y_mm, ranges::POS_MM)?;
+        tower.check("gap_mm", tw.gap_mm, ranges::LEN_MM)?;
+        tower.each("bed_mm", &tw.bed_mm, ranges::SIZE_MM)?;
+        tower.check("line_width_mm", tw.line_width_mm, LINE_MM)?;
+        tower.check("layer_height_mm", tw.layer_height_mm, LINE_MM)?;
+        tower.check("lift_mm", tw.lift_mm, ranges::LEN_MM)?;
+        tower.check("travel_feed_mm_min", tw.travel_feed_mm_min, ranges::FEED_MM_MIN)?;
+        tower.check("extrude_feed_mm_min", tw.extrude_feed_mm_min, ranges::FEED_MM_MIN)?;
+        tower.check("retract_feed_mm_min", tw.retract_feed_mm_min, ranges::FEED_MM_MIN)?;
+        t.count("max_window_lines", self.max_window_lines as u64, WINDOW_LINES)
     }
 }
 
 impl PurgeShiftConfig {
     /// Parses TOML and validates it.
     pub fn from_toml(text: &str) -> Result<Rules, ConfigError> {
-        let config: Self = toml::from_str(text).map_err(|e| ConfigError::Toml(e.to_string()))?;
+        let config: Self =
+            toml::from_str(text).map_err(|e| ConfigError::Toml(crate::settings::toml_message(&e)))?;
         config.validate()
     }
 
     /// Parses TOML into the raw settings (for merging with command-line flags).
     pub fn parse_toml(text: &str) -> Result<Self, ConfigError> {
-        toml::from_str(text).map_err(|e| ConfigError::Toml(e.to_string()))
+        let config: Self =
+            toml::from_str(text).map_err(|e| ConfigError::Toml(crate::settings::toml_message(&e)))?;
+        // The file's own values, so that their errors name the file (flags are checked again
+        // by `validate`).
+        config.check_ranges(&Table::root())?;
+        Ok(config)
     }
 
     /// Checks every value and converts volumes to filament length.
     pub fn validate(&self) -> Result<Rules, ConfigError> {
-        let diameter_mm = positive("filament_diameter_mm", self.filament_diameter_mm)?;
+        self.check_ranges(&Table::root())?;
+        let diameter_mm = self.filament_diameter_mm;
         let to_mm = |v: f64| mm3_to_filament_mm(v, diameter_mm).unwrap_or(f64::NAN);
         let area_mm2 = filament_mm_to_mm3(1.0, diameter_mm).unwrap_or(f64::NAN);
         let washout = match &self.washout {
@@ -269,23 +310,18 @@ impl PurgeShiftConfig {
         let tolerance = self.washout.and_then(|w| w.tolerance);
         let default_mm = match (self.purge_mm, self.purge_mm3, tolerance, washout) {
             (Some(_), Some(_), ..) => return Err(ConfigError::BothPurges),
-            (Some(mm), None, ..) => Some(positive("purge_mm", mm)?),
-            (None, Some(v), ..) => Some(to_mm(positive("purge_mm3", v)?)),
+            (Some(mm), None, ..) => Some(mm),
+            (None, Some(v), ..) => Some(to_mm(v)),
             (None, None, Some(eps), Some(w)) => {
                 Some(to_mm(w.purge_for_tolerance_mm3(eps).map_err(|e| ConfigError::Washout(e.to_string()))?))
             }
             _ => None,
         };
-        if let Some(eps) = tolerance {
-            if !(eps > 0.0 && eps <= 1.0) {
-                return Err(ConfigError::Washout(format!("tolerance must be within (0, 1], got {eps}")));
-            }
-        }
         let mut pairs = Vec::new();
         for p in &self.pair {
             let mm = match (p.purge_mm, p.purge_mm3) {
-                (Some(mm), None) => positive("pair purge_mm", mm)?,
-                (None, Some(v)) => to_mm(positive("pair purge_mm3", v)?),
+                (Some(mm), None) => mm,
+                (None, Some(v)) => to_mm(v),
                 _ => return Err(ConfigError::Pair { from: p.from, to: p.to }),
             };
             pairs.push((p.from, p.to, mm));
@@ -315,51 +351,9 @@ impl PurgeShiftConfig {
             "tower" => Fallback::Tower,
             other => return Err(ConfigError::Fallback(other.to_string())),
         };
-        let b = &self.block;
-        for (what, v) in [
-            ("block.travel_feed_mm_min", b.travel_feed_mm_min),
-            ("block.extrude_feed_mm_min", b.extrude_feed_mm_min),
-            ("block.retract_feed_mm_min", b.retract_feed_mm_min),
-            ("block.z_feed_mm_min", b.z_feed_mm_min),
-        ] {
-            positive(what, v)?;
-        }
         let t = &self.tower;
-        for (what, v) in [
-            ("tower.bed_mm", t.bed_mm[0]),
-            ("tower.bed_mm", t.bed_mm[1]),
-            ("tower.line_width_mm", t.line_width_mm),
-            ("tower.layer_height_mm", t.layer_height_mm),
-            ("tower.travel_feed_mm_min", t.travel_feed_mm_min),
-            ("tower.extrude_feed_mm_min", t.extrude_feed_mm_min),
-            ("tower.retract_feed_mm_min", t.retract_feed_mm_min),
-        ] {
-            positive(what, v)?;
-        }
-        for (what, v) in [
-            ("block.retract_mm", b.retract_mm),
-            ("block.lift_mm", b.lift_mm),
-            ("block.wipe_mm", b.wipe_mm),
-            ("tower.lift_mm", t.lift_mm),
-            ("tower.gap_mm", t.gap_mm),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(ConfigError::Negative { what, value: v });
-            }
-        }
         if t.x_mm.is_some() != t.y_mm.is_some() {
             return Err(ConfigError::Tower);
-        }
-        // TOML reads `inf` and `nan`: a purge spot must be a place on the bed.
-        for (what, v) in [
-            ("block.x_mm", Some(b.x_mm)),
-            ("block.y_mm", Some(b.y_mm)),
-            ("tower.x_mm", t.x_mm),
-            ("tower.y_mm", t.y_mm),
-        ] {
-            if let Some(value) = v.filter(|v| !v.is_finite()) {
-                return Err(ConfigError::NotFinite { what, value });
-            }
         }
         let mut rules = Rules {
             default_mm,
@@ -529,22 +523,28 @@ mod tests {
     fn refusals() {
         let err = |t: &str| PurgeShiftConfig::from_toml(t).unwrap_err();
         assert_eq!(err(""), ConfigError::NoPurge);
-        assert_eq!(err("purge_mm = -1.0"), ConfigError::NotPositive { what: "purge_mm", value: -1.0 });
+        let msg = |text: &str| err(text).to_string();
+        assert_eq!(msg("purge_mm = -1.0"), "purge_mm = -1 is out of range: 0.001 to 2000 mm");
+        assert_eq!(msg("purge_mm = 1e308"), "purge_mm = 1e308 is out of range: 0.001 to 2000 mm");
         assert_eq!(err("purge_mm = 1.0\npurge_mm3 = 2.0"), ConfigError::BothPurges);
         assert_eq!(err("purge_mm = 1.0\nfallback = \"wipe\""), ConfigError::Fallback("wipe".into()));
         assert_eq!(err("purge_mm = 1.0\n[tower]\nx_mm = 5.0"), ConfigError::Tower);
         assert_eq!(
-            err("purge_mm = 1.0\n[block]\nlift_mm = -1.0"),
-            ConfigError::Negative { what: "block.lift_mm", value: -1.0 }
+            msg("purge_mm = 1.0\n[block]\nlift_mm = -1.0"),
+            "[block] lift_mm = -1 is out of range: 0 to 10000 mm"
         );
         assert_eq!(
-            err("purge_mm = 1.0\n[block]\nx_mm = inf"),
-            ConfigError::NotFinite { what: "block.x_mm", value: f64::INFINITY }
+            msg("purge_mm = 1.0\n[block]\nx_mm = inf"),
+            "[block] x_mm = inf is out of range: -10000 to 10000 mm"
         );
-        assert!(matches!(
-            err("purge_mm = 1.0\n[tower]\nx_mm = 5.0\ny_mm = nan"),
-            ConfigError::NotFinite { what: "tower.y_mm", value } if value.is_nan()
-        ));
+        assert_eq!(
+            msg("purge_mm = 1.0\n[tower]\nx_mm = 5.0\ny_mm = nan"),
+            "[tower] y_mm = nan is out of range: -10000 to 10000 mm"
+        );
+        let e = PurgeShiftConfig::parse_toml("[washout]\nchamber_mm3 = 40.0\nvolume = 3\n").unwrap_err();
+        assert!(e.to_string().contains("unknown field `volume`"), "{e}");
+        let e = PurgeShiftConfig::parse_toml("[[pair]]\nfrom = 0\nto = 1\npurge_mm = nan\n").unwrap_err();
+        assert_eq!(e.to_string(), "[pair[0]] purge_mm = nan is out of range: 0.001 to 2000 mm");
         assert!(matches!(err("purge_mm = 1.0\nallow_features = [\"walls\"]"), ConfigError::Feature(_)));
         assert!(matches!(err("purge_mm = 1.0\nbogus = 1"), ConfigError::Toml(_)));
         assert_eq!(err("purge_mm = 1.0\nmarkers = [\"\", \"end\"]"), ConfigError::Markers);
