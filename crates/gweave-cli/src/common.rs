@@ -16,15 +16,19 @@ pub struct OutputArgs {
     /// Replace the input file (as PrusaSlicer post-processing scripts are called).
     #[arg(long, conflicts_with = "output")]
     pub in_place: bool,
-    /// With --in-place, do not keep `<input>.bak`.
+    /// With --in-place, do not keep `<input>.bak` (an older `.bak` that is not a copy of the
+    /// input is otherwise moved to the first free `.bak.1` .. `.bak.9`).
     #[arg(long, requires = "in_place")]
     pub no_backup: bool,
+    /// With --in-place, replace the file even if it is read-only.
+    #[arg(long, requires = "in_place")]
+    pub force: bool,
 }
 
 impl OutputArgs {
     pub fn target(&self) -> Result<Target> {
         Ok(match (&self.output, self.in_place) {
-            (_, true) => Target::InPlace { keep_backup: !self.no_backup },
+            (_, true) => Target::InPlace { keep_backup: !self.no_backup, force: self.force },
             (Some(p), false) if p == Path::new("-") => Target::Stdout,
             (Some(p), false) => Target::File(p.clone()),
             (None, false) => {

@@ -51,10 +51,10 @@ pub fn run(args: CatArgs) -> Result<ExitCode> {
 fn print_human(input: &Path, target: &Target, r: &CopyReport) {
     match target {
         Target::File(out) => println!("{} -> {}", input.display(), out.display()),
-        Target::InPlace { keep_backup: true } => {
+        Target::InPlace { keep_backup: true, .. } => {
             println!("{} (in place, kept {}.bak)", input.display(), input.display())
         }
-        Target::InPlace { keep_backup: false } => println!("{} (in place)", input.display()),
+        Target::InPlace { keep_backup: false, .. } => println!("{} (in place)", input.display()),
         Target::Stdout => {}
     }
     println!("  lines           {} ({:.1} MB), copied byte for byte", r.lines, r.bytes as f64 / 1e6);
