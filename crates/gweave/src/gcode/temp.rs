@@ -29,7 +29,11 @@ impl TempFile {
         let Some(paths) = live.as_mut() else {
             return Err(io::Error::new(io::ErrorKind::Interrupted, "interrupted"));
         };
-        let file = tempfile::Builder::new().prefix(".gweave-").suffix(".tmp").tempfile_in(dir)?;
+        let file = tempfile::Builder::new()
+            .prefix(".gweave-")
+            .suffix(".tmp")
+            .tempfile_in(dir)
+            .map_err(without_temp_name)?;
         paths.push(file.path().to_path_buf());
         Ok(TempFile { file: Some(file) })
     }
@@ -90,6 +94,17 @@ pub fn remove_all() -> usize {
     let mut live = lock();
     let paths = live.take().unwrap_or_default();
     paths.iter().filter(|p| fs::remove_file(p).is_ok()).count()
+}
+
+/// tempfile's error names the temporary file ("No such file or directory (os error 2) at path
+/// \".gweave-XXXX.tmp\""), which means nothing to the user, and hides the system's error
+/// inside a private type: keep the message before the path; the caller names the destination.
+fn without_temp_name(e: io::Error) -> io::Error {
+    let text = e.to_string();
+    match text.rfind(" at path ") {
+        Some(end) => io::Error::new(e.kind(), text[..end].to_owned()),
+        None => e,
+    }
 }
 
 fn forget(path: &Path) {
