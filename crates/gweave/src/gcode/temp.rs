@@ -79,11 +79,11 @@ impl Drop for TempFile {
 
 impl Write for TempFile {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        self.file.as_mut().expect("a live temporary file").write(buf)
+        self.file.as_mut().expect("a live temporary file").write(buf).map_err(without_temp_name)
     }
 
     fn flush(&mut self) -> io::Result<()> {
-        self.file.as_mut().expect("a live temporary file").flush()
+        self.file.as_mut().expect("a live temporary file").flush().map_err(without_temp_name)
     }
 }
 
