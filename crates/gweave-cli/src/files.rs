@@ -173,7 +173,9 @@ impl Id {
     fn of(path: &Path) -> Option<Id> {
         match std::fs::metadata(path) {
             Ok(meta) if !meta.is_file() && !meta.is_dir() => None,
-            Ok(meta) => Some(Id { inode: inode(&meta), path: std::fs::canonicalize(path).unwrap_or(path.into()) }),
+            Ok(meta) => {
+                Some(Id { inode: inode(&meta), path: std::fs::canonicalize(path).unwrap_or(path.into()) })
+            }
             Err(_) => Some(Id { inode: None, path: resolve_new(path) }),
         }
     }
@@ -224,7 +226,10 @@ mod tests {
         let input = dir.path().join("in.gcode");
         std::fs::write(&input, "G1\n").unwrap();
         let err = refused(Files::new().read("INPUT", Some(&input)).write("--plot", Some(&input)));
-        assert!(err.starts_with("--plot ") && err.ends_with("names the input (INPUT); name another file"), "{err}");
+        assert!(
+            err.starts_with("--plot ") && err.ends_with("names the input (INPUT); name another file"),
+            "{err}"
+        );
         // Another spelling of the same file, and a hard link to it.
         let other = dir.path().join(".").join("in.gcode");
         assert!(Files::new().read("INPUT", Some(&input)).write("--plot", Some(&other)).check().is_err());
@@ -244,7 +249,11 @@ mod tests {
         // Standard output and devices are no files.
         let ok = Files::new().write("-o", Some(Path::new("-"))).write("--report", Some(Path::new("-")));
         ok.check().unwrap();
-        Files::new().write("-o", Some(Path::new("/dev/null"))).write("--report", Some(Path::new("/dev/null"))).check().unwrap();
+        Files::new()
+            .write("-o", Some(Path::new("/dev/null")))
+            .write("--report", Some(Path::new("/dev/null")))
+            .check()
+            .unwrap();
     }
 
     #[test]
@@ -267,9 +276,13 @@ mod tests {
         let target = Target::InPlace { keep_backup: true, force: false };
         Files::new().read("INPUT", Some(&input)).target(&target, &input).check().unwrap();
         let bak = dir.path().join("in.gcode.bak");
-        let err = refused(Files::new().read("INPUT", Some(&input)).target(&target, &input).write("--report", Some(&bak)));
+        let err = refused(
+            Files::new().read("INPUT", Some(&input)).target(&target, &input).write("--report", Some(&bak)),
+        );
         assert!(err.contains("--in-place's backup"), "{err}");
-        let err = refused(Files::new().read("INPUT", Some(&input)).target(&target, &input).write("--report", Some(&input)));
+        let err = refused(
+            Files::new().read("INPUT", Some(&input)).target(&target, &input).write("--report", Some(&input)),
+        );
         assert!(err.contains("names the input (INPUT)"), "{err}");
     }
 }

@@ -49,7 +49,9 @@ impl Source {
     /// Every file the job will read its layers from.
     pub fn paths(&self) -> Vec<&Path> {
         match self {
-            Source::Stacks(stacks) => stacks.iter().flat_map(|s| s.paths.iter().map(PathBuf::as_path)).collect(),
+            Source::Stacks(stacks) => {
+                stacks.iter().flat_map(|s| s.paths.iter().map(PathBuf::as_path)).collect()
+            }
             Source::Sl1 { path, .. } => vec![path],
         }
     }

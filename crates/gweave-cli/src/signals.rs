@@ -57,7 +57,8 @@ mod imp {
                 return Ok(None);
             }
             let read_fd = fds[0];
-            let thread = std::thread::Builder::new().name("gweave-signals".into()).spawn(move || watch(read_fd));
+            let thread =
+                std::thread::Builder::new().name("gweave-signals".into()).spawn(move || watch(read_fd));
             let mut guard = Cleanup { previous: Vec::new(), fds, thread: None };
             guard.thread = Some(thread?);
             for signal in SIGNALS {

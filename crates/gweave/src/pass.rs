@@ -144,7 +144,13 @@ impl<'a> Run<'a> {
             self.progress.set_len(meta.len());
         }
         let options = self.options.for_flavour(flavour.as_deref());
-        let lines = Lines { reader: LineReader::new(file), path: &path, out_name, strictness: self.strictness, progress: self.progress };
+        let lines = Lines {
+            reader: LineReader::new(file),
+            path: &path,
+            out_name,
+            strictness: self.strictness,
+            progress: self.progress,
+        };
         lines.run(options, pass, out)
     }
 }
@@ -176,7 +182,12 @@ struct Lines<'a, R> {
 }
 
 impl<R: Read> Lines<'_, R> {
-    fn run<P: Pass + ?Sized>(self, options: StateOptions, pass: &mut P, out: &mut dyn Write) -> Result<State> {
+    fn run<P: Pass + ?Sized>(
+        self,
+        options: StateOptions,
+        pass: &mut P,
+        out: &mut dyn Write,
+    ) -> Result<State> {
         let state = State::new(options);
         if pass.reads_words() || state.reads_words() {
             self.drive::<true, P>(state, pass, out)

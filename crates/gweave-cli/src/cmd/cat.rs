@@ -66,7 +66,11 @@ fn print_human(out: &mut dyn Write, input: &Path, target: &Target, r: &CopyRepor
     }
     writeln!(out, "  lines           {} ({:.1} MB), copied byte for byte", r.lines, r.bytes as f64 / 1e6)?;
     if let Some(first) = r.first_malformed_line {
-        writeln!(out, "  malformed       {} (copied as written; the first at line {first})", r.malformed_lines)?;
+        writeln!(
+            out,
+            "  malformed       {} (copied as written; the first at line {first})",
+            r.malformed_lines
+        )?;
     }
     Ok(())
 }

@@ -56,18 +56,18 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
 }
 
 fn print_human(out: &mut dyn Write, input: &Path, report: &CheckReport) -> io::Result<()> {
-        let name = input.display();
-        for f in &report.findings {
-            let level = match f.severity {
-                gweave::gcode::diag::Severity::Error => "error",
-                gweave::gcode::diag::Severity::Warning => "warning",
-            };
-            writeln!(out, "{name}:{}:{}: {level}: {}", f.line, f.diagnostic.column, f.diagnostic.finding)?;
-        }
-        let shown = report.findings.len() as u64;
-        if shown < report.errors + report.warnings {
-            writeln!(out, "... {} more findings not shown", report.errors + report.warnings - shown)?;
-        }
-        writeln!(out, "{name}: {} lines, {} errors, {} warnings", report.lines, report.errors, report.warnings)?;
+    let name = input.display();
+    for f in &report.findings {
+        let level = match f.severity {
+            gweave::gcode::diag::Severity::Error => "error",
+            gweave::gcode::diag::Severity::Warning => "warning",
+        };
+        writeln!(out, "{name}:{}:{}: {level}: {}", f.line, f.diagnostic.column, f.diagnostic.finding)?;
+    }
+    let shown = report.findings.len() as u64;
+    if shown < report.errors + report.warnings {
+        writeln!(out, "... {} more findings not shown", report.errors + report.warnings - shown)?;
+    }
+    writeln!(out, "{name}: {} lines, {} errors, {} warnings", report.lines, report.errors, report.warnings)?;
     Ok(())
 }

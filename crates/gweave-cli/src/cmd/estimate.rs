@@ -82,7 +82,13 @@ fn print_human(out: &mut dyn Write, input: &Path, r: &EstimateReport) -> io::Res
     let e = &r.estimate;
     writeln!(out, "{} on {} ({} planner)", input.display(), r.machine, r.planner)?;
     writeln!(out, "  time            {}  ({:.1} s, {} planned blocks)", hms(e.total_s), e.total_s, e.blocks)?;
-    writeln!(out, "    motion {}  dwell {}  overhead {}", hms(e.motion_s), hms(e.dwell_s), hms(e.overhead_s))?;
+    writeln!(
+        out,
+        "    motion {}  dwell {}  overhead {}",
+        hms(e.motion_s),
+        hms(e.dwell_s),
+        hms(e.overhead_s)
+    )?;
     print_layers_and_features(out, &e.layer_s, e.unlayered_s, &e.feature_s)?;
     if r.steps_counted {
         let s = &e.steps.axes;

@@ -92,7 +92,10 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
     if let (Some(input), Some(target)) = (&args.input, &target) {
         files = files.target(target, input);
     }
-    files.write("--palette-png", args.palette_png.as_deref()).write("--report", args.report.report.as_deref()).check()?;
+    files
+        .write("--palette-png", args.palette_png.as_deref())
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let profile = profile(&args)?;
     let has_job = !(profile.schedule.is_empty() && profile.gradient.is_empty() && profile.map.is_empty());
     if let Some(png) = &args.palette_png {

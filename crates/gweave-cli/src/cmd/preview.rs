@@ -153,7 +153,8 @@ fn print_human(out: &mut dyn Write, args: &PreviewArgs, r: &PreviewReport) -> io
         None => writeln!(out, "{} -> {}", args.input.display(), args.output.display())?,
     }
     let size = format!("{:.1} KB", r.bytes as f64 / 1e3);
-    writeln!(out, 
+    writeln!(
+        out,
         "  {:<15} {format} {}x{} px, {size}, {} view, colour by {}",
         "picture", r.width_px, r.height_px, r.view, r.colour_by
     )?;

@@ -194,7 +194,8 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
 fn print_human(out: &mut dyn Write, r: &JobReport, profile: &PrintheadProfile) -> io::Result<()> {
     let rr = &r.raster;
     writeln!(out, "{}", r.output)?;
-    writeln!(out, 
+    writeln!(
+        out,
         "  head            {} nozzles at {} dpi ({:.6} mm), {} head(s), M{}",
         profile.nozzle_count,
         profile.dpi,
@@ -213,7 +214,8 @@ fn print_human(out: &mut dyn Write, r: &JobReport, profile: &PrintheadProfile) -
         Some(v) => writeln!(out, "  binder          {v:.3} uL ({:.4} mL)", v / 1000.0)?,
         None => writeln!(out, "  binder          (set drop_volume_pl in the profile)")?,
     }
-    writeln!(out, 
+    writeln!(
+        out,
         "  path            {:.1} m, {} XY moves, {} Z moves",
         rr.xy_path_mm / 1000.0,
         rr.xy_moves,
@@ -223,7 +225,8 @@ fn print_human(out: &mut dyn Write, r: &JobReport, profile: &PrintheadProfile) -
         "planner" => "planner, Marlin defaults",
         _ => "path at feed rate, no acceleration",
     };
-    writeln!(out, 
+    writeln!(
+        out,
         "  time            {} ({method}: motion {}, firing {})",
         hms(r.time.total_s),
         hms(r.time.motion_s),

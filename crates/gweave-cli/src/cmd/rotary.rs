@@ -142,7 +142,8 @@ impl MachineArgs {
 }
 
 fn print_machine(out: &mut dyn Write, m: &MachineReport) -> io::Result<()> {
-    writeln!(out, 
+    writeln!(
+        out,
         "  mandrel         {:.3} mm (circumference {:.3} mm), axes {} (rotary in {}), feed {}",
         m.mandrel_diameter_mm,
         m.circumference_mm,
@@ -234,7 +235,8 @@ fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {
     writeln!(out, "  mapping         {mapping}")?;
     writeln!(out, "  layers          {}", r.layers.len())?;
     for l in &r.layers {
-        writeln!(out, 
+        writeln!(
+            out,
             "    layer {:<4} r {:>8.3} mm  theta {:>9.3} .. {:>9.3} deg (span {:>7.3})  seam {:>7.3} deg  {:>9.2} mm",
             l.layer.index,
             l.layer.radius_mm,
@@ -245,7 +247,8 @@ fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {
             l.layer.filament_mm
         )?;
     }
-    writeln!(out, 
+    writeln!(
+        out,
         "  seam            at flat y = 0: {:.3} deg, turning {:.3} deg per layer",
         r.seam_offset_deg, r.seam_rotation_per_layer_deg
     )?;
@@ -365,7 +368,8 @@ fn print_tube(out: &mut dyn Write, r: &TubeReport) -> io::Result<()> {
         writeln!(out, "{}", dest.display())?;
     }
     print_machine(out, &r.machine)?;
-    writeln!(out, 
+    writeln!(
+        out,
         "  tube            length {:.3} mm, bead {:.3} x {:.3} mm, pitch {:.3} mm, {}",
         r.length_mm,
         r.bead_width_mm,
@@ -375,7 +379,8 @@ fn print_tube(out: &mut dyn Write, r: &TubeReport) -> io::Result<()> {
     )?;
     writeln!(out, "  layers          {}", r.layers.len())?;
     for l in &r.layers {
-        writeln!(out, 
+        writeln!(
+            out,
             "    layer {:<3} r {:>8.3} mm  {:<5} {:>8.2} turns  {:>8.3} deg/s  X {:.3} -> {:.3}  A {:.1} -> {:.1}",
             l.index,
             l.radius_mm,

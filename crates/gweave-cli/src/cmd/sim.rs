@@ -121,7 +121,8 @@ fn print_human(out: &mut dyn Write, input: &Path, r: &SimReport, errors: &[Strin
     writeln!(out, "{} on {}", input.display(), r.machine)?;
     writeln!(out, "  lines           {}  ({} planned blocks)", r.lines, r.blocks)?;
     writeln!(out, "  time            {}", hms(t.total_s))?;
-    writeln!(out, 
+    writeln!(
+        out,
         "    motion {}  dwell {}  heating {}  homing {}  overhead {}",
         hms(t.motion_s),
         hms(t.dwell_s),
@@ -141,12 +142,14 @@ fn print_human(out: &mut dyn Write, input: &Path, r: &SimReport, errors: &[Strin
     let s = &r.steps.axes;
     writeln!(out, "  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4])?;
     let [x, y, z, e, _] = r.position;
-    writeln!(out, 
+    writeln!(
+        out,
         "  end position    X {x:.2} Y {y:.2} Z {z:.2} E {e:.2}  (Count X {} Y {} Z {})",
         r.count[0], r.count[1], r.count[2]
     )?;
     for h in &r.heaters {
-        writeln!(out, 
+        writeln!(
+            out,
             "  heater {:<8} max {:.1} C, end {:.1} / {:.1} C, duty {:.0} %, {:.1} Wh",
             match h.heater {
                 HeaterId::Hotend(n) => format!("T{n}"),
@@ -201,7 +204,8 @@ pub(super) fn print_layers_and_features(
     if let Some((slowest, max)) = layer_s.iter().copied().enumerate().max_by(|a, b| a.1.total_cmp(&b.1)) {
         let min = layer_s.iter().copied().fold(f64::INFINITY, f64::min);
         let mean = layer_s.iter().sum::<f64>() / layer_s.len() as f64;
-        writeln!(out, 
+        writeln!(
+            out,
             "  layers          {}: min {min:.1} s, mean {mean:.1} s, max {max:.1} s (layer {slowest}); before the first {unlayered_s:.1} s",
             layer_s.len(),
         )?;

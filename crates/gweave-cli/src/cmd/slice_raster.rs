@@ -58,19 +58,26 @@ pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_human(out: &mut dyn Write, args: &SliceRasterArgs, r: &SliceReport, triangles: usize) -> io::Result<()> {
+fn print_human(
+    out: &mut dyn Write,
+    args: &SliceRasterArgs,
+    r: &SliceReport,
+    triangles: usize,
+) -> io::Result<()> {
     let g = &r.grid;
     writeln!(out, "{} -> {}", args.model.display(), args.output.display())?;
     writeln!(out, "  triangles       {triangles}")?;
     writeln!(out, "  layers          {} x {} mm from Z {:.3}", g.layers, g.layer_height_mm, g.z_min_mm)?;
-    writeln!(out, 
+    writeln!(
+        out,
         "  images          {} x {} px of {:.6} mm, corner at ({:.3}, {:.3}) mm",
         g.width_px, g.height_px, g.pixel_mm, g.origin_x_mm, g.origin_y_mm
     )?;
     let total: u64 = r.pixels_per_layer.iter().sum();
     let max = r.pixels_per_layer.iter().max().copied().unwrap_or(0);
     writeln!(out, "  binder pixels   {total} (largest layer {max})")?;
-    writeln!(out, 
+    writeln!(
+        out,
         "  next            gweave raster {} --pixel-mm {} -o part.gcode",
         args.output.display(),
         g.pixel_mm

@@ -54,7 +54,8 @@ fn print_human(out: &mut dyn Write, input: &std::path::Path, s: &Stats) -> io::R
         writeln!(out, "  z range         {lo:.3} .. {hi:.3} mm")?;
     }
     if let Some(b) = s.extrusion_bounds {
-        writeln!(out, 
+        writeln!(
+            out,
             "  extents         X {:.2}..{:.2}  Y {:.2}..{:.2} mm",
             b.min[0], b.max[0], b.min[1], b.max[1]
         )?;

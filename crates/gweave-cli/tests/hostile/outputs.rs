@@ -318,7 +318,9 @@ fn a_full_disk_leaves_nothing_behind() {
     let Some(fs1) = Tmpfs::mount("1m") else { return };
     let disk = fs1.0.path();
     // The output does not fit.
-    let out = gweave(disk, &["cat", &fixture_path("cura/cura_dual.gcode").to_string_lossy(), "-o", "out.gcode"]).run();
+    let out =
+        gweave(disk, &["cat", &fixture_path("cura/cura_dual.gcode").to_string_lossy(), "-o", "out.gcode"])
+            .run();
     out.assert_refused("out.gcode: No space left on device");
     assert!(!out.stderr.contains(".gweave-"), "{}", out.stderr);
     assert!(!disk.join("out.gcode").exists());

@@ -328,7 +328,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let input = dir.path().join("in.gcode");
         fs::write(&input, b"old\n").unwrap();
-        let mut out = Output::create(&Target::InPlace { keep_backup: true, force: false }, Some(&input)).unwrap();
+        let mut out =
+            Output::create(&Target::InPlace { keep_backup: true, force: false }, Some(&input)).unwrap();
         out.write_all(b"new\n").unwrap();
         out.commit().unwrap();
         assert_eq!(fs::read(&input).unwrap(), b"new\n");
@@ -395,7 +396,11 @@ mod tests {
         let err = in_place(&input, b"fourth\n", false).unwrap_err();
         assert!(matches!(err, Error::BackupSlotsFull { .. }), "{err}");
         assert_eq!(fs::read(&input).unwrap(), b"third\n");
-        assert!(fs::read_dir(dir.path()).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().ends_with(".tmp")));
+        assert!(fs::read_dir(dir.path()).unwrap().all(|e| !e
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .ends_with(".tmp")));
     }
 
     /// Regression: `--in-place` replaced a read-only file.
