@@ -126,6 +126,34 @@ mod imp {
             }
         }
     }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        fn current(signal: c_int) -> usize {
+            // SAFETY: queries the action into a zeroed local.
+            unsafe {
+                let mut action: libc::sigaction = std::mem::zeroed();
+                libc::sigaction(signal, std::ptr::null(), &mut action);
+                action.sa_sigaction
+            }
+        }
+
+        /// The Python package runs the CLI inside the interpreter: after a run, its own
+        /// handlers must be back (else Ctrl-C or SIGTERM would be swallowed or exit later).
+        #[test]
+        fn the_previous_handlers_are_restored_after_a_run() {
+            let before = current(libc::SIGHUP);
+            let guard = Cleanup::install().unwrap().expect("first install");
+            assert_eq!(current(libc::SIGHUP), on_signal as extern "C" fn(c_int) as usize);
+            // A second run at the same time (another Python thread) leaves them alone.
+            assert!(Cleanup::install().unwrap().is_none());
+            drop(guard);
+            assert_eq!(current(libc::SIGHUP), before);
+            assert_eq!(WAKE_FD.load(Ordering::SeqCst), -1);
+        }
+    }
 }
 
 #[cfg(unix)]
