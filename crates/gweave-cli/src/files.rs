@@ -88,16 +88,8 @@ impl Files {
                 let mut backup = input.as_os_str().to_owned();
                 backup.push(".bak");
                 let backup = PathBuf::from(backup);
-                self.write_if(*keep_backup, "--in-place's backup", &backup)
+                self.write("--in-place's backup", keep_backup.then_some(backup.as_path()))
             }
-        }
-    }
-
-    fn write_if(self, yes: bool, flag: &str, path: &Path) -> Files {
-        if yes {
-            self.write(flag, Some(path))
-        } else {
-            self
         }
     }
 
