@@ -121,15 +121,27 @@ impl Files {
                 }
             }
             for (earlier, earlier_id) in &outputs[..k] {
-                if collide(out, out_id.as_ref(), earlier, earlier_id.as_ref()) {
-                    bail!(
+                if !collide(out, out_id.as_ref(), earlier, earlier_id.as_ref()) {
+                    continue;
+                }
+                let (file, folder) = match (out.dir, earlier.dir) {
+                    (None, Some(_)) => (out, earlier),
+                    (Some(_), None) => (earlier, out),
+                    _ => bail!(
                         "{} {} names the same file as {} {}; name another file",
                         out.flag,
                         out.path.display(),
                         earlier.flag,
                         earlier.path.display()
-                    );
-                }
+                    ),
+                };
+                bail!(
+                    "{} {} is one of the files {} {} writes; name another file",
+                    file.flag,
+                    file.path.display(),
+                    folder.flag,
+                    folder.path.display()
+                );
             }
         }
         Ok(())

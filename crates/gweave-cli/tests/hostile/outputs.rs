@@ -138,6 +138,35 @@ fn output_and_report_naming_one_file_are_refused() {
     );
 }
 
+/// The layer images of `slice-raster -o DIR` and `sim --raster-out DIR` are outputs too.
+#[test]
+fn a_file_among_the_layers_an_output_folder_gets_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::create_dir(dir.path().join("layers")).unwrap();
+    fs::write(dir.path().join("m.stl"), "solid m\nendsolid m\n").unwrap();
+    refused_in(
+        dir.path(),
+        &[
+            "slice-raster",
+            "m.stl",
+            "--layer-height",
+            "0.1",
+            "-o",
+            "layers",
+            "--report",
+            "layers/layer_00000.png",
+        ],
+        "--report layers/layer_00000.png is one of the files -o layers writes; name another file",
+    );
+    let gcode = dir.path().join("layers").join("layer_00001_head0.png");
+    fs::copy(fixture_path("cura/cura_torus.gcode"), &gcode).unwrap();
+    refused_in(
+        dir.path(),
+        &["sim", "layers/layer_00001_head0.png", "--raster-out", "layers", "-q"],
+        "--raster-out layers would write over the input layers/layer_00001_head0.png (INPUT); name another folder",
+    );
+}
+
 /// A profile or snippet named as an output is an input too.
 #[test]
 fn an_output_naming_a_profile_is_refused() {
