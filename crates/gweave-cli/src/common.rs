@@ -1,10 +1,11 @@
 //! Arguments shared by subcommands: where output goes, and machine-readable reports.
 
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use gweave::gcode::writer::{same_file, write_file, Target};
+use gweave::gcode::writer::{write_file, Target};
 use serde::Serialize;
 
 /// Where a transform writes.
@@ -16,15 +17,19 @@ pub struct OutputArgs {
     /// Replace the input file (as PrusaSlicer post-processing scripts are called).
     #[arg(long, conflicts_with = "output")]
     pub in_place: bool,
-    /// With --in-place, do not keep `<input>.bak`.
+    /// With --in-place, do not keep `<input>.bak` (an older `.bak` that is not a copy of the
+    /// input is otherwise moved to the first free `.bak.1` .. `.bak.9`).
     #[arg(long, requires = "in_place")]
     pub no_backup: bool,
+    /// With --in-place, replace the file even if it is read-only.
+    #[arg(long, requires = "in_place")]
+    pub force: bool,
 }
 
 impl OutputArgs {
     pub fn target(&self) -> Result<Target> {
         Ok(match (&self.output, self.in_place) {
-            (_, true) => Target::InPlace { keep_backup: !self.no_backup },
+            (_, true) => Target::InPlace { keep_backup: !self.no_backup, force: self.force },
             (Some(p), false) if p == Path::new("-") => Target::Stdout,
             (Some(p), false) => Target::File(p.clone()),
             (None, false) => {
@@ -48,29 +53,33 @@ pub struct ReportArgs {
 impl ReportArgs {
     /// Writes the JSON report file if asked; returns whether the human summary should print.
     /// The JSON is streamed to its destination, never held whole in memory (a report may carry
-    /// an entry per line or per change of a large file). `reads` are the command's input files:
-    /// a report path naming one of them is refused rather than replacing it.
-    pub fn emit<T: Serialize>(&self, value: &T, reads: &[&Path]) -> Result<bool> {
-        use std::io::Write as _;
+    /// an entry per line or per change of a large file). The command has checked the report's
+    /// path against its other files (`crate::files`) before it started.
+    pub fn emit<T: Serialize>(&self, value: &T) -> Result<bool> {
         if let Some(path) = &self.report {
-            if reads.iter().any(|input| same_file(input, path)) {
-                bail!("--report {} would overwrite the input; name another file", path.display());
-            }
             write_file(path, |out| -> Result<()> {
                 serde_json::to_writer_pretty(&mut *out, value)?;
                 Ok(writeln!(out)?)
             })
-            .with_context(|| format!("writing {}", path.display()))?;
+            .with_context(|| format!("writing the report {}", path.display()))?;
         }
         if self.json {
-            let mut stdout = std::io::BufWriter::new(std::io::stdout().lock());
-            serde_json::to_writer_pretty(&mut stdout, value)?;
-            writeln!(stdout)?;
-            stdout.flush()?;
+            print_summary(|stdout| {
+                serde_json::to_writer_pretty(&mut *stdout, value)?;
+                writeln!(stdout)
+            })?;
             return Ok(false);
         }
         Ok(true)
     }
+}
+
+/// Prints a summary on standard output. Unlike `println!`, which panics, a full or closed
+/// standard output is an error here (`gweave stats x > /dev/full`); a closed pipe stays quiet
+/// (see `is_broken_pipe`).
+pub fn print_summary(print: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+    let mut out = io::BufWriter::new(io::stdout().lock());
+    print(&mut out).and_then(|()| out.flush()).context("writing to standard output")
 }
 
 /// Parses `X,Y,Z` (three numbers, mm) for flags such as `--bed 220,220,250`.
@@ -87,7 +96,6 @@ pub fn parse_xyz(text: &str) -> Result<[f64; 3], String> {
 
 /// Writes `bytes` to `path` through a temporary file renamed into place (see `write_file`).
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
-    use std::io::Write as _;
     write_file(path, |out| -> Result<()> { Ok(out.write_all(bytes)?) })
         .with_context(|| format!("writing {}", path.display()))
 }

@@ -5,8 +5,10 @@
 
 mod cmd;
 mod common;
+mod files;
 mod progress;
 pub mod raster_job;
+mod signals;
 
 use std::ffi::OsString;
 use std::process::ExitCode;
@@ -34,15 +36,26 @@ where
             return if e.use_stderr() { ExitCode::from(2) } else { ExitCode::SUCCESS };
         }
     };
-    match cmd::run(cli.command) {
+    // `serve` handles Ctrl-C itself (it stops and removes its pty link); every other command
+    // removes its temporary files and exits.
+    let guard = if cli.command.is_serve() { Ok(None) } else { signals::Cleanup::install() };
+    let result = guard.map_err(anyhow::Error::from).and_then(|_guard| cmd::run(cli.command));
+    match result {
         Ok(code) => code,
         Err(e) => {
             if is_broken_pipe(&e) {
                 return ExitCode::SUCCESS;
             }
             eprintln!("gweave: error: {e}");
+            // A cause already quoted by the message above it (a context that repeats an I/O
+            // error's text) is not printed again.
+            let mut shown = e.to_string();
             for cause in e.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
+                let text = cause.to_string();
+                if !shown.contains(&text) {
+                    eprintln!("  caused by: {text}");
+                }
+                shown = text;
             }
             ExitCode::FAILURE
         }

@@ -45,6 +45,18 @@ pub struct InputSpec {
     pub flip_y: bool,
 }
 
+impl Source {
+    /// Every file the job will read its layers from.
+    pub fn paths(&self) -> Vec<&Path> {
+        match self {
+            Source::Stacks(stacks) => {
+                stacks.iter().flat_map(|s| s.paths.iter().map(PathBuf::as_path)).collect()
+            }
+            Source::Sl1 { path, .. } => vec![path],
+        }
+    }
+}
+
 fn is_sl1(p: &Path) -> bool {
     p.extension().is_some_and(|e| e.eq_ignore_ascii_case("sl1"))
 }
@@ -436,9 +448,13 @@ impl JobOptions {
 
     /// Resolves the inputs and builds the job.
     pub fn job(&self) -> Result<Job> {
-        if self.pixel_mm.is_some() && self.dpi.is_some() {
-            bail!("give the image resolution once: pixel size or dpi");
-        }
+        let (source, heads) = self.source()?;
+        self.job_from(source, heads)
+    }
+
+    /// Resolves the inputs (lists folders and globs, reads no image) into the layer source and
+    /// the heads it needs, so that a caller can check the files before any is read.
+    pub fn source(&self) -> Result<(Source, usize)> {
         let spec = InputSpec {
             inputs: self.inputs.clone(),
             heads: self.heads,
@@ -453,7 +469,14 @@ impl JobOptions {
             },
             flip_y: self.flip_y,
         };
-        let (source, heads) = spec.resolve()?;
+        spec.resolve()
+    }
+
+    /// Builds the job from a resolved [`JobOptions::source`]: reads the profile and snippets.
+    pub fn job_from(&self, source: Source, heads: usize) -> Result<Job> {
+        if self.pixel_mm.is_some() && self.dpi.is_some() {
+            bail!("give the image resolution once: pixel size or dpi");
+        }
         if matches!(source, Source::Sl1 { .. }) && (self.pixel_mm.is_some() || self.dpi.is_some()) {
             bail!("a .sl1 archive carries its own pixel size: drop the pixel size / dpi");
         }

@@ -85,7 +85,7 @@ fn cat_json(
     backup: bool,
 ) -> PyResult<String> {
     let target = match (output, in_place) {
-        (_, true) => Target::InPlace { keep_backup: backup },
+        (_, true) => Target::InPlace { keep_backup: backup, force: false },
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
@@ -138,7 +138,7 @@ fn purge_shift_json(
     });
     let rules = c.validate().map_err(value_err)?;
     let target = match (output, in_place) {
-        (_, true) => Target::InPlace { keep_backup: backup },
+        (_, true) => Target::InPlace { keep_backup: backup, force: false },
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
@@ -871,7 +871,7 @@ fn mix_json(
     use gweave::post::mix::profile::{Dialect, GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
     let bad = |e: gweave::post::mix::MixPassError| PyValueError::new_err(e.to_string());
     let target = match (output, in_place) {
-        (_, true) => Target::InPlace { keep_backup: backup },
+        (_, true) => Target::InPlace { keep_backup: backup, force: false },
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };

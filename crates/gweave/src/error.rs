@@ -18,6 +18,17 @@ pub enum Error {
     #[error("refusing to overwrite the input {} (use --in-place to replace it)", path.display())]
     WouldOverwriteInput { path: PathBuf },
 
+    #[error("{} is read-only: --in-place would replace it (add --force to replace it anyway)", path.display())]
+    ReadOnly { path: PathBuf },
+
+    #[error(
+        "{} exists and is not a copy of the input, and {}.1 .. .{} are all taken: move old backups away or use --no-backup",
+        path.display(),
+        path.display(),
+        crate::gcode::writer::BACKUP_SLOTS
+    )]
+    BackupSlotsFull { path: PathBuf },
+
     #[error("--in-place needs an input file")]
     InPlaceWithoutInput,
 

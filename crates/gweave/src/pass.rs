@@ -125,21 +125,24 @@ impl<'a> Run<'a> {
 
     /// Streams the input through `pass` without output. Returns the final state.
     pub fn scan<P: Pass + ?Sized>(self, pass: &mut P) -> Result<State> {
-        self.drive(pass, &mut io::sink())
+        let out_name = output_name(self.input);
+        self.drive(pass, &mut io::sink(), out_name)
     }
 
     /// Streams the input through `pass` into `target`, committed only if everything succeeded.
     pub fn transform<P: Pass + ?Sized>(self, pass: &mut P, target: &Target) -> Result<State> {
         let input = self.input.to_path_buf();
         let mut out = Output::create(target, Some(&input))?;
-        let state = self.drive(pass, &mut out)?;
+        // Write errors name the file being written (not its temporary file, nor the input).
+        let out_name = out.dest().map_or_else(|| PathBuf::from("<stdout>"), Path::to_path_buf);
+        let state = self.drive(pass, &mut out, out_name)?;
         out.commit()?;
         Ok(state)
     }
 
     /// Streams the file, with the options its flavour implies (read from its ends first: the
     /// PrusaSlicer family names it only in the settings block after the last move).
-    fn drive<P: Pass + ?Sized>(self, pass: &mut P, out: &mut dyn Write) -> Result<State> {
+    fn drive<P: Pass + ?Sized>(self, pass: &mut P, out: &mut dyn Write, out_name: PathBuf) -> Result<State> {
         let path = self.input.to_path_buf();
         let flavour = match self.flavour {
             Some(known) => known,
@@ -150,7 +153,14 @@ impl<'a> Run<'a> {
             self.progress.set_len(meta.len());
         }
         let options = self.options.for_flavour(flavour.as_deref());
-        drive_reader(file, &path, options, self.strictness, self.progress, pass, out)
+        let lines = Lines {
+            reader: LineReader::new(file),
+            path: &path,
+            out_name,
+            strictness: self.strictness,
+            progress: self.progress,
+        };
+        lines.run(options, pass, out)
     }
 }
 
@@ -166,24 +176,35 @@ pub fn drive_reader<P: Pass + ?Sized>(
     pass: &mut P,
     out: &mut dyn Write,
 ) -> Result<State> {
-    let lines = Lines { reader: LineReader::new(input), path, strictness, progress };
-    let state = State::new(options);
-    if pass.reads_words() || state.reads_words() {
-        lines.drive::<true, P>(state, pass, out)
-    } else {
-        lines.drive::<false, P>(state, pass, out)
-    }
+    let out_name = output_name(path);
+    Lines { reader: LineReader::new(input), path, out_name, strictness, progress }.run(options, pass, out)
 }
 
 /// What the loop reads from, and how.
 struct Lines<'a, R> {
     reader: LineReader<R>,
     path: &'a Path,
+    /// The name write errors show.
+    out_name: PathBuf,
     strictness: Strictness,
     progress: &'a mut dyn Progress,
 }
 
 impl<R: Read> Lines<'_, R> {
+    fn run<P: Pass + ?Sized>(
+        self,
+        options: StateOptions,
+        pass: &mut P,
+        out: &mut dyn Write,
+    ) -> Result<State> {
+        let state = State::new(options);
+        if pass.reads_words() || state.reads_words() {
+            self.drive::<true, P>(state, pass, out)
+        } else {
+            self.drive::<false, P>(state, pass, out)
+        }
+    }
+
     /// Every line through the state and the pass; `LIST_WORDS`: plain moves with their words
     /// listed ([`Pass::reads_words`]).
     fn drive<const LIST_WORDS: bool, P: Pass + ?Sized>(
@@ -194,7 +215,8 @@ impl<R: Read> Lines<'_, R> {
     ) -> Result<State> {
         let path = self.path;
         let mut block = Block::default();
-        let write_err = |e: io::Error| Error::io(output_name(path), e);
+        let out_name = std::mem::take(&mut self.out_name);
+        let write_err = |e: io::Error| Error::io(&out_name, e);
         let mut next_report = 0u64;
         while let Some(line) = self.reader.next_line().map_err(|e| Error::io(path, e))? {
             if line.part != Part::Whole {

@@ -1,6 +1,7 @@
 //! `gweave cat`: parse and write back, unchanged. The identity every transform builds on, and a
 //! quick proof that gweave reads a file: the output is byte-identical to the input.
 
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -9,7 +10,8 @@ use clap::Args;
 use gweave::gcode::writer::Target;
 use gweave::pass::{CopyReport, Identity, Run, Strictness};
 
-use crate::common::{OutputArgs, ReportArgs};
+use crate::common::{print_summary, OutputArgs, ReportArgs};
+use crate::files::Files;
 use crate::progress::Bar;
 
 /// Parse a file and write it back byte for byte (checks that it parses).
@@ -34,6 +36,11 @@ pub struct CatArgs {
 
 pub fn run(args: CatArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
+    Files::new()
+        .read("INPUT", Some(&args.input))
+        .target(&target, &args.input)
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let mut bar = Bar::new(args.quiet);
     let mut run = Run::new(&args.input, &mut bar);
     if args.lenient {
@@ -42,23 +49,28 @@ pub fn run(args: CatArgs) -> Result<ExitCode> {
     let mut copy = Identity::default();
     run.transform(&mut copy, &target)?;
     drop(bar);
-    if args.report.emit(&copy.report, &[&args.input])? && target != Target::Stdout {
-        print_human(&args.input, &target, &copy.report);
+    if args.report.emit(&copy.report)? && target != Target::Stdout {
+        print_summary(|out| print_human(out, &args.input, &target, &copy.report))?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_human(input: &Path, target: &Target, r: &CopyReport) {
+fn print_human(out: &mut dyn Write, input: &Path, target: &Target, r: &CopyReport) -> io::Result<()> {
     match target {
-        Target::File(out) => println!("{} -> {}", input.display(), out.display()),
-        Target::InPlace { keep_backup: true } => {
-            println!("{} (in place, kept {}.bak)", input.display(), input.display())
+        Target::File(dest) => writeln!(out, "{} -> {}", input.display(), dest.display())?,
+        Target::InPlace { keep_backup: true, .. } => {
+            writeln!(out, "{} (in place, kept {}.bak)", input.display(), input.display())?
         }
-        Target::InPlace { keep_backup: false } => println!("{} (in place)", input.display()),
+        Target::InPlace { keep_backup: false, .. } => writeln!(out, "{} (in place)", input.display())?,
         Target::Stdout => {}
     }
-    println!("  lines           {} ({:.1} MB), copied byte for byte", r.lines, r.bytes as f64 / 1e6);
+    writeln!(out, "  lines           {} ({:.1} MB), copied byte for byte", r.lines, r.bytes as f64 / 1e6)?;
     if let Some(first) = r.first_malformed_line {
-        println!("  malformed       {} (copied as written; the first at line {first})", r.malformed_lines);
+        writeln!(
+            out,
+            "  malformed       {} (copied as written; the first at line {first})",
+            r.malformed_lines
+        )?;
     }
+    Ok(())
 }

@@ -1,14 +1,16 @@
 //! `gweave check`: lint a file before it reaches a printer; exit code 1 when errors are found.
 
-use std::path::PathBuf;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::check::{CheckOptions, CheckPass};
+use gweave::check::{CheckOptions, CheckPass, CheckReport};
 use gweave::pass::{Run, Strictness};
 
-use crate::common::ReportArgs;
+use crate::common::{print_summary, ReportArgs};
+use crate::files::Files;
 use crate::progress::Bar;
 
 /// Lint G-code: checksums, malformed or unknown commands, cold extrusion, bed bounds, feed rates.
@@ -36,6 +38,7 @@ pub struct CheckArgs {
 }
 
 pub fn run(args: CheckArgs) -> Result<ExitCode> {
+    Files::new().read("INPUT", Some(&args.input)).write("--report", args.report.report.as_deref()).check()?;
     let options =
         CheckOptions { bed_mm: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
     let mut pass = CheckPass::new(options);
@@ -45,21 +48,26 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
     run.scan(&mut pass)?;
     drop(bar);
     let report = pass.report;
-    if args.report.emit(&report, &[&args.input])? {
-        let name = args.input.display();
-        for f in &report.findings {
-            let level = match f.severity {
-                gweave::gcode::diag::Severity::Error => "error",
-                gweave::gcode::diag::Severity::Warning => "warning",
-            };
-            println!("{name}:{}:{}: {level}: {}", f.line, f.diagnostic.column, f.diagnostic.finding);
-        }
-        let shown = report.findings.len() as u64;
-        if shown < report.errors + report.warnings {
-            println!("... {} more findings not shown", report.errors + report.warnings - shown);
-        }
-        println!("{name}: {} lines, {} errors, {} warnings", report.lines, report.errors, report.warnings);
+    if args.report.emit(&report)? {
+        print_summary(|out| print_human(out, &args.input, &report))?;
     }
     let failed = report.errors > 0 || (args.strict && report.warnings > 0);
     Ok(if failed { ExitCode::FAILURE } else { ExitCode::SUCCESS })
+}
+
+fn print_human(out: &mut dyn Write, input: &Path, report: &CheckReport) -> io::Result<()> {
+    let name = input.display();
+    for f in &report.findings {
+        let level = match f.severity {
+            gweave::gcode::diag::Severity::Error => "error",
+            gweave::gcode::diag::Severity::Warning => "warning",
+        };
+        writeln!(out, "{name}:{}:{}: {level}: {}", f.line, f.diagnostic.column, f.diagnostic.finding)?;
+    }
+    let shown = report.findings.len() as u64;
+    if shown < report.errors + report.warnings {
+        writeln!(out, "... {} more findings not shown", report.errors + report.warnings - shown)?;
+    }
+    writeln!(out, "{name}: {} lines, {} errors, {} warnings", report.lines, report.errors, report.warnings)?;
+    Ok(())
 }

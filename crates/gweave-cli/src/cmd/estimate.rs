@@ -1,7 +1,7 @@
 //! `gweave estimate`: the print time from the virtual printer's planner alone, fast.
 
 use std::fs::File;
-use std::io::Read;
+use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -12,7 +12,8 @@ use gweave_sim::estimate::{estimate_report, EstimateReport};
 use gweave_sim::profile::MachineProfile;
 
 use super::sim::{print_layers_and_features, print_malformed};
-use crate::common::{hms, load_or_default, ReportArgs};
+use crate::common::{hms, load_or_default, print_summary, ReportArgs};
+use crate::files::Files;
 use crate::progress::Bar;
 
 /// Estimate the print time with the virtual printer's lookahead planner (Klipper or Marlin
@@ -41,6 +42,11 @@ pub struct EstimateArgs {
 }
 
 pub fn run(args: EstimateArgs) -> Result<ExitCode> {
+    Files::new()
+        .read("INPUT", Some(&args.input))
+        .read("--machine", args.machine.as_deref())
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
     let file = File::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
     let mut bar = Bar::new(args.quiet);
@@ -50,8 +56,8 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         Some(line) if line > 0 => anyhow!("{}:{line}: {}", args.input.display(), e.reason()),
         _ => anyhow!("{}: {}", args.input.display(), e.reason()),
     })?;
-    if args.report.emit(&report, &[&args.input])? {
-        print_human(&args.input, &report);
+    if args.report.emit(&report)? {
+        print_summary(|out| print_human(out, &args.input, &report))?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -72,15 +78,22 @@ impl Read for Counted {
     }
 }
 
-fn print_human(input: &Path, r: &EstimateReport) {
+fn print_human(out: &mut dyn Write, input: &Path, r: &EstimateReport) -> io::Result<()> {
     let e = &r.estimate;
-    println!("{} on {} ({} planner)", input.display(), r.machine, r.planner);
-    println!("  time            {}  ({:.1} s, {} planned blocks)", hms(e.total_s), e.total_s, e.blocks);
-    println!("    motion {}  dwell {}  overhead {}", hms(e.motion_s), hms(e.dwell_s), hms(e.overhead_s));
-    print_layers_and_features(&e.layer_s, e.unlayered_s, &e.feature_s);
-    print_malformed(&e.malformed, &e.huge_arcs);
+    writeln!(out, "{} on {} ({} planner)", input.display(), r.machine, r.planner)?;
+    writeln!(out, "  time            {}  ({:.1} s, {} planned blocks)", hms(e.total_s), e.total_s, e.blocks)?;
+    writeln!(
+        out,
+        "    motion {}  dwell {}  overhead {}",
+        hms(e.motion_s),
+        hms(e.dwell_s),
+        hms(e.overhead_s)
+    )?;
+    print_layers_and_features(out, &e.layer_s, e.unlayered_s, &e.feature_s)?;
+    print_malformed(out, &e.malformed, &e.huge_arcs)?;
     if r.steps_counted {
         let s = &e.steps.axes;
-        println!("  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4]);
+        writeln!(out, "  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4])?;
     }
+    Ok(())
 }

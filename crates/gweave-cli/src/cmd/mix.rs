@@ -15,7 +15,8 @@ use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{mix_file, wizard::run_wizard};
 
-use crate::common::{load_or_default, write_bytes, OutputArgs, ReportArgs};
+use crate::common::{load_or_default, print_summary, write_bytes, OutputArgs, ReportArgs};
+use crate::files::Files;
 use crate::progress::Bar;
 
 /// Colour a print on a mixing hotend: define mixes as virtual tools, change them by layer, by
@@ -83,6 +84,18 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
     if args.wizard {
         return wizard(&args);
     }
+    let target = match &args.input {
+        Some(_) => Some(args.out.target()?),
+        None => None,
+    };
+    let mut files = Files::new().read("INPUT", args.input.as_deref()).read("-c", args.config.as_deref());
+    if let (Some(input), Some(target)) = (&args.input, &target) {
+        files = files.target(target, input);
+    }
+    files
+        .write("--palette-png", args.palette_png.as_deref())
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let profile = profile(&args)?;
     let has_job = !(profile.schedule.is_empty() && profile.gradient.is_empty() && profile.map.is_empty());
     if let Some(png) = &args.palette_png {
@@ -91,20 +104,19 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
             return Ok(ExitCode::SUCCESS);
         }
     }
-    let Some(input) = &args.input else { bail!("give the G-code file to rewrite") };
-    let target = args.out.target()?;
+    let (Some(input), Some(target)) = (&args.input, target) else { bail!("give the G-code file to rewrite") };
     let mut bar = Bar::new(args.quiet);
     let report = mix_file(profile, input, &target, &mut bar)?;
     drop(bar);
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");
     }
-    if args.report.emit(&report, &[input])? && !args.quiet {
+    if args.report.emit(&report)? && !args.quiet {
         // Keep standard output clean when the G-code goes there.
         if target == Target::Stdout {
             print_human(&mut std::io::stderr().lock(), &report)?;
         } else {
-            print_human(&mut std::io::stdout().lock(), &report)?;
+            print_summary(|out| print_human(out, &report))?;
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -169,17 +181,19 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
     let mut input = stdin.lock();
     let mut stdout = std::io::stdout();
     let text = run_wizard(&mut input, &mut stdout)?;
-    println!();
     match &args.config {
         Some(path) => {
             write_bytes(path, text.as_bytes())?;
-            println!(
-                "Wrote {}. Next: gweave mix part.gcode -c {} -o part.mix.gcode",
-                path.display(),
-                path.display()
-            );
+            print_summary(|out| {
+                writeln!(
+                    out,
+                    "\nWrote {}. Next: gweave mix part.gcode -c {} -o part.mix.gcode",
+                    path.display(),
+                    path.display()
+                )
+            })?;
         }
-        None => print!("{text}"),
+        None => print_summary(|out| write!(out, "\n{text}"))?,
     }
     if interactive && args.input.is_some() {
         eprintln!("gweave: the wizard only writes the profile; run again with -c to process the file");

@@ -48,6 +48,12 @@ pub enum Command {
     Preview(preview::PreviewArgs),
 }
 
+impl Command {
+    pub fn is_serve(&self) -> bool {
+        matches!(self, Command::Serve(_))
+    }
+}
+
 pub fn run(command: Command) -> Result<ExitCode> {
     match command {
         Command::Stats(a) => stats::run(a),

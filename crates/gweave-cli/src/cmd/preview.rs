@@ -1,5 +1,6 @@
 //! `gweave preview`: a picture (PNG, SVG) or an interactive page (HTML) of what a file prints.
 
+use std::io::{self, Write};
 use std::ops::RangeInclusive;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -14,7 +15,8 @@ use gweave::render::{
 };
 use gweave::rotary::cylinder::RotaryConfig;
 
-use crate::common::{load, write_bytes, ReportArgs};
+use crate::common::{load, print_summary, write_bytes, ReportArgs};
+use crate::files::Files;
 use crate::progress::Bar;
 
 /// Draw a file: top view of a layer, isometric view of the print, or a before/after comparison.
@@ -99,6 +101,14 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 pub fn run(args: PreviewArgs) -> Result<ExitCode> {
+    Files::new()
+        .read("INPUT", Some(&args.input))
+        .read("--compare", args.compare.as_deref())
+        .read("--mix-profile", args.mix_profile.as_deref())
+        .read("--head", args.head.as_deref())
+        .write("-o", Some(&args.output))
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let format = Format::from_path(&args.output)?;
     if let Some(m) = args.min_len {
         if !(m.is_finite() && m >= 0.0) {
@@ -130,38 +140,37 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
     let preview = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
     drop(bar);
     write_bytes(&args.output, &preview.bytes)?;
-    let mut reads = vec![args.input.as_path()];
-    reads.extend(args.compare.as_deref());
-    if args.report.emit(&preview.report, &reads)? {
-        print_human(&args, &preview.report);
+    if args.report.emit(&preview.report)? {
+        print_summary(|out| print_human(out, &args, &preview.report))?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_human(args: &PreviewArgs, r: &PreviewReport) {
+fn print_human(out: &mut dyn Write, args: &PreviewArgs, r: &PreviewReport) -> io::Result<()> {
     let format = r.format.to_uppercase();
     match &args.compare {
-        Some(b) => println!("{} vs {} -> {}", args.input.display(), b.display(), args.output.display()),
-        None => println!("{} -> {}", args.input.display(), args.output.display()),
+        Some(b) => writeln!(out, "{} vs {} -> {}", args.input.display(), b.display(), args.output.display())?,
+        None => writeln!(out, "{} -> {}", args.input.display(), args.output.display())?,
     }
     let size = format!("{:.1} KB", r.bytes as f64 / 1e3);
-    println!(
+    writeln!(
+        out,
         "  {:<15} {format} {}x{} px, {size}, {} view, colour by {}",
         "picture", r.width_px, r.height_px, r.view, r.colour_by
-    );
+    )?;
     match &r.layers_drawn {
-        Some([a, b]) if a == b => println!("  layer           {a}"),
-        Some([a, b]) => println!("  layers          {a}-{b}"),
-        None => println!("  layers          none in range: the picture is empty"),
+        Some([a, b]) if a == b => writeln!(out, "  layer           {a}")?,
+        Some([a, b]) => writeln!(out, "  layers          {a}-{b}")?,
+        None => writeln!(out, "  layers          none in range: the picture is empty")?,
     }
     if let Some(n) = r.strokes {
-        println!("  drawn           {n} lines");
+        writeln!(out, "  drawn           {n} lines")?;
     }
     if let Some(n) = r.moves {
-        println!("  moves           {n} (a slider steps through the layers)");
+        writeln!(out, "  moves           {n} (a slider steps through the layers)")?;
     }
     if let Some([before, after]) = r.changed_moves {
-        println!("  changed         {before} moves of the first file, {after} of the second");
+        writeln!(out, "  changed         {before} moves of the first file, {after} of the second")?;
     }
     const SHOWN: usize = 8;
     if !r.legend.is_empty() {
@@ -170,6 +179,7 @@ fn print_human(args: &PreviewArgs, r: &PreviewReport) {
         if r.legend.len() > SHOWN {
             entries.push(format!("... {} more", r.legend.len() - SHOWN));
         }
-        println!("  legend          {}", entries.join(", "));
+        writeln!(out, "  legend          {}", entries.join(", "))?;
     }
+    Ok(())
 }

@@ -1,7 +1,6 @@
 //! `gweave purge-shift`: move every colour change earlier by the purge amount, splitting the
 //! move, so the purge prints inside the part instead of a wipe tower (docs/purge-shift.md).
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -10,7 +9,8 @@ use clap::Args;
 use gweave::gcode::writer::Target;
 use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
 
-use crate::common::{load_or_default, OutputArgs, ReportArgs};
+use crate::common::{load_or_default, print_summary, OutputArgs, ReportArgs};
+use crate::files::Files;
 use crate::progress::Bar;
 
 /// Move each tool/mix change earlier by the purge, so the old colour is purged inside the part.
@@ -93,8 +93,14 @@ fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
 }
 
 pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
-    let rules = config(&args)?.validate()?;
     let target = args.out.target()?;
+    Files::new()
+        .read("INPUT", Some(&args.input))
+        .read("-c", args.config.as_deref())
+        .target(&target, &args.input)
+        .write("--report", args.report.report.as_deref())
+        .check()?;
+    let rules = config(&args)?.validate()?;
     let mut bar = Bar::new(args.quiet);
     let report = purge_shift_file(rules, &args.input, &target, &mut bar)?;
     drop(bar);
@@ -104,13 +110,12 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     if report.warnings_total > 20 {
         eprintln!("gweave: ... {} more warnings (see --json)", report.warnings_total - 20);
     }
-    if args.report.emit(&report, &[&args.input])? {
+    if args.report.emit(&report)? {
         // Keep standard output clean when the G-code goes there.
         if target == Target::Stdout {
             eprint!("{}", report.summary());
         } else {
-            let mut stdout = std::io::stdout().lock();
-            write!(stdout, "{}", report.summary())?;
+            print_summary(|out| write!(out, "{}", report.summary()))?;
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -1,5 +1,6 @@
 //! `gweave raster`: layer images (or a PrusaSlicer `.sl1`) to binder-jet inkjet G-code.
 
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -8,7 +9,8 @@ use clap::{Args, ValueEnum};
 use gweave::gcode::writer::Target;
 use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
 
-use crate::common::{hms, ReportArgs};
+use crate::common::{hms, print_summary, ReportArgs};
+use crate::files::Files;
 use crate::raster_job::{JobOptions, JobReport};
 
 /// Layer images to inkjet G-code for binder jetting: bands as tall as the nozzle row, per
@@ -150,70 +152,87 @@ fn target(output: &Path) -> Target {
 pub fn run(args: RasterArgs) -> Result<ExitCode> {
     let options = args.options()?;
     let to_stdout = args.output == Path::new("-");
-    if args.test_pattern {
+    let source = if args.test_pattern { None } else { Some(options.source()?) };
+    let images = source.as_ref().map(|(s, _)| s.paths()).unwrap_or_default();
+    Files::new()
+        .read_all("INPUTS", images)
+        .read("--head", args.head.as_deref())
+        .read("--recoat", args.recoat.as_deref())
+        .read("--start", args.start.as_deref())
+        .read("--end", args.end.as_deref())
+        .write("-o", Some(&args.output))
+        .write("--report", args.report.report.as_deref())
+        .check()?;
+    let Some((source, heads)) = source else {
         let (rep, profile) = options.test_pattern(&target(&args.output), args.pattern_columns)?;
-        if args.report.emit(&rep, &[])? && !to_stdout {
-            println!("{}: nozzle test pattern", args.output.display());
-            println!(
-                "  {} head(s) x {} nozzles, {} columns per address, {} fire commands",
-                profile.heads.len(),
-                profile.nozzle_count,
-                args.pattern_columns.max(1),
-                rep.fire_commands
-            );
-            println!("  column group a fires address a alone: the row it prints is nozzle_rows[a]");
+        if args.report.emit(&rep)? && !to_stdout {
+            print_summary(|out| {
+                writeln!(out, "{}: nozzle test pattern", args.output.display())?;
+                writeln!(
+                    out,
+                    "  {} head(s) x {} nozzles, {} columns per address, {} fire commands",
+                    profile.heads.len(),
+                    profile.nozzle_count,
+                    args.pattern_columns.max(1),
+                    rep.fire_commands
+                )?;
+                writeln!(out, "  column group a fires address a alone: the row it prints is nozzle_rows[a]")
+            })?;
         }
         return Ok(ExitCode::SUCCESS);
-    }
-    let job = options.job()?;
+    };
+    let job = options.job_from(source, heads)?;
     let mut bar = LayerBar::new(args.quiet);
     let report = job.run(&target(&args.output), &mut bar)?;
     drop(bar);
-    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
-    if args.report.emit(&report, &inputs)? && !to_stdout {
-        print_human(&report, &job.profile);
+    if args.report.emit(&report)? && !to_stdout {
+        print_summary(|out| print_human(out, &report, &job.profile))?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_human(r: &JobReport, profile: &PrintheadProfile) {
+fn print_human(out: &mut dyn Write, r: &JobReport, profile: &PrintheadProfile) -> io::Result<()> {
     let rr = &r.raster;
-    println!("{}", r.output);
-    println!(
+    writeln!(out, "{}", r.output)?;
+    writeln!(
+        out,
         "  head            {} nozzles at {} dpi ({:.6} mm), {} head(s), M{}",
         profile.nozzle_count,
         profile.dpi,
         profile.pitch_mm(),
         r.heads,
         profile.dialect.fire_code()
-    );
-    println!("  layers          {} ({} images read)", rr.layers, r.images_read);
-    println!("  bands           {} printed, {} empty skipped", rr.bands_printed, rr.bands_skipped);
-    println!("  columns         {} fired, {} empty skipped", rr.columns_fired, rr.columns_skipped);
-    println!("  fire commands   {}", rr.fire_commands);
+    )?;
+    writeln!(out, "  layers          {} ({} images read)", rr.layers, r.images_read)?;
+    writeln!(out, "  bands           {} printed, {} empty skipped", rr.bands_printed, rr.bands_skipped)?;
+    writeln!(out, "  columns         {} fired, {} empty skipped", rr.columns_fired, rr.columns_skipped)?;
+    writeln!(out, "  fire commands   {}", rr.fire_commands)?;
     for (h, d) in rr.drops_per_head.iter().enumerate() {
-        println!("    P{h} drops      {d}");
+        writeln!(out, "    P{h} drops      {d}")?;
     }
     match rr.binder_volume_ul {
-        Some(v) => println!("  binder          {v:.3} uL ({:.4} mL)", v / 1000.0),
-        None => println!("  binder          (set drop_volume_pl in the profile)"),
+        Some(v) => writeln!(out, "  binder          {v:.3} uL ({:.4} mL)", v / 1000.0)?,
+        None => writeln!(out, "  binder          (set drop_volume_pl in the profile)")?,
     }
-    println!(
+    writeln!(
+        out,
         "  path            {:.1} m, {} XY moves, {} Z moves",
         rr.xy_path_mm / 1000.0,
         rr.xy_moves,
         rr.z_moves
-    );
+    )?;
     let method = match r.time.method {
         "planner" => "planner, Marlin defaults",
         _ => "path at feed rate, no acceleration",
     };
-    println!(
+    writeln!(
+        out,
         "  time            {} ({method}: motion {}, firing {})",
         hms(r.time.total_s),
         hms(r.time.motion_s),
         hms(r.time.fire_s)
-    );
+    )?;
+    Ok(())
 }
 
 /// A layer-count progress bar on stderr, only when stderr is a terminal and the job has enough

@@ -4,6 +4,7 @@
 //! continuous helical layers. Both print a summary (or JSON) read back from the written file,
 //! as the machine will execute it, and can draw that path in 3D (`--preview out.png`).
 
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -17,7 +18,8 @@ use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
 
 use crate::common::hms;
-use crate::common::{load, OutputArgs, ReportArgs};
+use crate::common::{load, print_summary, OutputArgs, ReportArgs};
+use crate::files::Files;
 use crate::progress::Bar;
 
 /// Rotary (lathe-type) printing: wrap flat G-code onto a mandrel, or generate helical tubes.
@@ -145,8 +147,9 @@ impl MachineArgs {
     }
 }
 
-fn print_machine(m: &MachineReport) {
-    println!(
+fn print_machine(out: &mut dyn Write, m: &MachineReport) -> io::Result<()> {
+    writeln!(
+        out,
         "  mandrel         {:.3} mm (circumference {:.3} mm), axes {} (rotary in {}), feed {}",
         m.mandrel_diameter_mm,
         m.circumference_mm,
@@ -160,7 +163,7 @@ fn print_machine(m: &MachineReport) {
             FeedConvention::Combined => "combined",
             FeedConvention::InverseTime => "inverse-time (G93)",
         }
-    );
+    )
 }
 
 /// Wrap a part sliced flat onto the mandrel of a lathe-type printer.
@@ -199,6 +202,13 @@ pub struct WrapArgs {
 
 fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
+    Files::new()
+        .read("INPUT", Some(&args.input))
+        .read("-c", args.machine.config.as_deref())
+        .target(&target, &args.input)
+        .write("--preview", args.machine.preview.as_deref())
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let mut config = match args.machine.config(WrapConfig::from_toml_str)? {
         Some(config) => config,
         None => WrapConfig::new(args.machine.machine()?),
@@ -216,22 +226,23 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     let mut bar = Bar::new(args.quiet);
     let report = report::wrap_file(&config, &args.input, &target, args.machine.preview.as_deref(), &mut bar)?;
     drop(bar);
-    if args.report.emit(&report, &[&args.input])? && !matches!(target, Target::Stdout) {
-        print_wrap(&report);
+    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
+        print_summary(|out| print_wrap(out, &report))?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_wrap(r: &WrapReport) {
-    if let Some(out) = &r.output {
-        println!("{} -> {}", r.input.display(), out.display());
+fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {
+    if let Some(dest) = &r.output {
+        writeln!(out, "{} -> {}", r.input.display(), dest.display())?;
     }
-    print_machine(&r.machine);
+    print_machine(out, &r.machine)?;
     let mapping = if r.keep_arc_length { "arc length kept (Diabase)" } else { "theta = 360*y/C, E scaled" };
-    println!("  mapping         {mapping}");
-    println!("  layers          {}", r.layers.len());
+    writeln!(out, "  mapping         {mapping}")?;
+    writeln!(out, "  layers          {}", r.layers.len())?;
     for l in &r.layers {
-        println!(
+        writeln!(
+            out,
             "    layer {:<4} r {:>8.3} mm  theta {:>9.3} .. {:>9.3} deg (span {:>7.3})  seam {:>7.3} deg  {:>9.2} mm",
             l.layer.index,
             l.layer.radius_mm,
@@ -240,14 +251,15 @@ fn print_wrap(r: &WrapReport) {
             l.span_deg,
             l.seam_deg,
             l.layer.filament_mm
-        );
+        )?;
     }
-    println!(
+    writeln!(
+        out,
         "  seam            at flat y = 0: {:.3} deg, turning {:.3} deg per layer",
         r.seam_offset_deg, r.seam_rotation_per_layer_deg
-    );
-    println!("  filament        {:.2} mm", r.filament_mm);
-    println!("  time (F only)   {}", hms(r.time_s));
+    )?;
+    writeln!(out, "  filament        {:.2} mm", r.filament_mm)?;
+    writeln!(out, "  time (F only)   {}", hms(r.time_s))
 }
 
 /// Generate a seam-free tube of continuous helical layers on the mandrel.
@@ -341,32 +353,40 @@ fn tube_params(args: &TubeArgs) -> Result<TubeParams> {
 }
 
 fn run_tube(args: TubeArgs) -> Result<ExitCode> {
+    Files::new()
+        .read("-c", args.machine.config.as_deref())
+        .write("-o", Some(&args.output))
+        .write("--preview", args.machine.preview.as_deref())
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let params = tube_params(&args)?;
     let target =
         if args.output == Path::new("-") { Target::Stdout } else { Target::File(args.output.clone()) };
     let report = report::tube_file(&params, &target, args.machine.preview.as_deref())?;
-    if args.report.emit(&report, &[])? && !matches!(target, Target::Stdout) {
-        print_tube(&report);
+    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
+        print_summary(|out| print_tube(out, &report))?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_tube(r: &TubeReport) {
-    if let Some(out) = &r.output {
-        println!("{}", out.display());
+fn print_tube(out: &mut dyn Write, r: &TubeReport) -> io::Result<()> {
+    if let Some(dest) = &r.output {
+        writeln!(out, "{}", dest.display())?;
     }
-    print_machine(&r.machine);
-    println!(
+    print_machine(out, &r.machine)?;
+    writeln!(
+        out,
         "  tube            length {:.3} mm, bead {:.3} x {:.3} mm, pitch {:.3} mm, {}",
         r.length_mm,
         r.bead_width_mm,
         r.layer_height_mm,
         r.pitch_mm,
         if r.interweave { "interwoven" } else { "one handedness" }
-    );
-    println!("  layers          {}", r.layers.len());
+    )?;
+    writeln!(out, "  layers          {}", r.layers.len())?;
     for l in &r.layers {
-        println!(
+        writeln!(
+            out,
             "    layer {:<3} r {:>8.3} mm  {:<5} {:>8.2} turns  {:>8.3} deg/s  X {:.3} -> {:.3}  A {:.1} -> {:.1}",
             l.index,
             l.radius_mm,
@@ -377,18 +397,19 @@ fn print_tube(r: &TubeReport) {
             l.axial_mm[1],
             l.theta_deg[0],
             l.theta_deg[1]
-        );
+        )?;
     }
-    println!("  seam            none: each layer starts where the one below ended, no travel");
+    writeln!(out, "  seam            none: each layer starts where the one below ended, no travel")?;
     let share = 100.0 * r.extruded_mm3 / r.wall_volume_mm3;
     let versus = if r.pitch_mm == r.bead_width_mm {
         format!("tube wall {:.1} mm3, {:+.2} %", r.wall_volume_mm3, share - 100.0)
     } else {
         format!("lattice: {share:.1} % of the closed wall's {:.1} mm3", r.wall_volume_mm3)
     };
-    println!("  filament        {:.2} mm = {:.1} mm3 ({versus})", r.filament_mm, r.extruded_mm3);
-    println!("  time (F only)   {}", hms(r.print_time_s));
+    writeln!(out, "  filament        {:.2} mm = {:.1} mm3 ({versus})", r.filament_mm, r.extruded_mm3)?;
+    writeln!(out, "  time (F only)   {}", hms(r.print_time_s))?;
     if let Some(n) = r.executed_beads {
-        println!("  read back       {n} extruding moves");
+        writeln!(out, "  read back       {n} extruding moves")?;
     }
+    Ok(())
 }

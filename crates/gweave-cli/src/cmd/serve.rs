@@ -58,6 +58,12 @@ pub struct ServeArgs {
 }
 
 pub fn run(args: ServeArgs) -> Result<ExitCode> {
+    crate::files::Files::new()
+        .read("--machine", args.machine.as_deref())
+        .write("--pty", args.pty.as_deref())
+        .write("--log", args.log.as_deref())
+        .write("--report", args.report.as_deref())
+        .check()?;
     let profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
     // Build one machine now so that a bad profile fails before any host connects.
     Machine::new(profile.clone()).context("building the virtual printer")?;

@@ -2,6 +2,7 @@
 
 use std::collections::BTreeMap;
 use std::fs::File;
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -16,7 +17,8 @@ use gweave_sim::interp::{Machine, Outcome, SimReport};
 use gweave_sim::plot::{save_speed_png, save_temperature_png};
 use gweave_sim::profile::{FaultSpec, MachineProfile};
 
-use crate::common::{hms, load_or_default, ReportArgs};
+use crate::common::{hms, load_or_default, print_summary, ReportArgs};
+use crate::files::{layer_png, Files};
 use crate::progress::Bar;
 
 /// Simulate a print on a virtual Marlin-like printer: time per layer and feature (planner),
@@ -55,6 +57,14 @@ pub struct SimArgs {
 }
 
 pub fn run(args: SimArgs) -> Result<ExitCode> {
+    Files::new()
+        .read("INPUT", Some(&args.input))
+        .read("--machine", args.machine.as_deref())
+        .write("--plot", args.plot.as_deref())
+        .write("--plot-speed", args.plot_speed.as_deref())
+        .write_dir("--raster-out", args.raster_out.as_deref(), layer_png)
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let mut profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
     for spec in &args.faults {
         profile.faults.push(spec.parse::<FaultSpec>()?);
@@ -74,8 +84,8 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
         canvas.write_layer_pngs(dir)?;
     }
-    if args.report.emit(&report, &[&args.input])? {
-        print_human(&args.input, &report, &errors);
+    if args.report.emit(&report)? {
+        print_summary(|out| print_human(out, &args.input, &report, &errors))?;
     }
     Ok(if report.halted { ExitCode::from(1) } else { ExitCode::SUCCESS })
 }
@@ -113,37 +123,40 @@ fn run_file(machine: &mut Machine, input: &Path, quiet: bool) -> Result<Vec<Stri
     Ok(errors)
 }
 
-fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
+fn print_human(out: &mut dyn Write, input: &Path, r: &SimReport, errors: &[String]) -> io::Result<()> {
     let t = &r.time;
-    println!("{} on {}", input.display(), r.machine);
-    println!("  lines           {}  ({} planned blocks)", r.lines, r.blocks);
-    println!("  time            {}", hms(t.total_s));
-    println!(
+    writeln!(out, "{} on {}", input.display(), r.machine)?;
+    writeln!(out, "  lines           {}  ({} planned blocks)", r.lines, r.blocks)?;
+    writeln!(out, "  time            {}", hms(t.total_s))?;
+    writeln!(
+        out,
         "    motion {}  dwell {}  heating {}  homing {}  overhead {}",
         hms(t.motion_s),
         hms(t.dwell_s),
         hms(t.heating_s),
         hms(t.homing_s),
         hms(t.overhead_s)
-    );
-    print_layers_and_features(&r.layer_s, r.unlayered_s, &r.feature_s);
+    )?;
+    print_layers_and_features(out, &r.layer_s, r.unlayered_s, &r.feature_s)?;
     for (tool, mm) in r.filament_mm.iter().enumerate() {
         let steps = r.steps.tools.get(tool).copied().unwrap_or(0);
-        println!("  filament T{tool:<3}  {mm:.2} mm  ({steps} E steps)");
+        writeln!(out, "  filament T{tool:<3}  {mm:.2} mm  ({steps} E steps)")?;
     }
     for (input, mm) in r.mixing_input_mm.iter().enumerate() {
         let steps = r.steps.mixing.get(input).copied().unwrap_or(0);
-        println!("  mixing input {input}  {mm:.2} mm  ({steps} steps)");
+        writeln!(out, "  mixing input {input}  {mm:.2} mm  ({steps} steps)")?;
     }
     let s = &r.steps.axes;
-    println!("  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4]);
+    writeln!(out, "  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4])?;
     let [x, y, z, e, _] = r.position;
-    println!(
+    writeln!(
+        out,
         "  end position    X {x:.2} Y {y:.2} Z {z:.2} E {e:.2}  (Count X {} Y {} Z {})",
         r.count[0], r.count[1], r.count[2]
-    );
+    )?;
     for h in &r.heaters {
-        println!(
+        writeln!(
+            out,
             "  heater {:<8} max {:.1} C, end {:.1} / {:.1} C, duty {:.0} %, {:.1} Wh",
             match h.heater {
                 HeaterId::Hotend(n) => format!("T{n}"),
@@ -154,10 +167,10 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
             h.target_c,
             h.mean_duty * 100.0,
             h.energy_wh
-        );
+        )?;
     }
     if let Some(ink) = &r.inkjet {
-        println!("  inkjet          {} layers, drops per head {:?}", ink.layers, ink.drops_per_head);
+        writeln!(out, "  inkjet          {} layers, drops per head {:?}", ink.layers, ink.drops_per_head)?;
     }
     if !r.unknown_commands.is_empty() {
         // The most frequent first; names escaped, since they come from whatever the file holds.
@@ -169,57 +182,64 @@ fn print_human(input: &Path, r: &SimReport, errors: &[String]) {
         if by_count.len() > SHOWN {
             list.push(format!("... {} more (see --json)", by_count.len() - SHOWN));
         }
-        println!("  unknown         {}", list.join(", "));
+        writeln!(out, "  unknown         {}", list.join(", "))?;
     }
-    print_malformed(&r.malformed, &r.huge_arcs);
+    print_malformed(out, &r.malformed, &r.huge_arcs)?;
     for e in errors {
-        println!("  {e}");
+        writeln!(out, "  {e}")?;
     }
     if r.halted {
-        println!("  HALTED");
+        writeln!(out, "  HALTED")?;
     }
     let total: u64 = r.warning_counts.values().sum();
     if total > 0 {
         let kinds: Vec<String> = r.warning_counts.iter().map(|(k, n)| format!("{k} {n}")).collect();
-        println!("  warnings        {total} ({})", kinds.join(", "));
+        writeln!(out, "  warnings        {total} ({})", kinds.join(", "))?;
         for w in r.warnings.iter().filter(|w| w.kind.name() != "unknown_command").take(10) {
-            println!("    line {}: {}", w.line, serde_json::to_string(&w.kind).unwrap_or_default());
+            writeln!(out, "    line {}: {}", w.line, serde_json::to_string(&w.kind).unwrap_or_default())?;
         }
     }
+    Ok(())
 }
 
 /// Lines that could not be read, as `check` reports them, and arcs too long to plan finely:
 /// handled, but never silently.
-pub(super) fn print_malformed(m: &Malformed, arcs: &HugeArcs) {
+pub(super) fn print_malformed(out: &mut dyn Write, m: &Malformed, arcs: &HugeArcs) -> io::Result<()> {
     if let Some(first) = m.first_malformed_line {
-        println!(
+        writeln!(
+            out,
             "  malformed       {} lines skipped (first: line {first}; see gweave check)",
             m.malformed_lines
-        );
+        )?;
     }
     if let Some(first) = arcs.first_huge_arc_line {
-        println!(
+        writeln!(
+            out,
             "  huge arcs       {} of more than {MAX_ARC_CHORDS} chords, planned with longer ones (first: line {first})",
             arcs.huge_arcs
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// The planner's time per layer (shortest, mean, longest) and per feature.
 pub(super) fn print_layers_and_features(
+    out: &mut dyn Write,
     layer_s: &[f64],
     unlayered_s: f64,
     feature_s: &BTreeMap<Feature, f64>,
-) {
+) -> io::Result<()> {
     if let Some((slowest, max)) = layer_s.iter().copied().enumerate().max_by(|a, b| a.1.total_cmp(&b.1)) {
         let min = layer_s.iter().copied().fold(f64::INFINITY, f64::min);
         let mean = layer_s.iter().sum::<f64>() / layer_s.len() as f64;
-        println!(
+        writeln!(
+            out,
             "  layers          {}: min {min:.1} s, mean {mean:.1} s, max {max:.1} s (layer {slowest}); before the first {unlayered_s:.1} s",
             layer_s.len(),
-        );
+        )?;
     }
     for (feature, t) in feature_s {
-        println!("    {:<18} {}", feature.name(), hms(*t));
+        writeln!(out, "    {:<18} {}", feature.name(), hms(*t))?;
     }
+    Ok(())
 }

@@ -1,5 +1,6 @@
 //! `gweave slice-raster`: a mesh to 1-bit layer images for `gweave raster`.
 
+use std::io::{self, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -8,7 +9,8 @@ use clap::Args;
 use gweave::gen::slice_raster::{slice_to_dir, SliceConfig, SliceReport};
 use gweave::gen::stl::read_stl;
 
-use crate::common::ReportArgs;
+use crate::common::{print_summary, ReportArgs};
+use crate::files::{layer_png, Files};
 
 /// Slice an STL mesh into layer images (PNG, 1-bit): each pixel is binder when its centre lies
 /// inside the section at mid-layer height (even-odd rule). Image row 0 is the lowest Y, as
@@ -38,6 +40,11 @@ pub struct SliceRasterArgs {
 }
 
 pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
+    Files::new()
+        .read("MODEL", Some(&args.model))
+        .write_dir("-o", Some(&args.output), layer_png)
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let mesh = read_stl(&args.model).with_context(|| format!("reading {}", args.model.display()))?;
     let cfg = SliceConfig {
         layer_height_mm: args.layer_height,
@@ -45,27 +52,35 @@ pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
         margin_px: args.margin,
     };
     let rep = slice_to_dir(&mesh, &cfg, &args.output)?;
-    if args.report.emit(&rep, &[&args.model])? {
-        print_human(&args, &rep, mesh.triangles.len());
+    if args.report.emit(&rep)? {
+        print_summary(|out| print_human(out, &args, &rep, mesh.triangles.len()))?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_human(args: &SliceRasterArgs, r: &SliceReport, triangles: usize) {
+fn print_human(
+    out: &mut dyn Write,
+    args: &SliceRasterArgs,
+    r: &SliceReport,
+    triangles: usize,
+) -> io::Result<()> {
     let g = &r.grid;
-    println!("{} -> {}", args.model.display(), args.output.display());
-    println!("  triangles       {triangles}");
-    println!("  layers          {} x {} mm from Z {:.3}", g.layers, g.layer_height_mm, g.z_min_mm);
-    println!(
+    writeln!(out, "{} -> {}", args.model.display(), args.output.display())?;
+    writeln!(out, "  triangles       {triangles}")?;
+    writeln!(out, "  layers          {} x {} mm from Z {:.3}", g.layers, g.layer_height_mm, g.z_min_mm)?;
+    writeln!(
+        out,
         "  images          {} x {} px of {:.6} mm, corner at ({:.3}, {:.3}) mm",
         g.width_px, g.height_px, g.pixel_mm, g.origin_x_mm, g.origin_y_mm
-    );
+    )?;
     let total: u64 = r.pixels_per_layer.iter().sum();
     let max = r.pixels_per_layer.iter().max().copied().unwrap_or(0);
-    println!("  binder pixels   {total} (largest layer {max})");
-    println!(
+    writeln!(out, "  binder pixels   {total} (largest layer {max})")?;
+    writeln!(
+        out,
         "  next            gweave raster {} --pixel-mm {} -o part.gcode",
         args.output.display(),
         g.pixel_mm
-    );
+    )?;
+    Ok(())
 }

@@ -12,4 +12,5 @@ pub mod line;
 pub mod number;
 pub mod reader;
 pub mod state;
+pub mod temp;
 pub mod writer;

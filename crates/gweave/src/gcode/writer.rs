@@ -1,11 +1,18 @@
 //! Safe output: every command writes to a temporary file beside the target and renames it into
 //! place only when all went well, so a failure never leaves partial output and the input is only
 //! replaced when the user asks (`--in-place`, keeping a `.bak` unless told not to).
+//!
+//! Replacing a file keeps what the user had: its mode, its owner (when running as root, the
+//! only user who can give a file away), and the previous backup. `--in-place` refuses a
+//! read-only file unless forced. The backup is itself written to a temporary file, synced and
+//! renamed, so `<input>.bak` is either absent or whole; an existing `.bak` that is not a byte
+//! copy of the input is renamed to the first free `.bak.1` .. `.bak.9`, never replaced.
 
 use std::fs;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
+use super::temp::TempFile;
 use crate::error::{Error, Result};
 
 /// Where a command's output goes.
@@ -13,11 +20,15 @@ use crate::error::{Error, Result};
 pub enum Target {
     /// A new file (replaced atomically if it exists). Refuses to be the input itself.
     File(PathBuf),
-    /// Replace the input, optionally keeping `<input>.bak`.
-    InPlace { keep_backup: bool },
+    /// Replace the input, optionally keeping `<input>.bak`. A read-only input is refused unless
+    /// `force`.
+    InPlace { keep_backup: bool, force: bool },
     /// Standard output (`-o -`).
     Stdout,
 }
+
+/// Older backups kept beside `<input>.bak`: `.bak.1` .. `.bak.9`.
+pub const BACKUP_SLOTS: u32 = 9;
 
 /// An output being written. Call [`Output::commit`] at the end; dropping it without committing
 /// deletes the temporary file.
@@ -27,7 +38,7 @@ pub struct Output {
 
 enum Sink {
     File {
-        file: BufWriter<tempfile::NamedTempFile>,
+        file: BufWriter<TempFile>,
         dest: PathBuf,
         backup: Option<PathBuf>,
     },
@@ -64,22 +75,32 @@ impl Output {
                 }
                 (path.clone(), None)
             }
-            Target::InPlace { keep_backup } => {
+            Target::InPlace { keep_backup, force } => {
                 let input = input.ok_or(Error::InPlaceWithoutInput)?;
+                let meta = fs::metadata(input).map_err(|e| Error::io(input, e))?;
+                if !force && is_read_only(input, &meta) {
+                    return Err(Error::ReadOnly { path: input.to_path_buf() });
+                }
                 let backup = keep_backup.then(|| backup_path(input));
+                if let Some(backup) = &backup {
+                    // Fail before the work, not after it, when no slot is free for the old one.
+                    if backup.symlink_metadata().is_ok() && free_slot(backup).is_none() {
+                        return Err(Error::BackupSlotsFull { path: backup.clone() });
+                    }
+                }
                 (input.to_path_buf(), backup)
             }
         };
-        let dir = match dest.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let tmp = tempfile::Builder::new()
-            .prefix(".gweave-")
-            .suffix(".tmp")
-            .tempfile_in(&dir)
-            .map_err(|e| Error::io(&dir, e))?;
+        let tmp = TempFile::new_in(&parent_dir(&dest)).map_err(|e| Error::io(&dest, e))?;
         Ok(Output { sink: Sink::File { file: BufWriter::with_capacity(BUFFER, tmp), dest, backup } })
+    }
+
+    /// The file being written (`None` for standard output): the name write errors should show.
+    pub fn dest(&self) -> Option<&Path> {
+        match &self.sink {
+            Sink::File { dest, .. } | Sink::Special { dest, .. } => Some(dest),
+            Sink::Stdout(_) => None,
+        }
     }
 
     /// Flushes, keeps the backup if asked, and renames the temporary file into place.
@@ -93,18 +114,12 @@ impl Output {
             Sink::File { file, dest, backup } => {
                 let tmp = file.into_inner().map_err(|e| Error::io(&dest, e.into_error()))?;
                 tmp.as_file().sync_all().map_err(|e| Error::io(&dest, e))?;
-                // Keep the permissions of the file being replaced (an executable script stays
-                // one); a new file gets the usual rw-r--r-- instead of the temporary file's 0600.
-                match fs::metadata(&dest) {
-                    Ok(meta) => fs::set_permissions(tmp.path(), meta.permissions()),
-                    Err(_) => set_new_file_mode(tmp.path()),
-                }
-                .map_err(|e| Error::io(&dest, e))?;
+                let replaced = fs::metadata(&dest).ok();
+                keep_metadata(&tmp, replaced.as_ref()).map_err(|e| Error::io(&dest, e))?;
                 if let Some(backup) = backup {
-                    fs::copy(&dest, &backup).map_err(|e| Error::io(&backup, e))?;
+                    write_backup(&dest, &backup, replaced.as_ref())?;
                 }
-                tmp.persist(&dest).map_err(|e| Error::io(&dest, e.error))?;
-                Ok(())
+                tmp.persist(&dest).map_err(|e| Error::io(&dest, e))
             }
         }
     }
@@ -148,15 +163,106 @@ impl Write for Output {
     }
 }
 
+/// The folder a temporary file for `dest` goes in (renames only work within one file system).
+fn parent_dir(dest: &Path) -> PathBuf {
+    match dest.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Copies `input` to `backup` through a synced temporary file, so the `.bak` is whole or
+/// absent. An existing backup with the input's bytes is kept as it is; any other is moved to
+/// the first free `.bak.N`.
+fn write_backup(input: &Path, backup: &Path, meta: Option<&fs::Metadata>) -> Result<()> {
+    if backup.symlink_metadata().is_ok() {
+        if same_bytes(input, backup).map_err(|e| Error::io(backup, e))? {
+            return Ok(());
+        }
+        let slot = free_slot(backup).ok_or_else(|| Error::BackupSlotsFull { path: backup.to_path_buf() })?;
+        fs::rename(backup, &slot).map_err(|e| Error::io(backup, e))?;
+    }
+    let mut tmp = TempFile::new_in(&parent_dir(backup)).map_err(|e| Error::io(backup, e))?;
+    let mut from = fs::File::open(input).map_err(|e| Error::io(input, e))?;
+    io::copy(&mut from, &mut tmp).map_err(|e| Error::io(backup, e))?;
+    tmp.as_file().sync_all().map_err(|e| Error::io(backup, e))?;
+    keep_metadata(&tmp, meta).map_err(|e| Error::io(backup, e))?;
+    tmp.persist(backup).map_err(|e| Error::io(backup, e))
+}
+
+/// The first of `<backup>.1` .. `<backup>.9` that does not exist.
+fn free_slot(backup: &Path) -> Option<PathBuf> {
+    (1..=BACKUP_SLOTS).map(|n| numbered(backup, n)).find(|p| p.symlink_metadata().is_err())
+}
+
+fn numbered(path: &Path, n: u32) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(format!(".{n}"));
+    PathBuf::from(name)
+}
+
+/// Whether two files hold the same bytes (read in step, stopping at the first difference).
+fn same_bytes(a: &Path, b: &Path) -> io::Result<bool> {
+    let (mut fa, mut fb) = (fs::File::open(a)?, fs::File::open(b)?);
+    if fa.metadata()?.len() != fb.metadata()?.len() {
+        return Ok(false);
+    }
+    let (mut ba, mut bb) = (vec![0u8; 1 << 16], vec![0u8; 1 << 16]);
+    loop {
+        let n = fa.read(&mut ba)?;
+        if n == 0 {
+            return Ok(true);
+        }
+        fb.read_exact(&mut bb[..n])?;
+        if ba[..n] != bb[..n] {
+            return Ok(false);
+        }
+    }
+}
+
+/// Gives the temporary file the mode (and, as root, the owner) of the file it replaces; a new
+/// file gets the usual rw-r--r-- instead of the temporary file's 0600.
 #[cfg(unix)]
-fn set_new_file_mode(path: &Path) -> io::Result<()> {
-    use std::os::unix::fs::PermissionsExt;
-    fs::set_permissions(path, fs::Permissions::from_mode(0o644))
+fn keep_metadata(tmp: &TempFile, replaced: Option<&fs::Metadata>) -> io::Result<()> {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    let Some(meta) = replaced else {
+        return fs::set_permissions(tmp.path(), fs::Permissions::from_mode(0o644));
+    };
+    // SAFETY: geteuid has no preconditions and cannot fail.
+    if unsafe { libc::geteuid() } == 0 {
+        std::os::unix::fs::fchown(tmp.as_file(), Some(meta.uid()), Some(meta.gid()))?;
+    }
+    // After the chown, which clears set-id bits.
+    fs::set_permissions(tmp.path(), meta.permissions())
 }
 
 #[cfg(not(unix))]
-fn set_new_file_mode(_path: &Path) -> io::Result<()> {
-    Ok(())
+fn keep_metadata(tmp: &TempFile, replaced: Option<&fs::Metadata>) -> io::Result<()> {
+    match replaced {
+        Some(meta) => fs::set_permissions(tmp.path(), meta.permissions()),
+        None => Ok(()),
+    }
+}
+
+/// A file the user cannot write, or whose mode has no write bit at all (root can write any
+/// file, but a file made read-only says "do not change me").
+#[cfg(unix)]
+fn is_read_only(path: &Path, meta: &fs::Metadata) -> bool {
+    use std::ffi::CString;
+    use std::os::unix::ffi::OsStrExt;
+    if meta.permissions().readonly() {
+        return true;
+    }
+    let Ok(c_path) = CString::new(path.as_os_str().as_bytes()) else {
+        return false;
+    };
+    // SAFETY: access(2) reads a valid NUL-terminated path and touches no other memory.
+    unsafe { libc::access(c_path.as_ptr(), libc::W_OK) != 0 }
+}
+
+#[cfg(not(unix))]
+fn is_read_only(_path: &Path, meta: &fs::Metadata) -> bool {
+    meta.permissions().readonly()
 }
 
 fn backup_path(input: &Path) -> PathBuf {
@@ -165,7 +271,18 @@ fn backup_path(input: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
+/// Whether two paths name the same existing file (through links, hard links included).
+#[cfg(unix)]
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (fs::metadata(a), fs::metadata(b)) {
+        (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+        _ => false,
+    }
+}
+
 /// Whether two paths name the same existing file.
+#[cfg(not(unix))]
 pub fn same_file(a: &Path, b: &Path) -> bool {
     match (fs::canonicalize(a), fs::canonicalize(b)) {
         (Ok(a), Ok(b)) => a == b,
@@ -211,7 +328,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let input = dir.path().join("in.gcode");
         fs::write(&input, b"old\n").unwrap();
-        let mut out = Output::create(&Target::InPlace { keep_backup: true }, Some(&input)).unwrap();
+        let mut out =
+            Output::create(&Target::InPlace { keep_backup: true, force: false }, Some(&input)).unwrap();
         out.write_all(b"new\n").unwrap();
         out.commit().unwrap();
         assert_eq!(fs::read(&input).unwrap(), b"new\n");
@@ -248,5 +366,82 @@ mod tests {
         fs::write(&input, b"old\n").unwrap();
         let err = Output::create(&Target::File(input.clone()), Some(&input)).err().unwrap();
         assert!(matches!(err, Error::WouldOverwriteInput { .. }));
+    }
+
+    fn in_place(input: &Path, bytes: &[u8], force: bool) -> Result<()> {
+        let mut out = Output::create(&Target::InPlace { keep_backup: true, force }, Some(input))?;
+        out.write_all(bytes).unwrap();
+        out.commit()
+    }
+
+    /// Regression: a second `--in-place` run replaced the `.bak` holding the original.
+    #[test]
+    fn a_foreign_backup_is_rotated_not_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.gcode");
+        fs::write(&input, b"original\n").unwrap();
+        in_place(&input, b"first\n", false).unwrap();
+        in_place(&input, b"second\n", false).unwrap();
+        assert_eq!(fs::read(&input).unwrap(), b"second\n");
+        assert_eq!(fs::read(dir.path().join("in.gcode.bak")).unwrap(), b"first\n");
+        assert_eq!(fs::read(dir.path().join("in.gcode.bak.1")).unwrap(), b"original\n");
+        // A backup that is already a copy of the input is kept, not rotated.
+        fs::write(&input, b"first\n").unwrap();
+        in_place(&input, b"third\n", false).unwrap();
+        assert!(!dir.path().join("in.gcode.bak.2").exists());
+        // With every slot taken, the run is refused before anything changes.
+        for n in 2..=BACKUP_SLOTS {
+            fs::write(dir.path().join(format!("in.gcode.bak.{n}")), b"old\n").unwrap();
+        }
+        let err = in_place(&input, b"fourth\n", false).unwrap_err();
+        assert!(matches!(err, Error::BackupSlotsFull { .. }), "{err}");
+        assert_eq!(fs::read(&input).unwrap(), b"third\n");
+        assert!(fs::read_dir(dir.path()).unwrap().all(|e| !e
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .ends_with(".tmp")));
+    }
+
+    /// Regression: `--in-place` replaced a read-only file.
+    #[cfg(unix)]
+    #[test]
+    fn a_read_only_input_needs_force() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.gcode");
+        fs::write(&input, b"old\n").unwrap();
+        fs::set_permissions(&input, fs::Permissions::from_mode(0o444)).unwrap();
+        let err = in_place(&input, b"new\n", false).unwrap_err();
+        assert!(matches!(err, Error::ReadOnly { .. }), "{err}");
+        assert_eq!(fs::read(&input).unwrap(), b"old\n");
+        in_place(&input, b"new\n", true).unwrap();
+        assert_eq!(fs::read(&input).unwrap(), b"new\n");
+        assert_eq!(fs::metadata(&input).unwrap().permissions().mode() & 0o777, 0o444);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn in_place_keeps_the_mode() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.gcode");
+        fs::write(&input, b"old\n").unwrap();
+        fs::set_permissions(&input, fs::Permissions::from_mode(0o754)).unwrap();
+        in_place(&input, b"new\n", false).unwrap();
+        assert_eq!(fs::metadata(&input).unwrap().permissions().mode() & 0o777, 0o754);
+        let bak = dir.path().join("in.gcode.bak");
+        assert_eq!(fs::metadata(bak).unwrap().permissions().mode() & 0o777, 0o754);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn hard_links_are_the_same_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a");
+        fs::write(&a, b"x").unwrap();
+        fs::hard_link(&a, dir.path().join("b")).unwrap();
+        assert!(same_file(&a, &dir.path().join("b")));
+        assert!(!same_file(&a, &dir.path().join("missing")));
     }
 }
