@@ -8,7 +8,9 @@ use clap::Args;
 use gweave::pass::Run;
 use gweave::stats::{Stats, StatsPass};
 
-use crate::common::{hms, ReportArgs};
+use gweave::range::FILAMENT_DIAMETER_MM;
+
+use crate::common::{hms, in_range, ReportArgs};
 use crate::progress::Bar;
 
 /// Statistics of a G-code file: slicer, layers, extents, filament per tool, distances, time.
@@ -20,7 +22,7 @@ pub struct StatsArgs {
     /// The G-code file to read.
     pub input: PathBuf,
     /// Filament diameter in mm (default: the file's own setting, else 1.75).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(FILAMENT_DIAMETER_MM))]
     pub filament_diameter: Option<f64>,
     #[command(flatten)]
     pub report: ReportArgs,

@@ -57,6 +57,7 @@
 
 use std::f64::consts::PI;
 
+use crate::range::Range;
 use serde::{Deserialize, Serialize};
 
 use super::{finite, positive, Result, RotaryError};
@@ -141,6 +142,9 @@ fn default_radial() -> char {
     'Z'
 }
 
+/// Mandrel diameters a lathe-type printer has (a 1 mm wire to a 1 m drum).
+pub const MANDREL_DIAMETER_MM: Range<f64> = Range::new(1.0, 1000.0, "mm");
+
 /// Axis letters a firmware accepts for motion (E is the extruder, so it is excluded).
 const AXIS_LETTERS: &str = "XYZABCUVW";
 
@@ -168,7 +172,7 @@ impl RotaryConfig {
 
     /// Checks ranges and that the three axis letters are distinct motion axes.
     pub fn validate(&self) -> Result<()> {
-        positive("mandrel_diameter_mm", self.mandrel_diameter_mm)?;
+        MANDREL_DIAMETER_MM.check("mandrel_diameter_mm", self.mandrel_diameter_mm)?;
         if let Some(cap) = self.max_rotary_deg_s {
             positive("max_rotary_deg_s", cap)?;
         }
@@ -441,6 +445,9 @@ pub fn pieces_for_step(d_theta_deg: f64, step_deg: f64) -> usize {
     ((d_theta_deg.abs() / step_deg).ceil() as usize).max(1)
 }
 
+/// Seam rotation per layer: at most a full turn either way.
+pub const SEAM_ROTATION_DEG: Range<f64> = Range::new(-360.0, 360.0, "deg");
+
 /// How a flat part is wrapped onto the mandrel. TOML keys all optional.
 ///
 /// ```toml
@@ -470,7 +477,8 @@ impl UnwrapConfig {
     pub fn validate(&self) -> Result<()> {
         finite("arc_length_z1_mm", self.arc_length_z1_mm)?;
         finite("seam_offset_deg", self.seam_offset_deg)?;
-        finite("seam_rotation_per_layer_deg", self.seam_rotation_per_layer_deg)
+        SEAM_ROTATION_DEG.check("seam_rotation_per_layer_deg", self.seam_rotation_per_layer_deg)?;
+        Ok(())
     }
 
     /// Angle of the seam (flat y = 0) on layer `layer` (0-based), degrees.

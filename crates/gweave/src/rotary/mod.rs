@@ -55,6 +55,9 @@ pub enum RotaryError {
         /// Why it was rejected.
         reason: String,
     },
+    /// A setting outside its physical range.
+    #[error(transparent)]
+    Range(#[from] crate::range::OutOfRange),
     /// The TOML text could not be read (unknown key, wrong type, syntax).
     #[error("rotary config: {0}")]
     Toml(#[from] toml::de::Error),
@@ -75,7 +78,7 @@ pub enum RotaryError {
         radius_mm: f64,
     },
     /// A path would need more points than the safety limit (runaway parameters).
-    #[error("path needs more than {limit} points; check pitch and tolerance")]
+    #[error("the path needs more than {limit} points; check the length, layers, pitch and chord tolerance")]
     TooManyPoints {
         /// The limit that was hit.
         limit: usize,

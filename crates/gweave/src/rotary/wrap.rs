@@ -47,7 +47,8 @@ use serde::{Deserialize, Serialize};
 
 use super::cylinder::{chord_pieces, CylPoint, RotaryConfig, UnwrapConfig};
 use super::emit::{rotary_number_format, validate_format, MoveSpec, MoveWriter};
-use super::{finite, positive, Result, RotaryError};
+use super::helix::CHORD_TOLERANCE_MM;
+use super::{positive, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::StateOptions;
 use crate::gcode::state::{Effect, Move, Path, State, E, X, Y, Z};
@@ -83,6 +84,10 @@ pub struct WrapConfig {
     pub numbers: NumberFormat,
 }
 
+/// Most chords one flat move becomes (a move of many turns round a thin mandrel); past it the
+/// move is refused rather than written as gigabytes.
+pub const MAX_CHORDS_PER_MOVE: usize = 1_000_000;
+
 fn default_tolerance() -> f64 {
     0.01
 }
@@ -108,13 +113,7 @@ impl WrapConfig {
 
     /// Checks every range.
     pub fn validate(&self) -> Result<()> {
-        finite("chord_tolerance_mm", self.chord_tolerance_mm)?;
-        if self.chord_tolerance_mm < 0.0 {
-            return Err(RotaryError::Config {
-                key: "chord_tolerance_mm",
-                reason: format!("must be >= 0, got {}", self.chord_tolerance_mm),
-            });
-        }
+        CHORD_TOLERANCE_MM.or_zero().check("chord_tolerance_mm", self.chord_tolerance_mm)?;
         positive("arc_tolerance_mm", self.arc_tolerance_mm)?;
         self.machine.validate()?;
         self.unwrap.validate()?;
@@ -236,6 +235,9 @@ impl Wrap {
             } else {
                 1
             };
+            if cuts > MAX_CHORDS_PER_MOVE {
+                return Err(RotaryError::TooManyPoints { limit: MAX_CHORDS_PER_MOVE });
+            }
             for j in 1..=cuts {
                 let t0 = (j - 1) as f64 / cuts as f64;
                 let t1 = j as f64 / cuts as f64;
