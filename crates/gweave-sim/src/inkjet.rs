@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 
 use gweave::gen::bitmap::{Bitmap, BitmapError};
 use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
+use gweave::range::{short, Ceiling, TooLarge, MAX_IMAGE_SIDE_PX};
 use serde::Serialize;
 use thiserror::Error;
 
@@ -35,6 +36,8 @@ pub enum InkjetError {
     Geometry,
     #[error(transparent)]
     Image(#[from] BitmapError),
+    #[error(transparent)]
+    TooLarge(#[from] TooLarge),
     #[error("{path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
 }
@@ -90,6 +93,18 @@ impl InkjetCanvas {
         if !(geometry.origin_x_mm.is_finite() && geometry.origin_y_mm.is_finite()) {
             return Err(InkjetError::Geometry);
         }
+        // Each layer holds a canvas per head: its size is checked before the first is made
+        // (a bed of 1e308 mm, or a 1e308 dpi head, asks for an endless canvas).
+        let side = Ceiling::new(MAX_IMAGE_SIDE_PX, "pixels per canvas side");
+        let because = || {
+            format!(
+                "the inkjet canvas ({} x {} nozzle pitches of {} mm)",
+                geometry.width_px,
+                geometry.height_px,
+                short(profile.pitch_mm())
+            )
+        };
+        side.check(geometry.width_px.max(geometry.height_px) as f64, because)?;
         Ok(InkjetCanvas {
             geometry,
             printhead: profile.clone(),

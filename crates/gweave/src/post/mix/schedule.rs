@@ -20,6 +20,7 @@ use crate::colour::dialect::{round_to_units, Decimals};
 use crate::colour::palette::{Palette, PaletteConfig};
 use crate::colour::solve::{lerp_perceived, solve};
 use crate::colour::{Mix, MixingModel, Srgb8};
+use crate::range::{Ceiling, MAX_LAYERS};
 
 use super::profile::{At, Dialect, GradientSpace, MixBase, MixProfile, MixRef};
 use super::MixPassError;
@@ -200,10 +201,16 @@ impl Plan {
             let a = r.add(&g.start)?;
             let b = r.add(&g.end)?;
             let (count, every) = match (start, end) {
-                (At::Layer(x), At::Layer(y)) => ((y - x) / g.every_layers, f64::from(g.every_layers)),
-                (At::Z(x), At::Z(y)) => (((y - x) / g.z_step_mm - 1e-9).ceil().max(0.0) as u32, g.z_step_mm),
+                (At::Layer(x), At::Layer(y)) => {
+                    (f64::from((y - x) / g.every_layers), f64::from(g.every_layers))
+                }
+                (At::Z(x), At::Z(y)) => (((y - x) / g.z_step_mm - 1e-9).ceil().max(0.0), g.z_step_mm),
                 _ => unreachable!("range() gives two ends of one kind"),
             };
+            // A step per layer at most: `z0-1e308` must be refused, not allocated.
+            let count = Ceiling::new(MAX_LAYERS, "gradient steps")
+                .check(count, || format!("the gradient {}..{}", g.start.label(), g.end.label()))
+                .map_err(|e| MixPassError::Config(e.to_string()))? as u32;
             let mut steps = Vec::with_capacity(count as usize + 1);
             for s in 0..=count {
                 let t = if count == 0 { 0.0 } else { f64::from(s) / f64::from(count) };

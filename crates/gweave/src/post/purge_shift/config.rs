@@ -36,6 +36,9 @@ use crate::colour::purge::{filament_mm_to_mm3, flush_volume_mm3, mm3_to_filament
 use crate::colour::Srgb8;
 use crate::gcode::layers::{Feature, Markers, ALL_FEATURES};
 use crate::post::purge_block::PurgeMotion;
+use crate::range::{
+    OutOfRange, BED_SIZE_MM, FILAMENT_DIAMETER_MM, LAYER_HEIGHT_MM, POSITION_MM, PURGE_MM, PURGE_MM3,
+};
 
 /// Why a purge-shift configuration was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -44,8 +47,8 @@ pub enum ConfigError {
     NotPositive { what: &'static str, value: f64 },
     #[error("{what} must be zero or more, got {value}")]
     Negative { what: &'static str, value: f64 },
-    #[error("{what} must be a number, got {value}")]
-    NotFinite { what: &'static str, value: f64 },
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
     #[error(
         "no purge amount: give `--purge MM` or `--purge-mm3 MM3` (Python: `purge=`, `purge_mm3=`), or in the config \
          purge_mm, purge_mm3, colours, pairs or a washout tolerance"
@@ -257,7 +260,12 @@ impl PurgeShiftConfig {
 
     /// Checks every value and converts volumes to filament length.
     pub fn validate(&self) -> Result<Rules, ConfigError> {
-        let diameter_mm = positive("filament_diameter_mm", self.filament_diameter_mm)?;
+        let diameter_mm = FILAMENT_DIAMETER_MM.check("filament_diameter_mm", self.filament_diameter_mm)?;
+        // Every purge in filament mm, however it was given (a length, a volume, a washout
+        // tolerance), within PURGE_MM: the tower or block a fallback builds grows with it.
+        let purge = |what: &'static str, mm: f64| {
+            PURGE_MM.check(what, positive(what, mm)?).map_err(ConfigError::from)
+        };
         let to_mm = |v: f64| mm3_to_filament_mm(v, diameter_mm).unwrap_or(f64::NAN);
         let area_mm2 = filament_mm_to_mm3(1.0, diameter_mm).unwrap_or(f64::NAN);
         let washout = match &self.washout {
@@ -269,11 +277,14 @@ impl PurgeShiftConfig {
         let tolerance = self.washout.and_then(|w| w.tolerance);
         let default_mm = match (self.purge_mm, self.purge_mm3, tolerance, washout) {
             (Some(_), Some(_), ..) => return Err(ConfigError::BothPurges),
-            (Some(mm), None, ..) => Some(positive("purge_mm", mm)?),
-            (None, Some(v), ..) => Some(to_mm(positive("purge_mm3", v)?)),
-            (None, None, Some(eps), Some(w)) => {
-                Some(to_mm(w.purge_for_tolerance_mm3(eps).map_err(|e| ConfigError::Washout(e.to_string()))?))
+            (Some(mm), None, ..) => Some(purge("purge_mm", mm)?),
+            (None, Some(v), ..) => {
+                Some(purge("purge_mm3 (as filament)", to_mm(PURGE_MM3.check("purge_mm3", v)?))?)
             }
+            (None, None, Some(eps), Some(w)) => Some(purge(
+                "washout purge (as filament)",
+                to_mm(w.purge_for_tolerance_mm3(eps).map_err(|e| ConfigError::Washout(e.to_string()))?),
+            )?),
             _ => None,
         };
         if let Some(eps) = tolerance {
@@ -284,8 +295,10 @@ impl PurgeShiftConfig {
         let mut pairs = Vec::new();
         for p in &self.pair {
             let mm = match (p.purge_mm, p.purge_mm3) {
-                (Some(mm), None) => positive("pair purge_mm", mm)?,
-                (None, Some(v)) => to_mm(positive("pair purge_mm3", v)?),
+                (Some(mm), None) => purge("pair purge_mm", mm)?,
+                (None, Some(v)) => {
+                    purge("pair purge_mm3 (as filament)", to_mm(PURGE_MM3.check("pair purge_mm3", v)?))?
+                }
                 _ => return Err(ConfigError::Pair { from: p.from, to: p.to }),
             };
             pairs.push((p.from, p.to, mm));
@@ -357,10 +370,14 @@ impl PurgeShiftConfig {
             ("tower.x_mm", t.x_mm),
             ("tower.y_mm", t.y_mm),
         ] {
-            if let Some(value) = v.filter(|v| !v.is_finite()) {
-                return Err(ConfigError::NotFinite { what, value });
+            if let Some(value) = v {
+                POSITION_MM.check(what, value)?;
             }
         }
+        BED_SIZE_MM.check("tower.bed_mm", t.bed_mm[0])?;
+        BED_SIZE_MM.check("tower.bed_mm", t.bed_mm[1])?;
+        LAYER_HEIGHT_MM.check("tower.layer_height_mm", t.layer_height_mm)?;
+        LAYER_HEIGHT_MM.check("tower.line_width_mm", t.line_width_mm)?;
         let mut rules = Rules {
             default_mm,
             pairs,
@@ -538,13 +555,17 @@ mod tests {
             ConfigError::Negative { what: "block.lift_mm", value: -1.0 }
         );
         assert_eq!(
-            err("purge_mm = 1.0\n[block]\nx_mm = inf"),
-            ConfigError::NotFinite { what: "block.x_mm", value: f64::INFINITY }
+            err("purge_mm = 1.0\n[block]\nx_mm = inf").to_string(),
+            "block.x_mm inf is out of range: -10000 to 10000 mm"
         );
-        assert!(matches!(
-            err("purge_mm = 1.0\n[tower]\nx_mm = 5.0\ny_mm = nan"),
-            ConfigError::NotFinite { what: "tower.y_mm", value } if value.is_nan()
-        ));
+        assert_eq!(
+            err("purge_mm = 1.0\n[tower]\nx_mm = 5.0\ny_mm = nan").to_string(),
+            "tower.y_mm NaN is out of range: -10000 to 10000 mm"
+        );
+        assert_eq!(
+            err("purge_mm = 1e308\nfallback = \"tower\"").to_string(),
+            "purge_mm 1e308 is out of range: 0 to 1000 mm"
+        );
         assert!(matches!(err("purge_mm = 1.0\nallow_features = [\"walls\"]"), ConfigError::Feature(_)));
         assert!(matches!(err("purge_mm = 1.0\nbogus = 1"), ConfigError::Toml(_)));
         assert_eq!(err("purge_mm = 1.0\nmarkers = [\"\", \"end\"]"), ConfigError::Markers);
