@@ -88,7 +88,7 @@ where
     T::Err: Display,
 {
     move |text| {
-        let v: T = text.trim().parse().map_err(|e| format!("{e}"))?;
+        let v: T = text.trim().parse().map_err(|e| format!("{e}; the range is {range}"))?;
         if range.contains(v) {
             Ok(v)
         } else {

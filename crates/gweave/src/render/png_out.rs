@@ -234,6 +234,20 @@ mod tests {
         assert_eq!(back.pixel(15, 2), [BACKGROUND[0], BACKGROUND[1], BACKGROUND[2], 255]);
     }
 
+    /// Regression: a preview of 300 000 layers over 10 mm took 146 s, every pixel under
+    /// thousands of strokes; the strokes drawn are now thinned past 16 pictures of ink.
+    #[test]
+    fn overdraw_is_thinned_to_a_budget() {
+        let stroke =
+            |y: f32| Stroke { from: [0.0, y], to: [99.0, y], width_px: 2.0, colour: [0, 0, 0], alpha: 1.0 };
+        // A 100 x 100 picture: 100 strokes of ~600 visited pixels are 6 pictures, drawn whole.
+        let few: Vec<Stroke> = (0..100).map(|i| stroke(i as f32)).collect();
+        assert_eq!(overdraw_stride(&few, 100, 100), 1);
+        // 300 000 of them over the same rows (1 800 pictures): every 1125th is drawn.
+        let many: Vec<Stroke> = (0..300_000).map(|i| stroke((i % 100) as f32)).collect();
+        assert_eq!(overdraw_stride(&many, 100, 100), 1125);
+    }
+
     #[test]
     fn hidden_strokes_are_skipped_without_changing_the_picture() {
         let st = |from: [f32; 2], to: [f32; 2], colour: [u8; 3], width_px: f32| Stroke {
