@@ -188,12 +188,9 @@ impl Ceiling {
         if needed.is_finite() && needed <= self.limit as f64 {
             Ok(needed.max(0.0) as u64)
         } else {
-            Err(TooLarge {
-                what: self.what,
-                needed: short(needed.round()),
-                limit: self.limit,
-                because: because(),
-            })
+            // A count is printed whole while it is short enough to read.
+            let needed = if needed < 1e15 { format!("{needed:.0}") } else { short(needed) };
+            Err(TooLarge { what: self.what, needed, limit: self.limit, because: because() })
         }
     }
 }
@@ -241,11 +238,13 @@ mod tests {
     fn a_ceiling_refuses_infinite_and_huge_counts() {
         let layers = Ceiling::new(MAX_LAYERS, "layers");
         assert_eq!(layers.check(12.0, String::new).unwrap(), 12);
-        let e = layers.check(1e12, || "a 100 m tall part at 0.1 mm".into()).unwrap_err();
+        let e = layers.check(1e6, || "a 100 m tall part at 0.1 mm".into()).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "a 100 m tall part at 0.1 mm needs 1e12 layers, more than the limit of 100000"
+            "a 100 m tall part at 0.1 mm needs 1000000 layers, more than the limit of 100000"
         );
+        let e = layers.check(1e300, || "a speck at 1e300 mm".into()).unwrap_err();
+        assert_eq!(e.to_string(), "a speck at 1e300 mm needs 1e300 layers, more than the limit of 100000");
         assert!(layers.check(f64::INFINITY, String::new).is_err());
         assert!(layers.check(f64::NAN, String::new).is_err());
     }

@@ -20,7 +20,7 @@ use crate::colour::dialect::{round_to_units, Decimals};
 use crate::colour::palette::{Palette, PaletteConfig};
 use crate::colour::solve::{lerp_perceived, solve};
 use crate::colour::{Mix, MixingModel, Srgb8};
-use crate::range::{Ceiling, MAX_LAYERS};
+use crate::range::{Ceiling, LAYER_NUMBER, MAX_LAYERS, POSITION_MM};
 
 use super::profile::{At, Dialect, GradientSpace, MixBase, MixProfile, MixRef};
 use super::MixPassError;
@@ -181,6 +181,16 @@ impl Resolver<'_> {
     }
 }
 
+/// A layer or height a schedule names, within [`LAYER_NUMBER`] or [`POSITION_MM`] (`--at-z 1e308`
+/// and `at = "z1e308"` alike).
+fn bounded(at: At, what: &str) -> Result<At, MixPassError> {
+    let checked = match at {
+        At::Layer(n) => LAYER_NUMBER.check(&format!("{what} layer"), n).map(|_| at),
+        At::Z(z) => POSITION_MM.check(&format!("{what} height"), z).map(|_| at),
+    };
+    checked.map_err(|e| MixPassError::Config(e.to_string()))
+}
+
 impl Plan {
     /// Resolves every mix of `profile` and gives each a place in the firmware.
     pub fn new(profile: &MixProfile) -> Result<Plan, MixPassError> {
@@ -194,10 +204,12 @@ impl Plan {
 
         let mut segments = Vec::new();
         for entry in &profile.schedule {
-            segments.push(Segment { start: entry.at()?, kind: Kind::Solid(r.add(&entry.mix)?) });
+            let start = bounded(entry.at()?, "a schedule entry")?;
+            segments.push(Segment { start, kind: Kind::Solid(r.add(&entry.mix)?) });
         }
         for g in &profile.gradient {
             let (start, end) = g.range()?;
+            let (start, end) = (bounded(start, "a gradient's start")?, bounded(end, "a gradient's end")?);
             let a = r.add(&g.start)?;
             let b = r.add(&g.end)?;
             let (count, every) = match (start, end) {
