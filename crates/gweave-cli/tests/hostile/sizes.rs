@@ -185,9 +185,11 @@ fn coarsen_hang_on_alternating_travel_and_extrusion() {
         text.push_str(&format!("G0X{x}Y{y}\nG1X{}E1\n", (x + 3) % 10));
     }
     fs::write(d.join("alt.gcode"), text).unwrap();
-    let out = gweave(d, &["preview", "alt.gcode", "-o", "x.png", "--travel", "--json", "-q"])
-        .limit(Duration::from_secs(20))
-        .run();
+    // A small picture keeps the drawing short in a debug build (its ink budget scales with it).
+    let out =
+        gweave(d, &["preview", "alt.gcode", "-o", "x.png", "--travel", "--size", "300x200", "--json", "-q"])
+            .limit(Duration::from_secs(20))
+            .run();
     out.assert_ok().assert_peak_under(256.0);
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let strokes = report["strokes"].as_u64().unwrap();
