@@ -244,18 +244,20 @@ impl ToolpathPass {
 
     /// Doubles the merge length and merges the segments kept so far again, with the rule of
     /// [`Self::push`], until at most three quarters of the ceiling are used. When merging cannot
-    /// help (fewer than an eighth of the segments chain onto one of their kind, as when travel
-    /// and extrusion take turns), every second segment of each kind is dropped instead, from
-    /// now on too ([`ToolpathPass::thinning`]). Each round merges (and an infinite merge length
-    /// merges every chain) or halves, so the loop ends whatever the file holds.
+    /// make the room even at an unbounded length (too few segments chain onto one of their kind,
+    /// as when travel and extrusion take turns), every second segment of each kind is dropped
+    /// instead, from now on too ([`ToolpathPass::thinning`]). Each round halves, or merges with a
+    /// doubled length (and an infinite length merges every chain), so the loop ends whatever the
+    /// file holds.
     fn coarsen(&mut self) {
         let max = self.options.max_segments.unwrap_or(usize::MAX).max(4);
-        while self.out.segments.len() > max / 4 * 3 {
+        let target = max / 4 * 3;
+        while self.out.segments.len() > target {
             let segments = &self.out.segments;
+            // Merging at any length removes one segment per chained pair, and no more.
             let chained =
                 segments.windows(2).filter(|w| w[0].same_kind(&w[1]) && w[0].end == w[1].start).count();
-            // Fewer than an eighth could merge at any length: merging cannot make the room.
-            if chained < segments.len() / 8 {
+            if segments.len() - chained > target {
                 self.thin();
             } else {
                 // 0.05 mm: the first step when the file was read without merging.
