@@ -20,7 +20,7 @@ const TEXT_SCALE: u32 = 2;
 ///
 /// The work of drawing grows with the ink: the pixels all strokes visit together. A file of
 /// 300 000 layers over 10 mm, or a million travel moves across the bed, lays each pixel under
-/// thousands of strokes; past [`MAX_OVERDRAW`] pictures' worth only every `k`-th stroke
+/// thousands of strokes; past 512 pictures' worth (`MAX_OVERDRAW`) only every `k`-th stroke
 /// is drawn (the last of each `k`, so the top of a stack stays on top), which such a picture
 /// cannot show anyway, and the time is bounded whatever the file.
 pub fn rasterise(d: &Drawing) -> Image {
