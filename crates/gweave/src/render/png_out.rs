@@ -20,7 +20,7 @@ const TEXT_SCALE: u32 = 2;
 ///
 /// The work of drawing grows with the ink: the pixels all strokes visit together. A file of
 /// 300 000 layers over 10 mm, or a million travel moves across the bed, lays each pixel under
-/// thousands of strokes; past 512 pictures' worth (`MAX_OVERDRAW`) only every `k`-th stroke
+/// thousands of strokes; past 256 pictures' worth (`MAX_OVERDRAW`) only every `k`-th stroke
 /// is drawn (the last of each `k`, so the top of a stack stays on top), which such a picture
 /// cannot show anyway, and the time is bounded whatever the file.
 pub fn rasterise(d: &Drawing) -> Image {
@@ -55,11 +55,11 @@ pub fn rasterise(d: &Drawing) -> Image {
     img
 }
 
-/// How many pictures' worth of pixels drawing may visit before the strokes are thinned: a few
-/// seconds at most in a release build. Whole prints of the test files visit 4 to 140 pictures'
-/// worth (a 400 x 300 picture of a 200-layer print seen from the side), a file of a million
-/// travel moves across the bed about 5 000.
-const MAX_OVERDRAW: f64 = 512.0;
+/// How many pictures' worth of pixels drawing may visit before the strokes are thinned: 2.8e8
+/// visits for a 1200 x 900 picture, about 4 s in a release build. Whole prints of the test
+/// files visit 4 to 140 pictures' worth (the most: a 400 x 300 picture of a 200-layer print
+/// seen from the side), a file of a million travel moves across the bed about 5 000.
+const MAX_OVERDRAW: f64 = 256.0;
 
 /// Draw every `k`-th stroke so that the ink stays under [`MAX_OVERDRAW`] pictures (1: all).
 fn overdraw_stride(strokes: &[Stroke], width: u32, height: u32) -> usize {
@@ -238,7 +238,7 @@ mod tests {
     }
 
     /// Regression: a preview of 300 000 layers over 10 mm took 146 s, every pixel under
-    /// thousands of strokes; the strokes drawn are now thinned past 512 pictures of ink.
+    /// thousands of strokes; the strokes drawn are now thinned past 256 pictures of ink.
     #[test]
     fn overdraw_is_thinned_to_a_budget() {
         let stroke =
@@ -246,9 +246,9 @@ mod tests {
         // A 100 x 100 picture: 100 strokes of ~600 visited pixels are 6 pictures, drawn whole.
         let few: Vec<Stroke> = (0..100).map(|i| stroke(i as f32)).collect();
         assert_eq!(overdraw_stride(&few, 100, 100), 1);
-        // 300 000 of them over the same rows (18 000 pictures): every 36th is drawn.
+        // 300 000 of them over the same rows (18 000 pictures): every 71st is drawn.
         let many: Vec<Stroke> = (0..300_000).map(|i| stroke((i % 100) as f32)).collect();
-        assert_eq!(overdraw_stride(&many, 100, 100), 36);
+        assert_eq!(overdraw_stride(&many, 100, 100), 71);
     }
 
     #[test]
