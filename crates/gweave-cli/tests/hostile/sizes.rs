@@ -160,7 +160,10 @@ fn raster_refuses_layer_images_of_different_sizes() {
 fn a_gradient_of_endless_steps_is_refused() {
     let (dir, _) = dir_with_fixture("cura/cura_torus.gcode", "in.gcode");
     for (gradient, needle) in [
-        ("z0-1e308=Cyan..Magenta", "a gradient's end height 1e308 is out of range: -10000 to 10000 mm"),
+        (
+            "z0-1e308=Cyan..Magenta",
+            "--gradient or [[gradient]] end height 1e308 is out of range: -10000 to 10000 mm",
+        ),
         ("0-1000000=Cyan..Magenta", "needs 1000000 gradient steps, more than the limit of 100000"),
     ] {
         let out = gweave(dir.path(), &["mix", "in.gcode", "-o", "m.gcode", "--gradient", gradient])

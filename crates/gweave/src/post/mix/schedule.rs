@@ -204,12 +204,15 @@ impl Plan {
 
         let mut segments = Vec::new();
         for entry in &profile.schedule {
-            let start = bounded(entry.at()?, "a schedule entry")?;
+            let start = bounded(entry.at()?, "--at-layer/--at-z or [[schedule]]")?;
             segments.push(Segment { start, kind: Kind::Solid(r.add(&entry.mix)?) });
         }
         for g in &profile.gradient {
             let (start, end) = g.range()?;
-            let (start, end) = (bounded(start, "a gradient's start")?, bounded(end, "a gradient's end")?);
+            let (start, end) = (
+                bounded(start, "--gradient or [[gradient]] start")?,
+                bounded(end, "--gradient or [[gradient]] end")?,
+            );
             let a = r.add(&g.start)?;
             let b = r.add(&g.end)?;
             let (count, every) = match (start, end) {
