@@ -67,6 +67,15 @@ pub fn short(v: f64) -> String {
     }
 }
 
+/// A computed count (possibly huge, infinite or NaN), whole while it is short enough to read.
+pub fn count(v: f64) -> String {
+    if v.abs() < 1e15 {
+        format!("{v:.0}")
+    } else {
+        short(v)
+    }
+}
+
 /// A number type a [`Range`] can bound.
 pub trait Quantity: Copy + PartialOrd + Send + Sync + 'static {
     /// The value as [`short`] writes it.
@@ -188,9 +197,7 @@ impl Ceiling {
         if needed.is_finite() && needed <= self.limit as f64 {
             Ok(needed.max(0.0) as u64)
         } else {
-            // A count is printed whole while it is short enough to read.
-            let needed = if needed < 1e15 { format!("{needed:.0}") } else { short(needed) };
-            Err(TooLarge { what: self.what, needed, limit: self.limit, because: because() })
+            Err(TooLarge { what: self.what, needed: count(needed), limit: self.limit, because: because() })
         }
     }
 }
