@@ -208,6 +208,16 @@ mod tests {
         InkjetCanvas::new(profile, geometry).unwrap()
     }
 
+    /// Regression: a canvas of a 1e308 mm bed (or a 1e308 dpi head) was allocated and aborted;
+    /// its size is checked first.
+    #[test]
+    fn an_endless_canvas_is_refused() {
+        let geometry =
+            CanvasGeometry { origin_x_mm: 0.0, origin_y_mm: 0.0, width_px: usize::MAX, height_px: 6 };
+        let err = InkjetCanvas::new(&PrintheadProfile::default(), geometry).unwrap_err();
+        assert!(err.to_string().ends_with("pixels per canvas side, more than the limit of 20000"), "{err}");
+    }
+
     #[test]
     fn drops_land_on_rows_after_map_and_offsets() {
         let profile = PrintheadProfile {
