@@ -3,9 +3,13 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
+use std::fmt::Display;
+use std::str::FromStr;
+
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::{write_file, Target};
+use gweave::range::{Quantity, Range};
 use serde::Serialize;
 
 /// Where a transform writes.
@@ -82,15 +86,40 @@ pub fn print_summary(print: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Re
     print(&mut out).and_then(|()| out.flush()).context("writing to standard output")
 }
 
-/// Parses `X,Y,Z` (three numbers, mm) for flags such as `--bed 220,220,250`.
-pub fn parse_xyz(text: &str) -> Result<[f64; 3], String> {
-    let parts: Vec<f64> = text
-        .split(',')
-        .map(|p| p.trim().parse::<f64>().map_err(|e| format!("{p:?}: {e}")))
-        .collect::<Result<_, _>>()?;
-    match parts[..] {
-        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok([x, y, z]),
-        _ => Err(format!("expected three numbers X,Y,Z, got {text:?}")),
+/// A clap value parser for one number within `range`:
+/// `#[arg(long, value_parser = in_range(MANDREL_DIAMETER_MM))]`. Clap then refuses
+/// `--mandrel-diameter 1e-9` before anything is read, naming the flag and the range
+/// ("invalid value '1e-9' for '--mandrel-diameter <MM>': out of range: 1 to 1000 mm"), so every
+/// numeric flag is bounded the same way, by the range the library states once.
+pub fn in_range<T>(range: Range<T>) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
+where
+    T: Quantity + FromStr,
+    T::Err: Display,
+{
+    move |text| {
+        let v: T = text.trim().parse().map_err(|e| format!("{e}; the range is {range}"))?;
+        if range.contains(v) {
+            Ok(v)
+        } else {
+            Err(format!("out of range: {range}"))
+        }
+    }
+}
+
+/// A clap value parser for `N` comma-separated numbers, each within `range`, for flags such as
+/// `--bed 220,220,250` or `--origin 10,20`.
+pub fn numbers_in<const N: usize>(
+    range: Range<f64>,
+) -> impl Fn(&str) -> Result<[f64; N], String> + Clone + Send + Sync + 'static {
+    move |text| {
+        let parts: Vec<&str> = text.split(',').collect();
+        let parts: [&str; N] =
+            parts.try_into().map_err(|_| format!("expected {N} comma-separated numbers, got {text:?}"))?;
+        let mut out = [0.0; N];
+        for (slot, part) in out.iter_mut().zip(parts) {
+            *slot = in_range(range)(part).map_err(|e| format!("{}: {e}", part.trim()))?;
+        }
+        Ok(out)
     }
 }
 

@@ -13,9 +13,10 @@ use gweave::gcode::writer::{Output, Target};
 use gweave::gen::bitmap::{load_image, Bitmap, Channel, ThresholdOptions};
 use gweave::gen::image_files::list_images;
 use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
-use gweave::gen::raster::{self, test_pattern, RasterConfig, RasterReport, RasterWriter};
+use gweave::gen::raster::{self, test_pattern, RasterConfig, RasterReport, RasterWriter, HEADS, THRESHOLD};
 use gweave::gen::sl1::Sl1Reader;
 use gweave::pass::Progress;
+use gweave::range::{DPI, PIXEL_MM};
 use gweave_sim::estimate::{Estimate, Estimator};
 use gweave_sim::limits::MotionProfile;
 use serde::Serialize;
@@ -303,15 +304,28 @@ impl Job {
                 let layers = stacks.iter().map(|s| s.paths.len()).max().unwrap_or(0);
                 progress.set_len(layers as u64);
                 let read = stacks.iter().map(|s| s.paths.len()).sum();
+                // Each stack's first image, with its size: every later layer must match it, as
+                // the layers of a .sl1 do.
+                let mut first: Vec<Option<(PathBuf, usize, usize)>> = vec![None; stacks.len()];
                 let load = |k: usize| -> Result<Vec<Bitmap>> {
                     let mut planes = Vec::with_capacity(stacks.len());
-                    for s in stacks {
+                    for (s, first) in stacks.iter().zip(&mut first) {
                         let Some(p) = s.paths.get(k) else {
                             planes.push(Bitmap::new(0, 0));
                             continue;
                         };
                         let b = load_image(p, &s.threshold)
                             .with_context(|| format!("reading {}", p.display()))?;
+                        let (w, h) = (b.width(), b.height());
+                        match first {
+                            None => *first = Some((p.clone(), w, h)),
+                            Some((p0, w0, h0)) if (*w0, *h0) != (w, h) => bail!(
+                                "{}: the layer image is {w} x {h} px, but {} is {w0} x {h0} px; every layer must have the same size",
+                                p.display(),
+                                p0.display()
+                            ),
+                            Some(_) => {}
+                        }
                         let b = if s.flip_y { b.mirror_y() } else { b };
                         planes.push(match self.pixel_mm {
                             Some(px) => b.resample(px, px, pitch)?,
@@ -453,8 +467,23 @@ impl JobOptions {
     }
 
     /// Resolves the inputs (lists folders and globs, reads no image) into the layer source and
-    /// the heads it needs, so that a caller can check the files before any is read.
+    /// the heads it needs, so that a caller can check the files before any is read. The
+    /// numbers are checked first: the CLI's parser checked them already, Python keywords
+    /// arrive here unchecked.
     pub fn source(&self) -> Result<(Source, usize)> {
+        if self.pixel_mm.is_some() && self.dpi.is_some() {
+            bail!("give the image resolution once: pixel size or dpi");
+        }
+        if let Some(px) = self.pixel_mm {
+            PIXEL_MM.check("pixel_mm", px)?;
+        }
+        if let Some(dpi) = self.dpi {
+            DPI.check("dpi", dpi)?;
+        }
+        if let Some(heads) = self.heads {
+            HEADS.check("heads", heads)?;
+        }
+        THRESHOLD.check("threshold", self.threshold)?;
         let spec = InputSpec {
             inputs: self.inputs.clone(),
             heads: self.heads,
@@ -474,9 +503,6 @@ impl JobOptions {
 
     /// Builds the job from a resolved [`JobOptions::source`]: reads the profile and snippets.
     pub fn job_from(&self, source: Source, heads: usize) -> Result<Job> {
-        if self.pixel_mm.is_some() && self.dpi.is_some() {
-            bail!("give the image resolution once: pixel size or dpi");
-        }
         if matches!(source, Source::Sl1 { .. }) && (self.pixel_mm.is_some() || self.dpi.is_some()) {
             bail!("a .sl1 archive carries its own pixel size: drop the pixel size / dpi");
         }
@@ -497,7 +523,7 @@ impl JobOptions {
             None => self.profile()?,
         };
         let mut out = Output::create(target, None)?;
-        let rep = test_pattern(&mut out, &profile, &self.config()?, columns.max(1))?;
+        let rep = test_pattern(&mut out, &profile, &self.config()?, columns)?;
         out.commit()?;
         Ok((rep, profile))
     }

@@ -55,7 +55,8 @@
 
 use std::fmt;
 
-use gweave::settings::{CheckRanges, OutOfRange, Range, Table};
+use gweave::range::{OutOfRange, Range};
+use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 

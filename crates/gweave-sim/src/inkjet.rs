@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 
 use gweave::gen::bitmap::{Bitmap, BitmapError};
 use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
+use gweave::range::{short, Ceiling, TooLarge, MAX_IMAGE_SIDE_PX};
 use serde::Serialize;
 use thiserror::Error;
 
@@ -35,6 +36,8 @@ pub enum InkjetError {
     Geometry,
     #[error(transparent)]
     Image(#[from] BitmapError),
+    #[error(transparent)]
+    TooLarge(#[from] TooLarge),
     #[error("{path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
 }
@@ -90,6 +93,18 @@ impl InkjetCanvas {
         if !(geometry.origin_x_mm.is_finite() && geometry.origin_y_mm.is_finite()) {
             return Err(InkjetError::Geometry);
         }
+        // Each layer holds a canvas per head: its size is checked before the first is made
+        // (a bed of 1e308 mm, or a 1e308 dpi head, asks for an endless canvas).
+        let side = Ceiling::new(MAX_IMAGE_SIDE_PX, "pixels per canvas side");
+        let because = || {
+            format!(
+                "the inkjet canvas ({} x {} nozzle pitches of {} mm)",
+                geometry.width_px,
+                geometry.height_px,
+                short(profile.pitch_mm())
+            )
+        };
+        side.check(geometry.width_px.max(geometry.height_px) as f64, because)?;
         Ok(InkjetCanvas {
             geometry,
             printhead: profile.clone(),
@@ -191,6 +206,16 @@ mod tests {
     fn canvas(profile: &PrintheadProfile) -> InkjetCanvas {
         let geometry = CanvasGeometry { origin_x_mm: 10.0, origin_y_mm: 20.0, width_px: 8, height_px: 6 };
         InkjetCanvas::new(profile, geometry).unwrap()
+    }
+
+    /// Regression: a canvas of a 1e308 mm bed (or a 1e308 dpi head) was allocated and aborted;
+    /// its size is checked first.
+    #[test]
+    fn an_endless_canvas_is_refused() {
+        let geometry =
+            CanvasGeometry { origin_x_mm: 0.0, origin_y_mm: 0.0, width_px: usize::MAX, height_px: 6 };
+        let err = InkjetCanvas::new(&PrintheadProfile::default(), geometry).unwrap_err();
+        assert!(err.to_string().ends_with("pixels per canvas side, more than the limit of 20000"), "{err}");
     }
 
     #[test]

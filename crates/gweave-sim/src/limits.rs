@@ -18,7 +18,8 @@
 //! max_accel_mm_s2 = 3000.0
 //! ```
 
-use gweave::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
+use gweave::range::{self, OutOfRange, Range};
+use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -211,8 +212,8 @@ const ACCEL_DEG_S2: Range = Range::new(0.001, 10_000_000.0, "°/s²");
 
 impl CheckRanges for KlipperLimits {
     fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
-        t.check("max_velocity_mm_s", self.max_velocity_mm_s, ranges::SPEED_MM_S)?;
-        t.check("max_accel_mm_s2", self.max_accel_mm_s2, ranges::ACCEL_MM_S2)?;
+        t.check("max_velocity_mm_s", self.max_velocity_mm_s, range::SPEED_MM_S)?;
+        t.check("max_accel_mm_s2", self.max_accel_mm_s2, range::ACCEL_MM_S2)?;
         t.check("minimum_cruise_ratio", self.minimum_cruise_ratio, CRUISE_RATIO)?;
         t.check("square_corner_velocity_mm_s", self.square_corner_velocity_mm_s, CORNER_SPEED_MM_S)?;
         t.check(
@@ -220,14 +221,14 @@ impl CheckRanges for KlipperLimits {
             self.instantaneous_corner_velocity_mm_s,
             CORNER_SPEED_MM_S,
         )?;
-        t.check_opt("max_z_velocity_mm_s", self.max_z_velocity_mm_s, ranges::SPEED_MM_S)?;
-        t.check_opt("max_z_accel_mm_s2", self.max_z_accel_mm_s2, ranges::ACCEL_MM_S2)?;
+        t.check_opt("max_z_velocity_mm_s", self.max_z_velocity_mm_s, range::SPEED_MM_S)?;
+        t.check_opt("max_z_accel_mm_s2", self.max_z_accel_mm_s2, range::ACCEL_MM_S2)?;
         t.check_opt(
             "max_extrude_only_velocity_mm_s",
             self.max_extrude_only_velocity_mm_s,
-            ranges::SPEED_MM_S,
+            range::SPEED_MM_S,
         )?;
-        t.check_opt("max_extrude_only_accel_mm_s2", self.max_extrude_only_accel_mm_s2, ranges::ACCEL_MM_S2)
+        t.check_opt("max_extrude_only_accel_mm_s2", self.max_extrude_only_accel_mm_s2, range::ACCEL_MM_S2)
     }
 }
 
@@ -399,10 +400,10 @@ impl CheckRanges for MotionProfile {
         let steps = t.sub("steps");
         let s = &self.steps;
         for (key, v) in [("x", s.x), ("y", s.y), ("z", s.z), ("e", s.e)] {
-            steps.check(key, v, ranges::STEPS_PER_UNIT)?;
+            steps.check(key, v, range::STEPS_PER_UNIT)?;
         }
-        steps.check_opt("a_per_deg", s.a_per_deg, ranges::STEPS_PER_UNIT)?;
-        steps.each("mixing_e", &s.mixing_e, ranges::STEPS_PER_UNIT)?;
+        steps.check_opt("a_per_deg", s.a_per_deg, range::STEPS_PER_UNIT)?;
+        steps.each("mixing_e", &s.mixing_e, range::STEPS_PER_UNIT)?;
         let linear_and_a = |table: Table, limits: &AxisLimits, linear: Range, a: Range| {
             let l = limits;
             [("x", l.x), ("y", l.y), ("z", l.z), ("e", l.e)]
@@ -410,12 +411,12 @@ impl CheckRanges for MotionProfile {
                 .try_for_each(|(key, v)| table.check(key, v, linear))?;
             table.check("a", l.a, a)
         };
-        linear_and_a(t.sub("max_feed_mm_s"), &self.max_feed_mm_s, ranges::SPEED_MM_S, SPEED_DEG_S)?;
-        linear_and_a(t.sub("max_accel_mm_s2"), &self.max_accel_mm_s2, ranges::ACCEL_MM_S2, ACCEL_DEG_S2)?;
+        linear_and_a(t.sub("max_feed_mm_s"), &self.max_feed_mm_s, range::SPEED_MM_S, SPEED_DEG_S)?;
+        linear_and_a(t.sub("max_accel_mm_s2"), &self.max_accel_mm_s2, range::ACCEL_MM_S2, ACCEL_DEG_S2)?;
         let accel = t.sub("accel");
-        accel.check("print_mm_s2", self.accel.print_mm_s2, ranges::ACCEL_MM_S2)?;
-        accel.check("retract_mm_s2", self.accel.retract_mm_s2, ranges::ACCEL_MM_S2)?;
-        accel.check("travel_mm_s2", self.accel.travel_mm_s2, ranges::ACCEL_MM_S2)?;
+        accel.check("print_mm_s2", self.accel.print_mm_s2, range::ACCEL_MM_S2)?;
+        accel.check("retract_mm_s2", self.accel.retract_mm_s2, range::ACCEL_MM_S2)?;
+        accel.check("travel_mm_s2", self.accel.travel_mm_s2, range::ACCEL_MM_S2)?;
         let corners = t.sub("corners");
         match &self.corners {
             CornerMode::Marlin { junction_deviation_mm, lookahead_blocks } => {

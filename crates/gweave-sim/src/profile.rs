@@ -26,7 +26,8 @@ use std::fmt;
 use std::str::FromStr;
 
 use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
-use gweave::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
+use gweave::range::{self, OutOfRange, Range};
+use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -95,24 +96,24 @@ impl CheckRanges for MachineProfile {
         self.thermal.check_ranges(&t.sub("thermal"))?;
         let bed = t.sub("bed");
         let b = &self.bed;
-        bed.check("x_min_mm", b.x_min_mm, ranges::POS_MM)?;
-        bed.check("y_min_mm", b.y_min_mm, ranges::POS_MM)?;
-        bed.check("x_mm", b.x_mm, ranges::SIZE_MM)?;
-        bed.check("y_mm", b.y_mm, ranges::SIZE_MM)?;
-        bed.check("z_mm", b.z_mm, ranges::SIZE_MM)?;
+        bed.check("x_min_mm", b.x_min_mm, range::POSITION_MM)?;
+        bed.check("y_min_mm", b.y_min_mm, range::POSITION_MM)?;
+        bed.check("x_mm", b.x_mm, range::SIZE_MM)?;
+        bed.check("y_mm", b.y_mm, range::SIZE_MM)?;
+        bed.check("z_mm", b.z_mm, range::SIZE_MM)?;
         let homing = t.sub("homing");
-        homing.each("feed_mm_s", &self.homing.feed_mm_s, ranges::SPEED_MM_S)?;
-        homing.each("bump_mm", &self.homing.bump_mm, ranges::LEN_MM)?;
+        homing.each("feed_mm_s", &self.homing.feed_mm_s, range::SPEED_MM_S)?;
+        homing.each("bump_mm", &self.homing.bump_mm, range::LEN_MM)?;
         homing.each("bump_divisor", &self.homing.bump_divisor, BUMP_DIVISOR)?;
         t.count("mixing_inputs", self.mixing_inputs as u64, MIXING_INPUTS)?;
         if let Some(r) = &self.rotary {
-            t.sub("rotary").check("cylinder_radius_mm", r.cylinder_radius_mm, ranges::SIZE_MM)?;
+            t.sub("rotary").check("cylinder_radius_mm", r.cylinder_radius_mm, range::SIZE_MM)?;
         }
         if let Some(ink) = &self.inkjet {
             let inkjet = t.sub("inkjet");
             ink.printhead.check_ranges(&inkjet.sub("printhead"))?;
-            inkjet.check("origin_x_mm", ink.origin_x_mm, ranges::POS_MM)?;
-            inkjet.check("origin_y_mm", ink.origin_y_mm, ranges::POS_MM)?;
+            inkjet.check("origin_x_mm", ink.origin_x_mm, range::POSITION_MM)?;
+            inkjet.check("origin_y_mm", ink.origin_y_mm, range::POSITION_MM)?;
             // The canvas is allocated at this size, so a computed size is held to the range too.
             let [width, height] = ink.canvas_px(&self.bed);
             let key = |name: &str, given: Option<usize>| match given {

@@ -30,7 +30,8 @@
 //! Defaults (REFERENCE.md §5): hotend runaway 40 s / 4 C and watch
 //! 20 s / +2 C; bed runaway 20 s / 2 C and watch 60 s / +2 C.
 
-use gweave::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
+use gweave::range::{self, OutOfRange, Range};
+use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
 
 use crate::heater::HeaterId;
@@ -70,7 +71,7 @@ impl CheckRanges for ProtectionConfig {
         t.check("watch_period_s", self.watch_period_s, PROTECT_PERIOD_S)?;
         t.check("watch_increase_c", self.watch_increase_c, PROTECT_BAND_C)?;
         t.check("min_temp_c", self.min_temp_c, MIN_TEMP_C)?;
-        t.check("max_temp_c", self.max_temp_c, ranges::TEMP_C)
+        t.check("max_temp_c", self.max_temp_c, range::TEMPERATURE_C)
     }
 }
 

@@ -23,7 +23,8 @@
 //! assert!(th.m105_report().starts_with("T:2"));
 //! ```
 
-use gweave::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
+use gweave::range::{self, OutOfRange, Range};
+use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -179,7 +180,7 @@ impl CheckRanges for ThermalConfig {
         t.check("hotend_overshoot_c", self.hotend_overshoot_c, OVERSHOOT_C)?;
         t.check("bed_overshoot_c", self.bed_overshoot_c, OVERSHOOT_C)?;
         t.check("sample_period_s", self.sample_period_s, SAMPLE_PERIOD_S)?;
-        t.check_opt("extrude_min_c", self.extrude_min_c, ranges::TEMP_C)?;
+        t.check_opt("extrude_min_c", self.extrude_min_c, range::TEMPERATURE_C)?;
         t.check("record_period_s", self.record_period_s, RECORD_PERIOD_S)?;
         t.count("record_max_samples", self.record_max_samples as u64, RECORD_SAMPLES)
     }

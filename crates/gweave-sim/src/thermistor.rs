@@ -38,7 +38,8 @@
 //! entry and MINTEMP fires); a **shorted** one pulls the input to ground, the
 //! ADC reads ~0 (the table clamps to its hottest entry and MAXTEMP fires).
 
-use gweave::settings::{CheckRanges, OutOfRange, Range, Table};
+use gweave::range::{OutOfRange, Range};
+use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 

@@ -23,6 +23,7 @@ pub mod gen;
 pub mod pass;
 // purge-shift and other post-processing passes
 pub mod post;
+pub mod range;
 pub mod render;
 pub mod rotary;
 pub mod settings;

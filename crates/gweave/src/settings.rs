@@ -11,7 +11,8 @@
 //! Unknown keys are refused by serde (`deny_unknown_fields`) before any range is checked.
 //!
 //! ```
-//! use gweave::settings::{CheckRanges, OutOfRange, Range, Table};
+//! use gweave::range::{OutOfRange, Range};
+//! use gweave::settings::{CheckRanges, Table};
 //!
 //! struct Bed { x_mm: f64 }
 //! impl CheckRanges for Bed {
@@ -23,101 +24,7 @@
 //! assert_eq!(err.to_string(), "[bed] x_mm = 1e308 is out of range: 1 to 10000 mm");
 //! ```
 
-use std::fmt;
-
-/// The closed interval `[min, max]` a key may take, in `unit`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Range {
-    /// Smallest allowed value.
-    pub min: f64,
-    /// Largest allowed value.
-    pub max: f64,
-    /// The unit printed after the range (`"mm"`, `"°C"`, `""` for a plain number).
-    pub unit: &'static str,
-}
-
-impl Range {
-    /// The range `[min, max]` in `unit`.
-    pub const fn new(min: f64, max: f64, unit: &'static str) -> Self {
-        Self { min, max, unit }
-    }
-
-    /// Whether `value` is a finite number inside the range.
-    pub fn contains(&self, value: f64) -> bool {
-        value.is_finite() && (self.min..=self.max).contains(&value)
-    }
-}
-
-impl fmt::Display for Range {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} to {}", Num(self.min), Num(self.max))?;
-        if !self.unit.is_empty() {
-            write!(f, " {}", self.unit)?;
-        }
-        Ok(())
-    }
-}
-
-/// Ranges shared by many keys. A key with its own physical limits states its own range.
-pub mod ranges {
-    use super::Range;
-
-    /// A temperature a heater can be asked for or protected at (hotends top out near 500 °C).
-    pub const TEMP_C: Range = Range::new(0.0, 500.0, "°C");
-    /// A length on or around a printer: 10 m covers the largest gantry.
-    pub const LEN_MM: Range = Range::new(0.0, 10_000.0, "mm");
-    /// A length that must not be zero (a size, a diameter, a travel).
-    pub const SIZE_MM: Range = Range::new(0.001, 10_000.0, "mm");
-    /// A position on the bed, either side of the origin.
-    pub const POS_MM: Range = Range::new(-10_000.0, 10_000.0, "mm");
-    /// A linear speed.
-    pub const SPEED_MM_S: Range = Range::new(0.001, 10_000.0, "mm/s");
-    /// A linear speed in G-code's unit (`F` words).
-    pub const FEED_MM_MIN: Range = Range::new(0.06, 600_000.0, "mm/min");
-    /// A linear acceleration.
-    pub const ACCEL_MM_S2: Range = Range::new(0.001, 1_000_000.0, "mm/s²");
-    /// Motor steps per mm (or per degree).
-    pub const STEPS_PER_UNIT: Range = Range::new(0.001, 1_000_000.0, "steps/unit");
-    /// A time constant or period of the firmware, 0 to a day.
-    pub const PERIOD_S: Range = Range::new(0.0, 86_400.0, "s");
-    /// A period that must not be zero (a loop must advance its clock).
-    pub const TICK_S: Range = Range::new(0.001, 3_600.0, "s");
-    /// A fraction.
-    pub const FRACTION: Range = Range::new(0.0, 1.0, "");
-    /// Printer resolution: from coarse inkjets to the finest photopolymer masks.
-    pub const DPI: Range = Range::new(1.0, 10_000.0, "dpi");
-    /// An angle of one turn or less either way.
-    pub const ANGLE_DEG: Range = Range::new(-360.0, 360.0, "°");
-}
-
-/// A value outside its [`Range`], or not a number: where it is, what it is, what it may be.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{table}{key} = {} is out of range: {range}", Num(*.value))]
-pub struct OutOfRange {
-    /// `[motion.steps] ` (empty for a top-level key).
-    pub table: TableName,
-    /// The key, with an index for an array element (`feed_mm_s[1]`).
-    pub key: String,
-    /// The value found.
-    pub value: f64,
-    /// The range it must be in.
-    pub range: Range,
-}
-
-/// A table's dotted path, printed as TOML writes its header (`[motion.corners] `), or nothing
-/// for the top level.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct TableName(pub String);
-
-impl fmt::Display for TableName {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.0.is_empty() {
-            Ok(())
-        } else {
-            write!(f, "[{}] ", self.0)
-        }
-    }
-}
+use crate::range::{short, OutOfRange, Quantity, Range};
 
 /// Where in the file a type's keys are: the checker handed to [`CheckRanges::check_ranges`].
 #[derive(Debug, Clone, Default)]
@@ -143,16 +50,19 @@ impl Table {
     }
 
     /// `key = value` must be a finite number in `range`.
-    pub fn check(&self, key: &str, value: f64, range: Range) -> Result<(), OutOfRange> {
-        if range.contains(value) {
-            Ok(())
-        } else {
-            Err(OutOfRange { table: TableName(self.path.clone()), key: key.to_owned(), value, range })
-        }
+    pub fn check<T: Quantity>(&self, key: &str, value: T, range: Range<T>) -> Result<(), OutOfRange> {
+        // `[motion.corners] junction_deviation_mm`, as TOML writes the table's header.
+        let name = if self.path.is_empty() { key.to_owned() } else { format!("[{}] {key}", self.path) };
+        range.check(&name, value).map(|_| ())
     }
 
     /// [`Table::check`] for an optional key: absent is fine.
-    pub fn check_opt(&self, key: &str, value: Option<f64>, range: Range) -> Result<(), OutOfRange> {
+    pub fn check_opt<T: Quantity>(
+        &self,
+        key: &str,
+        value: Option<T>,
+        range: Range<T>,
+    ) -> Result<(), OutOfRange> {
         value.map_or(Ok(()), |v| self.check(key, v, range))
     }
 
@@ -173,27 +83,8 @@ pub trait CheckRanges {
     fn check_ranges(&self, table: &Table) -> Result<(), OutOfRange>;
 }
 
-/// A number as a person writes it: `0.013`, `500`, `1e308` (never 309 digits), `nan`, `inf`.
-#[derive(Debug, Clone, Copy)]
-pub struct Num(pub f64);
-
-impl fmt::Display for Num {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let v = self.0;
-        if v.is_nan() {
-            f.write_str("nan")
-        } else if v.is_infinite() {
-            f.write_str(if v > 0.0 { "inf" } else { "-inf" })
-        } else if v == 0.0 || (1e-4..1e9).contains(&v.abs()) {
-            write!(f, "{v}")
-        } else {
-            write!(f, "{v:e}")
-        }
-    }
-}
-
 /// The TOML reader's message for `e`, with any number of more than 20 digits (serde prints
-/// the float `1e308` of an integer key in full) written short, as [`Num`] does.
+/// the float `1e308` of an integer key in full) written short, as [`short`] does.
 pub fn toml_message(e: &toml::de::Error) -> String {
     short_numbers(&e.to_string())
 }
@@ -207,7 +98,7 @@ fn short_numbers(text: &str) -> String {
         let len = run.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(run.len());
         let number = &run[..len];
         match number.parse::<f64>() {
-            Ok(v) if len > 20 => out.push_str(&Num(v).to_string()),
+            Ok(v) if len > 20 => out.push_str(&short(v)),
             _ => out.push_str(number),
         }
         rest = &run[len..];
@@ -219,13 +110,6 @@ fn short_numbers(text: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn numbers_print_short() {
-        let shown = [1e308, -1e308, 0.013, 500.0, f64::NAN, f64::NEG_INFINITY, 1e-9, -1.0, 0.0]
-            .map(|v| Num(v).to_string());
-        assert_eq!(shown, ["1e308", "-1e308", "0.013", "500", "nan", "-inf", "1e-9", "-1", "0"]);
-    }
 
     #[test]
     fn long_numbers_in_reader_messages_are_shortened() {
@@ -240,9 +124,10 @@ mod tests {
         assert_eq!(err.to_string(), "[thermal.hotends[1]] power_w = nan is out of range: 0.1 to 5000 W");
         let err = Table::root().check("mixing_inputs", 100.0, Range::new(0.0, 16.0, "")).unwrap_err();
         assert_eq!(err.to_string(), "mixing_inputs = 100 is out of range: 0 to 16");
-        let err = Table::root().sub("homing").each("bump_mm", &[1.0, -1.0], ranges::LEN_MM).unwrap_err();
+        let err =
+            Table::root().sub("homing").each("bump_mm", &[1.0, -1.0], crate::range::LEN_MM).unwrap_err();
         assert_eq!(err.to_string(), "[homing] bump_mm[1] = -1 is out of range: 0 to 10000 mm");
-        assert!(Table::root().check("x", 10_000.0, ranges::LEN_MM).is_ok(), "the range is closed");
-        assert!(Table::root().check_opt("x", None, ranges::LEN_MM).is_ok());
+        assert!(Table::root().check("x", 10_000.0, crate::range::LEN_MM).is_ok(), "the range is closed");
+        assert!(Table::root().check_opt("x", None, crate::range::LEN_MM).is_ok());
     }
 }

@@ -470,3 +470,18 @@ fn cartesian_helper_matches_points() {
     let p = CylPoint::new(1.0, 30.0, 2.0);
     assert_eq!(p.to_cartesian(), to_cartesian(1.0, 30.0, 2.0));
 }
+
+/// Regression (issue 25): `rotary tube --layers 1000000000` wrote until the disk was full; the
+/// whole tube's chords are now estimated and refused before a byte is written.
+#[test]
+fn a_tube_of_too_many_chords_is_refused_before_writing() {
+    let mut t = TubeParams::new(RotaryConfig::new(20.0));
+    t.layers = 1_000;
+    t.length_mm = 10_000.0;
+    let mut out = Vec::new();
+    let err = t.write_gcode(&mut out).unwrap_err();
+    assert!(matches!(err, RotaryError::TooManyPoints { limit: 5_000_000 }), "{err}");
+    assert!(out.is_empty(), "{} bytes written", out.len());
+    t.layers = 1_000_000;
+    assert_eq!(t.validate().unwrap_err().to_string(), "layers 1000000 is out of range: 1 to 1000");
+}

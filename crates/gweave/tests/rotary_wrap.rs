@@ -400,3 +400,14 @@ proptest! {
         }
     }
 }
+
+/// Regression (issue 25): a flat move of many turns round a thin mandrel became gigabytes of
+/// chords; past `MAX_CHORDS_PER_MOVE` it is refused, naming the line.
+#[test]
+fn a_move_of_endless_turns_is_refused() {
+    let mut config = WrapConfig::new(RotaryConfig::new(1.0));
+    config.chord_tolerance_mm = 0.001;
+    let err = wrap_bytes(config, b"G1 X1 F600\nG1 Y1000000000\n").unwrap_err();
+    assert!(matches!(err, RotaryError::AtLine { line: 2, .. }), "{err}");
+    assert!(matches!(*as_inner(&err), RotaryError::TooManyPoints { limit: 1_000_000 }), "{err}");
+}

@@ -9,7 +9,9 @@ use clap::Args;
 use gweave::check::{CheckOptions, CheckPass, CheckReport};
 use gweave::pass::{Run, Strictness};
 
-use crate::common::{print_summary, ReportArgs};
+use gweave::range::{BED_SIZE_MM, FEED_MM_MIN};
+
+use crate::common::{in_range, numbers_in, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::progress::Bar;
 
@@ -22,10 +24,11 @@ pub struct CheckArgs {
     /// The G-code file to check.
     pub input: PathBuf,
     /// Printable volume X,Y,Z in mm; moves outside it are reported.
-    #[arg(long, value_name = "X,Y,Z", value_parser = crate::common::parse_xyz)]
+    #[arg(long, value_name = "X,Y,Z", value_parser = numbers_in::<3>(BED_SIZE_MM))]
     pub bed: Option<[f64; 3]>,
     /// Feed rates above this are absurd, mm/min.
-    #[arg(long, default_value_t = CheckOptions::default().max_feed_mm_min)]
+    #[arg(long, value_name = "MM_MIN", default_value_t = CheckOptions::default().max_feed_mm_min,
+          value_parser = in_range(FEED_MM_MIN))]
     pub max_feed: f64,
     /// Treat warnings as errors.
     #[arg(long)]

@@ -15,7 +15,9 @@ use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{mix_file, wizard::run_wizard};
 
-use crate::common::{load_or_default, print_summary, write_bytes, OutputArgs, ReportArgs};
+use gweave::range::PURGE_MM;
+
+use crate::common::{in_range, load_or_default, print_summary, write_bytes, OutputArgs, ReportArgs};
 use crate::files::Files;
 use crate::progress::Bar;
 
@@ -59,7 +61,7 @@ pub struct MixArgs {
     #[arg(long, value_name = "DIALECT", value_parser = |s: &str| s.parse::<Dialect>().map_err(|e| e.to_string()))]
     pub dialect: Option<Dialect>,
     /// Purge length at each change, mm of filament (0: no purge); overrides the profile.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
     pub purge_mm: Option<f64>,
     /// Draw the job's mixes (or the whole palette without a job) as a PNG swatch chart.
     #[arg(long, value_name = "PNG")]

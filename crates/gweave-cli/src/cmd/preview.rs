@@ -5,17 +5,19 @@ use std::ops::RangeInclusive;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::Args;
 use gweave::colour::Srgb8;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::post::mix::profile::MixProfile;
+use gweave::range::LAYER_NUMBER;
 use gweave::render::{
-    preview_with_progress, ColourBy, Format, MixColours, PreviewOptions, PreviewReport, ViewKind, ViewOptions,
+    preview_with_progress, ColourBy, Format, MixColours, PreviewOptions, PreviewReport, ViewKind,
+    ViewOptions, MIN_LEN_MM, PICTURE_SIDE_PX,
 };
-use gweave::rotary::cylinder::RotaryConfig;
+use gweave::rotary::cylinder::{RotaryConfig, MANDREL_DIAMETER_MM};
 
-use crate::common::{load, print_summary, write_bytes, ReportArgs};
+use crate::common::{in_range, load, print_summary, write_bytes, ReportArgs};
 use crate::files::Files;
 use crate::progress::Bar;
 
@@ -35,7 +37,7 @@ pub struct PreviewArgs {
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// Draw only this layer (0-based).
-    #[arg(long, value_name = "N", conflicts_with = "layers")]
+    #[arg(long, value_name = "N", conflicts_with = "layers", value_parser = in_range(LAYER_NUMBER))]
     pub layer: Option<u32>,
     /// Draw this layer range, inclusive, e.g. 10-20.
     #[arg(long, value_name = "A-B", value_parser = parse_range)]
@@ -63,7 +65,7 @@ pub struct PreviewArgs {
     /// Draw the file as a rotary program on a mandrel of this diameter, mm (axes X along, A
     /// around in degrees, Z away from it). Not needed for `gweave rotary` output: its header
     /// names the machine.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(MANDREL_DIAMETER_MM))]
     pub mandrel_diameter: Option<f64>,
     /// Printhead profile of binder-jet raster output (TOML, as for `gweave raster --head`;
     /// default: HP C6602, 12 nozzles at 96 dpi): its fire commands are drawn as drops.
@@ -73,7 +75,7 @@ pub struct PreviewArgs {
     #[arg(long)]
     pub travel: bool,
     /// Merge chained moves shorter than this, mm (default: 0, or 0.2 for files over 32 MB).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(MIN_LEN_MM))]
     pub min_len: Option<f32>,
     #[command(flatten)]
     pub report: ReportArgs,
@@ -84,8 +86,8 @@ pub struct PreviewArgs {
 
 fn parse_range(s: &str) -> Result<RangeInclusive<u32>, String> {
     let (a, b) = s.split_once('-').ok_or_else(|| format!("expected A-B, got {s:?}"))?;
-    let a: u32 = a.trim().parse().map_err(|_| format!("bad layer {a:?}"))?;
-    let b: u32 = b.trim().parse().map_err(|_| format!("bad layer {b:?}"))?;
+    let layer = |n: &str| in_range(LAYER_NUMBER)(n).map_err(|e| format!("layer {}: {e}", n.trim()));
+    let (a, b) = (layer(a)?, layer(b)?);
     if a > b {
         return Err(format!("empty layer range {s:?}"));
     }
@@ -94,10 +96,8 @@ fn parse_range(s: &str) -> Result<RangeInclusive<u32>, String> {
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
-    match (w.parse(), h.parse()) {
-        (Ok(w), Ok(h)) => Ok((w, h)),
-        _ => Err(format!("expected WIDTHxHEIGHT, got {s:?}")),
-    }
+    let side = |n: &str| in_range(PICTURE_SIDE_PX)(n).map_err(|e| format!("{}: {e}", n.trim()));
+    Ok((side(w)?, side(h)?))
 }
 
 pub fn run(args: PreviewArgs) -> Result<ExitCode> {
@@ -110,11 +110,6 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let format = Format::from_path(&args.output)?;
-    if let Some(m) = args.min_len {
-        if !(m.is_finite() && m >= 0.0) {
-            bail!("--min-len must be 0 or more mm, got {m}");
-        }
-    }
     let mix = match &args.mix_profile {
         Some(path) => Some(MixColours::from_profile(&load(path, MixProfile::from_toml_str)?)?),
         None => None,

@@ -8,8 +8,9 @@ use anyhow::Result;
 use clap::Args;
 use gweave::gcode::writer::Target;
 use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
+use gweave::range::{FILAMENT_DIAMETER_MM, POSITION_MM, PURGE_MM, PURGE_MM3};
 
-use crate::common::{load_or_default, print_summary, OutputArgs, ReportArgs};
+use crate::common::{in_range, load_or_default, numbers_in, print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
 use crate::progress::Bar;
 
@@ -32,16 +33,16 @@ pub struct PurgeShiftArgs {
     #[command(flatten)]
     pub out: OutputArgs,
     /// Purge per change, mm of filament.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
     pub purge: Option<f64>,
     /// Purge per change as a volume, mm^3 (converted with --filament-diameter).
-    #[arg(long, value_name = "MM3", conflicts_with = "purge")]
+    #[arg(long, value_name = "MM3", conflicts_with = "purge", value_parser = in_range(PURGE_MM3))]
     pub purge_mm3: Option<f64>,
     /// TOML settings: per-pair table, colours, washout model, rules (flags override it).
     #[arg(short, long, value_name = "TOML")]
     pub config: Option<PathBuf>,
     /// Filament diameter, mm (default 1.75).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(FILAMENT_DIAMETER_MM))]
     pub filament_diameter: Option<f64>,
     /// Allow a change to move back into the previous layer.
     #[arg(long)]
@@ -57,8 +58,8 @@ pub struct PurgeShiftArgs {
     #[arg(long, value_name = "NAME")]
     pub fallback: Option<String>,
     /// The tower's corner `X,Y`, mm (default: beside the print's extent so far).
-    #[arg(long, value_name = "X,Y", value_delimiter = ',', num_args = 1)]
-    pub tower_at: Option<Vec<f64>>,
+    #[arg(long, value_name = "X,Y", value_parser = numbers_in::<2>(POSITION_MM))]
+    pub tower_at: Option<[f64; 2]>,
     #[command(flatten)]
     pub report: ReportArgs,
     /// No progress bar.
@@ -74,11 +75,6 @@ fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
         Some([begin, end]) => Some([begin.clone(), end.clone()]),
         Some(_) => anyhow::bail!("--markers takes two comment texts: BEGIN,END"),
     };
-    let tower_xy_mm = match args.tower_at.as_deref() {
-        None => None,
-        Some(&[x, y]) => Some([x, y]),
-        Some(_) => anyhow::bail!("--tower-at takes two numbers: X,Y"),
-    };
     c.apply(&Overrides {
         purge_mm: args.purge,
         purge_mm3: args.purge_mm3,
@@ -87,7 +83,7 @@ fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
         allow_features: args.allow_features.clone(),
         markers,
         fallback: args.fallback.clone(),
-        tower_xy_mm,
+        tower_xy_mm: args.tower_at,
     });
     Ok(c)
 }

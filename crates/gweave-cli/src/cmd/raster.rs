@@ -4,12 +4,14 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use clap::{Args, ValueEnum};
 use gweave::gcode::writer::Target;
 use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
+use gweave::gen::raster::{DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
+use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
 
-use crate::common::{hms, print_summary, ReportArgs};
+use crate::common::{hms, in_range, numbers_in, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::raster_job::{JobOptions, JobReport};
 
@@ -31,7 +33,7 @@ pub struct RasterArgs {
     #[arg(long, value_name = "PROFILE.toml")]
     pub head: Option<PathBuf>,
     /// Fraction of full scale at or above which a pixel gets binder.
-    #[arg(long, default_value_t = 0.5, value_name = "0..1")]
+    #[arg(long, default_value_t = 0.5, value_name = "0..1", value_parser = in_range(THRESHOLD))]
     pub threshold: f64,
     /// Dark pixels get binder (black-on-white drawings, as in seed 004's BMPs).
     #[arg(long)]
@@ -44,22 +46,22 @@ pub struct RasterArgs {
     #[arg(long)]
     pub one_way: bool,
     /// Fires per pixel (binder saturation).
-    #[arg(long, default_value_t = 1, value_name = "N")]
+    #[arg(long, default_value_t = 1, value_name = "N", value_parser = in_range(DENSITY))]
     pub density: u32,
     /// Bed position of the image corner, mm.
-    #[arg(long, value_name = "X,Y", default_value = "20,20")]
-    pub origin: String,
+    #[arg(long, value_name = "X,Y", default_value = "20,20", value_parser = numbers_in::<2>(POSITION_MM))]
+    pub origin: [f64; 2],
     /// Layer thickness, mm (default: the .sl1's own, else 0.1).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(LAYER_HEIGHT_MM))]
     pub layer_height: Option<f64>,
     /// Pixel size of the images, mm; they are resampled to the nozzle pitch.
-    #[arg(long, value_name = "MM", conflicts_with = "dpi")]
+    #[arg(long, value_name = "MM", conflicts_with = "dpi", value_parser = in_range(PIXEL_MM))]
     pub pixel_mm: Option<f64>,
     /// Resolution of the images, dots per inch (pixel = 25.4 / D mm).
-    #[arg(long, value_name = "D")]
+    #[arg(long, value_name = "D", value_parser = in_range(DPI))]
     pub dpi: Option<f64>,
     /// Heads to use (the profile's offsets; missing heads get zero offsets).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = in_range(HEADS))]
     pub heads: Option<usize>,
     /// One image channel per head, e.g. `r,b` (r, g, b, luma).
     #[arg(long, value_name = "LIST")]
@@ -77,7 +79,7 @@ pub struct RasterArgs {
     #[arg(long, value_enum)]
     pub dialect: Option<Dialect>,
     /// Carriage feed rate, mm/min.
-    #[arg(long, value_name = "MM_MIN")]
+    #[arg(long, value_name = "MM_MIN", value_parser = in_range(FEED_MM_MIN))]
     pub feed: Option<f64>,
     /// Estimate time from the path at the feed rate instead of running the planner (faster).
     #[arg(long)]
@@ -86,7 +88,7 @@ pub struct RasterArgs {
     #[arg(long)]
     pub test_pattern: bool,
     /// Columns per nozzle in the test pattern.
-    #[arg(long, default_value_t = 4, value_name = "N")]
+    #[arg(long, default_value_t = 4, value_name = "N", value_parser = in_range(PATTERN_COLUMNS))]
     pub pattern_columns: usize,
     #[command(flatten)]
     pub report: ReportArgs,
@@ -103,15 +105,6 @@ pub enum Dialect {
     Reprap,
 }
 
-fn parse_origin(text: &str) -> Result<(f64, f64)> {
-    let parts: Vec<&str> = text.split(',').collect();
-    let [x, y] = parts[..] else {
-        bail!("--origin wants X,Y in mm, got {text:?}");
-    };
-    let num = |s: &str| s.trim().parse::<f64>().with_context(|| format!("--origin: {s:?} is not a number"));
-    Ok((num(x)?, num(y)?))
-}
-
 impl RasterArgs {
     fn options(&self) -> Result<JobOptions> {
         Ok(JobOptions {
@@ -122,7 +115,7 @@ impl RasterArgs {
             flip_y: self.flip_y,
             one_way: self.one_way,
             density: self.density,
-            origin_mm: parse_origin(&self.origin)?,
+            origin_mm: (self.origin[0], self.origin[1]),
             layer_height_mm: self.layer_height,
             pixel_mm: self.pixel_mm,
             dpi: self.dpi,
@@ -173,7 +166,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
                     "  {} head(s) x {} nozzles, {} columns per address, {} fire commands",
                     profile.heads.len(),
                     profile.nozzle_count,
-                    args.pattern_columns.max(1),
+                    args.pattern_columns,
                     rep.fire_commands
                 )?;
                 writeln!(out, "  column group a fires address a alone: the row it prints is nozzle_rows[a]")

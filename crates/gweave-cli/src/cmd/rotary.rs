@@ -11,14 +11,17 @@ use std::process::ExitCode;
 use anyhow::{bail, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use gweave::gcode::writer::Target;
-use gweave::rotary::cylinder::{FeedConvention, RotaryConfig, RotaryUnit};
-use gweave::rotary::helix::TubeParams;
+use gweave::range::{ANGLE_DEG, FILAMENT_DIAMETER_MM, LAYER_HEIGHT_MM, SPEED_MM_S, TEMPERATURE_C};
+use gweave::rotary::cylinder::{FeedConvention, RotaryConfig, RotaryUnit, MANDREL_DIAMETER_MM};
+use gweave::rotary::helix::{
+    TubeParams, BEAD_WIDTH_MM, CHORD_TOLERANCE_MM, PITCH_MM, SEGMENTS_PER_TURN, TUBE_LAYERS, TUBE_LENGTH_MM,
+};
 use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
 
 use crate::common::hms;
-use crate::common::{load, print_summary, OutputArgs, ReportArgs};
+use crate::common::{in_range, load, print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
 use crate::progress::Bar;
 
@@ -66,7 +69,7 @@ pub enum UnitArg {
 #[derive(Args, Debug)]
 pub struct MachineArgs {
     /// Mandrel diameter, mm (required unless the config file gives `[machine] mandrel_diameter_mm`).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(MANDREL_DIAMETER_MM))]
     pub mandrel_diameter: Option<f64>,
     /// How the firmware reads F [default: nist].
     #[arg(long, value_enum)]
@@ -188,10 +191,10 @@ pub struct WrapArgs {
     #[arg(long)]
     pub keep_arc_length: bool,
     /// Turn every layer this much further than the one below, degrees, so seams do not stack.
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", value_parser = in_range(ANGLE_DEG))]
     pub seam_rotation: Option<f64>,
     /// Largest chord sagitta on the cylinder, mm (0: one move per flat move) [default: 0.01].
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(CHORD_TOLERANCE_MM.or_zero()))]
     pub chord_tol: Option<f64>,
     #[command(flatten)]
     pub report: ReportArgs,
@@ -279,37 +282,37 @@ pub struct TubeArgs {
     #[command(flatten)]
     pub machine: MachineArgs,
     /// Tube length along the mandrel, mm [default: 50].
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(TUBE_LENGTH_MM))]
     pub length: Option<f64>,
     /// Number of layers [default: 4].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = in_range(TUBE_LAYERS))]
     pub layers: Option<u32>,
     /// Layer height (radial step), mm [default: 0.2].
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(LAYER_HEIGHT_MM))]
     pub layer_height: Option<f64>,
     /// Bead width, mm [default: 0.4].
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(BEAD_WIDTH_MM))]
     pub bead_width: Option<f64>,
     /// Axial advance per turn, mm [default: the bead width, a closed wall].
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(PITCH_MM))]
     pub pitch: Option<f64>,
     /// Keep one handedness for every layer (the spindle reverses instead).
     #[arg(long)]
     pub no_interweave: bool,
     /// At least this many chords per turn.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = in_range(SEGMENTS_PER_TURN))]
     pub segments_per_turn: Option<u32>,
     /// Largest chord sagitta, mm [default: 0.01].
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(CHORD_TOLERANCE_MM))]
     pub chord_tol: Option<f64>,
     /// Surface speed while printing, mm/s [default: 20].
-    #[arg(long, value_name = "MM_S")]
+    #[arg(long, value_name = "MM_S", value_parser = in_range(SPEED_MM_S))]
     pub speed: Option<f64>,
     /// Nozzle temperature, degrees C [default: 190].
-    #[arg(long, value_name = "C")]
+    #[arg(long, value_name = "C", value_parser = in_range(TEMPERATURE_C))]
     pub temp: Option<f64>,
     /// Filament diameter, mm [default: 1.75].
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(FILAMENT_DIAMETER_MM))]
     pub filament_diameter: Option<f64>,
     #[command(flatten)]
     pub report: ReportArgs,

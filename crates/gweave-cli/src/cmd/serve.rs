@@ -19,7 +19,15 @@ use gweave_sim::serial::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
 use gweave_sim::tcp::TcpEndpoint;
 use gweave_sim::transport::{serve, Endpoint, ServeOptions, ServeSummary};
 
-use crate::common::load_or_default;
+use gweave::range::Range;
+
+use crate::common::{in_range, load_or_default};
+
+/// `--exit-after-idle`: a tenth of a second to about eleven days.
+const IDLE_S: Range<f64> = Range::new(0.1, 1e6, "s");
+/// `--duplicate-window`: Marlin's own resend buffer is a few lines; a host never has more than a
+/// few hundred in flight.
+const DUPLICATE_WINDOW: Range<u32> = Range::new(0, 1000, "lines");
 
 /// Run the virtual printer as a Marlin board behind a pty or a loopback TCP port.
 ///
@@ -45,7 +53,7 @@ pub struct ServeArgs {
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
     /// Exit after this many wall-clock seconds without a byte from the host.
-    #[arg(long, value_name = "SECS")]
+    #[arg(long, value_name = "SECS", value_parser = in_range(IDLE_S))]
     pub exit_after_idle: Option<f64>,
     /// When a host disconnects, write the simulator's report of its session here (JSON, as
     /// `gweave sim --report`; a later session replaces it).
@@ -53,7 +61,8 @@ pub struct ServeArgs {
     pub report: Option<PathBuf>,
     /// Acknowledge a repeat of one of the last N line numbers with `ok` without running it again
     /// (0: answer it with a resend request, as stock Marlin).
-    #[arg(long, value_name = "N", default_value_t = ProtocolConfig::default().duplicate_window)]
+    #[arg(long, value_name = "N", default_value_t = ProtocolConfig::default().duplicate_window,
+          value_parser = in_range(DUPLICATE_WINDOW))]
     pub duplicate_window: u32,
 }
 
@@ -73,13 +82,7 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
             duplicate_window: args.duplicate_window,
         },
         realtime: args.realtime,
-        exit_after_idle: match args.exit_after_idle {
-            Some(s) if !(s.is_finite() && s > 0.0) => {
-                bail!("--exit-after-idle takes a positive number of seconds")
-            }
-            Some(s) => Some(Duration::from_secs_f64(s)),
-            None => None,
-        },
+        exit_after_idle: args.exit_after_idle.map(Duration::from_secs_f64),
     };
     let mut log = match &args.log {
         Some(path) => {

@@ -6,10 +6,11 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use gweave::gen::slice_raster::{slice_to_dir, SliceConfig, SliceReport};
+use gweave::gen::slice_raster::{slice_to_dir, SliceConfig, SliceReport, MARGIN_PX};
 use gweave::gen::stl::read_stl;
+use gweave::range::{DPI, LAYER_HEIGHT_MM, PIXEL_MM};
 
-use crate::common::{print_summary, ReportArgs};
+use crate::common::{in_range, print_summary, ReportArgs};
 use crate::files::{layer_png, Files};
 
 /// Slice an STL mesh into layer images (PNG, 1-bit): each pixel is binder when its centre lies
@@ -21,16 +22,16 @@ pub struct SliceRasterArgs {
     /// The mesh (binary or ASCII STL).
     pub model: PathBuf,
     /// Layer thickness, mm.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(LAYER_HEIGHT_MM))]
     pub layer_height: f64,
     /// Image resolution, dots per inch (96 = the HP C6602's nozzle pitch).
-    #[arg(long, value_name = "D", default_value_t = 96.0, conflicts_with = "pixel_mm")]
+    #[arg(long, value_name = "D", default_value_t = 96.0, conflicts_with = "pixel_mm", value_parser = in_range(DPI))]
     pub dpi: f64,
     /// Pixel size in mm instead of --dpi.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(PIXEL_MM))]
     pub pixel_mm: Option<f64>,
     /// Empty pixels around the part on every side.
-    #[arg(long, default_value_t = 0, value_name = "PX")]
+    #[arg(long, default_value_t = 0, value_name = "PX", value_parser = in_range(MARGIN_PX))]
     pub margin: usize,
     /// Folder for `layer_00000.png`, ...
     #[arg(short, long, value_name = "DIR")]

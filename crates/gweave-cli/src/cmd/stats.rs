@@ -9,7 +9,9 @@ use clap::Args;
 use gweave::pass::Run;
 use gweave::stats::{Stats, StatsPass};
 
-use crate::common::{hms, print_summary, ReportArgs};
+use gweave::range::FILAMENT_DIAMETER_MM;
+
+use crate::common::{hms, in_range, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::progress::Bar;
 
@@ -22,7 +24,7 @@ pub struct StatsArgs {
     /// The G-code file to read.
     pub input: PathBuf,
     /// Filament diameter in mm (default: the file's own setting, else 1.75).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = in_range(FILAMENT_DIAMETER_MM))]
     pub filament_diameter: Option<f64>,
     #[command(flatten)]
     pub report: ReportArgs,

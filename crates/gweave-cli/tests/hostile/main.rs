@@ -14,4 +14,5 @@ mod bytes;
 mod config;
 mod outputs;
 mod serve;
+mod sizes;
 mod sweep;

@@ -328,10 +328,10 @@ pub struct NumberFormat {
 
 /// Decimals G-code numbers are written with: an f64 holds about 15 significant digits, so 9
 /// places leave 6 for the integer part.
-const DECIMALS: crate::settings::Range = crate::settings::Range::new(0.0, 9.0, "decimals");
+const DECIMALS: crate::range::Range = crate::range::Range::new(0.0, 9.0, "decimals");
 
 impl crate::settings::CheckRanges for NumberFormat {
-    fn check_ranges(&self, t: &crate::settings::Table) -> Result<(), crate::settings::OutOfRange> {
+    fn check_ranges(&self, t: &crate::settings::Table) -> Result<(), crate::range::OutOfRange> {
         t.count("position_decimals", self.position_decimals, DECIMALS)?;
         t.count("extrusion_decimals", self.extrusion_decimals, DECIMALS)?;
         t.count("feed_decimals", self.feed_decimals, DECIMALS)

@@ -14,6 +14,8 @@ use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
+use crate::range::{count, MAX_IMAGE_SIDE_PX};
+
 /// Errors from reading or writing layer images.
 #[derive(Debug, Error)]
 pub enum BitmapError {
@@ -30,8 +32,11 @@ pub enum BitmapError {
     Bmp(String),
     #[error("unsupported image format (expected BMP or PNG)")]
     UnknownFormat,
-    #[error("image too large: {width}x{height}")]
+    #[error("image too large: {width}x{height} px")]
     TooLarge { width: u64, height: u64 },
+    /// Resampling would make an image larger than [`MAX_IMAGE_SIDE_PX`] on a side.
+    #[error("resampled to the nozzle pitch, the image would be {width} x {height} px, more than the limit of {} px per side", MAX_IMAGE_SIDE_PX)]
+    Resampled { width: String, height: String },
     #[error("pixel buffer has {got} values, expected {expected}")]
     BufferSize { expected: usize, got: usize },
     #[error("no images match {0}")]
@@ -247,8 +252,15 @@ impl Bitmap {
                 return Err(BitmapError::PixelSize(v));
             }
         }
+        // The new size, checked before anything is allocated (a 1e6 mm source pixel would make
+        // a terabyte image).
+        let pixels = |n: usize, src: f64| (n as f64 * src / dst_px_mm + 0.5).floor();
+        let (w, h) = (pixels(self.width, src_px_x_mm), pixels(self.height, src_px_y_mm));
+        if w.max(h) > MAX_IMAGE_SIDE_PX as f64 {
+            return Err(BitmapError::Resampled { width: count(w), height: count(h) });
+        }
         let map = |n: usize, src: f64| -> Vec<usize> {
-            let count = (n as f64 * src / dst_px_mm + 0.5).floor() as usize;
+            let count = pixels(n, src) as usize;
             (0..count).map(|i| (((i as f64 + 0.5) * dst_px_mm / src) as usize).min(n - 1)).collect()
         };
         if self.width == 0 || self.height == 0 {
@@ -609,6 +621,19 @@ mod tests {
         assert!(!f.get(61, 0) && f.get(62, 0) && f.get(129, 0) && !f.get(130, 0));
         assert!(f.get(5, 0) && f.get(6, 0) && !f.get(7, 0) && f.get(199, 0));
         assert_eq!(f.row(0)[3] >> 8, 0, "padding past the width stays clear");
+    }
+
+    /// Regression: `raster --pixel-mm 1e6` aborted on a terabyte image; the resampled size is
+    /// checked before anything is allocated.
+    #[test]
+    fn resampling_past_the_side_limit_is_refused() {
+        let b = Bitmap::new(4, 3);
+        let err = b.resample(1e6, 1e6, 25.4 / 96.0).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "resampled to the nozzle pitch, the image would be 15118110 x 11338583 px, more than the limit of 20000 px per side"
+        );
+        assert_eq!(b.resample(1.0, 1.0, 0.5).unwrap().width(), 8);
     }
 
     #[test]

@@ -15,7 +15,8 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
+use crate::range::{self, OutOfRange, Range};
+use crate::settings::{CheckRanges, Table};
 
 /// Largest nozzle count: a band's nozzle mask is one `u64`.
 pub const MAX_NOZZLES: u32 = 64;
@@ -228,12 +229,12 @@ const DROP_VOLUME_PL: Range = Range::new(0.0, 100_000.0, "pl");
 impl CheckRanges for PrintheadProfile {
     fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
         t.count("nozzle_count", self.nozzle_count, NOZZLES)?;
-        t.check("dpi", self.dpi, ranges::DPI)?;
+        t.check("dpi", self.dpi, range::DPI)?;
         t.count("heads (count)", self.heads.len() as u64, HEADS)?;
         for (i, h) in self.heads.iter().enumerate() {
             let head = t.sub("heads").item(i);
-            head.check("offset_x_mm", h.offset_x_mm, ranges::POS_MM)?;
-            head.check("offset_y_mm", h.offset_y_mm, ranges::POS_MM)?;
+            head.check("offset_x_mm", h.offset_x_mm, range::POSITION_MM)?;
+            head.check("offset_y_mm", h.offset_y_mm, range::POSITION_MM)?;
         }
         t.check("min_fire_interval_us", self.min_fire_interval_us, FIRE_INTERVAL_US)?;
         t.check_opt("drop_volume_pl", self.drop_volume_pl, DROP_VOLUME_PL)

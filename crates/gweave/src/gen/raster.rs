@@ -41,6 +41,7 @@ use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
 use super::gcode_text::{push_fire, push_num, push_uint, TextTable};
 use super::printhead::{PrintheadError, PrintheadProfile, MAX_NOZZLES};
 use super::sl1::{Sl1Error, Sl1Reader};
+use crate::range::{OutOfRange, Range, FEED_MM_MIN, LAYER_HEIGHT_MM, POSITION_MM};
 
 /// Layer height used for image stacks when the configuration gives none.
 pub const DEFAULT_LAYER_HEIGHT_MM: f64 = 0.1;
@@ -58,9 +59,20 @@ pub enum RasterError {
     Sl1(#[from] Sl1Error),
     #[error("invalid raster config: {0}")]
     Config(String),
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
     #[error("{planes} image planes given but the profile has {heads} heads")]
     TooManyPlanes { planes: usize, heads: usize },
 }
+
+/// Fires per pixel (binder saturation): past 16 the powder is flooded.
+pub const DENSITY: Range<u32> = Range::new(1, 16, "fires per pixel");
+/// Columns per nozzle address in the test pattern.
+pub const PATTERN_COLUMNS: Range<usize> = Range::new(1, 100, "columns");
+/// Heads a job drives (the fire command's P).
+pub const HEADS: Range<usize> = Range::new(1, 16, "heads");
+/// Fraction of full scale at or above which a pixel gets binder.
+pub const THRESHOLD: Range<f64> = Range::new(0.0, 1.0, "");
 
 /// Raster job settings (TOML, all keys optional, unknown keys rejected).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -120,23 +132,16 @@ impl RasterConfig {
     /// Checks ranges.
     pub fn validate(&self) -> Result<(), RasterError> {
         let bad = |m: String| Err(RasterError::Config(m));
-        if !(self.origin_x_mm.is_finite() && self.origin_y_mm.is_finite()) {
-            return bad("origin must be finite".into());
-        }
+        POSITION_MM.check("origin_x_mm", self.origin_x_mm)?;
+        POSITION_MM.check("origin_y_mm", self.origin_y_mm)?;
         if let Some(h) = self.layer_height_mm {
-            if !(h.is_finite() && h > 0.0) {
-                return bad(format!("layer_height_mm must be > 0, got {h}"));
-            }
+            LAYER_HEIGHT_MM.check("layer_height_mm", h)?;
         }
-        if self.first_layer_z_mm.is_some_and(|z| !z.is_finite()) {
-            return bad("first_layer_z_mm must be finite".into());
+        if let Some(z) = self.first_layer_z_mm {
+            POSITION_MM.check("first_layer_z_mm", z)?;
         }
-        if self.density == 0 {
-            return bad("density must be at least 1".into());
-        }
-        if !(self.feed_mm_min.is_finite() && self.feed_mm_min > 0.0) {
-            return bad(format!("feed_mm_min must be > 0, got {}", self.feed_mm_min));
-        }
+        DENSITY.check("density", self.density)?;
+        FEED_MM_MIN.check("feed_mm_min", self.feed_mm_min)?;
         if self.decimals > 9 {
             return bad(format!("decimals must be 0..=9, got {}", self.decimals));
         }
@@ -500,6 +505,7 @@ pub fn test_pattern<W: Write>(
     cfg: &RasterConfig,
     group_columns: usize,
 ) -> Result<RasterReport, RasterError> {
+    PATTERN_COLUMNS.check("pattern columns", group_columns)?;
     let mut w = RasterWriter::new(out, profile, cfg, None)?;
     w.begin_layer();
     let n = profile.nozzle_count as usize;

@@ -19,14 +19,21 @@ use thiserror::Error;
 
 use super::bitmap::{Bitmap, BitmapError};
 use super::stl::Mesh;
+use crate::range::{
+    short, Ceiling, OutOfRange, Range, TooLarge, LAYER_HEIGHT_MM, MAX_IMAGE_SIDE_PX, MAX_LAYERS, PIXEL_MM,
+};
 
 /// Errors from slicing.
 #[derive(Debug, Error)]
 pub enum SliceError {
-    #[error("invalid slice config: {0}")]
-    Config(String),
     #[error("the mesh is empty")]
     EmptyMesh,
+    #[error("the mesh has a vertex coordinate of {0}")]
+    NonFinite(f64),
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
+    #[error(transparent)]
+    TooLarge(#[from] TooLarge),
     #[error(transparent)]
     Image(#[from] BitmapError),
     #[error("{path}: {source}")]
@@ -43,6 +50,19 @@ pub struct SliceConfig {
     pub pixel_mm: f64,
     /// Empty pixels added on every side.
     pub margin_px: usize,
+}
+
+/// Empty pixels around the part.
+pub const MARGIN_PX: Range<usize> = Range::new(0, 1_000, "px");
+
+impl SliceConfig {
+    /// Checks every range (the flags and the TOML keys alike).
+    pub fn validate(&self) -> Result<(), SliceError> {
+        LAYER_HEIGHT_MM.check("layer_height_mm", self.layer_height_mm)?;
+        PIXEL_MM.check("pixel_mm", self.pixel_mm)?;
+        MARGIN_PX.check("margin_px", self.margin_px)?;
+        Ok(())
+    }
 }
 
 impl Default for SliceConfig {
@@ -69,26 +89,39 @@ pub struct SliceGrid {
 impl SliceGrid {
     /// Plans the grid for a mesh.
     pub fn for_mesh(mesh: &Mesh, cfg: &SliceConfig) -> Result<Self, SliceError> {
-        for (name, v) in [("layer_height_mm", cfg.layer_height_mm), ("pixel_mm", cfg.pixel_mm)] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(SliceError::Config(format!("{name} must be > 0, got {v}")));
-            }
-        }
+        cfg.validate()?;
         let (lo, hi) = mesh.bounds().ok_or(SliceError::EmptyMesh)?;
+        if let Some(v) = lo.iter().chain(&hi).find(|v| !v.is_finite()) {
+            return Err(SliceError::NonFinite(*v));
+        }
         let p = cfg.pixel_mm;
-        let m = cfg.margin_px;
-        // A small tolerance keeps an exact multiple (10 mm / 0.5 mm, or 0.3 mm stored as f32)
-        // from gaining a column or layer.
-        let cells = |span: f64| (span / p - 1e-6).ceil().max(0.0) as usize;
+        let m = cfg.margin_px as f64;
+        // Sizes in floating point first, checked against their ceilings before anything is
+        // allocated or written: a 1e30 mm mesh must be refused, not overflow. A small tolerance
+        // keeps an exact multiple (10 mm / 0.5 mm, or 0.3 mm stored as f32) from gaining a
+        // column or layer.
+        let cells = |span: f64| (span / p - 1e-6).ceil().max(0.0);
+        let side = Ceiling::new(MAX_IMAGE_SIDE_PX, "pixels per image side");
+        let span = |axis: usize| hi[axis] - lo[axis];
+        let because = |axis: usize| {
+            let name = ["X", "Y"][axis];
+            move || format!("a {} mm {name} extent at {} mm per pixel", short(span(axis)), short(p))
+        };
+        let width_px = side.check(cells(span(0)) + 2.0 * m, because(0))?;
+        let height_px = side.check(cells(span(1)) + 2.0 * m, because(1))?;
+        let layers = Ceiling::new(MAX_LAYERS, "layers")
+            .check((span(2) / cfg.layer_height_mm - 1e-6).ceil().max(0.0), || {
+                format!("a part {} mm tall at {} mm per layer", short(span(2)), short(cfg.layer_height_mm))
+            })?;
         Ok(SliceGrid {
-            origin_x_mm: lo[0] - m as f64 * p,
-            origin_y_mm: lo[1] - m as f64 * p,
+            origin_x_mm: lo[0] - m * p,
+            origin_y_mm: lo[1] - m * p,
             pixel_mm: p,
-            width_px: cells(hi[0] - lo[0]) + 2 * m,
-            height_px: cells(hi[1] - lo[1]) + 2 * m,
+            width_px: width_px as usize,
+            height_px: height_px as usize,
             z_min_mm: lo[2],
             layer_height_mm: cfg.layer_height_mm,
-            layers: ((hi[2] - lo[2]) / cfg.layer_height_mm - 1e-6).ceil().max(0.0) as usize,
+            layers: layers as usize,
         })
     }
 

@@ -72,7 +72,7 @@ pub enum MixPassError {
     Config(String),
     /// A profile key out of its range (it names the table and the key).
     #[error(transparent)]
-    Range(#[from] crate::settings::OutOfRange),
+    Range(#[from] crate::range::OutOfRange),
     /// A line of the input the profile cannot handle (`<input>` for text in memory).
     #[error("{}:{line}: {message}", path.display())]
     AtLine { path: std::path::PathBuf, line: u64, message: String },

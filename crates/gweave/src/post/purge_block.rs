@@ -42,7 +42,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{E, X, Y, Z};
-use crate::settings::{ranges, CheckRanges, OutOfRange, Table};
+use crate::range::{self, OutOfRange};
+use crate::settings::{CheckRanges, Table};
 
 /// Where and how to purge (the purge settings of the profile, with the Z feed capped). The
 /// default is the seed's: retract 4 mm, lift 15 mm, purge at X10 Y10, wipe 5 mm along +X.
@@ -63,15 +64,15 @@ pub struct PurgeMotion {
 
 impl CheckRanges for PurgeMotion {
     fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
-        t.check("retract_mm", self.retract_mm, ranges::LEN_MM)?;
-        t.check("lift_mm", self.lift_mm, ranges::LEN_MM)?;
-        t.check("x_mm", self.x_mm, ranges::POS_MM)?;
-        t.check("y_mm", self.y_mm, ranges::POS_MM)?;
-        t.check("wipe_mm", self.wipe_mm, ranges::LEN_MM)?;
-        t.check("travel_feed_mm_min", self.travel_feed_mm_min, ranges::FEED_MM_MIN)?;
-        t.check("extrude_feed_mm_min", self.extrude_feed_mm_min, ranges::FEED_MM_MIN)?;
-        t.check("retract_feed_mm_min", self.retract_feed_mm_min, ranges::FEED_MM_MIN)?;
-        t.check("z_feed_mm_min", self.z_feed_mm_min, ranges::FEED_MM_MIN)
+        t.check("retract_mm", self.retract_mm, range::LEN_MM)?;
+        t.check("lift_mm", self.lift_mm, range::LEN_MM)?;
+        t.check("x_mm", self.x_mm, range::POSITION_MM)?;
+        t.check("y_mm", self.y_mm, range::POSITION_MM)?;
+        t.check("wipe_mm", self.wipe_mm, range::LEN_MM)?;
+        t.check("travel_feed_mm_min", self.travel_feed_mm_min, range::FEED_MM_MIN)?;
+        t.check("extrude_feed_mm_min", self.extrude_feed_mm_min, range::FEED_MM_MIN)?;
+        t.check("retract_feed_mm_min", self.retract_feed_mm_min, range::FEED_MM_MIN)?;
+        t.check("z_feed_mm_min", self.z_feed_mm_min, range::FEED_MM_MIN)
     }
 }
 

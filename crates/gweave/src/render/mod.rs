@@ -47,6 +47,7 @@ use serde::Serialize;
 use crate::gcode::state::State;
 use crate::gen::printhead::PrintheadProfile;
 use crate::pass::{Ctx, Pass, Progress, Quiet, Run};
+use crate::range::Range;
 use crate::rotary::cylinder::RotaryConfig;
 use crate::rotary::preview::RotaryReading;
 use crate::stats::{Stats, StatsPass};
@@ -61,8 +62,10 @@ pub use view::{ViewKind, ViewOptions};
 pub enum RenderError {
     #[error(transparent)]
     Gcode(#[from] crate::Error),
-    #[error("picture size must be 16 to 16384 px on each side, got {0}x{1}")]
+    #[error("picture size {0}x{1} is out of range: {PICTURE_SIDE_PX} on each side")]
     Size(u32, u32),
+    #[error(transparent)]
+    Range(#[from] crate::range::OutOfRange),
     #[error("unknown output format {0:?} (png, svg or html)")]
     Format(String),
     #[error("the HTML viewer shows one file; compare as PNG or SVG")]
@@ -94,6 +97,11 @@ impl Format {
     }
 }
 
+/// Width and height of a picture.
+pub const PICTURE_SIDE_PX: Range<u32> = Range::new(16, 16_384, "px");
+/// Merge length of chained moves (0: keep every move; 100 mm is a whole bed in a few strokes).
+pub const MIN_LEN_MM: Range<f32> = Range::new(0.0, 100.0, "mm");
+
 /// Everything `gweave preview` can be asked.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct PreviewOptions {
@@ -114,8 +122,11 @@ pub struct PreviewOptions {
 impl PreviewOptions {
     fn check(&self) -> Result<(), RenderError> {
         let (w, h) = (self.view.width_px, self.view.height_px);
-        if !(16..=16384).contains(&w) || !(16..=16384).contains(&h) {
+        if !(PICTURE_SIDE_PX.contains(w) && PICTURE_SIDE_PX.contains(h)) {
             return Err(RenderError::Size(w, h));
+        }
+        if let Some(m) = self.min_len_mm {
+            MIN_LEN_MM.check("min_len_mm", m)?;
         }
         Ok(())
     }

@@ -26,7 +26,10 @@
 //! keep more, so pictures also set [`ToolpathOptions::max_segments`]: when the toolpath reaches
 //! it, the merge length doubles and the segments kept so far are merged again, as often as
 //! needed. Memory then has a ceiling whatever the file's size, and the picture loses only detail
-//! finer than the final merge length (reported by [`ToolpathPass::min_len_mm`]).
+//! finer than the final merge length (reported by [`ToolpathPass::min_len_mm`]). Moves that
+//! never chain (travel and extrusion taking turns) cannot merge: then every second segment of
+//! each kind is dropped instead, as often as needed ([`ToolpathPass::thinning`]), so the ceiling
+//! holds for any file.
 
 use std::io::{self, Write};
 use std::ops::RangeInclusive;
@@ -186,13 +189,25 @@ pub struct ToolpathPass {
     pending: Option<Segment>,
     mix: Option<MixTracker>,
     cylinder: CylinderLayers,
+    /// See [`Self::thinning`].
+    thinning: u64,
+    /// Segments of each kind (travel, extruding) offered since thinning began.
+    thinning_seen: [u64; 2],
 }
 
 impl ToolpathPass {
     pub fn new(options: ToolpathOptions) -> Self {
         let mix = options.mix.clone().map(MixTracker::new);
         let out = Toolpath { tools: 1, ..Toolpath::default() };
-        ToolpathPass { options, out, pending: None, mix, cylinder: CylinderLayers::default() }
+        ToolpathPass {
+            options,
+            out,
+            pending: None,
+            mix,
+            cylinder: CylinderLayers::default(),
+            thinning: 1,
+            thinning_seen: [0; 2],
+        }
     }
 
     /// The collected toolpath.
@@ -218,6 +233,9 @@ impl ToolpathPass {
     }
 
     fn keep(&mut self, s: Segment) {
+        if self.thinned_out(&s) {
+            return;
+        }
         self.out.segments.push(s);
         if self.options.max_segments.is_some_and(|max| self.out.segments.len() >= max) {
             self.coarsen();
@@ -225,29 +243,75 @@ impl ToolpathPass {
     }
 
     /// Doubles the merge length and merges the segments kept so far again, with the rule of
-    /// [`Self::push`], until at most three quarters of the ceiling are used.
+    /// [`Self::push`], until at most three quarters of the ceiling are used. When merging cannot
+    /// make the room even at an unbounded length (too few segments chain onto one of their kind,
+    /// as when travel and extrusion take turns), every second segment of each kind is dropped
+    /// instead, from now on too ([`ToolpathPass::thinning`]). Each round halves, or merges with a
+    /// doubled length (and an infinite length merges every chain), so the loop ends whatever the
+    /// file holds.
     fn coarsen(&mut self) {
         let max = self.options.max_segments.unwrap_or(usize::MAX).max(4);
-        while self.out.segments.len() > max / 4 * 3 {
-            // 0.05 mm: the first step when the file was read without merging.
-            self.options.min_len_mm = (self.options.min_len_mm * 2.0).max(0.05);
-            let min_len = self.options.min_len_mm;
-            let segments = &mut self.out.segments;
-            let mut kept = 0;
-            for i in 0..segments.len() {
-                let s = segments[i];
-                if kept > 0 {
-                    let p = &mut segments[kept - 1];
-                    if p.same_kind(&s) && p.end == s.start && p.len_mm() < min_len {
-                        p.end = s.end;
-                        continue;
-                    }
-                }
-                segments[kept] = s;
-                kept += 1;
+        let target = max / 4 * 3;
+        while self.out.segments.len() > target {
+            let segments = &self.out.segments;
+            // Merging at any length removes one segment per chained pair, and no more.
+            let chained =
+                segments.windows(2).filter(|w| w[0].same_kind(&w[1]) && w[0].end == w[1].start).count();
+            if segments.len() - chained > target {
+                self.thin();
+            } else {
+                // 0.05 mm: the first step when the file was read without merging.
+                self.merge_again((self.options.min_len_mm * 2.0).max(0.05));
             }
-            segments.truncate(kept);
         }
+    }
+
+    /// Merges the segments kept so far again with merge length `min_len`.
+    fn merge_again(&mut self, min_len: f32) {
+        self.options.min_len_mm = min_len;
+        let segments = &mut self.out.segments;
+        let mut kept = 0;
+        for i in 0..segments.len() {
+            let s = segments[i];
+            if kept > 0 {
+                let p = &mut segments[kept - 1];
+                if p.same_kind(&s) && p.end == s.start && p.len_mm() < min_len {
+                    p.end = s.end;
+                    continue;
+                }
+            }
+            segments[kept] = s;
+            kept += 1;
+        }
+        segments.truncate(kept);
+    }
+
+    /// Doubles the thinning: keeps every second segment of each kind (extruding or not, so that
+    /// alternating travel and extrusion keep both) of those kept so far, and of those to come.
+    fn thin(&mut self) {
+        self.thinning *= 2;
+        let mut seen = [0u64; 2];
+        self.out.segments.retain(|s| {
+            let n = &mut seen[usize::from(s.extruding)];
+            *n += 1;
+            *n % 2 == 1
+        });
+    }
+
+    /// Thinning for a segment about to be kept: only every `thinning`-th of its kind is.
+    fn thinned_out(&mut self, s: &Segment) -> bool {
+        if self.thinning == 1 {
+            return false;
+        }
+        let n = &mut self.thinning_seen[usize::from(s.extruding)];
+        *n += 1;
+        *n % self.thinning != 1
+    }
+
+    /// How many segments of each kind stand for one kept (1: none dropped), once merging could
+    /// not keep the toolpath under [`ToolpathOptions::max_segments`].
+    pub fn thinning(&self) -> u64 {
+        self.thinning
     }
 
     fn push(&mut self, s: Segment) {
@@ -519,6 +583,32 @@ mod tests {
         assert_eq!(tp.segments.last().unwrap().end, [100.0, 0.0, 0.2]);
         // Still one chained path: each piece starts where the last ended.
         assert!(tp.segments.windows(2).all(|w| w[0].end == w[1].start));
+    }
+
+    /// Regression: alternating travel and extrusion never chain, so the merge could not reduce
+    /// anything and `coarsen` doubled the merge length for ever (a 39 MB file hung `preview`).
+    #[test]
+    fn coarsen_terminates_when_nothing_can_merge() {
+        let mut text = String::from("G1 X0 Y0 Z0.2 F600\n");
+        for i in 1..=5000 {
+            text.push_str(&format!("G0 X{} Y{}\nG1 X{}.5 E{i}\n", i % 97, i % 89, i % 97));
+        }
+        let options = ToolpathOptions {
+            print_only: false,
+            travel: true,
+            max_segments: Some(100),
+            ..Default::default()
+        };
+        let mut pass = ToolpathPass::new(options);
+        read(&text, &mut pass);
+        let (min_len, thinning) = (pass.min_len_mm(), pass.thinning());
+        let tp = pass.finish_toolpath();
+        assert!(tp.segments.len() <= 100, "{}", tp.segments.len());
+        // 10 000 segments in at most 100: halved (per kind) until they fit, both kinds kept.
+        assert_eq!(thinning, 128);
+        let extruding = tp.segments.iter().filter(|s| s.extruding).count();
+        assert!(extruding > 30 && tp.segments.len() - extruding > 30, "{extruding} of {}", tp.segments.len());
+        assert!(min_len < 1.0, "the merge length stays meaningful: {min_len}");
     }
 
     #[test]

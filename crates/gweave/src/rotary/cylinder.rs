@@ -57,6 +57,7 @@
 
 use std::f64::consts::PI;
 
+use crate::range::Range;
 use serde::{Deserialize, Serialize};
 
 use super::{in_range, Result, RotaryError};
@@ -141,6 +142,9 @@ fn default_radial() -> char {
     'Z'
 }
 
+/// Mandrel diameters a lathe-type printer has (a 1 mm wire to a 1 m drum).
+pub const MANDREL_DIAMETER_MM: Range<f64> = Range::new(1.0, 1000.0, "mm");
+
 /// Axis letters a firmware accepts for motion (E is the extruder, so it is excluded).
 const AXIS_LETTERS: &str = "XYZABCUVW";
 
@@ -168,8 +172,8 @@ impl RotaryConfig {
 
     /// Checks ranges and that the three axis letters are distinct motion axes.
     pub fn validate(&self) -> Result<()> {
-        use crate::settings::{ranges, Range};
-        in_range("machine", "mandrel_diameter_mm", self.mandrel_diameter_mm, ranges::SIZE_MM)?;
+        use crate::range::Range;
+        in_range("machine", "mandrel_diameter_mm", self.mandrel_diameter_mm, MANDREL_DIAMETER_MM)?;
         if let Some(cap) = self.max_rotary_deg_s {
             in_range("machine", "max_rotary_deg_s", cap, Range::new(0.001, 100_000.0, "°/s"))?;
         }
@@ -466,10 +470,10 @@ pub struct UnwrapConfig {
 impl UnwrapConfig {
     /// Checks every number against its range.
     pub fn validate(&self) -> Result<()> {
-        use crate::settings::ranges;
-        in_range("unwrap", "arc_length_z1_mm", self.arc_length_z1_mm, ranges::POS_MM)?;
-        in_range("unwrap", "seam_offset_deg", self.seam_offset_deg, ranges::ANGLE_DEG)?;
-        in_range("unwrap", "seam_rotation_per_layer_deg", self.seam_rotation_per_layer_deg, ranges::ANGLE_DEG)
+        use crate::range;
+        in_range("unwrap", "arc_length_z1_mm", self.arc_length_z1_mm, range::POSITION_MM)?;
+        in_range("unwrap", "seam_offset_deg", self.seam_offset_deg, range::ANGLE_DEG)?;
+        in_range("unwrap", "seam_rotation_per_layer_deg", self.seam_rotation_per_layer_deg, range::ANGLE_DEG)
     }
 
     /// Angle of the seam (flat y = 0) on layer `layer` (0-based), degrees.

@@ -37,11 +37,29 @@ use serde::{Deserialize, Serialize};
 
 use super::cylinder::{max_chord_step_deg, pieces_for_step, surface_length_mm, CylPoint, RotaryConfig};
 use super::emit::{rotary_number_format, validate_format, MoveWriter};
-use super::{finite, in_range, positive, Result, RotaryError};
+use super::{finite, in_range, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
+use crate::range::{Range, FILAMENT_DIAMETER_MM, LAYER_HEIGHT_MM, POSITION_MM, SPEED_MM_S, TEMPERATURE_C};
 
 /// Most points one path may have (a runaway guard: 5 million chords are ~150 MB of G-code).
 pub const MAX_POINTS: usize = 5_000_000;
+
+/// Largest chord sagitta: below a micrometre the chords only multiply (0.001 mm on a 1 mm
+/// mandrel is already 50 chords per turn).
+pub const CHORD_TOLERANCE_MM: Range<f64> = Range::new(0.001, 10.0, "mm");
+/// Tube length along the mandrel.
+pub const TUBE_LENGTH_MM: Range<f64> = Range::new(0.1, 10_000.0, "mm");
+/// Radial layers of a tube.
+pub const TUBE_LAYERS: Range<u32> = Range::new(1, 1_000, "");
+/// Bead width.
+pub const BEAD_WIDTH_MM: Range<f64> = Range::new(0.05, 20.0, "mm");
+/// Axial advance per turn.
+pub const PITCH_MM: Range<f64> = Range::new(0.05, 10_000.0, "mm");
+/// Chords per turn (a triangle to a tenth of a degree).
+pub const SEGMENTS_PER_TURN: Range<u32> = Range::new(3, 3_600, "");
+
+/// Flat turns closing each end of a layer.
+pub const END_TURNS: Range<f64> = Range::new(0.0, 100.0, "turns");
 
 /// A quantity as a function of the axial position, mm -> mm.
 #[derive(Clone)]
@@ -233,15 +251,20 @@ impl HelicalPath {
     /// Refuses early a path whose estimate from its start (pitch, radius) exceeds
     /// [`MAX_POINTS`]; variable profiles are also guarded point by point.
     fn check_size(&self, resolution: Resolution) -> Result<()> {
+        if self.estimated_points(resolution)? > MAX_POINTS as f64 {
+            return Err(RotaryError::TooManyPoints { limit: MAX_POINTS });
+        }
+        Ok(())
+    }
+
+    /// Points of the path estimated from its start (pitch, radius).
+    fn estimated_points(&self, resolution: Resolution) -> Result<f64> {
         let x = self.start_axial_mm;
         let step = resolution.step_deg(self.radius_mm.checked("radius", x)?);
         let turns_deg = (self.end_axial_mm - x).abs() / self.pitch_mm.checked("pitch", x)? * 360.0
             + self.lead_in_deg
             + self.lead_out_deg;
-        if turns_deg / step > MAX_POINTS as f64 {
-            return Err(RotaryError::TooManyPoints { limit: MAX_POINTS });
-        }
-        Ok(())
+        Ok(turns_deg / step)
     }
 
     /// Appends a flat turn of `d_theta_deg` at the last point's axial position.
@@ -284,9 +307,6 @@ fn push(points: &mut Vec<CylPoint>, p: CylPoint) -> Result<()> {
     Ok(())
 }
 
-/// Chords per turn of a helix: a triangle at least, and no finer than 0.004 degrees.
-const SEGMENTS: crate::settings::Range = crate::settings::Range::new(3.0, 100_000.0, "chords");
-
 /// How finely a helix is cut into straight G1 chords.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolution {
@@ -298,13 +318,11 @@ pub struct Resolution {
 
 impl Resolution {
     fn validate(&self) -> Result<()> {
-        positive("chord_tolerance_mm", self.chord_tolerance_mm)?;
-        match self.segments_per_turn {
-            Some(n) if n < 3 => {
-                Err(RotaryError::Config { key: "segments_per_turn", reason: format!("at least 3, got {n}") })
-            }
-            _ => Ok(()),
+        CHORD_TOLERANCE_MM.check("chord_tolerance_mm", self.chord_tolerance_mm)?;
+        if let Some(n) = self.segments_per_turn {
+            SEGMENTS_PER_TURN.check("segments_per_turn", n)?;
         }
+        Ok(())
     }
 
     /// The largest step at radius `radius_mm`, degrees.
@@ -372,22 +390,18 @@ impl Default for PrintSettings {
 impl PrintSettings {
     /// Checks every range.
     pub fn validate(&self) -> Result<()> {
-        use crate::settings::{ranges, Range};
-        /// A bead's height and width.
-        const BEAD_MM: Range = Range::new(0.01, 10.0, "mm");
-        const FILAMENT_DIAMETER_MM: Range = Range::new(0.1, 5.0, "mm");
-        in_range("print", "layer_height_mm", self.layer_height_mm, BEAD_MM)?;
-        in_range("print", "bead_width_mm", self.bead_width_mm, BEAD_MM)?;
+        in_range("print", "layer_height_mm", self.layer_height_mm, LAYER_HEIGHT_MM)?;
+        in_range("print", "bead_width_mm", self.bead_width_mm, BEAD_WIDTH_MM)?;
         in_range("print", "filament_diameter_mm", self.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;
-        in_range("print", "print_speed_mm_s", self.print_speed_mm_s, ranges::SPEED_MM_S)?;
-        in_range("print", "travel_speed_mm_s", self.travel_speed_mm_s, ranges::SPEED_MM_S)?;
-        in_range("print", "nozzle_temp_c", self.nozzle_temp_c, ranges::TEMP_C)?;
+        in_range("print", "print_speed_mm_s", self.print_speed_mm_s, SPEED_MM_S)?;
+        in_range("print", "travel_speed_mm_s", self.travel_speed_mm_s, SPEED_MM_S)?;
+        in_range("print", "nozzle_temp_c", self.nozzle_temp_c, TEMPERATURE_C)?;
         if let Some(t) = self.mandrel_temp_c {
-            in_range("print", "mandrel_temp_c", t, ranges::TEMP_C)?;
+            in_range("print", "mandrel_temp_c", t, TEMPERATURE_C)?;
         }
-        in_range("print", "chord_tolerance_mm", self.chord_tolerance_mm, super::wrap::TOLERANCE_MM)?;
+        in_range("print", "chord_tolerance_mm", self.chord_tolerance_mm, CHORD_TOLERANCE_MM)?;
         if let Some(n) = self.segments_per_turn {
-            in_range("print", "segments_per_turn", f64::from(n), SEGMENTS)?;
+            in_range("print", "segments_per_turn", n, SEGMENTS_PER_TURN)?;
         }
         validate_format("print.numbers", &self.numbers)
     }
@@ -588,16 +602,14 @@ impl TubeParams {
 
     /// Checks every range: the tube must be longer than a bead and the pitch at least a bead.
     pub fn validate(&self) -> Result<()> {
-        use crate::settings::{ranges, Range};
         self.machine.validate()?;
         self.print.validate()?;
-        in_range("", "axial_start_mm", self.axial_start_mm, ranges::POS_MM)?;
-        in_range("", "length_mm", self.length_mm, ranges::LEN_MM)?;
-        // The generators' layer limit (a tube of 100 000 layers is 20 m thick at 0.2 mm).
-        in_range("", "layers", f64::from(self.layers), Range::new(1.0, 100_000.0, "layers"))?;
-        in_range("", "end_turns", self.end_turns, Range::new(0.0, 1_000.0, "turns"))?;
+        in_range("", "axial_start_mm", self.axial_start_mm, POSITION_MM)?;
+        in_range("", "length_mm", self.length_mm, TUBE_LENGTH_MM)?;
+        in_range("", "layers", self.layers, TUBE_LAYERS)?;
+        in_range("", "end_turns", self.end_turns, END_TURNS)?;
         if let Some(p) = self.pitch_mm {
-            in_range("", "pitch_mm", p, ranges::LEN_MM)?;
+            in_range("", "pitch_mm", p, PITCH_MM)?;
         }
         if !(self.length_mm.is_finite() && self.length_mm > self.print.bead_width_mm) {
             return Err(RotaryError::Config {
@@ -611,6 +623,12 @@ impl TubeParams {
                 key: "pitch_mm",
                 reason: format!("must be at least the bead width (beads would overlap), got {pitch}"),
             });
+        }
+        // The whole program, estimated from its outermost layer (the most chords per turn),
+        // before a byte is written: each path's own guard alone would let a billion layers by.
+        let outer = self.layer_path(self.layers - 1, 0.0);
+        if f64::from(self.layers) * outer.estimated_points(self.print.resolution())? > MAX_POINTS as f64 {
+            return Err(RotaryError::TooManyPoints { limit: MAX_POINTS });
         }
         Ok(())
     }

@@ -55,6 +55,9 @@ pub enum RotaryError {
         /// Why it was rejected.
         reason: String,
     },
+    /// A setting outside its physical range.
+    #[error(transparent)]
+    Range(#[from] crate::range::OutOfRange),
     /// The TOML text could not be read (unknown key, wrong type, syntax).
     #[error("rotary config: {0}")]
     Toml(String),
@@ -75,7 +78,7 @@ pub enum RotaryError {
         radius_mm: f64,
     },
     /// A path would need more points than the safety limit (runaway parameters).
-    #[error("path needs more than {limit} points; check pitch and tolerance")]
+    #[error("the path needs more than {limit} points; check the length, layers, pitch and chord tolerance")]
     TooManyPoints {
         /// The limit that was hit.
         limit: usize,
@@ -93,9 +96,6 @@ pub enum RotaryError {
         /// What went wrong.
         error: Box<RotaryError>,
     },
-    /// A setting out of its range (it names the table and the key).
-    #[error(transparent)]
-    Range(#[from] crate::settings::OutOfRange),
     /// The core engine failed (reading, syntax).
     #[error(transparent)]
     Engine(#[from] crate::Error),
@@ -113,17 +113,13 @@ impl From<toml::de::Error> for RotaryError {
 /// Shorthand for results of this module.
 pub type Result<T, E = RotaryError> = std::result::Result<T, E>;
 
-/// Checks that `value` is finite and strictly positive.
-pub(crate) fn positive(key: &'static str, value: f64) -> Result<()> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(RotaryError::Config { key, reason: format!("must be a finite number > 0, got {value}") })
-    }
-}
-
 /// Checks `[table] key = value` against its range (see [`crate::settings`]).
-pub(crate) fn in_range(table: &str, key: &str, value: f64, range: crate::settings::Range) -> Result<()> {
+pub(crate) fn in_range<T: crate::range::Quantity>(
+    table: &str,
+    key: &str,
+    value: T,
+    range: crate::range::Range<T>,
+) -> Result<()> {
     Ok(crate::settings::Table::root().sub(table).check(key, value, range)?)
 }
 

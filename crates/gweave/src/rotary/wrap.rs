@@ -47,6 +47,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cylinder::{chord_pieces, CylPoint, RotaryConfig, UnwrapConfig};
 use super::emit::{rotary_number_format, validate_format, MoveSpec, MoveWriter};
+use super::helix::CHORD_TOLERANCE_MM;
 use super::{in_range, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::StateOptions;
@@ -83,8 +84,9 @@ pub struct WrapConfig {
     pub numbers: NumberFormat,
 }
 
-/// A chord's sagitta: 0.1 um is far below any nozzle, 10 mm a polygon.
-pub(crate) const TOLERANCE_MM: crate::settings::Range = crate::settings::Range::new(0.000_1, 10.0, "mm");
+/// Most chords one flat move becomes (a move of many turns round a thin mandrel); past it the
+/// move is refused rather than written as gigabytes.
+pub const MAX_CHORDS_PER_MOVE: usize = 1_000_000;
 
 fn default_tolerance() -> f64 {
     0.01
@@ -111,11 +113,9 @@ impl WrapConfig {
 
     /// Checks every range.
     pub fn validate(&self) -> Result<()> {
-        // 0 is one chord per flat move; a finer tolerance than 0.1 um only multiplies chords.
-        if self.chord_tolerance_mm != 0.0 {
-            in_range("", "chord_tolerance_mm", self.chord_tolerance_mm, TOLERANCE_MM)?;
-        }
-        in_range("", "arc_tolerance_mm", self.arc_tolerance_mm, TOLERANCE_MM)?;
+        // 0 is one chord per flat move.
+        in_range("", "chord_tolerance_mm", self.chord_tolerance_mm, CHORD_TOLERANCE_MM.or_zero())?;
+        in_range("", "arc_tolerance_mm", self.arc_tolerance_mm, CHORD_TOLERANCE_MM)?;
         self.machine.validate()?;
         self.unwrap.validate()?;
         validate_format("numbers", &self.numbers)
@@ -236,6 +236,9 @@ impl Wrap {
             } else {
                 1
             };
+            if cuts > MAX_CHORDS_PER_MOVE {
+                return Err(RotaryError::TooManyPoints { limit: MAX_CHORDS_PER_MOVE });
+            }
             for j in 1..=cuts {
                 let t0 = (j - 1) as f64 / cuts as f64;
                 let t1 = j as f64 / cuts as f64;

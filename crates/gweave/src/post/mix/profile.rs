@@ -45,7 +45,8 @@ use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
 use crate::colour::Srgb8;
 use crate::gcode::number::NumberFormat;
 use crate::post::purge_block::PurgeMotion;
-use crate::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
+use crate::range::{self, OutOfRange, Range, FILAMENT_DIAMETER_MM, LAYER_NUMBER, PURGE_MM, PURGE_MM3};
+use crate::settings::{CheckRanges, Table};
 
 use super::MixPassError;
 
@@ -581,21 +582,15 @@ const INPUTS: Range = Range::new(1.0, 16.0, "inputs");
 /// Filament densities, from foams to metal-filled filaments.
 const DENSITY_G_CM3: Range = Range::new(0.1, 25.0, "g/cm³");
 const VIRTUAL_TOOLS: Range = Range::new(0.0, 1_000.0, "tools");
-const FILAMENT_DIAMETER_MM: Range = Range::new(0.1, 5.0, "mm");
 const RATIO_DECIMALS: Range = Range::new(0.0, crate::colour::dialect::Decimals::MAX as f64, "");
 /// RepRapFirmware heater numbers.
 const RRF_HEATER: Range = Range::new(0.0, 255.0, "");
-/// Filament pushed through for one change (2 m is far beyond any real purge).
-const PURGE_MM: Range = Range::new(0.0, 2_000.0, "mm");
-const PURGE_MM3: Range = Range::new(0.0, 5_000.0, "mm³");
 const CHAMBER_MM3: Range = Range::new(0.001, 10_000.0, "mm³");
 const MULTIPLIER: Range = Range::new(0.001, 100.0, "");
 /// The washout tolerance: the share of the old colour left, below 1.
 const TOLERANCE: Range = Range::new(0.000_001, 0.999, "");
 /// 0 turns the Z feed cap off.
 const Z_CAP_MM_MIN: Range = Range::new(0.0, 600_000.0, "mm/min");
-/// Layer numbers, as far as any generator goes.
-const LAYER: Range = Range::new(0.0, 1_000_000.0, "");
 const EVERY_LAYERS: Range = Range::new(1.0, 1_000_000.0, "layers");
 
 impl CheckRanges for MixProfile {
@@ -639,17 +634,17 @@ impl CheckRanges for MixProfile {
         self.numbers.check_ranges(&t.sub("numbers"))?;
         for (i, s) in self.schedule.iter().enumerate() {
             let table = t.sub("schedule").item(i);
-            table.check_opt("layer", s.layer.map(f64::from), LAYER)?;
-            table.check_opt("z_mm", s.z_mm, ranges::LEN_MM)?;
+            table.check_opt("layer", s.layer, LAYER_NUMBER)?;
+            table.check_opt("z_mm", s.z_mm, range::LEN_MM)?;
         }
         for (i, g) in self.gradient.iter().enumerate() {
             let table = t.sub("gradient").item(i);
-            table.check_opt("from_layer", g.from_layer.map(f64::from), LAYER)?;
-            table.check_opt("to_layer", g.to_layer.map(f64::from), LAYER)?;
-            table.check_opt("from_z_mm", g.from_z_mm, ranges::LEN_MM)?;
-            table.check_opt("to_z_mm", g.to_z_mm, ranges::LEN_MM)?;
+            table.check_opt("from_layer", g.from_layer, LAYER_NUMBER)?;
+            table.check_opt("to_layer", g.to_layer, LAYER_NUMBER)?;
+            table.check_opt("from_z_mm", g.from_z_mm, range::LEN_MM)?;
+            table.check_opt("to_z_mm", g.to_z_mm, range::LEN_MM)?;
             table.count("every_layers", g.every_layers, EVERY_LAYERS)?;
-            table.check("z_step_mm", g.z_step_mm, ranges::SIZE_MM)?;
+            table.check("z_step_mm", g.z_step_mm, range::SIZE_MM)?;
         }
         Ok(())
     }

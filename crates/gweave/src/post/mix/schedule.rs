@@ -20,6 +20,7 @@ use crate::colour::dialect::{round_to_units, Decimals};
 use crate::colour::palette::{Palette, PaletteConfig};
 use crate::colour::solve::{lerp_perceived, solve};
 use crate::colour::{Mix, MixingModel, Srgb8};
+use crate::range::{Ceiling, LAYER_NUMBER, MAX_LAYERS, POSITION_MM};
 
 use super::profile::{At, Dialect, GradientSpace, MixBase, MixProfile, MixRef};
 use super::MixPassError;
@@ -180,6 +181,16 @@ impl Resolver<'_> {
     }
 }
 
+/// A layer or height a schedule names, within [`LAYER_NUMBER`] or [`POSITION_MM`] (`--at-z 1e308`
+/// and `at = "z1e308"` alike).
+fn bounded(at: At, what: &str) -> Result<At, MixPassError> {
+    let checked = match at {
+        At::Layer(n) => LAYER_NUMBER.check(&format!("{what} layer"), n).map(|_| at),
+        At::Z(z) => POSITION_MM.check(&format!("{what} height"), z).map(|_| at),
+    };
+    checked.map_err(|e| MixPassError::Config(e.to_string()))
+}
+
 impl Plan {
     /// Resolves every mix of `profile` and gives each a place in the firmware.
     pub fn new(profile: &MixProfile) -> Result<Plan, MixPassError> {
@@ -193,17 +204,28 @@ impl Plan {
 
         let mut segments = Vec::new();
         for entry in &profile.schedule {
-            segments.push(Segment { start: entry.at()?, kind: Kind::Solid(r.add(&entry.mix)?) });
+            let start = bounded(entry.at()?, "--at-layer/--at-z or [[schedule]]")?;
+            segments.push(Segment { start, kind: Kind::Solid(r.add(&entry.mix)?) });
         }
         for g in &profile.gradient {
             let (start, end) = g.range()?;
+            let (start, end) = (
+                bounded(start, "--gradient or [[gradient]] start")?,
+                bounded(end, "--gradient or [[gradient]] end")?,
+            );
             let a = r.add(&g.start)?;
             let b = r.add(&g.end)?;
             let (count, every) = match (start, end) {
-                (At::Layer(x), At::Layer(y)) => ((y - x) / g.every_layers, f64::from(g.every_layers)),
-                (At::Z(x), At::Z(y)) => (((y - x) / g.z_step_mm - 1e-9).ceil().max(0.0) as u32, g.z_step_mm),
+                (At::Layer(x), At::Layer(y)) => {
+                    (f64::from((y - x) / g.every_layers), f64::from(g.every_layers))
+                }
+                (At::Z(x), At::Z(y)) => (((y - x) / g.z_step_mm - 1e-9).ceil().max(0.0), g.z_step_mm),
                 _ => unreachable!("range() gives two ends of one kind"),
             };
+            // A step per layer at most: `z0-1e308` must be refused, not allocated.
+            let count = Ceiling::new(MAX_LAYERS, "gradient steps")
+                .check(count, || format!("the gradient {}..{}", g.start.label(), g.end.label()))
+                .map_err(|e| MixPassError::Config(e.to_string()))? as u32;
             let mut steps = Vec::with_capacity(count as usize + 1);
             for s in 0..=count {
                 let t = if count == 0 { 0.0 } else { f64::from(s) / f64::from(count) };

@@ -36,7 +36,8 @@ use crate::colour::purge::{filament_mm_to_mm3, flush_volume_mm3, mm3_to_filament
 use crate::colour::Srgb8;
 use crate::gcode::layers::{Feature, Markers, ALL_FEATURES};
 use crate::post::purge_block::PurgeMotion;
-use crate::settings::{ranges, CheckRanges, OutOfRange, Range, Table};
+use crate::range::{self, OutOfRange, Range, FILAMENT_DIAMETER_MM, PURGE_MM, PURGE_MM3};
+use crate::settings::{CheckRanges, Table};
 
 /// Why a purge-shift configuration was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -232,11 +233,6 @@ pub struct Rules {
     pub(crate) max_purge_mm: f64,
 }
 
-/// Filament pushed through for one change: 2 m is far beyond any real purge (a tower of such
-/// purges would not fit a bed).
-const PURGE_MM: Range = Range::new(0.001, 2_000.0, "mm");
-const PURGE_MM3: Range = Range::new(0.001, 5_000.0, "mm³");
-const FILAMENT_DIAMETER_MM: Range = Range::new(0.1, 5.0, "mm");
 const WASHOUT_MM3: Range = Range::new(0.0, 10_000.0, "mm³");
 const TOLERANCE: Range = Range::new(0.000_001, 1.0, "");
 /// A tower's line width and layer height.
@@ -263,16 +259,16 @@ impl CheckRanges for PurgeShiftConfig {
         self.block.check_ranges(&t.sub("block"))?;
         let tower = t.sub("tower");
         let tw = &self.tower;
-        tower.check_opt("x_mm", tw.x_mm, ranges::POS_MM)?;
-        tower.check_opt("y_mm", tw.y_mm, ranges::POS_MM)?;
-        tower.check("gap_mm", tw.gap_mm, ranges::LEN_MM)?;
-        tower.each("bed_mm", &tw.bed_mm, ranges::SIZE_MM)?;
+        tower.check_opt("x_mm", tw.x_mm, range::POSITION_MM)?;
+        tower.check_opt("y_mm", tw.y_mm, range::POSITION_MM)?;
+        tower.check("gap_mm", tw.gap_mm, range::LEN_MM)?;
+        tower.each("bed_mm", &tw.bed_mm, range::SIZE_MM)?;
         tower.check("line_width_mm", tw.line_width_mm, LINE_MM)?;
         tower.check("layer_height_mm", tw.layer_height_mm, LINE_MM)?;
-        tower.check("lift_mm", tw.lift_mm, ranges::LEN_MM)?;
-        tower.check("travel_feed_mm_min", tw.travel_feed_mm_min, ranges::FEED_MM_MIN)?;
-        tower.check("extrude_feed_mm_min", tw.extrude_feed_mm_min, ranges::FEED_MM_MIN)?;
-        tower.check("retract_feed_mm_min", tw.retract_feed_mm_min, ranges::FEED_MM_MIN)?;
+        tower.check("lift_mm", tw.lift_mm, range::LEN_MM)?;
+        tower.check("travel_feed_mm_min", tw.travel_feed_mm_min, range::FEED_MM_MIN)?;
+        tower.check("extrude_feed_mm_min", tw.extrude_feed_mm_min, range::FEED_MM_MIN)?;
+        tower.check("retract_feed_mm_min", tw.retract_feed_mm_min, range::FEED_MM_MIN)?;
         t.count("max_window_lines", self.max_window_lines as u64, WINDOW_LINES)
     }
 }

@@ -1,0 +1,251 @@
+//! Hangs and sizes: every numeric flag has a range, checked before anything is read, and every
+//! computed size (image pixels, layers, chords, gradient steps) is checked before allocating.
+
+use std::fs;
+use std::path::Path;
+use std::time::Duration;
+
+use crate::harness::*;
+
+/// A flag out of range is a command-line error (clap's exit code 2, as for an unknown flag)
+/// that names the flag and the allowed range; nothing is read or written.
+#[track_caller]
+fn assert_flag_refused(dir: &Path, args: &[&str], flag: &str, range: &str) {
+    let before = snapshot(dir);
+    let out = gweave(dir, args).limit(Duration::from_secs(20)).run();
+    out.assert_sound().assert_peak_under(64.0);
+    assert_eq!(out.code, Some(2), "expected a usage error for {args:?}; stderr: {}", out.stderr);
+    assert!(out.stderr.contains(flag), "{flag} not named: {}", out.stderr);
+    assert!(out.stderr.contains(range), "range not given: {}", out.stderr);
+    assert_eq!(snapshot(dir), before, "{args:?} changed the directory");
+}
+
+/// Regression: each of these hung, filled the disk, panicked or aborted on a terabyte
+/// allocation (issue 25).
+#[test]
+fn hostile_flag_values_are_refused_with_the_flag_and_its_range() {
+    let (dir, _) = dir_with_fixture("rotary/plate.gcode", "plate.gcode");
+    let d = dir.path();
+    fs::write(d.join("cube.stl"), ascii(&cube_facets(10.0, 10.0))).unwrap();
+    let cases: &[(&[&str], &str, &str)] = &[
+        (
+            &["rotary", "tube", "-o", "t.gcode", "--mandrel-diameter", "20", "--layers", "1000000000"],
+            "--layers",
+            "1 to 1000",
+        ),
+        (
+            &["rotary", "wrap", "plate.gcode", "-o", "w.gcode", "--mandrel-diameter", "1e-9"],
+            "--mandrel-diameter",
+            "1 to 1000 mm",
+        ),
+        (
+            &[
+                "rotary",
+                "wrap",
+                "plate.gcode",
+                "-o",
+                "w.gcode",
+                "--mandrel-diameter",
+                "20",
+                "--chord-tol",
+                "1e-12",
+            ],
+            "--chord-tol",
+            "0 or 0.001 to 10 mm",
+        ),
+        (
+            &["rotary", "tube", "-o", "t.gcode", "--mandrel-diameter", "20", "--chord-tol", "1e-12"],
+            "--chord-tol",
+            "0.001 to 10 mm",
+        ),
+        (
+            &["purge-shift", "plate.gcode", "-o", "p.gcode", "--purge", "1e308", "--fallback", "tower"],
+            "--purge",
+            "0 to 1000 mm",
+        ),
+        (
+            &["raster", "--test-pattern", "-o", "r.gcode", "--density", "4294967295"],
+            "--density",
+            "1 to 16 fires per pixel",
+        ),
+        (
+            &["raster", "--test-pattern", "-o", "r.gcode", "--pattern-columns", "1e8"],
+            "--pattern-columns",
+            "1 to 100 columns",
+        ),
+        (&["raster", "cube.stl", "-o", "r.gcode", "--dpi", "1e-300"], "--dpi", "10 to 10000 dpi"),
+        (&["raster", "cube.stl", "-o", "r.gcode", "--pixel-mm", "1e6"], "--pixel-mm", "0.00254 to 2.54 mm"),
+        (
+            &["slice-raster", "cube.stl", "--layer-height", "0.1", "--dpi", "1e6", "-o", "out"],
+            "--dpi",
+            "10 to 10000 dpi",
+        ),
+        (
+            &["slice-raster", "cube.stl", "--layer-height", "0.1", "--pixel-mm", "1e-9", "-o", "out"],
+            "--pixel-mm",
+            "0.00254 to 2.54 mm",
+        ),
+        (
+            &["slice-raster", "cube.stl", "--layer-height", "0.1", "--margin", "100000", "-o", "out"],
+            "--margin",
+            "0 to 1000 px",
+        ),
+        (
+            &["slice-raster", "cube.stl", "--layer-height", "0.1", "--margin", "4294967295", "-o", "out"],
+            "--margin",
+            "0 to 1000 px",
+        ),
+        (
+            &["preview", "plate.gcode", "-o", "x.png", "--mandrel-diameter", "1e308", "--view", "iso"],
+            "--mandrel-diameter",
+            "1 to 1000 mm",
+        ),
+        (&["mix", "plate.gcode", "-o", "m.gcode", "--purge-mm=-1"], "--purge-mm", "0 to 1000 mm"),
+        (&["stats", "plate.gcode", "--filament-diameter", "nan"], "--filament-diameter", "0.5 to 5 mm"),
+        (&["check", "plate.gcode", "--bed", "220,220,1e308"], "--bed", "1 to 10000 mm"),
+        (&["check", "plate.gcode", "--max-feed", "0"], "--max-feed", "1 to 100000 mm/min"),
+        (&["serve", "--tcp", "127.0.0.1:0", "--exit-after-idle", "inf"], "--exit-after-idle", "0.1 to 1e6 s"),
+    ];
+    for (args, flag, range) in cases {
+        assert_flag_refused(d, args, flag, range);
+    }
+}
+
+/// Regression: `slice-raster` of a cube with a speck at Z = 1e6 wrote PNGs until the disk was
+/// full; 1e30 or infinite coordinates panicked with "capacity overflow"; a 1 km cube aborted.
+#[test]
+fn slice_raster_refuses_sizes_past_its_ceilings_before_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut speck = cube_facets(10.0, 10.0);
+    speck.push_str(&facets(&[[[0.0, 0.0, 1e6], [0.1, 0.0, 1e6], [0.0, 0.1, 1e6]]]));
+    fs::write(d.join("speck.stl"), ascii(&speck)).unwrap();
+    fs::write(d.join("km.stl"), ascii(&cube_facets(1e6, 10.0))).unwrap();
+    fs::write(d.join("huge.stl"), ascii(&cube_facets(1e30, 10.0))).unwrap();
+    fs::write(d.join("inf.stl"), ascii(&cube_facets(f64::INFINITY, 10.0))).unwrap();
+    for (model, needle) in [
+        (
+            "speck.stl",
+            "a part 1e6 mm tall at 0.1 mm per layer needs 10000000 layers, more than the limit of 100000",
+        ),
+        ("km.stl", "pixels per image side, more than the limit of 20000"),
+        ("huge.stl", "pixels per image side, more than the limit of 20000"),
+        ("inf.stl", "the mesh has a vertex coordinate of inf"),
+    ] {
+        let out = gweave(d, &["slice-raster", model, "--layer-height", "0.1", "-o", "out"])
+            .limit(Duration::from_secs(20))
+            .run();
+        out.assert_refused(needle).assert_peak_under(64.0);
+        assert!(!d.join("out").exists(), "{model}: the output folder was made");
+    }
+}
+
+/// Regression: `raster` took layer images of different sizes silently (the .sl1 path refuses).
+#[test]
+fn raster_refuses_layer_images_of_different_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::create_dir(d.join("layers")).unwrap();
+    fs::write(d.join("layers/a_0.bmp"), bmp(16, 8)).unwrap();
+    fs::write(d.join("layers/a_1.bmp"), bmp(24, 8)).unwrap();
+    let out = gweave(d, &["raster", "layers", "-o", "r.gcode", "-q"]).limit(Duration::from_secs(20)).run();
+    out.assert_refused("a_1.bmp: the layer image is 24 x 8 px, but");
+    assert!(out.stderr.contains("a_0.bmp is 16 x 8 px"), "{}", out.stderr);
+    assert!(!d.join("r.gcode").exists());
+    assert_no_temp_left(d);
+}
+
+/// Regression: `mix --gradient z0-1e308=...` allocated 34 GB for its steps.
+#[test]
+fn a_gradient_of_endless_steps_is_refused() {
+    let (dir, _) = dir_with_fixture("cura/cura_torus.gcode", "in.gcode");
+    for (gradient, needle) in [
+        (
+            "z0-1e308=Cyan..Magenta",
+            "--gradient or [[gradient]] end height 1e308 is out of range: -10000 to 10000 mm",
+        ),
+        ("0-1000000=Cyan..Magenta", "needs 1000000 gradient steps, more than the limit of 100000"),
+    ] {
+        let out = gweave(dir.path(), &["mix", "in.gcode", "-o", "m.gcode", "--gradient", gradient])
+            .limit(Duration::from_secs(20))
+            .run();
+        out.assert_refused(needle).assert_peak_under(64.0);
+        assert!(!dir.path().join("m.gcode").exists());
+        assert_no_temp_left(dir.path());
+    }
+}
+
+/// Regression: alternating travel and extrusion never chain, and `ToolpathPass::coarsen`
+/// doubled its merge length for ever once the file passed the segment ceiling.
+#[test]
+fn coarsen_hang_on_alternating_travel_and_extrusion() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 2.2 million segments (15 MB): past the preview's ceiling of 2^21 kept segments.
+    let mut text = String::from(";LAYER:0\nM83\nG1 Z0.2 F1200\n");
+    for i in 0..1_100_000u32 {
+        let (x, y) = (i * 7 % 10, i * 13 % 10);
+        text.push_str(&format!("G0X{x}Y{y}\nG1X{}E1\n", (x + 3) % 10));
+    }
+    fs::write(d.join("alt.gcode"), text).unwrap();
+    // A small picture keeps the drawing short in a debug build (its ink budget scales with it).
+    let out =
+        gweave(d, &["preview", "alt.gcode", "-o", "x.png", "--travel", "--size", "300x200", "--json", "-q"])
+            .limit(Duration::from_secs(20))
+            .run();
+    out.assert_ok().assert_peak_under(256.0);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let strokes = report["strokes"].as_u64().unwrap();
+    assert!((1_000_000..=1 << 21).contains(&strokes), "{strokes} strokes kept");
+}
+
+/// An ASCII STL of these triangles.
+fn ascii(facets: &str) -> String {
+    format!("solid t\n{facets}endsolid t\n")
+}
+
+fn facets(triangles: &[[[f64; 3]; 3]]) -> String {
+    let mut s = String::new();
+    for t in triangles {
+        s.push_str("facet normal 0 0 0\nouter loop\n");
+        for v in t {
+            s.push_str(&format!("vertex {:e} {:e} {:e}\n", v[0], v[1], v[2]));
+        }
+        s.push_str("endloop\nendfacet\n");
+    }
+    s
+}
+
+/// A box `side` wide and deep, `height` tall, as an ASCII STL's facets (wrap with [`ascii`]).
+fn cube_facets(side: f64, height: f64) -> String {
+    let c = |i: usize| {
+        [
+            if i & 1 == 0 { 0.0 } else { side },
+            if i & 2 == 0 { 0.0 } else { side },
+            if i & 4 == 0 { 0.0 } else { height },
+        ]
+    };
+    let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+    let tris: Vec<_> =
+        quads.iter().flat_map(|q| [[c(q[0]), c(q[1]), c(q[2])], [c(q[0]), c(q[2]), c(q[3])]]).collect();
+    facets(&tris)
+}
+
+/// A white 24-bit BMP of `w` x `h` px.
+fn bmp(w: u32, h: u32) -> Vec<u8> {
+    let row = (w * 3).div_ceil(4) * 4;
+    let size = 54 + row * h;
+    let mut b = Vec::new();
+    b.extend(b"BM");
+    b.extend(size.to_le_bytes());
+    b.extend([0u8; 4]);
+    b.extend(54u32.to_le_bytes());
+    b.extend(40u32.to_le_bytes());
+    b.extend(w.to_le_bytes());
+    b.extend(h.to_le_bytes());
+    b.extend(1u16.to_le_bytes());
+    b.extend(24u16.to_le_bytes());
+    b.extend([0u8; 24]);
+    b.extend(std::iter::repeat_n(0xffu8, (row * h) as usize));
+    b
+}
