@@ -466,7 +466,7 @@ mod tests {
     fn rotary_needs_steps_and_bad_values_are_named() {
         assert_eq!(MachineProfile::from_toml_str("[rotary]\n"), Err(MachineProfileError::RotaryWithoutSteps));
         let err = MachineProfile::from_toml_str("[homing]\nfeed_mm_s = [50.0, 0.0, 4.0]\n").unwrap_err();
-        assert_eq!(err.to_string(), "[homing] feed_mm_s[1] = 0 is out of range: 0.001 to 10000 mm/s");
+        assert_eq!(err.to_string(), "[homing] feed_mm_s[1] = 0 is out of range: 0.01 to 1000 mm/s");
         let err = MachineProfile::from_toml_str("[homing]\norder = \"XXZ\"\n");
         assert_eq!(err, Err(MachineProfileError::HomingOrder("XXZ".into())));
     }

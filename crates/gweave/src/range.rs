@@ -17,7 +17,7 @@
 //! let err = DIAMETER_MM.check("--mandrel-diameter", 1e-9).unwrap_err();
 //! assert_eq!(err.to_string(), "--mandrel-diameter 1e-9 is out of range: 1 to 1000 mm");
 //! let err = DIAMETER_MM.check("mandrel_diameter_mm", 1e308).unwrap_err();
-//! assert_eq!(err.to_string(), "mandrel_diameter_mm 1e308 is out of range: 1 to 1000 mm");
+//! assert_eq!(err.to_string(), "mandrel_diameter_mm = 1e308 is out of range: 1 to 1000 mm");
 //! ```
 
 use std::fmt;
@@ -31,13 +31,13 @@ pub const MAX_IMAGE_SIDE_PX: u64 = 20_000;
 // nothing computed from them overflows or runs away.
 
 /// Filament diameter (1.75, 2.85 and 3 mm filaments, with room either side).
-pub const FILAMENT_DIAMETER_MM: Range = Range::new(0.1, 5.0, "mm");
+pub const FILAMENT_DIAMETER_MM: Range = Range::new(0.5, 5.0, "mm");
 /// Layer thickness.
 pub const LAYER_HEIGHT_MM: Range = Range::new(0.001, 10.0, "mm");
-/// A feed rate in G-code's unit (`F` words): 0.06 mm/min is 1 um/s, 600 000 mm/min 10 m/s.
-pub const FEED_MM_MIN: Range = Range::new(0.06, 600_000.0, "mm/min");
-/// A linear speed (the same span as [`FEED_MM_MIN`]).
-pub const SPEED_MM_S: Range = Range::new(0.001, 10_000.0, "mm/s");
+/// A feed rate in G-code's unit (`F` words): 100 000 mm/min is 1.7 m/s, beyond any printer.
+pub const FEED_MM_MIN: Range = Range::new(1.0, 100_000.0, "mm/min");
+/// A linear speed (about the span of [`FEED_MM_MIN`]).
+pub const SPEED_MM_S: Range = Range::new(0.01, 1_000.0, "mm/s");
 /// A linear acceleration.
 pub const ACCEL_MM_S2: Range = Range::new(0.001, 1_000_000.0, "mm/s²");
 /// A heater target or limit (0: off; hotends top out near 500 °C).
@@ -62,15 +62,15 @@ pub const FRACTION: Range = Range::new(0.0, 1.0, "");
 pub const ANGLE_DEG: Range = Range::new(-360.0, 360.0, "°");
 /// Image resolution, from coarse inkjets to the finest photopolymer masks; [`PIXEL_MM`] is the
 /// same span as a pixel size (`25.4 / dpi`).
-pub const DPI: Range = Range::new(1.0, 10_000.0, "dpi");
+pub const DPI: Range = Range::new(10.0, 10_000.0, "dpi");
 /// Pixel size (the same span as [`DPI`]).
-pub const PIXEL_MM: Range = Range::new(0.00254, 25.4, "mm");
+pub const PIXEL_MM: Range = Range::new(0.00254, 2.54, "mm");
 /// A layer number as a file counts them (0-based).
 pub const LAYER_NUMBER: Range<u32> = Range::new(0, 1_000_000, "");
-/// Purge per colour change, mm of filament (2 m: a whole wipe tower's worth, and more).
-pub const PURGE_MM: Range = Range::new(0.0, 2_000.0, "mm");
-/// Purge per colour change as a volume (2000 mm of 3 mm filament is 14 137 mm3).
-pub const PURGE_MM3: Range = Range::new(0.0, 15_000.0, "mm3");
+/// Purge per colour change, mm of filament (1 m: far beyond any real purge).
+pub const PURGE_MM: Range = Range::new(0.0, 1_000.0, "mm");
+/// Purge per colour change as a volume (1000 mm of 3 mm filament is 7 069 mm3).
+pub const PURGE_MM3: Range = Range::new(0.0, 10_000.0, "mm3");
 
 /// A number as a person reads it: plain for ordinary magnitudes, `1e308` / `1e-9` for the rest,
 /// so that no message prints a 309-digit number.
@@ -79,7 +79,7 @@ pub fn short(v: f64) -> String {
     if v.is_nan() {
         // As TOML spells it, which is where most such values come from.
         "nan".into()
-    } else if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&a) {
+    } else if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&a) {
         // Rust prints the shortest text that reads back as `v`: 0.001, 2.54, 25400.
         format!("{v}")
     } else {

@@ -483,5 +483,5 @@ fn a_tube_of_too_many_chords_is_refused_before_writing() {
     assert!(matches!(err, RotaryError::TooManyPoints { limit: 5_000_000 }), "{err}");
     assert!(out.is_empty(), "{} bytes written", out.len());
     t.layers = 1_000_000;
-    assert_eq!(t.validate().unwrap_err().to_string(), "layers 1000000 is out of range: 1 to 1000");
+    assert_eq!(t.validate().unwrap_err().to_string(), "layers = 1000000 is out of range: 1 to 1000");
 }

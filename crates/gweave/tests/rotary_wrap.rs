@@ -276,7 +276,7 @@ fn errors_name_the_line() {
     let err = wrap_bytes(config, b"G1 X1 F600\nG1 Z-50\n").unwrap_err();
     assert!(matches!(*as_inner(&err), RotaryError::BelowAxis { .. }), "{err}");
     let bad = WrapConfig::from_toml_str("chord_tolerance_mm = -1\n[machine]\nmandrel_diameter_mm = 20");
-    assert_eq!(bad.unwrap_err().to_string(), "chord_tolerance_mm = -1 is out of range: 0.0001 to 10 mm");
+    assert_eq!(bad.unwrap_err().to_string(), "chord_tolerance_mm = -1 is out of range: 0 or 0.001 to 10 mm");
 }
 
 fn as_inner(err: &RotaryError) -> &RotaryError {

@@ -104,7 +104,7 @@ fn hostile_flag_values_are_refused_with_the_flag_and_its_range() {
         (&["stats", "plate.gcode", "--filament-diameter", "nan"], "--filament-diameter", "0.5 to 5 mm"),
         (&["check", "plate.gcode", "--bed", "220,220,1e308"], "--bed", "1 to 10000 mm"),
         (&["check", "plate.gcode", "--max-feed", "0"], "--max-feed", "1 to 100000 mm/min"),
-        (&["serve", "--tcp", "127.0.0.1:0", "--exit-after-idle", "inf"], "--exit-after-idle", "0.1 to 1e6 s"),
+        (&["serve", "--tcp", "127.0.0.1:0", "--exit-after-idle", "inf"], "--exit-after-idle", "0.1 to 1000000 s"),
     ];
     for (args, flag, range) in cases {
         assert_flag_refused(d, args, flag, range);
@@ -126,7 +126,7 @@ fn slice_raster_refuses_sizes_past_its_ceilings_before_writing() {
     for (model, needle) in [
         (
             "speck.stl",
-            "a part 1e6 mm tall at 0.1 mm per layer needs 10000000 layers, more than the limit of 100000",
+            "a part 1000000 mm tall at 0.1 mm per layer needs 10000000 layers, more than the limit of 100000",
         ),
         ("km.stl", "pixels per image side, more than the limit of 20000"),
         ("huge.stl", "pixels per image side, more than the limit of 20000"),
@@ -162,7 +162,7 @@ fn a_gradient_of_endless_steps_is_refused() {
     for (gradient, needle) in [
         (
             "z0-1e308=Cyan..Magenta",
-            "--gradient or [[gradient]] end height 1e308 is out of range: -10000 to 10000 mm",
+            "[gradient[0]] to_z_mm = 1e308 is out of range: 0 to 10000 mm",
         ),
         ("0-1000000=Cyan..Magenta", "needs 1000000 gradient steps, more than the limit of 100000"),
     ] {

@@ -301,7 +301,7 @@ mod tests {
             bad("nozzle_count = 65").to_string(),
             "nozzle_count = 65 is out of range: 1 to 64 nozzles"
         );
-        assert_eq!(bad("dpi = 0.0").to_string(), "dpi = 0 is out of range: 1 to 10000 dpi");
+        assert_eq!(bad("dpi = 0.0").to_string(), "dpi = 0 is out of range: 10 to 10000 dpi");
         assert_eq!(bad("heads = []"), PrintheadError::NoHeads);
         assert!(matches!(bad("drop_volume_pl = -1.0"), PrintheadError::Range(_)));
     }

@@ -719,13 +719,13 @@ mod tests {
         let msg = |text: &str| MixProfile::from_toml_str(text).unwrap_err().to_string();
         assert_eq!(
             msg("[purge]\nlength_mm = 1e308"),
-            "[purge] length_mm = 1e308 is out of range: 0 to 2000 mm"
+            "[purge] length_mm = 1e308 is out of range: 0 to 1000 mm"
         );
         assert_eq!(msg("[purge]\nretract_mm = -1"), "[purge] retract_mm = -1 is out of range: 0 to 10000 mm");
         assert_eq!(msg("[purge]\nx_mm = nan"), "[purge] x_mm = nan is out of range: -10000 to 10000 mm");
         assert_eq!(
             msg("[hardware]\nfilament_diameter_mm = inf"),
-            "[hardware] filament_diameter_mm = inf is out of range: 0.1 to 5 mm"
+            "[hardware] filament_diameter_mm = inf is out of range: 0.5 to 5 mm"
         );
         assert_eq!(
             msg("[[gradient]]\nfrom_z_mm = 0\nto_z_mm = 1e308\nstart = \"Red\"\nend = \"Blue\""),

@@ -520,8 +520,8 @@ mod tests {
         let err = |t: &str| PurgeShiftConfig::from_toml(t).unwrap_err();
         assert_eq!(err(""), ConfigError::NoPurge);
         let msg = |text: &str| err(text).to_string();
-        assert_eq!(msg("purge_mm = -1.0"), "purge_mm = -1 is out of range: 0.001 to 2000 mm");
-        assert_eq!(msg("purge_mm = 1e308"), "purge_mm = 1e308 is out of range: 0.001 to 2000 mm");
+        assert_eq!(msg("purge_mm = -1.0"), "purge_mm = -1 is out of range: 0 to 1000 mm");
+        assert_eq!(msg("purge_mm = 1e308"), "purge_mm = 1e308 is out of range: 0 to 1000 mm");
         assert_eq!(err("purge_mm = 1.0\npurge_mm3 = 2.0"), ConfigError::BothPurges);
         assert_eq!(err("purge_mm = 1.0\nfallback = \"wipe\""), ConfigError::Fallback("wipe".into()));
         assert_eq!(err("purge_mm = 1.0\n[tower]\nx_mm = 5.0"), ConfigError::Tower);
@@ -540,7 +540,7 @@ mod tests {
         let e = PurgeShiftConfig::parse_toml("[washout]\nchamber_mm3 = 40.0\nvolume = 3\n").unwrap_err();
         assert!(e.to_string().contains("unknown field `volume`"), "{e}");
         let e = PurgeShiftConfig::parse_toml("[[pair]]\nfrom = 0\nto = 1\npurge_mm = nan\n").unwrap_err();
-        assert_eq!(e.to_string(), "[pair[0]] purge_mm = nan is out of range: 0.001 to 2000 mm");
+        assert_eq!(e.to_string(), "[pair[0]] purge_mm = nan is out of range: 0 to 1000 mm");
         assert!(matches!(err("purge_mm = 1.0\nallow_features = [\"walls\"]"), ConfigError::Feature(_)));
         assert!(matches!(err("purge_mm = 1.0\nbogus = 1"), ConfigError::Toml(_)));
         assert_eq!(err("purge_mm = 1.0\nmarkers = [\"\", \"end\"]"), ConfigError::Markers);
