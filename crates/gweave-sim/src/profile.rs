@@ -29,6 +29,7 @@ use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::firmware::{Firmware, FirmwareError};
 use crate::heater::{HeaterFault, HeaterId};
 use crate::limits::{MotionProfile, ProfileError};
 use crate::thermal::ThermalConfig;
@@ -67,6 +68,9 @@ pub enum MachineProfileError {
         /// Entries of `motion.steps.mixing_e`.
         steps: usize,
     },
+    /// A `[firmware]` value out of range.
+    #[error("machine profile: {0}")]
+    Firmware(#[from] FirmwareError),
     /// A fault specification such as `hotend-cartridge-off@120s` that cannot be read.
     #[error("fault `{0}`: expected HEATER-FAULT@SECONDS, e.g. hotend-cartridge-off@120s, bed-thermistor-open@30s, hotend1-thermistor-shorted@5s")]
     Fault(String),
@@ -318,6 +322,8 @@ pub struct MachineProfile {
     pub inkjet: Option<Inkjet>,
     /// Faults to inject, e.g. `["hotend-cartridge-off@120s"]`.
     pub faults: Vec<FaultSpec>,
+    /// What the firmware was built with ([`Firmware`]).
+    pub firmware: Firmware,
 }
 
 impl Default for MachineProfile {
@@ -333,6 +339,7 @@ impl Default for MachineProfile {
             rotary: None,
             inkjet: None,
             faults: Vec::new(),
+            firmware: Firmware::default(),
         }
     }
 }
@@ -357,6 +364,7 @@ impl MachineProfile {
     /// Check every value.
     pub fn validate(&self) -> Result<(), MachineProfileError> {
         self.motion.validate()?;
+        self.firmware.validate()?;
         let check = |name, value: f64, ok: bool, rule| {
             if ok && value.is_finite() {
                 Ok(())

@@ -101,6 +101,19 @@ pub trait Device {
     /// Lets `t_s` seconds pass with no command waiting (the host is quiet), calling `out` with
     /// what the board prints meanwhile (auto-reports). By default the clock stands still.
     fn idle(&mut self, _t_s: f64, _out: &mut dyn FnMut(f64, &str)) {}
+    /// Whether the last command is one a host times by the wall clock even when the board runs
+    /// faster than real time (`M400`: OctoPrint's pause sends `M400` then queues `M114` once the
+    /// `M400` is written; an `ok` that comes back before that finds an empty queue and the pause
+    /// waits for a communication timeout). See [`Protocol::feed_held`].
+    fn wall_timed(&self) -> bool {
+        false
+    }
+    /// Whether the board has work of its own (an SD print) that runs while the host is quiet.
+    fn has_own_work(&self) -> bool {
+        false
+    }
+    /// Runs one step of the board's own work (one line of an SD print), with its replies.
+    fn own_work(&mut self, _out: &mut dyn FnMut(f64, &str)) {}
 }
 
 pub use crate::interp::Outcome;
@@ -217,9 +230,21 @@ impl<D: Device> Protocol<D> {
 
     /// Takes bytes from the host, in any chunking, and answers every line they complete.
     pub fn feed(&mut self, bytes: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        self.feed_held(bytes, out, &mut |_, _| {});
+    }
+
+    /// [`Protocol::feed`], calling `hold(start_s, end_s)` before the `ok` of a command the host
+    /// times by the wall clock ([`Device::wall_timed`]), so that a transport running faster than
+    /// real time can hold that `ok` back for the command's simulated duration.
+    pub fn feed_held(
+        &mut self,
+        bytes: &[u8],
+        out: &mut dyn FnMut(f64, &str),
+        hold: &mut dyn FnMut(f64, f64),
+    ) {
         for &b in bytes {
             match (b, self.scan) {
-                (b'\n' | b'\r', _) => self.end_line(out),
+                (b'\n' | b'\r', _) => self.end_line(out, hold),
                 (_, Scan::Comment | Scan::Overflow) => {}
                 (b';', Scan::Normal) => self.scan = Scan::Comment,
                 (_, Scan::Normal) if self.line.len() >= MAX_LINE_BYTES => self.scan = Scan::Overflow,
@@ -236,6 +261,16 @@ impl<D: Device> Protocol<D> {
     /// half-received line stays as it is.
     pub fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
         self.device.idle(t_s, out);
+    }
+
+    /// Whether the board has work of its own to do ([`Device::has_own_work`]).
+    pub fn has_own_work(&self) -> bool {
+        self.device.has_own_work()
+    }
+
+    /// Runs one step of the board's own work ([`Device::own_work`]).
+    pub fn own_work(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        self.device.own_work(out);
     }
 
     /// Gives the device back, for a report after the session.
@@ -261,7 +296,7 @@ impl<D: Device> Protocol<D> {
         self.config
     }
 
-    fn end_line(&mut self, out: &mut dyn FnMut(f64, &str)) {
+    fn end_line(&mut self, out: &mut dyn FnMut(f64, &str), hold: &mut dyn FnMut(f64, f64)) {
         let scan = std::mem::replace(&mut self.scan, Scan::Normal);
         // A line of nothing but blanks (after its comment is gone) is an empty line.
         if self.line.iter().all(u8::is_ascii_whitespace) {
@@ -277,12 +312,12 @@ impl<D: Device> Protocol<D> {
         if scan == Scan::Overflow {
             self.refuse(LineError::TooLong, numbered, out);
         } else if !numbered {
-            self.run(cmd, out);
+            self.run(cmd, out, hold);
         } else {
             match self.check(cmd) {
                 Verdict::Accept(n) => {
                     self.last_n = n;
-                    self.run(cmd, out);
+                    self.run(cmd, out, hold);
                 }
                 Verdict::Duplicate => {
                     self.stats.duplicates += 1;
@@ -333,7 +368,7 @@ impl<D: Device> Protocol<D> {
 
     /// Runs an accepted line: the link commands here, the rest on the device, with keepalive
     /// lines interleaved by simulated time.
-    fn run(&mut self, cmd: &[u8], out: &mut dyn FnMut(f64, &str)) {
+    fn run(&mut self, cmd: &[u8], out: &mut dyn FnMut(f64, &str), hold: &mut dyn FnMut(f64, f64)) {
         parse_into(cmd, &mut self.block);
         if self.block.command.is_m(110) {
             if let Some(n) = self.block.get(b'N') {
@@ -363,6 +398,9 @@ impl<D: Device> Protocol<D> {
         keepalive.before(end_s, out);
         self.stats.busy += keepalive.printed;
         self.halted = outcome == Outcome::Halted;
+        if self.device.wall_timed() {
+            hold(start_s, end_s);
+        }
         if !self.device.acknowledged() {
             out(end_s, "ok");
         }
@@ -467,6 +505,18 @@ impl Device for crate::interp::Machine {
 
     fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
         crate::interp::Machine::idle(self, t_s, out)
+    }
+
+    fn wall_timed(&self) -> bool {
+        crate::interp::Machine::wall_timed(self)
+    }
+
+    fn has_own_work(&self) -> bool {
+        crate::interp::Machine::sd_printing(self)
+    }
+
+    fn own_work(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        crate::interp::Machine::sd_step(self, out)
     }
 }
 

@@ -292,7 +292,7 @@ mod tests {
         let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
         let addr = endpoint.local_addr().unwrap();
         let stop = AtomicBool::new(false);
-        let options = ServeOptions { realtime: true, ..ServeOptions::default() };
+        let options = ServeOptions { speed: Some(1.0), ..ServeOptions::default() };
         let mut transcript = Vec::new();
         std::thread::scope(|s| {
             // A failed assertion must still stop the server, or the scope never ends.

@@ -38,9 +38,13 @@ pub struct ServeArgs {
     /// Machine profile (TOML); default: the built-in RAMPS/Marlin printer.
     #[arg(long, value_name = "FILE")]
     pub machine: Option<PathBuf>,
-    /// Pace replies to the simulated clock (default: as fast as the simulation runs).
-    #[arg(long)]
+    /// Pace replies to the simulated clock (default: as fast as the simulation runs); the same
+    /// as `--speed 1`.
+    #[arg(long, conflicts_with = "speed")]
     pub realtime: bool,
+    /// Pace replies to the simulated clock, N times faster than real time (0.1 to 1000).
+    #[arg(long, value_name = "N")]
+    pub speed: Option<f64>,
     /// Write the session transcript (received `>` and sent `<` lines, simulated seconds).
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
@@ -51,6 +55,14 @@ pub struct ServeArgs {
     /// `gweave sim --report`; a later session replaces it).
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// The virtual SD card's folder (default: a new temporary folder, removed on exit). Used when
+    /// the profile's `[firmware]` has `sdcard`.
+    #[arg(long, value_name = "DIR")]
+    pub sd: Option<PathBuf>,
+    /// The virtual EEPROM (`M500` writes it, every power-on and `M501` read it; default: a file
+    /// in the session's temporary folder). Used when the profile's `[firmware]` has `eeprom`.
+    #[arg(long, value_name = "FILE")]
+    pub eeprom: Option<PathBuf>,
     /// Acknowledge a repeat of one of the last N line numbers with `ok` without running it again
     /// (0: answer it with a resend request, as stock Marlin).
     #[arg(long, value_name = "N", default_value_t = ProtocolConfig::default().duplicate_window)]
@@ -66,7 +78,14 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
             keepalive_s: DEFAULT_KEEPALIVE_S,
             duplicate_window: args.duplicate_window,
         },
-        realtime: args.realtime,
+        speed: match (args.realtime, args.speed) {
+            (_, Some(n)) if !(0.1..=1000.0).contains(&n) => {
+                bail!("--speed takes a factor from 0.1 to 1000, got {n}")
+            }
+            (_, Some(n)) => Some(n),
+            (true, None) => Some(1.0),
+            (false, None) => None,
+        },
         exit_after_idle: match args.exit_after_idle {
             Some(s) if !(s.is_finite() && s > 0.0) => {
                 bail!("--exit-after-idle takes a positive number of seconds")
@@ -100,7 +119,26 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
         }
         (None, None) => bail!("say where to serve: --pty PATH or --tcp 127.0.0.1:PORT"),
     };
-    let mut make = || Machine::new(profile.clone());
+    // The session's own folder: the default SD card and EEPROM live there and go with it.
+    let session_dir =
+        tempfile::Builder::new().prefix("gweave-serve-").tempdir().context("creating the session folder")?;
+    let sd_dir = match &args.sd {
+        Some(dir) if !dir.is_dir() => bail!("--sd {}: not a folder", dir.display()),
+        Some(dir) => dir.clone(),
+        None => {
+            let dir = session_dir.path().join("sd");
+            std::fs::create_dir(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            dir
+        }
+    };
+    let eeprom = args.eeprom.clone().unwrap_or_else(|| session_dir.path().join("eeprom.gcode"));
+    let mut make = || {
+        Machine::new(profile.clone()).map(|mut m| {
+            m.attach_sd(sd_dir.clone());
+            m.attach_eeprom(eeprom.clone());
+            m
+        })
+    };
     let mut report_error = None;
     let mut finished = |mut machine: Machine| {
         if let Some(path) = &args.report {
