@@ -20,12 +20,14 @@ rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
 
 py-deps: $(VENV)/.deps
-$(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt
+$(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt crates/gweave-py/requirements-octoprint.txt
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -r crates/gweave-py/requirements-dev.txt
 	# Printrun's printcore without its GUI dependencies (see the file).
 	$(PY) -m pip install -q --no-deps -r crates/gweave-py/requirements-host.txt
+	# OctoPrint with its dependencies, for test_octoprint_serve.py.
+	$(PY) -m pip install -q -r crates/gweave-py/requirements-octoprint.txt
 	touch $@
 
 # Headless chromium for the HTML viewer test (crates/gweave-py/tests/test_viewer.py); installed only
