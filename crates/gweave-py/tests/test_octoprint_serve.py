@@ -9,7 +9,8 @@ started with `--iknowwhatimdoing`, the flag that lets it run as root (CI contain
 One test walks through a session in order (each step needs the one before): connect to the
 explicit port; stay Operational through an idle period with live temperatures; heat to a target
 set while idle; print a real fixture to 100 % and stay connected; upload to the SD card and print
-from it; pause (in about a second), resume and cancel; disconnect and reconnect. OctoPrint's
+from it; pause (in about a second), resume and cancel; an M600 filament change answered through
+OctoPrint's prompt dialog; disconnect and reconnect. OctoPrint's
 serial log must never say "Unknown command". Both processes are always stopped.
 """
 
@@ -225,6 +226,18 @@ def test_octoprint_keeps_the_virtual_printer_and_prints_from_both_storages(sessi
         wait_for(lambda: octo.job()["state"] == "Printing", 10, "Printing again")
     octo.post("/api/job", {"command": "cancel"})
     wait_for(lambda: octo.job()["state"] == "Operational", 20, "Operational after cancelling")
+
+    # M600 from the terminal: OctoPrint shows Marlin's prompt; answering it resumes the board.
+    octo.post("/api/printer/command", {"commands": ["G28", "M600"]})
+    prompt = wait_for(lambda: octo.get("/api/plugin/action_command_prompt").get("text"), 60, "the M600 prompt")
+    assert prompt == "Nozzle Parked", prompt
+    assert octo.get("/api/plugin/action_command_prompt")["choices"] == ["Continue"]
+    time.sleep(2 * COMM_TIMEOUT_S)  # paused for the user, and still connected
+    assert octo.state() == "Operational"
+    octo.post("/api/plugin/action_command_prompt", {"command": "select", "choice": 0})
+    wait_for(lambda: "//action:prompt_begin Paused" in octo.serial_log(), 30, "the purge prompt")
+    octo.post("/api/printer/command", {"commands": ["M400"]})
+    wait_for(lambda: octo.serial_log().rstrip().endswith("Recv: ok"), 30, "the board to answer again")
 
     # Disconnect and reconnect: a fresh power-on, Operational again.
     octo.post("/api/connection", {"command": "disconnect"})

@@ -20,6 +20,7 @@
 //! host_action_commands = true  # HOST_ACTION_COMMANDS: //action:...
 //! prompt_support = true        # HOST_PROMPT_SUPPORT: //action:prompt_..., M876
 //! emergency_parser = true      # EMERGENCY_PARSER: M108 M112 M410 M876 act at once
+//! advanced_pause = true        # ADVANCED_PAUSE_FEATURE: M600 with host prompts
 //! fw_retract = true            # FWRETRACT: G10 G11 M207 M208 M209
 //! arcs = true                  # ARC_SUPPORT: G2 G3
 //! psu_control = false          # PSU_CONTROL: M80 (M81 is always there)
@@ -34,7 +35,7 @@
 //! use gweave_sim::firmware::Firmware;
 //!
 //! let fw = Firmware::default();
-//! assert!(fw.knows_m(20) && fw.knows_m(876) && !fw.knows_m(80));
+//! assert!(fw.knows_m(20) && fw.knows_m(600) && !fw.knows_m(80));
 //! assert!(fw.capability_lines().contains(&"Cap:SDCARD:1".to_owned()));
 //! ```
 
@@ -64,6 +65,8 @@ pub struct Firmware {
     pub prompt_support: bool,
     /// `EMERGENCY_PARSER`.
     pub emergency_parser: bool,
+    /// `ADVANCED_PAUSE_FEATURE`: `M600` filament change (with host prompts).
+    pub advanced_pause: bool,
     /// `FWRETRACT`: `G10`/`G11` and their settings `M207`-`M209`.
     pub fw_retract: bool,
     /// `ARC_SUPPORT`: `G2`/`G3`.
@@ -96,6 +99,7 @@ impl Default for Firmware {
             host_action_commands: true,
             prompt_support: true,
             emergency_parser: true,
+            advanced_pause: true,
             fw_retract: true,
             arcs: true,
             psu_control: false,
@@ -219,8 +223,7 @@ impl Firmware {
             73 => self.set_progress,
             80 => self.psu_control,
             42 | 226 => self.pin_control,
-            // ADVANCED_PAUSE_FEATURE is not simulated: the board is built without it.
-            125 | 600 => false,
+            600 => self.advanced_pause,
             154 => self.autoreport_pos,
             155 => self.autoreport_temp,
             207..=209 => self.fw_retract,

@@ -114,6 +114,15 @@ pub trait Device {
     }
     /// Runs one step of the board's own work (one line of an SD print), with its replies.
     fn own_work(&mut self, _out: &mut dyn FnMut(f64, &str)) {}
+    /// Whether the last command waits for the user to answer (`M600`): the protocol holds its
+    /// `ok` and the lines after it until [`Device::emergency`] ends the wait.
+    fn waiting_for_user(&self) -> bool {
+        false
+    }
+    /// The emergency parser's look at a line received while the board waits for the user.
+    fn emergency(&mut self, _line: &[u8], _out: &mut dyn FnMut(f64, &str)) {}
+    /// The rest of the command that waited for the user, once answered.
+    fn finish_user_wait(&mut self, _out: &mut dyn FnMut(f64, &str)) {}
 }
 
 pub use crate::interp::Outcome;
@@ -204,7 +213,16 @@ pub struct Protocol<D> {
     halted: bool,
     stats: LinkStats,
     block: Block,
+    /// A command waits for the user (`M600`) since this simulated time; its `ok` waits too.
+    user_wait: Option<f64>,
+    next_paused_busy_s: f64,
+    /// Lines received while a command waits for the user, at most [`MAX_HELD_LINES`].
+    waiting_lines: std::collections::VecDeque<(Vec<u8>, Scan)>,
 }
+
+/// Lines a board keeps while its queue is held (Marlin's `BUFSIZE` 4 plus a serial receive
+/// buffer of 128 bytes hold fewer); a host that keeps sending past this loses the rest.
+pub const MAX_HELD_LINES: usize = 16;
 
 impl<D: Device> Protocol<D> {
     pub fn new(device: D, config: ProtocolConfig) -> Self {
@@ -217,6 +235,9 @@ impl<D: Device> Protocol<D> {
             halted: false,
             stats: LinkStats::default(),
             block: Block::default(),
+            user_wait: None,
+            next_paused_busy_s: 0.0,
+            waiting_lines: std::collections::VecDeque::new(),
         }
     }
 
@@ -261,6 +282,20 @@ impl<D: Device> Protocol<D> {
     /// half-received line stays as it is.
     pub fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
         self.device.idle(t_s, out);
+        // Marlin's keepalive while a command waits for the user (`PAUSED_FOR_USER`).
+        if self.user_wait.is_some() && self.config.keepalive_s > 0 {
+            let now_s = self.device.now_s();
+            while self.next_paused_busy_s <= now_s {
+                out(self.next_paused_busy_s, "echo:busy: paused for user");
+                self.stats.busy += 1;
+                self.next_paused_busy_s += f64::from(self.config.keepalive_s);
+            }
+        }
+    }
+
+    /// Whether a command holds the queue waiting for the user (`M600`).
+    pub fn waiting_for_user(&self) -> bool {
+        self.user_wait.is_some()
     }
 
     /// Whether the board has work of its own to do ([`Device::has_own_work`]).
@@ -303,7 +338,65 @@ impl<D: Device> Protocol<D> {
             self.line.clear();
             return;
         }
+        if self.user_wait.is_some() {
+            self.during_user_wait(scan, out, hold);
+            return;
+        }
         let line = std::mem::take(&mut self.line);
+        self.accept(&line, scan, out, hold);
+        // Give the buffer back so that assembling lines allocates nothing in the long run.
+        self.line = line;
+        self.line.clear();
+    }
+
+    /// A line that arrives while a command waits for the user (`M600`): the command queue is
+    /// held, so the line waits its turn, but the emergency parser sees it at once (`M108` or
+    /// `M876` end the wait). Once the wait ends, the command finishes with its `ok` and the held
+    /// lines run in order.
+    fn during_user_wait(
+        &mut self,
+        scan: Scan,
+        out: &mut dyn FnMut(f64, &str),
+        hold: &mut dyn FnMut(f64, f64),
+    ) {
+        let line = std::mem::take(&mut self.line);
+        let start = line.iter().position(|&b| b != b' ').unwrap_or(line.len());
+        if scan == Scan::Normal {
+            self.device.emergency(command_body(&line[start..]), out);
+        }
+        // A full receive buffer loses what does not fit, as a board's does.
+        if self.waiting_lines.len() < MAX_HELD_LINES {
+            self.waiting_lines.push_back((line, scan));
+        }
+        if !self.device.waiting_for_user() {
+            self.end_user_wait(out, hold);
+        }
+    }
+
+    /// The user answered: the waiting command finishes, then the lines held meanwhile run.
+    fn end_user_wait(&mut self, out: &mut dyn FnMut(f64, &str), hold: &mut dyn FnMut(f64, f64)) {
+        let Some(start_s) = self.user_wait.take() else { return };
+        let mut keepalive = Keepalive::new(start_s, self.config.keepalive_s);
+        keepalive.next_s = self.device.now_s() + keepalive.interval_s;
+        self.device.finish_user_wait(&mut |t_s, text| {
+            keepalive.before(t_s, out);
+            out(t_s, text);
+        });
+        out(self.device.now_s(), "ok");
+        while self.user_wait.is_none() {
+            let Some((line, scan)) = self.waiting_lines.pop_front() else { break };
+            self.accept(&line, scan, out, hold);
+        }
+    }
+
+    /// Checks a complete line and runs it, as Marlin's queue does.
+    fn accept(
+        &mut self,
+        line: &[u8],
+        scan: Scan,
+        out: &mut dyn FnMut(f64, &str),
+        hold: &mut dyn FnMut(f64, f64),
+    ) {
         self.stats.lines += 1;
         // Marlin skips leading spaces (only spaces) before it looks for `N`.
         let start = line.iter().position(|&b| b != b' ').unwrap_or(line.len());
@@ -326,9 +419,6 @@ impl<D: Device> Protocol<D> {
                 Verdict::Refuse(e) => self.refuse(e, true, out),
             }
         }
-        // Give the buffer back so that assembling lines allocates nothing in the long run.
-        self.line = line;
-        self.line.clear();
     }
 
     /// Marlin's checks on a numbered line, in Marlin's order.
@@ -398,6 +488,12 @@ impl<D: Device> Protocol<D> {
         keepalive.before(end_s, out);
         self.stats.busy += keepalive.printed;
         self.halted = outcome == Outcome::Halted;
+        if self.device.waiting_for_user() {
+            // The ok comes when the user has answered (see `during_user_wait`).
+            self.user_wait = Some(start_s);
+            self.next_paused_busy_s = end_s + f64::from(self.config.keepalive_s);
+            return;
+        }
         if self.device.wall_timed() {
             hold(start_s, end_s);
         }
@@ -517,6 +613,18 @@ impl Device for crate::interp::Machine {
 
     fn own_work(&mut self, out: &mut dyn FnMut(f64, &str)) {
         crate::interp::Machine::sd_step(self, out)
+    }
+
+    fn waiting_for_user(&self) -> bool {
+        crate::interp::Machine::waiting_for_user(self)
+    }
+
+    fn emergency(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        crate::interp::Machine::emergency(self, line, out);
+    }
+
+    fn finish_user_wait(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        crate::interp::Machine::finish_user_wait(self, out)
     }
 }
 

@@ -67,6 +67,7 @@ pub const COMMANDS: &[CommandHelp] = &[
     c("M524", "abort the SD print"),
     c("M563 M567", "tool definition (accepted) and mix ratios (RepRapFirmware)"),
     c("M568", "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)"),
+    c("M600", "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume"),
     c("M851", "probe offsets X Y Z (firmware.probe)"),
     c("M876", "answer a host prompt (firmware.prompt_support)"),
     c("M928", "log the following commands to an SD file until M29"),

@@ -46,8 +46,10 @@ fn m400_ok_is_held_for_its_simulated_time() {
 
 #[test]
 fn m115_lists_the_firmware_table_and_what_is_left_out_is_unknown() {
-    let mut m =
-        Machine::new(profile("sdcard = false\nlong_filenames = false\nautoreport_sd = false\n")).unwrap();
+    let mut m = Machine::new(profile(
+        "sdcard = false\nlong_filenames = false\nautoreport_sd = false\nadvanced_pause = false\n",
+    ))
+    .unwrap();
     let out = run(&mut m, "M115\nM21\nM20\nM155 S2\nM600\n");
     assert!(out.contains(&"Cap:SDCARD:0".to_owned()), "{out:?}");
     assert!(out.contains(&"Cap:AUTOREPORT_TEMP:1".to_owned()), "{out:?}");
@@ -177,4 +179,64 @@ fn sd_print_pauses_reports_and_aborts() {
     assert_eq!(run(&mut m, "M27"), ["Not SD printing"]);
     assert_eq!(run(&mut m, "M30 LONGNA~1.GCO"), ["File deleted:LONGNA~1.GCO"]);
     assert_eq!(run(&mut m, "M23 nothere.gco"), ["echo:open failed, File: nothere.gco."]);
+}
+
+#[test]
+fn m600_prompts_the_host_and_holds_the_queue_until_m876() {
+    let mut p = Protocol::new(Machine::new(profile("")).unwrap(), ProtocolConfig::default());
+    let out = feed(&mut p, 1, &["M600"]);
+    let prompts: Vec<&String> =
+        out.iter().filter(|l| l.starts_with("//action:") || l.starts_with("echo:Insert")).collect();
+    assert_eq!(
+        prompts,
+        [
+            "//action:prompt_end",
+            "//action:prompt_begin Pause",
+            "//action:prompt_button Dismiss",
+            "//action:prompt_show",
+            "echo:Insert filament and send M108",
+            "//action:prompt_end",
+            "//action:prompt_begin Nozzle Parked",
+            "//action:prompt_button Continue",
+            "//action:prompt_show",
+        ]
+    );
+    assert!(!out.contains(&"ok".to_owned()), "no ok while the user is asked: {out:?}");
+    assert!(p.waiting_for_user());
+    // A host that goes on is held; the board keeps telling it so while the wall clock runs.
+    assert!(feed(&mut p, 2, &["M105"]).is_empty());
+    let mut busy = Vec::new();
+    p.idle(5.0, &mut |_t, l| busy.push(l.to_owned()));
+    assert_eq!(busy, ["echo:busy: paused for user"; 2]);
+    // The emergency parser takes M876 S0 at once: M600 finishes, then the held lines run.
+    let out = feed(&mut p, 3, &["M876 S0"]);
+    let tail: Vec<&str> = out.iter().map(String::as_str).filter(|l| !l.starts_with("echo:busy")).collect();
+    assert_eq!(
+        tail[..5],
+        [
+            "//action:prompt_end",
+            "//action:prompt_begin Paused",
+            "//action:prompt_button PurgeMore",
+            "//action:prompt_button Continue",
+            "//action:prompt_show"
+        ]
+    );
+    assert_eq!(tail[5], "//action:prompt_end");
+    assert_eq!(tail[6], "ok", "{tail:?}");
+    assert!(tail[7].starts_with("ok T:"), "{tail:?}");
+    assert_eq!(tail[8..], ["ok"]);
+    assert!(!p.waiting_for_user());
+}
+
+#[test]
+fn m600_without_advanced_pause_is_unknown_and_a_file_run_does_not_wait() {
+    let mut m = Machine::new(profile("advanced_pause = false\n")).unwrap();
+    assert_eq!(run(&mut m, "M600"), ["echo:Unknown command: \"M600\""]);
+    // `gweave sim`: nobody answers; the next command continues the print.
+    let mut m = Machine::new(profile("")).unwrap();
+    run(&mut m, "M600");
+    assert!(m.waiting_for_user());
+    let out = run(&mut m, "M114");
+    assert!(!m.waiting_for_user());
+    assert!(out.last().unwrap().starts_with("X:0.00"), "{out:?}");
 }

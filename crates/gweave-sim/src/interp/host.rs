@@ -25,6 +25,8 @@ pub(super) struct HostState {
     /// `G29` ran (a mesh exists), and `M420 S1` applies it.
     mesh_probed: bool,
     levelling_on: bool,
+    /// `M600` waits for the user ([`Machine::waiting_for_user`]).
+    pub waiting_for_user: bool,
 }
 
 impl Machine {
@@ -109,9 +111,7 @@ impl Machine {
         }
         self.core.drain();
         self.sync(out);
-        self.core.idle(PROBE_POINT_S * (nx * ny) as f64);
-        self.homing_s += PROBE_POINT_S * (nx * ny) as f64;
-        self.sync(out);
+        self.park_for(PROBE_POINT_S * (nx * ny) as f64, out);
         self.host.mesh_probed = true;
         self.host.levelling_on = true;
         for l in self.mesh_lines() {

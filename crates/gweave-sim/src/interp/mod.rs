@@ -34,6 +34,7 @@ mod commands;
 mod heat;
 mod host;
 mod motion;
+mod pause;
 mod report;
 mod sd;
 mod settings;
@@ -225,6 +226,10 @@ impl Machine {
         let line = trim_line_end(line);
         if self.sd_write_line(line, out) {
             return self.outcome();
+        }
+        if self.host.waiting_for_user {
+            // A run of a file has nobody to answer M600: the user pressed Continue at once.
+            self.finish_user_wait(out);
         }
         if trim(line) == b"?" {
             self.help(out);
@@ -425,6 +430,7 @@ impl Machine {
                 self.host_command(line, number, out)
             }
             92 | 207..=209 | 304 | 500..=503 | 851 => self.settings_command(number, out),
+            600 => self.m600(out),
             205 => {
                 let b = self.core.block();
                 for (slot, letter) in self.settings.m205_bst.iter_mut().zip([b'B', b'S', b'T']) {
