@@ -10,6 +10,7 @@
 #[allow(dead_code)]
 mod harness;
 
+mod hosts;
 mod outputs;
 mod serve;
 mod sweep;
