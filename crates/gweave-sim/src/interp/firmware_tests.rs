@@ -101,7 +101,7 @@ fn host_commands_answer_as_marlin() {
     assert_eq!(run(&mut m, "M75\nG4 S75\nM31"), ["echo:Print time: 1m 15s"]);
     assert_eq!(run(&mut m, "M77\nM31"), ["echo:Print time: 0s"]);
     assert_eq!(run(&mut m, "M420"), ["echo:Bed Leveling OFF", "echo:Fade Height OFF"]);
-    assert_eq!(run(&mut m, "G29"), ["echo:Home XYZ first"]);
+    assert_eq!(run(&mut m, "G29"), ["echo:Home XYZ First"]);
     let out = run(&mut m, "G28\nG29");
     assert_eq!(out[0], "Bilinear Leveling Grid:", "{out:?}");
     assert_eq!(run(&mut m, "M420")[0], "echo:Bed Leveling ON");

@@ -106,7 +106,7 @@ impl Machine {
         let Some((nx, ny)) = self.profile.firmware.grid() else { return };
         if self.homed != [true; 3] {
             // Marlin refuses to probe an unhomed machine.
-            out(self.now_s(), "echo:Home XYZ first");
+            out(self.now_s(), "echo:Home XYZ First");
             return;
         }
         self.core.drain();
