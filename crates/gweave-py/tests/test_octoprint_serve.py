@@ -235,10 +235,12 @@ def test_octoprint_keeps_the_virtual_printer_and_prints_from_both_storages(sessi
 
     # M600 from the terminal: OctoPrint shows Marlin's prompt; answering it resumes the board.
     octo.post("/api/printer/command", {"commands": ["G28", "M600"]})
-    # The plugin answers nothing (JSON null) while no prompt is open.
-    prompt = wait_for(lambda: (octo.get("/api/plugin/action_command_prompt") or {}).get("text"), 60, "the prompt")
-    assert prompt == "Nozzle Parked", prompt
-    assert octo.get("/api/plugin/action_command_prompt")["choices"] == ["Continue"]
+    # The plugin answers nothing (JSON null) while no prompt is open; M600 opens "Pause" first.
+    def prompt() -> dict:
+        return octo.get("/api/plugin/action_command_prompt") or {}
+
+    wait_for(lambda: prompt().get("text") == "Nozzle Parked", 60, "the Nozzle Parked prompt")
+    assert prompt()["choices"] == ["Continue"]
     time.sleep(2 * COMM_TIMEOUT_S)  # paused for the user, and still connected
     assert octo.state() == "Operational"
     octo.post("/api/plugin/action_command_prompt", {"command": "select", "choice": 0})

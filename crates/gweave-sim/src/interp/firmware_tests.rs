@@ -144,7 +144,18 @@ fn sd_upload_through_the_protocol_then_print_it_to_done() {
     let sel = feed(&mut p, 8, &["M23 part.gco", "M24", "M27"]);
     assert_eq!(
         sel,
-        ["File opened: PART.GCO Size: 27", "File selected", "ok", "ok", "SD printing byte 0/27", "ok"]
+        [
+            "File opened: PART.GCO Size: 27",
+            "File selected",
+            "ok",
+            "//action:prompt_end",
+            "//action:prompt_begin Resuming SD",
+            "//action:prompt_button Dismiss",
+            "//action:prompt_show",
+            "ok",
+            "SD printing byte 0/27",
+            "ok"
+        ]
     );
     let mut printed = Vec::new();
     while p.has_own_work() {
@@ -171,6 +182,19 @@ fn sd_print_pauses_reports_and_aborts() {
         m.sd_step(&mut |_t, l| reports.push(l.to_owned()));
     }
     assert!(reports.iter().any(|l| l.starts_with("SD printing byte ")), "{reports:?}");
+    // M25 asks the host whether to resume (Marlin's "Pause SD" prompt); M876 answers it.
+    assert_eq!(
+        run(&mut m, "M25"),
+        [
+            "//action:prompt_end",
+            "//action:prompt_begin Pause SD",
+            "//action:prompt_button Resume",
+            "//action:prompt_show"
+        ]
+    );
+    assert!(!m.sd_printing());
+    assert_eq!(run(&mut m, "M876 S0"), Vec::<String>::new());
+    assert!(m.sd_printing());
     run(&mut m, "M25");
     assert!(!m.sd_printing());
     let pos = run(&mut m, "M27");

@@ -27,6 +27,8 @@ pub(super) struct HostState {
     levelling_on: bool,
     /// `M600` waits for the user ([`Machine::waiting_for_user`]).
     pub waiting_for_user: bool,
+    /// The host prompt that is open, if any.
+    pub prompt: Option<super::pause::PromptReason>,
 }
 
 impl Machine {
@@ -40,13 +42,11 @@ impl Machine {
                 let text = duration_text(self.job_time_s());
                 out(now, &format!("echo:Print time: {text}"));
             }
-            75 => {
-                self.host.job_since_s.get_or_insert(now);
-            }
-            76 | 77 => {
-                let job_s = self.job_time_s();
-                self.host.job_s = if number == 77 { 0.0 } else { job_s };
-                self.host.job_since_s = None;
+            75 => self.job_timer_start(),
+            76 => self.job_timer_pause(),
+            77 => {
+                self.job_timer_pause();
+                self.host.job_s = 0.0;
             }
             81 => {
                 // Power off: heaters off, motors off (the axes must be homed again).
@@ -92,9 +92,10 @@ impl Machine {
                     self.refuse(format!("M226: pin {pin} never reaches state {want}: not waiting"), out);
                 }
             }
-            // Accepted: power on (PSU_CONTROL), a beep, an answer to a prompt nobody opened,
-            // emergency commands with nothing to interrupt (waits end by themselves here).
-            80 | 300 | 876 | 108 | 410 => {}
+            876 => self.answer_prompt(),
+            // Accepted: power on (PSU_CONTROL), a beep, emergency commands with nothing to
+            // interrupt (waits end by themselves here).
+            80 | 300 | 108 | 410 => {}
             420 => self.m420(out),
             _ => {}
         }
@@ -165,6 +166,18 @@ impl Machine {
             let late = ((now - self.host.next_pos_report_s) / period).floor() + 1.0;
             self.host.next_pos_report_s += late * period;
         }
+    }
+
+    /// `M75`: the print job timer runs (from now, unless it runs already).
+    pub(super) fn job_timer_start(&mut self) {
+        let now = self.now_s();
+        self.host.job_since_s.get_or_insert(now);
+    }
+
+    /// `M76`: the print job timer stops and keeps its reading.
+    pub(super) fn job_timer_pause(&mut self) {
+        self.host.job_s = self.job_time_s();
+        self.host.job_since_s = None;
     }
 
     /// The print job timer's present reading, s.

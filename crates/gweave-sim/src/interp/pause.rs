@@ -20,6 +20,19 @@
 
 use super::Machine;
 
+/// Why a host prompt is open (Marlin's `PromptReason`): what answering it with `M876` does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum PromptReason {
+    /// A message with a Dismiss button.
+    Info,
+    /// `M25`'s "Pause SD" / "Resume": answering resumes the SD print (Marlin injects `M24`).
+    PauseResume,
+    /// "Nozzle Parked" / "Continue": answering ends the wait, as `M108` does.
+    UserContinue,
+    /// "Paused" / "PurgeMore" / "Continue" after loading.
+    FilamentLoad,
+}
+
 /// `PAUSE_PARK_RETRACT_LENGTH` (2 mm) at `PAUSE_PARK_RETRACT_FEEDRATE` (60 mm/s), the park moves
 /// (`NOZZLE_PARK_Z_RAISE_MIN` to 20 mm at `NOZZLE_PARK_Z_FEEDRATE` 5 mm/s, then across the bed at
 /// `NOZZLE_PARK_XY_FEEDRATE` 100 mm/s), simulated s.
@@ -47,8 +60,12 @@ impl Machine {
         let text = super::command_text(line);
         let code: String = text.iter().take_while(|b| !b.is_ascii_whitespace()).map(|&b| b as char).collect();
         match code.to_ascii_uppercase().as_str() {
-            "M108" | "M876" => {
+            "M108" => {
                 self.host.waiting_for_user = false;
+                true
+            }
+            "M876" => {
+                self.answer_prompt();
                 true
             }
             "M112" => {
@@ -67,11 +84,11 @@ impl Machine {
     pub(super) fn m600(&mut self, out: &mut dyn FnMut(f64, &str)) {
         self.core.drain();
         self.sync(out);
-        self.prompt("Pause", &["Dismiss"], out);
+        self.prompt(PromptReason::Info, "Pause", &["Dismiss"], out);
         let t = PARK_S + if self.thermal.hotend_count() > 0 { UNLOAD_S } else { 0.0 };
         self.park_for(t, out);
         out(self.now_s(), "echo:Insert filament and send M108");
-        self.prompt("Nozzle Parked", &["Continue"], out);
+        self.prompt(PromptReason::UserContinue, "Nozzle Parked", &["Continue"], out);
         self.host.waiting_for_user = true;
     }
 
@@ -82,8 +99,8 @@ impl Machine {
             return;
         }
         self.park_for(PURGE_S, out);
-        self.prompt("Paused", &["PurgeMore", "Continue"], out);
-        out(self.now_s(), "//action:prompt_end");
+        self.prompt(PromptReason::FilamentLoad, "Paused", &["PurgeMore", "Continue"], out);
+        self.prompt_end(out);
         self.park_for(PARK_S, out);
     }
 
@@ -94,17 +111,41 @@ impl Machine {
         self.sync(out);
     }
 
+    /// `M876`: the host answered the open prompt (Marlin's `hostui.handle_response`).
+    pub(super) fn answer_prompt(&mut self) {
+        match self.host.prompt.take() {
+            Some(PromptReason::UserContinue) => self.host.waiting_for_user = false,
+            Some(PromptReason::PauseResume) => self.sd_resume(),
+            Some(PromptReason::Info | PromptReason::FilamentLoad) | None => {}
+        }
+    }
+
     /// A host prompt as Marlin's `hostui.prompt_do` prints it (only with `prompt_support`).
-    fn prompt(&mut self, message: &str, buttons: &[&str], out: &mut dyn FnMut(f64, &str)) {
+    pub(super) fn prompt(
+        &mut self,
+        reason: PromptReason,
+        message: &str,
+        buttons: &[&str],
+        out: &mut dyn FnMut(f64, &str),
+    ) {
         if !self.profile.firmware.prompt_support {
             return;
         }
+        self.prompt_end(out);
+        self.host.prompt = Some(reason);
         let t = self.now_s();
-        out(t, "//action:prompt_end");
         out(t, &format!("//action:prompt_begin {message}"));
         for b in buttons {
             out(t, &format!("//action:prompt_button {b}"));
         }
         out(t, "//action:prompt_show");
+    }
+
+    /// Closes the open prompt (`//action:prompt_end`).
+    fn prompt_end(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        if self.profile.firmware.prompt_support {
+            self.host.prompt = None;
+            out(self.now_s(), "//action:prompt_end");
+        }
     }
 }

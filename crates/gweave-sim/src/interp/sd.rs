@@ -16,6 +16,7 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use super::pause::PromptReason;
 use super::Machine;
 
 /// The longest line read from a file on the card, bytes: Marlin's `MAX_CMD_SIZE` buffer is
@@ -156,15 +157,18 @@ impl Machine {
                 out(now, "echo:SD card released");
             }
             23 => self.sd_select(&arg, out),
+            // Marlin 2.1's M24/M25 (`Marlin/src/gcode/sd/M24_M25.cpp`): the job timer, and a
+            // host prompt about it.
             24 => {
-                if let Some(p) = self.sd.open.as_mut() {
-                    p.running = true;
-                }
+                self.sd_resume();
+                self.prompt(PromptReason::Info, "Resuming SD", &["Dismiss"], out);
             }
             25 => {
                 if let Some(p) = self.sd.open.as_mut() {
                     p.running = false;
                 }
+                self.job_timer_pause();
+                self.prompt(PromptReason::PauseResume, "Pause SD", &["Resume"], out);
             }
             26 => {
                 if let (Some(p), Some(s)) = (self.sd.open.as_mut(), self.core.block().get(b'S')) {
@@ -195,6 +199,14 @@ impl Machine {
             }
             524 if self.sd.open.take().is_some() => out(now, "echo:Print Aborted"),
             _ => {}
+        }
+    }
+
+    /// Starts or resumes the selected file, with the print job timer.
+    pub(super) fn sd_resume(&mut self) {
+        if let Some(p) = self.sd.open.as_mut() {
+            p.running = true;
+            self.job_timer_start();
         }
     }
 
