@@ -33,7 +33,7 @@ pub const COMMANDS: &[CommandHelp] = &[
     c("M28 M29 M30 M32 M33", "SD upload to a file / end it, delete a file, select and start, long name of a file"),
     c("M31", "print job time"),
     c("M42 M226", "set a pin / wait for a pin state (firmware.pin_control)"),
-    c("M73 M117", "progress and LCD message, accepted"),
+    c("M73 M117", "progress (accepted) and status message, sent to the host as //action:notification"),
     c("M75 M76 M77", "print job timer start / pause / stop"),
     c("M80 M81", "power on (firmware.psu_control) / off: heaters and motors off"),
     c("M82 M83", "absolute / relative extrusion"),

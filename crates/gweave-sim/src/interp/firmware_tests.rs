@@ -105,7 +105,8 @@ fn host_commands_answer_as_marlin() {
     let out = run(&mut m, "G28\nG29");
     assert_eq!(out[0], "Bilinear Leveling Grid:", "{out:?}");
     assert_eq!(run(&mut m, "M420")[0], "echo:Bed Leveling ON");
-    for line in ["M108", "M410", "M876 S0", "M300 S440 P100", "M81", "M42 P13 S255", "M117 Hi", "M73 P50"] {
+    assert_eq!(run(&mut m, "M117 Printing part 1"), ["//action:notification Printing part 1"]);
+    for line in ["M108", "M410", "M876 S0", "M876 P1", "M300 S440 P100", "M81", "M42 P13 S255", "M73 P50"] {
         assert_eq!(run(&mut m, line), Vec::<String>::new(), "{line}");
     }
 }
@@ -229,11 +230,14 @@ fn m600_prompts_the_host_and_holds_the_queue_until_m876() {
     assert!(p.waiting_for_user());
     // A host that goes on is held; the board keeps telling it so while the wall clock runs.
     assert!(feed(&mut p, 2, &["M105"]).is_empty());
+    // OctoPrint's `M876 P1` (it supports prompts) answers nothing.
+    assert!(feed(&mut p, 3, &["M876 P1"]).is_empty());
+    assert!(p.waiting_for_user());
     let mut busy = Vec::new();
     p.idle(5.0, &mut |_t, l| busy.push(l.to_owned()));
     assert_eq!(busy, ["echo:busy: paused for user"; 2]);
     // The emergency parser takes M876 S0 at once: M600 finishes, then the held lines run.
-    let out = feed(&mut p, 3, &["M876 S0"]);
+    let out = feed(&mut p, 4, &["M876 S0"]);
     let tail: Vec<&str> = out.iter().map(String::as_str).filter(|l| !l.starts_with("echo:busy")).collect();
     assert_eq!(
         tail[..5],
@@ -248,7 +252,7 @@ fn m600_prompts_the_host_and_holds_the_queue_until_m876() {
     assert_eq!(tail[5], "//action:prompt_end");
     assert_eq!(tail[6], "ok", "{tail:?}");
     assert!(tail[7].starts_with("ok T:"), "{tail:?}");
-    assert_eq!(tail[8..], ["ok"]);
+    assert_eq!(tail[8..], ["ok", "ok"]);
     assert!(!p.waiting_for_user());
 }
 

@@ -92,10 +92,17 @@ impl Machine {
                     self.refuse(format!("M226: pin {pin} never reaches state {want}: not waiting"), out);
                 }
             }
-            876 => self.answer_prompt(),
+            // `M876 P1` only says the host supports prompts; `S<n>` answers the open one.
+            876 if s.is_some() => self.answer_prompt(),
+            // HOST_STATUS_NOTIFICATIONS: the status message goes to the host too.
+            117 if self.profile.firmware.host_action_commands => {
+                let text = String::from_utf8_lossy(super::command_text(line)).into_owned();
+                let message = text.get(4..).unwrap_or("").trim_start();
+                out(now, &format!("//action:notification {message}"));
+            }
             // Accepted: power on (PSU_CONTROL), a beep, emergency commands with nothing to
             // interrupt (waits end by themselves here).
-            80 | 300 | 108 | 410 => {}
+            80 | 117 | 300 | 108 | 410 | 876 => {}
             420 => self.m420(out),
             _ => {}
         }

@@ -424,9 +424,9 @@ impl Machine {
             }
             // Accepted, nothing to simulate: enable motors, progress, line numbers (the serial
             // layer's), LCD message, gradient mix, RRF tool definition.
-            17 | 73 | 110 | 117 | 166 | 563 => {}
+            17 | 73 | 110 | 166 | 563 => {}
             20..=30 | 32 | 33 | 524 | 928 => self.sd_command(line, number, out),
-            31 | 42 | 75..=77 | 80 | 81 | 108 | 118 | 154 | 211 | 226 | 300 | 410 | 420 | 876 => {
+            31 | 42 | 75..=77 | 80 | 81 | 108 | 117 | 118 | 154 | 211 | 226 | 300 | 410 | 420 | 876 => {
                 self.host_command(line, number, out)
             }
             92 | 207..=209 | 304 | 500..=503 | 851 => self.settings_command(number, out),

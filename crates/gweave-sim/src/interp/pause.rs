@@ -65,7 +65,10 @@ impl Machine {
                 true
             }
             "M876" => {
-                self.answer_prompt();
+                // `M876 P1` only says the host supports prompts; `S<n>` answers one.
+                if text.windows(2).any(|w| w[0].eq_ignore_ascii_case(&b'S') && w[1].is_ascii_digit()) {
+                    self.answer_prompt();
+                }
                 true
             }
             "M112" => {
