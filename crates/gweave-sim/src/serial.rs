@@ -48,6 +48,12 @@
 //! `M110 N<n>` (numbered or not) and `M113 [S<s>]` are about the link, not the machine: the
 //! protocol answers them itself and the device never sees them.
 //!
+//! A command that waits for the user (`M600`, [`Device::waiting_for_user`]) holds the queue: its
+//! `ok` and the lines received after it wait (at most [`MAX_HELD_LINES`]), with
+//! `echo:busy: paused for user` every keepalive interval of idle time, while the emergency
+//! parser looks at every line at once ([`Device::emergency`]: `M108`, `M876 S<n>`, `M112`); when
+//! the wait ends, the command finishes, prints its `ok`, and the held lines run in order.
+//!
 //! ```
 //! use gweave_sim::serial::{frame_line, Device, Outcome, Protocol, ProtocolConfig};
 //!
