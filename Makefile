@@ -21,12 +21,13 @@ rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
 
 py-deps: $(VENV)/.deps
-$(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt crates/gweave-py/requirements-integrations.txt
+$(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt crates/gweave-py/requirements-octoprint.txt
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -r crates/gweave-py/requirements-dev.txt
-	# OctoPrint, for the plugin's test (integrations/octoprint).
-	$(PY) -m pip install -q -r crates/gweave-py/requirements-integrations.txt
+	# OctoPrint with its dependencies (a whole web server), before Printrun, whose pins it would
+	# otherwise fight: the host of test_octoprint_serve.py and of the plugin's test_octoprint.py.
+	$(PY) -m pip install -q -r crates/gweave-py/requirements-octoprint.txt
 	# Printrun's printcore without its GUI dependencies (see the file).
 	$(PY) -m pip install -q --no-deps -r crates/gweave-py/requirements-host.txt
 	touch $@

@@ -31,6 +31,7 @@ use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::firmware::{Firmware, FirmwareError};
 use crate::heater::{HeaterFault, HeaterId};
 use crate::limits::MotionProfile;
 use crate::thermal::ThermalConfig;
@@ -62,6 +63,9 @@ pub enum MachineProfileError {
         /// Entries of `motion.steps.mixing_e`.
         steps: usize,
     },
+    /// A `[firmware]` value out of range.
+    #[error("machine profile: {0}")]
+    Firmware(#[from] FirmwareError),
     /// A fault specification such as `hotend-cartridge-off@120s` that cannot be read.
     #[error("fault `{0}`: expected HEATER-FAULT@SECONDS, e.g. hotend-cartridge-off@120s, bed-thermistor-open@30s, hotend1-thermistor-shorted@5s")]
     Fault(String),
@@ -372,6 +376,8 @@ pub struct MachineProfile {
     pub inkjet: Option<Inkjet>,
     /// Faults to inject, e.g. `["hotend-cartridge-off@120s"]`.
     pub faults: Vec<FaultSpec>,
+    /// What the firmware was built with ([`Firmware`]).
+    pub firmware: Firmware,
 }
 
 impl Default for MachineProfile {
@@ -387,6 +393,7 @@ impl Default for MachineProfile {
             rotary: None,
             inkjet: None,
             faults: Vec::new(),
+            firmware: Firmware::default(),
         }
     }
 }
@@ -414,6 +421,7 @@ impl MachineProfile {
     /// message), then the keys that must agree with each other.
     pub fn validate(&self) -> Result<(), MachineProfileError> {
         self.check_ranges(&Table::root())?;
+        self.firmware.validate()?;
         let h = &self.homing;
         let axes = h.axes();
         let unique = (0..3).all(|a| axes.iter().filter(|&&x| x == a).count() <= 1);

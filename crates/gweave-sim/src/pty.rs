@@ -322,7 +322,7 @@ mod tests {
     #[test]
     fn pty_a_hang_up_during_a_paced_command_is_seen_at_once() {
         let started = Instant::now();
-        let options = ServeOptions { realtime: true, ..ServeOptions::default() };
+        let options = ServeOptions { speed: Some(1.0), ..ServeOptions::default() };
         let (summary, ended) = with_server(options, |link| {
             let mut host = open_host(link);
             // Thirty seconds of replies paced to the wall clock; the host leaves after the boot.

@@ -48,6 +48,12 @@
 //! `M110 N<n>` (numbered or not) and `M113 [S<s>]` are about the link, not the machine: the
 //! protocol answers them itself and the device never sees them.
 //!
+//! A command that waits for the user (`M600`, [`Device::waiting_for_user`]) holds the queue: its
+//! `ok` and the lines received after it wait (at most [`MAX_HELD_LINES`]), with
+//! `echo:busy: paused for user` every keepalive interval of idle time, while the emergency
+//! parser looks at every line at once ([`Device::emergency`]: `M108`, `M876 S<n>`, `M112`); when
+//! the wait ends, the command finishes, prints its `ok`, and the held lines run in order.
+//!
 //! ```
 //! use gweave_sim::serial::{frame_line, Device, Outcome, Protocol, ProtocolConfig};
 //!
@@ -101,6 +107,28 @@ pub trait Device {
     /// Lets `t_s` seconds pass with no command waiting (the host is quiet), calling `out` with
     /// what the board prints meanwhile (auto-reports). By default the clock stands still.
     fn idle(&mut self, _t_s: f64, _out: &mut dyn FnMut(f64, &str)) {}
+    /// Whether the last command is one a host times by the wall clock even when the board runs
+    /// faster than real time (`M400`: OctoPrint's pause sends `M400` then queues `M114` once the
+    /// `M400` is written; an `ok` that comes back before that finds an empty queue and the pause
+    /// waits for a communication timeout). See [`Protocol::feed_held`].
+    fn wall_timed(&self) -> bool {
+        false
+    }
+    /// Whether the board has work of its own (an SD print) that runs while the host is quiet.
+    fn has_own_work(&self) -> bool {
+        false
+    }
+    /// Runs one step of the board's own work (one line of an SD print), with its replies.
+    fn own_work(&mut self, _out: &mut dyn FnMut(f64, &str)) {}
+    /// Whether the last command waits for the user to answer (`M600`): the protocol holds its
+    /// `ok` and the lines after it until [`Device::emergency`] ends the wait.
+    fn waiting_for_user(&self) -> bool {
+        false
+    }
+    /// The emergency parser's look at a line received while the board waits for the user.
+    fn emergency(&mut self, _line: &[u8], _out: &mut dyn FnMut(f64, &str)) {}
+    /// The rest of the command that waited for the user, once answered.
+    fn finish_user_wait(&mut self, _out: &mut dyn FnMut(f64, &str)) {}
 }
 
 pub use crate::interp::Outcome;
@@ -191,7 +219,16 @@ pub struct Protocol<D> {
     halted: bool,
     stats: LinkStats,
     block: Block,
+    /// A command waits for the user (`M600`) since this simulated time; its `ok` waits too.
+    user_wait: Option<f64>,
+    next_paused_busy_s: f64,
+    /// Lines received while a command waits for the user, at most [`MAX_HELD_LINES`].
+    waiting_lines: std::collections::VecDeque<(Vec<u8>, Scan)>,
 }
+
+/// Lines a board keeps while its queue is held (Marlin's `BUFSIZE` 4 plus a serial receive
+/// buffer of 128 bytes hold fewer); a host that keeps sending past this loses the rest.
+pub const MAX_HELD_LINES: usize = 16;
 
 impl<D: Device> Protocol<D> {
     pub fn new(device: D, config: ProtocolConfig) -> Self {
@@ -204,6 +241,9 @@ impl<D: Device> Protocol<D> {
             halted: false,
             stats: LinkStats::default(),
             block: Block::default(),
+            user_wait: None,
+            next_paused_busy_s: 0.0,
+            waiting_lines: std::collections::VecDeque::new(),
         }
     }
 
@@ -217,9 +257,21 @@ impl<D: Device> Protocol<D> {
 
     /// Takes bytes from the host, in any chunking, and answers every line they complete.
     pub fn feed(&mut self, bytes: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        self.feed_held(bytes, out, &mut |_, _| {});
+    }
+
+    /// [`Protocol::feed`], calling `hold(start_s, end_s)` before the `ok` of a command the host
+    /// times by the wall clock ([`Device::wall_timed`]), so that a transport running faster than
+    /// real time can hold that `ok` back for the command's simulated duration.
+    pub fn feed_held(
+        &mut self,
+        bytes: &[u8],
+        out: &mut dyn FnMut(f64, &str),
+        hold: &mut dyn FnMut(f64, f64),
+    ) {
         for &b in bytes {
             match (b, self.scan) {
-                (b'\n' | b'\r', _) => self.end_line(out),
+                (b'\n' | b'\r', _) => self.end_line(out, hold),
                 (_, Scan::Comment | Scan::Overflow) => {}
                 (b';', Scan::Normal) => self.scan = Scan::Comment,
                 (_, Scan::Normal) if self.line.len() >= MAX_LINE_BYTES => self.scan = Scan::Overflow,
@@ -236,6 +288,30 @@ impl<D: Device> Protocol<D> {
     /// half-received line stays as it is.
     pub fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
         self.device.idle(t_s, out);
+        // Marlin's keepalive while a command waits for the user (`PAUSED_FOR_USER`).
+        if self.user_wait.is_some() && self.config.keepalive_s > 0 {
+            let now_s = self.device.now_s();
+            while self.next_paused_busy_s <= now_s {
+                out(self.next_paused_busy_s, "echo:busy: paused for user");
+                self.stats.busy += 1;
+                self.next_paused_busy_s += f64::from(self.config.keepalive_s);
+            }
+        }
+    }
+
+    /// Whether a command holds the queue waiting for the user (`M600`).
+    pub fn waiting_for_user(&self) -> bool {
+        self.user_wait.is_some()
+    }
+
+    /// Whether the board has work of its own to do ([`Device::has_own_work`]).
+    pub fn has_own_work(&self) -> bool {
+        self.device.has_own_work()
+    }
+
+    /// Runs one step of the board's own work ([`Device::own_work`]).
+    pub fn own_work(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        self.device.own_work(out);
     }
 
     /// Gives the device back, for a report after the session.
@@ -261,14 +337,72 @@ impl<D: Device> Protocol<D> {
         self.config
     }
 
-    fn end_line(&mut self, out: &mut dyn FnMut(f64, &str)) {
+    fn end_line(&mut self, out: &mut dyn FnMut(f64, &str), hold: &mut dyn FnMut(f64, f64)) {
         let scan = std::mem::replace(&mut self.scan, Scan::Normal);
         // A line of nothing but blanks (after its comment is gone) is an empty line.
         if self.line.iter().all(u8::is_ascii_whitespace) {
             self.line.clear();
             return;
         }
+        if self.user_wait.is_some() {
+            self.during_user_wait(scan, out, hold);
+            return;
+        }
         let line = std::mem::take(&mut self.line);
+        self.accept(&line, scan, out, hold);
+        // Give the buffer back so that assembling lines allocates nothing in the long run.
+        self.line = line;
+        self.line.clear();
+    }
+
+    /// A line that arrives while a command waits for the user (`M600`): the command queue is
+    /// held, so the line waits its turn, but the emergency parser sees it at once (`M108` or
+    /// `M876` end the wait). Once the wait ends, the command finishes with its `ok` and the held
+    /// lines run in order.
+    fn during_user_wait(
+        &mut self,
+        scan: Scan,
+        out: &mut dyn FnMut(f64, &str),
+        hold: &mut dyn FnMut(f64, f64),
+    ) {
+        let line = std::mem::take(&mut self.line);
+        let start = line.iter().position(|&b| b != b' ').unwrap_or(line.len());
+        if scan == Scan::Normal {
+            self.device.emergency(command_body(&line[start..]), out);
+        }
+        // A full receive buffer loses what does not fit, as a board's does.
+        if self.waiting_lines.len() < MAX_HELD_LINES {
+            self.waiting_lines.push_back((line, scan));
+        }
+        if !self.device.waiting_for_user() {
+            self.end_user_wait(out, hold);
+        }
+    }
+
+    /// The user answered: the waiting command finishes, then the lines held meanwhile run.
+    fn end_user_wait(&mut self, out: &mut dyn FnMut(f64, &str), hold: &mut dyn FnMut(f64, f64)) {
+        let Some(start_s) = self.user_wait.take() else { return };
+        let mut keepalive = Keepalive::new(start_s, self.config.keepalive_s);
+        keepalive.next_s = self.device.now_s() + keepalive.interval_s;
+        self.device.finish_user_wait(&mut |t_s, text| {
+            keepalive.before(t_s, out);
+            out(t_s, text);
+        });
+        out(self.device.now_s(), "ok");
+        while self.user_wait.is_none() {
+            let Some((line, scan)) = self.waiting_lines.pop_front() else { break };
+            self.accept(&line, scan, out, hold);
+        }
+    }
+
+    /// Checks a complete line and runs it, as Marlin's queue does.
+    fn accept(
+        &mut self,
+        line: &[u8],
+        scan: Scan,
+        out: &mut dyn FnMut(f64, &str),
+        hold: &mut dyn FnMut(f64, f64),
+    ) {
         self.stats.lines += 1;
         // Marlin skips leading spaces (only spaces) before it looks for `N`.
         let start = line.iter().position(|&b| b != b' ').unwrap_or(line.len());
@@ -277,12 +411,12 @@ impl<D: Device> Protocol<D> {
         if scan == Scan::Overflow {
             self.refuse(LineError::TooLong, numbered, out);
         } else if !numbered {
-            self.run(cmd, out);
+            self.run(cmd, out, hold);
         } else {
             match self.check(cmd) {
                 Verdict::Accept(n) => {
                     self.last_n = n;
-                    self.run(cmd, out);
+                    self.run(cmd, out, hold);
                 }
                 Verdict::Duplicate => {
                     self.stats.duplicates += 1;
@@ -291,9 +425,6 @@ impl<D: Device> Protocol<D> {
                 Verdict::Refuse(e) => self.refuse(e, true, out),
             }
         }
-        // Give the buffer back so that assembling lines allocates nothing in the long run.
-        self.line = line;
-        self.line.clear();
     }
 
     /// Marlin's checks on a numbered line, in Marlin's order.
@@ -333,7 +464,7 @@ impl<D: Device> Protocol<D> {
 
     /// Runs an accepted line: the link commands here, the rest on the device, with keepalive
     /// lines interleaved by simulated time.
-    fn run(&mut self, cmd: &[u8], out: &mut dyn FnMut(f64, &str)) {
+    fn run(&mut self, cmd: &[u8], out: &mut dyn FnMut(f64, &str), hold: &mut dyn FnMut(f64, f64)) {
         parse_into(cmd, &mut self.block);
         if self.block.command.is_m(110) {
             if let Some(n) = self.block.get(b'N') {
@@ -363,6 +494,15 @@ impl<D: Device> Protocol<D> {
         keepalive.before(end_s, out);
         self.stats.busy += keepalive.printed;
         self.halted = outcome == Outcome::Halted;
+        if self.device.waiting_for_user() {
+            // The ok comes when the user has answered (see `during_user_wait`).
+            self.user_wait = Some(start_s);
+            self.next_paused_busy_s = end_s + f64::from(self.config.keepalive_s);
+            return;
+        }
+        if self.device.wall_timed() {
+            hold(start_s, end_s);
+        }
         if !self.device.acknowledged() {
             out(end_s, "ok");
         }
@@ -467,6 +607,30 @@ impl Device for crate::interp::Machine {
 
     fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
         crate::interp::Machine::idle(self, t_s, out)
+    }
+
+    fn wall_timed(&self) -> bool {
+        crate::interp::Machine::wall_timed(self)
+    }
+
+    fn has_own_work(&self) -> bool {
+        crate::interp::Machine::sd_printing(self)
+    }
+
+    fn own_work(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        crate::interp::Machine::sd_step(self, out)
+    }
+
+    fn waiting_for_user(&self) -> bool {
+        crate::interp::Machine::waiting_for_user(self)
+    }
+
+    fn emergency(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        crate::interp::Machine::emergency(self, line, out);
+    }
+
+    fn finish_user_wait(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        crate::interp::Machine::finish_user_wait(self, out)
     }
 }
 

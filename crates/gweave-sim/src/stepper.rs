@@ -112,6 +112,17 @@ impl Steppers {
         }
     }
 
+    /// `M92`: axis `axis` (0..5, X Y Z E A) counts `steps_per_unit` from here on; the motor stays
+    /// where it is and the steps taken so far are kept (Marlin recomputes its position from the
+    /// step counts the same way).
+    pub fn set_steps_per_unit(&mut self, axis: usize, steps_per_unit: f64) {
+        if let Some(a) = self.axes.get_mut(axis) {
+            a.anchor_pos = a.last_pos;
+            a.anchor_steps = a.steps;
+            a.steps_per_unit = steps_per_unit;
+        }
+    }
+
     /// Set every motor's logical position without stepping (homing, `SET_KINEMATIC_POSITION`).
     pub fn set_position(&mut self, pos: Pos) {
         for (a, p) in self.axes.iter_mut().zip(pos.to_array()) {

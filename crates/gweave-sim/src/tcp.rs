@@ -292,7 +292,7 @@ mod tests {
         let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
         let addr = endpoint.local_addr().unwrap();
         let stop = AtomicBool::new(false);
-        let options = ServeOptions { realtime: true, ..ServeOptions::default() };
+        let options = ServeOptions { speed: Some(1.0), ..ServeOptions::default() };
         let mut transcript = Vec::new();
         std::thread::scope(|s| {
             // A failed assertion must still stop the server, or the scope never ends.
@@ -343,5 +343,83 @@ mod tests {
         let transcript = String::from_utf8(transcript).unwrap();
         assert!(transcript.contains("       0.000 > N3 G28*16\n"), "{transcript}");
         assert!(transcript.contains("       0.600 < ok\n"), "{transcript}");
+    }
+
+    /// Runs a server of default virtual printers (with an SD card in `sd`) for the body.
+    fn with_machines(options: ServeOptions, sd: &std::path::Path, body: impl FnOnce(SocketAddr)) {
+        use crate::interp::Machine;
+        let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
+        let addr = endpoint.local_addr().unwrap();
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            let _stop = StopOnDrop(&stop);
+            let server = s.spawn(|| {
+                let mut make = || {
+                    Machine::new(Default::default()).map(|mut m| {
+                        m.attach_sd(sd.to_owned());
+                        m
+                    })
+                };
+                serve(&mut endpoint, &mut make, &mut |_| {}, &options, None, &stop).unwrap();
+            });
+            body(addr);
+            stop.store(true, Ordering::Relaxed);
+            server.join().unwrap();
+        });
+    }
+
+    /// Issue #20: OctoPrint's pause waited 3 s for a timeout because the fast board answered
+    /// M400 before OctoPrint had queued its M114; the ok now takes the moves' time.
+    #[test]
+    fn tcp_fast_board_holds_the_m400_ok_for_the_queued_moves() {
+        let sd = tempfile::tempdir().unwrap();
+        with_machines(ServeOptions::default(), sd.path(), |addr| {
+            let (mut host, mut reader) = connect(addr);
+            lines_through(&mut reader, "echo:Machine");
+            // 10 mm at 10 mm/s: about a second; the move itself is acknowledged at once.
+            let sent = Instant::now();
+            host.write_all(b"G1 X10 F600\n").unwrap();
+            lines_through(&mut reader, "ok");
+            assert!(sent.elapsed() < Duration::from_millis(300), "{:?}", sent.elapsed());
+            host.write_all(b"M400\n").unwrap();
+            lines_through(&mut reader, "ok");
+            let took = sent.elapsed();
+            assert!(took >= Duration::from_millis(950) && took < Duration::from_secs(3), "{took:?}");
+        });
+    }
+
+    #[test]
+    fn tcp_speed_n_paces_n_times_faster_than_real_time() {
+        let sd = tempfile::tempdir().unwrap();
+        with_machines(ServeOptions { speed: Some(4.0), ..ServeOptions::default() }, sd.path(), |addr| {
+            let (mut host, mut reader) = connect(addr);
+            lines_through(&mut reader, "echo:Machine");
+            let sent = Instant::now();
+            host.write_all(b"G4 S2\n").unwrap();
+            lines_through(&mut reader, "ok");
+            let took = sent.elapsed();
+            assert!(took >= Duration::from_millis(450) && took < Duration::from_millis(1500), "{took:?}");
+        });
+    }
+
+    #[test]
+    fn tcp_sd_print_runs_while_the_host_is_quiet_and_answers_it_meanwhile() {
+        let sd = tempfile::tempdir().unwrap();
+        let body: String = (0..200).map(|i| format!("G1 X{} Y{} F12000\n", i % 50, i % 7)).collect();
+        std::fs::write(sd.path().join("part.gco"), format!("G28\n{body}G1 X42 Y7\n")).unwrap();
+        with_machines(ServeOptions::default(), sd.path(), |addr| {
+            let (mut host, mut reader) = connect(addr);
+            lines_through(&mut reader, "echo:Machine");
+            host.write_all(b"M23 part.gco\nM24\n").unwrap();
+            lines_through(&mut reader, "File selected");
+            lines_through(&mut reader, "ok");
+            lines_through(&mut reader, "ok");
+            // The board prints on its own; the host only listens.
+            let got = lines_through(&mut reader, "Done printing file");
+            assert!(!got.iter().any(|l| l == "ok"), "no ok for the card's lines: {got:?}");
+            host.write_all(b"M114\n").unwrap();
+            let got = lines_through(&mut reader, "ok");
+            assert!(got[0].starts_with("X:42.00 Y:7.00 "), "{got:?}");
+        });
     }
 }

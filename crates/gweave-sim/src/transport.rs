@@ -6,9 +6,15 @@
 //! its boot lines (`start`), and feeds the host's bytes to a new [`Protocol`]. When the host
 //! leaves, the device is dropped. Only one host is served at a time.
 //!
-//! By default replies go out as fast as the simulation produces them. In real-time mode each
-//! reply waits until its simulated time, measured from the moment the command's bytes arrived:
-//! `G4 S5` answers `ok` five wall-clock seconds later, with keepalive lines at 2 s and 4 s.
+//! By default replies go out as fast as the simulation produces them, except the `ok` of a
+//! command hosts time by the wall clock (`M400`, [`Device::wall_timed`]), which is held for the
+//! command's simulated duration, at most [`MAX_HOLD`]. Paced at speed N
+//! ([`ServeOptions::speed`], 1 is real time) each reply waits until its simulated time, measured
+//! from the moment the command's bytes arrived, divided by N: at speed 1 `G4 S5` answers `ok`
+//! five wall-clock seconds later, with keepalive lines at 2 s and 4 s.
+//!
+//! The board's own work (an SD print, [`Device::own_work`]) runs while the host is quiet: as fast
+//! as it can between looks at the line, or paced as the replies are.
 //!
 //! Two clocks, one board: while commands come, the board runs on its simulated clock (as fast
 //! as it can, or paced); once the host has been quiet for [`QUIET_AFTER`], the board lives in
@@ -34,6 +40,13 @@ pub const TICK: Duration = Duration::from_millis(100);
 /// the planner at a shorter gap would put stops into a print that Marlin, with its buffer of
 /// queued moves, would not make).
 pub const QUIET_AFTER: Duration = Duration::from_millis(500);
+
+/// The longest wall-clock hold of a wall-timed `ok` ([`Device::wall_timed`]) when not pacing: a
+/// board draining its planner buffer of a print (16 moves) takes well under this.
+pub const MAX_HOLD: Duration = Duration::from_secs(5);
+
+/// How long the board's own work (an SD print) runs before the loop looks at the host again.
+const OWN_WORK_SLICE: Duration = Duration::from_millis(20);
 
 /// What a wait on an endpoint brought.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -90,8 +103,9 @@ impl TransportError {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ServeOptions {
     pub protocol: ProtocolConfig,
-    /// Pace replies to the simulated clock.
-    pub realtime: bool,
+    /// Pace replies to the simulated clock, this many times faster than real time (1: real
+    /// time); `None`: as fast as the simulation runs.
+    pub speed: Option<f64>,
     /// Stop when the host has sent nothing for this long (wall clock).
     pub exit_after_idle: Option<Duration>,
 }
@@ -134,13 +148,16 @@ where
 {
     let mut summary = ServeSummary::default();
     let mut link: Option<Protocol<D>> = None;
-    let mut out = Output::new(options.realtime, log, stop);
+    let mut out = Output::new(options.speed, log, stop);
     let mut received = LineLog::default();
     let mut buf = vec![0u8; 4096];
     let mut last_heard = Instant::now();
     let mut clock = IdleClock::new();
     while !stop.load(Ordering::Relaxed) {
-        let event = endpoint.wait(&mut buf, TICK).map_err(TransportError::io("waiting for the host"))?;
+        let working = link.as_ref().is_some_and(Protocol::has_own_work);
+        // A board with its own work looks at the host without waiting.
+        let wait = if working { Duration::ZERO } else { TICK };
+        let event = endpoint.wait(&mut buf, wait).map_err(TransportError::io("waiting for the host"))?;
         match event {
             Event::Connected => {
                 let device = make_device().map_err(|e| TransportError::Device(Box::new(e)))?;
@@ -162,7 +179,12 @@ where
                 let bytes = &buf[..n];
                 received.push(bytes, p.device().now_s(), &mut out);
                 out.rebase(p.device().now_s());
-                p.feed(bytes, &mut |t_s, line| out.line(endpoint, t_s, line));
+                let speed = options.speed;
+                p.feed_held(bytes, &mut |t_s, line| out.line(endpoint, t_s, line), &mut |from_s, to_s| {
+                    if speed.is_none() {
+                        hold(to_s - from_s, stop);
+                    }
+                });
                 clock.busy();
             }
             Event::Disconnected => {
@@ -173,7 +195,13 @@ where
             }
             Event::Nothing => {
                 if let Some(p) = link.as_mut() {
-                    clock.catch_up(p, &mut out, endpoint);
+                    if p.has_own_work() {
+                        out.rebase(p.device().now_s());
+                        own_work(p, &mut out, endpoint);
+                        clock.busy();
+                    } else {
+                        clock.catch_up(p, &mut out, endpoint);
+                    }
                 }
             }
         }
@@ -193,6 +221,32 @@ where
         summary.end_session(p, finished);
     }
     Ok(summary)
+}
+
+/// Holds a wall-timed `ok` for `t_s` seconds (at most [`MAX_HOLD`]), in ticks so that a stop
+/// request is seen.
+fn hold(t_s: f64, stop: &AtomicBool) {
+    let due = Instant::now() + Duration::from_secs_f64(t_s.clamp(0.0, MAX_HOLD.as_secs_f64()));
+    while !stop.load(Ordering::Relaxed) {
+        let now = Instant::now();
+        if now >= due {
+            break;
+        }
+        std::thread::sleep((due - now).min(TICK));
+    }
+}
+
+/// Runs the board's own work for one slice of wall time: as fast as it goes, or, when pacing, up
+/// to the simulated time of this wall-clock instant.
+fn own_work<D: Device>(link: &mut Protocol<D>, out: &mut Output<'_, '_>, endpoint: &mut dyn Endpoint) {
+    let start = Instant::now();
+    while link.has_own_work() && start.elapsed() < OWN_WORK_SLICE && out.failed.is_none() {
+        if out.speed.is_some() && out.wall_at(link.device().now_s()) > Instant::now() {
+            std::thread::sleep(Duration::from_millis(1));
+            continue;
+        }
+        link.own_work(&mut |t_s, line| out.line(endpoint, t_s, line));
+    }
 }
 
 /// The board's wall-clock life while its host is quiet.
@@ -234,7 +288,7 @@ impl IdleClock {
 
 /// Where replies go: paced, logged, sent; the first send error is kept for the loop.
 struct Output<'a, 's> {
-    realtime: bool,
+    speed: Option<f64>,
     /// Wall-clock instant and simulated time that correspond.
     anchor: (Instant, f64),
     log: Option<&'a mut dyn Write>,
@@ -244,8 +298,8 @@ struct Output<'a, 's> {
 }
 
 impl<'a, 's> Output<'a, 's> {
-    fn new(realtime: bool, log: Option<&'a mut dyn Write>, stop: &'s AtomicBool) -> Self {
-        Output { realtime, anchor: (Instant::now(), 0.0), log, stop, failed: None, bytes: Vec::new() }
+    fn new(speed: Option<f64>, log: Option<&'a mut dyn Write>, stop: &'s AtomicBool) -> Self {
+        Output { speed, anchor: (Instant::now(), 0.0), log, stop, failed: None, bytes: Vec::new() }
     }
 
     /// New bytes arrived with the device at `sim_s`: if the pacing has fallen behind the wall
@@ -258,7 +312,7 @@ impl<'a, 's> Output<'a, 's> {
     }
 
     fn wall_at(&self, sim_s: f64) -> Instant {
-        let ahead_s = (sim_s - self.anchor.1).max(0.0);
+        let ahead_s = (sim_s - self.anchor.1).max(0.0) / self.speed.unwrap_or(1.0);
         self.anchor.0 + Duration::from_secs_f64(ahead_s.min(1e9))
     }
 
@@ -266,7 +320,7 @@ impl<'a, 's> Output<'a, 's> {
         if self.failed.is_some() {
             return;
         }
-        if self.realtime {
+        if self.speed.is_some() {
             let due = self.wall_at(t_s);
             // Sleep in ticks so that a stop request and a hang-up are seen.
             while !self.stop.load(Ordering::Relaxed) {
@@ -421,7 +475,7 @@ mod tests {
     fn log_a_150_mb_line_is_cut_to_its_head_and_length() {
         let stop = AtomicBool::new(false);
         let mut log = Vec::new();
-        let mut out = Output::new(false, Some(&mut log), &stop);
+        let mut out = Output::new(None, Some(&mut log), &stop);
         let mut lines = LineLog::default();
         let chunk = vec![b'G'; 1 << 20];
         for _ in 0..150 {

@@ -25,6 +25,8 @@ use crate::common::{in_range, load_or_default};
 
 /// `--exit-after-idle`: a tenth of a second to about eleven days.
 const IDLE_S: Range<f64> = Range::new(0.1, 1e6, "s");
+/// `--speed`: from ten times slower than the machine to a thousand times faster.
+const SPEED_FACTOR: Range<f64> = Range::new(0.1, 1000.0, "x real time");
 /// `--duplicate-window`: Marlin's own resend buffer is a few lines; a host never has more than a
 /// few hundred in flight.
 const DUPLICATE_WINDOW: Range<u32> = Range::new(0, 1000, "lines");
@@ -46,9 +48,13 @@ pub struct ServeArgs {
     /// Machine profile (TOML); default: the built-in RAMPS/Marlin printer.
     #[arg(long, value_name = "FILE")]
     pub machine: Option<PathBuf>,
-    /// Pace replies to the simulated clock (default: as fast as the simulation runs).
-    #[arg(long)]
+    /// Pace replies to the simulated clock (default: as fast as the simulation runs); the same
+    /// as `--speed 1`.
+    #[arg(long, conflicts_with = "speed")]
     pub realtime: bool,
+    /// Pace replies to the simulated clock, N times faster than real time.
+    #[arg(long, value_name = "N", value_parser = in_range(SPEED_FACTOR))]
+    pub speed: Option<f64>,
     /// Write the session transcript (received `>` and sent `<` lines, simulated seconds).
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
@@ -59,6 +65,14 @@ pub struct ServeArgs {
     /// `gweave sim --report`; a later session replaces it).
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// The virtual SD card's folder (default: a new temporary folder, removed on exit). Used when
+    /// the profile's `[firmware]` has `sdcard`.
+    #[arg(long, value_name = "DIR")]
+    pub sd: Option<PathBuf>,
+    /// The virtual EEPROM (`M500` writes it, every power-on and `M501` read it; default: a file
+    /// in the session's temporary folder). Used when the profile's `[firmware]` has `eeprom`.
+    #[arg(long, value_name = "FILE")]
+    pub eeprom: Option<PathBuf>,
     /// Acknowledge a repeat of one of the last N line numbers with `ok` without running it again
     /// (0: answer it with a resend request, as stock Marlin).
     #[arg(long, value_name = "N", default_value_t = ProtocolConfig::default().duplicate_window,
@@ -81,7 +95,8 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
             keepalive_s: DEFAULT_KEEPALIVE_S,
             duplicate_window: args.duplicate_window,
         },
-        realtime: args.realtime,
+        // `--realtime` is `--speed 1`.
+        speed: args.speed.or(args.realtime.then_some(1.0)),
         exit_after_idle: args.exit_after_idle.map(Duration::from_secs_f64),
     };
     let mut log = match &args.log {
@@ -109,7 +124,26 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
         }
         (None, None) => bail!("say where to serve: --pty PATH or --tcp 127.0.0.1:PORT"),
     };
-    let mut make = || Machine::new(profile.clone());
+    // The session's own folder: the default SD card and EEPROM live there and go with it.
+    let session_dir =
+        tempfile::Builder::new().prefix("gweave-serve-").tempdir().context("creating the session folder")?;
+    let sd_dir = match &args.sd {
+        Some(dir) if !dir.is_dir() => bail!("--sd {}: not a folder", dir.display()),
+        Some(dir) => dir.clone(),
+        None => {
+            let dir = session_dir.path().join("sd");
+            std::fs::create_dir(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            dir
+        }
+    };
+    let eeprom = args.eeprom.clone().unwrap_or_else(|| session_dir.path().join("eeprom.gcode"));
+    let mut make = || {
+        Machine::new(profile.clone()).map(|mut m| {
+            m.attach_sd(sd_dir.clone());
+            m.attach_eeprom(eeprom.clone());
+            m
+        })
+    };
     let mut report_error = None;
     let mut finished = |mut machine: Machine| {
         if let Some(path) = &args.report {

@@ -238,3 +238,16 @@ pub fn dir_with_fixture(fixture: &str, name: &str) -> (tempfile::TempDir, PathBu
 pub fn fixture_path(fixture: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(fixture)
 }
+
+/// A flag out of range is a command-line error (clap's exit code 2, as for an unknown flag)
+/// that names the flag and the allowed range; nothing is read or written.
+#[track_caller]
+pub fn assert_flag_refused(dir: &Path, args: &[&str], flag: &str, range: &str) {
+    let before = snapshot(dir);
+    let out = gweave(dir, args).limit(Duration::from_secs(20)).run();
+    out.assert_sound().assert_peak_under(64.0);
+    assert_eq!(out.code, Some(2), "expected a usage error for {args:?}; stderr: {}", out.stderr);
+    assert!(out.stderr.contains(flag), "{flag} not named: {}", out.stderr);
+    assert!(out.stderr.contains(range), "range not given: {}", out.stderr);
+    assert_eq!(snapshot(dir), before, "{args:?} changed the directory");
+}

@@ -12,6 +12,7 @@ mod harness;
 
 mod bytes;
 mod config;
+mod hosts;
 mod outputs;
 mod serve;
 mod sizes;

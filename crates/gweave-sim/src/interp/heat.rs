@@ -178,6 +178,7 @@ impl Machine {
         self.core.idle(t_s);
         self.idle_s += t_s;
         self.sync(out);
+        self.timed_reports(out);
     }
 
     /// Let time pass with the machine standing still (heating waits, autotune).

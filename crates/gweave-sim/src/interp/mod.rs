@@ -32,8 +32,12 @@
 
 mod commands;
 mod heat;
+mod host;
 mod motion;
+mod pause;
 mod report;
+mod sd;
+mod settings;
 
 use std::collections::BTreeMap;
 
@@ -116,6 +120,13 @@ pub struct Machine {
     filament_mm: Vec<f64>,
     homed: [bool; 3],
     acknowledged: bool,
+    /// The last command is one hosts time by the wall clock (`M400`).
+    wall_timed: bool,
+    /// Settings beyond the planner's and heaters' (`M92`, `M207`-`M209`, `M851`, EEPROM).
+    settings: settings::Settings,
+    /// Job timer, prompts, pins, levelling.
+    host: host::HostState,
+    sd: sd::SdCard,
     ended: bool,
     heating_s: f64,
     homing_s: f64,
@@ -156,6 +167,8 @@ impl Machine {
                 Some(InkjetCanvas::new(&ink.printhead, geometry)?)
             }
         };
+        let steps = &profile.motion.steps;
+        let settings = settings::Settings::new([steps.x, steps.y, steps.z, steps.e]);
         let mut faults = profile.faults.clone();
         faults.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         Ok(Machine {
@@ -176,6 +189,10 @@ impl Machine {
             filament_mm: vec![0.0],
             homed: [false; 3],
             acknowledged: false,
+            wall_timed: false,
+            settings,
+            host: host::HostState::default(),
+            sd: sd::SdCard::default(),
             ended: false,
             heating_s: 0.0,
             homing_s: 0.0,
@@ -209,7 +226,15 @@ impl Machine {
     /// second, M105/M114/M119 texts, `echo:Unknown command: "G123"`, Error: lines).
     pub fn execute(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> Outcome {
         self.acknowledged = false;
+        self.wall_timed = false;
         let line = trim_line_end(line);
+        if self.sd_write_line(line, out) {
+            return self.outcome();
+        }
+        if self.host.waiting_for_user {
+            // A run of a file has nobody to answer M600: the user pressed Continue at once.
+            self.finish_user_wait(out);
+        }
         if trim(line) == b"?" {
             self.help(out);
             return self.outcome();
@@ -242,7 +267,20 @@ impl Machine {
             _ => self.unknown_command(line, out),
         }
         self.sync(out);
+        self.timed_reports(out);
         self.outcome()
+    }
+
+    /// The auto-reports that are not the heaters' (`M154` position, `M27 S` SD status).
+    fn timed_reports(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        self.timed_host_reports(out);
+        self.timed_sd_reports(out);
+    }
+
+    /// Whether the last command is one hosts time by the wall clock: `M400`, which OctoPrint's
+    /// pause sends before it queues the `M114` that completes the pause.
+    pub fn wall_timed(&self) -> bool {
+        self.wall_timed
     }
 
     /// Simulated time, s.
@@ -340,8 +378,12 @@ impl Machine {
         before: &state::Position,
         out: &mut dyn FnMut(f64, &str),
     ) {
+        if !self.profile.firmware.knows_g(number) {
+            return self.unknown_command(line, out);
+        }
         match number {
             0..=3 => self.motion(line, effect, out),
+            29 => self.g29(out),
             4 => match effect {
                 Effect::Dwell { t_s } if t_s > motion::MAX_COMMAND_S => {
                     self.refuse(format!("a dwell of {t_s:.0} s: refused"), out)
@@ -372,6 +414,9 @@ impl Machine {
     }
 
     fn m_code(&mut self, line: &[u8], number: u32, effect: Effect, out: &mut dyn FnMut(f64, &str)) {
+        if !self.profile.firmware.knows_m(number) {
+            return self.unknown_command(line, out);
+        }
         match number {
             // Program stop (the seed controller's "end of program"): finish the moves, motors off.
             0 | 1 | 18 | 84 => {
@@ -383,10 +428,25 @@ impl Machine {
             }
             // Accepted, nothing to simulate: enable motors, progress, line numbers (the serial
             // layer's), LCD message, gradient mix, RRF tool definition.
-            17 | 73 | 110 | 117 | 166 | 563 => {}
+            17 | 73 | 110 | 166 | 563 => {}
+            20..=30 | 32 | 33 | 524 | 928 => self.sd_command(line, number, out),
+            31 | 42 | 75..=77 | 80 | 81 | 108 | 117 | 118 | 154 | 211 | 226 | 300 | 410 | 420 | 876 => {
+                self.host_command(line, number, out)
+            }
+            92 | 207..=209 | 304 | 500..=503 | 851 => self.settings_command(number, out),
+            600 => self.m600(out),
+            205 => {
+                let b = self.core.block();
+                for (slot, letter) in self.settings.m205_bst.iter_mut().zip([b'B', b'S', b'T']) {
+                    if let Some(v) = b.get(letter).filter(|v| v.is_finite() && *v >= 0.0) {
+                        *slot = v;
+                    }
+                }
+                self.run_core(line, &effect, out);
+            }
             // RepRapFirmware 3.3+ sets a tool's temperatures with M568 (as G10 P S before).
             568 => self.rrf_tool_temperature(out),
-            82 | 83 | 201 | 203 | 204 | 205 | 163..=165 | 567 => self.run_core(line, &effect, out),
+            82 | 83 | 201 | 203 | 204 | 163..=165 | 567 => self.run_core(line, &effect, out),
             104 | 109 | 116 | 140 | 190 | 105 | 106 | 107 | 155 | 301 | 303 => {
                 self.heat_command(line, number, effect, out)
             }
@@ -413,8 +473,8 @@ impl Machine {
                         self.thermal.hotend_count()
                     ),
                 );
-                for cap in ["AUTOREPORT_TEMP:1", "EEPROM:0", "EMERGENCY_PARSER:0"] {
-                    out(t, &format!("Cap:{cap}"));
+                for cap in self.profile.firmware.capability_lines() {
+                    out(t, &cap);
                 }
             }
             119 => {
@@ -430,6 +490,7 @@ impl Machine {
                 self.thermal.set_moving(false);
                 self.run_core(line, &effect, out);
                 self.moved_since_m400 = false;
+                self.wall_timed = true;
             }
             578 | 700 if self.inkjet.is_some() => self.fire(),
             999 => {
@@ -572,5 +633,7 @@ fn command_text(line: &[u8]) -> &[u8] {
     trim(code)
 }
 
+#[cfg(test)]
+mod firmware_tests;
 #[cfg(test)]
 mod tests;

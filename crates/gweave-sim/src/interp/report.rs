@@ -23,7 +23,7 @@ pub struct SimTimes {
     pub dwell_s: f64,
     /// `M109`/`M190` waits and `M303` autotunes.
     pub heating_s: f64,
-    /// `G28`.
+    /// `G28`, `G29` probing, `M600` parking and filament moves.
     pub homing_s: f64,
     /// Firmware bookkeeping of Klipper mode (start buffer, motor-off stalls, exit flush).
     pub overhead_s: f64,

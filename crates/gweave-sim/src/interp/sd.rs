@@ -1,0 +1,402 @@
+//! The virtual SD card: a folder on the host computer, read and written with Marlin's SD
+//! commands (`Marlin/src/gcode/sd/`, `Marlin/src/sd/cardreader.cpp`).
+//!
+//! Files are listed by their 8.3 DOS name, as the FAT card shows them to Marlin: a name that
+//! fits 8.3 is its upper-case self (`PART.GCO`), a longer one gets the Windows short form
+//! `FIXTUR~1.GCO` (numbered in name order) and keeps its long name for `M20 L` and `M33`. Only
+//! files whose DOS extension starts with `G` are G-code to Marlin and listed.
+//!
+//! Printing from the card (`M23` then `M24`) runs the file's lines on the same machine and clock
+//! as the host's commands, one line per [`Machine::sd_step`], without `ok`s; `gweave serve` runs
+//! those steps while the host is quiet. `M27` reports `SD printing byte <pos>/<size>`, `M27 S<n>`
+//! every n seconds; the end prints `Done printing file`. An upload (`M28 <name>` ... `M29`)
+//! writes every following line, checked by the serial protocol as usual, into the file.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+use super::pause::PromptReason;
+use super::Machine;
+
+/// The longest line read from a file on the card, bytes: Marlin's `MAX_CMD_SIZE` buffer is
+/// smaller; a longer line (not G-code) is skipped past without holding it in memory.
+const MAX_SD_LINE: usize = 256;
+
+/// One file as the card lists it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(super) struct Entry {
+    /// The 8.3 name, upper case.
+    dos: String,
+    /// The name in the folder.
+    long: String,
+    size: u64,
+}
+
+/// A file opened for printing.
+#[derive(Debug)]
+struct Printing {
+    dos: String,
+    long: String,
+    reader: BufReader<File>,
+    size: u64,
+    pos: u64,
+    /// `M24` started it and `M25` has not paused it.
+    running: bool,
+}
+
+/// The card.
+#[derive(Debug, Default)]
+pub(super) struct SdCard {
+    /// The folder, once `gweave serve` attached one.
+    dir: Option<PathBuf>,
+    mounted: bool,
+    open: Option<Printing>,
+    /// `M28` upload or `M928` log: the file being written, and whether lines also run (log).
+    writing: Option<(File, bool)>,
+    /// `M27 S`: period (0: off) and next report time, s.
+    report_s: f64,
+    next_report_s: f64,
+}
+
+impl SdCard {
+    fn entries(&self) -> Vec<Entry> {
+        let Some(dir) = &self.dir else { return Vec::new() };
+        let Ok(read) = std::fs::read_dir(dir) else { return Vec::new() };
+        let mut files: Vec<(String, u64)> = read
+            .filter_map(Result::ok)
+            .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+            .filter_map(|e| Some((e.file_name().into_string().ok()?, e.metadata().ok()?.len())))
+            .filter(|(name, _)| !name.starts_with('.'))
+            .collect();
+        files.sort();
+        let mut taken: Vec<String> = Vec::new();
+        let mut out = Vec::new();
+        for (long, size) in files {
+            let dos = dos_name(&long, &taken);
+            taken.push(dos.clone());
+            if dos.rsplit_once('.').is_some_and(|(_, ext)| ext.starts_with('G')) {
+                out.push(Entry { dos, long, size });
+            }
+        }
+        out
+    }
+
+    /// The entry a host names, by its DOS or long name (case-insensitive, `/` prefix allowed).
+    fn find(&self, name: &str) -> Option<Entry> {
+        let name = name.trim().trim_start_matches('/');
+        self.entries()
+            .into_iter()
+            .find(|e| e.dos.eq_ignore_ascii_case(name) || e.long.eq_ignore_ascii_case(name))
+    }
+}
+
+impl Machine {
+    /// Gives the board an SD card: the files of `dir`.
+    pub fn attach_sd(&mut self, dir: PathBuf) {
+        self.sd.dir = Some(dir);
+        self.sd.mounted = true;
+    }
+
+    /// Whether an SD print is running (started and not paused).
+    pub fn sd_printing(&self) -> bool {
+        self.sd.open.as_ref().is_some_and(|p| p.running)
+    }
+
+    /// While an upload is open every line goes into the file: true when `line` was taken.
+    pub(super) fn sd_write_line(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> bool {
+        let Some((file, log)) = self.sd.writing.as_mut() else { return false };
+        let text = super::command_text(line);
+        let is_m29 = text.len() >= 3 && text[..3].eq_ignore_ascii_case(b"M29");
+        if is_m29 {
+            self.sd.writing = None;
+            out(self.now_s(), "Done saving file.");
+            return true;
+        }
+        let written = file.write_all(text).and_then(|()| file.write_all(b"\n"));
+        let log = *log;
+        if let Err(e) = written {
+            self.sd.writing = None;
+            self.refuse(format!("SD write failed: {e}"), out);
+            return true;
+        }
+        // M928 logs the commands and also runs them.
+        !log
+    }
+
+    /// The SD commands `M20`-`M30`, `M32`, `M524`, `M928` (`M33` in [`Machine::sd_command`]
+    /// too).
+    pub(super) fn sd_command(&mut self, line: &[u8], number: u32, out: &mut dyn FnMut(f64, &str)) {
+        let now = self.now_s();
+        let text = String::from_utf8_lossy(super::command_text(line)).into_owned();
+        // The file name is the rest of the line after the code (Marlin's `parser.string_arg`).
+        let arg =
+            text.get(3..).unwrap_or("").trim_start_matches(|c: char| c.is_ascii_digit()).trim().to_owned();
+        if number != 21 && !self.sd.mounted {
+            out(now, "echo:No media");
+            return;
+        }
+        match number {
+            20 => {
+                let long = self.profile.firmware.long_filenames && has_flag(&arg, 'L');
+                out(now, "Begin file list");
+                for e in self.sd.entries() {
+                    let l = if long { format!(" {}", e.long) } else { String::new() };
+                    out(now, &format!("{} {}{l}", e.dos, e.size));
+                }
+                out(now, "End file list");
+            }
+            21 => {
+                self.sd.mounted = self.sd.dir.as_deref().is_some_and(Path::is_dir);
+                out(now, if self.sd.mounted { "echo:SD card ok" } else { "echo:SD init fail" });
+            }
+            22 => {
+                self.sd.mounted = false;
+                self.sd.open = None;
+                self.sd.writing = None;
+                out(now, "echo:SD card released");
+            }
+            23 => self.sd_select(&arg, out),
+            // Marlin 2.1's M24/M25 (`Marlin/src/gcode/sd/M24_M25.cpp`): the job timer, and a
+            // host prompt about it.
+            24 => {
+                self.sd_resume();
+                self.prompt(PromptReason::Info, "Resuming SD", &["Dismiss"], out);
+            }
+            25 => {
+                if let Some(p) = self.sd.open.as_mut() {
+                    p.running = false;
+                }
+                self.job_timer_pause();
+                self.prompt(PromptReason::PauseResume, "Pause SD", &["Resume"], out);
+            }
+            26 => {
+                if let (Some(p), Some(s)) = (self.sd.open.as_mut(), self.core.block().get(b'S')) {
+                    let pos = (s.max(0.0) as u64).min(p.size);
+                    if p.reader.seek(SeekFrom::Start(pos)).is_ok() {
+                        p.pos = pos;
+                    }
+                }
+            }
+            27 => self.m27(&arg, out),
+            28 | 928 => self.sd_open_write(&arg, number == 928, out),
+            // An M29 outside an upload: nothing to close.
+            29 => {}
+            30 => self.sd_delete(&arg, out),
+            32 => {
+                // `M32 [S<pos>] [P1] !<name>#`: select and start at once.
+                let name = arg.split('!').nth(1).map_or(arg.as_str(), |n| n.split('#').next().unwrap_or(n));
+                let name = name.trim().to_owned();
+                self.sd_select(&name, out);
+                if let Some(p) = self.sd.open.as_mut() {
+                    p.running = true;
+                }
+            }
+            33 => {
+                if let Some(e) = self.sd.find(&arg) {
+                    out(now, &e.long);
+                }
+            }
+            524 if self.sd.open.take().is_some() => out(now, "echo:Print Aborted"),
+            _ => {}
+        }
+    }
+
+    /// Starts or resumes the selected file, with the print job timer.
+    pub(super) fn sd_resume(&mut self) {
+        if let Some(p) = self.sd.open.as_mut() {
+            p.running = true;
+            self.job_timer_start();
+        }
+    }
+
+    fn sd_select(&mut self, name: &str, out: &mut dyn FnMut(f64, &str)) {
+        let now = self.now_s();
+        let opened = self.sd.find(name).and_then(|e| {
+            let dir = self.sd.dir.as_ref()?;
+            let file = File::open(dir.join(&e.long)).ok()?;
+            Some(Printing {
+                dos: e.dos,
+                long: e.long,
+                reader: BufReader::new(file),
+                size: e.size,
+                pos: 0,
+                running: false,
+            })
+        });
+        match opened {
+            Some(p) => {
+                out(now, &format!("File opened: {} Size: {}", p.dos, p.size));
+                out(now, "File selected");
+                self.sd.open = Some(p);
+            }
+            None => out(now, &format!("echo:open failed, File: {name}.")),
+        }
+    }
+
+    fn m27(&mut self, arg: &str, out: &mut dyn FnMut(f64, &str)) {
+        let now = self.now_s();
+        if let Some(s) = self.core.block().get(b'S') {
+            if self.profile.firmware.autoreport_sd {
+                self.sd.report_s = if s.is_finite() && s > 0.0 { s } else { 0.0 };
+                self.sd.next_report_s = now + self.sd.report_s;
+            }
+            return;
+        }
+        if has_flag(arg, 'C') {
+            match &self.sd.open {
+                Some(p) => out(now, &format!("Current file: {} {}", p.dos, p.long)),
+                None => out(now, "Current file: (no file)"),
+            }
+            return;
+        }
+        out(now, &sd_status(self.sd.open.as_ref()));
+    }
+
+    fn sd_open_write(&mut self, arg: &str, log: bool, out: &mut dyn FnMut(f64, &str)) {
+        let now = self.now_s();
+        let name = arg.trim().trim_start_matches('/');
+        let fits = is_dos_name(name);
+        let allowed = !name.is_empty() && !name.contains('/') && (fits || self.profile.firmware.lfn_write);
+        let file = self.sd.dir.as_ref().filter(|_| allowed).and_then(|dir| {
+            let stored = if fits { name.to_ascii_uppercase() } else { name.to_owned() };
+            File::create(dir.join(stored)).ok()
+        });
+        match file {
+            Some(f) => {
+                self.sd.writing = Some((f, log));
+                out(now, &format!("Writing to file: {name}"));
+            }
+            None => out(now, &format!("echo:open failed, File: {name}.")),
+        }
+    }
+
+    fn sd_delete(&mut self, arg: &str, out: &mut dyn FnMut(f64, &str)) {
+        let now = self.now_s();
+        let removed = self.sd.find(arg).and_then(|e| {
+            let dir = self.sd.dir.as_ref()?;
+            std::fs::remove_file(dir.join(&e.long)).ok()
+        });
+        match removed {
+            Some(()) => out(now, &format!("File deleted:{}", arg.trim())),
+            None => out(now, &format!("Deletion failed, File: {}.", arg.trim())),
+        }
+    }
+
+    /// Runs the next line of the SD print (or ends it), as the board does between host commands.
+    pub fn sd_step(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let Some(p) = self.sd.open.as_mut().filter(|p| p.running) else { return };
+        let mut line = Vec::new();
+        let read = read_line(&mut p.reader, &mut line);
+        match read {
+            Ok(0) | Err(_) => {
+                self.sd.open = None;
+                // Marlin runs its SD_FINISHED_RELEASECOMMAND after the last move.
+                self.core.drain();
+                self.sync(out);
+                out(self.now_s(), "Done printing file");
+            }
+            Ok(n) => {
+                p.pos += n as u64;
+                if !super::command_text(&line).is_empty() {
+                    self.execute(&line, out);
+                }
+            }
+        }
+    }
+
+    /// The SD status auto-report (`M27 S`), when due.
+    pub(super) fn timed_sd_reports(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let now = self.now_s();
+        let period = self.sd.report_s;
+        if period > 0.0 && self.sd.next_report_s <= now + 1e-9 {
+            // Marlin's auto-report prints only while a file is open.
+            if self.sd.open.is_some() {
+                out(now, &sd_status(self.sd.open.as_ref()));
+            }
+            let late = ((now - self.sd.next_report_s) / period).floor() + 1.0;
+            self.sd.next_report_s += late * period;
+        }
+    }
+}
+
+fn sd_status(open: Option<&Printing>) -> String {
+    match open {
+        Some(p) => format!("SD printing byte {}/{}", p.pos, p.size),
+        None => "Not SD printing".to_owned(),
+    }
+}
+
+/// Whether a word of `arg` is the flag `letter` (`M20 L T`, `M27 C`).
+fn has_flag(arg: &str, letter: char) -> bool {
+    arg.split_whitespace().any(|w| w.len() == 1 && w.starts_with(|c: char| c.eq_ignore_ascii_case(&letter)))
+}
+
+/// One line of the file, at most [`MAX_SD_LINE`] bytes kept: the bytes consumed (0 at the end).
+fn read_line(reader: &mut impl BufRead, line: &mut Vec<u8>) -> std::io::Result<usize> {
+    let mut consumed = 0;
+    loop {
+        let buf = reader.fill_buf()?;
+        if buf.is_empty() {
+            return Ok(consumed);
+        }
+        let end = buf.iter().position(|&b| b == b'\n');
+        let take = end.map_or(buf.len(), |i| i + 1);
+        let room = MAX_SD_LINE.saturating_sub(line.len());
+        line.extend_from_slice(&buf[..take.min(room)]);
+        reader.consume(take);
+        consumed += take;
+        if end.is_some() {
+            return Ok(consumed);
+        }
+    }
+}
+
+/// Whether `name` is a valid 8.3 name as it is (no long name needed).
+fn is_dos_name(name: &str) -> bool {
+    let (base, ext) = name.rsplit_once('.').unwrap_or((name, ""));
+    let ok = |s: &str| s.chars().all(|c| c.is_ascii_alphanumeric() || "_-~!#$%&'(){}^@`".contains(c));
+    (1..=8).contains(&base.len()) && ext.len() <= 3 && ok(base) && ok(ext)
+}
+
+/// The 8.3 name FAT gives `long`, unique among `taken`: the name itself in upper case when it
+/// fits, else the first six usable characters, `~N` and the first three of the extension.
+fn dos_name(long: &str, taken: &[String]) -> String {
+    if is_dos_name(long) {
+        return long.to_ascii_uppercase();
+    }
+    let (base, ext) = long.rsplit_once('.').unwrap_or((long, ""));
+    let clean = |s: &str, n: usize| -> String {
+        s.chars()
+            .filter(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .take(n)
+            .collect::<String>()
+            .to_ascii_uppercase()
+    };
+    let ext = clean(ext, 3);
+    (1..)
+        .map(|n| {
+            let tail = format!("~{n}");
+            let base = clean(base, 8 - tail.len());
+            if ext.is_empty() {
+                format!("{base}{tail}")
+            } else {
+                format!("{base}{tail}.{ext}")
+            }
+        })
+        .find(|d| !taken.contains(d))
+        .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sd_names_are_fat_short_names() {
+        assert_eq!(dos_name("part.gco", &[]), "PART.GCO");
+        assert_eq!(dos_name("fixture.gcode", &[]), "FIXTUR~1.GCO");
+        assert_eq!(dos_name("fixture two.gcode", &["FIXTUR~1.GCO".to_owned()]), "FIXTUR~2.GCO");
+        assert!(has_flag("L T", 'l') && !has_flag("LT", 'L'));
+    }
+}
