@@ -38,6 +38,9 @@ pub enum ProfileError {
     /// Klipper's M204 needs either `S` or both `P` and `T` (it takes the smaller of the two).
     #[error("M204 needs S, or both P and T, in Klipper mode")]
     M204NeedsPAndT,
+    /// A Marlin profile takes corners by junction deviation or by classic jerk, not both.
+    #[error("corners: give junction_deviation_mm or jerk_mm_s, not both")]
+    JerkAndJunctionDeviation,
     /// A running planner cannot switch between Marlin and Klipper planning.
     #[error("the corner mode (marlin or klipper) cannot change while planning")]
     ModeChange,
@@ -255,13 +258,26 @@ impl KlipperLimits {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "mode", rename_all = "snake_case")]
 pub enum CornerMode {
-    /// Marlin/GRBL: junction deviation, per-axis feed and accel limits, M204 P/R/T.
+    /// Marlin: per-axis feed and accel limits, M204 P/R/T, and corners by junction deviation
+    /// or, with `jerk_mm_s`, by classic jerk (a Marlin build has one or the other).
     Marlin {
-        /// `JUNCTION_DEVIATION_MM` (M205 J).
-        junction_deviation_mm: f64,
-        /// The planner buffer length (`BLOCK_BUFFER_SIZE`); a block leaves with its speeds
-        /// final when the buffer is full, as in the firmware while the host streams.
+        /// `JUNCTION_DEVIATION_MM` (M205 J); `None` with `jerk_mm_s` (giving both is an error),
+        /// 0.013 when neither is given.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        junction_deviation_mm: Option<f64>,
+        /// `CLASSIC_JERK`: the largest instant speed change of each axis (`DEFAULT_XJERK` ...,
+        /// M205 X Y Z E).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        jerk_mm_s: Option<Jerk>,
+        /// The planner buffer (`BLOCK_BUFFER_SIZE`, 16); like Marlin's ring buffer it holds one
+        /// block less, and a block leaves with its speeds final when it is full, as in the
+        /// firmware while the host streams.
+        #[serde(default = "default_lookahead_blocks")]
         lookahead_blocks: usize,
+        /// `DEFAULT_MINSEGMENTTIME` (M205 B), µs: while the buffer is low (2 to
+        /// `lookahead_blocks / 2 - 1` blocks queued) a shorter block is slowed down towards it.
+        #[serde(default = "default_min_segment_time_us")]
+        min_segment_time_us: f64,
     },
     /// Klipper: square corner velocity, minimum cruise ratio and the toolhead limits.
     Klipper(KlipperLimits),
@@ -269,7 +285,66 @@ pub enum CornerMode {
 
 impl Default for CornerMode {
     fn default() -> Self {
-        Self::Marlin { junction_deviation_mm: 0.013, lookahead_blocks: 16 }
+        Self::Marlin {
+            junction_deviation_mm: Some(MARLIN_JUNCTION_DEVIATION_MM),
+            jerk_mm_s: None,
+            lookahead_blocks: default_lookahead_blocks(),
+            min_segment_time_us: default_min_segment_time_us(),
+        }
+    }
+}
+
+/// Marlin's stock `JUNCTION_DEVIATION_MM`.
+pub const MARLIN_JUNCTION_DEVIATION_MM: f64 = 0.013;
+
+fn default_lookahead_blocks() -> usize {
+    16
+}
+
+fn default_min_segment_time_us() -> f64 {
+    20_000.0
+}
+
+/// Classic jerk per axis (`CLASSIC_JERK`, M205 X Y Z E), mm/s.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Jerk {
+    /// X.
+    pub x: f64,
+    /// Y.
+    pub y: f64,
+    /// Z.
+    pub z: f64,
+    /// E.
+    pub e: f64,
+}
+
+impl Jerk {
+    /// X Y Z E.
+    pub fn to_array(&self) -> [f64; 4] {
+        [self.x, self.y, self.z, self.e]
+    }
+}
+
+/// How a Marlin profile takes corners.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MarlinCorners {
+    /// Junction deviation, mm.
+    JunctionDeviation(f64),
+    /// Classic jerk.
+    Jerk(Jerk),
+}
+
+impl CornerMode {
+    /// A Marlin profile's corner rule; `None` in Klipper mode.
+    pub fn marlin_corners(&self) -> Option<MarlinCorners> {
+        match *self {
+            Self::Marlin { jerk_mm_s: Some(j), .. } => Some(MarlinCorners::Jerk(j)),
+            Self::Marlin { junction_deviation_mm, .. } => Some(MarlinCorners::JunctionDeviation(
+                junction_deviation_mm.unwrap_or(MARLIN_JUNCTION_DEVIATION_MM),
+            )),
+            Self::Klipper(_) => None,
+        }
     }
 }
 
@@ -336,9 +411,20 @@ impl MotionProfile {
         positive("accel.retract_mm_s2", self.accel.retract_mm_s2)?;
         positive("accel.travel_mm_s2", self.accel.travel_mm_s2)?;
         match &self.corners {
-            CornerMode::Marlin { junction_deviation_mm, lookahead_blocks } => {
-                positive("corners.junction_deviation_mm", *junction_deviation_mm)?;
-                positive("corners.lookahead_blocks", *lookahead_blocks as f64)
+            CornerMode::Marlin { junction_deviation_mm, jerk_mm_s, lookahead_blocks, min_segment_time_us } => {
+                if let Some(jd) = junction_deviation_mm {
+                    positive("corners.junction_deviation_mm", *jd)?;
+                }
+                if let Some(j) = jerk_mm_s {
+                    if junction_deviation_mm.is_some() {
+                        return Err(ProfileError::JerkAndJunctionDeviation);
+                    }
+                    let names = ["corners.jerk_mm_s.x", "corners.jerk_mm_s.y", "corners.jerk_mm_s.z", "corners.jerk_mm_s.e"];
+                    j.to_array().iter().zip(names).try_for_each(|(&v, n)| non_negative(n, v))?;
+                }
+                // Marlin's ring buffer keeps one slot free: 2 slots hold one block.
+                positive("corners.lookahead_blocks", lookahead_blocks.saturating_sub(1) as f64)?;
+                non_negative("corners.min_segment_time_us", *min_segment_time_us)
             }
             CornerMode::Klipper(k) => k.validate(),
         }
@@ -386,13 +472,39 @@ impl MotionProfile {
         Ok(())
     }
 
-    /// M205 J: Marlin's junction deviation in mm. Klipper ignores M205, so this changes nothing
-    /// in Klipper mode.
+    /// M205 J: Marlin's junction deviation in mm. A Marlin build has junction deviation or
+    /// classic jerk, so this changes nothing in a jerk profile, nor in Klipper mode (Klipper
+    /// ignores M205).
     pub fn set_junction_deviation(&mut self, j_mm: f64) -> Result<(), ProfileError> {
         positive("M205 J", j_mm)?;
-        if let CornerMode::Marlin { junction_deviation_mm, .. } = &mut self.corners {
-            *junction_deviation_mm = j_mm;
+        if let CornerMode::Marlin { junction_deviation_mm, jerk_mm_s: None, .. } = &mut self.corners {
+            *junction_deviation_mm = Some(j_mm);
         }
+        Ok(())
+    }
+
+    /// M205 X Y Z E (classic jerk, mm/s) and B (minimum segment time, µs): the values given
+    /// change a Marlin profile; jerk values change only a jerk profile (see
+    /// [`MotionProfile::set_junction_deviation`]).
+    pub fn set_jerk(&mut self, m205: &AxisUpdate, min_segment_time_us: Option<f64>) -> Result<(), ProfileError> {
+        let CornerMode::Marlin { jerk_mm_s, min_segment_time_us: b, .. } = &mut self.corners else {
+            return Ok(());
+        };
+        let mut next = (*jerk_mm_s, *b);
+        if let Some(j) = &mut next.0 {
+            let slots = [&mut j.x, &mut j.y, &mut j.z, &mut j.e];
+            for ((slot, v), name) in slots.into_iter().zip(m205.to_array()).zip(["M205 X", "M205 Y", "M205 Z", "M205 E"]) {
+                if let Some(v) = v {
+                    non_negative(name, v)?;
+                    *slot = v;
+                }
+            }
+        }
+        if let Some(us) = min_segment_time_us {
+            non_negative("M205 B", us)?;
+            next.1 = us;
+        }
+        (*jerk_mm_s, *b) = next;
         Ok(())
     }
 }
@@ -423,7 +535,7 @@ mod tests {
         assert_eq!(p.validate(), Ok(()));
         assert_eq!(p.steps.z, 4000.0);
         assert_eq!(p.max_feed_mm_s.z, 5.0);
-        assert_eq!(p.corners, CornerMode::Marlin { junction_deviation_mm: 0.013, lookahead_blocks: 16 });
+        assert_eq!(p.corners.marlin_corners(), Some(MarlinCorners::JunctionDeviation(0.013)));
     }
 
     #[test]
@@ -479,7 +591,7 @@ mod tests {
         assert_eq!(m.max_accel_mm_s2.x, 3000.0, "a rejected line changes nothing");
         m.set_junction_deviation(0.02).unwrap();
         assert!(
-            matches!(m.corners, CornerMode::Marlin { junction_deviation_mm, .. } if junction_deviation_mm == 0.02)
+            matches!(m.corners, CornerMode::Marlin { junction_deviation_mm: Some(jd), .. } if jd == 0.02)
         );
     }
 

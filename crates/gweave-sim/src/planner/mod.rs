@@ -5,8 +5,9 @@
 //! Two planners imitate two firmwares (chosen by [`CornerMode`]):
 //! - [`CornerMode::Klipper`]: Klipper's lookahead, reproduced closely enough that print times
 //!   agree with Klipper's own to well under 0.01 % (see `klipper.rs` for the method);
-//! - [`CornerMode::Marlin`]: Marlin/GRBL junction deviation over a bounded block buffer
-//!   (see `marlin.rs`).
+//! - [`CornerMode::Marlin`]: Marlin's planner in whole steps, junction deviation or classic
+//!   jerk, over its bounded block buffer; print times agree with Marlin's own planner to
+//!   0.01 % (see `marlin.rs`).
 //!
 //! Both stream: [`Planner::push`] hands finished blocks to a [`BlockSink`] as soon as their
 //! speeds are final and the queue stays bounded (Marlin: `lookahead_blocks`; Klipper: about a
@@ -32,6 +33,8 @@
 mod junction;
 mod klipper;
 mod marlin;
+mod marlin_block;
+mod marlin_steps;
 mod trapezoid;
 
 pub use junction::{extruder_v2, HalfAngle};
@@ -179,9 +182,7 @@ impl Planner {
                 let rotary = (&self.profile.max_feed_mm_s, &self.profile.max_accel_mm_s2);
                 k.push(mv, geo, limits, rotary, sink);
             }
-            (Engine::Marlin(m), &CornerMode::Marlin { junction_deviation_mm, lookahead_blocks }) => {
-                m.push(mv, geo, &self.profile, junction_deviation_mm, lookahead_blocks, sink);
-            }
+            (Engine::Marlin(m), CornerMode::Marlin { .. }) => m.push(mv, &self.profile, sink),
             _ => unreachable!("set_profile keeps the corner mode of the engine"),
         }
         Ok(())
