@@ -54,6 +54,8 @@ const SMALL_SEGMENT_NEG_COS: f64 = -std::f64::consts::FRAC_1_SQRT_2;
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Settings {
     pub steps_per_unit: [f64; 5],
+    /// `steps_to_mm`, single precision as in Marlin.
+    mm_per_step: [f32; 5],
     max_feed: [f64; 5],
     max_accel: [f64; 5],
     /// M201 in whole steps/s² per motor (`max_acceleration_steps_per_s2`).
@@ -79,6 +81,7 @@ impl Settings {
         };
         Self {
             steps_per_unit,
+            mm_per_step: steps_per_unit.map(|s| 1.0 / s as f32),
             max_feed: profile.max_feed_mm_s.to_array(),
             max_accel,
             max_accel_steps: std::array::from_fn(|i| (max_accel[i] * steps_per_unit[i]).trunc()),
@@ -89,10 +92,11 @@ impl Settings {
         }
     }
 
-    /// The planner position of `pos`: each axis rounded to whole steps.
+    /// The planner position of `pos`: each axis rounded to whole steps (Marlin's positions and
+    /// steps per mm are single precision).
     pub(crate) fn to_steps(&self, pos: Pos) -> [f64; 5] {
         let p = pos.to_array();
-        std::array::from_fn(|i| (p[i] * self.steps_per_unit[i]).round())
+        std::array::from_fn(|i| (p[i] as f32 * self.steps_per_unit[i] as f32).round() as f64)
     }
 }
 
@@ -138,47 +142,59 @@ pub(crate) fn populate(
     if steps < MIN_STEPS_PER_SEGMENT {
         return None;
     }
-    let dist: [f64; 5] = std::array::from_fn(|i| delta[i] / set.steps_per_unit[i]);
+    // Marlin computes the length, the rates and the acceleration in single precision, and
+    // its roundings up (`ceil`) fall differently when a rate is a whole number in exact
+    // arithmetic (a 180 mm move at 25 mm/s and 80 steps/mm is 2000 steps/s exactly, 2001 in
+    // `float`): so does gweave, up to the acceleration in mm/s². The corner speeds after it
+    // are in double precision, where rounding no longer shifts a whole step.
+    let dist32: [f32; 5] = std::array::from_fn(|i| delta[i] as f32 * set.mm_per_step[i]);
     let xyz_steps = steps_abs[..3].iter().any(|&s| s >= MIN_STEPS_PER_SEGMENT);
-    let mm = if xyz_steps {
-        (dist[0] * dist[0] + dist[1] * dist[1] + dist[2] * dist[2]).sqrt()
+    let mm32 = if xyz_steps {
+        (dist32[0] * dist32[0] + dist32[1] * dist32[1] + dist32[2] * dist32[2]).sqrt()
     } else if steps_abs[4] > 0.0 {
         // gweave's rotary axis (not in Marlin 2.0): an A move without XYZ is measured in degrees.
-        dist[4].abs()
+        dist32[4].abs()
     } else {
-        dist[3].abs()
+        dist32[3].abs()
     };
     let extrudes = steps_abs[3] > 0.0;
     let moves_xyz = steps_abs[..3].iter().any(|&s| s > 0.0);
+    let steps32 = steps as f32;
+    let inverse_mm32 = 1.0 / mm32;
 
-    let mut inverse_s = feed_mm_s / mm;
+    let mut inverse_s32 = marlin_feed(feed_mm_s) * inverse_mm32;
     if (2..set.buffer_size / SLOWDOWN_DIVISOR).contains(&queued) {
-        let segment_us = (1e6 / inverse_s).round();
-        let short_us = set.min_segment_time_us - segment_us;
-        if short_us > 0.0 {
+        let segment_us = (1e6f32 / inverse_s32).round() as i64;
+        let short_us = set.min_segment_time_us as i64 - segment_us;
+        if short_us > 0 {
             // Marlin's integer arithmetic: (2 * short) / queued truncates.
-            let stretched_us = segment_us + (2.0 * short_us / queued as f64).trunc();
-            inverse_s = 1e6 / stretched_us;
+            inverse_s32 = 1e6f32 / (segment_us + 2 * short_us / queued as i64) as f32;
         }
     }
-    let mut nominal_v2 = (mm * inverse_s).powi(2);
-    let mut nominal_rate = (steps * inverse_s).ceil();
-    let mut speed: [f64; 5] = dist.map(|d| d * inverse_s);
-    let factor = (0..5)
-        .filter(|&i| speed[i] != 0.0)
-        .fold(1.0, |f: f64, i| if speed[i].abs() > set.max_feed[i] { f.lesser(set.max_feed[i] / speed[i].abs()) } else { f });
+    let mut nominal_v2_32 = (mm32 * inverse_s32) * (mm32 * inverse_s32);
+    let mut nominal_rate = (steps32 * inverse_s32).ceil() as f64;
+    let mut speed32: [f32; 5] = dist32.map(|d| d * inverse_s32);
+    let factor = (0..5).filter(|&i| speed32[i] != 0.0).fold(1.0f32, |f, i| {
+        let (cs, max) = (speed32[i].abs(), set.max_feed[i] as f32);
+        if cs > max {
+            f.min(max / cs)
+        } else {
+            f
+        }
+    });
     if factor < 1.0 {
-        speed = speed.map(|s| s * factor);
-        nominal_rate = (nominal_rate * factor).trunc();
-        nominal_v2 *= factor * factor;
+        speed32 = speed32.map(|s| s * factor);
+        // `nominal_rate *= speed_factor` on an unsigned integer: truncated.
+        nominal_rate = (nominal_rate as f32 * factor).trunc() as f64;
+        nominal_v2_32 *= factor * factor;
     }
 
-    let steps_per_mm = steps / mm;
+    let steps_per_mm32 = steps32 * inverse_mm32;
     let accel_steps = if !moves_xyz && steps_abs[4] == 0.0 {
-        (set.accel[2] * steps_per_mm).ceil()
+        (set.accel[2] as f32 * steps_per_mm32).ceil() as f64
     } else {
         let base = if extrudes { set.accel[0] } else { set.accel[1] };
-        let mut a = (base * steps_per_mm).ceil();
+        let mut a = (base as f32 * steps_per_mm32).ceil() as f64;
         for i in 0..5 {
             if steps_abs[i] > 0.0 && set.max_accel_steps[i] < a && a * steps_abs[i] > set.max_accel_steps[i] * steps {
                 a = (set.max_accel_steps[i] * steps / steps_abs[i]).trunc();
@@ -186,7 +202,11 @@ pub(crate) fn populate(
         }
         a
     };
-    let accel = accel_steps / steps_per_mm;
+    let accel = (accel_steps as f32 / steps_per_mm32) as f64;
+    let mm = mm32 as f64;
+    let nominal_v2 = nominal_v2_32 as f64;
+    let speed = speed32.map(f64::from);
+    let dist = dist32.map(f64::from);
 
     let first = queued == 0 || prev.nominal_v2 < 1e-12;
     let max_entry_v2 = match set.corners {
@@ -212,6 +232,13 @@ pub(crate) fn populate(
     prev.speed = speed;
     prev.nominal_v2 = nominal_v2;
     Some(MarlinBlock { steps, mm, nominal_rate, nominal_v2, accel_steps, accel, max_entry_v2 })
+}
+
+/// The feed rate as Marlin holds it: `F` / 60 in single precision, scaled by the 100 %
+/// feed-rate override (`MMS_SCALED`, `0.01f * 100`, in double precision), back to single.
+fn marlin_feed(feed_mm_s: f64) -> f32 {
+    let f = (feed_mm_s * 60.0) as f32 / 60.0;
+    (f as f64 * f64::from(0.01f32) * 100.0) as f32
 }
 
 /// The vector scaled to length 1 (zero components stay zero).
