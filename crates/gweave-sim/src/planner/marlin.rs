@@ -33,6 +33,23 @@ struct Block {
     entry_v2: f64,
 }
 
+impl Block {
+    /// The highest entry speed the next block can get from this one: `entry_v2 + 2 a len`, or
+    /// no limit for a block of "nominal length" (one long enough to brake from its nominal
+    /// speed to a stop, Marlin's `BLOCK_BIT_NOMINAL_LENGTH`). Marlin skips the check for those
+    /// on the grounds that the next block cannot enter faster than this one's nominal speed:
+    /// true under junction deviation, not always under classic jerk, whose "safe speed" at a
+    /// junction may exceed the previous block's nominal speed (a slow Z hop followed by a
+    /// fast travel). Then the block is left faster than it runs, as in the firmware.
+    fn reach_v2(&self) -> f64 {
+        if self.b.nominal_length {
+            f64::INFINITY
+        } else {
+            self.entry_v2 + 2.0 * self.b.accel * self.b.mm
+        }
+    }
+}
+
 /// The Marlin planner buffer.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct MarlinBuffer {
@@ -92,7 +109,11 @@ impl MarlinBuffer {
         let mut exit_v2 = MIN_V2;
         for i in (1..n).rev() {
             let b = &mut self.blocks[i];
-            let reverse_v2 = b.b.max_entry_v2.lesser(exit_v2 + 2.0 * b.b.accel * b.b.mm);
+            let reverse_v2 = if b.b.nominal_length {
+                b.b.max_entry_v2
+            } else {
+                b.b.max_entry_v2.lesser(exit_v2 + 2.0 * b.b.accel * b.b.mm)
+            };
             if reverse_v2 == b.reverse_v2 {
                 first_changed = i;
                 break;
@@ -103,10 +124,10 @@ impl MarlinBuffer {
         let Some(before) = first_changed.checked_sub(1).and_then(|i| self.blocks.get(i)) else {
             return;
         };
-        let mut reach_v2 = before.entry_v2 + 2.0 * before.b.accel * before.b.mm;
+        let mut reach_v2 = before.reach_v2();
         for b in self.blocks.iter_mut().skip(first_changed) {
             b.entry_v2 = b.reverse_v2.lesser(reach_v2);
-            reach_v2 = b.entry_v2 + 2.0 * b.b.accel * b.b.mm;
+            reach_v2 = b.reach_v2();
         }
     }
 

@@ -125,6 +125,9 @@ pub(crate) struct MarlinBlock {
     /// The same in mm/s².
     pub accel: f64,
     pub max_entry_v2: f64,
+    /// Long enough to brake from its nominal speed to `MINIMUM_PLANNER_SPEED`
+    /// (`BLOCK_BIT_NOMINAL_LENGTH`): the lookahead then takes its junction speeds as they are.
+    pub nominal_length: bool,
 }
 
 /// Populate a block for a move by `delta` steps requested at `feed_mm_s`, with `queued` blocks
@@ -231,7 +234,8 @@ pub(crate) fn populate(
     };
     prev.speed = speed;
     prev.nominal_v2 = nominal_v2;
-    Some(MarlinBlock { steps, mm, nominal_rate, nominal_v2, accel_steps, accel, max_entry_v2 })
+    let nominal_length = nominal_v2 <= MINIMUM_PLANNER_SPEED * MINIMUM_PLANNER_SPEED + 2.0 * accel * mm;
+    Some(MarlinBlock { steps, mm, nominal_rate, nominal_v2, accel_steps, accel, max_entry_v2, nominal_length })
 }
 
 /// The feed rate as Marlin holds it: `F` / 60 in single precision, scaled by the 100 %

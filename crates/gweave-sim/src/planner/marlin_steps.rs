@@ -49,10 +49,13 @@ impl StepProfile {
         let initial_rate = (nominal_rate * entry_factor).ceil().max(MINIMAL_STEP_RATE);
         let final_rate = (nominal_rate * exit_factor).ceil().max(MINIMAL_STEP_RATE);
         let two_a = 2.0 * accel;
-        // Marlin stores these in unsigned integers; a negative distance (a rate floor above a
-        // nominal rate under 120 steps/s) is taken as none.
+        // Marlin stores the step counts in unsigned integers. A negative acceleration distance
+        // (a rate floor above a nominal rate under 120 steps/s) is taken as none. A negative
+        // braking distance (a block left faster than its nominal speed, which classic jerk
+        // allows, see `marlin.rs`) wraps around and, through the same wrap in the cruise
+        // count, means no braking: the block cruises to its end.
         let mut accelerate = ((nominal_rate * nominal_rate - initial_rate * initial_rate) / two_a).ceil().max(0.0);
-        let decelerate = ((nominal_rate * nominal_rate - final_rate * final_rate) / two_a).floor().max(0.0);
+        let decelerate = ((nominal_rate * nominal_rate - final_rate * final_rate) / two_a).floor();
         let mut plateau = steps - accelerate - decelerate;
         let cruise_rate = if plateau < 0.0 {
             let meet = (two_a * steps - initial_rate * initial_rate + final_rate * final_rate) / (2.0 * two_a);
@@ -102,5 +105,16 @@ mod tests {
         assert_eq!(p.cruise_rate, 7590.0);
         assert_eq!(p.cruise_t_s, 0.0);
         assert!((p.accel_t_s - 240.0 / 7710.0).abs() < 1e-15 && (p.decel_t_s - 240.0 / 7710.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn block_left_above_its_nominal_rate_cruises_to_the_end() {
+        // 80 Z steps at 2000 steps/s, a = 40000, entered at 0.06 (121 steps/s), left at 2.83
+        // times nominal (5657 steps/s): accelerate ceil((2000² - 121²) / 80000) = 50 steps,
+        // then cruise 30 steps at 2000, no braking.
+        let p = StepProfile::new(80.0, 2000.0, 40_000.0, 0.0602, 2.8284);
+        assert_eq!((p.initial_rate, p.cruise_rate, p.final_rate), (121.0, 2000.0, 5657.0));
+        assert_eq!(p.decel_t_s, 0.0);
+        assert!((p.accel_t_s - 100.0 / 2121.0).abs() < 1e-15 && (p.cruise_t_s - 30.0 / 2000.0).abs() < 1e-15);
     }
 }
