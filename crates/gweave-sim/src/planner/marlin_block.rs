@@ -345,7 +345,7 @@ mod tests {
         assert!(populate([5.0, -5.0, 0.0, 5.0, 0.0], 50.0, 3, &set, &mut prev).is_none());
         // XY under six steps but E over: measured along E (0.012 mm at 500 steps/mm).
         let b = populate([5.0, 0.0, 0.0, 6.0, 0.0], 50.0, 3, &set, &mut prev).unwrap();
-        assert_eq!((b.steps, b.mm), (6.0, 0.012));
+        assert_eq!((b.steps, b.mm), (6.0, f64::from(0.012f32)));
     }
 
     #[test]
