@@ -18,7 +18,7 @@ use super::marlin_block::{populate, MarlinBlock, Previous, Settings, MINIMUM_PLA
 use super::marlin_steps::StepProfile;
 use super::trapezoid::Trapezoid;
 use super::{BlockSink, Lesser, PlannedBlock};
-use crate::kinematics::{Geometry, Move, Pos};
+use crate::kinematics::{Geometry, Move, MoveKind, Pos};
 use crate::limits::MotionProfile;
 
 const MIN_V2: f64 = MINIMUM_PLANNER_SPEED * MINIMUM_PLANNER_SPEED;
@@ -137,9 +137,18 @@ impl MarlinBuffer {
         };
         let exit_v2 = self.blocks.front().map_or(MIN_V2, |next| next.entry_v2);
         let nominal_v = b.nominal_v2.sqrt();
-        let steps =
-            StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, entry_v2.sqrt() / nominal_v, exit_v2.sqrt() / nominal_v);
-        let mm_per_step = b.mm / b.steps;
+        let steps = StepProfile::new(
+            b.steps,
+            b.nominal_rate,
+            b.accel_steps,
+            entry_v2.sqrt() / nominal_v,
+            exit_v2.sqrt() / nominal_v,
+        );
+        // The speeds along the path: Marlin's length, unless it measured a tiny XYZ move along
+        // E; the times are the steps' either way.
+        let geo = Geometry::between(mv.start, mv.end);
+        let len = if b.xyz_below_min_steps && geo.kind == MoveKind::Kinematic { geo.len } else { b.mm };
+        let mm_per_step = len / b.steps;
         let trapezoid = Trapezoid {
             entry_v_mm_s: steps.initial_rate * mm_per_step,
             cruise_v_mm_s: steps.cruise_rate * mm_per_step,
@@ -148,7 +157,7 @@ impl MarlinBuffer {
             cruise_t_s: steps.cruise_t_s,
             decel_t_s: steps.decel_t_s,
         };
-        sink.block(&PlannedBlock::new(&mv, &Geometry::between(mv.start, mv.end), b.accel, trapezoid));
+        sink.block(&PlannedBlock::new(&mv, &geo, b.accel, trapezoid));
     }
 }
 

@@ -128,6 +128,8 @@ pub(crate) struct MarlinBlock {
     /// Long enough to brake from its nominal speed to `MINIMUM_PLANNER_SPEED`
     /// (`BLOCK_BIT_NOMINAL_LENGTH`): the lookahead then takes its junction speeds as they are.
     pub nominal_length: bool,
+    /// No XYZ motor takes `MIN_STEPS_PER_SEGMENT` steps: measured along E (or A).
+    pub xyz_below_min_steps: bool,
 }
 
 /// Populate a block for a move by `delta` steps requested at `feed_mm_s`, with `queued` blocks
@@ -199,7 +201,10 @@ pub(crate) fn populate(
         let base = if extrudes { set.accel[0] } else { set.accel[1] };
         let mut a = (base as f32 * steps_per_mm32).ceil() as f64;
         for i in 0..5 {
-            if steps_abs[i] > 0.0 && set.max_accel_steps[i] < a && a * steps_abs[i] > set.max_accel_steps[i] * steps {
+            if steps_abs[i] > 0.0
+                && set.max_accel_steps[i] < a
+                && a * steps_abs[i] > set.max_accel_steps[i] * steps
+            {
                 a = (set.max_accel_steps[i] * steps / steps_abs[i]).trunc();
             }
         }
@@ -235,7 +240,17 @@ pub(crate) fn populate(
     prev.speed = speed;
     prev.nominal_v2 = nominal_v2;
     let nominal_length = nominal_v2 <= MINIMUM_PLANNER_SPEED * MINIMUM_PLANNER_SPEED + 2.0 * accel * mm;
-    Some(MarlinBlock { steps, mm, nominal_rate, nominal_v2, accel_steps, accel, max_entry_v2, nominal_length })
+    Some(MarlinBlock {
+        steps,
+        mm,
+        nominal_rate,
+        nominal_v2,
+        accel_steps,
+        accel,
+        max_entry_v2,
+        nominal_length,
+        xyz_below_min_steps: !xyz_steps,
+    })
 }
 
 /// The feed rate as Marlin holds it: `F` / 60 in single precision, scaled by the 100 %
@@ -259,9 +274,13 @@ fn deviation_v2(prev: &[f64; 5], unit: &[f64; 5], accel: f64, mm: f64, jd: f64, 
     }
     let neg_cos = neg_cos.max(-REVERSAL_NEG_COS);
     let change = normalised(std::array::from_fn(|i| unit[i] - prev[i]));
-    let junction_accel = (0..5)
-        .filter(|&i| change[i] != 0.0)
-        .fold(accel, |a: f64, i| if a * change[i].abs() > set.max_accel[i] { (set.max_accel[i] / change[i]).abs() } else { a });
+    let junction_accel = (0..5).filter(|&i| change[i] != 0.0).fold(accel, |a: f64, i| {
+        if a * change[i].abs() > set.max_accel[i] {
+            (set.max_accel[i] / change[i]).abs()
+        } else {
+            a
+        }
+    });
     let sin = HalfAngle::from_neg_cos(neg_cos).sin;
     let mut v2 = junction_accel * jd * sin / (1.0 - sin);
     if mm < SMALL_SEGMENT_MM && neg_cos < SMALL_SEGMENT_NEG_COS {
@@ -296,8 +315,11 @@ fn safe_speed(nominal_v: f64, speed: &[f64; 5], jerk: &[f64; 4]) -> f64 {
 /// Classic jerk at the junction with the previous block.
 fn jerk_junction_v(nominal_v: f64, speed: &[f64; 5], safe_v: f64, prev: &Previous, jerk: &[f64; 4]) -> f64 {
     let prev_nominal_v = prev.nominal_v2.sqrt();
-    let (mut v, smaller) =
-        if nominal_v < prev_nominal_v { (nominal_v, nominal_v / prev_nominal_v) } else { (prev_nominal_v, 1.0) };
+    let (mut v, smaller) = if nominal_v < prev_nominal_v {
+        (nominal_v, nominal_v / prev_nominal_v)
+    } else {
+        (prev_nominal_v, 1.0)
+    };
     let mut factor = 1.0;
     for ((&exit, &entry), &j) in prev.speed.iter().zip(speed).zip(jerk) {
         let (exit, entry) = (exit * smaller * factor, entry * factor);

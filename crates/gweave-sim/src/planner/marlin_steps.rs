@@ -45,7 +45,13 @@ impl StepProfile {
     /// The profile of a block of `steps` steps with nominal rate `nominal_rate` (a whole
     /// number of steps/s) and acceleration `accel` (whole steps/s²), entered and left at
     /// `entry_factor` and `exit_factor` times its nominal speed.
-    pub(crate) fn new(steps: f64, nominal_rate: f64, accel: f64, entry_factor: f64, exit_factor: f64) -> Self {
+    pub(crate) fn new(
+        steps: f64,
+        nominal_rate: f64,
+        accel: f64,
+        entry_factor: f64,
+        exit_factor: f64,
+    ) -> Self {
         let initial_rate = (nominal_rate * entry_factor).ceil().max(MINIMAL_STEP_RATE);
         let final_rate = (nominal_rate * exit_factor).ceil().max(MINIMAL_STEP_RATE);
         let two_a = 2.0 * accel;
@@ -54,11 +60,13 @@ impl StepProfile {
         // braking distance (a block left faster than its nominal speed, which classic jerk
         // allows, see `marlin.rs`) wraps around and, through the same wrap in the cruise
         // count, means no braking: the block cruises to its end.
-        let mut accelerate = ((nominal_rate * nominal_rate - initial_rate * initial_rate) / two_a).ceil().max(0.0);
+        let mut accelerate =
+            ((nominal_rate * nominal_rate - initial_rate * initial_rate) / two_a).ceil().max(0.0);
         let decelerate = ((nominal_rate * nominal_rate - final_rate * final_rate) / two_a).floor();
         let mut plateau = steps - accelerate - decelerate;
         let cruise_rate = if plateau < 0.0 {
-            let meet = (two_a * steps - initial_rate * initial_rate + final_rate * final_rate) / (2.0 * two_a);
+            let meet =
+                (two_a * steps - initial_rate * initial_rate + final_rate * final_rate) / (2.0 * two_a);
             accelerate = meet.ceil().clamp(0.0, steps);
             plateau = 0.0;
             // The peak rate is kept as a whole number (truncated), as Marlin stores it.
