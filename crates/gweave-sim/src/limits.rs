@@ -411,7 +411,12 @@ impl MotionProfile {
         positive("accel.retract_mm_s2", self.accel.retract_mm_s2)?;
         positive("accel.travel_mm_s2", self.accel.travel_mm_s2)?;
         match &self.corners {
-            CornerMode::Marlin { junction_deviation_mm, jerk_mm_s, lookahead_blocks, min_segment_time_us } => {
+            CornerMode::Marlin {
+                junction_deviation_mm,
+                jerk_mm_s,
+                lookahead_blocks,
+                min_segment_time_us,
+            } => {
                 if let Some(jd) = junction_deviation_mm {
                     positive("corners.junction_deviation_mm", *jd)?;
                 }
@@ -419,7 +424,12 @@ impl MotionProfile {
                     if junction_deviation_mm.is_some() {
                         return Err(ProfileError::JerkAndJunctionDeviation);
                     }
-                    let names = ["corners.jerk_mm_s.x", "corners.jerk_mm_s.y", "corners.jerk_mm_s.z", "corners.jerk_mm_s.e"];
+                    let names = [
+                        "corners.jerk_mm_s.x",
+                        "corners.jerk_mm_s.y",
+                        "corners.jerk_mm_s.z",
+                        "corners.jerk_mm_s.e",
+                    ];
                     j.to_array().iter().zip(names).try_for_each(|(&v, n)| non_negative(n, v))?;
                 }
                 // Marlin's ring buffer keeps one slot free: 2 slots hold one block.
@@ -486,14 +496,20 @@ impl MotionProfile {
     /// M205 X Y Z E (classic jerk, mm/s) and B (minimum segment time, µs): the values given
     /// change a Marlin profile; jerk values change only a jerk profile (see
     /// [`MotionProfile::set_junction_deviation`]).
-    pub fn set_jerk(&mut self, m205: &AxisUpdate, min_segment_time_us: Option<f64>) -> Result<(), ProfileError> {
+    pub fn set_jerk(
+        &mut self,
+        m205: &AxisUpdate,
+        min_segment_time_us: Option<f64>,
+    ) -> Result<(), ProfileError> {
         let CornerMode::Marlin { jerk_mm_s, min_segment_time_us: b, .. } = &mut self.corners else {
             return Ok(());
         };
         let mut next = (*jerk_mm_s, *b);
         if let Some(j) = &mut next.0 {
             let slots = [&mut j.x, &mut j.y, &mut j.z, &mut j.e];
-            for ((slot, v), name) in slots.into_iter().zip(m205.to_array()).zip(["M205 X", "M205 Y", "M205 Z", "M205 E"]) {
+            for ((slot, v), name) in
+                slots.into_iter().zip(m205.to_array()).zip(["M205 X", "M205 Y", "M205 Z", "M205 E"])
+            {
                 if let Some(v) = v {
                     non_negative(name, v)?;
                     *slot = v;
@@ -593,6 +609,42 @@ mod tests {
         assert!(
             matches!(m.corners, CornerMode::Marlin { junction_deviation_mm: Some(jd), .. } if jd == 0.02)
         );
+    }
+
+    #[test]
+    fn marlin_classic_jerk_profile_and_both_corner_rules_is_an_error() {
+        let jerk = "[corners]\nmode = \"marlin\"\njerk_mm_s = { x = 10.0, y = 10.0, z = 0.2, e = 2.5 }\n";
+        let p = MotionProfile::from_toml_str(jerk).unwrap();
+        let want = Jerk { x: 10.0, y: 10.0, z: 0.2, e: 2.5 };
+        assert_eq!(p.corners.marlin_corners(), Some(MarlinCorners::Jerk(want)));
+        assert!(matches!(p.corners, CornerMode::Marlin { lookahead_blocks: 16, .. }));
+        let both = format!("{jerk}junction_deviation_mm = 0.013\n");
+        assert_eq!(MotionProfile::from_toml_str(&both), Err(ProfileError::JerkAndJunctionDeviation));
+        let neither = MotionProfile::from_toml_str("[corners]\nmode = \"marlin\"\n").unwrap();
+        assert_eq!(neither.corners.marlin_corners(), Some(MarlinCorners::JunctionDeviation(0.013)));
+        assert_eq!(MotionProfile::from_toml_str(&toml::to_string(&p).unwrap()), Ok(p));
+    }
+
+    #[test]
+    fn m205_changes_the_corner_rule_the_profile_has() {
+        let mut jerk = MotionProfile::from_toml_str(
+            "[corners]\nmode = \"marlin\"\njerk_mm_s = { x = 10.0, y = 10.0, z = 0.2, e = 2.5 }\n",
+        )
+        .unwrap();
+        jerk.set_jerk(&AxisUpdate { x: Some(8.0), e: Some(4.5), ..AxisUpdate::default() }, Some(10_000.0))
+            .unwrap();
+        jerk.set_junction_deviation(0.02).unwrap();
+        let want = Jerk { x: 8.0, y: 10.0, z: 0.2, e: 4.5 };
+        assert_eq!(jerk.corners.marlin_corners(), Some(MarlinCorners::Jerk(want)));
+        assert!(
+            matches!(jerk.corners, CornerMode::Marlin { min_segment_time_us, .. } if min_segment_time_us == 1e4)
+        );
+        // A junction-deviation build ignores M205 X Y Z E.
+        let mut jd = MotionProfile::default();
+        jd.set_jerk(&AxisUpdate { x: Some(8.0), ..AxisUpdate::default() }, None).unwrap();
+        assert_eq!(jd.corners.marlin_corners(), Some(MarlinCorners::JunctionDeviation(0.013)));
+        let bad = jd.set_jerk(&AxisUpdate::default(), Some(-1.0));
+        assert_eq!(bad, Err(ProfileError::NotPositive { name: "M205 B", value: -1.0 }));
     }
 
     #[test]
