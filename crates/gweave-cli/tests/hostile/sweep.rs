@@ -88,7 +88,10 @@ fn sweep(name: &str, bytes: &[u8]) -> Vec<String> {
         if fs::read(&input).ok().as_deref() != Some(bytes) {
             failures.push(format!("{what}: input changed"));
         }
-        if snapshot(dir.path()).keys().any(|p| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with(".gweave-"))) {
+        if snapshot(dir.path())
+            .keys()
+            .any(|p| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with(".gweave-")))
+        {
             failures.push(format!("{what}: temporary file left"));
         }
         if outcome.code == Some(1) && Path::new(&dir.path().join("out.gcode")).exists() {
