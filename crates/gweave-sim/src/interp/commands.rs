@@ -41,7 +41,7 @@ pub const COMMANDS: &[CommandHelp] = &[
     c("M140 M190", "bed target, M190 also waits: S while heating, R both ways"),
     c("M155", "report temperatures every S seconds (0: off)"),
     c("M163 M164 M165 M166", "mixing: set a weight, store a virtual tool, mix at once, gradient (accepted)"),
-    c("M201 M203 M204 M205", "acceleration, feed rate, print/travel acceleration and junction deviation limits"),
+    c("M201 M203 M204 M205", "acceleration, feed rate, print/travel acceleration, junction deviation (M205 J) or classic jerk (M205 X Y Z E) and minimum segment time (M205 B) limits"),
     c("M220 M221", "feed rate / flow percentage (no S: report it)"),
     c("M301", "set or report the hotend PID gains"),
     c("M303", "PID autotune on the thermal plant (relay method), U1 applies the gains"),
