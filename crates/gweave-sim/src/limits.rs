@@ -362,6 +362,23 @@ pub struct MotionProfile {
     pub accel: MoveAccel,
     /// Corner handling and, in Klipper mode, the toolhead limits.
     pub corners: CornerMode,
+    /// Extruders with their own E limits (Marlin's `DISTINCT_E_FACTORS`, set by M92, M201 and
+    /// M203 with `T`), by tool number; a tool not listed, or a value not given, takes the
+    /// shared E values above. Marlin mode only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub extruders: Vec<ExtruderLimits>,
+}
+
+/// One extruder's own E limits; `None` takes the shared value.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExtruderLimits {
+    /// E steps per mm (M92 T E).
+    pub steps_per_mm: Option<f64>,
+    /// E maximum feed rate, mm/s (M203 T E).
+    pub max_feed_mm_s: Option<f64>,
+    /// E maximum acceleration, mm/s² (M201 T E).
+    pub max_accel_mm_s2: Option<f64>,
 }
 
 impl Default for MotionProfile {
@@ -372,6 +389,7 @@ impl Default for MotionProfile {
             max_accel_mm_s2: AxisLimits { x: 3000.0, y: 3000.0, z: 100.0, e: 10000.0, a: 3600.0 },
             accel: MoveAccel { print_mm_s2: 3000.0, retract_mm_s2: 3000.0, travel_mm_s2: 3000.0 },
             corners: CornerMode::default(),
+            extruders: Vec::new(),
         }
     }
 }
@@ -405,6 +423,14 @@ impl MotionProfile {
             positive("steps.a_per_deg", a)?;
         }
         s.mixing_e.iter().try_for_each(|&v| positive("steps.mixing_e", v))?;
+        for e in &self.extruders {
+            let values = [
+                ("extruders.steps_per_mm", e.steps_per_mm),
+                ("extruders.max_feed_mm_s", e.max_feed_mm_s),
+                ("extruders.max_accel_mm_s2", e.max_accel_mm_s2),
+            ];
+            values.iter().filter_map(|(n, v)| v.map(|v| (*n, v))).try_for_each(|(n, v)| positive(n, v))?;
+        }
         self.max_feed_mm_s.validate(FEED_NAMES)?;
         self.max_accel_mm_s2.validate(ACCEL_NAMES)?;
         positive("accel.print_mm_s2", self.accel.print_mm_s2)?;

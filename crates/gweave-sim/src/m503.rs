@@ -14,15 +14,15 @@
 //!
 //! Read here: `M92` (steps per mm), `M201`, `M203`, `M204` (`S` as print and travel on old
 //! boards), `M205` (`B` the minimum segment time; `J` means a junction-deviation build, `X Y Z
-//! E` without `J` a classic-jerk one), `M301` and `M304` (hotend and bed PID). `M851` (the probe
-//! offset) has no place in a machine profile and is returned as a note, so are the lines of
-//! other extruders (`T1`) and settings gweave does not model (`M900` linear advance, `M205 S T`
-//! minimum feed rates).
+//! E` without `J` a classic-jerk one), `M301` and `M304` (hotend and bed PID); `M92`, `M201`
+//! and `M203` with `T1` ... (`DISTINCT_E_FACTORS`) give that extruder its own E values. `M851`
+//! (the probe offset) has no place in a machine profile and is returned as a note, so are
+//! settings gweave does not model (`M900` linear advance, `M205 S T` minimum feed rates).
 
 use thiserror::Error;
 
 use crate::control::{ControlConfig, PidConfig, PidGains};
-use crate::limits::{AxisUpdate, CornerMode, Jerk, ProfileError, M204};
+use crate::limits::{AxisUpdate, CornerMode, ExtruderLimits, Jerk, ProfileError, M204};
 use crate::profile::MachineProfile;
 
 /// Why an `M503` report could not be read.
@@ -79,10 +79,22 @@ pub fn from_m503(report: &str) -> Result<FromM503, M503Error> {
         let get = |l: &str| values.iter().find(|(k, _)| k == l).map(|(_, v)| *v);
         let command = command.to_ascii_uppercase();
         // `T` is the extruder in M92, M201 and M203 (M204's T is travel, M205's the minimum
-        // travel feed rate).
+        // travel feed rate): another extruder's E (`DISTINCT_E_FACTORS`).
         let per_tool = matches!(command.as_str(), "M92" | "M201" | "M203");
-        if per_tool && get("T").is_some_and(|t| t != 0.0) {
-            notes.push(format!("{text}: another extruder's setting, not modelled (one E for every tool)"));
+        if let (true, Some(t), Some(e)) = (per_tool, get("T").filter(|&t| t >= 1.0), get("E")) {
+            let tool = t as usize;
+            let extruders = &mut p.motion.extruders;
+            if extruders.len() <= tool {
+                extruders.resize(tool + 1, ExtruderLimits::default());
+            }
+            let slot = match command.as_str() {
+                "M92" => &mut extruders[tool].steps_per_mm,
+                "M201" => &mut extruders[tool].max_accel_mm_s2,
+                _ => &mut extruders[tool].max_feed_mm_s,
+            };
+            *slot = Some(e);
+            p.motion.validate().map_err(|source| M503Error::Profile { line, source })?;
+            used.push(text.to_owned());
             continue;
         }
         let axes = || AxisUpdate { x: get("X"), y: get("Y"), z: get("Z"), e: get("E"), a: None };
@@ -201,8 +213,10 @@ mod tests {
 
     #[test]
     fn junction_deviation_build_and_bad_reports() {
-        let r = from_m503("echo:  M205 B20000.00 S0.00 T0.00 J0.02\n").unwrap();
+        let r = from_m503("echo:  M205 B20000.00 S0.00 T0.00 J0.02\necho:  M203 T1 E12.00\n").unwrap();
         assert_eq!(r.profile.motion.corners.marlin_corners(), Some(MarlinCorners::JunctionDeviation(0.02)));
+        assert_eq!(r.profile.motion.extruders[1].max_feed_mm_s, Some(12.0));
+        assert_eq!(r.profile.motion.extruders[0], ExtruderLimits::default());
         assert_eq!(from_m503("ok\nT:210 /210\n"), Err(M503Error::Empty));
         let bad = from_m503("echo:  M203 X500.00 Yfast\n");
         assert_eq!(bad, Err(M503Error::NotANumber { line: 1, word: "Yfast".to_owned() }));

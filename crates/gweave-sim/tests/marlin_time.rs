@@ -65,6 +65,7 @@ impl Limits {
                 lookahead_blocks: 16,
                 min_segment_time_us: 20_000.0,
             },
+            extruders: Vec::new(),
         }
     }
 }

@@ -254,6 +254,7 @@ impl Front {
             }
         }
         self.book.tool = tool;
+        jobs.push(Job::Tool(tool));
         self.refresh_mix(jobs);
         Ok(())
     }

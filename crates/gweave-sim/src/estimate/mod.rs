@@ -183,6 +183,8 @@ enum Job {
     Key(Key),
     /// The weights of the next mix number.
     Mix(Vec<f64>),
+    /// The following moves drive this extruder.
+    Tool(u32),
     /// The limits changed (already checked by the parse side).
     Profile { profile: Box<MotionProfile>, line: u64 },
 }

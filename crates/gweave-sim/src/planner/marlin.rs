@@ -18,7 +18,7 @@ use super::marlin_block::{populate, MarlinBlock, Previous, Settings, MINIMUM_PLA
 use super::marlin_steps::StepProfile;
 use super::trapezoid::Trapezoid;
 use super::{BlockSink, Lesser, PlannedBlock};
-use crate::kinematics::{Geometry, Move, MoveKind, Pos};
+use crate::kinematics::{axis, Geometry, Move, MoveKind, Pos};
 use crate::limits::MotionProfile;
 
 const MIN_V2: f64 = MINIMUM_PLANNER_SPEED * MINIMUM_PLANNER_SPEED;
@@ -61,6 +61,9 @@ pub(crate) struct MarlinBuffer {
     /// pushed ended: a move that starts elsewhere follows a `G92` or homing.
     block_end: Pos,
     last_end: Option<Pos>,
+    /// The extruder moves drive, and the E steps per mm the position is in.
+    tool: usize,
+    e_steps_per_mm: f64,
 }
 
 impl MarlinBuffer {
@@ -68,8 +71,20 @@ impl MarlinBuffer {
         self.blocks.len()
     }
 
+    /// Moves from now on drive extruder `tool`, with its own E limits if it has them.
+    pub(crate) fn select_tool(&mut self, tool: usize) {
+        self.tool = tool;
+    }
+
     pub(crate) fn push(&mut self, mv: &Move, profile: &MotionProfile, sink: &mut dyn BlockSink) {
-        let set = Settings::new(profile);
+        let set = Settings::new(profile, self.tool);
+        let e_steps_per_mm = set.steps_per_unit[axis::E];
+        if e_steps_per_mm != self.e_steps_per_mm && self.e_steps_per_mm > 0.0 {
+            // Another extruder with other E steps: the E position in its steps, as Marlin's
+            // `buffer_segment` rescales it.
+            self.position[axis::E] = (self.position[axis::E] * e_steps_per_mm / self.e_steps_per_mm).round();
+        }
+        self.e_steps_per_mm = e_steps_per_mm;
         if self.last_end != Some(mv.start) {
             // Marlin's `set_position_mm`: every axis takes the new position, in whole steps.
             self.position = set.to_steps(mv.start);

@@ -68,10 +68,15 @@ pub(crate) struct Settings {
 }
 
 impl Settings {
-    pub(crate) fn new(profile: &MotionProfile) -> Self {
+    /// The settings for moves of extruder `tool`.
+    pub(crate) fn new(profile: &MotionProfile, tool: usize) -> Self {
         let s = &profile.steps;
-        let steps_per_unit = [s.x, s.y, s.z, s.e, s.a_per_deg.unwrap_or(1.0)];
-        let max_accel = profile.max_accel_mm_s2.to_array();
+        let own = profile.extruders.get(tool).copied().unwrap_or_default();
+        let steps_per_unit = [s.x, s.y, s.z, own.steps_per_mm.unwrap_or(s.e), s.a_per_deg.unwrap_or(1.0)];
+        let mut max_accel = profile.max_accel_mm_s2.to_array();
+        let mut max_feed = profile.max_feed_mm_s.to_array();
+        max_accel[3] = own.max_accel_mm_s2.unwrap_or(max_accel[3]);
+        max_feed[3] = own.max_feed_mm_s.unwrap_or(max_feed[3]);
         let a = &profile.accel;
         let (buffer_size, min_segment_time_us) = match profile.corners {
             crate::limits::CornerMode::Marlin { lookahead_blocks, min_segment_time_us, .. } => {
@@ -82,7 +87,7 @@ impl Settings {
         Self {
             steps_per_unit,
             mm_per_step: steps_per_unit.map(|s| 1.0 / s as f32),
-            max_feed: profile.max_feed_mm_s.to_array(),
+            max_feed,
             max_accel,
             max_accel_steps: std::array::from_fn(|i| (max_accel[i] * steps_per_unit[i]).trunc()),
             accel: [a.print_mm_s2, a.travel_mm_s2, a.retract_mm_s2],
@@ -362,7 +367,7 @@ mod tests {
 
     #[test]
     fn fewer_than_six_steps_is_no_block() {
-        let set = Settings::new(&MotionProfile::default());
+        let set = Settings::new(&MotionProfile::default(), 0);
         let mut prev = Previous::default();
         assert!(populate([5.0, -5.0, 0.0, 5.0, 0.0], 50.0, 3, &set, &mut prev).is_none());
         // XY under six steps but E over: measured along E (0.012 mm at 500 steps/mm).
@@ -375,7 +380,7 @@ mod tests {
         // 10 mm +X then 10 mm +Y at 50 mm/s, jerk 10. X stops from 50: the junction speed is
         // scaled by 10/50 to 10 mm/s, and Y then starts from 0 to 10, within its jerk. Both
         // safe speeds (10 mm/s) exceed 99 % of that, so the safe speed it is.
-        let set = Settings::new(&jerk_profile());
+        let set = Settings::new(&jerk_profile(), 0);
         let mut prev = Previous::default();
         let first = populate([800.0, 0.0, 0.0, 0.0, 0.0], 50.0, 0, &set, &mut prev).unwrap();
         assert!((first.max_entry_v2 - 100.0).abs() < 1e-9, "{first:?}");
@@ -390,7 +395,7 @@ mod tests {
     fn rates_round_up_and_acceleration_is_whole_steps() {
         // 10 mm at 33.33 mm/s, 80 steps/mm: 800 steps at ceil(2666.4) = 2667 steps/s; accel
         // ceil(3000 * 80) = 240000 steps/s², X's own limit.
-        let set = Settings::new(&MotionProfile::default());
+        let set = Settings::new(&MotionProfile::default(), 0);
         let mut prev = Previous::default();
         let b = populate([800.0, 0.0, 0.0, 0.0, 0.0], 33.33, 0, &set, &mut prev).unwrap();
         assert_eq!((b.nominal_rate, b.accel_steps), (2667.0, 240_000.0));

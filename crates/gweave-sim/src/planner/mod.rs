@@ -188,6 +188,14 @@ impl Planner {
         Ok(())
     }
 
+    /// Moves from now on drive extruder `tool` (`T<n>`): in Marlin mode with its own E limits,
+    /// if the profile gives it some (`extruders`).
+    pub fn select_tool(&mut self, tool: usize) {
+        if let Engine::Marlin(m) = &mut self.engine {
+            m.select_tool(tool);
+        }
+    }
+
     /// Plan every queued move to a stop and emit it.
     pub fn flush<S: BlockSink>(&mut self, sink: &mut S) {
         match &mut self.engine {

@@ -174,6 +174,29 @@ fn z_limits() {
 }
 
 #[test]
+fn marlin_extruder_with_its_own_limits() {
+    // T1 may move E at 2 mm/s only: a 10 mm prime at 20 mm/s takes about 5 s there, and about
+    // 0.5 s on T0 (E limit 25 mm/s).
+    let mut p = marlin();
+    p.extruders = vec![
+        Default::default(),
+        crate::limits::ExtruderLimits { max_feed_mm_s: Some(2.0), ..Default::default() },
+    ];
+    let mut planner = Planner::new(p).unwrap();
+    let mut out: Vec<PlannedBlock> = Vec::new();
+    let prime =
+        |from: f64| mv(Pos::xyze(0.0, 0.0, 0.0, from), Pos::xyze(0.0, 0.0, 0.0, from + 10.0), 20.0, 0);
+    planner.push(&prime(0.0), &mut out).unwrap();
+    planner.flush(&mut out);
+    planner.select_tool(1);
+    planner.push(&prime(10.0), &mut out).unwrap();
+    planner.flush(&mut out);
+    assert!((out[0].duration_s() - 0.5).abs() < 0.01, "{:?}", out[0]);
+    assert!((out[1].duration_s() - 5.0).abs() < 0.01, "{:?}", out[1]);
+    assert_eq!(out[1].trapezoid.cruise_v_mm_s, 2.0);
+}
+
+#[test]
 fn marlin_buffer_is_bounded_and_emits_early() {
     let mut planner = Planner::new(marlin()).unwrap();
     let mut n = 0usize;
