@@ -159,28 +159,12 @@ pub(crate) fn populate(
     // are in double precision, where rounding no longer shifts a whole step.
     let dist32: [f32; 5] = std::array::from_fn(|i| delta[i] as f32 * set.mm_per_step[i]);
     let xyz_steps = steps_abs[..3].iter().any(|&s| s >= MIN_STEPS_PER_SEGMENT);
-    let mm32 = if xyz_steps {
-        (dist32[0] * dist32[0] + dist32[1] * dist32[1] + dist32[2] * dist32[2]).sqrt()
-    } else if steps_abs[4] > 0.0 {
-        // gweave's rotary axis (not in Marlin 2.0): an A move without XYZ is measured in degrees.
-        dist32[4].abs()
-    } else {
-        dist32[3].abs()
-    };
+    let mm32 = length_mm(&dist32, &steps_abs, xyz_steps);
     let extrudes = steps_abs[3] > 0.0;
-    let moves_xyz = steps_abs[..3].iter().any(|&s| s > 0.0);
     let steps32 = steps as f32;
     let inverse_mm32 = 1.0 / mm32;
 
-    let mut inverse_s32 = marlin_feed(feed_mm_s) * inverse_mm32;
-    if (2..set.buffer_size / SLOWDOWN_DIVISOR).contains(&queued) {
-        let segment_us = (1e6f32 / inverse_s32).round() as i64;
-        let short_us = set.min_segment_time_us as i64 - segment_us;
-        if short_us > 0 {
-            // Marlin's integer arithmetic: (2 * short) / queued truncates.
-            inverse_s32 = 1e6f32 / (segment_us + 2 * short_us / queued as i64) as f32;
-        }
-    }
+    let inverse_s32 = slowdown(marlin_feed(feed_mm_s) * inverse_mm32, queued, set);
     let mut nominal_v2_32 = (mm32 * inverse_s32) * (mm32 * inverse_s32);
     let mut nominal_rate = (steps32 * inverse_s32).ceil() as f64;
     let mut speed32: [f32; 5] = dist32.map(|d| d * inverse_s32);
@@ -198,32 +182,17 @@ pub(crate) fn populate(
         nominal_rate = (nominal_rate as f32 * factor).trunc() as f64;
         nominal_v2_32 *= factor * factor;
     }
-
     let steps_per_mm32 = steps32 * inverse_mm32;
-    let accel_steps = if !moves_xyz && steps_abs[4] == 0.0 {
-        (set.accel[2] as f32 * steps_per_mm32).ceil() as f64
-    } else {
-        let base = if extrudes { set.accel[0] } else { set.accel[1] };
-        let mut a = (base as f32 * steps_per_mm32).ceil() as f64;
-        for i in 0..5 {
-            if steps_abs[i] > 0.0
-                && set.max_accel_steps[i] < a
-                && a * steps_abs[i] > set.max_accel_steps[i] * steps
-            {
-                a = (set.max_accel_steps[i] * steps / steps_abs[i]).trunc();
-            }
-        }
-        a
-    };
+    let accel_steps = acceleration_steps(set, &steps_abs, steps, steps_per_mm32, extrudes);
     let accel = (accel_steps as f32 / steps_per_mm32) as f64;
     let mm = mm32 as f64;
     let nominal_v2 = nominal_v2_32 as f64;
     let speed = speed32.map(f64::from);
-    let dist = dist32.map(f64::from);
 
     let first = queued == 0 || prev.nominal_v2 < 1e-12;
     let max_entry_v2 = match set.corners {
         MarlinCorners::JunctionDeviation(jd) => {
+            let dist = dist32.map(f64::from);
             let unit = if extrudes { normalised(dist) } else { dist.map(|d| d / mm) };
             let v2 = if first {
                 0.0
@@ -256,6 +225,58 @@ pub(crate) fn populate(
         nominal_length,
         xyz_below_min_steps: !xyz_steps,
     })
+}
+
+/// The block's length: XYZ, or along E when no XYZ motor takes `MIN_STEPS_PER_SEGMENT` steps.
+fn length_mm(dist32: &[f32; 5], steps_abs: &[f64; 5], xyz_steps: bool) -> f32 {
+    if xyz_steps {
+        (dist32[0] * dist32[0] + dist32[1] * dist32[1] + dist32[2] * dist32[2]).sqrt()
+    } else if steps_abs[4] > 0.0 {
+        // gweave's rotary axis (not in Marlin 2.0): an A move without XYZ is measured in degrees.
+        dist32[4].abs()
+    } else {
+        dist32[3].abs()
+    }
+}
+
+/// `SLOWDOWN`: while 2 to `BLOCK_BUFFER_SIZE / 2 - 1` blocks are queued, a block shorter than
+/// the minimum segment time `min` takes `t + 2 (min - t) / queued` (Marlin's whole
+/// microseconds and integer division). Returns the new inverse of the block's time.
+fn slowdown(inverse_s32: f32, queued: usize, set: &Settings) -> f32 {
+    if !(2..set.buffer_size / SLOWDOWN_DIVISOR).contains(&queued) {
+        return inverse_s32;
+    }
+    let segment_us = (1e6f32 / inverse_s32).round() as i64;
+    let short_us = set.min_segment_time_us as i64 - segment_us;
+    if short_us > 0 {
+        1e6f32 / (segment_us + 2 * short_us / queued as i64) as f32
+    } else {
+        inverse_s32
+    }
+}
+
+/// The acceleration in whole steps/s² of the busiest motor: M204 R without XYZ (or A) steps,
+/// else P when extruding and T when not, rounded up; then held to each moving motor's M201
+/// limit in whole steps/s² (Marlin's `LIMIT_ACCEL_LONG`, truncating).
+fn acceleration_steps(
+    set: &Settings,
+    steps_abs: &[f64; 5],
+    steps: f64,
+    steps_per_mm32: f32,
+    extrudes: bool,
+) -> f64 {
+    let moves_xyza = steps_abs[..3].iter().chain(&steps_abs[4..]).any(|&s| s > 0.0);
+    if !moves_xyza {
+        return (set.accel[2] as f32 * steps_per_mm32).ceil() as f64;
+    }
+    let base = if extrudes { set.accel[0] } else { set.accel[1] };
+    let mut a = (base as f32 * steps_per_mm32).ceil() as f64;
+    for (&axis_steps, &max) in steps_abs.iter().zip(&set.max_accel_steps) {
+        if axis_steps > 0.0 && max < a && a * axis_steps > max * steps {
+            a = (max * steps / axis_steps).trunc();
+        }
+    }
+    a
 }
 
 /// The feed rate as Marlin holds it: `F` / 60 in single precision, scaled by the 100 %
