@@ -20,6 +20,7 @@ use super::trapezoid::Trapezoid;
 use super::{BlockSink, Lesser, PlannedBlock};
 use crate::kinematics::{axis, Geometry, Move, MoveKind, Pos};
 use crate::limits::MotionProfile;
+use crate::rounding::round_i64;
 
 const MIN_V2: f64 = MINIMUM_PLANNER_SPEED * MINIMUM_PLANNER_SPEED;
 
@@ -64,6 +65,8 @@ pub(crate) struct MarlinBuffer {
     /// The extruder moves drive, and the E steps per mm the position is in.
     tool: usize,
     e_steps_per_mm: f64,
+    /// The settings in force, taken from the profile at the first move after a change.
+    settings: Option<Settings>,
 }
 
 impl MarlinBuffer {
@@ -73,16 +76,25 @@ impl MarlinBuffer {
 
     /// Moves from now on drive extruder `tool`, with its own E limits if it has them.
     pub(crate) fn select_tool(&mut self, tool: usize) {
-        self.tool = tool;
+        if tool != self.tool {
+            self.tool = tool;
+            self.settings = None;
+        }
+    }
+
+    /// The profile changed: the next move takes its settings afresh.
+    pub(crate) fn profile_changed(&mut self) {
+        self.settings = None;
     }
 
     pub(crate) fn push(&mut self, mv: &Move, profile: &MotionProfile, sink: &mut dyn BlockSink) {
-        let set = Settings::new(profile, self.tool);
+        let set = *self.settings.get_or_insert_with(|| Settings::new(profile, self.tool));
         let e_steps_per_mm = set.steps_per_unit[axis::E];
         if e_steps_per_mm != self.e_steps_per_mm && self.e_steps_per_mm > 0.0 {
             // Another extruder with other E steps: the E position in its steps, as Marlin's
             // `buffer_segment` rescales it.
-            self.position[axis::E] = (self.position[axis::E] * e_steps_per_mm / self.e_steps_per_mm).round();
+            self.position[axis::E] =
+                round_i64(self.position[axis::E] * e_steps_per_mm / self.e_steps_per_mm) as f64;
         }
         self.e_steps_per_mm = e_steps_per_mm;
         if self.last_end != Some(mv.start) {

@@ -36,6 +36,7 @@ use super::junction::HalfAngle;
 use super::Lesser;
 use crate::kinematics::Pos;
 use crate::limits::{MarlinCorners, MotionProfile};
+use crate::rounding::{ceil, round_i64, trunc};
 
 /// `MIN_STEPS_PER_SEGMENT`.
 pub(crate) const MIN_STEPS_PER_SEGMENT: f64 = 6.0;
@@ -89,7 +90,7 @@ impl Settings {
             mm_per_step: steps_per_unit.map(|s| 1.0 / s as f32),
             max_feed,
             max_accel,
-            max_accel_steps: std::array::from_fn(|i| (max_accel[i] * steps_per_unit[i]).trunc()),
+            max_accel_steps: std::array::from_fn(|i| trunc(max_accel[i] * steps_per_unit[i])),
             accel: [a.print_mm_s2, a.travel_mm_s2, a.retract_mm_s2],
             corners: profile.corners.marlin_corners().expect("a Marlin profile"),
             min_segment_time_us,
@@ -101,7 +102,7 @@ impl Settings {
     /// steps per mm are single precision).
     pub(crate) fn to_steps(&self, pos: Pos) -> [f64; 5] {
         let p = pos.to_array();
-        std::array::from_fn(|i| (p[i] as f32 * self.steps_per_unit[i] as f32).round() as f64)
+        std::array::from_fn(|i| round_i64(f64::from(p[i] as f32 * self.steps_per_unit[i] as f32)) as f64)
     }
 }
 
@@ -166,7 +167,7 @@ pub(crate) fn populate(
 
     let inverse_s32 = slowdown(marlin_feed(feed_mm_s) * inverse_mm32, queued, set);
     let mut nominal_v2_32 = (mm32 * inverse_s32) * (mm32 * inverse_s32);
-    let mut nominal_rate = (steps32 * inverse_s32).ceil() as f64;
+    let mut nominal_rate = ceil(f64::from(steps32 * inverse_s32));
     let mut speed32: [f32; 5] = dist32.map(|d| d * inverse_s32);
     let factor = (0..5).filter(|&i| speed32[i] != 0.0).fold(1.0f32, |f, i| {
         let (cs, max) = (speed32[i].abs(), set.max_feed[i] as f32);
@@ -179,7 +180,7 @@ pub(crate) fn populate(
     if factor < 1.0 {
         speed32 = speed32.map(|s| s * factor);
         // `nominal_rate *= speed_factor` on an unsigned integer: truncated.
-        nominal_rate = (nominal_rate as f32 * factor).trunc() as f64;
+        nominal_rate = trunc(f64::from(nominal_rate as f32 * factor));
         nominal_v2_32 *= factor * factor;
     }
     let steps_per_mm32 = steps32 * inverse_mm32;
@@ -246,7 +247,7 @@ fn slowdown(inverse_s32: f32, queued: usize, set: &Settings) -> f32 {
     if !(2..set.buffer_size / SLOWDOWN_DIVISOR).contains(&queued) {
         return inverse_s32;
     }
-    let segment_us = (1e6f32 / inverse_s32).round() as i64;
+    let segment_us = round_i64(f64::from(1e6f32 / inverse_s32));
     let short_us = set.min_segment_time_us as i64 - segment_us;
     if short_us > 0 {
         1e6f32 / (segment_us + 2 * short_us / queued as i64) as f32
@@ -267,13 +268,13 @@ fn acceleration_steps(
 ) -> f64 {
     let moves_xyza = steps_abs[..3].iter().chain(&steps_abs[4..]).any(|&s| s > 0.0);
     if !moves_xyza {
-        return (set.accel[2] as f32 * steps_per_mm32).ceil() as f64;
+        return ceil(f64::from(set.accel[2] as f32 * steps_per_mm32));
     }
     let base = if extrudes { set.accel[0] } else { set.accel[1] };
-    let mut a = (base as f32 * steps_per_mm32).ceil() as f64;
+    let mut a = ceil(f64::from(base as f32 * steps_per_mm32));
     for (&axis_steps, &max) in steps_abs.iter().zip(&set.max_accel_steps) {
         if axis_steps > 0.0 && max < a && a * axis_steps > max * steps {
-            a = (max * steps / axis_steps).trunc();
+            a = trunc(max * steps / axis_steps);
         }
     }
     a

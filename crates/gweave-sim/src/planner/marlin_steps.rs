@@ -25,6 +25,8 @@
 //! of its end rates (the constant-acceleration time), which is how Marlin's own host-side
 //! estimate (the `marlin-calc` tool of the PrintTimeGenius plugin) times a block.
 
+use crate::rounding::{ceil, floor, trunc};
+
 /// `MINIMAL_STEP_RATE`: the stepper timer cannot run slower, steps/s.
 pub(crate) const MINIMAL_STEP_RATE: f64 = 120.0;
 
@@ -52,8 +54,8 @@ impl StepProfile {
         entry_factor: f64,
         exit_factor: f64,
     ) -> Self {
-        let initial_rate = (nominal_rate * entry_factor).ceil().max(MINIMAL_STEP_RATE);
-        let final_rate = (nominal_rate * exit_factor).ceil().max(MINIMAL_STEP_RATE);
+        let initial_rate = ceil(nominal_rate * entry_factor).max(MINIMAL_STEP_RATE);
+        let final_rate = ceil(nominal_rate * exit_factor).max(MINIMAL_STEP_RATE);
         let two_a = 2.0 * accel;
         // Marlin stores the step counts in unsigned integers. A negative acceleration distance
         // (a rate floor above a nominal rate under 120 steps/s) is taken as none. A negative
@@ -61,16 +63,16 @@ impl StepProfile {
         // allows, see `marlin.rs`) wraps around and, through the same wrap in the cruise
         // count, means no braking: the block cruises to its end.
         let mut accelerate =
-            ((nominal_rate * nominal_rate - initial_rate * initial_rate) / two_a).ceil().max(0.0);
-        let decelerate = ((nominal_rate * nominal_rate - final_rate * final_rate) / two_a).floor();
+            ceil((nominal_rate * nominal_rate - initial_rate * initial_rate) / two_a).max(0.0);
+        let decelerate = floor((nominal_rate * nominal_rate - final_rate * final_rate) / two_a);
         let mut plateau = steps - accelerate - decelerate;
         let cruise_rate = if plateau < 0.0 {
             let meet =
                 (two_a * steps - initial_rate * initial_rate + final_rate * final_rate) / (2.0 * two_a);
-            accelerate = meet.ceil().clamp(0.0, steps);
+            accelerate = ceil(meet).clamp(0.0, steps);
             plateau = 0.0;
             // The peak rate is kept as a whole number (truncated), as Marlin stores it.
-            (initial_rate * initial_rate + two_a * accelerate).sqrt().trunc()
+            trunc((initial_rate * initial_rate + two_a * accelerate).sqrt())
         } else {
             nominal_rate
         };

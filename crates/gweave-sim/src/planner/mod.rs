@@ -151,6 +151,9 @@ impl Planner {
     pub fn set_profile(&mut self, profile: MotionProfile) -> Result<(), ProfileError> {
         Self::check_change(&self.profile, &profile)?;
         self.profile = profile;
+        if let Engine::Marlin(m) = &mut self.engine {
+            m.profile_changed();
+        }
         Ok(())
     }
 
