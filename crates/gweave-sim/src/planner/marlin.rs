@@ -99,11 +99,11 @@ impl MarlinBuffer {
         self.e_steps_per_mm = e_steps_per_mm;
         if self.last_end != Some(mv.start) {
             // Marlin's `set_position_mm`: every axis takes the new position, in whole steps.
-            self.position = set.to_steps(mv.start);
+            self.position = set.steps_at(mv.start);
             self.block_end = mv.start;
         }
         self.last_end = Some(mv.end);
-        let target = set.to_steps(mv.end);
+        let target = set.steps_at(mv.end);
         let delta = std::array::from_fn(|i| target[i] - self.position[i]);
         if self.blocks.len() + 1 >= set.buffer_size {
             self.emit_front(sink);

@@ -100,7 +100,7 @@ impl Settings {
 
     /// The planner position of `pos`: each axis rounded to whole steps (Marlin's positions and
     /// steps per mm are single precision).
-    pub(crate) fn to_steps(&self, pos: Pos) -> [f64; 5] {
+    pub(crate) fn steps_at(&self, pos: Pos) -> [f64; 5] {
         let p = pos.to_array();
         std::array::from_fn(|i| round_i64(f64::from(p[i] as f32 * self.steps_per_unit[i] as f32)) as f64)
     }

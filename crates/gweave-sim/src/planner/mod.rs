@@ -119,7 +119,7 @@ impl BlockSink for Vec<PlannedBlock> {
 #[derive(Debug, Clone)]
 enum Engine {
     Klipper(Box<KlipperLookahead>),
-    Marlin(MarlinBuffer),
+    Marlin(Box<MarlinBuffer>),
 }
 
 /// A streaming lookahead planner for one machine profile.
@@ -135,7 +135,7 @@ impl Planner {
         profile.validate()?;
         let engine = match &profile.corners {
             CornerMode::Klipper(k) => Engine::Klipper(Box::new(KlipperLookahead::new(k))),
-            CornerMode::Marlin { .. } => Engine::Marlin(MarlinBuffer::default()),
+            CornerMode::Marlin { .. } => Engine::Marlin(Box::default()),
         };
         Ok(Self { profile, engine })
     }
