@@ -23,8 +23,9 @@
 //! direction is held to each axis' M201 maximum, and for blocks under 1 mm turning by less than
 //! 45 degrees the speed is also capped at `v^2 = a len / theta` (`JD_HANDLE_SMALL_SEGMENTS`;
 //! Marlin takes `theta` from a table within 0.01 rad of `acos`, gweave from `acos`). A near
-//! reversal (`cos > 0.999999`) stops at the minimum planner speed. This is Marlin 2.0's rule;
-//! Marlin 2.1 is the same for a single extruder.
+//! reversal (`cos > 0.999999`) stops at the minimum planner speed. This is Marlin 2.0's rule as
+//! of late 2020 (the ground truth's version); earlier 2.0 releases scaled the XYZE vector by the
+//! XYZ length instead of normalising it, and 2.1 has not been compared.
 //!
 //! Classic jerk (Marlin 2.0's rule, adapted there from Prusa firmware): a block may start from
 //! rest at its "safe speed", the nominal speed scaled until no axis' speed exceeds its jerk. At
