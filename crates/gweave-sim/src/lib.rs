@@ -8,6 +8,7 @@ pub mod interp;
 pub mod kinematics;
 pub mod limits;
 pub mod m503;
+pub mod marlin_limits;
 pub mod planner;
 pub mod plot;
 pub mod profile;

@@ -21,6 +21,8 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use crate::marlin_limits::{ExtruderLimits, Jerk, MarlinCorners};
+
 /// A value in a motion profile that cannot be used.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ProfileError {
@@ -130,7 +132,7 @@ pub struct AxisUpdate {
 }
 
 impl AxisUpdate {
-    fn to_array(self) -> [Option<f64>; 5] {
+    pub(crate) fn to_array(self) -> [Option<f64>; 5] {
         [self.x, self.y, self.z, self.e, self.a]
     }
 }
@@ -305,49 +307,6 @@ fn default_min_segment_time_us() -> f64 {
     20_000.0
 }
 
-/// Classic jerk per axis (`CLASSIC_JERK`, M205 X Y Z E), mm/s.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Jerk {
-    /// X.
-    pub x: f64,
-    /// Y.
-    pub y: f64,
-    /// Z.
-    pub z: f64,
-    /// E.
-    pub e: f64,
-}
-
-impl Jerk {
-    /// X Y Z E.
-    pub fn to_array(&self) -> [f64; 4] {
-        [self.x, self.y, self.z, self.e]
-    }
-}
-
-/// How a Marlin profile takes corners.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum MarlinCorners {
-    /// Junction deviation, mm.
-    JunctionDeviation(f64),
-    /// Classic jerk.
-    Jerk(Jerk),
-}
-
-impl CornerMode {
-    /// A Marlin profile's corner rule; `None` in Klipper mode.
-    pub fn marlin_corners(&self) -> Option<MarlinCorners> {
-        match *self {
-            Self::Marlin { jerk_mm_s: Some(j), .. } => Some(MarlinCorners::Jerk(j)),
-            Self::Marlin { junction_deviation_mm, .. } => Some(MarlinCorners::JunctionDeviation(
-                junction_deviation_mm.unwrap_or(MARLIN_JUNCTION_DEVIATION_MM),
-            )),
-            Self::Klipper(_) => None,
-        }
-    }
-}
-
 /// Everything the planner and the steppers need to know about the machine's motion.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -367,18 +326,6 @@ pub struct MotionProfile {
     /// shared E values above. Marlin mode only.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub extruders: Vec<ExtruderLimits>,
-}
-
-/// One extruder's own E limits; `None` takes the shared value.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ExtruderLimits {
-    /// E steps per mm (M92 T E).
-    pub steps_per_mm: Option<f64>,
-    /// E maximum feed rate, mm/s (M203 T E).
-    pub max_feed_mm_s: Option<f64>,
-    /// E maximum acceleration, mm/s² (M201 T E).
-    pub max_accel_mm_s2: Option<f64>,
 }
 
 impl Default for MotionProfile {
@@ -423,14 +370,7 @@ impl MotionProfile {
             positive("steps.a_per_deg", a)?;
         }
         s.mixing_e.iter().try_for_each(|&v| positive("steps.mixing_e", v))?;
-        for e in &self.extruders {
-            let values = [
-                ("extruders.steps_per_mm", e.steps_per_mm),
-                ("extruders.max_feed_mm_s", e.max_feed_mm_s),
-                ("extruders.max_accel_mm_s2", e.max_accel_mm_s2),
-            ];
-            values.iter().filter_map(|(n, v)| v.map(|v| (*n, v))).try_for_each(|(n, v)| positive(n, v))?;
-        }
+        self.extruders.iter().try_for_each(ExtruderLimits::validate)?;
         self.max_feed_mm_s.validate(FEED_NAMES)?;
         self.max_accel_mm_s2.validate(ACCEL_NAMES)?;
         positive("accel.print_mm_s2", self.accel.print_mm_s2)?;
@@ -450,13 +390,7 @@ impl MotionProfile {
                     if junction_deviation_mm.is_some() {
                         return Err(ProfileError::JerkAndJunctionDeviation);
                     }
-                    let names = [
-                        "corners.jerk_mm_s.x",
-                        "corners.jerk_mm_s.y",
-                        "corners.jerk_mm_s.z",
-                        "corners.jerk_mm_s.e",
-                    ];
-                    j.to_array().iter().zip(names).try_for_each(|(&v, n)| non_negative(n, v))?;
+                    j.validate()?;
                 }
                 // Marlin's ring buffer keeps one slot free: 2 slots hold one block.
                 positive("corners.lookahead_blocks", lookahead_blocks.saturating_sub(1) as f64)?;
@@ -518,40 +452,9 @@ impl MotionProfile {
         }
         Ok(())
     }
-
-    /// M205 X Y Z E (classic jerk, mm/s) and B (minimum segment time, µs): the values given
-    /// change a Marlin profile; jerk values change only a jerk profile (see
-    /// [`MotionProfile::set_junction_deviation`]).
-    pub fn set_jerk(
-        &mut self,
-        m205: &AxisUpdate,
-        min_segment_time_us: Option<f64>,
-    ) -> Result<(), ProfileError> {
-        let CornerMode::Marlin { jerk_mm_s, min_segment_time_us: b, .. } = &mut self.corners else {
-            return Ok(());
-        };
-        let mut next = (*jerk_mm_s, *b);
-        if let Some(j) = &mut next.0 {
-            let slots = [&mut j.x, &mut j.y, &mut j.z, &mut j.e];
-            for ((slot, v), name) in
-                slots.into_iter().zip(m205.to_array()).zip(["M205 X", "M205 Y", "M205 Z", "M205 E"])
-            {
-                if let Some(v) = v {
-                    non_negative(name, v)?;
-                    *slot = v;
-                }
-            }
-        }
-        if let Some(us) = min_segment_time_us {
-            non_negative("M205 B", us)?;
-            next.1 = us;
-        }
-        (*jerk_mm_s, *b) = next;
-        Ok(())
-    }
 }
 
-fn positive(name: &'static str, value: f64) -> Result<(), ProfileError> {
+pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), ProfileError> {
     if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
@@ -559,7 +462,7 @@ fn positive(name: &'static str, value: f64) -> Result<(), ProfileError> {
     }
 }
 
-fn non_negative(name: &'static str, value: f64) -> Result<(), ProfileError> {
+pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<(), ProfileError> {
     if value == 0.0 {
         Ok(())
     } else {
@@ -635,42 +538,6 @@ mod tests {
         assert!(
             matches!(m.corners, CornerMode::Marlin { junction_deviation_mm: Some(jd), .. } if jd == 0.02)
         );
-    }
-
-    #[test]
-    fn marlin_classic_jerk_profile_and_both_corner_rules_is_an_error() {
-        let jerk = "[corners]\nmode = \"marlin\"\njerk_mm_s = { x = 10.0, y = 10.0, z = 0.2, e = 2.5 }\n";
-        let p = MotionProfile::from_toml_str(jerk).unwrap();
-        let want = Jerk { x: 10.0, y: 10.0, z: 0.2, e: 2.5 };
-        assert_eq!(p.corners.marlin_corners(), Some(MarlinCorners::Jerk(want)));
-        assert!(matches!(p.corners, CornerMode::Marlin { lookahead_blocks: 16, .. }));
-        let both = format!("{jerk}junction_deviation_mm = 0.013\n");
-        assert_eq!(MotionProfile::from_toml_str(&both), Err(ProfileError::JerkAndJunctionDeviation));
-        let neither = MotionProfile::from_toml_str("[corners]\nmode = \"marlin\"\n").unwrap();
-        assert_eq!(neither.corners.marlin_corners(), Some(MarlinCorners::JunctionDeviation(0.013)));
-        assert_eq!(MotionProfile::from_toml_str(&toml::to_string(&p).unwrap()), Ok(p));
-    }
-
-    #[test]
-    fn m205_changes_the_corner_rule_the_profile_has() {
-        let mut jerk = MotionProfile::from_toml_str(
-            "[corners]\nmode = \"marlin\"\njerk_mm_s = { x = 10.0, y = 10.0, z = 0.2, e = 2.5 }\n",
-        )
-        .unwrap();
-        jerk.set_jerk(&AxisUpdate { x: Some(8.0), e: Some(4.5), ..AxisUpdate::default() }, Some(10_000.0))
-            .unwrap();
-        jerk.set_junction_deviation(0.02).unwrap();
-        let want = Jerk { x: 8.0, y: 10.0, z: 0.2, e: 4.5 };
-        assert_eq!(jerk.corners.marlin_corners(), Some(MarlinCorners::Jerk(want)));
-        assert!(
-            matches!(jerk.corners, CornerMode::Marlin { min_segment_time_us, .. } if min_segment_time_us == 1e4)
-        );
-        // A junction-deviation build ignores M205 X Y Z E.
-        let mut jd = MotionProfile::default();
-        jd.set_jerk(&AxisUpdate { x: Some(8.0), ..AxisUpdate::default() }, None).unwrap();
-        assert_eq!(jd.corners.marlin_corners(), Some(MarlinCorners::JunctionDeviation(0.013)));
-        let bad = jd.set_jerk(&AxisUpdate::default(), Some(-1.0));
-        assert_eq!(bad, Err(ProfileError::NotPositive { name: "M205 B", value: -1.0 }));
     }
 
     #[test]
