@@ -163,14 +163,11 @@ impl MarlinBuffer {
             return;
         };
         let exit_v2 = self.blocks.front().map_or(MIN_V2, |next| next.entry_v2);
-        let nominal_v = b.nominal_v2.sqrt();
-        let steps = StepProfile::new(
-            b.steps,
-            b.nominal_rate,
-            b.accel_steps,
-            entry_v2.sqrt() / nominal_v,
-            exit_v2.sqrt() / nominal_v,
-        );
+        // Speed over nominal speed, in single precision as Marlin's `recalculate_trapezoids`.
+        let inverse_nominal = 1.0 / (b.nominal_v2 as f32).sqrt();
+        let factor = |v2: f64| (v2 as f32).sqrt() * inverse_nominal;
+        let steps =
+            StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, factor(entry_v2), factor(exit_v2));
         // The speeds along the path: Marlin's length, unless it measured a tiny XYZ move along
         // E; the times are the steps' either way.
         let geo = Geometry::between(mv.start, mv.end);

@@ -46,33 +46,37 @@ pub(crate) struct StepProfile {
 impl StepProfile {
     /// The profile of a block of `steps` steps with nominal rate `nominal_rate` (a whole
     /// number of steps/s) and acceleration `accel` (whole steps/s²), entered and left at
-    /// `entry_factor` and `exit_factor` times its nominal speed.
+    /// `entry_factor` and `exit_factor` times its nominal speed. As in Marlin, the rates and
+    /// distances are worked out in single precision before they are rounded to whole numbers
+    /// (a factor of exactly 1/3 times 2400 steps/s is 800 in `float`, 801 rounded up in
+    /// `double`).
     pub(crate) fn new(
         steps: f64,
         nominal_rate: f64,
         accel: f64,
-        entry_factor: f64,
-        exit_factor: f64,
+        entry_factor: f32,
+        exit_factor: f32,
     ) -> Self {
-        let initial_rate = ceil(nominal_rate * entry_factor).max(MINIMAL_STEP_RATE);
-        let final_rate = ceil(nominal_rate * exit_factor).max(MINIMAL_STEP_RATE);
-        let two_a = 2.0 * accel;
+        let (steps32, nominal32, accel32) = (steps as f32, nominal_rate as f32, accel as f32);
+        let initial_rate = ceil(f64::from(nominal32 * entry_factor)).max(MINIMAL_STEP_RATE);
+        let final_rate = ceil(f64::from(nominal32 * exit_factor)).max(MINIMAL_STEP_RATE);
+        let (initial32, final32) = (initial_rate as f32, final_rate as f32);
+        let distance = |from: f32, to: f32| f64::from((to * to - from * from) / (accel32 * 2.0));
         // Marlin stores the step counts in unsigned integers. A negative acceleration distance
         // (a rate floor above a nominal rate under 120 steps/s) is taken as none. A negative
         // braking distance (a block left faster than its nominal speed, which classic jerk
         // allows, see `marlin.rs`) wraps around and, through the same wrap in the cruise
         // count, means no braking: the block cruises to its end.
-        let mut accelerate =
-            ceil((nominal_rate * nominal_rate - initial_rate * initial_rate) / two_a).max(0.0);
-        let decelerate = floor((nominal_rate * nominal_rate - final_rate * final_rate) / two_a);
+        let mut accelerate = ceil(distance(initial32, nominal32)).max(0.0);
+        let decelerate = floor(distance(final32, nominal32));
         let mut plateau = steps - accelerate - decelerate;
         let cruise_rate = if plateau < 0.0 {
             let meet =
-                (two_a * steps - initial_rate * initial_rate + final_rate * final_rate) / (2.0 * two_a);
-            accelerate = ceil(meet).clamp(0.0, steps);
+                (accel32 * 2.0 * steps32 - initial32 * initial32 + final32 * final32) / (accel32 * 4.0);
+            accelerate = ceil(f64::from(meet)).clamp(0.0, steps);
             plateau = 0.0;
             // The peak rate is kept as a whole number (truncated), as Marlin stores it.
-            trunc((initial_rate * initial_rate + two_a * accelerate).sqrt())
+            trunc(f64::from((initial32 * initial32 + 2.0 * accel32 * accelerate as f32).sqrt()))
         } else {
             nominal_rate
         };

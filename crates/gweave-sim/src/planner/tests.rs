@@ -167,9 +167,10 @@ fn z_limits() {
     let b = plan(MotionProfile::klipper(limits), &[[0.0; 4], [0.0, 0.0, 10.0, 0.0]], 50.0);
     assert!(close(b[0].trapezoid.cruise_v_mm_s, 5.0, 1e-12));
     // Marlin: Z at most 5 mm/s and 100 mm/s^2, at 4000 steps/mm 20000 steps/s and 400000
-    // steps/s², from and to 200 steps/s (0.05 mm/s): ceil(499.95) = 500 steps up, 499 down.
+    // steps/s², from and to 0.05 mm/s: 20000 * 0.01 is 200.00002 in single precision, so 201
+    // steps/s; ceil(499.95) = 500 steps up, 499 down.
     let b = plan(marlin(), &[[0.0; 4], [0.0, 0.0, 10.0, 0.0]], 50.0);
-    let want = marlin_steps_s(40_000.0, 20_000.0, 200.0, 500.0, 499.0);
+    let want = marlin_steps_s(40_000.0, 20_000.0, 201.0, 500.0, 499.0);
     assert!(close(b[0].duration_s(), want, 1e-12), "{:?}", b[0]);
 }
 
