@@ -23,6 +23,8 @@ use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use crate::marlin_limits::{ExtruderLimits, Jerk, MarlinCorners};
+
 /// A value in a motion profile that cannot be used.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ProfileError {
@@ -41,6 +43,9 @@ pub enum ProfileError {
     /// Klipper's M204 needs either `S` or both `P` and `T` (it takes the smaller of the two).
     #[error("M204 needs S, or both P and T, in Klipper mode")]
     M204NeedsPAndT,
+    /// A Marlin profile takes corners by junction deviation or by classic jerk, not both.
+    #[error("corners: give junction_deviation_mm or jerk_mm_s, not both")]
+    JerkAndJunctionDeviation,
     /// A running planner cannot switch between Marlin and Klipper planning.
     #[error("the corner mode (marlin or klipper) cannot change while planning")]
     ModeChange,
@@ -126,7 +131,7 @@ pub struct AxisUpdate {
 }
 
 impl AxisUpdate {
-    fn to_array(self) -> [Option<f64>; 5] {
+    pub(crate) fn to_array(self) -> [Option<f64>; 5] {
         [self.x, self.y, self.z, self.e, self.a]
     }
 }
@@ -204,8 +209,13 @@ const CRUISE_RATIO: Range = Range::new(0.0, 0.99, "");
 const CORNER_SPEED_MM_S: Range = Range::new(0.0, 1_000.0, "mm/s");
 /// Marlin's junction deviation (`JUNCTION_DEVIATION_MM`, typically 0.005 to 0.3).
 const JUNCTION_DEVIATION_MM: Range = Range::new(0.000_1, 10.0, "mm");
-/// Marlin's planner buffer (`BLOCK_BUFFER_SIZE`, 8 to 64 on real boards).
-const LOOKAHEAD_BLOCKS: Range = Range::new(1.0, 1_024.0, "blocks");
+/// Marlin's planner buffer (`BLOCK_BUFFER_SIZE`, 8 to 64 on real boards); its ring keeps one
+/// slot free, so 2 slots hold one block.
+const LOOKAHEAD_BLOCKS: Range = Range::new(2.0, 1_024.0, "blocks");
+/// Marlin's minimum segment time (`DEFAULT_MINSEGMENTTIME`, M205 B), up to a second.
+const MIN_SEGMENT_TIME_US: Range = Range::new(0.0, 1_000_000.0, "µs");
+/// Classic jerk (`CLASSIC_JERK`, M205 X Y Z E): an instant change of speed, 0 for none.
+pub(crate) const JERK_MM_S: Range = Range::new(0.0, 1_000.0, "mm/s");
 /// The rotary axis' speed and acceleration, degree based.
 const SPEED_DEG_S: Range = Range::new(0.001, 100_000.0, "°/s");
 const ACCEL_DEG_S2: Range = Range::new(0.001, 10_000_000.0, "°/s²");
@@ -272,13 +282,26 @@ impl KlipperLimits {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "mode", rename_all = "snake_case", deny_unknown_fields)]
 pub enum CornerMode {
-    /// Marlin/GRBL: junction deviation, per-axis feed and accel limits, M204 P/R/T.
+    /// Marlin: per-axis feed and accel limits, M204 P/R/T, and corners by junction deviation
+    /// or, with `jerk_mm_s`, by classic jerk (a Marlin build has one or the other).
     Marlin {
-        /// `JUNCTION_DEVIATION_MM` (M205 J).
-        junction_deviation_mm: f64,
-        /// The planner buffer length (`BLOCK_BUFFER_SIZE`); a block leaves with its speeds
-        /// final when the buffer is full, as in the firmware while the host streams.
+        /// `JUNCTION_DEVIATION_MM` (M205 J); `None` with `jerk_mm_s` (giving both is an error),
+        /// 0.013 when neither is given.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        junction_deviation_mm: Option<f64>,
+        /// `CLASSIC_JERK`: the largest instant speed change of each axis (`DEFAULT_XJERK` ...,
+        /// M205 X Y Z E).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        jerk_mm_s: Option<Jerk>,
+        /// The planner buffer (`BLOCK_BUFFER_SIZE`, 16); like Marlin's ring buffer it holds one
+        /// block less, and a block leaves with its speeds final when it is full, as in the
+        /// firmware while the host streams.
+        #[serde(default = "default_lookahead_blocks")]
         lookahead_blocks: usize,
+        /// `DEFAULT_MINSEGMENTTIME` (M205 B), µs: while the buffer is low (2 to
+        /// `lookahead_blocks / 2 - 1` blocks queued) a shorter block is slowed down towards it.
+        #[serde(default = "default_min_segment_time_us")]
+        min_segment_time_us: f64,
     },
     /// Klipper: square corner velocity, minimum cruise ratio and the toolhead limits.
     Klipper(KlipperLimits),
@@ -286,8 +309,24 @@ pub enum CornerMode {
 
 impl Default for CornerMode {
     fn default() -> Self {
-        Self::Marlin { junction_deviation_mm: 0.013, lookahead_blocks: 16 }
+        Self::Marlin {
+            junction_deviation_mm: Some(MARLIN_JUNCTION_DEVIATION_MM),
+            jerk_mm_s: None,
+            lookahead_blocks: default_lookahead_blocks(),
+            min_segment_time_us: default_min_segment_time_us(),
+        }
     }
+}
+
+/// Marlin's stock `JUNCTION_DEVIATION_MM`.
+pub const MARLIN_JUNCTION_DEVIATION_MM: f64 = 0.013;
+
+fn default_lookahead_blocks() -> usize {
+    16
+}
+
+fn default_min_segment_time_us() -> f64 {
+    20_000.0
 }
 
 /// Everything the planner and the steppers need to know about the machine's motion.
@@ -304,6 +343,11 @@ pub struct MotionProfile {
     pub accel: MoveAccel,
     /// Corner handling and, in Klipper mode, the toolhead limits.
     pub corners: CornerMode,
+    /// Extruders with their own E limits (Marlin's `DISTINCT_E_FACTORS`, set by M92, M201 and
+    /// M203 with `T`), by tool number; a tool not listed, or a value not given, takes the
+    /// shared E values above. Marlin mode only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub extruders: Vec<ExtruderLimits>,
 }
 
 impl Default for MotionProfile {
@@ -314,6 +358,7 @@ impl Default for MotionProfile {
             max_accel_mm_s2: AxisLimits { x: 3000.0, y: 3000.0, z: 100.0, e: 10000.0, a: 3600.0 },
             accel: MoveAccel { print_mm_s2: 3000.0, retract_mm_s2: 3000.0, travel_mm_s2: 3000.0 },
             corners: CornerMode::default(),
+            extruders: Vec::new(),
         }
     }
 }
@@ -339,7 +384,12 @@ impl MotionProfile {
 
     /// Check every value against its range (see [`CheckRanges`]), as a standalone file.
     pub fn validate(&self) -> Result<(), ProfileError> {
-        Ok(self.check_ranges(&Table::root())?)
+        self.check_ranges(&Table::root())?;
+        if let CornerMode::Marlin { junction_deviation_mm: Some(_), jerk_mm_s: Some(_), .. } = self.corners {
+            // A firmware is built with one corner rule or the other.
+            return Err(ProfileError::JerkAndJunctionDeviation);
+        }
+        Ok(())
     }
 
     /// M201: per-axis maximum acceleration (mm/s², A in deg/s²). Klipper ignores M201.
@@ -384,12 +434,13 @@ impl MotionProfile {
         Ok(())
     }
 
-    /// M205 J: Marlin's junction deviation in mm. Klipper ignores M205, so this changes nothing
-    /// in Klipper mode.
+    /// M205 J: Marlin's junction deviation in mm. A Marlin build has junction deviation or
+    /// classic jerk, so this changes nothing in a jerk profile, nor in Klipper mode (Klipper
+    /// ignores M205).
     pub fn set_junction_deviation(&mut self, j_mm: f64) -> Result<(), ProfileError> {
         positive("M205 J", j_mm)?;
-        if let CornerMode::Marlin { junction_deviation_mm, .. } = &mut self.corners {
-            *junction_deviation_mm = j_mm;
+        if let CornerMode::Marlin { junction_deviation_mm, jerk_mm_s: None, .. } = &mut self.corners {
+            *junction_deviation_mm = Some(j_mm);
         }
         Ok(())
     }
@@ -417,11 +468,23 @@ impl CheckRanges for MotionProfile {
         accel.check("print_mm_s2", self.accel.print_mm_s2, range::ACCEL_MM_S2)?;
         accel.check("retract_mm_s2", self.accel.retract_mm_s2, range::ACCEL_MM_S2)?;
         accel.check("travel_mm_s2", self.accel.travel_mm_s2, range::ACCEL_MM_S2)?;
+        for (i, extruder) in self.extruders.iter().enumerate() {
+            extruder.check_ranges(&t.sub("extruders").item(i))?;
+        }
         let corners = t.sub("corners");
         match &self.corners {
-            CornerMode::Marlin { junction_deviation_mm, lookahead_blocks } => {
-                corners.check("junction_deviation_mm", *junction_deviation_mm, JUNCTION_DEVIATION_MM)?;
-                corners.count("lookahead_blocks", *lookahead_blocks as u64, LOOKAHEAD_BLOCKS)
+            CornerMode::Marlin {
+                junction_deviation_mm,
+                jerk_mm_s,
+                lookahead_blocks,
+                min_segment_time_us,
+            } => {
+                corners.check_opt("junction_deviation_mm", *junction_deviation_mm, JUNCTION_DEVIATION_MM)?;
+                if let Some(jerk) = jerk_mm_s {
+                    jerk.check_ranges(&corners.sub("jerk_mm_s"))?;
+                }
+                corners.count("lookahead_blocks", *lookahead_blocks as u64, LOOKAHEAD_BLOCKS)?;
+                corners.check("min_segment_time_us", *min_segment_time_us, MIN_SEGMENT_TIME_US)
             }
             CornerMode::Klipper(k) => k.check_ranges(&corners),
         }
@@ -429,11 +492,19 @@ impl CheckRanges for MotionProfile {
 }
 
 /// A value of a G-code command (M201, M203, M204, M205) that changes a limit at run time.
-fn positive(name: &'static str, value: f64) -> Result<(), ProfileError> {
+pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), ProfileError> {
     if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
         Err(ProfileError::NotPositive { name, value })
+    }
+}
+
+pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<(), ProfileError> {
+    if value == 0.0 {
+        Ok(())
+    } else {
+        positive(name, value)
     }
 }
 
@@ -447,7 +518,7 @@ mod tests {
         assert_eq!(p.validate(), Ok(()));
         assert_eq!(p.steps.z, 4000.0);
         assert_eq!(p.max_feed_mm_s.z, 5.0);
-        assert_eq!(p.corners, CornerMode::Marlin { junction_deviation_mm: 0.013, lookahead_blocks: 16 });
+        assert_eq!(p.corners.marlin_corners(), Some(MarlinCorners::JunctionDeviation(0.013)));
     }
 
     #[test]
@@ -503,7 +574,7 @@ mod tests {
         assert_eq!(m.max_accel_mm_s2.x, 3000.0, "a rejected line changes nothing");
         m.set_junction_deviation(0.02).unwrap();
         assert!(
-            matches!(m.corners, CornerMode::Marlin { junction_deviation_mm, .. } if junction_deviation_mm == 0.02)
+            matches!(m.corners, CornerMode::Marlin { junction_deviation_mm: Some(jd), .. } if jd == 0.02)
         );
     }
 

@@ -21,6 +21,38 @@ pub(crate) fn round_i64(x: f64) -> i64 {
     }
 }
 
+/// `x.trunc()` without a call (see [`round_i64`]); every float from 2^52 on is whole already.
+#[inline]
+pub(crate) fn trunc(x: f64) -> f64 {
+    if x.abs() < 4_503_599_627_370_496.0 {
+        x as i64 as f64
+    } else {
+        x
+    }
+}
+
+/// `x.ceil()` without a call (a negative fraction rounds to +0, not -0).
+#[inline]
+pub(crate) fn ceil(x: f64) -> f64 {
+    let t = trunc(x);
+    if t < x {
+        t + 1.0
+    } else {
+        t
+    }
+}
+
+/// `x.floor()` without a call (a positive fraction rounds to +0).
+#[inline]
+pub(crate) fn floor(x: f64) -> f64 {
+    let t = trunc(x);
+    if t > x {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -38,6 +70,10 @@ mod tests {
         #[test]
         fn rounding_matches_the_library(x in proptest::num::f64::ANY) {
             prop_assert_eq!(round_i64(x), x.round() as i64);
+            // Equal as numbers (-0 == +0), and NaN stays NaN.
+            for (fast, lib) in [(trunc(x), x.trunc()), (ceil(x), x.ceil()), (floor(x), x.floor())] {
+                prop_assert!(fast == lib || (fast.is_nan() && lib.is_nan()), "{x}: {fast} {lib}");
+            }
         }
     }
 }

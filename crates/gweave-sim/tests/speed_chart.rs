@@ -26,12 +26,18 @@ fn the_speed_trace_of_cura_torus_adds_up_to_its_path() {
     let tp = Toolpath::from_file(&path, every_move).unwrap();
     let path_mm: f64 = tp.segments.iter().map(|s| f64::from(s.len_mm())).sum();
     let traced_mm: f64 = trace.buckets().iter().map(|b| b.distance_mm).sum();
-    assert!((traced_mm / path_mm - 1.0).abs() < 1e-3, "traced {traced_mm} mm, path {path_mm} mm");
+    // Marlin merges moves of fewer than 6 steps into the next one (838 of this file's 18532 XY
+    // moves are under 0.075 mm): the machine goes straight across their little zigzags, 35 mm
+    // (0.13 %) shorter than the file's path.
+    assert!((traced_mm / path_mm - 1.0).abs() < 2e-3, "traced {traced_mm} mm, path {path_mm} mm");
+    assert!(traced_mm < path_mm);
 
     let fastest_mm_s = tp.segments.iter().map(|s| s.feed_mm_s).fold(0.0f32, f32::max) as f64;
     let peak = trace.buckets().iter().map(|b| b.max_mm_s).fold(0.0, f64::max);
     assert!(
-        peak > 0.5 * fastest_mm_s && peak <= fastest_mm_s + 1e-6,
+        // Marlin rounds step rates up from single-precision lengths: under two steps/s (1/80 mm)
+        // more than asked.
+        peak > 0.5 * fastest_mm_s && peak <= fastest_mm_s + 2.0 / 80.0,
         "peak {peak}, fastest F {fastest_mm_s}"
     );
     assert!(trace.end_s() <= report.time.total_s + 1e-6 && trace.end_s() > 0.9 * report.time.motion_s);

@@ -10,6 +10,7 @@ use clap::Args;
 use gweave::pass::Progress;
 use gweave_sim::estimate::{estimate_report, EstimateReport};
 use gweave_sim::profile::MachineProfile;
+use gweave_sim::slicer_limits::slicer_limits;
 
 use super::sim::{print_layers_and_features, print_malformed};
 use crate::common::{hms, load_or_default, print_summary, ReportArgs};
@@ -28,8 +29,10 @@ pub struct EstimateArgs {
     /// The G-code file to estimate.
     pub input: PathBuf,
     /// Machine profile (TOML, see docs/machine.md); only its motion limits are used. Default: a
-    /// RAMPS 1.4 printer on Marlin.
-    #[arg(long, value_name = "TOML")]
+    /// RAMPS 1.4 printer on Marlin. `slicer`: the machine limits the slicer wrote into the file
+    /// (PrusaSlicer, SuperSlicer, OrcaSlicer `machine_max_*`, Cura's `machine_max_*`); the
+    /// settings used are listed on standard error.
+    #[arg(long, value_name = "TOML|slicer")]
     pub machine: Option<PathBuf>,
     /// Also count the steps of every motor (Bresenham, as `gweave sim` does); up to a fifth slower.
     #[arg(long)]
@@ -42,12 +45,17 @@ pub struct EstimateArgs {
 }
 
 pub fn run(args: EstimateArgs) -> Result<ExitCode> {
+    // `--machine slicer`: the limits the slicer wrote into the file itself.
+    let from_slicer = args.machine.as_deref().is_some_and(|m| m.as_os_str() == "slicer");
     Files::new()
         .read("INPUT", Some(&args.input))
-        .read("--machine", args.machine.as_deref())
+        .read("--machine", args.machine.as_deref().filter(|_| !from_slicer))
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
+    let profile = match &args.machine {
+        Some(_) if from_slicer => slicer_profile(&args.input)?,
+        other => load_or_default(other.as_ref(), MachineProfile::from_toml_str)?,
+    };
     let file = File::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
     let mut bar = Bar::new(args.quiet);
     bar.set_len(file.metadata().map(|m| m.len()).unwrap_or(0));
@@ -60,6 +68,39 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         print_summary(|out| print_human(out, &args.input, &report))?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The default machine with the limits the slicer wrote into `input`, saying which.
+fn slicer_profile(input: &Path) -> Result<MachineProfile> {
+    let ends = file_ends(input).with_context(|| format!("reading {}", input.display()))?;
+    let base = MachineProfile::default();
+    let limits = slicer_limits(&ends, &base.motion)
+        .with_context(|| format!("{}: --machine slicer", input.display()))?;
+    let flavour = limits.flavour.as_deref().map(|f| format!(", flavour {f}")).unwrap_or_default();
+    let name = format!("{}'s machine limits in the file{flavour}", limits.slicer);
+    eprintln!("{name}: {}", limits.used.join(", "));
+    eprintln!("  (steps per mm and anything not listed: the default machine's)");
+    Ok(MachineProfile { name, motion: limits.profile, ..base })
+}
+
+/// The first 64 KiB and the last 256 KiB of a file (all of a smaller one), where slicers put
+/// their settings: Cura in its header and `;SETTING_3` footer, the PrusaSlicer family in the
+/// settings block after the last move.
+fn file_ends(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::{Seek, SeekFrom};
+    const HEAD: u64 = 64 * 1024;
+    const TAIL: u64 = 256 * 1024;
+    let mut file = File::open(path)?;
+    let len = file.metadata()?.len();
+    let mut buf = Vec::new();
+    (&mut file).take(HEAD).read_to_end(&mut buf)?;
+    let tail_start = len.saturating_sub(TAIL).max(buf.len() as u64);
+    if tail_start < len {
+        buf.push(b'\n');
+        file.seek(SeekFrom::Start(tail_start))?;
+        file.take(TAIL).read_to_end(&mut buf)?;
+    }
+    Ok(buf)
 }
 
 /// The input file, moving the progress bar as it is read.

@@ -6,6 +6,7 @@ mod stats;
 
 // gweave-sim: the virtual printer
 mod estimate;
+mod machine;
 mod sim;
 // binder-jet raster
 mod raster;
@@ -35,6 +36,7 @@ pub enum Command {
     // gweave-sim: the virtual printer
     Sim(sim::SimArgs),
     Estimate(estimate::EstimateArgs),
+    Machine(machine::MachineArgs),
     Raster(Box<raster::RasterArgs>),
     SliceRaster(slice_raster::SliceRasterArgs),
     // purge-shift
@@ -62,6 +64,7 @@ pub fn run(command: Command) -> Result<ExitCode> {
         // gweave-sim: the virtual printer
         Command::Sim(a) => sim::run(a),
         Command::Estimate(a) => estimate::run(a),
+        Command::Machine(a) => machine::run(a),
         Command::Raster(a) => raster::run(*a),
         Command::SliceRaster(a) => slice_raster::run(a),
         // purge-shift

@@ -104,6 +104,7 @@ impl Back {
                 self.acc.key_s.push(0.0);
             }
             Job::Mix(weights) => self.acc.mixes.push(std::mem::take(weights)),
+            Job::Tool(tool) => self.planner.select_tool(*tool as usize),
             Job::Profile { profile, line } => self
                 .planner
                 .set_profile(std::mem::take(&mut **profile))

@@ -242,10 +242,10 @@ impl Front {
             163..=165 | 567 => return self.mixing_command(raw, jobs),
             201 if !self.book.klipper => profile.set_max_accel(&axes()),
             203 if !self.book.klipper => profile.set_max_feed(&axes()),
-            205 if !self.book.klipper => match b.get(b'J') {
-                Some(j) => profile.set_junction_deviation(j),
-                None => return Ok(()),
-            },
+            205 if !self.book.klipper => {
+                let jd = b.get(b'J').map_or(Ok(()), |j| profile.set_junction_deviation(j));
+                jd.and_then(|()| profile.set_jerk(&axes(), b.get(b'B')))
+            }
             204 => {
                 let m204 = M204 { s: b.get(b'S'), p: b.get(b'P'), r: b.get(b'R'), t: b.get(b'T') };
                 match profile.set_accel(&m204) {
@@ -330,6 +330,7 @@ impl Front {
             }
         }
         self.book.tool = tool;
+        jobs.push(Job::Tool(tool));
         self.refresh_mix(jobs);
         Ok(())
     }

@@ -192,6 +192,8 @@ enum Job {
     Key(Key),
     /// The weights of the next mix number.
     Mix(Vec<f64>),
+    /// The following moves drive this extruder.
+    Tool(u32),
     /// The limits changed (already checked by the parse side).
     Profile { profile: Box<MotionProfile>, line: u64 },
 }
@@ -486,15 +488,17 @@ mod tests {
         let text = ";FLAVOR:Marlin\n;LAYER:0\n;TYPE:WALL-OUTER\nG1 X10 E1 F600\n;LAYER:1\n;TYPE:FILL\n\
                     G1 X20 E2\nG4 P1000\nM204 T500\nG0 X30 F6000\n";
         let est = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
-        // Two collinear 10 mm moves at 10 mm/s (a = 3000): 1/300 s and 1/60 mm at each end.
-        let leg = 1.0 / 300.0 + (10.0 - 1.0 / 60.0) / 10.0;
-        // The travel with M204 T500: 10 mm cannot reach 100 mm/s; peak v^2 = 500 * 10.
-        let travel = 2.0 * 5000f64.sqrt() / 500.0;
-        assert!(close(est.layer_s[0], leg), "{est:?}");
-        assert!(close(est.layer_s[1], leg + 1.0 + travel), "{est:?}");
-        assert!(close(est.feature_s[&Feature::OuterWall], leg));
-        assert!(close(est.feature_s[&Feature::Infill], leg + 1.0 + travel));
-        assert!(close(est.total_s, 2.0 * leg + 1.0 + travel));
+        // In Marlin's steps (80/mm, a = 240000 steps/s²): two collinear 10 mm moves at 10 mm/s
+        // (800 steps/s) from and to 120 steps/s: 2 steps up, then 1 step down before the dwell.
+        let (leg0, leg1) = (4.0 / 920.0 + 798.0 / 800.0, 799.0 / 800.0 + 2.0 / 920.0);
+        // The travel with M204 T500 (40000 steps/s²) cannot reach 8000 steps/s: 400 steps up to
+        // trunc(sqrt(120² + 80000 * 400)) = 5658 steps/s and 400 down.
+        let travel = 1600.0 / 5778.0;
+        assert!(close(est.layer_s[0], leg0), "{est:?}");
+        assert!(close(est.layer_s[1], leg1 + 1.0 + travel), "{est:?}");
+        assert!(close(est.feature_s[&Feature::OuterWall], leg0));
+        assert!(close(est.feature_s[&Feature::Infill], leg1 + 1.0 + travel));
+        assert!(close(est.total_s, leg0 + leg1 + 1.0 + travel));
         assert_eq!((est.dwell_s, est.overhead_s, est.blocks), (1.0, 0.0, 3));
         assert_eq!(est.steps.axes[0], 30 * 80);
     }

@@ -53,7 +53,7 @@ pub const COMMANDS: &[CommandHelp] = &[
     c("M154", "report the position every S seconds (firmware.autoreport_pos)"),
     c("M155", "report temperatures every S seconds (0: off)"),
     c("M163 M164 M165 M166", "mixing: set a weight, store a virtual tool, mix at once, gradient (accepted)"),
-    c("M201 M203 M204 M205", "acceleration, feed rate, print/travel acceleration and junction deviation limits"),
+    c("M201 M203 M204 M205", "acceleration, feed rate, print/travel acceleration, junction deviation (M205 J) or classic jerk (M205 X Y Z E) and minimum segment time (M205 B) limits"),
     c("M207 M208 M209", "firmware retraction: retract length (the planner's G10), recover, auto-retract"),
     c("M211", "software endstops on/off and their limits"),
     c("M220 M221", "feed rate / flow percentage (no S: report it)"),

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 use super::Machine;
 use crate::heater::HeaterId;
-use crate::limits::CornerMode;
+use crate::marlin_limits::MarlinCorners;
 
 /// Settings the planner and heaters do not hold themselves.
 #[derive(Debug, Clone, PartialEq)]
@@ -140,11 +140,20 @@ impl Machine {
         let f = m.max_feed_mm_s;
         let a = m.max_accel_mm_s2;
         let acc = m.accel;
-        let j = match m.corners {
-            CornerMode::Marlin { junction_deviation_mm, .. } => junction_deviation_mm,
-            CornerMode::Klipper(_) => 0.0,
-        };
         let [b, s, t] = self.settings.m205_bst;
+        // Marlin prints the corner rule it was built with: J for junction deviation, X Y Z E
+        // for classic jerk (MarlinSettings::report, M205).
+        const JERK: &str = "Advanced (B<min_segment_time_us> S<min_feedrate> T<min_travel_feedrate> \
+                            X<max_x_jerk> Y<max_y_jerk> Z<max_z_jerk> E<max_e_jerk>):";
+        const JD: &str =
+            "Advanced (B<min_segment_time_us> S<min_feedrate> T<min_travel_feedrate> J<junc_dev>):";
+        let (heading, corner) = match m.corners.marlin_corners() {
+            Some(MarlinCorners::Jerk(j)) => {
+                (JERK, format!(" X{:.2} Y{:.2} Z{:.2} E{:.2}", j.x, j.y, j.z, j.e))
+            }
+            Some(MarlinCorners::JunctionDeviation(jd)) => (JD, format!(" J{jd:.3}")),
+            None => (JD, " J0.000".to_owned()),
+        };
         let mut lines = vec![
             ("Steps per unit:", format!("M92 X{sx:.2} Y{sy:.2} Z{sz:.2} E{se:.2}")),
             ("Max feedrates (units/s):", format!("M203 X{:.2} Y{:.2} Z{:.2} E{:.2}", f.x, f.y, f.z, f.e)),
@@ -153,10 +162,7 @@ impl Machine {
                 "Acceleration (units/s2) (P<print-accel> R<retract-accel> T<travel-accel>):",
                 format!("M204 P{:.2} R{:.2} T{:.2}", acc.print_mm_s2, acc.retract_mm_s2, acc.travel_mm_s2),
             ),
-            (
-                "Advanced (B<min_segment_time_us> S<min_feedrate> T<min_travel_feedrate> J<junc_dev>):",
-                format!("M205 B{b:.2} S{s:.2} T{t:.2} J{j:.3}"),
-            ),
+            (heading, format!("M205 B{b:.2} S{s:.2} T{t:.2}{corner}")),
         ];
         if let Ok(g) = self.thermal.pid_gains(HeaterId::Hotend(0)) {
             lines.push(("Hotend PID:", format!("M301 P{:.2} I{:.2} D{:.2}", g.kp, g.ki, g.kd)));

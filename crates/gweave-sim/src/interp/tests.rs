@@ -263,8 +263,10 @@ fn feed_and_flow_percentages() {
     let (r, _) = run(&mut m, "M221 S50\nG1 X100 E10 F6000\nM220 S50\nM220\nM400");
     assert_eq!(r, ["echo:FR:50%"]);
     assert_eq!(m.report().filament_mm, vec![5.0]);
-    // 100 mm at 100 mm/s with a = 3000: 1 s cruise + 1/30 s.
-    assert!((m.now_s() - (1.0 + 100.0 / 3000.0)).abs() < 1e-9, "{}", m.now_s());
+    // 100 mm at 100 mm/s with a = 3000, in Marlin's steps (80/mm): 8000 steps/s and 240000
+    // steps/s², from and to 120 steps/s: 134 steps up, 133 down, 7733 cruising.
+    let want = 534.0 / 8120.0 + 7733.0 / 8000.0;
+    assert!((m.now_s() - want).abs() < 1e-9, "{}", m.now_s());
 }
 
 #[test]

@@ -1,57 +1,72 @@
-//! A Marlin/GRBL style planner (`gnea/grbl:grbl/planner.c`, `MarlinFirmware/Marlin:
-//! Marlin/src/module/planner.cpp`).
+//! Marlin's planner buffer (`Marlin/src/module/planner.cpp`: `Planner::recalculate`,
+//! `reverse_pass`, `forward_pass`, `recalculate_trapezoids`), in whole steps as the firmware
+//! plans (see `marlin_block.rs` for how a move becomes a block, `marlin_steps.rs` for its
+//! step trapezoid and time).
 //!
-//! Each block gets a nominal speed (the requested feed, scaled down until no axis exceeds its
-//! M203 maximum), an acceleration (M204 P for printing moves, R for extrude-only, T for travel,
-//! scaled down until no axis exceeds its M201 maximum) and a maximum entry speed from the
-//! junction with the previous block. Marlin's junction uses the direction over all axes
-//! (X Y Z E A normalised together), limits the junction acceleration by each axis' maximum
-//! along the change of direction, and for blocks shorter than 1 mm also caps the speed at
-//! `v^2 = a * len / phi` with `phi` the turning angle, the centripetal limit of a polygonal arc.
-//!
-//! The buffer holds `lookahead_blocks` blocks. After each new block a reverse pass (from a stop
-//! at the end of the buffer) and a forward pass (from the first block's fixed entry) set every
-//! entry speed: `entry_v2 <= exit_v2 + 2 a len` backwards, `<= entry_v2_prev + 2 a len_prev`
-//! forwards. When the buffer is full, the oldest block leaves with its speeds final, as in the
-//! firmware where the stepper takes the oldest block while the host keeps the buffer full.
+//! The ring buffer has `lookahead_blocks` slots and, like any ring buffer that tells full
+//! from empty by its two indices, holds one block less. A new move waits for a free slot: when
+//! the buffer is full the oldest block leaves first, with its speeds final (the firmware's
+//! stepper takes it while the host keeps the buffer full). After each new block a reverse pass
+//! (from `MINIMUM_PLANNER_SPEED` at the end of the buffer) and a forward pass set every entry
+//! speed: `entry_v2 <= exit_v2 + 2 a len` backwards, `<= entry_v2_prev + 2 a len_prev`
+//! forwards. The oldest block's entry speed is never changed: the block before it has already
+//! left with that exit speed (or, on an empty buffer, the machine stands still).
 
 use std::collections::VecDeque;
 
-use super::junction::HalfAngle;
-use super::trapezoid::{peak_v2, Trapezoid};
-use super::{BlockSink, PlannedBlock};
-use crate::kinematics::{axis, Geometry, Move, MoveKind};
+use super::marlin_block::{populate, MarlinBlock, Previous, Settings, MINIMUM_PLANNER_SPEED};
+use super::marlin_steps::StepProfile;
+use super::trapezoid::Trapezoid;
+use super::{BlockSink, Lesser, PlannedBlock};
+use crate::kinematics::{axis, Geometry, Move, MoveKind, Pos};
 use crate::limits::MotionProfile;
+use crate::rounding::round_i64;
 
-/// Marlin treats `-u_prev . u > 0.999999` as a full reversal (stop at the junction).
-const REVERSAL_NEG_COS: f64 = 0.999_999;
+const MIN_V2: f64 = MINIMUM_PLANNER_SPEED * MINIMUM_PLANNER_SPEED;
 
 #[derive(Debug, Clone)]
 struct Block {
+    /// The move, from the end of the last block made (dropped moves before it included).
     mv: Move,
-    geo: Geometry,
-    accel: f64,
-    nominal_v2: f64,
-    max_entry_v2: f64,
+    b: MarlinBlock,
     /// The entry allowed by the reverse pass alone (braking for everything after it).
     reverse_v2: f64,
     entry_v2: f64,
 }
 
-/// The previous block's direction and nominal speed, kept after it leaves the buffer.
-#[derive(Debug, Clone, Copy)]
-struct Previous {
-    unit: [f64; 5],
-    nominal_v2: f64,
+impl Block {
+    /// The highest entry speed the next block can get from this one: `entry_v2 + 2 a len`, or
+    /// no limit for a block of "nominal length" (one long enough to brake from its nominal
+    /// speed to a stop, Marlin's `BLOCK_BIT_NOMINAL_LENGTH`). Marlin skips the check for those
+    /// on the grounds that the next block cannot enter faster than this one's nominal speed:
+    /// true under junction deviation, not always under classic jerk, whose "safe speed" at a
+    /// junction may exceed the previous block's nominal speed (a slow Z hop followed by a
+    /// fast travel). Then the block is left faster than it runs, as in the firmware.
+    fn reach_v2(&self) -> f64 {
+        if self.b.nominal_length {
+            f64::INFINITY
+        } else {
+            self.entry_v2 + 2.0 * self.b.accel * self.b.mm
+        }
+    }
 }
 
 /// The Marlin planner buffer.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct MarlinBuffer {
     blocks: VecDeque<Block>,
-    /// True when the first block follows one already emitted, so its entry speed is final.
-    head_entry_fixed: bool,
-    prev: Option<Previous>,
+    prev: Previous,
+    /// The planner position, whole steps per axis.
+    position: [f64; 5],
+    /// Where the last block made ended (the start of the next block), and where the last move
+    /// pushed ended: a move that starts elsewhere follows a `G92` or homing.
+    block_end: Pos,
+    last_end: Option<Pos>,
+    /// The extruder moves drive, and the E steps per mm the position is in.
+    tool: usize,
+    e_steps_per_mm: f64,
+    /// The settings in force, taken from the profile at the first move after a change.
+    settings: Option<Settings>,
 }
 
 impl MarlinBuffer {
@@ -59,48 +74,50 @@ impl MarlinBuffer {
         self.blocks.len()
     }
 
-    pub(crate) fn push(
-        &mut self,
-        mv: &Move,
-        geo: Geometry,
-        profile: &MotionProfile,
-        junction_deviation_mm: f64,
-        capacity: usize,
-        sink: &mut dyn BlockSink,
-    ) {
-        let max_feed = profile.max_feed_mm_s.to_array();
-        let max_accel = profile.max_accel_mm_s2.to_array();
-        let base_accel = match geo.kind {
-            MoveKind::ExtrudeOnly => profile.accel.retract_mm_s2,
-            _ if geo.delta[axis::E] != 0.0 => profile.accel.print_mm_s2,
-            _ => profile.accel.travel_mm_s2,
-        };
-        let nominal_v = axis_limited(mv.feed_mm_s, &geo.ratio, &max_feed);
-        let accel = axis_limited(base_accel, &geo.ratio, &max_accel);
-        let nominal_v2 = nominal_v * nominal_v;
-        let norm = geo.delta.iter().map(|d| d * d).sum::<f64>().sqrt();
-        let unit = geo.delta.map(|d| d / norm);
-        let max_entry_v2 = match self.prev {
-            Some(prev) => {
-                let v2 = junction_v2(&prev.unit, &unit, accel, &max_accel, junction_deviation_mm, geo.len);
-                v2.min(nominal_v2).min(prev.nominal_v2)
-            }
-            None => 0.0,
-        };
-        self.prev = Some(Previous { unit, nominal_v2 });
-        self.blocks.push_back(Block {
-            mv: *mv,
-            geo,
-            accel,
-            nominal_v2,
-            max_entry_v2,
-            reverse_v2: -1.0,
-            entry_v2: 0.0,
-        });
-        self.replan();
-        while self.blocks.len() > capacity {
+    /// Moves from now on drive extruder `tool`, with its own E limits if it has them.
+    pub(crate) fn select_tool(&mut self, tool: usize) {
+        if tool != self.tool {
+            self.tool = tool;
+            self.settings = None;
+        }
+    }
+
+    /// The profile changed: the next move takes its settings afresh.
+    pub(crate) fn profile_changed(&mut self) {
+        self.settings = None;
+    }
+
+    pub(crate) fn push(&mut self, mv: &Move, profile: &MotionProfile, sink: &mut dyn BlockSink) {
+        let set = *self.settings.get_or_insert_with(|| Settings::new(profile, self.tool));
+        let e_steps_per_mm = set.steps_per_unit[axis::E];
+        if e_steps_per_mm != self.e_steps_per_mm && self.e_steps_per_mm > 0.0 {
+            // Another extruder with other E steps: the E position in its steps, as Marlin's
+            // `buffer_segment` rescales it.
+            self.position[axis::E] =
+                round_i64(self.position[axis::E] * e_steps_per_mm / self.e_steps_per_mm) as f64;
+        }
+        self.e_steps_per_mm = e_steps_per_mm;
+        if self.last_end != Some(mv.start) {
+            // Marlin's `set_position_mm`: every axis takes the new position, in whole steps.
+            self.position = set.steps_at(mv.start);
+            self.block_end = mv.start;
+        }
+        self.last_end = Some(mv.end);
+        let target = set.steps_at(mv.end);
+        let delta = std::array::from_fn(|i| target[i] - self.position[i]);
+        if self.blocks.len() + 1 >= set.buffer_size {
             self.emit_front(sink);
         }
+        // A move of fewer than MIN_STEPS_PER_SEGMENT steps is dropped: the position stays,
+        // so its distance goes with the next move.
+        let Some(b) = populate(delta, mv.feed_mm_s, self.blocks.len(), &set, &mut self.prev) else {
+            return;
+        };
+        self.position = target;
+        let mv = Move { start: self.block_end, ..*mv };
+        self.block_end = mv.end;
+        self.blocks.push_back(Block { mv, b, reverse_v2: -1.0, entry_v2: MIN_V2 });
+        self.replan();
     }
 
     /// Plan the rest of the buffer to a stop and emit it.
@@ -108,21 +125,22 @@ impl MarlinBuffer {
         while !self.blocks.is_empty() {
             self.emit_front(sink);
         }
-        self.head_entry_fixed = false;
-        self.prev = None;
     }
 
-    /// The reverse and forward passes over the buffer. The reverse pass stops at the first
-    /// block whose reverse limit did not change (nothing before it can change either, GRBL's
-    /// "planned" pointer idea), and the forward pass starts there.
+    /// The reverse and forward passes over the buffer, the oldest block excepted. The reverse
+    /// pass stops at the first block whose reverse limit did not change (nothing before it can
+    /// change either: Marlin's `block_buffer_planned`), and the forward pass starts there.
     fn replan(&mut self) {
-        let fixed = usize::from(self.head_entry_fixed);
         let n = self.blocks.len();
-        let mut first_changed = fixed;
-        let mut exit_v2 = 0.0;
-        for i in (fixed..n).rev() {
+        let mut first_changed = 1.min(n);
+        let mut exit_v2 = MIN_V2;
+        for i in (1..n).rev() {
             let b = &mut self.blocks[i];
-            let reverse_v2 = b.max_entry_v2.min(exit_v2 + 2.0 * b.accel * b.geo.len);
+            let reverse_v2 = if b.b.nominal_length {
+                b.b.max_entry_v2
+            } else {
+                b.b.max_entry_v2.lesser(exit_v2 + 2.0 * b.b.accel * b.b.mm)
+            };
             if reverse_v2 == b.reverse_v2 {
                 first_changed = i;
                 break;
@@ -130,66 +148,41 @@ impl MarlinBuffer {
             b.reverse_v2 = reverse_v2;
             exit_v2 = reverse_v2;
         }
-        let mut reach_v2 = match first_changed.checked_sub(1).and_then(|i| self.blocks.get(i)) {
-            Some(prev) => prev.entry_v2 + 2.0 * prev.accel * prev.geo.len,
-            None => f64::INFINITY,
+        let Some(before) = first_changed.checked_sub(1).and_then(|i| self.blocks.get(i)) else {
+            return;
         };
+        let mut reach_v2 = before.reach_v2();
         for b in self.blocks.iter_mut().skip(first_changed) {
-            b.entry_v2 = b.reverse_v2.min(reach_v2);
-            reach_v2 = b.entry_v2 + 2.0 * b.accel * b.geo.len;
+            b.entry_v2 = b.reverse_v2.lesser(reach_v2);
+            reach_v2 = b.reach_v2();
         }
     }
 
     fn emit_front(&mut self, sink: &mut dyn BlockSink) {
-        let Some(b) = self.blocks.pop_front() else {
+        let Some(Block { mv, b, entry_v2, .. }) = self.blocks.pop_front() else {
             return;
         };
-        let exit_v2 = self.blocks.front().map_or(0.0, |next| next.entry_v2);
-        let cruise_v2 = b.nominal_v2.min(peak_v2(b.geo.len, b.accel, b.entry_v2, exit_v2));
-        let trapezoid = Trapezoid::from_v2(b.geo.len, b.accel, b.entry_v2, cruise_v2, exit_v2);
-        sink.block(&PlannedBlock::new(&b.mv, &b.geo, b.accel, trapezoid));
-        self.head_entry_fixed = !self.blocks.is_empty();
+        let exit_v2 = self.blocks.front().map_or(MIN_V2, |next| next.entry_v2);
+        // Speed over nominal speed, in single precision as Marlin's `recalculate_trapezoids`.
+        let inverse_nominal = 1.0 / (b.nominal_v2 as f32).sqrt();
+        let factor = |v2: f64| (v2 as f32).sqrt() * inverse_nominal;
+        let steps =
+            StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, factor(entry_v2), factor(exit_v2));
+        // The speeds along the path: Marlin's length, unless it measured a tiny XYZ move along
+        // E; the times are the steps' either way.
+        let geo = Geometry::between(mv.start, mv.end);
+        let len = if b.xyz_below_min_steps && geo.kind == MoveKind::Kinematic { geo.len } else { b.mm };
+        let mm_per_step = len / b.steps;
+        let trapezoid = Trapezoid {
+            entry_v_mm_s: steps.initial_rate * mm_per_step,
+            cruise_v_mm_s: steps.cruise_rate * mm_per_step,
+            exit_v_mm_s: steps.final_rate * mm_per_step,
+            accel_t_s: steps.accel_t_s,
+            cruise_t_s: steps.cruise_t_s,
+            decel_t_s: steps.decel_t_s,
+        };
+        sink.block(&PlannedBlock::new(&mv, &geo, b.accel, trapezoid));
     }
-}
-
-/// Scale `value` (a speed or an acceleration along the path) down until no axis, moving at
-/// `ratio[i] * value`, exceeds its own limit.
-fn axis_limited(value: f64, ratio: &[f64; 5], limit: &[f64; 5]) -> f64 {
-    ratio.iter().zip(limit).filter(|(r, _)| **r != 0.0).fold(value, |v, (r, l)| v.min(l / r.abs()))
-}
-
-/// Marlin's junction speed limit between unit directions `prev` and `next`.
-fn junction_v2(
-    prev: &[f64; 5],
-    next: &[f64; 5],
-    accel: f64,
-    max_accel: &[f64; 5],
-    deviation_mm: f64,
-    len: f64,
-) -> f64 {
-    let dot: f64 = prev.iter().zip(next).map(|(a, b)| a * b).sum();
-    let neg_cos = -dot;
-    if neg_cos > REVERSAL_NEG_COS {
-        return 0.0;
-    }
-    let neg_cos = neg_cos.max(-REVERSAL_NEG_COS);
-    // The acceleration available along the change of direction, per-axis limited.
-    let change = std::array::from_fn::<f64, 5, _>(|i| next[i] - prev[i]);
-    let change_len = change.iter().map(|c| c * c).sum::<f64>().sqrt();
-    let junction_accel = if change_len > 0.0 {
-        axis_limited(accel, &change.map(|c| c / change_len), max_accel)
-    } else {
-        accel
-    };
-    let half = HalfAngle::from_neg_cos(neg_cos);
-    let mut v2 = half.deviation_v2(junction_accel, deviation_mm).unwrap_or(f64::INFINITY);
-    if len < 1.0 {
-        // Short segments approximate arcs: turning by phi over len is a circle of radius
-        // len / phi, whose centripetal limit is v^2 = a len / phi.
-        let phi = dot.clamp(-1.0, 1.0).acos();
-        v2 = v2.min(len * junction_accel / phi);
-    }
-    v2
 }
 
 #[cfg(test)]
@@ -203,21 +196,23 @@ mod tests {
         #[test]
         fn early_stop_equals_full_replan(
             steps in proptest::collection::vec((-5.0..5.0f64, -5.0..5.0f64, 5.0..200.0f64), 1..200),
-            capacity in 2usize..40,
+            buffer in 3usize..40,
         ) {
-            let profile = MotionProfile::default();
-            let mut buffer = MarlinBuffer::default();
+            let mut profile = MotionProfile::default();
+            if let crate::limits::CornerMode::Marlin { lookahead_blocks, .. } = &mut profile.corners {
+                *lookahead_blocks = buffer;
+            }
+            let mut planner = MarlinBuffer::default();
             let mut sink = |_: &PlannedBlock| {};
             let mut at = Pos::default();
             for (dx, dy, feed) in steps {
                 let to = Pos::xyze(at.x_mm + dx, at.y_mm + dy, 0.0, at.e_mm + 0.1);
                 let mv = Move { start: at, end: to, feed_mm_s: feed, tag: 0 };
-                buffer.push(&mv, mv.geometry().unwrap(), &profile, 0.013, capacity, &mut sink);
-                let mut full = buffer.clone();
-                let fixed = usize::from(full.head_entry_fixed);
-                full.blocks.iter_mut().skip(fixed).for_each(|b| b.reverse_v2 = -1.0);
+                planner.push(&mv, &profile, &mut sink);
+                let mut full = planner.clone();
+                full.blocks.iter_mut().skip(1).for_each(|b| b.reverse_v2 = -1.0);
                 full.replan();
-                for (a, b) in buffer.blocks.iter().zip(&full.blocks) {
+                for (a, b) in planner.blocks.iter().zip(&full.blocks) {
                     prop_assert_eq!(a.entry_v2, b.entry_v2);
                 }
                 at = to;

@@ -5,8 +5,9 @@
 //! Two planners imitate two firmwares (chosen by [`CornerMode`]):
 //! - [`CornerMode::Klipper`]: Klipper's lookahead, reproduced closely enough that print times
 //!   agree with Klipper's own to well under 0.01 % (see `klipper.rs` for the method);
-//! - [`CornerMode::Marlin`]: Marlin/GRBL junction deviation over a bounded block buffer
-//!   (see `marlin.rs`).
+//! - [`CornerMode::Marlin`]: Marlin's planner in whole steps, junction deviation or classic
+//!   jerk, over its bounded block buffer; print times agree with Marlin's own planner to
+//!   0.01 % (see `marlin.rs`).
 //!
 //! Both stream: [`Planner::push`] hands finished blocks to a [`BlockSink`] as soon as their
 //! speeds are final and the queue stays bounded (Marlin: `lookahead_blocks`; Klipper: about a
@@ -32,6 +33,8 @@
 mod junction;
 mod klipper;
 mod marlin;
+mod marlin_block;
+mod marlin_steps;
 mod trapezoid;
 
 pub use junction::{extruder_v2, HalfAngle};
@@ -116,7 +119,7 @@ impl BlockSink for Vec<PlannedBlock> {
 #[derive(Debug, Clone)]
 enum Engine {
     Klipper(Box<KlipperLookahead>),
-    Marlin(MarlinBuffer),
+    Marlin(Box<MarlinBuffer>),
 }
 
 /// A streaming lookahead planner for one machine profile.
@@ -132,7 +135,7 @@ impl Planner {
         profile.validate()?;
         let engine = match &profile.corners {
             CornerMode::Klipper(k) => Engine::Klipper(Box::new(KlipperLookahead::new(k))),
-            CornerMode::Marlin { .. } => Engine::Marlin(MarlinBuffer::default()),
+            CornerMode::Marlin { .. } => Engine::Marlin(Box::default()),
         };
         Ok(Self { profile, engine })
     }
@@ -148,6 +151,9 @@ impl Planner {
     pub fn set_profile(&mut self, profile: MotionProfile) -> Result<(), ProfileError> {
         Self::check_change(&self.profile, &profile)?;
         self.profile = profile;
+        if let Engine::Marlin(m) = &mut self.engine {
+            m.profile_changed();
+        }
         Ok(())
     }
 
@@ -179,12 +185,18 @@ impl Planner {
                 let rotary = (&self.profile.max_feed_mm_s, &self.profile.max_accel_mm_s2);
                 k.push(mv, geo, limits, rotary, sink);
             }
-            (Engine::Marlin(m), &CornerMode::Marlin { junction_deviation_mm, lookahead_blocks }) => {
-                m.push(mv, geo, &self.profile, junction_deviation_mm, lookahead_blocks, sink);
-            }
+            (Engine::Marlin(m), CornerMode::Marlin { .. }) => m.push(mv, &self.profile, sink),
             _ => unreachable!("set_profile keeps the corner mode of the engine"),
         }
         Ok(())
+    }
+
+    /// Moves from now on drive extruder `tool` (`T<n>`): in Marlin mode with its own E limits,
+    /// if the profile gives it some (`extruders`).
+    pub fn select_tool(&mut self, tool: usize) {
+        if let Engine::Marlin(m) = &mut self.engine {
+            m.select_tool(tool);
+        }
     }
 
     /// Plan every queued move to a stop and emit it.

@@ -1,0 +1,61 @@
+//! `gweave machine`: machine profiles from what the printer says about itself.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use gweave_sim::m503::from_m503;
+
+use crate::common::{read_text, write_bytes};
+
+/// Make a machine profile (see docs/machine.md).
+#[derive(Args, Debug)]
+pub struct MachineArgs {
+    #[command(subcommand)]
+    pub command: MachineCommand,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum MachineCommand {
+    /// A profile from a Marlin board's `M503` report (paste the terminal's answer into a file;
+    /// `echo:` and OctoPrint's `Recv:` prefixes are fine): steps per mm (M92), limits (M201,
+    /// M203), accelerations (M204), jerk or junction deviation and the minimum segment time
+    /// (M205), hotend and bed PID (M301, M304). The probe offset (M851) and anything not
+    /// modelled is listed on standard error and kept as comments.
+    ///
+    /// Example: `gweave machine from-m503 m503.txt -o printer.toml`.
+    FromM503 {
+        /// The `M503` report.
+        input: PathBuf,
+        /// Where to write the profile (TOML); standard output without it.
+        #[arg(short, long, value_name = "TOML")]
+        output: Option<PathBuf>,
+    },
+}
+
+pub fn run(args: MachineArgs) -> Result<ExitCode> {
+    match args.command {
+        MachineCommand::FromM503 { input, output } => {
+            let made = from_m503(&read_text(&input)?).with_context(|| format!("in {}", input.display()))?;
+            let mut text = format!("# Made by `gweave machine from-m503` from {}.\n", input.display());
+            text.extend(made.used.iter().map(|u| format!("# used: {u}\n")));
+            text.extend(made.notes.iter().map(|n| format!("# not used: {n}\n")));
+            text.push('\n');
+            text.push_str(&toml::to_string(&made.profile).context("writing the profile as TOML")?);
+            for note in &made.notes {
+                eprintln!("not used: {note}");
+            }
+            match output {
+                Some(path) => {
+                    if path == input {
+                        anyhow::bail!("the output {} is the input", path.display());
+                    }
+                    write_bytes(&path, text.as_bytes())?;
+                }
+                None => print!("{text}"),
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}
