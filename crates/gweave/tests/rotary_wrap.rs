@@ -409,5 +409,16 @@ fn a_move_of_endless_turns_is_refused() {
     config.chord_tolerance_mm = 0.001;
     let err = wrap_bytes(config, b"G1 X1 F600\nG1 Y1000000000\n").unwrap_err();
     assert!(matches!(err, RotaryError::AtLine { line: 2, .. }), "{err}");
-    assert!(matches!(*as_inner(&err), RotaryError::TooManyPoints { limit: 1_000_000 }), "{err}");
+    assert!(matches!(*as_inner(&err), RotaryError::TooManyChords { limit: 1_000_000 }), "{err}");
+}
+
+/// Regression (issue 25): a `G2` of radius 10 km, nearly a full turn, wrapped onto a 30 mm
+/// mandrel would be ~60 million chords (2.4 GB): the chords of one move's pieces add up, and
+/// the move is refused once they pass the limit instead of writing until the disk is full.
+#[test]
+fn a_huge_arc_is_refused_not_wrapped_into_gigabytes() {
+    let config = WrapConfig::new(RotaryConfig::new(30.0));
+    let err = wrap_bytes(config, b"G92 E0\nG1 X10 Y10 F3000\nG2 X10 Y0 I10000000 J0 E1 F1000\n").unwrap_err();
+    assert!(matches!(err, RotaryError::AtLine { line: 3, .. }), "{err}");
+    assert!(matches!(*as_inner(&err), RotaryError::TooManyChords { limit: 1_000_000 }), "{err}");
 }

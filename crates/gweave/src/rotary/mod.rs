@@ -83,6 +83,13 @@ pub enum RotaryError {
         /// The limit that was hit.
         limit: usize,
     },
+    /// One flat move would wrap into more chords than the safety limit: an arc of kilometres,
+    /// or a move of thousands of turns round the mandrel.
+    #[error("the move wraps into more than {limit} chords on the mandrel; check its length (an arc's radius) and the chord tolerance")]
+    TooManyChords {
+        /// The limit that was hit.
+        limit: usize,
+    },
     /// A move was asked for before the machine's position was established.
     #[error("a move was written before the machine's position was known")]
     UnknownPosition,

@@ -225,9 +225,12 @@ impl Wrap {
             self.writer.extrude_only(out, e_mm, speed_mm_s, comment)?;
             return Ok(true);
         }
-        let pieces = flat_pieces(mv, self.config.arc_tolerance_mm);
+        let pieces = flat_pieces(mv, self.config.arc_tolerance_mm)?;
         let share = 1.0 / pieces.len() as f64;
         let mut prev = from;
+        // Chords written for this move so far: an arc of kilometres round a thin mandrel is
+        // thousands of turns per piece, and the pieces add up.
+        let mut chords = 0usize;
         for next in pieces {
             let (a, b) = (self.map(prev, layer)?, self.map(next, layer)?);
             let cuts = if self.config.chord_tolerance_mm > 0.0 {
@@ -236,8 +239,9 @@ impl Wrap {
             } else {
                 1
             };
-            if cuts > MAX_CHORDS_PER_MOVE {
-                return Err(RotaryError::TooManyPoints { limit: MAX_CHORDS_PER_MOVE });
+            chords = chords.saturating_add(cuts);
+            if chords > MAX_CHORDS_PER_MOVE {
+                return Err(RotaryError::TooManyChords { limit: MAX_CHORDS_PER_MOVE });
             }
             for j in 1..=cuts {
                 let t0 = (j - 1) as f64 / cuts as f64;
@@ -273,12 +277,15 @@ fn lerp3(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
 
 /// The flat end points of a move's pieces: the end itself for a line, chords within
 /// `tolerance_mm` for an arc (Z rising linearly along it, a helix).
-fn flat_pieces(mv: &Move, tolerance_mm: f64) -> Vec<[f64; 3]> {
+fn flat_pieces(mv: &Move, tolerance_mm: f64) -> Result<Vec<[f64; 3]>> {
     let to = flat(&mv.to);
     let Path::Arc(arc) = mv.path else {
-        return vec![to];
+        return Ok(vec![to]);
     };
     let n = arc.segments(tolerance_mm);
+    if n > MAX_CHORDS_PER_MOVE {
+        return Err(RotaryError::TooManyChords { limit: MAX_CHORDS_PER_MOVE });
+    }
     let mut points: Vec<[f64; 3]> = (1..n)
         .map(|i| {
             let t = i as f64 / n as f64;
@@ -287,7 +294,7 @@ fn flat_pieces(mv: &Move, tolerance_mm: f64) -> Vec<[f64; 3]> {
         })
         .collect();
     points.push(to);
-    points
+    Ok(points)
 }
 
 impl Pass for Wrap {
