@@ -80,8 +80,20 @@ pub fn short(v: f64) -> String {
         // As TOML spells it, which is where most such values come from.
         "nan".into()
     } else if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&a) {
-        // Rust prints the shortest text that reads back as `v`: 0.001, 2.54, 25400.
-        format!("{v}")
+        // Rust prints the shortest text that reads back as `v`: 0.001, 2.54, 25400, as the
+        // user typed it. A computed value (a volume turned into a length) would print all of
+        // its 17 digits: those keep 6 significant ones.
+        let text = format!("{v}");
+        if text.len() <= 12 {
+            return text;
+        }
+        let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
+        let rounded = format!("{v:.decimals$}");
+        if rounded.contains('.') {
+            rounded.trim_end_matches('0').trim_end_matches('.').to_owned()
+        } else {
+            rounded
+        }
     } else {
         format!("{v:e}")
     }
@@ -243,6 +255,9 @@ mod tests {
         assert_eq!(short(-1e-300), "-1e-300");
         assert_eq!(short(25400.0), "25400");
         assert_eq!(short(0.001), "0.001");
+        assert_eq!(short(50929.58178940651), "50929.6");
+        assert_eq!(short(0.12345678901234), "0.123457");
+        assert_eq!(short(-1.5), "-1.5");
         assert_eq!(short(f64::INFINITY), "inf");
         assert_eq!(short(f64::NAN), "nan");
     }

@@ -313,6 +313,13 @@ impl PurgeShiftConfig {
             }
             _ => None,
         };
+        // A purge however given (a volume through a thin filament, a washout tolerance) is held
+        // to the same length as one given in mm: the tower or block a fallback builds grows
+        // with it.
+        let as_filament = "purge as filament mm (from purge_mm3 or the washout)";
+        if let Some(mm) = default_mm {
+            PURGE_MM.check(as_filament, mm)?;
+        }
         let mut pairs = Vec::new();
         for p in &self.pair {
             let mm = match (p.purge_mm, p.purge_mm3) {
@@ -320,7 +327,7 @@ impl PurgeShiftConfig {
                 (None, Some(v)) => to_mm(v),
                 _ => return Err(ConfigError::Pair { from: p.from, to: p.to }),
             };
-            pairs.push((p.from, p.to, mm));
+            pairs.push((p.from, p.to, PURGE_MM.check(as_filament, mm)?));
         }
         let colours = self
             .colours
@@ -470,6 +477,19 @@ impl Rules {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Regression (issue 25): 10 000 mm3 through a 0.5 mm filament is 50 930 mm of purge, and
+    /// passed because only the volume was checked.
+    #[test]
+    fn a_purge_given_as_volume_is_held_to_the_length_limit() {
+        let e = PurgeShiftConfig::parse_toml("purge_mm3 = 10000.0\nfilament_diameter_mm = 0.5\n")
+            .and_then(|c| c.validate())
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "purge as filament mm (from purge_mm3 or the washout) = 50929.6 is out of range: 0 to 1000 mm"
+        );
+    }
 
     #[test]
     fn defaults_and_sources() {
