@@ -437,7 +437,7 @@ impl Machine {
             600 => self.m600(out),
             205 => {
                 let b = self.core.block();
-                for (slot, letter) in self.settings.m205_bst.iter_mut().zip([b'B', b'S', b'T']) {
+                for (slot, letter) in self.settings.m205_st.iter_mut().zip([b'S', b'T']) {
                     if let Some(v) = b.get(letter).filter(|v| v.is_finite() && *v >= 0.0) {
                         *slot = v;
                     }

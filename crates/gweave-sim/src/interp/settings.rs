@@ -12,6 +12,7 @@ use std::path::PathBuf;
 
 use super::Machine;
 use crate::heater::HeaterId;
+use crate::limits::CornerMode;
 use crate::marlin_limits::MarlinCorners;
 
 /// Settings the planner and heaters do not hold themselves.
@@ -19,9 +20,9 @@ use crate::marlin_limits::MarlinCorners;
 pub(super) struct Settings {
     /// Steps per unit X Y Z E (`M92`), as the steppers count them.
     pub steps: [f64; 4],
-    /// `M205 B S T`: minimum segment time (us), minimum feed and travel feed (mm/s). Reported
-    /// and stored; the planner has no minimum segment time.
-    pub m205_bst: [f64; 3],
+    /// `M205 S T`: minimum feed and travel feed (mm/s), reported and stored (not modelled). Its
+    /// `B`, the minimum segment time, is the planner's (`[motion.corners] min_segment_time_us`).
+    pub m205_st: [f64; 2],
     /// `M851 X Y Z`: nozzle to probe, mm.
     pub probe_offset_mm: [f64; 3],
     /// `M207 W F Z` (swap length mm, feed mm/s, lift mm); the length is the modal state's.
@@ -39,7 +40,7 @@ impl Settings {
         // Marlin's Configuration_adv.h: MIN_SEGMENT_TIME_US, RETRACT_*, RETRACT_RECOVER_*.
         Settings {
             steps,
-            m205_bst: [20000.0, 0.0, 0.0],
+            m205_st: [0.0, 0.0],
             probe_offset_mm: [10.0, 10.0, 0.0],
             retract: [13.0, 45.0, 0.0],
             recover: [0.0, 0.0, 8.0],
@@ -140,7 +141,11 @@ impl Machine {
         let f = m.max_feed_mm_s;
         let a = m.max_accel_mm_s2;
         let acc = m.accel;
-        let [b, s, t] = self.settings.m205_bst;
+        let [s, t] = self.settings.m205_st;
+        let b = match m.corners {
+            CornerMode::Marlin { min_segment_time_us, .. } => min_segment_time_us,
+            CornerMode::Klipper(_) => 0.0,
+        };
         // Marlin prints the corner rule it was built with: J for junction deviation, X Y Z E
         // for classic jerk (MarlinSettings::report, M205).
         const JERK: &str = "Advanced (B<min_segment_time_us> S<min_feedrate> T<min_travel_feedrate> \
