@@ -94,6 +94,40 @@ pub struct AxisLimits {
     pub a: f64,
 }
 
+/// A per-axis table of a profile in which every key is optional, as for every other table: the
+/// axes given replace those of `default` (`[motion.max_feed_mm_s]` with only `z = 12` on a
+/// printer that has no rotary axis).
+fn partial_limits<'de, D: serde::Deserializer<'de>>(
+    d: D,
+    default: AxisLimits,
+) -> Result<AxisLimits, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Given {
+        x: Option<f64>,
+        y: Option<f64>,
+        z: Option<f64>,
+        e: Option<f64>,
+        a: Option<f64>,
+    }
+    let g = Given::deserialize(d)?;
+    Ok(AxisLimits {
+        x: g.x.unwrap_or(default.x),
+        y: g.y.unwrap_or(default.y),
+        z: g.z.unwrap_or(default.z),
+        e: g.e.unwrap_or(default.e),
+        a: g.a.unwrap_or(default.a),
+    })
+}
+
+fn feed_limits<'de, D: serde::Deserializer<'de>>(d: D) -> Result<AxisLimits, D::Error> {
+    partial_limits(d, MotionProfile::default().max_feed_mm_s)
+}
+
+fn accel_limits<'de, D: serde::Deserializer<'de>>(d: D) -> Result<AxisLimits, D::Error> {
+    partial_limits(d, MotionProfile::default().max_accel_mm_s2)
+}
+
 impl AxisLimits {
     /// The limits in the order X Y Z E A, the order of [`crate::kinematics::Pos::to_array`].
     pub fn to_array(&self) -> [f64; 5] {
@@ -336,8 +370,10 @@ pub struct MotionProfile {
     /// Steps per unit of each motor.
     pub steps: StepsPerUnit,
     /// Marlin's per-axis maximum feed rate (M203), mm/s (A: deg/s). In Klipper mode only A uses it.
+    #[serde(deserialize_with = "feed_limits")]
     pub max_feed_mm_s: AxisLimits,
     /// Marlin's per-axis maximum acceleration (M201), mm/s² (A: deg/s²). In Klipper mode only A.
+    #[serde(deserialize_with = "accel_limits")]
     pub max_accel_mm_s2: AxisLimits,
     /// Marlin's move accelerations (M204 P R T). Klipper uses `corners.max_accel_mm_s2` instead.
     pub accel: MoveAccel,
@@ -511,6 +547,19 @@ pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<(), Profile
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Regression (a new user's trial): a per-axis table with only the keys a user changes was
+    /// refused with `missing field 'y'`, then `'a'` (a rotary axis the printer does not have).
+    #[test]
+    fn a_per_axis_table_takes_only_the_axes_given() {
+        let p = MotionProfile::from_toml_str("[max_feed_mm_s]\nz = 12.0\n[max_accel_mm_s2]\nx = 9000.0\n")
+            .unwrap();
+        let d = MotionProfile::default();
+        assert_eq!(p.max_feed_mm_s, AxisLimits { z: 12.0, ..d.max_feed_mm_s });
+        assert_eq!(p.max_accel_mm_s2, AxisLimits { x: 9000.0, ..d.max_accel_mm_s2 });
+        let e = MotionProfile::from_toml_str("[max_feed_mm_s]\nx = 0.0\n").unwrap_err();
+        assert_eq!(e.to_string(), "[max_feed_mm_s] x = 0 is out of range: 0.01 to 1000 mm/s");
+    }
 
     #[test]
     fn default_profile_is_marlin_ramps() {

@@ -7,7 +7,8 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use gweave_sim::m503::from_m503;
 
-use crate::common::{read_text, write_bytes};
+use crate::common::{print_summary, read_text, write_bytes};
+use crate::files::Files;
 
 /// Make a machine profile (see docs/machine.md).
 #[derive(Args, Debug)]
@@ -37,6 +38,7 @@ pub enum MachineCommand {
 pub fn run(args: MachineArgs) -> Result<ExitCode> {
     match args.command {
         MachineCommand::FromM503 { input, output } => {
+            Files::new().read("INPUT", Some(&input)).write("-o", output.as_deref()).check()?;
             let made = from_m503(&read_text(&input)?).with_context(|| format!("in {}", input.display()))?;
             let mut text = format!("# Made by `gweave machine from-m503` from {}.\n", input.display());
             text.extend(made.used.iter().map(|u| format!("# used: {u}\n")));
@@ -47,13 +49,8 @@ pub fn run(args: MachineArgs) -> Result<ExitCode> {
                 eprintln!("not used: {note}");
             }
             match output {
-                Some(path) => {
-                    if path == input {
-                        anyhow::bail!("the output {} is the input", path.display());
-                    }
-                    write_bytes(&path, text.as_bytes())?;
-                }
-                None => print!("{text}"),
+                Some(path) => write_bytes(&path, text.as_bytes())?,
+                None => print_summary(|out| out.write_all(text.as_bytes()))?,
             }
             Ok(ExitCode::SUCCESS)
         }

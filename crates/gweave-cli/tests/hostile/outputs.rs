@@ -362,3 +362,17 @@ fn a_full_disk_leaves_nothing_behind() {
     assert_eq!(snapshot(disk), before);
     assert_no_temp_left(disk);
 }
+
+/// Regression (a new user's trial): `machine from-m503 m.txt -o m.txt` read the transcript and
+/// printed its notes before refusing, with a wording of its own.
+#[test]
+fn machine_from_m503_naming_its_input_is_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("m.txt"), "echo:  M92 X80.00 Y80.00 Z400.00 E93.00\necho:  M900 K0.05\n")
+        .unwrap();
+    let before = snapshot(dir.path());
+    let out = gweave(dir.path(), &["machine", "from-m503", "m.txt", "-o", "m.txt"]).run();
+    out.assert_refused("-o m.txt names the input (INPUT); name another file");
+    assert!(!out.stderr.contains("not used"), "read before refusing: {}", out.stderr);
+    assert_eq!(snapshot(dir.path()), before);
+}
