@@ -128,17 +128,7 @@ impl MixPass {
         let cap = profile.z_cap.max_z_feed_mm_min;
         let zcap = (cap > 0.0).then_some(ZCap { max_z_feed_mm_min: cap, mode: profile.z_cap.mode });
         let p = &profile.purge;
-        let motion = PurgeMotion {
-            retract_mm: p.retract_mm,
-            lift_mm: p.lift_mm,
-            x_mm: p.x_mm,
-            y_mm: p.y_mm,
-            wipe_mm: p.wipe_mm,
-            travel_feed_mm_min: p.travel_feed_mm_min,
-            extrude_feed_mm_min: p.extrude_feed_mm_min,
-            retract_feed_mm_min: p.retract_feed_mm_min,
-            z_feed_mm_min: if cap > 0.0 { cap.min(p.travel_feed_mm_min) } else { p.travel_feed_mm_min },
-        };
+        let motion = p.motion(if cap > 0.0 { cap.min(p.travel_feed_mm_min) } else { p.travel_feed_mm_min });
         let acc = Accounting::new(&plan, &profile.hardware);
         Ok(MixPass {
             plan,

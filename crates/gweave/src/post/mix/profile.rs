@@ -212,6 +212,24 @@ pub struct PurgeConfig {
     pub pair: Vec<PairPurge>,
 }
 
+impl PurgeConfig {
+    /// The purge block's moves, with the Z feed the caller has worked out (the Z cap's, or
+    /// the travel feed).
+    pub fn motion(&self, z_feed_mm_min: f64) -> PurgeMotion {
+        PurgeMotion {
+            retract_mm: self.retract_mm,
+            lift_mm: self.lift_mm,
+            x_mm: self.x_mm,
+            y_mm: self.y_mm,
+            wipe_mm: self.wipe_mm,
+            travel_feed_mm_min: self.travel_feed_mm_min,
+            extrude_feed_mm_min: self.extrude_feed_mm_min,
+            retract_feed_mm_min: self.retract_feed_mm_min,
+            z_feed_mm_min,
+        }
+    }
+}
+
 impl Default for PurgeConfig {
     fn default() -> Self {
         PurgeConfig {
@@ -613,18 +631,7 @@ impl CheckRanges for MixProfile {
         purge.check("chamber_mm3", p.chamber_mm3, CHAMBER_MM3)?;
         purge.check("dead_mm3", p.dead_mm3, PURGE_MM3)?;
         purge.check("tolerance", p.tolerance, TOLERANCE)?;
-        let motion = PurgeMotion {
-            retract_mm: p.retract_mm,
-            lift_mm: p.lift_mm,
-            x_mm: p.x_mm,
-            y_mm: p.y_mm,
-            wipe_mm: p.wipe_mm,
-            travel_feed_mm_min: p.travel_feed_mm_min,
-            extrude_feed_mm_min: p.extrude_feed_mm_min,
-            retract_feed_mm_min: p.retract_feed_mm_min,
-            z_feed_mm_min: PurgeMotion::SEED.z_feed_mm_min,
-        };
-        motion.check_ranges(&purge)?;
+        p.motion(PurgeMotion::SEED.z_feed_mm_min).check_ranges(&purge)?;
         for (i, pair) in p.pair.iter().enumerate() {
             let table = purge.sub("pair").item(i);
             table.check_opt("length_mm", pair.length_mm, PURGE_MM)?;
