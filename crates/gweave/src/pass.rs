@@ -296,6 +296,9 @@ impl Pass for Identity {
         false
     }
 
+    // Inlined into the loop: without the hint the compiler stopped inlining it once the loop
+    // grew the long-line branch (+54 instructions a line for `cat`).
+    #[inline(always)]
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
         let r = &mut self.report;
         r.lines += 1;
