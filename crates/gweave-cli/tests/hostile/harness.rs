@@ -70,7 +70,6 @@ impl Outcome {
 pub struct Run {
     cmd: Command,
     limit: Duration,
-    stdin: Option<PathBuf>,
     stdout: Option<PathBuf>,
 }
 
@@ -78,18 +77,12 @@ pub struct Run {
 pub fn gweave<S: AsRef<std::ffi::OsStr>>(dir: &Path, args: &[S]) -> Run {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_gweave"));
     cmd.args(args).current_dir(dir).env_remove("COLUMNS");
-    Run { cmd, limit: Duration::from_secs(60), stdin: None, stdout: None }
+    Run { cmd, limit: Duration::from_secs(60), stdout: None }
 }
 
 impl Run {
     pub fn limit(mut self, limit: Duration) -> Self {
         self.limit = limit;
-        self
-    }
-
-    /// Standard input read from this file (default: none, `/dev/null`).
-    pub fn stdin_file(mut self, path: &Path) -> Self {
-        self.stdin = Some(path.to_path_buf());
         self
     }
 
@@ -100,10 +93,7 @@ impl Run {
     }
 
     pub fn spawn(mut self) -> Running {
-        match &self.stdin {
-            Some(path) => self.cmd.stdin(fs::File::open(path).expect("stdin file")),
-            None => self.cmd.stdin(Stdio::null()),
-        };
+        self.cmd.stdin(Stdio::null());
         match &self.stdout {
             Some(path) => {
                 self.cmd.stdout(fs::OpenOptions::new().write(true).open(path).expect("stdout file"))

@@ -6,8 +6,6 @@
 //!
 //! One module per finding area; `harness` runs the binary and measures it.
 
-// Helpers the area modules use as they need them.
-#[allow(dead_code)]
 mod harness;
 
 mod bytes;
