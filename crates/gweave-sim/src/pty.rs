@@ -297,6 +297,16 @@ mod tests {
         })
     }
 
+    /// After a hang-up, the next host to open the port gets a fresh power-on: no stale replies,
+    /// no fragment glued to its first command.
+    fn assert_next_host_gets_a_fresh_board(link: &Path) {
+        std::thread::sleep(3 * crate::transport::TICK);
+        let mut host = open_host(link);
+        host.write_all(b"M105\n").unwrap();
+        let got = lines_until(&mut host, |text| text.contains("ok T:"));
+        assert_eq!(got, ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]);
+    }
+
     #[test]
     fn pty_a_host_that_hangs_up_with_replies_unread_leaves_a_fresh_board() {
         let (summary, ended) = with_server(ServeOptions::default(), |link| {
@@ -307,12 +317,7 @@ mod tests {
             let sent = write_until_full(&mut host, &burst);
             assert!(sent < burst.len(), "the pty took all of it: {sent} bytes");
             drop(host);
-            std::thread::sleep(3 * crate::transport::TICK);
-            let mut host = open_host(link);
-            host.write_all(b"M105\n").unwrap();
-            let got = lines_until(&mut host, |text| text.contains("ok T:"));
-            // A fresh power-on: no stale replies, no fragment glued to the first command.
-            assert_eq!(got, ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]);
+            assert_next_host_gets_a_fresh_board(link);
         });
         assert_eq!(summary.sessions, 2);
         assert_eq!(ended[1], ["M105"]);
@@ -329,11 +334,7 @@ mod tests {
             host.write_all(b"G4 S30\n").unwrap();
             lines_until(&mut host, |text| text.contains("echo:Marlin test double\n"));
             drop(host);
-            std::thread::sleep(3 * crate::transport::TICK);
-            let mut host = open_host(link);
-            host.write_all(b"M105\n").unwrap();
-            let got = lines_until(&mut host, |text| text.contains("ok T:"));
-            assert_eq!(got, ["start", "echo:Marlin test double", "ok T:20.00 /0.00"]);
+            assert_next_host_gets_a_fresh_board(link);
         });
         assert!(started.elapsed() < Duration::from_secs(5), "{:?}", started.elapsed());
         assert_eq!(summary.sessions, 2);
