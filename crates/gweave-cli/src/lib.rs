@@ -3,6 +3,7 @@
 //! Each subcommand lives in `cmd/<name>.rs`: clap arguments in, validated library config out,
 //! the library does the work, and the subcommand prints a human summary or JSON.
 
+mod args;
 mod cmd;
 mod common;
 mod files;

@@ -7,19 +7,21 @@ use std::io::{self, Write};
 
 use serde::Serialize;
 
+use crate::bed::Bed;
 use crate::gcode::diag::{Diagnostic, Finding, Severity};
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
-use crate::pass::{Ctx, Pass};
+use crate::error::{Error, Result};
+use crate::pass::{Ctx, Pass, Progress, Run, Strictness};
 
 /// Lint settings.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CheckOptions {
-    /// Printable volume `[x, y, z]`, mm, from the origin; `None` skips the bounds check.
-    pub bed_mm: Option<[f64; 3]>,
+    /// The printable volume; `None` skips the bounds check.
+    pub bed: Option<Bed>,
     /// Feed rates above this are absurd, mm/min (default 60 000 = 1 m/s).
     pub max_feed_mm_min: f64,
     /// Relative extrusion longer than this without `G92 E` drifts in float firmware, mm.
@@ -33,7 +35,7 @@ pub struct CheckOptions {
 impl Default for CheckOptions {
     fn default() -> Self {
         CheckOptions {
-            bed_mm: None,
+            bed: None,
             max_feed_mm_min: 60_000.0,
             max_relative_e_mm: 100_000.0,
             max_absolute_e_mm: 100_000.0,
@@ -58,11 +60,20 @@ pub struct CheckReport {
     pub errors: u64,
     pub warnings: u64,
     pub findings: Vec<LineFinding>,
+    /// The bed moves were held to, if any.
+    pub bed: Option<Bed>,
+    /// Where that bed came from: `given`, or the file's settings used (`bed_shape = ...`).
+    pub bed_from: Option<String>,
 }
 
 impl CheckReport {
     pub fn passed(&self) -> bool {
         self.errors == 0
+    }
+
+    /// Whether the file fails the check: an error, or with `strict` a warning too.
+    pub fn failed(&self, strict: bool) -> bool {
+        self.errors > 0 || (strict && self.warnings > 0)
     }
 }
 
@@ -81,7 +92,9 @@ pub struct CheckPass {
 
 impl CheckPass {
     pub fn new(options: CheckOptions) -> Self {
-        CheckPass { options, ..Default::default() }
+        let bed_from = options.bed.map(|_| "given".to_owned());
+        let report = CheckReport { bed: options.bed, bed_from, ..Default::default() };
+        CheckPass { options, report, ..Default::default() }
     }
 
     fn add(&mut self, line: u64, diagnostic: Diagnostic) {
@@ -166,7 +179,7 @@ impl Pass for CheckPass {
                         n,
                         Diagnostic::at(
                             w.span.start as usize,
-                            Finding::AbsurdFeedRate { feed_mm_min: fmt(f) },
+                            Finding::AbsurdFeedRate { feed_mm_min: round3(f) },
                         ),
                     );
                 }
@@ -180,26 +193,26 @@ impl Pass for CheckPass {
                     let col = block.word(b'E').map_or(0, |w| w.span.start as usize);
                     self.add(n, Diagnostic::at(col, Finding::ExtrusionBeforeHeating));
                 }
-                if let Some(bed) = self.options.bed_mm {
+                if let Some(bed) = self.options.bed {
                     // An arc reaches past its end point: check the box around it in X and Y.
                     let arc_box = match &m.path {
                         Path::Arc(arc) => Some(arc.bounds()),
                         Path::Line => None,
                     };
-                    for (axis, limit) in [(X, bed[0]), (Y, bed[1]), (Z, bed[2])] {
+                    for axis in [X, Y, Z] {
                         let (lo, hi) = match arc_box {
                             Some([min, max]) if axis != Z => (min[axis], max[axis]),
                             _ => (m.to[axis], m.to[axis]),
                         };
-                        let v = if lo < -1e-9 { lo } else { hi };
-                        if v < -1e-9 || v > limit + 1e-9 {
+                        let v = if bed.contains(axis, lo) { hi } else { lo };
+                        if !bed.contains(axis, v) {
                             let letter = AXIS_LETTERS[axis];
                             let col = block.word(letter).map_or(0, |w| w.span.start as usize);
                             self.add(
                                 n,
                                 Diagnostic::at(
                                     col,
-                                    Finding::OutsideBed { axis: letter as char, value_mm: fmt(v) },
+                                    Finding::OutsideBed { axis: letter as char, value_mm: round3(v) },
                                 ),
                             );
                         }
@@ -215,14 +228,14 @@ impl Pass for CheckPass {
                             Diagnostic::at(
                                 0,
                                 Finding::RelativeEDrift {
-                                    since_reset_mm: fmt(self.relative_e_since_reset_mm),
+                                    since_reset_mm: round3(self.relative_e_since_reset_mm),
                                 },
                             ),
                         );
                     }
                 } else if m.to[E].abs() > self.options.max_absolute_e_mm && !self.drift_reported {
                     self.drift_reported = true;
-                    self.add(n, Diagnostic::at(0, Finding::AbsoluteEPrecision { e_mm: fmt(m.to[E]) }));
+                    self.add(n, Diagnostic::at(0, Finding::AbsoluteEPrecision { e_mm: round3(m.to[E]) }));
                 }
             }
             Effect::SetPosition if block.has(b'E') => {
@@ -235,8 +248,30 @@ impl Pass for CheckPass {
     }
 }
 
-fn fmt(v: f64) -> String {
-    format!("{v:.3}")
+/// A figure as the finding shows it, to the micrometre (JSON keeps it a number).
+fn round3(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}
+
+/// Checks the file at `path`, reading past malformed lines (each is a finding). Without a bed
+/// in `options`, the bed the slicer's settings in the file describe is used, if they give one
+/// ([`Bed::from_file`]).
+pub fn check_file(path: &std::path::Path, mut options: CheckOptions, progress: &mut dyn Progress) -> Result<CheckReport> {
+    let mut from_file = None;
+    if options.bed.is_none() {
+        if let Some(found) = Bed::from_file(path).map_err(|e| Error::io(path, e))? {
+            options.bed = Some(found.bed);
+            from_file = Some(found.from.join(", "));
+        }
+    }
+    let mut pass = CheckPass::new(options);
+    let mut run = Run::new(path, progress);
+    run.strictness = Strictness::Lenient;
+    run.scan(&mut pass)?;
+    if from_file.is_some() {
+        pass.report.bed_from = from_file;
+    }
+    Ok(pass.report)
 }
 
 /// Whether a G/M/T code is one that some mainstream firmware (Marlin, RepRapFirmware, Klipper,
@@ -302,7 +337,7 @@ mod tests {
     /// An arc whose ends are on the bed but whose bulge is not.
     #[test]
     fn arcs_leave_the_bed_between_their_ends() {
-        let options = CheckOptions { bed_mm: Some([100.0, 100.0, 100.0]), ..Default::default() };
+        let options = CheckOptions { bed: Some("100,100,100".parse().unwrap()), ..Default::default() };
         let text = "M104 S200\nG1 X5 Y2 F600\nG2 X15 Y2 I5 J0 E1\nG3 X5 Y2 I-5 J0 E2\nG3 X15 Y2 I5 J0 E3\n";
         let found = findings_with(text, options);
         assert_eq!(found, [(5, "move outside the bed: Y=-3.000 mm".to_string())]);

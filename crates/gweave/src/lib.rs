@@ -15,11 +15,13 @@
 //! assert_eq!(state.pos[X], 12.5);
 //! ```
 
+pub mod bed;
 pub mod check;
 pub mod colour;
 pub mod error;
 pub mod gcode;
 pub mod gen;
+pub mod malformed;
 pub mod pass;
 // purge-shift and other post-processing passes
 pub mod post;
@@ -28,5 +30,6 @@ pub mod render;
 pub mod rotary;
 pub mod settings;
 pub mod stats;
+pub mod total;
 
 pub use error::{Error, Result};

@@ -1,4 +1,4 @@
-//! `gweave check`: lint a file before it reaches a printer; exit code 1 when errors are found.
+//! `gweave check`: lint files before they reach a printer; exit code 1 when errors are found.
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -6,26 +6,31 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::check::{CheckOptions, CheckPass, CheckReport};
-use gweave::pass::{Run, Strictness};
+use gweave::bed::Bed;
+use gweave::check::{check_file, CheckOptions, CheckReport};
+use gweave::range::FEED_MM_MIN;
+use gweave::total::{CheckTotal, Named, PerFile};
 
-use gweave::range::{BED_SIZE_MM, FEED_MM_MIN};
-
-use crate::common::{in_range, numbers_in, print_summary, ReportArgs};
+use crate::args::Quiet;
+use crate::common::{in_range, print_summary, ReportArgs};
 use crate::files::Files;
-use crate::progress::Bar;
 
 /// Lint G-code: checksums, malformed or unknown commands, cold extrusion, bed bounds, feed rates.
 ///
-/// Exit code 0 when no errors were found (warnings allowed), 1 otherwise.
-/// Example: `gweave check part.gcode --bed 220,220,250`.
+/// Malformed lines are findings, never a stop. Exit code 0 when no file has errors (warnings
+/// allowed), 1 otherwise. Several files: one report each, then the total.
+/// Example: `gweave check part.gcode --bed 0,-4,250,210,210`.
 #[derive(Args, Debug)]
 pub struct CheckArgs {
-    /// The G-code file to check.
-    pub input: PathBuf,
-    /// Printable volume X,Y,Z in mm; moves outside it are reported.
-    #[arg(long, value_name = "X,Y,Z", value_parser = numbers_in::<3>(BED_SIZE_MM))]
-    pub bed: Option<[f64; 3]>,
+    /// The G-code files to check.
+    #[arg(required = true, value_name = "INPUT")]
+    pub inputs: Vec<PathBuf>,
+    /// Printable volume, mm: X,Y,Z from the origin, or X0,Y0,X1,Y1[,Z] from a corner (Z not
+    /// checked without it); moves outside it are reported [default: the bed the slicer's
+    /// settings in the file give (PrusaSlicer's bed_shape and max_print_height, Cura's
+    /// machine_width, machine_depth, machine_height, machine_center_is_zero), else none].
+    #[arg(long, value_name = "X,Y,Z|X0,Y0,X1,Y1[,Z]", value_parser = |s: &str| s.parse::<Bed>().map_err(|e| e.to_string()))]
+    pub bed: Option<Bed>,
     /// Feed rates above this are absurd, mm/min.
     #[arg(long, value_name = "MM_MIN", default_value_t = CheckOptions::default().max_feed_mm_min,
           value_parser = in_range(FEED_MM_MIN))]
@@ -35,30 +40,47 @@ pub struct CheckArgs {
     pub strict: bool,
     #[command(flatten)]
     pub report: ReportArgs,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 pub fn run(args: CheckArgs) -> Result<ExitCode> {
-    Files::new().read("INPUT", Some(&args.input)).write("--report", args.report.report.as_deref()).check()?;
-    let options =
-        CheckOptions { bed_mm: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
-    let mut pass = CheckPass::new(options);
-    let mut bar = Bar::new(args.quiet);
-    let mut run = Run::new(&args.input, &mut bar);
-    run.strictness = Strictness::Lenient;
-    run.scan(&mut pass)?;
-    drop(bar);
-    let report = pass.report;
-    if args.report.emit(&report)? {
-        print_summary(|out| print_human(out, &args.input, &report))?;
+    Files::new().read_all("INPUT", args.inputs.iter().map(PathBuf::as_path)).write("--report", args.report.report.as_deref()).check()?;
+    let options = CheckOptions { bed: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
+    let mut reports = Vec::with_capacity(args.inputs.len());
+    for input in &args.inputs {
+        let mut bar = args.quiet.bar();
+        let report = check_file(input, options.clone(), &mut bar)?;
+        drop(bar);
+        // Findings print as each file is done (they are what `check` is for, -q or not); the
+        // JSON waits for the total.
+        if !args.report.json {
+            print_summary(|out| print_file(out, input, &report, args.quiet.quiet))?;
+        }
+        reports.push(report);
     }
-    let failed = report.errors > 0 || (args.strict && report.warnings > 0);
-    Ok(if failed { ExitCode::FAILURE } else { ExitCode::SUCCESS })
+    let total = CheckTotal::of(&reports, args.strict);
+    let human = match &reports[..] {
+        [one] => args.quiet.emit(&args.report, one)?,
+        _ => {
+            let files = args.inputs.iter().zip(reports).map(|(p, r)| Named { path: p.display().to_string(), report: r });
+            args.quiet.emit(&args.report, &PerFile { files: files.collect(), total: total.clone() })?
+        }
+    };
+    if human && total.files > 1 {
+        print_summary(|out| {
+            writeln!(
+                out,
+                "total: {} files, {} lines, {} errors, {} warnings; {} failed",
+                total.files, total.lines, total.errors, total.warnings, total.failed_files
+            )
+        })?;
+    }
+    Ok(if total.failed_files > 0 { ExitCode::FAILURE } else { ExitCode::SUCCESS })
 }
 
-fn print_human(out: &mut dyn Write, input: &Path, report: &CheckReport) -> io::Result<()> {
+/// A file's findings, then (without -q) the bed used and its counts.
+fn print_file(out: &mut dyn Write, input: &Path, report: &CheckReport, quiet: bool) -> io::Result<()> {
     let name = input.display();
     for f in &report.findings {
         let level = match f.severity {
@@ -71,6 +93,13 @@ fn print_human(out: &mut dyn Write, input: &Path, report: &CheckReport) -> io::R
     if shown < report.errors + report.warnings {
         writeln!(out, "... {} more findings not shown", report.errors + report.warnings - shown)?;
     }
-    writeln!(out, "{name}: {} lines, {} errors, {} warnings", report.lines, report.errors, report.warnings)?;
-    Ok(())
+    if quiet {
+        return Ok(());
+    }
+    match (&report.bed, report.bed_from.as_deref()) {
+        (Some(bed), Some("given")) => writeln!(out, "{name}: bed {bed}")?,
+        (Some(bed), Some(from)) => writeln!(out, "{name}: bed {bed} (the file's {from})")?,
+        _ => writeln!(out, "{name}: no bed given or found in the file: bounds not checked")?,
+    }
+    writeln!(out, "{name}: {} lines, {} errors, {} warnings", report.lines, report.errors, report.warnings)
 }

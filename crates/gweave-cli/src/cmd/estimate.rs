@@ -72,7 +72,7 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
 
 /// The default machine with the limits the slicer wrote into `input`, saying which.
 fn slicer_profile(input: &Path) -> Result<MachineProfile> {
-    let ends = file_ends(input).with_context(|| format!("reading {}", input.display()))?;
+    let ends = gweave::gcode::ends::read_ends(input).with_context(|| format!("reading {}", input.display()))?;
     let base = MachineProfile::default();
     let limits = slicer_limits(&ends, &base.motion)
         .with_context(|| format!("{}: --machine slicer", input.display()))?;
@@ -81,26 +81,6 @@ fn slicer_profile(input: &Path) -> Result<MachineProfile> {
     eprintln!("{name}: {}", limits.used.join(", "));
     eprintln!("  (steps per mm and anything not listed: the default machine's)");
     Ok(MachineProfile { name, motion: limits.profile, ..base })
-}
-
-/// The first 64 KiB and the last 256 KiB of a file (all of a smaller one), where slicers put
-/// their settings: Cura in its header and `;SETTING_3` footer, the PrusaSlicer family in the
-/// settings block after the last move.
-fn file_ends(path: &Path) -> std::io::Result<Vec<u8>> {
-    use std::io::{Seek, SeekFrom};
-    const HEAD: u64 = 64 * 1024;
-    const TAIL: u64 = 256 * 1024;
-    let mut file = File::open(path)?;
-    let len = file.metadata()?.len();
-    let mut buf = Vec::new();
-    (&mut file).take(HEAD).read_to_end(&mut buf)?;
-    let tail_start = len.saturating_sub(TAIL).max(buf.len() as u64);
-    if tail_start < len {
-        buf.push(b'\n');
-        file.seek(SeekFrom::Start(tail_start))?;
-        file.take(TAIL).read_to_end(&mut buf)?;
-    }
-    Ok(buf)
 }
 
 /// The input file, moving the progress bar as it is read.

@@ -6,47 +6,93 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
+use gweave::malformed::{Counting, WithMalformed};
 use gweave::pass::Run;
 use gweave::stats::{Stats, StatsPass};
+use gweave::total::{Named, PerFile, StatsTotal};
 
 use gweave::range::FILAMENT_DIAMETER_MM;
 
+use crate::args::{Lenient, Quiet};
 use crate::common::{hms, in_range, print_summary, ReportArgs};
 use crate::files::Files;
-use crate::progress::Bar;
 
 /// Statistics of a G-code file: slicer, layers, extents, filament per tool, distances, time.
 ///
 /// Filament per tool counts extruding moves, as PrusaSlicer's `; filament used [mm]` does.
-/// Example: `gweave stats part.gcode --json`.
+/// Several files: one report each, then the total of what adds up (lines, filament, distances,
+/// times). Example: `gweave stats part.gcode --json`, `gweave stats *.gcode`.
 #[derive(Args, Debug)]
 pub struct StatsArgs {
-    /// The G-code file to read.
-    pub input: PathBuf,
+    /// The G-code files to read.
+    #[arg(required = true, value_name = "INPUT")]
+    pub inputs: Vec<PathBuf>,
     /// Filament diameter in mm (default: the file's own setting, else 1.75).
     #[arg(long, value_name = "MM", value_parser = in_range(FILAMENT_DIAMETER_MM))]
     pub filament_diameter: Option<f64>,
     #[command(flatten)]
+    pub lenient: Lenient,
+    #[command(flatten)]
     pub report: ReportArgs,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 pub fn run(args: StatsArgs) -> Result<ExitCode> {
-    Files::new().read("INPUT", Some(&args.input)).write("--report", args.report.report.as_deref()).check()?;
-    let mut pass = StatsPass::new(args.filament_diameter);
-    let mut bar = Bar::new(args.quiet);
-    let state = Run::new(&args.input, &mut bar).scan(&mut pass)?;
-    drop(bar);
-    let stats = pass.into_stats(&state);
-    if args.report.emit(&stats)? {
-        print_summary(|out| print_human(out, &args.input, &stats))?;
+    Files::new()
+        .read_all("INPUT", args.inputs.iter().map(PathBuf::as_path))
+        .write("--report", args.report.report.as_deref())
+        .check()?;
+    let mut all = Vec::with_capacity(args.inputs.len());
+    for input in &args.inputs {
+        let mut pass = Counting::new(StatsPass::new(args.filament_diameter));
+        let mut bar = args.quiet.bar();
+        let mut run = Run::new(input, &mut bar);
+        run.strictness = args.lenient.strictness();
+        let state = run.scan(&mut pass)?;
+        drop(bar);
+        all.push(WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed });
+    }
+    let human = match &all[..] {
+        [one] => args.quiet.emit(&args.report, one)?,
+        _ => {
+            let total = StatsTotal::of(&all);
+            let files =
+                args.inputs.iter().zip(&all).map(|(p, s)| Named { path: p.display().to_string(), report: s });
+            args.quiet.emit(&args.report, &PerFile { files: files.collect(), total })?
+        }
+    };
+    if human {
+        print_summary(|out| {
+            for (input, s) in args.inputs.iter().zip(&all) {
+                print_human(out, input, s)?;
+            }
+            if all.len() > 1 {
+                print_total(out, &StatsTotal::of(&all))?;
+            }
+            Ok(())
+        })?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_human(out: &mut dyn Write, input: &std::path::Path, s: &Stats) -> io::Result<()> {
+fn print_total(out: &mut dyn Write, t: &StatsTotal) -> io::Result<()> {
+    writeln!(out, "total of {} files", t.files)?;
+    writeln!(out, "  lines           {} ({:.1} MB)", t.lines, t.bytes as f64 / 1e6)?;
+    writeln!(out, "  tool changes    {}", t.tool_changes)?;
+    for f in &t.filament {
+        writeln!(out, "    T{:<3} {:>12.2} mm {:>10.1} mm3", f.tool, f.extruded_mm, f.extruded_mm3)?;
+    }
+    writeln!(out, "  print / travel  {:.1} m / {:.1} m", t.print_mm / 1000.0, t.travel_mm / 1000.0)?;
+    writeln!(out, "  time (F only)   {}", hms(t.time_s))?;
+    if t.malformed_lines > 0 {
+        writeln!(out, "  malformed       {} lines skipped", t.malformed_lines)?;
+    }
+    Ok(())
+}
+
+fn print_human(out: &mut dyn Write, input: &std::path::Path, read: &WithMalformed<Stats>) -> io::Result<()> {
+    let s = &read.report;
     writeln!(out, "{}", input.display())?;
     let flavour = s.slicer_figures.flavour.as_deref().map(|f| format!(" ({f})")).unwrap_or_default();
     writeln!(out, "  slicer          {}{flavour}", s.slicer.name())?;
@@ -84,6 +130,10 @@ fn print_human(out: &mut dyn Write, input: &std::path::Path, s: &Stats) -> io::R
     }
     for w in &s.warnings {
         writeln!(out, "  warning: {w}")?;
+    }
+    if let Some(first) = read.malformed.first_malformed_line {
+        let n = read.malformed.malformed_lines;
+        writeln!(out, "  malformed       {n} lines skipped (first: line {first}; see gweave check)")?;
     }
     Ok(())
 }

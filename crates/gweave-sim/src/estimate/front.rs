@@ -59,21 +59,8 @@ impl HugeArcs {
 /// `I10000000` would otherwise be 63 million chords, half a minute of planning.
 pub const MAX_ARC_CHORDS: u32 = 100_000;
 
-/// Lines that could not be read (a malformed word, a line longer than
-/// [`MAX_LINE`](gweave::gcode::reader::MAX_LINE)): counted, with the first, never dropped silently.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct Malformed {
-    pub malformed_lines: u64,
-    /// The first of them, 1-based.
-    pub first_malformed_line: Option<u64>,
-}
-
-impl Malformed {
-    fn add(&mut self, line: u64) {
-        self.malformed_lines += 1;
-        self.first_malformed_line.get_or_insert(line);
-    }
-}
+/// Lines that could not be read: the engine's tally, as `stats --lenient` reports it.
+pub use gweave::malformed::Malformed;
 
 /// What turns a move into jobs besides the move itself: its time account (tag) and the
 /// firmware's fixed overheads. Apart from the state, so that a move can be read in place from

@@ -11,7 +11,7 @@ pub enum Severity {
 }
 
 /// What was found.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Finding {
     /// A word whose value is not a number (`X1..2`).
@@ -54,19 +54,19 @@ pub enum Finding {
     /// A move that leaves the bed given with `--bed`.
     OutsideBed {
         axis: char,
-        value_mm: String,
+        value_mm: f64,
     },
     /// A feed rate no printer can do (or zero/negative).
     AbsurdFeedRate {
-        feed_mm_min: String,
+        feed_mm_min: f64,
     },
     /// Relative extrusion running long without a `G92 E` reset (float drift in the firmware).
     RelativeEDrift {
-        since_reset_mm: String,
+        since_reset_mm: f64,
     },
     /// Absolute E values so large that single-precision firmware loses resolution.
     AbsoluteEPrecision {
-        e_mm: String,
+        e_mm: f64,
     },
     /// `T<n>` past [`crate::gcode::state::MAX_TOOLS`]: no machine has that tool.
     ToolOutOfRange {
@@ -127,16 +127,16 @@ impl fmt::Display for Finding {
                 write!(f, "extrusion before any hotend temperature was set")
             }
             Finding::OutsideBed { axis, value_mm } => {
-                write!(f, "move outside the bed: {axis}={value_mm} mm")
+                write!(f, "move outside the bed: {axis}={value_mm:.3} mm")
             }
             Finding::AbsurdFeedRate { feed_mm_min } => {
-                write!(f, "absurd feed rate F{feed_mm_min} mm/min")
+                write!(f, "absurd feed rate F{feed_mm_min:.3} mm/min")
             }
             Finding::RelativeEDrift { since_reset_mm } => {
-                write!(f, "relative extrusion ran {since_reset_mm} mm without a G92 E reset (float drift)")
+                write!(f, "relative extrusion ran {since_reset_mm:.3} mm without a G92 E reset (float drift)")
             }
             Finding::AbsoluteEPrecision { e_mm } => {
-                write!(f, "absolute E reached {e_mm} mm without a reset (precision loss)")
+                write!(f, "absolute E reached {e_mm:.3} mm without a reset (precision loss)")
             }
             Finding::LineTooLong { len } => write!(
                 f,
@@ -158,7 +158,7 @@ impl fmt::Display for Finding {
 pub const MAX_LINE_DIAGNOSTICS: usize = 16;
 
 /// A finding at a 1-based column of a line.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Diagnostic {
     pub column: u32,
     #[serde(flatten)]

@@ -5,6 +5,7 @@
 pub mod arc;
 pub mod diag;
 pub mod encoding;
+pub mod ends;
 pub mod flavour;
 pub mod layers;
 pub mod lexer;

@@ -1,0 +1,95 @@
+//! Lines a lenient run read past: counted, the first one named, never dropped silently.
+//!
+//! A strict run ([`Strictness::Strict`](crate::pass::Strictness)) stops at the first malformed
+//! line with `file:line:column`. A lenient one hands such a line to its pass like any other (its
+//! good words still count; its state is what the firmware would make of it) and [`Counting`]
+//! tallies it, so that `gweave stats --lenient` and `gweave preview --lenient` say how much of
+//! the file they could not read, as `sim` and `estimate` do.
+//!
+//! ```
+//! use gweave::malformed::Counting;
+//! use gweave::pass::{drive_reader, Quiet, Strictness};
+//! use gweave::stats::StatsPass;
+//!
+//! let text = "G1 X1 F600\nG1 X1..2\nG1 X3\n";
+//! let mut pass = Counting::new(StatsPass::new(None));
+//! let path = std::path::Path::new("part.gcode");
+//! let options = Default::default();
+//! let lenient = Strictness::Lenient;
+//! drive_reader(text.as_bytes(), path, options, lenient, &mut Quiet, &mut pass, &mut std::io::sink())
+//!     .unwrap();
+//! assert_eq!((pass.malformed.malformed_lines, pass.malformed.first_malformed_line), (1, Some(2)));
+//! ```
+
+use std::io::{self, Write};
+
+use serde::Serialize;
+
+use crate::gcode::diag::Severity;
+use crate::gcode::reader::{Part, RawLine};
+use crate::gcode::state::State;
+use crate::pass::{Ctx, Pass};
+
+/// How many lines could not be read, and the first of them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct Malformed {
+    pub malformed_lines: u64,
+    /// The first of them, 1-based.
+    pub first_malformed_line: Option<u64>,
+}
+
+impl Malformed {
+    pub fn add(&mut self, line: u64) {
+        self.malformed_lines += 1;
+        self.first_malformed_line.get_or_insert(line);
+    }
+}
+
+/// A report with the malformed lines of its lenient read, in one JSON object (the report's
+/// fields and `malformed_lines`, `first_malformed_line`).
+#[derive(Debug, Clone, Serialize)]
+pub struct WithMalformed<T> {
+    #[serde(flatten)]
+    pub report: T,
+    #[serde(flatten)]
+    pub malformed: Malformed,
+}
+
+/// A pass that counts the malformed lines its inner pass sees (an error-level diagnostic, or a
+/// line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE)).
+#[derive(Debug, Default)]
+pub struct Counting<P> {
+    pub pass: P,
+    pub malformed: Malformed,
+}
+
+impl<P> Counting<P> {
+    pub fn new(pass: P) -> Self {
+        Counting { pass, malformed: Malformed::default() }
+    }
+}
+
+impl<P: Pass> Pass for Counting<P> {
+    #[inline]
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        if ctx.block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error) {
+            self.malformed.add(ctx.line.number);
+        }
+        self.pass.line(ctx, out)
+    }
+
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> io::Result<()> {
+        if let Part::Last { .. } = piece.part {
+            self.malformed.add(piece.number);
+        }
+        self.pass.long_line(piece, out)
+    }
+
+    fn finish(&mut self, state: &State, out: &mut dyn Write) -> io::Result<()> {
+        self.pass.finish(state, out)
+    }
+
+    fn reads_words(&self) -> bool {
+        self.pass.reads_words()
+    }
+}
