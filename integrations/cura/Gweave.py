@@ -39,7 +39,7 @@ class Gweave(Script):
                 },
                 "purge_mm": {
                     "label": "Purge",
-                    "description": "Filament each tool change is moved earlier by (gweave purge-shift --purge).",
+                    "description": "Filament each tool change is moved earlier by (gweave purge-shift --purge-mm).",
                     "type": "float",
                     "unit": "mm",
                     "default_value": 2.5,
@@ -78,7 +78,7 @@ class Gweave(Script):
 
 
 def run(mode: str, value, src: str, dst: str) -> None:
-    """``gweave purge-shift SRC -o DST --purge MM`` or ``gweave mix SRC -o DST -c PROFILE``.
+    """``gweave purge-shift SRC -o DST --purge-mm MM`` or ``gweave mix SRC -o DST -c PROFILE``.
 
     Through the Python package (its errors are exceptions with gweave's message, which Cura logs),
     or the ``gweave`` command on PATH when Cura's Python cannot import the package.
@@ -89,7 +89,7 @@ def run(mode: str, value, src: str, dst: str) -> None:
         exe = shutil.which("gweave")
         if exe is None:
             raise RuntimeError("gweave: neither the gweave Python package nor the gweave command is installed")
-        args = ["mix", src, "-o", dst, "-c", value] if mode == "mix" else ["purge-shift", src, "-o", dst, "--purge", repr(value)]
+        args = ["mix", src, "-o", dst, "-c", value] if mode == "mix" else ["purge-shift", src, "-o", dst, "--purge-mm", repr(value)]
         done = subprocess.run([exe, *args], capture_output=True, text=True)
         if done.returncode != 0:
             raise RuntimeError(done.stderr.strip())

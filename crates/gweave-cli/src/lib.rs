@@ -24,6 +24,12 @@ struct Cli {
     command: cmd::Command,
 }
 
+/// The clap description of every command, for tests that hold all of them to one vocabulary
+/// (`tests/vocabulary.rs`) and for the Python package's flag-to-keyword map.
+pub fn command() -> clap::Command {
+    <Cli as clap::CommandFactory>::command()
+}
+
 /// Runs the CLI with these arguments (the first is the program name) and returns the exit code.
 pub fn run<I, T>(args: I) -> ExitCode
 where

@@ -57,7 +57,10 @@ fn check_json(
     bed: Option<[f64; 3]>,
     max_feed: Option<f64>,
 ) -> PyResult<String> {
-    let bed = bed.map(|[x, y, z]| format!("{x},{y},{z}").parse::<gweave::bed::Bed>()).transpose().map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let bed = bed
+        .map(|[x, y, z]| format!("{x},{y},{z}").parse::<gweave::bed::Bed>())
+        .transpose()
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let mut options = CheckOptions { bed, ..CheckOptions::default() };
     if let Some(f) = max_feed {
         options.max_feed_mm_min = f;

@@ -211,7 +211,7 @@ def test_octoprint_times_with_the_machine_profile_set(octoprint, data):
 
 def test_octoprint_upload_is_purge_shifted_like_the_cli(octoprint, data, tmp_path):
     fixture = data / "slic3r" / "slic3r_cone_2tool.gcode"
-    octoprint.settings(on_upload="purge-shift --purge 2.5")
+    octoprint.settings(on_upload="purge-shift --purge-mm 2.5")
     try:
         assert octoprint.upload(fixture, "cone.gcode").status_code == 201
         f = octoprint.file("cone.gcode", lambda f: "gweave" in f and analysed(f))
@@ -229,7 +229,7 @@ def test_octoprint_upload_is_purge_shifted_like_the_cli(octoprint, data, tmp_pat
 
 def test_octoprint_refused_upload_is_kept_and_says_why(octoprint, data):
     fixture = data / "slic3r" / "slic3r_cone_2tool.gcode"
-    octoprint.settings(on_upload="purge-shift --purge=-1")
+    octoprint.settings(on_upload="purge-shift --purge-mm=-1")
     try:
         assert octoprint.upload(fixture, "refused.gcode").status_code == 201
         f = octoprint.file("refused.gcode", lambda f: "gweave" in f)
@@ -238,11 +238,11 @@ def test_octoprint_refused_upload_is_kept_and_says_why(octoprint, data):
     assert octoprint.stored("refused.gcode") == fixture.read_bytes()
     upload = f["gweave"]["upload"]
     assert upload["ok"] is False
-    assert "invalid value '-1' for '--purge <MM>': out of range: 0 to 1000 mm" in upload["error"], upload
+    assert "invalid value '-1' for '--purge-mm <MM>': out of range: 0 to 1000 mm" in upload["error"], upload
     recent = octoprint.http.get(f"{octoprint.url}/api/plugin/gweave").json()["uploads"]
     assert any(u["path"] == "refused.gcode" and not u["ok"] for u in recent)
     log = (octoprint.base / "logs" / "octoprint.log").read_text()
-    assert "refused.gcode stored as uploaded: error: invalid value '-1' for '--purge <MM>'" in log
+    assert "refused.gcode stored as uploaded: error: invalid value '-1' for '--purge-mm <MM>'" in log
 
 
 def test_octoprint_refuses_to_print_a_file_with_errors(octoprint, tmp_path):
@@ -339,7 +339,7 @@ def test_octoprint_page_shows_the_badge_and_settings(octoprint, data, tmp_path):
     for path, name in ((data / "cura" / "cura_torus.gcode", "torus.gcode"), (bad, "bad.gcode")):
         assert octoprint.upload(path, name).status_code == 201
         octoprint.file(name, analysed)
-    octoprint.settings(on_upload="purge-shift --purge 2.5")
+    octoprint.settings(on_upload="purge-shift --purge-mm 2.5")
     try:
         octoprint.upload(data / "slic3r" / "slic3r_cone_2tool.gcode", "cone.gcode")
         octoprint.file("cone.gcode", lambda f: "gweave" in f and analysed(f))

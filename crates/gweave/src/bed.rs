@@ -94,7 +94,8 @@ impl Bed {
     pub fn from_settings(text: &[u8]) -> Option<SlicerBed> {
         let text = String::from_utf8_lossy(text);
         let s = settings(&text);
-        let z = |key: &str| s.get(key).and_then(|v| v.parse::<f64>().ok()).filter(|z| BED_SIZE_MM.contains(*z));
+        let z =
+            |key: &str| s.get(key).and_then(|v| v.parse::<f64>().ok()).filter(|z| BED_SIZE_MM.contains(*z));
         if let Some(shape) = s.get("bed_shape") {
             let points: Option<Vec<[f64; 2]>> = shape
                 .split(',')
@@ -212,7 +213,8 @@ mod tests {
 
     #[test]
     fn cura_settings_footer_with_a_centred_origin() {
-        let footer = ";SETTING_3 {\"global_quality\": \"[general]\\\\nversion = 4\\\\n[values]\\\\nmachine_ce\n\
+        let footer =
+            ";SETTING_3 {\"global_quality\": \"[general]\\\\nversion = 4\\\\n[values]\\\\nmachine_ce\n\
             ;SETTING_3 nter_is_zero = True\\\\nmachine_depth = 200\\\\nmachine_width = 300\\\\n\"}\n";
         let found = Bed::from_settings(footer.as_bytes()).unwrap();
         assert_eq!(found.bed, Bed { x_mm: [-150.0, 150.0], y_mm: [-100.0, 100.0], z_mm: None });

@@ -8,12 +8,12 @@ use std::io::{self, Write};
 use serde::Serialize;
 
 use crate::bed::Bed;
+use crate::error::{Error, Result};
 use crate::gcode::diag::{Diagnostic, Finding, Severity};
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
-use crate::error::{Error, Result};
 use crate::pass::{Ctx, Pass, Progress, Run, Strictness};
 
 /// Lint settings.
@@ -256,7 +256,11 @@ fn round3(v: f64) -> f64 {
 /// Checks the file at `path`, reading past malformed lines (each is a finding). Without a bed
 /// in `options`, the bed the slicer's settings in the file describe is used, if they give one
 /// ([`Bed::from_file`]).
-pub fn check_file(path: &std::path::Path, mut options: CheckOptions, progress: &mut dyn Progress) -> Result<CheckReport> {
+pub fn check_file(
+    path: &std::path::Path,
+    mut options: CheckOptions,
+    progress: &mut dyn Progress,
+) -> Result<CheckReport> {
     let mut from_file = None;
     if options.bed.is_none() {
         if let Some(found) = Bed::from_file(path).map_err(|e| Error::io(path, e))? {

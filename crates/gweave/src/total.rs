@@ -93,7 +93,6 @@ pub struct Named<T> {
     pub report: T,
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,7 +6,7 @@ Settings (``plugins.gweave`` in OctoPrint's ``config.yaml``, or the plugin's set
 - ``machine``: a gweave machine profile (TOML path) for the print time and the virtual printer;
   empty: gweave's built-in machine (RAMPS 1.4 Marlin);
 - ``on_upload``: a gweave transform applied to each uploaded G-code file, for example
-  ``purge-shift --purge 2.5`` or ``mix -c /path/mix.toml``; empty: uploads are stored as they come;
+  ``purge-shift --purge-mm 2.5`` or ``mix -c /path/mix.toml``; empty: uploads are stored as they come;
 - ``block_on_errors``: refuse to start a print when the check finds errors;
 - ``timeout_s``: the longest one gweave run may take.
 

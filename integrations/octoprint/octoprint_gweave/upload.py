@@ -1,7 +1,7 @@
 """Upload processing (the ``octoprint.filemanager.preprocessor`` hook).
 
 ``plugins.gweave.on_upload`` holds a gweave transform and its arguments, as typed after
-``gweave`` on a command line without the input and output: ``purge-shift --purge 2.5`` or
+``gweave`` on a command line without the input and output: ``purge-shift --purge-mm 2.5`` or
 ``mix -c /path/mix.toml``. Each uploaded G-code file is written by
 ``gweave <command> <upload> -o <new> <arguments>`` and the new file is what OctoPrint stores, so it
 equals what the CLI writes for the same arguments, byte for byte.

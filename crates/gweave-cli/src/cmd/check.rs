@@ -45,7 +45,10 @@ pub struct CheckArgs {
 }
 
 pub fn run(args: CheckArgs) -> Result<ExitCode> {
-    Files::new().read_all("INPUT", args.inputs.iter().map(PathBuf::as_path)).write("--report", args.report.report.as_deref()).check()?;
+    Files::new()
+        .read_all("INPUT", args.inputs.iter().map(PathBuf::as_path))
+        .write("--report", args.report.report.as_deref())
+        .check()?;
     let options = CheckOptions { bed: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
     let mut reports = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {
@@ -63,7 +66,11 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
     let human = match &reports[..] {
         [one] => args.quiet.emit(&args.report, one)?,
         _ => {
-            let files = args.inputs.iter().zip(reports).map(|(p, r)| Named { path: p.display().to_string(), report: r });
+            let files = args
+                .inputs
+                .iter()
+                .zip(reports)
+                .map(|(p, r)| Named { path: p.display().to_string(), report: r });
             args.quiet.emit(&args.report, &PerFile { files: files.collect(), total: total.clone() })?
         }
     };

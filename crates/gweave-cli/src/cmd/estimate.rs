@@ -13,6 +13,7 @@ use gweave_sim::profile::MachineProfile;
 use gweave_sim::slicer_limits::slicer_limits;
 
 use super::sim::{print_layers_and_features, print_malformed};
+use crate::args::Quiet;
 use crate::common::{hms, load_or_default, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::progress::Bar;
@@ -39,9 +40,8 @@ pub struct EstimateArgs {
     pub steps: bool,
     #[command(flatten)]
     pub report: ReportArgs,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 pub fn run(args: EstimateArgs) -> Result<ExitCode> {
@@ -57,14 +57,14 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         other => load_or_default(other.as_ref(), MachineProfile::from_toml_str)?,
     };
     let file = File::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
-    let mut bar = Bar::new(args.quiet);
+    let mut bar = args.quiet.bar();
     bar.set_len(file.metadata().map(|m| m.len()).unwrap_or(0));
     let input = Counted { inner: file, bar, done: 0 };
     let report = estimate_report(input, &profile, args.steps).map_err(|e| match e.line() {
         Some(line) if line > 0 => anyhow!("{}:{line}: {}", args.input.display(), e.reason()),
         _ => anyhow!("{}: {}", args.input.display(), e.reason()),
     })?;
-    if args.report.emit(&report)? {
+    if args.quiet.emit(&args.report, &report)? {
         print_summary(|out| print_human(out, &args.input, &report))?;
     }
     Ok(ExitCode::SUCCESS)
@@ -72,7 +72,8 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
 
 /// The default machine with the limits the slicer wrote into `input`, saying which.
 fn slicer_profile(input: &Path) -> Result<MachineProfile> {
-    let ends = gweave::gcode::ends::read_ends(input).with_context(|| format!("reading {}", input.display()))?;
+    let ends =
+        gweave::gcode::ends::read_ends(input).with_context(|| format!("reading {}", input.display()))?;
     let base = MachineProfile::default();
     let limits = slicer_limits(&ends, &base.motion)
         .with_context(|| format!("{}: --machine slicer", input.display()))?;

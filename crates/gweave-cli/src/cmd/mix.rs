@@ -17,9 +17,9 @@ use gweave::post::mix::{mix_file, wizard::run_wizard};
 
 use gweave::range::PURGE_MM;
 
+use crate::args::Quiet;
 use crate::common::{in_range, load_or_default, print_summary, write_bytes, OutputArgs, ReportArgs};
 use crate::files::Files;
-use crate::progress::Bar;
 
 /// Colour a print on a mixing hotend: define mixes as virtual tools, change them by layer, by
 /// height, along a gradient or per slicer tool, purge at each change, cap the Z feed rate.
@@ -60,7 +60,7 @@ pub struct MixArgs {
     /// `gcode_flavor = reprapfirmware`), else marlin.
     #[arg(long, value_name = "DIALECT", value_parser = |s: &str| s.parse::<Dialect>().map_err(|e| e.to_string()))]
     pub dialect: Option<Dialect>,
-    /// Purge length at each change, mm of filament (0: no purge); overrides the profile.
+    /// Purge length at each change, mm of filament (0: no purge) [default: the profile's].
     #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
     pub purge_mm: Option<f64>,
     /// Draw the job's mixes (or the whole palette without a job) as a PNG swatch chart.
@@ -71,9 +71,8 @@ pub struct MixArgs {
     pub wizard: bool,
     #[command(flatten)]
     pub report: ReportArgs,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -107,13 +106,13 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         }
     }
     let (Some(input), Some(target)) = (&args.input, target) else { bail!("give the G-code file to rewrite") };
-    let mut bar = Bar::new(args.quiet);
+    let mut bar = args.quiet.bar();
     let report = mix_file(profile, input, &target, &mut bar)?;
     drop(bar);
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");
     }
-    if args.report.emit(&report)? && !args.quiet {
+    if args.quiet.emit(&args.report, &report)? {
         // Keep standard output clean when the G-code goes there.
         if target == Target::Stdout {
             print_human(&mut std::io::stderr().lock(), &report)?;

@@ -17,9 +17,9 @@ use gweave::render::{
 };
 use gweave::rotary::cylinder::{RotaryConfig, MANDREL_DIAMETER_MM};
 
+use crate::args::Quiet;
 use crate::common::{in_range, load, print_summary, write_bytes, ReportArgs};
 use crate::files::Files;
-use crate::progress::Bar;
 
 /// Draw a file: top view of a layer, isometric view of the print, or a before/after comparison.
 ///
@@ -36,10 +36,10 @@ pub struct PreviewArgs {
     /// Output file: .png, .svg or .html.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
-    /// Draw only this layer (0-based).
+    /// Draw only this layer (0-based) [default: every layer].
     #[arg(long, value_name = "N", conflicts_with = "layers", value_parser = in_range(LAYER_NUMBER))]
     pub layer: Option<u32>,
-    /// Draw this layer range, inclusive, e.g. 10-20.
+    /// Draw this layer range, inclusive, e.g. 10-20 [default: every layer].
     #[arg(long, value_name = "A-B", value_parser = parse_range)]
     pub layers: Option<RangeInclusive<u32>>,
     /// top (from above) or iso (isometric 3D).
@@ -47,7 +47,7 @@ pub struct PreviewArgs {
     pub view: ViewKind,
     /// tool, feature, speed, layer or mix (the colour each move is predicted to print, from the
     /// file's mixing commands, the filaments of --mix-profile and its chamber's washout).
-    #[arg(long, default_value = "tool", value_parser = |s: &str| s.parse::<ColourBy>())]
+    #[arg(long, alias = "color-by", default_value = "tool", value_parser = |s: &str| s.parse::<ColourBy>())]
     pub colour_by: ColourBy,
     /// Picture size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "1200x900", value_parser = parse_size)]
@@ -56,7 +56,7 @@ pub struct PreviewArgs {
     #[arg(long, value_name = "B")]
     pub compare: Option<PathBuf>,
     /// Colours of tools 0, 1, ... as #rrggbb, comma separated, for --colour-by tool.
-    #[arg(long, value_name = "COLOURS", value_delimiter = ',')]
+    #[arg(long, alias = "tool-colors", value_name = "COLOURS", value_delimiter = ',')]
     pub tool_colours: Vec<Srgb8>,
     /// A `gweave mix` profile: the filament colours of its inputs and its mixing chamber
     /// (purge.chamber_mm3, dead_mm3) for --colour-by mix (default: cyan, magenta, yellow, white).
@@ -64,7 +64,7 @@ pub struct PreviewArgs {
     pub mix_profile: Option<PathBuf>,
     /// Draw the file as a rotary program on a mandrel of this diameter, mm (axes X along, A
     /// around in degrees, Z away from it). Not needed for `gweave rotary` output: its header
-    /// names the machine.
+    /// names the machine [default: the file's gweave header, else a flat print].
     #[arg(long, value_name = "MM", value_parser = in_range(MANDREL_DIAMETER_MM))]
     pub mandrel_diameter: Option<f64>,
     /// Printhead profile of binder-jet raster output (TOML, as for `gweave raster --head`;
@@ -79,9 +79,8 @@ pub struct PreviewArgs {
     pub min_len: Option<f32>,
     #[command(flatten)]
     pub report: ReportArgs,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 fn parse_range(s: &str) -> Result<RangeInclusive<u32>, String> {
@@ -131,11 +130,11 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         rotary: args.mandrel_diameter.map(RotaryConfig::new),
         printhead,
     };
-    let mut bar = Bar::new(args.quiet);
+    let mut bar = args.quiet.bar();
     let preview = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
     drop(bar);
     write_bytes(&args.output, &preview.bytes)?;
-    if args.report.emit(&preview.report)? {
+    if args.quiet.emit(&args.report, &preview.report)? {
         print_summary(|out| print_human(out, &args, &preview.report))?;
     }
     Ok(ExitCode::SUCCESS)

@@ -10,9 +10,9 @@ use gweave::gcode::writer::Target;
 use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
 use gweave::range::{FILAMENT_DIAMETER_MM, POSITION_MM, PURGE_MM, PURGE_MM3};
 
+use crate::args::Quiet;
 use crate::common::{in_range, load_or_default, numbers_in, print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
-use crate::progress::Bar;
 
 /// Move each tool/mix change earlier by the purge, so the old colour is purged inside the part.
 ///
@@ -23,20 +23,22 @@ use crate::progress::Bar;
 /// the outer wall (unless allowed) or the previous change. With too little room the rest of
 /// the purge is accepted as missing, or purged in a block or on a small tower (--fallback).
 ///
-/// As a PrusaSlicer post-processing script: `/path/to/gweave purge-shift --purge 2.5 --in-place
+/// As a PrusaSlicer post-processing script: `/path/to/gweave purge-shift --purge-mm 2.5 --in-place
 /// --no-backup` (PrusaSlicer appends the file name). Chains after `gweave mix`.
-/// Example: `gweave purge-shift part.gcode -o part.shifted.gcode --purge 2.5`.
+/// Example: `gweave purge-shift part.gcode -o part.shifted.gcode --purge-mm 2.5`.
 #[derive(Args, Debug)]
 pub struct PurgeShiftArgs {
     /// The G-code file to read.
     pub input: PathBuf,
     #[command(flatten)]
     pub out: OutputArgs,
-    /// Purge per change, mm of filament.
-    #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
-    pub purge: Option<f64>,
-    /// Purge per change as a volume, mm^3 (converted with --filament-diameter).
-    #[arg(long, value_name = "MM3", conflicts_with = "purge", value_parser = in_range(PURGE_MM3))]
+    /// Purge per change, mm of filament (`--purge` is an older name); one of --purge-mm,
+    /// --purge-mm3 or the config's amounts is needed [default: the config's].
+    #[arg(long, alias = "purge", value_name = "MM", value_parser = in_range(PURGE_MM))]
+    pub purge_mm: Option<f64>,
+    /// Purge per change as a volume, mm^3 (converted with --filament-diameter) [default: the
+    /// config's].
+    #[arg(long, value_name = "MM3", conflicts_with = "purge_mm", value_parser = in_range(PURGE_MM3))]
     pub purge_mm3: Option<f64>,
     /// TOML settings: per-pair table, colours, washout model, rules (flags override it).
     #[arg(short, long, value_name = "TOML")]
@@ -54,7 +56,8 @@ pub struct PurgeShiftArgs {
     #[arg(long, value_name = "BEGIN,END", value_delimiter = ',', num_args = 1)]
     pub markers: Option<Vec<String>>,
     /// Too little room: `partial` (accept the shortfall), `block` (purge the rest in a purge
-    /// block, as `gweave mix` does) or `tower` (purge the rest on a small tower beside the part).
+    /// block, as `gweave mix` does) or `tower` (purge the rest on a small tower beside the part)
+    /// [default: the config's, else partial].
     #[arg(long, value_name = "NAME")]
     pub fallback: Option<String>,
     /// The tower's corner `X,Y`, mm (default: beside the print's extent so far).
@@ -62,9 +65,8 @@ pub struct PurgeShiftArgs {
     pub tower_at: Option<[f64; 2]>,
     #[command(flatten)]
     pub report: ReportArgs,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 /// Builds the library settings: the TOML file first, then the flags on top.
@@ -76,7 +78,7 @@ fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
         Some(_) => anyhow::bail!("--markers takes two comment texts: BEGIN,END"),
     };
     c.apply(&Overrides {
-        purge_mm: args.purge,
+        purge_mm: args.purge_mm,
         purge_mm3: args.purge_mm3,
         filament_diameter_mm: args.filament_diameter,
         cross_layers: args.cross_layers,
@@ -97,7 +99,7 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let rules = config(&args)?.validate()?;
-    let mut bar = Bar::new(args.quiet);
+    let mut bar = args.quiet.bar();
     let report = purge_shift_file(rules, &args.input, &target, &mut bar)?;
     drop(bar);
     for w in report.warnings.iter().take(20) {
@@ -106,7 +108,7 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     if report.warnings_total > 20 {
         eprintln!("gweave: ... {} more warnings (see --json)", report.warnings_total - 20);
     }
-    if args.report.emit(&report)? {
+    if args.quiet.emit(&args.report, &report)? {
         // Keep standard output clean when the G-code goes there.
         if target == Target::Stdout {
             eprint!("{}", report.summary());

@@ -11,6 +11,7 @@ use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
 use gweave::gen::raster::{DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
 
+use crate::args::Quiet;
 use crate::common::{hms, in_range, numbers_in, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::raster_job::{JobOptions, JobReport};
@@ -27,7 +28,7 @@ pub struct RasterArgs {
     #[arg(required_unless_present = "test_pattern")]
     pub inputs: Vec<PathBuf>,
     /// Output G-code file (`-` for standard output).
-    #[arg(short, long, value_name = "OUT.gcode")]
+    #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// Printhead profile (TOML; default: HP C6602, 12 nozzles at 96 dpi, one head).
     #[arg(long, value_name = "PROFILE.toml")]
@@ -54,16 +55,18 @@ pub struct RasterArgs {
     /// Layer thickness, mm (default: the .sl1's own, else 0.1).
     #[arg(long, value_name = "MM", value_parser = in_range(LAYER_HEIGHT_MM))]
     pub layer_height: Option<f64>,
-    /// Pixel size of the images, mm; they are resampled to the nozzle pitch.
+    /// Pixel size of the images, mm; they are resampled to the nozzle pitch [default: 25.4/--dpi,
+    /// else one pixel per nozzle pitch, or the .sl1's own].
     #[arg(long, value_name = "MM", conflicts_with = "dpi", value_parser = in_range(PIXEL_MM))]
     pub pixel_mm: Option<f64>,
-    /// Resolution of the images, dots per inch (pixel = 25.4 / D mm).
+    /// Resolution of the images, dots per inch (pixel = 25.4 / D mm) [default: the nozzle pitch's].
     #[arg(long, value_name = "D", value_parser = in_range(DPI))]
     pub dpi: Option<f64>,
-    /// Heads to use (the profile's offsets; missing heads get zero offsets).
+    /// Heads to use (the profile's offsets; missing heads get zero offsets) [default: one per
+    /// --channels entry, else 1].
     #[arg(long, value_name = "N", value_parser = in_range(HEADS))]
     pub heads: Option<usize>,
-    /// One image channel per head, e.g. `r,b` (r, g, b, luma).
+    /// One image channel per head, e.g. `r,b` (r, g, b, luma) [default: luma, one head].
     #[arg(long, value_name = "LIST")]
     pub channels: Option<String>,
     /// G-code between layers (powder recoat); `{layer}` and `{z}` are replaced.
@@ -78,7 +81,7 @@ pub struct RasterArgs {
     /// Fire command dialect (default: the profile's).
     #[arg(long, value_enum)]
     pub dialect: Option<Dialect>,
-    /// Carriage feed rate, mm/min.
+    /// Carriage feed rate, mm/min [default: 3000].
     #[arg(long, value_name = "MM_MIN", value_parser = in_range(FEED_MM_MIN))]
     pub feed: Option<f64>,
     /// Estimate time from the path at the feed rate instead of running the planner (faster).
@@ -92,9 +95,8 @@ pub struct RasterArgs {
     pub pattern_columns: usize,
     #[command(flatten)]
     pub report: ReportArgs,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -158,7 +160,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
         .check()?;
     let Some((source, heads)) = source else {
         let (rep, profile) = options.test_pattern(&target(&args.output), args.pattern_columns)?;
-        if args.report.emit(&rep)? && !to_stdout {
+        if args.quiet.emit(&args.report, &rep)? && !to_stdout {
             print_summary(|out| {
                 writeln!(out, "{}: nozzle test pattern", args.output.display())?;
                 writeln!(
@@ -175,10 +177,10 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     };
     let job = options.job_from(source, heads)?;
-    let mut bar = LayerBar::new(args.quiet);
+    let mut bar = LayerBar::new(args.quiet.quiet);
     let report = job.run(&target(&args.output), &mut bar)?;
     drop(bar);
-    if args.report.emit(&report)? && !to_stdout {
+    if args.quiet.emit(&args.report, &report)? && !to_stdout {
         print_summary(|out| print_human(out, &report, &job.profile))?;
     }
     Ok(ExitCode::SUCCESS)

@@ -20,10 +20,10 @@ use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
 
+use crate::args::Quiet;
 use crate::common::hms;
 use crate::common::{in_range, load, print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
-use crate::progress::Bar;
 
 /// Rotary (lathe-type) printing: wrap flat G-code onto a mandrel, or generate helical tubes.
 #[derive(Args, Debug)]
@@ -68,12 +68,13 @@ pub enum UnitArg {
 /// The machine, shared by both commands; flags override the TOML file.
 #[derive(Args, Debug)]
 pub struct MachineArgs {
-    /// Mandrel diameter, mm (required unless the config file gives `[machine] mandrel_diameter_mm`).
+    /// Mandrel diameter, mm [default: the config file's `[machine] mandrel_diameter_mm`; one of
+    /// them is required].
     #[arg(long, value_name = "MM", value_parser = in_range(MANDREL_DIAMETER_MM))]
     pub mandrel_diameter: Option<f64>,
-    /// How the firmware reads F [default: nist].
-    #[arg(long, value_enum)]
-    pub feed: Option<FeedArg>,
+    /// How the firmware reads F on rotary moves (`--feed` is an older name) [default: nist].
+    #[arg(long, alias = "feed", value_enum)]
+    pub feed_convention: Option<FeedArg>,
     /// Unit of the rotary word [default: deg].
     #[arg(long, value_enum)]
     pub rotary_unit: Option<UnitArg>,
@@ -131,7 +132,7 @@ impl MachineArgs {
         if let Some(d) = self.mandrel_diameter {
             machine.mandrel_diameter_mm = d;
         }
-        if let Some(feed) = self.feed {
+        if let Some(feed) = self.feed_convention {
             machine.feed_convention = match feed {
                 FeedArg::Nist => FeedConvention::Nist,
                 FeedArg::Combined => FeedConvention::Combined,
@@ -190,7 +191,8 @@ pub struct WrapArgs {
     /// Keep flat arc lengths (the Diabase wizard: A = Y*180/(pi*(R + z - z1)), E unchanged).
     #[arg(long)]
     pub keep_arc_length: bool,
-    /// Turn every layer this much further than the one below, degrees, so seams do not stack.
+    /// Turn every layer this much further than the one below, degrees, so seams do not stack
+    /// [default: 0].
     #[arg(long, value_name = "DEG", value_parser = in_range(ANGLE_DEG))]
     pub seam_rotation: Option<f64>,
     /// Largest chord sagitta on the cylinder, mm (0: one move per flat move) [default: 0.01].
@@ -198,9 +200,8 @@ pub struct WrapArgs {
     pub chord_tol: Option<f64>,
     #[command(flatten)]
     pub report: ReportArgs,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
@@ -226,10 +227,10 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     if let Some(tol) = args.chord_tol {
         config.chord_tolerance_mm = tol;
     }
-    let mut bar = Bar::new(args.quiet);
+    let mut bar = args.quiet.bar();
     let report = report::wrap_file(&config, &args.input, &target, args.machine.preview.as_deref(), &mut bar)?;
     drop(bar);
-    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
+    if args.quiet.emit(&args.report, &report)? && !matches!(target, Target::Stdout) {
         print_summary(|out| print_wrap(out, &report))?;
     }
     Ok(ExitCode::SUCCESS)
@@ -272,7 +273,7 @@ fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {
 /// layer (interweaving) unless --no-interweave; the spindle speed is recomputed per layer to
 /// keep the surface speed; E = w*h*L/A_filament; layers join without travel.
 ///
-/// Example: `gweave rotary tube -o tube.gcode --mandrel-diameter 20 --length 40 --layers 4
+/// Example: `gweave rotary tube -o tube.gcode --mandrel-diameter 20 --length 40 --layer-count 4
 /// --pitch 3 --preview tube.png` (an open, interwoven lattice).
 #[derive(Args, Debug)]
 pub struct TubeArgs {
@@ -284,9 +285,9 @@ pub struct TubeArgs {
     /// Tube length along the mandrel, mm [default: 50].
     #[arg(long, value_name = "MM", value_parser = in_range(TUBE_LENGTH_MM))]
     pub length: Option<f64>,
-    /// Number of layers [default: 4].
-    #[arg(long, value_name = "N", value_parser = in_range(TUBE_LAYERS))]
-    pub layers: Option<u32>,
+    /// Number of layers (`--layers` is an older name) [default: 4].
+    #[arg(long, alias = "layers", value_name = "N", value_parser = in_range(TUBE_LAYERS))]
+    pub layer_count: Option<u32>,
     /// Layer height (radial step), mm [default: 0.2].
     #[arg(long, value_name = "MM", value_parser = in_range(LAYER_HEIGHT_MM))]
     pub layer_height: Option<f64>,
@@ -299,7 +300,7 @@ pub struct TubeArgs {
     /// Keep one handedness for every layer (the spindle reverses instead).
     #[arg(long)]
     pub no_interweave: bool,
-    /// At least this many chords per turn.
+    /// At least this many chords per turn [default: as many as --chord-tol needs].
     #[arg(long, value_name = "N", value_parser = in_range(SEGMENTS_PER_TURN))]
     pub segments_per_turn: Option<u32>,
     /// Largest chord sagitta, mm [default: 0.01].
@@ -316,6 +317,8 @@ pub struct TubeArgs {
     pub filament_diameter: Option<f64>,
     #[command(flatten)]
     pub report: ReportArgs,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 fn tube_params(args: &TubeArgs) -> Result<TubeParams> {
@@ -339,7 +342,7 @@ fn tube_params(args: &TubeArgs) -> Result<TubeParams> {
             *slot = v;
         }
     }
-    if let Some(n) = args.layers {
+    if let Some(n) = args.layer_count {
         t.layers = n;
     }
     if args.pitch.is_some() {
@@ -366,7 +369,7 @@ fn run_tube(args: TubeArgs) -> Result<ExitCode> {
     let target =
         if args.output == Path::new("-") { Target::Stdout } else { Target::File(args.output.clone()) };
     let report = report::tube_file(&params, &target, args.machine.preview.as_deref())?;
-    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
+    if args.quiet.emit(&args.report, &report)? && !matches!(target, Target::Stdout) {
         print_summary(|out| print_tube(out, &report))?;
     }
     Ok(ExitCode::SUCCESS)

@@ -42,23 +42,24 @@ pub struct ServeArgs {
     /// Create a pseudo-terminal and link this path to it (removed on exit).
     #[arg(long, value_name = "PATH", required_unless_present = "tcp", conflicts_with = "tcp")]
     pub pty: Option<PathBuf>,
-    /// Listen on this loopback address instead (`127.0.0.1:PORT`).
+    /// Listen on this loopback address instead (`127.0.0.1:PORT`) [default: --pty].
     #[arg(long, value_name = "ADDR")]
     pub tcp: Option<SocketAddr>,
     /// Machine profile (TOML); default: the built-in RAMPS/Marlin printer.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "TOML")]
     pub machine: Option<PathBuf>,
     /// Pace replies to the simulated clock (default: as fast as the simulation runs); the same
-    /// as `--speed 1`.
+    /// as `--speed-factor 1`.
     #[arg(long, conflicts_with = "speed")]
     pub realtime: bool,
-    /// Pace replies to the simulated clock, N times faster than real time.
-    #[arg(long, value_name = "N", value_parser = in_range(SPEED_FACTOR))]
+    /// Pace replies to the simulated clock, N times faster than real time (`--speed` is an
+    /// older name) [default: unpaced, as fast as the simulation runs].
+    #[arg(long = "speed-factor", alias = "speed", value_name = "N", value_parser = in_range(SPEED_FACTOR))]
     pub speed: Option<f64>,
     /// Write the session transcript (received `>` and sent `<` lines, simulated seconds).
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
-    /// Exit after this many wall-clock seconds without a byte from the host.
+    /// Exit after this many wall-clock seconds without a byte from the host [default: never].
     #[arg(long, value_name = "SECS", value_parser = in_range(IDLE_S))]
     pub exit_after_idle: Option<f64>,
     /// When a host disconnects, write the simulator's report of its session here (JSON, as

@@ -17,9 +17,9 @@ use gweave_sim::interp::{Machine, Outcome, SimReport};
 use gweave_sim::plot::{save_speed_png, save_temperature_png};
 use gweave_sim::profile::{FaultSpec, MachineProfile};
 
+use crate::args::Quiet;
 use crate::common::{hms, load_or_default, print_summary, ReportArgs};
 use crate::files::{layer_png, Files};
-use crate::progress::Bar;
 
 /// Simulate a print on a virtual Marlin-like printer: time per layer and feature (planner),
 /// filament per tool and mixing input, exact step counts per motor (Bresenham), heaters
@@ -51,9 +51,8 @@ pub struct SimArgs {
     pub raster_out: Option<PathBuf>,
     #[command(flatten)]
     pub report: ReportArgs,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 pub fn run(args: SimArgs) -> Result<ExitCode> {
@@ -84,17 +83,17 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
         canvas.write_layer_pngs(dir)?;
     }
-    if args.report.emit(&report)? {
+    if args.quiet.emit(&args.report, &report)? {
         print_summary(|out| print_human(out, &args.input, &report, &errors))?;
     }
     Ok(if report.halted { ExitCode::from(1) } else { ExitCode::SUCCESS })
 }
 
 /// Executes every line until the end or a halt; returns the machine's `Error:` replies.
-fn run_file(machine: &mut Machine, input: &Path, quiet: bool) -> Result<Vec<String>> {
+fn run_file(machine: &mut Machine, input: &Path, quiet: Quiet) -> Result<Vec<String>> {
     let file = File::open(input).with_context(|| format!("opening {}", input.display()))?;
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let mut bar = Bar::new(quiet);
+    let mut bar = quiet.bar();
     bar.set_len(len);
     let mut reader = LineReader::new(file);
     let mut errors = Vec::new();

@@ -10,6 +10,7 @@ use gweave::gen::slice_raster::{slice_to_dir, SliceConfig, SliceReport, MARGIN_P
 use gweave::gen::stl::read_stl;
 use gweave::range::{DPI, LAYER_HEIGHT_MM, PIXEL_MM};
 
+use crate::args::Quiet;
 use crate::common::{in_range, print_summary, ReportArgs};
 use crate::files::{layer_png, Files};
 
@@ -27,7 +28,7 @@ pub struct SliceRasterArgs {
     /// Image resolution, dots per inch (96 = the HP C6602's nozzle pitch).
     #[arg(long, value_name = "D", default_value_t = 96.0, conflicts_with = "pixel_mm", value_parser = in_range(DPI))]
     pub dpi: f64,
-    /// Pixel size in mm instead of --dpi.
+    /// Pixel size in mm instead of --dpi [default: 25.4/--dpi].
     #[arg(long, value_name = "MM", value_parser = in_range(PIXEL_MM))]
     pub pixel_mm: Option<f64>,
     /// Empty pixels around the part on every side.
@@ -38,6 +39,8 @@ pub struct SliceRasterArgs {
     pub output: PathBuf,
     #[command(flatten)]
     pub report: ReportArgs,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
@@ -53,7 +56,7 @@ pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
         margin_px: args.margin,
     };
     let rep = slice_to_dir(&mesh, &cfg, &args.output)?;
-    if args.report.emit(&rep)? {
+    if args.quiet.emit(&args.report, &rep)? {
         print_summary(|out| print_human(out, &args, &rep, mesh.triangles.len()))?;
     }
     Ok(ExitCode::SUCCESS)

@@ -45,7 +45,7 @@ pub enum ConfigError {
     #[error(transparent)]
     Range(#[from] OutOfRange),
     #[error(
-        "no purge amount: give `--purge MM` or `--purge-mm3 MM3` (Python: `purge=`, `purge_mm3=`), or in the config \
+        "no purge amount: give `--purge-mm MM` or `--purge-mm3 MM3` (Python: `purge_mm=`, `purge_mm3=`), or in the config \
          purge_mm, purge_mm3, colours, pairs or a washout tolerance"
     )]
     NoPurge,
