@@ -65,7 +65,7 @@ impl ReportArgs {
                 serde_json::to_writer_pretty(&mut *out, value)?;
                 Ok(writeln!(out)?)
             })
-            .with_context(|| format!("writing the report {}", path.display()))?;
+            .map_err(|e| naming("--report", path, e))?;
         }
         if self.json {
             print_summary(|stdout| {
@@ -126,7 +126,16 @@ pub fn numbers_in<const N: usize>(
 /// Writes `bytes` to `path` through a temporary file renamed into place (see `write_file`).
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     write_file(path, |out| -> Result<()> { Ok(out.write_all(bytes)?) })
-        .with_context(|| format!("writing {}", path.display()))
+        .map_err(|e| naming("writing", path, e))
+}
+
+/// A failed write of `path` as one line that names the file once: the engine's I/O errors name
+/// it already (`/x/r.json: No such file or directory`), an error while writing does not.
+fn naming(what: &str, path: &Path, e: anyhow::Error) -> anyhow::Error {
+    match e.downcast_ref::<gweave::Error>() {
+        Some(named @ gweave::Error::Io { .. }) => anyhow::anyhow!("{what}: {named}"),
+        _ => anyhow::anyhow!("{what} {}: {e:#}", path.display()),
+    }
 }
 
 /// A text file the user named (a profile, a G-code snippet), with its name in the error.
@@ -166,6 +175,15 @@ where
     E: std::error::Error + Send + Sync + 'static,
 {
     path.map_or_else(|| Ok(T::default()), |path| load(path, parse))
+}
+
+/// The lines a lenient read went past, as every summary reports them (nothing when none).
+pub fn print_malformed(out: &mut dyn Write, m: &gweave::malformed::Malformed) -> io::Result<()> {
+    if let Some(first) = m.first_malformed_line {
+        let n = m.malformed_lines;
+        writeln!(out, "  malformed       {n} lines skipped (first: line {first}; see gweave check)")?;
+    }
+    Ok(())
 }
 
 /// A duration as `1h 02m 03s`.

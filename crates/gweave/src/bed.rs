@@ -208,7 +208,7 @@ mod tests {
         assert_eq!(err("200,200"), "expected X,Y,Z or X0,Y0,X1,Y1[,Z] (mm), got \"200,200\"");
         assert_eq!(err("200,x,200"), "\"x\" is not a number");
         assert_eq!(err("10,0,5,100"), "the bed is empty: X1 = 5 is not above X0 = 10");
-        assert!(err("0,200,200").contains("X 0 is out of range"), "{}", err("0,200,200"));
+        assert_eq!(err("0,200,200"), "X = 0 is out of range: 1 to 10000 mm");
     }
 
     #[test]

@@ -17,8 +17,8 @@ use gweave::render::{
 };
 use gweave::rotary::cylinder::{RotaryConfig, MANDREL_DIAMETER_MM};
 
-use crate::args::Quiet;
-use crate::common::{in_range, load, print_summary, write_bytes, ReportArgs};
+use crate::args::{Lenient, Quiet};
+use crate::common::{in_range, load, print_malformed, print_summary, write_bytes, ReportArgs};
 use crate::files::Files;
 
 /// Draw a file: top view of a layer, isometric view of the print, or a before/after comparison.
@@ -78,6 +78,8 @@ pub struct PreviewArgs {
     #[arg(long, value_name = "MM", value_parser = in_range(MIN_LEN_MM))]
     pub min_len: Option<f32>,
     #[command(flatten)]
+    pub lenient: Lenient,
+    #[command(flatten)]
     pub report: ReportArgs,
     #[command(flatten)]
     pub quiet: Quiet,
@@ -129,6 +131,7 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         mix,
         rotary: args.mandrel_diameter.map(RotaryConfig::new),
         printhead,
+        strictness: args.lenient.strictness(),
     };
     let mut bar = args.quiet.bar();
     let preview = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
@@ -175,5 +178,6 @@ fn print_human(out: &mut dyn Write, args: &PreviewArgs, r: &PreviewReport) -> io
         }
         writeln!(out, "  legend          {}", entries.join(", "))?;
     }
+    print_malformed(out, &r.malformed)?;
     Ok(())
 }

@@ -195,7 +195,7 @@ fn print_human(out: &mut dyn Write, input: &Path, r: &SimReport, errors: &[Strin
         let kinds: Vec<String> = r.warning_counts.iter().map(|(k, n)| format!("{k} {n}")).collect();
         writeln!(out, "  warnings        {total} ({})", kinds.join(", "))?;
         for w in r.warnings.iter().filter(|w| w.kind.name() != "unknown_command").take(10) {
-            writeln!(out, "    line {}: {}", w.line, serde_json::to_string(&w.kind).unwrap_or_default())?;
+            writeln!(out, "    line {}: {}", w.line, w.kind)?;
         }
     }
     Ok(())
@@ -204,13 +204,7 @@ fn print_human(out: &mut dyn Write, input: &Path, r: &SimReport, errors: &[Strin
 /// Lines that could not be read, as `check` reports them, and arcs too long to plan finely:
 /// handled, but never silently.
 pub(super) fn print_malformed(out: &mut dyn Write, m: &Malformed, arcs: &HugeArcs) -> io::Result<()> {
-    if let Some(first) = m.first_malformed_line {
-        writeln!(
-            out,
-            "  malformed       {} lines skipped (first: line {first}; see gweave check)",
-            m.malformed_lines
-        )?;
-    }
+    crate::common::print_malformed(out, m)?;
     if let Some(first) = arcs.first_huge_arc_line {
         writeln!(
             out,

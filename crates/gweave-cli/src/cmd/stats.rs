@@ -14,7 +14,7 @@ use gweave::total::{Named, PerFile, StatsTotal};
 use gweave::range::FILAMENT_DIAMETER_MM;
 
 use crate::args::{Lenient, Quiet};
-use crate::common::{hms, in_range, print_summary, ReportArgs};
+use crate::common::{hms, in_range, print_malformed, print_summary, ReportArgs};
 use crate::files::Files;
 
 /// Statistics of a G-code file: slicer, layers, extents, filament per tool, distances, time.
@@ -131,9 +131,6 @@ fn print_human(out: &mut dyn Write, input: &std::path::Path, read: &WithMalforme
     for w in &s.warnings {
         writeln!(out, "  warning: {w}")?;
     }
-    if let Some(first) = read.malformed.first_malformed_line {
-        let n = read.malformed.malformed_lines;
-        writeln!(out, "  malformed       {n} lines skipped (first: line {first}; see gweave check)")?;
-    }
+    print_malformed(out, &read.malformed)?;
     Ok(())
 }

@@ -38,6 +38,7 @@ mod pause;
 mod report;
 mod sd;
 mod settings;
+mod warning_text;
 
 use std::collections::BTreeMap;
 

@@ -46,7 +46,8 @@ use serde::Serialize;
 
 use crate::gcode::state::State;
 use crate::gen::printhead::PrintheadProfile;
-use crate::pass::{Ctx, Pass, Progress, Quiet, Run};
+use crate::malformed::{Counting, Malformed};
+use crate::pass::{Ctx, Pass, Progress, Quiet, Run, Strictness};
 use crate::range::Range;
 use crate::rotary::cylinder::RotaryConfig;
 use crate::rotary::preview::RotaryReading;
@@ -117,6 +118,9 @@ pub struct PreviewOptions {
     /// The inkjet head of binder-jet raster output, whose fire commands are drawn as dots
     /// (default: the HP C6602, as `gweave raster` assumes).
     pub printhead: Option<PrintheadProfile>,
+    /// Stop at the first malformed line (the default), or draw past them and count them
+    /// ([`PreviewReport::malformed`]).
+    pub strictness: Strictness,
 }
 
 impl PreviewOptions {
@@ -172,12 +176,17 @@ impl Pass for Both<'_> {
 pub fn toolpath_with_stats(
     path: &Path,
     options: ToolpathOptions,
+    strictness: Strictness,
     progress: &mut dyn Progress,
-) -> crate::Result<(Toolpath, Stats)> {
+) -> crate::Result<(Toolpath, Stats, Malformed)> {
     let mut tp = toolpath::ToolpathPass::new(options);
     let mut st = StatsPass::new(None);
-    let state = Run::new(path, progress).scan(&mut Both(&mut tp, &mut st))?;
-    Ok((tp.finish_toolpath(), st.into_stats(&state)))
+    let mut both = Counting::new(Both(&mut tp, &mut st));
+    let mut run = Run::new(path, progress);
+    run.strictness = strictness;
+    let state = run.scan(&mut both)?;
+    let malformed = both.malformed;
+    Ok((tp.finish_toolpath(), st.into_stats(&state), malformed))
 }
 
 /// The preview of `path` (compared with `compare` when given) in `format`, as file bytes.
@@ -218,6 +227,10 @@ pub struct PreviewReport {
     /// With `--compare`: the moves of the first file the second does not have, and the reverse.
     pub changed_moves: Option<[usize; 2]>,
     pub legend: Vec<colour_by::LegendEntry>,
+    /// Lines a lenient read went past (in both files, with `--compare`; the first is the
+    /// first file's, else the second's).
+    #[serde(flatten)]
+    pub malformed: Malformed,
 }
 
 impl PreviewReport {
@@ -238,6 +251,7 @@ impl PreviewReport {
             moves: None,
             changed_moves: None,
             legend: Vec::new(),
+            malformed: Malformed::default(),
         }
     }
 }
@@ -254,7 +268,7 @@ pub fn preview_with_progress(
     if format == Format::Html {
         return html_page(path, compare, options, progress);
     }
-    let d = drawing(path, compare, options, progress)?;
+    let (d, malformed) = drawing_counted(path, compare, options, progress)?;
     let bytes = match format {
         Format::Svg => svg::write_svg(&d).into_bytes(),
         _ => png_out::encode(&png_out::rasterise(&d))?,
@@ -265,6 +279,7 @@ pub fn preview_with_progress(
         strokes: Some(d.strokes.len()),
         changed_moves: <[usize; 2]>::try_from(changed).ok(),
         legend: d.legend,
+        malformed,
         ..PreviewReport::new(format, bytes.len(), options)
     };
     Ok(Preview { bytes, report })
@@ -277,16 +292,34 @@ pub fn drawing(
     options: &PreviewOptions,
     progress: &mut dyn Progress,
 ) -> Result<view::Drawing, RenderError> {
+    drawing_counted(path, compare, options, progress).map(|(d, _)| d)
+}
+
+/// [`drawing`] and the malformed lines a lenient read went past, over both files.
+fn drawing_counted(
+    path: &Path,
+    compare: Option<&Path>,
+    options: &PreviewOptions,
+    progress: &mut dyn Progress,
+) -> Result<(view::Drawing, Malformed), RenderError> {
+    let mut malformed = Malformed::default();
     let mut read = |p: &Path| -> Result<Toolpath, RenderError> {
-        let mut pass = toolpath::ToolpathPass::new(options.toolpath_options(p, false)?);
-        Run::new(p, &mut *progress).scan(&mut pass)?;
-        Ok(pass.finish_toolpath())
+        let mut pass = Counting::new(toolpath::ToolpathPass::new(options.toolpath_options(p, false)?));
+        let mut run = Run::new(p, &mut *progress);
+        run.strictness = options.strictness;
+        run.scan(&mut pass)?;
+        malformed.malformed_lines += pass.malformed.malformed_lines;
+        if malformed.first_malformed_line.is_none() {
+            malformed.first_malformed_line = pass.malformed.first_malformed_line;
+        }
+        Ok(pass.pass.finish_toolpath())
     };
     let before = read(path)?;
-    Ok(match compare {
+    let drawn = match compare {
         Some(other) => view::draw_compare(&before, &read(other)?, &options.view),
         None => view::draw(&before, &options.view),
-    })
+    };
+    Ok((drawn, malformed))
 }
 
 fn html_page(
@@ -298,7 +331,8 @@ fn html_page(
     if compare.is_some() {
         return Err(RenderError::CompareHtml);
     }
-    let (tp, stats) = toolpath_with_stats(path, options.toolpath_options(path, true)?, progress)?;
+    let (tp, stats, malformed) =
+        toolpath_with_stats(path, options.toolpath_options(path, true)?, options.strictness, progress)?;
     let html_options = html::HtmlOptions {
         title: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
         colour_by: options.view.colour_by,
@@ -313,6 +347,7 @@ fn html_page(
         layers_drawn: tp.layer_count().checked_sub(1).map(|last| [0, last]),
         moves: Some(tp.segments.len()),
         legend: colouring.legend(&[&tp]),
+        malformed,
         ..PreviewReport::new(Format::Html, bytes.len(), options)
     };
     Ok(Preview { bytes, report })
