@@ -97,7 +97,7 @@ def run(mode: str, value, src: str, dst: str) -> None:
     if mode == "mix":
         gweave.mix(src, dst, config=value)
     else:
-        gweave.purge_shift(src, dst, purge=value)
+        gweave.purge_shift(src, dst, purge_mm=value)
 
 
 def split_like(text: str, pieces: List[str]) -> List[str]:

@@ -4,7 +4,7 @@
 use std::fs::File;
 use std::path::PathBuf;
 
-use gweave::check::{CheckOptions, CheckPass};
+use gweave::check::{check_file, CheckOptions};
 use gweave::gcode::diag::{Diagnostic, Finding};
 use gweave::gcode::flavour::read_flavour;
 use gweave::gcode::lexer::{parse_into, parse_line};
@@ -13,7 +13,7 @@ use gweave::gcode::reader::{LineReader, Part};
 use gweave::gcode::state::{Effect, State, StateOptions, E, X, Y, Z};
 use gweave::gcode::writer::Target;
 use gweave::pass::{Identity, Quiet, Run};
-use gweave::stats::StatsPass;
+use gweave::stats::stats_file;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -25,10 +25,24 @@ use gweave::render::{
 };
 use pyo3::types::PyBytes;
 
+mod args;
+
+use args::{in_range, os_error, BedArg, LayersArg};
+use gweave::render::layer_range;
+
 fn err(e: gweave::Error) -> PyErr {
-    match e {
-        gweave::Error::Io { .. } => PyOSError::new_err(e.to_string()),
+    match &e {
+        gweave::Error::Io { path, source } => os_error(path, source),
         _ => PyValueError::new_err(e.to_string()),
+    }
+}
+
+/// `lenient=` as `--lenient`.
+fn strictness(lenient: bool) -> gweave::pass::Strictness {
+    if lenient {
+        gweave::pass::Strictness::Lenient
+    } else {
+        gweave::pass::Strictness::Strict
     }
 }
 
@@ -38,64 +52,66 @@ fn to_json<T: serde::Serialize>(value: &T) -> PyResult<String> {
 
 /// Statistics of a G-code file as JSON text (see `gweave stats --json`).
 #[pyfunction]
-#[pyo3(signature = (path, *, filament_diameter=None))]
-fn stats_json(py: Python<'_>, path: PathBuf, filament_diameter: Option<f64>) -> PyResult<String> {
-    let stats = py.allow_threads(|| {
-        let mut pass = StatsPass::new(filament_diameter);
-        let state = Run::new(&path, &mut Quiet).scan(&mut pass)?;
-        Ok::<_, gweave::Error>(pass.into_stats(&state))
-    });
+#[pyo3(signature = (path, *, filament_diameter=None, lenient=false))]
+fn stats_json(
+    py: Python<'_>,
+    path: PathBuf,
+    filament_diameter: Option<f64>,
+    lenient: bool,
+) -> PyResult<String> {
+    let diameter = in_range("filament_diameter", filament_diameter, gweave::range::FILAMENT_DIAMETER_MM)?;
+    let stats = py.allow_threads(|| stats_file(&path, diameter, strictness(lenient), &mut Quiet));
     to_json(&stats.map_err(err)?)
 }
 
-/// Lint report of a G-code file as JSON text (see `gweave check --json`).
+/// Lint report of a G-code file as JSON text (see `gweave check --json`). Without `bed`, the
+/// bed the slicer's settings in the file give; `failed` is whether the file fails the check (an
+/// error, or with `strict` a warning: `gweave check`'s exit code 1).
 #[pyfunction]
-#[pyo3(signature = (path, *, bed=None, max_feed=None))]
+#[pyo3(signature = (path, *, bed=None, max_feed=None, strict=false))]
 fn check_json(
     py: Python<'_>,
     path: PathBuf,
-    bed: Option<[f64; 3]>,
+    bed: Option<BedArg>,
     max_feed: Option<f64>,
+    strict: bool,
 ) -> PyResult<String> {
-    let bed = bed
-        .map(|[x, y, z]| format!("{x},{y},{z}").parse::<gweave::bed::Bed>())
-        .transpose()
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let mut options = CheckOptions { bed, ..CheckOptions::default() };
-    if let Some(f) = max_feed {
+    let mut options = CheckOptions { bed: bed.map(BedArg::bed).transpose()?, ..CheckOptions::default() };
+    if let Some(f) = in_range("max_feed", max_feed, gweave::range::FEED_MM_MIN)? {
         options.max_feed_mm_min = f;
     }
-    let report = py.allow_threads(|| {
-        let mut pass = CheckPass::new(options);
-        let mut quiet = Quiet;
-        let mut run = Run::new(&path, &mut quiet);
-        run.strictness = gweave::pass::Strictness::Lenient;
-        run.scan(&mut pass)?;
-        Ok::<_, gweave::Error>(pass.report)
-    });
-    to_json(&report.map_err(err)?)
+    let report = py.allow_threads(|| check_file(&path, options, &mut Quiet)).map_err(err)?;
+    let mut doc = serde_json::to_value(&report).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    doc["failed"] = report.failed(strict).into();
+    to_json(&doc)
 }
 
 /// Parse a file and write it back unchanged (atomically); `output=None` with `in_place=True`
 /// replaces the input, keeping `<path>.bak` unless `backup=False`. Returns what was copied as
 /// JSON text (see `gweave cat --json`).
 #[pyfunction]
-#[pyo3(signature = (path, output=None, *, in_place=false, backup=true))]
+#[pyo3(signature = (path, output=None, *, in_place=false, backup=true, force=false, lenient=false))]
+#[allow(clippy::too_many_arguments)]
 fn cat_json(
     py: Python<'_>,
     path: PathBuf,
     output: Option<PathBuf>,
     in_place: bool,
     backup: bool,
+    force: bool,
+    lenient: bool,
 ) -> PyResult<String> {
     let target = match (output, in_place) {
-        (_, true) => Target::InPlace { keep_backup: backup, force: false },
+        (_, true) => Target::InPlace { keep_backup: backup, force },
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
     let report = py.allow_threads(|| {
         let mut copy = Identity::default();
-        Run::new(&path, &mut Quiet).transform(&mut copy, &target).map(|_| copy.report)
+        let mut quiet = Quiet;
+        let mut run = Run::new(&path, &mut quiet);
+        run.strictness = strictness(lenient);
+        run.transform(&mut copy, &target).map(|_| copy.report)
     });
     to_json(&report.map_err(err)?)
 }
@@ -104,7 +120,7 @@ fn cat_json(
 /// Moves every colour change earlier by the purge (see `gweave purge-shift`); returns the report
 /// as JSON text. `config` is TOML text; the keyword arguments override it.
 #[pyfunction]
-#[pyo3(signature = (path, output=None, *, in_place=false, backup=true, purge=None, purge_mm3=None,
+#[pyo3(signature = (path, output=None, *, in_place=false, backup=true, force=false, purge_mm=None, purge_mm3=None,
     config=None, filament_diameter=None, cross_layers=false, allow_features=None, markers=None,
     fallback=None, tower_at=None))]
 #[allow(clippy::too_many_arguments)]
@@ -114,7 +130,8 @@ fn purge_shift_json(
     output: Option<PathBuf>,
     in_place: bool,
     backup: bool,
-    purge: Option<f64>,
+    force: bool,
+    purge_mm: Option<f64>,
     purge_mm3: Option<f64>,
     config: Option<String>,
     filament_diameter: Option<f64>,
@@ -131,7 +148,7 @@ fn purge_shift_json(
         None => PurgeShiftConfig::default(),
     };
     c.apply(&Overrides {
-        purge_mm: purge,
+        purge_mm,
         purge_mm3,
         filament_diameter_mm: filament_diameter,
         cross_layers,
@@ -142,7 +159,7 @@ fn purge_shift_json(
     });
     let rules = c.validate().map_err(value_err)?;
     let target = match (output, in_place) {
-        (_, true) => Target::InPlace { keep_backup: backup, force: false },
+        (_, true) => Target::InPlace { keep_backup: backup, force },
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
@@ -203,7 +220,7 @@ struct Reader {
 impl Reader {
     #[new]
     fn new(path: PathBuf) -> PyResult<Self> {
-        let os_err = |e: std::io::Error| PyOSError::new_err(format!("{}: {e}", path.display()));
+        let os_err = |e: std::io::Error| os_error(&path, &e);
         // The state reads the file's words as its flavour means them, as every command does.
         let flavour = read_flavour(&path).map_err(os_err)?;
         let file = File::open(&path).map_err(os_err)?;
@@ -294,13 +311,14 @@ impl Reader {
 /// A picture or viewer page of a file as bytes (`format`: png, svg or html) and the report of
 /// what it shows as JSON; see `gweave preview`.
 #[pyfunction]
-#[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None))]
+#[pyo3(signature = (path, *, format, layer=None, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None, min_len=None, lenient=false))]
 #[allow(clippy::too_many_arguments)]
 fn preview_json(
     py: Python<'_>,
     path: PathBuf,
     format: &str,
-    layers: Option<(u32, u32)>,
+    layer: Option<u32>,
+    layers: Option<LayersArg>,
     view: &str,
     colour_by: &str,
     size: (u32, u32),
@@ -310,17 +328,23 @@ fn preview_json(
     mix_profile: Option<PathBuf>,
     mandrel_diameter: Option<f64>,
     head: Option<PathBuf>,
+    min_len: Option<f32>,
+    lenient: bool,
 ) -> PyResult<(Py<PyBytes>, String)> {
+    let read = |p: &PathBuf| std::fs::read_to_string(p).map_err(|e| os_error(p, &e));
+    let layer = in_range("layer", layer, gweave::range::LAYER_NUMBER)?;
+    let mandrel_diameter =
+        in_range("mandrel_diameter", mandrel_diameter, gweave::rotary::cylinder::MANDREL_DIAMETER_MM)?;
     let printhead = match head {
         Some(p) => Some(
-            gweave::gen::printhead::PrintheadProfile::from_toml(&std::fs::read_to_string(&p)?)
+            gweave::gen::printhead::PrintheadProfile::from_toml(&read(&p)?)
                 .map_err(|e| PyValueError::new_err(e.to_string()))?,
         ),
         None => None,
     };
     let mix = match mix_profile {
         Some(p) => {
-            let text = std::fs::read_to_string(&p)?;
+            let text = read(&p)?;
             let profile = gweave::post::mix::profile::MixProfile::from_toml_str(&text)
                 .map_err(|e| PyValueError::new_err(e.to_string()))?;
             Some(
@@ -339,7 +363,11 @@ fn preview_json(
     let options = PreviewOptions {
         view: ViewOptions {
             kind: view.parse::<ViewKind>().map_err(PyValueError::new_err)?,
-            layers: layers.map(|(a, b)| a..=b),
+            layers: match (layer, layers) {
+                (Some(l), _) => Some(layer_range(l, l).map_err(PyValueError::new_err)?),
+                (None, Some(range)) => Some(range.range()?),
+                (None, None) => None,
+            },
             width_px: size.0,
             height_px: size.1,
             colour_by: colour_by.parse::<ColourBy>().map_err(PyValueError::new_err)?,
@@ -350,7 +378,8 @@ fn preview_json(
         mix,
         rotary: mandrel_diameter.map(gweave::rotary::cylinder::RotaryConfig::new),
         printhead,
-        ..PreviewOptions::default()
+        min_len_mm: min_len,
+        strictness: strictness(lenient),
     };
     let preview = py
         .allow_threads(|| {
@@ -570,8 +599,7 @@ fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::profile::Ma
     match machine {
         None => Ok(gweave_sim::profile::MachineProfile::default()),
         Some(path) => {
-            let text = std::fs::read_to_string(&path)
-                .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+            let text = std::fs::read_to_string(&path).map_err(|e| os_error(&path, &e))?;
             gweave_sim::profile::MachineProfile::from_toml_str(&text)
                 .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
         }
@@ -584,12 +612,16 @@ fn sim_err(e: impl std::fmt::Display) -> PyErr {
 
 /// Runs a file through the virtual printer; the report as JSON text (see `gweave sim --json`).
 #[pyfunction]
-#[pyo3(signature = (path, *, machine=None))]
-fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult<String> {
-    let profile = machine_profile(machine)?;
+#[pyo3(signature = (path, *, machine=None, fault=Vec::new()))]
+fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, fault: Vec<String>) -> PyResult<String> {
+    let mut profile = machine_profile(machine)?;
+    for spec in &fault {
+        let spec = spec.parse::<gweave_sim::profile::FaultSpec>();
+        profile.faults.push(spec.map_err(|e| PyValueError::new_err(format!("fault: {e}")))?);
+    }
     let report = py.allow_threads(|| {
         let mut m = gweave_sim::interp::Machine::new(profile).map_err(sim_err)?;
-        let file = File::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let file = File::open(&path).map_err(|e| os_error(&path, &e))?;
         let mut reader = LineReader::new(file);
         let mut out = |_t: f64, _l: &str| {};
         while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
@@ -616,7 +648,7 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult
 fn estimate_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, steps: bool) -> PyResult<String> {
     let profile = machine_profile(machine)?;
     let report = py.allow_threads(|| {
-        let file = File::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let file = File::open(&path).map_err(|e| os_error(&path, &e))?;
         gweave_sim::estimate::estimate_report(file, &profile, steps)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
     })?;
@@ -856,7 +888,7 @@ fn write_helical_paths_json(
 /// profile is TOML text (empty: the defaults); the lists add schedule entries, gradients and
 /// tool maps as the command line flags do.
 #[pyfunction]
-#[pyo3(signature = (path, output=None, *, config="", at_layer=Vec::new(), at_z=Vec::new(), map=Vec::new(), gradient=Vec::new(), perceived=false, dialect=None, in_place=false, backup=true))]
+#[pyo3(signature = (path, output=None, *, config="", at_layer=Vec::new(), at_z=Vec::new(), map=Vec::new(), gradient=Vec::new(), gradient_space="mix", dialect=None, purge_mm=None, in_place=false, backup=true, force=false))]
 #[allow(clippy::too_many_arguments)]
 fn mix_json(
     py: Python<'_>,
@@ -867,20 +899,32 @@ fn mix_json(
     at_z: Vec<String>,
     map: Vec<String>,
     gradient: Vec<String>,
-    perceived: bool,
+    gradient_space: &str,
     dialect: Option<&str>,
+    purge_mm: Option<f64>,
     in_place: bool,
     backup: bool,
+    force: bool,
 ) -> PyResult<String> {
     use gweave::post::mix::profile::{Dialect, GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
     let bad = |e: gweave::post::mix::MixPassError| PyValueError::new_err(e.to_string());
     let target = match (output, in_place) {
-        (_, true) => Target::InPlace { keep_backup: backup, force: false },
+        (_, true) => Target::InPlace { keep_backup: backup, force },
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
     let mut profile = MixProfile::from_toml_str(config).map_err(bad)?;
-    let space = if perceived { GradientSpace::Perceived } else { GradientSpace::Mix };
+    let space = match gradient_space {
+        "mix" => GradientSpace::Mix,
+        "perceived" => GradientSpace::Perceived,
+        other => {
+            let text = format!("gradient_space: 'mix' or 'perceived', not {other:?}");
+            return Err(PyValueError::new_err(text));
+        }
+    };
+    if let Some(mm) = in_range("purge_mm", purge_mm, gweave::range::PURGE_MM)? {
+        profile.purge.set_length_mm(mm);
+    }
     for s in &at_layer {
         profile.schedule.push(ScheduleEntry::parse_layer(s).map_err(bad)?);
     }

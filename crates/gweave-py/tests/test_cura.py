@@ -55,7 +55,7 @@ def test_cura_script_purge_shift_equals_the_cli(cura_python, data, tmp_path):
     pieces = in_cura(cura_python, fixture, tmp_path / "cura.gcode", {"mode": "purge-shift", "purge_mm": 2.5})
     # Cura's list comes back as long, each piece starting where it did (one per layer).
     assert pieces == {"pieces_in": 206, "pieces_out": 206, "firsts_equal": True}
-    gweave.purge_shift(fixture, tmp_path / "cli.gcode", purge=2.5)
+    gweave.purge_shift(fixture, tmp_path / "cli.gcode", purge_mm=2.5)
     got = (tmp_path / "cura.gcode").read_bytes()
     assert got == (tmp_path / "cli.gcode").read_bytes()
     assert got != fixture.read_bytes()
@@ -91,5 +91,5 @@ def test_cura_script_falls_back_to_the_gweave_command(cura_python, data, tmp_pat
     r = harness(fixture, tmp_path / "cura.gcode", {"mode": "purge-shift", "purge_mm": 2.5},
                 {"PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin"})
     assert r.returncode == 0, r.stderr[-3000:]
-    gweave.purge_shift(fixture, tmp_path / "cli.gcode", purge=2.5)
+    gweave.purge_shift(fixture, tmp_path / "cli.gcode", purge_mm=2.5)
     assert (tmp_path / "cura.gcode").read_bytes() == (tmp_path / "cli.gcode").read_bytes()

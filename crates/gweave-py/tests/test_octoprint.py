@@ -218,7 +218,7 @@ def test_octoprint_upload_is_purge_shifted_like_the_cli(octoprint, data, tmp_pat
     finally:
         octoprint.settings(on_upload="")
     expected = tmp_path / "cone.gcode"
-    gweave.purge_shift(fixture, expected, purge=2.5)
+    gweave.purge_shift(fixture, expected, purge_mm=2.5)
     stored = octoprint.stored("cone.gcode")
     assert stored != fixture.read_bytes()
     assert stored == expected.read_bytes()

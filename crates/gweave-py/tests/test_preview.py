@@ -29,7 +29,7 @@ def test_preview_report_names_the_colours(data, tmp_path):
 
 
 def test_preview_beyond_the_last_layer_is_blank(data):
-    png = gweave.preview(data / "cura" / "cura_dual.gcode", layer=(500, 600), size=(200, 100))
+    png = gweave.preview(data / "cura" / "cura_dual.gcode", layers=(500, 600), size=(200, 100))
     w, h, px = read_png(png)
     assert set(px) == {BACKGROUND}
 
@@ -73,7 +73,7 @@ def test_toolpath_arrays(data):
 def test_toolpath_of_a_rotary_program_lies_on_its_cylinders(tmp_path):
     np = pytest.importorskip("numpy")
     tube = tmp_path / "tube.gcode"
-    gweave.rotary_tube(tube, mandrel_diameter=20, length=30, layers=2)
+    gweave.rotary_tube(tube, mandrel_diameter=20, length=30, layer_count=2)
     # The header names the machine: the beads come out in 3D, layer k at the nozzle radius
     # 10 + 0.2 (k + 1) mm from the mandrel's axis (X), from X 0 to 30.
     tp = gweave.toolpath(tube, travel=False)
@@ -118,7 +118,7 @@ def test_preview_draws_rotary_output_on_its_cylinder(tmp_path):
     # A tube on a 20 mm mandrel, 30 mm long: seen from the top, 2 x 10.4 mm across (the outer
     # layer's nozzle radius), not the 65 mm of the circumference.
     out = tmp_path / "tube.gcode"
-    gweave.rotary_tube(out, mandrel_diameter=20, length=30, layers=2)
+    gweave.rotary_tube(out, mandrel_diameter=20, length=30, layer_count=2)
     w, h, px = read_png(gweave.preview(out, size=(400, 400)))
     column = [px[y * w + w // 2] for y in range(h)]
     lit = [y for y, c in enumerate(column) if c != BACKGROUND]

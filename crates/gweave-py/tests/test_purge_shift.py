@@ -7,7 +7,7 @@ import gweave
 
 def test_slic3r_first_change_is_split_by_hand(data, tmp_path):
     out = tmp_path / "cone.gcode"
-    r = gweave.purge_shift(data / "slic3r" / "slic3r_cone_2tool.gcode", out, purge=2.5)
+    r = gweave.purge_shift(data / "slic3r" / "slic3r_cone_2tool.gcode", out, purge_mm=2.5)
     assert len(r["changes"]) == 108
     c = r["changes"][0]
     assert c["change_lines"] == [553] and c["output_line"] == 510
@@ -30,7 +30,7 @@ def test_config_and_keywords(data, tmp_path):
 def test_fallbacks_purge_the_shortfall(data, tmp_path):
     src = data / "slic3r" / "slic3r_cone_2tool.gcode"
     out = tmp_path / "tower.gcode"
-    r = gweave.purge_shift(src, out, purge=2.5, fallback="tower", tower_at=(150, 20))
+    r = gweave.purge_shift(src, out, purge_mm=2.5, fallback="tower", tower_at=(150, 20))
     assert all(c["shortfall_mm"] == 0 and c["achieved_mm"] == 2.5 for c in r["changes"])
     assert abs(r["moved_mm"] - 241.02) < 0.01 and abs(r["fallback_mm"] - 28.98) < 0.01
     towers = [c for c in r["changes"] if c["fallback_mm"] > 0]
@@ -38,17 +38,17 @@ def test_fallbacks_purge_the_shortfall(data, tmp_path):
     text = out.read_text()
     assert text.count("; gweave purge-shift: purge T") == 29
     assert "\nG0 X150 Y20 F6000\n" in text
-    b = gweave.purge_shift(src, tmp_path / "block.gcode", purge=2.5, fallback="block")
+    b = gweave.purge_shift(src, tmp_path / "block.gcode", purge_mm=2.5, fallback="block")
     assert b["fallback_mm"] == r["fallback_mm"] and b["moved_mm"] == r["moved_mm"]
     # A corner is two numbers, as for `--tower-at X,Y`.
     for corner in [(150,), (150, 20, 0)]:
         with pytest.raises(ValueError, match="tuple of length 2"):
-            gweave.purge_shift(src, tmp_path / "x.gcode", purge=2.5, fallback="tower", tower_at=corner)
+            gweave.purge_shift(src, tmp_path / "x.gcode", purge_mm=2.5, fallback="tower", tower_at=corner)
 
 
 def test_refusals(data, tmp_path):
     with pytest.raises(ValueError, match="unknown fallback"):
-        gweave.purge_shift(data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode", purge=2, fallback="wipe")
+        gweave.purge_shift(data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode", purge_mm=2, fallback="wipe")
     with pytest.raises(ValueError, match="no purge amount"):
         gweave.purge_shift(data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode")
     assert not (tmp_path / "o.gcode").exists()

@@ -58,7 +58,7 @@ def test_raster_sl1_and_errors(tmp_path):
 
 def test_test_pattern(tmp_path):
     out = tmp_path / "p.gcode"
-    r = gweave.raster_test_pattern(out, columns=2)
+    r = gweave.raster_test_pattern(out, pattern_columns=2)
     assert r["fire_commands"] == 24
     s = [int(l.split("S")[1]) for l in out.read_text().splitlines() if l.startswith("M700")]
     assert s == [1 << a for a in range(12) for _ in range(2)]

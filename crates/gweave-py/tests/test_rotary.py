@@ -11,7 +11,7 @@ import gweave
 
 
 def test_tube_report_matches_the_wall_and_the_cli(tmp_path):
-    r = gweave.rotary_tube(tmp_path / "t.gcode", mandrel_diameter=20, length=30, layers=3, preview=tmp_path / "t.png")
+    r = gweave.rotary_tube(tmp_path / "t.gcode", mandrel_diameter=20, length=30, layer_count=3, preview=tmp_path / "t.png")
     wall = math.pi * ((10 + 3 * 0.2) ** 2 - 10**2) * 30
     assert r["wall_volume_mm3"] == pytest.approx(wall, rel=1e-12)
     assert r["extruded_mm3"] == pytest.approx(wall, rel=0.01)
@@ -27,7 +27,7 @@ def test_tube_report_matches_the_wall_and_the_cli(tmp_path):
 def test_tube_keywords_override_the_config(tmp_path):
     toml = tmp_path / "tube.toml"
     toml.write_text("length_mm = 12\nlayers = 5\n[machine]\nmandrel_diameter_mm = 16\n[print]\nbead_width_mm = 0.5\n")
-    r = gweave.rotary_tube(tmp_path / "t.gcode", config=toml, layers=2, pitch=4.0, interweave=False, feed="combined")
+    r = gweave.rotary_tube(tmp_path / "t.gcode", config=toml, layer_count=2, pitch=4.0, interweave=False, feed_convention="combined")
     assert len(r["layers"]) == 2 and r["pitch_mm"] == 4.0 and r["bead_width_mm"] == 0.5
     assert r["machine"]["feed_convention"] == "combined" and r["machine"]["mandrel_diameter_mm"] == 16
     assert {l["handedness"] for l in r["layers"]} == {"right"}

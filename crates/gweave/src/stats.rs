@@ -297,6 +297,21 @@ fn duration_s(v: &[u8]) -> Option<f64> {
     Some(total)
 }
 
+/// The statistics of the file at `path` (`diameter_mm` overrides the file's filament
+/// diameter); a lenient read goes past malformed lines and counts them.
+pub fn stats_file(
+    path: &std::path::Path,
+    diameter_mm: Option<f64>,
+    strictness: crate::pass::Strictness,
+    progress: &mut dyn crate::pass::Progress,
+) -> crate::Result<crate::malformed::WithMalformed<Stats>> {
+    let mut pass = crate::malformed::Counting::new(StatsPass::new(diameter_mm));
+    let mut run = crate::pass::Run::new(path, progress);
+    run.strictness = strictness;
+    let state = run.scan(&mut pass)?;
+    Ok(crate::malformed::WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -146,12 +146,7 @@ fn profile(args: &MixArgs) -> Result<MixProfile> {
         profile.hardware.dialect = Some(d);
     }
     if let Some(mm) = args.purge_mm {
-        profile.purge.length_mm = mm;
-        profile.purge.mode = if mm > 0.0 {
-            gweave::post::mix::profile::PurgeMode::Length
-        } else {
-            gweave::post::mix::profile::PurgeMode::Off
-        };
+        profile.purge.set_length_mm(mm);
     }
     profile.validate()?;
     Ok(profile)

@@ -12,8 +12,8 @@ use gweave::gen::printhead::PrintheadProfile;
 use gweave::post::mix::profile::MixProfile;
 use gweave::range::LAYER_NUMBER;
 use gweave::render::{
-    preview_with_progress, ColourBy, Format, MixColours, PreviewOptions, PreviewReport, ViewKind,
-    ViewOptions, MIN_LEN_MM, PICTURE_SIDE_PX,
+    parse_layer_range, preview_with_progress, ColourBy, Format, MixColours, PreviewOptions, PreviewReport,
+    ViewKind, ViewOptions, MIN_LEN_MM, PICTURE_SIDE_PX,
 };
 use gweave::rotary::cylinder::{RotaryConfig, MANDREL_DIAMETER_MM};
 
@@ -40,7 +40,7 @@ pub struct PreviewArgs {
     #[arg(long, value_name = "N", conflicts_with = "layers", value_parser = in_range(LAYER_NUMBER))]
     pub layer: Option<u32>,
     /// Draw this layer range, inclusive, e.g. 10-20 [default: every layer].
-    #[arg(long, value_name = "A-B", value_parser = parse_range)]
+    #[arg(long, value_name = "A-B", value_parser = parse_layer_range)]
     pub layers: Option<RangeInclusive<u32>>,
     /// top (from above) or iso (isometric 3D).
     #[arg(long, default_value = "top", value_parser = |s: &str| s.parse::<ViewKind>())]
@@ -83,16 +83,6 @@ pub struct PreviewArgs {
     pub report: ReportArgs,
     #[command(flatten)]
     pub quiet: Quiet,
-}
-
-fn parse_range(s: &str) -> Result<RangeInclusive<u32>, String> {
-    let (a, b) = s.split_once('-').ok_or_else(|| format!("expected A-B, got {s:?}"))?;
-    let layer = |n: &str| in_range(LAYER_NUMBER)(n).map_err(|e| format!("layer {}: {e}", n.trim()));
-    let (a, b) = (layer(a)?, layer(b)?);
-    if a > b {
-        return Err(format!("empty layer range {s:?}"));
-    }
-    Ok(a..=b)
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {

@@ -6,9 +6,8 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::malformed::{Counting, WithMalformed};
-use gweave::pass::Run;
-use gweave::stats::{Stats, StatsPass};
+use gweave::malformed::WithMalformed;
+use gweave::stats::{stats_file, Stats};
 use gweave::total::{Named, PerFile, StatsTotal};
 
 use gweave::range::FILAMENT_DIAMETER_MM;
@@ -45,13 +44,8 @@ pub fn run(args: StatsArgs) -> Result<ExitCode> {
         .check()?;
     let mut all = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {
-        let mut pass = Counting::new(StatsPass::new(args.filament_diameter));
         let mut bar = args.quiet.bar();
-        let mut run = Run::new(input, &mut bar);
-        run.strictness = args.lenient.strictness();
-        let state = run.scan(&mut pass)?;
-        drop(bar);
-        all.push(WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed });
+        all.push(stats_file(input, args.filament_diameter, args.lenient.strictness(), &mut bar)?);
     }
     let human = match &all[..] {
         [one] => args.quiet.emit(&args.report, one)?,

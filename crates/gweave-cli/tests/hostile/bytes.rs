@@ -52,7 +52,7 @@ fn a_long_line_is_handled_in_bounded_memory(unit: &[u8]) {
         &["stats", "long.gcode"][..],
         &["cat", "long.gcode", "-o", "out.gcode"],
         &["mix", "long.gcode", "-o", "out.gcode", "--map", "T0=Cyan"],
-        &["purge-shift", "long.gcode", "-o", "out.gcode", "--purge", "2"],
+        &["purge-shift", "long.gcode", "-o", "out.gcode", "--purge-mm", "2"],
         &["rotary", "wrap", "long.gcode", "-o", "out.gcode", "--mandrel-diameter", "30"],
         &["preview", "long.gcode", "-o", "out.png"],
     ] {

@@ -22,12 +22,19 @@ fn serve_an_sd_card_that_is_not_a_folder_is_refused() {
 #[test]
 fn serve_a_speed_out_of_range_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    for speed in ["--speed=0", "--speed=-3", "--speed=NaN", "--speed=inf", "--speed=1e9"] {
+    for speed in [
+        "--speed-factor=0",
+        "--speed-factor=-3",
+        "--speed-factor=NaN",
+        "--speed-factor=inf",
+        "--speed-factor=1e9",
+    ] {
         let args = ["serve", "--tcp", "127.0.0.1:0", speed];
-        assert_flag_refused(dir.path(), &args, "--speed", "0.1 to 1000 x real time");
+        assert_flag_refused(dir.path(), &args, "--speed-factor", "0.1 to 1000 x real time");
     }
     // clap's own refusal (usage error, exit code 2).
-    let out = gweave(dir.path(), &["serve", "--tcp", "127.0.0.1:0", "--speed", "2", "--realtime"]).run();
+    let out =
+        gweave(dir.path(), &["serve", "--tcp", "127.0.0.1:0", "--speed-factor", "2", "--realtime"]).run();
     out.assert_sound();
     assert_eq!(out.code, Some(2), "{}", out.stderr);
     assert!(out.stderr.contains("cannot be used with"), "{}", out.stderr);

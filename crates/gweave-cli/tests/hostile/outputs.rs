@@ -210,7 +210,7 @@ fn in_place_refuses_a_read_only_file_unless_forced() {
     fs::set_permissions(&input, fs::Permissions::from_mode(0o444)).unwrap();
     refused_in(
         dir.path(),
-        &["purge-shift", "in.gcode", "--purge", "2", "--in-place"],
+        &["purge-shift", "in.gcode", "--purge-mm", "2", "--in-place"],
         "in.gcode is read-only: --in-place would replace it (add --force to replace it anyway)",
     );
     gweave(dir.path(), &["cat", "in.gcode", "--in-place", "--force", "-q"]).run().assert_ok();

@@ -15,8 +15,8 @@ fn hostile_flag_values_are_refused_with_the_flag_and_its_range() {
     fs::write(d.join("cube.stl"), ascii(&cube_facets(10.0, 10.0))).unwrap();
     let cases: &[(&[&str], &str, &str)] = &[
         (
-            &["rotary", "tube", "-o", "t.gcode", "--mandrel-diameter", "20", "--layers", "1000000000"],
-            "--layers",
+            &["rotary", "tube", "-o", "t.gcode", "--mandrel-diameter", "20", "--layer-count", "1000000000"],
+            "--layer-count",
             "1 to 1000",
         ),
         (
@@ -45,8 +45,8 @@ fn hostile_flag_values_are_refused_with_the_flag_and_its_range() {
             "0.001 to 10 mm",
         ),
         (
-            &["purge-shift", "plate.gcode", "-o", "p.gcode", "--purge", "1e308", "--fallback", "tower"],
-            "--purge",
+            &["purge-shift", "plate.gcode", "-o", "p.gcode", "--purge-mm", "1e308", "--fallback", "tower"],
+            "--purge-mm",
             "0 to 1000 mm",
         ),
         (

@@ -56,7 +56,7 @@ const COMMANDS: &[&[&str]] = &[
     &["sim", "in.gcode"],
     &["estimate", "in.gcode"],
     &["mix", "in.gcode", "--at-layer", "0=Orange", "-o", "out.gcode"],
-    &["purge-shift", "in.gcode", "--purge", "2", "-o", "out.gcode"],
+    &["purge-shift", "in.gcode", "--purge-mm", "2", "-o", "out.gcode"],
     &["rotary", "wrap", "in.gcode", "--mandrel-diameter", "30", "-o", "out.gcode"],
     &["preview", "in.gcode", "-o", "out.png"],
     &["preview", "in.gcode", "-o", "out.html", "--view", "iso"],

@@ -27,7 +27,7 @@ from ._gweave import HelicalPath
 
 __version__: str = _gweave.__version__
 
-PathLike = Union[str, "os.PathLike[str]"]
+PathLike = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
 
 __all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
 __all__ += ["Machine", "sim", "estimate"]
@@ -43,34 +43,57 @@ __all__ += ["rotary_wrap", "rotary_tube", "HelicalPath", "write_helical_paths"]
 __all__ += ["preview", "toolpath"]
 
 
+def _path(value: Any, name: str) -> str:
+    """A path argument as the engine takes it: ``str``, ``bytes`` or any ``os.PathLike``; anything
+    else is a ``TypeError`` naming the parameter (the engine reports a missing file as
+    ``FileNotFoundError`` with its ``errno`` and ``filename``)."""
+    try:
+        return os.fsdecode(os.fspath(value))
+    except TypeError:
+        raise TypeError(f"{name}: expected a path (str, bytes or os.PathLike), not {type(value).__name__}") from None
+
+
+def _opt_path(value: Any, name: str) -> Optional[str]:
+    return None if value is None else _path(value, name)
+
+
 def read(path: PathLike) -> Reader:
     """Iterate a G-code file's lines, each with its parsed words and the machine state after it.
 
     Memory stays bounded whatever the file size.
     """
-    return Reader(os.fspath(path))
+    return Reader(_path(path, "path"))
 
 
-def stats(path: PathLike, *, filament_diameter: Optional[float] = None) -> Dict[str, Any]:
+def stats(path: PathLike, *, filament_diameter: Optional[float] = None, lenient: bool = False) -> Dict[str, Any]:
     """Statistics of a G-code file: slicer, layers, extents, filament per tool, distances, time.
 
-    ``filament_diameter`` (mm) overrides the file's own setting.
+    ``filament_diameter`` (mm) overrides the file's own setting. ``lenient=True`` reads past
+    malformed lines and counts them (``malformed_lines``, ``first_malformed_line``) instead of
+    raising ``ValueError`` at the first.
     """
-    return json.loads(_gweave.stats_json(os.fspath(path), filament_diameter=filament_diameter))
+    return json.loads(
+        _gweave.stats_json(_path(path, "path"), filament_diameter=filament_diameter, lenient=lenient)
+    )
 
 
 def check(
     path: PathLike,
     *,
-    bed: Optional[Sequence[float]] = None,
+    bed: Union[str, Sequence[float], None] = None,
     max_feed: Optional[float] = None,
+    strict: bool = False,
 ) -> Dict[str, Any]:
-    """Lint a G-code file. ``bed`` is the printable volume ``(x, y, z)`` in mm; ``max_feed`` in mm/min.
+    """Lint a G-code file, as ``gweave check`` does; ``max_feed`` in mm/min.
 
-    The report has ``errors``, ``warnings`` and ``findings`` (line, column, kind, severity).
+    ``bed`` is the printable volume in mm as ``--bed`` reads it: ``"X,Y,Z"`` from the origin or
+    ``"X0,Y0,X1,Y1[,Z]"`` from a corner, as text or as a sequence of those 3, 4 or 5 numbers.
+    Without it, the bed the slicer's settings in the file give (PrusaSlicer's ``bed_shape``,
+    Cura's ``machine_width``...), if any. The report has ``errors``, ``warnings``, ``findings``
+    (line, column, kind, severity), the ``bed`` used and ``bed_from``, and ``failed``: whether
+    the file fails (an error, or with ``strict=True`` a warning too; the CLI's exit code 1).
     """
-    bed_tuple = None if bed is None else (float(bed[0]), float(bed[1]), float(bed[2]))
-    return json.loads(_gweave.check_json(os.fspath(path), bed=bed_tuple, max_feed=max_feed))
+    return json.loads(_gweave.check_json(_path(path, "path"), bed=bed, max_feed=max_feed, strict=strict))
 
 
 def cat(
@@ -79,31 +102,40 @@ def cat(
     *,
     in_place: bool = False,
     backup: bool = True,
+    force: bool = False,
+    lenient: bool = False,
 ) -> Dict[str, Any]:
     """Parse a file and write it back unchanged, atomically (the identity every transform builds on).
 
-    Returns what was copied: ``lines``, ``bytes``; ``malformed_lines`` and ``first_malformed_line``
-    stay 0 and ``None`` (a malformed line raises ``ValueError`` naming file, line and column).
+    Returns what was copied: ``lines``, ``bytes``, ``malformed_lines`` and ``first_malformed_line``
+    (a malformed line raises ``ValueError`` naming file, line and column unless ``lenient=True``,
+    which copies it as written). ``force=True`` replaces a read-only file in place.
     """
     return json.loads(
         _gweave.cat_json(
-            os.fspath(path),
-            None if output is None else os.fspath(output),
+            _path(path, "path"),
+            _opt_path(output, "output"),
             in_place=in_place,
             backup=backup,
+            force=force,
+            lenient=lenient,
         )
     )
 
 
-def sim(path: PathLike, *, machine: Optional[PathLike] = None) -> Dict[str, Any]:
+def sim(path: PathLike, *, machine: Optional[PathLike] = None, fault: Sequence[str] = ()) -> Dict[str, Any]:
     """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML.
 
+    ``fault`` injects heater faults as ``--fault`` does (``["hotend-cartridge-off@120s"]``).
     The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
     ``feature_s``, ``filament_mm``, ``mixing_input_mm``, ``steps``, ``position``, ``count``,
     ``heaters``, ``thermal_faults``, ``halted``, ``unknown_commands`` and ``warnings``.
     """
-    m = None if machine is None else os.fspath(machine)
-    return json.loads(_gweave.sim_json(os.fspath(path), machine=m))
+    if isinstance(fault, str):
+        fault = [fault]
+    return json.loads(
+        _gweave.sim_json(_path(path, "path"), machine=_opt_path(machine, "machine"), fault=list(fault))
+    )
 
 
 def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool = False) -> Dict[str, Any]:
@@ -114,13 +146,10 @@ def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool 
     ``feature_s``, and ``steps`` when ``steps=True``.
     Heating waits and homing are not timed.
     """
-    m = None if machine is None else os.fspath(machine)
-    return json.loads(_gweave.estimate_json(os.fspath(path), machine=m, steps=steps))
+    return json.loads(_gweave.estimate_json(_path(path, "path"), machine=_opt_path(machine, "machine"), steps=steps))
+
+
 # ---- binder-jet raster ----
-
-
-def _opt_path(p: Optional[PathLike]) -> Optional[str]:
-    return None if p is None else os.fspath(p)
 
 
 def raster(
@@ -154,12 +183,12 @@ def raster(
     Returns the report of ``gweave raster --json`` (layers, bands, columns, drops per head,
     binder volume, ``time`` with the planner's estimate).
     """
-    paths = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
+    paths = [inputs] if isinstance(inputs, (str, bytes, os.PathLike)) else list(inputs)
     return json.loads(
         _gweave.raster_json(
-            [os.fspath(p) for p in paths],
-            os.fspath(output),
-            head=_opt_path(head),
+            [_path(p, "inputs") for p in paths],
+            _path(output, "output"),
+            head=_opt_path(head, "head"),
             threshold=threshold,
             invert=invert,
             flip_y=flip_y,
@@ -171,9 +200,9 @@ def raster(
             dpi=dpi,
             heads=heads,
             channels=channels,
-            recoat=_opt_path(recoat),
-            start=_opt_path(start),
-            end=_opt_path(end),
+            recoat=_opt_path(recoat, "recoat"),
+            start=_opt_path(start, "start"),
+            end=_opt_path(end, "end"),
             dialect=dialect,
             feed=feed,
             fast_estimate=fast_estimate,
@@ -187,17 +216,18 @@ def raster_test_pattern(
     head: Optional[PathLike] = None,
     heads: Optional[int] = None,
     dialect: Optional[str] = None,
-    columns: int = 4,
+    pattern_columns: int = 4,
     origin: Sequence[float] = (20.0, 20.0),
 ) -> Dict[str, Any]:
-    """Write a nozzle test pattern: ``columns`` columns per nozzle address, each address alone."""
+    """Write a nozzle test pattern (``gweave raster --test-pattern``): ``pattern_columns`` columns
+    per nozzle address, each address alone."""
     return json.loads(
         _gweave.raster_test_pattern_json(
-            os.fspath(output),
-            head=_opt_path(head),
+            _path(output, "output"),
+            head=_opt_path(head, "head"),
             heads=heads,
             dialect=dialect,
-            columns=columns,
+            columns=pattern_columns,
             origin=(float(origin[0]), float(origin[1])),
         )
     )
@@ -219,8 +249,8 @@ def slice_raster(
     """
     return json.loads(
         _gweave.slice_raster_json(
-            os.fspath(stl),
-            os.fspath(out_dir),
+            _path(stl, "stl"),
+            _path(out_dir, "out_dir"),
             layer_height=layer_height,
             dpi=dpi,
             pixel_mm=pixel_mm,
@@ -236,7 +266,8 @@ def purge_shift(
     *,
     in_place: bool = False,
     backup: bool = True,
-    purge: Optional[float] = None,
+    force: bool = False,
+    purge_mm: Optional[float] = None,
     purge_mm3: Optional[float] = None,
     config: Optional[PathLike] = None,
     filament_diameter: Optional[float] = None,
@@ -248,7 +279,7 @@ def purge_shift(
 ) -> Dict[str, Any]:
     """Move every tool/mix change earlier by the purge so it prints inside the part (no wipe tower).
 
-    ``purge`` is mm of filament (or ``purge_mm3``, mm^3); ``config`` a TOML file with per-pair
+    ``purge_mm`` is mm of filament (or ``purge_mm3``, mm^3); ``config`` a TOML file with per-pair
     amounts, colours, the washout model and rules (keyword arguments override it). With too
     little room, ``fallback`` is ``"partial"`` (accept the shortfall), ``"block"`` (purge the rest
     in a purge block, as ``mix`` does) or ``"tower"`` (on a small tower beside the part, its
@@ -257,16 +288,17 @@ def purge_shift(
     """
     text = None
     if config is not None:
-        with open(os.fspath(config), encoding="utf-8") as f:
+        with open(_path(config, "config"), encoding="utf-8") as f:
             text = f.read()
     pair = None if markers is None else (str(markers[0]), str(markers[1]))
     return json.loads(
         _gweave.purge_shift_json(
-            os.fspath(path),
-            None if output is None else os.fspath(output),
+            _path(path, "path"),
+            _opt_path(output, "output"),
             in_place=in_place,
             backup=backup,
-            purge=purge,
+            force=force,
+            purge_mm=purge_mm,
             purge_mm3=purge_mm3,
             config=text,
             filament_diameter=filament_diameter,
@@ -287,7 +319,8 @@ def preview(
     path: PathLike,
     *,
     output: Optional[PathLike] = None,
-    layer: Union[int, Tuple[int, int], None] = None,
+    layer: Optional[int] = None,
+    layers: Union[str, Tuple[int, int], None] = None,
     view: str = "top",
     colour_by: str = "tool",
     size: Tuple[int, int] = (1200, 900),
@@ -297,6 +330,8 @@ def preview(
     mix_profile: Optional[PathLike] = None,
     mandrel_diameter: Optional[float] = None,
     head: Optional[PathLike] = None,
+    min_len: Optional[float] = None,
+    lenient: bool = False,
     report: bool = False,
 ) -> Union[bytes, Tuple[bytes, Dict[str, Any]]]:
     """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None),
@@ -304,7 +339,9 @@ def preview(
     layers drawn, strokes, moves, and the ``legend``: each colour and what it stands for).
 
     ``output`` picks the format by extension (``.png``, ``.svg``, ``.html``) and is written.
-    ``layer`` is one 0-based layer or an inclusive ``(first, last)`` range; ``view`` is ``"top"`` or
+    ``layer`` is one 0-based layer, ``layers`` an inclusive ``(first, last)`` range (or ``"A-B"``);
+    ``min_len`` (mm) merges chained moves shorter than that; ``lenient=True`` draws past
+    malformed lines and counts them in the report; ``view`` is ``"top"`` or
     ``"iso"``; ``colour_by`` is ``tool``, ``feature``, ``speed``, ``layer`` or ``mix`` (the colour
     each move is predicted to print, from the file's mixing commands and the filaments of the
     ``gweave mix`` profile ``mix_profile``); ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``
@@ -313,28 +350,33 @@ def preview(
     from another file; ``size`` is ``(width, height)`` in pixels.
     """
     fmt = "png"
-    if output is not None:
-        ext = os.path.splitext(os.fspath(output))[1].lower()
+    out = _opt_path(output, "output")
+    if out is not None:
+        ext = os.path.splitext(out)[1].lower()
         if ext not in _PREVIEW_FORMATS:
-            raise ValueError(f"unknown output format {ext!r} (.png, .svg or .html)")
+            raise ValueError(f"output: unknown format {ext!r} (.png, .svg or .html)")
         fmt = _PREVIEW_FORMATS[ext]
-    layers = (layer, layer) if isinstance(layer, int) else None if layer is None else (int(layer[0]), int(layer[1]))
+    if layer is not None and layers is not None:
+        raise ValueError("layer and layers: give one (as --layer and --layers)")
     data, report_json = _gweave.preview_json(
-        os.fspath(path),
+        _path(path, "path"),
         format=fmt,
+        layer=layer,
         layers=layers,
         view=view,
         colour_by=colour_by,
         size=(int(size[0]), int(size[1])),
-        compare=None if compare is None else os.fspath(compare),
+        compare=_opt_path(compare, "compare"),
         tool_colours=None if tool_colours is None else list(tool_colours),
         travel=travel,
-        mix_profile=None if mix_profile is None else os.fspath(mix_profile),
+        mix_profile=_opt_path(mix_profile, "mix_profile"),
         mandrel_diameter=mandrel_diameter,
-        head=None if head is None else os.fspath(head),
+        head=_opt_path(head, "head"),
+        min_len=min_len,
+        lenient=lenient,
     )
-    if output is not None:
-        with open(output, "wb") as f:
+    if out is not None:
+        with open(out, "wb") as f:
             f.write(data)
     return (data, json.loads(report_json)) if report else data
 
@@ -355,7 +397,7 @@ def toolpath(
     import numpy as np
 
     n, cols = _gweave.toolpath_columns(
-        os.fspath(path), travel=travel, min_len=min_len, mandrel_diameter=mandrel_diameter
+        _path(path, "path"), travel=travel, min_len=min_len, mandrel_diameter=mandrel_diameter
     )
     dtypes = {"tool": "<u2", "feature": "u1", "feed_mm_s": "<f4", "layer": "<u4", "extruding": "u1"}
     out: Dict[str, Any] = {
@@ -381,35 +423,40 @@ def mix(
     at_z: Sequence[str] = (),
     map: Sequence[str] = (),
     gradient: Sequence[str] = (),
-    perceived: bool = False,
+    gradient_space: str = "mix",
     dialect: Optional[str] = None,
+    purge_mm: Optional[float] = None,
     in_place: bool = False,
     backup: bool = True,
+    force: bool = False,
 ) -> Dict[str, Any]:
     """Rewrite a file for a mixing hotend (see ``gweave mix``); returns the report.
 
     ``config`` is a profile TOML file; ``at_layer=["0=Orange", "10=Pink"]``, ``at_z``,
-    ``map=["T1=PVA"]``, ``gradient=["0-50=Cyan..Magenta"]`` and ``dialect`` (``"marlin"``,
-    ``"marlin-direct"``, ``"reprap"``; default: the profile's, else the file's flavour) work as
-    the command line flags.
+    ``map=["T1=PVA"]``, ``gradient=["0-50=Cyan..Magenta"]``, ``gradient_space`` (``"mix"`` or
+    ``"perceived"``), ``dialect`` (``"marlin"``, ``"marlin-direct"``, ``"reprap"``; default: the
+    profile's, else the file's flavour) and ``purge_mm`` (mm of filament per change, 0: none;
+    default: the profile's) work as the command line flags.
     """
     text = ""
     if config is not None:
-        with open(os.fspath(config), encoding="utf-8") as f:
+        with open(_path(config, "config"), encoding="utf-8") as f:
             text = f.read()
     return json.loads(
         _gweave.mix_json(
-            os.fspath(path),
-            None if output is None else os.fspath(output),
+            _path(path, "path"),
+            _opt_path(output, "output"),
             config=text,
             at_layer=list(at_layer),
             at_z=list(at_z),
             map=list(map),
             gradient=list(gradient),
-            perceived=perceived,
+            gradient_space=gradient_space,
             dialect=dialect,
+            purge_mm=purge_mm,
             in_place=in_place,
             backup=backup,
+            force=force,
         )
     )
 
@@ -431,13 +478,13 @@ _UNITS = {"deg": "degrees", "degrees": "degrees", "mm": "mm"}
 
 def _machine(
     mandrel_diameter: Optional[float],
-    feed: Optional[str],
+    feed_convention: Optional[str],
     rotary_unit: Optional[str],
     axes: Optional[Sequence[str]],
 ) -> Dict[str, Any]:
     machine: Dict[str, Any] = {
         "mandrel_diameter_mm": mandrel_diameter,
-        "feed_convention": feed,
+        "feed_convention": feed_convention,
         "rotary_unit": None if rotary_unit is None else _UNITS.get(rotary_unit, rotary_unit),
     }
     if axes is not None:
@@ -448,16 +495,12 @@ def _machine(
     return machine
 
 
-def _path(p: Optional[PathLike]) -> Optional[str]:
-    return None if p is None else os.fspath(p)
-
-
 def rotary_wrap(
     input: PathLike,
     output: PathLike,
     *,
     mandrel_diameter: Optional[float] = None,
-    feed: Optional[str] = None,
+    feed_convention: Optional[str] = None,
     rotary_unit: Optional[str] = None,
     axes: Optional[Sequence[str]] = None,
     keep_arc_length: Optional[bool] = None,
@@ -469,23 +512,23 @@ def rotary_wrap(
     """Wrap a part sliced flat onto the mandrel of a lathe-type printer (``gweave rotary wrap``).
 
     Flat X runs along the mandrel, Y around it (``theta = 360*y/(pi*D)``), Z away from it
-    (radius ``D/2 + z``). ``mandrel_diameter`` in mm; ``feed`` is ``"nist"``, ``"combined"`` or
+    (radius ``D/2 + z``). ``mandrel_diameter`` in mm; ``feed_convention`` is ``"nist"``, ``"combined"`` or
     ``"inverse-time"``; ``rotary_unit`` ``"deg"`` or ``"mm"``; ``axes`` like ``"X,A,Z"``;
     ``seam_rotation`` degrees per layer; ``chord_tol`` mm. Keywords override the TOML ``config``.
     ``preview`` writes a 3D PNG of the executed path. Returns the report (per-layer radius,
     angles swept, seam angle; filament; time).
     """
     settings = {
-        "machine": _machine(mandrel_diameter, feed, rotary_unit, axes),
+        "machine": _machine(mandrel_diameter, feed_convention, rotary_unit, axes),
         "chord_tolerance_mm": chord_tol,
         "unwrap": {"keep_arc_length": keep_arc_length, "seam_rotation_per_layer_deg": seam_rotation},
     }
     text = _gweave.rotary_wrap_json(
-        os.fspath(input),
-        os.fspath(output),
+        _path(input, "input"),
+        _path(output, "output"),
         settings=json.dumps(settings),
-        config=_path(config),
-        preview=_path(preview),
+        config=_opt_path(config, "config"),
+        preview=_opt_path(preview, "preview"),
     )
     return json.loads(text)
 
@@ -495,7 +538,7 @@ def rotary_tube(
     *,
     mandrel_diameter: Optional[float] = None,
     length: Optional[float] = None,
-    layers: Optional[int] = None,
+    layer_count: Optional[int] = None,
     layer_height: Optional[float] = None,
     bead_width: Optional[float] = None,
     pitch: Optional[float] = None,
@@ -505,7 +548,7 @@ def rotary_tube(
     speed: Optional[float] = None,
     temp: Optional[float] = None,
     filament_diameter: Optional[float] = None,
-    feed: Optional[str] = None,
+    feed_convention: Optional[str] = None,
     rotary_unit: Optional[str] = None,
     axes: Optional[Sequence[str]] = None,
     config: Optional[PathLike] = None,
@@ -520,9 +563,9 @@ def rotary_tube(
     turns, spindle speed; filament and its volume against the wall volume; time).
     """
     settings = {
-        "machine": _machine(mandrel_diameter, feed, rotary_unit, axes),
+        "machine": _machine(mandrel_diameter, feed_convention, rotary_unit, axes),
         "length_mm": length,
-        "layers": layers,
+        "layers": layer_count,
         "pitch_mm": pitch,
         "interweave": interweave,
         "print": {
@@ -536,7 +579,10 @@ def rotary_tube(
         },
     }
     text = _gweave.rotary_tube_json(
-        os.fspath(output), settings=json.dumps(settings), config=_path(config), preview=_path(preview)
+        _path(output, "output"),
+        settings=json.dumps(settings),
+        config=_opt_path(config, "config"),
+        preview=_opt_path(preview, "preview"),
     )
     return json.loads(text)
 
@@ -546,7 +592,7 @@ def write_helical_paths(
     output: PathLike,
     *,
     mandrel_diameter: Optional[float] = None,
-    feed: Optional[str] = None,
+    feed_convention: Optional[str] = None,
     rotary_unit: Optional[str] = None,
     axes: Optional[Sequence[str]] = None,
     layer_height: Optional[float] = None,
@@ -570,7 +616,7 @@ def write_helical_paths(
         gweave.write_helical_paths([cone], "cone.gcode", mandrel_diameter=20)
     """
     settings = {
-        "machine": _machine(mandrel_diameter, feed, rotary_unit, axes),
+        "machine": _machine(mandrel_diameter, feed_convention, rotary_unit, axes),
         "print": {
             "layer_height_mm": layer_height,
             "bead_width_mm": bead_width,
@@ -582,6 +628,6 @@ def write_helical_paths(
         },
     }
     text = _gweave.write_helical_paths_json(
-        list(paths), os.fspath(output), settings=json.dumps(settings), config=_path(config)
+        list(paths), _path(output, "output"), settings=json.dumps(settings), config=_opt_path(config, "config")
     )
     return json.loads(text)

@@ -172,6 +172,25 @@ impl Pass for Both<'_> {
     }
 }
 
+/// A layer range as `--layers` and Python's `layers=` take it: `A-B`, inclusive, 0-based, each
+/// within [`LAYER_NUMBER`](crate::range::LAYER_NUMBER).
+pub fn parse_layer_range(text: &str) -> Result<std::ops::RangeInclusive<u32>, String> {
+    let (a, b) = text.split_once('-').ok_or_else(|| format!("expected A-B, got {text:?}"))?;
+    let layer = |n: &str| -> Result<u32, String> {
+        let v: u32 = n.trim().parse().map_err(|e| format!("layer {}: {e}", n.trim()))?;
+        crate::range::LAYER_NUMBER.check("layer", v).map_err(|e| e.to_string())
+    };
+    layer_range(layer(a)?, layer(b)?)
+}
+
+/// `first..=last`, refused when empty.
+pub fn layer_range(first: u32, last: u32) -> Result<std::ops::RangeInclusive<u32>, String> {
+    if first > last {
+        return Err(format!("empty layer range {first}-{last}"));
+    }
+    Ok(first..=last)
+}
+
 /// Collects a file's toolpath and statistics in one pass.
 pub fn toolpath_with_stats(
     path: &Path,

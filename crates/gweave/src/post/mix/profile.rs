@@ -213,6 +213,12 @@ pub struct PurgeConfig {
 }
 
 impl PurgeConfig {
+    /// A purge of `mm` of filament at each change, 0 for none (`--purge-mm`, `purge_mm=`).
+    pub fn set_length_mm(&mut self, mm: f64) {
+        self.length_mm = mm;
+        self.mode = if mm > 0.0 { PurgeMode::Length } else { PurgeMode::Off };
+    }
+
     /// The purge block's moves, with the Z feed the caller has worked out (the Z cap's, or
     /// the travel feed).
     pub fn motion(&self, z_feed_mm_min: f64) -> PurgeMotion {
