@@ -2,9 +2,19 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 __version__: str
 
-def stats_json(path: str, *, filament_diameter: Optional[float] = None) -> str: ...
-def check_json(path: str, *, bed: Optional[Tuple[float, float, float]] = None, max_feed: Optional[float] = None) -> str: ...
-def cat_json(path: str, output: Optional[str] = None, *, in_place: bool = False, backup: bool = True) -> str: ...
+def stats_json(path: str, *, filament_diameter: Optional[float] = None, lenient: bool = False) -> str: ...
+def check_json(
+    path: str, *, bed: Union[str, Sequence[float], None] = None, max_feed: Optional[float] = None, strict: bool = False
+) -> str: ...
+def cat_json(
+    path: str,
+    output: Optional[str] = None,
+    *,
+    in_place: bool = False,
+    backup: bool = True,
+    force: bool = False,
+    lenient: bool = False,
+) -> str: ...
 def run_cli(argv: List[str]) -> int: ...
 
 # binder-jet raster
@@ -51,7 +61,8 @@ def purge_shift_json(
     *,
     in_place: bool = False,
     backup: bool = True,
-    purge: Optional[float] = None,
+    force: bool = False,
+    purge_mm: Optional[float] = None,
     purge_mm3: Optional[float] = None,
     config: Optional[str] = None,
     filament_diameter: Optional[float] = None,
@@ -72,16 +83,19 @@ def mix_json(
     at_z: List[str] = ...,
     map: List[str] = ...,
     gradient: List[str] = ...,
-    perceived: bool = False,
+    gradient_space: str = "mix",
     dialect: Optional[str] = None,
+    purge_mm: Optional[float] = None,
     in_place: bool = False,
     backup: bool = True,
+    force: bool = False,
 ) -> str: ...
 def preview_json(
     path: str,
     *,
     format: str,
-    layers: Optional[Tuple[int, int]] = None,
+    layer: Optional[int] = None,
+    layers: Union[str, Tuple[int, int], None] = None,
     view: str = "top",
     colour_by: str = "tool",
     size: Tuple[int, int] = (1200, 900),
@@ -91,6 +105,8 @@ def preview_json(
     mix_profile: Optional[str] = None,
     mandrel_diameter: Optional[float] = None,
     head: Optional[str] = None,
+    min_len: Optional[float] = None,
+    lenient: bool = False,
 ) -> Tuple[bytes, str]: ...
 def toolpath_columns(
     path: str, *, travel: bool = True, min_len: float = 0.0, mandrel_diameter: Optional[float] = None
@@ -119,7 +135,7 @@ class Reader:
     def __next__(self) -> Line: ...
 
 # gweave-sim: the virtual printer
-def sim_json(path: str, *, machine: Optional[str] = None) -> str: ...
+def sim_json(path: str, *, machine: Optional[str] = None, fault: List[str] = ...) -> str: ...
 def estimate_json(path: str, *, machine: Optional[str] = None, steps: bool = False) -> str: ...
 
 class Machine:

@@ -1,0 +1,159 @@
+"""Python like the CLI: every flag of every command has its keyword (same name, `-` as `_`) or a
+stated reason why not, and every keyword is a flag or a positional argument. The table below is
+the map (docs/pipeline.md, "One vocabulary"); this test fails when either side drifts."""
+
+import inspect
+import re
+
+import pytest
+
+import gweave
+
+# Flags every command shares that have no place in a function call: the report is the return
+# value, and nothing is drawn on a terminal.
+COMMON = {
+    "json": "the return value is the report",
+    "report": "the return value is the report",
+    "quiet": "no progress bar or summary in Python",
+    "help": "Python's help()",
+    "version": "gweave.__version__",
+}
+
+# Output flags of transforms: `-o` is the `output` argument, `--no-backup` is `backup=False`.
+TARGET = {"output": "output", "in-place": "in_place", "no-backup": "backup", "force": "force"}
+
+# command -> (function, {flag: keyword, or "-" and the reason}, positional arguments)
+MAP = {
+    "stats": ("stats", {"filament-diameter": "filament_diameter", "lenient": "lenient"}, ["path"]),
+    "check": ("check", {"bed": "bed", "max-feed": "max_feed", "strict": "strict"}, ["path"]),
+    "cat": ("cat", {**TARGET, "lenient": "lenient"}, ["path"]),
+    "sim": (
+        "sim",
+        {
+            "machine": "machine",
+            "fault": "fault",
+            "plot": "- pictures: the report has the series (Machine.report())",
+            "plot-speed": "- pictures: the report has the layer times",
+            "raster-out": "- pictures: gweave.main(['sim', ...])",
+        },
+        ["path"],
+    ),
+    "estimate": ("estimate", {"machine": "machine", "steps": "steps"}, ["path"]),
+    "raster": (
+        "raster",
+        {
+            "output": "output",
+            **{
+                f: f.replace("-", "_")
+                for f in (
+                    "head threshold invert flip-y one-way density origin layer-height pixel-mm dpi heads "
+                    "channels recoat start end dialect feed fast-estimate"
+                ).split()
+            },
+            "test-pattern": "- a function of its own: raster_test_pattern",
+            "pattern-columns": "- raster_test_pattern(pattern_columns=)",
+        },
+        ["inputs"],
+    ),
+    "slice-raster": (
+        "slice_raster",
+        {"layer-height": "layer_height", "dpi": "dpi", "pixel-mm": "pixel_mm", "margin": "margin", "output": "out_dir"},
+        ["stl"],
+    ),
+    "purge-shift": (
+        "purge_shift",
+        {
+            **TARGET,
+            **{
+                f: f.replace("-", "_")
+                for f in (
+                    "purge-mm purge-mm3 config filament-diameter cross-layers allow-features markers fallback tower-at"
+                ).split()
+            },
+        },
+        ["path"],
+    ),
+    "rotary wrap": (
+        "rotary_wrap",
+        {
+            "output": "output",
+            "in-place": "- rotary_wrap writes output; a wrapped file never replaces its flat input",
+            "no-backup": "- as in-place",
+            "force": "- as in-place",
+            **{
+                f: f.replace("-", "_")
+                for f in (
+                    "mandrel-diameter feed-convention rotary-unit axes config preview keep-arc-length seam-rotation chord-tol"
+                ).split()
+            },
+        },
+        ["input"],
+    ),
+    "rotary tube": (
+        "rotary_tube",
+        {
+            "output": "output",
+            "no-interweave": "interweave",
+            **{
+                f: f.replace("-", "_")
+                for f in (
+                    "mandrel-diameter feed-convention rotary-unit axes config preview length layer-count layer-height "
+                    "bead-width pitch segments-per-turn chord-tol speed temp filament-diameter"
+                ).split()
+            },
+        },
+        [],
+    ),
+    "mix": (
+        "mix",
+        {
+            **TARGET,
+            **{f: f.replace("-", "_") for f in "config at-layer at-z map gradient gradient-space dialect purge-mm".split()},
+            "palette-png": "- a picture: gweave.main(['mix', '--palette-png', ...])",
+            "wizard": "- asks questions on a terminal",
+        },
+        ["path"],
+    ),
+    "preview": (
+        "preview",
+        {
+            "output": "output",
+            **{
+                f: f.replace("-", "_")
+                for f in (
+                    "layer layers view colour-by size compare tool-colours mix-profile mandrel-diameter head travel "
+                    "min-len lenient"
+                ).split()
+            },
+        },
+        ["path"],
+    ),
+}
+
+# Keywords with no flag: what a function returns instead of printing.
+PYTHON_ONLY = {("preview", "report"): "return the report with the bytes"}
+
+
+def cli_flags(capfd: pytest.CaptureFixture[str], command: str) -> set:
+    capfd.readouterr()
+    assert gweave.main([*command.split(), "--help"]) == 0
+    text = capfd.readouterr().out
+    return set(re.findall(r"^\s+(?:-\w, )?--([a-z0-9-]+)", text, re.MULTILINE))
+
+
+@pytest.mark.parametrize("command", sorted(MAP))
+def test_every_flag_has_its_keyword(capfd: pytest.CaptureFixture[str], command: str) -> None:
+    function, table, positional = MAP[command]
+    flags = cli_flags(capfd, command) - set(COMMON)
+    assert flags == set(table), f"gweave {command}: flags not in the map {flags - set(table)}, gone {set(table) - flags}"
+    params = inspect.signature(getattr(gweave, function)).parameters
+    mapped = {k for k in table.values() if not k.startswith("-")}
+    extra = {p for p in params if (function, p) in PYTHON_ONLY}
+    assert set(params) == mapped | set(positional) | extra, (
+        f"gweave.{function}: keywords without a flag {set(params) - mapped - set(positional) - extra}, "
+        f"flags without a keyword {mapped - set(params)}"
+    )
+    for flag, keyword in table.items():
+        if keyword.startswith("-") or keyword in ("backup", "interweave", "out_dir", "output"):
+            continue
+        assert keyword == flag.replace("-", "_"), f"--{flag} is {keyword}= in Python"
