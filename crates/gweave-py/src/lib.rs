@@ -354,7 +354,8 @@ fn preview_json(
         }
         None => None,
     };
-    let format = Format::from_path(std::path::Path::new(&format!("x.{format}"))).map_err(render_err)?;
+    let format = Format::from_path(std::path::Path::new(&format!("x.{format}")))
+        .map_err(|e| PyValueError::new_err(format!("output: {e}")))?;
     let tool_colours = tool_colours
         .unwrap_or_default()
         .iter()

@@ -40,7 +40,7 @@ def test_preview_writes_svg_and_html(data, tmp_path):
     assert svg.count(b"<path ") > 10
     html = gweave.preview(data / "cura" / "cura_dual.gcode", output=tmp_path / "v.html")
     assert html.startswith(b"<!DOCTYPE html>") and b"https://" not in html
-    with pytest.raises(ValueError, match="unknown output format"):
+    with pytest.raises(ValueError, match=r"^output: unknown output format \"jpg\" \(png, svg or html\)$"):
         gweave.preview(data / "cura" / "cura_dual.gcode", output=tmp_path / "x.jpg")
     with pytest.raises(ValueError, match="unknown view"):
         gweave.preview(data / "cura" / "cura_dual.gcode", view="side")

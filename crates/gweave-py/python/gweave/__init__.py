@@ -312,7 +312,6 @@ def purge_shift(
 
 # ---- preview (render) ----
 
-_PREVIEW_FORMATS = {".png": "png", ".svg": "svg", ".html": "html", ".htm": "html"}
 
 
 def preview(
@@ -349,13 +348,9 @@ def preview(
     its cylinder; ``head`` is the printhead profile of raster output; ``compare`` highlights moves that differ
     from another file; ``size`` is ``(width, height)`` in pixels.
     """
-    fmt = "png"
     out = _opt_path(output, "output")
-    if out is not None:
-        ext = os.path.splitext(out)[1].lower()
-        if ext not in _PREVIEW_FORMATS:
-            raise ValueError(f"output: unknown format {ext!r} (.png, .svg or .html)")
-        fmt = _PREVIEW_FORMATS[ext]
+    # The format follows the output's extension, read by the engine as the CLI reads `-o`.
+    fmt = "png" if out is None else os.path.splitext(out)[1].lstrip(".")
     if layer is not None and layers is not None:
         raise ValueError("layer and layers: give one (as --layer and --layers)")
     data, report_json = _gweave.preview_json(
