@@ -66,7 +66,7 @@ fn one_flag_name_has_one_value_name_in_every_command() {
             // `TOML|slicer`: a profile file, or a word for a built-in one.
             let value = values
                 .iter()
-                .map(|v| v.to_string().split('|').next().unwrap_or("").to_owned())
+                .map(|v| v.as_str().split('|').next().unwrap_or("").to_owned())
                 .collect::<Vec<_>>()
                 .join(" ");
             seen.entry(long.to_owned()).or_default().entry(value).or_default().push(name.clone());
