@@ -298,18 +298,29 @@ fn duration_s(v: &[u8]) -> Option<f64> {
 }
 
 /// The statistics of the file at `path` (`diameter_mm` overrides the file's filament
-/// diameter); a lenient read goes past malformed lines and counts them.
+/// diameter); a lenient read goes past malformed lines and counts them. A strict read runs the
+/// bare pass, the hot loop as it was: no malformed line ever reaches it.
 pub fn stats_file(
     path: &std::path::Path,
     diameter_mm: Option<f64>,
     strictness: crate::pass::Strictness,
     progress: &mut dyn crate::pass::Progress,
 ) -> crate::Result<crate::malformed::WithMalformed<Stats>> {
-    let mut pass = crate::malformed::Counting::new(StatsPass::new(diameter_mm));
+    use crate::malformed::{Counting, Malformed, WithMalformed};
     let mut run = crate::pass::Run::new(path, progress);
     run.strictness = strictness;
-    let state = run.scan(&mut pass)?;
-    Ok(crate::malformed::WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed })
+    Ok(match strictness {
+        crate::pass::Strictness::Strict => {
+            let mut pass = StatsPass::new(diameter_mm);
+            let state = run.scan(&mut pass)?;
+            WithMalformed { report: pass.into_stats(&state), malformed: Malformed::default() }
+        }
+        crate::pass::Strictness::Lenient => {
+            let mut pass = Counting::new(StatsPass::new(diameter_mm));
+            let state = run.scan(&mut pass)?;
+            WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed }
+        }
+    })
 }
 
 #[cfg(test)]
