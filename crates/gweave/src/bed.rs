@@ -211,6 +211,24 @@ mod tests {
         assert_eq!(err("0,200,200"), "X = 0 is out of range: 1 to 10000 mm");
     }
 
+    proptest::proptest! {
+        /// A corner, a size and a height written as `--bed` text read back as that box; any
+        /// text is read or refused, never a panic.
+        #[test]
+        fn a_bed_text_reads_back_as_the_box_it_describes(
+            x0 in -5000i32..5000, y0 in -5000i32..5000, w in 1i32..5000, d in 1i32..5000, z in 1i32..5000,
+            junk in ".{0,40}",
+        ) {
+            let (x0, y0) = (f64::from(x0) / 10.0, f64::from(y0) / 10.0);
+            let (x1, y1, z) = (x0 + f64::from(w) / 10.0, y0 + f64::from(d) / 10.0, f64::from(z));
+            let bed: Bed = format!("{x0},{y0},{x1},{y1},{z}").parse().unwrap();
+            proptest::prop_assert_eq!(bed, Bed { x_mm: [x0, x1], y_mm: [y0, y1], z_mm: Some(z) });
+            proptest::prop_assert!(bed.contains(0, x0) && bed.contains(1, y1) && !bed.contains(2, z + 1.0));
+            let _ = junk.parse::<Bed>();
+            let _ = Bed::from_settings(format!("; bed_shape = {junk}\n;SETTING_3 {junk}").as_bytes());
+        }
+    }
+
     #[test]
     fn cura_settings_footer_with_a_centred_origin() {
         let footer =
