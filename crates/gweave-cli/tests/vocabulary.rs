@@ -118,3 +118,18 @@ fn quiet_means_one_thing_in_every_command_that_prints_a_summary() {
     }
     assert!(without.is_empty(), "commands with a summary but no -q: {without:?}");
 }
+
+#[test]
+fn every_colour_flag_takes_the_us_spelling_too() {
+    let mut missing = Vec::new();
+    for (name, cmd) in commands() {
+        for arg in cmd.get_arguments() {
+            let Some(long) = arg.get_long().filter(|l| l.contains("colour")) else { continue };
+            let us = long.replace("colour", "color");
+            if !arg.get_all_aliases().is_some_and(|a| a.contains(&us.as_str())) {
+                missing.push(format!("gweave {name} --{long} (no --{us})"));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "{missing:?}");
+}
