@@ -63,6 +63,10 @@ pub struct MixArgs {
     /// Purge length at each change, mm of filament (0: no purge); overrides the profile.
     #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
     pub purge_mm: Option<f64>,
+    /// Purge this much (mm of filament) in the first mix before the file's first extrusion,
+    /// to clear what the chamber held; overrides the profile's `[purge] initial_mm`.
+    #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
+    pub initial_purge: Option<f64>,
     /// Draw the job's mixes (or the whole palette without a job) as a PNG swatch chart.
     #[arg(long, value_name = "PNG")]
     pub palette_png: Option<PathBuf>,
@@ -153,6 +157,9 @@ fn profile(args: &MixArgs) -> Result<MixProfile> {
         } else {
             gweave::post::mix::profile::PurgeMode::Off
         };
+    }
+    if let Some(mm) = args.initial_purge {
+        profile.purge.initial_mm = mm;
     }
     profile.validate()?;
     Ok(profile)

@@ -16,6 +16,7 @@
 //! [purge]
 //! mode = "length"               # off | length | volume | colours | washout
 //! length_mm = 25.0
+//! initial_mm = 0.0              # purge before the file's first extrusion, in the first mix
 //!
 //! [z_cap]
 //! max_z_feed_mm_min = 200.0
@@ -191,6 +192,9 @@ pub struct PairPurge {
 pub struct PurgeConfig {
     pub mode: PurgeMode,
     pub length_mm: f64,
+    /// Purged in the first mix before the file first moves filament (0: none): the chamber may
+    /// hold anything from the last print or a hand-loaded colour.
+    pub initial_mm: f64,
     pub volume_mm3: f64,
     /// Scales OrcaSlicer's volume (`colours` mode).
     pub multiplier: f64,
@@ -235,6 +239,7 @@ impl Default for PurgeConfig {
         PurgeConfig {
             mode: PurgeMode::Length,
             length_mm: 25.0,
+            initial_mm: 0.0,
             volume_mm3: 90.0,
             multiplier: 1.0,
             chamber_mm3: 40.0,
@@ -626,6 +631,7 @@ impl CheckRanges for MixProfile {
         let p = &self.purge;
         let purge = t.sub("purge");
         purge.check("length_mm", p.length_mm, PURGE_MM)?;
+        purge.check("initial_mm", p.initial_mm, PURGE_MM)?;
         purge.check("volume_mm3", p.volume_mm3, PURGE_MM3)?;
         purge.check("multiplier", p.multiplier, MULTIPLIER)?;
         purge.check("chamber_mm3", p.chamber_mm3, CHAMBER_MM3)?;
