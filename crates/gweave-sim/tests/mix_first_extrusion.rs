@@ -51,8 +51,9 @@ fn the_prime_line_before_layer_0_runs_on_the_first_mix() {
     let input = read("tests/data/cura/cura_torus.gcode");
     let orange = [0.0, 0.1717, 0.8283, 0.0];
     for (initial_mm, extra) in [(0.0, ""), (30.0, "[purge]\ninitial_mm = 30\n")] {
-        let profile = MixProfile::from_toml_str(&format!("[[schedule]]\nlayer = 0\nmix = \"Orange\"\n{extra}"))
-            .unwrap();
+        let profile =
+            MixProfile::from_toml_str(&format!("[[schedule]]\nlayer = 0\nmix = \"Orange\"\n{extra}"))
+                .unwrap();
         let (out, report) = mix_bytes(profile, &input).unwrap();
         let pre = sim_mixing(before_layer_0(&out));
         assert!(!pre.halted);

@@ -8,7 +8,6 @@ use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use gweave::colour::palette::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
-use gweave::colour::{MixingModel, Srgb8};
 use gweave::gcode::writer::Target;
 use gweave::post::mix::profile::{Dialect, GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
 use gweave::post::mix::report::MixReport;
@@ -176,8 +175,7 @@ fn write_swatch(profile: &MixProfile, has_job: bool, png: &Path) -> Result<()> {
             .collect();
         render_png(&entries, &layout)?
     } else {
-        let colours: Vec<Srgb8> = profile.hardware.inputs.iter().map(|i| i.colour).collect();
-        let model = MixingModel::new(&colours)?;
+        let model = profile.hardware.mixing_model()?;
         let palette = Palette::seed().with_config(PaletteConfig { mix: profile.mix.clone() });
         render_resolved_png(&palette.resolve_all(&model)?, &layout)?
     };

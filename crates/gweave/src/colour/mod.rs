@@ -4,8 +4,10 @@
 //! - `srgb`, `lab`: `#RRGGBB`, linear light, CIE XYZ (D65) and CIELAB.
 //! - `delta_e`: CIEDE2000, how different two colours look.
 //! - `mix`: `Mix`, validated and normalised ratios per input.
+//! - `spectrum`: the CIE 1931 observer and D65 on a 380-730 nm grid; reflectance -> sRGB.
+//! - `reflectance`: the smoothest reflectance spectrum of an sRGB colour (Burns' LHTSS).
 //! - `mixing`: `MixingModel`, the colour a mix of given filaments prints
-//!   (Kubelka-Munk, subtractive).
+//!   (two-constant Kubelka-Munk on spectra, like pigments).
 //! - `solve`: the mix whose predicted colour is nearest a target.
 //! - `palette`: the seed's 17 named CMY(K) colours plus user mixes from TOML.
 //! - `dialect`: Marlin `M163`/`M164`/`M165` and RepRapFirmware `M563`/`M567`
@@ -38,7 +40,9 @@ pub mod mix;
 pub mod mixing;
 pub mod palette;
 pub mod purge;
+pub mod reflectance;
 pub mod solve;
+pub mod spectrum;
 pub mod srgb;
 pub mod swatch;
 

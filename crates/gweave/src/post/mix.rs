@@ -626,7 +626,9 @@ impl Pass for MixPass {
     fn finish(&mut self, _state: &State, out: &mut dyn Write) -> io::Result<()> {
         self.write_held(false, out)?;
         if !self.started {
-            self.acc.warnings.push("the file never moved filament nor reached its first layer: no mix was defined".into());
+            self.acc
+                .warnings
+                .push("the file never moved filament nor reached its first layer: no mix was defined".into());
         }
         Ok(())
     }

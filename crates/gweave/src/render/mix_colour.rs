@@ -2,8 +2,9 @@
 //!
 //! The file says the mix: its `T<n>`, `M163`/`M164`/`M165` and `M567` lines are followed with
 //! the core's [`MixingState`]. The hardware says the colours: the filaments loaded on each
-//! input (a `gweave mix` profile's `[[hardware.inputs]]`, or cyan, magenta, yellow, white), and
-//! the Kubelka-Munk [`MixingModel`] predicts what a mix of them looks like.
+//! input (a `gweave mix` profile's `[[hardware.inputs]]` with their strengths, or cyan,
+//! magenta, yellow, white), and the pigment model [`MixingModel`] (Kubelka-Munk on spectra)
+//! predicts what a mix of them looks like, once per distinct mix (see [`MixTracker`]'s cache).
 //!
 //! Between two mixes the nozzle does not switch at once: the mixing chamber still holds the old
 //! mix and is washed out by the new one ([`Washout`], a stirred chamber behind a plug-flow dead
@@ -47,22 +48,22 @@ pub struct MixColours {
 }
 
 impl MixColours {
-    /// `filaments` loaded on inputs 0, 1, ...; the chamber's washout; filament diameter, mm.
+    /// The model of the filaments loaded on inputs 0, 1, ...; the chamber's washout; filament
+    /// diameter, mm.
     pub fn new(
-        filaments: &[Srgb8],
+        model: MixingModel,
         washout: Washout,
         filament_diameter_mm: f64,
     ) -> Result<Self, MixColourError> {
         filament_mm_to_mm3(1.0, filament_diameter_mm)?;
-        Ok(MixColours { model: MixingModel::new(filaments)?, washout, filament_diameter_mm })
+        Ok(MixColours { model, washout, filament_diameter_mm })
     }
 
     /// The hardware of a `gweave mix` profile (its inputs, `purge.chamber_mm3`/`dead_mm3`).
     pub fn from_profile(profile: &MixProfile) -> Result<Self, MixColourError> {
         let hw = &profile.hardware;
-        let filaments: Vec<Srgb8> = hw.inputs.iter().map(|i| i.colour).collect();
         let washout = Washout::new(profile.purge.chamber_mm3, profile.purge.dead_mm3)?;
-        Self::new(&filaments, washout, hw.filament_diameter_mm)
+        Self::new(hw.mixing_model()?, washout, hw.filament_diameter_mm)
     }
 
     /// The defaults of a `gweave mix` profile: cyan, magenta, yellow, white on 1.75 mm.
@@ -80,6 +81,7 @@ impl PartialEq for MixColours {
     /// The model follows from the filaments.
     fn eq(&self, o: &Self) -> bool {
         self.model.inputs() == o.model.inputs()
+            && self.model.strengths() == o.model.strengths()
             && self.washout == o.washout
             && self.filament_diameter_mm == o.filament_diameter_mm
     }
@@ -213,7 +215,7 @@ mod tests {
         let cyan = Srgb8::new(0, 160, 224);
         let yellow = Srgb8::new(255, 224, 0);
         let washout = Washout::new(40.0, 10.0).unwrap();
-        let colours = MixColours::new(&[cyan, yellow], washout, 1.75).unwrap();
+        let colours = MixColours::new(MixingModel::new(&[cyan, yellow]).unwrap(), washout, 1.75).unwrap();
         let mut t = MixTracker::new(colours.clone());
         feed(&mut t, "T1");
         feed(&mut t, "T0");

@@ -43,7 +43,7 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
-use crate::colour::Srgb8;
+use crate::colour::{MixError, MixingModel, Srgb8};
 use crate::gcode::number::NumberFormat;
 use crate::post::purge_block::PurgeMotion;
 use crate::range::{self, OutOfRange, Range, FILAMENT_DIAMETER_MM, LAYER_NUMBER, PURGE_MM, PURGE_MM3};
@@ -98,6 +98,10 @@ pub struct Input {
     /// For purge waste in grams, g/cm^3 (PLA about 1.24, PVA about 1.23).
     #[serde(default = "default_density")]
     pub density_g_cm3: f64,
+    /// How strongly it tints a mix (the scattering scale of the pigment model, see
+    /// [`crate::colour::mixing`]); unset, from its colour. `gweave mix --fit` measures it.
+    #[serde(default)]
+    pub strength: Option<f64>,
 }
 
 fn default_material() -> String {
@@ -134,7 +138,12 @@ impl Default for Hardware {
             inputs: CMYW_FILAMENTS
                 .iter()
                 .zip(names)
-                .map(|(&colour, m)| Input { colour, material: m.into(), density_g_cm3: default_density() })
+                .map(|(&colour, m)| Input {
+                    colour,
+                    material: m.into(),
+                    density_g_cm3: default_density(),
+                    strength: None,
+                })
                 .collect(),
             dialect: None,
             virtual_tools: crate::colour::dialect::MARLIN_VIRTUAL_TOOLS,
@@ -150,6 +159,18 @@ impl Hardware {
     /// The dialect written: the profile's, or Marlin's if it is still unset.
     pub fn dialect(&self) -> Dialect {
         self.dialect.unwrap_or_default()
+    }
+
+    /// The pigment model for the loaded filaments (their colours and strengths): the one model
+    /// that the mix pass, `--predict`, previews and swatches use.
+    pub fn mixing_model(&self) -> Result<MixingModel, MixError> {
+        let colours: Vec<Srgb8> = self.inputs.iter().map(|i| i.colour).collect();
+        let strengths: Vec<f64> = self
+            .inputs
+            .iter()
+            .map(|i| i.strength.unwrap_or_else(|| MixingModel::default_strength(i.colour)))
+            .collect();
+        MixingModel::with_strengths(&colours, &strengths)
     }
 
     /// The input that holds material 2.
@@ -602,6 +623,9 @@ impl MixProfile {
 }
 
 const INPUTS: Range = Range::new(1.0, 16.0, "inputs");
+/// Pigment strengths: the default runs from 0.01 (black) to 1.01 (white); carbon black and
+/// fitted values go above, nothing mixes at 0.
+const STRENGTH: Range = Range::new(0.001, 100.0, "");
 /// Filament densities, from foams to metal-filled filaments.
 const DENSITY_G_CM3: Range = Range::new(0.1, 25.0, "g/cm³");
 const VIRTUAL_TOOLS: Range = Range::new(0.0, 1_000.0, "tools");
@@ -622,7 +646,9 @@ impl CheckRanges for MixProfile {
         let hardware = t.sub("hardware");
         hardware.count("inputs (count)", hw.inputs.len() as u64, INPUTS)?;
         for (i, input) in hw.inputs.iter().enumerate() {
-            hardware.sub("inputs").item(i).check("density_g_cm3", input.density_g_cm3, DENSITY_G_CM3)?;
+            let item = hardware.sub("inputs").item(i);
+            item.check("density_g_cm3", input.density_g_cm3, DENSITY_G_CM3)?;
+            item.check_opt("strength", input.strength, STRENGTH)?;
         }
         hardware.count("virtual_tools", hw.virtual_tools as u64, VIRTUAL_TOOLS)?;
         hardware.check("filament_diameter_mm", hw.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;

@@ -196,8 +196,7 @@ impl Plan {
     pub fn new(profile: &MixProfile) -> Result<Plan, MixPassError> {
         profile.validate()?;
         let hw = &profile.hardware;
-        let colours: Vec<Srgb8> = hw.inputs.iter().map(|i| i.colour).collect();
-        let model = MixingModel::new(&colours).map_err(|e| MixPassError::Config(e.to_string()))?;
+        let model = hw.mixing_model().map_err(|e| MixPassError::Config(e.to_string()))?;
         let decimals = Decimals::new(hw.ratio_decimals).map_err(|e| MixPassError::Config(e.to_string()))?;
         let palette = Palette::seed().with_config(PaletteConfig { mix: profile.mix.clone() });
         let mut r = Resolver { profile, palette, model, decimals, mixes: Vec::new(), warnings: Vec::new() };
