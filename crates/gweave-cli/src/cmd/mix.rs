@@ -69,6 +69,11 @@ pub struct MixArgs {
     /// Draw the job's mixes (or the whole palette without a job) as a PNG swatch chart.
     #[arg(long, value_name = "PNG")]
     pub palette_png: Option<PathBuf>,
+    /// Print the colour these ratios are predicted to print (`C:M:Y:W`, any scale), with the
+    /// profile's filaments or the defaults; repeatable; with --json a list of
+    /// `{"ratios", "srgb", "lab"}`.
+    #[arg(long, value_name = "RATIOS")]
+    pub predict: Vec<String>,
     /// Ask the seed's questions on the terminal and write the profile to -c (or print it).
     #[arg(long)]
     pub wizard: bool,
@@ -102,6 +107,9 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let profile = profile(&args)?;
+    if !args.predict.is_empty() {
+        return super::mix_colour::predict_all(&profile, &args.predict, &args.report);
+    }
     let has_job = !(profile.schedule.is_empty() && profile.gradient.is_empty() && profile.map.is_empty());
     if let Some(png) = &args.palette_png {
         write_swatch(&profile, has_job, png)?;

@@ -8,6 +8,7 @@
 //! - `reflectance`: the smoothest reflectance spectrum of an sRGB colour (Burns' LHTSS).
 //! - `mixing`: `MixingModel`, the colour a mix of given filaments prints
 //!   (two-constant Kubelka-Munk on spectra, like pigments).
+//! - `predict`: a mix's predicted colour as `#rrggbb` and CIELAB (`gweave mix --predict`).
 //! - `solve`: the mix whose predicted colour is nearest a target.
 //! - `palette`: the seed's 17 named CMY(K) colours plus user mixes from TOML.
 //! - `dialect`: Marlin `M163`/`M164`/`M165` and RepRapFirmware `M563`/`M567`
@@ -39,6 +40,7 @@ pub mod lab;
 pub mod mix;
 pub mod mixing;
 pub mod palette;
+pub mod predict;
 pub mod purge;
 pub mod reflectance;
 pub mod solve;
