@@ -11,10 +11,8 @@ use crate::common::{print_summary, ReportArgs};
 /// `--predict C:M:Y:W ...`: each mix's predicted colour, with the profile's filaments.
 pub fn predict_all(profile: &MixProfile, mixes: &[String], report: &ReportArgs) -> Result<ExitCode> {
     let model = profile.hardware.mixing_model()?;
-    let predictions = mixes
-        .iter()
-        .map(|s| Ok(predict(&model, &parse_ratios(s)?)?))
-        .collect::<Result<Vec<Prediction>>>()?;
+    let predictions =
+        mixes.iter().map(|s| Ok(predict(&model, &parse_ratios(s)?)?)).collect::<Result<Vec<Prediction>>>()?;
     if report.emit(&predictions)? {
         print_summary(|out| {
             for p in &predictions {

@@ -40,7 +40,11 @@ pub fn parse_ratios(s: &str) -> Result<Mix, MixError> {
 /// The model's colour for `mix`.
 pub fn predict(model: &MixingModel, mix: &Mix) -> Result<Prediction, MixError> {
     let lab: Lab = model.predict_lab(mix)?;
-    Ok(Prediction { ratios: mix.ratios().to_vec(), srgb: lab.to_srgb8().to_hex(), lab: [lab.l, lab.a, lab.b] })
+    Ok(Prediction {
+        ratios: mix.ratios().to_vec(),
+        srgb: lab.to_srgb8().to_hex(),
+        lab: [lab.l, lab.a, lab.b],
+    })
 }
 
 #[cfg(test)]
