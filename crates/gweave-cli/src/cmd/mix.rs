@@ -74,6 +74,14 @@ pub struct MixArgs {
     /// `{"ratios", "srgb", "lab"}`.
     #[arg(long, value_name = "RATIOS")]
     pub predict: Vec<String>,
+    /// Write a calibration card (G-code, to -o) for the profile's hotend and filaments: 26
+    /// swatches for 4 inputs, purged between; --report lists each swatch's id and ratios.
+    #[arg(long, conflicts_with_all = ["predict", "fit", "wizard"])]
+    pub calibration_card: bool,
+    /// Fit the filaments to a printed card's measured colours (CSV `id,srgb` or `id,L,a,b`)
+    /// and write the fitted profile to -o.
+    #[arg(long, value_name = "CSV", conflicts_with_all = ["predict", "wizard"])]
+    pub fit: Option<PathBuf>,
     /// Ask the seed's questions on the terminal and write the profile to -c (or print it).
     #[arg(long)]
     pub wizard: bool,
@@ -102,6 +110,10 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
     if let (Some(input), Some(target)) = (&args.input, &target) {
         files = files.target(target, input);
     }
+    if args.calibration_card || args.fit.is_some() {
+        let out = args.out.output.as_deref().filter(|_| args.input.is_none());
+        files = files.read("--fit", args.fit.as_deref()).write("-o", out.filter(|p| *p != Path::new("-")));
+    }
     files
         .write("--palette-png", args.palette_png.as_deref())
         .write("--report", args.report.report.as_deref())
@@ -109,6 +121,21 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
     let profile = profile(&args)?;
     if !args.predict.is_empty() {
         return super::mix_colour::predict_all(&profile, &args.predict, &args.report);
+    }
+    if args.calibration_card || args.fit.is_some() {
+        let Some(out) = args.out.output.as_deref().filter(|_| args.input.is_none()) else {
+            bail!("--calibration-card and --fit write to -o FILE and take no G-code input");
+        };
+        return match &args.fit {
+            Some(csv) => {
+                let text = match &args.config {
+                    Some(path) => crate::common::read_text(path)?,
+                    None => String::new(),
+                };
+                super::mix_colour::fit_profile(&profile, &text, csv, out, &args.report)
+            }
+            None => super::mix_colour::card(&profile, out, &args.report),
+        };
     }
     let has_job = !(profile.schedule.is_empty() && profile.gradient.is_empty() && profile.map.is_empty());
     if let Some(png) = &args.palette_png {

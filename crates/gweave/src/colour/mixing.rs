@@ -54,6 +54,17 @@ fn reflectance_of_ks(q: f64) -> f64 {
     1.0 / (1.0 + q + (q * q + 2.0 * q).sqrt())
 }
 
+/// One finite, positive strength per input.
+fn check_strengths(inputs: usize, strengths: &[f64]) -> Result<(), MixError> {
+    if strengths.len() != inputs {
+        return Err(MixError::InputCount { expected: inputs, found: strengths.len() });
+    }
+    match strengths.iter().enumerate().find(|(_, s)| !(s.is_finite() && **s > 0.0)) {
+        Some((index, &value)) => Err(MixError::Strength { index, value }),
+        None => Ok(()),
+    }
+}
+
 /// The filaments loaded in a mixing hotend, input 0 first, ready to predict colours.
 #[derive(Debug, Clone)]
 pub struct MixingModel {
@@ -75,16 +86,15 @@ impl MixingModel {
         if inputs.is_empty() {
             return Err(MixError::NoInputs);
         }
-        if strengths.len() != inputs.len() {
-            return Err(MixError::InputCount { expected: inputs.len(), found: strengths.len() });
-        }
-        if let Some((index, &value)) =
-            strengths.iter().enumerate().find(|(_, s)| !(s.is_finite() && **s > 0.0))
-        {
-            return Err(MixError::Strength { index, value });
-        }
+        check_strengths(inputs.len(), strengths)?;
         let k_over_s = inputs.iter().map(|c| reflectance(c.to_linear()).map(k_over_s)).collect();
         Ok(Self { inputs: inputs.to_vec(), strengths: strengths.to_vec(), k_over_s })
+    }
+
+    /// The same filaments with other strengths (the spectra are kept, not recomputed).
+    pub fn with_new_strengths(&self, strengths: &[f64]) -> Result<Self, MixError> {
+        check_strengths(self.inputs.len(), strengths)?;
+        Ok(Self { strengths: strengths.to_vec(), ..self.clone() })
     }
 
     /// The strength a filament of colour `c` gets unless told: its relative luminance plus 0.01.

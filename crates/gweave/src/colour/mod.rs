@@ -13,6 +13,7 @@
 //! - `palette`: the seed's 17 named CMY(K) colours plus user mixes from TOML.
 //! - `dialect`: Marlin `M163`/`M164`/`M165` and RepRapFirmware `M563`/`M567`
 //!   lines from a mix, and `MixingState` following those commands in a stream.
+//! - `fit`: filament colours and strengths from measured calibration swatches.
 //! - `purge`: purge volume between two colours, and the washout of a mixing chamber.
 //! - `swatch`: a palette as a PNG chart.
 //!
@@ -35,6 +36,7 @@
 //! ```
 pub mod delta_e;
 pub mod dialect;
+pub mod fit;
 pub(crate) mod font;
 pub mod lab;
 pub mod mix;

@@ -38,6 +38,7 @@
 //!                                  G1 F1800 X125 Y80 E410.2
 //! ```
 
+pub mod card;
 pub mod profile;
 pub mod report;
 pub mod schedule;

@@ -45,6 +45,7 @@ use serde::{Deserialize, Serialize};
 use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
 use crate::colour::{MixError, MixingModel, Srgb8};
 use crate::gcode::number::NumberFormat;
+use crate::post::mix::card::CardConfig;
 use crate::post::purge_block::PurgeMotion;
 use crate::range::{self, OutOfRange, Range, FILAMENT_DIAMETER_MM, LAYER_NUMBER, PURGE_MM, PURGE_MM3};
 use crate::settings::{CheckRanges, Table};
@@ -551,6 +552,8 @@ pub struct MixProfile {
     pub gradient: Vec<GradientSpec>,
     /// Slicer tool (`T1`) to mix.
     pub map: BTreeMap<String, MixRef>,
+    /// The calibration card (`gweave mix --calibration-card`).
+    pub card: CardConfig,
 }
 
 impl MixProfile {
@@ -671,6 +674,7 @@ impl CheckRanges for MixProfile {
         }
         t.sub("z_cap").check("max_z_feed_mm_min", self.z_cap.max_z_feed_mm_min, Z_CAP_MM_MIN)?;
         self.numbers.check_ranges(&t.sub("numbers"))?;
+        self.card.check_ranges(&t.sub("card"))?;
         for (i, s) in self.schedule.iter().enumerate() {
             let table = t.sub("schedule").item(i);
             table.check_opt("layer", s.layer, LAYER_NUMBER)?;
