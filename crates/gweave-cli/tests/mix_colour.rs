@@ -127,3 +127,52 @@ fn a_measured_card_fits_a_profile_that_predicts_other_blends() {
     ]);
     assert!(!same.status.success());
 }
+
+/// Runs `gweave args` with `answers` on standard input.
+fn gweave_answering(args: &[&str], answers: &str) -> Output {
+    use std::io::Write;
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_gweave"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(answers.as_bytes()).unwrap();
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn the_wizard_confirms_then_writes_and_runs_the_job() {
+    let dir = tempfile::tempdir().unwrap();
+    let profile = dir.path().join("mix.toml");
+    let out = dir.path().join("out.gcode");
+    let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/cura/cura_torus.gcode");
+    let args = [
+        "mix",
+        "--wizard",
+        input.to_str().unwrap(),
+        "-c",
+        profile.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-q",
+    ];
+    // Orange from layer 0, default purge and cap; declined: nothing is written.
+    let no = gweave_answering(&args, "1\nn\nOrange\n0\n\n\n\nn\n");
+    assert!(!no.status.success());
+    assert!(String::from_utf8_lossy(&no.stdout).contains("Summary:"));
+    assert!(!profile.exists() && !out.exists());
+    // Confirmed: the profile, then the file rewritten with it.
+    let yes = gweave_answering(&args, "1\nn\nOrange\n0\n\n\n\ny\n");
+    assert!(yes.status.success(), "{}", String::from_utf8_lossy(&yes.stderr));
+    assert!(std::fs::read_to_string(&profile).unwrap().contains("mix = \"Orange\""));
+    let gcode = std::fs::read_to_string(&out).unwrap();
+    assert!(gcode.contains("M163 S1 P0.1717\n"), "the job ran");
+    // Without -o it says plainly that the file was not processed.
+    std::fs::remove_file(&profile).unwrap();
+    let only = gweave_answering(&args[..5], "1\nn\nOrange\n0\n\n\n\ny\n");
+    assert!(only.status.success());
+    assert!(String::from_utf8_lossy(&only.stderr).contains("the wizard only wrote the profile"));
+}

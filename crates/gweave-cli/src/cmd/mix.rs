@@ -1,6 +1,6 @@
 //! `gweave mix`: rewrite slicer G-code for a mixing hotend (see `docs/mix.md`).
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -82,7 +82,8 @@ pub struct MixArgs {
     /// and write the fitted profile to -o.
     #[arg(long, value_name = "CSV", conflicts_with_all = ["predict", "wizard"])]
     pub fit: Option<PathBuf>,
-    /// Ask the seed's questions on the terminal and write the profile to -c (or print it).
+    /// Ask the seed's questions on the terminal, show a summary, and after a yes write the
+    /// profile to -c (or print it); with a G-code file and -o, then rewrite that file with it.
     #[arg(long)]
     pub wizard: bool,
     #[command(flatten)]
@@ -218,27 +219,57 @@ fn write_swatch(profile: &MixProfile, has_job: bool, png: &Path) -> Result<()> {
 }
 
 fn wizard(args: &MixArgs) -> Result<ExitCode> {
+    // With a G-code file and -o (or --in-place) the job runs right after: check those first.
+    let target = match (&args.input, args.out.output.is_some() || args.out.in_place) {
+        (Some(_), true) => Some(args.out.target()?),
+        _ => None,
+    };
+    let mut files = Files::new().read("INPUT", args.input.as_deref()).write("-c", args.config.as_deref());
+    if let (Some(input), Some(target)) = (&args.input, &target) {
+        files = files.target(target, input);
+    }
+    files.check()?;
     let stdin = std::io::stdin();
-    let interactive = stdin.is_terminal();
     let mut input = stdin.lock();
-    let mut stdout = std::io::stdout();
-    let text = run_wizard(&mut input, &mut stdout)?;
+    // The questions go to standard error when the job's G-code goes to standard output.
+    let mut prompts: Box<dyn Write> = if target == Some(Target::Stdout) {
+        Box::new(std::io::stderr())
+    } else {
+        Box::new(std::io::stdout())
+    };
+    let Some(text) = run_wizard(&mut input, &mut prompts)? else {
+        eprintln!("gweave: nothing written");
+        return Ok(ExitCode::FAILURE);
+    };
+    drop(prompts);
     match &args.config {
         Some(path) => {
             write_bytes(path, text.as_bytes())?;
-            print_summary(|out| {
-                writeln!(
-                    out,
-                    "\nWrote {}. Next: gweave mix part.gcode -c {} -o part.mix.gcode",
-                    path.display(),
-                    path.display()
-                )
-            })?;
+            eprintln!("Wrote {}.", path.display());
         }
-        None => print_summary(|out| write!(out, "\n{text}"))?,
+        None if target.is_none() => print_summary(|out| write!(out, "\n{text}"))?,
+        None => {}
     }
-    if interactive && args.input.is_some() {
-        eprintln!("gweave: the wizard only writes the profile; run again with -c to process the file");
+    let (Some(file), Some(target)) = (&args.input, target) else {
+        if let Some(file) = &args.input {
+            eprintln!(
+                "gweave: the wizard only wrote the profile; {} was not processed: give -o OUT to process it too",
+                file.display()
+            );
+        } else if let Some(path) = &args.config {
+            eprintln!("Next: gweave mix part.gcode -c {} -o part.mix.gcode", path.display());
+        }
+        return Ok(ExitCode::SUCCESS);
+    };
+    let profile = MixProfile::from_toml_str(&text)?;
+    let mut bar = Bar::new(args.quiet);
+    let report = mix_file(profile, file, &target, &mut bar)?;
+    drop(bar);
+    for w in &report.warnings {
+        eprintln!("gweave: warning: {w}");
+    }
+    if args.report.emit(&report)? && !args.quiet {
+        print_human(&mut std::io::stderr().lock(), &report)?;
     }
     Ok(ExitCode::SUCCESS)
 }
