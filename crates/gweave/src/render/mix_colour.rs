@@ -19,9 +19,10 @@
 //! primed with its first colour; the toolpath does not count the start G-code's prime lines),
 //! so the first layer shows no transition.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
 use crate::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use crate::colour::palette::MixSpec;
 use crate::colour::purge::{filament_mm_to_mm3, PurgeError, Washout};
 use crate::colour::{Mix, MixError, MixingModel, Srgb8};
 use crate::gcode::line::Block;
@@ -104,6 +105,8 @@ pub struct MixTracker {
     /// The colour of `to` once the washout has settled, until the mix changes: most moves
     /// print it, and need neither a ratio vector nor a cache lookup.
     settled: Option<Srgb8>,
+    /// A name for each settled mix's colour (see [`mix_name`]).
+    names: BTreeMap<[u8; 3], String>,
 }
 
 impl MixTracker {
@@ -120,6 +123,7 @@ impl MixTracker {
             purged_mm3: f64::INFINITY,
             loaded: false,
             cache: HashMap::new(),
+            names: BTreeMap::new(),
             settled: None,
         }
     }
@@ -180,8 +184,14 @@ impl MixTracker {
         let c = self.colour_of(&self.output(mid_mm3));
         if settled {
             self.settled = Some(c);
+            self.names.entry([c.r, c.g, c.b]).or_insert_with(|| mix_name(&self.to));
         }
         c
+    }
+
+    /// The names of the settled mixes' colours, for legends.
+    pub fn into_names(self) -> BTreeMap<[u8; 3], String> {
+        self.names
     }
 
     /// The predicted colour of `ratios`, through the cache.
@@ -197,6 +207,25 @@ impl MixTracker {
         }
         c
     }
+}
+
+/// The seed palette's name of `ratios` (to 0.005 on each input; 4 inputs), else the ratios as
+/// `0.25:0.25:0.5:0`.
+fn mix_name(ratios: &[f64]) -> String {
+    let named = crate::colour::palette::Palette::seed().entries().iter().find_map(|e| match &e.spec {
+        MixSpec::Ratios(m)
+            if m.inputs() == ratios.len()
+                && m.ratios().iter().zip(ratios).all(|(a, b)| (a - b).abs() < 0.005) =>
+        {
+            Some(e.name.clone())
+        }
+        _ => None,
+    });
+    named.unwrap_or_else(|| {
+        let parts: Vec<String> =
+            ratios.iter().map(|r| format!("{}", (r * 1000.0).round() / 1000.0)).collect();
+        parts.join(":")
+    })
 }
 
 #[cfg(test)]
@@ -233,6 +262,11 @@ mod tests {
         assert_ne!(mid, pure1);
         t.extrude(200.0);
         assert_eq!(t.extrude(1.0), pure1, "washed out");
+        // Settled colours are named by their ratios (no palette entry has 2 inputs).
+        let names = t.into_names();
+        assert_eq!(names.get(&[pure1.r, pure1.g, pure1.b]).map(String::as_str), Some("0:1"));
+        assert_eq!(mix_name(&[0.5, 0.0, 0.5, 0.0]), "Green");
+        assert_eq!(mix_name(&[0.25, 0.0, 0.75, 0.0]), "0.25:0:0.75:0");
     }
 
     #[test]
