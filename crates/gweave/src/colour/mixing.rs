@@ -165,8 +165,10 @@ mod tests {
         Lab::from_srgb8(Srgb8::new(r, g, b))
     }
 
-    /// Published pigment mixes of two colours: (a, b, share of b, the published result, source).
-    const PUBLISHED: [([u8; 3], [u8; 3], f64, [u8; 3], &str); 6] = [
+    /// A published pigment mix of two colours: (a, b, share of b, the published result, source).
+    type Published = ([u8; 3], [u8; 3], f64, [u8; 3], &'static str);
+
+    const PUBLISHED: [Published; 6] = [
         // Mixbox README (github.com/scrtwpns/mixbox), its usage example: blue + yellow at 0.5.
         ([0, 33, 133], [252, 211, 0], 0.5, [41, 130, 57], "Mixbox README"),
         // BambuStudio src/libslic3r/filament_mixer_model.h (MIT), header comment: same mix.

@@ -107,11 +107,13 @@ fn solve_in_place(a: &mut [[f64; UNKNOWNS + 1]; UNKNOWNS]) -> [f64; UNKNOWNS] {
         if p.abs() < 1e-300 {
             continue;
         }
-        for row in col + 1..UNKNOWNS {
-            let m = a[row][col] / p;
+        let (upper, lower) = a.split_at_mut(col + 1);
+        let pivot_row = &upper[col];
+        for row in lower.iter_mut() {
+            let m = row[col] / p;
             if m != 0.0 {
-                for k in col..=UNKNOWNS {
-                    a[row][k] -= m * a[col][k];
+                for (x, q) in row[col..].iter_mut().zip(&pivot_row[col..]) {
+                    *x -= m * q;
                 }
             }
         }
