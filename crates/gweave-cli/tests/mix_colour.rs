@@ -117,7 +117,7 @@ fn a_measured_card_fits_a_profile_that_predicts_other_blends() {
     let after = mean(&predict(Some(&fitted), &off_card));
     let before = mean(&predict(None, &off_card));
     assert!(after <= 3.0 && before > 5.0, "mean CIEDE2000 {before:.2} -> {after:.2}");
-    // An output naming an input is refused, and so is a G-code input.
+    // An output naming an input is refused, and nothing is written from a bad row.
     let same = gweave(&[
         "mix",
         "--fit",
@@ -126,6 +126,13 @@ fn a_measured_card_fits_a_profile_that_predicts_other_blends() {
         d("measured.csv").to_str().unwrap(),
     ]);
     assert!(!same.status.success());
+    std::fs::write(d("bad.csv"), "id,srgb\n1,#00a0e0\n2,#nothex\n").unwrap();
+    let bad =
+        gweave(&["mix", "--fit", d("bad.csv").to_str().unwrap(), "-o", d("bad.toml").to_str().unwrap()]);
+    assert!(!bad.status.success());
+    let said = String::from_utf8_lossy(&bad.stderr);
+    assert!(said.contains(&format!("{}:3: ", d("bad.csv").display())), "{said}");
+    assert!(!d("bad.toml").exists());
 }
 
 /// Runs `gweave args` with `answers` on standard input.

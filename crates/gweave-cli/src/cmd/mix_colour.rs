@@ -3,8 +3,8 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
-use gweave::colour::fit::{fit, parse_csv};
+use anyhow::{anyhow, Result};
+use gweave::colour::fit::{fit, parse_csv, FitError};
 use gweave::colour::predict::{parse_ratios, predict, Prediction};
 use gweave::post::mix::card::{calibration_card, card_mixes, fitted_profile_toml};
 use gweave::post::mix::profile::MixProfile;
@@ -81,7 +81,10 @@ pub fn fit_profile(
     output: &Path,
     report: &ReportArgs,
 ) -> Result<ExitCode> {
-    let measured = parse_csv(&read_text(csv)?).with_context(|| csv.display().to_string())?;
+    let measured = parse_csv(&read_text(csv)?).map_err(|e| match e {
+        FitError::Csv { line, message } => anyhow!("{}:{line}: {message}", csv.display()),
+        other => other.into(),
+    })?;
     let start = profile.hardware.mixing_model()?;
     let fitted = fit(&start, &card_mixes(profile.hardware.inputs.len()), &measured)?;
     let text = fitted_profile_toml(profile_text, profile, &fitted.model)?;
