@@ -280,6 +280,18 @@ mod tests {
     }
 
     #[test]
+    fn card_keys_have_ranges() {
+        for (text, want) in [
+            ("[card]\npatch_mm = 1000", "[card] patch_mm = 1000 is out of range: 3 to 100 mm"),
+            ("[card]\ncolumns = 0", "[card] columns = 0 is out of range"),
+            ("[[hardware.inputs]]\ncolour = \"#ffffff\"\nstrength = 0", "strength = 0 is out of range"),
+        ] {
+            let err = MixProfile::from_toml_str(text).unwrap_err().to_string();
+            assert!(err.contains(want), "{text}: {err}");
+        }
+    }
+
+    #[test]
     fn four_inputs_make_26_swatches_over_the_gamut() {
         let mixes = card_mixes(4);
         assert_eq!(mixes.len(), 4 + 6 * 3 + 4);
