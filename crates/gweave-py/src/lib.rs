@@ -885,6 +885,19 @@ fn write_helical_paths_json(
 }
 
 // mix
+/// The colour `ratios` (one per input, any scale) is predicted to print, as JSON text
+/// `{"ratios", "srgb", "lab"}` (see `gweave mix --predict`); `config` is a profile's TOML text
+/// (empty: the default cyan, magenta, yellow, white filaments).
+#[pyfunction]
+#[pyo3(signature = (ratios, *, config=""))]
+fn predict_colour_json(ratios: Vec<f64>, config: &str) -> PyResult<String> {
+    let bad = |e: &dyn std::fmt::Display| PyValueError::new_err(e.to_string());
+    let profile = gweave::post::mix::profile::MixProfile::from_toml_str(config).map_err(|e| bad(&e))?;
+    let model = profile.hardware.mixing_model().map_err(|e| bad(&e))?;
+    let mix = gweave::colour::Mix::new(&ratios).map_err(|e| bad(&e))?;
+    to_json(&gweave::colour::predict::predict(&model, &mix).map_err(|e| bad(&e))?)
+}
+
 /// `gweave mix` on a file: returns the report as JSON text (see `gweave mix --json`). The
 /// profile is TOML text (empty: the defaults); the lists add schedule entries, gradients and
 /// tool maps as the command line flags do.
@@ -964,6 +977,7 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(purge_shift_json, m)?)?;
     // mix
     m.add_function(wrap_pyfunction!(mix_json, m)?)?;
+    m.add_function(wrap_pyfunction!(predict_colour_json, m)?)?;
     m.add_class::<Line>()?;
     m.add_class::<Reader>()?;
     // gweave-sim: the virtual printer

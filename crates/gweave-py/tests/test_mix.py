@@ -34,3 +34,17 @@ def test_bad_input_raises(data, tmp_path):
         gweave.mix(data / "cura" / "cura_torus.gcode", tmp_path / "x.gcode", at_layer=["0=Mauve"])
     with pytest.raises(ValueError, match="nothing to do"):
         gweave.mix(data / "cura" / "cura_torus.gcode", tmp_path / "x.gcode")
+
+
+def test_predict_colour_is_the_command_lines(tmp_path):
+    green = gweave.predict_colour([1, 0, 1, 0])
+    assert green["ratios"] == [0.5, 0.0, 0.5, 0.0]
+    assert green["srgb"] == "#7dbd4c"  # `gweave mix --predict 1:0:1:0`
+    assert green["lab"][1] < -30  # a* < 0: green
+    profile = tmp_path / "two.toml"
+    profile.write_text(
+        '[[hardware.inputs]]\ncolour = "#002185"\n[[hardware.inputs]]\ncolour = "#fcd300"\n'
+    )
+    assert gweave.predict_colour([1, 1], profile=profile)["srgb"] == "#418548"
+    with pytest.raises(ValueError, match="mix has 3 inputs, expected 4"):
+        gweave.predict_colour([1, 1, 1])

@@ -255,7 +255,10 @@ fn cura_dual_with_a_tool_map() {
     let c = run("cura/cura_dual.gcode", p);
     let m = &c.report.mixes;
     assert_eq!((m[0].name.as_str(), m[1].name.as_str()), ("Orange", "#2060c0"));
-    assert!(m[1].delta_e.unwrap() < 10.0);
+    // A deep blue is just outside what cyan and magenta pigments make (dE 10.0 with the
+    // pigment model): the nearest mix is found and flagged.
+    let de = m[1].delta_e.unwrap();
+    assert!(de < 12.0 && m[1].out_of_gamut, "dE {de}");
     // 78 T lines: T0 in the start G-code, then each change.
     assert_eq!(c.report.changes, 77);
     assert_eq!(c.purges, 77);

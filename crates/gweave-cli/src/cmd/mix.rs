@@ -1,6 +1,6 @@
 //! `gweave mix`: rewrite slicer G-code for a mixing hotend (see `docs/mix.md`).
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -8,7 +8,6 @@ use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use gweave::colour::palette::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
-use gweave::colour::{MixingModel, Srgb8};
 use gweave::gcode::writer::Target;
 use gweave::post::mix::profile::{Dialect, GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
 use gweave::post::mix::report::MixReport;
@@ -63,10 +62,28 @@ pub struct MixArgs {
     /// Purge length at each change, mm of filament (0: no purge) [default: the profile's].
     #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
     pub purge_mm: Option<f64>,
+    /// Purge this much (mm of filament) in the first mix before the file's first extrusion,
+    /// to clear what the chamber held; overrides the profile's `[purge] initial_mm`.
+    #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
+    pub initial_purge: Option<f64>,
     /// Draw the job's mixes (or the whole palette without a job) as a PNG swatch chart.
     #[arg(long, value_name = "PNG")]
     pub palette_png: Option<PathBuf>,
-    /// Ask the seed's questions on the terminal and write the profile to -c (or print it).
+    /// Print the colour these ratios are predicted to print (`C:M:Y:W`, any scale), with the
+    /// profile's filaments or the defaults; repeatable; with --json a list of
+    /// `{"ratios", "srgb", "lab"}`.
+    #[arg(long, value_name = "RATIOS")]
+    pub predict: Vec<String>,
+    /// Write a calibration card (G-code, to -o) for the profile's hotend and filaments: 26
+    /// swatches for 4 inputs, purged between; --report lists each swatch's id and ratios.
+    #[arg(long, conflicts_with_all = ["predict", "fit", "wizard"])]
+    pub calibration_card: bool,
+    /// Fit the filaments to a printed card's measured colours (CSV `id,srgb` or `id,L,a,b`)
+    /// and write the fitted profile to -o.
+    #[arg(long, value_name = "CSV", conflicts_with_all = ["predict", "wizard"])]
+    pub fit: Option<PathBuf>,
+    /// Ask the seed's questions on the terminal, show a summary, and after a yes write the
+    /// profile to -c (or print it); with a G-code file and -o, then rewrite that file with it.
     #[arg(long)]
     pub wizard: bool,
     #[command(flatten)]
@@ -93,11 +110,33 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
     if let (Some(input), Some(target)) = (&args.input, &target) {
         files = files.target(target, input);
     }
+    if args.calibration_card || args.fit.is_some() {
+        let out = args.out.output.as_deref().filter(|_| args.input.is_none());
+        files = files.read("--fit", args.fit.as_deref()).write("-o", out.filter(|p| *p != Path::new("-")));
+    }
     files
         .write("--palette-png", args.palette_png.as_deref())
         .write("--report", args.report.report.as_deref())
         .check()?;
     let profile = profile(&args)?;
+    if !args.predict.is_empty() {
+        return super::mix_colour::predict_all(&profile, &args.predict, &args.report);
+    }
+    if args.calibration_card || args.fit.is_some() {
+        let Some(out) = args.out.output.as_deref().filter(|_| args.input.is_none()) else {
+            bail!("--calibration-card and --fit write to -o FILE and take no G-code input");
+        };
+        return match &args.fit {
+            Some(csv) => {
+                let text = match &args.config {
+                    Some(path) => crate::common::read_text(path)?,
+                    None => String::new(),
+                };
+                super::mix_colour::fit_profile(&profile, &text, csv, out, &args.report)
+            }
+            None => super::mix_colour::card(&profile, out, &args.report),
+        };
+    }
     let has_job = !(profile.schedule.is_empty() && profile.gradient.is_empty() && profile.map.is_empty());
     if let Some(png) = &args.palette_png {
         write_swatch(&profile, has_job, png)?;
@@ -148,6 +187,9 @@ fn profile(args: &MixArgs) -> Result<MixProfile> {
     if let Some(mm) = args.purge_mm {
         profile.purge.set_length_mm(mm);
     }
+    if let Some(mm) = args.initial_purge {
+        profile.purge.initial_mm = mm;
+    }
     profile.validate()?;
     Ok(profile)
 }
@@ -163,8 +205,7 @@ fn write_swatch(profile: &MixProfile, has_job: bool, png: &Path) -> Result<()> {
             .collect();
         render_png(&entries, &layout)?
     } else {
-        let colours: Vec<Srgb8> = profile.hardware.inputs.iter().map(|i| i.colour).collect();
-        let model = MixingModel::new(&colours)?;
+        let model = profile.hardware.mixing_model()?;
         let palette = Palette::seed().with_config(PaletteConfig { mix: profile.mix.clone() });
         render_resolved_png(&palette.resolve_all(&model)?, &layout)?
     };
@@ -172,27 +213,57 @@ fn write_swatch(profile: &MixProfile, has_job: bool, png: &Path) -> Result<()> {
 }
 
 fn wizard(args: &MixArgs) -> Result<ExitCode> {
+    // With a G-code file and -o (or --in-place) the job runs right after: check those first.
+    let target = match (&args.input, args.out.output.is_some() || args.out.in_place) {
+        (Some(_), true) => Some(args.out.target()?),
+        _ => None,
+    };
+    let mut files = Files::new().read("INPUT", args.input.as_deref()).write("-c", args.config.as_deref());
+    if let (Some(input), Some(target)) = (&args.input, &target) {
+        files = files.target(target, input);
+    }
+    files.check()?;
     let stdin = std::io::stdin();
-    let interactive = stdin.is_terminal();
     let mut input = stdin.lock();
-    let mut stdout = std::io::stdout();
-    let text = run_wizard(&mut input, &mut stdout)?;
+    // The questions go to standard error when the job's G-code goes to standard output.
+    let mut prompts: Box<dyn Write> = if target == Some(Target::Stdout) {
+        Box::new(std::io::stderr())
+    } else {
+        Box::new(std::io::stdout())
+    };
+    let Some(text) = run_wizard(&mut input, &mut prompts)? else {
+        eprintln!("gweave: nothing written");
+        return Ok(ExitCode::FAILURE);
+    };
+    drop(prompts);
     match &args.config {
         Some(path) => {
             write_bytes(path, text.as_bytes())?;
-            print_summary(|out| {
-                writeln!(
-                    out,
-                    "\nWrote {}. Next: gweave mix part.gcode -c {} -o part.mix.gcode",
-                    path.display(),
-                    path.display()
-                )
-            })?;
+            eprintln!("Wrote {}.", path.display());
         }
-        None => print_summary(|out| write!(out, "\n{text}"))?,
+        None if target.is_none() => print_summary(|out| write!(out, "\n{text}"))?,
+        None => {}
     }
-    if interactive && args.input.is_some() {
-        eprintln!("gweave: the wizard only writes the profile; run again with -c to process the file");
+    let (Some(file), Some(target)) = (&args.input, target) else {
+        if let Some(file) = &args.input {
+            eprintln!(
+                "gweave: the wizard only wrote the profile; {} was not processed: give -o OUT to process it too",
+                file.display()
+            );
+        } else if let Some(path) = &args.config {
+            eprintln!("Next: gweave mix part.gcode -c {} -o part.mix.gcode", path.display());
+        }
+        return Ok(ExitCode::SUCCESS);
+    };
+    let profile = MixProfile::from_toml_str(&text)?;
+    let mut bar = Bar::new(args.quiet);
+    let report = mix_file(profile, file, &target, &mut bar)?;
+    drop(bar);
+    for w in &report.warnings {
+        eprintln!("gweave: warning: {w}");
+    }
+    if args.report.emit(&report)? && !args.quiet {
+        print_human(&mut std::io::stderr().lock(), &report)?;
     }
     Ok(ExitCode::SUCCESS)
 }

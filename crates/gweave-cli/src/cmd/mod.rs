@@ -15,6 +15,7 @@ mod slice_raster;
 mod purge_shift;
 // mix
 mod mix;
+mod mix_colour;
 
 // rotary (lathe-type) printing
 mod rotary;

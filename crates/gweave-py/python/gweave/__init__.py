@@ -36,7 +36,7 @@ __all__ += ["raster", "raster_test_pattern", "slice_raster"]
 # purge-shift
 __all__ += ["purge_shift"]
 # mix
-__all__ += ["mix"]
+__all__ += ["mix", "predict_colour"]
 
 __all__ += ["rotary_wrap", "rotary_tube", "HelicalPath", "write_helical_paths"]
 
@@ -454,6 +454,21 @@ def mix(
             force=force,
         )
     )
+
+
+def predict_colour(ratios: Sequence[float], profile: Optional[PathLike] = None) -> Dict[str, Any]:
+    """The colour a mix is predicted to print (see ``gweave mix --predict``).
+
+    ``ratios`` has one share per input, in any scale (``[1, 0, 1, 0]`` is half cyan, half
+    yellow); ``profile`` is a ``gweave mix`` profile TOML file whose filaments (colours and
+    strengths) are used, else the default cyan, magenta, yellow and white. Returns
+    ``{"ratios": [...], "srgb": "#rrggbb", "lab": [L, a, b]}`` with the ratios normalised.
+    """
+    text = ""
+    if profile is not None:
+        with open(os.fspath(profile), encoding="utf-8") as f:
+            text = f.read()
+    return json.loads(_gweave.predict_colour_json([float(r) for r in ratios], config=text))
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -74,6 +74,7 @@ def purge_shift_json(
 ) -> str: ...
 
 # mix
+def predict_colour_json(ratios: List[float], *, config: str = "") -> str: ...
 def mix_json(
     path: str,
     output: Optional[str] = None,

@@ -21,6 +21,10 @@ pub enum MixError {
     InputCount { expected: usize, found: usize },
     #[error("{what} must be within [0, 1], got {value}")]
     OutOfUnitRange { what: &'static str, value: f64 },
+    #[error("ratios {0:?}: write numbers separated by ':', one per input (C:M:Y:W)")]
+    Syntax(String),
+    #[error("strength of input {index} is {value}, not a positive number")]
+    Strength { index: usize, value: f64 },
     #[error("input {index} does not exist in a {inputs}-input mix")]
     NoSuchInput { index: usize, inputs: usize },
 }

@@ -4,12 +4,16 @@
 //! - `srgb`, `lab`: `#RRGGBB`, linear light, CIE XYZ (D65) and CIELAB.
 //! - `delta_e`: CIEDE2000, how different two colours look.
 //! - `mix`: `Mix`, validated and normalised ratios per input.
+//! - `spectrum`: the CIE 1931 observer and D65 on a 380-730 nm grid; reflectance -> sRGB.
+//! - `reflectance`: the smoothest reflectance spectrum of an sRGB colour (Burns' LHTSS).
 //! - `mixing`: `MixingModel`, the colour a mix of given filaments prints
-//!   (Kubelka-Munk, subtractive).
+//!   (two-constant Kubelka-Munk on spectra, like pigments).
+//! - `predict`: a mix's predicted colour as `#rrggbb` and CIELAB (`gweave mix --predict`).
 //! - `solve`: the mix whose predicted colour is nearest a target.
 //! - `palette`: the seed's 17 named CMY(K) colours plus user mixes from TOML.
 //! - `dialect`: Marlin `M163`/`M164`/`M165` and RepRapFirmware `M563`/`M567`
 //!   lines from a mix, and `MixingState` following those commands in a stream.
+//! - `fit`: filament colours and strengths from measured calibration swatches.
 //! - `purge`: purge volume between two colours, and the washout of a mixing chamber.
 //! - `swatch`: a palette as a PNG chart.
 //!
@@ -32,13 +36,17 @@
 //! ```
 pub mod delta_e;
 pub mod dialect;
+pub mod fit;
 pub(crate) mod font;
 pub mod lab;
 pub mod mix;
 pub mod mixing;
 pub mod palette;
+pub mod predict;
 pub mod purge;
+pub mod reflectance;
 pub mod solve;
+pub mod spectrum;
 pub mod srgb;
 pub mod swatch;
 

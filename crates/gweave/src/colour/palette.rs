@@ -1,9 +1,12 @@
 //! Named mixes: the seed's 17-colour CMY(K) palette plus user definitions.
 //!
 //! The built-in palette is Annex A of seed 000 (a 4-in/1-out mixing extruder,
-//! 2016): inputs E0 cyan, E1 magenta, E2 yellow, E3 white/black ("key") or a
-//! second material. Its ratios are kept as printed; two of them sum to 0.99
-//! (Orange 0 : 0.17 : 0.82, Brown 0.33 each) and are normalised like any mix.
+//! 2016): inputs E0 cyan, E1 magenta, E2 yellow, E3 white or a second material.
+//! Its ratios are kept as printed; two of them sum to 0.99 (Orange 0 : 0.17 :
+//! 0.82, Brown 0.33 each) and are normalised like any mix. The seed called
+//! E3 alone "Key" (the K of CMYK, which is black), yet loaded it with white or a
+//! second material: we call it "White", what the default filament is, and keep
+//! "Key" as another name for it ([`ALIASES`]).
 //!
 //! Users add or override mixes in TOML, by ratios or by a colour to solve for:
 //!
@@ -26,7 +29,7 @@ use super::mixing::MixingModel;
 use super::solve::{solve, OUT_OF_GAMUT_DE};
 use super::srgb::Srgb8;
 
-/// Seed 000, Annex A: name and ratios for E0 cyan, E1 magenta, E2 yellow, E3 key.
+/// Seed 000, Annex A: name and ratios for E0 cyan, E1 magenta, E2 yellow, E3 white.
 pub const SEED_PALETTE: [(&str, [f64; 4]); 17] = [
     ("Cyan", [1.0, 0.0, 0.0, 0.0]),
     ("Ocean", [0.83, 0.17, 0.0, 0.0]),
@@ -44,8 +47,11 @@ pub const SEED_PALETTE: [(&str, [f64; 4]); 17] = [
     ("Magenta-Brown", [0.25, 0.5, 0.25, 0.0]),
     ("Yellow-Brown", [0.25, 0.25, 0.5, 0.0]),
     ("Brown", [0.33, 0.33, 0.33, 0.0]),
-    ("Key", [0.0, 0.0, 0.0, 1.0]),
+    ("White", [0.0, 0.0, 0.0, 1.0]),
 ];
+
+/// Other names for palette entries: the seed's, where ours differ.
+pub const ALIASES: [(&str, &str); 1] = [("Key", "White")];
 
 /// Typical PLA filament colours for the seed's inputs with white on E3
 /// (our estimate from vendor swatches; measure your own for accuracy).
@@ -184,9 +190,12 @@ impl Palette {
         }
     }
 
-    /// Look a colour up by name, ignoring case.
+    /// Look a colour up by name, ignoring case; a name the user defined wins over an alias.
     pub fn get(&self, name: &str) -> Option<&PaletteEntry> {
-        self.entries.iter().find(|e| same_name(&e.name, name))
+        self.entries.iter().find(|e| same_name(&e.name, name)).or_else(|| {
+            let (_, to) = ALIASES.iter().find(|(alias, _)| same_name(alias, name))?;
+            self.entries.iter().find(|e| same_name(&e.name, to))
+        })
     }
 
     pub fn entries(&self) -> &[PaletteEntry] {
@@ -252,11 +261,13 @@ mod tests {
         let names: Vec<&str> = p.entries().iter().map(|e| e.name.as_str()).collect();
         assert_eq!(names.len(), 17);
         assert_eq!(names[0], "Cyan");
-        assert_eq!(names[16], "Key");
+        assert_eq!(names[16], "White");
+        // The seed's name for it still works.
+        assert_eq!(p.get("key").unwrap().name, "White");
         assert_eq!(ratios(&p, "ocean"), [0.83, 0.17, 0.0, 0.0]);
         assert_eq!(ratios(&p, "SPRING GREEN"), [0.17, 0.0, 0.83, 0.0]);
         assert_eq!(ratios(&p, "cyan-brown"), [0.5, 0.25, 0.25, 0.0]);
-        assert_eq!(ratios(&p, "Key"), [0.0, 0.0, 0.0, 1.0]);
+        assert_eq!(ratios(&p, "White"), [0.0, 0.0, 0.0, 1.0]);
         // Printed as 0.17 : 0.82, which sums to 0.99.
         let orange = ratios(&p, "Orange");
         assert!((orange[1] - 17.0 / 99.0).abs() < 1e-12 && (orange[2] - 82.0 / 99.0).abs() < 1e-12);
@@ -321,10 +332,10 @@ mod tests {
         assert_eq!(salmon.target, Some(Srgb8::new(0xff, 0x88, 0xaa)));
         let de = salmon.delta_e.unwrap();
         assert_eq!(salmon.out_of_gamut, de > OUT_OF_GAMUT_DE);
-        // Pink is mostly white with a little magenta (strong in this model), no cyan.
+        // Pink is mostly white with magenta, a little yellow, no cyan.
         assert!(de < 2.0, "{salmon:?}");
         let w = salmon.mix.ratios();
-        assert!(w[0] == 0.0 && w[1] > 0.005 && w[3] > 0.9, "{salmon:?}");
+        assert!(w[0] == 0.0 && w[1] > 0.1 && w[2] < w[1] && w[3] > 0.5, "{salmon:?}");
     }
 
     #[test]

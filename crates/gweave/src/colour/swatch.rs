@@ -245,8 +245,8 @@ mod tests {
         assert_eq!((img.width, img.height), (6 + 6 * 102, 6 + 3 * (102 + 20)));
         // Yellow is the 9th colour: row 1, column 2.
         let yellow = resolved[8].predicted;
-        // The yellow filament (255, 224, 0) with its blue lifted to R_MIN.
-        assert_eq!(yellow, Srgb8::new(255, 224, 16));
+        // The yellow filament (255, 224, 0) with its blue lifted to RGB_MIN.
+        assert_eq!(yellow, Srgb8::new(255, 224, 3));
         assert_eq!(img.at(6 + 2 * 102 + 48, 6 + 122 + 48), yellow);
     }
 

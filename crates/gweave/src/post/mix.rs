@@ -3,9 +3,10 @@
 //!
 //! What the pass does, streaming, one line at a time:
 //!
-//! 1. At the start of the print proper (the first layer, after the start G-code) it defines the
-//!    mixes as virtual tools (Marlin `M163`/`M164`, RepRapFirmware `M563`/`M567`) and selects
-//!    the first. With `M165` direct mixing the mix itself is written at each change instead.
+//! 1. Before the file first moves filament (the start G-code's prime line, or the first layer
+//!    if nothing extrudes earlier) it defines the mixes as virtual tools (Marlin
+//!    `M163`/`M164`, RepRapFirmware `M563`/`M567`) and selects the first, so the prime line
+//!    already runs on the first mix; `[purge] initial_mm` then purges whatever the chamber held. With `M165` direct mixing the mix itself is written at each change instead.
 //! 2. It decides the wanted mix: per layer (or height) from the schedule and gradients for a
 //!    single-tool file; per slicer tool from the map for a multi-tool file. The slicer's `T<n>`
 //!    lines become comments: the virtual tool is selected right before the next extrusion, after
@@ -37,6 +38,7 @@
 //!                                  G1 F1800 X125 Y80 E410.2
 //! ```
 
+pub mod card;
 pub mod profile;
 pub mod report;
 pub mod schedule;
@@ -96,6 +98,8 @@ pub struct MixPass {
     zcap: Option<ZCap>,
     motion: PurgeMotion,
     started: bool,
+    /// `[purge] initial_mm` is still to be purged, before the first move of filament.
+    initial_purge_due: bool,
     /// The mix the firmware prints with now.
     active: Option<usize>,
     wanted: Option<usize>,
@@ -130,12 +134,14 @@ impl MixPass {
         let p = &profile.purge;
         let motion = p.motion(if cap > 0.0 { cap.min(p.travel_feed_mm_min) } else { p.travel_feed_mm_min });
         let acc = Accounting::new(&plan, &profile.hardware);
+        let initial_purge_due = profile.purge.initial_mm > 0.0;
         Ok(MixPass {
             plan,
             profile,
             zcap,
             motion,
             started: false,
+            initial_purge_due,
             active: None,
             wanted: None,
             active_tool: None,
@@ -180,7 +186,8 @@ impl MixPass {
         self.plan.decimals
     }
 
-    /// Mix definitions and the first selection, before the first line of the print proper.
+    /// Mix definitions and the first selection, before the first move of filament or the first
+    /// line of the print proper, whichever comes first.
     fn start_print(&mut self, state: &State) -> Result<(), MixPassError> {
         self.started = true;
         let hw = &self.profile.hardware;
@@ -340,11 +347,36 @@ impl MixPass {
         Ok(())
     }
 
+    /// The purge of `[purge] initial_mm` before the first move of filament, in the first mix:
+    /// whatever the chamber held before the print (the last job's mix, a colour loaded by hand)
+    /// comes out at the purge spot, as the seed purged at `;LAYER:0`.
+    fn initial_purge(&mut self, mv: &Move, state: &State) {
+        self.initial_purge_due = false;
+        let (Some(first), mm) = (self.active, self.profile.purge.initial_mm) else { return };
+        let label = format!("to {} before the print", self.plan.mixes[first].label);
+        let start = PurgeStart {
+            pos: purge_start_pos(&mv.from),
+            absolute_xyz: state.absolute(),
+            relative_e: state.relative_e(),
+            feed_mm_min: self.feed_before,
+            rapid_mode: self.rapid_before,
+            retracted_mm: self.retraction.in_force_mm(),
+        };
+        let mut block = Vec::new();
+        write_purge(&mut block, &self.profile.numbers, &self.motion, &start, mm, &label);
+        self.pre.extend_from_slice(&block);
+        self.acc.purge(first, mm);
+    }
+
     /// Decides what comes out for one line, into `pre` and `repl`.
     fn process(&mut self, ctx: &Ctx<'_>) -> Result<(), MixPassError> {
         let state = ctx.state;
         let print = state.structure.region == Region::Print;
-        if !self.started && print {
+        // The first filament the file moves, a start G-code's prime line included, is already
+        // the first mix: the firmware's default mix (often input 0 alone) would otherwise fill
+        // the chamber before layer 0.
+        let moves_filament = matches!(ctx.effect, Effect::Move(mv) if mv.e_mm() != 0.0);
+        if !self.started && (print || moves_filament) {
             self.start_print(state)?;
         }
         match ctx.effect {
@@ -374,6 +406,9 @@ impl MixPass {
         let print = state.structure.region == Region::Print;
         let e_mm = mv.e_mm();
         let layer = state.structure.layer.unwrap_or(0);
+        if self.initial_purge_due && e_mm != 0.0 {
+            self.initial_purge(mv, state);
+        }
         if print && self.started && mv.is_extruding() {
             if !self.plan.maps_tools() && self.decided_layer != Some(layer) {
                 self.wanted = self.plan.mix_at(layer, mv.to[Z]);
@@ -388,11 +423,9 @@ impl MixPass {
         let unretraction = e_mm > 0.0 && Retraction::moves_filament_only(mv) && mv.from[Z] == mv.to[Z];
         let fed_mm = if unretraction { self.unretract(ctx, mv)? } else { e_mm };
         self.retraction.observe(mv, fed_mm);
-        if print {
-            if let Some(a) = self.active {
-                let printed = mv.is_extruding().then_some((layer, state.structure.layer_z_mm));
-                self.acc.filament(a, fed_mm, printed);
-            }
+        if let Some(a) = self.active {
+            let printed = (print && mv.is_extruding()).then_some((layer, state.structure.layer_z_mm));
+            self.acc.filament(a, fed_mm, printed);
         }
         if !self.replaced {
             if let Some(zc) = self.zcap {
@@ -594,7 +627,9 @@ impl Pass for MixPass {
     fn finish(&mut self, _state: &State, out: &mut dyn Write) -> io::Result<()> {
         self.write_held(false, out)?;
         if !self.started {
-            self.acc.warnings.push("the file never reached its first layer: no mix was defined".into());
+            self.acc
+                .warnings
+                .push("the file never moved filament nor reached its first layer: no mix was defined".into());
         }
         Ok(())
     }

@@ -219,7 +219,14 @@ impl Colouring {
                         shown.push(c);
                     }
                 }
-                shown.into_iter().map(|c| entry(Srgb8::new(c[0], c[1], c[2]).to_string(), c)).collect()
+                // Named by the mix that prints the colour (a palette name or its ratios).
+                let name = |c: [u8; 3]| {
+                    toolpaths
+                        .iter()
+                        .find_map(|t| t.mix_names.get(&c).cloned())
+                        .unwrap_or_else(|| Srgb8::new(c[0], c[1], c[2]).to_string())
+                };
+                shown.into_iter().map(|c| entry(name(c), c)).collect()
             }
             ColourBy::Feature => {
                 let mut seen = [false; ALL_FEATURES.len()];
@@ -279,7 +286,7 @@ mod tests {
             segments: vec![seg(0, 10.0, 0), seg(0, 50.0, 9)],
             layer_z_mm: vec![0.0; 10],
             tools: 1,
-            on_cylinder: false,
+            ..Toolpath::default()
         };
         let c = Colouring::new(ColourBy::Speed, vec![], &[&tp]);
         let slow = c.colour(&tp.segments[0]);
@@ -301,7 +308,8 @@ mod tests {
             segments: vec![seg(1, 10.0, 0), long],
             layer_z_mm: vec![0.0],
             tools: 3,
-            on_cylinder: false,
+            mix_names: [([200, 0, 0], "Red".to_owned())].into(),
+            ..Toolpath::default()
         };
         let c = Colouring::new(ColourBy::Tool, vec![TOOL_COLOURS[0], red], &[&tp]);
         assert_eq!(c.colour(&tp.segments[0]), [200, 10, 10]);
@@ -316,9 +324,10 @@ mod tests {
         assert_eq!(legend.len(), 2);
         assert_eq!(
             (legend[0].label.as_str(), legend[0].colour),
-            ("#c80000", Srgb8::new(200, 0, 0)),
-            "longest first"
+            ("Red", Srgb8::new(200, 0, 0)),
+            "longest first, by the name of its mix"
         );
+        assert_eq!(legend[1].label, "#010000", "a colour without a name shows its value");
     }
 
     #[test]

@@ -2,8 +2,9 @@
 //!
 //! The file says the mix: its `T<n>`, `M163`/`M164`/`M165` and `M567` lines are followed with
 //! the core's [`MixingState`]. The hardware says the colours: the filaments loaded on each
-//! input (a `gweave mix` profile's `[[hardware.inputs]]`, or cyan, magenta, yellow, white), and
-//! the Kubelka-Munk [`MixingModel`] predicts what a mix of them looks like.
+//! input (a `gweave mix` profile's `[[hardware.inputs]]` with their strengths, or cyan,
+//! magenta, yellow, white), and the pigment model [`MixingModel`] (Kubelka-Munk on spectra)
+//! predicts what a mix of them looks like, once per distinct mix (see [`MixTracker`]'s cache).
 //!
 //! Between two mixes the nozzle does not switch at once: the mixing chamber still holds the old
 //! mix and is washed out by the new one ([`Washout`], a stirred chamber behind a plug-flow dead
@@ -18,9 +19,10 @@
 //! primed with its first colour; the toolpath does not count the start G-code's prime lines),
 //! so the first layer shows no transition.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
 use crate::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use crate::colour::palette::MixSpec;
 use crate::colour::purge::{filament_mm_to_mm3, PurgeError, Washout};
 use crate::colour::{Mix, MixError, MixingModel, Srgb8};
 use crate::gcode::line::Block;
@@ -47,22 +49,22 @@ pub struct MixColours {
 }
 
 impl MixColours {
-    /// `filaments` loaded on inputs 0, 1, ...; the chamber's washout; filament diameter, mm.
+    /// The model of the filaments loaded on inputs 0, 1, ...; the chamber's washout; filament
+    /// diameter, mm.
     pub fn new(
-        filaments: &[Srgb8],
+        model: MixingModel,
         washout: Washout,
         filament_diameter_mm: f64,
     ) -> Result<Self, MixColourError> {
         filament_mm_to_mm3(1.0, filament_diameter_mm)?;
-        Ok(MixColours { model: MixingModel::new(filaments)?, washout, filament_diameter_mm })
+        Ok(MixColours { model, washout, filament_diameter_mm })
     }
 
     /// The hardware of a `gweave mix` profile (its inputs, `purge.chamber_mm3`/`dead_mm3`).
     pub fn from_profile(profile: &MixProfile) -> Result<Self, MixColourError> {
         let hw = &profile.hardware;
-        let filaments: Vec<Srgb8> = hw.inputs.iter().map(|i| i.colour).collect();
         let washout = Washout::new(profile.purge.chamber_mm3, profile.purge.dead_mm3)?;
-        Self::new(&filaments, washout, hw.filament_diameter_mm)
+        Self::new(hw.mixing_model()?, washout, hw.filament_diameter_mm)
     }
 
     /// The defaults of a `gweave mix` profile: cyan, magenta, yellow, white on 1.75 mm.
@@ -80,6 +82,7 @@ impl PartialEq for MixColours {
     /// The model follows from the filaments.
     fn eq(&self, o: &Self) -> bool {
         self.model.inputs() == o.model.inputs()
+            && self.model.strengths() == o.model.strengths()
             && self.washout == o.washout
             && self.filament_diameter_mm == o.filament_diameter_mm
     }
@@ -102,6 +105,8 @@ pub struct MixTracker {
     /// The colour of `to` once the washout has settled, until the mix changes: most moves
     /// print it, and need neither a ratio vector nor a cache lookup.
     settled: Option<Srgb8>,
+    /// A name for each settled mix's colour (see [`mix_name`]).
+    names: BTreeMap<[u8; 3], String>,
 }
 
 impl MixTracker {
@@ -118,6 +123,7 @@ impl MixTracker {
             purged_mm3: f64::INFINITY,
             loaded: false,
             cache: HashMap::new(),
+            names: BTreeMap::new(),
             settled: None,
         }
     }
@@ -178,8 +184,14 @@ impl MixTracker {
         let c = self.colour_of(&self.output(mid_mm3));
         if settled {
             self.settled = Some(c);
+            self.names.entry([c.r, c.g, c.b]).or_insert_with(|| mix_name(&self.to));
         }
         c
+    }
+
+    /// The names of the settled mixes' colours, for legends.
+    pub fn into_names(self) -> BTreeMap<[u8; 3], String> {
+        self.names
     }
 
     /// The predicted colour of `ratios`, through the cache.
@@ -195,6 +207,25 @@ impl MixTracker {
         }
         c
     }
+}
+
+/// The seed palette's name of `ratios` (to 0.005 on each input; 4 inputs), else the ratios as
+/// `0.25:0.25:0.5:0`.
+fn mix_name(ratios: &[f64]) -> String {
+    let named = crate::colour::palette::Palette::seed().entries().iter().find_map(|e| match &e.spec {
+        MixSpec::Ratios(m)
+            if m.inputs() == ratios.len()
+                && m.ratios().iter().zip(ratios).all(|(a, b)| (a - b).abs() < 0.005) =>
+        {
+            Some(e.name.clone())
+        }
+        _ => None,
+    });
+    named.unwrap_or_else(|| {
+        let parts: Vec<String> =
+            ratios.iter().map(|r| format!("{}", (r * 1000.0).round() / 1000.0)).collect();
+        parts.join(":")
+    })
 }
 
 #[cfg(test)]
@@ -213,7 +244,7 @@ mod tests {
         let cyan = Srgb8::new(0, 160, 224);
         let yellow = Srgb8::new(255, 224, 0);
         let washout = Washout::new(40.0, 10.0).unwrap();
-        let colours = MixColours::new(&[cyan, yellow], washout, 1.75).unwrap();
+        let colours = MixColours::new(MixingModel::new(&[cyan, yellow]).unwrap(), washout, 1.75).unwrap();
         let mut t = MixTracker::new(colours.clone());
         feed(&mut t, "T1");
         feed(&mut t, "T0");
@@ -231,6 +262,11 @@ mod tests {
         assert_ne!(mid, pure1);
         t.extrude(200.0);
         assert_eq!(t.extrude(1.0), pure1, "washed out");
+        // Settled colours are named by their ratios (no palette entry has 2 inputs).
+        let names = t.into_names();
+        assert_eq!(names.get(&[pure1.r, pure1.g, pure1.b]).map(String::as_str), Some("0:1"));
+        assert_eq!(mix_name(&[0.5, 0.0, 0.5, 0.0]), "Green");
+        assert_eq!(mix_name(&[0.25, 0.0, 0.75, 0.0]), "0.25:0:0.75:0");
     }
 
     #[test]

@@ -145,6 +145,9 @@ pub struct Toolpath {
     /// A rotary program: the segments lie on cylinders about the X axis (see
     /// [`ToolpathOptions::rotary`]).
     pub on_cylinder: bool,
+    /// A name for each predicted mix colour ([`Segment::mix_rgb`]) the file printed: the
+    /// palette's name of its ratios, else the ratios (`0.25:0.25:0.5:0`). For legends.
+    pub mix_names: std::collections::BTreeMap<[u8; 3], String>,
 }
 
 impl Toolpath {
@@ -216,6 +219,9 @@ impl ToolpathPass {
         if self.options.rotary.is_some() {
             self.out.layer_z_mm = self.cylinder.finish(&mut self.out.segments, self.options.layers.as_ref());
             self.out.on_cylinder = true;
+        }
+        if let Some(mix) = self.mix.take() {
+            self.out.mix_names = mix.into_names();
         }
         self.out
     }

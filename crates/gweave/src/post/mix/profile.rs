@@ -16,6 +16,7 @@
 //! [purge]
 //! mode = "length"               # off | length | volume | colours | washout
 //! length_mm = 25.0
+//! initial_mm = 0.0              # purge before the file's first extrusion, in the first mix
 //!
 //! [z_cap]
 //! max_z_feed_mm_min = 200.0
@@ -42,8 +43,9 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
-use crate::colour::Srgb8;
+use crate::colour::{MixError, MixingModel, Srgb8};
 use crate::gcode::number::NumberFormat;
+use crate::post::mix::card::CardConfig;
 use crate::post::purge_block::PurgeMotion;
 use crate::range::{self, OutOfRange, Range, FILAMENT_DIAMETER_MM, LAYER_NUMBER, PURGE_MM, PURGE_MM3};
 use crate::settings::{CheckRanges, Table};
@@ -97,6 +99,10 @@ pub struct Input {
     /// For purge waste in grams, g/cm^3 (PLA about 1.24, PVA about 1.23).
     #[serde(default = "default_density")]
     pub density_g_cm3: f64,
+    /// How strongly it tints a mix (the scattering scale of the pigment model, see
+    /// [`crate::colour::mixing`]); unset, from its colour. `gweave mix --fit` measures it.
+    #[serde(default)]
+    pub strength: Option<f64>,
 }
 
 fn default_material() -> String {
@@ -133,7 +139,12 @@ impl Default for Hardware {
             inputs: CMYW_FILAMENTS
                 .iter()
                 .zip(names)
-                .map(|(&colour, m)| Input { colour, material: m.into(), density_g_cm3: default_density() })
+                .map(|(&colour, m)| Input {
+                    colour,
+                    material: m.into(),
+                    density_g_cm3: default_density(),
+                    strength: None,
+                })
                 .collect(),
             dialect: None,
             virtual_tools: crate::colour::dialect::MARLIN_VIRTUAL_TOOLS,
@@ -149,6 +160,18 @@ impl Hardware {
     /// The dialect written: the profile's, or Marlin's if it is still unset.
     pub fn dialect(&self) -> Dialect {
         self.dialect.unwrap_or_default()
+    }
+
+    /// The pigment model for the loaded filaments (their colours and strengths): the one model
+    /// that the mix pass, `--predict`, previews and swatches use.
+    pub fn mixing_model(&self) -> Result<MixingModel, MixError> {
+        let colours: Vec<Srgb8> = self.inputs.iter().map(|i| i.colour).collect();
+        let strengths: Vec<f64> = self
+            .inputs
+            .iter()
+            .map(|i| i.strength.unwrap_or_else(|| MixingModel::default_strength(i.colour)))
+            .collect();
+        MixingModel::with_strengths(&colours, &strengths)
     }
 
     /// The input that holds material 2.
@@ -191,6 +214,9 @@ pub struct PairPurge {
 pub struct PurgeConfig {
     pub mode: PurgeMode,
     pub length_mm: f64,
+    /// Purged in the first mix before the file first moves filament (0: none): the chamber may
+    /// hold anything from the last print or a hand-loaded colour.
+    pub initial_mm: f64,
     pub volume_mm3: f64,
     /// Scales OrcaSlicer's volume (`colours` mode).
     pub multiplier: f64,
@@ -241,6 +267,7 @@ impl Default for PurgeConfig {
         PurgeConfig {
             mode: PurgeMode::Length,
             length_mm: 25.0,
+            initial_mm: 0.0,
             volume_mm3: 90.0,
             multiplier: 1.0,
             chamber_mm3: 40.0,
@@ -531,6 +558,8 @@ pub struct MixProfile {
     pub gradient: Vec<GradientSpec>,
     /// Slicer tool (`T1`) to mix.
     pub map: BTreeMap<String, MixRef>,
+    /// The calibration card (`gweave mix --calibration-card`).
+    pub card: CardConfig,
 }
 
 impl MixProfile {
@@ -603,6 +632,9 @@ impl MixProfile {
 }
 
 const INPUTS: Range = Range::new(1.0, 16.0, "inputs");
+/// Pigment strengths: the default runs from 0.01 (black) to 1.01 (white); carbon black and
+/// fitted values go above, nothing mixes at 0.
+const STRENGTH: Range = Range::new(0.001, 100.0, "");
 /// Filament densities, from foams to metal-filled filaments.
 const DENSITY_G_CM3: Range = Range::new(0.1, 25.0, "g/cm³");
 const VIRTUAL_TOOLS: Range = Range::new(0.0, 1_000.0, "tools");
@@ -623,7 +655,9 @@ impl CheckRanges for MixProfile {
         let hardware = t.sub("hardware");
         hardware.count("inputs (count)", hw.inputs.len() as u64, INPUTS)?;
         for (i, input) in hw.inputs.iter().enumerate() {
-            hardware.sub("inputs").item(i).check("density_g_cm3", input.density_g_cm3, DENSITY_G_CM3)?;
+            let item = hardware.sub("inputs").item(i);
+            item.check("density_g_cm3", input.density_g_cm3, DENSITY_G_CM3)?;
+            item.check_opt("strength", input.strength, STRENGTH)?;
         }
         hardware.count("virtual_tools", hw.virtual_tools as u64, VIRTUAL_TOOLS)?;
         hardware.check("filament_diameter_mm", hw.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;
@@ -632,6 +666,7 @@ impl CheckRanges for MixProfile {
         let p = &self.purge;
         let purge = t.sub("purge");
         purge.check("length_mm", p.length_mm, PURGE_MM)?;
+        purge.check("initial_mm", p.initial_mm, PURGE_MM)?;
         purge.check("volume_mm3", p.volume_mm3, PURGE_MM3)?;
         purge.check("multiplier", p.multiplier, MULTIPLIER)?;
         purge.check("chamber_mm3", p.chamber_mm3, CHAMBER_MM3)?;
@@ -645,6 +680,7 @@ impl CheckRanges for MixProfile {
         }
         t.sub("z_cap").check("max_z_feed_mm_min", self.z_cap.max_z_feed_mm_min, Z_CAP_MM_MIN)?;
         self.numbers.check_ranges(&t.sub("numbers"))?;
+        self.card.check_ranges(&t.sub("card"))?;
         for (i, s) in self.schedule.iter().enumerate() {
             let table = t.sub("schedule").item(i);
             table.check_opt("layer", s.layer, LAYER_NUMBER)?;

@@ -196,8 +196,7 @@ impl Plan {
     pub fn new(profile: &MixProfile) -> Result<Plan, MixPassError> {
         profile.validate()?;
         let hw = &profile.hardware;
-        let colours: Vec<Srgb8> = hw.inputs.iter().map(|i| i.colour).collect();
-        let model = MixingModel::new(&colours).map_err(|e| MixPassError::Config(e.to_string()))?;
+        let model = hw.mixing_model().map_err(|e| MixPassError::Config(e.to_string()))?;
         let decimals = Decimals::new(hw.ratio_decimals).map_err(|e| MixPassError::Config(e.to_string()))?;
         let palette = Palette::seed().with_config(PaletteConfig { mix: profile.mix.clone() });
         let mut r = Resolver { profile, palette, model, decimals, mixes: Vec::new(), warnings: Vec::new() };
@@ -269,16 +268,19 @@ impl Plan {
                     m.slot = Slot::Fixed(t);
                 }
             } else {
-                let fixed = mixes.iter().filter(|m| !m.gradient_step).count() as u32;
-                if fixed + 2 > tools {
+                // More mixes than tools: the last two tools take turns (each redefined just
+                // before it is selected, while the other prints); the mixes before them keep
+                // a tool each, gradient steps always rotate.
+                if tools < 2 {
                     return Err(MixPassError::Config(format!(
-                        "{fixed} fixed mixes and gradient steps need {} virtual tools; the firmware has {tools}",
-                        fixed + 2
+                        "{} mixes need {} virtual tools, or 2 to take turns; the firmware has {tools}",
+                        mixes.len(),
+                        mixes.len()
                     )));
                 }
                 let mut t = 0;
                 for m in &mut mixes {
-                    m.slot = if m.gradient_step {
+                    m.slot = if m.gradient_step || t + 2 >= tools {
                         Slot::Rotating
                     } else {
                         t += 1;
@@ -382,6 +384,26 @@ mod tests {
         );
         // The seed's Orange 0 : 0.17 : 0.82 : 0, normalised (sum 0.99), 4 decimals.
         assert_eq!(plan.mixes[0].units, [0, 1717, 8283, 0]);
+    }
+
+    #[test]
+    fn all_17_palette_colours_fit_16_tools_by_taking_turns() {
+        // Refused before with "17 fixed mixes and gradient steps need 19 virtual tools".
+        let mut p = MixProfile::default();
+        for (t, (name, _)) in crate::colour::palette::SEED_PALETTE.iter().enumerate() {
+            p.add_map(&format!("T{t}={name}")).unwrap();
+        }
+        let plan = Plan::new(&p).unwrap();
+        let slots: Vec<Slot> = plan.mixes.iter().map(|m| m.slot).collect();
+        assert_eq!(slots[..14], (0..14).map(Slot::Fixed).collect::<Vec<_>>()[..]);
+        assert_eq!(slots[14..], [Slot::Rotating; 3]);
+        assert_eq!(plan.rotating_tools, [14, 15]);
+        p.hardware.virtual_tools = 1;
+        let err = Plan::new(&p).unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "mix profile: 17 mixes need 17 virtual tools, or 2 to take turns; the firmware has 1"
+        );
     }
 
     #[test]

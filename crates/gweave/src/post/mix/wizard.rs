@@ -7,6 +7,8 @@
 //! proportions of cyan, magenta, yellow and the fourth input; with two materials, the proportion
 //! of material 2 of each colour. We add the purge length and the Z feed cap, which the seed
 //! hard-coded (25 mm, F200). An invalid answer is asked again; the end of input is an error.
+//! Before anything is written the wizard shows what the profile will do (each mix with its
+//! ratios and predicted colour, where it is used, the purge and the Z cap) and asks for a yes.
 
 use std::io::{BufRead, Write};
 
@@ -82,8 +84,9 @@ fn quote(s: &str) -> String {
     toml::Value::String(s.to_owned()).to_string()
 }
 
-/// Asks the questions on `input`/`out` and returns the profile as TOML text (already checked).
-pub fn run_wizard(input: &mut dyn BufRead, out: &mut dyn Write) -> Result<String, MixPassError> {
+/// Asks the questions on `input`/`out` and returns the profile as TOML text (already checked),
+/// or `None` when the summary was not confirmed.
+pub fn run_wizard(input: &mut dyn BufRead, out: &mut dyn Write) -> Result<Option<String>, MixPassError> {
     let mut a = Asker { input, out };
     let palette = Palette::seed();
     a.say("gweave mix wizard: inputs E0 cyan, E1 magenta, E2 yellow, E3 white/black or material 2.")?;
@@ -201,8 +204,46 @@ pub fn run_wizard(input: &mut dyn BufRead, out: &mut dyn Write) -> Result<String
          [z_cap]\nmax_z_feed_mm_min = {cap:?}\n\n{mixes}\n{job}"
     );
     let profile = MixProfile::from_toml_str(&text)?;
-    Plan::new(&profile)?;
-    Ok(text)
+    let plan = Plan::new(&profile)?;
+    a.say(&summary(&profile, &plan))?;
+    let confirmed =
+        a.ask_parsed("Write this profile? (y/n)", Some("y"), |x| match x.to_lowercase().as_str() {
+            "y" | "yes" => Some(true),
+            "n" | "no" => Some(false),
+            _ => None,
+        })?;
+    Ok(confirmed.then_some(text))
+}
+
+/// What the profile will do, in a few lines.
+fn summary(profile: &MixProfile, plan: &Plan) -> String {
+    let mut s = String::from("\nSummary:\n  inputs:");
+    for (i, input) in profile.hardware.inputs.iter().enumerate() {
+        s.push_str(&format!(" E{i} {} {}", input.material, input.colour));
+    }
+    s.push('\n');
+    for m in &plan.mixes {
+        let ratios: Vec<String> = m.mix.ratios().iter().map(|r| format!("{r:.2}")).collect();
+        s.push_str(&format!("  {:<16} {}  predicted {}\n", m.label, ratios.join(":"), m.predicted));
+    }
+    for e in &profile.schedule {
+        if let Some(layer) = e.layer {
+            s.push_str(&format!("  from layer {layer}: {}\n", e.mix.label()));
+        }
+    }
+    for (tool, mix) in &profile.map {
+        s.push_str(&format!("  {tool}: {}\n", mix.label()));
+    }
+    let purge = match profile.purge.mode {
+        super::profile::PurgeMode::Off => "no purge".to_owned(),
+        _ => format!("purge {} mm at each change", profile.purge.length_mm),
+    };
+    let cap = match profile.z_cap.max_z_feed_mm_min {
+        c if c > 0.0 => format!("Z at most F{c}"),
+        _ => "no Z cap".to_owned(),
+    };
+    s.push_str(&format!("  {purge}; {cap}"));
+    s
 }
 
 #[cfg(test)]
@@ -211,14 +252,29 @@ mod tests {
 
     fn wizard(answers: &str) -> Result<(String, String), MixPassError> {
         let mut out = Vec::new();
-        let toml = run_wizard(&mut answers.as_bytes(), &mut out)?;
+        let toml = run_wizard(&mut answers.as_bytes(), &mut out)?.expect("confirmed");
         Ok((toml, String::from_utf8(out).unwrap()))
+    }
+
+    #[test]
+    fn a_summary_comes_before_the_confirmation() {
+        let mut out = Vec::new();
+        let declined = run_wizard(&mut "1\nn\nOrange\n0\n\n30\n\nn\n".as_bytes(), &mut out).unwrap();
+        assert_eq!(declined, None);
+        let said = String::from_utf8(out).unwrap();
+        let summary = said.find("Summary:").unwrap();
+        assert!(summary < said.find("Write this profile? (y/n) [y]:").unwrap(), "{said}");
+        assert!(said.contains("  Orange           0.00:0.17:0.83:0.00  predicted #"), "{said}");
+        assert!(
+            said.contains("  from layer 0: Orange\n  purge 30 mm at each change; Z at most F200"),
+            "{said}"
+        );
     }
 
     #[test]
     fn the_seeds_single_extruder_session() {
         // Orange from 0, a new Pink from 10, Orange from 25, Blue from 75; default purge and cap.
-        let answers = "1\nn\nOrange\n0\nPink\ny\n0 0.6 0.1 0.3\n10\nOrange\n25\nBlue\n75\n\n\n\n";
+        let answers = "1\nn\nOrange\n0\nPink\ny\n0 0.6 0.1 0.3\n10\nOrange\n25\nBlue\n75\n\n\n\ny\n";
         let (toml, said) = wizard(answers).unwrap();
         assert!(said.contains("\"Pink\" is not in the palette."));
         let p = MixProfile::from_toml_str(&toml).unwrap();
@@ -241,7 +297,7 @@ mod tests {
     #[test]
     fn the_seeds_multi_material_session() {
         // Two tools, E3 holds PVA: the part Red with 10 % PVA, the support all PVA; no purge.
-        let answers = "2\ny\nPVA\n2\nRed\n0.1\nsupport\n0\n150\n";
+        let answers = "2\ny\nPVA\n2\nRed\n0.1\nsupport\n0\n150\n\n";
         let (toml, _) = wizard(answers).unwrap();
         let p = MixProfile::from_toml_str(&toml).unwrap();
         assert_eq!(p.map["T0"].label(), "Red@0.1");
@@ -255,7 +311,7 @@ mod tests {
 
     #[test]
     fn bad_answers_are_asked_again_and_eof_is_an_error() {
-        let (toml, said) = wizard("3\n1\nn\n#12345\n#ff0000\nx\n0\n\n\n\n").unwrap();
+        let (toml, said) = wizard("3\n1\nn\n#12345\n#ff0000\nx\n0\n\n\n\n\n").unwrap();
         assert!(said.contains("\"3\" is not a valid answer."));
         assert!(said.contains("A colour is #RRGGBB."));
         assert!(toml.contains("mix = \"#ff0000\""));

@@ -4,22 +4,22 @@ M82 ;absolute extrusion mode
 G28
 G0 Z0.3 F200
 G0 X1 Y1 F9000
-G1 F1500 E2 ;prime
-;LAYER_COUNT:3
 ; gweave mix: 2 mixes, 4 inputs, Marlin dialect
-; Orange = T0, predicted #f22e12
+; Orange = T0, predicted #fd9a37
 M163 S0 P0
 M163 S1 P0.1717
 M163 S2 P0.8283
 M163 S3 P0
 M164 S0
-; Pink = T1, predicted #e6163a
+; Pink = T1, predicted #f35c76
 M163 S0 P0
 M163 S1 P0.6
 M163 S2 P0.1
 M163 S3 P0.3
 M164 S1
 T0
+G1 F1500 E2 ;prime
+;LAYER_COUNT:3
 ;LAYER:0
 G0 F9000 X20 Y20 Z0.3
 ;TYPE:WALL-OUTER
