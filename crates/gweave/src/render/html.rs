@@ -1,18 +1,23 @@
-//! A self-contained HTML viewer: one file, no network. The page (`viewer.html`, a canvas 2D
-//! viewer with a layer slider, pan, zoom, rotate, legend and stats) is built into the library;
-//! the toolpath is embedded in it as JSON holding base64 arrays.
+//! A self-contained HTML viewer: one file, no network. The page (`viewer.html`) draws the beads
+//! as lit 3D tubes with WebGL 2 (one instanced quad per segment, shaded as a round bead in the
+//! fragment shader), with orbit, pan, zoom, top view, a layer range, colourings with a legend,
+//! travel and the file's stats. The toolpath is embedded as JSON holding base64 arrays, which the
+//! page hands to the GPU as they are (no per-vertex work in JavaScript).
 //!
-//! Encoding, per segment (`n` segments):
+//! Encoding, per segment (`n` segments), for each file shown (two with `--compare`):
 //! - `pos`: 6 x u16 little endian (start x y z, end x y z), quantised over the extents `lo..hi`:
 //!   `q = round((v - lo) / (hi - lo) * 65535)`, so a 250 mm bed keeps 0.004 mm steps;
-//! - `tool`, `feature` (index into `features`), `flags` (bit 0: extruding): u8 each;
+//! - `tool`, `feature` (index into `features`), `flags` (bit 0: extruding; bit 1: a move the
+//!   other file of a comparison does not have): u8 each;
 //! - `layer`: u32; `feed`: u16, tenths of mm/s.
 //!
 //! - `mix` (only when the toolpath was read with the mix colouring): u8 index into
 //!   `mix_colours`, the distinct predicted colours (at most 255: channels are coarsened until
 //!   they fit), with `mix_legend` the colours printed longest.
 //!
-//! 15 bytes per segment before base64 (x 4/3): a 3 MB slicer file becomes about 2.5 MB of HTML.
+//! 15 bytes per segment before base64 (x 4/3): a 3 MB slicer file becomes about 2.5 MB of HTML,
+//! and the segment ceiling of a preview ([`super::MAX_SEGMENTS`]) bounds any file's page at
+//! about 42 MB.
 
 use std::collections::HashMap;
 
@@ -35,18 +40,24 @@ pub struct HtmlOptions {
     pub title: String,
     pub colour_by: ColourBy,
     pub view: ViewKind,
-    /// Layer shown first (the last layer when `None`).
+    /// Top layer of the range shown first (the last layer when `None`).
     pub layer: Option<u32>,
     pub tool_colours: Vec<Srgb8>,
+}
+
+/// One file the page shows: its toolpath, name and statistics.
+pub struct HtmlFile<'a> {
+    pub name: String,
+    pub toolpath: &'a Toolpath,
+    pub stats: Option<&'a Stats>,
+    /// In a comparison, which moves the other file does not have
+    /// ([`super::view::changed_moves`]): drawn in colour, the rest in grey.
+    pub changed: Option<Vec<bool>>,
 }
 
 #[derive(Serialize)]
 struct Payload<'a> {
     title: &'a str,
-    n: usize,
-    lo: [f32; 3],
-    hi: [f32; 3],
-    layer_z: &'a [f32],
     layer: Option<u32>,
     view: String,
     colour_by: &'static str,
@@ -54,6 +65,21 @@ struct Payload<'a> {
     feature_colours: Vec<String>,
     tool_colours: Vec<String>,
     travel_colour: String,
+    files: Vec<FileData<'a>>,
+}
+
+#[derive(Serialize)]
+struct FileData<'a> {
+    name: &'a str,
+    n: usize,
+    /// Quantisation extents of `pos` (everything drawn, travel included), mm.
+    lo: [f32; 3],
+    hi: [f32; 3],
+    /// Extents of what is printed (the panel's x, y, z), mm.
+    printed_lo: [f32; 3],
+    printed_hi: [f32; 3],
+    layer_z: &'a [f32],
+    on_cylinder: bool,
     stats: Option<&'a Stats>,
     pos: String,
     tool: String,
@@ -66,11 +92,41 @@ struct Payload<'a> {
     mix_legend: Vec<String>,
 }
 
-/// The page for a toolpath, with the file's stats when given.
-pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -> String {
-    let (lo, hi) = tp.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
+/// The page for one toolpath, or two compared side by side (see [`HtmlFile::changed`]), with
+/// each file's stats when given.
+pub fn write_html(files: &[HtmlFile<'_>], options: &HtmlOptions) -> String {
+    let toolpaths: Vec<&Toolpath> = files.iter().map(|f| f.toolpath).collect();
+    let tools = toolpaths.iter().map(|tp| tp.tools as usize).max().unwrap_or(1).max(options.tool_colours.len());
+    let tool_colours = (0..tools)
+        .map(|t| {
+            options.tool_colours.get(t).copied().unwrap_or(TOOL_COLOURS[t % TOOL_COLOURS.len()]).to_hex()
+        })
+        .collect();
+    let payload = Payload {
+        title: &options.title,
+        layer: options.layer,
+        view: options.view.to_string(),
+        colour_by: options.colour_by.name(),
+        features: ALL_FEATURES.iter().map(|f| f.name()).collect(),
+        feature_colours: FEATURE_COLOURS.iter().map(|c| c.to_hex()).collect(),
+        tool_colours,
+        travel_colour: TRAVEL_COLOUR.to_hex(),
+        files: files.iter().map(|f| file_data(f, options)).collect(),
+    };
+    // Serialising plain numbers and strings cannot fail; `</` is escaped so that no text in the
+    // data (a file name, a stats string) can close the script element.
+    let json = serde_json::to_string(&payload).unwrap_or_else(|_| "null".into()).replace("</", "<\\/");
+    TEMPLATE
+        .replacen("<title>gweave preview</title>", &format!("<title>{}</title>", escape(&options.title)), 1)
+        .replacen(DATA_SLOT, &json, 1)
+}
+
+/// The columns of one file (see the module notes).
+fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions) -> FileData<'a> {
+    let tp = f.toolpath;
+    let (printed_lo, printed_hi) = tp.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
     // Travel may leave the extruded extents: quantise over everything drawn.
-    let (mut lo, mut hi) = (lo, hi);
+    let (mut lo, mut hi) = (printed_lo, printed_hi);
     for s in &tp.segments {
         for p in [s.start, s.end] {
             for i in 0..3 {
@@ -84,7 +140,7 @@ pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -
     let (mut tool, mut feature, mut flags) =
         (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
     let (mut layer_of, mut feed) = (Vec::with_capacity(n * 4), Vec::with_capacity(n * 2));
-    for s in &tp.segments {
+    for (i, s) in tp.segments.iter().enumerate() {
         for p in [s.start, s.end] {
             for i in 0..3 {
                 pos.extend_from_slice(&quantise(p[i], lo[i], hi[i]).to_le_bytes());
@@ -92,16 +148,11 @@ pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -
         }
         tool.push(s.tool.min(255) as u8);
         feature.push(s.feature as u8);
-        flags.push(u8::from(s.extruding));
+        let is_changed = f.changed.as_ref().is_some_and(|c| c[i]);
+        flags.push(u8::from(s.extruding) | u8::from(is_changed) << 1);
         layer_of.extend_from_slice(&s.layer.to_le_bytes());
         feed.extend_from_slice(&((s.feed_mm_s * 10.0).round().clamp(0.0, 65535.0) as u16).to_le_bytes());
     }
-    let tools = (tp.tools as usize).max(options.tool_colours.len());
-    let tool_colours = (0..tools)
-        .map(|t| {
-            options.tool_colours.get(t).copied().unwrap_or(TOOL_COLOURS[t % TOOL_COLOURS.len()]).to_hex()
-        })
-        .collect();
     let (mix, mix_colours, mix_legend) = if options.colour_by == ColourBy::Mix {
         let (index, colours) = mix_palette(tp);
         let legend = Colouring::new(ColourBy::Mix, Vec::new(), &[tp]).legend(&[tp]);
@@ -109,20 +160,16 @@ pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -
     } else {
         (None, Vec::new(), Vec::new())
     };
-    let payload = Payload {
-        title: &options.title,
+    FileData {
+        name: &f.name,
         n,
         lo,
         hi,
+        printed_lo,
+        printed_hi,
         layer_z: &tp.layer_z_mm,
-        layer: options.layer,
-        view: options.view.to_string(),
-        colour_by: options.colour_by.name(),
-        features: ALL_FEATURES.iter().map(|f| f.name()).collect(),
-        feature_colours: FEATURE_COLOURS.iter().map(|c| c.to_hex()).collect(),
-        tool_colours,
-        travel_colour: TRAVEL_COLOUR.to_hex(),
-        stats,
+        on_cylinder: tp.on_cylinder,
+        stats: f.stats,
         pos: base64(&pos),
         tool: base64(&tool),
         feature: base64(&feature),
@@ -132,13 +179,7 @@ pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -
         mix,
         mix_colours,
         mix_legend,
-    };
-    // Serialising plain numbers and strings cannot fail; `</` is escaped so that no text in the
-    // data (a file name, a stats string) can close the script element.
-    let json = serde_json::to_string(&payload).unwrap_or_else(|_| "null".into()).replace("</", "<\\/");
-    TEMPLATE
-        .replacen("<title>gweave preview</title>", &format!("<title>{}</title>", escape(&options.title)), 1)
-        .replacen(DATA_SLOT, &json, 1)
+    }
 }
 
 /// Each segment's index into a palette of its predicted mix colours, and the palette: at most
@@ -205,6 +246,10 @@ mod tests {
     use crate::gcode::layers::Feature;
     use crate::render::toolpath::Segment;
 
+    fn file(tp: &Toolpath) -> HtmlFile<'_> {
+        HtmlFile { name: "t.gcode".into(), toolpath: tp, stats: None, changed: None }
+    }
+
     #[test]
     fn base64_matches_rfc4648_vectors() {
         let cases = [
@@ -240,7 +285,7 @@ mod tests {
             layer: None,
             tool_colours: vec![],
         };
-        let html = write_html(&tp, None, &options);
+        let html = write_html(&[file(&tp)], &options);
         assert!(!html.contains(DATA_SLOT));
         assert!(!html.contains("http://") && !html.contains("https://"), "no network");
         assert_eq!(html.matches("</script>").count(), 1, "the title cannot end the script");
@@ -284,7 +329,7 @@ mod tests {
             layer: None,
             tool_colours: vec![],
         };
-        let html = write_html(&few, None, &options);
+        let html = write_html(&[file(&few)], &options);
         assert!(html.contains("\"mix_colours\":[\"#000007\",\"#010007\",\"#020007\"]"));
     }
 }
