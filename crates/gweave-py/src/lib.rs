@@ -290,14 +290,14 @@ impl Reader {
 /// A picture or viewer page of a file as bytes (`format`: png, svg or html) and the report of
 /// what it shows as JSON; see `gweave preview`.
 #[pyfunction]
-#[pyo3(signature = (path, *, format, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None))]
+#[pyo3(signature = (path, *, format, layers=None, view=None, colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None))]
 #[allow(clippy::too_many_arguments)]
 fn preview_json(
     py: Python<'_>,
     path: PathBuf,
     format: &str,
     layers: Option<(u32, u32)>,
-    view: &str,
+    view: Option<&str>,
     colour_by: &str,
     size: (u32, u32),
     compare: Option<PathBuf>,
@@ -334,7 +334,10 @@ fn preview_json(
         .collect::<PyResult<Vec<_>>>()?;
     let options = PreviewOptions {
         view: ViewOptions {
-            kind: view.parse::<ViewKind>().map_err(PyValueError::new_err)?,
+            kind: match view {
+                Some(v) => v.parse::<ViewKind>().map_err(PyValueError::new_err)?,
+                None => format.default_view(),
+            },
             layers: layers.map(|(a, b)| a..=b),
             width_px: size.0,
             height_px: size.1,

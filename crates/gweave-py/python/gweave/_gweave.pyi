@@ -82,7 +82,7 @@ def preview_json(
     *,
     format: str,
     layers: Optional[Tuple[int, int]] = None,
-    view: str = "top",
+    view: Optional[str] = None,
     colour_by: str = "tool",
     size: Tuple[int, int] = (1200, 900),
     compare: Optional[str] = None,

@@ -4,7 +4,9 @@
 //! travel and the file's stats. The toolpath is embedded as JSON holding base64 arrays, which the
 //! page hands to the GPU as they are (no per-vertex work in JavaScript).
 //!
-//! Encoding, per segment (`n` segments), for each file shown (two with `--compare`):
+//! Encoding, per segment (`n` segments, the `extruding` ones first, each part in file order, so
+//! that the page draws beads and travel from two ranges of one buffer), for each file shown (two
+//! with `--compare`):
 //! - `pos`: 6 x u16 little endian (start x y z, end x y z), quantised over the extents `lo..hi`:
 //!   `q = round((v - lo) / (hi - lo) * 65535)`, so a 250 mm bed keeps 0.004 mm steps;
 //! - `tool`, `feature` (index into `features`), `flags` (bit 0: extruding; bit 1: a move the
@@ -72,14 +74,19 @@ struct Payload<'a> {
 struct FileData<'a> {
     name: &'a str,
     n: usize,
+    /// The first `extruding` segments extrude, the rest travel.
+    extruding: usize,
     /// Quantisation extents of `pos` (everything drawn, travel included), mm.
     lo: [f32; 3],
     hi: [f32; 3],
     /// Extents of what is printed (the panel's x, y, z), mm.
     printed_lo: [f32; 3],
     printed_hi: [f32; 3],
+    /// Z of each layer; on a cylinder, the radius of each layer, mm.
     layer_z: &'a [f32],
     on_cylinder: bool,
+    /// On a cylinder: the radii the beads lie between, mm.
+    radius_mm: Option<[f32; 2]>,
     stats: Option<&'a Stats>,
     pos: String,
     tool: String,
@@ -140,7 +147,10 @@ fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions) -> FileData<'a> {
     let (mut tool, mut feature, mut flags) =
         (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
     let (mut layer_of, mut feed) = (Vec::with_capacity(n * 4), Vec::with_capacity(n * 2));
-    for (i, s) in tp.segments.iter().enumerate() {
+    let extruding = |i: &usize| tp.segments[*i].extruding;
+    let order: Vec<usize> = (0..n).filter(extruding).chain((0..n).filter(|i| !extruding(i))).collect();
+    for &i in &order {
+        let s = &tp.segments[i];
         for p in [s.start, s.end] {
             for i in 0..3 {
                 pos.extend_from_slice(&quantise(p[i], lo[i], hi[i]).to_le_bytes());
@@ -156,13 +166,22 @@ fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions) -> FileData<'a> {
     let (mix, mix_colours, mix_legend) = if options.colour_by == ColourBy::Mix {
         let (index, colours) = mix_palette(tp);
         let legend = Colouring::new(ColourBy::Mix, Vec::new(), &[tp]).legend(&[tp]);
+        let index: Vec<u8> = order.iter().map(|&i| index[i]).collect();
         (Some(base64(&index)), colours, legend.iter().map(|e| e.colour.to_hex()).collect())
     } else {
         (None, Vec::new(), Vec::new())
     };
+    // The mandrel lies along X: a point's radius is its distance from that axis.
+    let radius_mm = tp.on_cylinder.then(|| {
+        let r = |p: [f32; 3]| p[1].hypot(p[2]);
+        let radii = tp.segments.iter().filter(|s| s.extruding).flat_map(|s| [r(s.start), r(s.end)]);
+        radii.fold([f32::INFINITY, 0.0], |[lo, hi], r| [lo.min(r), hi.max(r)])
+    });
     FileData {
         name: &f.name,
         n,
+        extruding: order.iter().filter(|i| extruding(i)).count(),
+        radius_mm,
         lo,
         hi,
         printed_lo,

@@ -93,6 +93,15 @@ impl Format {
             _ => Err(RenderError::Format(ext)),
         }
     }
+
+    /// The view a preview opens on when none is asked for: a layer from the top for pictures,
+    /// the whole part in 3D for the viewer page.
+    pub fn default_view(self) -> ViewKind {
+        match self {
+            Format::Html => ViewKind::Iso,
+            Format::Png | Format::Svg => ViewKind::Top,
+        }
+    }
 }
 
 /// Width and height of a picture.
