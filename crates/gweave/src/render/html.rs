@@ -4,9 +4,10 @@
 //! travel and the file's stats. The toolpath is embedded as JSON holding base64 arrays, which the
 //! page hands to the GPU as they are (no per-vertex work in JavaScript).
 //!
-//! Encoding, per segment (`n` segments, the `extruding` ones first, each part in file order, so
-//! that the page draws beads and travel from two ranges of one buffer), for each file shown (two
-//! with `--compare`):
+//! Encoding, per segment (`n` segments: first the `outside` beads that can show on the part's
+//! surface, then the rest of the `extruding` ones (inner walls, infill: [`hidden_inside`]), then
+//! travel, each part in file order, so that the page draws each from one range of one buffer,
+//! and only the first while the camera moves), for each file shown (two with `--compare`):
 //! - `pos`: 6 x u16 little endian (start x y z, end x y z), quantised over the extents `lo..hi`:
 //!   `q = round((v - lo) / (hi - lo) * 65535)`, so a 250 mm bed keeps 0.004 mm steps;
 //! - `tool`, `feature` (index into `features`), `flags` (bit 0: extruding; bit 1: a move the
@@ -26,7 +27,7 @@ use std::collections::HashMap;
 use serde::Serialize;
 
 use crate::colour::Srgb8;
-use crate::gcode::layers::ALL_FEATURES;
+use crate::gcode::layers::{Feature, ALL_FEATURES};
 use crate::stats::Stats;
 
 use super::colour_by::{ColourBy, Colouring, FEATURE_COLOURS, TOOL_COLOURS, TRAVEL_COLOUR};
@@ -74,8 +75,10 @@ struct Payload<'a> {
 struct FileData<'a> {
     name: &'a str,
     n: usize,
-    /// The first `extruding` segments extrude, the rest travel.
+    /// The first `extruding` segments extrude, the rest travel; of those, the first `outside`
+    /// can show on the part's surface.
     extruding: usize,
+    outside: usize,
     /// Quantisation extents of `pos` (everything drawn, travel included), mm.
     lo: [f32; 3],
     hi: [f32; 3],
@@ -147,8 +150,16 @@ fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions) -> FileData<'a> {
     let (mut tool, mut feature, mut flags) =
         (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
     let (mut layer_of, mut feed) = (Vec::with_capacity(n * 4), Vec::with_capacity(n * 2));
-    let extruding = |i: &usize| tp.segments[*i].extruding;
-    let order: Vec<usize> = (0..n).filter(extruding).chain((0..n).filter(|i| !extruding(i))).collect();
+    let class = |i: &usize| {
+        let s = &tp.segments[*i];
+        match (s.extruding, hidden_inside(s.feature)) {
+            (true, false) => 0,
+            (true, true) => 1,
+            (false, _) => 2,
+        }
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(class);
     for &i in &order {
         let s = &tp.segments[i];
         for p in [s.start, s.end] {
@@ -180,7 +191,8 @@ fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions) -> FileData<'a> {
     FileData {
         name: &f.name,
         n,
-        extruding: order.iter().filter(|i| extruding(i)).count(),
+        extruding: order.iter().filter(|i| class(i) < 2).count(),
+        outside: order.iter().filter(|i| class(i) == 0).count(),
         radius_mm,
         lo,
         hi,
@@ -199,6 +211,11 @@ fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions) -> FileData<'a> {
         mix_colours,
         mix_legend,
     }
+}
+
+/// Features the part's surface covers: the page leaves them out while the camera moves.
+fn hidden_inside(f: Feature) -> bool {
+    matches!(f, Feature::InnerWall | Feature::Infill | Feature::SolidInfill | Feature::Bridge | Feature::GapFill)
 }
 
 /// Each segment's index into a palette of its predicted mix colours, and the palette: at most
@@ -307,7 +324,7 @@ mod tests {
         let html = write_html(&[file(&tp)], &options);
         assert!(!html.contains(DATA_SLOT));
         assert!(!html.contains("http://") && !html.contains("https://"), "no network");
-        assert_eq!(html.matches("</script>").count(), 1, "the title cannot end the script");
+        assert_eq!(html.matches("</script>").count(), 2, "the title cannot end a script");
         // Start (0, 0, 0.2) is the low corner, end the high one: 0 and 65535 (ff ff) on each axis.
         let pos = base64(&[0, 0, 0, 0, 0, 0, 255, 255, 255, 255, 0, 0]);
         assert!(html.contains(&format!("\"pos\":\"{pos}\"")), "z span is 0: quantised to 0");
