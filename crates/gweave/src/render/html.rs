@@ -23,9 +23,9 @@
 //! faster than its JavaScript parser reads a string literal (on the 44 MB page of the benchmark
 //! file, 2 s of the first picture's 3 were that parse), and the page decodes it natively.
 //!
-//! 15 bytes per segment before base64 (x 4/3): a 3 MB slicer file becomes about 2.5 MB of HTML,
+//! 21 bytes per segment before base64 (x 4/3): a 3.1 MB slicer file becomes a 2.8 MB page,
 //! and the segment ceiling of a preview ([`super::MAX_SEGMENTS`]) bounds any file's page at
-//! about 42 MB.
+//! about 59 MB.
 
 use std::collections::HashMap;
 
@@ -132,7 +132,8 @@ struct FileData<'a> {
 /// each file's stats when given.
 pub fn write_html(files: &[HtmlFile<'_>], options: &HtmlOptions) -> String {
     let toolpaths: Vec<&Toolpath> = files.iter().map(|f| f.toolpath).collect();
-    let tools = toolpaths.iter().map(|tp| tp.tools as usize).max().unwrap_or(1).max(options.tool_colours.len());
+    let tools =
+        toolpaths.iter().map(|tp| tp.tools as usize).max().unwrap_or(1).max(options.tool_colours.len());
     let tool_colours = (0..tools)
         .map(|t| {
             options.tool_colours.get(t).copied().unwrap_or(TOOL_COLOURS[t % TOOL_COLOURS.len()]).to_hex()
@@ -243,7 +244,10 @@ fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions, blocks: &mut Blocks
 
 /// Features the part's surface covers: the page leaves them out while the camera moves.
 fn hidden_inside(f: Feature) -> bool {
-    matches!(f, Feature::InnerWall | Feature::Infill | Feature::SolidInfill | Feature::Bridge | Feature::GapFill)
+    matches!(
+        f,
+        Feature::InnerWall | Feature::Infill | Feature::SolidInfill | Feature::Bridge | Feature::GapFill
+    )
 }
 
 /// Each segment's index into a palette of its predicted mix colours, and the palette: at most

@@ -321,7 +321,12 @@ fn html_page(
     let files: Vec<html::HtmlFile<'_>> = read_files
         .iter()
         .zip(changed)
-        .map(|((p, (tp, stats)), changed)| html::HtmlFile { name: name(p), toolpath: tp, stats: Some(stats), changed })
+        .map(|((p, (tp, stats)), changed)| html::HtmlFile {
+            name: name(p),
+            toolpath: tp,
+            stats: Some(stats),
+            changed,
+        })
         .collect();
     let title = files.iter().map(|f| f.name.as_str()).collect::<Vec<_>>().join(" vs ");
     let html_options = html::HtmlOptions {
@@ -333,7 +338,8 @@ fn html_page(
     };
     let bytes = html::write_html(&files, &html_options).into_bytes();
     let toolpaths: Vec<&Toolpath> = files.iter().map(|f| f.toolpath).collect();
-    let colouring = colour_by::Colouring::new(options.view.colour_by, options.view.tool_colours.clone(), &toolpaths);
+    let colouring =
+        colour_by::Colouring::new(options.view.colour_by, options.view.tool_colours.clone(), &toolpaths);
     let layers = toolpaths.iter().map(|tp| tp.layer_count()).max().unwrap_or(0);
     let report = PreviewReport {
         layers_drawn: layers.checked_sub(1).map(|last| [0, last]),

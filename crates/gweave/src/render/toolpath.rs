@@ -655,7 +655,9 @@ mod tests {
         let mut text = String::new();
         for layer in 0..3 {
             let z = 0.1 * (layer + 1) as f64;
-            text.push_str(&format!(";LAYER:{layer}\nG1 Z{z:.1}\nG1 X10 Y20 F3000\nM400\nM700 P0 S1\nG1 X0\n"));
+            text.push_str(&format!(
+                ";LAYER:{layer}\nG1 Z{z:.1}\nG1 X10 Y20 F3000\nM400\nM700 P0 S1\nG1 X0\n"
+            ));
         }
         let tp = collect(&text, ToolpathOptions::default());
         assert_eq!(tp.layer_z_mm, [0.1, 0.2, 0.3]);
