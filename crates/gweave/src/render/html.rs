@@ -365,6 +365,38 @@ mod tests {
     }
 
     #[test]
+    fn surface_beads_come_first_and_compared_moves_are_flagged() {
+        let seg = |feature, extruding, x: f32| Segment {
+            start: [x, 0.0, 0.2],
+            end: [x + 1.0, 0.0, 0.2],
+            tool: 0,
+            feature,
+            feed_mm_s: 20.0,
+            layer: 0,
+            extruding,
+            mix_rgb: [0; 3],
+        };
+        let segments = vec![
+            seg(Feature::Unknown, false, 0.0),
+            seg(Feature::Infill, true, 1.0),
+            seg(Feature::OuterWall, true, 2.0),
+        ];
+        let tp = Toolpath { segments, layer_z_mm: vec![0.2], tools: 1, on_cylinder: false };
+        let options = HtmlOptions {
+            title: "c".into(),
+            colour_by: ColourBy::Tool,
+            view: ViewKind::Iso,
+            layer: None,
+            tool_colours: vec![],
+        };
+        let f = HtmlFile { changed: Some(vec![true, false, true]), ..file(&tp) };
+        let html = write_html(&[f], &options);
+        assert!(html.contains("\"extruding\":2,\"outside\":1"));
+        // Outer wall (changed), infill, travel (changed): bit 0 extruding, bit 1 changed.
+        assert!(html.contains(&format!("id=\"c3\">{}<", base64(&[3, 1, 2]))));
+    }
+
+    #[test]
     fn mix_colours_travel_as_a_palette_of_at_most_255() {
         let seg = |i: u32| Segment {
             start: [i as f32, 0.0, 0.2],
