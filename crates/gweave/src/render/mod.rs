@@ -11,7 +11,8 @@
 //!   turns segments into pixel [`view::Stroke`]s.
 //! - [`raster`] and [`png_out`]: a software rasteriser (wide anti-aliased lines, alpha) and PNG.
 //! - [`svg`]: the same drawing as SVG paths.
-//! - [`html`]: a self-contained interactive viewer page.
+//! - [`html`]: a self-contained interactive viewer page (the beads as lit 3D tubes, WebGL 2),
+//!   of one file or two compared side by side.
 //!
 //! Binder-jet raster output (`gweave raster`) draws the drops of each layer
 //! ([`toolpath`] decodes the fire commands with [`PreviewOptions::printhead`]).
