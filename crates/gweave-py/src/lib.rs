@@ -311,7 +311,7 @@ impl Reader {
 /// A picture or viewer page of a file as bytes (`format`: png, svg or html) and the report of
 /// what it shows as JSON; see `gweave preview`.
 #[pyfunction]
-#[pyo3(signature = (path, *, format, layer=None, layers=None, view="top", colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None, min_len=None, lenient=false))]
+#[pyo3(signature = (path, *, format, layer=None, layers=None, view=None, colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None, min_len=None, lenient=false))]
 #[allow(clippy::too_many_arguments)]
 fn preview_json(
     py: Python<'_>,
@@ -319,7 +319,7 @@ fn preview_json(
     format: &str,
     layer: Option<u32>,
     layers: Option<LayersArg>,
-    view: &str,
+    view: Option<&str>,
     colour_by: &str,
     size: (u32, u32),
     compare: Option<PathBuf>,
@@ -363,7 +363,10 @@ fn preview_json(
         .collect::<PyResult<Vec<_>>>()?;
     let options = PreviewOptions {
         view: ViewOptions {
-            kind: view.parse::<ViewKind>().map_err(PyValueError::new_err)?,
+            kind: match view {
+                Some(v) => v.parse::<ViewKind>().map_err(PyValueError::new_err)?,
+                None => format.default_view(),
+            },
             layers: match (layer, layers) {
                 (Some(l), _) => Some(layer_range(l, l).map_err(PyValueError::new_err)?),
                 (None, Some(range)) => Some(range.range()?),

@@ -43,6 +43,15 @@ impl Malformed {
         self.malformed_lines += 1;
         self.first_malformed_line.get_or_insert(line);
     }
+
+    /// Adds another file's count (a comparison reads two files); the first line named stays
+    /// the first file's.
+    pub fn merge(&mut self, other: Malformed) {
+        self.malformed_lines += other.malformed_lines;
+        if self.first_malformed_line.is_none() {
+            self.first_malformed_line = other.first_malformed_line;
+        }
+    }
 }
 
 /// A report with the malformed lines of its lenient read, in one JSON object (the report's

@@ -24,7 +24,9 @@ use crate::files::Files;
 /// Draw a file: top view of a layer, isometric view of the print, or a before/after comparison.
 ///
 /// The output format follows the extension of -o: `.png` and `.svg` are pictures, `.html` is one
-/// self-contained page (no network) with a layer slider, pan, zoom, rotate, legend and stats.
+/// self-contained page (no network): the beads as lit 3D tubes (WebGL), opening on an isometric
+/// view of the whole part, with orbit, pan, zoom, top view, a layer range, legend and stats; with
+/// --compare, the two files side by side, the moves each has that the other has not in colour.
 /// Layers are numbered from 0 as the core counts them (Cura's `;LAYER:n`).
 /// Examples: `gweave preview part.gcode -o part.png --layer 12`,
 /// `gweave preview part.gcode -o part.png --view iso --colour-by feature`,
@@ -42,9 +44,9 @@ pub struct PreviewArgs {
     /// Draw this layer range, inclusive, e.g. 10-20 [default: every layer].
     #[arg(long, value_name = "A-B", value_parser = parse_layer_range)]
     pub layers: Option<RangeInclusive<u32>>,
-    /// top (from above) or iso (isometric 3D).
-    #[arg(long, default_value = "top", value_parser = |s: &str| s.parse::<ViewKind>())]
-    pub view: ViewKind,
+    /// top (from above) or iso (isometric 3D); default: top for pictures, iso for the HTML page.
+    #[arg(long, value_parser = |s: &str| s.parse::<ViewKind>())]
+    pub view: Option<ViewKind>,
     /// tool, feature, speed, layer or mix (the colour each move is predicted to print, from the
     /// file's mixing commands, the filaments of --mix-profile and its chamber's washout).
     #[arg(long, alias = "color-by", default_value = "tool", value_parser = |s: &str| s.parse::<ColourBy>())]
@@ -108,7 +110,7 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
     let printhead = args.head.as_ref().map(|path| load(path, PrintheadProfile::from_toml)).transpose()?;
     let options = PreviewOptions {
         view: ViewOptions {
-            kind: args.view,
+            kind: args.view.unwrap_or(format.default_view()),
             layers: args.layer.map(|l| l..=l).or(args.layers.clone()),
             width_px: args.size.0,
             height_px: args.size.1,

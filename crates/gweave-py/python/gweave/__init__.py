@@ -320,7 +320,7 @@ def preview(
     output: Optional[PathLike] = None,
     layer: Optional[int] = None,
     layers: Union[str, Tuple[int, int], None] = None,
-    view: str = "top",
+    view: Optional[str] = None,
     colour_by: str = "tool",
     size: Tuple[int, int] = (1200, 900),
     compare: Optional[PathLike] = None,
@@ -341,12 +341,13 @@ def preview(
     ``layer`` is one 0-based layer, ``layers`` an inclusive ``(first, last)`` range (or ``"A-B"``);
     ``min_len`` (mm) merges chained moves shorter than that; ``lenient=True`` draws past
     malformed lines and counts them in the report; ``view`` is ``"top"`` or
-    ``"iso"``; ``colour_by`` is ``tool``, ``feature``, ``speed``, ``layer`` or ``mix`` (the colour
+    ``"iso"`` (default: top for pictures, iso for the HTML page, which draws the beads as lit 3D
+    tubes with WebGL); ``colour_by`` is ``tool``, ``feature``, ``speed``, ``layer`` or ``mix`` (the colour
     each move is predicted to print, from the file's mixing commands and the filaments of the
     ``gweave mix`` profile ``mix_profile``); ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``
     colour the tools; ``mandrel_diameter`` (mm) draws a rotary program without a gweave header on
     its cylinder; ``head`` is the printhead profile of raster output; ``compare`` highlights moves that differ
-    from another file; ``size`` is ``(width, height)`` in pixels.
+    from another file (in HTML, the two side by side); ``size`` is ``(width, height)`` in pixels.
     """
     out = _opt_path(output, "output")
     # The format follows the output's extension, read by the engine as the CLI reads `-o`.

@@ -98,7 +98,7 @@ def preview(
     output: Optional[PathLike] = None,
     layer: Optional[int] = None,
     layers: Union[str, Tuple[int, int], None] = None,
-    view: str = "top",
+    view: Optional[str] = None,
     colour_by: str = "tool",
     size: Tuple[int, int] = (1200, 900),
     compare: Optional[PathLike] = None,

@@ -97,7 +97,7 @@ def preview_json(
     format: str,
     layer: Optional[int] = None,
     layers: Union[str, Tuple[int, int], None] = None,
-    view: str = "top",
+    view: Optional[str] = None,
     colour_by: str = "tool",
     size: Tuple[int, int] = (1200, 900),
     compare: Optional[str] = None,

@@ -1,25 +1,38 @@
-//! A self-contained HTML viewer: one file, no network. The page (`viewer.html`, a canvas 2D
-//! viewer with a layer slider, pan, zoom, rotate, legend and stats) is built into the library;
-//! the toolpath is embedded in it as JSON holding base64 arrays.
+//! A self-contained HTML viewer: one file, no network. The page (`viewer.html`) draws the beads
+//! as lit 3D tubes with WebGL 2 (one instanced quad per segment, shaded as a round bead in the
+//! fragment shader), with orbit, pan, zoom, top view, a layer range, colourings with a legend,
+//! travel and the file's stats. The toolpath is embedded as JSON holding base64 arrays, which the
+//! page hands to the GPU as they are (no per-vertex work in JavaScript).
 //!
-//! Encoding, per segment (`n` segments):
+//! Encoding, per segment (`n` segments: first the `outside` beads that can show on the part's
+//! surface, then the rest of the `extruding` ones (inner walls, infill: [`hidden_inside`]), then
+//! travel, each part in file order, so that the page draws each from one range of one buffer,
+//! and only the first while the camera moves), for each file shown (two with `--compare`):
 //! - `pos`: 6 x u16 little endian (start x y z, end x y z), quantised over the extents `lo..hi`:
 //!   `q = round((v - lo) / (hi - lo) * 65535)`, so a 250 mm bed keeps 0.004 mm steps;
-//! - `tool`, `feature` (index into `features`), `flags` (bit 0: extruding): u8 each;
+//! - `tool`, `feature` (index into `features`), `flags` (bit 0: extruding; bit 1: a move the
+//!   other file of a comparison does not have): u8 each;
 //! - `layer`: u32; `feed`: u16, tenths of mm/s.
 //!
 //! - `mix` (only when the toolpath was read with the mix colouring): u8 index into
 //!   `mix_colours`, the distinct predicted colours (at most 255: channels are coarsened until
 //!   they fit), with `mix_legend` the colours printed longest.
 //!
-//! 15 bytes per segment before base64 (x 4/3): a 3 MB slicer file becomes about 2.5 MB of HTML.
+//! Each column travels as base64 text in a `<script type="application/octet-stream">` element of
+//! its own, which the JSON names by id: the browser's HTML tokenizer passes over such text far
+//! faster than its JavaScript parser reads a string literal (on the 44 MB page of the benchmark
+//! file, 2 s of the first picture's 3 were that parse), and the page decodes it natively.
+//!
+//! 21 bytes per segment before base64 (x 4/3): a 3.1 MB slicer file becomes a 2.8 MB page,
+//! and the segment ceiling of a preview ([`super::MAX_SEGMENTS`]) bounds any file's page at
+//! about 59 MB.
 
 use std::collections::HashMap;
 
 use serde::Serialize;
 
 use crate::colour::Srgb8;
-use crate::gcode::layers::ALL_FEATURES;
+use crate::gcode::layers::{Feature, ALL_FEATURES};
 use crate::stats::Stats;
 
 use super::colour_by::{ColourBy, Colouring, FEATURE_COLOURS, TOOL_COLOURS, TRAVEL_COLOUR};
@@ -28,6 +41,27 @@ use super::view::ViewKind;
 
 const TEMPLATE: &str = include_str!("viewer.html");
 const DATA_SLOT: &str = "/*GWEAVE_DATA*/null";
+const BLOCKS_SLOT: &str = "<!--GWEAVE_BLOCKS-->";
+
+/// The binary columns of a page, each its own element (see the module notes).
+#[derive(Default)]
+struct Blocks(Vec<String>);
+
+impl Blocks {
+    /// Adds a column; returns the id of its element.
+    fn add(&mut self, bytes: &[u8]) -> String {
+        self.0.push(base64(bytes));
+        format!("c{}", self.0.len() - 1)
+    }
+
+    fn html(&self) -> String {
+        let mut out = String::with_capacity(self.0.iter().map(|b| b.len() + 64).sum());
+        for (i, b) in self.0.iter().enumerate() {
+            out.push_str(&format!("<script type=\"application/octet-stream\" id=\"c{i}\">{b}</script>\n"));
+        }
+        out
+    }
+}
 
 /// How the page opens (the reader can change all of it).
 #[derive(Debug, Clone, PartialEq)]
@@ -35,18 +69,24 @@ pub struct HtmlOptions {
     pub title: String,
     pub colour_by: ColourBy,
     pub view: ViewKind,
-    /// Layer shown first (the last layer when `None`).
+    /// Top layer of the range shown first (the last layer when `None`).
     pub layer: Option<u32>,
     pub tool_colours: Vec<Srgb8>,
+}
+
+/// One file the page shows: its toolpath, name and statistics.
+pub struct HtmlFile<'a> {
+    pub name: String,
+    pub toolpath: &'a Toolpath,
+    pub stats: Option<&'a Stats>,
+    /// In a comparison, which moves the other file does not have
+    /// ([`super::view::changed_moves`]): drawn in colour, the rest in grey.
+    pub changed: Option<Vec<bool>>,
 }
 
 #[derive(Serialize)]
 struct Payload<'a> {
     title: &'a str,
-    n: usize,
-    lo: [f32; 3],
-    hi: [f32; 3],
-    layer_z: &'a [f32],
     layer: Option<u32>,
     view: String,
     colour_by: &'static str,
@@ -54,6 +94,28 @@ struct Payload<'a> {
     feature_colours: Vec<String>,
     tool_colours: Vec<String>,
     travel_colour: String,
+    files: Vec<FileData<'a>>,
+}
+
+#[derive(Serialize)]
+struct FileData<'a> {
+    name: &'a str,
+    n: usize,
+    /// The first `extruding` segments extrude, the rest travel; of those, the first `outside`
+    /// can show on the part's surface.
+    extruding: usize,
+    outside: usize,
+    /// Quantisation extents of `pos` (everything drawn, travel included), mm.
+    lo: [f32; 3],
+    hi: [f32; 3],
+    /// Extents of what is printed (the panel's x, y, z), mm.
+    printed_lo: [f32; 3],
+    printed_hi: [f32; 3],
+    /// Z of each layer; on a cylinder, the radius of each layer, mm.
+    layer_z: &'a [f32],
+    on_cylinder: bool,
+    /// On a cylinder: the radii the beads lie between, mm.
+    radius_mm: Option<[f32; 2]>,
     stats: Option<&'a Stats>,
     pos: String,
     tool: String,
@@ -66,11 +128,44 @@ struct Payload<'a> {
     mix_legend: Vec<String>,
 }
 
-/// The page for a toolpath, with the file's stats when given.
-pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -> String {
-    let (lo, hi) = tp.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
+/// The page for one toolpath, or two compared side by side (see [`HtmlFile::changed`]), with
+/// each file's stats when given.
+pub fn write_html(files: &[HtmlFile<'_>], options: &HtmlOptions) -> String {
+    let toolpaths: Vec<&Toolpath> = files.iter().map(|f| f.toolpath).collect();
+    let tools =
+        toolpaths.iter().map(|tp| tp.tools as usize).max().unwrap_or(1).max(options.tool_colours.len());
+    let tool_colours = (0..tools)
+        .map(|t| {
+            options.tool_colours.get(t).copied().unwrap_or(TOOL_COLOURS[t % TOOL_COLOURS.len()]).to_hex()
+        })
+        .collect();
+    let mut blocks = Blocks::default();
+    let payload = Payload {
+        title: &options.title,
+        layer: options.layer,
+        view: options.view.to_string(),
+        colour_by: options.colour_by.name(),
+        features: ALL_FEATURES.iter().map(|f| f.name()).collect(),
+        feature_colours: FEATURE_COLOURS.iter().map(|c| c.to_hex()).collect(),
+        tool_colours,
+        travel_colour: TRAVEL_COLOUR.to_hex(),
+        files: files.iter().map(|f| file_data(f, options, &mut blocks)).collect(),
+    };
+    // Serialising plain numbers and strings cannot fail; `</` is escaped so that no text in the
+    // data (a file name, a stats string) can close the script element.
+    let json = serde_json::to_string(&payload).unwrap_or_else(|_| "null".into()).replace("</", "<\\/");
+    TEMPLATE
+        .replacen("<title>gweave preview</title>", &format!("<title>{}</title>", escape(&options.title)), 1)
+        .replacen(DATA_SLOT, &json, 1)
+        .replacen(BLOCKS_SLOT, &blocks.html(), 1)
+}
+
+/// The columns of one file (see the module notes).
+fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions, blocks: &mut Blocks) -> FileData<'a> {
+    let tp = f.toolpath;
+    let (printed_lo, printed_hi) = tp.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
     // Travel may leave the extruded extents: quantise over everything drawn.
-    let (mut lo, mut hi) = (lo, hi);
+    let (mut lo, mut hi) = (printed_lo, printed_hi);
     for s in &tp.segments {
         for p in [s.start, s.end] {
             for i in 0..3 {
@@ -84,7 +179,18 @@ pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -
     let (mut tool, mut feature, mut flags) =
         (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
     let (mut layer_of, mut feed) = (Vec::with_capacity(n * 4), Vec::with_capacity(n * 2));
-    for s in &tp.segments {
+    let class = |i: &usize| {
+        let s = &tp.segments[*i];
+        match (s.extruding, hidden_inside(s.feature)) {
+            (true, false) => 0,
+            (true, true) => 1,
+            (false, _) => 2,
+        }
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(class);
+    for &i in &order {
+        let s = &tp.segments[i];
         for p in [s.start, s.end] {
             for i in 0..3 {
                 pos.extend_from_slice(&quantise(p[i], lo[i], hi[i]).to_le_bytes());
@@ -92,53 +198,56 @@ pub fn write_html(tp: &Toolpath, stats: Option<&Stats>, options: &HtmlOptions) -
         }
         tool.push(s.tool.min(255) as u8);
         feature.push(s.feature as u8);
-        flags.push(u8::from(s.extruding));
+        let is_changed = f.changed.as_ref().is_some_and(|c| c[i]);
+        flags.push(u8::from(s.extruding) | u8::from(is_changed) << 1);
         layer_of.extend_from_slice(&s.layer.to_le_bytes());
         feed.extend_from_slice(&((s.feed_mm_s * 10.0).round().clamp(0.0, 65535.0) as u16).to_le_bytes());
     }
-    let tools = (tp.tools as usize).max(options.tool_colours.len());
-    let tool_colours = (0..tools)
-        .map(|t| {
-            options.tool_colours.get(t).copied().unwrap_or(TOOL_COLOURS[t % TOOL_COLOURS.len()]).to_hex()
-        })
-        .collect();
     let (mix, mix_colours, mix_legend) = if options.colour_by == ColourBy::Mix {
         let (index, colours) = mix_palette(tp);
         let legend = Colouring::new(ColourBy::Mix, Vec::new(), &[tp]).legend(&[tp]);
-        (Some(base64(&index)), colours, legend.iter().map(|e| e.colour.to_hex()).collect())
+        let index: Vec<u8> = order.iter().map(|&i| index[i]).collect();
+        (Some(blocks.add(&index)), colours, legend.iter().map(|e| e.colour.to_hex()).collect())
     } else {
         (None, Vec::new(), Vec::new())
     };
-    let payload = Payload {
-        title: &options.title,
+    // The mandrel lies along X: a point's radius is its distance from that axis.
+    let radius_mm = tp.on_cylinder.then(|| {
+        let r = |p: [f32; 3]| p[1].hypot(p[2]);
+        let radii = tp.segments.iter().filter(|s| s.extruding).flat_map(|s| [r(s.start), r(s.end)]);
+        radii.fold([f32::INFINITY, 0.0], |[lo, hi], r| [lo.min(r), hi.max(r)])
+    });
+    FileData {
+        name: &f.name,
         n,
+        extruding: order.iter().filter(|i| class(i) < 2).count(),
+        outside: order.iter().filter(|i| class(i) == 0).count(),
+        radius_mm,
         lo,
         hi,
+        printed_lo,
+        printed_hi,
         layer_z: &tp.layer_z_mm,
-        layer: options.layer,
-        view: options.view.to_string(),
-        colour_by: options.colour_by.name(),
-        features: ALL_FEATURES.iter().map(|f| f.name()).collect(),
-        feature_colours: FEATURE_COLOURS.iter().map(|c| c.to_hex()).collect(),
-        tool_colours,
-        travel_colour: TRAVEL_COLOUR.to_hex(),
-        stats,
-        pos: base64(&pos),
-        tool: base64(&tool),
-        feature: base64(&feature),
-        flags: base64(&flags),
-        layer_of: base64(&layer_of),
-        feed: base64(&feed),
+        on_cylinder: tp.on_cylinder,
+        stats: f.stats,
+        pos: blocks.add(&pos),
+        tool: blocks.add(&tool),
+        feature: blocks.add(&feature),
+        flags: blocks.add(&flags),
+        layer_of: blocks.add(&layer_of),
+        feed: blocks.add(&feed),
         mix,
         mix_colours,
         mix_legend,
-    };
-    // Serialising plain numbers and strings cannot fail; `</` is escaped so that no text in the
-    // data (a file name, a stats string) can close the script element.
-    let json = serde_json::to_string(&payload).unwrap_or_else(|_| "null".into()).replace("</", "<\\/");
-    TEMPLATE
-        .replacen("<title>gweave preview</title>", &format!("<title>{}</title>", escape(&options.title)), 1)
-        .replacen(DATA_SLOT, &json, 1)
+    }
+}
+
+/// Features the part's surface covers: the page leaves them out while the camera moves.
+fn hidden_inside(f: Feature) -> bool {
+    matches!(
+        f,
+        Feature::InnerWall | Feature::Infill | Feature::SolidInfill | Feature::Bridge | Feature::GapFill
+    )
 }
 
 /// Each segment's index into a palette of its predicted mix colours, and the palette: at most
@@ -205,6 +314,10 @@ mod tests {
     use crate::gcode::layers::Feature;
     use crate::render::toolpath::Segment;
 
+    fn file(tp: &Toolpath) -> HtmlFile<'_> {
+        HtmlFile { name: "t.gcode".into(), toolpath: tp, stats: None, changed: None }
+    }
+
     #[test]
     fn base64_matches_rfc4648_vectors() {
         let cases = [
@@ -240,14 +353,47 @@ mod tests {
             layer: None,
             tool_colours: vec![],
         };
-        let html = write_html(&tp, None, &options);
+        let html = write_html(&[file(&tp)], &options);
         assert!(!html.contains(DATA_SLOT));
         assert!(!html.contains("http://") && !html.contains("https://"), "no network");
-        assert_eq!(html.matches("</script>").count(), 1, "the title cannot end the script");
+        assert_eq!(html.matches("</script>").count(), 2 + 6, "the title cannot end a script");
         // Start (0, 0, 0.2) is the low corner, end the high one: 0 and 65535 (ff ff) on each axis.
         let pos = base64(&[0, 0, 0, 0, 0, 0, 255, 255, 255, 255, 0, 0]);
-        assert!(html.contains(&format!("\"pos\":\"{pos}\"")), "z span is 0: quantised to 0");
-        assert!(html.contains("\"feed\":\"+gA=\""), "250 tenths of mm/s");
+        assert!(html.contains("\"pos\":\"c0\""), "columns named by id");
+        assert!(html.contains(&format!("id=\"c0\">{pos}</script>")), "z span is 0: quantised to 0");
+        assert!(html.contains("\"feed\":\"c5\"") && html.contains("id=\"c5\">+gA=<"), "250 tenths of mm/s");
+    }
+
+    #[test]
+    fn surface_beads_come_first_and_compared_moves_are_flagged() {
+        let seg = |feature, extruding, x: f32| Segment {
+            start: [x, 0.0, 0.2],
+            end: [x + 1.0, 0.0, 0.2],
+            tool: 0,
+            feature,
+            feed_mm_s: 20.0,
+            layer: 0,
+            extruding,
+            mix_rgb: [0; 3],
+        };
+        let segments = vec![
+            seg(Feature::Unknown, false, 0.0),
+            seg(Feature::Infill, true, 1.0),
+            seg(Feature::OuterWall, true, 2.0),
+        ];
+        let tp = Toolpath { segments, layer_z_mm: vec![0.2], tools: 1, on_cylinder: false };
+        let options = HtmlOptions {
+            title: "c".into(),
+            colour_by: ColourBy::Tool,
+            view: ViewKind::Iso,
+            layer: None,
+            tool_colours: vec![],
+        };
+        let f = HtmlFile { changed: Some(vec![true, false, true]), ..file(&tp) };
+        let html = write_html(&[f], &options);
+        assert!(html.contains("\"extruding\":2,\"outside\":1"));
+        // Outer wall (changed), infill, travel (changed): bit 0 extruding, bit 1 changed.
+        assert!(html.contains(&format!("id=\"c3\">{}<", base64(&[3, 1, 2]))));
     }
 
     #[test]
@@ -284,7 +430,7 @@ mod tests {
             layer: None,
             tool_colours: vec![],
         };
-        let html = write_html(&few, None, &options);
+        let html = write_html(&[file(&few)], &options);
         assert!(html.contains("\"mix_colours\":[\"#000007\",\"#010007\",\"#020007\"]"));
     }
 }

@@ -11,7 +11,8 @@
 //!   turns segments into pixel [`view::Stroke`]s.
 //! - [`raster`] and [`png_out`]: a software rasteriser (wide anti-aliased lines, alpha) and PNG.
 //! - [`svg`]: the same drawing as SVG paths.
-//! - [`html`]: a self-contained interactive viewer page.
+//! - [`html`]: a self-contained interactive viewer page (the beads as lit 3D tubes, WebGL 2),
+//!   of one file or two compared side by side.
 //!
 //! Binder-jet raster output (`gweave raster`) draws the drops of each layer
 //! ([`toolpath`] decodes the fire commands with [`PreviewOptions::printhead`]).
@@ -69,8 +70,6 @@ pub enum RenderError {
     Range(#[from] crate::range::OutOfRange),
     #[error("unknown output format {0:?} (png, svg or html)")]
     Format(String),
-    #[error("the HTML viewer shows one file; compare as PNG or SVG")]
-    CompareHtml,
     #[error("image encoding failed: {0}")]
     Encode(String),
     #[error(transparent)]
@@ -94,6 +93,15 @@ impl Format {
             "svg" => Ok(Format::Svg),
             "html" | "htm" => Ok(Format::Html),
             _ => Err(RenderError::Format(ext)),
+        }
+    }
+
+    /// The view a preview opens on when none is asked for: a layer from the top for pictures,
+    /// the whole part in 3D for the viewer page.
+    pub fn default_view(self) -> ViewKind {
+        match self {
+            Format::Html => ViewKind::Iso,
+            Format::Png | Format::Svg => ViewKind::Top,
         }
     }
 }
@@ -156,7 +164,7 @@ impl PreviewOptions {
 /// The most segments a picture or viewer keeps (80 MB, 140 MB with their strokes): twice the
 /// pixels of a 1200 x 900 picture, so a file of any size is drawn in bounded memory and loses only
 /// detail finer than a pixel or two (see [`ToolpathOptions::max_segments`]).
-const MAX_SEGMENTS: usize = 1 << 21;
+pub(crate) const MAX_SEGMENTS: usize = 1 << 21;
 
 /// Feeds every line to two passes (a toolpath and the statistics, in one read of the file).
 struct Both<'a>(&'a mut dyn Pass, &'a mut dyn Pass);
@@ -327,10 +335,7 @@ fn drawing_counted(
         let mut run = Run::new(p, &mut *progress);
         run.strictness = options.strictness;
         run.scan(&mut pass)?;
-        malformed.malformed_lines += pass.malformed.malformed_lines;
-        if malformed.first_malformed_line.is_none() {
-            malformed.first_malformed_line = pass.malformed.first_malformed_line;
-        }
+        malformed.merge(pass.malformed);
         Ok(pass.pass.finish_toolpath())
     };
     let before = read(path)?;
@@ -347,25 +352,54 @@ fn html_page(
     options: &PreviewOptions,
     progress: &mut dyn Progress,
 ) -> Result<Preview, RenderError> {
-    if compare.is_some() {
-        return Err(RenderError::CompareHtml);
+    let name = |p: &Path| p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut malformed = Malformed::default();
+    let mut read = |p: &Path| -> Result<(Toolpath, Stats), RenderError> {
+        let (tp, stats, m) =
+            toolpath_with_stats(p, options.toolpath_options(p, true)?, options.strictness, &mut *progress)?;
+        malformed.merge(m);
+        Ok((tp, stats))
+    };
+    let mut read_files = vec![(path, read(path)?)];
+    if let Some(other) = compare {
+        read_files.push((other, read(other)?));
     }
-    let (tp, stats, malformed) =
-        toolpath_with_stats(path, options.toolpath_options(path, true)?, options.strictness, progress)?;
+    let changed = match &read_files[..] {
+        [(_, (a, _)), (_, (b, _))] => vec![Some(view::changed_moves(a, b)), Some(view::changed_moves(b, a))],
+        _ => vec![None],
+    };
+    let changed_moves = <[usize; 2]>::try_from(
+        changed.iter().flatten().map(|c| c.iter().filter(|&&c| c).count()).collect::<Vec<_>>(),
+    )
+    .ok();
+    let files: Vec<html::HtmlFile<'_>> = read_files
+        .iter()
+        .zip(changed)
+        .map(|((p, (tp, stats)), changed)| html::HtmlFile {
+            name: name(p),
+            toolpath: tp,
+            stats: Some(stats),
+            changed,
+        })
+        .collect();
+    let title = files.iter().map(|f| f.name.as_str()).collect::<Vec<_>>().join(" vs ");
     let html_options = html::HtmlOptions {
-        title: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+        title,
         colour_by: options.view.colour_by,
         view: options.view.kind,
         layer: options.view.layers.as_ref().map(|r| *r.end()),
         tool_colours: options.view.tool_colours.clone(),
     };
-    let bytes = html::write_html(&tp, Some(&stats), &html_options).into_bytes();
+    let bytes = html::write_html(&files, &html_options).into_bytes();
+    let toolpaths: Vec<&Toolpath> = files.iter().map(|f| f.toolpath).collect();
     let colouring =
-        colour_by::Colouring::new(options.view.colour_by, options.view.tool_colours.clone(), &[&tp]);
+        colour_by::Colouring::new(options.view.colour_by, options.view.tool_colours.clone(), &toolpaths);
+    let layers = toolpaths.iter().map(|tp| tp.layer_count()).max().unwrap_or(0);
     let report = PreviewReport {
-        layers_drawn: tp.layer_count().checked_sub(1).map(|last| [0, last]),
-        moves: Some(tp.segments.len()),
-        legend: colouring.legend(&[&tp]),
+        layers_drawn: layers.checked_sub(1).map(|last| [0, last]),
+        moves: Some(toolpaths.iter().map(|tp| tp.segments.len()).sum()),
+        changed_moves,
+        legend: colouring.legend(&toolpaths),
         malformed,
         ..PreviewReport::new(Format::Html, bytes.len(), options)
     };

@@ -196,6 +196,8 @@ pub struct ToolpathPass {
     thinning: u64,
     /// Segments of each kind (travel, extruding) offered since thinning began.
     thinning_seen: [u64; 2],
+    /// The layer whose Z the drops of a fire command gave (see [`Self::fire`]).
+    fired_layer: Option<u32>,
 }
 
 impl ToolpathPass {
@@ -210,6 +212,7 @@ impl ToolpathPass {
             cylinder: CylinderLayers::default(),
             thinning: 1,
             thinning_seen: [0; 2],
+            fired_layer: None,
         }
     }
 
@@ -397,6 +400,13 @@ impl ToolpathPass {
         let pos = &ctx.state.pos;
         let half = (self.options.printhead.pitch_mm() / 2.0) as f32;
         let z = pos[Z] as f32;
+        // A raster layer states no Z in a comment and never extrudes, so the core's layer Z
+        // (stated, or taken at the first extrusion) stays unknown: the drops are the layer's
+        // deposit, and their Z is the layer's.
+        if let Some(layer_z) = self.out.layer_z_mm.get_mut(layer as usize) {
+            *layer_z = z;
+            self.fired_layer = Some(layer);
+        }
         for [x, y] in self.options.printhead.drops_mm(head, bits as u64, [pos[X], pos[Y]]) {
             let (x, y) = (x as f32, y as f32);
             self.out.tools = self.out.tools.max(head as u16 + 1);
@@ -422,8 +432,11 @@ impl Pass for ToolpathPass {
             if self.out.layer_z_mm.len() < n {
                 self.out.layer_z_mm.resize(n, st.layer_z_mm as f32);
             }
-            // The slicer may state Z after the marker (`;Z:`) or at the first extrusion.
-            self.out.layer_z_mm[layer as usize] = st.layer_z_mm as f32;
+            // The slicer may state Z after the marker (`;Z:`) or at the first extrusion; a
+            // raster layer's Z is its drops' (`fire`).
+            if self.fired_layer != Some(layer) {
+                self.out.layer_z_mm[layer as usize] = st.layer_z_mm as f32;
+            }
         }
         if let Some(mix) = &mut self.mix {
             mix.line(ctx.line.bytes, ctx.block, ctx.state.tool);
@@ -639,5 +652,20 @@ mod tests {
             assert_eq!(d.end, [10.0 + pitch / 2.0, 20.0 + row * pitch, 0.1]);
             assert_eq!((d.tool, d.layer), (0, 0));
         }
+    }
+
+    /// Regression (issue 23): raster layers state no Z in a comment and never extrude, and
+    /// every layer's Z was 0.0 (`z 0.00 mm` in the viewer, `toolpath()["layer_z"]` all 0).
+    #[test]
+    fn raster_layers_take_the_z_of_their_drops() {
+        let mut text = String::new();
+        for layer in 0..3 {
+            let z = 0.1 * (layer + 1) as f64;
+            text.push_str(&format!(
+                ";LAYER:{layer}\nG1 Z{z:.1}\nG1 X10 Y20 F3000\nM400\nM700 P0 S1\nG1 X0\n"
+            ));
+        }
+        let tp = collect(&text, ToolpathOptions::default());
+        assert_eq!(tp.layer_z_mm, [0.1, 0.2, 0.3]);
     }
 }
