@@ -32,7 +32,6 @@
 //! ```
 pub mod delta_e;
 pub mod dialect;
-pub(crate) mod font;
 pub mod lab;
 pub mod mix;
 pub mod mixing;

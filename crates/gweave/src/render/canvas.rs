@@ -8,6 +8,8 @@
 
 use std::io::{self, Write};
 
+use super::png_out::{write_png, Pixels};
+
 /// An RGB image with a depth per pixel.
 #[derive(Clone, Debug)]
 pub struct Canvas {
@@ -85,14 +87,9 @@ impl Canvas {
         }
     }
 
-    /// Writes the image as an 8-bit RGB PNG.
+    /// Writes the image as an 8-bit RGB PNG ([`super::png_out::write_png`]).
     pub fn write_png(&self, out: impl Write) -> io::Result<()> {
-        let mut encoder = png::Encoder::new(out, self.width, self.height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().map_err(io::Error::other)?;
-        writer.write_image_data(&self.rgb).map_err(io::Error::other)?;
-        writer.finish().map_err(io::Error::other)
+        write_png(out, self.width, self.height, Pixels::Rgb(&self.rgb)).map_err(io::Error::other)
     }
 }
 

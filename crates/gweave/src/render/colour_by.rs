@@ -197,10 +197,12 @@ impl Colouring {
                 let mut used: Vec<u16> = extruding().map(|s| s.tool).collect();
                 used.sort_unstable();
                 used.dedup();
+                // Binder-jet drops come from inkjet heads, not extruders.
+                let heads = toolpaths.iter().any(|t| t.heads);
                 used.into_iter()
                     .map(|t| {
                         let c = self.tool_colour(t);
-                        entry(format!("T{t}"), [c.r, c.g, c.b])
+                        entry(if heads { format!("head {t}") } else { format!("T{t}") }, [c.r, c.g, c.b])
                     })
                     .collect()
             }
@@ -280,6 +282,7 @@ mod tests {
             layer_z_mm: vec![0.0; 10],
             tools: 1,
             on_cylinder: false,
+            heads: false,
         };
         let c = Colouring::new(ColourBy::Speed, vec![], &[&tp]);
         let slow = c.colour(&tp.segments[0]);
@@ -302,6 +305,7 @@ mod tests {
             layer_z_mm: vec![0.0],
             tools: 3,
             on_cylinder: false,
+            heads: false,
         };
         let c = Colouring::new(ColourBy::Tool, vec![TOOL_COLOURS[0], red], &[&tp]);
         assert_eq!(c.colour(&tp.segments[0]), [200, 10, 10]);

@@ -232,7 +232,8 @@ mod tests {
             extruding: true,
             mix_rgb: [0; 3],
         };
-        let tp = Toolpath { segments: vec![s], layer_z_mm: vec![0.2], tools: 2, on_cylinder: false };
+        let tp =
+            Toolpath { segments: vec![s], layer_z_mm: vec![0.2], tools: 2, on_cylinder: false, heads: false };
         let options = HtmlOptions {
             title: "a</script>b".into(),
             colour_by: ColourBy::Tool,
@@ -267,6 +268,7 @@ mod tests {
             layer_z_mm: vec![0.2],
             tools: 1,
             on_cylinder: false,
+            heads: false,
         };
         let (index, colours) = mix_palette(&few);
         assert_eq!(index, [0, 1, 2]);

@@ -145,6 +145,8 @@ pub struct Toolpath {
     /// A rotary program: the segments lie on cylinders about the X axis (see
     /// [`ToolpathOptions::rotary`]).
     pub on_cylinder: bool,
+    /// Binder-jet raster output: the tools are the inkjet heads that fired.
+    pub heads: bool,
 }
 
 impl Toolpath {
@@ -394,6 +396,7 @@ impl ToolpathPass {
         for [x, y] in self.options.printhead.drops_mm(head, bits as u64, [pos[X], pos[Y]]) {
             let (x, y) = (x as f32, y as f32);
             self.out.tools = self.out.tools.max(head as u16 + 1);
+            self.out.heads = true;
             self.push(Segment {
                 start: [x - half, y, z],
                 end: [x + half, y, z],

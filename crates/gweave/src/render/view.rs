@@ -445,7 +445,7 @@ mod tests {
             seg([10.0, 0.0, 0.2], [10.0, 10.0, 0.2], 0, 0),
             seg([10.0, 10.0, 0.4], [0.0, 10.0, 0.4], 1, 1),
         ];
-        Toolpath { segments: s, layer_z_mm: vec![0.2, 0.4], tools: 2, on_cylinder: false }
+        Toolpath { segments: s, layer_z_mm: vec![0.2, 0.4], tools: 2, on_cylinder: false, heads: false }
     }
 
     #[test]
