@@ -141,12 +141,9 @@ mod tests {
     }
 
     fn decode(bytes: &[u8]) -> Decoded {
-        let mut reader = png::Decoder::new(bytes).read_info().unwrap();
-        let mut rgb = vec![0; reader.output_buffer_size()];
-        let info = reader.next_frame(&mut rgb).unwrap();
-        assert_eq!(info.color_type, png::ColorType::Rgb);
-        rgb.truncate(info.buffer_size());
-        Decoded { width: info.width, height: info.height, rgb }
+        let img = image::load_from_memory(bytes).unwrap();
+        assert_eq!(img.color(), image::ColorType::Rgb8);
+        Decoded { width: img.width(), height: img.height(), rgb: img.into_rgb8().into_raw() }
     }
 
     fn entry(name: &str, predicted: Srgb8, target: Option<Srgb8>) -> SwatchEntry {

@@ -147,11 +147,9 @@ mod tests {
         c.plot(2, 1, 0.0, BLUE);
         let mut bytes = Vec::new();
         c.write_png(&mut bytes).unwrap();
-        let decoder = png::Decoder::new(bytes.as_slice());
-        let mut reader = decoder.read_info().unwrap();
-        let mut buf = vec![0; reader.output_buffer_size()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        assert_eq!((info.width, info.height, info.color_type), (3, 2, png::ColorType::Rgb));
+        let img = image::load_from_memory(&bytes).unwrap();
+        assert_eq!((img.width(), img.height(), img.color()), (3, 2, image::ColorType::Rgb8));
+        let buf = img.into_rgb8().into_raw();
         assert_eq!(&buf[15..18], &BLUE);
         assert_eq!(&buf[0..3], &WHITE);
     }

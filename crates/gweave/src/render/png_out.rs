@@ -251,21 +251,12 @@ pub fn encode(img: &Image) -> Result<Vec<u8>, RenderError> {
     Ok(out)
 }
 
-/// Decodes an 8-bit RGB or RGBA PNG into an image (for tests and for checking output).
+/// Decodes a PNG into an RGBA image with the `image` crate (for tests and for checking output).
 pub fn decode(bytes: &[u8]) -> Result<Image, RenderError> {
-    let err = |e: png::DecodingError| RenderError::Encode(e.to_string());
-    let mut reader = png::Decoder::new(bytes).read_info().map_err(err)?;
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).map_err(err)?;
-    buf.truncate(info.buffer_size());
-    let rgba = match (info.color_type, info.bit_depth) {
-        (png::ColorType::Rgb, png::BitDepth::Eight) => {
-            buf.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect()
-        }
-        (png::ColorType::Rgba, png::BitDepth::Eight) => buf,
-        (c, d) => return Err(RenderError::Encode(format!("unsupported PNG {c:?} {d:?}"))),
-    };
-    Ok(Image { width: info.width, height: info.height, rgba })
+    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png)
+        .map_err(|e| RenderError::Encode(e.to_string()))?
+        .into_rgba8();
+    Ok(Image { width: img.width(), height: img.height(), rgba: img.into_raw() })
 }
 
 #[cfg(test)]
