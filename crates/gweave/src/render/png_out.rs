@@ -213,9 +213,9 @@ pub enum Pixels<'a> {
 }
 
 /// Writes a `width` x `height` PNG. Colour pictures are marked sRGB (so viewers do not
-/// colour-manage them twice) and compressed fast: a 1200 x 900 picture is mostly flat colour and
-/// the best compression makes it a few per cent smaller at several times the time. Layer masks
-/// are compressed with the default level: a raster job reads hundreds of them.
+/// colour-manage them twice) and compressed with the fast level, as previews always were (their
+/// time is in `make bench`). Layer masks keep the default level they always had (the raster
+/// benchmark reads 500 of them).
 pub fn write_png(
     out: impl Write,
     width: u32,
