@@ -459,7 +459,7 @@ mod tests {
         let (bytes, axes) = temperature_chart(th.series(), ChartFormat::Png).unwrap();
         let img = decode(&bytes).unwrap();
         assert_eq!((img.width, img.height), TEMPERATURE_PX);
-        let last = |id| th.series().of(id).last().unwrap().clone();
+        let last = |id| *th.series().of(id).last().unwrap();
         for (id, colour) in [(HeaterId::Hotend(0), HOTEND_COLOURS[0]), (HeaterId::Bed, BED_COLOUR)] {
             let s = last(id);
             let t_min = s.t_s / 60.0 - 0.02;

@@ -52,7 +52,7 @@ pub fn rasterise_with_progress(d: &Drawing, progress: &mut dyn Progress) -> Imag
         if visible[i] {
             img.line(s.from, s.to, s.width_px, s.colour, s.alpha);
         }
-        if i % REPORT_EVERY == 0 {
+        if i.is_multiple_of(REPORT_EVERY) {
             progress.advance((n + i) as u64);
         }
     }
@@ -175,7 +175,7 @@ fn visible_strokes(strokes: &[Stroke], width: u32, height: u32, done: &mut dyn F
     let mut visible = vec![false; strokes.len()];
     for (i, s) in strokes.iter().enumerate().rev() {
         let k = strokes.len() - i;
-        if k % REPORT_EVERY == 0 {
+        if k.is_multiple_of(REPORT_EVERY) {
             done(k);
         }
         if coverage.hides(s) {
