@@ -87,12 +87,13 @@ import sys; sys.path.insert(0, sys.argv[1]); from png import histogram
 lit = sum(histogram(sys.argv[1] + "/badge.png").values())
 assert 20000 < lit < 80000, lit
 PY
-# 5. The speed chart: a PNG 900 x 420 with the mean-speed colour on it.
+# 5. The speed chart: a PNG 1000 x 640 (speed above, time per layer below) with the mean-speed
+# colour on it.
 "$GWEAVE" sim "$DATA/cura/cura_torus.gcode" --plot-speed "$P/speed.png" -q > /dev/null
 python3 - "$P" <<'PY'
 import sys; sys.path.insert(0, sys.argv[1]); from png import read
 w, h, rows = read(sys.argv[1] + "/speed.png")
-assert (w, h) == (900, 420), (w, h)
+assert (w, h) == (1000, 640), (w, h)
 mean = sum(1 for r in rows for x in range(w) if tuple(r[3 * x:3 * x + 3]) == (30, 90, 200))
 assert mean > 1000, mean
 PY

@@ -39,6 +39,20 @@ impl gweave::pass::Progress for Bar {
             bar.set_position(done_bytes);
         }
     }
+
+    /// The work after reading (a preview's drawing) gets a bar of its own, named, so that the
+    /// bar never sits finished while the command still works.
+    fn stage(&mut self, name: &'static str, len: u64) {
+        if let Some(bar) = &self.0 {
+            bar.set_style(
+                ProgressStyle::with_template("{bar:40} {msg} {percent:>3}% {eta}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            bar.set_message(name);
+            bar.set_length(len);
+            bar.reset();
+        }
+    }
 }
 
 impl Drop for Bar {

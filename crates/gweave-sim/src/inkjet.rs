@@ -276,8 +276,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let paths = c.write_layer_pngs(dir.path()).unwrap();
         assert_eq!(paths, vec![dir.path().join("layer_00000_head0.png")]);
-        let file = std::fs::File::open(&paths[0]).unwrap();
-        let back = gweave::gen::bitmap::decode_png(file, &Default::default()).unwrap();
+        let back = gweave::gen::bitmap::load_image(&paths[0], &Default::default()).unwrap();
         assert_eq!(back, c.layers()[0].heads[0]);
         assert!(back.get(3, 0) && back.get(3, 2));
     }

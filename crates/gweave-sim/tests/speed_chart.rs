@@ -6,7 +6,7 @@ use std::path::Path;
 
 use gweave::render::{Toolpath, ToolpathOptions};
 use gweave_sim::interp::{Machine, Outcome};
-use gweave_sim::plot::write_speed_png;
+use gweave_sim::plot::{speed_chart, ChartFormat};
 use gweave_sim::profile::MachineProfile;
 
 #[test]
@@ -43,8 +43,9 @@ fn the_speed_trace_of_cura_torus_adds_up_to_its_path() {
     assert!(trace.end_s() <= report.time.total_s + 1e-6 && trace.end_s() > 0.9 * report.time.motion_s);
     assert_eq!(report.layer_s.len(), 28);
 
-    let mut png = Vec::new();
-    let top = write_speed_png(trace, &report.layer_s, &mut png).unwrap();
-    assert!((top - peak * 1.1).abs() < 1e-9);
+    let (png, axes) = speed_chart(trace, &report.layer_s, &report.mixing_input_mm, ChartFormat::Png).unwrap();
+    // The speed axis ends above the peak (room for the legend), the layer axis after layer 27.
+    assert!((axes.speed.get_y_range().end - peak * 1.26).abs() < 1e-9);
+    assert_eq!(axes.layers.get_x_range(), 0.0..28.0);
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
 }

@@ -95,6 +95,9 @@ pub enum Strictness {
 pub trait Progress {
     fn set_len(&mut self, _bytes: u64) {}
     fn advance(&mut self, _done_bytes: u64) {}
+    /// Work after reading begins (a preview's drawing), `len` units long; from now on
+    /// [`Progress::advance`] counts these units, not bytes.
+    fn stage(&mut self, _name: &'static str, _len: u64) {}
 }
 
 /// No progress reporting.

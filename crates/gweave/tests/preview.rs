@@ -307,3 +307,39 @@ fn the_report_says_what_the_preview_shows() {
         ("html", Some([0, 203]), Some(all.segments.len()))
     );
 }
+
+/// Every call a progress bar would get.
+#[derive(Default)]
+struct Recorder(Vec<(&'static str, u64)>);
+
+impl gweave::pass::Progress for Recorder {
+    fn set_len(&mut self, bytes: u64) {
+        self.0.push(("len", bytes));
+    }
+    fn advance(&mut self, done: u64) {
+        self.0.push(("advance", done));
+    }
+    fn stage(&mut self, name: &'static str, len: u64) {
+        self.0.push((name, len));
+    }
+}
+
+/// Regression (issue 23): a long preview showed a finished bar, then nothing while it drew. The
+/// drawing is now a stage of its own, reported to its end, after the reading.
+#[test]
+fn progress_covers_the_drawing_after_the_reading() {
+    let mut rec = Recorder::default();
+    let view = ViewOptions { kind: ViewKind::Iso, ..ViewOptions::default() };
+    let p = preview_with_progress(&dual(), None, Format::Png, &options(view), &mut rec).unwrap();
+    let strokes = p.report.strokes.unwrap() as u64;
+    let bytes = std::fs::metadata(dual()).unwrap().len();
+    let stage = rec.0.iter().position(|e| e.0 == "drawing").expect("a drawing stage");
+    assert_eq!(rec.0[0], ("len", bytes));
+    assert_eq!(rec.0[stage], ("drawing", 2 * strokes));
+    assert_eq!(rec.0.last(), Some(&("advance", 2 * strokes)));
+    // Before the stage, byte counts up to the file's end; after it, strokes, never going back.
+    assert!(rec.0[..stage].iter().all(|e| e.0 != "advance" || e.1 <= bytes));
+    let after: Vec<u64> = rec.0[stage + 1..].iter().map(|e| e.1).collect();
+    assert!(after.windows(2).all(|w| w[0] <= w[1]), "{after:?}");
+    assert!(strokes > 1000, "{strokes}");
+}

@@ -65,4 +65,7 @@ fn raster_output_lights_the_pixels_where_the_bmp_is_black() {
         &mismatched[..mismatched.len().min(10)]
     );
     assert_eq!(d.strokes.len(), black, "one drop per black pixel of the layer");
+    // Regression (issue 23): the legend named the inkjet head "T0", like an extruder.
+    let labels: Vec<&str> = d.legend.iter().map(|e| e.label.as_str()).collect();
+    assert_eq!(labels, ["head 0"]);
 }

@@ -14,7 +14,7 @@ use gweave::pass::Progress;
 use gweave_sim::estimate::{HugeArcs, Malformed, MAX_ARC_CHORDS};
 use gweave_sim::heater::HeaterId;
 use gweave_sim::interp::{Machine, Outcome, SimReport};
-use gweave_sim::plot::{save_speed_png, save_temperature_png};
+use gweave_sim::plot::{save_speed_chart, save_temperature_chart, ChartFormat};
 use gweave_sim::profile::{FaultSpec, MachineProfile};
 
 use crate::args::Quiet;
@@ -39,12 +39,13 @@ pub struct SimArgs {
     /// `hotend1-thermistor-shorted@5s` (repeatable).
     #[arg(long = "fault", value_name = "SPEC")]
     pub faults: Vec<String>,
-    /// Draw temperature and target over time into this PNG.
-    #[arg(long, value_name = "PNG")]
+    /// Chart each heater's temperature and target over time into this PNG or SVG (by its
+    /// extension).
+    #[arg(long, value_name = "PNG|SVG")]
     pub plot: Option<PathBuf>,
-    /// Draw the planned toolhead speed over time (mean and peak of each time slice) and the
-    /// time of each layer into this PNG.
-    #[arg(long, value_name = "PNG")]
+    /// Chart the planned toolhead speed over time (mean and peak of each time slice), the time
+    /// of each layer and, on a mixing machine, each input's filament into this PNG or SVG.
+    #[arg(long, value_name = "PNG|SVG")]
     pub plot_speed: Option<PathBuf>,
     /// Write the inkjet canvases (one PNG per layer and head) into this directory.
     #[arg(long, value_name = "DIR")]
@@ -64,6 +65,10 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
         .write_dir("--raster-out", args.raster_out.as_deref(), layer_png)
         .write("--report", args.report.report.as_deref())
         .check()?;
+    // A chart's format comes from its extension: refused before a long run, not after it.
+    for path in args.plot.iter().chain(&args.plot_speed) {
+        ChartFormat::from_path(path)?;
+    }
     let mut profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
     for spec in &args.faults {
         profile.faults.push(spec.parse::<FaultSpec>()?);
@@ -75,10 +80,10 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     let errors = run_file(&mut machine, &args.input, args.quiet)?;
     let report = machine.report();
     if let Some(path) = &args.plot {
-        save_temperature_png(machine.thermal().series(), path)?;
+        save_temperature_chart(machine.thermal().series(), path)?;
     }
     if let (Some(path), Some(trace)) = (&args.plot_speed, machine.speed_trace()) {
-        save_speed_png(trace, &report.layer_s, path)?;
+        save_speed_chart(trace, &report.layer_s, &report.mixing_input_mm, path)?;
     }
     if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
         canvas.write_layer_pngs(dir)?;

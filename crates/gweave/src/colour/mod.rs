@@ -37,7 +37,6 @@
 pub mod delta_e;
 pub mod dialect;
 pub mod fit;
-pub(crate) mod font;
 pub mod lab;
 pub mod mix;
 pub mod mixing;

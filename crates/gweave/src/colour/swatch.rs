@@ -4,7 +4,8 @@
 //! When the colour was asked for by value, a bar across the bottom of the square
 //! shows the target on the left half against the prediction on the right, so a
 //! poor match is visible at a glance. Under each square, optionally, the name
-//! and the predicted `#rrggbb` in a built-in 5 x 7 font.
+//! and the predicted `#rrggbb` in the embedded font ([`crate::render::text`]). It is drawn and
+//! encoded with the preview's image and PNG encoder.
 //!
 //! ```text
 //!   +--------+ +--------+
@@ -15,15 +16,22 @@
 //!    #RRGGBB    #RRGGBB
 //! ```
 
-use super::font::{glyph, ADVANCE, GLYPH_H};
 use super::palette::Resolved;
 use super::srgb::Srgb8;
+use crate::render::png_out::encode;
+use crate::render::raster::Image;
+use crate::render::text;
 
-const BACKGROUND: Srgb8 = Srgb8::new(250, 250, 250);
-const INK: Srgb8 = Srgb8::new(20, 20, 20);
+const BACKGROUND: [u8; 3] = [250, 250, 250];
+const INK: [u8; 3] = [20, 20, 20];
 const GAP_PX: u32 = 6;
-/// Two text lines of 7 px with 2 px leading, plus 2 px above.
-const LABEL_PX: u32 = 2 + 2 * (GLYPH_H + 2);
+/// Size of the label text, px.
+const TEXT_PX: f32 = 12.0;
+
+/// Two text lines, plus 2 px above.
+fn label_px() -> u32 {
+    2 + 2 * text::line_height(TEXT_PX)
+}
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SwatchError {
@@ -67,50 +75,6 @@ impl Default for SwatchLayout {
     }
 }
 
-/// An RGB8 raster.
-struct Canvas {
-    width: u32,
-    height: u32,
-    rgb: Vec<u8>,
-}
-
-impl Canvas {
-    fn new(width: u32, height: u32, fill: Srgb8) -> Self {
-        let rgb = [fill.r, fill.g, fill.b].repeat((width * height) as usize);
-        Self { width, height, rgb }
-    }
-
-    fn set(&mut self, x: u32, y: u32, c: Srgb8) {
-        if x < self.width && y < self.height {
-            let i = 3 * (y * self.width + x) as usize;
-            self.rgb[i..i + 3].copy_from_slice(&[c.r, c.g, c.b]);
-        }
-    }
-
-    fn fill_rect(&mut self, x0: u32, y0: u32, w: u32, h: u32, c: Srgb8) {
-        for y in y0..y0 + h {
-            for x in x0..x0 + w {
-                self.set(x, y, c);
-            }
-        }
-    }
-
-    /// Draw as many characters of `text` as fit in `max_w` pixels.
-    fn text(&mut self, x0: u32, y0: u32, max_w: u32, text: &str, c: Srgb8) {
-        let fitting = ((max_w + 1) / ADVANCE) as usize;
-        for (k, ch) in text.chars().take(fitting).enumerate() {
-            let gx = x0 + k as u32 * ADVANCE;
-            for (row, bits) in (0u32..).zip(glyph(ch)) {
-                for col in 0..5u32 {
-                    if bits & (0x10 >> col) != 0 {
-                        self.set(gx + col, y0 + row, c);
-                    }
-                }
-            }
-        }
-    }
-}
-
 /// Render `entries` as a PNG (RGB8); returns the encoded bytes.
 pub fn render_png(entries: &[SwatchEntry], layout: &SwatchLayout) -> Result<Vec<u8>, SwatchError> {
     if entries.is_empty() {
@@ -125,46 +89,36 @@ pub fn render_png(entries: &[SwatchEntry], layout: &SwatchLayout) -> Result<Vec<
     let count = entries.len() as u32;
     let columns = layout.columns.min(count);
     let rows = count.div_ceil(columns);
-    let label_px = if layout.labels { LABEL_PX } else { 0 };
+    let label_px = if layout.labels { label_px() } else { 0 };
     let pitch_x = layout.cell_px + GAP_PX;
     let pitch_y = layout.cell_px + label_px + GAP_PX;
-    let mut canvas = Canvas::new(GAP_PX + columns * pitch_x, GAP_PX + rows * pitch_y, BACKGROUND);
+    let mut img = Image::new(GAP_PX + columns * pitch_x, GAP_PX + rows * pitch_y, BACKGROUND);
+    let rgb = |c: Srgb8| [c.r, c.g, c.b];
     for (k, entry) in (0u32..).zip(entries) {
-        let x = GAP_PX + (k % columns) * pitch_x;
-        let y = GAP_PX + (k / columns) * pitch_y;
+        let x = (GAP_PX + (k % columns) * pitch_x) as i32;
+        let y = (GAP_PX + (k / columns) * pitch_y) as i32;
         let side = layout.cell_px;
-        canvas.fill_rect(x, y, side, side, entry.predicted);
+        img.rect(x, y, side, side, rgb(entry.predicted), 1.0);
         if let Some(target) = entry.target {
             let bar = side / 5;
-            canvas.fill_rect(x, y + side - bar, side / 2, bar, target);
+            img.rect(x, y + (side - bar) as i32, side / 2, bar, rgb(target), 1.0);
         }
         if layout.labels {
-            let ty = y + side + 2;
-            canvas.text(x, ty, side, &entry.name, INK);
-            canvas.text(x, ty + GLYPH_H + 2, side, &entry.predicted.to_hex(), INK);
+            let ty = y + side as i32 + 2;
+            // As much of each label as fits under its square.
+            for (line, label) in [entry.name.clone(), entry.predicted.to_hex()].iter().enumerate() {
+                let shown = text::fitting(label, TEXT_PX, side);
+                img.text(x, ty + (line as u32 * text::line_height(TEXT_PX)) as i32, shown, TEXT_PX, INK);
+            }
         }
     }
-    encode(&canvas)
+    encode(&img).map_err(|e| SwatchError::Encode(e.to_string()))
 }
 
 /// Palette colours resolved for some filaments, straight to a PNG.
 pub fn render_resolved_png(resolved: &[Resolved], layout: &SwatchLayout) -> Result<Vec<u8>, SwatchError> {
     let entries: Vec<SwatchEntry> = resolved.iter().map(SwatchEntry::from).collect();
     render_png(&entries, layout)
-}
-
-fn encode(canvas: &Canvas) -> Result<Vec<u8>, SwatchError> {
-    let err = |e: png::EncodingError| SwatchError::Encode(e.to_string());
-    let mut out = Vec::new();
-    let mut encoder = png::Encoder::new(&mut out, canvas.width, canvas.height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    // Mark the pixels as sRGB so viewers do not colour-manage them twice.
-    encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-    let mut writer = encoder.write_header().map_err(err)?;
-    writer.write_image_data(&canvas.rgb).map_err(err)?;
-    writer.finish().map_err(err)?;
-    Ok(out)
 }
 
 #[cfg(test)]
@@ -187,12 +141,9 @@ mod tests {
     }
 
     fn decode(bytes: &[u8]) -> Decoded {
-        let mut reader = png::Decoder::new(bytes).read_info().unwrap();
-        let mut rgb = vec![0; reader.output_buffer_size()];
-        let info = reader.next_frame(&mut rgb).unwrap();
-        assert_eq!(info.color_type, png::ColorType::Rgb);
-        rgb.truncate(info.buffer_size());
-        Decoded { width: info.width, height: info.height, rgb }
+        let img = image::load_from_memory(bytes).unwrap();
+        assert_eq!(img.color(), image::ColorType::Rgb8);
+        Decoded { width: img.width(), height: img.height(), rgb: img.into_rgb8().into_raw() }
     }
 
     fn entry(name: &str, predicted: Srgb8, target: Option<Srgb8>) -> SwatchEntry {
@@ -211,8 +162,9 @@ mod tests {
             entry("Key", Srgb8::new(0, 0, 0), None),
         ];
         let img = decode(&render_png(&entries, &layout).unwrap());
-        // 2 columns x 2 rows of (40 + 6) px plus a 6 px margin; label strip 20 px.
-        assert_eq!((img.width, img.height), (6 + 2 * 46, 6 + 2 * (46 + 20)));
+        // 2 columns x 2 rows of (40 + 6) px plus a 6 px margin, and the label strip.
+        let label = label_px();
+        assert_eq!((img.width, img.height), (6 + 2 * 46, 6 + 2 * (46 + label)));
         assert_eq!(img.at(6 + 20, 6 + 10), red);
         // Second square: prediction above and right, target in the bottom-left bar.
         let (x, y) = (6 + 46, 6);
@@ -220,12 +172,29 @@ mod tests {
         assert_eq!(img.at(x + 5, y + 37), pink);
         assert_eq!(img.at(x + 30, y + 37), near_pink);
         // Third square starts the second row.
-        assert_eq!(img.at(6 + 20, 6 + 66 + 10), Srgb8::new(0, 0, 0));
-        assert_eq!(img.at(2, 2), BACKGROUND);
-        // The "R" of "Red": its top row is 4 ink pixels then a gap.
-        let ty = 6 + 40 + 2;
-        let row: Vec<bool> = (6..12).map(|x| img.at(x, ty) == INK).collect();
-        assert_eq!(row, [true, true, true, true, false, false]);
+        assert_eq!(img.at(6 + 20, 6 + 46 + label + 10), Srgb8::new(0, 0, 0));
+        assert_eq!(img.at(2, 2), Srgb8::new(250, 250, 250));
+        // Under the first square, its name and hex code in dark ink, each on its own line.
+        let ink = |x0: u32, y0: u32, y1: u32| {
+            (y0..y1)
+                .flat_map(|y| (x0..x0 + 40).map(move |x| (x, y)))
+                .filter(|&(x, y)| img.at(x, y).r < 160)
+                .count()
+        };
+        let line = text::line_height(TEXT_PX);
+        let (name, hex) = (ink(6, 48, 48 + line), ink(6, 48 + line, 48 + 2 * line));
+        assert!(name > 10 && hex > 2 * name, "{name} {hex}");
+    }
+
+    #[test]
+    fn long_names_are_cut_to_their_square() {
+        let layout = SwatchLayout { cell_px: 30, columns: 2, labels: true };
+        let long = entry("Wwwwwwwwwwwwwwwwwwwwwwwwwww", Srgb8::new(10, 10, 10), None);
+        let img = decode(&render_png(&[long, entry("B", Srgb8::new(9, 9, 9), None)], &layout).unwrap());
+        // The gap between the squares stays free of the first name's ink.
+        let y0 = 6 + 30 + 2;
+        let gap_ink = (y0..y0 + label_px() - 2).flat_map(|y| (36..42).map(move |x| (x, y)));
+        assert!(gap_ink.clone().all(|(x, y)| img.at(x, y) == Srgb8::new(250, 250, 250)));
     }
 
     #[test]
@@ -242,12 +211,12 @@ mod tests {
         let png = render_resolved_png(&resolved, &SwatchLayout::default()).unwrap();
         let img = decode(&png);
         // 17 colours in 6 columns: 3 rows.
-        assert_eq!((img.width, img.height), (6 + 6 * 102, 6 + 3 * (102 + 20)));
+        assert_eq!((img.width, img.height), (6 + 6 * 102, 6 + 3 * (102 + label_px())));
         // Yellow is the 9th colour: row 1, column 2.
         let yellow = resolved[8].predicted;
         // The yellow filament (255, 224, 0) with its blue lifted to RGB_MIN.
         assert_eq!(yellow, Srgb8::new(255, 224, 3));
-        assert_eq!(img.at(6 + 2 * 102 + 48, 6 + 122 + 48), yellow);
+        assert_eq!(img.at(6 + 2 * 102 + 48, 6 + 102 + label_px() + 48), yellow);
     }
 
     #[test]

@@ -54,7 +54,7 @@ fn glob_match(pattern: &[u8], name: &[u8]) -> bool {
     }
 }
 
-/// Lists layer images: a directory (all `.bmp`/`.png` files in it) or a file-name glob such as
+/// Lists layer images: a directory (all `.bmp`/`.png`/`.tif`/`.tiff` files in it) or a file-name glob such as
 /// `layers/slice_*.png` (wildcards in the last path component only), sorted naturally.
 pub fn list_images(spec: &Path) -> Result<Vec<PathBuf>, BitmapError> {
     let (dir, pattern) = if spec.is_dir() {
@@ -73,7 +73,7 @@ pub fn list_images(spec: &Path) -> Result<Vec<PathBuf>, BitmapError> {
             Some(p) => glob_match(p.as_bytes(), name.as_bytes()),
             None => {
                 let lower = name.to_ascii_lowercase();
-                lower.ends_with(".png") || lower.ends_with(".bmp")
+                [".png", ".bmp", ".tif", ".tiff"].iter().any(|ext| lower.ends_with(ext))
             }
         };
         if keep && entry.path().is_file() {

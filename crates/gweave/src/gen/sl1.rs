@@ -30,7 +30,7 @@ use std::path::Path;
 
 use thiserror::Error;
 
-use super::bitmap::{decode_png, Bitmap, BitmapError, ThresholdOptions};
+use super::bitmap::{decode, Bitmap, BitmapError, ThresholdOptions};
 
 /// Errors from reading an `.sl1` archive.
 #[derive(Debug, Error)]
@@ -244,9 +244,10 @@ impl<R: Read + Seek> Sl1Reader<R> {
             .get(index)
             .ok_or(Sl1Error::LayerIndex { index, count: self.layer_names.len() })?
             .clone();
-        let entry = self.archive.by_name(&name)?;
-        let bitmap = decode_png(std::io::BufReader::new(entry), opts)
-            .map_err(|source| Sl1Error::Image { name: name.clone(), source })?;
+        let mut entry = self.archive.by_name(&name)?;
+        let mut png = Vec::with_capacity(entry.size() as usize);
+        entry.read_to_end(&mut png).map_err(|source| Sl1Error::Io { path: name.clone().into(), source })?;
+        let bitmap = decode(&png, opts).map_err(|source| Sl1Error::Image { name: name.clone(), source })?;
         let (w, h) = (self.info.image_width_px, self.info.image_height_px);
         if (bitmap.width(), bitmap.height()) != (w, h) {
             return Err(Sl1Error::LayerSize {

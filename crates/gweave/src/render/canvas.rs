@@ -8,6 +8,8 @@
 
 use std::io::{self, Write};
 
+use super::png_out::{write_png, Pixels};
+
 /// An RGB image with a depth per pixel.
 #[derive(Clone, Debug)]
 pub struct Canvas {
@@ -85,14 +87,9 @@ impl Canvas {
         }
     }
 
-    /// Writes the image as an 8-bit RGB PNG.
+    /// Writes the image as an 8-bit RGB PNG ([`super::png_out::write_png`]).
     pub fn write_png(&self, out: impl Write) -> io::Result<()> {
-        let mut encoder = png::Encoder::new(out, self.width, self.height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().map_err(io::Error::other)?;
-        writer.write_image_data(&self.rgb).map_err(io::Error::other)?;
-        writer.finish().map_err(io::Error::other)
+        write_png(out, self.width, self.height, Pixels::Rgb(&self.rgb)).map_err(io::Error::other)
     }
 }
 
@@ -150,11 +147,9 @@ mod tests {
         c.plot(2, 1, 0.0, BLUE);
         let mut bytes = Vec::new();
         c.write_png(&mut bytes).unwrap();
-        let decoder = png::Decoder::new(bytes.as_slice());
-        let mut reader = decoder.read_info().unwrap();
-        let mut buf = vec![0; reader.output_buffer_size()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        assert_eq!((info.width, info.height, info.color_type), (3, 2, png::ColorType::Rgb));
+        let img = image::load_from_memory(&bytes).unwrap();
+        assert_eq!((img.width(), img.height(), img.color()), (3, 2, image::ColorType::Rgb8));
+        let buf = img.into_rgb8().into_raw();
         assert_eq!(&buf[15..18], &BLUE);
         assert_eq!(&buf[0..3], &WHITE);
     }

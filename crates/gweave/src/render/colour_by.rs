@@ -197,10 +197,12 @@ impl Colouring {
                 let mut used: Vec<u16> = extruding().map(|s| s.tool).collect();
                 used.sort_unstable();
                 used.dedup();
+                // Binder-jet drops come from inkjet heads, not extruders.
+                let heads = toolpaths.iter().any(|t| t.heads);
                 used.into_iter()
                     .map(|t| {
                         let c = self.tool_colour(t);
-                        entry(format!("T{t}"), [c.r, c.g, c.b])
+                        entry(if heads { format!("head {t}") } else { format!("T{t}") }, [c.r, c.g, c.b])
                     })
                     .collect()
             }

@@ -9,7 +9,8 @@
 //! - [`mix_colour`]: the predicted mix colour of each move (mixing model and chamber washout).
 //! - [`view`]: top view of a layer or layer range, isometric view, before/after comparison;
 //!   turns segments into pixel [`view::Stroke`]s.
-//! - [`raster`] and [`png_out`]: a software rasteriser (wide anti-aliased lines, alpha) and PNG.
+//! - [`raster`] and [`png_out`]: a software rasteriser (wide anti-aliased lines, alpha) and the
+//!   one PNG encoder; [`text`]: the embedded font.
 //! - [`svg`]: the same drawing as SVG paths.
 //! - [`html`]: a self-contained interactive viewer page (the beads as lit 3D tubes, WebGL 2),
 //!   of one file or two compared side by side.
@@ -37,6 +38,7 @@ pub mod mix_colour;
 pub mod png_out;
 pub mod raster;
 pub mod svg;
+pub mod text;
 pub mod toolpath;
 pub mod view;
 
@@ -283,7 +285,7 @@ impl PreviewReport {
     }
 }
 
-/// [`preview`], reporting reading progress, with what the preview shows.
+/// [`preview`], reporting the progress of reading and then drawing, with what the preview shows.
 pub fn preview_with_progress(
     path: &Path,
     compare: Option<&Path>,
@@ -298,7 +300,7 @@ pub fn preview_with_progress(
     let (d, malformed) = drawing_counted(path, compare, options, progress)?;
     let bytes = match format {
         Format::Svg => svg::write_svg(&d).into_bytes(),
-        _ => png_out::encode(&png_out::rasterise(&d))?,
+        _ => png_out::encode(&png_out::rasterise_with_progress(&d, progress))?,
     };
     let changed: Vec<usize> = d.panels.iter().filter_map(|p| p.changed_moves).collect();
     let report = PreviewReport {

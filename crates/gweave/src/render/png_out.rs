@@ -1,12 +1,18 @@
-//! A [`Drawing`] as a PNG: strokes rasterised in order, then the legend and panel titles.
+//! A [`Drawing`] as a PNG: strokes rasterised in order, then the legend and panel titles; and
+//! the one PNG encoder every picture gweave writes goes through ([`write_png`]).
+
+use std::io::Write;
 
 use super::raster::{line_pixels, within, Image};
+use super::text;
 use super::view::{Drawing, Stroke};
 use super::RenderError;
+use crate::pass::{Progress, Quiet};
 
 const INK: [u8; 3] = [0x20, 0x20, 0x20];
 const LEGEND_BOX: [u8; 3] = [0xff, 0xff, 0xff];
-const TEXT_SCALE: u32 = 2;
+/// Size of legend and panel title text, px.
+const TEXT_PX: f32 = 16.0;
 
 /// Rasterises a drawing (strokes, legend, titles). A blank drawing is the background only.
 ///
@@ -24,32 +30,50 @@ const TEXT_SCALE: u32 = 2;
 /// is drawn (the last of each `k`, so the top of a stack stays on top), which such a picture
 /// cannot show anyway, and the time is bounded whatever the file.
 pub fn rasterise(d: &Drawing) -> Image {
+    rasterise_with_progress(d, &mut Quiet)
+}
+
+/// Strokes between two progress reports.
+const REPORT_EVERY: usize = 1 << 16;
+
+/// [`rasterise`], reporting the work as the stage "drawing": two units per stroke (finding the
+/// hidden ones, then drawing the rest), so that a bar covers the whole of a long drawing.
+pub fn rasterise_with_progress(d: &Drawing, progress: &mut dyn Progress) -> Image {
     let mut img = Image::new(d.width_px, d.height_px, d.background);
     let stride = overdraw_stride(&d.strokes, d.width_px, d.height_px);
     let kept: Vec<Stroke> =
         d.strokes.iter().enumerate().filter(|(i, _)| i % stride == stride - 1).map(|(_, s)| *s).collect();
     let strokes = if stride == 1 { &d.strokes } else { &kept };
-    let visible = visible_strokes(strokes, d.width_px, d.height_px);
-    for (s, _) in strokes.iter().zip(&visible).filter(|(_, v)| **v) {
-        img.line(s.from, s.to, s.width_px, s.colour, s.alpha);
+    let n = strokes.len();
+    progress.stage("drawing", 2 * n as u64);
+    let visible =
+        visible_strokes(strokes, d.width_px, d.height_px, &mut |done| progress.advance(done as u64));
+    for (i, s) in strokes.iter().enumerate() {
+        if visible[i] {
+            img.line(s.from, s.to, s.width_px, s.colour, s.alpha);
+        }
+        if i.is_multiple_of(REPORT_EVERY) {
+            progress.advance((n + i) as u64);
+        }
     }
-    let line_h = Image::text_height(TEXT_SCALE) + 6;
+    progress.advance(2 * n as u64);
+    let line_h = text::line_height(TEXT_PX) + 4;
     for p in &d.panels {
-        img.text(p.x_px as i32 + 12, d.height_px as i32 - line_h as i32 - 4, &p.title, TEXT_SCALE, INK);
+        img.text(p.x_px as i32 + 12, d.height_px as i32 - line_h as i32 - 4, &p.title, TEXT_PX, INK);
         if p.x_px > 0 {
             img.rect(p.x_px as i32, 0, 1, d.height_px, INK, 0.3);
         }
     }
     if !d.legend.is_empty() {
-        let longest = d.legend.iter().map(|e| e.label.chars().count()).max().unwrap_or(0) as u32;
-        let box_w = 12 + line_h + 6 * TEXT_SCALE * longest + 8;
+        let longest = d.legend.iter().map(|e| text::width(&e.label, TEXT_PX)).max().unwrap_or(0);
+        let box_w = 12 + line_h + longest + 8;
         let box_h = 8 + line_h * d.legend.len() as u32 + 4;
         img.rect(8, 8, box_w, box_h, LEGEND_BOX, 0.85);
         for (i, e) in d.legend.iter().enumerate() {
             let y = 14 + (i as u32 * line_h) as i32;
             let c = [e.colour.r, e.colour.g, e.colour.b];
-            img.rect(14, y, line_h - 6, line_h - 6, c, 1.0);
-            img.text(14 + line_h as i32, y, &e.label, TEXT_SCALE, INK);
+            img.rect(14, y + 2, line_h - 8, line_h - 8, c, 1.0);
+            img.text(14 + line_h as i32, y, &e.label, TEXT_PX, INK);
         }
     }
     img
@@ -145,10 +169,15 @@ impl Coverage {
 /// Which strokes are not fully hidden under later opaque ones (see [`rasterise`]): a reverse
 /// pass over the strokes; a stroke is hidden when every pixel it would change (the same pixels
 /// [`Image::line`] visits) is covered by a later opaque stroke.
-fn visible_strokes(strokes: &[Stroke], width: u32, height: u32) -> Vec<bool> {
+/// `done(k)` is called every [`REPORT_EVERY`] strokes with the number looked at so far.
+fn visible_strokes(strokes: &[Stroke], width: u32, height: u32, done: &mut dyn FnMut(usize)) -> Vec<bool> {
     let mut coverage = Coverage::new(width as usize, height as usize);
     let mut visible = vec![false; strokes.len()];
     for (i, s) in strokes.iter().enumerate().rev() {
+        let k = strokes.len() - i;
+        if k.is_multiple_of(REPORT_EVERY) {
+            done(k);
+        }
         if coverage.hides(s) {
             continue;
         }
@@ -174,37 +203,60 @@ fn mark_core(coverage: &mut Coverage, s: &Stroke) {
     });
 }
 
-/// Encodes an image as an 8-bit RGB PNG marked sRGB.
+/// Pixels for [`write_png`], rows top first.
+#[derive(Debug, Clone, Copy)]
+pub enum Pixels<'a> {
+    /// 8-bit sRGB, 3 bytes a pixel: pictures and charts.
+    Rgb(&'a [u8]),
+    /// 1-bit grey, rows packed most significant bit first and padded to a byte: layer masks.
+    Grey1(&'a [u8]),
+}
+
+/// Writes a `width` x `height` PNG. Colour pictures are marked sRGB (so viewers do not
+/// colour-manage them twice) and compressed with the fast level, as previews always were (their
+/// time is in `make bench`). Layer masks keep the default level they always had (the raster
+/// benchmark reads 500 of them).
+pub fn write_png(
+    out: impl Write,
+    width: u32,
+    height: u32,
+    pixels: Pixels<'_>,
+) -> Result<(), png::EncodingError> {
+    let mut encoder = png::Encoder::new(out, width, height);
+    let data = match pixels {
+        Pixels::Rgb(data) => {
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+            encoder.set_compression(png::Compression::Fast);
+            data
+        }
+        Pixels::Grey1(data) => {
+            encoder.set_color(png::ColorType::Grayscale);
+            encoder.set_depth(png::BitDepth::One);
+            data
+        }
+    };
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(data)?;
+    writer.finish()
+}
+
+/// Encodes an image as an 8-bit RGB PNG ([`write_png`]).
 pub fn encode(img: &Image) -> Result<Vec<u8>, RenderError> {
-    let err = |e: png::EncodingError| RenderError::Encode(e.to_string());
     let rgb: Vec<u8> = img.rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
     let mut out = Vec::new();
-    let mut encoder = png::Encoder::new(&mut out, img.width, img.height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-    encoder.set_compression(png::Compression::Fast);
-    let mut writer = encoder.write_header().map_err(err)?;
-    writer.write_image_data(&rgb).map_err(err)?;
-    writer.finish().map_err(err)?;
+    write_png(&mut out, img.width, img.height, Pixels::Rgb(&rgb))
+        .map_err(|e| RenderError::Encode(e.to_string()))?;
     Ok(out)
 }
 
-/// Decodes an 8-bit RGB or RGBA PNG into an image (for tests and for checking output).
+/// Decodes a PNG into an RGBA image with the `image` crate (for tests and for checking output).
 pub fn decode(bytes: &[u8]) -> Result<Image, RenderError> {
-    let err = |e: png::DecodingError| RenderError::Encode(e.to_string());
-    let mut reader = png::Decoder::new(bytes).read_info().map_err(err)?;
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).map_err(err)?;
-    buf.truncate(info.buffer_size());
-    let rgba = match (info.color_type, info.bit_depth) {
-        (png::ColorType::Rgb, png::BitDepth::Eight) => {
-            buf.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect()
-        }
-        (png::ColorType::Rgba, png::BitDepth::Eight) => buf,
-        (c, d) => return Err(RenderError::Encode(format!("unsupported PNG {c:?} {d:?}"))),
-    };
-    Ok(Image { width: info.width, height: info.height, rgba })
+    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png)
+        .map_err(|e| RenderError::Encode(e.to_string()))?
+        .into_rgba8();
+    Ok(Image { width: img.width(), height: img.height(), rgba: img.into_raw() })
 }
 
 #[cfg(test)]
@@ -266,7 +318,7 @@ mod tests {
             st([10.0, 26.0], [50.0, 26.0], [0, 255, 0], 3.0), // partly under its edge: visible
             st([5.0, 21.0], [55.0, 21.0], [0, 0, 255], 12.0),
         ];
-        assert_eq!(visible_strokes(&strokes, 60, 40), [false, true, true, true]);
+        assert_eq!(visible_strokes(&strokes, 60, 40, &mut |_| {}), [false, true, true, true]);
         let d = Drawing {
             width_px: 60,
             height_px: 40,

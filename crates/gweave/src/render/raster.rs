@@ -1,5 +1,5 @@
 //! A small software rasteriser: an RGBA8 image, anti-aliased wide lines with alpha blending,
-//! filled rectangles and 5 x 7 bitmap text.
+//! filled rectangles and text in the embedded font ([`super::text`]).
 //!
 //! A line of width `w` is the set of points within `w/2` of the segment (a capsule). Each pixel
 //! in the capsule's bounding box gets coverage `clamp(w/2 + 1/2 - d, 0, 1)`, where `d` is the
@@ -7,7 +7,7 @@
 //! usual cheap approximation of box-filtered area coverage. The colour is blended "over" the
 //! image: `dst = src * a + dst * (1 - a)` with `a = alpha * coverage` (Porter and Duff, 1984).
 
-use crate::colour::font::{glyph, ADVANCE, GLYPH_H};
+use super::text;
 
 /// An RGBA8 image, rows top first.
 #[derive(Debug, Clone, PartialEq)]
@@ -63,32 +63,15 @@ impl Image {
         }
     }
 
-    /// Text in the built-in 5 x 7 font (upper case), each font pixel `scale` pixels square.
-    /// Returns the width drawn, px.
-    pub fn text(&mut self, x: i32, y: i32, s: &str, scale: u32, c: [u8; 3]) -> u32 {
-        for (i, ch) in s.chars().enumerate() {
-            let gx = x + (i as u32 * ADVANCE * scale) as i32;
-            for (row, bits) in extra_glyph(ch).unwrap_or_else(|| glyph(ch)).iter().enumerate() {
-                for col in 0..5 {
-                    if bits & (0x10 >> col) != 0 {
-                        self.rect(
-                            gx + (col * scale) as i32,
-                            y + (row as u32 * scale) as i32,
-                            scale,
-                            scale,
-                            c,
-                            1.0,
-                        );
-                    }
-                }
+    /// Text in the embedded font, `size_px` tall ([`text::line_height`]), its top left at
+    /// (`x`, `y`), anti-aliased and clipped to the image. Returns the width drawn, px.
+    pub fn text(&mut self, x: i32, y: i32, s: &str, size_px: f32, c: [u8; 3]) -> u32 {
+        let (w, h) = (self.width as i32, self.height as i32);
+        text::rasterise(s, size_px, x as f32, y as f32, |px, py, cover| {
+            if (0..w).contains(&px) && (0..h).contains(&py) && cover > 0.0 {
+                self.blend(px as usize, py as usize, c, cover.min(1.0));
             }
-        }
-        s.chars().count() as u32 * ADVANCE * scale
-    }
-
-    /// Height of a text line at `scale`, px.
-    pub fn text_height(scale: u32) -> u32 {
-        GLYPH_H * scale
+        })
     }
 }
 
@@ -182,20 +165,6 @@ pub(crate) fn within(
     true
 }
 
-/// Glyphs legends need beyond the swatch font's: `: / ( ) % + ,` (rows top first, bit 4 left).
-fn extra_glyph(c: char) -> Option<[u8; 7]> {
-    Some(match c {
-        ':' => [0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00],
-        '/' => [0x01, 0x01, 0x02, 0x04, 0x08, 0x10, 0x10],
-        '(' => [0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02],
-        ')' => [0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08],
-        '%' => [0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03],
-        '+' => [0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00],
-        ',' => [0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08],
-        _ => return None,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -230,19 +199,18 @@ mod tests {
     }
 
     #[test]
-    fn text_draws_glyph_pixels() {
-        let mut img = Image::new(20, 10, [255, 255, 255]);
-        let w = img.text(1, 1, "T1", 1, [0, 0, 0]);
-        assert_eq!(w, 12);
-        // T's top bar runs across its first row.
-        assert_eq!(img.pixel(1, 1), [0, 0, 0, 255]);
-        assert_eq!(img.pixel(5, 1), [0, 0, 0, 255]);
-        assert_eq!(img.pixel(1, 3), [255, 255, 255, 255]);
-        // A slash runs from the bottom left to the top right.
-        let mut img = Image::new(6, 8, [255, 255, 255]);
-        img.text(0, 0, "/", 1, [0, 0, 0]);
-        assert_eq!((img.pixel(4, 0), img.pixel(0, 6)), ([0, 0, 0, 255], [0, 0, 0, 255]));
-        assert_eq!(img.pixel(0, 0), [255, 255, 255, 255]);
+    fn text_is_drawn_in_the_font_and_clipped() {
+        let mut img = Image::new(60, 30, [255, 255, 255]);
+        let w = img.text(2, 2, "T1", 20.0, [0, 0, 0]);
+        assert_eq!(w, text::width("T1", 20.0));
+        // T's bar: dark pixels on its top rows, between x = 2 and the width; none below the line.
+        let dark = |img: &Image, x: u32, y: u32| img.pixel(x, y)[0] < 100;
+        assert!((2..2 + w).any(|x| (2..10).any(|y| dark(&img, x, y))));
+        assert!((0..60).all(|x| !dark(&img, x, 29)));
+        // Text running off the image is clipped, not wrapped.
+        let mut img = Image::new(10, 10, [255, 255, 255]);
+        img.text(-5, 2, "WWWW", 20.0, [0, 0, 0]);
+        assert!((0..10).any(|x| dark(&img, x, 8)));
     }
 
     #[test]

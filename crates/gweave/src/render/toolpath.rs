@@ -148,6 +148,8 @@ pub struct Toolpath {
     /// A name for each predicted mix colour ([`Segment::mix_rgb`]) the file printed: the
     /// palette's name of its ratios, else the ratios (`0.25:0.25:0.5:0`). For legends.
     pub mix_names: std::collections::BTreeMap<[u8; 3], String>,
+    /// Binder-jet raster output: the tools are the inkjet heads that fired.
+    pub heads: bool,
 }
 
 impl Toolpath {
@@ -410,6 +412,7 @@ impl ToolpathPass {
         for [x, y] in self.options.printhead.drops_mm(head, bits as u64, [pos[X], pos[Y]]) {
             let (x, y) = (x as f32, y as f32);
             self.out.tools = self.out.tools.max(head as u16 + 1);
+            self.out.heads = true;
             self.push(Segment {
                 start: [x - half, y, z],
                 end: [x + half, y, z],
