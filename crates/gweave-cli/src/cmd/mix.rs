@@ -145,6 +145,11 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         }
     }
     let (Some(input), Some(target)) = (&args.input, target) else { bail!("give the G-code file to rewrite") };
+    run_job(&args, profile, input, target)
+}
+
+/// Mixes `input` into `target` and reports: the job of a plain run and of the wizard's.
+fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) -> Result<ExitCode> {
     let mut bar = args.quiet.bar();
     let report = mix_file(profile, input, &target, &mut bar)?;
     drop(bar);
@@ -255,17 +260,7 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
         }
         return Ok(ExitCode::SUCCESS);
     };
-    let profile = MixProfile::from_toml_str(&text)?;
-    let mut bar = Bar::new(args.quiet);
-    let report = mix_file(profile, file, &target, &mut bar)?;
-    drop(bar);
-    for w in &report.warnings {
-        eprintln!("gweave: warning: {w}");
-    }
-    if args.report.emit(&report)? && !args.quiet {
-        print_human(&mut std::io::stderr().lock(), &report)?;
-    }
-    Ok(ExitCode::SUCCESS)
+    run_job(args, MixProfile::from_toml_str(&text)?, file, target)
 }
 
 fn print_human(out: &mut dyn Write, r: &MixReport) -> std::io::Result<()> {
