@@ -85,3 +85,88 @@ fn purge_shift_warns_when_the_file_has_no_feature_comments() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(!stderr(&out).contains("no feature comments"), "{}", stderr(&out));
 }
+
+/// The rotary seed's flat wrap: a part wider than the circumference is refused, naming both
+/// widths, unless --allow-overlap; nothing is written.
+#[test]
+fn rotary_wrap_refuses_a_part_wider_than_the_circumference() {
+    let plate = fixture("rotary/plate.gcode");
+    let dir = tempfile::tempdir().unwrap();
+    let out_file = dir.path().join("sleeve.gcode");
+    let args = [
+        "rotary",
+        "wrap",
+        plate.to_str().unwrap(),
+        "-o",
+        out_file.to_str().unwrap(),
+        "--mandrel-diameter",
+        "20",
+    ];
+    let out = gweave(&args);
+    assert_eq!(out.status.code(), Some(1));
+    let said = stderr(&out);
+    assert!(
+        said.contains("span 93.798 mm round the mandrel") && said.contains("circumference 62.832 mm"),
+        "{said}"
+    );
+    assert!(!out_file.exists());
+    let out = gweave(&[&args[..], &["--allow-overlap", "-q"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out_file.exists());
+}
+
+/// Setup lines of the flat file name the rotary axis (and its unit) after the wrap.
+#[test]
+fn rotary_wrap_says_setup_lines_for_the_rotary_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let flat = dir.path().join("flat.gcode");
+    std::fs::write(&flat, "M92 X80 Y80 Z400 E93\nM203 X200 Y200\nG1 X1 Y1 F600\n").unwrap();
+    // 60 mm of circumference: 1 mm of flat Y is 6 degrees.
+    let d = format!("{}", 60.0 / std::f64::consts::PI);
+    let out = gweave(&["rotary", "wrap", flat.to_str().unwrap(), "-o", "-", "--mandrel-diameter", &d]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("\nM92 X80 A13.333 Z400 E93\nM203 X200 A1200.000\n"), "{text}");
+}
+
+/// --helical through the CLI: the report says so, the second layer starts on the first.
+#[test]
+fn rotary_wrap_helical_from_the_command_line() {
+    let plate = fixture("rotary/plate.gcode");
+    let dir = tempfile::tempdir().unwrap();
+    let out_file = dir.path().join("sleeve.gcode");
+    let out = gweave(&[
+        "rotary",
+        "wrap",
+        plate.to_str().unwrap(),
+        "-o",
+        out_file.to_str().unwrap(),
+        "--mandrel-diameter",
+        "30",
+        "--helical",
+        "--json",
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["helical"], true);
+    let r = |k: usize| json["layers"][k]["radius_mm"].as_f64().unwrap();
+    // Each layer's first bead is on the layer below's height, at the start of its turn.
+    assert!(
+        (r(0) - 15.2).abs() < 1e-9 && (r(1) - 15.2).abs() < 0.002 && (r(2) - 15.4).abs() < 0.002,
+        "{json}"
+    );
+    let refused = gweave(&[
+        "rotary",
+        "wrap",
+        plate.to_str().unwrap(),
+        "-o",
+        "-",
+        "--mandrel-diameter",
+        "30",
+        "--helical",
+        "--seam-rotation",
+        "5",
+    ]);
+    assert_eq!(refused.status.code(), Some(2), "clap refuses the pair");
+}

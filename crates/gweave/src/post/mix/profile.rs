@@ -263,6 +263,9 @@ pub enum ZCapMode {
     Split,
     /// Slow the whole move until its Z component is at the cap.
     Slow,
+    /// The mixing post-processor seed's rule: every move with a Z word and F above the cap is
+    /// split as `split` does, however little Z moves (see [`crate::post::zcap`]).
+    Seed,
 }
 
 /// The Z feed-rate cap. The seed's printer could not move Z faster than F200 (mm/min).
