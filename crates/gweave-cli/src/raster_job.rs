@@ -512,9 +512,13 @@ impl JobOptions {
         if matches!(source, Source::Sl1 { .. }) && (self.pixel_mm.is_some() || self.dpi.is_some()) {
             bail!("a .sl1 archive carries its own pixel size: drop the pixel size / dpi");
         }
+        let profile = self.profile()?;
+        if profile.recoat.is_some() && self.recoat.is_some() {
+            bail!("the printhead profile's [recoat] table and --recoat both describe the recoat: give one");
+        }
         Ok(Job {
             source,
-            profile: with_heads(&self.profile()?, self.heads.unwrap_or(heads)),
+            profile: with_heads(&profile, self.heads.unwrap_or(heads)),
             config: self.config()?,
             pixel_mm: self.pixel_mm.or(self.dpi.map(|d| 25.4 / d)),
             planner_estimate: !self.fast_estimate,

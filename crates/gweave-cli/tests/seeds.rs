@@ -170,3 +170,25 @@ fn rotary_wrap_helical_from_the_command_line() {
     ]);
     assert_eq!(refused.status.code(), Some(2), "clap refuses the pair");
 }
+
+/// The controller seed's thermistor table: a profile naming a CSV file beside it, run by
+/// `gweave sim` from another folder (the file is found next to the profile).
+#[test]
+fn sim_reads_the_thermistor_table_next_to_the_profile() {
+    let profile = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines/seed-controller.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let job = dir.path().join("heat.gcode");
+    std::fs::write(&job, "M104 S200\nM109 S200\nM105\n").unwrap();
+    let out = gweave(&["sim", job.to_str().unwrap(), "--machine", profile.to_str().unwrap(), "--json", "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // A table that is not there is named.
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "[thermal]\nthermistor_table = \"nowhere.csv\"\n").unwrap();
+    let out = gweave(&["sim", job.to_str().unwrap(), "--machine", bad.to_str().unwrap(), "-q"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("[thermal] thermistor_table") && stderr(&out).contains("nowhere.csv"),
+        "{}",
+        stderr(&out)
+    );
+}

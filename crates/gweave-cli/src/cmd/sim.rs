@@ -65,7 +65,10 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
         .write_dir("--raster-out", args.raster_out.as_deref(), layer_png)
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let mut profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
+    // Files the profile names (a thermistor table) are read from its folder.
+    let folder = args.machine.as_deref().and_then(Path::parent).unwrap_or(Path::new(""));
+    let mut profile =
+        load_or_default(args.machine.as_ref(), |text| MachineProfile::from_toml_in(text, folder))?;
     for spec in &args.faults {
         profile.faults.push(spec.parse::<FaultSpec>()?);
     }

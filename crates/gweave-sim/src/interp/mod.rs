@@ -50,6 +50,7 @@ use crate::heater::HeaterId;
 use crate::inkjet::{CanvasGeometry, InkjetCanvas, InkjetError};
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
 use crate::protection::{ThermalFault, KILL_LINE};
+use crate::recoat::RecoatCheck;
 use crate::speed_trace::SpeedTrace;
 use crate::thermal::{Thermal, ThermalError};
 
@@ -77,6 +78,9 @@ pub enum SimError {
     /// The inkjet canvas could not be built.
     #[error(transparent)]
     Inkjet(#[from] InkjetError),
+    /// The printhead's recoat names axes the virtual printer cannot check.
+    #[error("{0}")]
+    Recoat(String),
 }
 
 /// What the machine is in after a command.
@@ -103,6 +107,8 @@ pub struct Machine {
     core: Estimator,
     thermal: Thermal,
     inkjet: Option<InkjetCanvas>,
+    /// The recoat check of a binder-jet machine whose printhead has a `[recoat]` table.
+    recoat: Option<RecoatCheck>,
     /// Physical minus logical X Y Z: `G92` moves the logical origin, homing resets it.
     shift_mm: [f64; 3],
     moved_since_m400: bool,
@@ -167,6 +173,20 @@ impl Machine {
                 Some(InkjetCanvas::new(&ink.printhead, geometry)?)
             }
         };
+        let recoat = match &profile.inkjet {
+            Some(ink) => match &ink.printhead.recoat {
+                Some(r) => {
+                    // The powder bed is the canvas the drops are recorded on.
+                    let [w, h] = ink.canvas_px(&profile.bed);
+                    let pitch = ink.printhead.pitch_mm();
+                    let x = [ink.origin_x_mm, ink.origin_x_mm + w as f64 * pitch];
+                    let y = [ink.origin_y_mm, ink.origin_y_mm + h as f64 * pitch];
+                    Some(RecoatCheck::new(r, x, y).map_err(SimError::Recoat)?)
+                }
+                None => None,
+            },
+            None => None,
+        };
         let steps = &profile.motion.steps;
         let settings = settings::Settings::new([steps.x, steps.y, steps.z, steps.e]);
         let mut faults = profile.faults.clone();
@@ -176,6 +196,7 @@ impl Machine {
             core,
             thermal,
             inkjet,
+            recoat,
             shift_mm: [0.0; 3],
             moved_since_m400: true,
             halt: None,
@@ -337,6 +358,13 @@ impl Machine {
         if !std::mem::replace(&mut self.ended, true) {
             self.core.end();
             self.sync(out);
+            let mut unfinished = Vec::new();
+            if let Some(check) = &self.recoat {
+                check.finish(&mut unfinished);
+            }
+            for detail in unfinished {
+                self.warn(WarningKind::Inkjet { detail });
+            }
         }
     }
 
@@ -557,7 +585,11 @@ impl Machine {
         };
         let seen = canvas.warnings().len();
         canvas.on_m700(head, bits, x, y, z, moved);
-        let new: Vec<_> = canvas.warnings()[seen..].to_vec();
+        let mut new: Vec<_> = canvas.warnings()[seen..].to_vec();
+        if let Some(check) = &mut self.recoat {
+            let a = self.core.state().pos[state::A];
+            check.on_fire([x, y, z, a], z, &mut new);
+        }
         for detail in new {
             self.warn(WarningKind::Inkjet { detail });
         }

@@ -20,7 +20,9 @@
 //! move. Passes alternate direction (serpentine) unless one-way printing is asked for; the
 //! direction restarts left-to-right on every layer. The last, partial band of an image is
 //! printed too (the reference generator `sjkelly/image_to_gcode` drops it). Each layer starts
-//! with `;LAYER:<k>`, the recoat block (from the second layer on) and `G1 Z<z>`.
+//! with `;LAYER:<k>`, the recoat (from the second layer on) and `G1 Z<z>`. The recoat is motion
+//! when the printhead profile has a `[recoat]` table ([`super::recoat`]), else the job's
+//! `recoat_gcode`.
 //!
 //! Several heads (`P0`, `P1`, ...) each print their own plane (an image channel or an image
 //! set): every band is swept once per head, in head order, with that head's offset taken off
@@ -278,7 +280,13 @@ impl<W: Write> RasterWriter<W> {
         self.buf.extend_from_slice(b";LAYER:");
         push_uint(&mut self.buf, k);
         self.buf.push(b'\n');
-        if k > 0 {
+        let first_z = self.z_of_layer(0);
+        if let (true, Some(recoat)) = (k > 0, &self.profile.recoat) {
+            recoat.write(&mut self.buf, k, z, first_z, d);
+            // The spreader may ride on the carriage's axes: the next move states X and Y.
+            self.last_y_mm = None;
+            self.pos_mm = None;
+        } else if k > 0 {
             let mut z_text = Vec::new();
             push_num(&mut z_text, z, d);
             let block = self
