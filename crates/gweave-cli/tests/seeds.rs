@@ -192,3 +192,23 @@ fn sim_reads_the_thermistor_table_next_to_the_profile() {
         stderr(&out)
     );
 }
+
+/// The controller seed's M0 (`[firmware] m0 = "seed"`) ends the program: `gweave sim` runs
+/// nothing after it; Marlin's M0 goes on.
+#[test]
+fn sim_stops_at_the_seeds_m0() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = dir.path().join("job.gcode");
+    std::fs::write(&job, "G28\nG1 X50 F3000\nM0\nG1 X500\n").unwrap();
+    let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines/seed-controller.toml");
+    let marlin = dir.path().join("marlin.toml");
+    std::fs::write(&marlin, "[firmware]\nm0 = \"marlin\"\n").unwrap();
+    for (profile, runs_on) in [(seed.as_path(), false), (marlin.as_path(), true)] {
+        let out =
+            gweave(&["sim", job.to_str().unwrap(), "--machine", profile.to_str().unwrap(), "--json", "-q"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let out_of_bounds = json["warnings"].as_array().unwrap().iter().any(|w| w["kind"] == "out_of_bounds");
+        assert_eq!(out_of_bounds, runs_on, "{}: {json}", profile.display());
+    }
+}

@@ -110,7 +110,8 @@ fn run_file(machine: &mut Machine, input: &Path, quiet: bool) -> Result<Vec<Stri
     while let Some(line) = reader.next_line().with_context(|| format!("reading {}", input.display()))? {
         match line.part {
             Part::Whole => {
-                if machine.execute(line.bytes, &mut out) == Outcome::Halted {
+                // A halt stops the run, and so does the seed's M0 (`[firmware] m0 = "seed"`).
+                if machine.execute(line.bytes, &mut out) == Outcome::Halted || machine.program_ended() {
                     break;
                 }
             }

@@ -46,6 +46,7 @@ use gweave::gcode::state::{self, Effect};
 use thiserror::Error;
 
 use crate::estimate::{EstimateError, Estimator};
+use crate::firmware::ProgramStop;
 use crate::heater::HeaterId;
 use crate::inkjet::{CanvasGeometry, InkjetCanvas, InkjetError};
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
@@ -109,6 +110,8 @@ pub struct Machine {
     inkjet: Option<InkjetCanvas>,
     /// The recoat check of a binder-jet machine whose printhead has a `[recoat]` table.
     recoat: Option<RecoatCheck>,
+    /// An `M0` with the seed's behaviour ended the program (see [`Machine::program_ended`]).
+    program_ended: bool,
     /// Physical minus logical X Y Z: `G92` moves the logical origin, homing resets it.
     shift_mm: [f64; 3],
     moved_since_m400: bool,
@@ -197,6 +200,7 @@ impl Machine {
             thermal,
             inkjet,
             recoat,
+            program_ended: false,
             shift_mm: [0.0; 3],
             moved_since_m400: true,
             halt: None,
@@ -346,6 +350,12 @@ impl Machine {
         self.core.speed_trace()
     }
 
+    /// Whether an `M0` ended the program (`[firmware] m0 = "seed"`): a run of a file stops
+    /// there, and `gweave serve` closes the link.
+    pub fn program_ended(&self) -> bool {
+        self.program_ended
+    }
+
     /// The logical position X Y Z E A (what `M114` prints), mm and degrees.
     pub fn position(&self) -> [f64; 5] {
         let p = self.core.state().pos;
@@ -446,7 +456,16 @@ impl Machine {
             return self.unknown_command(line, out);
         }
         match number {
-            // Program stop (the seed controller's "end of program"): finish the moves, motors off.
+            // The controller seed's end of program: home, motors off, close the link.
+            0 if self.profile.firmware.m0 == ProgramStop::Seed => {
+                self.run_core(line, &effect, out);
+                self.core.drain();
+                self.execute(b"G28", out);
+                // The motors go off again after the homing: the axes are no longer homed.
+                self.homed = [false; 3];
+                self.program_ended = true;
+            }
+            // Program stop (Marlin's): finish the moves, motors off.
             0 | 1 | 18 | 84 => {
                 self.run_core(line, &effect, out);
                 self.core.drain();

@@ -1,5 +1,6 @@
-//! The controller seed's thermistor table, loaded from a CSV file named by the machine profile
-//! (examples/machines/seed-controller.toml), read by the virtual printer's firmware.
+//! The controller seed's machine (examples/machines/seed-controller.toml): its thermistor table
+//! loaded from a CSV file named by the profile and read by the virtual printer's firmware, and
+//! its `M0` (home, motors off, end of program).
 
 use std::path::Path;
 
@@ -45,4 +46,20 @@ fn a_bad_table_names_the_file_and_line() {
     std::fs::write(&profile, "[thermal]\nthermistor_table = \"missing.csv\"\n").unwrap();
     let e = MachineProfile::from_file(&profile).unwrap_err().to_string();
     assert!(e.contains("[thermal] thermistor_table") && e.contains("missing.csv"), "{e}");
+}
+
+#[test]
+fn m0_per_profile_marlin_stops_the_seed_ends_the_program() {
+    let seed = MachineProfile::from_file(&example()).unwrap();
+    let mut marlin = seed.clone();
+    marlin.firmware.m0 = gweave_sim::firmware::ProgramStop::Marlin;
+    for (profile, ended, x_after) in [(marlin, false, 50.0), (seed, true, 0.0)] {
+        let mut machine = Machine::new(profile).unwrap();
+        for line in ["G28", "G1 X50 Y20 F3000", "M0"] {
+            assert_eq!(machine.execute(line.as_bytes(), &mut |_, _| {}), Outcome::Ok);
+        }
+        // The seed homes before switching the motors off; Marlin stops where it is.
+        assert_eq!(machine.position()[0], x_after);
+        assert_eq!(machine.program_ended(), ended);
+    }
 }
