@@ -186,10 +186,11 @@ impl Wrap {
     fn short_way(&self, to: [f64; 3], layer: u32) -> Result<Option<CylPoint>> {
         let Some(here) = self.writer.position() else { return Ok(None) };
         let mut there = self.map(to, layer)?;
-        let turns = ((here.theta_deg - there.theta_deg) / 360.0).round();
-        if turns == 0.0 {
+        // Half a turn either way is as short: keep the mapped one.
+        if (here.theta_deg - there.theta_deg).abs() <= 180.0 {
             return Ok(None);
         }
+        let turns = ((here.theta_deg - there.theta_deg) / 360.0).round();
         there.theta_deg += 360.0 * turns;
         Ok(Some(there))
     }
