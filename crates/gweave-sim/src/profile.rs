@@ -420,6 +420,8 @@ impl MachineProfile {
     pub fn from_toml_in(text: &str, folder: &std::path::Path) -> Result<Self, MachineProfileError> {
         let mut p: Self = toml::from_str(text)
             .map_err(|e| MachineProfileError::Toml(gweave::settings::toml_message(&e)))?;
+        // The circuit the table's values are read through is checked first.
+        p.normalize()?;
         if let Some(name) = &p.thermal.thermistor_table {
             let path = folder.join(name);
             let table = std::fs::read_to_string(&path)
@@ -430,7 +432,6 @@ impl MachineProfile {
                 Err(message) => return Err(MachineProfileError::ThermistorTable { path, message }),
             }
         }
-        p.normalize()?;
         Ok(p)
     }
 
