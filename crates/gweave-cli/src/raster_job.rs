@@ -13,7 +13,9 @@ use gweave::gcode::writer::{Output, Target};
 use gweave::gen::bitmap::{load_image, Bitmap, Channel, ThresholdOptions};
 use gweave::gen::image_files::list_images;
 use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
-use gweave::gen::raster::{self, test_pattern, RasterConfig, RasterReport, RasterWriter, HEADS, THRESHOLD};
+use gweave::gen::raster::{
+    self, test_pattern, FireOrder, RasterConfig, RasterReport, RasterWriter, HEADS, THRESHOLD,
+};
 use gweave::gen::sl1::Sl1Reader;
 use gweave::pass::Progress;
 use gweave::range::{DPI, PIXEL_MM};
@@ -381,6 +383,8 @@ pub struct JobOptions {
     pub invert: bool,
     pub flip_y: bool,
     pub one_way: bool,
+    /// Fire after the move onto a column (default) or, as the binder-jet seed, before the next.
+    pub fire_order: FireOrder,
     pub density: u32,
     pub origin_mm: (f64, f64),
     pub layer_height_mm: Option<f64>,
@@ -407,6 +411,7 @@ impl Default for JobOptions {
             invert: false,
             flip_y: false,
             one_way: false,
+            fire_order: FireOrder::After,
             density: c.density,
             origin_mm: (c.origin_x_mm, c.origin_y_mm),
             layer_height_mm: None,
@@ -441,6 +446,7 @@ impl JobOptions {
             origin_y_mm: self.origin_mm.1,
             layer_height_mm: self.layer_height_mm,
             serpentine: !self.one_way,
+            fire_order: self.fire_order,
             density: self.density,
             ..RasterConfig::default()
         };
@@ -506,9 +512,13 @@ impl JobOptions {
         if matches!(source, Source::Sl1 { .. }) && (self.pixel_mm.is_some() || self.dpi.is_some()) {
             bail!("a .sl1 archive carries its own pixel size: drop the pixel size / dpi");
         }
+        let profile = self.profile()?;
+        if profile.recoat.is_some() && self.recoat.is_some() {
+            bail!("the printhead profile's [recoat] table and --recoat both describe the recoat: give one");
+        }
         Ok(Job {
             source,
-            profile: with_heads(&self.profile()?, self.heads.unwrap_or(heads)),
+            profile: with_heads(&profile, self.heads.unwrap_or(heads)),
             config: self.config()?,
             pixel_mm: self.pixel_mm.or(self.dpi.map(|d| 25.4 / d)),
             planner_estimate: !self.fast_estimate,

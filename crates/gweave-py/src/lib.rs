@@ -525,6 +525,7 @@ fn raster_json(
         invert,
         flip_y,
         one_way,
+        fire_order: Default::default(),
         density,
         origin_mm: origin,
         layer_height_mm: layer_height,

@@ -84,6 +84,20 @@ pub struct Firmware {
     /// Bed levelling grid points in X and Y (`GRID_MAX_POINTS_X/Y`): `G29`, `M420`; empty when
     /// the board has no levelling.
     pub mesh: Vec<u8>,
+    /// What `M0` does: Marlin's stop, or the controller seed's end of program.
+    pub m0: ProgramStop,
+}
+
+/// What `M0` (program stop) does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProgramStop {
+    /// Marlin: finish the queued moves, switch the motors off; the program goes on.
+    #[default]
+    Marlin,
+    /// The controller seed's end of program: finish the moves, home the axes, switch the
+    /// motors off and close the serial link; nothing after it runs.
+    Seed,
 }
 
 impl Default for Firmware {
@@ -108,6 +122,7 @@ impl Default for Firmware {
             pin_control: true,
             probe: false,
             mesh: vec![3, 3],
+            m0: ProgramStop::Marlin,
         }
     }
 }

@@ -54,6 +54,15 @@ pub enum InkjetWarning {
     UnknownHead { head: u32 },
     /// Some drops of this fire fall outside the canvas (`lost` of them).
     OffCanvas { head: u32, x_mm: f64, y_mm: f64, lost: u32 },
+    /// A fire after the recoat's pistons moved and before its spreader crossed the bed.
+    FireDuringRecoat { x_mm: f64, y_mm: f64 },
+    /// A new layer fired without any recoat since the last one.
+    NoRecoat { z_mm: f64 },
+    /// A recoat piston moved other than the layer height asks (times the powder ratio for the
+    /// feed piston).
+    PistonTravel { axis: char, moved_mm: f64, expected_mm: f64 },
+    /// The last recoat's spreader did not cross the whole bed.
+    SpreaderShort { reach_mm: [f64; 2], bed_mm: [f64; 2] },
 }
 
 /// The bed area recorded, in nozzle pitches (one pixel = one pitch square).

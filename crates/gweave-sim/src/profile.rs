@@ -36,6 +36,7 @@ use crate::heater::{HeaterFault, HeaterId};
 use crate::limits::MotionProfile;
 use crate::thermal::ThermalConfig;
 use crate::thermistor::SensorFault;
+use crate::thermistor_csv::table_from_csv;
 
 /// A machine profile that cannot be used.
 #[derive(Debug, PartialEq, Error)]
@@ -66,6 +67,9 @@ pub enum MachineProfileError {
     /// A `[firmware]` value out of range.
     #[error("machine profile: {0}")]
     Firmware(#[from] FirmwareError),
+    /// The thermistor table file named by `[thermal] thermistor_table` cannot be read.
+    #[error("machine profile: [thermal] thermistor_table {}: {message}", path.display())]
+    ThermistorTable { path: std::path::PathBuf, message: String },
     /// A fault specification such as `hotend-cartridge-off@120s` that cannot be read.
     #[error("fault `{0}`: expected HEATER-FAULT@SECONDS, e.g. hotend-cartridge-off@120s, bed-thermistor-open@30s, hotend1-thermistor-shorted@5s")]
     Fault(String),
@@ -400,10 +404,34 @@ impl Default for MachineProfile {
 
 impl MachineProfile {
     /// Read a profile from TOML text, fill derived defaults and check it.
+    /// Files it names (`[thermal] thermistor_table`) are read from the current folder.
     pub fn from_toml_str(text: &str) -> Result<Self, MachineProfileError> {
+        Self::from_toml_in(text, std::path::Path::new(""))
+    }
+
+    /// Read a profile file; the files it names are read from its folder.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, MachineProfileError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| MachineProfileError::Toml(format!("{}: {e}", path.display())))?;
+        Self::from_toml_in(&text, path.parent().unwrap_or(std::path::Path::new("")))
+    }
+
+    /// [`Self::from_toml_str`] with the files it names read from `folder`.
+    pub fn from_toml_in(text: &str, folder: &std::path::Path) -> Result<Self, MachineProfileError> {
         let mut p: Self = toml::from_str(text)
             .map_err(|e| MachineProfileError::Toml(gweave::settings::toml_message(&e)))?;
+        // The circuit the table's values are read through is checked first.
         p.normalize()?;
+        if let Some(name) = &p.thermal.thermistor_table {
+            let path = folder.join(name);
+            let table = std::fs::read_to_string(&path)
+                .map_err(|e| e.to_string())
+                .and_then(|text| table_from_csv(&text, &p.thermal.thermistor).map_err(|e| e.to_string()));
+            match table {
+                Ok(t) => p.thermal.thermistor_table_entries = Some(t),
+                Err(message) => return Err(MachineProfileError::ThermistorTable { path, message }),
+            }
+        }
         Ok(p)
     }
 

@@ -114,6 +114,11 @@ pub trait Device {
     fn wall_timed(&self) -> bool {
         false
     }
+    /// Whether the board has closed the serial link (the controller seed's `M0`): the transport
+    /// hangs up on the host.
+    fn link_closed(&self) -> bool {
+        false
+    }
     /// Whether the board has work of its own (an SD print) that runs while the host is quiet.
     fn has_own_work(&self) -> bool {
         false
@@ -595,6 +600,10 @@ impl Device for crate::interp::Machine {
 
     fn execute(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> Outcome {
         crate::interp::Machine::execute(self, line, out)
+    }
+
+    fn link_closed(&self) -> bool {
+        self.program_ended()
     }
 
     fn now_s(&self) -> f64 {

@@ -23,6 +23,8 @@
 //! assert!(th.m105_report().starts_with("T:2"));
 //! ```
 
+use std::path::PathBuf;
+
 use gweave::range::{self, OutOfRange, Range};
 use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
@@ -56,6 +58,8 @@ pub enum ThermalError {
     Halted(ThermalFault),
     #[error(transparent)]
     Range(#[from] OutOfRange),
+    #[error("thermistor_table {} was named but not read (load the profile with MachineProfile::from_file)", .0.display())]
+    TableNotRead(PathBuf),
 }
 
 /// Marlin's M109/M190 settle rule: the reading must stay near the target
@@ -100,6 +104,13 @@ pub struct ThermalConfig {
     pub bed: Option<HeaterConfig>,
     /// The sensor on every heater (default Marlin type 1).
     pub thermistor: BetaThermistor,
+    /// A CSV file of the firmware's table (see [`crate::thermistor_csv`]); default: a table
+    /// generated from `thermistor` every `table_step_c`. A relative path is read from the
+    /// profile's folder ([`crate::profile::MachineProfile::from_file`]).
+    pub thermistor_table: Option<PathBuf>,
+    /// That file's table, once read.
+    #[serde(skip)]
+    pub thermistor_table_entries: Option<ThermistorTable>,
     /// Temperature step of the generated firmware table, C (5).
     pub table_step_c: f64,
     /// Hotend control (default PID with [`PidGains::DEFAULT_HOTEND_40W`]).
@@ -131,6 +142,8 @@ impl Default for ThermalConfig {
             hotends: vec![HeaterConfig::hotend_40w()],
             bed: Some(HeaterConfig::bed_200w()),
             thermistor: BetaThermistor::default(),
+            thermistor_table: None,
+            thermistor_table_entries: None,
             table_step_c: 5.0,
             hotend_control: ControlConfig::Pid(PidConfig::with_gains(PidGains::DEFAULT_HOTEND_40W)),
             bed_control: ControlConfig::BangBang(Default::default()),
@@ -347,7 +360,11 @@ impl Thermal {
     pub fn new(cfg: ThermalConfig) -> Result<Self, ThermalError> {
         // The same check as the machine profile's, so a config built in code is held to it too.
         cfg.check_ranges(&Table::root().sub("thermal"))?;
-        let table = cfg.thermistor.table(TABLE_MIN_C, TABLE_MAX_C, cfg.table_step_c)?;
+        let table = match (&cfg.thermistor_table_entries, &cfg.thermistor_table) {
+            (Some(table), _) => table.clone(),
+            (None, Some(path)) => return Err(ThermalError::TableNotRead(path.clone())),
+            (None, None) => cfg.thermistor.table(TABLE_MIN_C, TABLE_MAX_C, cfg.table_step_c)?,
+        };
         let mut channels = Vec::new();
         let plants = cfg
             .hotends

@@ -82,6 +82,9 @@ pub enum ThermistorError {
     TempNotMonotonic { index: usize },
     #[error("table range {t_min_c}..{t_max_c} C with step {step_c} C is empty or invalid")]
     BadRange { t_min_c: f64, t_max_c: f64, step_c: f64 },
+    /// A thermistor table file that cannot be read (see [`crate::thermistor_csv`]).
+    #[error("line {line}: {message}")]
+    Csv { line: usize, message: String },
 }
 
 /// A physical NTC thermistor on a pull-up divider read by an oversampling ADC.

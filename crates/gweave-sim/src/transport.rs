@@ -205,6 +205,13 @@ where
                 }
             }
         }
+        if link.as_ref().is_some_and(|p| p.device().link_closed()) {
+            out.note("the board closed the link (M0)");
+            endpoint.hang_up();
+            if let Some(p) = link.take() {
+                summary.end_session(p, finished);
+            }
+        }
         if let Some(e) = out.failed.take() {
             out.note(&format!("send failed ({e}); dropping the host"));
             endpoint.hang_up();

@@ -30,7 +30,10 @@ fn load(file: &Path) -> Result<(), String> {
     let dir = file.parent().unwrap().file_name().unwrap().to_str().unwrap();
     let name = file.file_name().unwrap().to_str().unwrap();
     match dir {
-        "machines" | "bench" => MachineProfile::from_toml_str(&text).map(drop).map_err(|e| e.to_string()),
+        // Files a profile names (a thermistor table) are the shipped ones, beside the examples.
+        "machines" | "bench" => MachineProfile::from_toml_in(&text, &repo().join("examples/machines"))
+            .map(drop)
+            .map_err(|e| e.to_string()),
         "mix" => MixProfile::from_toml_str(&text).map(drop).map_err(|e| e.to_string()),
         "raster" => PrintheadProfile::from_toml(&text).map(drop).map_err(|e| e.to_string()),
         "rotary" if name.starts_with("wrap") => {

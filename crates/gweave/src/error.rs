@@ -38,6 +38,10 @@ pub enum Error {
     #[error("{0}")]
     Invalid(String),
 
+    /// A print-proper marker asked for is not in the file (or not in order).
+    #[error("{}: the print-proper marker `;{marker}` {detail}", path.display())]
+    MissingMarker { path: PathBuf, marker: String, detail: String },
+
     /// A command that writes `E` words was given a file whose extruder is another axis.
     #[error(
         "{}: the file is for {flavour}, whose extruder is the {} axis; this command writes E moves, which that machine would not extrude",

@@ -153,7 +153,11 @@ fn retract_travel_unretract_is_never_split() {
     let c = &r.changes.kept()[0];
     assert_eq!((c.achieved_mm, c.shortfall_mm, c.at_line), (0.75, 1.25, 6));
     assert!(String::from_utf8(out).unwrap().contains("G0 X10 Y10\nG1 E1\nT1\nG1 X20 E0.5\n"));
-    assert!(r.warnings[0].contains("line 11: T0->T1 purge short by 1.250 mm"), "{:?}", r.warnings);
+    assert!(
+        r.warnings.iter().any(|w| w.contains("line 11: T0->T1 purge short by 1.250 mm")),
+        "{:?}",
+        r.warnings
+    );
 }
 
 #[test]

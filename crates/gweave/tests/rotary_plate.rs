@@ -40,8 +40,9 @@ fn the_wrapped_plate_closes_on_itself_at_every_layer() {
             assert!((l.layer.radius_mm - (15.0 + 0.2 * (k + 1) as f64)).abs() < 1e-9);
         }
         // The same filament whatever the convention; the time as the firmware reads F agrees
-        // across conventions to the rounding of the F words.
+        // across conventions to the rounding of the F words (travel takes the short way round:
+        // 1796 s the long way).
         assert!((report.filament_mm - 1888.8007).abs() < 1e-3, "{}", report.filament_mm);
-        assert!((report.time_s - 1796.0).abs() < 2.0, "{convention:?}: {}", report.time_s);
+        assert!((report.time_s - 1793.5).abs() < 2.0, "{convention:?}: {}", report.time_s);
     }
 }

@@ -8,7 +8,7 @@ use anyhow::Result;
 use clap::{Args, ValueEnum};
 use gweave::gcode::writer::Target;
 use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
-use gweave::gen::raster::{DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
+use gweave::gen::raster::{FireOrder, DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
 
 use crate::args::Quiet;
@@ -46,6 +46,10 @@ pub struct RasterArgs {
     /// Print every pass left to right (default: serpentine).
     #[arg(long)]
     pub one_way: bool,
+    /// Fire `after` the move onto each column (`G1`, `M400`, `M700`), or `before` the move to
+    /// the next one as the binder-jet seed writes it (`M700`, `M400`, `G1`).
+    #[arg(long, value_enum, default_value = "after")]
+    pub fire_order: FireOrderArg,
     /// Fires per pixel (binder saturation).
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = in_range(DENSITY))]
     pub density: u32,
@@ -100,6 +104,14 @@ pub struct RasterArgs {
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
+pub enum FireOrderArg {
+    /// Move, `M400`, fire: the head stands at the column when it fires.
+    After,
+    /// Fire, `M400`, move: the seed's order (fires while moving on Marlin).
+    Before,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
 pub enum Dialect {
     /// `M700 P S` (Marlin hpc6602).
     Marlin,
@@ -116,6 +128,10 @@ impl RasterArgs {
             invert: self.invert,
             flip_y: self.flip_y,
             one_way: self.one_way,
+            fire_order: match self.fire_order {
+                FireOrderArg::After => FireOrder::After,
+                FireOrderArg::Before => FireOrder::Before,
+            },
             density: self.density,
             origin_mm: (self.origin[0], self.origin[1]),
             layer_height_mm: self.layer_height,

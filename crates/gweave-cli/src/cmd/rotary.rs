@@ -191,6 +191,13 @@ pub struct WrapArgs {
     /// Keep flat arc lengths (the Diabase wizard: A = Y*180/(pi*(R + z - z1)), E unchanged).
     #[arg(long)]
     pub keep_arc_length: bool,
+    /// Wind each layer as one turn of a helix rising one layer height per turn, joined to the
+    /// next layer without a step: no weld line (the rotary seed's helical unwrapping).
+    #[arg(long, conflicts_with_all = ["keep_arc_length", "seam_rotation"])]
+    pub helical: bool,
+    /// Wrap a part wider than the circumference over itself instead of refusing it.
+    #[arg(long)]
+    pub allow_overlap: bool,
     /// Turn every layer this much further than the one below, degrees, so seams do not stack
     /// [default: 0].
     #[arg(long, value_name = "DEG", value_parser = in_range(ANGLE_DEG))]
@@ -224,6 +231,8 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     if let Some(deg) = args.seam_rotation {
         config.unwrap.seam_rotation_per_layer_deg = deg;
     }
+    config.unwrap.helical |= args.helical;
+    config.allow_overlap |= args.allow_overlap;
     if let Some(tol) = args.chord_tol {
         config.chord_tolerance_mm = tol;
     }
@@ -241,7 +250,11 @@ fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {
         writeln!(out, "{} -> {}", r.input.display(), dest.display())?;
     }
     print_machine(out, &r.machine)?;
-    let mapping = if r.keep_arc_length { "arc length kept (Diabase)" } else { "theta = 360*y/C, E scaled" };
+    let mapping = match (r.keep_arc_length, r.helical) {
+        (true, _) => "arc length kept (Diabase)",
+        (false, true) => "helical: theta = 360*(y-y0)/C, radius rising one layer per turn, E scaled",
+        (false, false) => "theta = 360*y/C, E scaled",
+    };
     writeln!(out, "  mapping         {mapping}")?;
     writeln!(out, "  layers          {}", r.layers.len())?;
     for l in &r.layers {

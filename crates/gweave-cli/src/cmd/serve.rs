@@ -3,7 +3,7 @@
 use std::fs::File;
 use std::io::{LineWriter, Write};
 use std::net::SocketAddr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -88,7 +88,9 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
         .write("--log", args.log.as_deref())
         .write("--report", args.report.as_deref())
         .check()?;
-    let profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
+    // Files the profile names (a thermistor table) are read from its folder.
+    let folder = args.machine.as_deref().and_then(Path::parent).unwrap_or(Path::new(""));
+    let profile = load_or_default(args.machine.as_ref(), |text| MachineProfile::from_toml_in(text, folder))?;
     // Build one machine now so that a bad profile fails before any host connects.
     Machine::new(profile.clone()).context("building the virtual printer")?;
     let options = ServeOptions {

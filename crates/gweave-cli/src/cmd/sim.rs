@@ -69,7 +69,10 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     for path in args.plot.iter().chain(&args.plot_speed) {
         ChartFormat::from_path(path)?;
     }
-    let mut profile = load_or_default(args.machine.as_ref(), MachineProfile::from_toml_str)?;
+    // Files the profile names (a thermistor table) are read from its folder.
+    let folder = args.machine.as_deref().and_then(Path::parent).unwrap_or(Path::new(""));
+    let mut profile =
+        load_or_default(args.machine.as_ref(), |text| MachineProfile::from_toml_in(text, folder))?;
     for spec in &args.faults {
         profile.faults.push(spec.parse::<FaultSpec>()?);
     }
@@ -111,7 +114,8 @@ fn run_file(machine: &mut Machine, input: &Path, quiet: Quiet) -> Result<Vec<Str
     while let Some(line) = reader.next_line().with_context(|| format!("reading {}", input.display()))? {
         match line.part {
             Part::Whole => {
-                if machine.execute(line.bytes, &mut out) == Outcome::Halted {
+                // A halt stops the run, and so does the seed's M0 (`[firmware] m0 = "seed"`).
+                if machine.execute(line.bytes, &mut out) == Outcome::Halted || machine.program_ended() {
                     break;
                 }
             }

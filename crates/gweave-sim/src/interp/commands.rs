@@ -26,7 +26,7 @@ pub const COMMANDS: &[CommandHelp] = &[
     c("G29", "bed levelling (firmware.mesh): probe the grid in simulated time, store a flat mesh, levelling on"),
     c("G90 G91", "absolute / relative coordinates (E too)"),
     c("G92", "set the logical position without moving"),
-    c("M0 M1", "program stop: finish the moves, motors off"),
+    c("M0 M1", "program stop: finish the moves, motors off; with m0 = \"seed\" also home and end the program"),
     c("M17 M18 M84", "motors on (accepted) / off (the axes must be homed again)"),
     c("M20 M21 M22", "SD card (firmware.sdcard, serve --sd DIR): list files (L: long names), mount, release"),
     c("M23 M24 M25 M26 M27", "SD print: select a file, start/resume, pause, set the byte position, status (S<n>: every n s)"),

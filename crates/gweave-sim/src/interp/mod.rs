@@ -47,10 +47,12 @@ use gweave::gcode::state::{self, Effect};
 use thiserror::Error;
 
 use crate::estimate::{EstimateError, Estimator};
+use crate::firmware::ProgramStop;
 use crate::heater::HeaterId;
 use crate::inkjet::{CanvasGeometry, InkjetCanvas, InkjetError};
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
 use crate::protection::{ThermalFault, KILL_LINE};
+use crate::recoat::RecoatCheck;
 use crate::speed_trace::SpeedTrace;
 use crate::thermal::{Thermal, ThermalError};
 
@@ -78,6 +80,9 @@ pub enum SimError {
     /// The inkjet canvas could not be built.
     #[error(transparent)]
     Inkjet(#[from] InkjetError),
+    /// The printhead's recoat names axes the virtual printer cannot check.
+    #[error("{0}")]
+    Recoat(String),
 }
 
 /// What the machine is in after a command.
@@ -104,6 +109,10 @@ pub struct Machine {
     core: Estimator,
     thermal: Thermal,
     inkjet: Option<InkjetCanvas>,
+    /// The recoat check of a binder-jet machine whose printhead has a `[recoat]` table.
+    recoat: Option<RecoatCheck>,
+    /// An `M0` with the seed's behaviour ended the program (see [`Machine::program_ended`]).
+    program_ended: bool,
     /// Physical minus logical X Y Z: `G92` moves the logical origin, homing resets it.
     shift_mm: [f64; 3],
     moved_since_m400: bool,
@@ -168,6 +177,20 @@ impl Machine {
                 Some(InkjetCanvas::new(&ink.printhead, geometry)?)
             }
         };
+        let recoat = match &profile.inkjet {
+            Some(ink) => match &ink.printhead.recoat {
+                Some(r) => {
+                    // The powder bed is the canvas the drops are recorded on.
+                    let [w, h] = ink.canvas_px(&profile.bed);
+                    let pitch = ink.printhead.pitch_mm();
+                    let x = [ink.origin_x_mm, ink.origin_x_mm + w as f64 * pitch];
+                    let y = [ink.origin_y_mm, ink.origin_y_mm + h as f64 * pitch];
+                    Some(RecoatCheck::new(r, x, y).map_err(SimError::Recoat)?)
+                }
+                None => None,
+            },
+            None => None,
+        };
         let steps = &profile.motion.steps;
         let settings = settings::Settings::new([steps.x, steps.y, steps.z, steps.e]);
         let mut faults = profile.faults.clone();
@@ -177,6 +200,8 @@ impl Machine {
             core,
             thermal,
             inkjet,
+            recoat,
+            program_ended: false,
             shift_mm: [0.0; 3],
             moved_since_m400: true,
             halt: None,
@@ -326,6 +351,12 @@ impl Machine {
         self.core.speed_trace()
     }
 
+    /// Whether an `M0` ended the program (`[firmware] m0 = "seed"`): a run of a file stops
+    /// there, and `gweave serve` closes the link.
+    pub fn program_ended(&self) -> bool {
+        self.program_ended
+    }
+
     /// The logical position X Y Z E A (what `M114` prints), mm and degrees.
     pub fn position(&self) -> [f64; 5] {
         let p = self.core.state().pos;
@@ -338,6 +369,13 @@ impl Machine {
         if !std::mem::replace(&mut self.ended, true) {
             self.core.end();
             self.sync(out);
+            let mut unfinished = Vec::new();
+            if let Some(check) = &self.recoat {
+                check.finish(&mut unfinished);
+            }
+            for detail in unfinished {
+                self.warn(WarningKind::Inkjet { detail });
+            }
         }
     }
 
@@ -419,7 +457,16 @@ impl Machine {
             return self.unknown_command(line, out);
         }
         match number {
-            // Program stop (the seed controller's "end of program"): finish the moves, motors off.
+            // The controller seed's end of program: home, motors off, close the link.
+            0 if self.profile.firmware.m0 == ProgramStop::Seed => {
+                self.run_core(line, &effect, out);
+                self.core.drain();
+                self.execute(b"G28", out);
+                // The motors go off again after the homing: the axes are no longer homed.
+                self.homed = [false; 3];
+                self.program_ended = true;
+            }
+            // Program stop (Marlin's): finish the moves, motors off.
             0 | 1 | 18 | 84 => {
                 self.run_core(line, &effect, out);
                 self.core.drain();
@@ -558,7 +605,11 @@ impl Machine {
         };
         let seen = canvas.warnings().len();
         canvas.on_m700(head, bits, x, y, z, moved);
-        let new: Vec<_> = canvas.warnings()[seen..].to_vec();
+        let mut new: Vec<_> = canvas.warnings()[seen..].to_vec();
+        if let Some(check) = &mut self.recoat {
+            let a = self.core.state().pos[state::A];
+            check.on_fire([x, y, z, a], z, &mut new);
+        }
         for detail in new {
             self.warn(WarningKind::Inkjet { detail });
         }

@@ -74,6 +74,10 @@ impl Machine {
         }
         self.thermal.set_moving(true);
         self.moved_since_m400 = true;
+        if let Some(check) = &mut self.recoat {
+            let axes = |p: &state::Position| [p[state::X], p[state::Y], p[state::Z], p[state::A]];
+            check.on_move(axes(&m.from), axes(&m.to));
+        }
         self.run_core(line, &effect, out);
     }
 

@@ -356,7 +356,8 @@ impl Structure {
     }
 }
 
-fn trim(mut s: &[u8]) -> &[u8] {
+/// `s` without leading and trailing blanks (as comment text is compared).
+pub(crate) fn trim(mut s: &[u8]) -> &[u8] {
     while let [b' ' | b'\t' | b'\r', rest @ ..] = s {
         s = rest;
     }

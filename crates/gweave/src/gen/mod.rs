@@ -10,6 +10,7 @@ mod gcode_text;
 pub mod image_files;
 pub mod printhead;
 pub mod raster;
+pub mod recoat;
 pub mod sl1;
 pub mod slice_raster;
 pub mod stl;

@@ -15,6 +15,7 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use super::recoat::Recoat;
 use crate::range::{self, OutOfRange, Range};
 use crate::settings::{CheckRanges, Table};
 
@@ -32,6 +33,8 @@ pub enum PrintheadError {
     NozzleMap { count: u32, rows: Vec<u32> },
     #[error("invalid printhead TOML: {0}")]
     Toml(String),
+    #[error("{0}")]
+    Recoat(String),
 }
 
 /// Order of nozzle addresses inside the `S` word.
@@ -84,6 +87,7 @@ pub struct HeadOffset {
 /// min_fire_interval_us = 800.0
 /// drop_volume_pl = 160.0
 /// dialect = "marlin"
+/// [recoat]         # optional: the powder recoat between layers (see `super::recoat`)
 /// [[heads]]
 /// offset_x_mm = 0.0
 /// offset_y_mm = 0.0
@@ -108,6 +112,8 @@ pub struct PrintheadProfile {
     pub drop_volume_pl: Option<f64>,
     /// Fire command dialect.
     pub dialect: FirmwareDialect,
+    /// The powder recoat between layers, as motion; `None`: the raster job's recoat G-code.
+    pub recoat: Option<Recoat>,
 }
 
 impl Default for PrintheadProfile {
@@ -122,6 +128,7 @@ impl Default for PrintheadProfile {
             min_fire_interval_us: 800.0,
             drop_volume_pl: None,
             dialect: FirmwareDialect::Marlin,
+            recoat: None,
         }
     }
 }
@@ -140,6 +147,9 @@ impl PrintheadProfile {
         self.check_ranges(&Table::root())?;
         if self.heads.is_empty() {
             return Err(PrintheadError::NoHeads);
+        }
+        if let Some(problem) = self.recoat.as_ref().and_then(Recoat::axes_problem) {
+            return Err(PrintheadError::Recoat(problem));
         }
         if !self.nozzle_rows.is_empty() {
             let mut seen = vec![false; self.nozzle_count as usize];
@@ -237,7 +247,8 @@ impl CheckRanges for PrintheadProfile {
             head.check("offset_y_mm", h.offset_y_mm, range::POSITION_MM)?;
         }
         t.check("min_fire_interval_us", self.min_fire_interval_us, FIRE_INTERVAL_US)?;
-        t.check_opt("drop_volume_pl", self.drop_volume_pl, DROP_VOLUME_PL)
+        t.check_opt("drop_volume_pl", self.drop_volume_pl, DROP_VOLUME_PL)?;
+        self.recoat.as_ref().map_or(Ok(()), |r| r.check_ranges(&t.sub("recoat")))
     }
 }
 

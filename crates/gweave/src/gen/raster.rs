@@ -20,13 +20,23 @@
 //! move. Passes alternate direction (serpentine) unless one-way printing is asked for; the
 //! direction restarts left-to-right on every layer. The last, partial band of an image is
 //! printed too (the reference generator `sjkelly/image_to_gcode` drops it). Each layer starts
-//! with `;LAYER:<k>`, the recoat block (from the second layer on) and `G1 Z<z>`.
+//! with `;LAYER:<k>`, the recoat (from the second layer on) and `G1 Z<z>`. The recoat is motion
+//! when the printhead profile has a `[recoat]` table ([`super::recoat`]), else the job's
+//! `recoat_gcode`.
 //!
 //! Several heads (`P0`, `P1`, ...) each print their own plane (an image channel or an image
 //! set): every band is swept once per head, in head order, with that head's offset taken off
 //! the carriage position. `density` repeats the fire command at each column; the firmware
 //! spaces repeated fires by its minimum interval (800 us on the C6602), which the report's
 //! time estimate counts.
+//!
+//! `fire_order = "before"` writes the binder-jet seed's order instead: fire, `M400`, then the
+//! move to the next column (`M700 P0 S15`, `M400`, `G1 X20.265 ...`). Its first fire of a
+//! pass follows a move and an `M400`, as every fire of the default does; each later one is
+//! parsed right after a move is queued, so on Marlin (whose `M700` fires when parsed) it fires
+//! while the carriage is still travelling to its column, and the virtual printer warns about
+//! every such fire. It reproduces the seed's file for a firmware whose fire command waits for
+//! the moves itself.
 //!
 //! The output is written in 64 KiB chunks to any `Write`; the layers come one at a time,
 //! so memory is bounded by one layer per head.
@@ -74,6 +84,17 @@ pub const HEADS: Range<usize> = Range::new(1, 16, "heads");
 /// Fraction of full scale at or above which a pixel gets binder.
 pub const THRESHOLD: Range<f64> = Range::new(0.0, 1.0, "");
 
+/// Where a column's fire command goes relative to the move onto the column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FireOrder {
+    /// `G1 X<column>`, `M400`, `M700`: the head fires once it stands at the column.
+    #[default]
+    After,
+    /// The binder-jet seed's order: `M700`, `M400`, then `G1` to the next column.
+    Before,
+}
+
 /// Raster job settings (TOML, all keys optional, unknown keys rejected).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -100,6 +121,8 @@ pub struct RasterConfig {
     /// G-code between layers (powder recoat); `{layer}` and `{z}` are replaced by the coming
     /// layer's index and Z.
     pub recoat_gcode: String,
+    /// The fire command after the move onto its column (default) or before the next move.
+    pub fire_order: FireOrder,
 }
 
 impl Default for RasterConfig {
@@ -116,6 +139,7 @@ impl Default for RasterConfig {
             start_gcode: "G21 ; millimetres\nG90 ; absolute positions\nG28 ; home\n".into(),
             end_gcode: "M400\nG28 X Y ; park the carriage\n".into(),
             recoat_gcode: "M400\n; recoat: spread powder for layer {layer} (Z{z})\n".into(),
+            fire_order: FireOrder::After,
         }
     }
 }
@@ -256,7 +280,13 @@ impl<W: Write> RasterWriter<W> {
         self.buf.extend_from_slice(b";LAYER:");
         push_uint(&mut self.buf, k);
         self.buf.push(b'\n');
-        if k > 0 {
+        let first_z = self.z_of_layer(0);
+        if let (true, Some(recoat)) = (k > 0, &self.profile.recoat) {
+            recoat.write(&mut self.buf, k, z, first_z, d);
+            // The spreader may ride on the carriage's axes: the next move states X and Y.
+            self.last_y_mm = None;
+            self.pos_mm = None;
+        } else if k > 0 {
             let mut z_text = Vec::new();
             push_num(&mut z_text, z, d);
             let block = self
@@ -362,7 +392,10 @@ impl<W: Write> RasterWriter<W> {
                 push_num(&mut self.buf, y, self.cfg.decimals);
                 self.last_y_mm = Some(y);
             }
-            self.buf.extend_from_slice(b"\nM400\n");
+            // The seed's order drains the queue after the fire; the first fire of a pass still
+            // waits for the move onto the band.
+            let before = self.cfg.fire_order == FireOrder::Before;
+            self.buf.extend_from_slice(if before && idx > 0 { b"\n" } else { b"\nM400\n" });
             let fire_line = if (s as usize) < self.fire_text[head].len() {
                 self.fire_text[head].get(s as usize)
             } else {
@@ -372,6 +405,9 @@ impl<W: Write> RasterWriter<W> {
             };
             for _ in 0..density {
                 self.buf.extend_from_slice(fire_line);
+            }
+            if before {
+                self.buf.extend_from_slice(b"M400\n");
             }
             if let Some((px, py)) = self.pos_mm {
                 // Within a pass only X changes; sqrt only for the move onto a new band.
@@ -568,6 +604,25 @@ mod tests {
         assert_eq!(rep.drops_per_head, vec![4]);
         assert_eq!(rep.xy_moves, 3);
         assert!((rep.xy_path_mm - (2.0 + 1f64.hypot(2.0))).abs() < 1e-9);
+    }
+
+    #[test]
+    fn fire_order_before_is_the_seeds_fire_drain_move() {
+        let p = PrintheadProfile { nozzle_count: 2, dpi: 25.4, ..PrintheadProfile::default() };
+        let mut b = Bitmap::new(4, 3);
+        for (x, y) in [(0, 0), (0, 1), (2, 1), (3, 2)] {
+            b.set(x, y, true);
+        }
+        let cfg = RasterConfig { fire_order: FireOrder::Before, ..bare() };
+        let (g, rep) = gcode(&p, &cfg, &[b]);
+        // Onto the band and drained, then per column: fire, M400, move to the next column.
+        assert_eq!(
+            g,
+            "; gweave raster: binder-jet inkjet\nG1 F3000\n;LAYER:0\nG1 Z0.1\n\
+             G1 X0.5 Y0.5\nM400\nM700 P0 S3\nM400\nG1 X2.5\nM700 P0 S2\nM400\n\
+             G1 X3.5 Y2.5\nM400\nM700 P0 S1\nM400\n"
+        );
+        assert_eq!((rep.columns_fired, rep.drops_per_head[0]), (3, 4));
     }
 
     #[test]

@@ -60,6 +60,12 @@ pub struct PurgeMotion {
     pub retract_feed_mm_min: f64,
     /// Feed of the Z lift and lower (at most the Z cap).
     pub z_feed_mm_min: f64,
+    /// Feed of the way back from the purge spot, mm/min (default: `travel_feed_mm_min`).
+    pub return_feed_mm_min: Option<f64>,
+    /// Feed of the lower back onto the print, mm/min (default: `z_feed_mm_min`).
+    pub lower_feed_mm_min: Option<f64>,
+    /// Feed of the last unretraction, mm/min (default: `retract_feed_mm_min`).
+    pub unretract_feed_mm_min: Option<f64>,
 }
 
 impl CheckRanges for PurgeMotion {
@@ -72,7 +78,10 @@ impl CheckRanges for PurgeMotion {
         t.check("travel_feed_mm_min", self.travel_feed_mm_min, range::FEED_MM_MIN)?;
         t.check("extrude_feed_mm_min", self.extrude_feed_mm_min, range::FEED_MM_MIN)?;
         t.check("retract_feed_mm_min", self.retract_feed_mm_min, range::FEED_MM_MIN)?;
-        t.check("z_feed_mm_min", self.z_feed_mm_min, range::FEED_MM_MIN)
+        t.check("z_feed_mm_min", self.z_feed_mm_min, range::FEED_MM_MIN)?;
+        t.check_opt("return_feed_mm_min", self.return_feed_mm_min, range::FEED_MM_MIN)?;
+        t.check_opt("lower_feed_mm_min", self.lower_feed_mm_min, range::FEED_MM_MIN)?;
+        t.check_opt("unretract_feed_mm_min", self.unretract_feed_mm_min, range::FEED_MM_MIN)
     }
 }
 
@@ -88,7 +97,27 @@ impl PurgeMotion {
         extrude_feed_mm_min: 200.0,
         retract_feed_mm_min: 2400.0,
         z_feed_mm_min: 200.0,
+        return_feed_mm_min: None,
+        lower_feed_mm_min: None,
+        unretract_feed_mm_min: None,
     };
+
+    /// The mixing post-processor seed's own feeds: everything at F200 once it has set it
+    /// (retract, lift, purge, retract, the way back), the travel out at F1320, then the lower
+    /// and the unretraction at F150; no wipe. Lengths and the spot are kept from `self`.
+    pub fn with_seed_feeds(self) -> PurgeMotion {
+        PurgeMotion {
+            wipe_mm: 0.0,
+            travel_feed_mm_min: 1320.0,
+            extrude_feed_mm_min: 200.0,
+            retract_feed_mm_min: 200.0,
+            z_feed_mm_min: 200.0,
+            return_feed_mm_min: Some(200.0),
+            lower_feed_mm_min: Some(150.0),
+            unretract_feed_mm_min: Some(150.0),
+            ..self
+        }
+    }
 }
 
 impl Default for PurgeMotion {
@@ -255,12 +284,12 @@ pub fn write_purge_job(
     if m.wipe_mm > 0.0 {
         w.go(true, [Some(m.x_mm + m.wipe_mm), None, None], 0.0, m.travel_feed_mm_min);
     }
-    w.go(true, [Some(x), Some(y), None], 0.0, m.travel_feed_mm_min);
+    w.go(true, [Some(x), Some(y), None], 0.0, m.return_feed_mm_min.unwrap_or(m.travel_feed_mm_min));
     if m.lift_mm > 0.0 {
-        w.go(true, [None, None, Some(z)], 0.0, m.z_feed_mm_min);
+        w.go(true, [None, None, Some(z)], 0.0, m.lower_feed_mm_min.unwrap_or(m.z_feed_mm_min));
     }
     if r > 0.0 {
-        w.go(false, [None; 3], r, m.retract_feed_mm_min);
+        w.go(false, [None; 3], r, m.unretract_feed_mm_min.unwrap_or(m.retract_feed_mm_min));
     }
     let mut tail = b"G92 E".to_vec();
     fmt.write(&mut tail, e0, fmt.extrusion_decimals.max(5));
@@ -360,6 +389,32 @@ mod tests {
         let (text, s, _) = run("G1 X20 Y30 Z1 F1500\nG91", 0.0);
         assert!(text.contains("\nG0 Z15 F200\nG0 X-10 Y-20 F1320\n"), "{text}");
         assert_eq!([s.pos[X], s.pos[Y], s.pos[Z]], [20.0, 30.0, 1.0]);
+    }
+
+    #[test]
+    fn seed_feeds_are_the_mixing_seeds_purge() {
+        // The mixing seed's block: G0 F200, retract 4, lift 15, G0 F1320 to X10 Y10, F200,
+        // extrude 25, retract 4, back (still F200), G0 F150, lower 15, unretract 4.
+        let start = PurgeStart {
+            pos: [50.0, 60.0, 0.4, 0.0],
+            absolute_xyz: true,
+            relative_e: true,
+            feed_mm_min: 1800.0,
+            rapid_mode: false,
+            retracted_mm: 0.0,
+        };
+        let m = SEED.with_seed_feeds();
+        let mut out = Vec::new();
+        write_purge(&mut out, &NumberFormat::default(), &m, &start, 25.0, "A -> B");
+        let text = String::from_utf8(out).unwrap();
+        let feeds: Vec<&str> =
+            text.lines().filter_map(|l| l.split_whitespace().find(|w| w.starts_with('F'))).collect();
+        assert_eq!(
+            feeds,
+            ["F200", "F200", "F1320", "F200", "F200", "F200", "F150", "F150", "F1800"],
+            "{text}"
+        );
+        assert!(!text.contains("X15"), "no wipe: {text}");
     }
 
     #[test]

@@ -1,13 +1,20 @@
 //! A Z feed-rate cap. Firmware runs a move at the feed rate F along its XYZ path, so the Z axis
-//! moves at `F * |dz| / L` with `L = sqrt(dx^2 + dy^2 + dz^2)`. The seed's printer stalled its Z
-//! axis above F200 (mm/min), and its post-processor split such moves (`G0 F9000 X128.2 Y96.8
-//! Z0.4` became `G0 F200 Z0.400` then `G0 F9000 X128.200 Y96.800`). Two remedies:
+//! moves at `F * |dz| / L` with `L = sqrt(dx^2 + dy^2 + dz^2)`; that component is what is
+//! capped. Two remedies when it is over the cap:
 //!
 //! - **split** a travel that moves XY and Z: Z alone first at the cap, then XY at the
 //!   original F (which is also the feed rate in force afterwards, as the slicer expects);
 //! - **slow** everything else (Z-only moves, moves that extrude or retract while moving Z, arcs):
 //!   F becomes `cap * L / |dz|` (rounded down), then a `G1 F<original>` line restores the feed
 //!   rate the next lines rely on.
+//!
+//! The mixing post-processor seed's printer stalled its Z axis above F200 (mm/min). Its script
+//! split *every* line with a Z word and an F above 200, whatever Z did: its example
+//! `G0 F9000 X128.2 Y96.8 Z0.4` became `G0 F200 Z0.400` then `G0 F9000 X128.200 Y96.800`. This
+//! cap does not reproduce that by default: in the seed's file that move comes from far away, so
+//! Z runs at `9000 * 0.2 / L`, about 97 mm/min there, under the cap, and the line stays as it is
+//! (splitting it costs a stop for nothing). The same line after a short move is split
+//! (`the_seeds_example_splits` below). [`ZCapMode::Seed`] applies the seed's own rule.
 //!
 //! Lines with `N` line numbers or checksums are left alone (rewriting would break the checksum).
 
@@ -50,7 +57,12 @@ impl ZCap {
         fmt: &NumberFormat,
         out: &mut Vec<u8>,
     ) -> bool {
-        if !self.exceeded(mv) || block.line_number.is_some() || block.checksum.is_some() {
+        let over = match self.mode {
+            // The seed's rule looks at the words, not at the motion.
+            ZCapMode::Seed => block.has(b'Z') && mv.feed_mm_min > self.max_z_feed_mm_min * (1.0 + 1e-9),
+            _ => self.exceeded(mv),
+        };
+        if !over || block.line_number.is_some() || block.checksum.is_some() {
             return false;
         }
         let command: &[u8] = match block.command {
@@ -64,7 +76,7 @@ impl ZCap {
             _ => block.command_span.of(raw),
         };
         let moves_xy = mv.to[X] != mv.from[X] || mv.to[Y] != mv.from[Y];
-        let splittable = self.mode == ZCapMode::Split
+        let splittable = self.mode != ZCapMode::Slow
             && moves_xy
             && mv.to[E] == mv.from[E]
             && matches!(mv.path, Path::Line)
@@ -101,8 +113,10 @@ impl ZCap {
             }
             comment(out);
         } else {
+            // A Z word that does not move Z (the seed's rule only) runs at the cap.
             let dz = (mv.to[Z] - mv.from[Z]).abs();
-            let slow = floor_to(self.max_z_feed_mm_min * mv.len_mm() / dz, fmt.feed_decimals);
+            let stretch = if dz > 0.0 { mv.len_mm() / dz } else { 1.0 };
+            let slow = floor_to(self.max_z_feed_mm_min * stretch, fmt.feed_decimals);
             words(b"F", out);
             out.push(b' ');
             fmt.write_word(out, b'F', slow);
@@ -167,6 +181,11 @@ mod tests {
         // From far away the same move is slow enough in Z: 9000 * 0.2 / 159.3 = 11.3 mm/min.
         let far = "G0 F9000 X128.200 Y96.800 Z0.400";
         assert_eq!(cap(ZCapMode::Split, "G0 X0 Y0 Z0.2", far), far);
+        // The seed's rule splits it anyway, as the seed's script did.
+        assert_eq!(cap(ZCapMode::Seed, "G0 X0 Y0 Z0.2", far), "G0 Z0.400 F200\nG0 X128.200 Y96.800 F9000\n");
+        // ... and a Z word that does not move Z runs at the cap.
+        assert_eq!(cap(ZCapMode::Seed, "G0 X0 Y0 Z0.4", "G0 Z0.4 F9000"), "G0 Z0.4 F200\nG0 F9000\n");
+        assert_eq!(cap(ZCapMode::Seed, "G0 X0 Y0 Z0.2", "G0 X1 F9000"), "G0 X1 F9000", "no Z word");
     }
 
     #[test]

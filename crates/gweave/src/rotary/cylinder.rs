@@ -450,6 +450,7 @@ pub fn pieces_for_step(d_theta_deg: f64, step_deg: f64) -> usize {
 /// arc_length_z1_mm = 0.0              # z1 of that formula (the first layer's Z in Diabase)
 /// seam_offset_deg = 0.0               # where y = 0 lands on the mandrel
 /// seam_rotation_per_layer_deg = 0.0   # turn each layer further, to stagger the weld line
+/// helical = false                     # true: each layer one turn of a helix, no weld line
 /// ```
 ///
 /// The seam rotation turns whole layers: it staggers the weld line of parts that go all the way
@@ -465,6 +466,8 @@ pub struct UnwrapConfig {
     pub seam_offset_deg: f64,
     /// Extra rotation of every layer relative to the previous one, degrees.
     pub seam_rotation_per_layer_deg: f64,
+    /// Helical unwrapping ([`super::helical`]): the radius rises one layer height per turn.
+    pub helical: bool,
 }
 
 impl UnwrapConfig {
@@ -473,7 +476,26 @@ impl UnwrapConfig {
         use crate::range;
         in_range("unwrap", "arc_length_z1_mm", self.arc_length_z1_mm, range::POSITION_MM)?;
         in_range("unwrap", "seam_offset_deg", self.seam_offset_deg, range::ANGLE_DEG)?;
-        in_range("unwrap", "seam_rotation_per_layer_deg", self.seam_rotation_per_layer_deg, range::ANGLE_DEG)
+        in_range(
+            "unwrap",
+            "seam_rotation_per_layer_deg",
+            self.seam_rotation_per_layer_deg,
+            range::ANGLE_DEG,
+        )?;
+        // A helical layer has no seam to stagger, and its turn is one circumference of flat Y.
+        let reason = if !self.helical {
+            None
+        } else if self.keep_arc_length {
+            Some("the helical mapping wraps flat Y onto the circumference; it cannot keep arc lengths")
+        } else if self.seam_rotation_per_layer_deg != 0.0 {
+            Some("a helical layer has no seam to stagger; turning a layer would break the join to the next")
+        } else {
+            None
+        };
+        match reason {
+            Some(r) => Err(RotaryError::Config { key: "helical", reason: r.into() }),
+            None => Ok(()),
+        }
     }
 
     /// Angle of the seam (flat y = 0) on layer `layer` (0-based), degrees.

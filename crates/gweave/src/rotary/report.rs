@@ -18,6 +18,7 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use super::cylinder::{FeedConvention, RotaryConfig, RotaryUnit};
+use super::helical::file_extent;
 use super::helix::{Handedness, ProgramSummary, TubeParams};
 use super::preview::{self, LayerSummary, PreviewOptions, Program};
 use super::wrap::{from_engine, Wrap, WrapConfig};
@@ -82,6 +83,8 @@ pub struct WrapReport {
     pub machine: MachineReport,
     /// The Diabase mapping was used.
     pub keep_arc_length: bool,
+    /// Each layer was wound as one turn of a helix (no weld line).
+    pub helical: bool,
     /// Seam angle of layer 0, degrees.
     pub seam_offset_deg: f64,
     /// Seam turn per layer, degrees.
@@ -198,7 +201,8 @@ pub fn wrap_file(
     // and machinekit flavours) cannot be wrapped without losing its extrusion.
     let flavour = read_flavour(input).map_err(|e| RotaryError::Engine(crate::Error::io(input, e)))?;
     require_e_extruder(input, flavour.as_deref()).map_err(RotaryError::Engine)?;
-    let mut pass = Wrap::new(config.clone())?;
+    let extent = file_extent(input, flavour.clone()).map_err(|e| from_engine(e, input))?;
+    let mut pass = Wrap::new(config.clone(), extent)?;
     let run = Run { flavour: Some(flavour), ..Run::new(input, progress) };
     run.transform(&mut pass, target).map_err(|e| from_engine(e, input))?;
     let output = written_path(target, Some(input));
@@ -218,6 +222,7 @@ pub fn wrap_file(
         output,
         machine: MachineReport::of(&config.machine),
         keep_arc_length: config.unwrap.keep_arc_length,
+        helical: config.unwrap.helical,
         seam_offset_deg: config.unwrap.seam_offset_deg,
         seam_rotation_per_layer_deg: config.unwrap.seam_rotation_per_layer_deg,
         chord_tolerance_mm: config.chord_tolerance_mm,

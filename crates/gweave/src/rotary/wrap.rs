@@ -20,7 +20,13 @@
 //! with the inverse-time convention `G93` precedes it and `G94` ends the file. Homing that may
 //! move the rotary axis (`G28` with Y, or with no axis) makes the angle unknown, and it is
 //! declared again before the next move. Machine-setup M-codes that name axes (`M92`, `M203`...)
-//! are copied unchanged and still say Y.
+//! are said for the rotary machine: Y renamed to the rotary axis (its value converted to
+//! degrees where the rotary word is in degrees), X and Z to the axial and radial axes
+//! (the `setup` module).
+//!
+//! Before writing, the file is read once for the `y` span of its extrusions
+//! ([`super::helical`]): a part wider than the circumference is refused unless
+//! `allow_overlap`, and the helical mapping starts its turn at the part's smallest `y`.
 //!
 //! The seam rotation counts layers from the slicer's layer comments (the core
 //! [`crate::gcode::layers`] structure); a file without them is one layer.
@@ -47,7 +53,9 @@ use serde::{Deserialize, Serialize};
 
 use super::cylinder::{chord_pieces, CylPoint, RotaryConfig, UnwrapConfig};
 use super::emit::{rotary_number_format, validate_format, MoveSpec, MoveWriter};
+use super::helical::{bytes_extent, check_width, PartExtent, Ramp};
 use super::helix::CHORD_TOLERANCE_MM;
+use super::setup::rewrite_setup;
 use super::{in_range, Result, RotaryError};
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::StateOptions;
@@ -82,6 +90,17 @@ pub struct WrapConfig {
     /// Decimal places of rewritten words.
     #[serde(default = "rotary_number_format")]
     pub numbers: NumberFormat,
+    /// Wrap a part wider than the circumference over itself instead of refusing it.
+    #[serde(default)]
+    pub allow_overlap: bool,
+    /// Travel the short way round: a travel that would turn the mandrel more than half a turn
+    /// turns the other way, and the angle is declared back onto the mapping with `G92`.
+    #[serde(default = "default_short_travel")]
+    pub short_travel: bool,
+}
+
+fn default_short_travel() -> bool {
+    true
 }
 
 /// Most chords one flat move becomes (a move of many turns round a thin mandrel); past it the
@@ -101,6 +120,8 @@ impl WrapConfig {
             machine,
             unwrap: UnwrapConfig::default(),
             numbers: rotary_number_format(),
+            allow_overlap: false,
+            short_travel: true,
         }
     }
 
@@ -132,21 +153,46 @@ pub struct Wrap {
     /// The header naming the machine ([`RotaryConfig::header_lines`]) is out.
     headed: bool,
     buffer: Vec<u8>,
+    /// The helical ramp of the current layer (helical mapping only).
+    ramp: Option<Ramp>,
 }
 
 impl Wrap {
-    /// A pass for a validated configuration. The machine starts where the core state does, at
-    /// flat (0, 0, 0), with the mandrel angle not yet declared.
-    pub fn new(config: WrapConfig) -> Result<Self> {
+    /// A pass for a validated configuration, given the `y` span of the part's extrusions
+    /// ([`super::helical::file_extent`]): a part wider than the circumference is refused
+    /// unless `allow_overlap`. The machine starts where the core state does, at flat (0, 0, 0),
+    /// with the mandrel angle not yet declared.
+    pub fn new(config: WrapConfig, extent: Option<PartExtent>) -> Result<Self> {
         config.validate()?;
+        check_width(&config.machine, extent, config.allow_overlap)?;
         let mut writer = MoveWriter::new(config.machine.clone(), config.numbers, 0.0);
         let origin = config.unwrap.map(&config.machine, [0.0; 3], 0)?;
         writer.assume(origin, [true, false, true]);
-        Ok(Self { config, writer, started: false, headed: false, buffer: Vec::new() })
+        let ramp = config.unwrap.helical.then(|| Ramp::new(extent.map_or(0.0, |e| e.y_min_mm)));
+        Ok(Self { config, writer, started: false, headed: false, buffer: Vec::new(), ramp })
     }
 
     fn map(&self, flat: [f64; 3], layer: u32) -> Result<CylPoint> {
-        self.config.unwrap.map(&self.config.machine, flat, layer)
+        let [x, y, mut z] = flat;
+        if let Some(ramp) = &self.ramp {
+            z -= ramp.drop_mm(y, self.config.machine.circumference_mm());
+        }
+        self.config.unwrap.map(&self.config.machine, [x, y, z], layer)
+    }
+
+    /// For a travel to flat `to` that would turn the mandrel more than half a turn: where it
+    /// ends when it turns the other way, whole turns off the mapped angle (`None` when the
+    /// mapped way is already the short one, or the angle is not known).
+    fn short_way(&self, to: [f64; 3], layer: u32) -> Result<Option<CylPoint>> {
+        let Some(here) = self.writer.position() else { return Ok(None) };
+        let mut there = self.map(to, layer)?;
+        // Half a turn either way is as short: keep the mapped one.
+        if (here.theta_deg - there.theta_deg).abs() <= 180.0 {
+            return Ok(None);
+        }
+        let turns = ((here.theta_deg - there.theta_deg) / 360.0).round();
+        there.theta_deg += 360.0 * turns;
+        Ok(Some(there))
     }
 
     /// Rewrites one line into `self.buffer`, or returns `false` to keep it as it is.
@@ -154,6 +200,9 @@ impl Wrap {
         let state = ctx.state;
         self.writer.set_modes(!state.absolute(), state.relative_e());
         let layer = state.structure.layer.unwrap_or(0);
+        if let Some(ramp) = &mut self.ramp {
+            ramp.observe(&state.structure);
+        }
         match ctx.effect {
             Effect::Move(mv) => self.rewrite_move(ctx, mv, layer),
             Effect::Home { axes } => {
@@ -187,7 +236,14 @@ impl Wrap {
                 }
                 Ok(true)
             }
-            _ => Ok(false),
+            _ => match rewrite_setup(&self.config.machine, &self.config.numbers, ctx.line.bytes, ctx.block) {
+                Some(line) => {
+                    self.buffer.extend_from_slice(&line);
+                    self.buffer.push(b'\n');
+                    Ok(true)
+                }
+                None => Ok(false),
+            },
         }
     }
 
@@ -211,20 +267,44 @@ impl Wrap {
                 reason: "a move before any feed rate was set".into(),
             });
         }
-        let out = &mut self.buffer;
         if !self.started {
-            self.writer.enter_feed_mode(out)?;
+            self.writer.enter_feed_mode(&mut self.buffer)?;
             self.started = true;
         }
         if !self.writer.rotary_known() {
-            let p = self.config.unwrap.map(&self.config.machine, from, layer)?;
-            self.writer.declare(out, p, [false, true, false])?;
+            let p = self.map(from, layer)?;
+            self.writer.declare(&mut self.buffer, p, [false, true, false])?;
         }
-        let mut comment = ctx.block.comment_text(ctx.line.bytes);
+        let comment = ctx.block.comment_text(ctx.line.bytes);
         if !moves_axes {
-            self.writer.extrude_only(out, e_mm, speed_mm_s, comment)?;
+            self.writer.extrude_only(&mut self.buffer, e_mm, speed_mm_s, comment)?;
             return Ok(true);
         }
+        // A travel goes the short way round in one machine move (it lays no bead, so it need
+        // not follow the flat path), then the angle is declared back onto the mapping: the
+        // mandrel is physically where the mapped angle is, whole turns away.
+        let short = if e_mm <= 0.0 && self.config.short_travel { self.short_way(to, layer)? } else { None };
+        if let Some(there) = short {
+            let spec = MoveSpec { rapid: mv.rapid, to: there, e_mm, speed_mm_s, comment };
+            self.writer.write_move(&mut self.buffer, &spec)?;
+            let mapped = self.map(to, layer)?;
+            self.writer.declare(&mut self.buffer, mapped, [false, true, false])?;
+            return Ok(true);
+        }
+        self.write_pieces(mv, layer, e_mm, speed_mm_s, comment)?;
+        Ok(true)
+    }
+
+    /// The move's pieces: arcs in chords, chords on the cylinder within the tolerance.
+    fn write_pieces(
+        &mut self,
+        mv: &Move,
+        layer: u32,
+        e_mm: f64,
+        speed_mm_s: f64,
+        mut comment: Option<&[u8]>,
+    ) -> Result<()> {
+        let from = flat(&mv.from);
         let pieces = flat_pieces(mv, self.config.arc_tolerance_mm)?;
         let share = 1.0 / pieces.len() as f64;
         let mut prev = from;
@@ -249,7 +329,11 @@ impl Wrap {
                 let (q0, q1) = (lerp3(prev, next, t0), lerp3(prev, next, t1));
                 let mut e_piece = e_mm * share / cuts as f64;
                 if e_piece > 0.0 {
-                    e_piece *= self.config.unwrap.e_scale(&self.config.machine, q0, q1);
+                    let machine = &self.config.machine;
+                    e_piece *= self.config.unwrap.e_scale(machine, q0, q1);
+                    if let Some(ramp) = &self.ramp {
+                        e_piece *= ramp.e_factor(q0[1], q1[1], machine.circumference_mm());
+                    }
                 }
                 let spec = MoveSpec {
                     rapid: mv.rapid,
@@ -262,7 +346,7 @@ impl Wrap {
             }
             prev = next;
         }
-        Ok(true)
+        Ok(())
     }
 }
 
@@ -341,7 +425,8 @@ impl Pass for Wrap {
 
 /// Wraps a whole G-code text in memory (tests, Python): strict parsing, Marlin semantics.
 pub fn wrap_bytes(config: WrapConfig, input: &[u8]) -> Result<Vec<u8>> {
-    let mut pass = Wrap::new(config)?;
+    let extent = bytes_extent(input).map_err(|e| from_engine(e, std::path::Path::new("<input>")))?;
+    let mut pass = Wrap::new(config, extent)?;
     let mut out = Vec::with_capacity(input.len() * 2);
     let run = drive_reader(
         input,

@@ -236,6 +236,21 @@ pub struct PurgeConfig {
     /// Purge at every step of a gradient too (normally the blend is the point).
     pub on_gradient_steps: bool,
     pub pair: Vec<PairPurge>,
+    /// `seed`: the mixing seed's purge feeds ([`PurgeMotion::with_seed_feeds`]) over the feed
+    /// and wipe keys.
+    pub style: PurgeStyle,
+}
+
+/// Whose feeds the purge block moves with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum PurgeStyle {
+    /// The profile's feeds (retract and unretract fast, so that the nozzle does not ooze
+    /// meanwhile; a wipe after the purge).
+    #[default]
+    Gweave,
+    /// The seed's: F200 throughout, F150 to lower and unretract, no wipe.
+    Seed,
 }
 
 impl PurgeConfig {
@@ -248,7 +263,7 @@ impl PurgeConfig {
     /// The purge block's moves, with the Z feed the caller has worked out (the Z cap's, or
     /// the travel feed).
     pub fn motion(&self, z_feed_mm_min: f64) -> PurgeMotion {
-        PurgeMotion {
+        let motion = PurgeMotion {
             retract_mm: self.retract_mm,
             lift_mm: self.lift_mm,
             x_mm: self.x_mm,
@@ -258,6 +273,13 @@ impl PurgeConfig {
             extrude_feed_mm_min: self.extrude_feed_mm_min,
             retract_feed_mm_min: self.retract_feed_mm_min,
             z_feed_mm_min,
+            return_feed_mm_min: None,
+            lower_feed_mm_min: None,
+            unretract_feed_mm_min: None,
+        };
+        match self.style {
+            PurgeStyle::Gweave => motion,
+            PurgeStyle::Seed => motion.with_seed_feeds(),
         }
     }
 }
@@ -283,6 +305,7 @@ impl Default for PurgeConfig {
             retract_feed_mm_min: PurgeMotion::SEED.retract_feed_mm_min,
             on_gradient_steps: false,
             pair: Vec::new(),
+            style: PurgeStyle::Gweave,
         }
     }
 }
@@ -296,6 +319,9 @@ pub enum ZCapMode {
     Split,
     /// Slow the whole move until its Z component is at the cap.
     Slow,
+    /// The mixing post-processor seed's rule: every move with a Z word and F above the cap is
+    /// split as `split` does, however little Z moves (see [`crate::post::zcap`]).
+    Seed,
 }
 
 /// The Z feed-rate cap. The seed's printer could not move Z faster than F200 (mm/min).

@@ -49,6 +49,7 @@
 //! assert_eq!(report.changes.kept()[0].achieved_mm, 1.5);
 //! ```
 
+mod checks;
 pub mod config;
 mod fallback;
 pub mod report;
@@ -71,6 +72,7 @@ use crate::gcode::state::{Effect, StateOptions, X, Y, Z};
 use crate::gcode::writer::Target;
 use crate::pass::{drive_reader, Ctx, OwnedLine, Pass, Progress, Quiet, Run, Strictness};
 use crate::post::purge_block::{purge_start_pos, PurgeStart};
+use checks::{require_markers, FeatureComments};
 use fallback::{write_fallback, Spot, Surroundings};
 use split::{split, Splittable};
 
@@ -146,6 +148,7 @@ pub struct PurgeShift {
     report: PurgeShiftReport,
     /// Buffers of written lines, reused for new held lines.
     spare: Vec<OwnedLine>,
+    features: FeatureComments,
 }
 
 impl PurgeShift {
@@ -175,6 +178,7 @@ impl PurgeShift {
             out_lines: 0,
             report,
             spare: Vec::new(),
+            features: FeatureComments::default(),
         }
     }
 
@@ -576,6 +580,7 @@ impl Pass for PurgeShift {
         }
         let kind = match ctx.effect {
             Effect::Move(m) if m.is_extruding() => {
+                self.features.extrusion(structure.feature);
                 if !self.rules.allowed.contains(&structure.feature) {
                     self.flush(out, "a feature that may not take the purge")?;
                     return self.emit_raw(out, ctx);
@@ -611,6 +616,9 @@ impl Pass for PurgeShift {
     fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> io::Result<()> {
         self.close_group(out)?;
         self.flush(out, "the end of the file")?;
+        if let Some(w) = self.features.warning(&self.rules.allowed) {
+            self.report.warn_first(w);
+        }
         let r = &mut self.report;
         r.saved_mm = r.moved_mm;
         r.saved_mm3 = self.rules.mm3(r.moved_mm);
@@ -620,6 +628,7 @@ impl Pass for PurgeShift {
 
 /// Runs the pass over in-memory G-code.
 pub fn purge_shift_bytes(rules: Rules, input: &[u8]) -> Result<(Vec<u8>, PurgeShiftReport)> {
+    require_markers(input, Path::new("<input>"), rules.markers())?;
     let mut pass = PurgeShift::new(rules);
     let mut out = Vec::with_capacity(input.len() + 1024);
     drive_reader(
@@ -643,6 +652,10 @@ pub fn purge_shift_file(
 ) -> Result<PurgeShiftReport> {
     let flavour = read_flavour(input).map_err(|e| crate::Error::io(input, e))?;
     require_e_extruder(input, flavour.as_deref())?;
+    if rules.markers().begin.is_some() {
+        let file = std::fs::File::open(input).map_err(|e| crate::Error::io(input, e))?;
+        require_markers(file, input, rules.markers())?;
+    }
     let mut pass = PurgeShift::new(rules);
     let mut run = Run::new(input, progress);
     run.options = pass.state_options();

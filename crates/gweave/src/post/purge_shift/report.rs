@@ -185,6 +185,14 @@ impl PurgeShiftReport {
         }
     }
 
+    /// A warning about the whole file, put before the per-change ones (the CLI shows the first
+    /// few only).
+    pub(crate) fn warn_first(&mut self, text: String) {
+        self.warnings_total += 1;
+        self.warnings.insert(0, text);
+        self.warnings.truncate(MAX_WARNINGS);
+    }
+
     /// A short human summary (what the CLI prints).
     pub fn summary(&self) -> String {
         use std::fmt::Write;

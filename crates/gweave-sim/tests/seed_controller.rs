@@ -1,0 +1,65 @@
+//! The controller seed's machine (examples/machines/seed-controller.toml): its thermistor table
+//! loaded from a CSV file named by the profile and read by the virtual printer's firmware, and
+//! its `M0` (home, motors off, end of program).
+
+use std::path::Path;
+
+use gweave_sim::interp::{Machine, Outcome};
+use gweave_sim::profile::MachineProfile;
+
+fn example() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines/seed-controller.toml")
+}
+
+#[test]
+fn the_seed_table_is_loaded_and_heats_to_target() {
+    let profile = MachineProfile::from_file(&example()).unwrap();
+    let table = profile.thermal.thermistor_table_entries.clone().unwrap();
+    assert_eq!(table.entries().len(), 31, "the seed's 31 pairs");
+    // One 10-bit sample per reading, sorted by it; between two rows the reading is interpolated
+    // linearly.
+    let (a0, t0) = table.entries()[9];
+    let (a1, t1) = table.entries()[10];
+    assert_eq!((t0, t1), (210.0, 200.0));
+    let mid = (a0 + a1) / 2;
+    let expected = t0 + (t1 - t0) * f64::from(mid - a0) / f64::from(a1 - a0);
+    assert_eq!(table.celsius(mid), expected);
+    let mut machine = Machine::new(profile).unwrap();
+    let mut replies = Vec::new();
+    for line in ["M104 S200", "M109 S200", "M105"] {
+        let outcome = machine.execute(line.as_bytes(), &mut |_, r: &str| replies.push(r.to_owned()));
+        assert_eq!(outcome, Outcome::Ok, "{line}: {replies:?}");
+    }
+    let report = replies.iter().rev().find(|r| r.contains("T:")).unwrap();
+    let t: f64 = report.split("T:").nth(1).unwrap().split_whitespace().next().unwrap().parse().unwrap();
+    assert!((t - 200.0).abs() < 3.0, "{report}");
+}
+
+#[test]
+fn a_bad_table_names_the_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("t.csv"), "adc,celsius\n100,200\n90,oops\n").unwrap();
+    let profile = dir.path().join("m.toml");
+    std::fs::write(&profile, "[thermal]\nthermistor_table = \"t.csv\"\n").unwrap();
+    let e = MachineProfile::from_file(&profile).unwrap_err().to_string();
+    assert!(e.contains("t.csv: line 3: `oops` is not a number"), "{e}");
+    std::fs::write(&profile, "[thermal]\nthermistor_table = \"missing.csv\"\n").unwrap();
+    let e = MachineProfile::from_file(&profile).unwrap_err().to_string();
+    assert!(e.contains("[thermal] thermistor_table") && e.contains("missing.csv"), "{e}");
+}
+
+#[test]
+fn m0_per_profile_marlin_stops_the_seed_ends_the_program() {
+    let seed = MachineProfile::from_file(&example()).unwrap();
+    let mut marlin = seed.clone();
+    marlin.firmware.m0 = gweave_sim::firmware::ProgramStop::Marlin;
+    for (profile, ended, x_after) in [(marlin, false, 50.0), (seed, true, 0.0)] {
+        let mut machine = Machine::new(profile).unwrap();
+        for line in ["G28", "G1 X50 Y20 F3000", "M0"] {
+            assert_eq!(machine.execute(line.as_bytes(), &mut |_, _| {}), Outcome::Ok);
+        }
+        // The seed homes before switching the motors off; Marlin stops where it is.
+        assert_eq!(machine.position()[0], x_after);
+        assert_eq!(machine.program_ended(), ended);
+    }
+}
