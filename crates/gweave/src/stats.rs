@@ -11,12 +11,14 @@ use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
 use crate::gcode::state::{Effect, Path, State, X, Y, Z};
 use crate::pass::{Ctx, Pass};
+use crate::post::retraction::Retraction;
 
 /// Filament used by one tool.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct ToolFilament {
     pub tool: u32,
-    /// Filament pushed by extruding moves, mm (retract/unretract pairs not counted).
+    /// Filament pushed out of the nozzle, mm: extrusions and stationary purges; retractions
+    /// and the primes that undo them cancel (see `post/retraction.rs`).
     pub extruded_mm: f64,
     /// Volume of that filament, mm^3.
     pub extruded_mm3: f64,
@@ -100,7 +102,8 @@ pub struct StatsPass {
     bytes: u64,
     /// Lines in each region of the file, indexed by `Region as usize`.
     lines_by_region: [u64; 3],
-    extruded_mm: Vec<f64>,
+    /// Per tool: the filament out of its nozzle, and its retraction in force.
+    feeds: Vec<(f64, Retraction)>,
     /// The box of extruding moves so far: empty (min above max) until the first.
     bounds: Bounds,
     /// The last move extruded and nothing has set the position since: the next move starts
@@ -133,10 +136,10 @@ impl StatsPass {
             .unwrap_or(DEFAULT_FILAMENT_DIAMETER_MM);
         let area_mm2 = std::f64::consts::PI * diameter * diameter / 4.0;
         let filament = self
-            .extruded_mm
+            .feeds
             .iter()
             .enumerate()
-            .map(|(tool, &mm)| ToolFilament {
+            .map(|(tool, &(mm, _))| ToolFilament {
                 tool: tool as u32,
                 extruded_mm: mm,
                 extruded_mm3: mm * area_mm2,
@@ -187,6 +190,17 @@ impl StatsPass {
         }
     }
 
+    /// `fed_mm` of filament fed (negative: retracted) by the active tool.
+    #[inline]
+    fn feed(&mut self, tool: u32, fed_mm: f64) {
+        let tool = tool as usize;
+        if self.feeds.len() <= tool {
+            self.feeds.resize(tool + 1, Default::default());
+        }
+        let (pushed_mm, retraction) = &mut self.feeds[tool];
+        *pushed_mm += retraction.feed(fed_mm);
+    }
+
     #[cold]
     #[inline(never)]
     fn read_figures(&mut self, comment: &[u8]) {
@@ -229,13 +243,11 @@ impl Pass for StatsPass {
             Effect::Move(m) => {
                 let len_mm = m.len_mm();
                 let e_mm = m.e_mm();
-                // PrusaSlicer counts filament on moves that extrude while moving (any of X, Y, Z).
+                if e_mm != 0.0 {
+                    self.feed(ctx.state.tool, e_mm);
+                }
+                // A print move extrudes while moving (any of X, Y, Z).
                 if e_mm > 0.0 && len_mm > 0.0 {
-                    let tool = ctx.state.tool as usize;
-                    if self.extruded_mm.len() <= tool {
-                        self.extruded_mm.resize(tool + 1, 0.0);
-                    }
-                    self.extruded_mm[tool] += e_mm;
                     self.print_mm += len_mm;
                     // Extrusions come in runs, each starting where the last ended: the start
                     // is needed only after a travel (a test the processor guesses right).
@@ -262,6 +274,7 @@ impl Pass for StatsPass {
                     self.zero_feed_moves += 1;
                 }
             }
+            Effect::FirmwareRetract { e_mm } => self.feed(ctx.state.tool, *e_mm),
             Effect::ToolChange { from, to } if from != to => self.tool_changes += 1,
             Effect::Dwell { t_s } => {
                 self.time_by_feature_s[ctx.state.structure.feature as usize] += t_s;
@@ -349,6 +362,19 @@ mod tests {
         let bounds = seen.extrusion_bounds.unwrap();
         assert_eq!((bounds.min, bounds.max), ([0.0; 3], [20.0, 0.0, 0.0]));
         assert!(!seen.warnings.iter().any(|w| w.contains("flavour")), "{:?}", seen.warnings);
+    }
+
+    /// Issue 21: a 25 mm stationary purge counts; a retraction and the prime that undoes it
+    /// cancel (27 mm, not the 2 mm of the moving extrusions alone).
+    #[test]
+    fn stationary_extrusion_counts() {
+        let text = b"M104 S200\nM109 S200\nG92 E0\nG1 X10 Y10 F3000\nG1 E25 F200\nG1 X20 Y10 E26\nG92 E0\nG1 E-1\nG1 E0\nG1 X30 E1\n";
+        let stats = stats_of(text, StateOptions::default());
+        assert_eq!(stats.filament[0].extruded_mm, 27.0);
+        // Firmware retraction and its recovery cancel too; a retraction while wiping along XY
+        // is undone by the stationary prime after it.
+        let text = b"M104 S200\nM83\nG1 X10 Y10 F3000\nG1 X20 E2\nG10\nG11\nG1 X25 E-0.8\nG1 E0.8\nG1 E3\n";
+        assert_eq!(stats_of(text, StateOptions::default()).filament[0].extruded_mm, 5.0);
     }
 
     /// The extrusion box holds the whole of an arc, not only its end points.

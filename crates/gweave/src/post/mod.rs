@@ -14,4 +14,4 @@ pub mod purge_block;
 pub mod zcap;
 
 // The retraction in force, followed alike by the passes that insert purges.
-mod retraction;
+pub(crate) mod retraction;
