@@ -60,7 +60,7 @@ impl Default for Bounds {
 /// What the slicer itself wrote about the print, for comparison.
 #[derive(Debug, Clone, Default, Serialize, PartialEq)]
 pub struct SlicerFigures {
-    /// PrusaSlicer/Slic3r `; filament used [mm] = a, b, c`.
+    /// PrusaSlicer/Slic3r `; filament used [mm] = a, b, c`, Cura's `;Filament used: 1.2m`.
     pub filament_used_mm: Option<Vec<f64>>,
     /// PrusaSlicer `; estimated printing time (normal mode) = 1h 2m 3s`, in seconds.
     pub estimated_time_s: Option<f64>,
@@ -93,6 +93,10 @@ pub struct Stats {
     pub start_lines: u64,
     pub end_lines: u64,
     pub slicer_figures: SlicerFigures,
+    /// Whether the filament the file states ([`SlicerFigures::filament_used_mm`]) is what it
+    /// extrudes, per tool, within the figure's rounding (0.05 mm) or 0.01 %; `None` if it
+    /// states none.
+    pub filament_matches_slicer: Option<bool>,
     pub warnings: Vec<String>,
 }
 
@@ -164,6 +168,13 @@ impl StatsPass {
             warnings.push("no end G-code detected (the print proper runs to the end of the file)".into());
         }
         let extrusion_bounds = (!self.bounds.is_empty()).then_some(self.bounds);
+        let filament_matches_slicer = self.figures.filament_used_mm.as_ref().map(|theirs| {
+            let ours = |i: usize| self.feeds.get(i).map_or(0.0, |f| f.0);
+            (0..theirs.len().max(self.feeds.len())).all(|i| {
+                let theirs = theirs.get(i).copied().unwrap_or(0.0);
+                (ours(i) - theirs).abs() <= (theirs * 1e-4).max(0.05)
+            })
+        });
         Stats {
             bytes: self.bytes,
             lines: self.lines_by_region.iter().sum(),
@@ -186,6 +197,7 @@ impl StatsPass {
             start_lines: self.lines_by_region[Region::Start as usize],
             end_lines: self.lines_by_region[Region::End as usize],
             slicer_figures: self.figures,
+            filament_matches_slicer,
             warnings,
         }
     }
@@ -213,6 +225,12 @@ impl StatsPass {
             if let Some(mm) = mm {
                 self.figures.filament_used_mm.get_or_insert_with(Vec::new).push(mm);
             }
+        } else if let Some(v) = c.strip_prefix(b"Filament used:") {
+            // Cura: `;Filament used: 1.2m, 0.5m`. Its command line writes `0m` as a
+            // placeholder (the front end fills it in): no figure at all.
+            let m = v.split(|&b| b == b',').map(|x| list(x.trim_ascii().strip_suffix(b"m")?)?.first().copied());
+            let mm: Option<Vec<f64>> = m.map(|x| x.map(|m| m * 1000.0)).collect();
+            self.figures.filament_used_mm = mm.filter(|l| l.iter().any(|&x| x != 0.0));
         } else if let Some(v) = c.strip_prefix(b"estimated printing time (normal mode) =") {
             self.figures.estimated_time_s = duration_s(v);
         } else if let Some(v) =
