@@ -6,6 +6,7 @@
 mod cmd;
 mod common;
 mod files;
+mod finish;
 mod progress;
 pub mod raster_job;
 mod signals;

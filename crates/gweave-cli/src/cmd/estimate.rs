@@ -86,7 +86,7 @@ fn slicer_profile(input: &Path) -> Result<MachineProfile> {
 /// The first 64 KiB and the last 256 KiB of a file (all of a smaller one), where slicers put
 /// their settings: Cura in its header and `;SETTING_3` footer, the PrusaSlicer family in the
 /// settings block after the last move.
-fn file_ends(path: &Path) -> std::io::Result<Vec<u8>> {
+pub(crate) fn file_ends(path: &Path) -> std::io::Result<Vec<u8>> {
     use std::io::{Seek, SeekFrom};
     const HEAD: u64 = 64 * 1024;
     const TAIL: u64 = 256 * 1024;

@@ -19,6 +19,7 @@ use gweave::range::PURGE_MM;
 
 use crate::common::{in_range, load_or_default, print_summary, write_bytes, OutputArgs, ReportArgs};
 use crate::files::Files;
+use crate::finish;
 use crate::progress::Bar;
 
 /// Colour a print on a mixing hotend: define mixes as virtual tools, change them by layer, by
@@ -107,8 +108,9 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         }
     }
     let (Some(input), Some(target)) = (&args.input, target) else { bail!("give the G-code file to rewrite") };
+    finish::refuse_second_run(input, "mix")?;
     let mut bar = Bar::new(args.quiet);
-    let report = mix_file(profile, input, &target, &mut bar)?;
+    let (report, _) = finish::with_metadata(Some(input), &target, |t| Ok(mix_file(profile, input, t, &mut bar)?))?;
     drop(bar);
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");

@@ -1,0 +1,196 @@
+//! What every command that writes G-code does around its pass: it refuses to run a transform a
+//! second time on its own output, and it writes metadata that is true for the file as written.
+//!
+//! The transform writes into a scratch file (registered like every temporary file, so Ctrl-C
+//! removes it). One streaming pass over that file measures it: the filament by the `stats` count
+//! and the print time by the virtual printer's estimator, with the machine limits the slicer
+//! wrote into the file (normal and silent mode), else the default machine's. A second pass
+//! writes it to the real target (a temporary file renamed into place, `--in-place` with its
+//! `.bak`, or standard output) with the run's header on top and the slicer's figures and `M73`
+//! progress rewritten (`gweave::post::metadata`). Memory stays bounded: the passes stream, and
+//! what is kept is one time per progress line. The estimator lives in gweave-sim, which the
+//! engine cannot depend on, so this layer joins them.
+
+use std::fs::File;
+use std::io::{self, BufReader, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use gweave::gcode::flavour::read_flavour;
+use gweave::gcode::state::{State, StateOptions};
+use gweave::gcode::temp::TempFile;
+use gweave::gcode::writer::{Output, Target};
+use gweave::pass::{drive_reader, Ctx, Pass, Quiet, Run, Strictness};
+use gweave::post::metadata::{earlier_runs, header_line, is_progress_line, read_setting, Figures, MetadataPass};
+use gweave::stats::StatsPass;
+use gweave_sim::estimate::Estimator;
+use gweave_sim::limits::MotionProfile;
+use gweave_sim::profile::MachineProfile;
+use gweave_sim::slicer_limits::{slicer_limits, slicer_limits_silent};
+
+use crate::cmd::estimate::file_ends;
+
+/// Refuses to run `command` (`mix`, `purge-shift`, `rotary wrap`) on a file an earlier run of
+/// it wrote: a second run would stack on the first (shift the changes again, purge twice).
+pub fn refuse_second_run(input: &Path, command: &str) -> Result<()> {
+    // An input that cannot be opened is the transform's to report.
+    let Ok(file) = File::open(input) else { return Ok(()) };
+    let runs = earlier_runs(BufReader::new(file)).with_context(|| format!("reading {}", input.display()))?;
+    if let Some(run) = runs.iter().find(|r| r.is(command)) {
+        bail!(
+            "{}:{}: this file was written by `gweave {}`: a second {command} would stack on the first; run it on the file before (--in-place keeps it as .bak)",
+            input.display(),
+            run.line,
+            run.text
+        );
+    }
+    Ok(())
+}
+
+/// Runs `write` into a scratch file, then writes that file to `target` (given `input`, the
+/// G-code file the command read, for `--in-place`) with the run's header and its metadata
+/// recomputed. Returns what `write` returned and the path written (`None`: standard output).
+pub fn with_metadata<R>(
+    input: Option<&Path>,
+    target: &Target,
+    write: impl FnOnce(&Target) -> Result<R>,
+) -> Result<(R, Option<PathBuf>)> {
+    with_metadata_timed(input, target, write, |_| None)
+}
+
+/// [`with_metadata`] for a command that times its own output better than the estimator's
+/// machine can (`own_time_s`, s: a rotary axis, whose feed convention the default machine does
+/// not read): the times are scaled to it, progress lines keeping their estimated proportions.
+pub fn with_metadata_timed<R>(
+    input: Option<&Path>,
+    target: &Target,
+    write: impl FnOnce(&Target) -> Result<R>,
+    own_time_s: impl FnOnce(&R) -> Option<f64>,
+) -> Result<(R, Option<PathBuf>)> {
+    let dir = scratch_dir(target, input);
+    let scratch = TempFile::new_in(&dir).with_context(|| format!("creating a scratch file in {}", dir.display()))?;
+    let path = scratch.path().to_path_buf();
+    let result = write(&Target::File(path.clone()))?;
+    let mut figures = measure(&path)?;
+    if let Some(t_s) = own_time_s(&result) {
+        scale_times(&mut figures, t_s);
+    }
+    let mut out = Output::create(target, input)?;
+    let written = out.dest().map(Path::to_path_buf);
+    let flavour = read_flavour(&path).with_context(|| format!("reading {}", path.display()))?;
+    let options = StateOptions::default().for_flavour(flavour.as_deref());
+    let file = File::open(&path).with_context(|| format!("reading {}", path.display()))?;
+    let mut pass = MetadataPass::new(figures, header_line(&command_line()));
+    drive_reader(file, &path, options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
+    out.commit()?;
+    drop(scratch);
+    Ok((result, written))
+}
+
+/// Where the scratch file goes: beside the output (the same file system, as its temporary
+/// file), else the system's temporary directory (standard output, a device).
+fn scratch_dir(target: &Target, input: Option<&Path>) -> PathBuf {
+    let beside = match target {
+        Target::File(p) if p.metadata().map_or(true, |m| m.is_file()) => Some(p.as_path()),
+        Target::InPlace { .. } => input,
+        _ => None,
+    };
+    match beside.and_then(Path::parent) {
+        Some(dir) if dir.as_os_str().is_empty() => PathBuf::from("."),
+        Some(dir) => dir.to_path_buf(),
+        None => std::env::temp_dir(),
+    }
+}
+
+/// The command line as typed, without the program: `mix a.gcode -c mix.toml --in-place`.
+fn command_line() -> String {
+    let quote = |a: String| if a.is_empty() || a.contains([' ', '\t', '\'', '"']) { format!("{a:?}") } else { a };
+    std::env::args().skip(1).map(quote).collect::<Vec<_>>().join(" ")
+}
+
+/// Measures the written file: its filament, its settings, its estimated times.
+fn measure(path: &Path) -> Result<Figures> {
+    let ends = file_ends(path).with_context(|| format!("reading {}", path.display()))?;
+    let base = MachineProfile::default().motion;
+    let normal = slicer_limits(&ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
+    let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
+    let mut scan = Scan {
+        stats: StatsPass::new(None),
+        silent: (silent != normal).then(|| estimator(&silent)).transpose()?,
+        normal: estimator(&normal)?,
+        figures: Figures::default(),
+        error: None,
+    };
+    let mut quiet = Quiet;
+    let run = Run { strictness: Strictness::Lenient, ..Run::new(path, &mut quiet) };
+    let state = run.scan(&mut scan)?;
+    if let Some(e) = scan.error {
+        return Err(anyhow::Error::new(e).context("estimating the print time of the written file"));
+    }
+    Ok(scan.into_figures(&state))
+}
+
+/// Scales every time in `f` so that the normal mode's total is `t_s`.
+fn scale_times(f: &mut Figures, t_s: f64) {
+    let k = if f.time_s[0] > 0.0 { t_s / f.time_s[0] } else { 0.0 };
+    let times = f.time_s.iter_mut().chain(&mut f.first_layer_s).chain(f.progress_s.iter_mut().flatten());
+    times.for_each(|t| *t *= k);
+    f.time_s[0] = t_s;
+}
+
+fn estimator(profile: &MotionProfile) -> Result<Estimator> {
+    Ok(Estimator::new(profile)?)
+}
+
+/// The measuring pass: `stats`, the estimators, the settings, the time at each progress line.
+struct Scan {
+    stats: StatsPass,
+    normal: Estimator,
+    /// The silent mode's, when its limits differ.
+    silent: Option<Estimator>,
+    figures: Figures,
+    /// The estimator's first error (the pass goes on to the end, then reports it).
+    error: Option<gweave_sim::estimate::EstimateError>,
+}
+
+impl Scan {
+    fn into_figures(self, state: &State) -> Figures {
+        let stats = self.stats.into_stats(state);
+        let normal = self.normal.finish();
+        let silent = self.silent.map(Estimator::finish);
+        let silent = silent.as_ref().unwrap_or(&normal);
+        let first_layer = |e: &gweave_sim::estimate::Estimate| e.layer_s.first().copied().unwrap_or(0.0);
+        Figures {
+            filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
+            diameter_mm: stats.filament_diameter_mm,
+            time_s: [normal.total_s, silent.total_s],
+            first_layer_s: [first_layer(&normal), first_layer(silent)],
+            ..self.figures
+        }
+    }
+}
+
+impl Pass for Scan {
+    fn reads_words(&self) -> bool {
+        false
+    }
+
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        self.stats.line(ctx, out)?;
+        let raw = ctx.line.bytes;
+        for est in std::iter::once(&mut self.normal).chain(self.silent.as_mut()) {
+            if let Err(e) = est.line(raw) {
+                self.error.get_or_insert(e);
+            }
+        }
+        if let Some(c) = ctx.block.comment_text(raw) {
+            read_setting(c, &mut self.figures);
+        }
+        if is_progress_line(raw) {
+            let now = |e: &Estimator| e.now_s();
+            let t = now(&self.normal);
+            self.figures.progress_s.push([t, self.silent.as_ref().map_or(t, now)]);
+        }
+        Ok(())
+    }
+}
