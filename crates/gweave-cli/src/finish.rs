@@ -21,7 +21,9 @@ use gweave::gcode::state::{State, StateOptions};
 use gweave::gcode::temp::TempFile;
 use gweave::gcode::writer::{Output, Target};
 use gweave::pass::{drive_reader, Ctx, Pass, Quiet, Run, Strictness};
-use gweave::post::metadata::{earlier_runs, header_line, is_progress_line, read_setting, Figures, MetadataPass};
+use gweave::post::metadata::{
+    earlier_runs, header_line, is_progress_line, read_setting, Figures, MetadataPass,
+};
 use gweave::stats::StatsPass;
 use gweave_sim::estimate::Estimator;
 use gweave_sim::limits::MotionProfile;
@@ -68,7 +70,8 @@ pub fn with_metadata_timed<R>(
     own_time_s: impl FnOnce(&R) -> Option<f64>,
 ) -> Result<(R, Option<PathBuf>)> {
     let dir = scratch_dir(target, input);
-    let scratch = TempFile::new_in(&dir).with_context(|| format!("creating a scratch file in {}", dir.display()))?;
+    let scratch =
+        TempFile::new_in(&dir).with_context(|| format!("creating a scratch file in {}", dir.display()))?;
     let path = scratch.path().to_path_buf();
     let result = write(&Target::File(path.clone()))?;
     let mut figures = measure(&path)?;
@@ -104,7 +107,8 @@ fn scratch_dir(target: &Target, input: Option<&Path>) -> PathBuf {
 
 /// The command line as typed, without the program: `mix a.gcode -c mix.toml --in-place`.
 fn command_line() -> String {
-    let quote = |a: String| if a.is_empty() || a.contains([' ', '\t', '\'', '"']) { format!("{a:?}") } else { a };
+    let quote =
+        |a: String| if a.is_empty() || a.contains([' ', '\t', '\'', '"']) { format!("{a:?}") } else { a };
     std::env::args().skip(1).map(quote).collect::<Vec<_>>().join(" ")
 }
 

@@ -228,7 +228,8 @@ impl StatsPass {
         } else if let Some(v) = c.strip_prefix(b"Filament used:") {
             // Cura: `;Filament used: 1.2m, 0.5m`. Its command line writes `0m` as a
             // placeholder (the front end fills it in): no figure at all.
-            let m = v.split(|&b| b == b',').map(|x| list(x.trim_ascii().strip_suffix(b"m")?)?.first().copied());
+            let m =
+                v.split(|&b| b == b',').map(|x| list(x.trim_ascii().strip_suffix(b"m")?)?.first().copied());
             let mm: Option<Vec<f64>> = m.map(|x| x.map(|m| m * 1000.0)).collect();
             self.figures.filament_used_mm = mm.filter(|l| l.iter().any(|&x| x != 0.0));
         } else if let Some(v) = c.strip_prefix(b"estimated printing time (normal mode) =") {

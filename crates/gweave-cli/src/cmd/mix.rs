@@ -110,7 +110,8 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
     let (Some(input), Some(target)) = (&args.input, target) else { bail!("give the G-code file to rewrite") };
     finish::refuse_second_run(input, "mix")?;
     let mut bar = Bar::new(args.quiet);
-    let (report, _) = finish::with_metadata(Some(input), &target, |t| Ok(mix_file(profile, input, t, &mut bar)?))?;
+    let (report, _) =
+        finish::with_metadata(Some(input), &target, |t| Ok(mix_file(profile, input, t, &mut bar)?))?;
     drop(bar);
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");

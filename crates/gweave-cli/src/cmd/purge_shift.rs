@@ -100,8 +100,9 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     let rules = config(&args)?.validate()?;
     finish::refuse_second_run(&args.input, "purge-shift")?;
     let mut bar = Bar::new(args.quiet);
-    let (mut report, _) =
-        finish::with_metadata(Some(&args.input), &target, |t| Ok(purge_shift_file(rules, &args.input, t, &mut bar)?))?;
+    let (mut report, _) = finish::with_metadata(Some(&args.input), &target, |t| {
+        Ok(purge_shift_file(rules, &args.input, t, &mut bar)?)
+    })?;
     // The run's header is one line above every change.
     report.changes.offset_output_lines(1);
     drop(bar);

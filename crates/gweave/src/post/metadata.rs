@@ -171,10 +171,13 @@ impl MetadataPass {
         }
         let text = line.trim_ascii_start().strip_prefix(b";")?;
         let f = &self.figures;
-        let list = |v: &[f64], decimals: usize| v.iter().map(|x| format!("{x:.decimals$}")).collect::<Vec<_>>();
+        let list =
+            |v: &[f64], decimals: usize| v.iter().map(|x| format!("{x:.decimals$}")).collect::<Vec<_>>();
         let keep_key = |key_end: usize| line[..line.len() - text.len() + key_end].to_vec();
         // PrusaSlicer family: `; key = value`.
-        if let Some((key, end)) = text.iter().position(|&b| b == b'=').map(|i| (text[..i].trim_ascii(), i + 1)) {
+        if let Some((key, end)) =
+            text.iter().position(|&b| b == b'=').map(|i| (text[..i].trim_ascii(), i + 1))
+        {
             let value = match key {
                 b"filament used [mm]" => {
                     self.wrote_filament = true;
@@ -204,7 +207,9 @@ impl MetadataPass {
             return Some(out);
         }
         // Cura: `;KEY:value`.
-        let (key, end) = text.iter().position(|&b| b == b':').map(|i| (&text[..i], i + 1))?;
+        let (key, colon) = text.iter().position(|&b| b == b':').map(|i| (&text[..i], i + 1))?;
+        // Keep the space after the colon, if any (`;Filament used: 0m`, `;TIME:6666`).
+        let end = colon + text[colon..].iter().take_while(|b| **b == b' ').count();
         let value = match key {
             b"Filament used" => {
                 self.wrote_filament = true;
@@ -237,7 +242,8 @@ impl MetadataPass {
             return format!("{indent};TIME_ELAPSED:{t_s:.6}").into_bytes();
         }
         let [total, total_silent] = self.figures.time_s;
-        let percent = |t: f64, total: f64| if total > 0.0 { (100.0 * t / total).round().min(100.0) } else { 100.0 };
+        let percent =
+            |t: f64, total: f64| if total > 0.0 { (100.0 * t / total).round().min(100.0) } else { 100.0 };
         let minutes_left = |t: f64, total: f64| ((total - t).max(0.0) / 60.0).round();
         let (code, comment) = match text.find(';') {
             Some(i) => (&text[..i], &text[i..]),

@@ -143,7 +143,8 @@ impl Serialize for ChangeLog {
                     let entry: &RawValue = serde_json::from_str(&line).map_err(S::Error::custom)?;
                     seq.serialize_element(entry)?;
                 } else {
-                    let mut entry: serde_json::Value = serde_json::from_str(&line).map_err(S::Error::custom)?;
+                    let mut entry: serde_json::Value =
+                        serde_json::from_str(&line).map_err(S::Error::custom)?;
                     if let Some(n) = entry.get_mut("output_line").and_then(|n| n.as_u64()) {
                         entry["output_line"] = (n + self.spilled_line_offset).into();
                     }
