@@ -21,7 +21,7 @@
 //! (generated)`, which [`earlier_runs`] finds again: running the same transform on its own
 //! output would stack (shift the changes twice, purge twice), and the caller refuses it.
 
-use std::io::{self, BufRead, Write};
+use std::io::{self, BufRead, Read, Write};
 
 use crate::pass::{Ctx, Pass};
 use crate::stats::DEFAULT_FILAMENT_DIAMETER_MM;
@@ -31,8 +31,9 @@ const HEADER_START: &str = "; gweave ";
 /// The end of gweave's header line.
 const HEADER_END: &str = " (generated)";
 /// Lines searched for earlier runs' headers: a chain of runs, after Cura's Griffin header
-/// (about 25 lines).
+/// (about 25 lines); and bytes, so that a huge first line is not read whole.
 const HEADER_SEARCH_LINES: usize = 200;
+const HEADER_SEARCH_BYTES: u64 = 256 * 1024;
 
 /// The header line for a run of `command_line` (the command and its options, as typed).
 pub fn header_line(command_line: &str) -> String {
@@ -61,7 +62,7 @@ impl EarlierRun {
 /// The gweave runs recorded in the first lines of `input`.
 pub fn earlier_runs(input: impl BufRead) -> io::Result<Vec<EarlierRun>> {
     let mut runs = Vec::new();
-    for (i, line) in input.split(b'\n').take(HEADER_SEARCH_LINES).enumerate() {
+    for (i, line) in input.take(HEADER_SEARCH_BYTES).split(b'\n').take(HEADER_SEARCH_LINES).enumerate() {
         let line = line?;
         let text = String::from_utf8_lossy(&line);
         let text = text.trim_end_matches('\r');
