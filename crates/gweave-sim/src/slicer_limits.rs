@@ -214,6 +214,22 @@ mod tests {
         ; machine_max_feedrate_z = 12,12\n; machine_max_jerk_e = 2.5,2.5\n; machine_max_jerk_x = 10,10\n\
         ; machine_max_jerk_y = 10,10\n; machine_max_jerk_z = 0.2,0.4\n";
 
+    /// PrusaSlicer's silent-mode estimate plans with the second of each pair.
+    #[test]
+    fn prusaslicer_silent_mode_limits() {
+        let l = slicer_limits_silent(PRUSA_TAIL.as_bytes(), &MotionProfile::default()).unwrap();
+        let p = &l.profile;
+        assert_eq!(p.max_accel_mm_s2.to_array()[..4], [1000.0, 1000.0, 200.0, 5000.0]);
+        assert_eq!(p.max_feed_mm_s.to_array()[..4], [200.0, 200.0, 12.0, 120.0]);
+        assert_eq!((p.accel.print_mm_s2, p.accel.retract_mm_s2), (1250.0, 1250.0));
+        let jerk = Jerk { x: 10.0, y: 10.0, z: 0.4, e: 2.5 };
+        assert_eq!(p.corners.marlin_corners(), Some(MarlinCorners::Jerk(jerk)));
+        // One value: the same in both modes.
+        let one = "; machine_max_acceleration_x = 700\n";
+        let l = slicer_limits_silent(one.as_bytes(), &MotionProfile::default()).unwrap();
+        assert_eq!(l.profile.max_accel_mm_s2.x, 700.0);
+    }
+
     #[test]
     fn prusaslicer_normal_mode_limits_and_classic_jerk() {
         let l = slicer_limits(PRUSA_TAIL.as_bytes(), &MotionProfile::default()).unwrap();
