@@ -21,7 +21,7 @@
 //! (generated)`, which [`earlier_runs`] finds again: running the same transform on its own
 //! output would stack (shift the changes twice, purge twice), and the caller refuses it.
 
-use std::io::{self, BufRead, Read, Write};
+use std::io::{self, BufRead, Write};
 
 use crate::pass::{Ctx, Pass};
 use crate::stats::DEFAULT_FILAMENT_DIAMETER_MM;
