@@ -83,7 +83,7 @@ pub fn with_metadata_timed<R>(
     let flavour = read_flavour(&path).with_context(|| format!("reading {}", path.display()))?;
     let options = StateOptions::default().for_flavour(flavour.as_deref());
     let file = File::open(&path).with_context(|| format!("reading {}", path.display()))?;
-    let mut pass = MetadataPass::new(figures, header_line(&command_line()));
+    let mut pass = MetadataPass::new(figures, header_line(&command_line(input)));
     drive_reader(file, &path, options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
     out.commit()?;
     drop(scratch);
@@ -105,11 +105,38 @@ fn scratch_dir(target: &Target, input: Option<&Path>) -> PathBuf {
     }
 }
 
-/// The command line as typed, without the program: `mix a.gcode -c mix.toml --in-place`.
-fn command_line() -> String {
+/// Flags that say where the G-code comes from and goes, or how the run reports, not what it
+/// does to the file; with a value, and alone.
+const IO_FLAGS_WITH_VALUE: &[&str] = &["-o", "--output", "--report", "--preview", "--palette-png"];
+const IO_FLAGS: &[&str] = &["--in-place", "--no-backup", "--force", "-q", "--quiet", "--json"];
+
+/// The command and the options that shape its output, as typed, without the program, the
+/// input and output files and the reporting flags: `mix -c mix.toml --purge-mm 20`. So the
+/// same run from a file, a pipe or in place writes the same header.
+fn command_line(input: Option<&Path>) -> String {
+    transform_args(std::env::args().skip(1), input)
+}
+
+fn transform_args(args: impl Iterator<Item = String>, input: Option<&Path>) -> String {
     let quote =
         |a: String| if a.is_empty() || a.contains([' ', '\t', '\'', '"']) { format!("{a:?}") } else { a };
-    std::env::args().skip(1).map(quote).collect::<Vec<_>>().join(" ")
+    let mut kept = Vec::new();
+    let mut skip_value = false;
+    for arg in args {
+        let flag = arg.split_once('=').map_or(arg.as_str(), |(f, _)| f);
+        if std::mem::take(&mut skip_value)
+            || IO_FLAGS.contains(&arg.as_str())
+            || input == Some(Path::new(&arg))
+        {
+            continue;
+        }
+        if IO_FLAGS_WITH_VALUE.contains(&flag) {
+            skip_value = flag == arg;
+            continue;
+        }
+        kept.push(quote(arg));
+    }
+    kept.join(" ")
 }
 
 /// Measures the written file: its filament, its settings, its estimated times.
@@ -196,5 +223,29 @@ impl Pass for Scan {
             self.figures.progress_s.push([t, self.silent.as_ref().map_or(t, now)]);
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_header_keeps_the_options_that_shape_the_output() {
+        let args = |line: &str, input: Option<&str>| {
+            transform_args(line.split(' ').map(str::to_owned), input.map(Path::new))
+        };
+        assert_eq!(
+            args("purge-shift a.gcode --purge 2.5 -o b.gcode -q --report=r.json", Some("a.gcode")),
+            "purge-shift --purge 2.5"
+        );
+        assert_eq!(args("mix -c m.toml --in-place --no-backup a.gcode", Some("a.gcode")), "mix -c m.toml");
+        assert_eq!(
+            args("rotary tube --output=t.gcode --mandrel-diameter 20 --preview t.png --json", None),
+            "rotary tube --mandrel-diameter 20"
+        );
+        let spaced =
+            transform_args(["mix".into(), "--at-layer".into(), "0=Dark Red".into()].into_iter(), None);
+        assert_eq!(spaced, r#"mix --at-layer "0=Dark Red""#);
     }
 }

@@ -187,8 +187,10 @@ fn a_second_run_of_the_same_transform_is_refused() {
         let out = gweave(&second);
         assert!(!out.status.success(), "{command}");
         let err = String::from_utf8_lossy(&out.stderr);
+        // The run's options, without its files.
+        let options = args[command.split(' ').count()..].join(" ");
         let expected = format!(
-            "{}:1: this file was written by `gweave {} {command} {input}",
+            "{}:1: this file was written by `gweave {} {command} {options}`",
             once.display(),
             env!("CARGO_PKG_VERSION")
         );
@@ -272,4 +274,23 @@ fn stats_counts_a_stationary_purge() {
     )
     .unwrap();
     assert_eq!(stats(&file)["filament"][0]["extruded_mm"].as_f64(), Some(27.0));
+}
+
+/// The header names the run's options, not its files: the same run to a file, to standard
+/// output and in place writes the same bytes.
+#[test]
+fn the_same_run_writes_the_same_bytes_wherever_it_writes() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = fixture("slic3r/slic3r_cone_2tool.gcode");
+    let to_file = dir.path().join("out.gcode");
+    let text = transform(&["purge-shift", &input, "--purge", "2"], &to_file);
+    assert!(text
+        .starts_with(&format!("; gweave {} purge-shift --purge 2 (generated)\n", env!("CARGO_PKG_VERSION"))));
+    let piped = ok(gweave(&["purge-shift", &input, "--purge", "2", "-o", "-", "-q"]));
+    assert_eq!(String::from_utf8(piped.stdout).unwrap(), text);
+    let copy = dir.path().join("copy.gcode");
+    std::fs::copy(&input, &copy).unwrap();
+    ok(gweave(&["purge-shift", copy.to_str().unwrap(), "--purge", "2", "--in-place", "-q"]));
+    assert_eq!(std::fs::read_to_string(&copy).unwrap(), text);
+    assert_eq!(std::fs::read(dir.path().join("copy.gcode.bak")).unwrap(), std::fs::read(&input).unwrap());
 }

@@ -17,7 +17,7 @@
 //! Lines it does not know are copied byte for byte; a file that carries no such line (a
 //! generated one) gets a PrusaSlicer-style footer, so `stats` can compare.
 //!
-//! It also writes the run's header, one comment line `; gweave 0.1.0 mix -c mix.toml --in-place
+//! It also writes the run's header, one comment line `; gweave 0.1.0 mix -c mix.toml
 //! (generated)`, which [`earlier_runs`] finds again: running the same transform on its own
 //! output would stack (shift the changes twice, purge twice), and the caller refuses it.
 
@@ -35,7 +35,8 @@ const HEADER_END: &str = " (generated)";
 const HEADER_SEARCH_LINES: usize = 200;
 const HEADER_SEARCH_BYTES: u64 = 256 * 1024;
 
-/// The header line for a run of `command_line` (the command and its options, as typed).
+/// The header line for a run of `command_line` (the command and the options that shape its
+/// output, as typed).
 pub fn header_line(command_line: &str) -> String {
     format!("{HEADER_START}{} {command_line}{HEADER_END}", env!("CARGO_PKG_VERSION"))
 }
