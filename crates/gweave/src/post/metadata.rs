@@ -312,7 +312,11 @@ impl Pass for MetadataPass {
         }
         // A file without the slicer's figures (a generated one): PrusaSlicer's footer.
         let f = &self.figures;
-        let list = |v: &[f64]| v.iter().map(|x| format!("{x:.2}")).collect::<Vec<_>>().join(", ");
+        // A file that extrudes nothing (an inkjet raster) used none.
+        let list = |v: &[f64]| match v {
+            [] => "0.00".to_owned(),
+            v => v.iter().map(|x| format!("{x:.2}")).collect::<Vec<_>>().join(", "),
+        };
         let eol = String::from_utf8_lossy(&self.eol).into_owned();
         write!(out, "; filament used [mm] = {}{eol}", list(&f.filament_mm))?;
         write!(out, "; filament used [cm3] = {}{eol}", list(&f.cm3()))?;
@@ -432,6 +436,8 @@ G1 X1 E1 ; keep\r\nM73 P50 R31 ; half\r\nM73 P100 R0\r\n; filament used [mm] = 1
     fn a_file_without_figures_gets_a_footer() {
         let out = rewrite("G1 X1 E1\n", Figures { filament_mm: vec![12.345], ..Default::default() });
         assert!(out.ends_with("G1 X1 E1\n; filament used [mm] = 12.35\n; filament used [cm3] = 0.03\n; estimated printing time (normal mode) = 0s\n"), "{out}");
+        let out = rewrite("G1 X1\n", Figures::default());
+        assert!(out.ends_with("G1 X1\n; filament used [mm] = 0.00\n; filament used [cm3] = 0.00\n; estimated printing time (normal mode) = 0s\n"), "{out}");
     }
 
     #[test]
