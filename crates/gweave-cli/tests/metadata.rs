@@ -107,6 +107,11 @@ fn stats_of_every_transform_agrees_with_the_metadata_inside_it() {
     // A generated file gets the PrusaSlicer footer, with the rotary command's own time.
     let tube = stats(&out);
     assert!(stated_time_s(&tube).is_some_and(|t| t > 60.0 && t < 3600.0), "{tube}");
+    // An inkjet raster extrudes nothing, and says so.
+    let out = dir.path().join("sphere.inkjet.gcode");
+    let text = transform(&["raster", &fixture("sla/sphere.sl1")], &out);
+    check_output(&text, &out, "raster", false);
+    assert!(text.contains("\n; filament used [mm] = 0.00\n"));
 }
 
 /// The values of `letter` on the `M73` lines that carry it.
