@@ -203,7 +203,7 @@ impl StatsPass {
     }
 
     /// `fed_mm` of filament fed (negative: retracted) by the active tool.
-    #[inline]
+    #[inline(always)]
     fn feed(&mut self, tool: u32, fed_mm: f64) {
         let tool = tool as usize;
         if self.feeds.len() <= tool {

@@ -32,6 +32,9 @@ impl Retraction {
         if fed_mm < 0.0 {
             self.in_force_mm -= fed_mm;
             0.0
+        } else if self.in_force_mm == 0.0 {
+            // Most moves of a print: extrusion with nothing retracted (`stats`'s hot path).
+            fed_mm
         } else {
             let refill = fed_mm.min(self.in_force_mm);
             self.in_force_mm -= refill;
