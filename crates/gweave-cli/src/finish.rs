@@ -145,9 +145,13 @@ fn measure(path: &Path) -> Result<Figures> {
     let base = MachineProfile::default().motion;
     let normal = slicer_limits(&ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
     let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
+    // A second estimate only for a file that shows silent-mode figures (PrusaSlicer's footer is
+    // in its last 256 KiB, `M73 Q0 S..` in its first lines) with limits of their own.
+    let shows_silent =
+        [&b"(silent mode)"[..], b"M73 Q"].iter().any(|n| ends.windows(n.len()).any(|w| w == *n));
     let mut scan = Scan {
         stats: StatsPass::new(None),
-        silent: (silent != normal).then(|| estimator(&silent)).transpose()?,
+        silent: (shows_silent && silent != normal).then(|| estimator(&silent)).transpose()?,
         normal: estimator(&normal)?,
         figures: Figures::default(),
         error: None,
@@ -170,7 +174,7 @@ fn scale_times(f: &mut Figures, t_s: f64) {
 }
 
 fn estimator(profile: &MotionProfile) -> Result<Estimator> {
-    Ok(Estimator::new(profile)?)
+    Ok(Estimator::timing_only(profile)?)
 }
 
 /// The measuring pass: `stats`, the estimators, the settings, the time at each progress line.
