@@ -25,7 +25,7 @@ use gweave::post::metadata::{
     earlier_runs, header_line, is_progress_line, read_setting, Figures, MetadataPass,
 };
 use gweave::stats::StatsPass;
-use gweave_sim::estimate::Estimator;
+use gweave_sim::estimate::{estimate_time, Estimate, Estimator};
 use gweave_sim::limits::MotionProfile;
 use gweave_sim::profile::MachineProfile;
 use gweave_sim::slicer_limits::{slicer_limits, slicer_limits_silent};
@@ -140,6 +140,12 @@ fn transform_args(args: impl Iterator<Item = String>, input: Option<&Path>) -> S
 }
 
 /// Measures the written file: its filament, its settings, its estimated times.
+///
+/// The time at each progress line needs the estimator fed line by line in the same pass; a
+/// file without progress lines is estimated on three threads instead (`estimate_time`, several
+/// times faster). Progress lines are looked for in the file's ends (PrusaSlicer's `M73 P0` in
+/// its first lines, Cura's last `;TIME_ELAPSED:` in its last) and counted by the pass: a file
+/// with them only in its middle is read once more.
 fn measure(path: &Path) -> Result<Figures> {
     let ends = file_ends(path).with_context(|| format!("reading {}", path.display()))?;
     let base = MachineProfile::default().motion;
@@ -147,22 +153,49 @@ fn measure(path: &Path) -> Result<Figures> {
     let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
     // A second estimate only for a file that shows silent-mode figures (PrusaSlicer's footer is
     // in its last 256 KiB, `M73 Q0 S..` in its first lines) with limits of their own.
-    let shows_silent =
-        [&b"(silent mode)"[..], b"M73 Q"].iter().any(|n| ends.windows(n.len()).any(|w| w == *n));
-    let mut scan = Scan {
-        stats: StatsPass::new(None),
-        silent: (shows_silent && silent != normal).then(|| estimator(&silent)).transpose()?,
-        normal: estimator(&normal)?,
-        figures: Figures::default(),
-        error: None,
+    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
+    let silent =
+        (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
+    let per_line = contains(b"M73 ") || contains(b";TIME_ELAPSED:");
+    let (scan, state) = scan(path, per_line.then(|| estimators(&normal, silent.as_ref())).transpose()?)?;
+    let (scan, state) = match scan.estimators {
+        None if scan.progress_lines > 0 => self::scan(path, Some(estimators(&normal, silent.as_ref())?))?,
+        _ => (scan, state),
     };
+    let stats = scan.stats.into_stats(&state);
+    let (normal, silent) = match scan.estimators {
+        Some((normal, silent)) => (normal.finish(), silent.map(Estimator::finish)),
+        None => {
+            let estimate = |p: &MotionProfile| -> Result<Estimate> {
+                let file = File::open(path).with_context(|| format!("reading {}", path.display()))?;
+                Ok(estimate_time(file, p)?)
+            };
+            (estimate(&normal)?, silent.as_ref().map(estimate).transpose()?)
+        }
+    };
+    let silent = silent.as_ref().unwrap_or(&normal);
+    let first_layer = |e: &Estimate| e.layer_s.first().copied().unwrap_or(0.0);
+    Ok(Figures {
+        filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
+        diameter_mm: stats.filament_diameter_mm,
+        time_s: [normal.total_s, silent.total_s],
+        first_layer_s: [first_layer(&normal), first_layer(silent)],
+        ..scan.figures
+    })
+}
+
+/// One measuring pass over the file, with `estimators` (normal and silent mode) fed line by
+/// line if given.
+fn scan(path: &Path, estimators: Option<(Estimator, Option<Estimator>)>) -> Result<(Scan, State)> {
+    let figures = Figures::default();
+    let mut scan = Scan { stats: StatsPass::new(None), estimators, figures, progress_lines: 0, error: None };
     let mut quiet = Quiet;
     let run = Run { strictness: Strictness::Lenient, ..Run::new(path, &mut quiet) };
     let state = run.scan(&mut scan)?;
-    if let Some(e) = scan.error {
+    if let Some(e) = scan.error.take() {
         return Err(anyhow::Error::new(e).context("estimating the print time of the written file"));
     }
-    Ok(scan.into_figures(&state))
+    Ok((scan, state))
 }
 
 /// Scales every time in `f` so that the normal mode's total is `t_s`.
@@ -173,36 +206,24 @@ fn scale_times(f: &mut Figures, t_s: f64) {
     f.time_s[0] = t_s;
 }
 
-fn estimator(profile: &MotionProfile) -> Result<Estimator> {
-    Ok(Estimator::timing_only(profile)?)
+fn estimators(
+    normal: &MotionProfile,
+    silent: Option<&MotionProfile>,
+) -> Result<(Estimator, Option<Estimator>)> {
+    let estimator = |p: &MotionProfile| Estimator::timing_only(p);
+    Ok((estimator(normal)?, silent.map(estimator).transpose()?))
 }
 
-/// The measuring pass: `stats`, the estimators, the settings, the time at each progress line.
+/// The measuring pass: `stats`, the settings, the progress lines, and the estimators when the
+/// time at each progress line is needed.
 struct Scan {
     stats: StatsPass,
-    normal: Estimator,
-    /// The silent mode's, when its limits differ.
-    silent: Option<Estimator>,
+    /// Normal mode's, and silent mode's when its limits differ.
+    estimators: Option<(Estimator, Option<Estimator>)>,
     figures: Figures,
+    progress_lines: u64,
     /// The estimator's first error (the pass goes on to the end, then reports it).
     error: Option<gweave_sim::estimate::EstimateError>,
-}
-
-impl Scan {
-    fn into_figures(self, state: &State) -> Figures {
-        let stats = self.stats.into_stats(state);
-        let normal = self.normal.finish();
-        let silent = self.silent.map(Estimator::finish);
-        let silent = silent.as_ref().unwrap_or(&normal);
-        let first_layer = |e: &gweave_sim::estimate::Estimate| e.layer_s.first().copied().unwrap_or(0.0);
-        Figures {
-            filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
-            diameter_mm: stats.filament_diameter_mm,
-            time_s: [normal.total_s, silent.total_s],
-            first_layer_s: [first_layer(&normal), first_layer(silent)],
-            ..self.figures
-        }
-    }
 }
 
 impl Pass for Scan {
@@ -213,18 +234,22 @@ impl Pass for Scan {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
         self.stats.line(ctx, out)?;
         let raw = ctx.line.bytes;
-        for est in std::iter::once(&mut self.normal).chain(self.silent.as_mut()) {
-            if let Err(e) = est.line(raw) {
-                self.error.get_or_insert(e);
+        if let Some((normal, silent)) = &mut self.estimators {
+            for est in std::iter::once(normal).chain(silent.as_mut()) {
+                if let Err(e) = est.line(raw) {
+                    self.error.get_or_insert(e);
+                }
             }
         }
         if let Some(c) = ctx.block.comment_text(raw) {
             read_setting(c, &mut self.figures);
         }
         if is_progress_line(raw) {
-            let now = |e: &Estimator| e.now_s();
-            let t = now(&self.normal);
-            self.figures.progress_s.push([t, self.silent.as_ref().map_or(t, now)]);
+            self.progress_lines += 1;
+            if let Some((normal, silent)) = &self.estimators {
+                let t = normal.now_s();
+                self.figures.progress_s.push([t, silent.as_ref().map_or(t, Estimator::now_s)]);
+            }
         }
         Ok(())
     }

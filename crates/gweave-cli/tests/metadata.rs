@@ -299,3 +299,20 @@ fn the_same_run_writes_the_same_bytes_wherever_it_writes() {
     assert_eq!(std::fs::read_to_string(&copy).unwrap(), text);
     assert_eq!(std::fs::read(dir.path().join("copy.gcode.bak")).unwrap(), std::fs::read(&input).unwrap());
 }
+
+/// A progress line in the middle of a file only (not in the ends gweave looks at first) is
+/// found by the measuring pass and recomputed too.
+#[test]
+fn a_progress_line_in_the_middle_only_is_recomputed() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(fixture("prusaslicer/pr_bunny_3tool_rel.gcode")).unwrap();
+    let quarter = text.len() / 4;
+    let at = quarter + text[quarter..].find('\n').unwrap() + 1;
+    let input = dir.path().join("bunny.gcode");
+    std::fs::write(&input, format!("{}M73 P50 R1\n{}", &text[..at], &text[at..])).unwrap();
+    let out = dir.path().join("out.gcode");
+    let written = transform(&["purge-shift", input.to_str().unwrap(), "--purge", "2.5"], &out);
+    let (p, r) = (m73(&written, 'P'), m73(&written, 'R'));
+    assert_eq!(p.len(), 1);
+    assert!(p[0] > 5 && p[0] < 45 && r[0] > 60, "P{p:?} R{r:?}");
+}
