@@ -6,7 +6,8 @@
 //!   (`y`, `z`, `e`), `machine_max_feedrate_*`, `machine_max_jerk_*`,
 //!   `machine_max_acceleration_extruding` (M204 P), `_retracting` (R) and `_travel` (T), and
 //!   OrcaSlicer's `machine_max_junction_deviation`; each holds the normal mode's value, then the
-//!   stealth mode's (`9000,1000`): the first is used. `gcode_flavor = klipper` plans with
+//!   stealth mode's (`9000,1000`): the first is used, the second by [`slicer_limits_silent`]
+//!   (for PrusaSlicer's silent-mode estimate; the first if there is no second). `gcode_flavor = klipper` plans with
 //!   Klipper's rules, every other flavour with Marlin's.
 //! - Cura puts the settings changed from the printer's definition in `;SETTING_3` lines at the
 //!   end (`machine_max_feedrate_x`, `machine_max_acceleration_x`, `machine_acceleration`,
@@ -60,6 +61,17 @@ pub struct SlicerLimits {
 /// Read the limits from `text` (the head and tail of a file are enough: the settings are in the
 /// first or the last few hundred KB) onto `base`.
 pub fn slicer_limits(text: &[u8], base: &MotionProfile) -> Result<SlicerLimits, SlicerLimitsError> {
+    limits_of_mode(text, base, 0)
+}
+
+/// [`slicer_limits`] of the stealth (silent) mode: the second of each pair of values.
+pub fn slicer_limits_silent(text: &[u8], base: &MotionProfile) -> Result<SlicerLimits, SlicerLimitsError> {
+    limits_of_mode(text, base, 1)
+}
+
+/// The limits of mode `mode` (0 normal, 1 stealth): the value at that place in each list, or
+/// the first.
+fn limits_of_mode(text: &[u8], base: &MotionProfile, mode: usize) -> Result<SlicerLimits, SlicerLimitsError> {
     let text = String::from_utf8_lossy(text);
     let (settings, slicer) = match prusa_settings(&text) {
         s if !s.is_empty() => (s, "PrusaSlicer"),
@@ -74,7 +86,7 @@ pub fn slicer_limits(text: &[u8], base: &MotionProfile) -> Result<SlicerLimits, 
             return Ok(None);
         };
         // Normal mode first, stealth mode second.
-        let first = value.split(',').next().unwrap_or("").trim();
+        let first = value.split(',').nth(mode).or(value.split(',').next()).unwrap_or("").trim();
         let v = first
             .parse::<f64>()
             .map_err(|_| SlicerLimitsError::NotANumber { key: key.to_owned(), value: value.clone() })?;
@@ -201,6 +213,22 @@ mod tests {
         ; machine_max_feedrate_x = 500,200\n; machine_max_feedrate_y = 500,200\n\
         ; machine_max_feedrate_z = 12,12\n; machine_max_jerk_e = 2.5,2.5\n; machine_max_jerk_x = 10,10\n\
         ; machine_max_jerk_y = 10,10\n; machine_max_jerk_z = 0.2,0.4\n";
+
+    /// PrusaSlicer's silent-mode estimate plans with the second of each pair.
+    #[test]
+    fn prusaslicer_silent_mode_limits() {
+        let l = slicer_limits_silent(PRUSA_TAIL.as_bytes(), &MotionProfile::default()).unwrap();
+        let p = &l.profile;
+        assert_eq!(p.max_accel_mm_s2.to_array()[..4], [1000.0, 1000.0, 200.0, 5000.0]);
+        assert_eq!(p.max_feed_mm_s.to_array()[..4], [200.0, 200.0, 12.0, 120.0]);
+        assert_eq!((p.accel.print_mm_s2, p.accel.retract_mm_s2), (1250.0, 1250.0));
+        let jerk = Jerk { x: 10.0, y: 10.0, z: 0.4, e: 2.5 };
+        assert_eq!(p.corners.marlin_corners(), Some(MarlinCorners::Jerk(jerk)));
+        // One value: the same in both modes.
+        let one = "; machine_max_acceleration_x = 700\n";
+        let l = slicer_limits_silent(one.as_bytes(), &MotionProfile::default()).unwrap();
+        assert_eq!(l.profile.max_accel_mm_s2.x, 700.0);
+    }
 
     #[test]
     fn prusaslicer_normal_mode_limits_and_classic_jerk() {

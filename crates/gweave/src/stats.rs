@@ -11,12 +11,14 @@ use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
 use crate::gcode::state::{Effect, Path, State, X, Y, Z};
 use crate::pass::{Ctx, Pass};
+use crate::post::retraction::Retraction;
 
 /// Filament used by one tool.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct ToolFilament {
     pub tool: u32,
-    /// Filament pushed by extruding moves, mm (retract/unretract pairs not counted).
+    /// Filament pushed out of the nozzle, mm: extrusions and stationary purges; retractions
+    /// and the primes that undo them cancel (see `post/retraction.rs`).
     pub extruded_mm: f64,
     /// Volume of that filament, mm^3.
     pub extruded_mm3: f64,
@@ -58,7 +60,7 @@ impl Default for Bounds {
 /// What the slicer itself wrote about the print, for comparison.
 #[derive(Debug, Clone, Default, Serialize, PartialEq)]
 pub struct SlicerFigures {
-    /// PrusaSlicer/Slic3r `; filament used [mm] = a, b, c`.
+    /// PrusaSlicer/Slic3r `; filament used [mm] = a, b, c`, Cura's `;Filament used: 1.2m`.
     pub filament_used_mm: Option<Vec<f64>>,
     /// PrusaSlicer `; estimated printing time (normal mode) = 1h 2m 3s`, in seconds.
     pub estimated_time_s: Option<f64>,
@@ -91,6 +93,10 @@ pub struct Stats {
     pub start_lines: u64,
     pub end_lines: u64,
     pub slicer_figures: SlicerFigures,
+    /// Whether the filament the file states ([`SlicerFigures::filament_used_mm`]) is what it
+    /// extrudes, per tool, within the figure's rounding (0.05 mm) or 0.01 %; `None` if it
+    /// states none.
+    pub filament_matches_slicer: Option<bool>,
     pub warnings: Vec<String>,
 }
 
@@ -100,7 +106,8 @@ pub struct StatsPass {
     bytes: u64,
     /// Lines in each region of the file, indexed by `Region as usize`.
     lines_by_region: [u64; 3],
-    extruded_mm: Vec<f64>,
+    /// Per tool: the filament out of its nozzle, and its retraction in force.
+    feeds: Vec<(f64, Retraction)>,
     /// The box of extruding moves so far: empty (min above max) until the first.
     bounds: Bounds,
     /// The last move extruded and nothing has set the position since: the next move starts
@@ -133,10 +140,10 @@ impl StatsPass {
             .unwrap_or(DEFAULT_FILAMENT_DIAMETER_MM);
         let area_mm2 = std::f64::consts::PI * diameter * diameter / 4.0;
         let filament = self
-            .extruded_mm
+            .feeds
             .iter()
             .enumerate()
-            .map(|(tool, &mm)| ToolFilament {
+            .map(|(tool, &(mm, _))| ToolFilament {
                 tool: tool as u32,
                 extruded_mm: mm,
                 extruded_mm3: mm * area_mm2,
@@ -161,6 +168,13 @@ impl StatsPass {
             warnings.push("no end G-code detected (the print proper runs to the end of the file)".into());
         }
         let extrusion_bounds = (!self.bounds.is_empty()).then_some(self.bounds);
+        let filament_matches_slicer = self.figures.filament_used_mm.as_ref().map(|theirs| {
+            let ours = |i: usize| self.feeds.get(i).map_or(0.0, |f| f.0);
+            (0..theirs.len().max(self.feeds.len())).all(|i| {
+                let theirs = theirs.get(i).copied().unwrap_or(0.0);
+                (ours(i) - theirs).abs() <= (theirs * 1e-4).max(0.05)
+            })
+        });
         Stats {
             bytes: self.bytes,
             lines: self.lines_by_region.iter().sum(),
@@ -183,8 +197,20 @@ impl StatsPass {
             start_lines: self.lines_by_region[Region::Start as usize],
             end_lines: self.lines_by_region[Region::End as usize],
             slicer_figures: self.figures,
+            filament_matches_slicer,
             warnings,
         }
+    }
+
+    /// `fed_mm` of filament fed (negative: retracted) by the active tool.
+    #[inline(always)]
+    fn feed(&mut self, tool: u32, fed_mm: f64) {
+        let tool = tool as usize;
+        if self.feeds.len() <= tool {
+            self.feeds.resize(tool + 1, Default::default());
+        }
+        let (pushed_mm, retraction) = &mut self.feeds[tool];
+        *pushed_mm += retraction.feed(fed_mm);
     }
 
     #[cold]
@@ -199,6 +225,13 @@ impl StatsPass {
             if let Some(mm) = mm {
                 self.figures.filament_used_mm.get_or_insert_with(Vec::new).push(mm);
             }
+        } else if let Some(v) = c.strip_prefix(b"Filament used:") {
+            // Cura: `;Filament used: 1.2m, 0.5m`. Its command line writes `0m` as a
+            // placeholder (the front end fills it in): no figure at all.
+            let m =
+                v.split(|&b| b == b',').map(|x| list(x.trim_ascii().strip_suffix(b"m")?)?.first().copied());
+            let mm: Option<Vec<f64>> = m.map(|x| x.map(|m| m * 1000.0)).collect();
+            self.figures.filament_used_mm = mm.filter(|l| l.iter().any(|&x| x != 0.0));
         } else if let Some(v) = c.strip_prefix(b"estimated printing time (normal mode) =") {
             self.figures.estimated_time_s = duration_s(v);
         } else if let Some(v) =
@@ -229,13 +262,11 @@ impl Pass for StatsPass {
             Effect::Move(m) => {
                 let len_mm = m.len_mm();
                 let e_mm = m.e_mm();
-                // PrusaSlicer counts filament on moves that extrude while moving (any of X, Y, Z).
+                if e_mm != 0.0 {
+                    self.feed(ctx.state.tool, e_mm);
+                }
+                // A print move extrudes while moving (any of X, Y, Z).
                 if e_mm > 0.0 && len_mm > 0.0 {
-                    let tool = ctx.state.tool as usize;
-                    if self.extruded_mm.len() <= tool {
-                        self.extruded_mm.resize(tool + 1, 0.0);
-                    }
-                    self.extruded_mm[tool] += e_mm;
                     self.print_mm += len_mm;
                     // Extrusions come in runs, each starting where the last ended: the start
                     // is needed only after a travel (a test the processor guesses right).
@@ -262,6 +293,7 @@ impl Pass for StatsPass {
                     self.zero_feed_moves += 1;
                 }
             }
+            Effect::FirmwareRetract { e_mm } => self.feed(ctx.state.tool, *e_mm),
             Effect::ToolChange { from, to } if from != to => self.tool_changes += 1,
             Effect::Dwell { t_s } => {
                 self.time_by_feature_s[ctx.state.structure.feature as usize] += t_s;
@@ -375,6 +407,19 @@ mod tests {
         let bounds = seen.extrusion_bounds.unwrap();
         assert_eq!((bounds.min, bounds.max), ([0.0; 3], [20.0, 0.0, 0.0]));
         assert!(!seen.warnings.iter().any(|w| w.contains("flavour")), "{:?}", seen.warnings);
+    }
+
+    /// Issue 21: a 25 mm stationary purge counts; a retraction and the prime that undoes it
+    /// cancel (27 mm, not the 2 mm of the moving extrusions alone).
+    #[test]
+    fn stationary_extrusion_counts() {
+        let text = b"M104 S200\nM109 S200\nG92 E0\nG1 X10 Y10 F3000\nG1 E25 F200\nG1 X20 Y10 E26\nG92 E0\nG1 E-1\nG1 E0\nG1 X30 E1\n";
+        let stats = stats_of(text, StateOptions::default());
+        assert_eq!(stats.filament[0].extruded_mm, 27.0);
+        // Firmware retraction and its recovery cancel too; a retraction while wiping along XY
+        // is undone by the stationary prime after it.
+        let text = b"M104 S200\nM83\nG1 X10 Y10 F3000\nG1 X20 E2\nG10\nG11\nG1 X25 E-0.8\nG1 E0.8\nG1 E3\n";
+        assert_eq!(stats_of(text, StateOptions::default()).filament[0].extruded_mm, 5.0);
     }
 
     /// The extrusion box holds the whole of an arc, not only its end points.

@@ -19,6 +19,7 @@ use gweave::range::PURGE_MM;
 use crate::args::Quiet;
 use crate::common::{in_range, load_or_default, print_summary, write_bytes, OutputArgs, ReportArgs};
 use crate::files::Files;
+use crate::finish;
 
 /// Colour a print on a mixing hotend: define mixes as virtual tools, change them by layer, by
 /// height, along a gradient or per slicer tool, purge at each change, cap the Z feed rate.
@@ -150,8 +151,10 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
 
 /// Mixes `input` into `target` and reports: the job of a plain run and of the wizard's.
 fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) -> Result<ExitCode> {
+    finish::refuse_second_run(input, "mix")?;
     let mut bar = args.quiet.bar();
-    let report = mix_file(profile, input, &target, &mut bar)?;
+    let (report, _) =
+        finish::with_metadata(Some(input), &target, |t| Ok(mix_file(profile, input, t, &mut bar)?))?;
     drop(bar);
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");

@@ -5,7 +5,7 @@ mod check;
 mod stats;
 
 // gweave-sim: the virtual printer
-mod estimate;
+pub(crate) mod estimate;
 mod machine;
 mod sim;
 // binder-jet raster

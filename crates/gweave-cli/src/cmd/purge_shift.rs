@@ -13,6 +13,7 @@ use gweave::range::{FILAMENT_DIAMETER_MM, POSITION_MM, PURGE_MM, PURGE_MM3};
 use crate::args::Quiet;
 use crate::common::{in_range, load_or_default, numbers_in, print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
+use crate::finish;
 
 /// Move each tool/mix change earlier by the purge, so the old colour is purged inside the part.
 ///
@@ -99,8 +100,13 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let rules = config(&args)?.validate()?;
+    finish::refuse_second_run(&args.input, "purge-shift")?;
     let mut bar = args.quiet.bar();
-    let report = purge_shift_file(rules, &args.input, &target, &mut bar)?;
+    let (mut report, _) = finish::with_metadata(Some(&args.input), &target, |t| {
+        Ok(purge_shift_file(rules, &args.input, t, &mut bar)?)
+    })?;
+    // The run's header is one line above every change.
+    report.changes.offset_output_lines(1);
     drop(bar);
     for w in report.warnings.iter().take(20) {
         eprintln!("gweave: warning: {w}");

@@ -14,6 +14,7 @@ use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
 use crate::args::Quiet;
 use crate::common::{hms, in_range, numbers_in, print_summary, ReportArgs};
 use crate::files::Files;
+use crate::finish;
 use crate::raster_job::{JobOptions, JobReport};
 
 /// Layer images to inkjet G-code for binder jetting: bands as tall as the nozzle row, per
@@ -194,7 +195,11 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     };
     let job = options.job_from(source, heads)?;
     let mut bar = LayerBar::new(args.quiet.quiet);
-    let report = job.run(&target(&args.output), &mut bar)?;
+    // Its own time counts the printhead's firing, which the estimator does not know.
+    let run = |t: &Target| job.run(t, &mut bar);
+    let (mut report, _) =
+        finish::with_metadata_timed(None, &target(&args.output), run, |r: &JobReport| Some(r.time.total_s))?;
+    report.output = if to_stdout { "-".into() } else { args.output.display().to_string() };
     drop(bar);
     if args.quiet.emit(&args.report, &report)? && !to_stdout {
         print_summary(|out| print_human(out, &report, &job.profile))?;

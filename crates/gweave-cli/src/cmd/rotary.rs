@@ -24,6 +24,7 @@ use crate::args::Quiet;
 use crate::common::hms;
 use crate::common::{in_range, load, print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
+use crate::finish;
 
 /// Rotary (lathe-type) printing: wrap flat G-code onto a mandrel, or generate helical tubes.
 #[derive(Args, Debug)]
@@ -236,8 +237,14 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     if let Some(tol) = args.chord_tol {
         config.chord_tolerance_mm = tol;
     }
+    finish::refuse_second_run(&args.input, "rotary wrap")?;
     let mut bar = args.quiet.bar();
-    let report = report::wrap_file(&config, &args.input, &target, args.machine.preview.as_deref(), &mut bar)?;
+    let preview = args.machine.preview.as_deref();
+    let wrap = |t: &Target| Ok(report::wrap_file(&config, &args.input, t, preview, &mut bar)?);
+    // Its own time: the default machine of the estimator does not read the rotary feed.
+    let (mut report, written) =
+        finish::with_metadata_timed(Some(&args.input), &target, wrap, |r: &WrapReport| Some(r.time_s))?;
+    report.output = written;
     drop(bar);
     if args.quiet.emit(&args.report, &report)? && !matches!(target, Target::Stdout) {
         print_summary(|out| print_wrap(out, &report))?;
@@ -381,7 +388,11 @@ fn run_tube(args: TubeArgs) -> Result<ExitCode> {
     let params = tube_params(&args)?;
     let target =
         if args.output == Path::new("-") { Target::Stdout } else { Target::File(args.output.clone()) };
-    let report = report::tube_file(&params, &target, args.machine.preview.as_deref())?;
+    let preview = args.machine.preview.as_deref();
+    let tube = |t: &Target| Ok(report::tube_file(&params, t, preview)?);
+    let (mut report, written) =
+        finish::with_metadata_timed(None, &target, tube, |r: &TubeReport| Some(r.print_time_s))?;
+    report.output = written;
     if args.quiet.emit(&args.report, &report)? && !matches!(target, Target::Stdout) {
         print_summary(|out| print_tube(out, &report))?;
     }

@@ -42,6 +42,19 @@ impl fmt::Display for InkjetWarning {
             InkjetWarning::OffCanvas { head, x_mm, y_mm, lost } => {
                 write!(f, "head {head} at X {x_mm:.3} Y {y_mm:.3} mm: {lost} drops off the canvas")
             }
+            InkjetWarning::FireDuringRecoat { x_mm, y_mm } => {
+                write!(f, "fired during a recoat at X {x_mm:.3} Y {y_mm:.3} mm")
+            }
+            InkjetWarning::NoRecoat { z_mm } => write!(f, "layer at Z {z_mm:.3} mm fired with no recoat before it"),
+            InkjetWarning::PistonTravel { axis, moved_mm, expected_mm } => write!(
+                f,
+                "recoat piston {axis} moved {moved_mm:.3} mm where the layer asks {expected_mm:.3} mm"
+            ),
+            InkjetWarning::SpreaderShort { reach_mm, bed_mm } => write!(
+                f,
+                "the spreader reached {:.3} .. {:.3} mm, not across the bed {:.3} .. {:.3} mm",
+                reach_mm[0], reach_mm[1], bed_mm[0], bed_mm[1]
+            ),
         }
     }
 }

@@ -422,7 +422,7 @@ impl MixPass {
         // tool-change retraction is owed; the rewrite keeps E and F alone.
         let unretraction = e_mm > 0.0 && Retraction::moves_filament_only(mv) && mv.from[Z] == mv.to[Z];
         let fed_mm = if unretraction { self.unretract(ctx, mv)? } else { e_mm };
-        self.retraction.observe(mv, fed_mm);
+        self.retraction.feed(fed_mm);
         if let Some(a) = self.active {
             let printed = (print && mv.is_extruding()).then_some((layer, state.structure.layer_z_mm));
             self.acc.filament(a, fed_mm, printed);

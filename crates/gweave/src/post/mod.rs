@@ -13,5 +13,8 @@ pub mod mix;
 pub mod purge_block;
 pub mod zcap;
 
+// metadata: the slicer's figures rewritten for the file as written, and the run's header.
+pub mod metadata;
+
 // The retraction in force, followed alike by the passes that insert purges.
-mod retraction;
+pub(crate) mod retraction;

@@ -1,10 +1,14 @@
-//! The retraction in force: filament pulled back at the nozzle since the last extrusion, which
-//! a pass inserting moves (a purge block, a fallback purge) must know so that it neither
-//! retracts twice nor leaves the nozzle empty.
+//! The retraction in force, and so the filament that really leaves the nozzle: the one tracker
+//! behind `gweave stats`'s filament count and the passes that insert moves (a purge block, a
+//! fallback purge), which must neither retract twice nor leave the nozzle empty.
 //!
-//! A move that changes E without XY travel moves only filament: backwards it retracts, forwards
-//! it undoes a retraction. Z may change in the same move (`G1 Z0.6 E-0.8`, a retraction with its
-//! lift); an extrusion along XY ends any retraction.
+//! Filament fed backwards is a retraction, whether the nozzle stands (`G1 E-0.8`), lifts
+//! (`G1 Z0.6 E-0.8`) or wipes along XY while it retracts (PrusaSlicer's wipe): it is pulled
+//! back into the nozzle, not printed. Filament fed forwards first refills what is retracted
+//! (the prime that undoes the retraction pushes nothing out); only the rest leaves the nozzle,
+//! whether the nozzle moves (an extrusion) or stands (a purge, a prime line's blob). So a
+//! retraction and the prime that undoes it cancel, and a stationary purge counts. Firmware
+//! retraction (`G10`/`G11`) is followed the same way.
 
 use crate::gcode::state::{Move, X, Y};
 
@@ -20,13 +24,21 @@ impl Retraction {
         mv.e_mm() != 0.0 && mv.to[X] == mv.from[X] && mv.to[Y] == mv.from[Y]
     }
 
-    /// Follows `mv`, of which the output feeds `fed_mm` (the move's own E unless the pass
-    /// rewrote it). Undoing more than is retracted leaves none in force.
-    pub fn observe(&mut self, mv: &Move, fed_mm: f64) {
-        if mv.is_extruding() {
-            self.in_force_mm = 0.0;
-        } else if Self::moves_filament_only(mv) {
-            self.in_force_mm = (self.in_force_mm - fed_mm).max(0.0);
+    /// Follows `fed_mm` of filament fed (negative: retracted) by a move, a firmware retraction
+    /// or recovery, the move's own E unless the pass rewrote it. Returns what left the nozzle,
+    /// mm: the feed beyond the retraction in force, which it undoes first.
+    #[inline]
+    pub fn feed(&mut self, fed_mm: f64) -> f64 {
+        if fed_mm < 0.0 {
+            self.in_force_mm -= fed_mm;
+            0.0
+        } else if self.in_force_mm == 0.0 {
+            // Most moves of a print: extrusion with nothing retracted (`stats`'s hot path).
+            fed_mm
+        } else {
+            let refill = fed_mm.min(self.in_force_mm);
+            self.in_force_mm -= refill;
+            fed_mm - refill
         }
     }
 
@@ -44,38 +56,24 @@ impl Retraction {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gcode::state::{Path, Position};
-
-    fn mv(from: [f64; 4], to: [f64; 4]) -> Move {
-        let pos = |p: [f64; 4]| {
-            let mut q: Position = Default::default();
-            q[..4].copy_from_slice(&p);
-            q
-        };
-        Move { from: pos(from), to: pos(to), path: Path::Line, rapid: false, feed_mm_min: 1800.0 }
-    }
 
     #[test]
-    fn follows_retractions_lifts_and_extrusion() {
+    fn retractions_and_their_primes_cancel_and_the_rest_leaves_the_nozzle() {
         let mut r = Retraction::default();
-        // Retract 0.8 with a 0.4 mm lift in the same move, then 0.2 more.
-        r.observe(&mv([10.0, 10.0, 0.2, 5.0], [10.0, 10.0, 0.6, 4.2]), -0.8);
-        r.observe(&mv([10.0, 10.0, 0.6, 4.2], [10.0, 10.0, 0.6, 4.0]), -0.2);
-        assert!((r.in_force_mm() - 1.0).abs() < 1e-12);
-        // Travel and a pure Z move change nothing.
-        r.observe(&mv([10.0, 10.0, 0.6, 4.0], [50.0, 10.0, 0.6, 4.0]), 0.0);
-        r.observe(&mv([50.0, 10.0, 0.6, 4.0], [50.0, 10.0, 0.2, 4.0]), 0.0);
-        assert!((r.in_force_mm() - 1.0).abs() < 1e-12);
-        // A partial unretraction, then more than is left: none in force, never negative.
-        r.observe(&mv([50.0, 10.0, 0.2, 4.0], [50.0, 10.0, 0.2, 4.7]), 0.7);
+        // Retract 0.6 while wiping and 0.2 standing: 0.8 in force, nothing printed.
+        assert_eq!(r.feed(-0.6) + r.feed(-0.2), 0.0);
+        assert!((r.in_force_mm() - 0.8).abs() < 1e-12);
+        // A partial prime refills the nozzle, pushing nothing out.
+        assert_eq!(r.feed(0.5), 0.0);
         assert!((r.in_force_mm() - 0.3).abs() < 1e-12);
-        r.observe(&mv([50.0, 10.0, 0.2, 4.7], [50.0, 10.0, 0.2, 5.5]), 0.8);
+        // A prime with an extra 0.2: only the extra leaves the nozzle.
+        assert!((r.feed(0.5) - 0.2).abs() < 1e-12);
         assert_eq!(r.in_force_mm(), 0.0);
-        // An extrusion ends whatever is left.
-        r.observe(&mv([50.0, 10.0, 0.2, 5.5], [50.0, 10.0, 0.2, 5.0]), -0.5);
-        r.withdraw(0.2);
-        assert!((r.in_force_mm() - 0.3).abs() < 1e-12);
-        r.observe(&mv([50.0, 10.0, 0.2, 5.0], [60.0, 10.0, 0.2, 5.3]), 0.3);
-        assert_eq!(r.in_force_mm(), 0.0);
+        // A stationary purge with nothing retracted is all printed.
+        assert_eq!(r.feed(25.0), 25.0);
+        r.feed(-2.0);
+        r.withdraw(1.5);
+        assert!((r.in_force_mm() - 0.5).abs() < 1e-12);
+        assert_eq!(r.feed(0.5), 0.0);
     }
 }

@@ -66,7 +66,7 @@ impl Surroundings {
     /// Follows one move of the file.
     pub fn observe(&mut self, mv: &Move, in_print: bool) {
         let e_mm = mv.e_mm();
-        self.retraction.observe(mv, e_mm);
+        self.retraction.feed(e_mm);
         if mv.is_extruding() {
             if let Some((mm, feed)) = self.pending.take() {
                 self.retract_mm = mm;

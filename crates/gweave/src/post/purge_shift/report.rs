@@ -73,6 +73,9 @@ pub struct ChangeLog {
     kept: Vec<ChangeReport>,
     spill: Option<BufWriter<File>>,
     total: usize,
+    /// Lines written above the pass's output after it ran (a header), added to the spilled
+    /// entries' `output_line` as they are read back.
+    spilled_line_offset: u64,
 }
 
 impl ChangeLog {
@@ -107,6 +110,15 @@ impl ChangeLog {
         self.total - self.kept.len()
     }
 
+    /// Lines were inserted above every change in the output (the run's header, written after
+    /// the pass): the output line numbers move down by `lines`.
+    pub fn offset_output_lines(&mut self, lines: u64) {
+        for c in &mut self.kept {
+            c.output_line += lines;
+        }
+        self.spilled_line_offset += lines;
+    }
+
     /// Writes out what is buffered of the spill file (the pass calls it at the end).
     pub fn flush(&mut self) -> io::Result<()> {
         self.spill.as_mut().map_or(Ok(()), |s| s.flush())
@@ -127,8 +139,17 @@ impl Serialize for ChangeLog {
                 let line = line.map_err(S::Error::custom)?;
                 // Written by `push` as one JSON object per line: passed on as it is, checked
                 // but not rebuilt into a tree.
-                let entry: &RawValue = serde_json::from_str(&line).map_err(S::Error::custom)?;
-                seq.serialize_element(entry)?;
+                if self.spilled_line_offset == 0 {
+                    let entry: &RawValue = serde_json::from_str(&line).map_err(S::Error::custom)?;
+                    seq.serialize_element(entry)?;
+                } else {
+                    let mut entry: serde_json::Value =
+                        serde_json::from_str(&line).map_err(S::Error::custom)?;
+                    if let Some(n) = entry.get_mut("output_line").and_then(|n| n.as_u64()) {
+                        entry["output_line"] = (n + self.spilled_line_offset).into();
+                    }
+                    seq.serialize_element(&entry)?;
+                }
             }
         }
         seq.end()
