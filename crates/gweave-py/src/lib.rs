@@ -1,10 +1,10 @@
 //! Python bindings for gweave: one module, thin wrappers over the engine. Reports cross as JSON
 //! text (the same documents `--json` prints) and become dicts in `gweave/__init__.py`.
 
-use std::fs::File;
 use std::path::PathBuf;
 
 use gweave::check::{CheckOptions, CheckPass};
+use gweave::gcode::container::{self, Input};
 use gweave::gcode::diag::{Diagnostic, Finding};
 use gweave::gcode::flavour::read_flavour;
 use gweave::gcode::lexer::{parse_into, parse_line};
@@ -190,7 +190,7 @@ impl Line {
 /// Iterates a file's lines with parsed words and machine state; memory stays bounded.
 #[pyclass(module = "gweave")]
 struct Reader {
-    lines: LineReader<File>,
+    lines: LineReader<Input>,
     block: Block,
     state: State,
 }
@@ -202,7 +202,7 @@ impl Reader {
         let os_err = |e: std::io::Error| PyOSError::new_err(format!("{}: {e}", path.display()));
         // The state reads the file's words as its flavour means them, as every command does.
         let flavour = read_flavour(&path).map_err(os_err)?;
-        let file = File::open(&path).map_err(os_err)?;
+        let file = container::open(&path).map_err(os_err)?;
         let state = State::new(StateOptions::default().for_flavour(flavour.as_deref()));
         Ok(Reader { lines: LineReader::new(file), block: Block::default(), state })
     }
@@ -585,7 +585,7 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult
     let profile = machine_profile(machine)?;
     let report = py.allow_threads(|| {
         let mut m = gweave_sim::interp::Machine::new(profile).map_err(sim_err)?;
-        let file = File::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let file = container::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
         let mut reader = LineReader::new(file);
         let mut out = |_t: f64, _l: &str| {};
         while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
@@ -612,7 +612,7 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult
 fn estimate_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, steps: bool) -> PyResult<String> {
     let profile = machine_profile(machine)?;
     let report = py.allow_threads(|| {
-        let file = File::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let file = container::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
         gweave_sim::estimate::estimate_report(file, &profile, steps)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
     })?;

@@ -1,12 +1,12 @@
 //! `gweave estimate`: the print time from the virtual printer's planner alone, fast.
 
-use std::fs::File;
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
+use gweave::gcode::container;
 use gweave::pass::Progress;
 use gweave_sim::estimate::{estimate_report, EstimateReport};
 use gweave_sim::profile::MachineProfile;
@@ -56,9 +56,9 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         Some(_) if from_slicer => slicer_profile(&args.input)?,
         other => load_or_default(other.as_ref(), MachineProfile::from_toml_str)?,
     };
-    let file = File::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
+    let file = container::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
     let mut bar = Bar::new(args.quiet);
-    bar.set_len(file.metadata().map(|m| m.len()).unwrap_or(0));
+    bar.set_len(file.text_len.unwrap_or(0));
     let input = Counted { inner: file, bar, done: 0 };
     let report = estimate_report(input, &profile, args.steps).map_err(|e| match e.line() {
         Some(line) if line > 0 => anyhow!("{}:{line}: {}", args.input.display(), e.reason()),
@@ -83,29 +83,21 @@ fn slicer_profile(input: &Path) -> Result<MachineProfile> {
     Ok(MachineProfile { name, motion: limits.profile, ..base })
 }
 
-/// The first 64 KiB and the last 256 KiB of a file (all of a smaller one), where slicers put
-/// their settings: Cura in its header and `;SETTING_3` footer, the PrusaSlicer family in the
-/// settings block after the last move.
+/// The first 64 KiB and the last 256 KiB of a file's text (all of a smaller one), where
+/// slicers put their settings: Cura in its header and `;SETTING_3` footer, the PrusaSlicer
+/// family in the settings block after the last move.
 fn file_ends(path: &Path) -> std::io::Result<Vec<u8>> {
-    use std::io::{Seek, SeekFrom};
-    const HEAD: u64 = 64 * 1024;
-    const TAIL: u64 = 256 * 1024;
-    let mut file = File::open(path)?;
-    let len = file.metadata()?.len();
-    let mut buf = Vec::new();
-    (&mut file).take(HEAD).read_to_end(&mut buf)?;
-    let tail_start = len.saturating_sub(TAIL).max(buf.len() as u64);
-    if tail_start < len {
-        buf.push(b'\n');
-        file.seek(SeekFrom::Start(tail_start))?;
-        file.take(TAIL).read_to_end(&mut buf)?;
+    let (mut head, tail) = container::ends(path, 64 * 1024, 256 * 1024)?;
+    if !tail.is_empty() {
+        head.push(b'\n');
+        head.extend_from_slice(&tail);
     }
-    Ok(buf)
+    Ok(head)
 }
 
 /// The input file, moving the progress bar as it is read.
 struct Counted {
-    inner: File,
+    inner: container::Input,
     bar: Bar,
     done: u64,
 }

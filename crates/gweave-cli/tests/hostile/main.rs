@@ -9,6 +9,7 @@
 mod harness;
 
 mod bytes;
+mod containers;
 mod config;
 mod hosts;
 mod outputs;

@@ -149,6 +149,35 @@ pub fn find_suffix(text: &[u8], p: &Preamble) -> Option<(Metadata, usize)> {
     (start + 1 + used == before).then_some((Metadata { json: false, items }, start))
 }
 
+/// Takes PrusaSlicer's settings block (`; prusaslicer_config = begin`, `; key = value` lines,
+/// `; prusaslicer_config = end`, then only blank lines) off the end of a text; its items, none
+/// if the text does not end with one.
+pub fn take_settings(text: &mut Vec<u8>) -> Metadata {
+    const BEGIN: &[u8] = b"; prusaslicer_config = begin\n";
+    const END: &[u8] = b"; prusaslicer_config = end";
+    let body_end = text.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(0, |i| i + 1);
+    let Some(start) = memchr::memmem::rfind(&text[..body_end], BEGIN) else {
+        return Metadata::default();
+    };
+    if !text[..body_end].ends_with(END) || (start > 0 && text[start - 1] != b'\n') {
+        return Metadata::default();
+    }
+    let block = &text[start + BEGIN.len()..body_end - END.len()];
+    let mut items = Vec::new();
+    for line in block.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        match line.strip_prefix(b"; ").and_then(|l| {
+            let text = String::from_utf8_lossy(l);
+            text.split_once(" = ").map(|(k, v)| (k.to_owned(), v.to_owned()))
+        }) {
+            Some(item) => items.push(item),
+            None => return Metadata::default(),
+        }
+    }
+    text.truncate(start);
+    Metadata { json: false, items }
+}
+
 /// Standard base64 with padding (RFC 4648 section 4), as PrusaSlicer encodes thumbnails.
 pub fn base64(data: &[u8]) -> String {
     const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -221,6 +250,18 @@ mod tests {
         assert_eq!(start, 6);
         assert_eq!(print.get("estimated printing time (normal mode)"), Some("3m 0s"));
         assert!(find_suffix(b"G1 X1\n; prusaslicer_config = end\n\n", &p).is_none());
+    }
+
+    #[test]
+    fn a_text_files_settings_block_becomes_slicer_metadata() {
+        let mut text = b"G1 X1\n\n; prusaslicer_config = begin\n; a = 1\n; b = x = y\n; prusaslicer_config = end\n\n".to_vec();
+        let m = take_settings(&mut text);
+        assert_eq!(m, meta(&[("a", "1"), ("b", "x = y")]));
+        assert_eq!(text, b"G1 X1\n\n");
+        let mut other = b"G1 X1\n; prusaslicer_config = begin\nG1 X2\n; prusaslicer_config = end\n".to_vec();
+        let len = other.len();
+        assert_eq!(take_settings(&mut other), Metadata::default());
+        assert_eq!(other.len(), len);
     }
 
     #[test]

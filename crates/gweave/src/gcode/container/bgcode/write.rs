@@ -8,7 +8,8 @@
 //! starts and ends with the metadata rendered as comments ([`super::text`]); they are found and
 //! taken out of the G-code again, with the printer and print values the transform may have
 //! updated (filament used, times). A text input gets minimal metadata: the producer (gweave),
-//! and empty printer, print and slicer blocks.
+//! its PrusaSlicer settings block (`; prusaslicer_config = begin` .. `end`, taken out of the
+//! G-code) as the slicer metadata, and empty printer and print metadata.
 //!
 //! The file's order puts the print metadata before the G-code, but the updated values are known
 //! only at the end of the text, so the G-code blocks are spooled to an unnamed temporary file
@@ -23,6 +24,8 @@ use super::{file_header, text, Block, Compression, Header, Kind, Metadata, Pream
 
 /// The largest G-code block written (libbgcode's own limit, 65535 bytes).
 pub const BLOCK: usize = 65535;
+/// The end of a text input held back for its settings block (PrusaSlicer's is 10 to 100 KB).
+const SETTINGS_HOLD: usize = 1 << 20;
 /// Lines a transform may put before the rendered metadata are searched this far.
 const HEAD_SLACK: usize = 64 * 1024;
 
@@ -46,7 +49,7 @@ impl<W: Write> Writer<W> {
     pub fn new(out: W, carried: Option<Preamble>) -> io::Result<Writer<W>> {
         let (head_window, hold) = match &carried {
             Some(p) => (text::prefix(p).len() + HEAD_SLACK, text::suffix(p).len()),
-            None => (0, 0),
+            None => (0, SETTINGS_HOLD),
         };
         Ok(Writer {
             out,
@@ -118,15 +121,18 @@ impl<W: Write> Writer<W> {
         if self.head_window > 0 {
             self.head();
         }
-        let mut p = self.carried.take().unwrap_or_else(|| Preamble {
-            checksum: true,
-            file: Some(Metadata {
-                json: false,
-                items: vec![("Producer".into(), format!("gweave {}", env!("CARGO_PKG_VERSION")))],
-            }),
-            slicer: vec![Metadata::default()],
-            ..Preamble::default()
-        });
+        let mut p = match self.carried.take() {
+            Some(p) => p,
+            None => Preamble {
+                checksum: true,
+                file: Some(Metadata {
+                    json: false,
+                    items: vec![("Producer".into(), format!("gweave {}", env!("CARGO_PKG_VERSION")))],
+                }),
+                slicer: vec![text::take_settings(&mut self.pending)],
+                ..Preamble::default()
+            },
+        };
         if let Some((print, start)) = text::find_suffix(&self.pending, &p) {
             self.pending.truncate(start);
             p.print = print;
