@@ -84,7 +84,7 @@ def blocks(path: Path) -> list:
         assert res == pybgcode.EResult.Success
         while True:
             bh = _bgcode.BlockHeader()
-            if _bgcode.read_next_block_header(f, header, bh, None, 0) != pybgcode.EResult.Success:
+            if _bgcode.read_next_block_header(f, header, bh) != pybgcode.EResult.Success:
                 break
             assert _bgcode.verify_block_checksum(f, header, bh) == pybgcode.EResult.Success, f"block {len(kinds) + 1}"
             kinds.append(bh.type)

@@ -68,6 +68,9 @@ fn json_with_standard_output_is_refused() {
         out.assert_refused("--json and -o - would both write to standard output");
         assert!(out.stdout.is_empty(), "{args:?} wrote to standard output");
     }
+    gweave(dir.path(), &["purge-shift", "-", "--in-place", "--purge", "5"])
+        .run()
+        .assert_refused("--in-place needs a file to replace, not standard input (-)");
 }
 
 /// `preview -o - --format png` writes the PNG alone on standard output.

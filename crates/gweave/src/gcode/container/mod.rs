@@ -6,8 +6,10 @@
 //! An input's container is told by its first bytes, not its name: gzip's `1f 8b`, binary
 //! G-code's `GCDE`; anything else is text. An output's container is told by its name:
 //! `*.gz` is written compressed, `*.bgcode` as binary G-code ([`Container::of_output`]).
-//! Everything is streamed: gzip through flate2, binary G-code one block at a time.
+//! Everything is streamed: gzip through flate2, binary G-code one block at a time, decoded on a
+//! thread of its own ([`ahead`]).
 
+pub mod ahead;
 pub mod bgcode;
 pub mod heatshrink;
 pub mod meatpack;
@@ -52,10 +54,9 @@ impl Container {
 
 /// A G-code input opened for reading its text.
 pub struct Input {
-    pub container: Container,
     /// The text's length when known without reading it (plain text), for progress.
     pub text_len: Option<u64>,
-    reader: Box<dyn Read + Send>,
+    reader: Box<dyn Read + Send + Sync>,
 }
 
 impl Read for Input {
@@ -68,16 +69,15 @@ impl Read for Input {
 pub fn open(path: &Path) -> io::Result<Input> {
     let (mut raw, container) = sniffed(path)?;
     Ok(match container {
-        Container::Text => Input { container, text_len: Some(raw.len()?), reader: Box::new(raw) },
+        Container::Text => Input { text_len: Some(raw.len()?), reader: Box::new(raw) },
         Container::Gzip => Input {
-            container,
             text_len: None,
             reader: Box::new(MultiGzDecoder::new(BufReader::with_capacity(1 << 16, raw))),
         },
         Container::Bgcode => {
             raw.seek(SeekFrom::Start(0))?;
             let reader = bgcode::read::Reader::new(BufReader::with_capacity(1 << 16, raw))?;
-            Input { container, text_len: None, reader: Box::new(reader) }
+            Input { text_len: None, reader: Box::new(ahead::Ahead::new(reader)) }
         }
     })
 }
