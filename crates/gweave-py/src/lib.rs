@@ -585,7 +585,8 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult
     let profile = machine_profile(machine)?;
     let report = py.allow_threads(|| {
         let mut m = gweave_sim::interp::Machine::new(profile).map_err(sim_err)?;
-        let file = container::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let file =
+            container::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
         let mut reader = LineReader::new(file);
         let mut out = |_t: f64, _l: &str| {};
         while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
@@ -612,7 +613,8 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>) -> PyResult
 fn estimate_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, steps: bool) -> PyResult<String> {
     let profile = machine_profile(machine)?;
     let report = py.allow_threads(|| {
-        let file = container::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+        let file =
+            container::open(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
         gweave_sim::estimate::estimate_report(file, &profile, steps)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
     })?;

@@ -32,7 +32,8 @@ fn purge_shift_through_a_pipe_equals_the_file_run() {
          \"$G\" purge-shift - -o - --purge 5 < a.gcode > pipe.gcode",
     );
     assert_eq!(code, 0, "{err}");
-    let (file, pipe) = (fs::read(dir.path().join("file.gcode")).unwrap(), fs::read(dir.path().join("pipe.gcode")).unwrap());
+    let (file, pipe) =
+        (fs::read(dir.path().join("file.gcode")).unwrap(), fs::read(dir.path().join("pipe.gcode")).unwrap());
     assert!(file.len() > 1_000_000 && file == pipe, "{} vs {} bytes", file.len(), pipe.len());
     assert!(err.contains("changes"), "the summary goes to standard error: {err}");
     // Through `cat |` too (a pipe, not a redirected file), and a flavour at the end still found.
@@ -153,7 +154,11 @@ fn damaged_bgcode_blocks_are_refused() {
         }
         let out = gweave(dir.path(), &args).run();
         out.assert_refused("flipped.bgcode");
-        assert!(out.stderr.contains("checksum mismatch") && out.stderr.contains("(G-code at byte"), "{command}: {}", out.stderr);
+        assert!(
+            out.stderr.contains("checksum mismatch") && out.stderr.contains("(G-code at byte"),
+            "{command}: {}",
+            out.stderr
+        );
     }
     assert_eq!(snapshot(dir.path()), before, "a refused run wrote something");
     assert_no_temp_left(dir.path());

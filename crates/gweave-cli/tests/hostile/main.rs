@@ -9,8 +9,8 @@
 mod harness;
 
 mod bytes;
-mod containers;
 mod config;
+mod containers;
 mod hosts;
 mod outputs;
 mod serve;

@@ -66,7 +66,9 @@ impl Output {
         };
         // A binary input's metadata and thumbnails go into a binary output.
         let carried = match (container, input) {
-            (Container::Bgcode, Some(input)) => container::preamble(input).map_err(|e| Error::io(input, e))?,
+            (Container::Bgcode, Some(input)) => {
+                container::preamble(input).map_err(|e| Error::io(input, e))?
+            }
             _ => None,
         };
         let dest = sink.name();

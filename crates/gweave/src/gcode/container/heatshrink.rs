@@ -204,7 +204,8 @@ mod tests {
     #[test]
     fn gcode_text_round_trips_and_shrinks() {
         let text = std::fs::read(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/prusaslicer/pr_torus_pva.gcode"),
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../tests/data/prusaslicer/pr_torus_pva.gcode"),
         )
         .unwrap();
         for p in [P11, P12] {

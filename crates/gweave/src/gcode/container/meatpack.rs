@@ -22,7 +22,23 @@ const DISABLE_NO_SPACES: u8 = 246;
 /// The letters after which libbgcode puts a space back on a `G` line: G0/G1 (X Y Z E F), G2/G3
 /// (I J R), G4 (S), G29 (G P W H C A).
 fn is_g_parameter(c: u8) -> bool {
-    matches!(c, b'X' | b'Y' | b'Z' | b'E' | b'F' | b'I' | b'J' | b'R' | b'S' | b'G' | b'P' | b'W' | b'H' | b'C' | b'A')
+    matches!(
+        c,
+        b'X' | b'Y'
+            | b'Z'
+            | b'E'
+            | b'F'
+            | b'I'
+            | b'J'
+            | b'R'
+            | b'S'
+            | b'G'
+            | b'P'
+            | b'W'
+            | b'H'
+            | b'C'
+            | b'A'
+    )
 }
 
 /// Decodes one block's MeatPack bytes, appending the text to `out`.

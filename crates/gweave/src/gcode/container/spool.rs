@@ -87,7 +87,8 @@ impl Seek for Raw {
                     SeekFrom::Current(d) => pos.checked_add_signed(d),
                     SeekFrom::End(d) => len.checked_add_signed(d),
                 };
-                *pos = target.ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "seek before the start"))?;
+                *pos = target
+                    .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "seek before the start"))?;
                 Ok(*pos)
             }
         }

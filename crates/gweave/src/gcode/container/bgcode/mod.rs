@@ -152,7 +152,11 @@ impl Block {
     /// A block of `data` stored uncompressed.
     pub fn plain(kind: Kind, params: Vec<u8>, data: Vec<u8>) -> Block {
         let n = data.len() as u32;
-        Block { header: Header { kind, compression: Compression::None, uncompressed: n, stored: n }, params, data }
+        Block {
+            header: Header { kind, compression: Compression::None, uncompressed: n, stored: n },
+            params,
+            data,
+        }
     }
 
     /// The block's bytes, with its CRC32 when `checksum`.

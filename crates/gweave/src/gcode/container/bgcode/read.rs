@@ -7,7 +7,10 @@
 use std::io::{self, Read, Seek, SeekFrom};
 
 use super::super::{heatshrink, meatpack};
-use super::{invalid, read_full, text, Block, Compression, Header, Kind, Metadata, Preamble, Thumbnail, MAGIC, MAX_BLOCK};
+use super::{
+    invalid, read_full, text, Block, Compression, Header, Kind, Metadata, Preamble, Thumbnail, MAGIC,
+    MAX_BLOCK,
+};
 
 /// A binary G-code file read as text.
 pub struct Reader<R> {
@@ -70,7 +73,9 @@ impl<R: Read> Reader<R> {
                     break;
                 }
                 Kind::FileMetadata if r.block != 2 => return order_error("file metadata must come first"),
-                Kind::PrinterMetadata if seen_printer => return order_error("a second printer metadata block"),
+                Kind::PrinterMetadata if seen_printer => {
+                    return order_error("a second printer metadata block")
+                }
                 Kind::Thumbnail | Kind::PrintMetadata | Kind::SlicerMetadata if !seen_printer => {
                     return order_error("no printer metadata before it")
                 }
@@ -139,10 +144,15 @@ impl<R: Read> Reader<R> {
             return Err(truncated(n, 8));
         }
         let field = |i: usize| u16::from_le_bytes([h[i], h[i + 1]]);
-        let kind = Kind::from_u16(field(0))
-            .ok_or_else(|| invalid(format!("block {number} (at byte {offset}) has an unknown type {}", field(0))))?;
+        let kind = Kind::from_u16(field(0)).ok_or_else(|| {
+            invalid(format!("block {number} (at byte {offset}) has an unknown type {}", field(0)))
+        })?;
         let compression = Compression::from_u16(field(2)).ok_or_else(|| {
-            invalid(format!("block {number} ({} at byte {offset}) has an unknown compression {}", kind.name(), field(2)))
+            invalid(format!(
+                "block {number} ({} at byte {offset}) has an unknown compression {}",
+                kind.name(),
+                field(2)
+            ))
         })?;
         let uncompressed = u32::from_le_bytes([h[4], h[5], h[6], h[7]]);
         let mut stored = uncompressed;
@@ -234,7 +244,9 @@ impl<R: Read> Reader<R> {
         self.next = match self.header()? {
             Some(next) if next.header.kind == Kind::GCode => Some(next),
             Some(other) => {
-                return Err(other.error(invalid("only G-code blocks may follow the first G-code block".into())))
+                return Err(
+                    other.error(invalid("only G-code blocks may follow the first G-code block".into()))
+                )
             }
             None => None,
         };
@@ -276,7 +288,10 @@ fn decompress(data: &[u8], h: Header, out: &mut Vec<u8>) -> io::Result<()> {
         Compression::Deflate => {
             let mut z = flate2::read::ZlibDecoder::new(data);
             out.reserve(expected);
-            (&mut z).take(expected as u64 + 1).read_to_end(out).map_err(|e| invalid(format!("deflate data: {e}")))?;
+            (&mut z)
+                .take(expected as u64 + 1)
+                .read_to_end(out)
+                .map_err(|e| invalid(format!("deflate data: {e}")))?;
             if out.len() != expected {
                 return Err(invalid(format!(
                     "deflate data decodes to {} bytes, not the {expected} its header says",

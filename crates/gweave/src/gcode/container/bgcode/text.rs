@@ -216,7 +216,10 @@ mod tests {
                 width: 16,
                 height: 16,
             }],
-            print: meta(&[("filament used [mm]", "12.5"), ("estimated printing time (normal mode)", "1m 2s")]),
+            print: meta(&[
+                ("filament used [mm]", "12.5"),
+                ("estimated printing time (normal mode)", "1m 2s"),
+            ]),
             slicer: vec![meta(&[("gcode_flavor", "marlin2")])],
         }
     }
@@ -254,7 +257,9 @@ mod tests {
 
     #[test]
     fn a_text_files_settings_block_becomes_slicer_metadata() {
-        let mut text = b"G1 X1\n\n; prusaslicer_config = begin\n; a = 1\n; b = x = y\n; prusaslicer_config = end\n\n".to_vec();
+        let mut text =
+            b"G1 X1\n\n; prusaslicer_config = begin\n; a = 1\n; b = x = y\n; prusaslicer_config = end\n\n"
+                .to_vec();
         let m = take_settings(&mut text);
         assert_eq!(m, meta(&[("a", "1"), ("b", "x = y")]));
         assert_eq!(text, b"G1 X1\n\n");
