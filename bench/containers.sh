@@ -7,8 +7,8 @@ set -euo pipefail
 source "$(dirname "$0")/lib.sh"
 BIG=$(multitool_file)
 PY="$ROOT/.venv/bin/python"
-[ -s "$BIG.bgcode" ] || "$GWEAVE" cat "$BIG" -o "$BIG.bgcode" -q
-[ -s "$BIG.gz" ] || "$GWEAVE" cat "$BIG" -o "$BIG.gz" -q
+[ -s "$BIG.bgcode" ] || "$GWEAVE" cat "$BIG" -o "$BIG.bgcode" -q >/dev/null
+[ -s "$BIG.gz" ] || "$GWEAVE" cat "$BIG" -o "$BIG.gz" -q >/dev/null
 if [ ! -s "$BIG.prusa.bgcode" ] && "$PY" -c "import pybgcode" 2>/dev/null; then
   "$PY" - "$BIG" "$BIG.prusa.bgcode" <<'PYEOF'
 import sys, pybgcode

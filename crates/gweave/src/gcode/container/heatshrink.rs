@@ -30,47 +30,59 @@ const MAX_CHAIN: usize = 48;
 /// Decodes `input` into `out` (cleared first), which must come to `expected` bytes.
 pub fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>) -> io::Result<()> {
     out.clear();
-    out.reserve(expected);
+    out.resize(expected, 0);
     let mut bits = Bits { input, pos: 0, buf: 0, have: 0 };
     let (wb, lb) = (p.window_bits, p.lookahead_bits);
-    while out.len() < expected {
-        let Some(tag) = bits.take(1) else { break };
-        if tag == 1 {
-            let Some(byte) = bits.take(8) else { break };
-            out.push(byte as u8);
+    // The longest token: a back-reference's tag, index and count.
+    let longest = 1 + wb + lb;
+    let mut at = 0;
+    while at < expected {
+        if bits.have < longest {
+            bits.refill();
+        }
+        if bits.have == 0 {
+            break;
+        }
+        if bits.peek(1) == 1 {
+            if bits.have < 9 {
+                break;
+            }
+            out[at] = (bits.peek(9) & 0xFF) as u8;
+            bits.consume(9);
+            at += 1;
+            continue;
+        }
+        if bits.have < longest {
+            break;
+        }
+        let token = bits.peek(longest);
+        bits.consume(longest);
+        let dist = (token >> lb & ((1 << wb) - 1)) as usize + 1;
+        let len = ((token & ((1 << lb) - 1)) as usize + 1).min(expected - at);
+        if dist <= at && dist >= len {
+            out.copy_within(at - dist..at - dist + len, at);
         } else {
-            let Some(index) = bits.take(wb) else { break };
-            let Some(count) = bits.take(lb) else { break };
-            let (dist, len) = (index as usize + 1, count as usize + 1);
-            let len = len.min(expected - out.len());
-            if dist > out.len() {
-                // Before the start: the reference decoder's window is zero-filled.
-                for _ in 0..len {
-                    let b = out.len().checked_sub(dist).map_or(0, |i| out[i]);
-                    out.push(b);
-                }
-            } else {
-                let start = out.len() - dist;
-                if dist >= len {
-                    out.extend_from_within(start..start + len);
-                } else {
-                    for i in 0..len {
-                        out.push(out[start + i]);
-                    }
+            // Overlapping (a run), or before the start: the reference decoder's window is
+            // zero-filled there, and `out` already holds zeros.
+            for k in at..at + len {
+                if let Some(from) = k.checked_sub(dist) {
+                    out[k] = out[from];
                 }
             }
         }
+        at += len;
     }
-    if out.len() != expected {
+    if at != expected {
         return Err(io::Error::new(
             io::ErrorKind::InvalidData,
-            format!("heatshrink data decodes to {} bytes, not the {expected} its header says", out.len()),
+            format!("heatshrink data decodes to {at} bytes, not the {expected} its header says"),
         ));
     }
     Ok(())
 }
 
-/// Reads bits, most significant first, through a 64-bit buffer.
+/// Reads bits, most significant first, through a 64-bit buffer whose `have` top bits are
+/// valid (the rest zero).
 struct Bits<'a> {
     input: &'a [u8],
     pos: usize,
@@ -79,23 +91,37 @@ struct Bits<'a> {
 }
 
 impl Bits<'_> {
+    /// Tops the buffer up to at least 57 bits, or to the end of the input.
     #[inline]
-    fn take(&mut self, n: u32) -> Option<u32> {
-        if self.have < n {
+    fn refill(&mut self) {
+        if let Some(next) = self.input.get(self.pos..self.pos + 8) {
+            let v = u64::from_be_bytes(next.try_into().expect("8 bytes"));
+            let bytes = (63 - self.have) / 8;
+            let added = bytes * 8;
+            // Only the whole bytes taken, below the bits already held.
+            self.buf |= (v >> self.have) & !(u64::MAX >> (self.have + added));
+            self.have += added;
+            self.pos += bytes as usize;
+        } else {
             while self.have <= 56 {
                 let Some(&b) = self.input.get(self.pos) else { break };
                 self.buf |= u64::from(b) << (56 - self.have);
                 self.have += 8;
                 self.pos += 1;
             }
-            if self.have < n {
-                return None;
-            }
         }
-        let v = (self.buf >> (64 - n)) as u32;
+    }
+
+    /// The next `n` bits (1 to 32; `n <= have`).
+    #[inline]
+    fn peek(&self, n: u32) -> u32 {
+        (self.buf >> (64 - n)) as u32
+    }
+
+    #[inline]
+    fn consume(&mut self, n: u32) {
         self.buf <<= n;
         self.have -= n;
-        Some(v)
     }
 }
 

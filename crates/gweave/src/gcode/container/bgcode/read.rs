@@ -308,24 +308,31 @@ fn decompress(data: &[u8], h: Header, out: &mut Vec<u8>) -> io::Result<()> {
 }
 
 /// Copies `text` without the lines libbgcode's converter drops: empty, blank (spaces and tabs),
-/// or a `;` with nothing but blanks after it. A last line without a newline gets one.
+/// or a `;` with nothing but blanks after it. A last line without a newline gets one. Runs of
+/// kept lines are copied at once: most lines start with a letter and are kept.
 fn keep_non_empty_lines(text: &[u8], out: &mut Vec<u8>) {
     out.reserve(text.len() + 1);
-    // libbgcode's `trim`: spaces and tabs only.
-    let trim = |s: &[u8]| -> usize {
-        let start = s.iter().position(|&b| b != b' ' && b != b'\t').unwrap_or(s.len());
-        let end = s.iter().rposition(|&b| b != b' ' && b != b'\t').map_or(start, |i| i + 1);
-        end.saturating_sub(start)
-    };
-    for line in text.split_inclusive(|&b| b == b'\n') {
-        let body = line.strip_suffix(b"\n").unwrap_or(line);
-        let first = body.iter().position(|&b| b != b' ' && b != b'\t');
-        let empty = match first {
-            None => true,
-            Some(i) => body[i] == b';' && trim(&body[i + 1..]) == 0,
+    let blank = |b: u8| b == b' ' || b == b'\t';
+    let (mut run, mut start) = (0, 0);
+    while start < text.len() {
+        let end = memchr::memchr(b'\n', &text[start..]).map_or(text.len(), |i| start + i);
+        let line = &text[start..end];
+        let dropped = match line.first() {
+            Some(&c) if c != b' ' && c != b'\t' && c != b';' => false,
+            _ => match line.iter().position(|&b| !blank(b)) {
+                None => true,
+                Some(i) => line[i] == b';' && line[i + 1..].iter().all(|&b| blank(b)),
+            },
         };
-        if !empty {
-            out.extend_from_slice(body);
+        if dropped {
+            out.extend_from_slice(&text[run..start]);
+            run = end + 1;
+        }
+        start = end + 1;
+    }
+    if run < text.len() {
+        out.extend_from_slice(&text[run..]);
+        if text.last() != Some(&b'\n') {
             out.push(b'\n');
         }
     }
