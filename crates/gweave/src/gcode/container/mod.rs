@@ -69,7 +69,7 @@ impl Read for Input {
 pub fn open(path: &Path) -> io::Result<Input> {
     let (mut raw, container) = sniffed(path)?;
     Ok(match container {
-        Container::Text => Input { text_len: Some(raw.len()?), reader: Box::new(raw) },
+        Container::Text => Input { text_len: Some(raw.size()?), reader: Box::new(raw) },
         Container::Gzip => Input {
             text_len: None,
             reader: Box::new(MultiGzDecoder::new(BufReader::with_capacity(1 << 16, raw))),
@@ -106,7 +106,7 @@ pub fn ends(path: &Path, head: usize, tail: usize) -> io::Result<(Vec<u8>, Vec<u
     let mut first = Vec::with_capacity(head);
     match container {
         Container::Text => {
-            let len = raw.len()?;
+            let len = raw.size()?;
             (&mut raw).take(head as u64).read_to_end(&mut first)?;
             let start = len.saturating_sub(tail as u64).max(first.len() as u64);
             let mut last = Vec::new();

@@ -55,7 +55,7 @@ pub fn open(path: &Path) -> io::Result<Raw> {
 
 impl Raw {
     /// The input's length in bytes.
-    pub fn len(&self) -> io::Result<u64> {
+    pub fn size(&self) -> io::Result<u64> {
         match self {
             Raw::File(f) => Ok(f.metadata()?.len()),
             Raw::Spool { file, .. } => Ok(file.metadata()?.len()),
@@ -134,6 +134,6 @@ mod tests {
         let mut rest = String::new();
         a.read_to_string(&mut rest).unwrap();
         assert_eq!(rest, "G1 X2\n");
-        assert_eq!(a.len().unwrap(), 12);
+        assert_eq!(a.size().unwrap(), 12);
     }
 }
