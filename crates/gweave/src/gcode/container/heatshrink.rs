@@ -23,14 +23,18 @@ pub struct Params {
     pub lookahead_bits: u32,
 }
 
+/// Bytes a back-reference copies at once: the longest one (lookahead 4 bits).
+const COPY: usize = 16;
+
 /// Longest chain of earlier positions the encoder follows for one match: enough for G-code's
 /// repetitive text (the compressed size is within 1 % of following them all), bounded time.
 const MAX_CHAIN: usize = 48;
 
 /// Decodes `input` into `out` (cleared first), which must come to `expected` bytes.
 pub fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>) -> io::Result<()> {
-    out.clear();
-    out.resize(expected, 0);
+    // Room for a whole 16-byte copy past the end; not cleared (only grown), since every byte up
+    // to `expected` is written before it is read.
+    out.resize(expected + COPY, 0);
     let mut bits = Bits { input, pos: 0, buf: 0, have: 0 };
     let (wb, lb) = (p.window_bits, p.lookahead_bits);
     // The longest token: a back-reference's tag, index and count.
@@ -59,19 +63,21 @@ pub fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>) -> io
         bits.consume(longest);
         let dist = (token >> lb & ((1 << wb) - 1)) as usize + 1;
         let len = ((token & ((1 << lb) - 1)) as usize + 1).min(expected - at);
-        if dist <= at && dist >= len {
-            out.copy_within(at - dist..at - dist + len, at);
+        if dist <= at && dist >= COPY && len <= COPY {
+            // A fixed-size copy (no call to memcpy); the bytes past `len` are overwritten later.
+            let from = at - dist;
+            let chunk: [u8; COPY] = out[from..from + COPY].try_into().expect("16 bytes");
+            out[at..at + COPY].copy_from_slice(&chunk);
         } else {
-            // Overlapping (a run), or before the start: the reference decoder's window is
-            // zero-filled there, and `out` already holds zeros.
+            // Overlapping (a run), or before the start, where the reference decoder's window
+            // is zero-filled.
             for k in at..at + len {
-                if let Some(from) = k.checked_sub(dist) {
-                    out[k] = out[from];
-                }
+                out[k] = k.checked_sub(dist).map_or(0, |from| out[from]);
             }
         }
         at += len;
     }
+    out.truncate(at);
     if at != expected {
         return Err(io::Error::new(
             io::ErrorKind::InvalidData,
