@@ -55,6 +55,15 @@ pub struct ReportArgs {
 }
 
 impl ReportArgs {
+    /// Refuses `--json` when the command's output goes to standard output (`-o -`): the JSON
+    /// would follow the G-code or picture and spoil it.
+    pub fn refuse_json_with_stdout(&self, to_stdout: bool) -> Result<()> {
+        if self.json && to_stdout {
+            bail!("--json and -o - would both write to standard output: write the report with --report FILE, or the output to a file");
+        }
+        Ok(())
+    }
+
     /// Writes the JSON report file if asked; returns whether the human summary should print.
     /// The JSON is streamed to its destination, never held whole in memory (a report may carry
     /// an entry per line or per change of a large file). The command has checked the report's

@@ -95,6 +95,9 @@ impl Files {
 
     /// Refuses an output that names an input or another output.
     pub fn check(&self) -> Result<()> {
+        if self.outputs.iter().any(|e| e.flag == "--in-place" && e.path == Path::new("-")) {
+            bail!("--in-place needs a file to replace, not standard input (-): write with -o OUT or -o -");
+        }
         let inputs: Vec<(&Entry, Option<Id>)> = self.inputs.iter().map(|e| (e, Id::of(&e.path))).collect();
         let outputs: Vec<(&Entry, Option<Id>)> = self.outputs.iter().map(|e| (e, Id::of(&e.path))).collect();
         for (k, (out, out_id)) in outputs.iter().enumerate() {

@@ -1,10 +1,10 @@
 //! Python bindings for gweave: one module, thin wrappers over the engine. Reports cross as JSON
 //! text (the same documents `--json` prints) and become dicts in `gweave/__init__.py`.
 
-use std::fs::File;
 use std::path::PathBuf;
 
 use gweave::check::{check_file, CheckOptions};
+use gweave::gcode::container::{self, Input};
 use gweave::gcode::diag::{Diagnostic, Finding};
 use gweave::gcode::flavour::read_flavour;
 use gweave::gcode::lexer::{parse_into, parse_line};
@@ -211,7 +211,7 @@ impl Line {
 /// Iterates a file's lines with parsed words and machine state; memory stays bounded.
 #[pyclass(module = "gweave")]
 struct Reader {
-    lines: LineReader<File>,
+    lines: LineReader<Input>,
     block: Block,
     state: State,
 }
@@ -223,7 +223,7 @@ impl Reader {
         let os_err = |e: std::io::Error| os_error(&path, &e);
         // The state reads the file's words as its flavour means them, as every command does.
         let flavour = read_flavour(&path).map_err(os_err)?;
-        let file = File::open(&path).map_err(os_err)?;
+        let file = container::open(&path).map_err(os_err)?;
         let state = State::new(StateOptions::default().for_flavour(flavour.as_deref()));
         Ok(Reader { lines: LineReader::new(file), block: Block::default(), state })
     }
@@ -626,7 +626,7 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, fault: Vec<
     }
     let report = py.allow_threads(|| {
         let mut m = gweave_sim::interp::Machine::new(profile).map_err(sim_err)?;
-        let file = File::open(&path).map_err(|e| os_error(&path, &e))?;
+        let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
         let mut reader = LineReader::new(file);
         let mut out = |_t: f64, _l: &str| {};
         while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
@@ -653,7 +653,7 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, fault: Vec<
 fn estimate_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, steps: bool) -> PyResult<String> {
     let profile = machine_profile(machine)?;
     let report = py.allow_threads(|| {
-        let file = File::open(&path).map_err(|e| os_error(&path, &e))?;
+        let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
         gweave_sim::estimate::estimate_report(file, &profile, steps)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
     })?;

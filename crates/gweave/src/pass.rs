@@ -2,13 +2,13 @@
 //! hand the line with its state to a [`Pass`], which writes what should come out. A pass that
 //! needs lookahead keeps its own bounded buffer of [`OwnedLine`]s and says how large it may grow.
 
-use std::fs::File;
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::gcode::container;
 use crate::gcode::diag::{Finding, Severity};
 use crate::gcode::flavour::read_flavour;
 use crate::gcode::lexer::{parse_line, parse_line_lean};
@@ -143,21 +143,22 @@ impl<'a> Run<'a> {
         Ok(state)
     }
 
-    /// Streams the file, with the options its flavour implies (read from its ends first: the
-    /// PrusaSlicer family names it only in the settings block after the last move).
+    /// Streams the file (text, gzip or binary G-code, or standard input as `-`: see
+    /// [`container::open`]), with the options its flavour implies (read from its ends first:
+    /// the PrusaSlicer family names it only in the settings block after the last move).
     fn drive<P: Pass + ?Sized>(self, pass: &mut P, out: &mut dyn Write, out_name: PathBuf) -> Result<State> {
         let path = self.input.to_path_buf();
         let flavour = match self.flavour {
             Some(known) => known,
             None => read_flavour(&path).map_err(|e| Error::io(&path, e))?,
         };
-        let file = File::open(&path).map_err(|e| Error::io(&path, e))?;
-        if let Ok(meta) = file.metadata() {
-            self.progress.set_len(meta.len());
+        let input = container::open(&path).map_err(|e| Error::io(&path, e))?;
+        if let Some(len) = input.text_len {
+            self.progress.set_len(len);
         }
         let options = self.options.for_flavour(flavour.as_deref());
         let lines = Lines {
-            reader: LineReader::new(file),
+            reader: LineReader::new(input),
             path: &path,
             out_name,
             strictness: self.strictness,

@@ -35,6 +35,7 @@ pub struct CatArgs {
 
 pub fn run(args: CatArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
+    args.report.refuse_json_with_stdout(target == Target::Stdout)?;
     Files::new()
         .read("INPUT", Some(&args.input))
         .target(&target, &args.input)

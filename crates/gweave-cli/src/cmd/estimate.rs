@@ -1,12 +1,12 @@
 //! `gweave estimate`: the print time from the virtual printer's planner alone, fast.
 
-use std::fs::File;
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
+use gweave::gcode::container;
 use gweave::pass::Progress;
 use gweave_sim::estimate::{estimate_report, EstimateReport};
 use gweave_sim::profile::MachineProfile;
@@ -56,9 +56,9 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         Some(_) if from_slicer => slicer_profile(&args.input)?,
         other => load_or_default(other.as_ref(), MachineProfile::from_toml_str)?,
     };
-    let file = File::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
+    let file = container::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
     let mut bar = args.quiet.bar();
-    bar.set_len(file.metadata().map(|m| m.len()).unwrap_or(0));
+    bar.set_len(file.text_len.unwrap_or(0));
     let input = Counted { inner: file, bar, done: 0 };
     let report = estimate_report(input, &profile, args.steps).map_err(|e| match e.line() {
         Some(line) if line > 0 => anyhow!("{}:{line}: {}", args.input.display(), e.reason()),
@@ -86,7 +86,7 @@ fn slicer_profile(input: &Path) -> Result<MachineProfile> {
 
 /// The input file, moving the progress bar as it is read.
 struct Counted {
-    inner: File,
+    inner: container::Input,
     bar: Bar,
     done: u64,
 }

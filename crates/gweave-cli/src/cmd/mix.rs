@@ -107,6 +107,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         Some(_) => Some(args.out.target()?),
         None => None,
     };
+    args.report.refuse_json_with_stdout(target == Some(Target::Stdout))?;
     let mut files = Files::new().read("INPUT", args.input.as_deref()).read("-c", args.config.as_deref());
     if let (Some(input), Some(target)) = (&args.input, &target) {
         files = files.target(target, input);

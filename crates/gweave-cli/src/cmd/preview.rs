@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 use std::ops::RangeInclusive;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -27,6 +27,8 @@ use crate::files::Files;
 /// self-contained page (no network): the beads as lit 3D tubes (WebGL), opening on an isometric
 /// view of the whole part, with orbit, pan, zoom, top view, a layer range, legend and stats; with
 /// --compare, the two files side by side, the moves each has that the other has not in colour.
+/// `-o - --format png` writes the picture to standard output (and the summary to standard
+/// error); `-` as INPUT reads standard input.
 /// Layers are numbered from 0 as the core counts them (Cura's `;LAYER:n`).
 /// Examples: `gweave preview part.gcode -o part.png --layer 12`,
 /// `gweave preview part.gcode -o part.png --view iso --colour-by feature`,
@@ -35,9 +37,12 @@ use crate::files::Files;
 pub struct PreviewArgs {
     /// The G-code file to draw.
     pub input: PathBuf,
-    /// Output file: .png, .svg or .html.
+    /// Output file: .png, .svg or .html; `-` for standard output (with --format).
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
+    /// png, svg or html (default: from the extension of -o; needed with `-o -`).
+    #[arg(long, value_name = "FORMAT", value_parser = |s: &str| s.parse::<Format>())]
+    pub format: Option<Format>,
     /// Draw only this layer (0-based) [default: every layer].
     #[arg(long, value_name = "N", conflicts_with = "layers", value_parser = in_range(LAYER_NUMBER))]
     pub layer: Option<u32>,
@@ -102,7 +107,13 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         .write("-o", Some(&args.output))
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let format = Format::from_path(&args.output)?;
+    let to_stdout = args.output == Path::new("-");
+    let format = match args.format {
+        Some(format) => format,
+        None if to_stdout => anyhow::bail!("-o - needs --format png, svg or html"),
+        None => Format::from_path(&args.output)?,
+    };
+    args.report.refuse_json_with_stdout(to_stdout)?;
     let mix = match &args.mix_profile {
         Some(path) => Some(MixColours::from_profile(&load(path, MixProfile::from_toml_str)?)?),
         None => None,
@@ -128,9 +139,17 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
     let mut bar = args.quiet.bar();
     let preview = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
     drop(bar);
-    write_bytes(&args.output, &preview.bytes)?;
+    if to_stdout {
+        print_summary(|out| out.write_all(&preview.bytes))?;
+    } else {
+        write_bytes(&args.output, &preview.bytes)?;
+    }
     if args.quiet.emit(&args.report, &preview.report)? {
-        print_summary(|out| print_human(out, &args, &preview.report))?;
+        // Standard output holds the picture: the summary goes to standard error.
+        match to_stdout {
+            true => print_human(&mut io::stderr().lock(), &args, &preview.report)?,
+            false => print_summary(|out| print_human(out, &args, &preview.report))?,
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

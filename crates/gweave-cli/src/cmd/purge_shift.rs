@@ -93,6 +93,7 @@ fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
 
 pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
+    args.report.refuse_json_with_stdout(target == Target::Stdout)?;
     Files::new()
         .read("INPUT", Some(&args.input))
         .read("-c", args.config.as_deref())

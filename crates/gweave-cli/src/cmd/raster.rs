@@ -164,6 +164,7 @@ fn target(output: &Path) -> Target {
 pub fn run(args: RasterArgs) -> Result<ExitCode> {
     let options = args.options()?;
     let to_stdout = args.output == Path::new("-");
+    args.report.refuse_json_with_stdout(to_stdout)?;
     let source = if args.test_pattern { None } else { Some(options.source()?) };
     let images = source.as_ref().map(|(s, _)| s.paths()).unwrap_or_default();
     Files::new()

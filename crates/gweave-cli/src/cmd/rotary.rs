@@ -214,6 +214,7 @@ pub struct WrapArgs {
 
 fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
+    args.report.refuse_json_with_stdout(target == Target::Stdout)?;
     Files::new()
         .read("INPUT", Some(&args.input))
         .read("-c", args.machine.config.as_deref())
@@ -379,6 +380,7 @@ fn tube_params(args: &TubeArgs) -> Result<TubeParams> {
 }
 
 fn run_tube(args: TubeArgs) -> Result<ExitCode> {
+    args.report.refuse_json_with_stdout(args.output == Path::new("-"))?;
     Files::new()
         .read("-c", args.machine.config.as_deref())
         .write("-o", Some(&args.output))

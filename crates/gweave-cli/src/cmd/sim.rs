@@ -1,13 +1,13 @@
 //! `gweave sim`: run a file through the virtual printer and report what the machine did.
 
 use std::collections::BTreeMap;
-use std::fs::File;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use gweave::gcode::container;
 use gweave::gcode::layers::Feature;
 use gweave::gcode::reader::{LineReader, Part};
 use gweave::pass::Progress;
@@ -99,8 +99,8 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
 
 /// Executes every line until the end or a halt; returns the machine's `Error:` replies.
 fn run_file(machine: &mut Machine, input: &Path, quiet: Quiet) -> Result<Vec<String>> {
-    let file = File::open(input).with_context(|| format!("opening {}", input.display()))?;
-    let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let file = container::open(input).with_context(|| format!("opening {}", input.display()))?;
+    let len = file.text_len.unwrap_or(0);
     let mut bar = quiet.bar();
     bar.set_len(len);
     let mut reader = LineReader::new(file);

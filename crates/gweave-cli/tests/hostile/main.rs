@@ -10,6 +10,7 @@ mod harness;
 
 mod bytes;
 mod config;
+mod containers;
 mod hosts;
 mod outputs;
 mod serve;

@@ -4,15 +4,12 @@
 //! latter only after the last move, too late for a transform that must choose its commands at the
 //! start, so [`read_flavour`] looks at both ends of the file first.
 
-use std::fs::File;
-use std::io::{self, Read, Seek, SeekFrom};
+use std::io;
 use std::path::Path;
 
-/// Bytes searched at the start: Cura's header is a few hundred bytes.
-const HEAD_BYTES: usize = 64 * 1024;
-/// Bytes searched at the end: PrusaSlicer's settings block is about 10 KB after the flavour line,
-/// OrcaSlicer's a few times more.
-const TAIL_BYTES: usize = 256 * 1024;
+use super::container;
+
+use super::ends::{HEAD_BYTES, TAIL_BYTES};
 
 /// PrusaSlicer's `mach3` and `machinekit` flavours, for LinuxCNC-style machines: no E axis, and
 /// M-codes take their value as `P` (`M104 P200`, `M106 P237.15`).
@@ -57,29 +54,11 @@ pub fn flavour_in(text: &[u8]) -> Option<String> {
     first_flavour(head).or_else(|| first_flavour(tail))
 }
 
-/// The flavour named in the first 64 KB or the last 256 KB of a file; `None` when neither says.
-/// Anything but a regular file (a pipe, a terminal) is not read: its bytes would be gone for the
-/// pass that follows.
+/// The flavour named in the first 64 KB or the last 256 KB of a file's text (of any container,
+/// standard input included: see [`container::ends`]); `None` when neither says.
 pub fn read_flavour(path: &Path) -> io::Result<Option<String>> {
-    let mut file = File::open(path)?;
-    let meta = file.metadata()?;
-    if !meta.is_file() {
-        return Ok(None);
-    }
-    let len = meta.len();
-    let mut buf = Vec::with_capacity(HEAD_BYTES);
-    (&mut file).take(HEAD_BYTES as u64).read_to_end(&mut buf)?;
-    if let Some(flavour) = first_flavour(&buf) {
-        return Ok(Some(flavour));
-    }
-    let tail_start = len.saturating_sub(TAIL_BYTES as u64).max(buf.len() as u64);
-    if tail_start >= len {
-        return Ok(None);
-    }
-    file.seek(SeekFrom::Start(tail_start))?;
-    buf.clear();
-    file.take(TAIL_BYTES as u64).read_to_end(&mut buf)?;
-    Ok(first_flavour(&buf))
+    let (head, tail) = container::ends(path, HEAD_BYTES, TAIL_BYTES)?;
+    Ok(first_flavour(&head).or_else(|| first_flavour(&tail)))
 }
 
 /// The first flavour comment on a line of its own in `text` (lines end at `\n` or `\r`, as the

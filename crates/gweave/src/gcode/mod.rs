@@ -3,6 +3,7 @@
 //! spans; the state is a layer above it.
 
 pub mod arc;
+pub mod container;
 pub mod diag;
 pub mod encoding;
 pub mod ends;

@@ -12,6 +12,7 @@ use std::fs;
 use std::io::{self, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
+use super::container::{self, Container, Encoder};
 use super::temp::TempFile;
 use crate::error::{Error, Result};
 
@@ -31,9 +32,10 @@ pub enum Target {
 pub const BACKUP_SLOTS: u32 = 9;
 
 /// An output being written. Call [`Output::commit`] at the end; dropping it without committing
-/// deletes the temporary file.
+/// deletes the temporary file. A file named `*.gz` or `*.bgcode` is written compressed or as
+/// binary G-code ([`Container::of_output`]).
 pub struct Output {
-    sink: Sink,
+    sink: Encoder<Sink>,
 }
 
 enum Sink {
@@ -57,10 +59,31 @@ impl Output {
     /// Opens the output for `target`, given the `input` the command reads (for in-place and for
     /// refusing to overwrite the input by accident).
     pub fn create(target: &Target, input: Option<&Path>) -> Result<Output> {
-        let (dest, backup) = match target {
-            Target::Stdout => {
-                return Ok(Output { sink: Sink::Stdout(BufWriter::with_capacity(BUFFER, io::stdout())) })
+        let sink = Self::sink(target, input)?;
+        let container = match &sink {
+            Sink::File { dest, .. } | Sink::Special { dest, .. } => Container::of_output(dest),
+            Sink::Stdout(_) => Container::Text,
+        };
+        // A binary input's metadata and thumbnails go into a binary output.
+        let carried = match (container, input) {
+            (Container::Bgcode, Some(input)) => {
+                container::preamble(input).map_err(|e| Error::io(input, e))?
             }
+            _ => None,
+        };
+        let dest = sink.name();
+        let sink = Encoder::new(container, sink, carried).map_err(|e| Error::io(dest, e))?;
+        Ok(Output { sink })
+    }
+
+    /// An output written as it is, whatever its name (side files: reports, images).
+    fn plain(target: &Target) -> Result<Output> {
+        Ok(Output { sink: Encoder::Text(Self::sink(target, None)?) })
+    }
+
+    fn sink(target: &Target, input: Option<&Path>) -> Result<Sink> {
+        let (dest, backup) = match target {
+            Target::Stdout => return Ok(Sink::Stdout(BufWriter::with_capacity(BUFFER, io::stdout()))),
             Target::File(path) => {
                 if let Some(input) = input {
                     if same_file(input, path) {
@@ -71,7 +94,7 @@ impl Output {
                     let file =
                         fs::OpenOptions::new().write(true).open(path).map_err(|e| Error::io(path, e))?;
                     let file = BufWriter::with_capacity(BUFFER, file);
-                    return Ok(Output { sink: Sink::Special { file, dest: path.clone() } });
+                    return Ok(Sink::Special { file, dest: path.clone() });
                 }
                 (path.clone(), None)
             }
@@ -92,20 +115,32 @@ impl Output {
             }
         };
         let tmp = TempFile::new_in(&parent_dir(&dest)).map_err(|e| Error::io(&dest, e))?;
-        Ok(Output { sink: Sink::File { file: BufWriter::with_capacity(BUFFER, tmp), dest, backup } })
+        Ok(Sink::File { file: BufWriter::with_capacity(BUFFER, tmp), dest, backup })
     }
 
     /// The file being written (`None` for standard output): the name write errors should show.
     pub fn dest(&self) -> Option<&Path> {
-        match &self.sink {
+        let sink = match &self.sink {
+            Encoder::Text(s) => s,
+            Encoder::Gzip(z) => z.get_ref(),
+            Encoder::Bgcode(b) => b.get_ref(),
+        };
+        match sink {
             Sink::File { dest, .. } | Sink::Special { dest, .. } => Some(dest),
             Sink::Stdout(_) => None,
         }
     }
 
-    /// Flushes, keeps the backup if asked, and renames the temporary file into place.
+    /// Ends the container, flushes, keeps the backup if asked, and renames the temporary file
+    /// into place.
     pub fn commit(self) -> Result<()> {
-        match self.sink {
+        let name = self.dest().map_or_else(|| PathBuf::from("<stdout>"), Path::to_path_buf);
+        let sink = match self.sink.finish() {
+            Ok(sink) => sink,
+            Err(e) if e.kind() == io::ErrorKind::BrokenPipe => return Ok(()),
+            Err(e) => return Err(Error::io(name, e)),
+        };
+        match sink {
             Sink::Special { mut file, dest } => file.flush().map_err(|e| Error::io(&dest, e)),
             Sink::Stdout(mut w) => match w.flush() {
                 Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>", e)),
@@ -132,14 +167,38 @@ pub fn write_file<E: From<Error>>(
     path: &Path,
     write: impl FnOnce(&mut Output) -> Result<(), E>,
 ) -> Result<(), E> {
-    let mut out = Output::create(&Target::File(path.to_path_buf()), None)?;
+    let mut out = Output::plain(&Target::File(path.to_path_buf()))?;
     write(&mut out)?;
     Ok(out.commit()?)
 }
 
 impl Write for Output {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        match &mut self.sink {
+        self.sink.write(buf)
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
+        self.sink.write_all(buf)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.sink.flush()
+    }
+}
+
+impl Sink {
+    /// The name errors show.
+    fn name(&self) -> PathBuf {
+        match self {
+            Sink::File { dest, .. } | Sink::Special { dest, .. } => dest.clone(),
+            Sink::Stdout(_) => PathBuf::from("<stdout>"),
+        }
+    }
+}
+
+impl Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match self {
             Sink::File { file, .. } => file.write(buf),
             Sink::Special { file, .. } => file.write(buf),
             Sink::Stdout(w) => w.write(buf),
@@ -147,7 +206,7 @@ impl Write for Output {
     }
 
     fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
-        match &mut self.sink {
+        match self {
             Sink::File { file, .. } => file.write_all(buf),
             Sink::Special { file, .. } => file.write_all(buf),
             Sink::Stdout(w) => w.write_all(buf),
@@ -155,7 +214,7 @@ impl Write for Output {
     }
 
     fn flush(&mut self) -> io::Result<()> {
-        match &mut self.sink {
+        match self {
             Sink::File { file, .. } => file.flush(),
             Sink::Special { file, .. } => file.flush(),
             Sink::Stdout(w) => w.flush(),

@@ -89,13 +89,7 @@ pub enum Format {
 impl Format {
     /// From an output file's extension.
     pub fn from_path(path: &Path) -> Result<Format, RenderError> {
-        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-        match ext.as_str() {
-            "png" => Ok(Format::Png),
-            "svg" => Ok(Format::Svg),
-            "html" | "htm" => Ok(Format::Html),
-            _ => Err(RenderError::Format(ext)),
-        }
+        path.extension().and_then(|e| e.to_str()).unwrap_or("").parse()
     }
 
     /// The view a preview opens on when none is asked for: a layer from the top for pictures,
@@ -104,6 +98,21 @@ impl Format {
         match self {
             Format::Html => ViewKind::Iso,
             Format::Png | Format::Svg => ViewKind::Top,
+        }
+    }
+}
+
+impl std::str::FromStr for Format {
+    type Err = RenderError;
+
+    /// From a name (`png`, `svg`, `html`), as `--format` or an extension gives it.
+    fn from_str(name: &str) -> Result<Format, RenderError> {
+        let name = name.to_ascii_lowercase();
+        match name.as_str() {
+            "png" => Ok(Format::Png),
+            "svg" => Ok(Format::Svg),
+            "html" | "htm" => Ok(Format::Html),
+            _ => Err(RenderError::Format(name)),
         }
     }
 }

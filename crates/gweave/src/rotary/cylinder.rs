@@ -329,7 +329,7 @@ impl RotaryConfig {
     pub fn from_file_header(path: &std::path::Path) -> Option<RotaryConfig> {
         use std::io::Read;
         let mut head = Vec::new();
-        std::fs::File::open(path).ok()?.take(4096).read_to_end(&mut head).ok()?;
+        crate::gcode::container::open(path).ok()?.take(4096).read_to_end(&mut head).ok()?;
         Self::from_header(&String::from_utf8_lossy(&head))
     }
 

@@ -10,7 +10,6 @@
 //! Settings can also come as one JSON/TOML document merged over a TOML file
 //! ([`merged_settings`]), which is how the Python keywords reach the library.
 
-use std::fs::File;
 use std::io::{BufReader, BufWriter};
 use std::path::{Path, PathBuf};
 
@@ -179,7 +178,7 @@ fn read_back(
     let Some(path) = output else {
         return Ok(None);
     };
-    let program = preview::read_back(machine, BufReader::new(File::open(path)?))?;
+    let program = preview::read_back(machine, BufReader::new(crate::gcode::container::open(path)?))?;
     if let Some(png) = preview {
         let options = PreviewOptions { bead_width_mm, line_px: 2, ..PreviewOptions::default() };
         let image = preview::render(&program.beads, &options);

@@ -1,0 +1,153 @@
+"""Prusa binary G-code checked against libbgcode itself (pybgcode, Prusa's reference
+implementation), both ways: files libbgcode writes, with every compression and encoding it
+offers, read by gweave as the text libbgcode's own converter makes of them; files gweave writes
+pass libbgcode's checks and decode to the same text; a transform from .bgcode to .bgcode keeps
+the metadata and thumbnails."""
+
+import base64
+import struct
+import subprocess
+import sys
+import zlib
+from pathlib import Path
+
+import pytest
+
+import gweave
+
+pybgcode = pytest.importorskip("pybgcode")
+from pybgcode import _bgcode  # noqa: E402  (after the skip)
+
+COMPRESSIONS = ["none", "Deflate", "Heatshrink_11_4", "Heatshrink_12_4"]
+ENCODINGS = ["none", "MeatPack", "MeatPackComments"]
+
+
+def cli(*args: str) -> subprocess.CompletedProcess:
+    r = subprocess.run([sys.executable, "-m", "gweave", *args], capture_output=True)
+    assert r.returncode == 0, r.stderr.decode()
+    return r
+
+
+def png(width: int, height: int) -> bytes:
+    """A small valid PNG (grey), for a thumbnail."""
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    rows = b"".join(b"\x00" + bytes([128]) * width for _ in range(height))
+    header = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b"")
+
+
+def with_thumbnail(src: Path, dst: Path) -> None:
+    """A PrusaSlicer file with a thumbnail block after its first line, as PrusaSlicer writes one."""
+    data = base64.b64encode(png(16, 12)).decode()
+    block = f";\n; thumbnail begin 16x12 {len(data)}\n" + "".join(
+        f"; {data[i:i + 78]}\n" for i in range(0, len(data), 78)) + "; thumbnail end\n;\n\n"
+    first, rest = src.read_text().split("\n", 1)
+    dst.write_text(f"{first}\n\n{block}{rest}")
+
+
+def to_binary(src: Path, dst: Path, compression: str = "Heatshrink_12_4", encoding: str = "MeatPackComments") -> None:
+    cfg = pybgcode.get_config()
+    cfg.compression.gcode = getattr(_bgcode.CompressionType, compression)
+    cfg.gcode_encoding = getattr(_bgcode.GCodeEncodingType, encoding)
+    fin, fout = pybgcode.open(str(src), "r"), pybgcode.open(str(dst), "wb")
+    try:
+        assert pybgcode.from_ascii_to_binary(fin, fout, cfg) == pybgcode.EResult.Success
+    finally:
+        pybgcode.close(fout)
+        pybgcode.close(fin)
+
+
+def to_text(src: Path, dst: Path) -> bytes:
+    """libbgcode's text of a binary file, checksums verified."""
+    fin, fout = pybgcode.open(str(src), "rb"), pybgcode.open(str(dst), "w")
+    try:
+        assert pybgcode.from_binary_to_ascii(fin, fout, True) == pybgcode.EResult.Success
+    finally:
+        pybgcode.close(fout)
+        pybgcode.close(fin)
+    return dst.read_bytes()
+
+
+def to_text_file(src: Path, dst: Path) -> Path:
+    to_text(src, dst)
+    return dst
+
+
+def blocks(path: Path) -> list:
+    """Every block's type, each checksum verified by libbgcode."""
+    f = pybgcode.open(str(path), "rb")
+    try:
+        assert _bgcode.is_valid_binary_gcode(f, True) == pybgcode.EResult.Success
+        kinds = []
+        res, header = pybgcode.get_header(f)
+        assert res == pybgcode.EResult.Success
+        while True:
+            bh = _bgcode.BlockHeader()
+            if _bgcode.read_next_block_header(f, header, bh) != pybgcode.EResult.Success:
+                break
+            assert _bgcode.verify_block_checksum(f, header, bh) == pybgcode.EResult.Success, f"block {len(kinds) + 1}"
+            kinds.append(bh.type)
+        return kinds
+    finally:
+        pybgcode.close(f)
+
+
+@pytest.mark.parametrize("encoding", ENCODINGS)
+@pytest.mark.parametrize("compression", COMPRESSIONS)
+def test_files_libbgcode_writes_read_as_its_text(data, tmp_path, compression, encoding):
+    src = tmp_path / "thumb.gcode"
+    with_thumbnail(data / "prusaslicer" / "pr_torus_pva.gcode", src)
+    binary = tmp_path / "x.bgcode"
+    to_binary(src, binary, compression, encoding)
+    reference = to_text(binary, tmp_path / "ref.gcode")
+    assert cli("cat", str(binary), "-o", "-").stdout == reference
+    assert gweave.stats(binary) == gweave.stats(tmp_path / "ref.gcode")
+
+
+def test_files_gweave_writes_pass_libbgcode(data, tmp_path):
+    src = data / "prusaslicer" / "pr_bunny_3tool_rel.gcode"
+    out = tmp_path / "g.bgcode"
+    cli("cat", str(src), "-o", str(out))
+    assert len(blocks(out)) > 10
+    theirs = to_text(out, tmp_path / "theirs.gcode")
+    assert cli("cat", str(out), "-o", "-").stdout == theirs
+    # Their text is ours, empty lines aside, with the settings block after the G-code.
+    lines = [line for line in src.read_bytes().split(b"\n") if line.strip(b" \t") not in (b"", b";")]
+    gcode = b"".join(l + b"\n" for l in lines)
+    settings = gcode.index(b"; prusaslicer_config = begin")
+    assert gcode[:settings] in theirs
+    assert theirs.endswith(b"\n" + gcode[settings:] + b"\n")
+
+
+def test_a_transform_keeps_metadata_and_thumbnails(data, tmp_path):
+    src = tmp_path / "thumb.gcode"
+    with_thumbnail(data / "prusaslicer" / "pr_torus_pva.gcode", src)
+    before, after = tmp_path / "in.bgcode", tmp_path / "out.bgcode"
+    to_binary(src, before)
+    cli("purge-shift", str(before), "-o", str(after), "--purge", "5")
+    assert blocks(after)[-1] == int(_bgcode.EBlockType.GCode)
+
+    def metadata(path: Path) -> dict:
+        f = pybgcode.open(str(path), "rb")
+        try:
+            thumbs = [(t["meta"].format, t["meta"].width, t["meta"].height, bytes(t["bytes"])) for t in pybgcode.read_thumbnails(f)]
+            return {kind: pybgcode.read_metadata(f, kind) for kind in ("file", "printer", "print", "slicer")} | {"thumbnails": thumbs}
+        finally:
+            pybgcode.close(f)
+
+    kept = metadata(after)
+    assert kept == metadata(before)
+    assert kept["thumbnails"][0][:3] == (0, 16, 12)
+    assert "gcode_flavor" in kept["slicer"]
+    # The G-code is purge-shift's: the same as from the text it stands for.
+    text_out = tmp_path / "out.gcode"
+    cli("purge-shift", str(to_text_file(before, tmp_path / "in.gcode")), "-o", str(text_out), "--purge", "5")
+    ours = cli("cat", str(after), "-o", "-").stdout
+    assert ours == to_text(after, tmp_path / "after.gcode")
+
+    def non_empty(text: bytes) -> list:
+        return [line for line in text.split(b"\n") if line.strip(b" \t") not in (b"", b";")]
+
+    assert non_empty(ours) == non_empty(text_out.read_bytes())
+    assert non_empty(ours) != non_empty((tmp_path / "in.gcode").read_bytes()), "purge-shift moved no change"

@@ -1,0 +1,386 @@
+//! Reading a binary G-code file block by block, as a stream of text ([`Reader`] is a
+//! [`Read`]): the metadata rendered first ([`super::text::prefix`]), then each G-code block
+//! checked (CRC32), decompressed (deflate, heatshrink), decoded (MeatPack) and stripped of the
+//! empty lines libbgcode's converter leaves out, then the print and slicer metadata. Memory:
+//! one block, its decoded text, and the metadata.
+
+use std::io::{self, Read, Seek, SeekFrom};
+
+use super::super::{heatshrink, meatpack};
+use super::{
+    invalid, read_full, text, Block, Compression, Header, Kind, Metadata, Preamble, Thumbnail, MAGIC,
+    MAX_BLOCK,
+};
+
+/// A binary G-code file read as text.
+pub struct Reader<R> {
+    inner: R,
+    preamble: Preamble,
+    /// Text ready to be read, from `pos`.
+    buf: Vec<u8>,
+    pos: usize,
+    /// The next G-code block's header, already read; `None` after the last.
+    next: Option<Located>,
+    suffix_done: bool,
+    /// 1-based number of the next block, and the byte offset of the next header.
+    block: u32,
+    offset: u64,
+    scratch: Vec<u8>,
+    decoded: Vec<u8>,
+}
+
+/// A block header with its number and offset, for messages.
+#[derive(Clone, Copy)]
+struct Located {
+    header: Header,
+    number: u32,
+    offset: u64,
+}
+
+impl<R: Read> Reader<R> {
+    /// Reads the file header and every block before the G-code (`inner` starts at the magic).
+    pub fn new(inner: R) -> io::Result<Reader<R>> {
+        let mut r = Reader {
+            inner,
+            preamble: Preamble::default(),
+            buf: Vec::new(),
+            pos: 0,
+            next: None,
+            suffix_done: false,
+            block: 1,
+            offset: 10,
+            scratch: Vec::new(),
+            decoded: Vec::new(),
+        };
+        r.preamble.checksum = r.file_header()?;
+        let mut seen_printer = false;
+        loop {
+            let Some(at) = r.header()? else {
+                return Err(invalid("the file ends before its first G-code block".into()));
+            };
+            let order_error = |what: &str| {
+                Err(invalid(format!(
+                    "block {} ({} at byte {}) is out of order: {what}",
+                    at.number,
+                    at.header.kind.name(),
+                    at.offset
+                )))
+            };
+            match at.header.kind {
+                Kind::GCode if !seen_printer => return order_error("no printer metadata before it"),
+                Kind::GCode => {
+                    r.next = Some(at);
+                    break;
+                }
+                Kind::FileMetadata if r.block != 2 => return order_error("file metadata must come first"),
+                Kind::PrinterMetadata if seen_printer => {
+                    return order_error("a second printer metadata block")
+                }
+                Kind::Thumbnail | Kind::PrintMetadata | Kind::SlicerMetadata if !seen_printer => {
+                    return order_error("no printer metadata before it")
+                }
+                _ => {}
+            }
+            let block = r.block_data(at)?;
+            match at.header.kind {
+                Kind::Thumbnail => {
+                    let p = &block.params;
+                    let field = |i: usize| u16::from_le_bytes([p[i], p[i + 1]]);
+                    let (format, width, height) = (field(0), field(2), field(4));
+                    r.preamble.thumbnails.push(Thumbnail { block, format, width, height });
+                }
+                kind => {
+                    let meta = Metadata::parse(&r.decoded, block.encoding()).map_err(|e| at.error(e))?;
+                    match kind {
+                        Kind::FileMetadata => r.preamble.file = Some(meta),
+                        Kind::PrinterMetadata => {
+                            r.preamble.printer = meta;
+                            seen_printer = true;
+                        }
+                        Kind::PrintMetadata => r.preamble.print = meta,
+                        _ => r.preamble.slicer.push(meta),
+                    }
+                }
+            }
+        }
+        r.buf = text::prefix(&r.preamble);
+        Ok(r)
+    }
+
+    /// What came before the G-code: metadata and thumbnails.
+    pub fn preamble(&self) -> &Preamble {
+        &self.preamble
+    }
+
+    /// Checks the magic and version; returns whether blocks carry a CRC32.
+    fn file_header(&mut self) -> io::Result<bool> {
+        let mut h = [0u8; 10];
+        if read_full(&mut self.inner, &mut h)? < h.len() || &h[..4] != MAGIC {
+            return Err(invalid("not a binary G-code file (no GCDE header)".into()));
+        }
+        let version = u32::from_le_bytes([h[4], h[5], h[6], h[7]]);
+        if version != super::VERSION {
+            return Err(invalid(format!("binary G-code version {version} is not supported (only 1)")));
+        }
+        match u16::from_le_bytes([h[8], h[9]]) {
+            0 => Ok(false),
+            1 => Ok(true),
+            c => Err(invalid(format!("unknown checksum type {c} in the file header"))),
+        }
+    }
+
+    /// The next block's header, `None` at the end of the file.
+    fn header(&mut self) -> io::Result<Option<Located>> {
+        let (number, offset) = (self.block, self.offset);
+        let mut h = [0u8; 12];
+        let n = read_full(&mut self.inner, &mut h[..8])?;
+        if n == 0 {
+            return Ok(None);
+        }
+        let truncated = |got: usize, of: usize| {
+            invalid(format!("block {number} (at byte {offset}) is truncated: the file ends {got} bytes into its {of}-byte header"))
+        };
+        if n < 8 {
+            return Err(truncated(n, 8));
+        }
+        let field = |i: usize| u16::from_le_bytes([h[i], h[i + 1]]);
+        let kind = Kind::from_u16(field(0)).ok_or_else(|| {
+            invalid(format!("block {number} (at byte {offset}) has an unknown type {}", field(0)))
+        })?;
+        let compression = Compression::from_u16(field(2)).ok_or_else(|| {
+            invalid(format!(
+                "block {number} ({} at byte {offset}) has an unknown compression {}",
+                kind.name(),
+                field(2)
+            ))
+        })?;
+        let uncompressed = u32::from_le_bytes([h[4], h[5], h[6], h[7]]);
+        let mut stored = uncompressed;
+        let mut len = 8;
+        if compression != Compression::None {
+            let got = read_full(&mut self.inner, &mut h[8..12])?;
+            if got < 4 {
+                return Err(truncated(8 + got, 12));
+            }
+            stored = u32::from_le_bytes([h[8], h[9], h[10], h[11]]);
+            len = 12;
+        }
+        let at = Located { header: Header { kind, compression, uncompressed, stored }, number, offset };
+        if uncompressed > MAX_BLOCK || stored > MAX_BLOCK {
+            return Err(at.error(invalid(format!(
+                "its size ({} bytes) is larger than the limit of {MAX_BLOCK}",
+                uncompressed.max(stored)
+            ))));
+        }
+        self.block += 1;
+        self.offset += len as u64;
+        Ok(Some(at))
+    }
+
+    /// Reads the block's parameters, data and checksum; checks the checksum; leaves the
+    /// decompressed data in `self.decoded`. Returns the block as stored.
+    fn block_data(&mut self, at: Located) -> io::Result<Block> {
+        let h = at.header;
+        let mut params = vec![0u8; h.kind.params_len()];
+        let mut data = std::mem::take(&mut self.scratch);
+        data.resize(h.stored as usize, 0);
+        let crc_len = if self.preamble.checksum { 4 } else { 0 };
+        let total = params.len() + data.len() + crc_len;
+        let mut got = read_full(&mut self.inner, &mut params)?;
+        if got == params.len() {
+            got += read_full(&mut self.inner, &mut data)?;
+        }
+        let mut crc = [0u8; 4];
+        if got == params.len() + data.len() {
+            got += read_full(&mut self.inner, &mut crc[..crc_len])?;
+        }
+        if got < total {
+            return Err(at.error(invalid(format!("truncated: the file ends {got} bytes into its {total}"))));
+        }
+        self.offset += total as u64;
+        if self.preamble.checksum {
+            let mut hasher = crc32fast::Hasher::new();
+            hasher.update(&h.to_bytes());
+            hasher.update(&params);
+            hasher.update(&data);
+            let (stored, computed) = (u32::from_le_bytes(crc), hasher.finalize());
+            if stored != computed {
+                return Err(at.error(invalid(format!(
+                    "checksum mismatch (stored {stored:08x}, computed {computed:08x}): the file is damaged"
+                ))));
+            }
+        }
+        // Thumbnails are stored as they are (libbgcode reads their data without decompressing).
+        if h.kind != Kind::Thumbnail {
+            decompress(&data, h, &mut self.decoded).map_err(|e| at.error(e))?;
+        }
+        Ok(Block { header: h, params, data })
+    }
+
+    /// Decodes the next G-code block into `buf`, or the suffix after the last.
+    fn refill(&mut self) -> io::Result<()> {
+        self.buf.clear();
+        self.pos = 0;
+        let Some(at) = self.next.take() else {
+            if !self.suffix_done {
+                self.suffix_done = true;
+                self.buf = text::suffix(&self.preamble);
+            }
+            return Ok(());
+        };
+        let block = self.block_data(at)?;
+        let text = match block.encoding() {
+            0 => std::mem::take(&mut self.decoded),
+            1 | 2 => {
+                let mut t = Vec::with_capacity(self.decoded.len() * 2);
+                meatpack::decode(&self.decoded, &mut t);
+                t
+            }
+            e => return Err(at.error(invalid(format!("unknown G-code encoding {e}")))),
+        };
+        keep_non_empty_lines(&text, &mut self.buf);
+        self.decoded = text;
+        self.scratch = block.data;
+        self.next = match self.header()? {
+            Some(next) if next.header.kind == Kind::GCode => Some(next),
+            Some(other) => {
+                return Err(
+                    other.error(invalid("only G-code blocks may follow the first G-code block".into()))
+                )
+            }
+            None => None,
+        };
+        Ok(())
+    }
+}
+
+impl Located {
+    fn error(&self, e: io::Error) -> io::Error {
+        io::Error::new(
+            e.kind(),
+            format!("block {} ({} at byte {}): {e}", self.number, self.header.kind.name(), self.offset),
+        )
+    }
+}
+
+impl<R: Read> Read for Reader<R> {
+    fn read(&mut self, out: &mut [u8]) -> io::Result<usize> {
+        while self.pos == self.buf.len() {
+            if self.next.is_none() && self.suffix_done {
+                return Ok(0);
+            }
+            self.refill()?;
+        }
+        let n = out.len().min(self.buf.len() - self.pos);
+        out[..n].copy_from_slice(&self.buf[self.pos..self.pos + n]);
+        self.pos += n;
+        Ok(n)
+    }
+}
+
+/// Decompresses a block's data into `out` (cleared first), which must come to the header's
+/// uncompressed size.
+fn decompress(data: &[u8], h: Header, out: &mut Vec<u8>) -> io::Result<()> {
+    let expected = h.uncompressed as usize;
+    out.clear();
+    match h.compression {
+        Compression::None => out.extend_from_slice(data),
+        Compression::Deflate => {
+            let mut z = flate2::read::ZlibDecoder::new(data);
+            out.reserve(expected);
+            (&mut z)
+                .take(expected as u64 + 1)
+                .read_to_end(out)
+                .map_err(|e| invalid(format!("deflate data: {e}")))?;
+            if out.len() != expected {
+                return Err(invalid(format!(
+                    "deflate data decodes to {} bytes, not the {expected} its header says",
+                    out.len()
+                )));
+            }
+        }
+        Compression::Heatshrink11 | Compression::Heatshrink12 => {
+            let window_bits = if h.compression == Compression::Heatshrink11 { 11 } else { 12 };
+            heatshrink::decode(data, heatshrink::Params { window_bits, lookahead_bits: 4 }, expected, out)?;
+        }
+    }
+    Ok(())
+}
+
+/// Copies `text` without the lines libbgcode's converter drops: empty, blank (spaces and tabs),
+/// or a `;` with nothing but blanks after it. A last line without a newline gets one. Runs of
+/// kept lines are copied at once: most lines start with a letter and are kept.
+fn keep_non_empty_lines(text: &[u8], out: &mut Vec<u8>) {
+    out.reserve(text.len() + 1);
+    let blank = |b: u8| b == b' ' || b == b'\t';
+    let (mut run, mut start) = (0, 0);
+    while start < text.len() {
+        let end = memchr::memchr(b'\n', &text[start..]).map_or(text.len(), |i| start + i);
+        let line = &text[start..end];
+        let dropped = match line.first() {
+            Some(&c) if c != b' ' && c != b'\t' && c != b';' => false,
+            _ => match line.iter().position(|&b| !blank(b)) {
+                None => true,
+                Some(i) => line[i] == b';' && line[i + 1..].iter().all(|&b| blank(b)),
+            },
+        };
+        if dropped {
+            out.extend_from_slice(&text[run..start]);
+            run = end + 1;
+        }
+        start = end + 1;
+    }
+    if run < text.len() {
+        out.extend_from_slice(&text[run..]);
+        if text.last() != Some(&b'\n') {
+            out.push(b'\n');
+        }
+    }
+}
+
+/// The last `want` bytes of the text of a binary G-code file, reading only the G-code blocks
+/// at its end: the block headers are walked with seeks, then blocks are decoded from the last
+/// one back until enough text is found.
+pub fn tail<R: Read + Seek>(mut inner: R, want: usize) -> io::Result<Vec<u8>> {
+    let mut reader = Reader::new(&mut inner)?;
+    let suffix = text::suffix(&reader.preamble);
+    let mut blocks = Vec::new();
+    // Walk: remember each G-code block's offset, skip its body.
+    let crc_len: u64 = if reader.preamble.checksum { 4 } else { 0 };
+    let mut next = reader.next.take();
+    while let Some(at) = next {
+        blocks.push(at);
+        let skip = at.header.kind.params_len() as u64 + u64::from(at.header.stored) + crc_len;
+        reader.inner.seek(SeekFrom::Current(skip as i64))?;
+        reader.offset += skip;
+        next = reader.header()?;
+    }
+    let mut parts: Vec<Vec<u8>> = vec![suffix];
+    let mut have = parts[0].len();
+    for at in blocks.iter().rev() {
+        if have >= want {
+            break;
+        }
+        let header_len = at.header.to_bytes().len() as u64;
+        reader.inner.seek(SeekFrom::Start(at.offset + header_len))?;
+        reader.next = Some(*at);
+        reader.suffix_done = true;
+        reader.refill()?;
+        have += reader.buf.len();
+        parts.push(std::mem::take(&mut reader.buf));
+    }
+    let text: Vec<u8> = parts.into_iter().rev().flatten().collect();
+    Ok(text[text.len().saturating_sub(want)..].to_vec())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_lines_go_as_libbgcode_drops_them() {
+        let mut out = Vec::new();
+        keep_non_empty_lines(b"G1 X1\n\n  \t\n;\n ;  \n; kept\r\n\r\nG1 Y2", &mut out);
+        assert_eq!(out, b"G1 X1\n; kept\r\n\r\nG1 Y2\n");
+    }
+}

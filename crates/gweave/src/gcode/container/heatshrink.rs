@@ -1,0 +1,281 @@
+//! Heatshrink: the LZSS compression of Prusa binary G-code's blocks (compression 2: window
+//! 2^11, lookahead 2^4; compression 3: window 2^12, lookahead 2^4), as the reference library
+//! (atomicobject/heatshrink, used by libbgcode and Prusa's firmware) writes it.
+//!
+//! The stream is a sequence of bits, most significant first. A `1` bit is followed by a literal
+//! byte (8 bits); a `0` bit by a back-reference: `window` bits holding the distance minus one,
+//! then `lookahead` bits holding the length minus one, copied from the bytes already output
+//! (the window). The last byte is padded with zero bits, which a decoder ignores because they
+//! never complete a token. Bytes before the start of the output read as zero, as the reference
+//! decoder's zero-filled window gives them.
+//!
+//! Why not the `heatshrink` crate (0.2): its encoder tries every position of the window for every
+//! byte (about 2^12 x 16 comparisons a byte with window 12, minutes for one print), and its
+//! decoder reads one bit at a time through a state machine. A G-code file has tens of thousands
+//! of blocks; this module decodes with a 64-bit bit buffer and encodes with hash chains.
+
+use std::io;
+
+/// Window and lookahead, in bits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Params {
+    pub window_bits: u32,
+    pub lookahead_bits: u32,
+}
+
+/// Bytes a back-reference copies at once: the longest one (lookahead 4 bits).
+const COPY: usize = 16;
+
+/// Longest chain of earlier positions the encoder follows for one match: enough for G-code's
+/// repetitive text (the compressed size is within 1 % of following them all), bounded time.
+const MAX_CHAIN: usize = 48;
+
+/// Decodes `input` into `out` (cleared first), which must come to `expected` bytes.
+pub fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>) -> io::Result<()> {
+    // Room for a whole 16-byte copy past the end; not cleared (only grown), since every byte up
+    // to `expected` is written before it is read.
+    out.resize(expected + COPY, 0);
+    let mut bits = Bits { input, pos: 0, buf: 0, have: 0 };
+    let (wb, lb) = (p.window_bits, p.lookahead_bits);
+    // The longest token: a back-reference's tag, index and count.
+    let longest = 1 + wb + lb;
+    let mut at = 0;
+    while at < expected {
+        if bits.have < longest {
+            bits.refill();
+        }
+        if bits.have == 0 {
+            break;
+        }
+        if bits.peek(1) == 1 {
+            if bits.have < 9 {
+                break;
+            }
+            out[at] = (bits.peek(9) & 0xFF) as u8;
+            bits.consume(9);
+            at += 1;
+            continue;
+        }
+        if bits.have < longest {
+            break;
+        }
+        let token = bits.peek(longest);
+        bits.consume(longest);
+        let dist = (token >> lb & ((1 << wb) - 1)) as usize + 1;
+        let len = ((token & ((1 << lb) - 1)) as usize + 1).min(expected - at);
+        if dist <= at && dist >= COPY && len <= COPY {
+            // A fixed-size copy (no call to memcpy); the bytes past `len` are overwritten later.
+            let from = at - dist;
+            let chunk: [u8; COPY] = out[from..from + COPY].try_into().expect("16 bytes");
+            out[at..at + COPY].copy_from_slice(&chunk);
+        } else {
+            // Overlapping (a run), or before the start, where the reference decoder's window
+            // is zero-filled.
+            for k in at..at + len {
+                out[k] = k.checked_sub(dist).map_or(0, |from| out[from]);
+            }
+        }
+        at += len;
+    }
+    out.truncate(at);
+    if at != expected {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!("heatshrink data decodes to {at} bytes, not the {expected} its header says"),
+        ));
+    }
+    Ok(())
+}
+
+/// Reads bits, most significant first, through a 64-bit buffer whose `have` top bits are
+/// valid (the rest zero).
+struct Bits<'a> {
+    input: &'a [u8],
+    pos: usize,
+    buf: u64,
+    have: u32,
+}
+
+impl Bits<'_> {
+    /// Tops the buffer up to at least 57 bits, or to the end of the input.
+    #[inline]
+    fn refill(&mut self) {
+        if let Some(next) = self.input.get(self.pos..self.pos + 8) {
+            let v = u64::from_be_bytes(next.try_into().expect("8 bytes"));
+            let bytes = (63 - self.have) / 8;
+            let added = bytes * 8;
+            // Only the whole bytes taken, below the bits already held.
+            self.buf |= (v >> self.have) & !(u64::MAX >> (self.have + added));
+            self.have += added;
+            self.pos += bytes as usize;
+        } else {
+            while self.have <= 56 {
+                let Some(&b) = self.input.get(self.pos) else { break };
+                self.buf |= u64::from(b) << (56 - self.have);
+                self.have += 8;
+                self.pos += 1;
+            }
+        }
+    }
+
+    /// The next `n` bits (1 to 32; `n <= have`).
+    #[inline]
+    fn peek(&self, n: u32) -> u32 {
+        (self.buf >> (64 - n)) as u32
+    }
+
+    #[inline]
+    fn consume(&mut self, n: u32) {
+        self.buf <<= n;
+        self.have -= n;
+    }
+}
+
+/// Encodes `input` into `out` (appended).
+pub fn encode(input: &[u8], p: Params, out: &mut Vec<u8>) {
+    const HASH_BITS: u32 = 14;
+    let window = 1usize << p.window_bits;
+    let max_len = 1usize << p.lookahead_bits;
+    // A back-reference costs 1 + window + lookahead bits, a literal 9: worth it from this length.
+    let min_len = (1 + p.window_bits + p.lookahead_bits).div_ceil(9) as usize + 1;
+    let mut head = vec![u32::MAX; 1 << HASH_BITS];
+    let mut prev = vec![u32::MAX; input.len()];
+    let hash = |i: usize| {
+        let v = u32::from(input[i]) | u32::from(input[i + 1]) << 8 | u32::from(input[i + 2]) << 16;
+        (v.wrapping_mul(0x9E37_79B1) >> (32 - HASH_BITS)) as usize
+    };
+    let insert = |i: usize, head: &mut Vec<u32>, prev: &mut Vec<u32>| {
+        if i + 2 < input.len() {
+            let h = hash(i);
+            prev[i] = head[h];
+            head[h] = i as u32;
+        }
+    };
+    let mut w = BitWriter { out, buf: 0, have: 0 };
+    let mut i = 0;
+    while i < input.len() {
+        let (mut best_len, mut best_dist) = (0, 0);
+        if i + 2 < input.len() {
+            let limit = max_len.min(input.len() - i);
+            let mut cand = head[hash(i)];
+            let mut chain = 0;
+            while cand != u32::MAX && chain < MAX_CHAIN {
+                let c = cand as usize;
+                if i - c > window {
+                    break;
+                }
+                let len = input[c..].iter().zip(&input[i..i + limit]).take_while(|(a, b)| a == b).count();
+                if len > best_len {
+                    (best_len, best_dist) = (len, i - c);
+                    if len == limit {
+                        break;
+                    }
+                }
+                cand = prev[c];
+                chain += 1;
+            }
+        }
+        if best_len >= min_len {
+            w.put(0, 1);
+            w.put((best_dist - 1) as u32, p.window_bits);
+            w.put((best_len - 1) as u32, p.lookahead_bits);
+            for k in i..i + best_len {
+                insert(k, &mut head, &mut prev);
+            }
+            i += best_len;
+        } else {
+            w.put(0x100 | u32::from(input[i]), 9);
+            insert(i, &mut head, &mut prev);
+            i += 1;
+        }
+    }
+    w.finish();
+}
+
+struct BitWriter<'a> {
+    out: &'a mut Vec<u8>,
+    buf: u64,
+    have: u32,
+}
+
+impl BitWriter<'_> {
+    fn put(&mut self, v: u32, n: u32) {
+        self.buf = self.buf << n | u64::from(v);
+        self.have += n;
+        while self.have >= 8 {
+            self.have -= 8;
+            self.out.push((self.buf >> self.have) as u8);
+        }
+    }
+
+    /// Pads the last byte with zero bits.
+    fn finish(mut self) {
+        if self.have > 0 {
+            self.out.push((self.buf << (8 - self.have)) as u8);
+            self.have = 0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const P12: Params = Params { window_bits: 12, lookahead_bits: 4 };
+    const P11: Params = Params { window_bits: 11, lookahead_bits: 4 };
+
+    fn round_trip(input: &[u8], p: Params) -> usize {
+        let mut packed = Vec::new();
+        encode(input, p, &mut packed);
+        let mut back = Vec::new();
+        decode(&packed, p, input.len(), &mut back).unwrap();
+        assert!(back == input);
+        packed.len()
+    }
+
+    #[test]
+    fn gcode_text_round_trips_and_shrinks() {
+        let text = std::fs::read(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../tests/data/prusaslicer/pr_torus_pva.gcode"),
+        )
+        .unwrap();
+        for p in [P11, P12] {
+            let packed = round_trip(&text[..65536], p);
+            assert!(packed < 65536 / 2, "{packed}");
+        }
+    }
+
+    /// The reference encoder's output for a tiny input, worked by hand: `1` + 'a', `1` + 'b',
+    /// then a back-reference of distance 2, length 4 (`0`, index 1, count 3) with window 4 and
+    /// lookahead 3 (the format's smallest), padded.
+    #[test]
+    fn decodes_a_hand_made_stream() {
+        let p = Params { window_bits: 4, lookahead_bits: 3 };
+        // 1 01100001 1 01100010 0 0001 011 + padding
+        let bits = "10110000110110001000001011";
+        let mut bytes = Vec::new();
+        for chunk in bits.as_bytes().chunks(8) {
+            let s: String = chunk.iter().map(|&b| b as char).collect();
+            bytes.push(u8::from_str_radix(&format!("{s:0<8}"), 2).unwrap());
+        }
+        let mut out = Vec::new();
+        decode(&bytes, p, 6, &mut out).unwrap();
+        assert_eq!(out, b"ababab");
+        let err = decode(&bytes, p, 7, &mut out).unwrap_err();
+        assert_eq!(err.to_string(), "heatshrink data decodes to 6 bytes, not the 7 its header says");
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_bytes_round_trip(bytes in proptest::collection::vec(proptest::sample::select(b"G1 X0.5Y\n".to_vec()), 0..3000)) {
+            round_trip(&bytes, P12);
+            round_trip(&bytes, P11);
+        }
+
+        #[test]
+        fn garbage_never_panics(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..300), n in 0usize..2000) {
+            let _ = decode(&bytes, P12, n, &mut Vec::new());
+        }
+    }
+}

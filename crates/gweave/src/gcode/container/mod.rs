@@ -1,0 +1,210 @@
+//! How G-code is stored: plain text, gzip (`.gcode.gz`), or Prusa's binary G-code (`.bgcode`),
+//! read from a file or from standard input (`-`). Every command opens its G-code input through
+//! [`open`] and writes through [`Encoder`] (by way of `writer::Output`), so every command, the
+//! CLI and Python read and write all of them alike.
+//!
+//! An input's container is told by its first bytes, not its name: gzip's `1f 8b`, binary
+//! G-code's `GCDE`; anything else is text. An output's container is told by its name:
+//! `*.gz` is written compressed, `*.bgcode` as binary G-code ([`Container::of_output`]).
+//! Everything is streamed: gzip through flate2, binary G-code one block at a time, decoded on a
+//! thread of its own ([`ahead`]).
+
+pub mod ahead;
+pub mod bgcode;
+pub mod heatshrink;
+pub mod meatpack;
+pub mod spool;
+
+use std::io::{self, BufReader, Read, Seek, SeekFrom, Write};
+use std::path::Path;
+
+use flate2::read::MultiGzDecoder;
+use flate2::write::GzEncoder;
+
+/// How a G-code text is stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Container {
+    #[default]
+    Text,
+    Gzip,
+    Bgcode,
+}
+
+impl Container {
+    /// The container of stored bytes that start with `head`.
+    pub fn sniff(head: &[u8]) -> Container {
+        if head.starts_with(&[0x1f, 0x8b]) {
+            Container::Gzip
+        } else if head.starts_with(bgcode::MAGIC) {
+            Container::Bgcode
+        } else {
+            Container::Text
+        }
+    }
+
+    /// The container an output named `path` is written in: `.gz` gzip, `.bgcode` binary.
+    pub fn of_output(path: &Path) -> Container {
+        match path.extension().map(|e| e.to_ascii_lowercase()) {
+            Some(e) if e == "gz" => Container::Gzip,
+            Some(e) if e == "bgcode" => Container::Bgcode,
+            _ => Container::Text,
+        }
+    }
+}
+
+/// A G-code input opened for reading its text.
+pub struct Input {
+    /// The text's length when known without reading it (plain text), for progress.
+    pub text_len: Option<u64>,
+    reader: Box<dyn Read + Send + Sync>,
+}
+
+impl Read for Input {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        self.reader.read(buf)
+    }
+}
+
+/// Opens `path` (`-` for standard input) as G-code text, whatever its container.
+pub fn open(path: &Path) -> io::Result<Input> {
+    let (mut raw, container) = sniffed(path)?;
+    Ok(match container {
+        Container::Text => Input { text_len: Some(raw.size()?), reader: Box::new(raw) },
+        Container::Gzip => Input {
+            text_len: None,
+            reader: Box::new(MultiGzDecoder::new(BufReader::with_capacity(1 << 16, raw))),
+        },
+        Container::Bgcode => {
+            raw.seek(SeekFrom::Start(0))?;
+            let reader = bgcode::read::Reader::new(BufReader::with_capacity(1 << 16, raw))?;
+            Input { text_len: None, reader: Box::new(ahead::Ahead::new(reader)) }
+        }
+    })
+}
+
+/// Opens the raw input and tells its container, positioned at the start.
+fn sniffed(path: &Path) -> io::Result<(spool::Raw, Container)> {
+    let mut raw = spool::open(path)?;
+    let mut head = [0u8; 4];
+    let mut n = 0;
+    while n < head.len() {
+        match raw.read(&mut head[n..])? {
+            0 => break,
+            k => n += k,
+        }
+    }
+    raw.seek(SeekFrom::Start(0))?;
+    Ok((raw, Container::sniff(&head[..n])))
+}
+
+/// The first `head` and the last `tail` bytes of the text of `path` (all of a shorter text in
+/// `.0`, the tail then starting where the head ended), where slicers name the flavour and
+/// write their settings. Plain text is read at both ends; binary G-code decodes only its last
+/// blocks; gzip has to be decompressed through to its end.
+pub fn ends(path: &Path, head: usize, tail: usize) -> io::Result<(Vec<u8>, Vec<u8>)> {
+    let (mut raw, container) = sniffed(path)?;
+    let mut first = Vec::with_capacity(head);
+    match container {
+        Container::Text => {
+            let len = raw.size()?;
+            (&mut raw).take(head as u64).read_to_end(&mut first)?;
+            let start = len.saturating_sub(tail as u64).max(first.len() as u64);
+            let mut last = Vec::new();
+            if start < len {
+                raw.seek(SeekFrom::Start(start))?;
+                raw.take(tail as u64).read_to_end(&mut last)?;
+            }
+            Ok((first, last))
+        }
+        Container::Gzip => {
+            let mut z = MultiGzDecoder::new(BufReader::new(raw));
+            (&mut z).take(head as u64).read_to_end(&mut first)?;
+            // A ring of twice the tail, compacted when full.
+            let mut last: Vec<u8> = Vec::with_capacity(2 * tail);
+            let mut buf = vec![0u8; 1 << 16];
+            loop {
+                let n = z.read(&mut buf)?;
+                if n == 0 {
+                    break;
+                }
+                last.extend_from_slice(&buf[..n]);
+                if last.len() > 2 * tail {
+                    last.drain(..last.len() - tail);
+                }
+            }
+            let keep = last.len().min(tail);
+            Ok((first, last.split_off(last.len() - keep)))
+        }
+        Container::Bgcode => {
+            let mut reader = bgcode::read::Reader::new(BufReader::new(&mut raw))?;
+            (&mut reader).take(head as u64).read_to_end(&mut first)?;
+            drop(reader);
+            raw.seek(SeekFrom::Start(0))?;
+            let last = bgcode::read::tail(BufReader::new(raw), tail)?;
+            // A short text: its tail is already (partly) in the head.
+            Ok((first, last))
+        }
+    }
+}
+
+/// The metadata and thumbnails of `path` if it is binary G-code, to carry into an output.
+pub fn preamble(path: &Path) -> io::Result<Option<bgcode::Preamble>> {
+    let (raw, container) = sniffed(path)?;
+    if container != Container::Bgcode {
+        return Ok(None);
+    }
+    Ok(Some(bgcode::read::Reader::new(BufReader::new(raw))?.preamble().clone()))
+}
+
+/// Text written into `W` in a container.
+pub enum Encoder<W: Write> {
+    Text(W),
+    Gzip(GzEncoder<W>),
+    Bgcode(Box<bgcode::write::Writer<W>>),
+}
+
+impl<W: Write> Encoder<W> {
+    /// An encoder into `out`; a binary output carries `carried` (a binary input's metadata).
+    pub fn new(container: Container, out: W, carried: Option<bgcode::Preamble>) -> io::Result<Encoder<W>> {
+        Ok(match container {
+            Container::Text => Encoder::Text(out),
+            Container::Gzip => Encoder::Gzip(GzEncoder::new(out, flate2::Compression::default())),
+            Container::Bgcode => Encoder::Bgcode(Box::new(bgcode::write::Writer::new(out, carried)?)),
+        })
+    }
+
+    /// Ends the container (gzip's trailer, binary G-code's blocks); returns the writer.
+    pub fn finish(self) -> io::Result<W> {
+        match self {
+            Encoder::Text(w) => Ok(w),
+            Encoder::Gzip(z) => z.finish(),
+            Encoder::Bgcode(b) => b.finish(),
+        }
+    }
+}
+
+impl<W: Write> Write for Encoder<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match self {
+            Encoder::Text(w) => w.write(buf),
+            Encoder::Gzip(z) => z.write(buf),
+            Encoder::Bgcode(b) => b.write(buf),
+        }
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
+        match self {
+            Encoder::Text(w) => w.write_all(buf),
+            Encoder::Gzip(z) => z.write_all(buf),
+            Encoder::Bgcode(b) => b.write_all(buf),
+        }
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        match self {
+            Encoder::Text(w) => w.flush(),
+            Encoder::Gzip(z) => z.flush(),
+            Encoder::Bgcode(b) => b.flush(),
+        }
+    }
+}
