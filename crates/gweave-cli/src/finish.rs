@@ -134,9 +134,32 @@ fn transform_args(args: impl Iterator<Item = String>, input: Option<&Path>) -> S
             skip_value = flag == arg;
             continue;
         }
-        kept.push(quote(arg));
+        kept.push(quote(canonical(&kept, arg)));
     }
     kept.join(" ")
+}
+
+/// A flag as the command's help names it: an older name or a US spelling (`--purge`,
+/// `--color-by`) is written as its canonical name, so the header of a run does not depend on
+/// which alias was typed. `kept[0]` is the subcommand (with `rotary`, `kept[1]` too).
+fn canonical(kept: &[String], arg: String) -> String {
+    let Some(long) = arg.strip_prefix("--") else { return arg };
+    let (name, value) = long.split_once('=').map_or((long, None), |(n, v)| (n, Some(v)));
+    let mut cmd = crate::command();
+    for sub in kept.iter().take(2) {
+        match cmd.find_subcommand(sub) {
+            Some(found) => cmd = found.clone(),
+            None => break,
+        }
+    }
+    let found = cmd.get_arguments().find(|a| {
+        a.get_long() == Some(name) || a.get_all_aliases().is_some_and(|all| all.contains(&name))
+    });
+    match (found.and_then(|a| a.get_long()), value) {
+        (Some(long), Some(v)) => format!("--{long}={v}"),
+        (Some(long), None) => format!("--{long}"),
+        (None, _) => arg,
+    }
 }
 
 /// Measures the written file: its filament, its settings, its estimated times.
@@ -266,7 +289,7 @@ mod tests {
         };
         assert_eq!(
             args("purge-shift a.gcode --purge 2.5 -o b.gcode -q --report=r.json", Some("a.gcode")),
-            "purge-shift --purge 2.5"
+            "purge-shift --purge-mm 2.5"
         );
         assert_eq!(args("mix -c m.toml --in-place --no-backup a.gcode", Some("a.gcode")), "mix -c m.toml");
         assert_eq!(
@@ -276,5 +299,13 @@ mod tests {
         let spaced =
             transform_args(["mix".into(), "--at-layer".into(), "0=Dark Red".into()].into_iter(), None);
         assert_eq!(spaced, r#"mix --at-layer "0=Dark Red""#);
+    }
+
+    #[test]
+    fn a_header_names_the_canonical_flag_whatever_alias_was_typed() {
+        let args = |line: &str| transform_args(line.split(' ').map(str::to_owned), None);
+        assert_eq!(args("purge-shift --purge 2.5"), args("purge-shift --purge-mm 2.5"));
+        assert_eq!(args("rotary wrap --feed=nist"), "rotary wrap --feed-convention=nist");
+        assert_eq!(args("rotary tube --layers 4"), "rotary tube --layer-count 4");
     }
 }

@@ -93,7 +93,7 @@ fn stats_of_every_transform_agrees_with_the_metadata_inside_it() {
         assert!(before.is_null() || before != stated(&stats(&out)), "{rel}: {before}");
 
         let out = dir.path().join(format!("{name}.shifted.gcode"));
-        let text = transform(&["purge-shift", &input, "--purge", "2.5"], &out);
+        let text = transform(&["purge-shift", &input, "--purge-mm", "2.5"], &out);
         check_output(&text, &out, "purge-shift", true);
     }
     let out = dir.path().join("sleeve.gcode");
@@ -144,7 +144,7 @@ fn m73_progress_is_recomputed_monotone_from_0_to_100() {
     let input = input.to_str().unwrap();
     for (name, args) in [
         ("mix", vec!["mix", input, "--at-layer", "0=Orange", "--at-layer", "3=Blue"]),
-        ("purge-shift", vec!["purge-shift", input, "--purge", "2.5"]),
+        ("purge-shift", vec!["purge-shift", input, "--purge-mm", "2.5"]),
     ] {
         let out = dir.path().join(format!("{name}.gcode"));
         let text = transform(&args, &out);
@@ -177,7 +177,7 @@ fn a_second_run_of_the_same_transform_is_refused() {
     let plate = fixture("rotary/plate.gcode");
     let runs: [(&str, Vec<&str>, &str); 3] = [
         ("mix", vec!["mix", "--at-layer", "0=Orange", "--at-layer", "3=Blue"], &torus),
-        ("purge-shift", vec!["purge-shift", "--purge", "2.5"], &torus),
+        ("purge-shift", vec!["purge-shift", "--purge-mm", "2.5"], &torus),
         ("rotary wrap", vec!["rotary", "wrap", "--mandrel-diameter", "30"], &plate),
     ];
     for (command, args, input) in runs {
@@ -231,7 +231,7 @@ fn a_chain_of_transforms_keeps_one_header_line_per_run() {
         &mixed,
     );
     let shifted = dir.path().join("shifted.gcode");
-    let text = transform(&["purge-shift", mixed.to_str().unwrap(), "--purge", "2.5"], &shifted);
+    let text = transform(&["purge-shift", mixed.to_str().unwrap(), "--purge-mm", "2.5"], &shifted);
     let lines: Vec<&str> = text.lines().take(3).collect();
     assert!(lines[0].starts_with("; gweave 0.1.0 purge-shift "), "{lines:?}");
     assert!(lines[1].starts_with("; gweave 0.1.0 mix "), "{lines:?}");
@@ -246,13 +246,13 @@ fn a_chain_of_transforms_keeps_one_header_line_per_run() {
 fn cura_headers_stay_first_and_get_true_figures() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("dual.gcode");
-    let text = transform(&["purge-shift", &fixture("cura/cura_dual.gcode"), "--purge", "2.5"], &out);
+    let text = transform(&["purge-shift", &fixture("cura/cura_dual.gcode"), "--purge-mm", "2.5"], &out);
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], ";START_OF_HEADER");
     let end = lines.iter().position(|l| *l == ";END_OF_HEADER").unwrap();
     assert!(lines[end + 1].starts_with("; gweave 0.1.0 purge-shift "), "{:?}", &lines[end..end + 2]);
     let out = dir.path().join("torus.gcode");
-    let text = transform(&["purge-shift", &fixture("cura/cura_torus.gcode"), "--purge", "2.5"], &out);
+    let text = transform(&["purge-shift", &fixture("cura/cura_torus.gcode"), "--purge-mm", "2.5"], &out);
     let s = stats(&out);
     let mm = s["filament"][0]["extruded_mm"].as_f64().unwrap();
     let stated = text.lines().find_map(|l| l.strip_prefix(";Filament used: ")).unwrap();
@@ -288,14 +288,14 @@ fn the_same_run_writes_the_same_bytes_wherever_it_writes() {
     let dir = tempfile::tempdir().unwrap();
     let input = fixture("slic3r/slic3r_cone_2tool.gcode");
     let to_file = dir.path().join("out.gcode");
-    let text = transform(&["purge-shift", &input, "--purge", "2"], &to_file);
+    let text = transform(&["purge-shift", &input, "--purge-mm", "2"], &to_file);
     assert!(text
-        .starts_with(&format!("; gweave {} purge-shift --purge 2 (generated)\n", env!("CARGO_PKG_VERSION"))));
-    let piped = ok(gweave(&["purge-shift", &input, "--purge", "2", "-o", "-", "-q"]));
+        .starts_with(&format!("; gweave {} purge-shift --purge-mm 2 (generated)\n", env!("CARGO_PKG_VERSION"))));
+    let piped = ok(gweave(&["purge-shift", &input, "--purge-mm", "2", "-o", "-", "-q"]));
     assert_eq!(String::from_utf8(piped.stdout).unwrap(), text);
     let copy = dir.path().join("copy.gcode");
     std::fs::copy(&input, &copy).unwrap();
-    ok(gweave(&["purge-shift", copy.to_str().unwrap(), "--purge", "2", "--in-place", "-q"]));
+    ok(gweave(&["purge-shift", copy.to_str().unwrap(), "--purge-mm", "2", "--in-place", "-q"]));
     assert_eq!(std::fs::read_to_string(&copy).unwrap(), text);
     assert_eq!(std::fs::read(dir.path().join("copy.gcode.bak")).unwrap(), std::fs::read(&input).unwrap());
 }
@@ -311,7 +311,7 @@ fn a_progress_line_in_the_middle_only_is_recomputed() {
     let input = dir.path().join("bunny.gcode");
     std::fs::write(&input, format!("{}M73 P50 R1\n{}", &text[..at], &text[at..])).unwrap();
     let out = dir.path().join("out.gcode");
-    let written = transform(&["purge-shift", input.to_str().unwrap(), "--purge", "2.5"], &out);
+    let written = transform(&["purge-shift", input.to_str().unwrap(), "--purge-mm", "2.5"], &out);
     let (p, r) = (m73(&written, 'P'), m73(&written, 'R'));
     assert_eq!(p.len(), 1);
     assert!(p[0] > 5 && p[0] < 45 && r[0] > 60, "P{p:?} R{r:?}");

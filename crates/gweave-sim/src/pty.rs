@@ -332,7 +332,9 @@ mod tests {
             let mut host = open_host(link);
             // Thirty seconds of replies paced to the wall clock; the host leaves after the boot.
             host.write_all(b"G4 S30\n").unwrap();
-            lines_until(&mut host, |text| text.contains("echo:Marlin test double\n"));
+            // The first keepalive (2 s into the dwell) proves the board is running the command
+            // (on a loaded machine the banner alone can come before the line is read).
+            lines_until(&mut host, |text| text.contains("echo:busy: processing\n"));
             drop(host);
             assert_next_host_gets_a_fresh_board(link);
         });
