@@ -16,6 +16,7 @@ use std::io::{self, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use gweave::gcode::container;
 use gweave::gcode::flavour::read_flavour;
 use gweave::gcode::state::{State, StateOptions};
 use gweave::gcode::temp::TempFile;
@@ -36,7 +37,9 @@ use gweave::gcode::ends::read_ends;
 /// it wrote: a second run would stack on the first (shift the changes again, purge twice).
 pub fn refuse_second_run(input: &Path, command: &str) -> Result<()> {
     // An input that cannot be opened is the transform's to report.
-    let Ok(file) = File::open(input) else { return Ok(()) };
+    // Read through its container: a `.gcode.gz` or `.bgcode` written by gweave holds the header
+    // in its text.
+    let Ok(file) = container::open(input) else { return Ok(()) };
     let runs = earlier_runs(BufReader::new(file)).with_context(|| format!("reading {}", input.display()))?;
     if let Some(run) = runs.iter().find(|r| r.is(command)) {
         bail!(
@@ -152,9 +155,9 @@ fn canonical(kept: &[String], arg: String) -> String {
             None => break,
         }
     }
-    let found = cmd.get_arguments().find(|a| {
-        a.get_long() == Some(name) || a.get_all_aliases().is_some_and(|all| all.contains(&name))
-    });
+    let found = cmd
+        .get_arguments()
+        .find(|a| a.get_long() == Some(name) || a.get_all_aliases().is_some_and(|all| all.contains(&name)));
     match (found.and_then(|a| a.get_long()), value) {
         (Some(long), Some(v)) => format!("--{long}={v}"),
         (Some(long), None) => format!("--{long}"),

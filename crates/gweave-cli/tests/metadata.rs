@@ -289,8 +289,10 @@ fn the_same_run_writes_the_same_bytes_wherever_it_writes() {
     let input = fixture("slic3r/slic3r_cone_2tool.gcode");
     let to_file = dir.path().join("out.gcode");
     let text = transform(&["purge-shift", &input, "--purge-mm", "2"], &to_file);
-    assert!(text
-        .starts_with(&format!("; gweave {} purge-shift --purge-mm 2 (generated)\n", env!("CARGO_PKG_VERSION"))));
+    assert!(text.starts_with(&format!(
+        "; gweave {} purge-shift --purge-mm 2 (generated)\n",
+        env!("CARGO_PKG_VERSION")
+    )));
     let piped = ok(gweave(&["purge-shift", &input, "--purge-mm", "2", "-o", "-", "-q"]));
     assert_eq!(String::from_utf8(piped.stdout).unwrap(), text);
     let copy = dir.path().join("copy.gcode");
@@ -315,4 +317,28 @@ fn a_progress_line_in_the_middle_only_is_recomputed() {
     let (p, r) = (m73(&written, 'P'), m73(&written, 'R'));
     assert_eq!(p.len(), 1);
     assert!(p[0] > 5 && p[0] < 45 && r[0] > 60, "P{p:?} R{r:?}");
+}
+
+#[test]
+fn a_second_run_on_gzip_or_binary_output_is_refused() {
+    // The header lives in the text a container holds: the refusal reads through it.
+    let dir = tempfile::tempdir().unwrap();
+    let input = fixture("prusaslicer/pr_bunny_3tool_rel.gcode");
+    for name in ["once.gcode.gz", "once.bgcode"] {
+        let once = dir.path().join(name);
+        ok(gweave(&["purge-shift", &input, "--purge-mm", "2.5", "-o", once.to_str().unwrap(), "-q"]));
+        let twice = dir.path().join(format!("twice-{name}"));
+        let out = gweave(&[
+            "purge-shift",
+            once.to_str().unwrap(),
+            "--purge-mm",
+            "2.5",
+            "-o",
+            twice.to_str().unwrap(),
+        ]);
+        assert!(!out.status.success(), "{name}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("a second purge-shift would stack on the first"), "{name}: {err}");
+        assert!(!twice.exists(), "{name}");
+    }
 }

@@ -45,7 +45,9 @@ impl fmt::Display for InkjetWarning {
             InkjetWarning::FireDuringRecoat { x_mm, y_mm } => {
                 write!(f, "fired during a recoat at X {x_mm:.3} Y {y_mm:.3} mm")
             }
-            InkjetWarning::NoRecoat { z_mm } => write!(f, "layer at Z {z_mm:.3} mm fired with no recoat before it"),
+            InkjetWarning::NoRecoat { z_mm } => {
+                write!(f, "layer at Z {z_mm:.3} mm fired with no recoat before it")
+            }
             InkjetWarning::PistonTravel { axis, moved_mm, expected_mm } => write!(
                 f,
                 "recoat piston {axis} moved {moved_mm:.3} mm where the layer asks {expected_mm:.3} mm"
