@@ -256,13 +256,13 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     };
     let profile = MixProfile::from_toml_str(&text)?;
-    let mut bar = Bar::new(args.quiet);
+    let mut bar = args.quiet.bar();
     let report = mix_file(profile, file, &target, &mut bar)?;
     drop(bar);
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");
     }
-    if args.report.emit(&report)? && !args.quiet {
+    if args.quiet.emit(&args.report, &report)? {
         print_human(&mut std::io::stderr().lock(), &report)?;
     }
     Ok(ExitCode::SUCCESS)
