@@ -22,7 +22,8 @@ fn commands() -> Vec<(String, Command)> {
 
 /// Value names of arguments that name a file or folder: absent, the file is not read or
 /// written, which is no default to state.
-const PATHS: [&str; 10] = ["FILE", "PNG", "TOML", "OUT", "OUT.gcode", "DIR", "PROFILE.toml", "B", "PATH", "CSV"];
+const PATHS: [&str; 10] =
+    ["FILE", "PNG", "TOML", "OUT", "OUT.gcode", "DIR", "PROFILE.toml", "B", "PATH", "CSV"];
 
 #[test]
 fn every_default_is_shown_in_help() {

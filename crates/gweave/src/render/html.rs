@@ -381,7 +381,13 @@ mod tests {
             seg(Feature::Infill, true, 1.0),
             seg(Feature::OuterWall, true, 2.0),
         ];
-        let tp = Toolpath { segments, layer_z_mm: vec![0.2], tools: 1, on_cylinder: false, mix_names: Default::default() };
+        let tp = Toolpath {
+            segments,
+            layer_z_mm: vec![0.2],
+            tools: 1,
+            on_cylinder: false,
+            mix_names: Default::default(),
+        };
         let options = HtmlOptions {
             title: "c".into(),
             colour_by: ColourBy::Tool,
