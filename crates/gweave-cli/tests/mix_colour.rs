@@ -47,7 +47,7 @@ fn predict_prints_text_and_json() {
     assert!(out.status.success());
     assert_eq!(
         String::from_utf8_lossy(&out.stdout),
-        "0.5000:0.0000:0.5000:0.0000  #7dbd4c  L 70.4 a -39.9 b 49.7\n"
+        "0.5000:0.0000:0.5000:0.0000  #69c348  L 71.1 a -48.9 b 51.8\n"
     );
     let p = predict(None, &["0:0:0:1".into()]);
     assert_eq!(p[0].0, "#f5f5f0");

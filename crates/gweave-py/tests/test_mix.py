@@ -39,7 +39,7 @@ def test_bad_input_raises(data, tmp_path):
 def test_predict_colour_is_the_command_lines(tmp_path):
     green = gweave.predict_colour([1, 0, 1, 0])
     assert green["ratios"] == [0.5, 0.0, 0.5, 0.0]
-    assert green["srgb"] == "#7dbd4c"  # `gweave mix --predict 1:0:1:0`
+    assert green["srgb"] == "#69c348"  # `gweave mix --predict 1:0:1:0`
     assert green["lab"][1] < -30  # a* < 0: green
     profile = tmp_path / "two.toml"
     profile.write_text(

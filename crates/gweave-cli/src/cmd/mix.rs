@@ -64,7 +64,7 @@ pub struct MixArgs {
     #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
     pub purge_mm: Option<f64>,
     /// Purge this much (mm of filament) in the first mix before the file's first extrusion,
-    /// to clear what the chamber held; overrides the profile's `[purge] initial_mm` [default: 0].
+    /// to clear what the chamber held [default: the profile's `[purge] initial_mm`].
     #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
     pub initial_purge: Option<f64>,
     /// Draw the job's mixes (or the whole palette without a job) as a PNG swatch chart.

@@ -41,6 +41,7 @@ pub mod lab;
 pub mod mix;
 pub mod mixing;
 pub mod palette;
+pub mod pigments;
 pub mod predict;
 pub mod purge;
 pub mod reflectance;

@@ -5,13 +5,13 @@ G28
 G0 Z0.3 F200
 G0 X1 Y1 F9000
 ; gweave mix: 2 mixes, 4 inputs, Marlin dialect
-; Orange = T0, predicted #fd9a37
+; Orange = T0, predicted #ffb72b
 M163 S0 P0
 M163 S1 P0.1717
 M163 S2 P0.8283
 M163 S3 P0
 M164 S0
-; Pink = T1, predicted #f35c76
+; Pink = T1, predicted #ef4680
 M163 S0 P0
 M163 S1 P0.6
 M163 S2 P0.1
