@@ -906,7 +906,7 @@ fn predict_colour_json(ratios: Vec<f64>, config: &str) -> PyResult<String> {
 /// profile is TOML text (empty: the defaults); the lists add schedule entries, gradients and
 /// tool maps as the command line flags do.
 #[pyfunction]
-#[pyo3(signature = (path, output=None, *, config="", at_layer=Vec::new(), at_z=Vec::new(), map=Vec::new(), gradient=Vec::new(), gradient_space="mix", dialect=None, purge_mm=None, in_place=false, backup=true, force=false))]
+#[pyo3(signature = (path, output=None, *, config="", at_layer=Vec::new(), at_z=Vec::new(), map=Vec::new(), gradient=Vec::new(), gradient_space="mix", dialect=None, purge_mm=None, initial_purge=None, in_place=false, backup=true, force=false))]
 #[allow(clippy::too_many_arguments)]
 fn mix_json(
     py: Python<'_>,
@@ -920,6 +920,7 @@ fn mix_json(
     gradient_space: &str,
     dialect: Option<&str>,
     purge_mm: Option<f64>,
+    initial_purge: Option<f64>,
     in_place: bool,
     backup: bool,
     force: bool,
@@ -942,6 +943,9 @@ fn mix_json(
     };
     if let Some(mm) = in_range("purge_mm", purge_mm, gweave::range::PURGE_MM)? {
         profile.purge.set_length_mm(mm);
+    }
+    if let Some(mm) = in_range("initial_purge", initial_purge, gweave::range::PURGE_MM)? {
+        profile.purge.initial_mm = mm;
     }
     for s in &at_layer {
         profile.schedule.push(ScheduleEntry::parse_layer(s).map_err(bad)?);

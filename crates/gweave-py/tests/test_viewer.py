@@ -150,7 +150,7 @@ def test_viewer_compare_side_by_side(data, tmp_path, browser):
 
 def test_viewer_rotary_top_view_is_a_shaded_cylinder_with_its_extents(tmp_path, browser):
     tube = tmp_path / "t.gcode"
-    gweave.rotary_tube(tube, mandrel_diameter=20, length=30, layers=3)
+    gweave.rotary_tube(tube, mandrel_diameter=20, length=30, layer_count=3)
     page = tmp_path / "t.html"
     gweave.preview(tube, output=page, view="top")
     browser.open(page)

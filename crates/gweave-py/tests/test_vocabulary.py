@@ -112,7 +112,7 @@ MAP = {
             "palette-png": "- a picture: gweave.main(['mix', '--palette-png', ...])",
             "wizard": "- asks questions on a terminal",
             "predict": "- gweave.predict_colour(ratios, profile)",
-            "initial-purge": "- the profile's [purge] initial_mm, through config",
+            "initial-purge": "initial_purge",
             "calibration-card": "- a file: gweave.main(['mix', '--calibration-card', ...])",
             "fit": "- a file: gweave.main(['mix', '--fit', ...])",
         },

@@ -422,6 +422,7 @@ def mix(
     gradient_space: str = "mix",
     dialect: Optional[str] = None,
     purge_mm: Optional[float] = None,
+    initial_purge: Optional[float] = None,
     in_place: bool = False,
     backup: bool = True,
     force: bool = False,
@@ -432,7 +433,8 @@ def mix(
     ``map=["T1=PVA"]``, ``gradient=["0-50=Cyan..Magenta"]``, ``gradient_space`` (``"mix"`` or
     ``"perceived"``), ``dialect`` (``"marlin"``, ``"marlin-direct"``, ``"reprap"``; default: the
     profile's, else the file's flavour) and ``purge_mm`` (mm of filament per change, 0: none;
-    default: the profile's) work as the command line flags.
+    default: the profile's) and ``initial_purge`` (mm purged in the first mix before the first
+    extrusion; default: the profile's ``[purge] initial_mm``) work as the command line flags.
     """
     text = ""
     if config is not None:
@@ -450,6 +452,7 @@ def mix(
             gradient_space=gradient_space,
             dialect=dialect,
             purge_mm=purge_mm,
+            initial_purge=initial_purge,
             in_place=in_place,
             backup=backup,
             force=force,

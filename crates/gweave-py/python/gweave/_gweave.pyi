@@ -87,6 +87,7 @@ def mix_json(
     gradient_space: str = "mix",
     dialect: Optional[str] = None,
     purge_mm: Optional[float] = None,
+    initial_purge: Optional[float] = None,
     in_place: bool = False,
     backup: bool = True,
     force: bool = False,
