@@ -13,7 +13,7 @@
 //!   Ku = 4 d / (pi a)
 //! ```
 //!
-//! and the classic Ziegler-Nichols rules (REFERENCE.md §5) turn `Ku, Tu`
+//! and the classic Ziegler-Nichols rules (Ziegler and Nichols, 1942; Marlin's `PID_autotune` in `temperature.cpp`) turn `Ku, Tu`
 //! into per-second PID gains on the 0..=255 output scale:
 //!
 //! ```text

@@ -18,7 +18,7 @@
 //!
 //! # PID
 //!
-//! On the error `e = target - measured` (REFERENCE.md §5 and Marlin's
+//! On the error `e = target - measured` (Marlin's
 //! `M301` semantics):
 //!
 //! ```text

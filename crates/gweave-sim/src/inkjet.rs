@@ -15,7 +15,7 @@
 //! coordinates (well under half a pitch) never moves a drop to the next pixel.
 //!
 //! One canvas per head per layer; a new layer starts when a fire happens at a new Z. Two
-//! firmware pitfalls become typed warnings (REFERENCE §4): `M700` runs as soon as it is parsed,
+//! firmware pitfalls become typed warnings (`sjkelly/Marlin` branch hpc6602, `Marlin_main.cpp`): `M700` runs as soon as it is parsed,
 //! so without an `M400` since the last move it fires while the carriage is still travelling;
 //! and the firmware reads `S` only when `P` is given, so `M700` without `P` fires nothing.
 

@@ -9,7 +9,7 @@
 //!
 //! Every panel has a title, axes with units and ticks, and a legend in its upper right corner.
 //! The axes start at 0; time ends with the run, values leave room above the highest for the
-//! legend ([`headroom`]); plotters picks round ticks.
+//! legend (`headroom`); plotters picks round ticks.
 
 use std::io::Write;
 use std::path::Path;

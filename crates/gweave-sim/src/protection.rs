@@ -27,7 +27,7 @@
 //!   `hysteresis` below the target for at most `period`; longer is a
 //!   runaway. Catches a heater (or sensor) lost after reaching temperature.
 //!
-//! Defaults (REFERENCE.md §5): hotend runaway 40 s / 4 C and watch
+//! Defaults (Marlin's `Configuration.h`: `THERMAL_PROTECTION_*`, `WATCH_*`): hotend runaway 40 s / 4 C and watch
 //! 20 s / +2 C; bed runaway 20 s / 2 C and watch 60 s / +2 C.
 
 use gweave::range::{self, OutOfRange, Range};

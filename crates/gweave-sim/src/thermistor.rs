@@ -22,8 +22,8 @@
 //!
 //! Marlin's thermistor type 1 is a 100 kOhm NTC with B = 4092 on a 4.7 kOhm
 //! pull-up, read by a 10-bit ADC whose samples are summed `OVERSAMPLENR = 16`
-//! times, so the raw value spans `0..=1023*16` (REFERENCE.md §5,
-//! `Marlin/src/module/thermistor/thermistor_1.h`). We do not copy that table:
+//! times, so the raw value spans `0..=1023*16`
+//! (`Marlin/src/module/thermistor/thermistor_1.h`). We do not copy that table:
 //! [`BetaThermistor::table`] generates one from the model.
 //!
 //! # The firmware side

@@ -37,7 +37,7 @@ pub struct RasterArgs {
     /// Fraction of full scale at or above which a pixel gets binder.
     #[arg(long, default_value_t = 0.5, value_name = "0..1", value_parser = in_range(THRESHOLD))]
     pub threshold: f64,
-    /// Dark pixels get binder (black-on-white drawings, as in seed 004's BMPs).
+    /// Dark pixels get binder (black-on-white drawings, as in the binder-jet seed's BMPs).
     #[arg(long)]
     pub invert: bool,
     /// The images' first row is the far edge (+Y up, as pictures are drawn); default: the first

@@ -26,7 +26,7 @@
 //! ]);
 //! ```
 //!
-//! Replies follow Marlin (REFERENCE.md §5, `Marlin/src/core/language.h`): `M105` answers
+//! Replies follow Marlin (`Marlin/src/core/language.h`, `Marlin/src/gcode/queue.cpp`): `M105` answers
 //! `ok T:.. /.. B:.. /.. @:.. B@:..` itself (see [`Machine::acknowledged`]); every other command
 //! leaves the final `ok` to the caller (the serial protocol or `gweave sim`).
 

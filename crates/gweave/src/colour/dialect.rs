@@ -1,7 +1,8 @@
 //! Mixes as firmware commands, both ways: render a `Mix` as G-code lines, and
 //! follow the mixing commands of a G-code stream in a `MixingState`.
 //!
-//! Firmware semantics (REFERENCE.md section 1):
+//! Firmware semantics (Marlin's `gcode/feature/mixing/M163-M165.cpp` and `feature/mixing.cpp`;
+//! RepRapFirmware's `M563`/`M567` documentation):
 //! - Marlin MIXING_EXTRUDER: `M163 S<i> P<f>` sets input i's factor in a
 //!   collector (negative -> 0); `M164 S<t>` normalises the collector and stores
 //!   it as virtual tool t; `M165 A B C D H I` sets inputs 0-5 at once (missing

@@ -85,7 +85,7 @@ impl Mix {
         }
     }
 
-    /// "Proportion of material 2" (seed 000): the input `index` holds a second
+    /// "Proportion of material 2" (the mixing seed): the input `index` holds a second
     /// material (e.g. soluble PVA or flexible), which gets the share `p`; the
     /// other inputs keep their proportions among themselves, scaled to `1 - p`.
     /// `p = 1` is pure material 2 (support), `p = 0` removes it.

@@ -1,6 +1,6 @@
 //! Named mixes: the seed's 17-colour CMY(K) palette plus user definitions.
 //!
-//! The built-in palette is Annex A of seed 000 (a 4-in/1-out mixing extruder,
+//! The built-in palette is Annex A of the mixing seed (docs/seeds.md) (a 4-in/1-out mixing extruder,
 //! 2016): inputs E0 cyan, E1 magenta, E2 yellow, E3 white or a second material.
 //! Its ratios are kept as printed; two of them sum to 0.99 (Orange 0 : 0.17 :
 //! 0.82, Brown 0.33 each) and are normalised like any mix. The seed called

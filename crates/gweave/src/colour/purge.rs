@@ -16,7 +16,7 @@
 //!   A laminar path between chamber and nozzle (volume `Vd`, "dead volume")
 //!   only delays this: it flushes as a plug, adding `Vd` before any washout.
 //!   Measured transitions on a 4-in-1 hotend are about 90-100 mm^3, melt zones
-//!   80-110 mm^3 (REFERENCE.md section 2).
+//!   80-110 mm^3 (published transition measurements of 4-in-1 mixing hotends).
 
 use std::f64::consts::PI;
 

@@ -7,7 +7,7 @@
 //!
 //! Geometry: the nozzles of a head form one row-per-nozzle column along +Y. Nozzle row `r`
 //! (0 = the nozzle at the head's reference point) prints the pixel row `r` of the current band.
-//! The pitch is `25.4 / dpi` mm exactly (96 dpi = 0.264583.. mm, REFERENCE §4).
+//! The pitch is `25.4 / dpi` mm exactly (96 dpi = 0.264583.. mm: 25.4 mm per inch).
 //! The physical nozzle order of the C6602 is not the address order (PlanB pinout), so the
 //! profile carries a nozzle map from address to physical row; `raster::test_pattern` prints a
 //! pattern that reveals it.

@@ -1,6 +1,6 @@
 //! Binder-jet raster G-code: layer images -> `G1` / `M400` / `M700 P S` per column.
 //!
-//! Method (seed 004, REFERENCE §4): each layer image, already at the nozzle pitch
+//! Method (the binder-jet seed, docs/seeds.md, and `sjkelly/image_to_gcode`): each layer image, already at the nozzle pitch
 //! `p = 25.4 / dpi`, is cut into bands as tall as the nozzle row (12 rows on the C6602). For
 //! every band the head sweeps along X and stops at each column that has at least one ink pixel:
 //!
@@ -99,7 +99,7 @@ pub enum FireOrder {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RasterConfig {
-    /// Bed position of the image's corner (seed 004: 20 mm from the edges).
+    /// Bed position of the image's corner (the binder-jet seed: 20 mm from the edges).
     pub origin_x_mm: f64,
     pub origin_y_mm: f64,
     /// Layer thickness; `None` takes it from the source (`.sl1`) or uses 0.1 mm.
@@ -470,7 +470,7 @@ pub struct ImageStack {
     pub paths: Vec<PathBuf>,
     pub threshold: ThresholdOptions,
     /// The files' first row is the far edge (highest Y), as in a picture viewed with +Y up;
-    /// without it the first row is printed at the lowest Y (seed 004's order).
+    /// without it the first row is printed at the lowest Y (the binder-jet seed's order).
     pub flip_y: bool,
 }
 

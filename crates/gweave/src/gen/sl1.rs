@@ -3,7 +3,7 @@
 //! An `.sl1` file is a ZIP holding `config.ini` (job: `jobDir`, `layerHeight`, `numFast`,
 //! `numSlow`, ...), `prusaslicer.ini` (printer: `display_pixels_x/y`, `display_width/height` in
 //! mm, `display_mirror_x/y`, `display_orientation`) and one anti-aliased greyscale PNG per layer
-//! named `<jobDir>%05d.png` (REFERENCE §4). Both ini files are `key = value` lines.
+//! named `<jobDir>%05d.png` (PrusaSlicer's SL1 export). Both ini files are `key = value` lines.
 //!
 //! How the stored image relates to the bed (our own measurement: PrusaSlicer 2.5.0 exports of
 //! an L-shaped plate for all eight orientation/mirror settings, `tests/data/raster/L_*.sl1`).

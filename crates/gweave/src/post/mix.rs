@@ -1,4 +1,4 @@
-//! `gweave mix`: slicer G-code for a mixing hotend (seed 000). The slicer knows one extruder, or
+//! `gweave mix`: slicer G-code for a mixing hotend (the mixing seed, docs/seeds.md). The slicer knows one extruder, or
 //! several; the printer has one nozzle fed by N filaments whose ratios the firmware mixes.
 //!
 //! What the pass does, streaming, one line at a time:

@@ -5,7 +5,7 @@
 //! page hands to the GPU as they are (no per-vertex work in JavaScript).
 //!
 //! Encoding, per segment (`n` segments: first the `outside` beads that can show on the part's
-//! surface, then the rest of the `extruding` ones (inner walls, infill: [`hidden_inside`]), then
+//! surface, then the rest of the `extruding` ones (inner walls, infill: `hidden_inside`), then
 //! travel, each part in file order, so that the page draws each from one range of one buffer,
 //! and only the first while the camera moves), for each file shown (two with `--compare`):
 //! - `pos`: 6 x u16 little endian (start x y z, end x y z), quantised over the extents `lo..hi`:
@@ -24,7 +24,7 @@
 //! file, 2 s of the first picture's 3 were that parse), and the page decodes it natively.
 //!
 //! 21 bytes per segment before base64 (x 4/3): a 3.1 MB slicer file becomes a 2.8 MB page,
-//! and the segment ceiling of a preview ([`super::MAX_SEGMENTS`]) bounds any file's page at
+//! and the segment ceiling of a preview (`MAX_SEGMENTS`) bounds any file's page at
 //! about 59 MB.
 
 use std::collections::HashMap;

@@ -393,7 +393,7 @@ impl ToolpathPass {
             return;
         }
         let word = |l: u8| ctx.block.word(l).and_then(|w| w.number());
-        // The firmware reads S only with P (REFERENCE section 4).
+        // The firmware reads S only with P (`sjkelly/Marlin` branch hpc6602, `Marlin_main.cpp`).
         let (Some(head), Some(bits)) = (word(b'P'), word(b'S')) else { return };
         if !(head >= 0.0 && bits >= 0.0 && head < 64.0 && bits < u64::MAX as f64) {
             return;

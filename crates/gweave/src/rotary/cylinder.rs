@@ -22,7 +22,8 @@
 //! surface is `L = sqrt(dX^2 + dr^2 + (r*dTheta_rad)^2)` (exact for `dr = 0`; for a radial ramp
 //! the mean radius is a second-order approximation). To move at surface speed `v` it needs
 //! `T = L / v`, lengthened if the rotary axis would exceed its speed cap. What F must then be
-//! written depends on how the firmware reads F (REFERENCE.md section 3):
+//! written depends on how the firmware reads F (LinuxCNC's feed-rate rules for rotary axes, Marlin's `ARTICULATED_ROBOT_ARM`,
+//! RepRapFirmware's `M584 ... S0`, `G93` inverse time):
 //!
 //! ```text
 //!   nist         LinuxCNC / NIST RS274NGC, Marlin's default: if a linear axis (axial or
@@ -38,7 +39,7 @@
 //! # Unwrap: a flat part onto the cylinder
 //!
 //! A part sliced flat with its Y length equal to the circumference `C = 2*pi*R0` maps as
-//! `theta_deg = 360*y/C`, `r = R0 + z` (seed 001, method (a)). A flat step `(dx, dy)` becomes
+//! `theta_deg = 360*y/C`, `r = R0 + z` (the rotary seed's method (a)). A flat step `(dx, dy)` becomes
 //! `(dx, dy*r/R0)` on the surface at radius `r`, so the extrusion scales by
 //! `hypot(dx, dy*r/R0) / hypot(dx, dy)`. The Diabase rotary wizard keeps the arc length instead,
 //! `A = Y*180/(pi*(R0 + z - z1))`, and leaves E as it is; the surface speed is then the flat

@@ -1,7 +1,7 @@
 //! Seam-free helical printing on a mandrel: tubes of continuous helical layers and custom
 //! helical paths (cones, variable pitch).
 //!
-//! # The tube (seed 001, method (b), done properly)
+//! # The tube (the rotary seed's method (b), done properly)
 //!
 //! ```text
 //!         axial ->

@@ -1,4 +1,4 @@
-//! `wrap`: a part sliced flat, printed onto the mandrel (seed 001, method (a)).
+//! `wrap`: a part sliced flat, printed onto the mandrel (the rotary seed's method (a), docs/seeds.md).
 //!
 //! The flat file's X runs along the mandrel, its Y around it (its Y length should be the
 //! circumference `pi * D`), its Z away from it. Each motion line is rewritten:

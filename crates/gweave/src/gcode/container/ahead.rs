@@ -1,7 +1,7 @@
 //! Decoding on a thread of its own, ahead of the reader: a binary G-code file's blocks are
 //! decompressed and decoded while the line reader parses the text of the previous ones, so
 //! reading a `.bgcode` costs about the time of the slower of the two rather than their sum (two
-//! cores). At most [`DEPTH`] decoded chunks wait in the channel: memory stays bounded.
+//! cores). At most `DEPTH` decoded chunks wait in the channel: memory stays bounded.
 
 use std::io::{self, Read};
 use std::sync::mpsc::{sync_channel, Receiver};

@@ -1,4 +1,4 @@
-//! `purge-shift`: multi-colour on a mixing hotend without a wipe tower (seed 003).
+//! `purge-shift`: multi-colour on a mixing hotend without a wipe tower (the purge-shift seed, docs/seeds.md).
 //!
 //! After a change of tool or mix the old colour still fills the nozzle. Instead of purging it
 //! into a tower, this pass moves every change *earlier* in the file by the purge amount: it walks

@@ -11,7 +11,7 @@
 //! finds the slicer's figures and flavour where it finds them in a text file, and
 //! `gweave cat x.bgcode -o x.gcode` writes what libbgcode's converter writes.
 //!
-//! Blocks are read and written one at a time ([`read`], [`write`]); a block may hold at most
+//! Blocks are read and written one at a time ([`read`], [`mod@write`]); a block may hold at most
 //! [`MAX_BLOCK`] bytes, so memory stays bounded whatever the file's size.
 
 pub mod read;
