@@ -36,11 +36,11 @@ use gweave::gcode::ends::read_ends;
 /// Refuses to run `command` (`mix`, `purge-shift`, `rotary wrap`) on a file an earlier run of
 /// it wrote: a second run would stack on the first (shift the changes again, purge twice).
 pub fn refuse_second_run(input: &Path, command: &str) -> Result<()> {
-    // An input that cannot be opened is the transform's to report.
     // Read through its container: a `.gcode.gz` or `.bgcode` written by gweave holds the header
-    // in its text.
+    // in its text. An input that cannot be opened or read (a damaged block) is the transform's
+    // to report, with the file, block and line it names.
     let Ok(file) = container::open(input) else { return Ok(()) };
-    let runs = earlier_runs(BufReader::new(file)).with_context(|| format!("reading {}", input.display()))?;
+    let Ok(runs) = earlier_runs(BufReader::new(file)) else { return Ok(()) };
     if let Some(run) = runs.iter().find(|r| r.is(command)) {
         bail!(
             "{}:{}: this file was written by `gweave {}`: a second {command} would stack on the first; run it on the file before (--in-place keeps it as .bak)",
