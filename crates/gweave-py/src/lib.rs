@@ -166,8 +166,10 @@ fn purge_shift_json(
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
     let write = |t: &Target| purge_shift_file(rules, &path, t, &mut Quiet).map_err(err);
-    let report =
+    let mut report =
         py.allow_threads(|| finish::finished(Some(&path), &target, "purge-shift", options, write, |_| None))?;
+    // The run's header is one line above every change.
+    report.changes.offset_output_lines(1);
     to_json(&report)
 }
 
