@@ -26,6 +26,7 @@ use gweave::render::{
 use pyo3::types::PyBytes;
 
 mod args;
+mod finish;
 
 use args::{in_range, os_error, BedArg, LayersArg};
 use gweave::render::layer_range;
@@ -122,7 +123,7 @@ fn cat_json(
 #[pyfunction]
 #[pyo3(signature = (path, output=None, *, in_place=false, backup=true, force=false, purge_mm=None, purge_mm3=None,
     config=None, filament_diameter=None, cross_layers=false, allow_features=None, markers=None,
-    fallback=None, tower_at=None))]
+    fallback=None, tower_at=None, options=""))]
 #[allow(clippy::too_many_arguments)]
 fn purge_shift_json(
     py: Python<'_>,
@@ -140,6 +141,7 @@ fn purge_shift_json(
     markers: Option<(String, String)>,
     fallback: Option<String>,
     tower_at: Option<(f64, f64)>,
+    options: &str,
 ) -> PyResult<String> {
     use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
     let value_err = |e: gweave::post::purge_shift::ConfigError| PyValueError::new_err(e.to_string());
@@ -163,7 +165,11 @@ fn purge_shift_json(
         (Some(p), false) => Target::File(p),
         (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
     };
-    let report = py.allow_threads(|| purge_shift_file(rules, &path, &target, &mut Quiet)).map_err(err)?;
+    let write = |t: &Target| purge_shift_file(rules, &path, t, &mut Quiet).map_err(err);
+    let mut report =
+        py.allow_threads(|| finish::finished(Some(&path), &target, "purge-shift", options, write, |_| None))?;
+    // The run's header is one line above every change.
+    report.changes.offset_output_lines(1);
     to_json(&report)
 }
 
@@ -493,7 +499,7 @@ fn dialect_of(name: Option<&str>) -> PyResult<Option<gweave::gen::printhead::Fir
 #[pyfunction]
 #[pyo3(signature = (inputs, output, *, head=None, threshold=0.5, invert=false, flip_y=false, one_way=false,
     density=1, origin=(20.0, 20.0), layer_height=None, pixel_mm=None, dpi=None, heads=None, channels=None,
-    recoat=None, start=None, end=None, dialect=None, feed=None, fast_estimate=false))]
+    recoat=None, start=None, end=None, dialect=None, feed=None, fast_estimate=false, options=""))]
 #[allow(clippy::too_many_arguments)]
 fn raster_json(
     py: Python<'_>,
@@ -517,8 +523,9 @@ fn raster_json(
     dialect: Option<&str>,
     feed: Option<f64>,
     fast_estimate: bool,
+    options: &str,
 ) -> PyResult<String> {
-    let options = gweave_cli::raster_job::JobOptions {
+    let job_options = gweave_cli::raster_job::JobOptions {
         inputs,
         head,
         threshold,
@@ -540,8 +547,12 @@ fn raster_json(
         feed_mm_min: feed,
         fast_estimate,
     };
-    let report =
-        py.allow_threads(|| options.job()?.run(&Target::File(output), &mut Quiet)).map_err(job_err)?;
+    let job = job_options.job().map_err(job_err)?;
+    let write = |t: &Target| job.run(t, &mut Quiet).map_err(job_err);
+    // Its own time counts the printhead's firing, which the estimator does not know.
+    let own_time = |r: &gweave_cli::raster_job::JobReport| Some(r.time.total_s);
+    let target = Target::File(output);
+    let report = py.allow_threads(|| finish::finished(None, &target, "raster", options, write, own_time))?;
     to_json(&report)
 }
 
@@ -733,7 +744,7 @@ fn rotary_err(e: RotaryError) -> PyErr {
 /// Wraps a flat G-code file onto the mandrel; `settings` is a JSON object of `WrapConfig` keys
 /// merged over the TOML file `config`. Returns the report as JSON text (`rotary wrap --json`).
 #[pyfunction]
-#[pyo3(signature = (input, output, *, settings, config=None, preview=None))]
+#[pyo3(signature = (input, output, *, settings, config=None, preview=None, options=""))]
 fn rotary_wrap_json(
     py: Python<'_>,
     input: PathBuf,
@@ -741,27 +752,36 @@ fn rotary_wrap_json(
     settings: String,
     config: Option<PathBuf>,
     preview: Option<PathBuf>,
+    options: &str,
 ) -> PyResult<String> {
     let wrap: WrapConfig = merged_settings(config.as_deref(), &settings).map_err(rotary_err)?;
-    let report =
-        py.allow_threads(|| wrap_file(&wrap, &input, &Target::File(output), preview.as_deref(), &mut Quiet));
-    to_json(&report.map_err(rotary_err)?)
+    let write = |t: &Target| wrap_file(&wrap, &input, t, preview.as_deref(), &mut Quiet).map_err(rotary_err);
+    let target = Target::File(output);
+    let own_time = |r: &gweave::rotary::report::WrapReport| Some(r.time_s);
+    let report = py
+        .allow_threads(|| finish::finished(Some(&input), &target, "rotary wrap", options, write, own_time))?;
+    to_json(&report)
 }
 
 /// Generates a helical tube; `settings` is a JSON object of `TubeParams` keys merged over the
 /// TOML file `config`. Returns the report as JSON text (`rotary tube --json`).
 #[pyfunction]
-#[pyo3(signature = (output, *, settings, config=None, preview=None))]
+#[pyo3(signature = (output, *, settings, config=None, preview=None, options=""))]
 fn rotary_tube_json(
     py: Python<'_>,
     output: PathBuf,
     settings: String,
     config: Option<PathBuf>,
     preview: Option<PathBuf>,
+    options: &str,
 ) -> PyResult<String> {
     let params: helix::TubeParams = merged_settings(config.as_deref(), &settings).map_err(rotary_err)?;
-    let report = py.allow_threads(|| tube_file(&params, &Target::File(output), preview.as_deref()));
-    to_json(&report.map_err(rotary_err)?)
+    let write = |t: &Target| tube_file(&params, t, preview.as_deref()).map_err(rotary_err);
+    let target = Target::File(output);
+    let own_time = |r: &gweave::rotary::report::TubeReport| Some(r.print_time_s);
+    let report =
+        py.allow_threads(|| finish::finished(None, &target, "rotary tube", options, write, own_time))?;
+    to_json(&report)
 }
 
 /// The first exception a Python profile function raised, re-raised after the path fails.
@@ -906,7 +926,7 @@ fn predict_colour_json(ratios: Vec<f64>, config: &str) -> PyResult<String> {
 /// profile is TOML text (empty: the defaults); the lists add schedule entries, gradients and
 /// tool maps as the command line flags do.
 #[pyfunction]
-#[pyo3(signature = (path, output=None, *, config="", at_layer=Vec::new(), at_z=Vec::new(), map=Vec::new(), gradient=Vec::new(), gradient_space="mix", dialect=None, purge_mm=None, initial_purge=None, in_place=false, backup=true, force=false))]
+#[pyo3(signature = (path, output=None, *, config="", at_layer=Vec::new(), at_z=Vec::new(), map=Vec::new(), gradient=Vec::new(), gradient_space="mix", dialect=None, purge_mm=None, initial_purge=None, in_place=false, backup=true, force=false, options=""))]
 #[allow(clippy::too_many_arguments)]
 fn mix_json(
     py: Python<'_>,
@@ -924,6 +944,7 @@ fn mix_json(
     in_place: bool,
     backup: bool,
     force: bool,
+    options: &str,
 ) -> PyResult<String> {
     use gweave::post::mix::profile::{Dialect, GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
     let bad = |e: gweave::post::mix::MixPassError| PyValueError::new_err(e.to_string());
@@ -962,12 +983,14 @@ fn mix_json(
     if let Some(d) = dialect {
         profile.hardware.dialect = Some(d.parse::<Dialect>().map_err(bad)?);
     }
-    let report = py.allow_threads(|| gweave::post::mix::mix_file(profile, &path, &target, &mut Quiet));
-    match report {
-        Ok(r) => to_json(&r),
+    let write = |t: &Target| match gweave::post::mix::mix_file(profile, &path, t, &mut Quiet) {
+        Ok(r) => Ok(r),
         Err(gweave::post::mix::MixPassError::Engine(e)) => Err(err(e)),
         Err(e) => Err(bad(e)),
-    }
+    };
+    let report =
+        py.allow_threads(|| finish::finished(Some(&path), &target, "mix", options, write, |_| None))?;
+    to_json(&report)
 }
 
 #[pymodule]

@@ -281,7 +281,7 @@ class Browser:
     def __init__(self, tmp: Path) -> None:
         import websocket  # websocket-client, OctoPrint's dependency
 
-        from test_viewer import FLAGS
+        from _cdp import FLAGS
 
         profile = tmp / "profile"
         self.proc = subprocess.Popen(

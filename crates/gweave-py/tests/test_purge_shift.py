@@ -10,11 +10,12 @@ def test_slic3r_first_change_is_split_by_hand(data, tmp_path):
     r = gweave.purge_shift(data / "slic3r" / "slic3r_cone_2tool.gcode", out, purge_mm=2.5)
     assert len(r["changes"]) == 108
     c = r["changes"][0]
-    assert c["change_lines"] == [553] and c["output_line"] == 510
+    # Output lines count the run's header on top.
+    assert c["change_lines"] == [553] and c["output_line"] == 511
     assert c["achieved_mm"] == 2.5 and c["split"]["line"] == 509
     lines = out.read_text().splitlines()
     # 24.30781 - 2.5 = 21.80781, inside the move from E21.79225 to E21.85317.
-    assert lines[508:511] == ["G1 X104.44317 Y87.09572 E21.80781", "T1", "G1 X104.913 Y87.264 E21.85317"]
+    assert lines[509:512] == ["G1 X104.44317 Y87.09572 E21.80781", "T1", "G1 X104.913 Y87.264 E21.85317"]
 
 
 def test_config_and_keywords(data, tmp_path):

@@ -52,6 +52,7 @@ MAP = {
             },
             "test-pattern": "- a function of its own: raster_test_pattern",
             "pattern-columns": "- raster_test_pattern(pattern_columns=)",
+            "fire-order": "- not a keyword yet: gweave.main(['raster', '--fire-order', ...])",
         },
         ["inputs"],
     ),
@@ -86,6 +87,8 @@ MAP = {
                     "mandrel-diameter feed-convention rotary-unit axes config preview keep-arc-length seam-rotation chord-tol"
                 ).split()
             },
+            "helical": "- not a keyword yet: gweave.main(['rotary', 'wrap', '--helical', ...])",
+            "allow-overlap": "- the config TOML's allow_overlap",
         },
         ["input"],
     ),
@@ -129,6 +132,7 @@ MAP = {
                     "min-len lenient"
                 ).split()
             },
+            "format": "- the format follows the output's extension (standard output is the CLI's)",
         },
         ["path"],
     ),

@@ -2,6 +2,7 @@
 pub mod autotune;
 pub mod control;
 pub mod estimate;
+pub mod finish;
 pub mod firmware;
 pub mod heater;
 pub mod inkjet;

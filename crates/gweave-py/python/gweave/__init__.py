@@ -152,6 +152,37 @@ def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool 
 # ---- binder-jet raster ----
 
 
+def _word(value: Any) -> str:
+    """One value as the command line would have it: ``20`` for 20.0, a path as its text, a
+    pair as ``x,y``; quoted as gweave's header quotes a word with a space or a quote."""
+    if isinstance(value, (tuple, list)):
+        text = ",".join(_word(v) for v in value)
+    elif isinstance(value, float) and value.is_integer():
+        text = str(int(value))
+    elif isinstance(value, (bytes, os.PathLike)):
+        text = os.fsdecode(value)
+    else:
+        text = str(value)
+    if text == "" or any(c in text for c in " \t'\""):
+        return json.dumps(text)
+    return text
+
+
+def _flags(*flags: Tuple[str, Any]) -> str:
+    """The options of the CLI run equivalent to a call, for the header the transform writes
+    (``; gweave 0.1.0 mix --purge-mm 20 (generated)``): ``(flag, value)`` pairs with the CLI's
+    flag names; None and False are left out, True is the bare flag, a list repeats the flag."""
+    words = []
+    for flag, value in flags:
+        for v in value if isinstance(value, list) else [value]:
+            if v is None or v is False:
+                continue
+            words.append(flag)
+            if v is not True:
+                words.append(_word(v))
+    return " ".join(words)
+
+
 def raster(
     inputs: Union[PathLike, Sequence[PathLike]],
     output: PathLike,
@@ -206,6 +237,26 @@ def raster(
             dialect=dialect,
             feed=feed,
             fast_estimate=fast_estimate,
+            options=_flags(
+                ("--head", head),
+                ("--threshold", None if threshold == 0.5 else threshold),
+                ("--invert", invert),
+                ("--flip-y", flip_y),
+                ("--one-way", one_way),
+                ("--density", None if density == 1 else density),
+                ("--origin", None if tuple(origin) == (20.0, 20.0) else tuple(origin)),
+                ("--layer-height", layer_height),
+                ("--pixel-mm", pixel_mm),
+                ("--dpi", dpi),
+                ("--heads", heads),
+                ("--channels", channels),
+                ("--recoat", recoat),
+                ("--start", start),
+                ("--end", end),
+                ("--dialect", dialect),
+                ("--feed", feed),
+                ("--fast-estimate", fast_estimate),
+            ),
         )
     )
 
@@ -307,6 +358,17 @@ def purge_shift(
             markers=pair,
             fallback=fallback,
             tower_at=None if tower_at is None else tuple(map(float, tower_at)),
+            options=_flags(
+                ("-c", config),
+                ("--purge-mm", purge_mm),
+                ("--purge-mm3", purge_mm3),
+                ("--filament-diameter", filament_diameter),
+                ("--cross-layers", cross_layers),
+                ("--allow-features", None if allow_features is None else tuple(allow_features)),
+                ("--markers", pair),
+                ("--fallback", fallback),
+                ("--tower-at", None if tower_at is None else tuple(tower_at)),
+            ),
         )
     )
 
@@ -456,6 +518,17 @@ def mix(
             in_place=in_place,
             backup=backup,
             force=force,
+            options=_flags(
+                ("-c", config),
+                ("--at-layer", list(at_layer)),
+                ("--at-z", list(at_z)),
+                ("--map", list(map)),
+                ("--gradient", list(gradient)),
+                ("--gradient-space", None if gradient_space == "mix" else gradient_space),
+                ("--dialect", dialect),
+                ("--purge-mm", purge_mm),
+                ("--initial-purge", initial_purge),
+            ),
         )
     )
 
@@ -543,6 +616,16 @@ def rotary_wrap(
         settings=json.dumps(settings),
         config=_opt_path(config, "config"),
         preview=_opt_path(preview, "preview"),
+        options=_flags(
+            ("--mandrel-diameter", mandrel_diameter),
+            ("--feed-convention", feed_convention),
+            ("--rotary-unit", rotary_unit),
+            ("--axes", axes if axes is None or isinstance(axes, str) else tuple(axes)),
+            ("-c", config),
+            ("--keep-arc-length", keep_arc_length),
+            ("--seam-rotation", seam_rotation),
+            ("--chord-tol", chord_tol),
+        ),
     )
     return json.loads(text)
 
@@ -597,6 +680,24 @@ def rotary_tube(
         settings=json.dumps(settings),
         config=_opt_path(config, "config"),
         preview=_opt_path(preview, "preview"),
+        options=_flags(
+            ("--mandrel-diameter", mandrel_diameter),
+            ("--feed-convention", feed_convention),
+            ("--rotary-unit", rotary_unit),
+            ("--axes", axes if axes is None or isinstance(axes, str) else tuple(axes)),
+            ("-c", config),
+            ("--length", length),
+            ("--layer-count", layer_count),
+            ("--layer-height", layer_height),
+            ("--bead-width", bead_width),
+            ("--pitch", pitch),
+            ("--no-interweave", interweave is False),
+            ("--segments-per-turn", segments_per_turn),
+            ("--chord-tol", chord_tol),
+            ("--speed", speed),
+            ("--temp", temp),
+            ("--filament-diameter", filament_diameter),
+        ),
     )
     return json.loads(text)
 

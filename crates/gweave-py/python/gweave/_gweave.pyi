@@ -40,6 +40,7 @@ def raster_json(
     dialect: Optional[str] = None,
     feed: Optional[float] = None,
     fast_estimate: bool = False,
+    options: str = "",
 ) -> str: ...
 def raster_test_pattern_json(
     output: str,
@@ -71,6 +72,7 @@ def purge_shift_json(
     markers: Optional[Tuple[str, str]] = None,
     fallback: Optional[str] = None,
     tower_at: Optional[Tuple[float, float]] = None,
+    options: str = "",
 ) -> str: ...
 
 # mix
@@ -91,6 +93,7 @@ def mix_json(
     in_place: bool = False,
     backup: bool = True,
     force: bool = False,
+    options: str = "",
 ) -> str: ...
 def preview_json(
     path: str,
@@ -151,8 +154,12 @@ class Machine:
 # rotary (lathe-type) printing
 Profile = Union[float, Sequence[Tuple[float, float]], Callable[[float], float]]
 
-def rotary_wrap_json(input: str, output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None) -> str: ...
-def rotary_tube_json(output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None) -> str: ...
+def rotary_wrap_json(
+    input: str, output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None, options: str = ""
+) -> str: ...
+def rotary_tube_json(
+    output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None, options: str = ""
+) -> str: ...
 def write_helical_paths_json(paths: List["HelicalPath"], output: str, *, settings: str, config: Optional[str] = None) -> str: ...
 
 class HelicalPath:

@@ -1,0 +1,300 @@
+//! What every front end that writes a transform's G-code does around its pass (the CLI's
+//! commands and the Python package alike): it refuses to run a transform a second time on its
+//! own output, and it writes metadata that is true for the file as written.
+//!
+//! The transform writes into a scratch file (registered like every temporary file, so Ctrl-C
+//! removes it). One streaming pass over that file measures it: the filament by the `stats` count
+//! and the print time by the estimator, with the machine limits the slicer wrote into the file
+//! (normal and silent mode), else the default machine's. A second pass writes it to the real
+//! target (a temporary file renamed into place, `--in-place` with its `.bak`, or standard
+//! output) with the run's header on top and the slicer's figures and `M73` progress rewritten
+//! (`gweave::post::metadata`). Memory stays bounded: the passes stream, and what is kept is one
+//! time per progress line. The estimator lives here, which the engine cannot depend on, so this
+//! crate joins them.
+
+use std::fs::File;
+use std::io::{self, BufReader, Write};
+use std::path::{Path, PathBuf};
+
+use gweave::gcode::container;
+use gweave::gcode::ends::read_ends;
+use gweave::gcode::flavour::read_flavour;
+use gweave::gcode::state::{State, StateOptions};
+use gweave::gcode::temp::TempFile;
+use gweave::gcode::writer::{Output, Target};
+use gweave::pass::{drive_reader, Ctx, Pass, Quiet, Run, Strictness};
+use gweave::post::metadata::{
+    earlier_runs, header_line, is_progress_line, read_setting, Figures, MetadataPass,
+};
+use gweave::stats::StatsPass;
+
+use crate::estimate::{estimate_time, Estimate, EstimateError, Estimator};
+use crate::limits::MotionProfile;
+use crate::profile::MachineProfile;
+use crate::slicer_limits::{slicer_limits, slicer_limits_silent};
+
+pub type Result<T, E = FinishError> = std::result::Result<T, E>;
+
+/// Why a transform's output could not be finished.
+#[derive(Debug, thiserror::Error)]
+pub enum FinishError {
+    /// Reading the scratch file or writing the target failed.
+    #[error(transparent)]
+    Engine(#[from] gweave::Error),
+
+    #[error("estimating the print time of the written file: {0}")]
+    Estimate(#[from] EstimateError),
+
+    /// The input was written by an earlier run of the same transform (`run`: what ran, from the
+    /// header at `line`).
+    #[error(
+        "{}:{line}: this file was written by `gweave {run}`: a second {command} would stack on the first; run it on the file before (--in-place keeps it as .bak)",
+        path.display()
+    )]
+    SecondRun { path: PathBuf, line: u64, run: String, command: String },
+}
+
+/// Refuses to run `command` (`mix`, `purge-shift`, `rotary wrap`) on a file an earlier run of
+/// it wrote: a second run would stack on the first (shift the changes again, purge twice).
+pub fn refuse_second_run(input: &Path, command: &str) -> Result<()> {
+    // Read through its container: a `.gcode.gz` or `.bgcode` written by gweave holds the header
+    // in its text. An input that cannot be opened or read (a damaged block) is the transform's
+    // to report, with the file, block and line it names.
+    let Ok(file) = container::open(input) else { return Ok(()) };
+    let Ok(runs) = earlier_runs(BufReader::new(file)) else { return Ok(()) };
+    match runs.into_iter().find(|r| r.is(command)) {
+        Some(run) => Err(FinishError::SecondRun {
+            path: input.to_path_buf(),
+            line: run.line,
+            run: run.text,
+            command: command.to_owned(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Runs `write` into a scratch file, then writes that file to `target` (given `input`, the
+/// G-code file the transform read, for `--in-place`) with the header of the run of
+/// `command_line` (the command and the options that shape its output, in the CLI's words:
+/// `mix --purge-mm 20`) and its metadata recomputed. Returns what `write` returned and the path
+/// written (`None`: standard output).
+pub fn with_metadata<R, E: From<FinishError>>(
+    input: Option<&Path>,
+    target: &Target,
+    command_line: &str,
+    write: impl FnOnce(&Target) -> Result<R, E>,
+) -> Result<(R, Option<PathBuf>), E> {
+    with_metadata_timed(input, target, command_line, write, |_| None)
+}
+
+/// [`with_metadata`] for a transform that times its own output better than the estimator's
+/// machine can (`own_time_s`, s: a rotary axis, whose feed convention the default machine does
+/// not read): the times are scaled to it, progress lines keeping their estimated proportions.
+pub fn with_metadata_timed<R, E: From<FinishError>>(
+    input: Option<&Path>,
+    target: &Target,
+    command_line: &str,
+    write: impl FnOnce(&Target) -> Result<R, E>,
+    own_time_s: impl FnOnce(&R) -> Option<f64>,
+) -> Result<(R, Option<PathBuf>), E> {
+    let dir = scratch_dir(target, input);
+    let scratch = TempFile::new_in(&dir).map_err(|e| FinishError::from(gweave::Error::io(&dir, e)))?;
+    let path = scratch.path().to_path_buf();
+    let result = write(&Target::File(path.clone()))?;
+    let written = finish(&path, input, target, command_line, own_time_s(&result))?;
+    drop(scratch);
+    Ok((result, written))
+}
+
+/// Writes the scratch file `path` to `target` with the header and the metadata.
+fn finish(
+    path: &Path,
+    input: Option<&Path>,
+    target: &Target,
+    command_line: &str,
+    own_time_s: Option<f64>,
+) -> Result<Option<PathBuf>> {
+    let mut figures = measure(path)?;
+    if let Some(t_s) = own_time_s {
+        scale_times(&mut figures, t_s);
+    }
+    let mut out = Output::create(target, input)?;
+    let written = out.dest().map(Path::to_path_buf);
+    let flavour = read_flavour(path).map_err(|e| gweave::Error::io(path, e))?;
+    let options = StateOptions::default().for_flavour(flavour.as_deref());
+    let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
+    let mut pass = MetadataPass::new(figures, header_line(command_line));
+    drive_reader(file, path, options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
+    out.commit()?;
+    Ok(written)
+}
+
+/// Where the scratch file goes: beside the output (the same file system, as its temporary
+/// file), else the system's temporary directory (standard output, a device).
+fn scratch_dir(target: &Target, input: Option<&Path>) -> PathBuf {
+    let beside = match target {
+        Target::File(p) if p.metadata().map_or(true, |m| m.is_file()) => Some(p.as_path()),
+        Target::InPlace { .. } => input,
+        _ => None,
+    };
+    match beside.and_then(Path::parent) {
+        Some(dir) if dir.as_os_str().is_empty() => PathBuf::from("."),
+        Some(dir) => dir.to_path_buf(),
+        None => std::env::temp_dir(),
+    }
+}
+
+/// Measures the written file: its filament, its settings, its estimated times.
+///
+/// The time at each progress line needs the estimator fed line by line in the same pass; a
+/// file without progress lines is estimated on three threads instead (`estimate_time`, several
+/// times faster). Progress lines are looked for in the file's ends (PrusaSlicer's `M73 P0` in
+/// its first lines, Cura's last `;TIME_ELAPSED:` in its last) and counted by the pass: a file
+/// with them only in its middle is read once more.
+fn measure(path: &Path) -> Result<Figures> {
+    let ends = read_ends(path).map_err(|e| gweave::Error::io(path, e))?;
+    let base = MachineProfile::default().motion;
+    let normal = slicer_limits(&ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
+    let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
+    // A second estimate only for a file that shows silent-mode figures (PrusaSlicer's footer is
+    // in its last 256 KiB, `M73 Q0 S..` in its first lines) with limits of their own.
+    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
+    let silent =
+        (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
+    let per_line = contains(b"M73 ") || contains(b";TIME_ELAPSED:");
+    let (scan, state) = scan(path, per_line.then(|| estimators(&normal, silent.as_ref())).transpose()?)?;
+    let (scan, state) = match scan.estimators {
+        None if scan.progress_lines > 0 => self::scan(path, Some(estimators(&normal, silent.as_ref())?))?,
+        _ => (scan, state),
+    };
+    let stats = scan.stats.into_stats(&state);
+    let (normal, silent) = match scan.estimators {
+        Some((normal, silent)) => (normal.finish(), silent.map(Estimator::finish)),
+        None => {
+            let estimate = |p: &MotionProfile| -> Result<Estimate> {
+                let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
+                Ok(estimate_time(file, p)?)
+            };
+            (estimate(&normal)?, silent.as_ref().map(estimate).transpose()?)
+        }
+    };
+    let silent = silent.as_ref().unwrap_or(&normal);
+    let first_layer = |e: &Estimate| e.layer_s.first().copied().unwrap_or(0.0);
+    Ok(Figures {
+        filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
+        diameter_mm: stats.filament_diameter_mm,
+        time_s: [normal.total_s, silent.total_s],
+        first_layer_s: [first_layer(&normal), first_layer(silent)],
+        ..scan.figures
+    })
+}
+
+/// One measuring pass over the file, with `estimators` (normal and silent mode) fed line by
+/// line if given.
+fn scan(path: &Path, estimators: Option<(Estimator, Option<Estimator>)>) -> Result<(Scan, State)> {
+    let figures = Figures::default();
+    let mut scan = Scan { stats: StatsPass::new(None), estimators, figures, progress_lines: 0, error: None };
+    let mut quiet = Quiet;
+    let run = Run { strictness: Strictness::Lenient, ..Run::new(path, &mut quiet) };
+    let state = run.scan(&mut scan)?;
+    if let Some(e) = scan.error.take() {
+        return Err(e.into());
+    }
+    Ok((scan, state))
+}
+
+/// Scales every time in `f` so that the normal mode's total is `t_s`.
+fn scale_times(f: &mut Figures, t_s: f64) {
+    let k = if f.time_s[0] > 0.0 { t_s / f.time_s[0] } else { 0.0 };
+    let times = f.time_s.iter_mut().chain(&mut f.first_layer_s).chain(f.progress_s.iter_mut().flatten());
+    times.for_each(|t| *t *= k);
+    f.time_s[0] = t_s;
+}
+
+fn estimators(
+    normal: &MotionProfile,
+    silent: Option<&MotionProfile>,
+) -> Result<(Estimator, Option<Estimator>)> {
+    let estimator = |p: &MotionProfile| Estimator::timing_only(p);
+    Ok((estimator(normal)?, silent.map(estimator).transpose()?))
+}
+
+/// The measuring pass: `stats`, the settings, the progress lines, and the estimators when the
+/// time at each progress line is needed.
+struct Scan {
+    stats: StatsPass,
+    /// Normal mode's, and silent mode's when its limits differ.
+    estimators: Option<(Estimator, Option<Estimator>)>,
+    figures: Figures,
+    progress_lines: u64,
+    /// The estimator's first error (the pass goes on to the end, then reports it).
+    error: Option<EstimateError>,
+}
+
+impl Pass for Scan {
+    fn reads_words(&self) -> bool {
+        false
+    }
+
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        self.stats.line(ctx, out)?;
+        let raw = ctx.line.bytes;
+        if let Some((normal, silent)) = &mut self.estimators {
+            for est in std::iter::once(normal).chain(silent.as_mut()) {
+                if let Err(e) = est.line(raw) {
+                    self.error.get_or_insert(e);
+                }
+            }
+        }
+        if let Some(c) = ctx.block.comment_text(raw) {
+            read_setting(c, &mut self.figures);
+        }
+        if is_progress_line(raw) {
+            self.progress_lines += 1;
+            if let Some((normal, silent)) = &self.estimators {
+                let t = normal.now_s();
+                self.figures.progress_s.push([t, silent.as_ref().map_or(t, Estimator::now_s)]);
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_second_run_of_the_same_transform_is_refused_naming_the_first() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.gcode");
+        std::fs::write(&input, "; gweave 0.1.0 mix --purge-mm 20 (generated)\nG1 X1\n").unwrap();
+        let e = refuse_second_run(&input, "purge-shift").and_then(|()| refuse_second_run(&input, "mix"));
+        let Err(FinishError::SecondRun { line, run, command, .. }) = e else { panic!("{e:?}") };
+        assert_eq!((line, run.as_str(), command.as_str()), (1, "0.1.0 mix --purge-mm 20", "mix"));
+    }
+
+    #[test]
+    fn a_run_writes_its_header_and_true_filament() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.gcode");
+        let write = |t: &Target| -> Result<()> {
+            std::fs::write(t_path(t), "G92 E0\nG1 X10 E5 F600\n; filament used [mm] = 1.00\n")
+                .map_err(|e| gweave::Error::io(t_path(t), e).into())
+        };
+        let ((), written) =
+            with_metadata(None, &Target::File(out.clone()), "rotary tube --length 10", write).unwrap();
+        assert_eq!(written.as_deref(), Some(out.as_path()));
+        let text = std::fs::read_to_string(&out).unwrap();
+        let header = header_line("rotary tube --length 10");
+        assert!(text.starts_with(&format!("{header}\n")), "{text}");
+        assert!(text.contains("; filament used [mm] = 5.00\n"), "{text}");
+    }
+
+    fn t_path(t: &Target) -> &Path {
+        match t {
+            Target::File(p) => p,
+            _ => unreachable!("the scratch file is a file"),
+        }
+    }
+}
