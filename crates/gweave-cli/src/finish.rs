@@ -37,8 +37,20 @@ const IO_FLAGS: &[&str] = &["--in-place", "--no-backup", "--force", "-q", "--qui
 /// The command and the options that shape its output, as typed, without the program, the
 /// input and output files and the reporting flags: `mix -c mix.toml --purge-mm 20`. So the
 /// same run from a file, a pipe or in place writes the same header.
+/// The arguments `run` was given (the program name first): the process's own when the binary
+/// runs, the list `gweave.main([...])` passes when Python runs the CLI in its process (where
+/// `std::env::args()` is Python's own command line).
+static ARGS: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+
+/// Keeps the arguments of this run for its header; each run replaces the last's.
+pub fn remember_args(args: &[std::ffi::OsString]) {
+    let args = args.iter().map(|a| a.to_string_lossy().into_owned()).collect();
+    *ARGS.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = args;
+}
+
 fn command_line(input: Option<&Path>) -> String {
-    transform_args(std::env::args().skip(1), input)
+    let args = ARGS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clone();
+    transform_args(args.into_iter().skip(1), input)
 }
 
 fn transform_args(args: impl Iterator<Item = String>, input: Option<&Path>) -> String {

@@ -138,7 +138,8 @@ pub fn is_progress_line(line: &[u8]) -> bool {
 pub struct MetadataPass {
     figures: Figures,
     header: String,
-    /// The header is written before the first line, or after Cura's Griffin header block.
+    /// The header is written before the first line, or after Cura's Griffin header block or
+    /// its `;FLAVOR:` line.
     header_written: bool,
     first_line: bool,
     /// The next entry of `figures.progress_s`.
@@ -282,13 +283,16 @@ impl MetadataPass {
 impl Pass for MetadataPass {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
         let bytes = ctx.line.bytes;
+        let cura_flavour_first = self.first_line && bytes.starts_with(b";FLAVOR:");
         if self.first_line {
             self.first_line = false;
             if !ctx.line.eol.is_empty() {
                 self.eol = ctx.line.eol.to_vec();
             }
-            // Ultimaker's printers read the Griffin header only at the very top.
-            if bytes != b";START_OF_HEADER" {
+            // Ultimaker's printers read the Griffin header only at the very top, and Cura's
+            // post-processing scripts expect its `;FLAVOR:` line to open the file (its first
+            // piece): the header goes after them.
+            if bytes != b";START_OF_HEADER" && !cura_flavour_first {
                 self.write_header(out)?;
             }
         }
@@ -297,7 +301,7 @@ impl Pass for MetadataPass {
             None => out.write_all(bytes)?,
         }
         out.write_all(ctx.line.eol)?;
-        if !self.header_written && bytes == b";END_OF_HEADER" {
+        if !self.header_written && (bytes == b";END_OF_HEADER" || cura_flavour_first) {
             self.write_header(out)?;
         }
         Ok(())
@@ -409,9 +413,8 @@ G1 X1 E1 ; keep\r\nM73 P50 R31 ; half\r\nM73 P100 R0\r\n; filament used [mm] = 1
         let f = Figures { progress_s: vec![[12.25, 12.25]], ..figures() };
         let out = rewrite(";FLAVOR:Marlin\n;TIME:6666\n;Filament used: 0m\n;TIME_ELAPSED:1.0\n", f.clone());
         assert!(
-            out.ends_with(
-                ";FLAVOR:Marlin\n;TIME:3723\n;Filament used: 1.00000m, 0.25050m\n;TIME_ELAPSED:12.250000\n"
-            ),
+            out.starts_with(";FLAVOR:Marlin\n; gweave ")
+                && out.ends_with(";TIME:3723\n;Filament used: 1.00000m, 0.25050m\n;TIME_ELAPSED:12.250000\n"),
             "{out}"
         );
         let out = rewrite(
