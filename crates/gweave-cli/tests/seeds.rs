@@ -216,7 +216,8 @@ fn sim_stops_at_the_seeds_m0() {
 /// The controller seed's constant-speed stepping through `gweave sim` and `gweave estimate`
 /// with its example profile: X10 at F600 is 800 steps of 1 / (10 mm/s * 80 steps/mm), exactly
 /// 1 s; X20 Y15 at F1200 is Y's 1200 steps of 1 / (20 * 80) s, 0.75 s; the 2 mm retract at
-/// F2400 is 1000 E steps of 1 / (40 * 500) s, 0.05 s.
+/// F2400 is 1000 E steps of 1 / (40 * 500) s, 0.05 s. (`estimate` read the profile's
+/// thermistor table from the working folder and refused the profile from anywhere else.)
 #[test]
 fn sim_and_estimate_time_the_seeds_constant_speed_moves() {
     let dir = tempfile::tempdir().unwrap();
