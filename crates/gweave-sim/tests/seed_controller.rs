@@ -6,7 +6,7 @@ use std::path::Path;
 
 use gweave_sim::estimate::estimate;
 use gweave_sim::interp::{Machine, Outcome};
-use gweave_sim::limits::{CornerMode, MotionProfile};
+use gweave_sim::limits::{CornerMode, KlipperLimits, MotionProfile};
 use gweave_sim::profile::MachineProfile;
 
 fn example() -> std::path::PathBuf {
@@ -101,4 +101,21 @@ fn the_virtual_printer_moves_at_constant_speed() {
     let report = machine.report();
     assert!((report.time.motion_s - MOVES_S).abs() < 1e-12, "{:?}", report.time);
     assert_eq!(report.steps.axes, [1600, 1200, 800, 1000, 0]);
+}
+
+/// A real file at constant speed: the same step counts as with Klipper's planner, which also
+/// steps every move (Marlin's joins moves of fewer than 6 steps to the next, so its motors skip
+/// their back-and-forth and count fewer), and faster than either, having no acceleration.
+#[test]
+fn a_real_file_steps_as_klipper_at_constant_speed() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/cura/cura_torus.gcode");
+    let text = std::fs::read(file).unwrap();
+    let constant = MotionProfile { corners: CornerMode::Constant {}, ..MotionProfile::default() };
+    let fast = estimate(text.as_slice(), &constant).unwrap();
+    let klipper = estimate(text.as_slice(), &MotionProfile::klipper(KlipperLimits::default())).unwrap();
+    let marlin = estimate(text.as_slice(), &MotionProfile::default()).unwrap();
+    assert_eq!(fast.steps, klipper.steps);
+    assert_eq!(fast.steps.axes, [1_363_044, 1_397_168, 90_800, 410_309, 0]);
+    assert!(marlin.steps.axes[0] < fast.steps.axes[0], "{:?}", marlin.steps);
+    assert!(fast.motion_s < klipper.motion_s.min(marlin.motion_s), "{}", fast.motion_s);
 }
