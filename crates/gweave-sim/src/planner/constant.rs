@@ -19,8 +19,9 @@
 //! round(start * steps_per_mm)`, the motors' own counts as long as no `G92` has put an axis off
 //! its step grid. Ties go to the first motor in X Y Z E A order.
 //!
-//! What is not the seed's: the delay is exact (the seed waits whole microseconds, plus the time
-//! its loop body takes), and A (rotary) counts as one more motor.
+//! What is not the seed's: the delay is exact (the seed's delay code is a figure its text does
+//! not reproduce; an Arduino delay counts whole microseconds, and the loop body takes its own
+//! time per step), and A (rotary) counts as one more motor.
 
 use super::{PlannedBlock, Trapezoid};
 use crate::kinematics::{Geometry, Move};
