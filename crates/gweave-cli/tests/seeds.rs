@@ -212,3 +212,28 @@ fn sim_stops_at_the_seeds_m0() {
         assert_eq!(out_of_bounds, runs_on, "{}: {json}", profile.display());
     }
 }
+
+/// The controller seed's constant-speed stepping through `gweave sim` and `gweave estimate`
+/// with its example profile: X10 at F600 is 800 steps of 1 / (10 mm/s * 80 steps/mm), exactly
+/// 1 s; X20 Y15 at F1200 is Y's 1200 steps of 1 / (20 * 80) s, 0.75 s; the 2 mm retract at
+/// F2400 is 1000 E steps of 1 / (40 * 500) s, 0.05 s. (`estimate` read the profile's
+/// thermistor table from the working folder and refused the profile from anywhere else.)
+#[test]
+fn sim_and_estimate_time_the_seeds_constant_speed_moves() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = dir.path().join("job.gcode");
+    std::fs::write(&job, "M109 S200\nG1 X10 F600\nG1 X20 Y15 F1200\nG1 E-2 F2400\n").unwrap();
+    let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines/seed-controller.toml");
+    let (job, seed) = (job.to_str().unwrap(), seed.to_str().unwrap());
+    let out = gweave(&["sim", job, "--machine", seed, "--json", "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let motion_s = json["time"]["motion_s"].as_f64().unwrap();
+    assert!((motion_s - 1.8).abs() < 1e-9, "{}", json["time"]);
+    assert_eq!(json["steps"]["axes"], serde_json::json!([1600, 1200, 0, 1000, 0]));
+    let out = gweave(&["estimate", job, "--machine", seed, "--json", "-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["planner"], "constant");
+    assert!((json["motion_s"].as_f64().unwrap() - 1.8).abs() < 1e-9, "{json}");
+}

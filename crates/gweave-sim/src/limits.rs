@@ -1,5 +1,5 @@
 //! The machine's motion profile: steps per unit, speed and acceleration limits, and how corners
-//! are taken (Marlin junction deviation or Klipper's square corner velocity).
+//! are taken (Marlin junction deviation, Klipper's square corner velocity, or at constant speed).
 //!
 //! The defaults describe a common RAMPS 1.4 printer running Marlin with the values of Marlin's
 //! stock `Configuration.h` (`MarlinFirmware/Marlin:Marlin/Configuration.h`):
@@ -46,8 +46,8 @@ pub enum ProfileError {
     /// A Marlin profile takes corners by junction deviation or by classic jerk, not both.
     #[error("corners: give junction_deviation_mm or jerk_mm_s, not both")]
     JerkAndJunctionDeviation,
-    /// A running planner cannot switch between Marlin and Klipper planning.
-    #[error("the corner mode (marlin or klipper) cannot change while planning")]
+    /// A running planner cannot switch between Marlin, Klipper and constant-speed planning.
+    #[error("the corner mode (marlin, klipper or constant) cannot change while planning")]
     ModeChange,
     /// The profile text is not valid TOML for a motion profile.
     #[error("motion profile: {0}")]
@@ -339,6 +339,12 @@ pub enum CornerMode {
     },
     /// Klipper: square corner velocity, minimum cruise ratio and the toolhead limits.
     Klipper(KlipperLimits),
+    /// No acceleration: every move runs at its commanded feed from its first step to its last,
+    /// corners included, as the controller seed's firmware steps (`planner/constant.rs`). The
+    /// feed, acceleration and corner limits are kept (M503 prints them) but not applied. (A
+    /// variant with no fields, so that serde refuses a key given with it, as a unit variant
+    /// would not.)
+    Constant {},
 }
 
 impl Default for CornerMode {
@@ -456,7 +462,8 @@ impl MotionProfile {
                 };
                 k.max_accel_mm_s2 = accel;
             }
-            CornerMode::Marlin { .. } => {
+            // Constant mode keeps Marlin's M204 values (M503 reports them) without using them.
+            CornerMode::Marlin { .. } | CornerMode::Constant {} => {
                 let a = &mut self.accel;
                 if let Some(s) = m204.s {
                     a.print_mm_s2 = s;
@@ -523,6 +530,7 @@ impl CheckRanges for MotionProfile {
                 corners.check("min_segment_time_us", *min_segment_time_us, MIN_SEGMENT_TIME_US)
             }
             CornerMode::Klipper(k) => k.check_ranges(&corners),
+            CornerMode::Constant {} => Ok(()),
         }
     }
 }
@@ -586,6 +594,22 @@ mod tests {
         assert!(matches!(&typo, Err(ProfileError::Toml(m)) if m.contains("xx")), "{typo:?}");
         let typo = MotionProfile::from_toml_str("[corners]\nmode = \"klipper\"\nmax_velocty = 1.0\n");
         assert!(matches!(typo, Err(ProfileError::Toml(_))), "{typo:?}");
+    }
+
+    #[test]
+    fn toml_constant_profile_has_no_corner_keys_and_cannot_change_mode() {
+        let p = MotionProfile::from_toml_str("[corners]\nmode = \"constant\"\n").unwrap();
+        assert_eq!(p.corners, CornerMode::Constant {});
+        assert_eq!(p.corners.marlin_corners(), None);
+        assert_eq!(MotionProfile::from_toml_str(&toml::to_string(&p).unwrap()).unwrap(), p);
+        let extra =
+            MotionProfile::from_toml_str("[corners]\nmode = \"constant\"\njunction_deviation_mm = 0.01\n");
+        assert!(
+            matches!(&extra, Err(ProfileError::Toml(m)) if m.contains("junction_deviation_mm")),
+            "{extra:?}"
+        );
+        let change = crate::planner::Planner::check_change(&p, &MotionProfile::default());
+        assert_eq!(change, Err(ProfileError::ModeChange));
     }
 
     #[test]

@@ -52,14 +52,14 @@ pub enum MarlinCorners {
 }
 
 impl CornerMode {
-    /// A Marlin profile's corner rule; `None` in Klipper mode.
+    /// A Marlin profile's corner rule; `None` in Klipper and constant mode.
     pub fn marlin_corners(&self) -> Option<MarlinCorners> {
         match *self {
             Self::Marlin { jerk_mm_s: Some(j), .. } => Some(MarlinCorners::Jerk(j)),
             Self::Marlin { junction_deviation_mm, .. } => Some(MarlinCorners::JunctionDeviation(
                 junction_deviation_mm.unwrap_or(MARLIN_JUNCTION_DEVIATION_MM),
             )),
-            Self::Klipper(_) => None,
+            Self::Klipper(_) | Self::Constant {} => None,
         }
     }
 }

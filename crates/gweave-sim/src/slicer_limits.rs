@@ -142,17 +142,18 @@ fn limits_of_mode(text: &[u8], base: &MotionProfile, mode: usize) -> Result<Slic
 }
 
 /// Junction deviation when the file gives one, else classic jerk when it gives any jerk (the
-/// others from the base, or Marlin's defaults), else the base's rule.
+/// others from the base, or Marlin's defaults), else the base's rule (Marlin's default on a
+/// Klipper or constant-speed base).
 fn marlin_corners(base: &CornerMode, jerk: [Option<f64>; 4], jd: Option<f64>) -> CornerMode {
     let (lookahead_blocks, min_segment_time_us, base_jerk) = match *base {
         CornerMode::Marlin { lookahead_blocks, min_segment_time_us, jerk_mm_s, .. } => {
             (lookahead_blocks, min_segment_time_us, jerk_mm_s)
         }
-        CornerMode::Klipper(_) => match CornerMode::default() {
+        CornerMode::Klipper(_) | CornerMode::Constant {} => match CornerMode::default() {
             CornerMode::Marlin { lookahead_blocks, min_segment_time_us, .. } => {
                 (lookahead_blocks, min_segment_time_us, None)
             }
-            CornerMode::Klipper(_) => unreachable!("the default is Marlin"),
+            CornerMode::Klipper(_) | CornerMode::Constant {} => unreachable!("the default is Marlin"),
         },
     };
     let defaults = base_jerk.unwrap_or(Jerk { x: 10.0, y: 10.0, z: 0.3, e: 5.0 });
@@ -169,7 +170,7 @@ fn marlin_corners(base: &CornerMode, jerk: [Option<f64>; 4], jd: Option<f64>) ->
         ),
         (None, false) => match *base {
             CornerMode::Marlin { junction_deviation_mm, jerk_mm_s, .. } => (junction_deviation_mm, jerk_mm_s),
-            CornerMode::Klipper(_) => (Some(MARLIN_JUNCTION_DEVIATION_MM), None),
+            CornerMode::Klipper(_) | CornerMode::Constant {} => (Some(MARLIN_JUNCTION_DEVIATION_MM), None),
         },
     };
     CornerMode::Marlin { junction_deviation_mm, jerk_mm_s, lookahead_blocks, min_segment_time_us }

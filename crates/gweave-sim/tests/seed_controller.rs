@@ -1,10 +1,12 @@
 //! The controller seed's machine (examples/machines/seed-controller.toml): its thermistor table
 //! loaded from a CSV file named by the profile and read by the virtual printer's firmware, and
-//! its `M0` (home, motors off, end of program).
+//! its `M0` (home, motors off, end of program), and its constant-speed stepping.
 
 use std::path::Path;
 
+use gweave_sim::estimate::estimate;
 use gweave_sim::interp::{Machine, Outcome};
+use gweave_sim::limits::{CornerMode, KlipperLimits, MotionProfile};
 use gweave_sim::profile::MachineProfile;
 
 fn example() -> std::path::PathBuf {
@@ -62,4 +64,58 @@ fn m0_per_profile_marlin_stops_the_seed_ends_the_program() {
         assert_eq!(machine.position()[0], x_after);
         assert_eq!(machine.program_ended(), ended);
     }
+}
+
+/// A move of each kind at the seed's constant speed: 10 mm of X at F600 (800 steps of
+/// 1 / (10 mm/s * 80 steps/mm) = 1 s), X10 Y15 at F1200 (Y dominates with 1200 steps of
+/// 1 / (20 * 80) s = 0.75 s), a 2 mm retract at F2400 (1000 E steps of 1 / (40 * 500) s =
+/// 0.05 s), 0.2 mm of Z at F600 (800 steps of 1 / (10 * 4000) s = 0.02 s, above Z's 5 mm/s
+/// limit, which the seed does not have).
+const MOVES: &str = "G1 X10 F600\nG1 X20 Y15 F1200\nG1 E-2 F2400\nG1 Z0.2 F600\n";
+const MOVES_S: f64 = 1.0 + 0.75 + 0.05 + 0.02;
+
+#[test]
+fn constant_motion_times_each_move_by_its_dominant_steps() {
+    let seed = MachineProfile::from_file(&example()).unwrap();
+    assert_eq!(seed.motion.corners, CornerMode::Constant {});
+    let est = estimate(MOVES.as_bytes(), &seed.motion).unwrap();
+    assert!((est.motion_s - MOVES_S).abs() < 1e-12, "{}", est.motion_s);
+    assert_eq!(est.blocks, 4);
+    // The first move alone is exactly one second.
+    assert_eq!(estimate("G1 X10 F600\n".as_bytes(), &seed.motion).unwrap().motion_s, 1.0);
+    // The same moves planned with Marlin's acceleration take longer and step the same.
+    let marlin = estimate(MOVES.as_bytes(), &MotionProfile::default()).unwrap();
+    assert!(marlin.motion_s > MOVES_S + 0.01, "{}", marlin.motion_s);
+    assert_eq!(est.steps, marlin.steps);
+    assert_eq!(est.steps.axes, [1600, 1200, 800, 1000, 0]);
+}
+
+#[test]
+fn the_virtual_printer_moves_at_constant_speed() {
+    let mut machine = Machine::new(MachineProfile::from_file(&example()).unwrap()).unwrap();
+    // Hot first: the seed's firmware, like Marlin, refuses a cold retract.
+    let job = format!("M109 S200\n{MOVES}M400\n");
+    for line in job.lines() {
+        assert_eq!(machine.execute(line.as_bytes(), &mut |_, _| {}), Outcome::Ok, "{line}");
+    }
+    let report = machine.report();
+    assert!((report.time.motion_s - MOVES_S).abs() < 1e-12, "{:?}", report.time);
+    assert_eq!(report.steps.axes, [1600, 1200, 800, 1000, 0]);
+}
+
+/// A real file at constant speed: the same step counts as with Klipper's planner, which also
+/// steps every move (Marlin's joins moves of fewer than 6 steps to the next, so its motors skip
+/// their back-and-forth and count fewer), and faster than either, having no acceleration.
+#[test]
+fn a_real_file_steps_as_klipper_at_constant_speed() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/cura/cura_torus.gcode");
+    let text = std::fs::read(file).unwrap();
+    let constant = MotionProfile { corners: CornerMode::Constant {}, ..MotionProfile::default() };
+    let fast = estimate(text.as_slice(), &constant).unwrap();
+    let klipper = estimate(text.as_slice(), &MotionProfile::klipper(KlipperLimits::default())).unwrap();
+    let marlin = estimate(text.as_slice(), &MotionProfile::default()).unwrap();
+    assert_eq!(fast.steps, klipper.steps);
+    assert_eq!(fast.steps.axes, [1_363_044, 1_397_168, 90_800, 410_309, 0]);
+    assert!(marlin.steps.axes[0] < fast.steps.axes[0], "{:?}", marlin.steps);
+    assert!(fast.motion_s < klipper.motion_s.min(marlin.motion_s), "{}", fast.motion_s);
 }

@@ -54,7 +54,11 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         .check()?;
     let profile = match &args.machine {
         Some(_) if from_slicer => slicer_profile(&args.input)?,
-        other => load_or_default(other.as_ref(), MachineProfile::from_toml_str)?,
+        // Files the profile names (a thermistor table) are read from its folder, as `sim` does.
+        other => {
+            let folder = other.as_deref().and_then(Path::parent).unwrap_or(Path::new(""));
+            load_or_default(other.as_ref(), |text| MachineProfile::from_toml_in(text, folder))?
+        }
     };
     let file = container::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
     let mut bar = args.quiet.bar();

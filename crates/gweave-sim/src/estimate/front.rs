@@ -274,7 +274,7 @@ impl Front {
                     arg("SQUARE_CORNER_VELOCITY"),
                     arg("MINIMUM_CRUISE_RATIO"),
                 ),
-                CornerMode::Marlin { .. } => return Ok(()),
+                CornerMode::Marlin { .. } | CornerMode::Constant {} => return Ok(()),
             };
             self.change_profile(result.map(|()| profile), jobs)
         } else {

@@ -13,7 +13,7 @@ use crate::profile::MachineProfile;
 pub struct EstimateReport {
     /// The machine profile's name.
     pub machine: String,
-    /// `klipper` or `marlin`.
+    /// `klipper`, `marlin` or `constant`.
     pub planner: &'static str,
     /// Whether the steps were counted (otherwise all zero).
     pub steps_counted: bool,
@@ -32,6 +32,7 @@ pub fn estimate_report<R: Read + Send>(
     let planner = match machine.motion.corners {
         CornerMode::Klipper(_) => "klipper",
         CornerMode::Marlin { .. } => "marlin",
+        CornerMode::Constant {} => "constant",
     };
     Ok(EstimateReport { machine: machine.name.clone(), planner, steps_counted: count_steps, estimate })
 }

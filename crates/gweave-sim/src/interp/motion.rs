@@ -178,7 +178,8 @@ impl Machine {
     }
 
     /// The acceleration homing moves use on `axis`: the axis limit, capped by Marlin's travel
-    /// acceleration or Klipper's toolhead limit.
+    /// acceleration or Klipper's toolhead limit; none in constant mode (an infinite
+    /// acceleration: each stroke takes its distance over its feed).
     fn homing_accel(&self, axis: usize) -> f64 {
         let p = self.core.profile();
         let axis_max = p.max_accel_mm_s2.to_array()[axis];
@@ -188,6 +189,7 @@ impl Machine {
                 (state::Z, Some(z)) => z,
                 _ => k.max_accel_mm_s2,
             },
+            CornerMode::Constant {} => f64::INFINITY,
         }
     }
 

@@ -144,7 +144,7 @@ impl Machine {
         let [s, t] = self.settings.m205_st;
         let b = match m.corners {
             CornerMode::Marlin { min_segment_time_us, .. } => min_segment_time_us,
-            CornerMode::Klipper(_) => 0.0,
+            CornerMode::Klipper(_) | CornerMode::Constant {} => 0.0,
         };
         // Marlin prints the corner rule it was built with: J for junction deviation, X Y Z E
         // for classic jerk (MarlinSettings::report, M205).

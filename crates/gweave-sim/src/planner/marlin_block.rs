@@ -84,7 +84,9 @@ impl Settings {
             crate::limits::CornerMode::Marlin { lookahead_blocks, min_segment_time_us, .. } => {
                 (lookahead_blocks, min_segment_time_us)
             }
-            crate::limits::CornerMode::Klipper(_) => unreachable!("a Marlin planner has a Marlin profile"),
+            crate::limits::CornerMode::Klipper(_) | crate::limits::CornerMode::Constant {} => {
+                unreachable!("a Marlin planner has a Marlin profile")
+            }
         };
         Self {
             steps_per_unit,

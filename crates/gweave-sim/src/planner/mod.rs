@@ -2,14 +2,17 @@
 //! profiles, looking ahead over the queued moves so that corners and short moves slow the
 //! machine down only as much as the limits require.
 //!
-//! Two planners imitate two firmwares (chosen by [`CornerMode`]):
+//! Two planners imitate two firmwares, and a third the controller seed (chosen by
+//! [`CornerMode`]):
 //! - [`CornerMode::Klipper`]: Klipper's lookahead, reproduced closely enough that print times
 //!   agree with Klipper's own to well under 0.01 % (see `klipper.rs` for the method);
 //! - [`CornerMode::Marlin`]: Marlin's planner in whole steps, junction deviation or classic
 //!   jerk, over its bounded block buffer; print times agree with Marlin's own planner to
-//!   0.01 % (see `marlin.rs`).
+//!   0.01 % (see `marlin.rs`);
+//! - [`CornerMode::Constant`]: no acceleration, each move at its feed on its dominant motor,
+//!   timed in whole steps as the seed's delay-per-step loop runs (see `constant.rs`).
 //!
-//! Both stream: [`Planner::push`] hands finished blocks to a [`BlockSink`] as soon as their
+//! All stream: [`Planner::push`] hands finished blocks to a [`BlockSink`] as soon as their
 //! speeds are final and the queue stays bounded (Marlin: `lookahead_blocks`; Klipper: about a
 //! second of motion), so a file of any size plans in constant memory.
 //! [`Planner::flush`] plans the rest to a stop, for the end of the file or a dwell
@@ -30,6 +33,7 @@
 //! assert!((blocks[0].trapezoid.duration_s() - (2.0 / 60.0 + (100.0 - 2.5 / 3.0) / 50.0)).abs() < 1e-12);
 //! ```
 
+mod constant;
 mod junction;
 mod klipper;
 mod marlin;
@@ -120,6 +124,8 @@ impl BlockSink for Vec<PlannedBlock> {
 enum Engine {
     Klipper(Box<KlipperLookahead>),
     Marlin(Box<MarlinBuffer>),
+    /// Constant speed keeps no queue: each move's block is final as it arrives.
+    Constant,
 }
 
 /// A streaming lookahead planner for one machine profile.
@@ -136,6 +142,7 @@ impl Planner {
         let engine = match &profile.corners {
             CornerMode::Klipper(k) => Engine::Klipper(Box::new(KlipperLookahead::new(k))),
             CornerMode::Marlin { .. } => Engine::Marlin(Box::default()),
+            CornerMode::Constant {} => Engine::Constant,
         };
         Ok(Self { profile, engine })
     }
@@ -147,7 +154,7 @@ impl Planner {
 
     /// Replace the profile mid-stream (M201, M203, M204, M205, `SET_VELOCITY_LIMIT`): moves
     /// pushed from now on use it, queued moves keep their limits, as in both firmwares. The
-    /// corner mode (Marlin or Klipper) cannot change.
+    /// corner mode (Marlin, Klipper or constant) cannot change.
     pub fn set_profile(&mut self, profile: MotionProfile) -> Result<(), ProfileError> {
         Self::check_change(&self.profile, &profile)?;
         self.profile = profile;
@@ -165,6 +172,7 @@ impl Planner {
             (&current.corners, &next.corners),
             (CornerMode::Klipper(_), CornerMode::Klipper(_))
                 | (CornerMode::Marlin { .. }, CornerMode::Marlin { .. })
+                | (CornerMode::Constant {}, CornerMode::Constant {})
         );
         if same_mode {
             Ok(())
@@ -186,6 +194,9 @@ impl Planner {
                 k.push(mv, geo, limits, rotary, sink);
             }
             (Engine::Marlin(m), CornerMode::Marlin { .. }) => m.push(mv, &self.profile, sink),
+            (Engine::Constant, CornerMode::Constant {}) => {
+                sink.block(&constant::block(mv, &geo, &self.profile.steps))
+            }
             _ => unreachable!("set_profile keeps the corner mode of the engine"),
         }
         Ok(())
@@ -204,6 +215,7 @@ impl Planner {
         match &mut self.engine {
             Engine::Klipper(k) => k.flush(sink),
             Engine::Marlin(m) => m.flush(sink),
+            Engine::Constant => {}
         }
     }
 
@@ -212,6 +224,7 @@ impl Planner {
         match &self.engine {
             Engine::Klipper(k) => k.queued(),
             Engine::Marlin(m) => m.queued(),
+            Engine::Constant => 0,
         }
     }
 }
