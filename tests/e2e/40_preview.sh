@@ -6,7 +6,7 @@ F="$DATA/cura/cura_dual.gcode"
 # PNG signature and IHDR size (bytes 16..24: width, height big-endian).
 [ "$(head -c 8 "$WORK/p.png" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] || { echo "not a PNG"; exit 1; }
 [ "$(od -An -tu1 -j16 -N8 "$WORK/p.png" | tr -s ' ' | sed 's/^ //')" = "0 0 1 144 0 0 1 44" ] || { echo "PNG size"; exit 1; }
-"$GWEAVE" preview "$F" -o "$WORK/p.svg" --layer 60 -q --report "$WORK/pv.json" > "$WORK/pv.txt"
+"$GWEAVE" preview "$F" -o "$WORK/p.svg" --layer 60 --report "$WORK/pv.json" > "$WORK/pv.txt"
 n=$(grep -o '<path ' "$WORK/p.svg" | wc -l)
 [ "$n" -gt 10 ] || { echo "svg paths: $n"; exit 1; }
 # The summary and the report say what was drawn: layer 60, its lines, the two tools' legend.

@@ -9,7 +9,7 @@ mkdir -p "$R"
 
 # 1. Wrap the plate (40 x 30*pi x 2 mm, 10 layers) with a seam rotation; read back per layer.
 "$GWEAVE" rotary wrap "$DATA/rotary/plate.gcode" -o "$R/sleeve.gcode" --mandrel-diameter 30 \
-  --seam-rotation 7.5 --preview "$R/sleeve.png" --report "$R/sleeve.json" -q > "$R/sleeve.txt"
+  --seam-rotation 7.5 --preview "$R/sleeve.png" --report "$R/sleeve.json" > "$R/sleeve.txt"
 grep -q "layers          10" "$R/sleeve.txt"
 python3 - "$DATA/rotary/plate.gcode" "$R/sleeve.gcode" "$R/sleeve.json" "$R/sleeve.png" <<'PY'
 import json, math, struct, sys
@@ -146,7 +146,7 @@ if [ -x "$PY_BIN" ]; then
 import json, sys
 import gweave
 out = sys.argv[1]
-s = gweave.rotary_tube(out + "/py_tube.gcode", mandrel_diameter=20, length=30, layers=3)
+s = gweave.rotary_tube(out + "/py_tube.gcode", mandrel_diameter=20, length=30, layer_count=3)
 assert open(out + "/py_tube.gcode").read() == open(out + "/tube.gcode").read()
 t = json.load(open(out + "/tube.json"))
 assert abs(s["extruded_mm3"] - t["extruded_mm3"]) < 1e-9

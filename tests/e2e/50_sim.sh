@@ -23,7 +23,7 @@ assert open(sys.argv[2], "rb").read(8) == b"\x89PNG\r\n\x1a\n"
 PY
 
 # A cartridge that falls off mid-print: thermal runaway, exit 1.
-if "$GWEAVE" sim "$F" --fault hotend-cartridge-off@400s -q > "$WORK/halt.txt"; then
+if "$GWEAVE" sim "$F" --fault hotend-cartridge-off@400s -q > "$WORK/halt.txt" 2>&1; then
   echo "a halted run exited 0"; exit 1
 fi
 grep -q "Error:Thermal Runaway, system stopped! Heater_ID: 0" "$WORK/halt.txt"

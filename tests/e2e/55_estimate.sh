@@ -21,7 +21,7 @@ assert abs(parts - e["total_s"]) < 1e-6, e
 PY
 done
 
-"$GWEAVE" estimate "$DATA/cura/cura_torus.gcode" -q > "$WORK/est.txt"
+"$GWEAVE" estimate "$DATA/cura/cura_torus.gcode" > "$WORK/est.txt"
 grep -q "on RAMPS 1.4 Marlin (default) (marlin planner)" "$WORK/est.txt"
 grep -Eq "^  time +0h 12m 03s" "$WORK/est.txt"  # 722.7 s, Marlin's planner in whole steps
 

@@ -93,6 +93,12 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     }
     if args.quiet.emit(&args.report, &report)? {
         print_summary(|out| print_human(out, &args.input, &report, &errors))?;
+    } else {
+        // Without the summary (-q, --json) the printer's errors still reach standard error:
+        // -q never hides why a run failed.
+        for e in &errors {
+            eprintln!("gweave: the printer said: {e}");
+        }
     }
     Ok(if report.halted { ExitCode::from(1) } else { ExitCode::SUCCESS })
 }

@@ -331,29 +331,14 @@ impl MixPass {
         self.acc.changes += 1;
         let purge_mm = self.purge_mm(from, to)?;
         if purge_mm > 0.0 {
-            let start = PurgeStart {
-                pos: purge_start_pos(&mv.from),
-                absolute_xyz: state.absolute(),
-                relative_e: state.relative_e(),
-                feed_mm_min: self.feed_before,
-                rapid_mode: self.rapid_before,
-                retracted_mm: self.retraction.in_force_mm(),
-            };
-            let mut block = Vec::new();
-            write_purge(&mut block, &self.profile.numbers, &self.motion, &start, purge_mm, &label);
-            self.pre.extend_from_slice(&block);
-            self.acc.purge(to, purge_mm);
+            self.purge(mv, state, to, purge_mm, &label);
         }
         Ok(())
     }
 
-    /// The purge of `[purge] initial_mm` before the first move of filament, in the first mix:
-    /// whatever the chamber held before the print (the last job's mix, a colour loaded by hand)
-    /// comes out at the purge spot, as the seed purged at `;LAYER:0`.
-    fn initial_purge(&mut self, mv: &Move, state: &State) {
-        self.initial_purge_due = false;
-        let (Some(first), mm) = (self.active, self.profile.purge.initial_mm) else { return };
-        let label = format!("to {} before the print", self.plan.mixes[first].label);
+    /// Writes a purge block of `mm` in mix `to` before the current line, from where the move
+    /// starts, and counts it.
+    fn purge(&mut self, mv: &Move, state: &State, to: usize, mm: f64, label: &str) {
         let start = PurgeStart {
             pos: purge_start_pos(&mv.from),
             absolute_xyz: state.absolute(),
@@ -363,9 +348,19 @@ impl MixPass {
             retracted_mm: self.retraction.in_force_mm(),
         };
         let mut block = Vec::new();
-        write_purge(&mut block, &self.profile.numbers, &self.motion, &start, mm, &label);
+        write_purge(&mut block, &self.profile.numbers, &self.motion, &start, mm, label);
         self.pre.extend_from_slice(&block);
-        self.acc.purge(first, mm);
+        self.acc.purge(to, mm);
+    }
+
+    /// The purge of `[purge] initial_mm` before the first move of filament, in the first mix:
+    /// whatever the chamber held before the print (the last job's mix, a colour loaded by hand)
+    /// comes out at the purge spot, as the seed purged at `;LAYER:0`.
+    fn initial_purge(&mut self, mv: &Move, state: &State) {
+        self.initial_purge_due = false;
+        let (Some(first), mm) = (self.active, self.profile.purge.initial_mm) else { return };
+        let label = format!("to {} before the print", self.plan.mixes[first].label);
+        self.purge(mv, state, first, mm, &label);
     }
 
     /// Decides what comes out for one line, into `pre` and `repl`.
