@@ -26,6 +26,7 @@ use std::io::{self, Write};
 use serde::Serialize;
 
 use crate::gcode::diag::Severity;
+use crate::gcode::line::Block;
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::State;
 use crate::pass::{Ctx, Pass};
@@ -52,6 +53,14 @@ impl Malformed {
             self.first_malformed_line = other.first_malformed_line;
         }
     }
+}
+
+/// Whether a parsed line counts as malformed: it carries an error-level diagnostic (a
+/// malformed word, a bad checksum). A line over [`MAX_LINE`](crate::gcode::reader::MAX_LINE)
+/// counts too, when its last piece arrives (`Pass::long_line`).
+#[inline]
+pub fn is_malformed(block: &Block) -> bool {
+    block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error)
 }
 
 /// A report with the malformed lines of its lenient read, in one JSON object (the report's
@@ -81,7 +90,7 @@ impl<P> Counting<P> {
 impl<P: Pass> Pass for Counting<P> {
     #[inline]
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
-        if ctx.block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error) {
+        if is_malformed(ctx.block) {
             self.malformed.add(ctx.line.number);
         }
         self.pass.line(ctx, out)

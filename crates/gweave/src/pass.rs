@@ -16,6 +16,7 @@ use crate::gcode::line::Block;
 use crate::gcode::reader::{LineReader, Part, RawLine};
 use crate::gcode::state::{Effect, State, StateOptions};
 use crate::gcode::writer::{Output, Target};
+use crate::malformed::{is_malformed, Malformed};
 
 /// A line with everything known about it, after its effect on the state.
 pub struct Ctx<'a> {
@@ -290,9 +291,8 @@ pub struct CopyReport {
     /// Lines with an error (a malformed word, a bad checksum, a line longer than
     /// [`MAX_LINE`](crate::gcode::reader::MAX_LINE)...), copied as written. Only a
     /// [`Strictness::Lenient`] run gets past one; a strict run stops at the first.
-    pub malformed_lines: u64,
-    /// The first of them, 1-based.
-    pub first_malformed_line: Option<u64>,
+    #[serde(flatten)]
+    pub malformed: Malformed,
 }
 
 impl Pass for Identity {
@@ -307,8 +307,8 @@ impl Pass for Identity {
         let r = &mut self.report;
         r.lines += 1;
         r.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
-        if ctx.block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error) {
-            r.malformed(ctx.line.number);
+        if is_malformed(ctx.block) {
+            r.malformed.add(ctx.line.number);
         }
         keep(ctx, out)
     }
@@ -318,17 +318,10 @@ impl Pass for Identity {
         r.bytes += (piece.bytes.len() + piece.eol.len()) as u64;
         if let Part::Last { .. } = piece.part {
             r.lines += 1;
-            r.malformed(piece.number);
+            r.malformed.add(piece.number);
         }
         out.write_all(piece.bytes)?;
         out.write_all(piece.eol)
-    }
-}
-
-impl CopyReport {
-    fn malformed(&mut self, line: u64) {
-        self.malformed_lines += 1;
-        self.first_malformed_line.get_or_insert(line);
     }
 }
 
@@ -359,8 +352,7 @@ mod tests {
         let expected = CopyReport {
             lines: 6,
             bytes: input.len() as u64,
-            malformed_lines: 1,
-            first_malformed_line: Some(4),
+            malformed: Malformed { malformed_lines: 1, first_malformed_line: Some(4) },
         };
         assert_eq!(report, expected);
     }
@@ -412,8 +404,7 @@ mod tests {
         let expected = CopyReport {
             lines: 3,
             bytes: input.len() as u64,
-            malformed_lines: 1,
-            first_malformed_line: Some(2),
+            malformed: Malformed { malformed_lines: 1, first_malformed_line: Some(2) },
         };
         assert_eq!(report, expected);
     }

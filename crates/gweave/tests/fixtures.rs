@@ -46,7 +46,7 @@ fn every_fixture_round_trips_byte_exact() {
         let newlines = bytes.iter().filter(|&&b| b == b'\n').count() as u64;
         let lines = newlines + u64::from(bytes.last() != Some(&b'\n'));
         assert_eq!((copy.report.lines, copy.report.bytes), (lines, bytes.len() as u64), "{rel}");
-        assert_eq!(copy.report.malformed_lines, 0, "{rel}");
+        assert_eq!(copy.report.malformed.malformed_lines, 0, "{rel}");
     }
 }
 

@@ -65,11 +65,11 @@ fn print_human(out: &mut dyn Write, input: &Path, target: &Target, r: &CopyRepor
         Target::Stdout => {}
     }
     writeln!(out, "  lines           {} ({:.1} MB), copied byte for byte", r.lines, r.bytes as f64 / 1e6)?;
-    if let Some(first) = r.first_malformed_line {
+    if let Some(first) = r.malformed.first_malformed_line {
         writeln!(
             out,
             "  malformed       {} (copied as written; the first at line {first})",
-            r.malformed_lines
+            r.malformed.malformed_lines
         )?;
     }
     Ok(())

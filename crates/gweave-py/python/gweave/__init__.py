@@ -183,6 +183,19 @@ def _flags(*flags: Tuple[str, Any]) -> str:
     return " ".join(words)
 
 
+def _machine_flags(
+    mandrel_diameter: Any, feed_convention: Any, rotary_unit: Any, axes: Any, config: Any
+) -> Tuple[Tuple[str, Any], ...]:
+    """The rotary machine's flags (``gweave rotary wrap`` and ``tube`` share them), for a header."""
+    return (
+        ("--mandrel-diameter", mandrel_diameter),
+        ("--feed-convention", feed_convention),
+        ("--rotary-unit", rotary_unit),
+        ("--axes", axes if axes is None or isinstance(axes, str) else tuple(axes)),
+        ("-c", config),
+    )
+
+
 def raster(
     inputs: Union[PathLike, Sequence[PathLike]],
     output: PathLike,
@@ -617,11 +630,7 @@ def rotary_wrap(
         config=_opt_path(config, "config"),
         preview=_opt_path(preview, "preview"),
         options=_flags(
-            ("--mandrel-diameter", mandrel_diameter),
-            ("--feed-convention", feed_convention),
-            ("--rotary-unit", rotary_unit),
-            ("--axes", axes if axes is None or isinstance(axes, str) else tuple(axes)),
-            ("-c", config),
+            *_machine_flags(mandrel_diameter, feed_convention, rotary_unit, axes, config),
             ("--keep-arc-length", keep_arc_length),
             ("--seam-rotation", seam_rotation),
             ("--chord-tol", chord_tol),
@@ -681,11 +690,7 @@ def rotary_tube(
         config=_opt_path(config, "config"),
         preview=_opt_path(preview, "preview"),
         options=_flags(
-            ("--mandrel-diameter", mandrel_diameter),
-            ("--feed-convention", feed_convention),
-            ("--rotary-unit", rotary_unit),
-            ("--axes", axes if axes is None or isinstance(axes, str) else tuple(axes)),
-            ("-c", config),
+            *_machine_flags(mandrel_diameter, feed_convention, rotary_unit, axes, config),
             ("--length", length),
             ("--layer-count", layer_count),
             ("--layer-height", layer_height),
