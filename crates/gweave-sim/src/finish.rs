@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use gweave::gcode::container;
 use gweave::gcode::ends::read_ends;
-use gweave::gcode::flavour::read_flavour;
+use gweave::gcode::flavour::flavour_in;
 use gweave::gcode::state::{State, StateOptions};
 use gweave::gcode::temp::TempFile;
 use gweave::gcode::writer::{Output, Target};
@@ -114,13 +114,12 @@ fn finish(
     command_line: &str,
     own_time_s: Option<f64>,
 ) -> Result<Option<PathBuf>> {
-    let mut figures = measure(path)?;
+    let (mut figures, flavour) = measure(path)?;
     if let Some(t_s) = own_time_s {
         scale_times(&mut figures, t_s);
     }
     let mut out = Output::create(target, input)?;
     let written = out.dest().map(Path::to_path_buf);
-    let flavour = read_flavour(path).map_err(|e| gweave::Error::io(path, e))?;
     let options = StateOptions::default().for_flavour(flavour.as_deref());
     let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
     let mut pass = MetadataPass::new(figures, header_line(command_line));
@@ -151,8 +150,10 @@ fn scratch_dir(target: &Target, input: Option<&Path>) -> PathBuf {
 /// times faster). Progress lines are looked for in the file's ends (PrusaSlicer's `M73 P0` in
 /// its first lines, Cura's last `;TIME_ELAPSED:` in its last) and counted by the pass: a file
 /// with them only in its middle is read once more.
-fn measure(path: &Path) -> Result<Figures> {
+fn measure(path: &Path) -> Result<(Figures, Option<String>)> {
+    // The file's ends are read once: the machine limits, what the file holds, its flavour.
     let ends = read_ends(path).map_err(|e| gweave::Error::io(path, e))?;
+    let flavour = flavour_in(&ends);
     let base = MachineProfile::default().motion;
     let normal = slicer_limits(&ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
     let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
@@ -162,9 +163,12 @@ fn measure(path: &Path) -> Result<Figures> {
     let silent =
         (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
     let per_line = contains(b"M73 ") || contains(b";TIME_ELAPSED:");
-    let (scan, state) = scan(path, per_line.then(|| estimators(&normal, silent.as_ref())).transpose()?)?;
+    let first_estimators = per_line.then(|| estimators(&normal, silent.as_ref())).transpose()?;
+    let (scan, state) = scan(path, &flavour, first_estimators)?;
     let (scan, state) = match scan.estimators {
-        None if scan.progress_lines > 0 => self::scan(path, Some(estimators(&normal, silent.as_ref())?))?,
+        None if scan.progress_lines > 0 => {
+            self::scan(path, &flavour, Some(estimators(&normal, silent.as_ref())?))?
+        }
         _ => (scan, state),
     };
     let stats = scan.stats.into_stats(&state);
@@ -180,22 +184,28 @@ fn measure(path: &Path) -> Result<Figures> {
     };
     let silent = silent.as_ref().unwrap_or(&normal);
     let first_layer = |e: &Estimate| e.layer_s.first().copied().unwrap_or(0.0);
-    Ok(Figures {
+    let figures = Figures {
         filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
         diameter_mm: stats.filament_diameter_mm,
         time_s: [normal.total_s, silent.total_s],
         first_layer_s: [first_layer(&normal), first_layer(silent)],
         ..scan.figures
-    })
+    };
+    Ok((figures, flavour))
 }
 
 /// One measuring pass over the file, with `estimators` (normal and silent mode) fed line by
 /// line if given.
-fn scan(path: &Path, estimators: Option<(Estimator, Option<Estimator>)>) -> Result<(Scan, State)> {
+fn scan(
+    path: &Path,
+    flavour: &Option<String>,
+    estimators: Option<(Estimator, Option<Estimator>)>,
+) -> Result<(Scan, State)> {
     let figures = Figures::default();
     let mut scan = Scan { stats: StatsPass::new(None), estimators, figures, progress_lines: 0, error: None };
     let mut quiet = Quiet;
-    let run = Run { strictness: Strictness::Lenient, ..Run::new(path, &mut quiet) };
+    let run =
+        Run { strictness: Strictness::Lenient, flavour: Some(flavour.clone()), ..Run::new(path, &mut quiet) };
     let state = run.scan(&mut scan)?;
     if let Some(e) = scan.error.take() {
         return Err(e.into());
