@@ -30,28 +30,75 @@ pub const M165_LETTERS: [char; 6] = ['A', 'B', 'C', 'D', 'H', 'I'];
 /// Marlin's default number of virtual tools (MIXING_VIRTUAL_TOOLS).
 pub const MARLIN_VIRTUAL_TOOLS: usize = 16;
 
+/// Why a mixing command or a dialect setting is refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DialectError {
+    /// More decimals than [`Decimals::MAX`].
     #[error("{0} decimals is too many (at most {max})", max = Decimals::MAX)]
     Decimals(u32),
+    /// M165 has more input letters than the mix has inputs.
     #[error("M165 has letters for 6 inputs, the mix has {0}")]
     TooManyInputsForM165(usize),
+    /// An M563 tool without a drive.
     #[error("a tool needs at least one drive")]
     NoDrives,
+    /// An M-code that is not one of the mixing commands.
     #[error("M{code} is not a mixing command")]
-    NotMixing { code: u16 },
+    NotMixing {
+        /// The M-code's number.
+        code: u16,
+    },
+    /// A mixing command without a word it needs.
     #[error("M{code} needs the word {letter}")]
-    MissingWord { code: u16, letter: char },
+    MissingWord {
+        /// The M-code's number.
+        code: u16,
+        /// The missing word's letter.
+        letter: char,
+    },
+    /// A word whose value is NaN or infinite.
     #[error("M{code} {letter}{value}: not a finite number")]
-    NotFinite { code: u16, letter: char, value: f64 },
+    NotFinite {
+        /// The M-code's number.
+        code: u16,
+        /// The word's letter.
+        letter: char,
+        /// The value as read.
+        value: f64,
+    },
+    /// A word that should be a tool or input index but is negative, fractional or too large.
     #[error("M{code} {letter}{value}: not an index")]
-    BadIndex { code: u16, letter: char, value: f64 },
+    BadIndex {
+        /// The M-code's number.
+        code: u16,
+        /// The word's letter.
+        letter: char,
+        /// The value as read.
+        value: f64,
+    },
+    /// An input index at or past the number of inputs.
     #[error("input {index} does not exist ({inputs} inputs)")]
-    NoSuchInput { index: usize, inputs: usize },
+    NoSuchInput {
+        /// The index as written.
+        index: usize,
+        /// The number of inputs of the mixer.
+        inputs: usize,
+    },
+    /// A virtual tool at or past the number of tools.
     #[error("virtual tool {tool} does not exist ({tools} tools)")]
-    NoSuchTool { tool: usize, tools: usize },
+    NoSuchTool {
+        /// The tool as written.
+        tool: usize,
+        /// The number of virtual tools.
+        tools: usize,
+    },
+    /// A command that would store a mix of all zeros.
     #[error("M{code} would store an all-zero mix; the firmware would divide by zero")]
-    AllZero { code: u16 },
+    AllZero {
+        /// The M-code's number.
+        code: u16,
+    },
+    /// The mix itself is invalid.
     #[error(transparent)]
     Mix(#[from] MixError),
 }
@@ -61,8 +108,10 @@ pub enum DialectError {
 pub struct Decimals(u32);
 
 impl Decimals {
+    /// The most decimals a mixing command is written with.
     pub const MAX: u32 = 9;
 
+    /// `decimals` places, refused above [`Decimals::MAX`].
     pub fn new(decimals: u32) -> Result<Self, DialectError> {
         if decimals <= Self::MAX {
             Ok(Self(decimals))
@@ -159,11 +208,28 @@ pub fn rrf_m563(tool: u32, drives: &[u32], heater: u32) -> Result<String, Dialec
 #[derive(Debug, Clone, PartialEq)]
 pub enum MixingUpdate {
     /// M163: one input's factor in Marlin's collector.
-    Factor { input: usize, factor: f64 },
+    Factor {
+        /// The input (0-based) whose factor was set.
+        input: usize,
+        /// The factor as written, not yet normalised.
+        factor: f64,
+    },
     /// M164 / M165: a Marlin virtual tool now holds this mix.
-    Stored { tool: usize, mix: Mix },
+    Stored {
+        /// The virtual tool that now holds `mix`.
+        tool: usize,
+        /// The normalised mix stored.
+        mix: Mix,
+    },
     /// M567: a RepRapFirmware tool's ratios as written; `sum` should be 1.
-    RrfMix { tool: u32, ratios: Vec<f64>, sum: f64 },
+    RrfMix {
+        /// The RepRapFirmware tool number (M567 P).
+        tool: u32,
+        /// The ratios as written (M567 E), one per drive.
+        ratios: Vec<f64>,
+        /// Their sum, which should be 1.
+        sum: f64,
+    },
 }
 
 /// The mixing part of the machine state, fed one command at a time.
@@ -218,6 +284,7 @@ impl MixingState {
         Ok(Self { collector: tools[0].ratios().to_vec(), tools, active: 0, rrf: BTreeMap::new() })
     }
 
+    /// The number of inputs (filaments) of the mixer.
     pub fn inputs(&self) -> usize {
         self.collector.len()
     }
@@ -227,6 +294,7 @@ impl MixingState {
         &self.collector
     }
 
+    /// The active Marlin virtual tool.
     pub fn active_tool(&self) -> usize {
         self.active
     }
@@ -236,6 +304,7 @@ impl MixingState {
         &self.tools[self.active]
     }
 
+    /// The mix a Marlin virtual tool holds, if the tool exists.
     pub fn tool(&self, tool: usize) -> Option<&Mix> {
         self.tools.get(tool)
     }

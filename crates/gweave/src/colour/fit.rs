@@ -22,10 +22,23 @@ use super::srgb::Srgb8;
 /// Why measurements could not be read or fitted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FitError {
+    /// A line of the measurements CSV cannot be read.
     #[error("line {line}: {message}")]
-    Csv { line: usize, message: String },
+    Csv {
+        /// The line number, from 1.
+        line: usize,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A measurement names a swatch the card does not have.
     #[error("swatch {id} is not on the card (1 to {count})")]
-    NoSuchSwatch { id: u32, count: usize },
+    NoSuchSwatch {
+        /// The swatch number as written.
+        id: u32,
+        /// The number of swatches on the card.
+        count: usize,
+    },
+    /// A fitted mix is invalid.
     #[error(transparent)]
     Mix(#[from] MixError),
 }
@@ -33,7 +46,9 @@ pub enum FitError {
 /// One measured swatch.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Measurement {
+    /// The swatch's number on the calibration card, from 1.
     pub id: u32,
+    /// The colour measured on the print, CIELAB (D65).
     pub lab: Lab,
 }
 
@@ -86,6 +101,7 @@ pub fn parse_csv(text: &str) -> Result<Vec<Measurement>, FitError> {
 /// The fitted filaments and how well they explain the measurements.
 #[derive(Debug, Clone)]
 pub struct Fitted {
+    /// The mixing model with the fitted filament colours.
     pub model: MixingModel,
     /// Per measurement, in the order given: the swatch id and CIEDE2000 between measured and
     /// predicted, with the starting model and with the fitted one.

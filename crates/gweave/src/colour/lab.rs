@@ -18,8 +18,11 @@ pub struct Xyz {
 /// CIELAB: `l` in 0..100, `a` green(-)/red(+), `b` blue(-)/yellow(+).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Lab {
+    /// Lightness L*, 0 (black) to 100 (white).
     pub l: f64,
+    /// Green (negative) to red (positive) axis a*.
     pub a: f64,
+    /// Blue (negative) to yellow (positive) axis b*.
     pub b: f64,
 }
 
@@ -59,6 +62,7 @@ impl Xyz {
 }
 
 impl Lab {
+    /// The CIELAB colour of CIE XYZ `c` under the D65 white point.
     pub fn from_xyz(c: Xyz) -> Self {
         // f(t) is the cube root above epsilon and a straight line below it,
         // so that dark colours stay finite and continuous.
@@ -75,6 +79,7 @@ impl Lab {
         Self { l: 116.0 * fy - 16.0, a: 500.0 * (fx - fy), b: 200.0 * (fy - fz) }
     }
 
+    /// The CIE XYZ colour (D65) of this CIELAB colour.
     pub fn to_xyz(self) -> Xyz {
         let fy = (self.l + 16.0) / 116.0;
         let fx = fy + self.a / 500.0;
@@ -91,6 +96,7 @@ impl Lab {
         Xyz { x: inv(fx) * D65_WHITE.x, y: y * D65_WHITE.y, z: inv(fz) * D65_WHITE.z }
     }
 
+    /// The CIELAB colour of an 8-bit sRGB colour.
     pub fn from_srgb8(c: Srgb8) -> Self {
         Self::from_xyz(Xyz::from_linear(c.to_linear()))
     }

@@ -9,24 +9,63 @@
 /// Why a set of ratios is not a usable mix.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MixError {
+    /// A mix with no input.
     #[error("a mix needs at least one input")]
     NoInputs,
+    /// A ratio that is NaN or infinite.
     #[error("ratio of input {index} is {value}, not a finite number")]
-    NotFinite { index: usize, value: f64 },
+    NotFinite {
+        /// The input (0-based).
+        index: usize,
+        /// The ratio as given.
+        value: f64,
+    },
+    /// A negative ratio.
     #[error("ratio of input {index} is negative ({value})")]
-    Negative { index: usize, value: f64 },
+    Negative {
+        /// The input (0-based).
+        index: usize,
+        /// The ratio as given.
+        value: f64,
+    },
+    /// All ratios are zero.
     #[error("all ratios are zero; the firmware would divide by zero")]
     AllZero,
+    /// A mix with another number of inputs than the mixer has.
     #[error("mix has {found} inputs, expected {expected}")]
-    InputCount { expected: usize, found: usize },
+    InputCount {
+        /// The mixer's number of inputs.
+        expected: usize,
+        /// The mix's number of inputs.
+        found: usize,
+    },
+    /// A value that must be within 0 to 1 is not.
     #[error("{what} must be within [0, 1], got {value}")]
-    OutOfUnitRange { what: &'static str, value: f64 },
+    OutOfUnitRange {
+        /// What the value is, for the message.
+        what: &'static str,
+        /// The value as given.
+        value: f64,
+    },
+    /// Ratios text that is not numbers separated by `:`.
     #[error("ratios {0:?}: write numbers separated by ':', one per input (C:M:Y:W)")]
     Syntax(String),
+    /// A filament strength that is not a positive number.
     #[error("strength of input {index} is {value}, not a positive number")]
-    Strength { index: usize, value: f64 },
+    Strength {
+        /// The input (0-based).
+        index: usize,
+        /// The strength as given.
+        value: f64,
+    },
+    /// An input index at or past the number of inputs.
     #[error("input {index} does not exist in a {inputs}-input mix")]
-    NoSuchInput { index: usize, inputs: usize },
+    NoSuchInput {
+        /// The index as given.
+        index: usize,
+        /// The mix's number of inputs.
+        inputs: usize,
+    },
 }
 
 /// Ratios per input, each in `[0, 1]`, summing to 1.

@@ -37,8 +37,8 @@
 pub mod delta_e;
 pub mod dialect;
 pub mod fit;
-pub mod lab;
-pub mod mix;
+pub(crate) mod lab;
+pub(crate) mod mix;
 pub mod mixing;
 pub mod palette;
 pub mod pigments;
@@ -47,7 +47,7 @@ pub mod purge;
 pub mod reflectance;
 pub mod solve;
 pub mod spectrum;
-pub mod srgb;
+pub(crate) mod srgb;
 pub mod swatch;
 
 pub use lab::Lab;

@@ -65,10 +65,13 @@ pub const CMYK_FILAMENTS: [Srgb8; 4] =
 /// Why a mix definition was rejected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MixSpecError {
+    /// A colour gives both ratios and a target colour.
     #[error("give either `ratios` or `colour`, not both")]
     Both,
+    /// A colour gives neither ratios nor a target colour.
     #[error("give `ratios` or `colour`")]
     Neither,
+    /// The ratios are not a valid mix.
     #[error(transparent)]
     Ratios(#[from] MixError),
 }
@@ -76,14 +79,19 @@ pub enum MixSpecError {
 /// Palette errors.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PaletteError {
+    /// A name that is neither in the palette nor an alias.
     #[error("no colour named {0:?} in the palette")]
     UnknownName(String),
+    /// A named mix of the configuration is invalid.
     #[error("mix {name:?}: {source}")]
     Mix {
+        /// The mix's name.
         name: String,
+        /// Why it is invalid.
         #[source]
         source: MixError,
     },
+    /// The palette's TOML cannot be read.
     #[error("palette TOML: {0}")]
     Toml(#[from] toml::de::Error),
 }
@@ -121,6 +129,7 @@ impl TryFrom<RawMixSpec> for MixSpec {
 #[derive(Debug, Clone, PartialEq, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PaletteConfig {
+    /// The named colours, by name.
     #[serde(default)]
     pub mix: BTreeMap<String, MixSpec>,
 }
@@ -128,14 +137,18 @@ pub struct PaletteConfig {
 /// One named colour.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PaletteEntry {
+    /// The colour's name, as written in the palette.
     pub name: String,
+    /// How the colour is given: ratios or a target colour.
     pub spec: MixSpec,
 }
 
 /// A named colour made concrete for a set of filaments.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Resolved {
+    /// The colour's name.
     pub name: String,
+    /// The mix that prints it with these filaments.
     pub mix: Mix,
     /// What the mixing model predicts the mix prints as.
     pub predicted: Srgb8,
@@ -198,6 +211,7 @@ impl Palette {
         })
     }
 
+    /// Every named colour, in palette order.
     pub fn entries(&self) -> &[PaletteEntry] {
         &self.entries
     }

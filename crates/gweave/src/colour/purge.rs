@@ -25,12 +25,26 @@ use super::srgb::Srgb8;
 /// OrcaSlicer's floor for a colour change, mm^3.
 pub const MIN_FLUSH_MM3: f64 = 60.0;
 
+/// Why purge settings are refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PurgeError {
+    /// A quantity that must be positive is not.
     #[error("{what} must be a positive number, got {value}")]
-    NotPositive { what: &'static str, value: f64 },
+    NotPositive {
+        /// The setting's name, for the message.
+        what: &'static str,
+        /// The value as given.
+        value: f64,
+    },
+    /// A quantity that must not be negative is.
     #[error("{what} must be a non-negative number, got {value}")]
-    Negative { what: &'static str, value: f64 },
+    Negative {
+        /// The setting's name, for the message.
+        what: &'static str,
+        /// The value as given.
+        value: f64,
+    },
+    /// A tolerance outside (0, 1].
     #[error("tolerance must be within (0, 1], got {0}")]
     Tolerance(f64),
 }

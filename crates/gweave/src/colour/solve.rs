@@ -37,6 +37,7 @@ const MIN_STEP: f64 = 1e-6;
 /// The best mix found for a target colour.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Solution {
+    /// The mix closest to the target.
     pub mix: Mix,
     /// The model's colour for `mix`, rounded to 8 bits.
     pub predicted: Srgb8,

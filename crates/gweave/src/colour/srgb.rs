@@ -28,8 +28,11 @@ pub enum HexColourError {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
 #[serde(try_from = "String", into = "String")]
 pub struct Srgb8 {
+    /// Red, 0 to 255.
     pub r: u8,
+    /// Green, 0 to 255.
     pub g: u8,
+    /// Blue, 0 to 255.
     pub b: u8,
 }
 
@@ -66,6 +69,7 @@ fn to_byte(c: f64) -> u8 {
 }
 
 impl Srgb8 {
+    /// The colour with channels `r`, `g`, `b`.
     pub const fn new(r: u8, g: u8, b: u8) -> Self {
         Self { r, g, b }
     }
@@ -86,6 +90,7 @@ impl Srgb8 {
         self.to_string()
     }
 
+    /// The linear-light RGB of this colour (the sRGB transfer curve undone).
     pub fn to_linear(self) -> LinearRgb {
         let ch = |v: u8| decode_channel(f64::from(v) / 255.0);
         LinearRgb { r: ch(self.r), g: ch(self.g), b: ch(self.b) }

@@ -33,14 +33,19 @@ fn label_px() -> u32 {
     2 + 2 * text::line_height(TEXT_PX)
 }
 
+/// Why a swatch chart cannot be drawn.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SwatchError {
+    /// No colour to draw.
     #[error("nothing to draw")]
     Empty,
+    /// A square size outside 16 to 1024 px.
     #[error("swatch squares must be 16 to 1024 px, got {0}")]
     CellSize(u32),
+    /// Zero columns.
     #[error("a swatch chart needs at least one column")]
     NoColumns,
+    /// The PNG encoder failed.
     #[error("PNG encoding failed: {0}")]
     Encode(String),
 }
@@ -48,8 +53,11 @@ pub enum SwatchError {
 /// One colour to draw.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SwatchEntry {
+    /// The colour's name, written under its square.
     pub name: String,
+    /// The colour the mixing model predicts, drawn in the square.
     pub predicted: Srgb8,
+    /// The colour asked for, drawn beside the prediction when given.
     pub target: Option<Srgb8>,
 }
 
@@ -64,6 +72,7 @@ impl From<&Resolved> for SwatchEntry {
 pub struct SwatchLayout {
     /// Side of each colour square.
     pub cell_px: u32,
+    /// Squares per row.
     pub columns: u32,
     /// Draw the name and hex code under each square.
     pub labels: bool,

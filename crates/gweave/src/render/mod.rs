@@ -33,8 +33,8 @@
 pub mod camera;
 pub mod canvas;
 pub mod colour_by;
-pub mod html;
-pub mod mix_colour;
+pub(crate) mod html;
+pub(crate) mod mix_colour;
 pub mod png_out;
 pub mod raster;
 pub mod svg;

@@ -39,7 +39,7 @@
 
 pub mod cylinder;
 pub mod emit;
-pub mod helical;
+pub(crate) mod helical;
 pub mod helix;
 pub mod preview;
 pub mod report;

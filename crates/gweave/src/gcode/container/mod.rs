@@ -9,11 +9,11 @@
 //! Everything is streamed: gzip through flate2, binary G-code one block at a time, decoded on a
 //! thread of its own ([`ahead`]).
 
-pub mod ahead;
-pub mod bgcode;
-pub mod heatshrink;
-pub mod meatpack;
-pub mod spool;
+pub(crate) mod ahead;
+pub(crate) mod bgcode;
+pub(crate) mod heatshrink;
+pub(crate) mod meatpack;
+pub(crate) mod spool;
 
 use std::io::{self, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::Path;

@@ -50,7 +50,7 @@
 //! ```
 
 mod checks;
-pub mod config;
+pub(crate) mod config;
 mod fallback;
 pub mod report;
 mod split;
