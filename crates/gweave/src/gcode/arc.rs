@@ -11,7 +11,9 @@ use std::f64::consts::TAU;
 /// An arc in the XY plane (G17), resolved to absolute millimetres.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Arc {
+    /// Centre in the XY plane, absolute mm.
     pub center: [f64; 2],
+    /// Radius, mm.
     pub radius_mm: f64,
     /// Angle of the start point around the centre, radians.
     pub start_rad: f64,

@@ -6,7 +6,9 @@ use std::fmt;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Severity {
+    /// Suspicious but the line still means something; `gweave check` passes.
     Warning,
+    /// The line cannot be trusted; `gweave check` fails.
     Error,
 }
 
@@ -16,25 +18,35 @@ pub enum Severity {
 pub enum Finding {
     /// A word whose value is not a number (`X1..2`).
     MalformedNumber {
+        /// The word's letter.
         letter: char,
     },
     /// `NaN` or `inf` where a number belongs.
     NotFinite {
+        /// The word's letter.
         letter: char,
     },
     /// A motion word with no value (`G1 X`).
     MissingValue {
+        /// The word's letter.
         letter: char,
     },
     /// A byte that cannot start a word.
     UnexpectedByte {
+        /// The byte found.
         byte: u8,
     },
+    /// A `(` comment that the line ends inside.
     UnclosedComment,
+    /// A `"` string that the line ends inside.
     UnclosedString,
+    /// A `{` expression that the line ends inside.
     UnclosedExpression,
+    /// A checksum that is not the XOR of the bytes before `*`.
     ChecksumMismatch {
+        /// The checksum written after `*`.
         given: u32,
+        /// The XOR of every byte before `*`.
         computed: u8,
     },
     /// `*` not followed by digits, or followed by more words.
@@ -43,46 +55,59 @@ pub enum Finding {
     BadLineNumber,
     /// A line number that does not follow the previous one.
     LineNumberSequence {
+        /// The number that should have come next.
         expected: i64,
+        /// The number written.
         found: i64,
     },
+    /// A command no firmware gweave knows runs.
     UnknownCommand {
+        /// The command as written (`M999`, `G12`).
         command: String,
     },
     /// Extrusion while no hotend temperature has been set.
     ExtrusionBeforeHeating,
     /// A move that leaves the bed given with `--bed`.
     OutsideBed {
+        /// The axis that leaves the bed.
         axis: char,
+        /// The position it reaches, mm.
         value_mm: f64,
     },
     /// A feed rate no printer can do (or zero/negative).
     AbsurdFeedRate {
+        /// The feed rate written, mm/min.
         feed_mm_min: f64,
     },
     /// Relative extrusion running long without a `G92 E` reset (float drift in the firmware).
     RelativeEDrift {
+        /// Filament fed since the last reset, mm.
         since_reset_mm: f64,
     },
     /// Absolute E values so large that single-precision firmware loses resolution.
     AbsoluteEPrecision {
+        /// The absolute E value, mm.
         e_mm: f64,
     },
     /// `T<n>` past [`crate::gcode::state::MAX_TOOLS`]: no machine has that tool.
     ToolOutOfRange {
+        /// The tool number written.
         tool: u32,
     },
     /// A line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE): not parsed.
     LineTooLong {
+        /// The line's length in bytes, line ending excluded.
         len: u64,
     },
     /// More findings on the line than are kept ([`MAX_LINE_DIAGNOSTICS`]).
     MoreFindings {
+        /// How many findings were dropped.
         count: u32,
     },
 }
 
 impl Finding {
+    /// How serious this finding is.
     pub fn severity(&self) -> Severity {
         match self {
             Finding::UnknownCommand { .. }
@@ -160,12 +185,15 @@ pub const MAX_LINE_DIAGNOSTICS: usize = 16;
 /// A finding at a 1-based column of a line.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Diagnostic {
+    /// The column of the finding, from 1.
     pub column: u32,
+    /// What was found.
     #[serde(flatten)]
     pub finding: Finding,
 }
 
 impl Diagnostic {
+    /// `finding` at the 0-based byte `byte_index` of the line.
     pub fn at(byte_index: usize, finding: Finding) -> Self {
         Diagnostic { column: byte_index as u32 + 1, finding }
     }

@@ -21,16 +21,26 @@ use serde::Serialize;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Slicer {
+    /// No slicer recognised.
     #[default]
     Unknown,
+    /// PrusaSlicer.
     PrusaSlicer,
+    /// SuperSlicer.
     SuperSlicer,
+    /// OrcaSlicer.
     OrcaSlicer,
+    /// Bambu Studio.
     BambuStudio,
+    /// Ultimaker Cura.
     Cura,
+    /// Slic3r.
     Slic3r,
+    /// Simplify3D.
     Simplify3D,
+    /// ideaMaker.
     IdeaMaker,
+    /// KISSlicer.
     KISSlicer,
 }
 
@@ -53,6 +63,7 @@ impl Slicer {
         pairs.iter().find(|(p, _)| c.starts_with(p)).map(|&(_, s)| s)
     }
 
+    /// The slicer's name in reports (`unknown` when none was recognised).
     pub fn name(&self) -> &'static str {
         match self {
             Slicer::Unknown => "unknown",
@@ -78,21 +89,36 @@ impl Slicer {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Feature {
+    /// No feature stated yet, or one gweave does not know.
     #[default]
     Unknown,
+    /// The outermost perimeter.
     OuterWall,
+    /// Inner perimeters.
     InnerWall,
+    /// A perimeter printed over nothing.
     OverhangWall,
+    /// Sparse infill.
     Infill,
+    /// Solid infill.
     SolidInfill,
+    /// The top skin.
     TopSurface,
+    /// A bridge over a gap.
     Bridge,
+    /// Support material.
     Support,
+    /// The support's interface with the part.
     SupportInterface,
+    /// Skirt or brim.
     Skirt,
+    /// The wipe (prime) tower.
     WipeTower,
+    /// Ironing over the top surface.
     Ironing,
+    /// Gap fill between perimeters.
     GapFill,
+    /// Custom G-code of the slicer's profile.
     Custom,
 }
 
@@ -135,6 +161,7 @@ impl Feature {
         }
     }
 
+    /// The feature's `snake_case` name in reports.
     pub fn name(&self) -> &'static str {
         match self {
             Feature::Unknown => "unknown",
@@ -196,19 +223,24 @@ pub enum Region {
 /// Explicit markers that delimit the print proper (comment text after `;`, trimmed).
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Markers {
+    /// The comment that starts the print proper.
     pub begin: Option<Vec<u8>>,
+    /// The comment that ends the print proper.
     pub end: Option<Vec<u8>>,
 }
 
 /// Layer, feature and region tracking, fed one line at a time by the machine state.
 #[derive(Debug, Clone, Default)]
 pub struct Structure {
+    /// The slicer that wrote the file, from its comments.
     pub slicer: Slicer,
     /// 0-based index of the current layer; `None` before the first.
     pub layer: Option<u32>,
     /// Z of the current layer as the slicer states it (or as first extruded at), mm.
     pub layer_z_mm: f64,
+    /// The feature being printed, from the slicer's comments.
     pub feature: Feature,
+    /// Where in the file the line is: start G-code, print or end G-code.
     pub region: Region,
     /// Cura's `;LAYER_COUNT:`.
     pub layer_count: Option<u32>,
@@ -224,6 +256,7 @@ pub struct Structure {
 }
 
 impl Structure {
+    /// Tracking with explicit markers for the print proper.
     pub fn with_markers(markers: Markers) -> Self {
         Structure { markers, ..Structure::default() }
     }

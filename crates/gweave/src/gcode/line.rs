@@ -7,11 +7,14 @@ use super::diag::{Diagnostic, Finding, MAX_LINE_DIAGNOSTICS};
 /// A byte range `start..end` inside one line (without its line ending).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Span {
+    /// First byte, 0-based.
     pub start: u32,
+    /// One past the last byte.
     pub end: u32,
 }
 
 impl Span {
+    /// The span `start..end`.
     pub fn new(start: usize, end: usize) -> Self {
         Span { start: start as u32, end: end as u32 }
     }
@@ -29,7 +32,14 @@ pub enum Command {
     #[default]
     None,
     /// A letter-number command: `G1`, `M104`, `T2`, `G29.1` (`sub` = 1).
-    Code { letter: u8, number: u32, sub: Option<u32> },
+    Code {
+        /// The command letter, upper-cased (`G`, `M`, `T`).
+        letter: u8,
+        /// The number after the letter.
+        number: u32,
+        /// The number after a dot, if any.
+        sub: Option<u32>,
+    },
     /// A Klipper/RepRapFirmware extended command such as `SET_VELOCITY_LIMIT` or `echo`; its
     /// arguments are kept as text in [`Block::text`].
     Extended,
@@ -61,6 +71,7 @@ impl Command {
 /// The value of a word.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Value {
+    /// A number.
     Number(f64),
     /// A letter with no value, as in `G28 X Y` or `M84 E`.
     Empty,
@@ -75,7 +86,9 @@ pub enum Value {
 /// One parameter word: a letter (upper-cased) and its value.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Word {
+    /// The letter, upper-cased.
     pub letter: u8,
+    /// What follows the letter.
     pub value: Value,
     /// The whole word as written, letter included.
     pub span: Span,
@@ -95,13 +108,16 @@ impl Word {
 /// A line's checksum: what was written after `*` and the XOR of every byte before it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Checksum {
+    /// The number written after `*`.
     pub given: u32,
+    /// The XOR of every byte before `*`.
     pub computed: u8,
     /// From the `*` to the end of the digits.
     pub span: Span,
 }
 
 impl Checksum {
+    /// The written checksum matches the line.
     pub fn is_valid(&self) -> bool {
         self.given == u32::from(self.computed)
     }
@@ -167,8 +183,11 @@ impl PlainMove {
 pub struct Block {
     /// `N<n>` line number and its span.
     pub line_number: Option<(i64, Span)>,
+    /// `*<n>` checksum, if the line has one.
     pub checksum: Option<Checksum>,
+    /// The command the line starts with.
     pub command: Command,
+    /// Where the command is written.
     pub command_span: Span,
     /// Parameter words in written order.
     pub words: Vec<Word>,
@@ -180,6 +199,7 @@ pub struct Block {
     pub block_delete: bool,
     /// A `%` tape marker line.
     pub tape_marker: bool,
+    /// What is wrong with the line, at most [`MAX_LINE_DIAGNOSTICS`] findings.
     pub diagnostics: Vec<Diagnostic>,
     /// The line's words by letter when it is a plain move ([`PlainMove`]); `present` is 0
     /// otherwise.

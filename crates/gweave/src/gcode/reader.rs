@@ -37,7 +37,10 @@ pub enum Part {
     Piece,
     /// The last piece of a longer line (perhaps the only one, if it all came at once), with
     /// the line's ending. `len`: the whole line's length in bytes, line ending excluded.
-    Last { len: u64 },
+    Last {
+        /// The whole line's length in bytes, line ending excluded.
+        len: u64,
+    },
 }
 
 impl<'a> RawLine<'a> {
@@ -176,6 +179,7 @@ pub struct LineReader<R> {
 }
 
 impl<R: Read> LineReader<R> {
+    /// Lines of `inner`, numbered from 1.
     pub fn new(inner: R) -> Self {
         LineReader {
             inner,
@@ -439,6 +443,7 @@ pub struct ChunkReader<R> {
 }
 
 impl<R: Read> ChunkReader<R> {
+    /// Chunks of whole lines of `inner`.
     pub fn new(inner: R) -> Self {
         Self { inner, carry: Vec::new(), offset: 0, eof: false }
     }

@@ -11,11 +11,17 @@ use super::line::{Block, Command, PlainMove, Value, Word};
 
 /// Axis indices into a position array.
 pub const X: usize = 0;
+/// Index of the Y axis.
 pub const Y: usize = 1;
+/// Index of the Z axis.
 pub const Z: usize = 2;
+/// Index of the extruder (E) axis.
 pub const E: usize = 3;
+/// Index of the A rotary axis.
 pub const A: usize = 4;
+/// Index of the B rotary axis.
 pub const B: usize = 5;
+/// Index of the C rotary axis.
 pub const C: usize = 6;
 /// Number of tracked axes: X Y Z E A B C.
 pub const AXES: usize = 7;
@@ -74,28 +80,38 @@ pub enum Firmware {
 /// The motion mode that axis words on a line without a command continue.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Motion {
+    /// `G0`: a rapid move.
     Rapid,
+    /// `G1`: a linear move at the feed rate.
     #[default]
     Linear,
+    /// `G2`: a clockwise arc.
     ArcCw,
+    /// `G3`: a counter-clockwise arc.
     ArcCcw,
 }
 
 /// The geometry of one move.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Path {
+    /// A straight line.
     Line,
+    /// An arc (`G2`/`G3`).
     Arc(Arc),
 }
 
 /// A move the line commanded, in absolute logical millimetres.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Move {
+    /// Where the move starts.
     pub from: Position,
+    /// Where the move ends.
     pub to: Position,
+    /// The path between them.
     pub path: Path,
     /// `G0`: a rapid (slicers use it for travel).
     pub rapid: bool,
+    /// The feed rate, mm/min.
     pub feed_mm_min: f64,
 }
 
@@ -146,24 +162,30 @@ pub enum Effect {
     /// Nothing that moves or changes modes we track.
     #[default]
     None,
+    /// A move (`G0`-`G3`).
     Move(Move),
     /// `G28`: the axes homed (bit i = axis i).
     Home {
+        /// Bit i: axis i homed.
         axes: u8,
     },
     /// `G92`: the logical position was set.
     SetPosition,
     /// `T<n>`.
     ToolChange {
+        /// The tool before the change.
         from: u32,
+        /// The tool after it.
         to: u32,
     },
     /// `G10` firmware retraction or `G11` recover: filament moved, mm (negative = retract).
     FirmwareRetract {
+        /// Filament moved, mm (negative = retract).
         e_mm: f64,
     },
     /// `G4` dwell.
     Dwell {
+        /// Dwell time, s.
         t_s: f64,
     },
 }
@@ -185,6 +207,7 @@ impl Effect {
 pub struct Thermal {
     /// Target per hotend, °C (grown on demand).
     pub hotend_c: Vec<f64>,
+    /// Bed target, °C.
     pub bed_c: f64,
     /// Any hotend temperature has been set (for the cold-extrusion lint).
     pub hotend_set: bool,
@@ -195,6 +218,7 @@ pub struct Thermal {
 /// Options fixed for a whole file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StateOptions {
+    /// The firmware whose rules the file follows.
     pub firmware: Firmware,
     /// Length of a `G10` firmware retraction when the file does not set it with `M207`, mm.
     pub fw_retract_mm: f64,
@@ -240,6 +264,7 @@ impl StateOptions {
 /// The modal state. Feed it every line with [`State::apply`].
 #[derive(Debug, Clone)]
 pub struct State {
+    /// Logical position, mm, indexed by axis ([`X`], [`E`]...).
     pub pos: Position,
     /// G90 (true) or G91.
     absolute: bool,
@@ -250,15 +275,21 @@ pub struct State {
     relative_axes: u8,
     /// G20 in force.
     pub inches: bool,
+    /// Feed rate in force, mm/min.
     pub feed_mm_min: f64,
+    /// The motion mode that axis words without a command continue.
     pub motion: Motion,
+    /// The active tool.
     pub tool: u32,
     /// Filament fed per tool since the start, mm (never reset by G92).
     pub filament_mm: Vec<f64>,
     /// A G10 retraction is in force.
     pub fw_retracted: bool,
+    /// Length of a `G10` retraction (`M207 S`), mm.
     pub fw_retract_mm: f64,
+    /// Temperatures and fan asked for.
     pub thermal: Thermal,
+    /// Layer, feature and region of the line.
     pub structure: Structure,
     /// Fixed at creation: [`State::options`].
     options: StateOptions,
@@ -284,6 +315,7 @@ impl Default for State {
 }
 
 impl State {
+    /// A state at the origin, absolute, with `options` for the whole file.
     pub fn new(options: StateOptions) -> Self {
         State {
             pos: [0.0; AXES],

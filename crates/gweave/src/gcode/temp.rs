@@ -38,10 +38,12 @@ impl TempFile {
         Ok(TempFile { file: Some(file) })
     }
 
+    /// The open file.
     pub fn as_file(&self) -> &fs::File {
         self.inner().as_file()
     }
 
+    /// The file's path.
     pub fn path(&self) -> &Path {
         self.inner().path()
     }

@@ -23,7 +23,12 @@ pub enum Target {
     File(PathBuf),
     /// Replace the input, optionally keeping `<input>.bak`. A read-only input is refused unless
     /// `force`.
-    InPlace { keep_backup: bool, force: bool },
+    InPlace {
+        /// Keep the original as `<input>.bak`.
+        keep_backup: bool,
+        /// Replace a read-only input.
+        force: bool,
+    },
     /// Standard output (`-o -`).
     Stdout,
 }

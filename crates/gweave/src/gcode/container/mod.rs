@@ -24,9 +24,12 @@ use flate2::write::GzEncoder;
 /// How a G-code text is stored.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Container {
+    /// Plain text.
     #[default]
     Text,
+    /// Gzip-compressed text (`.gcode.gz`).
     Gzip,
+    /// Prusa's binary G-code (`.bgcode`).
     Bgcode,
 }
 
@@ -158,8 +161,11 @@ pub fn preamble(path: &Path) -> io::Result<Option<bgcode::Preamble>> {
 
 /// Text written into `W` in a container.
 pub enum Encoder<W: Write> {
+    /// Written as plain text.
     Text(W),
+    /// Compressed with gzip.
     Gzip(GzEncoder<W>),
+    /// Written as binary G-code blocks.
     Bgcode(Box<bgcode::write::Writer<W>>),
 }
 
