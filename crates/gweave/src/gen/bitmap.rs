@@ -22,29 +22,52 @@ use crate::render::png_out::{write_png, Pixels};
 /// Errors from reading or writing layer images.
 #[derive(Debug, Error)]
 pub enum BitmapError {
+    /// An image file cannot be read.
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
     /// Writing the image file (see [`crate::gcode::writer::write_file`]).
     #[error(transparent)]
     Output(#[from] crate::error::Error),
+    /// A PNG cannot be decoded.
     #[error("PNG decode: {0}")]
     PngDecode(#[from] png::DecodingError),
+    /// A PNG cannot be encoded.
     #[error("PNG encode: {0}")]
     PngEncode(#[from] png::EncodingError),
     /// Decoding a BMP, PNG or TIFF (the `image` crate; its message names the format's problem).
     #[error("image decode: {0}")]
     Decode(#[from] image::ImageError),
+    /// A file that is neither BMP, PNG nor TIFF.
     #[error("unsupported image format (expected BMP, PNG or TIFF)")]
     UnknownFormat,
     /// Resampling would make an image larger than [`MAX_IMAGE_SIDE_PX`] on a side.
     #[error("resampled to the nozzle pitch, the image would be {width} x {height} px, more than the limit of {} px per side", MAX_IMAGE_SIDE_PX)]
-    Resampled { width: String, height: String },
+    Resampled {
+        /// The resampled width, px (text, as it may not fit a number).
+        width: String,
+        /// The resampled height, px.
+        height: String,
+    },
+    /// A pixel buffer of the wrong length for its size.
     #[error("pixel buffer has {got} values, expected {expected}")]
-    BufferSize { expected: usize, got: usize },
+    BufferSize {
+        /// Values the size needs.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// A pattern that matches no file.
     #[error("no images match {0}")]
     NoImages(PathBuf),
+    /// A threshold outside 0 to 1.
     #[error("invalid threshold {0} (expected 0..=1)")]
     Threshold(f64),
+    /// A pixel size that is not a positive number of mm.
     #[error("invalid pixel size {0} mm")]
     PixelSize(f64),
 }
@@ -56,8 +79,11 @@ pub enum Channel {
     /// Rec. 601 luma `(299 R + 587 G + 114 B) / 1000`.
     #[default]
     Luma,
+    /// The red channel only.
     Red,
+    /// The green channel only.
     Green,
+    /// The blue channel only.
     Blue,
 }
 
@@ -105,14 +131,17 @@ impl Bitmap {
         Bitmap { width, height, words_per_row, words: vec![0; words_per_row * height] }
     }
 
+    /// Width, px.
     pub fn width(&self) -> usize {
         self.width
     }
 
+    /// Height, px.
     pub fn height(&self) -> usize {
         self.height
     }
 
+    /// 64-bit words per row of the packed bits.
     pub fn words_per_row(&self) -> usize {
         self.words_per_row
     }

@@ -25,14 +25,24 @@ pub const MAX_NOZZLES: u32 = 64;
 /// Errors from validating a [`PrintheadProfile`].
 #[derive(Debug, Error, PartialEq)]
 pub enum PrintheadError {
+    /// A number outside its range.
     #[error(transparent)]
     Range(#[from] OutOfRange),
+    /// A profile without a head.
     #[error("at least one head is required")]
     NoHeads,
+    /// `nozzle_rows` is not a permutation of the rows.
     #[error("nozzle_rows must list each row 0..{count} exactly once (got {rows:?})")]
-    NozzleMap { count: u32, rows: Vec<u32> },
+    NozzleMap {
+        /// The number of nozzle rows.
+        count: u32,
+        /// The rows as written.
+        rows: Vec<u32>,
+    },
+    /// The profile's TOML cannot be read.
     #[error("invalid printhead TOML: {0}")]
     Toml(String),
+    /// The `[recoat]` table is invalid.
     #[error("{0}")]
     Recoat(String),
 }
@@ -73,7 +83,9 @@ impl FirmwareDialect {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct HeadOffset {
+    /// Offset of nozzle row 0 from the carriage along X, mm.
     pub offset_x_mm: f64,
+    /// Offset of nozzle row 0 from the carriage along Y, mm.
     pub offset_y_mm: f64,
 }
 

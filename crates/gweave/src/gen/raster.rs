@@ -59,20 +59,32 @@ pub const DEFAULT_LAYER_HEIGHT_MM: f64 = 0.1;
 /// Errors from raster generation.
 #[derive(Debug, Error)]
 pub enum RasterError {
+    /// The output cannot be written.
     #[error("write failed: {0}")]
     Io(#[from] std::io::Error),
+    /// The printhead profile is invalid.
     #[error(transparent)]
     Printhead(#[from] PrintheadError),
+    /// An image cannot be read.
     #[error(transparent)]
     Bitmap(#[from] BitmapError),
+    /// A `.sl1` archive cannot be read.
     #[error(transparent)]
     Sl1(#[from] Sl1Error),
+    /// An invalid job setting.
     #[error("invalid raster config: {0}")]
     Config(String),
+    /// A number outside its range.
     #[error(transparent)]
     Range(#[from] OutOfRange),
+    /// More image planes than heads.
     #[error("{planes} image planes given but the profile has {heads} heads")]
-    TooManyPlanes { planes: usize, heads: usize },
+    TooManyPlanes {
+        /// Image planes given.
+        planes: usize,
+        /// Heads in the profile.
+        heads: usize,
+    },
 }
 
 /// Fires per pixel (binder saturation): past 16 the powder is flooded.
@@ -101,6 +113,7 @@ pub enum FireOrder {
 pub struct RasterConfig {
     /// Bed position of the image's corner (the binder-jet seed: 20 mm from the edges).
     pub origin_x_mm: f64,
+    /// Bed Y of the image's corner, mm.
     pub origin_y_mm: f64,
     /// Layer thickness; `None` takes it from the source (`.sl1`) or uses 0.1 mm.
     pub layer_height_mm: Option<f64>,
@@ -176,6 +189,7 @@ impl RasterConfig {
 /// What a raster job did (counts per head pass: one head sweeping one band).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct RasterReport {
+    /// Layers printed.
     pub layers: u64,
     /// Passes that fired at least once.
     pub bands_printed: u64,
@@ -193,6 +207,7 @@ pub struct RasterReport {
     pub binder_volume_ul: Option<f64>,
     /// `G1` moves in XY and in Z.
     pub xy_moves: u64,
+    /// `G1` moves in Z.
     pub z_moves: u64,
     /// XY path length from the first move on.
     pub xy_path_mm: f64,
@@ -467,7 +482,9 @@ fn push_block(buf: &mut Vec<u8>, block: &str) {
 /// Images of one head: one file per layer, and how to threshold them (e.g. the red channel).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImageStack {
+    /// The layer images, one per layer, bottom first.
     pub paths: Vec<PathBuf>,
+    /// How each image is turned into fire/no-fire bits.
     pub threshold: ThresholdOptions,
     /// The files' first row is the far edge (highest Y), as in a picture viewed with +Y up;
     /// without it the first row is printed at the lowest Y (the binder-jet seed's order).

@@ -49,16 +49,26 @@ pub const POWDER_RATIO: Range = Range::new(1.0, 3.0, "");
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Recoat {
+    /// The axis that carries the roller or blade.
     pub spreader_axis: char,
+    /// The spreader's parked position, before the bed, mm.
     pub spreader_start_mm: f64,
+    /// The spreader's travel across the bed, mm.
     pub spreader_stroke_mm: f64,
+    /// Spreader feed while spreading, mm/min.
     pub spread_feed_mm_min: f64,
+    /// Spreader feed on the way back, mm/min.
     pub return_feed_mm_min: f64,
+    /// Feed of both pistons, mm/min.
     pub piston_feed_mm_min: f64,
+    /// The axis of the feed (powder supply) piston.
     pub feed_piston_axis: char,
+    /// The axis of the build piston (the layer's Z).
     #[serde(default = "default_build_axis")]
     pub build_piston_axis: char,
+    /// Feed piston rise per layer height, 1 to 3 ([`POWDER_RATIO`]).
     pub powder_ratio: f64,
+    /// Settling time after spreading, s.
     #[serde(default)]
     pub dwell_s: f64,
 }

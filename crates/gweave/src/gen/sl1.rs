@@ -35,49 +35,102 @@ use super::bitmap::{decode, Bitmap, BitmapError, ThresholdOptions};
 /// Errors from reading an `.sl1` archive.
 #[derive(Debug, Error)]
 pub enum Sl1Error {
+    /// The archive cannot be opened.
     #[error("{path}: {source}")]
-    Io { path: std::path::PathBuf, source: std::io::Error },
+    Io {
+        /// The archive.
+        path: std::path::PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The archive is not a valid zip.
     #[error("sl1 archive: {0}")]
     Zip(#[from] zip::result::ZipError),
+    /// A key of the archive's `config.ini` is missing or invalid.
     #[error("sl1 {file}: missing or invalid key {key}")]
-    Key { file: &'static str, key: &'static str },
+    Key {
+        /// The file inside the archive.
+        file: &'static str,
+        /// The key.
+        key: &'static str,
+    },
+    /// No layer image in the archive.
     #[error("sl1 has no layer images {0}NNNNN.png")]
     NoLayers(String),
+    /// A layer index past the last layer.
     #[error("sl1 layer {index} out of range (count {count})")]
-    LayerIndex { index: usize, count: usize },
+    LayerIndex {
+        /// The index asked for.
+        index: usize,
+        /// The number of layers.
+        count: usize,
+    },
+    /// A layer image cannot be decoded.
     #[error("sl1 layer {name}: {source}")]
-    Image { name: String, source: BitmapError },
+    Image {
+        /// The image's name in the archive.
+        name: String,
+        /// Why it cannot be decoded.
+        source: BitmapError,
+    },
+    /// A layer image of another size than the display.
     #[error("sl1 layer {name}: {width}x{height} px, expected {expected_w}x{expected_h}")]
-    LayerSize { name: String, width: usize, height: usize, expected_w: usize, expected_h: usize },
+    LayerSize {
+        /// The image's name in the archive.
+        name: String,
+        /// Its width, px.
+        width: usize,
+        /// Its height, px.
+        height: usize,
+        /// The width the display needs, px.
+        expected_w: usize,
+        /// The height the display needs, px.
+        expected_h: usize,
+    },
 }
 
 /// Display orientation from `display_orientation`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Orientation {
+    /// `display_orientation = landscape`: images as the display's pixels are laid out.
     Landscape,
+    /// `display_orientation = portrait`: the images' width and height are swapped.
     Portrait,
 }
 
 /// What the archive says about its layers.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Sl1Info {
+    /// `jobDir`: the prefix of the layer images' names.
     pub job_dir: String,
+    /// `layerHeight`, mm.
     pub layer_height_mm: f64,
+    /// `numFast`: layers printed with the fast tilt.
     pub num_fast: u32,
+    /// `numSlow`: layers printed with the slow tilt.
     pub num_slow: u32,
+    /// `display_pixels_x`: the display's width, px.
     pub display_pixels_x: u32,
+    /// `display_pixels_y`: the display's height, px.
     pub display_pixels_y: u32,
+    /// `display_width`, mm.
     pub display_width_mm: f64,
+    /// `display_height`, mm.
     pub display_height_mm: f64,
+    /// `display_mirror_x`: images are mirrored along x.
     pub mirror_x: bool,
+    /// `display_mirror_y`: images are mirrored along y.
     pub mirror_y: bool,
+    /// `display_orientation`.
     pub orientation: Orientation,
     /// Layer image size in pixels (after the portrait swap).
     pub image_width_px: usize,
+    /// Layer image height in pixels (after the portrait swap).
     pub image_height_px: usize,
     /// Size of one image pixel along the image's x (columns) and y (rows) axes.
     pub pixel_x_mm: f64,
+    /// Size of one image pixel along y (rows), mm.
     pub pixel_y_mm: f64,
     /// Number of layer PNGs in the archive.
     pub layer_count: usize,
@@ -198,10 +251,12 @@ impl<R: Read + Seek> Sl1Reader<R> {
         Ok(Sl1Reader { archive, info, layer_names: layers.into_iter().map(|(_, n)| n).collect() })
     }
 
+    /// What the archive says about its layers.
     pub fn info(&self) -> &Sl1Info {
         &self.info
     }
 
+    /// Number of layer images.
     pub fn layer_count(&self) -> usize {
         self.layer_names.len()
     }

@@ -26,18 +26,29 @@ use crate::range::{
 /// Errors from slicing.
 #[derive(Debug, Error)]
 pub enum SliceError {
+    /// A mesh without a triangle.
     #[error("the mesh is empty")]
     EmptyMesh,
+    /// A vertex coordinate that is NaN or infinite.
     #[error("the mesh has a vertex coordinate of {0}")]
     NonFinite(f64),
+    /// A setting outside its range.
     #[error(transparent)]
     Range(#[from] OutOfRange),
+    /// The images would be too large.
     #[error(transparent)]
     TooLarge(#[from] TooLarge),
+    /// A layer image cannot be written.
     #[error(transparent)]
     Image(#[from] BitmapError),
+    /// A file cannot be read or written.
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
 }
 
 /// Slicing settings (TOML, unknown keys rejected).
@@ -76,13 +87,21 @@ impl Default for SliceConfig {
 /// `z_min + (k + 1/2) layer_height`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SliceGrid {
+    /// X of the first pixel's edge, mm.
     pub origin_x_mm: f64,
+    /// Y of the first pixel's edge, mm.
     pub origin_y_mm: f64,
+    /// Pixel side, mm.
     pub pixel_mm: f64,
+    /// Image width, px.
     pub width_px: usize,
+    /// Image height, px.
     pub height_px: usize,
+    /// Bottom of the mesh, mm.
     pub z_min_mm: f64,
+    /// Layer thickness, mm.
     pub layer_height_mm: f64,
+    /// Number of layers.
     pub layers: usize,
 }
 
@@ -139,11 +158,13 @@ pub struct Slicer<'m> {
 }
 
 impl<'m> Slicer<'m> {
+    /// A slicer for `mesh` on the grid `cfg` gives (refused for an empty or non-finite mesh).
     pub fn new(mesh: &'m Mesh, cfg: &SliceConfig) -> Result<Self, SliceError> {
         let grid = SliceGrid::for_mesh(mesh, cfg)?;
         Ok(Slicer { mesh, grid, crossings: vec![Vec::new(); grid.height_px] })
     }
 
+    /// Where the layer images sit.
     pub fn grid(&self) -> &SliceGrid {
         &self.grid
     }
@@ -218,7 +239,9 @@ fn section_segment(t: &[[f32; 3]; 3], z: f64) -> Option<[(f64, f64); 2]> {
 /// What [`slice_to_dir`] wrote.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SliceReport {
+    /// Where the layer images sit.
     pub grid: SliceGrid,
+    /// The images written, one per layer, bottom first.
     pub files: Vec<PathBuf>,
     /// Ink pixels per layer.
     pub pixels_per_layer: Vec<u64>,

@@ -15,12 +15,31 @@ use thiserror::Error;
 /// Errors from reading STL.
 #[derive(Debug, Error)]
 pub enum StlError {
+    /// The file cannot be read.
     #[error("{path}: {source}")]
-    Io { path: std::path::PathBuf, source: std::io::Error },
+    Io {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// A binary STL shorter than its triangle count says.
     #[error("binary STL truncated: {len} bytes for {count} triangles")]
-    Truncated { len: usize, count: u64 },
+    Truncated {
+        /// The file's length in bytes.
+        len: usize,
+        /// The triangle count in its header.
+        count: u64,
+    },
+    /// An ASCII STL line cannot be read.
     #[error("ASCII STL line {line}: {message}")]
-    Parse { line: usize, message: String },
+    Parse {
+        /// The line number, from 1.
+        line: usize,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// Neither a binary nor an ASCII STL.
     #[error("not an STL file")]
     NotStl,
 }
@@ -31,6 +50,7 @@ pub type Triangle = [[f32; 3]; 3];
 /// A triangle soup.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Mesh {
+    /// The triangles, in file order.
     pub triangles: Vec<Triangle>,
 }
 
