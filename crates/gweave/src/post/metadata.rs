@@ -152,6 +152,7 @@ pub struct MetadataPass {
 }
 
 impl MetadataPass {
+    /// The pass writing `header` (a [`header_line`]) first and the metadata from `figures`.
     pub fn new(figures: Figures, header: String) -> Self {
         MetadataPass {
             figures,

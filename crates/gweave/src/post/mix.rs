@@ -70,6 +70,7 @@ pub const HOLD_LINES: usize = 32;
 /// Errors of the mix pass.
 #[derive(Debug, thiserror::Error)]
 pub enum MixPassError {
+    /// The profile is inconsistent (the message says how).
     #[error("mix profile: {0}")]
     Config(String),
     /// A profile key out of its range (it names the table and the key).
@@ -77,9 +78,18 @@ pub enum MixPassError {
     Range(#[from] crate::range::OutOfRange),
     /// A line of the input the profile cannot handle (`<input>` for text in memory).
     #[error("{}:{line}: {message}", path.display())]
-    AtLine { path: std::path::PathBuf, line: u64, message: String },
+    AtLine {
+        /// The input (`<input>` for text in memory).
+        path: std::path::PathBuf,
+        /// The line number, from 1.
+        line: u64,
+        /// What the profile cannot handle.
+        message: String,
+    },
+    /// A mix of the profile is invalid.
     #[error(transparent)]
     Mix(#[from] crate::colour::MixError),
+    /// The engine failed (reading, writing, a malformed line).
     #[error(transparent)]
     Engine(#[from] crate::Error),
 }

@@ -50,13 +50,21 @@ use crate::settings::{CheckRanges, Table};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PurgeMotion {
+    /// Retraction before the travel to the purge spot, mm.
     pub retract_mm: f64,
+    /// Z lift before the travel, mm.
     pub lift_mm: f64,
+    /// X of the purge spot, mm.
     pub x_mm: f64,
+    /// Y of the purge spot, mm.
     pub y_mm: f64,
+    /// Wipe along +X after the purge, mm.
     pub wipe_mm: f64,
+    /// Feed of the travel to the spot and back, mm/min.
     pub travel_feed_mm_min: f64,
+    /// Feed of the purge's extrusion, mm/min.
     pub extrude_feed_mm_min: f64,
+    /// Feed of the retraction and unretraction, mm/min.
     pub retract_feed_mm_min: f64,
     /// Feed of the Z lift and lower (at most the Z cap).
     pub z_feed_mm_min: f64,
@@ -134,17 +142,27 @@ pub enum PurgePattern {
     /// A compact zigzag from the spot at the current Z: `rows` rows of `row_mm`, alternately
     /// along +X and -X, `pitch_mm` apart along +Y. E is fed in proportion to the path length,
     /// rows and steps alike: the flow of a printed line whose width is the pitch.
-    Zigzag { rows: u32, row_mm: f64, pitch_mm: f64 },
+    Zigzag {
+        /// Number of rows.
+        rows: u32,
+        /// Length of a row, mm.
+        row_mm: f64,
+        /// Distance between rows along +Y, mm.
+        pitch_mm: f64,
+    },
 }
 
 /// One purge: how much, how, and the names in its comment lines
 /// (`; gweave <by>: purge <label>, <purge_mm> mm` ... `; gweave <by>: end purge`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PurgeJob<'a> {
+    /// Filament to purge, mm.
     pub purge_mm: f64,
+    /// Where the filament goes.
     pub pattern: PurgePattern,
     /// The command that writes it (`mix`, `purge-shift`).
     pub by: &'a str,
+    /// The mix or tool purged into, for the comments.
     pub label: &'a str,
 }
 

@@ -28,7 +28,9 @@ pub use super::mix::profile::ZCapMode;
 /// The cap and what to do above it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ZCap {
+    /// Largest Z speed, mm/min.
     pub max_z_feed_mm_min: f64,
+    /// What to do with a move above it.
     pub mode: ZCapMode,
 }
 

@@ -32,17 +32,25 @@ pub struct CardConfig {
     pub patch_mm: f64,
     /// Space between swatches, mm.
     pub gap_mm: f64,
+    /// Swatches per row.
     pub columns: u32,
+    /// Layers of each swatch.
     pub layers: u32,
+    /// Layer height, mm.
     pub layer_mm: f64,
     /// Extrusion width and line spacing, mm.
     pub line_mm: f64,
     /// Front left corner of swatch 1, mm (away from the purge spot at X10 Y10).
     pub x_mm: f64,
+    /// Y of the front left corner of swatch 1, mm.
     pub y_mm: f64,
+    /// Hotend temperature, °C.
     pub hotend_c: f64,
+    /// Bed temperature, °C.
     pub bed_c: f64,
+    /// Feed while printing, mm/min.
     pub print_feed_mm_min: f64,
+    /// Feed of travels, mm/min.
     pub travel_feed_mm_min: f64,
 }
 
@@ -91,9 +99,11 @@ pub struct Swatch {
     pub ratios: Vec<f64>,
     /// 0-based, row 0 at the front (smallest Y).
     pub row: u32,
+    /// 0-based, column 0 at the left (smallest X).
     pub column: u32,
     /// Centre of the patch, mm.
     pub x_mm: f64,
+    /// Centre of the patch along Y, mm.
     pub y_mm: f64,
     /// What the profile's model predicts, `#rrggbb`.
     pub predicted: String,
@@ -102,7 +112,9 @@ pub struct Swatch {
 /// The card's report: the swatches, and the mix pass's own report.
 #[derive(Debug, Clone, Serialize)]
 pub struct CardReport {
+    /// The swatches, in reading order.
     pub swatches: Vec<Swatch>,
+    /// The mix pass's report on the card's G-code.
     pub mix: MixReport,
 }
 

@@ -94,6 +94,7 @@ impl Dialect {
 pub struct Input {
     /// The filament's colour (sRGB), for the mixing model.
     pub colour: Srgb8,
+    /// The filament's material, for reports (default PLA).
     #[serde(default = "default_material")]
     pub material: String,
     /// For purge waste in grams, g/cm^3 (PLA about 1.24, PVA about 1.23).
@@ -123,6 +124,7 @@ pub struct Hardware {
     pub dialect: Option<Dialect>,
     /// Virtual tools the firmware stores (Marlin MIXING_VIRTUAL_TOOLS, default 16).
     pub virtual_tools: usize,
+    /// Filament diameter, mm.
     pub filament_diameter_mm: f64,
     /// The input holding "material 2" (default: the last input).
     pub material2_input: Option<usize>,
@@ -201,9 +203,13 @@ pub enum PurgeMode {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PairPurge {
+    /// The mix before the change (a name or colour as in the schedule).
     pub from: String,
+    /// The mix after the change.
     pub to: String,
+    /// Purge this much filament, mm.
     pub length_mm: Option<f64>,
+    /// Purge this much plastic, mm^3.
     pub volume_mm3: Option<f64>,
 }
 
@@ -212,29 +218,42 @@ pub struct PairPurge {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PurgeConfig {
+    /// How the purge amount is found.
     pub mode: PurgeMode,
+    /// Filament purged in `length` mode, mm.
     pub length_mm: f64,
     /// Purged in the first mix before the file first moves filament (0: none): the chamber may
     /// hold anything from the last print or a hand-loaded colour.
     pub initial_mm: f64,
+    /// Plastic purged in `volume` mode, mm^3.
     pub volume_mm3: f64,
     /// Scales OrcaSlicer's volume (`colours` mode).
     pub multiplier: f64,
+    /// Volume of the mixing chamber (`washout` mode), mm^3.
     pub chamber_mm3: f64,
+    /// Volume between the chamber and the nozzle tip that purges at once (`washout` mode), mm^3.
     pub dead_mm3: f64,
     /// Old-colour fraction left after the purge (`washout` mode).
     pub tolerance: f64,
+    /// Retraction before the purge travel, mm.
     pub retract_mm: f64,
+    /// Z lift before the purge travel, mm.
     pub lift_mm: f64,
+    /// X of the purge spot, mm.
     pub x_mm: f64,
+    /// Y of the purge spot, mm.
     pub y_mm: f64,
     /// Move along +X after the purge, to wipe the nozzle on the purge blob's side.
     pub wipe_mm: f64,
+    /// Feed of the travel to the purge spot and back, mm/min.
     pub travel_feed_mm_min: f64,
+    /// Feed of the purge's extrusion, mm/min.
     pub extrude_feed_mm_min: f64,
+    /// Feed of the retraction and unretraction, mm/min.
     pub retract_feed_mm_min: f64,
     /// Purge at every step of a gradient too (normally the blend is the point).
     pub on_gradient_steps: bool,
+    /// Amounts for given changes of mix, over `mode`.
     pub pair: Vec<PairPurge>,
     /// `seed`: the mixing seed's purge feeds ([`PurgeMotion::with_seed_feeds`]) over the feed
     /// and wipe keys.
@@ -330,6 +349,7 @@ pub enum ZCapMode {
 pub struct ZCapConfig {
     /// Largest Z speed, mm/min (0: no cap).
     pub max_z_feed_mm_min: f64,
+    /// What to do with a move whose Z runs faster than the cap.
     pub mode: ZCapMode,
 }
 
@@ -359,14 +379,18 @@ impl Default for ToolChangeConfig {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(try_from = "String")]
 pub struct MixRef {
+    /// The mix: a palette name or a colour.
     pub base: MixBase,
     /// Proportion of material 2, 0..=1.
     pub material2: Option<f64>,
 }
 
+/// The mix a [`MixRef`] names, before material 2.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MixBase {
+    /// A palette or user name (`Orange`).
     Name(String),
+    /// A colour to solve a mix for (`#ff8000`).
     Colour(Srgb8),
 }
 
@@ -420,7 +444,9 @@ impl TryFrom<String> for MixRef {
 /// Where a schedule entry or gradient starts: a layer index (0 = first) or a height.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum At {
+    /// A 0-based layer index.
     Layer(u32),
+    /// A height, mm.
     Z(f64),
 }
 
@@ -428,12 +454,16 @@ pub enum At {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScheduleEntry {
+    /// From this layer (0-based) on.
     pub layer: Option<u32>,
+    /// From this height on, mm.
     pub z_mm: Option<f64>,
+    /// The mix to print with.
     pub mix: MixRef,
 }
 
 impl ScheduleEntry {
+    /// Where the entry starts (exactly one of `layer` and `z_mm` must be given).
     pub fn at(&self) -> Result<At, MixPassError> {
         match (self.layer, self.z_mm) {
             (Some(l), None) => Ok(At::Layer(l)),
@@ -481,12 +511,19 @@ pub enum GradientSpace {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GradientSpec {
+    /// First layer of a layer range (0-based).
     pub from_layer: Option<u32>,
+    /// Last layer of a layer range, inclusive.
     pub to_layer: Option<u32>,
+    /// Bottom of a Z range, mm.
     pub from_z_mm: Option<f64>,
+    /// Top of a Z range, mm, inclusive.
     pub to_z_mm: Option<f64>,
+    /// The mix at the start.
     pub start: MixRef,
+    /// The mix at the end.
     pub end: MixRef,
+    /// How the steps between them are interpolated.
     #[serde(default)]
     pub space: GradientSpace,
     /// A new step every this many layers (layer ranges).
@@ -572,15 +609,21 @@ impl GradientSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct MixProfile {
+    /// The mixing hotend and its firmware (`[hardware]`).
     pub hardware: Hardware,
+    /// The purge at each change of mix (`[purge]`).
     pub purge: PurgeConfig,
+    /// The Z feed cap (`[z_cap]`).
     pub z_cap: ZCapConfig,
+    /// What slicer tool-change retractions become (`[tool_change]`).
     pub tool_change: ToolChangeConfig,
     /// Format of the numbers in new lines.
     pub numbers: NumberFormat,
     /// User colours by name (`[mix.Pink] ratios = [...]` or `colour = "#..."`).
     pub mix: BTreeMap<String, MixSpec>,
+    /// Mixes from given layers or heights on (`[[schedule]]`).
     pub schedule: Vec<ScheduleEntry>,
+    /// Blends over layer or Z ranges (`[[gradient]]`).
     pub gradient: Vec<GradientSpec>,
     /// Slicer tool (`T1`) to mix.
     pub map: BTreeMap<String, MixRef>,

@@ -16,6 +16,7 @@ use super::schedule::{Plan, Slot};
 /// One mix of the job and where it went.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MixUse {
+    /// The mix's label as the profile names it.
     pub name: String,
     /// Ratios per input as written, summing to 1.
     pub ratios: Vec<f64>,
@@ -25,9 +26,11 @@ pub struct MixUse {
     pub target: Option<String>,
     /// CIEDE2000 between target and prediction.
     pub delta_e: Option<f64>,
+    /// The target colour is outside what the filaments can mix.
     pub out_of_gamut: bool,
     /// The virtual tool (none for M165 direct mixing); a gradient step shares one of two tools.
     pub tool: Option<u32>,
+    /// A step inside a gradient.
     pub gradient_step: bool,
     /// Layer ranges (0-based, inclusive) where this mix extruded.
     pub layers: Vec<[u32; 2]>,
@@ -38,35 +41,46 @@ pub struct MixUse {
 /// Purge waste.
 #[derive(Debug, Clone, PartialEq, Serialize, Default)]
 pub struct PurgeTotals {
+    /// Purges written.
     pub count: u32,
+    /// Filament purged, mm.
     pub filament_mm: f64,
+    /// Plastic purged, mm^3.
     pub volume_mm3: f64,
+    /// Plastic purged, g (with each input's density).
     pub mass_g: f64,
+    /// Filament purged per input, mm.
     pub per_input_mm: Vec<f64>,
 }
 
 /// The dominant mix of one layer.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LayerMix {
+    /// The layer, 0-based.
     pub layer: u32,
+    /// Its height, mm.
     pub z_mm: f64,
     /// Index into [`MixReport::mixes`].
     pub mix: usize,
+    /// The mix's predicted colour, `#rrggbb`.
     pub colour: String,
 }
 
 /// The report; see the module docs.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MixReport {
+    /// How the mixes were written to the firmware.
     pub dialect: Dialect,
     /// The firmware flavour the file names (`gcode_flavor`, Cura's `;FLAVOR:`); a profile that
     /// sets no dialect follows it.
     pub flavour: Option<String>,
+    /// Every mix of the job.
     pub mixes: Vec<MixUse>,
     /// Print plus purges, mm, per input.
     pub filament_per_input_mm: Vec<f64>,
     /// Print plus purges, g, per input (with each input's density).
     pub filament_per_input_g: Vec<f64>,
+    /// Purge waste.
     pub purge: PurgeTotals,
     /// Changes of mix during the print (the first selection is not one).
     pub changes: u32,
@@ -74,7 +88,9 @@ pub struct MixReport {
     pub z_capped_lines: u64,
     /// Slicer tool-change retractions and unretractions removed.
     pub dropped_retractions: u64,
+    /// The dominant mix of each layer.
     pub layers: Vec<LayerMix>,
+    /// What the run noticed and did anyway.
     pub warnings: Vec<String>,
 }
 

@@ -39,17 +39,23 @@ pub enum Slot {
 /// One mix the job uses.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlannedMix {
+    /// The mix's label as the profile names it.
     pub label: String,
+    /// The mix, normalised.
     pub mix: Mix,
     /// The ratios as written (units of 10^-decimals, summing to exactly 10^decimals).
     pub units: Vec<u64>,
+    /// The colour the mixing model predicts.
     pub predicted: Srgb8,
     /// The colour asked for, when the mix was solved from one.
     pub target: Option<Srgb8>,
+    /// CIEDE2000 between target and prediction.
     pub delta_e: Option<f64>,
+    /// The target colour is outside what the filaments can mix.
     pub out_of_gamut: bool,
     /// A step inside a gradient (not purged by default).
     pub gradient_step: bool,
+    /// Where the mix lives in the firmware.
     pub slot: Slot,
 }
 
@@ -68,12 +74,15 @@ struct Segment {
 /// The resolved job; see the module docs.
 #[derive(Debug, Clone)]
 pub struct Plan {
+    /// Every mix the job uses.
     pub mixes: Vec<PlannedMix>,
     segments: Vec<Segment>,
     tool_map: BTreeMap<u32, usize>,
     /// The two tools gradient steps take turns on (when they do not all fit).
     pub rotating_tools: [u32; 2],
+    /// What planning noticed and did anyway.
     pub warnings: Vec<String>,
+    /// Decimals of the ratios written.
     pub decimals: Decimals,
 }
 

@@ -42,27 +42,42 @@ use crate::settings::{CheckRanges, Table};
 /// Why a purge-shift configuration was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ConfigError {
+    /// A number outside its range.
     #[error(transparent)]
     Range(#[from] OutOfRange),
     #[error(
         "no purge amount: give `--purge-mm MM` or `--purge-mm3 MM3` (Python: `purge_mm=`, `purge_mm3=`), or in the config \
          purge_mm, purge_mm3, colours, pairs or a washout tolerance"
     )]
+    /// No purge amount anywhere.
     NoPurge,
+    /// Both `purge_mm` and `purge_mm3`.
     #[error("give either purge_mm or purge_mm3, not both")]
     BothPurges,
+    /// A pair with no amount or both.
     #[error("pair {from}->{to} needs exactly one of purge_mm and purge_mm3")]
-    Pair { from: u32, to: u32 },
+    Pair {
+        /// The tool before the change.
+        from: u32,
+        /// The tool after it.
+        to: u32,
+    },
+    /// A feature name gweave does not know.
     #[error("unknown feature {0:?} (known: {known})", known = feature_names())]
     Feature(String),
+    /// A fallback other than `partial`, `block` or `tower`.
     #[error("unknown fallback {0:?} (known: partial, block, tower)")]
     Fallback(String),
+    /// Only one of the tower's `x_mm` and `y_mm`.
     #[error("tower: give both x_mm and y_mm, or neither (placed beside the print)")]
     Tower,
+    /// A marker with empty text.
     #[error("markers need non-empty begin and end text")]
     Markers,
+    /// Invalid washout settings.
     #[error("washout: {0}")]
     Washout(String),
+    /// The configuration's TOML cannot be read.
     #[error("TOML: {0}")]
     Toml(String),
 }
@@ -109,6 +124,7 @@ pub enum Fallback {
 }
 
 impl Fallback {
+    /// The fallback's name in configurations and reports.
     pub fn name(&self) -> &'static str {
         match self {
             Fallback::Partial => "partial",
@@ -127,6 +143,7 @@ pub struct TowerConfig {
     /// The tower's corner (smallest X and Y), mm; unset: `gap_mm` to the right of the print's
     /// XY extent known so far (to the left when the bed ends there).
     pub x_mm: Option<f64>,
+    /// The tower's corner along Y, mm (set with `x_mm`).
     pub y_mm: Option<f64>,
     /// Distance from the print's extent, mm.
     pub gap_mm: f64,
@@ -138,7 +155,9 @@ pub struct TowerConfig {
     pub layer_height_mm: f64,
     /// Z lift for the travels, mm (0: travel at the layer's Z, as the slicer's own travels do).
     pub lift_mm: f64,
+    /// Feed of the travels, mm/min.
     pub travel_feed_mm_min: f64,
+    /// Feed of the zigzag's extrusion, mm/min.
     pub extrude_feed_mm_min: f64,
     /// Feed of the retraction around the travels when the file's own is not known yet.
     pub retract_feed_mm_min: f64,
@@ -166,18 +185,25 @@ impl Default for TowerConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PurgeShiftConfig {
+    /// Filament to purge at each change, mm.
     pub purge_mm: Option<f64>,
+    /// Plastic to purge at each change, mm^3 (converted with `filament_diameter_mm`).
     pub purge_mm3: Option<f64>,
+    /// Filament diameter, mm.
     pub filament_diameter_mm: f64,
+    /// Amounts for given tool pairs, over the global one.
     pub pair: Vec<PairPurge>,
     /// Colour of each tool (`#RRGGBB`), for purge volumes derived from colours.
     pub colours: Vec<String>,
+    /// The washout model, purging until the old colour is below a tolerance.
     pub washout: Option<WashoutConfig>,
+    /// A change may move back past a layer start.
     pub cross_layers: bool,
     /// Feature names a change may move through (see [`Feature::name`]).
     pub allow_features: Vec<String>,
     /// `[begin, end]` comment texts that delimit the print proper.
     pub markers: Option<[String; 2]>,
+    /// What to do with the purge a change cannot move: `partial`, `block` or `tower`.
     pub fallback: String,
     /// The `block` fallback's purge block (as in `gweave mix`'s `[purge]`).
     pub block: PurgeMotion,
@@ -384,13 +410,19 @@ impl PurgeShiftConfig {
 /// [`PurgeShiftConfig::apply`] (the CLI and Python share it).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overrides {
+    /// `--purge-mm`: filament per change, mm.
     pub purge_mm: Option<f64>,
+    /// `--purge-mm3`: plastic per change, mm^3.
     pub purge_mm3: Option<f64>,
+    /// `--filament-diameter-mm`, mm.
     pub filament_diameter_mm: Option<f64>,
     /// `true` allows crossing; `false` leaves the file's setting.
     pub cross_layers: bool,
+    /// `--allow-features`: the features a change may move through.
     pub allow_features: Option<Vec<String>>,
+    /// `--markers`: the comments that delimit the print proper.
     pub markers: Option<[String; 2]>,
+    /// `--fallback`: `partial`, `block` or `tower`.
     pub fallback: Option<String>,
     /// The tower fallback's corner, mm.
     pub tower_xy_mm: Option<[f64; 2]>,
@@ -457,14 +489,17 @@ impl Rules {
         }
     }
 
+    /// The comments that delimit the print proper.
     pub fn markers(&self) -> &Markers {
         &self.markers
     }
 
+    /// What to do with the purge a change cannot move.
     pub fn fallback(&self) -> Fallback {
         self.fallback
     }
 
+    /// Filament diameter, mm.
     pub fn filament_diameter_mm(&self) -> f64 {
         self.diameter_mm
     }

@@ -152,6 +152,7 @@ pub struct PurgeShift {
 }
 
 impl PurgeShift {
+    /// The pass, with these rules.
     pub fn new(rules: Rules) -> Self {
         // MixingState::new only fails for zero tools.
         let mixing = MixingState::new(MIX_INPUTS, MIX_TOOLS).expect("constant sizes are valid");
@@ -187,10 +188,12 @@ impl PurgeShift {
         StateOptions { markers: self.rules.markers().clone(), ..StateOptions::default() }
     }
 
+    /// What the run did so far.
     pub fn report(&self) -> &PurgeShiftReport {
         &self.report
     }
 
+    /// What the run did, the pass consumed.
     pub fn into_report(self) -> PurgeShiftReport {
         self.report
     }

@@ -28,12 +28,15 @@ pub struct SplitPoint {
 /// One change of tool or mix.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ChangeReport {
+    /// The tool before the change.
     pub from_tool: u32,
+    /// The tool after it.
     pub to_tool: u32,
     /// Input line numbers of the lines that moved (the `T` and its mix definition).
     pub change_lines: Vec<u64>,
     /// Output line number of the first moved line.
     pub output_line: u64,
+    /// Purge asked for, mm of filament.
     pub requested_mm: f64,
     /// Purge done: `moved_mm + fallback_mm`.
     pub achieved_mm: f64,
@@ -45,13 +48,17 @@ pub struct ChangeReport {
     pub fallback_mm: f64,
     /// Lines the fallback inserted right after the change lines (in the output).
     pub fallback_lines: u64,
+    /// Purge asked for, mm^3.
     pub requested_mm3: f64,
+    /// Purge done, mm^3.
     pub achieved_mm3: f64,
     /// Layer (0-based) and feature where the change now sits.
     pub layer: Option<u32>,
+    /// The feature where the change now sits.
     pub feature: Feature,
     /// Input line number of the move the change now precedes (or splits).
     pub at_line: u64,
+    /// Where a move was split to place the change inside it.
     pub split: Option<SplitPoint>,
     /// Why the walk back stopped before the full purge, when it did.
     pub stopped_by: Option<&'static str>,
@@ -159,14 +166,19 @@ impl Serialize for ChangeLog {
 /// The whole run.
 #[derive(Debug, Serialize, Default)]
 pub struct PurgeShiftReport {
+    /// Every change of tool or mix, in file order.
     pub changes: ChangeLog,
     /// Changes outside the print proper (start/end G-code), left alone.
     pub untouched_changes: u64,
+    /// Purge asked for over all changes, mm.
     pub requested_mm: f64,
+    /// Purge done over all changes, mm.
     pub achieved_mm: f64,
+    /// Purge missing over all changes, mm.
     pub shortfall_mm: f64,
     /// Of the achieved purge: moved into the old colour's path, and purged by the fallback.
     pub moved_mm: f64,
+    /// Purged by the fallback, mm.
     pub fallback_mm: f64,
     /// Changes that got the whole purge (moved and fallback together).
     pub full_changes: u64,
@@ -174,7 +186,9 @@ pub struct PurgeShiftReport {
     /// purge inside the part saves: mm of filament and mm^3 (the moved purge; a fallback's
     /// purge is waste like the tower's).
     pub saved_mm: f64,
+    /// What a tower would have wasted, mm^3.
     pub saved_mm3: f64,
+    /// Filament diameter used for the volumes, mm.
     pub filament_diameter_mm: f64,
     /// Most lines ever held back at once (the bounded window).
     pub max_window_lines: usize,
