@@ -21,19 +21,25 @@ use super::toolpath::{Segment, Toolpath};
 /// The attribute that picks a segment's colour.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ColourBy {
+    /// Each tool its colour.
     #[default]
     Tool,
+    /// Each feature (wall, infill, support...) its colour.
     Feature,
+    /// Feed rate, slow to fast on a colour ramp.
     Speed,
+    /// Layer, bottom to top on a colour ramp.
     Layer,
     /// Predicted printed colour of each move ([`Segment::mix_rgb`]).
     Mix,
 }
 
 impl ColourBy {
+    /// Every colouring, in the order `--colour-by` lists them.
     pub const ALL: [ColourBy; 5] =
         [ColourBy::Tool, ColourBy::Feature, ColourBy::Speed, ColourBy::Layer, ColourBy::Mix];
 
+    /// The colouring's name for `--colour-by`.
     pub fn name(self) -> &'static str {
         match self {
             ColourBy::Tool => "tool",
@@ -128,13 +134,16 @@ fn ramp_table() -> Vec<[u8; 3]> {
 /// One entry of a legend.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct LegendEntry {
+    /// What the colour stands for: a tool, a feature, a speed or layer band, a mix.
     pub label: String,
+    /// The colour drawn.
     pub colour: Srgb8,
 }
 
 /// A colouring fitted to one toolpath.
 #[derive(Debug, Clone)]
 pub struct Colouring {
+    /// The attribute the colours stand for.
     pub by: ColourBy,
     /// Per-tool colours (tool colouring); missing tools fall back to [`TOOL_COLOURS`].
     pub tool_colours: Vec<Srgb8>,

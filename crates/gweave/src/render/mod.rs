@@ -64,16 +64,22 @@ pub use view::{ViewKind, ViewOptions};
 /// Why a preview could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
+    /// The G-code cannot be read.
     #[error(transparent)]
     Gcode(#[from] crate::Error),
+    /// A picture size outside [`PICTURE_SIDE_PX`].
     #[error("picture size {0}x{1} is out of range: {PICTURE_SIDE_PX} on each side")]
     Size(u32, u32),
+    /// An option outside its range.
     #[error(transparent)]
     Range(#[from] crate::range::OutOfRange),
+    /// An output format other than png, svg or html.
     #[error("unknown output format {0:?} (png, svg or html)")]
     Format(String),
+    /// The image encoder failed.
     #[error("image encoding failed: {0}")]
     Encode(String),
+    /// A rotary file cannot be read back.
     #[error(transparent)]
     Rotary(#[from] crate::rotary::RotaryError),
 }
@@ -81,8 +87,11 @@ pub enum RenderError {
 /// What the preview is written as.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
+    /// A PNG picture.
     Png,
+    /// An SVG picture.
     Svg,
+    /// An HTML page with an interactive 3D view.
     Html,
 }
 
@@ -125,6 +134,7 @@ pub const MIN_LEN_MM: Range<f32> = Range::new(0.0, 100.0, "mm");
 /// Everything `gweave preview` can be asked.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct PreviewOptions {
+    /// What to draw and how.
     pub view: ViewOptions,
     /// Merge chained moves shorter than this, mm; `None` picks by file size
     /// ([`ToolpathOptions::min_len_for_file_size`]).
@@ -239,7 +249,9 @@ pub fn preview(
 
 /// A preview's file bytes and what they show.
 pub struct Preview {
+    /// The file's contents.
     pub bytes: Vec<u8>,
+    /// What it shows.
     pub report: PreviewReport,
 }
 
@@ -248,12 +260,15 @@ pub struct Preview {
 pub struct PreviewReport {
     /// `png`, `svg` or `html`.
     pub format: &'static str,
+    /// Size of the file, bytes.
     pub bytes: usize,
     /// `top` or `iso`.
     pub view: String,
+    /// The colouring's name.
     pub colour_by: &'static str,
     /// Picture size (for HTML, the initial canvas), pixels.
     pub width_px: u32,
+    /// Picture height, pixels.
     pub height_px: u32,
     /// Layers drawn, first and last, as the file numbers them (HTML: all, with a slider).
     pub layers_drawn: Option<[u32; 2]>,
@@ -264,6 +279,7 @@ pub struct PreviewReport {
     pub moves: Option<usize>,
     /// With `--compare`: the moves of the first file the second does not have, and the reverse.
     pub changed_moves: Option<[usize; 2]>,
+    /// What each colour stands for.
     pub legend: Vec<colour_by::LegendEntry>,
     /// Lines a lenient read went past (in both files, with `--compare`; the first is the
     /// first file's, else the second's).

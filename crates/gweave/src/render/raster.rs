@@ -12,7 +12,9 @@ use super::text;
 /// An RGBA8 image, rows top first.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {
+    /// Width, px.
     pub width: u32,
+    /// Height, px.
     pub height: u32,
     /// `width * height * 4` bytes.
     pub rgba: Vec<u8>,

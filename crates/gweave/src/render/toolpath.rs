@@ -50,10 +50,15 @@ mod cylinder;
 /// One straight piece of tool path, mm and mm/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Segment {
+    /// Where the move starts, mm.
     pub start: [f32; 3],
+    /// Where it ends, mm.
     pub end: [f32; 3],
+    /// The tool that moved.
     pub tool: u16,
+    /// The feature printed.
     pub feature: Feature,
+    /// Feed rate, mm/s.
     pub feed_mm_s: f32,
     /// 0-based layer (0 for moves before the first layer marker).
     pub layer: u32,
@@ -137,6 +142,7 @@ impl ToolpathOptions {
 /// Everything collected from one file.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Toolpath {
+    /// The moves, in file order.
     pub segments: Vec<Segment>,
     /// Z of each layer as the slicer states it, mm (index = layer; layers not kept included).
     pub layer_z_mm: Vec<f32>,
@@ -203,6 +209,7 @@ pub struct ToolpathPass {
 }
 
 impl ToolpathPass {
+    /// A pass collecting the toolpath with `options`.
     pub fn new(options: ToolpathOptions) -> Self {
         let mix = options.mix.clone().map(MixTracker::new);
         let out = Toolpath { tools: 1, ..Toolpath::default() };

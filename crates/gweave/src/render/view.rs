@@ -65,11 +65,15 @@ impl fmt::Display for ViewKind {
 /// What to draw and how.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ViewOptions {
+    /// The projection: from above or isometric.
     pub kind: ViewKind,
     /// Layers drawn (all when `None`).
     pub layers: Option<RangeInclusive<u32>>,
+    /// Picture width, pixels.
     pub width_px: u32,
+    /// Picture height, pixels.
     pub height_px: u32,
+    /// The attribute that picks a segment's colour.
     pub colour_by: ColourBy,
     /// Per-tool colours for the tool and mix colourings (see [`super::colour_by`]).
     pub tool_colours: Vec<Srgb8>,
@@ -97,10 +101,15 @@ impl Default for ViewOptions {
 /// One line to draw, in pixels.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stroke {
+    /// Start, pixels from the top left corner.
     pub from: [f32; 2],
+    /// End, pixels from the top left corner.
     pub to: [f32; 2],
+    /// sRGB colour.
     pub colour: [u8; 3],
+    /// Line width, pixels.
     pub width_px: f32,
+    /// Opacity, 0 to 1.
     pub alpha: f32,
 }
 
@@ -108,8 +117,11 @@ pub struct Stroke {
 /// comparison) and a title (empty for a single view).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Panel {
+    /// Left edge of the panel, pixels.
     pub x_px: u32,
+    /// Width of the panel, pixels.
     pub width_px: u32,
+    /// The panel's title (empty for a single view).
     pub title: String,
     /// In a comparison, the moves of this side (in the layers drawn) the other file does not have.
     pub changed_moves: Option<usize>,
@@ -120,11 +132,17 @@ pub struct Panel {
 /// Everything a PNG or SVG writer needs: strokes in drawing order, legend, titles.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Drawing {
+    /// Picture width, pixels.
     pub width_px: u32,
+    /// Picture height, pixels.
     pub height_px: u32,
+    /// sRGB colour behind everything.
     pub background: [u8; 3],
+    /// The lines, in drawing order.
     pub strokes: Vec<Stroke>,
+    /// What each colour stands for.
     pub legend: Vec<LegendEntry>,
+    /// The views side by side (one, or two for a comparison).
     pub panels: Vec<Panel>,
     /// The layers drawn, as the file numbers them (`None`: no layer of the file is in range).
     pub layers_drawn: Option<RangeInclusive<u32>>,
@@ -137,6 +155,7 @@ impl Drawing {
     }
 }
 
+/// The picture's background (sRGB, a warm off-white).
 pub const BACKGROUND: [u8; 3] = [0xf7, 0xf7, 0xf5];
 /// Unchanged moves in a comparison.
 pub const UNCHANGED: [u8; 3] = [0xc4, 0xc4, 0xc4];
@@ -191,6 +210,7 @@ impl Projection {
         ]
     }
 
+    /// Pixels per mm.
     pub fn scale_px_mm(&self) -> f32 {
         self.scale_px_mm
     }

@@ -97,8 +97,9 @@ pub struct RotaryReading {
 /// One move as the machine runs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotaryMove {
-    /// Where the nozzle starts and ends.
+    /// Where the nozzle starts.
     pub from: CylPoint,
+    /// Where the nozzle ends.
     pub to: CylPoint,
     /// Filament pushed, mm.
     pub e_mm: f64,
