@@ -30,14 +30,18 @@ use crate::range::{BED_SIZE_MM, POSITION_MM};
 /// A printable box, mm: X and Y as `[min, max]`, Z from 0 to its height (`None`: not checked).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 pub struct Bed {
+    /// X from and to, mm.
     pub x_mm: [f64; 2],
+    /// Y from and to, mm.
     pub y_mm: [f64; 2],
+    /// Height, mm (`None`: Z is not checked).
     pub z_mm: Option<f64>,
 }
 
 /// A bed the file's own settings describe, and where it was read.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SlicerBed {
+    /// The bed.
     pub bed: Bed,
     /// The settings used, `key = value` as written.
     pub from: Vec<String>,
@@ -46,14 +50,25 @@ pub struct SlicerBed {
 /// Why a bed text was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BedError {
+    /// Neither 3 nor 4 or 5 numbers.
     #[error("expected X,Y,Z or X0,Y0,X1,Y1[,Z] (mm), got {0:?}")]
     Count(String),
+    /// A part that is not a number.
     #[error("{0:?} is not a number")]
     NotANumber(String),
+    /// A number outside its range.
     #[error("{0}")]
     Range(#[from] crate::range::OutOfRange),
+    /// A side whose end is not above its start.
     #[error("the bed is empty: {axis}1 = {hi} is not above {axis}0 = {lo}")]
-    Empty { axis: char, lo: f64, hi: f64 },
+    Empty {
+        /// The axis.
+        axis: char,
+        /// Its start, mm.
+        lo: f64,
+        /// Its end, mm.
+        hi: f64,
+    },
 }
 
 impl Bed {

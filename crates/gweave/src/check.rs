@@ -47,18 +47,25 @@ impl Default for CheckOptions {
 /// One finding at a line.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct LineFinding {
+    /// The line number, from 1.
     pub line: u64,
+    /// What was found and at which column.
     #[serde(flatten)]
     pub diagnostic: Diagnostic,
+    /// How serious it is.
     pub severity: Severity,
 }
 
 /// The lint's result.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct CheckReport {
+    /// Lines read.
     pub lines: u64,
+    /// Error-level findings.
     pub errors: u64,
+    /// Warning-level findings.
     pub warnings: u64,
+    /// Every finding, in file order.
     pub findings: Vec<LineFinding>,
     /// The bed moves were held to, if any.
     pub bed: Option<Bed>,
@@ -67,6 +74,7 @@ pub struct CheckReport {
 }
 
 impl CheckReport {
+    /// The file has no error-level finding.
     pub fn passed(&self) -> bool {
         self.errors == 0
     }
@@ -81,6 +89,7 @@ impl CheckReport {
 #[derive(Debug, Default)]
 pub struct CheckPass {
     options: CheckOptions,
+    /// What the lint found so far.
     pub report: CheckReport,
     last_line_number: Option<i64>,
     relative_e_since_reset_mm: f64,
@@ -91,6 +100,7 @@ pub struct CheckPass {
 }
 
 impl CheckPass {
+    /// The lint with `options`.
     pub fn new(options: CheckOptions) -> Self {
         let bed_from = options.bed.map(|_| "given".to_owned());
         let report = CheckReport { bed: options.bed, bed_from, ..Default::default() };

@@ -5,42 +5,87 @@ use std::path::{Path, PathBuf};
 
 use crate::gcode::diag::Finding;
 
+/// A result whose error is the library's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// Why an engine operation failed; every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
+    /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: io::Error,
+    },
 
+    /// A line cannot be read (a strict run stops at the first).
     #[error("{}:{line}:{column}: {finding}", path.display())]
-    Syntax { path: PathBuf, line: u64, column: u32, finding: Finding },
+    Syntax {
+        /// The file.
+        path: PathBuf,
+        /// The line number, from 1.
+        line: u64,
+        /// The column, from 1.
+        column: u32,
+        /// What is wrong.
+        finding: Finding,
+    },
 
+    /// An output that is the input itself, without `--in-place`.
     #[error("refusing to overwrite the input {} (use --in-place to replace it)", path.display())]
-    WouldOverwriteInput { path: PathBuf },
+    WouldOverwriteInput {
+        /// The input.
+        path: PathBuf,
+    },
 
+    /// A read-only input for `--in-place`, without `--force`.
     #[error("{} is read-only: --in-place would replace it (add --force to replace it anyway)", path.display())]
-    ReadOnly { path: PathBuf },
+    ReadOnly {
+        /// The input.
+        path: PathBuf,
+    },
 
+    /// `--in-place` found no free backup name for the input.
     #[error(
         "{} exists and is not a copy of the input, and {}.1 .. .{} are all taken: move old backups away or use --no-backup",
         path.display(),
         path.display(),
         crate::gcode::writer::BACKUP_SLOTS
     )]
-    BackupSlotsFull { path: PathBuf },
+    BackupSlotsFull {
+        /// The input.
+        path: PathBuf,
+    },
 
+    /// `--in-place` with standard input.
     #[error("--in-place needs an input file")]
     InPlaceWithoutInput,
 
+    /// A configuration file is invalid.
     #[error("{}: {message}", path.display())]
-    Config { path: PathBuf, message: String },
+    Config {
+        /// The configuration file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
 
+    /// An invalid argument (the message says which and why).
     #[error("{0}")]
     Invalid(String),
 
     /// A print-proper marker asked for is not in the file (or not in order).
     #[error("{}: the print-proper marker `;{marker}` {detail}", path.display())]
-    MissingMarker { path: PathBuf, marker: String, detail: String },
+    MissingMarker {
+        /// The file.
+        path: PathBuf,
+        /// The marker's text, without the `;`.
+        marker: String,
+        /// What is wrong: missing, or out of order.
+        detail: String,
+    },
 
     /// A command that writes `E` words was given a file whose extruder is another axis.
     #[error(
@@ -48,10 +93,18 @@ pub enum Error {
         path.display(),
         char::from(*letter)
     )]
-    ForeignExtruder { path: PathBuf, flavour: String, letter: u8 },
+    ForeignExtruder {
+        /// The file.
+        path: PathBuf,
+        /// The file's firmware flavour.
+        flavour: String,
+        /// The letter of that firmware's extruder axis.
+        letter: u8,
+    },
 }
 
 impl Error {
+    /// An [`Error::Io`] on `path`.
     pub fn io(path: impl AsRef<Path>, source: io::Error) -> Self {
         Error::Io { path: path.as_ref().to_path_buf(), source }
     }

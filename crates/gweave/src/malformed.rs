@@ -34,12 +34,14 @@ use crate::pass::{Ctx, Pass};
 /// How many lines could not be read, and the first of them.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct Malformed {
+    /// Lines that could not be read.
     pub malformed_lines: u64,
     /// The first of them, 1-based.
     pub first_malformed_line: Option<u64>,
 }
 
 impl Malformed {
+    /// Counts malformed line `line` (1-based).
     pub fn add(&mut self, line: u64) {
         self.malformed_lines += 1;
         self.first_malformed_line.get_or_insert(line);
@@ -67,8 +69,10 @@ pub fn is_malformed(block: &Block) -> bool {
 /// fields and `malformed_lines`, `first_malformed_line`).
 #[derive(Debug, Clone, Serialize)]
 pub struct WithMalformed<T> {
+    /// The command's report.
     #[serde(flatten)]
     pub report: T,
+    /// The malformed lines of its read.
     #[serde(flatten)]
     pub malformed: Malformed,
 }
@@ -77,11 +81,14 @@ pub struct WithMalformed<T> {
 /// line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE)).
 #[derive(Debug, Default)]
 pub struct Counting<P> {
+    /// The inner pass.
     pub pass: P,
+    /// The malformed lines it saw.
     pub malformed: Malformed,
 }
 
 impl<P> Counting<P> {
+    /// Counting for `pass`.
     pub fn new(pass: P) -> Self {
         Counting { pass, malformed: Malformed::default() }
     }

@@ -20,9 +20,13 @@ use crate::malformed::{is_malformed, Malformed};
 
 /// A line with everything known about it, after its effect on the state.
 pub struct Ctx<'a> {
+    /// The line as read, with its ending and number.
     pub line: RawLine<'a>,
+    /// What the line says.
     pub block: &'a Block,
+    /// What the line did to the machine.
     pub effect: &'a Effect,
+    /// The machine state after the line.
     pub state: &'a State,
 }
 
@@ -66,16 +70,21 @@ pub fn keep(ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
 /// A line copied out of the reader's buffer, for passes that hold lines back.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct OwnedLine {
+    /// The line, without its ending.
     pub bytes: Vec<u8>,
+    /// The line's ending (`\n`, `\r\n` or none).
     pub eol: Vec<u8>,
+    /// The line number, from 1.
     pub number: u64,
 }
 
 impl OwnedLine {
+    /// A copy of `line`.
     pub fn from_raw(line: &RawLine<'_>) -> Self {
         OwnedLine { bytes: line.bytes.to_vec(), eol: line.eol.to_vec(), number: line.number }
     }
 
+    /// Writes the line and its ending.
     pub fn write_to(&self, out: &mut dyn Write) -> io::Result<()> {
         out.write_all(&self.bytes)?;
         out.write_all(&self.eol)
@@ -94,7 +103,9 @@ pub enum Strictness {
 
 /// Reports progress in bytes; the CLI draws a bar with it.
 pub trait Progress {
+    /// The input is `bytes` long.
     fn set_len(&mut self, _bytes: u64) {}
+    /// `done_bytes` of the input are read.
     fn advance(&mut self, _done_bytes: u64) {}
     /// Work after reading begins (a preview's drawing), `len` units long; from now on
     /// [`Progress::advance`] counts these units, not bytes.
@@ -107,9 +118,13 @@ impl Progress for Quiet {}
 
 /// A run's settings.
 pub struct Run<'a> {
+    /// The G-code file read (`-` for standard input).
     pub input: &'a Path,
+    /// Options fixed for the whole file (firmware, retraction length).
     pub options: StateOptions,
+    /// How malformed lines are treated.
     pub strictness: Strictness,
+    /// Where progress is reported.
     pub progress: &'a mut dyn Progress,
     /// The file's flavour when the caller has read it already ([`read_flavour`]); `None`: the
     /// run reads it.
@@ -117,6 +132,7 @@ pub struct Run<'a> {
 }
 
 impl<'a> Run<'a> {
+    /// A strict run over `input` with default options.
     pub fn new(input: &'a Path, progress: &'a mut dyn Progress) -> Self {
         Run {
             input,
@@ -279,12 +295,14 @@ fn output_name(input: &Path) -> PathBuf {
 /// The identity pass: what `gweave cat` runs. It copies every line as read and counts them.
 #[derive(Debug, Default)]
 pub struct Identity {
+    /// What was copied.
     pub report: CopyReport,
 }
 
 /// What [`Identity`] copied.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
 pub struct CopyReport {
+    /// Lines copied.
     pub lines: u64,
     /// Bytes copied, line endings included (the size of the input).
     pub bytes: u64,

@@ -112,6 +112,7 @@ pub fn count(v: f64) -> String {
 pub trait Quantity: Copy + PartialOrd + Send + Sync + 'static {
     /// The value as [`short`] writes it.
     fn short(self) -> String;
+    /// The value is zero.
     fn is_zero(self) -> bool;
 }
 
@@ -151,7 +152,9 @@ integer_quantity!(u16, u32, u64, usize, i32, i64);
 /// says 0 means "off" (a chord tolerance of 0: no chords).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Range<T = f64> {
+    /// Smallest value allowed.
     pub min: T,
+    /// Largest value allowed.
     pub max: T,
     /// Unit shown after the range (`mm`, `dpi`, `C`), empty for counts.
     pub unit: &'static str,
@@ -160,6 +163,7 @@ pub struct Range<T = f64> {
 }
 
 impl<T: Quantity> Range<T> {
+    /// `min..=max` in `unit`, without zero.
     pub const fn new(min: T, max: T, unit: &'static str) -> Self {
         Range { min, max, unit, zero: false }
     }
@@ -213,12 +217,14 @@ pub struct OutOfRange {
 /// The most of something a generator makes, e.g. [`MAX_LAYERS`] layers.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ceiling {
+    /// The most allowed.
     pub limit: u64,
     /// What is counted, plural: `layers`, `pixels per image side`.
     pub what: &'static str,
 }
 
 impl Ceiling {
+    /// At most `limit` of `what`.
     pub const fn new(limit: u64, what: &'static str) -> Self {
         Ceiling { limit, what }
     }
@@ -239,9 +245,13 @@ impl Ceiling {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{because} needs {needed} {what}, more than the limit of {limit}")]
 pub struct TooLarge {
+    /// What is counted, plural.
     pub what: &'static str,
+    /// How many were needed, as text (it may be infinite).
     pub needed: String,
+    /// The most allowed.
     pub limit: u64,
+    /// What needed them, e.g. "a 1000 mm tall part at 0.001 mm per layer".
     pub because: String,
 }
 

@@ -16,6 +16,7 @@ use crate::post::retraction::Retraction;
 /// Filament used by one tool.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct ToolFilament {
+    /// The tool number.
     pub tool: u32,
     /// Filament pushed out of the nozzle, mm: extrusions and stationary purges; retractions
     /// and the primes that undo them cancel (see `post/retraction.rs`).
@@ -27,7 +28,9 @@ pub struct ToolFilament {
 /// An axis-aligned box, mm.
 #[derive(Debug, Clone, Copy, Serialize, PartialEq)]
 pub struct Bounds {
+    /// Smallest X, Y, Z, mm.
     pub min: [f64; 3],
+    /// Largest X, Y, Z, mm.
     pub max: [f64; 3],
 }
 
@@ -73,30 +76,43 @@ pub struct SlicerFigures {
 /// The statistics of one file.
 #[derive(Debug, Clone, Serialize)]
 pub struct Stats {
+    /// Size of the file, bytes.
     pub bytes: u64,
+    /// Lines in the file.
     pub lines: u64,
+    /// The slicer that wrote it.
     pub slicer: Slicer,
+    /// Layers printed.
     pub layers: u32,
     /// Z range of extrusion, mm.
     pub z_range_mm: Option<[f64; 2]>,
     /// Bounding box of extruding moves, mm.
     pub extrusion_bounds: Option<Bounds>,
+    /// Tool changes (`T<n>` to another tool).
     pub tool_changes: u32,
+    /// Filament diameter used for volumes, mm.
     pub filament_diameter_mm: f64,
+    /// Filament per tool.
     pub filament: Vec<ToolFilament>,
+    /// Length of extruding moves, mm.
     pub print_mm: f64,
+    /// Length of travel moves, mm.
     pub travel_mm: f64,
     /// Length over feed rate for every move, by feature type, s (no acceleration).
     pub time_by_feature_s: BTreeMap<&'static str, f64>,
+    /// Print time as length over feed rate, s (no acceleration).
     pub time_s: f64,
     /// Lines of start and end G-code detected.
     pub start_lines: u64,
+    /// Lines of end G-code detected.
     pub end_lines: u64,
+    /// What the slicer's own comments state (time, filament).
     pub slicer_figures: SlicerFigures,
     /// Whether the filament the file states ([`SlicerFigures::filament_used_mm`]) is what it
     /// extrudes, per tool, within the figure's rounding (0.05 mm) or 0.01 %; `None` if it
     /// states none.
     pub filament_matches_slicer: Option<bool>,
+    /// What the file does that is worth a look.
     pub warnings: Vec<String>,
 }
 
@@ -128,6 +144,7 @@ pub struct StatsPass {
 pub const DEFAULT_FILAMENT_DIAMETER_MM: f64 = 1.75;
 
 impl StatsPass {
+    /// Statistics with the filament diameter forced to `diameter_override_mm`, if given.
     pub fn new(diameter_override_mm: Option<f64>) -> Self {
         StatsPass { diameter_override_mm, ..Default::default() }
     }

@@ -11,20 +11,28 @@ use crate::stats::{Stats, ToolFilament};
 /// `stats` over several files.
 #[derive(Debug, Clone, Default, Serialize, PartialEq)]
 pub struct StatsTotal {
+    /// Files read.
     pub files: usize,
+    /// Bytes over every file.
     pub bytes: u64,
+    /// Lines over every file.
     pub lines: u64,
+    /// Tool changes over every file.
     pub tool_changes: u64,
     /// Per tool number, over every file that used it.
     pub filament: Vec<ToolFilament>,
+    /// Length of extruding moves, mm.
     pub print_mm: f64,
+    /// Length of travel moves, mm.
     pub travel_mm: f64,
+    /// Print time as length over feed rate, s.
     pub time_s: f64,
     /// Lines a lenient read could not use, over every file.
     pub malformed_lines: u64,
 }
 
 impl StatsTotal {
+    /// The total of `files`.
     pub fn of<'a>(files: impl IntoIterator<Item = &'a WithMalformed<Stats>>) -> StatsTotal {
         let mut t = StatsTotal::default();
         for f in files {
@@ -55,15 +63,20 @@ impl StatsTotal {
 /// `check` over several files.
 #[derive(Debug, Clone, Default, Serialize, PartialEq, Eq)]
 pub struct CheckTotal {
+    /// Files checked.
     pub files: usize,
     /// Files with an error (or, with `strict`, a warning): those the exit code is 1 for.
     pub failed_files: usize,
+    /// Lines over every file.
     pub lines: u64,
+    /// Error-level findings over every file.
     pub errors: u64,
+    /// Warning-level findings over every file.
     pub warnings: u64,
 }
 
 impl CheckTotal {
+    /// The total of `reports`; with `strict` a warning fails a file too.
     pub fn of<'a>(reports: impl IntoIterator<Item = &'a CheckReport>, strict: bool) -> CheckTotal {
         let mut t = CheckTotal::default();
         for r in reports {
@@ -81,14 +94,18 @@ impl CheckTotal {
 /// print for more than one file.
 #[derive(Debug, Clone, Serialize)]
 pub struct PerFile<T, Total> {
+    /// Each file's report.
     pub files: Vec<Named<T>>,
+    /// Their total.
     pub total: Total,
 }
 
 /// One file's report with its path first.
 #[derive(Debug, Clone, Serialize)]
 pub struct Named<T> {
+    /// The file's path as given.
     pub path: String,
+    /// Its report.
     #[serde(flatten)]
     pub report: T,
 }

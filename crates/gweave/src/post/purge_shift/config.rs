@@ -45,11 +45,11 @@ pub enum ConfigError {
     /// A number outside its range.
     #[error(transparent)]
     Range(#[from] OutOfRange),
+    /// No purge amount anywhere.
     #[error(
         "no purge amount: give `--purge-mm MM` or `--purge-mm3 MM3` (Python: `purge_mm=`, `purge_mm3=`), or in the config \
          purge_mm, purge_mm3, colours, pairs or a washout tolerance"
     )]
-    /// No purge amount anywhere.
     NoPurge,
     /// Both `purge_mm` and `purge_mm3`.
     #[error("give either purge_mm or purge_mm3, not both")]
