@@ -6,7 +6,7 @@
 //! per-segment cost is one lookup.
 //!
 //! The mix colouring draws each segment in its [`Segment::mix_rgb`], the colour the mixing model
-//! and the chamber's washout predict for it ([`super::mix_colour`]): read the toolpath with
+//! and the chamber's washout predict for it (`mix_colour`): read the toolpath with
 //! [`super::ToolpathOptions::mix`] set.
 
 use std::collections::HashMap;

@@ -6,13 +6,13 @@
 //! - [`toolpath`]: the segments of a file (start, end, tool, feature, feed, layer, extruding),
 //!   collected in one streaming pass, with decimation for huge files.
 //! - [`colour_by`]: colour by tool, feature type, speed, layer or predicted mix colour.
-//! - [`mix_colour`]: the predicted mix colour of each move (mixing model and chamber washout).
+//! - `mix_colour`: the predicted mix colour of each move (mixing model and chamber washout).
 //! - [`view`]: top view of a layer or layer range, isometric view, before/after comparison;
 //!   turns segments into pixel [`view::Stroke`]s.
 //! - [`raster`] and [`png_out`]: a software rasteriser (wide anti-aliased lines, alpha) and the
 //!   one PNG encoder; [`text`]: the embedded font.
 //! - [`svg`]: the same drawing as SVG paths.
-//! - [`html`]: a self-contained interactive viewer page (the beads as lit 3D tubes, WebGL 2),
+//! - `html`: a self-contained interactive viewer page (the beads as lit 3D tubes, WebGL 2),
 //!   of one file or two compared side by side.
 //!
 //! Binder-jet raster output (`gweave raster`) draws the drops of each layer

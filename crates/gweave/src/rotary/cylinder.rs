@@ -467,7 +467,7 @@ pub struct UnwrapConfig {
     pub seam_offset_deg: f64,
     /// Extra rotation of every layer relative to the previous one, degrees.
     pub seam_rotation_per_layer_deg: f64,
-    /// Helical unwrapping ([`super::helical`]): the radius rises one layer height per turn.
+    /// Helical unwrapping (`rotary::helical`): the radius rises one layer height per turn.
     pub helical: bool,
 }
 

@@ -9,7 +9,7 @@
 //!   rotary printing), the flat-to-cylinder unwrap mapping, chord subdivision, the seam.
 //! - [`emit`]: the move writer shared by the generators: fixed decimals, absolute or relative E,
 //!   F converted per convention from the rounded coordinates the firmware will actually see.
-//! - [`helical`]: helical unwrapping of a flat part (no weld line) and the check that a part is
+//! - `helical`: helical unwrapping of a flat part (no weld line) and the check that a part is
 //!   not wider than the circumference.
 //! - [`helix`]: seam-free helical tubes and custom helical paths (cones, variable pitch).
 //! - [`wrap`]: the streaming pass that prints a flat-sliced part onto the mandrel.

@@ -25,7 +25,7 @@
 //! (the `setup` module).
 //!
 //! Before writing, the file is read once for the `y` span of its extrusions
-//! ([`super::helical`]): a part wider than the circumference is refused unless
+//! (`rotary::helical`): a part wider than the circumference is refused unless
 //! `allow_overlap`, and the helical mapping starts its turn at the part's smallest `y`.
 //!
 //! The seam rotation counts layers from the slicer's layer comments (the core
@@ -159,7 +159,7 @@ pub struct Wrap {
 
 impl Wrap {
     /// A pass for a validated configuration, given the `y` span of the part's extrusions
-    /// ([`super::helical::file_extent`]): a part wider than the circumference is refused
+    /// (`helical::file_extent`): a part wider than the circumference is refused
     /// unless `allow_overlap`. The machine starts where the core state does, at flat (0, 0, 0),
     /// with the mandrel angle not yet declared.
     pub fn new(config: WrapConfig, extent: Option<PartExtent>) -> Result<Self> {

@@ -7,7 +7,7 @@
 //! G-code's `GCDE`; anything else is text. An output's container is told by its name:
 //! `*.gz` is written compressed, `*.bgcode` as binary G-code ([`Container::of_output`]).
 //! Everything is streamed: gzip through flate2, binary G-code one block at a time, decoded on a
-//! thread of its own ([`ahead`]).
+//! thread of its own (`ahead`).
 
 pub(crate) mod ahead;
 pub(crate) mod bgcode;
