@@ -10,7 +10,7 @@
 //!   (two-constant Kubelka-Munk on spectra, like pigments).
 //! - `predict`: a mix's predicted colour as `#rrggbb` and CIELAB (`gweave mix --predict`).
 //! - `solve`: the mix whose predicted colour is nearest a target.
-//! - `palette`: the seed's 17 named CMY(K) colours plus user mixes from TOML.
+//! - `palette`: the mixing post-processor seed's (`docs/seeds.md`) 17 named CMY(K) colours plus user mixes from TOML.
 //! - `dialect`: Marlin `M163`/`M164`/`M165` and RepRapFirmware `M563`/`M567`
 //!   lines from a mix, and `MixingState` following those commands in a stream.
 //! - `fit`: filament colours and strengths from measured calibration swatches.

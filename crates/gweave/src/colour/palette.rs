@@ -1,4 +1,4 @@
-//! Named mixes: the seed's 17-colour CMY(K) palette plus user definitions.
+//! Named mixes: the mixing post-processor seed's 17-colour CMY(K) palette plus user definitions.
 //!
 //! The built-in palette is Annex A of the mixing seed (docs/seeds.md) (a 4-in/1-out mixing extruder,
 //! 2016): inputs E0 cyan, E1 magenta, E2 yellow, E3 white or a second material.
@@ -29,7 +29,7 @@ use super::mixing::MixingModel;
 use super::solve::{solve, OUT_OF_GAMUT_DE};
 use super::srgb::Srgb8;
 
-/// Seed 000, Annex A: name and ratios for E0 cyan, E1 magenta, E2 yellow, E3 white.
+/// The mixing post-processor seed's Annex A (`docs/seeds.md`): name and ratios for E0 cyan, E1 magenta, E2 yellow, E3 white.
 pub const SEED_PALETTE: [(&str, [f64; 4]); 17] = [
     ("Cyan", [1.0, 0.0, 0.0, 0.0]),
     ("Ocean", [0.83, 0.17, 0.0, 0.0]),

@@ -215,7 +215,7 @@ mod tests {
 
     #[test]
     fn filament_conversions() {
-        // 1.75 mm filament: 2.405 mm^2, so the seed's 25 mm purge is 60.1 mm^3.
+        // 1.75 mm filament: 2.405 mm^2, so the mixing seed's 25 mm purge is 60.1 mm^3.
         close(filament_mm_to_mm3(25.0, 1.75).unwrap(), 60.132, 1e-3);
         close(mm3_to_filament_mm(100.0, 1.75).unwrap(), 41.575, 1e-3);
         close(mm3_to_filament_mm(100.0, 2.85).unwrap(), 15.676, 1e-3);

@@ -1,5 +1,5 @@
-//! The purge sequence a mixing hotend needs after a change of mix, as the seed's post-processor
-//! did it: retract, lift, travel to the purge spot, extrude, retract, wipe, come back, lower,
+//! The purge sequence a mixing hotend needs after a change of mix, as the mixing
+//! post-processor seed (`docs/seeds.md`) did it: retract, lift, travel to the purge spot, extrude, retract, wipe, come back, lower,
 //! unretract, restore the extruder position.
 //!
 //! E bookkeeping. Let `r` be the block's own retraction and `d` the retraction the slicer already

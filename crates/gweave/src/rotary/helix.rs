@@ -335,7 +335,7 @@ impl Resolution {
     }
 }
 
-/// The bead, the material and how to write the program. TOML keys are all optional; the defaults are the seed's setup (`G28 X Z`, `M109 S190`, `G90`, `G21`).
+/// The bead, the material and how to write the program. TOML keys are all optional; the defaults are the rotary seed's setup (`docs/seeds.md`) (`G28 X Z`, `M109 S190`, `G90`, `G21`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PrintSettings {

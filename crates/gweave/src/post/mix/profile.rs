@@ -117,7 +117,7 @@ fn default_density() -> f64 {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Hardware {
-    /// Input 0 first. Default: the seed's cyan, magenta, yellow and white PLA.
+    /// Input 0 first. Default: the mixing post-processor seed's cyan, magenta, yellow and white PLA.
     pub inputs: Vec<Input>,
     /// How the firmware is told the mix; unset, the file's flavour decides
     /// ([`MixProfile::dialect_for_file`]), and Marlin when the file does not say.
@@ -213,7 +213,7 @@ pub struct PairPurge {
     pub volume_mm3: Option<f64>,
 }
 
-/// The purge at each change of mix. Defaults are the seed's: retract 4 mm, lift 15 mm, go to
+/// The purge at each change of mix. Defaults are the mixing post-processor seed's (`docs/seeds.md`): retract 4 mm, lift 15 mm, go to
 /// X10 Y10, extrude 25 mm.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -343,7 +343,7 @@ pub enum ZCapMode {
     Seed,
 }
 
-/// The Z feed-rate cap. The seed's printer could not move Z faster than F200 (mm/min).
+/// The Z feed-rate cap. The mixing post-processor seed's printer could not move Z faster than F200 (mm/min).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ZCapConfig {

@@ -1,7 +1,7 @@
 //! The plan: every mix the job needs, resolved for the loaded filaments, given a virtual tool,
 //! and the rule that says which mix is wanted at a layer (or height) or for a slicer tool.
 //!
-//! Schedules follow the seed: an entry holds from its layer until the next entry (Orange from
+//! Schedules follow the mixing post-processor seed (`docs/seeds.md`): an entry holds from its layer until the next entry (Orange from
 //! layer 0, Pink from 10, Orange from 25, Blue from 75 to the end). Before the first entry the
 //! first entry's mix is used. A gradient over layers `a..=b` every `n` layers has
 //! `S = (b - a) / n` steps after its first; layer `L` gets step `s = min((L - a) / n, S)` at

@@ -1,4 +1,4 @@
-//! `gweave mix --wizard`: the seed's questions, asked on a terminal (plain line prompts, so
+//! `gweave mix --wizard`: the mixing post-processor seed's questions (`docs/seeds.md`), asked on a terminal (plain line prompts, so
 //! answers can be piped in), answered into a profile TOML for next time.
 //!
 //! The seed asked: one material or two (is the fourth input a second material?); for a

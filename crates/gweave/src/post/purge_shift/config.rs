@@ -18,7 +18,7 @@
 //! chamber_mm3 = 4.0
 //! dead_mm3 = 1.0
 //! tolerance = 0.05               # if set and no purge_mm/purge_mm3: purge = V ln(1/eps) + Vd
-//! [block]                        # fallback "block": gweave mix's purge block (the seed's defaults)
+//! [block]                        # fallback "block": gweave mix's purge block (the mixing seed's defaults)
 //! retract_mm = 4.0
 //! lift_mm = 15.0
 //! x_mm = 10.0
@@ -180,7 +180,7 @@ impl Default for TowerConfig {
     }
 }
 
-/// All settings of the pass. `Default` is the seed's: 2.5 mm of 1.75 mm filament, no crossing
+/// All settings of the pass. `Default` is the purge-shift seed's (`docs/seeds.md`): 2.5 mm of 1.75 mm filament, no crossing
 /// of layers, every feature but the outer wall, no explicit markers, partial fallback.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -457,7 +457,7 @@ impl PurgeShiftConfig {
 }
 
 impl Rules {
-    /// The seed's setting: a fixed purge of `purge_mm` of filament, other rules default.
+    /// The purge-shift seed's setting: a fixed purge of `purge_mm` of filament, other rules default.
     pub fn fixed(purge_mm: f64) -> Result<Rules, ConfigError> {
         PurgeShiftConfig { purge_mm: Some(purge_mm), ..PurgeShiftConfig::default() }.validate()
     }
