@@ -10,7 +10,7 @@
 //! thread of its own (`ahead`).
 
 pub(crate) mod ahead;
-pub(crate) mod bgcode;
+pub mod bgcode;
 pub(crate) mod heatshrink;
 pub(crate) mod meatpack;
 pub(crate) mod spool;

@@ -31,11 +31,17 @@ pub const MAX_BLOCK: u32 = 64 << 20;
 /// Block types (the header's first field).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
+    /// Type 0: the file's metadata (producer).
     FileMetadata,
+    /// Type 1: G-code text.
     GCode,
+    /// Type 2: the slicer's settings.
     SlicerMetadata,
+    /// Type 3: the printer's metadata (what the printer shows).
     PrinterMetadata,
+    /// Type 4: the print's metadata (time, filament).
     PrintMetadata,
+    /// Type 5: a thumbnail image.
     Thumbnail,
 }
 
@@ -63,6 +69,7 @@ impl Kind {
         }
     }
 
+    /// The block type as messages name it.
     pub fn name(self) -> &'static str {
         match self {
             Kind::FileMetadata => "file metadata",
@@ -88,10 +95,13 @@ impl Kind {
 /// Block compressions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Compression {
+    /// Stored as is.
     None,
     /// zlib's deflate, with its zlib wrapper (libbgcode calls `deflateInit`).
     Deflate,
+    /// Heatshrink with window 11 and lookahead 4 bits.
     Heatshrink11,
+    /// Heatshrink with window 12 and lookahead 4 bits.
     Heatshrink12,
 }
 
@@ -119,8 +129,11 @@ impl Compression {
 /// A block's header.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Header {
+    /// The block type.
     pub kind: Kind,
+    /// How the data is compressed.
     pub compression: Compression,
+    /// Size of the data uncompressed, bytes.
     pub uncompressed: u32,
     /// The stored size (the uncompressed size when not compressed).
     pub stored: u32,
@@ -143,8 +156,11 @@ impl Header {
 /// One block as stored: header, parameters and data, ready to be copied into another file.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Block {
+    /// The block's header.
     pub header: Header,
+    /// The parameters after the header (encoding, or a thumbnail's format and size).
     pub params: Vec<u8>,
+    /// The data as stored (compressed when the header says so).
     pub data: Vec<u8>,
 }
 
@@ -181,7 +197,9 @@ impl Block {
 /// PrusaSlicer's newer slicer settings) with an empty key.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Metadata {
+    /// JSON text (encoding 1) rather than `key=value` lines.
     pub json: bool,
+    /// The `key=value` pairs in order (one pair with an empty key for JSON).
     pub items: Vec<(String, String)>,
 }
 
@@ -211,6 +229,7 @@ impl Metadata {
         self.items.iter().flat_map(|(k, v)| [k.as_bytes(), b"=", v.as_bytes(), b"\n"].concat()).collect()
     }
 
+    /// The value of `key`, if present.
     pub fn get(&self, key: &str) -> Option<&str> {
         self.items.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
     }
@@ -224,10 +243,13 @@ impl Metadata {
 /// A thumbnail: its block as stored (copied as it is) and what its parameters say.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Thumbnail {
+    /// The block as stored.
     pub block: Block,
     /// 0 PNG, 1 JPG, 2 QOI.
     pub format: u16,
+    /// Width, px.
     pub width: u16,
+    /// Height, px.
     pub height: u16,
 }
 
@@ -236,9 +258,13 @@ pub struct Thumbnail {
 pub struct Preamble {
     /// Whether the blocks carry CRC32 checksums.
     pub checksum: bool,
+    /// The file metadata block (producer), if any.
     pub file: Option<Metadata>,
+    /// The printer metadata block.
     pub printer: Metadata,
+    /// The thumbnails, in file order.
     pub thumbnails: Vec<Thumbnail>,
+    /// The print metadata block.
     pub print: Metadata,
     /// The slicer metadata blocks (libbgcode reads up to two: INI and JSON).
     pub slicer: Vec<Metadata>,
