@@ -15,6 +15,8 @@
 //! assert_eq!(state.pos[X], 12.5);
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod bed;
 pub mod check;
 pub mod colour;
@@ -33,3 +35,8 @@ pub mod stats;
 pub mod total;
 
 pub use error::{Error, Result};
+// The types most callers start from, as shortcuts; their modules keep the full paths.
+pub use gcode::line::Block;
+pub use gcode::state::State;
+pub use pass::{Pass, Progress, Quiet, Strictness};
+pub use range::Range;
