@@ -50,7 +50,7 @@ pub struct SlicerBed {
 /// Why a bed text was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BedError {
-    /// Neither 3 nor 4 or 5 numbers.
+    /// Not 3, 4 or 5 numbers.
     #[error("expected X,Y,Z or X0,Y0,X1,Y1[,Z] (mm), got {0:?}")]
     Count(String),
     /// A part that is not a number.
