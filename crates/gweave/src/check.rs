@@ -290,7 +290,7 @@ pub fn check_file(
 
 /// Whether a G/M/T code is one that some mainstream firmware (Marlin, RepRapFirmware, Klipper,
 /// Prusa) understands.
-pub fn is_known(letter: u8, number: u32) -> bool {
+pub(crate) fn is_known(letter: u8, number: u32) -> bool {
     match letter {
         b'T' | b'D' => true,
         b'G' => {

@@ -61,7 +61,7 @@ impl Malformed {
 /// malformed word, a bad checksum). A line over [`MAX_LINE`](crate::gcode::reader::MAX_LINE)
 /// counts too, when its last piece arrives (`Pass::long_line`).
 #[inline]
-pub fn is_malformed(block: &Block) -> bool {
+pub(crate) fn is_malformed(block: &Block) -> bool {
     block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error)
 }
 

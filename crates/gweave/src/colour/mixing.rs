@@ -96,7 +96,7 @@ impl MixingModel {
     }
 
     /// Model with a strength (scattering scale, see the module docs) per input.
-    pub fn with_strengths(inputs: &[Srgb8], strengths: &[f64]) -> Result<Self, MixError> {
+    pub(crate) fn with_strengths(inputs: &[Srgb8], strengths: &[f64]) -> Result<Self, MixError> {
         if inputs.is_empty() {
             return Err(MixError::NoInputs);
         }
@@ -106,13 +106,13 @@ impl MixingModel {
     }
 
     /// The same filaments with other strengths (the spectra are kept, not recomputed).
-    pub fn with_new_strengths(&self, strengths: &[f64]) -> Result<Self, MixError> {
+    pub(crate) fn with_new_strengths(&self, strengths: &[f64]) -> Result<Self, MixError> {
         check_strengths(self.inputs.len(), strengths)?;
         Ok(Self { strengths: strengths.to_vec(), ..self.clone() })
     }
 
     /// The strength a filament of colour `c` gets unless told: its relative luminance plus 0.01.
-    pub fn default_strength(c: Srgb8) -> f64 {
+    pub(crate) fn default_strength(c: Srgb8) -> f64 {
         Xyz::from_linear(c.to_linear()).y + STRENGTH_FLOOR
     }
 
@@ -127,7 +127,7 @@ impl MixingModel {
     }
 
     /// Predicted CIELAB colour of a mix.
-    pub fn predict_lab(&self, mix: &Mix) -> Result<Lab, MixError> {
+    pub(crate) fn predict_lab(&self, mix: &Mix) -> Result<Lab, MixError> {
         mix.expect_inputs(self.inputs.len())?;
         Ok(self.lab_for_weights(mix.ratios()))
     }

@@ -55,7 +55,7 @@ pub fn solve(model: &MixingModel, target: Srgb8) -> Solution {
 }
 
 /// Ratios for a CIELAB target.
-pub fn solve_lab(model: &MixingModel, target: Lab) -> Solution {
+pub(crate) fn solve_lab(model: &MixingModel, target: Lab) -> Solution {
     Search::new(model, target).run().0
 }
 

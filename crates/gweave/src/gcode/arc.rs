@@ -24,7 +24,7 @@ pub struct Arc {
 impl Arc {
     /// From start and end points and the I/J centre offset (relative to the start).
     /// Equal start and end points make a full circle, as in Marlin and RepRapFirmware.
-    pub fn from_offset(start: [f64; 2], end: [f64; 2], ij: [f64; 2], clockwise: bool) -> Option<Arc> {
+    pub(crate) fn from_offset(start: [f64; 2], end: [f64; 2], ij: [f64; 2], clockwise: bool) -> Option<Arc> {
         let center = [start[0] + ij[0], start[1] + ij[1]];
         let radius_mm = ij[0].hypot(ij[1]);
         if !(radius_mm.is_finite() && radius_mm > 0.0) {
@@ -54,7 +54,7 @@ impl Arc {
 
     /// From start and end points and a radius; a negative radius asks for the arc longer than half
     /// a circle (RS-274 convention).
-    pub fn from_radius(start: [f64; 2], end: [f64; 2], r: f64, clockwise: bool) -> Option<Arc> {
+    pub(crate) fn from_radius(start: [f64; 2], end: [f64; 2], r: f64, clockwise: bool) -> Option<Arc> {
         let (dx, dy) = (end[0] - start[0], end[1] - start[1]);
         let chord = dx.hypot(dy);
         if chord.is_nan() || chord <= 0.0 || r.is_nan() || r.abs() * 2.0 < chord - 1e-9 {

@@ -125,7 +125,7 @@ pub enum Feature {
 impl Feature {
     /// From the text of a `;TYPE:` comment (PrusaSlicer family and Cura) or a Simplify3D
     /// `; feature` comment.
-    pub fn from_name(name: &[u8]) -> Feature {
+    pub(crate) fn from_name(name: &[u8]) -> Feature {
         let n = trim(name);
         let eq = |s: &str| n.eq_ignore_ascii_case(s.as_bytes());
         if eq("External perimeter") || eq("WALL-OUTER") || eq("Outer wall") || eq("outer perimeter") {
@@ -257,14 +257,14 @@ pub struct Structure {
 
 impl Structure {
     /// Tracking with explicit markers for the print proper.
-    pub fn with_markers(markers: Markers) -> Self {
+    pub(crate) fn with_markers(markers: Markers) -> Self {
         Structure { markers, ..Structure::default() }
     }
 
     /// The current layer when the file marks its layers with comments; `None` when it does not
     /// (layers are then only guessed from Z changes, which mean nothing in, say, a rotary
     /// program whose Z is the radius).
-    pub fn commented_layer(&self) -> Option<u32> {
+    pub(crate) fn commented_layer(&self) -> Option<u32> {
         self.layer.filter(|_| self.marked_layers)
     }
 
@@ -294,7 +294,7 @@ impl Structure {
     }
 
     /// Looks at a line's comment (text after `;`), before its effect on motion.
-    pub fn observe_comment(&mut self, comment: &[u8]) {
+    pub(crate) fn observe_comment(&mut self, comment: &[u8]) {
         let c = trim(comment);
         if let Some(m) = &self.markers.begin {
             if c == m.as_slice() {
@@ -365,7 +365,7 @@ impl Structure {
 
     /// An extruding move at `z_mm`: starts a layer in files without layer markers, and places
     /// Cura/Prusa layers whose Z was not stated.
-    pub fn observe_extrusion(&mut self, z_mm: f64) {
+    pub(crate) fn observe_extrusion(&mut self, z_mm: f64) {
         if self.marked_layers {
             if std::mem::take(&mut self.z_pending) {
                 self.layer_z_mm = z_mm;

@@ -160,7 +160,7 @@ impl PlainMove {
     /// The index of a plain move's letter in [`PlainMove::LETTERS`]. A table lookup: a `match`
     /// compiles to a jump through a table, which the processor guesses wrong word after word.
     #[inline(always)]
-    pub fn index_of(letter: u8) -> Option<usize> {
+    pub(crate) fn index_of(letter: u8) -> Option<usize> {
         const NONE: u8 = u8::MAX;
         const INDEX: [u8; 256] = {
             let mut t = [NONE; 256];

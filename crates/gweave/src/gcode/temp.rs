@@ -49,7 +49,7 @@ impl TempFile {
     }
 
     /// Renames the file to `dest` (atomically, on the same file system) and forgets it.
-    pub fn persist(mut self, dest: &Path) -> io::Result<()> {
+    pub(crate) fn persist(mut self, dest: &Path) -> io::Result<()> {
         let file = self.file.take().expect("a live temporary file");
         let path = file.path().to_path_buf();
         match file.persist(dest) {

@@ -337,7 +337,7 @@ fn backup_path(input: &Path) -> PathBuf {
 
 /// Whether two paths name the same existing file (through links, hard links included).
 #[cfg(unix)]
-pub fn same_file(a: &Path, b: &Path) -> bool {
+pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
     use std::os::unix::fs::MetadataExt;
     match (fs::metadata(a), fs::metadata(b)) {
         (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
@@ -347,7 +347,7 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 
 /// Whether two paths name the same existing file.
 #[cfg(not(unix))]
-pub fn same_file(a: &Path, b: &Path) -> bool {
+pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
     match (fs::canonicalize(a), fs::canonicalize(b)) {
         (Ok(a), Ok(b)) => a == b,
         _ => false,

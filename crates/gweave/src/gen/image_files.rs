@@ -10,7 +10,7 @@ fn io_err(path: &Path, source: std::io::Error) -> BitmapError {
 }
 
 /// Compares names so that digit runs sort by value: `l2.png < l10.png`.
-pub fn natural_cmp(a: &str, b: &str) -> Ordering {
+pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
     let (mut a, mut b) = (a.as_bytes(), b.as_bytes());
     loop {
         match (a.first(), b.first()) {

@@ -94,7 +94,7 @@ impl CheckRanges for Recoat {
 
 impl Recoat {
     /// The three axes must be distinct motion axes. Returns the reason when they are not.
-    pub fn axes_problem(&self) -> Option<String> {
+    pub(crate) fn axes_problem(&self) -> Option<String> {
         let axes = [self.spreader_axis, self.feed_piston_axis, self.build_piston_axis];
         if let Some(a) = axes.iter().find(|a| !AXES.contains(**a)) {
             return Some(format!("[recoat] axis `{a}` is not one of {AXES}"));

@@ -107,7 +107,7 @@ pub struct SliceGrid {
 
 impl SliceGrid {
     /// Plans the grid for a mesh.
-    pub fn for_mesh(mesh: &Mesh, cfg: &SliceConfig) -> Result<Self, SliceError> {
+    pub(crate) fn for_mesh(mesh: &Mesh, cfg: &SliceConfig) -> Result<Self, SliceError> {
         cfg.validate()?;
         let (lo, hi) = mesh.bounds().ok_or(SliceError::EmptyMesh)?;
         if let Some(v) = lo.iter().chain(&hi).find(|v| !v.is_finite()) {
@@ -145,7 +145,7 @@ impl SliceGrid {
     }
 
     /// Height of the cutting plane of layer `k`.
-    pub fn z_of_layer(&self, k: usize) -> f64 {
+    pub(crate) fn z_of_layer(&self, k: usize) -> f64 {
         self.z_min_mm + (k as f64 + 0.5) * self.layer_height_mm
     }
 }
@@ -175,7 +175,7 @@ impl<'m> Slicer<'m> {
     }
 
     /// The section at height `z_mm` as an image of the grid.
-    pub fn slice_at(&mut self, z_mm: f64) -> Bitmap {
+    pub(crate) fn slice_at(&mut self, z_mm: f64) -> Bitmap {
         let g = self.grid;
         for row in &mut self.crossings {
             row.clear();

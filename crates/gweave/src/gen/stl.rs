@@ -107,7 +107,7 @@ pub fn read_stl(path: &Path) -> Result<Mesh, StlError> {
 }
 
 /// Parses STL bytes, binary or ASCII.
-pub fn parse_stl(data: &[u8]) -> Result<Mesh, StlError> {
+pub(crate) fn parse_stl(data: &[u8]) -> Result<Mesh, StlError> {
     if data.len() >= 84 {
         let count = u64::from(u32::from_le_bytes([data[80], data[81], data[82], data[83]]));
         if data.len() as u64 == 84 + 50 * count {

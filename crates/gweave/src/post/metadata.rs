@@ -330,7 +330,7 @@ impl Pass for MetadataPass {
 }
 
 /// A duration as PrusaSlicer writes it: `5h 31m 58s`, `7m 46s`, `1d 0h 0m 1s`.
-pub fn prusa_duration(t_s: f64) -> String {
+pub(crate) fn prusa_duration(t_s: f64) -> String {
     let t = t_s.max(0.0).round() as u64;
     let (d, h, m, s) = (t / 86400, t / 3600 % 24, t / 60 % 60, t % 60);
     if d > 0 {

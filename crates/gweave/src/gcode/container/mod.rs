@@ -35,7 +35,7 @@ pub enum Container {
 
 impl Container {
     /// The container of stored bytes that start with `head`.
-    pub fn sniff(head: &[u8]) -> Container {
+    pub(crate) fn sniff(head: &[u8]) -> Container {
         if head.starts_with(&[0x1f, 0x8b]) {
             Container::Gzip
         } else if head.starts_with(bgcode::MAGIC) {

@@ -163,7 +163,7 @@ impl Accounting {
     }
 
     /// A rotating tool now holds `mix`.
-    pub fn set_tool(&mut self, mix: usize, tool: u32) {
+    pub(crate) fn set_tool(&mut self, mix: usize, tool: u32) {
         self.mixes[mix].tool = Some(tool);
     }
 

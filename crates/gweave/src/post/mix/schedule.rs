@@ -303,12 +303,12 @@ impl Plan {
     }
 
     /// Whether slicer tools are mapped (multi-tool input) rather than scheduled by layer.
-    pub fn maps_tools(&self) -> bool {
+    pub(crate) fn maps_tools(&self) -> bool {
         !self.tool_map.is_empty()
     }
 
     /// The mix for slicer tool `tool`.
-    pub fn for_tool(&self, tool: u32) -> Result<usize, MixPassError> {
+    pub(crate) fn for_tool(&self, tool: u32) -> Result<usize, MixPassError> {
         self.tool_map.get(&tool).copied().ok_or_else(|| {
             MixPassError::Config(format!(
                 "the file selects T{tool}, which has no mix: add --map T{tool}=<mix>"
@@ -317,7 +317,7 @@ impl Plan {
     }
 
     /// The mix wanted at `layer` (0-based) printed at `z_mm`.
-    pub fn mix_at(&self, layer: u32, z_mm: f64) -> Option<usize> {
+    pub(crate) fn mix_at(&self, layer: u32, z_mm: f64) -> Option<usize> {
         let first = self.segments.first()?;
         let k = match first.start {
             At::Layer(_) => f64::from(layer),
