@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use gweave_sim::limits::{Jerk, MarlinCorners};
+use gweave_sim::motion::limits::{Jerk, MarlinCorners};
 use gweave_sim::profile::MachineProfile;
 
 fn gweave(args: &[&str]) -> Output {

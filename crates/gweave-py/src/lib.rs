@@ -665,7 +665,7 @@ fn estimate_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, steps:
     let profile = machine_profile(machine)?;
     let report = py.allow_threads(|| {
         let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
-        gweave_sim::estimate::estimate_report(file, &profile, steps)
+        gweave_sim::motion::estimate::estimate_report(file, &profile, steps)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
     })?;
     to_json(&report)

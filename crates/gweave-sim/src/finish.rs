@@ -28,10 +28,10 @@ use gweave::post::metadata::{
 };
 use gweave::stats::StatsPass;
 
-use crate::estimate::{estimate_time, Estimate, EstimateError, Estimator};
-use crate::limits::MotionProfile;
+use crate::motion::estimate::{estimate_time, Estimate, EstimateError, Estimator};
+use crate::motion::limits::MotionProfile;
+use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
 use crate::profile::MachineProfile;
-use crate::slicer_limits::{slicer_limits, slicer_limits_silent};
 
 pub type Result<T, E = FinishError> = std::result::Result<T, E>;
 

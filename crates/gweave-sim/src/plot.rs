@@ -25,8 +25,8 @@ use gweave::gcode::writer::write_file;
 use gweave::render::png_out::{write_png, Pixels};
 use gweave::render::text::FONT_TTF;
 
-use crate::heater::HeaterId;
-use crate::speed_trace::SpeedTrace;
+use crate::motion::speed_trace::SpeedTrace;
+use crate::thermal::heater::HeaterId;
 use crate::thermal::TimeSeries;
 
 /// Writing the plot failed.
@@ -422,8 +422,8 @@ pub fn save_speed_chart(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{MoveKind, Pos};
-    use crate::planner::{PlannedBlock, Trapezoid};
+    use crate::motion::kinematics::{MoveKind, Pos};
+    use crate::motion::planner::{PlannedBlock, Trapezoid};
     use crate::thermal::{Thermal, ThermalConfig};
     use gweave::render::png_out::decode;
     use gweave::render::raster::Image;

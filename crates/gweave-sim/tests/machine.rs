@@ -3,9 +3,9 @@
 
 use std::path::Path;
 
-use gweave_sim::estimate::estimate;
 use gweave_sim::interp::{Machine, Outcome, SimReport};
-use gweave_sim::limits::{CornerMode, KlipperLimits};
+use gweave_sim::motion::estimate::estimate;
+use gweave_sim::motion::limits::{CornerMode, KlipperLimits};
 use gweave_sim::profile::MachineProfile;
 
 const TORUS: &str = include_str!("data/cura_torus.gcode");

@@ -13,11 +13,11 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::write_file;
 use gweave_sim::interp::Machine;
+use gweave_sim::link::pty::PtyEndpoint;
+use gweave_sim::link::serial::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
+use gweave_sim::link::tcp::TcpEndpoint;
+use gweave_sim::link::transport::{serve, Endpoint, ServeOptions, ServeSummary};
 use gweave_sim::profile::MachineProfile;
-use gweave_sim::pty::PtyEndpoint;
-use gweave_sim::serial::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
-use gweave_sim::tcp::TcpEndpoint;
-use gweave_sim::transport::{serve, Endpoint, ServeOptions, ServeSummary};
 
 use gweave::range::Range;
 

@@ -12,9 +12,9 @@
 use gweave::gcode::state::Effect;
 
 use super::{Halt, Machine, WarningKind};
-use crate::autotune::AutotuneConfig;
-use crate::control::PidGains;
-use crate::heater::HeaterId;
+use crate::thermal::autotune::AutotuneConfig;
+use crate::thermal::control::PidGains;
+use crate::thermal::heater::HeaterId;
 use crate::thermal::{Thermal, ThermalError, WaitMode, WaitStatus};
 
 /// The longest `M109`/`M190`/`M303` the machine waits before giving up, simulated s. Marlin
@@ -311,8 +311,11 @@ pub(super) fn heater_stats(thermal: &Thermal, ids: &[HeaterId]) -> Vec<super::He
                 max_c = max_c.max(s.temp_c);
             }
             let power_w = thermal.heater(id).ok()?.config().power_w;
-            let duty =
-                if n > 0 { power_sum / (n as f64 * f64::from(crate::control::POWER_MAX)) } else { 0.0 };
+            let duty = if n > 0 {
+                power_sum / (n as f64 * f64::from(crate::thermal::control::POWER_MAX))
+            } else {
+                0.0
+            };
             Some(super::HeaterStats {
                 heater: id,
                 temp_c: thermal.temperature(id).ok()?,

@@ -46,14 +46,14 @@ use gweave::gcode::line::Command;
 use gweave::gcode::state::{self, Effect};
 use thiserror::Error;
 
-use crate::estimate::{EstimateError, Estimator};
-use crate::firmware::ProgramStop;
-use crate::heater::HeaterId;
+use crate::inkjet::recoat::RecoatCheck;
 use crate::inkjet::{CanvasGeometry, InkjetCanvas, InkjetError};
+use crate::motion::estimate::{EstimateError, Estimator};
+use crate::motion::speed_trace::SpeedTrace;
+use crate::profile::firmware::ProgramStop;
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
-use crate::protection::{ThermalFault, KILL_LINE};
-use crate::recoat::RecoatCheck;
-use crate::speed_trace::SpeedTrace;
+use crate::thermal::heater::HeaterId;
+use crate::thermal::protection::{ThermalFault, KILL_LINE};
 use crate::thermal::{Thermal, ThermalError};
 
 pub use commands::{help_lines, CommandHelp, COMMANDS};
@@ -388,7 +388,7 @@ impl Machine {
     }
 
     fn is_klipper(&self) -> bool {
-        matches!(self.profile.motion.corners, crate::limits::CornerMode::Klipper(_))
+        matches!(self.profile.motion.corners, crate::motion::limits::CornerMode::Klipper(_))
     }
 
     /// Plans what the line does; a refusal becomes an `echo:` reply and a warning.

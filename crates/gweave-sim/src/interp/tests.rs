@@ -227,7 +227,7 @@ fn mixing_inputs_share_e_by_the_virtual_tool() {
 #[test]
 fn e_steps_and_filament_per_tool_on_two_hotends() {
     let mut p = MachineProfile::default();
-    p.thermal.hotends = vec![crate::heater::HeaterConfig::hotend_40w(); 2];
+    p.thermal.hotends = vec![crate::thermal::heater::HeaterConfig::hotend_40w(); 2];
     p.thermal.extrude_min_c = None;
     let mut m = Machine::new(p).unwrap();
     // Relative E at 500 steps/mm. T0: 2.5 out, 0.8 back, 0.8 out; T1: 1.2 and 0.0031 (the motor
