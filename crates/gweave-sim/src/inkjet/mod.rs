@@ -1,4 +1,5 @@
-//! Inkjet (binder-jet) executor of the virtual printer: records where the drops land.
+//! Inkjet (binder-jet) executor of the virtual printer: records where the drops land, and
+//! checks the powder recoats between layers ([`recoat`]).
 //!
 //! The interpreter calls [`InkjetCanvas::on_m700`] for every `M700 P<head> S<bits>` (Marlin
 //! hpc6602) or `M578 P S` (RepRapFirmware) with the carriage position at that moment. Each set
