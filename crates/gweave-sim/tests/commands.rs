@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use gweave_sim::interp::{help_lines, Machine, COMMANDS};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::MachineProfile;
+use gweave_sim::{help_lines, Machine, COMMANDS};
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")

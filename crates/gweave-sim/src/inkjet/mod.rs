@@ -50,30 +50,42 @@ pub enum InkjetError {
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum InkjetWarning {
     /// Fire with a move since the last `M400`: the drops land somewhere along the move.
+    #[allow(missing_docs)] // the head and the carriage position, mm
     FireWithoutM400 { head: u32, x_mm: f64, y_mm: f64 },
     /// Fire without `P`: the firmware ignores `S`, nothing is fired.
+    #[allow(missing_docs)] // the carriage position, mm
     MissingHead { x_mm: f64, y_mm: f64 },
     /// `P` names a head the profile does not have: nothing is fired.
+    #[allow(missing_docs)] // the head named
     UnknownHead { head: u32 },
     /// Some drops of this fire fall outside the canvas (`lost` of them).
+    #[allow(missing_docs)] // the head, the carriage position (mm) and the drops lost
     OffCanvas { head: u32, x_mm: f64, y_mm: f64, lost: u32 },
     /// A fire after the recoat's pistons moved and before its spreader crossed the bed.
+    #[allow(missing_docs)] // the carriage position, mm
     FireDuringRecoat { x_mm: f64, y_mm: f64 },
     /// A new layer fired without any recoat since the last one.
+    #[allow(missing_docs)] // the new layer's Z, mm
     NoRecoat { z_mm: f64 },
     /// A recoat piston moved other than the layer height asks (times the powder ratio for the
     /// feed piston).
+    #[allow(missing_docs)] // the piston's axis, its travel and the travel expected, mm
     PistonTravel { axis: char, moved_mm: f64, expected_mm: f64 },
     /// The last recoat's spreader did not cross the whole bed.
+    #[allow(missing_docs)] // the spreader's reach and the bed's span along its axis, mm
     SpreaderShort { reach_mm: [f64; 2], bed_mm: [f64; 2] },
 }
 
 /// The bed area recorded, in nozzle pitches (one pixel = one pitch square).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CanvasGeometry {
+    /// Bed X of the canvas' first pixel column, mm.
     pub origin_x_mm: f64,
+    /// Bed Y of the canvas' first pixel row, mm.
     pub origin_y_mm: f64,
+    /// Width in pixels (nozzle pitches).
     pub width_px: usize,
+    /// Height in pixels (nozzle pitches).
     pub height_px: usize,
 }
 
@@ -100,6 +112,7 @@ pub struct InkjetCanvas {
 const SAME_Z_MM: f64 = 1e-6;
 
 impl InkjetCanvas {
+    /// An empty canvas for the printhead, over `geometry` of the bed.
     pub fn new(profile: &PrintheadProfile, geometry: CanvasGeometry) -> Result<Self, InkjetError> {
         profile.validate()?;
         if !(geometry.origin_x_mm.is_finite() && geometry.origin_y_mm.is_finite()) {
@@ -175,6 +188,7 @@ impl InkjetCanvas {
         }
     }
 
+    /// What went wrong with the fires so far.
     pub fn warnings(&self) -> &[InkjetWarning] {
         &self.warnings
     }

@@ -11,8 +11,8 @@
 //! after every command, so they heat, cool and trip their protection while the machine moves.
 //!
 //! ```
-//! use gweave_sim::interp::{Machine, Outcome};
-//! use gweave_sim::profile::MachineProfile;
+//! use gweave_sim::{Machine, Outcome};
+//! use gweave_sim::MachineProfile;
 //!
 //! let mut m = Machine::new(MachineProfile::default()).unwrap();
 //! let mut replies = Vec::new();

@@ -55,7 +55,7 @@
 //! the wait ends, the command finishes, prints its `ok`, and the held lines run in order.
 //!
 //! ```
-//! use gweave_sim::link::serial::{frame_line, Device, Outcome, Protocol, ProtocolConfig};
+//! use gweave_sim::{frame_line, Device, Outcome, Protocol, ProtocolConfig};
 //!
 //! /// A machine that does nothing, instantly.
 //! struct Idle;
@@ -236,6 +236,7 @@ pub struct Protocol<D> {
 pub const MAX_HELD_LINES: usize = 16;
 
 impl<D: Device> Protocol<D> {
+    /// The protocol in front of `device`.
     pub fn new(device: D, config: ProtocolConfig) -> Self {
         Protocol {
             device,
@@ -285,6 +286,7 @@ impl<D: Device> Protocol<D> {
         }
     }
 
+    /// The device behind the protocol.
     pub fn device(&self) -> &D {
         &self.device
     }
@@ -334,10 +336,12 @@ impl<D: Device> Protocol<D> {
         self.halted
     }
 
+    /// What went over the link so far.
     pub fn stats(&self) -> LinkStats {
         self.stats
     }
 
+    /// The protocol's settings.
     pub fn config(&self) -> ProtocolConfig {
         self.config
     }

@@ -24,6 +24,7 @@ use crate::link::transport::{wait_readable, write_all_nonblocking, Endpoint, Eve
 /// What a host that connects while another is served reads before the server closes it.
 pub const REFUSAL: &str = "echo:busy: another host is connected\n";
 
+/// A loopback TCP listener serving one host at a time.
 pub struct TcpEndpoint {
     listener: TcpListener,
     client: Option<TcpStream>,

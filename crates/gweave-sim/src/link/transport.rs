@@ -102,6 +102,7 @@ impl TransportError {
 /// How to serve.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ServeOptions {
+    /// The serial protocol's settings.
     pub protocol: ProtocolConfig,
     /// Pace replies to the simulated clock, this many times faster than real time (1: real
     /// time); `None`: as fast as the simulation runs.

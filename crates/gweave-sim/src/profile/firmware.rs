@@ -32,7 +32,7 @@
 //! ```
 //!
 //! ```
-//! use gweave_sim::profile::firmware::Firmware;
+//! use gweave_sim::Firmware;
 //!
 //! let fw = Firmware::default();
 //! assert!(fw.knows_m(20) && fw.knows_m(600) && !fw.knows_m(80));

@@ -18,7 +18,7 @@
 //! silently as a default).
 //!
 //! ```
-//! use gweave_sim::profile::MachineProfile;
+//! use gweave_sim::MachineProfile;
 //!
 //! let p = MachineProfile::from_toml_str("name = \"mini\"\n[bed]\nx_mm = 180.0\n").unwrap();
 //! assert_eq!((p.bed.x_mm, p.bed.y_mm), (180.0, 200.0));
@@ -75,6 +75,7 @@ pub enum MachineProfileError {
     Firmware(#[from] FirmwareError),
     /// The thermistor table file named by `[thermal] thermistor_table` cannot be read.
     #[error("machine profile: [thermal] thermistor_table {}: {message}", path.display())]
+    #[allow(missing_docs)] // the file and why
     ThermistorTable { path: std::path::PathBuf, message: String },
     /// A fault specification such as `hotend-cartridge-off@120s` that cannot be read.
     #[error("fault `{0}`: expected HEATER-FAULT@SECONDS, e.g. hotend-cartridge-off@120s, bed-thermistor-open@30s, hotend1-thermistor-shorted@5s")]

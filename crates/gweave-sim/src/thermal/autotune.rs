@@ -158,12 +158,15 @@ impl AutotuneConfig {
 pub struct Cycle {
     /// Bias and half-swing for the next cycle, 0..=255 scale.
     pub bias: i64,
+    /// See `bias`.
     pub d: i64,
     /// Trough and peak of this cycle, C.
     pub min_c: f64,
+    /// See `min_c`.
     pub max_c: f64,
     /// Ultimate gain and period, from the third cycle on.
     pub ku: Option<f64>,
+    /// See `ku`.
     pub tu_s: Option<f64>,
     /// Ziegler-Nichols gains from `ku`, `tu_s`.
     pub gains: Option<PidGains>,
@@ -349,8 +352,11 @@ fn to_ms(t_s: f64) -> i64 {
 /// The outcome of [`run_on_heater`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct AutotuneRun {
+    /// The gains found.
     pub gains: PidGains,
+    /// Every relay cycle measured.
     pub cycles: Vec<Cycle>,
+    /// The progress lines M303 prints.
     pub lines: Vec<String>,
     /// Simulated time the tune took, s.
     pub elapsed_s: f64,

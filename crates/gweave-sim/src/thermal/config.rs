@@ -69,13 +69,18 @@ pub struct ThermalConfig {
     /// Bed control (default the seed's bang-bang, as Marlin ships without
     /// `PIDTEMPBED`).
     pub bed_control: ControlConfig,
+    /// Thermal protection of the hotends (Marlin's `THERMAL_PROTECTION_HOTENDS` settings).
     pub hotend_protection: ProtectionConfig,
+    /// Thermal protection of the bed (`THERMAL_PROTECTION_BED`).
     pub bed_protection: ProtectionConfig,
+    /// How `M109` settles.
     pub hotend_wait: WaitConfig,
+    /// How `M190` settles.
     pub bed_wait: WaitConfig,
     /// Targets are capped this far below MAXTEMP (Marlin `HOTEND_OVERSHOOT`
     /// 15 C, `BED_OVERSHOOT` 10 C).
     pub hotend_overshoot_c: f64,
+    /// The bed's margin below its MAXTEMP, C.
     pub bed_overshoot_c: f64,
     /// Period of the firmware's read-protect-control loop, s (0.1).
     pub sample_period_s: f64,

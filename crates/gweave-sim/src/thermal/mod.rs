@@ -17,8 +17,8 @@
 //! the `[thermal]` table of the profile is [`ThermalConfig`].
 //!
 //! ```
-//! use gweave_sim::thermal::heater::HeaterId;
-//! use gweave_sim::thermal::{Thermal, ThermalConfig, WaitMode, WaitStatus};
+//! use gweave_sim::HeaterId;
+//! use gweave_sim::{Thermal, ThermalConfig, WaitMode, WaitStatus};
 //!
 //! let mut th = Thermal::new(ThermalConfig::default()).unwrap();
 //! th.set_target(HeaterId::Hotend(0), 210.0).unwrap();
@@ -59,22 +59,31 @@ pub const COLD_EXTRUSION_LINE: &str = "echo: cold extrusion prevented";
 /// Errors of the thermal facade.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ThermalError {
+    /// A heater's plant is invalid.
     #[error(transparent)]
     Heater(#[from] HeaterError),
+    /// A control algorithm's settings are invalid.
     #[error(transparent)]
     Control(#[from] ControlError),
+    /// The thermistor model or its table is invalid.
     #[error(transparent)]
     Thermistor(#[from] ThermistorError),
+    /// An autotune could not start or failed.
     #[error(transparent)]
     Autotune(#[from] AutotuneError),
+    /// The machine has no such heater.
     #[error("no heater {0:?} on this machine")]
     UnknownHeater(HeaterId),
+    /// PID gains asked of a heater that is not PID-controlled.
     #[error("heater {0:?} is not PID-controlled")]
     NotPid(HeaterId),
+    /// The heaters are halted by a fault until `M999`.
     #[error("printer halted: {}", .0.error_line())]
     Halted(ThermalFault),
+    /// A value (a target) outside its range.
     #[error(transparent)]
     Range(#[from] OutOfRange),
+    /// The profile names a thermistor table file that was never read.
     #[error("thermistor_table {} was named but not read (load the profile with MachineProfile::from_file)", .0.display())]
     TableNotRead(PathBuf),
 }
@@ -113,14 +122,18 @@ struct Channel {
 /// How M109/M190 wait: `S` waits only while heating, `R` both ways.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WaitMode {
+    /// `S`: wait only while heating (a hotter reading ends the wait at once).
     HeatOnly,
+    /// `R`: wait for the target whether heating or cooling.
     Both,
 }
 
 /// Result of polling a wait.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WaitStatus {
+    /// Not yet settled.
     Waiting,
+    /// Settled: the residency time passed within the window.
     Reached,
     /// The printer halted on a thermal fault.
     Halted,

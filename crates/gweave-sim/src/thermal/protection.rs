@@ -107,9 +107,13 @@ impl ProtectionConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FaultKind {
+    /// The reading fell away from a target it had held.
     ThermalRunaway,
+    /// The reading did not rise enough while heating.
     HeatingFailed,
+    /// The reading is below the minimum (a sensor off or shorted open).
     MinTemp,
+    /// The reading is above the maximum.
     MaxTemp,
 }
 
@@ -128,7 +132,9 @@ impl FaultKind {
 /// A thermal fault: what, which heater, when.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ThermalFault {
+    /// Which check tripped.
     pub kind: FaultKind,
+    /// On which heater.
     pub heater: HeaterId,
     /// Simulated time of detection, s.
     pub at_s: f64,
@@ -198,10 +204,6 @@ impl Protection {
             runaway_target_c: 0.0,
             watch: None,
         }
-    }
-
-    pub fn config(&self) -> &ProtectionConfig {
-        &self.cfg
     }
 
     /// Arm (or disarm) the heating watch after a new target was set

@@ -43,6 +43,7 @@ pub(super) struct Front {
 /// bed), planned with that many longer chords, and counted with the first one's line.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct HugeArcs {
+    /// How many arcs.
     pub huge_arcs: u64,
     /// The line of the first, 1-based.
     pub first_huge_arc_line: Option<u64>,

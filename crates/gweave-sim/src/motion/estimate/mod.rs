@@ -2,8 +2,8 @@
 //! planner and the steppers, and add up the time per layer and per feature.
 //!
 //! ```
-//! use gweave_sim::motion::estimate::estimate;
-//! use gweave_sim::motion::limits::{KlipperLimits, MotionProfile};
+//! use gweave_sim::estimate;
+//! use gweave_sim::{KlipperLimits, MotionProfile};
 //!
 //! let gcode = "G1 X100 F3000\nG4 P500\n";
 //! let est = estimate(gcode.as_bytes(), &MotionProfile::klipper(KlipperLimits::default())).unwrap();

@@ -17,6 +17,7 @@ pub struct EstimateReport {
     pub planner: &'static str,
     /// Whether the steps were counted (otherwise all zero).
     pub steps_counted: bool,
+    /// The estimate itself.
     #[serde(flatten)]
     pub estimate: Estimate,
 }

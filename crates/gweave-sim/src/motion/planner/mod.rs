@@ -19,9 +19,9 @@
 //! (G4, M400, M109, ...).
 //!
 //! ```
-//! use gweave_sim::motion::kinematics::{Move, Pos};
-//! use gweave_sim::motion::limits::{KlipperLimits, MotionProfile};
-//! use gweave_sim::motion::planner::{PlannedBlock, Planner};
+//! use gweave_sim::{Move, Pos};
+//! use gweave_sim::{KlipperLimits, MotionProfile};
+//! use gweave_sim::{PlannedBlock, Planner};
 //!
 //! let mut planner = Planner::new(MotionProfile::klipper(KlipperLimits::default())).unwrap();
 //! let mut blocks: Vec<PlannedBlock> = Vec::new();
@@ -41,8 +41,7 @@ mod marlin_block;
 mod marlin_steps;
 mod trapezoid;
 
-pub use junction::{extruder_v2, HalfAngle};
-pub use trapezoid::{peak_v2, Trapezoid};
+pub use trapezoid::Trapezoid;
 
 use crate::motion::kinematics::{Geometry, Move, MoveError, MoveKind, Pos};
 use crate::motion::limits::{CornerMode, MotionProfile, ProfileError};

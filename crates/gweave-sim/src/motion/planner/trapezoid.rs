@@ -77,7 +77,8 @@ fn phase_time(d: f64, v_sum: f64) -> f64 {
 
 /// The highest squared speed a block can reach when it must enter at `entry_v2` and leave at
 /// `exit_v2`: where `v^2 = entry_v2 + 2 a x` meets `v^2 = exit_v2 + 2 a (len - x)`.
-pub fn peak_v2(len: f64, accel: f64, entry_v2: f64, exit_v2: f64) -> f64 {
+#[cfg(test)]
+fn peak_v2(len: f64, accel: f64, entry_v2: f64, exit_v2: f64) -> f64 {
     0.5 * (entry_v2 + exit_v2) + accel * len
 }
 
