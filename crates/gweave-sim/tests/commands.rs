@@ -1,5 +1,5 @@
 //! The command list of the virtual printer is one source: the `?` reply, the table in
-//! `docs/gcode.md` and what the interpreter dispatches all agree with `interp::COMMANDS`.
+//! `docs/gcode.md` and what the interpreter dispatches all agree with the registry, `gweave_sim::COMMANDS`.
 
 use std::path::{Path, PathBuf};
 
