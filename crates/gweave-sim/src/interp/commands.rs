@@ -266,8 +266,8 @@ fn g29(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 /// `G92`: the machine stays where it is; what changes is the logical origin.
 fn set_position(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     let pos = m.core.state().pos;
-    for i in 0..3 {
-        m.shift_mm[i] += c.before[i] - pos[i];
+    for (shift, (before, now)) in m.shift_mm.iter_mut().zip(c.before.iter().zip(pos)) {
+        *shift += before - now;
     }
     m.run_core(c.line, &c.effect, out);
 }

@@ -189,7 +189,7 @@ impl Default for Endstops {
 
 impl Endstops {
     /// The sides in the order X Y Z.
-    pub fn to_array(&self) -> [EndstopSide; 3] {
+    pub fn to_array(self) -> [EndstopSide; 3] {
         [self.x, self.y, self.z]
     }
 }
