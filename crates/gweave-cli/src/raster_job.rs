@@ -19,8 +19,8 @@ use gweave::gen::raster::{
 use gweave::gen::sl1::Sl1Reader;
 use gweave::pass::Progress;
 use gweave::range::{DPI, PIXEL_MM};
-use gweave_sim::estimate::{Estimate, Estimator};
-use gweave_sim::limits::MotionProfile;
+use gweave_sim::MotionProfile;
+use gweave_sim::{Estimate, Estimator};
 use serde::Serialize;
 
 use crate::common::{load_or_default, read_text};
@@ -186,7 +186,7 @@ struct EstimatingWriter<W: Write> {
     inner: W,
     est: Option<Estimator>,
     partial: Vec<u8>,
-    error: Option<gweave_sim::estimate::EstimateError>,
+    error: Option<gweave_sim::EstimateError>,
 }
 
 impl<W: Write> EstimatingWriter<W> {
@@ -593,8 +593,7 @@ mod tests {
         };
         let rep = options.job().unwrap().run(&Target::File(out.clone()), &mut Quiet).unwrap();
         let whole =
-            gweave_sim::estimate::estimate(std::fs::File::open(&out).unwrap(), &MotionProfile::default())
-                .unwrap();
+            gweave_sim::estimate(std::fs::File::open(&out).unwrap(), &MotionProfile::default()).unwrap();
         assert_eq!(rep.time.method, "planner");
         assert_eq!(rep.time.motion_s, whole.total_s);
         // 844 inked columns, each fired twice at >= 800 us.
@@ -623,7 +622,7 @@ mod tests {
         assert_eq!(w.inner, text);
         assert!(w.partial.is_empty());
         let chunked = w.est.take().unwrap().finish();
-        let whole = gweave_sim::estimate::estimate(&text[..], &MotionProfile::default()).unwrap();
+        let whole = gweave_sim::estimate(&text[..], &MotionProfile::default()).unwrap();
         assert_eq!(chunked, whole);
         assert!(whole.total_s > 2.0, "{whole:?}");
     }

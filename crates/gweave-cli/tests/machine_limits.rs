@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use gweave_sim::limits::{Jerk, MarlinCorners};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::MachineProfile;
+use gweave_sim::{Jerk, MarlinCorners};
 
 fn gweave(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_gweave")).args(args).output().unwrap()

@@ -611,12 +611,12 @@ fn slice_raster_json(
 
 // --- gweave-sim: the virtual printer ---
 
-fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::profile::MachineProfile> {
+fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::MachineProfile> {
     match machine {
-        None => Ok(gweave_sim::profile::MachineProfile::default()),
+        None => Ok(gweave_sim::MachineProfile::default()),
         Some(path) => {
             let text = std::fs::read_to_string(&path).map_err(|e| os_error(&path, &e))?;
-            gweave_sim::profile::MachineProfile::from_toml_str(&text)
+            gweave_sim::MachineProfile::from_toml_str(&text)
                 .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
         }
     }
@@ -632,18 +632,18 @@ fn sim_err(e: impl std::fmt::Display) -> PyErr {
 fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, fault: Vec<String>) -> PyResult<String> {
     let mut profile = machine_profile(machine)?;
     for spec in &fault {
-        let spec = spec.parse::<gweave_sim::profile::FaultSpec>();
+        let spec = spec.parse::<gweave_sim::FaultSpec>();
         profile.faults.push(spec.map_err(|e| PyValueError::new_err(format!("fault: {e}")))?);
     }
     let report = py.allow_threads(|| {
-        let mut m = gweave_sim::interp::Machine::new(profile).map_err(sim_err)?;
+        let mut m = gweave_sim::Machine::new(profile).map_err(sim_err)?;
         let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
         let mut reader = LineReader::new(file);
         let mut out = |_t: f64, _l: &str| {};
         while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
             match line.part {
                 Part::Whole => {
-                    if m.execute(line.bytes, &mut out) == gweave_sim::interp::Outcome::Halted {
+                    if m.execute(line.bytes, &mut out) == gweave_sim::Outcome::Halted {
                         break;
                     }
                 }
@@ -665,7 +665,7 @@ fn estimate_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, steps:
     let profile = machine_profile(machine)?;
     let report = py.allow_threads(|| {
         let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
-        gweave_sim::estimate::estimate_report(file, &profile, steps)
+        gweave_sim::estimate_report(file, &profile, steps)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
     })?;
     to_json(&report)
@@ -675,7 +675,7 @@ fn estimate_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, steps:
 /// (Unsendable: it stays on the thread that made it; the controllers are not `Sync`.)
 #[pyclass(module = "gweave", unsendable)]
 struct Machine {
-    inner: gweave_sim::interp::Machine,
+    inner: gweave_sim::Machine,
 }
 
 #[pymethods]
@@ -684,7 +684,7 @@ impl Machine {
     #[new]
     #[pyo3(signature = (*, machine=None))]
     fn new(machine: Option<PathBuf>) -> PyResult<Self> {
-        let inner = gweave_sim::interp::Machine::new(machine_profile(machine)?).map_err(sim_err)?;
+        let inner = gweave_sim::Machine::new(machine_profile(machine)?).map_err(sim_err)?;
         Ok(Self { inner })
     }
 
@@ -698,7 +698,7 @@ impl Machine {
     fn execute(&mut self, line: &str) -> Vec<String> {
         let mut replies = Vec::new();
         let outcome = self.inner.execute(line.as_bytes(), &mut |_t, l| replies.push(l.to_owned()));
-        if outcome == gweave_sim::interp::Outcome::Ok && !self.inner.acknowledged() {
+        if outcome == gweave_sim::Outcome::Ok && !self.inner.acknowledged() {
             replies.push("ok".to_owned());
         }
         replies

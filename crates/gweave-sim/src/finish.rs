@@ -28,11 +28,12 @@ use gweave::post::metadata::{
 };
 use gweave::stats::StatsPass;
 
-use crate::estimate::{estimate_time, Estimate, EstimateError, Estimator};
-use crate::limits::MotionProfile;
+use crate::motion::estimate::{estimate_time, Estimate, EstimateError, Estimator};
+use crate::motion::limits::MotionProfile;
+use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
 use crate::profile::MachineProfile;
-use crate::slicer_limits::{slicer_limits, slicer_limits_silent};
 
+/// A result of finishing an output.
 pub type Result<T, E = FinishError> = std::result::Result<T, E>;
 
 /// Why a transform's output could not be finished.
@@ -42,6 +43,7 @@ pub enum FinishError {
     #[error(transparent)]
     Engine(#[from] gweave::Error),
 
+    /// The written file could not be estimated for its metadata.
     #[error("estimating the print time of the written file: {0}")]
     Estimate(#[from] EstimateError),
 
@@ -51,6 +53,7 @@ pub enum FinishError {
         "{}:{line}: this file was written by `gweave {run}`: a second {command} would stack on the first; run it on the file before (--in-place keeps it as .bak)",
         path.display()
     )]
+    #[allow(missing_docs)] // the input, the header's line, what ran and this command's name
     SecondRun { path: PathBuf, line: u64, run: String, command: String },
 }
 

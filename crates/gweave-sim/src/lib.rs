@@ -1,29 +1,65 @@
-//! The gweave virtual printer.
-pub mod autotune;
-pub mod control;
-pub mod estimate;
+//! The gweave virtual printer: a Marlin-like (or Klipper-like) board on a simulated clock, laid
+//! out as firmware is, one folder per subsystem.
+//!
+//! - [`Machine`] (`interp/`) executes one command at a time, dispatched through the command
+//!   registry ([`COMMANDS`]), and keeps the [`SimReport`] of a run;
+//! - `motion/`: kinematics, limits ([`MotionProfile`]), the lookahead [`Planner`] (Marlin's
+//!   `planner.cpp` or Klipper's `toolhead.py`), the [`Steppers`] and the print-time estimator
+//!   ([`estimate`], [`Estimator`]);
+//! - `thermal/`: heater plants, thermistors, control, protection and autotune behind
+//!   [`Thermal`] (Marlin's `temperature.cpp`);
+//! - `link/`: the host protocol ([`Protocol`]) and the endpoints [`serve`] runs it on
+//!   ([`PtyEndpoint`], [`TcpEndpoint`]);
+//! - `inkjet/`: the drops of a printhead ([`InkjetCanvas`]) and the recoats of a binder-jet bed;
+//! - `profile/`: the [`MachineProfile`] TOML and its `[firmware]` build options;
+//! - [`finish`]: what a front end does around a transform's output; [`plot`]: the charts.
+//!
+//! ```
+//! use gweave_sim::{Machine, MachineProfile, Outcome};
+//!
+//! let mut m = Machine::new(MachineProfile::default()).unwrap();
+//! let mut replies = Vec::new();
+//! assert_eq!(m.execute(b"M114", &mut |_t, l| replies.push(l.to_owned())), Outcome::Ok);
+//! assert_eq!(replies, ["X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0"]);
+//! ```
+#![warn(missing_docs)]
+
 pub mod finish;
-pub mod firmware;
-pub mod heater;
-pub mod inkjet;
-pub mod interp;
-pub mod kinematics;
-pub mod limits;
-pub mod m503;
-pub mod marlin_limits;
-pub mod planner;
+mod inkjet;
+mod interp;
+mod link;
+mod motion;
 pub mod plot;
-pub mod profile;
-pub mod protection;
-pub mod pty;
-pub mod recoat;
-mod rounding;
-pub mod serial;
-pub mod slicer_limits;
-pub mod speed_trace;
-pub mod stepper;
-pub mod tcp;
-pub mod thermal;
-pub mod thermistor;
-pub mod thermistor_csv;
-pub mod transport;
+mod profile;
+mod thermal;
+
+pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetWarning};
+pub use interp::{
+    help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Queue, SimError, SimReport,
+    SimTimes, SimWarning, WarningKind, COMMANDS, STOPPED_LINE, UNKNOWN_KINDS, UNKNOWN_OTHERS,
+};
+pub use link::pty::PtyEndpoint;
+pub use link::serial::{frame_line, Device, Protocol, ProtocolConfig, DEFAULT_KEEPALIVE_S};
+pub use link::tcp::TcpEndpoint;
+pub use link::transport::{serve, Endpoint, ServeOptions, ServeSummary};
+pub use motion::estimate::{
+    estimate, estimate_report, estimate_time, Estimate, EstimateError, EstimateReport, Estimator, HugeArcs,
+    Malformed, MAX_ARC_CHORDS,
+};
+pub use motion::kinematics::{Move, Pos};
+pub use motion::limits::{
+    AxisLimits, CornerMode, Jerk, KlipperLimits, MotionProfile, MoveAccel, StepsPerUnit,
+};
+pub use motion::marlin_limits::{ExtruderLimits, MarlinCorners};
+pub use motion::planner::{PlannedBlock, Planner};
+pub use motion::slicer_limits::slicer_limits;
+pub use motion::stepper::{BresenhamWalk, Steppers};
+pub use profile::firmware::{Firmware, ProgramStop};
+pub use profile::m503::from_m503;
+pub use profile::{FaultSpec, Inkjet, MachineProfile, MachineProfileError};
+pub use thermal::autotune::{run_on_heater, AutotuneConfig, AutotuneRun, Cycle};
+pub use thermal::control::PidGains;
+pub use thermal::heater::{HeaterConfig, HeaterFault, HeaterId};
+pub use thermal::protection::{FaultKind, ThermalFault, KILL_LINE};
+pub use thermal::thermistor::SensorFault;
+pub use thermal::{Thermal, ThermalConfig, ThermalError, WaitMode, WaitStatus, COLD_EXTRUSION_LINE};

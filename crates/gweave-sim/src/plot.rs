@@ -25,8 +25,8 @@ use gweave::gcode::writer::write_file;
 use gweave::render::png_out::{write_png, Pixels};
 use gweave::render::text::FONT_TTF;
 
-use crate::heater::HeaterId;
-use crate::speed_trace::SpeedTrace;
+use crate::motion::speed_trace::SpeedTrace;
+use crate::thermal::heater::HeaterId;
 use crate::thermal::TimeSeries;
 
 /// Writing the plot failed.
@@ -52,7 +52,9 @@ pub enum PlotError {
 /// What a chart is written as.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ChartFormat {
+    /// A bitmap.
     Png,
+    /// A vector drawing, the text as text.
     Svg,
 }
 
@@ -75,13 +77,18 @@ pub const SPEED_PX: (u32, u32) = (1000, 640);
 const MIXING_PANEL_PX: u32 = 220;
 
 /// Line colours per heater (hotends in order, the bed its own).
+/// Temperature chart colours of the hotends, in order, and of the bed.
 pub const HOTEND_COLOURS: [RGBColor; 4] =
     [RGBColor(200, 40, 30), RGBColor(30, 90, 200), RGBColor(30, 150, 60), RGBColor(150, 60, 170)];
+/// See [`HOTEND_COLOURS`].
 pub const BED_COLOUR: RGBColor = RGBColor(230, 140, 20);
 /// Speed chart colours: mean, peak, layer bars, mixing inputs.
 pub const SPEED_MEAN: RGBColor = RGBColor(30, 90, 200);
+/// See [`SPEED_MEAN`].
 pub const SPEED_PEAK: RGBColor = RGBColor(170, 195, 240);
+/// See [`SPEED_MEAN`].
 pub const LAYER_BAR: RGBColor = RGBColor(230, 140, 20);
+/// See [`SPEED_MEAN`].
 pub const INPUT_BAR: RGBColor = RGBColor(60, 150, 110);
 
 /// A panel's mapping from (time or index, value) to pixels, for tests and callers that mark it.
@@ -305,7 +312,9 @@ struct Speeds<'a> {
 
 /// The speed chart's panels' axes: speed (minutes, mm/s) and layer time (layer, s).
 pub struct SpeedAxes {
+    /// Speed over time: minutes, mm/s.
     pub speed: Axes,
+    /// Layer times: layer, s.
     pub layers: Axes,
 }
 
@@ -422,8 +431,8 @@ pub fn save_speed_chart(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{MoveKind, Pos};
-    use crate::planner::{PlannedBlock, Trapezoid};
+    use crate::motion::kinematics::{MoveKind, Pos};
+    use crate::motion::planner::{PlannedBlock, Trapezoid};
     use crate::thermal::{Thermal, ThermalConfig};
     use gweave::render::png_out::decode;
     use gweave::render::raster::Image;

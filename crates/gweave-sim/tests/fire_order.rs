@@ -6,9 +6,9 @@
 use gweave::gen::bitmap::Bitmap;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{FireOrder, RasterConfig, RasterWriter};
-use gweave_sim::inkjet::{CanvasGeometry, InkjetWarning};
-use gweave_sim::interp::{Machine, Outcome};
-use gweave_sim::profile::{Inkjet, MachineProfile};
+use gweave_sim::{CanvasGeometry, InkjetWarning};
+use gweave_sim::{Inkjet, MachineProfile};
+use gweave_sim::{Machine, Outcome};
 
 #[test]
 fn seed_fire_order_fires_while_moving_and_lands_on_the_same_pixels() {

@@ -10,9 +10,9 @@ use gweave::gen::bitmap::{Bitmap, Channel, ThresholdOptions};
 use gweave::gen::printhead::{HeadOffset, PrintheadProfile};
 use gweave::gen::raster::{raster_image_stacks, raster_sl1, ImageStack, RasterConfig};
 use gweave::gen::sl1::Sl1Reader;
-use gweave_sim::inkjet::{CanvasGeometry, InkjetCanvas, InkjetWarning};
-use gweave_sim::interp::{Machine, Outcome};
-use gweave_sim::profile::{Inkjet, MachineProfile};
+use gweave_sim::{CanvasGeometry, InkjetCanvas, InkjetWarning};
+use gweave_sim::{Inkjet, MachineProfile};
+use gweave_sim::{Machine, Outcome};
 
 fn word(line: &str, letter: char) -> Option<&str> {
     line.split_whitespace().find_map(|w| w.strip_prefix(letter))

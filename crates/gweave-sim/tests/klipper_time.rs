@@ -2,8 +2,8 @@
 //! README: Klipper at commit 84104bb, `max_velocity 300`, `max_accel 3000`,
 //! `minimum_cruise_ratio 0.5`, `square_corner_velocity 5`, `instantaneous_corner_velocity 1`).
 
-use gweave_sim::estimate::{estimate, Estimate};
-use gweave_sim::limits::{KlipperLimits, MotionProfile};
+use gweave_sim::{estimate, Estimate};
+use gweave_sim::{KlipperLimits, MotionProfile};
 
 /// The fixture prepared for Klipper's batch mode as the README says: `G28` becomes
 /// `SET_KINEMATIC_POSITION X=0 Y=0 Z=0`, `M109`/`M190` go, `{machine_depth}` becomes 220.

@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
-use gweave_sim::estimate::estimate;
-use gweave_sim::interp::{Machine, Outcome, SimReport};
-use gweave_sim::limits::{CornerMode, KlipperLimits};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::estimate;
+use gweave_sim::MachineProfile;
+use gweave_sim::{CornerMode, KlipperLimits};
+use gweave_sim::{Machine, Outcome, SimReport};
 
 const TORUS: &str = include_str!("data/cura_torus.gcode");
 

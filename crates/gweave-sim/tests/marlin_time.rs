@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
-use gweave_sim::estimate::estimate_time;
-use gweave_sim::limits::{AxisLimits, CornerMode, Jerk, MotionProfile, MoveAccel, StepsPerUnit};
+use gweave_sim::estimate_time;
+use gweave_sim::{AxisLimits, CornerMode, Jerk, MotionProfile, MoveAccel, StepsPerUnit};
 
 /// One set of limits, as the M-code lines given to the tool (`M92`, `M201`, `M203`,
 /// `M204 P R T`, `M205 X Y Z E S0 T0` or `M205 S0 T0 J`).

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use gweave::post::mix::card::calibration_card;
 use gweave::post::mix::profile::MixProfile;
-use gweave_sim::interp::{Machine, SimReport};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::MachineProfile;
+use gweave_sim::{Machine, SimReport};
 
 fn sim_mixing(text: &str) -> SimReport {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines/mixing-4in.toml");

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 
 use gweave::post::mix::mix_bytes;
 use gweave::post::mix::profile::MixProfile;
-use gweave_sim::interp::{Machine, SimReport};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::MachineProfile;
+use gweave_sim::{Machine, SimReport};
 
 fn repo(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)

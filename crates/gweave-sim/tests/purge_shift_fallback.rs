@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 
 use gweave::post::purge_shift::{purge_shift_bytes, PurgeShiftConfig};
-use gweave_sim::interp::{Machine, SimReport};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::MachineProfile;
+use gweave_sim::{Machine, SimReport};
 
 fn fixture(rel: &str) -> Vec<u8> {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel);

@@ -7,9 +7,9 @@ use std::path::Path;
 use gweave::gen::bitmap::Bitmap;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{RasterConfig, RasterWriter};
-use gweave_sim::inkjet::InkjetWarning;
-use gweave_sim::interp::{Machine, Outcome, WarningKind};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::InkjetWarning;
+use gweave_sim::MachineProfile;
+use gweave_sim::{Machine, Outcome, WarningKind};
 
 fn machine_profile() -> MachineProfile {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines/binder-jet.toml");

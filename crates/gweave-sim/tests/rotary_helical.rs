@@ -7,8 +7,8 @@ use std::path::Path;
 
 use gweave::rotary::cylinder::RotaryConfig;
 use gweave::rotary::wrap::{wrap_bytes, WrapConfig};
-use gweave_sim::interp::Machine;
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::Machine;
+use gweave_sim::MachineProfile;
 
 #[test]
 fn helical_wrap_puts_every_bead_on_its_helix() {

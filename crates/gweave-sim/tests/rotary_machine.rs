@@ -7,8 +7,8 @@ use std::path::Path;
 
 use gweave::rotary::cylinder::RotaryConfig;
 use gweave::rotary::helix::TubeParams;
-use gweave_sim::interp::{Machine, Outcome};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::MachineProfile;
+use gweave_sim::{Machine, Outcome};
 
 fn rotary_machine() -> Machine {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines/rotary.toml");

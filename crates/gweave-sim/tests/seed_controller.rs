@@ -4,10 +4,10 @@
 
 use std::path::Path;
 
-use gweave_sim::estimate::estimate;
-use gweave_sim::interp::{Machine, Outcome};
-use gweave_sim::limits::{CornerMode, KlipperLimits, MotionProfile};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::estimate;
+use gweave_sim::MachineProfile;
+use gweave_sim::{CornerMode, KlipperLimits, MotionProfile};
+use gweave_sim::{Machine, Outcome};
 
 fn example() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines/seed-controller.toml")
@@ -54,7 +54,7 @@ fn a_bad_table_names_the_file_and_line() {
 fn m0_per_profile_marlin_stops_the_seed_ends_the_program() {
     let seed = MachineProfile::from_file(&example()).unwrap();
     let mut marlin = seed.clone();
-    marlin.firmware.m0 = gweave_sim::firmware::ProgramStop::Marlin;
+    marlin.firmware.m0 = gweave_sim::ProgramStop::Marlin;
     for (profile, ended, x_after) in [(marlin, false, 50.0), (seed, true, 0.0)] {
         let mut machine = Machine::new(profile).unwrap();
         for line in ["G28", "G1 X50 Y20 F3000", "M0"] {

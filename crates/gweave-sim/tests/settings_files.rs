@@ -7,7 +7,7 @@ use gweave::gen::printhead::PrintheadProfile;
 use gweave::post::mix::profile::MixProfile;
 use gweave::rotary::helix::TubeParams;
 use gweave::rotary::wrap::WrapConfig;
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::MachineProfile;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")

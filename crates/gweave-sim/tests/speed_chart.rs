@@ -5,9 +5,9 @@
 use std::path::Path;
 
 use gweave::render::{Toolpath, ToolpathOptions};
-use gweave_sim::interp::{Machine, Outcome};
 use gweave_sim::plot::{speed_chart, ChartFormat};
-use gweave_sim::profile::MachineProfile;
+use gweave_sim::MachineProfile;
+use gweave_sim::{Machine, Outcome};
 
 #[test]
 fn the_speed_trace_of_cura_torus_adds_up_to_its_path() {

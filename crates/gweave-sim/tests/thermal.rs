@@ -1,12 +1,12 @@
 //! The thermal facade end to end: heat-ups, every protection on a faulty
 //! plant, M105 text, M109/M190 waits, cold extrusion, M303 and the series.
 
-use gweave_sim::autotune::AutotuneConfig;
-use gweave_sim::control::PidGains;
-use gweave_sim::heater::{HeaterConfig, HeaterFault, HeaterId};
-use gweave_sim::protection::{FaultKind, ThermalFault, KILL_LINE};
-use gweave_sim::thermal::{Thermal, ThermalConfig, ThermalError, WaitMode, WaitStatus, COLD_EXTRUSION_LINE};
-use gweave_sim::thermistor::SensorFault;
+use gweave_sim::AutotuneConfig;
+use gweave_sim::PidGains;
+use gweave_sim::SensorFault;
+use gweave_sim::{FaultKind, ThermalFault, KILL_LINE};
+use gweave_sim::{HeaterConfig, HeaterFault, HeaterId};
+use gweave_sim::{Thermal, ThermalConfig, ThermalError, WaitMode, WaitStatus, COLD_EXTRUSION_LINE};
 use proptest::prelude::*;
 
 const T0: HeaterId = HeaterId::Hotend(0);

@@ -3,10 +3,10 @@
 
 use std::time::Instant;
 
-use gweave_sim::kinematics::{Move, Pos};
-use gweave_sim::limits::{KlipperLimits, MotionProfile};
-use gweave_sim::planner::{PlannedBlock, Planner};
-use gweave_sim::stepper::Steppers;
+use gweave_sim::Steppers;
+use gweave_sim::{KlipperLimits, MotionProfile};
+use gweave_sim::{Move, Pos};
+use gweave_sim::{PlannedBlock, Planner};
 
 fn run(profile: MotionProfile, n: u64) -> (f64, f64) {
     let mut planner = Planner::new(profile.clone()).unwrap();

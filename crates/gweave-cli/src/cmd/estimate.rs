@@ -8,9 +8,9 @@ use anyhow::{anyhow, Context, Result};
 use clap::Args;
 use gweave::gcode::container;
 use gweave::pass::Progress;
-use gweave_sim::estimate::{estimate_report, EstimateReport};
-use gweave_sim::profile::MachineProfile;
-use gweave_sim::slicer_limits::slicer_limits;
+use gweave_sim::slicer_limits;
+use gweave_sim::MachineProfile;
+use gweave_sim::{estimate_report, EstimateReport};
 
 use super::sim::{print_layers_and_features, print_malformed};
 use crate::args::Quiet;

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
-use gweave_sim::m503::from_m503;
+use gweave_sim::from_m503;
 
 use crate::common::{print_summary, read_text, write_bytes};
 use crate::files::Files;

@@ -12,12 +12,12 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::write_file;
-use gweave_sim::interp::Machine;
-use gweave_sim::profile::MachineProfile;
-use gweave_sim::pty::PtyEndpoint;
-use gweave_sim::serial::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
-use gweave_sim::tcp::TcpEndpoint;
-use gweave_sim::transport::{serve, Endpoint, ServeOptions, ServeSummary};
+use gweave_sim::Machine;
+use gweave_sim::MachineProfile;
+use gweave_sim::PtyEndpoint;
+use gweave_sim::TcpEndpoint;
+use gweave_sim::{serve, Endpoint, ServeOptions, ServeSummary};
+use gweave_sim::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
 
 use gweave::range::Range;
 

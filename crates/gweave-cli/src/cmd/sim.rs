@@ -11,11 +11,11 @@ use gweave::gcode::container;
 use gweave::gcode::layers::Feature;
 use gweave::gcode::reader::{LineReader, Part};
 use gweave::pass::Progress;
-use gweave_sim::estimate::{HugeArcs, Malformed, MAX_ARC_CHORDS};
-use gweave_sim::heater::HeaterId;
-use gweave_sim::interp::{Machine, Outcome, SimReport};
 use gweave_sim::plot::{save_speed_chart, save_temperature_chart, ChartFormat};
-use gweave_sim::profile::{FaultSpec, MachineProfile};
+use gweave_sim::HeaterId;
+use gweave_sim::{FaultSpec, MachineProfile};
+use gweave_sim::{HugeArcs, Malformed, MAX_ARC_CHORDS};
+use gweave_sim::{Machine, Outcome, SimReport};
 
 use crate::args::Quiet;
 use crate::common::{hms, load_or_default, print_summary, ReportArgs};

@@ -2,8 +2,8 @@
 //! wall-timed `M400`, over the serial protocol where hosts see them.
 
 use super::*;
+use crate::link::serial::{frame_line, Protocol, ProtocolConfig};
 use crate::profile::MachineProfile;
-use crate::serial::{frame_line, Protocol, ProtocolConfig};
 
 fn run(m: &mut Machine, text: &str) -> Vec<String> {
     let mut replies = Vec::new();

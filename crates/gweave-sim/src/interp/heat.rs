@@ -9,12 +9,13 @@
 //! seconds once the reading is within `TEMP_WINDOW` of the target and is `?` before. (Marlin
 //! 1.x printed a shorter `T:.. E:0 W:?`; hosts read the `T:` either way.)
 
-use gweave::gcode::state::Effect;
+use gweave::range;
 
+use super::commands::{Call, Params};
 use super::{Halt, Machine, WarningKind};
-use crate::autotune::AutotuneConfig;
-use crate::control::PidGains;
-use crate::heater::HeaterId;
+use crate::thermal::autotune::AutotuneConfig;
+use crate::thermal::control::PidGains;
+use crate::thermal::heater::HeaterId;
 use crate::thermal::{Thermal, ThermalError, WaitMode, WaitStatus};
 
 /// The longest `M109`/`M190`/`M303` the machine waits before giving up, simulated s. Marlin
@@ -25,80 +26,72 @@ const MAX_WAIT_S: f64 = 3.0 * 3600.0;
 const WAIT_REPORT_S: f64 = 1.0;
 
 impl Machine {
-    pub(super) fn heat_command(
-        &mut self,
-        line: &[u8],
-        number: u32,
-        effect: Effect,
-        out: &mut dyn FnMut(f64, &str),
-    ) {
+    /// `M104`/`M109 [T<hotend>] S|R<celsius>`: the hotend's target; `M109` also waits (`S`:
+    /// while heating, `R`: both ways).
+    pub(super) fn hotend_target(&mut self, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
         let b = self.core.block();
-        let s = b.get(b'S');
-        let r = b.get(b'R');
-        let t = b.get(b'T');
-        let e = b.get(b'E');
-        match number {
-            104 | 109 => {
-                let hotend = t.map_or(self.active_hotend_index(), |t| t.max(0.0) as u8);
-                let id = HeaterId::Hotend(hotend);
-                if self.thermal.target(id).is_err() {
-                    let code = format!("M{number}");
-                    out(self.now_s(), &format!("echo:{code} Invalid extruder {hotend}"));
-                    self.warn(WarningKind::InvalidExtruder { tool: u32::from(hotend) });
-                    return;
-                }
-                self.set_target(id, s.or(r), out);
-                if number == 109 {
-                    self.run_core(line, &effect, out);
-                    self.sync(out);
-                    let mode = mode(r.is_some() && s.is_none());
-                    self.wait_heater(id, mode, out);
-                }
-            }
-            140 | 190 => {
-                if self.thermal.target(HeaterId::Bed).is_err() {
-                    self.unknown_command(line, out);
-                    return;
-                }
-                self.set_target(HeaterId::Bed, s.or(r), out);
-                if number == 190 {
-                    self.run_core(line, &effect, out);
-                    self.sync(out);
-                    self.wait_heater(HeaterId::Bed, mode(r.is_some() && s.is_none()), out);
-                }
-            }
-            116 => {
-                // RepRapFirmware: wait for every heater that has a target.
-                self.run_core(line, &effect, out);
-                self.core.drain();
-                self.sync(out);
-                let ids = (0..self.thermal.hotend_count())
-                    .map(HeaterId::Hotend)
-                    .chain(self.profile.thermal.bed.map(|_| HeaterId::Bed))
-                    .filter(|&id| self.thermal.target(id).is_ok_and(|t| t > 0.0))
-                    .collect::<Vec<_>>();
-                for id in ids {
-                    self.wait_heater(id, WaitMode::HeatOnly, out);
-                }
-            }
-            105 => {
-                let text = format!("ok {}", self.thermal.m105_report());
-                out(self.now_s(), &text);
-                self.acknowledged = true;
-            }
-            106 | 107 => {
-                let fan = self.core.state().thermal.fan;
-                self.thermal.set_fan(fan);
-            }
-            155 => {
-                let period = s.unwrap_or(0.0);
-                self.autoreport_s = if period.is_finite() && period > 0.0 { period } else { 0.0 };
-                self.next_report_s = self.now_s() + self.autoreport_s;
-            }
-            301 => self.m301(e, out),
-            303 => self.m303(e, s, out),
-            _ => {}
+        let (s, r) = (b.get(b'S'), b.get(b'R'));
+        let hotend = b.get(b'T').map_or(self.active_hotend_index(), |t| t.max(0.0) as u8);
+        let id = HeaterId::Hotend(hotend);
+        if self.thermal.target(id).is_err() {
+            out(self.now_s(), &format!("echo:M{} Invalid extruder {hotend}", c.number));
+            self.warn(WarningKind::InvalidExtruder { tool: u32::from(hotend) });
+            return;
         }
+        self.set_target(id, s.or(r), out);
+        if c.number == 109 {
+            self.run_core(c.line, &c.effect, out);
+            self.sync(out);
+            self.wait_heater(id, mode(r.is_some() && s.is_none()), out);
+        }
+    }
+
+    /// `M140`/`M190 S|R<celsius>`: the bed's target; `M190` also waits. Unknown without a bed.
+    pub(super) fn bed_target(&mut self, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+        if self.thermal.target(HeaterId::Bed).is_err() {
+            self.unknown_command(c.line, out);
+            return;
+        }
+        let b = self.core.block();
+        let (s, r) = (b.get(b'S'), b.get(b'R'));
+        self.set_target(HeaterId::Bed, s.or(r), out);
+        if c.number == 190 {
+            self.run_core(c.line, &c.effect, out);
+            self.sync(out);
+            self.wait_heater(HeaterId::Bed, mode(r.is_some() && s.is_none()), out);
+        }
+    }
+
+    /// `M116` (RepRapFirmware): wait for every heater that has a target.
+    pub(super) fn m116(&mut self, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+        self.run_core(c.line, &c.effect, out);
+        self.core.drain();
+        self.sync(out);
+        let ids = (0..self.thermal.hotend_count())
+            .map(HeaterId::Hotend)
+            .chain(self.profile.thermal.bed.map(|_| HeaterId::Bed))
+            .filter(|&id| self.thermal.target(id).is_ok_and(|t| t > 0.0))
+            .collect::<Vec<_>>();
+        for id in ids {
+            self.wait_heater(id, WaitMode::HeatOnly, out);
+        }
+    }
+
+    /// `M105`: the temperatures, answered with its own `ok` as Marlin does.
+    pub(super) fn m105(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let text = format!("ok {}", self.thermal.m105_report());
+        out(self.now_s(), &text);
+        self.acknowledged = true;
+    }
+
+    /// `M155 S<seconds>`: report the temperatures every S seconds (0: off).
+    pub(super) fn m155(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let period = match Params::new('M', 155, self.core.block()).get(b'S', range::PERIOD_S) {
+            Ok(s) => s.unwrap_or(0.0),
+            Err(e) => return self.refuse(e.to_string(), out),
+        };
+        self.autoreport_s = period;
+        self.next_report_s = self.now_s() + self.autoreport_s;
     }
 
     /// RepRapFirmware `G10 P<tool> S<active> [R<standby>]` and its successor `M568` (same
@@ -189,9 +182,9 @@ impl Machine {
     }
 
     /// `M301 [E<n>] [P] [I] [D]`: set the given gains, print them all.
-    fn m301(&mut self, e: Option<f64>, out: &mut dyn FnMut(f64, &str)) {
-        let id = HeaterId::Hotend(e.map_or(0, |e| e.max(0.0) as u8));
+    pub(super) fn m301(&mut self, out: &mut dyn FnMut(f64, &str)) {
         let b = self.core.block();
+        let id = HeaterId::Hotend(b.get(b'E').map_or(0, |e| e.max(0.0) as u8));
         let (p, i, d) = (b.get(b'P'), b.get(b'I'), b.get(b'D'));
         let result = self.thermal.pid_gains(id).and_then(|g| {
             let gains = PidGains { kp: p.unwrap_or(g.kp), ki: i.unwrap_or(g.ki), kd: d.unwrap_or(g.kd) };
@@ -204,19 +197,20 @@ impl Machine {
     }
 
     /// `M303 E<heater> S<temp> [C<cycles>] [U1]`: relay autotune on the plant (E-1 is the bed).
-    fn m303(&mut self, e: Option<f64>, s: Option<f64>, out: &mut dyn FnMut(f64, &str)) {
+    pub(super) fn m303(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let b = self.core.block();
+        let (e, s) = (b.get(b'E'), b.get(b'S'));
         let id = match e {
             Some(e) if e < 0.0 => HeaterId::Bed,
             e => HeaterId::Hotend(e.map_or(0, |e| e as u8)),
         };
         let default_c = if id == HeaterId::Bed { 70.0 } else { 150.0 };
-        let b = self.core.block();
         let mut cfg = AutotuneConfig::new(s.unwrap_or(default_c));
         if let Some(c) = b.get(b'C') {
             cfg.cycles = c.max(0.0) as u32;
         }
         let apply = b.get(b'U').is_some_and(|u| u != 0.0);
-        self.core.drain();
+        // The registry drained the planner (`Queue::Drains`).
         self.sync(out);
         self.thermal.set_moving(false);
         if let Err(e) = self.thermal.start_autotune(id, cfg, apply) {
@@ -311,8 +305,11 @@ pub(super) fn heater_stats(thermal: &Thermal, ids: &[HeaterId]) -> Vec<super::He
                 max_c = max_c.max(s.temp_c);
             }
             let power_w = thermal.heater(id).ok()?.config().power_w;
-            let duty =
-                if n > 0 { power_sum / (n as f64 * f64::from(crate::control::POWER_MAX)) } else { 0.0 };
+            let duty = if n > 0 {
+                power_sum / (n as f64 * f64::from(crate::thermal::control::POWER_MAX))
+            } else {
+                0.0
+            };
             Some(super::HeaterStats {
                 heater: id,
                 temp_c: thermal.temperature(id).ok()?,

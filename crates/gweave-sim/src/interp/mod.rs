@@ -11,8 +11,8 @@
 //! after every command, so they heat, cool and trip their protection while the machine moves.
 //!
 //! ```
-//! use gweave_sim::interp::{Machine, Outcome};
-//! use gweave_sim::profile::MachineProfile;
+//! use gweave_sim::{Machine, Outcome};
+//! use gweave_sim::MachineProfile;
 //!
 //! let mut m = Machine::new(MachineProfile::default()).unwrap();
 //! let mut replies = Vec::new();
@@ -46,17 +46,17 @@ use gweave::gcode::line::Command;
 use gweave::gcode::state::{self, Effect};
 use thiserror::Error;
 
-use crate::estimate::{EstimateError, Estimator};
-use crate::firmware::ProgramStop;
-use crate::heater::HeaterId;
+use crate::inkjet::recoat::RecoatCheck;
 use crate::inkjet::{CanvasGeometry, InkjetCanvas, InkjetError};
+use crate::motion::estimate::{EstimateError, Estimator};
+use crate::motion::speed_trace::SpeedTrace;
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
-use crate::protection::{ThermalFault, KILL_LINE};
-use crate::recoat::RecoatCheck;
-use crate::speed_trace::SpeedTrace;
+use crate::thermal::heater::HeaterId;
+use crate::thermal::protection::ThermalFault;
 use crate::thermal::{Thermal, ThermalError};
 
-pub use commands::{help_lines, CommandHelp, COMMANDS};
+pub use commands::{help_lines, CommandSpec, Queue, COMMANDS};
+use commands::{Call, Params};
 pub use report::{HeaterStats, InkjetSummary, SimReport, SimTimes, SimWarning, WarningKind};
 
 /// Marlin's reply to any command while stopped (`STR_ERR_STOPPED`).
@@ -64,6 +64,9 @@ pub const STOPPED_LINE: &str = "Error:Printer stopped due to errors. Fix the err
 
 /// Warnings kept with their details; later ones are only counted.
 const MAX_WARNINGS: usize = 1000;
+
+/// `M220`/`M221` percentages: above 0, at most a hundred times the speed or flow.
+const PERCENT: gweave::range::Range = gweave::range::Range::new(1.0, 10_000.0, "%");
 
 /// Why a machine cannot be built.
 #[derive(Debug, Error)]
@@ -262,33 +265,29 @@ impl Machine {
             self.finish_user_wait(out);
         }
         if trim(line) == b"?" {
-            self.help(out);
+            // Before the parser, which has no word for it; answered even when halted.
+            (commands::help_spec().run)(
+                self,
+                &Call { line, number: 0, effect: Effect::None, before: [0.0; state::AXES] },
+                out,
+            );
             return self.outcome();
         }
         let before = self.core.state().pos;
         let effect = self.core.parse(line);
         let command = self.core.block().command;
-        if self.halt.is_some() && !allowed_while_halted(command) {
+        let spec = commands::lookup(command, self.core.block().command_span.of(line));
+        if self.halt.is_some() && !spec.is_some_and(|s| s.while_halted) {
             out(self.now_s(), STOPPED_LINE);
             return Outcome::Halted;
         }
-        match command {
-            Command::None => self.motion(line, effect, out),
-            Command::Code { letter: b'G', number, sub: None } => {
-                self.g_code(line, number, effect, &before, out)
+        match (command, spec) {
+            (Command::None, _) => self.motion(line, effect, out),
+            (Command::Code { letter, number, .. }, Some(spec)) if self.built_with(letter, number) => {
+                self.run_spec(spec, &Call { line, number, effect, before }, out)
             }
-            Command::Code { letter: b'M', number, sub: None } => self.m_code(line, number, effect, out),
-            Command::Code { letter: b'T', number, sub: None } => self.tool_change(line, number, effect, out),
-            Command::Extended if self.is_klipper() => {
-                let name = self.core.block().command_span.of(line);
-                let known = [&b"SET_VELOCITY_LIMIT"[..], b"SET_KINEMATIC_POSITION"]
-                    .iter()
-                    .any(|k| name.eq_ignore_ascii_case(k));
-                if known {
-                    self.run_core(line, &effect, out);
-                } else {
-                    self.unknown_command(line, out);
-                }
+            (Command::Extended, Some(spec)) => {
+                self.run_spec(spec, &Call { line, number: 0, effect, before }, out)
             }
             _ => self.unknown_command(line, out),
         }
@@ -388,7 +387,7 @@ impl Machine {
     }
 
     fn is_klipper(&self) -> bool {
-        matches!(self.profile.motion.corners, crate::limits::CornerMode::Klipper(_))
+        matches!(self.profile.motion.corners, crate::motion::limits::CornerMode::Klipper(_))
     }
 
     /// Plans what the line does; a refusal becomes an `echo:` reply and a warning.
@@ -409,161 +408,38 @@ impl Machine {
         self.warn(WarningKind::Refused { message });
     }
 
-    fn g_code(
-        &mut self,
-        line: &[u8],
-        number: u32,
-        effect: Effect,
-        before: &state::Position,
-        out: &mut dyn FnMut(f64, &str),
-    ) {
-        if !self.profile.firmware.knows_g(number) {
-            return self.unknown_command(line, out);
+    /// Carries out a command of the registry: drains the planner first if it says so.
+    fn run_spec(&mut self, spec: &CommandSpec, call: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+        if spec.queue == Queue::Drains {
+            self.core.drain();
         }
-        match number {
-            0..=3 => self.motion(line, effect, out),
-            29 => self.g29(out),
-            4 => match effect {
-                Effect::Dwell { t_s } if t_s > motion::MAX_COMMAND_S => {
-                    self.refuse(format!("a dwell of {t_s:.0} s: refused"), out)
-                }
-                _ => {
-                    self.thermal.set_moving(false);
-                    self.run_core(line, &effect, out);
-                    self.moved_since_m400 = false;
-                }
-            },
-            // RepRapFirmware's `G10 P<tool> S<temp>` sets a tool's temperature; the state says
-            // which `G10` is which (Marlin's `G10 S1` is a retraction).
-            10 if self.core.state().g10_is_not_a_retraction(self.core.block()) => {
-                self.rrf_tool_temperature(out)
-            }
-            10 | 11 | 20 | 21 | 90 | 91 => self.run_core(line, &effect, out),
-            28 => self.home(line, effect, before, out),
-            92 => {
-                // The machine stays where it is: what changes is the logical origin.
-                let pos = self.core.state().pos;
-                for i in 0..3 {
-                    self.shift_mm[i] += before[i] - pos[i];
-                }
-                self.run_core(line, &effect, out);
-            }
-            _ => self.unknown_command(line, out),
+        (spec.run)(self, call, out);
+    }
+
+    /// Whether this firmware build has the code (`[firmware]` options such as `sdcard`).
+    fn built_with(&self, letter: u8, number: u32) -> bool {
+        match letter {
+            b'G' => self.profile.firmware.knows_g(number),
+            b'M' => self.profile.firmware.knows_m(number),
+            _ => true,
         }
     }
 
-    fn m_code(&mut self, line: &[u8], number: u32, effect: Effect, out: &mut dyn FnMut(f64, &str)) {
-        if !self.profile.firmware.knows_m(number) {
-            return self.unknown_command(line, out);
-        }
-        match number {
-            // The controller seed's end of program: home, motors off, close the link.
-            0 if self.profile.firmware.m0 == ProgramStop::Seed => {
-                self.run_core(line, &effect, out);
-                self.core.drain();
-                self.execute(b"G28", out);
-                // The motors go off again after the homing: the axes are no longer homed.
-                self.homed = [false; 3];
-                self.program_ended = true;
-            }
-            // Program stop (Marlin's): finish the moves, motors off.
-            0 | 1 | 18 | 84 => {
-                self.run_core(line, &effect, out);
-                self.core.drain();
-                if number <= 1 || !self.core.block().has(b'S') {
-                    self.homed = [false; 3];
-                }
-            }
-            // Accepted, nothing to simulate: enable motors, progress, line numbers (the serial
-            // layer's), LCD message, gradient mix, RRF tool definition.
-            17 | 73 | 110 | 166 | 563 => {}
-            20..=30 | 32 | 33 | 524 | 928 => self.sd_command(line, number, out),
-            31 | 42 | 75..=77 | 80 | 81 | 108 | 117 | 118 | 154 | 211 | 226 | 300 | 410 | 420 | 876 => {
-                self.host_command(line, number, out)
-            }
-            92 | 207..=209 | 304 | 500..=503 | 851 => self.settings_command(number, out),
-            600 => self.m600(out),
-            205 => {
-                let b = self.core.block();
-                for (slot, letter) in self.settings.m205_st.iter_mut().zip([b'S', b'T']) {
-                    if let Some(v) = b.get(letter).filter(|v| v.is_finite() && *v >= 0.0) {
-                        *slot = v;
-                    }
-                }
-                self.run_core(line, &effect, out);
-            }
-            // RepRapFirmware 3.3+ sets a tool's temperatures with M568 (as G10 P S before).
-            568 => self.rrf_tool_temperature(out),
-            82 | 83 | 201 | 203 | 204 | 163..=165 | 567 => self.run_core(line, &effect, out),
-            104 | 109 | 116 | 140 | 190 | 105 | 106 | 107 | 155 | 301 | 303 => {
-                self.heat_command(line, number, effect, out)
-            }
-            112 => {
-                self.halt = Some(Halt::Emergency);
-                self.heaters_off();
-                out(self.now_s(), KILL_LINE);
-            }
-            114 => {
-                self.core.drain();
-                self.sync(out);
-                let text = self.m114_text();
-                out(self.now_s(), &text);
-            }
-            115 => {
-                let t = self.now_s();
-                out(
-                    t,
-                    &format!(
-                        "FIRMWARE_NAME:gweave-sim {} (Marlin compatible) PROTOCOL_VERSION:1.0 \
-                         MACHINE_TYPE:{} EXTRUDER_COUNT:{}",
-                        env!("CARGO_PKG_VERSION"),
-                        self.profile.name,
-                        self.thermal.hotend_count()
-                    ),
-                );
-                for cap in self.profile.firmware.capability_lines() {
-                    out(t, &cap);
-                }
-            }
-            119 => {
-                self.core.drain();
-                self.sync(out);
-                for l in self.m119_lines() {
-                    out(self.now_s(), &l);
-                }
-            }
-            220 => self.percentage(b'S', "FR:", out, |m| &mut m.feed_pct),
-            221 => self.percentage(b'S', "E0 Flow: ", out, |m| &mut m.flow_pct),
-            400 => {
-                self.thermal.set_moving(false);
-                self.run_core(line, &effect, out);
-                self.moved_since_m400 = false;
-                self.wall_timed = true;
-            }
-            578 | 700 if self.inkjet.is_some() => self.fire(),
-            999 => {
-                self.halt = None;
-                self.thermal.clear_halt();
-            }
-            _ => self.unknown_command(line, out),
-        }
-    }
-
-    /// `M220`/`M221`: set the percentage given by `letter`, or report it.
+    /// `M220`/`M221`: set the percentage (`S`), or report it.
     fn percentage(
         &mut self,
-        letter: u8,
+        number: u32,
         label: &str,
         out: &mut dyn FnMut(f64, &str),
         field: impl Fn(&mut Self) -> &mut f64,
     ) {
-        match self.core.block().get(letter) {
-            Some(v) if v.is_finite() && v > 0.0 => *field(self) = v,
-            Some(_) => {}
-            None => {
+        match Params::new('M', number, self.core.block()).get(b'S', PERCENT) {
+            Ok(Some(v)) => *field(self) = v,
+            Ok(None) => {
                 let v = *field(self);
                 out(self.now_s(), &format!("echo:{label}{v:.0}%"));
             }
+            Err(e) => self.refuse(e.to_string(), out),
         }
     }
 
@@ -629,14 +505,6 @@ impl Machine {
         self.warn(WarningKind::UnknownCommand { command: text });
     }
 
-    /// `?`: the command list ([`COMMANDS`]), as the seed controller answers it.
-    fn help(&mut self, out: &mut dyn FnMut(f64, &str)) {
-        let t = self.now_s();
-        for l in help_lines() {
-            out(t, &l);
-        }
-    }
-
     fn warn(&mut self, kind: WarningKind) {
         *self.warning_counts.entry(kind.name()).or_default() += 1;
         if self.warnings.len() < MAX_WARNINGS {
@@ -658,14 +526,6 @@ impl Machine {
         let p = self.core.state().pos;
         std::array::from_fn(|i| p[i] + self.shift_mm[i])
     }
-}
-
-/// Commands a halted Marlin still answers.
-fn allowed_while_halted(command: Command) -> bool {
-    matches!(
-        command,
-        Command::Code { letter: b'M', number: 105 | 110 | 112 | 114 | 115 | 119 | 999, sub: None }
-    )
 }
 
 fn trim_line_end(line: &[u8]) -> &[u8] {

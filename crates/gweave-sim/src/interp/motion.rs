@@ -10,8 +10,8 @@
 use gweave::gcode::state::{self, Effect};
 
 use super::{Machine, WarningKind};
-use crate::kinematics::{Geometry, Pos};
-use crate::limits::CornerMode;
+use crate::motion::kinematics::{Geometry, Pos};
+use crate::motion::limits::CornerMode;
 use crate::profile::EndstopSide;
 use crate::thermal::COLD_EXTRUSION_LINE;
 

@@ -14,7 +14,7 @@
 //! speeds, below) and leave the nozzle where it was, as Marlin's unpark does; the filament they
 //! move goes out and back in and is not counted.
 //!
-//! The wait is the serial protocol's business ([`crate::serial::Protocol`] holds the `ok` and the
+//! The wait is the serial protocol's business ([`crate::link::serial::Protocol`] holds the `ok` and the
 //! lines after it while [`Machine::waiting_for_user`]); a run of a file (`gweave sim`) has no user
 //! to wait for: the next command continues as if the user had pressed Continue at once.
 
@@ -75,7 +75,7 @@ impl Machine {
                 self.host.waiting_for_user = false;
                 self.halt = Some(super::Halt::Emergency);
                 self.heaters_off();
-                out(self.now_s(), crate::protection::KILL_LINE);
+                out(self.now_s(), crate::thermal::protection::KILL_LINE);
                 true
             }
             "M410" => true,

@@ -6,11 +6,11 @@ use gweave::gcode::layers::Feature;
 use serde::Serialize;
 
 use super::{heat, Machine};
-use crate::estimate::{HugeArcs, Malformed};
-use crate::heater::HeaterId;
 use crate::inkjet::InkjetWarning;
-use crate::protection::ThermalFault;
-use crate::stepper::StepTotals;
+use crate::motion::estimate::{HugeArcs, Malformed};
+use crate::motion::stepper::StepTotals;
+use crate::thermal::heater::HeaterId;
+use crate::thermal::protection::ThermalFault;
 
 /// Where the simulated time went, s. `total_s` is the sum of the others.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]

@@ -11,9 +11,9 @@
 use std::path::PathBuf;
 
 use super::Machine;
-use crate::heater::HeaterId;
-use crate::limits::CornerMode;
-use crate::marlin_limits::MarlinCorners;
+use crate::motion::limits::CornerMode;
+use crate::motion::marlin_limits::MarlinCorners;
+use crate::thermal::heater::HeaterId;
 
 /// Settings the planner and heaters do not hold themselves.
 #[derive(Debug, Clone, PartialEq)]
@@ -120,7 +120,7 @@ impl Machine {
         let b = self.core.block();
         let (p, i, d) = (b.get(b'P'), b.get(b'I'), b.get(b'D'));
         let result = self.thermal.pid_gains(HeaterId::Bed).and_then(|g| {
-            let gains = crate::control::PidGains {
+            let gains = crate::thermal::control::PidGains {
                 kp: p.unwrap_or(g.kp),
                 ki: i.unwrap_or(g.ki),
                 kd: d.unwrap_or(g.kd),

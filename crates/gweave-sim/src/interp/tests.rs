@@ -1,6 +1,7 @@
 use super::motion::rest_to_rest_s;
 use super::*;
 use crate::profile::MachineProfile;
+use crate::thermal::protection::KILL_LINE;
 
 /// Runs lines, returning the replies and the last outcome.
 fn run(m: &mut Machine, text: &str) -> (Vec<String>, Outcome) {
@@ -227,7 +228,7 @@ fn mixing_inputs_share_e_by_the_virtual_tool() {
 #[test]
 fn e_steps_and_filament_per_tool_on_two_hotends() {
     let mut p = MachineProfile::default();
-    p.thermal.hotends = vec![crate::heater::HeaterConfig::hotend_40w(); 2];
+    p.thermal.hotends = vec![crate::thermal::heater::HeaterConfig::hotend_40w(); 2];
     p.thermal.extrude_min_c = None;
     let mut m = Machine::new(p).unwrap();
     // Relative E at 500 steps/mm. T0: 2.5 out, 0.8 back, 0.8 out; T1: 1.2 and 0.0031 (the motor
@@ -267,6 +268,24 @@ fn feed_and_flow_percentages() {
     // steps/s², from and to 120 steps/s: 134 steps up, 133 down, 7733 cruising.
     let want = 534.0 / 8120.0 + 7733.0 / 8000.0;
     assert!((m.now_s() - want).abs() < 1e-9, "{}", m.now_s());
+}
+
+/// A parameter outside its range is refused with the registry's uniform reply, and the value
+/// in force stays (before the registry, `M220 S0` and `M155 S-1` were dropped in silence).
+#[test]
+fn out_of_range_parameters_are_refused_uniformly() {
+    let mut m = warm_machine();
+    let (r, _) = run(&mut m, "M220 S50\nM220 S0\nM221 S20000\nM220\nM155 S-1");
+    assert_eq!(
+        r,
+        [
+            "echo:M220 S = 0 is out of range: 1 to 10000 %",
+            "echo:M221 S = 20000 is out of range: 1 to 10000 %",
+            "echo:FR:50%",
+            "echo:M155 S = -1 is out of range: 0 to 86400 s",
+        ]
+    );
+    assert_eq!(m.report().warning_counts.get("refused"), Some(&3));
 }
 
 #[test]

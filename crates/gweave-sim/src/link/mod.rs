@@ -1,0 +1,11 @@
+//! Link: the board's serial line to a host, as Marlin's `gcode/queue.cpp` and
+//! `core/serial.h` speak it (line numbers, checksums, `ok`, `Resend:`, `busy:` keepalives).
+//!
+//! The protocol itself ([`serial`]) is transport-free: bytes in, timed reply lines out, tested
+//! over in-memory pipes. [`transport`] runs it in real time over an endpoint: a pseudo-terminal
+//! ([`pty`]) that looks like a USB serial port, or a loopback TCP socket ([`tcp`]) as network
+//! printers and OctoPrint's `socket://` URLs use.
+pub mod pty;
+pub mod serial;
+pub mod tcp;
+pub mod transport;

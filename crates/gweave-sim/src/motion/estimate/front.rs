@@ -1,0 +1,451 @@
+//! The parse side of the estimator: lines go through the core lexer and modal state, and come
+//! out as [`Job`]s for the plan side ([`super::back::Back`]): moves cut to straight chords, waits
+//! for the queue to drain, dwells, limit changes. Everything the G-code file decides lives
+//! here; nothing here depends on what the planner has done, so the two sides can run on two
+//! threads ([`super::estimate`]).
+
+use std::collections::HashMap;
+
+use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use gweave::gcode::arc::Arc;
+use gweave::gcode::diag::Severity;
+use gweave::gcode::layers::Structure;
+use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
+use gweave::gcode::line::{Block, Command};
+use gweave::gcode::reader::{Part, RawLine};
+use gweave::gcode::state::{self, Effect, Firmware, Path, State, StateOptions};
+
+use super::{
+    EstimateError, Job, Key, ARC_CHORD_MM, DEFAULT_FEED_MM_S, FW_RECOVER_FEED_MM_S, FW_RETRACT_FEED_MM_S,
+    KLIPPER_MOTOR_OFF_S, KLIPPER_START_BUFFER_S,
+};
+use crate::motion::kinematics::{Move, Pos};
+use crate::motion::limits::{AxisUpdate, CornerMode, MotionProfile, ProfileError, M204};
+use crate::motion::planner::Planner;
+
+/// Parser, modal state and the bookkeeping that turns lines into jobs.
+#[derive(Debug)]
+pub(super) struct Front {
+    pub(super) block: Block,
+    pub(super) state: State,
+    /// The profile the plan side runs with, kept in step through [`Job::Profile`].
+    pub(super) profile: MotionProfile,
+    book: Bookkeeping,
+    mix_index: HashMap<Vec<u64>, usize>,
+    /// The mixing commands' state, for a profile with mixing inputs.
+    pub(super) mixing: Option<MixingState>,
+    pub(super) line: u64,
+    /// Lines with an error, skipped as firmware skips them.
+    pub(super) malformed: Malformed,
+}
+
+/// Arcs longer than [`MAX_ARC_CHORDS`] chords of [`ARC_CHORD_MM`] (over 100 m: no printer's
+/// bed), planned with that many longer chords, and counted with the first one's line.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct HugeArcs {
+    /// How many arcs.
+    pub huge_arcs: u64,
+    /// The line of the first, 1-based.
+    pub first_huge_arc_line: Option<u64>,
+}
+
+impl HugeArcs {
+    fn add(&mut self, line: u64) {
+        self.huge_arcs += 1;
+        self.first_huge_arc_line.get_or_insert(line);
+    }
+}
+
+/// The most chords an arc is cut into: 100 m of arc at [`ARC_CHORD_MM`]. A `G2` with
+/// `I10000000` would otherwise be 63 million chords, half a minute of planning.
+pub const MAX_ARC_CHORDS: u32 = 100_000;
+
+/// Lines that could not be read: the engine's tally, as `stats --lenient` reports it.
+pub use gweave::malformed::Malformed;
+
+/// What turns a move into jobs besides the move itself: its time account (tag) and the
+/// firmware's fixed overheads. Apart from the state, so that a move can be read in place from
+/// the state's effect while this changes.
+#[derive(Debug)]
+struct Bookkeeping {
+    key_index: HashMap<Key, u64>,
+    /// The last key looked up and its tag.
+    last_tag: Option<(Key, u64)>,
+    mix: usize,
+    /// The selected tool (`T<n>` carried out by [`Front::run`]), for per-tool E steps.
+    tool: u32,
+    klipper: bool,
+    started: bool,
+    motors_on: bool,
+    /// Arcs of more than [`MAX_ARC_CHORDS`] chords.
+    huge_arcs: HugeArcs,
+}
+
+impl Front {
+    /// The parse side for `profile`, with the jobs that set up the plan side (the first mix).
+    pub(super) fn new(profile: &MotionProfile, jobs: &mut Vec<Job>) -> Result<Self, EstimateError> {
+        let klipper = matches!(profile.corners, CornerMode::Klipper(_));
+        let firmware = if klipper { Firmware::Klipper } else { Firmware::Marlin };
+        let mixing = match profile.steps.mixing_e.len() {
+            0 => None,
+            n => Some(
+                MixingState::new(n, MARLIN_VIRTUAL_TOOLS)
+                    .map_err(|source| EstimateError::Mixing { line: 0, source })?,
+            ),
+        };
+        let book = Bookkeeping {
+            key_index: HashMap::new(),
+            last_tag: None,
+            mix: 0,
+            tool: 0,
+            klipper,
+            started: false,
+            motors_on: false,
+            huge_arcs: HugeArcs::default(),
+        };
+        let mut front = Self {
+            block: Block::default(),
+            state: State::new(StateOptions { firmware, ..StateOptions::default() }),
+            profile: profile.clone(),
+            book,
+            mix_index: HashMap::new(),
+            mixing,
+            line: 0,
+            malformed: Malformed::default(),
+        };
+        front.refresh_mix(jobs);
+        Ok(front)
+    }
+
+    /// Parse `raw` and apply it to the modal state.
+    pub(super) fn parse(&mut self, raw: &[u8]) -> Effect {
+        self.line += 1;
+        parse_into(raw, &mut self.block);
+        self.count_malformed();
+        *self.state.apply(raw, &self.block)
+    }
+
+    /// Counts the line just parsed if it has an error.
+    #[inline(always)]
+    fn count_malformed(&mut self) {
+        if !self.block.diagnostics.is_empty()
+            && self.block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error)
+        {
+            self.malformed.add(self.line);
+        }
+    }
+
+    /// The arcs too long for chords of [`ARC_CHORD_MM`] so far.
+    pub(super) fn huge_arcs(&self) -> HugeArcs {
+        self.book.huge_arcs
+    }
+
+    /// A line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE), which is not read:
+    /// counted as malformed.
+    pub(super) fn skip_long_line(&mut self) {
+        self.line += 1;
+        self.malformed.add(self.line);
+    }
+
+    /// [`Front::parse`] and [`Front::run`] for a line from a reader, whose look-ahead bytes
+    /// speed up the lexer. A move is read in place from the state (it is large).
+    #[inline(always)]
+    pub(super) fn step(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        match line.part {
+            Part::Whole => {}
+            Part::Last { .. } => {
+                self.skip_long_line();
+                return Ok(());
+            }
+            Part::Piece => return Ok(()),
+        }
+        self.line += 1;
+        // A plain move's words are read by no one here (only M-codes and extended commands
+        // are, below): leave them unlisted where the state does without them.
+        if self.state.reads_words() {
+            parse_line(line, &mut self.block);
+        } else {
+            parse_line_lean(line, &mut self.block);
+        }
+        self.count_malformed();
+        self.state.apply(line.bytes, &self.block);
+        if let Effect::Move(m) = &self.state.effect {
+            self.book.motion(&self.state.structure, m, self.line, jobs);
+            return Ok(());
+        }
+        let effect = self.state.effect;
+        self.run(line.bytes, &effect, jobs)
+    }
+
+    /// Turn `effect` (what [`Front::parse`] said `raw` does, possibly changed by the caller)
+    /// and the line's motion-related commands into jobs.
+    pub(super) fn run(
+        &mut self,
+        raw: &[u8],
+        effect: &Effect,
+        jobs: &mut Vec<Job>,
+    ) -> Result<(), EstimateError> {
+        match effect {
+            Effect::Move(m) => {
+                self.book.motion(&self.state.structure, m, self.line, jobs);
+                return Ok(());
+            }
+            Effect::Dwell { t_s } => {
+                jobs.push(Job::Drain);
+                let tag = self.book.tag(&self.state.structure, jobs);
+                jobs.push(Job::Dwell { t_s: *t_s, tag });
+            }
+            Effect::Home { .. } => jobs.push(Job::Drain),
+            Effect::FirmwareRetract { e_mm } => {
+                self.firmware_retract(*e_mm, jobs);
+                return Ok(());
+            }
+            Effect::ToolChange { to, .. } => return self.select_tool(*to, jobs),
+            _ => {}
+        }
+        match self.block.command {
+            Command::Code { letter: b'M', number, sub: None } => self.m_code(raw, number, jobs),
+            Command::Extended => self.extended(raw, jobs),
+            _ => Ok(()),
+        }
+    }
+
+    fn m_code(&mut self, raw: &[u8], number: u32, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        let b = &self.block;
+        let axes =
+            || AxisUpdate { x: b.get(b'X'), y: b.get(b'Y'), z: b.get(b'Z'), e: b.get(b'E'), a: b.get(b'A') };
+        let mut profile = self.profile.clone();
+        let changed = match number {
+            400 | 109 | 190 => {
+                jobs.push(Job::Drain);
+                return Ok(());
+            }
+            18 | 84 => {
+                jobs.push(Job::Drain);
+                if self.book.klipper && std::mem::take(&mut self.book.motors_on) {
+                    jobs.push(Job::Overhead { t_s: KLIPPER_MOTOR_OFF_S });
+                }
+                return Ok(());
+            }
+            163..=165 | 567 => return self.mixing_command(raw, jobs),
+            201 if !self.book.klipper => profile.set_max_accel(&axes()),
+            203 if !self.book.klipper => profile.set_max_feed(&axes()),
+            205 if !self.book.klipper => {
+                let jd = b.get(b'J').map_or(Ok(()), |j| profile.set_junction_deviation(j));
+                jd.and_then(|()| profile.set_jerk(&axes(), b.get(b'B')))
+            }
+            204 => {
+                let m204 = M204 { s: b.get(b'S'), p: b.get(b'P'), r: b.get(b'R'), t: b.get(b'T') };
+                match profile.set_accel(&m204) {
+                    // Klipper answers an M204 without S, P and T with a message and goes on.
+                    Err(ProfileError::M204NeedsPAndT) => return Ok(()),
+                    other => other,
+                }
+            }
+            _ => return Ok(()),
+        };
+        self.change_profile(changed.map(|()| profile), jobs)
+    }
+
+    /// Klipper's extended commands that change motion: `SET_KINEMATIC_POSITION` and
+    /// `SET_VELOCITY_LIMIT`.
+    fn extended(&mut self, raw: &[u8], jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        let name = self.block.command_span.of(raw);
+        let args = self.block.text_of(raw).unwrap_or_default();
+        let arg = |key: &str| -> Option<f64> {
+            std::str::from_utf8(args).ok()?.split_whitespace().find_map(|kv| {
+                let (k, v) = kv.split_once('=')?;
+                k.eq_ignore_ascii_case(key).then(|| v.parse().ok()).flatten()
+            })
+        };
+        if name.eq_ignore_ascii_case(b"SET_KINEMATIC_POSITION") {
+            jobs.push(Job::Drain);
+            for (axis, key) in [(state::X, "X"), (state::Y, "Y"), (state::Z, "Z")] {
+                if let Some(v) = arg(key) {
+                    self.state.pos[axis] = v;
+                }
+            }
+            Ok(())
+        } else if name.eq_ignore_ascii_case(b"SET_VELOCITY_LIMIT") {
+            let mut profile = self.profile.clone();
+            let result = match &mut profile.corners {
+                CornerMode::Klipper(k) => k.set_velocity_limit(
+                    arg("VELOCITY"),
+                    arg("ACCEL"),
+                    arg("SQUARE_CORNER_VELOCITY"),
+                    arg("MINIMUM_CRUISE_RATIO"),
+                ),
+                CornerMode::Marlin { .. } | CornerMode::Constant {} => return Ok(()),
+            };
+            self.change_profile(result.map(|()| profile), jobs)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Take a changed profile if the planner would, and pass it on.
+    fn change_profile(
+        &mut self,
+        profile: Result<MotionProfile, ProfileError>,
+        jobs: &mut Vec<Job>,
+    ) -> Result<(), EstimateError> {
+        let profile = profile
+            .and_then(|p| Planner::check_change(&self.profile, &p).map(|()| p))
+            .map_err(|source| EstimateError::Profile { line: self.line, source })?;
+        self.profile = profile.clone();
+        jobs.push(Job::Profile { profile: Box::new(profile), line: self.line });
+        Ok(())
+    }
+
+    /// `M163`-`M165` and `M567` on a mixing hotend (ignored without one).
+    fn mixing_command(&mut self, raw: &[u8], jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        let Some(mixing) = &mut self.mixing else {
+            return Ok(());
+        };
+        let line = self.line;
+        mixing.follow_line(raw, &self.block).map_err(|source| EstimateError::Mixing { line, source })?;
+        self.refresh_mix(jobs);
+        Ok(())
+    }
+
+    /// `T<n>`: on a mixing hotend, select virtual tool n (Marlin) or the tool's `M567` mix
+    /// (RepRapFirmware).
+    fn select_tool(&mut self, tool: u32, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        if let Some(mixing) = &mut self.mixing {
+            if mixing.rrf_mix(tool).is_none() {
+                let line = self.line;
+                mixing.select_tool(tool as usize).map_err(|source| EstimateError::Mixing { line, source })?;
+            }
+        }
+        self.book.tool = tool;
+        jobs.push(Job::Tool(tool));
+        self.refresh_mix(jobs);
+        Ok(())
+    }
+
+    /// Make the mix in force the one that splits the E steps of the following moves.
+    fn refresh_mix(&mut self, jobs: &mut Vec<Job>) {
+        let Some(mixing) = &self.mixing else {
+            return;
+        };
+        let weights = match mixing.rrf_mix(self.state.tool) {
+            Some(rrf) => rrf,
+            None => mixing.active_mix().ratios(),
+        };
+        let bits: Vec<u64> = weights.iter().map(|w| w.to_bits()).collect();
+        // Index 0 is the plan side's "no mix" entry.
+        let next = self.mix_index.len() + 1;
+        self.book.mix = *self.mix_index.entry(bits).or_insert_with(|| {
+            jobs.push(Job::Mix(weights.to_vec()));
+            next
+        });
+    }
+
+    /// `G10`/`G11`: an extrude-only move of the retraction length.
+    fn firmware_retract(&mut self, e_mm: f64, jobs: &mut Vec<Job>) {
+        let start = at(&self.state.pos);
+        let end = Pos { e_mm: start.e_mm + e_mm, ..start };
+        let feed_mm_s = if e_mm < 0.0 { FW_RETRACT_FEED_MM_S } else { FW_RECOVER_FEED_MM_S };
+        let tag = self.book.tag(&self.state.structure, jobs);
+        self.book.motors_on = true;
+        jobs.push(Job::Move { mv: Move { start, end, feed_mm_s, tag }, line: self.line });
+    }
+}
+
+impl Bookkeeping {
+    /// The tag for the current layer, feature and mix. The key changes only at a new layer,
+    /// feature, mix or tool, so the last one is kept: hashing it for every move cost a tenth
+    /// of the whole simulation.
+    #[inline]
+    fn tag(&mut self, s: &Structure, jobs: &mut Vec<Job>) -> u64 {
+        let key = Key { layer: s.layer, feature: s.feature, mix: self.mix, tool: self.tool };
+        match self.last_tag {
+            Some((last, tag)) if last == key => tag,
+            _ => self.new_tag(key, jobs),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn new_tag(&mut self, key: Key, jobs: &mut Vec<Job>) -> u64 {
+        let next = self.key_index.len() as u64;
+        let tag = *self.key_index.entry(key).or_insert_with(|| {
+            jobs.push(Job::Key(key));
+            next
+        });
+        self.last_tag = Some((key, tag));
+        tag
+    }
+
+    /// Motion is about to start: Klipper's start buffer before the first move.
+    fn moving(&mut self, jobs: &mut Vec<Job>) {
+        if !self.started {
+            self.started = true;
+            if self.klipper {
+                jobs.push(Job::Overhead { t_s: KLIPPER_START_BUFFER_S });
+            }
+        }
+        self.motors_on = true;
+    }
+
+    /// A move of the file, on line `line`: straight, or an arc cut into chords.
+    #[inline]
+    fn motion(&mut self, s: &Structure, m: &state::Move, line: u64, jobs: &mut Vec<Job>) {
+        let feed_mm_s = if m.feed_mm_min > 0.0 { m.feed_mm_min / 60.0 } else { DEFAULT_FEED_MM_S };
+        let tag = self.tag(s, jobs);
+        self.moving(jobs);
+        let (start, end) = (at(&m.from), at(&m.to));
+        let Path::Arc(arc) = &m.path else {
+            jobs.push(Job::Move { mv: Move { start, end, feed_mm_s, tag }, line });
+            return;
+        };
+        // The chords are cut as the plan side takes them ([`Chords`]): a huge arc costs time,
+        // never memory. Past MAX_ARC_CHORDS they are longer than ARC_CHORD_MM, and counted.
+        let wanted = (m.len_mm() / ARC_CHORD_MM).ceil();
+        if wanted > MAX_ARC_CHORDS as f64 {
+            self.huge_arcs.add(line);
+        }
+        let count = wanted.clamp(1.0, MAX_ARC_CHORDS as f64) as u32;
+        let chords = Chords { arc: *arc, from: m.from, to: m.to, start, end, feed_mm_s, tag, count };
+        jobs.push(Job::Arc { chords: Box::new(chords), line });
+    }
+}
+
+/// An arc's chords, computed one at a time: chord `k` of `count` ends at fraction `k / count`
+/// of the sweep (Z, E and A moving linearly along it, a helix), the last exactly at the end.
+#[derive(Debug)]
+pub(super) struct Chords {
+    arc: Arc,
+    from: state::Position,
+    to: state::Position,
+    start: Pos,
+    end: Pos,
+    feed_mm_s: f64,
+    tag: u64,
+    count: u32,
+}
+
+impl Chords {
+    pub(super) fn moves(&self) -> impl Iterator<Item = Move> + '_ {
+        let point = move |k: u32| {
+            if k == self.count {
+                return self.end;
+            }
+            let t = f64::from(k) / f64::from(self.count);
+            let [x_mm, y_mm] = self.arc.point(t);
+            let lerp = |axis: usize| self.from[axis] + (self.to[axis] - self.from[axis]) * t;
+            Pos { x_mm, y_mm, z_mm: lerp(state::Z), e_mm: lerp(state::E), a_deg: lerp(state::A) }
+        };
+        (1..=self.count).scan(self.start, move |from, k| {
+            let to = point(k);
+            let mv = Move { start: *from, end: to, feed_mm_s: self.feed_mm_s, tag: self.tag };
+            *from = to;
+            Some(mv)
+        })
+    }
+}
+
+/// The machine position of the core's modal position.
+fn at(p: &state::Position) -> Pos {
+    Pos { x_mm: p[state::X], y_mm: p[state::Y], z_mm: p[state::Z], e_mm: p[state::E], a_deg: p[state::A] }
+}

@@ -1,0 +1,608 @@
+//! Print-time estimation: stream a G-code file through the core parser and modal state, the
+//! planner and the steppers, and add up the time per layer and per feature.
+//!
+//! ```
+//! use gweave_sim::estimate;
+//! use gweave_sim::{KlipperLimits, MotionProfile};
+//!
+//! let gcode = "G1 X100 F3000\nG4 P500\n";
+//! let est = estimate(gcode.as_bytes(), &MotionProfile::klipper(KlipperLimits::default())).unwrap();
+//! // 0.25 s start buffer, 100 mm at 50 mm/s with a = 3000, 0.5 s dwell, Klipper's final flush.
+//! assert!((est.dwell_s - 0.5).abs() < 1e-12);
+//! assert!((est.motion_s - (2.0 + 50.0 / 3000.0)).abs() < 1e-12);
+//! ```
+//!
+//! What waits for the motion queue to drain, and so ends the lookahead at a stop: `G4`, `M400`,
+//! `M109`/`M190` (the heating time itself is not estimated), `G28`, `M84`/`M18`, and Klipper's
+//! `SET_KINEMATIC_POSITION`. Arcs are cut into chords of at most 1 mm, as both firmwares do
+//! (Klipper `[gcode_arcs] resolution`, Marlin `MM_PER_ARC_SEGMENT`). Moves before any `F` run at
+//! both firmwares' default of 25 mm/s.
+//!
+//! In Klipper mode the total reproduces Klipper's batch-mode print time
+//! (`Klipper3d/klipper:klippy/toolhead.py`, `extras/motion_queuing.py`, `extras/stepper_enable.py`):
+//! it starts with a 0.25 s buffer (`BUFFER_TIME_START`) before the first move, `M84` stalls
+//! twice for 0.1 s (`DISABLE_STALL_TIME`), and at exit the step generator has flushed 0.25 s
+//! (`BGFLUSH_EXTRA_TIME`) past the last motion plus twice the 1 ms step-generation window, which
+//! Klipper's reported print time includes. These go to `overhead_s`, not to any layer.
+//!
+//! Mixing hotends (a profile with `steps.mixing_e`): the mixing commands are followed with the
+//! core's [`MixingState`] (Marlin `M163`/`M164`/`M165` virtual tools selected by `T<n>`,
+//! RepRapFirmware `M567` mixes of tools), and the active mix splits the E steps of the
+//! following moves. Firmware retraction (`G10`/`G11`) is an extrude-only move of the `M207`
+//! length at Marlin's `RETRACT_FEEDRATE` (45 mm/s) and `RETRACT_RECOVER_FEEDRATE` (8 mm/s).
+//!
+//! [`Estimator`] is also the motion core of the virtual printer ([`crate::interp::Machine`]):
+//! it splits a line into [`Estimator::parse`] (syntax and modal state) and [`Estimator::run`]
+//! (planning), so the machine can look at, or change, what a line does in between (refuse a
+//! cold extrusion, scale the feed by `M220`).
+//!
+//! Inside, the work has two sides that share nothing but a queue of jobs: the parse
+//! side (`front`: lexer, modal state, time accounts, moves cut to straight chords) and the plan
+//! side (`back`: planner, steppers, clock). [`Estimator`] runs them one after the other on each
+//! line; [`estimate`] runs them on threads of their own, with a third one reading the file, and
+//! gets the same result to the bit.
+
+use std::collections::BTreeMap;
+use std::io::{self, Read};
+use std::sync::mpsc;
+
+use gweave::colour::dialect::{DialectError, MixingState};
+use gweave::gcode::layers::Feature;
+use gweave::gcode::line::Block;
+use gweave::gcode::reader::{Chunk, ChunkReader};
+use gweave::gcode::state::{Effect, State};
+use thiserror::Error;
+
+use crate::motion::kinematics::{Move, MoveError};
+use crate::motion::limits::{MotionProfile, ProfileError};
+use crate::motion::speed_trace::SpeedTrace;
+use crate::motion::stepper::{StepTotals, Steppers};
+
+mod back;
+mod front;
+mod report;
+
+use back::Back;
+use front::{Chords, Front};
+pub use front::{HugeArcs, Malformed, MAX_ARC_CHORDS};
+pub use report::{estimate_report, EstimateReport};
+
+/// Feed rate before the file sets one, mm/s (Klipper `gcode_move`, Marlin `feedrate_mm_s`).
+pub const DEFAULT_FEED_MM_S: f64 = 25.0;
+/// Longest chord an arc is cut into, mm.
+pub const ARC_CHORD_MM: f64 = 1.0;
+/// Klipper's `BUFFER_TIME_START`, s.
+const KLIPPER_START_BUFFER_S: f64 = 0.25;
+/// Klipper's two `DISABLE_STALL_TIME` dwells around `M84`, s.
+const KLIPPER_MOTOR_OFF_S: f64 = 0.2;
+/// Marlin's `RETRACT_FEEDRATE` and `RETRACT_RECOVER_FEEDRATE` for `G10`/`G11`, mm/s.
+const FW_RETRACT_FEED_MM_S: f64 = 45.0;
+const FW_RECOVER_FEED_MM_S: f64 = 8.0;
+/// Klipper's step generation at exit: `BGFLUSH_EXTRA_TIME` past the last motion plus twice the
+/// 1 ms `SDS_CHECK_TIME` scan window, s.
+const KLIPPER_EXIT_FLUSH_S: f64 = 0.25 + 2.0 * 0.001;
+
+/// Why a file could not be estimated.
+#[derive(Debug, Error)]
+pub enum EstimateError {
+    /// Reading the input failed.
+    #[error("reading G-code: {0}")]
+    Io(#[from] std::io::Error),
+    /// A move the planner cannot take.
+    #[error("line {line}: {source}")]
+    Move {
+        /// 1-based line number.
+        line: u64,
+        /// What is wrong with it.
+        source: MoveError,
+    },
+    /// A limit set by the file (M201, M203, M204, M205, `SET_VELOCITY_LIMIT`) or the profile
+    /// itself (line 0) is invalid.
+    #[error("line {line}: {source}")]
+    Profile {
+        /// 1-based line number, 0 for the profile given.
+        line: u64,
+        /// What is wrong with it.
+        source: ProfileError,
+    },
+    /// A mixing command (`M163`-`M165`, `M567`, `T<n>` on a mixing hotend) that the firmware
+    /// would refuse. [`Estimator::line`] ignores these; the virtual printer reports them.
+    #[error("line {line}: {source}")]
+    Mixing {
+        /// 1-based line number.
+        line: u64,
+        /// What is wrong with it.
+        source: DialectError,
+    },
+}
+
+impl EstimateError {
+    /// The 1-based line of the file at fault, if the error is about one (0: the profile given).
+    pub fn line(&self) -> Option<u64> {
+        match self {
+            Self::Io(_) => None,
+            Self::Move { line, .. } | Self::Profile { line, .. } | Self::Mixing { line, .. } => Some(*line),
+        }
+    }
+
+    /// What is wrong, without the line.
+    pub fn reason(&self) -> String {
+        match self {
+            Self::Io(e) => e.to_string(),
+            Self::Move { source, .. } => source.to_string(),
+            Self::Profile { source, .. } => source.to_string(),
+            Self::Mixing { source, .. } => source.to_string(),
+        }
+    }
+}
+
+/// The estimated times of a file.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct Estimate {
+    /// Everything, s.
+    pub total_s: f64,
+    /// Time spent moving, s.
+    pub motion_s: f64,
+    /// `G4` dwells, s.
+    pub dwell_s: f64,
+    /// Firmware bookkeeping that belongs to no layer (see the module documentation), s.
+    pub overhead_s: f64,
+    /// Planned blocks (arcs count once per chord).
+    pub blocks: u64,
+    /// Motion and dwell before the first layer, s.
+    pub unlayered_s: f64,
+    /// Motion and dwell per layer (index = the core's 0-based layer), s.
+    pub layer_s: Vec<f64>,
+    /// Motion and dwell per feature, s.
+    pub feature_s: BTreeMap<Feature, f64>,
+    /// Steps per motor.
+    pub steps: StepTotals,
+    /// Lines skipped because they could not be read.
+    #[serde(flatten)]
+    pub malformed: Malformed,
+    /// Arcs too long to cut into chords of [`ARC_CHORD_MM`].
+    #[serde(flatten)]
+    pub huge_arcs: HugeArcs,
+}
+
+/// What a block's time is attributed to, the mix its E steps are split by and the tool they
+/// are counted for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct Key {
+    layer: Option<u32>,
+    feature: Feature,
+    mix: usize,
+    tool: u32,
+}
+
+/// What the parse side asks of the plan side, in file order.
+#[derive(Debug)]
+enum Job {
+    /// Plan a straight move; `line` for its error.
+    Move { mv: Move, line: u64 },
+    /// Plan an arc's chords, cut as they are planned.
+    Arc { chords: Box<Chords>, line: u64 },
+    /// Plan every queued move to a stop (the firmware waits for its queue to drain).
+    Drain,
+    /// A `G4` dwell, attributed to `tag` (after a [`Job::Drain`]).
+    Dwell { t_s: f64, tag: u64 },
+    /// Firmware bookkeeping time that belongs to no layer.
+    Overhead { t_s: f64 },
+    /// The key of the next tag number.
+    Key(Key),
+    /// The weights of the next mix number.
+    Mix(Vec<f64>),
+    /// The following moves drive this extruder.
+    Tool(u32),
+    /// The limits changed (already checked by the parse side).
+    Profile { profile: Box<MotionProfile>, line: u64 },
+}
+
+/// A streaming estimator: feed it lines, then [`Estimator::finish`].
+#[derive(Debug)]
+pub struct Estimator {
+    front: Front,
+    back: Back,
+    /// The jobs of the line being run; empty between calls.
+    jobs: Vec<Job>,
+}
+
+impl Estimator {
+    /// An estimator for a machine with this profile.
+    pub fn new(profile: &MotionProfile) -> Result<Self, EstimateError> {
+        Self::with_steps(profile, true)
+    }
+
+    /// An estimator that only keeps time, without stepping the motors: up to a fifth faster
+    /// (what a transform's metadata needs).
+    pub fn timing_only(profile: &MotionProfile) -> Result<Self, EstimateError> {
+        Self::with_steps(profile, false)
+    }
+
+    /// An estimator that steps the motors (`count_steps`) or only keeps time, which is faster.
+    fn with_steps(profile: &MotionProfile, count_steps: bool) -> Result<Self, EstimateError> {
+        let back =
+            Back::new(profile, count_steps).map_err(|source| EstimateError::Profile { line: 0, source })?;
+        let mut jobs = Vec::new();
+        let front = Front::new(profile, &mut jobs)?;
+        let mut est = Self { front, back, jobs };
+        est.execute()?;
+        Ok(est)
+    }
+
+    /// Execute one line (without its line ending). Mixing commands the firmware would refuse
+    /// are skipped.
+    pub fn line(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
+        let effect = self.parse(raw);
+        skip_mixing_errors(self.run(raw, &effect))
+    }
+
+    /// First half of [`Estimator::line`]: parse the line and apply it to the modal state; say
+    /// what it does. Nothing is planned yet.
+    pub fn parse(&mut self, raw: &[u8]) -> Effect {
+        self.front.parse(raw)
+    }
+
+    /// Second half of [`Estimator::line`]: carry out `effect` (normally what
+    /// [`Estimator::parse`] returned for `raw`, possibly changed by the caller) and the line's
+    /// motion-related commands.
+    pub fn run(&mut self, raw: &[u8], effect: &Effect) -> Result<(), EstimateError> {
+        let ran = self.front.run(raw, effect, &mut self.jobs);
+        // What the line did before an error still happens, as in firmware.
+        self.execute()?;
+        ran
+    }
+
+    /// Hand the pending jobs to the plan side.
+    fn execute(&mut self) -> Result<(), EstimateError> {
+        let result = self.jobs.iter_mut().try_for_each(|job| self.back.execute(job));
+        self.jobs.clear();
+        result
+    }
+
+    /// The line last parsed.
+    pub fn block(&self) -> &Block {
+        &self.front.block
+    }
+
+    /// The modal state after the line last parsed.
+    pub fn state(&self) -> &State {
+        &self.front.state
+    }
+
+    /// The modal state, to set what the machine found out itself (the position after homing).
+    pub fn state_mut(&mut self) -> &mut State {
+        &mut self.front.state
+    }
+
+    /// Lines parsed so far (the 1-based number of the last one).
+    pub fn line_number(&self) -> u64 {
+        self.front.line
+    }
+
+    /// The clock: the end of the last block executed plus dwells and waits, s. Queued moves
+    /// are not counted until they leave the planner.
+    pub fn now_s(&self) -> f64 {
+        self.back.acc.t_s
+    }
+
+    /// Moves waiting in the lookahead queue.
+    pub fn queued(&self) -> usize {
+        self.back.planner.queued()
+    }
+
+    /// The motion profile in force (M201-M205 change it).
+    pub fn profile(&self) -> &MotionProfile {
+        self.back.planner.profile()
+    }
+
+    /// The motors.
+    pub fn steppers(&self) -> &Steppers {
+        &self.back.acc.steppers
+    }
+
+    /// The motors, to step what the planner does not plan (homing).
+    pub fn steppers_mut(&mut self) -> &mut Steppers {
+        &mut self.back.acc.steppers
+    }
+
+    /// Record the planned speed over time from now on ([`Estimator::speed_trace`]).
+    pub fn record_speed(&mut self) {
+        self.back.acc.speed.get_or_insert_with(Default::default);
+    }
+
+    /// The planned speed over time, if [`Estimator::record_speed`] was called.
+    pub fn speed_trace(&self) -> Option<&SpeedTrace> {
+        self.back.acc.speed.as_deref()
+    }
+
+    /// The mixing state, for a profile with mixing inputs.
+    pub fn mixing(&self) -> Option<&MixingState> {
+        self.front.mixing.as_ref()
+    }
+
+    /// Let `t_s` pass with the machine standing still, attributed to no layer (heating,
+    /// homing). Plan the queue first with [`Estimator::drain`].
+    pub fn idle(&mut self, t_s: f64) {
+        if t_s > 0.0 {
+            self.back.acc.t_s += t_s;
+        }
+    }
+
+    /// Plan every queued move to a stop and execute it (what `M400` waits for).
+    pub fn drain(&mut self) {
+        self.back.drain();
+    }
+
+    /// Plan the rest and return the estimate.
+    pub fn finish(mut self) -> Estimate {
+        self.end();
+        self.summary()
+    }
+
+    /// The end of the file: plan the rest and, in Klipper mode, add its exit flush. Call once.
+    pub fn end(&mut self) {
+        self.back.end();
+    }
+
+    /// The times so far (moves still queued in the planner are not counted).
+    pub fn summary(&self) -> Estimate {
+        Estimate { malformed: self.front.malformed, huge_arcs: self.front.huge_arcs(), ..self.back.summary() }
+    }
+
+    /// Counts a line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE) (given in
+    /// pieces by the line reader; call this for its last) as a malformed line, not read.
+    pub fn skip_long_line(&mut self) {
+        self.front.skip_long_line();
+    }
+}
+
+/// The firmware refuses a bad mixing command and goes on; so does the estimate.
+fn skip_mixing_errors(result: Result<(), EstimateError>) -> Result<(), EstimateError> {
+    match result {
+        Err(EstimateError::Mixing { .. }) => Ok(()),
+        other => other,
+    }
+}
+
+/// Jobs handed from one thread to the other at a time: large enough that the hand-over costs
+/// nothing per line, small enough to stay in the cache.
+const BATCH: usize = 1024;
+/// An empty batch. The room past [`BATCH`] takes the last line's jobs (an arc's chords, a
+/// few dozen at most on real files) without growing.
+fn new_batch() -> Vec<Job> {
+    Vec::with_capacity(BATCH + 64)
+}
+/// Batches in flight between the threads; with [`BATCH`] this bounds the memory in between
+/// (under 1 MB).
+const BATCHES_IN_FLIGHT: usize = 4;
+/// Chunks of the file (about 1 MiB each) read ahead of the parser.
+const CHUNKS_IN_FLIGHT: usize = 2;
+
+/// Estimate a whole file read from `input`, step counts included. Three threads share the work:
+/// one reads the file in chunks of whole lines, one parses them and follows the modal state,
+/// one plans and steps. The result is the same, to the bit, as feeding every line to one
+/// [`Estimator`] (the plan side sees the same jobs in the same order); the memory is bounded by
+/// the chunks and batches in flight.
+pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
+    on_threads(input, Estimator::with_steps(profile, true)?)
+}
+
+/// [`estimate`] without the step counts (all zero), up to a fifth faster.
+pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
+    on_threads(input, Estimator::with_steps(profile, false)?)
+}
+
+fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
+    let Estimator { mut front, mut back, jobs } = estimator;
+    debug_assert!(jobs.is_empty());
+    let (to_front, chunks) = mpsc::sync_channel::<io::Result<Chunk>>(CHUNKS_IN_FLIGHT);
+    let (return_chunk, spare_chunks) = mpsc::channel::<Vec<u8>>();
+    let (to_back, batches) = mpsc::sync_channel::<Vec<Job>>(BATCHES_IN_FLIGHT);
+    let (return_batch, spare_batches) = mpsc::channel::<Vec<Job>>();
+    std::thread::scope(|scope| {
+        scope.spawn(move || read_chunks(input, &to_front, &spare_chunks));
+        let planning = scope.spawn(move || -> Result<Back, EstimateError> {
+            for mut batch in batches {
+                for job in &mut batch {
+                    back.execute(job)?;
+                }
+                batch.clear();
+                // The parse side may have finished and gone: then the batch is not needed.
+                let _ = return_batch.send(batch);
+            }
+            Ok(back)
+        });
+        let mut batch = new_batch();
+        let handover = Handover { to_back: &to_back, spare: &spare_batches, return_chunk: &return_chunk };
+        let parsed = parse_chunks(chunks, &mut front, &mut batch, &handover);
+        // The lines before an error are planned too: one of them may hold an earlier error. A
+        // closed channel means the plan side stopped on an error, which it returns.
+        let _ = to_back.send(batch);
+        drop(to_back);
+        // The plan side is behind the parse side: its error, if any, is on an earlier line.
+        let mut back = planning.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
+        parsed?;
+        back.end();
+        Ok(Estimate { malformed: front.malformed, huge_arcs: front.huge_arcs(), ..back.summary() })
+    })
+}
+
+/// The reading thread: the file in chunks of whole lines, until the end, an error (passed on)
+/// or the parser stops taking them.
+fn read_chunks<R: Read>(
+    input: R,
+    to_front: &mpsc::SyncSender<io::Result<Chunk>>,
+    spare: &mpsc::Receiver<Vec<u8>>,
+) {
+    let mut reader = ChunkReader::new(input);
+    while let Some(next) = reader.next_chunk(spare.try_recv().unwrap_or_default()).transpose() {
+        let failed = next.is_err();
+        if to_front.send(next).is_err() || failed {
+            break;
+        }
+    }
+}
+
+/// Where the parse side hands its batches and takes empty ones, and returns read chunks.
+struct Handover<'a> {
+    to_back: &'a mpsc::SyncSender<Vec<Job>>,
+    spare: &'a mpsc::Receiver<Vec<Job>>,
+    return_chunk: &'a mpsc::Sender<Vec<u8>>,
+}
+
+/// The parse side: every line into jobs, sent in batches. Stops early, with `Ok`, when the plan
+/// side has stopped (it reports its error itself).
+fn parse_chunks(
+    chunks: mpsc::Receiver<io::Result<Chunk>>,
+    front: &mut Front,
+    batch: &mut Vec<Job>,
+    handover: &Handover,
+) -> Result<(), EstimateError> {
+    let mut lines_before = 0;
+    for chunk in chunks {
+        let chunk = chunk?;
+        let mut lines = chunk.lines(lines_before);
+        while let Some(line) = lines.next_line() {
+            skip_mixing_errors(front.step(&line, batch))?;
+            if batch.len() >= BATCH {
+                let next = handover.spare.try_recv().unwrap_or_else(|_| new_batch());
+                if handover.to_back.send(std::mem::replace(batch, next)).is_err() {
+                    return Ok(());
+                }
+            }
+        }
+        lines_before = lines.number();
+        // The reader may have finished and gone: then the buffer is not needed.
+        let _ = handover.return_chunk.send(chunk.into_buffer());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use gweave::gcode::reader::LineReader;
+
+    use super::*;
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() < 1e-9
+    }
+
+    #[test]
+    fn marlin_layers_features_dwell_and_m204() {
+        let text = ";FLAVOR:Marlin\n;LAYER:0\n;TYPE:WALL-OUTER\nG1 X10 E1 F600\n;LAYER:1\n;TYPE:FILL\n\
+                    G1 X20 E2\nG4 P1000\nM204 T500\nG0 X30 F6000\n";
+        let est = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
+        // In Marlin's steps (80/mm, a = 240000 steps/s²): two collinear 10 mm moves at 10 mm/s
+        // (800 steps/s) from and to 120 steps/s: 2 steps up, then 1 step down before the dwell.
+        let (leg0, leg1) = (4.0 / 920.0 + 798.0 / 800.0, 799.0 / 800.0 + 2.0 / 920.0);
+        // The travel with M204 T500 (40000 steps/s²) cannot reach 8000 steps/s: 400 steps up to
+        // trunc(sqrt(120² + 80000 * 400)) = 5658 steps/s and 400 down.
+        let travel = 1600.0 / 5778.0;
+        assert!(close(est.layer_s[0], leg0), "{est:?}");
+        assert!(close(est.layer_s[1], leg1 + 1.0 + travel), "{est:?}");
+        assert!(close(est.feature_s[&Feature::OuterWall], leg0));
+        assert!(close(est.feature_s[&Feature::Infill], leg1 + 1.0 + travel));
+        assert!(close(est.total_s, leg0 + leg1 + 1.0 + travel));
+        assert_eq!((est.dwell_s, est.overhead_s, est.blocks), (1.0, 0.0, 3));
+        assert_eq!(est.steps.axes[0], 30 * 80);
+    }
+
+    #[test]
+    fn arcs_are_cut_into_chords() {
+        // A half circle of radius 10 (31.4 mm) becomes 32 chords, ending exactly at X20.
+        let est =
+            estimate("G1 X0 Y0 F600\nG2 X20 Y0 I10 J0\n".as_bytes(), &MotionProfile::default()).unwrap();
+        assert_eq!(est.blocks, 32);
+        assert_eq!(est.steps.axes[0], 20 * 80);
+    }
+
+    #[test]
+    fn a_huge_arc_is_planned_without_a_vec_of_chords() {
+        // A radius of 10 km: 63 million chords of 1 mm.
+        let text = "G1 X0 Y0 F600\nG2 X0 Y0 I10000000 J0 E1\nG1 X10\n";
+        let mut est = Estimator::new(&MotionProfile::default()).unwrap();
+        for line in text.lines() {
+            est.line(line.as_bytes()).unwrap();
+            assert!(est.jobs.capacity() < 64, "{} jobs held", est.jobs.capacity());
+        }
+        let sequential = est.finish();
+        assert_eq!(sequential.huge_arcs, HugeArcs { huge_arcs: 1, first_huge_arc_line: Some(2) });
+        // The first move goes nowhere: the arc's chords and the last move.
+        assert_eq!(sequential.blocks, u64::from(MAX_ARC_CHORDS) + 1);
+        let threaded = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
+        assert_eq!(threaded, sequential);
+    }
+
+    #[test]
+    fn malformed_lines_are_counted_not_dropped() {
+        let text = "G1 X10 F600\nG1 X1..2\n\0\0\0\nG1 X20\n";
+        let est = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
+        assert_eq!(est.malformed, Malformed { malformed_lines: 2, first_malformed_line: Some(2) });
+        assert_eq!(est.blocks, 2);
+    }
+
+    /// Every line through one [`Estimator`], on this thread.
+    fn sequential(text: &[u8], profile: &MotionProfile) -> Result<Estimate, EstimateError> {
+        let mut est = Estimator::new(profile)?;
+        let mut reader = LineReader::new(text);
+        while let Some(line) = reader.next_line()? {
+            est.line(line.bytes)?;
+        }
+        Ok(est.finish())
+    }
+
+    fn fixture(path: &str) -> Vec<u8> {
+        std::fs::read(format!("{}/../../tests/data/{path}", env!("CARGO_MANIFEST_DIR"))).unwrap()
+    }
+
+    #[test]
+    fn threads_give_the_one_thread_result_to_the_bit() {
+        let klipper = MotionProfile::klipper(crate::motion::limits::KlipperLimits::default());
+        for path in [
+            "prusaslicer/pr_bunny_3tool_rel.gcode",
+            "prusaslicer/pr_sphere_rrf_fwretract.gcode",
+            "cura/cura_torus.gcode",
+            "slic3r/slic3r_cone_2tool.gcode",
+        ] {
+            let text = fixture(path);
+            for profile in [&MotionProfile::default(), &klipper] {
+                let one = sequential(&text, profile).unwrap();
+                let two = estimate(&text[..], profile).unwrap();
+                // Bit for bit: the same jobs reach the planner in the same order.
+                assert_eq!(one, two, "{path}");
+                assert!(one.blocks > 1000 && one.steps.axes[0] > 0, "{path}: {one:?}");
+                let time_only = estimate_time(&text[..], profile).unwrap();
+                assert_eq!(time_only.total_s.to_bits(), one.total_s.to_bits(), "{path}");
+                assert_eq!(time_only.layer_s, one.layer_s, "{path}");
+                assert_eq!(time_only.steps.axes, [0; 5], "{path}");
+            }
+        }
+    }
+
+    #[test]
+    fn an_error_planning_a_late_line_is_reported_with_that_line() {
+        // Thousands of lines (several batches between the threads), then two relative moves of
+        // 9.99e307 mm, which is finite, then infinite: the planner refuses the second.
+        let mut text = String::from("G1 F600\n");
+        for i in 0..3000 {
+            text.push_str(&format!("G1 X{}\n", i % 7));
+        }
+        let huge = "9".repeat(308);
+        text.push_str(&format!("G91\nG1 X{huge}\nG1 X{huge}\nG1 X1\nM204 S-5\n"));
+        let err = estimate(text.as_bytes(), &MotionProfile::default()).unwrap_err();
+        assert!(
+            matches!(err, EstimateError::Move { line: 3004, source: MoveError::NonFinitePosition }),
+            "{err}"
+        );
+        let err = sequential(text.as_bytes(), &MotionProfile::default()).unwrap_err();
+        assert!(matches!(err, EstimateError::Move { line: 3004, .. }), "{err}");
+    }
+
+    #[test]
+    fn bad_input_is_an_error_with_its_line() {
+        let err = estimate("G1 X1 F600\nM204 S-5\n".as_bytes(), &MotionProfile::default()).unwrap_err();
+        assert!(matches!(err, EstimateError::Profile { line: 2, .. }), "{err}");
+    }
+}

@@ -1,0 +1,345 @@
+//! Klipper's lookahead (`Klipper3d/klipper:klippy/toolhead.py`, `Move` and `LookAheadQueue`),
+//! reproduced from its published behaviour so that print times agree with Klipper's own.
+//!
+//! Each move gets, when queued:
+//! - `max_cruise_v2`: the requested speed capped by `max_velocity`, then by `limit_speed` from the
+//!   Z axis (`max_z_velocity * len/|dz|`), from extrude-only and retract moves
+//!   (`max_extrude_only_velocity / |e ratio|`) and from the rotary axis;
+//! - `delta_v2 = 2 a len`, the most its squared speed can change over the move;
+//! - `max_start_v2`: the junction limit with the previous move (see [`super::junction`]), also
+//!   capped by both cruise speeds and by what the previous move can reach;
+//! - for `minimum_cruise_ratio`, a second "smoothed" profile with the pseudo acceleration
+//!   `a (1 - ratio)`: `mcr_delta_v2 = 2 a_mcr len` and `max_mcr_start_v2`.
+//!
+//! The flush walks the queue backwards from a stop at its end. `start_v2` is limited by the
+//! junction and by what braking over this move allows. The smoothed profile finds the peaks of
+//! each accelerate-then-decelerate run: a move that can accelerate in the smoothed profile ends
+//! a run, and the peak `(mcr_start_v2 + reachable_mcr_v2) / 2` caps the cruise speed of every
+//! move of that run. Moves that cannot accelerate take their cruise speed from the move before
+//! them in a second, forward walk.
+//!
+//! Lazy flushing: while moves keep arriving, the queue is flushed only up to the start of the
+//! last run whose peak is known, because a later move can raise only speeds after that point.
+//! A lazy flush is tried whenever the queued moves (at their nominal speeds) add up to the flush
+//! time: 1 s after a full flush, 0.15 s after any other flush. This bounds the queue to about
+//! that much motion while giving the same speeds as planning the whole file at once.
+
+use std::collections::VecDeque;
+
+use super::junction::{extruder_v2, HalfAngle};
+use super::{BlockSink, Lesser, PlannedBlock};
+use crate::motion::kinematics::{axis, Geometry, Move, MoveKind};
+use crate::motion::limits::{AxisLimits, KlipperLimits};
+use crate::motion::planner::trapezoid::Trapezoid;
+
+/// Queued motion after a full flush before the first lazy flush is tried (`BUFFER_TIME_HIGH`).
+const FLUSH_AFTER_FULL_S: f64 = 1.0;
+/// Queued motion between lazy flush attempts (`LOOKAHEAD_FLUSH_TIME`).
+const FLUSH_AFTER_LAZY_S: f64 = 0.15;
+/// The acceleration Klipper gives extrude-only moves before the extruder limits them.
+const EXTRUDE_ONLY_ACCEL_MM_S2: f64 = 99_999_999.9;
+
+/// One queued move with Klipper's planning quantities (squared speeds in (mm/s)^2).
+#[derive(Debug, Clone)]
+struct QueuedMove {
+    mv: Move,
+    geo: Geometry,
+    accel: f64,
+    junction_deviation_mm: f64,
+    min_move_t: f64,
+    max_start_v2: f64,
+    max_cruise_v2: f64,
+    delta_v2: f64,
+    max_mcr_start_v2: f64,
+    mcr_delta_v2: f64,
+}
+
+impl QueuedMove {
+    /// `limit_speed`: lower the cruise speed and the acceleration of this move.
+    fn limit_speed(&mut self, speed: f64, accel: f64) {
+        let speed2 = speed * speed;
+        if speed2 < self.max_cruise_v2 {
+            self.max_cruise_v2 = speed2;
+            self.min_move_t = self.geo.len / speed;
+        }
+        self.accel = self.accel.lesser(accel);
+        self.delta_v2 = 2.0 * self.geo.len * self.accel;
+        self.mcr_delta_v2 = self.mcr_delta_v2.lesser(self.delta_v2);
+    }
+
+    fn is_kinematic(&self) -> bool {
+        self.geo.kind == MoveKind::Kinematic
+    }
+
+    /// `calc_junction`: the highest entry speed allowed by the corner with `prev`.
+    fn calc_junction(&mut self, prev: &QueuedMove, icv_mm_s: f64) {
+        if !self.is_kinematic() || !prev.is_kinematic() {
+            return;
+        }
+        let (r, pr) = (&self.geo.ratio, &prev.geo.ratio);
+        let e_v2 = extruder_v2(icv_mm_s, pr[axis::E], r[axis::E]).unwrap_or(self.max_cruise_v2);
+        let mut v2 = self
+            .max_cruise_v2
+            .lesser(prev.max_cruise_v2)
+            .lesser(prev.max_start_v2 + prev.delta_v2)
+            .lesser(e_v2);
+        let half = HalfAngle::from_neg_cos(-(r[0] * pr[0] + r[1] * pr[1] + r[2] * pr[2]));
+        if let (Some(jd_v2), Some(prev_jd_v2)) = (
+            half.deviation_v2(self.accel, self.junction_deviation_mm),
+            half.deviation_v2(prev.accel, prev.junction_deviation_mm),
+        ) {
+            v2 = v2
+                .lesser(jd_v2)
+                .lesser(prev_jd_v2)
+                .lesser(half.centripetal_v2(self.delta_v2))
+                .lesser(half.centripetal_v2(prev.delta_v2));
+        }
+        self.max_start_v2 = v2;
+        self.max_mcr_start_v2 = v2.lesser(prev.max_mcr_start_v2 + prev.mcr_delta_v2);
+    }
+
+    fn block(&self, entry_v2: f64, cruise_v2: f64, exit_v2: f64) -> PlannedBlock {
+        let trapezoid = Trapezoid::from_v2(self.geo.len, self.accel, entry_v2, cruise_v2, exit_v2);
+        PlannedBlock::new(&self.mv, &self.geo, self.accel, trapezoid)
+    }
+}
+
+/// The result of the backward walk for one move: its start speed, its cruise speed when known
+/// (`None` for a move that cannot accelerate), and the start speed of the move after it.
+#[derive(Debug, Clone, Copy, Default)]
+struct Walk {
+    start_v2: f64,
+    cruise_v2: Option<f64>,
+    next_start_v2: f64,
+}
+
+/// Klipper's lookahead queue.
+#[derive(Debug, Clone)]
+pub(crate) struct KlipperLookahead {
+    queue: VecDeque<QueuedMove>,
+    walk: Vec<Walk>,
+    flush_budget_s: f64,
+    /// `max_z_velocity` / `max_z_accel` resolved against the limits at start, as Klipper reads
+    /// them from the config once.
+    z_velocity_mm_s: f64,
+    z_accel_mm_s2: f64,
+}
+
+impl KlipperLookahead {
+    pub(crate) fn new(limits: &KlipperLimits) -> Self {
+        Self {
+            queue: VecDeque::new(),
+            walk: Vec::new(),
+            flush_budget_s: FLUSH_AFTER_FULL_S,
+            z_velocity_mm_s: limits.max_z_velocity_mm_s.unwrap_or(limits.max_velocity_mm_s),
+            z_accel_mm_s2: limits.max_z_accel_mm_s2.unwrap_or(limits.max_accel_mm_s2),
+        }
+    }
+
+    pub(crate) fn queued(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// Queue a move (with its already checked geometry) and flush what is final.
+    pub(crate) fn push(
+        &mut self,
+        mv: &Move,
+        geo: Geometry,
+        limits: &KlipperLimits,
+        rotary: (&AxisLimits, &AxisLimits),
+        sink: &mut dyn BlockSink,
+    ) {
+        let mut q = self.new_move(mv, geo, limits, rotary);
+        let Some(prev) = self.queue.back() else {
+            self.queue.push_back(q);
+            return;
+        };
+        q.calc_junction(prev, limits.instantaneous_corner_velocity_mm_s);
+        self.flush_budget_s -= q.min_move_t;
+        self.queue.push_back(q);
+        if self.flush_budget_s <= 0.0 {
+            self.flush_queue(true, sink);
+        }
+    }
+
+    /// Plan everything queued, ending at a stop.
+    pub(crate) fn flush(&mut self, sink: &mut dyn BlockSink) {
+        self.flush_queue(false, sink);
+        self.flush_budget_s = FLUSH_AFTER_FULL_S;
+    }
+
+    /// `Move.__init__` plus the kinematics' and the extruder's `check_move`.
+    fn new_move(
+        &self,
+        mv: &Move,
+        geo: Geometry,
+        k: &KlipperLimits,
+        (max_feed, max_accel): (&AxisLimits, &AxisLimits),
+    ) -> QueuedMove {
+        let kinematic = geo.kind == MoveKind::Kinematic;
+        let (velocity, accel) = if kinematic {
+            (mv.feed_mm_s.lesser(k.max_velocity_mm_s), k.max_accel_mm_s2)
+        } else {
+            (mv.feed_mm_s, EXTRUDE_ONLY_ACCEL_MM_S2)
+        };
+        let len = geo.len;
+        let mut q = QueuedMove {
+            mv: *mv,
+            geo,
+            accel,
+            junction_deviation_mm: k.junction_deviation_mm(),
+            min_move_t: len / velocity,
+            max_start_v2: 0.0,
+            max_cruise_v2: velocity * velocity,
+            delta_v2: 2.0 * len * accel,
+            max_mcr_start_v2: 0.0,
+            mcr_delta_v2: 2.0 * len * k.mcr_pseudo_accel_mm_s2(),
+        };
+        let d = geo.delta;
+        if kinematic && d[axis::Z] != 0.0 {
+            let z_ratio = len / d[axis::Z].abs();
+            q.limit_speed(self.z_velocity_mm_s * z_ratio, self.z_accel_mm_s2 * z_ratio);
+        }
+        let e_ratio = geo.ratio[axis::E];
+        let extrude_only_or_retract = (d[axis::X] == 0.0 && d[axis::Y] == 0.0) || e_ratio < 0.0;
+        if d[axis::E] != 0.0 && extrude_only_or_retract {
+            let inv = 1.0 / e_ratio.abs();
+            let v = k.max_extrude_only_velocity_mm_s.map_or(f64::INFINITY, |v| v * inv);
+            let a = k.max_extrude_only_accel_mm_s2.map_or(f64::INFINITY, |a| a * inv);
+            q.limit_speed(v, a);
+        }
+        // The rotary axis, as one of Klipper's extra axes: its own speed and accel limits.
+        let a_ratio = geo.ratio[axis::A].abs();
+        if a_ratio > 0.0 {
+            q.limit_speed(max_feed.a / a_ratio, max_accel.a / a_ratio);
+        }
+        q
+    }
+
+    /// `LookAheadQueue.flush`: the backward walk, then the forward walk over the moves that are
+    /// final. A lazy flush emits nothing until a run's peak is known.
+    fn flush_queue(&mut self, lazy: bool, sink: &mut dyn BlockSink) {
+        self.flush_budget_s = FLUSH_AFTER_LAZY_S;
+        let n = self.queue.len();
+        self.walk.clear();
+        self.walk.resize(n, Walk::default());
+        let mut flush_count = n;
+        let mut searching = lazy;
+        let (mut next_start_v2, mut next_mcr_start_v2, mut peak_cruise_v2) = (0.0, 0.0, 0.0);
+        let mut pending = 0usize;
+        for i in (0..n).rev() {
+            let m = &self.queue[i];
+            let reachable_start_v2 = next_start_v2 + m.delta_v2;
+            let start_v2 = m.max_start_v2.lesser(reachable_start_v2);
+            let reachable_mcr_v2 = next_mcr_start_v2 + m.mcr_delta_v2;
+            let mcr_start_v2 = m.max_mcr_start_v2.lesser(reachable_mcr_v2);
+            pending += 1;
+            let mut cruise_v2 = None;
+            if mcr_start_v2 < reachable_mcr_v2 {
+                // This move can accelerate. If it can also decelerate, or it is a full
+                // acceleration followed by moves that only decelerate, it tops a run.
+                if mcr_start_v2 + m.mcr_delta_v2 > next_mcr_start_v2 || pending > 1 {
+                    if searching && peak_cruise_v2 != 0.0 {
+                        flush_count = i + pending;
+                        searching = false;
+                    }
+                    peak_cruise_v2 = (mcr_start_v2 + reachable_mcr_v2) * 0.5;
+                }
+                cruise_v2 = Some(
+                    ((start_v2 + reachable_start_v2) * 0.5).lesser(m.max_cruise_v2).lesser(peak_cruise_v2),
+                );
+                pending = 0;
+            }
+            self.walk[i] = Walk { start_v2, cruise_v2, next_start_v2 };
+            next_start_v2 = start_v2;
+            next_mcr_start_v2 = mcr_start_v2;
+        }
+        if searching || flush_count == 0 {
+            return;
+        }
+        let mut prev_cruise_v2: f64 = 0.0;
+        for (m, w) in self.queue.drain(..flush_count).zip(&self.walk) {
+            let cruise_v2 = w.cruise_v2.unwrap_or_else(|| prev_cruise_v2.lesser(w.start_v2));
+            sink.block(&m.block(w.start_v2.lesser(cruise_v2), cruise_v2, w.next_start_v2.lesser(cruise_v2)));
+            prev_cruise_v2 = cruise_v2;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::kinematics::Pos;
+    use crate::motion::limits::MotionProfile;
+    use proptest::prelude::*;
+
+    /// Plan a path; with `full` no lazy flush ever happens before the final flush.
+    fn plan(moves: &[Move], full: bool) -> Vec<PlannedBlock> {
+        let limits = KlipperLimits {
+            max_extrude_only_velocity_mm_s: Some(40.0),
+            max_extrude_only_accel_mm_s2: Some(900.0),
+            ..KlipperLimits::default()
+        };
+        let profile = MotionProfile::klipper(limits);
+        let rotary = (&profile.max_feed_mm_s, &profile.max_accel_mm_s2);
+        let mut k = KlipperLookahead::new(&limits);
+        let mut out: Vec<PlannedBlock> = Vec::new();
+        for mv in moves {
+            if full {
+                k.flush_budget_s = f64::INFINITY;
+            }
+            k.push(mv, mv.geometry().unwrap(), &limits, rotary, &mut out);
+        }
+        k.flush(&mut out);
+        out
+    }
+
+    fn path() -> impl Strategy<Value = Vec<Move>> {
+        let step = (-30.0..30.0f64, -30.0..30.0f64, 0..10u8, 0.0..0.5f64, 2.0..200.0f64);
+        proptest::collection::vec(step, 1..400).prop_map(|steps| {
+            let mut at = Pos::default();
+            let mut moves = Vec::new();
+            for (i, (dx, dy, kind, de, feed)) in steps.into_iter().enumerate() {
+                let mut to = at;
+                match kind {
+                    // A retract or unretract, or a layer change.
+                    0 => to.e_mm -= de,
+                    1 => to.e_mm += de,
+                    2 => to.z_mm += 0.2,
+                    // Mostly short printing and travel moves.
+                    k => {
+                        let scale = if k < 6 { 0.05 } else { 1.0 };
+                        to.x_mm += dx * scale;
+                        to.y_mm += dy * scale;
+                        to.e_mm += if k % 2 == 0 { de * scale } else { 0.0 };
+                    }
+                }
+                moves.push(Move { start: at, end: to, feed_mm_s: feed, tag: i as u64 });
+                at = to;
+            }
+            moves
+        })
+    }
+
+    proptest! {
+        /// Klipper's lazy flushing commits a move only once no later move can change its speeds.
+        #[test]
+        fn lazy_flushing_equals_full_lookahead(moves in path()) {
+            let lazy = plan(&moves, false);
+            let full = plan(&moves, true);
+            prop_assert_eq!(lazy.len(), full.len());
+            for (a, b) in lazy.iter().zip(&full) {
+                prop_assert_eq!(a.tag, b.tag);
+                let (ta, tb) = (a.trapezoid, b.trapezoid);
+                for (x, y) in [
+                    (ta.entry_v_mm_s, tb.entry_v_mm_s),
+                    (ta.cruise_v_mm_s, tb.cruise_v_mm_s),
+                    (ta.exit_v_mm_s, tb.exit_v_mm_s),
+                    (ta.duration_s(), tb.duration_s()),
+                ] {
+                    prop_assert!((x - y).abs() <= 1e-9 * y.abs().max(1.0), "{:?} vs {:?}", ta, tb);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,232 @@
+//! The motion planner: turns requested straight moves into blocks with trapezoidal speed
+//! profiles, looking ahead over the queued moves so that corners and short moves slow the
+//! machine down only as much as the limits require.
+//!
+//! Two planners imitate two firmwares, and a third the controller seed (chosen by
+//! [`CornerMode`]):
+//! - [`CornerMode::Klipper`]: Klipper's lookahead, reproduced closely enough that print times
+//!   agree with Klipper's own to well under 0.01 % (see `klipper.rs` for the method);
+//! - [`CornerMode::Marlin`]: Marlin's planner in whole steps, junction deviation or classic
+//!   jerk, over its bounded block buffer; print times agree with Marlin's own planner to
+//!   0.01 % (see `marlin.rs`);
+//! - [`CornerMode::Constant`]: no acceleration, each move at its feed on its dominant motor,
+//!   timed in whole steps as the seed's delay-per-step loop runs (see `constant.rs`).
+//!
+//! All stream: [`Planner::push`] hands finished blocks to a [`BlockSink`] as soon as their
+//! speeds are final and the queue stays bounded (Marlin: `lookahead_blocks`; Klipper: about a
+//! second of motion), so a file of any size plans in constant memory.
+//! [`Planner::flush`] plans the rest to a stop, for the end of the file or a dwell
+//! (G4, M400, M109, ...).
+//!
+//! ```
+//! use gweave_sim::{Move, Pos};
+//! use gweave_sim::{KlipperLimits, MotionProfile};
+//! use gweave_sim::{PlannedBlock, Planner};
+//!
+//! let mut planner = Planner::new(MotionProfile::klipper(KlipperLimits::default())).unwrap();
+//! let mut blocks: Vec<PlannedBlock> = Vec::new();
+//! let mv = Move { start: Pos::default(), end: Pos::xyze(100.0, 0.0, 0.0, 0.0), feed_mm_s: 50.0, tag: 7 };
+//! planner.push(&mv, &mut blocks).unwrap();
+//! planner.flush(&mut blocks);
+//! assert_eq!(blocks.len(), 1);
+//! // 0 -> 50 mm/s at 3000 mm/s^2 and back: 2 x 1/60 s, 100 - 2 x 0.41667 mm at 50 mm/s.
+//! assert!((blocks[0].trapezoid.duration_s() - (2.0 / 60.0 + (100.0 - 2.5 / 3.0) / 50.0)).abs() < 1e-12);
+//! ```
+
+mod constant;
+mod junction;
+mod klipper;
+mod marlin;
+mod marlin_block;
+mod marlin_steps;
+mod trapezoid;
+
+pub use trapezoid::Trapezoid;
+
+use crate::motion::kinematics::{Geometry, Move, MoveError, MoveKind, Pos};
+use crate::motion::limits::{CornerMode, MotionProfile, ProfileError};
+use klipper::KlipperLookahead;
+use marlin::MarlinBuffer;
+
+/// A planned block: one move with its final speeds and phase times.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlannedBlock {
+    /// The tag of the move it came from.
+    pub tag: u64,
+    /// Start position.
+    pub start: Pos,
+    /// End position (for a move without XYZ travel, XYZ stay at the start).
+    pub end: Pos,
+    /// The length the speeds refer to: XYZ mm, or A degrees / E mm for moves without XYZ.
+    pub len: f64,
+    /// The acceleration used, in the same length unit per s².
+    pub accel_mm_s2: f64,
+    /// What the move drives.
+    pub kind: MoveKind,
+    /// Speeds and times.
+    pub trapezoid: Trapezoid,
+}
+
+impl PlannedBlock {
+    fn new(mv: &Move, geo: &Geometry, accel_mm_s2: f64, trapezoid: Trapezoid) -> Self {
+        let mut end = mv.end;
+        if geo.kind != MoveKind::Kinematic {
+            (end.x_mm, end.y_mm, end.z_mm) = (mv.start.x_mm, mv.start.y_mm, mv.start.z_mm);
+        }
+        Self { tag: mv.tag, start: mv.start, end, len: geo.len, accel_mm_s2, kind: geo.kind, trapezoid }
+    }
+
+    /// Time the block takes, s.
+    pub fn duration_s(&self) -> f64 {
+        self.trapezoid.duration_s()
+    }
+}
+
+/// The smaller of two speeds or accelerations, in one `minsd`. `f64::min` also sorts out NaN,
+/// which costs a few instructions per call and showed in the planner's profile; a planned
+/// move's numbers are never NaN (its positions and feed rate are checked finite first).
+pub(crate) trait Lesser {
+    fn lesser(self, other: f64) -> f64;
+}
+
+impl Lesser for f64 {
+    #[inline(always)]
+    fn lesser(self, other: f64) -> f64 {
+        if self < other {
+            self
+        } else {
+            other
+        }
+    }
+}
+
+/// Receives planned blocks in order. Closures `FnMut(&PlannedBlock)` and `Vec<PlannedBlock>` are
+/// sinks.
+pub trait BlockSink {
+    /// One more block, in execution order.
+    fn block(&mut self, block: &PlannedBlock);
+}
+
+impl<F: FnMut(&PlannedBlock)> BlockSink for F {
+    fn block(&mut self, block: &PlannedBlock) {
+        self(block)
+    }
+}
+
+impl BlockSink for Vec<PlannedBlock> {
+    fn block(&mut self, block: &PlannedBlock) {
+        self.push(*block)
+    }
+}
+
+#[derive(Debug, Clone)]
+enum Engine {
+    Klipper(Box<KlipperLookahead>),
+    Marlin(Box<MarlinBuffer>),
+    /// Constant speed keeps no queue: each move's block is final as it arrives.
+    Constant,
+}
+
+/// A streaming lookahead planner for one machine profile.
+#[derive(Debug, Clone)]
+pub struct Planner {
+    profile: MotionProfile,
+    engine: Engine,
+}
+
+impl Planner {
+    /// A planner for `profile`, which is checked first.
+    pub fn new(profile: MotionProfile) -> Result<Self, ProfileError> {
+        profile.validate()?;
+        let engine = match &profile.corners {
+            CornerMode::Klipper(k) => Engine::Klipper(Box::new(KlipperLookahead::new(k))),
+            CornerMode::Marlin { .. } => Engine::Marlin(Box::default()),
+            CornerMode::Constant {} => Engine::Constant,
+        };
+        Ok(Self { profile, engine })
+    }
+
+    /// The profile in force.
+    pub fn profile(&self) -> &MotionProfile {
+        &self.profile
+    }
+
+    /// Replace the profile mid-stream (M201, M203, M204, M205, `SET_VELOCITY_LIMIT`): moves
+    /// pushed from now on use it, queued moves keep their limits, as in both firmwares. The
+    /// corner mode (Marlin, Klipper or constant) cannot change.
+    pub fn set_profile(&mut self, profile: MotionProfile) -> Result<(), ProfileError> {
+        Self::check_change(&self.profile, &profile)?;
+        self.profile = profile;
+        if let Engine::Marlin(m) = &mut self.engine {
+            m.profile_changed();
+        }
+        Ok(())
+    }
+
+    /// Whether a planner running `current` would take `next` ([`Planner::set_profile`]'s rule),
+    /// for a caller that keeps its own copy of the profile.
+    pub fn check_change(current: &MotionProfile, next: &MotionProfile) -> Result<(), ProfileError> {
+        next.validate()?;
+        let same_mode = matches!(
+            (&current.corners, &next.corners),
+            (CornerMode::Klipper(_), CornerMode::Klipper(_))
+                | (CornerMode::Marlin { .. }, CornerMode::Marlin { .. })
+                | (CornerMode::Constant {}, CornerMode::Constant {})
+        );
+        if same_mode {
+            Ok(())
+        } else {
+            Err(ProfileError::ModeChange)
+        }
+    }
+
+    /// Queue a move; blocks whose speeds became final go to `sink`. A move that goes nowhere is
+    /// dropped, as both firmwares do.
+    pub fn push<S: BlockSink>(&mut self, mv: &Move, sink: &mut S) -> Result<(), MoveError> {
+        let geo = mv.geometry()?;
+        if geo.len == 0.0 {
+            return Ok(());
+        }
+        match (&mut self.engine, &self.profile.corners) {
+            (Engine::Klipper(k), CornerMode::Klipper(limits)) => {
+                let rotary = (&self.profile.max_feed_mm_s, &self.profile.max_accel_mm_s2);
+                k.push(mv, geo, limits, rotary, sink);
+            }
+            (Engine::Marlin(m), CornerMode::Marlin { .. }) => m.push(mv, &self.profile, sink),
+            (Engine::Constant, CornerMode::Constant {}) => {
+                sink.block(&constant::block(mv, &geo, &self.profile.steps))
+            }
+            _ => unreachable!("set_profile keeps the corner mode of the engine"),
+        }
+        Ok(())
+    }
+
+    /// Moves from now on drive extruder `tool` (`T<n>`): in Marlin mode with its own E limits,
+    /// if the profile gives it some (`extruders`).
+    pub fn select_tool(&mut self, tool: usize) {
+        if let Engine::Marlin(m) = &mut self.engine {
+            m.select_tool(tool);
+        }
+    }
+
+    /// Plan every queued move to a stop and emit it.
+    pub fn flush<S: BlockSink>(&mut self, sink: &mut S) {
+        match &mut self.engine {
+            Engine::Klipper(k) => k.flush(sink),
+            Engine::Marlin(m) => m.flush(sink),
+            Engine::Constant => {}
+        }
+    }
+
+    /// How many moves wait in the lookahead queue.
+    pub fn queued(&self) -> usize {
+        match &self.engine {
+            Engine::Klipper(k) => k.queued(),
+            Engine::Marlin(m) => m.queued(),
+            Engine::Constant => 0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

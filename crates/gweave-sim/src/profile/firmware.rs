@@ -1,0 +1,298 @@
+//! What the virtual board's firmware was built with: the `[firmware]` table of the machine
+//! profile.
+//!
+//! A Marlin board answers a host according to the features compiled into it: `M115` lists them
+//! as `Cap:` lines, a command whose feature is absent is `echo:Unknown command: "M600"`. Hosts read
+//! the list and behave accordingly (OctoPrint stops polling `M105` when `AUTOREPORT_TEMP` is
+//! there, shows its SD panel when `SDCARD` is, answers `//action:prompt_begin` dialogs when
+//! `PROMPT_SUPPORT` is). The defaults are a common current Marlin 2.1 build for a printer with a
+//! display and an SD slot (the options of `Configuration.h`/`Configuration_adv.h` in brackets):
+//!
+//! ```toml
+//! [firmware]
+//! eeprom = true                # EEPROM_SETTINGS: M500 M501 (a file next to the session)
+//! sdcard = true                # SDSUPPORT: M20-M30 M32 M524 M928
+//! long_filenames = true        # LONG_FILENAME_HOST_SUPPORT: M33, M20 L (EXTENDED_M20)
+//! lfn_write = false            # LONG_FILENAME_WRITE_SUPPORT: M28 with a long name
+//! autoreport_temp = true       # AUTO_REPORT_TEMPERATURES: M155
+//! autoreport_pos = false       # AUTO_REPORT_POSITION: M154
+//! autoreport_sd = true         # AUTO_REPORT_SD_STATUS: M27 S
+//! host_action_commands = true  # HOST_ACTION_COMMANDS: //action:...
+//! prompt_support = true        # HOST_PROMPT_SUPPORT: //action:prompt_..., M876
+//! emergency_parser = true      # EMERGENCY_PARSER: M108 M112 M410 M876 act at once
+//! advanced_pause = true        # ADVANCED_PAUSE_FEATURE: M600 with host prompts
+//! fw_retract = true            # FWRETRACT: G10 G11 M207 M208 M209
+//! arcs = true                  # ARC_SUPPORT: G2 G3
+//! psu_control = false          # PSU_CONTROL: M80 (M81 is always there)
+//! buzzer = true                # a speaker: M300
+//! set_progress = true          # SET_PROGRESS_MANUALLY: M73
+//! pin_control = true           # DIRECT_PIN_CONTROL: M42 M226
+//! probe = false                # a bed probe: M851, G30 (Z_PROBE)
+//! mesh = [3, 3]                # bed levelling (AUTO_BED_LEVELING_BILINEAR grid): G29 M420; [] none
+//! ```
+//!
+//! ```
+//! use gweave_sim::Firmware;
+//!
+//! let fw = Firmware::default();
+//! assert!(fw.knows_m(20) && fw.knows_m(600) && !fw.knows_m(80));
+//! assert!(fw.capability_lines().contains(&"Cap:SDCARD:1".to_owned()));
+//! ```
+
+use serde::{Deserialize, Serialize};
+
+/// The build features of the virtual board (see the module documentation for the defaults).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Firmware {
+    /// `EEPROM_SETTINGS`: `M500`/`M501` save and load the settings.
+    pub eeprom: bool,
+    /// `SDSUPPORT`: the SD card commands.
+    pub sdcard: bool,
+    /// `LONG_FILENAME_HOST_SUPPORT`: `M33`, long names in `M20 L` (`EXTENDED_M20`).
+    pub long_filenames: bool,
+    /// `LONG_FILENAME_WRITE_SUPPORT`: `M28` creates a file under a long name.
+    pub lfn_write: bool,
+    /// `AUTO_REPORT_TEMPERATURES`: `M155`.
+    pub autoreport_temp: bool,
+    /// `AUTO_REPORT_POSITION`: `M154`.
+    pub autoreport_pos: bool,
+    /// `AUTO_REPORT_SD_STATUS`: `M27 S<seconds>`.
+    pub autoreport_sd: bool,
+    /// `HOST_ACTION_COMMANDS`: `//action:paused`, `//action:resumed`...
+    pub host_action_commands: bool,
+    /// `HOST_PROMPT_SUPPORT`: `//action:prompt_begin`... dialogs answered with `M876`.
+    pub prompt_support: bool,
+    /// `EMERGENCY_PARSER`.
+    pub emergency_parser: bool,
+    /// `ADVANCED_PAUSE_FEATURE`: `M600` filament change (with host prompts).
+    pub advanced_pause: bool,
+    /// `FWRETRACT`: `G10`/`G11` and their settings `M207`-`M209`.
+    pub fw_retract: bool,
+    /// `ARC_SUPPORT`: `G2`/`G3`.
+    pub arcs: bool,
+    /// `PSU_CONTROL`: `M80` (`SOFTWARE_POWER`).
+    pub psu_control: bool,
+    /// A speaker or buzzer: `M300`.
+    pub buzzer: bool,
+    /// `SET_PROGRESS_MANUALLY`: `M73` (`BUILD_PERCENT`).
+    pub set_progress: bool,
+    /// `DIRECT_PIN_CONTROL`: `M42`, `M226`.
+    pub pin_control: bool,
+    /// A bed probe: `M851` probe offsets (`Z_PROBE`).
+    pub probe: bool,
+    /// Bed levelling grid points in X and Y (`GRID_MAX_POINTS_X/Y`): `G29`, `M420`; empty when
+    /// the board has no levelling.
+    pub mesh: Vec<u8>,
+    /// What `M0` does: Marlin's stop, or the controller seed's end of program.
+    pub m0: ProgramStop,
+}
+
+/// What `M0` (program stop) does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProgramStop {
+    /// Marlin: finish the queued moves, switch the motors off; the program goes on.
+    #[default]
+    Marlin,
+    /// The controller seed's end of program: finish the moves, home the axes, switch the
+    /// motors off and close the serial link; nothing after it runs.
+    Seed,
+}
+
+impl Default for Firmware {
+    fn default() -> Self {
+        Firmware {
+            eeprom: true,
+            sdcard: true,
+            long_filenames: true,
+            lfn_write: false,
+            autoreport_temp: true,
+            autoreport_pos: false,
+            autoreport_sd: true,
+            host_action_commands: true,
+            prompt_support: true,
+            emergency_parser: true,
+            advanced_pause: true,
+            fw_retract: true,
+            arcs: true,
+            psu_control: false,
+            buzzer: true,
+            set_progress: true,
+            pin_control: true,
+            probe: false,
+            mesh: vec![3, 3],
+            m0: ProgramStop::Marlin,
+        }
+    }
+}
+
+/// A `[firmware]` value that cannot be built.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum FirmwareError {
+    /// The mesh is not two sizes of 2 to 15 points.
+    #[error("firmware.mesh must be [] or two grid sizes of 2 to 15 points (GRID_MAX_POINTS_X/Y), got {0:?}")]
+    Mesh(Vec<u8>),
+    /// A feature that needs another one.
+    #[error("firmware.{0} needs firmware.{1}")]
+    Needs(&'static str, &'static str),
+}
+
+impl Firmware {
+    /// Checks the values that depend on each other.
+    pub fn validate(&self) -> Result<(), FirmwareError> {
+        let mesh_ok =
+            self.mesh.is_empty() || (self.mesh.len() == 2 && self.mesh.iter().all(|n| (2..=15).contains(n)));
+        if !mesh_ok {
+            return Err(FirmwareError::Mesh(self.mesh.clone()));
+        }
+        let needs = [
+            (self.long_filenames, !self.sdcard, "long_filenames", "sdcard"),
+            (self.lfn_write, !self.long_filenames, "lfn_write", "long_filenames"),
+            (self.autoreport_sd, !self.sdcard, "autoreport_sd", "sdcard"),
+            (self.prompt_support, !self.host_action_commands, "prompt_support", "host_action_commands"),
+        ];
+        match needs.iter().find(|(on, missing, ..)| *on && *missing) {
+            Some(&(_, _, what, needed)) => Err(FirmwareError::Needs(what, needed)),
+            None => Ok(()),
+        }
+    }
+
+    /// The bed levelling grid, when the board has one.
+    pub fn grid(&self) -> Option<(usize, usize)> {
+        match self.mesh[..] {
+            [x, y] => Some((usize::from(x), usize::from(y))),
+            _ => None,
+        }
+    }
+
+    /// The `Cap:` lines of `M115`, in Marlin 2.1's order (`Marlin/src/gcode/host/M115.cpp`).
+    /// Capabilities the virtual board never has (binary transfer, runout sensor, lights, ...)
+    /// are listed as `0`, as Marlin lists its absent ones.
+    pub fn capability_lines(&self) -> Vec<String> {
+        let levelling = self.grid().is_some();
+        let caps: [(&str, bool); 31] = [
+            ("SERIAL_XON_XOFF", false),
+            ("BINARY_FILE_TRANSFER", false),
+            ("EEPROM", self.eeprom),
+            ("VOLUMETRIC", true),
+            ("AUTOREPORT_POS", self.autoreport_pos),
+            ("AUTOREPORT_TEMP", self.autoreport_temp),
+            ("PROGRESS", false),
+            ("PRINT_JOB", true),
+            ("AUTOLEVEL", levelling && self.probe),
+            ("RUNOUT", false),
+            ("Z_PROBE", self.probe),
+            ("LEVELING_DATA", levelling),
+            ("BUILD_PERCENT", self.set_progress),
+            ("SOFTWARE_POWER", self.psu_control),
+            ("TOGGLE_LIGHTS", false),
+            ("CASE_LIGHT_BRIGHTNESS", false),
+            ("EMERGENCY_PARSER", self.emergency_parser),
+            ("HOST_ACTION_COMMANDS", self.host_action_commands),
+            ("PROMPT_SUPPORT", self.prompt_support),
+            ("SDCARD", self.sdcard),
+            ("MULTI_VOLUME", false),
+            ("REPEAT", false),
+            ("SD_WRITE", self.sdcard),
+            ("AUTOREPORT_SD_STATUS", self.autoreport_sd),
+            ("LONG_FILENAME", self.long_filenames),
+            ("LFN_WRITE", self.lfn_write),
+            ("CUSTOM_FIRMWARE_UPLOAD", false),
+            ("EXTENDED_M20", self.long_filenames),
+            ("THERMAL_PROTECTION", true),
+            ("MOTION_MODES", false),
+            ("ARCS", self.arcs),
+        ];
+        // SDCARD's MULTI_VOLUME line is printed only on boards with SD support.
+        let tail = [
+            ("BABYSTEPPING", false),
+            ("CHAMBER_TEMPERATURE", false),
+            ("COOLER_TEMPERATURE", false),
+            ("MEATPACK", false),
+            ("CONFIG_EXPORT", false),
+        ];
+        caps.iter()
+            .filter(|(name, _)| *name != "MULTI_VOLUME" || self.sdcard)
+            .chain(tail.iter())
+            .map(|(name, on)| format!("Cap:{name}:{}", u8::from(*on)))
+            .collect()
+    }
+
+    /// Whether this build has the G-code `G<number>` (of those that depend on a feature).
+    pub fn knows_g(&self, number: u32) -> bool {
+        match number {
+            2 | 3 => self.arcs,
+            10 | 11 => self.fw_retract,
+            29 => self.grid().is_some(),
+            30 => self.probe,
+            _ => true,
+        }
+    }
+
+    /// Whether this build has the M-code `M<number>` (of those that depend on a feature).
+    pub fn knows_m(&self, number: u32) -> bool {
+        match number {
+            20..=30 | 32 | 524 | 928 => self.sdcard,
+            33 => self.long_filenames,
+            73 => self.set_progress,
+            80 => self.psu_control,
+            42 | 226 => self.pin_control,
+            600 => self.advanced_pause,
+            154 => self.autoreport_pos,
+            155 => self.autoreport_temp,
+            207..=209 => self.fw_retract,
+            300 => self.buzzer,
+            420 => self.grid().is_some(),
+            500 | 501 => self.eeprom,
+            851 => self.probe,
+            876 => self.prompt_support,
+            _ => true,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn m115_lists_marlin_2_1_capabilities_in_order() {
+        let lines = Firmware::default().capability_lines();
+        assert_eq!(lines.first().map(String::as_str), Some("Cap:SERIAL_XON_XOFF:0"));
+        assert_eq!(lines.last().map(String::as_str), Some("Cap:CONFIG_EXPORT:0"));
+        for cap in [
+            "Cap:EEPROM:1",
+            "Cap:AUTOREPORT_TEMP:1",
+            "Cap:EMERGENCY_PARSER:1",
+            "Cap:HOST_ACTION_COMMANDS:1",
+            "Cap:PROMPT_SUPPORT:1",
+            "Cap:SDCARD:1",
+            "Cap:AUTOREPORT_SD_STATUS:1",
+            "Cap:EXTENDED_M20:1",
+            "Cap:THERMAL_PROTECTION:1",
+            "Cap:LEVELING_DATA:1",
+            "Cap:AUTOREPORT_POS:0",
+        ] {
+            assert!(lines.iter().any(|l| l == cap), "{cap} in {lines:?}");
+        }
+        let bare =
+            Firmware { sdcard: false, long_filenames: false, autoreport_sd: false, ..Firmware::default() };
+        let lines = bare.capability_lines();
+        assert!(lines.contains(&"Cap:SDCARD:0".to_owned()));
+        assert!(!lines.iter().any(|l| l.starts_with("Cap:MULTI_VOLUME")));
+    }
+
+    #[test]
+    fn firmware_table_checks_what_depends_on_what() {
+        assert_eq!(Firmware::default().validate(), Ok(()));
+        let fw = Firmware { sdcard: false, ..Firmware::default() };
+        assert_eq!(fw.validate(), Err(FirmwareError::Needs("long_filenames", "sdcard")));
+        let fw = Firmware { mesh: vec![3], ..Firmware::default() };
+        assert_eq!(fw.validate(), Err(FirmwareError::Mesh(vec![3])));
+        let fw: Firmware =
+            toml::from_str("sdcard = false\nlong_filenames = false\nautoreport_sd = false\n").unwrap();
+        assert!(!fw.knows_m(20) && !fw.knows_m(27) && fw.knows_m(105));
+        assert!(toml::from_str::<Firmware>("sd_card = true\n").is_err());
+    }
+}
