@@ -7,6 +7,7 @@ mod args;
 mod cmd;
 mod common;
 mod files;
+mod firmware_arg;
 mod finish;
 mod progress;
 pub mod raster_job;

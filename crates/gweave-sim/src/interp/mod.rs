@@ -42,6 +42,7 @@ mod warning_text;
 
 use std::collections::BTreeMap;
 
+use gweave::firmware::MixingCode;
 use gweave::gcode::line::Command;
 use gweave::gcode::state::{self, Effect};
 use thiserror::Error;
@@ -228,6 +229,13 @@ impl Machine {
             warnings: Vec::new(),
             warning_counts: BTreeMap::new(),
         })
+    }
+
+    /// Reads the lines to come as `firmware` reads them: a file's, as `stats` reads it
+    /// ([`gweave::gcode::flavour::read_firmware`]). Call before the first line; a host on the
+    /// serial line is read as Marlin reads it.
+    pub fn read_as(&mut self, firmware: gweave::firmware::Firmware) {
+        self.core.read_as(firmware);
     }
 
     /// Lines printed at power-on, as Marlin does: `start`, then `echo:` lines.
@@ -475,8 +483,9 @@ impl Machine {
                 }
             }
             // Accepted, nothing to simulate: enable motors, progress, line numbers (the serial
-            // layer's), LCD message, gradient mix, RRF tool definition.
-            17 | 73 | 110 | 166 | 563 => {}
+            // layer's), LCD message; a gradient mix, an RRF tool definition.
+            17 | 73 | 110 => {}
+            n if MixingCode::sets_nothing_to_follow(n) => {}
             20..=30 | 32 | 33 | 524 | 928 => self.sd_command(line, number, out),
             31 | 42 | 75..=77 | 80 | 81 | 108 | 117 | 118 | 154 | 211 | 226 | 300 | 410 | 420 | 876 => {
                 self.host_command(line, number, out)
@@ -494,7 +503,8 @@ impl Machine {
             }
             // RepRapFirmware 3.3+ sets a tool's temperatures with M568 (as G10 P S before).
             568 => self.rrf_tool_temperature(out),
-            82 | 83 | 201 | 203 | 204 | 163..=165 | 567 => self.run_core(line, &effect, out),
+            82 | 83 | 201 | 203 | 204 => self.run_core(line, &effect, out),
+            n if MixingCode::sets_a_mix(n) => self.run_core(line, &effect, out),
             104 | 109 | 116 | 140 | 190 | 105 | 106 | 107 | 155 | 301 | 303 => {
                 self.heat_command(line, number, effect, out)
             }

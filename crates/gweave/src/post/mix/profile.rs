@@ -4,7 +4,7 @@
 //!
 //! ```toml
 //! [hardware]
-//! dialect = "marlin"            # marlin | marlin-direct | reprap (unset: from the file)
+//! dialect = "marlin"            # marlin | marlin-direct | reprapfirmware (unset: from the file)
 //! virtual_tools = 16
 //! filament_diameter_mm = 1.75
 //! material2_input = 3           # the input holding "material 2" (default: the last)
@@ -44,6 +44,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
 use crate::colour::{MixError, MixingModel, Srgb8};
+use crate::firmware::{Firmware, MixCommands};
 use crate::gcode::number::NumberFormat;
 use crate::post::mix::card::CardConfig;
 use crate::post::purge_block::PurgeMotion;
@@ -52,39 +53,14 @@ use crate::settings::{CheckRanges, Table};
 
 use super::MixPassError;
 
-/// How the firmware is told the mix.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum Dialect {
-    /// Marlin MIXING_EXTRUDER: `M163 S<i> P<f>` ... `M164 S<t>`, then `T<t>`.
-    #[default]
-    Marlin,
-    /// Marlin with direct mixing: `M165 A B C D H I` sets the active tool's mix at each change.
-    MarlinDirect,
-    /// RepRapFirmware: `M563 P<t> D0:1:.. H<h>` and `M567 P<t> E<a:b:..>`, then `T<t>`.
-    Reprap,
-}
-
-impl FromStr for Dialect {
+impl FromStr for MixCommands {
     type Err = MixPassError;
-    /// The profile's names (`marlin`, `marlin-direct`, `reprap`), as its TOML reads them.
+    /// The profile's names (`marlin`, `marlin-direct`, `reprapfirmware`; `reprap` still
+    /// accepted), as its TOML reads them.
     fn from_str(s: &str) -> Result<Self, MixPassError> {
         use serde::de::{value::Error, IntoDeserializer};
-        Dialect::deserialize(s.into_deserializer())
+        MixCommands::deserialize(s.into_deserializer())
             .map_err(|e: Error| MixPassError::Config(format!("dialect: {e}")))
-    }
-}
-
-impl Dialect {
-    /// The dialect of a file sliced for `flavour` (its `gcode_flavor`): RepRapFirmware's for
-    /// `reprapfirmware`, Marlin's for everything else (Klipper has no mixing extruder; Slic3r's
-    /// `reprap` is the Marlin/Sprinter family).
-    pub fn for_flavour(flavour: &str) -> Dialect {
-        if flavour.eq_ignore_ascii_case("reprapfirmware") {
-            Dialect::Reprap
-        } else {
-            Dialect::Marlin
-        }
     }
 }
 
@@ -120,7 +96,7 @@ pub struct Hardware {
     pub inputs: Vec<Input>,
     /// How the firmware is told the mix; unset, the file's flavour decides
     /// ([`MixProfile::dialect_for_file`]), and Marlin when the file does not say.
-    pub dialect: Option<Dialect>,
+    pub dialect: Option<MixCommands>,
     /// Virtual tools the firmware stores (Marlin MIXING_VIRTUAL_TOOLS, default 16).
     pub virtual_tools: usize,
     pub filament_diameter_mm: f64,
@@ -158,7 +134,7 @@ impl Default for Hardware {
 
 impl Hardware {
     /// The dialect written: the profile's, or Marlin's if it is still unset.
-    pub fn dialect(&self) -> Dialect {
+    pub fn dialect(&self) -> MixCommands {
         self.dialect.unwrap_or_default()
     }
 
@@ -603,8 +579,7 @@ impl MixProfile {
     /// [`flavour_in`]: crate::gcode::flavour::flavour_in
     pub fn dialect_for_file(&mut self, flavour: Option<&str>) {
         let hw = &mut self.hardware;
-        hw.dialect =
-            Some(hw.dialect.unwrap_or_else(|| flavour.map_or(Dialect::Marlin, Dialect::for_flavour)));
+        hw.dialect = Some(hw.dialect.unwrap_or_else(|| Firmware::resolve(None, flavour).mix_commands()));
     }
 
     /// Adds `--map T1=PVA`.
@@ -627,10 +602,10 @@ impl MixProfile {
         if hw.inputs.is_empty() {
             return cfg("hardware.inputs: at least one input".into());
         }
-        if hw.dialect() == Dialect::MarlinDirect && hw.inputs.len() > 6 {
+        if hw.dialect() == MixCommands::MarlinDirect && hw.inputs.len() > 6 {
             return cfg("marlin-direct (M165) has letters for 6 inputs at most".into());
         }
-        if hw.virtual_tools == 0 && hw.dialect() != Dialect::MarlinDirect {
+        if hw.virtual_tools == 0 && hw.dialect() != MixCommands::MarlinDirect {
             return cfg("hardware.virtual_tools must be at least 1".into());
         }
         if hw.material2_index() >= hw.inputs.len() {
@@ -738,9 +713,10 @@ mod tests {
 
     #[test]
     fn dialect_names_are_the_profiles() {
-        let names = ["marlin", "marlin-direct", "reprap"].map(|n| n.parse::<Dialect>().unwrap());
-        assert_eq!(names, [Dialect::Marlin, Dialect::MarlinDirect, Dialect::Reprap]);
-        let err = "rrf".parse::<Dialect>().unwrap_err().to_string();
+        let names = ["marlin", "marlin-direct", "reprapfirmware", "reprap"].map(|n| n.parse::<MixCommands>().unwrap());
+        let rrf = MixCommands::RepRapFirmware;
+        assert_eq!(names, [MixCommands::Marlin, MixCommands::MarlinDirect, rrf, rrf]);
+        let err = "rrf".parse::<MixCommands>().unwrap_err().to_string();
         assert!(err.contains("unknown variant `rrf`"), "{err}");
     }
 

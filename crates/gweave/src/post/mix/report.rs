@@ -10,7 +10,8 @@ use serde::Serialize;
 
 use crate::colour::Srgb8;
 
-use super::profile::{Dialect, Hardware};
+use super::profile::Hardware;
+use crate::firmware::MixCommands;
 use super::schedule::{Plan, Slot};
 
 /// One mix of the job and where it went.
@@ -58,7 +59,7 @@ pub struct LayerMix {
 /// The report; see the module docs.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MixReport {
-    pub dialect: Dialect,
+    pub dialect: MixCommands,
     /// The firmware flavour the file names (`gcode_flavor`, Cura's `;FLAVOR:`); a profile that
     /// sets no dialect follows it.
     pub flavour: Option<String>,

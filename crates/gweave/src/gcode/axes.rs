@@ -1,0 +1,33 @@
+//! The machine's axes: their indices into a position, their letters, and a position on
+//! every axis.
+
+/// Axis indices into a position array.
+pub const X: usize = 0;
+pub const Y: usize = 1;
+pub const Z: usize = 2;
+pub const E: usize = 3;
+pub const A: usize = 4;
+pub const B: usize = 5;
+pub const C: usize = 6;
+/// Number of tracked axes: X Y Z E A B C.
+pub const AXES: usize = 7;
+/// The axis letters in index order.
+pub const AXIS_LETTERS: [u8; AXES] = [b'X', b'Y', b'Z', b'E', b'A', b'B', b'C'];
+
+/// The axis index of an (upper-case) word letter.
+#[inline]
+pub fn axis_of(letter: u8) -> Option<usize> {
+    match letter {
+        b'X' => Some(X),
+        b'Y' => Some(Y),
+        b'Z' => Some(Z),
+        b'E' => Some(E),
+        b'A' => Some(A),
+        b'B' => Some(B),
+        b'C' => Some(C),
+        _ => None,
+    }
+}
+
+/// A position on every axis, mm (degrees for rotary A/B/C).
+pub type Position = [f64; AXES];
