@@ -33,7 +33,9 @@ impl Machine {
         out: &mut dyn FnMut(f64, &str),
     ) {
         let b = self.core.block();
-        let s = b.get(b'S');
+        // LinuxCNC gives an M-code's value as `P` (`M104 P200`), as the state reads it.
+        let values_in_p = self.core.state().options().firmware.values_in_p();
+        let s = b.get(b'S').or_else(|| b.get(b'P').filter(|_| values_in_p));
         let r = b.get(b'R');
         let t = b.get(b'T');
         let e = b.get(b'E');
