@@ -9,10 +9,10 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use gweave::firmware::Firmware;
 use gweave::gcode::writer::{Output, Target};
 use gweave::gen::bitmap::{load_image, Bitmap, Channel, ThresholdOptions};
 use gweave::gen::image_files::list_images;
-use gweave::firmware::Firmware;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{
     self, test_pattern, FireOrder, RasterConfig, RasterReport, RasterWriter, HEADS, THRESHOLD,

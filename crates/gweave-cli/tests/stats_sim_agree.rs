@@ -81,7 +81,10 @@ fn stats_and_sim_read_every_fixture_the_same_way() {
         // The printer counts filament per extruder it has (one by default): compare totals.
         let sim_mm: f64 = numbers(&sim["filament_mm"]).iter().sum();
         assert!(stats_mm > 0.0, "{name}: no filament");
-        assert!((sim_mm - stats_mm).abs() < 1e-6 * stats_mm, "{name}: filament: sim {sim_mm}, stats {stats_mm}");
+        assert!(
+            (sim_mm - stats_mm).abs() < 1e-6 * stats_mm,
+            "{name}: filament: sim {sim_mm}, stats {stats_mm}"
+        );
     }
     assert_eq!(linuxcnc, 1, "the mach3 fixture is among them");
 }

@@ -259,9 +259,9 @@ mod tests {
     fn one_spelling_and_the_old_ones() {
         for f in Firmware::ALL {
             assert_eq!(f.name().parse::<Firmware>(), Ok(f));
-            let toml: Firmware = serde::Deserialize::deserialize(
-                serde::de::value::StrDeserializer::<serde::de::value::Error>::new(f.name()),
-            )
+            let toml: Firmware = serde::Deserialize::deserialize(serde::de::value::StrDeserializer::<
+                serde::de::value::Error,
+            >::new(f.name()))
             .unwrap();
             assert_eq!(toml, f);
             for alias in f.aliases() {

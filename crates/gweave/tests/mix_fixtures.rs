@@ -9,10 +9,10 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use gweave::firmware::MixCommands;
 use gweave::gcode::lexer::parse_into;
 use gweave::gcode::line::Block;
 use gweave::gcode::state::{Effect, State, E, X, Y, Z};
-use gweave::firmware::MixCommands;
 use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::{mix_bytes, mix_file};
@@ -328,7 +328,10 @@ fn the_files_flavour_chooses_the_dialect_a_profile_leaves_unset() {
     let job = "[[schedule]]\nlayer = 0\nmix = \"Orange\"\n[[schedule]]\nlayer = 50\nmix = \"Blue\"\n";
     let sphere = "prusaslicer/pr_sphere_rrf_fwretract.gcode";
     let c = run(sphere, MixProfile::from_toml_str(job).unwrap());
-    assert_eq!((c.report.dialect, c.report.flavour.as_deref()), (MixCommands::RepRapFirmware, Some("reprapfirmware")));
+    assert_eq!(
+        (c.report.dialect, c.report.flavour.as_deref()),
+        (MixCommands::RepRapFirmware, Some("reprapfirmware"))
+    );
     // The ratios in force were read back from the M567 lines.
     assert_eq!(
         (c.ratios_by_layer[&49].as_slice(), c.ratios_by_layer[&50].as_slice()),

@@ -61,8 +61,7 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
             load_or_default(other.as_ref(), |text| MachineProfile::from_toml_in(text, folder))?
         }
     };
-    let firmware =
-        read_firmware(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
+    let firmware = read_firmware(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
     let file = container::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
     let mut bar = args.quiet.bar();
     bar.set_len(file.text_len.unwrap_or(0));

@@ -6,8 +6,8 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::{Args, ValueEnum};
-use gweave::gcode::writer::Target;
 use gweave::firmware::Firmware;
+use gweave::gcode::writer::Target;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{FireOrder, DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};

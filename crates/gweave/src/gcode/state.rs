@@ -51,11 +51,7 @@ pub struct StateOptions {
 
 impl Default for StateOptions {
     fn default() -> Self {
-        StateOptions {
-            firmware: Firmware::Marlin,
-            fw_retract_mm: 1.0,
-            markers: Markers::default(),
-        }
+        StateOptions { firmware: Firmware::Marlin, fw_retract_mm: 1.0, markers: Markers::default() }
     }
 }
 
@@ -298,7 +294,10 @@ impl State {
             // Marlin's G90/G91 set the extrusion mode too.
             90 | 91 => {
                 let absolute = number == 90;
-                self.set_modes(absolute, self.options.firmware.absolute_e_after_g90_g91(absolute, self.absolute_e));
+                self.set_modes(
+                    absolute,
+                    self.options.firmware.absolute_e_after_g90_g91(absolute, self.absolute_e),
+                );
             }
             92 => {
                 for w in &block.words {
@@ -330,7 +329,9 @@ impl State {
                 }
             }
             106 => {
-                let speed = block.get(b'S').or_else(|| block.get(b'P').filter(|_| self.options.firmware.values_in_p()));
+                let speed = block
+                    .get(b'S')
+                    .or_else(|| block.get(b'P').filter(|_| self.options.firmware.values_in_p()));
                 self.thermal.fan = (speed.unwrap_or(255.0) / 255.0).clamp(0.0, 1.0);
             }
             107 => self.thermal.fan = 0.0,

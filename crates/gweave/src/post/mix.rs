@@ -39,6 +39,7 @@
 //! ```
 
 pub mod card;
+pub mod job;
 pub mod profile;
 pub mod report;
 pub mod schedule;
@@ -229,7 +230,9 @@ impl MixPass {
                 MixCommands::MarlinDirect => {}
             }
         }
-        if hw.dialect() == MixCommands::RepRapFirmware && self.plan.mixes.iter().any(|m| m.slot == Slot::Rotating) {
+        if hw.dialect() == MixCommands::RepRapFirmware
+            && self.plan.mixes.iter().any(|m| m.slot == Slot::Rotating)
+        {
             for t in self.plan.rotating_tools {
                 define_rrf_tool(t, &mut text)?;
             }
@@ -687,8 +690,10 @@ pub fn mix_file(
     run.transform(&mut pass, target).map_err(|e| unwrap_error(e, input))?;
     let mut report = pass.into_report();
     // A pipe cannot be read ahead: its flavour shows only once the dialect is written.
-    if let Some(f) =
-        report.flavour.as_deref().filter(|f| chosen_blind && Firmware::resolve(None, Some(f)).mix_commands() != report.dialect)
+    if let Some(f) = report
+        .flavour
+        .as_deref()
+        .filter(|f| chosen_blind && Firmware::resolve(None, Some(f)).mix_commands() != report.dialect)
     {
         report.warnings.push(format!(
             "the file's flavour ({f}) wants the {:?} dialect, but {:?} was written: give it as a file, not a pipe, or set hardware.dialect",

@@ -11,8 +11,8 @@ use serde::Serialize;
 use crate::colour::Srgb8;
 
 use super::profile::Hardware;
-use crate::firmware::MixCommands;
 use super::schedule::{Plan, Slot};
+use crate::firmware::MixCommands;
 
 /// One mix of the job and where it went.
 #[derive(Debug, Clone, PartialEq, Serialize)]

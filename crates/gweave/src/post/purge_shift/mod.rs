@@ -63,8 +63,8 @@ pub use config::{ConfigError, Fallback, Overrides, PurgeShiftConfig, Rules, Towe
 pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
 
 use crate::colour::dialect::MixingState;
-use crate::firmware::MixingCode;
 use crate::error::Result;
+use crate::firmware::MixingCode;
 use crate::gcode::flavour::{read_flavour, require_e_extruder};
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::line::Block;
