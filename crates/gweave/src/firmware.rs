@@ -6,8 +6,8 @@
 //! the mix pass (how a mix is written), the raster generator (the inkjet fire code), the
 //! simulator, the CLI and Python.
 //!
-//! Sources, by firmware: Marlin's `gcode/geometry/G90_G91` handling in `gcode/gcode.cpp`
-//! (`G90`/`G91` set E too, `M82`/`M83` E alone) and `feature/mixing.cpp` (`M163`-`M166`);
+//! Sources, by firmware: Marlin's `gcode/gcode.cpp` (`G90`/`G91` set E too, `M82`/`M83` E
+//! alone) and `feature/mixing.cpp` (`M163`-`M166`);
 //! Klipper's `docs/G-Codes.md` (`G90`/`G91` leave the extrusion mode alone, E relative under
 //! `G91`); RepRapFirmware's G-code dictionary (`M82`/`M83` alone decide E, `G10 P S` and `M568`
 //! tool temperatures, `M563`/`M567` mixing tools, `M578` inkjet); LinuxCNC's G-code reference
@@ -102,15 +102,18 @@ impl Firmware {
     /// The word that drives the extruder: `E`, or `A` on LinuxCNC (where `E` means nothing).
     pub fn extrusion_letter(self) -> u8 {
         match self {
+            Firmware::Marlin | Firmware::Klipper | Firmware::RepRapFirmware => b'E',
             Firmware::LinuxCnc => b'A',
-            _ => b'E',
         }
     }
 
     /// Whether M-codes give their value as `P` (LinuxCNC): there `M106 P` is the fan speed,
     /// not Marlin's fan index.
     pub fn values_in_p(self) -> bool {
-        self == Firmware::LinuxCnc
+        match self {
+            Firmware::Marlin | Firmware::Klipper | Firmware::RepRapFirmware => false,
+            Firmware::LinuxCnc => true,
+        }
     }
 
     /// The extrusion mode after `G90` (`absolute`) or `G91`, from the mode before it
@@ -126,13 +129,20 @@ impl Firmware {
     /// Whether E moves relative under these modes: under `M83`, or under `G91` except on
     /// RepRapFirmware, where only `M82`/`M83` decide it.
     pub fn relative_e(self, absolute: bool, absolute_e: bool) -> bool {
-        !absolute_e || (!absolute && self != Firmware::RepRapFirmware)
+        let g91_moves_e = match self {
+            Firmware::Marlin | Firmware::Klipper | Firmware::LinuxCnc => true,
+            Firmware::RepRapFirmware => false,
+        };
+        !absolute_e || (!absolute && g91_moves_e)
     }
 
     /// Whether `G10 S<t>` alone is a tool temperature (RepRapFirmware) rather than a firmware
     /// retraction (Marlin's `G10 S1` is the longer swap retraction).
     pub fn g10_s_is_a_temperature(self) -> bool {
-        self == Firmware::RepRapFirmware
+        match self {
+            Firmware::Marlin | Firmware::Klipper | Firmware::LinuxCnc => false,
+            Firmware::RepRapFirmware => true,
+        }
     }
 
     /// The M-code that fires an inkjet head, `M<code> P<head> S<nozzle bits>`: Marlin's
@@ -150,8 +160,8 @@ impl Firmware {
     /// LinuxCNC have no mixing extruder of their own).
     pub fn mix_commands(self) -> MixCommands {
         match self {
+            Firmware::Marlin | Firmware::Klipper | Firmware::LinuxCnc => MixCommands::Marlin,
             Firmware::RepRapFirmware => MixCommands::RepRapFirmware,
-            _ => MixCommands::Marlin,
         }
     }
 }
