@@ -20,3 +20,27 @@ pub fn inkjet_firmware() -> impl TypedValueParser<Value = Firmware> {
         (Firmware::RepRapFirmware, "`M578 P S` (RepRapFirmware; `reprap` still accepted)"),
     ])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `raster --dialect` takes the one spelling and the old ones, and only firmwares that fire.
+    #[test]
+    fn raster_dialect_takes_the_spelling_and_the_old_ones() {
+        let command = || {
+            clap::Command::new("t").arg(clap::Arg::new("d").long("dialect").value_parser(inkjet_firmware()))
+        };
+        let rrf = Firmware::RepRapFirmware;
+        for (name, want) in [
+            ("marlin", Firmware::Marlin),
+            ("reprapfirmware", rrf),
+            ("reprap", rrf),
+            ("rep_rap_firmware", rrf),
+        ] {
+            let matches = command().try_get_matches_from(["t", "--dialect", name]).unwrap();
+            assert_eq!(matches.get_one::<Firmware>("d"), Some(&want), "{name}");
+        }
+        assert!(command().try_get_matches_from(["t", "--dialect", "klipper"]).is_err());
+    }
+}

@@ -1,7 +1,7 @@
 //! `stats` and `sim` read every file the same way (issue 27): as the firmware its flavour names
 //! (`gweave::firmware::Firmware`). Over every fixture, the virtual printer ends where the modal
-//! state `stats` reads with ends (X Y Z, the extrusion axis E and the rotary A), has fed the
-//! same filament, and counts the same layers. A LinuxCNC file extrudes with A: read as Marlin,
+//! state `stats` reads with ends (X Y Z, the extrusion axis E and the rotary A), its moves have
+//! fed the same filament, and it counts the same layers. A LinuxCNC file extrudes with A: read as Marlin,
 //! the printer would move a rotary A and feed nothing.
 
 use std::path::{Path, PathBuf};
