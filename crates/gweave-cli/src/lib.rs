@@ -8,6 +8,7 @@ mod cmd;
 mod common;
 mod files;
 mod finish;
+mod firmware_arg;
 mod progress;
 pub mod raster_job;
 mod signals;

@@ -9,10 +9,11 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use gweave::firmware::Firmware;
 use gweave::gcode::writer::{Output, Target};
 use gweave::gen::bitmap::{load_image, Bitmap, Channel, ThresholdOptions};
 use gweave::gen::image_files::list_images;
-use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
+use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{
     self, test_pattern, FireOrder, RasterConfig, RasterReport, RasterWriter, HEADS, THRESHOLD,
 };
@@ -396,7 +397,7 @@ pub struct JobOptions {
     pub recoat: Option<PathBuf>,
     pub start: Option<PathBuf>,
     pub end: Option<PathBuf>,
-    pub dialect: Option<FirmwareDialect>,
+    pub dialect: Option<Firmware>,
     pub feed_mm_min: Option<f64>,
     pub fast_estimate: bool,
 }
@@ -435,6 +436,8 @@ impl JobOptions {
         let mut p = load_or_default(self.head.as_ref(), PrintheadProfile::from_toml)?;
         if let Some(d) = self.dialect {
             p.dialect = d;
+            // A firmware without a fire command is refused here, as in a profile.
+            p.validate()?;
         }
         Ok(p)
     }

@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use gweave::bed::Bed;
+use gweave::firmware::Firmware;
 use gweave::range::{Quantity, Range};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -22,6 +23,12 @@ pub fn os_error(path: &Path, e: &std::io::Error) -> PyErr {
         }
         None => PyOSError::new_err(format!("{filename}: {e}")),
     }
+}
+
+/// A firmware by its name or an older spelling (`dialect="reprapfirmware"`, `"reprap"`), or a
+/// `ValueError` naming the parameter.
+pub fn firmware(name: &str, value: Option<&str>) -> PyResult<Option<Firmware>> {
+    value.map(str::parse).transpose().map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
 }
 
 /// `value` within `range`, or a `ValueError` naming the parameter and the range, as the CLI

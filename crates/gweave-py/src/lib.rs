@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use gweave::check::{check_file, CheckOptions};
 use gweave::gcode::container::{self, Input};
 use gweave::gcode::diag::{Diagnostic, Finding};
-use gweave::gcode::flavour::read_flavour;
+use gweave::gcode::flavour::{read_firmware, read_flavour};
 use gweave::gcode::lexer::{parse_into, parse_line};
 use gweave::gcode::line::{Block, Command, Value};
 use gweave::gcode::reader::{LineReader, Part};
@@ -482,18 +482,6 @@ fn job_err(e: anyhow::Error) -> PyErr {
     }
 }
 
-fn dialect_of(name: Option<&str>) -> PyResult<Option<gweave::gen::printhead::FirmwareDialect>> {
-    use gweave::gen::printhead::FirmwareDialect;
-    match name {
-        None => Ok(None),
-        Some("marlin") => Ok(Some(FirmwareDialect::Marlin)),
-        Some("reprap") => Ok(Some(FirmwareDialect::RepRapFirmware)),
-        Some(other) => {
-            Err(PyValueError::new_err(format!("dialect must be 'marlin' or 'reprap', got {other:?}")))
-        }
-    }
-}
-
 /// Rasters layer images or a `.sl1` into inkjet G-code; the report as JSON text (see
 /// `gweave raster --json`).
 #[pyfunction]
@@ -543,7 +531,7 @@ fn raster_json(
         recoat,
         start,
         end,
-        dialect: dialect_of(dialect)?,
+        dialect: args::firmware("dialect", dialect)?,
         feed_mm_min: feed,
         fast_estimate,
     };
@@ -571,7 +559,7 @@ fn raster_test_pattern_json(
     let options = gweave_cli::raster_job::JobOptions {
         head,
         heads,
-        dialect: dialect_of(dialect)?,
+        dialect: args::firmware("dialect", dialect)?,
         origin_mm: origin,
         ..Default::default()
     };
@@ -637,6 +625,7 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, fault: Vec<
     }
     let report = py.allow_threads(|| {
         let mut m = gweave_sim::Machine::new(profile).map_err(sim_err)?;
+        m.read_as(read_firmware(&path).map_err(|e| os_error(&path, &e))?);
         let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
         let mut reader = LineReader::new(file);
         let mut out = |_t: f64, _l: &str| {};
@@ -664,8 +653,9 @@ fn sim_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, fault: Vec<
 fn estimate_json(py: Python<'_>, path: PathBuf, machine: Option<PathBuf>, steps: bool) -> PyResult<String> {
     let profile = machine_profile(machine)?;
     let report = py.allow_threads(|| {
+        let firmware = read_firmware(&path).map_err(|e| os_error(&path, &e))?;
         let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
-        gweave_sim::estimate_report(file, &profile, steps)
+        gweave_sim::estimate_report(file, &profile, firmware, steps)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
     })?;
     to_json(&report)
@@ -946,7 +936,7 @@ fn mix_json(
     force: bool,
     options: &str,
 ) -> PyResult<String> {
-    use gweave::post::mix::profile::{Dialect, GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
+    use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
     let bad = |e: gweave::post::mix::MixPassError| PyValueError::new_err(e.to_string());
     let target = match (output, in_place) {
         (_, true) => Target::InPlace { keep_backup: backup, force },
@@ -981,7 +971,7 @@ fn mix_json(
         profile.add_map(s).map_err(bad)?;
     }
     if let Some(d) = dialect {
-        profile.hardware.dialect = Some(d.parse::<Dialect>().map_err(bad)?);
+        profile.hardware.dialect = Some(d.parse::<gweave::firmware::MixCommands>().map_err(bad)?);
     }
     let write = |t: &Target| match gweave::post::mix::mix_file(profile, &path, t, &mut Quiet) {
         Ok(r) => Ok(r),

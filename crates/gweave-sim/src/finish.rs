@@ -16,6 +16,7 @@ use std::fs::File;
 use std::io::{self, BufReader, Write};
 use std::path::{Path, PathBuf};
 
+use gweave::firmware::Firmware;
 use gweave::gcode::container;
 use gweave::gcode::ends::read_ends;
 use gweave::gcode::flavour::flavour_in;
@@ -28,7 +29,7 @@ use gweave::post::metadata::{
 };
 use gweave::stats::StatsPass;
 
-use crate::motion::estimate::{estimate_time, Estimate, EstimateError, Estimator};
+use crate::motion::estimate::{estimate_as, Estimate, EstimateError, Estimator};
 use crate::motion::limits::MotionProfile;
 use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
 use crate::profile::MachineProfile;
@@ -149,7 +150,7 @@ fn scratch_dir(target: &Target, input: Option<&Path>) -> PathBuf {
 /// Measures the written file: its filament, its settings, its estimated times.
 ///
 /// The time at each progress line needs the estimator fed line by line in the same pass; a
-/// file without progress lines is estimated on three threads instead (`estimate_time`, several
+/// file without progress lines is estimated on three threads instead (`estimate_as`, several
 /// times faster). Progress lines are looked for in the file's ends (PrusaSlicer's `M73 P0` in
 /// its first lines, Cura's last `;TIME_ELAPSED:` in its last) and counted by the pass: a file
 /// with them only in its middle is read once more.
@@ -157,6 +158,8 @@ fn measure(path: &Path) -> Result<(Figures, Option<String>)> {
     // The file's ends are read once: the machine limits, what the file holds, its flavour.
     let ends = read_ends(path).map_err(|e| gweave::Error::io(path, e))?;
     let flavour = flavour_in(&ends);
+    // Read as `stats` reads it (the metadata's filament comes from its pass).
+    let firmware = Firmware::resolve(None, flavour.as_deref());
     let base = MachineProfile::default().motion;
     let normal = slicer_limits(&ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
     let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
@@ -166,11 +169,11 @@ fn measure(path: &Path) -> Result<(Figures, Option<String>)> {
     let silent =
         (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
     let per_line = contains(b"M73 ") || contains(b";TIME_ELAPSED:");
-    let first_estimators = per_line.then(|| estimators(&normal, silent.as_ref())).transpose()?;
+    let first_estimators = per_line.then(|| estimators(&normal, silent.as_ref(), firmware)).transpose()?;
     let (scan, state) = scan(path, &flavour, first_estimators)?;
     let (scan, state) = match scan.estimators {
         None if scan.progress_lines > 0 => {
-            self::scan(path, &flavour, Some(estimators(&normal, silent.as_ref())?))?
+            self::scan(path, &flavour, Some(estimators(&normal, silent.as_ref(), firmware)?))?
         }
         _ => (scan, state),
     };
@@ -180,7 +183,7 @@ fn measure(path: &Path) -> Result<(Figures, Option<String>)> {
         None => {
             let estimate = |p: &MotionProfile| -> Result<Estimate> {
                 let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
-                Ok(estimate_time(file, p)?)
+                Ok(estimate_as(file, p, firmware, false)?)
             };
             (estimate(&normal)?, silent.as_ref().map(estimate).transpose()?)
         }
@@ -227,8 +230,13 @@ fn scale_times(f: &mut Figures, t_s: f64) {
 fn estimators(
     normal: &MotionProfile,
     silent: Option<&MotionProfile>,
+    firmware: Firmware,
 ) -> Result<(Estimator, Option<Estimator>)> {
-    let estimator = |p: &MotionProfile| Estimator::timing_only(p);
+    let estimator = |p: &MotionProfile| {
+        let mut estimator = Estimator::timing_only(p)?;
+        estimator.read_as(firmware);
+        Ok::<_, EstimateError>(estimator)
+    };
     Ok((estimator(normal)?, silent.map(estimator).transpose()?))
 }
 

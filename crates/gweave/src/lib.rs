@@ -21,6 +21,7 @@ pub mod bed;
 pub mod check;
 pub mod colour;
 pub mod error;
+pub mod firmware;
 pub mod gcode;
 pub mod gen;
 pub mod malformed;

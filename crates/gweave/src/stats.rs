@@ -172,12 +172,12 @@ impl StatsPass {
         }
         if let Some(flavour) = &self.figures.flavour {
             let letter = extrusion_letter(flavour);
-            if letter != state.options().extrusion_letter {
+            if letter != state.options().firmware.extrusion_letter() {
                 // Only a stream (a pipe) is read without looking at its end first.
                 warnings.push(format!(
                     "the file's flavour ({flavour}) extrudes with {}, but it was read with {}: read it from a file, not a pipe",
                     char::from(letter),
-                    char::from(state.options().extrusion_letter)
+                    char::from(state.options().firmware.extrusion_letter())
                 ));
             }
         }

@@ -9,10 +9,11 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use gweave::firmware::MixCommands;
 use gweave::gcode::lexer::parse_into;
 use gweave::gcode::line::Block;
 use gweave::gcode::state::{Effect, State, E, X, Y, Z};
-use gweave::post::mix::profile::{Dialect, MixProfile};
+use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::{mix_bytes, mix_file};
 use gweave::post::zcap::z_feed_mm_min;
@@ -119,7 +120,7 @@ fn run(rel: &str, profile: MixProfile) -> Checked {
             assert!((r.iter().sum::<f64>() - 1.0).abs() < 1e-12, "RRF ratios must sum to 1: {l}");
             tools.insert(word(b'P') as u32, r);
         } else if let Some(t) = block.command.tool() {
-            assert!(report.dialect != Dialect::MarlinDirect, "a T line with direct mixing: {l}");
+            assert!(report.dialect != MixCommands::MarlinDirect, "a T line with direct mixing: {l}");
             active = Some(tools.get(&t).unwrap_or_else(|| panic!("T{t} used before it was defined")).clone());
         }
         if let Effect::Move(m) = effect {
@@ -251,7 +252,7 @@ fn cura_torus_with_a_gradient_over_more_steps_than_tools() {
 #[test]
 fn cura_dual_with_a_tool_map() {
     let mut p = profile("tool_map.toml");
-    p.hardware.dialect = Some(Dialect::Reprap);
+    p.hardware.dialect = Some(MixCommands::RepRapFirmware);
     let c = run("cura/cura_dual.gcode", p);
     let m = &c.report.mixes;
     assert_eq!((m[0].name.as_str(), m[1].name.as_str()), ("Orange", "#2060c0"));
@@ -267,7 +268,7 @@ fn cura_dual_with_a_tool_map() {
 #[test]
 fn slic3r_cone_with_a_tool_map_and_direct_mixing() {
     let mut p = profile("tool_map.toml");
-    p.hardware.dialect = Some(Dialect::MarlinDirect);
+    p.hardware.dialect = Some(MixCommands::MarlinDirect);
     let c = run("slic3r/slic3r_cone_2tool.gcode", p);
     assert_eq!(c.report.changes, 108);
 }
@@ -327,7 +328,10 @@ fn the_files_flavour_chooses_the_dialect_a_profile_leaves_unset() {
     let job = "[[schedule]]\nlayer = 0\nmix = \"Orange\"\n[[schedule]]\nlayer = 50\nmix = \"Blue\"\n";
     let sphere = "prusaslicer/pr_sphere_rrf_fwretract.gcode";
     let c = run(sphere, MixProfile::from_toml_str(job).unwrap());
-    assert_eq!((c.report.dialect, c.report.flavour.as_deref()), (Dialect::Reprap, Some("reprapfirmware")));
+    assert_eq!(
+        (c.report.dialect, c.report.flavour.as_deref()),
+        (MixCommands::RepRapFirmware, Some("reprapfirmware"))
+    );
     // The ratios in force were read back from the M567 lines.
     assert_eq!(
         (c.ratios_by_layer[&49].as_slice(), c.ratios_by_layer[&50].as_slice()),
@@ -336,8 +340,8 @@ fn the_files_flavour_chooses_the_dialect_a_profile_leaves_unset() {
     assert_eq!(c.report.changes, 1);
 
     let c = run("prusaslicer/pr_torus_pva.gcode", MixProfile::from_toml_str(job).unwrap());
-    assert_eq!((c.report.dialect, c.report.flavour.as_deref()), (Dialect::Marlin, Some("marlin2")));
+    assert_eq!((c.report.dialect, c.report.flavour.as_deref()), (MixCommands::Marlin, Some("marlin2")));
     let c =
         run(sphere, MixProfile::from_toml_str(&format!("[hardware]\ndialect = \"marlin\"\n{job}")).unwrap());
-    assert_eq!(c.report.dialect, Dialect::Marlin);
+    assert_eq!(c.report.dialect, MixCommands::Marlin);
 }

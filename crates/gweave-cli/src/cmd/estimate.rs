@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
 use gweave::gcode::container;
+use gweave::gcode::flavour::read_firmware;
 use gweave::pass::Progress;
 use gweave_sim::slicer_limits;
 use gweave_sim::MachineProfile;
@@ -60,11 +61,12 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
             load_or_default(other.as_ref(), |text| MachineProfile::from_toml_in(text, folder))?
         }
     };
+    let firmware = read_firmware(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
     let file = container::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
     let mut bar = args.quiet.bar();
     bar.set_len(file.text_len.unwrap_or(0));
     let input = Counted { inner: file, bar, done: 0 };
-    let report = estimate_report(input, &profile, args.steps).map_err(|e| match e.line() {
+    let report = estimate_report(input, &profile, firmware, args.steps).map_err(|e| match e.line() {
         Some(line) if line > 0 => anyhow!("{}:{line}: {}", args.input.display(), e.reason()),
         _ => anyhow!("{}: {}", args.input.display(), e.reason()),
     })?;

@@ -8,8 +8,9 @@ use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use gweave::colour::palette::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
+use gweave::firmware::MixCommands;
 use gweave::gcode::writer::Target;
-use gweave::post::mix::profile::{Dialect, GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
+use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{mix_file, wizard::run_wizard};
@@ -55,11 +56,11 @@ pub struct MixArgs {
     /// How --gradient blends.
     #[arg(long, value_enum, default_value = "mix")]
     pub gradient_space: Space,
-    /// Firmware dialect: marlin (M163/M164), marlin-direct (M165) or reprap (M563/M567);
-    /// overrides the profile. Default: the profile's, else the file's flavour (reprap for
-    /// `gcode_flavor = reprapfirmware`), else marlin.
-    #[arg(long, value_name = "DIALECT", value_parser = |s: &str| s.parse::<Dialect>().map_err(|e| e.to_string()))]
-    pub dialect: Option<Dialect>,
+    /// Firmware dialect: marlin (M163/M164), marlin-direct (M165) or reprapfirmware (M563/M567;
+    /// `reprap` still accepted); overrides the profile. Default: the profile's, else the file's
+    /// flavour (reprapfirmware for `gcode_flavor = reprapfirmware`), else marlin.
+    #[arg(long, value_name = "DIALECT", value_parser = |s: &str| s.parse::<MixCommands>().map_err(|e| e.to_string()))]
+    pub dialect: Option<MixCommands>,
     /// Purge length at each change, mm of filament (0: no purge) [default: the profile's].
     #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
     pub purge_mm: Option<f64>,

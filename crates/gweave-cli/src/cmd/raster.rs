@@ -6,8 +6,9 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::{Args, ValueEnum};
+use gweave::firmware::Firmware;
 use gweave::gcode::writer::Target;
-use gweave::gen::printhead::{FirmwareDialect, PrintheadProfile};
+use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{FireOrder, DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
 
@@ -15,6 +16,7 @@ use crate::args::Quiet;
 use crate::common::{hms, in_range, numbers_in, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::finish;
+use crate::firmware_arg::inkjet_firmware;
 use crate::raster_job::{JobOptions, JobReport};
 
 /// Layer images to inkjet G-code for binder jetting: bands as tall as the nozzle row, per
@@ -84,8 +86,8 @@ pub struct RasterArgs {
     #[arg(long, value_name = "FILE")]
     pub end: Option<PathBuf>,
     /// Fire command dialect (default: the profile's).
-    #[arg(long, value_enum)]
-    pub dialect: Option<Dialect>,
+    #[arg(long, value_parser = inkjet_firmware())]
+    pub dialect: Option<Firmware>,
     /// Carriage feed rate, mm/min [default: 3000].
     #[arg(long, value_name = "MM_MIN", value_parser = in_range(FEED_MM_MIN))]
     pub feed: Option<f64>,
@@ -112,14 +114,6 @@ pub enum FireOrderArg {
     Before,
 }
 
-#[derive(ValueEnum, Clone, Copy, Debug)]
-pub enum Dialect {
-    /// `M700 P S` (Marlin hpc6602).
-    Marlin,
-    /// `M578 P S` (RepRapFirmware).
-    Reprap,
-}
-
 impl RasterArgs {
     fn options(&self) -> Result<JobOptions> {
         Ok(JobOptions {
@@ -143,10 +137,7 @@ impl RasterArgs {
             recoat: self.recoat.clone(),
             start: self.start.clone(),
             end: self.end.clone(),
-            dialect: self.dialect.map(|d| match d {
-                Dialect::Marlin => FirmwareDialect::Marlin,
-                Dialect::Reprap => FirmwareDialect::RepRapFirmware,
-            }),
+            dialect: self.dialect,
             feed_mm_min: self.feed,
             fast_estimate: self.fast_estimate,
         })
@@ -218,7 +209,7 @@ fn print_human(out: &mut dyn Write, r: &JobReport, profile: &PrintheadProfile) -
         profile.dpi,
         profile.pitch_mm(),
         r.heads,
-        profile.dialect.fire_code()
+        profile.fire_code()
     )?;
     writeln!(out, "  layers          {} ({} images read)", rr.layers, r.images_read)?;
     writeln!(out, "  bands           {} printed, {} empty skipped", rr.bands_printed, rr.bands_skipped)?;

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Args;
 use gweave::gcode::container;
+use gweave::gcode::flavour::read_firmware;
 use gweave::gcode::layers::Feature;
 use gweave::gcode::reader::{LineReader, Part};
 use gweave::pass::Progress;
@@ -105,6 +106,8 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
 
 /// Executes every line until the end or a halt; returns the machine's `Error:` replies.
 fn run_file(machine: &mut Machine, input: &Path, quiet: Quiet) -> Result<Vec<String>> {
+    // The file is read as `stats` reads it: as the firmware its flavour names.
+    machine.read_as(read_firmware(input).with_context(|| format!("reading {}", input.display()))?);
     let file = container::open(input).with_context(|| format!("opening {}", input.display()))?;
     let len = file.text_len.unwrap_or(0);
     let mut bar = quiet.bar();

@@ -221,7 +221,7 @@ def raster(
 ) -> Dict[str, Any]:
     """Layer images (folders, globs, image files) or one ``.sl1`` to binder-jet inkjet G-code.
 
-    Per inked column: ``G1 X``, ``M400``, ``M700 P<head> S<bits>`` (``dialect="reprap"``: M578).
+    Per inked column: ``G1 X``, ``M400``, ``M700 P<head> S<bits>`` (``dialect="reprapfirmware"``: M578; ``"reprap"`` still accepted).
     Units: ``origin`` mm, ``layer_height`` mm, ``pixel_mm`` mm (or ``dpi``), ``feed`` mm/min;
     ``recoat``/``start``/``end`` are files of G-code. ``head`` is a printhead profile TOML.
     Returns the report of ``gweave raster --json`` (layers, bands, columns, drops per head,
@@ -506,8 +506,8 @@ def mix(
 
     ``config`` is a profile TOML file; ``at_layer=["0=Orange", "10=Pink"]``, ``at_z``,
     ``map=["T1=PVA"]``, ``gradient=["0-50=Cyan..Magenta"]``, ``gradient_space`` (``"mix"`` or
-    ``"perceived"``), ``dialect`` (``"marlin"``, ``"marlin-direct"``, ``"reprap"``; default: the
-    profile's, else the file's flavour) and ``purge_mm`` (mm of filament per change, 0: none;
+    ``"perceived"``), ``dialect`` (``"marlin"``, ``"marlin-direct"``, ``"reprapfirmware"``;
+    default: the profile's, else the file's flavour) and ``purge_mm`` (mm of filament per change, 0: none;
     default: the profile's) and ``initial_purge`` (mm purged in the first mix before the first
     extrusion; default: the profile's ``[purge] initial_mm``) work as the command line flags.
     """

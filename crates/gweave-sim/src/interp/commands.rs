@@ -17,6 +17,7 @@
 use std::collections::HashMap;
 use std::sync::OnceLock;
 
+use gweave::firmware::MixingCode;
 use gweave::gcode::line::{Block, Command};
 use gweave::gcode::state::{self, Effect};
 use gweave::range::{OutOfRange, Range};
@@ -129,7 +130,7 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M420", what: "bed levelling on/off (S), mesh report (V)", run: host, while_halted: false, queue: Queue::Streams },
     CommandSpec { codes: "M500 M501 M502 M503", what: "settings: save to / load from the EEPROM file, factory defaults, report", run: settings, while_halted: false, queue: Queue::Streams },
     CommandSpec { codes: "M524", what: "abort the SD print", run: sd, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: rrf_tools, while_halted: false, queue: Queue::Streams },
+    CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, while_halted: false, queue: Queue::Streams },
     CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, while_halted: false, queue: Queue::Streams },
     CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, while_halted: false, queue: Queue::Streams },
     CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: settings, while_halted: false, queue: Queue::Streams },
@@ -391,9 +392,11 @@ fn m119(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     }
 }
 
-/// `M163`-`M165` go to the mixer of the motion core; `M166` (gradient mix) is accepted.
+/// The mixing codes ([`MixingCode`]): those that set a mix (Marlin's `M163`-`M165`,
+/// RepRapFirmware's `M567`) go to the mixer of the motion core; a gradient (`M166`) and an RRF
+/// tool definition (`M563`) are accepted.
 fn mixing(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    if c.number != 166 {
+    if MixingCode::sets_a_mix(c.number) {
         m.run_core(c.line, &c.effect, out)
     }
 }
@@ -426,13 +429,6 @@ fn m400(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.run_core(c.line, &c.effect, out);
     m.moved_since_m400 = false;
     m.wall_timed = true;
-}
-
-/// RepRapFirmware's `M563` tool definition (accepted) and `M567` mix ratios (the mixer's).
-fn rrf_tools(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    if c.number == 567 {
-        m.run_core(c.line, &c.effect, out)
-    }
 }
 
 /// RepRapFirmware 3.3+ sets a tool's temperatures with `M568` (as `G10 P S` before).

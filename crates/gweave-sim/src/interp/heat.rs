@@ -29,8 +29,8 @@ impl Machine {
     /// `M104`/`M109 [T<hotend>] S|R<celsius>`: the hotend's target; `M109` also waits (`S`:
     /// while heating, `R`: both ways).
     pub(super) fn hotend_target(&mut self, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+        let (s, r) = self.target_words();
         let b = self.core.block();
-        let (s, r) = (b.get(b'S'), b.get(b'R'));
         let hotend = b.get(b'T').map_or(self.active_hotend_index(), |t| t.max(0.0) as u8);
         let id = HeaterId::Hotend(hotend);
         if self.thermal.target(id).is_err() {
@@ -52,8 +52,7 @@ impl Machine {
             self.unknown_command(c.line, out);
             return;
         }
-        let b = self.core.block();
-        let (s, r) = (b.get(b'S'), b.get(b'R'));
+        let (s, r) = self.target_words();
         self.set_target(HeaterId::Bed, s.or(r), out);
         if c.number == 190 {
             self.run_core(c.line, &c.effect, out);
@@ -105,6 +104,15 @@ impl Machine {
         };
         let s = b.get(b'S');
         self.set_target(HeaterId::Hotend(hotend), s, out);
+    }
+
+    /// The target words `S` and `R` of a heater command. LinuxCNC gives an M-code's value as
+    /// `P` (`M104 P200`), as the state reads it.
+    fn target_words(&self) -> (Option<f64>, Option<f64>) {
+        let b = self.core.block();
+        let values_in_p = self.core.state().options().firmware.values_in_p();
+        let s = b.get(b'S').or_else(|| b.get(b'P').filter(|_| values_in_p));
+        (s, b.get(b'R'))
     }
 
     fn active_hotend_index(&self) -> u8 {

@@ -233,6 +233,13 @@ impl Machine {
         })
     }
 
+    /// Reads the lines to come as `firmware` reads them: a file's, as `stats` reads it
+    /// ([`gweave::gcode::flavour::read_firmware`]). Call before the first line; a host on the
+    /// serial line is read as Marlin reads it.
+    pub fn read_as(&mut self, firmware: gweave::firmware::Firmware) {
+        self.core.read_as(firmware);
+    }
+
     /// Lines printed at power-on, as Marlin does: `start`, then `echo:` lines.
     pub fn boot_lines(&self) -> Vec<String> {
         vec![

@@ -21,6 +21,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write;
 
 use super::mix::{Mix, MixError};
+use crate::firmware::MixingCode;
 use crate::gcode::line::{Block, Command};
 use crate::gcode::number::scan;
 
@@ -406,7 +407,7 @@ impl MixingState {
             let tool = number as usize;
             return self.select_tool(tool).map(|mix| Some(MixingUpdate::Stored { tool, mix: mix.clone() }));
         }
-        if letter != b'M' || !matches!(number, 163..=165 | 567) {
+        if letter != b'M' || !MixingCode::sets_a_mix(number) {
             return Ok(None);
         }
         let words: Vec<(char, f64)> =

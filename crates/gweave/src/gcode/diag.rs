@@ -89,7 +89,7 @@ pub enum Finding {
         /// The absolute E value, mm.
         e_mm: f64,
     },
-    /// `T<n>` past [`crate::gcode::state::MAX_TOOLS`]: no machine has that tool.
+    /// `T<n>` past [`MAX_TOOLS`](super::limits::MAX_TOOLS): no machine has that tool.
     ToolOutOfRange {
         /// The tool number written.
         tool: u32,
@@ -166,13 +166,13 @@ impl fmt::Display for Finding {
             Finding::LineTooLong { len } => write!(
                 f,
                 "line of {len} bytes is longer than the limit of {} (not read)",
-                crate::gcode::reader::MAX_LINE
+                super::reader::MAX_LINE
             ),
             Finding::MoreFindings { count } => write!(f, "{count} more findings on this line"),
             Finding::ToolOutOfRange { tool } => write!(
                 f,
                 "T{tool} names no tool (at most {} are read; the tool stays as it was)",
-                crate::gcode::state::MAX_TOOLS
+                super::limits::MAX_TOOLS
             ),
         }
     }

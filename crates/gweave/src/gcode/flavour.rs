@@ -2,29 +2,21 @@
 //! header, the PrusaSlicer family (PrusaSlicer, SuperSlicer, OrcaSlicer, Slic3r) writes
 //! `; gcode_flavor = marlin2` in the settings block at the very end. A streaming pass meets the
 //! latter only after the last move, too late for a transform that must choose its commands at the
-//! start, so [`read_flavour`] looks at both ends of the file first.
+//! start, so [`read_flavour`] looks at both ends of the file first. What a flavour means to the
+//! way a file is read is [`Firmware::from_flavour`].
 
 use std::io;
 use std::path::Path;
 
 use super::container;
+use crate::firmware::Firmware;
 
 use super::ends::{HEAD_BYTES, TAIL_BYTES};
 
-/// PrusaSlicer's `mach3` and `machinekit` flavours, for LinuxCNC-style machines: no E axis, and
-/// M-codes take their value as `P` (`M104 P200`, `M106 P237.15`).
-pub fn is_linuxcnc(flavour: &str) -> bool {
-    flavour.eq_ignore_ascii_case("mach3") || flavour.eq_ignore_ascii_case("machinekit")
-}
-
-/// The word a flavour extrudes with: `A` for the LinuxCNC flavours ([`is_linuxcnc`]), `E` for
-/// every other.
+/// The word a flavour extrudes with ([`Firmware::extrusion_letter`] of the firmware it names):
+/// `A` for PrusaSlicer's LinuxCNC flavours `mach3` and `machinekit`, `E` for every other.
 pub fn extrusion_letter(flavour: &str) -> u8 {
-    if is_linuxcnc(flavour) {
-        b'A'
-    } else {
-        b'E'
-    }
+    Firmware::resolve(None, Some(flavour)).extrusion_letter()
 }
 
 /// For commands that write `E` words (purges, split moves): refuses a file whose flavour extrudes
@@ -59,6 +51,13 @@ pub fn flavour_in(text: &[u8]) -> Option<String> {
 pub fn read_flavour(path: &Path) -> io::Result<Option<String>> {
     let (head, tail) = container::ends(path, HEAD_BYTES, TAIL_BYTES)?;
     Ok(first_flavour(&head).or_else(|| first_flavour(&tail)))
+}
+
+/// The firmware a file is read as: the one its flavour names ([`read_flavour`],
+/// [`Firmware::resolve`]), Marlin where it names none. `stats`, every transform, `sim` and
+/// `estimate` read a file this way.
+pub fn read_firmware(path: &Path) -> io::Result<Firmware> {
+    Ok(Firmware::resolve(None, read_flavour(path)?.as_deref()))
 }
 
 /// The first flavour comment on a line of its own in `text` (lines end at `\n` or `\r`, as the

@@ -58,6 +58,15 @@ impl Command {
         matches!(self, Command::Code { letter: b'M', number, sub: None } if *number == n)
     }
 
+    /// The number of an `M<n>` command.
+    #[inline]
+    pub fn m(&self) -> Option<u32> {
+        match self {
+            Command::Code { letter: b'M', number, sub: None } => Some(*number),
+            _ => None,
+        }
+    }
+
     /// The tool number of a `T<n>` command.
     #[inline]
     pub fn tool(&self) -> Option<u32> {

@@ -3,13 +3,16 @@
 //! spans; the state is a layer above it.
 
 pub mod arc;
+pub mod axes;
 pub mod container;
 pub mod diag;
+pub mod effect;
 pub mod encoding;
 pub mod ends;
 pub mod flavour;
 pub mod layers;
 pub mod lexer;
+pub mod limits;
 pub mod line;
 pub mod number;
 pub mod reader;

@@ -8,42 +8,13 @@
 use super::arc::Arc;
 use super::layers::{Markers, Structure};
 use super::line::{Block, Command, PlainMove, Value, Word};
+use crate::firmware::Firmware;
 
-/// Axis indices into a position array.
-pub const X: usize = 0;
-/// Index of the Y axis.
-pub const Y: usize = 1;
-/// Index of the Z axis.
-pub const Z: usize = 2;
-/// Index of the extruder (E) axis.
-pub const E: usize = 3;
-/// Index of the A rotary axis.
-pub const A: usize = 4;
-/// Index of the B rotary axis.
-pub const B: usize = 5;
-/// Index of the C rotary axis.
-pub const C: usize = 6;
-/// Number of tracked axes: X Y Z E A B C.
-pub const AXES: usize = 7;
-/// The axis letters in index order.
-pub const AXIS_LETTERS: [u8; AXES] = [b'X', b'Y', b'Z', b'E', b'A', b'B', b'C'];
+pub use super::axes::{axis_of, Position, A, AXES, AXIS_LETTERS, B, C, E, X, Y, Z};
+pub use super::effect::{Effect, Motion, Move, Path};
+pub use super::limits::MAX_TOOLS;
 
-/// The axis index of an (upper-case) word letter.
-#[inline]
-pub fn axis_of(letter: u8) -> Option<usize> {
-    match letter {
-        b'X' => Some(X),
-        b'Y' => Some(Y),
-        b'Z' => Some(Z),
-        b'E' => Some(E),
-        b'A' => Some(A),
-        b'B' => Some(B),
-        b'C' => Some(C),
-        _ => None,
-    }
-}
-
-/// The axis a word moves: as [`axis_of`], but the extrusion word ([`StateOptions::
+/// The axis a word moves: as [`axis_of`], but the extrusion word ([`Firmware::
 /// extrusion_letter`]) is E, and `E` is no axis where another letter extrudes.
 #[inline]
 fn axis_of_word(letter: u8, extrusion_letter: u8) -> Option<usize> {
@@ -53,154 +24,7 @@ fn axis_of_word(letter: u8, extrusion_letter: u8) -> Option<usize> {
     axis_of(letter).filter(|&i| i != E)
 }
 
-/// Tools a file may select: `T<n>` for larger `n` names no tool (firmware answers "Invalid
-/// extruder") and leaves the current one selected, so per-tool tables stay small.
-pub const MAX_TOOLS: u32 = 256;
-
-/// A position on every axis, mm (degrees for rotary A/B/C).
-pub type Position = [f64; AXES];
-
 const MM_PER_INCH: f64 = 25.4;
-
-/// How the firmware treats `G90`/`G91` for the extruder.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Firmware {
-    /// Marlin: `G90` makes every axis absolute, E included (until `M83`); `G91` makes all relative.
-    #[default]
-    Marlin,
-    /// Klipper: `G90`/`G91` leave the M82/M83 extrusion mode alone, but E is relative while G91
-    /// is in force.
-    Klipper,
-    /// RepRapFirmware: only M82/M83 decide E; `G91` leaves extrusion absolute under `M82`.
-    #[serde(rename = "reprapfirmware")]
-    RepRapFirmware,
-}
-
-/// The motion mode that axis words on a line without a command continue.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Motion {
-    /// `G0`: a rapid move.
-    Rapid,
-    /// `G1`: a linear move at the feed rate.
-    #[default]
-    Linear,
-    /// `G2`: a clockwise arc.
-    ArcCw,
-    /// `G3`: a counter-clockwise arc.
-    ArcCcw,
-}
-
-/// The geometry of one move.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Path {
-    /// A straight line.
-    Line,
-    /// An arc (`G2`/`G3`).
-    Arc(Arc),
-}
-
-/// A move the line commanded, in absolute logical millimetres.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Move {
-    /// Where the move starts.
-    pub from: Position,
-    /// Where the move ends.
-    pub to: Position,
-    /// The path between them.
-    pub path: Path,
-    /// `G0`: a rapid (slicers use it for travel).
-    pub rapid: bool,
-    /// The feed rate, mm/min.
-    pub feed_mm_min: f64,
-}
-
-impl Move {
-    /// Filament fed by this move, mm (negative for a retraction).
-    #[inline]
-    pub fn e_mm(&self) -> f64 {
-        self.to[E] - self.from[E]
-    }
-
-    /// XY length, following the arc for G2/G3.
-    pub fn xy_len_mm(&self) -> f64 {
-        match &self.path {
-            Path::Line => {
-                let (dx, dy) = (self.to[X] - self.from[X], self.to[Y] - self.from[Y]);
-                (dx * dx + dy * dy).sqrt()
-            }
-            Path::Arc(arc) => arc.xy_len_mm(),
-        }
-    }
-
-    /// Tool-path length in XYZ, mm (a helix for an arc with Z change).
-    pub fn len_mm(&self) -> f64 {
-        // sqrt of squares rather than hypot: no overflow is possible at printer scales, and it
-        // is several times faster on the hot path.
-        let dz = self.to[Z] - self.from[Z];
-        let xy2 = match &self.path {
-            Path::Line => {
-                let (dx, dy) = (self.to[X] - self.from[X], self.to[Y] - self.from[Y]);
-                dx * dx + dy * dy
-            }
-            Path::Arc(arc) => arc.xy_len_mm().powi(2),
-        };
-        (xy2 + dz * dz).sqrt()
-    }
-
-    /// Deposits material while moving in XY: a printing move, not travel or retraction.
-    #[inline]
-    pub fn is_extruding(&self) -> bool {
-        self.e_mm() > 0.0
-            && (self.to[X] != self.from[X] || self.to[Y] != self.from[Y] || matches!(self.path, Path::Arc(_)))
-    }
-}
-
-/// What a line did to the machine.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub enum Effect {
-    /// Nothing that moves or changes modes we track.
-    #[default]
-    None,
-    /// A move (`G0`-`G3`).
-    Move(Move),
-    /// `G28`: the axes homed (bit i = axis i).
-    Home {
-        /// Bit i: axis i homed.
-        axes: u8,
-    },
-    /// `G92`: the logical position was set.
-    SetPosition,
-    /// `T<n>`.
-    ToolChange {
-        /// The tool before the change.
-        from: u32,
-        /// The tool after it.
-        to: u32,
-    },
-    /// `G10` firmware retraction or `G11` recover: filament moved, mm (negative = retract).
-    FirmwareRetract {
-        /// Filament moved, mm (negative = retract).
-        e_mm: f64,
-    },
-    /// `G4` dwell.
-    Dwell {
-        /// Dwell time, s.
-        t_s: f64,
-    },
-}
-
-impl Effect {
-    /// Filament this line fed, mm (negative for a retraction): a move's E or a firmware retract.
-    #[inline]
-    pub fn filament_mm(&self) -> f64 {
-        match self {
-            Effect::Move(m) => m.e_mm(),
-            Effect::FirmwareRetract { e_mm } => *e_mm,
-            _ => 0.0,
-        }
-    }
-}
 
 /// Temperatures and fan the file has asked for.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -218,46 +42,27 @@ pub struct Thermal {
 /// Options fixed for a whole file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StateOptions {
-    /// The firmware whose rules the file follows.
+    /// How the file's lines are read (the extrusion word, what G90/G91 do to E, ...).
     pub firmware: Firmware,
     /// Length of a `G10` firmware retraction when the file does not set it with `M207`, mm.
     pub fw_retract_mm: f64,
     /// Explicit markers for the print proper.
     pub markers: Markers,
-    /// The word that drives the extruder: `E`, or `A` in PrusaSlicer's `mach3` and `machinekit`
-    /// flavours (LinuxCNC has no E axis), where `E` then means nothing.
-    pub extrusion_letter: u8,
-    /// The file is for a LinuxCNC-style machine ([`super::flavour::is_linuxcnc`]), whose M-codes
-    /// take their value as `P`: there `M106 P` is the fan speed, not Marlin's fan index.
-    pub linuxcnc: bool,
 }
 
 impl Default for StateOptions {
     fn default() -> Self {
-        StateOptions {
-            firmware: Firmware::Marlin,
-            fw_retract_mm: 1.0,
-            markers: Markers::default(),
-            extrusion_letter: b'E',
-            linuxcnc: false,
-        }
+        StateOptions { firmware: Firmware::Marlin, fw_retract_mm: 1.0, markers: Markers::default() }
     }
 }
 
 impl StateOptions {
     /// These options for a file sliced for `flavour` (its `gcode_flavor`, see
-    /// [`crate::gcode::flavour`]): the extrusion word it uses, and the firmware's rule for
-    /// `G90`/`G91` where the flavour names Klipper or RepRapFirmware (the Marlin rule stays
-    /// for every other).
+    /// [`crate::gcode::flavour`]): the firmware it names ([`Firmware::from_flavour`]), or
+    /// these options' own where it names none (Marlin by default).
     pub fn for_flavour(self, flavour: Option<&str>) -> Self {
-        let extrusion_letter = flavour.map_or(self.extrusion_letter, super::flavour::extrusion_letter);
-        let linuxcnc = flavour.map_or(self.linuxcnc, super::flavour::is_linuxcnc);
-        let firmware = match flavour {
-            Some(f) if f.eq_ignore_ascii_case("klipper") => Firmware::Klipper,
-            Some(f) if f.eq_ignore_ascii_case("reprapfirmware") => Firmware::RepRapFirmware,
-            _ => self.firmware,
-        };
-        StateOptions { extrusion_letter, linuxcnc, firmware, ..self }
+        let firmware = flavour.and_then(Firmware::from_flavour).unwrap_or(self.firmware);
+        StateOptions { firmware, ..self }
     }
 }
 
@@ -333,13 +138,13 @@ impl State {
             structure: Structure::with_markers(options.markers.clone()),
             slots: std::array::from_fn(|i| {
                 let letter = i as u8;
-                match axis_of_word(letter, options.extrusion_letter) {
+                match axis_of_word(letter, options.firmware.extrusion_letter()) {
                     Some(axis) => axis as u8,
                     None if letter == b'F' => FEED_SLOT as u8,
                     None => NO_SLOT,
                 }
             }),
-            reads_plain_moves: options.extrusion_letter == b'E',
+            reads_plain_moves: options.firmware.extrusion_letter() == b'E',
             options,
             effect: Effect::None,
         }
@@ -368,10 +173,10 @@ impl State {
     }
 
     /// Sets G90/G91 and M82/M83, and which axes they make relative: G91 every axis but E; E
-    /// under M83, or under G91 except in RepRapFirmware, where only M82/M83 decide it.
+    /// as the firmware says ([`Firmware::relative_e`]).
     fn set_modes(&mut self, absolute: bool, absolute_e: bool) {
         (self.absolute, self.absolute_e) = (absolute, absolute_e);
-        let relative_e = !absolute_e || (!absolute && self.options.firmware != Firmware::RepRapFirmware);
+        let relative_e = self.options.firmware.relative_e(absolute, absolute_e);
         self.relative_axes = if absolute { 0 } else { XYZ_ABC_BITS } | u8::from(relative_e) << E;
     }
 
@@ -498,13 +303,15 @@ impl State {
             // Marlin's G90/G91 set the extrusion mode too.
             90 | 91 => {
                 let absolute = number == 90;
-                let marlin = self.options.firmware == Firmware::Marlin;
-                self.set_modes(absolute, if marlin { absolute } else { self.absolute_e });
+                self.set_modes(
+                    absolute,
+                    self.options.firmware.absolute_e_after_g90_g91(absolute, self.absolute_e),
+                );
             }
             92 => {
                 for w in &block.words {
                     if let (Some(i), Some(v)) =
-                        (axis_of_word(w.letter, self.options.extrusion_letter), w.number())
+                        (axis_of_word(w.letter, self.options.firmware.extrusion_letter()), w.number())
                     {
                         self.pos[i] = self.to_mm(v);
                     }
@@ -531,7 +338,9 @@ impl State {
                 }
             }
             106 => {
-                let speed = block.get(b'S').or_else(|| block.get(b'P').filter(|_| self.options.linuxcnc));
+                let speed = block
+                    .get(b'S')
+                    .or_else(|| block.get(b'P').filter(|_| self.options.firmware.values_in_p()));
                 self.thermal.fan = (speed.unwrap_or(255.0) / 255.0).clamp(0.0, 1.0);
             }
             107 => self.thermal.fan = 0.0,
@@ -555,7 +364,7 @@ impl State {
     pub fn g10_is_not_a_retraction(&self, block: &Block) -> bool {
         block.has(b'P')
             || block.has(b'L')
-            || (self.options.firmware == Firmware::RepRapFirmware && block.has(b'S'))
+            || (self.options.firmware.g10_s_is_a_temperature() && block.has(b'S'))
     }
 
     /// A RepRapFirmware tool temperature: the active one (`S`) of tool `P` (default: the current).
@@ -734,7 +543,7 @@ mod tests {
         assert_eq!(s.filament_mm[0], 3.0);
         assert_eq!((s.pos[E], s.pos[A], s.pos[X]), (2.0, 0.0, 20.0));
         // A file that names no flavour keeps the caller's choice, E by default.
-        assert_eq!(StateOptions::default().for_flavour(None).extrusion_letter, b'E');
+        assert_eq!(StateOptions::default().for_flavour(None).firmware.extrusion_letter(), b'E');
     }
 
     /// `M106 P` is the fan speed in the LinuxCNC flavours (PrusaSlicer writes `M106 P237.15`),
@@ -846,9 +655,9 @@ mod tests {
         fn plain_moves_by_letter_match_the_words(
             modes in proptest::collection::vec("(G90|G91|M82|M83|G20|G21|G92 X1 E2)", 0..4),
             line in "G[01]( [XYZEF]-?[0-9]{1,3}\\.[0-9]{1,3}){0,6}",
-            firmware in 0usize..3,
+            firmware in 0usize..4,
         ) {
-            let firmware = [Firmware::Marlin, Firmware::Klipper, Firmware::RepRapFirmware][firmware];
+            let firmware = Firmware::ALL[firmware];
             let mut by_letter = State::new(StateOptions { firmware, ..StateOptions::default() });
             run(&mut by_letter, &format!("G1 X3 Y4 Z5 E6 F100\n{}", modes.join("\n")));
             let mut by_word = by_letter.clone();

@@ -16,6 +16,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::recoat::Recoat;
+use crate::firmware::Firmware;
 use crate::range::{self, OutOfRange, Range};
 use crate::settings::{CheckRanges, Table};
 
@@ -45,6 +46,9 @@ pub enum PrintheadError {
     /// The `[recoat]` table is invalid.
     #[error("{0}")]
     Recoat(String),
+    /// The profile names a firmware without an inkjet fire command.
+    #[error("dialect: {0} has no inkjet fire command (marlin: M700, reprapfirmware: M578)")]
+    NoFireCommand(Firmware),
 }
 
 /// Order of nozzle addresses inside the `S` word.
@@ -56,27 +60,6 @@ pub enum BitOrder {
     LsbFirst,
     /// Address `a` is bit `nozzle_count - 1 - a`.
     MsbFirst,
-}
-
-/// Which fire command the firmware understands.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum FirmwareDialect {
-    /// Marlin hpc6602 branch: `M700 P<head> S<bits>`.
-    #[default]
-    Marlin,
-    /// RepRapFirmware: `M578 P<head> S<bits>`.
-    RepRapFirmware,
-}
-
-impl FirmwareDialect {
-    /// The M-code number of the fire command.
-    pub fn fire_code(self) -> u32 {
-        match self {
-            FirmwareDialect::Marlin => 700,
-            FirmwareDialect::RepRapFirmware => 578,
-        }
-    }
 }
 
 /// One cartridge on the carriage. Its nozzle row 0 sits at carriage position + offset.
@@ -122,8 +105,8 @@ pub struct PrintheadProfile {
     pub min_fire_interval_us: f64,
     /// Volume of one drop in picolitres, if known (gives the binder volume in reports).
     pub drop_volume_pl: Option<f64>,
-    /// Fire command dialect.
-    pub dialect: FirmwareDialect,
+    /// The firmware, for its fire command ([`Firmware::inkjet_fire_code`]).
+    pub dialect: Firmware,
     /// The powder recoat between layers, as motion; `None`: the raster job's recoat G-code.
     pub recoat: Option<Recoat>,
 }
@@ -139,7 +122,7 @@ impl Default for PrintheadProfile {
             bit_order: BitOrder::LsbFirst,
             min_fire_interval_us: 800.0,
             drop_volume_pl: None,
-            dialect: FirmwareDialect::Marlin,
+            dialect: Firmware::Marlin,
             recoat: None,
         }
     }
@@ -160,6 +143,9 @@ impl PrintheadProfile {
         if self.heads.is_empty() {
             return Err(PrintheadError::NoHeads);
         }
+        if self.dialect.inkjet_fire_code().is_none() {
+            return Err(PrintheadError::NoFireCommand(self.dialect));
+        }
         if let Some(problem) = self.recoat.as_ref().and_then(Recoat::axes_problem) {
             return Err(PrintheadError::Recoat(problem));
         }
@@ -178,6 +164,12 @@ impl PrintheadProfile {
             }
         }
         Ok(())
+    }
+
+    /// The M-code number of the fire command: `M700` (Marlin), `M578` (RepRapFirmware). Call
+    /// only on a validated profile (its firmware has one); Marlin's otherwise.
+    pub fn fire_code(&self) -> u32 {
+        self.dialect.inkjet_fire_code().unwrap_or(700)
     }
 
     /// Nozzle pitch in mm: `25.4 / dpi`.
@@ -292,8 +284,11 @@ mod tests {
         assert_eq!(p.pitch_mm(), 25.4 / 96.0);
         assert!((p.pitch_mm() - 0.264_583_333).abs() < 1e-9);
         assert_eq!(p.min_fire_interval_us, 800.0);
-        assert_eq!(p.dialect.fire_code(), 700);
-        assert_eq!(FirmwareDialect::RepRapFirmware.fire_code(), 578);
+        assert_eq!(p.fire_code(), 700);
+        let rrf = PrintheadProfile { dialect: Firmware::RepRapFirmware, ..p.clone() };
+        assert_eq!(rrf.fire_code(), 578);
+        let klipper = PrintheadProfile { dialect: Firmware::Klipper, ..p };
+        assert_eq!(klipper.validate(), Err(PrintheadError::NoFireCommand(Firmware::Klipper)));
     }
 
     #[test]
@@ -305,7 +300,7 @@ mod tests {
         .unwrap();
         assert_eq!(p.heads.len(), 2);
         assert_eq!(p.heads[1].offset_y_mm, -2.0);
-        assert_eq!(p.dialect, FirmwareDialect::RepRapFirmware);
+        assert_eq!(p.dialect, Firmware::RepRapFirmware);
         // row 2 is address 0 -> msb-first bit 3; row 0 is address 1 -> bit 2.
         assert_eq!(p.row_to_s_bit(), vec![2, 0, 3, 1]);
         assert_eq!(p.rows_of_s_bits(0b1000), 0b0100);

@@ -415,7 +415,7 @@ impl<W: Write> RasterWriter<W> {
                 self.fire_text[head].get(s as usize)
             } else {
                 fire.clear();
-                push_fire(&mut fire, self.profile.dialect.fire_code(), head, s);
+                push_fire(&mut fire, self.profile.fire_code(), head, s);
                 &fire
             };
             for _ in 0..density {
@@ -462,7 +462,7 @@ fn fire_table(profile: &PrintheadProfile, head: usize) -> TextTable {
     let mut t = TextTable::default();
     if profile.nozzle_count <= FIRE_TABLE_MAX_NOZZLES {
         for s in 0..1u64 << profile.nozzle_count {
-            push_fire(&mut t.text, profile.dialect.fire_code(), head, s);
+            push_fire(&mut t.text, profile.fire_code(), head, s);
             t.ends.push(t.text.len());
         }
     }
@@ -671,7 +671,7 @@ mod tests {
             nozzle_count: 3,
             dpi: 25.4,
             nozzle_rows: vec![2, 0, 1],
-            dialect: super::super::printhead::FirmwareDialect::RepRapFirmware,
+            dialect: crate::firmware::Firmware::RepRapFirmware,
             heads: vec![
                 Default::default(),
                 super::super::printhead::HeadOffset { offset_x_mm: 10.0, offset_y_mm: 1.0 },

@@ -39,6 +39,7 @@
 //! ```
 
 pub mod card;
+pub mod job;
 pub mod profile;
 pub mod report;
 pub mod schedule;
@@ -60,7 +61,8 @@ use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, P
 use crate::post::retraction::Retraction;
 use crate::post::zcap::ZCap;
 
-use profile::{Dialect, MixProfile, PurgeMode};
+use crate::firmware::{Firmware, MixCommands};
+use profile::{MixProfile, PurgeMode};
 use report::{Accounting, MixReport};
 use schedule::{Plan, Slot};
 
@@ -224,21 +226,23 @@ impl MixPass {
             let Slot::Fixed(t) = m.slot else { continue };
             text.push_str(&format!("; {} = T{t}, predicted {}\n", m.label, m.predicted.to_hex()));
             match hw.dialect() {
-                Dialect::Marlin => {
+                MixCommands::Marlin => {
                     for l in marlin_m163_m164(&m.mix, t as usize, self.plan.decimals) {
                         text.push_str(&l);
                         text.push('\n');
                     }
                 }
-                Dialect::Reprap => {
+                MixCommands::RepRapFirmware => {
                     define_rrf_tool(t, &mut text)?;
                     text.push_str(&rrf_m567(&m.mix, t, self.plan.decimals));
                     text.push('\n');
                 }
-                Dialect::MarlinDirect => {}
+                MixCommands::MarlinDirect => {}
             }
         }
-        if hw.dialect() == Dialect::Reprap && self.plan.mixes.iter().any(|m| m.slot == Slot::Rotating) {
+        if hw.dialect() == MixCommands::RepRapFirmware
+            && self.plan.mixes.iter().any(|m| m.slot == Slot::Rotating)
+        {
             for t in self.plan.rotating_tools {
                 define_rrf_tool(t, &mut text)?;
             }
@@ -275,7 +279,7 @@ impl MixPass {
                 let t = tools[k];
                 if self.rotating[k] != Some(mix) {
                     text.push_str(&format!("; {} = T{t}, predicted {}\n", m.label, m.predicted.to_hex()));
-                    if self.profile.hardware.dialect() == Dialect::Reprap {
+                    if self.profile.hardware.dialect() == MixCommands::RepRapFirmware {
                         text.push_str(&rrf_m567(&m.mix, t, self.decimals()));
                         text.push('\n');
                     } else {
@@ -696,12 +700,14 @@ pub fn mix_file(
     run.transform(&mut pass, target).map_err(|e| unwrap_error(e, input))?;
     let mut report = pass.into_report();
     // A pipe cannot be read ahead: its flavour shows only once the dialect is written.
-    if let Some(f) =
-        report.flavour.as_deref().filter(|f| chosen_blind && Dialect::for_flavour(f) != report.dialect)
+    if let Some(f) = report
+        .flavour
+        .as_deref()
+        .filter(|f| chosen_blind && Firmware::resolve(None, Some(f)).mix_commands() != report.dialect)
     {
         report.warnings.push(format!(
             "the file's flavour ({f}) wants the {:?} dialect, but {:?} was written: give it as a file, not a pipe, or set hardware.dialect",
-            Dialect::for_flavour(f),
+            Firmware::resolve(None, Some(f)).mix_commands(),
             report.dialect
         ));
     }

@@ -451,7 +451,7 @@ impl Pass for ToolpathPass {
         if let Some(mix) = &mut self.mix {
             mix.line(ctx.line.bytes, ctx.block, ctx.state.tool);
         }
-        if ctx.block.command.is_m(self.options.printhead.dialect.fire_code()) {
+        if ctx.block.command.is_m(self.options.printhead.fire_code()) {
             self.fire(ctx);
         }
         match ctx.effect {

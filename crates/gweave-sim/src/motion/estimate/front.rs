@@ -7,13 +7,14 @@
 use std::collections::HashMap;
 
 use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use gweave::firmware::{Firmware, MixingCode};
 use gweave::gcode::arc::Arc;
 use gweave::gcode::diag::Severity;
 use gweave::gcode::layers::Structure;
 use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
 use gweave::gcode::line::{Block, Command};
 use gweave::gcode::reader::{Part, RawLine};
-use gweave::gcode::state::{self, Effect, Firmware, Path, State, StateOptions};
+use gweave::gcode::state::{self, Effect, Path, State, StateOptions};
 
 use super::{
     EstimateError, Job, Key, ARC_CHORD_MM, DEFAULT_FEED_MM_S, FW_RECOVER_FEED_MM_S, FW_RETRACT_FEED_MM_S,
@@ -85,7 +86,6 @@ impl Front {
     /// The parse side for `profile`, with the jobs that set up the plan side (the first mix).
     pub(super) fn new(profile: &MotionProfile, jobs: &mut Vec<Job>) -> Result<Self, EstimateError> {
         let klipper = matches!(profile.corners, CornerMode::Klipper(_));
-        let firmware = if klipper { Firmware::Klipper } else { Firmware::Marlin };
         let mixing = match profile.steps.mixing_e.len() {
             0 => None,
             n => Some(
@@ -105,7 +105,7 @@ impl Front {
         };
         let mut front = Self {
             block: Block::default(),
-            state: State::new(StateOptions { firmware, ..StateOptions::default() }),
+            state: State::default(),
             profile: profile.clone(),
             book,
             mix_index: HashMap::new(),
@@ -115,6 +115,12 @@ impl Front {
         };
         front.refresh_mix(jobs);
         Ok(front)
+    }
+
+    /// Reads the lines to come as `firmware` reads them (the file's, [`Firmware::resolve`]d as
+    /// `stats` resolves it): before the first line, as the modal state starts afresh.
+    pub(super) fn read_as(&mut self, firmware: Firmware) {
+        self.state = State::new(StateOptions { firmware, ..StateOptions::default() });
     }
 
     /// Parse `raw` and apply it to the modal state.
@@ -227,7 +233,7 @@ impl Front {
                 }
                 return Ok(());
             }
-            163..=165 | 567 => return self.mixing_command(raw, jobs),
+            n if MixingCode::sets_a_mix(n) => return self.mixing_command(raw, jobs),
             201 if !self.book.klipper => profile.set_max_accel(&axes()),
             203 if !self.book.klipper => profile.set_max_feed(&axes()),
             205 if !self.book.klipper => {

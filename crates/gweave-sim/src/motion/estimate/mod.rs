@@ -47,6 +47,7 @@ use std::io::{self, Read};
 use std::sync::mpsc;
 
 use gweave::colour::dialect::{DialectError, MixingState};
+use gweave::firmware::Firmware;
 use gweave::gcode::layers::Feature;
 use gweave::gcode::line::Block;
 use gweave::gcode::reader::{Chunk, ChunkReader};
@@ -230,6 +231,13 @@ impl Estimator {
         Ok(est)
     }
 
+    /// Reads the lines to come as `firmware` reads them (a file's, [`Firmware::resolve`]d from
+    /// its flavour as `stats` does): call before the first line. Without it, lines read as
+    /// Marlin reads them.
+    pub fn read_as(&mut self, firmware: Firmware) {
+        self.front.read_as(firmware);
+    }
+
     /// Execute one line (without its line ending). Mixing commands the firmware would refuse
     /// are skipped.
     pub fn line(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
@@ -384,13 +392,28 @@ const CHUNKS_IN_FLIGHT: usize = 2;
 /// one plans and steps. The result is the same, to the bit, as feeding every line to one
 /// [`Estimator`] (the plan side sees the same jobs in the same order); the memory is bounded by
 /// the chunks and batches in flight.
+/// The lines are read as Marlin reads them; [`estimate_as`] reads them as another firmware does.
 pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    on_threads(input, Estimator::with_steps(profile, true)?)
+    estimate_as(input, profile, Firmware::Marlin, true)
+}
+
+/// [`estimate`] with the lines read as `firmware` reads them (a file's: see
+/// [`gweave::gcode::flavour::read_firmware`]), counting steps if asked (without, up to a fifth
+/// faster).
+pub fn estimate_as<R: Read + Send>(
+    input: R,
+    profile: &MotionProfile,
+    firmware: Firmware,
+    count_steps: bool,
+) -> Result<Estimate, EstimateError> {
+    let mut estimator = Estimator::with_steps(profile, count_steps)?;
+    estimator.read_as(firmware);
+    on_threads(input, estimator)
 }
 
 /// [`estimate`] without the step counts (all zero), up to a fifth faster.
 pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    on_threads(input, Estimator::with_steps(profile, false)?)
+    estimate_as(input, profile, Firmware::Marlin, false)
 }
 
 fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {

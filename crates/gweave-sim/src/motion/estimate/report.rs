@@ -2,9 +2,10 @@
 
 use std::io::Read;
 
+use gweave::firmware::Firmware;
 use serde::Serialize;
 
-use super::{estimate, estimate_time, Estimate, EstimateError};
+use super::{estimate_as, Estimate, EstimateError};
 use crate::motion::limits::CornerMode;
 use crate::profile::MachineProfile;
 
@@ -22,14 +23,15 @@ pub struct EstimateReport {
     pub estimate: Estimate,
 }
 
-/// Estimate the file read from `input` on `machine`, counting steps if asked.
+/// Estimate the file read from `input` on `machine`, its lines read as `firmware` reads them (the
+/// file's: [`gweave::gcode::flavour::read_firmware`]), counting steps if asked.
 pub fn estimate_report<R: Read + Send>(
     input: R,
     machine: &MachineProfile,
+    firmware: Firmware,
     count_steps: bool,
 ) -> Result<EstimateReport, EstimateError> {
-    let estimate =
-        if count_steps { estimate(input, &machine.motion)? } else { estimate_time(input, &machine.motion)? };
+    let estimate = estimate_as(input, &machine.motion, firmware, count_steps)?;
     let planner = match machine.motion.corners {
         CornerMode::Klipper(_) => "klipper",
         CornerMode::Marlin { .. } => "marlin",

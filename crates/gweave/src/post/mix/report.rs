@@ -10,8 +10,9 @@ use serde::Serialize;
 
 use crate::colour::Srgb8;
 
-use super::profile::{Dialect, Hardware};
+use super::profile::Hardware;
 use super::schedule::{Plan, Slot};
+use crate::firmware::MixCommands;
 
 /// One mix of the job and where it went.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -70,7 +71,7 @@ pub struct LayerMix {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MixReport {
     /// How the mixes were written to the firmware.
-    pub dialect: Dialect,
+    pub dialect: MixCommands,
     /// The firmware flavour the file names (`gcode_flavor`, Cura's `;FLAVOR:`); a profile that
     /// sets no dialect follows it.
     pub flavour: Option<String>,

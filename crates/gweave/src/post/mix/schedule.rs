@@ -22,7 +22,7 @@ use crate::colour::solve::{lerp_perceived, solve};
 use crate::colour::{Mix, MixingModel, Srgb8};
 use crate::range::{Ceiling, LAYER_NUMBER, MAX_LAYERS, POSITION_MM};
 
-use super::profile::{At, Dialect, GradientSpace, MixBase, MixProfile, MixRef};
+use super::profile::{At, GradientSpace, MixBase, MixProfile, MixRef};
 use super::MixPassError;
 
 /// Where a mix lives in the firmware.
@@ -271,7 +271,7 @@ impl Plan {
         let mut mixes = r.mixes;
         let tools = hw.virtual_tools as u32;
         let mut rotating_tools = [0, 0];
-        if hw.dialect() != Dialect::MarlinDirect {
+        if hw.dialect() != crate::firmware::MixCommands::MarlinDirect {
             if mixes.len() as u32 <= tools {
                 for (t, m) in (0u32..).zip(mixes.iter_mut()) {
                     m.slot = Slot::Fixed(t);

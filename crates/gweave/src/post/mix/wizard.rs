@@ -199,7 +199,7 @@ pub fn run_wizard(input: &mut dyn BufRead, out: &mut dyn Write) -> Result<Option
     };
     let text = format!(
         "# Written by gweave mix --wizard.\n[hardware]\n\
-         # dialect: marlin | marlin-direct | reprap; unset, the G-code file's flavour decides.\n\
+         # dialect: marlin | marlin-direct | reprapfirmware; unset, the G-code file's flavour decides.\n\
          {inputs}\n{purge_table}\n\
          [z_cap]\nmax_z_feed_mm_min = {cap:?}\n\n{mixes}\n{job}"
     );

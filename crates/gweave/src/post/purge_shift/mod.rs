@@ -64,6 +64,7 @@ pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
 
 use crate::colour::dialect::MixingState;
 use crate::error::Result;
+use crate::firmware::MixingCode;
 use crate::gcode::flavour::{read_flavour, require_e_extruder};
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::line::Block;
@@ -531,7 +532,7 @@ fn tool_dependent(block: &Block) -> bool {
 /// A line that belongs to a change group.
 fn is_change_line(block: &Block) -> bool {
     let c = block.command;
-    c.tool().is_some() || [163, 164, 165, 563, 567].iter().any(|&n| c.is_m(n))
+    c.tool().is_some() || c.m().is_some_and(MixingCode::goes_with_a_tool_change)
 }
 
 impl Pass for PurgeShift {

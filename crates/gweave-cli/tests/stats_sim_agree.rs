@@ -1,0 +1,90 @@
+//! `stats` and `sim` read every file the same way (issue 27): as the firmware its flavour names
+//! (`gweave::firmware::Firmware`). Over every fixture, the virtual printer ends where the modal
+//! state `stats` reads with ends (X Y Z, the extrusion axis E and the rotary A), its moves have
+//! fed the same filament, and it counts the same layers. A LinuxCNC file extrudes with A: read as Marlin,
+//! the printer would move a rotary A and feed nothing.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use gweave::gcode::state::{Effect, State, A, E, X, Y, Z};
+use gweave::pass::{Ctx, Pass, Quiet, Run};
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_gweave")).args(args).output().unwrap();
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// Every G-code fixture: tests/data/<slicer>/*.gcode.
+fn fixtures() -> Vec<PathBuf> {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data");
+    let mut all: Vec<PathBuf> = std::fs::read_dir(&data)
+        .unwrap()
+        .flat_map(|dir| std::fs::read_dir(dir.unwrap().path()).into_iter().flatten())
+        .map(|f| f.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "gcode"))
+        .collect();
+    all.sort();
+    all
+}
+
+/// Filament the moves fed, mm: the printer's `filament_mm` (which leaves out `G10`/`G11`
+/// firmware retractions, where the state's own count has them).
+#[derive(Default)]
+struct MovesFed(f64);
+
+impl Pass for MovesFed {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn std::io::Write) -> std::io::Result<()> {
+        if let Effect::Move(m) = ctx.effect {
+            self.0 += m.e_mm();
+        }
+        Ok(())
+    }
+}
+
+/// The modal state `stats` ends with, through the same driver (`Run`, which reads the file's
+/// flavour) as `gweave stats`, and the filament its moves fed.
+fn stats_state(path: &Path) -> (State, f64) {
+    let mut fed = MovesFed::default();
+    let state = Run::new(path, &mut Quiet).scan(&mut fed).unwrap();
+    (state, fed.0)
+}
+
+fn numbers(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array().unwrap().iter().map(|n| n.as_f64().unwrap()).collect()
+}
+
+#[test]
+fn stats_and_sim_read_every_fixture_the_same_way() {
+    let fixtures = fixtures();
+    assert!(fixtures.len() >= 8, "{fixtures:?}");
+    let mut linuxcnc = 0;
+    for path in &fixtures {
+        let name = path.display();
+        let p = path.to_str().unwrap();
+        let stats = json(&["stats", p, "--json", "-q"]);
+        let sim = json(&["sim", p, "--json", "-q"]);
+        let (state, stats_mm) = stats_state(path);
+        linuxcnc += usize::from(state.options().firmware.extrusion_letter() == b'A');
+
+        let layers = sim["layer_s"].as_array().unwrap().len();
+        assert_eq!(stats["layers"].as_u64(), Some(layers as u64), "{name}: layers");
+
+        // `M114`'s logical X Y Z E A at the end, as the state has them.
+        let position = numbers(&sim["position"]);
+        for (i, axis) in [X, Y, Z, E, A].into_iter().enumerate() {
+            let (theirs, ours) = (position[i], state.pos[axis]);
+            assert!((theirs - ours).abs() < 1e-3, "{name}: axis {i}: sim {theirs}, stats {ours}");
+        }
+
+        // The printer counts filament per extruder it has (one by default): compare totals.
+        let sim_mm: f64 = numbers(&sim["filament_mm"]).iter().sum();
+        assert!(stats_mm > 0.0, "{name}: no filament");
+        assert!(
+            (sim_mm - stats_mm).abs() < 1e-6 * stats_mm,
+            "{name}: filament: sim {sim_mm}, stats {stats_mm}"
+        );
+    }
+    assert_eq!(linuxcnc, 1, "the mach3 fixture is among them");
+}
