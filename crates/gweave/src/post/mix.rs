@@ -131,8 +131,7 @@ impl MixPass {
         let plan = Plan::new(&profile)?;
         let cap = profile.z_cap.max_z_feed_mm_min;
         let zcap = (cap > 0.0).then_some(ZCap { max_z_feed_mm_min: cap, mode: profile.z_cap.mode });
-        let p = &profile.purge;
-        let motion = p.motion(if cap > 0.0 { cap.min(p.travel_feed_mm_min) } else { p.travel_feed_mm_min });
+        let motion = profile.purge.motion(cap);
         let acc = Accounting::new(&plan, &profile.hardware);
         let initial_purge_due = profile.purge.initial_mm > 0.0;
         Ok(MixPass {

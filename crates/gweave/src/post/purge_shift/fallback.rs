@@ -165,7 +165,6 @@ pub(crate) fn write_fallback(
                 travel_feed_mm_min: t.travel_feed_mm_min,
                 extrude_feed_mm_min: t.extrude_feed_mm_min,
                 retract_feed_mm_min: env.retract_feed_mm_min.unwrap_or(t.retract_feed_mm_min),
-                z_feed_mm_min: rules.block.z_feed_mm_min,
                 ..rules.block
             };
             (motion, pattern)
