@@ -385,6 +385,10 @@ impl MixPass {
                 self.replaced = true;
             }
             Effect::Move(mv) => self.process_move(ctx, mv)?,
+            // The purge block primes and retracts again a firmware retraction in force too.
+            Effect::FirmwareRetract { .. } => {
+                self.retraction.follow(ctx.effect);
+            }
             _ => {}
         }
         Ok(())
@@ -753,6 +757,26 @@ mod tests {
         assert!(e_moves[0].starts_with("G1 E-4 "), "{text}");
         assert!(e_moves[1].starts_with("G1 E29.8 "), "{text}");
         assert!(e_moves[2].starts_with("G1 E-4.8 "), "{text}");
+    }
+
+    #[test]
+    fn purge_refills_a_firmware_retraction_in_force() {
+        // As above with `G10` (1 mm by default): the firmware's retraction is in force at the
+        // change too, so the purge primes 4 + 1 + 25 and retracts 4 + 1 again. Before, mix
+        // ignored it (E29 / E-4) while purge-shift counted it.
+        let input = "M83\n;LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\nG10\n\
+                     ;LAYER_CHANGE\nG1 Z0.4 F100\nG1 X0 E2 F1800\n";
+        let (out, _) = mix_bytes(profile(""), input.as_bytes()).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let e_moves: Vec<&str> = text
+            .lines()
+            .skip_while(|l| !l.starts_with("; gweave mix: purge"))
+            .filter(|l| l.starts_with("G1 E"))
+            .take(3)
+            .collect();
+        assert_eq!(e_moves.len(), 3, "{text}");
+        assert!(e_moves[1].starts_with("G1 E30 "), "{text}");
+        assert!(e_moves[2].starts_with("G1 E-5 "), "{text}");
     }
 
     #[test]
