@@ -11,14 +11,14 @@ use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
 use crate::gcode::state::{Effect, Path, State, X, Y, Z};
 use crate::pass::{Ctx, Pass};
-use crate::post::retraction::Retraction;
+use crate::gcode::retraction::Retraction;
 
 /// Filament used by one tool.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct ToolFilament {
     pub tool: u32,
     /// Filament pushed out of the nozzle, mm: extrusions and stationary purges; retractions
-    /// and the primes that undo them cancel (see `post/retraction.rs`).
+    /// and the primes that undo them cancel (see `gcode/retraction.rs`).
     pub extruded_mm: f64,
     /// Volume of that filament, mm^3.
     pub extruded_mm3: f64,

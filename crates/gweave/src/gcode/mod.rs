@@ -13,6 +13,8 @@ pub mod lexer;
 pub mod line;
 pub mod number;
 pub mod reader;
+// The retraction in force, followed alike by `stats` and the passes that insert purges.
+pub(crate) mod retraction;
 pub mod state;
 pub mod temp;
 pub mod writer;

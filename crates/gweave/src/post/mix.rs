@@ -57,7 +57,7 @@ use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z}
 use crate::gcode::writer::Target;
 use crate::pass::{drive_reader, keep, Ctx, Pass, Progress, Quiet, Run, Strictness};
 use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
-use crate::post::retraction::Retraction;
+use crate::gcode::retraction::Retraction;
 use crate::post::zcap::ZCap;
 
 use profile::{Dialect, MixProfile, PurgeMode};
