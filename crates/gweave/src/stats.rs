@@ -9,9 +9,9 @@ use serde::Serialize;
 
 use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
+use crate::gcode::retraction::Retraction;
 use crate::gcode::state::{Effect, Path, State, X, Y, Z};
 use crate::pass::{Ctx, Pass};
-use crate::gcode::retraction::Retraction;
 
 /// Filament used by one tool.
 #[derive(Debug, Clone, Serialize, PartialEq)]

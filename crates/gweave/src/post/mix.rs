@@ -53,11 +53,11 @@ use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
 use crate::gcode::flavour::{flavour_in, flavour_of_comment, read_flavour, require_e_extruder};
 use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
+use crate::gcode::retraction::Retraction;
 use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z};
 use crate::gcode::writer::Target;
 use crate::pass::{drive_reader, keep, Ctx, Pass, Progress, Quiet, Run, Strictness};
 use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
-use crate::gcode::retraction::Retraction;
 use crate::post::zcap::ZCap;
 
 use profile::{Dialect, MixProfile, PurgeMode};

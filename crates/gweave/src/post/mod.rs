@@ -15,4 +15,3 @@ pub mod zcap;
 
 // metadata: the slicer's figures rewritten for the file as written, and the run's header.
 pub mod metadata;
-

@@ -760,7 +760,8 @@ mod tests {
 
     #[test]
     fn purge_z_feed_is_the_travel_feed_under_the_cap_unless_set() {
-        let z = |text: &str, cap: f64| MixProfile::from_toml_str(text).unwrap().purge.motion(cap).z_feed_mm_min;
+        let z =
+            |text: &str, cap: f64| MixProfile::from_toml_str(text).unwrap().purge.motion(cap).z_feed_mm_min;
         assert_eq!(z("", 200.0), Some(200.0));
         assert_eq!(z("", 0.0), Some(1320.0));
         assert_eq!(z("[purge]\nz_feed_mm_min = 100", 200.0), Some(100.0));

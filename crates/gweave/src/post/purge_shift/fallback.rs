@@ -23,9 +23,9 @@
 
 use super::config::{Fallback, Rules, TowerConfig};
 use crate::gcode::number::NumberFormat;
+use crate::gcode::retraction::Retraction;
 use crate::gcode::state::{Effect, Move, X, Y};
 use crate::post::purge_block::{write_purge_job, PurgeJob, PurgeMotion, PurgePattern, PurgeStart};
-use crate::gcode::retraction::Retraction;
 
 /// Inserted lines carry the split's precision: 0.01 um positions, 1e-6 mm of filament.
 const FORMAT: NumberFormat = NumberFormat {
