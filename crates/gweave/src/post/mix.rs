@@ -744,19 +744,23 @@ mod tests {
         // seed's 4 mm retraction, then 4 + 0.8 + 25 back out) and leave them retracted again.
         let input = "M83\n;LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\nG1 Z0.6 E-0.8 F2100\n\
                      ;LAYER_CHANGE\nG1 Z0.4 F100\nG1 X0 E2 F1800\n";
+        assert_eq!(purge_e_moves(input), ["G1 E-4 F2400", "G1 E29.8 F200", "G1 E-4.8 F2400"]);
+    }
+
+    /// The first three E-only moves of the first purge block of `input` mixed with two changes.
+    fn purge_e_moves(input: &str) -> Vec<String> {
         let (out, report) = mix_bytes(profile(""), input.as_bytes()).unwrap();
         assert_eq!(report.purge.count, 1);
         let text = String::from_utf8(out).unwrap();
-        let e_moves: Vec<&str> = text
+        let e_moves: Vec<String> = text
             .lines()
             .skip_while(|l| !l.starts_with("; gweave mix: purge"))
             .filter(|l| l.starts_with("G1 E"))
             .take(3)
+            .map(str::to_owned)
             .collect();
         assert_eq!(e_moves.len(), 3, "{text}");
-        assert!(e_moves[0].starts_with("G1 E-4 "), "{text}");
-        assert!(e_moves[1].starts_with("G1 E29.8 "), "{text}");
-        assert!(e_moves[2].starts_with("G1 E-4.8 "), "{text}");
+        e_moves
     }
 
     #[test]
@@ -766,17 +770,7 @@ mod tests {
         // ignored it (E29 / E-4) while purge-shift counted it.
         let input = "M83\n;LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\nG10\n\
                      ;LAYER_CHANGE\nG1 Z0.4 F100\nG1 X0 E2 F1800\n";
-        let (out, _) = mix_bytes(profile(""), input.as_bytes()).unwrap();
-        let text = String::from_utf8(out).unwrap();
-        let e_moves: Vec<&str> = text
-            .lines()
-            .skip_while(|l| !l.starts_with("; gweave mix: purge"))
-            .filter(|l| l.starts_with("G1 E"))
-            .take(3)
-            .collect();
-        assert_eq!(e_moves.len(), 3, "{text}");
-        assert!(e_moves[1].starts_with("G1 E30 "), "{text}");
-        assert!(e_moves[2].starts_with("G1 E-5 "), "{text}");
+        assert_eq!(purge_e_moves(input), ["G1 E-4 F2400", "G1 E30 F200", "G1 E-5 F2400"]);
     }
 
     #[test]
