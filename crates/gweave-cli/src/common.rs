@@ -10,6 +10,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::{write_file, Target};
 use gweave::range::{Quantity, Range};
+use gweave::total::{Named, PerFile};
 use serde::Serialize;
 
 use crate::args::Quiet;
@@ -72,6 +73,24 @@ impl ReportArgs {
     /// neither --json nor -q.
     pub fn emit<T: Serialize>(&self, value: &T) -> Result<bool> {
         Ok(self.emit_result(value)? && !self.quiet.quiet)
+    }
+
+    /// [`ReportArgs::emit`] for a command over several files (`stats`, `check`): one file's
+    /// report as it is, several as `{"files": [{"path", ...report}], "total"}`.
+    pub fn emit_per_file<R: Serialize, T: Serialize>(
+        &self,
+        inputs: &[PathBuf],
+        reports: &[R],
+        total: impl FnOnce() -> T,
+    ) -> Result<bool> {
+        match reports {
+            [one] => self.emit(one),
+            _ => {
+                let files = inputs.iter().zip(reports);
+                let files = files.map(|(p, r)| Named { path: p.display().to_string(), report: r }).collect();
+                self.emit(&PerFile { files, total: total() })
+            }
+        }
     }
 
     /// [`ReportArgs::emit`] for a command whose text is its result, not a summary

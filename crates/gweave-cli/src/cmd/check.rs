@@ -9,7 +9,7 @@ use clap::Args;
 use gweave::bed::Bed;
 use gweave::check::{check_file, CheckOptions, CheckReport};
 use gweave::range::FEED_MM_MIN;
-use gweave::total::{CheckTotal, Named, PerFile};
+use gweave::total::CheckTotal;
 
 use crate::common::{in_range, print_summary, ReportArgs};
 use crate::files::Files;
@@ -60,17 +60,7 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
         reports.push(report);
     }
     let total = CheckTotal::of(&reports, args.strict);
-    let human = match &reports[..] {
-        [one] => args.report.emit(one)?,
-        _ => {
-            let files = args
-                .inputs
-                .iter()
-                .zip(reports)
-                .map(|(p, r)| Named { path: p.display().to_string(), report: r });
-            args.report.emit(&PerFile { files: files.collect(), total: total.clone() })?
-        }
-    };
+    let human = args.report.emit_per_file(&args.inputs, &reports, || total.clone())?;
     if human && total.files > 1 {
         print_summary(|out| {
             writeln!(

@@ -8,7 +8,7 @@ use anyhow::Result;
 use clap::Args;
 use gweave::malformed::WithMalformed;
 use gweave::stats::{stats_file, Stats};
-use gweave::total::{Named, PerFile, StatsTotal};
+use gweave::total::StatsTotal;
 
 use gweave::range::FILAMENT_DIAMETER_MM;
 
@@ -45,15 +45,7 @@ pub fn run(args: StatsArgs) -> Result<ExitCode> {
         let mut bar = args.report.quiet.bar();
         all.push(stats_file(input, args.filament_diameter, args.lenient.strictness(), &mut bar)?);
     }
-    let human = match &all[..] {
-        [one] => args.report.emit(one)?,
-        _ => {
-            let total = StatsTotal::of(&all);
-            let files =
-                args.inputs.iter().zip(&all).map(|(p, s)| Named { path: p.display().to_string(), report: s });
-            args.report.emit(&PerFile { files: files.collect(), total })?
-        }
-    };
+    let human = args.report.emit_per_file(&args.inputs, &all, || StatsTotal::of(&all))?;
     if human {
         print_summary(|out| {
             for (input, s) in args.inputs.iter().zip(&all) {
