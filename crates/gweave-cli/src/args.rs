@@ -2,14 +2,17 @@
 //! into each subcommand with `#[command(flatten)]` so that one name has one meaning and one
 //! help text everywhere.
 
+use std::path::{Path, PathBuf};
+
 use anyhow::Result;
 use clap::Args;
-use serde::Serialize;
+use gweave_sim::MachineProfile;
 
-use crate::common::ReportArgs;
+use crate::common::load_or_default;
 use crate::progress::Bar;
 
-/// `-q`: quiet on standard output and standard error alike, except for what went wrong.
+/// `-q`: quiet on standard output and standard error alike, except for what went wrong. Part of
+/// [`ReportArgs`](crate::common::ReportArgs), which decides with it whether a summary prints.
 #[derive(Args, Debug, Clone, Copy, Default)]
 pub struct Quiet {
     /// No progress bar and no human summary; errors, warnings and findings still print, and
@@ -22,12 +25,6 @@ impl Quiet {
     /// The progress bar, drawn only without -q (and only on a terminal, for large inputs).
     pub fn bar(&self) -> Bar {
         Bar::new(self.quiet)
-    }
-
-    /// Writes the JSON asked for (`--json`, `--report`); returns whether the human summary
-    /// prints: neither --json nor -q.
-    pub fn emit<T: Serialize>(&self, report: &ReportArgs, value: &T) -> Result<bool> {
-        Ok(report.emit(value)? && !self.quiet)
     }
 }
 
@@ -48,5 +45,22 @@ impl Lenient {
         } else {
             gweave::pass::Strictness::Strict
         }
+    }
+}
+
+/// `--machine`: the virtual printer's profile, for the commands that run it (`sim`, `serve`).
+#[derive(Args, Debug, Clone, Default)]
+pub struct MachineArg {
+    /// Machine profile (TOML, see docs/machine.md); default: a RAMPS 1.4 printer on Marlin.
+    #[arg(long = "machine", id = "machine", value_name = "TOML")]
+    pub path: Option<PathBuf>,
+}
+
+impl MachineArg {
+    /// The profile, or the built-in printer without `--machine`. Files the profile names (a
+    /// thermistor table) are read from its folder.
+    pub fn load(&self) -> Result<MachineProfile> {
+        let folder = self.path.as_deref().and_then(Path::parent).unwrap_or(Path::new(""));
+        load_or_default(self.path.as_ref(), |text| MachineProfile::from_toml_in(text, folder))
     }
 }

@@ -10,7 +10,10 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::{write_file, Target};
 use gweave::range::{Quantity, Range};
+use gweave::total::{Named, PerFile};
 use serde::Serialize;
+
+use crate::args::Quiet;
 
 /// Where a transform writes.
 #[derive(Args, Debug)]
@@ -43,7 +46,7 @@ impl OutputArgs {
     }
 }
 
-/// Machine-readable output.
+/// What a command reports and where: machine-readable output (`--json`, `--report`) and `-q`.
 #[derive(Args, Debug)]
 pub struct ReportArgs {
     /// Print the result as JSON on standard output instead of the human summary.
@@ -52,6 +55,8 @@ pub struct ReportArgs {
     /// Also write the result as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    #[command(flatten)]
+    pub quiet: Quiet,
 }
 
 impl ReportArgs {
@@ -64,11 +69,36 @@ impl ReportArgs {
         Ok(())
     }
 
-    /// Writes the JSON report file if asked; returns whether the human summary should print.
+    /// Writes the JSON report file if asked; returns whether the human summary should print:
+    /// neither --json nor -q.
+    pub fn emit<T: Serialize>(&self, value: &T) -> Result<bool> {
+        Ok(self.emit_result(value)? && !self.quiet.quiet)
+    }
+
+    /// [`ReportArgs::emit`] for a command over several files (`stats`, `check`): one file's
+    /// report as it is, several as `{"files": [{"path", ...report}], "total"}`.
+    pub fn emit_per_file<R: Serialize, T: Serialize>(
+        &self,
+        inputs: &[PathBuf],
+        reports: &[R],
+        total: impl FnOnce() -> T,
+    ) -> Result<bool> {
+        match reports {
+            [one] => self.emit(one),
+            _ => {
+                let files = inputs.iter().zip(reports);
+                let files = files.map(|(p, r)| Named { path: p.display().to_string(), report: r }).collect();
+                self.emit(&PerFile { files, total: total() })
+            }
+        }
+    }
+
+    /// [`ReportArgs::emit`] for a command whose text is its result, not a summary
+    /// (`mix --predict`): -q does not hide it.
     /// The JSON is streamed to its destination, never held whole in memory (a report may carry
     /// an entry per line or per change of a large file). The command has checked the report's
     /// path against its other files (`crate::files`) before it started.
-    pub fn emit<T: Serialize>(&self, value: &T) -> Result<bool> {
+    pub fn emit_result<T: Serialize>(&self, value: &T) -> Result<bool> {
         if let Some(path) = &self.report {
             write_file(path, |out| -> Result<()> {
                 serde_json::to_writer_pretty(&mut *out, value)?;

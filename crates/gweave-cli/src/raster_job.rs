@@ -259,7 +259,7 @@ impl Job {
             e.finish()
         });
         out.commit()?;
-        let fire_s = report.fire_commands as f64 * self.profile.min_fire_interval_us * 1e-6;
+        let fire_s = self.profile.fire_time_s(report.fire_commands);
         let time = match estimate {
             Some(e) => {
                 TimeEstimate { method: "planner", motion_s: e.total_s, fire_s, total_s: e.total_s + fire_s }

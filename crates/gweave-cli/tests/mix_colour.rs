@@ -183,3 +183,22 @@ fn the_wizard_confirms_then_writes_and_runs_the_job() {
     assert!(only.status.success());
     assert!(String::from_utf8_lossy(&only.stderr).contains("the wizard only wrote the profile"));
 }
+
+#[test]
+fn quiet_hides_the_card_summary_but_not_a_prediction() {
+    // -q means no human summary in every command; the card's summary printed through it
+    // before. A prediction is the command's result, not a summary: -q leaves it.
+    let dir = tempfile::tempdir().unwrap();
+    let card = dir.path().join("card.gcode");
+    let loud = gweave(&["mix", "--calibration-card", "-o", card.to_str().unwrap()]);
+    assert!(loud.status.success(), "{}", String::from_utf8_lossy(&loud.stderr));
+    assert!(!loud.stdout.is_empty());
+    let quiet = gweave(&["mix", "--calibration-card", "-o", card.to_str().unwrap(), "-q"]);
+    assert!(quiet.status.success(), "{}", String::from_utf8_lossy(&quiet.stderr));
+    assert_eq!(String::from_utf8_lossy(&quiet.stdout), "");
+    let predicted = gweave(&["mix", "--predict", "1:0:1:0", "-q"]);
+    assert_eq!(
+        String::from_utf8_lossy(&predicted.stdout),
+        "0.5000:0.0000:0.5000:0.0000  #69c348  L 71.1 a -48.9 b 51.8\n"
+    );
+}

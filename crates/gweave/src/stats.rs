@@ -9,9 +9,9 @@ use serde::Serialize;
 
 use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
+use crate::gcode::retraction::Retraction;
 use crate::gcode::state::{Effect, Path, State, X, Y, Z};
 use crate::pass::{Ctx, Pass};
-use crate::post::retraction::Retraction;
 
 /// Filament used by one tool.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -19,7 +19,7 @@ pub struct ToolFilament {
     /// The tool number.
     pub tool: u32,
     /// Filament pushed out of the nozzle, mm: extrusions and stationary purges; retractions
-    /// and the primes that undo them cancel (see `post/retraction.rs`).
+    /// and the primes that undo them cancel (see `gcode/retraction.rs`).
     pub extruded_mm: f64,
     /// Volume of that filament, mm^3.
     pub extruded_mm3: f64,

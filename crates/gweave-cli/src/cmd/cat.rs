@@ -10,7 +10,6 @@ use clap::Args;
 use gweave::gcode::writer::Target;
 use gweave::pass::{CopyReport, Identity, Run, Strictness};
 
-use crate::args::Quiet;
 use crate::common::{print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
 
@@ -29,8 +28,6 @@ pub struct CatArgs {
     pub lenient: bool,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 pub fn run(args: CatArgs) -> Result<ExitCode> {
@@ -41,7 +38,7 @@ pub fn run(args: CatArgs) -> Result<ExitCode> {
         .target(&target, &args.input)
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let mut bar = args.quiet.bar();
+    let mut bar = args.report.quiet.bar();
     let mut run = Run::new(&args.input, &mut bar);
     if args.lenient {
         run.strictness = Strictness::Lenient;
@@ -49,7 +46,7 @@ pub fn run(args: CatArgs) -> Result<ExitCode> {
     let mut copy = Identity::default();
     run.transform(&mut copy, &target)?;
     drop(bar);
-    if args.quiet.emit(&args.report, &copy.report)? && target != Target::Stdout {
+    if args.report.emit(&copy.report)? && target != Target::Stdout {
         print_summary(|out| print_human(out, &args.input, &target, &copy.report))?;
     }
     Ok(ExitCode::SUCCESS)

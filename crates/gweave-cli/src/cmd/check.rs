@@ -9,9 +9,8 @@ use clap::Args;
 use gweave::bed::Bed;
 use gweave::check::{check_file, CheckOptions, CheckReport};
 use gweave::range::FEED_MM_MIN;
-use gweave::total::{CheckTotal, Named, PerFile};
+use gweave::total::CheckTotal;
 
-use crate::args::Quiet;
 use crate::common::{in_range, print_summary, ReportArgs};
 use crate::files::Files;
 
@@ -40,8 +39,6 @@ pub struct CheckArgs {
     pub strict: bool,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 pub fn run(args: CheckArgs) -> Result<ExitCode> {
@@ -52,28 +49,18 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
     let options = CheckOptions { bed: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
     let mut reports = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {
-        let mut bar = args.quiet.bar();
+        let mut bar = args.report.quiet.bar();
         let report = check_file(input, options.clone(), &mut bar)?;
         drop(bar);
         // Findings print as each file is done (they are what `check` is for, -q or not); the
         // JSON waits for the total.
         if !args.report.json {
-            print_summary(|out| print_file(out, input, &report, args.quiet.quiet))?;
+            print_summary(|out| print_file(out, input, &report, args.report.quiet.quiet))?;
         }
         reports.push(report);
     }
     let total = CheckTotal::of(&reports, args.strict);
-    let human = match &reports[..] {
-        [one] => args.quiet.emit(&args.report, one)?,
-        _ => {
-            let files = args
-                .inputs
-                .iter()
-                .zip(reports)
-                .map(|(p, r)| Named { path: p.display().to_string(), report: r });
-            args.quiet.emit(&args.report, &PerFile { files: files.collect(), total: total.clone() })?
-        }
-    };
+    let human = args.report.emit_per_file(&args.inputs, &reports, || total.clone())?;
     if human && total.files > 1 {
         print_summary(|out| {
             writeln!(

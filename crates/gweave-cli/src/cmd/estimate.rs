@@ -14,7 +14,6 @@ use gweave_sim::MachineProfile;
 use gweave_sim::{estimate_report, EstimateReport};
 
 use super::sim::{print_layers_and_features, print_malformed};
-use crate::args::Quiet;
 use crate::common::{hms, load_or_default, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::progress::Bar;
@@ -41,8 +40,6 @@ pub struct EstimateArgs {
     pub steps: bool,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 pub fn run(args: EstimateArgs) -> Result<ExitCode> {
@@ -63,14 +60,14 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
     };
     let firmware = read_firmware(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
     let file = container::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
-    let mut bar = args.quiet.bar();
+    let mut bar = args.report.quiet.bar();
     bar.set_len(file.text_len.unwrap_or(0));
     let input = Counted { inner: file, bar, done: 0 };
     let report = estimate_report(input, &profile, firmware, args.steps).map_err(|e| match e.line() {
         Some(line) if line > 0 => anyhow!("{}:{line}: {}", args.input.display(), e.reason()),
         _ => anyhow!("{}: {}", args.input.display(), e.reason()),
     })?;
-    if args.quiet.emit(&args.report, &report)? {
+    if args.report.emit(&report)? {
         print_summary(|out| print_human(out, &args.input, &report))?;
     }
     Ok(ExitCode::SUCCESS)

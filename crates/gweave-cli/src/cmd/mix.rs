@@ -17,7 +17,6 @@ use gweave::post::mix::{mix_file, wizard::run_wizard};
 
 use gweave::range::PURGE_MM;
 
-use crate::args::Quiet;
 use crate::common::{in_range, load_or_default, print_summary, write_bytes, OutputArgs, ReportArgs};
 use crate::files::Files;
 use crate::finish;
@@ -90,8 +89,6 @@ pub struct MixArgs {
     pub wizard: bool,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -154,14 +151,14 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
 /// Mixes `input` into `target` and reports: the job of a plain run and of the wizard's.
 fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) -> Result<ExitCode> {
     finish::refuse_second_run(input, "mix")?;
-    let mut bar = args.quiet.bar();
+    let mut bar = args.report.quiet.bar();
     let (report, _) =
         finish::with_metadata(Some(input), &target, |t| Ok(mix_file(profile, input, t, &mut bar)?))?;
     drop(bar);
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");
     }
-    if args.quiet.emit(&args.report, &report)? {
+    if args.report.emit(&report)? {
         // Keep standard output clean when the G-code goes there.
         if target == Target::Stdout {
             print_human(&mut std::io::stderr().lock(), &report)?;

@@ -16,7 +16,7 @@ pub fn predict_all(profile: &MixProfile, mixes: &[String], report: &ReportArgs) 
     let model = profile.hardware.mixing_model()?;
     let predictions =
         mixes.iter().map(|s| Ok(predict(&model, &parse_ratios(s)?)?)).collect::<Result<Vec<Prediction>>>()?;
-    if report.emit(&predictions)? {
+    if report.emit_result(&predictions)? {
         print_summary(|out| {
             for p in &predictions {
                 let ratios: Vec<String> = p.ratios.iter().map(|r| format!("{r:.4}")).collect();

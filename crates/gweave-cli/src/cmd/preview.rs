@@ -17,7 +17,7 @@ use gweave::render::{
 };
 use gweave::rotary::cylinder::{RotaryConfig, MANDREL_DIAMETER_MM};
 
-use crate::args::{Lenient, Quiet};
+use crate::args::Lenient;
 use crate::common::{in_range, load, print_malformed, print_summary, write_bytes, ReportArgs};
 use crate::files::Files;
 
@@ -88,8 +88,6 @@ pub struct PreviewArgs {
     pub lenient: Lenient,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -136,7 +134,7 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
         printhead,
         strictness: args.lenient.strictness(),
     };
-    let mut bar = args.quiet.bar();
+    let mut bar = args.report.quiet.bar();
     let preview = preview_with_progress(&args.input, args.compare.as_deref(), format, &options, &mut bar)?;
     drop(bar);
     if to_stdout {
@@ -144,7 +142,7 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
     } else {
         write_bytes(&args.output, &preview.bytes)?;
     }
-    if args.quiet.emit(&args.report, &preview.report)? {
+    if args.report.emit(&preview.report)? {
         // Standard output holds the picture: the summary goes to standard error.
         match to_stdout {
             true => print_human(&mut io::stderr().lock(), &args, &preview.report)?,

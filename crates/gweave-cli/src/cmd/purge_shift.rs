@@ -10,7 +10,6 @@ use gweave::gcode::writer::Target;
 use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
 use gweave::range::{FILAMENT_DIAMETER_MM, POSITION_MM, PURGE_MM, PURGE_MM3};
 
-use crate::args::Quiet;
 use crate::common::{in_range, load_or_default, numbers_in, print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
 use crate::finish;
@@ -66,8 +65,6 @@ pub struct PurgeShiftArgs {
     pub tower_at: Option<[f64; 2]>,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 /// Builds the library settings: the TOML file first, then the flags on top.
@@ -102,7 +99,7 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
         .check()?;
     let rules = config(&args)?.validate()?;
     finish::refuse_second_run(&args.input, "purge-shift")?;
-    let mut bar = args.quiet.bar();
+    let mut bar = args.report.quiet.bar();
     let (mut report, _) = finish::with_metadata(Some(&args.input), &target, |t| {
         Ok(purge_shift_file(rules, &args.input, t, &mut bar)?)
     })?;
@@ -115,7 +112,7 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     if report.warnings_total > 20 {
         eprintln!("gweave: ... {} more warnings (see --json)", report.warnings_total - 20);
     }
-    if args.quiet.emit(&args.report, &report)? {
+    if args.report.emit(&report)? {
         // Keep standard output clean when the G-code goes there.
         if target == Target::Stdout {
             eprint!("{}", report.summary());

@@ -12,7 +12,6 @@ use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{FireOrder, DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
 
-use crate::args::Quiet;
 use crate::common::{hms, in_range, numbers_in, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::finish;
@@ -102,8 +101,6 @@ pub struct RasterArgs {
     pub pattern_columns: usize,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -169,7 +166,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
         .check()?;
     let Some((source, heads)) = source else {
         let (rep, profile) = options.test_pattern(&target(&args.output), args.pattern_columns)?;
-        if args.quiet.emit(&args.report, &rep)? && !to_stdout {
+        if args.report.emit(&rep)? && !to_stdout {
             print_summary(|out| {
                 writeln!(out, "{}: nozzle test pattern", args.output.display())?;
                 writeln!(
@@ -186,14 +183,14 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     };
     let job = options.job_from(source, heads)?;
-    let mut bar = LayerBar::new(args.quiet.quiet);
+    let mut bar = LayerBar::new(args.report.quiet.quiet);
     // Its own time counts the printhead's firing, which the estimator does not know.
     let run = |t: &Target| job.run(t, &mut bar);
     let (mut report, _) =
         finish::with_metadata_timed(None, &target(&args.output), run, |r: &JobReport| Some(r.time.total_s))?;
     report.output = if to_stdout { "-".into() } else { args.output.display().to_string() };
     drop(bar);
-    if args.quiet.emit(&args.report, &report)? && !to_stdout {
+    if args.report.emit(&report)? && !to_stdout {
         print_summary(|out| print_human(out, &report, &job.profile))?;
     }
     Ok(ExitCode::SUCCESS)

@@ -20,7 +20,6 @@ use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
 
-use crate::args::Quiet;
 use crate::common::hms;
 use crate::common::{in_range, load, print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
@@ -208,8 +207,6 @@ pub struct WrapArgs {
     pub chord_tol: Option<f64>,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
@@ -239,7 +236,7 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
         config.chord_tolerance_mm = tol;
     }
     finish::refuse_second_run(&args.input, "rotary wrap")?;
-    let mut bar = args.quiet.bar();
+    let mut bar = args.report.quiet.bar();
     let preview = args.machine.preview.as_deref();
     let wrap = |t: &Target| Ok(report::wrap_file(&config, &args.input, t, preview, &mut bar)?);
     // Its own time: the default machine of the estimator does not read the rotary feed.
@@ -247,7 +244,7 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
         finish::with_metadata_timed(Some(&args.input), &target, wrap, |r: &WrapReport| Some(r.time_s))?;
     report.output = written;
     drop(bar);
-    if args.quiet.emit(&args.report, &report)? && !matches!(target, Target::Stdout) {
+    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
         print_summary(|out| print_wrap(out, &report))?;
     }
     Ok(ExitCode::SUCCESS)
@@ -338,8 +335,6 @@ pub struct TubeArgs {
     pub filament_diameter: Option<f64>,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 fn tube_params(args: &TubeArgs) -> Result<TubeParams> {
@@ -395,7 +390,7 @@ fn run_tube(args: TubeArgs) -> Result<ExitCode> {
     let (mut report, written) =
         finish::with_metadata_timed(None, &target, tube, |r: &TubeReport| Some(r.print_time_s))?;
     report.output = written;
-    if args.quiet.emit(&args.report, &report)? && !matches!(target, Target::Stdout) {
+    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
         print_summary(|out| print_tube(out, &report))?;
     }
     Ok(ExitCode::SUCCESS)

@@ -3,7 +3,7 @@
 use std::fs::File;
 use std::io::{LineWriter, Write};
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -13,7 +13,6 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::write_file;
 use gweave_sim::Machine;
-use gweave_sim::MachineProfile;
 use gweave_sim::PtyEndpoint;
 use gweave_sim::TcpEndpoint;
 use gweave_sim::{serve, Endpoint, ServeOptions, ServeSummary};
@@ -21,7 +20,8 @@ use gweave_sim::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
 
 use gweave::range::Range;
 
-use crate::common::{in_range, load_or_default};
+use crate::args::MachineArg;
+use crate::common::in_range;
 
 /// `--exit-after-idle`: a tenth of a second to about eleven days.
 const IDLE_S: Range<f64> = Range::new(0.1, 1e6, "s");
@@ -45,9 +45,8 @@ pub struct ServeArgs {
     /// Listen on this loopback address instead (`127.0.0.1:PORT`) [default: --pty].
     #[arg(long, value_name = "ADDR")]
     pub tcp: Option<SocketAddr>,
-    /// Machine profile (TOML); default: the built-in RAMPS/Marlin printer.
-    #[arg(long, value_name = "TOML")]
-    pub machine: Option<PathBuf>,
+    #[command(flatten)]
+    pub machine: MachineArg,
     /// Pace replies to the simulated clock (default: as fast as the simulation runs); the same
     /// as `--speed-factor 1`.
     #[arg(long, conflicts_with = "speed")]
@@ -83,14 +82,12 @@ pub struct ServeArgs {
 
 pub fn run(args: ServeArgs) -> Result<ExitCode> {
     crate::files::Files::new()
-        .read("--machine", args.machine.as_deref())
+        .read("--machine", args.machine.path.as_deref())
         .write("--pty", args.pty.as_deref())
         .write("--log", args.log.as_deref())
         .write("--report", args.report.as_deref())
         .check()?;
-    // Files the profile names (a thermistor table) are read from its folder.
-    let folder = args.machine.as_deref().and_then(Path::parent).unwrap_or(Path::new(""));
-    let profile = load_or_default(args.machine.as_ref(), |text| MachineProfile::from_toml_in(text, folder))?;
+    let profile = args.machine.load()?;
     // Build one machine now so that a bad profile fails before any host connects.
     Machine::new(profile.clone()).context("building the virtual printer")?;
     let options = ServeOptions {

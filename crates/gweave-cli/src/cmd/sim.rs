@@ -13,13 +13,13 @@ use gweave::gcode::layers::Feature;
 use gweave::gcode::reader::{LineReader, Part};
 use gweave::pass::Progress;
 use gweave_sim::plot::{save_speed_chart, save_temperature_chart, ChartFormat};
+use gweave_sim::FaultSpec;
 use gweave_sim::HeaterId;
-use gweave_sim::{FaultSpec, MachineProfile};
 use gweave_sim::{HugeArcs, Malformed, MAX_ARC_CHORDS};
 use gweave_sim::{Machine, Outcome, SimReport};
 
-use crate::args::Quiet;
-use crate::common::{hms, load_or_default, print_summary, ReportArgs};
+use crate::args::{MachineArg, Quiet};
+use crate::common::{hms, print_summary, ReportArgs};
 use crate::files::{layer_png, Files};
 
 /// Simulate a print on a virtual Marlin-like printer: time per layer and feature (planner),
@@ -33,9 +33,8 @@ use crate::files::{layer_png, Files};
 pub struct SimArgs {
     /// The G-code file to run.
     pub input: PathBuf,
-    /// Machine profile (TOML, see docs/machine.md); default: a RAMPS 1.4 printer on Marlin.
-    #[arg(long, value_name = "TOML")]
-    pub machine: Option<PathBuf>,
+    #[command(flatten)]
+    pub machine: MachineArg,
     /// Inject a heater fault, e.g. `hotend-cartridge-off@120s`, `bed-thermistor-open@30s`,
     /// `hotend1-thermistor-shorted@5s` (repeatable).
     #[arg(long = "fault", value_name = "SPEC")]
@@ -53,14 +52,12 @@ pub struct SimArgs {
     pub raster_out: Option<PathBuf>,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 pub fn run(args: SimArgs) -> Result<ExitCode> {
     Files::new()
         .read("INPUT", Some(&args.input))
-        .read("--machine", args.machine.as_deref())
+        .read("--machine", args.machine.path.as_deref())
         .write("--plot", args.plot.as_deref())
         .write("--plot-speed", args.plot_speed.as_deref())
         .write_dir("--raster-out", args.raster_out.as_deref(), layer_png)
@@ -70,10 +67,7 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     for path in args.plot.iter().chain(&args.plot_speed) {
         ChartFormat::from_path(path)?;
     }
-    // Files the profile names (a thermistor table) are read from its folder.
-    let folder = args.machine.as_deref().and_then(Path::parent).unwrap_or(Path::new(""));
-    let mut profile =
-        load_or_default(args.machine.as_ref(), |text| MachineProfile::from_toml_in(text, folder))?;
+    let mut profile = args.machine.load()?;
     for spec in &args.faults {
         profile.faults.push(spec.parse::<FaultSpec>()?);
     }
@@ -81,7 +75,7 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     if args.plot_speed.is_some() {
         machine.record_speed();
     }
-    let errors = run_file(&mut machine, &args.input, args.quiet)?;
+    let errors = run_file(&mut machine, &args.input, args.report.quiet)?;
     let report = machine.report();
     if let Some(path) = &args.plot {
         save_temperature_chart(machine.thermal().series(), path)?;
@@ -92,7 +86,7 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
         canvas.write_layer_pngs(dir)?;
     }
-    if args.quiet.emit(&args.report, &report)? {
+    if args.report.emit(&report)? {
         print_summary(|out| print_human(out, &args.input, &report, &errors))?;
     } else {
         // Without the summary (-q, --json) the printer's errors still reach standard error:

@@ -10,7 +10,6 @@ use gweave::gen::slice_raster::{slice_to_dir, SliceConfig, SliceReport, MARGIN_P
 use gweave::gen::stl::read_stl;
 use gweave::range::{DPI, LAYER_HEIGHT_MM, PIXEL_MM};
 
-use crate::args::Quiet;
 use crate::common::{in_range, print_summary, ReportArgs};
 use crate::files::{layer_png, Files};
 
@@ -39,8 +38,6 @@ pub struct SliceRasterArgs {
     pub output: PathBuf,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
@@ -56,7 +53,7 @@ pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
         margin_px: args.margin,
     };
     let rep = slice_to_dir(&mesh, &cfg, &args.output)?;
-    if args.quiet.emit(&args.report, &rep)? {
+    if args.report.emit(&rep)? {
         print_summary(|out| print_human(out, &args, &rep, mesh.triangles.len()))?;
     }
     Ok(ExitCode::SUCCESS)

@@ -8,11 +8,11 @@ use anyhow::Result;
 use clap::Args;
 use gweave::malformed::WithMalformed;
 use gweave::stats::{stats_file, Stats};
-use gweave::total::{Named, PerFile, StatsTotal};
+use gweave::total::StatsTotal;
 
 use gweave::range::FILAMENT_DIAMETER_MM;
 
-use crate::args::{Lenient, Quiet};
+use crate::args::Lenient;
 use crate::common::{hms, in_range, print_malformed, print_summary, ReportArgs};
 use crate::files::Files;
 
@@ -33,8 +33,6 @@ pub struct StatsArgs {
     pub lenient: Lenient,
     #[command(flatten)]
     pub report: ReportArgs,
-    #[command(flatten)]
-    pub quiet: Quiet,
 }
 
 pub fn run(args: StatsArgs) -> Result<ExitCode> {
@@ -44,18 +42,10 @@ pub fn run(args: StatsArgs) -> Result<ExitCode> {
         .check()?;
     let mut all = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {
-        let mut bar = args.quiet.bar();
+        let mut bar = args.report.quiet.bar();
         all.push(stats_file(input, args.filament_diameter, args.lenient.strictness(), &mut bar)?);
     }
-    let human = match &all[..] {
-        [one] => args.quiet.emit(&args.report, one)?,
-        _ => {
-            let total = StatsTotal::of(&all);
-            let files =
-                args.inputs.iter().zip(&all).map(|(p, s)| Named { path: p.display().to_string(), report: s });
-            args.quiet.emit(&args.report, &PerFile { files: files.collect(), total })?
-        }
-    };
+    let human = args.report.emit_per_file(&args.inputs, &all, || StatsTotal::of(&all))?;
     if human {
         print_summary(|out| {
             for (input, s) in args.inputs.iter().zip(&all) {

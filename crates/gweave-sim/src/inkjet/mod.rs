@@ -173,9 +173,9 @@ impl InkjetCanvas {
             Some(layer) => &mut layer.heads[head as usize],
             None => return,
         };
+        self.drops_per_head[head as usize] += u64::from(self.printhead.drops_of_fire(bits));
         let mut lost = 0;
         for [x, y] in self.printhead.drops_mm(head as usize, bits, [x_mm, y_mm]) {
-            self.drops_per_head[head as usize] += 1;
             let px = ((x - g.origin_x_mm) / self.pitch_mm).floor();
             let py = ((y - g.origin_y_mm) / self.pitch_mm).floor();
             let inside = px >= 0.0 && py >= 0.0 && canvas.set(px as usize, py as usize, true);

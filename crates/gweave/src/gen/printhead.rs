@@ -223,6 +223,25 @@ impl PrintheadProfile {
             .map(move |r| [x, y0 + f64::from(r) * pitch])
     }
 
+    /// How many drops one fire command with `S<s_bits>` puts down: the one drops formula, for
+    /// the generator's report and the simulator's count alike. The bit order maps the nozzle
+    /// addresses onto `S` bits `0..nozzle_count`, so the drops are the set bits below
+    /// `nozzle_count` (the firmware ignores the others). Call only on a validated profile.
+    pub fn drops_of_fire(&self, s_bits: u64) -> u32 {
+        let mask = u64::MAX >> (64 - self.nozzle_count.clamp(1, 64));
+        (s_bits & mask).count_ones()
+    }
+
+    /// Binder put down by `drops` drops, µl (`None` without a `drop_volume_pl`).
+    pub fn binder_volume_ul(&self, drops: u64) -> Option<f64> {
+        self.drop_volume_pl.map(|pl| drops as f64 * pl * 1e-6)
+    }
+
+    /// The time `fire_commands` fires take at the shortest interval between two fires, s.
+    pub fn fire_time_s(&self, fire_commands: u64) -> f64 {
+        fire_commands as f64 * self.min_fire_interval_us * 1e-6
+    }
+
     /// Converts an `S` word into a mask of physical rows (bit `r` = row `r` fires).
     /// Bits above `nozzle_count` are ignored, as the firmware does.
     pub fn rows_of_s_bits(&self, s_bits: u64) -> u64 {
@@ -274,6 +293,10 @@ mod tests {
         assert_eq!(drops(1, 1 | 1 << 9, [10.0, 20.0]), vec![[12.0, 21.0 + 3.0 * pitch]]);
         assert_eq!(drops(0, 0b0110, [0.0, 0.0]), vec![[0.0, pitch], [0.0, 2.0 * pitch]]);
         assert!(drops(2, 1, [0.0, 0.0]).is_empty(), "no head 2");
+        // The count agrees with the positions, bits past the nozzles included.
+        for bits in [0, 1, 0b0110, 1 | 1 << 9, 0xfff, u64::MAX] {
+            assert_eq!(p.drops_of_fire(bits) as usize, drops(0, bits, [0.0, 0.0]).len(), "S{bits}");
+        }
     }
 
     #[test]

@@ -430,7 +430,7 @@ impl<W: Write> RasterWriter<W> {
                     if py == y { (x - px).abs() } else { ((x - px).powi(2) + (y - py).powi(2)).sqrt() };
             }
             self.pos_mm = Some((x, y));
-            drops += u64::from(s.count_ones());
+            drops += u64::from(self.profile.drops_of_fire(s));
         }
         let r = &mut self.report;
         r.xy_path_mm += path_mm;
@@ -448,9 +448,9 @@ impl<W: Write> RasterWriter<W> {
         self.out.write_all(&self.buf)?;
         self.out.flush()?;
         let drops: u64 = self.report.drops_per_head.iter().sum();
-        self.report.binder_volume_ul = self.profile.drop_volume_pl.map(|pl| drops as f64 * pl * 1e-6);
+        self.report.binder_volume_ul = self.profile.binder_volume_ul(drops);
         self.report.estimated_time_s = self.report.xy_path_mm / (self.cfg.feed_mm_min / 60.0)
-            + self.report.fire_commands as f64 * self.profile.min_fire_interval_us * 1e-6;
+            + self.profile.fire_time_s(self.report.fire_commands);
         Ok((self.out, self.report))
     }
 }

@@ -54,11 +54,11 @@ use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
 use crate::gcode::flavour::{flavour_in, flavour_of_comment, read_flavour, require_e_extruder};
 use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
+use crate::gcode::retraction::Retraction;
 use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z};
 use crate::gcode::writer::Target;
 use crate::pass::{drive_reader, keep, Ctx, Pass, Progress, Quiet, Run, Strictness};
 use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
-use crate::post::retraction::Retraction;
 use crate::post::zcap::ZCap;
 
 use crate::firmware::{Firmware, MixCommands};
@@ -143,8 +143,7 @@ impl MixPass {
         let plan = Plan::new(&profile)?;
         let cap = profile.z_cap.max_z_feed_mm_min;
         let zcap = (cap > 0.0).then_some(ZCap { max_z_feed_mm_min: cap, mode: profile.z_cap.mode });
-        let p = &profile.purge;
-        let motion = p.motion(if cap > 0.0 { cap.min(p.travel_feed_mm_min) } else { p.travel_feed_mm_min });
+        let motion = profile.purge.motion(cap);
         let acc = Accounting::new(&plan, &profile.hardware);
         let initial_purge_due = profile.purge.initial_mm > 0.0;
         Ok(MixPass {
@@ -400,6 +399,10 @@ impl MixPass {
                 self.replaced = true;
             }
             Effect::Move(mv) => self.process_move(ctx, mv)?,
+            // The purge block primes and retracts again a firmware retraction in force too.
+            Effect::FirmwareRetract { .. } => {
+                self.retraction.follow(ctx.effect);
+            }
             _ => {}
         }
         Ok(())
@@ -757,19 +760,33 @@ mod tests {
         // seed's 4 mm retraction, then 4 + 0.8 + 25 back out) and leave them retracted again.
         let input = "M83\n;LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\nG1 Z0.6 E-0.8 F2100\n\
                      ;LAYER_CHANGE\nG1 Z0.4 F100\nG1 X0 E2 F1800\n";
+        assert_eq!(purge_e_moves(input), ["G1 E-4 F2400", "G1 E29.8 F200", "G1 E-4.8 F2400"]);
+    }
+
+    /// The first three E-only moves of the first purge block of `input` mixed with two changes.
+    fn purge_e_moves(input: &str) -> Vec<String> {
         let (out, report) = mix_bytes(profile(""), input.as_bytes()).unwrap();
         assert_eq!(report.purge.count, 1);
         let text = String::from_utf8(out).unwrap();
-        let e_moves: Vec<&str> = text
+        let e_moves: Vec<String> = text
             .lines()
             .skip_while(|l| !l.starts_with("; gweave mix: purge"))
             .filter(|l| l.starts_with("G1 E"))
             .take(3)
+            .map(str::to_owned)
             .collect();
         assert_eq!(e_moves.len(), 3, "{text}");
-        assert!(e_moves[0].starts_with("G1 E-4 "), "{text}");
-        assert!(e_moves[1].starts_with("G1 E29.8 "), "{text}");
-        assert!(e_moves[2].starts_with("G1 E-4.8 "), "{text}");
+        e_moves
+    }
+
+    #[test]
+    fn purge_refills_a_firmware_retraction_in_force() {
+        // As above with `G10` (1 mm by default): the firmware's retraction is in force at the
+        // change too, so the purge primes 4 + 1 + 25 and retracts 4 + 1 again. Before, mix
+        // ignored it (E29 / E-4) while purge-shift counted it.
+        let input = "M83\n;LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\nG10\n\
+                     ;LAYER_CHANGE\nG1 Z0.4 F100\nG1 X0 E2 F1800\n";
+        assert_eq!(purge_e_moves(input), ["G1 E-4 F2400", "G1 E30 F200", "G1 E-5 F2400"]);
     }
 
     #[test]

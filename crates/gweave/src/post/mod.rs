@@ -15,6 +15,3 @@ pub mod zcap;
 
 // metadata: the slicer's figures rewritten for the file as written, and the run's header.
 pub mod metadata;
-
-// The retraction in force, followed alike by the passes that insert purges.
-pub(crate) mod retraction;

@@ -45,8 +45,10 @@ use crate::gcode::state::{E, X, Y, Z};
 use crate::range::{self, OutOfRange};
 use crate::settings::{CheckRanges, Table};
 
-/// Where and how to purge (the purge settings of the profile, with the Z feed capped). The
-/// default is the seed's: retract 4 mm, lift 15 mm, purge at X10 Y10, wipe 5 mm along +X.
+/// Where and how to purge: the one purge-settings type, read from `gweave mix`'s `[purge]` table
+/// (flattened into [`PurgeConfig`](crate::post::mix::profile::PurgeConfig)) and `gweave
+/// purge-shift`'s `[block]` table, checked once by its [`CheckRanges`]. The default is the seed's:
+/// retract 4 mm, lift 15 mm, purge at X10 Y10, wipe 5 mm along +X.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PurgeMotion {
@@ -66,8 +68,9 @@ pub struct PurgeMotion {
     pub extrude_feed_mm_min: f64,
     /// Feed of the retraction and unretraction, mm/min.
     pub retract_feed_mm_min: f64,
-    /// Feed of the Z lift and lower (at most the Z cap).
-    pub z_feed_mm_min: f64,
+    /// Feed of the Z lift and lower, mm/min. Unset, each command puts its own: `mix` the travel
+    /// feed under its Z cap, `purge-shift` [`PurgeMotion::SEED_Z_FEED_MM_MIN`].
+    pub z_feed_mm_min: Option<f64>,
     /// Feed of the way back from the purge spot, mm/min (default: `travel_feed_mm_min`).
     pub return_feed_mm_min: Option<f64>,
     /// Feed of the lower back onto the print, mm/min (default: `z_feed_mm_min`).
@@ -86,7 +89,7 @@ impl CheckRanges for PurgeMotion {
         t.check("travel_feed_mm_min", self.travel_feed_mm_min, range::FEED_MM_MIN)?;
         t.check("extrude_feed_mm_min", self.extrude_feed_mm_min, range::FEED_MM_MIN)?;
         t.check("retract_feed_mm_min", self.retract_feed_mm_min, range::FEED_MM_MIN)?;
-        t.check("z_feed_mm_min", self.z_feed_mm_min, range::FEED_MM_MIN)?;
+        t.check_opt("z_feed_mm_min", self.z_feed_mm_min, range::FEED_MM_MIN)?;
         t.check_opt("return_feed_mm_min", self.return_feed_mm_min, range::FEED_MM_MIN)?;
         t.check_opt("lower_feed_mm_min", self.lower_feed_mm_min, range::FEED_MM_MIN)?;
         t.check_opt("unretract_feed_mm_min", self.unretract_feed_mm_min, range::FEED_MM_MIN)
@@ -94,7 +97,11 @@ impl CheckRanges for PurgeMotion {
 }
 
 impl PurgeMotion {
-    /// The seed's purge: 4 mm retraction, 15 mm lift, at X10 Y10, 5 mm wipe.
+    /// The seed's Z feed, mm/min.
+    pub const SEED_Z_FEED_MM_MIN: f64 = 200.0;
+
+    /// The seed's purge: 4 mm retraction, 15 mm lift, at X10 Y10, 5 mm wipe; the Z feed is left
+    /// to the command.
     pub const SEED: PurgeMotion = PurgeMotion {
         retract_mm: 4.0,
         lift_mm: 15.0,
@@ -104,7 +111,7 @@ impl PurgeMotion {
         travel_feed_mm_min: 1320.0,
         extrude_feed_mm_min: 200.0,
         retract_feed_mm_min: 2400.0,
-        z_feed_mm_min: 200.0,
+        z_feed_mm_min: None,
         return_feed_mm_min: None,
         lower_feed_mm_min: None,
         unretract_feed_mm_min: None,
@@ -119,12 +126,17 @@ impl PurgeMotion {
             travel_feed_mm_min: 1320.0,
             extrude_feed_mm_min: 200.0,
             retract_feed_mm_min: 200.0,
-            z_feed_mm_min: 200.0,
+            z_feed_mm_min: Some(Self::SEED_Z_FEED_MM_MIN),
             return_feed_mm_min: Some(200.0),
             lower_feed_mm_min: Some(150.0),
             unretract_feed_mm_min: Some(150.0),
             ..self
         }
+    }
+
+    /// The feed of the Z lift and lower: the one set, else the travel feed.
+    fn z_feed(&self) -> f64 {
+        self.z_feed_mm_min.unwrap_or(self.travel_feed_mm_min)
     }
 }
 
@@ -284,7 +296,7 @@ pub fn write_purge_job(
         w.go(false, [None; 3], -r, m.retract_feed_mm_min);
     }
     if m.lift_mm > 0.0 {
-        w.go(true, [None, None, Some(z + m.lift_mm)], 0.0, m.z_feed_mm_min);
+        w.go(true, [None, None, Some(z + m.lift_mm)], 0.0, m.z_feed());
     }
     w.go(true, [Some(m.x_mm), Some(m.y_mm), None], 0.0, m.travel_feed_mm_min);
     match job.pattern {
@@ -304,7 +316,7 @@ pub fn write_purge_job(
     }
     w.go(true, [Some(x), Some(y), None], 0.0, m.return_feed_mm_min.unwrap_or(m.travel_feed_mm_min));
     if m.lift_mm > 0.0 {
-        w.go(true, [None, None, Some(z)], 0.0, m.lower_feed_mm_min.unwrap_or(m.z_feed_mm_min));
+        w.go(true, [None, None, Some(z)], 0.0, m.lower_feed_mm_min.unwrap_or(m.z_feed()));
     }
     if r > 0.0 {
         w.go(false, [None; 3], r, m.unretract_feed_mm_min.unwrap_or(m.retract_feed_mm_min));
@@ -339,7 +351,9 @@ mod tests {
     use crate::gcode::line::Block;
     use crate::gcode::state::{Effect, State};
 
-    const SEED: PurgeMotion = PurgeMotion::SEED;
+    /// The seed's purge with the seed's Z feed, as `purge-shift` resolves it.
+    const SEED: PurgeMotion =
+        PurgeMotion { z_feed_mm_min: Some(PurgeMotion::SEED_Z_FEED_MM_MIN), ..PurgeMotion::SEED };
 
     /// Runs `prefix`, then the block from the resulting state; returns the text, the state after,
     /// and the filament the block fed.

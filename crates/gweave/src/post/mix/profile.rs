@@ -214,22 +214,10 @@ pub struct PurgeConfig {
     pub dead_mm3: f64,
     /// Old-colour fraction left after the purge (`washout` mode).
     pub tolerance: f64,
-    /// Retraction before the purge travel, mm.
-    pub retract_mm: f64,
-    /// Z lift before the purge travel, mm.
-    pub lift_mm: f64,
-    /// X of the purge spot, mm.
-    pub x_mm: f64,
-    /// Y of the purge spot, mm.
-    pub y_mm: f64,
-    /// Move along +X after the purge, to wipe the nozzle on the purge blob's side.
-    pub wipe_mm: f64,
-    /// Feed of the travel to the purge spot and back, mm/min.
-    pub travel_feed_mm_min: f64,
-    /// Feed of the purge's extrusion, mm/min.
-    pub extrude_feed_mm_min: f64,
-    /// Feed of the retraction and unretraction, mm/min.
-    pub retract_feed_mm_min: f64,
+    /// Where and how the block moves: `retract_mm`, `lift_mm`, `x_mm`, `y_mm`, `wipe_mm` and the
+    /// feeds, keys of this same table (the Z feed unset: the travel feed under the Z cap).
+    #[serde(flatten)]
+    pub motion: PurgeMotion,
     /// Purge at every step of a gradient too (normally the blend is the point).
     pub on_gradient_steps: bool,
     /// Amounts for given changes of mix, over `mode`.
@@ -258,23 +246,12 @@ impl PurgeConfig {
         self.mode = if mm > 0.0 { PurgeMode::Length } else { PurgeMode::Off };
     }
 
-    /// The purge block's moves, with the Z feed the caller has worked out (the Z cap's, or
-    /// the travel feed).
-    pub fn motion(&self, z_feed_mm_min: f64) -> PurgeMotion {
-        let motion = PurgeMotion {
-            retract_mm: self.retract_mm,
-            lift_mm: self.lift_mm,
-            x_mm: self.x_mm,
-            y_mm: self.y_mm,
-            wipe_mm: self.wipe_mm,
-            travel_feed_mm_min: self.travel_feed_mm_min,
-            extrude_feed_mm_min: self.extrude_feed_mm_min,
-            retract_feed_mm_min: self.retract_feed_mm_min,
-            z_feed_mm_min,
-            return_feed_mm_min: None,
-            lower_feed_mm_min: None,
-            unretract_feed_mm_min: None,
-        };
+    /// The purge block's moves: the Z feed is the one set, else the travel feed, at most
+    /// `z_cap_mm_min` (0: no cap).
+    pub fn motion(&self, z_cap_mm_min: f64) -> PurgeMotion {
+        let z_mm_min = self.motion.z_feed_mm_min.unwrap_or(self.motion.travel_feed_mm_min);
+        let z_mm_min = if z_cap_mm_min > 0.0 { z_cap_mm_min.min(z_mm_min) } else { z_mm_min };
+        let motion = PurgeMotion { z_feed_mm_min: Some(z_mm_min), ..self.motion };
         match self.style {
             PurgeStyle::Gweave => motion,
             PurgeStyle::Seed => motion.with_seed_feeds(),
@@ -293,14 +270,7 @@ impl Default for PurgeConfig {
             chamber_mm3: 40.0,
             dead_mm3: 10.0,
             tolerance: 0.02,
-            retract_mm: PurgeMotion::SEED.retract_mm,
-            lift_mm: PurgeMotion::SEED.lift_mm,
-            x_mm: PurgeMotion::SEED.x_mm,
-            y_mm: PurgeMotion::SEED.y_mm,
-            wipe_mm: PurgeMotion::SEED.wipe_mm,
-            travel_feed_mm_min: PurgeMotion::SEED.travel_feed_mm_min,
-            extrude_feed_mm_min: PurgeMotion::SEED.extrude_feed_mm_min,
-            retract_feed_mm_min: PurgeMotion::SEED.retract_feed_mm_min,
+            motion: PurgeMotion::SEED,
             on_gradient_steps: false,
             pair: Vec::new(),
             style: PurgeStyle::Gweave,
@@ -488,7 +458,7 @@ impl CheckRanges for MixProfile {
         purge.check("chamber_mm3", p.chamber_mm3, CHAMBER_MM3)?;
         purge.check("dead_mm3", p.dead_mm3, PURGE_MM3)?;
         purge.check("tolerance", p.tolerance, TOLERANCE)?;
-        p.motion(PurgeMotion::SEED.z_feed_mm_min).check_ranges(&purge)?;
+        p.motion.check_ranges(&purge)?;
         for (i, pair) in p.pair.iter().enumerate() {
             let table = purge.sub("pair").item(i);
             table.check_opt("length_mm", pair.length_mm, PURGE_MM)?;
@@ -555,10 +525,22 @@ mod tests {
     #[test]
     fn defaults_are_the_seeds() {
         let p = MixProfile::from_toml_str("").unwrap();
-        assert_eq!((p.purge.retract_mm, p.purge.lift_mm, p.purge.length_mm), (4.0, 15.0, 25.0));
-        assert_eq!((p.purge.x_mm, p.purge.y_mm), (10.0, 10.0));
+        let m = &p.purge.motion;
+        assert_eq!((m.retract_mm, m.lift_mm, p.purge.length_mm), (4.0, 15.0, 25.0));
+        assert_eq!((m.x_mm, m.y_mm), (10.0, 10.0));
         assert_eq!(p.z_cap.max_z_feed_mm_min, 200.0);
         assert_eq!((p.hardware.virtual_tools, p.hardware.inputs.len()), (16, 4));
+    }
+
+    #[test]
+    fn purge_z_feed_is_the_travel_feed_under_the_cap_unless_set() {
+        let z =
+            |text: &str, cap: f64| MixProfile::from_toml_str(text).unwrap().purge.motion(cap).z_feed_mm_min;
+        assert_eq!(z("", 200.0), Some(200.0));
+        assert_eq!(z("", 0.0), Some(1320.0));
+        assert_eq!(z("[purge]\nz_feed_mm_min = 100", 200.0), Some(100.0));
+        assert_eq!(z("[purge]\nz_feed_mm_min = 900", 200.0), Some(200.0));
+        assert_eq!(z("[purge]\nstyle = \"seed\"", 0.0), Some(PurgeMotion::SEED_Z_FEED_MM_MIN));
     }
 
     #[test]

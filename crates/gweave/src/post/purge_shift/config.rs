@@ -396,7 +396,11 @@ impl PurgeShiftConfig {
             allowed,
             markers,
             fallback,
-            block: self.block,
+            // The block lifts at the seed's Z feed unless `[block]` names one.
+            block: PurgeMotion {
+                z_feed_mm_min: Some(self.block.z_feed_mm_min.unwrap_or(PurgeMotion::SEED_Z_FEED_MM_MIN)),
+                ..self.block
+            },
             tower: self.tower,
             max_window_lines: self.max_window_lines.max(16),
             max_purge_mm: 0.0,

@@ -23,9 +23,9 @@
 
 use super::config::{Fallback, Rules, TowerConfig};
 use crate::gcode::number::NumberFormat;
-use crate::gcode::state::{Move, X, Y};
+use crate::gcode::retraction::Retraction;
+use crate::gcode::state::{Effect, Move, X, Y};
 use crate::post::purge_block::{write_purge_job, PurgeJob, PurgeMotion, PurgePattern, PurgeStart};
-use crate::post::retraction::Retraction;
 
 /// Inserted lines carry the split's precision: 0.01 um positions, 1e-6 mm of filament.
 const FORMAT: NumberFormat = NumberFormat {
@@ -63,10 +63,14 @@ pub(crate) struct Surroundings {
 }
 
 impl Surroundings {
+    /// Follows the retraction in force over one line of the file.
+    pub fn follow_retraction(&mut self, effect: &Effect) {
+        self.retraction.follow(effect);
+    }
+
     /// Follows one move of the file.
     pub fn observe(&mut self, mv: &Move, in_print: bool) {
         let e_mm = mv.e_mm();
-        self.retraction.feed(e_mm);
         if mv.is_extruding() {
             if let Some((mm, feed)) = self.pending.take() {
                 self.retract_mm = mm;
@@ -165,7 +169,6 @@ pub(crate) fn write_fallback(
                 travel_feed_mm_min: t.travel_feed_mm_min,
                 extrude_feed_mm_min: t.extrude_feed_mm_min,
                 retract_feed_mm_min: env.retract_feed_mm_min.unwrap_or(t.retract_feed_mm_min),
-                z_feed_mm_min: rules.block.z_feed_mm_min,
                 ..rules.block
             };
             (motion, pattern)

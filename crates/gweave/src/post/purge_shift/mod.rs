@@ -329,7 +329,6 @@ impl PurgeShift {
     /// The machine as `state` leaves it, with the retraction in force (the file's E-only
     /// retractions and a firmware `G10`).
     fn spot_here(&self, state: &crate::gcode::state::State) -> Spot {
-        let fw_mm = if state.fw_retracted { state.fw_retract_mm } else { 0.0 };
         Spot {
             start: PurgeStart {
                 pos: purge_start_pos(&state.pos),
@@ -337,7 +336,7 @@ impl PurgeShift {
                 relative_e: state.relative_e(),
                 feed_mm_min: state.feed_mm_min,
                 rapid_mode: state.motion == crate::gcode::state::Motion::Rapid,
-                retracted_mm: self.env.retracted_mm() + fw_mm,
+                retracted_mm: self.env.retracted_mm(),
             },
             inches: state.inches,
         }
@@ -548,6 +547,7 @@ impl Pass for PurgeShift {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
+        self.env.follow_retraction(ctx.effect);
         if let Effect::Move(m) = ctx.effect {
             self.env.observe(m, in_print);
         }

@@ -10,7 +10,7 @@
 //! retraction and the prime that undoes it cancel, and a stationary purge counts. Firmware
 //! retraction (`G10`/`G11`) is followed the same way.
 
-use crate::gcode::state::{Move, X, Y};
+use crate::gcode::state::{Effect, Move, X, Y};
 
 /// Follows the retraction in force over the moves of a file.
 #[derive(Debug, Clone, Copy, Default)]
@@ -39,6 +39,17 @@ impl Retraction {
             let refill = fed_mm.min(self.in_force_mm);
             self.in_force_mm -= refill;
             fed_mm - refill
+        }
+    }
+
+    /// Follows the filament a line feeds: a move's E, or a firmware retraction or recovery
+    /// (`G10`/`G11`, which the firmware does with E the file never names). Returns what left
+    /// the nozzle, mm.
+    pub fn follow(&mut self, effect: &Effect) -> f64 {
+        match effect {
+            Effect::Move(mv) => self.feed(mv.e_mm()),
+            Effect::FirmwareRetract { e_mm } => self.feed(*e_mm),
+            _ => 0.0,
         }
     }
 
