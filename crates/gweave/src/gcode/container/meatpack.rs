@@ -29,7 +29,23 @@ const DISABLE_NO_SPACES: u8 = 246;
 /// The letters after which libbgcode puts a space back on a `G` line: G0/G1 (X Y Z E F), G2/G3
 /// (I J R), G4 (S), G29 (G P W H C A).
 const fn is_g_parameter(c: u8) -> bool {
-    matches!(c, b'X' | b'Y' | b'Z' | b'E' | b'F' | b'I' | b'J' | b'R' | b'S' | b'G' | b'P' | b'W' | b'H' | b'C' | b'A')
+    matches!(
+        c,
+        b'X' | b'Y'
+            | b'Z'
+            | b'E'
+            | b'F'
+            | b'I'
+            | b'J'
+            | b'R'
+            | b'S'
+            | b'G'
+            | b'P'
+            | b'W'
+            | b'H'
+            | b'C'
+            | b'A'
+    )
 }
 
 /// The class of the last character written (the state's low two bits).
@@ -322,7 +338,8 @@ mod tests {
     /// from: the oracle the table-driven decoder must equal byte for byte.
     fn reference(input: &[u8]) -> Vec<u8> {
         let mut out: Vec<u8> = Vec::new();
-        let (mut packing, mut no_spaces, mut pending, mut queue, mut add_space) = (false, false, 0u8, 0u8, false);
+        let (mut packing, mut no_spaces, mut pending, mut queue, mut add_space) =
+            (false, false, 0u8, 0u8, false);
         let mut emit = |c: u8, add_space: &mut bool| {
             let last = out.last().copied();
             let line_start = last.is_none() || last == Some(b'\n');

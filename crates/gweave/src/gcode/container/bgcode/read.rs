@@ -394,7 +394,8 @@ mod tests {
         let mut text = b"G1 X1\n\n  \t\n;\n ;  \n; kept\r\n\r\nG1 Y2".to_vec();
         drop_empty_lines(&mut text);
         assert_eq!(text, b"G1 X1\n; kept\r\n\r\nG1 Y2\n");
-        for (text, kept) in [(&b"\n\nG1\n"[..], &b"G1\n"[..]), (b"G1\n;\n", b"G1\n"), (b"", b""), (b" ", b"")] {
+        for (text, kept) in [(&b"\n\nG1\n"[..], &b"G1\n"[..]), (b"G1\n;\n", b"G1\n"), (b"", b""), (b" ", b"")]
+        {
             let mut t = text.to_vec();
             drop_empty_lines(&mut t);
             assert_eq!(t, kept);
