@@ -15,7 +15,7 @@ pub struct FormatArgs {
     /// How the output G-code is stored: text, gz (gzip) or bgcode (Prusa binary G-code). A
     /// file's name already says it (`.gz`, `.bgcode`); this is for `-o -` [default: by the
     /// output's name; text on standard output].
-    #[arg(long, value_name = "KIND")]
+    #[arg(long, value_name = "FORMAT")]
     pub format: Option<Format>,
 }
 
