@@ -31,18 +31,22 @@ pub struct OutputArgs {
     /// With --in-place, replace the file even if it is read-only.
     #[arg(long, requires = "in_place")]
     pub force: bool,
+    #[command(flatten)]
+    pub format: crate::format::FormatArgs,
 }
 
 impl OutputArgs {
     pub fn target(&self) -> Result<Target> {
-        Ok(match (&self.output, self.in_place) {
+        let target = match (&self.output, self.in_place) {
             (_, true) => Target::InPlace { keep_backup: !self.no_backup, force: self.force },
             (Some(p), false) if p == Path::new("-") => Target::Stdout,
             (Some(p), false) => Target::File(p.clone()),
             (None, false) => {
                 bail!("say where to write: -o OUT, -o - for standard output, or --in-place")
             }
-        })
+        };
+        self.format.apply(&target)?;
+        Ok(target)
     }
 }
 

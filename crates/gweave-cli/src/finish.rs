@@ -31,7 +31,8 @@ pub fn with_metadata_timed<R>(
 
 /// Flags that say where the G-code comes from and goes, or how the run reports, not what it
 /// does to the file; with a value, and alone.
-const IO_FLAGS_WITH_VALUE: &[&str] = &["-o", "--output", "--report", "--preview", "--palette-png"];
+const IO_FLAGS_WITH_VALUE: &[&str] =
+    &["-o", "--output", "--format", "--report", "--preview", "--palette-png"];
 const IO_FLAGS: &[&str] = &["--in-place", "--no-backup", "--force", "-q", "--quiet", "--json"];
 
 /// The command and the options that shape its output, as typed, without the program, the

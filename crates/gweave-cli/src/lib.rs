@@ -9,6 +9,7 @@ mod common;
 mod files;
 mod finish;
 mod firmware_arg;
+mod format;
 mod progress;
 pub mod raster_job;
 mod signals;
@@ -40,6 +41,8 @@ where
 {
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
     finish::remember_args(&args);
+    // Standard output's container is chosen per run (`--format`), not kept from an earlier one.
+    gweave::gcode::writer::set_stdout_container(gweave::gcode::container::Container::Text);
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {

@@ -169,3 +169,59 @@ def test_a_transform_keeps_metadata_and_thumbnails(data, tmp_path):
     without = lambda text: [l for l in non_empty(text) if not l.startswith(b"; gweave ")]  # noqa: E731
     assert without(ours) == without(text_out.read_bytes())
     assert non_empty(ours) != non_empty((tmp_path / "in.gcode").read_bytes()), "purge-shift moved no change"
+
+
+def read_metadata(path: Path) -> dict:
+    f = pybgcode.open(str(path), "rb")
+    try:
+        return {kind: pybgcode.read_metadata(f, kind) for kind in ("file", "printer", "print", "slicer")}
+    finally:
+        pybgcode.close(f)
+
+
+def test_a_text_files_metadata_fills_the_printer_and_print_blocks(data, tmp_path):
+    """Text to .bgcode: the printer and print blocks carry what PrusaSlicer puts there, the
+    settings from the file's settings block and the figures gweave wrote into the footer."""
+    src = data / "prusaslicer" / "pr_bunny_3tool_rel.gcode"
+    binary, text = tmp_path / "out.bgcode", tmp_path / "out.gcode"
+    cli("purge-shift", str(src), "-o", str(binary), "--purge", "5")
+    cli("purge-shift", str(src), "-o", str(text), "--purge", "5")
+    assert len(blocks(binary)) > 3
+
+    def comments(path: Path) -> dict:
+        pairs = [l[2:].split(" = ", 1) for l in path.read_text().splitlines() if l.startswith("; ") and " = " in l]
+        return dict(pairs)
+
+    settings, footer = comments(src), comments(text)
+    meta = read_metadata(binary)
+    for key in ("printer_model", "filament_type", "nozzle_diameter", "bed_temperature", "fill_density",
+                "layer_height", "temperature"):
+        assert meta["printer"][key] == settings[key], key
+    for key in ("filament used [mm]", "estimated printing time (normal mode)"):
+        assert meta["printer"][key] == footer[key], key
+    for key in ("filament used [mm]", "filament used [cm3]", "total filament used [g]",
+                "estimated printing time (normal mode)", "estimated printing time (silent mode)"):
+        assert meta["print"][key] == footer[key], key
+    assert meta["slicer"]["gcode_flavor"] == settings["gcode_flavor"]
+
+
+def test_a_pipe_carries_binary_gcode(data, tmp_path):
+    """`-o - --format bgcode` through a real shell pipe writes the bytes `-o x.bgcode` writes."""
+    src = data / "prusaslicer" / "pr_torus_pva.gcode"
+    named, piped = tmp_path / "named.bgcode", tmp_path / "piped.bgcode"
+    cli("purge-shift", str(src), "--purge", "5", "-o", str(named))
+    gw = f"{sys.executable} -m gweave"
+    subprocess.run(f"cat '{src}' | {gw} purge-shift - --purge 5 -o - --format bgcode | cat > '{piped}'",
+                   shell=True, check=True)
+    assert piped.read_bytes()[:4] == b"GCDE"
+    assert len(blocks(piped)) > 3
+    assert to_text(piped, tmp_path / "p.gcode") == to_text(named, tmp_path / "n.gcode")
+    # gzip through a pipe too, and cat's text back out of it.
+    gz = subprocess.run(f"{gw} cat '{src}' -o - --format gz | gzip -dc", shell=True, check=True,
+                        capture_output=True).stdout
+    assert gz == cli("cat", str(src), "-o", "-").stdout
+    # A file's name must agree with --format.
+    r = subprocess.run([sys.executable, "-m", "gweave", "cat", str(src), "-o", str(tmp_path / "x.gcode"),
+                        "--format", "bgcode"], capture_output=True)
+    assert r.returncode != 0
+    assert b"is named for text" in r.stderr

@@ -32,6 +32,8 @@ pub struct RasterArgs {
     /// Output G-code file (`-` for standard output).
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub format: crate::format::FormatArgs,
     /// Printhead profile (TOML; default: HP C6602, 12 nozzles at 96 dpi, one head).
     #[arg(long, value_name = "PROFILE.toml")]
     pub head: Option<PathBuf>,
@@ -153,6 +155,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     let options = args.options()?;
     let to_stdout = args.output == Path::new("-");
     args.report.refuse_json_with_stdout(to_stdout)?;
+    args.format.apply(&target(&args.output))?;
     let source = if args.test_pattern { None } else { Some(options.source()?) };
     let images = source.as_ref().map(|(s, _)| s.paths()).unwrap_or_default();
     Files::new()

@@ -299,6 +299,8 @@ pub struct TubeArgs {
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     #[command(flatten)]
+    pub format: crate::format::FormatArgs,
+    #[command(flatten)]
     pub machine: MachineArgs,
     /// Tube length along the mandrel, mm [default: 50].
     #[arg(long, value_name = "MM", value_parser = in_range(TUBE_LENGTH_MM))]
@@ -385,6 +387,7 @@ fn run_tube(args: TubeArgs) -> Result<ExitCode> {
     let params = tube_params(&args)?;
     let target =
         if args.output == Path::new("-") { Target::Stdout } else { Target::File(args.output.clone()) };
+    args.format.apply(&target)?;
     let preview = args.machine.preview.as_deref();
     let tube = |t: &Target| Ok(report::tube_file(&params, t, preview)?);
     let (mut report, written) =

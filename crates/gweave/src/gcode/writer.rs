@@ -11,6 +11,7 @@
 use std::fs;
 use std::io::{self, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU8, Ordering};
 
 use super::container::{self, Container, Encoder};
 use super::temp::TempFile;
@@ -38,7 +39,7 @@ pub const BACKUP_SLOTS: u32 = 9;
 
 /// An output being written. Call [`Output::commit`] at the end; dropping it without committing
 /// deletes the temporary file. A file named `*.gz` or `*.bgcode` is written compressed or as
-/// binary G-code ([`Container::of_output`]).
+/// binary G-code ([`Container::of_output`]); standard output as [`set_stdout_container`] says.
 pub struct Output {
     sink: Encoder<Sink>,
 }
@@ -60,6 +61,24 @@ enum Sink {
 
 const BUFFER: usize = 1 << 20;
 
+/// The container G-code written to standard output is stored in (the CLI's `--format`): a pipe
+/// has no name to tell it, and standard output is the process's own, so the choice is too.
+/// Scratch and side files are never standard output, so only the run's output follows it.
+static STDOUT_CONTAINER: AtomicU8 = AtomicU8::new(Container::Text as u8);
+
+/// Sets the container of G-code written to standard output from now on.
+pub fn set_stdout_container(container: Container) {
+    STDOUT_CONTAINER.store(container as u8, Ordering::Relaxed);
+}
+
+fn stdout_container() -> Container {
+    match STDOUT_CONTAINER.load(Ordering::Relaxed) {
+        c if c == Container::Gzip as u8 => Container::Gzip,
+        c if c == Container::Bgcode as u8 => Container::Bgcode,
+        _ => Container::Text,
+    }
+}
+
 impl Output {
     /// Opens the output for `target`, given the `input` the command reads (for in-place and for
     /// refusing to overwrite the input by accident).
@@ -67,7 +86,7 @@ impl Output {
         let sink = Self::sink(target, input)?;
         let container = match &sink {
             Sink::File { dest, .. } | Sink::Special { dest, .. } => Container::of_output(dest),
-            Sink::Stdout(_) => Container::Text,
+            Sink::Stdout(_) => stdout_container(),
         };
         // A binary input's metadata and thumbnails go into a binary output.
         let carried = match (container, input) {

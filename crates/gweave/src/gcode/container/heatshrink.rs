@@ -30,10 +30,10 @@ const COPY: usize = 16;
 /// repetitive text (the compressed size is within 1 % of following them all), bounded time.
 const MAX_CHAIN: usize = 48;
 
-/// Decodes `input` into `out` (cleared first), which must come to `expected` bytes.
+/// Decodes `input` into `out` (replacing what it held), which must come to `expected` bytes.
 pub fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>) -> io::Result<()> {
-    // Room for a whole 16-byte copy past the end; not cleared (only grown), since every byte up
-    // to `expected` is written before it is read.
+    // Room for a whole 16-byte copy past the end; not cleared (only grown: a block's buffer is
+    // reused for the next), since every byte up to `expected` is written before it is read.
     out.resize(expected + COPY, 0);
     let mut bits = Bits { input, pos: 0, buf: 0, have: 0 };
     let (wb, lb) = (p.window_bits, p.lookahead_bits);

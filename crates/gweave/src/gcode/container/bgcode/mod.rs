@@ -15,6 +15,7 @@
 //! [`MAX_BLOCK`] bytes, so memory stays bounded whatever the file's size.
 
 pub mod read;
+pub mod summary;
 pub mod text;
 pub mod write;
 

@@ -229,17 +229,14 @@ impl<R: Read> Reader<R> {
             return Ok(());
         };
         let block = self.block_data(at)?;
-        let text = match block.encoding() {
-            0 => std::mem::take(&mut self.decoded),
-            1 | 2 => {
-                let mut t = Vec::with_capacity(self.decoded.len() * 2);
-                meatpack::decode(&self.decoded, &mut t);
-                t
-            }
+        // Decoded straight into the text buffer (its room kept from block to block), the
+        // dropped lines taken out in place.
+        match block.encoding() {
+            0 => std::mem::swap(&mut self.buf, &mut self.decoded),
+            1 | 2 => meatpack::decode(&self.decoded, &mut self.buf),
             e => return Err(at.error(invalid(format!("unknown G-code encoding {e}")))),
-        };
-        keep_non_empty_lines(&text, &mut self.buf);
-        self.decoded = text;
+        }
+        drop_empty_lines(&mut self.buf);
         self.scratch = block.data;
         self.next = match self.header()? {
             Some(next) if next.header.kind == Kind::GCode => Some(next),
@@ -278,14 +275,17 @@ impl<R: Read> Read for Reader<R> {
     }
 }
 
-/// Decompresses a block's data into `out` (cleared first), which must come to the header's
-/// uncompressed size.
+/// Decompresses a block's data into `out` (replacing what it held), which must come to the
+/// header's uncompressed size.
 fn decompress(data: &[u8], h: Header, out: &mut Vec<u8>) -> io::Result<()> {
     let expected = h.uncompressed as usize;
-    out.clear();
     match h.compression {
-        Compression::None => out.extend_from_slice(data),
+        Compression::None => {
+            out.clear();
+            out.extend_from_slice(data);
+        }
         Compression::Deflate => {
+            out.clear();
             let mut z = flate2::read::ZlibDecoder::new(data);
             out.reserve(expected);
             (&mut z)
@@ -307,15 +307,17 @@ fn decompress(data: &[u8], h: Header, out: &mut Vec<u8>) -> io::Result<()> {
     Ok(())
 }
 
-/// Copies `text` without the lines libbgcode's converter drops: empty, blank (spaces and tabs),
+/// Takes out of `text` the lines libbgcode's converter drops: empty, blank (spaces and tabs),
 /// or a `;` with nothing but blanks after it. A last line without a newline gets one. Runs of
-/// kept lines are copied at once: most lines start with a letter and are kept.
-fn keep_non_empty_lines(text: &[u8], out: &mut Vec<u8>) {
-    out.reserve(text.len() + 1);
+/// kept lines move at once, and only after a dropped line: most lines start with a letter and
+/// are kept where they are.
+fn drop_empty_lines(text: &mut Vec<u8>) {
     let blank = |b: u8| b == b' ' || b == b'\t';
-    let (mut run, mut start) = (0, 0);
-    while start < text.len() {
-        let end = memchr::memchr(b'\n', &text[start..]).map_or(text.len(), |i| start + i);
+    let len = text.len();
+    // Kept bytes end at `write`; the run of kept lines not yet moved starts at `run`.
+    let (mut write, mut run, mut start) = (0, 0, 0);
+    while start < len {
+        let end = memchr::memchr(b'\n', &text[start..]).map_or(len, |i| start + i);
         let line = &text[start..end];
         let dropped = match line.first() {
             Some(&c) if c != b' ' && c != b'\t' && c != b';' => false,
@@ -325,16 +327,26 @@ fn keep_non_empty_lines(text: &[u8], out: &mut Vec<u8>) {
             },
         };
         if dropped {
-            out.extend_from_slice(&text[run..start]);
+            if run != write {
+                text.copy_within(run..start, write);
+            }
+            write += start - run;
             run = end + 1;
         }
         start = end + 1;
     }
-    if run < text.len() {
-        out.extend_from_slice(&text[run..]);
-        if text.last() != Some(&b'\n') {
-            out.push(b'\n');
+    let ends_line = text.last() == Some(&b'\n');
+    if run < len {
+        if run != write {
+            text.copy_within(run..len, write);
         }
+        write += len - run;
+        text.truncate(write);
+        if !ends_line {
+            text.push(b'\n');
+        }
+    } else {
+        text.truncate(write);
     }
 }
 
@@ -379,8 +391,14 @@ mod tests {
 
     #[test]
     fn empty_lines_go_as_libbgcode_drops_them() {
-        let mut out = Vec::new();
-        keep_non_empty_lines(b"G1 X1\n\n  \t\n;\n ;  \n; kept\r\n\r\nG1 Y2", &mut out);
-        assert_eq!(out, b"G1 X1\n; kept\r\n\r\nG1 Y2\n");
+        let mut text = b"G1 X1\n\n  \t\n;\n ;  \n; kept\r\n\r\nG1 Y2".to_vec();
+        drop_empty_lines(&mut text);
+        assert_eq!(text, b"G1 X1\n; kept\r\n\r\nG1 Y2\n");
+        for (text, kept) in [(&b"\n\nG1\n"[..], &b"G1\n"[..]), (b"G1\n;\n", b"G1\n"), (b"", b""), (b" ", b"")]
+        {
+            let mut t = text.to_vec();
+            drop_empty_lines(&mut t);
+            assert_eq!(t, kept);
+        }
     }
 }

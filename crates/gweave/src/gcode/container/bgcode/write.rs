@@ -7,9 +7,10 @@
 //! stored, its metadata from the text the transform wrote. A transform's text of such an input
 //! starts and ends with the metadata rendered as comments ([`super::text`]); they are found and
 //! taken out of the G-code again, with the printer and print values the transform may have
-//! updated (filament used, times). A text input gets minimal metadata: the producer (gweave),
-//! its PrusaSlicer settings block (`; prusaslicer_config = begin` .. `end`, taken out of the
-//! G-code) as the slicer metadata, and empty printer and print metadata.
+//! updated (filament used, times). A text input gets the metadata PrusaSlicer would give it: the
+//! producer (gweave), its PrusaSlicer settings block (`; prusaslicer_config = begin` .. `end`,
+//! taken out of the G-code) as the slicer metadata, and printer and print metadata from those
+//! settings and the footer's figures ([`summary`]; the footer stays in the G-code too).
 //!
 //! The file's order puts the print metadata before the G-code, but the updated values are known
 //! only at the end of the text, so the G-code blocks are spooled to an unnamed temporary file
@@ -20,7 +21,7 @@ use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 
 use super::super::heatshrink;
-use super::{file_header, text, Block, Compression, Header, Kind, Metadata, Preamble};
+use super::{file_header, summary, text, Block, Compression, Header, Kind, Metadata, Preamble};
 
 /// The largest G-code block written (libbgcode's own limit, 65535 bytes).
 pub const BLOCK: usize = 65535;
@@ -125,15 +126,21 @@ impl<W: Write> Writer<W> {
         }
         let mut p = match self.carried.take() {
             Some(p) => p,
-            None => Preamble {
-                checksum: true,
-                file: Some(Metadata {
-                    json: false,
-                    items: vec![("Producer".into(), format!("gweave {}", env!("CARGO_PKG_VERSION")))],
-                }),
-                slicer: vec![text::take_settings(&mut self.pending)],
-                ..Preamble::default()
-            },
+            None => {
+                let settings = text::take_settings(&mut self.pending);
+                let (printer, print) = summary::of_text(&settings, &self.pending);
+                Preamble {
+                    checksum: true,
+                    file: Some(Metadata {
+                        json: false,
+                        items: vec![("Producer".into(), format!("gweave {}", env!("CARGO_PKG_VERSION")))],
+                    }),
+                    printer,
+                    print,
+                    slicer: vec![settings],
+                    ..Preamble::default()
+                }
+            }
         };
         if let Some((print, start)) = text::find_suffix(&self.pending, &p) {
             self.pending.truncate(start);

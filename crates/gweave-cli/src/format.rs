@@ -1,0 +1,75 @@
+//! `--format`: how a command's G-code output is stored, for every command that writes G-code
+//! (cat, mix, purge-shift, rotary wrap and tube, raster). A file's name says it (`.gz`,
+//! `.bgcode`: `gweave::gcode::container::Container::of_output`); standard output has no name, so
+//! `-o - --format bgcode` is how a pipe carries binary G-code. With a file, `--format` must
+//! agree with the name: a `.gcode` file holding binary G-code would fool the next program.
+
+use anyhow::{bail, Result};
+use clap::{Args, ValueEnum};
+use gweave::gcode::container::Container;
+use gweave::gcode::writer::{set_stdout_container, Target};
+
+/// How the output G-code is stored.
+#[derive(Args, Debug, Clone, Copy)]
+pub struct FormatArgs {
+    /// How the output G-code is stored: text, gz (gzip) or bgcode (Prusa binary G-code). A
+    /// file's name already says it (`.gz`, `.bgcode`); this is for `-o -` [default: by the
+    /// output's name; text on standard output].
+    #[arg(long, value_name = "FORMAT")]
+    pub format: Option<Format>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    Text,
+    Gz,
+    Bgcode,
+}
+
+impl Format {
+    fn container(self) -> Container {
+        match self {
+            Format::Text => Container::Text,
+            Format::Gz => Container::Gzip,
+            Format::Bgcode => Container::Bgcode,
+        }
+    }
+}
+
+fn name(c: Container) -> &'static str {
+    match c {
+        Container::Text => "text",
+        Container::Gzip => "gz",
+        Container::Bgcode => "bgcode",
+    }
+}
+
+impl FormatArgs {
+    /// Makes the choice for `target`: standard output's container, or a check that a file's
+    /// name agrees with it.
+    pub fn apply(&self, target: &Target) -> Result<()> {
+        let Some(format) = self.format else {
+            set_stdout_container(Container::Text);
+            return Ok(());
+        };
+        let wanted = format.container();
+        match target {
+            Target::Stdout => set_stdout_container(wanted),
+            Target::File(path) => {
+                let named = Container::of_output(path);
+                if named != wanted {
+                    bail!(
+                        "--format {} but -o {} is named for {}: a file's name says how it is stored (.gcode, .gcode.gz, .bgcode); --format is for -o -",
+                        name(wanted),
+                        path.display(),
+                        name(named)
+                    );
+                }
+            }
+            Target::InPlace { .. } => {
+                bail!("--format does not go with --in-place: the file keeps the kind its name says")
+            }
+        }
+        Ok(())
+    }
+}
