@@ -15,6 +15,16 @@ pub enum Error {
     #[error("{}:{line}:{column}: {finding}", path.display())]
     Syntax { path: PathBuf, line: u64, column: u32, finding: Finding },
 
+    /// A pass refused a line (or, without a line, the end of the file): `source` is the pass's
+    /// own typed error (`downcast_ref` it), the file and position the driver's.
+    #[error("{}: {source}", place(path, *line, *column))]
+    Pass {
+        path: PathBuf,
+        line: Option<u64>,
+        column: Option<u32>,
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+
     #[error("refusing to overwrite the input {} (use --in-place to replace it)", path.display())]
     WouldOverwriteInput { path: PathBuf },
 
@@ -49,6 +59,15 @@ pub enum Error {
         char::from(*letter)
     )]
     ForeignExtruder { path: PathBuf, flavour: String, letter: u8 },
+}
+
+/// `file`, `file:line` or `file:line:column`.
+fn place(path: &Path, line: Option<u64>, column: Option<u32>) -> String {
+    match (line, column) {
+        (Some(l), Some(c)) => format!("{}:{l}:{c}", path.display()),
+        (Some(l), None) => format!("{}:{l}", path.display()),
+        _ => path.display().to_string(),
+    }
 }
 
 impl Error {

@@ -18,6 +18,7 @@
 pub mod bed;
 pub mod check;
 pub mod colour;
+pub mod eol;
 pub mod error;
 pub mod gcode;
 pub mod gen;
@@ -28,6 +29,7 @@ pub mod post;
 pub mod range;
 pub mod render;
 pub mod rotary;
+pub mod run;
 pub mod settings;
 pub mod stats;
 pub mod total;

@@ -42,12 +42,9 @@ pub fn run(args: CatArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let mut bar = args.quiet.bar();
-    let mut run = Run::new(&args.input, &mut bar);
-    if args.lenient {
-        run.strictness = Strictness::Lenient;
-    }
+    let strictness = if args.lenient { Strictness::Lenient } else { Strictness::Strict };
     let mut copy = Identity::default();
-    run.transform(&mut copy, &target)?;
+    Run::file(&args.input).progress(&mut bar).strictness(strictness).to(&target).run(&mut copy)?;
     drop(bar);
     if args.quiet.emit(&args.report, &copy.report)? && target != Target::Stdout {
         print_summary(|out| print_human(out, &args.input, &target, &copy.report))?;

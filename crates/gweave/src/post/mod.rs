@@ -16,5 +16,8 @@ pub mod zcap;
 // metadata: the slicer's figures rewritten for the file as written, and the run's header.
 pub mod metadata;
 
+// What the transforms warn about, typed.
+pub mod warning;
+
 // The retraction in force, followed alike by the passes that insert purges.
 pub(crate) mod retraction;

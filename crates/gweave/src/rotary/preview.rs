@@ -33,7 +33,7 @@ use super::cylinder::{surface_length_mm, CylPoint, MachineDelta, RotaryConfig};
 use super::{Result, RotaryError};
 use crate::gcode::layers::Feature;
 use crate::gcode::state::{axis_of, Effect, Move, Position, StateOptions, E};
-use crate::pass::{drive_reader, Ctx, Pass, Quiet, Strictness};
+use crate::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Step, Strictness};
 use crate::render::camera::Camera;
 use crate::render::canvas::Canvas;
 
@@ -178,9 +178,9 @@ struct Reader {
 }
 
 impl Pass for Reader {
-    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
         let Effect::Move(mv) = ctx.effect else {
-            return Ok(());
+            return Ok(Flow::Continue);
         };
         let m = self.reading.read(mv);
         self.time_s += m.t_s;
@@ -190,7 +190,7 @@ impl Pass for Reader {
                 Bead { from: m.from, to: m.to, e_mm: m.e_mm, speed_mm_s: m.speed_mm_s(), feature, layer: 0 };
             self.beads.push((bead, ctx.state.structure.commented_layer()));
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 }
 

@@ -12,6 +12,7 @@ use crate::colour::Srgb8;
 
 use super::profile::{Dialect, Hardware};
 use super::schedule::{Plan, Slot};
+use crate::post::warning::Warning;
 
 /// One mix of the job and where it went.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -75,7 +76,7 @@ pub struct MixReport {
     /// Slicer tool-change retractions and unretractions removed.
     pub dropped_retractions: u64,
     pub layers: Vec<LayerMix>,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 impl MixReport {
@@ -102,7 +103,7 @@ pub(crate) struct Accounting {
     layers: Vec<LayerMix>,
     /// The layer being printed.
     current: Option<OpenLayer>,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 impl Accounting {
