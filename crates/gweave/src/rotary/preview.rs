@@ -202,7 +202,9 @@ pub fn read_back(machine: &RotaryConfig, input: impl Read) -> Result<Program> {
         input,
         std::path::Path::new("<rotary program>"),
         StateOptions::default(),
-        Strictness::Strict,
+        // A program gweave wrote holds a malformed line only where a lenient wrap copied one
+        // through (a strict one refuses it first): it is read past here too.
+        Strictness::Lenient,
         &mut Quiet,
         &mut reader,
         &mut io::sink(),
