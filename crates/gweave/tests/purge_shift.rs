@@ -7,9 +7,7 @@ use std::path::PathBuf;
 
 use gweave::gcode::layers::Feature;
 use gweave::pass::{Run, Strictness};
-use gweave::post::purge_shift::{
-    purge_shift, purge_shift_bytes, PurgeShift, PurgeShiftConfig, PurgeShiftReport, Rules,
-};
+use gweave::post::purge_shift::{purge_shift, PurgeShift, PurgeShiftConfig, PurgeShiftReport, Rules};
 
 fn fixture(rel: &str) -> Vec<u8> {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel);
