@@ -50,6 +50,7 @@ use std::io::{self, Write};
 
 use crate::colour::dialect::{marlin_m163_m164, marlin_m165, rrf_m563, rrf_m567};
 use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
+use crate::eol::Eol;
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
@@ -115,7 +116,8 @@ pub struct MixPass {
     held: Vec<Held>,
     feed_before: f64,
     rapid_before: bool,
-    eol: Vec<u8>,
+    /// The file's line endings, for the lines the pass writes.
+    eol: Eol,
     /// Lines before the current line, `\n`-separated.
     pre: Vec<u8>,
     /// The current line's replacement, `\n`-separated (empty: keep the line).
@@ -154,7 +156,7 @@ impl MixPass {
             held: Vec::new(),
             feed_before: 0.0,
             rapid_before: false,
-            eol: b"\n".to_vec(),
+            eol: Eol::default(),
             pre: Vec::new(),
             repl: Vec::new(),
             replaced: false,
@@ -485,23 +487,24 @@ impl MixPass {
         let mut text = b";".to_vec();
         text.extend_from_slice(ctx.line.bytes);
         text.extend_from_slice(b" ; gweave mix: slicer tool-change retraction dropped");
-        text.extend_from_slice(&self.eol);
+        text.extend_from_slice(self.eol.get());
         text.extend_from_slice(b"G92 E");
         fmt.write(&mut text, mv.to[E], fmt.extrusion_decimals.max(5));
-        text.extend_from_slice(&self.eol);
+        text.extend_from_slice(self.eol.get());
         if ctx.block.has(b'F') {
             text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
             write_exact_feed(&mut text, fmt, mv.feed_mm_min);
-            text.extend_from_slice(&self.eol);
+            text.extend_from_slice(self.eol.get());
         }
         text
     }
 
     /// Renders `pre` and the line (or its replacement) with the file's line endings.
     fn render(&mut self, ctx: &Ctx<'_>, into: &mut Vec<u8>) {
-        push_lines(into, &self.pre, &self.eol, &self.eol);
+        // Writing into memory cannot fail.
+        let _ = self.eol.block(into, &self.pre);
         if self.replaced {
-            push_lines(into, &self.repl, &self.eol, ctx.line.eol);
+            let _ = self.eol.text(into, &self.repl, ctx.line.eol);
         } else {
             into.extend_from_slice(ctx.line.bytes);
             into.extend_from_slice(ctx.line.eol);
@@ -524,20 +527,6 @@ impl MixPass {
     }
 }
 
-/// Appends `\n`-separated `text` to `into` with `eol` after each line and `last_eol` after the
-/// last one.
-fn push_lines(into: &mut Vec<u8>, text: &[u8], eol: &[u8], last_eol: &[u8]) {
-    if text.is_empty() {
-        return;
-    }
-    let body = text.strip_suffix(b"\n").unwrap_or(text);
-    let mut lines = body.split(|&b| b == b'\n').peekable();
-    while let Some(l) = lines.next() {
-        into.extend_from_slice(l);
-        into.extend_from_slice(if lines.peek().is_some() { eol } else { last_eol });
-    }
-}
-
 /// The pass's error for the line it was given (the driver names the file and the line).
 fn refused(e: MixPassError) -> PassError {
     match e {
@@ -554,10 +543,7 @@ fn write(out: &mut dyn Write, bytes: &[u8]) -> Step {
 
 impl Pass for MixPass {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
-        if !ctx.line.eol.is_empty() {
-            self.eol.clear();
-            self.eol.extend_from_slice(ctx.line.eol);
-        }
+        self.eol.learn(ctx.line.eol);
         self.pre.clear();
         self.repl.clear();
         self.replaced = false;
