@@ -8,7 +8,7 @@ use std::path::Path;
 use gweave::gcode::flavour::flavour_in;
 use gweave::gcode::reader::{ChunkReader, LineReader, RawLine};
 use gweave::gcode::state::StateOptions;
-use gweave::pass::{drive_reader, keep, Ctx, Identity, Pass, Quiet, Strictness};
+use gweave::pass::{drive_reader, keep, Ctx, Identity, Pass, Quiet, Step, Strictness};
 
 /// Runs `bytes` through the reader, lexer and state three ways, and checks each copy. An input
 /// may be refused (an encoding the reader does not read), but then the same way however it is
@@ -56,7 +56,7 @@ fn copy(input: impl Read, options: &StateOptions, pass: &mut impl Pass) -> Optio
 struct ListingCopy;
 
 impl Pass for ListingCopy {
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         keep(ctx, out)
     }
 }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use gweave::gcode::state::{Effect, State, A, E, X, Y, Z};
-use gweave::pass::{Ctx, Pass, Quiet, Run};
+use gweave::pass::{Ctx, Flow, Pass, Run, Step};
 
 fn json(args: &[&str]) -> serde_json::Value {
     let out = Command::new(env!("CARGO_BIN_EXE_gweave")).args(args).output().unwrap();
@@ -35,11 +35,11 @@ fn fixtures() -> Vec<PathBuf> {
 struct MovesFed(f64);
 
 impl Pass for MovesFed {
-    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn std::io::Write) -> std::io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn std::io::Write) -> Step {
         if let Effect::Move(m) = ctx.effect {
             self.0 += m.e_mm();
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 }
 
@@ -47,7 +47,7 @@ impl Pass for MovesFed {
 /// flavour) as `gweave stats`, and the filament its moves fed.
 fn stats_state(path: &Path) -> (State, f64) {
     let mut fed = MovesFed::default();
-    let state = Run::new(path, &mut Quiet).scan(&mut fed).unwrap();
+    let state = Run::file(path).scan(&mut fed).unwrap();
     (state, fed.0)
 }
 

@@ -46,13 +46,12 @@ MAP = {
             **{
                 f: f.replace("-", "_")
                 for f in (
-                    "head threshold invert flip-y one-way density origin layer-height pixel-mm dpi heads "
-                    "channels recoat start end dialect feed fast-estimate"
+                    "head threshold invert flip-y one-way fire-order density origin layer-height pixel-mm dpi "
+                    "heads channels recoat start end dialect feed fast-estimate"
                 ).split()
             },
             "test-pattern": "- a function of its own: raster_test_pattern",
             "pattern-columns": "- raster_test_pattern(pattern_columns=)",
-            "fire-order": "- not a keyword yet: gweave.main(['raster', '--fire-order', ...])",
         },
         ["inputs"],
     ),
@@ -68,7 +67,8 @@ MAP = {
             **{
                 f: f.replace("-", "_")
                 for f in (
-                    "purge-mm purge-mm3 config filament-diameter cross-layers allow-features markers fallback tower-at"
+                    "purge-mm purge-mm3 config filament-diameter cross-layers allow-features markers fallback tower-at "
+                    "lenient"
                 ).split()
             },
         },
@@ -84,11 +84,10 @@ MAP = {
             **{
                 f: f.replace("-", "_")
                 for f in (
-                    "mandrel-diameter feed-convention rotary-unit axes config preview keep-arc-length seam-rotation chord-tol"
+                    "mandrel-diameter feed-convention rotary-unit axes config preview keep-arc-length seam-rotation "
+                    "helical allow-overlap chord-tol lenient"
                 ).split()
             },
-            "helical": "- not a keyword yet: gweave.main(['rotary', 'wrap', '--helical', ...])",
-            "allow-overlap": "- the config TOML's allow_overlap",
         },
         ["input"],
     ),
@@ -111,7 +110,10 @@ MAP = {
         "mix",
         {
             **TARGET,
-            **{f: f.replace("-", "_") for f in "config at-layer at-z map gradient gradient-space dialect purge-mm".split()},
+            **{
+                f: f.replace("-", "_")
+                for f in "config at-layer at-z map gradient gradient-space dialect purge-mm lenient".split()
+            },
             "palette-png": "- a picture: gweave.main(['mix', '--palette-png', ...])",
             "wizard": "- asks questions on a terminal",
             "predict": "- gweave.predict_colour(ratios, profile)",

@@ -13,7 +13,7 @@
 //! crate joins them.
 
 use std::fs::File;
-use std::io::{self, BufReader, Write};
+use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use gweave::firmware::Firmware;
@@ -23,7 +23,7 @@ use gweave::gcode::flavour::flavour_in;
 use gweave::gcode::state::{State, StateOptions};
 use gweave::gcode::temp::TempFile;
 use gweave::gcode::writer::{Output, Target};
-use gweave::pass::{drive_reader, Ctx, Pass, Quiet, Run, Strictness};
+use gweave::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Run, Step, Strictness};
 use gweave::post::metadata::{
     earlier_runs, header_line, is_progress_line, read_setting, Figures, MetadataPass,
 };
@@ -209,9 +209,7 @@ fn scan(
 ) -> Result<(Scan, State)> {
     let figures = Figures::default();
     let mut scan = Scan { stats: StatsPass::new(None), estimators, figures, progress_lines: 0, error: None };
-    let mut quiet = Quiet;
-    let run =
-        Run { strictness: Strictness::Lenient, flavour: Some(flavour.clone()), ..Run::new(path, &mut quiet) };
+    let run = Run::file(path).strictness(Strictness::Lenient).known_flavour(flavour.clone());
     let state = run.scan(&mut scan)?;
     if let Some(e) = scan.error.take() {
         return Err(e.into());
@@ -257,7 +255,7 @@ impl Pass for Scan {
         false
     }
 
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         self.stats.line(ctx, out)?;
         let raw = ctx.line.bytes;
         if let Some((normal, silent)) = &mut self.estimators {
@@ -266,6 +264,10 @@ impl Pass for Scan {
                     self.error.get_or_insert(e);
                 }
             }
+        }
+        if self.error.is_some() {
+            // The run fails with it: nothing after it matters.
+            return Ok(Flow::Stop);
         }
         if let Some(c) = ctx.block.comment_text(raw) {
             read_setting(c, &mut self.figures);
@@ -277,7 +279,7 @@ impl Pass for Scan {
                 self.figures.progress_s.push([t, silent.as_ref().map_or(t, Estimator::now_s)]);
             }
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 }
 

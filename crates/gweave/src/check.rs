@@ -3,7 +3,7 @@
 //! any hotend temperature, moves off the bed, absurd feed rates, and extrusion values that drift
 //! in single-precision firmware.
 
-use std::io::{self, Write};
+use std::io::Write;
 
 use serde::Serialize;
 
@@ -14,7 +14,7 @@ use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
-use crate::pass::{Ctx, Pass, Progress, Run, Strictness};
+use crate::pass::{Ctx, Flow, Pass, PassError, Progress, Run, Step, Strictness};
 
 /// Lint settings.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
@@ -120,7 +120,7 @@ impl CheckPass {
 }
 
 impl Pass for CheckPass {
-    fn long_line(&mut self, piece: &RawLine<'_>, _out: &mut dyn Write) -> io::Result<()> {
+    fn long_line(&mut self, piece: &RawLine<'_>, _out: &mut dyn Write) -> Result<(), PassError> {
         if let Part::Last { len } = piece.part {
             self.report.lines = piece.number;
             self.add(piece.number, Diagnostic::at(0, Finding::LineTooLong { len }));
@@ -128,7 +128,7 @@ impl Pass for CheckPass {
         Ok(())
     }
 
-    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
         let n = ctx.line.number;
         self.report.lines = n;
         let block = ctx.block;
@@ -254,7 +254,7 @@ impl Pass for CheckPass {
             }
             _ => {}
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 }
 
@@ -279,9 +279,7 @@ pub fn check_file(
         }
     }
     let mut pass = CheckPass::new(options);
-    let mut run = Run::new(path, progress);
-    run.strictness = Strictness::Lenient;
-    run.scan(&mut pass)?;
+    Run::file(path).progress(progress).strictness(Strictness::Lenient).scan(&mut pass)?;
     if from_file.is_some() {
         pass.report.bed_from = from_file;
     }
@@ -318,6 +316,7 @@ fn is_griffin(letter: u8, number: u32) -> bool {
 mod tests {
     use super::*;
     use crate::pass::{drive_reader, Quiet, Strictness};
+    use std::io;
     use std::path::Path;
 
     fn findings(text: &str) -> Vec<(u64, String)> {

@@ -33,6 +33,20 @@ pub enum Error {
         finding: Finding,
     },
 
+    /// A pass refused a line (or, without a line, the end of the file): `source` is the pass's
+    /// own typed error (`downcast_ref` it), the file and position the driver's.
+    #[error("{}: {source}", place(path, *line, *column))]
+    Pass {
+        /// The file read.
+        path: PathBuf,
+        /// The 1-based line refused, if the refusal is about a line.
+        line: Option<u64>,
+        /// The 1-based column within it, if the pass knows one.
+        column: Option<u32>,
+        /// The pass's own error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+
     /// An output that is the input itself, without `--in-place`.
     #[error("refusing to overwrite the input {} (use --in-place to replace it)", path.display())]
     WouldOverwriteInput {
@@ -101,6 +115,15 @@ pub enum Error {
         /// The letter of that firmware's extruder axis.
         letter: u8,
     },
+}
+
+/// `file`, `file:line` or `file:line:column`.
+fn place(path: &Path, line: Option<u64>, column: Option<u32>) -> String {
+    match (line, column) {
+        (Some(l), Some(c)) => format!("{}:{l}:{c}", path.display()),
+        (Some(l), None) => format!("{}:{l}", path.display()),
+        _ => path.display().to_string(),
+    }
 }
 
 impl Error {

@@ -20,6 +20,7 @@
 pub mod bed;
 pub mod check;
 pub mod colour;
+pub mod eol;
 pub mod error;
 pub mod firmware;
 pub mod gcode;
@@ -31,6 +32,7 @@ pub mod post;
 pub mod range;
 pub mod render;
 pub mod rotary;
+pub mod run;
 pub mod settings;
 pub mod stats;
 pub mod total;

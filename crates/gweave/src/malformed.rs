@@ -21,7 +21,7 @@
 //! assert_eq!((pass.malformed.malformed_lines, pass.malformed.first_malformed_line), (1, Some(2)));
 //! ```
 
-use std::io::{self, Write};
+use std::io::Write;
 
 use serde::Serialize;
 
@@ -29,7 +29,7 @@ use crate::gcode::diag::Severity;
 use crate::gcode::line::Block;
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::State;
-use crate::pass::{Ctx, Pass};
+use crate::pass::{Ctx, Pass, PassError, Step};
 
 /// How many lines could not be read, and the first of them.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
@@ -77,6 +77,27 @@ pub struct WithMalformed<T> {
     pub malformed: Malformed,
 }
 
+/// A transform's report as `--json` writes it: with the lines its lenient run read past
+/// ([`WithMalformed`]); a strict run's report as it is (its count is always zero).
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum Transformed<'a, T> {
+    /// A strict run's report, as it is.
+    Strict(&'a T),
+    /// A lenient run's report, with the lines it read past.
+    Lenient(WithMalformed<&'a T>),
+}
+
+impl<'a, T> Transformed<'a, T> {
+    /// The report as `--json` writes it after a run of this strictness.
+    pub fn new(report: &'a T, malformed: Malformed, strictness: crate::pass::Strictness) -> Self {
+        match strictness {
+            crate::pass::Strictness::Strict => Transformed::Strict(report),
+            crate::pass::Strictness::Lenient => Transformed::Lenient(WithMalformed { report, malformed }),
+        }
+    }
+}
+
 /// A pass that counts the malformed lines its inner pass sees (an error-level diagnostic, or a
 /// line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE)).
 #[derive(Debug, Default)]
@@ -96,21 +117,21 @@ impl<P> Counting<P> {
 
 impl<P: Pass> Pass for Counting<P> {
     #[inline]
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         if is_malformed(ctx.block) {
             self.malformed.add(ctx.line.number);
         }
         self.pass.line(ctx, out)
     }
 
-    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> Result<(), PassError> {
         if let Part::Last { .. } = piece.part {
             self.malformed.add(piece.number);
         }
         self.pass.long_line(piece, out)
     }
 
-    fn finish(&mut self, state: &State, out: &mut dyn Write) -> io::Result<()> {
+    fn finish(&mut self, state: &State, out: &mut dyn Write) -> Result<(), PassError> {
         self.pass.finish(state, out)
     }
 

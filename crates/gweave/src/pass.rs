@@ -1,6 +1,12 @@
 //! One streaming shape for every command: read a line, parse it, advance the machine state, and
 //! hand the line with its state to a [`Pass`], which writes what should come out. A pass that
 //! needs lookahead keeps its own bounded buffer of [`OwnedLine`]s and says how large it may grow.
+//!
+//! A pass answers each line with a [`Step`]: [`Flow::Continue`], [`Flow::Stop`] (it has seen
+//! enough: the driver reads no further and calls [`Pass::finish`]), or a [`PassError`]. The
+//! pass does not know the file: the driver names it, with the line (and the column, when the
+//! pass gives one), in [`Error::Pass`]. The set-up of a run (input, output, strictness,
+//! flavour) is the [`Run`](crate::run::Run) builder's.
 
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
@@ -8,15 +14,14 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::gcode::container;
 use crate::gcode::diag::{Finding, Severity};
-use crate::gcode::flavour::read_flavour;
 use crate::gcode::lexer::{parse_line, parse_line_lean};
 use crate::gcode::line::Block;
 use crate::gcode::reader::{LineReader, Part, RawLine};
 use crate::gcode::state::{Effect, State, StateOptions};
-use crate::gcode::writer::{Output, Target};
 use crate::malformed::{is_malformed, Malformed};
+
+pub use crate::run::{Ran, Run, Source};
 
 /// A line with everything known about it, after its effect on the state.
 pub struct Ctx<'a> {
@@ -30,11 +35,47 @@ pub struct Ctx<'a> {
     pub state: &'a State,
 }
 
+/// What the driver does after a line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flow {
+    /// Read the next line.
+    Continue,
+    /// Read no further: the pass has what it needs. [`Pass::finish`] is still called.
+    Stop,
+}
+
+/// Why a pass could not go on.
+#[derive(Debug, thiserror::Error)]
+pub enum PassError {
+    /// Writing the output failed (the driver names the output).
+    #[error(transparent)]
+    Write(#[from] io::Error),
+    /// The pass cannot handle the line it was given (the driver names the file and the line).
+    #[error("{source}")]
+    Refused {
+        /// 1-based column of the cause on the line, when the pass knows it.
+        column: Option<u32>,
+        /// The pass's own error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+}
+
+impl PassError {
+    /// The pass refuses the line for `reason`, a typed error of its own: the caller gets it back
+    /// from [`Error::Pass`] with `downcast_ref`.
+    pub fn refuse(reason: impl std::error::Error + Send + Sync + 'static) -> Self {
+        PassError::Refused { column: None, source: Box::new(reason) }
+    }
+}
+
+/// What a pass answers for one line.
+pub type Step = std::result::Result<Flow, PassError>;
+
 /// Something that watches or rewrites a stream of lines. Every method has a default, so a
 /// read-only pass implements only what it needs.
 pub trait Pass {
     /// Sees one line; writes what should be output for it (by default, the line unchanged).
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         keep(ctx, out)
     }
 
@@ -42,13 +83,13 @@ pub trait Pass {
     /// strict one stops at such a line). The line is not parsed and leaves the state as it
     /// was. By default the piece is written unchanged, so that a copy keeps the line byte for
     /// byte without ever holding it whole.
-    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> Result<(), PassError> {
         out.write_all(piece.bytes)?;
-        out.write_all(piece.eol)
+        Ok(out.write_all(piece.eol)?)
     }
 
-    /// Called after the last line.
-    fn finish(&mut self, _state: &State, _out: &mut dyn Write) -> io::Result<()> {
+    /// Called after the last line (or after [`Flow::Stop`]).
+    fn finish(&mut self, _state: &State, _out: &mut dyn Write) -> Result<(), PassError> {
         Ok(())
     }
 
@@ -60,11 +101,32 @@ pub trait Pass {
     }
 }
 
+/// A pass behind a `&mut` is a pass (a runner wraps the caller's pass without taking it).
+impl<P: Pass + ?Sized> Pass for &mut P {
+    #[inline]
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
+        (**self).line(ctx, out)
+    }
+
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> Result<(), PassError> {
+        (**self).long_line(piece, out)
+    }
+
+    fn finish(&mut self, state: &State, out: &mut dyn Write) -> Result<(), PassError> {
+        (**self).finish(state, out)
+    }
+
+    fn reads_words(&self) -> bool {
+        (**self).reads_words()
+    }
+}
+
 /// Writes a line exactly as it was read.
 #[inline]
-pub fn keep(ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+pub fn keep(ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
     out.write_all(ctx.line.bytes)?;
-    out.write_all(ctx.line.eol)
+    out.write_all(ctx.line.eol)?;
+    Ok(Flow::Continue)
 }
 
 /// A line copied out of the reader's buffer, for passes that hold lines back.
@@ -116,75 +178,6 @@ pub trait Progress {
 pub struct Quiet;
 impl Progress for Quiet {}
 
-/// A run's settings.
-pub struct Run<'a> {
-    /// The G-code file read (`-` for standard input).
-    pub input: &'a Path,
-    /// Options fixed for the whole file (firmware, retraction length).
-    pub options: StateOptions,
-    /// How malformed lines are treated.
-    pub strictness: Strictness,
-    /// Where progress is reported.
-    pub progress: &'a mut dyn Progress,
-    /// The file's flavour when the caller has read it already ([`read_flavour`]); `None`: the
-    /// run reads it.
-    pub flavour: Option<Option<String>>,
-}
-
-impl<'a> Run<'a> {
-    /// A strict run over `input` with default options.
-    pub fn new(input: &'a Path, progress: &'a mut dyn Progress) -> Self {
-        Run {
-            input,
-            options: StateOptions::default(),
-            strictness: Strictness::Strict,
-            progress,
-            flavour: None,
-        }
-    }
-
-    /// Streams the input through `pass` without output. Returns the final state.
-    pub fn scan<P: Pass + ?Sized>(self, pass: &mut P) -> Result<State> {
-        let out_name = output_name(self.input);
-        self.drive(pass, &mut io::sink(), out_name)
-    }
-
-    /// Streams the input through `pass` into `target`, committed only if everything succeeded.
-    pub fn transform<P: Pass + ?Sized>(self, pass: &mut P, target: &Target) -> Result<State> {
-        let input = self.input.to_path_buf();
-        let mut out = Output::create(target, Some(&input))?;
-        // Write errors name the file being written (not its temporary file, nor the input).
-        let out_name = out.dest().map_or_else(|| PathBuf::from("<stdout>"), Path::to_path_buf);
-        let state = self.drive(pass, &mut out, out_name)?;
-        out.commit()?;
-        Ok(state)
-    }
-
-    /// Streams the file (text, gzip or binary G-code, or standard input as `-`: see
-    /// [`container::open`]), with the options its flavour implies (read from its ends first:
-    /// the PrusaSlicer family names it only in the settings block after the last move).
-    fn drive<P: Pass + ?Sized>(self, pass: &mut P, out: &mut dyn Write, out_name: PathBuf) -> Result<State> {
-        let path = self.input.to_path_buf();
-        let flavour = match self.flavour {
-            Some(known) => known,
-            None => read_flavour(&path).map_err(|e| Error::io(&path, e))?,
-        };
-        let input = container::open(&path).map_err(|e| Error::io(&path, e))?;
-        if let Some(len) = input.text_len {
-            self.progress.set_len(len);
-        }
-        let options = self.options.for_flavour(flavour.as_deref());
-        let lines = Lines {
-            reader: LineReader::new(input),
-            path: &path,
-            out_name,
-            strictness: self.strictness,
-            progress: self.progress,
-        };
-        lines.run(options, pass, out)
-    }
-}
-
 /// The loop itself, over any reader (files, in-memory text in tests and Python). Generic over
 /// the pass, so that a pass known at the call (`stats`) has its per-line code inlined into the
 /// loop; `&mut dyn Pass` works as well.
@@ -197,7 +190,21 @@ pub fn drive_reader<P: Pass + ?Sized>(
     pass: &mut P,
     out: &mut dyn Write,
 ) -> Result<State> {
-    let out_name = output_name(path);
+    drive_named(input, path, output_name(path), options, strictness, progress, pass, out)
+}
+
+/// [`drive_reader`] with the name write errors give the output.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn drive_named<P: Pass + ?Sized>(
+    input: impl Read,
+    path: &Path,
+    out_name: PathBuf,
+    options: StateOptions,
+    strictness: Strictness,
+    progress: &mut dyn Progress,
+    pass: &mut P,
+    out: &mut dyn Write,
+) -> Result<State> {
     Lines { reader: LineReader::new(input), path, out_name, strictness, progress }.run(options, pass, out)
 }
 
@@ -237,12 +244,20 @@ impl<R: Read> Lines<'_, R> {
         let path = self.path;
         let mut block = Block::default();
         let out_name = std::mem::take(&mut self.out_name);
-        let write_err = |e: io::Error| Error::io(&out_name, e);
+        // A pass's error, named: its output for a write, the input's line for a refusal.
+        let named = |e: PassError, line: Option<u64>| match e {
+            PassError::Write(e) => Error::io(&out_name, e),
+            PassError::Refused { column, source } => {
+                Error::Pass { path: path.to_path_buf(), line, column, source }
+            }
+        };
         let mut next_report = 0u64;
         while let Some(line) = self.reader.next_line().map_err(|e| Error::io(path, e))? {
             if line.part != Part::Whole {
                 match (self.strictness, line.part) {
-                    (Strictness::Lenient, _) => pass.long_line(&line, out).map_err(write_err)?,
+                    (Strictness::Lenient, _) => {
+                        pass.long_line(&line, out).map_err(|e| named(e, Some(line.number)))?
+                    }
                     (Strictness::Strict, Part::Last { len }) => {
                         return Err(Error::Syntax {
                             path: path.to_path_buf(),
@@ -272,15 +287,20 @@ impl<R: Read> Lines<'_, R> {
                 }
             }
             state.apply(line.bytes, &block);
-            let offset = line.offset;
-            pass.line(&Ctx { line, block: &block, effect: &state.effect, state: &state }, out)
-                .map_err(write_err)?;
+            let (offset, number) = (line.offset, line.number);
+            let flow = pass
+                .line(&Ctx { line, block: &block, effect: &state.effect, state: &state }, out)
+                .map_err(|e| named(e, Some(number)))?;
             if offset >= next_report {
                 self.progress.advance(offset);
                 next_report = offset + (4 << 20);
             }
+            if flow == Flow::Stop {
+                break;
+            }
         }
-        pass.finish(&state, out).map_err(write_err)?;
+        // What the pass refuses at the end belongs to no line of its own.
+        pass.finish(&state, out).map_err(|e| named(e, None))?;
         self.progress.advance(self.reader.position());
         Ok(state)
     }
@@ -321,7 +341,7 @@ impl Pass for Identity {
     // Inlined into the loop: without the hint the compiler stopped inlining it once the loop
     // grew the long-line branch (+54 instructions a line for `cat`).
     #[inline(always)]
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         let r = &mut self.report;
         r.lines += 1;
         r.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
@@ -331,7 +351,7 @@ impl Pass for Identity {
         keep(ctx, out)
     }
 
-    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> Result<(), PassError> {
         let r = &mut self.report;
         r.bytes += (piece.bytes.len() + piece.eol.len()) as u64;
         if let Part::Last { .. } = piece.part {
@@ -339,7 +359,7 @@ impl Pass for Identity {
             r.malformed.add(piece.number);
         }
         out.write_all(piece.bytes)?;
-        out.write_all(piece.eol)
+        Ok(out.write_all(piece.eol)?)
     }
 }
 
@@ -438,10 +458,10 @@ mod tests {
             self.reads_words
         }
 
-        fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+        fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
             let unlisted = ctx.block.plain.present != 0 && ctx.block.words.is_empty();
             self.seen.push((*ctx.effect, ctx.state.structure.layer, unlisted));
-            Ok(())
+            Ok(Flow::Continue)
         }
     }
 

@@ -3,7 +3,7 @@
 //! the real time), plus the slicer's own figures read from its comments for comparison.
 
 use std::collections::BTreeMap;
-use std::io::{self, Write};
+use std::io::Write;
 
 use serde::Serialize;
 
@@ -11,7 +11,7 @@ use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
 use crate::gcode::retraction::Retraction;
 use crate::gcode::state::{Effect, Path, State, X, Y, Z};
-use crate::pass::{Ctx, Pass};
+use crate::pass::{Ctx, Flow, Pass, Step};
 
 /// Filament used by one tool.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -267,7 +267,7 @@ impl Pass for StatsPass {
     }
 
     #[inline(always)]
-    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
         self.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
         self.lines_by_region[ctx.state.structure.region as usize] += 1;
         if let Some(c) = ctx.block.comment_text(ctx.line.bytes) {
@@ -319,7 +319,7 @@ impl Pass for StatsPass {
             Effect::SetPosition | Effect::Home { .. } => self.start_in_bounds = false,
             _ => {}
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 }
 
@@ -356,8 +356,7 @@ pub fn stats_file(
     progress: &mut dyn crate::pass::Progress,
 ) -> crate::Result<crate::malformed::WithMalformed<Stats>> {
     use crate::malformed::{Counting, Malformed, WithMalformed};
-    let mut run = crate::pass::Run::new(path, progress);
-    run.strictness = strictness;
+    let run = crate::pass::Run::file(path).progress(progress).strictness(strictness);
     Ok(match strictness {
         crate::pass::Strictness::Strict => {
             let mut pass = StatsPass::new(diameter_mm);
@@ -375,6 +374,7 @@ pub fn stats_file(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::io;
 
     #[test]
     fn reads_prusaslicer_duration() {

@@ -23,7 +23,7 @@ const FIXTURES: [&str; 7] = [
 
 fn stats(rel: &str) -> (Stats, gweave::gcode::state::State) {
     let mut pass = StatsPass::new(None);
-    let state = Run::new(&data(rel), &mut Quiet).scan(&mut pass).unwrap();
+    let state = Run::file(&data(rel)).scan(&mut pass).unwrap();
     (pass.into_stats(&state), state)
 }
 
@@ -116,7 +116,7 @@ fn check_finds_only_real_problems_in_the_fixtures() {
     use gweave::check::{CheckOptions, CheckPass};
     for rel in FIXTURES {
         let mut pass = CheckPass::new(CheckOptions::default());
-        Run::new(&data(rel), &mut Quiet).scan(&mut pass).unwrap();
+        Run::file(&data(rel)).scan(&mut pass).unwrap();
         let found: Vec<(u64, String)> =
             pass.report.findings.iter().map(|f| (f.line, f.diagnostic.finding.to_string())).collect();
         assert_eq!(found, Vec::new(), "{rel}");

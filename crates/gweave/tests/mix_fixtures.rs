@@ -15,7 +15,7 @@ use gweave::gcode::line::Block;
 use gweave::gcode::state::{Effect, State, E, X, Y, Z};
 use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
-use gweave::post::mix::{mix_bytes, mix_file};
+use gweave::post::mix::{mix, mix_bytes};
 use gweave::post::zcap::z_feed_mm_min;
 
 fn data(rel: &str) -> PathBuf {
@@ -316,7 +316,7 @@ fn golden_small_case() {
     let tmp = tempfile::tempdir().unwrap();
     let dest = tmp.path().join("out.gcode");
     let target = gweave::gcode::writer::Target::File(dest.clone());
-    mix_file(profile, &dir.join("small.gcode"), &target, &mut gweave::pass::Quiet).unwrap();
+    mix(profile, gweave::pass::Run::file(&dir.join("small.gcode")).to(&target)).unwrap();
     assert_eq!(std::fs::read(dest).unwrap(), std::fs::read(golden).unwrap());
 }
 

@@ -3,9 +3,16 @@
 
 mod purge_check;
 
+use gweave::pass::{Run, Strictness};
 use gweave::post::purge_shift::report::KEPT_CHANGES;
-use gweave::post::purge_shift::{purge_shift_bytes, PurgeShift, PurgeShiftConfig, Rules};
+use gweave::post::purge_shift::{purge_shift, PurgeShift, PurgeShiftConfig, PurgeShiftReport, Rules};
 use proptest::prelude::*;
+
+/// The pass over text in memory, reading past malformed lines (what these properties feed it).
+fn lenient(rules: Rules, input: &[u8]) -> gweave::Result<(Vec<u8>, PurgeShiftReport)> {
+    let run = Run::text(input).to_memory().strictness(Strictness::Lenient);
+    purge_shift(rules, run).map(|(report, ran)| (ran.output, report))
+}
 
 /// One step of a synthetic program.
 #[derive(Debug, Clone)]
@@ -100,7 +107,7 @@ fn program(steps: &[Step], absolute_e: bool) -> String {
 
 fn check(text: &str, rules: Rules) -> gweave::post::purge_shift::PurgeShiftReport {
     let options = PurgeShift::new(rules.clone()).state_options();
-    let (out, report) = purge_shift_bytes(rules, text.as_bytes()).unwrap();
+    let (out, report) = lenient(rules, text.as_bytes()).unwrap();
     purge_check::check(text.as_bytes(), &out, &report, &options);
     report
 }
@@ -136,7 +143,7 @@ proptest! {
         "(G[0-3]|G92|G10|G11|M8[23]|T[0-2]|M16[345]|M567|;LAYER:[0-9]|;TYPE:WALL-OUTER)?( [XYZEIJRSP]-?[0-9]{0,3}(\\.[0-9]{0,3})?){0,4}",
         0..60)) {
         let text = lines.join("\n");
-        let _ = purge_shift_bytes(Rules::fixed(1.0).unwrap(), text.as_bytes()).unwrap();
+        let _ = lenient(Rules::fixed(1.0).unwrap(), text.as_bytes()).unwrap();
     }
 }
 
@@ -159,7 +166,7 @@ fn window_does_not_grow_with_the_file() {
             let rules = PurgeShiftConfig { purge_mm: Some(1.0), cross_layers, ..PurgeShiftConfig::default() }
                 .validate()
                 .unwrap();
-            let (_, r) = purge_shift_bytes(rules, layers(n).as_bytes()).unwrap();
+            let (_, r) = lenient(rules, layers(n).as_bytes()).unwrap();
             assert_eq!(r.changes.total(), n);
             // The report holds at most KEPT_CHANGES entries; the rest are in its spill file and
             // still come out, in order, in the JSON report.
@@ -190,7 +197,7 @@ fn a_long_line_keeps_its_place_in_a_lenient_shift() {
     let mut text = b";TYPE:Perimeter\nG1 X1 E1 F600\nG1 X2 E2\n;".to_vec();
     text.extend(std::iter::repeat_n(b'x', gweave::gcode::reader::MAX_LINE + 1));
     text.extend_from_slice(b"\nG1 X3 E3\nT1\nG1 X4 E4\n");
-    let (out, _) = purge_shift_bytes(Rules::fixed(0.5).unwrap(), &text).unwrap();
+    let (out, _) = lenient(Rules::fixed(0.5).unwrap(), &text).unwrap();
     let long_at = |bytes: &[u8]| bytes.windows(3).position(|w| w == b";xx").unwrap();
     assert_eq!(long_at(&out), long_at(&text));
     assert_eq!(&out[..long_at(&out)], &text[..long_at(&text)]);

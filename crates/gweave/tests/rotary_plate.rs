@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use gweave::gcode::writer::Target;
-use gweave::pass::Quiet;
+use gweave::pass::Run;
 use gweave::rotary::cylinder::{FeedConvention, RotaryConfig};
 use gweave::rotary::report::wrap_file;
 use gweave::rotary::wrap::WrapConfig;
@@ -26,7 +26,7 @@ fn the_wrapped_plate_closes_on_itself_at_every_layer() {
         let mut config = WrapConfig::new(machine);
         config.unwrap.seam_rotation_per_layer_deg = 12.0;
         let out = dir.path().join("sleeve.gcode");
-        let report = wrap_file(&config, &plate(), &Target::File(out), None, &mut Quiet).unwrap();
+        let (report, _) = wrap_file(&config, Run::file(&plate()).to(&Target::File(out)), None).unwrap();
         assert_eq!(report.layers.len(), 10);
         let bead_deg = 360.0 * BEAD_MM / (PI * 30.0);
         let first = report.layers[0].layer.theta_range_deg[0];

@@ -270,7 +270,7 @@ fn keep_arc_length_keeps_e() {
 fn errors_name_the_line() {
     let config = WrapConfig::new(machine());
     let err = wrap_bytes(config.clone(), b"G1 X1 F600\nG20\nG1 X2\n").unwrap_err();
-    assert!(matches!(err, RotaryError::AtLine { line: 3, .. }), "{err}");
+    assert!(matches!(err, RotaryError::Engine(gweave::Error::Pass { line: Some(3), .. })), "{err}");
     let err = wrap_bytes(config.clone(), b"G1 X1 E1\n").unwrap_err();
     assert_eq!(err.to_string(), "<input>:1: invalid rotary setting `F`: a move before any feed rate was set");
     let err = wrap_bytes(config, b"G1 X1 F600\nG1 Z-50\n").unwrap_err();
@@ -281,7 +281,9 @@ fn errors_name_the_line() {
 
 fn as_inner(err: &RotaryError) -> &RotaryError {
     match err {
-        RotaryError::AtLine { error, .. } => error,
+        RotaryError::Engine(gweave::Error::Pass { source, .. }) => {
+            source.downcast_ref().expect("a RotaryError")
+        }
         other => other,
     }
 }
@@ -411,7 +413,7 @@ fn a_move_of_endless_turns_is_refused() {
     // A bead (a travel takes the short way round, in one move), on a part allowed to overlap.
     config.allow_overlap = true;
     let err = wrap_bytes(config, b"G1 X1 F600\nG1 Y1000000000 E1\n").unwrap_err();
-    assert!(matches!(err, RotaryError::AtLine { line: 2, .. }), "{err}");
+    assert!(matches!(err, RotaryError::Engine(gweave::Error::Pass { line: Some(2), .. })), "{err}");
     assert!(matches!(*as_inner(&err), RotaryError::TooManyChords { limit: 1_000_000 }), "{err}");
 }
 
@@ -422,6 +424,6 @@ fn a_move_of_endless_turns_is_refused() {
 fn a_huge_arc_is_refused_not_wrapped_into_gigabytes() {
     let config = WrapConfig::new(RotaryConfig::new(30.0));
     let err = wrap_bytes(config, b"G92 E0\nG1 X10 Y10 F3000\nG2 X10 Y0 I10000000 J0 E1 F1000\n").unwrap_err();
-    assert!(matches!(err, RotaryError::AtLine { line: 3, .. }), "{err}");
+    assert!(matches!(err, RotaryError::Engine(gweave::Error::Pass { line: Some(3), .. })), "{err}");
     assert!(matches!(*as_inner(&err), RotaryError::TooManyChords { limit: 1_000_000 }), "{err}");
 }

@@ -39,12 +39,9 @@ pub fn run(args: CatArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let mut bar = args.report.quiet.bar();
-    let mut run = Run::new(&args.input, &mut bar);
-    if args.lenient {
-        run.strictness = Strictness::Lenient;
-    }
+    let strictness = if args.lenient { Strictness::Lenient } else { Strictness::Strict };
     let mut copy = Identity::default();
-    run.transform(&mut copy, &target)?;
+    Run::file(&args.input).progress(&mut bar).strictness(strictness).to(&target).run(&mut copy)?;
     drop(bar);
     if args.report.emit(&copy.report)? && target != Target::Stdout {
         print_summary(|out| print_human(out, &args.input, &target, &copy.report))?;

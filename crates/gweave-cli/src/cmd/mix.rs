@@ -10,14 +10,20 @@ use gweave::colour::palette::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
 use gweave::firmware::MixCommands;
 use gweave::gcode::writer::Target;
-use gweave::post::mix::profile::{GradientSpace, GradientSpec, MixProfile, ScheduleEntry};
+use gweave::malformed::Transformed;
+use gweave::pass::Run;
+use gweave::post::mix::overrides::Overrides;
+use gweave::post::mix::profile::{GradientSpace, MixProfile};
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
-use gweave::post::mix::{mix_file, wizard::run_wizard};
+use gweave::post::mix::{mix, wizard::run_wizard};
 
 use gweave::range::PURGE_MM;
 
-use crate::common::{in_range, load_or_default, print_summary, write_bytes, OutputArgs, ReportArgs};
+use crate::args::Lenient;
+use crate::common::{
+    in_range, load_or_default, print_malformed, print_summary, write_bytes, OutputArgs, ReportArgs,
+};
 use crate::files::Files;
 use crate::finish;
 
@@ -88,6 +94,8 @@ pub struct MixArgs {
     #[arg(long)]
     pub wizard: bool,
     #[command(flatten)]
+    pub lenient: Lenient,
+    #[command(flatten)]
     pub report: ReportArgs,
 }
 
@@ -152,18 +160,25 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
 fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) -> Result<ExitCode> {
     finish::refuse_second_run(input, "mix")?;
     let mut bar = args.report.quiet.bar();
-    let (report, _) =
-        finish::with_metadata(Some(input), &target, |t| Ok(mix_file(profile, input, t, &mut bar)?))?;
+    let strictness = args.lenient.strictness();
+    let ((report, malformed), _) = finish::with_metadata(Some(input), &target, |t| {
+        let (report, ran) = mix(profile, Run::file(input).to(t).progress(&mut bar).strictness(strictness))?;
+        Ok((report, ran.malformed))
+    })?;
     drop(bar);
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");
     }
-    if args.report.emit(&report)? {
+    if args.report.emit(&Transformed::new(&report, malformed, strictness))? {
+        let human = |out: &mut dyn Write| {
+            print_human(out, &report)?;
+            print_malformed(out, &malformed)
+        };
         // Keep standard output clean when the G-code goes there.
         if target == Target::Stdout {
-            print_human(&mut std::io::stderr().lock(), &report)?;
+            human(&mut std::io::stderr().lock())?;
         } else {
-            print_summary(|out| print_human(out, &report))?;
+            print_summary(human)?;
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -172,32 +187,19 @@ fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) ->
 /// The profile file with the flags added on top.
 fn profile(args: &MixArgs) -> Result<MixProfile> {
     let mut profile = load_or_default(args.config.as_ref(), MixProfile::from_toml_str)?;
-    let space = match args.gradient_space {
-        Space::Mix => GradientSpace::Mix,
-        Space::Perceived => GradientSpace::Perceived,
-    };
-    for s in &args.at_layer {
-        profile.schedule.push(ScheduleEntry::parse_layer(s)?);
-    }
-    for s in &args.at_z {
-        profile.schedule.push(ScheduleEntry::parse_z(s)?);
-    }
-    for s in &args.gradient {
-        profile.gradient.push(GradientSpec::parse(s, space)?);
-    }
-    for s in &args.map {
-        profile.add_map(s)?;
-    }
-    if let Some(d) = args.dialect {
-        profile.hardware.dialect = Some(d);
-    }
-    if let Some(mm) = args.purge_mm {
-        profile.purge.set_length_mm(mm);
-    }
-    if let Some(mm) = args.initial_purge {
-        profile.purge.initial_mm = mm;
-    }
-    profile.validate()?;
+    profile.apply(&Overrides {
+        at_layer: args.at_layer.clone(),
+        at_z: args.at_z.clone(),
+        map: args.map.clone(),
+        gradient: args.gradient.clone(),
+        gradient_space: match args.gradient_space {
+            Space::Mix => GradientSpace::Mix,
+            Space::Perceived => GradientSpace::Perceived,
+        },
+        dialect: args.dialect,
+        purge_mm: args.purge_mm,
+        initial_purge_mm: args.initial_purge,
+    })?;
     Ok(profile)
 }
 

@@ -7,10 +7,15 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use gweave::gcode::writer::Target;
-use gweave::post::purge_shift::{purge_shift_file, Overrides, PurgeShiftConfig};
+use gweave::malformed::Transformed;
+use gweave::pass::Run;
+use gweave::post::purge_shift::{purge_shift, Overrides, PurgeShiftConfig};
 use gweave::range::{FILAMENT_DIAMETER_MM, POSITION_MM, PURGE_MM, PURGE_MM3};
 
-use crate::common::{in_range, load_or_default, numbers_in, print_summary, OutputArgs, ReportArgs};
+use crate::args::Lenient;
+use crate::common::{
+    in_range, load_or_default, numbers_in, print_malformed, print_summary, OutputArgs, ReportArgs,
+};
 use crate::files::Files;
 use crate::finish;
 
@@ -64,6 +69,8 @@ pub struct PurgeShiftArgs {
     #[arg(long, value_name = "X,Y", value_parser = numbers_in::<2>(POSITION_MM))]
     pub tower_at: Option<[f64; 2]>,
     #[command(flatten)]
+    pub lenient: Lenient,
+    #[command(flatten)]
     pub report: ReportArgs,
 }
 
@@ -100,8 +107,11 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     let rules = config(&args)?.validate()?;
     finish::refuse_second_run(&args.input, "purge-shift")?;
     let mut bar = args.report.quiet.bar();
-    let (mut report, _) = finish::with_metadata(Some(&args.input), &target, |t| {
-        Ok(purge_shift_file(rules, &args.input, t, &mut bar)?)
+    let strictness = args.lenient.strictness();
+    let ((mut report, malformed), _) = finish::with_metadata(Some(&args.input), &target, |t| {
+        let run = Run::file(&args.input).to(t).progress(&mut bar).strictness(strictness);
+        let (report, ran) = purge_shift(rules, run)?;
+        Ok((report, ran.malformed))
     })?;
     // The run's header is one line above every change.
     report.changes.offset_output_lines(1);
@@ -112,12 +122,16 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     if report.warnings_total > 20 {
         eprintln!("gweave: ... {} more warnings (see --json)", report.warnings_total - 20);
     }
-    if args.report.emit(&report)? {
+    if args.report.emit(&Transformed::new(&report, malformed, strictness))? {
+        let summary = |out: &mut dyn std::io::Write| {
+            write!(out, "{}", report.summary())?;
+            print_malformed(out, &malformed)
+        };
         // Keep standard output clean when the G-code goes there.
         if target == Target::Stdout {
-            eprint!("{}", report.summary());
+            summary(&mut std::io::stderr())?;
         } else {
-            print_summary(|out| write!(out, "{}", report.summary()))?;
+            print_summary(summary)?;
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -20,10 +20,13 @@ use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
 
+use crate::args::Lenient;
 use crate::common::hms;
-use crate::common::{in_range, load, print_summary, OutputArgs, ReportArgs};
+use crate::common::{in_range, load, print_malformed, print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
 use crate::finish;
+use gweave::malformed::Transformed;
+use gweave::pass::Run;
 
 /// Rotary (lathe-type) printing: wrap flat G-code onto a mandrel, or generate helical tubes.
 #[derive(Args, Debug)]
@@ -206,6 +209,8 @@ pub struct WrapArgs {
     #[arg(long, value_name = "MM", value_parser = in_range(CHORD_TOLERANCE_MM.or_zero()))]
     pub chord_tol: Option<f64>,
     #[command(flatten)]
+    pub lenient: Lenient,
+    #[command(flatten)]
     pub report: ReportArgs,
 }
 
@@ -238,14 +243,23 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     finish::refuse_second_run(&args.input, "rotary wrap")?;
     let mut bar = args.report.quiet.bar();
     let preview = args.machine.preview.as_deref();
-    let wrap = |t: &Target| Ok(report::wrap_file(&config, &args.input, t, preview, &mut bar)?);
+    let strictness = args.lenient.strictness();
+    let wrap = |t: &Target| {
+        let run = Run::file(&args.input).to(t).progress(&mut bar).strictness(strictness);
+        Ok(report::wrap_file(&config, run, preview)?)
+    };
     // Its own time: the default machine of the estimator does not read the rotary feed.
-    let (mut report, written) =
-        finish::with_metadata_timed(Some(&args.input), &target, wrap, |r: &WrapReport| Some(r.time_s))?;
+    let ((mut report, malformed), written) =
+        finish::with_metadata_timed(Some(&args.input), &target, wrap, |r| Some(r.0.time_s))?;
     report.output = written;
     drop(bar);
-    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
-        print_summary(|out| print_wrap(out, &report))?;
+    if args.report.emit(&Transformed::new(&report, malformed, strictness))?
+        && !matches!(target, Target::Stdout)
+    {
+        print_summary(|out| {
+            print_wrap(out, &report)?;
+            print_malformed(out, &malformed)
+        })?;
     }
     Ok(ExitCode::SUCCESS)
 }

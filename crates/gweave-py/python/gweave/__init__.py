@@ -205,6 +205,7 @@ def raster(
     invert: bool = False,
     flip_y: bool = False,
     one_way: bool = False,
+    fire_order: str = "after",
     density: int = 1,
     origin: Sequence[float] = (20.0, 20.0),
     layer_height: Optional[float] = None,
@@ -221,7 +222,9 @@ def raster(
 ) -> Dict[str, Any]:
     """Layer images (folders, globs, image files) or one ``.sl1`` to binder-jet inkjet G-code.
 
-    Per inked column: ``G1 X``, ``M400``, ``M700 P<head> S<bits>`` (``dialect="reprapfirmware"``: M578; ``"reprap"`` still accepted).
+    Per inked column: ``G1 X``, ``M400``, ``M700 P<head> S<bits>`` (``dialect="reprapfirmware"``: M578;
+    ``"reprap"`` still accepted; ``fire_order="before"``: fire, wait, then move, the binder-jet
+    seed's order).
     Units: ``origin`` mm, ``layer_height`` mm, ``pixel_mm`` mm (or ``dpi``), ``feed`` mm/min;
     ``recoat``/``start``/``end`` are files of G-code. ``head`` is a printhead profile TOML.
     Returns the report of ``gweave raster --json`` (layers, bands, columns, drops per head,
@@ -237,6 +240,7 @@ def raster(
             invert=invert,
             flip_y=flip_y,
             one_way=one_way,
+            fire_order=fire_order,
             density=density,
             origin=(float(origin[0]), float(origin[1])),
             layer_height=layer_height,
@@ -256,6 +260,7 @@ def raster(
                 ("--invert", invert),
                 ("--flip-y", flip_y),
                 ("--one-way", one_way),
+                ("--fire-order", None if fire_order == "after" else fire_order),
                 ("--density", None if density == 1 else density),
                 ("--origin", None if tuple(origin) == (20.0, 20.0) else tuple(origin)),
                 ("--layer-height", layer_height),
@@ -340,6 +345,7 @@ def purge_shift(
     markers: Optional[Sequence[str]] = None,
     fallback: Optional[str] = None,
     tower_at: Optional[Sequence[float]] = None,
+    lenient: bool = False,
 ) -> Dict[str, Any]:
     """Move every tool/mix change earlier by the purge so it prints inside the part (no wipe tower).
 
@@ -347,8 +353,10 @@ def purge_shift(
     amounts, colours, the washout model and rules (keyword arguments override it). With too
     little room, ``fallback`` is ``"partial"`` (accept the shortfall), ``"block"`` (purge the rest
     in a purge block, as ``mix`` does) or ``"tower"`` (on a small tower beside the part, its
-    corner ``tower_at`` = (x, y) mm if given). Returns the report: per change the requested,
-    moved and fallback purge, where the change now sits, and totals.
+    corner ``tower_at`` = (x, y) mm if given). A malformed line raises ``ValueError`` naming file,
+    line and column unless ``lenient=True``, which copies it through and counts it
+    (``malformed_lines``). Returns the report: per change the requested, moved and fallback purge,
+    where the change now sits, and totals.
     """
     text = None
     if config is not None:
@@ -371,6 +379,7 @@ def purge_shift(
             markers=pair,
             fallback=fallback,
             tower_at=None if tower_at is None else tuple(map(float, tower_at)),
+            lenient=lenient,
             options=_flags(
                 ("-c", config),
                 ("--purge-mm", purge_mm),
@@ -381,6 +390,7 @@ def purge_shift(
                 ("--markers", pair),
                 ("--fallback", fallback),
                 ("--tower-at", None if tower_at is None else tuple(tower_at)),
+                ("--lenient", lenient),
             ),
         )
     )
@@ -501,6 +511,7 @@ def mix(
     in_place: bool = False,
     backup: bool = True,
     force: bool = False,
+    lenient: bool = False,
 ) -> Dict[str, Any]:
     """Rewrite a file for a mixing hotend (see ``gweave mix``); returns the report.
 
@@ -510,6 +521,7 @@ def mix(
     default: the profile's, else the file's flavour) and ``purge_mm`` (mm of filament per change, 0: none;
     default: the profile's) and ``initial_purge`` (mm purged in the first mix before the first
     extrusion; default: the profile's ``[purge] initial_mm``) work as the command line flags.
+    ``lenient=True`` copies malformed lines through and counts them instead of raising.
     """
     text = ""
     if config is not None:
@@ -531,6 +543,7 @@ def mix(
             in_place=in_place,
             backup=backup,
             force=force,
+            lenient=lenient,
             options=_flags(
                 ("-c", config),
                 ("--at-layer", list(at_layer)),
@@ -541,6 +554,7 @@ def mix(
                 ("--dialect", dialect),
                 ("--purge-mm", purge_mm),
                 ("--initial-purge", initial_purge),
+                ("--lenient", lenient),
             ),
         )
     )
@@ -605,23 +619,34 @@ def rotary_wrap(
     axes: Optional[Sequence[str]] = None,
     keep_arc_length: Optional[bool] = None,
     seam_rotation: Optional[float] = None,
+    helical: bool = False,
+    allow_overlap: bool = False,
     chord_tol: Optional[float] = None,
     config: Optional[PathLike] = None,
     preview: Optional[PathLike] = None,
+    lenient: bool = False,
 ) -> Dict[str, Any]:
     """Wrap a part sliced flat onto the mandrel of a lathe-type printer (``gweave rotary wrap``).
 
     Flat X runs along the mandrel, Y around it (``theta = 360*y/(pi*D)``), Z away from it
     (radius ``D/2 + z``). ``mandrel_diameter`` in mm; ``feed_convention`` is ``"nist"``, ``"combined"`` or
     ``"inverse-time"``; ``rotary_unit`` ``"deg"`` or ``"mm"``; ``axes`` like ``"X,A,Z"``;
-    ``seam_rotation`` degrees per layer; ``chord_tol`` mm. Keywords override the TOML ``config``.
+    ``seam_rotation`` degrees per layer; ``helical=True`` winds each layer as one turn of a helix
+    (no weld line); ``allow_overlap=True`` wraps a part wider than the circumference over itself;
+    ``chord_tol`` mm; ``lenient=True`` copies malformed lines through and counts them instead of
+    raising. Keywords override the TOML ``config``.
     ``preview`` writes a 3D PNG of the executed path. Returns the report (per-layer radius,
     angles swept, seam angle; filament; time).
     """
     settings = {
         "machine": _machine(mandrel_diameter, feed_convention, rotary_unit, axes),
         "chord_tolerance_mm": chord_tol,
-        "unwrap": {"keep_arc_length": keep_arc_length, "seam_rotation_per_layer_deg": seam_rotation},
+        "allow_overlap": allow_overlap or None,
+        "unwrap": {
+            "keep_arc_length": keep_arc_length,
+            "seam_rotation_per_layer_deg": seam_rotation,
+            "helical": helical or None,
+        },
     }
     text = _gweave.rotary_wrap_json(
         _path(input, "input"),
@@ -629,11 +654,15 @@ def rotary_wrap(
         settings=json.dumps(settings),
         config=_opt_path(config, "config"),
         preview=_opt_path(preview, "preview"),
+        lenient=lenient,
         options=_flags(
             *_machine_flags(mandrel_diameter, feed_convention, rotary_unit, axes, config),
             ("--keep-arc-length", keep_arc_length),
             ("--seam-rotation", seam_rotation),
+            ("--helical", helical),
+            ("--allow-overlap", allow_overlap),
             ("--chord-tol", chord_tol),
+            ("--lenient", lenient),
         ),
     )
     return json.loads(text)

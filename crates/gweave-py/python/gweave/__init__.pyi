@@ -43,6 +43,7 @@ def raster(
     invert: bool = False,
     flip_y: bool = False,
     one_way: bool = False,
+    fire_order: str = "after",
     density: int = 1,
     origin: Sequence[float] = (20.0, 20.0),
     layer_height: Optional[float] = None,
@@ -91,6 +92,7 @@ def purge_shift(
     markers: Optional[Sequence[str]] = None,
     fallback: Optional[str] = None,
     tower_at: Optional[Sequence[float]] = None,
+    lenient: bool = False,
 ) -> Report: ...
 def preview(
     path: PathLike,
@@ -130,6 +132,7 @@ def mix(
     in_place: bool = False,
     backup: bool = True,
     force: bool = False,
+    lenient: bool = False,
 ) -> Report: ...
 def predict_colour(ratios: Sequence[float], profile: Optional[PathLike] = None) -> Dict[str, Any]: ...
 def main(argv: Optional[Sequence[str]] = None) -> int: ...
@@ -143,9 +146,12 @@ def rotary_wrap(
     axes: Optional[Sequence[str]] = None,
     keep_arc_length: Optional[bool] = None,
     seam_rotation: Optional[float] = None,
+    helical: bool = False,
+    allow_overlap: bool = False,
     chord_tol: Optional[float] = None,
     config: Optional[PathLike] = None,
     preview: Optional[PathLike] = None,
+    lenient: bool = False,
 ) -> Report: ...
 def rotary_tube(
     output: PathLike,

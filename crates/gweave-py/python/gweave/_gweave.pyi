@@ -27,6 +27,7 @@ def raster_json(
     invert: bool = False,
     flip_y: bool = False,
     one_way: bool = False,
+    fire_order: str = "after",
     density: int = 1,
     origin: Tuple[float, float] = (20.0, 20.0),
     layer_height: Optional[float] = None,
@@ -72,6 +73,7 @@ def purge_shift_json(
     markers: Optional[Tuple[str, str]] = None,
     fallback: Optional[str] = None,
     tower_at: Optional[Tuple[float, float]] = None,
+    lenient: bool = False,
     options: str = "",
 ) -> str: ...
 
@@ -93,6 +95,7 @@ def mix_json(
     in_place: bool = False,
     backup: bool = True,
     force: bool = False,
+    lenient: bool = False,
     options: str = "",
 ) -> str: ...
 def preview_json(
@@ -155,7 +158,14 @@ class Machine:
 Profile = Union[float, Sequence[Tuple[float, float]], Callable[[float], float]]
 
 def rotary_wrap_json(
-    input: str, output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None, options: str = ""
+    input: str,
+    output: str,
+    *,
+    settings: str,
+    config: Optional[str] = None,
+    preview: Optional[str] = None,
+    lenient: bool = False,
+    options: str = "",
 ) -> str: ...
 def rotary_tube_json(
     output: str, *, settings: str, config: Optional[str] = None, preview: Optional[str] = None, options: str = ""

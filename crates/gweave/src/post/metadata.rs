@@ -23,7 +23,7 @@
 
 use std::io::{self, BufRead, Write};
 
-use crate::pass::{Ctx, Pass};
+use crate::pass::{Ctx, Flow, Pass, PassError, Step};
 use crate::stats::DEFAULT_FILAMENT_DIAMETER_MM;
 
 /// The start of gweave's header line.
@@ -282,7 +282,7 @@ impl MetadataPass {
 }
 
 impl Pass for MetadataPass {
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         let bytes = ctx.line.bytes;
         let cura_flavour_first = self.first_line && bytes.starts_with(b";FLAVOR:");
         if self.first_line {
@@ -305,10 +305,10 @@ impl Pass for MetadataPass {
         if !self.header_written && (bytes == b";END_OF_HEADER" || cura_flavour_first) {
             self.write_header(out)?;
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 
-    fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> io::Result<()> {
+    fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> Result<(), PassError> {
         if self.first_line || !self.header_written {
             self.write_header(out)?;
         }
@@ -325,7 +325,8 @@ impl Pass for MetadataPass {
         let eol = String::from_utf8_lossy(&self.eol).into_owned();
         write!(out, "; filament used [mm] = {}{eol}", list(&f.filament_mm))?;
         write!(out, "; filament used [cm3] = {}{eol}", list(&f.cm3()))?;
-        write!(out, "; estimated printing time (normal mode) = {}{eol}", prusa_duration(f.time_s[0]))
+        write!(out, "; estimated printing time (normal mode) = {}{eol}", prusa_duration(f.time_s[0]))?;
+        Ok(())
     }
 }
 

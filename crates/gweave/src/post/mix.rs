@@ -40,6 +40,7 @@
 
 pub mod card;
 pub mod job;
+pub mod overrides;
 pub mod profile;
 pub mod report;
 pub mod schedule;
@@ -47,18 +48,18 @@ pub mod wizard;
 
 use std::collections::BTreeMap;
 use std::io::{self, Write};
-use std::path::Path;
 
 use crate::colour::dialect::{marlin_m163_m164, marlin_m165, rrf_m563, rrf_m567};
 use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
-use crate::gcode::flavour::{flavour_in, flavour_of_comment, read_flavour, require_e_extruder};
+use crate::eol::Eol;
+use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
 use crate::gcode::retraction::Retraction;
-use crate::gcode::state::{Effect, Motion, Move, State, StateOptions, E, X, Y, Z};
-use crate::gcode::writer::Target;
-use crate::pass::{drive_reader, keep, Ctx, Pass, Progress, Quiet, Run, Strictness};
+use crate::gcode::state::{Effect, Motion, Move, State, E, X, Y, Z};
+use crate::pass::{keep, Ctx, Flow, Pass, PassError, Ran, Run, Step};
 use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
+use crate::post::warning::Warning;
 use crate::post::zcap::ZCap;
 
 use crate::firmware::{Firmware, MixCommands};
@@ -78,17 +79,11 @@ pub enum MixPassError {
     /// A profile key out of its range (it names the table and the key).
     #[error(transparent)]
     Range(#[from] crate::range::OutOfRange),
-    /// A line of the input the profile cannot handle (`<input>` for text in memory).
-    #[error("{}:{line}: {message}", path.display())]
-    AtLine {
-        /// The input (`<input>` for text in memory).
-        path: std::path::PathBuf,
-        /// The line number, from 1.
-        line: u64,
-        /// What the profile cannot handle.
-        message: String,
-    },
-    /// A mix of the profile is invalid.
+    /// A value given that the profile cannot take, or a line of the input it cannot handle
+    /// (the pass driver names the file and the line: [`crate::Error::Pass`]).
+    #[error("{0}")]
+    Input(String),
+    /// A mix cannot be made (its colour, its ratios).
     #[error(transparent)]
     Mix(#[from] crate::colour::MixError),
     /// The engine failed (reading, writing, a malformed line).
@@ -126,7 +121,8 @@ pub struct MixPass {
     held: Vec<Held>,
     feed_before: f64,
     rapid_before: bool,
-    eol: Vec<u8>,
+    /// The file's line endings, for the lines the pass writes.
+    eol: Eol,
     /// Lines before the current line, `\n`-separated.
     pre: Vec<u8>,
     /// The current line's replacement, `\n`-separated (empty: keep the line).
@@ -164,7 +160,7 @@ impl MixPass {
             held: Vec::new(),
             feed_before: 0.0,
             rapid_before: false,
-            eol: b"\n".to_vec(),
+            eol: Eol::default(),
             pre: Vec::new(),
             repl: Vec::new(),
             replaced: false,
@@ -501,23 +497,24 @@ impl MixPass {
         let mut text = b";".to_vec();
         text.extend_from_slice(ctx.line.bytes);
         text.extend_from_slice(b" ; gweave mix: slicer tool-change retraction dropped");
-        text.extend_from_slice(&self.eol);
+        text.extend_from_slice(self.eol.get());
         text.extend_from_slice(b"G92 E");
         fmt.write(&mut text, mv.to[E], fmt.extrusion_decimals.max(5));
-        text.extend_from_slice(&self.eol);
+        text.extend_from_slice(self.eol.get());
         if ctx.block.has(b'F') {
             text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
             write_exact_feed(&mut text, fmt, mv.feed_mm_min);
-            text.extend_from_slice(&self.eol);
+            text.extend_from_slice(self.eol.get());
         }
         text
     }
 
     /// Renders `pre` and the line (or its replacement) with the file's line endings.
     fn render(&mut self, ctx: &Ctx<'_>, into: &mut Vec<u8>) {
-        push_lines(into, &self.pre, &self.eol, &self.eol);
+        // Writing into memory cannot fail.
+        let _ = self.eol.block(into, &self.pre);
         if self.replaced {
-            push_lines(into, &self.repl, &self.eol, ctx.line.eol);
+            let _ = self.eol.text(into, &self.repl, ctx.line.eol);
         } else {
             into.extend_from_slice(ctx.line.bytes);
             into.extend_from_slice(ctx.line.eol);
@@ -540,37 +537,23 @@ impl MixPass {
     }
 }
 
-/// Appends `\n`-separated `text` to `into` with `eol` after each line and `last_eol` after the
-/// last one.
-fn push_lines(into: &mut Vec<u8>, text: &[u8], eol: &[u8], last_eol: &[u8]) {
-    if text.is_empty() {
-        return;
-    }
-    let body = text.strip_suffix(b"\n").unwrap_or(text);
-    let mut lines = body.split(|&b| b == b'\n').peekable();
-    while let Some(l) = lines.next() {
-        into.extend_from_slice(l);
-        into.extend_from_slice(if lines.peek().is_some() { eol } else { last_eol });
+/// The pass's error for the line it was given (the driver names the file and the line).
+fn refused(e: MixPassError) -> PassError {
+    match e {
+        MixPassError::Config(message) => PassError::refuse(MixPassError::Input(message)),
+        other => PassError::refuse(other),
     }
 }
 
-fn at_line(line: u64) -> impl Fn(MixPassError) -> io::Error {
-    move |e| {
-        let e = match e {
-            // The driver knows the file: [`unwrap_error`] names it.
-            MixPassError::Config(message) => MixPassError::AtLine { path: Default::default(), line, message },
-            other => other,
-        };
-        io::Error::other(e)
-    }
+/// Writes `bytes` and reads on.
+fn write(out: &mut dyn Write, bytes: &[u8]) -> Step {
+    out.write_all(bytes)?;
+    Ok(Flow::Continue)
 }
 
 impl Pass for MixPass {
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
-        if !ctx.line.eol.is_empty() {
-            self.eol.clear();
-            self.eol.extend_from_slice(ctx.line.eol);
-        }
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
+        self.eol.learn(ctx.line.eol);
         self.pre.clear();
         self.repl.clear();
         self.replaced = false;
@@ -579,7 +562,7 @@ impl Pass for MixPass {
         }
         // The slicer tool before this line, for a retraction that a T on this line follows.
         let tool_before = self.slicer_tool;
-        self.process(ctx).map_err(at_line(ctx.line.number))?;
+        self.process(ctx).map_err(refused)?;
         self.feed_before = ctx.state.feed_mm_min;
         self.rapid_before = ctx.state.motion == Motion::Rapid;
         let dropping = !self.profile.tool_change.keep_slicer_retractions
@@ -593,7 +576,7 @@ impl Pass for MixPass {
         self.render(ctx, &mut bytes);
         if !dropping {
             self.write_held(false, out)?;
-            return out.write_all(&bytes);
+            return write(out, &bytes);
         }
         let retraction = match ctx.effect {
             Effect::Move(mv)
@@ -608,10 +591,10 @@ impl Pass for MixPass {
         };
         if retraction.is_some() {
             self.held.push(Held { bytes, retraction });
-            return Ok(());
+            return Ok(Flow::Continue);
         }
         if self.held.is_empty() {
-            return out.write_all(&bytes);
+            return write(out, &bytes);
         }
         match ctx.effect {
             Effect::ToolChange { .. } => {
@@ -619,88 +602,41 @@ impl Pass for MixPass {
                 let now = std::mem::replace(&mut self.slicer_tool, tool_before);
                 self.write_held(true, out)?;
                 self.slicer_tool = now;
-                out.write_all(&bytes)
+                write(out, &bytes)
             }
             Effect::Move(mv) if mv.from[X] != mv.to[X] || mv.from[Y] != mv.to[Y] || mv.e_mm() != 0.0 => {
                 self.write_held(false, out)?;
-                out.write_all(&bytes)
+                write(out, &bytes)
             }
             _ if self.held.len() < HOLD_LINES => {
                 self.held.push(Held { bytes, retraction: None });
-                Ok(())
+                Ok(Flow::Continue)
             }
             _ => {
                 self.write_held(false, out)?;
-                out.write_all(&bytes)
+                write(out, &bytes)
             }
         }
     }
 
-    fn finish(&mut self, _state: &State, out: &mut dyn Write) -> io::Result<()> {
+    fn finish(&mut self, _state: &State, out: &mut dyn Write) -> Result<(), PassError> {
         self.write_held(false, out)?;
         if !self.started {
-            self.acc
-                .warnings
-                .push("the file never moved filament nor reached its first layer: no mix was defined".into());
+            self.acc.warnings.push(Warning::NoMixDefined);
         }
         Ok(())
     }
 }
 
-/// The pass's own errors come back through the driver as I/O errors: the [`MixPassError`] they
-/// are, a line's error naming `input`.
-fn unwrap_error(e: crate::Error, input: &Path) -> MixPassError {
-    match e {
-        crate::Error::Io { source, .. } if source.get_ref().is_some_and(|e| e.is::<MixPassError>()) => {
-            match source.into_inner().map(|e| e.downcast::<MixPassError>()) {
-                Some(Ok(e)) => match *e {
-                    MixPassError::AtLine { line, message, .. } => {
-                        MixPassError::AtLine { path: input.to_path_buf(), line, message }
-                    }
-                    other => other,
-                },
-                _ => unreachable!("checked to be a MixPassError just above"),
-            }
-        }
-        e => MixPassError::Engine(e),
-    }
-}
-
-/// Runs the pass over a whole text in memory (tests, Python): strict parsing, Marlin semantics.
-/// A profile without a dialect takes the one the text's flavour implies.
-pub fn mix_bytes(mut profile: MixProfile, input: &[u8]) -> Result<(Vec<u8>, MixReport), MixPassError> {
-    let flavour = flavour_in(input);
-    profile.dialect_for_file(flavour.as_deref());
-    let mut pass = MixPass::new(profile)?;
-    let mut out = Vec::with_capacity(input.len() + input.len() / 8);
-    drive_reader(
-        input,
-        Path::new("<input>"),
-        StateOptions::default(),
-        Strictness::Strict,
-        &mut Quiet,
-        &mut pass,
-        &mut out,
-    )
-    .map_err(|e| unwrap_error(e, Path::new("<input>")))?;
-    Ok((out, pass.into_report()))
-}
-
-/// Runs the pass from a file into `target` (committed only on success), streaming. A profile
-/// without a dialect takes the one the file's flavour implies (read from both ends first).
-pub fn mix_file(
-    mut profile: MixProfile,
-    input: &Path,
-    target: &Target,
-    progress: &mut dyn Progress,
-) -> Result<MixReport, MixPassError> {
-    let flavour = read_flavour(input).map_err(|e| crate::Error::io(input, e))?;
-    require_e_extruder(input, flavour.as_deref())?;
+/// Runs the pass as `run` says (input, output, strictness, progress). A profile without a
+/// dialect takes the one the file's flavour implies (read from both ends first).
+pub fn mix(mut profile: MixProfile, run: Run<'_>) -> Result<(MixReport, Ran), MixPassError> {
+    let mut run = run.writes_e();
+    let flavour = run.flavour()?.map(str::to_owned);
     let chosen_blind = profile.hardware.dialect.is_none() && flavour.is_none();
     profile.dialect_for_file(flavour.as_deref());
     let mut pass = MixPass::new(profile)?;
-    let run = Run { flavour: Some(flavour), ..Run::new(input, progress) };
-    run.transform(&mut pass, target).map_err(|e| unwrap_error(e, input))?;
+    let ran = run.run(&mut pass)?;
     let mut report = pass.into_report();
     // A pipe cannot be read ahead: its flavour shows only once the dialect is written.
     if let Some(f) = report
@@ -708,13 +644,19 @@ pub fn mix_file(
         .as_deref()
         .filter(|f| chosen_blind && Firmware::resolve(None, Some(f)).mix_commands() != report.dialect)
     {
-        report.warnings.push(format!(
-            "the file's flavour ({f}) wants the {:?} dialect, but {:?} was written: give it as a file, not a pipe, or set hardware.dialect",
-            Firmware::resolve(None, Some(f)).mix_commands(),
-            report.dialect
-        ));
+        report.warnings.push(Warning::DialectNotTheFlavours {
+            flavour: f.to_owned(),
+            wanted: format!("{:?}", Firmware::resolve(None, Some(f)).mix_commands()),
+            written: format!("{:?}", report.dialect),
+        });
     }
-    Ok(report)
+    Ok((report, ran))
+}
+
+/// [`mix`] of a whole text in memory, strictly (tests, examples).
+pub fn mix_bytes(profile: MixProfile, input: &[u8]) -> Result<(Vec<u8>, MixReport), MixPassError> {
+    let (report, ran) = mix(profile, Run::text(input).to_memory())?;
+    Ok((ran.output, report))
 }
 
 #[cfg(test)]

@@ -15,3 +15,6 @@ pub mod zcap;
 
 // metadata: the slicer's figures rewritten for the file as written, and the run's header.
 pub mod metadata;
+
+// What the transforms warn about, typed.
+pub mod warning;

@@ -50,7 +50,7 @@ use serde::Serialize;
 use crate::gcode::state::State;
 use crate::gen::printhead::PrintheadProfile;
 use crate::malformed::{Counting, Malformed};
-use crate::pass::{Ctx, Pass, Progress, Quiet, Run, Strictness};
+use crate::pass::{Ctx, Pass, PassError, Progress, Quiet, Run, Step, Strictness};
 use crate::range::Range;
 use crate::rotary::cylinder::RotaryConfig;
 use crate::rotary::preview::RotaryReading;
@@ -191,11 +191,11 @@ pub(crate) const MAX_SEGMENTS: usize = 1 << 21;
 struct Both<'a>(&'a mut dyn Pass, &'a mut dyn Pass);
 
 impl Pass for Both<'_> {
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         self.0.line(ctx, &mut io::sink())?;
         self.1.line(ctx, out)
     }
-    fn finish(&mut self, state: &State, out: &mut dyn Write) -> io::Result<()> {
+    fn finish(&mut self, state: &State, out: &mut dyn Write) -> Result<(), PassError> {
         self.0.finish(state, &mut io::sink())?;
         self.1.finish(state, out)
     }
@@ -230,9 +230,7 @@ pub fn toolpath_with_stats(
     let mut tp = toolpath::ToolpathPass::new(options);
     let mut st = StatsPass::new(None);
     let mut both = Counting::new(Both(&mut tp, &mut st));
-    let mut run = Run::new(path, progress);
-    run.strictness = strictness;
-    let state = run.scan(&mut both)?;
+    let state = Run::file(path).progress(progress).strictness(strictness).scan(&mut both)?;
     let malformed = both.malformed;
     Ok((tp.finish_toolpath(), st.into_stats(&state), malformed))
 }
@@ -359,9 +357,7 @@ fn drawing_counted(
     let mut malformed = Malformed::default();
     let mut read = |p: &Path| -> Result<Toolpath, RenderError> {
         let mut pass = Counting::new(toolpath::ToolpathPass::new(options.toolpath_options(p, false)?));
-        let mut run = Run::new(p, &mut *progress);
-        run.strictness = options.strictness;
-        run.scan(&mut pass)?;
+        Run::file(p).progress(&mut *progress).strictness(options.strictness).scan(&mut pass)?;
         malformed.merge(pass.malformed);
         Ok(pass.pass.finish_toolpath())
     };

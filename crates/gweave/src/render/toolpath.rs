@@ -31,14 +31,14 @@
 //! each kind is dropped instead, as often as needed ([`ToolpathPass::thinning`]), so the ceiling
 //! holds for any file.
 
-use std::io::{self, Write};
+use std::io::Write;
 use std::ops::RangeInclusive;
 use std::path::Path;
 
 use crate::gcode::layers::{Feature, Region, Structure};
 use crate::gcode::state::{Effect, Move, Path as MovePath, E, X, Y, Z};
 use crate::gen::printhead::PrintheadProfile;
-use crate::pass::{Ctx, Pass, Quiet, Run};
+use crate::pass::{Ctx, Flow, Pass, Run, Step};
 use crate::rotary::cylinder::CylPoint;
 use crate::rotary::preview::{RotaryMove, RotaryReading};
 
@@ -162,7 +162,7 @@ impl Toolpath {
     /// Reads a file.
     pub fn from_file(path: &Path, options: ToolpathOptions) -> crate::Result<Toolpath> {
         let mut pass = ToolpathPass::new(options);
-        Run::new(path, &mut Quiet).scan(&mut pass)?;
+        Run::file(path).scan(&mut pass)?;
         Ok(pass.finish_toolpath())
     }
 
@@ -435,7 +435,7 @@ impl ToolpathPass {
 }
 
 impl Pass for ToolpathPass {
-    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
         let st = &ctx.state.structure;
         if let Some(layer) = st.layer {
             let n = layer as usize + 1;
@@ -471,25 +471,25 @@ impl Pass for ToolpathPass {
                 let tool = ctx.state.tool.min(u16::MAX as u32) as u16;
                 if let Some(m) = self.options.rotary.as_ref().map(|r| r.read(m)) {
                     self.cylinder_move(&m, st, tool, mix_rgb);
-                    return Ok(());
+                    return Ok(Flow::Continue);
                 }
                 // Only the start G-code (purge lines) is left out: the end G-code's parking is
                 // travel, drawn only on request, and any extrusion there is really printed.
                 if self.options.print_only && st.region == Region::Start {
-                    return Ok(());
+                    return Ok(Flow::Continue);
                 }
                 let layer = st.layer.unwrap_or(0);
                 if let Some(r) = &self.options.layers {
                     if !r.contains(&layer) {
-                        return Ok(());
+                        return Ok(Flow::Continue);
                     }
                 }
                 let extruding = m.is_extruding();
                 if !extruding && !self.options.travel {
-                    return Ok(());
+                    return Ok(Flow::Continue);
                 }
                 if m.to[X] == m.from[X] && m.to[Y] == m.from[Y] && m.to[Z] == m.from[Z] {
-                    return Ok(());
+                    return Ok(Flow::Continue);
                 }
                 let template = Segment {
                     start: [0.0; 3],
@@ -505,7 +505,7 @@ impl Pass for ToolpathPass {
             }
             _ => {}
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 }
 
@@ -513,7 +513,8 @@ impl Pass for ToolpathPass {
 mod tests {
     use super::*;
     use crate::gcode::state::StateOptions;
-    use crate::pass::{drive_reader, Strictness};
+    use crate::pass::{drive_reader, Quiet, Strictness};
+    use std::io;
 
     fn read(text: &str, pass: &mut ToolpathPass) {
         let (path, options) = (Path::new("t.gcode"), StateOptions::default());

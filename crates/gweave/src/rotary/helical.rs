@@ -30,14 +30,13 @@
 //! file once before writing to find that span and refuses such a part, naming both widths,
 //! unless overlap is allowed ([`check_width`]).
 
-use std::io::{self, Read, Write};
-use std::path::Path;
+use std::io::Write;
 
 use super::cylinder::RotaryConfig;
 use super::{Result, RotaryError};
 use crate::gcode::layers::{Region, Structure};
-use crate::gcode::state::{Effect, StateOptions, Y};
-use crate::pass::{drive_reader, Ctx, Pass, Quiet, Run, Strictness};
+use crate::gcode::state::{Effect, Y};
+use crate::pass::{Ctx, Flow, Pass, Run, Step};
 
 /// The `y` range of a part's extrusions in the print proper, mm (arcs by their end points).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -58,7 +57,7 @@ struct ExtentPass {
 }
 
 impl Pass for ExtentPass {
-    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
         if let Effect::Move(m) = ctx.effect {
             if m.is_extruding() && ctx.state.structure.region == Region::Print {
                 let (a, b) = (m.from[Y], m.to[Y]);
@@ -67,7 +66,7 @@ impl Pass for ExtentPass {
                 e.y_max_mm = e.y_max_mm.max(a).max(b);
             }
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 
     fn reads_words(&self) -> bool {
@@ -75,27 +74,11 @@ impl Pass for ExtentPass {
     }
 }
 
-/// The extent of a file's part (`None`: no extrusion in the print proper).
-pub fn file_extent(input: &Path, flavour: Option<String>) -> crate::Result<Option<PartExtent>> {
+/// The extent of the part `run` reads (`None`: no extrusion in the print proper), read
+/// before the run proper.
+pub fn part_extent(run: &mut Run<'_>) -> crate::Result<Option<PartExtent>> {
     let mut pass = ExtentPass::default();
-    let mut quiet = Quiet;
-    Run { flavour: Some(flavour), ..Run::new(input, &mut quiet) }.scan(&mut pass)?;
-    Ok(pass.extent)
-}
-
-/// The extent of a part in memory.
-pub fn bytes_extent(input: impl Read) -> crate::Result<Option<PartExtent>> {
-    let mut pass = ExtentPass::default();
-    let path = Path::new("<input>");
-    drive_reader(
-        input,
-        path,
-        StateOptions::default(),
-        Strictness::Strict,
-        &mut Quiet,
-        &mut pass,
-        &mut io::sink(),
-    )?;
+    run.prescan(&mut pass)?;
     Ok(pass.extent)
 }
 

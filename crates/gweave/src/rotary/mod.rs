@@ -97,17 +97,8 @@ pub enum RotaryError {
     /// A move was asked for before the machine's position was established.
     #[error("a move was written before the machine's position was known")]
     UnknownPosition,
-    /// A rewritten line failed, at this line of the input.
-    #[error("{}:{line}: {error}", path.display())]
-    AtLine {
-        /// The input file (`<input>` for text in memory).
-        path: std::path::PathBuf,
-        /// 1-based input line number.
-        line: u64,
-        /// What went wrong.
-        error: Box<RotaryError>,
-    },
-    /// The core engine failed (reading, syntax).
+    /// The core engine failed (reading, syntax), or a line could not be wrapped
+    /// ([`crate::Error::Pass`], its source the line's [`RotaryError`]).
     #[error(transparent)]
     Engine(#[from] crate::Error),
     /// Writing the output failed.

@@ -33,7 +33,7 @@ use super::cylinder::{surface_length_mm, CylPoint, MachineDelta, RotaryConfig};
 use super::{Result, RotaryError};
 use crate::gcode::layers::Feature;
 use crate::gcode::state::{axis_of, Effect, Move, Position, StateOptions, E};
-use crate::pass::{drive_reader, Ctx, Pass, Quiet, Strictness};
+use crate::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Step, Strictness};
 use crate::render::camera::Camera;
 use crate::render::canvas::Canvas;
 
@@ -179,9 +179,9 @@ struct Reader {
 }
 
 impl Pass for Reader {
-    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
         let Effect::Move(mv) = ctx.effect else {
-            return Ok(());
+            return Ok(Flow::Continue);
         };
         let m = self.reading.read(mv);
         self.time_s += m.t_s;
@@ -191,7 +191,7 @@ impl Pass for Reader {
                 Bead { from: m.from, to: m.to, e_mm: m.e_mm, speed_mm_s: m.speed_mm_s(), feature, layer: 0 };
             self.beads.push((bead, ctx.state.structure.commented_layer()));
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 }
 
@@ -203,7 +203,9 @@ pub fn read_back(machine: &RotaryConfig, input: impl Read) -> Result<Program> {
         input,
         std::path::Path::new("<rotary program>"),
         StateOptions::default(),
-        Strictness::Strict,
+        // A program gweave wrote holds a malformed line only where a lenient wrap copied one
+        // through (a strict one refuses it first): it is read past here too.
+        Strictness::Lenient,
         &mut Quiet,
         &mut reader,
         &mut io::sink(),

@@ -17,14 +17,13 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use super::cylinder::{FeedConvention, RotaryConfig, RotaryUnit};
-use super::helical::file_extent;
 use super::helix::{Handedness, ProgramSummary, TubeParams};
 use super::preview::{self, LayerSummary, PreviewOptions, Program};
-use super::wrap::{from_engine, Wrap, WrapConfig};
+use super::wrap::{wrap, WrapConfig};
 use super::{Result, RotaryError};
-use crate::gcode::flavour::{read_flavour, require_e_extruder};
 use crate::gcode::writer::{write_file, Output, Target};
-use crate::pass::Run;
+use crate::malformed::Malformed;
+use crate::run::{Dest, Run};
 
 /// Bead width drawn in the preview of a wrapped part, mm: 0, thin (2 px) toolpaths, so that
 /// the infill, the layers below and the weld line stay visible through a solid skin.
@@ -187,24 +186,22 @@ fn read_back(
     Ok(Some(program))
 }
 
-/// Wraps `input` to `target` (see [`super::wrap`]), reads the result back and reports it.
+/// Wraps the file `run` reads to the target it writes (see [`super::wrap`]), reads the result
+/// back and reports it, with the lines a lenient run read past.
 pub fn wrap_file(
     config: &WrapConfig,
-    input: &Path,
-    target: &Target,
+    run: Run<'_>,
     preview: Option<&Path>,
-    progress: &mut dyn crate::pass::Progress,
-) -> Result<WrapReport> {
-    check_preview(target, preview)?;
-    // The wrap writes the rotary axis as A: a file that extrudes with A (PrusaSlicer's mach3
-    // and machinekit flavours) cannot be wrapped without losing its extrusion.
-    let flavour = read_flavour(input).map_err(|e| RotaryError::Engine(crate::Error::io(input, e)))?;
-    require_e_extruder(input, flavour.as_deref()).map_err(RotaryError::Engine)?;
-    let extent = file_extent(input, flavour.clone()).map_err(|e| from_engine(e, input))?;
-    let mut pass = Wrap::new(config.clone(), extent)?;
-    let run = Run { flavour: Some(flavour), ..Run::new(input, progress) };
-    run.transform(&mut pass, target).map_err(|e| from_engine(e, input))?;
-    let output = written_path(target, Some(input));
+) -> Result<(WrapReport, Malformed)> {
+    let input = run.source().path().to_path_buf();
+    let output = match run.destination() {
+        Dest::Target(target) => {
+            check_preview(target, preview)?;
+            written_path(target, Some(&input))
+        }
+        _ => None,
+    };
+    let ran = wrap(config.clone(), run)?;
     let program = read_back(&config.machine, output.as_deref(), preview, WRAP_PREVIEW_BEAD_MM)?;
     let program = program.unwrap_or_default();
     let layers = program
@@ -216,8 +213,8 @@ pub fn wrap_file(
             seam_deg: config.unwrap.seam_deg(l.index).rem_euclid(360.0),
         })
         .collect();
-    Ok(WrapReport {
-        input: input.to_path_buf(),
+    let report = WrapReport {
+        input,
         output,
         machine: MachineReport::of(&config.machine),
         keep_arc_length: config.unwrap.keep_arc_length,
@@ -228,7 +225,8 @@ pub fn wrap_file(
         layers,
         filament_mm: program.filament_mm,
         time_s: program.time_s,
-    })
+    };
+    Ok((report, ran.malformed))
 }
 
 /// Writes the tube to `target`, reads it back and reports it.

@@ -47,20 +47,20 @@
 //! assert_eq!(String::from_utf8(wrap_bytes(config, before.as_bytes()).unwrap()).unwrap(), after);
 //! ```
 
-use std::io::{self, Write};
+use std::io::Write;
 
 use serde::{Deserialize, Serialize};
 
 use super::cylinder::{chord_pieces, CylPoint, RotaryConfig, UnwrapConfig};
 use super::emit::{rotary_number_format, validate_format, MoveSpec, MoveWriter};
-use super::helical::{bytes_extent, check_width, PartExtent, Ramp};
+use super::helical::{check_width, part_extent, PartExtent, Ramp};
 use super::helix::CHORD_TOLERANCE_MM;
 use super::setup::rewrite_setup;
 use super::{in_range, Result, RotaryError};
+use crate::eol::Eol;
 use crate::gcode::number::NumberFormat;
-use crate::gcode::state::StateOptions;
 use crate::gcode::state::{Effect, Move, Path, State, E, X, Y, Z};
-use crate::pass::{drive_reader, keep, Ctx, Pass, Quiet, Strictness};
+use crate::pass::{keep, Ctx, Flow, Pass, PassError, Ran, Run, Step};
 
 /// Settings of the wrap pass. In TOML, top-level keys first, then the tables:
 ///
@@ -152,6 +152,8 @@ pub struct Wrap {
     started: bool,
     /// The header naming the machine ([`RotaryConfig::header_lines`]) is out.
     headed: bool,
+    /// The file's line endings, for the lines the wrap writes.
+    eol: Eol,
     buffer: Vec<u8>,
     /// The helical ramp of the current layer (helical mapping only).
     ramp: Option<Ramp>,
@@ -169,7 +171,15 @@ impl Wrap {
         let origin = config.unwrap.map(&config.machine, [0.0; 3], 0)?;
         writer.assume(origin, [true, false, true]);
         let ramp = config.unwrap.helical.then(|| Ramp::new(extent.map_or(0.0, |e| e.y_min_mm)));
-        Ok(Self { config, writer, started: false, headed: false, buffer: Vec::new(), ramp })
+        Ok(Self {
+            config,
+            writer,
+            started: false,
+            headed: false,
+            eol: Eol::default(),
+            buffer: Vec::new(),
+            ramp,
+        })
     }
 
     fn map(&self, flat: [f64; 3], layer: u32) -> Result<CylPoint> {
@@ -382,80 +392,45 @@ fn flat_pieces(mv: &Move, tolerance_mm: f64) -> Result<Vec<[f64; 3]>> {
 }
 
 impl Pass for Wrap {
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
+        self.eol.learn(ctx.line.eol);
         if !self.headed {
             self.headed = true;
-            let eol: &[u8] = if ctx.line.eol.is_empty() { b"\n" } else { ctx.line.eol };
-            for line in self.config.machine.header_lines("wrap") {
-                out.write_all(line.as_bytes())?;
-                out.write_all(eol)?;
-            }
+            let header = self.config.machine.header_lines("wrap").join("\n");
+            self.eol.block(out, header.as_bytes())?;
         }
         self.buffer.clear();
-        let rewritten = self.rewrite(ctx).map_err(|e| {
-            // The driver knows the file: [`from_engine`] names it.
-            let path = std::path::PathBuf::new();
-            io::Error::other(RotaryError::AtLine { path, line: ctx.line.number, error: Box::new(e) })
-        })?;
-        if !rewritten {
+        if !self.rewrite(ctx).map_err(PassError::refuse)? {
             return keep(ctx, out);
         }
-        // The writer ends lines with `\n`; keep the file's own line ending (none after the
-        // last line of a file that has none).
-        let eol: &[u8] = if ctx.line.eol.is_empty() { b"\n" } else { ctx.line.eol };
-        let mut lines = self.buffer.split(|&b| b == b'\n').peekable();
-        while let Some(line) = lines.next() {
-            if lines.peek().is_none() {
-                break; // the empty tail after the final `\n`
-            }
-            out.write_all(line)?;
-            let last = lines.peek().is_some_and(|tail| tail.is_empty());
-            out.write_all(if last { ctx.line.eol } else { eol })?;
-        }
-        Ok(())
+        // The writer ends lines with `\n`: the file's own ending instead (none after the last
+        // line of a file that has none).
+        self.eol.text(out, &self.buffer, ctx.line.eol)?;
+        Ok(Flow::Continue)
     }
 
-    fn finish(&mut self, _state: &State, out: &mut dyn Write) -> io::Result<()> {
+    fn finish(&mut self, _state: &State, out: &mut dyn Write) -> Result<(), PassError> {
         if self.started {
-            self.writer.leave_feed_mode(out).map_err(io::Error::other)?;
+            self.writer.leave_feed_mode(out).map_err(|e| match e {
+                RotaryError::Io(e) => PassError::Write(e),
+                e => PassError::refuse(e),
+            })?;
         }
         Ok(())
     }
 }
 
-/// Wraps a whole G-code text in memory (tests, Python): strict parsing, Marlin semantics.
-pub fn wrap_bytes(config: WrapConfig, input: &[u8]) -> Result<Vec<u8>> {
-    let extent = bytes_extent(input).map_err(|e| from_engine(e, std::path::Path::new("<input>")))?;
+/// Wraps as `run` says (input, output, strictness, progress): the file is read once for the
+/// part's width first ([`super::helical`]), then wrapped. The wrap writes the rotary axis as
+/// `A`: a file that extrudes with `A` (PrusaSlicer's mach3 and machinekit flavours) is refused.
+pub fn wrap(config: WrapConfig, run: Run<'_>) -> Result<Ran> {
+    let mut run = run.writes_e();
+    let extent = part_extent(&mut run)?;
     let mut pass = Wrap::new(config, extent)?;
-    let mut out = Vec::with_capacity(input.len() * 2);
-    let run = drive_reader(
-        input,
-        std::path::Path::new("<input>"),
-        StateOptions::default(),
-        Strictness::Strict,
-        &mut Quiet,
-        &mut pass,
-        &mut out,
-    );
-    run.map(|_| out).map_err(|e| from_engine(e, std::path::Path::new("<input>")))
+    Ok(run.run(&mut pass)?)
 }
 
-/// The pass's own errors travel through the engine's driver as I/O errors: brings them back
-/// as the [`RotaryError`] they are, a line's error naming `input`; any other engine error is
-/// wrapped.
-pub fn from_engine(e: crate::Error, input: &std::path::Path) -> RotaryError {
-    match e {
-        crate::Error::Io { source, .. } if source.get_ref().is_some_and(|s| s.is::<RotaryError>()) => {
-            match source.into_inner().map(|s| s.downcast::<RotaryError>()) {
-                Some(Ok(inner)) => match *inner {
-                    RotaryError::AtLine { line, error, .. } => {
-                        RotaryError::AtLine { path: input.to_path_buf(), line, error }
-                    }
-                    other => other,
-                },
-                _ => unreachable!("checked to be a RotaryError just above"),
-            }
-        }
-        other => RotaryError::Engine(other),
-    }
+/// [`wrap`] of a whole text in memory, strictly (tests, examples).
+pub fn wrap_bytes(config: WrapConfig, input: &[u8]) -> Result<Vec<u8>> {
+    Ok(wrap(config, Run::text(input).to_memory())?.output)
 }

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::Path;
 
 use gweave::gcode::state::{Effect, Move, Path as MovePath, StateOptions, E, X, Y};
-use gweave::pass::{drive_reader, Ctx, Pass, Quiet, Strictness};
+use gweave::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Step, Strictness};
 use gweave::post::purge_shift::PurgeShiftReport;
 
 /// What one line did, in a replay.
@@ -29,7 +29,7 @@ pub struct Replay {
 struct Recorder(Replay);
 
 impl Pass for Recorder {
-    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> std::io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
         let mut text = ctx.line.bytes.to_vec();
         text.extend_from_slice(ctx.line.eol);
         let mv = match ctx.effect {
@@ -40,7 +40,7 @@ impl Pass for Recorder {
         if let Some(m) = mv.filter(Move::is_extruding) {
             self.0.printed_mm += m.e_mm();
         }
-        Ok(())
+        Ok(Flow::Continue)
     }
 }
 

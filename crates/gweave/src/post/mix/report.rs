@@ -13,6 +13,7 @@ use crate::colour::Srgb8;
 use super::profile::Hardware;
 use super::schedule::{Plan, Slot};
 use crate::firmware::MixCommands;
+use crate::post::warning::Warning;
 
 /// One mix of the job and where it went.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -92,7 +93,7 @@ pub struct MixReport {
     /// The dominant mix of each layer.
     pub layers: Vec<LayerMix>,
     /// What the run noticed and did anyway.
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 impl MixReport {
@@ -119,7 +120,7 @@ pub(crate) struct Accounting {
     layers: Vec<LayerMix>,
     /// The layer being printed.
     current: Option<OpenLayer>,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 impl Accounting {

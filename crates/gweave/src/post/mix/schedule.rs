@@ -24,6 +24,7 @@ use crate::range::{Ceiling, LAYER_NUMBER, MAX_LAYERS, POSITION_MM};
 
 use super::profile::{At, GradientSpace, MixBase, MixProfile, MixRef};
 use super::MixPassError;
+use crate::post::warning::Warning;
 
 /// Where a mix lives in the firmware.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -81,7 +82,7 @@ pub struct Plan {
     /// The two tools gradient steps take turns on (when they do not all fit).
     pub rotating_tools: [u32; 2],
     /// What planning noticed and did anyway.
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
     /// Decimals of the ratios written.
     pub decimals: Decimals,
 }
@@ -92,7 +93,7 @@ struct Resolver<'a> {
     model: MixingModel,
     decimals: Decimals,
     mixes: Vec<PlannedMix>,
-    warnings: Vec<String>,
+    warnings: Vec<Warning>,
 }
 
 impl Resolver<'_> {
@@ -149,11 +150,11 @@ impl Resolver<'_> {
         }
         if out_of_gamut {
             if let (Some(t), Some(de)) = (target, delta_e) {
-                self.warnings.push(format!(
-                    "{}: {} is out of gamut for these filaments; nearest mix is off by dE2000 {de:.1}",
-                    r.label(),
-                    t.to_hex()
-                ));
+                self.warnings.push(Warning::OutOfGamut {
+                    mix: r.label(),
+                    target_hex: t.to_hex(),
+                    delta_e: de,
+                });
             }
         }
         self.push(r.label(), mix, target, delta_e, out_of_gamut, false)

@@ -18,6 +18,7 @@ use crate::gcode::layers::{trim, Feature, Markers, ALL_FEATURES};
 use crate::gcode::lexer::parse_line_lean;
 use crate::gcode::line::Block;
 use crate::gcode::reader::{LineReader, Part};
+use crate::post::warning::Warning;
 
 /// Fails unless `input` has the begin marker and, after it, the end marker (a file without
 /// markers asked for passes).
@@ -83,7 +84,7 @@ impl FeatureComments {
 
     /// The warning, when the file has extrusions, none with a feature, and the rules keep the
     /// change off some feature while letting it through unmarked extrusions.
-    pub(crate) fn warning(&self, allowed: &BTreeSet<Feature>) -> Option<String> {
+    pub(crate) fn warning(&self, allowed: &BTreeSet<Feature>) -> Option<Warning> {
         if !self.extruded || self.known || !allowed.contains(&Feature::Unknown) {
             return None;
         }
@@ -92,12 +93,7 @@ impl FeatureComments {
         if kept_off.is_empty() {
             return None;
         }
-        Some(format!(
-            "the file has no feature comments (;TYPE:), so the rule keeping changes off {} cannot apply: \
-             changes moved through every extrusion; slice with a slicer that writes them (PrusaSlicer, Cura, ...) \
-             or pass --allow-features to say what may take the purge",
-            kept_off.join(", ")
-        ))
+        Some(Warning::NoFeatureComments { kept_off })
     }
 }
 
@@ -157,7 +153,7 @@ mod tests {
         let mut seen = FeatureComments::default();
         assert_eq!(seen.warning(&default), None, "no extrusion, no warning");
         seen.extrusion(Feature::Unknown);
-        let w = seen.warning(&default).unwrap();
+        let w = seen.warning(&default).unwrap().to_string();
         assert!(
             w.starts_with(
                 "the file has no feature comments (;TYPE:), so the rule keeping changes off outer_wall"

@@ -63,16 +63,17 @@ pub use config::{ConfigError, Fallback, Overrides, PurgeShiftConfig, Rules, Towe
 pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
 
 use crate::colour::dialect::MixingState;
+use crate::eol::Eol;
 use crate::error::Result;
 use crate::firmware::MixingCode;
-use crate::gcode::flavour::{read_flavour, require_e_extruder};
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::line::Block;
 use crate::gcode::reader::RawLine;
 use crate::gcode::state::{Effect, StateOptions, X, Y, Z};
-use crate::gcode::writer::Target;
-use crate::pass::{drive_reader, Ctx, OwnedLine, Pass, Progress, Quiet, Run, Strictness};
+use crate::pass::{Ctx, Flow, OwnedLine, Pass, PassError, Ran, Run, Source, Step};
 use crate::post::purge_block::{purge_start_pos, PurgeStart};
+use crate::post::warning::{Shortfall, Warning};
+use crate::run::IN_MEMORY;
 use checks::{require_markers, FeatureComments};
 use fallback::{write_fallback, Spot, Surroundings};
 use split::{split, Splittable};
@@ -145,7 +146,8 @@ pub struct PurgeShift {
     env: Surroundings,
     mixing: MixingState,
     colour: Colour,
-    out_lines: u64,
+    /// Lines written, with the ending each had.
+    emitted: Eol,
     report: PurgeShiftReport,
     /// Buffers of written lines, reused for new held lines.
     spare: Vec<OwnedLine>,
@@ -177,7 +179,7 @@ impl PurgeShift {
             env: Surroundings::default(),
             mixing,
             colour,
-            out_lines: 0,
+            emitted: Eol::default(),
             report,
             spare: Vec::new(),
             features: FeatureComments::default(),
@@ -200,9 +202,7 @@ impl PurgeShift {
     }
 
     fn emit(&mut self, out: &mut dyn Write, bytes: &[u8], eol: &[u8]) -> io::Result<()> {
-        self.out_lines += 1;
-        out.write_all(bytes)?;
-        out.write_all(eol)
+        self.emitted.line(out, bytes, eol)
     }
 
     fn emit_line(&mut self, out: &mut dyn Write, line: &OwnedLine) -> io::Result<()> {
@@ -352,10 +352,12 @@ impl PurgeShift {
         let to_tool = self.colour.tool;
         let (requested_mm, known) = self.rules.purge_mm(from_tool, to_tool);
         if !known {
-            self.report.warn(format!(
-                "line {}: no purge amount for T{from_tool}->T{to_tool}; using the largest configured, {requested_mm:.3} mm",
-                group[0].number
-            ));
+            self.report.warn(Warning::NoPurgeAmount {
+                line: group[0].number,
+                from_tool,
+                to_tool,
+                used_mm: requested_mm,
+            });
         }
         // Walk back: `need` is what is still to be found.
         let mut need = requested_mm;
@@ -420,7 +422,7 @@ impl PurgeShift {
             if let Kind::Extrude { split: s, .. } = &h.kind {
                 let halves = split(&h.line.bytes, s, t);
                 self.emit(out, &halves.first, &h.line.eol)?;
-                change.output_line = self.out_lines + 1;
+                change.output_line = self.emitted.lines() + 1;
                 self.emit_change(out, group, &mut change, Some(spot_of(s, &s.end_of(&halves.first))))?;
                 match &halves.second {
                     Some(second) => self.emit(out, second, &h.line.eol)?,
@@ -433,7 +435,7 @@ impl PurgeShift {
             }
         }
         if change.split.is_none() {
-            change.output_line = self.out_lines + 1;
+            change.output_line = self.emitted.lines() + 1;
             self.emit_change(out, group, &mut change, spot)?;
         }
         for h in &held[rest..] {
@@ -472,26 +474,27 @@ impl PurgeShift {
         let text = spot.and_then(|spot| {
             write_fallback(&self.rules, &mut self.env, &spot, change.layer, short_mm, &label)
         });
-        let how = match (&text, spot) {
-            (Some(_), _) => format!("; the rest purged by the {} fallback", self.rules.fallback.name()),
-            (None, Some(s)) if s.inches && self.rules.fallback != Fallback::Partial => {
-                "; no fallback purge: the file is in inches".into()
-            }
+        let then = match (&text, spot) {
+            (Some(_), _) => Shortfall::Purged(self.rules.fallback.name()),
+            (None, Some(s)) if s.inches && self.rules.fallback != Fallback::Partial => Shortfall::Inches,
             // A change that opens its layer, as `gweave mix` writes them, cannot move at all
             // unless the purge may reach into the layer below.
             _ if change.moved_mm == 0.0 && change.stopped_by == Some(LAYER_CHANGE) => {
-                "; it opens its layer: --cross-layers lets the purge reach the layer below".into()
+                Shortfall::OpensItsLayer
             }
-            _ => String::new(),
+            _ => Shortfall::Accepted,
         };
-        self.report.warn(format!(
-            "layer {}, line {}: T{from}->T{to} purge short by {short_mm:.3} mm ({:.3} of {:.3} mm; stopped by {}){how}",
-            change.layer.map_or("-".into(), |l| l.to_string()),
-            change.change_lines[0],
-            change.moved_mm,
-            change.requested_mm,
-            change.stopped_by.unwrap_or_default(),
-        ));
+        self.report.warn(Warning::PurgeShort {
+            layer: change.layer,
+            line: change.change_lines[0],
+            from_tool: from,
+            to_tool: to,
+            short_mm,
+            moved_mm: change.moved_mm,
+            requested_mm: change.requested_mm,
+            stopped_by: change.stopped_by.unwrap_or_default(),
+            then,
+        });
         if let Some(text) = text {
             let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
             for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
@@ -537,14 +540,14 @@ fn is_change_line(block: &Block) -> bool {
 impl Pass for PurgeShift {
     /// A line too long to read (only a lenient run gets here): nothing is moved across it, and
     /// the lines held back go out before it, so that it keeps its place.
-    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> Result<(), PassError> {
         self.close_group(out)?;
         self.flush(out, "a line too long to read")?;
         out.write_all(piece.bytes)?;
-        out.write_all(piece.eol)
+        Ok(out.write_all(piece.eol)?)
     }
 
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
         self.env.follow_retraction(ctx.effect);
@@ -565,19 +568,19 @@ impl Pass for PurgeShift {
             self.group.extend(tail);
             let owned = self.own(&ctx.line);
             self.group.push(owned);
-            return Ok(());
+            return Ok(Flow::Continue);
         }
         if self.group_before.is_some() {
             if ctx.block.is_empty() {
                 let owned = self.own(&ctx.line);
                 self.group_tail.push(owned);
-                return Ok(());
+                return Ok(Flow::Continue);
             }
             self.close_group(out)?;
         }
         if !in_print {
             self.flush(out, "the start of the print proper")?;
-            return self.emit_raw(out, ctx);
+            return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
         }
         if structure.layer_started {
             self.layer_start(out)?;
@@ -587,11 +590,11 @@ impl Pass for PurgeShift {
                 self.features.extrusion(structure.feature);
                 if !self.rules.allowed.contains(&structure.feature) {
                     self.flush(out, "a feature that may not take the purge")?;
-                    return self.emit_raw(out, ctx);
+                    return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
                 }
                 if ctx.block.line_number.is_some() || ctx.block.checksum.is_some() {
                     self.flush(out, "a numbered line")?;
-                    return self.emit_raw(out, ctx);
+                    return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
                 }
                 let state = ctx.state;
                 let split = Splittable {
@@ -604,20 +607,21 @@ impl Pass for PurgeShift {
             }
             Effect::Home { .. } => {
                 self.flush(out, "homing")?;
-                return self.emit_raw(out, ctx);
+                return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
             }
             _ if tool_dependent(ctx.block) => {
                 self.flush(out, "a command for the active tool")?;
-                return self.emit_raw(out, ctx);
+                return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
             }
             _ => Kind::Other,
         };
         let owned = self.own(&ctx.line);
         let held = self.held(owned, kind, structure.layer, structure.feature);
-        self.push(out, held)
+        self.push(out, held)?;
+        Ok(Flow::Continue)
     }
 
-    fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> io::Result<()> {
+    fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> Result<(), PassError> {
         self.close_group(out)?;
         self.flush(out, "the end of the file")?;
         if let Some(w) = self.features.warning(&self.rules.allowed) {
@@ -626,44 +630,30 @@ impl Pass for PurgeShift {
         let r = &mut self.report;
         r.saved_mm = r.moved_mm;
         r.saved_mm3 = self.rules.mm3(r.moved_mm);
-        r.changes.flush()
+        Ok(r.changes.flush()?)
     }
 }
 
-/// Runs the pass over in-memory G-code.
-pub fn purge_shift_bytes(rules: Rules, input: &[u8]) -> Result<(Vec<u8>, PurgeShiftReport)> {
-    require_markers(input, Path::new("<input>"), rules.markers())?;
-    let mut pass = PurgeShift::new(rules);
-    let mut out = Vec::with_capacity(input.len() + 1024);
-    drive_reader(
-        input,
-        Path::new("<input>"),
-        pass.state_options(),
-        Strictness::Lenient,
-        &mut Quiet,
-        &mut pass,
-        &mut out,
-    )?;
-    Ok((out, pass.into_report()))
-}
-
-/// Runs the pass over a file into `target` (a file, in place, or standard output).
-pub fn purge_shift_file(
-    rules: Rules,
-    input: &Path,
-    target: &Target,
-    progress: &mut dyn Progress,
-) -> Result<PurgeShiftReport> {
-    let flavour = read_flavour(input).map_err(|e| crate::Error::io(input, e))?;
-    require_e_extruder(input, flavour.as_deref())?;
+/// Runs the pass as `run` says (input, output, strictness, progress).
+pub fn purge_shift(rules: Rules, run: Run<'_>) -> Result<(PurgeShiftReport, Ran)> {
+    let mut run = run.writes_e();
+    run.flavour()?;
     if rules.markers().begin.is_some() {
-        let file = std::fs::File::open(input).map_err(|e| crate::Error::io(input, e))?;
-        require_markers(file, input, rules.markers())?;
+        match run.source() {
+            Source::File(path) => {
+                let file = std::fs::File::open(path).map_err(|e| crate::Error::io(path, e))?;
+                require_markers(file, path, rules.markers())?;
+            }
+            Source::Text(text) => require_markers(text, Path::new(IN_MEMORY), rules.markers())?,
+        }
     }
     let mut pass = PurgeShift::new(rules);
-    let mut run = Run::new(input, progress);
-    run.options = pass.state_options();
-    run.flavour = Some(flavour);
-    run.transform(&mut pass, target)?;
-    Ok(pass.into_report())
+    let ran = run.options(pass.state_options()).run(&mut pass)?;
+    Ok((pass.into_report(), ran))
+}
+
+/// [`purge_shift`] of a whole text in memory, strictly (tests, examples).
+pub fn purge_shift_bytes(rules: Rules, input: &[u8]) -> Result<(Vec<u8>, PurgeShiftReport)> {
+    let (report, ran) = purge_shift(rules, Run::text(input).to_memory())?;
+    Ok((ran.output, report))
 }

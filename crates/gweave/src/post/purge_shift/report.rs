@@ -13,6 +13,7 @@ use serde::{Serialize, Serializer};
 use serde_json::value::RawValue;
 
 use crate::gcode::layers::Feature;
+use crate::post::warning::Warning;
 
 /// Where a change was split into a move.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -193,7 +194,7 @@ pub struct PurgeShiftReport {
     /// Most lines ever held back at once (the bounded window).
     pub max_window_lines: usize,
     /// The first warnings (at most [`MAX_WARNINGS`]; every change's shortfall is in `changes`).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
     /// How many warnings there were in all.
     pub warnings_total: u64,
 }
@@ -213,7 +214,7 @@ impl PurgeShiftReport {
         self.changes.push(c)
     }
 
-    pub(crate) fn warn(&mut self, text: String) {
+    pub(crate) fn warn(&mut self, text: Warning) {
         self.warnings_total += 1;
         if self.warnings.len() < MAX_WARNINGS {
             self.warnings.push(text);
@@ -222,7 +223,7 @@ impl PurgeShiftReport {
 
     /// A warning about the whole file, put before the per-change ones (the CLI shows the first
     /// few only).
-    pub(crate) fn warn_first(&mut self, text: String) {
+    pub(crate) fn warn_first(&mut self, text: Warning) {
         self.warnings_total += 1;
         self.warnings.insert(0, text);
         self.warnings.truncate(MAX_WARNINGS);

@@ -1,0 +1,147 @@
+//! Binder-jet raster: layer images or a `.sl1` into inkjet G-code, the nozzle test pattern,
+//! and STL slicing into layer images.
+
+use std::path::PathBuf;
+
+use gweave::gcode::writer::Target;
+use gweave::pass::Quiet;
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+
+use crate::{finish, to_json};
+
+// ---- binder-jet raster (gweave raster, slice-raster) ----
+
+/// An anyhow error from the CLI's job runner: OSError when a file could not be read or written.
+fn job_err(e: anyhow::Error) -> PyErr {
+    let io = e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some());
+    let text = format!("{e:#}");
+    if io {
+        PyOSError::new_err(text)
+    } else {
+        PyValueError::new_err(text)
+    }
+}
+
+/// Rasters layer images or a `.sl1` into inkjet G-code; the report as JSON text (see
+/// `gweave raster --json`).
+#[pyfunction]
+#[pyo3(signature = (inputs, output, *, head=None, threshold=0.5, invert=false, flip_y=false, one_way=false,
+    fire_order="after", density=1, origin=(20.0, 20.0), layer_height=None, pixel_mm=None, dpi=None, heads=None, channels=None,
+    recoat=None, start=None, end=None, dialect=None, feed=None, fast_estimate=false, options=""))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn raster_json(
+    py: Python<'_>,
+    inputs: Vec<PathBuf>,
+    output: PathBuf,
+    head: Option<PathBuf>,
+    threshold: f64,
+    invert: bool,
+    flip_y: bool,
+    one_way: bool,
+    fire_order: &str,
+    density: u32,
+    origin: (f64, f64),
+    layer_height: Option<f64>,
+    pixel_mm: Option<f64>,
+    dpi: Option<f64>,
+    heads: Option<usize>,
+    channels: Option<String>,
+    recoat: Option<PathBuf>,
+    start: Option<PathBuf>,
+    end: Option<PathBuf>,
+    dialect: Option<&str>,
+    feed: Option<f64>,
+    fast_estimate: bool,
+    options: &str,
+) -> PyResult<String> {
+    let job_options = gweave_cli::raster_job::JobOptions {
+        inputs,
+        head,
+        threshold,
+        invert,
+        flip_y,
+        one_way,
+        fire_order: match fire_order {
+            "after" => gweave::gen::raster::FireOrder::After,
+            "before" => gweave::gen::raster::FireOrder::Before,
+            other => {
+                let text = format!("fire_order must be 'after' or 'before', got {other:?}");
+                return Err(PyValueError::new_err(text));
+            }
+        },
+        density,
+        origin_mm: origin,
+        layer_height_mm: layer_height,
+        pixel_mm,
+        dpi,
+        heads,
+        channels,
+        recoat,
+        start,
+        end,
+        dialect: crate::args::firmware("dialect", dialect)?,
+        feed_mm_min: feed,
+        fast_estimate,
+    };
+    let job = job_options.job().map_err(job_err)?;
+    let write = |t: &Target| job.run(t, &mut Quiet).map_err(job_err);
+    // Its own time counts the printhead's firing, which the estimator does not know.
+    let own_time = |r: &gweave_cli::raster_job::JobReport| Some(r.time.total_s);
+    let target = Target::File(output);
+    let report = py.allow_threads(|| finish::finished(None, &target, "raster", options, write, own_time))?;
+    to_json(&report)
+}
+
+/// Writes a nozzle test pattern; the raster report as JSON text.
+#[pyfunction]
+#[pyo3(signature = (output, *, head=None, heads=None, dialect=None, columns=4, origin=(20.0, 20.0)))]
+pub(crate) fn raster_test_pattern_json(
+    py: Python<'_>,
+    output: PathBuf,
+    head: Option<PathBuf>,
+    heads: Option<usize>,
+    dialect: Option<&str>,
+    columns: usize,
+    origin: (f64, f64),
+) -> PyResult<String> {
+    let options = gweave_cli::raster_job::JobOptions {
+        head,
+        heads,
+        dialect: crate::args::firmware("dialect", dialect)?,
+        origin_mm: origin,
+        ..Default::default()
+    };
+    let (report, _) =
+        py.allow_threads(|| options.test_pattern(&Target::File(output), columns)).map_err(job_err)?;
+    to_json(&report)
+}
+
+/// Slices an STL into 1-bit layer PNGs in `out_dir`; the report as JSON text (see
+/// `gweave slice-raster --json`).
+#[pyfunction]
+#[pyo3(signature = (stl, out_dir, *, layer_height, dpi=96.0, pixel_mm=None, margin=0))]
+pub(crate) fn slice_raster_json(
+    py: Python<'_>,
+    stl: PathBuf,
+    out_dir: PathBuf,
+    layer_height: f64,
+    dpi: f64,
+    pixel_mm: Option<f64>,
+    margin: usize,
+) -> PyResult<String> {
+    use gweave::gen::slice_raster::{slice_to_dir, SliceConfig};
+    let cfg = SliceConfig {
+        layer_height_mm: layer_height,
+        pixel_mm: pixel_mm.unwrap_or(25.4 / dpi),
+        margin_px: margin,
+    };
+    let report = py.allow_threads(|| {
+        let mesh = gweave::gen::stl::read_stl(&stl).map_err(|e| match e {
+            gweave::gen::stl::StlError::Io { .. } => PyOSError::new_err(e.to_string()),
+            _ => PyValueError::new_err(format!("{}: {e}", stl.display())),
+        })?;
+        slice_to_dir(&mesh, &cfg, &out_dir).map_err(|e| PyValueError::new_err(e.to_string()))
+    })?;
+    to_json(&report)
+}

@@ -1,0 +1,137 @@
+//! The virtual printer (`gweave sim`, `gweave estimate`, `gweave.Machine`).
+
+use std::path::PathBuf;
+
+use gweave::gcode::container;
+use gweave::gcode::flavour::read_firmware;
+use gweave::gcode::reader::{LineReader, Part};
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+
+use crate::args::os_error;
+use crate::to_json;
+
+// --- gweave-sim: the virtual printer ---
+
+fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::MachineProfile> {
+    match machine {
+        None => Ok(gweave_sim::MachineProfile::default()),
+        Some(path) => {
+            let text = std::fs::read_to_string(&path).map_err(|e| os_error(&path, &e))?;
+            gweave_sim::MachineProfile::from_toml_str(&text)
+                .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
+        }
+    }
+}
+
+fn sim_err(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// Runs a file through the virtual printer; the report as JSON text (see `gweave sim --json`).
+#[pyfunction]
+#[pyo3(signature = (path, *, machine=None, fault=Vec::new()))]
+pub(crate) fn sim_json(
+    py: Python<'_>,
+    path: PathBuf,
+    machine: Option<PathBuf>,
+    fault: Vec<String>,
+) -> PyResult<String> {
+    let mut profile = machine_profile(machine)?;
+    for spec in &fault {
+        let spec = spec.parse::<gweave_sim::FaultSpec>();
+        profile.faults.push(spec.map_err(|e| PyValueError::new_err(format!("fault: {e}")))?);
+    }
+    let report = py.allow_threads(|| {
+        let mut m = gweave_sim::Machine::new(profile).map_err(sim_err)?;
+        m.read_as(read_firmware(&path).map_err(|e| os_error(&path, &e))?);
+        let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
+        let mut reader = LineReader::new(file);
+        let mut out = |_t: f64, _l: &str| {};
+        while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
+            match line.part {
+                Part::Whole => {
+                    if m.execute(line.bytes, &mut out) == gweave_sim::Outcome::Halted {
+                        break;
+                    }
+                }
+                Part::Piece => {}
+                Part::Last { .. } => m.skip_long_line(),
+            }
+        }
+        m.finish(&mut out);
+        Ok::<_, PyErr>(m.report())
+    })?;
+    to_json(&report)
+}
+
+/// Estimates a file's print time with the virtual printer's planner alone, on three threads; the
+/// report as JSON text (see `gweave estimate --json`).
+#[pyfunction]
+#[pyo3(signature = (path, *, machine=None, steps=false))]
+pub(crate) fn estimate_json(
+    py: Python<'_>,
+    path: PathBuf,
+    machine: Option<PathBuf>,
+    steps: bool,
+) -> PyResult<String> {
+    let profile = machine_profile(machine)?;
+    let report = py.allow_threads(|| {
+        let firmware = read_firmware(&path).map_err(|e| os_error(&path, &e))?;
+        let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
+        gweave_sim::estimate_report(file, &profile, firmware, steps)
+            .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
+    })?;
+    to_json(&report)
+}
+
+/// A virtual printer to drive one command at a time, as a host would over a serial line.
+/// (Unsendable: it stays on the thread that made it; the controllers are not `Sync`.)
+#[pyclass(module = "gweave", unsendable)]
+pub(crate) struct Machine {
+    inner: gweave_sim::Machine,
+}
+
+#[pymethods]
+impl Machine {
+    /// A machine at power-on; `machine` is a profile TOML path (default: RAMPS 1.4 Marlin).
+    #[new]
+    #[pyo3(signature = (*, machine=None))]
+    fn new(machine: Option<PathBuf>) -> PyResult<Self> {
+        let inner = gweave_sim::Machine::new(machine_profile(machine)?).map_err(sim_err)?;
+        Ok(Self { inner })
+    }
+
+    /// The lines printed at power-on (`start`, ...).
+    fn boot_lines(&self) -> Vec<String> {
+        self.inner.boot_lines()
+    }
+
+    /// Executes one command; returns its replies as a serial port would show them, ending
+    /// with `ok` unless the machine is halted (`M105` answers `ok T:...` in one line).
+    fn execute(&mut self, line: &str) -> Vec<String> {
+        let mut replies = Vec::new();
+        let outcome = self.inner.execute(line.as_bytes(), &mut |_t, l| replies.push(l.to_owned()));
+        if outcome == gweave_sim::Outcome::Ok && !self.inner.acknowledged() {
+            replies.push("ok".to_owned());
+        }
+        replies
+    }
+
+    /// Simulated time, s.
+    #[getter]
+    fn now_s(&self) -> f64 {
+        self.inner.now_s()
+    }
+
+    /// Executes everything still queued in the planner (the end of a job).
+    fn finish(&mut self) {
+        self.inner.finish(&mut |_, _| {});
+    }
+
+    /// The report so far as a dict (the same fields as `gweave sim --json`).
+    fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = to_json(&self.inner.report())?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+}

@@ -1,0 +1,169 @@
+//! What the post-processing transforms warn about, typed (as the virtual printer's
+//! `WarningKind`): a caller can match on the kind and read its figures, and the report still
+//! says each warning in the words it always did. Through `Display` and in JSON a warning is
+//! that sentence, so `--json` documents are what they were when warnings were strings.
+
+use std::fmt;
+
+use serde::{Serialize, Serializer};
+
+/// One warning of a transform's report.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Warning {
+    /// `mix`: a target colour the filaments cannot print; the nearest mix is `delta_e` off.
+    OutOfGamut {
+        /// The mix's name.
+        mix: String,
+        /// The colour asked for, `#rrggbb`.
+        target_hex: String,
+        /// CIEDE2000 distance of the nearest printable mix.
+        delta_e: f64,
+    },
+    /// `mix`: the file never moved filament nor reached its first layer, so no mix was defined.
+    NoMixDefined,
+    /// `mix`: standard input's flavour, seen only after the dialect was chosen, wanted another.
+    DialectNotTheFlavours {
+        /// The flavour the file names.
+        flavour: String,
+        /// The mix commands that flavour wants.
+        wanted: String,
+        /// The mix commands written.
+        written: String,
+    },
+    /// `purge-shift`: no purge is configured for this change; the largest configured was used.
+    NoPurgeAmount {
+        /// The change's line, from 1.
+        line: u64,
+        /// The tool before the change.
+        from_tool: u32,
+        /// The tool after it.
+        to_tool: u32,
+        /// The purge used instead, mm of filament.
+        used_mm: f64,
+    },
+    /// `purge-shift`: the change could not move back far enough for its whole purge.
+    PurgeShort {
+        /// The change's layer, from 0, when the file marks layers.
+        layer: Option<u32>,
+        /// The change's line, from 1.
+        line: u64,
+        /// The tool before the change.
+        from_tool: u32,
+        /// The tool after it.
+        to_tool: u32,
+        /// Purge missing, mm of filament.
+        short_mm: f64,
+        /// Purge the change moved back over, mm of filament.
+        moved_mm: f64,
+        /// Purge asked for, mm of filament.
+        requested_mm: f64,
+        /// What stopped the move back (a feature, the layer start, ...).
+        stopped_by: &'static str,
+        /// What became of the shortfall.
+        then: Shortfall,
+    },
+    /// `purge-shift`: without feature comments the rule keeping changes off these features
+    /// cannot apply.
+    NoFeatureComments {
+        /// The features the rule keeps changes off.
+        kept_off: Vec<&'static str>,
+    },
+}
+
+/// What became of a purge's shortfall.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shortfall {
+    /// Purged by this fallback (`block`, `tower`).
+    Purged(&'static str),
+    /// Not purged: the fallbacks do not write inches.
+    Inches,
+    /// Not purged: the change opens its layer, and the purge may not reach the layer below.
+    OpensItsLayer,
+    /// Accepted (the `partial` fallback).
+    Accepted,
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Warning::OutOfGamut { mix, target_hex, delta_e } => write!(
+                f,
+                "{mix}: {target_hex} is out of gamut for these filaments; nearest mix is off by dE2000 {delta_e:.1}"
+            ),
+            Warning::NoMixDefined => {
+                f.write_str("the file never moved filament nor reached its first layer: no mix was defined")
+            }
+            Warning::DialectNotTheFlavours { flavour, wanted, written } => write!(
+                f,
+                "the file's flavour ({flavour}) wants the {wanted} dialect, but {written} was written: give it as a file, not a pipe, or set hardware.dialect"
+            ),
+            Warning::NoPurgeAmount { line, from_tool, to_tool, used_mm } => write!(
+                f,
+                "line {line}: no purge amount for T{from_tool}->T{to_tool}; using the largest configured, {used_mm:.3} mm"
+            ),
+            Warning::PurgeShort {
+                layer,
+                line,
+                from_tool,
+                to_tool,
+                short_mm,
+                moved_mm,
+                requested_mm,
+                stopped_by,
+                then,
+            } => {
+                let layer = layer.map_or("-".into(), |l| l.to_string());
+                write!(
+                    f,
+                    "layer {layer}, line {line}: T{from_tool}->T{to_tool} purge short by {short_mm:.3} mm ({moved_mm:.3} of {requested_mm:.3} mm; stopped by {stopped_by})"
+                )?;
+                match then {
+                    Shortfall::Purged(fallback) => write!(f, "; the rest purged by the {fallback} fallback"),
+                    Shortfall::Inches => f.write_str("; no fallback purge: the file is in inches"),
+                    Shortfall::OpensItsLayer => {
+                        f.write_str("; it opens its layer: --cross-layers lets the purge reach the layer below")
+                    }
+                    Shortfall::Accepted => Ok(()),
+                }
+            }
+            Warning::NoFeatureComments { kept_off } => write!(
+                f,
+                "the file has no feature comments (;TYPE:), so the rule keeping changes off {} cannot apply: \
+                 changes moved through every extrusion; slice with a slicer that writes them (PrusaSlicer, Cura, ...) \
+                 or pass --allow-features to say what may take the purge",
+                kept_off.join(", ")
+            ),
+        }
+    }
+}
+
+/// A warning is its sentence in JSON.
+impl Serialize for Warning {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_warning_is_its_sentence_in_text_and_json() {
+        let w = Warning::PurgeShort {
+            layer: None,
+            line: 12,
+            from_tool: 0,
+            to_tool: 1,
+            short_mm: 0.5,
+            moved_mm: 1.5,
+            requested_mm: 2.0,
+            stopped_by: "a layer change",
+            then: Shortfall::OpensItsLayer,
+        };
+        let text = "layer -, line 12: T0->T1 purge short by 0.500 mm (1.500 of 2.000 mm; stopped by a layer change); \
+                    it opens its layer: --cross-layers lets the purge reach the layer below";
+        assert_eq!(w.to_string(), text);
+        assert_eq!(serde_json::to_string(&w).unwrap(), serde_json::to_string(text).unwrap());
+    }
+}
