@@ -11,11 +11,15 @@
 //! only hide the layers below it, so this order is exact for planar layers. Walls are shaded by
 //! their direction so that the shape reads.
 //!
-//! Rotary programs ([`Toolpath::on_cylinder`]): the layers are cylinders about X, so no order
-//! of layers is right; strokes are drawn from far to near along the line of sight (painter's
-//! algorithm by depth, exact for strokes that do not overlap in depth), and shaded by how much
-//! the cylinder's normal `(0, y, z) / r` faces the eye (35 % ambient, 65 % diffuse, as
-//! [`crate::rotary::preview`] draws).
+//! Rotary programs ([`Toolpath::on_cylinder`]): the layers are cylinders about X, nested. A line
+//! of sight meets them in one order: it enters each cylinder on the half that faces the eye,
+//! outermost first, and leaves on the half turned away, innermost first (the chord through an
+//! inner cylinder lies inside the chord through an outer one). So the strokes are drawn half
+//! turned away first, outer radii before inner, then the half facing the eye, inner radii before
+//! outer, and at one radius from far to near: painter's algorithm with an order that is exact
+//! for every pixel, where ordering by depth alone let a lower layer's short strokes show
+//! through the long chords above them. Beads are shaded by how much the cylinder's normal
+//! `(0, y, z) / r` faces the eye (35 % ambient, 65 % diffuse).
 //!
 //! Comparison: a move is unchanged when the other file has a move with the same end points (to
 //! 0.01 mm), tool, feed rate (to 0.1 mm/s) and extruding flag; moves are counted as a multiset,
@@ -246,6 +250,20 @@ fn shade_cylinder(s: &Segment, eye: [f32; 3], c: [u8; 3]) -> [u8; 3] {
     c.map(|v| (v as f32 * (0.35 + 0.65 * facing)).round() as u8)
 }
 
+/// Where a stroke on a cylinder about X comes in the drawing order (see the module notes): the
+/// half (0 turned away from `eye`, 1 facing it), the radius signed so that the half's first
+/// layer comes first, and the nearness to the eye.
+fn cylinder_order(s: &Segment, eye: [f32; 3]) -> [f32; 3] {
+    let mid = [0, 1, 2].map(|k| (s.start[k] + s.end[k]) / 2.0);
+    // The ends lie on the cylinder (a chord's middle sags inside it).
+    let r = (s.start[1].hypot(s.start[2]) + s.end[1].hypot(s.end[2])) / 2.0;
+    if mid[1] * eye[1] + mid[2] * eye[2] >= 0.0 {
+        [1.0, r, dot3(mid, eye)]
+    } else {
+        [0.0, -r, dot3(mid, eye)]
+    }
+}
+
 fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
@@ -382,7 +400,7 @@ fn strokes(
     let min_px = if options.kind == ViewKind::Iso { 2.0 } else { 1.0 };
     let width_px = (options.line_width_mm * proj.scale_px_mm()).clamp(min_px, 12.0);
     let eye = toward_eye(options.kind);
-    let mut order: Vec<(f32, Stroke)> = Vec::new();
+    let mut order: Vec<([f32; 3], Stroke)> = Vec::new();
     for (i, s) in tp.segments.iter().enumerate() {
         if !in_layers(options, s) {
             continue;
@@ -393,8 +411,8 @@ fn strokes(
             _ => colouring.colour(s),
         };
         let mid = [0, 1, 2].map(|k| (s.start[k] + s.end[k]) / 2.0);
-        // Drawing order: height for flat layers, nearness to the eye on a cylinder.
-        let key = if tp.on_cylinder { dot3(mid, eye) } else { mid[2] };
+        // Drawing order: height for flat layers; on a cylinder see the module notes.
+        let key = if tp.on_cylinder { cylinder_order(s, eye) } else { [mid[2], 0.0, 0.0] };
         if tp.on_cylinder && s.extruding && is_changed != Some(false) {
             colour = shade_cylinder(s, eye, colour);
         } else if options.kind == ViewKind::Iso && s.extruding {
@@ -412,7 +430,9 @@ fn strokes(
     }
     if options.kind == ViewKind::Iso || tp.on_cylinder {
         // Low to high (far to near); stable, so equal keys keep file order.
-        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+        order.sort_by(|(a, _), (b, _)| {
+            a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])).then(a[2].total_cmp(&b[2]))
+        });
     }
     if changed.is_some() {
         // Changed moves on top of the grey ones.
