@@ -504,6 +504,46 @@ mod tests {
         assert_eq!(d.strokes[1].colour, [c.r, c.g, c.b].map(|v| (v as f32 * (0.6 + 0.4 * 0.6)) as u8));
     }
 
+    /// Regression: strokes on a cylinder were drawn by the depth of their middle, so a long
+    /// chord of an outer layer, whose middle sags away from the eye, was drawn under a short
+    /// stroke of the layer inside it, and lower layers showed through the tube's surface.
+    #[test]
+    fn cylinder_strokes_follow_the_line_of_sight() {
+        // Seen from the top (eye +Z): the half z > 0 faces the eye. On each half a short
+        // stroke on r = 10 at the top of the arc, and a long chord on r = 10.2 over 60 degrees,
+        // whose middle is 1.4 mm further down.
+        let (s60, c60) = (60f32.to_radians().sin(), 60f32.to_radians().cos());
+        // The halves at different X, so that their strokes can be told apart.
+        let ring = |sign: f32| {
+            let (r, big, x) = (10.0, 10.2, 1.5 - 1.5 * sign);
+            [
+                seg([x, -0.1, sign * r], [x + 1.0, 0.1, sign * r], 0, 0),
+                seg([x, big * c60, sign * big * s60], [x + 1.0, -big * c60, sign * big * s60], 1, 1),
+            ]
+        };
+        let mut segments = ring(1.0).to_vec();
+        segments.extend(ring(-1.0));
+        let tp = Toolpath {
+            segments,
+            layer_z_mm: vec![10.0, 10.2],
+            tools: 2,
+            on_cylinder: true,
+            ..Toolpath::default()
+        };
+        let d = draw(&tp, &ViewOptions::default());
+        let order: Vec<(f32, u16)> = d
+            .strokes
+            .iter()
+            .map(|st| {
+                let s =
+                    tp.segments.iter().find(|s| d.panels[0].projection.project(s.start) == st.from).unwrap();
+                (s.start[2].signum(), s.tool)
+            })
+            .collect();
+        // The back half outer (tool 1) then inner (tool 0), the front half inner then outer.
+        assert_eq!(order, [(-1.0, 1), (-1.0, 0), (1.0, 0), (1.0, 1)]);
+    }
+
     #[test]
     fn compare_finds_the_moved_segment() {
         let a = square();

@@ -287,7 +287,15 @@ mod tests {
     fn read_back(machine: &RotaryConfig, text: &str) -> Result<Program> {
         let mut pass = ProgramPass::new(RotaryReading::new(machine)?);
         let path = std::path::Path::new("p.gcode");
-        drive_reader(text.as_bytes(), path, StateOptions::default(), Strictness::Strict, &mut Quiet, &mut pass, &mut io::sink())?;
+        drive_reader(
+            text.as_bytes(),
+            path,
+            StateOptions::default(),
+            Strictness::Strict,
+            &mut Quiet,
+            &mut pass,
+            &mut io::sink(),
+        )?;
         Ok(pass.finish())
     }
 
@@ -318,8 +326,16 @@ mod tests {
         let mut pass = ProgramPass::new(reading.clone());
         let path = std::path::Path::new("p.gcode");
         let text = "G92 A0\nG1 Z0.2 F600\nG1 X10 A90 E1 F600\n";
-        drive_reader(text.as_bytes(), path, StateOptions::default(), Strictness::Strict, &mut Quiet, &mut pass, &mut io::sink())
-            .unwrap();
+        drive_reader(
+            text.as_bytes(),
+            path,
+            StateOptions::default(),
+            Strictness::Strict,
+            &mut Quiet,
+            &mut pass,
+            &mut io::sink(),
+        )
+        .unwrap();
         let layer = pass.finish().layers[0];
         assert_eq!((layer.theta_range_deg, layer.axial_range_mm), ([0.0, 90.0], [0.0, 10.0]));
         let mut from = [0.0; AXES];
