@@ -16,9 +16,9 @@
 //! outermost first, and leaves on the half turned away, innermost first (the chord through an
 //! inner cylinder lies inside the chord through an outer one). So the strokes are drawn half
 //! turned away first, outer radii before inner, then the half facing the eye, inner radii before
-//! outer, and at one radius from far to near: painter's algorithm with an order that is exact
-//! for every pixel, where ordering by depth alone let a lower layer's short strokes show
-//! through the long chords above them. Beads are shaded by how much the cylinder's normal
+//! outer, and at one radius in file order: painter's algorithm with an order that is exact for
+//! every pixel, where ordering by depth alone let a lower layer's short strokes show through the
+//! long chords above them. Beads are shaded by how much the cylinder's normal
 //! `(0, y, z) / r` faces the eye (35 % ambient, 65 % diffuse).
 //!
 //! Comparison: a move is unchanged when the other file has a move with the same end points (to
@@ -250,22 +250,26 @@ fn shade_cylinder(s: &Segment, eye: [f32; 3], c: [u8; 3]) -> [u8; 3] {
     c.map(|v| (v as f32 * (0.35 + 0.65 * facing)).round() as u8)
 }
 
+/// Radii on a cylinder are below this, mm (a 1000 mm mandrel and its layers): the drawing order
+/// puts the half facing the eye after it.
+const FRONT_HALF: f32 = 2048.0;
+
 /// Where a stroke on a cylinder about X comes in the drawing order (see the module notes): the
-/// half (0 turned away from `eye`, 1 facing it), the radius signed so that the half's first
-/// layer comes first, and the nearness to the eye.
-fn cylinder_order(s: &Segment, eye: [f32; 3]) -> [f32; 3] {
-    let mid = [0, 1, 2].map(|k| (s.start[k] + s.end[k]) / 2.0);
+/// half turned away from `eye` at `-r` (outer radii first), the half facing it at
+/// `FRONT_HALF + r` (inner radii first). The radius is whole microns (what the radial word is
+/// written to), so that the strokes of one layer tie and keep their file order: on one half of
+/// one cylinder a line of sight meets one stroke, and strokes overlap only by their width, as on
+/// a flat layer. The f32 steps near `2 * FRONT_HALF` are 0.24 microns.
+fn cylinder_order(s: &Segment, eye: [f32; 3]) -> f32 {
+    let mid = [1, 2].map(|k| (s.start[k] + s.end[k]) / 2.0);
     // The ends lie on the cylinder (a chord's middle sags inside it).
     let r = (s.start[1].hypot(s.start[2]) + s.end[1].hypot(s.end[2])) / 2.0;
-    if mid[1] * eye[1] + mid[2] * eye[2] >= 0.0 {
-        [1.0, r, dot3(mid, eye)]
+    let r = (r * 1000.0).round() / 1000.0;
+    if mid[0] * eye[1] + mid[1] * eye[2] >= 0.0 {
+        FRONT_HALF + r
     } else {
-        [0.0, -r, dot3(mid, eye)]
+        -r
     }
-}
-
-fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 fn in_layers(options: &ViewOptions, s: &Segment) -> bool {
@@ -400,7 +404,7 @@ fn strokes(
     let min_px = if options.kind == ViewKind::Iso { 2.0 } else { 1.0 };
     let width_px = (options.line_width_mm * proj.scale_px_mm()).clamp(min_px, 12.0);
     let eye = toward_eye(options.kind);
-    let mut order: Vec<([f32; 3], Stroke)> = Vec::new();
+    let mut order: Vec<(f32, Stroke)> = Vec::new();
     for (i, s) in tp.segments.iter().enumerate() {
         if !in_layers(options, s) {
             continue;
@@ -412,7 +416,7 @@ fn strokes(
         };
         let mid = [0, 1, 2].map(|k| (s.start[k] + s.end[k]) / 2.0);
         // Drawing order: height for flat layers; on a cylinder see the module notes.
-        let key = if tp.on_cylinder { cylinder_order(s, eye) } else { [mid[2], 0.0, 0.0] };
+        let key = if tp.on_cylinder { cylinder_order(s, eye) } else { mid[2] };
         if tp.on_cylinder && s.extruding && is_changed != Some(false) {
             colour = shade_cylinder(s, eye, colour);
         } else if options.kind == ViewKind::Iso && s.extruding {
@@ -430,9 +434,7 @@ fn strokes(
     }
     if options.kind == ViewKind::Iso || tp.on_cylinder {
         // Low to high (far to near); stable, so equal keys keep file order.
-        order.sort_by(|(a, _), (b, _)| {
-            a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])).then(a[2].total_cmp(&b[2]))
-        });
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
     }
     if changed.is_some() {
         // Changed moves on top of the grey ones.
