@@ -188,7 +188,7 @@ impl ProgramPass {
     pub fn finish(self) -> Program {
         let layers = if self.commented.is_empty() {
             let mut layers: Vec<LayerSummary> = self.by_radius.into_values().collect();
-            layers.sort_unstable_by(|a, b| micron(a.radius_mm).cmp(&micron(b.radius_mm)));
+            layers.sort_unstable_by_key(|l| micron(l.radius_mm));
             for (rank, layer) in layers.iter_mut().enumerate() {
                 // Ranks fit a u32 for any program that fits in memory.
                 layer.index = rank as u32;
