@@ -96,3 +96,57 @@ fn the_viewer_page_of_a_tube_carries_its_3d_segments() {
     let lo: Vec<f32> = lo.split(',').map(|v| v.parse().unwrap()).collect();
     assert!((lo[1] + 10.4).abs() < 0.01 && (lo[2] + 10.4).abs() < 0.01, "{lo:?}");
 }
+
+/// Whether `p` is `base` shaded, as the cylinder shading does (`base * k`, k in 0.35..1, each
+/// channel rounded).
+fn shade_of(p: [u8; 4], base: [u8; 3]) -> bool {
+    let i = (0..3).max_by_key(|&i| base[i]).unwrap();
+    let k = f32::from(p[i]) / f32::from(base[i]);
+    (0.34..=1.0).contains(&k) && (0..3).all(|c| (f32::from(p[c]) - f32::from(base[c]) * k).abs() <= 2.0)
+}
+
+/// Regression (issues 23 and 27): `rotary wrap --preview` drew every layer in a colour of its
+/// own, so a two-tool part showed neither tool. It now goes through the toolpath pass and is
+/// coloured by tool when the program changes tools.
+#[test]
+fn a_wrapped_two_tool_part_previews_in_both_tools_colours() {
+    use gweave::gcode::writer::Target;
+    use gweave::render::colour_by::TOOL_COLOURS;
+    use gweave::rotary::report::wrap_file;
+    use gweave::rotary::wrap::WrapConfig;
+
+    // A band of each tool, 20 mm across the flat Y (76 degrees of a 30 mm mandrel), the travel
+    // between them never drawn.
+    let mut flat = String::from(";LAYER_CHANGE\n;Z:0.2\nG1 Z0.2 F1200\nT0\n");
+    let mut e = 0.0;
+    for (tool, y0) in [(0, 0.0), (1, 30.0)] {
+        flat.push_str(&format!("T{tool}\nG0 X0 Y{y0}\n"));
+        for i in 0..40 {
+            e += 2.0;
+            let x = if i % 2 == 0 { 40 } else { 0 };
+            flat.push_str(&format!(
+                "G1 X{x} Y{:.1} E{e:.1}\nG1 Y{:.1}\n",
+                y0 + 0.5 * i as f64,
+                y0 + 0.5 * (i + 1) as f64
+            ));
+        }
+    }
+    let dir = std::env::temp_dir().join(format!("gweave-preview-rotary-tools-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (input, output, png) = (dir.join("flat.gcode"), dir.join("wrapped.gcode"), dir.join("wrapped.png"));
+    std::fs::write(&input, flat).unwrap();
+    let config = WrapConfig::new(RotaryConfig::new(30.0));
+    let target = Target::File(output);
+    wrap_file(&config, gweave::run::Run::file(&input).to(&target), Some(&png)).unwrap();
+    let img = gweave::render::png_out::decode(&std::fs::read(&png).unwrap()).unwrap();
+    let count = |c: gweave::colour::Srgb8| {
+        (0..img.height)
+            .flat_map(|y| (0..img.width).map(move |x| (x, y)))
+            .filter(|&(x, y)| shade_of(img.pixel(x, y), [c.r, c.g, c.b]))
+            .count()
+    };
+    let (t0, t1) = (count(TOOL_COLOURS[0]), count(TOOL_COLOURS[1]));
+    // Each band covers thousands of pixels of an 800 x 600 picture.
+    assert!(t0 > 2000 && t1 > 2000, "tool 0: {t0} px, tool 1: {t1} px");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -61,7 +61,7 @@ impl Canvas {
         }
     }
 
-    /// Draws a line between two `[x_px, y_px, depth]` points (as [`super::camera::Camera::project`]
+    /// Draws a line between two `[x_px, y_px, depth]` points (as an orthographic camera
     /// gives them), `width_px` wide (at least 1). Non-finite points draw nothing.
     pub fn line(&mut self, a: [f64; 3], b: [f64; 3], rgb: [u8; 3], width_px: u32) {
         if a.iter().chain(&b).any(|v| !v.is_finite()) {

@@ -1,8 +1,6 @@
 //! Pictures of what a file prints: `gweave preview`, and the drawing tools other commands use.
 //!
-//! - [`canvas`] and [`camera`]: a z-buffered RGB canvas with line drawing and PNG output, and an
-//!   orthographic camera (isometric or top view) mapping 3D millimetres to pixels (the rotary
-//!   pictures use them).
+//! - [`canvas`]: a z-buffered RGB canvas with line drawing and PNG output.
 //! - [`toolpath`]: the segments of a file (start, end, tool, feature, feed, layer, extruding),
 //!   collected in one streaming pass, with decimation for huge files.
 //! - [`colour_by`]: colour by tool, feature type, speed, layer or predicted mix colour.
@@ -22,7 +20,8 @@
 //! file with [`PreviewOptions::rotary`]) go through the same toolpath pass, each move's machine
 //! words read back on the cylinder ([`crate::rotary::preview::RotaryReading`]), and are drawn in
 //! 3D there, in the pictures and in the viewer, with the same colourings, travel and bounded
-//! memory as flat files.
+//! memory as flat files; so are the `--preview` pictures of `gweave rotary wrap` and `tube`
+//! ([`crate::rotary::report`]).
 //!
 //! ```no_run
 //! use gweave::render::{preview, Format, PreviewOptions};
@@ -30,7 +29,6 @@
 //! std::fs::write("part.png", png).unwrap();
 //! ```
 
-pub mod camera;
 pub mod canvas;
 pub mod colour_by;
 pub(crate) mod html;
@@ -187,8 +185,9 @@ impl PreviewOptions {
 /// detail finer than a pixel or two (see [`ToolpathOptions::max_segments`]).
 pub(crate) const MAX_SEGMENTS: usize = 1 << 21;
 
-/// Feeds every line to two passes (a toolpath and the statistics, in one read of the file).
-struct Both<'a>(&'a mut dyn Pass, &'a mut dyn Pass);
+/// Feeds every line to two passes (a toolpath and the statistics, or a rotary program's figures,
+/// in one read of the file).
+pub(crate) struct Both<'a>(pub(crate) &'a mut dyn Pass, pub(crate) &'a mut dyn Pass);
 
 impl Pass for Both<'_> {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {

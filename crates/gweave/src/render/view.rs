@@ -11,11 +11,15 @@
 //! only hide the layers below it, so this order is exact for planar layers. Walls are shaded by
 //! their direction so that the shape reads.
 //!
-//! Rotary programs ([`Toolpath::on_cylinder`]): the layers are cylinders about X, so no order
-//! of layers is right; strokes are drawn from far to near along the line of sight (painter's
-//! algorithm by depth, exact for strokes that do not overlap in depth), and shaded by how much
-//! the cylinder's normal `(0, y, z) / r` faces the eye (35 % ambient, 65 % diffuse, as
-//! [`crate::rotary::preview`] draws).
+//! Rotary programs ([`Toolpath::on_cylinder`]): the layers are cylinders about X, nested. A line
+//! of sight meets them in one order: it enters each cylinder on the half that faces the eye,
+//! outermost first, and leaves on the half turned away, innermost first (the chord through an
+//! inner cylinder lies inside the chord through an outer one). So the strokes are drawn half
+//! turned away first, outer radii before inner, then the half facing the eye, inner radii before
+//! outer, and at one radius in file order: painter's algorithm with an order that is exact for
+//! every pixel, where ordering by depth alone let a lower layer's short strokes show through the
+//! long chords above them. Beads are shaded by how much the cylinder's normal
+//! `(0, y, z) / r` faces the eye (35 % ambient, 65 % diffuse).
 //!
 //! Comparison: a move is unchanged when the other file has a move with the same end points (to
 //! 0.01 mm), tool, feed rate (to 0.1 mm/s) and extruding flag; moves are counted as a multiset,
@@ -266,8 +270,26 @@ fn shade_cylinder(s: &Segment, eye: [f32; 3], c: [u8; 3]) -> [u8; 3] {
     c.map(|v| (v as f32 * (0.35 + 0.65 * facing)).round() as u8)
 }
 
-fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+/// Radii on a cylinder are below this, mm (a 1000 mm mandrel and its layers): the drawing order
+/// puts the half facing the eye after it.
+const FRONT_HALF: f32 = 2048.0;
+
+/// Where a stroke on a cylinder about X comes in the drawing order (see the module notes): the
+/// half turned away from `eye` at `-r` (outer radii first), the half facing it at
+/// `FRONT_HALF + r` (inner radii first). The radius is whole microns (what the radial word is
+/// written to), so that the strokes of one layer tie and keep their file order: on one half of
+/// one cylinder a line of sight meets one stroke, and strokes overlap only by their width, as on
+/// a flat layer. The f32 steps near `2 * FRONT_HALF` are 0.24 microns.
+fn cylinder_order(s: &Segment, eye: [f32; 3]) -> f32 {
+    let mid = [1, 2].map(|k| (s.start[k] + s.end[k]) / 2.0);
+    // The ends lie on the cylinder (a chord's middle sags inside it).
+    let r = (s.start[1].hypot(s.start[2]) + s.end[1].hypot(s.end[2])) / 2.0;
+    let r = (r * 1000.0).round() / 1000.0;
+    if mid[0] * eye[1] + mid[1] * eye[2] >= 0.0 {
+        FRONT_HALF + r
+    } else {
+        -r
+    }
 }
 
 fn in_layers(options: &ViewOptions, s: &Segment) -> bool {
@@ -413,8 +435,8 @@ fn strokes(
             _ => colouring.colour(s),
         };
         let mid = [0, 1, 2].map(|k| (s.start[k] + s.end[k]) / 2.0);
-        // Drawing order: height for flat layers, nearness to the eye on a cylinder.
-        let key = if tp.on_cylinder { dot3(mid, eye) } else { mid[2] };
+        // Drawing order: height for flat layers; on a cylinder see the module notes.
+        let key = if tp.on_cylinder { cylinder_order(s, eye) } else { mid[2] };
         if tp.on_cylinder && s.extruding && is_changed != Some(false) {
             colour = shade_cylinder(s, eye, colour);
         } else if options.kind == ViewKind::Iso && s.extruding {
@@ -502,6 +524,46 @@ mod tests {
         let c = super::super::colour_by::TOOL_COLOURS[0];
         assert_eq!(d.strokes[0].colour, [c.r, c.g, c.b].map(|v| (v as f32 * (0.6 + 0.4 * 0.8)) as u8));
         assert_eq!(d.strokes[1].colour, [c.r, c.g, c.b].map(|v| (v as f32 * (0.6 + 0.4 * 0.6)) as u8));
+    }
+
+    /// Regression: strokes on a cylinder were drawn by the depth of their middle, so a long
+    /// chord of an outer layer, whose middle sags away from the eye, was drawn under a short
+    /// stroke of the layer inside it, and lower layers showed through the tube's surface.
+    #[test]
+    fn cylinder_strokes_follow_the_line_of_sight() {
+        // Seen from the top (eye +Z): the half z > 0 faces the eye. On each half a short
+        // stroke on r = 10 at the top of the arc, and a long chord on r = 10.2 over 60 degrees,
+        // whose middle is 1.4 mm further down.
+        let (s60, c60) = (60f32.to_radians().sin(), 60f32.to_radians().cos());
+        // The halves at different X, so that their strokes can be told apart.
+        let ring = |sign: f32| {
+            let (r, big, x) = (10.0, 10.2, 1.5 - 1.5 * sign);
+            [
+                seg([x, -0.1, sign * r], [x + 1.0, 0.1, sign * r], 0, 0),
+                seg([x, big * c60, sign * big * s60], [x + 1.0, -big * c60, sign * big * s60], 1, 1),
+            ]
+        };
+        let mut segments = ring(1.0).to_vec();
+        segments.extend(ring(-1.0));
+        let tp = Toolpath {
+            segments,
+            layer_z_mm: vec![10.0, 10.2],
+            tools: 2,
+            on_cylinder: true,
+            ..Toolpath::default()
+        };
+        let d = draw(&tp, &ViewOptions::default());
+        let order: Vec<(f32, u16)> = d
+            .strokes
+            .iter()
+            .map(|st| {
+                let s =
+                    tp.segments.iter().find(|s| d.panels[0].projection.project(s.start) == st.from).unwrap();
+                (s.start[2].signum(), s.tool)
+            })
+            .collect();
+        // The back half outer (tool 1) then inner (tool 0), the front half inner then outer.
+        assert_eq!(order, [(-1.0, 1), (-1.0, 0), (1.0, 0), (1.0, 1)]);
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! The two rotary jobs end to end, for the command line and Python alike: write the program,
-//! read it back as the machine runs it ([`super::preview::read_back`]), optionally draw it,
-//! and report what it does (serialisable, the `--json` documents).
+//! read it back as the machine runs it ([`super::preview::ProgramPass`]), in the same read draw
+//! it if asked (the toolpath pass and the isometric view of `gweave preview`), and report what it
+//! does (serialisable, the `--json` documents).
 //!
 //! - [`wrap_file`]: a flat G-code file wrapped onto the mandrel; per layer the radius, the
 //!   angles the beads sweep and where the weld line (flat y = 0) lies.
@@ -10,7 +11,7 @@
 //! Settings can also come as one JSON/TOML document merged over a TOML file
 //! ([`merged_settings`]), which is how the Python keywords reach the library.
 
-use std::io::{BufReader, BufWriter};
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
@@ -18,16 +19,22 @@ use serde::Serialize;
 
 use super::cylinder::{FeedConvention, RotaryConfig, RotaryUnit};
 use super::helix::{Handedness, ProgramSummary, TubeParams};
-use super::preview::{self, LayerSummary, PreviewOptions, Program};
+use super::preview::{LayerSummary, Program, ProgramPass, RotaryReading};
 use super::wrap::{wrap, WrapConfig};
 use super::{Result, RotaryError};
 use crate::gcode::writer::{write_file, Output, Target};
 use crate::malformed::Malformed;
+use crate::pass::Strictness;
+use crate::render::toolpath::{ToolpathOptions, ToolpathPass};
+use crate::render::{png_out, view, Both, ColourBy, ViewKind, ViewOptions, MAX_SEGMENTS};
 use crate::run::{Dest, Run};
 
 /// Bead width drawn in the preview of a wrapped part, mm: 0, thin (2 px) toolpaths, so that
 /// the infill, the layers below and the weld line stay visible through a solid skin.
 pub const WRAP_PREVIEW_BEAD_MM: f64 = 0.0;
+
+/// Size of a `--preview` picture, pixels.
+pub const PREVIEW_SIZE_PX: [u32; 2] = [800, 600];
 
 /// The machine a program was written for.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -167,7 +174,10 @@ fn check_preview(target: &Target, preview: Option<&Path>) -> Result<()> {
     Ok(())
 }
 
-/// Reads the written program back and draws it to `preview` if asked.
+/// Reads the written program back and, in the same read, draws it to `preview` if asked: the
+/// toolpath pass on the machine's cylinder (bounded by the segment ceiling), seen in the
+/// isometric view, beads `bead_width_mm` wide (0: 2 px), travel hidden, coloured by tool when
+/// the program changes tools and by layer otherwise.
 fn read_back(
     machine: &RotaryConfig,
     output: Option<&Path>,
@@ -177,13 +187,37 @@ fn read_back(
     let Some(path) = output else {
         return Ok(None);
     };
-    let program = preview::read_back(machine, BufReader::new(crate::gcode::container::open(path)?))?;
-    if let Some(png) = preview {
-        let options = PreviewOptions { bead_width_mm, line_px: 2, ..PreviewOptions::default() };
-        let image = preview::render(&program.beads, &options);
-        write_file(png, |out| -> Result<()> { Ok(image.write_png(out)?) })?;
-    }
-    Ok(Some(program))
+    let reading = RotaryReading::new(machine)?;
+    let mut program = ProgramPass::new(reading.clone());
+    // A program gweave wrote holds a malformed line only where a lenient wrap copied one
+    // through (a strict one refuses it first): it is read past here too.
+    let run = Run::file(path).strictness(Strictness::Lenient);
+    let Some(png) = preview else {
+        run.scan(&mut program)?;
+        return Ok(Some(program.finish()));
+    };
+    let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    let mut toolpath = ToolpathPass::new(ToolpathOptions {
+        travel: false,
+        min_len_mm: ToolpathOptions::min_len_for_file_size(bytes),
+        max_segments: Some(MAX_SEGMENTS),
+        rotary: Some(reading),
+        ..ToolpathOptions::default()
+    });
+    run.scan(&mut Both(&mut toolpath, &mut program))?;
+    let toolpath = toolpath.finish_toolpath();
+    let view = ViewOptions {
+        kind: ViewKind::Iso,
+        width_px: PREVIEW_SIZE_PX[0],
+        height_px: PREVIEW_SIZE_PX[1],
+        colour_by: if toolpath.tools > 1 { ColourBy::Tool } else { ColourBy::Layer },
+        line_width_mm: bead_width_mm as f32,
+        ..ViewOptions::default()
+    };
+    let image = png_out::rasterise(&view::draw(&toolpath, &view));
+    let encoded = png_out::encode(&image).map_err(std::io::Error::other)?;
+    write_file(png, |out| -> Result<()> { Ok(out.write_all(&encoded)?) })?;
+    Ok(Some(program.finish()))
 }
 
 /// Wraps the file `run` reads to the target it writes (see [`super::wrap`]), reads the result
@@ -271,7 +305,7 @@ pub fn tube_file(params: &TubeParams, target: &Target, preview: Option<&Path>) -
         extruded_mm3: summary.filament_mm * area_mm2,
         wall_volume_mm3: params.wall_volume_mm3(),
         print_time_s: summary.print_time_s,
-        executed_beads: program.map(|p| p.beads.len()),
+        executed_beads: program.map(|p| p.beads),
     })
 }
 
