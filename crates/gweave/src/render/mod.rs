@@ -1,6 +1,5 @@
 //! Pictures of what a file prints: `gweave preview`, and the drawing tools other commands use.
 //!
-//! - [`canvas`]: a z-buffered RGB canvas with line drawing and PNG output.
 //! - [`toolpath`]: the segments of a file (start, end, tool, feature, feed, layer, extruding),
 //!   collected in one streaming pass, with decimation for huge files.
 //! - [`colour_by`]: colour by tool, feature type, speed, layer or predicted mix colour.
@@ -29,7 +28,6 @@
 //! std::fs::write("part.png", png).unwrap();
 //! ```
 
-pub mod canvas;
 pub mod colour_by;
 pub(crate) mod html;
 pub(crate) mod mix_colour;
