@@ -2,6 +2,7 @@
 #   make demo   installs what is needed, then runs the main jobs on bundled real slicer output
 #   make test   installs what is needed, then runs every test (cargo, pytest, end to end)
 #   make bench  benchmarks on large real files, each figure beside a reference from the same run
+#   make docs-images  draws the pictures of README.md and docs/ again with the current code
 #   make fuzz   coverage-guided fuzzing of the reader, lexer and profile loaders (not in make test)
 
 SHELL := /bin/bash
@@ -13,7 +14,7 @@ GWEAVE := target/release/gweave
 OUT := out
 
 .PHONY: demo test bench deps rust-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
-.PHONY: browser-deps cura-deps fuzz
+.PHONY: browser-deps cura-deps fuzz docs-images
 
 deps: rust-deps py-deps browser-deps cura-deps
 
@@ -86,6 +87,9 @@ demo: build python
 
 bench: build python
 	bash bench/run.sh $(GWEAVE)
+
+docs-images: build
+	bash scripts/docs_images.sh $(GWEAVE)
 
 # Coverage-guided fuzzing with AFL++ (cargo-afl, stable toolchain), FUZZ_SECONDS per target, one
 # process at a time, niced. Each run starts from the kept corpus (fuzz/corpus/<target>/) and leaves
