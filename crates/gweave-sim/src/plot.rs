@@ -4,7 +4,7 @@
 //! - temperature: each heater's reading (solid) and target (thin, lighter) over simulated time,
 //!   a legend naming each (`hotend T0`, `hotend T0 target`, `bed`, `bed target`);
 //! - speed: the planned toolhead speed over time (the mean of each time slice as a line, its
-//!   peak as a light band, from [`SpeedTrace`]), below it the time of each layer as bars (the
+//!   peak as a light band, from `SpeedTrace`), below it the time of each layer as bars (the
 //!   planner's per-layer figures), and on a mixing machine the filament each input fed.
 //!
 //! Every panel has a title, axes with units and ticks, and a legend in its upper right corner.

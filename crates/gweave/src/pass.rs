@@ -6,7 +6,7 @@
 //! enough: the driver reads no further and calls [`Pass::finish`]), or a [`PassError`]. The
 //! pass does not know the file: the driver names it, with the line (and the column, when the
 //! pass gives one), in [`Error::Pass`]. The set-up of a run (input, output, strictness,
-//! flavour) is the [`Run`](crate::run::Run) builder's.
+//! flavour) is the [`Run`] builder's.
 
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};

@@ -55,7 +55,7 @@ pub struct ThermalConfig {
     pub bed: Option<HeaterConfig>,
     /// The sensor on every heater (default Marlin type 1).
     pub thermistor: BetaThermistor,
-    /// A CSV file of the firmware's table (see [`crate::thermal::thermistor_csv`]); default: a table
+    /// A CSV file of the firmware's table (see `crate::thermal::thermistor_csv`); default: a table
     /// generated from `thermistor` every `table_step_c`. A relative path is read from the
     /// profile's folder ([`crate::profile::MachineProfile::from_file`]).
     pub thermistor_table: Option<PathBuf>,

@@ -419,7 +419,7 @@ impl Thermal {
     /// many moves (calls) lie between: a long print costs one plant step per sample, not one
     /// per move.
     ///
-    /// One call runs at most [`MAX_SAMPLES_PER_STEP`] firmware loops: past them the heaters
+    /// One call runs at most `MAX_SAMPLES_PER_STEP` firmware loops: past them the heaters
     /// have long settled, so the rest of the step is integrated with the last power and the
     /// loop resumes at its end. A dwell of a century (or a clock pushed to 1e308 s by a huge
     /// move) then costs a bounded time instead of hanging.

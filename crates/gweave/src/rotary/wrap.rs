@@ -143,8 +143,8 @@ impl WrapConfig {
     }
 }
 
-/// The wrap pass; see the module docs. Errors reach the driver as `io::Error`s whose source
-/// is a [`RotaryError::AtLine`].
+/// The wrap pass; see the module docs. A line it cannot wrap is refused with a [`RotaryError`],
+/// to which the driver adds the file and the line ([`crate::Error::Pass`]).
 #[derive(Debug)]
 pub struct Wrap {
     config: WrapConfig,
@@ -421,7 +421,7 @@ impl Pass for Wrap {
 }
 
 /// Wraps as `run` says (input, output, strictness, progress): the file is read once for the
-/// part's width first ([`super::helical`]), then wrapped. The wrap writes the rotary axis as
+/// part's width first (`rotary::helical`), then wrapped. The wrap writes the rotary axis as
 /// `A`: a file that extrudes with `A` (PrusaSlicer's mach3 and machinekit flavours) is refused.
 pub fn wrap(config: WrapConfig, run: Run<'_>) -> Result<Ran> {
     let mut run = run.writes_e();

@@ -40,7 +40,7 @@ pub(super) struct Front {
     pub(super) malformed: Malformed,
 }
 
-/// Arcs longer than [`MAX_ARC_CHORDS`] chords of [`ARC_CHORD_MM`] (over 100 m: no printer's
+/// Arcs longer than [`MAX_ARC_CHORDS`] chords of `ARC_CHORD_MM` (over 100 m: no printer's
 /// bed), planned with that many longer chords, and counted with the first one's line.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct HugeArcs {
@@ -57,7 +57,7 @@ impl HugeArcs {
     }
 }
 
-/// The most chords an arc is cut into: 100 m of arc at [`ARC_CHORD_MM`]. A `G2` with
+/// The most chords an arc is cut into: 100 m of arc at `ARC_CHORD_MM`. A `G2` with
 /// `I10000000` would otherwise be 63 million chords, half a minute of planning.
 pub const MAX_ARC_CHORDS: u32 = 100_000;
 

@@ -161,7 +161,7 @@ pub struct Estimate {
     /// Lines skipped because they could not be read.
     #[serde(flatten)]
     pub malformed: Malformed,
-    /// Arcs too long to cut into chords of [`ARC_CHORD_MM`].
+    /// Arcs too long to cut into chords of `ARC_CHORD_MM`.
     #[serde(flatten)]
     pub huge_arcs: HugeArcs,
 }
@@ -392,7 +392,7 @@ const CHUNKS_IN_FLIGHT: usize = 2;
 /// one plans and steps. The result is the same, to the bit, as feeding every line to one
 /// [`Estimator`] (the plan side sees the same jobs in the same order); the memory is bounded by
 /// the chunks and batches in flight.
-/// The lines are read as Marlin reads them; [`estimate_as`] reads them as another firmware does.
+/// The lines are read as Marlin reads them; `estimate_as` reads them as another firmware does.
 pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
     estimate_as(input, profile, Firmware::Marlin, true)
 }

@@ -124,8 +124,8 @@ struct Colour {
     rrf: Option<Vec<f64>>,
 }
 
-/// The purge-shift pass. Feed it a file with [`crate::pass::Run`] using
-/// [`PurgeShift::state_options`], or use [`purge_shift_bytes`] / [`purge_shift_file`].
+/// The purge-shift pass. Run it over a file with [`purge_shift`] (a [`crate::run::Run`] says
+/// the input, the output and the strictness), or over text with [`purge_shift_bytes`].
 pub struct PurgeShift {
     rules: Rules,
     window: VecDeque<Held>,
