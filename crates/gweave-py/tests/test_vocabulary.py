@@ -20,7 +20,9 @@ COMMON = {
 }
 
 # Output flags of transforms: `-o` is the `output` argument, `--no-backup` is `backup=False`.
-TARGET = {"output": "output", "in-place": "in_place", "no-backup": "backup", "force": "force"}
+# `--format` chooses standard output's container (`-o -`); Python writes files, whose names say it.
+FORMAT = {"format": "- standard output's container: Python writes files, whose names say it"}
+TARGET = {"output": "output", "in-place": "in_place", "no-backup": "backup", "force": "force", **FORMAT}
 
 # command -> (function, {flag: keyword, or "-" and the reason}, positional arguments)
 MAP = {
@@ -43,6 +45,7 @@ MAP = {
         "raster",
         {
             "output": "output",
+            **FORMAT,
             **{
                 f: f.replace("-", "_")
                 for f in (
@@ -78,6 +81,7 @@ MAP = {
         "rotary_wrap",
         {
             "output": "output",
+            **FORMAT,
             "in-place": "- rotary_wrap writes output; a wrapped file never replaces its flat input",
             "no-backup": "- as in-place",
             "force": "- as in-place",
@@ -95,6 +99,7 @@ MAP = {
         "rotary_tube",
         {
             "output": "output",
+            **FORMAT,
             "no-interweave": "interweave",
             **{
                 f: f.replace("-", "_")
