@@ -56,7 +56,7 @@ grep -q "^M567 P1 E0.5:0.5:0:0$" "$WORK/rrf.gcode"
 python3 - "$WORK/rrf.json" "$WORK/rrf.sim.json" <<'PY'
 import json, sys
 mix, sim = (json.load(open(p)) for p in sys.argv[1:])
-assert (mix["dialect"], mix["flavour"]) == ("reprap", "reprapfirmware"), (mix["dialect"], mix["flavour"])
+assert (mix["dialect"], mix["flavour"]) == ("reprapfirmware", "reprapfirmware"), (mix["dialect"], mix["flavour"])
 assert sim["unknown_commands"] == {} and sim["warning_counts"] == {}, sim["warning_counts"]
 # The sim counts net filament: the file's last firmware retraction (1 mm of Blue, 0.5:0.5:0:0)
 # is never undone. Beyond that, whole steps of each input (500 per mm) and the report's 3 decimals.
@@ -70,7 +70,7 @@ PY
 grep -q "^M164 S0$" "$WORK/rrf-marlin.gcode"
 ! grep -q "^M567 " "$WORK/rrf-marlin.gcode"
 if [ -x "$PYGWEAVE" ]; then
-  "$(dirname "$PYGWEAVE")/python" -c 'import sys, gweave; r = gweave.mix(sys.argv[1], sys.argv[2], at_layer=["0=Orange"], dialect="reprap"); assert r["dialect"] == "reprap", r["dialect"]' \
+  "$(dirname "$PYGWEAVE")/python" -c 'import sys, gweave; r = gweave.mix(sys.argv[1], sys.argv[2], at_layer=["0=Orange"], dialect="reprap"); assert r["dialect"] == "reprapfirmware", r["dialect"]' \
     "$DATA/cura/cura_torus.gcode" "$WORK/torus-rrf.gcode"
   grep -q "^M567 P0 E0:0.1717:0.8283:0$" "$WORK/torus-rrf.gcode"
 fi
