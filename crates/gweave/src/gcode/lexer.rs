@@ -280,6 +280,31 @@ fn words(raw: &[u8], mut i: usize, block: &mut Block) {
     }
 }
 
+/// The end of the token at `at`: a bad token is skipped whole, so that its pieces do not read as
+/// more words.
+fn token_end(raw: &[u8], mut at: usize) -> usize {
+    while at < raw.len() && !is_space(raw[at]) && !matches!(raw[at], b';' | b'(' | b'*') {
+        at += 1;
+    }
+    at
+}
+
+/// The end of a RepRapFirmware colon list whose first colon is at `colon`: each colon must be
+/// followed by a number (`E0.3:` or `E0.3:x` is malformed).
+fn colon_list_end(raw: &[u8], mut colon: usize, letter: u8, block: &mut Block) -> usize {
+    while raw.get(colon) == Some(&b':') {
+        match scan_at(raw, colon + 1) {
+            Ok((_, end)) => colon = end,
+            Err(_) => {
+                block
+                    .diagnose(Diagnostic::at(colon + 1, Finding::MalformedNumber { letter: letter as char }));
+                return token_end(raw, colon + 1);
+            }
+        }
+    }
+    colon
+}
+
 /// Reads one word at `start` (a letter) and returns the index after it.
 #[inline(always)]
 fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
@@ -289,6 +314,11 @@ fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
         Some(b'"') => quoted(raw, at, block),
         Some(b'{') => expression(raw, at, block),
         _ => match scan_at(raw, at) {
+            // RepRapFirmware gives a list as numbers joined by colons (`M567 P0 E0.3:0.7`): the
+            // word's value is the first, its span the whole list (`colour::dialect` reads it).
+            Ok((v, end)) if raw.get(end) == Some(&b':') => {
+                (Value::Number(v), colon_list_end(raw, end, letter, block))
+            }
             Ok((v, end)) => (Value::Number(v), end),
             Err(NumberError::Empty) => (Value::Empty, at),
             Err(e) => {
@@ -297,12 +327,7 @@ fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
                     _ => Finding::MalformedNumber { letter: letter as char },
                 };
                 block.diagnose(Diagnostic::at(at, finding));
-                // Skip the whole bad token so that its pieces do not read as more words.
-                let mut end = at;
-                while end < raw.len() && !is_space(raw[end]) && !matches!(raw[end], b';' | b'(' | b'*') {
-                    end += 1;
-                }
-                (Value::Invalid, end)
+                (Value::Invalid, token_end(raw, at))
             }
         },
     };
@@ -402,6 +427,25 @@ mod tests {
         let b = parse(raw);
         assert_eq!(b.text_of(raw.as_bytes()), Some(&b"cube.gcode"[..]));
         assert!(b.checksum.is_some());
+    }
+
+    /// Regression (rrf_colon_lists_are_malformed): `gweave mix` writes RepRapFirmware's
+    /// `M567 P0 E0.3:0.7`, and `check`, `stats` and a strict `purge-shift` refused its own output
+    /// ("unexpected character ':'").
+    #[test]
+    fn rrf_colon_lists_are_one_word() {
+        let raw = "M567 P0 E0:0.1717:0.8283:0 ; mix";
+        let b = parse(raw);
+        assert!(b.diagnostics.is_empty(), "{:?}", b.diagnostics);
+        let e = b.word(b'E').unwrap();
+        assert_eq!(e.value, Value::Number(0.0));
+        assert_eq!(e.span.of(raw.as_bytes()), b"E0:0.1717:0.8283:0");
+        assert!(b.comment.is_some());
+        for bad in ["M567 P0 E0.3:", "M567 P0 E0.3:x", "M567 P0 E0.3::0.7"] {
+            let b = parse(bad);
+            assert_eq!(b.diagnostics.len(), 1, "{bad}: {:?}", b.diagnostics);
+            assert!(matches!(b.diagnostics[0].finding, Finding::MalformedNumber { letter: 'E' }), "{bad}");
+        }
     }
 
     #[test]
