@@ -21,6 +21,11 @@ use nix::poll::{poll, PollFd, PollFlags};
 
 use crate::link::transport::{wait_readable, write_all_nonblocking, Endpoint, Event, TransportError};
 
+/// How long a newcomer waits for news of the current host before it is refused (see
+/// [`TcpEndpoint`]'s `wait`): far longer than a loopback packet takes, far shorter than a host's
+/// read timeout.
+const CLOSE_GRACE: Duration = Duration::from_millis(100);
+
 /// What a host that connects while another is served reads before the server closes it.
 pub const REFUSAL: &str = "echo:busy: another host is connected\n";
 
@@ -103,8 +108,14 @@ impl Endpoint for TcpEndpoint {
             Ok(_) | Err(nix::errno::Errno::EINTR) => {}
             Err(e) => return Err(e.into()),
         }
-        let client_ready = !fds[0].revents().unwrap_or(PollFlags::empty()).is_empty();
+        let mut client_ready = !fds[0].revents().unwrap_or(PollFlags::empty()).is_empty();
         let newcomer = fds[1].revents().unwrap_or(PollFlags::empty()).contains(PollFlags::POLLIN);
+        if !client_ready && newcomer {
+            // The host's close may still be on its way: loopback packets of two sockets can be
+            // handled out of order when the sender moved to another CPU between its close and
+            // the newcomer's connect. Give it a moment before turning the newcomer away.
+            client_ready = !wait_readable(&*client, CLOSE_GRACE)?.is_empty();
+        }
         if !client_ready {
             // A socket that was closed or reset always polls ready, so the host is still there.
             if newcomer {
