@@ -341,7 +341,8 @@ impl State {
                 let speed = block
                     .get(b'S')
                     .or_else(|| block.get(b'P').filter(|_| self.options.firmware.values_in_p()));
-                self.thermal.fan = (speed.unwrap_or(255.0) / 255.0).clamp(0.0, 1.0);
+                let full = crate::range::PWM.max;
+                self.thermal.fan = (speed.unwrap_or(full) / full).clamp(0.0, 1.0);
             }
             107 => self.thermal.fan = 0.0,
             207 => {
