@@ -35,7 +35,7 @@ mod thermal;
 
 pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetWarning};
 pub use interp::{
-    help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Queue, SimError, SimReport,
+    help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Param, Queue, SimError, SimReport,
     SimTimes, SimWarning, WarningKind, COMMANDS, STOPPED_LINE, UNKNOWN_KINDS, UNKNOWN_OTHERS,
 };
 pub use link::pty::PtyEndpoint;

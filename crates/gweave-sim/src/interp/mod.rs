@@ -57,7 +57,7 @@ use crate::thermal::protection::ThermalFault;
 use crate::thermal::{Thermal, ThermalError};
 
 use commands::Call;
-pub use commands::{help_lines, CommandSpec, Queue, COMMANDS};
+pub use commands::{help_lines, CommandSpec, Param, Queue, COMMANDS};
 pub use report::{HeaterStats, InkjetSummary, SimReport, SimTimes, SimWarning, WarningKind};
 
 /// Marlin's reply to any command while stopped (`STR_ERR_STOPPED`).
