@@ -31,6 +31,8 @@ mod link;
 mod motion;
 pub mod plot;
 mod profile;
+#[cfg(any(test, feature = "test-support"))]
+pub mod test_support;
 mod thermal;
 
 pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetWarning};
