@@ -82,6 +82,16 @@ fn docs_gcode_md_lists_every_range() {
     assert_eq!(rows, want, "the table should be:\n{}", want.join("\n"));
 }
 
+/// The virtual printer carries out every command the engine's modal state interprets
+/// (`gweave::gcode::codes`), so that `stats`, `estimate` and `sim` read the same commands.
+#[test]
+fn every_code_the_modal_state_interprets_is_in_the_registry() {
+    let listed: Vec<&str> = COMMANDS.iter().flat_map(|c| c.codes.split_whitespace()).collect();
+    for code in gweave::gcode::codes::modal_codes() {
+        assert!(listed.contains(&code), "{code} is read by the modal state but not in the registry");
+    }
+}
+
 #[test]
 fn every_listed_command_is_carried_out() {
     for entry in COMMANDS {

@@ -232,7 +232,8 @@ impl State {
     }
 
     /// Every line but a plain move: out of line, so that [`State::apply`] stays small enough
-    /// to be inlined into the loops that call it.
+    /// to be inlined into the loops that call it. The codes matched here and in the two below
+    /// are declared in [`MODAL_CODES`](super::codes::MODAL_CODES); a test keeps them equal.
     #[inline(never)]
     fn command(&mut self, block: &Block) {
         match block.command {
