@@ -117,17 +117,15 @@ const DWELL_MS: Range = Range::new(0.0, range::PERIOD_S.max * 1000.0, "ms");
 /// the machine does not have is Marlin's `Invalid extruder`.
 const TOOL: Range = Range::new(0.0, 255.0, "");
 
-const FEED: &[Param] = &[p("F", range::FEED_MM_MIN)];
-const ARC: &[Param] = &[p("F", range::FEED_MM_MIN), p("IJR", range::POSITION_MM)];
+/// The words of the commands that take a period.
 const PERIOD: &[Param] = &[p("S", range::PERIOD_S)];
-const HOTEND_TEMP: &[Param] = &[p("SRP", range::TEMPERATURE_C), p("T", TOOL)];
+/// RepRapFirmware's tool temperature, `G10 P<tool> S<active> R<standby>` and `M568`.
 const TOOL_TEMP: &[Param] = &[p("P", TOOL), p("SR", range::TEMPERATURE_C)];
-const GAINS: &[Param] = &[p("PID", control::GAIN)];
 
 /// Every command the interpreter carries out, in the order of the help listing.
 pub const COMMANDS: &[CommandSpec] = &[
-    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, while_halted: false, queue: Queue::Streams, params: FEED },
-    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, while_halted: false, queue: Queue::Streams, params: ARC },
+    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, while_halted: false, queue: Queue::Streams, params: &[p("F", range::FEED_MM_MIN)] },
+    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, while_halted: false, queue: Queue::Streams, params: &[p("F", range::FEED_MM_MIN), p("IJR", range::POSITION_MM)] },
     CommandSpec { codes: "G4", what: "dwell P milliseconds or S seconds, after the queued moves", run: dwell, while_halted: false, queue: Queue::Streams, params: &[p("S", range::PERIOD_S), p("P", DWELL_MS)] },
     CommandSpec { codes: "G10 G11", what: "firmware retract / recover (45 / 8 mm/s), Marlin's `G10 S1` too; G10 with P (tool) and S sets a tool temperature (RepRapFirmware)", run: g10_g11, while_halted: false, queue: Queue::Streams, params: TOOL_TEMP },
     CommandSpec { codes: "G20 G21", what: "inches / millimetres", run: core, while_halted: false, queue: Queue::Streams, params: &[] },
@@ -150,7 +148,7 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M80 M81", what: "power on (firmware.psu_control) / off: heaters and motors off", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
     CommandSpec { codes: "M82 M83", what: "absolute / relative extrusion", run: core, while_halted: false, queue: Queue::Streams, params: &[] },
     CommandSpec { codes: "M92", what: "steps per unit X Y Z E of the steppers", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("XYZE", range::STEPS_PER_UNIT)] },
-    CommandSpec { codes: "M104 M109", what: "hotend target (T picks the hotend), M109 also waits: S while heating, R both ways", run: hotend_target, while_halted: false, queue: Queue::Streams, params: HOTEND_TEMP },
+    CommandSpec { codes: "M104 M109", what: "hotend target (T picks the hotend), M109 also waits: S while heating, R both ways", run: hotend_target, while_halted: false, queue: Queue::Streams, params: &[p("SRP", range::TEMPERATURE_C), p("T", TOOL)] },
     CommandSpec { codes: "M105", what: "report temperatures and heater powers: ok T:.. /.. B:.. /.. @:.. B@:..", run: m105, while_halted: true, queue: Queue::Streams, params: &[] },
     CommandSpec { codes: "M106 M107", what: "part fan speed / off (the fan cools the hotend)", run: fan, while_halted: false, queue: Queue::Streams, params: &[p("SP", range::PWM)] },
     CommandSpec { codes: "M108 M410", what: "emergency parser: break a wait / quick stop (accepted: waits end by themselves)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
@@ -175,7 +173,7 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M300", what: "beep (accepted)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
     CommandSpec { codes: "M301", what: "set or report the hotend PID gains", run: m301, while_halted: false, queue: Queue::Streams, params: &[p("PID", control::GAIN), p("E", TOOL)] },
     CommandSpec { codes: "M303", what: "PID autotune on the thermal plant (relay method), U1 applies the gains", run: m303, while_halted: false, queue: Queue::Drains, params: &[p("S", range::TEMPERATURE_C)] },
-    CommandSpec { codes: "M304", what: "set or report the bed PID gains", run: settings, while_halted: false, queue: Queue::Streams, params: GAINS },
+    CommandSpec { codes: "M304", what: "set or report the bed PID gains", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("PID", control::GAIN)] },
     CommandSpec { codes: "M400", what: "wait for the queued moves to finish; its ok takes that time in wall time too (hosts time it)", run: m400, while_halted: false, queue: Queue::Drains, params: &[] },
     CommandSpec { codes: "M420", what: "bed levelling on/off (S), mesh report (V)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
     CommandSpec { codes: "M500 M501 M502 M503", what: "settings: save to / load from the EEPROM file, factory defaults, report", run: settings, while_halted: false, queue: Queue::Streams, params: &[] },

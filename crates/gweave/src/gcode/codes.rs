@@ -20,7 +20,7 @@ pub struct ModalCode {
 pub const MODAL_CODES: &[ModalCode] = &[
     ModalCode { codes: "G0 G1 G2 G3", meaning: "motion mode, then the move to the axis words (F the feed rate)" },
     ModalCode { codes: "G4", meaning: "a dwell of S seconds plus P milliseconds" },
-    ModalCode { codes: "G10 G11", meaning: "firmware retract / recover by the M207 length; G10 with P or L (S in RepRapFirmware) a tool temperature" },
+    ModalCode { codes: "G10 G11", meaning: "firmware retract / recover by the M207 length; a G10 with P or L (S in RepRapFirmware) is none: with S, a tool temperature" },
     ModalCode { codes: "G20 G21", meaning: "inches / millimetres" },
     ModalCode { codes: "G28", meaning: "homing: the named axes (all without words) are at 0" },
     ModalCode { codes: "G90 G91", meaning: "absolute / relative axes (E too, as the firmware does)" },
