@@ -31,11 +31,13 @@ mod link;
 mod motion;
 pub mod plot;
 mod profile;
+#[cfg(any(test, feature = "test-support"))]
+pub mod test_support;
 mod thermal;
 
 pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetWarning};
 pub use interp::{
-    help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Queue, SimError, SimReport,
+    help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Param, Queue, SimError, SimReport,
     SimTimes, SimWarning, WarningKind, COMMANDS, STOPPED_LINE, UNKNOWN_KINDS, UNKNOWN_OTHERS,
 };
 pub use link::pty::PtyEndpoint;

@@ -41,7 +41,7 @@ fn help_reply_is_the_command_list() {
 #[test]
 fn docs_gcode_md_lists_the_same_commands() {
     let text = std::fs::read_to_string(repo().join("docs/gcode.md")).unwrap();
-    let section = text.split("## The virtual printer's commands").nth(1).expect("section in docs/gcode.md");
+    let section = section(&text, "## The virtual printer's commands");
     let rows: Vec<(String, String)> = section
         .lines()
         .filter_map(|l| l.strip_prefix("| `"))
@@ -53,6 +53,43 @@ fn docs_gcode_md_lists_the_same_commands() {
     let want: Vec<(String, String)> =
         COMMANDS.iter().map(|c| (c.codes.to_owned(), c.what.to_owned())).collect();
     assert_eq!(rows, want);
+}
+
+/// The section of `text` under `heading`, up to the next heading of its level.
+fn section<'a>(text: &'a str, heading: &str) -> &'a str {
+    let rest = text.split(heading).nth(1).unwrap_or_else(|| panic!("{heading} in docs/gcode.md"));
+    rest.split("\n## ").next().unwrap_or(rest)
+}
+
+/// The table of ranges in `docs/gcode.md` is the registry's: one row per command and group of
+/// words sharing a range.
+#[test]
+fn docs_gcode_md_lists_every_range() {
+    let text = std::fs::read_to_string(repo().join("docs/gcode.md")).unwrap();
+    let rows: Vec<&str> = section(&text, "## Ranges of the virtual printer's parameters")
+        .lines()
+        .filter(|l| l.starts_with("| `"))
+        .collect();
+    let want: Vec<String> = COMMANDS
+        .iter()
+        .flat_map(|c| {
+            c.params.iter().map(|p| {
+                let letters: Vec<String> = p.letters.chars().map(String::from).collect();
+                format!("| `{}` | `{}` | {} |", c.codes, letters.join(" "), p.range)
+            })
+        })
+        .collect();
+    assert_eq!(rows, want, "the table should be:\n{}", want.join("\n"));
+}
+
+/// The virtual printer carries out every command the engine's modal state interprets
+/// (`gweave::gcode::codes`), so that `stats`, `estimate` and `sim` read the same commands.
+#[test]
+fn every_code_the_modal_state_interprets_is_in_the_registry() {
+    let listed: Vec<&str> = COMMANDS.iter().flat_map(|c| c.codes.split_whitespace()).collect();
+    for code in gweave::gcode::codes::modal_codes() {
+        assert!(listed.contains(&code), "{code} is read by the modal state but not in the registry");
+    }
 }
 
 #[test]

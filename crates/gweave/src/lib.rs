@@ -35,6 +35,8 @@ pub mod rotary;
 pub mod run;
 pub mod settings;
 pub mod stats;
+#[cfg(any(test, feature = "test-support"))]
+pub mod test_support;
 pub mod total;
 
 pub use error::{Error, Result};

@@ -52,6 +52,8 @@ pub const SIZE_MM: Range = Range::new(0.001, 10_000.0, "mm");
 pub const BED_SIZE_MM: Range = Range::new(1.0, 10_000.0, "mm");
 /// Motor steps per mm (or per degree).
 pub const STEPS_PER_UNIT: Range = Range::new(0.001, 1_000_000.0, "steps/unit");
+/// A PWM value as `M106 S` (a fan) and `M42 S` (a pin) write it: 0 off, 255 full (Marlin's 8-bit PWM).
+pub const PWM: Range = Range::new(0.0, 255.0, "");
 /// A time constant or period of the firmware, 0 to a day.
 pub const PERIOD_S: Range = Range::new(0.0, 86_400.0, "s");
 /// A period that must not be zero (a loop must advance its clock).

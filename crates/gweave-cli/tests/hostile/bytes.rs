@@ -186,11 +186,11 @@ fn a_huge_arc_is_planned_without_a_vec_of_chords() {
         ),
         "{text}"
     );
-    // The virtual printer refuses so long a move, as it refuses any move of days.
+    // The virtual printer refuses the arc's centre, 10 km away: beyond any machine.
     let run = gweave(d, &["sim", "arc.gcode"]).limit(limit).run();
     run.assert_ok().assert_peak_under(PEAK_MIB);
     assert!(
-        run.stdout_text().contains("line 4: refused: a 62831853.072 mm move at F600 would take 6283185 s"),
+        run.stdout_text().contains("line 4: refused: G2 I = 10000000 is out of range: -10000 to 10000 mm"),
         "{}",
         run.stdout_text()
     );

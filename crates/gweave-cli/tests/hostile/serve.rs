@@ -10,6 +10,8 @@ use std::path::Path;
 use std::thread;
 use std::time::{Duration, Instant};
 
+use gweave_sim::test_support::{connect, lines_through, reset};
+
 use crate::harness::*;
 
 /// A running `gweave serve`, stopped when dropped (killed, if a failed assertion left it running).
@@ -83,47 +85,12 @@ impl Drop for Server {
     }
 }
 
-/// A TCP host with a 10 s read limit.
-fn connect(addr: SocketAddr) -> (TcpStream, BufReader<TcpStream>) {
-    let stream = TcpStream::connect(addr).unwrap();
-    stream.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
-    let reader = BufReader::new(stream.try_clone().unwrap());
-    (stream, reader)
-}
-
-/// Reply lines up to the first that starts with `last`.
-fn lines_through(reader: &mut impl BufRead, last: &str) -> Vec<String> {
-    let mut got = Vec::new();
-    while !got.last().is_some_and(|l: &String| l.starts_with(last)) {
-        let mut line = String::new();
-        assert!(reader.read_line(&mut line).unwrap() > 0, "closed after {got:?}");
-        got.push(line.trim_end().to_string());
-    }
-    got
-}
-
 /// The boot lines and the answer to one M105, checked.
 #[track_caller]
 fn assert_fresh_board_answers_m105(got: &[String]) {
     assert_eq!(got.first().map(String::as_str), Some("start"), "{got:?}");
     assert!(got.last().unwrap().starts_with("ok T:25.00"), "{got:?}");
     assert!(!got.iter().any(|l| l.contains("Unknown command")), "{got:?}");
-}
-
-/// Closes `stream` with a reset (RST) instead of a FIN: a zero linger time.
-fn reset(stream: TcpStream) {
-    let linger = libc::linger { l_onoff: 1, l_linger: 0 };
-    // SAFETY: setsockopt on a socket we own, with a pointer to a local of the stated size.
-    let rc = unsafe {
-        libc::setsockopt(
-            std::os::fd::AsRawFd::as_raw_fd(&stream),
-            libc::SOL_SOCKET,
-            libc::SO_LINGER,
-            (&linger as *const libc::linger).cast(),
-            std::mem::size_of::<libc::linger>() as libc::socklen_t,
-        )
-    };
-    assert_eq!(rc, 0);
 }
 
 /// Regression: the first connection right after an abrupt close (RST) was accepted and closed
@@ -321,6 +288,34 @@ fn serve_a_target_set_while_idle_heats() {
     let got = lines_through(&mut reader, "ok T:");
     let reading: f64 = got.last().unwrap()["ok T:".len()..].split(' ').next().unwrap().parse().unwrap();
     assert!(reading > 25.0, "{got:?}");
+    drop((host, reader));
+    server.stop().assert_ok();
+}
+
+/// A host that sends values out of range (a temperature past any hotend, a negative one, a fan
+/// past 255, a word that is not a number, a dwell of days) gets the uniform refusal for each
+/// and an `ok`, and the board keeps what was in force (the target set before).
+#[test]
+fn serve_values_out_of_range_are_refused_and_change_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let (server, addr) = Server::tcp(dir.path(), &[]);
+    let (mut host, mut reader) = connect(addr);
+    lines_through(&mut reader, "echo:Machine");
+    host.write_all(b"M104 S200\n").unwrap();
+    assert_eq!(lines_through(&mut reader, "ok"), ["ok"]);
+    for (line, refusal) in [
+        ("M104 S600", "echo:M104 S = 600 is out of range: 0 to 500 °C"),
+        ("M104 S-5", "echo:M104 S = -5 is out of range: 0 to 500 °C"),
+        ("M104 Snan", "echo:M104 S = nan is out of range: 0 to 500 °C"),
+        ("M106 S300", "echo:M106 S = 300 is out of range: 0 to 255"),
+        ("G4 S999999", "echo:G4 S = 999999 is out of range: 0 to 86400 s"),
+    ] {
+        host.write_all(format!("{line}\n").as_bytes()).unwrap();
+        assert_eq!(lines_through(&mut reader, "ok"), [refusal, "ok"], "{line}");
+    }
+    host.write_all(b"M105\n").unwrap();
+    let got = lines_through(&mut reader, "ok T:");
+    assert!(got.last().unwrap().contains(" /200.00 "), "{got:?}");
     drop((host, reader));
     server.stop().assert_ok();
 }

@@ -139,18 +139,13 @@ impl RecoatCheck {
 mod tests {
     use super::*;
 
+    /// The shared recoat, its spreader from 0 over 100 mm, no settling.
     fn recoat() -> Recoat {
         Recoat {
-            spreader_axis: 'Y',
             spreader_start_mm: 0.0,
             spreader_stroke_mm: 100.0,
-            spread_feed_mm_min: 300.0,
-            return_feed_mm_min: 3000.0,
-            piston_feed_mm_min: 120.0,
-            feed_piston_axis: 'A',
-            build_piston_axis: 'Z',
-            powder_ratio: 1.5,
             dwell_s: 0.0,
+            ..gweave::test_support::recoat()
         }
     }
 

@@ -10,19 +10,24 @@
 //! command here is one row plus its handler (see `docs/architecture.md`, "Adding a command to
 //! the virtual printer").
 //!
-//! Parameters with a physical range are read through [`Params`], which refuses a value outside
-//! it with one uniform reply, `echo:M155 S = -1 is out of range: ...` (the range's own text from
-//! `gweave::range`), as Marlin echoes a bad parameter instead of acting on it.
+//! Every number word a command reads has a physical range, declared in its row
+//! ([`CommandSpec::params`]). The dispatcher checks them before the line changes anything and
+//! refuses a value outside with one uniform reply, `echo:M155 S = -1 is out of range: 0 to
+//! 86400 s` (the range's own text from `gweave::range`), keeping the value in force, as Marlin
+//! echoes a bad parameter instead of acting on it. A handler reads its words knowing they are
+//! in range.
 
 use std::collections::HashMap;
 use std::sync::OnceLock;
 
 use gweave::firmware::MixingCode;
-use gweave::gcode::line::{Block, Command};
+use gweave::gcode::line::{Block, Command, Value};
 use gweave::gcode::state::{self, Effect};
-use gweave::range::{OutOfRange, Range};
+use gweave::range::{self, OutOfRange, Range};
 
 use super::Machine;
+use crate::motion::limits;
+use crate::thermal::control;
 
 /// What a handler is given: the line, the code's number, what the line does to the modal state
 /// and the logical position before it.
@@ -68,6 +73,23 @@ pub struct CommandSpec {
     pub while_halted: bool,
     /// Whether it waits for the queued moves.
     pub queue: Queue,
+    /// The number words it reads and the values each may take: the dispatcher refuses the
+    /// whole line before it changes anything if one is outside ([`check`]).
+    pub params: &'static [Param],
+}
+
+/// Number words of a command that share one physical range.
+#[derive(Debug, Clone, Copy)]
+pub struct Param {
+    /// The letters (`"XYZE"` for `M92`'s steps per unit).
+    pub letters: &'static str,
+    /// What each may be.
+    pub range: Range,
+}
+
+/// Words `letters`, each in `range`.
+const fn p(letters: &'static str, range: Range) -> Param {
+    Param { letters, range }
 }
 
 impl std::fmt::Debug for CommandSpec {
@@ -76,71 +98,97 @@ impl std::fmt::Debug for CommandSpec {
             .field("codes", &self.codes)
             .field("while_halted", &self.while_halted)
             .field("queue", &self.queue)
+            .field("params", &self.params)
             .finish_non_exhaustive()
     }
 }
 
+// The ranges of the words. Most are the engine's (`gweave::range`) or those the machine profile
+// is checked against (`motion::limits`, `thermal::control`): a value the profile would refuse
+// is refused on the serial line too.
+
+/// `M220`/`M221` percentages: above 0, at most a hundred times the speed or flow.
+const PERCENT: Range = Range::new(1.0, 10_000.0, "%");
+/// `M73 P`: a print's progress.
+const PROGRESS_PCT: Range = Range::new(0.0, 100.0, "%");
+/// `G4 P`: a dwell in milliseconds, up to [`range::PERIOD_S`] (a day).
+const DWELL_MS: Range = Range::new(0.0, range::PERIOD_S.max * 1000.0, "ms");
+/// A hotend or tool index (`M104 T`, `G10 P`, `M301 E`): a byte, as the heater index is; one
+/// the machine does not have is Marlin's `Invalid extruder`.
+const TOOL: Range = Range::new(0.0, 255.0, "");
+
+/// The words of the commands that take a period.
+const PERIOD: &[Param] = &[p("S", range::PERIOD_S)];
+/// RepRapFirmware's tool temperature, `G10 P<tool> S<active> R<standby>` and `M568`.
+const TOOL_TEMP: &[Param] = &[p("P", TOOL), p("SR", range::TEMPERATURE_C)];
+
 /// Every command the interpreter carries out, in the order of the help listing.
 pub const COMMANDS: &[CommandSpec] = &[
-    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "G4", what: "dwell P milliseconds or S seconds, after the queued moves", run: dwell, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "G10 G11", what: "firmware retract / recover (45 / 8 mm/s), Marlin's `G10 S1` too; G10 with P (tool) and S sets a tool temperature (RepRapFirmware)", run: g10_g11, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "G20 G21", what: "inches / millimetres", run: core, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "G28", what: "home the named axes (all without words) against the endstops, with Marlin's bump", run: home, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "G29", what: "bed levelling (firmware.mesh): probe the grid in simulated time, store a flat mesh, levelling on", run: g29, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "G90 G91", what: "absolute / relative coordinates (E too)", run: core, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "G92", what: "set the logical position without moving", run: set_position, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M0 M1", what: "program stop: finish the moves, motors off; with m0 = \"seed\" also home and end the program", run: program_stop, while_halted: false, queue: Queue::Drains },
-    CommandSpec { codes: "M17 M18 M84", what: "motors on (accepted) / off (the axes must be homed again)", run: motors, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M20 M21 M22", what: "SD card (firmware.sdcard, serve --sd DIR): list files (L: long names), mount, release", run: sd, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M23 M24 M25 M26 M27", what: "SD print: select a file, start/resume, pause, set the byte position, status (S<n>: every n s)", run: sd, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M28 M29 M30 M32 M33", what: "SD upload to a file / end it, delete a file, select and start, long name of a file", run: sd, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M31", what: "print job time", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M42 M226", what: "set a pin / wait for a pin state (firmware.pin_control)", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M73 M117", what: "progress (accepted) and status message, sent to the host as //action:notification", run: progress_message, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M75 M76 M77", what: "print job timer start / pause / stop", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M80 M81", what: "power on (firmware.psu_control) / off: heaters and motors off", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M82 M83", what: "absolute / relative extrusion", run: core, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M92", what: "steps per unit X Y Z E of the steppers", run: settings, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M104 M109", what: "hotend target (T picks the hotend), M109 also waits: S while heating, R both ways", run: hotend_target, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M105", what: "report temperatures and heater powers: ok T:.. /.. B:.. /.. @:.. B@:..", run: m105, while_halted: true, queue: Queue::Streams },
-    CommandSpec { codes: "M106 M107", what: "part fan speed / off (the fan cools the hotend)", run: fan, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M108 M410", what: "emergency parser: break a wait / quick stop (accepted: waits end by themselves)", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M110", what: "set the line number (serial protocol)", run: accepted, while_halted: true, queue: Queue::Streams },
-    CommandSpec { codes: "M112", what: "emergency stop: heaters off, halted until M999", run: emergency_stop, while_halted: true, queue: Queue::Streams },
-    CommandSpec { codes: "M114", what: "position and motor counts after the queued moves", run: m114, while_halted: true, queue: Queue::Drains },
-    CommandSpec { codes: "M115", what: "firmware name, extruder count and the capabilities of the [firmware] table", run: m115, while_halted: true, queue: Queue::Streams },
-    CommandSpec { codes: "M116", what: "wait for every heater with a target (RepRapFirmware)", run: m116, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M118", what: "print a message to the host (A1: // prefix, E1: echo: prefix)", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M119", what: "endstop states", run: m119, while_halted: true, queue: Queue::Drains },
-    CommandSpec { codes: "M140 M190", what: "bed target, M190 also waits: S while heating, R both ways", run: bed_target, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M154", what: "report the position every S seconds (firmware.autoreport_pos)", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M155", what: "report temperatures every S seconds (0: off)", run: m155, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M163 M164 M165 M166", what: "mixing: set a weight, store a virtual tool, mix at once, gradient (accepted)", run: mixing, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M201 M203 M204 M205", what: "acceleration, feed rate, print/travel acceleration, junction deviation (M205 J) or classic jerk (M205 X Y Z E) and minimum segment time (M205 B) limits", run: limits, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M207 M208 M209", what: "firmware retraction: retract length (the planner's G10), recover, auto-retract", run: settings, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M211", what: "software endstops on/off and their limits", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M220 M221", what: "feed rate / flow percentage (no S: report it)", run: percentage, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M300", what: "beep (accepted)", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M301", what: "set or report the hotend PID gains", run: m301, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M303", what: "PID autotune on the thermal plant (relay method), U1 applies the gains", run: m303, while_halted: false, queue: Queue::Drains },
-    CommandSpec { codes: "M304", what: "set or report the bed PID gains", run: settings, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M400", what: "wait for the queued moves to finish; its ok takes that time in wall time too (hosts time it)", run: m400, while_halted: false, queue: Queue::Drains },
-    CommandSpec { codes: "M420", what: "bed levelling on/off (S), mesh report (V)", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M500 M501 M502 M503", what: "settings: save to / load from the EEPROM file, factory defaults, report", run: settings, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M524", what: "abort the SD print", run: sd, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: settings, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M876", what: "answer a host prompt (firmware.prompt_support)", run: host, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M578 M700", what: "inkjet fire at the carriage position (machines with a printhead)", run: fire, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "M999", what: "restart after a halt", run: restart, while_halted: true, queue: Queue::Streams },
-    CommandSpec { codes: "T<n>", what: "select a tool (a virtual mixing tool on a mixing hotend)", run: tool_change, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "SET_VELOCITY_LIMIT SET_KINEMATIC_POSITION", what: "Klipper's limits and position (Klipper mode)", run: klipper, while_halted: false, queue: Queue::Streams },
-    CommandSpec { codes: "?", what: "this list", run: help, while_halted: true, queue: Queue::Streams },
+    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, while_halted: false, queue: Queue::Streams, params: &[p("F", range::FEED_MM_MIN)] },
+    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, while_halted: false, queue: Queue::Streams, params: &[p("F", range::FEED_MM_MIN), p("IJR", range::POSITION_MM)] },
+    CommandSpec { codes: "G4", what: "dwell P milliseconds or S seconds, after the queued moves", run: dwell, while_halted: false, queue: Queue::Streams, params: &[p("S", range::PERIOD_S), p("P", DWELL_MS)] },
+    CommandSpec { codes: "G10 G11", what: "firmware retract / recover (45 / 8 mm/s), Marlin's `G10 S1` too; G10 with P (tool) and S sets a tool temperature (RepRapFirmware)", run: g10_g11, while_halted: false, queue: Queue::Streams, params: TOOL_TEMP },
+    CommandSpec { codes: "G20 G21", what: "inches / millimetres", run: core, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "G28", what: "home the named axes (all without words) against the endstops, with Marlin's bump", run: home, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "G29", what: "bed levelling (firmware.mesh): probe the grid in simulated time, store a flat mesh, levelling on", run: g29, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "G90 G91", what: "absolute / relative coordinates (E too)", run: core, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "G92", what: "set the logical position without moving", run: set_position, while_halted: false, queue: Queue::Streams, params: &[p("XYZ", range::POSITION_MM)] },
+    CommandSpec { codes: "M0 M1", what: "program stop: finish the moves, motors off; with m0 = \"seed\" also home and end the program", run: program_stop, while_halted: false, queue: Queue::Drains, params: &[] },
+    CommandSpec { codes: "M17 M18 M84", what: "motors on (accepted) / off (the axes must be homed again)", run: motors, while_halted: false, queue: Queue::Streams, params: PERIOD },
+    CommandSpec { codes: "M20 M21 M22", what: "SD card (firmware.sdcard, serve --sd DIR): list files (L: long names), mount, release", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M23 M24 M25 M26", what: "SD print: select a file, start/resume, pause, set the byte position", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M27", what: "SD print status (S<n>: every n s)", run: sd, while_halted: false, queue: Queue::Streams, params: PERIOD },
+    CommandSpec { codes: "M28 M29 M30 M32 M33", what: "SD upload to a file / end it, delete a file, select and start, long name of a file", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M31", what: "print job time", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M42", what: "set a pin (firmware.pin_control): P pin, S value", run: host, while_halted: false, queue: Queue::Streams, params: &[p("S", range::PWM)] },
+    CommandSpec { codes: "M226", what: "wait for a pin state (firmware.pin_control)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M73", what: "progress (accepted)", run: accepted, while_halted: false, queue: Queue::Streams, params: &[p("P", PROGRESS_PCT)] },
+    CommandSpec { codes: "M117", what: "status message, sent to the host as //action:notification", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M75 M76 M77", what: "print job timer start / pause / stop", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M80 M81", what: "power on (firmware.psu_control) / off: heaters and motors off", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M82 M83", what: "absolute / relative extrusion", run: core, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M92", what: "steps per unit X Y Z E of the steppers", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("XYZE", range::STEPS_PER_UNIT)] },
+    CommandSpec { codes: "M104 M109", what: "hotend target (T picks the hotend), M109 also waits: S while heating, R both ways", run: hotend_target, while_halted: false, queue: Queue::Streams, params: &[p("SRP", range::TEMPERATURE_C), p("T", TOOL)] },
+    CommandSpec { codes: "M105", what: "report temperatures and heater powers: ok T:.. /.. B:.. /.. @:.. B@:..", run: m105, while_halted: true, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M106 M107", what: "part fan speed / off (the fan cools the hotend)", run: fan, while_halted: false, queue: Queue::Streams, params: &[p("SP", range::PWM)] },
+    CommandSpec { codes: "M108 M410", what: "emergency parser: break a wait / quick stop (accepted: waits end by themselves)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M110", what: "set the line number (serial protocol)", run: accepted, while_halted: true, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M112", what: "emergency stop: heaters off, halted until M999", run: emergency_stop, while_halted: true, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M114", what: "position and motor counts after the queued moves", run: m114, while_halted: true, queue: Queue::Drains, params: &[] },
+    CommandSpec { codes: "M115", what: "firmware name, extruder count and the capabilities of the [firmware] table", run: m115, while_halted: true, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M116", what: "wait for every heater with a target (RepRapFirmware)", run: m116, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M118", what: "print a message to the host (A1: // prefix, E1: echo: prefix)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M119", what: "endstop states", run: m119, while_halted: true, queue: Queue::Drains, params: &[] },
+    CommandSpec { codes: "M140 M190", what: "bed target, M190 also waits: S while heating, R both ways", run: bed_target, while_halted: false, queue: Queue::Streams, params: &[p("SRP", range::TEMPERATURE_C)] },
+    CommandSpec { codes: "M154", what: "report the position every S seconds (firmware.autoreport_pos)", run: host, while_halted: false, queue: Queue::Streams, params: PERIOD },
+    CommandSpec { codes: "M155", what: "report temperatures every S seconds (0: off)", run: m155, while_halted: false, queue: Queue::Streams, params: PERIOD },
+    CommandSpec { codes: "M163 M164 M165 M166", what: "mixing: set a weight, store a virtual tool, mix at once, gradient (accepted)", run: mixing, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M201", what: "maximum acceleration per axis", run: core, while_halted: false, queue: Queue::Streams, params: &[p("XYZE", range::ACCEL_MM_S2), p("A", limits::ACCEL_DEG_S2)] },
+    CommandSpec { codes: "M203", what: "maximum feed rate per axis", run: core, while_halted: false, queue: Queue::Streams, params: &[p("XYZE", range::SPEED_MM_S), p("A", limits::SPEED_DEG_S)] },
+    CommandSpec { codes: "M204", what: "print (P, S) / retract (R) / travel (T) acceleration", run: core, while_halted: false, queue: Queue::Streams, params: &[p("SPRT", range::ACCEL_MM_S2)] },
+    CommandSpec { codes: "M205", what: "junction deviation (J) or classic jerk (X Y Z E), minimum segment time (B), minimum feed rates (S T)", run: m205, while_halted: false, queue: Queue::Streams, params: &[p("XYZE", limits::JERK_MM_S), p("J", limits::JUNCTION_DEVIATION_MM), p("B", limits::MIN_SEGMENT_TIME_US), p("ST", range::SPEED_MM_S.or_zero())] },
+    CommandSpec { codes: "M207 M208 M209", what: "firmware retraction: retract length (the planner's G10), recover, auto-retract", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("SWZ", range::LEN_MM), p("F", range::FEED_MM_MIN)] },
+    CommandSpec { codes: "M211", what: "software endstops on/off and their limits", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M220 M221", what: "feed rate / flow percentage (no S: report it)", run: percentage, while_halted: false, queue: Queue::Streams, params: &[p("S", PERCENT)] },
+    CommandSpec { codes: "M300", what: "beep (accepted)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M301", what: "set or report the hotend PID gains", run: m301, while_halted: false, queue: Queue::Streams, params: &[p("PID", control::GAIN), p("E", TOOL)] },
+    CommandSpec { codes: "M303", what: "PID autotune on the thermal plant (relay method), U1 applies the gains", run: m303, while_halted: false, queue: Queue::Drains, params: &[p("S", range::TEMPERATURE_C)] },
+    CommandSpec { codes: "M304", what: "set or report the bed PID gains", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("PID", control::GAIN)] },
+    CommandSpec { codes: "M400", what: "wait for the queued moves to finish; its ok takes that time in wall time too (hosts time it)", run: m400, while_halted: false, queue: Queue::Drains, params: &[] },
+    CommandSpec { codes: "M420", what: "bed levelling on/off (S), mesh report (V)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M500 M501 M502 M503", what: "settings: save to / load from the EEPROM file, factory defaults, report", run: settings, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M524", what: "abort the SD print", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, while_halted: false, queue: Queue::Streams, params: TOOL_TEMP },
+    CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("XYZ", range::POSITION_MM)] },
+    CommandSpec { codes: "M876", what: "answer a host prompt (firmware.prompt_support)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M578 M700", what: "inkjet fire at the carriage position (machines with a printhead)", run: fire, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "M999", what: "restart after a halt", run: restart, while_halted: true, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "T<n>", what: "select a tool (a virtual mixing tool on a mixing hotend)", run: tool_change, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "SET_VELOCITY_LIMIT SET_KINEMATIC_POSITION", what: "Klipper's limits and position (Klipper mode)", run: klipper, while_halted: false, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "?", what: "this list", run: help, while_halted: true, queue: Queue::Streams, params: &[] },
 ];
 
 /// The `?` reply: a title line, then `echo:  <codes>  <what>` per command.
@@ -200,26 +248,34 @@ pub(super) fn help_spec() -> &'static CommandSpec {
     COMMANDS.iter().find(|c| c.codes == "?").expect("`?` is in the registry")
 }
 
-/// A command's words, read with their ranges.
-pub(super) struct Params<'a> {
-    code: String,
-    block: &'a Block,
-}
-
-impl<'a> Params<'a> {
-    /// The words of `block`, for the command `letter number` (named in the error).
-    pub(super) fn new(letter: char, number: u32, block: &'a Block) -> Self {
-        Params { code: format!("{letter}{number}"), block }
+/// Refuses a line whose words are outside what `params` declares, before it changes anything
+/// (as GRBL's parser checks a whole line first): the first such word as the uniform reply,
+/// `M104 S = 600 is out of range: 0 to 500 °C`. `code` names the command (`M104`); a word that
+/// is not a number (`Snan`, `S1..2`) is outside every range, written as it was.
+pub(super) fn check(code: (u8, u32), params: &[Param], block: &Block, line: &[u8]) -> Result<(), OutOfRange> {
+    for param in params {
+        for letter in param.letters.bytes() {
+            let Some(word) = block.word(letter) else { continue };
+            let name = || format!("{}{} {}", code.0 as char, code.1, letter as char);
+            match word.value {
+                Value::Number(v) => {
+                    param.range.check(&name(), v)?;
+                }
+                Value::Invalid => {
+                    let written = word.span.of(line).get(1..).unwrap_or_default();
+                    return Err(OutOfRange {
+                        name: name(),
+                        value: String::from_utf8_lossy(written).into_owned(),
+                        range: param.range.to_string(),
+                    });
+                }
+                // A bare letter (`G28 X`), a quoted string or an expression (RepRapFirmware's
+                // `{...}`) is not a number the command reads.
+                Value::Empty | Value::Text(_) | Value::Expr(_) => {}
+            }
+        }
     }
-
-    /// Word `letter` if given: `Err` (with the uniform reply) when it is outside `range` or
-    /// not a number.
-    pub(super) fn get(&self, letter: u8, range: Range) -> Result<Option<f64>, OutOfRange> {
-        self.block
-            .get(letter)
-            .map(|v| range.check(&format!("{} {}", self.code, letter as char), v))
-            .transpose()
-    }
+    Ok(())
 }
 
 // The handlers. Families handled by one method of their own module (`sd`, `host`,
@@ -312,14 +368,8 @@ fn settings(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.settings_command(c.number, out)
 }
 
-/// `M73` progress (accepted), `M117` status message.
-fn progress_message(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    if c.number == 117 {
-        m.host_command(c.line, c.number, out)
-    }
-}
-
-/// Accepted, nothing to simulate (`M110`: the line numbers are the serial layer's).
+/// Accepted, nothing to simulate (`M73`: the progress is the host's; `M110`: the line numbers
+/// are the serial layer's).
 fn accepted(_: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {}
 
 fn hotend_target(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
@@ -343,8 +393,8 @@ fn m116(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.m116(c, out)
 }
 
-fn m155(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.m155(out)
+fn m155(m: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    m.m155()
 }
 
 fn m301(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
@@ -401,14 +451,12 @@ fn mixing(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     }
 }
 
-/// `M201`/`M203`/`M204`/`M205` are the planner's; `M205 S T` are also kept for `M503`.
-fn limits(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    if c.number == 205 {
-        let b = m.core.block();
-        for (slot, letter) in m.settings.m205_st.iter_mut().zip([b'S', b'T']) {
-            if let Some(v) = b.get(letter).filter(|v| v.is_finite() && *v >= 0.0) {
-                *slot = v;
-            }
+/// `M205`: the planner's, its `S T` (minimum feed rates) also kept for `M503`.
+fn m205(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    let b = m.core.block();
+    for (slot, letter) in m.settings.m205_st.iter_mut().zip([b'S', b'T']) {
+        if let Some(v) = b.get(letter) {
+            *slot = v;
         }
     }
     m.run_core(c.line, &c.effect, out);
@@ -417,9 +465,9 @@ fn limits(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 /// `M220`/`M221`: feed rate / flow percentage, or report it.
 fn percentage(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     if c.number == 220 {
-        m.percentage(c.number, "FR:", out, |m| &mut m.feed_pct)
+        m.percentage("FR:", out, |m| &mut m.feed_pct)
     } else {
-        m.percentage(c.number, "E0 Flow: ", out, |m| &mut m.flow_pct)
+        m.percentage("E0 Flow: ", out, |m| &mut m.flow_pct)
     }
 }
 

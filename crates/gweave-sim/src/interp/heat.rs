@@ -9,9 +9,7 @@
 //! seconds once the reading is within `TEMP_WINDOW` of the target and is `?` before. (Marlin
 //! 1.x printed a shorter `T:.. E:0 W:?`; hosts read the `T:` either way.)
 
-use gweave::range;
-
-use super::commands::{Call, Params};
+use super::commands::Call;
 use super::{Halt, Machine, WarningKind};
 use crate::thermal::autotune::AutotuneConfig;
 use crate::thermal::control::PidGains;
@@ -84,12 +82,8 @@ impl Machine {
     }
 
     /// `M155 S<seconds>`: report the temperatures every S seconds (0: off).
-    pub(super) fn m155(&mut self, out: &mut dyn FnMut(f64, &str)) {
-        let period = match Params::new('M', 155, self.core.block()).get(b'S', range::PERIOD_S) {
-            Ok(s) => s.unwrap_or(0.0),
-            Err(e) => return self.refuse(e.to_string(), out),
-        };
-        self.autoreport_s = period;
+    pub(super) fn m155(&mut self) {
+        self.autoreport_s = self.core.block().get(b'S').unwrap_or(0.0);
         self.next_report_s = self.now_s() + self.autoreport_s;
     }
 

@@ -59,7 +59,7 @@ impl Machine {
                 out(now, &format!("{prefix}{text}"));
             }
             154 => {
-                let period = s.filter(|s| s.is_finite() && *s > 0.0).unwrap_or(0.0);
+                let period = s.unwrap_or(0.0);
                 self.host.autoreport_pos_s = period;
                 self.host.next_pos_report_s = now + period;
             }

@@ -42,6 +42,7 @@ mod warning_text;
 
 use std::collections::BTreeMap;
 
+use gweave::gcode::effect::Motion;
 use gweave::gcode::line::Command;
 use gweave::gcode::state::{self, Effect};
 use thiserror::Error;
@@ -55,8 +56,8 @@ use crate::thermal::heater::HeaterId;
 use crate::thermal::protection::ThermalFault;
 use crate::thermal::{Thermal, ThermalError};
 
-pub use commands::{help_lines, CommandSpec, Queue, COMMANDS};
-use commands::{Call, Params};
+use commands::Call;
+pub use commands::{help_lines, CommandSpec, Param, Queue, COMMANDS};
 pub use report::{HeaterStats, InkjetSummary, SimReport, SimTimes, SimWarning, WarningKind};
 
 /// Marlin's reply to any command while stopped (`STR_ERR_STOPPED`).
@@ -64,9 +65,6 @@ pub const STOPPED_LINE: &str = "Error:Printer stopped due to errors. Fix the err
 
 /// Warnings kept with their details; later ones are only counted.
 const MAX_WARNINGS: usize = 1000;
-
-/// `M220`/`M221` percentages: above 0, at most a hundred times the speed or flow.
-const PERCENT: gweave::range::Range = gweave::range::Range::new(1.0, 10_000.0, "%");
 
 /// Why a machine cannot be built.
 #[derive(Debug, Error)]
@@ -281,10 +279,19 @@ impl Machine {
             return self.outcome();
         }
         let before = self.core.state().pos;
-        let effect = self.core.parse(line);
+        self.core.lex(line);
         let command = self.core.block().command;
         let spec = commands::lookup(command, self.core.block().command_span.of(line));
-        if self.halt.is_some() && !spec.is_some_and(|s| s.while_halted) {
+        let halted = self.halt.is_some() && !spec.is_some_and(|s| s.while_halted);
+        if !halted {
+            if let Err(e) = self.check_words(command, spec, line) {
+                // Nothing of the line happened: the values in force stay.
+                self.refuse(e.to_string(), out);
+                return self.outcome();
+            }
+        }
+        let effect = self.core.apply(line);
+        if halted {
             out(self.now_s(), STOPPED_LINE);
             return Outcome::Halted;
         }
@@ -301,6 +308,36 @@ impl Machine {
         self.sync(out);
         self.timed_reports(out);
         self.outcome()
+    }
+
+    /// The words of the line just read, against the ranges its command declares
+    /// ([`commands::check`]); a line without a command is a move in the modal motion (`G0`..`G3`).
+    fn check_words(
+        &self,
+        command: Command,
+        spec: Option<&CommandSpec>,
+        line: &[u8],
+    ) -> Result<(), gweave::range::OutOfRange> {
+        let (code, spec) = match (command, spec) {
+            (Command::None, _) => {
+                let number = match self.core.state().motion {
+                    Motion::Rapid => 0,
+                    Motion::Linear => 1,
+                    Motion::ArcCw => 2,
+                    Motion::ArcCcw => 3,
+                };
+                let code = Command::Code { letter: b'G', number, sub: None };
+                ((b'G', number), commands::lookup(code, b""))
+            }
+            (Command::Code { letter, number, .. }, spec) if self.built_with(letter, number) => {
+                ((letter, number), spec)
+            }
+            _ => return Ok(()),
+        };
+        match spec {
+            Some(spec) => commands::check(code, spec.params, self.core.block(), line),
+            None => Ok(()),
+        }
     }
 
     /// The auto-reports that are not the heaters' (`M154` position, `M27 S` SD status).
@@ -435,18 +472,16 @@ impl Machine {
     /// `M220`/`M221`: set the percentage (`S`), or report it.
     fn percentage(
         &mut self,
-        number: u32,
         label: &str,
         out: &mut dyn FnMut(f64, &str),
         field: impl Fn(&mut Self) -> &mut f64,
     ) {
-        match Params::new('M', number, self.core.block()).get(b'S', PERCENT) {
-            Ok(Some(v)) => *field(self) = v,
-            Ok(None) => {
+        match self.core.block().get(b'S') {
+            Some(v) => *field(self) = v,
+            None => {
                 let v = *field(self);
                 out(self.now_s(), &format!("echo:{label}{v:.0}%"));
             }
-            Err(e) => self.refuse(e.to_string(), out),
         }
     }
 
@@ -554,5 +589,7 @@ fn command_text(line: &[u8]) -> &[u8] {
 
 #[cfg(test)]
 mod firmware_tests;
+#[cfg(test)]
+mod params_tests;
 #[cfg(test)]
 mod tests;

@@ -68,7 +68,7 @@ impl Machine {
         match number {
             92 => {
                 for (axis, v) in words(b"XYZE").into_iter().enumerate() {
-                    if let Some(v) = v.filter(|v| v.is_finite() && *v > 0.0) {
+                    if let Some(v) = v {
                         self.settings.steps[axis] = v;
                         self.core.steppers_mut().set_steps_per_unit(axis, v);
                     }
@@ -262,7 +262,7 @@ impl Machine {
 }
 
 fn set(slot: &mut f64, value: Option<f64>) {
-    if let Some(v) = value.filter(|v| v.is_finite()) {
+    if let Some(v) = value {
         *slot = v;
     }
 }

@@ -316,17 +316,21 @@ fn moves_out_of_reach_are_refused() {
 }
 
 /// A stray digit in a feed rate or a dwell would hold the simulated clock for years: refused,
-/// as the simulated heaters would need hours to step through it. A long but sane dwell runs.
+/// as the simulated heaters would need hours to step through it (a feed below 1 mm/min or a
+/// dwell over a day by their ranges; a move whose length makes it last over a week at a sane
+/// feed by its time). A long but sane dwell runs.
 #[test]
 fn commands_longer_than_a_week_are_refused() {
     let mut m = machine();
-    let (r, _) = run(&mut m, "G28\nG1 X100 F0.0001\nG4 S99999999\nG4 S600\nG1 X50 F6000\nM400");
+    let (r, _) =
+        run(&mut m, "G28\nG1 X100 F0.0001\nG4 S99999999\nG1 E1000000 F1\nG4 S600\nG1 X50 F6000\nM400");
     let refusals: Vec<_> = r.iter().filter(|l| l.starts_with("echo:")).collect();
     assert_eq!(
         refusals,
         [
-            "echo:a 100.000 mm move at F0.0001 would take 60000000 s: move refused",
-            "echo:a dwell of 99999999 s: refused"
+            "echo:G1 F = 0.0001 is out of range: 1 to 100000 mm/min",
+            "echo:G4 S = 99999999 is out of range: 0 to 86400 s",
+            "echo:a 1000000.000 mm move at F1 would take 60000000 s: move refused",
         ],
         "{r:?}"
     );

@@ -166,14 +166,13 @@ impl Drop for PtyEndpoint {
 mod tests {
     use std::fs::File;
     use std::io::Write;
-    use std::sync::atomic::Ordering;
     use std::time::Instant;
 
     use nix::sys::termios::{cfsetspeed, BaudRate};
 
     use super::*;
     use crate::link::serial::tests::Scripted;
-    use crate::link::transport::{serve, ServeOptions, StopOnDrop};
+    use crate::link::transport::{serving, ServeOptions};
 
     fn open_host(link: &Path) -> File {
         OpenOptions::new()
@@ -212,14 +211,8 @@ mod tests {
         let link = dir.path().join("gweave0");
         let mut endpoint = PtyEndpoint::open(&link).unwrap();
         assert_eq!(std::fs::read_link(&link).unwrap(), endpoint.slave_path());
-        let stop = AtomicBool::new(false);
-        std::thread::scope(|s| {
-            // A failed assertion must still stop the server, or the scope never ends.
-            let _stop = StopOnDrop(&stop);
-            let server = s.spawn(|| {
-                let mut make = || Ok::<_, io::Error>(Scripted::default());
-                serve(&mut endpoint, &mut make, &mut |_| {}, &ServeOptions::default(), None, &stop)
-            });
+        let make = || Ok::<_, io::Error>(Scripted::default());
+        let (summary, _, ()) = serving(&mut endpoint, make, &ServeOptions::default(), None, || {
             let mut host = open_host(&link);
             // Raw mode: CR is not turned into LF, nothing is echoed back.
             host.write_all(b"N1 G28*18\r\nN2 G28*19\nG4 S5\n").unwrap();
@@ -245,11 +238,10 @@ mod tests {
             let mut host = open_host(&link);
             host.write_all(b"G28\n").unwrap();
             assert_eq!(lines_until_ok(&mut host, 1), ["start", "echo:Marlin test double", "ok"]);
-            stop.store(true, Ordering::Relaxed);
-            let summary = server.join().unwrap().unwrap();
-            assert_eq!(summary.sessions, 2);
-            assert_eq!(summary.link.busy, 2);
         });
+        let summary = summary.unwrap();
+        assert_eq!(summary.sessions, 2);
+        assert_eq!(summary.link.busy, 2);
         drop(endpoint);
         assert!(std::fs::symlink_metadata(&link).is_err(), "the link is removed");
     }
@@ -281,20 +273,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let link = dir.path().join("gweave0");
         let mut endpoint = PtyEndpoint::open(&link).unwrap();
-        let stop = AtomicBool::new(false);
-        std::thread::scope(|s| {
-            let _stop = StopOnDrop(&stop);
-            let server = s.spawn(|| {
-                let mut make = || Ok::<_, io::Error>(Scripted::default());
-                let mut ended = Vec::new();
-                let mut finished = |d: Scripted| ended.push(d.ran);
-                let summary = serve(&mut endpoint, &mut make, &mut finished, &options, None, &stop);
-                (summary.unwrap(), ended)
-            });
-            body(&link);
-            stop.store(true, Ordering::Relaxed);
-            server.join().unwrap()
-        })
+        let make = || Ok::<_, io::Error>(Scripted::default());
+        let (summary, ended, ()) = serving(&mut endpoint, make, &options, None, || body(&link));
+        (summary.unwrap(), ended.into_iter().map(|d| d.ran).collect())
     }
 
     /// After a hang-up, the next host to open the port gets a fresh power-on: no stale replies,

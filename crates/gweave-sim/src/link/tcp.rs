@@ -151,58 +151,13 @@ impl Endpoint for TcpEndpoint {
 
 #[cfg(test)]
 mod tests {
-    use std::io::{BufRead, BufReader, Write};
-    use std::net::TcpStream;
-    use std::sync::atomic::Ordering;
+    use std::io::Write;
     use std::time::Instant;
 
     use super::*;
     use crate::link::serial::tests::Scripted;
-    use crate::link::transport::{serve, ServeOptions, StopOnDrop};
-
-    fn lines_until_ok(reader: &mut BufReader<TcpStream>, oks: usize) -> Vec<String> {
-        let mut got = Vec::new();
-        while got.iter().filter(|l: &&String| *l == "ok").count() < oks {
-            let mut line = String::new();
-            assert!(reader.read_line(&mut line).unwrap() > 0, "closed after {got:?}");
-            got.push(line.trim_end().to_string());
-        }
-        got
-    }
-
-    fn connect(addr: SocketAddr) -> (TcpStream, BufReader<TcpStream>) {
-        let stream = TcpStream::connect(addr).unwrap();
-        stream.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
-        let reader = BufReader::new(stream.try_clone().unwrap());
-        (stream, reader)
-    }
-
-    /// Reads reply lines up to the first that starts with `last`.
-    fn lines_through(reader: &mut BufReader<TcpStream>, last: &str) -> Vec<String> {
-        let mut got = Vec::new();
-        while !got.last().is_some_and(|l: &String| l.starts_with(last)) {
-            let mut line = String::new();
-            assert!(reader.read_line(&mut line).unwrap() > 0, "closed after {got:?}");
-            got.push(line.trim_end().to_string());
-        }
-        got
-    }
-
-    /// Closes `stream` abruptly: with a zero linger time, close sends a reset (RST), not a FIN.
-    fn reset(stream: TcpStream) {
-        let linger = libc::linger { l_onoff: 1, l_linger: 0 };
-        // SAFETY: setsockopt on a socket we own, with a pointer to a local of the stated size.
-        let rc = unsafe {
-            libc::setsockopt(
-                std::os::fd::AsRawFd::as_raw_fd(&stream),
-                libc::SOL_SOCKET,
-                libc::SO_LINGER,
-                (&linger as *const libc::linger).cast(),
-                std::mem::size_of::<libc::linger>() as libc::socklen_t,
-            )
-        };
-        assert_eq!(rc, 0, "{}", io::Error::last_os_error());
-    }
+    use crate::link::transport::{serving, ServeOptions};
+    use crate::test_support::{connect, lines_through, lines_until_ok, reset};
 
     /// Connects while another host is served: everything the server says before it closes.
     fn turned_away(addr: SocketAddr) -> String {
@@ -219,19 +174,10 @@ mod tests {
     fn with_server(options: ServeOptions, body: impl FnOnce(SocketAddr)) -> Vec<Scripted> {
         let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
         let addr = endpoint.local_addr().unwrap();
-        let stop = AtomicBool::new(false);
-        std::thread::scope(|s| {
-            let _stop = StopOnDrop(&stop);
-            let server = s.spawn(|| {
-                let mut make = || Ok::<_, io::Error>(Scripted::default());
-                let mut ended = Vec::new();
-                serve(&mut endpoint, &mut make, &mut |d| ended.push(d), &options, None, &stop).unwrap();
-                ended
-            });
-            body(addr);
-            stop.store(true, Ordering::Relaxed);
-            server.join().unwrap()
-        })
+        let make = || Ok::<_, io::Error>(Scripted::default());
+        let (summary, ended, ()) = serving(&mut endpoint, make, &options, None, || body(addr));
+        summary.unwrap();
+        ended
     }
 
     #[test]
@@ -303,20 +249,10 @@ mod tests {
     fn serves_one_host_at_a_time_and_reboots_per_connection() {
         let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
         let addr = endpoint.local_addr().unwrap();
-        let stop = AtomicBool::new(false);
         let options = ServeOptions { speed: Some(1.0), ..ServeOptions::default() };
         let mut transcript = Vec::new();
-        std::thread::scope(|s| {
-            // A failed assertion must still stop the server, or the scope never ends.
-            let _stop = StopOnDrop(&stop);
-            let server = s.spawn(|| {
-                let mut make = || Ok::<_, io::Error>(Scripted::default());
-                let mut ended = Vec::new();
-                let mut finished = |d: Scripted| ended.push(d.ran);
-                let summary =
-                    serve(&mut endpoint, &mut make, &mut finished, &options, Some(&mut transcript), &stop);
-                (summary, ended)
-            });
+        let make = || Ok::<_, io::Error>(Scripted::default());
+        let (summary, ended, ()) = serving(&mut endpoint, make, &options, Some(&mut transcript), || {
             let (mut host, mut reader) = connect(addr);
             host.write_all(b"N1 G28*18\nN3 G28*16\n").unwrap();
             let got = lines_until_ok(&mut reader, 2);
@@ -343,15 +279,14 @@ mod tests {
             let (mut host, mut reader) = connect(addr);
             host.write_all(b"N1 G28*18\n").unwrap();
             assert_eq!(lines_until_ok(&mut reader, 1), ["start", "echo:Marlin test double", "ok"]);
-            stop.store(true, Ordering::Relaxed);
-            let (summary, ended) = server.join().unwrap();
-            let summary = summary.unwrap();
-            // Each session's machine comes back when it ends, with what it ran.
-            assert_eq!(ended, [vec!["G28", "G4 S0.6"], vec!["G28"]]);
-            assert_eq!(summary.sessions, 2);
-            assert_eq!(summary.link.executed, 3);
-            assert_eq!(summary.link.errors, 1);
         });
+        let summary = summary.unwrap();
+        // Each session's machine comes back when it ends, with what it ran.
+        let ran: Vec<_> = ended.into_iter().map(|d| d.ran).collect();
+        assert_eq!(ran, [vec!["G28", "G4 S0.6"], vec!["G28"]]);
+        assert_eq!(summary.sessions, 2);
+        assert_eq!(summary.link.executed, 3);
+        assert_eq!(summary.link.errors, 1);
         let transcript = String::from_utf8(transcript).unwrap();
         assert!(transcript.contains("       0.000 > N3 G28*16\n"), "{transcript}");
         assert!(transcript.contains("       0.600 < ok\n"), "{transcript}");
@@ -362,22 +297,13 @@ mod tests {
         use crate::interp::Machine;
         let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
         let addr = endpoint.local_addr().unwrap();
-        let stop = AtomicBool::new(false);
-        std::thread::scope(|s| {
-            let _stop = StopOnDrop(&stop);
-            let server = s.spawn(|| {
-                let mut make = || {
-                    Machine::new(Default::default()).map(|mut m| {
-                        m.attach_sd(sd.to_owned());
-                        m
-                    })
-                };
-                serve(&mut endpoint, &mut make, &mut |_| {}, &options, None, &stop).unwrap();
-            });
-            body(addr);
-            stop.store(true, Ordering::Relaxed);
-            server.join().unwrap();
-        });
+        let make = || {
+            Machine::new(Default::default()).map(|mut m| {
+                m.attach_sd(sd.to_owned());
+                m
+            })
+        };
+        serving(&mut endpoint, make, &options, None, || body(addr)).0.unwrap();
     }
 
     /// Issue #20: OctoPrint's pause waited 3 s for a timeout because the fast board answered

@@ -463,16 +463,41 @@ fn tick_ms() -> u16 {
     u16::try_from(TICK.as_millis()).unwrap_or(u16::MAX)
 }
 
-/// Raises a stop flag when dropped: a server thread started in a test scope ends even when the
-/// test body panics.
+/// Runs [`serve`] on `endpoint` in a thread while `body` runs, then stops it: what the server
+/// returned, the devices of the sessions as they ended, and what `body` returned. A failed
+/// assertion in `body` stops the server too, or the scope would never end.
 #[cfg(test)]
-pub(crate) struct StopOnDrop<'a>(pub &'a AtomicBool);
-
-#[cfg(test)]
-impl Drop for StopOnDrop<'_> {
-    fn drop(&mut self) {
-        self.0.store(true, Ordering::Relaxed);
+pub(crate) fn serving<D, E, T>(
+    endpoint: &mut (dyn Endpoint + Send),
+    mut make_device: impl FnMut() -> Result<D, E> + Send,
+    options: &ServeOptions,
+    log: Option<&mut (dyn Write + Send)>,
+    body: impl FnOnce() -> T,
+) -> (Result<ServeSummary, TransportError>, Vec<D>, T)
+where
+    D: Device + Send,
+    E: std::error::Error + Send + Sync + 'static,
+{
+    struct StopOnDrop<'a>(&'a AtomicBool);
+    impl Drop for StopOnDrop<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Relaxed);
+        }
     }
+    let stop = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let _stop = StopOnDrop(&stop);
+        let server = s.spawn(|| {
+            let mut ended = Vec::new();
+            let log = log.map(|l| l as &mut dyn Write);
+            let summary = serve(endpoint, &mut make_device, &mut |d| ended.push(d), options, log, &stop);
+            (summary, ended)
+        });
+        let out = body();
+        stop.store(true, Ordering::Relaxed);
+        let (summary, ended) = server.join().unwrap();
+        (summary, ended, out)
+    })
 }
 
 #[cfg(test)]

@@ -242,17 +242,17 @@ const CRUISE_RATIO: Range = Range::new(0.0, 0.99, "");
 /// A corner speed (square corner or instantaneous E change); 0 stops at every corner.
 const CORNER_SPEED_MM_S: Range = Range::new(0.0, 1_000.0, "mm/s");
 /// Marlin's junction deviation (`JUNCTION_DEVIATION_MM`, typically 0.005 to 0.3).
-const JUNCTION_DEVIATION_MM: Range = Range::new(0.000_1, 10.0, "mm");
+pub(crate) const JUNCTION_DEVIATION_MM: Range = Range::new(0.000_1, 10.0, "mm");
 /// Marlin's planner buffer (`BLOCK_BUFFER_SIZE`, 8 to 64 on real boards); its ring keeps one
 /// slot free, so 2 slots hold one block.
 const LOOKAHEAD_BLOCKS: Range = Range::new(2.0, 1_024.0, "blocks");
 /// Marlin's minimum segment time (`DEFAULT_MINSEGMENTTIME`, M205 B), up to a second.
-const MIN_SEGMENT_TIME_US: Range = Range::new(0.0, 1_000_000.0, "µs");
+pub(crate) const MIN_SEGMENT_TIME_US: Range = Range::new(0.0, 1_000_000.0, "µs");
 /// Classic jerk (`CLASSIC_JERK`, M205 X Y Z E): an instant change of speed, 0 for none.
 pub(crate) const JERK_MM_S: Range = Range::new(0.0, 1_000.0, "mm/s");
 /// The rotary axis' speed and acceleration, degree based.
-const SPEED_DEG_S: Range = Range::new(0.001, 100_000.0, "°/s");
-const ACCEL_DEG_S2: Range = Range::new(0.001, 10_000_000.0, "°/s²");
+pub(crate) const SPEED_DEG_S: Range = Range::new(0.001, 100_000.0, "°/s");
+pub(crate) const ACCEL_DEG_S2: Range = Range::new(0.001, 10_000_000.0, "°/s²");
 
 impl CheckRanges for KlipperLimits {
     fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {

@@ -67,7 +67,7 @@ const BAND_C: Range = Range::new(0.0, 100.0, "°C");
 const EVAL_PERIOD_S: Range = Range::new(0.001, 60.0, "s");
 /// PID gains in counts (of 255) per kelvin (per second, times seconds); tuned beds reach a
 /// few thousand.
-const GAIN: Range = Range::new(0.0, 100_000.0, "");
+pub(crate) const GAIN: Range = Range::new(0.0, 100_000.0, "");
 const FILTER_S: Range = Range::new(0.0, 600.0, "s");
 
 impl CheckRanges for ControlConfig {

@@ -4,6 +4,7 @@
 
 pub mod arc;
 pub mod axes;
+pub mod codes;
 pub mod container;
 pub mod diag;
 pub mod effect;

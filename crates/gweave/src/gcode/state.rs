@@ -232,7 +232,8 @@ impl State {
     }
 
     /// Every line but a plain move: out of line, so that [`State::apply`] stays small enough
-    /// to be inlined into the loops that call it.
+    /// to be inlined into the loops that call it. The codes matched here and in the two below
+    /// are declared in [`MODAL_CODES`](super::codes::MODAL_CODES); a test keeps them equal.
     #[inline(never)]
     fn command(&mut self, block: &Block) {
         match block.command {
@@ -341,7 +342,8 @@ impl State {
                 let speed = block
                     .get(b'S')
                     .or_else(|| block.get(b'P').filter(|_| self.options.firmware.values_in_p()));
-                self.thermal.fan = (speed.unwrap_or(255.0) / 255.0).clamp(0.0, 1.0);
+                let full = crate::range::PWM.max;
+                self.thermal.fan = (speed.unwrap_or(full) / full).clamp(0.0, 1.0);
             }
             107 => self.thermal.fan = 0.0,
             207 => {

@@ -136,20 +136,7 @@ impl Recoat {
 mod tests {
     use super::*;
 
-    pub(crate) fn example() -> Recoat {
-        Recoat {
-            spreader_axis: 'Y',
-            spreader_start_mm: -20.0,
-            spreader_stroke_mm: 260.0,
-            spread_feed_mm_min: 300.0,
-            return_feed_mm_min: 3000.0,
-            piston_feed_mm_min: 120.0,
-            feed_piston_axis: 'A',
-            build_piston_axis: 'Z',
-            powder_ratio: 1.5,
-            dwell_s: 0.5,
-        }
-    }
+    use crate::test_support::recoat as example;
 
     #[test]
     fn recoat_motion_from_the_profile() {

@@ -125,9 +125,20 @@ impl Front {
 
     /// Parse `raw` and apply it to the modal state.
     pub(super) fn parse(&mut self, raw: &[u8]) -> Effect {
+        self.lex(raw);
+        self.apply(raw)
+    }
+
+    /// First half of [`Front::parse`]: read the line's words into [`Front::block`], counting
+    /// it; the modal state is not touched yet.
+    pub(super) fn lex(&mut self, raw: &[u8]) {
         self.line += 1;
         parse_into(raw, &mut self.block);
         self.count_malformed();
+    }
+
+    /// Second half of [`Front::parse`]: apply the line just read to the modal state.
+    pub(super) fn apply(&mut self, raw: &[u8]) -> Effect {
         *self.state.apply(raw, &self.block)
     }
 

@@ -251,6 +251,18 @@ impl Estimator {
         self.front.parse(raw)
     }
 
+    /// [`Estimator::parse`] in two steps, for a caller that checks the words before the
+    /// line changes anything (the virtual printer refuses a value out of range, as GRBL's
+    /// parser checks a whole line first): read the line into [`Estimator::block`]...
+    pub fn lex(&mut self, raw: &[u8]) {
+        self.front.lex(raw)
+    }
+
+    /// ...then apply it to the modal state and say what it does.
+    pub fn apply(&mut self, raw: &[u8]) -> Effect {
+        self.front.apply(raw)
+    }
+
     /// Second half of [`Estimator::line`]: carry out `effect` (normally what
     /// [`Estimator::parse`] returned for `raw`, possibly changed by the caller) and the line's
     /// motion-related commands.

@@ -1,0 +1,21 @@
+//! Fixtures the tests of this crate and of the crates above share, so that each is written once.
+//! Built for tests only: `cfg(test)` here, the `test-support` feature in a dev-dependency.
+
+use crate::gen::recoat::Recoat;
+
+/// A binder-jet recoat: the spreader on Y from -20 mm over 260 mm, the feed piston on A, the
+/// build piston on Z, 1.5 times the layer's powder, half a second of settling.
+pub fn recoat() -> Recoat {
+    Recoat {
+        spreader_axis: 'Y',
+        spreader_start_mm: -20.0,
+        spreader_stroke_mm: 260.0,
+        spread_feed_mm_min: 300.0,
+        return_feed_mm_min: 3000.0,
+        piston_feed_mm_min: 120.0,
+        feed_piston_axis: 'A',
+        build_piston_axis: 'Z',
+        powder_ratio: 1.5,
+        dwell_s: 0.5,
+    }
+}
