@@ -11,10 +11,10 @@
 //! use gweave::rotary::overrides::{MachineOverrides, WrapOverrides};
 //! use gweave::rotary::wrap::WrapConfig;
 //! let machine = MachineOverrides { mandrel_diameter_mm: Some(30.0), ..MachineOverrides::default() };
-//! let mut config = WrapConfig::read(Some("[unwrap]\nhelical = true\n"), &machine).unwrap();
+//! let mut config = WrapConfig::read(Some("chord_tolerance_mm = 0.05\n"), &machine).unwrap();
 //! config.apply(&WrapOverrides { machine, seam_rotation_deg: Some(7.5), ..WrapOverrides::default() }).unwrap();
 //! assert_eq!((config.machine.mandrel_diameter_mm, config.unwrap.seam_rotation_per_layer_deg), (30.0, 7.5));
-//! assert!(config.unwrap.helical, "a file's value stays unless a flag replaces it");
+//! assert_eq!(config.chord_tolerance_mm, 0.05, "a file's value stays unless a flag replaces it");
 //! ```
 
 use super::cylinder::{FeedConvention, RotaryConfig, RotaryUnit};
