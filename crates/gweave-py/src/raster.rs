@@ -141,17 +141,14 @@ pub(crate) fn slice_raster_json(
     margin: usize,
 ) -> PyResult<String> {
     use gweave::gen::slice_raster::{slice_to_dir, SliceConfig};
-    let cfg = SliceConfig {
-        layer_height_mm: layer_height,
-        pixel_mm: pixel_mm.unwrap_or(25.4 / dpi),
-        margin_px: margin,
-    };
     let report = py.allow_threads(|| {
         let mesh = gweave::gen::stl::read_stl(&stl).map_err(|e| match e {
             gweave::gen::stl::StlError::Io { .. } => PyOSError::new_err(e.to_string()),
             _ => PyValueError::new_err(format!("{}: {e}", stl.display())),
         })?;
-        slice_to_dir(&mesh, &cfg, &out_dir).map_err(|e| PyValueError::new_err(e.to_string()))
+        let sliced = SliceConfig::with_resolution(layer_height, pixel_mm, dpi, margin)
+            .and_then(|cfg| slice_to_dir(&mesh, &cfg, &out_dir));
+        sliced.map_err(|e| PyValueError::new_err(e.to_string()))
     })?;
     to_json(&report)
 }
