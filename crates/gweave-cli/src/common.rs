@@ -195,18 +195,8 @@ pub fn load<T, E>(path: &Path, parse: impl FnOnce(&str) -> std::result::Result<T
 where
     E: std::error::Error + Send + Sync + 'static,
 {
-    parse(&read_text(path)?).map_err(|e| {
-        let mut message = e.to_string();
-        let mut cause = std::error::Error::source(&e);
-        while let Some(c) = cause {
-            let text = c.to_string();
-            if !message.contains(&text) {
-                message = format!("{message}: {text}");
-            }
-            cause = c.source();
-        }
-        anyhow::anyhow!("{}: {message}", path.display())
-    })
+    parse(&read_text(path)?)
+        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), gweave::error::with_causes(&e)))
 }
 
 /// [`load`] for an optional file: its default without one.

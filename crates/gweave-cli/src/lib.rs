@@ -11,7 +11,6 @@ mod finish;
 mod firmware_arg;
 mod format;
 mod progress;
-pub mod raster_job;
 mod signals;
 
 use std::ffi::OsString;

@@ -2,10 +2,11 @@
 //! expects them: `FileNotFoundError` (with `errno` and `filename`) for a missing file,
 //! `ValueError` naming the parameter for a value out of its range.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use gweave::bed::Bed;
 use gweave::firmware::Firmware;
+use gweave::gcode::writer::Target;
 use gweave::range::{Quantity, Range};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -29,6 +30,18 @@ pub fn os_error(path: &Path, e: &std::io::Error) -> PyErr {
 /// `ValueError` naming the parameter.
 pub fn firmware(name: &str, value: Option<&str>) -> PyResult<Option<Firmware>> {
     value.map(str::parse).transpose().map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
+}
+
+/// Where a transform writes, from the keywords every transform shares (`output`, `in_place`,
+/// `backup`, `force`) as the CLI reads `-o`, `--in-place`, `--no-backup` and `--force`:
+/// `in_place=True` replaces the input (keeping `<path>.bak` unless `backup=False`), else
+/// `output` is the file written; neither is a `ValueError`.
+pub fn target_of(output: Option<PathBuf>, in_place: bool, backup: bool, force: bool) -> PyResult<Target> {
+    match (output, in_place) {
+        (_, true) => Ok(Target::InPlace { keep_backup: backup, force }),
+        (Some(p), false) => Ok(Target::File(p)),
+        (None, false) => Err(PyValueError::new_err("give an output path or in_place=True")),
+    }
 }
 
 /// `value` within `range`, or a `ValueError` naming the parameter and the range, as the CLI

@@ -4,7 +4,9 @@
 use std::path::PathBuf;
 
 use gweave::gcode::writer::Target;
+use gweave::gen::raster_job::{JobError, JobOptions, JobReport};
 use gweave::pass::Quiet;
+use gweave_sim::Estimator;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 
@@ -12,10 +14,18 @@ use crate::{finish, to_json};
 
 // ---- binder-jet raster (gweave raster, slice-raster) ----
 
-/// An anyhow error from the CLI's job runner: OSError when a file could not be read or written.
-fn job_err(e: anyhow::Error) -> PyErr {
-    let io = e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some());
-    let text = format!("{e:#}");
+/// A raster job's error as Python raises it: `OSError` when a file could not be read or written
+/// (an I/O error among its causes), else `ValueError`; the text is the message and its causes,
+/// `: `-separated.
+fn job_err(e: JobError) -> PyErr {
+    let mut text = e.to_string();
+    let mut io = false;
+    let mut cause = std::error::Error::source(&e);
+    while let Some(c) = cause {
+        io |= c.downcast_ref::<std::io::Error>().is_some();
+        text = format!("{text}: {c}");
+        cause = c.source();
+    }
     if io {
         PyOSError::new_err(text)
     } else {
@@ -55,7 +65,7 @@ pub(crate) fn raster_json(
     fast_estimate: bool,
     options: &str,
 ) -> PyResult<String> {
-    let job_options = gweave_cli::raster_job::JobOptions {
+    let job_options = JobOptions {
         inputs,
         head,
         threshold,
@@ -85,9 +95,9 @@ pub(crate) fn raster_json(
         fast_estimate,
     };
     let job = job_options.job().map_err(job_err)?;
-    let write = |t: &Target| job.run(t, &mut Quiet).map_err(job_err);
+    let write = |t: &Target| job.run(t, &mut Quiet, Estimator::line_timer).map_err(job_err);
     // Its own time counts the printhead's firing, which the estimator does not know.
-    let own_time = |r: &gweave_cli::raster_job::JobReport| Some(r.time.total_s);
+    let own_time = |r: &JobReport| Some(r.time.total_s);
     let target = Target::File(output);
     let report = py.allow_threads(|| finish::finished(None, &target, "raster", options, write, own_time))?;
     to_json(&report)
@@ -105,7 +115,7 @@ pub(crate) fn raster_test_pattern_json(
     columns: usize,
     origin: (f64, f64),
 ) -> PyResult<String> {
-    let options = gweave_cli::raster_job::JobOptions {
+    let options = JobOptions {
         head,
         heads,
         dialect: crate::args::firmware("dialect", dialect)?,
@@ -131,17 +141,14 @@ pub(crate) fn slice_raster_json(
     margin: usize,
 ) -> PyResult<String> {
     use gweave::gen::slice_raster::{slice_to_dir, SliceConfig};
-    let cfg = SliceConfig {
-        layer_height_mm: layer_height,
-        pixel_mm: pixel_mm.unwrap_or(25.4 / dpi),
-        margin_px: margin,
-    };
     let report = py.allow_threads(|| {
         let mesh = gweave::gen::stl::read_stl(&stl).map_err(|e| match e {
             gweave::gen::stl::StlError::Io { .. } => PyOSError::new_err(e.to_string()),
             _ => PyValueError::new_err(format!("{}: {e}", stl.display())),
         })?;
-        slice_to_dir(&mesh, &cfg, &out_dir).map_err(|e| PyValueError::new_err(e.to_string()))
+        let sliced = SliceConfig::with_resolution(layer_height, pixel_mm, dpi, margin)
+            .and_then(|cfg| slice_to_dir(&mesh, &cfg, &out_dir));
+        sliced.map_err(|e| PyValueError::new_err(e.to_string()))
     })?;
     to_json(&report)
 }

@@ -11,13 +11,13 @@ use gweave::gcode::lexer::{parse_into, parse_line};
 use gweave::gcode::line::{Block, Command, Value};
 use gweave::gcode::reader::{LineReader, Part};
 use gweave::gcode::state::{Effect, State, StateOptions, E, X, Y, Z};
-use gweave::gcode::writer::Target;
 use gweave::pass::{Identity, Quiet, Run};
 use gweave::stats::stats_file;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::args::target_of;
 use crate::args::{in_range, os_error, BedArg};
 use crate::{err, strictness, to_json};
 
@@ -72,11 +72,7 @@ pub(crate) fn cat_json(
     force: bool,
     lenient: bool,
 ) -> PyResult<String> {
-    let target = match (output, in_place) {
-        (_, true) => Target::InPlace { keep_backup: backup, force },
-        (Some(p), false) => Target::File(p),
-        (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
-    };
+    let target = target_of(output, in_place, backup, force)?;
     let report = py.allow_threads(|| {
         let mut copy = Identity::default();
         let run = Run::file(&path).strictness(strictness(lenient)).to(&target);

@@ -7,7 +7,7 @@ use gweave::pass::Run;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::args::in_range;
+use crate::args::{in_range, target_of};
 use crate::{err, finish, strictness, to_json};
 use gweave::malformed::Transformed;
 use gweave::post::mix::mix;
@@ -56,11 +56,7 @@ pub(crate) fn purge_shift_json(
         tower_xy_mm: tower_at.map(|(x, y)| [x, y]),
     });
     let rules = c.validate().map_err(value_err)?;
-    let target = match (output, in_place) {
-        (_, true) => Target::InPlace { keep_backup: backup, force },
-        (Some(p), false) => Target::File(p),
-        (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
-    };
+    let target = target_of(output, in_place, backup, force)?;
     let strictness = strictness(lenient);
     let write = |t: &Target| {
         let (report, ran) = purge_shift(rules, Run::file(&path).strictness(strictness).to(t)).map_err(err)?;
@@ -116,11 +112,7 @@ pub(crate) fn mix_json(
     use gweave::post::mix::overrides::{gradient_space as space_named, Overrides};
     use gweave::post::mix::profile::MixProfile;
     let bad = |e: gweave::post::mix::MixPassError| PyValueError::new_err(e.to_string());
-    let target = match (output, in_place) {
-        (_, true) => Target::InPlace { keep_backup: backup, force },
-        (Some(p), false) => Target::File(p),
-        (None, false) => return Err(PyValueError::new_err("give an output path or in_place=True")),
-    };
+    let target = target_of(output, in_place, backup, force)?;
     let mut profile = MixProfile::from_toml_str(config).map_err(bad)?;
     profile
         .apply(&Overrides {

@@ -69,3 +69,6 @@ def test_slice_raster_then_raster(tmp_path):
     assert s["grid"]["layers"] == 57 and len(s["files"]) == 57
     r = gweave.raster(tmp_path / "layers", tmp_path / "t.gcode", fast_estimate=True)
     assert r["drops_per_head"] == [sum(s["pixels_per_layer"])]
+    # The resolution is checked as the CLI checks --dpi (the library's SliceConfig::with_resolution).
+    with pytest.raises(ValueError, match="^dpi = 0 is out of range"):
+        gweave.slice_raster(RDATA / "torus.stl", tmp_path / "none", layer_height=0.1, dpi=0)

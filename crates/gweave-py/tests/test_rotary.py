@@ -73,3 +73,27 @@ def test_callable_profiles_and_their_errors(tmp_path):
         gweave.HelicalPath(0, 5, radius=broken, pitch=1.0).points()
     with pytest.raises(ValueError, match="handedness"):
         gweave.HelicalPath(0, 5, radius=10, pitch=1, handedness="up")
+
+
+def test_wrap_keywords_read_a_config_as_the_cli_flags_do(data, tmp_path):
+    # A file without the [machine] table's required diameter, completed by the keyword, with a
+    # switch turned off and values replaced: the same library Overrides as the CLI's flags.
+    toml = tmp_path / "wrap.toml"
+    toml.write_text("chord_tolerance_mm = 0.05\n[unwrap]\nseam_rotation_per_layer_deg = 3\n")
+    plate = data / "rotary" / "plate.gcode"
+    r = gweave.rotary_wrap(
+        plate, tmp_path / "py.gcode", config=toml, mandrel_diameter=30, seam_rotation=7.5, axes="X,Y,Z",
+        rotary_unit="mm", feed_convention="combined",
+    )
+    assert r["machine"]["mandrel_diameter_mm"] == 30 and r["chord_tolerance_mm"] == 0.05
+    assert r["seam_rotation_per_layer_deg"] == 7.5 and r["machine"]["axes"] == "XYZ"
+    cli = tmp_path / "cli.gcode"
+    # The flags in the order Python's header lists them, so the headers match too.
+    flags = ["--mandrel-diameter", "30", "--feed-convention", "combined", "--rotary-unit", "mm", "--axes", "X,Y,Z",
+             "-c", str(toml), "--seam-rotation", "7.5"]
+    assert gweave.main(["rotary", "wrap", str(plate), "-o", str(cli), *flags, "-q"]) == 0
+    assert cli.read_bytes() == (tmp_path / "py.gcode").read_bytes()
+    with pytest.raises(ValueError, match="give --mandrel-diameter"):
+        gweave.rotary_wrap(plate, tmp_path / "none.gcode")
+    with pytest.raises(ValueError, match='rotary_unit: .deg. or .mm., not "inch"'):
+        gweave.rotary_wrap(plate, tmp_path / "bad.gcode", mandrel_diameter=30, rotary_unit="inch")

@@ -126,6 +126,22 @@ fn place(path: &Path, line: Option<u64>, column: Option<u32>) -> String {
     }
 }
 
+/// An error's message followed by its causes, `: `-separated, each once: a cause whose text
+/// the message already holds is not repeated. A settings file's error is one line this way
+/// (`printer.toml: [bed] x_mm = -1 is out of range: ...`).
+pub fn with_causes(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut message = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        let text = c.to_string();
+        if !message.contains(&text) {
+            message = format!("{message}: {text}");
+        }
+        cause = c.source();
+    }
+    message
+}
+
 impl Error {
     /// An [`Error::Io`] on `path`.
     pub fn io(path: impl AsRef<Path>, source: io::Error) -> Self {

@@ -10,13 +10,14 @@ use gweave::firmware::Firmware;
 use gweave::gcode::writer::Target;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{FireOrder, DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
+use gweave::gen::raster_job::{JobOptions, JobReport};
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
+use gweave_sim::Estimator;
 
 use crate::common::{hms, in_range, numbers_in, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::finish;
 use crate::firmware_arg::inkjet_firmware;
-use crate::raster_job::{JobOptions, JobReport};
 
 /// Layer images to inkjet G-code for binder jetting: bands as tall as the nozzle row, per
 /// inked column `G1 X`, `M400`, `M700 P<head> S<bits>` (Marlin hpc6602) or `M578` (RepRapFirmware).
@@ -188,7 +189,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     let job = options.job_from(source, heads)?;
     let mut bar = LayerBar::new(args.report.quiet.quiet);
     // Its own time counts the printhead's firing, which the estimator does not know.
-    let run = |t: &Target| job.run(t, &mut bar);
+    let run = |t: &Target| Ok(job.run(t, &mut bar, Estimator::line_timer)?);
     let (mut report, _) =
         finish::with_metadata_timed(None, &target(&args.output), run, |r: &JobReport| Some(r.time.total_s))?;
     report.output = if to_stdout { "-".into() } else { args.output.display().to_string() };

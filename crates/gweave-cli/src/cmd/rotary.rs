@@ -8,14 +8,15 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::{Args, Subcommand, ValueEnum};
 use gweave::gcode::writer::Target;
 use gweave::range::{ANGLE_DEG, FILAMENT_DIAMETER_MM, LAYER_HEIGHT_MM, SPEED_MM_S, TEMPERATURE_C};
-use gweave::rotary::cylinder::{FeedConvention, RotaryConfig, RotaryUnit, MANDREL_DIAMETER_MM};
+use gweave::rotary::cylinder::{FeedConvention, RotaryUnit, MANDREL_DIAMETER_MM};
 use gweave::rotary::helix::{
     TubeParams, BEAD_WIDTH_MM, CHORD_TOLERANCE_MM, PITCH_MM, SEGMENTS_PER_TURN, TUBE_LAYERS, TUBE_LENGTH_MM,
 };
+use gweave::rotary::overrides::{MachineOverrides, TubeOverrides, WrapOverrides};
 use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
@@ -101,55 +102,33 @@ fn parse_axes(text: &str) -> Result<[char; 3], String> {
 }
 
 impl MachineArgs {
-    /// The config file read with `parse`, with the mandrel diameter from the command line
-    /// filled in (the `[machine]` table requires it), or `None` without a file. Its errors name
-    /// the file.
-    fn config<T>(&self, parse: impl FnOnce(&str) -> Result<T, RotaryError>) -> Result<Option<T>> {
-        let Some(path) = &self.config else {
-            return Ok(None);
-        };
-        let diameter = self.mandrel_diameter;
-        let read = |text: &str| {
-            let mut table: toml::Table = text.parse()?;
-            if let Some(d) = diameter {
-                let machine = table.entry("machine").or_insert_with(|| toml::Table::new().into());
-                if let Some(machine) = machine.as_table_mut() {
-                    machine.insert("mandrel_diameter_mm".into(), d.into());
-                }
-            }
-            parse(&table.to_string())
-        };
-        load(path, read).map(Some)
-    }
-
-    /// A machine from the flags alone.
-    fn machine(&self) -> Result<RotaryConfig> {
-        match self.mandrel_diameter {
-            Some(d) => Ok(RotaryConfig::new(d)),
-            None => bail!("give --mandrel-diameter MM (or a config file with [machine] mandrel_diameter_mm)"),
-        }
-    }
-
-    /// Applies the flags over a machine read from a file or built by [`Self::machine`].
-    fn apply(&self, machine: &mut RotaryConfig) {
-        if let Some(d) = self.mandrel_diameter {
-            machine.mandrel_diameter_mm = d;
-        }
-        if let Some(feed) = self.feed_convention {
-            machine.feed_convention = match feed {
+    /// The machine's flags, in the library's words.
+    fn overrides(&self) -> MachineOverrides {
+        MachineOverrides {
+            mandrel_diameter_mm: self.mandrel_diameter,
+            feed_convention: self.feed_convention.map(|feed| match feed {
                 FeedArg::Nist => FeedConvention::Nist,
                 FeedArg::Combined => FeedConvention::Combined,
                 FeedArg::InverseTime => FeedConvention::InverseTime,
-            };
-        }
-        if let Some(unit) = self.rotary_unit {
-            machine.rotary_unit = match unit {
+            }),
+            rotary_unit: self.rotary_unit.map(|unit| match unit {
                 UnitArg::Deg => RotaryUnit::Degrees,
                 UnitArg::Mm => RotaryUnit::Mm,
-            };
+            }),
+            axes: self.axes,
         }
-        if let Some([a, r, z]) = self.axes {
-            (machine.axial_axis, machine.rotary_axis, machine.radial_axis) = (a, r, z);
+    }
+
+    /// The settings `read` makes of the config file (its errors name the file) or, without
+    /// one, of the flags alone (`WrapConfig::read`, `TubeParams::read`).
+    fn read<T>(
+        &self,
+        read: impl FnOnce(Option<&str>, &MachineOverrides) -> Result<T, RotaryError>,
+    ) -> Result<T> {
+        let machine = self.overrides();
+        match &self.config {
+            Some(path) => load(path, |text| read(Some(text), &machine)),
+            None => Ok(read(None, &machine)?),
         }
     }
 }
@@ -224,22 +203,15 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
         .write("--preview", args.machine.preview.as_deref())
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let mut config = match args.machine.config(WrapConfig::from_toml_str)? {
-        Some(config) => config,
-        None => WrapConfig::new(args.machine.machine()?),
-    };
-    args.machine.apply(&mut config.machine);
-    if args.keep_arc_length {
-        config.unwrap.keep_arc_length = true;
-    }
-    if let Some(deg) = args.seam_rotation {
-        config.unwrap.seam_rotation_per_layer_deg = deg;
-    }
-    config.unwrap.helical |= args.helical;
-    config.allow_overlap |= args.allow_overlap;
-    if let Some(tol) = args.chord_tol {
-        config.chord_tolerance_mm = tol;
-    }
+    let mut config = args.machine.read(WrapConfig::read)?;
+    config.apply(&WrapOverrides {
+        machine: args.machine.overrides(),
+        keep_arc_length: args.keep_arc_length.then_some(true),
+        helical: args.helical,
+        allow_overlap: args.allow_overlap,
+        seam_rotation_deg: args.seam_rotation,
+        chord_tolerance_mm: args.chord_tol,
+    })?;
     finish::refuse_second_run(&args.input, "rotary wrap")?;
     let mut bar = args.report.quiet.bar();
     let preview = args.machine.preview.as_deref();
@@ -354,39 +326,21 @@ pub struct TubeArgs {
 }
 
 fn tube_params(args: &TubeArgs) -> Result<TubeParams> {
-    let mut t = match args.machine.config(TubeParams::from_toml_str)? {
-        Some(params) => params,
-        None => TubeParams::new(args.machine.machine()?),
-    };
-    args.machine.apply(&mut t.machine);
-    let p = &mut t.print;
-    let overrides = [
-        (&mut t.length_mm, args.length),
-        (&mut p.layer_height_mm, args.layer_height),
-        (&mut p.bead_width_mm, args.bead_width),
-        (&mut p.chord_tolerance_mm, args.chord_tol),
-        (&mut p.print_speed_mm_s, args.speed),
-        (&mut p.nozzle_temp_c, args.temp),
-        (&mut p.filament_diameter_mm, args.filament_diameter),
-    ];
-    for (slot, value) in overrides {
-        if let Some(v) = value {
-            *slot = v;
-        }
-    }
-    if let Some(n) = args.layer_count {
-        t.layers = n;
-    }
-    if args.pitch.is_some() {
-        t.pitch_mm = args.pitch;
-    }
-    if args.no_interweave {
-        t.interweave = false;
-    }
-    if args.segments_per_turn.is_some() {
-        t.print.segments_per_turn = args.segments_per_turn;
-    }
-    t.validate()?;
+    let mut t = args.machine.read(TubeParams::read)?;
+    t.apply(&TubeOverrides {
+        machine: args.machine.overrides(),
+        length_mm: args.length,
+        layers: args.layer_count,
+        layer_height_mm: args.layer_height,
+        bead_width_mm: args.bead_width,
+        pitch_mm: args.pitch,
+        interweave: args.no_interweave.then_some(false),
+        segments_per_turn: args.segments_per_turn,
+        chord_tolerance_mm: args.chord_tol,
+        print_speed_mm_s: args.speed,
+        nozzle_temp_c: args.temp,
+        filament_diameter_mm: args.filament_diameter,
+    })?;
     Ok(t)
 }
 

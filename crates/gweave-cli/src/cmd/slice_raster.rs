@@ -47,11 +47,7 @@ pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let mesh = read_stl(&args.model).with_context(|| format!("reading {}", args.model.display()))?;
-    let cfg = SliceConfig {
-        layer_height_mm: args.layer_height,
-        pixel_mm: args.pixel_mm.unwrap_or(25.4 / args.dpi),
-        margin_px: args.margin,
-    };
+    let cfg = SliceConfig::with_resolution(args.layer_height, args.pixel_mm, args.dpi, args.margin)?;
     let rep = slice_to_dir(&mesh, &cfg, &args.output)?;
     if args.report.emit(&rep)? {
         print_summary(|out| print_human(out, &args, &rep, mesh.triangles.len()))?;

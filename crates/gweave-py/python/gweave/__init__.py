@@ -584,8 +584,19 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 
 # ---- rotary (lathe-type) printing ----------------------------------------------------------
-# The keywords below only rename arguments to the library's TOML keys; every default, check and
-# computation is the Rust library's (the same as `gweave rotary ... --json`).
+# The keywords below are the CLI's flags, which the binding turns into the library's rotary
+# `Overrides` as the CLI does; every default, check and computation is the Rust library's (the
+# same as `gweave rotary ... --json`).
+
+def _axes(axes: Optional[Sequence[str]]) -> Optional[Tuple[str, ...]]:
+    """``axes`` as the three letters (axial, rotary, radial): ``"X,A,Z"`` or a sequence."""
+    if axes is None:
+        return None
+    letters = tuple(axes.split(",") if isinstance(axes, str) else axes)
+    if len(letters) != 3:
+        raise ValueError("axes: three letters, axial, rotary, radial (e.g. 'X,A,Z')")
+    return letters
+
 
 _UNITS = {"deg": "degrees", "degrees": "degrees", "mm": "mm"}
 
@@ -596,15 +607,15 @@ def _machine(
     rotary_unit: Optional[str],
     axes: Optional[Sequence[str]],
 ) -> Dict[str, Any]:
+    """The ``[machine]`` table of :func:`write_helical_paths`'s settings (the commands take
+    the keywords themselves)."""
     machine: Dict[str, Any] = {
         "mandrel_diameter_mm": mandrel_diameter,
         "feed_convention": feed_convention,
         "rotary_unit": None if rotary_unit is None else _UNITS.get(rotary_unit, rotary_unit),
     }
-    if axes is not None:
-        letters = list(axes.split(",") if isinstance(axes, str) else axes)
-        if len(letters) != 3:
-            raise ValueError("axes: three letters, axial, rotary, radial (e.g. 'X,A,Z')")
+    letters = _axes(axes)
+    if letters is not None:
         machine.update(axial_axis=letters[0], rotary_axis=letters[1], radial_axis=letters[2])
     return machine
 
@@ -638,20 +649,18 @@ def rotary_wrap(
     ``preview`` writes a 3D PNG of the executed path. Returns the report (per-layer radius,
     angles swept, seam angle; filament; time).
     """
-    settings = {
-        "machine": _machine(mandrel_diameter, feed_convention, rotary_unit, axes),
-        "chord_tolerance_mm": chord_tol,
-        "allow_overlap": allow_overlap or None,
-        "unwrap": {
-            "keep_arc_length": keep_arc_length,
-            "seam_rotation_per_layer_deg": seam_rotation,
-            "helical": helical or None,
-        },
-    }
     text = _gweave.rotary_wrap_json(
         _path(input, "input"),
         _path(output, "output"),
-        settings=json.dumps(settings),
+        mandrel_diameter=mandrel_diameter,
+        feed_convention=feed_convention,
+        rotary_unit=rotary_unit,
+        axes=_axes(axes),
+        keep_arc_length=keep_arc_length,
+        seam_rotation=seam_rotation,
+        helical=helical,
+        allow_overlap=allow_overlap,
+        chord_tol=chord_tol,
         config=_opt_path(config, "config"),
         preview=_opt_path(preview, "preview"),
         lenient=lenient,
@@ -697,25 +706,23 @@ def rotary_tube(
     Keywords override the TOML ``config``. Returns the report (per-layer radius, handedness,
     turns, spindle speed; filament and its volume against the wall volume; time).
     """
-    settings = {
-        "machine": _machine(mandrel_diameter, feed_convention, rotary_unit, axes),
-        "length_mm": length,
-        "layers": layer_count,
-        "pitch_mm": pitch,
-        "interweave": interweave,
-        "print": {
-            "layer_height_mm": layer_height,
-            "bead_width_mm": bead_width,
-            "segments_per_turn": segments_per_turn,
-            "chord_tolerance_mm": chord_tol,
-            "print_speed_mm_s": speed,
-            "nozzle_temp_c": temp,
-            "filament_diameter_mm": filament_diameter,
-        },
-    }
     text = _gweave.rotary_tube_json(
         _path(output, "output"),
-        settings=json.dumps(settings),
+        mandrel_diameter=mandrel_diameter,
+        length=length,
+        layer_count=layer_count,
+        layer_height=layer_height,
+        bead_width=bead_width,
+        pitch=pitch,
+        interweave=interweave,
+        segments_per_turn=segments_per_turn,
+        chord_tol=chord_tol,
+        speed=speed,
+        temp=temp,
+        filament_diameter=filament_diameter,
+        feed_convention=feed_convention,
+        rotary_unit=rotary_unit,
+        axes=_axes(axes),
         config=_opt_path(config, "config"),
         preview=_opt_path(preview, "preview"),
         options=_flags(

@@ -20,7 +20,8 @@ use thiserror::Error;
 use super::bitmap::{Bitmap, BitmapError};
 use super::stl::Mesh;
 use crate::range::{
-    short, Ceiling, OutOfRange, Range, TooLarge, LAYER_HEIGHT_MM, MAX_IMAGE_SIDE_PX, MAX_LAYERS, PIXEL_MM,
+    short, Ceiling, OutOfRange, Range, TooLarge, DPI, LAYER_HEIGHT_MM, MAX_IMAGE_SIDE_PX, MAX_LAYERS,
+    PIXEL_MM,
 };
 
 /// Errors from slicing.
@@ -67,6 +68,22 @@ pub struct SliceConfig {
 pub const MARGIN_PX: Range<usize> = Range::new(0, 1_000, "px");
 
 impl SliceConfig {
+    /// The settings as `gweave slice-raster`'s flags and Python's keywords give them: the pixel
+    /// size if given, else one pixel per dot at `dpi` (25.4 / dpi mm, an inch being 25.4 mm;
+    /// `dpi` checked against [`DPI`]). The other ranges are checked when slicing starts.
+    pub fn with_resolution(
+        layer_height_mm: f64,
+        pixel_mm: Option<f64>,
+        dpi: f64,
+        margin_px: usize,
+    ) -> Result<Self, SliceError> {
+        let pixel_mm = match pixel_mm {
+            Some(px) => px,
+            None => 25.4 / DPI.check("dpi", dpi)?,
+        };
+        Ok(SliceConfig { layer_height_mm, pixel_mm, margin_px })
+    }
+
     /// Checks every range (the flags and the TOML keys alike).
     pub fn validate(&self) -> Result<(), SliceError> {
         LAYER_HEIGHT_MM.check("layer_height_mm", self.layer_height_mm)?;
@@ -270,6 +287,17 @@ mod tests {
     use crate::gen::bitmap::{load_image, ThresholdOptions};
     use crate::gen::image_files::list_images;
     use crate::gen::stl::parse_stl;
+
+    #[test]
+    fn the_pixel_is_given_or_one_dot_at_the_resolution() {
+        let c = SliceConfig::with_resolution(0.1, None, 96.0, 2).unwrap();
+        assert_eq!(c, SliceConfig { layer_height_mm: 0.1, pixel_mm: 25.4 / 96.0, margin_px: 2 });
+        let given = SliceConfig::with_resolution(0.1, Some(0.05), 96.0, 0).unwrap();
+        assert_eq!(given.pixel_mm, 0.05);
+        // A resolution of nothing is refused by name, not as an infinite pixel.
+        let e = SliceConfig::with_resolution(0.1, None, 0.0, 0).unwrap_err();
+        assert!(e.to_string().starts_with("dpi = 0 is out of range"), "{e}");
+    }
 
     /// An axis-aligned box as 12 triangles.
     fn cuboid(lo: [f32; 3], hi: [f32; 3]) -> Mesh {

@@ -14,6 +14,7 @@
 //! - [`helix`]: seam-free helical tubes and custom helical paths (cones, variable pitch).
 //! - [`wrap`]: the streaming pass that prints a flat-sliced part onto the mandrel.
 //! - [`preview`]: any rotary program read back as the machine runs it, and drawn in 3D.
+//! - [`overrides`]: the flags and Python keywords laid over the TOML settings, shared by both.
 //! - [`report`]: both jobs end to end (write, read back, draw, report) for the CLI and Python.
 //!
 //! ```
@@ -41,6 +42,7 @@ pub mod cylinder;
 pub mod emit;
 pub(crate) mod helical;
 pub mod helix;
+pub mod overrides;
 pub mod preview;
 pub mod report;
 mod setup;
@@ -59,6 +61,9 @@ pub enum RotaryError {
         /// Why it was rejected.
         reason: String,
     },
+    /// No mandrel diameter: neither a flag (a keyword) nor the settings file gives one.
+    #[error("give --mandrel-diameter MM (or a config file with [machine] mandrel_diameter_mm)")]
+    NoMandrel,
     /// A setting outside its physical range.
     #[error(transparent)]
     Range(#[from] crate::range::OutOfRange),

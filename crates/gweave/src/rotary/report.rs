@@ -8,8 +8,9 @@
 //! - [`tube_file`]: a helical tube; per layer the radius, handedness, turns, spindle speed and
 //!   where the layer starts and ends (the next one starts there: there is no seam).
 //!
-//! Settings can also come as one JSON/TOML document merged over a TOML file
-//! ([`merged_settings`]), which is how the Python keywords reach the library.
+//! The commands' flags and Python's keywords reach the settings through
+//! [`super::overrides`]; the settings of custom helical paths (`gweave.write_helical_paths`)
+//! come as one JSON document merged over a TOML file ([`merged_settings`]).
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};

@@ -62,6 +62,7 @@ use crate::motion::stepper::{StepTotals, Steppers};
 mod back;
 mod front;
 mod report;
+mod timer;
 
 use back::Back;
 use front::{Chords, Front};

@@ -1,151 +1,116 @@
-//! A whole raster job as the CLI and the Python package run it: resolve the inputs (folders,
-//! globs, image lists or one `.sl1`), raster them layer by layer into an atomically written file,
-//! and estimate the print time with the virtual printer's planner while the G-code streams out.
+//! A whole raster job as `gweave raster` and `gweave.raster()` run it: resolve the inputs
+//! (folders, globs, image lists or one `.sl1`), raster them layer by layer into an atomically
+//! written file, and time the print while the G-code streams out.
 //!
-//! The G-code generator itself is `gweave::gen::raster`; this module only wires files, heads
-//! and the estimate together, so `gweave raster` and `gweave.raster()` give identical results.
+//! The G-code generator itself is [`super::raster`]; this module wires files, heads and the
+//! time estimate together, so that the command line and Python give identical results. The
+//! planner that times the G-code is the virtual printer's, which sits above the engine: the
+//! caller hands it in as a [`LineTimer`] (`gweave_sim::Estimator::line_timer`).
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
-use gweave::firmware::Firmware;
-use gweave::gcode::writer::{Output, Target};
-use gweave::gen::bitmap::{load_image, Bitmap, Channel, ThresholdOptions};
-use gweave::gen::image_files::list_images;
-use gweave::gen::printhead::PrintheadProfile;
-use gweave::gen::raster::{
-    self, test_pattern, FireOrder, RasterConfig, RasterReport, RasterWriter, HEADS, THRESHOLD,
-};
-use gweave::gen::sl1::Sl1Reader;
-use gweave::pass::Progress;
-use gweave::range::{DPI, PIXEL_MM};
-use gweave_sim::MotionProfile;
-use gweave_sim::{Estimate, Estimator};
 use serde::Serialize;
 
-use crate::common::{load_or_default, read_text};
+use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
+use super::printhead::{PrintheadError, PrintheadProfile};
+use super::raster::{
+    test_pattern, FireOrder, RasterConfig, RasterError, RasterReport, RasterWriter, HEADS, THRESHOLD,
+};
+use super::sl1::{Sl1Error, Sl1Reader};
+use crate::firmware::Firmware;
+use crate::gcode::writer::{Output, Target};
+use crate::pass::Progress;
+use crate::range::{OutOfRange, DPI, PIXEL_MM};
 
-/// Where the layer images of a job come from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Source {
-    /// One image stack per head (stack `h` printed by head `h`), each with its channel.
-    Stacks(Vec<raster::ImageStack>),
-    /// A PrusaSlicer SLA archive, printed by head 0.
-    Sl1 { path: PathBuf, threshold: ThresholdOptions },
+/// Any error, boxed: what a [`LineTimer`] (a planner outside the engine) fails with.
+pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Why a raster job failed. Its text is the message a user reads; a file that cannot be read
+/// is named, with the operating system's error as the source.
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    /// Inputs, heads or channels that do not fit together (the message says how).
+    #[error("{0}")]
+    Invalid(String),
+    /// A layer image cannot be read.
+    #[error("reading {}", path.display())]
+    ReadImage {
+        /// The image.
+        path: PathBuf,
+        /// Why.
+        source: BitmapError,
+    },
+    /// A `.sl1` archive cannot be opened.
+    #[error("reading {}", path.display())]
+    ReadArchive {
+        /// The archive.
+        path: PathBuf,
+        /// Why.
+        source: Sl1Error,
+    },
+    /// A G-code block file (`--start`, `--end`, `--recoat`) or the profile cannot be read.
+    #[error("reading {}", path.display())]
+    ReadText {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: io::Error,
+    },
+    /// Images that cannot be listed, decoded or resampled.
+    #[error(transparent)]
+    Image(#[from] BitmapError),
+    /// An archive's layer that cannot be read.
+    #[error(transparent)]
+    Archive(#[from] Sl1Error),
+    /// The generator refused the settings or could not write.
+    #[error(transparent)]
+    Raster(#[from] RasterError),
+    /// The printhead profile is invalid.
+    #[error(transparent)]
+    Printhead(#[from] PrintheadError),
+    /// A number outside its range.
+    #[error(transparent)]
+    Range(#[from] OutOfRange),
+    /// The output (or a settings file) failed.
+    #[error(transparent)]
+    Engine(#[from] crate::Error),
+    /// The planner could not be set up.
+    #[error(transparent)]
+    Planner(BoxError),
+    /// The planner refused a line of the written G-code.
+    #[error("estimating the print time")]
+    Estimate(#[source] BoxError),
+    /// The thread decoding the images stopped without an error of its own.
+    #[error("the image decoder stopped")]
+    DecoderStopped(#[source] std::sync::mpsc::RecvError),
 }
 
-/// How the inputs on the command line become a [`Source`].
-#[derive(Debug, Clone, Default)]
-pub struct InputSpec {
-    /// Folders, globs (`*`, `?` in the file name), image files, or one `.sl1`.
-    pub inputs: Vec<PathBuf>,
-    /// Heads to use (None: as many as the profile has, but only head 0 unless inputs say more).
-    pub heads: Option<usize>,
-    /// One channel per head: every head prints the same images, head `h` their channel `h`.
-    pub channels: Vec<Channel>,
-    pub threshold: ThresholdOptions,
-    /// The files' first row is the far edge (+Y up), as a picture is drawn.
-    pub flip_y: bool,
+/// A result whose error is a [`JobError`].
+pub type Result<T, E = JobError> = std::result::Result<T, E>;
+
+/// A planner that times G-code fed to it line by line, as the job writes it: the virtual
+/// printer's (`gweave_sim::Estimator`), which the engine cannot name.
+pub trait LineTimer {
+    /// Takes one line, without its end.
+    fn line(&mut self, line: &[u8]) -> std::result::Result<(), BoxError>;
+    /// The motion (and dwell) time of every line taken, s.
+    fn total_s(self: Box<Self>) -> f64;
 }
 
-impl Source {
-    /// Every file the job will read its layers from.
-    pub fn paths(&self) -> Vec<&Path> {
-        match self {
-            Source::Stacks(stacks) => {
-                stacks.iter().flat_map(|s| s.paths.iter().map(PathBuf::as_path)).collect()
-            }
-            Source::Sl1 { path, .. } => vec![path],
-        }
-    }
+/// `Err(JobError::Invalid(...))` with a formatted message.
+macro_rules! invalid {
+    ($($arg:tt)*) => {
+        return Err(JobError::Invalid(format!($($arg)*)))
+    };
 }
 
-fn is_sl1(p: &Path) -> bool {
-    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("sl1"))
-}
+mod inputs;
+pub use inputs::{parse_channels, InputSpec, Source};
 
-fn is_glob(p: &Path) -> bool {
-    p.file_name().is_some_and(|n| n.to_string_lossy().contains(['*', '?']))
-}
-
-/// Parses `r,b` / `red,luma` into channels.
-pub fn parse_channels(text: &str) -> Result<Vec<Channel>> {
-    text.split(',')
-        .map(|c| {
-            Ok(match c.trim().to_ascii_lowercase().as_str() {
-                "r" | "red" => Channel::Red,
-                "g" | "green" => Channel::Green,
-                "b" | "blue" => Channel::Blue,
-                "l" | "luma" | "grey" | "gray" => Channel::Luma,
-                other => bail!("unknown channel {other:?} (use r, g, b or luma)"),
-            })
-        })
-        .collect()
-}
-
-impl InputSpec {
-    /// Resolves the inputs, and returns the source and the number of heads it needs.
-    ///
-    /// Rules: one `.sl1` alone -> head 0. With `channels`, all inputs form one image list and
-    /// head `h` prints channel `h`. Without them and with `heads > 1`, each input is one head's
-    /// folder or glob. Otherwise all inputs form one list for head 0, in the given order (a
-    /// folder or glob contributes its files in natural order: `l2 < l10`).
-    pub fn resolve(&self) -> Result<(Source, usize)> {
-        if self.inputs.is_empty() {
-            bail!("no input: give a folder, a glob, image files, or a .sl1 archive");
-        }
-        if self.inputs.iter().any(|p| is_sl1(p)) {
-            if self.inputs.len() != 1 || !self.channels.is_empty() || self.heads.unwrap_or(1) > 1 {
-                bail!("a .sl1 archive is printed alone by one head (no other inputs, heads or channels)");
-            }
-            return Ok((Source::Sl1 { path: self.inputs[0].clone(), threshold: self.threshold }, 1));
-        }
-        let expand = |p: &PathBuf| -> Result<Vec<PathBuf>> {
-            if p.is_dir() || is_glob(p) {
-                Ok(list_images(p)?)
-            } else if p.is_file() {
-                Ok(vec![p.clone()])
-            } else {
-                bail!("{}: no such file or folder", p.display())
-            }
-        };
-        let stack = |paths: Vec<PathBuf>, channel: Channel| raster::ImageStack {
-            paths,
-            threshold: ThresholdOptions { channel, ..self.threshold },
-            flip_y: self.flip_y,
-        };
-        let all = || -> Result<Vec<PathBuf>> {
-            let mut v = Vec::new();
-            for p in &self.inputs {
-                v.extend(expand(p)?);
-            }
-            Ok(v)
-        };
-        if !self.channels.is_empty() {
-            let heads = self.heads.unwrap_or(self.channels.len());
-            if heads != self.channels.len() {
-                bail!("{} channels given for {heads} heads: give one channel per head", self.channels.len());
-            }
-            let paths = all()?;
-            let stacks = self.channels.iter().map(|&c| stack(paths.clone(), c)).collect();
-            return Ok((Source::Stacks(stacks), heads));
-        }
-        match self.heads {
-            Some(h) if h > 1 => {
-                if self.inputs.len() != h {
-                    bail!("{h} heads need {h} inputs (one folder or glob per head) or --channels");
-                }
-                let stacks = self
-                    .inputs
-                    .iter()
-                    .map(|p| Ok(stack(expand(p)?, self.threshold.channel)))
-                    .collect::<Result<_>>()?;
-                Ok((Source::Stacks(stacks), h))
-            }
-            _ => Ok((Source::Stacks(vec![stack(all()?, self.threshold.channel)]), 1)),
-        }
-    }
+/// The text of a file the job reads.
+fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| JobError::ReadText { path: path.to_path_buf(), source })
 }
 
 /// Makes the profile have exactly `heads` heads: extra heads get zero offsets, which suits
@@ -167,30 +132,35 @@ pub struct TimeEstimate {
     pub motion_s: f64,
     /// Firing: every fire command counted at the head's minimum fire interval, s.
     pub fire_s: f64,
+    /// Motion and firing, s.
     pub total_s: f64,
 }
 
 /// What a job did.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct JobReport {
+    /// The file written, `-` for standard output.
     pub output: String,
+    /// Heads that printed.
     pub heads: usize,
     /// Layer images (or archive layers) read.
     pub images_read: usize,
+    /// What the generator wrote.
     #[serde(flatten)]
     pub raster: RasterReport,
+    /// The print time.
     pub time: TimeEstimate,
 }
 
-/// Feeds every complete line written through it to an estimator.
-struct EstimatingWriter<W: Write> {
+/// Feeds every complete line written through it to a planner.
+struct EstimatingWriter<'t, W: Write> {
     inner: W,
-    est: Option<Estimator>,
+    est: Option<Box<dyn LineTimer + 't>>,
     partial: Vec<u8>,
-    error: Option<gweave_sim::EstimateError>,
+    error: Option<BoxError>,
 }
 
-impl<W: Write> EstimatingWriter<W> {
+impl<W: Write> EstimatingWriter<'_, W> {
     fn feed(&mut self, buf: &[u8]) {
         let Some(est) = self.est.as_mut() else {
             return;
@@ -216,7 +186,7 @@ impl<W: Write> EstimatingWriter<W> {
     }
 }
 
-impl<W: Write> Write for EstimatingWriter<W> {
+impl<W: Write> Write for EstimatingWriter<'_, W> {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         let n = self.inner.write(buf)?;
         self.feed(&buf[..n]);
@@ -230,8 +200,11 @@ impl<W: Write> Write for EstimatingWriter<W> {
 /// A raster job, ready to run.
 #[derive(Debug, Clone)]
 pub struct Job {
+    /// Where the layers come from.
     pub source: Source,
+    /// The printhead, with as many heads as the job drives.
     pub profile: PrintheadProfile,
+    /// The validated raster settings.
     pub config: RasterConfig,
     /// Pixel size of image files in mm; they are resampled to the nozzle pitch when given.
     /// (`.sl1` archives carry their own.)
@@ -242,27 +215,33 @@ pub struct Job {
 
 impl Job {
     /// Writes the G-code to `target` and returns the report. `progress` counts layers (its
-    /// `set_len` gets the layer count, `advance` the layers done), not bytes.
-    pub fn run(&self, target: &Target, progress: &mut dyn Progress) -> Result<JobReport> {
+    /// `set_len` gets the layer count, `advance` the layers done), not bytes. `planner` makes
+    /// the timer of a [`Job::planner_estimate`] job (`gweave_sim::Estimator::line_timer`); a
+    /// fast estimate never calls it.
+    pub fn run<'t>(
+        &self,
+        target: &Target,
+        progress: &mut dyn Progress,
+        planner: impl FnOnce() -> std::result::Result<Box<dyn LineTimer + 't>, BoxError>,
+    ) -> Result<JobReport> {
         let mut out = Output::create(target, None)?;
-        let planner = self.planner_estimate;
-        let est = if planner { Some(Estimator::new(&MotionProfile::default())?) } else { None };
+        let est = if self.planner_estimate { Some(planner().map_err(JobError::Planner)?) } else { None };
         let mut tee = EstimatingWriter { inner: &mut out, est, partial: Vec::new(), error: None };
         let (report, images_read) = self.write(&mut tee, progress)?;
         if let Some(e) = tee.error.take() {
-            return Err(anyhow::Error::new(e).context("estimating the print time"));
+            return Err(JobError::Estimate(e));
         }
-        let estimate: Option<Estimate> = tee.est.take().map(|mut e| {
+        let motion_s: Option<f64> = tee.est.take().map(|mut e| {
             if !tee.partial.is_empty() {
                 let _ = e.line(&tee.partial);
             }
-            e.finish()
+            e.total_s()
         });
         out.commit()?;
         let fire_s = self.profile.fire_time_s(report.fire_commands);
-        let time = match estimate {
-            Some(e) => {
-                TimeEstimate { method: "planner", motion_s: e.total_s, fire_s, total_s: e.total_s + fire_s }
+        let time = match motion_s {
+            Some(motion_s) => {
+                TimeEstimate { method: "planner", motion_s, fire_s, total_s: motion_s + fire_s }
             }
             None => TimeEstimate {
                 method: "feed",
@@ -282,8 +261,8 @@ impl Job {
         let pitch = self.profile.pitch_mm();
         match &self.source {
             Source::Sl1 { path, threshold } => {
-                let mut reader =
-                    Sl1Reader::open(path).with_context(|| format!("reading {}", path.display()))?;
+                let mut reader = Sl1Reader::open(path)
+                    .map_err(|source| JobError::ReadArchive { path: path.clone(), source })?;
                 let (px_x, px_y) = reader.bed_pixel_mm();
                 let layers = reader.layer_count();
                 progress.set_len(layers as u64);
@@ -297,7 +276,7 @@ impl Job {
             }
             Source::Stacks(stacks) => {
                 if stacks.len() > self.profile.heads.len() {
-                    bail!(
+                    invalid!(
                         "{} image sets but the printhead profile has {} heads",
                         stacks.len(),
                         self.profile.heads.len()
@@ -318,11 +297,11 @@ impl Job {
                             continue;
                         };
                         let b = load_image(p, &s.threshold)
-                            .with_context(|| format!("reading {}", p.display()))?;
+                            .map_err(|source| JobError::ReadImage { path: p.clone(), source })?;
                         let (w, h) = (b.width(), b.height());
                         match first {
                             None => *first = Some((p.clone(), w, h)),
-                            Some((p0, w0, h0)) if (*w0, *h0) != (w, h) => bail!(
+                            Some((p0, w0, h0)) if (*w0, *h0) != (w, h) => invalid!(
                                 "{}: the layer image is {w} x {h} px, but {} is {w0} x {h0} px; every layer must have the same size",
                                 p.display(),
                                 p0.display()
@@ -365,7 +344,7 @@ fn pipelined<W: Write>(
             }
         });
         for k in 0..layers {
-            let planes = rx.recv().context("the image decoder stopped")??;
+            let planes = rx.recv().map_err(JobError::DecoderStopped)??;
             w.layer(&planes)?;
             progress.advance(k as u64 + 1);
         }
@@ -377,28 +356,46 @@ fn pipelined<W: Write>(
 /// library's validated types by [`JobOptions::job`].
 #[derive(Debug, Clone)]
 pub struct JobOptions {
+    /// Folders, globs, image files in layer order, or one `.sl1` (`INPUTS`).
     pub inputs: Vec<PathBuf>,
     /// Printhead profile TOML (None: the HP C6602 defaults).
     pub head: Option<PathBuf>,
+    /// Fraction of full scale at or above which a pixel gets binder.
     pub threshold: f64,
+    /// Dark pixels get binder.
     pub invert: bool,
+    /// The images' first row is the far edge (+Y up).
     pub flip_y: bool,
+    /// Every pass left to right instead of serpentine.
     pub one_way: bool,
-    /// Fire after the move onto a column (default) or, as the binder-jet seed, before the next.
+    /// Fire after the move onto a column (default) or, as binder-jet printers have done, before
+    /// the move to the next one.
     pub fire_order: FireOrder,
+    /// Fires per pixel.
     pub density: u32,
+    /// Bed position of the image corner, mm.
     pub origin_mm: (f64, f64),
+    /// Layer thickness, mm (None: the `.sl1`'s own, else the generator's default).
     pub layer_height_mm: Option<f64>,
+    /// Pixel size of the images, mm.
     pub pixel_mm: Option<f64>,
+    /// Resolution of the images, dots per inch (pixel = 25.4 / dpi mm).
     pub dpi: Option<f64>,
+    /// Heads to use.
     pub heads: Option<usize>,
+    /// One image channel per head, `r,b` (r, g, b, luma).
     pub channels: Option<String>,
-    /// Files with G-code blocks.
+    /// A file with the G-code between layers (powder recoat).
     pub recoat: Option<PathBuf>,
+    /// A file with the G-code before the first layer.
     pub start: Option<PathBuf>,
+    /// A file with the G-code after the last layer.
     pub end: Option<PathBuf>,
+    /// The fire command's firmware (None: the profile's).
     pub dialect: Option<Firmware>,
+    /// Carriage feed rate, mm/min (None: the generator's default).
     pub feed_mm_min: Option<f64>,
+    /// Time the job from the path at the feed rate instead of running the planner.
     pub fast_estimate: bool,
 }
 
@@ -433,7 +430,12 @@ impl Default for JobOptions {
 impl JobOptions {
     /// The printhead profile: `head` file or the C6602 defaults, with `dialect` applied.
     pub fn profile(&self) -> Result<PrintheadProfile> {
-        let mut p = load_or_default(self.head.as_ref(), PrintheadProfile::from_toml)?;
+        let mut p = match &self.head {
+            Some(path) => PrintheadProfile::from_toml(&read_text(path)?).map_err(|e| {
+                crate::Error::Config { path: path.clone(), message: crate::error::with_causes(&e) }
+            })?,
+            None => PrintheadProfile::default(),
+        };
         if let Some(d) = self.dialect {
             p.dialect = d;
             // A firmware without a fire command is refused here, as in a profile.
@@ -481,7 +483,7 @@ impl JobOptions {
     /// arrive here unchecked.
     pub fn source(&self) -> Result<(Source, usize)> {
         if self.pixel_mm.is_some() && self.dpi.is_some() {
-            bail!("give the image resolution once: pixel size or dpi");
+            invalid!("give the image resolution once: pixel size or dpi");
         }
         if let Some(px) = self.pixel_mm {
             PIXEL_MM.check("pixel_mm", px)?;
@@ -513,11 +515,13 @@ impl JobOptions {
     /// Builds the job from a resolved [`JobOptions::source`]: reads the profile and snippets.
     pub fn job_from(&self, source: Source, heads: usize) -> Result<Job> {
         if matches!(source, Source::Sl1 { .. }) && (self.pixel_mm.is_some() || self.dpi.is_some()) {
-            bail!("a .sl1 archive carries its own pixel size: drop the pixel size / dpi");
+            invalid!("a .sl1 archive carries its own pixel size: drop the pixel size / dpi");
         }
         let profile = self.profile()?;
         if profile.recoat.is_some() && self.recoat.is_some() {
-            bail!("the printhead profile's [recoat] table and --recoat both describe the recoat: give one");
+            invalid!(
+                "the printhead profile's [recoat] table and --recoat both describe the recoat: give one"
+            );
         }
         Ok(Job {
             source,
@@ -545,77 +549,33 @@ impl JobOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use gweave::pass::Quiet;
+    use crate::pass::Quiet;
 
     fn examples() -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster")
     }
 
-    #[test]
-    fn inputs_resolve_to_heads_and_channels() {
-        let layers = examples().join("layers");
-        let spec = |inputs: Vec<PathBuf>, heads, channels: &str| InputSpec {
-            inputs,
-            heads,
-            channels: if channels.is_empty() { Vec::new() } else { parse_channels(channels).unwrap() },
-            ..InputSpec::default()
-        };
-        let (src, heads) = spec(vec![layers.clone()], None, "").resolve().unwrap();
-        let Source::Stacks(s) = src else { panic!("stacks") };
-        assert_eq!((heads, s.len(), s[0].paths.len()), (1, 1, 8));
-        assert!(s[0].paths[7].ends_with("badge_7.bmp"));
-        let (src, heads) = spec(vec![layers.join("badge_?.bmp")], None, "r,b").resolve().unwrap();
-        let Source::Stacks(s) = src else { panic!("stacks") };
-        assert_eq!(heads, 2);
-        assert_eq!((s[0].threshold.channel, s[1].threshold.channel), (Channel::Red, Channel::Blue));
-        assert_eq!(s[1].paths.len(), 8);
-        let (_, heads) = spec(vec![layers.clone(), layers.clone()], Some(2), "").resolve().unwrap();
-        assert_eq!(heads, 2);
-        // Errors: heads without enough inputs, channel count mismatch, a .sl1 with other inputs.
-        assert!(spec(vec![layers.clone()], Some(2), "").resolve().is_err());
-        assert!(spec(vec![layers.clone()], Some(3), "r,b").resolve().is_err());
-        assert!(spec(vec![PathBuf::from("a.sl1"), layers], None, "").resolve().is_err());
-        assert!(parse_channels("r,x").is_err());
-        let sl1 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../gweave/tests/data/raster/sphere.sl1");
-        let with_dpi = JobOptions { inputs: vec![sl1.clone()], dpi: Some(300.0), ..JobOptions::default() };
-        assert!(with_dpi.job().is_err());
-        let job = JobOptions { inputs: vec![sl1], ..JobOptions::default() }.job().unwrap();
-        assert!(matches!(job.source, Source::Sl1 { .. }));
-        assert_eq!(job.profile.heads.len(), 1);
-    }
+    /// A timer that keeps the lines it is fed and counts each as one second.
+    #[derive(Default)]
+    struct Lines(std::rc::Rc<std::cell::RefCell<Vec<Vec<u8>>>>);
 
-    #[test]
-    fn streamed_estimate_equals_estimating_the_written_file() {
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().join("badge.gcode");
-        let options = JobOptions {
-            inputs: vec![examples().join("layers")],
-            flip_y: true,
-            density: 2,
-            ..JobOptions::default()
-        };
-        let rep = options.job().unwrap().run(&Target::File(out.clone()), &mut Quiet).unwrap();
-        let whole =
-            gweave_sim::estimate(std::fs::File::open(&out).unwrap(), &MotionProfile::default()).unwrap();
-        assert_eq!(rep.time.method, "planner");
-        assert_eq!(rep.time.motion_s, whole.total_s);
-        // 844 inked columns, each fired twice at >= 800 us.
-        assert_eq!(rep.raster.fire_commands, 2 * 844);
-        assert!((rep.time.fire_s - 2.0 * 844.0 * 800e-6).abs() < 1e-12);
-        assert_eq!(rep.images_read, 8);
-        // The planner's time exceeds the feed-rate bound: every column starts and stops.
-        let fast = JobOptions { fast_estimate: true, ..options }.job().unwrap();
-        let rep_fast = fast.run(&Target::File(out), &mut Quiet).unwrap();
-        assert_eq!(rep_fast.time.method, "feed");
-        assert!(rep.time.total_s > rep_fast.time.total_s, "{:?} {:?}", rep.time, rep_fast.time);
+    impl LineTimer for Lines {
+        fn line(&mut self, line: &[u8]) -> std::result::Result<(), BoxError> {
+            self.0.borrow_mut().push(line.to_vec());
+            Ok(())
+        }
+        fn total_s(self: Box<Self>) -> f64 {
+            self.0.borrow().len() as f64
+        }
     }
 
     #[test]
     fn writer_splits_lines_across_chunks() {
         let text = b"G1 X10 F600\nM400\nG1 X20\nG1 Y5\nM400\n";
+        let seen = Lines::default();
         let mut w = EstimatingWriter {
             inner: Vec::new(),
-            est: Some(Estimator::new(&MotionProfile::default()).unwrap()),
+            est: Some(Box::new(Lines(seen.0.clone()))),
             partial: Vec::new(),
             error: None,
         };
@@ -624,9 +584,59 @@ mod tests {
         }
         assert_eq!(w.inner, text);
         assert!(w.partial.is_empty());
-        let chunked = w.est.take().unwrap().finish();
-        let whole = gweave_sim::estimate(&text[..], &MotionProfile::default()).unwrap();
-        assert_eq!(chunked, whole);
-        assert!(whole.total_s > 2.0, "{whole:?}");
+        let lines: Vec<&[u8]> = text.split(|&b| b == b'\n').filter(|l| !l.is_empty()).collect();
+        assert_eq!(*seen.0.borrow(), lines);
+    }
+
+    #[test]
+    fn the_planner_times_the_written_file_and_a_fast_estimate_never_asks_for_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("badge.gcode");
+        let options = JobOptions {
+            inputs: vec![examples().join("layers")],
+            flip_y: true,
+            density: 2,
+            ..JobOptions::default()
+        };
+        let seen = Lines::default();
+        let timer = || Ok(Box::new(Lines(seen.0.clone())) as Box<dyn LineTimer>);
+        let rep = options.job().unwrap().run(&Target::File(out.clone()), &mut Quiet, timer).unwrap();
+        let written = std::fs::read(&out).unwrap();
+        let lines = written.split(|&b| b == b'\n').filter(|l| !l.is_empty()).count();
+        assert_eq!(seen.0.borrow().len(), lines);
+        assert_eq!((rep.time.method, rep.time.motion_s), ("planner", lines as f64));
+        // 844 inked columns, each fired twice at >= 800 us.
+        assert_eq!(rep.raster.fire_commands, 2 * 844);
+        assert!((rep.time.fire_s - 2.0 * 844.0 * 800e-6).abs() < 1e-12);
+        assert_eq!(rep.time.total_s, rep.time.motion_s + rep.time.fire_s);
+        assert_eq!(rep.images_read, 8);
+        let fast = JobOptions { fast_estimate: true, ..options }.job().unwrap();
+        let never = || -> std::result::Result<Box<dyn LineTimer>, BoxError> {
+            panic!("a fast estimate ran the planner")
+        };
+        let rep_fast = fast.run(&Target::File(out), &mut Quiet, never).unwrap();
+        assert_eq!(rep_fast.time.method, "feed");
+        assert_eq!(rep_fast.time.total_s, rep_fast.raster.estimated_time_s);
+    }
+
+    #[test]
+    fn a_timer_that_refuses_a_line_fails_the_job_and_leaves_no_output() {
+        struct Refuses;
+        impl LineTimer for Refuses {
+            fn line(&mut self, _: &[u8]) -> std::result::Result<(), BoxError> {
+                Err("line 1: no".into())
+            }
+            fn total_s(self: Box<Self>) -> f64 {
+                0.0
+            }
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("badge.gcode");
+        let job =
+            JobOptions { inputs: vec![examples().join("layers")], ..JobOptions::default() }.job().unwrap();
+        let e = job.run(&Target::File(out.clone()), &mut Quiet, || Ok(Box::new(Refuses))).unwrap_err();
+        assert_eq!(e.to_string(), "estimating the print time");
+        assert_eq!(std::error::Error::source(&e).unwrap().to_string(), "line 1: no");
+        assert!(!out.exists());
     }
 }
