@@ -14,7 +14,8 @@ use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
-use crate::pass::{Ctx, Flow, Pass, PassError, Progress, Run, Step, Strictness};
+use crate::pass::{Ctx, Flow, Pass, PassError, Progress, Step, Strictness};
+use crate::run::Run;
 
 /// Lint settings.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]

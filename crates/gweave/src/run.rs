@@ -8,7 +8,8 @@
 //! before it builds its pass (`mix` chooses its dialect from it) asks [`Run::flavour`] first.
 //!
 //! ```
-//! use gweave::pass::{Identity, Run, Strictness};
+//! use gweave::pass::{Identity, Strictness};
+//! use gweave::run::Run;
 //! let text = b"G1 X1\nG1 X1..2\nG1 X3\n";
 //! let mut pass = Identity::default();
 //! let ran = Run::text(text).to_memory().strictness(Strictness::Lenient).run(&mut pass).unwrap();
@@ -25,8 +26,8 @@ use crate::gcode::container;
 use crate::gcode::flavour::{flavour_in, read_flavour, require_e_extruder};
 use crate::gcode::state::{State, StateOptions};
 use crate::gcode::writer::{Output, Target};
-use crate::malformed::{Counting, Malformed};
-use crate::pass::{drive_reader, Pass, Progress, Quiet, Strictness};
+use crate::malformed::Malformed;
+use crate::pass::{drive_reader, Counting, Pass, Progress, Quiet, Strictness};
 
 /// The name a text in memory goes by in messages.
 pub const IN_MEMORY: &str = "<input>";

@@ -355,8 +355,9 @@ pub fn stats_file(
     strictness: crate::pass::Strictness,
     progress: &mut dyn crate::pass::Progress,
 ) -> crate::Result<crate::malformed::WithMalformed<Stats>> {
-    use crate::malformed::{Counting, Malformed, WithMalformed};
-    let run = crate::pass::Run::file(path).progress(progress).strictness(strictness);
+    use crate::malformed::{Malformed, WithMalformed};
+    use crate::pass::Counting;
+    let run = crate::run::Run::file(path).progress(progress).strictness(strictness);
     Ok(match strictness {
         crate::pass::Strictness::Strict => {
             let mut pass = StatsPass::new(diameter_mm);

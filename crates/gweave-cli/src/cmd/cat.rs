@@ -8,7 +8,8 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use gweave::gcode::writer::Target;
-use gweave::pass::{CopyReport, Identity, Run, Strictness};
+use gweave::pass::{CopyReport, Identity, Strictness};
+use gweave::run::Run;
 
 use crate::common::{print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;

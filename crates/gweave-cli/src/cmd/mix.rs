@@ -11,12 +11,12 @@ use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, Swatc
 use gweave::firmware::MixCommands;
 use gweave::gcode::writer::Target;
 use gweave::malformed::Transformed;
-use gweave::pass::Run;
 use gweave::post::mix::overrides::Overrides;
 use gweave::post::mix::profile::{GradientSpace, MixProfile};
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{mix, wizard::run_wizard};
+use gweave::run::Run;
 
 use gweave::range::PURGE_MM;
 

@@ -7,9 +7,9 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use gweave::malformed::Transformed;
-use gweave::pass::Run;
 use gweave::post::purge_shift::{purge_shift, Overrides, PurgeShiftConfig};
 use gweave::range::{FILAMENT_DIAMETER_MM, POSITION_MM, PURGE_MM, PURGE_MM3};
+use gweave::run::Run;
 
 use crate::args::Lenient;
 use crate::common::{

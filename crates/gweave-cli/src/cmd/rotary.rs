@@ -26,7 +26,7 @@ use crate::common::{in_range, load, print_malformed, print_summary, OutputArgs, 
 use crate::files::Files;
 use crate::finish;
 use gweave::malformed::Transformed;
-use gweave::pass::Run;
+use gweave::run::Run;
 
 /// Rotary (lathe-type) printing: wrap flat G-code onto a mandrel, or generate helical tubes.
 #[derive(Args, Debug)]

@@ -121,7 +121,7 @@ impl Output {
                 if let Some(backup) = &backup {
                     // Fail before the work, not after it, when no slot is free for the old one.
                     if backup.symlink_metadata().is_ok() && free_slot(backup).is_none() {
-                        return Err(Error::BackupSlotsFull { path: backup.clone() });
+                        return Err(Error::BackupSlotsFull { path: backup.clone(), slots: BACKUP_SLOTS });
                     }
                 }
                 (input.to_path_buf(), backup)
@@ -251,7 +251,8 @@ fn write_backup(input: &Path, backup: &Path, meta: Option<&fs::Metadata>) -> Res
         if same_bytes(input, backup).map_err(|e| Error::io(backup, e))? {
             return Ok(());
         }
-        let slot = free_slot(backup).ok_or_else(|| Error::BackupSlotsFull { path: backup.to_path_buf() })?;
+        let slot = free_slot(backup)
+            .ok_or_else(|| Error::BackupSlotsFull { path: backup.to_path_buf(), slots: BACKUP_SLOTS })?;
         fs::rename(backup, &slot).map_err(|e| Error::io(backup, e))?;
     }
     let mut tmp = TempFile::new_in(&parent_dir(backup)).map_err(|e| Error::io(backup, e))?;

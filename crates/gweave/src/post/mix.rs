@@ -57,10 +57,11 @@ use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
 use crate::gcode::retraction::Retraction;
 use crate::gcode::state::{Effect, Motion, Move, State, E, X, Y, Z};
-use crate::pass::{keep, Ctx, Flow, Pass, PassError, Ran, Run, Step};
+use crate::pass::{keep, Ctx, Flow, Pass, PassError, Step};
 use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
 use crate::post::warning::Warning;
 use crate::post::zcap::ZCap;
+use crate::run::{Ran, Run};
 
 use crate::firmware::{Firmware, MixCommands};
 use profile::{MixProfile, PurgeMode};

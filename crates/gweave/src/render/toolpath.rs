@@ -38,9 +38,10 @@ use std::path::Path;
 use crate::gcode::layers::{Feature, Region, Structure};
 use crate::gcode::state::{Effect, Move, Path as MovePath, E, X, Y, Z};
 use crate::gen::printhead::PrintheadProfile;
-use crate::pass::{Ctx, Flow, Pass, Run, Step};
+use crate::pass::{Ctx, Flow, Pass, Step};
 use crate::rotary::cylinder::CylPoint;
 use crate::rotary::preview::{RotaryMove, RotaryReading};
+use crate::run::Run;
 
 use super::mix_colour::{MixColours, MixTracker};
 use cylinder::{CylinderLayers, PROVISIONAL};
