@@ -128,7 +128,7 @@ fn finish(
     let options = StateOptions::default().for_flavour(flavour.as_deref());
     let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
     let mut pass = MetadataPass::new(figures, header_line(command_line));
-    drive_reader(file, path, options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
+    drive_reader(file, path, None, options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
     out.commit()?;
     Ok(written)
 }

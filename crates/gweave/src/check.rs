@@ -330,6 +330,7 @@ mod tests {
         drive_reader(
             text.as_bytes(),
             Path::new("t.gcode"),
+            None,
             options,
             strict,
             &mut Quiet,
@@ -369,6 +370,7 @@ mod tests {
         let state = crate::pass::drive_reader(
             text.as_bytes(),
             Path::new("t.gcode"),
+            None,
             Default::default(),
             Strictness::Strict,
             &mut Quiet,

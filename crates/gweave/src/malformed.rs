@@ -16,7 +16,7 @@
 //! let path = std::path::Path::new("part.gcode");
 //! let options = Default::default();
 //! let lenient = Strictness::Lenient;
-//! drive_reader(text.as_bytes(), path, options, lenient, &mut Quiet, &mut pass, &mut std::io::sink())
+//! drive_reader(text.as_bytes(), path, None, options, lenient, &mut Quiet, &mut pass, &mut std::io::sink())
 //!     .unwrap();
 //! assert_eq!((pass.malformed.malformed_lines, pass.malformed.first_malformed_line), (1, Some(2)));
 //! ```

@@ -212,31 +212,20 @@ impl Progress for Quiet {}
 
 /// The loop itself, over any reader (files, in-memory text in tests and Python). Generic over
 /// the pass, so that a pass known at the call (`stats`) has its per-line code inlined into the
-/// loop; `&mut dyn Pass` works as well.
+/// loop; `&mut dyn Pass` works as well. Write errors name `output` (the file being written),
+/// or `<path> (output)` without one.
+#[allow(clippy::too_many_arguments)]
 pub fn drive_reader<P: Pass + ?Sized>(
     input: impl Read,
     path: &Path,
+    output: Option<&Path>,
     options: StateOptions,
     strictness: Strictness,
     progress: &mut dyn Progress,
     pass: &mut P,
     out: &mut dyn Write,
 ) -> Result<State> {
-    drive_named(input, path, output_name(path), options, strictness, progress, pass, out)
-}
-
-/// [`drive_reader`] with the name write errors give the output.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn drive_named<P: Pass + ?Sized>(
-    input: impl Read,
-    path: &Path,
-    out_name: PathBuf,
-    options: StateOptions,
-    strictness: Strictness,
-    progress: &mut dyn Progress,
-    pass: &mut P,
-    out: &mut dyn Write,
-) -> Result<State> {
+    let out_name = output.map_or_else(|| output_name(path), Path::to_path_buf);
     Lines { reader: LineReader::new(input), path, out_name, strictness, progress }.run(options, pass, out)
 }
 
@@ -404,6 +393,7 @@ mod tests {
         drive_reader(
             input,
             Path::new("t"),
+            None,
             StateOptions::default(),
             Strictness::Lenient,
             &mut Quiet,
@@ -433,6 +423,7 @@ mod tests {
         let err = drive_reader(
             &b"G1 X1\nG1 Y2..3\n"[..],
             Path::new("part.gcode"),
+            None,
             StateOptions::default(),
             Strictness::Strict,
             &mut Quiet,
@@ -451,6 +442,7 @@ mod tests {
         let err = drive_reader(
             &input[..],
             Path::new("zeros.gcode"),
+            None,
             StateOptions::default(),
             Strictness::Strict,
             &mut Quiet,
@@ -512,6 +504,7 @@ mod tests {
                 drive_reader(
                     &text[..],
                     Path::new(file),
+                    None,
                     options,
                     Strictness::Lenient,
                     &mut Quiet,

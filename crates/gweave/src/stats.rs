@@ -392,9 +392,17 @@ mod tests {
         use crate::pass::{drive_reader, Quiet, Strictness};
         let mut pass = StatsPass::new(None);
         let path = std::path::Path::new("t.gcode");
-        let state =
-            drive_reader(text, path, options, Strictness::Strict, &mut Quiet, &mut pass, &mut io::sink())
-                .unwrap();
+        let state = drive_reader(
+            text,
+            path,
+            None,
+            options,
+            Strictness::Strict,
+            &mut Quiet,
+            &mut pass,
+            &mut io::sink(),
+        )
+        .unwrap();
         pass.into_stats(&state)
     }
 
@@ -451,6 +459,7 @@ G3 X25 Y5 I10 J0 E6
         let state = crate::pass::drive_reader(
             &text[..],
             std::path::Path::new("t.gcode"),
+            None,
             Default::default(),
             crate::pass::Strictness::Strict,
             &mut crate::pass::Quiet,

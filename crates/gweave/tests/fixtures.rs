@@ -36,6 +36,7 @@ fn every_fixture_round_trips_byte_exact() {
         drive_reader(
             &bytes[..],
             Path::new(rel),
+            None,
             Default::default(),
             Strictness::Strict,
             &mut Quiet,

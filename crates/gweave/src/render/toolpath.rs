@@ -519,8 +519,17 @@ mod tests {
 
     fn read(text: &str, pass: &mut ToolpathPass) {
         let (path, options) = (Path::new("t.gcode"), StateOptions::default());
-        drive_reader(text.as_bytes(), path, options, Strictness::Strict, &mut Quiet, pass, &mut io::sink())
-            .unwrap();
+        drive_reader(
+            text.as_bytes(),
+            path,
+            None,
+            options,
+            Strictness::Strict,
+            &mut Quiet,
+            pass,
+            &mut io::sink(),
+        )
+        .unwrap();
     }
 
     pub(crate) fn collect(text: &str, options: ToolpathOptions) -> Toolpath {
