@@ -42,6 +42,7 @@ pub mod card;
 pub mod job;
 pub mod overrides;
 pub mod profile;
+mod purge_table;
 pub mod report;
 pub mod schedule;
 pub mod wizard;
