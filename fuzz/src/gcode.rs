@@ -46,9 +46,18 @@ pub fn check(bytes: &[u8]) {
 /// `None` if reading failed.
 fn copy(input: impl Read, options: &StateOptions, pass: &mut impl Pass) -> Option<Vec<u8>> {
     let mut out = Vec::new();
-    drive_reader(input, Path::new("fuzz"), options.clone(), Strictness::Lenient, &mut Quiet, pass, &mut out)
-        .ok()
-        .map(|_| out)
+    drive_reader(
+        input,
+        Path::new("fuzz"),
+        None,
+        options.clone(),
+        Strictness::Lenient,
+        &mut Quiet,
+        pass,
+        &mut out,
+    )
+    .ok()
+    .map(|_| out)
 }
 
 /// Copies every line, as [`Identity`] does, but asks for the words of plain moves too, so that the

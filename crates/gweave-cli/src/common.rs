@@ -37,16 +37,13 @@ pub struct OutputArgs {
 
 impl OutputArgs {
     pub fn target(&self) -> Result<Target> {
-        let target = match (&self.output, self.in_place) {
-            (_, true) => Target::InPlace { keep_backup: !self.no_backup, force: self.force },
-            (Some(p), false) if p == Path::new("-") => Target::Stdout,
-            (Some(p), false) => Target::File(p.clone()),
+        match (&self.output, self.in_place) {
+            (_, true) => self.format.in_place(!self.no_backup, self.force),
+            (Some(p), false) => self.format.target(p),
             (None, false) => {
                 bail!("say where to write: -o OUT, -o - for standard output, or --in-place")
             }
-        };
-        self.format.apply(&target)?;
-        Ok(target)
+        }
     }
 }
 

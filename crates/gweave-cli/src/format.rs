@@ -7,7 +7,8 @@
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use gweave::gcode::container::Container;
-use gweave::gcode::writer::{set_stdout_container, Target};
+use gweave::gcode::writer::Target;
+use std::path::Path;
 
 /// How the output G-code is stored.
 #[derive(Args, Debug, Clone, Copy)]
@@ -45,31 +46,31 @@ fn name(c: Container) -> &'static str {
 }
 
 impl FormatArgs {
-    /// Makes the choice for `target`: standard output's container, or a check that a file's
-    /// name agrees with it.
-    pub fn apply(&self, target: &Target) -> Result<()> {
-        let Some(format) = self.format else {
-            set_stdout_container(Container::Text);
-            return Ok(());
-        };
-        let wanted = format.container();
-        match target {
-            Target::Stdout => set_stdout_container(wanted),
-            Target::File(path) => {
-                let named = Container::of_output(path);
-                if named != wanted {
-                    bail!(
-                        "--format {} but -o {} is named for {}: a file's name says how it is stored (.gcode, .gcode.gz, .bgcode); --format is for -o -",
-                        name(wanted),
-                        path.display(),
-                        name(named)
-                    );
-                }
-            }
-            Target::InPlace { .. } => {
-                bail!("--format does not go with --in-place: the file keeps the kind its name says")
+    /// The target `-o OUT` names: `-` is standard output, stored as `--format` says (text by
+    /// default); a file must be named for the container `--format` asks for.
+    pub fn target(&self, output: &Path) -> Result<Target> {
+        if output == Path::new("-") {
+            return Ok(Target::Stdout(self.format.map_or(Container::Text, Format::container)));
+        }
+        if let Some(wanted) = self.format.map(Format::container) {
+            let named = Container::of_output(output);
+            if named != wanted {
+                bail!(
+                    "--format {} but -o {} is named for {}: a file's name says how it is stored (.gcode, .gcode.gz, .bgcode); --format is for -o -",
+                    name(wanted),
+                    output.display(),
+                    name(named)
+                );
             }
         }
-        Ok(())
+        Ok(Target::File(output.to_path_buf()))
+    }
+
+    /// The target `--in-place` names: the input, refused with `--format`.
+    pub fn in_place(&self, keep_backup: bool, force: bool) -> Result<Target> {
+        if self.format.is_some() {
+            bail!("--format does not go with --in-place: the file keeps the kind its name says")
+        }
+        Ok(Target::InPlace { keep_backup, force })
     }
 }

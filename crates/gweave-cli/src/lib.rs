@@ -40,8 +40,6 @@ where
 {
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
     finish::remember_args(&args);
-    // Standard output's container is chosen per run (`--format`), not kept from an earlier one.
-    gweave::gcode::writer::set_stdout_container(gweave::gcode::container::Container::Text);
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {

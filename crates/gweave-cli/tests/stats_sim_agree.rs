@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use gweave::gcode::state::{Effect, State, A, E, X, Y, Z};
-use gweave::pass::{Ctx, Flow, Pass, Run, Step};
+use gweave::pass::{Ctx, Flow, Pass, Step};
+use gweave::run::Run;
 
 fn json(args: &[&str]) -> serde_json::Value {
     let out = Command::new(env!("CARGO_BIN_EXE_gweave")).args(args).output().unwrap();

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use gweave::gcode::writer::Target;
-use gweave::pass::Run;
+use gweave::run::Run;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 

@@ -23,10 +23,11 @@ use gweave::gcode::flavour::flavour_in;
 use gweave::gcode::state::{State, StateOptions};
 use gweave::gcode::temp::TempFile;
 use gweave::gcode::writer::{Output, Target};
-use gweave::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Run, Step, Strictness};
+use gweave::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Step, Strictness};
 use gweave::post::metadata::{
     earlier_runs, header_line, is_progress_line, read_setting, Figures, MetadataPass,
 };
+use gweave::run::Run;
 use gweave::stats::StatsPass;
 
 use crate::motion::estimate::{estimate_as, Estimate, EstimateError, Estimator};
@@ -127,7 +128,7 @@ fn finish(
     let options = StateOptions::default().for_flavour(flavour.as_deref());
     let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
     let mut pass = MetadataPass::new(figures, header_line(command_line));
-    drive_reader(file, path, options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
+    drive_reader(file, path, None, options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
     out.commit()?;
     Ok(written)
 }

@@ -14,7 +14,8 @@ use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
-use crate::pass::{Ctx, Flow, Pass, PassError, Progress, Run, Step, Strictness};
+use crate::pass::{Ctx, Flow, Pass, PassError, Progress, Step, Strictness};
+use crate::run::Run;
 
 /// Lint settings.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
@@ -329,6 +330,7 @@ mod tests {
         drive_reader(
             text.as_bytes(),
             Path::new("t.gcode"),
+            None,
             options,
             strict,
             &mut Quiet,
@@ -368,6 +370,7 @@ mod tests {
         let state = crate::pass::drive_reader(
             text.as_bytes(),
             Path::new("t.gcode"),
+            None,
             Default::default(),
             Strictness::Strict,
             &mut Quiet,

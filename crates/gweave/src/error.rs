@@ -66,11 +66,13 @@ pub enum Error {
         "{} exists and is not a copy of the input, and {}.1 .. .{} are all taken: move old backups away or use --no-backup",
         path.display(),
         path.display(),
-        crate::gcode::writer::BACKUP_SLOTS
+        slots
     )]
     BackupSlotsFull {
         /// The input.
         path: PathBuf,
+        /// How many older backups are kept (`gcode::writer::BACKUP_SLOTS`).
+        slots: u32,
     },
 
     /// `--in-place` with standard input.

@@ -1,14 +1,14 @@
 //! Lines a lenient run read past: counted, the first one named, never dropped silently.
 //!
-//! A strict run ([`Strictness::Strict`](crate::pass::Strictness)) stops at the first malformed
-//! line with `file:line:column`. A lenient one hands such a line to its pass like any other (its
-//! good words still count; its state is what the firmware would make of it) and [`Counting`]
-//! tallies it, so that `gweave stats --lenient` and `gweave preview --lenient` say how much of
-//! the file they could not read, as `sim` and `estimate` do.
+//! A strict run ([`Strictness::Strict`]) stops at the first malformed line with
+//! `file:line:column`. A lenient one hands such a line to its pass like any other (its good words
+//! still count; its state is what the firmware would make of it) and
+//! [`Counting`](crate::pass::Counting) tallies it, so that `gweave stats --lenient` and
+//! `gweave preview --lenient` say how much of the file they could not read, as `sim` and
+//! `estimate` do. The driver (`pass`) sits above this module and uses its counts.
 //!
 //! ```
-//! use gweave::malformed::Counting;
-//! use gweave::pass::{drive_reader, Quiet, Strictness};
+//! use gweave::pass::{drive_reader, Counting, Quiet, Strictness};
 //! use gweave::stats::StatsPass;
 //!
 //! let text = "G1 X1 F600\nG1 X1..2\nG1 X3\n";
@@ -16,20 +16,25 @@
 //! let path = std::path::Path::new("part.gcode");
 //! let options = Default::default();
 //! let lenient = Strictness::Lenient;
-//! drive_reader(text.as_bytes(), path, options, lenient, &mut Quiet, &mut pass, &mut std::io::sink())
+//! drive_reader(text.as_bytes(), path, None, options, lenient, &mut Quiet, &mut pass, &mut std::io::sink())
 //!     .unwrap();
 //! assert_eq!((pass.malformed.malformed_lines, pass.malformed.first_malformed_line), (1, Some(2)));
 //! ```
-
-use std::io::Write;
 
 use serde::Serialize;
 
 use crate::gcode::diag::Severity;
 use crate::gcode::line::Block;
-use crate::gcode::reader::{Part, RawLine};
-use crate::gcode::state::State;
-use crate::pass::{Ctx, Pass, PassError, Step};
+
+/// How strictly to treat malformed lines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Strictness {
+    /// The first error-level diagnostic stops the run with file, line and column.
+    #[default]
+    Strict,
+    /// Diagnostics are left to the pass (lint, lossless copy).
+    Lenient,
+}
 
 /// How many lines could not be read, and the first of them.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
@@ -90,52 +95,10 @@ pub enum Transformed<'a, T> {
 
 impl<'a, T> Transformed<'a, T> {
     /// The report as `--json` writes it after a run of this strictness.
-    pub fn new(report: &'a T, malformed: Malformed, strictness: crate::pass::Strictness) -> Self {
+    pub fn new(report: &'a T, malformed: Malformed, strictness: Strictness) -> Self {
         match strictness {
-            crate::pass::Strictness::Strict => Transformed::Strict(report),
-            crate::pass::Strictness::Lenient => Transformed::Lenient(WithMalformed { report, malformed }),
+            Strictness::Strict => Transformed::Strict(report),
+            Strictness::Lenient => Transformed::Lenient(WithMalformed { report, malformed }),
         }
-    }
-}
-
-/// A pass that counts the malformed lines its inner pass sees (an error-level diagnostic, or a
-/// line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE)).
-#[derive(Debug, Default)]
-pub struct Counting<P> {
-    /// The inner pass.
-    pub pass: P,
-    /// The malformed lines it saw.
-    pub malformed: Malformed,
-}
-
-impl<P> Counting<P> {
-    /// Counting for `pass`.
-    pub fn new(pass: P) -> Self {
-        Counting { pass, malformed: Malformed::default() }
-    }
-}
-
-impl<P: Pass> Pass for Counting<P> {
-    #[inline]
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
-        if is_malformed(ctx.block) {
-            self.malformed.add(ctx.line.number);
-        }
-        self.pass.line(ctx, out)
-    }
-
-    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> Result<(), PassError> {
-        if let Part::Last { .. } = piece.part {
-            self.malformed.add(piece.number);
-        }
-        self.pass.long_line(piece, out)
-    }
-
-    fn finish(&mut self, state: &State, out: &mut dyn Write) -> Result<(), PassError> {
-        self.pass.finish(state, out)
-    }
-
-    fn reads_words(&self) -> bool {
-        self.pass.reads_words()
     }
 }

@@ -6,7 +6,7 @@
 //! enough: the driver reads no further and calls [`Pass::finish`]), or a [`PassError`]. The
 //! pass does not know the file: the driver names it, with the line (and the column, when the
 //! pass gives one), in [`Error::Pass`]. The set-up of a run (input, output, strictness,
-//! flavour) is the [`Run`] builder's.
+//! flavour) is the [`Run`](crate::run::Run) builder's.
 
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
@@ -21,7 +21,7 @@ use crate::gcode::reader::{LineReader, Part, RawLine};
 use crate::gcode::state::{Effect, State, StateOptions};
 use crate::malformed::{is_malformed, Malformed};
 
-pub use crate::run::{Ran, Run, Source};
+pub use crate::malformed::Strictness;
 
 /// A line with everything known about it, after its effect on the state.
 pub struct Ctx<'a> {
@@ -153,14 +153,46 @@ impl OwnedLine {
     }
 }
 
-/// How strictly to treat malformed lines.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Strictness {
-    /// The first error-level diagnostic stops the run with file, line and column.
-    #[default]
-    Strict,
-    /// Diagnostics are left to the pass (lint, lossless copy).
-    Lenient,
+/// A pass that counts the malformed lines its inner pass sees (an error-level diagnostic, or a
+/// line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE)).
+#[derive(Debug, Default)]
+pub struct Counting<P> {
+    /// The inner pass.
+    pub pass: P,
+    /// The malformed lines it saw.
+    pub malformed: Malformed,
+}
+
+impl<P> Counting<P> {
+    /// Counting for `pass`.
+    pub fn new(pass: P) -> Self {
+        Counting { pass, malformed: Malformed::default() }
+    }
+}
+
+impl<P: Pass> Pass for Counting<P> {
+    #[inline]
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
+        if is_malformed(ctx.block) {
+            self.malformed.add(ctx.line.number);
+        }
+        self.pass.line(ctx, out)
+    }
+
+    fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> Result<(), PassError> {
+        if let Part::Last { .. } = piece.part {
+            self.malformed.add(piece.number);
+        }
+        self.pass.long_line(piece, out)
+    }
+
+    fn finish(&mut self, state: &State, out: &mut dyn Write) -> Result<(), PassError> {
+        self.pass.finish(state, out)
+    }
+
+    fn reads_words(&self) -> bool {
+        self.pass.reads_words()
+    }
 }
 
 /// Reports progress in bytes; the CLI draws a bar with it.
@@ -180,31 +212,20 @@ impl Progress for Quiet {}
 
 /// The loop itself, over any reader (files, in-memory text in tests and Python). Generic over
 /// the pass, so that a pass known at the call (`stats`) has its per-line code inlined into the
-/// loop; `&mut dyn Pass` works as well.
+/// loop; `&mut dyn Pass` works as well. Write errors name `output` (the file being written),
+/// or `<path> (output)` without one.
+#[allow(clippy::too_many_arguments)]
 pub fn drive_reader<P: Pass + ?Sized>(
     input: impl Read,
     path: &Path,
+    output: Option<&Path>,
     options: StateOptions,
     strictness: Strictness,
     progress: &mut dyn Progress,
     pass: &mut P,
     out: &mut dyn Write,
 ) -> Result<State> {
-    drive_named(input, path, output_name(path), options, strictness, progress, pass, out)
-}
-
-/// [`drive_reader`] with the name write errors give the output.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn drive_named<P: Pass + ?Sized>(
-    input: impl Read,
-    path: &Path,
-    out_name: PathBuf,
-    options: StateOptions,
-    strictness: Strictness,
-    progress: &mut dyn Progress,
-    pass: &mut P,
-    out: &mut dyn Write,
-) -> Result<State> {
+    let out_name = output.map_or_else(|| output_name(path), Path::to_path_buf);
     Lines { reader: LineReader::new(input), path, out_name, strictness, progress }.run(options, pass, out)
 }
 
@@ -372,6 +393,7 @@ mod tests {
         drive_reader(
             input,
             Path::new("t"),
+            None,
             StateOptions::default(),
             Strictness::Lenient,
             &mut Quiet,
@@ -401,6 +423,7 @@ mod tests {
         let err = drive_reader(
             &b"G1 X1\nG1 Y2..3\n"[..],
             Path::new("part.gcode"),
+            None,
             StateOptions::default(),
             Strictness::Strict,
             &mut Quiet,
@@ -419,6 +442,7 @@ mod tests {
         let err = drive_reader(
             &input[..],
             Path::new("zeros.gcode"),
+            None,
             StateOptions::default(),
             Strictness::Strict,
             &mut Quiet,
@@ -480,6 +504,7 @@ mod tests {
                 drive_reader(
                     &text[..],
                     Path::new(file),
+                    None,
                     options,
                     Strictness::Lenient,
                     &mut Quiet,

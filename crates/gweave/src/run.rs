@@ -8,7 +8,8 @@
 //! before it builds its pass (`mix` chooses its dialect from it) asks [`Run::flavour`] first.
 //!
 //! ```
-//! use gweave::pass::{Identity, Run, Strictness};
+//! use gweave::pass::{Identity, Strictness};
+//! use gweave::run::Run;
 //! let text = b"G1 X1\nG1 X1..2\nG1 X3\n";
 //! let mut pass = Identity::default();
 //! let ran = Run::text(text).to_memory().strictness(Strictness::Lenient).run(&mut pass).unwrap();
@@ -25,8 +26,8 @@ use crate::gcode::container;
 use crate::gcode::flavour::{flavour_in, read_flavour, require_e_extruder};
 use crate::gcode::state::{State, StateOptions};
 use crate::gcode::writer::{Output, Target};
-use crate::malformed::{Counting, Malformed};
-use crate::pass::{drive_reader, Pass, Progress, Quiet, Strictness};
+use crate::malformed::Malformed;
+use crate::pass::{drive_reader, Counting, Pass, Progress, Quiet, Strictness};
 
 /// The name a text in memory goes by in messages.
 pub const IN_MEMORY: &str = "<input>";
@@ -204,22 +205,20 @@ impl<'a> Run<'a> {
 
     /// Streams the input through `pass` without output. Returns the final state.
     pub fn scan<P: Pass + ?Sized>(self, pass: &mut P) -> Result<State> {
-        let mut p = self.source.path().as_os_str().to_owned();
-        p.push(" (output)");
-        self.drive(pass, &mut io::sink(), PathBuf::from(p))
+        self.drive(pass, &mut io::sink(), None)
     }
 
     /// Streams the input through `pass` to the run's [`Dest`].
     pub fn run<P: Pass + ?Sized>(mut self, pass: &mut P) -> Result<Ran> {
         match std::mem::take(&mut self.dest) {
-            Dest::Nowhere => self.counted(pass, &mut io::sink(), PathBuf::new()),
+            Dest::Nowhere => self.counted(pass, &mut io::sink(), None),
             Dest::Memory => {
                 let len = match self.source {
                     Source::Text(t) => t.len(),
                     Source::File(_) => 0,
                 };
                 let mut out = Vec::with_capacity(len + len / 8);
-                let ran = self.counted(pass, &mut out, PathBuf::from("<output>"))?;
+                let ran = self.counted(pass, &mut out, Some(Path::new("<output>")))?;
                 Ok(Ran { output: out, ..ran })
             }
             Dest::Target(target) => {
@@ -231,7 +230,7 @@ impl<'a> Run<'a> {
                 // Write errors name the file being written (not its temporary file, nor the
                 // input).
                 let out_name = out.dest().map_or_else(|| PathBuf::from("<stdout>"), Path::to_path_buf);
-                let ran = self.counted(pass, &mut out, out_name)?;
+                let ran = self.counted(pass, &mut out, Some(&out_name))?;
                 out.commit()?;
                 Ok(ran)
             }
@@ -239,7 +238,12 @@ impl<'a> Run<'a> {
     }
 
     /// A lenient run counts the lines it reads past.
-    fn counted<P: Pass + ?Sized>(self, pass: &mut P, out: &mut dyn Write, out_name: PathBuf) -> Result<Ran> {
+    fn counted<P: Pass + ?Sized>(
+        self,
+        pass: &mut P,
+        out: &mut dyn Write,
+        out_name: Option<&Path>,
+    ) -> Result<Ran> {
         if self.strictness == Strictness::Strict {
             let state = self.drive(pass, out, out_name)?;
             return Ok(Ran { state, malformed: Malformed::default(), output: Vec::new() });
@@ -253,7 +257,7 @@ impl<'a> Run<'a> {
         mut self,
         pass: &mut P,
         out: &mut dyn Write,
-        out_name: PathBuf,
+        out_name: Option<&Path>,
     ) -> Result<State> {
         let flavour = self.flavour()?.map(str::to_owned);
         let options = self.options.for_flavour(flavour.as_deref());
@@ -265,10 +269,11 @@ impl<'a> Run<'a> {
                 if let Some(len) = input.text_len {
                     progress.set_len(len);
                 }
-                crate::pass::drive_named(input, path, out_name, options, self.strictness, progress, pass, out)
+                drive_reader(input, path, out_name, options, self.strictness, progress, pass, out)
             }
+            // Write errors of an in-memory text name `<input> (output)`, whatever the output.
             Source::Text(text) => {
-                drive_reader(text, Path::new(IN_MEMORY), options, self.strictness, progress, pass, out)
+                drive_reader(text, Path::new(IN_MEMORY), None, options, self.strictness, progress, pass, out)
             }
         }
     }

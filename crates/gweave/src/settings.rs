@@ -24,6 +24,10 @@
 //! assert_eq!(err.to_string(), "[bed] x_mm = 1e308 is out of range: 1 to 10000 mm");
 //! ```
 
+use std::fmt;
+
+use serde::de::{self, Deserialize, Deserializer, Visitor};
+
 use crate::range::{short, OutOfRange, Quantity, Range};
 
 /// Where in the file a type's keys are: the checker handed to [`CheckRanges::check_ranges`].
@@ -107,9 +111,74 @@ fn short_numbers(text: &str) -> String {
     out
 }
 
+/// The keys a `#[derive(Deserialize)]` struct reads, in the order of its fields: the list its
+/// unknown-key errors give. A table that holds the keys of two types (mix's `[purge]`) sorts
+/// its keys with it, without naming them a second time.
+pub fn keys_of<'de, T: Deserialize<'de>>() -> &'static [&'static str] {
+    T::deserialize(KeysProbe).err().map_or(&[], |keys| keys.0)
+}
+
+/// A deserializer that only asks a struct for its keys: serde's derive names them all when it
+/// reads a struct ([`Deserializer::deserialize_struct`]); the probe answers with an "error"
+/// carrying them.
+struct KeysProbe;
+
+#[derive(Debug)]
+struct Keys(&'static [&'static str]);
+
+impl fmt::Display for Keys {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "keys {:?}", self.0)
+    }
+}
+
+impl std::error::Error for Keys {}
+
+impl de::Error for Keys {
+    fn custom<M: fmt::Display>(_: M) -> Self {
+        Keys(&[])
+    }
+}
+
+impl<'de> Deserializer<'de> for KeysProbe {
+    type Error = Keys;
+
+    fn deserialize_any<V: Visitor<'de>>(self, _: V) -> Result<V::Value, Keys> {
+        Err(Keys(&[]))
+    }
+
+    fn deserialize_struct<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        fields: &'static [&'static str],
+        _: V,
+    ) -> Result<V::Value, Keys> {
+        Err(Keys(fields))
+    }
+
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf option
+        unit unit_struct newtype_struct seq tuple tuple_struct map enum identifier ignored_any
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn keys_of_a_struct_are_its_fields_in_order() {
+        #[derive(serde::Deserialize)]
+        #[allow(dead_code)]
+        struct Spot {
+            x_mm: f64,
+            y_mm: Option<f64>,
+            #[serde(skip)]
+            z_mm: f64,
+        }
+        assert_eq!(keys_of::<Spot>(), ["x_mm", "y_mm"]);
+        assert!(keys_of::<f64>().is_empty());
+    }
 
     #[test]
     fn long_numbers_in_reader_messages_are_shortened() {

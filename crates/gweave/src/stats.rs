@@ -355,8 +355,9 @@ pub fn stats_file(
     strictness: crate::pass::Strictness,
     progress: &mut dyn crate::pass::Progress,
 ) -> crate::Result<crate::malformed::WithMalformed<Stats>> {
-    use crate::malformed::{Counting, Malformed, WithMalformed};
-    let run = crate::pass::Run::file(path).progress(progress).strictness(strictness);
+    use crate::malformed::{Malformed, WithMalformed};
+    use crate::pass::Counting;
+    let run = crate::run::Run::file(path).progress(progress).strictness(strictness);
     Ok(match strictness {
         crate::pass::Strictness::Strict => {
             let mut pass = StatsPass::new(diameter_mm);
@@ -391,9 +392,17 @@ mod tests {
         use crate::pass::{drive_reader, Quiet, Strictness};
         let mut pass = StatsPass::new(None);
         let path = std::path::Path::new("t.gcode");
-        let state =
-            drive_reader(text, path, options, Strictness::Strict, &mut Quiet, &mut pass, &mut io::sink())
-                .unwrap();
+        let state = drive_reader(
+            text,
+            path,
+            None,
+            options,
+            Strictness::Strict,
+            &mut Quiet,
+            &mut pass,
+            &mut io::sink(),
+        )
+        .unwrap();
         pass.into_stats(&state)
     }
 
@@ -450,6 +459,7 @@ G3 X25 Y5 I10 J0 E6
         let state = crate::pass::drive_reader(
             &text[..],
             std::path::Path::new("t.gcode"),
+            None,
             Default::default(),
             crate::pass::Strictness::Strict,
             &mut crate::pass::Quiet,

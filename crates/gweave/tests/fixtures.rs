@@ -4,7 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::layers::{Region, Slicer};
-use gweave::pass::{drive_reader, Identity, Quiet, Run, Strictness};
+use gweave::pass::{drive_reader, Identity, Quiet, Strictness};
+use gweave::run::Run;
 use gweave::stats::{Stats, StatsPass};
 
 fn data(rel: &str) -> PathBuf {
@@ -35,6 +36,7 @@ fn every_fixture_round_trips_byte_exact() {
         drive_reader(
             &bytes[..],
             Path::new(rel),
+            None,
             Default::default(),
             Strictness::Strict,
             &mut Quiet,

@@ -316,7 +316,7 @@ fn golden_small_case() {
     let tmp = tempfile::tempdir().unwrap();
     let dest = tmp.path().join("out.gcode");
     let target = gweave::gcode::writer::Target::File(dest.clone());
-    mix(profile, gweave::pass::Run::file(&dir.join("small.gcode")).to(&target)).unwrap();
+    mix(profile, gweave::run::Run::file(&dir.join("small.gcode")).to(&target)).unwrap();
     assert_eq!(std::fs::read(dest).unwrap(), std::fs::read(golden).unwrap());
 }
 

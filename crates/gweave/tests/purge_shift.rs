@@ -6,8 +6,9 @@ mod purge_check;
 use std::path::PathBuf;
 
 use gweave::gcode::layers::Feature;
-use gweave::pass::{Run, Strictness};
+use gweave::pass::Strictness;
 use gweave::post::purge_shift::{purge_shift, PurgeShift, PurgeShiftConfig, PurgeShiftReport, Rules};
+use gweave::run::Run;
 
 fn fixture(rel: &str) -> Vec<u8> {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel);

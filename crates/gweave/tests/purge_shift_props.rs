@@ -3,9 +3,10 @@
 
 mod purge_check;
 
-use gweave::pass::{Run, Strictness};
+use gweave::pass::Strictness;
 use gweave::post::purge_shift::report::KEPT_CHANGES;
 use gweave::post::purge_shift::{purge_shift, PurgeShift, PurgeShiftConfig, PurgeShiftReport, Rules};
+use gweave::run::Run;
 use proptest::prelude::*;
 
 /// The pass over text in memory, reading past malformed lines (what these properties feed it).

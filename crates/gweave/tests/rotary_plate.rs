@@ -5,10 +5,10 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use gweave::gcode::writer::Target;
-use gweave::pass::Run;
 use gweave::rotary::cylinder::{FeedConvention, RotaryConfig};
 use gweave::rotary::report::wrap_file;
 use gweave::rotary::wrap::WrapConfig;
+use gweave::run::Run;
 
 fn plate() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/rotary/plate.gcode")

@@ -8,7 +8,8 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use gweave::gcode::writer::Target;
-use gweave::pass::{CopyReport, Identity, Run, Strictness};
+use gweave::pass::{CopyReport, Identity, Strictness};
+use gweave::run::Run;
 
 use crate::common::{print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
@@ -32,7 +33,7 @@ pub struct CatArgs {
 
 pub fn run(args: CatArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
-    args.report.refuse_json_with_stdout(target == Target::Stdout)?;
+    args.report.refuse_json_with_stdout(target.is_stdout())?;
     Files::new()
         .read("INPUT", Some(&args.input))
         .target(&target, &args.input)
@@ -43,7 +44,7 @@ pub fn run(args: CatArgs) -> Result<ExitCode> {
     let mut copy = Identity::default();
     Run::file(&args.input).progress(&mut bar).strictness(strictness).to(&target).run(&mut copy)?;
     drop(bar);
-    if args.report.emit(&copy.report)? && target != Target::Stdout {
+    if args.report.emit(&copy.report)? && !target.is_stdout() {
         print_summary(|out| print_human(out, &args.input, &target, &copy.report))?;
     }
     Ok(ExitCode::SUCCESS)
@@ -56,7 +57,7 @@ fn print_human(out: &mut dyn Write, input: &Path, target: &Target, r: &CopyRepor
             writeln!(out, "{} (in place, kept {}.bak)", input.display(), input.display())?
         }
         Target::InPlace { keep_backup: false, .. } => writeln!(out, "{} (in place)", input.display())?,
-        Target::Stdout => {}
+        Target::Stdout(_) => {}
     }
     writeln!(out, "  lines           {} ({:.1} MB), copied byte for byte", r.lines, r.bytes as f64 / 1e6)?;
     if let Some(first) = r.malformed.first_malformed_line {

@@ -11,12 +11,12 @@ use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, Swatc
 use gweave::firmware::MixCommands;
 use gweave::gcode::writer::Target;
 use gweave::malformed::Transformed;
-use gweave::pass::Run;
 use gweave::post::mix::overrides::Overrides;
 use gweave::post::mix::profile::{GradientSpace, MixProfile};
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{mix, wizard::run_wizard};
+use gweave::run::Run;
 
 use gweave::range::PURGE_MM;
 
@@ -113,7 +113,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         Some(_) => Some(args.out.target()?),
         None => None,
     };
-    args.report.refuse_json_with_stdout(target == Some(Target::Stdout))?;
+    args.report.refuse_json_with_stdout(target.as_ref().is_some_and(Target::is_stdout))?;
     let mut files = Files::new().read("INPUT", args.input.as_deref()).read("-c", args.config.as_deref());
     if let (Some(input), Some(target)) = (&args.input, &target) {
         files = files.target(target, input);
@@ -175,7 +175,7 @@ fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) ->
             print_malformed(out, &malformed)
         };
         // Keep standard output clean when the G-code goes there.
-        if target == Target::Stdout {
+        if target.is_stdout() {
             human(&mut std::io::stderr().lock())?;
         } else {
             print_summary(human)?;
@@ -235,7 +235,7 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
     let stdin = std::io::stdin();
     let mut input = stdin.lock();
     // The questions go to standard error when the job's G-code goes to standard output.
-    let mut prompts: Box<dyn Write> = if target == Some(Target::Stdout) {
+    let mut prompts: Box<dyn Write> = if target.as_ref().is_some_and(Target::is_stdout) {
         Box::new(std::io::stderr())
     } else {
         Box::new(std::io::stdout())

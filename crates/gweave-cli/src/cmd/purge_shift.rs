@@ -6,11 +6,10 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::gcode::writer::Target;
 use gweave::malformed::Transformed;
-use gweave::pass::Run;
 use gweave::post::purge_shift::{purge_shift, Overrides, PurgeShiftConfig};
 use gweave::range::{FILAMENT_DIAMETER_MM, POSITION_MM, PURGE_MM, PURGE_MM3};
+use gweave::run::Run;
 
 use crate::args::Lenient;
 use crate::common::{
@@ -97,7 +96,7 @@ fn config(args: &PurgeShiftArgs) -> Result<PurgeShiftConfig> {
 
 pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
-    args.report.refuse_json_with_stdout(target == Target::Stdout)?;
+    args.report.refuse_json_with_stdout(target.is_stdout())?;
     Files::new()
         .read("INPUT", Some(&args.input))
         .read("-c", args.config.as_deref())
@@ -128,7 +127,7 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
             print_malformed(out, &malformed)
         };
         // Keep standard output clean when the G-code goes there.
-        if target == Target::Stdout {
+        if target.is_stdout() {
             summary(&mut std::io::stderr())?;
         } else {
             print_summary(summary)?;

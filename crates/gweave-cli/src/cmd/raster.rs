@@ -144,19 +144,11 @@ impl RasterArgs {
     }
 }
 
-fn target(output: &Path) -> Target {
-    if output == Path::new("-") {
-        Target::Stdout
-    } else {
-        Target::File(output.to_path_buf())
-    }
-}
-
 pub fn run(args: RasterArgs) -> Result<ExitCode> {
     let options = args.options()?;
     let to_stdout = args.output == Path::new("-");
     args.report.refuse_json_with_stdout(to_stdout)?;
-    args.format.apply(&target(&args.output))?;
+    let target = args.format.target(&args.output)?;
     let source = if args.test_pattern { None } else { Some(options.source()?) };
     let images = source.as_ref().map(|(s, _)| s.paths()).unwrap_or_default();
     Files::new()
@@ -169,7 +161,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let Some((source, heads)) = source else {
-        let (rep, profile) = options.test_pattern(&target(&args.output), args.pattern_columns)?;
+        let (rep, profile) = options.test_pattern(&target, args.pattern_columns)?;
         if args.report.emit(&rep)? && !to_stdout {
             print_summary(|out| {
                 writeln!(out, "{}: nozzle test pattern", args.output.display())?;
@@ -191,7 +183,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     // Its own time counts the printhead's firing, which the estimator does not know.
     let run = |t: &Target| Ok(job.run(t, &mut bar, Estimator::line_timer)?);
     let (mut report, _) =
-        finish::with_metadata_timed(None, &target(&args.output), run, |r: &JobReport| Some(r.time.total_s))?;
+        finish::with_metadata_timed(None, &target, run, |r: &JobReport| Some(r.time.total_s))?;
     report.output = if to_stdout { "-".into() } else { args.output.display().to_string() };
     drop(bar);
     if args.report.emit(&report)? && !to_stdout {

@@ -27,7 +27,7 @@ use crate::common::{in_range, load, print_malformed, print_summary, OutputArgs, 
 use crate::files::Files;
 use crate::finish;
 use gweave::malformed::Transformed;
-use gweave::pass::Run;
+use gweave::run::Run;
 
 /// Rotary (lathe-type) printing: wrap flat G-code onto a mandrel, or generate helical tubes.
 #[derive(Args, Debug)]
@@ -195,7 +195,7 @@ pub struct WrapArgs {
 
 fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
-    args.report.refuse_json_with_stdout(target == Target::Stdout)?;
+    args.report.refuse_json_with_stdout(target.is_stdout())?;
     Files::new()
         .read("INPUT", Some(&args.input))
         .read("-c", args.machine.config.as_deref())
@@ -225,9 +225,7 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
         finish::with_metadata_timed(Some(&args.input), &target, wrap, |r| Some(r.0.time_s))?;
     report.output = written;
     drop(bar);
-    if args.report.emit(&Transformed::new(&report, malformed, strictness))?
-        && !matches!(target, Target::Stdout)
-    {
+    if args.report.emit(&Transformed::new(&report, malformed, strictness))? && !target.is_stdout() {
         print_summary(|out| {
             print_wrap(out, &report)?;
             print_malformed(out, &malformed)
@@ -353,15 +351,13 @@ fn run_tube(args: TubeArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let params = tube_params(&args)?;
-    let target =
-        if args.output == Path::new("-") { Target::Stdout } else { Target::File(args.output.clone()) };
-    args.format.apply(&target)?;
+    let target = args.format.target(&args.output)?;
     let preview = args.machine.preview.as_deref();
     let tube = |t: &Target| Ok(report::tube_file(&params, t, preview)?);
     let (mut report, written) =
         finish::with_metadata_timed(None, &target, tube, |r: &TubeReport| Some(r.print_time_s))?;
     report.output = written;
-    if args.report.emit(&report)? && !matches!(target, Target::Stdout) {
+    if args.report.emit(&report)? && !target.is_stdout() {
         print_summary(|out| print_tube(out, &report))?;
     }
     Ok(ExitCode::SUCCESS)

@@ -11,7 +11,6 @@
 use std::fs;
 use std::io::{self, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU8, Ordering};
 
 use super::container::{self, Container, Encoder};
 use super::temp::TempFile;
@@ -30,8 +29,16 @@ pub enum Target {
         /// Replace a read-only input.
         force: bool,
     },
-    /// Standard output (`-o -`).
-    Stdout,
+    /// Standard output (`-o -`), stored in this container (the CLI's `--format`): a pipe has no
+    /// name to say how its G-code is stored, so the target says it.
+    Stdout(Container),
+}
+
+impl Target {
+    /// Whether the output goes to standard output, whatever its container.
+    pub fn is_stdout(&self) -> bool {
+        matches!(self, Target::Stdout(_))
+    }
 }
 
 /// Older backups kept beside `<input>.bak`: `.bak.1` .. `.bak.9`.
@@ -39,7 +46,7 @@ pub const BACKUP_SLOTS: u32 = 9;
 
 /// An output being written. Call [`Output::commit`] at the end; dropping it without committing
 /// deletes the temporary file. A file named `*.gz` or `*.bgcode` is written compressed or as
-/// binary G-code ([`Container::of_output`]); standard output as [`set_stdout_container`] says.
+/// binary G-code ([`Container::of_output`]); standard output as its [`Target::Stdout`] says.
 pub struct Output {
     sink: Encoder<Sink>,
 }
@@ -61,32 +68,15 @@ enum Sink {
 
 const BUFFER: usize = 1 << 20;
 
-/// The container G-code written to standard output is stored in (the CLI's `--format`): a pipe
-/// has no name to tell it, and standard output is the process's own, so the choice is too.
-/// Scratch and side files are never standard output, so only the run's output follows it.
-static STDOUT_CONTAINER: AtomicU8 = AtomicU8::new(Container::Text as u8);
-
-/// Sets the container of G-code written to standard output from now on.
-pub fn set_stdout_container(container: Container) {
-    STDOUT_CONTAINER.store(container as u8, Ordering::Relaxed);
-}
-
-fn stdout_container() -> Container {
-    match STDOUT_CONTAINER.load(Ordering::Relaxed) {
-        c if c == Container::Gzip as u8 => Container::Gzip,
-        c if c == Container::Bgcode as u8 => Container::Bgcode,
-        _ => Container::Text,
-    }
-}
-
 impl Output {
     /// Opens the output for `target`, given the `input` the command reads (for in-place and for
     /// refusing to overwrite the input by accident).
     pub fn create(target: &Target, input: Option<&Path>) -> Result<Output> {
         let sink = Self::sink(target, input)?;
-        let container = match &sink {
-            Sink::File { dest, .. } | Sink::Special { dest, .. } => Container::of_output(dest),
-            Sink::Stdout(_) => stdout_container(),
+        let dest = sink.name();
+        let container = match target {
+            Target::Stdout(container) => *container,
+            Target::File(_) | Target::InPlace { .. } => Container::of_output(&dest),
         };
         // A binary input's metadata and thumbnails go into a binary output.
         let carried = match (container, input) {
@@ -95,7 +85,6 @@ impl Output {
             }
             _ => None,
         };
-        let dest = sink.name();
         let sink = Encoder::new(container, sink, carried).map_err(|e| Error::io(dest, e))?;
         Ok(Output { sink })
     }
@@ -107,7 +96,7 @@ impl Output {
 
     fn sink(target: &Target, input: Option<&Path>) -> Result<Sink> {
         let (dest, backup) = match target {
-            Target::Stdout => return Ok(Sink::Stdout(BufWriter::with_capacity(BUFFER, io::stdout()))),
+            Target::Stdout(_) => return Ok(Sink::Stdout(BufWriter::with_capacity(BUFFER, io::stdout()))),
             Target::File(path) => {
                 if let Some(input) = input {
                     if same_file(input, path) {
@@ -132,7 +121,7 @@ impl Output {
                 if let Some(backup) = &backup {
                     // Fail before the work, not after it, when no slot is free for the old one.
                     if backup.symlink_metadata().is_ok() && free_slot(backup).is_none() {
-                        return Err(Error::BackupSlotsFull { path: backup.clone() });
+                        return Err(Error::BackupSlotsFull { path: backup.clone(), slots: BACKUP_SLOTS });
                     }
                 }
                 (input.to_path_buf(), backup)
@@ -262,7 +251,8 @@ fn write_backup(input: &Path, backup: &Path, meta: Option<&fs::Metadata>) -> Res
         if same_bytes(input, backup).map_err(|e| Error::io(backup, e))? {
             return Ok(());
         }
-        let slot = free_slot(backup).ok_or_else(|| Error::BackupSlotsFull { path: backup.to_path_buf() })?;
+        let slot = free_slot(backup)
+            .ok_or_else(|| Error::BackupSlotsFull { path: backup.to_path_buf(), slots: BACKUP_SLOTS })?;
         fs::rename(backup, &slot).map_err(|e| Error::io(backup, e))?;
     }
     let mut tmp = TempFile::new_in(&parent_dir(backup)).map_err(|e| Error::io(backup, e))?;

@@ -362,6 +362,7 @@ mod tests {
         drive_reader(
             text.as_bytes(),
             path,
+            None,
             Default::default(),
             Strictness::Lenient,
             &mut Quiet,

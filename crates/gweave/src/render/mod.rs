@@ -45,11 +45,12 @@ use serde::Serialize;
 
 use crate::gcode::state::State;
 use crate::gen::printhead::PrintheadProfile;
-use crate::malformed::{Counting, Malformed};
-use crate::pass::{Ctx, Pass, PassError, Progress, Quiet, Run, Step, Strictness};
+use crate::malformed::Malformed;
+use crate::pass::{Counting, Ctx, Pass, PassError, Progress, Quiet, Step, Strictness};
 use crate::range::Range;
 use crate::rotary::cylinder::RotaryConfig;
 use crate::rotary::preview::RotaryReading;
+use crate::run::Run;
 use crate::stats::{Stats, StatsPass};
 
 pub use colour_by::ColourBy;

@@ -38,9 +38,10 @@ use std::path::Path;
 use crate::gcode::layers::{Feature, Region, Structure};
 use crate::gcode::state::{Effect, Move, Path as MovePath, E, X, Y, Z};
 use crate::gen::printhead::PrintheadProfile;
-use crate::pass::{Ctx, Flow, Pass, Run, Step};
+use crate::pass::{Ctx, Flow, Pass, Step};
 use crate::rotary::cylinder::CylPoint;
 use crate::rotary::preview::{RotaryMove, RotaryReading};
+use crate::run::Run;
 
 use super::mix_colour::{MixColours, MixTracker};
 use cylinder::{CylinderLayers, PROVISIONAL};
@@ -518,8 +519,17 @@ mod tests {
 
     fn read(text: &str, pass: &mut ToolpathPass) {
         let (path, options) = (Path::new("t.gcode"), StateOptions::default());
-        drive_reader(text.as_bytes(), path, options, Strictness::Strict, &mut Quiet, pass, &mut io::sink())
-            .unwrap();
+        drive_reader(
+            text.as_bytes(),
+            path,
+            None,
+            options,
+            Strictness::Strict,
+            &mut Quiet,
+            pass,
+            &mut io::sink(),
+        )
+        .unwrap();
     }
 
     pub(crate) fn collect(text: &str, options: ToolpathOptions) -> Toolpath {

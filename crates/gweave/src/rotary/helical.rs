@@ -36,7 +36,8 @@ use super::cylinder::RotaryConfig;
 use super::{Result, RotaryError};
 use crate::gcode::layers::{Region, Structure};
 use crate::gcode::state::{Effect, Y};
-use crate::pass::{Ctx, Flow, Pass, Run, Step};
+use crate::pass::{Ctx, Flow, Pass, Step};
+use crate::run::Run;
 
 /// The `y` range of a part's extrusions in the print proper, mm (arcs by their end points).
 #[derive(Debug, Clone, Copy, PartialEq)]

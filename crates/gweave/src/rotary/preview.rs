@@ -19,7 +19,7 @@
 //! tube.write_gcode(&mut gcode).unwrap();
 //! let mut pass = preview::ProgramPass::new(preview::RotaryReading::new(&tube.machine).unwrap());
 //! let (path, options) = ("tube.gcode".as_ref(), Default::default());
-//! drive_reader(gcode.as_slice(), path, options, Strictness::Strict, &mut Quiet, &mut pass, &mut std::io::sink())
+//! drive_reader(gcode.as_slice(), path, None, options, Strictness::Strict, &mut Quiet, &mut pass, &mut std::io::sink())
 //!     .unwrap();
 //! let program = pass.finish();
 //! assert_eq!(program.layers.len(), 2);

@@ -160,13 +160,13 @@ fn written_path(target: &Target, input: Option<&Path>) -> Option<PathBuf> {
     match target {
         Target::File(p) => Some(p.clone()),
         Target::InPlace { .. } => input.map(Path::to_path_buf),
-        Target::Stdout => None,
+        Target::Stdout(_) => None,
     }
 }
 
 /// A preview is drawn from the written file, so standard output cannot have one.
 fn check_preview(target: &Target, preview: Option<&Path>) -> Result<()> {
-    if preview.is_some() && *target == Target::Stdout {
+    if preview.is_some() && target.is_stdout() {
         return Err(RotaryError::Config {
             key: "preview",
             reason: "a preview needs the G-code written to a file".into(),
@@ -403,7 +403,8 @@ mod tests {
         assert_eq!(r.layers[1].theta_deg[0], r.layers[0].theta_deg[1]);
         assert!(r.executed_beads.unwrap() > 100);
         assert!(std::fs::metadata(&png).unwrap().len() > 1000);
-        let err = tube_file(&t, &Target::Stdout, Some(&png)).unwrap_err();
+        let stdout = Target::Stdout(crate::gcode::container::Container::Text);
+        let err = tube_file(&t, &stdout, Some(&png)).unwrap_err();
         assert!(matches!(err, RotaryError::Config { key: "preview", .. }));
     }
 }

@@ -60,7 +60,8 @@ use super::{in_range, Result, RotaryError};
 use crate::eol::Eol;
 use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{Effect, Move, Path, State, E, X, Y, Z};
-use crate::pass::{keep, Ctx, Flow, Pass, PassError, Ran, Run, Step};
+use crate::pass::{keep, Ctx, Flow, Pass, PassError, Step};
+use crate::run::{Ran, Run};
 
 /// Settings of the wrap pass. In TOML, top-level keys first, then the tables:
 ///

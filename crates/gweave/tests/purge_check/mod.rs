@@ -49,6 +49,7 @@ pub fn replay(bytes: &[u8], options: &StateOptions) -> Replay {
     let state = drive_reader(
         bytes,
         Path::new("replay"),
+        None,
         options.clone(),
         Strictness::Lenient,
         &mut Quiet,

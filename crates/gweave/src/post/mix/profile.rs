@@ -193,9 +193,10 @@ pub struct PairPurge {
 }
 
 /// The purge at each change of mix. Defaults are the mixing post-processor seed's (`docs/seeds.md`): retract 4 mm, lift 15 mm, go to
-/// X10 Y10, extrude 25 mm.
+/// X10 Y10, extrude 25 mm. Its `Deserialize` reads mix's own keys with this derive and the
+/// motion's from the same table (`purge_table.rs`).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(remote = "Self", deny_unknown_fields, default)]
 pub struct PurgeConfig {
     /// How the purge amount is found.
     pub mode: PurgeMode,
@@ -216,7 +217,7 @@ pub struct PurgeConfig {
     pub tolerance: f64,
     /// Where and how the block moves: `retract_mm`, `lift_mm`, `x_mm`, `y_mm`, `wipe_mm` and the
     /// feeds, keys of this same table (the Z feed unset: the travel feed under the Z cap).
-    #[serde(flatten)]
+    #[serde(skip)]
     pub motion: PurgeMotion,
     /// Purge at every step of a gradient too (normally the blend is the point).
     pub on_gradient_steps: bool,
@@ -577,5 +578,67 @@ mod tests {
         assert!(
             msg("[[hardware.inputs]]\ncolour = \"#ffffff\"\ndensity = 1").contains("unknown field `density`")
         );
+    }
+    /// Every key `[purge]` reads, in the order unknown-key errors list them: its own, then the
+    /// purge motion's (the keys of purge-shift's `[block]`).
+    const PURGE_KEYS: &str = "`mode`, `length_mm`, `initial_mm`, `volume_mm3`, `multiplier`, `chamber_mm3`, \
+        `dead_mm3`, `tolerance`, `on_gradient_steps`, `pair`, `style`, `retract_mm`, `lift_mm`, `x_mm`, `y_mm`, \
+        `wipe_mm`, `travel_feed_mm_min`, `extrude_feed_mm_min`, `retract_feed_mm_min`, `z_feed_mm_min`, \
+        `return_feed_mm_min`, `lower_feed_mm_min`, `unretract_feed_mm_min`";
+
+    #[test]
+    fn unknown_key_in_purge_is_reported_at_its_own_line_with_the_expected_keys() {
+        let err = MixProfile::from_toml_str(
+            "[hardware]
+virtual_tools = 4
+
+[purge]
+mode = \"length\"\nlenght_mm = 3\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("TOML parse error at line 6, column 1\n"), "{err}");
+        assert!(err.contains("6 | lenght_mm = 3\n"), "{err}");
+        assert!(
+            err.ends_with(&format!("unknown field `lenght_mm`, expected one of {PURGE_KEYS}\n")),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn wrong_type_in_purge_is_reported_at_its_own_value() {
+        let msg = |text: &str| MixProfile::from_toml_str(text).unwrap_err().to_string();
+        // A key of the purge motion, and one of mix's own.
+        let err = msg("[purge]\nmode = \"length\"\nretract_mm = \"4\"\n");
+        assert!(err.contains("TOML parse error at line 3, column 14\n"), "{err}");
+        assert!(err.ends_with("invalid type: string \"4\", expected f64\n"), "{err}");
+        let err = msg("[purge]\nlength_mm = 25\non_gradient_steps = 1\n");
+        assert!(err.contains("TOML parse error at line 3, column 21\n"), "{err}");
+        assert!(err.ends_with("invalid type: integer `1`, expected a boolean\n"), "{err}");
+        let err = msg("[purge]\nz_feed_mm_min = true\n");
+        assert!(err.contains("TOML parse error at line 2, column 17\n"), "{err}");
+        assert!(err.ends_with("invalid type: boolean `true`, expected f64\n"), "{err}");
+    }
+
+    #[test]
+    fn purge_keys_read_as_before() {
+        let p = MixProfile::from_toml_str(
+            "[purge]\nmode = \"volume\"\nvolume_mm3 = 50\nretract_mm = 2\nz_feed_mm_min = 300.5\n\
+             style = \"seed\"\nunretract_feed_mm_min = 900\n[[purge.pair]]\nfrom = \"A\"\nto = \"B\"\nlength_mm = 3\n",
+        )
+        .unwrap();
+        let want = PurgeMotion {
+            retract_mm: 2.0,
+            z_feed_mm_min: Some(300.5),
+            unretract_feed_mm_min: Some(900.0),
+            ..PurgeMotion::SEED
+        };
+        assert_eq!(p.purge.motion, want);
+        assert_eq!(
+            (p.purge.mode, p.purge.volume_mm3, p.purge.style),
+            (PurgeMode::Volume, 50.0, PurgeStyle::Seed)
+        );
+        assert_eq!(p.purge.pair.len(), 1);
+        assert_eq!(p.purge.length_mm, 25.0, "a key not given keeps its default");
     }
 }
