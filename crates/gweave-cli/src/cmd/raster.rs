@@ -168,7 +168,8 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let Some((source, heads)) = source else {
-        let (rep, profile) = options.test_pattern(&target(&args.output), args.pattern_columns)?;
+        let pattern = |t: &Target| options.test_pattern(t, args.pattern_columns);
+        let ((rep, profile), _) = finish::with_metadata(None, &target(&args.output), pattern)?;
         if args.report.emit(&rep)? && !to_stdout {
             print_summary(|out| {
                 writeln!(out, "{}: nozzle test pattern", args.output.display())?;
