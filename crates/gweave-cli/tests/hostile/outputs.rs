@@ -383,6 +383,18 @@ fn write_errors_during_a_transform_name_the_output() {
     }
 }
 
+/// Regression: `serve --report PATH` was written only when a host disconnected, so a report in
+/// a missing folder, or naming the EEPROM file the server reads, was found out after serving.
+#[test]
+fn serve_report_path_is_checked_before_serving() {
+    let dir = tempfile::tempdir().unwrap();
+    let serve = ["serve", "--tcp", "127.0.0.1:0", "--exit-after-idle", "3"];
+    let args = [&serve[..], &["--report", "missing/r.json"]].concat();
+    refused_in(dir.path(), &args, "--report missing/r.json: No such file or directory");
+    let args = [&serve[..], &["--eeprom", "e.gcode", "--report", "e.gcode"]].concat();
+    refused_in(dir.path(), &args, "--report e.gcode names the input (--eeprom); name another file");
+}
+
 /// Regression (a new user's trial): `machine from-m503 m.txt -o m.txt` read the transcript and
 /// printed its notes before refusing, with a wording of its own.
 #[test]
