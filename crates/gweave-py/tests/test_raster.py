@@ -62,6 +62,9 @@ def test_test_pattern(tmp_path):
     assert r["fire_commands"] == 24
     s = [int(l.split("S")[1]) for l in out.read_text().splitlines() if l.startswith("M700")]
     assert s == [1 << a for a in range(12) for _ in range(2)]
+    # The run's header, as the CLI writes it (`gweave raster --test-pattern --pattern-columns 2`).
+    first = out.read_text().splitlines()[0]
+    assert first.startswith("; gweave ") and first.endswith(" raster --test-pattern --pattern-columns 2 (generated)")
 
 
 def test_slice_raster_then_raster(tmp_path):
