@@ -20,6 +20,8 @@ def test_raster_bmp_stack(tmp_path):
     out = tmp_path / "badge.gcode"
     r = gweave.raster(EXAMPLES / "layers", out, flip_y=True, head=EXAMPLES / "c6602.toml")
     assert (r["layers"], r["bands_printed"], r["bands_skipped"]) == (8, 29, 3)
+    # Regression: the report named the scratch file (`.gweave-XXXX.tmp`) the run wrote first.
+    assert r["output"] == str(out)
     assert (r["columns_fired"], r["drops_per_head"]) == (844, [6508])
     assert r["binder_volume_ul"] == pytest.approx(6508 * 160e-6)
     assert r["time"]["method"] == "planner"

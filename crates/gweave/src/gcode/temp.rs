@@ -126,8 +126,9 @@ fn forget(path: &Path) {
     stands_for().retain(|(p, _)| p != path);
 }
 
-/// The name errors in writing `path` show: the output a scratch file stands for, else `path`.
-pub(crate) fn shown_name(path: &Path) -> PathBuf {
+/// The name errors in writing `path` show, and reports: the output a scratch file stands for,
+/// else `path`.
+pub fn shown_name(path: &Path) -> PathBuf {
     let aliases = stands_for();
     aliases.iter().find(|(p, _)| p == path).map_or(path, |(_, output)| output).to_path_buf()
 }
