@@ -206,6 +206,17 @@ fn inode(_meta: &std::fs::Metadata) -> Option<(u64, u64)> {
     None
 }
 
+/// Checks now that `path`, named by `flag`, can be written, for an output written only later
+/// (`serve --report`, at each host's disconnection): its folder must take the temporary file
+/// every output is written through.
+pub fn check_writable(flag: &str, path: &Path) -> Result<()> {
+    let folder = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    match gweave::gcode::temp::TempFile::new_in(folder) {
+        Ok(_) => Ok(()),
+        Err(e) => bail!("{flag} {}: {e}", path.display()),
+    }
+}
+
 /// A path that does not exist yet, with its folder resolved as far as it exists (links,
 /// `..`), so that two spellings of one new file compare equal.
 fn resolve_new(path: &Path) -> PathBuf {

@@ -342,3 +342,14 @@ fn a_second_run_on_gzip_or_binary_output_is_refused() {
         assert!(!twice.exists(), "{name}");
     }
 }
+
+/// Regression: `raster --test-pattern` wrote no `; gweave ...` header, unlike every command
+/// that writes G-code (`rotary tube` and `raster` of images have it, checked above).
+#[test]
+fn generators_outputs_carry_the_gweave_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("pattern.gcode");
+    let text = transform(&["raster", "--test-pattern", "--pattern-columns", "2"], &out);
+    check_output(&text, &out, "raster --test-pattern --pattern-columns 2", false);
+    assert!(text.contains("\n; filament used [mm] = 0.00\n"), "{text}");
+}

@@ -37,8 +37,8 @@ fn predict(profile: Option<&Path>, ratios: &[String]) -> Vec<(String, [f64; 3])>
 }
 
 fn delta_e(a: [f64; 3], b: [f64; 3]) -> f64 {
-    use gweave::colour::{delta_e::ciede2000, Lab};
-    ciede2000(Lab { l: a[0], a: a[1], b: a[2] }, Lab { l: b[0], a: b[1], b: b[2] })
+    use gweave::colour::{Ciede2000, Lab};
+    Lab::new(a[0], a[1], a[2]).difference(Lab::new(b[0], b[1], b[2]))
 }
 
 #[test]

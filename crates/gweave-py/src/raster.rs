@@ -105,7 +105,8 @@ pub(crate) fn raster_json(
 
 /// Writes a nozzle test pattern; the raster report as JSON text.
 #[pyfunction]
-#[pyo3(signature = (output, *, head=None, heads=None, dialect=None, columns=4, origin=(20.0, 20.0)))]
+#[pyo3(signature = (output, *, head=None, heads=None, dialect=None, columns=4, origin=(20.0, 20.0), options=""))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn raster_test_pattern_json(
     py: Python<'_>,
     output: PathBuf,
@@ -114,16 +115,19 @@ pub(crate) fn raster_test_pattern_json(
     dialect: Option<&str>,
     columns: usize,
     origin: (f64, f64),
+    options: &str,
 ) -> PyResult<String> {
-    let options = JobOptions {
+    let job_options = JobOptions {
         head,
         heads,
         dialect: crate::args::firmware("dialect", dialect)?,
         origin_mm: origin,
         ..Default::default()
     };
+    let write = |t: &Target| job_options.test_pattern(t, columns).map_err(job_err);
+    let target = Target::File(output);
     let (report, _) =
-        py.allow_threads(|| options.test_pattern(&Target::File(output), columns)).map_err(job_err)?;
+        py.allow_threads(|| finish::finished(None, &target, "raster", options, write, |_| None))?;
     to_json(&report)
 }
 

@@ -20,6 +20,8 @@ def test_raster_bmp_stack(tmp_path):
     out = tmp_path / "badge.gcode"
     r = gweave.raster(EXAMPLES / "layers", out, flip_y=True, head=EXAMPLES / "c6602.toml")
     assert (r["layers"], r["bands_printed"], r["bands_skipped"]) == (8, 29, 3)
+    # Regression: the report named the scratch file (`.gweave-XXXX.tmp`) the run wrote first.
+    assert r["output"] == str(out)
     assert (r["columns_fired"], r["drops_per_head"]) == (844, [6508])
     assert r["binder_volume_ul"] == pytest.approx(6508 * 160e-6)
     assert r["time"]["method"] == "planner"
@@ -62,6 +64,9 @@ def test_test_pattern(tmp_path):
     assert r["fire_commands"] == 24
     s = [int(l.split("S")[1]) for l in out.read_text().splitlines() if l.startswith("M700")]
     assert s == [1 << a for a in range(12) for _ in range(2)]
+    # The run's header, as the CLI writes it (`gweave raster --test-pattern --pattern-columns 2`).
+    first = out.read_text().splitlines()[0]
+    assert first.startswith("; gweave ") and first.endswith(" raster --test-pattern --pattern-columns 2 (generated)")
 
 
 def test_slice_raster_then_raster(tmp_path):

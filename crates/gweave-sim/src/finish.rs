@@ -102,8 +102,14 @@ pub fn with_metadata_timed<R, E: From<FinishError>>(
     write: impl FnOnce(&Target) -> Result<R, E>,
     own_time_s: impl FnOnce(&R) -> Option<f64>,
 ) -> Result<(R, Option<PathBuf>), E> {
-    let dir = scratch_dir(target, input);
+    let output = beside(target, input);
+    let dir = scratch_dir(output);
     let scratch = TempFile::new_in(&dir).map_err(|e| FinishError::from(gweave::Error::io(&dir, e)))?;
+    // Beside the output, on its file system: a disk that fills up while the transform writes
+    // is the output's, and errors name the output, which the user named.
+    if let Some(output) = output {
+        scratch.stand_for(output);
+    }
     let path = scratch.path().to_path_buf();
     let result = write(&Target::File(path.clone()))?;
     let written = finish(&path, input, target, command_line, own_time_s(&result))?;
@@ -133,14 +139,18 @@ fn finish(
     Ok(written)
 }
 
-/// Where the scratch file goes: beside the output (the same file system, as its temporary
-/// file), else the system's temporary directory (standard output, a device).
-fn scratch_dir(target: &Target, input: Option<&Path>) -> PathBuf {
-    let beside = match target {
+/// The output file the scratch file goes beside (the same file system, as its temporary file):
+/// none for standard output or a device.
+fn beside<'a>(target: &'a Target, input: Option<&'a Path>) -> Option<&'a Path> {
+    match target {
         Target::File(p) if p.metadata().map_or(true, |m| m.is_file()) => Some(p.as_path()),
         Target::InPlace { .. } => input,
         _ => None,
-    };
+    }
+}
+
+/// Where the scratch file goes: beside the output, else the system's temporary directory.
+fn scratch_dir(beside: Option<&Path>) -> PathBuf {
     match beside.and_then(Path::parent) {
         Some(dir) if dir.as_os_str().is_empty() => PathBuf::from("."),
         Some(dir) => dir.to_path_buf(),

@@ -427,3 +427,20 @@ fn a_huge_arc_is_refused_not_wrapped_into_gigabytes() {
     assert!(matches!(err, RotaryError::Engine(gweave::Error::Pass { line: Some(3), .. })), "{err}");
     assert!(matches!(*as_inner(&err), RotaryError::TooManyChords { limit: 1_000_000 }), "{err}");
 }
+
+/// Regression: `leave_feed_mode` wrote the closing `G94` of the inverse-time convention with a
+/// bare `\n` in a CRLF file, and straight after a last line that had no ending.
+#[test]
+fn leave_feed_mode_ends_g94_with_the_files_line_ending() {
+    let mut machine = machine();
+    machine.feed_convention = FeedConvention::InverseTime;
+    let config = WrapConfig::new(machine);
+    let body = "G92 E0\r\nG1 Z0.2 F600\r\nG1 X10 Y15 E1.0 F1200 ; first\r\nM106 S255";
+    let out = wrap(&config, &format!("{body}\r\n"));
+    assert!(out.ends_with("\r\nM106 S255\r\nG94\r\n"), "{out:?}");
+    assert!(!out.replace("\r\n", "").contains('\n'), "a bare LF in {out:?}");
+    // A file without a final ending: G94 is the last line, on a line of its own, without one.
+    let out = wrap(&config, body);
+    assert!(out.ends_with("\r\nM106 S255\r\nG94"), "{out:?}");
+    assert!(!out.replace("\r\n", "").contains('\n'), "a bare LF in {out:?}");
+}

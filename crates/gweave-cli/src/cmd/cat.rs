@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
+use gweave::gcode::container::Container;
 use gweave::gcode::writer::Target;
 use gweave::pass::{CopyReport, Identity, Strictness};
 use gweave::run::Run;
@@ -59,7 +60,17 @@ fn print_human(out: &mut dyn Write, input: &Path, target: &Target, r: &CopyRepor
         Target::InPlace { keep_backup: false, .. } => writeln!(out, "{} (in place)", input.display())?,
         Target::Stdout(_) => {}
     }
-    writeln!(out, "  lines           {} ({:.1} MB), copied byte for byte", r.lines, r.bytes as f64 / 1e6)?;
+    // Binary G-code keeps no empty line, nor one of a lone `;` (as libbgcode's converter).
+    let container = match target {
+        Target::File(dest) => Container::of_output(dest),
+        Target::InPlace { .. } => Container::of_output(input),
+        Target::Stdout(container) => *container,
+    };
+    let how = match container {
+        Container::Bgcode => "written as binary G-code: empty lines and lone `;` not kept",
+        _ => "copied byte for byte",
+    };
+    writeln!(out, "  lines           {} ({:.1} MB), {how}", r.lines, r.bytes as f64 / 1e6)?;
     if let Some(first) = r.malformed.first_malformed_line {
         writeln!(
             out,

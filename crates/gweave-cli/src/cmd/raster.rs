@@ -161,7 +161,8 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let Some((source, heads)) = source else {
-        let (rep, profile) = options.test_pattern(&target, args.pattern_columns)?;
+        let pattern = |t: &Target| Ok(options.test_pattern(t, args.pattern_columns)?);
+        let ((rep, profile), _) = finish::with_metadata(None, &target, pattern)?;
         if args.report.emit(&rep)? && !to_stdout {
             print_summary(|out| {
                 writeln!(out, "{}: nozzle test pattern", args.output.display())?;

@@ -83,10 +83,15 @@ pub struct ServeArgs {
 pub fn run(args: ServeArgs) -> Result<ExitCode> {
     crate::files::Files::new()
         .read("--machine", args.machine.path.as_deref())
+        .read("--eeprom", args.eeprom.as_deref())
         .write("--pty", args.pty.as_deref())
         .write("--log", args.log.as_deref())
         .write("--report", args.report.as_deref())
         .check()?;
+    // The report is written when a host disconnects: find out now that it cannot be.
+    if let Some(report) = &args.report {
+        crate::files::check_writable("--report", report)?;
+    }
     let profile = args.machine.load()?;
     // Build one machine now so that a bad profile fails before any host connects.
     Machine::new(profile.clone()).context("building the virtual printer")?;

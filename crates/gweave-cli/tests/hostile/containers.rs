@@ -145,6 +145,21 @@ fn bgcode_round_trips() {
     assert_eq!(b.matches("; prusaslicer_config = begin").count(), 1);
 }
 
+/// Regression: `cat` said "copied byte for byte" of a `.bgcode` output, where empty lines are
+/// not kept; a text copy is byte for byte.
+#[test]
+fn cat_to_bgcode_does_not_claim_byte_for_byte() {
+    let (dir, _) = dir_with_fixture("prusaslicer/pr_torus_pva.gcode", "a.gcode");
+    let out = gweave(dir.path(), &["cat", "a.gcode", "-o", "a.bgcode"]).run();
+    out.assert_ok();
+    let summary = out.stdout_text();
+    assert!(!summary.contains("byte for byte"), "{summary}");
+    assert!(summary.contains("written as binary G-code: empty lines and lone `;` not kept"), "{summary}");
+    let out = gweave(dir.path(), &["cat", "a.bgcode", "-o", "b.gcode"]).run();
+    out.assert_ok();
+    assert!(out.stdout_text().contains(", copied byte for byte\n"), "{}", out.stdout_text());
+}
+
 /// A damaged block: the error names the file and the block, exit code 1, no output left.
 #[test]
 fn damaged_bgcode_blocks_are_refused() {

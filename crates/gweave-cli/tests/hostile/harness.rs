@@ -70,6 +70,7 @@ impl Outcome {
 pub struct Run {
     cmd: Command,
     limit: Duration,
+    cpu_limit: Option<Duration>,
     stdout: Option<PathBuf>,
 }
 
@@ -77,12 +78,20 @@ pub struct Run {
 pub fn gweave<S: AsRef<std::ffi::OsStr>>(dir: &Path, args: &[S]) -> Run {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_gweave"));
     cmd.args(args).current_dir(dir).env_remove("COLUMNS");
-    Run { cmd, limit: Duration::from_secs(60), stdout: None }
+    Run { cmd, limit: Duration::from_secs(60), cpu_limit: None, stdout: None }
 }
 
 impl Run {
     pub fn limit(mut self, limit: Duration) -> Self {
         self.limit = limit;
+        self
+    }
+
+    /// Also kills the process (then `hung`) once it has used `limit` of CPU time (user and
+    /// system). Unlike the wall clock, CPU time hardly grows when other builds load the
+    /// machine, so a busy loop is caught with a limit far above a normal run's time.
+    pub fn cpu_limit(mut self, limit: Duration) -> Self {
+        self.cpu_limit = Some(limit);
         self
     }
 
@@ -103,7 +112,8 @@ impl Run {
         let mut child = self.cmd.stderr(Stdio::piped()).spawn().expect("gweave runs");
         let stdout = drain(child.stdout.take());
         let stderr = drain(child.stderr.take());
-        Running { child, started: Instant::now(), limit: self.limit, stdout, stderr }
+        let (limit, cpu_limit) = (self.limit, self.cpu_limit);
+        Running { child, started: Instant::now(), limit, cpu_limit, stdout, stderr }
     }
 
     /// Runs to the end, or to the time limit (then killed, and `hung`).
@@ -118,6 +128,7 @@ pub struct Running {
     child: Child,
     started: Instant,
     limit: Duration,
+    cpu_limit: Option<Duration>,
     stdout: thread::JoinHandle<Vec<u8>>,
     stderr: thread::JoinHandle<Vec<u8>>,
 }
@@ -169,13 +180,26 @@ impl Running {
                 let peak_mib = peak_kib as f64 / 1024.0;
                 return Outcome { code, signal, stdout, stderr, peak_mib, elapsed, hung };
             }
-            if !hung && self.started.elapsed() > self.limit {
+            let over_cpu = self.cpu_limit.is_some_and(|l| cpu_time(pid).is_some_and(|t| t > l));
+            if !hung && (self.started.elapsed() > self.limit || over_cpu) {
                 hung = true;
                 self.signal(libc::SIGKILL);
             }
             thread::sleep(Duration::from_millis(2));
         }
     }
+}
+
+/// CPU time (user and system) of a running process; `None` once it has exited.
+fn cpu_time(pid: i32) -> Option<Duration> {
+    let stat = fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // Fields after the command name (which may hold spaces, in parentheses): state is the
+    // first, utime and stime the 12th and 13th (proc(5)), in clock ticks.
+    let mut fields = stat.rsplit_once(')')?.1.split_whitespace().skip(11);
+    let ticks: u64 = fields.next()?.parse::<u64>().ok()? + fields.next()?.parse::<u64>().ok()?;
+    // SAFETY: sysconf reads a constant of the system; no memory is touched.
+    let per_s = unsafe { libc::sysconf(libc::_SC_CLK_TCK) }.max(1) as f64;
+    Some(Duration::from_secs_f64(ticks as f64 / per_s))
 }
 
 /// `VmHWM` of a running process, KiB; `None` once it has exited.

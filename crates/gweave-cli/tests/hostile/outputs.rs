@@ -364,6 +364,37 @@ fn a_full_disk_leaves_nothing_behind() {
     assert_no_temp_left(disk);
 }
 
+/// Regression: a transform's write error named its scratch file (the `.gweave-XXXX.tmp` it
+/// writes before the header and metadata go on), not the output the user gave.
+#[test]
+fn write_errors_during_a_transform_name_the_output() {
+    let Some(fs1) = Tmpfs::mount("1m") else { return };
+    let disk = fs1.0.path();
+    let input = fixture_path("cura/cura_dual.gcode");
+    for args in [
+        &["purge-shift", &input.to_string_lossy(), "--purge-mm", "25", "-o", "out.gcode", "-q"][..],
+        &["mix", &input.to_string_lossy(), "--at-layer", "0=Orange", "-o", "out.gcode", "-q"][..],
+    ] {
+        let out = gweave(disk, args).run();
+        out.assert_refused("out.gcode: No space left on device");
+        assert!(!out.stderr.contains(".gweave-"), "{}", out.stderr);
+        assert!(!disk.join("out.gcode").exists());
+        assert_no_temp_left(disk);
+    }
+}
+
+/// Regression: `serve --report PATH` was written only when a host disconnected, so a report in
+/// a missing folder, or naming the EEPROM file the server reads, was found out after serving.
+#[test]
+fn serve_report_path_is_checked_before_serving() {
+    let dir = tempfile::tempdir().unwrap();
+    let serve = ["serve", "--tcp", "127.0.0.1:0", "--exit-after-idle", "3"];
+    let args = [&serve[..], &["--report", "missing/r.json"]].concat();
+    refused_in(dir.path(), &args, "--report missing/r.json: No such file or directory");
+    let args = [&serve[..], &["--eeprom", "e.gcode", "--report", "e.gcode"]].concat();
+    refused_in(dir.path(), &args, "--report e.gcode names the input (--eeprom); name another file");
+}
+
 /// Regression (a new user's trial): `machine from-m503 m.txt -o m.txt` read the transcript and
 /// printed its notes before refusing, with a wording of its own.
 #[test]

@@ -163,7 +163,10 @@ fn a_gradient_of_endless_steps_is_refused() {
 }
 
 /// Regression: alternating travel and extrusion never chain, and `ToolpathPass::coarsen`
-/// doubled its merge length for ever once the file passed the segment ceiling.
+/// doubled its merge length for ever once the file passed the segment ceiling. The hang was a
+/// busy loop, so it is caught by CPU time: a run takes about 4 s of CPU in a debug build, and
+/// 12 s of wall clock on a loaded machine (a 20 s wall limit nearly tripped); the loop would
+/// pass any limit.
 #[test]
 fn coarsen_hang_on_alternating_travel_and_extrusion() {
     let dir = tempfile::tempdir().unwrap();
@@ -178,7 +181,8 @@ fn coarsen_hang_on_alternating_travel_and_extrusion() {
     // A small picture keeps the drawing short in a debug build (its ink budget scales with it).
     let out =
         gweave(d, &["preview", "alt.gcode", "-o", "x.png", "--travel", "--size", "300x200", "--json", "-q"])
-            .limit(Duration::from_secs(20))
+            .cpu_limit(Duration::from_secs(120))
+            .limit(Duration::from_secs(1200))
             .run();
     out.assert_ok().assert_peak_under(256.0);
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();

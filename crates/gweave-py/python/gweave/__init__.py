@@ -298,6 +298,14 @@ def raster_test_pattern(
             dialect=dialect,
             columns=pattern_columns,
             origin=(float(origin[0]), float(origin[1])),
+            options=_flags(
+                ("--test-pattern", True),
+                ("--head", head),
+                ("--heads", heads),
+                ("--dialect", dialect),
+                ("--pattern-columns", None if pattern_columns == 4 else pattern_columns),
+                ("--origin", None if tuple(origin) == (20.0, 20.0) else tuple(origin)),
+            ),
         )
     )
 

@@ -51,6 +51,7 @@ def raster_test_pattern_json(
     dialect: Optional[str] = None,
     columns: int = 4,
     origin: Tuple[float, float] = (20.0, 20.0),
+    options: str = "",
 ) -> str: ...
 def slice_raster_json(
     stl: str, out_dir: str, *, layer_height: float, dpi: float = 96.0, pixel_mm: Optional[float] = None, margin: int = 0

@@ -13,11 +13,10 @@
 //! Measurements come as CSV with a header: `id,srgb` (`#rrggbb`, e.g. from a photo white-
 //! balanced on a grey card) or `id,L,a,b` (CIELAB D65 from a colorimeter).
 
-use super::delta_e::ciede2000;
-use super::lab::Lab;
 use super::mix::{Mix, MixError};
 use super::mixing::MixingModel;
 use super::srgb::Srgb8;
+use super::{Ciede2000, Lab};
 
 /// Why measurements could not be read or fitted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -87,11 +86,11 @@ pub fn parse_csv(text: &str) -> Result<Vec<Measurement>, FitError> {
         let lab = if lab_columns {
             let n = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite());
             match (n(cells[1]), n(cells[2]), n(cells[3])) {
-                (Some(l), Some(a), Some(b)) if (0.0..=100.0).contains(&l) => Lab { l, a, b },
+                (Some(l), Some(a), Some(b)) if (0.0..=100.0).contains(&l) => Lab::new(l, a, b),
                 _ => return Err(bad(format!("L, a, b {:?}: numbers, L within 0..100", &cells[1..]))),
             }
         } else {
-            Lab::from_srgb8(Srgb8::parse_hex(cells[1]).map_err(|e| bad(e.to_string()))?)
+            Lab::from(Srgb8::parse_hex(cells[1]).map_err(|e| bad(e.to_string()))?)
         };
         Ok(Measurement { id, lab })
     })
@@ -124,12 +123,12 @@ pub fn fit(start: &MixingModel, card: &[Mix], measured: &[Measurement]) -> Resul
     for (_, mix, lab) in &samples {
         mix.expect_inputs(colours.len())?;
         if let Some(i) = mix.ratios().iter().position(|&r| r == 1.0) {
-            colours[i] = lab.to_srgb8();
+            colours[i] = Srgb8::from(*lab);
         }
     }
     let base = MixingModel::with_strengths(&colours, start.strengths())?;
     let error = |model: &MixingModel| -> f64 {
-        samples.iter().map(|(_, mix, lab)| ciede2000(*lab, model.lab_for_weights(mix.ratios())).powi(2)).sum()
+        samples.iter().map(|(_, mix, lab)| lab.difference(model.lab_for_weights(mix.ratios())).powi(2)).sum()
     };
     let mut logs: Vec<f64> = start.strengths().iter().map(|s| s.ln()).collect();
     let mut best = error(&base);
@@ -157,8 +156,8 @@ pub fn fit(start: &MixingModel, card: &[Mix], measured: &[Measurement]) -> Resul
     let delta_e = samples
         .iter()
         .map(|(id, mix, lab)| {
-            let before = ciede2000(*lab, start.lab_for_weights(mix.ratios()));
-            (*id, before, ciede2000(*lab, model.lab_for_weights(mix.ratios())))
+            let before = lab.difference(start.lab_for_weights(mix.ratios()));
+            (*id, before, lab.difference(model.lab_for_weights(mix.ratios())))
         })
         .collect();
     Ok(Fitted { model, delta_e })
@@ -178,9 +177,9 @@ mod tests {
     fn reads_both_csv_forms_and_refuses_bad_rows() {
         let m = parse_csv("id,srgb\n1,#00a0e0\n\n# white\n4, #f5f5f0\n").unwrap();
         assert_eq!(m.len(), 2);
-        assert_eq!((m[1].id, m[1].lab.to_srgb8()), (4, Srgb8::new(0xf5, 0xf5, 0xf0)));
+        assert_eq!((m[1].id, Srgb8::from(m[1].lab)), (4, Srgb8::new(0xf5, 0xf5, 0xf0)));
         let m = parse_csv("ID,L,a,b\n2,50,10,-20\n").unwrap();
-        assert_eq!(m[0].lab, Lab { l: 50.0, a: 10.0, b: -20.0 });
+        assert_eq!(m[0].lab, Lab::new(50.0, 10.0, -20.0));
         for (text, want) in [
             ("", "line 1: empty"),
             ("id,rgb\n", "line 1: header"),
@@ -211,7 +210,7 @@ mod tests {
         // Measured as 8-bit colours, as from a photo.
         let measured: Vec<Measurement> = (1..)
             .zip(&card)
-            .map(|(id, mix)| Measurement { id, lab: Lab::from_srgb8(truth.predict(mix).unwrap()) })
+            .map(|(id, mix)| Measurement { id, lab: Lab::from(truth.predict(mix).unwrap()) })
             .collect();
         let start = MixingModel::new(&CMYW_FILAMENTS).unwrap();
         let fitted = fit(&start, &card, &measured).unwrap();
@@ -232,18 +231,18 @@ mod tests {
         ];
         let errors: Vec<f64> = off_card
             .iter()
-            .map(|w| ciede2000(truth.lab_for_weights(w), fitted.model.lab_for_weights(w)))
+            .map(|w| truth.lab_for_weights(w).difference(fitted.model.lab_for_weights(w)))
             .collect();
         let mean = errors.iter().sum::<f64>() / errors.len() as f64;
         assert!(mean <= 3.0, "{errors:?}");
-        let unfitted = off_card.iter().map(|w| ciede2000(truth.lab_for_weights(w), start.lab_for_weights(w)));
+        let unfitted = off_card.iter().map(|w| truth.lab_for_weights(w).difference(start.lab_for_weights(w)));
         assert!(unfitted.sum::<f64>() / 8.0 > 5.0);
     }
 
     #[test]
     fn unknown_swatches_are_refused() {
         let start = MixingModel::new(&CMYW_FILAMENTS).unwrap();
-        let m = [Measurement { id: 27, lab: Lab { l: 50.0, a: 0.0, b: 0.0 } }];
+        let m = [Measurement { id: 27, lab: Lab::new(50.0, 0.0, 0.0) }];
         assert_eq!(
             fit(&start, &card_mixes(4), &m).unwrap_err(),
             FitError::NoSuchSwatch { id: 27, count: 26 }

@@ -41,11 +41,15 @@
 //! below and in `docs/mix.md`. `solve` minimises CIEDE2000 against this model, so all callers
 //! (palette, previews, swatches, the solver) share it.
 
-use super::lab::{Lab, Xyz};
+use palette::convert::FromColorUnclamped;
+use palette::white_point::D65;
+use palette::{LinSrgb, Xyz};
+
 use super::mix::{Mix, MixError};
 use super::pigments::spectrum;
 use super::spectrum::{linear_rgb, Spectrum, BANDS};
 use super::srgb::Srgb8;
+use super::Lab;
 
 /// Added to the luminance for the default strength, so that a near-black filament still mixes.
 const STRENGTH_FLOOR: f64 = 0.01;
@@ -113,7 +117,7 @@ impl MixingModel {
 
     /// The strength a filament of colour `c` gets unless told: its relative luminance plus 0.01.
     pub(crate) fn default_strength(c: Srgb8) -> f64 {
-        Xyz::from_linear(c.to_linear()).y + STRENGTH_FLOOR
+        Xyz::<D65, f64>::from_color_unclamped(LinSrgb::from(c)).y + STRENGTH_FLOOR
     }
 
     /// The filament colours, input 0 first.
@@ -134,7 +138,7 @@ impl MixingModel {
 
     /// Predicted colour of a mix, as the nearest 8-bit sRGB colour.
     pub fn predict(&self, mix: &Mix) -> Result<Srgb8, MixError> {
-        self.predict_lab(mix).map(Lab::to_srgb8)
+        self.predict_lab(mix).map(Srgb8::from)
     }
 
     /// Lab for non-negative weights, one per input, summing to 1. The solver
@@ -153,15 +157,16 @@ impl MixingModel {
             }
         }
         let r = ks.map(|k| reflectance_of_ks(k / scattering));
-        Lab::from_xyz(Xyz::from_linear(linear_rgb(&r)))
+        Lab::from_color_unclamped(linear_rgb(&r))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::colour::delta_e::ciede2000;
     use crate::colour::palette::CMYW_FILAMENTS;
+    use crate::colour::Ciede2000;
+    use ::palette::Lch;
 
     const CYAN: Srgb8 = CMYW_FILAMENTS[0];
     const MAGENTA: Srgb8 = CMYW_FILAMENTS[1];
@@ -177,7 +182,17 @@ mod tests {
     }
 
     fn lab(r: u8, g: u8, b: u8) -> Lab {
-        Lab::from_srgb8(Srgb8::new(r, g, b))
+        Lab::from(Srgb8::new(r, g, b))
+    }
+
+    /// Hue angle h_ab in degrees, [0, 360).
+    fn hue(lab: Lab) -> f64 {
+        Lch::from_color_unclamped(lab).hue.into_positive_degrees()
+    }
+
+    /// Chroma C*ab.
+    fn chroma(lab: Lab) -> f64 {
+        Lch::from_color_unclamped(lab).chroma
     }
 
     /// A published pigment mix of two colours: (a, b, share of b, the published result, source).
@@ -238,7 +253,7 @@ mod tests {
         let model = MixingModel::new(&CMYW_FILAMENTS).unwrap();
         let errors: Vec<f64> = FILAMENT_MIXER
             .iter()
-            .map(|(w, want)| ciede2000(predict(&model, w), lab(want[0], want[1], want[2])))
+            .map(|(w, want)| predict(&model, w).difference(lab(want[0], want[1], want[2])))
             .collect();
         let stats =
             |e: &[f64]| (e.iter().sum::<f64>() / e.len() as f64, e.iter().copied().fold(0.0, f64::max));
@@ -275,8 +290,8 @@ mod tests {
             let model =
                 MixingModel::new(&[Srgb8::new(a[0], a[1], a[2]), Srgb8::new(b[0], b[1], b[2])]).unwrap();
             let got = predict(&model, &[1.0 - t, t]);
-            let de = ciede2000(got, lab(want[0], want[1], want[2]));
-            eprintln!("{a:?} + {b:?} at {t}: {} vs {want:?} ({source}): dE {de:.1}", got.to_srgb8());
+            let de = got.difference(lab(want[0], want[1], want[2]));
+            eprintln!("{a:?} + {b:?} at {t}: {} vs {want:?} ({source}): dE {de:.1}", Srgb8::from(got));
             errors.push(de);
         }
         let mean = errors.iter().sum::<f64>() / errors.len() as f64;
@@ -290,8 +305,8 @@ mod tests {
         let model = MixingModel::new(&[Srgb8::new(0, 33, 133), Srgb8::new(252, 211, 0)]).unwrap();
         let green = predict(&model, &[0.5, 0.5]);
         // The linear-RGB model this one replaced gave (25, 48, 25), dE 28 from Mixbox's green.
-        assert!((120.0..165.0).contains(&green.hue_deg()), "{}", green.to_srgb8());
-        assert!(green.chroma() > 30.0 && green.l > 40.0, "{}", green.to_srgb8());
+        assert!((120.0..165.0).contains(&hue(green)), "{}", Srgb8::from(green));
+        assert!(chroma(green) > 30.0 && green.l > 40.0, "{}", Srgb8::from(green));
     }
 
     #[test]
@@ -299,18 +314,18 @@ mod tests {
         let model = MixingModel::new(&CMYW_FILAMENTS).unwrap();
         // Cyan + magenta: blue-violet, between blue (hue ~300 in CIELAB) and violet.
         let blue = predict(&model, &[0.5, 0.5, 0.0, 0.0]);
-        assert!((270.0..320.0).contains(&blue.hue_deg()), "{} h={}", blue.to_srgb8(), blue.hue_deg());
+        assert!((270.0..320.0).contains(&hue(blue)), "{} h={}", Srgb8::from(blue), hue(blue));
         // Magenta + yellow: red; cyan + yellow: green.
         let red = predict(&model, &[0.0, 0.5, 0.5, 0.0]);
-        assert!(red.hue_deg() < 50.0 || red.hue_deg() > 350.0, "{} h={}", red.to_srgb8(), red.hue_deg());
+        assert!(hue(red) < 50.0 || hue(red) > 350.0, "{} h={}", Srgb8::from(red), hue(red));
         let green = predict(&model, &[0.5, 0.0, 0.5, 0.0]);
-        assert!((120.0..180.0).contains(&green.hue_deg()), "{}", green.to_srgb8());
+        assert!((120.0..180.0).contains(&hue(green)), "{}", Srgb8::from(green));
         // All three: a muted brown, darker than cyan and yellow, far less chromatic than any.
         let brown = predict(&model, &[1.0, 1.0, 1.0, 0.0]);
-        assert!(brown.l < 55.0 && brown.chroma() < 30.0, "{} C={}", brown.to_srgb8(), brown.chroma());
+        assert!(brown.l < 55.0 && chroma(brown) < 30.0, "{} C={}", Srgb8::from(brown), chroma(brown));
         // Complements (cyan against red, the magenta-yellow mix) mute each other.
         let muted = predict(&model, &[0.5, 0.25, 0.25, 0.0]);
-        assert!(muted.chroma() < red.chroma().min(lab(0, 160, 224).chroma()) / 2.0, "{}", muted.to_srgb8());
+        assert!(chroma(muted) < chroma(red).min(chroma(lab(0, 160, 224))) / 2.0, "{}", Srgb8::from(muted));
     }
 
     #[test]
@@ -324,8 +339,8 @@ mod tests {
             tint[3] = 1.0;
             let tint = predict(&model, &tint);
             // Lighter, paler, about the same hue.
-            assert!(tint.l > base.l && tint.chroma() < base.chroma(), "input {i}: {}", tint.to_srgb8());
-            let turn = (tint.hue_deg() - base.hue_deg() + 180.0).rem_euclid(360.0) - 180.0;
+            assert!(tint.l > base.l && chroma(tint) < chroma(base), "input {i}: {}", Srgb8::from(tint));
+            let turn = (hue(tint) - hue(base) + 180.0).rem_euclid(360.0) - 180.0;
             assert!(turn.abs() < 25.0, "input {i}: hue turns {turn}");
         }
         // No blend of these light filaments goes near black.
@@ -360,7 +375,7 @@ mod tests {
             assert!(lab.l < last_l, "L not falling at black share {k}");
             last_l = lab.l;
             let other = predict(&swapped, &[k, 1.0 - k]);
-            assert!(ciede2000(lab, other) < 1e-9);
+            assert!(lab.difference(other) < 1e-9);
         }
     }
 
@@ -369,7 +384,7 @@ mod tests {
         let weak = MixingModel::with_strengths(&[CYAN, WHITE], &[0.2, 1.0]).unwrap();
         let strong = MixingModel::with_strengths(&[CYAN, WHITE], &[2.0, 1.0]).unwrap();
         let (w, s) = (predict(&weak, &[0.2, 0.8]), predict(&strong, &[0.2, 0.8]));
-        assert!(s.chroma() > w.chroma() + 10.0 && s.l < w.l, "{} {}", w.to_srgb8(), s.to_srgb8());
+        assert!(chroma(s) > chroma(w) + 10.0 && s.l < w.l, "{} {}", Srgb8::from(w), Srgb8::from(s));
     }
 
     #[test]

@@ -1,8 +1,9 @@
 //! Colour science for mixing extruders: which filament ratios print which colour,
 //! and how to tell the firmware.
 //!
-//! - `srgb`, `lab`: `#RRGGBB`, linear light, CIE XYZ (D65) and CIELAB.
-//! - `delta_e`: CIEDE2000, how different two colours look.
+//! - `srgb`: `#RRGGBB`, and its way into the `palette` crate's colour spaces. The sRGB transfer
+//!   curve, CIE XYZ (D65), CIELAB ([`Lab`]) and CIEDE2000 ([`Ciede2000`], how different two
+//!   colours look) are `palette`'s; what is gweave's own is the pigment model below.
 //! - `mix`: `Mix`, validated and normalised ratios per input.
 //! - `spectrum`: the CIE 1931 observer and D65 on a 380-730 nm grid; reflectance -> sRGB.
 //! - `reflectance`: the smoothest reflectance spectrum of an sRGB colour (Burns' LHTSS).
@@ -34,10 +35,10 @@
 //! );
 //! assert_eq!(lines, ["M163 S0 P0.35", "M163 S1 P0", "M163 S2 P0.35", "M163 S3 P0.3", "M164 S1"]);
 //! ```
-pub mod delta_e;
+#[cfg(test)]
+mod ciede2000_sharma;
 pub mod dialect;
 pub mod fit;
-pub(crate) mod lab;
 pub(crate) mod mix;
 pub mod mixing;
 pub mod palette;
@@ -50,7 +51,11 @@ pub mod spectrum;
 pub(crate) mod srgb;
 pub mod swatch;
 
-pub use lab::Lab;
+/// CIELAB relative to D65 (the sRGB white), in `f64`: `l` 0 (black) to 100 (white), `a`
+/// green (-) to red (+), `b` blue (-) to yellow (+).
+pub type Lab = ::palette::Lab<::palette::white_point::D65, f64>;
+
+pub use ::palette::color_difference::Ciede2000;
 pub use mix::{Mix, MixError};
 pub use mixing::MixingModel;
 pub use srgb::Srgb8;

@@ -260,7 +260,8 @@ fn resolve_entry(entry: &PaletteEntry, model: &MixingModel) -> Result<Resolved, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::colour::lab::Lab;
+    use crate::colour::Lab;
+    use ::palette::GetHue;
 
     fn ratios(p: &Palette, name: &str) -> Vec<f64> {
         match &p.get(name).unwrap().spec {
@@ -309,7 +310,8 @@ mod tests {
             "Violet",
             "Magenta",
         ];
-        let hue = |name| Lab::from_srgb8(p.resolve(name, &model).unwrap().predicted).hue_deg();
+        let hue =
+            |name| Lab::from(p.resolve(name, &model).unwrap().predicted).get_hue().into_positive_degrees();
         let mut turned = 0.0;
         for pair in ring.windows(2) {
             let step = (hue(pair[1]) - hue(pair[0])).rem_euclid(360.0);

@@ -196,7 +196,7 @@ const FITTED: [(Srgb8, Spectrum); 4] = [
 pub fn spectrum(c: Srgb8) -> Spectrum {
     match FITTED.iter().find(|(colour, _)| *colour == c) {
         Some((_, r)) => *r,
-        None => reflectance(c.to_linear()),
+        None => reflectance(c.into()),
     }
 }
 
@@ -205,13 +205,14 @@ mod tests {
     use super::*;
     use crate::colour::reflectance::RGB_MIN;
     use crate::colour::spectrum::{linear_rgb, wavelength_nm, BANDS};
+    use palette::LinSrgb;
 
     #[test]
     fn fitted_spectra_show_their_filament_colours() {
         for (c, r) in FITTED {
             assert!(r.iter().all(|&x| x > 0.0 && x < 1.0), "{c}");
-            let (got, want) = (linear_rgb(&r), c.to_linear());
-            for (g, w) in [(got.r, want.r), (got.g, want.g), (got.b, want.b)] {
+            let (got, want) = (linear_rgb(&r), LinSrgb::from(c));
+            for (g, w) in [(got.red, want.red), (got.green, want.green), (got.blue, want.blue)] {
                 assert!((g - w.clamp(RGB_MIN, 1.0 - RGB_MIN)).abs() < 1e-12, "{c}: {got:?}");
             }
             // As smooth as the smoothest spectrum of that colour, give or take: no band jumps
@@ -224,10 +225,10 @@ mod tests {
     fn the_fitted_cyan_keeps_reflecting_into_the_green() {
         let at = |r: &Spectrum, nm: f64| r[(0..BANDS).find(|&i| wavelength_nm(i) == nm).unwrap()];
         let fitted = spectrum(CMYW_FILAMENTS[0]);
-        let smoothest = reflectance(CMYW_FILAMENTS[0].to_linear());
+        let smoothest = reflectance(CMYW_FILAMENTS[0].into());
         assert!(at(&fitted, 550.0) > at(&smoothest, 550.0) + 0.05, "{fitted:?}");
         // Other colours get the smoothest spectrum.
         let orange = Srgb8::new(255, 136, 16);
-        assert_eq!(spectrum(orange), reflectance(orange.to_linear()));
+        assert_eq!(spectrum(orange), reflectance(orange.into()));
     }
 }

@@ -12,9 +12,10 @@
 
 use serde::Serialize;
 
-use super::lab::Lab;
 use super::mix::{Mix, MixError};
 use super::mixing::MixingModel;
+use super::srgb::Srgb8;
+use super::Lab;
 
 /// One predicted colour.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -42,7 +43,7 @@ pub fn predict(model: &MixingModel, mix: &Mix) -> Result<Prediction, MixError> {
     let lab: Lab = model.predict_lab(mix)?;
     Ok(Prediction {
         ratios: mix.ratios().to_vec(),
-        srgb: lab.to_srgb8().to_hex(),
+        srgb: Srgb8::from(lab).to_hex(),
         lab: [lab.l, lab.a, lab.b],
     })
 }

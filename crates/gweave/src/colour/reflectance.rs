@@ -25,8 +25,9 @@
 //! A channel of exactly 0 or 1 has no solution (tanh never reaches ±1), so channels are kept
 //! inside `[RGB_MIN, 1 - RGB_MIN]`: at most 1 in a byte near black, invisible elsewhere.
 
+use palette::LinSrgb;
+
 use super::spectrum::{to_linear_rgb_map, Spectrum, BANDS};
-use super::srgb::LinearRgb;
 
 /// Linear channels are kept within `[RGB_MIN, 1 - RGB_MIN]` (sRGB byte 3 at the dark end).
 pub const RGB_MIN: f64 = 1e-3;
@@ -37,8 +38,8 @@ const MAX_STEPS: usize = 50;
 const TOLERANCE: f64 = 1e-11;
 
 /// The smoothest reflectance spectrum (LHTSS) whose colour under D65 is `c`.
-pub fn reflectance(c: LinearRgb) -> Spectrum {
-    let target = [c.r, c.g, c.b].map(|v| v.clamp(RGB_MIN, 1.0 - RGB_MIN));
+pub fn reflectance(c: LinSrgb<f64>) -> Spectrum {
+    let target = [c.red, c.green, c.blue].map(|v| v.clamp(RGB_MIN, 1.0 - RGB_MIN));
     let t = to_linear_rgb_map();
     let mut z = [0.0; BANDS];
     let mut lambda = [0.0; 3];
@@ -147,11 +148,11 @@ mod tests {
             Srgb8::new(128, 128, 128),
             Srgb8::new(255, 0, 0),
         ] {
-            let r = reflectance(c.to_linear());
+            let want = LinSrgb::from(c);
+            let r = reflectance(want);
             assert!(r.iter().all(|&x| x > 0.0 && x < 1.0), "{c}: {r:?}");
             let back = linear_rgb(&r);
-            let want = c.to_linear();
-            for (got, want) in [(back.r, want.r), (back.g, want.g), (back.b, want.b)] {
+            for (got, want) in [(back.red, want.red), (back.green, want.green), (back.blue, want.blue)] {
                 assert!((got - want.clamp(RGB_MIN, 1.0 - RGB_MIN)).abs() < 1e-9, "{c}: {back:?}");
             }
         }
@@ -160,9 +161,9 @@ mod tests {
     #[test]
     fn spectra_are_smooth_and_where_the_hue_says() {
         // A grey is flat; yellow reflects the long wavelengths, not the short ones.
-        let grey = reflectance(Srgb8::new(128, 128, 128).to_linear());
+        let grey = reflectance(Srgb8::new(128, 128, 128).into());
         assert!(grey.iter().all(|&x| (x - grey[0]).abs() < 1e-6), "{grey:?}");
-        let yellow = reflectance(Srgb8::new(255, 224, 0).to_linear());
+        let yellow = reflectance(Srgb8::new(255, 224, 0).into());
         let at = |nm: f64| yellow[(0..BANDS).find(|&i| wavelength_nm(i) == nm).unwrap()];
         assert!(at(450.0) < 0.1 && at(600.0) > 0.8, "{yellow:?}");
     }

@@ -15,11 +15,12 @@
 //! The target is *out of gamut* when even the best mix is more than
 //! `OUT_OF_GAMUT_DE` away: those filaments cannot print it.
 
-use super::delta_e::ciede2000;
-use super::lab::Lab;
+use palette::Mix as _;
+
 use super::mix::{Mix, MixError};
 use super::mixing::MixingModel;
 use super::srgb::Srgb8;
+use super::{Ciede2000, Lab};
 
 /// Above this CIEDE2000 the best mix is flagged `out_of_gamut` (a difference
 /// of 5 is obvious side by side; 1 is just noticeable).
@@ -51,7 +52,7 @@ pub struct Solution {
 
 /// Ratios for `target` with the model's filaments.
 pub fn solve(model: &MixingModel, target: Srgb8) -> Solution {
-    solve_lab(model, Lab::from_srgb8(target))
+    solve_lab(model, Lab::from(target))
 }
 
 /// Ratios for a CIELAB target.
@@ -68,7 +69,7 @@ pub fn lerp_perceived(model: &MixingModel, a: &Mix, b: &Mix, t: f64) -> Result<S
     }
     let lab_a = model.predict_lab(a)?;
     let lab_b = model.predict_lab(b)?;
-    Ok(solve_lab(model, lab_a.lerp(lab_b, t)))
+    Ok(solve_lab(model, lab_a.mix(lab_b, t)))
 }
 
 /// One search: the model, the target and a count of model evaluations.
@@ -85,7 +86,7 @@ impl<'a> Search<'a> {
 
     fn error(&mut self, w: &[f64]) -> f64 {
         self.evaluations += 1;
-        ciede2000(self.target, self.model.lab_for_weights(w))
+        self.target.difference(self.model.lab_for_weights(w))
     }
 
     /// Returns the solution and the number of model evaluations it took.
@@ -117,7 +118,7 @@ impl<'a> Search<'a> {
         let predicted_lab = self.model.lab_for_weights(mix.ratios());
         let solution = Solution {
             mix,
-            predicted: predicted_lab.to_srgb8(),
+            predicted: Srgb8::from(predicted_lab),
             predicted_lab,
             delta_e: error,
             out_of_gamut: error > OUT_OF_GAMUT_DE,
@@ -226,7 +227,7 @@ mod tests {
         let model = cmyw();
         let known = Mix::new(&[0.2, 0.1, 0.3, 0.4]).unwrap();
         let colour = model.predict(&known).unwrap();
-        let (s, evaluations) = Search::new(&model, Lab::from_srgb8(colour)).run();
+        let (s, evaluations) = Search::new(&model, Lab::from(colour)).run();
         assert!(s.delta_e < 0.05, "dE {}", s.delta_e);
         assert!(!s.out_of_gamut);
         for (got, want) in s.mix.ratios().iter().zip(known.ratios()) {
@@ -266,7 +267,7 @@ mod tests {
         let lab_a = model.predict_lab(&a).unwrap();
         let lab_b = model.predict_lab(&b).unwrap();
         let mid = lerp_perceived(&model, &a, &b, 0.5).unwrap();
-        assert!(ciede2000(mid.predicted_lab, lab_a.lerp(lab_b, 0.5)) < 1.0, "{mid:?}");
+        assert!(mid.predicted_lab.difference(lab_a.mix(lab_b, 0.5)) < 1.0, "{mid:?}");
         assert!(lerp_perceived(&model, &a, &b, 1.5).is_err());
         let three = Mix::new(&[1.0, 1.0, 1.0]).unwrap();
         assert!(matches!(lerp_perceived(&model, &a, &three, 0.5), Err(MixError::InputCount { .. })));

@@ -11,14 +11,16 @@
 //!
 //! The tristimulus values of a surface of reflectance `R(λ)` lit by D65 are the sums
 //! `X = k Σ R(λ) S(λ) x(λ)` (likewise Y, Z) with `k` making `Y = 1` for `R = 1` (CIE 15,
-//! section 7.1, summation at a 10 nm interval). Linear sRGB follows by the IEC 61966-2-1 matrix.
+//! section 7.1, summation at a 10 nm interval). Linear sRGB follows by the IEC 61966-2-1 matrix
+//! (the `palette` crate's XYZ -> linear sRGB conversion, applied to each band's XYZ weights).
 //! Each row of the resulting 3 x 36 map is scaled so that `R = 1` gives exactly (1, 1, 1): the
 //! 10 nm sums put the white 0.1 % off the sRGB D65 white, and a perfect white must stay white.
 
 use std::sync::OnceLock;
 
-use super::lab::XYZ_TO_RGB;
-use super::srgb::LinearRgb;
+use palette::convert::FromColorUnclamped;
+use palette::white_point::D65;
+use palette::{LinSrgb, Xyz};
 
 /// Number of wavelength bands.
 pub const BANDS: usize = 36;
@@ -78,8 +80,11 @@ pub fn to_linear_rgb_map() -> &'static [Spectrum; 3] {
         let y_white: f64 = CIE_TABLE.iter().map(|(_, cmf, d65)| cmf[1] * d65).sum();
         let mut map = [[0.0; BANDS]; 3];
         for (i, (_, cmf, d65)) in CIE_TABLE.iter().enumerate() {
-            for (row, m) in map.iter_mut().zip(&XYZ_TO_RGB) {
-                row[i] = (m[0] * cmf[0] + m[1] * cmf[1] + m[2] * cmf[2]) * d65 / y_white;
+            // The map is linear in R, so band i's column is the linear sRGB of its XYZ weights.
+            let [x, y, z] = cmf.map(|c| c * d65 / y_white);
+            let rgb = LinSrgb::<f64>::from_color_unclamped(Xyz::<D65, f64>::new(x, y, z));
+            for (row, v) in map.iter_mut().zip([rgb.red, rgb.green, rgb.blue]) {
+                row[i] = v;
             }
         }
         for row in &mut map {
@@ -91,9 +96,10 @@ pub fn to_linear_rgb_map() -> &'static [Spectrum; 3] {
 }
 
 /// The linear sRGB colour of a surface with reflectance `r` under D65.
-pub fn linear_rgb(r: &Spectrum) -> LinearRgb {
-    let [a, b, c] = to_linear_rgb_map().each_ref().map(|row| row.iter().zip(r).map(|(m, x)| m * x).sum());
-    LinearRgb { r: a, g: b, b: c }
+pub fn linear_rgb(r: &Spectrum) -> LinSrgb<f64> {
+    let [red, green, blue] =
+        to_linear_rgb_map().each_ref().map(|row| row.iter().zip(r).map(|(m, x)| m * x).sum());
+    LinSrgb::new(red, green, blue)
 }
 
 #[cfg(test)]
@@ -115,15 +121,15 @@ mod tests {
     #[test]
     fn white_is_white_and_grey_is_grey() {
         let white = linear_rgb(&[1.0; BANDS]);
-        for c in [white.r, white.g, white.b] {
+        for c in [white.red, white.green, white.blue] {
             assert!((c - 1.0).abs() < 1e-12, "{white:?}");
         }
         let grey = linear_rgb(&[0.2; BANDS]);
-        assert!((grey.r - 0.2).abs() < 1e-12 && (grey.b - 0.2).abs() < 1e-12);
+        assert!((grey.red - 0.2).abs() < 1e-12 && (grey.blue - 0.2).abs() < 1e-12);
         // A reflectance only in the long wavelengths is red; only in the short ones, blue.
         let red = linear_rgb(&std::array::from_fn(|i| if wavelength_nm(i) >= 600.0 { 1.0 } else { 0.0 }));
-        assert!(red.r > 0.5 && red.g < 0.15 && red.b < 0.05, "{red:?}");
+        assert!(red.red > 0.5 && red.green < 0.15 && red.blue < 0.05, "{red:?}");
         let blue = linear_rgb(&std::array::from_fn(|i| if wavelength_nm(i) <= 480.0 { 1.0 } else { 0.0 }));
-        assert!(blue.b > 0.7 && blue.r < 0.1, "{blue:?}");
+        assert!(blue.blue > 0.7 && blue.red < 0.1, "{blue:?}");
     }
 }

@@ -55,6 +55,9 @@ enum Sink {
     File {
         file: BufWriter<TempFile>,
         dest: PathBuf,
+        /// The name errors show: `dest`, or the output a scratch `dest` stands for
+        /// ([`TempFile::stand_for`]).
+        shown: PathBuf,
         backup: Option<PathBuf>,
     },
     /// A device or pipe (`/dev/null`, a FIFO): written directly, since renaming a file over it
@@ -127,8 +130,9 @@ impl Output {
                 (input.to_path_buf(), backup)
             }
         };
-        let tmp = TempFile::new_in(&parent_dir(&dest)).map_err(|e| Error::io(&dest, e))?;
-        Ok(Sink::File { file: BufWriter::with_capacity(BUFFER, tmp), dest, backup })
+        let shown = super::temp::shown_name(&dest);
+        let tmp = TempFile::new_in(&parent_dir(&dest)).map_err(|e| Error::io(&shown, e))?;
+        Ok(Sink::File { file: BufWriter::with_capacity(BUFFER, tmp), dest, shown, backup })
     }
 
     /// The file being written (`None` for standard output): the name write errors should show.
@@ -139,7 +143,8 @@ impl Output {
             Encoder::Bgcode(b) => b.get_ref(),
         };
         match sink {
-            Sink::File { dest, .. } | Sink::Special { dest, .. } => Some(dest),
+            Sink::File { shown, .. } => Some(shown),
+            Sink::Special { dest, .. } => Some(dest),
             Sink::Stdout(_) => None,
         }
     }
@@ -159,15 +164,15 @@ impl Output {
                 Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>", e)),
                 _ => Ok(()),
             },
-            Sink::File { file, dest, backup } => {
-                let tmp = file.into_inner().map_err(|e| Error::io(&dest, e.into_error()))?;
-                tmp.as_file().sync_all().map_err(|e| Error::io(&dest, e))?;
+            Sink::File { file, dest, shown, backup } => {
+                let tmp = file.into_inner().map_err(|e| Error::io(&shown, e.into_error()))?;
+                tmp.as_file().sync_all().map_err(|e| Error::io(&shown, e))?;
                 let replaced = fs::metadata(&dest).ok();
-                keep_metadata(&tmp, replaced.as_ref()).map_err(|e| Error::io(&dest, e))?;
+                keep_metadata(&tmp, replaced.as_ref()).map_err(|e| Error::io(&shown, e))?;
                 if let Some(backup) = backup {
                     write_backup(&dest, &backup, replaced.as_ref())?;
                 }
-                tmp.persist(&dest).map_err(|e| Error::io(&dest, e))
+                tmp.persist(&dest).map_err(|e| Error::io(&shown, e))
             }
         }
     }
@@ -203,7 +208,8 @@ impl Sink {
     /// The name errors show.
     fn name(&self) -> PathBuf {
         match self {
-            Sink::File { dest, .. } | Sink::Special { dest, .. } => dest.clone(),
+            Sink::File { shown, .. } => shown.clone(),
+            Sink::Special { dest, .. } => dest.clone(),
             Sink::Stdout(_) => PathBuf::from("<stdout>"),
         }
     }

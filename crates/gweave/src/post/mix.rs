@@ -640,7 +640,8 @@ pub fn mix(mut profile: MixProfile, run: Run<'_>) -> Result<(MixReport, Ran), Mi
     let mut pass = MixPass::new(profile)?;
     let ran = run.run(&mut pass)?;
     let mut report = pass.into_report();
-    // A pipe cannot be read ahead: its flavour shows only once the dialect is written.
+    // A flavour named only in the middle of the file (standard input is spooled and read at
+    // both ends as a file is) shows only once the dialect is written.
     if let Some(f) = report
         .flavour
         .as_deref()
@@ -731,6 +732,25 @@ mod tests {
         let input = "M83\n;LAYER_CHANGE\nG1 Z0.2 F100\nG1 X10 E1 F1800\nG10\n\
                      ;LAYER_CHANGE\nG1 Z0.4 F100\nG1 X0 E2 F1800\n";
         assert_eq!(purge_e_moves(input), ["G1 E-4 F2400", "G1 E30 F200", "G1 E-5 F2400"]);
+    }
+
+    /// Regression: the warning for a flavour seen only during the pass said a pipe cannot be
+    /// read ahead ("give it as a file, not a pipe"), though standard input is spooled and read
+    /// at both ends as a file is: only a flavour named in the middle of a file is seen late.
+    #[test]
+    fn dialect_warning_for_a_flavour_in_the_middle_does_not_blame_a_pipe() {
+        let (head, tail) = ("; padding\n".repeat(8_000), "; tail\n".repeat(40_000));
+        let late = format!("{head}; gcode_flavor = reprapfirmware\n{PRINT}{tail}");
+        let (_, report) = mix_bytes(profile(""), late.as_bytes()).unwrap();
+        let warnings: Vec<String> = report.warnings.iter().map(ToString::to_string).collect();
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        let w = &warnings[0];
+        assert!(w.contains("(reprapfirmware)") && w.contains("--dialect") && !w.contains("pipe"), "{w}");
+        // Named in the file's ends, as slicers name it, the flavour chooses the dialect.
+        let (_, report) =
+            mix_bytes(profile(""), format!("{PRINT}; gcode_flavor = reprapfirmware\n").as_bytes()).unwrap();
+        assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+        assert_eq!(report.dialect, Firmware::RepRapFirmware.mix_commands());
     }
 
     #[test]

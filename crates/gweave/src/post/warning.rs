@@ -21,7 +21,8 @@ pub enum Warning {
     },
     /// `mix`: the file never moved filament nor reached its first layer, so no mix was defined.
     NoMixDefined,
-    /// `mix`: standard input's flavour, seen only after the dialect was chosen, wanted another.
+    /// `mix`: a flavour named only in the middle of the file (not in the ends read before the
+    /// pass), seen after the dialect was chosen, wanted another.
     DialectNotTheFlavours {
         /// The flavour the file names.
         flavour: String,
@@ -95,7 +96,9 @@ impl fmt::Display for Warning {
             }
             Warning::DialectNotTheFlavours { flavour, wanted, written } => write!(
                 f,
-                "the file's flavour ({flavour}) wants the {wanted} dialect, but {written} was written: give it as a file, not a pipe, or set hardware.dialect"
+                "the file's flavour ({flavour}) wants the {wanted} dialect, but {written} was written: the file names it only in its middle, beyond the first {} KiB and the last {} KiB read before the pass; give --dialect or set hardware.dialect",
+                crate::gcode::ends::HEAD_BYTES / 1024,
+                crate::gcode::ends::TAIL_BYTES / 1024
             ),
             Warning::NoPurgeAmount { line, from_tool, to_tool, used_mm } => write!(
                 f,

@@ -13,6 +13,8 @@ use std::collections::HashMap;
 use std::fmt;
 use std::str::FromStr;
 
+use palette::Mix as _;
+
 use crate::colour::{Lab, Srgb8};
 use crate::gcode::layers::{Feature, ALL_FEATURES};
 
@@ -119,13 +121,13 @@ const RAMP_STOPS: [Srgb8; 5] = [
 
 /// A ramp precomputed at 256 steps.
 fn ramp_table() -> Vec<[u8; 3]> {
-    let labs: Vec<Lab> = RAMP_STOPS.iter().map(|&c| Lab::from_srgb8(c)).collect();
+    let labs: Vec<Lab> = RAMP_STOPS.iter().map(|&c| Lab::from(c)).collect();
     let spans = (labs.len() - 1) as f64;
     (0..256)
         .map(|i| {
             let x = i as f64 / 255.0 * spans;
             let k = (x.floor() as usize).min(labs.len() - 2);
-            let c = labs[k].lerp(labs[k + 1], x - k as f64).to_srgb8();
+            let c = Srgb8::from(labs[k].mix(labs[k + 1], x - k as f64));
             [c.r, c.g, c.b]
         })
         .collect()

@@ -155,6 +155,8 @@ pub struct Wrap {
     headed: bool,
     /// The file's line endings, for the lines the wrap writes.
     eol: Eol,
+    /// The last line read had no ending (the file's last line, unterminated).
+    unterminated: bool,
     buffer: Vec<u8>,
     /// The helical ramp of the current layer (helical mapping only).
     ramp: Option<Ramp>,
@@ -178,6 +180,7 @@ impl Wrap {
             started: false,
             headed: false,
             eol: Eol::default(),
+            unterminated: false,
             buffer: Vec::new(),
             ramp,
         })
@@ -395,6 +398,7 @@ fn flat_pieces(mv: &Move, tolerance_mm: f64) -> Result<Vec<[f64; 3]>> {
 impl Pass for Wrap {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         self.eol.learn(ctx.line.eol);
+        self.unterminated = ctx.line.eol.is_empty();
         if !self.headed {
             self.headed = true;
             let header = self.config.machine.header_lines("wrap").join("\n");
@@ -411,11 +415,21 @@ impl Pass for Wrap {
     }
 
     fn finish(&mut self, _state: &State, out: &mut dyn Write) -> Result<(), PassError> {
-        if self.started {
-            self.writer.leave_feed_mode(out).map_err(|e| match e {
-                RotaryError::Io(e) => PassError::Write(e),
-                e => PassError::refuse(e),
-            })?;
+        if !self.started {
+            return Ok(());
+        }
+        self.buffer.clear();
+        self.writer.leave_feed_mode(&mut self.buffer).map_err(PassError::refuse)?;
+        if self.buffer.is_empty() {
+            return Ok(());
+        }
+        // In the file's line ending; after a last line without one, the closing line becomes
+        // the last line and goes without.
+        if self.unterminated {
+            out.write_all(self.eol.get())?;
+            self.eol.text(out, &self.buffer, b"")?;
+        } else {
+            self.eol.block(out, &self.buffer)?;
         }
         Ok(())
     }

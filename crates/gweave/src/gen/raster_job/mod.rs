@@ -251,7 +251,8 @@ impl Job {
             },
         };
         let output = match target {
-            Target::File(p) => p.display().to_string(),
+            // Under `finish::with_metadata` this is its scratch file: name the output.
+            Target::File(p) => crate::gcode::temp::shown_name(p).display().to_string(),
             _ => "-".into(),
         };
         Ok(JobReport { output, heads: self.profile.heads.len(), images_read, raster: report, time })
