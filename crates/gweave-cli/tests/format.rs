@@ -73,3 +73,20 @@ fn a_file_named_otherwise_is_refused() {
     assert!(err.contains("--format bgcode but -o") && err.contains("is named for text"), "{err}");
     assert!(!out_path.exists());
 }
+
+/// Regression (merge of the scratch file's shown name with `Target::Stdout(Container)`): a
+/// transform that finishes through a scratch file wrote `x.gcode.gz` compressed twice (the
+/// scratch took the container of the name it stands for). One gzip stream, the text of `-o -`.
+#[test]
+fn gz_output_is_compressed_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let zipped = dir.path().join("shifted.gcode.gz");
+    let f = fixture("prusaslicer/pr_torus_pva.gcode");
+    let out = run(&["purge-shift", &f, "--purge", "5", "-o", zipped.to_str().unwrap(), "-q"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let script = format!("gzip -dc '{}'", zipped.display());
+    let unzipped = Command::new("sh").args(["-c", &script]).output().unwrap().stdout;
+    let text = run(&["purge-shift", &f, "--purge", "5", "-o", "-"]).stdout;
+    assert!(text.starts_with(b"; gweave"));
+    assert!(unzipped == text, "the .gz holds other bytes than the text output");
+}

@@ -77,9 +77,12 @@ impl Output {
     pub fn create(target: &Target, input: Option<&Path>) -> Result<Output> {
         let sink = Self::sink(target, input)?;
         let dest = sink.name();
-        let container = match target {
-            Target::Stdout(container) => *container,
-            Target::File(_) | Target::InPlace { .. } => Container::of_output(&dest),
+        // The container follows the file really written: a scratch file that stands for a
+        // `.gz` output is written as text, the finishing copy compresses.
+        let container = match (&sink, target) {
+            (Sink::File { dest, .. } | Sink::Special { dest, .. }, _) => Container::of_output(dest),
+            (Sink::Stdout(_), Target::Stdout(container)) => *container,
+            (Sink::Stdout(_), _) => Container::Text,
         };
         // A binary input's metadata and thumbnails go into a binary output.
         let carried = match (container, input) {
