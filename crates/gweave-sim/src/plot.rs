@@ -1,5 +1,5 @@
 //! Charts of a run, drawn with `plotters` in gweave's embedded font
-//! ([`gweave::render::text::FONT_TTF`]), as PNG (plotters' bitmap backend, written by gweave's PNG
+//! ([`gweave::picture::text::FONT_TTF`]), as PNG (plotters' bitmap backend, written by gweave's PNG
 //! encoder) or SVG (plotters' SVG backend, the text as text), chosen by the file's extension:
 //! - temperature: each heater's reading (solid) and target (thin, lighter) over simulated time,
 //!   a legend naming each (`hotend T0`, `hotend T0 target`, `bed`, `bed target`);
@@ -22,8 +22,8 @@ use plotters::style::register_font;
 use thiserror::Error;
 
 use gweave::gcode::writer::write_file;
-use gweave::render::png_out::{write_png, Pixels};
-use gweave::render::text::FONT_TTF;
+use gweave::picture::{write_png, Pixels};
+use gweave::picture::text::FONT_TTF;
 
 use crate::motion::speed_trace::SpeedTrace;
 use crate::thermal::heater::HeaterId;
@@ -434,8 +434,8 @@ mod tests {
     use crate::motion::kinematics::{MoveKind, Pos};
     use crate::motion::planner::{PlannedBlock, Trapezoid};
     use crate::thermal::{Thermal, ThermalConfig};
-    use gweave::render::png_out::decode;
-    use gweave::render::raster::Image;
+    use gweave::picture::decode;
+    use gweave::picture::Image;
 
     /// Is a pixel within 3 px of `at` within 24 levels of `c`?
     fn near(img: &Image, at: (i32, i32), c: RGBColor) -> bool {

@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 
 use gweave::pass::Quiet;
 use gweave::render::colour_by::TOOL_COLOURS;
-use gweave::render::png_out::{decode, rasterise};
-use gweave::render::raster::Image;
+use gweave::picture::decode;
+use gweave::render::png_out::rasterise;
+use gweave::picture::Image;
 use gweave::render::view::{Drawing, BACKGROUND, UNCHANGED};
 use gweave::render::{
     drawing, preview, preview_with_progress, svg, Format, PreviewOptions, Toolpath, ToolpathOptions,
@@ -335,7 +336,7 @@ fn progress_covers_the_drawing_after_the_reading() {
     let bytes = std::fs::metadata(dual()).unwrap().len();
     let stage = rec.0.iter().position(|e| e.0 == "drawing").expect("a drawing stage");
     assert_eq!(rec.0[0], ("len", bytes));
-    assert_eq!(rec.0[stage], ("drawing", 2 * strokes));
+    assert_eq!(rec.0[stage], ("drawing", strokes));
     assert_eq!(rec.0.last(), Some(&("advance", 2 * strokes)));
     // Before the stage, byte counts up to the file's end; after it, strokes, never going back.
     assert!(rec.0[..stage].iter().all(|e| e.0 != "advance" || e.1 <= bytes));

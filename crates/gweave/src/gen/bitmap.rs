@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use crate::range::{count, MAX_IMAGE_SIDE_PX};
-use crate::render::png_out::{write_png, Pixels};
+use crate::picture::{write_png, Pixels};
 
 /// Errors from reading or writing layer images.
 #[derive(Debug, Error)]
