@@ -159,12 +159,55 @@ impl Painter<'_> {
         }
     }
 
+    /// A filled polygon through `points` (nonzero winding). Polygons with a NaN or infinite
+    /// point draw nothing.
+    pub fn polygon(&mut self, points: &[[f32; 2]], c: [u8; 3], alpha: f32) {
+        if points.iter().flatten().any(|v| !v.is_finite()) {
+            return;
+        }
+        self.colour(c, alpha);
+        let mut pb = PathBuilder::new();
+        for (i, p) in points.iter().enumerate() {
+            if i == 0 {
+                pb.move_to(p[0], p[1]);
+            } else {
+                pb.line_to(p[0], p[1]);
+            }
+        }
+        pb.close();
+        if let Some(path) = pb.finish() {
+            self.pixmap.fill_path(&path, &self.paint, FillRule::Winding, Transform::identity(), None);
+        }
+    }
+
+    /// A circle of `radius_px` about `centre`: filled, or (`outline_px`) its outline that wide.
+    pub fn circle(&mut self, centre: [f32; 2], radius_px: f32, c: [u8; 3], alpha: f32, outline_px: Option<f32>) {
+        let Some(path) = PathBuilder::from_circle(centre[0], centre[1], radius_px) else {
+            return;
+        };
+        self.colour(c, alpha);
+        match outline_px {
+            Some(w) => {
+                self.stroke.width = w.max(0.0);
+                self.pixmap.stroke_path(&path, &self.paint, &self.stroke, Transform::identity(), None);
+            }
+            None => self.pixmap.fill_path(&path, &self.paint, FillRule::Winding, Transform::identity(), None),
+        }
+    }
+
     /// See [`Image::text`].
     pub fn text(&mut self, x: i32, y: i32, s: &str, size_px: f32, c: [u8; 3]) -> u32 {
+        self.text_turned(x as f32, y as f32, s, size_px, c, 0)
+    }
+
+    /// Text turned `quarter_turns` times 90 degrees clockwise about its top left (`x`, `y`)
+    /// (3: reading upwards, as a y axis's title). Returns its width along the line, px.
+    pub fn text_turned(&mut self, x: f32, y: f32, s: &str, size_px: f32, c: [u8; 3], quarter_turns: u8) -> u32 {
         self.colour(c, 1.0);
-        let (path, width) = text::outline(s, size_px, x as f32, y as f32);
+        let (path, width) = text::outline(s, size_px, x, y);
+        let turn = Transform::from_rotate_at(90.0 * f32::from(quarter_turns % 4), x, y);
         if let Some(path) = path {
-            self.pixmap.fill_path(&path, &self.paint, FillRule::Winding, Transform::identity(), None);
+            self.pixmap.fill_path(&path, &self.paint, FillRule::Winding, turn, None);
         }
         width
     }
@@ -265,6 +308,21 @@ mod tests {
     }
 
     #[test]
+    fn polygons_and_circles_fill_their_inside() {
+        let mut img = Image::new(20, 20, [255, 255, 255]);
+        let mut p = img.painter().unwrap();
+        p.polygon(&[[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]], [255, 0, 0], 1.0);
+        p.circle([15.0, 15.0], 4.0, [0, 0, 255], 1.0, None);
+        p.circle([5.0, 15.0], 3.0, [0, 0, 0], 1.0, Some(1.0));
+        assert_eq!(img.pixel(2, 2), [255, 0, 0, 255]);
+        assert_eq!(img.pixel(8, 8), [255, 255, 255, 255], "beyond the diagonal");
+        assert_eq!(img.pixel(15, 15), [0, 0, 255, 255]);
+        assert_eq!(img.pixel(19, 19), [255, 255, 255, 255], "outside the circle");
+        assert_eq!(img.pixel(5, 15), [255, 255, 255, 255], "an outline is hollow");
+        assert!(img.pixel(5, 12)[0] < 128, "{:?}: on the outline", img.pixel(5, 12));
+    }
+
+    #[test]
     fn rectangles_blend_and_clip() {
         let mut img = Image::new(10, 10, [0, 0, 0]);
         img.rect(-5, 2, 8, 3, [255, 255, 255], 1.0);
@@ -292,6 +350,14 @@ mod tests {
         let row: Vec<u32> = (0..60).filter(|&x| dark(&img, x, top + 3)).collect();
         let (lo, hi) = (row[0], row[row.len() - 1]);
         assert!(lo >= 10 && hi < 10 + w && !row.contains(&((lo + hi) / 2)), "{row:?}");
+        // Turned a quarter anticlockwise (three clockwise), it reads upwards: the ink of "T1"
+        // lies above its start, in a column as wide as the line is high.
+        let mut img = Image::new(30, 60, [255, 255, 255]);
+        let w = text::width("T1", 20.0);
+        img.painter().unwrap().text_turned(4.0, 56.0, "T1", 20.0, [0, 0, 0], 3);
+        let ink: Vec<(u32, u32)> = (0..30).flat_map(|x| (0..60).map(move |y| (x, y))).filter(|&(x, y)| dark(&img, x, y)).collect();
+        assert!(!ink.is_empty());
+        assert!(ink.iter().all(|&(x, y)| (4..4 + 20).contains(&x) && (56 - w..56).contains(&y)), "{ink:?}");
         // Text running off the image is clipped, not wrapped.
         let mut img = Image::new(10, 10, [255, 255, 255]);
         img.text(-5, 2, "WWWW", 20.0, [0, 0, 0]);
