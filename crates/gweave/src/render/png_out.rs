@@ -41,27 +41,9 @@ pub fn rasterise_with_progress(d: &Drawing, progress: &mut dyn Progress) -> Imag
     let strokes = if stride == 1 { &d.strokes } else { &kept };
     let n = strokes.len();
     progress.stage("drawing", n as u64);
-    let mut img = Image::transparent(d.width_px, d.height_px);
-    if let Some(mut painter) = img.painter() {
-        painter.behind();
-        let mut opaque = Opaque::new(d.width_px, d.height_px);
-        let mut chain = Chain::default();
-        for (k, s) in strokes.iter().rev().enumerate() {
-            if k.is_multiple_of(REPORT_EVERY) {
-                progress.advance(k as u64);
-            }
-            if opaque.hides(painter.rgba(), s) {
-                continue;
-            }
-            if !chain.precede(s) {
-                chain.paint(&mut painter, &mut opaque);
-                chain.start(s);
-            }
-        }
-        chain.paint(&mut painter, &mut opaque);
-        painter.rect(0, 0, d.width_px, d.height_px, d.background, 1.0);
-    }
+    let img = paint_strokes(d, strokes, true, progress);
     progress.advance(n as u64);
+    let mut img = img;
     let line_h = text::line_height(TEXT_PX) + 4;
     for p in &d.panels {
         img.text(p.x_px as i32 + 12, d.height_px as i32 - line_h as i32 - 4, &p.title, TEXT_PX, INK);
@@ -80,6 +62,32 @@ pub fn rasterise_with_progress(d: &Drawing, progress: &mut dyn Progress) -> Imag
             img.rect(14, y + 2, line_h - 8, line_h - 8, c, 1.0);
             img.text(14 + line_h as i32, y, &e.label, TEXT_PX, INK);
         }
+    }
+    img
+}
+
+/// The strokes of `d` painted front to back over its background, skipping those found hidden
+/// when `skip_hidden` (which changes no pixel).
+fn paint_strokes(d: &Drawing, strokes: &[Stroke], skip_hidden: bool, progress: &mut dyn Progress) -> Image {
+    let mut img = Image::transparent(d.width_px, d.height_px);
+    if let Some(mut painter) = img.painter() {
+        painter.behind();
+        let mut opaque = Opaque::new(d.width_px, d.height_px);
+        let mut chain = Chain::default();
+        for (k, s) in strokes.iter().rev().enumerate() {
+            if k.is_multiple_of(REPORT_EVERY) {
+                progress.advance(k as u64);
+            }
+            // A stroke that follows on joins the chain whether hidden or not, so that skipping
+            // hidden strokes never changes where a polyline is cut.
+            if chain.precede(s) || (skip_hidden && opaque.hides(painter.rgba(), s)) {
+                continue;
+            }
+            chain.paint(&mut painter, &mut opaque);
+            chain.start(s);
+        }
+        chain.paint(&mut painter, &mut opaque);
+        painter.rect(0, 0, d.width_px, d.height_px, d.background, 1.0);
     }
     img
 }
@@ -252,6 +260,28 @@ mod tests {
             }
         }
         assert!(hidden > 2000, "{hidden} hidden");
+    }
+
+    /// The same on a real print: both tools of `cura_dual`, layers 40 to 80, from the side
+    /// and from the top.
+    #[test]
+    fn skipping_hidden_strokes_leaves_the_pixels_unchanged() {
+        let dual = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/cura/cura_dual.gcode");
+        for kind in [crate::render::ViewKind::Iso, crate::render::ViewKind::Top] {
+            let view = crate::render::ViewOptions {
+                kind,
+                layers: Some(40..=80),
+                width_px: 400,
+                height_px: 300,
+                ..Default::default()
+            };
+            let options = crate::render::PreviewOptions { view, ..Default::default() };
+            let d = crate::render::drawing(&dual, None, &options, &mut Quiet).unwrap();
+            let skipped = paint_strokes(&d, &d.strokes, true, &mut Quiet);
+            let all = paint_strokes(&d, &d.strokes, false, &mut Quiet);
+            let differ = skipped.rgba.chunks(4).zip(all.rgba.chunks(4)).filter(|(a, b)| a != b).count();
+            assert_eq!(differ, 0, "{kind}");
+        }
     }
 
     #[test]
