@@ -23,8 +23,8 @@ use plotters::style::register_font;
 use thiserror::Error;
 
 use gweave::gcode::writer::write_file;
-use gweave::picture::{encode, Image};
 use gweave::picture::text::FONT_TTF;
+use gweave::picture::{encode, Image};
 
 use crate::chart_canvas::ChartCanvas;
 use crate::motion::speed_trace::SpeedTrace;

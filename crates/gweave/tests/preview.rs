@@ -8,10 +8,10 @@
 use std::path::{Path, PathBuf};
 
 use gweave::pass::Quiet;
-use gweave::render::colour_by::TOOL_COLOURS;
 use gweave::picture::decode;
-use gweave::render::png_out::rasterise;
 use gweave::picture::Image;
+use gweave::render::colour_by::TOOL_COLOURS;
+use gweave::render::png_out::rasterise;
 use gweave::render::view::{Drawing, BACKGROUND, UNCHANGED};
 use gweave::render::{
     drawing, preview, preview_with_progress, svg, Format, PreviewOptions, Toolpath, ToolpathOptions,

@@ -9,8 +9,8 @@
 
 use std::path::PathBuf;
 
-use gweave::render::png_out::rasterise;
 use gweave::picture::Image;
+use gweave::render::png_out::rasterise;
 use gweave::render::view::BACKGROUND;
 use gweave::render::{drawing, ColourBy, Format, PreviewOptions, ViewKind, ViewOptions};
 use gweave::rotary::cylinder::RotaryConfig;

@@ -181,7 +181,14 @@ impl Painter<'_> {
     }
 
     /// A circle of `radius_px` about `centre`: filled, or (`outline_px`) its outline that wide.
-    pub fn circle(&mut self, centre: [f32; 2], radius_px: f32, c: [u8; 3], alpha: f32, outline_px: Option<f32>) {
+    pub fn circle(
+        &mut self,
+        centre: [f32; 2],
+        radius_px: f32,
+        c: [u8; 3],
+        alpha: f32,
+        outline_px: Option<f32>,
+    ) {
         let Some(path) = PathBuilder::from_circle(centre[0], centre[1], radius_px) else {
             return;
         };
@@ -202,7 +209,15 @@ impl Painter<'_> {
 
     /// Text turned `quarter_turns` times 90 degrees clockwise about its top left (`x`, `y`)
     /// (3: reading upwards, as a y axis's title). Returns its width along the line, px.
-    pub fn text_turned(&mut self, x: f32, y: f32, s: &str, size_px: f32, c: [u8; 3], quarter_turns: u8) -> u32 {
+    pub fn text_turned(
+        &mut self,
+        x: f32,
+        y: f32,
+        s: &str,
+        size_px: f32,
+        c: [u8; 3],
+        quarter_turns: u8,
+    ) -> u32 {
         self.colour(c, 1.0);
         let (path, width) = text::outline(s, size_px, x, y);
         let turn = Transform::from_rotate_at(90.0 * f32::from(quarter_turns % 4), x, y);
@@ -355,7 +370,8 @@ mod tests {
         let mut img = Image::new(30, 60, [255, 255, 255]);
         let w = text::width("T1", 20.0);
         img.painter().unwrap().text_turned(4.0, 56.0, "T1", 20.0, [0, 0, 0], 3);
-        let ink: Vec<(u32, u32)> = (0..30).flat_map(|x| (0..60).map(move |y| (x, y))).filter(|&(x, y)| dark(&img, x, y)).collect();
+        let ink: Vec<(u32, u32)> =
+            (0..30).flat_map(|x| (0..60).map(move |y| (x, y))).filter(|&(x, y)| dark(&img, x, y)).collect();
         assert!(!ink.is_empty());
         assert!(ink.iter().all(|&(x, y)| (4..4 + 20).contains(&x) && (56 - w..56).contains(&y)), "{ink:?}");
         // Text running off the image is clipped, not wrapped.

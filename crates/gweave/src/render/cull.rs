@@ -113,7 +113,9 @@ impl Opaque {
         }
         let (w, h) = (self.w as u32, self.h as u32);
         let reach2 = reach * reach;
-        within(s.from, s.to, reach, w, h, |x, y, dist2| dist2 > reach2 || rgba[(y * self.w + x) * 4 + 3] == 255)
+        within(s.from, s.to, reach, w, h, |x, y, dist2| {
+            dist2 > reach2 || rgba[(y * self.w + x) * 4 + 3] == 255
+        })
     }
 
     /// `s` is painted: its tiles may have become opaque.

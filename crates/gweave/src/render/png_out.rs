@@ -141,7 +141,15 @@ mod tests {
     use crate::render::view::BACKGROUND;
 
     fn drawing(width_px: u32, height_px: u32, strokes: Vec<Stroke>) -> Drawing {
-        Drawing { width_px, height_px, background: BACKGROUND, strokes, legend: vec![], panels: vec![], layers_drawn: None }
+        Drawing {
+            width_px,
+            height_px,
+            background: BACKGROUND,
+            strokes,
+            legend: vec![],
+            panels: vec![],
+            layers_drawn: None,
+        }
     }
 
     fn st(from: [f32; 2], to: [f32; 2], colour: [u8; 3], width_px: f32) -> Stroke {
@@ -228,7 +236,10 @@ mod tests {
                 let (len, angle) = (next() * 12.0, next() * std::f32::consts::TAU);
                 let to = [from[0] + len * angle.cos(), from[1] + len * angle.sin()];
                 let colour = [(i % 251) as u8, (i * 7 % 253) as u8, 90];
-                Stroke { alpha: if i % 17 == 0 { 0.35 } else { 1.0 }, ..st(from, to, colour, 2.0 + next() * 6.0) }
+                Stroke {
+                    alpha: if i % 17 == 0 { 0.35 } else { 1.0 },
+                    ..st(from, to, colour, 2.0 + next() * 6.0)
+                }
             })
             .collect();
         let d = drawing(w, h, strokes);
@@ -266,7 +277,8 @@ mod tests {
     /// and from the top.
     #[test]
     fn skipping_hidden_strokes_leaves_the_pixels_unchanged() {
-        let dual = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/cura/cura_dual.gcode");
+        let dual =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/cura/cura_dual.gcode");
         for kind in [crate::render::ViewKind::Iso, crate::render::ViewKind::Top] {
             let view = crate::render::ViewOptions {
                 kind,
@@ -291,7 +303,10 @@ mod tests {
         let d = drawing(
             20,
             20,
-            vec![st([10.5, 2.5], [10.5, 10.25], [0, 0, 200], 1.0), st([10.5, 10.25], [10.5, 18.5], [0, 0, 200], 1.0)],
+            vec![
+                st([10.5, 2.5], [10.5, 10.25], [0, 0, 200], 1.0),
+                st([10.5, 10.25], [10.5, 18.5], [0, 0, 200], 1.0),
+            ],
         );
         let img = rasterise(&d);
         assert!((3..18).all(|y| img.pixel(10, y) == [0, 0, 200, 255]));
