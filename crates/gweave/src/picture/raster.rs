@@ -280,7 +280,9 @@ mod tests {
     #[test]
     fn painting_behind_front_to_back_is_painting_over_back_to_front() {
         // A wide red line, a blue one across it and a half-transparent green one over both.
-        let lines: [([f32; 2], [f32; 2], f32, [u8; 3], f32); 3] = [
+        // From, to, width, colour, alpha.
+        type Line = ([f32; 2], [f32; 2], f32, [u8; 3], f32);
+        let lines: [Line; 3] = [
             ([2.0, 10.0], [38.0, 10.0], 6.0, [255, 0, 0], 1.0),
             ([20.0, 2.0], [21.0, 18.0], 4.0, [0, 0, 255], 1.0),
             ([2.0, 16.0], [38.0, 17.0], 3.0, [0, 160, 0], 0.5),
