@@ -17,7 +17,8 @@
 //! says how much of it is painted.
 
 use tiny_skia::{
-    BlendMode, FillRule, LineCap, LineJoin, Paint, PathBuilder, PixmapMut, Rect, Stroke, Transform,
+    BlendMode, FillRule, LineCap, LineJoin, Paint, PathBuilder, PathStroker, PixmapMut, Rect, Stroke,
+    Transform,
 };
 
 use super::text;
@@ -62,6 +63,8 @@ impl Image {
             pixmap,
             paint: Paint::default(),
             stroke: Stroke { line_cap: LineCap::Round, line_join: LineJoin::Round, ..Stroke::default() },
+            stroker: PathStroker::new(),
+            builder: PathBuilder::new(),
         })
     }
 
@@ -95,6 +98,10 @@ pub struct Painter<'a> {
     pixmap: PixmapMut<'a>,
     paint: Paint<'static>,
     stroke: Stroke,
+    /// Kept from one stroke to the next, with their buffers: a preview paints hundreds of
+    /// thousands of short strokes.
+    stroker: PathStroker,
+    builder: PathBuilder,
 }
 
 impl Painter<'_> {
@@ -141,14 +148,24 @@ impl Painter<'_> {
         // tiny-skia draws strokes up to 1 px wide as hairlines (Skia's "modulated hairline"),
         // whose ends and joints are not fully covered; from 1 px up, as the area they cover.
         self.stroke.width = if width_px >= 1.0 { width_px.max(HAIRLINE_PX) } else { width_px.max(0.0) };
-        let mut pb = PathBuilder::new();
+        let mut pb = std::mem::take(&mut self.builder);
         pb.move_to(p0[0], p0[1]);
         for p in &points[1..] {
             pb.line_to(p[0], p[1]);
         }
-        if let Some(path) = pb.finish() {
+        let Some(path) = pb.finish() else {
+            return;
+        };
+        if self.stroke.width >= HAIRLINE_PX {
+            // What `stroke_path` does for a stroke wider than a hairline, with the stroker's
+            // buffers kept.
+            if let Some(outline) = self.stroker.stroke(&path, &self.stroke, 1.0) {
+                self.pixmap.fill_path(&outline, &self.paint, FillRule::Winding, Transform::identity(), None);
+            }
+        } else {
             self.pixmap.stroke_path(&path, &self.paint, &self.stroke, Transform::identity(), None);
         }
+        self.builder = path.clear();
     }
 
     /// See [`Image::rect`].

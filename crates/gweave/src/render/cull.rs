@@ -69,10 +69,10 @@ impl Opaque {
     /// it draws nothing (off the picture, or NaN).
     fn reach(&self, s: &Stroke) -> Option<(f32, [usize; 4])> {
         let reach = s.width_px.max(1.0) / 2.0 + REACH_PX;
-        let x0 = (s.from[0].min(s.to[0]) - reach).floor().max(0.0);
-        let y0 = (s.from[1].min(s.to[1]) - reach).floor().max(0.0);
-        let x1 = (s.from[0].max(s.to[0]) + reach).ceil().min(self.w as f32);
-        let y1 = (s.from[1].max(s.to[1]) + reach).ceil().min(self.h as f32);
+        let x0 = floor(s.from[0].min(s.to[0]) - reach).max(0.0);
+        let y0 = floor(s.from[1].min(s.to[1]) - reach).max(0.0);
+        let x1 = ceil(s.from[0].max(s.to[0]) + reach).min(self.w as f32);
+        let y1 = ceil(s.from[1].max(s.to[1]) + reach).min(self.h as f32);
         (x0 < x1 && y0 < y1).then_some((reach, [x0 as usize, y0 as usize, x1 as usize, y1 as usize]))
     }
 
@@ -128,6 +128,27 @@ impl Opaque {
     }
 }
 
+/// `v.floor()` without a call into the C library (x86-64 before SSE 4.1 has no instruction for
+/// it), for the pixel positions of a picture (well within `i32`).
+fn floor(v: f32) -> f32 {
+    let t = v as i32 as f32;
+    if t > v {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
+/// `v.ceil()`, as [`floor`].
+fn ceil(v: f32) -> f32 {
+    let t = v as i32 as f32;
+    if t < v {
+        t + 1.0
+    } else {
+        t
+    }
+}
+
 /// Calls `f(x, y, dist2)` for the pixels of a `width` x `height` image whose centres may lie
 /// within `reach` of the segment `p0`-`p1` (every one that does, and a few that do not),
 /// `dist2` being the square of the centre's distance to the segment; stops when `f` returns
@@ -145,10 +166,10 @@ fn within(
     height: u32,
     mut f: impl FnMut(usize, usize, f32) -> bool,
 ) -> bool {
-    let x_lo = (p0[0].min(p1[0]) - reach).floor().max(0.0);
-    let y_lo = (p0[1].min(p1[1]) - reach).floor().max(0.0);
-    let x_hi = (p0[0].max(p1[0]) + reach).ceil().min(width as f32);
-    let y_hi = (p0[1].max(p1[1]) + reach).ceil().min(height as f32);
+    let x_lo = floor(p0[0].min(p1[0]) - reach).max(0.0);
+    let y_lo = floor(p0[1].min(p1[1]) - reach).max(0.0);
+    let x_hi = ceil(p0[0].max(p1[0]) + reach).min(width as f32);
+    let y_hi = ceil(p0[1].max(p1[1]) + reach).min(height as f32);
     if !(x_lo < x_hi && y_lo < y_hi) {
         return true;
     }
@@ -162,8 +183,8 @@ fn within(
         if let Some((half_span, slope)) = span {
             let x_line = p0[0] + slope * (py - p0[1]);
             // Pixel x has its centre at x + 0.5; one pixel to spare for rounding.
-            xa = xa.max((x_line - half_span - 1.5).floor());
-            xb = xb.min((x_line + half_span + 0.5).ceil());
+            xa = xa.max(floor(x_line - half_span - 1.5));
+            xb = xb.min(ceil(x_line + half_span + 0.5));
         }
         if xa >= xb {
             continue;
@@ -183,4 +204,17 @@ fn within(
         }
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floor_and_ceil_are_the_library_ones() {
+        for v in [-2.5f32, -1.0, -0.25, 0.0, 0.25, 1.0, 1.5, 899.999, 1200.0, 4096.5] {
+            assert_eq!(floor(v), v.floor(), "{v}");
+            assert_eq!(ceil(v), v.ceil(), "{v}");
+        }
+    }
 }
