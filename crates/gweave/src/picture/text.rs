@@ -5,8 +5,10 @@
 //! before it, scaled to the size asked (the size is the font's height from descender to ascender
 //! in pixels, `ab_glyph`'s `PxScale`). The glyph outlines (lines and quadratic or cubic Beziers)
 //! become one path that [`super::raster`] fills like any other shape, with the same
-//! anti-aliasing. The charts of `gweave sim --plot` use the same font
-//! through `plotters` ([`FONT_TTF`]), so every picture gweave draws has one typeface.
+//! anti-aliasing. The PNG charts of `gweave sim --plot` are drawn with these outlines too (their
+//! `plotters` backend lays text out with [`width`] and [`line_height`]); the SVG charts name the
+//! font and `plotters` measures them with the same file ([`FONT_TTF`]), so every picture gweave
+//! draws has one typeface.
 
 use std::sync::OnceLock;
 
