@@ -16,7 +16,7 @@ const TEXT_PX: f32 = 16.0;
 /// The strokes are painted last first, each behind what is painted
 /// ([`Painter::behind`]), then the background behind them all: the picture painting them in
 /// order gives (to 8-bit rounding where strokes are not opaque), where a stroke that the ones
-/// after it hide is found hidden by the image itself and skipped ([`super::cull`]). Strokes
+/// after it hide is found hidden by the image itself and skipped (`render::cull`). Strokes
 /// that follow on (the end of one is the start of the next, in one colour, width and opacity)
 /// are painted as one polyline with round joins, so their joints have no seams.
 ///
