@@ -24,6 +24,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod chart_canvas;
 pub mod finish;
 mod inkjet;
 mod interp;

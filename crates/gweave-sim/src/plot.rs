@@ -1,6 +1,7 @@
 //! Charts of a run, drawn with `plotters` in gweave's embedded font
-//! ([`gweave::render::text::FONT_TTF`]), as PNG (plotters' bitmap backend, written by gweave's PNG
-//! encoder) or SVG (plotters' SVG backend, the text as text), chosen by the file's extension:
+//! ([`gweave::picture::text::FONT_TTF`]), as PNG (painted by gweave's rasteriser,
+//! `crate::chart_canvas`, and written by its PNG writer) or SVG (plotters' SVG backend, the text
+//! as text), chosen by the file's extension:
 //! - temperature: each heater's reading (solid) and target (thin, lighter) over simulated time,
 //!   a legend naming each (`hotend T0`, `hotend T0 target`, `bed`, `bed target`);
 //! - speed: the planned toolhead speed over time (the mean of each time slice as a line, its
@@ -22,9 +23,10 @@ use plotters::style::register_font;
 use thiserror::Error;
 
 use gweave::gcode::writer::write_file;
-use gweave::render::png_out::{write_png, Pixels};
-use gweave::render::text::FONT_TTF;
+use gweave::picture::text::FONT_TTF;
+use gweave::picture::{encode, Image};
 
+use crate::chart_canvas::ChartCanvas;
 use crate::motion::speed_trace::SpeedTrace;
 use crate::thermal::heater::HeaterId;
 use crate::thermal::TimeSeries;
@@ -133,16 +135,14 @@ fn render<C: Chart>(chart: &C, format: ChartFormat) -> Result<(Vec<u8>, C::Axes)
     let (w, h) = chart.size_px();
     match format {
         ChartFormat::Png => {
-            let mut rgb = vec![0u8; w as usize * h as usize * 3];
+            let mut image = Image::new(w, h, [255, 255, 255]);
             let axes = {
-                let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+                let root = ChartCanvas::new(&mut image).into_drawing_area();
                 let axes = chart.draw(&root)?;
                 root.present().map_err(draw_err)?;
                 axes
             };
-            let mut bytes = Vec::new();
-            write_png(&mut bytes, w, h, Pixels::Rgb(&rgb))?;
-            Ok((bytes, axes))
+            Ok((encode(&image)?, axes))
         }
         ChartFormat::Svg => {
             let mut svg = String::new();
@@ -434,8 +434,8 @@ mod tests {
     use crate::motion::kinematics::{MoveKind, Pos};
     use crate::motion::planner::{PlannedBlock, Trapezoid};
     use crate::thermal::{Thermal, ThermalConfig};
-    use gweave::render::png_out::decode;
-    use gweave::render::raster::Image;
+    use gweave::picture::decode;
+    use gweave::picture::Image;
 
     /// Is a pixel within 3 px of `at` within 24 levels of `c`?
     fn near(img: &Image, at: (i32, i32), c: RGBColor) -> bool {
@@ -473,7 +473,11 @@ mod tests {
             let s = last(id);
             let t_min = s.t_s / 60.0 - 0.02;
             assert!(near(&img, axes.translate(&(t_min, s.temp_c)), colour), "{id:?} reading at {}", s.temp_c);
-            assert!(near(&img, axes.translate(&(t_min, s.target_c)), light(colour)), "{id:?} target");
+            // The target where the reading is far below it (at the end the reading, drawn over
+            // it, is on it).
+            let heating = th.series().of(id).find(|s| s.target_c - s.temp_c > 20.0 && s.t_s > 6.0).unwrap();
+            let at = axes.translate(&(heating.t_s / 60.0, heating.target_c));
+            assert!(near(&img, at, light(colour)), "{id:?} target at {} s", heating.t_s);
         }
         // The hotend's reading is far from the bed's: no hotend colour where the bed line is.
         let bed = last(HeaterId::Bed);

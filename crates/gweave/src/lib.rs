@@ -27,6 +27,7 @@ pub mod gcode;
 pub mod gen;
 pub mod malformed;
 pub mod pass;
+pub mod picture;
 // purge-shift and other post-processing passes
 pub mod post;
 pub mod range;

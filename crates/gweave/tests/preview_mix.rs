@@ -10,11 +10,11 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+use gweave::picture::Image;
 use gweave::post::mix::mix_bytes;
 use gweave::post::mix::profile::MixProfile;
 use gweave::post::purge_shift::{purge_shift_bytes, PurgeShiftConfig};
 use gweave::render::png_out::rasterise;
-use gweave::render::raster::Image;
 use gweave::render::view::{Drawing, BACKGROUND};
 use gweave::render::{drawing, ColourBy, MixColours, PreviewOptions, ViewOptions};
 

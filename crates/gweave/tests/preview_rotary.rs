@@ -9,8 +9,8 @@
 
 use std::path::PathBuf;
 
+use gweave::picture::Image;
 use gweave::render::png_out::rasterise;
-use gweave::render::raster::Image;
 use gweave::render::view::BACKGROUND;
 use gweave::render::{drawing, ColourBy, Format, PreviewOptions, ViewKind, ViewOptions};
 use gweave::rotary::cylinder::RotaryConfig;
@@ -138,7 +138,7 @@ fn a_wrapped_two_tool_part_previews_in_both_tools_colours() {
     let config = WrapConfig::new(RotaryConfig::new(30.0));
     let target = Target::File(output);
     wrap_file(&config, gweave::run::Run::file(&input).to(&target), Some(&png)).unwrap();
-    let img = gweave::render::png_out::decode(&std::fs::read(&png).unwrap()).unwrap();
+    let img = gweave::picture::decode(&std::fs::read(&png).unwrap()).unwrap();
     let count = |c: gweave::colour::Srgb8| {
         (0..img.height)
             .flat_map(|y| (0..img.width).map(move |x| (x, y)))

@@ -4,7 +4,7 @@
 //! When the colour was asked for by value, a bar across the bottom of the square
 //! shows the target on the left half against the prediction on the right, so a
 //! poor match is visible at a glance. Under each square, optionally, the name
-//! and the predicted `#rrggbb` in the embedded font ([`crate::render::text`]). It is drawn and
+//! and the predicted `#rrggbb` in the embedded font ([`crate::picture::text`]). It is drawn and
 //! encoded with the preview's image and PNG encoder.
 //!
 //! ```text
@@ -18,9 +18,7 @@
 
 use super::palette::Resolved;
 use super::srgb::Srgb8;
-use crate::render::png_out::encode;
-use crate::render::raster::Image;
-use crate::render::text;
+use crate::picture::{encode, text, Image};
 
 const BACKGROUND: [u8; 3] = [250, 250, 250];
 const INK: [u8; 3] = [20, 20, 20];

@@ -6,8 +6,9 @@
 //! - `mix_colour`: the predicted mix colour of each move (mixing model and chamber washout).
 //! - [`view`]: top view of a layer or layer range, isometric view, before/after comparison;
 //!   turns segments into pixel [`view::Stroke`]s.
-//! - [`raster`] and [`png_out`]: a software rasteriser (wide anti-aliased lines, alpha) and the
-//!   one PNG encoder; [`text`]: the embedded font.
+//! - [`png_out`]: a drawing as pixels, painted front to back with [`crate::picture`]'s
+//!   rasteriser (`tiny-skia`), skipping the strokes that the ones in front hide (`cull`) or
+//!   that are past an ink budget.
 //! - [`svg`]: the same drawing as SVG paths.
 //! - `html`: a self-contained interactive viewer page (the beads as lit 3D tubes, WebGL 2),
 //!   of one file or two compared side by side.
@@ -29,12 +30,11 @@
 //! ```
 
 pub mod colour_by;
+mod cull;
 pub(crate) mod html;
 pub(crate) mod mix_colour;
 pub mod png_out;
-pub mod raster;
 pub mod svg;
-pub mod text;
 pub mod toolpath;
 pub mod view;
 
@@ -321,7 +321,8 @@ pub fn preview_with_progress(
     let (d, malformed) = drawing_counted(path, compare, options, progress)?;
     let bytes = match format {
         Format::Svg => svg::write_svg(&d).into_bytes(),
-        _ => png_out::encode(&png_out::rasterise_with_progress(&d, progress))?,
+        _ => crate::picture::encode(&png_out::rasterise_with_progress(&d, progress))
+            .map_err(|e| RenderError::Encode(e.to_string()))?,
     };
     let changed: Vec<usize> = d.panels.iter().filter_map(|p| p.changed_moves).collect();
     let report = PreviewReport {

@@ -216,7 +216,7 @@ fn read_back(
         ..ViewOptions::default()
     };
     let image = png_out::rasterise(&view::draw(&toolpath, &view));
-    let encoded = png_out::encode(&image).map_err(std::io::Error::other)?;
+    let encoded = crate::picture::encode(&image).map_err(std::io::Error::other)?;
     write_file(png, |out| -> Result<()> { Ok(out.write_all(&encoded)?) })?;
     Ok(Some(program.finish()))
 }
