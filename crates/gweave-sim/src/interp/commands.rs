@@ -74,7 +74,7 @@ pub struct CommandSpec {
     /// Whether it waits for the queued moves.
     pub queue: Queue,
     /// The number words it reads and the values each may take: the dispatcher refuses the
-    /// whole line before it changes anything if one is outside ([`check`]).
+    /// whole line before it changes anything if one is outside (`check`).
     pub params: &'static [Param],
 }
 
