@@ -20,14 +20,13 @@ import os
 from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 from . import _gweave
-from ._gweave import Line, Reader
-from ._gweave import Machine
-
-from ._gweave import HelicalPath
+from ._gweave import HelicalPath, Line, Machine, Reader
 
 __version__: str = _gweave.__version__
 
 PathLike = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
+# A report: the dict of the command line's `--json` document for the same command.
+Report = Dict[str, Any]
 
 __all__ = ["Line", "Reader", "read", "stats", "check", "cat", "main", "__version__"]
 __all__ += ["Machine", "sim", "estimate"]
@@ -65,7 +64,7 @@ def read(path: PathLike) -> Reader:
     return Reader(_path(path, "path"))
 
 
-def stats(path: PathLike, *, filament_diameter: Optional[float] = None, lenient: bool = False) -> Dict[str, Any]:
+def stats(path: PathLike, *, filament_diameter: Optional[float] = None, lenient: bool = False) -> Report:
     """Statistics of a G-code file: slicer, layers, extents, filament per tool, distances, time.
 
     ``filament_diameter`` (mm) overrides the file's own setting. ``lenient=True`` reads past
@@ -83,7 +82,7 @@ def check(
     bed: Union[str, Sequence[float], None] = None,
     max_feed: Optional[float] = None,
     strict: bool = False,
-) -> Dict[str, Any]:
+) -> Report:
     """Lint a G-code file, as ``gweave check`` does; ``max_feed`` in mm/min.
 
     ``bed`` is the printable volume in mm as ``--bed`` reads it: ``"X,Y,Z"`` from the origin or
@@ -104,7 +103,7 @@ def cat(
     backup: bool = True,
     force: bool = False,
     lenient: bool = False,
-) -> Dict[str, Any]:
+) -> Report:
     """Parse a file and write it back unchanged, atomically (the identity every transform builds on).
 
     Returns what was copied: ``lines``, ``bytes``, ``malformed_lines`` and ``first_malformed_line``
@@ -123,7 +122,7 @@ def cat(
     )
 
 
-def sim(path: PathLike, *, machine: Optional[PathLike] = None, fault: Sequence[str] = ()) -> Dict[str, Any]:
+def sim(path: PathLike, *, machine: Optional[PathLike] = None, fault: Sequence[str] = ()) -> Report:
     """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML.
 
     ``fault`` injects heater faults as ``--fault`` does (``["hotend-cartridge-off@120s"]``).
@@ -138,7 +137,7 @@ def sim(path: PathLike, *, machine: Optional[PathLike] = None, fault: Sequence[s
     )
 
 
-def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool = False) -> Dict[str, Any]:
+def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool = False) -> Report:
     """Estimate the print time with the virtual printer's planner alone (``gweave estimate``).
 
     Faster than :func:`sim` (reading, parsing and planning on three threads, no heaters):
@@ -219,7 +218,7 @@ def raster(
     dialect: Optional[str] = None,
     feed: Optional[float] = None,
     fast_estimate: bool = False,
-) -> Dict[str, Any]:
+) -> Report:
     """Layer images (folders, globs, image files) or one ``.sl1`` to binder-jet inkjet G-code.
 
     Per inked column: ``G1 X``, ``M400``, ``M700 P<head> S<bits>`` (``dialect="reprapfirmware"``: M578;
@@ -287,7 +286,7 @@ def raster_test_pattern(
     dialect: Optional[str] = None,
     pattern_columns: int = 4,
     origin: Sequence[float] = (20.0, 20.0),
-) -> Dict[str, Any]:
+) -> Report:
     """Write a nozzle test pattern (``gweave raster --test-pattern``): ``pattern_columns`` columns
     per nozzle address, each address alone."""
     return json.loads(
@@ -318,7 +317,7 @@ def slice_raster(
     dpi: float = 96.0,
     pixel_mm: Optional[float] = None,
     margin: int = 0,
-) -> Dict[str, Any]:
+) -> Report:
     """Slice an STL into 1-bit layer PNGs (pixel centres at mid-layer Z, even-odd fill).
 
     ``layer_height`` in mm; resolution as ``dpi`` or ``pixel_mm``. Returns the report of
@@ -354,7 +353,7 @@ def purge_shift(
     fallback: Optional[str] = None,
     tower_at: Optional[Sequence[float]] = None,
     lenient: bool = False,
-) -> Dict[str, Any]:
+) -> Report:
     """Move every tool/mix change earlier by the purge so it prints inside the part (no wipe tower).
 
     ``purge_mm`` is mm of filament (or ``purge_mm3``, mm^3); ``config`` a TOML file with per-pair
@@ -425,7 +424,7 @@ def preview(
     min_len: Optional[float] = None,
     lenient: bool = False,
     report: bool = False,
-) -> Union[bytes, Tuple[bytes, Dict[str, Any]]]:
+) -> Union[bytes, Tuple[bytes, Report]]:
     """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None),
     or with ``report=True`` the bytes and the report ``gweave preview --json`` prints (format, view,
     layers drawn, strokes, moves, and the ``legend``: each colour and what it stands for).
@@ -472,7 +471,7 @@ def preview(
 
 def toolpath(
     path: PathLike, *, travel: bool = True, min_len: float = 0.0, mandrel_diameter: Optional[float] = None
-) -> Dict[str, Any]:
+) -> Report:
     """A file's segments as NumPy arrays (NumPy is needed for this function only).
 
     Keys: ``start`` and ``end`` (float32, shape (n, 3), mm), ``tool`` (uint16), ``feature`` (uint8,
@@ -520,7 +519,7 @@ def mix(
     backup: bool = True,
     force: bool = False,
     lenient: bool = False,
-) -> Dict[str, Any]:
+) -> Report:
     """Rewrite a file for a mixing hotend (see ``gweave mix``); returns the report.
 
     ``config`` is a profile TOML file; ``at_layer=["0=Orange", "10=Pink"]``, ``at_z``,
@@ -568,7 +567,7 @@ def mix(
     )
 
 
-def predict_colour(ratios: Sequence[float], profile: Optional[PathLike] = None) -> Dict[str, Any]:
+def predict_colour(ratios: Sequence[float], profile: Optional[PathLike] = None) -> Report:
     """The colour a mix is predicted to print (see ``gweave mix --predict``).
 
     ``ratios`` has one share per input, in any scale (``[1, 0, 1, 0]`` is half cyan, half
@@ -614,7 +613,7 @@ def _machine(
     feed_convention: Optional[str],
     rotary_unit: Optional[str],
     axes: Optional[Sequence[str]],
-) -> Dict[str, Any]:
+) -> Report:
     """The ``[machine]`` table of :func:`write_helical_paths`'s settings (the commands take
     the keywords themselves)."""
     machine: Dict[str, Any] = {
@@ -644,7 +643,7 @@ def rotary_wrap(
     config: Optional[PathLike] = None,
     preview: Optional[PathLike] = None,
     lenient: bool = False,
-) -> Dict[str, Any]:
+) -> Report:
     """Wrap a part sliced flat onto the mandrel of a lathe-type printer (``gweave rotary wrap``).
 
     Flat X runs along the mandrel, Y around it (``theta = 360*y/(pi*D)``), Z away from it
@@ -705,7 +704,7 @@ def rotary_tube(
     axes: Optional[Sequence[str]] = None,
     config: Optional[PathLike] = None,
     preview: Optional[PathLike] = None,
-) -> Dict[str, Any]:
+) -> Report:
     """Generate a seam-free tube of continuous helical layers (``gweave rotary tube``).
 
     Layer k lies on radius ``D/2 + (k + 1/2)*layer_height``, advancing ``pitch`` mm per turn
@@ -767,7 +766,7 @@ def write_helical_paths(
     chord_tol: Optional[float] = None,
     segments_per_turn: Optional[int] = None,
     config: Optional[PathLike] = None,
-) -> Dict[str, Any]:
+) -> Report:
     """Write a program printing custom :class:`HelicalPath` beads in order (one bead each).
 
     Between paths the nozzle moves without extruding. ``config`` is a TOML file with
