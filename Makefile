@@ -73,6 +73,8 @@ cargo-test: rust-deps
 	$(CARGO) test --workspace --exclude gweave-py
 
 pytest: python-debug
+	# The package's annotations agree with the compiled module's stub (_gweave.pyi).
+	$(PY) -m mypy crates/gweave-py/python/gweave
 	# Exit code 5 (no tests collected) is a failure here, as every other non-zero code.
 	$(PY) -m pytest crates/gweave-py/tests -q
 

@@ -385,7 +385,7 @@ def purge_shift(
             allow_features=None if allow_features is None else list(allow_features),
             markers=pair,
             fallback=fallback,
-            tower_at=None if tower_at is None else tuple(map(float, tower_at)),
+            tower_at=_xy(tower_at, "tower_at"),
             lenient=lenient,
             options=_flags(
                 ("-c", config),
@@ -595,14 +595,25 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 # `Overrides` as the CLI does; every default, check and computation is the Rust library's (the
 # same as `gweave rotary ... --json`).
 
-def _axes(axes: Optional[Sequence[str]]) -> Optional[Tuple[str, ...]]:
+def _axes(axes: Optional[Sequence[str]]) -> Optional[Tuple[str, str, str]]:
     """``axes`` as the three letters (axial, rotary, radial): ``"X,A,Z"`` or a sequence."""
     if axes is None:
         return None
     letters = tuple(axes.split(",") if isinstance(axes, str) else axes)
     if len(letters) != 3:
         raise ValueError("axes: three letters, axial, rotary, radial (e.g. 'X,A,Z')")
-    return letters
+    axial, rotary, radial = letters
+    return (axial, rotary, radial)
+
+
+def _xy(value: Optional[Sequence[float]], name: str) -> Optional[Tuple[float, float]]:
+    """A point ``(x, y)`` in mm, or ``None``."""
+    if value is None:
+        return None
+    xy = tuple(float(v) for v in value)
+    if len(xy) != 2:
+        raise ValueError(f"{name}: two numbers, x and y in mm")
+    return (xy[0], xy[1])
 
 
 _UNITS = {"deg": "degrees", "degrees": "degrees", "mm": "mm"}
