@@ -21,9 +21,10 @@ use gweave::rotary::helix::{
     self, Handedness, HelicalPath as RustHelicalPath, PrintSettings, Profile, Resolution,
 };
 use gweave::rotary::overrides::{MachineOverrides, TubeOverrides, WrapOverrides};
-use gweave::rotary::report::{merged_settings, tube_file, wrap_file};
+use gweave::rotary::report::merged_settings;
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
+use gweave::rotary_job::{tube_file, wrap_file};
 
 fn rotary_err(e: RotaryError) -> PyErr {
     match e {

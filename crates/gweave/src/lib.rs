@@ -33,6 +33,7 @@ pub mod post;
 pub mod range;
 pub mod render;
 pub mod rotary;
+pub mod rotary_job;
 pub mod run;
 pub mod settings;
 pub mod stats;

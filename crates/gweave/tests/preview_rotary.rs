@@ -112,8 +112,8 @@ fn shade_of(p: [u8; 4], base: [u8; 3]) -> bool {
 fn a_wrapped_two_tool_part_previews_in_both_tools_colours() {
     use gweave::gcode::writer::Target;
     use gweave::render::colour_by::TOOL_COLOURS;
-    use gweave::rotary::report::wrap_file;
     use gweave::rotary::wrap::WrapConfig;
+    use gweave::rotary_job::wrap_file;
 
     // A band of each tool, 20 mm across the flat Y (76 degrees of a 30 mm mandrel), the travel
     // between them never drawn.

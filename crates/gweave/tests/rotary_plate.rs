@@ -6,8 +6,8 @@ use std::path::Path;
 
 use gweave::gcode::writer::Target;
 use gweave::rotary::cylinder::{FeedConvention, RotaryConfig};
-use gweave::rotary::report::wrap_file;
 use gweave::rotary::wrap::WrapConfig;
+use gweave::rotary_job::wrap_file;
 use gweave::run::Run;
 
 fn plate() -> std::path::PathBuf {

@@ -17,9 +17,10 @@ use gweave::rotary::helix::{
     TubeParams, BEAD_WIDTH_MM, CHORD_TOLERANCE_MM, PITCH_MM, SEGMENTS_PER_TURN, TUBE_LAYERS, TUBE_LENGTH_MM,
 };
 use gweave::rotary::overrides::{MachineOverrides, TubeOverrides, WrapOverrides};
-use gweave::rotary::report::{self, MachineReport, TubeReport, WrapReport};
+use gweave::rotary::report::{MachineReport, TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
+use gweave::rotary_job;
 
 use crate::args::Lenient;
 use crate::common::hms;
@@ -218,7 +219,7 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     let strictness = args.lenient.strictness();
     let wrap = |t: &Target| {
         let run = Run::file(&args.input).to(t).progress(&mut bar).strictness(strictness);
-        Ok(report::wrap_file(&config, run, preview)?)
+        Ok(rotary_job::wrap_file(&config, run, preview)?)
     };
     // Its own time: the default machine of the estimator does not read the rotary feed.
     let ((mut report, malformed), written) =
@@ -353,7 +354,7 @@ fn run_tube(args: TubeArgs) -> Result<ExitCode> {
     let params = tube_params(&args)?;
     let target = args.format.target(&args.output)?;
     let preview = args.machine.preview.as_deref();
-    let tube = |t: &Target| Ok(report::tube_file(&params, t, preview)?);
+    let tube = |t: &Target| Ok(rotary_job::tube_file(&params, t, preview)?);
     let (mut report, written) =
         finish::with_metadata_timed(None, &target, tube, |r: &TubeReport| Some(r.print_time_s))?;
     report.output = written;
