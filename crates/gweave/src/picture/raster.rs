@@ -16,8 +16,7 @@
 //! says how much of it is painted.
 
 use tiny_skia::{
-    BlendMode, FillRule, LineCap, LineJoin, Paint, PathBuilder, PixmapMut, Rect, Stroke,
-    Transform,
+    BlendMode, FillRule, LineCap, LineJoin, Paint, PathBuilder, PixmapMut, Rect, Stroke, Transform,
 };
 
 use super::text;
