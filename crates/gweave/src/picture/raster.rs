@@ -5,11 +5,10 @@
 //! `tiny-skia` is a port of Skia's CPU rasteriser: a path is scan-converted with 4 x 4
 //! supersampling (Skia's `SkScan_AntiPath`), so a pixel's coverage is the share of its 16 sample
 //! points inside the shape, and a pixel wholly inside is fully covered. A line of width `w` is
-//! stroked as the set of points within `w/2` of the segment (round caps); a line thinner than a
-//! pixel is drawn one pixel wide with its alpha scaled by its width (Skia's "modulated
-//! hairline"), and a line of exactly one pixel a thousandth wider, as an area (a hairline's
-//! ends and joints are not fully covered). The colour is blended "over" the image: `dst = src * a + dst * (1 - a)` with
-//! `a = alpha * coverage` (Porter and Duff, 1984).
+//! filled as the points within `w/2` of the segment (round caps, as polygons within a tenth of
+//! a pixel of their arcs); a line thinner than a pixel is drawn one pixel wide with its alpha
+//! scaled by its width (Skia's "modulated hairline"). The colour is blended "over" the image:
+//! `dst = src * a + dst * (1 - a)` with `a = alpha * coverage` (Porter and Duff, 1984).
 //!
 //! A finished image is opaque (its background is), so the premultiplied RGBA that `tiny-skia`
 //! works in is plain RGBA: [`Image::rgba`] is read and encoded as it is. While a picture is
@@ -17,14 +16,10 @@
 //! says how much of it is painted.
 
 use tiny_skia::{
-    BlendMode, FillRule, LineCap, LineJoin, Paint, PathBuilder, PathStroker, PixmapMut, Rect, Stroke,
-    Transform,
+    BlendMode, FillRule, LineCap, LineJoin, Paint, PathBuilder, PixmapMut, Rect, Stroke, Transform,
 };
 
 use super::text;
-
-/// The narrowest stroke tiny-skia draws as an area: a hair over a pixel.
-const HAIRLINE_PX: f32 = 1.001;
 
 /// An RGBA8 image, rows top first.
 #[derive(Debug, Clone, PartialEq)]
@@ -63,7 +58,6 @@ impl Image {
             pixmap,
             paint: Paint::default(),
             stroke: Stroke { line_cap: LineCap::Round, line_join: LineJoin::Round, ..Stroke::default() },
-            stroker: PathStroker::new(),
             builder: PathBuilder::new(),
         })
     }
@@ -98,9 +92,8 @@ pub struct Painter<'a> {
     pixmap: PixmapMut<'a>,
     paint: Paint<'static>,
     stroke: Stroke,
-    /// Kept from one stroke to the next, with their buffers: a preview paints hundreds of
-    /// thousands of short strokes.
-    stroker: PathStroker,
+    /// Kept from one line to the next, with its buffers: a preview paints hundreds of
+    /// thousands of short lines.
     builder: PathBuilder,
 }
 
@@ -145,27 +138,26 @@ impl Painter<'_> {
             }
             return;
         }
-        // tiny-skia draws strokes up to 1 px wide as hairlines (Skia's "modulated hairline"),
-        // whose ends and joints are not fully covered; from 1 px up, as the area they cover.
-        self.stroke.width = if width_px >= 1.0 { width_px.max(HAIRLINE_PX) } else { width_px.max(0.0) };
-        let mut pb = std::mem::take(&mut self.builder);
+        // Lines from 1 px up are drawn as the area they cover; thinner ones as tiny-skia's
+        // hairlines (Skia's "modulated hairline": one pixel wide, faded by the width).
+        if width_px >= 1.0 {
+            let mut pb = std::mem::take(&mut self.builder);
+            capsules(&mut pb, points, width_px / 2.0);
+            if let Some(path) = pb.finish() {
+                self.pixmap.fill_path(&path, &self.paint, FillRule::Winding, Transform::identity(), None);
+                self.builder = path.clear();
+            }
+            return;
+        }
+        self.stroke.width = width_px.max(0.0);
+        let mut pb = PathBuilder::new();
         pb.move_to(p0[0], p0[1]);
         for p in &points[1..] {
             pb.line_to(p[0], p[1]);
         }
-        let Some(path) = pb.finish() else {
-            return;
-        };
-        if self.stroke.width >= HAIRLINE_PX {
-            // What `stroke_path` does for a stroke wider than a hairline, with the stroker's
-            // buffers kept.
-            if let Some(outline) = self.stroker.stroke(&path, &self.stroke, 1.0) {
-                self.pixmap.fill_path(&outline, &self.paint, FillRule::Winding, Transform::identity(), None);
-            }
-        } else {
+        if let Some(path) = pb.finish() {
             self.pixmap.stroke_path(&path, &self.paint, &self.stroke, Transform::identity(), None);
         }
-        self.builder = path.clear();
     }
 
     /// See [`Image::rect`].
@@ -242,6 +234,58 @@ impl Painter<'_> {
             self.pixmap.fill_path(&path, &self.paint, FillRule::Winding, turn, None);
         }
         width
+    }
+}
+
+/// How far a round end drawn as a polygon may fall inside its arc, px.
+const ARC_TOLERANCE_PX: f32 = 0.1;
+
+/// Adds to `pb` the points within `radius_px` of the polyline through `points` (a line with
+/// round joins and ends) as one capsule per segment: a rectangle along it and a half circle
+/// at each end, the half circles as polygons whose corners lie on the arc and whose sides
+/// stay within [`ARC_TOLERANCE_PX`] of it. Every capsule turns the same way about its own
+/// direction, so filled with the nonzero rule they make their union: the round joins, each
+/// pixel covered once.
+///
+/// Filling straight edges is what `tiny-skia` does fastest: stroking a path instead builds its
+/// outline from quadratic arcs, which the scan converter then cuts into lines again, and a
+/// preview paints hundreds of thousands of short strokes.
+fn capsules(pb: &mut PathBuilder, points: &[[f32; 2]], radius_px: f32) {
+    // A chord of angle `step` on a circle of radius r lies r (1 - cos(step / 2)) inside it.
+    let step = 2.0 * (1.0 - (ARC_TOLERANCE_PX / radius_px).min(1.0)).acos();
+    let n = (std::f32::consts::PI / step).ceil().clamp(2.0, 32.0) as usize;
+    // The corners of a half circle of radius `radius_px`, from the left of the direction
+    // of travel round the back to its right: (along, across).
+    let mut arc = [(0.0, 0.0); 33];
+    for (i, corner) in arc[..=n].iter_mut().enumerate() {
+        let (sin, cos) = (std::f32::consts::PI * i as f32 / n as f32).sin_cos();
+        *corner = (radius_px * sin, radius_px * cos);
+    }
+    let arc = &arc[..=n];
+    for pair in points.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let len = dx.hypot(dy);
+        if len == 0.0 {
+            // The segments next to it cover the point.
+            continue;
+        }
+        // Along the segment, and to its left.
+        let (u, v) = ([dx / len, dy / len], [-dy / len, dx / len]);
+        let corner = |p: [f32; 2], along: f32, across: f32| {
+            [p[0] + u[0] * along + v[0] * across, p[1] + u[1] * along + v[1] * across]
+        };
+        let start = corner(a, 0.0, radius_px);
+        pb.move_to(start[0], start[1]);
+        for &(along, across) in &arc[1..] {
+            let c = corner(a, -along, across);
+            pb.line_to(c[0], c[1]);
+        }
+        for &(along, across) in arc {
+            let c = corner(b, along, -across);
+            pb.line_to(c[0], c[1]);
+        }
+        pb.close();
     }
 }
 
