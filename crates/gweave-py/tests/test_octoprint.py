@@ -348,7 +348,12 @@ def test_octoprint_page_shows_the_badge_and_settings(octoprint, data, tmp_path):
     browser = Browser(tmp_path)
     try:
         browser.call("Page.navigate", url=octoprint.url)
-        browser.wait("document.querySelectorAll('.gweave-badge .label').length >= 4")
+        # Badges settle once no analysis is running (OctoPrint may analyse a file again, and
+        # its progress label shows until that ends).
+        browser.wait(
+            "document.querySelectorAll('.gweave-badge .label').length >= 4"
+            " && document.querySelectorAll('.gweave-badge .label-info').length == 0"
+        )
         badges = browser.js("Array.from(document.querySelectorAll('.gweave-badge')).map(e => e.innerText.trim())")
         t = int(gweave.estimate(data / "cura" / "cura_torus.gcode")["total_s"])  # OctoPrint floors
         torus = f"gweave {t // 3600:02}:{t // 60 % 60:02}:{t % 60:02}"

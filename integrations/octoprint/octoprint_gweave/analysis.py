@@ -138,11 +138,13 @@ class GweaveAnalysisQueue(AbstractAnalysisQueue):
             raise RuntimeError(f"gweave: {e}") from e
         finally:
             self._job = None
+            # Done, failed or aborted (OctoPrint aborts a background analysis for an upload's):
+            # the page's progress label goes either way, or it would stay at its last figure.
+            self._plugin.analysis_progress(entry.path, 1.0)
         self._logger.info(
             "gweave analysed %s in %.2f s: %s s print time, errors: %s", entry.path, time.monotonic() - started,
             result.get("estimatedPrintTime"), result["gweave"]["errors"] or "none",
         )
-        self._plugin.analysis_progress(entry.path, 1.0)
         return result
 
     def _do_abort(self, reenqueue: bool = True) -> None:
