@@ -98,7 +98,7 @@ fn read_back(
     Ok(Some(program.finish()))
 }
 
-/// Wraps the file `run` reads to the target it writes (see [`super::wrap`]), reads the result
+/// Wraps the file `run` reads to the target it writes (see [`crate::rotary::wrap`]), reads the result
 /// back and reports it, with the lines a lenient run read past.
 pub fn wrap_file(
     config: &WrapConfig,
