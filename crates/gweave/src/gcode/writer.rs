@@ -76,9 +76,9 @@ impl Output {
     /// refusing to overwrite the input by accident).
     pub fn create(target: &Target, input: Option<&Path>) -> Result<Output> {
         let sink = Self::sink(target, input)?;
-        let dest = sink.name();
-        // The container follows the file really written: a scratch file that stands for a
-        // `.gz` output is written as text, the finishing copy compresses.
+        let shown = sink.name();
+        // The container follows the file really written (not the name errors show): a scratch
+        // file that stands for a `.gz` output is written as text, the finishing copy compresses.
         let container = match (&sink, target) {
             (Sink::File { dest, .. } | Sink::Special { dest, .. }, _) => Container::of_output(dest),
             (Sink::Stdout(_), Target::Stdout(container)) => *container,
@@ -91,7 +91,7 @@ impl Output {
             }
             _ => None,
         };
-        let sink = Encoder::new(container, sink, carried).map_err(|e| Error::io(dest, e))?;
+        let sink = Encoder::new(container, sink, carried).map_err(|e| Error::io(shown, e))?;
         Ok(Output { sink })
     }
 
