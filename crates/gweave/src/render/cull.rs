@@ -41,15 +41,25 @@ pub(super) fn overdraw_stride(strokes: &[Stroke], width: u32, height: u32) -> us
 
 /// Side of the square tiles, px.
 const TILE: usize = 8;
-/// How far past its half width a stroke may change pixels (their centres), px. A line is a
-/// polygon within its capsule ([`crate::picture::Painter::polyline`]), and `tiny-skia` samples a
-/// pixel at 4 x 4 points: rows a quarter pixel apart, the nearest 0.375 px from the centre, and
-/// spans along a row rounded to a quarter pixel, so 0.625 px across; a sample inside the shape
-/// lies within 0.73 px of the centre, and the rest is margin. The tests that paint with and
-/// without skipping fail from 0.5 down; every pixel looked at beyond the reach makes strokes
-/// seem visible that are not (1.25, as the round ends were stroked from arcs, drew the
-/// benchmark's iso view 7 % slower, to the same picture).
-const REACH_PX: f32 = 1.0;
+/// How far past its half width a line 1 px wide or more may change pixels (their centres), px.
+/// A line is filled as a polygon inside its capsule ([`crate::picture::Painter::polyline`]),
+/// and `tiny-skia` covers a pixel by point samples (Skia's `SkScan_AntiPath`, 4 x 4 per pixel):
+/// sample rows a quarter pixel apart through the row centres at 1/8, 3/8, 5/8 and 7/8, and along
+/// a row the span between two edges rounded to a quarter pixel, which takes in the columns whose
+/// centres (the same eighths) lie inside. A covered sample is therefore a point of the shape at
+/// most `3/8 * sqrt(2)` = 0.530 px from the pixel's centre. The rest is the fixed point of the
+/// edge walker (coordinates in 1/256 px, slopes in 1/65536 of a sample row: under 0.02 px
+/// down a 900 px edge), with more than three times that to spare. The tests that paint with and
+/// without skipping fail from 0.5 down. Every pixel looked at beyond the reach makes strokes
+/// seem visible that are not: with 1.0, the iso view of the benchmark file painted 45 % more
+/// strokes (63 600 against 43 800), to the same picture.
+const REACH_PX: f32 = 0.6;
+
+/// How far from its middle line a line thinner than a pixel may change pixels, px: `tiny-skia`
+/// draws it as an anti-aliased hairline (Skia's "modulated hairline"), one pixel wide, whose
+/// coverage falls off to nothing one pixel away from the line, and whose round ends lengthen it
+/// by half a pixel; 0.1 px to spare. The hairline test fails from 1.0 down.
+const HAIRLINE_REACH_PX: f32 = 1.6;
 
 /// What the strokes painted so far hide, read from the image they are painted on.
 pub(super) struct Opaque {
@@ -73,7 +83,7 @@ impl Opaque {
     /// The pixel box `s` could change, clipped to the image: `x0, y0, x1, y1`, or `None` when
     /// it draws nothing (off the picture, or NaN).
     fn reach(&self, s: &Stroke) -> Option<(f32, [usize; 4])> {
-        let reach = s.width_px.max(1.0) / 2.0 + REACH_PX;
+        let reach = if s.width_px >= 1.0 { s.width_px / 2.0 + REACH_PX } else { HAIRLINE_REACH_PX };
         let x0 = floor(s.from[0].min(s.to[0]) - reach).max(0.0);
         let y0 = floor(s.from[1].min(s.to[1]) - reach).max(0.0);
         let x1 = ceil(s.from[0].max(s.to[0]) + reach).min(self.w as f32);
