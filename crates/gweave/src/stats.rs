@@ -173,9 +173,11 @@ impl StatsPass {
         if let Some(flavour) = &self.figures.flavour {
             let letter = extrusion_letter(flavour);
             if letter != state.options().firmware.extrusion_letter() {
-                // Only a stream (a pipe) is read without looking at its end first.
+                // The flavour is looked for at both ends of the file before the moves are read
+                // (standard input is spooled to be read the same way): only a flavour named
+                // in the middle of the file is seen too late.
                 warnings.push(format!(
-                    "the file's flavour ({flavour}) extrudes with {}, but it was read with {}: read it from a file, not a pipe",
+                    "the file's flavour ({flavour}) extrudes with {}, but it was read with {}: the flavour is named in the middle of the file, past where gweave looks for it (slicers name it at the start or the end)",
                     char::from(letter),
                     char::from(state.options().firmware.extrusion_letter())
                 ));
@@ -426,7 +428,7 @@ mod tests {
         assert!(blind.filament.iter().all(|t| t.extruded_mm == 0.0), "{:?}", blind.filament);
         // Nothing extruded: no box, not the empty box's infinities.
         assert_eq!((blind.extrusion_bounds, blind.z_range_mm), (None, None));
-        let warning = "the file's flavour (mach3) extrudes with A, but it was read with E: read it from a file, not a pipe";
+        let warning = "the file's flavour (mach3) extrudes with A, but it was read with E: the flavour is named in the middle of the file, past where gweave looks for it (slicers name it at the start or the end)";
         assert!(blind.warnings.iter().any(|w| w == warning), "{:?}", blind.warnings);
         let seen = run(StateOptions::default().for_flavour(Some("mach3")));
         assert_eq!(seen.filament[0].extruded_mm, 2.0);

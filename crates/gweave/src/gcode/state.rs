@@ -24,7 +24,8 @@ fn axis_of_word(letter: u8, extrusion_letter: u8) -> Option<usize> {
     axis_of(letter).filter(|&i| i != E)
 }
 
-const MM_PER_INCH: f64 = 25.4;
+/// Millimetres in an inch (G20 files), exactly.
+pub(crate) const MM_PER_INCH: f64 = 25.4;
 
 /// Temperatures and fan the file has asked for.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -34,9 +34,8 @@
 use crate::gcode::lexer::parse_into;
 use crate::gcode::line::{Block, Value};
 use crate::gcode::number::NumberFormat;
-use crate::gcode::state::{axis_of, Move, Path, Position, AXES, AXIS_LETTERS, E, X, Y};
+use crate::gcode::state::{axis_of, Move, Path, Position, AXES, AXIS_LETTERS, E, MM_PER_INCH, X, Y};
 
-const MM_PER_INCH: f64 = 25.4;
 /// Decimals written for split positions and I/J, mm (0.01 um: far below any step).
 pub(crate) const POSITION_DECIMALS: u8 = 5;
 /// Decimals written for split E words, mm of filament.
