@@ -7,7 +7,7 @@ use gweave::run::Run;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 
-use crate::args::os_error;
+use crate::args::{os_error, target_of};
 use crate::{err, finish, strictness, to_json};
 use gweave::malformed::{Malformed, Transformed};
 use gweave::rotary::report::WrapReport;
@@ -85,14 +85,17 @@ fn read_settings<T>(
 /// Wraps a flat G-code file onto the mandrel; the keywords override the TOML file `config` as
 /// the CLI's flags do. Returns the report as JSON text (`rotary wrap --json`).
 #[pyfunction]
-#[pyo3(signature = (input, output, *, mandrel_diameter=None, feed_convention=None, rotary_unit=None, axes=None,
-    keep_arc_length=None, seam_rotation=None, helical=false, allow_overlap=false, chord_tol=None, config=None,
-    preview=None, lenient=false, options=""))]
+#[pyo3(signature = (input, output=None, *, in_place=false, backup=true, force=false, mandrel_diameter=None,
+    feed_convention=None, rotary_unit=None, axes=None, keep_arc_length=None, seam_rotation=None, helical=false,
+    allow_overlap=false, chord_tol=None, config=None, preview=None, lenient=false, options=""))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn rotary_wrap_json(
     py: Python<'_>,
     input: PathBuf,
-    output: PathBuf,
+    output: Option<PathBuf>,
+    in_place: bool,
+    backup: bool,
+    force: bool,
     mandrel_diameter: Option<f64>,
     feed_convention: Option<&str>,
     rotary_unit: Option<&str>,
@@ -123,7 +126,7 @@ pub(crate) fn rotary_wrap_json(
         let run = Run::file(&input).strictness(strictness).to(t);
         wrap_file(&wrap, run, preview.as_deref()).map_err(rotary_err)
     };
-    let target = Target::File(output);
+    let target = target_of(output, in_place, backup, force)?;
     let own_time = |r: &(WrapReport, Malformed)| Some(r.0.time_s);
     let (report, malformed) = py
         .allow_threads(|| finish::finished(Some(&input), &target, "rotary wrap", options, write, own_time))?;

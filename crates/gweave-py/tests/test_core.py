@@ -62,7 +62,7 @@ def test_cat_is_byte_exact_and_never_overwrites_input(data, tmp_path):
     assert filecmp.cmp(src, out, shallow=False)
     raw = src.read_bytes()
     assert copied == {"lines": raw.count(b"\n"), "bytes": len(raw), "malformed_lines": 0, "first_malformed_line": None}
-    with pytest.raises(ValueError, match="refusing to overwrite"):
+    with pytest.raises(ValueError, match=r"refusing to overwrite .*\(pass in_place=True to replace it\)"):
         gweave.cat(out, out)
 
 

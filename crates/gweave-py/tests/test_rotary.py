@@ -2,6 +2,7 @@
 
 import json
 import math
+import shutil
 import subprocess
 import sys
 
@@ -45,6 +46,28 @@ def test_wrap_closes_every_layer(data, tmp_path):
         assert layer["span_deg"] + bead_deg == pytest.approx(360, abs=0.005)
         assert layer["seam_deg"] == pytest.approx(7.5 * k)
         assert layer["radius_mm"] == pytest.approx(15 + 0.2 * (k + 1))
+
+
+def test_wrap_replaces_its_input_only_when_asked_as_the_cli(data, tmp_path):
+    """Regression: ``rotary_wrap`` had no ``in_place`` (the CLI's ``--in-place``), and refusing an
+    output that is the input told a Python caller to "use --in-place"."""
+    src = tmp_path / "plate.gcode"
+    shutil.copy(data / "rotary" / "plate.gcode", src)
+    original = src.read_bytes()
+    with pytest.raises(ValueError, match=r"refusing to overwrite the input .*pass in_place=True"):
+        gweave.rotary_wrap(src, src, mandrel_diameter=30)
+    with pytest.raises(ValueError, match="give an output path or in_place=True"):
+        gweave.rotary_wrap(src, mandrel_diameter=30)
+    assert src.read_bytes() == original
+    gweave.rotary_wrap(src, tmp_path / "sleeve.gcode", mandrel_diameter=30)
+    src.chmod(0o444)
+    with pytest.raises(ValueError, match="read-only: in_place=True would replace it .*pass force=True"):
+        gweave.rotary_wrap(src, in_place=True, mandrel_diameter=30)
+    assert src.read_bytes() == original
+    report = gweave.rotary_wrap(src, in_place=True, force=True, mandrel_diameter=30)
+    assert len(report["layers"]) == 10
+    assert (tmp_path / "plate.gcode.bak").read_bytes() == original
+    assert src.read_bytes() == (tmp_path / "sleeve.gcode").read_bytes()
 
 
 def test_cone_path_points_follow_the_radius_table():

@@ -640,8 +640,11 @@ def _machine(
 
 def rotary_wrap(
     input: PathLike,
-    output: PathLike,
+    output: Optional[PathLike] = None,
     *,
+    in_place: bool = False,
+    backup: bool = True,
+    force: bool = False,
     mandrel_diameter: Optional[float] = None,
     feed_convention: Optional[str] = None,
     rotary_unit: Optional[str] = None,
@@ -664,12 +667,17 @@ def rotary_wrap(
     (no weld line); ``allow_overlap=True`` wraps a part wider than the circumference over itself;
     ``chord_tol`` mm; ``lenient=True`` copies malformed lines through and counts them instead of
     raising. Keywords override the TOML ``config``.
-    ``preview`` writes a 3D PNG of the executed path. Returns the report (per-layer radius,
-    angles swept, seam angle; filament; time).
+    ``preview`` writes a 3D PNG of the executed path. Give ``output``, or ``in_place=True`` to
+    replace ``input`` (keeping a ``.bak`` unless ``backup=False``; ``force=True`` replaces a
+    read-only file). Returns the report (per-layer radius, angles swept, seam angle; filament;
+    time).
     """
     text = _gweave.rotary_wrap_json(
         _path(input, "input"),
-        _path(output, "output"),
+        _opt_path(output, "output"),
+        in_place=in_place,
+        backup=backup,
+        force=force,
         mandrel_diameter=mandrel_diameter,
         feed_convention=feed_convention,
         rotary_unit=rotary_unit,

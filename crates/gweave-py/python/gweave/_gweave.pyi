@@ -160,8 +160,11 @@ Profile = Union[float, Sequence[Tuple[float, float]], Callable[[float], float]]
 
 def rotary_wrap_json(
     input: str,
-    output: str,
+    output: Optional[str] = None,
     *,
+    in_place: bool = False,
+    backup: bool = True,
+    force: bool = False,
     mandrel_diameter: Optional[float] = None,
     feed_convention: Optional[str] = None,
     rotary_unit: Optional[str] = None,
