@@ -343,8 +343,9 @@ fn a_second_run_on_gzip_or_binary_output_is_refused() {
     }
 }
 
-/// Regression: `raster --test-pattern` wrote no `; gweave ...` header, unlike every command
-/// that writes G-code (`rotary tube` and `raster` of images have it, checked above).
+/// Regression: `raster --test-pattern` and `mix --calibration-card` wrote no `; gweave ...`
+/// header nor the metadata footer, unlike every other command that writes G-code
+/// (`rotary tube` and `raster` of images have them, checked above).
 #[test]
 fn generators_outputs_carry_the_gweave_header() {
     let dir = tempfile::tempdir().unwrap();
@@ -352,4 +353,11 @@ fn generators_outputs_carry_the_gweave_header() {
     let text = transform(&["raster", "--test-pattern", "--pattern-columns", "2"], &out);
     check_output(&text, &out, "raster --test-pattern --pattern-columns 2", false);
     assert!(text.contains("\n; filament used [mm] = 0.00\n"), "{text}");
+    let out = dir.path().join("card.gcode");
+    let text = transform(&["mix", "--calibration-card"], &out);
+    check_output(&text, &out, "mix --calibration-card", false);
+    // 26 swatches on the default CMYW hotend, each its own virtual tool, and the time.
+    let used = text.lines().find(|l| l.starts_with("; filament used [mm] = ")).unwrap();
+    assert!(used.split(", ").count() >= 16, "{used}");
+    assert!(text.contains("\n; estimated printing time (normal mode) = "), "{text}");
 }

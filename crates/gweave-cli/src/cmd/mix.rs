@@ -142,7 +142,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
                 };
                 super::mix_colour::fit_profile(&profile, &text, csv, out, &args.report)
             }
-            None => super::mix_colour::card(&profile, out, &args.report),
+            None => super::mix_colour::card(&profile, out, &args.out.format.target(out)?, &args.report),
         };
     }
     let has_job = !(profile.schedule.is_empty() && profile.gradient.is_empty() && profile.map.is_empty());

@@ -1,11 +1,13 @@
 //! `gweave mix`'s colour tools: `--predict`, `--calibration-card`, `--fit` (see `docs/mix.md`).
 
+use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
 
 use anyhow::{anyhow, Result};
 use gweave::colour::fit::{fit, parse_csv, FitError};
 use gweave::colour::predict::{parse_ratios, predict, Prediction};
+use gweave::gcode::writer::{Output, Target};
 use gweave::post::mix::card::{calibration_card, card_mixes, fitted_profile_toml};
 use gweave::post::mix::profile::MixProfile;
 
@@ -30,13 +32,15 @@ pub fn predict_all(profile: &MixProfile, mixes: &[String], report: &ReportArgs) 
 }
 
 /// `--calibration-card -o card.gcode [--report card.json]`.
-pub fn card(profile: &MixProfile, output: &Path, report: &ReportArgs) -> Result<ExitCode> {
+/// The card is written as every G-code gweave makes: the `; gweave` header, and the metadata
+/// footer (filament, time) a slicer would write.
+pub fn card(profile: &MixProfile, output: &Path, target: &Target, report: &ReportArgs) -> Result<ExitCode> {
     let (gcode, card) = calibration_card(profile)?;
-    if output == Path::new("-") {
-        print_summary(|out| out.write_all(&gcode))?;
-    } else {
-        write_bytes(output, &gcode)?;
-    }
+    crate::finish::with_metadata(None, target, |t| {
+        let mut out = Output::create(t, None)?;
+        out.write_all(&gcode)?;
+        Ok(out.commit()?)
+    })?;
     for w in &card.mix.warnings {
         eprintln!("gweave: warning: {w}");
     }
@@ -46,7 +50,7 @@ pub fn card(profile: &MixProfile, output: &Path, report: &ReportArgs) -> Result<
         purge: &'a gweave::post::mix::report::PurgeTotals,
     }
     let summary = Swatches { swatches: &card.swatches, purge: &card.mix.purge };
-    if report.emit(&summary)? && output != Path::new("-") {
+    if report.emit(&summary)? && !target.is_stdout() {
         print_summary(|out| {
             writeln!(
                 out,
