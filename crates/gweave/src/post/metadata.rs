@@ -149,6 +149,9 @@ pub struct MetadataPass {
     /// The next Slic3r `; filament used =` line's tool.
     slic3r_tool: usize,
     eol: Vec<u8>,
+    /// The last line written has no line ending (the file's last line, unterminated): what is
+    /// added after it starts a line of its own.
+    open_line: bool,
 }
 
 impl MetadataPass {
@@ -163,6 +166,7 @@ impl MetadataPass {
             wrote_filament: false,
             slic3r_tool: 0,
             eol: b"\n".to_vec(),
+            open_line: false,
         }
     }
 
@@ -276,8 +280,17 @@ impl MetadataPass {
 
     fn write_header(&mut self, out: &mut dyn Write) -> io::Result<()> {
         self.header_written = true;
+        self.end_open_line(out)?;
         out.write_all(self.header.as_bytes())?;
         out.write_all(&self.eol)
+    }
+
+    /// Ends the last line written if it has no line ending, so that what follows is a line.
+    fn end_open_line(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        if std::mem::take(&mut self.open_line) {
+            out.write_all(&self.eol)?;
+        }
+        Ok(())
     }
 }
 
@@ -302,6 +315,7 @@ impl Pass for MetadataPass {
             None => out.write_all(bytes)?,
         }
         out.write_all(ctx.line.eol)?;
+        self.open_line = ctx.line.eol.is_empty();
         if !self.header_written && (bytes == b";END_OF_HEADER" || cura_flavour_first) {
             self.write_header(out)?;
         }
@@ -316,6 +330,7 @@ impl Pass for MetadataPass {
             return Ok(());
         }
         // A file without the slicer's figures (a generated one): PrusaSlicer's footer.
+        self.end_open_line(out)?;
         let f = &self.figures;
         // A file that extrudes nothing (an inkjet raster) used none.
         let list = |v: &[f64]| match v {
@@ -444,6 +459,22 @@ G1 X1 E1 ; keep\r\nM73 P50 R31 ; half\r\nM73 P100 R0\r\n; filament used [mm] = 1
         assert!(out.ends_with("G1 X1 E1\n; filament used [mm] = 12.35\n; filament used [cm3] = 0.03\n; estimated printing time (normal mode) = 0s\n"), "{out}");
         let out = rewrite("G1 X1\n", Figures::default());
         assert!(out.ends_with("G1 X1\n; filament used [mm] = 0.00\n; filament used [cm3] = 0.00\n; estimated printing time (normal mode) = 0s\n"), "{out}");
+    }
+
+    /// Regression: after a last line without a line ending the footer ran on in it
+    /// (`;End of Gcode; filament used [mm] = ...`, a comment no host reads), and so did the
+    /// header after a Griffin header block ending the file.
+    #[test]
+    fn what_follows_an_unterminated_last_line_starts_a_line() {
+        let out =
+            rewrite("G1 X1 E1\n;End of Gcode", Figures { filament_mm: vec![12.345], ..Default::default() });
+        assert!(out.ends_with("\n;End of Gcode\n; filament used [mm] = 12.35\n; filament used [cm3] = 0.03\n; estimated printing time (normal mode) = 0s\n"), "{out}");
+        let header = header_line("mix a.gcode -o b.gcode");
+        let out = rewrite(";START_OF_HEADER\r\n;END_OF_HEADER", Figures::default());
+        assert!(
+            out.starts_with(&format!(";START_OF_HEADER\r\n;END_OF_HEADER\r\n{header}\r\n; filament used")),
+            "{out}"
+        );
     }
 
     #[test]
