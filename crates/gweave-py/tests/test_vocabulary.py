@@ -80,11 +80,7 @@ MAP = {
     "rotary wrap": (
         "rotary_wrap",
         {
-            "output": "output",
-            **FORMAT,
-            "in-place": "- rotary_wrap writes output; a wrapped file never replaces its flat input",
-            "no-backup": "- as in-place",
-            "force": "- as in-place",
+            **TARGET,
             **{
                 f: f.replace("-", "_")
                 for f in (
