@@ -134,7 +134,9 @@ fn finish(
     let options = StateOptions::default().for_flavour(flavour.as_deref());
     let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
     let mut pass = MetadataPass::new(figures, header_line(command_line));
-    drive_reader(file, path, None, options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
+    // Write errors name the output the user named, not the scratch file read here.
+    let shown = out.shown();
+    drive_reader(file, path, Some(&shown), options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
     out.commit()?;
     Ok(written)
 }

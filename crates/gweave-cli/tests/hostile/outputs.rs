@@ -383,6 +383,23 @@ fn write_errors_during_a_transform_name_the_output() {
     }
 }
 
+/// Regression: a disk filling up while the metadata was written (the transform's output, 3 MB,
+/// fits on a 4 MB disk; it and the final file together do not) named the scratch file,
+/// `.gweave-XXXX.tmp (output)`, not the output.
+#[test]
+fn write_errors_while_the_metadata_is_written_name_the_output() {
+    let Some(fs4) = Tmpfs::mount("4m") else { return };
+    let disk = fs4.0.path();
+    let input = fixture_path("cura/cura_dual.gcode");
+    let out =
+        gweave(disk, &["purge-shift", &input.to_string_lossy(), "--purge-mm", "25", "-o", "out.gcode", "-q"])
+            .run();
+    out.assert_refused("out.gcode: No space left on device");
+    assert!(!out.stderr.contains(".gweave-"), "{}", out.stderr);
+    assert!(!disk.join("out.gcode").exists());
+    assert_no_temp_left(disk);
+}
+
 /// Regression: `serve --report PATH` was written only when a host disconnected, so a report in
 /// a missing folder, or naming the EEPROM file the server reads, was found out after serving.
 #[test]

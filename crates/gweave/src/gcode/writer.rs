@@ -140,15 +140,24 @@ impl Output {
 
     /// The file being written (`None` for standard output): the name write errors should show.
     pub fn dest(&self) -> Option<&Path> {
-        let sink = match &self.sink {
-            Encoder::Text(s) => s,
-            Encoder::Gzip(z) => z.get_ref(),
-            Encoder::Bgcode(b) => b.get_ref(),
-        };
-        match sink {
+        match self.open_sink() {
             Sink::File { shown, .. } => Some(shown),
             Sink::Special { dest, .. } => Some(dest),
             Sink::Stdout(_) => None,
+        }
+    }
+
+    /// The name write errors show: the file the user named (not its temporary file), or
+    /// `<stdout>`.
+    pub fn shown(&self) -> PathBuf {
+        self.open_sink().name()
+    }
+
+    fn open_sink(&self) -> &Sink {
+        match &self.sink {
+            Encoder::Text(s) => s,
+            Encoder::Gzip(z) => z.get_ref(),
+            Encoder::Bgcode(b) => b.get_ref(),
         }
     }
 
