@@ -368,18 +368,13 @@ fn a_full_disk_leaves_nothing_behind() {
 /// writes before the header and metadata go on), not the output the user gave.
 #[test]
 fn write_errors_during_a_transform_name_the_output() {
-    let Some(fs1) = Tmpfs::mount("1m") else { return };
-    let disk = fs1.0.path();
     let input = fixture_path("cura/cura_dual.gcode");
+    let input = input.to_string_lossy();
     for args in [
-        &["purge-shift", &input.to_string_lossy(), "--purge-mm", "25", "-o", "out.gcode", "-q"][..],
-        &["mix", &input.to_string_lossy(), "--at-layer", "0=Orange", "-o", "out.gcode", "-q"][..],
+        &["purge-shift", &input, "--purge-mm", "25", "-o", "out.gcode", "-q"][..],
+        &["mix", &input, "--at-layer", "0=Orange", "-o", "out.gcode", "-q"][..],
     ] {
-        let out = gweave(disk, args).run();
-        out.assert_refused("out.gcode: No space left on device");
-        assert!(!out.stderr.contains(".gweave-"), "{}", out.stderr);
-        assert!(!disk.join("out.gcode").exists());
-        assert_no_temp_left(disk);
+        write_error_names_the_output("1m", args);
     }
 }
 
@@ -388,12 +383,19 @@ fn write_errors_during_a_transform_name_the_output() {
 /// `.gweave-XXXX.tmp (output)`, not the output.
 #[test]
 fn write_errors_while_the_metadata_is_written_name_the_output() {
-    let Some(fs4) = Tmpfs::mount("4m") else { return };
-    let disk = fs4.0.path();
     let input = fixture_path("cura/cura_dual.gcode");
-    let out =
-        gweave(disk, &["purge-shift", &input.to_string_lossy(), "--purge-mm", "25", "-o", "out.gcode", "-q"])
-            .run();
+    write_error_names_the_output(
+        "4m",
+        &["purge-shift", &input.to_string_lossy(), "--purge-mm", "25", "-o", "out.gcode", "-q"],
+    );
+}
+
+/// Runs `args` writing `out.gcode` on a tmpfs of `size`: refused for want of space, naming
+/// `out.gcode` and not a scratch file, leaving nothing behind.
+fn write_error_names_the_output(size: &str, args: &[&str]) {
+    let Some(fs) = Tmpfs::mount(size) else { return };
+    let disk = fs.0.path();
+    let out = gweave(disk, args).run();
     out.assert_refused("out.gcode: No space left on device");
     assert!(!out.stderr.contains(".gweave-"), "{}", out.stderr);
     assert!(!disk.join("out.gcode").exists());

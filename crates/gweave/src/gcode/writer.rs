@@ -140,7 +140,7 @@ impl Output {
 
     /// The file being written (`None` for standard output): the name write errors should show.
     pub fn dest(&self) -> Option<&Path> {
-        match self.open_sink() {
+        match self.inner_sink() {
             Sink::File { shown, .. } => Some(shown),
             Sink::Special { dest, .. } => Some(dest),
             Sink::Stdout(_) => None,
@@ -150,10 +150,10 @@ impl Output {
     /// The name write errors show: the file the user named (not its temporary file), or
     /// `<stdout>`.
     pub fn shown(&self) -> PathBuf {
-        self.open_sink().name()
+        self.inner_sink().name()
     }
 
-    fn open_sink(&self) -> &Sink {
+    fn inner_sink(&self) -> &Sink {
         match &self.sink {
             Encoder::Text(s) => s,
             Encoder::Gzip(z) => z.get_ref(),
