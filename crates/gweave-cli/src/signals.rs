@@ -1,4 +1,4 @@
-//! Ctrl-C, SIGTERM and SIGHUP during a run: remove the temporary files being written
+//! Ctrl-C, SIGTERM, SIGHUP and a closed pipe (SIGPIPE) during a run: remove the temporary files being written
 //! (`gweave::gcode::temp`), then exit with 128 + the signal number, as a shell reports a
 //! process the signal killed. Without this, a signal ends the process before any destructor
 //! runs and leaves a hidden `.gweave-*.tmp` as large as the output written so far.
@@ -17,7 +17,11 @@ mod imp {
 
     use libc::c_int;
 
-    const SIGNALS: [c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP];
+    /// SIGPIPE too: the command line leaves it at its default, as Unix tools do, so a reader
+    /// that stops early (`gweave mix ... -o - | head`) kills the process, which would leave the
+    /// scratch file behind. It is guarded only where it is fatal: Python ignores it, and a
+    /// closed pipe is then an error the run unwinds from.
+    const SIGNALS: [c_int; 4] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP, libc::SIGPIPE];
 
     /// The pipe's write end while a run is guarded, else -1.
     static WAKE_FD: AtomicI32 = AtomicI32::new(-1);
@@ -65,6 +69,11 @@ mod imp {
                 // SAFETY: a zeroed sigaction is valid; the handler is an `extern "C" fn(c_int)`
                 // as sa_sigaction expects without SA_SIGINFO; `old` receives the previous one.
                 unsafe {
+                    let mut now: libc::sigaction = std::mem::zeroed();
+                    libc::sigaction(signal, std::ptr::null(), &mut now);
+                    if signal == libc::SIGPIPE && now.sa_sigaction != libc::SIG_DFL {
+                        continue;
+                    }
                     let mut action: libc::sigaction = std::mem::zeroed();
                     action.sa_sigaction = on_signal as extern "C" fn(c_int) as usize;
                     action.sa_flags = libc::SA_RESTART;

@@ -402,6 +402,29 @@ fn write_error_names_the_output(size: &str, args: &[&str]) {
     assert_no_temp_left(disk);
 }
 
+/// Regression: a reader that stops early (`gweave purge-shift in.gcode -o - | head -1`) killed
+/// the process by SIGPIPE, the command line leaving it at its default as Unix tools do, and the
+/// scratch file the output is made in (in the temporary directory, for standard output) stayed.
+#[test]
+fn a_closed_pipe_leaves_no_scratch_file() {
+    use std::io::Read;
+    let tmp = tempfile::tempdir().unwrap();
+    let input = fixture_path("cura/cura_dual.gcode");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_gweave"))
+        .args(["purge-shift", &input.to_string_lossy(), "--purge-mm", "25", "-o", "-", "-q"])
+        .env("TMPDIR", tmp.path())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 16];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    // The pipe's read end is dropped here: the next write of the 3 MB output meets it closed.
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(128 + libc::SIGPIPE), "{status:?}");
+    assert_no_temp_left(tmp.path());
+}
+
 /// Regression: `serve --report PATH` was written only when a host disconnected, so a report in
 /// a missing folder, or naming the EEPROM file the server reads, was found out after serving.
 #[test]
