@@ -1,13 +1,27 @@
-//! Ctrl-C, SIGTERM, SIGHUP and a closed pipe (SIGPIPE) during a run: remove the temporary files being written
-//! (`gweave::gcode::temp`), then exit with 128 + the signal number, as a shell reports a
-//! process the signal killed. Without this, a signal ends the process before any destructor
-//! runs and leaves a hidden `.gweave-*.tmp` as large as the output written so far.
+//! A signal during a run (Ctrl-C, SIGTERM, SIGHUP, a closed pipe, `ulimit -f`'s SIGXFSZ, a
+//! `kill -USR1`...): remove the temporary files being written (`gweave::gcode::temp`), then end
+//! the process by the same signal, with its default action, so the parent sees what it sent
+//! (a shell reports 128 + the signal; a core-dumping signal still dumps). Without this, a
+//! signal ends the process before any destructor runs and leaves a hidden `.gweave-*.tmp` as
+//! large as the output written so far.
+//!
+//! Every signal whose default action ends the process is guarded, except two kinds:
+//! - a signal the process inherited as ignored (`nohup` ignores SIGHUP, a shell starts
+//!   background jobs with SIGINT and SIGQUIT ignored): the run must go on through it, as the
+//!   one who started it asked (POSIX `nohup`, and "Signals" in the shell's job control);
+//! - a signal someone in the process already handles: the Python interpreter, which runs the
+//!   CLI inside itself (`gweave.main()`), handles SIGINT as `KeyboardInterrupt`; the run
+//!   leaves it to it (the Python package polls for it and stops the run).
+//!
+//! Faults a thread raises against itself (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGTRAP, SIGSYS,
+//! SIGABRT) are not guarded: the handler would return into the faulting instruction, and
+//! Rust's runtime owns SIGSEGV and SIGBUS for its stack-overflow report.
 //!
 //! The handler itself only writes the signal number into a pipe (`write` is async-signal-safe);
 //! a thread reading the pipe does the work, which needs locks and allocation. The handlers are
 //! installed for the length of one run and the previous ones restored after it, because the
-//! Python package runs the CLI inside the interpreter, whose own Ctrl-C handling must come
-//! back once the command returns.
+//! Python package runs the CLI inside the interpreter, whose own handling must come back once
+//! the command returns.
 
 #[cfg(unix)]
 mod imp {
@@ -17,11 +31,26 @@ mod imp {
 
     use libc::c_int;
 
-    /// SIGPIPE too: the command line leaves it at its default, as Unix tools do, so a reader
-    /// that stops early (`gweave mix ... -o - | head`) kills the process, which would leave the
-    /// scratch file behind. It is guarded only where it is fatal: Python ignores it, and a
-    /// closed pipe is then an error the run unwinds from.
-    const SIGNALS: [c_int; 4] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP, libc::SIGPIPE];
+    /// The signals guarded: every one whose default action ends the process (signal(7)) and
+    /// that comes from outside the thread it interrupts. SIGPIPE too: the command line leaves
+    /// it at its default, as Unix tools do, so a reader that stops early
+    /// (`gweave mix ... -o - | head`) kills the process, which would leave the scratch file.
+    /// SIGXFSZ is the file size limit (`ulimit -f`) a write just passed; SIGXCPU the CPU time
+    /// limit (`ulimit -t`).
+    fn guarded() -> Vec<c_int> {
+        use libc::*;
+        let mut signals = vec![
+            SIGHUP, SIGINT, SIGQUIT, SIGPIPE, SIGALRM, SIGTERM, SIGUSR1, SIGUSR2, SIGXCPU, SIGXFSZ,
+            SIGVTALRM, SIGPROF,
+        ];
+        // Linux ends the process on these too, and on every real-time signal.
+        #[cfg(any(target_os = "linux", target_os = "android"))]
+        {
+            signals.extend([SIGIO, SIGPWR, SIGSTKFLT]);
+            signals.extend(SIGRTMIN()..=SIGRTMAX());
+        }
+        signals
+    }
 
     /// The pipe's write end while a run is guarded, else -1.
     static WAKE_FD: AtomicI32 = AtomicI32::new(-1);
@@ -65,13 +94,16 @@ mod imp {
                 std::thread::Builder::new().name("gweave-signals".into()).spawn(move || watch(read_fd));
             let mut guard = Cleanup { previous: Vec::new(), fds, thread: None };
             guard.thread = Some(thread?);
-            for signal in SIGNALS {
+            for signal in guarded() {
                 // SAFETY: a zeroed sigaction is valid; the handler is an `extern "C" fn(c_int)`
                 // as sa_sigaction expects without SA_SIGINFO; `old` receives the previous one.
                 unsafe {
                     let mut now: libc::sigaction = std::mem::zeroed();
-                    libc::sigaction(signal, std::ptr::null(), &mut now);
-                    if signal == libc::SIGPIPE && now.sa_sigaction != libc::SIG_DFL {
+                    if libc::sigaction(signal, std::ptr::null(), &mut now) != 0 {
+                        continue;
+                    }
+                    // An inherited ignore (nohup), or the embedding program's own handler.
+                    if now.sa_sigaction != libc::SIG_DFL {
                         continue;
                     }
                     let mut action: libc::sigaction = std::mem::zeroed();
@@ -89,7 +121,8 @@ mod imp {
         }
     }
 
-    /// Waits for a signal number (0: the run ended), then cleans up and exits.
+    /// Waits for a signal number (0: the run ended), then cleans up and ends the process by
+    /// that signal.
     fn watch(read_fd: c_int) {
         loop {
             let mut byte = 0u8;
@@ -102,8 +135,26 @@ mod imp {
                 return;
             }
             gweave::gcode::temp::remove_all();
-            std::process::exit(128 + c_int::from(byte));
+            die_by(c_int::from(byte));
         }
+    }
+
+    /// Ends the process by `signal` with its default action, as if no handler had been there:
+    /// the parent's `wait` then reports the signal (and a core dump for SIGQUIT or SIGXFSZ),
+    /// which an `exit(128 + signal)` would not. Falls back to that exit if the signal did not
+    /// end the process (blocked in this thread and pending elsewhere).
+    fn die_by(signal: c_int) -> ! {
+        // SAFETY: sets the default action, unblocks the signal in this thread and sends it to
+        // this thread; no memory of ours is touched.
+        unsafe {
+            libc::signal(signal, libc::SIG_DFL);
+            let mut set: libc::sigset_t = std::mem::zeroed();
+            libc::sigemptyset(&mut set);
+            libc::sigaddset(&mut set, signal);
+            libc::pthread_sigmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut());
+            libc::raise(signal);
+        }
+        std::process::exit(128 + signal)
     }
 
     impl Drop for Cleanup {
@@ -151,15 +202,23 @@ mod imp {
 
         /// The Python package runs the CLI inside the interpreter: after a run, its own
         /// handlers must be back (else Ctrl-C or SIGTERM would be swallowed or exit later).
+        /// And a signal the process was started with ignored (`nohup` and SIGHUP) stays
+        /// ignored during a run.
         #[test]
         fn the_previous_handlers_are_restored_after_a_run() {
             let before = current(libc::SIGHUP);
+            // SAFETY: sets SIGUSR2's disposition to "ignore"; no handler code.
+            unsafe {
+                libc::signal(libc::SIGUSR2, libc::SIG_IGN);
+            }
             let guard = Cleanup::install().unwrap().expect("first install");
             assert_eq!(current(libc::SIGHUP), on_signal as extern "C" fn(c_int) as usize);
+            assert_eq!(current(libc::SIGUSR2), libc::SIG_IGN);
             // A second run at the same time (another Python thread) leaves them alone.
             assert!(Cleanup::install().unwrap().is_none());
             drop(guard);
             assert_eq!(current(libc::SIGHUP), before);
+            assert_eq!(current(libc::SIGUSR2), libc::SIG_IGN);
             assert_eq!(WAKE_FD.load(Ordering::SeqCst), -1);
         }
     }

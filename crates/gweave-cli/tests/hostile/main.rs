@@ -14,5 +14,6 @@ mod containers;
 mod hosts;
 mod outputs;
 mod serve;
+mod signals;
 mod sizes;
 mod sweep;
