@@ -13,6 +13,7 @@ mod config;
 mod containers;
 mod hosts;
 mod outputs;
+mod sd_links;
 mod serve;
 mod signals;
 mod sizes;

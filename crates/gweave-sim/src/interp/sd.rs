@@ -11,10 +11,17 @@
 //! those steps while the host is quiet. `M27` reports `SD printing byte <pos>/<size>`, `M27 S<n>`
 //! every n seconds; the end prints `Done printing file`. An upload (`M28 <name>` ... `M29`)
 //! writes every following line, checked by the serial protocol as usual, into the file.
+//!
+//! The folder is on the host's file system, where a name can be a symbolic link to anywhere
+//! (`LINK.GCO -> ../outside/victim.gco`), made by whoever can write the folder. A FAT card has
+//! no links, and the board reaches nothing outside its card, so the card never follows one:
+//! a link is not listed, not selected, not deleted and not written ([`open_to_read`],
+//! [`create`]), even if it appears between the listing and the open.
 
-use std::fs::File;
-use std::io::{BufRead, BufReader, Seek, SeekFrom, Write};
-use std::path::{Path, PathBuf};
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, BufRead, BufReader, Seek, SeekFrom, Write};
+use std::os::unix::fs::OpenOptionsExt;
+use std::path::{Component, Path, PathBuf};
 
 use super::pause::PromptReason;
 use super::Machine;
@@ -214,7 +221,7 @@ impl Machine {
         let now = self.now_s();
         let opened = self.sd.find(name).and_then(|e| {
             let dir = self.sd.dir.as_ref()?;
-            let file = File::open(dir.join(&e.long)).ok()?;
+            let file = open_to_read(dir, &e.long).ok()?;
             Some(Printing {
                 dos: e.dos,
                 long: e.long,
@@ -257,10 +264,10 @@ impl Machine {
         let now = self.now_s();
         let name = arg.trim().trim_start_matches('/');
         let fits = is_dos_name(name);
-        let allowed = !name.is_empty() && !name.contains('/') && (fits || self.profile.firmware.lfn_write);
+        let allowed = fits || self.profile.firmware.lfn_write;
         let file = self.sd.dir.as_ref().filter(|_| allowed).and_then(|dir| {
             let stored = if fits { name.to_ascii_uppercase() } else { name.to_owned() };
-            File::create(dir.join(stored)).ok()
+            create(dir, &stored).ok()
         });
         match file {
             Some(f) => {
@@ -324,6 +331,47 @@ fn sd_status(open: Option<&Printing>) -> String {
     match open {
         Some(p) => format!("SD printing byte {}/{}", p.pos, p.size),
         None => "Not SD printing".to_owned(),
+    }
+}
+
+/// Opens the card's file `name` to print it; never through a symbolic link (`O_NOFOLLOW`: a
+/// link put in place after the listing is refused by the open itself), and only a regular
+/// file (`O_NONBLOCK` so that a FIFO put in its place cannot block the board; it does nothing
+/// to a regular file).
+fn open_to_read(dir: &Path, name: &str) -> io::Result<File> {
+    let file = OpenOptions::new()
+        .read(true)
+        .custom_flags(nix::libc::O_NOFOLLOW | nix::libc::O_NONBLOCK)
+        .open(dir.join(one_name(name)?))?;
+    if !file.metadata()?.is_file() {
+        return Err(io::Error::new(io::ErrorKind::InvalidInput, "not a file"));
+    }
+    Ok(file)
+}
+
+/// Creates the card's file `name` for an upload (`M28`) or a log (`M928`), empty, replacing
+/// the card's file of that name. Never through a link: a symbolic link of that name is
+/// refused; an existing file is removed and a new one created exclusively (`O_CREAT|O_EXCL`
+/// fails on any name that exists again, a link included), so that a file hard-linked
+/// elsewhere keeps its bytes there, as two files on a card are two files.
+fn create(dir: &Path, name: &str) -> io::Result<File> {
+    let path = dir.join(one_name(name)?);
+    match fs::symlink_metadata(&path) {
+        Ok(meta) if meta.is_file() => fs::remove_file(&path)?,
+        Ok(_) => return Err(io::Error::new(io::ErrorKind::InvalidInput, "not a file")),
+        Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+        Err(e) => return Err(e),
+    }
+    OpenOptions::new().write(true).create_new(true).custom_flags(nix::libc::O_NOFOLLOW).open(path)
+}
+
+/// `name` if it is one plain name in the card's folder (no `/`, `.`, `..`, or empty name),
+/// else an error: what a host sends must not reach outside the card.
+fn one_name(name: &str) -> io::Result<&str> {
+    let mut parts = Path::new(name).components();
+    match (parts.next(), parts.next()) {
+        (Some(Component::Normal(_)), None) if !name.contains('/') => Ok(name),
+        _ => Err(io::Error::new(io::ErrorKind::InvalidInput, "not a name on the card")),
     }
 }
 
@@ -398,5 +446,24 @@ mod tests {
         assert_eq!(dos_name("fixture.gcode", &[]), "FIXTUR~1.GCO");
         assert_eq!(dos_name("fixture two.gcode", &["FIXTUR~1.GCO".to_owned()]), "FIXTUR~2.GCO");
         assert!(has_flag("L T", 'l') && !has_flag("LT", 'L'));
+    }
+
+    /// The opens themselves refuse a link, so that one put in place between the listing and
+    /// the open (where `M20` and `M23` check) is not followed either; and a name never reaches
+    /// outside the folder.
+    #[test]
+    fn the_card_opens_no_link_and_no_name_outside_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let card = dir.path().join("card");
+        fs::create_dir(&card).unwrap();
+        fs::write(dir.path().join("victim.gco"), "G28\n").unwrap();
+        std::os::unix::fs::symlink("../victim.gco", card.join("LINK.GCO")).unwrap();
+        assert!(open_to_read(&card, "LINK.GCO").is_err());
+        assert!(create(&card, "LINK.GCO").is_err());
+        for name in ["../victim.gco", "..", ".", "", "a/b.gco", "/victim.gco"] {
+            assert!(open_to_read(&card, name).is_err() && create(&card, name).is_err(), "{name:?}");
+        }
+        assert_eq!(fs::read_to_string(dir.path().join("victim.gco")).unwrap(), "G28\n");
+        assert!(fs::symlink_metadata(card.join("LINK.GCO")).unwrap().file_type().is_symlink());
     }
 }
