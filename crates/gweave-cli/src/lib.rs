@@ -57,6 +57,10 @@ where
             if is_broken_pipe(&e) {
                 return ExitCode::SUCCESS;
             }
+            // Stopped from outside (Ctrl-C in Python's `gweave.main()`): the caller says so.
+            if is_stopped(&e) {
+                return ExitCode::from(130);
+            }
             eprintln!("gweave: error: {e}");
             // A cause already quoted by the message above it (a context that repeats an I/O
             // error's text) is not printed again.
@@ -71,6 +75,11 @@ where
             ExitCode::FAILURE
         }
     }
+}
+
+/// A run stopped by its caller ([`gweave::interrupt`]), whatever error it unwound with.
+fn is_stopped(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(gweave::interrupt::is_stopped))
 }
 
 /// A closed pipe (`gweave cat x | head`) is not an error.

@@ -35,10 +35,15 @@ pub fn firmware(name: &str, value: Option<&str>) -> PyResult<Option<Firmware>> {
 /// Where a transform writes, from the keywords every transform shares (`output`, `in_place`,
 /// `backup`, `force`) as the CLI reads `-o`, `--in-place`, `--no-backup` and `--force`:
 /// `in_place=True` replaces the input (keeping `<path>.bak` unless `backup=False`), else
-/// `output` is the file written; neither is a `ValueError`.
+/// `output` is the file written; neither, or both (as the CLI refuses `-o` with `--in-place`:
+/// which one was meant?), is a `ValueError`.
 pub fn target_of(output: Option<PathBuf>, in_place: bool, backup: bool, force: bool) -> PyResult<Target> {
     match (output, in_place) {
-        (_, true) => Ok(Target::InPlace { keep_backup: backup, force }),
+        (Some(p), true) => Err(PyValueError::new_err(format!(
+            "output={} and in_place=True: give one of them (in_place=True replaces the input)",
+            p.display()
+        ))),
+        (None, true) => Ok(Target::InPlace { keep_backup: backup, force }),
         (Some(p), false) => Ok(Target::File(p)),
         (None, false) => Err(PyValueError::new_err("give an output path or in_place=True")),
     }

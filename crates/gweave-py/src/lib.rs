@@ -6,6 +6,7 @@ use pyo3::prelude::*;
 
 mod args;
 mod finish;
+mod interrupt;
 mod preview;
 mod raster;
 mod read;
@@ -52,17 +53,28 @@ fn to_json<T: serde::Serialize>(value: &T) -> PyResult<String> {
 }
 
 /// Runs the `gweave` command line with these arguments (argv[0] included); returns the exit code.
+/// A Ctrl-C stops the run (its scratch files removed, no output) and raises `SystemExit(130)`,
+/// as a Python command-line tool ends on Ctrl-C, with the `KeyboardInterrupt` as its cause:
+/// the interpreter unwinds, running `finally` blocks and `atexit` handlers.
 #[pyfunction]
-fn run_cli(py: Python<'_>, argv: Vec<String>) -> i32 {
-    let code = py.allow_threads(|| gweave_cli::run(argv));
+fn run_cli(py: Python<'_>, argv: Vec<String>) -> PyResult<i32> {
+    let code = interrupt::interruptible(py, || gweave_cli::run(argv)).map_err(|raised| {
+        if raised.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
+            let exit = pyo3::exceptions::PySystemExit::new_err(130);
+            exit.set_cause(py, Some(raised));
+            exit
+        } else {
+            raised
+        }
+    })?;
     // ExitCode is opaque; the CLI only returns SUCCESS, FAILURE (1) or usage errors (2).
-    if code == std::process::ExitCode::SUCCESS {
+    Ok(if code == std::process::ExitCode::SUCCESS {
         0
     } else if code == std::process::ExitCode::from(2) {
         2
     } else {
         1
-    }
+    })
 }
 
 #[pymodule]

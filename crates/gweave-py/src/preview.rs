@@ -1,5 +1,6 @@
 //! Previews (`gweave preview`) and the toolpath as columns for the notebook viewer.
 
+use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
 use gweave::pass::Quiet;
@@ -96,11 +97,10 @@ pub(crate) fn preview_json(
         min_len_mm: min_len,
         strictness: strictness(lenient),
     };
-    let preview = py
-        .allow_threads(|| {
-            render::preview_with_progress(&path, compare.as_deref(), format, &options, &mut Quiet)
-        })
-        .map_err(render_err)?;
+    let preview = interruptible(py, || {
+        render::preview_with_progress(&path, compare.as_deref(), format, &options, &mut Quiet)
+    })?
+    .map_err(render_err)?;
     Ok((PyBytes::new(py, &preview.bytes).unbind(), to_json(&preview.report)?))
 }
 
@@ -129,7 +129,7 @@ pub(crate) fn toolpath_columns(
     let rotary = gweave::rotary::preview::RotaryReading::for_file(&path, machine.as_ref())
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let options = ToolpathOptions { travel, min_len_mm: min_len, rotary, ..ToolpathOptions::default() };
-    let tp = py.allow_threads(|| Toolpath::from_file(&path, options)).map_err(err)?;
+    let tp = interruptible(py, || Toolpath::from_file(&path, options))?.map_err(err)?;
     let n = tp.segments.len();
     let mut cols: [(&str, Vec<u8>); 7] = [
         ("start", Vec::with_capacity(n * 12)),

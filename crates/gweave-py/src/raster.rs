@@ -1,6 +1,7 @@
 //! Binder-jet raster: layer images or a `.sl1` into inkjet G-code, the nozzle test pattern,
 //! and STL slicing into layer images.
 
+use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
 use gweave::gcode::writer::Target;
@@ -99,7 +100,7 @@ pub(crate) fn raster_json(
     // Its own time counts the printhead's firing, which the estimator does not know.
     let own_time = |r: &JobReport| Some(r.time.total_s);
     let target = Target::File(output);
-    let report = py.allow_threads(|| finish::finished(None, &target, "raster", options, write, own_time))?;
+    let report = interruptible(py, || finish::finished(None, &target, "raster", options, write, own_time))??;
     to_json(&report)
 }
 
@@ -127,7 +128,7 @@ pub(crate) fn raster_test_pattern_json(
     let write = |t: &Target| job_options.test_pattern(t, columns).map_err(job_err);
     let target = Target::File(output);
     let (report, _) =
-        py.allow_threads(|| finish::finished(None, &target, "raster", options, write, |_| None))?;
+        interruptible(py, || finish::finished(None, &target, "raster", options, write, |_| None))??;
     to_json(&report)
 }
 
@@ -145,7 +146,7 @@ pub(crate) fn slice_raster_json(
     margin: usize,
 ) -> PyResult<String> {
     use gweave::gen::slice_raster::{slice_to_dir, SliceConfig};
-    let report = py.allow_threads(|| {
+    let report = interruptible(py, || {
         let mesh = gweave::gen::stl::read_stl(&stl).map_err(|e| match e {
             gweave::gen::stl::StlError::Io { .. } => PyOSError::new_err(e.to_string()),
             _ => PyValueError::new_err(format!("{}: {e}", stl.display())),
@@ -153,6 +154,6 @@ pub(crate) fn slice_raster_json(
         let sliced = SliceConfig::with_resolution(layer_height, pixel_mm, dpi, margin)
             .and_then(|cfg| slice_to_dir(&mesh, &cfg, &out_dir));
         sliced.map_err(|e| PyValueError::new_err(e.to_string()))
-    })?;
+    })??;
     to_json(&report)
 }

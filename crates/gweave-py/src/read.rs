@@ -1,6 +1,7 @@
 //! Reading G-code: statistics, the lint report, the lossless copy, and the line-by-line
 //! reader (`gweave.Reader`, `gweave.Line`).
 
+use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
 use gweave::check::{check_file, CheckOptions};
@@ -32,7 +33,7 @@ pub(crate) fn stats_json(
     lenient: bool,
 ) -> PyResult<String> {
     let diameter = in_range("filament_diameter", filament_diameter, gweave::range::FILAMENT_DIAMETER_MM)?;
-    let stats = py.allow_threads(|| stats_file(&path, diameter, strictness(lenient), &mut Quiet));
+    let stats = interruptible(py, || stats_file(&path, diameter, strictness(lenient), &mut Quiet))?;
     to_json(&stats.map_err(err)?)
 }
 
@@ -52,7 +53,7 @@ pub(crate) fn check_json(
     if let Some(f) = in_range("max_feed", max_feed, gweave::range::FEED_MM_MIN)? {
         options.max_feed_mm_min = f;
     }
-    let report = py.allow_threads(|| check_file(&path, options, &mut Quiet)).map_err(err)?;
+    let report = interruptible(py, || check_file(&path, options, &mut Quiet))?.map_err(err)?;
     let mut doc = serde_json::to_value(&report).map_err(|e| PyValueError::new_err(e.to_string()))?;
     doc["failed"] = report.failed(strict).into();
     to_json(&doc)
@@ -74,11 +75,11 @@ pub(crate) fn cat_json(
     lenient: bool,
 ) -> PyResult<String> {
     let target = target_of(output, in_place, backup, force)?;
-    let report = py.allow_threads(|| {
+    let report = interruptible(py, || {
         let mut copy = Identity::default();
         let run = Run::file(&path).strictness(strictness(lenient)).to(&target);
         run.run(&mut copy).map(|_| copy.report)
-    });
+    })?;
     to_json(&report.map_err(err)?)
 }
 

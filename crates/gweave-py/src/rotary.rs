@@ -1,5 +1,6 @@
 //! Rotary (lathe-type) printing: wrapping flat G-code, helical tubes and paths.
 
+use crate::interrupt::interruptible;
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::writer::Target;
@@ -128,8 +129,9 @@ pub(crate) fn rotary_wrap_json(
     };
     let target = target_of(output, in_place, backup, force)?;
     let own_time = |r: &(WrapReport, Malformed)| Some(r.0.time_s);
-    let (report, malformed) = py
-        .allow_threads(|| finish::finished(Some(&input), &target, "rotary wrap", options, write, own_time))?;
+    let (report, malformed) = interruptible(py, || {
+        finish::finished(Some(&input), &target, "rotary wrap", options, write, own_time)
+    })??;
     to_json(&Transformed::new(&report, malformed, strictness))
 }
 
@@ -184,7 +186,7 @@ pub(crate) fn rotary_tube_json(
     let target = Target::File(output);
     let own_time = |r: &gweave::rotary::report::TubeReport| Some(r.print_time_s);
     let report =
-        py.allow_threads(|| finish::finished(None, &target, "rotary tube", options, write, own_time))?;
+        interruptible(py, || finish::finished(None, &target, "rotary tube", options, write, own_time))??;
     to_json(&report)
 }
 

@@ -1,5 +1,6 @@
 //! The virtual printer (`gweave sim`, `gweave estimate`, `gweave.Machine`).
 
+use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
 use gweave::gcode::container;
@@ -42,7 +43,7 @@ pub(crate) fn sim_json(
         let spec = spec.parse::<gweave_sim::FaultSpec>();
         profile.faults.push(spec.map_err(|e| PyValueError::new_err(format!("fault: {e}")))?);
     }
-    let report = py.allow_threads(|| {
+    let report = interruptible(py, || {
         let mut m = gweave_sim::Machine::new(profile).map_err(sim_err)?;
         m.read_as(read_firmware(&path).map_err(|e| os_error(&path, &e))?);
         let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
@@ -61,7 +62,7 @@ pub(crate) fn sim_json(
         }
         m.finish(&mut out);
         Ok::<_, PyErr>(m.report())
-    })?;
+    })??;
     to_json(&report)
 }
 
@@ -76,12 +77,12 @@ pub(crate) fn estimate_json(
     steps: bool,
 ) -> PyResult<String> {
     let profile = machine_profile(machine)?;
-    let report = py.allow_threads(|| {
+    let report = interruptible(py, || {
         let firmware = read_firmware(&path).map_err(|e| os_error(&path, &e))?;
         let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
         gweave_sim::estimate_report(file, &profile, firmware, steps)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
-    })?;
+    })??;
     to_json(&report)
 }
 

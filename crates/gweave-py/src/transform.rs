@@ -1,5 +1,6 @@
 //! The post-processing transforms: `purge-shift` and `mix` (and the colour a mix prints).
 
+use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
 use gweave::gcode::writer::Target;
@@ -62,8 +63,9 @@ pub(crate) fn purge_shift_json(
         let (report, ran) = purge_shift(rules, Run::file(&path).strictness(strictness).to(t)).map_err(err)?;
         Ok((report, ran.malformed))
     };
-    let (mut report, malformed) =
-        py.allow_threads(|| finish::finished(Some(&path), &target, "purge-shift", options, write, |_| None))?;
+    let (mut report, malformed) = interruptible(py, || {
+        finish::finished(Some(&path), &target, "purge-shift", options, write, |_| None)
+    })??;
     // The run's header is one line above every change.
     report.changes.offset_output_lines(1);
     to_json(&Transformed::new(&report, malformed, strictness))
@@ -133,6 +135,6 @@ pub(crate) fn mix_json(
         Err(e) => Err(bad(e)),
     };
     let (report, malformed) =
-        py.allow_threads(|| finish::finished(Some(&path), &target, "mix", options, write, |_| None))?;
+        interruptible(py, || finish::finished(Some(&path), &target, "mix", options, write, |_| None))??;
     to_json(&Transformed::new(&report, malformed, strictness))
 }

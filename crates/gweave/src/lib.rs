@@ -25,6 +25,7 @@ pub mod error;
 pub mod firmware;
 pub mod gcode;
 pub mod gen;
+pub mod interrupt;
 pub mod malformed;
 pub mod pass;
 pub mod picture;

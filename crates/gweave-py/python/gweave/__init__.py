@@ -583,7 +583,12 @@ def predict_colour(ratios: Sequence[float], profile: Optional[PathLike] = None) 
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Run the ``gweave`` command line (the same binary as the Rust CLI)."""
+    """Run the ``gweave`` command line (the same binary as the Rust CLI); returns its exit code.
+
+    A Ctrl-C stops the run (no output written) and raises ``SystemExit(130)``, with the
+    ``KeyboardInterrupt`` as its ``__cause__``, as a command-line tool ends: ``finally`` blocks
+    and ``atexit`` handlers run.
+    """
     import sys
 
     args = list(sys.argv if argv is None else ["gweave", *argv])

@@ -22,6 +22,9 @@ static STANDS_FOR: Mutex<Vec<(PathBuf, PathBuf)>> = Mutex::new(Vec::new());
 /// A temporary file beside a destination: removed when dropped unless persisted.
 pub struct TempFile {
     file: Option<tempfile::NamedTempFile>,
+    /// The creating thread's run, checked before every write: a stopped run writes no more
+    /// and unwinds, dropping (removing) the file.
+    stop: Option<crate::interrupt::Token>,
 }
 
 impl TempFile {
@@ -38,7 +41,7 @@ impl TempFile {
             .tempfile_in(dir)
             .map_err(without_temp_name)?;
         paths.push(file.path().to_path_buf());
-        Ok(TempFile { file: Some(file) })
+        Ok(TempFile { file: Some(file), stop: crate::interrupt::current() })
     }
 
     /// The open file.
@@ -91,6 +94,9 @@ impl Drop for TempFile {
 
 impl Write for TempFile {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        if let Some(stop) = &self.stop {
+            stop.check()?;
+        }
         self.file.as_mut().expect("a live temporary file").write(buf).map_err(without_temp_name)
     }
 

@@ -496,7 +496,13 @@ fn parse_chunks(
     handover: &Handover,
 ) -> Result<(), EstimateError> {
     let mut lines_before = 0;
+    // A stopped run (Python's Ctrl-C) stops here too, not only at the reader: the chunks
+    // already read would otherwise be parsed and planned first.
+    let stop = gweave::interrupt::current();
     for chunk in chunks {
+        if let Some(stop) = &stop {
+            stop.check()?;
+        }
         let chunk = chunk?;
         let mut lines = chunk.lines(lines_before);
         while let Some(line) = lines.next_line() {

@@ -60,10 +60,15 @@ pub struct Input {
     /// The text's length when known without reading it (plain text), for progress.
     pub text_len: Option<u64>,
     reader: Box<dyn Read + Send + Sync>,
+    /// The opening thread's run, checked before every read (a stopped run reads no more).
+    stop: Option<crate::interrupt::Token>,
 }
 
 impl Read for Input {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        if let Some(stop) = &self.stop {
+            stop.check()?;
+        }
         self.reader.read(buf)
     }
 }
@@ -71,18 +76,16 @@ impl Read for Input {
 /// Opens `path` (`-` for standard input) as G-code text, whatever its container.
 pub fn open(path: &Path) -> io::Result<Input> {
     let (mut raw, container) = sniffed(path)?;
-    Ok(match container {
-        Container::Text => Input { text_len: Some(raw.size()?), reader: Box::new(raw) },
-        Container::Gzip => Input {
-            text_len: None,
-            reader: Box::new(MultiGzDecoder::new(BufReader::with_capacity(1 << 16, raw))),
-        },
+    let (text_len, reader): (_, Box<dyn Read + Send + Sync>) = match container {
+        Container::Text => (Some(raw.size()?), Box::new(raw)),
+        Container::Gzip => (None, Box::new(MultiGzDecoder::new(BufReader::with_capacity(1 << 16, raw)))),
         Container::Bgcode => {
             raw.seek(SeekFrom::Start(0))?;
             let reader = bgcode::read::Reader::new(BufReader::with_capacity(1 << 16, raw))?;
-            Input { text_len: None, reader: Box::new(ahead::Ahead::new(reader)) }
+            (None, Box::new(ahead::Ahead::new(reader)))
         }
-    })
+    };
+    Ok(Input { text_len, reader, stop: crate::interrupt::current() })
 }
 
 /// Opens the raw input and tells its container, positioned at the start.
