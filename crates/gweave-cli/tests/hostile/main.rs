@@ -6,11 +6,13 @@
 //!
 //! One module per finding area; `harness` runs the binary and measures it.
 
+mod bombs;
 mod harness;
 
 mod bytes;
 mod config;
 mod containers;
+mod counts;
 mod hosts;
 mod outputs;
 mod serve;
