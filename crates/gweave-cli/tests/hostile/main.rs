@@ -6,6 +6,7 @@
 //!
 //! One module per finding area; `harness` runs the binary and measures it.
 
+mod bgcode_bombs;
 mod bombs;
 mod harness;
 
