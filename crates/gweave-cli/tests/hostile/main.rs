@@ -15,6 +15,7 @@ mod config;
 mod containers;
 mod counts;
 mod hosts;
+mod image_bombs;
 mod outputs;
 mod serve;
 mod sizes;
