@@ -19,4 +19,5 @@ mod image_bombs;
 mod outputs;
 mod serve;
 mod sizes;
+mod spools;
 mod sweep;
