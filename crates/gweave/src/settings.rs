@@ -247,6 +247,29 @@ mod tests {
         assert!(keys_of::<f64>().is_empty());
     }
 
+    /// Regression: the reader quoted the whole offending line, so a 50 MB value printed itself.
+    #[test]
+    fn reader_messages_quote_a_window_of_a_long_line() {
+        #[derive(Debug, serde::Deserialize)]
+        #[allow(dead_code)]
+        struct Bed {
+            x_mm: f64,
+        }
+        let long = "y".repeat(100_000);
+        let e = toml::from_str::<Bed>(&format!("x_mm = 1\nname = \"{long}")).unwrap_err();
+        let message = toml_message(&e);
+        assert!(message.len() < 600, "{} bytes: {message}", message.len());
+        let lines: Vec<&str> = message.lines().collect();
+        assert_eq!(lines[0], "TOML parse error at line 2, column 100009");
+        // The quoted line shows the end where the error is, the marks stay under it.
+        assert!(lines[2].starts_with("2 | ...yyy") && lines[2].len() <= "2 | ...".len() + 120, "{message}");
+        assert_eq!(lines[3].find('^'), lines[2].rfind('y').map(|i| i + 1), "{message}");
+        let e = toml::from_str::<Bed>(&format!("x_mm = \"{long}\"")).unwrap_err();
+        let last = toml_message(&e).lines().last().unwrap().to_owned();
+        assert!(last.starts_with("invalid type: string \"yyy") && last.ends_with("yyy..."), "{last}");
+        assert_eq!(last.chars().count(), 1_003);
+    }
+
     #[test]
     fn long_numbers_in_reader_messages_are_shortened() {
         let long = format!("invalid type: floating point `1{}.0`, expected u32 at line 3", "0".repeat(308));

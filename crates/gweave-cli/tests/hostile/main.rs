@@ -16,6 +16,7 @@ mod containers;
 mod counts;
 mod hosts;
 mod image_bombs;
+mod messages;
 mod outputs;
 mod serve;
 mod sizes;

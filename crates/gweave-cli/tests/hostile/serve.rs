@@ -15,7 +15,7 @@ use gweave_sim::test_support::{connect, lines_through, reset};
 use crate::harness::*;
 
 /// A running `gweave serve`, stopped when dropped (killed, if a failed assertion left it running).
-struct Server {
+pub(crate) struct Server {
     run: Option<Running>,
 }
 
@@ -27,7 +27,7 @@ impl Server {
     }
 
     /// Serves TCP on a free loopback port; returns once the port answers.
-    fn tcp(dir: &Path, extra: &[&str]) -> (Server, SocketAddr) {
+    pub(crate) fn tcp(dir: &Path, extra: &[&str]) -> (Server, SocketAddr) {
         // Port 0 would make the server pick, but then the port must be read from its output;
         // a port that was free a moment ago is simpler.
         let addr = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap();
@@ -56,7 +56,7 @@ impl Server {
     }
 
     /// Stops the server as Ctrl-C does and returns how its run went.
-    fn stop(mut self) -> Outcome {
+    pub(crate) fn stop(mut self) -> Outcome {
         let run = self.run.take().unwrap();
         run.signal(libc::SIGTERM);
         run.wait()
