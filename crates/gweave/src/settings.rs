@@ -93,8 +93,8 @@ pub trait CheckRanges {
 
 /// Largest settings file read (a profile, a job, an `M503` report, a thermistor table): the
 /// shipped profiles are 1 to 3 KiB, a mix profile at its ceiling of 4 096 mixes about 160 KiB.
-/// The TOML reader keeps every value with its text and place, about 140 bytes of memory for
-/// each 2-byte value of an array (`[0,0,0,...]`), so 256 KiB of settings may take 36 MiB; a
+/// The TOML reader keeps every value with its text and place, about 170 bytes of memory for
+/// each 2-byte value of an array (`[0,0,0,...]`), so 256 KiB of settings may take 22 MiB; a
 /// larger file (or `--machine /dev/zero`) is refused after this many bytes instead.
 pub const MAX_FILE_BYTES: u64 = 256 << 10;
 
