@@ -107,14 +107,11 @@ fn spool(stream: &mut dyn Read) -> io::Result<File> {
         };
         copied += n as u64;
         if copied > limit {
-            return Err(io::Error::new(
-                io::ErrorKind::Other,
-                format!(
-                    "the stream is longer than the limit of {} copied to the temporary directory \
+            return Err(io::Error::other(format!(
+                "the stream is longer than the limit of {} copied to the temporary directory \
                      ({LIMIT_VAR} sets another)",
-                    size_text(limit)
-                ),
-            ));
+                size_text(limit)
+            )));
         }
         copy.write_all(&buf[..n]).map_err(in_dir)?;
     }
