@@ -1,7 +1,9 @@
 //! The checks the fuzz targets run, one module per kind of input. The regression tests include
 //! these files with `#[path]` and replay the kept corpus through them ([`replay`]).
 
+pub mod bgcode;
 pub mod gcode;
+pub mod m503;
 pub mod machine;
 pub mod profiles;
 pub mod replay;

@@ -180,7 +180,7 @@ fn naming(what: &str, path: &Path, e: anyhow::Error) -> anyhow::Error {
 
 /// A text file the user named (a profile, a G-code snippet), with its name in the error.
 pub fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
+    gweave::settings::read_text(path).with_context(|| format!("reading {}", path.display()))
 }
 
 /// The settings file at `path` read with `parse`, naming the file in either error.

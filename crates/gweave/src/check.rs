@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use crate::bed::Bed;
 use crate::error::{Error, Result};
+use crate::firmware::Firmware;
 use crate::gcode::diag::{Diagnostic, Finding, Severity};
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::line::{Command, Value};
@@ -154,6 +155,16 @@ impl Pass for CheckPass {
         }
         if let Some(flavour) = block.comment_text(ctx.line.bytes).and_then(flavour_of_comment) {
             self.griffin = flavour.eq_ignore_ascii_case(b"Griffin");
+        }
+        // A name such as `PRINT_START` is a Klipper macro or a RepRapFirmware meta command; a
+        // Marlin board (the firmware a file that names no other is read for) knows none, and
+        // `sim` calls it an unknown command: so does the lint.
+        if block.command == Command::Extended && ctx.state.options().firmware == Firmware::Marlin {
+            let command = String::from_utf8_lossy(block.command_span.of(ctx.line.bytes)).into_owned();
+            self.add(
+                n,
+                Diagnostic::at(block.command_span.start as usize, Finding::UnknownCommand { command }),
+            );
         }
         if let Command::Code { letter, number, .. } = block.command {
             if !(is_known(letter, number) || self.griffin && is_griffin(letter, number)) {

@@ -25,6 +25,8 @@
 //! ```
 
 use std::fmt;
+use std::io::{self, Read};
+use std::path::Path;
 
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 
@@ -70,9 +72,11 @@ impl Table {
         value.map_or(Ok(()), |v| self.check(key, v, range))
     }
 
-    /// [`Table::check`] for a count (or any integer key).
+    /// [`Table::check`] for a count (or any integer key), printed whole (`9223372036854775807`,
+    /// not `9.223372036854776e18`).
     pub fn count(&self, key: &str, value: impl Into<u64>, range: Range) -> Result<(), OutOfRange> {
-        self.check(key, value.into() as f64, range)
+        let value = value.into();
+        self.check(key, value as f64, range).map_err(|e| OutOfRange { value: value.to_string(), ..e })
     }
 
     /// [`Table::check`] for every element of an array key, naming the element (`key[2]`).
@@ -87,10 +91,73 @@ pub trait CheckRanges {
     fn check_ranges(&self, table: &Table) -> Result<(), OutOfRange>;
 }
 
+/// Largest settings file read (a profile, a job, an `M503` report, a thermistor table): the
+/// shipped profiles are 1 to 3 KiB, a mix profile at its ceiling of 4 096 mixes about 160 KiB.
+/// The TOML reader keeps every value with its text and place, about 170 bytes of memory for
+/// each 2-byte value of an array (`[0,0,0,...]`), so 256 KiB of settings may take 22 MiB; a
+/// larger file (or `--machine /dev/zero`) is refused after this many bytes instead.
+pub const MAX_FILE_BYTES: u64 = 256 << 10;
+
+/// The text of the settings file at `path`, refused past [`MAX_FILE_BYTES`] (read no further:
+/// the path may name an endless device or pipe).
+pub fn read_text(path: &Path) -> io::Result<String> {
+    let mut text = String::new();
+    std::fs::File::open(path)?.take(MAX_FILE_BYTES + 1).read_to_string(&mut text)?;
+    if text.len() as u64 > MAX_FILE_BYTES {
+        let message = format!("larger than the limit of {} KiB for a settings file", MAX_FILE_BYTES >> 10);
+        return Err(io::Error::new(io::ErrorKind::InvalidData, message));
+    }
+    Ok(text)
+}
+
+/// Longest source line a TOML error quotes, in characters: the reader quotes the whole
+/// offending line, which may be a 50 MB value.
+const MESSAGE_LINE_CHARS: usize = 120;
+/// Longest other line of a TOML error: the list of a table's keys an unknown key gets (a few
+/// hundred characters) stays whole, a wrong-typed 50 MB string value does not.
+const MESSAGE_TEXT_CHARS: usize = 1_000;
+
 /// The TOML reader's message for `e`, with any number of more than 20 digits (serde prints
-/// the float `1e308` of an integer key in full) written short, as [`short`] does.
+/// the float `1e308` of an integer key in full) written short, as [`short`] does, the quoted
+/// source line and its `^^^` marks cut to [`MESSAGE_LINE_CHARS`] around the error's column and
+/// any other line to its first [`MESSAGE_TEXT_CHARS`].
 pub fn toml_message(e: &toml::de::Error) -> String {
-    short_numbers(&e.to_string())
+    let text = e.to_string();
+    // "TOML parse error at line 3, column 14"
+    let column = text
+        .lines()
+        .next()
+        .and_then(|l| l.rsplit_once("column "))
+        .and_then(|(_, c)| c.trim().parse::<usize>().ok())
+        .unwrap_or(1);
+    let from = column.saturating_sub(1 + MESSAGE_LINE_CHARS / 2);
+    let mut out: String = text.lines().map(|l| cut_line(l, from) + "\n").collect();
+    if !text.ends_with('\n') {
+        out.pop();
+    }
+    short_numbers(&out)
+}
+
+/// `line` of a TOML message cut: a quoted source line (`3 | key = ...`) or its marks
+/// (`  |    ^^^`) to [`MESSAGE_LINE_CHARS`] from character `from` of the source, others to
+/// their first [`MESSAGE_TEXT_CHARS`].
+fn cut_line(line: &str, from: usize) -> String {
+    let quoted =
+        line.split_once("| ").filter(|(gutter, _)| gutter.bytes().all(|b| b == b' ' || b.is_ascii_digit()));
+    let (head, body, from, most) = match quoted {
+        Some((gutter, source)) => (format!("{gutter}| "), source, from, MESSAGE_LINE_CHARS),
+        None => (String::new(), line, 0, MESSAGE_TEXT_CHARS),
+    };
+    let total = body.chars().count();
+    if total <= most {
+        return line.to_owned();
+    }
+    let kept: String = body.chars().skip(from).take(most).collect();
+    let before = if from > 0 { "..." } else { "" };
+    let after = if from + most < total { "..." } else { "" };
+    // The marks' line is spaces up to the column: it keeps its alignment under the source line.
+    let before = if body.bytes().all(|b| b == b' ' || b == b'^') && from > 0 { "   " } else { before };
+    format!("{head}{before}{kept}{after}")
 }
 
 fn short_numbers(text: &str) -> String {
@@ -178,6 +245,29 @@ mod tests {
         }
         assert_eq!(keys_of::<Spot>(), ["x_mm", "y_mm"]);
         assert!(keys_of::<f64>().is_empty());
+    }
+
+    /// Regression: the reader quoted the whole offending line, so a 50 MB value printed itself.
+    #[test]
+    fn reader_messages_quote_a_window_of_a_long_line() {
+        #[derive(Debug, serde::Deserialize)]
+        #[allow(dead_code)]
+        struct Bed {
+            x_mm: f64,
+        }
+        let long = "y".repeat(100_000);
+        let e = toml::from_str::<Bed>(&format!("x_mm = 1\nname = \"{long}")).unwrap_err();
+        let message = toml_message(&e);
+        assert!(message.len() < 600, "{} bytes: {message}", message.len());
+        let lines: Vec<&str> = message.lines().collect();
+        assert_eq!(lines[0], "TOML parse error at line 2, column 100009");
+        // The quoted line shows the end where the error is, the marks stay under it.
+        assert!(lines[2].starts_with("2 | ...yyy") && lines[2].len() <= "2 | ...".len() + 120, "{message}");
+        assert_eq!(lines[3].find('^'), lines[2].rfind('y').map(|i| i + 1), "{message}");
+        let e = toml::from_str::<Bed>(&format!("x_mm = \"{long}\"")).unwrap_err();
+        let last = toml_message(&e).lines().last().unwrap().to_owned();
+        assert!(last.starts_with("invalid type: string \"yyy") && last.ends_with("yyy..."), "{last}");
+        assert_eq!(last.chars().count(), 1_003);
     }
 
     #[test]

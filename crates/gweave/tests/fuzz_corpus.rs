@@ -1,10 +1,12 @@
 //! Replays what fuzzing kept (`fuzz/corpus/<target>/`, `fuzz/crashes/<target>/`) through the fuzz
 //! targets' own checks, included from `fuzz/src/`: the G-code target (line reader, lexer and
-//! machine state, and `cat`'s byte-for-byte copy) and the engine's profile loaders. The machine
-//! profile's corpus is replayed in gweave-sim's tests. docs/reliability.md, "Fuzzing".
+//! machine state, and `cat`'s byte-for-byte copy), the binary G-code reader and the engine's
+//! profile loaders. The machine profile's and `M503` corpora are replayed in gweave-sim's tests. docs/reliability.md, "Fuzzing".
 
 use std::path::PathBuf;
 
+#[path = "../../../fuzz/src/bgcode.rs"]
+mod bgcode;
 #[path = "../../../fuzz/src/gcode.rs"]
 mod gcode;
 #[path = "../../../fuzz/src/profiles.rs"]
@@ -29,4 +31,9 @@ fn fuzz_corpus_mix_profile_is_read_or_refused_without_panic() {
 #[test]
 fn fuzz_corpus_printhead_profile_is_read_or_refused_without_panic() {
     replay::replay(&fuzz_dir(), "printhead_profile", profiles::printhead_profile);
+}
+
+#[test]
+fn fuzz_corpus_bgcode_is_read_or_refused_without_panic() {
+    replay::replay(&fuzz_dir(), "bgcode", bgcode::bgcode);
 }

@@ -19,7 +19,8 @@ use gweave::render::{drawing, PreviewOptions, ViewOptions};
 #[test]
 fn raster_output_lights_the_pixels_where_the_bmp_is_black() {
     let bmp = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster/layers/badge_0.bmp");
-    let image = load_image(&bmp, &ThresholdOptions { invert: true, ..ThresholdOptions::default() }).unwrap();
+    let image =
+        load_image(&bmp, &ThresholdOptions { invert: true, ..ThresholdOptions::default() }, 0.1).unwrap();
     let head = PrintheadProfile::default();
     let cfg = RasterConfig::default();
     let mut writer = RasterWriter::new(Vec::new(), &head, &cfg, None).unwrap();

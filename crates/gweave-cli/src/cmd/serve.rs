@@ -106,7 +106,8 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
     };
     let mut log = match &args.log {
         Some(path) => {
-            Some(LineWriter::new(File::create(path).with_context(|| format!("creating {}", path.display()))?))
+            let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
+            Some(SaysWhenItFails { inner: LineWriter::new(file), path: path.clone() })
         }
         None => None,
     };
@@ -174,6 +175,38 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
     match report_error {
         Some(e) => Err(e),
         None => Ok(ExitCode::SUCCESS),
+    }
+}
+
+/// The session log, which says on standard error when it can no longer be written (a full
+/// disk): the printer goes on without it, as a board goes on without its SD card log, but the
+/// user learns why the log ends there.
+struct SaysWhenItFails<W> {
+    inner: W,
+    path: PathBuf,
+}
+
+impl<W: Write> SaysWhenItFails<W> {
+    fn said<T>(&self, result: std::io::Result<T>) -> std::io::Result<T> {
+        if let Err(e) = &result {
+            eprintln!(
+                "gweave serve: --log {}: {e}; the log stops here, the printer goes on",
+                self.path.display()
+            );
+        }
+        result
+    }
+}
+
+impl<W: Write> Write for SaysWhenItFails<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let result = self.inner.write(buf);
+        self.said(result)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        let result = self.inner.flush();
+        self.said(result)
     }
 }
 

@@ -10,7 +10,7 @@ use std::process::Command;
 use crate::harness::*;
 
 /// `sh -c SCRIPT` in `dir` with the binary as `$G`: (exit code, stdout, stderr).
-fn shell(dir: &Path, script: &str) -> (i32, Vec<u8>, String) {
+pub(crate) fn shell(dir: &Path, script: &str) -> (i32, Vec<u8>, String) {
     let out = Command::new("sh")
         .arg("-c")
         .arg(script)

@@ -95,6 +95,12 @@ impl Run {
         self
     }
 
+    /// Sets the environment variable `key` for the run.
+    pub fn env(mut self, key: &str, value: impl AsRef<std::ffi::OsStr>) -> Self {
+        self.cmd.env(key, value);
+        self
+    }
+
     /// Standard output written to this file (default: captured), e.g. `/dev/full`.
     pub fn stdout_file(mut self, path: &Path) -> Self {
         self.stdout = Some(path.to_path_buf());

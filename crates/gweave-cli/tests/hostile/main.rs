@@ -6,15 +6,21 @@
 //!
 //! One module per finding area; `harness` runs the binary and measures it.
 
+mod bgcode_bombs;
+mod bombs;
 mod harness;
 
 mod bytes;
 mod config;
 mod containers;
+mod counts;
 mod hosts;
+mod image_bombs;
+mod messages;
 mod outputs;
 mod sd_links;
 mod serve;
 mod signals;
 mod sizes;
+mod spools;
 mod sweep;

@@ -302,7 +302,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let paths = c.write_layer_pngs(dir.path()).unwrap();
         assert_eq!(paths, vec![dir.path().join("layer_00000_head0.png")]);
-        let back = gweave::gen::bitmap::load_image(&paths[0], &Default::default()).unwrap();
+        let back = gweave::gen::bitmap::load_image(&paths[0], &Default::default(), 0.1).unwrap();
         assert_eq!(back, c.layers()[0].heads[0]);
         assert!(back.get(3, 0) && back.get(3, 2));
     }

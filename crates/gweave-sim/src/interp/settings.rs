@@ -232,7 +232,7 @@ impl Machine {
         let Some(path) = self.settings.eeprom.clone() else {
             return;
         };
-        let Ok(text) = std::fs::read_to_string(&path) else {
+        let Ok(text) = gweave::settings::read_text(&path) else {
             // Marlin finds an empty EEPROM and keeps (then saves) its defaults.
             out(self.now_s(), "echo:EEPROM version mismatch (EEPROM=? Marlin=V86)");
             return;

@@ -250,6 +250,8 @@ const LOOKAHEAD_BLOCKS: Range = Range::new(2.0, 1_024.0, "blocks");
 pub(crate) const MIN_SEGMENT_TIME_US: Range = Range::new(0.0, 1_000_000.0, "µs");
 /// Classic jerk (`CLASSIC_JERK`, M205 X Y Z E): an instant change of speed, 0 for none.
 pub(crate) const JERK_MM_S: Range = Range::new(0.0, 1_000.0, "mm/s");
+/// Extruders with their own limits (see [`crate::motion::marlin_limits::MAX_EXTRUDERS`]).
+const EXTRUDERS: Range = Range::new(0.0, crate::motion::marlin_limits::MAX_EXTRUDERS as f64, "extruders");
 /// The rotary axis' speed and acceleration, degree based.
 pub(crate) const SPEED_DEG_S: Range = Range::new(0.001, 100_000.0, "°/s");
 pub(crate) const ACCEL_DEG_S2: Range = Range::new(0.001, 10_000_000.0, "°/s²");
@@ -511,6 +513,7 @@ impl CheckRanges for MotionProfile {
         accel.check("print_mm_s2", self.accel.print_mm_s2, range::ACCEL_MM_S2)?;
         accel.check("retract_mm_s2", self.accel.retract_mm_s2, range::ACCEL_MM_S2)?;
         accel.check("travel_mm_s2", self.accel.travel_mm_s2, range::ACCEL_MM_S2)?;
+        t.count("extruders (count)", self.extruders.len() as u64, EXTRUDERS)?;
         for (i, extruder) in self.extruders.iter().enumerate() {
             extruder.check_ranges(&t.sub("extruders").item(i))?;
         }

@@ -22,11 +22,12 @@
 use thiserror::Error;
 
 use crate::motion::limits::{AxisUpdate, CornerMode, ExtruderLimits, Jerk, ProfileError, M204};
-use crate::profile::MachineProfile;
+use crate::motion::marlin_limits::MAX_EXTRUDERS;
+use crate::profile::{MachineProfile, MachineProfileError};
 use crate::thermal::control::{ControlConfig, PidConfig, PidGains};
 
 /// Why an `M503` report could not be read.
-#[derive(Debug, Clone, PartialEq, Error)]
+#[derive(Debug, PartialEq, Error)]
 pub enum M503Error {
     /// A value is not a number.
     #[error("line {line}: `{word}` is not a number")]
@@ -43,6 +44,25 @@ pub enum M503Error {
         line: usize,
         /// What is wrong.
         source: ProfileError,
+    },
+    /// `M92`, `M201` or `M203` names an extruder a Marlin build cannot have.
+    #[error("line {line}: {command} T{tool}: no such extruder (a Marlin build has at most {max}, T0 to T{last})", max = MAX_EXTRUDERS, last = MAX_EXTRUDERS - 1)]
+    Extruder {
+        /// 1-based line of the report.
+        line: usize,
+        /// The command, `M92`, `M201` or `M203`.
+        command: String,
+        /// The extruder as written (it may be huge or fractional).
+        tool: String,
+    },
+    /// A value the command sets is out of the profile's range (the profile
+    /// `gweave estimate` would then refuse, e.g. `M205 J1e60`).
+    #[error("line {line}: {source}")]
+    Machine {
+        /// 1-based line of the report.
+        line: usize,
+        /// What is wrong, naming the profile key.
+        source: MachineProfileError,
     },
     /// No motion setting at all: not an `M503` report.
     #[error("no M92, M201, M203, M204 or M205 line: not an M503 report")]
@@ -82,6 +102,11 @@ pub fn from_m503(report: &str) -> Result<FromM503, M503Error> {
         // travel feed rate): another extruder's E (`DISTINCT_E_FACTORS`).
         let per_tool = matches!(command.as_str(), "M92" | "M201" | "M203");
         if let (true, Some(t), Some(e)) = (per_tool, get("T").filter(|&t| t >= 1.0), get("E")) {
+            // The tool sizes the list of extruders: held to the build's ceiling first.
+            if !(t.fract() == 0.0 && t < MAX_EXTRUDERS as f64) {
+                let tool = if t.fract() == 0.0 { gweave::range::count(t) } else { gweave::range::short(t) };
+                return Err(M503Error::Extruder { line, command, tool });
+            }
             let tool = t as usize;
             let extruders = &mut p.motion.extruders;
             if extruders.len() <= tool {
@@ -145,6 +170,9 @@ pub fn from_m503(report: &str) -> Result<FromM503, M503Error> {
             }
         };
         result.map_err(|source| M503Error::Profile { line, source })?;
+        // Every key the line set, in the machine's ranges: a value `estimate` and `sim` would
+        // refuse is refused here, at its line.
+        p.validate().map_err(|source| M503Error::Machine { line, source })?;
         used.push(text.to_owned());
     }
     if !used.iter().any(|u| ["M92", "M201", "M203", "M204", "M205"].iter().any(|c| u.starts_with(c))) {

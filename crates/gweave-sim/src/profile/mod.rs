@@ -418,7 +418,7 @@ impl MachineProfile {
 
     /// Read a profile file; the files it names are read from its folder.
     pub fn from_file(path: &std::path::Path) -> Result<Self, MachineProfileError> {
-        let text = std::fs::read_to_string(path)
+        let text = gweave::settings::read_text(path)
             .map_err(|e| MachineProfileError::Toml(format!("{}: {e}", path.display())))?;
         Self::from_toml_in(&text, path.parent().unwrap_or(std::path::Path::new("")))
     }
@@ -431,7 +431,7 @@ impl MachineProfile {
         p.normalize()?;
         if let Some(name) = &p.thermal.thermistor_table {
             let path = folder.join(name);
-            let table = std::fs::read_to_string(&path)
+            let table = gweave::settings::read_text(&path)
                 .map_err(|e| e.to_string())
                 .and_then(|text| table_from_csv(&text, &p.thermal.thermistor).map_err(|e| e.to_string()));
             match table {
@@ -444,6 +444,9 @@ impl MachineProfile {
 
     /// Fill `motion.steps.mixing_e` for a mixing hotend that left it empty, then validate.
     pub fn normalize(&mut self) -> Result<(), MachineProfileError> {
+        // The count is checked before it sizes anything: `mixing_inputs = 4294967296` would
+        // otherwise ask for 34 GB here, before `validate` could refuse it.
+        Table::root().count("mixing_inputs", self.mixing_inputs as u64, MIXING_INPUTS)?;
         let steps = &mut self.motion.steps;
         if self.mixing_inputs > 0 && steps.mixing_e.is_empty() {
             steps.mixing_e = vec![steps.e; self.mixing_inputs];

@@ -20,7 +20,7 @@
 //!
 //! Names are matched without regard to case (`"spring green"` finds `Spring Green`).
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 use serde::Deserialize;
 
@@ -164,10 +164,9 @@ pub struct Resolved {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Palette {
     entries: Vec<PaletteEntry>,
-}
-
-fn same_name(a: &str, b: &str) -> bool {
-    a.to_lowercase() == b.to_lowercase()
+    /// Each entry's index by its name in lower case: a profile of 20 000 mixes took 92 s when
+    /// every insert and look-up compared names one by one.
+    by_name: HashMap<String, usize>,
 }
 
 impl Palette {
@@ -197,17 +196,23 @@ impl Palette {
 
     /// Add a mix, or replace the one with the same name (ignoring case).
     pub fn insert(&mut self, name: &str, spec: MixSpec) {
-        match self.entries.iter_mut().find(|e| same_name(&e.name, name)) {
-            Some(entry) => *entry = PaletteEntry { name: name.to_owned(), spec },
-            None => self.entries.push(PaletteEntry { name: name.to_owned(), spec }),
+        let entry = PaletteEntry { name: name.to_owned(), spec };
+        match self.by_name.get(&name.to_lowercase()) {
+            Some(&i) => self.entries[i] = entry,
+            None => {
+                self.by_name.insert(name.to_lowercase(), self.entries.len());
+                self.entries.push(entry);
+            }
         }
     }
 
     /// Look a colour up by name, ignoring case; a name the user defined wins over an alias.
     pub fn get(&self, name: &str) -> Option<&PaletteEntry> {
-        self.entries.iter().find(|e| same_name(&e.name, name)).or_else(|| {
-            let (_, to) = ALIASES.iter().find(|(alias, _)| same_name(alias, name))?;
-            self.entries.iter().find(|e| same_name(&e.name, to))
+        let find = |name: &str| self.by_name.get(&name.to_lowercase()).map(|&i| &self.entries[i]);
+        find(name).or_else(|| {
+            let lower = name.to_lowercase();
+            let (_, to) = ALIASES.iter().find(|(alias, _)| alias.to_lowercase() == lower)?;
+            find(to)
         })
     }
 
@@ -324,6 +329,23 @@ mod tests {
         let key = p.resolve("key", &model).unwrap();
         assert_eq!(key.predicted, CMYW_FILAMENTS[3]);
         assert_eq!((key.target, key.delta_e), (None, None));
+    }
+
+    /// Regression: a mix profile of 20 000 mixes took 92 s (10 000: 20 s) because every insert
+    /// and look-up compared the name with every entry's, lower-casing both each time.
+    #[test]
+    fn a_palette_of_20000_mixes_builds_and_finds_in_linear_time() {
+        let mix = Mix::new(&[1.0, 0.0, 0.0, 0.0]).unwrap();
+        let config = PaletteConfig {
+            mix: (0..20_000).map(|i| (format!("Mix{i}"), MixSpec::Ratios(mix.clone()))).collect(),
+        };
+        let started = std::time::Instant::now();
+        let p = Palette::seed().with_config(config);
+        assert!((0..20_000).all(|i| p.get(&format!("mix{i}")).is_some_and(|e| e.name == format!("Mix{i}"))));
+        assert_eq!(p.entries().len(), 17 + 20_000);
+        assert_eq!(p.get("key").unwrap().name, "White", "aliases still resolve");
+        // Linear: about 0.1 s in a debug build; the quadratic search took minutes.
+        assert!(started.elapsed() < std::time::Duration::from_secs(10), "{:?}", started.elapsed());
     }
 
     #[test]

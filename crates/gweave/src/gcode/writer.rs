@@ -130,7 +130,15 @@ impl Output {
                         return Err(Error::BackupSlotsFull { path: backup.clone(), slots: BACKUP_SLOTS });
                     }
                 }
-                (input.to_path_buf(), backup)
+                // A link is kept and its target replaced, as an editor saving through the link
+                // does (`sed -i` without --follow-symlinks replaced the link by a file and left
+                // the target as it was).
+                let is_link = input.symlink_metadata().is_ok_and(|m| m.file_type().is_symlink());
+                let dest = match is_link {
+                    true => fs::canonicalize(input).map_err(|e| Error::io(input, e))?,
+                    false => input.to_path_buf(),
+                };
+                (dest, backup)
             }
         };
         let shown = super::temp::shown_name(&dest);

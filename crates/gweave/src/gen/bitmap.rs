@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use crate::picture::{write_png, Pixels};
-use crate::range::{count, MAX_IMAGE_SIDE_PX};
+use crate::range::{self, count, MAX_IMAGE_SIDE_PX};
 
 /// Errors from reading or writing layer images.
 #[derive(Debug, Error)]
@@ -52,6 +52,21 @@ pub enum BitmapError {
         width: String,
         /// The resampled height, px.
         height: String,
+    },
+    /// An image file whose header gives a size past [`max_side_px`], refused before it is
+    /// decoded.
+    #[error("the image is {width} x {height} px, more than the limit of {limit} px per side at {pixel_mm} mm a pixel (the largest bed, {bed_mm} mm, and at most {} px)", MAX_IMAGE_SIDE_PX)]
+    ImageSize {
+        /// The width the header gives, px.
+        width: u64,
+        /// The height, px.
+        height: u64,
+        /// The most allowed per side, px.
+        limit: u64,
+        /// The pixel size the image is printed at, mm (as text, short).
+        pixel_mm: String,
+        /// The largest bed, mm.
+        bed_mm: f64,
     },
     /// A pixel buffer of the wrong length for its size.
     #[error("pixel buffer has {got} values, expected {expected}")]
@@ -336,21 +351,28 @@ fn io_err(path: &Path, source: std::io::Error) -> BitmapError {
 }
 
 /// Decodes a BMP, PNG or TIFF (recognised by its signature) and thresholds it.
-pub fn decode(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
+pub fn decode(data: &[u8], opts: &ThresholdOptions, pixel_mm: f64) -> Result<Bitmap, BitmapError> {
     let cutoff = opts.cutoff()?;
     if is_plain_1bit_grey_png(data) {
+        // IHDR's width and height (big-endian, PNG spec 11.2.2), before anything is inflated.
+        let field =
+            |at: usize| u64::from(u32::from_be_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]));
+        check_size(field(16), field(20), pixel_mm)?;
         return decode_png_1bit(data, opts);
     }
-    let reader = image::ImageReader::new(Cursor::new(data))
-        .with_guessed_format()
-        .map_err(image::ImageError::IoError)?;
+    let reader = || {
+        image::ImageReader::new(Cursor::new(data)).with_guessed_format().map_err(image::ImageError::IoError)
+    };
     if !matches!(
-        reader.format(),
+        reader()?.format(),
         Some(image::ImageFormat::Bmp | image::ImageFormat::Png | image::ImageFormat::Tiff)
     ) {
         return Err(BitmapError::UnknownFormat);
     }
-    let img = reader.decode()?;
+    // The header's size (the decoder reads no pixel for it), checked before decoding.
+    let (width, height) = reader()?.into_dimensions()?;
+    check_size(u64::from(width), u64::from(height), pixel_mm)?;
+    let img = reader()?.decode()?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let colour = img.color();
     // One 8-bit level per pixel: grey as it is, colour through the chosen channel, both
@@ -440,10 +462,34 @@ fn pick(channel: Channel, r: u8, g: u8, b: u8) -> u8 {
     }
 }
 
-/// Loads a BMP, PNG or TIFF file and thresholds it ([`decode`]).
-pub fn load_image(path: &Path, opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
+/// Loads a BMP, PNG or TIFF file whose pixels are printed `pixel_mm` wide and thresholds it
+/// ([`decode`]).
+pub fn load_image(path: &Path, opts: &ThresholdOptions, pixel_mm: f64) -> Result<Bitmap, BitmapError> {
     let data = std::fs::read(path).map_err(|e| io_err(path, e))?;
-    decode(&data, opts)
+    decode(&data, opts, pixel_mm)
+}
+
+/// The most pixels a layer image printed at `pixel_mm` a pixel may have on a side: as many as
+/// cover the largest bed ([`range::BED_SIZE_MM`], 10 m), and at most [`MAX_IMAGE_SIDE_PX`]
+/// (what decoding and rastering one layer may hold). A 60 000 x 60 000 1-bit PNG is 557 KB on
+/// disk but 450 MB decoded and 7 GB of G-code, so its header is checked before anything else.
+pub fn max_side_px(pixel_mm: f64) -> u64 {
+    let bed_px = (range::BED_SIZE_MM.max / pixel_mm).floor();
+    if bed_px.is_finite() && bed_px >= 0.0 {
+        MAX_IMAGE_SIDE_PX.min(bed_px as u64)
+    } else {
+        MAX_IMAGE_SIDE_PX
+    }
+}
+
+/// `width` x `height` (from an image header) within [`max_side_px`] of `pixel_mm`.
+fn check_size(width: u64, height: u64, pixel_mm: f64) -> Result<(), BitmapError> {
+    let limit = max_side_px(pixel_mm);
+    if width.max(height) <= limit {
+        return Ok(());
+    }
+    let (pixel_mm, bed_mm) = (range::short(pixel_mm), range::BED_SIZE_MM.max);
+    Err(BitmapError::ImageSize { width, height, limit, pixel_mm, bed_mm })
 }
 
 #[cfg(test)]
@@ -565,7 +611,7 @@ mod tests {
         b.set(7, 1, true);
         let mut buf = Vec::new();
         b.write_png(&mut buf).unwrap();
-        assert_eq!(decode(&buf, &opts()).unwrap(), b);
+        assert_eq!(decode(&buf, &opts(), 0.1).unwrap(), b);
 
         let mut buf = Vec::new();
         {
@@ -576,7 +622,7 @@ mod tests {
             // white opaque, white transparent, white half alpha (255*128/255 = 128 -> lit)
             w.write_image_data(&[255, 255, 255, 0, 255, 128]).unwrap();
         }
-        let g = decode(&buf, &opts()).unwrap();
+        let g = decode(&buf, &opts(), 0.1).unwrap();
         assert_eq!((g.get(0, 0), g.get(1, 0), g.get(2, 0)), (true, false, true));
     }
 
@@ -591,7 +637,7 @@ mod tests {
             w.write_image_data(&[255, 0, 0, 0, 0, 255]).unwrap();
         }
         let get = |channel| {
-            let b = decode(&buf, &ThresholdOptions { channel, ..opts() }).unwrap();
+            let b = decode(&buf, &ThresholdOptions { channel, ..opts() }, 0.1).unwrap();
             (b.get(0, 0), b.get(1, 0))
         };
         assert_eq!(get(Channel::Red), (true, false));
@@ -611,7 +657,7 @@ mod tests {
             enc.set_depth(png::BitDepth::Sixteen);
             enc.write_header().unwrap().write_image_data(&[0x90, 0, 0x70, 0]).unwrap();
         }
-        let b = decode(&buf, &opts()).unwrap();
+        let b = decode(&buf, &opts(), 0.1).unwrap();
         assert_eq!((b.get(0, 0), b.get(1, 0)), (true, false));
         // Palette: index 1 is white, 0 black, 2 pure red (luma 76: dark, red channel: lit).
         let mut buf = Vec::new();
@@ -622,9 +668,9 @@ mod tests {
             enc.set_palette(vec![0, 0, 0, 255, 255, 255, 255, 0, 0]);
             enc.write_header().unwrap().write_image_data(&[1, 0, 2]).unwrap();
         }
-        let b = decode(&buf, &opts()).unwrap();
+        let b = decode(&buf, &opts(), 0.1).unwrap();
         assert_eq!((b.get(0, 0), b.get(1, 0), b.get(2, 0)), (true, false, false));
-        let red = decode(&buf, &ThresholdOptions { channel: Channel::Red, ..opts() }).unwrap();
+        let red = decode(&buf, &ThresholdOptions { channel: Channel::Red, ..opts() }, 0.1).unwrap();
         assert!(red.get(2, 0));
         // TIFF, 8-bit grey and RGBA.
         let mut tiff = Cursor::new(Vec::new());
@@ -632,17 +678,17 @@ mod tests {
             .unwrap()
             .write_to(&mut tiff, image::ImageFormat::Tiff)
             .unwrap();
-        let b = decode(tiff.get_ref(), &opts()).unwrap();
+        let b = decode(tiff.get_ref(), &opts(), 0.1).unwrap();
         assert_eq!((b.width(), b.get(0, 0), b.get(1, 0), b.get(2, 0)), (3, true, false, true));
         let mut tiff = Cursor::new(Vec::new());
         image::RgbaImage::from_raw(2, 1, vec![255, 255, 255, 255, 255, 255, 255, 0])
             .unwrap()
             .write_to(&mut tiff, image::ImageFormat::Tiff)
             .unwrap();
-        let b = decode(tiff.get_ref(), &opts()).unwrap();
+        let b = decode(tiff.get_ref(), &opts(), 0.1).unwrap();
         assert_eq!((b.get(0, 0), b.get(1, 0)), (true, false), "transparent white is dark");
         // Not an image we read.
-        assert!(matches!(decode(b"GIF89a....", &opts()), Err(BitmapError::UnknownFormat)));
+        assert!(matches!(decode(b"GIF89a....", &opts(), 0.1), Err(BitmapError::UnknownFormat)));
     }
 
     /// Builds a BMP file by hand (bottom-up unless `top_down`).
@@ -680,23 +726,23 @@ mod tests {
         // 1-bit, palette 0 = black, 1 = white; row 0 = 1010..., row 1 = 0000...1 (x = 9)
         let pal = [[0, 0, 0, 0], [255, 255, 255, 0]];
         let rows = vec![vec![0b1010_0000, 0], vec![0, 0b0100_0000]];
-        let b = decode(&bmp(10, 2, 1, &pal, &rows, false), &opts()).unwrap();
+        let b = decode(&bmp(10, 2, 1, &pal, &rows, false), &opts(), 0.1).unwrap();
         assert_eq!((b.width(), b.height(), b.count_ones()), (10, 2, 3));
         assert!(b.get(0, 0) && b.get(2, 0) && b.get(9, 1));
         // 8-bit grey ramp, top-down
         let pal: Vec<[u8; 4]> = (0..=255u8).map(|v| [v, v, v, 0]).collect();
         let rows = vec![vec![0, 127, 128, 200]];
-        let b = decode(&bmp(4, 1, 8, &pal, &rows, true), &opts()).unwrap();
+        let b = decode(&bmp(4, 1, 8, &pal, &rows, true), &opts(), 0.1).unwrap();
         assert_eq!((0..4).map(|x| b.get(x, 0)).collect::<Vec<_>>(), [false, false, true, true]);
         // 24-bit BGR: blue pixel, white pixel
         let rows = vec![vec![255, 0, 0, 255, 255, 255]];
         let blue = ThresholdOptions { channel: Channel::Blue, ..opts() };
-        let b = decode(&bmp(2, 1, 24, &[], &rows, false), &blue).unwrap();
+        let b = decode(&bmp(2, 1, 24, &[], &rows, false), &blue, 0.1).unwrap();
         assert!(b.get(0, 0) && b.get(1, 0));
-        let b = decode(&bmp(2, 1, 24, &[], &rows, false), &opts()).unwrap();
+        let b = decode(&bmp(2, 1, 24, &[], &rows, false), &opts(), 0.1).unwrap();
         assert!(!b.get(0, 0) && b.get(1, 0));
-        assert!(decode(b"BMxx", &opts()).is_err());
-        assert!(decode(&bmp(2, 1, 24, &[], &rows, false)[..60], &opts()).is_err());
+        assert!(decode(b"BMxx", &opts(), 0.1).is_err());
+        assert!(decode(&bmp(2, 1, 24, &[], &rows, false)[..60], &opts(), 0.1).is_err());
     }
 
     proptest::proptest! {

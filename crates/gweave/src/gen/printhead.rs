@@ -252,6 +252,8 @@ impl PrintheadProfile {
 }
 
 const NOZZLES: Range = Range::new(1.0, MAX_NOZZLES as f64, "nozzles");
+/// Entries of `nozzle_rows`: none (the identity) or one per nozzle.
+const NOZZLE_ROWS: Range = Range::new(0.0, MAX_NOZZLES as f64, "rows");
 /// Heads on one carriage (each is a `P` address).
 const HEADS: Range = Range::new(0.0, 16.0, "heads");
 /// Up to a second between two fires.
@@ -262,6 +264,8 @@ const DROP_VOLUME_PL: Range = Range::new(0.0, 100_000.0, "pl");
 impl CheckRanges for PrintheadProfile {
     fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
         t.count("nozzle_count", self.nozzle_count, NOZZLES)?;
+        // A map of a million rows would be listed whole in the message that refuses it.
+        t.count("nozzle_rows (count)", self.nozzle_rows.len() as u64, NOZZLE_ROWS)?;
         t.check("dpi", self.dpi, range::DPI)?;
         t.count("heads (count)", self.heads.len() as u64, HEADS)?;
         for (i, h) in self.heads.iter().enumerate() {

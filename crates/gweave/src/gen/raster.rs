@@ -509,7 +509,7 @@ pub fn raster_image_stacks<W: Write>(
         for s in stacks {
             let plane = match s.paths.get(k) {
                 Some(p) => {
-                    let b = load_image(p, &s.threshold)?;
+                    let b = load_image(p, &s.threshold, source_pixel_mm.unwrap_or(pitch))?;
                     let b = if s.flip_y { b.mirror_y() } else { b };
                     match source_pixel_mm {
                         Some(px) => b.resample(px, px, pitch)?,

@@ -54,6 +54,9 @@ pub enum Sl1Error {
         /// The key.
         key: &'static str,
     },
+    /// A size in the archive's settings past its ceiling.
+    #[error("sl1: {0}")]
+    TooLarge(#[from] crate::range::TooLarge),
     /// No layer image in the archive.
     #[error("sl1 has no layer images {0}NNNNN.png")]
     NoLayers(String),
@@ -155,13 +158,23 @@ fn read_entry<R: Read + Seek>(
     archive: &mut zip::ZipArchive<R>,
     name: &str,
 ) -> Result<Option<String>, Sl1Error> {
-    let mut entry = match archive.by_name(name) {
+    let entry = match archive.by_name(name) {
         Ok(e) => e,
         Err(zip::result::ZipError::FileNotFound) => return Ok(None),
         Err(e) => return Err(e.into()),
     };
+    // A settings file of the archive, bounded as any settings file is (it may inflate to GBs).
+    let limit = crate::settings::MAX_FILE_BYTES;
     let mut s = String::new();
-    entry.read_to_string(&mut s).map_err(|source| Sl1Error::Io { path: name.into(), source })?;
+    entry
+        .take(limit + 1)
+        .read_to_string(&mut s)
+        .map_err(|source| Sl1Error::Io { path: name.into(), source })?;
+    if s.len() as u64 > limit {
+        let source =
+            std::io::Error::new(std::io::ErrorKind::InvalidData, "larger than a settings file may be");
+        return Err(Sl1Error::Io { path: name.into(), source });
+    }
     Ok(Some(s))
 }
 
@@ -205,6 +218,11 @@ impl<R: Read + Seek> Sl1Reader<R> {
         if display_pixels_x == 0 || display_pixels_y == 0 || display_width_mm <= 0.0 {
             return Err(Sl1Error::Key { file: "prusaslicer.ini", key: "display_pixels_x" });
         }
+        // Each layer is made a bed image of this size: held to the ceiling of an image side
+        // before any is allocated (the largest resin printers' masks are about 15 000 px).
+        let side = f64::from(display_pixels_x.max(display_pixels_y));
+        crate::range::Ceiling::new(crate::range::MAX_IMAGE_SIDE_PX, "pixels per image side")
+            .check(side, || "the archive's display (display_pixels_x, display_pixels_y)".to_owned())?;
         let orientation = match printer.get("display_orientation").map(String::as_str) {
             Some("portrait") => Orientation::Portrait,
             _ => Orientation::Landscape,
@@ -300,9 +318,17 @@ impl<R: Read + Seek> Sl1Reader<R> {
             .ok_or(Sl1Error::LayerIndex { index, count: self.layer_names.len() })?
             .clone();
         let mut entry = self.archive.by_name(&name)?;
-        let mut png = Vec::with_capacity(entry.size() as usize);
-        entry.read_to_end(&mut png).map_err(|source| Sl1Error::Io { path: name.clone().into(), source })?;
-        let bitmap = decode(&png, opts).map_err(|source| Sl1Error::Image { name: name.clone(), source })?;
+        // The size the archive claims is not trusted for the allocation: the read is bounded
+        // by the largest 1-bit layer (one bit a pixel, plus PNG's row bytes).
+        let most = crate::range::MAX_IMAGE_SIDE_PX.pow(2) / 8 + (1 << 20);
+        let mut png = Vec::with_capacity(entry.size().min(1 << 20) as usize);
+        (&mut entry)
+            .take(most)
+            .read_to_end(&mut png)
+            .map_err(|source| Sl1Error::Io { path: name.clone().into(), source })?;
+        let pixel_mm = self.info.pixel_x_mm.min(self.info.pixel_y_mm);
+        let bitmap =
+            decode(&png, opts, pixel_mm).map_err(|source| Sl1Error::Image { name: name.clone(), source })?;
         let (w, h) = (self.info.image_width_px, self.info.image_height_px);
         if (bitmap.width(), bitmap.height()) != (w, h) {
             return Err(Sl1Error::LayerSize {

@@ -395,7 +395,7 @@ mod tests {
         assert_eq!(rep.pixels_per_layer, vec![32, 32, 32]);
         let listed = list_images(dir.path()).unwrap();
         assert_eq!(listed, rep.files);
-        let img = load_image(&listed[2], &ThresholdOptions::default()).unwrap();
+        let img = load_image(&listed[2], &ThresholdOptions::default(), 0.1).unwrap();
         assert_eq!((img.width(), img.height(), img.count_ones()), (8, 4, 32));
         assert!(matches!(slice_to_dir(&Mesh::default(), &cfg, dir.path()), Err(SliceError::EmptyMesh)));
     }

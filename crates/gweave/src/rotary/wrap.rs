@@ -151,6 +151,9 @@ pub struct Wrap {
     config: WrapConfig,
     writer: MoveWriter,
     started: bool,
+    /// A line has given an `F` word: a move at feed 0 is then one at `F0`, not one before any
+    /// feed rate.
+    feed_given: bool,
     /// The header naming the machine ([`RotaryConfig::header_lines`]) is out.
     headed: bool,
     /// The file's line endings, for the lines the wrap writes.
@@ -178,6 +181,7 @@ impl Wrap {
             config,
             writer,
             started: false,
+            feed_given: false,
             headed: false,
             eol: Eol::default(),
             unterminated: false,
@@ -276,10 +280,15 @@ impl Wrap {
         }
         let speed_mm_s = mv.feed_mm_min / 60.0;
         if speed_mm_s.is_nan() || speed_mm_s <= 0.0 {
-            return Err(RotaryError::Config {
-                key: "F",
-                reason: "a move before any feed rate was set".into(),
-            });
+            let reason = if self.feed_given {
+                format!(
+                    "a move at F{}: set a feed rate above 0 before it",
+                    crate::range::short(mv.feed_mm_min)
+                )
+            } else {
+                "a move before any feed rate was set".into()
+            };
+            return Err(RotaryError::Config { key: "F", reason });
         }
         if !self.started {
             self.writer.enter_feed_mode(&mut self.buffer)?;
@@ -405,6 +414,7 @@ impl Pass for Wrap {
             self.eol.block(out, header.as_bytes())?;
         }
         self.buffer.clear();
+        self.feed_given |= ctx.block.has(b'F');
         if !self.rewrite(ctx).map_err(PassError::refuse)? {
             return keep(ctx, out);
         }

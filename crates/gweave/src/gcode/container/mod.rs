@@ -78,7 +78,7 @@ pub fn open(path: &Path) -> io::Result<Input> {
     let (mut raw, container) = sniffed(path)?;
     let (text_len, reader): (_, Box<dyn Read + Send + Sync>) = match container {
         Container::Text => (Some(raw.size()?), Box::new(raw)),
-        Container::Gzip => (None, Box::new(MultiGzDecoder::new(BufReader::with_capacity(1 << 16, raw)))),
+        Container::Gzip => (None, Box::new(Gunzip::new(raw))),
         Container::Bgcode => {
             raw.seek(SeekFrom::Start(0))?;
             let reader = bgcode::read::Reader::new(BufReader::with_capacity(1 << 16, raw))?;
@@ -86,6 +86,41 @@ pub fn open(path: &Path) -> io::Result<Input> {
         }
     };
     Ok(Input { text_len, reader, stop: crate::interrupt::current() })
+}
+
+/// A gzip file's text: its members one after the other (as `gzip -d` reads them), and bytes
+/// after the last member that do not start another one are an error that says so (flate2 calls
+/// them an "invalid gzip header", which sends the user looking at the start of the file).
+struct Gunzip {
+    inner: MultiGzDecoder<BufReader<spool::Raw>>,
+    /// Text bytes given out so far: an error after some is not the file's own header.
+    out: u64,
+}
+
+impl Gunzip {
+    fn new(raw: spool::Raw) -> Gunzip {
+        Gunzip { inner: MultiGzDecoder::new(BufReader::with_capacity(1 << 16, raw)), out: 0 }
+    }
+}
+
+impl Read for Gunzip {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        match self.inner.read(buf) {
+            Ok(n) => {
+                self.out += n as u64;
+                Ok(n)
+            }
+            Err(e) if self.out > 0 && e.to_string().contains("invalid gzip header") => Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "trailing data after the gzip stream ({} bytes of text read): bytes that are not \
+                     gzip follow its end; the file is damaged or had something appended",
+                    self.out
+                ),
+            )),
+            Err(e) => Err(e),
+        }
+    }
 }
 
 /// Opens the raw input and tells its container, positioned at the start.
@@ -123,7 +158,7 @@ pub fn ends(path: &Path, head: usize, tail: usize) -> io::Result<(Vec<u8>, Vec<u
             Ok((first, last))
         }
         Container::Gzip => {
-            let mut z = MultiGzDecoder::new(BufReader::new(raw));
+            let mut z = Gunzip::new(raw);
             (&mut z).take(head as u64).read_to_end(&mut first)?;
             // A ring of twice the tail, compacted when full.
             let mut last: Vec<u8> = Vec::with_capacity(2 * tail);

@@ -7,14 +7,28 @@
 //! process exits, however it exits (a signal included), so it needs none of the clean-up of
 //! [`crate::gcode::temp`]. Each later open of the same path reads the copy from its start, with
 //! its own position.
+//!
+//! A stream may have no end (`yes G1 X1 | gweave stats -`, `gweave stats /dev/zero`), so a copy
+//! stops at [`DEFAULT_LIMIT`] bytes (or `GWEAVE_SPOOL_LIMIT`, e.g. `512M`, `20G`) with an error
+//! saying so, rather than fill the temporary directory. A copy that cannot be written names the
+//! temporary directory (`$TMPDIR`), not the input.
 
 use std::fs::File;
-use std::io::{self, Read, Seek, SeekFrom};
+use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 /// The path that names standard input.
 pub const STDIN: &str = "-";
+
+/// Most bytes copied from one stream: larger than any sliced file (the largest real ones are a
+/// few GiB of text), small enough that an endless stream stops before a temporary directory
+/// on a small disk is full.
+pub const DEFAULT_LIMIT: u64 = 8 << 30;
+
+/// The environment variable that sets another limit: bytes, or with `K`, `M` or `G` (powers
+/// of 1024).
+pub const LIMIT_VAR: &str = "GWEAVE_SPOOL_LIMIT";
 
 /// Copies made so far, by the path that named them.
 static SPOOLS: Mutex<Vec<(PathBuf, Arc<File>)>> = Mutex::new(Vec::new());
@@ -37,20 +51,80 @@ pub fn open(path: &Path) -> io::Result<Raw> {
     if let Some((_, file)) = spools.iter().find(|(p, _)| p == path) {
         return Ok(Raw::Spool { file: Arc::clone(file), pos: 0 });
     }
-    let mut copy = tempfile::tempfile()?;
-    if is_stdin(path) {
-        io::copy(&mut io::stdin().lock(), &mut copy)?;
+    let copy = if is_stdin(path) {
+        spool(&mut io::stdin().lock())?
     } else {
         let mut file = File::open(path)?;
         let meta = file.metadata()?;
         if meta.is_file() || meta.is_dir() {
             return Ok(Raw::File(file));
         }
-        io::copy(&mut file, &mut copy)?;
-    }
+        spool(&mut file)?
+    };
     let file = Arc::new(copy);
     spools.push((path.to_path_buf(), Arc::clone(&file)));
     Ok(Raw::Spool { file, pos: 0 })
+}
+
+/// The limit in force: [`LIMIT_VAR`] if set (an error if it cannot be read), else
+/// [`DEFAULT_LIMIT`].
+fn limit() -> io::Result<u64> {
+    let Some(text) = std::env::var_os(LIMIT_VAR) else {
+        return Ok(DEFAULT_LIMIT);
+    };
+    let text = text.to_string_lossy();
+    let (digits, shift) = match text.trim().to_ascii_uppercase() {
+        t if t.ends_with('K') => (t[..t.len() - 1].to_owned(), 10),
+        t if t.ends_with('M') => (t[..t.len() - 1].to_owned(), 20),
+        t if t.ends_with('G') => (t[..t.len() - 1].to_owned(), 30),
+        t => (t, 0),
+    };
+    digits.parse::<u64>().ok().and_then(|n| n.checked_mul(1 << shift)).ok_or_else(|| {
+        io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("{LIMIT_VAR}={text}: give a size in bytes, or with K, M or G (e.g. 512M)"),
+        )
+    })
+}
+
+/// Copies `stream` into a new unnamed file in the temporary directory, at most [`limit`] bytes.
+fn spool(stream: &mut dyn Read) -> io::Result<File> {
+    let limit = limit()?;
+    let dir = std::env::temp_dir();
+    // A failed write is the temporary directory's problem (full, read-only, gone): say which.
+    let in_dir = |e: io::Error| {
+        io::Error::new(e.kind(), format!("copying the stream to a file in {} ($TMPDIR): {e}", dir.display()))
+    };
+    let mut copy = tempfile::tempfile().map_err(in_dir)?;
+    let mut buf = vec![0u8; 1 << 16];
+    let mut copied: u64 = 0;
+    loop {
+        let n = match stream.read(&mut buf) {
+            Ok(0) => return Ok(copy),
+            Ok(n) => n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        copied += n as u64;
+        if copied > limit {
+            return Err(io::Error::other(format!(
+                "the stream is longer than the limit of {} copied to the temporary directory \
+                     ({LIMIT_VAR} sets another)",
+                size_text(limit)
+            )));
+        }
+        copy.write_all(&buf[..n]).map_err(in_dir)?;
+    }
+}
+
+/// `bytes` as the limit is written: `8 GiB`, `512 MiB`, `1000 bytes`.
+fn size_text(bytes: u64) -> String {
+    match bytes {
+        b if b >= 1 << 30 && b % (1 << 30) == 0 => format!("{} GiB", b >> 30),
+        b if b >= 1 << 20 && b % (1 << 20) == 0 => format!("{} MiB", b >> 20),
+        b if b >= 1 << 10 && b % (1 << 10) == 0 => format!("{} KiB", b >> 10),
+        b => format!("{b} bytes"),
+    }
 }
 
 impl Raw {

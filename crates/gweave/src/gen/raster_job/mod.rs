@@ -110,7 +110,7 @@ pub use inputs::{parse_channels, InputSpec, Source};
 
 /// The text of a file the job reads.
 fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|source| JobError::ReadText { path: path.to_path_buf(), source })
+    crate::settings::read_text(path).map_err(|source| JobError::ReadText { path: path.to_path_buf(), source })
 }
 
 /// Makes the profile have exactly `heads` heads: extra heads get zero offsets, which suits
@@ -297,7 +297,7 @@ impl Job {
                             planes.push(Bitmap::new(0, 0));
                             continue;
                         };
-                        let b = load_image(p, &s.threshold)
+                        let b = load_image(p, &s.threshold, self.pixel_mm.unwrap_or(pitch))
                             .map_err(|source| JobError::ReadImage { path: p.clone(), source })?;
                         let (w, h) = (b.width(), b.height());
                         match first {

@@ -435,9 +435,21 @@ const TOLERANCE: Range = Range::new(0.000_001, 0.999, "");
 /// 0 turns the Z feed cap off.
 const Z_CAP_MM_MIN: Range = Range::new(0.0, 600_000.0, "mm/min");
 const EVERY_LAYERS: Range = Range::new(1.0, 1_000_000.0, "layers");
+/// Named mixes, gradients, purge pairs and tool mappings of one profile: more than any job
+/// paints with (a virtual tool per mix is at most 1 000), few enough that every one is
+/// resolved (a colour solved for the loaded filaments) in a few seconds.
+const ENTRIES: Range = Range::new(0.0, 4_096.0, "entries");
+/// Schedule entries: one per layer at most ([`range::MAX_LAYERS`]).
+const SCHEDULE_ENTRIES: Range = Range::new(0.0, range::MAX_LAYERS as f64, "entries");
 
 impl CheckRanges for MixProfile {
     fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        // The counts first: they size what the checks below walk.
+        t.count("mix (count)", self.mix.len() as u64, ENTRIES)?;
+        t.count("schedule (count)", self.schedule.len() as u64, SCHEDULE_ENTRIES)?;
+        t.count("gradient (count)", self.gradient.len() as u64, ENTRIES)?;
+        t.count("map (count)", self.map.len() as u64, ENTRIES)?;
+        t.sub("purge").count("pair (count)", self.purge.pair.len() as u64, ENTRIES)?;
         let hw = &self.hardware;
         let hardware = t.sub("hardware");
         hardware.count("inputs (count)", hw.inputs.len() as u64, INPUTS)?;

@@ -35,6 +35,7 @@ use serde::{Deserialize, Serialize};
 use crate::colour::purge::{filament_mm_to_mm3, flush_volume_mm3, mm3_to_filament_mm, Washout};
 use crate::colour::Srgb8;
 use crate::gcode::layers::{Feature, Markers, ALL_FEATURES};
+use crate::gcode::limits::MAX_TOOLS;
 use crate::post::purge_block::PurgeMotion;
 use crate::range::{self, OutOfRange, Range, FILAMENT_DIAMETER_MM, PURGE_MM, PURGE_MM3};
 use crate::settings::{CheckRanges, Table};
@@ -263,6 +264,12 @@ const WASHOUT_MM3: Range = Range::new(0.0, 10_000.0, "mm³");
 const TOLERANCE: Range = Range::new(0.000_001, 1.0, "");
 /// A tower's line width and layer height.
 const LINE_MM: Range = Range::new(0.01, 10.0, "mm");
+/// Tool pairs given their own purge: every ordered pair of 100 tools.
+const PAIRS: Range = Range::new(0.0, 10_000.0, "pairs");
+/// Tool colours: one per tool a machine may have ([`MAX_TOOLS`]).
+const TOOLS: Range = Range::new(0.0, MAX_TOOLS as f64, "tools");
+/// Feature names: each feature once, with room for the names of other slicers.
+const FEATURES: Range = Range::new(0.0, 1_000.0, "names");
 /// Lines held while looking for a place to purge.
 const WINDOW_LINES: Range = Range::new(1.0, 10_000_000.0, "lines");
 
@@ -271,6 +278,10 @@ impl CheckRanges for PurgeShiftConfig {
         t.check_opt("purge_mm", self.purge_mm, PURGE_MM)?;
         t.check_opt("purge_mm3", self.purge_mm3, PURGE_MM3)?;
         t.check("filament_diameter_mm", self.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;
+        // Counts first: every tool change looks its pair up among them.
+        t.count("pair (count)", self.pair.len() as u64, PAIRS)?;
+        t.count("colours (count)", self.colours.len() as u64, TOOLS)?;
+        t.count("allow_features (count)", self.allow_features.len() as u64, FEATURES)?;
         for (i, p) in self.pair.iter().enumerate() {
             let pair = t.sub("pair").item(i);
             pair.check_opt("purge_mm", p.purge_mm, PURGE_MM)?;

@@ -26,8 +26,25 @@ pub const MAGIC: &[u8; 4] = b"GCDE";
 /// The version of the specification this module implements.
 pub const VERSION: u32 = 1;
 /// The largest block (stored or decoded) read: libbgcode and PrusaSlicer write G-code blocks of
-/// at most 64 KiB and thumbnails of a few hundred KiB; a larger size is a damaged header.
-pub const MAX_BLOCK: u32 = 64 << 20;
+/// at most 64 KiB and thumbnails of a few hundred KiB; a larger size is a damaged header or a
+/// bomb (one G-code block of 64 MiB, 98 KB deflated, took 143 MB: stored, decoded and handed
+/// on at once).
+pub const MAX_BLOCK: u32 = 8 << 20;
+/// The most bytes every block before the G-code may hold together (metadata and thumbnails,
+/// stored or decoded): they are kept for the whole run (rendered as text before and after the
+/// G-code, carried into a binary output), so a 65 KB file whose printer metadata inflates to
+/// 64 MiB must not be taken in. PrusaSlicer's settings are about 60 KiB, its thumbnails a few
+/// hundred; a block that would pass the limit is refused from its header, before it is read.
+pub const MAX_PREAMBLE: u64 = 8 << 20;
+/// The most `key=value` items one metadata block may hold (PrusaSlicer's settings have about
+/// 700); each takes about 50 bytes of memory beyond its text, so 4 MiB of `=\n` lines would
+/// otherwise take 100 MB.
+pub const MAX_METADATA_ITEMS: usize = 10_000;
+/// The most thumbnails read (PrusaSlicer writes one per size asked for, two to four).
+pub const MAX_THUMBNAILS: usize = 16;
+/// The most slicer metadata blocks read: the specification has one, libbgcode reads an INI and
+/// a JSON one.
+pub const MAX_SLICER_BLOCKS: usize = 2;
 
 /// Block types (the header's first field).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -205,18 +222,22 @@ pub struct Metadata {
 }
 
 impl Metadata {
-    /// Decodes a metadata block's data. Lines without `=` are skipped.
+    /// Decodes a metadata block's data. Lines without `=` are skipped; more than
+    /// [`MAX_METADATA_ITEMS`] items are refused (counted before any is kept).
     pub fn parse(data: &[u8], encoding: u16) -> io::Result<Metadata> {
         let text = String::from_utf8_lossy(data);
         match encoding {
-            0 => Ok(Metadata {
-                json: false,
-                items: text
-                    .split('\n')
-                    .filter_map(|l| l.split_once('='))
-                    .map(|(k, v)| (k.to_owned(), v.to_owned()))
-                    .collect(),
-            }),
+            0 => {
+                let pairs = || text.split('\n').filter_map(|l| l.split_once('='));
+                let count = pairs().take(MAX_METADATA_ITEMS + 1).count();
+                if count > MAX_METADATA_ITEMS {
+                    return Err(invalid(format!(
+                        "more than {MAX_METADATA_ITEMS} key=value items: not metadata a slicer writes"
+                    )));
+                }
+                let items = pairs().map(|(k, v)| (k.to_owned(), v.to_owned())).collect();
+                Ok(Metadata { json: false, items })
+            }
             1 => Ok(Metadata { json: true, items: vec![(String::new(), text.into_owned())] }),
             e => Err(invalid(format!("unknown metadata encoding {e}"))),
         }

@@ -9,7 +9,7 @@ use std::io::{self, Read, Seek, SeekFrom};
 use super::super::{heatshrink, meatpack};
 use super::{
     invalid, read_full, text, Block, Compression, Header, Kind, Metadata, Preamble, Thumbnail, MAGIC,
-    MAX_BLOCK,
+    MAX_BLOCK, MAX_PREAMBLE, MAX_SLICER_BLOCKS, MAX_THUMBNAILS,
 };
 
 /// A binary G-code file read as text.
@@ -54,6 +54,8 @@ impl<R: Read> Reader<R> {
         };
         r.preamble.checksum = r.file_header()?;
         let mut seen_printer = false;
+        // Bytes of the blocks kept so far (stored or decoded, the larger), held to MAX_PREAMBLE.
+        let mut kept: u64 = 0;
         loop {
             let Some(at) = r.header()? else {
                 return Err(invalid("the file ends before its first G-code block".into()));
@@ -79,7 +81,21 @@ impl<R: Read> Reader<R> {
                 Kind::Thumbnail | Kind::PrintMetadata | Kind::SlicerMetadata if !seen_printer => {
                     return order_error("no printer metadata before it")
                 }
+                Kind::Thumbnail if r.preamble.thumbnails.len() == MAX_THUMBNAILS => {
+                    return at.refuse(format!("more than {MAX_THUMBNAILS} thumbnails"))
+                }
+                Kind::SlicerMetadata if r.preamble.slicer.len() == MAX_SLICER_BLOCKS => {
+                    return at.refuse(format!("more than {MAX_SLICER_BLOCKS} slicer metadata blocks"))
+                }
                 _ => {}
+            }
+            // Checked from the header, before the block is read or inflated.
+            kept += u64::from(at.header.uncompressed.max(at.header.stored));
+            if kept > MAX_PREAMBLE {
+                return at.refuse(format!(
+                    "the blocks before the G-code would hold {kept} bytes, more than the limit of {} MiB",
+                    MAX_PREAMBLE >> 20
+                ));
             }
             let block = r.block_data(at)?;
             match at.header.kind {
@@ -168,8 +184,9 @@ impl<R: Read> Reader<R> {
         let at = Located { header: Header { kind, compression, uncompressed, stored }, number, offset };
         if uncompressed > MAX_BLOCK || stored > MAX_BLOCK {
             return Err(at.error(invalid(format!(
-                "its size ({} bytes) is larger than the limit of {MAX_BLOCK}",
-                uncompressed.max(stored)
+                "its size ({} bytes) is larger than the limit of {} MiB for a block",
+                uncompressed.max(stored),
+                MAX_BLOCK >> 20
             ))));
         }
         self.block += 1;
@@ -252,6 +269,11 @@ impl<R: Read> Reader<R> {
 }
 
 impl Located {
+    /// The file refused at this block, saying why.
+    fn refuse<T>(&self, why: String) -> io::Result<T> {
+        Err(self.error(invalid(why)))
+    }
+
     fn error(&self, e: io::Error) -> io::Error {
         io::Error::new(
             e.kind(),
@@ -356,12 +378,28 @@ fn drop_empty_lines(text: &mut Vec<u8>) {
 pub fn tail<R: Read + Seek>(mut inner: R, want: usize) -> io::Result<Vec<u8>> {
     let mut reader = Reader::new(&mut inner)?;
     let suffix = text::suffix(&reader.preamble);
-    let mut blocks = Vec::new();
-    // Walk: remember each G-code block's offset, skip its body.
+    // Walk: remember the last G-code blocks, skip each body. A block's text is at least its
+    // decoded size (MeatPack only packs) less the empty lines dropped, so the blocks holding the
+    // last `2 * want` decoded bytes give the tail; the ones before are forgotten as the walk
+    // goes, which keeps memory constant per block (10 million empty blocks took 474 MB here).
+    let mut blocks = std::collections::VecDeque::new();
+    let mut last_bytes: u64 = 0;
     let crc_len: u64 = if reader.preamble.checksum { 4 } else { 0 };
     let mut next = reader.next.take();
     while let Some(at) = next {
-        blocks.push(at);
+        // An empty block has no text to give.
+        if at.header.uncompressed > 0 {
+            blocks.push_back(at);
+            last_bytes += u64::from(at.header.uncompressed);
+        }
+        while let Some(first) = blocks.front() {
+            let without = last_bytes - u64::from(first.header.uncompressed);
+            if without < 2 * want as u64 {
+                break;
+            }
+            last_bytes = without;
+            blocks.pop_front();
+        }
         let skip = at.header.kind.params_len() as u64 + u64::from(at.header.stored) + crc_len;
         reader.inner.seek(SeekFrom::Current(skip as i64))?;
         reader.offset += skip;
