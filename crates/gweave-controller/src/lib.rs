@@ -35,7 +35,7 @@
 //! let inputs = Inputs { now_ms: 0, adc: [1000, 1000, 1000], endstops: 0 };
 //! controller.boot(&mut board, &inputs);
 //! // The main loop: bytes from the UART, then one turn of the machine.
-//! for &b in b"N1 G1 X1 F600*59\n" {
+//! for &b in b"N1 G1 X1 F600*48\n" {
 //!     controller.receive(b);
 //! }
 //! controller.poll(&mut board, &inputs);

@@ -10,9 +10,11 @@
 /// `log2(x)` roughly in the top bits), which is within 4 % of the answer, so three iterations
 /// reach full `f32` precision.
 pub fn sqrt(x: f32) -> f32 {
-    // `!(x > 0.0)` also catches NaN.
-    if !(x > 0.0) || x.is_infinite() {
-        return if x.is_infinite() { x } else { 0.0 };
+    if x.is_nan() || x <= 0.0 {
+        return 0.0;
+    }
+    if x.is_infinite() {
+        return x;
     }
     let mut r = f32::from_bits((x.to_bits() >> 1) + 0x1FBD_1DF5);
     for _ in 0..3 {

@@ -81,7 +81,7 @@ impl Planner {
     /// An empty planner at the origin.
     pub const fn new() -> Self {
         const EMPTY: Block = Block {
-            step: StepBlock { steps: [0; AXES], events: 0, dir_bits: 0, endstop_mask: 0, endstop_invert: 0 },
+            step: StepBlock::IDLE,
             len_mm: 0.0,
             accel_mm_s2: 0.0,
             nominal_v2: 0.0,
@@ -120,11 +120,14 @@ impl Planner {
         if self.is_full() {
             return false;
         }
-        let mut step = StepBlock { endstop_mask, endstop_invert: s.endstop_inverting, ..StepBlock::default() };
+        let mut step =
+            StepBlock { endstop_mask, endstop_invert: s.endstop_inverting, ..StepBlock::default() };
         let mut delta_mm = [0.0f32; AXES];
         for axis in 0..AXES {
-            let delta = i64::from(target_steps[axis]) - i64::from(self.position_steps[axis]);
-            step.steps[axis] = delta.unsigned_abs().min(u64::from(u32::MAX / 2)) as u32;
+            // 32-bit arithmetic only (64-bit costs kilobytes on an AVR); at most 2^31 steps, so
+            // the stepper's counters (below 2 × events) fit 32 bits.
+            let delta = target_steps[axis].saturating_sub(self.position_steps[axis]);
+            step.steps[axis] = delta.unsigned_abs();
             step.events = step.events.max(step.steps[axis]);
             if delta > 0 {
                 step.dir_bits |= 1 << axis;
@@ -168,11 +171,19 @@ impl Planner {
             // was planned to stop.
             0.0
         } else {
-            self.junction_v2(&unit, accel_mm_s2, s.junction_deviation_mm).min(nominal_v2).min(self.previous_nominal_v2)
+            self.junction_v2(&unit, accel_mm_s2, s.junction_deviation_mm)
+                .min(nominal_v2)
+                .min(self.previous_nominal_v2)
         };
         let slot = (self.first + self.count) % PLANNER_BLOCKS;
-        self.blocks[slot] =
-            Block { step, len_mm, accel_mm_s2, nominal_v2, max_entry_v2, entry_v2: if self.is_empty() { 0.0 } else { max_entry_v2 } };
+        self.blocks[slot] = Block {
+            step,
+            len_mm,
+            accel_mm_s2,
+            nominal_v2,
+            max_entry_v2,
+            entry_v2: if self.is_empty() { 0.0 } else { max_entry_v2 },
+        };
         self.count += 1;
         self.previous_unit = unit;
         self.previous_nominal_v2 = nominal_v2;

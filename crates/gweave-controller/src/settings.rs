@@ -1,5 +1,5 @@
 //! The printer's settings: what the board's configuration sets at build time, what `M92`,
-//! `M201`, `M203`, `M204`, `M205` and `M301`/`M304` change over serial, and what `M500` keeps in
+//! `M201`, `M203`, `M204`, `M205` and `M301` change over serial, and what `M500` keeps in
 //! EEPROM.
 //!
 //! The defaults are a common i3-style printer on RAMPS 1.4 (issue 37): 80/80/400/93 steps per
@@ -59,10 +59,10 @@ pub struct Settings {
     /// Thermistor table per sensor, in [`crate::HEATERS`] order, as Marlin numbers them (only
     /// type 1 is built in; 0 means no sensor).
     pub thermistor: [u8; HEATERS],
-    /// PID gains of the hotends (`M301`).
+    /// PID gains of the hotends (`M301`). The bed is switched on below its target and off above
+    /// (bang-bang, Marlin's default without `PIDTEMPBED`): it is slow and heavy, and needs no
+    /// tuning that way.
     pub hotend_pid: Pid,
-    /// PID gains of the bed (`M304`).
-    pub bed_pid: Pid,
     /// Highest temperature allowed per heater, °C: above it the machine halts (MAXTEMP).
     pub max_temp_c: [f32; HEATERS],
 }
@@ -86,7 +86,6 @@ impl Settings {
         hotends: 1,
         thermistor: [1, 0, 1],
         hotend_pid: Pid { kp: 22.2, ki: 1.08, kd: 114.0 },
-        bed_pid: Pid { kp: 10.0, ki: 0.023, kd: 305.4 },
         max_temp_c: [275.0, 275.0, 150.0],
     };
 }
@@ -107,15 +106,15 @@ pub const EEPROM_BYTES: u16 = 4 + 4 * Settings::STORED as u16 + 2;
 
 impl Settings {
     /// How many numbers `M500` keeps: steps, feeds and accelerations per axis (12), the three
-    /// accelerations and the junction deviation (4), the two PID sets (6).
-    pub const STORED: usize = 22;
+    /// accelerations and the junction deviation (4), the hotends' PID gains (3).
+    pub const STORED: usize = 19;
 
     /// The numbers kept in EEPROM, in their EEPROM order.
     fn stored(&mut self) -> [&mut f32; Settings::STORED] {
         let [s0, s1, s2, s3] = &mut self.steps_per_mm;
         let [f0, f1, f2, f3] = &mut self.max_feed_mm_s;
         let [a0, a1, a2, a3] = &mut self.max_accel_mm_s2;
-        let (hp, bp) = (&mut self.hotend_pid, &mut self.bed_pid);
+        let hp = &mut self.hotend_pid;
         [
             s0,
             s1,
@@ -136,9 +135,6 @@ impl Settings {
             &mut hp.kp,
             &mut hp.ki,
             &mut hp.kd,
-            &mut bp.kp,
-            &mut bp.ki,
-            &mut bp.kd,
         ]
     }
 
@@ -228,6 +224,6 @@ mod tests {
         let mut again = Settings::DEFAULT;
         assert_eq!(again.load(&mut eeprom), None);
         assert_eq!(again, Settings::DEFAULT);
-        assert_eq!(EEPROM_BYTES, 94);
+        assert_eq!(EEPROM_BYTES, 82);
     }
 }

@@ -79,7 +79,9 @@ mod tests {
 
     #[test]
     fn decimals_read_as_the_nearest_float() {
-        for text in ["0", "1", "-5", "12.5", "0.013", "-0.0125", "199.9999", "3000", "93.0", "123456789", "0.000001"] {
+        for text in
+            ["0", "1", "-5", "12.5", "0.013", "-0.0125", "199.9999", "3000", "93.0", "123456789", "0.000001"]
+        {
             let want: f32 = text.parse().unwrap();
             let got = value(text).unwrap();
             assert!((got - want).abs() <= want.abs() * 1.2e-7, "{text}: {got} vs {want}");

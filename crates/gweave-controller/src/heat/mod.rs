@@ -1,4 +1,5 @@
-//! The heaters: thermistor readings to temperatures ([`thermistor`]), PID control ([`pid`])
+//! The heaters: thermistor readings to temperatures ([`thermistor`]), PID control of the
+//! hotends ([`pid`]), the bed switched on and off,
 //! and the safety rules ([`safety`]), run every [`PERIOD_MS`].
 
 pub mod pid;
@@ -64,24 +65,39 @@ impl Heat {
 
     /// Reads the sensors; every [`PERIOD_MS`] runs the PID loops and the safety rules. Returns
     /// whether the heaters were managed (time to feed the watchdog), or the heater at fault.
-    pub fn manage(&mut self, settings: &Settings, adc: &[u16; HEATERS], now_ms: u32) -> Result<bool, (usize, Fault)> {
+    pub fn manage(
+        &mut self,
+        settings: &Settings,
+        adc: &[u16; HEATERS],
+        now_ms: u32,
+    ) -> Result<bool, (usize, Fault)> {
         let dt_ms = match self.last_ms {
             Some(last) if now_ms.wrapping_sub(last) < PERIOD_MS => return Ok(false),
             Some(last) => now_ms.wrapping_sub(last).min(10 * PERIOD_MS),
             None => PERIOD_MS,
         };
         self.last_ms = Some(now_ms);
-        for i in 0..HEATERS {
-            let Some(table) = thermistor::table(settings.thermistor[i]).filter(|_| Heat::fitted(settings, i)) else {
+        for (i, (h, &reading)) in self.heaters.iter_mut().zip(adc).enumerate() {
+            let Some(table) = thermistor::table(settings.thermistor[i]).filter(|_| Heat::fitted(settings, i))
+            else {
                 continue;
             };
-            let h = &mut self.heaters[i];
-            h.temp_c = thermistor::celsius(table, adc[i]);
-            if let Err(fault) = h.guard.check(Heat::rules(i), settings.max_temp_c[i], h.target_c, h.temp_c, now_ms) {
+            h.temp_c = thermistor::celsius(table, reading);
+            if let Err(fault) =
+                h.guard.check(Heat::rules(i), settings.max_temp_c[i], h.target_c, h.temp_c, now_ms)
+            {
                 return Err((i, fault));
             }
-            let gains = if i == BED { &settings.bed_pid } else { &settings.hotend_pid };
-            h.duty = h.pid.update(gains, h.target_c, h.temp_c, dt_ms as f32 / 1000.0);
+            h.duty = if i == BED {
+                // Bang-bang (see `Settings::hotend_pid`).
+                if h.temp_c < h.target_c {
+                    255
+                } else {
+                    0
+                }
+            } else {
+                h.pid.update(&settings.hotend_pid, h.target_c, h.temp_c, dt_ms as f32 / 1000.0)
+            };
         }
         Ok(true)
     }

@@ -58,9 +58,11 @@ pub struct Rules {
 }
 
 /// Hotends' rules.
-pub const HOTEND: Rules = Rules { min_c: 5.0, runaway_ms: 40_000, runaway_c: 4.0, watch_ms: 20_000, watch_c: 2.0 };
+pub const HOTEND: Rules =
+    Rules { min_c: 5.0, runaway_ms: 40_000, runaway_c: 4.0, watch_ms: 20_000, watch_c: 2.0 };
 /// The bed's rules.
-pub const BED: Rules = Rules { min_c: 5.0, runaway_ms: 20_000, runaway_c: 2.0, watch_ms: 60_000, watch_c: 2.0 };
+pub const BED: Rules =
+    Rules { min_c: 5.0, runaway_ms: 20_000, runaway_c: 2.0, watch_ms: 60_000, watch_c: 2.0 };
 
 /// Marlin's `TEMP_HYSTERESIS` (3 °C): a target this close (plus the watch's increase and one
 /// degree) to the temperature is not watched, since it may never rise by the increase.
@@ -86,7 +88,14 @@ impl Guard {
     }
 
     /// Checks one reading against the rules.
-    pub fn check(&mut self, rules: &Rules, max_c: f32, target_c: f32, temp_c: f32, now_ms: u32) -> Result<(), Fault> {
+    pub fn check(
+        &mut self,
+        rules: &Rules,
+        max_c: f32,
+        target_c: f32,
+        temp_c: f32,
+        now_ms: u32,
+    ) -> Result<(), Fault> {
         if temp_c > max_c {
             return Err(Fault::MaxTemp);
         }
@@ -107,7 +116,9 @@ impl Guard {
             }
         }
         match self.runaway_deadline_ms {
-            None if temp_c >= target_c => self.runaway_deadline_ms = Some(now_ms.wrapping_add(rules.runaway_ms)),
+            None if temp_c >= target_c => {
+                self.runaway_deadline_ms = Some(now_ms.wrapping_add(rules.runaway_ms))
+            }
             None => {}
             Some(_) if temp_c >= target_c - rules.runaway_c => {
                 self.runaway_deadline_ms = Some(now_ms.wrapping_add(rules.runaway_ms));

@@ -35,12 +35,24 @@ impl Controller<'_> {
             Ok(w) => w,
             Err(WordError::NoCommand) => return unknown(io, body),
             Err(WordError::BadWord(column)) => {
-                Reply::new().s(b"Error:Bad G-code at column ").u32(u32::from(column) + 1).s(b": \"").escaped(body).s(b"\"").send(io);
+                Reply::new()
+                    .s(b"Error:Bad G-code at column ")
+                    .u32(u32::from(column) + 1)
+                    .s(b": \"")
+                    .escaped(body)
+                    .s(b"\"")
+                    .send(io);
                 return line(io, b"ok");
             }
         };
         if let Some(letter) = out_of_range(&words) {
-            Reply::new().s(b"Error:Value out of range: ").s(&[letter]).s(b" in \"").escaped(body).s(b"\"").send(io);
+            Reply::new()
+                .s(b"Error:Value out of range: ")
+                .s(&[letter])
+                .s(b" in \"")
+                .escaped(body)
+                .s(b"\"")
+                .send(io);
             return line(io, b"ok");
         }
         match self.dispatch(io, &words) {
@@ -111,8 +123,8 @@ impl Controller<'_> {
                 return Some(Done::Quiet);
             }
             (b'M', 92) => {
-                for axis in 0..AXES {
-                    if let Some(v) = w.get(AXIS_LETTERS[axis]) {
+                for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
+                    if let Some(v) = w.get(letter) {
                         s.steps_per_mm[axis] = v;
                         // The same place, counted in the new steps.
                         self.planner.position_steps[axis] = round_i32(self.position_mm[axis] * v);
@@ -130,8 +142,8 @@ impl Controller<'_> {
                 set(w, b'T', &mut s.travel_accel_mm_s2);
             }
             (b'M', 205) => set(w, b'J', &mut s.junction_deviation_mm),
-            (b'M', 301 | 304) => {
-                let pid = if code == 301 { &mut s.hotend_pid } else { &mut s.bed_pid };
+            (b'M', 301) => {
+                let pid = &mut s.hotend_pid;
                 set(w, b'P', &mut pid.kp);
                 set(w, b'I', &mut pid.ki);
                 set(w, b'D', &mut pid.kd);
@@ -177,8 +189,8 @@ impl Controller<'_> {
 
     /// `G92`: names the current place (all axes 0 with no letter).
     fn set_position(&mut self, w: &Words) {
-        for axis in 0..AXES {
-            if let Some(v) = w.get(AXIS_LETTERS[axis]).or((!w.any()).then_some(0.0)) {
+        for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
+            if let Some(v) = w.get(letter).or((!w.any()).then_some(0.0)) {
                 self.position_mm[axis] = v;
                 self.planner.position_steps[axis] = round_i32(v * self.settings.steps_per_mm[axis]);
             }
@@ -200,7 +212,13 @@ impl Controller<'_> {
     }
 
     fn report_eeprom(&self, io: &mut impl Io, what: &[u8], crc: u16) {
-        Reply::new().s(what).u32(u32::from(crate::settings::EEPROM_BYTES)).s(b" bytes; crc ").u32(u32::from(crc)).s(b")").send(io);
+        Reply::new()
+            .s(what)
+            .u32(u32::from(crate::settings::EEPROM_BYTES))
+            .s(b" bytes; crc ")
+            .u32(u32::from(crc))
+            .s(b")")
+            .send(io);
     }
 }
 
@@ -223,8 +241,8 @@ fn set(w: &Words, letter: u8, value: &mut f32) {
 }
 
 fn set_axes(w: &Words, values: &mut [f32; AXES]) {
-    for axis in 0..AXES {
-        set(w, AXIS_LETTERS[axis], &mut values[axis]);
+    for (value, &letter) in values.iter_mut().zip(&AXIS_LETTERS) {
+        set(w, letter, value);
     }
 }
 
@@ -241,7 +259,7 @@ fn out_of_range(w: &Words) -> Option<u8> {
         (b'M', 92 | 201 | 203) => &[(b"XYZE", SETTING)],
         (b'M', 204) => &[(b"SPRT", SETTING)],
         (b'M', 205) => &[(b"J", (0.0, 10.0))],
-        (b'M', 301 | 304) => &[(b"PID", GAIN)],
+        (b'M', 301) => &[(b"PID", GAIN)],
         _ => &[],
     };
     for (letters, (low, high)) in ranges {

@@ -166,7 +166,11 @@ impl<'q> Controller<'q> {
     /// Checks a line's number and checksum, then runs it.
     fn run_line(&mut self, io: &mut impl Io, raw: &[u8], too_long: bool) {
         if too_long {
-            return self.refuse(io, b"Error:Line too long, Last Line: ", protocol::line_number(raw).is_some());
+            return self.refuse(
+                io,
+                b"Error:Line too long, Last Line: ",
+                protocol::line_number(raw).is_some(),
+            );
         }
         let body = match protocol::check(raw, self.last_line) {
             Ok(checked) => {
@@ -219,7 +223,11 @@ impl<'q> Controller<'q> {
                 }
                 let h = &self.heat.heaters[heater];
                 h.target_c <= 0.0
-                    || if both_ways { self.heat.at_target(heater, TEMP_WINDOW_C) } else { h.temp_c >= h.target_c - TEMP_WINDOW_C }
+                    || if both_ways {
+                        self.heat.at_target(heater, TEMP_WINDOW_C)
+                    } else {
+                        h.temp_c >= h.target_c - TEMP_WINDOW_C
+                    }
             }
             Wait::Home(mut homing) => {
                 if self.moving() {
@@ -280,7 +288,11 @@ impl<'q> Controller<'q> {
 
     /// What the board drives now.
     pub fn outputs(&self) -> Outputs {
-        Outputs { heater_duty: self.heat.duties(), fan_duty: self.fan_duty, steppers_enabled: self.steppers_enabled }
+        Outputs {
+            heater_duty: self.heat.duties(),
+            fan_duty: self.fan_duty,
+            steppers_enabled: self.steppers_enabled,
+        }
     }
 
     /// The settings in force.

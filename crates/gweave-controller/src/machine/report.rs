@@ -11,10 +11,7 @@ use crate::{Io, AXES, AXIS_LETTERS, E};
 /// emergency parser (`M112` acts at once), EEPROM and thermal protection, and no SD card or
 /// auto-report.
 pub(super) fn firmware(io: &mut impl Io) {
-    line(
-        io,
-        b"FIRMWARE_NAME:gweave-controller PROTOCOL_VERSION:1.0 MACHINE_TYPE:RAMPS 1.4 EXTRUDER_COUNT:1",
-    );
+    line(io, b"FIRMWARE_NAME:gweave-controller PROTOCOL_VERSION:1.0 MACHINE_TYPE:RAMPS 1.4 EXTRUDER_COUNT:1");
     for cap in [
         &b"Cap:SERIAL_XON_XOFF:0"[..],
         b"Cap:BINARY_FILE_TRANSFER:0",
@@ -33,15 +30,15 @@ impl Controller<'_> {
     /// planner's (where the queued moves end), as the positions are.
     pub(super) fn report_position(&self, io: &mut impl Io) {
         let mut r = Reply::new();
-        for axis in 0..AXES {
+        for (axis, (&letter, &mm)) in AXIS_LETTERS.iter().zip(&self.position_mm).enumerate() {
             if axis > 0 {
                 r.s(b" ");
             }
-            r.s(&[AXIS_LETTERS[axis], b':']).f2(self.position_mm[axis]);
+            r.s(&[letter, b':']).f2(mm);
         }
         r.s(b" Count");
-        for axis in 0..E {
-            r.s(&[b' ', AXIS_LETTERS[axis], b':']).i32(self.planner.position_steps[axis]);
+        for (&letter, &steps) in AXIS_LETTERS[..E].iter().zip(&self.planner.position_steps) {
+            r.s(&[b' ', letter, b':']).i32(steps);
         }
         r.send(io);
     }
@@ -60,8 +57,8 @@ impl Controller<'_> {
     pub(super) fn report_settings(&self, io: &mut impl Io) {
         let s = &self.settings;
         let axes = |r: &mut Reply, values: &[f32; AXES]| {
-            for axis in 0..AXES {
-                r.s(&[b' ', AXIS_LETTERS[axis]]).f2(values[axis]);
+            for (&letter, &value) in AXIS_LETTERS.iter().zip(values) {
+                r.s(&[b' ', letter]).f2(value);
             }
         };
         line(io, b"echo:; Steps per unit:");
@@ -85,8 +82,5 @@ impl Controller<'_> {
         line(io, b"echo:; Hotend PID:");
         let p = &s.hotend_pid;
         r.s(b"echo:  M301 P").f2(p.kp).s(b" I").f2(p.ki).s(b" D").f2(p.kd).send(io);
-        line(io, b"echo:; Bed PID:");
-        let p = &s.bed_pid;
-        r.s(b"echo:  M304 P").f2(p.kp).s(b" I").f2(p.ki).s(b" D").f2(p.kd).send(io);
     }
 }

@@ -119,31 +119,53 @@ mod tests {
 
     #[test]
     fn numbers_are_written_as_marlin_prints_them() {
-        assert_eq!(text(|r| {
-            r.f2(210.0);
-        }), "210.00");
-        assert_eq!(text(|r| {
-            r.f2(-0.004);
-        }), "0.00");
-        assert_eq!(text(|r| {
-            r.f2(-12.345);
-        }), "-12.35");
-        assert_eq!(text(|r| {
-            r.f2(0.013);
-        }), "0.01");
-        assert_eq!(text(|r| {
-            r.i32(-800).s(b" ").u32(0).s(b" ").u32(u32::MAX);
-        }), "-800 0 4294967295");
+        assert_eq!(
+            text(|r| {
+                r.f2(210.0);
+            }),
+            "210.00"
+        );
+        assert_eq!(
+            text(|r| {
+                r.f2(-0.004);
+            }),
+            "0.00"
+        );
+        assert_eq!(
+            text(|r| {
+                r.f2(-12.345);
+            }),
+            "-12.35"
+        );
+        assert_eq!(
+            text(|r| {
+                r.f2(0.013);
+            }),
+            "0.01"
+        );
+        assert_eq!(
+            text(|r| {
+                r.i32(-800).s(b" ").u32(0).s(b" ").u32(u32::MAX);
+            }),
+            "-800 0 4294967295"
+        );
     }
 
     #[test]
     fn a_reply_is_cut_not_overflowed() {
         let long = [b'a'; 300];
-        assert_eq!(text(|r| {
-            r.s(&long);
-        }).len(), MAX_REPLY);
-        assert_eq!(text(|r| {
-            r.escaped(b"G1\x00\xff\"");
-        }), "G1???");
+        assert_eq!(
+            text(|r| {
+                r.s(&long);
+            })
+            .len(),
+            MAX_REPLY
+        );
+        assert_eq!(
+            text(|r| {
+                r.escaped(b"G1\x00\xff\"");
+            }),
+            "G1???"
+        );
     }
 }

@@ -49,7 +49,13 @@ impl Default for LineReader {
 impl LineReader {
     /// Nothing received yet.
     pub const fn new() -> Self {
-        LineReader { current: Line::EMPTY, in_comment: false, queue: [Line::EMPTY; LINE_QUEUE], first: 0, count: 0 }
+        LineReader {
+            current: Line::EMPTY,
+            in_comment: false,
+            queue: [Line::EMPTY; LINE_QUEUE],
+            first: 0,
+            count: 0,
+        }
     }
 
     /// Takes one byte from the host. Returns `false`, keeping nothing, when the byte would end a

@@ -52,6 +52,12 @@ pub struct StepBlock {
     pub endstop_invert: u8,
 }
 
+impl StepBlock {
+    /// No move.
+    pub const IDLE: StepBlock =
+        StepBlock { steps: [0; AXES], events: 0, dir_bits: 0, endstop_mask: 0, endstop_invert: 0 };
+}
+
 /// A few milliseconds of one block at a constant step rate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Segment {
@@ -96,18 +102,11 @@ impl Default for StepQueue {
 impl StepQueue {
     /// An empty queue.
     pub const fn new() -> Self {
-        const SEGMENT: UnsafeCell<Segment> =
-            UnsafeCell::new(Segment { block: 0, starts_block: false, events: 0, interval_ticks: 0 });
-        const BLOCK: UnsafeCell<StepBlock> = UnsafeCell::new(StepBlock {
-            steps: [0; AXES],
-            events: 0,
-            dir_bits: 0,
-            endstop_mask: 0,
-            endstop_invert: 0,
-        });
         StepQueue {
-            segments: [SEGMENT; SEGMENTS],
-            blocks: [BLOCK; STEP_BLOCKS],
+            segments: [const {
+                UnsafeCell::new(Segment { block: 0, starts_block: false, events: 0, interval_ticks: 0 })
+            }; SEGMENTS],
+            blocks: [const { UnsafeCell::new(StepBlock::IDLE) }; STEP_BLOCKS],
             head: AtomicU8::new(0),
             tail: AtomicU8::new(0),
             busy: AtomicBool::new(false),
@@ -316,6 +315,10 @@ impl<'q> Stepper<'q> {
     }
 
     fn out(&self, step_bits: u8, interval_ticks: u32) -> StepOut {
-        StepOut { step_bits, dir_bits: self.dir_bits, interval_ticks: interval_ticks.min(MAX_TIMER_TICKS) as u16 }
+        StepOut {
+            step_bits,
+            dir_bits: self.dir_bits,
+            interval_ticks: interval_ticks.min(MAX_TIMER_TICKS) as u16,
+        }
     }
 }

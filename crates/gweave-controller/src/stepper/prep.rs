@@ -203,7 +203,11 @@ fn next_segment(run: &mut Running, carry_ticks: &mut f32, starts_block: bool) ->
     let wanted = (speed * SEGMENT_S / run.mm_per_event) as u32;
     let events = wanted.clamp(1, u32::from(u16::MAX)).min(run.events - run.events_done);
     run.events_done += events;
-    let s1_mm = if run.events_done == run.events { run.profile.len_mm } else { run.events_done as f32 * run.mm_per_event };
+    let s1_mm = if run.events_done == run.events {
+        run.profile.len_mm
+    } else {
+        run.events_done as f32 * run.mm_per_event
+    };
     let total_ticks = run.profile.time_s(s0_mm, s1_mm) * TICKS_PER_S as f32 + *carry_ticks;
     let interval = ((total_ticks / events as f32) as u32).max(MIN_STEP_TICKS);
     *carry_ticks = (total_ticks - (interval * events) as f32).max(0.0);
