@@ -297,6 +297,37 @@ fn g28_homes_z_then_y_then_x_to_zero() {
 }
 
 #[test]
+fn m119_reports_the_endstops_and_g4_waits() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.steps[1] = 0; // Y at its endstop
+    b.take();
+    b.send("M119\nG4 P250\nM400\n");
+    b.run_ms(100);
+    assert_eq!(b.take(), "Reporting endstop status\nx_min: open\ny_min: TRIGGERED\nz_min: open\nok\n");
+    b.run_ms(200);
+    assert_eq!(b.take(), "ok\nok\n");
+}
+
+#[test]
+fn a_full_planner_holds_the_ok_until_a_block_is_free() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.take();
+    // 20 slow moves: the planner holds 16, plus the one being cut; the host gets its oks as
+    // room frees up, and the steps come out exact.
+    let start = b.steps[0];
+    for i in 1..=20 {
+        b.send(&std::format!("G1 X{i} F600\n"));
+    }
+    b.run_ms(5);
+    let early = b.text().matches("ok").count();
+    assert!((16..20).contains(&early), "{early} oks at once");
+    b.run_until_ok(20, 10_000);
+    b.send("M400\n");
+    b.run_until_ok(21, 10_000);
+    assert_eq!(b.steps[0] - start, 20 * 80);
+}
+
+#[test]
 fn g28_with_one_axis_homes_only_it() {
     let mut b = Bench::new(Settings::DEFAULT);
     b.steps = [4000, 2400, 8000, 0];
@@ -448,4 +479,14 @@ fn acceleration_follows_the_setting() {
     // 40 mm: 0.1 s up, 30 mm at 100 mm/s, 0.1 s down, less the 5 ms to the first step
     // (1/80 mm from rest: t = sqrt(2 d / a)).
     assert!((total_s - 0.495).abs() < 0.0002, "{total_s} s");
+}
+
+#[test]
+fn the_core_fits_the_ram_budget() {
+    // On the host, references are 8 bytes instead of an AVR's 2 and alignment pads more: an
+    // upper bound of the board's figure (1672 + 264 + 64 bytes when written). The budget of the
+    // whole firmware is 4 KB of static RAM, the core's constants (about 1.8 KB of strings and
+    // tables, which an AVR copies into RAM) included.
+    let size = core::mem::size_of::<Controller>() + core::mem::size_of::<StepQueue>();
+    assert!(size + core::mem::size_of::<Stepper>() <= 2000, "{size} bytes");
 }

@@ -43,12 +43,17 @@ pub struct Checked<'a> {
     pub body: &'a [u8],
 }
 
-/// The number written after position `at` (digits only; an absent or overlong number reads as
-/// what fits, as C's `strtol` into a long would, saturated).
+/// The number at the start of `bytes` (digits only; none reads 0; an overlong number saturates,
+/// as C's `strtol` does).
 pub fn leading_number(bytes: &[u8]) -> u32 {
     let mut n: u32 = 0;
     for &b in bytes.iter().take_while(|b| b.is_ascii_digit()) {
-        n = n.saturating_mul(10).saturating_add(u32::from(b - b'0'));
+        // Compared rather than `saturating_mul`, whose overflow check is a 64-bit multiply on
+        // an AVR.
+        if n > (u32::MAX - 9) / 10 {
+            return u32::MAX;
+        }
+        n = n * 10 + u32::from(b - b'0');
     }
     n
 }
@@ -131,5 +136,6 @@ mod tests {
         // M110 takes any number.
         assert_eq!(check(b"N0 M110 N0*125", 41), Ok(Checked { number: Some(0), body: b"M110 N0" }));
         assert_eq!(check(b"G28", 41), Ok(Checked { number: None, body: b"G28" }));
+        assert_eq!(leading_number(b"99999999999"), u32::MAX);
     }
 }

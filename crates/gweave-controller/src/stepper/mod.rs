@@ -15,16 +15,16 @@
 //!
 //! A move of `(dx, dy, dz, de)` steps takes `n = max(dx, dy, dz, de)` *step events*; the axis
 //! with the most steps steps at every event, the others at evenly spread events. Each axis keeps
-//! a counter; at every event it adds its step count, and when the counter passes `n` it steps
+//! a counter; at every event it adds its step count, and when the counter reaches `n` it steps
 //! and subtracts `n`. Over the `n` events the counter gains `d * n` and loses `n` per step, so
 //! the axis makes exactly `d` steps: integers only, no drift, exact totals. (Bresenham's line
 //! algorithm, 1965; GRBL and Marlin step the same way.) Starting each counter at `n / 2` spreads
 //! the minor axes' steps to the middle of their intervals.
 //!
 //! ```text
-//!   dx = 5, dy = 2, n = 5        event:  1  2  3  4  5
-//!   counter y (start 2, +2):             4  6  3  5  2   (-5 when it passes 5)
-//!   step y:                              .  *  .  *  .
+//!   dx = 5, dy = 2, n = 5           event:  1  2  3  4  5
+//!   counter y (starts at 2, +2 per event):  4  6  3  5  2
+//!   reaches 5: step y, counter - 5:         .  *  .  *  .    (counters after: 4 1 3 0 2)
 //! ```
 
 pub mod prep;
