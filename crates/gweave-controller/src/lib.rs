@@ -36,7 +36,7 @@
 //! controller.boot(&mut board, &inputs);
 //! // The main loop: bytes from the UART, then one turn of the machine.
 //! for &b in b"N1 G1 X1 F600*48\n" {
-//!     controller.receive(b);
+//!     assert!(controller.receive(b)); // `false`: the line queue is full, offer it again later
 //! }
 //! controller.poll(&mut board, &inputs);
 //! // The timer interrupt: pulse these STEP pins, set these DIR pins, come back in so many ticks.
@@ -69,10 +69,14 @@
 //! 6. Meanwhile [`heat`] reads the thermistors, runs the PID loops and the safety rules; a
 //!    fault halts the machine ([`Controller::kill`]): heaters off, steppers off, an `Error:`
 //!    line, then only a reset helps.
+//!
+//! With the feature `std`, `twin` runs the core on a simulated board on the host (a clock, the
+//! step interrupt, endstops, a thermal plant): the core's own tests use it, and so can anything
+//! that wants the firmware's behaviour without a board.
 #![no_std]
 #![warn(missing_docs)]
 
-#[cfg(test)]
+#[cfg(any(test, feature = "std"))]
 extern crate std;
 
 pub mod gcode;
@@ -84,6 +88,8 @@ pub mod planner;
 pub mod serial;
 pub mod settings;
 pub mod stepper;
+#[cfg(feature = "std")]
+pub mod twin;
 
 pub use machine::Controller;
 pub use settings::Settings;

@@ -116,6 +116,7 @@ impl<'q> Controller<'q> {
 
     /// Takes one byte from the host. Returns `false`, taking nothing, when the byte would end a
     /// line and the line queue is full: offer it again after the next [`Controller::poll`].
+    #[must_use = "a byte refused must be offered again, or the line it ends is lost"]
     pub fn receive(&mut self, byte: u8) -> bool {
         let accepted = self.reader.push(byte);
         // The emergency parser (Marlin's `EMERGENCY_PARSER`): an `M112` acts before the lines

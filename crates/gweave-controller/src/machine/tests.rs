@@ -1,155 +1,49 @@
-//! The controller on a test bench: a board that counts steps, moves endstops with the axes,
-//! heats a simple thermal plant, and keeps a clock of step-timer ticks.
+//! The controller on the twin (`crate::twin`): a simulated board that steps the interrupt on
+//! its clock, closes the endstops where the axes' minimum is, and heats a first-order plant.
 
 use std::boxed::Box;
+use std::cell::RefCell;
+use std::rc::Rc;
 use std::string::String;
 use std::vec::Vec;
 
-use crate::heat::thermistor::TYPE_1;
 use crate::limits::TICKS_PER_S;
 use crate::serial::protocol::frame;
-use crate::{Controller, Inputs, Io, Settings, StepQueue, Stepper, AXES, HEATERS};
+use crate::twin::{FirstOrder, Twin};
+use crate::{Controller, Settings, StepQueue, Stepper, AXES, HEATERS};
 
-#[derive(Default)]
-struct Board {
-    sent: Vec<u8>,
-    eeprom: Vec<u8>,
-    watchdog_feeds: u32,
-}
-
-impl Io for Board {
-    fn send(&mut self, bytes: &[u8]) {
-        self.sent.extend_from_slice(bytes);
-    }
-    fn eeprom_read(&mut self, addr: u16, buf: &mut [u8]) {
-        for (i, b) in buf.iter_mut().enumerate() {
-            *b = self.eeprom.get(usize::from(addr) + i).copied().unwrap_or(0xFF);
-        }
-    }
-    fn eeprom_write(&mut self, addr: u16, data: &[u8]) {
-        let end = usize::from(addr) + data.len();
-        if self.eeprom.len() < end {
-            self.eeprom.resize(end, 0xFF);
-        }
-        self.eeprom[usize::from(addr)..end].copy_from_slice(data);
-    }
-    fn watchdog_feed(&mut self) {
-        self.watchdog_feeds += 1;
-    }
-}
-
-/// The ADC reading of a temperature on a type 1 thermistor (the table read backwards).
-fn adc_of(t_c: f32) -> u16 {
-    let i = TYPE_1.iter().position(|&(_, t)| f32::from(t) <= t_c).unwrap_or(TYPE_1.len() - 1);
-    if i == 0 {
-        return TYPE_1[0].0;
-    }
-    let ((a0, t0), (a1, t1)) = (TYPE_1[i - 1], TYPE_1[i]);
-    let f = (f32::from(t0) - t_c) / f32::from(t0 - t1);
-    (f32::from(a0) + f * f32::from(a1 - a0)).round() as u16
-}
-
+/// The twin with the endstops at 0 steps and the axes some way from them, and the step times
+/// of X.
 struct Bench {
-    c: Controller<'static>,
-    stepper: Stepper<'static>,
-    board: Board,
-    /// The physical position in steps; the endstops close at 0 and below.
-    steps: [i64; AXES],
-    dir_bits: u8,
-    ticks: u64,
-    next_step: u64,
-    next_poll: u64,
-    /// Heater temperatures of the plant, °C; `heater_works` false: a heater that cannot heat.
-    temp_c: [f32; HEATERS],
-    heater_works: bool,
-    /// Overrides the ADC of a sensor (an open thermistor reads 1023).
-    adc_override: [Option<u16>; HEATERS],
-    /// Step event times (ticks) of X, for the timing tests.
-    x_times: Vec<u64>,
+    t: Twin<'static, FirstOrder>,
+    x_times: Rc<RefCell<Vec<u64>>>,
 }
 
 impl Bench {
     fn new(settings: Settings) -> Bench {
         let queue: &'static StepQueue = Box::leak(Box::new(StepQueue::new()));
-        let mut b = Bench {
-            c: Controller::new(queue, settings),
-            stepper: Stepper::new(queue),
-            board: Board::default(),
-            steps: [8000, 8000, 40000, 0],
-            dir_bits: 0,
-            ticks: 0,
-            next_step: 0,
-            next_poll: 0,
-            temp_c: [20.0; HEATERS],
-            heater_works: true,
-            adc_override: [None; HEATERS],
-            x_times: Vec::new(),
-        };
-        let inputs = b.inputs();
-        b.c.boot(&mut b.board, &inputs);
-        b
-    }
-
-    fn now_ms(&self) -> u32 {
-        (self.ticks * 1000 / u64::from(TICKS_PER_S)) as u32
-    }
-
-    fn inputs(&self) -> Inputs {
-        let adc: [u16; HEATERS] =
-            core::array::from_fn(|i| self.adc_override[i].unwrap_or_else(|| adc_of(self.temp_c[i])));
-        let endstops = (0..3).filter(|&a| self.steps[a] <= 0).fold(0, |m, a| m | 1 << a);
-        Inputs { now_ms: self.now_ms(), adc, endstops }
+        let mut t = Twin::new(queue, settings, FirstOrder::default());
+        t.endstop_steps = [0; 3];
+        t.steps = [8000, 8000, 40000, 0];
+        let x_times = Rc::new(RefCell::new(Vec::new()));
+        let times = Rc::clone(&x_times);
+        t.on_step = Some(Box::new(move |axis, tick| {
+            if axis == 0 {
+                times.borrow_mut().push(tick);
+            }
+        }));
+        Bench { t, x_times }
     }
 
     fn send(&mut self, text: &str) {
-        for &b in text.as_bytes() {
-            while !self.c.receive(b) {
-                self.run_ms(1);
-            }
-        }
+        self.t.send(text.as_bytes());
     }
 
-    /// Runs the board for `ms` of its time: the step interrupt when its timer says, the main
-    /// loop every millisecond between.
-    fn run_ms(&mut self, ms: u32) {
-        let end = self.ticks + u64::from(ms) * u64::from(TICKS_PER_S) / 1000;
-        while self.ticks < end {
-            if self.next_poll <= self.next_step {
-                self.ticks = self.next_poll;
-                let inputs = self.inputs();
-                self.c.poll(&mut self.board, &inputs);
-                self.plant(0.001);
-                self.next_poll += 2000;
-                continue;
-            }
-            self.ticks = self.next_step;
-            let out = self.stepper.tick(self.inputs().endstops);
-            for axis in 0..AXES {
-                if out.step_bits & (1 << axis) != 0 {
-                    self.steps[axis] += if self.dir_bits & (1 << axis) != 0 { 1 } else { -1 };
-                    if axis == 0 {
-                        self.x_times.push(self.ticks);
-                    }
-                }
-            }
-            self.dir_bits = out.dir_bits;
-            self.next_step += u64::from(out.interval_ticks);
-        }
+    fn run_ms(&mut self, ms: u64) {
+        self.t.run_ms(ms);
     }
 
-    /// A first-order thermal plant per heater: 40 W hotend / 200 W bed at full duty, losses to
-    /// 20 °C air, heat capacities 10 J/K and 400 J/K.
-    fn plant(&mut self, dt_s: f32) {
-        let duty = self.c.outputs().heater_duty;
-        for (i, (temp_c, &duty)) in self.temp_c.iter_mut().zip(&duty).enumerate() {
-            let (watts, capacity, loss) =
-                if i == crate::BED { (200.0, 400.0, 0.8) } else { (40.0, 10.0, 0.1) };
-            let power = if self.heater_works { watts * f32::from(duty) / 255.0 } else { 0.0 };
-            *temp_c += (power - loss * (*temp_c - 20.0)) / capacity * dt_s;
-        }
-    }
-
-    fn run_until_ok(&mut self, count: usize, limit_ms: u32) {
+    fn run_until_ok(&mut self, count: usize, limit_ms: u64) {
         for _ in 0..limit_ms {
             if self.text().matches("ok").count() >= count {
                 return;
@@ -160,12 +54,12 @@ impl Bench {
     }
 
     fn text(&self) -> String {
-        String::from_utf8_lossy(&self.board.sent).into_owned()
+        String::from_utf8_lossy(&self.t.memory.sent).into_owned()
     }
 
     fn take(&mut self) -> String {
         let t = self.text();
-        self.board.sent.clear();
+        self.t.memory.sent.clear();
         t
     }
 }
@@ -223,7 +117,7 @@ fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
     b.run_ms(2);
     assert_eq!(b.take(), "Error:Line too long, Last Line: 0\nResend: 1\nok\n");
     for byte in [0u8, 0xFF, 0x80, 0x1B, b'G', b'1', b' ', b'X', 0xC3, b'\n'] {
-        assert!(b.c.receive(byte));
+        assert!(b.t.controller.receive(byte));
     }
     b.run_ms(2);
     // As Marlin: not a command it knows.
@@ -242,11 +136,11 @@ fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
 #[test]
 fn a_move_makes_exact_step_counts() {
     let mut b = Bench::new(Settings::DEFAULT);
-    let start = b.steps;
+    let start = b.t.steps;
     b.send("G91\nG1 X10.0125 Y-3.3 Z0.1 E1.5 F6000\nM400\nM114\n");
     b.run_until_ok(4, 2000);
     // 10.0125 * 80 = 801, -3.3 * 80 = -264, 0.1 * 400 = 40, 1.5 * 93 = 139.5 -> 140.
-    let moved: Vec<i64> = (0..AXES).map(|a| b.steps[a] - start[a]).collect();
+    let moved: Vec<i64> = (0..AXES).map(|a| b.t.steps[a] - start[a]).collect();
     assert_eq!(moved, [801, -264, 40, 140]);
     assert!(
         b.text().ends_with("X:10.01 Y:-3.30 Z:0.10 E:1.50 Count X:801 Y:-264 Z:40\nok\n"),
@@ -258,7 +152,7 @@ fn a_move_makes_exact_step_counts() {
 #[test]
 fn many_short_moves_add_up_exactly() {
     let mut b = Bench::new(Settings::DEFAULT);
-    let start = b.steps;
+    let start = b.t.steps;
     // A polygon of 0.5 mm segments with extrusion, as a slicer writes them.
     let mut text = String::from("G92 X0 Y0 E0\n");
     let (mut x, mut y, mut e) = (0.0f64, 0.0f64, 0.0f64);
@@ -273,33 +167,33 @@ fn many_short_moves_add_up_exactly() {
     b.send(&text);
     b.run_until_ok(202, 20_000);
     let want = |v: f64, spm: f64| (v * spm).round() as i64;
-    assert_eq!(b.steps[0] - start[0], want((x * 1000.0).round() / 1000.0, 80.0));
-    assert_eq!(b.steps[1] - start[1], want((y * 1000.0).round() / 1000.0, 80.0));
-    assert_eq!(b.steps[3] - start[3], want((e * 10000.0).round() / 10000.0, 93.0));
+    assert_eq!(b.t.steps[0] - start[0], want((x * 1000.0).round() / 1000.0, 80.0));
+    assert_eq!(b.t.steps[1] - start[1], want((y * 1000.0).round() / 1000.0, 80.0));
+    assert_eq!(b.t.steps[3] - start[3], want((e * 10000.0).round() / 10000.0, 93.0));
 }
 
 #[test]
 fn g28_homes_z_then_y_then_x_to_zero() {
     let mut b = Bench::new(Settings::DEFAULT);
-    b.steps = [4000, 2400, 8000, 0];
+    b.t.steps = [4000, 2400, 8000, 0];
     b.send("G28\nM114\n");
     b.run_until_ok(2, 60_000);
     assert!(b.text().ends_with("X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0\nok\n"), "{}", b.text());
     // Each axis stopped where its endstop closed (the test bench's 0), give or take the step
     // on which the switch was read.
     for axis in 0..3 {
-        assert!(b.steps[axis] == 0, "axis {axis} at {}", b.steps[axis]);
+        assert!(b.t.steps[axis] == 0, "axis {axis} at {}", b.t.steps[axis]);
     }
     // Then a move from home lands where it is asked.
     b.send("G1 X10 Y20 Z5 F6000\nM400\n");
     b.run_until_ok(4, 20_000);
-    assert_eq!(&b.steps[..3], &[800, 1600, 2000]);
+    assert_eq!(&b.t.steps[..3], &[800, 1600, 2000]);
 }
 
 #[test]
 fn m119_reports_the_endstops_and_g4_waits() {
     let mut b = Bench::new(Settings::DEFAULT);
-    b.steps[1] = 0; // Y at its endstop
+    b.t.steps[1] = 0; // Y at its endstop
     b.take();
     b.send("M119\nG4 P250\nM400\n");
     b.run_ms(100);
@@ -314,7 +208,7 @@ fn a_full_planner_holds_the_ok_until_a_block_is_free() {
     b.take();
     // 20 slow moves: the planner holds 16, plus the one being cut; the host gets its oks as
     // room frees up, and the steps come out exact.
-    let start = b.steps[0];
+    let start = b.t.steps[0];
     for i in 1..=20 {
         b.send(&std::format!("G1 X{i} F600\n"));
     }
@@ -324,16 +218,16 @@ fn a_full_planner_holds_the_ok_until_a_block_is_free() {
     b.run_until_ok(20, 10_000);
     b.send("M400\n");
     b.run_until_ok(21, 10_000);
-    assert_eq!(b.steps[0] - start, 20 * 80);
+    assert_eq!(b.t.steps[0] - start, 20 * 80);
 }
 
 #[test]
 fn g28_with_one_axis_homes_only_it() {
     let mut b = Bench::new(Settings::DEFAULT);
-    b.steps = [4000, 2400, 8000, 0];
+    b.t.steps = [4000, 2400, 8000, 0];
     b.send("G28 X\n");
     b.run_until_ok(1, 60_000);
-    assert_eq!(&b.steps[..3], &[0, 2400, 8000]);
+    assert_eq!(&b.t.steps[..3], &[0, 2400, 8000]);
 }
 
 #[test]
@@ -350,12 +244,11 @@ fn m503_reports_as_marlin_and_m500_keeps_settings_over_a_reset() {
     b.run_ms(2);
     assert!(b.take().contains("echo:Settings Stored (82 bytes; crc "));
     // A new board with the same EEPROM.
-    let eeprom = std::mem::take(&mut b.board.eeprom);
+    let eeprom = std::mem::take(&mut b.t.memory.eeprom);
     let mut b = Bench::new(Settings::DEFAULT);
-    b.board.eeprom = eeprom;
-    let inputs = b.inputs();
-    b.c.boot(&mut b.board, &inputs);
-    assert_eq!(b.c.settings().steps_per_mm[3], 415.5);
+    b.t.memory.eeprom = eeprom;
+    b.t.power_on();
+    assert_eq!(b.t.controller.settings().steps_per_mm[3], 415.5);
     b.send("M502\nM503\n");
     b.run_ms(2);
     assert!(b.take().contains("echo:  M92 X80.00 Y80.00 Z400.00 E93.00\n"));
@@ -370,15 +263,15 @@ fn m109_heats_to_its_target_reporting_then_holds_it() {
     let t = b.take();
     assert!(t.contains(" T:"), "{t}");
     assert!(t.contains("echo:busy: processing\n"), "{t}");
-    assert!(b.temp_c[0] >= 209.0, "{}", b.temp_c[0]);
+    assert!(b.t.plant.temp_c[0] >= 209.0, "{}", b.t.plant.temp_c[0]);
     let (mut low, mut high) = (f32::MAX, 0.0f32);
     for _ in 0..120 {
         b.run_ms(500);
-        low = low.min(b.temp_c[0]);
-        high = high.max(b.temp_c[0]);
+        low = low.min(b.t.plant.temp_c[0]);
+        high = high.max(b.t.plant.temp_c[0]);
     }
     assert!(low > 208.0 && high < 213.0, "held within {low}..{high}");
-    assert!(b.board.watchdog_feeds > 1000);
+    assert!(b.t.memory.watchdog_feeds > 1000);
 }
 
 #[test]
@@ -386,15 +279,15 @@ fn m190_heats_the_bed() {
     let mut b = Bench::new(Settings::DEFAULT);
     b.send("M190 S60\nM105\n");
     b.run_until_ok(2, 600_000);
-    assert!(b.c.heat().heaters[crate::BED].temp_c >= 59.0, "{}", b.text());
+    assert!(b.t.controller.heat().heaters[crate::BED].temp_c >= 59.0, "{}", b.text());
     assert!(b.text().contains("B:"));
 }
 
 fn assert_halted(b: &mut Bench, error: &str) {
     let t = b.take();
     assert!(t.contains(&(String::from(error) + "\nError:Printer halted. kill() called!\n")), "{t}");
-    assert!(b.c.is_halted());
-    let out = b.c.outputs();
+    assert!(b.t.controller.is_halted());
+    let out = b.t.controller.outputs();
     assert_eq!((out.heater_duty, out.fan_duty, out.steppers_enabled), ([0; HEATERS], 0, 0));
     b.send("G28\n");
     b.run_ms(2);
@@ -404,7 +297,7 @@ fn assert_halted(b: &mut Bench, error: &str) {
 #[test]
 fn an_open_thermistor_halts_with_mintemp() {
     let mut b = Bench::new(Settings::DEFAULT);
-    b.adc_override[0] = Some(1023);
+    b.t.plant.adc_override[0] = Some(1023);
     b.send("M104 S200\n");
     b.run_ms(300);
     assert_halted(&mut b, "Error:MINTEMP triggered, system stopped! Heater_ID: 0");
@@ -413,7 +306,7 @@ fn an_open_thermistor_halts_with_mintemp() {
 #[test]
 fn a_heater_that_cannot_heat_halts_with_heating_failed() {
     let mut b = Bench::new(Settings::DEFAULT);
-    b.heater_works = false;
+    b.t.plant.heating = [false; HEATERS];
     b.send("M104 S200\n");
     b.run_ms(21_000);
     assert_halted(&mut b, "Error:Heating failed, system stopped! Heater_ID: 0");
@@ -426,7 +319,7 @@ fn a_heater_that_fails_at_temperature_halts_with_thermal_runaway() {
     b.run_until_ok(1, 600_000);
     // The wait ends within a degree; the runaway watch starts once the target is reached.
     b.run_ms(30_000);
-    b.heater_works = false;
+    b.t.plant.heating = [false; HEATERS];
     b.run_ms(60_000);
     assert_halted(&mut b, "Error:Thermal Runaway, system stopped! Heater_ID: bed");
 }
@@ -434,7 +327,7 @@ fn a_heater_that_fails_at_temperature_halts_with_thermal_runaway() {
 #[test]
 fn a_shorted_thermistor_halts_with_maxtemp_even_unheated() {
     let mut b = Bench::new(Settings::DEFAULT);
-    b.adc_override[crate::BED] = Some(3);
+    b.t.plant.adc_override[crate::BED] = Some(3);
     b.run_ms(300);
     assert_halted(&mut b, "Error:MAXTEMP triggered, system stopped! Heater_ID: bed");
 }
@@ -444,15 +337,15 @@ fn m112_stops_everything_at_once() {
     let mut b = Bench::new(Settings::DEFAULT);
     b.send("M104 S200\nG1 X100 F600\n");
     b.run_ms(500);
-    let before = b.steps[0];
+    let before = b.t.steps[0];
     // Queued behind a dwell, M112 still acts at once (the emergency parser).
     b.send("G4 S10\nM112\n");
     b.run_ms(1);
     let t = b.take();
     assert!(t.ends_with("Error:Printer halted. kill() called!\n"), "{t}");
     b.run_ms(100);
-    assert!(b.steps[0] - before < 20, "steps after M112: {}", b.steps[0] - before);
-    let out = b.c.outputs();
+    assert!(b.t.steps[0] - before < 20, "steps after M112: {}", b.t.steps[0] - before);
+    let out = b.t.controller.outputs();
     assert_eq!((out.heater_duty, out.steppers_enabled), ([0; HEATERS], 0));
 }
 
@@ -464,7 +357,7 @@ fn acceleration_follows_the_setting() {
     b.run_until_ok(3, 10_000);
     // From the X step times: speed between steps 80 apart (1 mm), and the acceleration from
     // speeds 10 mm apart in the ramp (v² = v0² + 2 a d). The ramp to 100 mm/s is 5 mm.
-    let t = &b.x_times;
+    let t = b.x_times.borrow();
     assert_eq!(t.len(), 3200);
     let secs = |ticks: u64| ticks as f64 / f64::from(TICKS_PER_S);
     // The mean speed over 1 mm, and the time in the middle of it: under constant acceleration
