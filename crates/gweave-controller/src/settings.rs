@@ -44,6 +44,8 @@ pub struct Settings {
     pub travel_mm: [f32; AXES],
     /// Homing speed per axis, mm/s (Marlin's `HOMING_FEEDRATE_MM_M`: 50, 50, 4 mm/s).
     pub homing_feed_mm_s: [f32; AXES],
+    /// The order `G28` homes the axes in (axis indices: 2, 1, 0 is Z, then Y, then X).
+    pub homing_order: [u8; 3],
     /// Distance to back off after first touching an endstop, mm (Marlin's
     /// `HOMING_BUMP_MM`: 5, 5, 2), before touching it again at half speed.
     pub homing_bump_mm: [f32; AXES],
@@ -80,6 +82,7 @@ impl Settings {
         junction_deviation_mm: 0.013,
         travel_mm: [200.0, 200.0, 200.0, 0.0],
         homing_feed_mm_s: [50.0, 50.0, 4.0, 0.0],
+        homing_order: [2, 1, 0],
         homing_bump_mm: [5.0, 5.0, 2.0, 0.0],
         invert_dir: 0,
         endstop_inverting: 0,

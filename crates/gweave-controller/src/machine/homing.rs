@@ -10,16 +10,14 @@
 //! 3. towards it again at half speed: the switch is met more gently, so the place it closes at
 //!    is repeatable to a step or two.
 //!
-//! The axes home one after the other in the order Z, Y, X (the controller document's order),
-//! each only if named on the line, all three if none is.
+//! The axes home one after the other in the settings' order (by default Z, Y, X, the
+//! controller document's order; Marlin homes X, Y, Z), each only if named on the line, all
+//! three if none is.
 
 use super::Controller;
 use crate::gcode::words::Words;
 use crate::math::round_i32;
 use crate::{AXIS_LETTERS, X, Y, Z};
-
-/// The homing order.
-const ORDER: [usize; 3] = [Z, Y, X];
 
 /// Where a `G28` is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -33,14 +31,18 @@ pub(super) struct Homing {
 impl Homing {
     /// The axes named on the line, or all three.
     pub(super) fn new(w: &Words) -> Homing {
-        let named = ORDER.iter().filter(|&&a| w.has(AXIS_LETTERS[a])).fold(0u8, |m, &a| m | 1 << a);
+        let named = [X, Y, Z].iter().filter(|&&a| w.has(AXIS_LETTERS[a])).fold(0u8, |m, &a| m | 1 << a);
         Homing { axes: if named == 0 { 1 << X | 1 << Y | 1 << Z } else { named }, phase: 0 }
     }
 
     /// Called when the machine is still: queues the next move; returns `true` when every axis
     /// is home.
     pub(super) fn next(&mut self, c: &mut Controller<'_>) -> bool {
-        let Some(&axis) = ORDER.iter().find(|&&a| self.axes & (1 << a) != 0) else { return true };
+        let order = c.settings.homing_order.map(usize::from);
+        let Some(&axis) = order.iter().find(|&&a| a <= Z && self.axes & (1 << a) != 0) else {
+            // Every axis home (an order that leaves one out never homes it).
+            return true;
+        };
         let s = c.settings;
         let feed_mm_s = s.homing_feed_mm_s[axis];
         // Moves relative to where the axis is taken to be now.
