@@ -93,6 +93,12 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
         crate::files::check_writable("--report", report)?;
     }
     let profile = args.machine.load()?;
+    if profile.firmware.kind == gweave_sim::FirmwareKind::Gweave {
+        bail!(
+            "serve runs the Marlin model; the controller core ([firmware] kind = \"gweave\") runs under `gweave sim` \
+             and on the board (docs/firmware.md)"
+        );
+    }
     // Build one machine now so that a bad profile fails before any host connects.
     Machine::new(profile.clone()).context("building the virtual printer")?;
     let options = ServeOptions {
