@@ -392,8 +392,11 @@ fn m112_stops_everything_at_once() {
     b.send("M104 S200\nG1 X100 F600\n");
     b.run_ms(500);
     let before = b.t.steps[0];
-    // Queued behind a dwell, M112 still acts at once (the emergency parser).
-    b.send("G4 S10\nM112\n");
+    // Queued behind a dwell and a full line queue, M112 still acts at once (the emergency
+    // parser), its line refused or not.
+    for &byte in b"G4 S10\nG4 S1\nG4 S1\nG4 S1\nG4 S1\nM112\n" {
+        let _ = b.t.controller.receive(byte);
+    }
     b.run_ms(1);
     let t = b.take();
     assert!(t.ends_with("Error:Printer halted. kill() called!\n"), "{t}");
