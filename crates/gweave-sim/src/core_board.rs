@@ -13,10 +13,14 @@
 //! constant-speed corners, classic jerk, endstops at the maximum, a PID-controlled bed, a
 //! thermistor other than Marlin's type 1, mixing, rotary or inkjet hardware.
 
-use gweave_controller::twin::{Plant, Twin, TwinError};
+use std::cell::Cell;
+
+use gweave_controller::twin::{Memory, OwnedTwin, Plant, Twin, TwinError};
 use gweave_controller::{Settings, StepQueue, HEATERS};
 use serde::Serialize;
 
+use crate::interp::Outcome;
+use crate::link::serial::Device;
 use crate::motion::limits::CornerMode;
 use crate::profile::{EndstopSide, MachineProfile};
 use crate::thermal::control::ControlConfig;
@@ -211,6 +215,101 @@ pub fn run_file(
     Ok(report)
 }
 
+/// The core behind `gweave serve`'s serial line, for one host session (a fresh board at each
+/// connection). The protocol layer ([`crate::Protocol`]) checks the line numbers and checksums
+/// with Marlin's rules, as the core's own reader does, and hands each accepted line to the core;
+/// every line the core prints goes back to the host at the board time it was printed, its own
+/// `ok` and `echo:busy: processing` lines included (the protocol's keepalive is off for it).
+pub struct CoreDevice {
+    board: OwnedTwin<SimPlant>,
+    /// Bytes of the core's output already handed to the host.
+    forwarded: Cell<usize>,
+}
+
+impl CoreDevice {
+    /// A board powered on with `profile` and the EEPROM bytes a previous session left (none:
+    /// erased), which it reads its settings from (it has printed `start`).
+    pub fn new(profile: &MachineProfile, eeprom: Vec<u8>) -> Result<CoreDevice, CoreBoardError> {
+        let memory = Memory { eeprom, ..Memory::default() };
+        let board = OwnedTwin::new(core_settings(profile)?, SimPlant::new(profile)?, memory);
+        Ok(CoreDevice { board, forwarded: Cell::new(0) })
+    }
+
+    /// The EEPROM as the session leaves it (`M500`), for the next session.
+    pub fn eeprom(&self) -> &[u8] {
+        &self.board.twin().memory.eeprom
+    }
+
+    /// Hands the lines printed since the last call to `out`; returns how many were `ok`s.
+    fn forward(&self, out: &mut dyn FnMut(f64, &str)) -> usize {
+        let sent = &self.board.twin().memory.sent;
+        let new = &sent[self.forwarded.get()..];
+        let complete = new.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        let t_s = self.now_s();
+        let mut oks = 0;
+        for line in String::from_utf8_lossy(&new[..complete]).lines() {
+            oks += usize::from(line.starts_with("ok"));
+            out(t_s, line);
+        }
+        self.forwarded.set(self.forwarded.get() + complete);
+        oks
+    }
+
+    /// What the session did, as `gweave sim` reports it.
+    pub fn report(&self, machine: &str) -> CoreReport {
+        let twin = self.board.twin();
+        CoreReport {
+            machine: machine.to_owned(),
+            lines: 0,
+            time_s: self.now_s(),
+            end_steps: twin.steps_from_home(),
+            halted: twin.controller.is_halted(),
+            errors: Vec::new(),
+        }
+    }
+}
+
+impl Device for CoreDevice {
+    fn boot_lines(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        self.forward(&mut |_, line| lines.push(line.to_owned()));
+        lines
+    }
+
+    fn execute(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> Outcome {
+        self.board.send(line);
+        self.board.send(b"\n");
+        let deadline_ms = self.board.twin().now_ms() + LINE_LIMIT_MS;
+        let mut oks = self.forward(out);
+        while oks == 0 && self.board.twin().now_ms() < deadline_ms {
+            self.board.run_ms(1);
+            oks += self.forward(out);
+        }
+        if self.board.twin().controller.is_halted() {
+            Outcome::Halted
+        } else {
+            Outcome::Ok
+        }
+    }
+
+    fn now_s(&self) -> f64 {
+        self.board.twin().now_ms() as f64 / 1000.0
+    }
+
+    fn acknowledged(&self) -> bool {
+        true
+    }
+
+    fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
+        // The board lives the host's silence (heaters heat, moves end), at most an hour at once.
+        let ms = (t_s * 1000.0).clamp(0.0, LINE_LIMIT_MS as f64) as u64;
+        for _ in 0..ms {
+            self.board.run_ms(1);
+            self.forward(out);
+        }
+    }
+}
+
 /// Why the core could not run a file.
 #[derive(Debug, thiserror::Error)]
 pub enum CoreBoardError {
@@ -247,6 +346,37 @@ mod tests {
         let p = MachineProfile::default();
         let r = run_file(&p, &mut lines("M109 S200\nM105\n")).unwrap();
         assert!(!r.halted && r.time_s > 30.0, "{r:?}");
+    }
+
+    #[test]
+    fn the_core_answers_behind_the_serial_protocol() {
+        let device = CoreDevice::new(&MachineProfile::default(), Vec::new()).unwrap();
+        let mut link =
+            crate::Protocol::new(device, crate::ProtocolConfig { keepalive_s: 0, duplicate_window: 0 });
+        let mut replies = Vec::new();
+        let mut out = |_t_s: f64, line: &str| replies.push(line.to_owned());
+        link.boot(&mut out);
+        link.feed(b"N0 M110 N0*125\nN1 G28*18\nN3 G28*16\nM114\nM105\n", &mut out);
+        // Homing takes seconds: the core's own keepalive lines come meanwhile.
+        let busy = replies.iter().filter(|l| *l == "echo:busy: processing").count();
+        assert!(busy >= 2, "{replies:?}");
+        replies.retain(|l| l != "echo:busy: processing");
+        assert_eq!(
+            replies[..7],
+            [
+                "start",
+                "ok",
+                "ok",
+                "Error:Line Number is not Last Line Number+1, Last Line: 1",
+                "Resend: 2",
+                "ok",
+                "X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0",
+            ]
+        );
+        assert_eq!(replies[7], "ok");
+        assert!(replies[8].starts_with("ok T:"), "{replies:?}");
+        assert_eq!(replies.len(), 9, "{replies:?}");
+        assert!(link.device().now_s() > 10.0, "homing takes board time");
     }
 
     #[test]
