@@ -181,9 +181,7 @@ impl<'q> Controller<'q> {
             }
             Err(e) => return self.refuse(io, LineError::message(e), true),
         };
-        let mut copy = [0u8; crate::limits::MAX_LINE];
-        copy[..body.len()].copy_from_slice(body);
-        self.run_command(io, &copy[..body.len()]);
+        self.run_command(io, body);
     }
 
     /// Answers a refused line as Marlin: the error with the last line number, a request to send
