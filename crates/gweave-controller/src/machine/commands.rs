@@ -78,6 +78,8 @@ impl Controller<'_> {
                 self.steppers_enabled = 0b1111;
                 return Some(Done::Quiet);
             }
+            // Millimetres, the only unit this machine has.
+            (b'G', 21) => {}
             (b'G', 90) => self.relative = 0,
             (b'G', 91) => self.relative = 0b1111,
             (b'G', 92) => self.set_position(w),

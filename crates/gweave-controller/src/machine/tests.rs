@@ -146,8 +146,8 @@ fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
 fn a_move_makes_exact_step_counts() {
     let mut b = Bench::hot(Settings::DEFAULT);
     let start = b.t.steps;
-    b.send("G91\nG1 X10.0125 Y-3.3 Z0.1 E1.5 F6000\nM400\nM114\n");
-    b.run_until_ok(4, 2000);
+    b.send("G21\nG91\nG1 X10.0125 Y-3.3 Z0.1 E1.5 F6000\nM400\nM114\n");
+    b.run_until_ok(5, 2000);
     // 10.0125 * 80 = 801, -3.3 * 80 = -264, 0.1 * 400 = 40, 1.5 * 93 = 139.5 -> 140.
     let moved: Vec<i64> = (0..AXES).map(|a| b.t.steps[a] - start[a]).collect();
     assert_eq!(moved, [801, -264, 40, 140]);
