@@ -179,6 +179,19 @@ fn a_cold_hotend_does_not_extrude() {
 }
 
 #[test]
+fn a_move_slower_than_the_16_bit_timer_keeps_its_pace() {
+    // 0.01 mm of Z at 1 mm/min: 4 steps 0.15 s apart (300 000 ticks, several timer periods).
+    let mut b = Bench::new(Settings::DEFAULT);
+    let start = b.t.steps[2];
+    b.send("G91\nG1 Z0.01 F1\nM400\n");
+    b.run_until_ok(3, 5000);
+    assert_eq!(b.t.steps[2] - start, 4);
+    // The whole move takes its 0.6 s (the ramps are negligible at this speed).
+    let ms = b.t.now_ms();
+    assert!((600..700).contains(&ms), "{ms} ms");
+}
+
+#[test]
 fn many_short_moves_add_up_exactly() {
     let mut b = Bench::hot(Settings::DEFAULT);
     let start = b.t.steps;
