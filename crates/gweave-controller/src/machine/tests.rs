@@ -143,6 +143,23 @@ fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
 }
 
 #[test]
+fn a_value_out_of_range_is_refused_and_changes_nothing() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("M104 S200\nM104 S600\nG1 X10 F0\nM105\n");
+    b.run_ms(5);
+    let t = b.take();
+    assert!(
+        t.starts_with(
+            "start\nok\necho:M104 S = 600.00 is out of range: 0.00 to 500.00\nok\n\
+             echo:G1 F = 0.00 is out of range: 0.01 to 100000.00\nok\nok T:"
+        ),
+        "{t}"
+    );
+    assert!(t.contains(" /200.00"), "{t}");
+    assert_eq!(b.t.controller.position_mm()[0], 0.0);
+}
+
+#[test]
 fn a_move_makes_exact_step_counts() {
     let mut b = Bench::hot(Settings::DEFAULT);
     let start = b.t.steps;
