@@ -2,6 +2,7 @@
 //! these files with `#[path]` and replay the kept corpus through them ([`replay`]).
 
 pub mod bgcode;
+pub mod controller;
 pub mod gcode;
 pub mod m503;
 pub mod machine;
