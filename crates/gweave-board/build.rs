@@ -1,0 +1,11 @@
+//! Builds the C shim over libsimavr (csrc/shim.c) and links libsimavr (Debian's
+//! libsimavr-dev: headers in /usr/include/simavr).
+fn main() {
+    println!("cargo::rerun-if-changed=csrc/shim.c");
+    cc::Build::new()
+        .file("csrc/shim.c")
+        .include("/usr/include/simavr")
+        .warnings(true)
+        .compile("gweave_board_shim");
+    println!("cargo::rustc-link-lib=dylib=simavr");
+}
