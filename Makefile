@@ -17,7 +17,7 @@ OUT := out
 .PHONY: demo test bench deps rust-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
 .PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-test
 
-deps: rust-deps py-deps browser-deps cura-deps
+deps: rust-deps py-deps browser-deps cura-deps firmware-deps
 
 rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
@@ -92,11 +92,13 @@ python-debug: py-deps
 
 lint: rust-deps
 	$(CARGO) fmt --all -- --check
+	$(CARGO) fmt --manifest-path firmware/ramps/Cargo.toml -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 	# Broken or private links in the API docs fail too.
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --exclude gweave-py -q
 
-cargo-test: rust-deps
+# The emulated board's tests (crates/gweave-board/tests) run the firmware `make firmware` built.
+cargo-test: rust-deps firmware
 	$(CARGO) test --workspace --exclude gweave-py
 
 pytest: python-debug
@@ -108,7 +110,7 @@ pytest: python-debug
 e2e: build-debug python-debug
 	bash tests/e2e/run.sh target/debug/gweave
 
-test: deps lint cargo-test pytest e2e
+test: deps firmware lint cargo-test pytest e2e
 	@echo "make test: all passed"
 
 demo: build python

@@ -8,8 +8,10 @@
 use std::collections::VecDeque;
 use std::path::Path;
 
-use crate::ramps::{Shield, Wiring, DRIVERS, MOSFETS, PIN_DIR, PIN_ENABLE, PIN_MOSFET, PIN_STEP, STEP_DIR_ENABLE};
 use crate::ramps::{Axis, Plant, THERMISTOR_ADC};
+use crate::ramps::{
+    Shield, Wiring, DRIVERS, MOSFETS, PIN_DIR, PIN_ENABLE, PIN_MOSFET, PIN_STEP, STEP_DIR_ENABLE,
+};
 use crate::sim::{Avr, LoadError, Stopped};
 
 /// The Mega 2560's crystal.
@@ -103,7 +105,8 @@ impl Board {
             let byte = self.to_chip.pop_front().unwrap_or_default();
             self.avr.serial_in(byte);
         }
-        let end = (self.avr.cycle() + SLICE_CYCLES).min(until).min(self.next_plant_cycle.max(self.avr.cycle() + 1));
+        let end =
+            (self.avr.cycle() + SLICE_CYCLES).min(until).min(self.next_plant_cycle.max(self.avr.cycle() + 1));
         self.avr.run(end).map_err(|s| BoardError::Stopped(s, self.now_s()))?;
         self.sync_inputs();
         Ok(())
@@ -126,9 +129,22 @@ impl Board {
         }
     }
 
+    /// The whole lines the firmware sent since the last call (without line ends); a line not
+    /// finished yet waits for its end.
+    pub fn lines(&mut self) -> Vec<String> {
+        let bytes = self.take_serial();
+        self.partial.extend(bytes);
+        let mut lines = Vec::new();
+        while let Some(end) = self.partial.iter().position(|&b| b == b'\n') {
+            let line: Vec<u8> = self.partial.drain(..=end).collect();
+            lines.push(String::from_utf8_lossy(&line[..end]).trim_end_matches('\r').to_string());
+        }
+        lines
+    }
+
     /// Run until the firmware sends a line for which `done` holds, for at most `timeout_s` of
-    /// board time; returns every line it sent meanwhile (without line ends), the last one
-    /// being the match.
+    /// board time; returns every line it sent meanwhile, the last one being the match (lines
+    /// after it in the same slice wait for the next call).
     pub fn run_until_line(
         &mut self,
         mut done: impl FnMut(&str) -> bool,
@@ -137,14 +153,14 @@ impl Board {
         let until = self.avr.cycle() + (timeout_s * f64::from(CPU_HZ)) as u64;
         let mut lines = Vec::new();
         loop {
-            let bytes = self.take_serial();
-            self.partial.extend(bytes);
-            while let Some(end) = self.partial.iter().position(|&b| b == b'\n') {
-                let line: Vec<u8> = self.partial.drain(..=end).collect();
-                let text = String::from_utf8_lossy(&line[..end]).trim_end_matches('\r').to_string();
-                let hit = done(&text);
-                lines.push(text);
+            let mut new = self.lines().into_iter();
+            while let Some(line) = new.next() {
+                let hit = done(&line);
+                lines.push(line);
                 if hit {
+                    // Put back what came after the match, for the next call.
+                    let rest: Vec<u8> = new.flat_map(|l| l.into_bytes().into_iter().chain([b'\n'])).collect();
+                    self.partial.splice(0..0, rest);
                     return Ok(lines);
                 }
             }
@@ -159,7 +175,10 @@ impl Board {
     /// or `!!`); returns the lines it sent meanwhile.
     pub fn command(&mut self, line: &str, timeout_s: f64) -> Result<Vec<String>, BoardError> {
         self.send_line(line);
-        self.run_until_line(|l| l.starts_with("ok") || l.starts_with("Error:") || l.starts_with("!!"), timeout_s)
+        self.run_until_line(
+            |l| l.starts_with("ok") || l.starts_with("Error:") || l.starts_with("!!"),
+            timeout_s,
+        )
     }
 
     /// One stepper socket (0 X, 1 Y, 2 Z, 3 E0, 4 E1) and its axis.

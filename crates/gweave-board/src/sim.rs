@@ -117,7 +117,8 @@ impl<W: Wires> Avr<W> {
     pub fn load(elf: &Path, hz: u32, wires: W) -> Result<Self, LoadError> {
         let err = || LoadError { path: elf.display().to_string() };
         let path = CString::new(elf.as_os_str().as_encoded_bytes()).map_err(|_| err())?;
-        let callback = Box::into_raw(Box::new(Callback { wires, drive: Drive { board: std::ptr::null_mut() } }));
+        let callback =
+            Box::into_raw(Box::new(Callback { wires, drive: Drive { board: std::ptr::null_mut() } }));
         // SAFETY: the path is a valid C string; `callback` outlives the board (freed after it).
         let board = unsafe { gw_board_new(path.as_ptr(), hz, on_event::<W>, callback.cast()) };
         if board.is_null() {

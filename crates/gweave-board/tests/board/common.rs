@@ -19,3 +19,19 @@ pub fn booted(wiring: Wiring) -> Board {
     board.run_until_line(|l| l == "start", 1.0).unwrap();
     board
 }
+
+/// `N<n> <command>*<checksum>`: a line as a host numbers it (the checksum is the XOR of every
+/// byte before the `*`).
+pub fn numbered(n: u32, command: &str) -> String {
+    let body = format!("N{n} {command}");
+    let sum = body.bytes().fold(0u8, |a, b| a ^ b);
+    format!("{body}*{sum}")
+}
+
+/// The number after `key` in a report line (`T:` of `ok T:25.0 /0.0`).
+pub fn field(line: &str, key: &str) -> f64 {
+    let at = line.find(key).unwrap_or_else(|| panic!("no {key} in {line:?}")) + key.len();
+    let text: String =
+        line[at..].chars().take_while(|c| c.is_ascii_digit() || *c == '.' || *c == '-').collect();
+    text.parse().unwrap_or_else(|_| panic!("no number after {key} in {line:?}"))
+}
