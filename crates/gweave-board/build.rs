@@ -5,6 +5,8 @@ fn main() {
     cc::Build::new()
         .file("csrc/shim.c")
         .include("/usr/include/simavr")
+        // The loop that runs the chip instruction by instruction: optimised even in tests.
+        .opt_level(2)
         // simavr's callbacks get parameters a callback may not need.
         .flag("-Wno-unused-parameter")
         .compile("gweave_board_shim");

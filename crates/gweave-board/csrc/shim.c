@@ -19,6 +19,7 @@
 #include <simavr/avr_uart.h>
 #include <simavr/avr_ioport.h>
 #include <simavr/avr_adc.h>
+#include <simavr/avr_extint.h>
 
 /* What a callback reports to Rust. */
 enum { GW_UART_OUT = 0, GW_PIN = 1 };
@@ -142,6 +143,15 @@ gw_board *gw_board_new(const char *path, uint32_t hz, gw_event_fn event, void *u
 	avr_irq_register_notify(avr_io_getirq(b->avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON), uart_xon, b);
 	avr_irq_register_notify(avr_io_getirq(b->avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), uart_xoff, b);
 	b->uart0 = (avr_uart_t *)find_io(b->avr, "uart", 0);
+
+	/*
+	 * simavr 1.6 polls a low external-interrupt pin every cycle while its sense control is
+	 * "low level" (the reset value), even with the interrupt disabled: the X and Z endstops
+	 * (INT5, INT3) are low while open, which made the emulator three times slower. The
+	 * firmware reads the endstops by polling, so the level polling is switched off.
+	 */
+	for (int i = 0; i < EXTINT_COUNT; i++)
+		avr_extint_set_strict_lvl_trig(b->avr, i, 0);
 
 	patch_adc_mux(b->avr);
 	avr_irq_register_notify(avr_io_getirq(b->avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_OUT_TRIGGER), adc_trigger, b);
@@ -274,4 +284,7 @@ uint16_t gw_board_min_sp(gw_board *b)
 void gw_board_reset(gw_board *b)
 {
 	avr_reset(b->avr);
+	/* The reset switched the level polling back on (see gw_board_new). */
+	for (int i = 0; i < EXTINT_COUNT; i++)
+		avr_extint_set_strict_lvl_trig(b->avr, i, 0);
 }
