@@ -3,7 +3,7 @@
 #   make test   installs what is needed, then runs every test (cargo, pytest, end to end)
 #   make bench  benchmarks on large real files, each figure beside a reference from the same run
 #   make docs-images  draws the pictures of README.md and docs/ again with the current code
-#   make fuzz   coverage-guided fuzzing of the reader, lexer and profile loaders (not in make test)
+#   make fuzz   coverage-guided fuzzing of the reader, lexer, profile loaders and controller core (not in make test)
 #   make firmware  the firmware for Arduino Mega 2560 + RAMPS 1.4 (firmware/out/gweave-ramps.hex)
 
 SHELL := /bin/bash
@@ -127,7 +127,7 @@ docs-images: build
 # its queue and findings in fuzz/out/<target>/; a crash fails the run, to be kept in
 # fuzz/crashes/<target>/ (docs/reliability.md, "Fuzzing").
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS := gcode machine_profile mix_profile printhead_profile
+FUZZ_TARGETS := gcode machine_profile mix_profile printhead_profile controller_reader controller
 FUZZ_ENV := AFL_NO_UI=1 AFL_SKIP_CPUFREQ=1 AFL_NO_AFFINITY=1 AFL_AUTORESUME=1 \
 	AFL_I_DONT_CARE_ABOUT_MISSING_CRASHES=1
 

@@ -1,0 +1,47 @@
+//! Every fixed size of the core, in one place, with what it costs in RAM.
+//!
+//! The ATmega2560 has 8 KB of RAM; the budget of the whole firmware's static data is 4 KB
+//! (issue 37), so each buffer here is as small as does the job.
+
+/// The longest line kept, in bytes: Marlin's `MAX_CMD_SIZE` (96) less its terminating NUL.
+/// Longer lines are refused whole (`Error:Line too long`), never cut and run.
+/// RAM: one line being received plus [`LINE_QUEUE`] complete ones.
+pub const MAX_LINE: usize = 95;
+
+/// Complete lines waiting for the machine, as Marlin's `BUFSIZE` (4): the host may send ahead
+/// of the `ok`s by this many lines. RAM: `LINE_QUEUE * (MAX_LINE + 2)` bytes (388).
+pub const LINE_QUEUE: usize = 4;
+
+/// Moves in the look-ahead planner (GRBL keeps 16 on a 328p, Marlin 16 on AVR). More blocks
+/// let the planner keep speed through more short segments. RAM: about 60 bytes each (960).
+pub const PLANNER_BLOCKS: usize = 16;
+
+/// Segments between the main loop and the step interrupt (GRBL: 6). Each is a few
+/// milliseconds of motion, so this many segments cover the time the main loop may spend on a
+/// slow command or a serial burst without the steppers running dry. RAM: 8 bytes each.
+pub const SEGMENTS: usize = 8;
+
+/// Steppers' per-block data referenced by the segments (one per segment is enough: a block
+/// spans at least one segment). RAM: 24 bytes each.
+pub const STEP_BLOCKS: usize = SEGMENTS;
+
+/// Target duration of one segment, in seconds. The step rate is constant within a segment and
+/// recomputed from the speed profile at each one (see [`crate::stepper::prep`]): 5 ms segments
+/// make 200 speed updates a second, smooth enough for acceleration, cheap enough for the main
+/// loop of an 8-bit board.
+pub const SEGMENT_S: f32 = 0.005;
+
+/// The step timer's rate: Timer1 of a 16 MHz AVR with prescaler 8 counts at 2 MHz.
+pub const TICKS_PER_S: u32 = 2_000_000;
+
+/// The shortest step interval the core asks for, in timer ticks (25 µs: 40 kHz), so that the
+/// interrupt never swallows the main loop whatever the settings say.
+pub const MIN_STEP_TICKS: u32 = 50;
+
+/// The longest interval a 16-bit timer holds, in ticks; longer waits are made of several
+/// interrupts without a step.
+pub const MAX_TIMER_TICKS: u32 = 65_535;
+
+/// The interrupt's interval while there is nothing to step (1 ms): how soon a new segment is
+/// seen.
+pub const IDLE_TICKS: u16 = 2_000;

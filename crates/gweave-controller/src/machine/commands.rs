@@ -1,0 +1,275 @@
+//! What each command does. The line's words are all read and checked first
+//! ([`Words::parse`]); a command then checks its own numbers' ranges before it changes
+//! anything, so a refused line leaves the machine as it was.
+
+use super::homing::Homing;
+use super::{Controller, Wait};
+use crate::gcode::words::{Command, WordError, Words};
+use crate::math::round_i32;
+use crate::serial::out::{line, Reply};
+use crate::{Io, AXES, AXIS_LETTERS, BED, E, HOTEND0, HOTEND1};
+
+/// How a command ends.
+enum Done {
+    /// Print `ok` now.
+    Ok,
+    /// The command printed its own `ok` (`ok T:...` of `M105`) or waits ([`Wait`]).
+    Quiet,
+}
+
+/// The physical range of every number a command takes: a value outside is refused whole.
+/// Feed rates up to 100 000 mm/min, positions within ±100 m, temperatures 0-500 °C, settings
+/// positive and below a million.
+const FEED_MM_MIN: (f32, f32) = (0.001, 100_000.0);
+const POSITION_MM: (f32, f32) = (-100_000.0, 100_000.0);
+const TEMP_C: (f32, f32) = (0.0, 500.0);
+const SETTING: (f32, f32) = (0.000_001, 1_000_000.0);
+const GAIN: (f32, f32) = (0.0, 100_000.0);
+const DUTY: (f32, f32) = (0.0, 255.0);
+const DWELL_MS: (f32, f32) = (0.0, 3_600_000.0);
+
+impl Controller<'_> {
+    /// Runs one command line (line number and checksum removed).
+    pub(super) fn run_command(&mut self, io: &mut impl Io, body: &[u8]) {
+        let words = match Words::parse(body) {
+            Ok(w) => w,
+            Err(WordError::NoCommand) => return unknown(io, body),
+            Err(WordError::BadWord(column)) => {
+                Reply::new()
+                    .s(b"Error:Bad G-code at column ")
+                    .u32(u32::from(column) + 1)
+                    .s(b": \"")
+                    .escaped(body)
+                    .s(b"\"")
+                    .send(io);
+                return line(io, b"ok");
+            }
+        };
+        if let Some(letter) = out_of_range(&words) {
+            Reply::new()
+                .s(b"Error:Value out of range: ")
+                .s(&[letter])
+                .s(b" in \"")
+                .escaped(body)
+                .s(b"\"")
+                .send(io);
+            return line(io, b"ok");
+        }
+        match self.dispatch(io, &words) {
+            Some(Done::Ok) => line(io, b"ok"),
+            Some(Done::Quiet) => {}
+            None => unknown(io, body),
+        }
+    }
+
+    fn dispatch(&mut self, io: &mut impl Io, w: &Words) -> Option<Done> {
+        let Command { letter, code } = w.command;
+        let now = self.inputs.now_ms;
+        let s = &mut self.settings;
+        match (letter, code) {
+            (b'G', 0 | 1) => self.linear_move(w),
+            (b'G', 4) => {
+                let ms = w.get(b'P').unwrap_or(0.0) + w.get(b'S').unwrap_or(0.0) * 1000.0;
+                self.wait = Wait::Moves { then_dwell_ms: ms as u32 };
+                return Some(Done::Quiet);
+            }
+            (b'G', 28) => {
+                self.wait = Wait::Home(Homing::new(w));
+                self.steppers_enabled = 0b1111;
+                return Some(Done::Quiet);
+            }
+            (b'G', 90) => self.relative = 0,
+            (b'G', 91) => self.relative = 0b1111,
+            (b'G', 92) => self.set_position(w),
+            (b'M', 82) => self.relative &= !(1 << E),
+            (b'M', 83) => self.relative |= 1 << E,
+            (b'M', 0 | 84 | 18) => {
+                if code == 0 {
+                    // A program stop: the moves end, then heaters and motors are off.
+                    self.heat.all_off();
+                    self.fan_duty = 0;
+                }
+                let mask = axes_given(w).unwrap_or(0b1111);
+                self.steppers_enabled &= !mask;
+                self.wait = Wait::Moves { then_dwell_ms: 0 };
+                return Some(Done::Quiet);
+            }
+            (b'M', 17) => self.steppers_enabled |= axes_given(w).unwrap_or(0b1111),
+            (b'M', 104 | 109) => {
+                let heater = if w.get(b'T') == Some(1.0) { HOTEND1 } else { HOTEND0 };
+                return Some(self.set_temperature(w, heater, code == 109, now));
+            }
+            (b'M', 140 | 190) => return Some(self.set_temperature(w, BED, code == 190, now)),
+            (b'M', 105) => {
+                let mut r = Reply::new();
+                r.s(b"ok");
+                self.heat.report(&self.settings, &mut r);
+                r.send(io);
+                return Some(Done::Quiet);
+            }
+            (b'M', 106) => self.fan_duty = w.get(b'S').unwrap_or(255.0) as u8,
+            (b'M', 107) => self.fan_duty = 0,
+            (b'M', 110) => {
+                if let Some(n) = w.get(b'N') {
+                    self.last_line = n as u32;
+                }
+            }
+            (b'M', 112) => self.kill(io, None),
+            (b'M', 114) => self.report_position(io),
+            (b'M', 115) => super::report::firmware(io),
+            (b'M', 119) => self.report_endstops(io),
+            (b'M', 400) => {
+                self.wait = Wait::Moves { then_dwell_ms: 0 };
+                return Some(Done::Quiet);
+            }
+            (b'M', 92) => {
+                for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
+                    if let Some(v) = w.get(letter) {
+                        s.steps_per_mm[axis] = v;
+                        // The same place, counted in the new steps.
+                        self.planner.position_steps[axis] = round_i32(self.position_mm[axis] * v);
+                    }
+                }
+            }
+            (b'M', 201) => set_axes(w, &mut s.max_accel_mm_s2),
+            (b'M', 203) => set_axes(w, &mut s.max_feed_mm_s),
+            (b'M', 204) => {
+                if let Some(v) = w.get(b'S') {
+                    (s.print_accel_mm_s2, s.travel_accel_mm_s2) = (v, v);
+                }
+                set(w, b'P', &mut s.print_accel_mm_s2);
+                set(w, b'R', &mut s.retract_accel_mm_s2);
+                set(w, b'T', &mut s.travel_accel_mm_s2);
+            }
+            (b'M', 205) => set(w, b'J', &mut s.junction_deviation_mm),
+            (b'M', 301) => {
+                let pid = &mut s.hotend_pid;
+                set(w, b'P', &mut pid.kp);
+                set(w, b'I', &mut pid.ki);
+                set(w, b'D', &mut pid.kd);
+            }
+            (b'M', 500) => {
+                let crc = self.settings.save(io);
+                self.report_eeprom(io, b"echo:Settings Stored (", crc);
+            }
+            (b'M', 501) => match self.settings.load(io) {
+                Some(crc) => self.report_eeprom(io, b"echo:Stored settings retrieved (", crc),
+                None => line(io, b"echo:No settings stored in EEPROM: settings unchanged"),
+            },
+            (b'M', 502) => {
+                self.settings = crate::Settings::DEFAULT;
+                line(io, b"echo:Hardcoded Default Settings Loaded");
+            }
+            (b'M', 503) => self.report_settings(io),
+            (b'T', 0) => {}
+            (b'T', 1) if crate::heat::Heat::fitted(&self.settings, HOTEND1) => {}
+            _ => return None,
+        }
+        Some(Done::Ok)
+    }
+
+    /// `G0`/`G1`: the target in mm (absolute or relative per axis), then in steps, to the
+    /// planner. `F` is in mm/min and stays for the next moves.
+    fn linear_move(&mut self, w: &Words) {
+        if let Some(f) = w.get(b'F') {
+            self.feed_mm_s = f / 60.0;
+        }
+        let mut target = self.planner.position_steps;
+        for axis in 0..AXES {
+            if let Some(v) = w.get(AXIS_LETTERS[axis]) {
+                let relative = self.relative & (1 << axis) != 0;
+                self.position_mm[axis] = if relative { self.position_mm[axis] + v } else { v };
+                target[axis] = round_i32(self.position_mm[axis] * self.settings.steps_per_mm[axis]);
+            }
+        }
+        self.steppers_enabled |= 0b1111;
+        // Room was checked before the line was taken.
+        self.planner.add(target, self.feed_mm_s, 0, &self.settings);
+    }
+
+    /// `G92`: names the current place (all axes 0 with no letter).
+    fn set_position(&mut self, w: &Words) {
+        for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
+            if let Some(v) = w.get(letter).or((!w.any()).then_some(0.0)) {
+                self.position_mm[axis] = v;
+                self.planner.position_steps[axis] = round_i32(v * self.settings.steps_per_mm[axis]);
+            }
+        }
+    }
+
+    /// `M104`/`M109`, `M140`/`M190`: `S` the target (and for the waits, `R` a target to reach
+    /// both ways, heating or cooling).
+    fn set_temperature(&mut self, w: &Words, heater: usize, wait: bool, now_ms: u32) -> Done {
+        let target = w.get(b'R').or(w.get(b'S'));
+        if let Some(t) = target {
+            self.heat.set_target(&self.settings, heater, t, now_ms);
+        }
+        if wait && target.is_some() {
+            self.wait = Wait::Heat { heater, both_ways: w.has(b'R') };
+            return Done::Quiet;
+        }
+        Done::Ok
+    }
+
+    fn report_eeprom(&self, io: &mut impl Io, what: &[u8], crc: u16) {
+        Reply::new()
+            .s(what)
+            .u32(u32::from(crate::settings::EEPROM_BYTES))
+            .s(b" bytes; crc ")
+            .u32(u32::from(crc))
+            .s(b")")
+            .send(io);
+    }
+}
+
+/// `echo:Unknown command: "G123"` then `ok`, as Marlin.
+fn unknown(io: &mut impl Io, body: &[u8]) {
+    Reply::new().s(b"echo:Unknown command: \"").escaped(body).s(b"\"").send(io);
+    line(io, b"ok");
+}
+
+/// The axes named on the line (bits), if any.
+fn axes_given(w: &Words) -> Option<u8> {
+    let mask = (0..AXES).filter(|&a| w.has(AXIS_LETTERS[a])).fold(0u8, |m, a| m | 1 << a);
+    (mask != 0).then_some(mask)
+}
+
+fn set(w: &Words, letter: u8, value: &mut f32) {
+    if let Some(v) = w.get(letter) {
+        *value = v;
+    }
+}
+
+fn set_axes(w: &Words, values: &mut [f32; AXES]) {
+    for (value, &letter) in values.iter_mut().zip(&AXIS_LETTERS) {
+        set(w, letter, value);
+    }
+}
+
+/// The first letter whose value is outside its command's range, if any.
+fn out_of_range(w: &Words) -> Option<u8> {
+    let Command { letter, code } = w.command;
+    let ranges: &[(&[u8], (f32, f32))] = match (letter, code) {
+        (b'G', 0 | 1) => &[(b"XYZE", POSITION_MM), (b"F", FEED_MM_MIN)],
+        (b'G', 92) => &[(b"XYZE", POSITION_MM)],
+        (b'G', 4) => &[(b"P", DWELL_MS), (b"S", (0.0, 3600.0))],
+        (b'M', 104 | 109 | 140 | 190) => &[(b"SR", TEMP_C), (b"T", (0.0, 1.0))],
+        (b'M', 106) => &[(b"S", DUTY)],
+        (b'M', 110) => &[(b"N", (0.0, 2_000_000_000.0))],
+        (b'M', 92 | 201 | 203) => &[(b"XYZE", SETTING)],
+        (b'M', 204) => &[(b"SPRT", SETTING)],
+        (b'M', 205) => &[(b"J", (0.0, 10.0))],
+        (b'M', 301) => &[(b"PID", GAIN)],
+        _ => &[],
+    };
+    for (letters, (low, high)) in ranges {
+        for &l in *letters {
+            if let Some(v) = w.get(l) {
+                if !(v >= *low && v <= *high) {
+                    return Some(l);
+                }
+            }
+        }
+    }
+    None
+}

@@ -1,0 +1,318 @@
+//! The controller: the main loop's half of the firmware, tying the serial line, the commands,
+//! the planner, the segment maker and the heaters together.
+//!
+//! One turn of the main loop is one [`Controller::poll`]: read the temperatures and run the
+//! heaters (and feed the watchdog), cut planned moves into segments for the step interrupt,
+//! carry on with the command that waits (homing, `M109`, `M400`, `G4`), and, when none waits,
+//! run the next line. Nothing in a turn waits: a command that takes time is a state
+//! ([`Wait`]) the next turns look at, so the heaters and the steppers are served all along.
+//! The time comes in as an argument, so on the host every test is deterministic.
+
+mod commands;
+mod homing;
+mod report;
+#[cfg(test)]
+mod tests;
+
+use crate::heat::Heat;
+use crate::planner::Planner;
+use crate::serial::out::{line, Reply};
+use crate::serial::protocol::{self, LineError};
+use crate::serial::reader::LineReader;
+use crate::settings::Settings;
+use crate::stepper::prep::Prep;
+use crate::stepper::StepQueue;
+use crate::{Inputs, Io, Outputs, AXES, BED, HEATERS};
+use homing::Homing;
+
+/// Marlin's `DEFAULT_KEEPALIVE_INTERVAL`: while a command runs longer, the host hears
+/// `echo:busy: processing` this often, so it knows the board is alive.
+const KEEPALIVE_MS: u32 = 2_000;
+
+/// How often `M109`/`M190` print the temperatures while they wait.
+const HEAT_REPORT_MS: u32 = 1_000;
+
+/// Marlin's `TEMP_WINDOW` / `TEMP_BED_WINDOW`: a wait for a temperature ends within this of it.
+const TEMP_WINDOW_C: f32 = 1.0;
+
+/// What the running command waits for before its `ok`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Wait {
+    /// Nothing: the next line may run.
+    Nothing,
+    /// The moves to finish (`M400`, `M84`, `M0`, before `G4`), then maybe a dwell (ms).
+    Moves { then_dwell_ms: u32 },
+    /// Until this time (ms).
+    Dwell { until_ms: u32 },
+    /// Heater `heater` to reach its target (`M109`, `M190`); `both_ways`: also to cool down
+    /// to it (`R`).
+    Heat { heater: usize, both_ways: bool },
+    /// The homing sequence.
+    Home(Homing),
+}
+
+/// The controller core's main-loop half. See the crate's documentation for the board's side.
+pub struct Controller<'q> {
+    queue: &'q StepQueue,
+    settings: Settings,
+    reader: LineReader,
+    /// The last line number taken (`N`).
+    last_line: u32,
+    planner: Planner,
+    prep: Prep,
+    heat: Heat,
+    /// Where the commands have put the head, mm (logical position).
+    position_mm: [f32; AXES],
+    /// Axes whose coordinates are relative (`G91`, and `M83` for E).
+    relative: u8,
+    feed_mm_s: f32,
+    fan_duty: u8,
+    steppers_enabled: u8,
+    wait: Wait,
+    /// When the running command started, for the keepalive (ms).
+    busy_since_ms: u32,
+    next_report_ms: u32,
+    /// An `M112` was seen by the line reader: halt before anything else.
+    emergency: bool,
+    halted: bool,
+    inputs: Inputs,
+}
+
+impl<'q> Controller<'q> {
+    /// A controller at rest on `queue` (shared with the [`crate::Stepper`]) with `settings`
+    /// (the board's build-time defaults; [`Controller::boot`] reads EEPROM over them).
+    pub fn new(queue: &'q StepQueue, settings: Settings) -> Self {
+        Controller {
+            queue,
+            settings,
+            reader: LineReader::new(),
+            last_line: 0,
+            planner: Planner::new(),
+            prep: Prep::new(),
+            heat: Heat::default(),
+            position_mm: [0.0; AXES],
+            relative: 0,
+            // Marlin's power-on feed rate: 1500 mm/min.
+            feed_mm_s: 25.0,
+            fan_duty: 0,
+            steppers_enabled: 0,
+            wait: Wait::Nothing,
+            busy_since_ms: 0,
+            next_report_ms: 0,
+            emergency: false,
+            halted: false,
+            inputs: Inputs { now_ms: 0, adc: [0; HEATERS], endstops: 0 },
+        }
+    }
+
+    /// Power-on: prints `start` (a host knows the board is up) and reads the settings kept in
+    /// EEPROM, if any.
+    pub fn boot(&mut self, io: &mut impl Io, inputs: &Inputs) {
+        self.inputs = *inputs;
+        line(io, b"start");
+        // Only what `M500` keeps is read; the build's fixed facts (sizes, sensors) stay.
+        let _ = self.settings.load(io);
+    }
+
+    /// Takes one byte from the host. Returns `false`, taking nothing, when the byte would end a
+    /// line and the line queue is full: offer it again after the next [`Controller::poll`].
+    #[must_use = "a byte refused must be offered again, or the line it ends is lost"]
+    pub fn receive(&mut self, byte: u8) -> bool {
+        let accepted = self.reader.push(byte);
+        // The emergency parser (Marlin's `EMERGENCY_PARSER`): an `M112` acts before the lines
+        // queued ahead of it run.
+        if accepted && matches!(byte, b'\n' | b'\r') && self.reader.last_is_m112() {
+            self.emergency = true;
+        }
+        accepted
+    }
+
+    /// One turn of the main loop with the inputs read now.
+    pub fn poll(&mut self, io: &mut impl Io, inputs: &Inputs) {
+        self.inputs = *inputs;
+        if self.emergency && !self.halted {
+            self.kill(io, None);
+        }
+        if self.halted {
+            // Only a reset helps; every line is answered so that the host does not wait.
+            while self.reader.pop().is_some() {
+                line(io, b"Error:Printer halted. kill() called!");
+                line(io, b"ok");
+            }
+            return;
+        }
+        match self.heat.manage(&self.settings, &inputs.adc, inputs.now_ms) {
+            Ok(true) => io.watchdog_feed(),
+            Ok(false) => {}
+            Err(fault) => return self.kill(io, Some(fault)),
+        }
+        self.prep.fill(&mut self.planner, self.queue);
+        self.carry_on(io);
+        while self.wait == Wait::Nothing && !self.planner.is_full() {
+            let Some(l) = self.reader.pop() else { break };
+            self.busy_since_ms = inputs.now_ms;
+            self.next_report_ms = inputs.now_ms.wrapping_add(HEAT_REPORT_MS);
+            self.run_line(io, l.bytes(), l.too_long);
+            self.prep.fill(&mut self.planner, self.queue);
+            if self.halted {
+                return;
+            }
+        }
+        if self.wait != Wait::Nothing && inputs.now_ms.wrapping_sub(self.busy_since_ms) >= KEEPALIVE_MS {
+            self.busy_since_ms = self.busy_since_ms.wrapping_add(KEEPALIVE_MS);
+            line(io, b"echo:busy: processing");
+        }
+    }
+
+    /// Checks a line's number and checksum, then runs it.
+    fn run_line(&mut self, io: &mut impl Io, raw: &[u8], too_long: bool) {
+        if too_long {
+            return self.refuse(
+                io,
+                b"Error:Line too long, Last Line: ",
+                protocol::line_number(raw).is_some(),
+            );
+        }
+        let body = match protocol::check(raw, self.last_line) {
+            Ok(checked) => {
+                if let Some(n) = checked.number {
+                    self.last_line = n;
+                }
+                checked.body
+            }
+            Err(e) => return self.refuse(io, LineError::message(e), true),
+        };
+        let mut copy = [0u8; crate::limits::MAX_LINE];
+        copy[..body.len()].copy_from_slice(body);
+        self.run_command(io, &copy[..body.len()]);
+    }
+
+    /// Answers a refused line as Marlin: the error with the last line number, a request to send
+    /// again from the next one (numbered lines), `ok`; the lines received after it are dropped,
+    /// since the host sends them again.
+    fn refuse(&mut self, io: &mut impl Io, message: &[u8], resend: bool) {
+        Reply::new().s(message).u32(self.last_line).send(io);
+        if resend {
+            Reply::new().s(b"Resend: ").u32(self.last_line.wrapping_add(1)).send(io);
+            self.reader.flush();
+        }
+        line(io, b"ok");
+    }
+
+    /// Continues the waiting command; prints its `ok` when it is done.
+    fn carry_on(&mut self, io: &mut impl Io) {
+        let now = self.inputs.now_ms;
+        let done = match self.wait {
+            Wait::Nothing => return,
+            Wait::Moves { then_dwell_ms } => {
+                if self.moving() {
+                    false
+                } else if then_dwell_ms > 0 {
+                    self.wait = Wait::Dwell { until_ms: now.wrapping_add(then_dwell_ms) };
+                    false
+                } else {
+                    true
+                }
+            }
+            Wait::Dwell { until_ms } => (now.wrapping_sub(until_ms) as i32) >= 0,
+            Wait::Heat { heater, both_ways } => {
+                if (now.wrapping_sub(self.next_report_ms) as i32) >= 0 {
+                    self.next_report_ms = now.wrapping_add(HEAT_REPORT_MS);
+                    let mut r = Reply::new();
+                    self.heat.report(&self.settings, &mut r);
+                    r.send(io);
+                }
+                let h = &self.heat.heaters[heater];
+                h.target_c <= 0.0
+                    || if both_ways {
+                        self.heat.at_target(heater, TEMP_WINDOW_C)
+                    } else {
+                        h.temp_c >= h.target_c - TEMP_WINDOW_C
+                    }
+            }
+            Wait::Home(mut homing) => {
+                if self.moving() {
+                    false
+                } else {
+                    let finished = homing.next(self);
+                    if !finished {
+                        self.wait = Wait::Home(homing);
+                        self.prep.fill(&mut self.planner, self.queue);
+                    }
+                    finished
+                }
+            }
+        };
+        if done {
+            self.wait = Wait::Nothing;
+            line(io, b"ok");
+        }
+    }
+
+    /// Whether moves are planned, being cut or being stepped.
+    fn moving(&self) -> bool {
+        !self.planner.is_empty() || self.prep.is_busy() || !self.queue.is_idle()
+    }
+
+    /// Halts the machine: steps stop at the next interrupt, every heater and stepper is off,
+    /// the fault (if any) and Marlin's `kill()` line are printed, and from now on every line is
+    /// answered with that error. Only a reset (or the watchdog) brings the board back, with
+    /// everything off. `fault`: the heater and what went wrong.
+    pub fn kill(&mut self, io: &mut impl Io, fault: Option<(usize, crate::heat::safety::Fault)>) {
+        self.queue.abort();
+        // What the host sent before the halt is not run, nor answered.
+        self.reader.flush();
+        self.planner.clear();
+        self.prep.clear();
+        self.heat.all_off();
+        self.fan_duty = 0;
+        self.steppers_enabled = 0;
+        self.halted = true;
+        self.wait = Wait::Nothing;
+        if let Some((heater, what)) = fault {
+            let mut r = Reply::new();
+            r.s(b"Error:").s(what.text()).s(b", system stopped! Heater_ID: ");
+            if heater == BED {
+                r.s(b"bed");
+            } else {
+                r.u32(heater as u32);
+            }
+            r.send(io);
+        }
+        line(io, b"Error:Printer halted. kill() called!");
+    }
+
+    /// Whether the machine is halted (after a fault or `M112`).
+    pub fn is_halted(&self) -> bool {
+        self.halted
+    }
+
+    /// What the board drives now.
+    pub fn outputs(&self) -> Outputs {
+        Outputs {
+            heater_duty: self.heat.duties(),
+            fan_duty: self.fan_duty,
+            steppers_enabled: self.steppers_enabled,
+        }
+    }
+
+    /// The settings in force.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The heaters' state (temperatures, targets, duties).
+    pub fn heat(&self) -> &Heat {
+        &self.heat
+    }
+
+    /// Where the commands have put the head (mm), moves still running included.
+    pub fn position_mm(&self) -> [f32; AXES] {
+        self.position_mm
+    }
+
+    /// The same in steps (the planner's position).
+    pub fn position_steps(&self) -> [i32; AXES] {
+        self.planner.position_steps
+    }
+}

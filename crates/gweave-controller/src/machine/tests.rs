@@ -1,0 +1,410 @@
+//! The controller on the twin (`crate::twin`): a simulated board that steps the interrupt on
+//! its clock, closes the endstops where the axes' minimum is, and heats a first-order plant.
+
+use std::boxed::Box;
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::string::String;
+use std::vec::Vec;
+
+use crate::limits::TICKS_PER_S;
+use crate::serial::protocol::frame;
+use crate::twin::{FirstOrder, Twin};
+use crate::{Controller, Settings, StepQueue, Stepper, AXES, HEATERS};
+
+/// The twin with the endstops at 0 steps and the axes some way from them, and the step times
+/// of X.
+struct Bench {
+    t: Twin<'static, FirstOrder>,
+    x_times: Rc<RefCell<Vec<u64>>>,
+}
+
+impl Bench {
+    fn new(settings: Settings) -> Bench {
+        let queue: &'static StepQueue = Box::leak(Box::new(StepQueue::new()));
+        let mut t = Twin::new(queue, settings, FirstOrder::default());
+        t.endstop_steps = [0; 3];
+        t.steps = [8000, 8000, 40000, 0];
+        let x_times = Rc::new(RefCell::new(Vec::new()));
+        let times = Rc::clone(&x_times);
+        t.on_step = Some(Box::new(move |axis, tick| {
+            if axis == 0 {
+                times.borrow_mut().push(tick);
+            }
+        }));
+        Bench { t, x_times }
+    }
+
+    fn send(&mut self, text: &str) {
+        self.t.send(text.as_bytes());
+    }
+
+    fn run_ms(&mut self, ms: u64) {
+        self.t.run_ms(ms);
+    }
+
+    fn run_until_ok(&mut self, count: usize, limit_ms: u64) {
+        for _ in 0..limit_ms {
+            if self.text().matches("ok").count() >= count {
+                return;
+            }
+            self.run_ms(1);
+        }
+        panic!("no ok within {limit_ms} ms: {}", self.text());
+    }
+
+    fn text(&self) -> String {
+        String::from_utf8_lossy(&self.t.memory.sent).into_owned()
+    }
+
+    fn take(&mut self) -> String {
+        let t = self.text();
+        self.t.memory.sent.clear();
+        t
+    }
+}
+
+fn framed(n: u32, command: &str) -> String {
+    let mut buf = [0u8; 128];
+    let len = frame(n, command.as_bytes(), &mut buf);
+    String::from_utf8(buf[..len].to_vec()).unwrap() + "\n"
+}
+
+#[test]
+fn boot_says_start_and_unknown_commands_are_echoed() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    assert_eq!(b.take(), "start\n");
+    b.send("G123\nM115\n");
+    b.run_ms(5);
+    let t = b.take();
+    assert!(t.starts_with("echo:Unknown command: \"G123\"\nok\nFIRMWARE_NAME:gweave-controller"), "{t}");
+    assert!(t.contains("Cap:EEPROM:1\n") && t.ends_with("Cap:THERMAL_PROTECTION:1\nok\n"), "{t}");
+}
+
+#[test]
+fn line_numbers_and_checksums_get_marlins_replies_byte_for_byte() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.take();
+    b.send("N0 M110 N0*125\n");
+    b.send(&framed(1, "G90"));
+    b.run_ms(2);
+    b.send(&framed(3, "G90"));
+    b.run_ms(2);
+    b.send("N2 G90*99\n");
+    b.run_ms(2);
+    b.send("N2 G90\n");
+    b.run_ms(2);
+    assert_eq!(
+        b.take(),
+        "ok\nok\n\
+         Error:Line Number is not Last Line Number+1, Last Line: 1\nResend: 2\nok\n\
+         Error:checksum mismatch, Last Line: 1\nResend: 2\nok\n\
+         Error:No Checksum with line number, Last Line: 1\nResend: 2\nok\n"
+    );
+    b.send(&framed(2, "G90"));
+    b.send("M110 N41\n");
+    b.send(&framed(42, "G91"));
+    b.run_ms(2);
+    assert_eq!(b.take(), "ok\nok\nok\n");
+}
+
+#[test]
+fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.take();
+    let long = String::from("N1 G1 X") + &"1".repeat(1024) + "\n";
+    b.send(&long);
+    b.run_ms(2);
+    assert_eq!(b.take(), "Error:Line too long, Last Line: 0\nResend: 1\nok\n");
+    for byte in [0u8, 0xFF, 0x80, 0x1B, b'G', b'1', b' ', b'X', 0xC3, b'\n'] {
+        assert!(b.t.controller.receive(byte));
+    }
+    b.run_ms(2);
+    // As Marlin: not a command it knows.
+    assert_eq!(b.take(), "echo:Unknown command: \"????G1 X?\"\nok\n");
+    b.send("G1 X\u{e9}\n");
+    b.run_ms(2);
+    assert_eq!(b.take(), "Error:Bad G-code at column 5: \"G1 X??\"\nok\n");
+    b.send("\x01\x02\x03\n");
+    b.run_ms(2);
+    assert_eq!(b.take(), "echo:Unknown command: \"???\"\nok\n");
+    b.send("M105\n");
+    b.run_ms(2);
+    assert!(b.take().starts_with("ok T:"));
+}
+
+#[test]
+fn a_move_makes_exact_step_counts() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    let start = b.t.steps;
+    b.send("G91\nG1 X10.0125 Y-3.3 Z0.1 E1.5 F6000\nM400\nM114\n");
+    b.run_until_ok(4, 2000);
+    // 10.0125 * 80 = 801, -3.3 * 80 = -264, 0.1 * 400 = 40, 1.5 * 93 = 139.5 -> 140.
+    let moved: Vec<i64> = (0..AXES).map(|a| b.t.steps[a] - start[a]).collect();
+    assert_eq!(moved, [801, -264, 40, 140]);
+    assert!(
+        b.text().ends_with("X:10.01 Y:-3.30 Z:0.10 E:1.50 Count X:801 Y:-264 Z:40\nok\n"),
+        "{}",
+        b.text()
+    );
+}
+
+#[test]
+fn many_short_moves_add_up_exactly() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    let start = b.t.steps;
+    // A polygon of 0.5 mm segments with extrusion, as a slicer writes them.
+    let mut text = String::from("G92 X0 Y0 E0\n");
+    let (mut x, mut y, mut e) = (0.0f64, 0.0f64, 0.0f64);
+    for i in 0..200 {
+        let a = f64::from(i) * 0.05;
+        x += 0.5 * a.cos();
+        y += 0.5 * a.sin();
+        e += 0.02;
+        text += &std::format!("G1 X{x:.3} Y{y:.3} E{e:.4} F3600\n");
+    }
+    text += "M400\n";
+    b.send(&text);
+    b.run_until_ok(202, 20_000);
+    let want = |v: f64, spm: f64| (v * spm).round() as i64;
+    assert_eq!(b.t.steps[0] - start[0], want((x * 1000.0).round() / 1000.0, 80.0));
+    assert_eq!(b.t.steps[1] - start[1], want((y * 1000.0).round() / 1000.0, 80.0));
+    assert_eq!(b.t.steps[3] - start[3], want((e * 10000.0).round() / 10000.0, 93.0));
+}
+
+#[test]
+fn g28_homes_z_then_y_then_x_to_zero() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.t.steps = [4000, 2400, 8000, 0];
+    b.send("G28\nM114\n");
+    b.run_until_ok(2, 60_000);
+    assert!(b.text().ends_with("X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0\nok\n"), "{}", b.text());
+    // Each axis stopped where its endstop closed (the test bench's 0), give or take the step
+    // on which the switch was read.
+    for axis in 0..3 {
+        assert!(b.t.steps[axis] == 0, "axis {axis} at {}", b.t.steps[axis]);
+    }
+    // Then a move from home lands where it is asked.
+    b.send("G1 X10 Y20 Z5 F6000\nM400\n");
+    b.run_until_ok(4, 20_000);
+    assert_eq!(&b.t.steps[..3], &[800, 1600, 2000]);
+}
+
+#[test]
+fn m119_reports_the_endstops_and_g4_waits() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.t.steps[1] = 0; // Y at its endstop
+    b.take();
+    b.send("M119\nG4 P250\nM400\n");
+    b.run_ms(100);
+    assert_eq!(b.take(), "Reporting endstop status\nx_min: open\ny_min: TRIGGERED\nz_min: open\nok\n");
+    b.run_ms(200);
+    assert_eq!(b.take(), "ok\nok\n");
+}
+
+#[test]
+fn a_full_planner_holds_the_ok_until_a_block_is_free() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.take();
+    // 20 slow moves: the planner holds 16, plus the one being cut; the host gets its oks as
+    // room frees up, and the steps come out exact.
+    let start = b.t.steps[0];
+    for i in 1..=20 {
+        b.send(&std::format!("G1 X{i} F600\n"));
+    }
+    b.run_ms(5);
+    let early = b.text().matches("ok").count();
+    assert!((16..20).contains(&early), "{early} oks at once");
+    b.run_until_ok(20, 10_000);
+    b.send("M400\n");
+    b.run_until_ok(21, 10_000);
+    assert_eq!(b.t.steps[0] - start, 20 * 80);
+}
+
+/// The axes in the order they moved during `G28` on a board with `homing_order`.
+fn homing_sequence(homing_order: [u8; 3]) -> Vec<usize> {
+    let queue = StepQueue::new();
+    let moved = Rc::new(RefCell::new(Vec::new()));
+    let log = Rc::clone(&moved);
+    let mut t = Twin::new(&queue, Settings { homing_order, ..Settings::DEFAULT }, FirstOrder::default());
+    t.on_step = Some(Box::new(move |axis, _| {
+        let mut m = log.borrow_mut();
+        if m.last() != Some(&axis) {
+            m.push(axis);
+        }
+    }));
+    t.run_lines(b"G28\n", 60_000).unwrap();
+    assert_eq!(t.steps_from_home()[..3], [0, 0, 0]);
+    drop(t);
+    Rc::try_unwrap(moved).unwrap().into_inner()
+}
+
+#[test]
+fn g28_homes_in_the_settings_order_z_y_x_by_default() {
+    // Each axis: approach, back off, approach again, all on that axis alone.
+    assert_eq!(homing_sequence([2, 1, 0]), [2, 1, 0]);
+    assert_eq!(homing_sequence([0, 1, 2]), [0, 1, 2]);
+}
+
+#[test]
+fn g28_with_one_axis_homes_only_it() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.t.steps = [4000, 2400, 8000, 0];
+    b.send("G28 X\n");
+    b.run_until_ok(1, 60_000);
+    assert_eq!(&b.t.steps[..3], &[0, 2400, 8000]);
+}
+
+#[test]
+fn m503_reports_as_marlin_and_m500_keeps_settings_over_a_reset() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.take();
+    b.send("M503\n");
+    b.run_ms(2);
+    let t = b.take();
+    assert!(t.contains("echo:  M92 X80.00 Y80.00 Z400.00 E93.00\n"), "{t}");
+    assert!(t.contains("echo:  M203 X300.00 Y300.00 Z5.00 E25.00\n"), "{t}");
+    assert!(t.contains("echo:  M301 P22.20 I1.08 D114.00\n"), "{t}");
+    b.send("M92 E415.5\nM500\n");
+    b.run_ms(2);
+    assert!(b.take().contains("echo:Settings Stored (82 bytes; crc "));
+    // A new board with the same EEPROM.
+    let eeprom = std::mem::take(&mut b.t.memory.eeprom);
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.t.memory.eeprom = eeprom;
+    b.t.power_on();
+    assert_eq!(b.t.controller.settings().steps_per_mm[3], 415.5);
+    b.send("M502\nM503\n");
+    b.run_ms(2);
+    assert!(b.take().contains("echo:  M92 X80.00 Y80.00 Z400.00 E93.00\n"));
+}
+
+#[test]
+fn m109_heats_to_its_target_reporting_then_holds_it() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.take();
+    b.send("M109 S210\n");
+    b.run_until_ok(1, 300_000);
+    let t = b.take();
+    assert!(t.contains(" T:"), "{t}");
+    assert!(t.contains("echo:busy: processing\n"), "{t}");
+    assert!(b.t.plant.temp_c[0] >= 209.0, "{}", b.t.plant.temp_c[0]);
+    let (mut low, mut high) = (f32::MAX, 0.0f32);
+    for _ in 0..120 {
+        b.run_ms(500);
+        low = low.min(b.t.plant.temp_c[0]);
+        high = high.max(b.t.plant.temp_c[0]);
+    }
+    assert!(low > 208.0 && high < 213.0, "held within {low}..{high}");
+    assert!(b.t.memory.watchdog_feeds > 1000);
+}
+
+#[test]
+fn m190_heats_the_bed() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("M190 S60\nM105\n");
+    b.run_until_ok(2, 600_000);
+    assert!(b.t.controller.heat().heaters[crate::BED].temp_c >= 59.0, "{}", b.text());
+    assert!(b.text().contains("B:"));
+}
+
+fn assert_halted(b: &mut Bench, error: &str) {
+    let t = b.take();
+    assert!(t.contains(&(String::from(error) + "\nError:Printer halted. kill() called!\n")), "{t}");
+    assert!(b.t.controller.is_halted());
+    let out = b.t.controller.outputs();
+    assert_eq!((out.heater_duty, out.fan_duty, out.steppers_enabled), ([0; HEATERS], 0, 0));
+    b.send("G28\n");
+    b.run_ms(2);
+    assert_eq!(b.take(), "Error:Printer halted. kill() called!\nok\n");
+}
+
+#[test]
+fn an_open_thermistor_halts_with_mintemp() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.t.plant.adc_override[0] = Some(1023);
+    b.send("M104 S200\n");
+    b.run_ms(300);
+    assert_halted(&mut b, "Error:MINTEMP triggered, system stopped! Heater_ID: 0");
+}
+
+#[test]
+fn a_heater_that_cannot_heat_halts_with_heating_failed() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.t.plant.heating = [false; HEATERS];
+    b.send("M104 S200\n");
+    b.run_ms(21_000);
+    assert_halted(&mut b, "Error:Heating failed, system stopped! Heater_ID: 0");
+}
+
+#[test]
+fn a_heater_that_fails_at_temperature_halts_with_thermal_runaway() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("M190 S60\n");
+    b.run_until_ok(1, 600_000);
+    // The wait ends within a degree; the runaway watch starts once the target is reached.
+    b.run_ms(30_000);
+    b.t.plant.heating = [false; HEATERS];
+    b.run_ms(60_000);
+    assert_halted(&mut b, "Error:Thermal Runaway, system stopped! Heater_ID: bed");
+}
+
+#[test]
+fn a_shorted_thermistor_halts_with_maxtemp_even_unheated() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.t.plant.adc_override[crate::BED] = Some(3);
+    b.run_ms(300);
+    assert_halted(&mut b, "Error:MAXTEMP triggered, system stopped! Heater_ID: bed");
+}
+
+#[test]
+fn m112_stops_everything_at_once() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("M104 S200\nG1 X100 F600\n");
+    b.run_ms(500);
+    let before = b.t.steps[0];
+    // Queued behind a dwell, M112 still acts at once (the emergency parser).
+    b.send("G4 S10\nM112\n");
+    b.run_ms(1);
+    let t = b.take();
+    assert!(t.ends_with("Error:Printer halted. kill() called!\n"), "{t}");
+    b.run_ms(100);
+    assert!(b.t.steps[0] - before < 20, "steps after M112: {}", b.t.steps[0] - before);
+    let out = b.t.controller.outputs();
+    assert_eq!((out.heater_duty, out.steppers_enabled), ([0; HEATERS], 0));
+}
+
+#[test]
+fn acceleration_follows_the_setting() {
+    let mut b =
+        Bench::new(Settings { print_accel_mm_s2: 1000.0, travel_accel_mm_s2: 1000.0, ..Settings::DEFAULT });
+    b.send("G91\nG1 X40 F6000\nM400\n");
+    b.run_until_ok(3, 10_000);
+    // From the X step times: speed between steps 80 apart (1 mm), and the acceleration from
+    // speeds 10 mm apart in the ramp (v² = v0² + 2 a d). The ramp to 100 mm/s is 5 mm.
+    let t = b.x_times.borrow();
+    assert_eq!(t.len(), 3200);
+    let secs = |ticks: u64| ticks as f64 / f64::from(TICKS_PER_S);
+    // The mean speed over 1 mm, and the time in the middle of it: under constant acceleration
+    // the mean speed over a time is the speed at its middle.
+    let speed = |i: usize| (1.0 / secs(t[i + 80] - t[i]), secs(t[i + 80] + t[i]) / 2.0);
+    let ((v1, t1), (v2, t2)) = (speed(40), speed(280));
+    let a = (v2 - v1) / (t2 - t1);
+    assert!((a - 1000.0).abs() < 10.0, "acceleration {a} mm/s²");
+    let cruise = speed(1600).0;
+    assert!((cruise - 100.0).abs() < 0.5, "cruise {cruise} mm/s");
+    let total_s = (t[3199] - t[0]) as f64 / f64::from(TICKS_PER_S);
+    // 40 mm: 0.1 s up, 30 mm at 100 mm/s, 0.1 s down, less the 5 ms to the first step
+    // (1/80 mm from rest: t = sqrt(2 d / a)).
+    assert!((total_s - 0.495).abs() < 0.0002, "{total_s} s");
+}
+
+#[test]
+fn the_core_fits_the_ram_budget() {
+    // On the host, references are 8 bytes instead of an AVR's 2 and alignment pads more: an
+    // upper bound of the board's figure (1680 + 264 + 64 bytes when written). The budget of the
+    // whole firmware is 4 KB of static RAM, the core's constants (about 1.8 KB of strings and
+    // tables, which an AVR copies into RAM) included.
+    let size = core::mem::size_of::<Controller>() + core::mem::size_of::<StepQueue>();
+    assert!(size + core::mem::size_of::<Stepper>() <= 2048, "{size} bytes");
+}

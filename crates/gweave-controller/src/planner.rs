@@ -1,0 +1,296 @@
+//! The look-ahead planner: how fast each move may start and end.
+//!
+//! # Why look ahead
+//!
+//! A move cannot start at full speed: the motors accelerate at a limited rate `a` (mm/s²), so
+//! the speed grows as `v² = v0² + 2 a d` over a distance `d`. Stopping at the end of every
+//! short segment of a curve would be slow and shake the machine, so the planner keeps the next
+//! [`PLANNER_BLOCKS`] moves and lets the head pass each junction as fast as the corner and the
+//! moves ahead allow: it must always be able to stop by the end of the last move it knows.
+//!
+//! # Speeds at the junctions (GRBL's junction deviation)
+//!
+//! At a corner of angle `θ` between two moves (the angle between their directions; 0 means
+//! straight on), the head may keep the speed of a circle that passes within the junction
+//! deviation `δ` of the corner's point, tangent to both moves. Such a circle has radius
+//! `r = δ sin(θ/2) / (1 - sin(θ/2))`, and on it the centripetal acceleration `v²/r` must stay
+//! within `a`, so
+//!
+//! ```text
+//!   v_junction² = a δ sin(θ/2) / (1 - sin(θ/2)),     sin(θ/2) = sqrt((1 - cos θ) / 2)
+//! ```
+//!
+//! (`gnea/grbl:grbl/planner.c`, "junction deviation"; Marlin uses the same with δ = 0.013 mm).
+//! Straight on (`θ = 0`) the limit is the moves' own speeds; a full reversal (`θ = 180°`)
+//! allows nothing.
+//!
+//! # The passes
+//!
+//! Each block's entry speed is at most its junction limit, and so that the machine can stop:
+//! - the reverse pass, from the newest block (which must end at rest) back to the oldest,
+//!   caps each entry so the block can slow down to the next one's entry:
+//!   `entry_i² ≤ entry_{i+1}² + 2 a_i L_i`;
+//! - the forward pass, from the oldest block on, caps each entry to what the block before can
+//!   reach by accelerating: `entry_{i+1}² ≤ entry_i² + 2 a_i L_i`.
+//!
+//! The oldest block's entry is fixed: it is the exit speed the block before it (already being
+//! stepped) was given, or rest. Speeds are kept squared, as the formulas want them.
+
+use crate::limits::PLANNER_BLOCKS;
+use crate::math::sqrt;
+use crate::settings::Settings;
+use crate::stepper::StepBlock;
+use crate::{AXES, E};
+
+/// One planned move.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Block {
+    /// The steps, for the stepper.
+    pub step: StepBlock,
+    /// Length of the move in mm (of X, Y and Z; of E for a move of the extruder alone).
+    pub len_mm: f32,
+    /// Acceleration of the move along its path, mm/s².
+    pub accel_mm_s2: f32,
+    /// Squared speed the move asks for (its feed rate within the axes' limits), (mm/s)².
+    pub nominal_v2: f32,
+    /// Squared highest entry speed (the junction limit), (mm/s)².
+    pub max_entry_v2: f32,
+    /// Squared planned entry speed, (mm/s)².
+    pub entry_v2: f32,
+}
+
+/// The ring of planned moves, and where the planned moves end.
+pub struct Planner {
+    blocks: [Block; PLANNER_BLOCKS],
+    first: usize,
+    count: usize,
+    /// Unit direction of the last planned move (XYZE, in mm), for the next junction.
+    previous_unit: [f32; AXES],
+    previous_nominal_v2: f32,
+    /// Where the last planned move ends, in steps per axis.
+    pub position_steps: [i32; AXES],
+}
+
+impl Default for Planner {
+    fn default() -> Self {
+        Planner::new()
+    }
+}
+
+impl Planner {
+    /// An empty planner at the origin.
+    pub const fn new() -> Self {
+        const EMPTY: Block = Block {
+            step: StepBlock::IDLE,
+            len_mm: 0.0,
+            accel_mm_s2: 0.0,
+            nominal_v2: 0.0,
+            max_entry_v2: 0.0,
+            entry_v2: 0.0,
+        };
+        Planner {
+            blocks: [EMPTY; PLANNER_BLOCKS],
+            first: 0,
+            count: 0,
+            previous_unit: [0.0; AXES],
+            previous_nominal_v2: 0.0,
+            position_steps: [0; AXES],
+        }
+    }
+
+    /// Whether no move can be added now.
+    pub fn is_full(&self) -> bool {
+        self.count == PLANNER_BLOCKS
+    }
+
+    /// Whether no move waits.
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Forgets every waiting move (a halt).
+    pub fn clear(&mut self) {
+        self.count = 0;
+    }
+
+    /// Plans a move from [`Planner::position_steps`] to `target_steps` at `feed_mm_s` (within
+    /// the settings' limits); `endstop_mask` names the endstops that end it (homing). A move of
+    /// no step is not planned. Returns `false`, planning nothing, when the planner is full.
+    pub fn add(&mut self, target_steps: [i32; AXES], feed_mm_s: f32, endstop_mask: u8, s: &Settings) -> bool {
+        if self.is_full() {
+            return false;
+        }
+        let mut step =
+            StepBlock { endstop_mask, endstop_invert: s.endstop_inverting, ..StepBlock::default() };
+        let mut delta_mm = [0.0f32; AXES];
+        for axis in 0..AXES {
+            // 32-bit arithmetic only (64-bit costs kilobytes on an AVR); at most 2^31 steps, so
+            // the stepper's counters (below 2 × events) fit 32 bits.
+            let delta = target_steps[axis].saturating_sub(self.position_steps[axis]);
+            step.steps[axis] = delta.unsigned_abs();
+            step.events = step.events.max(step.steps[axis]);
+            if delta > 0 {
+                step.dir_bits |= 1 << axis;
+            }
+            delta_mm[axis] = delta as f32 / s.steps_per_mm[axis];
+        }
+        step.dir_bits ^= s.invert_dir;
+        if step.events == 0 {
+            return true;
+        }
+        let xyz_mm2: f32 = delta_mm[..E].iter().map(|d| d * d).sum();
+        let len_mm = if xyz_mm2 > 0.0 { sqrt(xyz_mm2) } else { delta_mm[E].abs() };
+        // Speed and acceleration along the path, within every axis' own limits: an axis
+        // covering a fraction `|d|/L` of the path moves at that fraction of the path's speed.
+        let mut feed_mm_s = feed_mm_s;
+        let mut accel_mm_s2 = if xyz_mm2 == 0.0 {
+            s.retract_accel_mm_s2
+        } else if delta_mm[E] != 0.0 {
+            s.print_accel_mm_s2
+        } else {
+            s.travel_accel_mm_s2
+        };
+        let mut unit = [0.0f32; AXES];
+        let mut unit_norm2 = 0.0;
+        for axis in 0..AXES {
+            let fraction = delta_mm[axis].abs() / len_mm;
+            if fraction > 0.0 {
+                feed_mm_s = feed_mm_s.min(s.max_feed_mm_s[axis] / fraction);
+                accel_mm_s2 = accel_mm_s2.min(s.max_accel_mm_s2[axis] / fraction);
+            }
+            unit[axis] = delta_mm[axis];
+            unit_norm2 += delta_mm[axis] * delta_mm[axis];
+        }
+        let unit_norm = sqrt(unit_norm2);
+        for u in &mut unit {
+            *u /= unit_norm;
+        }
+        let nominal_v2 = feed_mm_s * feed_mm_s;
+        let max_entry_v2 = if self.is_empty() {
+            // Nothing before it in the planner: the move before (if any) is being stepped and
+            // was planned to stop.
+            0.0
+        } else {
+            self.junction_v2(&unit, accel_mm_s2, s.junction_deviation_mm)
+                .min(nominal_v2)
+                .min(self.previous_nominal_v2)
+        };
+        let slot = (self.first + self.count) % PLANNER_BLOCKS;
+        self.blocks[slot] = Block {
+            step,
+            len_mm,
+            accel_mm_s2,
+            nominal_v2,
+            max_entry_v2,
+            entry_v2: if self.is_empty() { 0.0 } else { max_entry_v2 },
+        };
+        self.count += 1;
+        self.previous_unit = unit;
+        self.previous_nominal_v2 = nominal_v2;
+        self.position_steps = target_steps;
+        self.recalculate();
+        true
+    }
+
+    /// The junction limit between the last planned move and one in direction `unit`.
+    fn junction_v2(&self, unit: &[f32; AXES], accel_mm_s2: f32, deviation_mm: f32) -> f32 {
+        let cos_theta = -self.previous_unit.iter().zip(unit).map(|(p, u)| p * u).sum::<f32>();
+        if cos_theta > 0.999_999 {
+            return 0.0; // a full reversal
+        }
+        if cos_theta < -0.999_999 {
+            return f32::MAX; // straight on
+        }
+        let sin_half = sqrt(0.5 * (1.0 - cos_theta));
+        accel_mm_s2 * deviation_mm * sin_half / (1.0 - sin_half)
+    }
+
+    fn at(&mut self, i: usize) -> &mut Block {
+        &mut self.blocks[(self.first + i) % PLANNER_BLOCKS]
+    }
+
+    /// The reverse and forward passes over the waiting blocks (see the module's text).
+    fn recalculate(&mut self) {
+        let mut next_entry_v2 = 0.0; // the newest block ends at rest
+        for i in (1..self.count).rev() {
+            let b = self.at(i);
+            b.entry_v2 = b.max_entry_v2.min(next_entry_v2 + 2.0 * b.accel_mm_s2 * b.len_mm);
+            next_entry_v2 = b.entry_v2;
+        }
+        for i in 0..self.count.saturating_sub(1) {
+            let b = *self.at(i);
+            let reachable_v2 = b.entry_v2 + 2.0 * b.accel_mm_s2 * b.len_mm;
+            let next = self.at(i + 1);
+            next.entry_v2 = next.entry_v2.min(reachable_v2);
+        }
+    }
+
+    /// Takes the oldest block for stepping, with its exit speed squared (the next block's
+    /// entry, or rest); the next block's entry is fixed from now on.
+    pub fn pop(&mut self) -> Option<(Block, f32)> {
+        if self.count == 0 {
+            return None;
+        }
+        let block = self.blocks[self.first];
+        self.first = (self.first + 1) % PLANNER_BLOCKS;
+        self.count -= 1;
+        let exit_v2 = if self.count > 0 { self.blocks[self.first].entry_v2 } else { 0.0 };
+        Some((block, exit_v2))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn planned(moves: &[[i32; AXES]]) -> Planner {
+        let mut p = Planner::new();
+        for &m in moves {
+            assert!(p.add(m, 100.0, 0, &Settings::DEFAULT));
+        }
+        p
+    }
+
+    #[test]
+    fn a_straight_line_keeps_speed_through_its_junction() {
+        // Two 10 mm moves along X at 100 mm/s (3000 mm/s²): the junction is straight, so the
+        // second starts at the speed the first reaches, capped by its own stop:
+        // v² = 2 a L = 60000 > 100², so the full 100 mm/s.
+        let mut p = planned(&[[800, 0, 0, 0], [1600, 0, 0, 0]]);
+        let (first, exit_v2) = p.pop().unwrap();
+        assert_eq!(first.entry_v2, 0.0);
+        assert_eq!(first.step.steps, [800, 0, 0, 0]);
+        assert_eq!(exit_v2, 100.0 * 100.0);
+    }
+
+    #[test]
+    fn a_right_angle_slows_to_the_junction_deviation_speed() {
+        let mut p = planned(&[[800, 0, 0, 0], [800, 800, 0, 0]]);
+        p.pop();
+        let (second, _) = p.pop().unwrap();
+        // θ = 90°: sin(45°) = 0.7071, v² = 3000 * 0.013 * 0.7071 / 0.2929 = 94.15 (9.7 mm/s).
+        assert!((second.entry_v2 - 94.15).abs() < 0.05, "{}", second.entry_v2);
+    }
+
+    #[test]
+    fn a_reversal_stops_and_a_full_planner_refuses() {
+        let mut p = planned(&[[800, 0, 0, 0], [0, 0, 0, 0]]);
+        assert_eq!(p.pop().unwrap().1, 0.0);
+        let mut p = Planner::new();
+        for i in 0..PLANNER_BLOCKS as i32 {
+            assert!(p.add([i + 1, 0, 0, 0], 10.0, 0, &Settings::DEFAULT));
+        }
+        assert!(p.is_full());
+        assert!(!p.add([100, 0, 0, 0], 10.0, 0, &Settings::DEFAULT));
+        assert_eq!(p.position_steps, [PLANNER_BLOCKS as i32, 0, 0, 0]);
+    }
+
+    #[test]
+    fn z_moves_are_held_to_zs_limits() {
+        let mut p = planned(&[[0, 0, 4000, 0]]);
+        let (b, _) = p.pop().unwrap();
+        assert_eq!(b.nominal_v2, 25.0); // Z at most 5 mm/s
+        assert_eq!(b.accel_mm_s2, 100.0);
+        assert_eq!(b.len_mm, 10.0);
+    }
+}

@@ -1,0 +1,6 @@
+//! The serial line: bytes into lines ([`reader`]), Marlin's line numbers and checksums
+//! ([`protocol`]), and reply lines with numbers written by hand ([`out`]).
+
+pub mod out;
+pub mod protocol;
+pub mod reader;

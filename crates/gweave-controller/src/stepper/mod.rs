@@ -1,0 +1,324 @@
+//! The step interrupt's logic, and the queue that feeds it.
+//!
+//! # Two sides
+//!
+//! The main loop plans moves and cuts them into *segments* ([`prep`]): a few milliseconds of
+//! motion at a constant step rate. The step interrupt ([`Stepper::tick`]) runs them: at each
+//! interrupt it makes at most one step on each axis and says when to come back. They meet only
+//! through the [`StepQueue`], a ring with one producer (the main loop) and one consumer (the
+//! interrupt), as GRBL's planner and stepper meet through its segment buffer
+//! (`gnea/grbl:grbl/stepper.c`). A segment is written completely before the producer publishes
+//! it by moving `head`; the consumer copies it before it frees the slot by moving `tail`. On an
+//! AVR, loads and stores of one byte cannot be torn, which is all the atomics here need.
+//!
+//! # Bresenham's algorithm
+//!
+//! A move of `(dx, dy, dz, de)` steps takes `n = max(dx, dy, dz, de)` *step events*; the axis
+//! with the most steps steps at every event, the others at evenly spread events. Each axis keeps
+//! a counter; at every event it adds its step count, and when the counter reaches `n` it steps
+//! and subtracts `n`. Over the `n` events the counter gains `d * n` and loses `n` per step, so
+//! the axis makes exactly `d` steps: integers only, no drift, exact totals. (Bresenham's line
+//! algorithm, 1965; GRBL and Marlin step the same way.) Starting each counter at `n / 2` spreads
+//! the minor axes' steps to the middle of their intervals.
+//!
+//! ```text
+//!   dx = 5, dy = 2, n = 5           event:  1  2  3  4  5
+//!   counter y (starts at 2, +2 per event):  4  6  3  5  2
+//!   reaches 5: step y, counter - 5:         .  *  .  *  .    (counters after: 4 1 3 0 2)
+//! ```
+
+pub mod prep;
+
+use core::cell::UnsafeCell;
+use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+
+use crate::limits::{IDLE_TICKS, MAX_TIMER_TICKS, SEGMENTS, STEP_BLOCKS};
+use crate::AXES;
+
+/// What a move is to the stepper: steps per axis, their directions, and the endstops that end
+/// it early (homing).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct StepBlock {
+    /// Steps per axis (absolute).
+    pub steps: [u32; AXES],
+    /// Step events: the largest of `steps`.
+    pub events: u32,
+    /// DIR pin levels for this move (the settings' inversion applied).
+    pub dir_bits: u8,
+    /// Endstops that stop this move when triggered (bit `1 << axis`; 0 for a normal move).
+    pub endstop_mask: u8,
+    /// Endstop pins whose triggered level is low: an endstop is triggered when
+    /// `(levels ^ endstop_invert) & bit` is set.
+    pub endstop_invert: u8,
+}
+
+impl StepBlock {
+    /// No move.
+    pub const IDLE: StepBlock =
+        StepBlock { steps: [0; AXES], events: 0, dir_bits: 0, endstop_mask: 0, endstop_invert: 0 };
+}
+
+/// A few milliseconds of one block at a constant step rate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Segment {
+    /// Slot of its block in the step block ring.
+    pub block: u8,
+    /// Whether the block starts with this segment (the stepper loads it and resets Bresenham).
+    pub starts_block: bool,
+    /// Step events in this segment (at least 1).
+    pub events: u16,
+    /// Timer ticks between step events.
+    pub interval_ticks: u32,
+}
+
+/// The ring between the main loop and the step interrupt. On a board, a `static`.
+pub struct StepQueue {
+    segments: [UnsafeCell<Segment>; SEGMENTS],
+    blocks: [UnsafeCell<StepBlock>; STEP_BLOCKS],
+    /// Next segment slot the producer writes.
+    head: AtomicU8,
+    /// Next segment slot the consumer reads.
+    tail: AtomicU8,
+    /// The stepper is running a segment it has taken.
+    busy: AtomicBool,
+    /// Set by the producer: drop everything, now and forever (a halt).
+    abort: AtomicBool,
+    /// Set by the stepper when an endstop ended a homing move; cleared by the producer.
+    endstop_hit: AtomicBool,
+}
+
+// SAFETY: the cells are shared between one producer and one consumer; `head`/`tail` hand each
+// slot over (written completely, then published with Release; read after an Acquire load), so
+// no slot is ever read and written at the same time. Step block slots are written only for a
+// block none of whose segments is in the ring (see `prep`).
+unsafe impl Sync for StepQueue {}
+
+impl Default for StepQueue {
+    fn default() -> Self {
+        StepQueue::new()
+    }
+}
+
+impl StepQueue {
+    /// An empty queue.
+    pub const fn new() -> Self {
+        StepQueue {
+            segments: [const {
+                UnsafeCell::new(Segment { block: 0, starts_block: false, events: 0, interval_ticks: 0 })
+            }; SEGMENTS],
+            blocks: [const { UnsafeCell::new(StepBlock::IDLE) }; STEP_BLOCKS],
+            head: AtomicU8::new(0),
+            tail: AtomicU8::new(0),
+            busy: AtomicBool::new(false),
+            abort: AtomicBool::new(false),
+            endstop_hit: AtomicBool::new(false),
+        }
+    }
+
+    fn queued(&self) -> usize {
+        let head = usize::from(self.head.load(Ordering::Acquire));
+        let tail = usize::from(self.tail.load(Ordering::Acquire));
+        (head + 2 * SEGMENTS - tail) % (2 * SEGMENTS)
+    }
+
+    /// Whether the producer can push a segment.
+    pub fn has_room(&self) -> bool {
+        self.queued() < SEGMENTS
+    }
+
+    /// Whether the steppers are still: nothing queued and nothing running.
+    pub fn is_idle(&self) -> bool {
+        self.queued() == 0 && !self.busy.load(Ordering::Acquire)
+    }
+
+    /// Producer: writes a step block into `slot`. Only for a block whose segments are not yet
+    /// pushed (`prep` hands out slots in turn, one per block, [`STEP_BLOCKS`] of them).
+    pub(crate) fn write_block(&self, slot: u8, block: StepBlock) {
+        // SAFETY: the stepper reads a block slot only when it takes the block's first segment
+        // from the ring. `prep` writes block `b` into slot `b % STEP_BLOCKS` only while the ring
+        // has room: had the ring still a segment of block `b - STEP_BLOCKS`, the blocks between
+        // would hold the other `SEGMENTS - 1` slots (each has at least one segment) and the ring
+        // would be full.
+        unsafe { *self.blocks[usize::from(slot)].get() = block };
+    }
+
+    /// Producer: appends a segment; `false` if the ring is full.
+    pub(crate) fn push(&self, segment: Segment) -> bool {
+        if !self.has_room() {
+            return false;
+        }
+        let head = self.head.load(Ordering::Relaxed);
+        // SAFETY: slot `head` is outside the consumer's window [tail, head).
+        unsafe { *self.segments[usize::from(head) % SEGMENTS].get() = segment };
+        self.head.store(((usize::from(head) + 1) % (2 * SEGMENTS)) as u8, Ordering::Release);
+        true
+    }
+
+    /// Consumer: takes the oldest segment, and its block if the segment starts one, marking
+    /// the stepper busy.
+    fn pop(&self) -> Option<(Segment, Option<StepBlock>)> {
+        if self.queued() == 0 {
+            return None;
+        }
+        let tail = self.tail.load(Ordering::Relaxed);
+        // SAFETY: slot `tail` was published by the producer's Release store of `head`.
+        let segment = unsafe { *self.segments[usize::from(tail) % SEGMENTS].get() };
+        // SAFETY: see `write_block`.
+        let block = segment.starts_block.then(|| unsafe { *self.blocks[usize::from(segment.block)].get() });
+        self.busy.store(true, Ordering::Release);
+        self.tail.store(((usize::from(tail) + 1) % (2 * SEGMENTS)) as u8, Ordering::Release);
+        Some((segment, block))
+    }
+
+    /// Producer: stop every step now and for good (a halt). The stepper drops what it has at its
+    /// next interrupt.
+    pub fn abort(&self) {
+        self.abort.store(true, Ordering::Release);
+    }
+
+    /// Whether an endstop ended the last homing move (the producer clears it with
+    /// [`StepQueue::clear_endstop_hit`] before the next one).
+    pub fn endstop_hit(&self) -> bool {
+        self.endstop_hit.load(Ordering::Acquire)
+    }
+
+    /// Producer: forgets the last endstop hit (only while the steppers are idle).
+    pub fn clear_endstop_hit(&self) {
+        self.endstop_hit.store(false, Ordering::Release);
+    }
+}
+
+/// What the step interrupt does now: pulse `step_bits`, then set the DIR pins to `dir_bits`
+/// for the steps to come, then come back after `interval_ticks` of the step timer.
+///
+/// The direction is always set one interrupt before the step that needs it, so a driver's
+/// direction set-up time (200 ns for an A4988) is met whatever the board's timing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StepOut {
+    /// STEP pins to pulse now, bit `1 << axis`.
+    pub step_bits: u8,
+    /// DIR pin levels for the next steps, bit `1 << axis` (set after this call's pulses).
+    pub dir_bits: u8,
+    /// Timer ticks ([`crate::limits::TICKS_PER_S`]) until the next interrupt.
+    pub interval_ticks: u16,
+}
+
+/// The consumer side: Bresenham over the segments, called from the step timer's interrupt.
+pub struct Stepper<'q> {
+    queue: &'q StepQueue,
+    block: StepBlock,
+    counters: [u32; AXES],
+    /// Step events left in the running segment.
+    events_left: u16,
+    interval_ticks: u32,
+    /// Ticks still to wait before the next event when an interval exceeds the 16-bit timer.
+    wait_ticks: u32,
+    dir_bits: u8,
+}
+
+impl<'q> Stepper<'q> {
+    /// A stepper at rest on `queue`.
+    pub fn new(queue: &'q StepQueue) -> Self {
+        Stepper {
+            queue,
+            block: StepBlock::default(),
+            counters: [0; AXES],
+            events_left: 0,
+            interval_ticks: 0,
+            wait_ticks: 0,
+            dir_bits: 0,
+        }
+    }
+
+    /// The interrupt: called when the step timer fires, with the endstop pins' levels (bit
+    /// `1 << axis`, high = 1). Integer arithmetic only.
+    ///
+    /// A segment's first event comes one interval after the segment is taken, each next one an
+    /// interval later, so the events of a segment of `n` events and interval `i` fall at
+    /// `i, 2i, ... n i` from its start: the profile's times ([`prep`]).
+    pub fn tick(&mut self, endstop_levels: u8) -> StepOut {
+        if self.queue.abort.load(Ordering::Acquire) {
+            self.events_left = 0;
+            self.wait_ticks = 0;
+            self.queue.tail.store(self.queue.head.load(Ordering::Acquire), Ordering::Release);
+            self.queue.busy.store(false, Ordering::Release);
+            return self.out(0, u32::from(IDLE_TICKS));
+        }
+        // A long interval is waited out in timer-sized pieces.
+        if self.wait_ticks > 0 {
+            return self.wait();
+        }
+        let mut step_bits = 0;
+        if self.events_left > 0 {
+            let triggered = (endstop_levels ^ self.block.endstop_invert) & self.block.endstop_mask;
+            if triggered != 0 {
+                // Homing: the endstop is reached; the rest of this block is dropped.
+                self.queue.endstop_hit.store(true, Ordering::Release);
+                self.events_left = 0;
+            } else {
+                step_bits = self.event();
+                self.events_left -= 1;
+            }
+        }
+        if self.events_left == 0 && !self.next_segment() {
+            self.queue.busy.store(false, Ordering::Release);
+            return self.out(step_bits, u32::from(IDLE_TICKS));
+        }
+        self.wait_ticks = self.interval_ticks;
+        let mut out = self.wait();
+        out.step_bits = step_bits;
+        out
+    }
+
+    /// One Bresenham step event: the step bits of the axes that step.
+    fn event(&mut self) -> u8 {
+        let mut bits = 0;
+        for axis in 0..AXES {
+            self.counters[axis] += self.block.steps[axis];
+            if self.counters[axis] >= self.block.events {
+                self.counters[axis] -= self.block.events;
+                bits |= 1 << axis;
+            }
+        }
+        bits
+    }
+
+    /// Takes the next segment, skipping what is left of a homing block that met its endstop.
+    fn next_segment(&mut self) -> bool {
+        while let Some((segment, block)) = self.queue.pop() {
+            if let Some(block) = block {
+                self.block = block;
+                // Half of the events: the minor axes' steps fall mid-interval (see above).
+                self.counters = [block.events / 2; AXES];
+            }
+            if self.block.endstop_mask != 0 && self.queue.endstop_hit.load(Ordering::Acquire) {
+                continue;
+            }
+            self.dir_bits = self.block.dir_bits;
+            self.events_left = segment.events;
+            self.interval_ticks = segment.interval_ticks;
+            return true;
+        }
+        false
+    }
+
+    fn wait(&mut self) -> StepOut {
+        let now = self.wait_ticks.min(MAX_TIMER_TICKS);
+        // Leave no remainder too short for the next interrupt to be on time.
+        let now = if self.wait_ticks - now < 100 && self.wait_ticks > MAX_TIMER_TICKS {
+            self.wait_ticks / 2
+        } else {
+            now
+        };
+        self.wait_ticks -= now;
+        self.out(0, now)
+    }
+
+    fn out(&self, step_bits: u8, interval_ticks: u32) -> StepOut {
+        StepOut {
+            step_bits,
+            dir_bits: self.dir_bits,
+            interval_ticks: interval_ticks.min(MAX_TIMER_TICKS) as u16,
+        }
+    }
+}
