@@ -5,9 +5,6 @@
 
 use crate::regs::{interrupt_free, EEAR, EECR, EEDR, EEMPE, EEPE, EERE};
 
-/// Size of the ATmega2560's EEPROM, bytes.
-pub const SIZE: usize = 4096;
-
 fn wait_ready() {
     while EECR.read() & EEPE != 0 {}
 }

@@ -102,7 +102,6 @@ pub const TCCR1B: Reg8 = Reg8(0x81);
 pub const TCNT1: Reg16 = Reg16(0x84);
 pub const OCR1A: Reg16 = Reg16(0x88);
 pub const TIMSK1: Reg8 = Reg8(0x6F);
-pub const TIFR1: Reg8 = Reg8(0x36);
 
 // The analog-to-digital converter.
 pub const ADCW: Reg16 = Reg16(0x78);

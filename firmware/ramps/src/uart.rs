@@ -38,11 +38,8 @@ struct Ring {
 // every access to the other side's index is a single byte read (atomic on the AVR).
 unsafe impl Sync for Ring {}
 
-static RX: Ring = Ring {
-    buf: UnsafeCell::new([0; RX_SIZE]),
-    head: UnsafeCell::new(0),
-    tail: UnsafeCell::new(0),
-};
+static RX: Ring =
+    Ring { buf: UnsafeCell::new([0; RX_SIZE]), head: UnsafeCell::new(0), tail: UnsafeCell::new(0) };
 
 /// Set the port up at `baud` (250000 or 115200, 8N1) with the receive interrupt on.
 pub fn init(cpu_hz: u32, baud: u32) {
