@@ -171,14 +171,11 @@ impl Board {
         }
     }
 
-    /// Send `line` and run until the firmware answers `ok` (or a line starting with `Error:`
-    /// or `!!`); returns the lines it sent meanwhile.
+    /// Send `line` and run until the firmware answers `ok`; returns the lines it sent
+    /// meanwhile (an `Error:` line comes before its `ok`, as in Marlin).
     pub fn command(&mut self, line: &str, timeout_s: f64) -> Result<Vec<String>, BoardError> {
         self.send_line(line);
-        self.run_until_line(
-            |l| l.starts_with("ok") || l.starts_with("Error:") || l.starts_with("!!"),
-            timeout_s,
-        )
+        self.run_until_line(|l| l.starts_with("ok"), timeout_s)
     }
 
     /// One stepper socket (0 X, 1 Y, 2 Z, 3 E0, 4 E1) and its axis.

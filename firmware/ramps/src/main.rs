@@ -145,6 +145,11 @@ pub extern "C" fn main() -> ! {
         }
         controller.poll(&mut io, &inputs(adc_now));
         apply(&controller.outputs());
+        if controller.is_halted() {
+            // Halted (a thermal fault, M112) is a safe state that must last until the user
+            // resets the board: the watchdog must not restart it into a working printer.
+            watchdog::feed();
+        }
     }
 }
 

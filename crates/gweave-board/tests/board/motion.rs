@@ -1,6 +1,5 @@
 //! Moves on the emulated board: STEP pulses counted on the pins, per axis.
 
-
 use gweave_board::Wiring;
 
 /// Sockets X, Y, Z, E0, E1.

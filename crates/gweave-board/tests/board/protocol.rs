@@ -1,6 +1,5 @@
 //! The firmware's serial protocol on the emulated board: what a host sees.
 
-
 use gweave_board::{Board, Wiring};
 
 #[test]
