@@ -51,6 +51,12 @@ typedef struct gw_board {
 	avr_uart_t *uart0;
 	/* When the firmware last wrote a byte to send. */
 	avr_cycle_count_t last_tx_cycle;
+	/* The interrupt handler being timed (its vector's flash address), when it started, and the
+	 * longest it took, in cycles (from the vector to the `reti` that sets I again). */
+	avr_flashaddr_t timed_vector;
+	avr_cycle_count_t isr_start;
+	int in_isr;
+	avr_cycle_count_t isr_max_cycles;
 	/* Levels driven from outside, per port (A..L). */
 	avr_ioport_external_t external[GW_PORTS];
 } gw_board;
@@ -261,6 +267,16 @@ int gw_board_run(gw_board *b, uint64_t until)
 			result = state == cpu_Done ? 1 : 2;
 			break;
 		}
+		if (b->timed_vector) {
+			if (avr->pc == b->timed_vector && !b->in_isr) {
+				b->in_isr = 1;
+				b->isr_start = avr->cycle;
+			} else if (b->in_isr && avr->sreg[S_I]) {
+				b->in_isr = 0;
+				if (avr->cycle - b->isr_start > b->isr_max_cycles)
+					b->isr_max_cycles = avr->cycle - b->isr_start;
+			}
+		}
 		uint16_t sp = avr->data[0x5D] | (avr->data[0x5E] << 8);
 		if (sp < b->min_sp && sp != 0)
 			b->min_sp = sp;
@@ -287,4 +303,18 @@ void gw_board_reset(gw_board *b)
 	/* The reset switched the level polling back on (see gw_board_new). */
 	for (int i = 0; i < EXTINT_COUNT; i++)
 		avr_extint_set_strict_lvl_trig(b->avr, i, 0);
+}
+
+/* Time the handler of interrupt `vector` (its number in the datasheet's table, e.g. 17 for
+ * TIMER1_COMPA); 0 stops. Each vector is a 4-byte jump on the ATmega2560. */
+void gw_board_time_vector(gw_board *b, uint32_t vector)
+{
+	b->timed_vector = vector * 4;
+	b->in_isr = 0;
+	b->isr_max_cycles = 0;
+}
+
+uint64_t gw_board_isr_max_cycles(gw_board *b)
+{
+	return b->isr_max_cycles;
 }

@@ -209,6 +209,17 @@ impl Board {
         self.sync_inputs();
     }
 
+    /// Time the step interrupt's handler (Timer1 compare A, vector 17) from now on.
+    pub fn time_step_interrupt(&mut self) {
+        self.avr.time_vector(17);
+    }
+
+    /// The longest the step interrupt's handler took since [`Board::time_step_interrupt`],
+    /// cycles (16 a microsecond).
+    pub fn step_interrupt_max_cycles(&self) -> u64 {
+        self.avr.isr_max_cycles()
+    }
+
     /// The lowest stack pointer seen: the stack's high-water mark is `0x21FF` minus it.
     pub fn min_stack_pointer(&self) -> u16 {
         self.avr.min_stack_pointer()

@@ -28,6 +28,8 @@ extern "C" {
     fn gw_board_run(b: *mut GwBoard, until: u64) -> c_int;
     fn gw_board_cycle(b: *mut GwBoard) -> u64;
     fn gw_board_min_sp(b: *mut GwBoard) -> u16;
+    fn gw_board_time_vector(b: *mut GwBoard, vector: u32);
+    fn gw_board_isr_max_cycles(b: *mut GwBoard) -> u64;
 }
 
 /// What `gw_board_run` returns when the firmware stopped or crashed.
@@ -189,6 +191,19 @@ impl<W: Wires> Avr<W> {
     pub fn min_stack_pointer(&self) -> u16 {
         // SAFETY: a live board.
         unsafe { gw_board_min_sp(self.board) }
+    }
+
+    /// Time the handler of interrupt number `vector` (17: Timer1 compare A, the step
+    /// interrupt), from its vector to the `reti` that enables interrupts again.
+    pub fn time_vector(&mut self, vector: u32) {
+        // SAFETY: a live board.
+        unsafe { gw_board_time_vector(self.board, vector) }
+    }
+
+    /// The longest run of the timed handler so far, cycles.
+    pub fn isr_max_cycles(&self) -> u64 {
+        // SAFETY: a live board.
+        unsafe { gw_board_isr_max_cycles(self.board) }
     }
 
     /// The wires, between runs.
