@@ -65,6 +65,9 @@ pub struct Settings {
     /// (bang-bang, Marlin's default without `PIDTEMPBED`): it is slow and heavy, and needs no
     /// tuning that way.
     pub hotend_pid: Pid,
+    /// Lowest hotend temperature an extruding move may run at, °C (Marlin's `EXTRUDE_MINTEMP`,
+    /// 170); 0 allows cold extrusion.
+    pub extrude_min_c: f32,
     /// Highest temperature allowed per heater, °C: above it the machine halts (MAXTEMP).
     pub max_temp_c: [f32; HEATERS],
 }
@@ -89,6 +92,7 @@ impl Settings {
         hotends: 1,
         thermistor: [1, 0, 1],
         hotend_pid: Pid { kp: 22.2, ki: 1.08, kd: 114.0 },
+        extrude_min_c: 170.0,
         max_temp_c: [275.0, 275.0, 150.0],
     };
 }

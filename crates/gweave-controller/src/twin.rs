@@ -16,6 +16,8 @@
 //! assert_eq!(twin.steps_from_home(), [800, 400, 0, 0]);
 //! ```
 
+use core::mem::ManuallyDrop;
+use core::ptr::NonNull;
 use std::vec::Vec;
 
 use crate::heat::thermistor::TYPE_1;
@@ -162,11 +164,16 @@ pub enum TwinError {
 impl<'q, P: Plant> Twin<'q, P> {
     /// Powers the board on: `start`, the settings from its (empty) EEPROM.
     pub fn new(queue: &'q StepQueue, settings: Settings, plant: P) -> Self {
+        Twin::with_memory(queue, settings, plant, Memory::default())
+    }
+
+    /// Powers the board on with `memory`'s EEPROM (a board that has run before).
+    pub fn with_memory(queue: &'q StepQueue, settings: Settings, plant: P, memory: Memory) -> Self {
         let spm = settings.steps_per_mm;
         let mut twin = Twin {
             controller: Controller::new(queue, settings),
             stepper: Stepper::new(queue),
-            memory: Memory::default(),
+            memory,
             plant,
             steps: [0; AXES],
             endstop_steps: [-(100.0 * spm[0]) as i64, -(100.0 * spm[1]) as i64, -(50.0 * spm[2]) as i64],
@@ -272,6 +279,64 @@ impl<'q, P: Plant> Twin<'q, P> {
     }
 }
 
+/// A twin that owns its step queue: a board object that lives on its own, as the virtual
+/// printer's board for one host session. ([`Twin`] borrows the queue, as the firmware's
+/// controller and interrupt share a `static` one.)
+pub struct OwnedTwin<P: Plant> {
+    /// Dropped by hand, before the queue it borrows.
+    twin: ManuallyDrop<Twin<'static, P>>,
+    queue: NonNull<StepQueue>,
+}
+
+impl<P: Plant> OwnedTwin<P> {
+    /// Powers a board on, as [`Twin::with_memory`].
+    pub fn new(settings: Settings, plant: P, memory: Memory) -> Self {
+        let queue = NonNull::from(std::boxed::Box::leak(std::boxed::Box::new(StepQueue::new())));
+        // SAFETY: the queue stays where it is on the heap until `drop` frees it, after the
+        // twin, the only holder of references to it. The twin never leaves this struct: it is
+        // lent only as `&Twin` (through which no `'static` reference can be taken out), and
+        // the methods below act on it in place.
+        let twin = Twin::with_memory(unsafe { queue.as_ref() }, settings, plant, memory);
+        OwnedTwin { twin: ManuallyDrop::new(twin), queue }
+    }
+
+    /// The twin, to look at.
+    pub fn twin(&self) -> &Twin<'static, P> {
+        &self.twin
+    }
+
+    /// The serial output and EEPROM.
+    pub fn memory_mut(&mut self) -> &mut Memory {
+        &mut self.twin.memory
+    }
+
+    /// The thermal plant.
+    pub fn plant_mut(&mut self) -> &mut P {
+        &mut self.twin.plant
+    }
+
+    /// [`Twin::send`].
+    pub fn send(&mut self, bytes: &[u8]) {
+        self.twin.send(bytes);
+    }
+
+    /// [`Twin::run_ms`].
+    pub fn run_ms(&mut self, ms: u64) {
+        self.twin.run_ms(ms);
+    }
+}
+
+impl<P: Plant> Drop for OwnedTwin<P> {
+    fn drop(&mut self) {
+        // SAFETY: the twin is dropped once, here, and the queue after it, once: it came from
+        // `Box::leak` in `new` and nothing refers to it any more.
+        unsafe {
+            ManuallyDrop::drop(&mut self.twin);
+            drop(std::boxed::Box::from_raw(self.queue.as_ptr()));
+        }
+    }
+}
+
 /// How many reply lines start with `ok`.
 fn oks(replies: &[u8]) -> usize {
     replies.split(|&b| b == b'\n').filter(|l| l.starts_with(b"ok")).count()
@@ -280,6 +345,17 @@ fn oks(replies: &[u8]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_owned_twin_runs_and_frees_its_queue() {
+        for _ in 0..3 {
+            let mut t = OwnedTwin::new(Settings::DEFAULT, FirstOrder::default(), Memory::default());
+            t.send(b"G91\nG1 X1 F600\nM400\n");
+            t.run_ms(500);
+            assert_eq!(t.twin().steps[0], 80);
+            assert_eq!(t.memory_mut().sent, b"start\nok\nok\nok\n");
+        }
+    }
 
     #[test]
     fn the_plant_reads_back_through_the_firmwares_table() {

@@ -12,6 +12,8 @@
 //!   ([`PtyEndpoint`], [`TcpEndpoint`]);
 //! - `inkjet/`: the drops of a printhead ([`InkjetCanvas`]) and the recoats of a binder-jet bed;
 //! - `profile/`: the [`MachineProfile`] TOML and its `[firmware]` build options;
+//! - [`core_board`]: `[firmware] kind = "gweave"`, the board running gweave's own controller
+//!   core (the firmware of the real board) instead of the Marlin model;
 //! - [`finish`]: what a front end does around a transform's output; [`plot`]: the charts.
 //!
 //! ```
@@ -25,6 +27,7 @@
 #![warn(missing_docs)]
 
 mod chart_canvas;
+pub mod core_board;
 pub mod finish;
 mod inkjet;
 mod interp;
@@ -57,7 +60,7 @@ pub use motion::marlin_limits::{ExtruderLimits, MarlinCorners};
 pub use motion::planner::{PlannedBlock, Planner};
 pub use motion::slicer_limits::slicer_limits;
 pub use motion::stepper::{BresenhamWalk, Steppers};
-pub use profile::firmware::{Firmware, ProgramStop};
+pub use profile::firmware::{Firmware, FirmwareKind, ProgramStop};
 pub use profile::m503::from_m503;
 pub use profile::{FaultSpec, Inkjet, MachineProfile, MachineProfileError};
 pub use thermal::autotune::{run_on_heater, AutotuneConfig, AutotuneRun, Cycle};

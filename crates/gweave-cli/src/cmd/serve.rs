@@ -1,5 +1,6 @@
 //! `gweave serve`: the virtual printer on a serial line, for real hosts.
 
+use std::cell::RefCell;
 use std::fs::File;
 use std::io::{LineWriter, Write};
 use std::net::SocketAddr;
@@ -12,10 +13,11 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::write_file;
-use gweave_sim::Machine;
+use gweave_sim::core_board::CoreDevice;
 use gweave_sim::PtyEndpoint;
 use gweave_sim::TcpEndpoint;
 use gweave_sim::{serve, Endpoint, ServeOptions, ServeSummary};
+use gweave_sim::{FirmwareKind, Machine};
 use gweave_sim::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
 
 use gweave::range::Range;
@@ -93,11 +95,17 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
         crate::files::check_writable("--report", report)?;
     }
     let profile = args.machine.load()?;
+    let core = profile.firmware.kind == FirmwareKind::Gweave;
     // Build one machine now so that a bad profile fails before any host connects.
-    Machine::new(profile.clone()).context("building the virtual printer")?;
+    if core {
+        CoreDevice::new(&profile, Vec::new()).context("building the virtual printer")?;
+    } else {
+        Machine::new(profile.clone()).context("building the virtual printer")?;
+    }
     let options = ServeOptions {
         protocol: ProtocolConfig {
-            keepalive_s: DEFAULT_KEEPALIVE_S,
+            // The controller core prints its own keepalive lines.
+            keepalive_s: if core { 0 } else { DEFAULT_KEEPALIVE_S },
             duplicate_window: args.duplicate_window,
         },
         // `--realtime` is `--speed 1`.
@@ -142,18 +150,11 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
         }
     };
     let eeprom = args.eeprom.clone().unwrap_or_else(|| session_dir.path().join("eeprom.gcode"));
-    let mut make = || {
-        Machine::new(profile.clone()).map(|mut m| {
-            m.attach_sd(sd_dir.clone());
-            m.attach_eeprom(eeprom.clone());
-            m
-        })
-    };
     let mut report_error = None;
-    let mut finished = |mut machine: Machine| {
+    // A session's report, whichever board served it, as JSON.
+    let mut write_report = |json: serde_json::Result<String>| {
         if let Some(path) = &args.report {
-            machine.finish(&mut |_, _| {});
-            let written = serde_json::to_string_pretty(&machine.report())
+            let written = json
                 .map_err(anyhow::Error::from)
                 .and_then(|text| write_file(path, |out| -> Result<()> { Ok(writeln!(out, "{text}")?) }));
             if let Err(e) = written {
@@ -161,14 +162,32 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
             }
         }
     };
-    let summary = serve(
-        endpoint.as_mut(),
-        &mut make,
-        &mut finished,
-        &options,
-        log.as_mut().map(|w| w as &mut dyn Write),
-        &stop,
-    )?;
+    let log = log.as_mut().map(|w| w as &mut dyn Write);
+    let summary = if core {
+        // One board for the whole run: what a session keeps in EEPROM (M500), the next reads.
+        let eeprom = RefCell::new(Vec::new());
+        let mut make = || CoreDevice::new(&profile, eeprom.take());
+        let mut finished = |device: CoreDevice| {
+            eeprom.replace(device.eeprom().to_vec());
+            write_report(serde_json::to_string_pretty(&device.report(&profile.name)));
+        };
+        serve(endpoint.as_mut(), &mut make, &mut finished, &options, log, &stop)?
+    } else {
+        let mut make = || {
+            Machine::new(profile.clone()).map(|mut m| {
+                m.attach_sd(sd_dir.clone());
+                m.attach_eeprom(eeprom.clone());
+                m
+            })
+        };
+        let mut finished = |mut machine: Machine| {
+            if args.report.is_some() {
+                machine.finish(&mut |_, _| {});
+                write_report(serde_json::to_string_pretty(&machine.report()));
+            }
+        };
+        serve(endpoint.as_mut(), &mut make, &mut finished, &options, log, &stop)?
+    };
     drop(endpoint);
     print_summary(&summary);
     match report_error {

@@ -12,9 +12,11 @@ use gweave::gcode::flavour::read_firmware;
 use gweave::gcode::layers::Feature;
 use gweave::gcode::reader::{LineReader, Part};
 use gweave::pass::Progress;
+use gweave_sim::core_board::{self, CoreReport};
 use gweave_sim::plot::{save_speed_chart, save_temperature_chart, ChartFormat};
 use gweave_sim::FaultSpec;
 use gweave_sim::HeaterId;
+use gweave_sim::{FirmwareKind, MachineProfile};
 use gweave_sim::{HugeArcs, Malformed, MAX_ARC_CHORDS};
 use gweave_sim::{Machine, Outcome, SimReport};
 
@@ -68,6 +70,9 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
         ChartFormat::from_path(path)?;
     }
     let mut profile = args.machine.load()?;
+    if profile.firmware.kind == FirmwareKind::Gweave {
+        return run_core(&args, &profile);
+    }
     for spec in &args.faults {
         profile.faults.push(spec.parse::<FaultSpec>()?);
     }
@@ -96,6 +101,74 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
         }
     }
     Ok(if report.halted { ExitCode::from(1) } else { ExitCode::SUCCESS })
+}
+
+/// `[firmware] kind = "gweave"`: the file on gweave's own controller core (docs/firmware.md),
+/// as a host streams it to the board; the report is the board's time, its net steps per motor
+/// and its errors.
+fn run_core(args: &SimArgs, profile: &MachineProfile) -> Result<ExitCode> {
+    let refused = [
+        ("--fault", !args.faults.is_empty()),
+        ("--plot", args.plot.is_some()),
+        ("--plot-speed", args.plot_speed.is_some()),
+        ("--raster-out", args.raster_out.is_some()),
+    ];
+    if let Some((flag, _)) = refused.iter().find(|(_, given)| *given) {
+        anyhow::bail!("{flag} is for the Marlin model: the machine profile runs the controller core ([firmware] kind = \"gweave\")");
+    }
+    let input = &args.input;
+    let file = container::open(input).with_context(|| format!("opening {}", input.display()))?;
+    let mut reader = LineReader::new(file);
+    let mut read_error = None;
+    // Inside a line longer than the reader's buffer: its first piece was sent.
+    let mut in_long_line = false;
+    let mut next_line = || loop {
+        match reader.next_line() {
+            Ok(Some(line)) => match line.part {
+                Part::Whole => return Some(line.bytes.to_vec()),
+                // Far longer than the board's 95 bytes: its first bytes stand for it, and the
+                // board refuses the line as too long.
+                Part::Piece if !in_long_line => {
+                    in_long_line = true;
+                    return Some(line.bytes[..line.bytes.len().min(256)].to_vec());
+                }
+                Part::Piece => {}
+                Part::Last { .. } => in_long_line = false,
+            },
+            Ok(None) => return None,
+            Err(e) => {
+                read_error = Some(e);
+                return None;
+            }
+        }
+    };
+    let report = core_board::run_file(profile, &mut next_line)?;
+    if let Some(e) = read_error {
+        return Err(e).with_context(|| format!("reading {}", input.display()));
+    }
+    if args.report.emit(&report)? {
+        print_summary(|out| print_core(out, input, &report))?;
+    } else {
+        for e in &report.errors {
+            eprintln!("gweave: the printer said: {e}");
+        }
+    }
+    Ok(if report.halted { ExitCode::from(1) } else { ExitCode::SUCCESS })
+}
+
+fn print_core(out: &mut dyn Write, input: &Path, r: &CoreReport) -> io::Result<()> {
+    writeln!(out, "{} on {} (gweave controller core)", input.display(), r.machine)?;
+    writeln!(out, "  lines           {}", r.lines)?;
+    writeln!(out, "  time            {}", hms(r.time_s))?;
+    let [x, y, z, e] = r.end_steps;
+    writeln!(out, "  end position    Count X {x} Y {y} Z {z} E {e}")?;
+    for error in &r.errors {
+        writeln!(out, "  the printer said: {error}")?;
+    }
+    if r.halted {
+        writeln!(out, "  halted")?;
+    }
+    Ok(())
 }
 
 /// Executes every line until the end or a halt; returns the machine's `Error:` replies.

@@ -67,7 +67,7 @@ impl Controller<'_> {
         let now = self.inputs.now_ms;
         let s = &mut self.settings;
         match (letter, code) {
-            (b'G', 0 | 1) => self.linear_move(w),
+            (b'G', 0 | 1) => self.linear_move(io, w),
             (b'G', 4) => {
                 let ms = w.get(b'P').unwrap_or(0.0) + w.get(b'S').unwrap_or(0.0) * 1000.0;
                 self.wait = Wait::Moves { then_dwell_ms: ms as u32 };
@@ -170,17 +170,27 @@ impl Controller<'_> {
 
     /// `G0`/`G1`: the target in mm (absolute or relative per axis), then in steps, to the
     /// planner. `F` is in mm/min and stays for the next moves.
-    fn linear_move(&mut self, w: &Words) {
+    ///
+    /// Extruding below the settings' minimum hotend temperature is refused as Marlin's
+    /// `PREVENT_COLD_EXTRUSION` does: cold plastic does not flow, the extruder would grind the
+    /// filament. The move goes without its E part, E counts as moved, and the host hears
+    /// `echo: cold extrusion prevented`.
+    fn linear_move(&mut self, io: &mut impl Io, w: &Words) {
         if let Some(f) = w.get(b'F') {
             self.feed_mm_s = f / 60.0;
         }
         let mut target = self.planner.position_steps;
-        for axis in 0..AXES {
-            if let Some(v) = w.get(AXIS_LETTERS[axis]) {
+        for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
+            if let Some(v) = w.get(letter) {
                 let relative = self.relative & (1 << axis) != 0;
                 self.position_mm[axis] = if relative { self.position_mm[axis] + v } else { v };
                 target[axis] = round_i32(self.position_mm[axis] * self.settings.steps_per_mm[axis]);
             }
+        }
+        let cold = self.heat.heaters[HOTEND0].temp_c < self.settings.extrude_min_c;
+        if target[E] != self.planner.position_steps[E] && cold {
+            self.planner.position_steps[E] = target[E];
+            line(io, b"echo: cold extrusion prevented");
         }
         self.steppers_enabled |= 0b1111;
         // Room was checked before the line was taken.

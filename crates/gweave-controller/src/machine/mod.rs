@@ -118,13 +118,12 @@ impl<'q> Controller<'q> {
     /// line and the line queue is full: offer it again after the next [`Controller::poll`].
     #[must_use = "a byte refused must be offered again, or the line it ends is lost"]
     pub fn receive(&mut self, byte: u8) -> bool {
-        let accepted = self.reader.push(byte);
         // The emergency parser (Marlin's `EMERGENCY_PARSER`): an `M112` acts before the lines
-        // queued ahead of it run.
-        if accepted && matches!(byte, b'\n' | b'\r') && self.reader.last_is_m112() {
+        // queued ahead of it run, even if the queue is full.
+        if matches!(byte, b'\n' | b'\r') && self.reader.current_is_m112() {
             self.emergency = true;
         }
-        accepted
+        self.reader.push(byte)
     }
 
     /// One turn of the main loop with the inputs read now.

@@ -35,6 +35,15 @@ impl Bench {
         Bench { t, x_times }
     }
 
+    /// The same with the hotend already at 200 °C (unheated, it cools slowly), hot enough to
+    /// extrude.
+    fn hot(settings: Settings) -> Bench {
+        let mut b = Bench::new(settings);
+        b.t.plant.temp_c[0] = 200.0;
+        b.run_ms(200);
+        b
+    }
+
     fn send(&mut self, text: &str) {
         self.t.send(text.as_bytes());
     }
@@ -135,7 +144,7 @@ fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
 
 #[test]
 fn a_move_makes_exact_step_counts() {
-    let mut b = Bench::new(Settings::DEFAULT);
+    let mut b = Bench::hot(Settings::DEFAULT);
     let start = b.t.steps;
     b.send("G91\nG1 X10.0125 Y-3.3 Z0.1 E1.5 F6000\nM400\nM114\n");
     b.run_until_ok(4, 2000);
@@ -150,8 +159,28 @@ fn a_move_makes_exact_step_counts() {
 }
 
 #[test]
-fn many_short_moves_add_up_exactly() {
+fn a_cold_hotend_does_not_extrude() {
     let mut b = Bench::new(Settings::DEFAULT);
+    b.run_ms(200);
+    b.take();
+    let start = b.t.steps;
+    b.send("G1 X1 E5 F600\nG1 X2 E6\nM400\nM114\n");
+    b.run_until_ok(4, 5000);
+    let t = b.take();
+    assert!(t.starts_with("echo: cold extrusion prevented\nok\necho: cold extrusion prevented\nok\n"), "{t}");
+    // X moved, E did not, and E counts as moved: hot again, E 7 extrudes 1 mm.
+    assert!(t.contains("X:2.00 Y:0.00 Z:0.00 E:6.00"), "{t}");
+    assert_eq!((b.t.steps[0] - start[0], b.t.steps[3] - start[3]), (160, 0));
+    b.t.plant.temp_c[0] = 200.0;
+    b.run_ms(200);
+    b.send("G1 E7\nM400\n");
+    b.run_until_ok(2, 5000);
+    assert_eq!(b.t.steps[3] - start[3], 93);
+}
+
+#[test]
+fn many_short_moves_add_up_exactly() {
+    let mut b = Bench::hot(Settings::DEFAULT);
     let start = b.t.steps;
     // A polygon of 0.5 mm segments with extrusion, as a slicer writes them.
     let mut text = String::from("G92 X0 Y0 E0\n");
@@ -363,8 +392,11 @@ fn m112_stops_everything_at_once() {
     b.send("M104 S200\nG1 X100 F600\n");
     b.run_ms(500);
     let before = b.t.steps[0];
-    // Queued behind a dwell, M112 still acts at once (the emergency parser).
-    b.send("G4 S10\nM112\n");
+    // Queued behind a dwell and a full line queue, M112 still acts at once (the emergency
+    // parser), its line refused or not.
+    for &byte in b"G4 S10\nG4 S1\nG4 S1\nG4 S1\nG4 S1\nM112\n" {
+        let _ = b.t.controller.receive(byte);
+    }
     b.run_ms(1);
     let t = b.take();
     assert!(t.ends_with("Error:Printer halted. kill() called!\n"), "{t}");

@@ -112,14 +112,10 @@ impl LineReader {
         self.count = 0;
     }
 
-    /// Whether the newest complete line is an `M112` (emergency stop), which must act at once
-    /// rather than in its turn.
-    pub fn last_is_m112(&self) -> bool {
-        if self.count == 0 {
-            return false;
-        }
-        let last = &self.queue[(usize::from(self.first) + usize::from(self.count) - 1) % LINE_QUEUE];
-        let bytes = last.bytes();
+    /// Whether the line being received (about to end) holds an `M112` (emergency stop), which
+    /// must act at once rather than in its turn, even when the queue is full.
+    pub fn current_is_m112(&self) -> bool {
+        let bytes = self.current.bytes();
         bytes.windows(5).any(|w| &w[..4] == b"M112" && !w[4].is_ascii_digit()) || bytes.ends_with(b"M112")
     }
 
@@ -165,6 +161,20 @@ mod tests {
         assert_eq!(got[0].0.len(), MAX_LINE);
         assert!(got[0].0.starts_with(b"N7 G1 X111"));
         assert_eq!(got[1], (b"M105".to_vec(), false));
+    }
+
+    #[test]
+    fn an_m112_is_seen_before_its_line_ends() {
+        let mut r = LineReader::new();
+        for &b in b"N5 M112*3" {
+            r.push(b);
+        }
+        assert!(r.current_is_m112());
+        r.push(b'\n');
+        for &b in b"M1120 ; M112" {
+            r.push(b);
+        }
+        assert!(!r.current_is_m112());
     }
 
     #[test]

@@ -10,6 +10,7 @@
 //!
 //! ```toml
 //! [firmware]
+//! kind = "marlin"              # the Marlin model; "gweave": gweave's own controller core
 //! eeprom = true                # EEPROM_SETTINGS: M500 M501 (a file next to the session)
 //! sdcard = true                # SDSUPPORT: M20-M30 M32 M524 M928
 //! long_filenames = true        # LONG_FILENAME_HOST_SUPPORT: M33, M20 L (EXTENDED_M20)
@@ -45,6 +46,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Firmware {
+    /// Which firmware the board runs.
+    pub kind: FirmwareKind,
     /// `EEPROM_SETTINGS`: `M500`/`M501` save and load the settings.
     pub eeprom: bool,
     /// `SDSUPPORT`: the SD card commands.
@@ -88,6 +91,19 @@ pub struct Firmware {
     pub m0: ProgramStop,
 }
 
+/// Which firmware the virtual board runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FirmwareKind {
+    /// The Marlin model of this crate (or Klipper's, by the profile's corners), with the build
+    /// options of this table.
+    #[default]
+    Marlin,
+    /// gweave's own controller core, the firmware of the ATmega2560 + RAMPS board
+    /// (`crate::core_board`, docs/firmware.md); the other options of this table are not read.
+    Gweave,
+}
+
 /// What `M0` (program stop) does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -103,6 +119,7 @@ pub enum ProgramStop {
 impl Default for Firmware {
     fn default() -> Self {
         Firmware {
+            kind: FirmwareKind::Marlin,
             eeprom: true,
             sdcard: true,
             long_filenames: true,
