@@ -3,9 +3,10 @@
 `gweave-board firmware/out/gweave-ramps.elf --pty LINK` runs the very image `make firmware`
 builds on an emulated ATmega2560 (libsimavr) wired as a printer; Printrun's printcore streams
 the start of a real Cura file to it with line numbers and checksums. The board's pins must end
-where the firmware's own planner says: the X, Y and Z positions counted on the STEP and DIR pins
+where the firmware's own planner says and where the same core on the host (`gweave sim` with
+`[firmware] kind = "gweave"`) ends: the X, Y and Z positions counted on the STEP and DIR pins
 (microsteps from the endstops the file's G28 homed against) equal the `Count` of the final
-`M114`, exactly.
+`M114` and the twin's end steps, exactly.
 
 Needs `make firmware` and the `gweave-board` binary (`cargo build -p gweave-board`; $GWEAVE_BOARD
 names it, as `make pytest` does).
@@ -15,6 +16,7 @@ import json
 import os
 import re
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -49,6 +51,23 @@ def board_binary() -> Path:
     return built
 
 
+def gweave_command() -> list:
+    """The CLI: $GWEAVE if set (a built binary), else the installed Python package."""
+    exe = os.environ.get("GWEAVE")
+    return [exe] if exe else [sys.executable, "-m", "gweave"]
+
+
+def twin_end_steps(cut: Path, tmp: Path) -> list:
+    """Where the same file ends on the controller core's twin on the host (`gweave sim` with the
+    firmware's default printer), in steps per axis."""
+    report = tmp / "twin.json"
+    machine = ROOT / "examples" / "machines" / "gweave-ramps.toml"
+    command = gweave_command() + ["sim", str(cut), "--machine", str(machine), "--report", str(report)]
+    r = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return json.loads(report.read_text())["end_steps"]
+
+
 def wait_for(condition, timeout_s: float, what: str) -> None:
     deadline = time.monotonic() + timeout_s
     while not condition():
@@ -74,6 +93,9 @@ def first_moves(source: Path, moves: int) -> list:
 
 def test_printcore_streams_a_cura_file_and_the_pins_agree_with_m114(data, tmp_path):
     binary = board_binary()
+    lines = first_moves(data / "cura" / "cura_torus.gcode", MOVES)
+    cut = tmp_path / "cut.gcode"
+    cut.write_text("\n".join(lines) + "\n")
     link, report, log = tmp_path / "ramps", tmp_path / "pins.json", tmp_path / "board.log"
     args = ["--pty", str(link), "--fast", "--report", str(report), "--seconds", "600", "--hotend-c", "214"]
     with open(log, "w") as err:
@@ -86,7 +108,6 @@ def test_printcore_streams_a_cura_file_and_the_pins_agree_with_m114(data, tmp_pa
         assert proc.poll() is None, log.read_text()
         host.connect(str(link), 250000)
         wait_for(lambda: host.online, 30, "printcore to see the board online")
-        lines = first_moves(data / "cura" / "cura_torus.gcode", MOVES)
         host.startprint(gcoder.LightGCode(lines))
         wait_for(lambda: not host.printing, 300, "the print to end")
         host.send_now("M400")
@@ -107,6 +128,8 @@ def test_printcore_streams_a_cura_file_and_the_pins_agree_with_m114(data, tmp_pa
     count = dict(re.findall(r"([XYZ]):(-?\d+)", m114.split(" Count ", 1)[1]))
     # The pins, microsteps from the endstops: where the firmware's planner says it is.
     assert pins["position_steps"][:3] == [int(count[a]) for a in "XYZ"], (pins, m114)
+    # The same core on the host ends on the same steps.
+    assert pins["position_steps"][:3] == twin_end_steps(cut, tmp_path)[:3], pins
     # The file printed something: the head moved and the extruder pushed filament.
     assert min(abs(p) for p in pins["position_steps"][:2]) > 1000, pins
     assert pins["net_steps"][3] > 0, pins
