@@ -123,7 +123,8 @@ def cat(
 
 
 def sim(path: PathLike, *, machine: Optional[PathLike] = None, fault: Sequence[str] = ()) -> Report:
-    """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML.
+    """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML or
+    a built-in profile's name (``"prusa-mk3"``, ``"klipper"``: ``gweave machine list``).
 
     ``fault`` injects heater faults as ``--fault`` does (``["hotend-cartridge-off@120s"]``).
     The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
