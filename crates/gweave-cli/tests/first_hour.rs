@@ -44,3 +44,42 @@ fn machine_klipper_is_a_built_in_profile_not_a_missing_file() {
     assert!(said.contains("reading klipperr: "), "{said}");
     assert!(said.contains("built in: marlin-ramps, prusa-mk3, klipper,"), "{said}");
 }
+
+/// `check` on a file whose wipe tower is off the bed printed one warning per move (40 364, 1 000
+/// of them line by line): each kind is one line with its count, range and lines.
+#[test]
+fn check_shows_a_wipe_tower_off_the_bed_as_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("tower.gcode");
+    let mut g = String::from("M104 S200\n;TYPE:Perimeter\nG1 X10 Y10 E1\n;TYPE:Wipe tower\n");
+    for i in 0..3000 {
+        g.push_str(&format!("G1 X{} Y20 E{}\n", 201 + i % 49, 2 + i));
+    }
+    std::fs::write(&file, g).unwrap();
+    let out = gweave(&["check", file.to_str().unwrap(), "--bed", "200,200,200"]);
+    let said = text(&out.stdout);
+    let name = file.display();
+    assert_eq!(
+        said.lines().next().unwrap(),
+        format!("{name}:5:4: warning: wipe tower moves outside the bed: X 201.000 .. 249.000 mm, 3000 moves, lines 5 .. 3004")
+    );
+    assert!(said.contains("3004 lines, 0 errors, 3000 warnings"), "{said}");
+    assert_eq!(said.lines().count(), 3, "{said}");
+}
+
+/// purge-shift listed each shortfall as a warning (95 lines on a user's file): one line per
+/// kind, and `-q` keeps them (docs/pipeline.md: -q hides the summary only).
+#[test]
+fn purge_shift_groups_its_shortfalls_and_keeps_them_with_q() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_file = dir.path().join("cone.gcode");
+    let cone = fixture("slic3r/slic3r_cone_2tool.gcode");
+    let out = gweave(&["purge-shift", &cone, "-o", out_file.to_str().unwrap(), "--purge-mm", "40", "-q"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let said = text(&out.stderr);
+    let warnings: Vec<&str> = said.lines().filter(|l| l.starts_with("gweave: warning: ")).collect();
+    assert!(!warnings.is_empty(), "-q hid the warnings: {said}");
+    assert!(warnings.len() <= 4, "{said}");
+    assert!(warnings.iter().any(|w| w.contains(" changes purge short by ")), "{said}");
+    assert!(out.stdout.is_empty());
+}

@@ -8,6 +8,7 @@ use anyhow::Result;
 use clap::Args;
 use gweave::bed::Bed;
 use gweave::check::{check_file, CheckOptions, CheckReport};
+use gweave::gcode::diag::Finding;
 use gweave::range::FEED_MM_MIN;
 use gweave::total::CheckTotal;
 
@@ -73,17 +74,33 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
     Ok(if total.failed_files > 0 { ExitCode::FAILURE } else { ExitCode::SUCCESS })
 }
 
-/// A file's findings, then (without -q) the bed used and its counts.
+/// A file's findings, one line per kind (with how many and where), then (without -q) the bed
+/// used and its counts.
 fn print_file(out: &mut dyn Write, input: &Path, report: &CheckReport, quiet: bool) -> io::Result<()> {
     let name = input.display();
-    for f in &report.findings {
+    for g in &report.groups {
+        let f = &g.first;
         let level = match f.severity {
             gweave::gcode::diag::Severity::Error => "error",
             gweave::gcode::diag::Severity::Warning => "warning",
         };
-        writeln!(out, "{name}:{}:{}: {level}: {}", f.line, f.diagnostic.column, f.diagnostic.finding)?;
+        write!(out, "{name}:{}:{}: {level}: ", f.line, f.diagnostic.column)?;
+        match (&f.diagnostic.finding, g.range_mm) {
+            (Finding::OutsideBed { axis, .. }, Some([lo, hi])) if g.count > 1 => {
+                let what = g.feature.map(|f| format!("{} ", f.name().replace('_', " "))).unwrap_or_default();
+                writeln!(
+                    out,
+                    "{what}moves outside the bed: {axis} {lo:.3} .. {hi:.3} mm, {} moves, lines {} .. {}",
+                    g.count, f.line, g.last_line
+                )?;
+            }
+            (finding, _) if g.count > 1 => {
+                writeln!(out, "{finding} ({} lines like it, the last at line {})", g.count, g.last_line)?
+            }
+            (finding, _) => writeln!(out, "{finding}")?,
+        }
     }
-    let shown = report.findings.len() as u64;
+    let shown: u64 = report.groups.iter().map(|g| g.count).sum();
     if shown < report.errors + report.warnings {
         writeln!(out, "... {} more findings not shown", report.errors + report.warnings - shown)?;
     }
