@@ -83,3 +83,79 @@ fn purge_shift_groups_its_shortfalls_and_keeps_them_with_q() {
     assert!(warnings.iter().any(|w| w.contains(" changes purge short by ")), "{said}");
     assert!(out.stdout.is_empty());
 }
+
+/// `preview --layer 5000` wrote a blank picture and exited 0.
+#[test]
+fn preview_past_the_last_layer_fails_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("l.png");
+    let out = gweave(&[
+        "preview",
+        &fixture("cura/cura_dual.gcode"),
+        "-o",
+        png.to_str().unwrap(),
+        "--layer",
+        "5000",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("layer 5000 is past the file's last layer, 203"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert!(!png.exists());
+}
+
+/// A stack of images has no layer height: it was printed at 0.1 mm without a word (a voxel
+/// stack came out squashed tenfold).
+#[test]
+fn a_bmp_stack_hints_at_its_layer_height() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_file = dir.path().join("badge.gcode");
+    let layers = root().join("examples/raster/layers");
+    let out = gweave(&[
+        "raster",
+        layers.to_str().unwrap(),
+        "-o",
+        out_file.to_str().unwrap(),
+        "--pixel-mm",
+        "0.2",
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let said = text(&out.stderr);
+    assert!(said.contains("images carry no layer height: the layers are 0.1 mm apart"), "{said}");
+    assert!(said.contains("--layer-height 0.2000 (the pixel size given)"), "{said}");
+    let given = gweave(&[
+        "raster",
+        layers.to_str().unwrap(),
+        "-o",
+        out_file.to_str().unwrap(),
+        "--layer-height",
+        "0.2",
+        "-q",
+    ]);
+    assert!(text(&given.stderr).is_empty(), "{}", text(&given.stderr));
+}
+
+/// `rotary wrap --helical` said "seam at flat y = 0": a helical wrap has no seam.
+#[test]
+fn the_helical_wrap_summary_says_it_has_no_seam() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_file = dir.path().join("sleeve.gcode");
+    let plate = fixture("rotary/plate.gcode");
+    let out = gweave(&[
+        "rotary",
+        "wrap",
+        &plate,
+        "-o",
+        out_file.to_str().unwrap(),
+        "--mandrel-diameter",
+        "30",
+        "--helical",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let said = text(&out.stdout);
+    assert!(!said.contains("at flat y = 0"), "{said}");
+    assert!(said.contains("  seam            none: each layer is one turn of a helix"), "{said}");
+}

@@ -69,8 +69,8 @@ pub struct HtmlOptions {
     pub title: String,
     pub colour_by: ColourBy,
     pub view: ViewKind,
-    /// Top layer of the range shown first (the last layer when `None`).
-    pub layer: Option<u32>,
+    /// The layer range shown first, first and last (every layer when `None`).
+    pub layers: Option<[u32; 2]>,
     pub tool_colours: Vec<Srgb8>,
 }
 
@@ -87,7 +87,7 @@ pub struct HtmlFile<'a> {
 #[derive(Serialize)]
 struct Payload<'a> {
     title: &'a str,
-    layer: Option<u32>,
+    layers: Option<[u32; 2]>,
     view: String,
     colour_by: &'static str,
     features: Vec<&'static str>,
@@ -142,7 +142,7 @@ pub fn write_html(files: &[HtmlFile<'_>], options: &HtmlOptions) -> String {
     let mut blocks = Blocks::default();
     let payload = Payload {
         title: &options.title,
-        layer: options.layer,
+        layers: options.layers,
         view: options.view.to_string(),
         colour_by: options.colour_by.name(),
         features: ALL_FEATURES.iter().map(|f| f.name()).collect(),
@@ -350,7 +350,7 @@ mod tests {
             title: "a</script>b".into(),
             colour_by: ColourBy::Tool,
             view: ViewKind::Top,
-            layer: None,
+            layers: None,
             tool_colours: vec![],
         };
         let html = write_html(&[file(&tp)], &options);
@@ -386,7 +386,7 @@ mod tests {
             title: "c".into(),
             colour_by: ColourBy::Tool,
             view: ViewKind::Iso,
-            layer: None,
+            layers: None,
             tool_colours: vec![],
         };
         let f = HtmlFile { changed: Some(vec![true, false, true]), ..file(&tp) };
@@ -427,7 +427,7 @@ mod tests {
             title: "m".into(),
             colour_by: ColourBy::Mix,
             view: ViewKind::Top,
-            layer: None,
+            layers: None,
             tool_colours: vec![],
         };
         let html = write_html(&[file(&few)], &options);
