@@ -195,7 +195,8 @@ impl PreviewOptions {
             travel: keep_all_layers || self.view.travel,
             min_len_mm: self.min_len_mm.unwrap_or_else(|| ToolpathOptions::min_len_for_file_size(bytes)),
             max_segments: Some(MAX_SEGMENTS),
-            mix: (self.view.colour_by == ColourBy::Mix)
+            // The viewer page offers every colouring, mix included, whichever it opens on.
+            mix: (keep_all_layers || self.view.colour_by == ColourBy::Mix)
                 .then(|| self.mix.clone().unwrap_or_else(MixColours::cmyw)),
             printhead: self.printhead.clone().unwrap_or_default(),
             rotary,
