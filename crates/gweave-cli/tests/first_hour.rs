@@ -168,11 +168,15 @@ fn check_takes_the_bed_of_a_machine_profile() {
     let file = dir.path().join("purge-line.gcode");
     // Prusa's purge line runs at Y -3, on the MK3S's bed (Y from -4), off a bed from Y 0.
     std::fs::write(&file, "M104 S215\nG1 Y-3.0 F1000\nG1 X60 E9\nG1 X250 Y200 Z200\n").unwrap();
-    let check = |machine: &str| text(&gweave(&["check", file.to_str().unwrap(), "--machine", machine]).stdout);
+    let check =
+        |machine: &str| text(&gweave(&["check", file.to_str().unwrap(), "--machine", machine]).stdout);
     let mk3 = check("prusa-mk3");
     assert!(mk3.contains("bed X 0 .. 255, Y -4 .. 212.5, Z 0 .. 210 mm"), "{mk3}");
     assert!(mk3.contains("4 lines, 0 errors, 0 warnings"), "{mk3}");
     let ramps = check("marlin-ramps");
-    assert!(ramps.contains(":2:4: warning: moves outside the bed: Y=-3.000 mm, 2 moves, lines 2 .. 3"), "{ramps}");
+    assert!(
+        ramps.contains(":2:4: warning: moves outside the bed: Y=-3.000 mm, 2 moves, lines 2 .. 3"),
+        "{ramps}"
+    );
     assert!(ramps.contains(":4:4: warning: move outside the bed: X=250.000 mm"), "{ramps}");
 }
