@@ -42,6 +42,7 @@ pub const BUILTIN: &[BuiltinProfile] = &[
     example!("marlin-ramps"),
     example!("prusa-mk3"),
     example!("klipper"),
+    example!("dual-extruder"),
     example!("mixing-4in"),
     example!("rotary"),
     example!("inkjet-c6602"),

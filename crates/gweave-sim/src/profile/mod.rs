@@ -493,8 +493,24 @@ impl MachineProfile {
 
 #[cfg(test)]
 mod tests {
+
+    /// docs/machine.md says every key is optional, but a `[[thermal.hotends]]` entry failed
+    /// with "missing field `heat_capacity_j_k`" until all six were given.
+    #[test]
+    fn a_hotend_entry_takes_the_default_blocks_missing_keys() {
+        let p = MachineProfile::from_toml_str(
+            "[[thermal.hotends]]\n[[thermal.hotends]]\npower_w = 30.0\n[thermal.bed]\npower_w = 300.0\n",
+        )
+        .unwrap();
+        let block = HeaterConfig::hotend_40w();
+        assert_eq!(p.thermal.hotends, [block, HeaterConfig { power_w: 30.0, ..block }]);
+        assert_eq!(p.thermal.bed, Some(HeaterConfig { power_w: 300.0, ..HeaterConfig::bed_200w() }));
+        let typo = MachineProfile::from_toml_str("[[thermal.hotends]]\npower = 30.0\n").unwrap_err();
+        assert!(typo.to_string().contains("unknown field `power`"), "{typo}");
+    }
     use super::*;
     use crate::motion::limits::CornerMode;
+    use crate::thermal::heater::HeaterConfig;
 
     #[test]
     fn default_is_ramps_marlin() {
