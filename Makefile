@@ -1,5 +1,5 @@
 # gweave: two set-up commands for a fresh machine.
-#   make demo   installs what is needed, then runs the main jobs on bundled real slicer output
+#   make demo   builds the command line, then runs the main jobs on bundled real slicer output
 #   make test   installs what is needed, then runs every test (cargo, pytest, end to end)
 #   make bench  benchmarks on large real files, each figure beside a reference from the same run
 #   make docs-images  draws the pictures of README.md and docs/ again with the current code
@@ -14,7 +14,7 @@ CARGO := cargo
 GWEAVE := target/release/gweave
 OUT := out
 
-.PHONY: demo test bench deps rust-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
+.PHONY: demo test bench deps rust-deps python-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
 .PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-test
 
 deps: rust-deps py-deps browser-deps cura-deps firmware-deps
@@ -22,10 +22,17 @@ deps: rust-deps py-deps browser-deps cura-deps firmware-deps
 rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
 
-py-deps: $(VENV)/.deps
-$(VENV)/.deps: crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt crates/gweave-py/requirements-octoprint.txt
+# What the Python package needs to be built and used (`make python`): maturin and NumPy.
+python-deps: $(VENV)/.python-deps
+$(VENV)/.python-deps: crates/gweave-py/requirements.txt
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -r crates/gweave-py/requirements.txt
+	touch $@
+
+# Everything the tests need on top (pytest, mypy, the hosts and OctoPrint's web server).
+py-deps: $(VENV)/.deps
+$(VENV)/.deps: $(VENV)/.python-deps crates/gweave-py/requirements-dev.txt crates/gweave-py/requirements-host.txt crates/gweave-py/requirements-octoprint.txt
 	$(PY) -m pip install -q -r crates/gweave-py/requirements-dev.txt
 	# OctoPrint with its dependencies (a whole web server), before Printrun, whose pins it would
 	# otherwise fight: the host of test_octoprint_serve.py and of the plugin's test_octoprint.py.
@@ -84,7 +91,7 @@ build: rust-deps
 build-debug: rust-deps
 	$(CARGO) build -p gweave-cli
 
-python: py-deps
+python: python-deps
 	$(VENV)/bin/maturin develop --release -q -m crates/gweave-py/Cargo.toml
 
 python-debug: py-deps
@@ -113,7 +120,9 @@ e2e: build-debug python-debug
 test: deps firmware lint cargo-test pytest e2e
 	@echo "make test: all passed"
 
-demo: build python
+# The demo runs the command line only: one release build of the engine, no Python environment
+# (README.md says how long it takes from a fresh clone).
+demo: build
 	bash examples/demo.sh $(GWEAVE) $(OUT)
 
 bench: build python

@@ -2,8 +2,9 @@
 #
 # Install: copy this file into Cura's `scripts` folder (Help > Show Configuration Folder, then
 # `scripts/`; create it if missing) and restart Cura. It needs the gweave Python package in the
-# Python that runs Cura (`pip install gweave` or `pip install ./crates/gweave-py`); when Cura's own
-# Python cannot import it (the AppImage), the `gweave` command on PATH is run instead.
+# Python that runs Cura, from a checkout of gweave (`pip install ./crates/gweave-py`: the `gweave`
+# package on PyPI is not ours, docs/integrations.md); when Cura's own Python cannot import it
+# (the AppImage), the `gweave` command on PATH is run instead.
 #
 # Cura hands a post-processing script the G-code as a list of strings (the header, the start
 # G-code, one string per layer, the end G-code) and writes their concatenation. This script

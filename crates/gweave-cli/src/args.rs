@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
+use gweave_sim::builtin::MachineSource;
 use gweave_sim::MachineProfile;
 
-use crate::common::load_or_default;
 use crate::progress::Bar;
 
 /// `-q`: quiet on standard output and standard error alike, except for what went wrong. Part of
@@ -51,8 +51,9 @@ impl Lenient {
 /// `--machine`: the virtual printer's profile, for the commands that run it (`sim`, `serve`).
 #[derive(Args, Debug, Clone, Default)]
 pub struct MachineArg {
-    /// Machine profile (TOML, see docs/machine.md); default: a RAMPS 1.4 printer on Marlin.
-    #[arg(long = "machine", id = "machine", value_name = "TOML")]
+    /// Machine profile: a TOML file (docs/machine.md) or a built-in profile's name
+    /// (`gweave machine list`: prusa-mk3, klipper, ...); default: a RAMPS 1.4 printer on Marlin.
+    #[arg(long = "machine", id = "machine", value_name = "TOML|NAME")]
     pub path: Option<PathBuf>,
 }
 
@@ -60,7 +61,20 @@ impl MachineArg {
     /// The profile, or the built-in printer without `--machine`. Files the profile names (a
     /// thermistor table) are read from its folder.
     pub fn load(&self) -> Result<MachineProfile> {
-        let folder = self.path.as_deref().and_then(Path::parent).unwrap_or(Path::new(""));
-        load_or_default(self.path.as_ref(), |text| MachineProfile::from_toml_in(text, folder))
+        self.path.as_deref().map_or_else(|| Ok(MachineProfile::default()), load_machine)
+    }
+}
+
+/// A `--machine` value: a profile file, or a built-in profile's name where no such file exists.
+pub fn load_machine(value: &Path) -> Result<MachineProfile> {
+    match MachineSource::of(value) {
+        MachineSource::Builtin(b) => Ok(b.profile()?),
+        MachineSource::File(path) => {
+            let folder = path.parent().unwrap_or(Path::new(""));
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| anyhow::anyhow!(gweave_sim::builtin::not_found(path, &e)))?;
+            MachineProfile::from_toml_in(&text, folder)
+                .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), gweave::error::with_causes(&e)))
+        }
     }
 }

@@ -89,3 +89,30 @@ fn stats_and_sim_read_every_fixture_the_same_way() {
     }
     assert_eq!(linuxcnc, 1, "the mach3 fixture is among them");
 }
+
+/// `sim` and `stats` gave two filament figures for one tool (T0 1428.03 against 1448.03 mm on
+/// the Cura two-tool file) with no word why: the printer counts the motor's net feed, `stats`
+/// what left the nozzle. The difference is what stayed retracted at the end, which `sim` now
+/// reports per tool and shows beside the figure.
+#[test]
+fn sim_filament_plus_what_stayed_retracted_is_stats_figure_per_tool() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/cura/cura_dual.gcode");
+    let p = data.to_str().unwrap();
+    let stats = json(&["stats", p, "--json", "-q"]);
+    let sim = json(&["sim", p, "--machine", "dual-extruder", "--json", "-q"]);
+    let fed = numbers(&sim["filament_mm"]);
+    let back = numbers(&sim["retracted_at_end_mm"]);
+    let out: Vec<f64> =
+        stats["filament"].as_array().unwrap().iter().map(|t| t["extruded_mm"].as_f64().unwrap()).collect();
+    assert_eq!((fed.len(), back.len(), out.len()), (2, 2, 2));
+    for t in 0..2 {
+        assert!(
+            (fed[t] + back[t] - out[t]).abs() < 1e-6 * out[t],
+            "T{t}: {} + {} vs {}",
+            fed[t],
+            back[t],
+            out[t]
+        );
+    }
+    assert!((back[0] - 20.0).abs() < 1e-9 && (back[1] - 6.5).abs() < 1e-9, "{back:?}");
+}

@@ -14,12 +14,18 @@ use crate::to_json;
 
 // --- gweave-sim: the virtual printer ---
 
+/// `machine=`: a profile file or a built-in profile's name (`gweave machine list`).
 fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::MachineProfile> {
-    match machine {
-        None => Ok(gweave_sim::MachineProfile::default()),
-        Some(path) => {
+    use gweave_sim::builtin::MachineSource;
+    let Some(path) = machine else {
+        return Ok(gweave_sim::MachineProfile::default());
+    };
+    match MachineSource::of(&path) {
+        MachineSource::Builtin(b) => b.profile().map_err(|e| PyValueError::new_err(e.to_string())),
+        MachineSource::File(_) => {
             let text = std::fs::read_to_string(&path).map_err(|e| os_error(&path, &e))?;
-            gweave_sim::MachineProfile::from_toml_str(&text)
+            let folder = path.parent().unwrap_or(std::path::Path::new(""));
+            gweave_sim::MachineProfile::from_toml_in(&text, folder)
                 .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
         }
     }

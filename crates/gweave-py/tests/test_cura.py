@@ -93,3 +93,10 @@ def test_cura_script_falls_back_to_the_gweave_command(cura_python, data, tmp_pat
     assert r.returncode == 0, r.stderr[-3000:]
     gweave.purge_shift(fixture, tmp_path / "cli.gcode", purge_mm=2.5)
     assert (tmp_path / "cura.gcode").read_bytes() == (tmp_path / "cli.gcode").read_bytes()
+
+
+def test_the_scripts_install_line_names_no_pypi_package():
+    # The header said `pip install gweave`: that name on PyPI is not ours (docs/integrations.md).
+    header = (ROOT / "integrations" / "cura" / "Gweave.py").read_text().split("\nimport ")[0]
+    assert "pip install gweave" not in header
+    assert "pip install ./crates/gweave-py" in header

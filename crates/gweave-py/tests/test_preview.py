@@ -28,10 +28,10 @@ def test_preview_report_names_the_colours(data, tmp_path):
     assert png == gweave.preview(data / "cura" / "cura_dual.gcode", layer=60, size=(400, 300))
 
 
-def test_preview_beyond_the_last_layer_is_blank(data):
-    png = gweave.preview(data / "cura" / "cura_dual.gcode", layers=(500, 600), size=(200, 100))
-    w, h, px = read_png(png)
-    assert set(px) == {BACKGROUND}
+def test_preview_beyond_the_last_layer_names_the_last_layer(data):
+    # It was a blank picture: a user asking for layer 500 of a 204-layer file learnt nothing.
+    with pytest.raises(ValueError, match=r"layer 500 is past the file's last layer, 203 \(layers count from 0\)"):
+        gweave.preview(data / "cura" / "cura_dual.gcode", layers=(500, 600), size=(200, 100))
 
 
 def test_preview_writes_svg_and_html(data, tmp_path):

@@ -23,6 +23,19 @@ def test_sim_with_a_machine_profile(data: Path) -> None:
     assert r["time"]["overhead_s"] > 0.25
 
 
+def test_machine_by_the_name_of_a_built_in_profile(data: Path, tmp_path: Path, monkeypatch) -> None:
+    # The example profiles were not installed with the package: `machine="klipper"` found no file.
+    monkeypatch.chdir(tmp_path)
+    path = data / "cura" / "cura_torus.gcode"
+    by_name = gweave.estimate(path, machine="prusa-mk3")
+    assert by_name["machine"] == "Prusa i3 MK3S"
+    assert by_name == gweave.estimate(path, machine=MACHINES / "prusa-mk3.toml")
+    assert gweave.sim(path, machine="klipper")["machine"] == "Klipper cartesian"
+    # A file of that name wins over the built-in profile.
+    (tmp_path / "klipper").write_text('name = "mine"\n')
+    assert gweave.estimate(path, machine="klipper")["machine"] == "mine"
+
+
 def test_estimate_plans_like_the_virtual_printer(data: Path) -> None:
     path = data / "cura" / "cura_torus.gcode"
     klipper = MACHINES / "klipper.toml"

@@ -200,3 +200,21 @@ def test_viewer_on_the_benchmark_file_first_picture_and_orbit(tmp_path, browser)
     assert_framed(browser.screenshot(tmp_path / "big.png"))
     assert first_ms < 3000
     assert orbit["fps"] > 10, "16-25 frames/s under load, see docs/performance.md"
+
+
+def test_viewer_mix_colouring_names_the_users_mixes_on_a_page_made_by_tool(data, tmp_path, browser):
+    # The page held no mix colours unless made with --colour-by mix: choosing "mix" showed the
+    # tool colours with a T0 legend; its legend then said "predicted #ef4680", not "Pink".
+    mixed = tmp_path / "seed.gcode"
+    gweave.mix(data / "cura" / "cura_torus.gcode", mixed, config=ROOT / "examples" / "mix" / "seed_layers.toml")
+    page = tmp_path / "seed.html"
+    gweave.preview(mixed, output=page)
+    browser.open(page, "colour=mix")
+    legend = browser.eval("document.getElementById('legend').innerText")
+    assert "Orange" in legend and "Pink" in legend, legend
+    assert "T0" not in legend and "predicted" not in legend, legend
+    # A plain slicer file says it has no mix to show.
+    plain = tmp_path / "plain.html"
+    gweave.preview(data / "cura" / "cura_torus.gcode", output=plain)
+    browser.open(plain, "colour=mix")
+    assert "no mixing commands" in browser.eval("document.getElementById('legend').innerText")

@@ -60,6 +60,7 @@ pub use motion::marlin_limits::{ExtruderLimits, MarlinCorners};
 pub use motion::planner::{PlannedBlock, Planner};
 pub use motion::slicer_limits::slicer_limits;
 pub use motion::stepper::{BresenhamWalk, Steppers};
+pub use profile::builtin;
 pub use profile::firmware::{Firmware, FirmwareKind, ProgramStop};
 pub use profile::m503::from_m503;
 pub use profile::{FaultSpec, Inkjet, MachineProfile, MachineProfileError};

@@ -19,7 +19,6 @@
 //! assert_eq!(found.bed.y_mm, [-4.0, 210.0]);
 //! ```
 
-use std::collections::BTreeMap;
 use std::fmt;
 use std::str::FromStr;
 
@@ -108,7 +107,7 @@ impl Bed {
     /// them), or `None` when they give none.
     pub fn from_settings(text: &[u8]) -> Option<SlicerBed> {
         let text = String::from_utf8_lossy(text);
-        let s = settings(&text);
+        let s = crate::gcode::ends::settings(&text, &BED_KEYS);
         let z =
             |key: &str| s.get(key).and_then(|v| v.parse::<f64>().ok()).filter(|z| BED_SIZE_MM.contains(*z));
         if let Some(shape) = s.get("bed_shape") {
@@ -146,30 +145,15 @@ impl Bed {
     }
 }
 
-/// The bed settings in `text`: `; key = value` comment lines (the PrusaSlicer family, Cura
-/// start G-code) and Cura's `;SETTING_3` document, whose lines are joined and its escaped
-/// newlines undone. The last value of a key wins, as the footer comes after the header.
-fn settings(text: &str) -> BTreeMap<&'static str, String> {
-    const KEYS: [&str; 6] = [
-        "bed_shape",
-        "max_print_height",
-        "machine_width",
-        "machine_depth",
-        "machine_height",
-        "machine_center_is_zero",
-    ];
-    let cura: String = text.lines().filter_map(|l| l.strip_prefix(";SETTING_3 ")).collect();
-    let cura = cura.replace("\\\\n", "\n").replace("\\n", "\n");
-    let comments = text.lines().filter_map(|l| l.trim().strip_prefix(';'));
-    let mut found = BTreeMap::new();
-    for line in comments.chain(cura.lines()) {
-        let Some((k, v)) = line.split_once('=') else { continue };
-        if let Some(key) = KEYS.iter().find(|key| **key == k.trim()) {
-            found.insert(*key, v.trim().trim_end_matches(['"', '}', ',']).trim().to_owned());
-        }
-    }
-    found
-}
+/// The settings a bed is read from.
+const BED_KEYS: [&str; 6] = [
+    "bed_shape",
+    "max_print_height",
+    "machine_width",
+    "machine_depth",
+    "machine_height",
+    "machine_center_is_zero",
+];
 
 impl FromStr for Bed {
     type Err = BedError;

@@ -12,6 +12,7 @@ use crate::error::{Error, Result};
 use crate::firmware::Firmware;
 use crate::gcode::diag::{Diagnostic, Finding, Severity};
 use crate::gcode::flavour::flavour_of_comment;
+use crate::gcode::layers::Feature;
 use crate::gcode::line::{Command, Value};
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
@@ -58,6 +59,45 @@ pub struct LineFinding {
     pub severity: Severity,
 }
 
+/// Findings of one kind, shown as one line: a wipe tower off the bed is thousands of moves, a
+/// file sent with the wrong checksums thousands of lines, and a user needs to read each once.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct FindingGroup {
+    /// The first finding of the kind.
+    pub first: LineFinding,
+    /// How many there are, the first included.
+    pub count: u64,
+    /// The line of the last one.
+    pub last_line: u64,
+    /// Moves off the bed: the lowest and highest position reached on the axis, mm.
+    pub range_mm: Option<[f64; 2]>,
+    /// Moves off the bed: the feature the slicer said they print (`wipe_tower`), if any.
+    pub feature: Option<Feature>,
+}
+
+/// What makes two findings one kind: the finding, the axis or command it names, and for moves
+/// off the bed the feature they print (a wipe tower apart from a skirt).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+struct GroupKey {
+    kind: std::mem::Discriminant<Finding>,
+    detail: String,
+    feature: Feature,
+}
+
+impl GroupKey {
+    fn of(finding: &Finding, feature: Feature) -> Self {
+        let (detail, feature) = match finding {
+            Finding::OutsideBed { axis, .. } => (axis.to_string(), feature),
+            Finding::UnknownCommand { command } => (command.clone(), Feature::Unknown),
+            Finding::MalformedNumber { letter }
+            | Finding::NotFinite { letter }
+            | Finding::MissingValue { letter } => (letter.to_string(), Feature::Unknown),
+            _ => (String::new(), Feature::Unknown),
+        };
+        GroupKey { kind: std::mem::discriminant(finding), detail, feature }
+    }
+}
+
 /// The lint's result.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct CheckReport {
@@ -67,8 +107,11 @@ pub struct CheckReport {
     pub errors: u64,
     /// Warning-level findings.
     pub warnings: u64,
-    /// Every finding, in file order.
+    /// Every finding, in file order (the first [`CheckOptions::max_findings`]).
     pub findings: Vec<LineFinding>,
+    /// The findings by kind, in the order each kind first appears (at most
+    /// [`CheckOptions::max_findings`] kinds; all findings are counted).
+    pub groups: Vec<FindingGroup>,
     /// The bed moves were held to, if any.
     pub bed: Option<Bed>,
     /// Where that bed came from: `given`, or the file's settings used (`bed_shape = ...`).
@@ -99,6 +142,10 @@ pub struct CheckPass {
     cold_reported: bool,
     /// The file says it is for Ultimaker's Griffin firmware (Cura's `;FLAVOR:Griffin`).
     griffin: bool,
+    /// Each kind's place in `report.groups`.
+    group_of: std::collections::HashMap<GroupKey, usize>,
+    /// The feature of the line being checked.
+    feature: Feature,
 }
 
 impl CheckPass {
@@ -115,8 +162,35 @@ impl CheckPass {
             Severity::Error => self.report.errors += 1,
             Severity::Warning => self.report.warnings += 1,
         }
+        let key = GroupKey::of(&diagnostic.finding, self.feature);
+        let value_mm = match diagnostic.finding {
+            Finding::OutsideBed { value_mm, .. } => Some(value_mm),
+            _ => None,
+        };
+        let finding = LineFinding { line, diagnostic, severity };
+        match self.group_of.get(&key) {
+            Some(&i) => {
+                let g = &mut self.report.groups[i];
+                g.count += 1;
+                g.last_line = line;
+                if let (Some([lo, hi]), Some(v)) = (&mut g.range_mm, value_mm) {
+                    (*lo, *hi) = (lo.min(v), hi.max(v));
+                }
+            }
+            None if self.report.groups.len() < self.options.max_findings => {
+                self.group_of.insert(key.clone(), self.report.groups.len());
+                self.report.groups.push(FindingGroup {
+                    first: finding.clone(),
+                    count: 1,
+                    last_line: line,
+                    range_mm: value_mm.map(|v| [v, v]),
+                    feature: value_mm.and(Some(key.feature)).filter(|f| *f != Feature::Unknown),
+                });
+            }
+            None => {}
+        }
         if self.report.findings.len() < self.options.max_findings {
-            self.report.findings.push(LineFinding { line, diagnostic, severity });
+            self.report.findings.push(finding);
         }
     }
 }
@@ -133,6 +207,7 @@ impl Pass for CheckPass {
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
         let n = ctx.line.number;
         self.report.lines = n;
+        self.feature = ctx.state.structure.feature;
         let block = ctx.block;
         for d in &block.diagnostics {
             self.add(n, d.clone());
@@ -358,6 +433,47 @@ mod tests {
         assert_eq!(found, [(2, "unknown command G280".into()), (3, "unknown command G281".into())]);
         let found = findings(";FLAVOR:Griffin\nG280\nG281\n");
         assert_eq!(found, [(3, "unknown command G281".to_string())]);
+    }
+
+    /// A wipe tower off a 200 mm bed printed 40 364 warnings, one per move, 1 000 of them line
+    /// by line: they are one group, with the range the tower reaches and where it is.
+    #[test]
+    fn a_wipe_tower_off_the_bed_is_one_finding_group_not_a_flood() {
+        let mut text = String::from("M104 S200\n;TYPE:Perimeter\nG1 X10 Y10 E1\n;TYPE:Wipe tower\n");
+        for i in 0..2000 {
+            text.push_str(&format!("G1 X{} Y20 E{}\n", 180 + i % 70, 2 + i));
+        }
+        text.push_str(";TYPE:Skirt/Brim\nG1 X230 Y5 E3000\nG1 X231 Y5 E3001\nG13\nG13\n");
+        let options = CheckOptions { bed: Some("200,200,200".parse().unwrap()), ..Default::default() };
+        let mut pass = CheckPass::new(options);
+        drive_reader(
+            text.as_bytes(),
+            Path::new("t.gcode"),
+            None,
+            Default::default(),
+            Strictness::Lenient,
+            &mut Quiet,
+            &mut pass,
+            &mut io::sink(),
+        )
+        .unwrap();
+        let groups: Vec<_> = pass
+            .report
+            .groups
+            .iter()
+            .map(|g| (g.first.line, g.count, g.last_line, g.range_mm, g.feature))
+            .collect();
+        assert_eq!(
+            groups,
+            [
+                // X 200 is on the bed's edge: X 201 .. 249 are off it, 49 of every 70 moves.
+                (26, 1391, 2004, Some([201.0, 249.0]), Some(Feature::WipeTower)),
+                (2006, 2, 2007, Some([230.0, 231.0]), Some(Feature::Skirt)),
+                (2008, 2, 2009, None, None),
+            ]
+        );
+        assert_eq!(pass.report.warnings, 1395);
+        assert_eq!(pass.report.findings.len(), 1000);
     }
 
     /// An arc whose ends are on the bed but whose bulge is not.

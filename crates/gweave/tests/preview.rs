@@ -85,17 +85,20 @@ fn the_two_tools_of_cura_dual_draw_in_their_own_colours_where_they_print() {
     assert_eq!(decode(&png).unwrap(), img);
 }
 
+/// Layers past the last: the drawing is blank, and a preview refuses them, naming the last
+/// layer (a blank picture with exit 0 told a user nothing).
 #[test]
-fn layers_beyond_the_last_render_blank() {
+fn layers_beyond_the_last_draw_blank_and_a_preview_refuses_them() {
     let tp = Toolpath::from_file(&dual(), ToolpathOptions { travel: false, ..ToolpathOptions::default() })
         .unwrap();
     assert_eq!(tp.layer_count(), 204);
     let view =
         ViewOptions { layers: Some(204..=300), width_px: 320, height_px: 240, ..ViewOptions::default() };
-    let png = preview(&dual(), None, Format::Png, &options(view)).unwrap();
-    let img = decode(&png).unwrap();
+    let img = rasterise(&gweave::render::view::draw(&tp, &view));
     assert_eq!((img.width, img.height), (320, 240));
     assert!(img.rgba.chunks_exact(4).all(|p| p[..3] == BACKGROUND), "all background");
+    let err = preview(&dual(), None, Format::Png, &options(view)).err().map(|e| e.to_string());
+    assert_eq!(err.as_deref(), Some("layer 204 is past the file's last layer, 203 (layers count from 0)"));
 }
 
 #[test]
@@ -250,7 +253,7 @@ fn html_embeds_every_segment_and_the_stats() {
 
 /// What `gweave preview` says it drew: the layers (clipped to the file's `;LAYER:0` to `;LAYER:203`;
 /// its `;LAYER_COUNT:205` counts one more than Cura writes), the lines in the
-/// picture, the legend; the whole file in the viewer page; nothing for layers the file lacks.
+/// picture, the legend; the whole file in the viewer page; an error for layers the file lacks.
 #[test]
 fn the_report_says_what_the_preview_shows() {
     let (d, _) = draw(&dual(), None, layer(60));
@@ -269,9 +272,17 @@ fn the_report_says_what_the_preview_shows() {
     let tail = ViewOptions { layers: Some(200..=300), ..ViewOptions::default() };
     let r = preview_with_progress(&dual(), None, Format::Png, &options(tail), &mut Quiet).unwrap().report;
     assert_eq!(r.layers_drawn, Some([200, 203]));
+    // Past the last layer: refused with the last layer named (it was a blank picture, exit 0).
     let past = ViewOptions { layers: Some(300..=400), ..ViewOptions::default() };
-    let r = preview_with_progress(&dual(), None, Format::Png, &options(past), &mut Quiet).unwrap().report;
-    assert_eq!((r.layers_drawn, r.strokes), (None, Some(0)));
+    for format in [Format::Png, Format::Html] {
+        let err = preview_with_progress(&dual(), None, format, &options(past.clone()), &mut Quiet)
+            .err()
+            .map(|e| e.to_string());
+        assert_eq!(
+            err.as_deref(),
+            Some("layer 300 is past the file's last layer, 203 (layers count from 0)")
+        );
+    }
 
     let html =
         preview_with_progress(&dual(), None, Format::Html, &options(ViewOptions::default()), &mut Quiet)
@@ -282,6 +293,23 @@ fn the_report_says_what_the_preview_shows() {
         (html.format, html.layers_drawn, html.moves),
         ("html", Some([0, 203]), Some(all.segments.len()))
     );
+}
+
+/// `--layers 0-60` on the viewer page said "layers 0-203" (every layer) and opened on them all:
+/// the report and the page's opening range are what was asked, clipped to the file.
+#[test]
+fn the_html_report_says_the_layers_asked_for() {
+    let page = |layers| {
+        let view = ViewOptions { layers, ..ViewOptions::default() };
+        preview_with_progress(&dual(), None, Format::Html, &options(view), &mut Quiet).unwrap()
+    };
+    let p = page(Some(0..=60));
+    assert_eq!(p.report.layers_drawn, Some([0, 60]));
+    assert!(String::from_utf8(p.bytes).unwrap().contains("\"layers\":[0,60]"));
+    assert_eq!(page(Some(150..=900)).report.layers_drawn, Some([150, 203]));
+    let all = page(None);
+    assert_eq!(all.report.layers_drawn, Some([0, 203]));
+    assert!(String::from_utf8(all.bytes).unwrap().contains("\"layers\":null"));
 }
 
 /// Every call a progress bar would get.

@@ -127,3 +127,36 @@ fn each_band_of_a_mixed_file_draws_in_its_predicted_colour_and_purge_shift_shows
         assert!(c[0] >= magenta[0].min(yellow[0]) - 2 && c[1] <= yellow[1] + 2, "{c:?}");
     }
 }
+
+/// The viewer page's "mix" colouring showed tool colours and a T0/T1 legend unless the page was
+/// made with `--colour-by mix` (it held `"mix_colours": []`), and its legend said `predicted
+/// #ef4680` or `0:0.6:0.1:0.3` where the user had named the mix Pink. Now a page of a mixed file
+/// carries the mix colours whatever it opens on, each named as `gweave mix` named it.
+#[test]
+fn the_viewer_page_colours_by_mix_with_the_users_names_whatever_it_opens_on() {
+    let seed = include_str!("../../../examples/mix/seed_layers.toml");
+    let (mixed, _) = mix_bytes(MixProfile::from_toml_str(seed).unwrap(), &torus()).unwrap();
+    let path = write_temp("seed_layers.mix.gcode", &mixed);
+    let page = |path: &Path| {
+        let options = PreviewOptions::default();
+        let p = gweave::render::preview_with_progress(
+            path,
+            None,
+            gweave::render::Format::Html,
+            &options,
+            &mut gweave::pass::Quiet,
+        )
+        .unwrap();
+        String::from_utf8(p.bytes).unwrap()
+    };
+    let html = page(&path);
+    let legend = html.split("\"mix_legend\":").nth(1).unwrap().split("]]").next().unwrap();
+    let mut names: Vec<&str> = legend.split("\",\"").skip(1).map(|s| s.split('"').next().unwrap()).collect();
+    names.sort();
+    assert!(names.contains(&"Orange") && names.contains(&"Pink"), "{legend}");
+    assert!(!names.iter().any(|n| n.contains(':') || n.starts_with("predicted")), "{legend}");
+    assert!(!html.contains("\"mix_colours\":[]"));
+    // A plain slicer file has no mix to show: the page says so instead of tool colours.
+    let plain = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/cura/cura_torus.gcode");
+    assert!(page(&plain).contains("\"mix\":null,\"mix_colours\":[],\"mix_legend\":[]"));
+}

@@ -353,3 +353,28 @@ fn after_gweave_mix_on_the_cura_torus() {
         }
     }
 }
+
+/// purge-shift on a file sliced with a wipe tower moved the tool changes into the tower and its
+/// ramming and reported "saved vs tower" without a word: the file is refused, the setting named.
+#[test]
+fn a_file_sliced_with_a_wipe_tower_is_refused_naming_the_setting() {
+    let rules = config("purge_mm = 2.0");
+    let body = "M104 S200\nG92 E0\nG1 X1 E1\nT1\nG1 X2 E2\n";
+    let prusa = format!("{body}; filament_minimal_purge_on_wipe_tower = 15\n; wipe_tower = 1\n");
+    let err = gweave::post::purge_shift::purge_shift_bytes(rules.clone(), prusa.as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("was sliced with a wipe tower (wipe_tower = 1): purge-shift replaces the tower"),
+        "{err}"
+    );
+    let cura = format!(
+        "{body};SETTING_3 {{\"global_quality\": \"[general]\\\\nprime_tower_enable = True\\\\n\"}}\n"
+    );
+    let err =
+        gweave::post::purge_shift::purge_shift_bytes(rules.clone(), cura.as_bytes()).unwrap_err().to_string();
+    assert!(err.contains("(prime_tower_enable = True)"), "{err}");
+    // Without the tower (a key that merely ends in wipe_tower is not it), the file shifts.
+    let none = format!("{body}; filament_minimal_purge_on_wipe_tower = 15\n; wipe_tower = 0\n");
+    assert!(gweave::post::purge_shift::purge_shift_bytes(rules, none.as_bytes()).is_ok());
+}

@@ -8,9 +8,11 @@ use anyhow::Result;
 use clap::Args;
 use gweave::bed::Bed;
 use gweave::check::{check_file, CheckOptions, CheckReport};
+use gweave::gcode::diag::Finding;
 use gweave::range::FEED_MM_MIN;
 use gweave::total::CheckTotal;
 
+use crate::args::load_machine;
 use crate::common::{in_range, print_summary, ReportArgs};
 use crate::files::Files;
 
@@ -30,6 +32,10 @@ pub struct CheckArgs {
     /// machine_width, machine_depth, machine_height, machine_center_is_zero), else none].
     #[arg(long, value_name = "X,Y,Z|X0,Y0,X1,Y1[,Z]", value_parser = |s: &str| s.parse::<Bed>().map_err(|e| e.to_string()))]
     pub bed: Option<Bed>,
+    /// The bed of this machine profile (a TOML file or a built-in name, `gweave machine list`):
+    /// its `[bed]` travel, as `sim` holds moves to it.
+    #[arg(long, value_name = "TOML|NAME", conflicts_with = "bed")]
+    pub machine: Option<PathBuf>,
     /// Feed rates above this are absurd, mm/min.
     #[arg(long, value_name = "MM_MIN", default_value_t = CheckOptions::default().max_feed_mm_min,
           value_parser = in_range(FEED_MM_MIN))]
@@ -46,7 +52,11 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
         .read_all("INPUT", args.inputs.iter().map(PathBuf::as_path))
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let options = CheckOptions { bed: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
+    let bed = match &args.machine {
+        Some(m) => Some(machine_bed(m)?),
+        None => args.bed,
+    };
+    let options = CheckOptions { bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
     let mut reports = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {
         let mut bar = args.report.quiet.bar();
@@ -73,17 +83,44 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
     Ok(if total.failed_files > 0 { ExitCode::FAILURE } else { ExitCode::SUCCESS })
 }
 
-/// A file's findings, then (without -q) the bed used and its counts.
+/// The build volume of a machine profile, as a bed to check moves against.
+fn machine_bed(machine: &Path) -> Result<Bed> {
+    let b = load_machine(machine)?.bed;
+    let lo = [b.x_min_mm, b.y_min_mm];
+    Ok(Bed::new(lo, [lo[0] + b.x_mm, lo[1] + b.y_mm], Some(b.z_mm))?)
+}
+
+/// A file's findings, one line per kind (with how many and where), then (without -q) the bed
+/// used and its counts.
 fn print_file(out: &mut dyn Write, input: &Path, report: &CheckReport, quiet: bool) -> io::Result<()> {
     let name = input.display();
-    for f in &report.findings {
+    for g in &report.groups {
+        let f = &g.first;
         let level = match f.severity {
             gweave::gcode::diag::Severity::Error => "error",
             gweave::gcode::diag::Severity::Warning => "warning",
         };
-        writeln!(out, "{name}:{}:{}: {level}: {}", f.line, f.diagnostic.column, f.diagnostic.finding)?;
+        write!(out, "{name}:{}:{}: {level}: ", f.line, f.diagnostic.column)?;
+        match (&f.diagnostic.finding, g.range_mm) {
+            (Finding::OutsideBed { axis, .. }, Some([lo, hi])) if g.count > 1 => {
+                let what = g.feature.map(|f| format!("{} ", f.name().replace('_', " "))).unwrap_or_default();
+                let range = match lo == hi {
+                    true => format!("{axis}={lo:.3}"),
+                    false => format!("{axis} {lo:.3} .. {hi:.3}"),
+                };
+                writeln!(
+                    out,
+                    "{what}moves outside the bed: {range} mm, {} moves, lines {} .. {}",
+                    g.count, f.line, g.last_line
+                )?;
+            }
+            (finding, _) if g.count > 1 => {
+                writeln!(out, "{finding} ({} lines like it, the last at line {})", g.count, g.last_line)?
+            }
+            (finding, _) => writeln!(out, "{finding}")?,
+        }
     }
-    let shown = report.findings.len() as u64;
+    let shown: u64 = report.groups.iter().map(|g| g.count).sum();
     if shown < report.errors + report.warnings {
         writeln!(out, "... {} more findings not shown", report.errors + report.warnings - shown)?;
     }

@@ -14,7 +14,8 @@ use gweave_sim::MachineProfile;
 use gweave_sim::{estimate_report, EstimateReport};
 
 use super::sim::{print_layers_and_features, print_malformed};
-use crate::common::{hms, load_or_default, print_summary, ReportArgs};
+use crate::args::MachineArg;
+use crate::common::{hms, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::progress::Bar;
 
@@ -29,11 +30,11 @@ use crate::progress::Bar;
 pub struct EstimateArgs {
     /// The G-code file to estimate.
     pub input: PathBuf,
-    /// Machine profile (TOML, see docs/machine.md); only its motion limits are used. Default: a
-    /// RAMPS 1.4 printer on Marlin. `slicer`: the machine limits the slicer wrote into the file
+    /// Machine profile: a TOML file (docs/machine.md) or a built-in profile's name (`gweave
+    /// machine list`); only its motion limits are used. Default: a RAMPS 1.4 printer on Marlin. `slicer`: the machine limits the slicer wrote into the file
     /// (PrusaSlicer, SuperSlicer, OrcaSlicer `machine_max_*`, Cura's `machine_max_*`); the
     /// settings used are listed on standard error.
-    #[arg(long, value_name = "TOML|slicer")]
+    #[arg(long, value_name = "TOML|NAME|slicer")]
     pub machine: Option<PathBuf>,
     /// Also count the steps of every motor (Bresenham, as `gweave sim` does); up to a fifth slower.
     #[arg(long)]
@@ -52,11 +53,8 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         .check()?;
     let profile = match &args.machine {
         Some(_) if from_slicer => slicer_profile(&args.input)?,
-        // Files the profile names (a thermistor table) are read from its folder, as `sim` does.
-        other => {
-            let folder = other.as_deref().and_then(Path::parent).unwrap_or(Path::new(""));
-            load_or_default(other.as_ref(), |text| MachineProfile::from_toml_in(text, folder))?
-        }
+        // A file or a built-in profile's name, as `sim` reads it.
+        other => MachineArg { path: other.clone() }.load()?,
     };
     let firmware = read_firmware(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
     let file = container::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;

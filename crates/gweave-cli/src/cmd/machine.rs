@@ -1,16 +1,19 @@
-//! `gweave machine`: machine profiles from what the printer says about itself.
+//! `gweave machine`: the built-in machine profiles, and profiles from what the printer says
+//! about itself.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
+use anyhow::{anyhow, Context, Result};
 use clap::{Args, Subcommand};
+use gweave_sim::builtin::{self, BUILTIN};
 use gweave_sim::from_m503;
 
 use crate::common::{print_summary, read_text, write_bytes};
 use crate::files::Files;
 
-/// Make a machine profile (see docs/machine.md).
+/// Machine profiles: the built-in ones, and one made from what a printer says about itself
+/// (see docs/machine.md).
 #[derive(Args, Debug)]
 pub struct MachineArgs {
     #[command(subcommand)]
@@ -19,6 +22,18 @@ pub struct MachineArgs {
 
 #[derive(Subcommand, Debug)]
 pub enum MachineCommand {
+    /// The profiles built into gweave, which `--machine NAME` takes anywhere a profile file
+    /// goes (`gweave sim part.gcode --machine prusa-mk3`).
+    List,
+    /// A built-in profile's text, comments included: the start of a profile of your own
+    /// (`gweave machine show prusa-mk3 -o my-printer.toml`, then edit it).
+    Show {
+        /// The profile's name (`gweave machine list`).
+        name: String,
+        /// Where to write it; standard output without it.
+        #[arg(short, long, value_name = "TOML")]
+        output: Option<PathBuf>,
+    },
     /// A profile from a Marlin board's `M503` report (paste the terminal's answer into a file;
     /// `echo:` and OctoPrint's `Recv:` prefixes are fine): steps per mm (M92), limits (M201,
     /// M203), accelerations (M204), jerk or junction deviation and the minimum segment time
@@ -37,6 +52,22 @@ pub enum MachineCommand {
 
 pub fn run(args: MachineArgs) -> Result<ExitCode> {
     match args.command {
+        MachineCommand::List => {
+            print_summary(|out| {
+                for b in BUILTIN {
+                    writeln!(out, "{:<16} {}", b.name, b.summary())?;
+                }
+                writeln!(out, "(--machine NAME; `gweave machine show NAME -o mine.toml` to start your own)")
+            })?;
+            Ok(ExitCode::SUCCESS)
+        }
+        MachineCommand::Show { name, output } => {
+            Files::new().write("-o", output.as_deref()).check()?;
+            let b = builtin::find(&name).ok_or_else(|| {
+                anyhow!("no built-in machine profile named {name:?} (built in: {})", builtin::names())
+            })?;
+            write_or_print(output, b.text)
+        }
         MachineCommand::FromM503 { input, output } => {
             Files::new().read("INPUT", Some(&input)).write("-o", output.as_deref()).check()?;
             let made = from_m503(&read_text(&input)?).with_context(|| format!("in {}", input.display()))?;
@@ -48,11 +79,16 @@ pub fn run(args: MachineArgs) -> Result<ExitCode> {
             for note in &made.notes {
                 eprintln!("not used: {note}");
             }
-            match output {
-                Some(path) => write_bytes(&path, text.as_bytes())?,
-                None => print_summary(|out| out.write_all(text.as_bytes()))?,
-            }
-            Ok(ExitCode::SUCCESS)
+            write_or_print(output, &text)
         }
     }
+}
+
+/// A profile's text to the file `-o` names, or to standard output.
+fn write_or_print(output: Option<PathBuf>, text: &str) -> Result<ExitCode> {
+    match output {
+        Some(path) => write_bytes(&path, text.as_bytes())?,
+        None => print_summary(|out| out.write_all(text.as_bytes()))?,
+    }
+    Ok(ExitCode::SUCCESS)
 }

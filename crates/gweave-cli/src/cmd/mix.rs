@@ -33,7 +33,7 @@ use crate::finish;
 /// Examples:
 ///   gweave mix part.gcode -c mix.toml -o part.mix.gcode
 ///   gweave mix part.gcode --at-layer 0=Orange --at-layer 10=Pink -o out.gcode
-///   gweave mix dual.gcode --map T0=Orange --map T1=PVA --in-place
+///   gweave mix dual.gcode --map T0=Orange --map T1=support --in-place
 ///   gweave mix --wizard -c mix.toml
 /// As a PrusaSlicer post-processing script: `/path/to/gweave mix -c /path/mix.toml --in-place
 /// --no-backup` (PrusaSlicer adds the G-code path last).
@@ -52,7 +52,9 @@ pub struct MixArgs {
     /// From this height (mm) on, print this mix: `2.5=Blue`.
     #[arg(long = "at-z", value_name = "Z=MIX")]
     pub at_z: Vec<String>,
-    /// Slicer tool to mix: `T1=PVA`, `T0=Orange`.
+    /// Slicer tool to mix: `T0=Orange`, `T1=support` (100 % of the material-2 input, E3), or a
+    /// material an input holds (`T1=PVA` with a profile that loads PVA, e.g.
+    /// examples/mix/pva_support.toml).
     #[arg(long, value_name = "TN=MIX")]
     pub map: Vec<String>,
     /// A gradient: `0-50=Cyan..Magenta`, `0-50/2=...` (every 2 layers), `z1-8=...` (heights).

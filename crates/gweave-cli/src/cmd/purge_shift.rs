@@ -115,11 +115,13 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     // The run's header is one line above every change.
     report.changes.offset_output_lines(1);
     drop(bar);
-    for w in report.warnings.iter().take(20) {
+    // Warnings print with -q too (docs/pipeline.md), one line per kind.
+    for w in gweave::post::warning::grouped(&report.warnings) {
         eprintln!("gweave: warning: {w}");
     }
-    if report.warnings_total > 20 {
-        eprintln!("gweave: ... {} more warnings (see --json)", report.warnings_total - 20);
+    let kept = report.warnings.len() as u64;
+    if report.warnings_total > kept {
+        eprintln!("gweave: ... {} more warnings, counted only", report.warnings_total - kept);
     }
     if args.report.emit(&Transformed::new(&report, malformed, strictness))? {
         let summary = |out: &mut dyn std::io::Write| {

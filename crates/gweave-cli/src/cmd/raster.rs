@@ -10,7 +10,7 @@ use gweave::firmware::Firmware;
 use gweave::gcode::writer::Target;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{FireOrder, DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
-use gweave::gen::raster_job::{JobOptions, JobReport};
+use gweave::gen::raster_job::{JobOptions, JobReport, Source};
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
 use gweave_sim::Estimator;
 
@@ -179,6 +179,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
         }
         return Ok(ExitCode::SUCCESS);
     };
+    let from_images = matches!(source, Source::Stacks(_));
     let job = options.job_from(source, heads)?;
     let mut bar = LayerBar::new(args.report.quiet.quiet);
     // Its own time counts the printhead's firing, which the estimator does not know.
@@ -190,7 +191,25 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     if args.report.emit(&report)? && !to_stdout {
         print_summary(|out| print_human(out, &report, &job.profile))?;
     }
+    if from_images && args.layer_height.is_none() {
+        eprintln!("gweave: note: {}", layer_height_hint(args.pixel_mm.or(args.dpi.map(|d| 25.4 / d))));
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Images carry no layer height, so a stack gets the default; a stack sliced from a model at
+/// its pixel size (a voxel stack, as medical and CT scans are) printed at 0.1 mm comes out
+/// squashed or stretched by the ratio. Say so, with the flag that fixes it.
+fn layer_height_hint(pixel_mm: Option<f64>) -> String {
+    let default = gweave::gen::raster::DEFAULT_LAYER_HEIGHT_MM;
+    let fix = match pixel_mm {
+        Some(px) => format!("--layer-height {px:.4} (the pixel size given)"),
+        None => "--layer-height H".to_owned(),
+    };
+    format!(
+        "images carry no layer height: the layers are {default} mm apart (the default); if the \
+         stack was sliced at its pixel size (voxels), give {fix} so the part keeps its proportions"
+    )
 }
 
 fn print_human(out: &mut dyn Write, r: &JobReport, profile: &PrintheadProfile) -> io::Result<()> {

@@ -260,11 +260,19 @@ fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {
             l.layer.filament_mm
         )?;
     }
-    writeln!(
-        out,
-        "  seam            at flat y = 0: {:.3} deg, turning {:.3} deg per layer",
-        r.seam_offset_deg, r.seam_rotation_per_layer_deg
-    )?;
+    if r.helical {
+        // Each layer is one turn of a helix that ends where the next begins (docs/rotary.md).
+        writeln!(
+            out,
+            "  seam            none: each layer is one turn of a helix, ending where the next starts"
+        )?;
+    } else {
+        writeln!(
+            out,
+            "  seam            at flat y = 0: {:.3} deg, turning {:.3} deg per layer",
+            r.seam_offset_deg, r.seam_rotation_per_layer_deg
+        )?;
+    }
     writeln!(out, "  filament        {:.2} mm", r.filament_mm)?;
     writeln!(out, "  time (F only)   {}", hms(r.time_s))
 }

@@ -224,7 +224,15 @@ fn print_human(out: &mut dyn Write, input: &Path, r: &SimReport, errors: &[Strin
     print_layers_and_features(out, &r.layer_s, r.unlayered_s, &r.feature_s)?;
     for (tool, mm) in r.filament_mm.iter().enumerate() {
         let steps = r.steps.tools.get(tool).copied().unwrap_or(0);
-        writeln!(out, "  filament T{tool:<3}  {mm:.2} mm  ({steps} E steps)")?;
+        write!(out, "  filament T{tool:<3}  {mm:.2} mm  ({steps} E steps)")?;
+        // The motor's net feed; what left the nozzle (stats', the slicer's) adds what is still
+        // retracted at the end.
+        match r.retracted_at_end_mm.get(tool).copied().filter(|r| *r >= 0.005) {
+            Some(back) => {
+                writeln!(out, "; {:.2} mm left the nozzle, {back:.2} mm stayed retracted", mm + back)?
+            }
+            None => writeln!(out)?,
+        }
     }
     for (input, mm) in r.mixing_input_mm.iter().enumerate() {
         let steps = r.steps.mixing.get(input).copied().unwrap_or(0);

@@ -123,11 +123,13 @@ def cat(
 
 
 def sim(path: PathLike, *, machine: Optional[PathLike] = None, fault: Sequence[str] = ()) -> Report:
-    """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML.
+    """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML or
+    a built-in profile's name (``"prusa-mk3"``, ``"klipper"``: ``gweave machine list``).
 
     ``fault`` injects heater faults as ``--fault`` does (``["hotend-cartridge-off@120s"]``).
     The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
-    ``feature_s``, ``filament_mm``, ``mixing_input_mm``, ``steps``, ``position``, ``count``,
+    ``feature_s``, ``filament_mm`` (each motor's net feed; ``retracted_at_end_mm`` added to it
+    is what left the nozzle, ``stats``'s figure), ``mixing_input_mm``, ``steps``, ``position``, ``count``,
     ``heaters``, ``thermal_faults``, ``halted``, ``unknown_commands`` and ``warnings``.
     """
     if isinstance(fault, str):

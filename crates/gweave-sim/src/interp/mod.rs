@@ -44,6 +44,7 @@ use std::collections::BTreeMap;
 
 use gweave::gcode::effect::Motion;
 use gweave::gcode::line::Command;
+use gweave::gcode::retraction::Retraction;
 use gweave::gcode::state::{self, Effect};
 use thiserror::Error;
 
@@ -129,6 +130,8 @@ pub struct Machine {
     /// The tool filament is counted for (`T<n>`), and the filament fed per tool, mm.
     tool: usize,
     filament_mm: Vec<f64>,
+    /// The retraction in force per tool: what of the fed filament has not left the nozzle.
+    retraction: Vec<Retraction>,
     homed: [bool; 3],
     acknowledged: bool,
     /// The last command is one hosts time by the wall clock (`M400`).
@@ -214,6 +217,7 @@ impl Machine {
             flow_pct: 100.0,
             tool: 0,
             filament_mm: vec![0.0],
+            retraction: vec![Retraction::default()],
             homed: [false; 3],
             acknowledged: false,
             wall_timed: false,
@@ -508,6 +512,7 @@ impl Machine {
         self.tool = number as usize;
         if self.filament_mm.len() <= self.tool {
             self.filament_mm.resize(self.tool + 1, 0.0);
+            self.retraction.resize(self.tool + 1, Retraction::default());
         }
     }
 

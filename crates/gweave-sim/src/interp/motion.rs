@@ -70,7 +70,9 @@ impl Machine {
             } else if self.flow_pct != 100.0 {
                 m.to[state::E] = m.from[state::E] + de * self.flow_pct / 100.0;
             }
-            self.filament_mm[self.tool] += m.to[state::E] - m.from[state::E];
+            let fed_mm = m.to[state::E] - m.from[state::E];
+            self.filament_mm[self.tool] += fed_mm;
+            self.retraction[self.tool].feed(fed_mm);
         }
         self.thermal.set_moving(true);
         self.moved_since_m400 = true;

@@ -3,6 +3,7 @@
 use std::collections::BTreeMap;
 
 use gweave::gcode::layers::Feature;
+use gweave::gcode::retraction::Retraction;
 use serde::Serialize;
 
 use super::{heat, Machine};
@@ -168,6 +169,10 @@ pub struct SimReport {
     pub feature_s: BTreeMap<Feature, f64>,
     /// Filament fed per tool (net, after flow and refused cold extrusions), mm.
     pub filament_mm: Vec<f64>,
+    /// Filament per tool still retracted at the end (pulled back and not pushed out again:
+    /// Cura's end retraction, a tool parked retracted after its last change), mm. Added to
+    /// `filament_mm` it is what left the nozzle, `gweave stats`'s figure and the slicer's.
+    pub retracted_at_end_mm: Vec<f64>,
     /// Filament fed per mixing input (net, from its motor), mm.
     pub mixing_input_mm: Vec<f64>,
     /// Steps per motor (both directions count).
@@ -232,6 +237,7 @@ impl Machine {
             layer_s: est.layer_s,
             feature_s: est.feature_s,
             filament_mm: self.filament_mm.clone(),
+            retracted_at_end_mm: self.retraction.iter().map(Retraction::in_force_mm).collect(),
             mixing_input_mm,
             steps: est.steps,
             position: self.position(),

@@ -25,6 +25,7 @@
 //! assert!(MachineProfile::from_toml_str("[bed]\nx_nm = 1.0\n").is_err());
 //! ```
 
+pub mod builtin;
 pub mod firmware;
 pub mod m503;
 
@@ -425,15 +426,28 @@ impl MachineProfile {
 
     /// [`Self::from_toml_str`] with the files it names read from `folder`.
     pub fn from_toml_in(text: &str, folder: &std::path::Path) -> Result<Self, MachineProfileError> {
+        Self::from_toml_reading(text, |name| {
+            let path = folder.join(name);
+            let text = gweave::settings::read_text(&path).map_err(|e| e.to_string());
+            (path, text)
+        })
+    }
+
+    /// [`Self::from_toml_str`] with the files it names given by `read` (the name the profile
+    /// uses in, the path to show and the text or why there is none out): from a folder, or
+    /// from the program for a [`builtin`] profile.
+    pub fn from_toml_reading(
+        text: &str,
+        read: impl Fn(&std::path::Path) -> (std::path::PathBuf, Result<String, String>),
+    ) -> Result<Self, MachineProfileError> {
         let mut p: Self = toml::from_str(text)
             .map_err(|e| MachineProfileError::Toml(gweave::settings::toml_message(&e)))?;
         // The circuit the table's values are read through is checked first.
         p.normalize()?;
         if let Some(name) = &p.thermal.thermistor_table {
-            let path = folder.join(name);
-            let table = gweave::settings::read_text(&path)
-                .map_err(|e| e.to_string())
-                .and_then(|text| table_from_csv(&text, &p.thermal.thermistor).map_err(|e| e.to_string()));
+            let (path, text) = read(name);
+            let table =
+                text.and_then(|text| table_from_csv(&text, &p.thermal.thermistor).map_err(|e| e.to_string()));
             match table {
                 Ok(t) => p.thermal.thermistor_table_entries = Some(t),
                 Err(message) => return Err(MachineProfileError::ThermistorTable { path, message }),
@@ -482,8 +496,24 @@ impl MachineProfile {
 
 #[cfg(test)]
 mod tests {
+
+    /// docs/machine.md says every key is optional, but a `[[thermal.hotends]]` entry failed
+    /// with "missing field `heat_capacity_j_k`" until all six were given.
+    #[test]
+    fn a_hotend_entry_takes_the_default_blocks_missing_keys() {
+        let p = MachineProfile::from_toml_str(
+            "[[thermal.hotends]]\n[[thermal.hotends]]\npower_w = 30.0\n[thermal.bed]\npower_w = 300.0\n",
+        )
+        .unwrap();
+        let block = HeaterConfig::hotend_40w();
+        assert_eq!(p.thermal.hotends, [block, HeaterConfig { power_w: 30.0, ..block }]);
+        assert_eq!(p.thermal.bed, Some(HeaterConfig { power_w: 300.0, ..HeaterConfig::bed_200w() }));
+        let typo = MachineProfile::from_toml_str("[[thermal.hotends]]\npower = 30.0\n").unwrap_err();
+        assert!(typo.to_string().contains("unknown field `power`"), "{typo}");
+    }
     use super::*;
     use crate::motion::limits::CornerMode;
+    use crate::thermal::heater::HeaterConfig;
 
     #[test]
     fn default_is_ramps_marlin() {

@@ -49,9 +49,13 @@ impl CheckRanges for WaitConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ThermalConfig {
-    /// Hotend plants, `T0`, `T1`, ... (default: one [`HeaterConfig::hotend_40w`]).
+    /// Hotend plants, `T0`, `T1`, ... (default: one [`HeaterConfig::hotend_40w`]; a key an
+    /// entry leaves out is that heater's).
+    #[serde(deserialize_with = "crate::thermal::heater::hotends_with_defaults")]
     pub hotends: Vec<HeaterConfig>,
-    /// Bed plant (default [`HeaterConfig::bed_200w`]); `None` for no bed.
+    /// Bed plant (default [`HeaterConfig::bed_200w`], also for the keys a `[thermal.bed]` leaves
+    /// out); `None` for no bed.
+    #[serde(deserialize_with = "crate::thermal::heater::bed_with_defaults")]
     pub bed: Option<HeaterConfig>,
     /// The sensor on every heater (default Marlin type 1).
     pub thermistor: BetaThermistor,

@@ -126,6 +126,50 @@ fn default_ambient_c() -> f64 {
     25.0
 }
 
+/// A heater as a profile writes it: every key optional (docs/machine.md), the missing ones
+/// taken from the default heater of its kind, so `[[thermal.hotends]]` with only `power_w = 50`
+/// is a 50 W version of the default block rather than an error for the five keys not given.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HeaterKeys {
+    power_w: Option<f64>,
+    heat_capacity_j_k: Option<f64>,
+    loss_w_k: Option<f64>,
+    fan_loss_w_k: Option<f64>,
+    ambient_c: Option<f64>,
+    heater_lag_s: Option<f64>,
+    sensor_lag_s: Option<f64>,
+}
+
+impl HeaterKeys {
+    fn over(self, d: HeaterConfig) -> HeaterConfig {
+        HeaterConfig {
+            power_w: self.power_w.unwrap_or(d.power_w),
+            heat_capacity_j_k: self.heat_capacity_j_k.unwrap_or(d.heat_capacity_j_k),
+            loss_w_k: self.loss_w_k.unwrap_or(d.loss_w_k),
+            fan_loss_w_k: self.fan_loss_w_k.unwrap_or(d.fan_loss_w_k),
+            ambient_c: self.ambient_c.unwrap_or(d.ambient_c),
+            heater_lag_s: self.heater_lag_s.unwrap_or(d.heater_lag_s),
+            sensor_lag_s: self.sensor_lag_s.unwrap_or(d.sensor_lag_s),
+        }
+    }
+}
+
+/// `[[thermal.hotends]]`, each key missing taken from [`HeaterConfig::hotend_40w`].
+pub(crate) fn hotends_with_defaults<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Vec<HeaterConfig>, D::Error> {
+    let keys = Vec::<HeaterKeys>::deserialize(d)?;
+    Ok(keys.into_iter().map(|k| k.over(HeaterConfig::hotend_40w())).collect())
+}
+
+/// `[thermal.bed]`, each key missing taken from [`HeaterConfig::bed_200w`].
+pub(crate) fn bed_with_defaults<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Option<HeaterConfig>, D::Error> {
+    Ok(Some(HeaterKeys::deserialize(d)?.over(HeaterConfig::bed_200w())))
+}
+
 impl HeaterConfig {
     /// A typical 40 W cartridge in an aluminium block (E3D V6 class).
     ///

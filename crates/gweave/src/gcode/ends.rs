@@ -4,6 +4,7 @@
 //! rewrites) bounded whatever the file's size. The text is read through its container
 //! ([`container::ends`]), so a `.gcode.gz` or `.bgcode` file is read as the text it holds.
 
+use std::collections::BTreeMap;
 use std::io;
 use std::path::Path;
 
@@ -23,4 +24,22 @@ pub fn read_ends(path: &Path) -> io::Result<Vec<u8>> {
         head.extend_from_slice(&tail);
     }
     Ok(head)
+}
+
+/// The slicer settings `keys` in `text` (a file's ends, [`read_ends`]): `; key = value` comment
+/// lines (the PrusaSlicer family, Cura start G-code) and Cura's `;SETTING_3` document, whose
+/// lines are joined and its escaped newlines undone. The last value of a key wins, as the
+/// footer comes after the header.
+pub(crate) fn settings<'k>(text: &str, keys: &[&'k str]) -> BTreeMap<&'k str, String> {
+    let cura: String = text.lines().filter_map(|l| l.strip_prefix(";SETTING_3 ")).collect();
+    let cura = cura.replace("\\\\n", "\n").replace("\\n", "\n");
+    let comments = text.lines().filter_map(|l| l.trim().strip_prefix(';'));
+    let mut found = BTreeMap::new();
+    for line in comments.chain(cura.lines()) {
+        let Some((k, v)) = line.split_once('=') else { continue };
+        if let Some(key) = keys.iter().find(|key| **key == k.trim()) {
+            found.insert(*key, v.trim().trim_end_matches(['"', '}', ',']).trim().to_owned());
+        }
+    }
+    found
 }

@@ -18,7 +18,7 @@ pub mod line;
 pub mod number;
 pub mod reader;
 // The retraction in force, followed alike by `stats` and the passes that insert purges.
-pub(crate) mod retraction;
+pub mod retraction;
 pub mod state;
 pub mod temp;
 pub mod writer;

@@ -14,7 +14,7 @@ use crate::gcode::state::{Effect, Move, X, Y};
 
 /// Follows the retraction in force over the moves of a file.
 #[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Retraction {
+pub struct Retraction {
     in_force_mm: f64,
 }
 

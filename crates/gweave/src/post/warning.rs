@@ -118,16 +118,8 @@ impl fmt::Display for Warning {
                 let layer = layer.map_or("-".into(), |l| l.to_string());
                 write!(
                     f,
-                    "layer {layer}, line {line}: T{from_tool}->T{to_tool} purge short by {short_mm:.3} mm ({moved_mm:.3} of {requested_mm:.3} mm; stopped by {stopped_by})"
-                )?;
-                match then {
-                    Shortfall::Purged(fallback) => write!(f, "; the rest purged by the {fallback} fallback"),
-                    Shortfall::Inches => f.write_str("; no fallback purge: the file is in inches"),
-                    Shortfall::OpensItsLayer => {
-                        f.write_str("; it opens its layer: --cross-layers lets the purge reach the layer below")
-                    }
-                    Shortfall::Accepted => Ok(()),
-                }
+                    "layer {layer}, line {line}: T{from_tool}->T{to_tool} purge short by {short_mm:.3} mm ({moved_mm:.3} of {requested_mm:.3} mm; stopped by {stopped_by}){then}"
+                )
             }
             Warning::NoFeatureComments { kept_off } => write!(
                 f,
@@ -137,6 +129,73 @@ impl fmt::Display for Warning {
                 kept_off.join(", ")
             ),
         }
+    }
+}
+
+/// What became of a shortfall, as the end of a warning's sentence (nothing when accepted).
+impl fmt::Display for Shortfall {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Shortfall::Purged(fallback) => write!(f, "; the rest purged by the {fallback} fallback"),
+            Shortfall::Inches => f.write_str("; no fallback purge: the file is in inches"),
+            Shortfall::OpensItsLayer => {
+                f.write_str("; it opens its layer: --cross-layers lets the purge reach the layer below")
+            }
+            Shortfall::Accepted => Ok(()),
+        }
+    }
+}
+
+/// Warnings as a person reads them: one line per kind. A file with 95 short purges gets one
+/// line with their count, range and total, and where the first is, not 95 lines (each change
+/// is still in the report's `changes` and `--json`). Kinds are shown in the order they first
+/// appear; a kind seen once keeps its own sentence.
+pub fn grouped(warnings: &[Warning]) -> Vec<String> {
+    // (the first warning of the kind, how many, smallest and largest shortfall, total)
+    let mut groups: Vec<(&Warning, u64, f64, f64, f64)> = Vec::new();
+    for w in warnings {
+        let short_mm = match w {
+            Warning::PurgeShort { short_mm, .. } => *short_mm,
+            _ => 0.0,
+        };
+        match groups.iter_mut().find(|g| same_kind(g.0, w)) {
+            Some(g) => {
+                g.1 += 1;
+                (g.2, g.3, g.4) = (g.2.min(short_mm), g.3.max(short_mm), g.4 + short_mm);
+            }
+            None => groups.push((w, 1, short_mm, short_mm, short_mm)),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(first, count, min_mm, max_mm, total_mm)| match first {
+            _ if count == 1 => first.to_string(),
+            Warning::PurgeShort { layer, line, stopped_by, then, .. } => {
+                let layer = layer.map_or("-".into(), |l| l.to_string());
+                format!(
+                    "{count} changes purge short by {min_mm:.3} .. {max_mm:.3} mm ({total_mm:.3} mm in all; \
+                     stopped by {stopped_by}), the first at layer {layer}, line {line}{then}; --json lists each"
+                )
+            }
+            Warning::NoPurgeAmount { line, used_mm, .. } => format!(
+                "{count} changes have no purge amount for their tool pair, the first at line {line}; \
+                 using the largest configured, {used_mm:.3} mm"
+            ),
+            other => format!("{other} (and {} more like it)", count - 1),
+        })
+        .collect()
+}
+
+/// Whether two warnings are shown as one line: short purges stopped by the same thing and
+/// ending the same way, changes without a purge amount; every other warning is its own.
+fn same_kind(a: &Warning, b: &Warning) -> bool {
+    match (a, b) {
+        (
+            Warning::PurgeShort { stopped_by: s1, then: t1, .. },
+            Warning::PurgeShort { stopped_by: s2, then: t2, .. },
+        ) => s1 == s2 && t1 == t2,
+        (Warning::NoPurgeAmount { .. }, Warning::NoPurgeAmount { .. }) => true,
+        _ => a == b,
     }
 }
 
@@ -150,6 +209,38 @@ impl Serialize for Warning {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn short(line: u64, short_mm: f64, stopped_by: &'static str) -> Warning {
+        Warning::PurgeShort {
+            layer: Some(3),
+            line,
+            from_tool: 0,
+            to_tool: 1,
+            short_mm,
+            moved_mm: 2.5 - short_mm,
+            requested_mm: 2.5,
+            stopped_by,
+            then: Shortfall::Accepted,
+        }
+    }
+
+    #[test]
+    fn ninety_five_shortfalls_are_one_warning_line() {
+        let mut warnings: Vec<Warning> =
+            (0..95).map(|i| short(100 + i, 0.5 + i as f64 / 100.0, "the outer wall")).collect();
+        warnings.insert(10, short(7, 1.0, "a layer change"));
+        let lines = grouped(&warnings);
+        assert_eq!(
+            lines,
+            [
+                "95 changes purge short by 0.500 .. 1.440 mm (92.150 mm in all; stopped by the outer wall), \
+                 the first at layer 3, line 100; --json lists each"
+                    .to_owned(),
+                "layer 3, line 7: T0->T1 purge short by 1.000 mm (1.500 of 2.500 mm; stopped by a layer change)"
+                    .to_owned(),
+            ]
+        );
+    }
 
     #[test]
     fn a_warning_is_its_sentence_in_text_and_json() {

@@ -69,8 +69,8 @@ pub struct HtmlOptions {
     pub title: String,
     pub colour_by: ColourBy,
     pub view: ViewKind,
-    /// Top layer of the range shown first (the last layer when `None`).
-    pub layer: Option<u32>,
+    /// The layer range shown first, first and last (every layer when `None`).
+    pub layers: Option<[u32; 2]>,
     pub tool_colours: Vec<Srgb8>,
 }
 
@@ -87,7 +87,7 @@ pub struct HtmlFile<'a> {
 #[derive(Serialize)]
 struct Payload<'a> {
     title: &'a str,
-    layer: Option<u32>,
+    layers: Option<[u32; 2]>,
     view: String,
     colour_by: &'static str,
     features: Vec<&'static str>,
@@ -125,7 +125,8 @@ struct FileData<'a> {
     feed: String,
     mix: Option<String>,
     mix_colours: Vec<String>,
-    mix_legend: Vec<String>,
+    /// The colours printed longest, each with its mix's name.
+    mix_legend: Vec<[String; 2]>,
 }
 
 /// The page for one toolpath, or two compared side by side (see [`HtmlFile::changed`]), with
@@ -142,14 +143,14 @@ pub fn write_html(files: &[HtmlFile<'_>], options: &HtmlOptions) -> String {
     let mut blocks = Blocks::default();
     let payload = Payload {
         title: &options.title,
-        layer: options.layer,
+        layers: options.layers,
         view: options.view.to_string(),
         colour_by: options.colour_by.name(),
         features: ALL_FEATURES.iter().map(|f| f.name()).collect(),
         feature_colours: FEATURE_COLOURS.iter().map(|c| c.to_hex()).collect(),
         tool_colours,
         travel_colour: TRAVEL_COLOUR.to_hex(),
-        files: files.iter().map(|f| file_data(f, options, &mut blocks)).collect(),
+        files: files.iter().map(|f| file_data(f, &mut blocks)).collect(),
     };
     // Serialising plain numbers and strings cannot fail; `</` is escaped so that no text in the
     // data (a file name, a stats string) can close the script element.
@@ -161,7 +162,7 @@ pub fn write_html(files: &[HtmlFile<'_>], options: &HtmlOptions) -> String {
 }
 
 /// The columns of one file (see the module notes).
-fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions, blocks: &mut Blocks) -> FileData<'a> {
+fn file_data<'a>(f: &'a HtmlFile<'a>, blocks: &mut Blocks) -> FileData<'a> {
     let tp = f.toolpath;
     let (printed_lo, printed_hi) = tp.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
     // Travel may leave the extruded extents: quantise over everything drawn.
@@ -203,11 +204,14 @@ fn file_data<'a>(f: &'a HtmlFile<'a>, options: &HtmlOptions, blocks: &mut Blocks
         layer_of.extend_from_slice(&s.layer.to_le_bytes());
         feed.extend_from_slice(&((s.feed_mm_s * 10.0).round().clamp(0.0, 65535.0) as u16).to_le_bytes());
     }
-    let (mix, mix_colours, mix_legend) = if options.colour_by == ColourBy::Mix {
+    // Whatever colouring the page opens on, a file with mixing commands can be shown by mix,
+    // its legend naming each mix as `gweave mix` named it.
+    let (mix, mix_colours, mix_legend) = if tp.mixing {
         let (index, colours) = mix_palette(tp);
         let legend = Colouring::new(ColourBy::Mix, Vec::new(), &[tp]).legend(&[tp]);
         let index: Vec<u8> = order.iter().map(|&i| index[i]).collect();
-        (Some(blocks.add(&index)), colours, legend.iter().map(|e| e.colour.to_hex()).collect())
+        let legend = legend.iter().map(|e| [e.colour.to_hex(), e.label.clone()]).collect();
+        (Some(blocks.add(&index)), colours, legend)
     } else {
         (None, Vec::new(), Vec::new())
     };
@@ -350,7 +354,7 @@ mod tests {
             title: "a</script>b".into(),
             colour_by: ColourBy::Tool,
             view: ViewKind::Top,
-            layer: None,
+            layers: None,
             tool_colours: vec![],
         };
         let html = write_html(&[file(&tp)], &options);
@@ -386,7 +390,7 @@ mod tests {
             title: "c".into(),
             colour_by: ColourBy::Tool,
             view: ViewKind::Iso,
-            layer: None,
+            layers: None,
             tool_colours: vec![],
         };
         let f = HtmlFile { changed: Some(vec![true, false, true]), ..file(&tp) };
@@ -412,6 +416,7 @@ mod tests {
             segments: (0..3).map(seg).collect(),
             layer_z_mm: vec![0.2],
             tools: 1,
+            mixing: true,
             ..Toolpath::default()
         };
         let (index, colours) = mix_palette(&few);
@@ -427,7 +432,7 @@ mod tests {
             title: "m".into(),
             colour_by: ColourBy::Mix,
             view: ViewKind::Top,
-            layer: None,
+            layers: None,
             tool_colours: vec![],
         };
         let html = write_html(&[file(&few)], &options);

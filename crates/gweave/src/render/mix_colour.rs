@@ -21,11 +21,11 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use crate::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
+use crate::colour::dialect::{MixingState, MixingUpdate, MARLIN_VIRTUAL_TOOLS};
 use crate::colour::palette::MixSpec;
 use crate::colour::purge::{filament_mm_to_mm3, PurgeError, Washout};
 use crate::colour::{Mix, MixError, MixingModel, Srgb8};
-use crate::gcode::line::Block;
+use crate::gcode::line::{Block, Command};
 use crate::post::mix::profile::MixProfile;
 
 /// Below this old-colour share a transition is over: 1/512 moves no 8-bit channel.
@@ -107,6 +107,15 @@ pub struct MixTracker {
     settled: Option<Srgb8>,
     /// A name for each settled mix's colour (see [`mix_name`]).
     names: BTreeMap<[u8; 3], String>,
+    /// The names `gweave mix` gave the mixes it defined, by tool: its `; Pink = T1, predicted
+    /// #ef4680` comment comes right before the lines that define tool 1, which name it.
+    labels: HashMap<u32, String>,
+    /// The name of the last such comment and its tool, until the tool is defined.
+    pending_label: Option<(u32, String)>,
+    /// The tool whose mix prints now (Marlin's virtual tool, or the RepRapFirmware tool).
+    printing_tool: u32,
+    /// The file has mixing commands (else the colouring has nothing of its own to show).
+    pub(crate) mixing: bool,
 }
 
 impl MixTracker {
@@ -125,16 +134,50 @@ impl MixTracker {
             cache: HashMap::new(),
             names: BTreeMap::new(),
             settled: None,
+            labels: HashMap::new(),
+            pending_label: None,
+            printing_tool: 0,
+            mixing: false,
         }
+    }
+
+    /// A `gweave mix` definition comment, `Pink = T1, predicted #ef4680`: the label and tool.
+    fn label_comment(raw: &[u8], block: &Block) -> Option<(u32, String)> {
+        let text = std::str::from_utf8(block.comment_text(raw)?).ok()?.trim();
+        let (label, rest) = text.rsplit_once(" = T")?;
+        let (tool, rest) = rest.split_once(", predicted #")?;
+        (rest.len() == 6).then_some(())?;
+        Some((tool.parse().ok()?, label.to_owned()))
     }
 
     /// One line of the file; `tool` is the core state's tool after it (RepRapFirmware mixes
     /// are per tool).
     pub fn line(&mut self, raw: &[u8], block: &Block, tool: u32) {
-        // A line the firmware would refuse changes nothing.
-        if !matches!(self.state.follow_line(raw, block), Ok(Some(_))) {
-            return;
+        if let Some(label) = Self::label_comment(raw, block) {
+            self.pending_label = Some(label);
         }
+        // A line the firmware would refuse changes nothing.
+        let update = match self.state.follow_line(raw, block) {
+            Ok(Some(update)) => update,
+            _ => return,
+        };
+        self.mixing = true;
+        // A definition (M164, M165, M567; not a `T` selecting a tool) names the tool's mix
+        // when a label comment announced it, and unnames it otherwise (M165 into a named tool).
+        let defined = match (&update, &block.command) {
+            (_, Command::Code { letter: b'T', .. }) => None,
+            (MixingUpdate::Stored { tool, .. }, _) => Some(*tool as u32),
+            (MixingUpdate::RrfMix { tool, .. }, _) => Some(*tool),
+            _ => None,
+        };
+        if let Some(t) = defined {
+            match self.pending_label.take_if(|(n, _)| *n == t) {
+                Some((_, label)) => self.labels.insert(t, label),
+                None => self.labels.remove(&t),
+            };
+        }
+        self.printing_tool =
+            if self.state.rrf_mix(tool).is_some() { tool } else { self.state.active_tool() as u32 };
         let target = self.active_ratios(tool);
         if target != self.to && self.loaded {
             self.from = self.output(self.purged_mm3);
@@ -184,7 +227,10 @@ impl MixTracker {
         let c = self.colour_of(&self.output(mid_mm3));
         if settled {
             self.settled = Some(c);
-            self.names.entry([c.r, c.g, c.b]).or_insert_with(|| mix_name(&self.to));
+            let label = self.labels.get(&self.printing_tool);
+            self.names
+                .entry([c.r, c.g, c.b])
+                .or_insert_with(|| label.cloned().unwrap_or_else(|| mix_name(&self.to)));
         }
         c
     }

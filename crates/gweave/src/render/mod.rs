@@ -79,6 +79,31 @@ pub enum RenderError {
     /// A rotary file cannot be read back.
     #[error(transparent)]
     Rotary(#[from] crate::rotary::RotaryError),
+    /// `--layer`/`--layers` start past the file's last layer (a blank picture says nothing).
+    #[error("{}", no_such_layer(*first, *last))]
+    NoSuchLayer {
+        /// The first layer asked for.
+        first: u32,
+        /// The file's last layer, from 0; `None` when it has none.
+        last: Option<u32>,
+    },
+}
+
+fn no_such_layer(first: u32, last: Option<u32>) -> String {
+    match last {
+        Some(last) => format!("layer {first} is past the file's last layer, {last} (layers count from 0)"),
+        None => format!("layer {first}: the file has no layers to draw"),
+    }
+}
+
+/// Refuses a layer range that starts past the last of `layers` layers.
+fn check_layers(options: &PreviewOptions, layers: u32) -> Result<(), RenderError> {
+    match &options.view.layers {
+        Some(asked) if *asked.start() >= layers => {
+            Err(RenderError::NoSuchLayer { first: *asked.start(), last: layers.checked_sub(1) })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// What the preview is written as.
@@ -170,7 +195,8 @@ impl PreviewOptions {
             travel: keep_all_layers || self.view.travel,
             min_len_mm: self.min_len_mm.unwrap_or_else(|| ToolpathOptions::min_len_for_file_size(bytes)),
             max_segments: Some(MAX_SEGMENTS),
-            mix: (self.view.colour_by == ColourBy::Mix)
+            // The viewer page offers every colouring, mix included, whichever it opens on.
+            mix: (keep_all_layers || self.view.colour_by == ColourBy::Mix)
                 .then(|| self.mix.clone().unwrap_or_else(MixColours::cmyw)),
             printhead: self.printhead.clone().unwrap_or_default(),
             rotary,
@@ -362,8 +388,15 @@ fn drawing_counted(
     };
     let before = read(path)?;
     let drawn = match compare {
-        Some(other) => view::draw_compare(&before, &read(other)?, &options.view),
-        None => view::draw(&before, &options.view),
+        Some(other) => {
+            let after = read(other)?;
+            check_layers(options, before.layer_count().max(after.layer_count()))?;
+            view::draw_compare(&before, &after, &options.view)
+        }
+        None => {
+            check_layers(options, before.layer_count())?;
+            view::draw(&before, &options.view)
+        }
     };
     Ok((drawn, malformed))
 }
@@ -405,20 +438,23 @@ fn html_page(
         })
         .collect();
     let title = files.iter().map(|f| f.name.as_str()).collect::<Vec<_>>().join(" vs ");
+    let layers = files.iter().map(|f| f.toolpath.layer_count()).max().unwrap_or(0);
+    check_layers(options, layers)?;
+    // The range the page opens on, as the pictures clip it; the reader can widen it.
+    let layers_drawn = view::layers_drawn(&options.view, layers).map(|r| [*r.start(), *r.end()]);
     let html_options = html::HtmlOptions {
         title,
         colour_by: options.view.colour_by,
         view: options.view.kind,
-        layer: options.view.layers.as_ref().map(|r| *r.end()),
+        layers: layers_drawn.filter(|_| options.view.layers.is_some()),
         tool_colours: options.view.tool_colours.clone(),
     };
     let bytes = html::write_html(&files, &html_options).into_bytes();
     let toolpaths: Vec<&Toolpath> = files.iter().map(|f| f.toolpath).collect();
     let colouring =
         colour_by::Colouring::new(options.view.colour_by, options.view.tool_colours.clone(), &toolpaths);
-    let layers = toolpaths.iter().map(|tp| tp.layer_count()).max().unwrap_or(0);
     let report = PreviewReport {
-        layers_drawn: layers.checked_sub(1).map(|last| [0, last]),
+        layers_drawn,
         moves: Some(toolpaths.iter().map(|tp| tp.segments.len()).sum()),
         changed_moves,
         legend: colouring.legend(&toolpaths),

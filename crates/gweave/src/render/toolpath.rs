@@ -152,9 +152,12 @@ pub struct Toolpath {
     /// A rotary program: the segments lie on cylinders about the X axis (see
     /// [`ToolpathOptions::rotary`]).
     pub on_cylinder: bool,
-    /// A name for each predicted mix colour ([`Segment::mix_rgb`]) the file printed: the
-    /// palette's name of its ratios, else the ratios (`0.25:0.25:0.5:0`). For legends.
+    /// A name for each predicted mix colour ([`Segment::mix_rgb`]) the file printed: the name
+    /// `gweave mix` gave the mix, else the palette's name of its ratios, else the ratios
+    /// (`0.25:0.25:0.5:0`). For legends.
     pub mix_names: std::collections::BTreeMap<[u8; 3], String>,
+    /// Read with the mix colouring, the file has mixing commands (M163-M165, M567).
+    pub mixing: bool,
     /// Binder-jet raster output: the tools are the inkjet heads that fired.
     pub heads: bool,
 }
@@ -234,6 +237,7 @@ impl ToolpathPass {
             self.out.on_cylinder = true;
         }
         if let Some(mix) = self.mix.take() {
+            self.out.mixing = mix.mixing;
             self.out.mix_names = mix.into_names();
         }
         self.out

@@ -402,7 +402,7 @@ fn empty(options: &ViewOptions, layers: u32) -> Drawing {
 }
 
 /// The layers `options` asks for that a file with `layers` layers has.
-fn layers_drawn(options: &ViewOptions, layers: u32) -> Option<RangeInclusive<u32>> {
+pub(crate) fn layers_drawn(options: &ViewOptions, layers: u32) -> Option<RangeInclusive<u32>> {
     let last = layers.checked_sub(1)?;
     let (first, end) = match &options.layers {
         Some(asked) => (*asked.start(), (*asked.end()).min(last)),

@@ -125,18 +125,7 @@ impl Resolver<'_> {
                     } else {
                         hw.inputs.iter().position(|i| i.material.to_lowercase() == lower)
                     };
-                    let i = input.ok_or_else(|| {
-                        MixPassError::Config(format!(
-                            "no colour or material named {name:?} (palette: {}; materials: {})",
-                            self.palette
-                                .entries()
-                                .iter()
-                                .map(|e| e.name.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", "),
-                            hw.inputs.iter().map(|i| i.material.as_str()).collect::<Vec<_>>().join(", ")
-                        ))
-                    })?;
+                    let i = input.ok_or_else(|| unknown_name(name, &self.palette, hw))?;
                     (unit(i)?, None, None, false)
                 }
             },
@@ -356,6 +345,22 @@ fn key(at: At) -> f64 {
     }
 }
 
+/// A `--map`/schedule name that is neither a palette colour nor an input's material. A user who
+/// writes `T1=PVA` on a profile whose inputs are all PLA wants the soluble-support setup: say
+/// how to get it (`support`, 100 % of material 2, or a profile with a PVA input).
+fn unknown_name(name: &str, palette: &Palette, hw: &super::profile::Hardware) -> MixPassError {
+    let colours: Vec<&str> = palette.entries().iter().map(|e| e.name.as_str()).collect();
+    let materials: Vec<&str> = hw.inputs.iter().map(|i| i.material.as_str()).collect();
+    MixPassError::Config(format!(
+        "no colour or material named {name:?} (palette: {}; materials: {}). For 100 % of \
+         material 2 (input E{}) write `support` (e.g. --map T1=support); for a PVA input, start \
+         from examples/mix/pva_support.toml (-c)",
+        colours.join(", "),
+        materials.join(", "),
+        hw.material2_index()
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -394,6 +399,20 @@ mod tests {
         );
         // The seed's Orange 0 : 0.17 : 0.82 : 0, normalised (sum 0.99), 4 decimals.
         assert_eq!(plan.mixes[0].units, [0, 1717, 8283, 0]);
+    }
+
+    #[test]
+    fn map_t1_pva_on_the_default_profile_points_to_support() {
+        // The README's `--map T1=PVA` on the default (all-PLA) profile said only "materials:
+        // PLA, PLA, PLA, PLA"; it now says what to write instead.
+        let mut p = MixProfile::default();
+        p.add_map("T1=PVA").unwrap();
+        let err = Plan::new(&p).unwrap_err().to_string();
+        assert!(err.contains("no colour or material named \"PVA\""), "{err}");
+        assert!(err.contains("materials: PLA, PLA, PLA, PLA). For 100 % of material 2 (input E3) write `support` (e.g. --map T1=support); for a PVA input, start from examples/mix/pva_support.toml"), "{err}");
+        let mut support = MixProfile::default();
+        support.add_map("T1=support").unwrap();
+        assert_eq!(Plan::new(&support).unwrap().mixes[0].units, [0, 0, 0, 10000]);
     }
 
     #[test]

@@ -13,6 +13,7 @@
 use std::io::{BufRead, Write};
 
 use crate::colour::palette::Palette;
+use crate::gcode::state::MAX_TOOLS;
 
 use super::profile::MixProfile;
 use super::schedule::Plan;
@@ -101,12 +102,15 @@ pub fn run_wizard(input: &mut dyn BufRead, out: &mut dyn Write) -> Result<Option
             _ => None,
         },
     )?;
-    let material2 = a.yes("Does E3 hold a second material (e.g. PVA)? (y/n)")?;
+    // Material 2's name, when E3 holds one: an answer for a colour too (all of E3, as `support`).
+    let material2 = match a.yes("Does E3 hold a second material (e.g. PVA)? (y/n)")? {
+        true => Some(a.ask("Name of material 2", Some("PVA"))?),
+        false => None,
+    };
     let mut mixes = String::new();
     let mut job = String::new();
     let mut inputs = String::new();
-    if material2 {
-        let m = a.ask("Name of material 2", Some("PVA"))?;
+    if let Some(m) = &material2 {
         for (colour, material) in
             [("#00a0e0", "PLA"), ("#e0007a", "PLA"), ("#ffe000", "PLA"), ("#f0ecd8", m.as_str())]
         {
@@ -124,9 +128,10 @@ pub fn run_wizard(input: &mut dyn BufRead, out: &mut dyn Write) -> Result<Option
                 if name.is_empty() {
                     return Ok(None);
                 }
-                let known = name.starts_with('#')
-                    || palette.get(&name).is_some()
-                    || ["support", "material2"].contains(&name.to_lowercase().as_str());
+                let lower = name.to_lowercase();
+                let all_material2 = ["support", "material2"].contains(&lower.as_str())
+                    || material2.as_ref().is_some_and(|m| m.to_lowercase() == lower);
+                let known = name.starts_with('#') || palette.get(&name).is_some() || all_material2;
                 if name.starts_with('#') && crate::colour::Srgb8::parse_hex(&name).is_err() {
                     a.say("  A colour is #RRGGBB.")?;
                     continue;
@@ -149,7 +154,7 @@ pub fn run_wizard(input: &mut dyn BufRead, out: &mut dyn Write) -> Result<Option
                     let r: Vec<String> = ratios.iter().map(f64::to_string).collect();
                     mixes.push_str(&format!("[mix.{}]\nratios = [{}]\n", quote(&name), r.join(", ")));
                 }
-                let p = if material2 && name.to_lowercase() != "support" {
+                let p = if material2.is_some() && !all_material2 {
                     a.fraction(&format!("  Proportion of material 2 in {name} (0-1)"))?
                 } else {
                     0.0
@@ -171,7 +176,7 @@ pub fn run_wizard(input: &mut dyn BufRead, out: &mut dyn Write) -> Result<Option
     } else {
         let n: u32 =
             a.ask_parsed("How many slicer tools (T0, T1, ...) does the file use?", Some("2"), |x| {
-                x.parse().ok()
+                x.parse().ok().filter(|n| (1..=MAX_TOOLS).contains(n))
             })?;
         job.push_str("[map]\n");
         for t in 0..n {
@@ -307,6 +312,20 @@ mod tests {
         assert_eq!(p.z_cap.max_z_feed_mm_min, 150.0);
         let plan = Plan::new(&p).unwrap();
         assert_eq!(plan.mixes[plan.for_tool(0).unwrap()].units, [0, 4500, 4500, 1000]);
+    }
+
+    #[test]
+    fn the_wizard_takes_material_2s_name_as_a_colour_and_refuses_0_tools() {
+        // It asked for material 2's name (PVA), then rejected "PVA" as a tool's colour, and it
+        // accepted a file with 0 tools (a profile mapping nothing).
+        let answers = "2\ny\nPVA\n0\n2\nRed\n0.1\nPVA\n0\n150\n\n";
+        let (toml, said) = wizard(answers).unwrap();
+        assert!(said.contains("\"0\" is not a valid answer."), "{said}");
+        assert!(!said.contains("\"PVA\" is not in the palette."), "{said}");
+        let p = MixProfile::from_toml_str(&toml).unwrap();
+        assert_eq!(p.map["T1"].label(), "PVA");
+        let plan = Plan::new(&p).unwrap();
+        assert_eq!(plan.mixes[plan.for_tool(1).unwrap()].units, [0, 0, 0, 10000]);
     }
 
     #[test]

@@ -65,6 +65,35 @@ pub(crate) fn require_markers(input: impl Read, path: &Path, markers: &Markers) 
     Err(Error::MissingMarker { path: path.to_path_buf(), marker, detail })
 }
 
+/// The slicer settings that put a wipe (prime) tower in the file, as each writes them at the
+/// file's ends: the PrusaSlicer family's `; wipe_tower = 1`, OrcaSlicer's `; enable_prime_tower
+/// = 1`, Cura's `prime_tower_enable = True` in its `;SETTING_3` footer.
+const TOWER_SETTINGS: [(&str, &str); 3] =
+    [("wipe_tower", "1"), ("enable_prime_tower", "1"), ("prime_tower_enable", "True")];
+
+/// Refuses a file sliced with a wipe tower. purge-shift is the tower's replacement: on a file
+/// that has one, the slicer's tool changes sit at the tower, so each would be moved back into
+/// the tower's own moves and ramming, and the report would count a saving against a tower that
+/// is still printed. `ends` is the text the slicer's settings are in (the file's head and tail).
+pub(crate) fn refuse_wipe_tower(ends: &[u8], path: &Path) -> Result<()> {
+    let keys = TOWER_SETTINGS.map(|(key, _)| key);
+    let set = crate::gcode::ends::settings(&String::from_utf8_lossy(ends), &keys);
+    let found = TOWER_SETTINGS
+        .iter()
+        .find(|(key, on)| set.get(key).is_some_and(|v| v == on))
+        .map(|(key, on)| format!("{key} = {on}"));
+    match found {
+        Some(setting) => Err(Error::Invalid(format!(
+            "{}: the file was sliced with a wipe tower ({setting}): purge-shift replaces the tower, \
+             and would move the tool changes into the tower's own moves; slice it again without \
+             the tower (PrusaSlicer: Print Settings > Multiple Extruders > Wipe tower; Cura: Prime \
+             Tower) and purge-shift that file",
+            path.display()
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Whether the print's extrusions carry feature comments (`;TYPE:` and the like). Without them
 /// every extrusion is [`Feature::Unknown`]: a rule that keeps changes off some features (by
 /// default the outer wall, so that the colour seam stays inside) cannot tell those apart, and

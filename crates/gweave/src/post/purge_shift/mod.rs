@@ -639,6 +639,13 @@ impl Pass for PurgeShift {
 pub fn purge_shift(rules: Rules, run: Run<'_>) -> Result<(PurgeShiftReport, Ran)> {
     let mut run = run.writes_e();
     run.flavour()?;
+    match run.source() {
+        Source::File(path) => {
+            let ends = crate::gcode::ends::read_ends(path).map_err(|e| crate::Error::io(path, e))?;
+            checks::refuse_wipe_tower(&ends, path)?;
+        }
+        Source::Text(text) => checks::refuse_wipe_tower(text, Path::new(IN_MEMORY))?,
+    }
     if rules.markers().begin.is_some() {
         match run.source() {
             Source::File(path) => {

@@ -1,0 +1,182 @@
+//! What a new user met in the first hour (issue 39), through the real binary: profiles by
+//! name, one line per kind of warning, and the small traps of `preview`, `raster` and `rotary`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn gweave(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gweave")).args(args).output().unwrap()
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn fixture(name: &str) -> String {
+    root().join("tests/data").join(name).to_str().unwrap().to_owned()
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// `--machine klipper` said "reading klipper: No such file": the example profiles are built in,
+/// by name, wherever gweave runs from (and the Python package has them too).
+#[test]
+fn machine_klipper_is_a_built_in_profile_not_a_missing_file() {
+    let torus = fixture("cura/cura_torus.gcode");
+    let by_name = gweave(&["estimate", &torus, "--machine", "klipper", "--json", "-q"]);
+    assert!(by_name.status.success(), "{}", text(&by_name.stderr));
+    let file = root().join("examples/machines/klipper.toml");
+    let by_path = gweave(&["estimate", &torus, "--machine", file.to_str().unwrap(), "--json", "-q"]);
+    assert_eq!(text(&by_name.stdout), text(&by_path.stdout));
+
+    let list = text(&gweave(&["machine", "list"]).stdout);
+    for name in ["marlin-ramps", "prusa-mk3", "klipper", "mixing-4in", "rotary", "inkjet-c6602"] {
+        assert!(list.lines().any(|l| l.starts_with(name)), "{name} in {list}");
+    }
+    let shown = gweave(&["machine", "show", "prusa-mk3"]);
+    assert_eq!(text(&shown.stdout), include_str!("../../../examples/machines/prusa-mk3.toml"));
+
+    let typo = gweave(&["sim", &torus, "--machine", "klipperr"]);
+    assert_eq!(typo.status.code(), Some(1));
+    let said = text(&typo.stderr);
+    assert!(said.contains("reading klipperr: "), "{said}");
+    assert!(said.contains("built in: marlin-ramps, prusa-mk3, klipper,"), "{said}");
+}
+
+/// `check` on a file whose wipe tower is off the bed printed one warning per move (40 364, 1 000
+/// of them line by line): each kind is one line with its count, range and lines.
+#[test]
+fn check_shows_a_wipe_tower_off_the_bed_as_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("tower.gcode");
+    let mut g = String::from("M104 S200\n;TYPE:Perimeter\nG1 X10 Y10 E1\n;TYPE:Wipe tower\n");
+    for i in 0..3000 {
+        g.push_str(&format!("G1 X{} Y20 E{}\n", 201 + i % 49, 2 + i));
+    }
+    std::fs::write(&file, g).unwrap();
+    let out = gweave(&["check", file.to_str().unwrap(), "--bed", "200,200,200"]);
+    let said = text(&out.stdout);
+    let name = file.display();
+    assert_eq!(
+        said.lines().next().unwrap(),
+        format!("{name}:5:4: warning: wipe tower moves outside the bed: X 201.000 .. 249.000 mm, 3000 moves, lines 5 .. 3004")
+    );
+    assert!(said.contains("3004 lines, 0 errors, 3000 warnings"), "{said}");
+    assert_eq!(said.lines().count(), 3, "{said}");
+}
+
+/// purge-shift listed each shortfall as a warning (95 lines on a user's file): one line per
+/// kind, and `-q` keeps them (docs/pipeline.md: -q hides the summary only).
+#[test]
+fn purge_shift_groups_its_shortfalls_and_keeps_them_with_q() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_file = dir.path().join("cone.gcode");
+    let cone = fixture("slic3r/slic3r_cone_2tool.gcode");
+    let out = gweave(&["purge-shift", &cone, "-o", out_file.to_str().unwrap(), "--purge-mm", "40", "-q"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let said = text(&out.stderr);
+    let warnings: Vec<&str> = said.lines().filter(|l| l.starts_with("gweave: warning: ")).collect();
+    assert!(!warnings.is_empty(), "-q hid the warnings: {said}");
+    assert!(warnings.len() <= 4, "{said}");
+    assert!(warnings.iter().any(|w| w.contains(" changes purge short by ")), "{said}");
+    assert!(out.stdout.is_empty());
+}
+
+/// `preview --layer 5000` wrote a blank picture and exited 0.
+#[test]
+fn preview_past_the_last_layer_fails_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("l.png");
+    let out = gweave(&[
+        "preview",
+        &fixture("cura/cura_dual.gcode"),
+        "-o",
+        png.to_str().unwrap(),
+        "--layer",
+        "5000",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("layer 5000 is past the file's last layer, 203"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert!(!png.exists());
+}
+
+/// A stack of images has no layer height: it was printed at 0.1 mm without a word (a voxel
+/// stack came out squashed tenfold).
+#[test]
+fn a_bmp_stack_hints_at_its_layer_height() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_file = dir.path().join("badge.gcode");
+    let layers = root().join("examples/raster/layers");
+    let out = gweave(&[
+        "raster",
+        layers.to_str().unwrap(),
+        "-o",
+        out_file.to_str().unwrap(),
+        "--pixel-mm",
+        "0.2",
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let said = text(&out.stderr);
+    assert!(said.contains("images carry no layer height: the layers are 0.1 mm apart"), "{said}");
+    assert!(said.contains("--layer-height 0.2000 (the pixel size given)"), "{said}");
+    let given = gweave(&[
+        "raster",
+        layers.to_str().unwrap(),
+        "-o",
+        out_file.to_str().unwrap(),
+        "--layer-height",
+        "0.2",
+        "-q",
+    ]);
+    assert!(text(&given.stderr).is_empty(), "{}", text(&given.stderr));
+}
+
+/// `rotary wrap --helical` said "seam at flat y = 0": a helical wrap has no seam.
+#[test]
+fn the_helical_wrap_summary_says_it_has_no_seam() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_file = dir.path().join("sleeve.gcode");
+    let plate = fixture("rotary/plate.gcode");
+    let out = gweave(&[
+        "rotary",
+        "wrap",
+        &plate,
+        "-o",
+        out_file.to_str().unwrap(),
+        "--mandrel-diameter",
+        "30",
+        "--helical",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let said = text(&out.stdout);
+    assert!(!said.contains("at flat y = 0"), "{said}");
+    assert!(said.contains("  seam            none: each layer is one turn of a helix"), "{said}");
+}
+
+/// A user with a profile of their printer checked files against a bed typed again by hand
+/// (`--bed 0,-4,250,210,210`): `--machine` takes the profile's.
+#[test]
+fn check_takes_the_bed_of_a_machine_profile() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("purge-line.gcode");
+    // Prusa's purge line runs at Y -3, on the MK3S's bed (Y from -4), off a bed from Y 0.
+    std::fs::write(&file, "M104 S215\nG1 Y-3.0 F1000\nG1 X60 E9\nG1 X250 Y200 Z200\n").unwrap();
+    let check =
+        |machine: &str| text(&gweave(&["check", file.to_str().unwrap(), "--machine", machine]).stdout);
+    let mk3 = check("prusa-mk3");
+    assert!(mk3.contains("bed X 0 .. 255, Y -4 .. 212.5, Z 0 .. 210 mm"), "{mk3}");
+    assert!(mk3.contains("4 lines, 0 errors, 0 warnings"), "{mk3}");
+    let ramps = check("marlin-ramps");
+    assert!(
+        ramps.contains(":2:4: warning: moves outside the bed: Y=-3.000 mm, 2 moves, lines 2 .. 3"),
+        "{ramps}"
+    );
+    assert!(ramps.contains(":4:4: warning: move outside the bed: X=250.000 mm"), "{ramps}");
+}

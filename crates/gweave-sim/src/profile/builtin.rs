@@ -1,0 +1,155 @@
+//! The example machine profiles of `examples/machines/`, built into the library so that the
+//! `gweave` binary and the Python package both carry them: `--machine klipper` (or
+//! `machine="klipper"` in Python) works from any folder, with nothing installed beside the
+//! program. A path to a file always works too; a value names a built-in profile only when no
+//! file of that name exists, so a user's own `klipper` file is never shadowed.
+//!
+//! ```
+//! use gweave_sim::builtin;
+//!
+//! let klipper = builtin::find("klipper").unwrap();
+//! assert_eq!(klipper.profile().unwrap().name, "Klipper cartesian");
+//! assert!(builtin::find("no-such-printer").is_none());
+//! ```
+
+use std::path::Path;
+
+use super::{MachineProfile, MachineProfileError};
+
+/// One profile shipped inside the program, with the files it names (a thermistor table).
+#[derive(Debug)]
+pub struct BuiltinProfile {
+    /// What `--machine` takes: the file name in `examples/machines/` without `.toml`.
+    pub name: &'static str,
+    /// The profile's text, comments included, as in `examples/machines/NAME.toml`.
+    pub text: &'static str,
+    /// Files the profile names, by the name it uses, with their text.
+    files: &'static [(&'static str, &'static str)],
+}
+
+macro_rules! example {
+    ($name:literal $(, $file:literal)*) => {
+        BuiltinProfile {
+            name: $name,
+            text: include_str!(concat!("../../../../examples/machines/", $name, ".toml")),
+            files: &[$(($file, include_str!(concat!("../../../../examples/machines/", $file)))),*],
+        }
+    };
+}
+
+/// Every built-in profile; the first is the default machine written out.
+pub const BUILTIN: &[BuiltinProfile] = &[
+    example!("marlin-ramps"),
+    example!("prusa-mk3"),
+    example!("klipper"),
+    example!("dual-extruder"),
+    example!("mixing-4in"),
+    example!("rotary"),
+    example!("inkjet-c6602"),
+    example!("binder-jet"),
+    example!("seed-controller", "seed_ntc.csv"),
+];
+
+/// The built-in profile called `name`.
+pub fn find(name: &str) -> Option<&'static BuiltinProfile> {
+    BUILTIN.iter().find(|b| b.name == name)
+}
+
+/// The names of every built-in profile, for messages (`marlin-ramps, prusa-mk3, ...`).
+pub fn names() -> String {
+    BUILTIN.iter().map(|b| b.name).collect::<Vec<_>>().join(", ")
+}
+
+impl BuiltinProfile {
+    /// The profile, checked, with the files it names taken from the program too.
+    pub fn profile(&self) -> Result<MachineProfile, MachineProfileError> {
+        MachineProfile::from_toml_reading(self.text, |name| {
+            let text = self.files.iter().find(|(n, _)| Path::new(n) == name).map(|(_, t)| t.to_string());
+            (name.to_path_buf(), text.ok_or_else(|| "not built into gweave".to_owned()))
+        })
+    }
+
+    /// What the printer is: the profile's `name`.
+    pub fn summary(&self) -> String {
+        self.profile().map(|p| p.name).unwrap_or_default()
+    }
+}
+
+/// Where a `--machine` value comes from.
+#[derive(Debug)]
+pub enum MachineSource<'a> {
+    /// A profile file (or a path that does not exist and names no built-in profile: reading it
+    /// gives the error).
+    File(&'a Path),
+    /// A built-in profile, named where no file of that name exists.
+    Builtin(&'static BuiltinProfile),
+}
+
+impl<'a> MachineSource<'a> {
+    /// A file when one exists at `value`, else the built-in profile of that name, else the file
+    /// (whose reading fails and says so).
+    pub fn of(value: &'a Path) -> Self {
+        match value.to_str().and_then(find) {
+            Some(b) if !value.exists() => MachineSource::Builtin(b),
+            _ => MachineSource::File(value),
+        }
+    }
+
+    /// The profile; a missing file is named with the built-in names beside it.
+    pub fn load(&self) -> Result<MachineProfile, MachineProfileError> {
+        match self {
+            MachineSource::Builtin(b) => b.profile(),
+            MachineSource::File(path) => match std::fs::read_to_string(path) {
+                Ok(text) => MachineProfile::from_toml_in(&text, path.parent().unwrap_or(Path::new(""))),
+                Err(e) => Err(MachineProfileError::Toml(not_found(path, &e))),
+            },
+        }
+    }
+}
+
+/// `reading PATH: ERROR`, and for a missing file, the names `--machine` also takes.
+pub fn not_found(path: &Path, e: &std::io::Error) -> String {
+    let mut message = format!("reading {}: {e}", path.display());
+    if e.kind() == std::io::ErrorKind::NotFound {
+        message.push_str(&format!(
+            " (neither a file nor a built-in profile; built in: {}; see `gweave machine list`)",
+            names()
+        ));
+    }
+    message
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_profile_loads() {
+        for b in BUILTIN {
+            let p = b.profile().unwrap_or_else(|e| panic!("{}: {e}", b.name));
+            assert!(!p.name.is_empty() && !b.summary().is_empty(), "{}", b.name);
+        }
+        let seed = find("seed-controller").unwrap().profile().unwrap();
+        assert!(seed.thermal.thermistor_table_entries.is_some());
+    }
+
+    #[test]
+    fn the_default_machine_is_the_first_builtin() {
+        let written = BUILTIN[0].profile().unwrap();
+        assert_eq!(
+            MachineProfile { name: MachineProfile::default().name, ..written },
+            MachineProfile::default()
+        );
+    }
+
+    #[test]
+    fn machine_klipper_is_a_name_not_a_missing_file() {
+        let p = MachineSource::of(Path::new("klipper")).load().unwrap();
+        assert_eq!(p.name, "Klipper cartesian");
+        let mk3 = MachineSource::of(Path::new("prusa-mk3")).load().unwrap();
+        assert_eq!((mk3.bed.x_mm, mk3.bed.y_min_mm, mk3.motion.steps.e), (255.0, -4.0, 280.0));
+        let missing = MachineSource::of(Path::new("klipperr")).load().unwrap_err().to_string();
+        assert!(missing.contains("reading klipperr: "), "{missing}");
+        assert!(missing.contains("built in: marlin-ramps, prusa-mk3, klipper,"), "{missing}");
+    }
+}
