@@ -11,19 +11,23 @@
 //! `M73 Q.. S..` (silent mode), as Prusa's firmware reads them.
 //!
 //! A transform that adds purges or changes feed rates makes every one of these false. The
-//! [`MetadataPass`] rewrites them in a second streaming pass over the written file, from
+//! [`MetadataPass`] rewrites them in a second streaming copy of the written file, from
 //! [`Figures`] measured on that file (its filament by the `stats` count, its times by the
 //! virtual printer's estimate: the caller, which can depend on the estimator, fills them in).
 //! Lines it does not know are copied byte for byte; a file that carries no such line (a
-//! generated one) gets a PrusaSlicer-style footer, so `stats` can compare.
+//! generated one) gets a PrusaSlicer-style footer, so `stats` can compare. The copy only splits
+//! lines ([`MetadataPass::copy`]): what it rewrites is found by its first bytes, so nothing is
+//! lexed, and it runs at the speed of `memchr` rather than of the parser.
 //!
 //! It also writes the run's header, one comment line `; gweave 0.1.0 mix -c mix.toml
 //! (generated)`, which [`earlier_runs`] finds again: running the same transform on its own
 //! output would stack (shift the changes twice, purge twice), and the caller refuses it.
 
-use std::io::{self, BufRead, Write};
+use std::io::{self, BufRead, Read, Write};
+use std::path::Path;
 
-use crate::pass::{Ctx, Flow, Pass, PassError, Step};
+use crate::error::Error;
+use crate::gcode::reader::{LineReader, Part};
 use crate::stats::DEFAULT_FILAMENT_DIAMETER_MM;
 
 /// The start of gweave's header line.
@@ -134,7 +138,7 @@ pub fn is_progress_line(line: &[u8]) -> bool {
 }
 
 /// The second pass: the header first, then the file with its metadata rewritten from
-/// [`Figures`], and a footer if it had none.
+/// [`Figures`], and a footer if it had none ([`MetadataPass::copy`]).
 pub struct MetadataPass {
     figures: Figures,
     header: String,
@@ -294,14 +298,37 @@ impl MetadataPass {
     }
 }
 
-impl Pass for MetadataPass {
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
-        let bytes = ctx.line.bytes;
+impl MetadataPass {
+    /// Copies `input` (read from `path`) to `out` with the header and the metadata; errors
+    /// name `path` for a read and `shown` (the output the user named) for a write. Lines are
+    /// split as every pass splits them ([`LineReader`]): the pieces of a line longer than
+    /// [`MAX_LINE`](crate::gcode::reader::MAX_LINE) are copied as they are.
+    pub fn copy(
+        mut self,
+        input: impl Read,
+        path: &Path,
+        shown: &Path,
+        out: &mut dyn Write,
+    ) -> crate::Result<()> {
+        let mut reader = LineReader::new(input);
+        let written = |e| Error::io(shown, e);
+        while let Some(line) = reader.next_line().map_err(|e| Error::io(path, e))? {
+            if line.part == Part::Whole {
+                self.line(line.bytes, line.eol, out).map_err(written)?;
+            } else {
+                out.write_all(line.bytes).and_then(|()| out.write_all(line.eol)).map_err(written)?;
+            }
+        }
+        self.finish(out).map_err(written)
+    }
+
+    /// One whole line, `bytes` without its line ending `eol`.
+    fn line(&mut self, bytes: &[u8], eol: &[u8], out: &mut dyn Write) -> io::Result<()> {
         let cura_flavour_first = self.first_line && bytes.starts_with(b";FLAVOR:");
         if self.first_line {
             self.first_line = false;
-            if !ctx.line.eol.is_empty() {
-                self.eol = ctx.line.eol.to_vec();
+            if !eol.is_empty() {
+                self.eol = eol.to_vec();
             }
             // Ultimaker's printers read the Griffin header only at the very top, and Cura's
             // post-processing scripts expect its `;FLAVOR:` line to open the file (its first
@@ -310,19 +337,21 @@ impl Pass for MetadataPass {
                 self.write_header(out)?;
             }
         }
-        match self.rewrite(bytes) {
-            Some(new) => out.write_all(&new)?,
-            None => out.write_all(bytes)?,
-        }
-        out.write_all(ctx.line.eol)?;
-        self.open_line = ctx.line.eol.is_empty();
+        // Only comments and `M73` are rewritten: any other line is copied without a look.
+        let rewritten = match bytes.trim_ascii_start().first() {
+            Some(b';' | b'M' | b'm') => self.rewrite(bytes),
+            _ => None,
+        };
+        out.write_all(rewritten.as_deref().unwrap_or(bytes))?;
+        out.write_all(eol)?;
+        self.open_line = eol.is_empty();
         if !self.header_written && (bytes == b";END_OF_HEADER" || cura_flavour_first) {
             self.write_header(out)?;
         }
-        Ok(Flow::Continue)
+        Ok(())
     }
 
-    fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> Result<(), PassError> {
+    fn finish(&mut self, out: &mut dyn Write) -> io::Result<()> {
         if self.first_line || !self.header_written {
             self.write_header(out)?;
         }
@@ -368,23 +397,12 @@ fn numbers(v: &[u8]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pass::{drive_reader, Quiet, Strictness};
 
     fn rewrite(text: &str, figures: Figures) -> String {
-        let mut pass = MetadataPass::new(figures, header_line("mix a.gcode -o b.gcode"));
+        let pass = MetadataPass::new(figures, header_line("mix a.gcode -o b.gcode"));
         let mut out = Vec::new();
         let path = std::path::Path::new("t.gcode");
-        drive_reader(
-            text.as_bytes(),
-            path,
-            None,
-            Default::default(),
-            Strictness::Lenient,
-            &mut Quiet,
-            &mut pass,
-            &mut out,
-        )
-        .unwrap();
+        pass.copy(text.as_bytes(), path, path, &mut out).unwrap();
         String::from_utf8(out).unwrap()
     }
 

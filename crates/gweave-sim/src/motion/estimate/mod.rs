@@ -50,7 +50,7 @@ use gweave::colour::dialect::{DialectError, MixingState};
 use gweave::firmware::Firmware;
 use gweave::gcode::layers::Feature;
 use gweave::gcode::line::Block;
-use gweave::gcode::reader::{Chunk, ChunkReader};
+use gweave::gcode::reader::{Chunk, ChunkReader, RawLine};
 use gweave::gcode::state::{Effect, State};
 use thiserror::Error;
 
@@ -244,6 +244,17 @@ impl Estimator {
     pub fn line(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
         let effect = self.parse(raw);
         skip_mixing_errors(self.run(raw, &effect))
+    }
+
+    /// [`Estimator::line`] for a line from a [`LineReader`](gweave::gcode::reader::LineReader),
+    /// whose look-ahead bytes speed up the lexer: the same result to the bit. The pieces of a
+    /// line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE) count as one malformed
+    /// line ([`Estimator::skip_long_line`]).
+    pub fn read_line(&mut self, line: &RawLine<'_>) -> Result<(), EstimateError> {
+        let ran = self.front.step(line, &mut self.jobs);
+        // What the line did before an error still happens, as in firmware.
+        self.execute()?;
+        skip_mixing_errors(ran)
     }
 
     /// First half of [`Estimator::line`]: parse the line and apply it to the modal state; say

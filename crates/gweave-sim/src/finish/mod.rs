@@ -3,37 +3,29 @@
 //! own output, and it writes metadata that is true for the file as written.
 //!
 //! The transform writes into a scratch file (registered like every temporary file, so Ctrl-C
-//! removes it). One streaming pass over that file measures it: the filament by the `stats` count
-//! and the print time by the estimator, with the machine limits the slicer wrote into the file
-//! (normal and silent mode), else the default machine's. A second pass writes it to the real
-//! target (a temporary file renamed into place, `--in-place` with its `.bak`, or standard
-//! output) with the run's header on top and the slicer's figures and `M73` progress rewritten
-//! (`gweave::post::metadata`). Memory stays bounded: the passes stream, and what is kept is one
-//! time per progress line. The estimator lives here, which the engine cannot depend on, so this
-//! crate joins them.
+//! removes it). One streaming read of that file measures it on several cores ([`measure`]): the
+//! filament by the `stats` count and the print time by the estimator, with the machine limits
+//! the slicer wrote into the file (normal and silent mode), else the default machine's. A copy
+//! that only splits lines writes it to the real target (a temporary file renamed into place,
+//! `--in-place` with its `.bak`, or standard output) with the run's header on top and the
+//! slicer's figures and `M73` progress rewritten (`gweave::post::metadata`). Memory stays
+//! bounded: the passes stream, and what is kept is one time per progress line. The estimator
+//! lives here, which the engine cannot depend on, so this crate joins them.
 
 use std::fs::File;
-use std::io::{BufReader, Write};
+use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
-use gweave::firmware::Firmware;
 use gweave::gcode::container;
-use gweave::gcode::ends::read_ends;
-use gweave::gcode::flavour::flavour_in;
-use gweave::gcode::state::{State, StateOptions};
 use gweave::gcode::temp::TempFile;
 use gweave::gcode::writer::{Output, Target};
-use gweave::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Step, Strictness};
-use gweave::post::metadata::{
-    earlier_runs, header_line, is_progress_line, read_setting, Figures, MetadataPass,
-};
-use gweave::run::Run;
-use gweave::stats::StatsPass;
+use gweave::post::metadata::{earlier_runs, header_line, Figures, MetadataPass};
 
-use crate::motion::estimate::{estimate_as, Estimate, EstimateError, Estimator};
-use crate::motion::limits::MotionProfile;
-use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
-use crate::profile::MachineProfile;
+use crate::motion::estimate::EstimateError;
+
+mod measure;
+
+use measure::measure;
 
 /// A result of finishing an output.
 pub type Result<T, E = FinishError> = std::result::Result<T, E>;
@@ -125,18 +117,17 @@ fn finish(
     command_line: &str,
     own_time_s: Option<f64>,
 ) -> Result<Option<PathBuf>> {
-    let (mut figures, flavour) = measure(path)?;
+    let mut figures = measure(path)?;
     if let Some(t_s) = own_time_s {
         scale_times(&mut figures, t_s);
     }
     let mut out = Output::create(target, input)?;
     let written = out.dest().map(Path::to_path_buf);
-    let options = StateOptions::default().for_flavour(flavour.as_deref());
     let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
-    let mut pass = MetadataPass::new(figures, header_line(command_line));
+    let pass = MetadataPass::new(figures, header_line(command_line));
     // Write errors name the output the user named, not the scratch file read here.
     let shown = out.shown();
-    drive_reader(file, path, Some(&shown), options, Strictness::Lenient, &mut Quiet, &mut pass, &mut out)?;
+    pass.copy(file, path, &shown, &mut out)?;
     out.commit()?;
     Ok(written)
 }
@@ -160,140 +151,12 @@ fn scratch_dir(beside: Option<&Path>) -> PathBuf {
     }
 }
 
-/// Measures the written file: its filament, its settings, its estimated times.
-///
-/// The time at each progress line needs the estimator fed line by line in the same pass; a
-/// file without progress lines is estimated on three threads instead (`estimate_as`, several
-/// times faster). Progress lines are looked for in the file's ends (PrusaSlicer's `M73 P0` in
-/// its first lines, Cura's last `;TIME_ELAPSED:` in its last) and counted by the pass: a file
-/// with them only in its middle is read once more.
-fn measure(path: &Path) -> Result<(Figures, Option<String>)> {
-    // The file's ends are read once: the machine limits, what the file holds, its flavour.
-    let ends = read_ends(path).map_err(|e| gweave::Error::io(path, e))?;
-    let flavour = flavour_in(&ends);
-    // Read as `stats` reads it (the metadata's filament comes from its pass).
-    let firmware = Firmware::resolve(None, flavour.as_deref());
-    let base = MachineProfile::default().motion;
-    let normal = slicer_limits(&ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
-    let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
-    // A second estimate only for a file that shows silent-mode figures (PrusaSlicer's footer is
-    // in its last 256 KiB, `M73 Q0 S..` in its first lines) with limits of their own.
-    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
-    let silent =
-        (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
-    let per_line = contains(b"M73 ") || contains(b";TIME_ELAPSED:");
-    let first_estimators = per_line.then(|| estimators(&normal, silent.as_ref(), firmware)).transpose()?;
-    let (scan, state) = scan(path, &flavour, first_estimators)?;
-    let (scan, state) = match scan.estimators {
-        None if scan.progress_lines > 0 => {
-            self::scan(path, &flavour, Some(estimators(&normal, silent.as_ref(), firmware)?))?
-        }
-        _ => (scan, state),
-    };
-    let stats = scan.stats.into_stats(&state);
-    let (normal, silent) = match scan.estimators {
-        Some((normal, silent)) => (normal.finish(), silent.map(Estimator::finish)),
-        None => {
-            let estimate = |p: &MotionProfile| -> Result<Estimate> {
-                let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
-                Ok(estimate_as(file, p, firmware, false)?)
-            };
-            (estimate(&normal)?, silent.as_ref().map(estimate).transpose()?)
-        }
-    };
-    let silent = silent.as_ref().unwrap_or(&normal);
-    let first_layer = |e: &Estimate| e.layer_s.first().copied().unwrap_or(0.0);
-    let figures = Figures {
-        filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
-        diameter_mm: stats.filament_diameter_mm,
-        time_s: [normal.total_s, silent.total_s],
-        first_layer_s: [first_layer(&normal), first_layer(silent)],
-        ..scan.figures
-    };
-    Ok((figures, flavour))
-}
-
-/// One measuring pass over the file, with `estimators` (normal and silent mode) fed line by
-/// line if given.
-fn scan(
-    path: &Path,
-    flavour: &Option<String>,
-    estimators: Option<(Estimator, Option<Estimator>)>,
-) -> Result<(Scan, State)> {
-    let figures = Figures::default();
-    let mut scan = Scan { stats: StatsPass::new(None), estimators, figures, progress_lines: 0, error: None };
-    let run = Run::file(path).strictness(Strictness::Lenient).known_flavour(flavour.clone());
-    let state = run.scan(&mut scan)?;
-    if let Some(e) = scan.error.take() {
-        return Err(e.into());
-    }
-    Ok((scan, state))
-}
-
 /// Scales every time in `f` so that the normal mode's total is `t_s`.
 fn scale_times(f: &mut Figures, t_s: f64) {
     let k = if f.time_s[0] > 0.0 { t_s / f.time_s[0] } else { 0.0 };
     let times = f.time_s.iter_mut().chain(&mut f.first_layer_s).chain(f.progress_s.iter_mut().flatten());
     times.for_each(|t| *t *= k);
     f.time_s[0] = t_s;
-}
-
-fn estimators(
-    normal: &MotionProfile,
-    silent: Option<&MotionProfile>,
-    firmware: Firmware,
-) -> Result<(Estimator, Option<Estimator>)> {
-    let estimator = |p: &MotionProfile| {
-        let mut estimator = Estimator::timing_only(p)?;
-        estimator.read_as(firmware);
-        Ok::<_, EstimateError>(estimator)
-    };
-    Ok((estimator(normal)?, silent.map(estimator).transpose()?))
-}
-
-/// The measuring pass: `stats`, the settings, the progress lines, and the estimators when the
-/// time at each progress line is needed.
-struct Scan {
-    stats: StatsPass,
-    /// Normal mode's, and silent mode's when its limits differ.
-    estimators: Option<(Estimator, Option<Estimator>)>,
-    figures: Figures,
-    progress_lines: u64,
-    /// The estimator's first error (the pass goes on to the end, then reports it).
-    error: Option<EstimateError>,
-}
-
-impl Pass for Scan {
-    fn reads_words(&self) -> bool {
-        false
-    }
-
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
-        self.stats.line(ctx, out)?;
-        let raw = ctx.line.bytes;
-        if let Some((normal, silent)) = &mut self.estimators {
-            for est in std::iter::once(normal).chain(silent.as_mut()) {
-                if let Err(e) = est.line(raw) {
-                    self.error.get_or_insert(e);
-                }
-            }
-        }
-        if self.error.is_some() {
-            // The run fails with it: nothing after it matters.
-            return Ok(Flow::Stop);
-        }
-        if let Some(c) = ctx.block.comment_text(raw) {
-            read_setting(c, &mut self.figures);
-        }
-        if is_progress_line(raw) {
-            self.progress_lines += 1;
-            if let Some((normal, silent)) = &self.estimators {
-                let t = normal.now_s();
-                self.figures.progress_s.push([t, silent.as_ref().map_or(t, Estimator::now_s)]);
-            }
-        }
-        Ok(Flow::Continue)
-    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,263 @@
+//! Measuring a written file for its metadata: its filament by the `stats` count, its settings,
+//! its estimated times (normal and silent mode) and the time at each progress line.
+//!
+//! The estimate is the costly part: Marlin's step-exact planner, about 1 900 instructions a line
+//! (docs/performance.md), twice for a file with silent-mode limits of its own. So the file is
+//! read once, by a thread of its own, and handed in chunks to one thread per estimator and to
+//! this one, which counts `stats`: the three work on as many cores as there are, at the pace of
+//! the slowest. Each estimator is fed every line in file order, as one [`Estimator`] fed line by
+//! line, so the figures are the same to the bit as a serial pass's; the channels are bounded, so
+//! the memory is a few chunks whatever the file's size, and one time per progress line.
+
+use std::io::{self, Read};
+use std::path::Path;
+use std::sync::mpsc::{self, Receiver, SyncSender};
+use std::sync::Arc;
+
+use gweave::firmware::Firmware;
+use gweave::gcode::container;
+use gweave::gcode::ends::read_ends;
+use gweave::gcode::flavour::flavour_in;
+use gweave::gcode::reader::{LineReader, Part};
+use gweave::gcode::state::StateOptions;
+use gweave::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Step, Strictness};
+use gweave::post::metadata::{is_progress_line, read_setting, Figures};
+use gweave::stats::{Stats, StatsPass};
+
+use super::Result;
+use crate::motion::estimate::{Estimate, EstimateError, Estimator};
+use crate::motion::limits::MotionProfile;
+use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
+use crate::profile::MachineProfile;
+
+/// Bytes read at a time and handed to every reader of the file.
+const CHUNK: usize = 1 << 20;
+/// Chunks in flight to each reader: what bounds the memory (a few MiB).
+const CHUNKS_IN_FLIGHT: usize = 4;
+
+/// Measures the written file at `path`.
+///
+/// The machine limits are the ones the slicer wrote into the file (normal and silent mode), else
+/// the default machine's, read from the file's ends, as the flavour.
+pub(super) fn measure(path: &Path) -> Result<Figures> {
+    let ends = read_ends(path).map_err(|e| gweave::Error::io(path, e))?;
+    let flavour = flavour_in(&ends);
+    // Read as `stats` reads it (the metadata's filament comes from its pass).
+    let firmware = Firmware::resolve(None, flavour.as_deref());
+    let base = MachineProfile::default().motion;
+    let normal = slicer_limits(&ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
+    let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
+    // A second estimate only for a file that shows silent-mode figures (PrusaSlicer's footer is
+    // in its last 256 KiB, `M73 Q0 S..` in its first lines) with limits of their own.
+    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
+    let silent =
+        (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
+    let estimator = |p: &MotionProfile| -> Result<Estimator> {
+        let mut estimator = Estimator::timing_only(p)?;
+        estimator.read_as(firmware);
+        Ok(estimator)
+    };
+    let (normal, silent) = (estimator(&normal)?, silent.as_ref().map(estimator).transpose()?);
+    let options = StateOptions::default().for_flavour(flavour.as_deref());
+    let (tally, normal, silent) = on_threads(path, options, normal, silent)?;
+    let silent = silent.as_ref().unwrap_or(&normal);
+    let first_layer = |t: &Timed| t.estimate.layer_s.first().copied().unwrap_or(0.0);
+    let figures = Figures {
+        filament_mm: tally.stats.filament.iter().map(|f| f.extruded_mm).collect(),
+        diameter_mm: tally.stats.filament_diameter_mm,
+        time_s: [normal.estimate.total_s, silent.estimate.total_s],
+        first_layer_s: [first_layer(&normal), first_layer(silent)],
+        progress_s: normal.progress_s.iter().zip(&silent.progress_s).map(|(&n, &s)| [n, s]).collect(),
+        ..tally.figures
+    };
+    Ok(figures)
+}
+
+/// The file read once and measured on threads: `stats` and the settings here, each estimator
+/// on a thread of its own.
+fn on_threads(
+    path: &Path,
+    options: StateOptions,
+    normal: Estimator,
+    silent: Option<Estimator>,
+) -> Result<(Tally, Timed, Option<Timed>)> {
+    let (to_tally, for_tally) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
+    let (to_normal, for_normal) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
+    let (to_silent, for_silent) = match silent {
+        Some(_) => {
+            let (to, from) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
+            (Some(to), Some(from))
+        }
+        None => (None, None),
+    };
+    std::thread::scope(|scope| {
+        let readers = [Some(to_tally), Some(to_normal), to_silent];
+        scope.spawn(move || spread(path, readers));
+        let normal = scope.spawn(move || timed(Chunks::new(for_normal), normal));
+        let silent =
+            silent.zip(for_silent).map(|(est, chunks)| scope.spawn(move || timed(Chunks::new(chunks), est)));
+        let tally = tally(Chunks::new(for_tally), path, options);
+        let join = |t: std::thread::ScopedJoinHandle<'_, _>| {
+            t.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
+        };
+        let normal = join(normal);
+        let silent = silent.map(join).transpose();
+        // The first line at fault, normal mode's first (a serial pass would stop there); a read
+        // error (no line) is the tally's to report, with the file's name.
+        let fault = |e: Option<&EstimateError>| e.and_then(EstimateError::line);
+        let (n, s) = (fault(normal.as_ref().err()), fault(silent.as_ref().err()));
+        match (normal, silent) {
+            (Err(e), _) if n.is_some() && (s.is_none() || n <= s) => Err(e.into()),
+            (_, Err(e)) if s.is_some() => Err(e.into()),
+            (normal, silent) => {
+                let tally = tally?;
+                Ok((tally, normal?, silent?))
+            }
+        }
+    })
+}
+
+/// The reading thread: the file in chunks to every reader, until the end or an error (passed
+/// to each). A reader that stopped (on an error of its own) is left out.
+fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<io::Result<Arc<[u8]>>>>; N]) {
+    let mut send = |chunk: io::Result<Arc<[u8]>>| {
+        for reader in &mut readers {
+            let sent = match (reader.as_ref(), &chunk) {
+                (None, _) => continue,
+                (Some(r), Ok(c)) => r.send(Ok(Arc::clone(c))),
+                (Some(r), Err(e)) => r.send(Err(io::Error::new(e.kind(), e.to_string()))),
+            };
+            if sent.is_err() {
+                *reader = None;
+            }
+        }
+        chunk.is_ok() && readers.iter().any(Option::is_some)
+    };
+    let mut input = match container::open(path) {
+        Ok(input) => input,
+        Err(e) => {
+            send(Err(e));
+            return;
+        }
+    };
+    loop {
+        let mut buf = vec![0; CHUNK];
+        match read_full(&mut input, &mut buf) {
+            Ok(0) => return,
+            Ok(n) => {
+                buf.truncate(n);
+                if !send(Ok(buf.into())) {
+                    return;
+                }
+            }
+            Err(e) => {
+                send(Err(e));
+                return;
+            }
+        }
+    }
+}
+
+/// Reads until `buf` is full or the input ends; the bytes read.
+fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match input.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
+}
+
+/// The chunks one reader receives, read as a stream.
+struct Chunks {
+    from: Receiver<io::Result<Arc<[u8]>>>,
+    chunk: Arc<[u8]>,
+    at: usize,
+}
+
+impl Chunks {
+    fn new(from: Receiver<io::Result<Arc<[u8]>>>) -> Self {
+        Chunks { from, chunk: Arc::from(&[][..]), at: 0 }
+    }
+}
+
+impl Read for Chunks {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        while self.at == self.chunk.len() {
+            match self.from.recv() {
+                Ok(chunk) => (self.chunk, self.at) = (chunk?, 0),
+                // The reading thread is done: the end of the file.
+                Err(_) => return Ok(0),
+            }
+        }
+        let n = buf.len().min(self.chunk.len() - self.at);
+        buf[..n].copy_from_slice(&self.chunk[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
+    }
+}
+
+/// An estimator's figures: its estimate and the time at each progress line, s.
+struct Timed {
+    estimate: Estimate,
+    progress_s: Vec<f64>,
+}
+
+/// An estimator's thread: every line, as the passes split them, and the clock read after each
+/// progress line.
+fn timed(input: impl Read, mut estimator: Estimator) -> Result<Timed, EstimateError> {
+    let mut reader = LineReader::new(input);
+    let mut progress_s = Vec::new();
+    while let Some(line) = reader.next_line()? {
+        estimator.read_line(&line)?;
+        if line.part == Part::Whole && is_progress_line(line.bytes) {
+            progress_s.push(estimator.now_s());
+        }
+    }
+    Ok(Timed { estimate: estimator.finish(), progress_s })
+}
+
+/// What this thread counts: `stats` and the settings the metadata needs.
+struct Tally {
+    stats: Stats,
+    figures: Figures,
+}
+
+fn tally(input: impl Read, path: &Path, options: StateOptions) -> Result<Tally> {
+    let mut pass = TallyPass { stats: StatsPass::new(None), figures: Figures::default() };
+    let state = drive_reader(
+        input,
+        path,
+        None,
+        options,
+        Strictness::Lenient,
+        &mut Quiet,
+        &mut pass,
+        &mut io::sink(),
+    )?;
+    Ok(Tally { stats: pass.stats.into_stats(&state), figures: pass.figures })
+}
+
+/// The `stats` count and the settings ([`read_setting`]).
+struct TallyPass {
+    stats: StatsPass,
+    figures: Figures,
+}
+
+impl Pass for TallyPass {
+    fn reads_words(&self) -> bool {
+        false
+    }
+
+    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn io::Write) -> Step {
+        self.stats.line(ctx, out)?;
+        if let Some(c) = ctx.block.comment_text(ctx.line.bytes) {
+            read_setting(c, &mut self.figures);
+        }
+        Ok(Flow::Continue)
+    }
+}
