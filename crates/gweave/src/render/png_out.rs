@@ -82,6 +82,11 @@ fn paint_strokes(d: &Drawing, strokes: &[Stroke], skip_hidden: bool, progress: &
             if k.is_multiple_of(REPORT_EVERY) {
                 progress.advance(k as u64);
             }
+            // A stopped run (Python's Ctrl-C) paints no further: the picture is thrown away,
+            // and its write, if any, refused (`interrupt`).
+            if k.is_multiple_of(crate::interrupt::CHECK_EVERY) && crate::interrupt::stopped() {
+                break;
+            }
             // Polylines are cut where they are when every stroke is painted, hidden or not:
             // a polyline is skipped when all its strokes are hidden, and painted whole when one
             // is not. Nothing is painted while one is gathered, so each stroke is tested on the
@@ -94,7 +99,11 @@ fn paint_strokes(d: &Drawing, strokes: &[Stroke], skip_hidden: bool, progress: &
                 chain.visible = !(skip_hidden && opaque.hides(painter.rgba(), s));
             }
         }
-        chain.paint(&mut painter, &mut opaque);
+        // Painting a polyline is one call into the rasteriser, not interruptible: a stopped
+        // run skips the last one (a file of chained moves is one polyline, painted here).
+        if !crate::interrupt::stopped() {
+            chain.paint(&mut painter, &mut opaque);
+        }
         painter.rect(0, 0, d.width_px, d.height_px, d.background, 1.0);
     }
     img

@@ -426,6 +426,10 @@ fn strokes(
     let eye = toward_eye(options.kind);
     let mut order: Vec<(f32, Stroke)> = Vec::new();
     for (i, s) in tp.segments.iter().enumerate() {
+        // A stopped run (Python's Ctrl-C) projects no further: the drawing is thrown away.
+        if i.is_multiple_of(crate::interrupt::CHECK_EVERY) && crate::interrupt::stopped() {
+            return Vec::new();
+        }
         if !in_layers(options, s) {
             continue;
         }
