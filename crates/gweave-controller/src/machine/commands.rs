@@ -112,7 +112,7 @@ impl Controller<'_> {
             (b'M', 107) => self.fan_duty = 0,
             (b'M', 110) => {
                 if let Some(n) = w.get(b'N') {
-                    self.last_line = n as u32;
+                    self.last_line = n as i32;
                 }
             }
             (b'M', 112) => self.kill(io, None),
@@ -267,7 +267,7 @@ fn out_of_range(w: &Words) -> Option<(u8, f32, (f32, f32))> {
         (b'G', 4) => &[(b"P", DWELL_MS), (b"S", (0.0, 3600.0))],
         (b'M', 104 | 109 | 140 | 190) => &[(b"SR", TEMP_C), (b"T", (0.0, 1.0))],
         (b'M', 106) => &[(b"S", DUTY)],
-        (b'M', 110) => &[(b"N", (0.0, 2_000_000_000.0))],
+        (b'M', 110) => &[(b"N", (-1.0, 2_000_000_000.0))],
         (b'M', 92 | 201 | 203) => &[(b"XYZE", SETTING)],
         (b'M', 204) => &[(b"SPRT", SETTING)],
         (b'M', 205) => &[(b"J", (0.0, 10.0))],

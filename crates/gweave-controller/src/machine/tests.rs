@@ -110,11 +110,17 @@ fn line_numbers_and_checksums_get_marlins_replies_byte_for_byte() {
          Error:checksum mismatch, Last Line: 1\nResend: 2\nok\n\
          Error:No Checksum with line number, Last Line: 1\nResend: 2\nok\n"
     );
+    // printcore's first line: the next is N0.
+    b.send("N-1 M110 N-1*125\n");
+    b.send(&framed(0, "G90"));
+    b.run_ms(2);
+    assert_eq!(b.take(), "ok\nok\n");
+    b.send(&framed(1, "G90"));
     b.send(&framed(2, "G90"));
     b.send("M110 N41\n");
     b.send(&framed(42, "G91"));
     b.run_ms(2);
-    assert_eq!(b.take(), "ok\nok\nok\n");
+    assert_eq!(b.take(), "ok\nok\nok\nok\n");
 }
 
 #[test]
