@@ -21,7 +21,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     board.run_for(5.0)?;
     let sp = board.min_stack_pointer();
     println!("stack high-water mark: {} bytes (lowest SP {sp:#06x})", RAMEND - sp);
-    println!("step interrupt, longest: {} cycles", board.step_interrupt_max_cycles());
+    println!(
+        "step interrupt: longest {} cycles, mean {} cycles",
+        board.step_interrupt_max_cycles(),
+        board.step_interrupt_mean_cycles()
+    );
 
     // Limits out of the way, so the rate is the interrupt's, not the planner's.
     for line in [

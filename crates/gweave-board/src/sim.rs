@@ -30,6 +30,7 @@ extern "C" {
     fn gw_board_min_sp(b: *mut GwBoard) -> u16;
     fn gw_board_time_vector(b: *mut GwBoard, vector: u32);
     fn gw_board_isr_max_cycles(b: *mut GwBoard) -> u64;
+    fn gw_board_isr_mean_cycles(b: *mut GwBoard) -> u64;
 }
 
 /// What `gw_board_run` returns when the firmware stopped or crashed.
@@ -204,6 +205,12 @@ impl<W: Wires> Avr<W> {
     pub fn isr_max_cycles(&self) -> u64 {
         // SAFETY: a live board.
         unsafe { gw_board_isr_max_cycles(self.board) }
+    }
+
+    /// The mean run of the timed handler so far, cycles.
+    pub fn isr_mean_cycles(&self) -> u64 {
+        // SAFETY: a live board.
+        unsafe { gw_board_isr_mean_cycles(self.board) }
     }
 
     /// The wires, between runs.
