@@ -16,11 +16,10 @@ import json
 import os
 import re
 import subprocess
-import sys
-import time
 from pathlib import Path
 
 import pytest
+from _host import gweave_command, wait_for
 
 printcore_mod = pytest.importorskip(
     "printrun.printcore", reason="pip install --no-deps -r crates/gweave-py/requirements-host.txt"
@@ -51,11 +50,6 @@ def board_binary() -> Path:
     return built
 
 
-def gweave_command() -> list:
-    """The CLI: $GWEAVE if set (a built binary), else the installed Python package."""
-    exe = os.environ.get("GWEAVE")
-    return [exe] if exe else [sys.executable, "-m", "gweave"]
-
 
 def twin_end_steps(cut: Path, tmp: Path) -> list:
     """Where the same file ends on the controller core's twin on the host (`gweave sim` with the
@@ -67,13 +61,6 @@ def twin_end_steps(cut: Path, tmp: Path) -> list:
     assert r.returncode == 0, r.stderr
     return json.loads(report.read_text())["end_steps"]
 
-
-def wait_for(condition, timeout_s: float, what: str) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
-        time.sleep(0.01)
 
 
 def first_moves(source: Path, moves: int) -> list:
