@@ -57,3 +57,24 @@ fn printcores_n_minus_1_m110_is_understood() {
     assert_eq!(board.command("N-1 M110 N-1*125", 1.0).unwrap(), ["ok"]);
     assert_eq!(board.command(&crate::common::numbered(0, "G4 P0"), 1.0).unwrap(), ["ok"]);
 }
+
+#[test]
+fn m500_keeps_the_settings_in_eeprom_across_a_reset() {
+    let mut board = crate::common::booted(Wiring::default());
+    let m503 = |board: &mut gweave_board::Board| {
+        let lines = board.command("M503", 1.0).unwrap();
+        lines.into_iter().find(|l| l.contains("M92 ")).unwrap_or_default()
+    };
+    assert!(m503(&mut board).ends_with("M92 X80.00 Y80.00 Z400.00 E93.00"));
+    assert_eq!(board.command("M92 X100 E95.5", 1.0).unwrap().last().unwrap(), "ok");
+    assert_eq!(board.command("M500", 2.0).unwrap().last().unwrap(), "ok");
+    // The reset button: RAM is gone, the EEPROM is not.
+    board.reset();
+    board.run_until_line(|l| l == "start", 1.0).unwrap();
+    assert!(m503(&mut board).ends_with("M92 X100.00 Y80.00 Z400.00 E95.50"), "{}", m503(&mut board));
+    // And the new steps/mm drive the pins: 1 mm of X is 100 steps now.
+    for line in ["G91", "G1 X1 F600", "M400"] {
+        board.command(line, 5.0).unwrap();
+    }
+    assert_eq!(board.net_steps()[0], 100);
+}
