@@ -58,3 +58,56 @@ fn sim_on_the_controller_core_refuses_the_marlin_models_flags() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("--plot is for the Marlin model"), "{stderr}");
 }
+
+/// `gweave serve`, killed when the test ends however it ends.
+struct Serve(std::process::Child);
+
+impl Drop for Serve {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// The lines a host reads until one starts with `last`, failing after 20 s.
+fn read_through(reader: &mut impl std::io::BufRead, last: &str) -> Vec<String> {
+    let mut got = Vec::new();
+    loop {
+        let mut line = String::new();
+        assert!(reader.read_line(&mut line).unwrap() > 0, "the board hung up: {got:?}");
+        got.push(line.trim_end().to_owned());
+        if line.starts_with(last) {
+            return got;
+        }
+    }
+}
+
+#[test]
+fn serve_puts_the_controller_core_behind_the_port() {
+    use std::io::{BufReader, Write};
+    use std::net::{TcpListener, TcpStream};
+    use std::time::{Duration, Instant};
+
+    let addr = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap();
+    let profile = repo("examples/machines/gweave-ramps.toml");
+    let args = ["serve", "--tcp", &addr.to_string(), "--machine", profile.to_str().unwrap()];
+    let _server = Serve(Command::new(env!("CARGO_BIN_EXE_gweave")).args(args).spawn().unwrap());
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let host = loop {
+        if let Ok(host) = TcpStream::connect(addr) {
+            break host;
+        }
+        assert!(Instant::now() < deadline, "the server never listened");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    host.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    let mut reader = BufReader::new(host.try_clone().unwrap());
+    assert_eq!(read_through(&mut reader, "start"), ["start"]);
+    (&host).write_all(b"N0 M110 N0*125\nN1 G28*18\nN2 M114*37\n").unwrap();
+    let mut got = read_through(&mut reader, "X:");
+    got.retain(|l| l != "echo:busy: processing");
+    assert_eq!(got, ["ok", "ok", "X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0"]);
+    (&host).write_all(b"M115\n").unwrap();
+    let got = read_through(&mut reader, "FIRMWARE_NAME");
+    assert!(got.last().unwrap().starts_with("FIRMWARE_NAME:gweave-controller"), "{got:?}");
+}

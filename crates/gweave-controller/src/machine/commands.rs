@@ -20,7 +20,7 @@ enum Done {
 /// The physical range of every number a command takes: a value outside is refused whole.
 /// Feed rates up to 100 000 mm/min, positions within ±100 m, temperatures 0-500 °C, settings
 /// positive and below a million.
-const FEED_MM_MIN: (f32, f32) = (0.001, 100_000.0);
+const FEED_MM_MIN: (f32, f32) = (0.01, 100_000.0);
 const POSITION_MM: (f32, f32) = (-100_000.0, 100_000.0);
 const TEMP_C: (f32, f32) = (0.0, 500.0);
 const SETTING: (f32, f32) = (0.000_001, 1_000_000.0);
@@ -45,14 +45,13 @@ impl Controller<'_> {
                 return line(io, b"ok");
             }
         };
-        if let Some(letter) = out_of_range(&words) {
-            Reply::new()
-                .s(b"Error:Value out of range: ")
-                .s(&[letter])
-                .s(b" in \"")
-                .escaped(body)
-                .s(b"\"")
-                .send(io);
+        if let Some((letter, value, (low, high))) = out_of_range(&words) {
+            // As the virtual printer words it: `echo:M104 S = 600.00 is out of range: 0.00 to
+            // 500.00`; the line is not run, the values in force stay.
+            let Command { letter: command, code } = words.command;
+            let mut r = Reply::new();
+            r.s(b"echo:").s(&[command]).u32(u32::from(code)).s(&[b' ', letter]).s(b" = ").f2(value);
+            r.s(b" is out of range: ").f2(low).s(b" to ").f2(high).send(io);
             return line(io, b"ok");
         }
         match self.dispatch(io, &words) {
@@ -78,6 +77,8 @@ impl Controller<'_> {
                 self.steppers_enabled = 0b1111;
                 return Some(Done::Quiet);
             }
+            // Millimetres, the only unit this machine has.
+            (b'G', 21) => {}
             (b'G', 90) => self.relative = 0,
             (b'G', 91) => self.relative = 0b1111,
             (b'G', 92) => self.set_position(w),
@@ -111,7 +112,7 @@ impl Controller<'_> {
             (b'M', 107) => self.fan_duty = 0,
             (b'M', 110) => {
                 if let Some(n) = w.get(b'N') {
-                    self.last_line = n as u32;
+                    self.last_line = n as i32;
                 }
             }
             (b'M', 112) => self.kill(io, None),
@@ -256,8 +257,9 @@ fn set_axes(w: &Words, values: &mut [f32; AXES]) {
     }
 }
 
-/// The first letter whose value is outside its command's range, if any.
-fn out_of_range(w: &Words) -> Option<u8> {
+/// The first letter whose value is outside its command's range, if any: the letter, the value
+/// and the range.
+fn out_of_range(w: &Words) -> Option<(u8, f32, (f32, f32))> {
     let Command { letter, code } = w.command;
     let ranges: &[(&[u8], (f32, f32))] = match (letter, code) {
         (b'G', 0 | 1) => &[(b"XYZE", POSITION_MM), (b"F", FEED_MM_MIN)],
@@ -265,18 +267,18 @@ fn out_of_range(w: &Words) -> Option<u8> {
         (b'G', 4) => &[(b"P", DWELL_MS), (b"S", (0.0, 3600.0))],
         (b'M', 104 | 109 | 140 | 190) => &[(b"SR", TEMP_C), (b"T", (0.0, 1.0))],
         (b'M', 106) => &[(b"S", DUTY)],
-        (b'M', 110) => &[(b"N", (0.0, 2_000_000_000.0))],
+        (b'M', 110) => &[(b"N", (-1.0, 2_000_000_000.0))],
         (b'M', 92 | 201 | 203) => &[(b"XYZE", SETTING)],
         (b'M', 204) => &[(b"SPRT", SETTING)],
         (b'M', 205) => &[(b"J", (0.0, 10.0))],
         (b'M', 301) => &[(b"PID", GAIN)],
         _ => &[],
     };
-    for (letters, (low, high)) in ranges {
-        for &l in *letters {
+    for &(letters, (low, high)) in ranges {
+        for &l in letters {
             if let Some(v) = w.get(l) {
-                if !(v >= *low && v <= *high) {
-                    return Some(l);
+                if !(v >= low && v <= high) {
+                    return Some((l, v, (low, high)));
                 }
             }
         }

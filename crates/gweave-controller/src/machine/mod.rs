@@ -57,7 +57,7 @@ pub struct Controller<'q> {
     settings: Settings,
     reader: LineReader,
     /// The last line number taken (`N`).
-    last_line: u32,
+    last_line: i32,
     planner: Planner,
     prep: Prep,
     heat: Heat,
@@ -181,18 +181,16 @@ impl<'q> Controller<'q> {
             }
             Err(e) => return self.refuse(io, LineError::message(e), true),
         };
-        let mut copy = [0u8; crate::limits::MAX_LINE];
-        copy[..body.len()].copy_from_slice(body);
-        self.run_command(io, &copy[..body.len()]);
+        self.run_command(io, body);
     }
 
     /// Answers a refused line as Marlin: the error with the last line number, a request to send
     /// again from the next one (numbered lines), `ok`; the lines received after it are dropped,
     /// since the host sends them again.
     fn refuse(&mut self, io: &mut impl Io, message: &[u8], resend: bool) {
-        Reply::new().s(message).u32(self.last_line).send(io);
+        Reply::new().s(message).i32(self.last_line).send(io);
         if resend {
-            Reply::new().s(b"Resend: ").u32(self.last_line.wrapping_add(1)).send(io);
+            Reply::new().s(b"Resend: ").i32(self.last_line.wrapping_add(1)).send(io);
             self.reader.flush();
         }
         line(io, b"ok");

@@ -110,11 +110,17 @@ fn line_numbers_and_checksums_get_marlins_replies_byte_for_byte() {
          Error:checksum mismatch, Last Line: 1\nResend: 2\nok\n\
          Error:No Checksum with line number, Last Line: 1\nResend: 2\nok\n"
     );
+    // printcore's first line: the next is N0.
+    b.send("N-1 M110 N-1*125\n");
+    b.send(&framed(0, "G90"));
+    b.run_ms(2);
+    assert_eq!(b.take(), "ok\nok\n");
+    b.send(&framed(1, "G90"));
     b.send(&framed(2, "G90"));
     b.send("M110 N41\n");
     b.send(&framed(42, "G91"));
     b.run_ms(2);
-    assert_eq!(b.take(), "ok\nok\nok\n");
+    assert_eq!(b.take(), "ok\nok\nok\nok\n");
 }
 
 #[test]
@@ -143,11 +149,28 @@ fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
 }
 
 #[test]
+fn a_value_out_of_range_is_refused_and_changes_nothing() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("M104 S200\nM104 S600\nG1 X10 F0\nM105\n");
+    b.run_ms(5);
+    let t = b.take();
+    assert!(
+        t.starts_with(
+            "start\nok\necho:M104 S = 600.00 is out of range: 0.00 to 500.00\nok\n\
+             echo:G1 F = 0.00 is out of range: 0.01 to 100000.00\nok\nok T:"
+        ),
+        "{t}"
+    );
+    assert!(t.contains(" /200.00"), "{t}");
+    assert_eq!(b.t.controller.position_mm()[0], 0.0);
+}
+
+#[test]
 fn a_move_makes_exact_step_counts() {
     let mut b = Bench::hot(Settings::DEFAULT);
     let start = b.t.steps;
-    b.send("G91\nG1 X10.0125 Y-3.3 Z0.1 E1.5 F6000\nM400\nM114\n");
-    b.run_until_ok(4, 2000);
+    b.send("G21\nG91\nG1 X10.0125 Y-3.3 Z0.1 E1.5 F6000\nM400\nM114\n");
+    b.run_until_ok(5, 2000);
     // 10.0125 * 80 = 801, -3.3 * 80 = -264, 0.1 * 400 = 40, 1.5 * 93 = 139.5 -> 140.
     let moved: Vec<i64> = (0..AXES).map(|a| b.t.steps[a] - start[a]).collect();
     assert_eq!(moved, [801, -264, 40, 140]);
@@ -176,6 +199,19 @@ fn a_cold_hotend_does_not_extrude() {
     b.send("G1 E7\nM400\n");
     b.run_until_ok(2, 5000);
     assert_eq!(b.t.steps[3] - start[3], 93);
+}
+
+#[test]
+fn a_move_slower_than_the_16_bit_timer_keeps_its_pace() {
+    // 0.01 mm of Z at 1 mm/min: 4 steps 0.15 s apart (300 000 ticks, several timer periods).
+    let mut b = Bench::new(Settings::DEFAULT);
+    let start = b.t.steps[2];
+    b.send("G91\nG1 Z0.01 F1\nM400\n");
+    b.run_until_ok(3, 5000);
+    assert_eq!(b.t.steps[2] - start, 4);
+    // The whole move takes its 0.6 s (the ramps are negligible at this speed).
+    let ms = b.t.now_ms();
+    assert!((600..700).contains(&ms), "{ms} ms");
 }
 
 #[test]

@@ -38,7 +38,7 @@ impl LineError {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Checked<'a> {
     /// Its line number, if it had one: the new last line number.
-    pub number: Option<u32>,
+    pub number: Option<i32>,
     /// The command, without the line number and the checksum.
     pub body: &'a [u8],
 }
@@ -59,17 +59,23 @@ pub fn leading_number(bytes: &[u8]) -> u32 {
 }
 
 /// The line number of a line starting with `N`, if it does (used also for lines refused before
-/// the checks, to ask for them again).
-pub fn line_number(line: &[u8]) -> Option<u32> {
-    match line {
-        [b'N', rest @ ..] => Some(leading_number(rest)),
-        _ => None,
-    }
+/// the checks, to ask for them again), and the bytes it takes after the `N`. It may be negative:
+/// printcore starts a print with `N-1 M110 N-1*125`, so that the next line is `N0`. Numbers past
+/// the `i32` range saturate.
+pub fn line_number(line: &[u8]) -> Option<(i32, usize)> {
+    let [b'N', rest @ ..] = line else { return None };
+    let (negative, digits) = match rest {
+        [b'-', digits @ ..] => (true, digits),
+        _ => (false, rest),
+    };
+    let magnitude = leading_number(digits).min(i32::MAX as u32) as i32;
+    let used = usize::from(negative) + digits.iter().take_while(|b| b.is_ascii_digit()).count();
+    Some((if negative { -magnitude } else { magnitude }, used))
 }
 
 /// Checks `line` against the last line number taken.
-pub fn check(line: &[u8], last: u32) -> Result<Checked<'_>, LineError> {
-    let Some(number) = line_number(line) else {
+pub fn check(line: &[u8], last: i32) -> Result<Checked<'_>, LineError> {
+    let Some((number, used)) = line_number(line) else {
         // Unnumbered: a trailing checksum, if any, is ignored.
         let end = line.iter().position(|&b| b == b'*').unwrap_or(line.len());
         return Ok(Checked { number: None, body: trim(&line[..end]) });
@@ -86,8 +92,7 @@ pub fn check(line: &[u8], last: u32) -> Result<Checked<'_>, LineError> {
     if written.is_empty() || leading_number(written) != u32::from(sum) {
         return Err(LineError::Checksum);
     }
-    let digits = line[1..].iter().take_while(|b| b.is_ascii_digit()).count();
-    Ok(Checked { number: Some(number), body: trim(&line[1 + digits..star]) })
+    Ok(Checked { number: Some(number), body: trim(&line[1 + used..star]) })
 }
 
 fn trim(mut bytes: &[u8]) -> &[u8] {
@@ -137,5 +142,8 @@ mod tests {
         assert_eq!(check(b"N0 M110 N0*125", 41), Ok(Checked { number: Some(0), body: b"M110 N0" }));
         assert_eq!(check(b"G28", 41), Ok(Checked { number: None, body: b"G28" }));
         assert_eq!(leading_number(b"99999999999"), u32::MAX);
+        // printcore's first line.
+        assert_eq!(check(b"N-1 M110 N-1*125", 41), Ok(Checked { number: Some(-1), body: b"M110 N-1" }));
+        assert_eq!(line_number(b"N99999999999 G1"), Some((i32::MAX, 11)));
     }
 }

@@ -51,6 +51,10 @@ pub struct Profile {
     exit_v2: f32,
     cruise_v: f32,
     accel_mm_s2: f32,
+    /// `1 / accel` and `1 / cruise`, s²/mm and s/mm: divisions done once per block, not per
+    /// segment (a float division is the slowest arithmetic an AVR does).
+    inv_accel: f32,
+    inv_cruise_v: f32,
     accel_end_mm: f32,
     decel_start_mm: f32,
     len_mm: f32,
@@ -71,11 +75,14 @@ impl Profile {
             decel_len_mm = len_mm - accel_end_mm;
             cruise_v2 = entry_v2 + two_a * accel_end_mm;
         }
+        let cruise_v = sqrt(cruise_v2);
         Profile {
             entry_v2,
             exit_v2,
-            cruise_v: sqrt(cruise_v2),
+            cruise_v,
             accel_mm_s2,
+            inv_accel: 1.0 / accel_mm_s2,
+            inv_cruise_v: if cruise_v > 0.0 { 1.0 / cruise_v } else { 0.0 },
             accel_end_mm,
             decel_start_mm: len_mm - decel_len_mm,
             len_mm,
@@ -107,17 +114,33 @@ impl Profile {
         let mut t_s = 0.0;
         let (a0, a1) = (s0_mm, s1_mm.min(self.accel_end_mm));
         if a1 > a0 {
-            t_s += (self.ramp_up_v(a1) - self.ramp_up_v(a0)) / self.accel_mm_s2;
+            t_s += (self.ramp_up_v(a1) - self.ramp_up_v(a0)) * self.inv_accel;
         }
         let (c0, c1) = (s0_mm.max(self.accel_end_mm), s1_mm.min(self.decel_start_mm));
         if c1 > c0 {
-            t_s += (c1 - c0) / self.cruise_v;
+            t_s += (c1 - c0) * self.inv_cruise_v;
         }
         let (d0, d1) = (s0_mm.max(self.decel_start_mm), s1_mm);
         if d1 > d0 {
-            t_s += (self.ramp_down_v(d0) - self.ramp_down_v(d1)) / self.accel_mm_s2;
+            t_s += (self.ramp_down_v(d0) - self.ramp_down_v(d1)) * self.inv_accel;
         }
         t_s
+    }
+
+    /// [`Profile::time_s`] when the speeds at both ends are known: inside one part of the
+    /// trapezoid the time is the speed change over the acceleration, or the distance over the
+    /// cruise speed, with no square root; only a segment across a corner of the trapezoid (at
+    /// most two a block) takes the general way.
+    pub fn time_between_s(&self, s0_mm: f32, v0_mm_s: f32, s1_mm: f32, v1_mm_s: f32) -> f32 {
+        if s1_mm <= self.accel_end_mm {
+            (v1_mm_s - v0_mm_s) * self.inv_accel
+        } else if s0_mm >= self.decel_start_mm {
+            (v0_mm_s - v1_mm_s) * self.inv_accel
+        } else if s0_mm >= self.accel_end_mm && s1_mm <= self.decel_start_mm {
+            (s1_mm - s0_mm) * self.inv_cruise_v
+        } else {
+            self.time_s(s0_mm, s1_mm)
+        }
     }
 }
 
@@ -127,6 +150,10 @@ struct Running {
     events: u32,
     events_done: u32,
     mm_per_event: f32,
+    /// Events in [`SEGMENT_S`] at 1 mm/s.
+    events_per_mm_s: f32,
+    /// The speed where the next segment starts, mm/s (the last one's end speed).
+    speed_mm_s: f32,
     slot: u8,
     homing: bool,
 }
@@ -183,11 +210,14 @@ impl Prep {
         let slot = self.next_slot;
         self.next_slot = ((usize::from(slot) + 1) % STEP_BLOCKS) as u8;
         queue.write_block(slot, step);
+        let mm_per_event = len_mm / step.events as f32;
         self.running = Some(Running {
             profile: Profile::new(len_mm, entry_v2, nominal_v2, exit_v2, accel_mm_s2),
             events: step.events,
             events_done: 0,
-            mm_per_event: len_mm / step.events as f32,
+            mm_per_event,
+            events_per_mm_s: SEGMENT_S / mm_per_event,
+            speed_mm_s: sqrt(entry_v2),
             slot,
             homing: step.endstop_mask != 0,
         });
@@ -196,11 +226,11 @@ impl Prep {
 }
 
 /// The next segment of `run`: about [`SEGMENT_S`] long at the speed where it starts, at least
-/// one event.
+/// one event. One square root and one division (the interval) a segment.
 fn next_segment(run: &mut Running, carry_ticks: &mut f32, starts_block: bool) -> Segment {
     let s0_mm = run.events_done as f32 * run.mm_per_event;
-    let speed = run.profile.speed_mm_s(s0_mm);
-    let wanted = (speed * SEGMENT_S / run.mm_per_event) as u32;
+    let v0 = run.speed_mm_s;
+    let wanted = (v0 * run.events_per_mm_s) as u32;
     let events = wanted.clamp(1, u32::from(u16::MAX)).min(run.events - run.events_done);
     run.events_done += events;
     let s1_mm = if run.events_done == run.events {
@@ -208,7 +238,9 @@ fn next_segment(run: &mut Running, carry_ticks: &mut f32, starts_block: bool) ->
     } else {
         run.events_done as f32 * run.mm_per_event
     };
-    let total_ticks = run.profile.time_s(s0_mm, s1_mm) * TICKS_PER_S as f32 + *carry_ticks;
+    let v1 = run.profile.speed_mm_s(s1_mm);
+    run.speed_mm_s = v1;
+    let total_ticks = run.profile.time_between_s(s0_mm, v0, s1_mm, v1) * TICKS_PER_S as f32 + *carry_ticks;
     let interval = ((total_ticks / events as f32) as u32).max(MIN_STEP_TICKS);
     *carry_ticks = (total_ticks - (interval * events) as f32).max(0.0);
     Segment { block: run.slot, starts_block, events: events as u16, interval_ticks: interval }
@@ -227,6 +259,18 @@ mod tests {
         assert!((p.time_s(0.0, 1.25) - 0.05).abs() < 1e-6);
         assert!((p.speed_mm_s(5.0) - 50.0).abs() < 1e-4);
         assert!((p.speed_mm_s(9.9) - sqrt(200.0)).abs() < 1e-3);
+    }
+
+    #[test]
+    fn the_time_from_the_end_speeds_is_the_general_time() {
+        let p = Profile::new(10.0, 100.0, 2500.0, 400.0, 1000.0);
+        let mut s0 = 0.0;
+        while s0 < 10.0 {
+            let s1 = (s0 + 0.37f32).min(10.0);
+            let fast = p.time_between_s(s0, p.speed_mm_s(s0), s1, p.speed_mm_s(s1));
+            assert!((fast - p.time_s(s0, s1)).abs() < 1e-6, "{s0}..{s1}");
+            s0 = s1;
+        }
     }
 
     #[test]
