@@ -47,11 +47,9 @@ fn a_wrong_checksum_is_asked_again_with_resend() {
     assert_eq!(board.command(&crate::common::numbered(1, "G4 P0"), 1.0).unwrap().last().unwrap(), "ok");
 }
 
-/// printcore starts every print with `N-1 M110 N-1` (Marlin: the next line is N0). The
-/// controller core reads `N-1` as no number and answers `Unknown command`, then asks for N1
-/// again; the emulated board found it (crates/gweave-py/tests/test_board.py).
+/// printcore starts every print with `N-1 M110 N-1` (Marlin: the next line is N0). The core
+/// first read `N-1` as no number; the emulated board found it (crates/gweave-py/tests/test_board.py).
 #[test]
-#[ignore = "the controller core does not read a negative line number yet (gweave-controller)"]
 fn printcores_n_minus_1_m110_is_understood() {
     let mut board = crate::common::booted(Wiring::default());
     assert_eq!(board.command("N-1 M110 N-1*125", 1.0).unwrap(), ["ok"]);
