@@ -76,3 +76,13 @@ fn m500_keeps_the_settings_in_eeprom_across_a_reset() {
     }
     assert_eq!(board.net_steps()[0], 100);
 }
+
+#[test]
+fn a_missing_or_foreign_firmware_is_an_error_naming_it() {
+    let host_elf = std::env::current_exe().unwrap();
+    let host_elf = host_elf.to_str().unwrap();
+    for path in ["/nonexistent/gweave-ramps.elf", env!("CARGO_MANIFEST_DIR"), host_elf] {
+        let err = gweave_board::Board::new(path.as_ref(), Wiring::default()).err().expect(path);
+        assert!(err.to_string().contains(path), "{err}");
+    }
+}
