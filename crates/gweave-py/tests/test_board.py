@@ -6,7 +6,8 @@ the start of a real Cura file to it with line numbers and checksums. The board's
 where the firmware's own planner says and where the same core on the host (`gweave sim` with
 `[firmware] kind = "gweave"`) ends: the X, Y and Z positions counted on the STEP and DIR pins
 (microsteps from the endstops the file's G28 homed against) equal the `Count` of the final
-`M114` and the twin's end steps, exactly.
+`M114` and the twin's end steps, exactly. A second test prints the same file from OctoPrint's
+storage through its REST API, and the pins end on the same steps.
 
 Needs `make firmware` and the `gweave-board` binary (`cargo build -p gweave-board`; $GWEAVE_BOARD
 names it, as `make pytest` does).
@@ -114,4 +115,41 @@ def test_printcore_streams_a_cura_file_and_the_pins_agree_with_m114(data, tmp_pa
     assert pins["position_steps"][:3] == twin_end_steps(cut, tmp_path)[:3], pins
     # The file printed something: the head moved and the extruder pushed filament.
     assert min(abs(p) for p in pins["position_steps"][:2]) > 1000, pins
+    assert pins["net_steps"][3] > 0, pins
+
+
+def test_octoprint_prints_a_cura_file_on_the_board_and_the_pins_agree_with_the_twin(data, tmp_path):
+    """The same file printed from OctoPrint's storage through its REST API, as a user does."""
+    pytest.importorskip("octoprint", reason="pip install -r crates/gweave-py/requirements-octoprint.txt")
+    from test_octoprint_serve import OctoPrint, connect, stop
+
+    binary = board_binary()
+    cut = tmp_path / "cut.gcode"
+    cut.write_text("\n".join(first_moves(data / "cura" / "cura_torus.gcode", MOVES)) + "\n")
+    link, report, log = tmp_path / "ramps", tmp_path / "pins.json", tmp_path / "board.log"
+    args = ["--pty", str(link), "--fast", "--report", str(report), "--seconds", "900", "--hotend-c", "214"]
+    octo = None
+    with open(log, "w") as err:
+        proc = subprocess.Popen([str(binary), str(ELF), *args], stdout=subprocess.DEVNULL, stderr=err)
+    try:
+        wait_for(lambda: link.is_symlink() or proc.poll() is not None, 30, "the pty link")
+        assert proc.poll() is None, log.read_text()
+        octo = OctoPrint(tmp_path, link)
+        connect(octo, str(link))
+        octo.upload("local", cut, select="true", print="true")
+        wait_for(lambda: octo.job()["state"].startswith("Printing"), 30, "the print to start")
+        wait_for(lambda: octo.job()["state"] == "Operational", 300, "the print to end")
+        assert octo.job()["progress"]["completion"] == 100.0
+        # The moves still queued end before the M114 is answered.
+        answers = octo.serial_log().count(" Count ")
+        octo.post("/api/printer/command", {"commands": ["M400", "M114"]})
+        wait_for(lambda: octo.serial_log().count(" Count ") > answers, 60, "the M114 after the moves")
+        octo.post("/api/connection", {"command": "disconnect"})
+        wait_for(report.exists, 30, "the board's report")
+    finally:
+        if octo is not None:
+            octo.close()
+        stop(proc)
+    pins = json.loads(report.read_text())
+    assert pins["position_steps"][:3] == twin_end_steps(cut, tmp_path)[:3], pins
     assert pins["net_steps"][3] > 0, pins
