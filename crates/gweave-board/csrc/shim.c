@@ -57,6 +57,8 @@ typedef struct gw_board {
 	avr_cycle_count_t isr_start;
 	int in_isr;
 	avr_cycle_count_t isr_max_cycles;
+	avr_cycle_count_t isr_total_cycles;
+	uint64_t isr_count;
 	/* Levels driven from outside, per port (A..L). */
 	avr_ioport_external_t external[GW_PORTS];
 } gw_board;
@@ -273,8 +275,11 @@ int gw_board_run(gw_board *b, uint64_t until)
 				b->isr_start = avr->cycle;
 			} else if (b->in_isr && avr->sreg[S_I]) {
 				b->in_isr = 0;
-				if (avr->cycle - b->isr_start > b->isr_max_cycles)
-					b->isr_max_cycles = avr->cycle - b->isr_start;
+				avr_cycle_count_t took = avr->cycle - b->isr_start;
+				if (took > b->isr_max_cycles)
+					b->isr_max_cycles = took;
+				b->isr_total_cycles += took;
+				b->isr_count++;
 			}
 		}
 		uint16_t sp = avr->data[0x5D] | (avr->data[0x5E] << 8);
@@ -312,9 +317,17 @@ void gw_board_time_vector(gw_board *b, uint32_t vector)
 	b->timed_vector = vector * 4;
 	b->in_isr = 0;
 	b->isr_max_cycles = 0;
+	b->isr_total_cycles = 0;
+	b->isr_count = 0;
 }
 
 uint64_t gw_board_isr_max_cycles(gw_board *b)
 {
 	return b->isr_max_cycles;
+}
+
+/* The mean time of the timed handler, cycles (0 before it ran). */
+uint64_t gw_board_isr_mean_cycles(gw_board *b)
+{
+	return b->isr_count ? b->isr_total_cycles / b->isr_count : 0;
 }

@@ -21,7 +21,32 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     board.run_for(5.0)?;
     let sp = board.min_stack_pointer();
     println!("stack high-water mark: {} bytes (lowest SP {sp:#06x})", RAMEND - sp);
-    println!("step interrupt, longest: {} cycles", board.step_interrupt_max_cycles());
+    println!(
+        "step interrupt: longest {} cycles, mean {} cycles",
+        board.step_interrupt_max_cycles(),
+        board.step_interrupt_mean_cycles()
+    );
+
+    // A host streaming short segments, one line after each `ok`: does the planner run dry?
+    for line in ["G28", "G90", "G1 X10 Y10 F3600", "M400"] {
+        board.command(line, 60.0)?;
+    }
+    let first = board.axis(0).step_log.len();
+    for i in 1..=200 {
+        board.command(&format!("G1 X{:.1} F3600", 10.0 + 0.5 * f64::from(i)), 5.0)?;
+    }
+    board.command("M400", 10.0)?;
+    let log = &board.axis(0).step_log[first..];
+    // The middle of the run, away from the ramps at either end: at 60 mm/s a step every
+    // 3333 cycles; a gap of two steps' time means the planner had nothing left to run.
+    let middle = &log[log.len() / 10..log.len() * 9 / 10];
+    let longest = middle.windows(2).map(|w| w[1].0 - w[0].0).max().unwrap_or(0);
+    println!(
+        "0.5 mm segments at 60 mm/s over {} baud: longest step gap {:.2} ms ({})",
+        250_000,
+        longest as f64 / f64::from(CPU_HZ) * 1000.0,
+        if longest > 2 * 3333 { "the planner ran dry" } else { "never dry" }
+    );
 
     // Limits out of the way, so the rate is the interrupt's, not the planner's.
     for line in [

@@ -220,6 +220,11 @@ impl Board {
         self.avr.isr_max_cycles()
     }
 
+    /// The mean time of the step interrupt's handler, cycles.
+    pub fn step_interrupt_mean_cycles(&self) -> u64 {
+        self.avr.isr_mean_cycles()
+    }
+
     /// The lowest stack pointer seen: the stack's high-water mark is `0x21FF` minus it.
     pub fn min_stack_pointer(&self) -> u16 {
         self.avr.min_stack_pointer()

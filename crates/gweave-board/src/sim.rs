@@ -30,6 +30,7 @@ extern "C" {
     fn gw_board_min_sp(b: *mut GwBoard) -> u16;
     fn gw_board_time_vector(b: *mut GwBoard, vector: u32);
     fn gw_board_isr_max_cycles(b: *mut GwBoard) -> u64;
+    fn gw_board_isr_mean_cycles(b: *mut GwBoard) -> u64;
 }
 
 /// What `gw_board_run` returns when the firmware stopped or crashed.
@@ -109,16 +110,43 @@ pub struct Avr<W: Wires> {
 
 /// The firmware could not be loaded.
 #[derive(Debug, thiserror::Error)]
-#[error("simavr could not load {path} as an ATmega2560 firmware (is it an AVR ELF?)")]
+#[error("cannot load {path} as an ATmega2560 firmware: {why}")]
 pub struct LoadError {
     pub path: String,
+    pub why: &'static str,
+}
+
+/// `EM_AVR`, the ELF header's machine number of Atmel AVR code.
+const EM_AVR: u16 = 83;
+
+/// Why `elf` is not an AVR ELF file, if it is not (simavr's loader takes some other files, a
+/// directory among them, for an empty firmware).
+fn not_avr_elf(elf: &Path) -> Option<&'static str> {
+    use std::io::Read;
+    let Ok(mut file) = std::fs::File::open(elf) else { return Some("it cannot be opened") };
+    if !file.metadata().is_ok_and(|m| m.is_file()) {
+        return Some("it is not a file");
+    }
+    let mut header = [0u8; 20];
+    if file.read_exact(&mut header).is_err() || &header[..4] != b"\x7fELF" {
+        return Some("it is not an ELF file");
+    }
+    // e_machine, at byte 18 of the header; AVR ELF files are little-endian.
+    if u16::from_le_bytes([header[18], header[19]]) != EM_AVR {
+        return Some("it is not AVR code");
+    }
+    None
 }
 
 impl<W: Wires> Avr<W> {
     /// An ATmega2560 at `hz` running the ELF at `elf`, its outputs wired to `wires`.
     pub fn load(elf: &Path, hz: u32, wires: W) -> Result<Self, LoadError> {
-        let err = || LoadError { path: elf.display().to_string() };
-        let path = CString::new(elf.as_os_str().as_encoded_bytes()).map_err(|_| err())?;
+        let err = |why| LoadError { path: elf.display().to_string(), why };
+        if let Some(why) = not_avr_elf(elf) {
+            return Err(err(why));
+        }
+        let path =
+            CString::new(elf.as_os_str().as_encoded_bytes()).map_err(|_| err("its path holds a NUL"))?;
         let callback =
             Box::into_raw(Box::new(Callback { wires, drive: Drive { board: std::ptr::null_mut() } }));
         // SAFETY: the path is a valid C string; `callback` outlives the board (freed after it).
@@ -126,7 +154,7 @@ impl<W: Wires> Avr<W> {
         if board.is_null() {
             // SAFETY: made by Box::into_raw above and never shared.
             drop(unsafe { Box::from_raw(callback) });
-            return Err(err());
+            return Err(err("simavr refused it"));
         }
         // SAFETY: no run is going on, so nothing else holds the callback.
         unsafe { (*callback).drive.board = board };
@@ -204,6 +232,12 @@ impl<W: Wires> Avr<W> {
     pub fn isr_max_cycles(&self) -> u64 {
         // SAFETY: a live board.
         unsafe { gw_board_isr_max_cycles(self.board) }
+    }
+
+    /// The mean run of the timed handler so far, cycles.
+    pub fn isr_mean_cycles(&self) -> u64 {
+        // SAFETY: a live board.
+        unsafe { gw_board_isr_mean_cycles(self.board) }
     }
 
     /// The wires, between runs.

@@ -6,7 +6,8 @@ the start of a real Cura file to it with line numbers and checksums. The board's
 where the firmware's own planner says and where the same core on the host (`gweave sim` with
 `[firmware] kind = "gweave"`) ends: the X, Y and Z positions counted on the STEP and DIR pins
 (microsteps from the endstops the file's G28 homed against) equal the `Count` of the final
-`M114` and the twin's end steps, exactly.
+`M114` and the twin's end steps, exactly. A second test prints the same file from OctoPrint's
+storage through its REST API, and the pins end on the same steps.
 
 Needs `make firmware` and the `gweave-board` binary (`cargo build -p gweave-board`; $GWEAVE_BOARD
 names it, as `make pytest` does).
@@ -16,11 +17,10 @@ import json
 import os
 import re
 import subprocess
-import sys
-import time
 from pathlib import Path
 
 import pytest
+from _host import gweave_command, wait_for
 
 printcore_mod = pytest.importorskip(
     "printrun.printcore", reason="pip install --no-deps -r crates/gweave-py/requirements-host.txt"
@@ -36,8 +36,6 @@ MOVES = 300
 # the bed would only add minutes of emulated waiting, and the hotend starts hot (--hotend-c) so
 # that the file's own M109 returns at once and the extruder may move.
 BED_HEATING = re.compile(r"^M(140|190)\b")
-# What the core answers to printcore's `N-1 M110 N-1` today (see the assertion).
-N_MINUS_1_REFUSED = ["Error:Line Number is not Last Line Number+1, Last Line: 0", "Resend: 1"]
 
 
 def board_binary() -> Path:
@@ -51,11 +49,6 @@ def board_binary() -> Path:
     return built
 
 
-def gweave_command() -> list:
-    """The CLI: $GWEAVE if set (a built binary), else the installed Python package."""
-    exe = os.environ.get("GWEAVE")
-    return [exe] if exe else [sys.executable, "-m", "gweave"]
-
 
 def twin_end_steps(cut: Path, tmp: Path) -> list:
     """Where the same file ends on the controller core's twin on the host (`gweave sim` with the
@@ -67,13 +60,6 @@ def twin_end_steps(cut: Path, tmp: Path) -> list:
     assert r.returncode == 0, r.stderr
     return json.loads(report.read_text())["end_steps"]
 
-
-def wait_for(condition, timeout_s: float, what: str) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
-        time.sleep(0.01)
 
 
 def first_moves(source: Path, moves: int) -> list:
@@ -119,11 +105,8 @@ def test_printcore_streams_a_cura_file_and_the_pins_agree_with_m114(data, tmp_pa
     proc.wait(timeout=30)
     pins = json.loads(report.read_text())
 
-    # printcore starts every print with `N-1 M110 N-1`, which the controller core does not read
-    # yet (it takes `-1` for no number): one error and a resend at the start, nothing after.
-    # See crates/gweave-board/tests/board/protocol.rs, printcores_n_minus_1_m110_is_understood.
-    errors = [l for l in received if l.startswith(("Error:", "Resend:", "!!"))]
-    assert errors in ([], N_MINUS_1_REFUSED), received
+    # Not one error or resend (printcore's opening `N-1 M110 N-1` included).
+    assert not [l for l in received if l.startswith(("Error:", "Resend:", "!!"))], received
     m114 = next(l for l in received if " Count " in l)
     count = dict(re.findall(r"([XYZ]):(-?\d+)", m114.split(" Count ", 1)[1]))
     # The pins, microsteps from the endstops: where the firmware's planner says it is.
@@ -132,4 +115,41 @@ def test_printcore_streams_a_cura_file_and_the_pins_agree_with_m114(data, tmp_pa
     assert pins["position_steps"][:3] == twin_end_steps(cut, tmp_path)[:3], pins
     # The file printed something: the head moved and the extruder pushed filament.
     assert min(abs(p) for p in pins["position_steps"][:2]) > 1000, pins
+    assert pins["net_steps"][3] > 0, pins
+
+
+def test_octoprint_prints_a_cura_file_on_the_board_and_the_pins_agree_with_the_twin(data, tmp_path):
+    """The same file printed from OctoPrint's storage through its REST API, as a user does."""
+    pytest.importorskip("octoprint", reason="pip install -r crates/gweave-py/requirements-octoprint.txt")
+    from test_octoprint_serve import OctoPrint, connect, stop
+
+    binary = board_binary()
+    cut = tmp_path / "cut.gcode"
+    cut.write_text("\n".join(first_moves(data / "cura" / "cura_torus.gcode", MOVES)) + "\n")
+    link, report, log = tmp_path / "ramps", tmp_path / "pins.json", tmp_path / "board.log"
+    args = ["--pty", str(link), "--fast", "--report", str(report), "--seconds", "900", "--hotend-c", "214"]
+    octo = None
+    with open(log, "w") as err:
+        proc = subprocess.Popen([str(binary), str(ELF), *args], stdout=subprocess.DEVNULL, stderr=err)
+    try:
+        wait_for(lambda: link.is_symlink() or proc.poll() is not None, 30, "the pty link")
+        assert proc.poll() is None, log.read_text()
+        octo = OctoPrint(tmp_path, link)
+        connect(octo, str(link))
+        octo.upload("local", cut, select="true", print="true")
+        wait_for(lambda: octo.job()["state"].startswith("Printing"), 30, "the print to start")
+        wait_for(lambda: octo.job()["state"] == "Operational", 300, "the print to end")
+        assert octo.job()["progress"]["completion"] == 100.0
+        # The moves still queued end before the M114 is answered.
+        answers = octo.serial_log().count(" Count ")
+        octo.post("/api/printer/command", {"commands": ["M400", "M114"]})
+        wait_for(lambda: octo.serial_log().count(" Count ") > answers, 60, "the M114 after the moves")
+        octo.post("/api/connection", {"command": "disconnect"})
+        wait_for(report.exists, 30, "the board's report")
+    finally:
+        if octo is not None:
+            octo.close()
+        stop(proc)
+    pins = json.loads(report.read_text())
+    assert pins["position_steps"][:3] == twin_end_steps(cut, tmp_path)[:3], pins
     assert pins["net_steps"][3] > 0, pins

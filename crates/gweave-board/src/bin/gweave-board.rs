@@ -41,8 +41,17 @@ struct Args {
 /// Board time run between two looks at the pty: 1 ms.
 const TICK_S: f64 = 0.001;
 
-fn main() -> anyhow::Result<()> {
-    let args = Args::parse();
+fn main() -> std::process::ExitCode {
+    match run(Args::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("gweave-board: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
     let mut board = Board::new(&args.elf, Wiring::default())?;
     if let Some(c) = args.hotend_c {
         board.shield_mut().plants[0].heater.set_temperature(c);

@@ -56,3 +56,32 @@ fn an_open_thermistor_halts_with_the_heaters_off() {
     board.run_for(1.0).unwrap();
     assert_eq!(board.net_steps(), [0; 5]);
 }
+
+#[test]
+fn m190_s60_heats_the_bed_then_holds_it() {
+    let mut board = crate::common::booted(Wiring::default());
+    // A bed still warm from the last print (45 °C): the same path through D8 and A14 as from
+    // cold, in a third of the board time.
+    board.shield_mut().plants[1].heater.set_temperature(45.0);
+    board.send_line("M190 S60");
+    let mut peak_c = f64::MIN;
+    loop {
+        board.run_for(0.1).unwrap();
+        peak_c = peak_c.max(board.plant(1).heater.sensor_c());
+        if board.lines().iter().any(|l| l == "ok") {
+            break;
+        }
+        assert!(board.now_s() < 200.0, "M190 still waiting at {} C", board.plant(1).heater.sensor_c());
+    }
+    let (mut low_c, settled_s) = (f64::MAX, board.now_s() + 10.0);
+    while board.now_s() < settled_s + 30.0 {
+        board.run_for(0.1).unwrap();
+        let t = board.plant(1).heater.sensor_c();
+        peak_c = peak_c.max(t);
+        if board.now_s() >= settled_s {
+            low_c = low_c.min(t);
+        }
+    }
+    assert!(peak_c <= 63.0, "overshoot to {peak_c} C");
+    assert!(low_c >= 59.0 && peak_c <= 61.0, "held between {low_c} and {peak_c} C");
+}

@@ -47,13 +47,42 @@ fn a_wrong_checksum_is_asked_again_with_resend() {
     assert_eq!(board.command(&crate::common::numbered(1, "G4 P0"), 1.0).unwrap().last().unwrap(), "ok");
 }
 
-/// printcore starts every print with `N-1 M110 N-1` (Marlin: the next line is N0). The
-/// controller core reads `N-1` as no number and answers `Unknown command`, then asks for N1
-/// again; the emulated board found it (crates/gweave-py/tests/test_board.py).
+/// printcore starts every print with `N-1 M110 N-1` (Marlin: the next line is N0). The core
+/// first read `N-1` as no number; the emulated board found it (crates/gweave-py/tests/test_board.py).
 #[test]
-#[ignore = "the controller core does not read a negative line number yet (gweave-controller)"]
 fn printcores_n_minus_1_m110_is_understood() {
     let mut board = crate::common::booted(Wiring::default());
     assert_eq!(board.command("N-1 M110 N-1*125", 1.0).unwrap(), ["ok"]);
     assert_eq!(board.command(&crate::common::numbered(0, "G4 P0"), 1.0).unwrap(), ["ok"]);
+}
+
+#[test]
+fn m500_keeps_the_settings_in_eeprom_across_a_reset() {
+    let mut board = crate::common::booted(Wiring::default());
+    let m503 = |board: &mut gweave_board::Board| {
+        let lines = board.command("M503", 1.0).unwrap();
+        lines.into_iter().find(|l| l.contains("M92 ")).unwrap_or_default()
+    };
+    assert!(m503(&mut board).ends_with("M92 X80.00 Y80.00 Z400.00 E93.00"));
+    assert_eq!(board.command("M92 X100 E95.5", 1.0).unwrap().last().unwrap(), "ok");
+    assert_eq!(board.command("M500", 2.0).unwrap().last().unwrap(), "ok");
+    // The reset button: RAM is gone, the EEPROM is not.
+    board.reset();
+    board.run_until_line(|l| l == "start", 1.0).unwrap();
+    assert!(m503(&mut board).ends_with("M92 X100.00 Y80.00 Z400.00 E95.50"), "{}", m503(&mut board));
+    // And the new steps/mm drive the pins: 1 mm of X is 100 steps now.
+    for line in ["G91", "G1 X1 F600", "M400"] {
+        board.command(line, 5.0).unwrap();
+    }
+    assert_eq!(board.net_steps()[0], 100);
+}
+
+#[test]
+fn a_missing_or_foreign_firmware_is_an_error_naming_it() {
+    let host_elf = std::env::current_exe().unwrap();
+    let host_elf = host_elf.to_str().unwrap();
+    for path in ["/nonexistent/gweave-ramps.elf", env!("CARGO_MANIFEST_DIR"), host_elf] {
+        let err = gweave_board::Board::new(path.as_ref(), Wiring::default()).err().expect(path);
+        assert!(err.to_string().contains(path), "{err}");
+    }
 }
