@@ -15,7 +15,7 @@ use crate::to_json;
 // --- gweave-sim: the virtual printer ---
 
 /// `machine=`: a profile file or a built-in profile's name (`gweave machine list`).
-fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::MachineProfile> {
+pub(crate) fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::MachineProfile> {
     use gweave_sim::builtin::MachineSource;
     let Some(path) = machine else {
         return Ok(gweave_sim::MachineProfile::default());

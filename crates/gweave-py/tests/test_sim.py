@@ -61,3 +61,12 @@ def test_machine_replies_like_marlin() -> None:
     assert m.execute("M112") == ["Error:Printer halted. kill() called!"]
     assert m.now_s > 0
     assert m.report()["halted"] is True
+
+
+def test_check_against_a_machine_profiles_bed(tmp_path: Path) -> None:
+    # The purge line of Prusa's start G-code runs at Y -3: on the MK3S's bed, off one from Y 0.
+    g = tmp_path / "purge-line.gcode"
+    g.write_text("M104 S215\nG1 Y-3.0 F1000\nG1 X60 E9\n")
+    mk3 = gweave.check(g, machine="prusa-mk3")
+    assert (mk3["warnings"], mk3["bed"]["y_mm"]) == (0, [-4.0, 212.5])
+    assert gweave.check(g, machine=MACHINES / "marlin-ramps.toml")["warnings"] == 2

@@ -27,7 +27,7 @@ TARGET = {"output": "output", "in-place": "in_place", "no-backup": "backup", "fo
 # command -> (function, {flag: keyword, or "-" and the reason}, positional arguments)
 MAP = {
     "stats": ("stats", {"filament-diameter": "filament_diameter", "lenient": "lenient"}, ["path"]),
-    "check": ("check", {"bed": "bed", "max-feed": "max_feed", "strict": "strict"}, ["path"]),
+    "check": ("check", {"bed": "bed", "machine": "machine", "max-feed": "max_feed", "strict": "strict"}, ["path"]),
     "cat": ("cat", {**TARGET, "lenient": "lenient"}, ["path"]),
     "sim": (
         "sim",

@@ -53,7 +53,7 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let bed = match &args.machine {
-        Some(m) => Some(machine_bed(m)?),
+        Some(m) => Some(load_machine(m)?.bed.to_check()?),
         None => args.bed,
     };
     let options = CheckOptions { bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
@@ -81,13 +81,6 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
         })?;
     }
     Ok(if total.failed_files > 0 { ExitCode::FAILURE } else { ExitCode::SUCCESS })
-}
-
-/// The build volume of a machine profile, as a bed to check moves against.
-fn machine_bed(machine: &Path) -> Result<Bed> {
-    let b = load_machine(machine)?.bed;
-    let lo = [b.x_min_mm, b.y_min_mm];
-    Ok(Bed::new(lo, [lo[0] + b.x_mm, lo[1] + b.y_mm], Some(b.z_mm))?)
 }
 
 /// A file's findings, one line per kind (with how many and where), then (without -q) the bed

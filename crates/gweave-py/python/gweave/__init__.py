@@ -80,6 +80,7 @@ def check(
     path: PathLike,
     *,
     bed: Union[str, Sequence[float], None] = None,
+    machine: Optional[PathLike] = None,
     max_feed: Optional[float] = None,
     strict: bool = False,
 ) -> Report:
@@ -88,11 +89,16 @@ def check(
     ``bed`` is the printable volume in mm as ``--bed`` reads it: ``"X,Y,Z"`` from the origin or
     ``"X0,Y0,X1,Y1[,Z]"`` from a corner, as text or as a sequence of those 3, 4 or 5 numbers.
     Without it, the bed the slicer's settings in the file give (PrusaSlicer's ``bed_shape``,
-    Cura's ``machine_width``...), if any. The report has ``errors``, ``warnings``, ``findings``
+    Cura's ``machine_width``...), if any; ``machine`` (a profile file or a built-in name such as
+    ``"prusa-mk3"``) checks against that machine's bed instead. The report has ``errors``, ``warnings``, ``findings``
     (line, column, kind, severity), the ``bed`` used and ``bed_from``, and ``failed``: whether
     the file fails (an error, or with ``strict=True`` a warning too; the CLI's exit code 1).
     """
-    return json.loads(_gweave.check_json(_path(path, "path"), bed=bed, max_feed=max_feed, strict=strict))
+    return json.loads(
+        _gweave.check_json(
+            _path(path, "path"), bed=bed, machine=_opt_path(machine, "machine"), max_feed=max_feed, strict=strict
+        )
+    )
 
 
 def cat(

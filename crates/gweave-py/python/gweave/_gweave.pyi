@@ -4,7 +4,12 @@ __version__: str
 
 def stats_json(path: str, *, filament_diameter: Optional[float] = None, lenient: bool = False) -> str: ...
 def check_json(
-    path: str, *, bed: Union[str, Sequence[float], None] = None, max_feed: Optional[float] = None, strict: bool = False
+    path: str,
+    *,
+    bed: Union[str, Sequence[float], None] = None,
+    machine: Optional[str] = None,
+    max_feed: Optional[float] = None,
+    strict: bool = False,
 ) -> str: ...
 def cat_json(
     path: str,

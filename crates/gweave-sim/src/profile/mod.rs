@@ -158,6 +158,12 @@ impl Bed {
             (0.0, self.z_mm),
         ]
     }
+
+    /// The volume `gweave check --machine` holds moves to: this one.
+    pub fn to_check(self) -> Result<gweave::bed::Bed, gweave::bed::BedError> {
+        let [x, y, z] = self.ranges();
+        gweave::bed::Bed::new([x.0, y.0], [x.1, y.1], Some(z.1))
+    }
 }
 
 /// Which end of an axis its endstop is at.
