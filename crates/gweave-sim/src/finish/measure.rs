@@ -55,6 +55,8 @@ pub(super) fn measure(path: &Path) -> Result<Figures> {
     let estimator = |p: &MotionProfile| -> Result<Estimator> {
         let mut estimator = Estimator::timing_only(p)?;
         estimator.read_as(firmware);
+        // The metadata needs the total and the first layer: memory stays flat with the layers.
+        estimator.first_layer_only();
         Ok(estimator)
     };
     let (normal, silent) = (estimator(&normal)?, silent.as_ref().map(estimator).transpose()?);
@@ -259,5 +261,66 @@ impl Pass for TallyPass {
             read_setting(c, &mut self.figures);
         }
         Ok(Flow::Continue)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The serial pass the threads replaced: one estimator per mode fed every whole line, the
+    /// clock read after each progress line.
+    fn serial(text: &[u8], profile: &MotionProfile) -> ([f64; 2], Vec<f64>) {
+        let mut est = Estimator::timing_only(profile).unwrap();
+        est.read_as(Firmware::Marlin);
+        let (mut reader, mut progress_s) = (LineReader::new(text), Vec::new());
+        while let Some(line) = reader.next_line().unwrap() {
+            if line.part == Part::Whole {
+                est.line(line.bytes).unwrap();
+                if is_progress_line(line.bytes) {
+                    progress_s.push(est.now_s());
+                }
+            }
+        }
+        let est = est.finish();
+        ([est.total_s, est.layer_s[0]], progress_s)
+    }
+
+    /// Regression: the metadata was measured by a serial pass after the transform (purge-shift
+    /// 17x `cat`); the threads must give its figures to the bit, both modes.
+    #[test]
+    fn the_threaded_measure_gives_the_serial_figures_to_the_bit() {
+        let fixture =
+            format!("{}/../../tests/data/prusaslicer/pr_bunny_3tool_rel.gcode", env!("CARGO_MANIFEST_DIR"));
+        let whole = std::fs::read_to_string(fixture).unwrap();
+        let lines: Vec<&str> = whole.lines().collect();
+        // Its first 6000 lines with progress lines in both modes every 500, and its settings
+        // block (the silent mode's own limits).
+        let mut text = String::new();
+        for (i, line) in lines[..6000].iter().chain(&lines[lines.len() - 350..]).enumerate() {
+            if i % 500 == 0 {
+                text.push_str("M73 P0 R0\nM73 Q0 S0\n");
+            }
+            text.push_str(line);
+            text.push('\n');
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m73.gcode");
+        std::fs::write(&path, &text).unwrap();
+        let figures = measure(&path).unwrap();
+        let ends = read_ends(&path).unwrap();
+        let base = MachineProfile::default().motion;
+        let normal = slicer_limits(&ends, &base).unwrap().profile;
+        let silent = slicer_limits_silent(&ends, &base).unwrap().profile;
+        assert_ne!(normal, silent);
+        let (normal_s, normal_progress) = serial(text.as_bytes(), &normal);
+        let (silent_s, silent_progress) = serial(text.as_bytes(), &silent);
+        assert_eq!(figures.time_s.map(f64::to_bits), [normal_s[0].to_bits(), silent_s[0].to_bits()]);
+        assert_eq!(figures.first_layer_s.map(f64::to_bits), [normal_s[1].to_bits(), silent_s[1].to_bits()]);
+        let expected: Vec<[f64; 2]> =
+            normal_progress.into_iter().zip(silent_progress).map(|(n, s)| [n, s]).collect();
+        assert_eq!(figures.progress_s.len(), 2 * 13);
+        assert_eq!(figures.progress_s, expected);
+        assert!(figures.filament_mm.iter().sum::<f64>() > 100.0, "{figures:?}");
     }
 }
