@@ -70,7 +70,7 @@ printf "%-22s %8.3f s %8s MB/s   %sx faster than gcodeparser, %sx faster than gc
   "gweave stats" "$t_small" "$(mbps "$ssize" "$t_small")" "$(ratio "$t_gp" "$t_small")" "$(ratio "$t_gl" "$t_small")"
 
 for extra in "$ROOT"/bench/[a-z]*.sh; do
-  case "$(basename "$extra")" in run.sh | lib.sh) continue ;; esac
+  case "$(basename "$extra")" in run.sh | lib.sh | guard.sh) continue ;; esac
   echo "== $(basename "$extra" .sh)"
   bash "$extra" "$GWEAVE"
 done
@@ -80,11 +80,18 @@ python3 - "$BENCH_GOALS" "$(cut -d' ' -f1-3 /proc/loadavg)" <<'PY'
 import sys
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1]) if l.strip()]
 print(f"load average {sys.argv[2]}")
-short = 0
+at_goal = 0
 for label, value, op, goal, unit in rows:
     v, g = float(value), float(goal)
     ok = v <= g if op == "<=" else v >= g
-    short += not ok
+    at_goal += ok
     print(f"  {label:44} {v:9.2f} {unit:22} goal {op} {g:g}   {'ok' if ok else 'SHORT'}")
-print(f"{len(rows) - short} of {len(rows)} figures at their goal" + (f", {short} short" if short else ""))
+# A figure whose script skipped (no klipper_estimator, no pybgcode) is short of its goal too.
+expected = ["stats,", "check", "purge-shift,", "purge-shift memory", "mix (3-tool map)", "mix memory",
+            "raster", "estimate,", "estimate:", "sim with", "stats of PrusaSlicer"]
+missing = [n for n in expected if not any(r[0].startswith(n) for r in rows)]
+for name in missing:
+    print(f"  {name + ' ...':44} {'':9} {'not measured (skipped)':22} {'':13}   SHORT")
+total = len(rows) + len(missing)
+print(f"{at_goal} of {total} figures at their goal" + (f", {total - at_goal} short" if at_goal < total else ""))
 PY
