@@ -30,6 +30,9 @@ use crate::motion::limits::MotionProfile;
 use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
 use crate::profile::MachineProfile;
 
+/// A chunk of the file, shared by its readers, or the error reading it.
+type Shared = io::Result<Arc<[u8]>>;
+
 /// Bytes read at a time and handed to every reader of the file.
 const CHUNK: usize = 1 << 20;
 /// Chunks in flight to each reader: what bounds the memory (a few MiB).
@@ -121,8 +124,8 @@ fn on_threads(
 
 /// The reading thread: the file in chunks to every reader, until the end or an error (passed
 /// to each). A reader that stopped (on an error of its own) is left out.
-fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<io::Result<Arc<[u8]>>>>; N]) {
-    let mut send = |chunk: io::Result<Arc<[u8]>>| {
+fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<Shared>>; N]) {
+    let mut send = |chunk: Shared| {
         for reader in &mut readers {
             let sent = match (reader.as_ref(), &chunk) {
                 (None, _) => continue,
@@ -143,8 +146,9 @@ fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<io::Resul
         }
     };
     loop {
+        // A short read makes a short chunk: the readers take the stream in any pieces.
         let mut buf = vec![0; CHUNK];
-        match read_full(&mut input, &mut buf) {
+        match input.read(&mut buf) {
             Ok(0) => return,
             Ok(n) => {
                 buf.truncate(n);
@@ -152,6 +156,7 @@ fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<io::Resul
                     return;
                 }
             }
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
             Err(e) => {
                 send(Err(e));
                 return;
@@ -160,29 +165,15 @@ fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<io::Resul
     }
 }
 
-/// Reads until `buf` is full or the input ends; the bytes read.
-fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
-    let mut n = 0;
-    while n < buf.len() {
-        match input.read(&mut buf[n..]) {
-            Ok(0) => break,
-            Ok(k) => n += k,
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(n)
-}
-
 /// The chunks one reader receives, read as a stream.
 struct Chunks {
-    from: Receiver<io::Result<Arc<[u8]>>>,
+    from: Receiver<Shared>,
     chunk: Arc<[u8]>,
     at: usize,
 }
 
 impl Chunks {
-    fn new(from: Receiver<io::Result<Arc<[u8]>>>) -> Self {
+    fn new(from: Receiver<Shared>) -> Self {
         Chunks { from, chunk: Arc::from(&[][..]), at: 0 }
     }
 }
