@@ -16,6 +16,7 @@ OUT := out
 
 .PHONY: demo test bench deps rust-deps python-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
 .PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-test
+.PHONY: guard
 
 deps: rust-deps py-deps browser-deps cura-deps firmware-deps
 
@@ -117,7 +118,15 @@ pytest: python-debug
 e2e: build-debug python-debug
 	bash tests/e2e/run.sh target/debug/gweave
 
-test: deps firmware lint cargo-test pytest e2e
+# The performance guard: instructions per line (callgrind) of the hot commands on a fixed input
+# against bench/guard-baseline.txt, failing past +15 % (bench/guard.sh; docs/performance.md). It
+# measures the `guard` profile (release without fat LTO: minutes less to build than `release`).
+guard: rust-deps
+	@command -v valgrind >/dev/null || { [ "$$(id -u)" = 0 ] && apt-get install -y -q valgrind >/dev/null; } || true
+	$(CARGO) build --profile guard -p gweave-cli
+	bash bench/guard.sh $${CARGO_TARGET_DIR:-target}/guard/gweave
+
+test: deps firmware lint cargo-test pytest e2e guard
 	@echo "make test: all passed"
 
 # The demo runs the command line only: one release build of the engine, no Python environment

@@ -29,4 +29,7 @@ for kind in bgcode prusa.bgcode gz; do
   t=$(best 3 "$GWEAVE" stats "$f" -q)
   printf "%-30s %8s s   %6s MB stored, peak %s MB, %sx the text's time\n" "gweave stats (.$kind)" "$t" \
     "$(python3 -c "print(f'{$(stat -c %s "$f")/1e6:.0f}')")" "$(peak_mb "$GWEAVE" stats "$f" -q)" "$(ratio "$t" "$t_text")"
+  if [ "$kind" = prusa.bgcode ]; then
+    goal "stats of PrusaSlicer's .bgcode (MeatPack)" "$(ratio "$t" "$t_text")" "<=" 2 "x the same as text"
+  fi
 done

@@ -83,3 +83,6 @@ echo "klipper_estimator / gweave sim: $(ratio "$t_ke" "$t_gw")x wall time, $(rat
   "$(ratio "$m_ke" "$m_gw")x peak memory; estimates differ by $d_s s ($d_ppm per million)"
 echo "klipper_estimator / gweave estimate: $(ratio "$t_ke" "$t_ge")x wall time (target 10x)," \
   "$(ratio "$u_ke" "$u_ge")x user time (all threads), $(ratio "$m_ke" "$m_ge")x peak memory; estimates differ by $d_ge s"
+goal "estimate, $(python3 -c "print(f'{$(stat -c %s "$BIG")/1e6:.0f}')") MB: klipper_estimator's wall time" "$(ratio "$t_ke" "$t_ge")" ">=" 15 "x faster"
+goal "estimate: klipper_estimator's CPU time" "$(ratio "$(python3 -c "print($u_ke + $s_ke_sys)")" "$(python3 -c "print($u_ge + $s_ge_sys)")")" ">=" 10 "x less"
+goal "sim with steps and heaters: klipper_estimator" "$(ratio "$t_ke" "$t_gw")" ">=" 3 "x faster"

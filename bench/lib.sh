@@ -27,3 +27,11 @@ multitool_file() {
   fi
   echo "$big"
 }
+
+# Issue 35's table: `goal LABEL VALUE OP GOAL UNIT` records a figure beside its goal (OP: `<=`,
+# `>=`) in $BENCH_GOALS, which bench/run.sh prints at the end, marking the ones short of their
+# goal. Without $BENCH_GOALS (a script run on its own) nothing is recorded.
+goal() {
+  [ -n "${BENCH_GOALS:-}" ] || return 0
+  printf '%s\t%s\t%s\t%s\t%s\n' "$1" "$2" "$3" "$4" "$5" >> "$BENCH_GOALS"
+}

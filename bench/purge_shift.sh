@@ -15,9 +15,11 @@ t_cat=$(best 3 "$GWEAVE" cat "$BIG" -o /dev/null -q)
 t_ps=$(best 3 "$GWEAVE" purge-shift "$BIG" -o /dev/null -q --purge-mm 2.5)
 printf "%-26s %8s s\n" "gweave cat" "$t_cat"
 printf "%-26s %8s s   %sx cat\n" "gweave purge-shift" "$t_ps" "$(ratio "$t_ps" "$t_cat")"
-printf "%-26s %8s MB (1x file)  %s MB (60x file)\n" "purge-shift peak memory" \
-  "$(peak_mb "$GWEAVE" purge-shift "$SRC" -o /dev/null -q --purge-mm 2.5)" \
-  "$(peak_mb "$GWEAVE" purge-shift "$BIG" -o /dev/null -q --purge-mm 2.5)"
+m1=$(peak_mb "$GWEAVE" purge-shift "$SRC" -o /dev/null -q --purge-mm 2.5)
+m60=$(peak_mb "$GWEAVE" purge-shift "$BIG" -o /dev/null -q --purge-mm 2.5)
+printf "%-26s %8s MB (1x file)  %s MB (60x file)\n" "purge-shift peak memory" "$m1" "$m60"
+goal "purge-shift, $(python3 -c "print(f'{$size/1e6:.0f}')") MB" "$(ratio "$t_ps" "$t_cat")" "<=" 1.5 "x gweave cat"
+goal "purge-shift memory, 60x the file against 1x" "$(ratio "$m60" "$m1")" "<=" 1.3 "x (flat: 1)"
 printf "%-26s %8s MB (1x file)  %s MB (60x file)\n" "  with --report" \
   "$(peak_mb "$GWEAVE" purge-shift "$SRC" -o /dev/null -q --purge-mm 2.5 --report "$BIG.report.json")" \
   "$(peak_mb "$GWEAVE" purge-shift "$BIG" -o /dev/null -q --purge-mm 2.5 --report "$BIG.report.json")"

@@ -84,3 +84,7 @@ print(f"  {'gweave raster -> file':36} {t['file'][0]:7.2f}s {cpu('file'):7.2f}s 
       f"{size / 1e9:.2f} GB G-code, {size / 1e6 / t['file'][0]:.0f} MB/s")
 print(f"  {r['columns_fired']} columns fired, {r['bands_printed']} bands, {sum(r['drops_per_head'])} drops")
 PY
+goal "raster, 500 layers of 2000 x 2000 px, CPU time" "$(python3 -c "
+import sys
+t = {l.split()[0]: [float(v) for v in l.split()[1:]] for l in open(sys.argv[1])}
+print(f'{(t[\"pipe\"][1] + t[\"pipe\"][2]) / (t[\"zlib\"][1] + t[\"zlib\"][2]):.2f}')" "$DATA/times.txt")" "<=" 3 "x Python zlib's"

@@ -30,6 +30,9 @@ use crate::motion::limits::MotionProfile;
 use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
 use crate::profile::MachineProfile;
 
+/// A chunk of the file, shared by its readers, or the error reading it.
+type Shared = io::Result<Arc<[u8]>>;
+
 /// Bytes read at a time and handed to every reader of the file.
 const CHUNK: usize = 1 << 20;
 /// Chunks in flight to each reader: what bounds the memory (a few MiB).
@@ -55,6 +58,8 @@ pub(super) fn measure(path: &Path) -> Result<Figures> {
     let estimator = |p: &MotionProfile| -> Result<Estimator> {
         let mut estimator = Estimator::timing_only(p)?;
         estimator.read_as(firmware);
+        // The metadata needs the total and the first layer: memory stays flat with the layers.
+        estimator.first_layer_only();
         Ok(estimator)
     };
     let (normal, silent) = (estimator(&normal)?, silent.as_ref().map(estimator).transpose()?);
@@ -119,8 +124,8 @@ fn on_threads(
 
 /// The reading thread: the file in chunks to every reader, until the end or an error (passed
 /// to each). A reader that stopped (on an error of its own) is left out.
-fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<io::Result<Arc<[u8]>>>>; N]) {
-    let mut send = |chunk: io::Result<Arc<[u8]>>| {
+fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<Shared>>; N]) {
+    let mut send = |chunk: Shared| {
         for reader in &mut readers {
             let sent = match (reader.as_ref(), &chunk) {
                 (None, _) => continue,
@@ -141,8 +146,9 @@ fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<io::Resul
         }
     };
     loop {
+        // A short read makes a short chunk: the readers take the stream in any pieces.
         let mut buf = vec![0; CHUNK];
-        match read_full(&mut input, &mut buf) {
+        match input.read(&mut buf) {
             Ok(0) => return,
             Ok(n) => {
                 buf.truncate(n);
@@ -150,6 +156,7 @@ fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<io::Resul
                     return;
                 }
             }
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
             Err(e) => {
                 send(Err(e));
                 return;
@@ -158,29 +165,15 @@ fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<io::Resul
     }
 }
 
-/// Reads until `buf` is full or the input ends; the bytes read.
-fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
-    let mut n = 0;
-    while n < buf.len() {
-        match input.read(&mut buf[n..]) {
-            Ok(0) => break,
-            Ok(k) => n += k,
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(n)
-}
-
 /// The chunks one reader receives, read as a stream.
 struct Chunks {
-    from: Receiver<io::Result<Arc<[u8]>>>,
+    from: Receiver<Shared>,
     chunk: Arc<[u8]>,
     at: usize,
 }
 
 impl Chunks {
-    fn new(from: Receiver<io::Result<Arc<[u8]>>>) -> Self {
+    fn new(from: Receiver<Shared>) -> Self {
         Chunks { from, chunk: Arc::from(&[][..]), at: 0 }
     }
 }
@@ -259,5 +252,66 @@ impl Pass for TallyPass {
             read_setting(c, &mut self.figures);
         }
         Ok(Flow::Continue)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The serial pass the threads replaced: one estimator per mode fed every whole line, the
+    /// clock read after each progress line.
+    fn serial(text: &[u8], profile: &MotionProfile) -> ([f64; 2], Vec<f64>) {
+        let mut est = Estimator::timing_only(profile).unwrap();
+        est.read_as(Firmware::Marlin);
+        let (mut reader, mut progress_s) = (LineReader::new(text), Vec::new());
+        while let Some(line) = reader.next_line().unwrap() {
+            if line.part == Part::Whole {
+                est.line(line.bytes).unwrap();
+                if is_progress_line(line.bytes) {
+                    progress_s.push(est.now_s());
+                }
+            }
+        }
+        let est = est.finish();
+        ([est.total_s, est.layer_s[0]], progress_s)
+    }
+
+    /// Regression: the metadata was measured by a serial pass after the transform (purge-shift
+    /// 17x `cat`); the threads must give its figures to the bit, both modes.
+    #[test]
+    fn the_threaded_measure_gives_the_serial_figures_to_the_bit() {
+        let fixture =
+            format!("{}/../../tests/data/prusaslicer/pr_bunny_3tool_rel.gcode", env!("CARGO_MANIFEST_DIR"));
+        let whole = std::fs::read_to_string(fixture).unwrap();
+        let lines: Vec<&str> = whole.lines().collect();
+        // Its first 6000 lines with progress lines in both modes every 500, and its settings
+        // block (the silent mode's own limits).
+        let mut text = String::new();
+        for (i, line) in lines[..6000].iter().chain(&lines[lines.len() - 350..]).enumerate() {
+            if i % 500 == 0 {
+                text.push_str("M73 P0 R0\nM73 Q0 S0\n");
+            }
+            text.push_str(line);
+            text.push('\n');
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m73.gcode");
+        std::fs::write(&path, &text).unwrap();
+        let figures = measure(&path).unwrap();
+        let ends = read_ends(&path).unwrap();
+        let base = MachineProfile::default().motion;
+        let normal = slicer_limits(&ends, &base).unwrap().profile;
+        let silent = slicer_limits_silent(&ends, &base).unwrap().profile;
+        assert_ne!(normal, silent);
+        let (normal_s, normal_progress) = serial(text.as_bytes(), &normal);
+        let (silent_s, silent_progress) = serial(text.as_bytes(), &silent);
+        assert_eq!(figures.time_s.map(f64::to_bits), [normal_s[0].to_bits(), silent_s[0].to_bits()]);
+        assert_eq!(figures.first_layer_s.map(f64::to_bits), [normal_s[1].to_bits(), silent_s[1].to_bits()]);
+        let expected: Vec<[f64; 2]> =
+            normal_progress.into_iter().zip(silent_progress).map(|(n, s)| [n, s]).collect();
+        assert_eq!(figures.progress_s.len(), 2 * 13);
+        assert_eq!(figures.progress_s, expected);
+        assert!(figures.filament_mm.iter().sum::<f64>() > 100.0, "{figures:?}");
     }
 }

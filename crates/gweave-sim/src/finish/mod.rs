@@ -3,7 +3,7 @@
 //! own output, and it writes metadata that is true for the file as written.
 //!
 //! The transform writes into a scratch file (registered like every temporary file, so Ctrl-C
-//! removes it). One streaming read of that file measures it on several cores ([`measure`]): the
+//! removes it). One streaming read of that file measures it on several cores (`measure.rs`): the
 //! filament by the `stats` count and the print time by the estimator, with the machine limits
 //! the slicer wrote into the file (normal and silent mode), else the default machine's. A copy
 //! that only splits lines writes it to the real target (a temporary file renamed into place,

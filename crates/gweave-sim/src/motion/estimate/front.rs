@@ -80,6 +80,8 @@ struct Bookkeeping {
     motors_on: bool,
     /// Arcs of more than [`MAX_ARC_CHORDS`] chords.
     huge_arcs: HugeArcs,
+    /// Every layer after the first is accounted as one ([`Front::first_layer_only`]).
+    fold_later_layers: bool,
 }
 
 impl Front {
@@ -102,6 +104,7 @@ impl Front {
             started: false,
             motors_on: false,
             huge_arcs: HugeArcs::default(),
+            fold_later_layers: false,
         };
         let mut front = Self {
             block: Block::default(),
@@ -150,6 +153,13 @@ impl Front {
         {
             self.malformed.add(self.line);
         }
+    }
+
+    /// Accounts every layer after the first as one: the time accounts then stop growing with
+    /// the layers (a key per layer, feature and tool: tens of MB for a long print), for a
+    /// caller that needs only the total and the first layer's time.
+    pub(super) fn first_layer_only(&mut self) {
+        self.book.fold_later_layers = true;
     }
 
     /// The arcs too long for chords of [`ARC_CHORD_MM`] so far.
@@ -231,7 +241,6 @@ impl Front {
         let b = &self.block;
         let axes =
             || AxisUpdate { x: b.get(b'X'), y: b.get(b'Y'), z: b.get(b'Z'), e: b.get(b'E'), a: b.get(b'A') };
-        let mut profile = self.profile.clone();
         let changed = match number {
             400 | 109 | 190 => {
                 jobs.push(Job::Drain);
@@ -245,15 +254,15 @@ impl Front {
                 return Ok(());
             }
             n if MixingCode::sets_a_mix(n) => return self.mixing_command(raw, jobs),
-            201 if !self.book.klipper => profile.set_max_accel(&axes()),
-            203 if !self.book.klipper => profile.set_max_feed(&axes()),
-            205 if !self.book.klipper => {
-                let jd = b.get(b'J').map_or(Ok(()), |j| profile.set_junction_deviation(j));
-                jd.and_then(|()| profile.set_jerk(&axes(), b.get(b'B')))
-            }
+            201 if !self.book.klipper => self.changed(|p| p.set_max_accel(&axes())),
+            203 if !self.book.klipper => self.changed(|p| p.set_max_feed(&axes())),
+            205 if !self.book.klipper => self.changed(|p| {
+                let jd = b.get(b'J').map_or(Ok(()), |j| p.set_junction_deviation(j));
+                jd.and_then(|()| p.set_jerk(&axes(), b.get(b'B')))
+            }),
             204 => {
                 let m204 = M204 { s: b.get(b'S'), p: b.get(b'P'), r: b.get(b'R'), t: b.get(b'T') };
-                match profile.set_accel(&m204) {
+                match self.changed(|p| p.set_accel(&m204)) {
                     // Klipper answers an M204 without S, P and T with a message and goes on.
                     Err(ProfileError::M204NeedsPAndT) => return Ok(()),
                     other => other,
@@ -261,7 +270,17 @@ impl Front {
             }
             _ => return Ok(()),
         };
-        self.change_profile(changed.map(|()| profile), jobs)
+        self.change_profile(changed, jobs)
+    }
+
+    /// The profile as `set` changes it: a copy is made only for a command that sets limits (one
+    /// per `M`-code line, `M73` and `M106` included, led the estimate's profile).
+    fn changed(
+        &self,
+        set: impl FnOnce(&mut MotionProfile) -> Result<(), ProfileError>,
+    ) -> Result<MotionProfile, ProfileError> {
+        let mut profile = self.profile.clone();
+        set(&mut profile).map(|()| profile)
     }
 
     /// Klipper's extended commands that change motion: `SET_KINEMATIC_POSITION` and
@@ -375,7 +394,11 @@ impl Bookkeeping {
     /// of the whole simulation.
     #[inline]
     fn tag(&mut self, s: &Structure, jobs: &mut Vec<Job>) -> u64 {
-        let key = Key { layer: s.layer, feature: s.feature, mix: self.mix, tool: self.tool };
+        let layer = match s.layer {
+            Some(l) if l > 0 && self.fold_later_layers => Some(1),
+            layer => layer,
+        };
+        let key = Key { layer, feature: s.feature, mix: self.mix, tool: self.tool };
         match self.last_tag {
             Some((last, tag)) if last == key => tag,
             _ => self.new_tag(key, jobs),

@@ -239,6 +239,14 @@ impl Estimator {
         self.front.read_as(firmware);
     }
 
+    /// Keeps the first layer's time apart ([`Estimate::layer_s`]`[0]`, the same to the bit) and
+    /// accounts every later layer as one (`layer_s[1]`), so that memory does not grow with the
+    /// layers: what a transform's metadata needs (its total and first layer). Call before the
+    /// first line.
+    pub fn first_layer_only(&mut self) {
+        self.front.first_layer_only();
+    }
+
     /// Execute one line (without its line ending). Mixing commands the firmware would refuse
     /// are skipped.
     pub fn line(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
@@ -632,6 +640,26 @@ mod tests {
                 assert_eq!(time_only.steps.axes, [0; 5], "{path}");
             }
         }
+    }
+
+    /// Regression: a transform's metadata estimate kept an account per layer, feature and tool
+    /// (purge-shift's peak memory grew from 17 MB to 50 MB with 60 times the layers).
+    #[test]
+    fn first_layer_only_keeps_the_first_layer_to_the_bit_in_two_accounts() {
+        let text = fixture("prusaslicer/pr_bunny_3tool_rel.gcode");
+        let all = sequential(&text, &MotionProfile::default()).unwrap();
+        let mut est = Estimator::new(&MotionProfile::default()).unwrap();
+        est.first_layer_only();
+        let mut reader = LineReader::new(&text[..]);
+        while let Some(line) = reader.next_line().unwrap() {
+            est.read_line(&line).unwrap();
+        }
+        let folded = est.finish();
+        assert!(all.layer_s.len() > 100, "{}", all.layer_s.len());
+        assert_eq!(folded.layer_s.len(), 2);
+        assert_eq!(folded.layer_s[0].to_bits(), all.layer_s[0].to_bits());
+        assert_eq!(folded.total_s.to_bits(), all.total_s.to_bits());
+        assert_eq!((folded.blocks, folded.steps), (all.blocks, all.steps));
     }
 
     #[test]
