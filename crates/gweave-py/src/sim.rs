@@ -17,7 +17,7 @@ fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::MachineProf
     match machine {
         None => Ok(gweave_sim::MachineProfile::default()),
         Some(path) => {
-            let text = std::fs::read_to_string(&path).map_err(|e| os_error(&path, &e))?;
+            let text = gweave::settings::read_text(&path).map_err(|e| os_error(&path, &e))?;
             gweave_sim::MachineProfile::from_toml_str(&text)
                 .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
         }
