@@ -33,7 +33,7 @@ pub(crate) fn preview_json(
     layers: Option<LayersArg>,
     view: Option<&str>,
     colour_by: &str,
-    size: (u32, u32),
+    size: (i64, i64),
     compare: Option<PathBuf>,
     tool_colours: Option<Vec<String>>,
     travel: bool,
@@ -43,8 +43,16 @@ pub(crate) fn preview_json(
     min_len: Option<f32>,
     lenient: bool,
 ) -> PyResult<(Py<PyBytes>, String)> {
-    let read = |p: &PathBuf| std::fs::read_to_string(p).map_err(|e| os_error(p, &e));
+    let read = |p: &PathBuf| gweave::settings::read_text(p).map_err(|e| os_error(p, &e));
     let layer = in_range("layer", layer, gweave::range::LAYER_NUMBER)?;
+    // Read as any Python int, then held to the range under the keyword's name: as `(u32, u32)`,
+    // `size=(-1, 5)` was an OverflowError that did not say which argument.
+    let side = |name: &str, v: i64| -> PyResult<u32> {
+        let r = render::PICTURE_SIDE_PX;
+        let range = gweave::range::Range::new(i64::from(r.min), i64::from(r.max), r.unit);
+        range.check(name, v).map(|v| v as u32).map_err(|e| PyValueError::new_err(e.to_string()))
+    };
+    let size = (side("size[0]", size.0)?, side("size[1]", size.1)?);
     let mandrel_diameter =
         in_range("mandrel_diameter", mandrel_diameter, gweave::rotary::cylinder::MANDREL_DIAMETER_MM)?;
     let printhead = match head {

@@ -78,7 +78,7 @@ fn read_settings<T>(
     let Some(path) = config else {
         return read(None, machine).map_err(rotary_err);
     };
-    let text = std::fs::read_to_string(path).map_err(|e| os_error(path, &e))?;
+    let text = gweave::settings::read_text(path).map_err(|e| os_error(path, &e))?;
     read(Some(&text), machine)
         .map_err(|e| PyValueError::new_err(format!("{}: {}", path.display(), gweave::error::with_causes(&e))))
 }

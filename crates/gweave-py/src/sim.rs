@@ -23,7 +23,7 @@ pub(crate) fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::
     match MachineSource::of(&path) {
         MachineSource::Builtin(b) => b.profile().map_err(|e| PyValueError::new_err(e.to_string())),
         MachineSource::File(_) => {
-            let text = std::fs::read_to_string(&path).map_err(|e| os_error(&path, &e))?;
+            let text = gweave::settings::read_text(&path).map_err(|e| os_error(&path, &e))?;
             let folder = path.parent().unwrap_or(std::path::Path::new(""));
             gweave_sim::MachineProfile::from_toml_in(&text, folder)
                 .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))

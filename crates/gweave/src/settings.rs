@@ -119,8 +119,8 @@ const MESSAGE_TEXT_CHARS: usize = 1_000;
 
 /// The TOML reader's message for `e`, with any number of more than 20 digits (serde prints
 /// the float `1e308` of an integer key in full) written short, as [`short`] does, the quoted
-/// source line and its `^^^` marks cut to [`MESSAGE_LINE_CHARS`] around the error's column and
-/// any other line to its first [`MESSAGE_TEXT_CHARS`].
+/// source line and its `^^^` marks cut to 120 characters around the error's column and any other
+/// line to its first 1 000 (`MESSAGE_LINE_CHARS`, `MESSAGE_TEXT_CHARS`).
 pub fn toml_message(e: &toml::de::Error) -> String {
     let text = e.to_string();
     // "TOML parse error at line 3, column 14"
