@@ -71,7 +71,7 @@ pub fn load_machine(value: &Path) -> Result<MachineProfile> {
         MachineSource::Builtin(b) => Ok(b.profile()?),
         MachineSource::File(path) => {
             let folder = path.parent().unwrap_or(Path::new(""));
-            let text = std::fs::read_to_string(path)
+            let text = gweave::settings::read_text(path)
                 .map_err(|e| anyhow::anyhow!(gweave_sim::builtin::not_found(path, &e)))?;
             MachineProfile::from_toml_in(&text, folder)
                 .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), gweave::error::with_causes(&e)))

@@ -99,7 +99,7 @@ impl<'a> MachineSource<'a> {
     pub fn load(&self) -> Result<MachineProfile, MachineProfileError> {
         match self {
             MachineSource::Builtin(b) => b.profile(),
-            MachineSource::File(path) => match std::fs::read_to_string(path) {
+            MachineSource::File(path) => match gweave::settings::read_text(path) {
                 Ok(text) => MachineProfile::from_toml_in(&text, path.parent().unwrap_or(Path::new(""))),
                 Err(e) => Err(MachineProfileError::Toml(not_found(path, &e))),
             },

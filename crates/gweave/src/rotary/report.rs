@@ -147,7 +147,7 @@ pub struct TubeReport {
 pub fn merged_settings<T: DeserializeOwned>(toml_file: Option<&Path>, overrides: &str) -> Result<T> {
     let mut base = match toml_file {
         Some(path) => {
-            let text = std::fs::read_to_string(path)?;
+            let text = crate::settings::read_text(path)?;
             let table: toml::Table = toml::from_str(&text)?;
             serde_json::to_value(table).map_err(json_error)?
         }
