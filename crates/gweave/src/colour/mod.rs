@@ -39,6 +39,8 @@
 mod ciede2000_sharma;
 pub mod dialect;
 pub mod fit;
+#[cfg(test)]
+mod fit_reference;
 pub(crate) mod mix;
 pub mod mixing;
 pub mod palette;
@@ -46,6 +48,7 @@ pub mod pigments;
 pub mod predict;
 pub mod purge;
 pub mod reflectance;
+pub mod shape;
 pub mod solve;
 pub mod spectrum;
 pub(crate) mod srgb;
