@@ -275,13 +275,15 @@ fn solve_linear(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
         if p.abs() < 1e-300 {
             continue;
         }
-        for row in col + 1..n {
-            let f = a[row][col] / p;
+        let (upper, lower) = a.split_at_mut(col + 1);
+        let (pivot_row, pivot_b) = (&upper[col], b[col]);
+        for (row, b_row) in lower.iter_mut().zip(&mut b[col + 1..]) {
+            let f = row[col] / p;
             if f != 0.0 {
-                for k in col..n {
-                    a[row][k] -= f * a[col][k];
+                for (x, q) in row[col..].iter_mut().zip(&pivot_row[col..]) {
+                    *x -= f * q;
                 }
-                b[row] -= f * b[col];
+                *b_row -= f * pivot_b;
             }
         }
     }

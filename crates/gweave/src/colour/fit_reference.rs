@@ -485,32 +485,3 @@ const SET_3: RefSet = RefSet {
         ([1.0, 1.0, 1.0, 1.0], [176, 150, 116]),
     ],
 };
-
-#[test]
-fn scratch_named() {
-    let model = MixingModel::new(&super::palette::CMYW_FILAMENTS).unwrap();
-    for (name, w, css) in [
-        ("Ocean", [0.83, 0.17, 0.0, 0.0], "#0077a8"),
-        ("Blue", [0.5, 0.5, 0.0, 0.0], "#1f4e9c"),
-        ("Violet", [0.17, 0.83, 0.0, 0.0], "#6c3b8e"),
-        ("Raspberry", [0.0, 0.83, 0.17, 0.0], "#b0195a"),
-        ("Red", [0.0, 0.5, 0.5, 0.0], "#c8102e"),
-        ("Orange", [0.0, 0.17, 0.82, 0.0], "#f26a21"),
-        ("Spring Green", [0.17, 0.0, 0.83, 0.0], "#7bc143"),
-        ("Green", [0.5, 0.0, 0.5, 0.0], "#2e9a47"),
-        ("Turquoise", [0.83, 0.0, 0.17, 0.0], "#1fa5a0"),
-        ("Brown", [0.33, 0.33, 0.33, 0.0], "#7a4b2a"),
-    ] {
-        let p = model.predict_lab(&Mix::new(&w).unwrap()).unwrap();
-        let t = Srgb8::parse_hex(css).unwrap();
-        let s = super::solve::solve(&model, t);
-        eprintln!(
-            "{name:14} {} dE {:5.1} from {css}; nearest {} dE {:5.1} {:?}",
-            Srgb8::from(p),
-            p.difference(Lab::from(t)),
-            s.predicted,
-            s.delta_e,
-            s.mix.ratios()
-        );
-    }
-}
