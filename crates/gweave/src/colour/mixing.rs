@@ -7,7 +7,8 @@
 //! 1. **Spectrum.** Each filament's sRGB colour becomes the smoothest reflectance spectrum
 //!    that shows it, 36 bands from 380 to 730 nm ([`super::reflectance`], S. A. Burns' LHTSS);
 //!    the default filaments have spectra fitted to published pigment mixing instead
-//!    ([`super::pigments`]).
+//!    ([`super::pigments`]). A fitted profile moves a filament's spectrum away from that one by
+//!    its *shape* ([`super::shape`], measured by `gweave mix --fit`), keeping its colour.
 //! 2. **Absorption and scattering.** For an opaque layer Kubelka-Munk theory (P. Kubelka and
 //!    F. Munk, 1931) ties reflectance `R` to the ratio of absorption `K` to scattering `S`:
 //!
