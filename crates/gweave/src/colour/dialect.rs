@@ -167,7 +167,8 @@ fn format_units(units: u64, decimals: Decimals) -> String {
     format!("{whole}.{}", digits.trim_end_matches('0'))
 }
 
-fn formatted(mix: &Mix, decimals: Decimals) -> Vec<String> {
+/// The ratios as the firmware lines write them (trailing zeros trimmed).
+pub(crate) fn formatted(mix: &Mix, decimals: Decimals) -> Vec<String> {
     round_to_units(mix, decimals).into_iter().map(|u| format_units(u, decimals)).collect()
 }
 

@@ -7,7 +7,8 @@
 //! 1. **Spectrum.** Each filament's sRGB colour becomes the smoothest reflectance spectrum
 //!    that shows it, 36 bands from 380 to 730 nm ([`super::reflectance`], S. A. Burns' LHTSS);
 //!    the default filaments have spectra fitted to published pigment mixing instead
-//!    ([`super::pigments`]).
+//!    ([`super::pigments`]). A fitted profile moves a filament's spectrum away from that one by
+//!    its *shape* ([`super::shape`], measured by `gweave mix --fit`), keeping its colour.
 //! 2. **Absorption and scattering.** For an opaque layer Kubelka-Munk theory (P. Kubelka and
 //!    F. Munk, 1931) ties reflectance `R` to the ratio of absorption `K` to scattering `S`:
 //!
@@ -46,7 +47,7 @@ use palette::white_point::D65;
 use palette::{LinSrgb, Xyz};
 
 use super::mix::{Mix, MixError};
-use super::pigments::spectrum;
+use super::shape::{shaped_spectrum, Shape, BUMPS};
 use super::spectrum::{linear_rgb, Spectrum, BANDS};
 use super::srgb::Srgb8;
 use super::Lab;
@@ -88,6 +89,8 @@ fn check_strengths(inputs: usize, strengths: &[f64]) -> Result<(), MixError> {
 pub struct MixingModel {
     inputs: Vec<Srgb8>,
     strengths: Vec<f64>,
+    /// Spectral shape per input ([`super::shape`]; zero: the filament's own spectrum).
+    shapes: Vec<Shape>,
     /// K/S spectrum per input.
     k_over_s: Vec<Spectrum>,
 }
@@ -101,12 +104,33 @@ impl MixingModel {
 
     /// Model with a strength (scattering scale, see the module docs) per input.
     pub(crate) fn with_strengths(inputs: &[Srgb8], strengths: &[f64]) -> Result<Self, MixError> {
+        Self::with_shapes(inputs, strengths, &vec![[0.0; BUMPS]; inputs.len()])
+    }
+
+    /// Model with a strength and a spectral shape ([`super::shape`]) per input.
+    pub(crate) fn with_shapes(
+        inputs: &[Srgb8],
+        strengths: &[f64],
+        shapes: &[Shape],
+    ) -> Result<Self, MixError> {
         if inputs.is_empty() {
             return Err(MixError::NoInputs);
         }
         check_strengths(inputs.len(), strengths)?;
-        let k_over_s = inputs.iter().map(|&c| spectrum(c).map(k_over_s)).collect();
-        Ok(Self { inputs: inputs.to_vec(), strengths: strengths.to_vec(), k_over_s })
+        if shapes.len() != inputs.len() {
+            return Err(MixError::InputCount { expected: inputs.len(), found: shapes.len() });
+        }
+        let k_over_s =
+            inputs.iter().zip(shapes).map(|(&c, shape)| shaped_spectrum(c, shape).map(k_over_s)).collect();
+        Ok(Self { inputs: inputs.to_vec(), strengths: strengths.to_vec(), shapes: shapes.to_vec(), k_over_s })
+    }
+
+    /// The same filaments with input `i` given another shape (only its spectrum is recomputed).
+    pub(crate) fn with_new_shape(&self, i: usize, shape: Shape) -> Self {
+        let mut model = self.clone();
+        model.shapes[i] = shape;
+        model.k_over_s[i] = shaped_spectrum(model.inputs[i], &shape).map(k_over_s);
+        model
     }
 
     /// The same filaments with other strengths (the spectra are kept, not recomputed).
@@ -128,6 +152,11 @@ impl MixingModel {
     /// The strengths, input 0 first.
     pub fn strengths(&self) -> &[f64] {
         &self.strengths
+    }
+
+    /// The spectral shapes, input 0 first.
+    pub fn shapes(&self) -> &[Shape] {
+        &self.shapes
     }
 
     /// Predicted CIELAB colour of a mix.

@@ -14,7 +14,8 @@
 //! - `palette`: the mixing post-processor seed's (`docs/seeds.md`) 17 named CMY(K) colours plus user mixes from TOML.
 //! - `dialect`: Marlin `M163`/`M164`/`M165` and RepRapFirmware `M563`/`M567`
 //!   lines from a mix, and `MixingState` following those commands in a stream.
-//! - `fit`: filament colours and strengths from measured calibration swatches.
+//! - `shape`: a filament's spectral shape, how its spectrum departs from the smoothest one.
+//! - `fit`: filament colours, strengths and shapes from measured calibration swatches.
 //! - `purge`: purge volume between two colours, and the washout of a mixing chamber.
 //! - `swatch`: a palette as a PNG chart.
 //!
@@ -39,6 +40,8 @@
 mod ciede2000_sharma;
 pub mod dialect;
 pub mod fit;
+#[cfg(test)]
+mod fit_reference;
 pub(crate) mod mix;
 pub mod mixing;
 pub mod palette;
@@ -46,6 +49,7 @@ pub mod pigments;
 pub mod predict;
 pub mod purge;
 pub mod reflectance;
+pub mod shape;
 pub mod solve;
 pub mod spectrum;
 pub(crate) mod srgb;

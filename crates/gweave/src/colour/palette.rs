@@ -26,7 +26,7 @@ use serde::Deserialize;
 
 use super::mix::{Mix, MixError};
 use super::mixing::MixingModel;
-use super::solve::{solve, OUT_OF_GAMUT_DE};
+use super::solve::{solve, Solution, OUT_OF_GAMUT_DE};
 use super::srgb::Srgb8;
 
 /// The mixing post-processor seed's Annex A (`docs/seeds.md`): name and ratios for E0 cyan, E1 magenta, E2 yellow, E3 white.
@@ -49,6 +49,42 @@ pub const SEED_PALETTE: [(&str, [f64; 4]); 17] = [
     ("Brown", [0.33, 0.33, 0.33, 0.0]),
     ("White", [0.0, 0.0, 0.0, 1.0]),
 ];
+
+/// The colour each seed name that names a hue means, for the gamut check of
+/// [`Palette::name_out_of_gamut`]: our estimate of a typical PLA filament sold under that name
+/// (from vendor swatches, as [`CMYW_FILAMENTS`]). Cyan, Magenta, Yellow and White are the
+/// filaments themselves; the browns of one hue are not checked.
+pub const NAMED_COLOURS: [(&str, Srgb8); 10] = [
+    ("Ocean", Srgb8::new(0x00, 0x77, 0xa8)),
+    ("Blue", Srgb8::new(0x1f, 0x4e, 0x9c)),
+    ("Violet", Srgb8::new(0x6c, 0x3b, 0x8e)),
+    ("Raspberry", Srgb8::new(0xb0, 0x19, 0x5a)),
+    ("Red", Srgb8::new(0xc8, 0x10, 0x2e)),
+    ("Orange", Srgb8::new(0xf2, 0x6a, 0x21)),
+    ("Spring Green", Srgb8::new(0x7b, 0xc1, 0x43)),
+    ("Green", Srgb8::new(0x2e, 0x9a, 0x47)),
+    ("Turquoise", Srgb8::new(0x1f, 0xa5, 0xa0)),
+    ("Brown", Srgb8::new(0x7a, 0x4b, 0x2a)),
+];
+
+/// A palette name is out of the filaments' gamut when the nearest mix they make is more than
+/// this CIEDE2000 from the colour the name means ([`NAMED_COLOURS`]). Twice the
+/// [`OUT_OF_GAMUT_DE`] of a `#rrggbb` target: a name asks for a family of colours, not one, and a
+/// difference of 10 is about the step from a colour to its neighbour with another name (a blue
+/// to a violet). With the default filaments only Blue (nearest #6165ae, 11.8) and Brown (a dark
+/// brown: these light filaments have no black; 10.9) are out.
+pub const NAME_GAMUT_DE: f64 = 10.0;
+
+/// A palette name whose colour the filaments cannot print ([`Palette::name_out_of_gamut`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NameOutOfGamut {
+    /// The colour the name means.
+    pub meant: Srgb8,
+    /// The palette's ratios' predicted colour.
+    pub predicted: Srgb8,
+    /// The mix nearest `meant` these filaments make, and how far it is.
+    pub nearest: Solution,
+}
 
 /// Other names for palette entries: the seed's, where ours differ.
 pub const ALIASES: [(&str, &str); 1] = [("Key", "White")];
@@ -216,6 +252,24 @@ impl Palette {
         })
     }
 
+    /// For a name of the seed palette that still has the seed's ratios and names a hue
+    /// ([`NAMED_COLOURS`]): the nearest colour `model`'s filaments make to the one the name
+    /// means, when it is more than [`NAME_GAMUT_DE`] away (else `None`). The seed's ratios were
+    /// chosen for its own filaments: the seed's "Blue", cyan and magenta 1:1, prints purple with
+    /// ours, and no mix of them prints a blue.
+    pub fn name_out_of_gamut(&self, name: &str, model: &MixingModel) -> Option<NameOutOfGamut> {
+        let entry = self.get(name)?;
+        let (_, ratios) = SEED_PALETTE.iter().find(|(seed, _)| same_name(seed, &entry.name))?;
+        let MixSpec::Ratios(mix) = &entry.spec else { return None };
+        if mix.ratios() != Mix::new(ratios).ok()?.ratios() {
+            return None;
+        }
+        let (_, meant) = NAMED_COLOURS.iter().find(|(named, _)| same_name(named, &entry.name))?;
+        let predicted = model.predict(mix).ok()?;
+        let nearest = solve(model, *meant);
+        (nearest.delta_e > NAME_GAMUT_DE).then_some(NameOutOfGamut { meant: *meant, predicted, nearest })
+    }
+
     /// Every named colour, in palette order.
     pub fn entries(&self) -> &[PaletteEntry] {
         &self.entries
@@ -273,6 +327,41 @@ mod tests {
             MixSpec::Ratios(m) => m.ratios().to_vec(),
             MixSpec::Colour(c) => panic!("{name} is defined by colour {c}"),
         }
+    }
+
+    #[test]
+    fn palette_blue_out_of_gamut_is_said() {
+        // Issue 39: "Blue" printed purple (#74419f) with no word that no mix prints blue.
+        let model = MixingModel::new(&CMYW_FILAMENTS).unwrap();
+        let p = Palette::seed();
+        let blue = p.name_out_of_gamut("blue", &model).unwrap();
+        assert_eq!(
+            (blue.meant, blue.predicted),
+            (Srgb8::new(0x1f, 0x4e, 0x9c), Srgb8::new(0x74, 0x41, 0x9f))
+        );
+        // Measured: #6165ae at dE00 11.8, cyan-heavy (0.67 : 0.29 : 0.04 : 0).
+        assert_eq!(blue.nearest.predicted, Srgb8::new(0x61, 0x65, 0xae));
+        assert!((11.0..12.5).contains(&blue.nearest.delta_e), "{}", blue.nearest.delta_e);
+        // Reachable names are not flagged, nor the filaments, nor a name the user redefined.
+        let out: Vec<&str> = NAMED_COLOURS
+            .iter()
+            .map(|(n, _)| *n)
+            .filter(|n| p.name_out_of_gamut(n, &model).is_some())
+            .collect();
+        assert_eq!(out, ["Blue", "Brown"]);
+        assert_eq!(p.name_out_of_gamut("Cyan", &model), None);
+        let mut mine = Palette::seed();
+        mine.insert("Blue", MixSpec::Ratios(Mix::new(&[0.7, 0.3, 0.0, 0.0]).unwrap()));
+        assert_eq!(mine.name_out_of_gamut("Blue", &model), None);
+        // A blue filament on E3 reaches it.
+        let with_blue = MixingModel::new(&[
+            CMYW_FILAMENTS[0],
+            CMYW_FILAMENTS[1],
+            CMYW_FILAMENTS[2],
+            Srgb8::new(0x1f, 0x4e, 0x9c),
+        ])
+        .unwrap();
+        assert_eq!(p.name_out_of_gamut("Blue", &with_blue), None);
     }
 
     #[test]

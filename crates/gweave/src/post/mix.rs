@@ -743,13 +743,20 @@ mod tests {
         let late = format!("{head}; gcode_flavor = reprapfirmware\n{PRINT}{tail}");
         let (_, report) = mix_bytes(profile(""), late.as_bytes()).unwrap();
         let warnings: Vec<String> = report.warnings.iter().map(ToString::to_string).collect();
-        assert_eq!(warnings.len(), 1, "{warnings:?}");
-        let w = &warnings[0];
+        // The palette's Blue (layer 1) is out of the filaments' gamut, and says so first.
+        assert_eq!(warnings.len(), 2, "{warnings:?}");
+        assert!(warnings[0].starts_with("Blue: out of these filaments' gamut"), "{warnings:?}");
+        let w = &warnings[1];
         assert!(w.contains("(reprapfirmware)") && w.contains("--dialect") && !w.contains("pipe"), "{w}");
         // Named in the file's ends, as slicers name it, the flavour chooses the dialect.
         let (_, report) =
             mix_bytes(profile(""), format!("{PRINT}; gcode_flavor = reprapfirmware\n").as_bytes()).unwrap();
-        assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+        // Only Blue's gamut warning: nothing about the dialect.
+        assert!(
+            matches!(&report.warnings[..], [crate::post::warning::Warning::NameOutOfGamut { .. }]),
+            "{:?}",
+            report.warnings
+        );
         assert_eq!(report.dialect, Firmware::RepRapFirmware.mix_commands());
     }
 

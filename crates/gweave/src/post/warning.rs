@@ -19,6 +19,22 @@ pub enum Warning {
         /// CIEDE2000 distance of the nearest printable mix.
         delta_e: f64,
     },
+    /// `mix`: a palette name whose colour the filaments cannot print (see
+    /// `colour::palette::NAME_GAMUT_DE`).
+    NameOutOfGamut {
+        /// The mix's name.
+        mix: String,
+        /// The colour the name means, `#rrggbb`.
+        meant_hex: String,
+        /// What the palette's ratios print, `#rrggbb`.
+        predicted_hex: String,
+        /// The nearest colour the filaments print, `#rrggbb`.
+        nearest_hex: String,
+        /// Its ratios, as written in the summary.
+        nearest_ratios: String,
+        /// CIEDE2000 between the nearest and the meant colour.
+        delta_e: f64,
+    },
     /// `mix`: the file never moved filament nor reached its first layer, so no mix was defined.
     NoMixDefined,
     /// `mix`: a flavour named only in the middle of the file (not in the ends read before the
@@ -91,6 +107,13 @@ impl fmt::Display for Warning {
                 f,
                 "{mix}: {target_hex} is out of gamut for these filaments; nearest mix is off by dE2000 {delta_e:.1}"
             ),
+            Warning::NameOutOfGamut { mix, meant_hex, predicted_hex, nearest_hex, nearest_ratios, delta_e } => {
+                write!(
+                    f,
+                    "{mix}: out of these filaments' gamut: its ratios print {predicted_hex}, and the nearest to {} ({meant_hex}) they print is {nearest_hex} at {nearest_ratios}, dE2000 {delta_e:.1}",
+                    mix.to_lowercase()
+                )
+            }
             Warning::NoMixDefined => {
                 f.write_str("the file never moved filament nor reached its first layer: no mix was defined")
             }

@@ -193,14 +193,19 @@ pub fn fitted_profile_toml(
         .hardware
         .inputs
         .iter()
-        .zip(model.inputs().iter().zip(model.strengths()))
-        .map(|(input, (colour, strength))| {
+        .zip(model.inputs().iter().zip(model.strengths()).zip(model.shapes()))
+        .map(|(input, ((colour, strength), shape))| {
             let mut t = toml::Table::new();
             t.insert("colour".into(), colour.to_hex().into());
             t.insert("material".into(), input.material.clone().into());
             t.insert("density_g_cm3".into(), input.density_g_cm3.into());
             // Four significant digits: the fit's own precision.
             t.insert("strength".into(), format!("{strength:.3e}").parse::<f64>().unwrap_or(*strength).into());
+            if shape.iter().any(|&a| a != 0.0) {
+                // Four decimals: a change of 1e-4 in a bump weight moves no colour by 0.01 ΔE00.
+                let rounded = shape.map(|a| (a * 1e4).round() / 1e4);
+                t.insert("shape".into(), toml::Value::Array(rounded.iter().map(|&a| a.into()).collect()));
+            }
             toml::Value::Table(t)
         })
         .collect();

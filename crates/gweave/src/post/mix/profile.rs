@@ -43,6 +43,7 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
+use crate::colour::shape::Shape;
 use crate::colour::{MixError, MixingModel, Srgb8};
 use crate::firmware::{Firmware, MixCommands};
 use crate::gcode::number::NumberFormat;
@@ -83,6 +84,10 @@ pub struct Input {
     /// [`crate::colour::mixing`]); unset, from its colour. `gweave mix --fit` measures it.
     #[serde(default)]
     pub strength: Option<f64>,
+    /// Its spectral shape (seven bump weights at 400, 450, .. 700 nm, see
+    /// [`crate::colour::shape`]); unset, none. `gweave mix --fit` measures it.
+    #[serde(default)]
+    pub shape: Option<Shape>,
 }
 
 fn default_material() -> String {
@@ -125,6 +130,7 @@ impl Default for Hardware {
                     material: m.into(),
                     density_g_cm3: default_density(),
                     strength: None,
+                    shape: None,
                 })
                 .collect(),
             dialect: None,
@@ -143,7 +149,7 @@ impl Hardware {
         self.dialect.unwrap_or_default()
     }
 
-    /// The pigment model for the loaded filaments (their colours and strengths): the one model
+    /// The pigment model for the loaded filaments (their colours, strengths and shapes): the one model
     /// that the mix pass, `--predict`, previews and swatches use.
     pub fn mixing_model(&self) -> Result<MixingModel, MixError> {
         let colours: Vec<Srgb8> = self.inputs.iter().map(|i| i.colour).collect();
@@ -152,7 +158,8 @@ impl Hardware {
             .iter()
             .map(|i| i.strength.unwrap_or_else(|| MixingModel::default_strength(i.colour)))
             .collect();
-        MixingModel::with_strengths(&colours, &strengths)
+        let shapes: Vec<Shape> = self.inputs.iter().map(|i| i.shape.unwrap_or_default()).collect();
+        MixingModel::with_shapes(&colours, &strengths, &shapes)
     }
 
     /// The input that holds material 2.
@@ -422,6 +429,8 @@ const INPUTS: Range = Range::new(1.0, 16.0, "inputs");
 /// Pigment strengths: the default runs from 0.01 (black) to 1.01 (white); carbon black and
 /// fitted values go above, nothing mixes at 0.
 const STRENGTH: Range = Range::new(0.001, 100.0, "");
+/// Spectral shape weights: `gweave mix --fit` keeps them within ±3 (see `colour::fit`).
+const SHAPE: Range = Range::new(-3.0, 3.0, "");
 /// Filament densities, from foams to metal-filled filaments.
 const DENSITY_G_CM3: Range = Range::new(0.1, 25.0, "g/cm³");
 const VIRTUAL_TOOLS: Range = Range::new(0.0, 1_000.0, "tools");
@@ -457,6 +466,9 @@ impl CheckRanges for MixProfile {
             let item = hardware.sub("inputs").item(i);
             item.check("density_g_cm3", input.density_g_cm3, DENSITY_G_CM3)?;
             item.check_opt("strength", input.strength, STRENGTH)?;
+            for (k, &a) in input.shape.iter().flatten().enumerate() {
+                item.check(&format!("shape[{k}]"), a, SHAPE)?;
+            }
         }
         hardware.count("virtual_tools", hw.virtual_tools as u64, VIRTUAL_TOOLS)?;
         hardware.check("filament_diameter_mm", hw.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;

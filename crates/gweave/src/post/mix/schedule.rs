@@ -16,7 +16,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::colour::dialect::{round_to_units, Decimals};
+use crate::colour::dialect::{formatted, round_to_units, Decimals};
 use crate::colour::palette::{Palette, PaletteConfig};
 use crate::colour::solve::{lerp_perceived, solve};
 use crate::colour::{Mix, MixingModel, Srgb8};
@@ -116,6 +116,19 @@ impl Resolver<'_> {
                         .palette
                         .resolve(name, &self.model)
                         .map_err(|e| MixPassError::Config(e.to_string()))?;
+                    if let Some(miss) = self.palette.name_out_of_gamut(name, &self.model) {
+                        let warning = Warning::NameOutOfGamut {
+                            mix: res.name.clone(),
+                            meant_hex: miss.meant.to_hex(),
+                            predicted_hex: miss.predicted.to_hex(),
+                            nearest_hex: miss.nearest.predicted.to_hex(),
+                            nearest_ratios: formatted(&miss.nearest.mix, self.decimals).join(":"),
+                            delta_e: miss.nearest.delta_e,
+                        };
+                        if !self.warnings.contains(&warning) {
+                            self.warnings.push(warning);
+                        }
+                    }
                     (res.mix, res.target, res.delta_e, res.out_of_gamut)
                 }
                 None => {
@@ -413,6 +426,20 @@ mod tests {
         let mut support = MixProfile::default();
         support.add_map("T1=support").unwrap();
         assert_eq!(Plan::new(&support).unwrap().mixes[0].units, [0, 0, 0, 10000]);
+    }
+
+    #[test]
+    fn palette_blue_out_of_gamut_is_in_the_warnings() {
+        // Issue 39: the seed's schedule printed "Blue" purple (#74419f) and said nothing. Blue is
+        // named twice (layers 75 and 80): one warning.
+        let mut p = seed_schedule();
+        p.schedule.push(ScheduleEntry::parse_layer("80=blue").unwrap());
+        let plan = Plan::new(&p).unwrap();
+        let said: Vec<String> = plan.warnings.iter().map(ToString::to_string).collect();
+        assert_eq!(
+            said,
+            ["Blue: out of these filaments' gamut: its ratios print #74419f, and the nearest to blue (#1f4e9c) they print is #6165ae at 0.6709:0.2894:0.0397:0, dE2000 11.8"]
+        );
     }
 
     #[test]
