@@ -259,12 +259,14 @@ impl Palette {
     /// ours, and no mix of them prints a blue.
     pub fn name_out_of_gamut(&self, name: &str, model: &MixingModel) -> Option<NameOutOfGamut> {
         let entry = self.get(name)?;
-        let (_, ratios) = SEED_PALETTE.iter().find(|(seed, _)| same_name(seed, &entry.name))?;
+        let lower = entry.name.to_lowercase();
+        let same_name = |listed: &str| listed.to_lowercase() == lower;
+        let (_, ratios) = SEED_PALETTE.iter().find(|(seed, _)| same_name(seed))?;
         let MixSpec::Ratios(mix) = &entry.spec else { return None };
         if mix.ratios() != Mix::new(ratios).ok()?.ratios() {
             return None;
         }
-        let (_, meant) = NAMED_COLOURS.iter().find(|(named, _)| same_name(named, &entry.name))?;
+        let (_, meant) = NAMED_COLOURS.iter().find(|(named, _)| same_name(named))?;
         let predicted = model.predict(mix).ok()?;
         let nearest = solve(model, *meant);
         (nearest.delta_e > NAME_GAMUT_DE).then_some(NameOutOfGamut { meant: *meant, predicted, nearest })
