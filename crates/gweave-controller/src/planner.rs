@@ -38,6 +38,7 @@
 
 use crate::limits::PLANNER_BLOCKS;
 use crate::math::sqrt;
+use crate::mixing::Mixer;
 use crate::settings::Settings;
 use crate::stepper::StepBlock;
 use crate::{AXES, E};
@@ -116,7 +117,18 @@ impl Planner {
     /// Plans a move from [`Planner::position_steps`] to `target_steps` at `feed_mm_s` (within
     /// the settings' limits); `endstop_mask` names the endstops that end it (homing). A move of
     /// no step is not planned. Returns `false`, planning nothing, when the planner is full.
-    pub fn add(&mut self, target_steps: [i32; AXES], feed_mm_s: f32, endstop_mask: u8, s: &Settings) -> bool {
+    ///
+    /// On a mixing hotend the E steps go to the inputs by `mixer`'s active mix
+    /// ([`Mixer::split`]), each input a motor of the block; the planner's speeds and lengths stay
+    /// those of E.
+    pub fn add(
+        &mut self,
+        target_steps: [i32; AXES],
+        feed_mm_s: f32,
+        endstop_mask: u8,
+        s: &Settings,
+        mixer: &mut Mixer,
+    ) -> bool {
         if self.is_full() {
             return false;
         }
@@ -133,6 +145,17 @@ impl Planner {
                 step.dir_bits |= 1 << axis;
             }
             delta_mm[axis] = delta as f32 / s.steps_per_mm[axis];
+        }
+        if mixer.inputs() > 0 {
+            let e_delta = target_steps[E].saturating_sub(self.position_steps[E]);
+            step.dir_bits &= !(1 << E);
+            for (k, d) in mixer.split(e_delta).into_iter().enumerate() {
+                step.steps[E + k] = d.unsigned_abs();
+                step.events = step.events.max(step.steps[E + k]);
+                if d > 0 {
+                    step.dir_bits |= 1 << (E + k);
+                }
+            }
         }
         step.dir_bits ^= s.invert_dir;
         if step.events == 0 {
@@ -246,7 +269,7 @@ mod tests {
     fn planned(moves: &[[i32; AXES]]) -> Planner {
         let mut p = Planner::new();
         for &m in moves {
-            assert!(p.add(m, 100.0, 0, &Settings::DEFAULT));
+            assert!(p.add(m, 100.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
         }
         p
     }
@@ -259,7 +282,7 @@ mod tests {
         let mut p = planned(&[[800, 0, 0, 0], [1600, 0, 0, 0]]);
         let (first, exit_v2) = p.pop().unwrap();
         assert_eq!(first.entry_v2, 0.0);
-        assert_eq!(first.step.steps, [800, 0, 0, 0]);
+        assert_eq!(first.step.steps, [800, 0, 0, 0, 0, 0, 0]);
         assert_eq!(exit_v2, 100.0 * 100.0);
     }
 
@@ -278,10 +301,10 @@ mod tests {
         assert_eq!(p.pop().unwrap().1, 0.0);
         let mut p = Planner::new();
         for i in 0..PLANNER_BLOCKS as i32 {
-            assert!(p.add([i + 1, 0, 0, 0], 10.0, 0, &Settings::DEFAULT));
+            assert!(p.add([i + 1, 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
         }
         assert!(p.is_full());
-        assert!(!p.add([100, 0, 0, 0], 10.0, 0, &Settings::DEFAULT));
+        assert!(!p.add([100, 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
         assert_eq!(p.position_steps, [PLANNER_BLOCKS as i32, 0, 0, 0]);
     }
 

@@ -70,6 +70,9 @@ pub struct Settings {
     pub extrude_min_c: f32,
     /// Highest temperature allowed per heater, °C: above it the machine halts (MAXTEMP).
     pub max_temp_c: [f32; HEATERS],
+    /// Inputs of a mixing hotend, 2 to [`crate::limits::MIX_INPUTS`] (E0, E1, ...; see
+    /// [`crate::mixing`]), or 0 for a plain extruder. A build-time fact, not kept by `M500`.
+    pub mixing_inputs: u8,
 }
 
 impl Settings {
@@ -94,6 +97,7 @@ impl Settings {
         hotend_pid: Pid { kp: 22.2, ki: 1.08, kd: 114.0 },
         extrude_min_c: 170.0,
         max_temp_c: [275.0, 275.0, 150.0],
+        mixing_inputs: 0,
     };
 }
 
@@ -191,7 +195,7 @@ impl Settings {
 
 /// CRC-16/CCITT of `bytes`, continuing from `crc` (start with `0xFFFF`): catches any EEPROM
 /// byte worn or half written.
-fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
+pub(crate) fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
     for &b in bytes {
         crc ^= u16::from(b) << 8;
         for _ in 0..8 {

@@ -10,7 +10,7 @@ use crate::serial::out::{line, Reply};
 use crate::{Io, AXES, AXIS_LETTERS, BED, E, HOTEND0, HOTEND1};
 
 /// How a command ends.
-enum Done {
+pub(super) enum Done {
     /// Print `ok` now.
     Ok,
     /// The command printed its own `ok` (`ok T:...` of `M105`) or waits ([`Wait`]).
@@ -74,7 +74,7 @@ impl Controller<'_> {
             }
             (b'G', 28) => {
                 self.wait = Wait::Home(Homing::new(w));
-                self.steppers_enabled = 0b1111;
+                self.steppers_enabled = self.motors(0b1111);
                 return Some(Done::Quiet);
             }
             // Millimetres, the only unit this machine has.
@@ -90,12 +90,12 @@ impl Controller<'_> {
                     self.heat.all_off();
                     self.fan_duty = 0;
                 }
-                let mask = axes_given(w).unwrap_or(0b1111);
+                let mask = self.motors(axes_given(w).unwrap_or(0b1111));
                 self.steppers_enabled &= !mask;
                 self.wait = Wait::Moves { then_dwell_ms: 0 };
                 return Some(Done::Quiet);
             }
-            (b'M', 17) => self.steppers_enabled |= axes_given(w).unwrap_or(0b1111),
+            (b'M', 17) => self.steppers_enabled |= self.motors(axes_given(w).unwrap_or(0b1111)),
             (b'M', 104 | 109) => {
                 let heater = if w.get(b'T') == Some(1.0) { HOTEND1 } else { HOTEND0 };
                 return Some(self.set_temperature(w, heater, code == 109, now));
@@ -151,17 +151,30 @@ impl Controller<'_> {
             }
             (b'M', 500) => {
                 let crc = self.settings.save(io);
+                self.save_tools(io);
                 self.report_eeprom(io, b"echo:Settings Stored (", crc);
             }
             (b'M', 501) => match self.settings.load(io) {
-                Some(crc) => self.report_eeprom(io, b"echo:Stored settings retrieved (", crc),
+                Some(crc) => {
+                    self.load_tools(io);
+                    self.report_eeprom(io, b"echo:Stored settings retrieved (", crc)
+                }
                 None => line(io, b"echo:No settings stored in EEPROM: settings unchanged"),
             },
             (b'M', 502) => {
-                self.settings = crate::Settings::DEFAULT;
+                // The build's fixed facts stay (the inputs fitted); the rest is the default.
+                let inputs = self.settings.mixing_inputs;
+                self.settings = crate::Settings { mixing_inputs: inputs, ..crate::Settings::DEFAULT };
+                self.mixer.reset_tools();
                 line(io, b"echo:Hardcoded Default Settings Loaded");
             }
-            (b'M', 503) => self.report_settings(io),
+            (b'M', 503) => {
+                self.report_settings(io);
+                self.report_tools(io);
+            }
+            (b'M', 163..=165) | (b'T', _) if self.mixer.inputs() > 0 => {
+                return Some(self.mixing_command(io, w))
+            }
             (b'T', 0) => {}
             (b'T', 1) if crate::heat::Heat::fitted(&self.settings, HOTEND1) => {}
             _ => return None,
@@ -193,9 +206,9 @@ impl Controller<'_> {
             self.planner.position_steps[E] = target[E];
             line(io, b"echo: cold extrusion prevented");
         }
-        self.steppers_enabled |= 0b1111;
+        self.steppers_enabled |= self.motors(0b1111);
         // Room was checked before the line was taken.
-        self.planner.add(target, self.feed_mm_s, 0, &self.settings);
+        self.planner.add(target, self.feed_mm_s, 0, &self.settings, &mut self.mixer);
     }
 
     /// `G92`: names the current place (all axes 0 with no letter).

@@ -10,11 +10,13 @@
 
 mod commands;
 mod homing;
+mod mixing;
 mod report;
 #[cfg(test)]
 mod tests;
 
 use crate::heat::Heat;
+use crate::mixing::Mixer;
 use crate::planner::Planner;
 use crate::serial::out::{line, Reply};
 use crate::serial::protocol::{self, LineError};
@@ -59,6 +61,8 @@ pub struct Controller<'q> {
     /// The last line number taken (`N`).
     last_line: i32,
     planner: Planner,
+    /// The mixing hotend's tools and shares (inert without one).
+    mixer: Mixer,
     prep: Prep,
     heat: Heat,
     /// Where the commands have put the head, mm (logical position).
@@ -88,6 +92,7 @@ impl<'q> Controller<'q> {
             reader: LineReader::new(),
             last_line: 0,
             planner: Planner::new(),
+            mixer: Mixer::new(settings.mixing_inputs),
             prep: Prep::new(),
             heat: Heat::default(),
             position_mm: [0.0; AXES],
@@ -112,6 +117,7 @@ impl<'q> Controller<'q> {
         line(io, b"start");
         // Only what `M500` keeps is read; the build's fixed facts (sizes, sensors) stay.
         let _ = self.settings.load(io);
+        self.load_tools(io);
     }
 
     /// Takes one byte from the host. Returns `false`, taking nothing, when the byte would end a

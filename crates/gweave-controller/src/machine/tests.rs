@@ -473,6 +473,13 @@ fn the_core_fits_the_ram_budget() {
     // upper bound of the board's figure (1680 + 264 + 64 bytes when written). The budget of the
     // whole firmware is 4 KB of static RAM, the core's constants (about 1.8 KB of strings and
     // tables, which an AVR copies into RAM) included.
+    //
+    // A mixing hotend's state comes on top, counted exactly: the mixer (tools, collector,
+    // shares), and a step count per extra input in every planner block, step block and in the
+    // stepper's Bresenham counters.
+    use crate::limits::{MIX_INPUTS, PLANNER_BLOCKS, STEP_BLOCKS};
+    let mixing = core::mem::size_of::<crate::mixing::Mixer>()
+        + (PLANNER_BLOCKS + STEP_BLOCKS + 2) * 4 * (MIX_INPUTS - 1);
     let size = core::mem::size_of::<Controller>() + core::mem::size_of::<StepQueue>();
-    assert!(size + core::mem::size_of::<Stepper>() <= 2048, "{size} bytes");
+    assert!(size + core::mem::size_of::<Stepper>() <= 2048 + mixing, "{size} bytes, {mixing} of them mixing");
 }

@@ -33,14 +33,14 @@ use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use crate::limits::{IDLE_TICKS, MAX_TIMER_TICKS, SEGMENTS, STEP_BLOCKS};
-use crate::AXES;
+use crate::MOTORS;
 
 /// What a move is to the stepper: steps per axis, their directions, and the endstops that end
 /// it early (homing).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct StepBlock {
-    /// Steps per axis (absolute).
-    pub steps: [u32; AXES],
+    /// Steps per motor (absolute): X, Y, Z, E, and a mixing hotend's other inputs.
+    pub steps: [u32; MOTORS],
     /// Step events: the largest of `steps`.
     pub events: u32,
     /// DIR pin levels for this move (the settings' inversion applied).
@@ -55,7 +55,7 @@ pub struct StepBlock {
 impl StepBlock {
     /// No move.
     pub const IDLE: StepBlock =
-        StepBlock { steps: [0; AXES], events: 0, dir_bits: 0, endstop_mask: 0, endstop_invert: 0 };
+        StepBlock { steps: [0; MOTORS], events: 0, dir_bits: 0, endstop_mask: 0, endstop_invert: 0 };
 }
 
 /// A few milliseconds of one block at a constant step rate.
@@ -195,9 +195,10 @@ impl StepQueue {
 /// direction set-up time (200 ns for an A4988) is met whatever the board's timing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct StepOut {
-    /// STEP pins to pulse now, bit `1 << axis`.
+    /// STEP pins to pulse now, bit `1 << motor` ([`crate::MOTORS`]: a mixing hotend's inputs
+    /// after X, Y and Z).
     pub step_bits: u8,
-    /// DIR pin levels for the next steps, bit `1 << axis` (set after this call's pulses).
+    /// DIR pin levels for the next steps, bit `1 << motor` (set after this call's pulses).
     pub dir_bits: u8,
     /// Timer ticks ([`crate::limits::TICKS_PER_S`]) until the next interrupt.
     pub interval_ticks: u16,
@@ -207,7 +208,7 @@ pub struct StepOut {
 pub struct Stepper<'q> {
     queue: &'q StepQueue,
     block: StepBlock,
-    counters: [u32; AXES],
+    counters: [u32; MOTORS],
     /// Step events left in the running segment.
     events_left: u16,
     interval_ticks: u32,
@@ -222,7 +223,7 @@ impl<'q> Stepper<'q> {
         Stepper {
             queue,
             block: StepBlock::default(),
-            counters: [0; AXES],
+            counters: [0; MOTORS],
             events_left: 0,
             interval_ticks: 0,
             wait_ticks: 0,
@@ -273,11 +274,11 @@ impl<'q> Stepper<'q> {
     /// One Bresenham step event: the step bits of the axes that step.
     fn event(&mut self) -> u8 {
         let mut bits = 0;
-        for axis in 0..AXES {
-            self.counters[axis] += self.block.steps[axis];
-            if self.counters[axis] >= self.block.events {
-                self.counters[axis] -= self.block.events;
-                bits |= 1 << axis;
+        for motor in 0..MOTORS {
+            self.counters[motor] += self.block.steps[motor];
+            if self.counters[motor] >= self.block.events {
+                self.counters[motor] -= self.block.events;
+                bits |= 1 << motor;
             }
         }
         bits
@@ -289,7 +290,7 @@ impl<'q> Stepper<'q> {
             if let Some(block) = block {
                 self.block = block;
                 // Half of the events: the minor axes' steps fall mid-interval (see above).
-                self.counters = [block.events / 2; AXES];
+                self.counters = [block.events / 2; MOTORS];
             }
             if self.block.endstop_mask != 0 && self.queue.endstop_hit.load(Ordering::Acquire) {
                 continue;
