@@ -65,14 +65,6 @@ pub const MIX_UNITS: u16 = 10_000;
 /// A mix: the units of each input (E0 first), summing to [`MIX_UNITS`] over the inputs fitted.
 pub type Mix = [u16; MIX_INPUTS];
 
-/// One input's ideal cumulative share of E steps: `whole + units / MIX_UNITS` steps, with
-/// `0 <= units < MIX_UNITS` (so a negative share has a negative `whole`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-struct Ideal {
-    whole: i32,
-    units: u16,
-}
-
 /// Why a mixing command was refused (nothing changed).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MixError {
@@ -92,8 +84,11 @@ pub struct Mixer {
     collector: [f32; MIX_INPUTS],
     tools: [Mix; MIX_TOOLS],
     active: u8,
-    ideal: [Ideal; MIX_INPUTS],
-    given: [i32; MIX_INPUTS],
+    /// Each input's ideal cumulative share of E steps: `whole + units / MIX_UNITS` steps, with
+    /// `0 <= units < MIX_UNITS` (so a negative share has a negative `whole`). What each input
+    /// was given follows from them (the rounded prefix sums), so it is not kept.
+    ideal_whole: [i32; MIX_INPUTS],
+    ideal_units: [u16; MIX_INPUTS],
 }
 
 /// Where the tools start in EEPROM (after the settings), and the mark of their layout.
@@ -112,8 +107,8 @@ impl Mixer {
             collector: [0.0; MIX_INPUTS],
             tools: [[0; MIX_INPUTS]; MIX_TOOLS],
             active: 0,
-            ideal: [Ideal { whole: 0, units: 0 }; MIX_INPUTS],
-            given: [0; MIX_INPUTS],
+            ideal_whole: [0; MIX_INPUTS],
+            ideal_units: [0; MIX_INPUTS],
         };
         mixer.reset_tools();
         mixer
@@ -192,28 +187,41 @@ impl Mixer {
         if n == 0 || e_steps == 0 {
             return out;
         }
+        let before = self.given();
         let mix = self.tools[usize::from(self.active)];
         // e = q * UNITS + r, 0 <= r < UNITS: units * e / UNITS = units * q + units * r / UNITS,
         // every product within 32 bits (units * r < 10^8; units * q within the E steps).
         let units = i32::from(MIX_UNITS);
         let (q, r) = (e_steps.div_euclid(units), e_steps.rem_euclid(units));
-        let (mut prefix_whole, mut prefix_units) = (0i32, 0i32);
-        let mut rounded_before = 0;
         for k in 0..n {
             let u = i32::from(mix[k]);
-            let ideal = &mut self.ideal[k];
-            let sum_units = i32::from(ideal.units) + u * r;
-            ideal.whole += u * q + sum_units.div_euclid(units);
-            ideal.units = sum_units.rem_euclid(units) as u16;
-            prefix_whole += ideal.whole + (prefix_units + i32::from(ideal.units)).div_euclid(units);
-            prefix_units = (prefix_units + i32::from(ideal.units)).rem_euclid(units);
-            let rounded = round_half_away(prefix_whole, prefix_units);
-            let given = rounded - rounded_before;
-            rounded_before = rounded;
-            out[k] = given - self.given[k];
-            self.given[k] = given;
+            let sum_units = i32::from(self.ideal_units[k]) + u * r;
+            self.ideal_whole[k] += u * q + sum_units.div_euclid(units);
+            self.ideal_units[k] = sum_units.rem_euclid(units) as u16;
+        }
+        let after = self.given();
+        for k in 0..n {
+            out[k] = after[k] - before[k];
         }
         out
+    }
+
+    /// What each input has been given so far, steps: the differences of the rounded prefix
+    /// sums of the ideal shares.
+    fn given(&self) -> [i32; MIX_INPUTS] {
+        let units = i32::from(MIX_UNITS);
+        let mut given = [0; MIX_INPUTS];
+        let (mut prefix_whole, mut prefix_units) = (0i32, 0i32);
+        let mut rounded_before = 0;
+        for k in 0..self.inputs() {
+            let sum_units = prefix_units + i32::from(self.ideal_units[k]);
+            prefix_whole += self.ideal_whole[k] + sum_units.div_euclid(units);
+            prefix_units = sum_units.rem_euclid(units);
+            let rounded = round_half_away(prefix_whole, prefix_units);
+            given[k] = rounded - rounded_before;
+            rounded_before = rounded;
+        }
+        given
     }
 
     /// `M500`: the tools to EEPROM after the settings.

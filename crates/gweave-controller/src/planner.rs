@@ -36,7 +36,7 @@
 //! The oldest block's entry is fixed: it is the exit speed the block before it (already being
 //! stepped) was given, or rest. Speeds are kept squared, as the formulas want them.
 
-use crate::limits::PLANNER_BLOCKS;
+use crate::limits::{MIN_STEPS_PER_SEGMENT, PLANNER_BLOCKS};
 use crate::math::sqrt;
 use crate::mixing::Mixer;
 use crate::settings::Settings;
@@ -145,6 +145,10 @@ impl Planner {
                 step.dir_bits |= 1 << axis;
             }
             delta_mm[axis] = delta as f32 / s.steps_per_mm[axis];
+        }
+        if step.events < MIN_STEPS_PER_SEGMENT && endstop_mask == 0 {
+            // Too short to plan: the position stays, so the next move takes this one's steps.
+            return true;
         }
         if mixer.inputs() > 0 {
             let e_delta = target_steps[E].saturating_sub(self.position_steps[E]);
@@ -301,11 +305,21 @@ mod tests {
         assert_eq!(p.pop().unwrap().1, 0.0);
         let mut p = Planner::new();
         for i in 0..PLANNER_BLOCKS as i32 {
-            assert!(p.add([i + 1, 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
+            assert!(p.add([6 * (i + 1), 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
         }
         assert!(p.is_full());
-        assert!(!p.add([100, 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
-        assert_eq!(p.position_steps, [PLANNER_BLOCKS as i32, 0, 0, 0]);
+        assert!(!p.add([1000, 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
+        assert_eq!(p.position_steps, [6 * PLANNER_BLOCKS as i32, 0, 0, 0]);
+    }
+
+    #[test]
+    fn a_move_of_fewer_than_six_steps_goes_with_the_next() {
+        let mut p = Planner::new();
+        let mut mixer = Mixer::new(0);
+        assert!(p.add([5, 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut mixer));
+        assert!(p.is_empty() && p.position_steps == [0; AXES], "not planned");
+        assert!(p.add([9, 0, 0, 2], 10.0, 0, &Settings::DEFAULT, &mut mixer));
+        assert_eq!(p.pop().unwrap().0.step.steps, [9, 0, 0, 2, 0, 0, 0]);
     }
 
     #[test]

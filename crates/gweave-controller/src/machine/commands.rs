@@ -126,9 +126,10 @@ impl Controller<'_> {
             (b'M', 92) => {
                 for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
                     if let Some(v) = w.get(letter) {
-                        s.steps_per_mm[axis] = v;
-                        // The same place, counted in the new steps.
-                        self.planner.position_steps[axis] = round_i32(self.position_mm[axis] * v);
+                        self.settings.steps_per_mm[axis] = v;
+                        // The same place in the new steps (E: the motor stays and counts the
+                        // new steps from here).
+                        self.anchor(axis);
                     }
                 }
             }
@@ -198,7 +199,7 @@ impl Controller<'_> {
             if let Some(v) = w.get(letter) {
                 let relative = self.relative & (1 << axis) != 0;
                 self.position_mm[axis] = if relative { self.position_mm[axis] + v } else { v };
-                target[axis] = round_i32(self.position_mm[axis] * self.settings.steps_per_mm[axis]);
+                target[axis] = self.target_steps(axis);
             }
         }
         let cold = self.heat.heaters[HOTEND0].temp_c < self.settings.extrude_min_c;
@@ -211,12 +212,40 @@ impl Controller<'_> {
         self.planner.add(target, self.feed_mm_s, 0, &self.settings, &mut self.mixer);
     }
 
+    /// Where `axis`'s motor goes for the logical position now, in steps. E counts from where it
+    /// was last named, as the virtual printer's Marlin model does (`gweave-sim`'s
+    /// `motion/stepper.rs`), so that rounding never accumulates: a `G92 E0` at every layer, or
+    /// the `G92 E<e>` after a purge, loses no fraction of a step, where rounding the named
+    /// position itself (`round(e * steps_per_mm)`, Marlin's `set_position_mm`) would shift E's
+    /// steps by up to half a step each time, and a mixing hotend's split with them. X, Y and Z
+    /// are rounded from their position (named at 0 by homing, where the steps are 0; a `G92`
+    /// of them rounds the position named).
+    pub(super) fn target_steps(&self, axis: usize) -> i32 {
+        let spm = self.settings.steps_per_mm[axis];
+        if axis == E {
+            self.anchor_e_steps + round_i32((self.position_mm[E] - self.anchor_e_mm) * spm)
+        } else {
+            round_i32(self.position_mm[axis] * spm)
+        }
+    }
+
+    /// Names the logical position of `axis` now: E's is where its motor is (the planner's end),
+    /// X's, Y's and Z's the position rounded to steps.
+    pub(super) fn anchor(&mut self, axis: usize) {
+        if axis == E {
+            self.anchor_e_mm = self.position_mm[E];
+            self.anchor_e_steps = self.planner.position_steps[E];
+        } else {
+            self.planner.position_steps[axis] = self.target_steps(axis);
+        }
+    }
+
     /// `G92`: names the current place (all axes 0 with no letter).
     fn set_position(&mut self, w: &Words) {
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
             if let Some(v) = w.get(letter).or((!w.any()).then_some(0.0)) {
                 self.position_mm[axis] = v;
-                self.planner.position_steps[axis] = round_i32(v * self.settings.steps_per_mm[axis]);
+                self.anchor(axis);
             }
         }
     }

@@ -67,6 +67,11 @@ pub struct Controller<'q> {
     heat: Heat,
     /// Where the commands have put the head, mm (logical position).
     position_mm: [f32; AXES],
+    /// Where E was last named (`G92 E`, `M92 E`), mm, and its motor's steps then: E's targets
+    /// are counted in steps from there, so naming E never moves nor rounds the motor (see
+    /// `Controller::target_steps`). X, Y and Z are named at 0 by homing, where the steps are 0.
+    anchor_e_mm: f32,
+    anchor_e_steps: i32,
     /// Axes whose coordinates are relative (`G91`, and `M83` for E).
     relative: u8,
     feed_mm_s: f32,
@@ -96,6 +101,8 @@ impl<'q> Controller<'q> {
             prep: Prep::new(),
             heat: Heat::default(),
             position_mm: [0.0; AXES],
+            anchor_e_mm: 0.0,
+            anchor_e_steps: 0,
             relative: 0,
             // Marlin's power-on feed rate: 1500 mm/min.
             feed_mm_s: 25.0,
