@@ -194,14 +194,15 @@ impl Controller<'_> {
         if let Some(f) = w.get(b'F') {
             self.feed_mm_s = f / 60.0;
         }
-        let mut target = self.planner.position_steps;
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
             if let Some(v) = w.get(letter) {
                 let relative = self.relative & (1 << axis) != 0;
                 self.position_mm[axis] = if relative { self.position_mm[axis] + v } else { v };
-                target[axis] = self.target_steps(axis);
             }
         }
+        // Every axis, named on the line or not: a move too short to plan left its steps to
+        // this one (MIN_STEPS_PER_SEGMENT), E's included even if this line has no E.
+        let target: [i32; AXES] = core::array::from_fn(|axis| self.target_steps(axis));
         let cold = self.heat.heaters[HOTEND0].temp_c < self.settings.extrude_min_c;
         if target[E] != self.planner.position_steps[E] && cold {
             self.planner.position_steps[E] = target[E];
