@@ -182,10 +182,9 @@ impl Mixer {
     /// Shares a move's `e_steps` (signed) among the inputs by the active mix: each input's
     /// signed steps for the move (see the module's documentation). Zeros without mixing.
     pub fn split(&mut self, e_steps: i32) -> [i32; MIX_INPUTS] {
-        let mut out = [0; MIX_INPUTS];
         let n = self.inputs();
         if n == 0 || e_steps == 0 {
-            return out;
+            return [0; MIX_INPUTS];
         }
         let before = self.given();
         let mix = self.tools[usize::from(self.active)];
@@ -193,17 +192,15 @@ impl Mixer {
         // every product within 32 bits (units * r < 10^8; units * q within the E steps).
         let units = i32::from(MIX_UNITS);
         let (q, r) = (e_steps.div_euclid(units), e_steps.rem_euclid(units));
-        for k in 0..n {
-            let u = i32::from(mix[k]);
-            let sum_units = i32::from(self.ideal_units[k]) + u * r;
-            self.ideal_whole[k] += u * q + sum_units.div_euclid(units);
-            self.ideal_units[k] = sum_units.rem_euclid(units) as u16;
+        let ideals = self.ideal_whole.iter_mut().zip(&mut self.ideal_units);
+        for ((whole, ideal_units), &u) in ideals.zip(&mix).take(n) {
+            let u = i32::from(u);
+            let sum_units = i32::from(*ideal_units) + u * r;
+            *whole += u * q + sum_units.div_euclid(units);
+            *ideal_units = sum_units.rem_euclid(units) as u16;
         }
         let after = self.given();
-        for k in 0..n {
-            out[k] = after[k] - before[k];
-        }
-        out
+        core::array::from_fn(|k| after[k] - before[k])
     }
 
     /// What each input has been given so far, steps: the differences of the rounded prefix
@@ -213,12 +210,13 @@ impl Mixer {
         let mut given = [0; MIX_INPUTS];
         let (mut prefix_whole, mut prefix_units) = (0i32, 0i32);
         let mut rounded_before = 0;
-        for k in 0..self.inputs() {
-            let sum_units = prefix_units + i32::from(self.ideal_units[k]);
-            prefix_whole += self.ideal_whole[k] + sum_units.div_euclid(units);
+        let ideals = self.ideal_whole.iter().zip(&self.ideal_units);
+        for (g, (&whole, &ideal_units)) in given.iter_mut().zip(ideals).take(self.inputs()) {
+            let sum_units = prefix_units + i32::from(ideal_units);
+            prefix_whole += whole + sum_units.div_euclid(units);
             prefix_units = sum_units.rem_euclid(units);
             let rounded = round_half_away(prefix_whole, prefix_units);
-            given[k] = rounded - rounded_before;
+            *g = rounded - rounded_before;
             rounded_before = rounded;
         }
         given
@@ -273,7 +271,7 @@ impl Mixer {
 /// one each to the largest remainders (the first input on a tie). `None` if all are zero.
 fn normalise(weights: &[f32]) -> Option<Mix> {
     let sum: f32 = weights.iter().sum();
-    if !(sum > 0.0) || !sum.is_finite() {
+    if sum.is_nan() || sum <= 0.0 || sum.is_infinite() {
         return None;
     }
     let mut mix = [0u16; MIX_INPUTS];
