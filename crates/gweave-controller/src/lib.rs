@@ -146,8 +146,8 @@ pub struct Outputs {
     pub heater_duty: [u8; HEATERS],
     /// Part cooling fan duty, 0-255 (`M106 S<duty>`).
     pub fan_duty: u8,
-    /// Stepper drivers to enable, bit `1 << axis` (RAMPS EN pins are active low: the board
-    /// inverts).
+    /// Stepper drivers to enable, bit `1 << motor` ([`MOTORS`]; RAMPS EN pins are active low:
+    /// the board inverts).
     pub steppers_enabled: u8,
 }
 

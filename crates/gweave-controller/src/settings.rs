@@ -49,8 +49,8 @@ pub struct Settings {
     /// Distance to back off after first touching an endstop, mm (Marlin's
     /// `HOMING_BUMP_MM`: 5, 5, 2), before touching it again at half speed.
     pub homing_bump_mm: [f32; AXES],
-    /// DIR pin bits to invert (bit `1 << axis`): with 0, every DIR pin is high for a positive
-    /// move.
+    /// DIR pin bits to invert (bit `1 << motor`, [`crate::MOTORS`]: a mixing hotend's inputs
+    /// E1-E3 after E0 = E): with 0, every DIR pin is high for a positive move.
     pub invert_dir: u8,
     /// Endstop pin bits whose triggered level is low (bit `1 << axis`): with 0, an endstop pin
     /// reads high when triggered.
