@@ -111,14 +111,17 @@ fn virtual_tools_survive_m500_and_a_reset_and_m503_prints_them() {
 #[test]
 fn a_wrong_mixing_command_is_refused_and_changes_nothing() {
     let mut t = twin(2, Memory::default());
-    let replies =
-        run(&mut t, "M163 S2 P1\nM164 S16\nM163 S0 P0\nM163 S1 P0\nM164 S1\nT16\nT1\nG1 X10 E10 F1200\n");
+    let replies = run(
+        &mut t,
+        "M163 S2 P1\nM164 S16\nM163 S0 P0\nM163 S1 P0\nM164 S1\nT16\nM163 S0 P2000000\nT1\nG1 X10 E10 F1200\n",
+    );
     assert_eq!(
         replies,
         "echo:M163 S = 2.00 is out of range: 0.00 to 1.00\nok\n\
          echo:M164 S = 16.00 is out of range: 0.00 to 15.00\nok\nok\nok\n\
          echo:M164: a mix of all zeros is not stored\nok\n\
-         echo:T16 T = 16.00 is out of range: 0.00 to 15.00\nok\nok\nok\n"
+         echo:T16 T = 16.00 is out of range: 0.00 to 15.00\nok\n\
+         echo:M163 P = 2000000.00 is out of range: -1000000.00 to 1000000.00\nok\nok\nok\n"
     );
     assert_eq!(t.pulses[E..E + 2], [0, 1000], "tool 1 is still input 1 alone");
 }

@@ -27,6 +27,8 @@ const SETTING: (f32, f32) = (0.000_001, 1_000_000.0);
 const GAIN: (f32, f32) = (0.0, 100_000.0);
 const DUTY: (f32, f32) = (0.0, 255.0);
 const DWELL_MS: (f32, f32) = (0.0, 3_600_000.0);
+/// A mixing weight: only ratios matter, a negative one counts as 0; a million bounds the sum.
+const MIX_WEIGHT: (f32, f32) = (-1_000_000.0, 1_000_000.0);
 
 impl Controller<'_> {
     /// Runs one command line (line number and checksum removed).
@@ -315,6 +317,8 @@ fn out_of_range(w: &Words) -> Option<(u8, f32, (f32, f32))> {
         (b'M', 204) => &[(b"SPRT", SETTING)],
         (b'M', 205) => &[(b"J", (0.0, 10.0))],
         (b'M', 301) => &[(b"PID", GAIN)],
+        (b'M', 163) => &[(b"P", MIX_WEIGHT)],
+        (b'M', 165) => &[(b"ABCD", MIX_WEIGHT)],
         _ => &[],
     };
     for &(letters, (low, high)) in ranges {
