@@ -4,6 +4,7 @@
 #   make bench  benchmarks on large real files, each figure beside a reference from the same run
 #   make docs-images  draws the pictures of README.md and docs/ again with the current code
 #   make fuzz   coverage-guided fuzzing of the reader, lexer, profile loaders and controller core (not in make test)
+#   make firmware  the firmware for Arduino Mega 2560 + RAMPS 1.4 (firmware/out/gweave-ramps.hex)
 
 SHELL := /bin/bash
 .SHELLFLAGS := -eu -o pipefail -c
@@ -14,9 +15,9 @@ GWEAVE := target/release/gweave
 OUT := out
 
 .PHONY: demo test bench deps rust-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
-.PHONY: browser-deps cura-deps fuzz docs-images
+.PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-test
 
-deps: rust-deps py-deps browser-deps cura-deps
+deps: rust-deps py-deps browser-deps cura-deps firmware-deps
 
 rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
@@ -50,6 +51,32 @@ cura-deps:
 	  apt-get install -y -q --no-install-recommends cura || { apt-get update -q && apt-get install -y -q --no-install-recommends cura; }; \
 	else echo "cura-deps: no Debian cura package and not root: the Cura script test will be skipped"; fi
 
+# The firmware (docs/firmware.md): Debian's Rust (rustc-web 1.96 with the library source, which
+# builds `core` for the AVR; rustup's toolchains ship no AVR target), avr-gcc to link, and
+# libsimavr for the emulated board of the tests. Installed with apt-get when running as root.
+FW_PACKAGES := rustc-web cargo-web rust-web-src gcc-avr avr-libc binutils-avr simavr libsimavr-dev
+FW_OUT := firmware/out
+# Its own target folder: another compiler and another target than the workspace's.
+FW_TARGET_DIR ?= $(CURDIR)/target/avr
+FW_ELF := $(FW_OUT)/gweave-ramps.elf
+
+firmware-deps:
+	@missing=""; for p in $(FW_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -z "$$missing" ]; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  apt-get install -y -q --no-install-recommends $$missing || { apt-get update -q && apt-get install -y -q --no-install-recommends $$missing; }; \
+	else echo "firmware-deps: missing$$missing (install them as root: apt-get install$$missing)"; exit 1; fi
+
+firmware: firmware-deps
+	cd firmware/ramps && CARGO_TARGET_DIR=$(FW_TARGET_DIR) RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 \
+	  /usr/bin/cargo build --release -q
+	@mkdir -p $(FW_OUT)
+	cp $(FW_TARGET_DIR)/avr-none/release/gweave-ramps.elf $(FW_ELF)
+	avr-objcopy -O ihex -R .eeprom $(FW_ELF) $(FW_OUT)/gweave-ramps.hex
+	@avr-size $(FW_ELF)
+
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli
 
@@ -65,11 +92,13 @@ python-debug: py-deps
 
 lint: rust-deps
 	$(CARGO) fmt --all -- --check
+	$(CARGO) fmt --manifest-path firmware/ramps/Cargo.toml -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 	# Broken or private links in the API docs fail too.
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --exclude gweave-py -q
 
-cargo-test: rust-deps
+# The emulated board's tests (crates/gweave-board/tests) run the firmware `make firmware` built.
+cargo-test: rust-deps firmware
 	$(CARGO) test --workspace --exclude gweave-py
 
 pytest: python-debug
@@ -81,7 +110,7 @@ pytest: python-debug
 e2e: build-debug python-debug
 	bash tests/e2e/run.sh target/debug/gweave
 
-test: deps lint cargo-test pytest e2e
+test: deps firmware lint cargo-test pytest e2e
 	@echo "make test: all passed"
 
 demo: build python

@@ -17,11 +17,11 @@ import os
 import re
 import select
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
+from _host import gweave_command, wait_for
 
 printcore_mod = pytest.importorskip(
     "printrun.printcore", reason="pip install --no-deps -r crates/gweave-py/requirements-host.txt"
@@ -32,11 +32,6 @@ FIXTURE = ("prusaslicer", "pr_torus_pva.gcode")
 NUMBERED = re.compile(r"N(-?\d+) (.*)\*(\d+)\n")
 
 
-def gweave_command() -> list:
-    """The CLI under test: $GWEAVE if set (a built binary), else the installed Python package."""
-    exe = os.environ.get("GWEAVE")
-    return [exe] if exe else [sys.executable, "-m", "gweave"]
-
 
 @pytest.fixture(scope="module", autouse=True)
 def serve_is_wired():
@@ -45,13 +40,6 @@ def serve_is_wired():
     if r.returncode != 0:
         pytest.skip("this gweave has no `serve` subcommand yet")
 
-
-def wait_for(condition, timeout_s: float, what: str) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
-        time.sleep(0.01)
 
 
 def checksum(text: str) -> int:

@@ -47,7 +47,7 @@ pub use interp::{
 pub use link::pty::PtyEndpoint;
 pub use link::serial::{frame_line, Device, Protocol, ProtocolConfig, DEFAULT_KEEPALIVE_S};
 pub use link::tcp::TcpEndpoint;
-pub use link::transport::{serve, Endpoint, ServeOptions, ServeSummary};
+pub use link::transport::{serve, Endpoint, Event as EndpointEvent, ServeOptions, ServeSummary};
 pub use motion::estimate::{
     estimate, estimate_report, estimate_time, Estimate, EstimateError, EstimateReport, Estimator, HugeArcs,
     Malformed, MAX_ARC_CHORDS,
@@ -65,7 +65,7 @@ pub use profile::m503::from_m503;
 pub use profile::{FaultSpec, Inkjet, MachineProfile, MachineProfileError};
 pub use thermal::autotune::{run_on_heater, AutotuneConfig, AutotuneRun, Cycle};
 pub use thermal::control::PidGains;
-pub use thermal::heater::{HeaterConfig, HeaterFault, HeaterId};
+pub use thermal::heater::{Heater, HeaterConfig, HeaterFault, HeaterId};
 pub use thermal::protection::{FaultKind, ThermalFault, KILL_LINE};
-pub use thermal::thermistor::SensorFault;
+pub use thermal::thermistor::{BetaThermistor, SensorFault};
 pub use thermal::{Thermal, ThermalConfig, ThermalError, WaitMode, WaitStatus, COLD_EXTRUSION_LINE};

@@ -1,0 +1,76 @@
+//! Faults and bad input on the emulated board: each ends in a safe state with Marlin's words,
+//! never a crash or a stuck board.
+
+use gweave_board::{Board, Wiring};
+use gweave_sim::HeaterFault;
+
+/// Run until the halt, then check Marlin's two lines, that every heater is off and that the
+/// board stays halted past the watchdog's timeout.
+fn assert_halts(board: &mut Board, error: &str, timeout_s: f64) {
+    let lines = board.run_until_line(|l| l == "Error:Printer halted. kill() called!", timeout_s).unwrap();
+    assert!(lines.iter().any(|l| l == error), "{lines:?}");
+    board.run_for(1.5).unwrap();
+    for i in 0..3 {
+        assert_eq!(board.plant(i).heater.last_power_w(), 0.0, "heater {i} still on");
+    }
+    for socket in 0..4 {
+        assert!(!board.axis(socket).enabled(), "driver {socket} still enabled");
+    }
+    let reply = board.command("G1 X10 F3000", 1.0).unwrap();
+    assert_eq!(reply, ["Error:Printer halted. kill() called!", "ok"]);
+}
+
+#[test]
+fn a_heater_that_cannot_heat_halts_with_heating_failed() {
+    let mut board = crate::common::booted(Wiring::default());
+    board.shield_mut().plants[0].heater.inject(HeaterFault::CartridgeDisconnected);
+    assert_eq!(board.command("M104 S200", 1.0).unwrap().last().unwrap(), "ok");
+    // Marlin's heating watch: 2 °C within 20 s, or the heater is not heating.
+    assert_halts(&mut board, "Error:Heating failed, system stopped! Heater_ID: 0", 30.0);
+}
+
+#[test]
+fn a_hotend_past_maxtemp_halts() {
+    let mut board = crate::common::booted(Wiring::default());
+    // A shorted MOSFET or a runaway heater: the hotend at 280 °C, above MAXTEMP (275).
+    board.shield_mut().plants[0].heater.set_temperature(280.0);
+    assert_halts(&mut board, "Error:MAXTEMP triggered, system stopped! Heater_ID: 0", 2.0);
+}
+
+#[test]
+fn m112_stops_a_move_at_once() {
+    let mut board = crate::common::booted(Wiring::default());
+    assert_eq!(board.command("M104 S200", 1.0).unwrap().last().unwrap(), "ok");
+    board.send_line("G1 X100 F600");
+    board.run_for(0.5).unwrap();
+    let moved = board.net_steps()[0];
+    assert!(moved > 0, "moving before the M112");
+    board.send_line("M112");
+    board.run_until_line(|l| l == "Error:Printer halted. kill() called!", 1.0).unwrap();
+    let at_halt = board.net_steps()[0];
+    board.run_for(1.5).unwrap();
+    // No step after the halt's line, and far from the 8000 steps of the move.
+    assert_eq!(board.net_steps()[0], at_halt);
+    assert!(at_halt < 8000 / 2, "{at_halt} steps");
+    assert_eq!(board.plant(0).heater.last_power_w(), 0.0);
+}
+
+#[test]
+fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
+    let mut board = crate::common::booted(Wiring::default());
+    // 1 KB of words: far past the 95 bytes a line may have (a comment past them would only be
+    // cut off, as Marlin does).
+    let long = format!("G1{}", " X1".repeat(342));
+    board.send_line(&long);
+    let lines = board.run_until_line(|l| l.starts_with("ok"), 2.0).unwrap();
+    assert!(lines.iter().any(|l| l.starts_with("Error:")), "{lines:?}");
+    let garbage: Vec<u8> = (0..512u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 24) as u8).collect();
+    board.send(&garbage);
+    board.send(b"\n");
+    board.run_for(1.0).unwrap();
+    board.lines();
+    // Still answering, and nothing moved.
+    let reply = board.command("M105", 1.0).unwrap();
+    assert!(reply.last().unwrap().starts_with("ok T:"), "{reply:?}");
+    assert_eq!(board.net_steps(), [0; 5]);
+}

@@ -1,0 +1,8 @@
+//! The gweave firmware on the emulated RAMPS board (`make firmware` builds it first): one test
+//! binary, so the board's tests share one build and run in parallel.
+
+mod common;
+mod faults;
+mod heating;
+mod motion;
+mod protocol;

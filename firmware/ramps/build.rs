@@ -1,0 +1,231 @@
+//! Reads the printer's settings (`../printer.toml`) at build time and writes them as Rust
+//! constants into `$OUT_DIR/printer.rs`, which `src/config.rs` includes.
+//!
+//! The file is a small subset of TOML (sections, `key = value` with numbers, strings, booleans
+//! and flat arrays), read here by hand so that the firmware build needs no parser crate. Every
+//! key is checked against the table below: an unknown key, a wrong type or a value out of
+//! range stops the build, naming the line.
+
+use std::fmt::Write as _;
+
+/// A value as written in the file.
+#[derive(Debug, Clone)]
+enum Value {
+    Number(f64),
+    Text(String),
+    Bool(bool),
+    List(Vec<Value>),
+}
+
+/// What a key holds and which Rust field it sets.
+enum Kind {
+    /// One float of `Settings`, within a range.
+    Float { field: &'static str, min: f64, max: f64 },
+    /// A float per entry (`len` of them) of `Settings`, within a range.
+    Floats { field: &'static str, len: usize, min: f64, max: f64 },
+    /// Booleans per axis, stored as the bits of a byte.
+    Bits { field: &'static str, len: usize },
+    /// Small integers of `Settings`, one per entry.
+    Bytes { field: &'static str, len: usize, allowed: &'static [u8] },
+    /// `[Kp, Ki, Kd]` of a `Pid`.
+    Pid { field: &'static str },
+    /// The order of X, Y and Z as a string (`"ZYX"`), stored as axis indices.
+    AxisOrder { field: &'static str },
+    /// Handled by hand below (board keys).
+    Board,
+}
+
+/// Every key the file may have: `(section, key, kind)`.
+const KEYS: &[(&str, &str, Kind)] = &[
+    ("board", "baud", Kind::Board),
+    ("board", "layout", Kind::Board),
+    ("motion", "steps_per_mm", Kind::Floats { field: "steps_per_mm", len: 4, min: 1.0, max: 10_000.0 }),
+    ("motion", "max_feed_mm_s", Kind::Floats { field: "max_feed_mm_s", len: 4, min: 0.1, max: 1_000.0 }),
+    (
+        "motion",
+        "max_accel_mm_s2",
+        Kind::Floats { field: "max_accel_mm_s2", len: 4, min: 1.0, max: 100_000.0 },
+    ),
+    ("motion", "print_accel_mm_s2", Kind::Float { field: "print_accel_mm_s2", min: 1.0, max: 100_000.0 }),
+    ("motion", "retract_accel_mm_s2", Kind::Float { field: "retract_accel_mm_s2", min: 1.0, max: 100_000.0 }),
+    ("motion", "travel_accel_mm_s2", Kind::Float { field: "travel_accel_mm_s2", min: 1.0, max: 100_000.0 }),
+    ("motion", "junction_deviation_mm", Kind::Float { field: "junction_deviation_mm", min: 0.001, max: 0.5 }),
+    ("motion", "travel_mm", Kind::Floats { field: "travel_mm", len: 4, min: 0.0, max: 2_000.0 }),
+    ("motion", "homing_feed_mm_s", Kind::Floats { field: "homing_feed_mm_s", len: 4, min: 0.0, max: 300.0 }),
+    ("motion", "homing_order", Kind::AxisOrder { field: "homing_order" }),
+    ("motion", "homing_bump_mm", Kind::Floats { field: "homing_bump_mm", len: 4, min: 0.0, max: 50.0 }),
+    ("motion", "invert_dir", Kind::Bits { field: "invert_dir", len: 4 }),
+    ("motion", "endstop_inverting", Kind::Bits { field: "endstop_inverting", len: 3 }),
+    ("heaters", "thermistor", Kind::Bytes { field: "thermistor", len: 3, allowed: &[0, 1] }),
+    ("heaters", "hotend_pid", Kind::Pid { field: "hotend_pid" }),
+    ("heaters", "max_temp_c", Kind::Floats { field: "max_temp_c", len: 3, min: 0.0, max: 400.0 }),
+];
+
+fn main() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../printer.toml");
+    println!("cargo::rerun-if-changed={path}");
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| fail(0, &format!("cannot read it: {e}")));
+    let out = std::env::var("OUT_DIR").expect("cargo sets OUT_DIR");
+    std::fs::write(format!("{out}/printer.rs"), generate(&text)).expect("OUT_DIR is writable");
+}
+
+/// Stop the build with a message naming the file and line.
+fn fail(line: usize, msg: &str) -> ! {
+    eprintln!("firmware/printer.toml:{line}: {msg}");
+    std::process::exit(1);
+}
+
+/// The Rust source of the settings in `text`.
+fn generate(text: &str) -> String {
+    let mut baud = 250_000u32;
+    let mut hotends = 1u8;
+    let mut fields = String::new();
+    let mut section = String::new();
+    let mut seen: Vec<(String, String)> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let n = i + 1;
+        let line = strip_comment(raw).trim();
+        if line.is_empty() {
+            continue;
+        }
+        if let Some(name) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            section = name.trim().to_string();
+            if !KEYS.iter().any(|(s, _, _)| *s == section) {
+                fail(n, &format!("unknown section [{section}] (known: [board], [motion], [heaters])"));
+            }
+            continue;
+        }
+        let Some((key, value)) = line.split_once('=') else { fail(n, "expected `key = value`") };
+        let key = key.trim();
+        let value =
+            parse_value(value.trim()).unwrap_or_else(|| fail(n, &format!("cannot read the value of {key}")));
+        let Some((_, _, kind)) = KEYS.iter().find(|(s, k, _)| *s == section && *k == key) else {
+            let known: Vec<&str> =
+                KEYS.iter().filter(|(s, _, _)| *s == section).map(|(_, k, _)| *k).collect();
+            fail(n, &format!("unknown key {key} in [{section}] (known: {})", known.join(", ")));
+        };
+        if seen.contains(&(section.clone(), key.to_string())) {
+            fail(n, &format!("{key} is set twice"));
+        }
+        seen.push((section.clone(), key.to_string()));
+        match kind {
+            Kind::Board if key == "baud" => match value {
+                Value::Number(b) if b == 250_000.0 || b == 115_200.0 => baud = b as u32,
+                _ => fail(n, "baud is 250000 or 115200"),
+            },
+            Kind::Board => match value {
+                Value::Text(t) if t == "EFB" => hotends = 1,
+                Value::Text(t) if t == "EEB" => hotends = 2,
+                _ => fail(n, "layout is \"EFB\" or \"EEB\""),
+            },
+            Kind::Float { field, min, max } => {
+                let v = number(n, key, &value, *min, *max);
+                let _ = writeln!(fields, "    {field}: {v:?},");
+            }
+            Kind::Floats { field, len, min, max } => {
+                let vs: Vec<String> = list(n, key, &value, *len)
+                    .iter()
+                    .map(|v| format!("{:?}", number(n, key, v, *min, *max)))
+                    .collect();
+                let _ = writeln!(fields, "    {field}: [{}],", vs.join(", "));
+            }
+            Kind::Bits { field, len } => {
+                let mut bits = 0u8;
+                for (axis, v) in list(n, key, &value, *len).iter().enumerate() {
+                    match v {
+                        Value::Bool(true) => bits |= 1 << axis,
+                        Value::Bool(false) => {}
+                        _ => fail(n, &format!("{key} holds true or false per axis")),
+                    }
+                }
+                let _ = writeln!(fields, "    {field}: {bits:#06b},");
+            }
+            Kind::Bytes { field, len, allowed } => {
+                let vs: Vec<String> = list(n, key, &value, *len)
+                    .iter()
+                    .map(|v| match v {
+                        Value::Number(x) if allowed.iter().any(|&a| f64::from(a) == *x) => format!("{x}"),
+                        _ => fail(n, &format!("{key} entries are one of {allowed:?}")),
+                    })
+                    .collect();
+                let _ = writeln!(fields, "    {field}: [{}],", vs.join(", "));
+            }
+            Kind::AxisOrder { field } => {
+                let order = match &value {
+                    Value::Text(t) => t.clone(),
+                    _ => fail(n, &format!("{key} is a string such as \"ZYX\"")),
+                };
+                let mut sorted: Vec<char> = order.chars().collect();
+                sorted.sort_unstable();
+                if sorted != ['X', 'Y', 'Z'] {
+                    fail(n, &format!("{key} names X, Y and Z once each, such as \"ZYX\""));
+                }
+                let axes: Vec<String> =
+                    order.chars().map(|c| ((c as u8 - b'X') as usize).to_string()).collect();
+                let _ = writeln!(fields, "    {field}: [{}],", axes.join(", "));
+            }
+            Kind::Pid { field } => {
+                let g: Vec<f64> =
+                    list(n, key, &value, 3).iter().map(|v| number(n, key, v, 0.0, 10_000.0)).collect();
+                let _ = writeln!(
+                    fields,
+                    "    {field}: Pid {{ kp: {:?}, ki: {:?}, kd: {:?} }},",
+                    g[0], g[1], g[2]
+                );
+            }
+        }
+    }
+    format!(
+        "// Generated by build.rs from firmware/printer.toml: edit that file, not this one.\n\
+         use gweave_controller::settings::Pid;\n\
+         use gweave_controller::Settings;\n\n\
+         /// The serial line's speed, baud.\n\
+         pub const BAUD: u32 = {baud};\n\n\
+         /// The printer's settings (the controller's defaults where the file says nothing).\n\
+         #[allow(clippy::needless_update)]\n\
+         pub const SETTINGS: Settings = Settings {{\n    hotends: {hotends},\n{fields}    ..Settings::DEFAULT\n}};\n"
+    )
+}
+
+/// The line without its `#` comment (a `#` inside a string is kept).
+fn strip_comment(line: &str) -> &str {
+    let mut in_string = false;
+    for (i, c) in line.char_indices() {
+        match c {
+            '"' => in_string = !in_string,
+            '#' if !in_string => return &line[..i],
+            _ => {}
+        }
+    }
+    line
+}
+
+fn parse_value(text: &str) -> Option<Value> {
+    if let Some(inner) = text.strip_prefix('[').and_then(|t| t.strip_suffix(']')) {
+        let items = inner.split(',').map(str::trim).filter(|s| !s.is_empty());
+        return items.map(parse_value).collect::<Option<Vec<_>>>().map(Value::List);
+    }
+    if let Some(inner) = text.strip_prefix('"').and_then(|t| t.strip_suffix('"')) {
+        return Some(Value::Text(inner.to_string()));
+    }
+    match text {
+        "true" => Some(Value::Bool(true)),
+        "false" => Some(Value::Bool(false)),
+        _ => text.replace('_', "").parse::<f64>().ok().filter(|v| v.is_finite()).map(Value::Number),
+    }
+}
+
+fn number(line: usize, key: &str, value: &Value, min: f64, max: f64) -> f64 {
+    match value {
+        Value::Number(v) if (min..=max).contains(v) => *v,
+        Value::Number(v) => fail(line, &format!("{key}: {v} is outside {min}..={max}")),
+        _ => fail(line, &format!("{key} holds numbers")),
+    }
+}
+
+fn list<'a>(line: usize, key: &str, value: &'a Value, len: usize) -> &'a [Value] {
+    match value {
+        Value::List(items) if items.len() == len => items,
+        _ => fail(line, &format!("{key} is a list of {len} values")),
+    }
+}

@@ -1,0 +1,204 @@
+//! gweave firmware for an Arduino Mega 2560 with a RAMPS 1.4 shield.
+//!
+//! Everything a printer's firmware *means* (the serial protocol, G-code, the planner, the step
+//! timing, temperature control and its safety rules) is the controller core,
+//! `crates/gweave-controller`, the same code the virtual printer runs on the host. This crate
+//! is only the board: it moves bytes, readings and outputs between the core and the chip's
+//! peripherals.
+//!
+//! - the main loop ([`main`]): serial bytes in, ADC readings and endstops in, one turn of the
+//!   controller, heater/fan duties and stepper enables out;
+//! - the step interrupt (Timer1, [`step_interrupt`]): the core's stepper says which STEP pins
+//!   to pulse, which way the DIR pins point, and when to come back;
+//! - the millisecond interrupt (Timer0, `clock.rs`): the clock and the heaters' PWM;
+//! - the serial receive interrupt (`uart.rs`): bytes into a ring buffer.
+//!
+//! Safety: every output starts off (a reset leaves all pins as inputs, so the MOSFETs' gates
+//! are pulled low), the watchdog resets the chip if the main loop stops, and a halt of the core
+//! (a thermal fault, M112) switches the heaters off at once.
+#![no_std]
+#![no_main]
+#![feature(asm_experimental_arch, abi_avr_interrupt)]
+
+mod adc;
+mod clock;
+mod eeprom;
+mod pins;
+mod regs;
+mod step_timer;
+mod uart;
+mod watchdog;
+
+mod config {
+    include!(concat!(env!("OUT_DIR"), "/printer.rs"));
+}
+
+use core::cell::UnsafeCell;
+
+use gweave_controller::{Controller, Inputs, Io, StepQueue, Stepper, HEATERS};
+
+/// The Mega's crystal.
+const CPU_HZ: u32 = 16_000_000;
+
+// The core counts step intervals in Timer1's ticks.
+const _: () = assert!(step_timer::TICKS_PER_S == gweave_controller::limits::TICKS_PER_S);
+
+/// The blocks between the main loop (which plans them) and the step interrupt (which runs
+/// them). The queue itself is safe to share: the core makes it single-producer,
+/// single-consumer.
+static QUEUE: StepQueue = StepQueue::new();
+
+/// The step interrupt's own state, set up once before the interrupt is enabled.
+struct IsrOnly<T>(UnsafeCell<Option<T>>);
+// SAFETY: written once by `main` with the step interrupt still off, then used only by it.
+unsafe impl<T> Sync for IsrOnly<T> {}
+static STEPPER: IsrOnly<Stepper<'static>> = IsrOnly(UnsafeCell::new(None));
+
+/// The ADC channels in the core's heater order: hotend 0 (A13), hotend 1 (A15), bed (A14).
+const ADC_CHANNELS: [u8; HEATERS] = [pins::ADC_TEMP_0, pins::ADC_TEMP_1, pins::ADC_TEMP_BED];
+
+/// What the core asks of the board: serial output, EEPROM, watchdog.
+struct Ramps;
+
+impl Io for Ramps {
+    fn send(&mut self, bytes: &[u8]) {
+        uart::write(bytes);
+    }
+
+    fn eeprom_read(&mut self, addr: u16, buf: &mut [u8]) {
+        for (i, b) in buf.iter_mut().enumerate() {
+            *b = eeprom::read(addr.wrapping_add(i as u16));
+        }
+    }
+
+    fn eeprom_write(&mut self, addr: u16, data: &[u8]) {
+        for (i, &b) in data.iter().enumerate() {
+            eeprom::write(addr.wrapping_add(i as u16), b);
+            // A byte takes 3.4 ms: a long save must not look like a hang.
+            watchdog::feed();
+        }
+    }
+
+    fn watchdog_feed(&mut self) {
+        watchdog::feed();
+    }
+}
+
+/// The endstop pins' levels, bit `1 << axis` (X, Y, Z).
+fn endstops() -> u8 {
+    let mut bits = 0;
+    for (axis, pin) in pins::ENDSTOPS_MIN.iter().enumerate() {
+        if pin.read() {
+            bits |= 1 << axis;
+        }
+    }
+    bits
+}
+
+#[no_mangle]
+pub extern "C" fn main() -> ! {
+    let by_watchdog = watchdog::start();
+    for d in pins::DRIVERS {
+        // Disabled (ENABLE high) before the pins become outputs, so no motor twitches.
+        d.enable.write(true);
+        d.enable.make_output();
+        d.step.make_output();
+        d.dir.make_output();
+    }
+    for e in pins::ENDSTOPS_MIN {
+        e.make_input_pullup();
+    }
+    pins::LED.make_output();
+    clock::init([pins::HEATER_0, pins::HEATER_BED, pins::D9]);
+    uart::init(CPU_HZ, config::BAUD);
+    let mut adc = adc::Sampler::new(ADC_CHANNELS);
+
+    let mut controller = Controller::new(&QUEUE, config::SETTINGS);
+    // SAFETY: the step interrupt is not enabled yet, so nothing else reads STEPPER.
+    unsafe { *STEPPER.0.get() = Some(Stepper::new(&QUEUE)) };
+    regs::enable_interrupts();
+    step_timer::start(1000);
+
+    let mut io = Ramps;
+    if by_watchdog {
+        io.send(b"echo:Watchdog Reset\n");
+    }
+    // Wait for the first full set of thermistor readings (16 rounds of 104 us conversions).
+    let mut adc_now = loop {
+        if let Some(sums) = adc.poll() {
+            break sums.map(|s| s / adc::OVERSAMPLE);
+        }
+    };
+    let inputs = |adc: [u16; HEATERS]| Inputs { now_ms: clock::now_ms(), adc, endstops: endstops() };
+    controller.boot(&mut io, &inputs(adc_now));
+    // A byte the controller refused (its line queue was full): offered again after its turn.
+    let mut held = None;
+    loop {
+        while let Some(byte) = held.take().or_else(uart::read) {
+            if !controller.receive(byte) {
+                held = Some(byte);
+                break;
+            }
+        }
+        if let Some(sums) = adc.poll() {
+            adc_now = sums.map(|s| s / adc::OVERSAMPLE);
+        }
+        controller.poll(&mut io, &inputs(adc_now));
+        apply(&controller.outputs());
+        if controller.is_halted() {
+            // Halted (a thermal fault, M112) is a safe state that must last until the user
+            // resets the board: the watchdog must not restart it into a working printer.
+            watchdog::feed();
+        }
+    }
+}
+
+/// Drive the heaters, the fan and the stepper enables as the core asks.
+fn apply(out: &gweave_controller::Outputs) {
+    let [hotend0, hotend1, bed] = out.heater_duty;
+    // D9 is the fan on an "EFB" board, the second hotend's heater on "EEB".
+    let d9 = if config::SETTINGS.hotends == 2 { hotend1 } else { out.fan_duty };
+    clock::set_duty([hotend0, bed, d9]);
+    pins::LED.write(hotend0 | hotend1 | bed != 0);
+    for (axis, d) in pins::DRIVERS.iter().enumerate().take(gweave_controller::AXES) {
+        // ENABLE is active low.
+        d.enable.write(out.steppers_enabled & (1 << axis) == 0);
+    }
+}
+
+/// The step interrupt (Timer1 compare match A, vector 17).
+///
+/// The STEP pins due now go high, stay high for at least two microseconds (the A4988 and
+/// DRV8825 drivers of RAMPS need 1 us and 1.9 us), then low; the DIR pins are set after the pulse for
+/// the next steps, so they are steady long before the next rising edge (the drivers need
+/// 200-650 ns).
+#[no_mangle]
+pub unsafe extern "avr-interrupt" fn __vector_17() {
+    // SAFETY: set before this interrupt was enabled; only this handler uses it.
+    let Some(stepper) = (unsafe { &mut *STEPPER.0.get() }) else { return };
+    let out = stepper.tick(endstops());
+    step_timer::set_next_in_interrupt(out.interval_ticks);
+    for (axis, d) in pins::DRIVERS.iter().enumerate().take(gweave_controller::AXES) {
+        if out.step_bits & (1 << axis) != 0 {
+            // The core asks for the enables after its turn, but a block it queued in that turn
+            // may start here first: a driver is enabled before its first step, or the step
+            // is lost. (ENABLE is active low.)
+            d.enable.write_in_interrupt(false);
+            d.step.write_in_interrupt(true);
+        }
+    }
+    // Between raising and lowering a STEP pin the loops over the drivers take longer than the
+    // 1.9 us a DRV8825 needs (the emulated board's test
+    // `a_g1_move_gives_exactly_its_steps_on_every_axis` checks every pulse for 2 us).
+    for (axis, d) in pins::DRIVERS.iter().enumerate().take(gweave_controller::AXES) {
+        d.step.write_in_interrupt(false);
+        d.dir.write_in_interrupt(out.dir_bits & (1 << axis) != 0);
+    }
+}
+
+/// A bug in the firmware: heaters off, then wait for the watchdog's reset.
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    clock::all_off();
+    loop {}
+}

@@ -1,0 +1,123 @@
+//! The RAMPS 1.4 pin map on the Arduino Mega 2560.
+//!
+//! Each Arduino pin number is one bit of one of the chip's ports. A port has three registers:
+//! PINx (read the pins), DDRx (1 = output) and PORTx (drive an output high or low, or switch
+//! the pull-up of an input on). The numbers follow Marlin's `pins_RAMPS.h` and the Mega's
+//! schematic (which port bit each header pin is):
+//! <https://github.com/MarlinFirmware/Marlin/blob/2.1.x/Marlin/src/pins/ramps/pins_RAMPS.h>.
+
+use crate::regs::{interrupt_free, Reg8};
+
+/// One port (A..L): its PINx address; DDRx and PORTx follow it.
+#[derive(Clone, Copy)]
+pub struct Port(usize);
+
+const PORT_A: Port = Port(0x20);
+const PORT_B: Port = Port(0x23);
+const PORT_C: Port = Port(0x26);
+const PORT_D: Port = Port(0x29);
+const PORT_E: Port = Port(0x2C);
+const PORT_F: Port = Port(0x2F);
+const PORT_H: Port = Port(0x100);
+const PORT_J: Port = Port(0x103);
+const PORT_K: Port = Port(0x106);
+const PORT_L: Port = Port(0x109);
+
+/// One pin: a bit of a port.
+#[derive(Clone, Copy)]
+pub struct Pin {
+    port: Port,
+    mask: u8,
+}
+
+impl Pin {
+    const fn new(port: Port, bit: u8) -> Self {
+        Pin { port, mask: 1 << bit }
+    }
+
+    fn pin_reg(self) -> Reg8 {
+        Reg8(self.port.0)
+    }
+    fn ddr_reg(self) -> Reg8 {
+        Reg8(self.port.0 + 1)
+    }
+    fn port_reg(self) -> Reg8 {
+        Reg8(self.port.0 + 2)
+    }
+
+    /// Make the pin an output, driven low (the safe level of every output here: heaters and
+    /// fans off, STEP idle; RAMPS's driver ENABLE is active low, so a low ENABLE is dealt with by
+    /// the caller, which drives it high first).
+    pub fn make_output(self) {
+        interrupt_free(|| {
+            self.ddr_reg().set(self.mask);
+        });
+    }
+
+    /// Make the pin an input with the chip's pull-up (about 35 kOhm to 5 V) on, so an open
+    /// switch reads high.
+    pub fn make_input_pullup(self) {
+        interrupt_free(|| {
+            self.ddr_reg().clear(self.mask);
+            self.port_reg().set(self.mask);
+        });
+    }
+
+    /// Drive an output high or low. The read-modify-write of PORTx runs with interrupts off:
+    /// the step interrupt writes other bits of the same ports.
+    pub fn write(self, high: bool) {
+        interrupt_free(|| self.write_in_interrupt(high));
+    }
+
+    /// Drive an output from inside an interrupt (interrupts are already off there).
+    #[inline(always)]
+    pub fn write_in_interrupt(self, high: bool) {
+        if high {
+            self.port_reg().set(self.mask);
+        } else {
+            self.port_reg().clear(self.mask);
+        }
+    }
+
+    /// Read the pin's level.
+    pub fn read(self) -> bool {
+        self.pin_reg().read() & self.mask != 0
+    }
+}
+
+/// STEP, DIR and ENABLE of one stepper driver socket.
+#[derive(Clone, Copy)]
+pub struct Driver {
+    pub step: Pin,
+    pub dir: Pin,
+    /// Active low: the driver holds its motor only while this pin is low.
+    pub enable: Pin,
+}
+
+/// The five driver sockets, in the order X, Y, Z, E0, E1 (D54/D55/D38, D60/D61/D56,
+/// D46/D48/D62, D26/D28/D24, D36/D34/D30).
+pub const DRIVERS: [Driver; 5] = [
+    Driver { step: Pin::new(PORT_F, 0), dir: Pin::new(PORT_F, 1), enable: Pin::new(PORT_D, 7) },
+    Driver { step: Pin::new(PORT_F, 6), dir: Pin::new(PORT_F, 7), enable: Pin::new(PORT_F, 2) },
+    Driver { step: Pin::new(PORT_L, 3), dir: Pin::new(PORT_L, 1), enable: Pin::new(PORT_K, 0) },
+    Driver { step: Pin::new(PORT_A, 4), dir: Pin::new(PORT_A, 6), enable: Pin::new(PORT_A, 2) },
+    Driver { step: Pin::new(PORT_C, 1), dir: Pin::new(PORT_C, 3), enable: Pin::new(PORT_C, 7) },
+];
+
+/// Minimum endstops of X, Y and Z: D3, D14, D18.
+pub const ENDSTOPS_MIN: [Pin; 3] = [Pin::new(PORT_E, 5), Pin::new(PORT_J, 1), Pin::new(PORT_D, 3)];
+
+/// Hotend heater (D10, the MOSFET next to the power input on RAMPS "EFB").
+pub const HEATER_0: Pin = Pin::new(PORT_B, 4);
+/// Heated bed (D8, the big MOSFET on its own 11 A input).
+pub const HEATER_BED: Pin = Pin::new(PORT_H, 5);
+/// D9: the part fan on "EFB", the second hotend heater on "EEB".
+pub const D9: Pin = Pin::new(PORT_H, 6);
+/// The Mega's own LED (D13): lit while any heater is on.
+pub const LED: Pin = Pin::new(PORT_B, 7);
+
+/// The analog inputs of the thermistors: TEMP_0 on A13, TEMP_BED on A14, TEMP_1 on A15
+/// (ADC channels 13, 14, 15).
+pub const ADC_TEMP_0: u8 = 13;
+pub const ADC_TEMP_BED: u8 = 14;
+pub const ADC_TEMP_1: u8 = 15;
