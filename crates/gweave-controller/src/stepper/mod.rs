@@ -154,20 +154,24 @@ impl StepQueue {
         true
     }
 
-    /// Consumer: takes the oldest segment, and its block if the segment starts one, marking
-    /// the stepper busy.
-    fn pop(&self) -> Option<(Segment, Option<StepBlock>)> {
+    /// Consumer: takes the oldest segment, marking the stepper busy; a segment that starts a
+    /// block first copies the block into `block`. Nothing else is moved: the step interrupt
+    /// runs this at the last event of a segment, before that event's pulses go out, so every
+    /// byte copied here makes that one step late (see [`Stepper::tick`]).
+    fn pop(&self, block: &mut StepBlock) -> Option<Segment> {
         if self.queued() == 0 {
             return None;
         }
         let tail = self.tail.load(Ordering::Relaxed);
         // SAFETY: slot `tail` was published by the producer's Release store of `head`.
         let segment = unsafe { *self.segments[usize::from(tail) % SEGMENTS].get() };
-        // SAFETY: see `write_block`.
-        let block = segment.starts_block.then(|| unsafe { *self.blocks[usize::from(segment.block)].get() });
+        if segment.starts_block {
+            // SAFETY: see `write_block`; read before `tail` frees the segment's slot.
+            *block = unsafe { *self.blocks[usize::from(segment.block)].get() };
+        }
         self.busy.store(true, Ordering::Release);
         self.tail.store(((usize::from(tail) + 1) % (2 * SEGMENTS)) as u8, Ordering::Release);
-        Some((segment, block))
+        Some(segment)
     }
 
     /// Producer: stop every step now and for good (a halt). The stepper drops what it has at its
@@ -286,11 +290,10 @@ impl<'q> Stepper<'q> {
 
     /// Takes the next segment, skipping what is left of a homing block that met its endstop.
     fn next_segment(&mut self) -> bool {
-        while let Some((segment, block)) = self.queue.pop() {
-            if let Some(block) = block {
-                self.block = block;
+        while let Some(segment) = self.queue.pop(&mut self.block) {
+            if segment.starts_block {
                 // Half of the events: the minor axes' steps fall mid-interval (see above).
-                self.counters = [block.events / 2; MOTORS];
+                self.counters = [self.block.events / 2; MOTORS];
             }
             if self.block.endstop_mask != 0 && self.queue.endstop_hit.load(Ordering::Acquire) {
                 continue;
