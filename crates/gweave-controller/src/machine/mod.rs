@@ -5,7 +5,7 @@
 //! heaters (and feed the watchdog), cut planned moves into segments for the step interrupt,
 //! carry on with the command that waits (homing, `M109`, `M400`, `G4`), and, when none waits,
 //! run the next line. Nothing in a turn waits: a command that takes time is a state
-//! ([`Wait`]) the next turns look at, so the heaters and the steppers are served all along.
+//! (`Wait`) the next turns look at, so the heaters and the steppers are served all along.
 //! The time comes in as an argument, so on the host every test is deterministic.
 
 mod commands;
