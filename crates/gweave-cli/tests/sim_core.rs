@@ -111,3 +111,41 @@ fn serve_puts_the_controller_core_behind_the_port() {
     let got = read_through(&mut reader, "FIRMWARE_NAME");
     assert!(got.last().unwrap().starts_with("FIRMWARE_NAME:gweave-controller"), "{got:?}");
 }
+
+/// `steps.mixing` of the Marlin model's JSON report, or `mixing_steps` of the core's.
+fn mixing_steps(out: &Output) -> Vec<u64> {
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let steps = report.pointer("/steps/mixing").or(report.get("mixing_steps")).expect("mixing steps");
+    steps.as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect()
+}
+
+#[test]
+fn gweave_mix_output_splits_alike_on_the_core_and_the_marlin_model() {
+    // The seed's layer schedule on a Cura torus: virtual tools from M163/M164, T<n> at the
+    // layer changes, purges; heated, so every extrusion runs. Each input's steps on the
+    // controller core's mixer equal the Marlin model's, exactly.
+    let dir = tempfile::tempdir().unwrap();
+    let mixed = dir.path().join("torus.mix.gcode");
+    let config = repo("examples/mix/seed_layers.toml");
+    let input = repo("tests/data/cura/cura_torus.gcode");
+    let mix = gweave(&[
+        "mix",
+        input.to_str().unwrap(),
+        "-c",
+        config.to_str().unwrap(),
+        "-o",
+        mixed.to_str().unwrap(),
+    ]);
+    assert!(mix.status.success(), "{}", String::from_utf8_lossy(&mix.stderr));
+    let core_profile = repo("examples/machines/gweave-mixing.toml");
+    let marlin_profile = dir.path().join("marlin.toml");
+    let profile = std::fs::read_to_string(&core_profile).unwrap();
+    std::fs::write(&marlin_profile, profile.replace("kind = \"gweave\"", "kind = \"marlin\"")).unwrap();
+    let sim =
+        |p: &Path| gweave(&["sim", mixed.to_str().unwrap(), "--machine", p.to_str().unwrap(), "--json"]);
+    let (core, marlin) = (mixing_steps(&sim(&core_profile)), mixing_steps(&sim(&marlin_profile)));
+    assert_eq!(core, marlin);
+    // The torus has 28 layers: Orange and Pink only, no cyan (E0).
+    assert_eq!(core, [0, 31815, 40121, 12189]);
+}

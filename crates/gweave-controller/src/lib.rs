@@ -84,6 +84,7 @@ pub mod heat;
 pub mod limits;
 pub mod machine;
 pub mod math;
+pub mod mixing;
 pub mod planner;
 pub mod serial;
 pub mod settings;
@@ -97,6 +98,10 @@ pub use stepper::{StepOut, StepQueue, Stepper};
 
 /// The axes, in the order of every per-axis array: X, Y, Z, then the extruder E.
 pub const AXES: usize = 4;
+/// The motors the step interrupt drives, in the order of its per-motor arrays and bits: X, Y,
+/// Z, then the extruder E (input E0 of a mixing hotend) and the other inputs of a mixing hotend
+/// (E1 at bit `1 << (E + 1)`, ...; see [`mixing`]).
+pub const MOTORS: usize = AXES + limits::MIX_INPUTS - 1;
 /// The index of each axis in per-axis arrays, and its bit in step, direction and endstop bytes
 /// (`1 << X`).
 pub const X: usize = 0;
@@ -141,8 +146,8 @@ pub struct Outputs {
     pub heater_duty: [u8; HEATERS],
     /// Part cooling fan duty, 0-255 (`M106 S<duty>`).
     pub fan_duty: u8,
-    /// Stepper drivers to enable, bit `1 << axis` (RAMPS EN pins are active low: the board
-    /// inverts).
+    /// Stepper drivers to enable, bit `1 << motor` ([`MOTORS`]; RAMPS EN pins are active low:
+    /// the board inverts).
     pub steppers_enabled: u8,
 }
 

@@ -3,6 +3,22 @@
 //! The ATmega2560 has 8 KB of RAM; the budget of the whole firmware's static data is 4 KB
 //! (issue 37), so each buffer here is as small as does the job.
 
+/// A move whose axes all take fewer steps than this is not planned: its distance goes with the
+/// next move (the planner's position stays). Marlin's `MIN_STEPS_PER_SEGMENT` (6, in
+/// `Configuration_adv.h`): slicers' tiny segments would otherwise fill the planner with blocks
+/// too short to plan speed through, and the virtual printer's Marlin model drops them the
+/// same way, so a mixing hotend's shares of E fall on the same moves in both.
+pub const MIN_STEPS_PER_SEGMENT: u32 = 6;
+
+/// Inputs of a mixing hotend at most (E0-E3: RAMPS's E0 and E1 drivers, two more on its
+/// auxiliary pins). Each is a motor of the step block: 4 bytes per step block and a Bresenham
+/// counter of 4 bytes each.
+pub const MIX_INPUTS: usize = 4;
+
+/// Virtual tools of a mixing hotend (Marlin's `MIXING_VIRTUAL_TOOLS` default, 16). RAM and
+/// EEPROM: `2 * MIX_INPUTS` bytes each (128).
+pub const MIX_TOOLS: usize = 16;
+
 /// The longest line kept, in bytes: Marlin's `MAX_CMD_SIZE` (96) less its terminating NUL.
 /// Longer lines are refused whole (`Error:Line too long`), never cut and run.
 /// RAM: one line being received plus [`LINE_QUEUE`] complete ones.

@@ -36,8 +36,9 @@
 //! The oldest block's entry is fixed: it is the exit speed the block before it (already being
 //! stepped) was given, or rest. Speeds are kept squared, as the formulas want them.
 
-use crate::limits::PLANNER_BLOCKS;
+use crate::limits::{MIN_STEPS_PER_SEGMENT, PLANNER_BLOCKS};
 use crate::math::sqrt;
+use crate::mixing::Mixer;
 use crate::settings::Settings;
 use crate::stepper::StepBlock;
 use crate::{AXES, E};
@@ -116,7 +117,18 @@ impl Planner {
     /// Plans a move from [`Planner::position_steps`] to `target_steps` at `feed_mm_s` (within
     /// the settings' limits); `endstop_mask` names the endstops that end it (homing). A move of
     /// no step is not planned. Returns `false`, planning nothing, when the planner is full.
-    pub fn add(&mut self, target_steps: [i32; AXES], feed_mm_s: f32, endstop_mask: u8, s: &Settings) -> bool {
+    ///
+    /// On a mixing hotend the E steps go to the inputs by `mixer`'s active mix
+    /// ([`Mixer::split`]), each input a motor of the block; the planner's speeds and lengths stay
+    /// those of E.
+    pub fn add(
+        &mut self,
+        target_steps: [i32; AXES],
+        feed_mm_s: f32,
+        endstop_mask: u8,
+        s: &Settings,
+        mixer: &mut Mixer,
+    ) -> bool {
         if self.is_full() {
             return false;
         }
@@ -133,6 +145,21 @@ impl Planner {
                 step.dir_bits |= 1 << axis;
             }
             delta_mm[axis] = delta as f32 / s.steps_per_mm[axis];
+        }
+        if step.events < MIN_STEPS_PER_SEGMENT && endstop_mask == 0 {
+            // Too short to plan: the position stays, so the next move takes this one's steps.
+            return true;
+        }
+        if mixer.inputs() > 0 {
+            let e_delta = target_steps[E].saturating_sub(self.position_steps[E]);
+            step.dir_bits &= !(1 << E);
+            for (k, d) in mixer.split(e_delta).into_iter().enumerate() {
+                step.steps[E + k] = d.unsigned_abs();
+                step.events = step.events.max(step.steps[E + k]);
+                if d > 0 {
+                    step.dir_bits |= 1 << (E + k);
+                }
+            }
         }
         step.dir_bits ^= s.invert_dir;
         if step.events == 0 {
@@ -246,7 +273,7 @@ mod tests {
     fn planned(moves: &[[i32; AXES]]) -> Planner {
         let mut p = Planner::new();
         for &m in moves {
-            assert!(p.add(m, 100.0, 0, &Settings::DEFAULT));
+            assert!(p.add(m, 100.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
         }
         p
     }
@@ -259,7 +286,7 @@ mod tests {
         let mut p = planned(&[[800, 0, 0, 0], [1600, 0, 0, 0]]);
         let (first, exit_v2) = p.pop().unwrap();
         assert_eq!(first.entry_v2, 0.0);
-        assert_eq!(first.step.steps, [800, 0, 0, 0]);
+        assert_eq!(first.step.steps, [800, 0, 0, 0, 0, 0, 0]);
         assert_eq!(exit_v2, 100.0 * 100.0);
     }
 
@@ -278,11 +305,21 @@ mod tests {
         assert_eq!(p.pop().unwrap().1, 0.0);
         let mut p = Planner::new();
         for i in 0..PLANNER_BLOCKS as i32 {
-            assert!(p.add([i + 1, 0, 0, 0], 10.0, 0, &Settings::DEFAULT));
+            assert!(p.add([6 * (i + 1), 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
         }
         assert!(p.is_full());
-        assert!(!p.add([100, 0, 0, 0], 10.0, 0, &Settings::DEFAULT));
-        assert_eq!(p.position_steps, [PLANNER_BLOCKS as i32, 0, 0, 0]);
+        assert!(!p.add([1000, 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut Mixer::new(0)));
+        assert_eq!(p.position_steps, [6 * PLANNER_BLOCKS as i32, 0, 0, 0]);
+    }
+
+    #[test]
+    fn a_move_of_fewer_than_six_steps_goes_with_the_next() {
+        let mut p = Planner::new();
+        let mut mixer = Mixer::new(0);
+        assert!(p.add([5, 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut mixer));
+        assert!(p.is_empty() && p.position_steps == [0; AXES], "not planned");
+        assert!(p.add([9, 0, 0, 2], 10.0, 0, &Settings::DEFAULT, &mut mixer));
+        assert_eq!(p.pop().unwrap().0.step.steps, [9, 0, 0, 2, 0, 0, 0]);
     }
 
     #[test]

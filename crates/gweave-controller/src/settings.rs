@@ -49,8 +49,8 @@ pub struct Settings {
     /// Distance to back off after first touching an endstop, mm (Marlin's
     /// `HOMING_BUMP_MM`: 5, 5, 2), before touching it again at half speed.
     pub homing_bump_mm: [f32; AXES],
-    /// DIR pin bits to invert (bit `1 << axis`): with 0, every DIR pin is high for a positive
-    /// move.
+    /// DIR pin bits to invert (bit `1 << motor`, [`crate::MOTORS`]: a mixing hotend's inputs
+    /// E1-E3 after E0 = E): with 0, every DIR pin is high for a positive move.
     pub invert_dir: u8,
     /// Endstop pin bits whose triggered level is low (bit `1 << axis`): with 0, an endstop pin
     /// reads high when triggered.
@@ -70,6 +70,9 @@ pub struct Settings {
     pub extrude_min_c: f32,
     /// Highest temperature allowed per heater, °C: above it the machine halts (MAXTEMP).
     pub max_temp_c: [f32; HEATERS],
+    /// Inputs of a mixing hotend, 2 to [`crate::limits::MIX_INPUTS`] (E0, E1, ...; see
+    /// [`crate::mixing`]), or 0 for a plain extruder. A build-time fact, not kept by `M500`.
+    pub mixing_inputs: u8,
 }
 
 impl Settings {
@@ -94,6 +97,7 @@ impl Settings {
         hotend_pid: Pid { kp: 22.2, ki: 1.08, kd: 114.0 },
         extrude_min_c: 170.0,
         max_temp_c: [275.0, 275.0, 150.0],
+        mixing_inputs: 0,
     };
 }
 
@@ -191,7 +195,7 @@ impl Settings {
 
 /// CRC-16/CCITT of `bytes`, continuing from `crc` (start with `0xFFFF`): catches any EEPROM
 /// byte worn or half written.
-fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
+pub(crate) fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
     for &b in bytes {
         crc ^= u16::from(b) << 8;
         for _ in 0..8 {

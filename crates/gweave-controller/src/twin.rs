@@ -22,7 +22,7 @@ use std::vec::Vec;
 
 use crate::heat::thermistor::TYPE_1;
 use crate::limits::TICKS_PER_S;
-use crate::{Controller, Inputs, Io, Settings, StepQueue, Stepper, AXES, HEATERS};
+use crate::{Controller, Inputs, Io, Settings, StepQueue, Stepper, AXES, HEATERS, MOTORS};
 
 /// The temperatures behind the thermistor inputs, driven by the heater duties.
 pub trait Plant {
@@ -144,7 +144,10 @@ pub struct Twin<'q, P: Plant> {
     /// this position (set by [`Twin::new`] so that the machine starts 100 mm, 100 mm and 50 mm
     /// from them; a test may move them).
     pub endstop_steps: [i64; 3],
-    /// Called with the axis and the time (ticks) of each step, for timing checks.
+    /// Step pulses per motor ([`MOTORS`]: X, Y, Z, E0 and a mixing hotend's other inputs),
+    /// both directions counted.
+    pub pulses: [u64; MOTORS],
+    /// Called with the motor ([`MOTORS`]) and the time (ticks) of each step, for timing checks.
     pub on_step: Option<std::boxed::Box<dyn FnMut(usize, u64) + 'q>>,
     dir_bits: u8,
     ticks: u64,
@@ -177,6 +180,7 @@ impl<'q, P: Plant> Twin<'q, P> {
             plant,
             steps: [0; AXES],
             endstop_steps: [-(100.0 * spm[0]) as i64, -(100.0 * spm[1]) as i64, -(50.0 * spm[2]) as i64],
+            pulses: [0; MOTORS],
             on_step: None,
             dir_bits: 0,
             ticks: 0,
@@ -238,17 +242,14 @@ impl<'q, P: Plant> Twin<'q, P> {
             }
             self.ticks = self.next_step;
             let out = self.stepper.tick(self.inputs().endstops);
-            for axis in 0..AXES {
-                if out.step_bits & (1 << axis) != 0 {
-                    self.steps[axis] +=
-                        if (self.dir_bits ^ self.controller.settings().invert_dir) & (1 << axis) != 0 {
-                            1
-                        } else {
-                            -1
-                        };
-                    if let Some(f) = self.on_step.as_mut() {
-                        f(axis, self.ticks);
-                    }
+            for motor in (0..MOTORS).filter(|m| out.step_bits & (1 << m) != 0) {
+                self.pulses[motor] += 1;
+                if motor < AXES {
+                    let forward = (self.dir_bits ^ self.controller.settings().invert_dir) & (1 << motor) != 0;
+                    self.steps[motor] += if forward { 1 } else { -1 };
+                }
+                if let Some(f) = self.on_step.as_mut() {
+                    f(motor, self.ticks);
                 }
             }
             self.dir_bits = out.dir_bits;

@@ -11,12 +11,17 @@
 //! homing travel), the homing speeds, bumps and order, one or two hotends, the hotend PID gains
 //! and MAXTEMPs. What the core cannot take is refused by name rather than ignored: Klipper or
 //! constant-speed corners, classic jerk, endstops at the maximum, a PID-controlled bed, a
-//! thermistor other than Marlin's type 1, mixing, rotary or inkjet hardware.
+//! thermistor other than Marlin's type 1, rotary or inkjet hardware, a mixing hotend of more
+//! inputs than the core drives or whose inputs' steps per mm differ from E's.
+//!
+//! A mixing hotend (`mixing_inputs`, 2 to 4) runs on the core's mixer (docs/firmware.md,
+//! "Mixing"): the report gives each input's step pulses, the Marlin model's `steps.mixing`.
 
 use std::cell::Cell;
 
+use gweave_controller::limits::MIX_INPUTS;
 use gweave_controller::twin::{Memory, OwnedTwin, Plant, Twin, TwinError};
-use gweave_controller::{Settings, StepQueue, HEATERS};
+use gweave_controller::{Settings, StepQueue, E, HEATERS};
 use serde::Serialize;
 
 use crate::interp::Outcome;
@@ -56,8 +61,14 @@ pub fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported> {
     if [p.endstops.x, p.endstops.y, p.endstops.z].contains(&EndstopSide::Max) {
         return Err(Unsupported("endstop at an axis maximum (endstops)"));
     }
-    if p.mixing_inputs > 0 || p.rotary.is_some() || p.inkjet.is_some() || t.hotends.len() > 2 {
-        return Err(Unsupported("mixing, rotary, inkjet or third hotend"));
+    if p.rotary.is_some() || p.inkjet.is_some() || t.hotends.len() > 2 {
+        return Err(Unsupported("rotary, inkjet or third hotend"));
+    }
+    if p.mixing_inputs > MIX_INPUTS {
+        return Err(Unsupported("mixing hotend of more than 4 inputs (mixing_inputs)"));
+    }
+    if m.steps.mixing_e.iter().any(|&s| s != m.steps.e) {
+        return Err(Unsupported("mixing input with its own steps per mm (motion.steps.mixing_e)"));
     }
     let axes = |v: [f64; 4]| v.map(|x| x as f32);
     // Axis indices; an index past Z (none given) homes nothing in that place.
@@ -94,8 +105,15 @@ pub fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported> {
             t.hotend_protection.max_temp_c as f32,
             t.bed_protection.max_temp_c as f32,
         ],
+        mixing_inputs: p.mixing_inputs as u8,
         ..d
     })
+}
+
+/// Each mixing input's step pulses (input `k` is the motor `k` places after E's).
+fn mixing_steps<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> Vec<u64> {
+    let inputs = usize::from(twin.controller.settings().mixing_inputs);
+    twin.pulses[E..E + inputs.min(MIX_INPUTS)].to_vec()
 }
 
 /// The profile's heaters behind the core's thermistor inputs, read by a 10-bit ADC.
@@ -151,6 +169,9 @@ pub struct CoreReport {
     /// Where each motor ends, in steps: X, Y and Z from their endstops (the homed origin), E
     /// from power-on (`M114`'s `Count`, the Marlin model's end position).
     pub end_steps: [i64; 4],
+    /// Step pulses of each input of a mixing hotend, E0 first, both directions counted (the
+    /// Marlin model's `steps.mixing`); empty without one.
+    pub mixing_steps: Vec<u64>,
     /// Whether the board halted (a thermal fault or `M112`).
     pub halted: bool,
     /// The board's `Error:` lines.
@@ -175,6 +196,7 @@ pub fn run_file(
         lines: 0,
         time_s: 0.0,
         end_steps: [0; 4],
+        mixing_steps: Vec::new(),
         halted: false,
         errors: Vec::new(),
     };
@@ -206,6 +228,7 @@ pub fn run_file(
     }
     report.time_s = twin.now_ms() as f64 / 1000.0;
     report.end_steps = twin.steps_from_home();
+    report.mixing_steps = mixing_steps(&twin);
     report.halted |= twin.controller.is_halted();
     report.errors = String::from_utf8_lossy(&replies)
         .lines()
@@ -263,6 +286,7 @@ impl CoreDevice {
             lines: 0,
             time_s: self.now_s(),
             end_steps: twin.steps_from_home(),
+            mixing_steps: mixing_steps(twin),
             halted: twin.controller.is_halted(),
             errors: Vec::new(),
         }

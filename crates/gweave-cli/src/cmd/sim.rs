@@ -162,6 +162,13 @@ fn print_core(out: &mut dyn Write, input: &Path, r: &CoreReport) -> io::Result<(
     writeln!(out, "  time            {}", hms(r.time_s))?;
     let [x, y, z, e] = r.end_steps;
     writeln!(out, "  end position    Count X {x} Y {y} Z {z} E {e}")?;
+    if !r.mixing_steps.is_empty() {
+        write!(out, "  mixing steps   ")?;
+        for (k, steps) in r.mixing_steps.iter().enumerate() {
+            write!(out, " E{k} {steps}")?;
+        }
+        writeln!(out)?;
+    }
     for error in &r.errors {
         writeln!(out, "  the printer said: {error}")?;
     }

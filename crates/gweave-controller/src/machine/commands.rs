@@ -10,7 +10,7 @@ use crate::serial::out::{line, Reply};
 use crate::{Io, AXES, AXIS_LETTERS, BED, E, HOTEND0, HOTEND1};
 
 /// How a command ends.
-enum Done {
+pub(super) enum Done {
     /// Print `ok` now.
     Ok,
     /// The command printed its own `ok` (`ok T:...` of `M105`) or waits ([`Wait`]).
@@ -27,6 +27,8 @@ const SETTING: (f32, f32) = (0.000_001, 1_000_000.0);
 const GAIN: (f32, f32) = (0.0, 100_000.0);
 const DUTY: (f32, f32) = (0.0, 255.0);
 const DWELL_MS: (f32, f32) = (0.0, 3_600_000.0);
+/// A mixing weight: only ratios matter, a negative one counts as 0; a million bounds the sum.
+const MIX_WEIGHT: (f32, f32) = (-1_000_000.0, 1_000_000.0);
 
 impl Controller<'_> {
     /// Runs one command line (line number and checksum removed).
@@ -74,7 +76,7 @@ impl Controller<'_> {
             }
             (b'G', 28) => {
                 self.wait = Wait::Home(Homing::new(w));
-                self.steppers_enabled = 0b1111;
+                self.steppers_enabled = self.motors(0b1111);
                 return Some(Done::Quiet);
             }
             // Millimetres, the only unit this machine has.
@@ -90,12 +92,12 @@ impl Controller<'_> {
                     self.heat.all_off();
                     self.fan_duty = 0;
                 }
-                let mask = axes_given(w).unwrap_or(0b1111);
+                let mask = self.motors(axes_given(w).unwrap_or(0b1111));
                 self.steppers_enabled &= !mask;
                 self.wait = Wait::Moves { then_dwell_ms: 0 };
                 return Some(Done::Quiet);
             }
-            (b'M', 17) => self.steppers_enabled |= axes_given(w).unwrap_or(0b1111),
+            (b'M', 17) => self.steppers_enabled |= self.motors(axes_given(w).unwrap_or(0b1111)),
             (b'M', 104 | 109) => {
                 let heater = if w.get(b'T') == Some(1.0) { HOTEND1 } else { HOTEND0 };
                 return Some(self.set_temperature(w, heater, code == 109, now));
@@ -126,9 +128,10 @@ impl Controller<'_> {
             (b'M', 92) => {
                 for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
                     if let Some(v) = w.get(letter) {
-                        s.steps_per_mm[axis] = v;
-                        // The same place, counted in the new steps.
-                        self.planner.position_steps[axis] = round_i32(self.position_mm[axis] * v);
+                        self.settings.steps_per_mm[axis] = v;
+                        // The same place in the new steps (E: the motor stays and counts the
+                        // new steps from here).
+                        self.anchor(axis);
                     }
                 }
             }
@@ -151,17 +154,30 @@ impl Controller<'_> {
             }
             (b'M', 500) => {
                 let crc = self.settings.save(io);
+                self.save_tools(io);
                 self.report_eeprom(io, b"echo:Settings Stored (", crc);
             }
             (b'M', 501) => match self.settings.load(io) {
-                Some(crc) => self.report_eeprom(io, b"echo:Stored settings retrieved (", crc),
+                Some(crc) => {
+                    self.load_tools(io);
+                    self.report_eeprom(io, b"echo:Stored settings retrieved (", crc)
+                }
                 None => line(io, b"echo:No settings stored in EEPROM: settings unchanged"),
             },
             (b'M', 502) => {
-                self.settings = crate::Settings::DEFAULT;
+                // The build's fixed facts stay (the inputs fitted); the rest is the default.
+                let inputs = self.settings.mixing_inputs;
+                self.settings = crate::Settings { mixing_inputs: inputs, ..crate::Settings::DEFAULT };
+                self.mixer.reset_tools();
                 line(io, b"echo:Hardcoded Default Settings Loaded");
             }
-            (b'M', 503) => self.report_settings(io),
+            (b'M', 503) => {
+                self.report_settings(io);
+                self.report_tools(io);
+            }
+            (b'M', 163..=165) | (b'T', _) if self.mixer.inputs() > 0 => {
+                return Some(self.mixing_command(io, w))
+            }
             (b'T', 0) => {}
             (b'T', 1) if crate::heat::Heat::fitted(&self.settings, HOTEND1) => {}
             _ => return None,
@@ -180,22 +196,51 @@ impl Controller<'_> {
         if let Some(f) = w.get(b'F') {
             self.feed_mm_s = f / 60.0;
         }
-        let mut target = self.planner.position_steps;
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
             if let Some(v) = w.get(letter) {
                 let relative = self.relative & (1 << axis) != 0;
                 self.position_mm[axis] = if relative { self.position_mm[axis] + v } else { v };
-                target[axis] = round_i32(self.position_mm[axis] * self.settings.steps_per_mm[axis]);
             }
         }
+        // Every axis, named on the line or not: a move too short to plan left its steps to
+        // this one (MIN_STEPS_PER_SEGMENT), E's included even if this line has no E.
+        let target: [i32; AXES] = core::array::from_fn(|axis| self.target_steps(axis));
         let cold = self.heat.heaters[HOTEND0].temp_c < self.settings.extrude_min_c;
         if target[E] != self.planner.position_steps[E] && cold {
             self.planner.position_steps[E] = target[E];
             line(io, b"echo: cold extrusion prevented");
         }
-        self.steppers_enabled |= 0b1111;
+        self.steppers_enabled |= self.motors(0b1111);
         // Room was checked before the line was taken.
-        self.planner.add(target, self.feed_mm_s, 0, &self.settings);
+        self.planner.add(target, self.feed_mm_s, 0, &self.settings, &mut self.mixer);
+    }
+
+    /// Where `axis`'s motor goes for the logical position now, in steps. E counts from where it
+    /// was last named, as the virtual printer's Marlin model does (`gweave-sim`'s
+    /// `motion/stepper.rs`), so that rounding never accumulates: a `G92 E0` at every layer, or
+    /// the `G92 E<e>` after a purge, loses no fraction of a step, where rounding the named
+    /// position itself (`round(e * steps_per_mm)`, Marlin's `set_position_mm`) would shift E's
+    /// steps by up to half a step each time, and a mixing hotend's split with them. X, Y and Z
+    /// are rounded from their position (named at 0 by homing, where the steps are 0; a `G92`
+    /// of them rounds the position named).
+    pub(super) fn target_steps(&self, axis: usize) -> i32 {
+        let spm = self.settings.steps_per_mm[axis];
+        if axis == E {
+            self.anchor_e_steps + round_i32((self.position_mm[E] - self.anchor_e_mm) * spm)
+        } else {
+            round_i32(self.position_mm[axis] * spm)
+        }
+    }
+
+    /// Names the logical position of `axis` now: E's is where its motor is (the planner's end),
+    /// X's, Y's and Z's the position rounded to steps.
+    pub(super) fn anchor(&mut self, axis: usize) {
+        if axis == E {
+            self.anchor_e_mm = self.position_mm[E];
+            self.anchor_e_steps = self.planner.position_steps[E];
+        } else {
+            self.planner.position_steps[axis] = self.target_steps(axis);
+        }
     }
 
     /// `G92`: names the current place (all axes 0 with no letter).
@@ -203,7 +248,7 @@ impl Controller<'_> {
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
             if let Some(v) = w.get(letter).or((!w.any()).then_some(0.0)) {
                 self.position_mm[axis] = v;
-                self.planner.position_steps[axis] = round_i32(v * self.settings.steps_per_mm[axis]);
+                self.anchor(axis);
             }
         }
     }
@@ -272,6 +317,8 @@ fn out_of_range(w: &Words) -> Option<(u8, f32, (f32, f32))> {
         (b'M', 204) => &[(b"SPRT", SETTING)],
         (b'M', 205) => &[(b"J", (0.0, 10.0))],
         (b'M', 301) => &[(b"PID", GAIN)],
+        (b'M', 163) => &[(b"P", MIX_WEIGHT)],
+        (b'M', 165) => &[(b"ABCD", MIX_WEIGHT)],
         _ => &[],
     };
     for &(letters, (low, high)) in ranges {

@@ -50,7 +50,7 @@ impl Homing {
             let mut target = c.planner.position_steps;
             target[axis] = target[axis].saturating_add(round_i32(mm * s.steps_per_mm[axis]));
             c.queue.clear_endstop_hit();
-            c.planner.add(target, feed_mm_s, if stop_at_endstop { 1 << axis } else { 0 }, &s);
+            c.planner.add(target, feed_mm_s, if stop_at_endstop { 1 << axis } else { 0 }, &s, &mut c.mixer);
         };
         self.phase += 1;
         match self.phase {

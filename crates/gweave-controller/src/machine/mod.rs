@@ -10,11 +10,13 @@
 
 mod commands;
 mod homing;
+mod mixing;
 mod report;
 #[cfg(test)]
 mod tests;
 
 use crate::heat::Heat;
+use crate::mixing::Mixer;
 use crate::planner::Planner;
 use crate::serial::out::{line, Reply};
 use crate::serial::protocol::{self, LineError};
@@ -59,10 +61,17 @@ pub struct Controller<'q> {
     /// The last line number taken (`N`).
     last_line: i32,
     planner: Planner,
+    /// The mixing hotend's tools and shares (inert without one).
+    mixer: Mixer,
     prep: Prep,
     heat: Heat,
     /// Where the commands have put the head, mm (logical position).
     position_mm: [f32; AXES],
+    /// Where E was last named (`G92 E`, `M92 E`), mm, and its motor's steps then: E's targets
+    /// are counted in steps from there, so naming E never moves nor rounds the motor (see
+    /// `Controller::target_steps`). X, Y and Z are named at 0 by homing, where the steps are 0.
+    anchor_e_mm: f32,
+    anchor_e_steps: i32,
     /// Axes whose coordinates are relative (`G91`, and `M83` for E).
     relative: u8,
     feed_mm_s: f32,
@@ -88,9 +97,12 @@ impl<'q> Controller<'q> {
             reader: LineReader::new(),
             last_line: 0,
             planner: Planner::new(),
+            mixer: Mixer::new(settings.mixing_inputs),
             prep: Prep::new(),
             heat: Heat::default(),
             position_mm: [0.0; AXES],
+            anchor_e_mm: 0.0,
+            anchor_e_steps: 0,
             relative: 0,
             // Marlin's power-on feed rate: 1500 mm/min.
             feed_mm_s: 25.0,
@@ -112,6 +124,7 @@ impl<'q> Controller<'q> {
         line(io, b"start");
         // Only what `M500` keeps is read; the build's fixed facts (sizes, sensors) stay.
         let _ = self.settings.load(io);
+        self.load_tools(io);
     }
 
     /// Takes one byte from the host. Returns `false`, taking nothing, when the byte would end a

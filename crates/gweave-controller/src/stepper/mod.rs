@@ -33,14 +33,14 @@ use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use crate::limits::{IDLE_TICKS, MAX_TIMER_TICKS, SEGMENTS, STEP_BLOCKS};
-use crate::AXES;
+use crate::MOTORS;
 
 /// What a move is to the stepper: steps per axis, their directions, and the endstops that end
 /// it early (homing).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct StepBlock {
-    /// Steps per axis (absolute).
-    pub steps: [u32; AXES],
+    /// Steps per motor (absolute): X, Y, Z, E, and a mixing hotend's other inputs.
+    pub steps: [u32; MOTORS],
     /// Step events: the largest of `steps`.
     pub events: u32,
     /// DIR pin levels for this move (the settings' inversion applied).
@@ -55,7 +55,7 @@ pub struct StepBlock {
 impl StepBlock {
     /// No move.
     pub const IDLE: StepBlock =
-        StepBlock { steps: [0; AXES], events: 0, dir_bits: 0, endstop_mask: 0, endstop_invert: 0 };
+        StepBlock { steps: [0; MOTORS], events: 0, dir_bits: 0, endstop_mask: 0, endstop_invert: 0 };
 }
 
 /// A few milliseconds of one block at a constant step rate.
@@ -154,20 +154,24 @@ impl StepQueue {
         true
     }
 
-    /// Consumer: takes the oldest segment, and its block if the segment starts one, marking
-    /// the stepper busy.
-    fn pop(&self) -> Option<(Segment, Option<StepBlock>)> {
+    /// Consumer: takes the oldest segment, marking the stepper busy; a segment that starts a
+    /// block first copies the block into `block`. Nothing else is moved: the step interrupt
+    /// runs this at the last event of a segment, before that event's pulses go out, so every
+    /// byte copied here makes that one step late (see [`Stepper::tick`]).
+    fn pop(&self, block: &mut StepBlock) -> Option<Segment> {
         if self.queued() == 0 {
             return None;
         }
         let tail = self.tail.load(Ordering::Relaxed);
         // SAFETY: slot `tail` was published by the producer's Release store of `head`.
         let segment = unsafe { *self.segments[usize::from(tail) % SEGMENTS].get() };
-        // SAFETY: see `write_block`.
-        let block = segment.starts_block.then(|| unsafe { *self.blocks[usize::from(segment.block)].get() });
+        if segment.starts_block {
+            // SAFETY: see `write_block`; read before `tail` frees the segment's slot.
+            *block = unsafe { *self.blocks[usize::from(segment.block)].get() };
+        }
         self.busy.store(true, Ordering::Release);
         self.tail.store(((usize::from(tail) + 1) % (2 * SEGMENTS)) as u8, Ordering::Release);
-        Some((segment, block))
+        Some(segment)
     }
 
     /// Producer: stop every step now and for good (a halt). The stepper drops what it has at its
@@ -195,9 +199,10 @@ impl StepQueue {
 /// direction set-up time (200 ns for an A4988) is met whatever the board's timing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct StepOut {
-    /// STEP pins to pulse now, bit `1 << axis`.
+    /// STEP pins to pulse now, bit `1 << motor` ([`crate::MOTORS`]: a mixing hotend's inputs
+    /// after X, Y and Z).
     pub step_bits: u8,
-    /// DIR pin levels for the next steps, bit `1 << axis` (set after this call's pulses).
+    /// DIR pin levels for the next steps, bit `1 << motor` (set after this call's pulses).
     pub dir_bits: u8,
     /// Timer ticks ([`crate::limits::TICKS_PER_S`]) until the next interrupt.
     pub interval_ticks: u16,
@@ -207,7 +212,7 @@ pub struct StepOut {
 pub struct Stepper<'q> {
     queue: &'q StepQueue,
     block: StepBlock,
-    counters: [u32; AXES],
+    counters: [u32; MOTORS],
     /// Step events left in the running segment.
     events_left: u16,
     interval_ticks: u32,
@@ -222,7 +227,7 @@ impl<'q> Stepper<'q> {
         Stepper {
             queue,
             block: StepBlock::default(),
-            counters: [0; AXES],
+            counters: [0; MOTORS],
             events_left: 0,
             interval_ticks: 0,
             wait_ticks: 0,
@@ -273,11 +278,11 @@ impl<'q> Stepper<'q> {
     /// One Bresenham step event: the step bits of the axes that step.
     fn event(&mut self) -> u8 {
         let mut bits = 0;
-        for axis in 0..AXES {
-            self.counters[axis] += self.block.steps[axis];
-            if self.counters[axis] >= self.block.events {
-                self.counters[axis] -= self.block.events;
-                bits |= 1 << axis;
+        for motor in 0..MOTORS {
+            self.counters[motor] += self.block.steps[motor];
+            if self.counters[motor] >= self.block.events {
+                self.counters[motor] -= self.block.events;
+                bits |= 1 << motor;
             }
         }
         bits
@@ -285,11 +290,10 @@ impl<'q> Stepper<'q> {
 
     /// Takes the next segment, skipping what is left of a homing block that met its endstop.
     fn next_segment(&mut self) -> bool {
-        while let Some((segment, block)) = self.queue.pop() {
-            if let Some(block) = block {
-                self.block = block;
+        while let Some(segment) = self.queue.pop(&mut self.block) {
+            if segment.starts_block {
                 // Half of the events: the minor axes' steps fall mid-interval (see above).
-                self.counters = [block.events / 2; AXES];
+                self.counters = [self.block.events / 2; MOTORS];
             }
             if self.block.endstop_mask != 0 && self.queue.endstop_hit.load(Ordering::Acquire) {
                 continue;
