@@ -48,6 +48,8 @@ pub const BUILTIN: &[BuiltinProfile] = &[
     example!("inkjet-c6602"),
     example!("binder-jet"),
     example!("seed-controller", "seed_ntc.csv"),
+    example!("gweave-ramps"),
+    example!("gweave-mixing"),
 ];
 
 /// The built-in profile called `name`.
@@ -131,6 +133,22 @@ mod tests {
         }
         let seed = find("seed-controller").unwrap().profile().unwrap();
         assert!(seed.thermal.thermistor_table_entries.is_some());
+    }
+
+    /// Regression: the controller core's profiles (gweave-ramps, gweave-mixing) were added to
+    /// examples/machines/ after this list was written, so `--machine gweave-ramps` was "neither a
+    /// file nor a built-in profile" from any other folder.
+    #[test]
+    fn every_example_machine_is_built_in() {
+        let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines");
+        let mut examples: Vec<String> = std::fs::read_dir(folder)
+            .unwrap()
+            .filter_map(|e| e.unwrap().file_name().to_str()?.strip_suffix(".toml").map(str::to_owned))
+            .collect();
+        examples.sort();
+        let mut built_in: Vec<String> = BUILTIN.iter().map(|b| b.name.to_owned()).collect();
+        built_in.sort();
+        assert_eq!(built_in, examples);
     }
 
     #[test]
