@@ -17,6 +17,7 @@ import json
 import os
 import re
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -77,21 +78,74 @@ def first_moves(source: Path, moves: int) -> list:
     return out
 
 
+def start_board(binary: Path, tmp: Path, extra: list) -> tuple:
+    """Starts the board on the pty `tmp/ramps` with a hot hotend, as fast as it can run; returns
+    the process once the link is there, and the file its messages go to."""
+    link, log = tmp / "ramps", tmp / "board.log"
+    args = ["--pty", str(link), "--fast", "--hotend-c", "214", *extra]
+    with open(log, "w") as err:
+        proc = subprocess.Popen([str(binary), str(ELF), *args], stdout=subprocess.DEVNULL, stderr=err)
+    try:
+        wait_for(lambda: link.is_symlink() or proc.poll() is not None, 30, "the pty link")
+        assert proc.poll() is None, log.read_text()
+    except BaseException:
+        stop_board(proc)
+        raise
+    return proc, log
+
+
+def stop_board(proc: subprocess.Popen) -> None:
+    """Ends the board if it still runs, and reaps it (a test that failed midway leaves no process
+    behind for a later test's garbage collector to warn about)."""
+    if proc.poll() is None:
+        proc.kill()
+    proc.wait(timeout=30)
+
+
+def test_board_keeps_running_when_a_host_probes_the_port_without_a_byte(tmp_path):
+    """Regression (CI, stop 41): Printrun runs `stty -F PORT -hup` before it opens the port; the
+    board took that open and close for the end of a session, wrote its report and exited, and
+    printcore then found no port ("Could not connect to serial port")."""
+    binary = board_binary()
+    link, report = tmp_path / "ramps", tmp_path / "pins.json"
+    proc, log = start_board(binary, tmp_path, ["--report", str(report), "--seconds", "600"])
+    try:
+        for _ in range(3):
+            probe = subprocess.run(["stty", "-F", str(link), "-hup"], capture_output=True, text=True)
+            assert probe.returncode == 0, probe.stderr
+            time.sleep(0.3)
+        assert proc.poll() is None, log.read_text()
+        assert link.is_symlink() and not report.exists()
+        # A host that does speak ends the session: the report is written and the board exits.
+        answer = bytearray()
+
+        def answered(word: bytes) -> bool:
+            answer.extend(os.read(host.fileno(), 4096))
+            return word in answer
+
+        with open(link, "r+b", buffering=0) as host:
+            # Opening the port resets the board; what it receives before its greeting is lost,
+            # as on a real Mega, so a host waits for `start` first.
+            wait_for(lambda: answered(b"start"), 30, "the board's greeting")
+            host.write(b"M114\n")
+            wait_for(lambda: answered(b"Count"), 30, "the M114 answer")
+        wait_for(report.exists, 30, "the board's report")
+        assert proc.wait(timeout=30) == 0, log.read_text()
+    finally:
+        stop_board(proc)
+
+
 def test_printcore_streams_a_cura_file_and_the_pins_agree_with_m114(data, tmp_path):
     binary = board_binary()
     lines = first_moves(data / "cura" / "cura_torus.gcode", MOVES)
     cut = tmp_path / "cut.gcode"
     cut.write_text("\n".join(lines) + "\n")
-    link, report, log = tmp_path / "ramps", tmp_path / "pins.json", tmp_path / "board.log"
-    args = ["--pty", str(link), "--fast", "--report", str(report), "--seconds", "600", "--hotend-c", "214"]
-    with open(log, "w") as err:
-        proc = subprocess.Popen([str(binary), str(ELF), *args], stdout=subprocess.DEVNULL, stderr=err)
+    link, report = tmp_path / "ramps", tmp_path / "pins.json"
+    proc, log = start_board(binary, tmp_path, ["--report", str(report), "--seconds", "600"])
     received = []
     host = printcore_mod.printcore()
     host.recvcb = lambda line: received.append(line.rstrip("\r\n"))
     try:
-        wait_for(lambda: link.is_symlink() or proc.poll() is not None, 30, "the pty link")
-        assert proc.poll() is None, log.read_text()
         host.connect(str(link), 250000)
         wait_for(lambda: host.online, 30, "printcore to see the board online")
         host.startprint(gcoder.LightGCode(lines))
@@ -99,10 +153,15 @@ def test_printcore_streams_a_cura_file_and_the_pins_agree_with_m114(data, tmp_pa
         host.send_now("M400")
         host.send_now("M114")
         wait_for(lambda: any(" Count " in l for l in received), 60, "the M114 answer")
+        host.disconnect()
+        wait_for(report.exists, 30, "the board's report")
+        proc.wait(timeout=30)
+    except BaseException:
+        print("board log:", log.read_text())
+        raise
     finally:
         host.disconnect()
-    wait_for(report.exists, 30, "the board's report")
-    proc.wait(timeout=30)
+        stop_board(proc)
     pins = json.loads(report.read_text())
 
     # Not one error or resend (printcore's opening `N-1 M110 N-1` included).
@@ -121,19 +180,15 @@ def test_printcore_streams_a_cura_file_and_the_pins_agree_with_m114(data, tmp_pa
 def test_octoprint_prints_a_cura_file_on_the_board_and_the_pins_agree_with_the_twin(data, tmp_path):
     """The same file printed from OctoPrint's storage through its REST API, as a user does."""
     pytest.importorskip("octoprint", reason="pip install -r crates/gweave-py/requirements-octoprint.txt")
-    from test_octoprint_serve import OctoPrint, connect, stop
+    from test_octoprint_serve import OctoPrint, connect
 
     binary = board_binary()
     cut = tmp_path / "cut.gcode"
     cut.write_text("\n".join(first_moves(data / "cura" / "cura_torus.gcode", MOVES)) + "\n")
-    link, report, log = tmp_path / "ramps", tmp_path / "pins.json", tmp_path / "board.log"
-    args = ["--pty", str(link), "--fast", "--report", str(report), "--seconds", "900", "--hotend-c", "214"]
+    link, report = tmp_path / "ramps", tmp_path / "pins.json"
     octo = None
-    with open(log, "w") as err:
-        proc = subprocess.Popen([str(binary), str(ELF), *args], stdout=subprocess.DEVNULL, stderr=err)
+    proc, log = start_board(binary, tmp_path, ["--report", str(report), "--seconds", "900"])
     try:
-        wait_for(lambda: link.is_symlink() or proc.poll() is not None, 30, "the pty link")
-        assert proc.poll() is None, log.read_text()
         octo = OctoPrint(tmp_path, link)
         connect(octo, str(link))
         octo.upload("local", cut, select="true", print="true")
@@ -149,7 +204,7 @@ def test_octoprint_prints_a_cura_file_on_the_board_and_the_pins_agree_with_the_t
     finally:
         if octo is not None:
             octo.close()
-        stop(proc)
+        stop_board(proc)
     pins = json.loads(report.read_text())
     assert pins["position_steps"][:3] == twin_end_steps(cut, tmp_path)[:3], pins
     assert pins["net_steps"][3] > 0, pins

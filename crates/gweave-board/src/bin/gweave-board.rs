@@ -32,8 +32,10 @@ struct Args {
     /// minute of heating from cold).
     #[arg(long, value_parser = parse_celsius)]
     hotend_c: Option<f64>,
-    /// When the host closes the port, write what the pins did to this file (JSON: each axis's
-    /// position in microsteps from its endstop and its net steps) and exit.
+    /// When a host that sent anything closes the port, write what the pins did to this file
+    /// (JSON: each axis's position in microsteps from its endstop and its net steps) and exit.
+    /// A host that opens and closes the port without a byte (Printrun runs `stty -F PORT -hup`
+    /// before it connects) was only setting the line up: the board keeps running.
     #[arg(long)]
     report: Option<PathBuf>,
 }
@@ -62,15 +64,23 @@ fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let start_board_s = board.now_s();
     let mut buf = [0u8; 512];
+    // Bytes the connected host has sent since it opened the port.
+    let mut session_bytes = 0usize;
     loop {
         if args.seconds.is_some_and(|s| board.now_s() >= s) {
             return Ok(());
         }
         match pty.wait(&mut buf, Duration::ZERO)? {
-            EndpointEvent::Connected => board.reset(),
-            EndpointEvent::Data(n) => board.send(&buf[..n]),
+            EndpointEvent::Connected => {
+                session_bytes = 0;
+                board.reset();
+            }
+            EndpointEvent::Data(n) => {
+                session_bytes += n;
+                board.send(&buf[..n]);
+            }
             EndpointEvent::Disconnected => {
-                if let Some(path) = &args.report {
+                if let Some(path) = args.report.as_ref().filter(|_| session_bytes > 0) {
                     return write_report(&board, path);
                 }
             }
