@@ -62,6 +62,7 @@ fn every_shipped_settings_file_loads() {
 /// loader refuses it naming the key (or accepts it, for a value inside the range), never panics.
 #[test]
 fn every_numeric_key_of_every_file_is_bounded() {
+    let copy = tempfile::tempdir().unwrap();
     for file in all_files() {
         let text = std::fs::read_to_string(&file).unwrap();
         for (i, line) in text.lines().enumerate() {
@@ -74,8 +75,7 @@ fn every_numeric_key_of_every_file_is_bounded() {
                 let mut lines: Vec<&str> = text.lines().collect();
                 let mutated = format!("{key} = {bad}");
                 lines[i] = &mutated;
-                let copy = std::env::temp_dir().join(format!("gweave-settings-{}", std::process::id()));
-                let dir = copy.join(file.parent().unwrap().file_name().unwrap());
+                let dir = copy.path().join(file.parent().unwrap().file_name().unwrap());
                 std::fs::create_dir_all(&dir).unwrap();
                 let path = dir.join(file.file_name().unwrap());
                 std::fs::write(&path, lines.join("\n")).unwrap();

@@ -25,10 +25,9 @@ fn torus() -> Vec<u8> {
     std::fs::read(path).unwrap()
 }
 
-fn write_temp(name: &str, bytes: &[u8]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("gweave-preview-mix-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
+/// Writes `bytes` to `name` in `dir` (a test's own temporary folder, removed when it ends).
+fn write_temp(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {
+    let path = dir.path().join(name);
     std::fs::write(&path, bytes).unwrap();
     path
 }
@@ -78,7 +77,8 @@ fn each_band_of_a_mixed_file_draws_in_its_predicted_colour_and_purge_shift_shows
     let profile = MixProfile::from_toml_str(BANDS).unwrap();
     let colours = MixColours::from_profile(&profile).unwrap();
     let (mixed, _) = mix_bytes(profile, &torus()).unwrap();
-    let mixed_path = write_temp("torus.mix.gcode", &mixed);
+    let dir = tempfile::tempdir().unwrap();
+    let mixed_path = write_temp(&dir, "torus.mix.gcode", &mixed);
 
     let blue = rgb(colours.predict(&[0.5, 0.5, 0.0, 0.0]).unwrap());
     let yellow = rgb(colours.predict(&[0.0, 0.0, 1.0, 0.0]).unwrap());
@@ -103,7 +103,7 @@ fn each_band_of_a_mixed_file_draws_in_its_predicted_colour_and_purge_shift_shows
     let (shifted, report) = purge_shift_bytes(rules, &mixed).unwrap();
     let moved = report.changes.kept().iter().filter(|c| c.achieved_mm > 10.0).count();
     assert!(moved >= 1, "{:?}", report.changes);
-    let shifted_path = write_temp("torus.shifted.gcode", &shifted);
+    let shifted_path = write_temp(&dir, "torus.shifted.gcode", &shifted);
 
     // Layer 18: all yellow before the shift; after it, the end of the layer prints the blend.
     let blends = |d: &Drawing| -> Vec<[u8; 3]> {
@@ -136,7 +136,8 @@ fn each_band_of_a_mixed_file_draws_in_its_predicted_colour_and_purge_shift_shows
 fn the_viewer_page_colours_by_mix_with_the_users_names_whatever_it_opens_on() {
     let seed = include_str!("../../../examples/mix/seed_layers.toml");
     let (mixed, _) = mix_bytes(MixProfile::from_toml_str(seed).unwrap(), &torus()).unwrap();
-    let path = write_temp("seed_layers.mix.gcode", &mixed);
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_temp(&dir, "seed_layers.mix.gcode", &mixed);
     let page = |path: &Path| {
         let options = PreviewOptions::default();
         let p = gweave::render::preview_with_progress(

@@ -27,9 +27,8 @@ fn raster_output_lights_the_pixels_where_the_bmp_is_black() {
     writer.layer(std::slice::from_ref(&image)).unwrap();
     writer.layer(std::slice::from_ref(&image)).unwrap();
     let (gcode, _) = writer.finish().unwrap();
-    let dir = std::env::temp_dir().join(format!("gweave-preview-raster-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("badge.gcode");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("badge.gcode");
     std::fs::write(&path, gcode).unwrap();
 
     let view = ViewOptions {

@@ -16,14 +16,13 @@ use gweave::render::{drawing, ColourBy, Format, PreviewOptions, ViewKind, ViewOp
 use gweave::rotary::cylinder::RotaryConfig;
 use gweave::rotary::helix::TubeParams;
 
-fn tube_file(name: &str) -> (PathBuf, TubeParams) {
+/// A two-layer tube written to `name` in `dir` (a test's own temporary folder).
+fn tube_file(dir: &tempfile::TempDir, name: &str) -> (PathBuf, TubeParams) {
     let mut tube = TubeParams::new(RotaryConfig::new(20.0));
     (tube.length_mm, tube.layers) = (20.0, 2);
     let mut gcode = Vec::new();
     tube.write_gcode(&mut gcode).unwrap();
-    let dir = std::env::temp_dir().join(format!("gweave-preview-rotary-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
+    let path = dir.path().join(name);
     std::fs::write(&path, gcode).unwrap();
     (path, tube)
 }
@@ -46,7 +45,8 @@ fn options(kind: ViewKind) -> PreviewOptions {
 
 #[test]
 fn a_tube_is_drawn_round_on_its_cylinder() {
-    let (path, tube) = tube_file("tube.gcode");
+    let dir = tempfile::tempdir().unwrap();
+    let (path, tube) = tube_file(&dir, "tube.gcode");
     let r_mm = (tube.layer_radius_mm(1) + tube.print.layer_height_mm / 2.0) as f32;
     assert!((r_mm - 10.4).abs() < 1e-4, "{r_mm}");
     // The header names the machine: no rotary option needed.
@@ -87,7 +87,8 @@ fn a_tube_is_drawn_round_on_its_cylinder() {
 
 #[test]
 fn the_viewer_page_of_a_tube_carries_its_3d_segments() {
-    let (path, _) = tube_file("tube_html.gcode");
+    let dir = tempfile::tempdir().unwrap();
+    let (path, _) = tube_file(&dir, "tube_html.gcode");
     let html = gweave::render::preview(&path, None, Format::Html, &options(ViewKind::Iso)).unwrap();
     let html = String::from_utf8(html).unwrap();
     // Quantisation bounds of the 3D segments: Y and Z span the outer diameter, not the
@@ -131,9 +132,8 @@ fn a_wrapped_two_tool_part_previews_in_both_tools_colours() {
             ));
         }
     }
-    let dir = std::env::temp_dir().join(format!("gweave-preview-rotary-tools-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let (input, output, png) = (dir.join("flat.gcode"), dir.join("wrapped.gcode"), dir.join("wrapped.png"));
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output, png) = (dir.path().join("flat.gcode"), dir.path().join("wrapped.gcode"), dir.path().join("wrapped.png"));
     std::fs::write(&input, flat).unwrap();
     let config = WrapConfig::new(RotaryConfig::new(30.0));
     let target = Target::File(output);
@@ -148,5 +148,4 @@ fn a_wrapped_two_tool_part_previews_in_both_tools_colours() {
     let (t0, t1) = (count(TOOL_COLOURS[0]), count(TOOL_COLOURS[1]));
     // Each band covers thousands of pixels of an 800 x 600 picture.
     assert!(t0 > 2000 && t1 > 2000, "tool 0: {t0} px, tool 1: {t1} px");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -29,7 +29,7 @@ use crate::thermal::control::{ControlConfig, PidConfig, PidGains};
 /// Why an `M503` report could not be read.
 #[derive(Debug, PartialEq, Error)]
 pub enum M503Error {
-    /// A value is not a number.
+    /// A value is not a finite number (`Yfast`, or `X1e400`, which overflows to infinity).
     #[error("line {line}: `{word}` is not a number")]
     NotANumber {
         /// 1-based line of the report.
@@ -93,7 +93,8 @@ pub fn from_m503(report: &str) -> Result<FromM503, M503Error> {
         let mut values = Vec::new();
         for w in words {
             let (letter, number) = w.split_at(w.chars().next().map_or(0, char::len_utf8));
-            let v = number.parse::<f64>().map_err(|_| M503Error::NotANumber { line, word: w.to_owned() })?;
+            let not_a_number = || M503Error::NotANumber { line, word: w.to_owned() };
+            let v = number.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(not_a_number)?;
             values.push((letter.to_ascii_uppercase(), v));
         }
         let get = |l: &str| values.iter().find(|(k, _)| k == l).map(|(_, v)| *v);
@@ -248,6 +249,9 @@ mod tests {
         assert_eq!(from_m503("ok\nT:210 /210\n"), Err(M503Error::Empty));
         let bad = from_m503("echo:  M203 X500.00 Yfast\n");
         assert_eq!(bad, Err(M503Error::NotANumber { line: 1, word: "Yfast".to_owned() }));
+        // Regression: `X1e400` was reported as `x = inf is out of range`, a value the user never wrote.
+        let huge = from_m503("echo:  M92 X1e400 Y80.00\n");
+        assert_eq!(huge, Err(M503Error::NotANumber { line: 1, word: "X1e400".to_owned() }));
         let zero = from_m503("echo:  M201 X0\n");
         assert!(matches!(zero, Err(M503Error::Profile { line: 1, .. })), "{zero:?}");
     }
