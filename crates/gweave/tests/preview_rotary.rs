@@ -133,7 +133,8 @@ fn a_wrapped_two_tool_part_previews_in_both_tools_colours() {
         }
     }
     let dir = tempfile::tempdir().unwrap();
-    let (input, output, png) = (dir.path().join("flat.gcode"), dir.path().join("wrapped.gcode"), dir.path().join("wrapped.png"));
+    let (input, output, png) =
+        (dir.path().join("flat.gcode"), dir.path().join("wrapped.gcode"), dir.path().join("wrapped.png"));
     std::fs::write(&input, flat).unwrap();
     let config = WrapConfig::new(RotaryConfig::new(30.0));
     let target = Target::File(output);
