@@ -211,7 +211,8 @@ fn a_g1_move_gives_exactly_its_steps_on_every_axis_of_the_32_bit_board() {
     qemu.command("G1 X-2.5 F3000");
     qemu.command("M400");
     let m114 = qemu.command("M114");
-    assert_eq!(m114, ["X:7.50 Y:5.00 Z:1.00 E:0.00 Count X:600 Y:400 Z:400", "ok"]);
+    // E counts as moved, as in Marlin: a prevented extrusion still moves the E position.
+    assert_eq!(m114, ["X:7.50 Y:5.00 Z:1.00 E:2.00 Count X:600 Y:400 Z:400", "ok"]);
 
     let pins = replay(&qemu.stop(), &[X_STEP, Y_STEP, Z_STEP, E0_STEP]);
     let count = |pin| pins.rising.get(&pin).map_or(0, Vec::len);
