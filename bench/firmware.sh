@@ -24,6 +24,7 @@ if [ -s "$CORTEX_ELF" ]; then
   echo "== firmware: $(basename "$CORTEX_ELF") (STM32F405/F407; not run on a cycle-exact emulator)"
   printf "%-26s %7s KB   of 1024 KB (STM32F407), 256 KB (STM32F103RC)\n" "flash (text + data)" "$(kb $((ctext + cdata)))"
   printf "%-26s %7s KB   of 128 KB (STM32F407), 48 KB (STM32F103RC); + main's stack\n" "static RAM (data + bss)" "$(kb $((cdata + cbss)))"
+  python3 "$ROOT/bench/cortex_stack.py" "$CORTEX_ELF"
 else
   echo "== no $CORTEX_ELF: make firmware-cortex for the 32-bit build's sizes"
 fi

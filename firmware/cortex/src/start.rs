@@ -45,6 +45,11 @@ extern "C" {
     static mut _bss_end: u32;
 }
 
+/// The word free RAM is painted with at reset.
+const STACK_PAINT: u32 = 0xA5A5_A5A5;
+/// Words below the reset handler's stack pointer left unpainted: its own frame.
+const STACK_PAINT_MARGIN_WORDS: usize = 16;
+
 /// The reset handler.
 ///
 /// # Safety
@@ -70,6 +75,16 @@ pub unsafe extern "C" fn reset() {
         let mut dst = &raw mut _bss_start;
         while dst < &raw mut _bss_end {
             dst.write_volatile(0);
+            dst = dst.add(1);
+        }
+        // Paint the free RAM up to this handler's own frame, so that the stack's high-water
+        // mark can be read from a RAM dump (bench/cortex_stack.py): the lowest word that is no
+        // longer the paint.
+        let sp: *mut u32;
+        core::arch::asm!("mov {}, sp", out(reg) sp, options(nomem, nostack));
+        let end = sp.sub(STACK_PAINT_MARGIN_WORDS);
+        while dst < end {
+            dst.write_volatile(STACK_PAINT);
             dst = dst.add(1);
         }
     }
