@@ -14,6 +14,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from typing import Callable
 
 RAM_START = 0x2000_0000
 RAM_BYTES = 128 * 1024
@@ -62,7 +63,7 @@ def main() -> None:
           f"(a session of {len(SESSION)} commands; static RAM ends at {first_paint} bytes)")
 
 
-def wait_for(qemu: subprocess.Popen, done) -> None:
+def wait_for(qemu: "subprocess.Popen[bytes]", done: Callable[[str], bool]) -> None:
     """Read the serial line until `done` accepts a line."""
     assert qemu.stdout
     while True:
