@@ -5,6 +5,7 @@
 #   make docs-images  draws the pictures of README.md and docs/ again with the current code
 #   make fuzz   coverage-guided fuzzing of the reader, lexer, binary G-code, M503, profile loaders and controller core (not in make test)
 #   make firmware  the firmware for Arduino Mega 2560 + RAMPS 1.4 (firmware/out/gweave-ramps.hex)
+#   make firmware-cortex  the firmware for a 32-bit STM32F4 board (firmware/out/gweave-cortex.bin)
 
 SHELL := /bin/bash
 .SHELLFLAGS := -eu -o pipefail -c
@@ -15,7 +16,7 @@ GWEAVE := target/release/gweave
 OUT := out
 
 .PHONY: demo test bench deps rust-deps python-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
-.PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-test
+.PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-test firmware-cortex
 .PHONY: guard
 
 deps: rust-deps py-deps browser-deps cura-deps firmware-deps
@@ -62,7 +63,10 @@ cura-deps:
 # The firmware (docs/firmware.md): Debian's Rust (rustc-web 1.96 with the library source, which
 # builds `core` for the AVR; rustup's toolchains ship no AVR target), avr-gcc to link, and
 # libsimavr for the emulated board of the tests. Installed with apt-get when running as root.
-FW_PACKAGES := rustc-web cargo-web rust-web-src gcc-avr avr-libc binutils-avr simavr libsimavr-dev
+# The 32-bit build links with LLVM's lld (rust-web-llvm's `rust-lld` points to lld-22's) and
+# runs in the tests on qemu-system-arm's Netduino Plus 2 (an STM32F405).
+FW_PACKAGES := rustc-web cargo-web rust-web-src gcc-avr avr-libc binutils-avr simavr libsimavr-dev \
+  lld-22 llvm-22 qemu-system-arm
 FW_OUT := firmware/out
 # Its own target folder: another compiler and another target than the workspace's.
 FW_TARGET_DIR ?= $(CURDIR)/target/avr
@@ -85,6 +89,19 @@ firmware: firmware-deps
 	avr-objcopy -O ihex -R .eeprom $(FW_ELF) $(FW_OUT)/gweave-ramps.hex
 	@avr-size $(FW_ELF)
 
+# The same core for a Cortex-M4F (STM32F405/F407, BTT SKR Pro's pin map; docs/firmware.md):
+# the ELF for QEMU and debuggers, the raw .bin a board's bootloader or st-flash writes at
+# 0x08000000.
+FW_CORTEX_ELF := $(FW_OUT)/gweave-cortex.elf
+FW_CORTEX_TARGET_DIR ?= $(CURDIR)/target/cortex
+firmware-cortex: firmware-deps
+	cd firmware/cortex && CARGO_TARGET_DIR=$(FW_CORTEX_TARGET_DIR) RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 \
+	  /usr/bin/cargo build --release -q
+	@mkdir -p $(FW_OUT)
+	cp $(FW_CORTEX_TARGET_DIR)/thumbv7em-none-eabihf/release/gweave-cortex $(FW_CORTEX_ELF)
+	llvm-objcopy-22 -O binary $(FW_CORTEX_ELF) $(FW_OUT)/gweave-cortex.bin
+	@llvm-size-22 $(FW_CORTEX_ELF)
+
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli
 
@@ -101,12 +118,14 @@ python-debug: py-deps
 lint: rust-deps
 	$(CARGO) fmt --all -- --check
 	$(CARGO) fmt --manifest-path firmware/ramps/Cargo.toml -- --check
+	$(CARGO) fmt --manifest-path firmware/cortex/Cargo.toml -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 	# Broken or private links in the API docs fail too.
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --exclude gweave-py -q
 
-# The emulated board's tests (crates/gweave-board/tests) run the firmware `make firmware` built.
-cargo-test: rust-deps firmware
+# The emulated boards' tests (crates/gweave-board/tests) run the firmware `make firmware` and
+# `make firmware-cortex` built (tests/cortex.rs starts QEMU: about 2 s).
+cargo-test: rust-deps firmware firmware-cortex
 	$(CARGO) test --workspace --exclude gweave-py
 
 pytest: python-debug
