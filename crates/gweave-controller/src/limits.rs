@@ -50,9 +50,23 @@ pub const SEGMENT_S: f32 = 0.005;
 /// The step timer's rate: Timer1 of a 16 MHz AVR with prescaler 8 counts at 2 MHz.
 pub const TICKS_PER_S: u32 = 2_000_000;
 
-/// The shortest step interval the core asks for, in timer ticks (25 µs: 40 kHz), so that the
-/// interrupt never swallows the main loop whatever the settings say.
-pub const MIN_STEP_TICKS: u32 = 50;
+/// The highest step rate, step events per second (Marlin's `MAX_STEP_FREQUENCY`): the planner
+/// lowers the speed of a move whose fastest motor would step faster
+/// ([`crate::planner::Planner::add`]), so the step interrupt never takes more of the chip than
+/// the main loop can spare (measured on the ATmega2560 in docs/firmware.md, "Budgets").
+pub const MAX_STEP_HZ: u32 = 40_000;
+
+/// The shortest step interval the core asks for, in timer ticks (25 µs: [`MAX_STEP_HZ`]).
+pub const MIN_STEP_TICKS: u32 = TICKS_PER_S / MAX_STEP_HZ;
+
+/// The shortest time between two step interrupts, in timer ticks (100 µs: 10 000 interrupts a
+/// second at most). A segment whose step interval is shorter runs 2, 4 or 8 step events per
+/// interrupt (multi-stepping, [`crate::stepper::Stepper::tick`]): on an 8-bit chip an
+/// interrupt's entry and exit alone cost a hundred cycles or more.
+pub const MULTISTEP_TICKS: u32 = 200;
+
+/// The most step events one interrupt makes, log2 (8 events).
+pub const MAX_EVENTS_PER_TICK_LOG2: u8 = 3;
 
 /// The longest interval a 16-bit timer holds, in ticks; longer waits are made of several
 /// interrupts without a step.
