@@ -40,7 +40,9 @@
 //! keeps the plan it started with, which is always safe.
 
 use super::{Segment, StepQueue};
-use crate::limits::{MAX_EVENTS_PER_TICK_LOG2, MIN_STEP_TICKS, MULTISTEP_TICKS, SEGMENT_S, STEP_BLOCKS, TICKS_PER_S};
+use crate::limits::{
+    MAX_EVENTS_PER_TICK_LOG2, MIN_STEP_TICKS, MULTISTEP_TICKS, SEGMENT_S, STEP_BLOCKS, TICKS_PER_S,
+};
 use crate::math::sqrt;
 use crate::planner::{Block, Planner};
 
