@@ -59,11 +59,14 @@ pub const MAX_STEP_HZ: u32 = 40_000;
 /// The shortest step interval the core asks for, in timer ticks (25 µs: [`MAX_STEP_HZ`]).
 pub const MIN_STEP_TICKS: u32 = TICKS_PER_S / MAX_STEP_HZ;
 
-/// The shortest time between two step interrupts, in timer ticks (100 µs: 10 000 interrupts a
+/// The shortest time between two step interrupts, in timer ticks (125 µs: 8 000 interrupts a
 /// second at most). A segment whose step interval is shorter runs 2, 4 or 8 step events per
 /// interrupt (multi-stepping, [`crate::stepper::Stepper::tick`]): on an 8-bit chip an
-/// interrupt's entry and exit alone cost a hundred cycles or more.
-pub const MULTISTEP_TICKS: u32 = 200;
+/// interrupt's entry and exit alone cost a hundred cycles or more. Measured on the emulated
+/// ATmega2560: with 100 µs, X, Y and E at 20 000 steps/s each left the main loop too little
+/// time and a segment came 240 µs late; 8 000 steps/s (the board's acceleration test) still
+/// run one event per interrupt.
+pub const MULTISTEP_TICKS: u32 = 250;
 
 /// The most step events one interrupt makes, log2 (8 events).
 pub const MAX_EVENTS_PER_TICK_LOG2: u8 = 3;
