@@ -15,7 +15,7 @@ GWEAVE := target/release/gweave
 OUT := out
 
 .PHONY: demo test bench deps rust-deps python-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
-.PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-test
+.PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-fault firmware-test
 .PHONY: guard
 
 deps: rust-deps py-deps browser-deps cura-deps firmware-deps
@@ -85,6 +85,14 @@ firmware: firmware-deps
 	avr-objcopy -O ihex -R .eeprom $(FW_ELF) $(FW_OUT)/gweave-ramps.hex
 	@avr-size $(FW_ELF)
 
+# The same firmware with `M9999` hanging its main loop (feature fault-injection), for the
+# emulated board's watchdog test only; its own target folder, so neither build undoes the other.
+firmware-fault: firmware-deps
+	cd firmware/ramps && CARGO_TARGET_DIR=$(FW_TARGET_DIR)/fault RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 \
+	  /usr/bin/cargo build --release -q --features fault-injection
+	@mkdir -p $(FW_OUT)
+	cp $(FW_TARGET_DIR)/fault/avr-none/release/gweave-ramps.elf $(FW_OUT)/gweave-ramps-fault.elf
+
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli
 
@@ -106,7 +114,7 @@ lint: rust-deps
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --exclude gweave-py -q
 
 # The emulated board's tests (crates/gweave-board/tests) run the firmware `make firmware` built.
-cargo-test: rust-deps firmware
+cargo-test: rust-deps firmware firmware-fault
 	$(CARGO) test --workspace --exclude gweave-py
 
 pytest: python-debug
