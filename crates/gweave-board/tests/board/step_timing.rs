@@ -3,7 +3,7 @@
 //! the step interrupt costs no time, so its step times are the plan's), and the acceleration
 //! is measured from the pulses themselves.
 
-use gweave_board::{Board, Wiring, CPU_HZ};
+use gweave_board::{Wiring, CPU_HZ};
 use gweave_controller::limits::TICKS_PER_S;
 use gweave_controller::twin::{FirstOrder, Twin};
 use gweave_controller::{Settings, StepQueue, AXES};
