@@ -10,14 +10,19 @@ fn assert_halts(board: &mut Board, error: &str, timeout_s: f64) {
     let lines = board.run_until_line(|l| l == "Error:Printer halted. kill() called!", timeout_s).unwrap();
     assert!(lines.iter().any(|l| l == error), "{lines:?}");
     board.run_for(1.5).unwrap();
+    assert_safe(board);
+    let reply = board.command("G1 X10 F3000", 1.0).unwrap();
+    assert_eq!(reply, ["Error:Printer halted. kill() called!", "ok"]);
+}
+
+/// Every heater off, no driver enabled.
+fn assert_safe(board: &Board) {
     for i in 0..3 {
         assert_eq!(board.plant(i).heater.last_power_w(), 0.0, "heater {i} still on");
     }
     for socket in 0..4 {
         assert!(!board.axis(socket).enabled(), "driver {socket} still enabled");
     }
-    let reply = board.command("G1 X10 F3000", 1.0).unwrap();
-    assert_eq!(reply, ["Error:Printer halted. kill() called!", "ok"]);
 }
 
 #[test]
@@ -92,12 +97,7 @@ fn a_hung_main_loop_is_reset_by_the_watchdog_with_the_heaters_off() {
     assert_eq!(lines[lines.len() - 2..], ["echo:Watchdog Reset", "start"], "{lines:?}");
     // A safe state: every heater off, no driver enabled, the target forgotten.
     board.run_for(1.0).unwrap();
-    for i in 0..3 {
-        assert_eq!(board.plant(i).heater.last_power_w(), 0.0, "heater {i} on after the reset");
-    }
-    for socket in 0..4 {
-        assert!(!board.axis(socket).enabled(), "driver {socket} enabled after the reset");
-    }
+    assert_safe(&board);
     let report = board.command("M105", 1.0).unwrap();
     assert!(report.last().unwrap().contains(" /0.0"), "{report:?}");
 }
