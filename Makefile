@@ -16,7 +16,7 @@ GWEAVE := target/release/gweave
 OUT := out
 
 .PHONY: demo test bench deps rust-deps python-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
-.PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-test firmware-cortex
+.PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-fault firmware-test firmware-cortex
 .PHONY: guard
 
 deps: rust-deps py-deps browser-deps cura-deps firmware-deps
@@ -102,6 +102,14 @@ firmware-cortex: firmware-deps
 	llvm-objcopy-22 -O binary $(FW_CORTEX_ELF) $(FW_OUT)/gweave-cortex.bin
 	@llvm-size-22 $(FW_CORTEX_ELF)
 
+# The same firmware with `M9999` hanging its main loop (feature fault-injection), for the
+# emulated board's watchdog test only; its own target folder, so neither build undoes the other.
+firmware-fault: firmware-deps
+	cd firmware/ramps && CARGO_TARGET_DIR=$(FW_TARGET_DIR)/fault RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 \
+	  /usr/bin/cargo build --release -q --features fault-injection
+	@mkdir -p $(FW_OUT)
+	cp $(FW_TARGET_DIR)/fault/avr-none/release/gweave-ramps.elf $(FW_OUT)/gweave-ramps-fault.elf
+
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli
 
@@ -123,9 +131,9 @@ lint: rust-deps
 	# Broken or private links in the API docs fail too.
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --exclude gweave-py -q
 
-# The emulated boards' tests (crates/gweave-board/tests) run the firmware `make firmware` and
-# `make firmware-cortex` built (tests/cortex.rs starts QEMU: about 2 s).
-cargo-test: rust-deps firmware firmware-cortex
+# The emulated boards' tests (crates/gweave-board/tests) run the firmware `make firmware`,
+# `make firmware-fault` and `make firmware-cortex` built (tests/cortex.rs starts QEMU: about 2 s).
+cargo-test: rust-deps firmware firmware-fault firmware-cortex
 	$(CARGO) test --workspace --exclude gweave-py
 
 pytest: python-debug

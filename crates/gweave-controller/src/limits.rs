@@ -50,9 +50,26 @@ pub const SEGMENT_S: f32 = 0.005;
 /// The step timer's rate: Timer1 of a 16 MHz AVR with prescaler 8 counts at 2 MHz.
 pub const TICKS_PER_S: u32 = 2_000_000;
 
-/// The shortest step interval the core asks for, in timer ticks (25 µs: 40 kHz), so that the
-/// interrupt never swallows the main loop whatever the settings say.
-pub const MIN_STEP_TICKS: u32 = 50;
+/// The highest step rate, step events per second (Marlin's `MAX_STEP_FREQUENCY`): the planner
+/// lowers the speed of a move whose fastest motor would step faster
+/// ([`crate::planner::Planner::add`]), so the step interrupt never takes more of the chip than
+/// the main loop can spare (measured on the ATmega2560 in docs/firmware.md, "Budgets").
+pub const MAX_STEP_HZ: u32 = 40_000;
+
+/// The shortest step interval the core asks for, in timer ticks (25 µs: [`MAX_STEP_HZ`]).
+pub const MIN_STEP_TICKS: u32 = TICKS_PER_S / MAX_STEP_HZ;
+
+/// The shortest time between two step interrupts, in timer ticks (125 µs: 8 000 interrupts a
+/// second at most). A segment whose step interval is shorter runs 2, 4 or 8 step events per
+/// interrupt (multi-stepping, [`crate::stepper::Stepper::tick`]): on an 8-bit chip an
+/// interrupt's entry and exit alone cost a hundred cycles or more. Measured on the emulated
+/// ATmega2560: with 100 µs, X, Y and E at 20 000 steps/s each left the main loop too little
+/// time and a segment came 240 µs late; 8 000 steps/s (the board's acceleration test) still
+/// run one event per interrupt.
+pub const MULTISTEP_TICKS: u32 = 250;
+
+/// The most step events one interrupt makes, log2 (8 events).
+pub const MAX_EVENTS_PER_TICK_LOG2: u8 = 3;
 
 /// The longest interval a 16-bit timer holds, in ticks; longer waits are made of several
 /// interrupts without a step.

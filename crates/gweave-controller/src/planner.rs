@@ -36,7 +36,7 @@
 //! The oldest block's entry is fixed: it is the exit speed the block before it (already being
 //! stepped) was given, or rest. Speeds are kept squared, as the formulas want them.
 
-use crate::limits::{MIN_STEPS_PER_SEGMENT, PLANNER_BLOCKS};
+use crate::limits::{MAX_STEP_HZ, MIN_STEPS_PER_SEGMENT, PLANNER_BLOCKS};
 use crate::math::sqrt;
 use crate::mixing::Mixer;
 use crate::settings::Settings;
@@ -188,6 +188,10 @@ impl Planner {
             unit[axis] = delta_mm[axis];
             unit_norm2 += delta_mm[axis] * delta_mm[axis];
         }
+        // Marlin's MAX_STEP_FREQUENCY: the motor with the most steps (`events` of them over
+        // `len_mm`) steps at most MAX_STEP_HZ times a second, so no speed asks more of the
+        // step interrupt than it can hold.
+        feed_mm_s = feed_mm_s.min(MAX_STEP_HZ as f32 * len_mm / step.events as f32);
         let unit_norm = sqrt(unit_norm2);
         for u in &mut unit {
             *u /= unit_norm;
@@ -320,6 +324,25 @@ mod tests {
         assert!(p.is_empty() && p.position_steps == [0; AXES], "not planned");
         assert!(p.add([9, 0, 0, 2], 10.0, 0, &Settings::DEFAULT, &mut mixer));
         assert_eq!(p.pop().unwrap().0.step.steps, [9, 0, 0, 2, 0, 0, 0]);
+    }
+
+    #[test]
+    fn a_speed_beyond_the_step_rate_cap_is_lowered_to_it() {
+        // 1000 mm/s asked of X at 80 steps/mm (80 000 steps/s), the axis' limit raised out of
+        // the way: the cap, 40 000 steps/s, is 500 mm/s.
+        let mut s = Settings::DEFAULT;
+        s.max_feed_mm_s[0] = 2000.0;
+        let mut p = Planner::new();
+        assert!(p.add([8000, 0, 0, 0], 1000.0, 0, &s, &mut Mixer::new(0)));
+        let (b, _) = p.pop().unwrap();
+        assert!((sqrt(b.nominal_v2) - MAX_STEP_HZ as f32 / 80.0).abs() < 0.01, "{}", sqrt(b.nominal_v2));
+        // A diagonal is held by its fastest motor: Y at 400 steps/mm over a 3-4-5 move.
+        s.steps_per_mm[1] = 400.0;
+        s.max_feed_mm_s[1] = 2000.0;
+        assert!(p.add([8000 + 240, 1600, 0, 0], 1000.0, 0, &s, &mut Mixer::new(0)));
+        let (b, _) = p.pop().unwrap();
+        // 5 mm along the path, 1600 Y steps: 40 000 steps/s is 125 mm/s along the path.
+        assert!((sqrt(b.nominal_v2) - 125.0).abs() < 0.01, "{}", sqrt(b.nominal_v2));
     }
 
     #[test]

@@ -84,15 +84,30 @@ impl Io for Ramps {
     }
 }
 
+/// Runs `$body` once for each stepper socket the core drives (X, Y, Z, E0), with `$axis` a
+/// constant: unrolled by hand, so each pin is a fixed port and bit and its write a couple of
+/// instructions. (A loop over the table made the step interrupt read each pin's port from RAM
+/// and shift its bit into place at run time: hundreds of cycles per interrupt.)
+macro_rules! each_driver {
+    (|$axis:ident, $d:ident| $body:block) => {{
+        const _: () = assert!(gweave_controller::AXES == 4);
+        each_driver!(@one 0, $axis, $d, $body);
+        each_driver!(@one 1, $axis, $d, $body);
+        each_driver!(@one 2, $axis, $d, $body);
+        each_driver!(@one 3, $axis, $d, $body);
+    }};
+    (@one $i:literal, $axis:ident, $d:ident, $body:block) => {{
+        const $axis: usize = $i;
+        let $d = pins::DRIVERS[$axis];
+        $body
+    }};
+}
+
 /// The endstop pins' levels, bit `1 << axis` (X, Y, Z).
+#[inline(always)]
 fn endstops() -> u8 {
-    let mut bits = 0;
-    for (axis, pin) in pins::ENDSTOPS_MIN.iter().enumerate() {
-        if pin.read() {
-            bits |= 1 << axis;
-        }
-    }
-    bits
+    let [x, y, z] = pins::ENDSTOPS_MIN;
+    u8::from(x.read()) | u8::from(y.read()) << 1 | u8::from(z.read()) << 2
 }
 
 #[no_mangle]
@@ -169,31 +184,67 @@ fn apply(out: &gweave_controller::Outputs) {
 /// The step interrupt (Timer1 compare match A, vector 17).
 ///
 /// The STEP pins due now go high, stay high for at least two microseconds (the A4988 and
-/// DRV8825 drivers of RAMPS need 1 us and 1.9 us), then low; the DIR pins are set after the pulse for
-/// the next steps, so they are steady long before the next rising edge (the drivers need
-/// 200-650 ns).
+/// DRV8825 drivers of RAMPS need 1 us and 1.9 us), then low; the DIR pins are set after the
+/// pulse for the next steps, so they are steady long before the next rising edge (the drivers
+/// need 200-650 ns). At high step rates the core asks for several step events in one
+/// interrupt (an interval of 0: multi-stepping); each is pulsed in turn, the core's next
+/// event computed between them, which keeps each STEP pin low for longer than a driver needs.
 #[no_mangle]
 pub unsafe extern "avr-interrupt" fn __vector_17() {
     // SAFETY: set before this interrupt was enabled; only this handler uses it.
     let Some(stepper) = (unsafe { &mut *STEPPER.0.get() }) else { return };
-    let out = stepper.tick(endstops());
-    step_timer::set_next_in_interrupt(out.interval_ticks);
-    for (axis, d) in pins::DRIVERS.iter().enumerate().take(gweave_controller::AXES) {
-        if out.step_bits & (1 << axis) != 0 {
+    loop {
+        let out = stepper.tick(endstops());
+        if out.step_bits != 0 {
+            pulse(out.step_bits);
+        }
+        if out.interval_ticks != 0 {
+            // The directions change only from one segment to the next, never within the
+            // events of one interrupt: set once, for the next interrupt's steps.
+            each_driver!(|AXIS, d| {
+                d.dir.write_in_interrupt(out.dir_bits & (1 << AXIS) != 0);
+            });
+            step_timer::set_next_in_interrupt(out.interval_ticks);
+            return;
+        }
+    }
+}
+
+/// One STEP pulse on the drivers of `step_bits`.
+#[inline(always)]
+fn pulse(step_bits: u8) {
+    each_driver!(|AXIS, d| {
+        if step_bits & (1 << AXIS) != 0 {
             // The core asks for the enables after its turn, but a block it queued in that turn
             // may start here first: a driver is enabled before its first step, or the step
             // is lost. (ENABLE is active low.)
             d.enable.write_in_interrupt(false);
             d.step.write_in_interrupt(true);
         }
-    }
-    // Between raising and lowering a STEP pin the loops over the drivers take longer than the
-    // 1.9 us a DRV8825 needs (the emulated board's test
-    // `a_g1_move_gives_exactly_its_steps_on_every_axis` checks every pulse for 2 us).
-    for (axis, d) in pins::DRIVERS.iter().enumerate().take(gweave_controller::AXES) {
+    });
+    // 2 us high (32 cycles, the DRV8825's 1.9 us; the emulated board's test
+    // `a_g1_move_gives_exactly_its_steps_on_every_axis` checks every pulse).
+    pulse_delay();
+    each_driver!(|_AXIS, d| {
         d.step.write_in_interrupt(false);
-        d.dir.write_in_interrupt(out.dir_bits & (1 << axis) != 0);
-    }
+    });
+}
+
+/// About 30 cycles: ten turns of a three-cycle loop (`dec`, then `brne` taken), the rest of
+/// the pulse's 32 cycles in the writes around it.
+#[inline(always)]
+fn pulse_delay() {
+    // SAFETY: counts a scratch register down to zero; touches nothing else.
+    unsafe {
+        core::arch::asm!(
+            "ldi {n}, 10",
+            "1:",
+            "dec {n}",
+            "brne 1b",
+            n = out(reg_upper) _,
+            options(nomem, nostack),
+        )
+    };
 }
 
 /// A bug in the firmware: heaters off, then wait for the watchdog's reset.

@@ -13,6 +13,16 @@ pub fn elf() -> PathBuf {
     path
 }
 
+/// The firmware built with `M9999` hanging its main loop (`make firmware-fault`;
+/// `GWEAVE_FAULT_ELF` overrides the path).
+pub fn fault_elf() -> PathBuf {
+    let path = std::env::var_os("GWEAVE_FAULT_ELF").map(PathBuf::from).unwrap_or_else(|| {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../firmware/out/gweave-ramps-fault.elf")
+    });
+    assert!(path.exists(), "{} is missing: run `make firmware-fault` first", path.display());
+    path
+}
+
 /// A board wired as `wiring`, run until the firmware said `start`.
 pub fn booted(wiring: Wiring) -> Board {
     let mut board = Board::new(&elf(), wiring).unwrap();

@@ -10,14 +10,19 @@ fn assert_halts(board: &mut Board, error: &str, timeout_s: f64) {
     let lines = board.run_until_line(|l| l == "Error:Printer halted. kill() called!", timeout_s).unwrap();
     assert!(lines.iter().any(|l| l == error), "{lines:?}");
     board.run_for(1.5).unwrap();
+    assert_safe(board);
+    let reply = board.command("G1 X10 F3000", 1.0).unwrap();
+    assert_eq!(reply, ["Error:Printer halted. kill() called!", "ok"]);
+}
+
+/// Every heater off, no driver enabled.
+fn assert_safe(board: &Board) {
     for i in 0..3 {
         assert_eq!(board.plant(i).heater.last_power_w(), 0.0, "heater {i} still on");
     }
     for socket in 0..4 {
         assert!(!board.axis(socket).enabled(), "driver {socket} still enabled");
     }
-    let reply = board.command("G1 X10 F3000", 1.0).unwrap();
-    assert_eq!(reply, ["Error:Printer halted. kill() called!", "ok"]);
 }
 
 #[test]
@@ -73,4 +78,26 @@ fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
     let reply = board.command("M105", 1.0).unwrap();
     assert!(reply.last().unwrap().starts_with("ok T:"), "{reply:?}");
     assert_eq!(board.net_steps(), [0; 5]);
+}
+
+#[test]
+fn a_hung_main_loop_is_reset_by_the_watchdog_with_the_heaters_off() {
+    let mut board = Board::new(&crate::common::fault_elf(), Wiring::default()).unwrap();
+    board.run_until_line(|l| l == "start", 1.0).unwrap();
+    assert_eq!(board.command("M104 S200", 1.0).unwrap().last().unwrap(), "ok");
+    board.run_for(1.0).unwrap();
+    assert!(board.plant(0).heater.last_power_w() > 0.0, "heating before the hang");
+    // The main loop spins forever, the hotend's PWM (an interrupt) still on: only the
+    // watchdog (1 s) can end it.
+    board.send_line("M9999");
+    let hung_at = board.now_s();
+    let lines = board.run_until_line(|l| l == "start", 3.0).unwrap();
+    let reset_after_s = board.now_s() - hung_at;
+    assert!((0.9..2.0).contains(&reset_after_s), "restarted {reset_after_s:.2} s after the hang");
+    assert_eq!(lines[lines.len() - 2..], ["echo:Watchdog Reset", "start"], "{lines:?}");
+    // A safe state: every heater off, no driver enabled, the target forgotten.
+    board.run_for(1.0).unwrap();
+    assert_safe(&board);
+    let report = board.command("M105", 1.0).unwrap();
+    assert!(report.last().unwrap().contains(" /0.0"), "{report:?}");
 }

@@ -6,3 +6,4 @@ mod faults;
 mod heating;
 mod motion;
 mod protocol;
+mod step_timing;

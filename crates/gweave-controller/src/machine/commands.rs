@@ -118,6 +118,13 @@ impl Controller<'_> {
                 }
             }
             (b'M', 112) => self.kill(io, None),
+            // Fault injection (feature `fault-injection`, never in a normal build): the main
+            // loop hangs as a bug would, heaters as they are, so a board's test can check that
+            // its watchdog resets the chip into a safe state.
+            #[cfg(feature = "fault-injection")]
+            (b'M', 9999) => loop {
+                core::hint::spin_loop();
+            },
             (b'M', 114) => self.report_position(io),
             (b'M', 115) => super::report::firmware(io),
             (b'M', 119) => self.report_endstops(io),

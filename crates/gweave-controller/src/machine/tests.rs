@@ -488,3 +488,32 @@ fn the_core_fits_the_ram_budget() {
         core::mem::size_of::<Stepper>()
     );
 }
+
+#[test]
+fn thirty_thousand_steps_a_second_come_four_per_interrupt_on_the_profiles_time() {
+    // 100 mm of X at 375 mm/s (30 000 steps/s at 80 steps/mm), 3000 mm/s²: ramps of 0.125 s
+    // and 23.4375 mm each, 53.125 mm of cruise in 0.141667 s.
+    let mut s = Settings::DEFAULT;
+    s.max_feed_mm_s[0] = 400.0;
+    let mut b = Bench::new(s);
+    b.send("G91\nG1 X100 F22500\nM400\n");
+    b.run_until_ok(3, 10_000);
+    let t = b.x_times.borrow();
+    assert_eq!(t.len(), 8000);
+    // At cruise the step interval is 66.7 ticks, under MULTISTEP_TICKS: 4 events an interrupt,
+    // an interrupt every 266.7 ticks (133 us: 7500 interrupts a second).
+    let cruise = &t[3900..4100];
+    let mut groups: Vec<u64> = cruise.to_vec();
+    groups.dedup();
+    // (51 when the 200 steps begin and end inside a group.)
+    assert!((50..=51).contains(&groups.len()), "{} interrupts for 200 steps", groups.len());
+    for w in groups.windows(2) {
+        // Four intervals of 66 or 67 ticks (the fraction is carried from segment to segment).
+        assert!((264..=268).contains(&(w[1] - w[0])), "interrupts {} ticks apart", w[1] - w[0]);
+    }
+    // The move still takes its profile's time, less the time to its first step (1/80 mm from
+    // rest: sqrt(2 d / a) = 2.887 ms), and the last step lands on the profile's end.
+    let total_s = (t[7999] - t[0]) as f64 / f64::from(TICKS_PER_S);
+    let planned_s = 2.0 * 0.125 + 53.125 / 375.0 - (2.0 * 0.0125f64 / 3000.0).sqrt();
+    assert!((total_s - planned_s).abs() < 0.0002, "{total_s} s, planned {planned_s} s");
+}

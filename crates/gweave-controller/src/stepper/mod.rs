@@ -59,7 +59,10 @@ impl StepBlock {
 }
 
 /// A few milliseconds of one block at a constant step rate.
+///
+/// Packed: 9 bytes on the host as on the AVR (which aligns nothing), not 12.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(C, packed)]
 pub struct Segment {
     /// Slot of its block in the step block ring.
     pub block: u8,
@@ -69,6 +72,10 @@ pub struct Segment {
     pub events: u16,
     /// Timer ticks between step events.
     pub interval_ticks: u32,
+    /// Step events per interrupt, as a power of two: `1 << events_per_tick_log2`
+    /// (multi-stepping when the interval is shorter than
+    /// [`crate::limits::MULTISTEP_TICKS`], see [`Stepper::tick`]).
+    pub events_per_tick_log2: u8,
 }
 
 /// The ring between the main loop and the step interrupt. On a board, a `static`.
@@ -104,7 +111,13 @@ impl StepQueue {
     pub const fn new() -> Self {
         StepQueue {
             segments: [const {
-                UnsafeCell::new(Segment { block: 0, starts_block: false, events: 0, interval_ticks: 0 })
+                UnsafeCell::new(Segment {
+                    block: 0,
+                    starts_block: false,
+                    events: 0,
+                    interval_ticks: 0,
+                    events_per_tick_log2: 0,
+                })
             }; SEGMENTS],
             blocks: [const { UnsafeCell::new(StepBlock::IDLE) }; STEP_BLOCKS],
             head: AtomicU8::new(0),
@@ -193,7 +206,9 @@ impl StepQueue {
 }
 
 /// What the step interrupt does now: pulse `step_bits`, then set the DIR pins to `dir_bits`
-/// for the steps to come, then come back after `interval_ticks` of the step timer.
+/// for the steps to come, then come back after `interval_ticks` of the step timer; an
+/// `interval_ticks` of 0 means another step event is due at once: call [`Stepper::tick`]
+/// again in the same interrupt, after this one's pulses (multi-stepping).
 ///
 /// The direction is always set one interrupt before the step that needs it, so a driver's
 /// direction set-up time (200 ns for an A4988) is met whatever the board's timing.
@@ -204,7 +219,8 @@ pub struct StepOut {
     pub step_bits: u8,
     /// DIR pin levels for the next steps, bit `1 << motor` (set after this call's pulses).
     pub dir_bits: u8,
-    /// Timer ticks ([`crate::limits::TICKS_PER_S`]) until the next interrupt.
+    /// Timer ticks ([`crate::limits::TICKS_PER_S`]) until the next interrupt; 0: the next
+    /// event is due now, in this interrupt.
     pub interval_ticks: u16,
 }
 
@@ -213,8 +229,14 @@ pub struct Stepper<'q> {
     queue: &'q StepQueue,
     block: StepBlock,
     counters: [u32; MOTORS],
+    /// Motors with steps in the running block, bit `1 << motor`: the others are skipped.
+    moving: u8,
     /// Step events left in the running segment.
     events_left: u16,
+    /// Step events left in this interrupt's group (multi-stepping).
+    group_left: u8,
+    /// Step events per interrupt, log2, for the running segment.
+    group_log2: u8,
     interval_ticks: u32,
     /// Ticks still to wait before the next event when an interval exceeds the 16-bit timer.
     wait_ticks: u32,
@@ -228,7 +250,10 @@ impl<'q> Stepper<'q> {
             queue,
             block: StepBlock::default(),
             counters: [0; MOTORS],
+            moving: 0,
             events_left: 0,
+            group_left: 0,
+            group_log2: 0,
             interval_ticks: 0,
             wait_ticks: 0,
             dir_bits: 0,
@@ -241,9 +266,19 @@ impl<'q> Stepper<'q> {
     /// A segment's first event comes one interval after the segment is taken, each next one an
     /// interval later, so the events of a segment of `n` events and interval `i` fall at
     /// `i, 2i, ... n i` from its start: the profile's times ([`prep`]).
+    ///
+    /// **Multi-stepping** (as Marlin does above its `MAX_STEP_ISR_FREQUENCY_1X`): an interrupt
+    /// costs its entry and exit (saving and restoring the registers) on top of the events it
+    /// makes, so at high step rates a segment runs `k = 2^events_per_tick_log2` events per
+    /// interrupt, one interrupt every `k i`: [`StepOut::interval_ticks`] is 0 between the events
+    /// of one interrupt. The events of a group fall at the time of its last one, each at most
+    /// one interrupt period early; a segment's last group may be shorter, and comes as many
+    /// intervals after the one before as it has events, so the segment still ends on its
+    /// profile's time.
     pub fn tick(&mut self, endstop_levels: u8) -> StepOut {
         if self.queue.abort.load(Ordering::Acquire) {
             self.events_left = 0;
+            self.group_left = 0;
             self.wait_ticks = 0;
             self.queue.tail.store(self.queue.head.load(Ordering::Acquire), Ordering::Release);
             self.queue.busy.store(false, Ordering::Release);
@@ -254,38 +289,63 @@ impl<'q> Stepper<'q> {
             return self.wait();
         }
         let mut step_bits = 0;
-        if self.events_left > 0 {
+        if self.group_left > 0 {
             let triggered = (endstop_levels ^ self.block.endstop_invert) & self.block.endstop_mask;
             if triggered != 0 {
                 // Homing: the endstop is reached; the rest of this block is dropped.
                 self.queue.endstop_hit.store(true, Ordering::Release);
                 self.events_left = 0;
+                self.group_left = 0;
             } else {
                 step_bits = self.event();
                 self.events_left -= 1;
+                self.group_left -= 1;
+                if self.group_left > 0 {
+                    return self.out(step_bits, 0);
+                }
             }
         }
         if self.events_left == 0 && !self.next_segment() {
             self.queue.busy.store(false, Ordering::Release);
             return self.out(step_bits, u32::from(IDLE_TICKS));
         }
-        self.wait_ticks = self.interval_ticks;
+        let group = self.events_left.min(1 << self.group_log2) as u8;
+        self.group_left = group;
+        self.wait_ticks = self.interval_ticks * u32::from(group);
         let mut out = self.wait();
         out.step_bits = step_bits;
         out
     }
 
-    /// One Bresenham step event: the step bits of the axes that step.
+    /// One Bresenham step event: the step bits of the motors that step. Unrolled, and only the
+    /// block's moving motors do arithmetic: on an 8-bit chip each is a few dozen cycles of
+    /// 32-bit additions and comparisons, and a loop over the motors would cost as much again
+    /// in indexing (the step interrupt runs this up to 40 000 times a second).
     fn event(&mut self) -> u8 {
+        const _: () = assert!(MOTORS == 7, "event() is unrolled for 7 motors");
         let mut bits = 0;
-        for motor in 0..MOTORS {
-            self.counters[motor] += self.block.steps[motor];
-            if self.counters[motor] >= self.block.events {
-                self.counters[motor] -= self.block.events;
-                bits |= 1 << motor;
-            }
-        }
+        self.motor_event::<0>(&mut bits);
+        self.motor_event::<1>(&mut bits);
+        self.motor_event::<2>(&mut bits);
+        self.motor_event::<3>(&mut bits);
+        self.motor_event::<4>(&mut bits);
+        self.motor_event::<5>(&mut bits);
+        self.motor_event::<6>(&mut bits);
         bits
+    }
+
+    /// Bresenham for motor `M`: add its steps, and step when the counter reaches the events.
+    #[inline(always)]
+    fn motor_event<const M: usize>(&mut self, bits: &mut u8) {
+        if self.moving & (1 << M) != 0 {
+            let counter = self.counters[M] + self.block.steps[M];
+            self.counters[M] = if counter >= self.block.events {
+                *bits |= 1 << M;
+                counter - self.block.events
+            } else {
+                counter
+            };
+        }
     }
 
     /// Takes the next segment, skipping what is left of a homing block that met its endstop.
@@ -294,6 +354,12 @@ impl<'q> Stepper<'q> {
             if segment.starts_block {
                 // Half of the events: the minor axes' steps fall mid-interval (see above).
                 self.counters = [self.block.events / 2; MOTORS];
+                self.moving = 0;
+                for (motor, &steps) in self.block.steps.iter().enumerate() {
+                    if steps != 0 {
+                        self.moving |= 1 << motor;
+                    }
+                }
             }
             if self.block.endstop_mask != 0 && self.queue.endstop_hit.load(Ordering::Acquire) {
                 continue;
@@ -301,6 +367,7 @@ impl<'q> Stepper<'q> {
             self.dir_bits = self.block.dir_bits;
             self.events_left = segment.events;
             self.interval_ticks = segment.interval_ticks;
+            self.group_log2 = segment.events_per_tick_log2;
             return true;
         }
         false

@@ -40,7 +40,9 @@
 //! keeps the plan it started with, which is always safe.
 
 use super::{Segment, StepQueue};
-use crate::limits::{MIN_STEP_TICKS, SEGMENT_S, STEP_BLOCKS, TICKS_PER_S};
+use crate::limits::{
+    MAX_EVENTS_PER_TICK_LOG2, MIN_STEP_TICKS, MULTISTEP_TICKS, SEGMENT_S, STEP_BLOCKS, TICKS_PER_S,
+};
 use crate::math::sqrt;
 use crate::planner::{Block, Planner};
 
@@ -144,6 +146,9 @@ impl Profile {
     }
 }
 
+/// A segment's length in timer ticks.
+const SEGMENT_TICKS: u32 = (SEGMENT_S * TICKS_PER_S as f32) as u32;
+
 /// The block being cut.
 struct Running {
     profile: Profile,
@@ -231,6 +236,11 @@ fn next_segment(run: &mut Running, carry_ticks: &mut f32, starts_block: bool) ->
     let s0_mm = run.events_done as f32 * run.mm_per_event;
     let v0 = run.speed_mm_s;
     let wanted = (v0 * run.events_per_mm_s) as u32;
+    // Whole groups of multi-stepping (`wanted` events in SEGMENT_S are an interval of about
+    // SEGMENT_TICKS / wanted), so each interrupt of the segment makes as many events: only a
+    // block's last segment may end on a shorter group.
+    let group = 1 << events_per_tick_log2(SEGMENT_TICKS / wanted.max(1));
+    let wanted = wanted / group * group;
     let events = wanted.clamp(1, u32::from(u16::MAX)).min(run.events - run.events_done);
     run.events_done += events;
     let s1_mm = if run.events_done == run.events {
@@ -243,7 +253,23 @@ fn next_segment(run: &mut Running, carry_ticks: &mut f32, starts_block: bool) ->
     let total_ticks = run.profile.time_between_s(s0_mm, v0, s1_mm, v1) * TICKS_PER_S as f32 + *carry_ticks;
     let interval = ((total_ticks / events as f32) as u32).max(MIN_STEP_TICKS);
     *carry_ticks = (total_ticks - (interval * events) as f32).max(0.0);
-    Segment { block: run.slot, starts_block, events: events as u16, interval_ticks: interval }
+    Segment {
+        block: run.slot,
+        starts_block,
+        events: events as u16,
+        interval_ticks: interval,
+        events_per_tick_log2: events_per_tick_log2(interval),
+    }
+}
+
+/// Step events per interrupt (log2) for a step interval: the fewest that keep the interrupts
+/// at least [`MULTISTEP_TICKS`] apart.
+fn events_per_tick_log2(interval_ticks: u32) -> u8 {
+    let mut log2 = 0;
+    while log2 < MAX_EVENTS_PER_TICK_LOG2 && interval_ticks << log2 < MULTISTEP_TICKS {
+        log2 += 1;
+    }
+    log2
 }
 
 #[cfg(test)]
