@@ -221,7 +221,13 @@ pub unsafe extern "C" fn step_interrupt() {
     // SAFETY: set before this interrupt was enabled; only this handler uses it.
     let Some(state) = (unsafe { &mut *STEP.0.get() }) else { return };
     state.clock.advance_in_interrupt(state.period_ticks);
-    if state.wait_ticks == 0 {
+    if state.wait_ticks != 0 {
+        schedule(state);
+        return;
+    }
+    // At high step rates the core asks for several step events in one interrupt (an interval
+    // of 0: multi-stepping): each is pulsed in turn, the next computed between them.
+    loop {
         let out = state.stepper.tick(endstops());
         // Per port, the BSRR words that raise the STEP pins due now, then lower them and set
         // the DIR pins that change: one write per port and edge, none when idle.
@@ -249,8 +255,11 @@ pub unsafe extern "C" fn step_interrupt() {
                 write_port(port, bits);
             }
         }
-        state.wait_ticks = u32::from(out.interval_ticks);
-        schedule(state);
+        let last = out.interval_ticks != 0;
+        if last {
+            state.wait_ticks = u32::from(out.interval_ticks);
+            schedule(state);
+        }
         if out.step_bits != 0 {
             step_timer::wait_in_interrupt(STEP_PULSE_CYCLES);
         }
@@ -259,8 +268,9 @@ pub unsafe extern "C" fn step_interrupt() {
                 write_port(port, bits);
             }
         }
-    } else {
-        schedule(state);
+        if last {
+            return;
+        }
     }
 }
 
