@@ -98,7 +98,7 @@ fn endstops() -> u8 {
 #[no_mangle]
 pub extern "C" fn main() -> ! {
     let by_watchdog = watchdog::start();
-    for d in pins::DRIVERS {
+    for d in &pins::DRIVERS[..config::DRIVERS] {
         // Disabled (ENABLE high) before the pins become outputs, so no motor twitches.
         d.enable.write(true);
         d.enable.make_output();
@@ -160,9 +160,9 @@ fn apply(out: &gweave_controller::Outputs) {
     let d9 = if config::SETTINGS.hotends == 2 { hotend1 } else { out.fan_duty };
     clock::set_duty([hotend0, bed, d9]);
     pins::LED.write(hotend0 | hotend1 | bed != 0);
-    for (axis, d) in pins::DRIVERS.iter().enumerate().take(gweave_controller::AXES) {
+    for (motor, d) in pins::DRIVERS[..config::DRIVERS].iter().enumerate() {
         // ENABLE is active low.
-        d.enable.write(out.steppers_enabled & (1 << axis) == 0);
+        d.enable.write(out.steppers_enabled & (1 << motor) == 0);
     }
 }
 
@@ -178,8 +178,8 @@ pub unsafe extern "avr-interrupt" fn __vector_17() {
     let Some(stepper) = (unsafe { &mut *STEPPER.0.get() }) else { return };
     let out = stepper.tick(endstops());
     step_timer::set_next_in_interrupt(out.interval_ticks);
-    for (axis, d) in pins::DRIVERS.iter().enumerate().take(gweave_controller::AXES) {
-        if out.step_bits & (1 << axis) != 0 {
+    for (motor, d) in pins::DRIVERS[..config::DRIVERS].iter().enumerate() {
+        if out.step_bits & (1 << motor) != 0 {
             // The core asks for the enables after its turn, but a block it queued in that turn
             // may start here first: a driver is enabled before its first step, or the step
             // is lost. (ENABLE is active low.)
@@ -190,9 +190,9 @@ pub unsafe extern "avr-interrupt" fn __vector_17() {
     // Between raising and lowering a STEP pin the loops over the drivers take longer than the
     // 1.9 us a DRV8825 needs (the emulated board's test
     // `a_g1_move_gives_exactly_its_steps_on_every_axis` checks every pulse for 2 us).
-    for (axis, d) in pins::DRIVERS.iter().enumerate().take(gweave_controller::AXES) {
+    for (motor, d) in pins::DRIVERS[..config::DRIVERS].iter().enumerate() {
         d.step.write_in_interrupt(false);
-        d.dir.write_in_interrupt(out.dir_bits & (1 << axis) != 0);
+        d.dir.write_in_interrupt(out.dir_bits & (1 << motor) != 0);
     }
 }
 
