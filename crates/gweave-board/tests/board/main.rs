@@ -4,5 +4,6 @@
 mod common;
 mod faults;
 mod heating;
+mod mixing;
 mod motion;
 mod protocol;
