@@ -70,7 +70,6 @@ FW_PACKAGES := rustc-web cargo-web rust-web-src gcc-avr avr-libc binutils-avr si
 FW_OUT := firmware/out
 # Its own target folder: another compiler and another target than the workspace's.
 FW_TARGET_DIR ?= $(CURDIR)/target/avr
-FW_ELF := $(FW_OUT)/gweave-ramps.elf
 
 firmware-deps:
 	@missing=""; for p in $(FW_PACKAGES); do \
@@ -81,13 +80,23 @@ firmware-deps:
 	  apt-get install -y -q --no-install-recommends $$missing || { apt-get update -q && apt-get install -y -q --no-install-recommends $$missing; }; \
 	else echo "firmware-deps: missing$$missing (install them as root: apt-get install$$missing)"; exit 1; fi
 
-firmware: firmware-deps
-	cd firmware/ramps && CARGO_TARGET_DIR=$(FW_TARGET_DIR) RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 \
-	  /usr/bin/cargo build --release -q
+# One image per printer file: $(call fw_image,NAME,TOML) builds firmware/TOML into
+# $(FW_OUT)/NAME.elf and .hex, in a target folder of its own (the printer's settings are
+# constants of the build, so two images sharing a folder would rebuild each other).
+define fw_image
+	cd firmware/ramps && GWEAVE_PRINTER=$(2) CARGO_TARGET_DIR=$(FW_TARGET_DIR)$(3) RUSTC=/usr/bin/rustc \
+	  RUSTC_BOOTSTRAP=1 /usr/bin/cargo build --release -q
 	@mkdir -p $(FW_OUT)
-	cp $(FW_TARGET_DIR)/avr-none/release/gweave-ramps.elf $(FW_ELF)
-	avr-objcopy -O ihex -R .eeprom $(FW_ELF) $(FW_OUT)/gweave-ramps.hex
-	@avr-size $(FW_ELF)
+	cp $(FW_TARGET_DIR)$(3)/avr-none/release/gweave-ramps.elf $(FW_OUT)/$(1).elf
+	avr-objcopy -O ihex -R .eeprom $(FW_OUT)/$(1).elf $(FW_OUT)/$(1).hex
+	@avr-size $(FW_OUT)/$(1).elf
+endef
+
+# The default printer (firmware/printer.toml), and the same printer with a 4-input mixing
+# hotend (firmware/printer-mixing.toml).
+firmware: firmware-deps
+	$(call fw_image,gweave-ramps,printer.toml,)
+	$(call fw_image,gweave-ramps-mixing,printer-mixing.toml,-mixing)
 
 # The same core for a Cortex-M4F (STM32F405/F407, BTT SKR Pro's pin map; docs/firmware.md):
 # the ELF for QEMU and debuggers, the raw .bin a board's bootloader or st-flash writes at

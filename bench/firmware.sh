@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The firmware's budgets (issue 37), beside the goals: flash and static RAM from avr-size
+# The firmware's budgets (issues 37 and 38), beside the goals: flash and static RAM from avr-size
 # (Marlin 1.1.9 for this board with EEPROM settings: 63.8 KB flash, 2.7 KB static RAM; at most
 # 64 KB and 4 KB), the stack's high-water mark, the longest step interrupt and the highest
 # step rate held (GRBL: 30 kHz on one axis; goal 20 kHz on three), measured on the emulated
@@ -7,14 +7,23 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 ELF="$ROOT/firmware/out/gweave-ramps.elf"
-[ -s "$ELF" ] || { echo "no $ELF: run make firmware first"; exit 1; }
+MIXING_ELF="$ROOT/firmware/out/gweave-ramps-mixing.elf"
+for f in "$ELF" "$MIXING_ELF"; do [ -s "$f" ] || { echo "no $f: run make firmware first"; exit 1; }; done
 
-read -r text data bss < <(avr-size "$ELF" | awk 'NR == 2 { print $1, $2, $3 }')
 kb() { python3 -c "print(f'{$1/1024:.1f}')"; }
-echo "== firmware: $(basename "$ELF")"
-printf "%-26s %7s KB   goal <= 64 KB (Marlin 1.1.9: 63.8 KB)\n" "flash (text + data)" "$(kb $((text + data)))"
-printf "%-26s %7s KB   goal <= 4 KB (Marlin 1.1.9: 2.7 KB)\n" "static RAM (data + bss)" "$(kb $((data + bss)))"
-printf "%-26s %7s KB   of 8 KB\n" "RAM left for the stack" "$(kb $((8192 - data - bss)))"
+# Flash and static RAM of one image against its goals: flash_goal_kb ram_goal_kb reference.
+sizes() {
+  local elf="$1" flash_goal="$2" ram_goal="$3" reference="$4" text data bss
+  read -r text data bss < <(avr-size "$elf" | awk 'NR == 2 { print $1, $2, $3 }')
+  echo "== firmware: $(basename "$elf")"
+  printf "%-26s %7s KB   goal <= %s KB%s\n" "flash (text + data)" "$(kb $((text + data)))" "$flash_goal" "$reference"
+  printf "%-26s %7s KB   goal <= %s KB\n" "static RAM (data + bss)" "$(kb $((data + bss)))" "$ram_goal"
+  printf "%-26s %7s KB   of 8 KB\n" "RAM left for the stack" "$(kb $((8192 - data - bss)))"
+}
+# The base image (issue 37), and the machines image (issue 38: a 4-input mixing hotend on E0,
+# E1 and AUX-2).
+sizes "$ELF" 64 4 " (Marlin 1.1.9: 63.8 KB, 2.7 KB RAM)"
+sizes "$MIXING_ELF" 128 6 ""
 
 # The 32-bit build (`make firmware-cortex`), beside the AVR's figures above: the same core for
 # a Cortex-M4F, against the smallest chip of the boards it is meant for (docs/firmware.md).

@@ -1,5 +1,6 @@
-//! Reads the printer's settings (`../printer.toml`) at build time and writes them as Rust
-//! constants into `$OUT_DIR/printer.rs`, which `src/config.rs` includes.
+//! Reads the printer's settings (`../printer.toml`, or the file `GWEAVE_PRINTER` names, such as
+//! `../printer-mixing.toml` for `make firmware`'s mixing image) at build time and writes them
+//! as Rust constants into `$OUT_DIR/printer.rs`, which `src/main.rs` includes.
 //!
 //! The file is a small subset of TOML (sections, `key = value` with numbers, strings, booleans
 //! and flat arrays), read here by hand so that the firmware build needs no parser crate. Every
@@ -39,6 +40,7 @@ enum Kind {
 const KEYS: &[(&str, &str, Kind)] = &[
     ("board", "baud", Kind::Board),
     ("board", "layout", Kind::Board),
+    ("board", "mixing_inputs", Kind::Board),
     ("motion", "steps_per_mm", Kind::Floats { field: "steps_per_mm", len: 4, min: 1.0, max: 10_000.0 }),
     ("motion", "max_feed_mm_s", Kind::Floats { field: "max_feed_mm_s", len: 4, min: 0.1, max: 1_000.0 }),
     (
@@ -61,24 +63,36 @@ const KEYS: &[(&str, &str, Kind)] = &[
     ("heaters", "max_temp_c", Kind::Floats { field: "max_temp_c", len: 3, min: 0.0, max: 400.0 }),
 ];
 
+/// The file read when `GWEAVE_PRINTER` names none, relative to `firmware/`.
+const DEFAULT_PRINTER: &str = "printer.toml";
+
 fn main() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../printer.toml");
+    println!("cargo::rerun-if-env-changed=GWEAVE_PRINTER");
+    let name = std::env::var("GWEAVE_PRINTER").unwrap_or_else(|_| DEFAULT_PRINTER.to_string());
+    let path = format!("{}/../{name}", env!("CARGO_MANIFEST_DIR"));
     println!("cargo::rerun-if-changed={path}");
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| fail(0, &format!("cannot read it: {e}")));
+    let text =
+        std::fs::read_to_string(&path).unwrap_or_else(|e| fail(&name, 0, &format!("cannot read it: {e}")));
     let out = std::env::var("OUT_DIR").expect("cargo sets OUT_DIR");
-    std::fs::write(format!("{out}/printer.rs"), generate(&text)).expect("OUT_DIR is writable");
+    // Written aside, then renamed over: a reader never sees half a file, and a target folder
+    // seeded by hard links from another keeps the other's copy.
+    let (tmp, dest) = (format!("{out}/printer.rs.tmp"), format!("{out}/printer.rs"));
+    std::fs::write(&tmp, generate(&name, &text)).expect("OUT_DIR is writable");
+    std::fs::rename(&tmp, &dest).expect("OUT_DIR is writable");
 }
 
 /// Stop the build with a message naming the file and line.
-fn fail(line: usize, msg: &str) -> ! {
-    eprintln!("firmware/printer.toml:{line}: {msg}");
+fn fail(file: &str, line: usize, msg: &str) -> ! {
+    eprintln!("firmware/{file}:{line}: {msg}");
     std::process::exit(1);
 }
 
 /// The Rust source of the settings in `text`.
-fn generate(text: &str) -> String {
+fn generate(file: &str, text: &str) -> String {
+    let fail = |line: usize, msg: &str| -> ! { fail(file, line, msg) };
     let mut baud = 250_000u32;
     let mut hotends = 1u8;
+    let mut mixing_inputs = 0u8;
     let mut fields = String::new();
     let mut section = String::new();
     let mut seen: Vec<(String, String)> = Vec::new();
@@ -113,25 +127,31 @@ fn generate(text: &str) -> String {
                 Value::Number(b) if b == 250_000.0 || b == 115_200.0 => baud = b as u32,
                 _ => fail(n, "baud is 250000 or 115200"),
             },
+            Kind::Board if key == "mixing_inputs" => match value {
+                // 0: a plain extruder; 2 to 4 inputs of a mixing hotend (E0, E1 on the
+                // extruder sockets, E2, E3 on AUX-2).
+                Value::Number(k) if [0.0, 2.0, 3.0, 4.0].contains(&k) => mixing_inputs = k as u8,
+                _ => fail(n, "mixing_inputs is 0 (no mixing hotend), 2, 3 or 4"),
+            },
             Kind::Board => match value {
                 Value::Text(t) if t == "EFB" => hotends = 1,
                 Value::Text(t) if t == "EEB" => hotends = 2,
                 _ => fail(n, "layout is \"EFB\" or \"EEB\""),
             },
             Kind::Float { field, min, max } => {
-                let v = number(n, key, &value, *min, *max);
+                let v = number(file, n, key, &value, *min, *max);
                 let _ = writeln!(fields, "    {field}: {v:?},");
             }
             Kind::Floats { field, len, min, max } => {
-                let vs: Vec<String> = list(n, key, &value, *len)
+                let vs: Vec<String> = list(file, n, key, &value, *len)
                     .iter()
-                    .map(|v| format!("{:?}", number(n, key, v, *min, *max)))
+                    .map(|v| format!("{:?}", number(file, n, key, v, *min, *max)))
                     .collect();
                 let _ = writeln!(fields, "    {field}: [{}],", vs.join(", "));
             }
             Kind::Bits { field, len } => {
                 let mut bits = 0u8;
-                for (axis, v) in list(n, key, &value, *len).iter().enumerate() {
+                for (axis, v) in list(file, n, key, &value, *len).iter().enumerate() {
                     match v {
                         Value::Bool(true) => bits |= 1 << axis,
                         Value::Bool(false) => {}
@@ -141,7 +161,7 @@ fn generate(text: &str) -> String {
                 let _ = writeln!(fields, "    {field}: {bits:#06b},");
             }
             Kind::Bytes { field, len, allowed } => {
-                let vs: Vec<String> = list(n, key, &value, *len)
+                let vs: Vec<String> = list(file, n, key, &value, *len)
                     .iter()
                     .map(|v| match v {
                         Value::Number(x) if allowed.iter().any(|&a| f64::from(a) == *x) => format!("{x}"),
@@ -165,25 +185,30 @@ fn generate(text: &str) -> String {
                 let _ = writeln!(fields, "    {field}: [{}],", axes.join(", "));
             }
             Kind::Pid { field } => {
-                let g: Vec<f64> =
-                    list(n, key, &value, 3).iter().map(|v| number(n, key, v, 0.0, 10_000.0)).collect();
+                let g: Vec<f64> = list(file, n, key, &value, 3)
+                    .iter()
+                    .map(|v| number(file, n, key, v, 0.0, 10_000.0))
+                    .collect();
                 let _ = writeln!(
                     fields,
-                    "    {field}: Pid {{ kp: {:?}, ki: {:?}, kd: {:?} }},",
+                    "    {field}: gweave_controller::settings::Pid {{ kp: {:?}, ki: {:?}, kd: {:?} }},",
                     g[0], g[1], g[2]
                 );
             }
         }
     }
+    // The drivers the step interrupt runs: X, Y, Z, E0, and the other inputs of a mixing hotend.
+    let drivers = 4 + usize::from(mixing_inputs.max(1)) - 1;
     format!(
-        "// Generated by build.rs from firmware/printer.toml: edit that file, not this one.\n\
-         use gweave_controller::settings::Pid;\n\
+        "// Generated by build.rs from firmware/{file}: edit that file, not this one.\n\
          use gweave_controller::Settings;\n\n\
          /// The serial line's speed, baud.\n\
          pub const BAUD: u32 = {baud};\n\n\
+         /// The driver sockets used, in the order X, Y, Z, E0, E1, E2, E3.\n\
+         pub const DRIVERS: usize = {drivers};\n\n\
          /// The printer's settings (the controller's defaults where the file says nothing).\n\
          #[allow(clippy::needless_update)]\n\
-         pub const SETTINGS: Settings = Settings {{\n    hotends: {hotends},\n{fields}    ..Settings::DEFAULT\n}};\n"
+         pub const SETTINGS: Settings = Settings {{\n    hotends: {hotends},\n    mixing_inputs: {mixing_inputs},\n{fields}    ..Settings::DEFAULT\n}};\n"
     )
 }
 
@@ -215,7 +240,8 @@ fn parse_value(text: &str) -> Option<Value> {
     }
 }
 
-fn number(line: usize, key: &str, value: &Value, min: f64, max: f64) -> f64 {
+fn number(file: &str, line: usize, key: &str, value: &Value, min: f64, max: f64) -> f64 {
+    let fail = |line: usize, msg: &str| -> ! { fail(file, line, msg) };
     match value {
         Value::Number(v) if (min..=max).contains(v) => *v,
         Value::Number(v) => fail(line, &format!("{key}: {v} is outside {min}..={max}")),
@@ -223,9 +249,9 @@ fn number(line: usize, key: &str, value: &Value, min: f64, max: f64) -> f64 {
     }
 }
 
-fn list<'a>(line: usize, key: &str, value: &'a Value, len: usize) -> &'a [Value] {
+fn list<'a>(file: &str, line: usize, key: &str, value: &'a Value, len: usize) -> &'a [Value] {
     match value {
         Value::List(items) if items.len() == len => items,
-        _ => fail(line, &format!("{key} is a list of {len} values")),
+        _ => fail(file, line, &format!("{key} is a list of {len} values")),
     }
 }

@@ -178,7 +178,7 @@ impl Board {
         self.run_until_line(|l| l.starts_with("ok"), timeout_s)
     }
 
-    /// One stepper socket (0 X, 1 Y, 2 Z, 3 E0, 4 E1) and its axis.
+    /// One stepper socket (0 X, 1 Y, 2 Z, 3 E0, 4 E1, 5 E2, 6 E3) and its axis.
     pub fn axis(&self, socket: usize) -> &Axis {
         &self.avr.wires().axes[socket.min(DRIVERS - 1)]
     }

@@ -11,19 +11,22 @@ use gweave_sim::{BetaThermistor, Heater, HeaterConfig, SensorFault};
 
 use crate::sim::{Drive, PortPin, Wires};
 
-/// The driver sockets, in the order X, Y, Z, E0, E1.
-pub const DRIVERS: usize = 5;
+/// The driver sockets, in the order X, Y, Z, E0, E1, then E2 and E3 of a mixing hotend on
+/// drivers wired to the AUX-2 header (the mixing image's; the base image leaves them alone).
+pub const DRIVERS: usize = 7;
 /// Axis names, in socket order.
-pub const AXIS_NAMES: [&str; DRIVERS] = ["X", "Y", "Z", "E0", "E1"];
+pub const AXIS_NAMES: [&str; DRIVERS] = ["X", "Y", "Z", "E0", "E1", "E2", "E3"];
 
 /// STEP, DIR, ENABLE of each socket (D54/D55/D38, D60/D61/D56, D46/D48/D62, D26/D28/D24,
-/// D36/D34/D30).
+/// D36/D34/D30; on AUX-2, D63/D40/D59 and D65/D42/D64).
 pub const STEP_DIR_ENABLE: [[PortPin; 3]; DRIVERS] = [
     [PortPin::new(b'F', 0), PortPin::new(b'F', 1), PortPin::new(b'D', 7)],
     [PortPin::new(b'F', 6), PortPin::new(b'F', 7), PortPin::new(b'F', 2)],
     [PortPin::new(b'L', 3), PortPin::new(b'L', 1), PortPin::new(b'K', 0)],
     [PortPin::new(b'A', 4), PortPin::new(b'A', 6), PortPin::new(b'A', 2)],
     [PortPin::new(b'C', 1), PortPin::new(b'C', 3), PortPin::new(b'C', 7)],
+    [PortPin::new(b'K', 1), PortPin::new(b'G', 1), PortPin::new(b'F', 5)],
+    [PortPin::new(b'K', 3), PortPin::new(b'L', 7), PortPin::new(b'K', 2)],
 ];
 
 /// Minimum endstops of X, Y, Z: D3, D14, D18.

@@ -84,22 +84,30 @@ impl Io for Ramps {
     }
 }
 
-/// Runs `$body` once for each stepper socket the core drives (X, Y, Z, E0), with `$axis` a
-/// constant: unrolled by hand, so each pin is a fixed port and bit and its write a couple of
-/// instructions. (A loop over the table made the step interrupt read each pin's port from RAM
-/// and shift its bit into place at run time: hundreds of cycles per interrupt.)
+/// Runs `$body` once for each stepper socket the build drives (X, Y, Z, E0, then a mixing
+/// hotend's other inputs: `config::DRIVERS` of them), with `$axis` a constant: unrolled by hand,
+/// so each pin is a fixed port and bit and its write a couple of instructions, and a socket the
+/// build does not use compiles to nothing. (A loop over the table made the step interrupt read
+/// each pin's port from RAM and shift its bit into place at run time: hundreds of cycles per
+/// interrupt.)
 macro_rules! each_driver {
     (|$axis:ident, $d:ident| $body:block) => {{
-        const _: () = assert!(gweave_controller::AXES == 4);
+        const _: () = assert!(config::DRIVERS <= pins::DRIVERS.len());
+        const _: () = assert!(pins::DRIVERS.len() == gweave_controller::MOTORS);
         each_driver!(@one 0, $axis, $d, $body);
         each_driver!(@one 1, $axis, $d, $body);
         each_driver!(@one 2, $axis, $d, $body);
         each_driver!(@one 3, $axis, $d, $body);
+        each_driver!(@one 4, $axis, $d, $body);
+        each_driver!(@one 5, $axis, $d, $body);
+        each_driver!(@one 6, $axis, $d, $body);
     }};
     (@one $i:literal, $axis:ident, $d:ident, $body:block) => {{
         const $axis: usize = $i;
-        let $d = pins::DRIVERS[$axis];
-        $body
+        if $axis < config::DRIVERS {
+            let $d = pins::DRIVERS[$axis];
+            $body
+        }
     }};
 }
 
@@ -113,7 +121,7 @@ fn endstops() -> u8 {
 #[no_mangle]
 pub extern "C" fn main() -> ! {
     let by_watchdog = watchdog::start();
-    for d in pins::DRIVERS {
+    for d in &pins::DRIVERS[..config::DRIVERS] {
         // Disabled (ENABLE high) before the pins become outputs, so no motor twitches.
         d.enable.write(true);
         d.enable.make_output();
@@ -175,9 +183,9 @@ fn apply(out: &gweave_controller::Outputs) {
     let d9 = if config::SETTINGS.hotends == 2 { hotend1 } else { out.fan_duty };
     clock::set_duty([hotend0, bed, d9]);
     pins::LED.write(hotend0 | hotend1 | bed != 0);
-    for (axis, d) in pins::DRIVERS.iter().enumerate().take(gweave_controller::AXES) {
+    for (motor, d) in pins::DRIVERS[..config::DRIVERS].iter().enumerate() {
         // ENABLE is active low.
-        d.enable.write(out.steppers_enabled & (1 << axis) == 0);
+        d.enable.write(out.steppers_enabled & (1 << motor) == 0);
     }
 }
 

@@ -18,6 +18,7 @@ const PORT_C: Port = Port(0x26);
 const PORT_D: Port = Port(0x29);
 const PORT_E: Port = Port(0x2C);
 const PORT_F: Port = Port(0x2F);
+const PORT_G: Port = Port(0x32);
 const PORT_H: Port = Port(0x100);
 const PORT_J: Port = Port(0x103);
 const PORT_K: Port = Port(0x106);
@@ -94,14 +95,21 @@ pub struct Driver {
     pub enable: Pin,
 }
 
-/// The five driver sockets, in the order X, Y, Z, E0, E1 (D54/D55/D38, D60/D61/D56,
-/// D46/D48/D62, D26/D28/D24, D36/D34/D30).
-pub const DRIVERS: [Driver; 5] = [
+/// The driver sockets, in the order X, Y, Z, E0, E1 (D54/D55/D38, D60/D61/D56, D46/D48/D62,
+/// D26/D28/D24, D36/D34/D30), then the inputs E2 and E3 of a mixing hotend on external driver
+/// boards wired to the AUX-2 header (STEP/DIR/ENABLE D63/D40/D59 and D65/D42/D64: A9, D40, A5,
+/// A11, D42, A10). RAMPS has only five sockets and Marlin's `pins_RAMPS.h` names no E2 or E3
+/// pins; AUX-2's pins are the ones it leaves free when no TMC driver is wired over SPI
+/// (`HAS_FREE_AUX2_PINS`), and they are set up only in a build whose printer has those inputs
+/// (`config::DRIVERS`), so the base image leaves the header alone.
+pub const DRIVERS: [Driver; 7] = [
     Driver { step: Pin::new(PORT_F, 0), dir: Pin::new(PORT_F, 1), enable: Pin::new(PORT_D, 7) },
     Driver { step: Pin::new(PORT_F, 6), dir: Pin::new(PORT_F, 7), enable: Pin::new(PORT_F, 2) },
     Driver { step: Pin::new(PORT_L, 3), dir: Pin::new(PORT_L, 1), enable: Pin::new(PORT_K, 0) },
     Driver { step: Pin::new(PORT_A, 4), dir: Pin::new(PORT_A, 6), enable: Pin::new(PORT_A, 2) },
     Driver { step: Pin::new(PORT_C, 1), dir: Pin::new(PORT_C, 3), enable: Pin::new(PORT_C, 7) },
+    Driver { step: Pin::new(PORT_K, 1), dir: Pin::new(PORT_G, 1), enable: Pin::new(PORT_F, 5) },
+    Driver { step: Pin::new(PORT_K, 3), dir: Pin::new(PORT_L, 7), enable: Pin::new(PORT_K, 2) },
 ];
 
 /// Minimum endstops of X, Y and Z: D3, D14, D18.

@@ -77,7 +77,7 @@ fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
     // Still answering, and nothing moved.
     let reply = board.command("M105", 1.0).unwrap();
     assert!(reply.last().unwrap().starts_with("ok T:"), "{reply:?}");
-    assert_eq!(board.net_steps(), [0; 5]);
+    assert_eq!(board.net_steps(), [0; 7]);
 }
 
 #[test]

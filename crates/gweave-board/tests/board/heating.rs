@@ -54,7 +54,7 @@ fn an_open_thermistor_halts_with_the_heaters_off() {
     let reply = board.command("G1 X10 F3000", 1.0).unwrap();
     assert_eq!(reply, ["Error:Printer halted. kill() called!", "ok"]);
     board.run_for(1.0).unwrap();
-    assert_eq!(board.net_steps(), [0; 5]);
+    assert_eq!(board.net_steps(), [0; 7]);
 }
 
 #[test]

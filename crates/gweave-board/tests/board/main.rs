@@ -4,6 +4,7 @@
 mod common;
 mod faults;
 mod heating;
+mod mixing;
 mod motion;
 mod protocol;
 mod step_timing;

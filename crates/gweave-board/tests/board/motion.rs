@@ -2,7 +2,7 @@
 
 use gweave_board::Wiring;
 
-/// Sockets X, Y, Z, E0, E1.
+/// Sockets X, Y, Z, E0, E1, E2, E3.
 const X: usize = 0;
 const Y: usize = 1;
 const Z: usize = 2;
@@ -15,7 +15,7 @@ fn a_g1_move_gives_exactly_its_steps_on_every_axis() {
         assert_eq!(board.command(line, 30.0).unwrap().last().unwrap(), "ok", "{line}");
     }
     // 7.5 mm * 80, -5 mm * 80, 0.5 mm * 400 (the default printer's steps/mm).
-    assert_eq!(board.net_steps(), [600, -400, 200, 0, 0]);
+    assert_eq!(board.net_steps(), [600, -400, 200, 0, 0, 0, 0]);
     assert_eq!(board.axis(X).steps_plus, 800);
     assert_eq!(board.axis(X).steps_minus, 200);
     for socket in [X, Y, Z] {

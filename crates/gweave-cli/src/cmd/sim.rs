@@ -182,6 +182,10 @@ fn print_core(out: &mut dyn Write, input: &Path, r: &CoreReport) -> io::Result<(
 fn run_file(machine: &mut Machine, input: &Path, quiet: Quiet) -> Result<Vec<String>> {
     // The file is read as `stats` reads it: as the firmware its flavour names.
     machine.read_as(read_firmware(input).with_context(|| format!("reading {}", input.display()))?);
+    // A rotary program's F words follow the convention its header declares.
+    if let Some(rotary) = gweave::rotary::cylinder::RotaryConfig::from_file_header(input) {
+        machine.declare_rotary(rotary);
+    }
     let file = container::open(input).with_context(|| format!("opening {}", input.display()))?;
     let len = file.text_len.unwrap_or(0);
     let mut bar = quiet.bar();

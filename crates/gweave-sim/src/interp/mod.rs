@@ -36,6 +36,7 @@ mod host;
 mod motion;
 mod pause;
 mod report;
+mod rotary_feed;
 mod sd;
 mod settings;
 mod warning_text;
@@ -113,6 +114,8 @@ pub struct Machine {
     inkjet: Option<InkjetCanvas>,
     /// The recoat check of a binder-jet machine whose printhead has a `[recoat]` table.
     recoat: Option<RecoatCheck>,
+    /// The feed convention a rotary program declared ([`Machine::declare_rotary`]).
+    declared_feed: Option<rotary_feed::DeclaredFeed>,
     /// An `M0` with the seed's behaviour ended the program (see [`Machine::program_ended`]).
     program_ended: bool,
     /// Physical minus logical X Y Z: `G92` moves the logical origin, homing resets it.
@@ -205,6 +208,7 @@ impl Machine {
             thermal,
             inkjet,
             recoat,
+            declared_feed: None,
             program_ended: false,
             shift_mm: [0.0; 3],
             moved_since_m400: true,
@@ -240,6 +244,13 @@ impl Machine {
     /// serial line is read as Marlin reads it.
     pub fn read_as(&mut self, firmware: gweave::firmware::Firmware) {
         self.core.read_as(firmware);
+    }
+
+    /// Reads the F of the moves to come as the rotary program's header declares them
+    /// (`gweave::rotary::cylinder::RotaryConfig::from_file_header`): a NIST or combined feed
+    /// with the rotary axis A in degrees; inverse time is not read (see `rotary_feed.rs`).
+    pub fn declare_rotary(&mut self, machine: gweave::rotary::cylinder::RotaryConfig) {
+        self.declared_feed = rotary_feed::DeclaredFeed::new(machine);
     }
 
     /// Lines printed at power-on, as Marlin does: `start`, then `echo:` lines.
