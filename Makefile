@@ -84,6 +84,13 @@ firmware: firmware-deps
 	cp $(FW_TARGET_DIR)/avr-none/release/gweave-ramps.elf $(FW_ELF)
 	avr-objcopy -O ihex -R .eeprom $(FW_ELF) $(FW_OUT)/gweave-ramps.hex
 	@avr-size $(FW_ELF)
+	# The inkjet printer's image (M700 through an InkShield, docs/firmware.md "Inkjet"): the
+	# same folder and `core`, the feature on.
+	cd firmware/ramps && CARGO_TARGET_DIR=$(FW_TARGET_DIR) RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 \
+	  /usr/bin/cargo build --release -q --features inkjet
+	cp $(FW_TARGET_DIR)/avr-none/release/gweave-ramps.elf $(FW_OUT)/gweave-ramps-inkjet.elf
+	avr-objcopy -O ihex -R .eeprom $(FW_OUT)/gweave-ramps-inkjet.elf $(FW_OUT)/gweave-ramps-inkjet.hex
+	@avr-size $(FW_OUT)/gweave-ramps-inkjet.elf
 
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli
