@@ -4,5 +4,6 @@
 mod common;
 mod faults;
 mod heating;
+mod inkjet;
 mod motion;
 mod protocol;
