@@ -10,8 +10,8 @@ use std::path::Path;
 
 use crate::ramps::{Axis, Plant, THERMISTOR_ADC};
 use crate::ramps::{
-    Shield, Wiring, DRIVERS, MOSFETS, PIN_DIR, PIN_ENABLE, PIN_INK_ADDRESS, PIN_INK_PULSE, PIN_MOSFET, PIN_STEP,
-    STEP_DIR_ENABLE,
+    Shield, Wiring, DRIVERS, MOSFETS, PIN_DIR, PIN_ENABLE, PIN_INK_ADDRESS, PIN_INK_PULSE, PIN_MOSFET,
+    PIN_STEP, STEP_DIR_ENABLE,
 };
 use crate::sim::{Avr, LoadError, Stopped};
 

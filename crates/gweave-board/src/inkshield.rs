@@ -188,7 +188,10 @@ mod tests {
         assert_eq!(got, vec![(0, 0x801, 1_000), (1, 8, 2_000), (0, 32, 13_800)]);
         assert_eq!(fires[0].steps, [1, 2, 3]);
         let t = s.timing;
-        assert_eq!((t.width_min, t.width_max, t.gap_min, t.refill_min), (Some(82), Some(82), Some(18), Some(12_800)));
+        assert_eq!(
+            (t.width_min, t.width_max, t.gap_min, t.refill_min),
+            (Some(82), Some(82), Some(18), Some(12_800))
+        );
         assert_eq!(t.faults, 0);
     }
 

@@ -271,7 +271,9 @@ impl Wires for Shield {
                 let steps = std::array::from_fn(|a| self.axes[a].position);
                 self.inkshield.pulse_changed((index - PIN_INK_PULSE) as usize, high, cycle, steps);
             }
-            _ if index >= PIN_INK_ADDRESS => self.inkshield.address_changed((index - PIN_INK_ADDRESS) as usize, high),
+            _ if index >= PIN_INK_ADDRESS => {
+                self.inkshield.address_changed((index - PIN_INK_ADDRESS) as usize, high)
+            }
             _ => {
                 let m = &mut self.mosfets[i - 3 * DRIVERS];
                 match (m.on_since, high) {

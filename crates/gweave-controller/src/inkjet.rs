@@ -5,10 +5,10 @@
 //! **The physics.** The C6602 is a thermal inkjet: under each of its 12 nozzles (one column at
 //! 96 dpi, 0.2646 mm apart) sits a thin-film resistor. A pulse of current of a few microseconds
 //! boils a film of ink on it; the vapour bubble pushes one drop (about 160 pl) out of the
-//! nozzle, and capillarity refills the chamber. The InkShield raises the cartridge's supply to
-//! about 20 V and puts a 4-to-16 decoder in front of the resistors: four *address* lines (A, B,
-//! C, D) say which nozzle, and the *pulse* line gates the current. Hence the timing (the
-//! InkShield library, `NicholasCLewis/InkShield`, and the patch):
+//! nozzle, and capillarity refills the chamber. The InkShield raises the cartridge's supply
+//! above the board's 5 V and puts a 4-to-16 decoder in front of the resistors: four *address*
+//! lines (A, B, C, D) say which nozzle, and the *pulse* line gates the current. Hence the
+//! timing (the InkShield library, `NicholasCLewis/InkShield`, and the patch):
 //!
 //! - a nozzle fires with a pulse of [`PULSE_US`] (5 us): shorter does not boil the film, longer
 //!   heats the resistor and the ink for nothing and wears the resistor;

@@ -2,8 +2,8 @@
 //! RAMPS: the pins that fire an HP C6602 cartridge, for the core's `M700`
 //! (`gweave_controller::inkjet` explains the printhead and the command).
 //!
-//! The shield raises the cartridge's supply to about 20 V and switches one nozzle's resistor
-//! at a time through a 4-to-16 decoder: four address lines (A, B, C, D: the nozzle's number in
+//! The shield raises the cartridge's supply above the board's 5 V and switches one nozzle's
+//! resistor at a time through a 4-to-16 decoder: four address lines (A, B, C, D: the nozzle's number in
 //! binary) choose the resistor, the pulse line switches the current through it. A nozzle
 //! fires as the library and Steve Kelly's Marlin patch do it: set the address, raise the pulse
 //! for 5 us, lower it, clear the address; the next nozzle follows, in address order.

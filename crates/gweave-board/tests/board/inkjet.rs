@@ -99,7 +99,12 @@ fn assert_same_drops(gcode: &str) -> (usize, u64) {
     let got = board_layers(&fires, &want);
     assert_eq!(got.len(), want.len());
     for (k, (g, w)) in got.iter().zip(&want).enumerate() {
-        assert!((g.z_mm - w.z_mm).abs() < 1e-9, "layer {k}: Z {} on the board, {} in the sim", g.z_mm, w.z_mm);
+        assert!(
+            (g.z_mm - w.z_mm).abs() < 1e-9,
+            "layer {k}: Z {} on the board, {} in the sim",
+            g.z_mm,
+            w.z_mm
+        );
         assert_eq!(g.heads, w.heads, "layer {k}");
     }
     assert_inkshield_timing(&timing);
