@@ -80,23 +80,26 @@ firmware-deps:
 	  apt-get install -y -q --no-install-recommends $$missing || { apt-get update -q && apt-get install -y -q --no-install-recommends $$missing; }; \
 	else echo "firmware-deps: missing$$missing (install them as root: apt-get install$$missing)"; exit 1; fi
 
-# One image per printer file: $(call fw_image,NAME,TOML) builds firmware/TOML into
-# $(FW_OUT)/NAME.elf and .hex, in a target folder of its own (the printer's settings are
-# constants of the build, so two images sharing a folder would rebuild each other).
+# One image per printer file and features: $(call fw_image,NAME,TOML,FOLDER,FEATURES) builds
+# firmware/TOML with the cargo FEATURES into $(FW_OUT)/NAME.elf and .hex, in a target folder of
+# its own (the printer's settings and the features are constants of the build, so two images
+# sharing a folder would rebuild each other).
 define fw_image
 	cd firmware/ramps && GWEAVE_PRINTER=$(2) CARGO_TARGET_DIR=$(FW_TARGET_DIR)$(3) RUSTC=/usr/bin/rustc \
-	  RUSTC_BOOTSTRAP=1 /usr/bin/cargo build --release -q
+	  RUSTC_BOOTSTRAP=1 /usr/bin/cargo build --release -q --features "$(4)"
 	@mkdir -p $(FW_OUT)
 	cp $(FW_TARGET_DIR)$(3)/avr-none/release/gweave-ramps.elf $(FW_OUT)/$(1).elf
 	avr-objcopy -O ihex -R .eeprom $(FW_OUT)/$(1).elf $(FW_OUT)/$(1).hex
 	@avr-size $(FW_OUT)/$(1).elf
 endef
 
-# The default printer (firmware/printer.toml), and the same printer with a 4-input mixing
-# hotend (firmware/printer-mixing.toml).
+# The default printer (firmware/printer.toml), the same printer with a 4-input mixing hotend
+# (firmware/printer-mixing.toml), and an inkjet printer (M700 through an InkShield,
+# docs/firmware.md "Inkjet").
 firmware: firmware-deps
-	$(call fw_image,gweave-ramps,printer.toml,)
-	$(call fw_image,gweave-ramps-mixing,printer-mixing.toml,-mixing)
+	$(call fw_image,gweave-ramps,printer.toml,,)
+	$(call fw_image,gweave-ramps-mixing,printer-mixing.toml,-mixing,)
+	$(call fw_image,gweave-ramps-inkjet,printer.toml,-inkjet,inkjet)
 
 # The same core for a Cortex-M4F (STM32F405/F407, BTT SKR Pro's pin map; docs/firmware.md):
 # the ELF for QEMU and debuggers, the raw .bin a board's bootloader or st-flash writes at
@@ -111,13 +114,11 @@ firmware-cortex: firmware-deps
 	llvm-objcopy-22 -O binary $(FW_CORTEX_ELF) $(FW_OUT)/gweave-cortex.bin
 	@llvm-size-22 $(FW_CORTEX_ELF)
 
+
 # The same firmware with `M9999` hanging its main loop (feature fault-injection), for the
-# emulated board's watchdog test only; its own target folder, so neither build undoes the other.
+# emulated board's watchdog test only.
 firmware-fault: firmware-deps
-	cd firmware/ramps && CARGO_TARGET_DIR=$(FW_TARGET_DIR)/fault RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 \
-	  /usr/bin/cargo build --release -q --features fault-injection
-	@mkdir -p $(FW_OUT)
-	cp $(FW_TARGET_DIR)/fault/avr-none/release/gweave-ramps.elf $(FW_OUT)/gweave-ramps-fault.elf
+	$(call fw_image,gweave-ramps-fault,printer.toml,/fault,fault-injection)
 
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli

@@ -10,7 +10,8 @@ use std::path::Path;
 
 use crate::ramps::{Axis, Plant, THERMISTOR_ADC};
 use crate::ramps::{
-    Shield, Wiring, DRIVERS, MOSFETS, PIN_DIR, PIN_ENABLE, PIN_MOSFET, PIN_STEP, STEP_DIR_ENABLE,
+    Shield, Wiring, DRIVERS, MOSFETS, PIN_DIR, PIN_ENABLE, PIN_INK_ADDRESS, PIN_INK_PULSE, PIN_MOSFET,
+    PIN_STEP, STEP_DIR_ENABLE,
 };
 use crate::sim::{Avr, LoadError, Stopped};
 
@@ -58,6 +59,12 @@ impl Board {
         }
         for (i, pin) in MOSFETS.into_iter().enumerate() {
             avr.watch(pin, PIN_MOSFET + i as u32);
+        }
+        for (i, pin) in crate::inkshield::ADDRESS.into_iter().enumerate() {
+            avr.watch(pin, PIN_INK_ADDRESS + i as u32);
+        }
+        for (i, pin) in crate::inkshield::PULSE.into_iter().enumerate() {
+            avr.watch(pin, PIN_INK_PULSE + i as u32);
         }
         let mut board = Board { avr, to_chip: VecDeque::new(), partial: Vec::new(), next_plant_cycle: 0 };
         board.sync_inputs();

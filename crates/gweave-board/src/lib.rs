@@ -6,6 +6,7 @@
 //! - every STEP pulse moves its axis one microstep in the direction of its DIR pin, with the
 //!   cycle it happened at ([`ramps::Axis`]);
 //! - X, Y and Z close their minimum endstop when they reach position 0;
+//! - the InkShield's pins (an inkjet build) are decoded into nozzle fires ([`inkshield`]);
 //! - the heater MOSFETs heat the project's thermal plant (`gweave-sim`'s [`gweave_sim::Heater`]),
 //!   whose thermistor voltage feeds the analog inputs A13-A15.
 //!
@@ -23,6 +24,7 @@
 //! UDRE stays low after the transmitter is switched off (raised by the harness).
 
 mod board;
+pub mod inkshield;
 pub mod ramps;
 pub mod sim;
 

@@ -9,6 +9,7 @@
 
 use gweave_sim::{BetaThermistor, Heater, HeaterConfig, SensorFault};
 
+use crate::inkshield::InkShield;
 use crate::sim::{Drive, PortPin, Wires};
 
 /// The driver sockets, in the order X, Y, Z, E0, E1, then E2 and E3 of a mixing hotend on
@@ -44,6 +45,9 @@ pub const PIN_STEP: u32 = 0;
 pub const PIN_DIR: u32 = PIN_STEP + DRIVERS as u32;
 pub const PIN_ENABLE: u32 = PIN_DIR + DRIVERS as u32;
 pub const PIN_MOSFET: u32 = PIN_ENABLE + DRIVERS as u32;
+/// The InkShield's address lines, then its pulse lines ([`crate::inkshield`]).
+pub const PIN_INK_ADDRESS: u32 = PIN_MOSFET + MOSFETS.len() as u32;
+pub const PIN_INK_PULSE: u32 = PIN_INK_ADDRESS + crate::inkshield::ADDRESS.len() as u32;
 
 /// What D9 drives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -137,6 +141,8 @@ pub struct Shield {
     pub plants: [Plant; 3],
     /// Bytes the firmware sent, not yet taken.
     pub serial_out: Vec<u8>,
+    /// The InkShield's decoder: the nozzle pulses of an inkjet build.
+    pub inkshield: InkShield,
     mosfets: [Mosfet; 3],
     /// Cycle at which the plants last advanced.
     plant_cycle: u64,
@@ -157,6 +163,7 @@ impl Shield {
             axes,
             plants,
             serial_out: Vec::new(),
+            inkshield: InkShield::default(),
             mosfets: Default::default(),
             plant_cycle: 0,
             endstop_levels: [None; 3],
@@ -263,6 +270,13 @@ impl Wires for Shield {
             }
             _ if index < PIN_ENABLE => self.axes[i - DRIVERS].dir_high = high,
             _ if index < PIN_MOSFET => self.axes[i - 2 * DRIVERS].enable_low = !high,
+            _ if index >= PIN_INK_PULSE => {
+                let steps = std::array::from_fn(|a| self.axes[a].position);
+                self.inkshield.pulse_changed((index - PIN_INK_PULSE) as usize, high, cycle, steps);
+            }
+            _ if index >= PIN_INK_ADDRESS => {
+                self.inkshield.address_changed((index - PIN_INK_ADDRESS) as usize, high)
+            }
             _ => {
                 let m = &mut self.mosfets[i - 3 * DRIVERS];
                 match (m.on_since, high) {

@@ -81,6 +81,8 @@ extern crate std;
 
 pub mod gcode;
 pub mod heat;
+#[cfg(feature = "inkjet")]
+pub mod inkjet;
 pub mod limits;
 pub mod machine;
 pub mod math;
@@ -171,4 +173,13 @@ pub trait Io {
     /// managed, so a main loop that hangs stops calling it and the watchdog resets the board,
     /// whose start-up leaves every heater off.
     fn watchdog_feed(&mut self) {}
+    /// Fires inkjet head `head` (`M700 P`): each nozzle whose bit is set in `nozzles` (bit `a`:
+    /// address `a`, 0-11) once, in address order, with the printhead's pulse timing
+    /// ([`inkjet`]: the address held around a 5 us pulse, at least a microsecond between two
+    /// nozzles). The core calls it when the moves before the `M700` have ended and the head
+    /// has refilled.
+    #[cfg(feature = "inkjet")]
+    fn inkjet_fire(&mut self, head: u8, nozzles: u16) {
+        let _ = (head, nozzles);
+    }
 }

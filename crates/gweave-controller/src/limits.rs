@@ -19,6 +19,11 @@ pub const MIX_INPUTS: usize = 4;
 /// EEPROM: `2 * MIX_INPUTS` bytes each (128).
 pub const MIX_TOOLS: usize = 16;
 
+/// Inkjet heads a build may wire (`M700 P0`, `P1`): each needs a pulse pin of its own (the
+/// four address lines are shared), and the RAMPS build wires two (Steve Kelly's Marlin patch
+/// allows six).
+pub const INKJET_HEADS: usize = 2;
+
 /// The longest line kept, in bytes: Marlin's `MAX_CMD_SIZE` (96) less its terminating NUL.
 /// Longer lines are refused whole (`Error:Line too long`), never cut and run.
 /// RAM: one line being received plus [`LINE_QUEUE`] complete ones.

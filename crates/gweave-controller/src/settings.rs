@@ -73,6 +73,10 @@ pub struct Settings {
     /// Inputs of a mixing hotend, 2 to [`crate::limits::MIX_INPUTS`] (E0, E1, ...; see
     /// [`crate::mixing`]), or 0 for a plain extruder. A build-time fact, not kept by `M500`.
     pub mixing_inputs: u8,
+    /// Inkjet heads wired (0 to [`crate::limits::INKJET_HEADS`]; each an HP C6602 on its own
+    /// pulse pin, `M700 P<head>`), or 0: no inkjet, and `M700` is unknown. A build-time fact,
+    /// not kept by `M500`; only a build with the feature `inkjet` fires them.
+    pub inkjet_heads: u8,
 }
 
 impl Settings {
@@ -98,6 +102,7 @@ impl Settings {
         extrude_min_c: 170.0,
         max_temp_c: [275.0, 275.0, 150.0],
         mixing_inputs: 0,
+        inkjet_heads: 0,
     };
 }
 

@@ -103,6 +103,9 @@ pub struct Memory {
     pub eeprom: Vec<u8>,
     /// How many times the watchdog was fed.
     pub watchdog_feeds: u64,
+    /// The inkjet fires asked for (`M700`), head and nozzle mask, not yet taken by the twin.
+    #[cfg(feature = "inkjet")]
+    pub inkjet_fires: Vec<(u8, u16)>,
 }
 
 impl Io for Memory {
@@ -124,6 +127,24 @@ impl Io for Memory {
     fn watchdog_feed(&mut self) {
         self.watchdog_feeds += 1;
     }
+    #[cfg(feature = "inkjet")]
+    fn inkjet_fire(&mut self, head: u8, nozzles: u16) {
+        self.inkjet_fires.push((head, nozzles));
+    }
+}
+
+/// One inkjet fire on the twin: which head and nozzles, when, and where the motors were.
+#[cfg(feature = "inkjet")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fire {
+    /// The head (`M700 P`).
+    pub head: u8,
+    /// The nozzles fired (`M700 S`: bit `a` is address `a`).
+    pub nozzles: u16,
+    /// The board's time, ms.
+    pub ms: u64,
+    /// Where each motor was, in steps from the homed origin ([`Twin::steps_from_home`]).
+    pub steps: [i64; AXES],
 }
 
 /// The main loop's period on the twin, in timer ticks (1 ms).
@@ -147,6 +168,9 @@ pub struct Twin<'q, P: Plant> {
     /// Step pulses per motor ([`MOTORS`]: X, Y, Z, E0 and a mixing hotend's other inputs),
     /// both directions counted.
     pub pulses: [u64; MOTORS],
+    /// The inkjet fires so far, in order.
+    #[cfg(feature = "inkjet")]
+    pub fires: Vec<Fire>,
     /// Called with the motor ([`MOTORS`]) and the time (ticks) of each step, for timing checks.
     pub on_step: Option<std::boxed::Box<dyn FnMut(usize, u64) + 'q>>,
     dir_bits: u8,
@@ -181,6 +205,8 @@ impl<'q, P: Plant> Twin<'q, P> {
             steps: [0; AXES],
             endstop_steps: [-(100.0 * spm[0]) as i64, -(100.0 * spm[1]) as i64, -(50.0 * spm[2]) as i64],
             pulses: [0; MOTORS],
+            #[cfg(feature = "inkjet")]
+            fires: Vec::new(),
             on_step: None,
             dir_bits: 0,
             ticks: 0,
@@ -236,6 +262,11 @@ impl<'q, P: Plant> Twin<'q, P> {
                 self.ticks = self.next_poll;
                 let inputs = self.inputs();
                 self.controller.poll(&mut self.memory, &inputs);
+                #[cfg(feature = "inkjet")]
+                for (head, nozzles) in core::mem::take(&mut self.memory.inkjet_fires) {
+                    let (ms, steps) = (self.now_ms(), self.steps_from_home());
+                    self.fires.push(Fire { head, nozzles, ms, steps });
+                }
                 self.plant.advance(self.controller.outputs().heater_duty, 0.001);
                 self.next_poll += POLL_TICKS;
                 continue;

@@ -39,7 +39,7 @@ mod profile;
 pub mod test_support;
 mod thermal;
 
-pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetWarning};
+pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetLayer, InkjetWarning};
 pub use interp::{
     help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Param, Queue, SimError, SimReport,
     SimTimes, SimWarning, WarningKind, COMMANDS, STOPPED_LINE, UNKNOWN_KINDS, UNKNOWN_OTHERS,

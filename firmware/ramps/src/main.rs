@@ -23,6 +23,8 @@
 mod adc;
 mod clock;
 mod eeprom;
+#[cfg(feature = "inkjet")]
+mod inkshield;
 mod pins;
 mod regs;
 mod step_timer;
@@ -82,6 +84,11 @@ impl Io for Ramps {
     fn watchdog_feed(&mut self) {
         watchdog::feed();
     }
+
+    #[cfg(feature = "inkjet")]
+    fn inkjet_fire(&mut self, head: u8, nozzles: u16) {
+        inkshield::fire(head, nozzles);
+    }
 }
 
 /// Runs `$body` once for each stepper socket the build drives (X, Y, Z, E0, then a mixing
@@ -132,11 +139,17 @@ pub extern "C" fn main() -> ! {
         e.make_input_pullup();
     }
     pins::LED.make_output();
+    #[cfg(feature = "inkjet")]
+    inkshield::init();
     clock::init([pins::HEATER_0, pins::HEATER_BED, pins::D9]);
     uart::init(CPU_HZ, config::BAUD);
     let mut adc = adc::Sampler::new(ADC_CHANNELS);
 
-    let mut controller = Controller::new(&QUEUE, config::SETTINGS);
+    #[cfg(not(feature = "inkjet"))]
+    let settings = config::SETTINGS;
+    #[cfg(feature = "inkjet")]
+    let settings = gweave_controller::Settings { inkjet_heads: inkshield::HEADS, ..config::SETTINGS };
+    let mut controller = Controller::new(&QUEUE, settings);
     // SAFETY: the step interrupt is not enabled yet, so nothing else reads STEPPER.
     unsafe { *STEPPER.0.get() = Some(Stepper::new(&QUEUE)) };
     regs::enable_interrupts();

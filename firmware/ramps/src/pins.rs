@@ -129,3 +129,15 @@ pub const LED: Pin = Pin::new(PORT_B, 7);
 pub const ADC_TEMP_0: u8 = 13;
 pub const ADC_TEMP_BED: u8 = 14;
 pub const ADC_TEMP_1: u8 = 15;
+
+/// The InkShield's inputs, wired to RAMPS for an inkjet build (`inkshield.rs`): the address
+/// lines A, B, C, D of its nozzle decoder, bit 0 first, on the AUX-4 header (D17, D16, D23,
+/// D25; D17 and D16 are the address lines A and B of Steve Kelly's Marlin patch too).
+#[cfg(feature = "inkjet")]
+pub const INKSHIELD_ADDRESS: [Pin; 4] =
+    [Pin::new(PORT_H, 0), Pin::new(PORT_H, 1), Pin::new(PORT_A, 1), Pin::new(PORT_A, 3)];
+/// The pulse line of each head (`M700 P0`, `P1`): D19 (the Z_MAX endstop socket's signal, the
+/// patch's head 0) and D2 (X_MAX, the InkShield library's examples' pulse pin). This firmware
+/// homes to the minimum endstops only, so the maximum sockets are free.
+#[cfg(feature = "inkjet")]
+pub const INKSHIELD_PULSE: [Pin; 2] = [Pin::new(PORT_D, 2), Pin::new(PORT_E, 4)];

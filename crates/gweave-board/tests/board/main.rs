@@ -5,6 +5,7 @@ mod common;
 mod faults;
 mod heating;
 mod mixing;
+mod inkjet;
 mod motion;
 mod protocol;
 mod step_timing;

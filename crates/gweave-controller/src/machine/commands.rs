@@ -27,6 +27,12 @@ const SETTING: (f32, f32) = (0.000_001, 1_000_000.0);
 const GAIN: (f32, f32) = (0.0, 100_000.0);
 const DUTY: (f32, f32) = (0.0, 255.0);
 const DWELL_MS: (f32, f32) = (0.0, 3_600_000.0);
+/// An inkjet head (`M700 P`), of those a build may wire, and a C6602's nozzle mask (`S`, 12
+/// bits).
+#[cfg(feature = "inkjet")]
+const INKJET_HEAD: (f32, f32) = (0.0, (crate::limits::INKJET_HEADS - 1) as f32);
+#[cfg(feature = "inkjet")]
+const NOZZLE_MASK: (f32, f32) = (0.0, crate::inkjet::ALL_NOZZLES as f32);
 /// A mixing weight: only ratios matter, a negative one counts as 0; a million bounds the sum.
 const MIX_WEIGHT: (f32, f32) = (-1_000_000.0, 1_000_000.0);
 
@@ -49,10 +55,12 @@ impl Controller<'_> {
         };
         if let Some((letter, value, (low, high))) = out_of_range(&words) {
             // As the virtual printer words it: `echo:M104 S = 600.00 is out of range: 0.00 to
-            // 500.00`; the line is not run, the values in force stay.
+            // 500.00`; the line is not run, the values in force stay. A fire refused is an
+            // error (`Error:M700 S = ...`): the print would miss those drops, and a host stops.
             let Command { letter: command, code } = words.command;
+            let severity: &[u8] = if (command, code) == (b'M', 700) { b"Error:" } else { b"echo:" };
             let mut r = Reply::new();
-            r.s(b"echo:").s(&[command]).u32(u32::from(code)).s(&[b' ', letter]).s(b" = ").f2(value);
+            r.s(severity).s(&[command]).u32(u32::from(code)).s(&[b' ', letter]).s(b" = ").f2(value);
             r.s(b" is out of range: ").f2(low).s(b" to ").f2(high).send(io);
             return line(io, b"ok");
         }
@@ -173,8 +181,8 @@ impl Controller<'_> {
             },
             (b'M', 502) => {
                 // The build's fixed facts stay (the inputs fitted); the rest is the default.
-                let inputs = self.settings.mixing_inputs;
-                self.settings = crate::Settings { mixing_inputs: inputs, ..crate::Settings::DEFAULT };
+                let (mixing_inputs, inkjet_heads) = (self.settings.mixing_inputs, self.settings.inkjet_heads);
+                self.settings = crate::Settings { mixing_inputs, inkjet_heads, ..crate::Settings::DEFAULT };
                 self.mixer.reset_tools();
                 line(io, b"echo:Hardcoded Default Settings Loaded");
             }
@@ -185,6 +193,8 @@ impl Controller<'_> {
             (b'M', 163..=165) | (b'T', _) if self.mixer.inputs() > 0 => {
                 return Some(self.mixing_command(io, w))
             }
+            #[cfg(feature = "inkjet")]
+            (b'M', 700) if self.settings.inkjet_heads > 0 => return Some(self.inkjet_command(io, w)),
             (b'T', 0) => {}
             (b'T', 1) if crate::heat::Heat::fitted(&self.settings, HOTEND1) => {}
             _ => return None,
@@ -326,6 +336,8 @@ fn out_of_range(w: &Words) -> Option<(u8, f32, (f32, f32))> {
         (b'M', 301) => &[(b"PID", GAIN)],
         (b'M', 163) => &[(b"P", MIX_WEIGHT)],
         (b'M', 165) => &[(b"ABCD", MIX_WEIGHT)],
+        #[cfg(feature = "inkjet")]
+        (b'M', 700) => &[(b"P", INKJET_HEAD), (b"S", NOZZLE_MASK)],
         _ => &[],
     };
     for &(letters, (low, high)) in ranges {

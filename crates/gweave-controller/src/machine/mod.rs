@@ -10,6 +10,8 @@
 
 mod commands;
 mod homing;
+#[cfg(feature = "inkjet")]
+mod inkjet;
 mod mixing;
 mod report;
 #[cfg(test)]
@@ -51,6 +53,9 @@ enum Wait {
     Heat { heater: usize, both_ways: bool },
     /// The homing sequence.
     Home(Homing),
+    /// The moves to finish and the head to refill, then fire these nozzles (`M700`).
+    #[cfg(feature = "inkjet")]
+    Fire { head: u8, nozzles: u16 },
 }
 
 /// The controller core's main-loop half. See the crate's documentation for the board's side.
@@ -65,6 +70,9 @@ pub struct Controller<'q> {
     mixer: Mixer,
     prep: Prep,
     heat: Heat,
+    /// When each inkjet head last fired (`M700`).
+    #[cfg(feature = "inkjet")]
+    inkjet: crate::inkjet::Heads,
     /// Where the commands have put the head, mm (logical position).
     position_mm: [f32; AXES],
     /// Where E was last named (`G92 E`, `M92 E`), mm, and its motor's steps then: E's targets
@@ -100,6 +108,8 @@ impl<'q> Controller<'q> {
             mixer: Mixer::new(settings.mixing_inputs),
             prep: Prep::new(),
             heat: Heat::default(),
+            #[cfg(feature = "inkjet")]
+            inkjet: crate::inkjet::Heads::new(),
             position_mm: [0.0; AXES],
             anchor_e_mm: 0.0,
             anchor_e_steps: 0,
@@ -240,6 +250,8 @@ impl<'q> Controller<'q> {
                         h.temp_c >= h.target_c - TEMP_WINDOW_C
                     }
             }
+            #[cfg(feature = "inkjet")]
+            Wait::Fire { head, nozzles } => self.fire_when_ready(io, head, nozzles),
             Wait::Home(mut homing) => {
                 if self.moving() {
                     false

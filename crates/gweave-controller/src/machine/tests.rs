@@ -481,6 +481,9 @@ fn the_core_fits_the_ram_budget() {
     use crate::limits::{MIX_INPUTS, PLANNER_BLOCKS, STEP_BLOCKS};
     let mixing = core::mem::size_of::<crate::mixing::Mixer>()
         + (PLANNER_BLOCKS + STEP_BLOCKS + 2) * 4 * (MIX_INPUTS - 1);
+    // An inkjet build's refill times (`M700`) come on top too, and their alignment.
+    #[cfg(feature = "inkjet")]
+    let mixing = mixing + core::mem::size_of::<crate::inkjet::Heads>() + 4;
     let size = core::mem::size_of::<Controller>() + core::mem::size_of::<StepQueue>();
     assert!(
         size + core::mem::size_of::<Stepper>() <= 2048 + mixing,

@@ -92,7 +92,9 @@ pub struct CanvasGeometry {
 /// The drops of one layer, one bitmap per head (row 0 at the lowest Y).
 #[derive(Debug, Clone, PartialEq)]
 pub struct InkjetLayer {
+    /// The carriage's Z when the layer's first fire ran, mm.
     pub z_mm: f64,
+    /// One canvas per head, in head order.
     pub heads: Vec<Bitmap>,
 }
 
