@@ -116,7 +116,10 @@ mod tests {
 
     impl Card {
         fn new(name: &str) -> Card {
-            let profile = MixProfile::default();
+            Card::with(name, MixProfile::default())
+        }
+
+        fn with(name: &str, profile: MixProfile) -> Card {
             let (gcode, report) = calibration_card(&profile).unwrap();
             let path = std::env::temp_dir().join(format!("gweave-card-{}-{name}.gcode", std::process::id()));
             std::fs::write(&path, gcode).unwrap();
@@ -124,8 +127,12 @@ mod tests {
         }
 
         fn drawing(&self) -> (Drawing, Vec<[f32; 2]>) {
+            self.drawing_at([1200, 900])
+        }
+
+        fn drawing_at(&self, size_px: [u32; 2]) -> (Drawing, Vec<[f32; 2]>) {
             let mix = MixColours::from_profile(&self.profile).unwrap();
-            card_drawing(&self.path, &self.report.swatches, mix, &self.profile.card, [1200, 900]).unwrap()
+            card_drawing(&self.path, &self.report.swatches, mix, &self.profile.card, size_px).unwrap()
         }
 
         /// A swatch's patch in the picture, px.
@@ -160,28 +167,33 @@ mod tests {
 
     #[test]
     fn the_legend_covers_no_swatch_of_the_card() {
-        // Issue 39: at 1200 x 900 the legend lay over swatch 25, the far left of the back row.
+        // Issue 39: the legend lay over swatch 25, the far left of the back row, in pictures
+        // that the card fills from side to side (1000 x 800, 800 x 600).
         let card = Card::new("legend");
-        let (d, centres) = card.drawing();
-        let legend = legend::legend_box(&d.legend).expect("the mix colouring has a legend");
-        let img = png_out::rasterise(&d);
-        for (s, c) in card.report.swatches.iter().zip(&centres) {
-            let patch = card.patch_px(&d, s);
-            assert!(
-                !legend::overlap(legend, patch),
-                "swatch {} at {patch:?} under the legend {legend:?}",
-                s.id
-            );
-            // And the swatch shows in its predicted colour (the top layer, the chamber washed
-            // to within a unit of 8 bits).
-            assert_near(rgb(&img, *c), &s.predicted, s.id);
+        for size in [[1200, 900], [1000, 800], [800, 600]] {
+            let (d, centres) = card.drawing_at(size);
+            let legend = legend::legend_box(&d.legend).expect("the mix colouring has a legend");
+            let img = png_out::rasterise(&d);
+            for (s, c) in card.report.swatches.iter().zip(&centres) {
+                let patch = card.patch_px(&d, s);
+                assert!(
+                    !legend::overlap(legend, patch),
+                    "{size:?}: swatch {} at {patch:?} under {legend:?}",
+                    s.id
+                );
+                // And the swatch shows in its predicted colour (the top layer, the chamber
+                // washed to within a unit of 8 bits).
+                assert_near(rgb(&img, *c), &s.predicted, s.id);
+            }
         }
     }
 
     #[test]
     fn a_white_swatch_has_a_visible_border() {
         // Issue 39: the white filament's swatch (#f5f5ee) vanished on the off-white picture.
-        let card = Card::new("white");
+        // With the bands example, its first lines are still tinted by the swatch before.
+        let bands = MixProfile::from_toml_str(include_str!("../../../../examples/mix/bands.toml")).unwrap();
+        let card = Card::with("white", bands);
         let (d, centres) = card.drawing();
         let white = card.report.swatches.iter().position(|s| s.ratios == [0.0, 0.0, 0.0, 1.0]).unwrap();
         let img = png_out::rasterise(&d);
@@ -193,8 +205,13 @@ mod tests {
         let y = centre[1];
         let darkest = (patch[0] - 6..centre[0] as u32).map(|x| rgb(&img, [x as f32, y])[0]).min().unwrap();
         assert!(darkest + 40 < BACKGROUND[0], "no visible edge: darkest red channel {darkest}");
-        // Away from the edge, the gap is background: the rim is only round the swatch.
+        // Away from the edge, the gap is background: the rim is only round the swatch, not
+        // across it where the washout's tint changes (a line at each change of tint, before).
         assert_eq!(rgb(&img, [patch[0] as f32 - 10.0, y]), BACKGROUND);
+        let inside =
+            (patch[1] + 4..patch[1] + patch[3] - 4).map(|y| rgb(&img, [centre[0] - 20.0, y as f32])[0]);
+        let darkest_inside = inside.min().unwrap();
+        assert!(darkest_inside + 20 > BACKGROUND[0], "a line across the swatch: {darkest_inside}");
     }
 
     /// Pixels of `img` in `r` darker than `below` on every channel, as a mask.

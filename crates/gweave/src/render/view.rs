@@ -518,7 +518,7 @@ const RIM_SHADE: f32 = 0.7;
 /// How much wider than the stroke its rim is, px (one pixel each side).
 const RIM_PX: f32 = 2.0;
 
-/// The strokes, each run of extruded strokes in one faint colour (see [`FAINT_DE00`]) preceded
+/// The strokes, each run of extruded strokes in faint colours (see [`FAINT_DE00`]) preceded
 /// by a rim: its strokes again, [`RIM_PX`] wider in a darker shade. Painted first, the rims
 /// show only round the outside of the run (a white swatch gets a grey edge, its inside stays
 /// white).
@@ -547,7 +547,10 @@ fn with_rims(strokes: impl Iterator<Item = Stroke>) -> Vec<Stroke> {
     };
     for s in strokes {
         let rimmed = s.alpha == 1.0 && faint(s.colour);
-        if run.first().is_some_and(|r| !rimmed || r.colour != s.colour) {
+        // One run for every faint colour in a row: a swatch whose first lines are still
+        // tinted by the colour before (the chamber's washout) gets one rim round it, not one
+        // across it at each change of tint.
+        if !rimmed && !run.is_empty() {
             flush(&mut out, &mut run);
         }
         if rimmed {
