@@ -47,8 +47,7 @@ mix_preview "$T/torus.mix.gcode" -o "$IMG/preview_mix.png" --view iso
 mix_preview "$T/torus.mix.gcode" -o "$IMG/preview_mix_switch.png" --layer 18
 mix_preview "$T/torus.shift.gcode" -o "$IMG/preview_purge_shift.png" --layer 18
 # The calibration card, in the colours predicted for the default filaments.
-"$G" mix --calibration-card -c "$BANDS" -o "$T/card.gcode" -q
-preview "$T/card.gcode" -o "$IMG/mix_calibration_card.png" --view top --colour-by mix --size 760x900
+"$G" mix --calibration-card -c "$BANDS" -o "$T/card.gcode" --card-png "$IMG/mix_calibration_card.png" -q
 
 # Rotary output on its cylinder, and the rotary commands' own previews.
 "$G" rotary tube -c examples/rotary/tube.toml -o "$T/tube.gcode" -q --preview "$IMG/rotary_tube.png"

@@ -202,3 +202,38 @@ fn quiet_hides_the_card_summary_but_not_a_prediction() {
         "0.5000:0.0000:0.5000:0.0000  #69c348  L 71.1 a -48.9 b 51.8\n"
     );
 }
+
+#[test]
+fn the_card_counts_rows_from_1_in_the_terminal_and_the_json_and_draws_numbered_swatches() {
+    // Issue 39: the terminal said "row 2 col 1" for swatch 7 while card.json said row 1,
+    // column 0. Both count from 1 now, as the swatch ids do.
+    let dir = tempfile::tempdir().unwrap();
+    let (card, report, png) =
+        (dir.path().join("card.gcode"), dir.path().join("card.json"), dir.path().join("card.png"));
+    let out = gweave(&[
+        "mix",
+        "--calibration-card",
+        "-o",
+        card.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--card-png",
+        png.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let line = text.lines().find(|l| l.trim_start().starts_with("7 ")).unwrap();
+    assert!(line.contains("row 2 col 1"), "{line}");
+    assert!(text.contains("rows and columns count from 1, as in the JSON"), "{text}");
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let s7 = &json["swatches"][6];
+    assert_eq!((s7["id"].as_u64(), s7["row"].as_u64(), s7["column"].as_u64()), (Some(7), Some(2), Some(1)));
+    // The picture: a PNG of the preview's size (its pixels are tested in render::card).
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    assert_eq!((&bytes[16..20], &bytes[20..24]), (&1200u32.to_be_bytes()[..], &900u32.to_be_bytes()[..]));
+    // The picture is drawn from the card's file: with -o - there is none.
+    let refused = gweave(&["mix", "--calibration-card", "-o", "-", "--card-png", png.to_str().unwrap()]);
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--card-png draws the card from its file"));
+}

@@ -50,6 +50,7 @@ impl StatsTotal {
                     Some(x) => {
                         x.extruded_mm += tf.extruded_mm;
                         x.extruded_mm3 += tf.extruded_mm3;
+                        x.fed_moving_mm += tf.fed_moving_mm;
                     }
                     None => t.filament.push(tf.clone()),
                 }

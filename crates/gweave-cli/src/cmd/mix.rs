@@ -87,6 +87,10 @@ pub struct MixArgs {
     /// swatches for 4 inputs, purged between; --report lists each swatch's id and ratios.
     #[arg(long, conflicts_with_all = ["predict", "fit", "wizard"])]
     pub calibration_card: bool,
+    /// With --calibration-card: draw the card from above in its predicted colours, each
+    /// swatch with its number (as in --report and the CSV --fit reads), as a PNG.
+    #[arg(long, value_name = "PNG", requires = "calibration_card")]
+    pub card_png: Option<PathBuf>,
     /// Fit the filaments to a printed card's measured colours (CSV `id,srgb` or `id,L,a,b`)
     /// and write the fitted profile to -o.
     #[arg(long, value_name = "CSV", conflicts_with_all = ["predict", "wizard"])]
@@ -126,6 +130,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
     }
     files
         .write("--palette-png", args.palette_png.as_deref())
+        .write("--card-png", args.card_png.as_deref())
         .write("--report", args.report.report.as_deref())
         .check()?;
     let profile = profile(&args)?;
@@ -144,7 +149,13 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
                 };
                 super::mix_colour::fit_profile(&profile, &text, csv, out, &args.report)
             }
-            None => super::mix_colour::card(&profile, out, &args.out.format.target(out)?, &args.report),
+            None => super::mix_colour::card(
+                &profile,
+                out,
+                &args.out.format.target(out)?,
+                args.card_png.as_deref(),
+                &args.report,
+            ),
         };
     }
     let has_job = !(profile.schedule.is_empty() && profile.gradient.is_empty() && profile.map.is_empty());

@@ -4,12 +4,14 @@ use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
 
-use anyhow::{anyhow, Result};
+use anyhow::{anyhow, bail, Result};
 use gweave::colour::fit::{fit, parse_csv, FitError};
 use gweave::colour::predict::{parse_ratios, predict, Prediction};
 use gweave::gcode::writer::{Output, Target};
 use gweave::post::mix::card::{calibration_card, card_mixes, fitted_profile_toml};
 use gweave::post::mix::profile::MixProfile;
+use gweave::render::card::card_png;
+use gweave::render::MixColours;
 
 use crate::common::{print_summary, read_text, write_bytes, ReportArgs};
 
@@ -31,16 +33,34 @@ pub fn predict_all(profile: &MixProfile, mixes: &[String], report: &ReportArgs) 
     Ok(ExitCode::SUCCESS)
 }
 
-/// `--calibration-card -o card.gcode [--report card.json]`.
+/// Size of `--card-png`'s picture, px (a preview's default).
+const CARD_PICTURE_PX: [u32; 2] = [1200, 900];
+
+/// `--calibration-card -o card.gcode [--report card.json] [--card-png card.png]`.
 /// The card is written as every G-code gweave makes: the `; gweave` header, and the metadata
 /// footer (filament, time) a slicer would write.
-pub fn card(profile: &MixProfile, output: &Path, target: &Target, report: &ReportArgs) -> Result<ExitCode> {
+/// With `picture`, the card's picture is drawn from the file written (numbered swatches).
+pub fn card(
+    profile: &MixProfile,
+    output: &Path,
+    target: &Target,
+    picture: Option<&Path>,
+    report: &ReportArgs,
+) -> Result<ExitCode> {
+    if picture.is_some() && target.is_stdout() {
+        bail!("--card-png draws the card from its file: give -o FILE, not -");
+    }
     let (gcode, card) = calibration_card(profile)?;
     crate::finish::with_metadata(None, target, |t| {
         let mut out = Output::create(t, None)?;
         out.write_all(&gcode)?;
         Ok(out.commit()?)
     })?;
+    if let Some(png) = picture {
+        let mix = MixColours::from_profile(profile)?;
+        let bytes = card_png(output, &card.swatches, mix, &profile.card, CARD_PICTURE_PX)?;
+        write_bytes(png, &bytes)?;
+    }
     for w in &card.mix.warnings {
         eprintln!("gweave: warning: {w}");
     }
@@ -54,7 +74,7 @@ pub fn card(profile: &MixProfile, output: &Path, target: &Target, report: &Repor
         print_summary(|out| {
             writeln!(
                 out,
-                "{} swatches, swatch 1 at the front left, rows of {}:",
+                "{} swatches, swatch 1 at the front left, rows of {} (rows and columns count from 1, as in the JSON):",
                 card.swatches.len(),
                 profile.card.columns
             )?;
@@ -64,8 +84,8 @@ pub fn card(profile: &MixProfile, output: &Path, target: &Target, report: &Repor
                     out,
                     "  {:>3}  row {} col {}  {}  predicted {}",
                     s.id,
-                    s.row + 1,
-                    s.column + 1,
+                    s.row,
+                    s.column,
                     ratios.join(":"),
                     s.predicted
                 )?;

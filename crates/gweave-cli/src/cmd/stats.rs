@@ -105,7 +105,11 @@ fn print_human(out: &mut dyn Write, input: &std::path::Path, read: &WithMalforme
         writeln!(out, "    T{:<3} {:>12.2} mm {:>10.1} mm3{theirs}", f.tool, f.extruded_mm, f.extruded_mm3)?;
     }
     if let Some(matches) = s.filament_matches_slicer {
-        writeln!(out, "  slicer figures  {}", if matches { "match" } else { "differ from the count above" })?;
+        writeln!(
+            out,
+            "  slicer figures  {}",
+            if matches { "match" } else { "differ from the count above (see the warnings)" }
+        )?;
     }
     writeln!(out, "  print / travel  {:.1} m / {:.1} m", s.print_mm / 1000.0, s.travel_mm / 1000.0)?;
     writeln!(out, "  time (F only)   {}", hms(s.time_s))?;

@@ -29,9 +29,11 @@
 //! std::fs::write("part.png", png).unwrap();
 //! ```
 
+pub mod card;
 pub mod colour_by;
 mod cull;
 pub(crate) mod html;
+pub mod legend;
 pub(crate) mod mix_colour;
 pub mod png_out;
 pub mod svg;

@@ -2,14 +2,15 @@
 //! legend and panel titles ([`crate::picture`] paints and encodes).
 
 use super::cull::{overdraw_stride, Opaque};
+use super::legend;
 use super::view::{Drawing, Stroke};
 use crate::pass::{Progress, Quiet};
 use crate::picture::{text, Image, Painter};
 
 const INK: [u8; 3] = [0x20, 0x20, 0x20];
 const LEGEND_BOX: [u8; 3] = [0xff, 0xff, 0xff];
-/// Size of legend and panel title text, px.
-const TEXT_PX: f32 = 16.0;
+/// Size of panel title text, px (as the legend's).
+const TEXT_PX: f32 = legend::TEXT_PX;
 
 /// Rasterises a drawing (strokes, legend, titles). A blank drawing is the background only.
 ///
@@ -55,14 +56,14 @@ pub fn rasterise_with_progress(d: &Drawing, progress: &mut dyn Progress) -> Imag
             img.rect(p.x_px as i32, 0, 1, d.height_px, INK, 0.3);
         }
     }
-    if !d.legend.is_empty() {
-        let longest = d.legend.iter().map(|e| text::width(&e.label, TEXT_PX)).max().unwrap_or(0);
-        let box_w = 12 + line_h + longest + 8;
-        let box_h = 8 + line_h * d.legend.len() as u32 + 4;
-        img.rect(8, 8, box_w, box_h, LEGEND_BOX, 0.85);
+    if let Some([x, y, w, h]) = legend::legend_box(&d.legend) {
+        img.rect(x as i32, y as i32, w, h, LEGEND_BOX, 0.85);
+        let line_h = legend::line_px();
         for (i, e) in d.legend.iter().enumerate() {
             let y = 14 + (i as u32 * line_h) as i32;
             let c = [e.colour.r, e.colour.g, e.colour.b];
+            // A thin frame, so a white or pale colour shows on the white box.
+            img.rect(13, y + 1, line_h - 6, line_h - 6, INK, 0.5);
             img.rect(14, y + 2, line_h - 8, line_h - 8, c, 1.0);
             img.text(14 + line_h as i32, y, &e.label, TEXT_PX, INK);
         }

@@ -4,6 +4,7 @@
 
 use std::fmt::Write;
 
+use super::legend;
 use super::view::{Drawing, Stroke};
 
 /// Consecutive strokes that can be written as one polyline: `(first, last)` index pairs.
@@ -59,17 +60,24 @@ pub fn write_svg(d: &Drawing) -> String {
     for p in d.panels.iter().filter(|p| !p.title.is_empty()) {
         let _ = writeln!(s, r#"<text x="{}" y="{}" {text}>{}</text>"#, p.x_px + 12, h - 12, escape(&p.title));
     }
-    if !d.legend.is_empty() {
+    // The box the PNG's legend takes, which the drawing is kept clear of (`render::legend`).
+    if let Some([x, y, w, h]) = legend::legend_box(&d.legend) {
         let _ = writeln!(
             s,
-            r##"<g class="legend"><rect x="8" y="8" width="170" height="{}" fill="#ffffff" fill-opacity="0.85"/>"##,
-            12 + 20 * d.legend.len()
+            r##"<g class="legend"><rect x="{x}" y="{y}" width="{w}" height="{h}" fill="#ffffff" fill-opacity="0.85"/>"##,
         );
+        let line = legend::line_px();
         for (i, e) in d.legend.iter().enumerate() {
-            let y = 14 + 20 * i;
+            let y = 14 + line * i as u32;
             let c = [e.colour.r, e.colour.g, e.colour.b];
-            let _ = writeln!(s, r#"<rect x="14" y="{y}" width="14" height="14" fill="{}"/>"#, hex(c));
-            let _ = writeln!(s, r#"<text x="34" y="{}" {text}>{}</text>"#, y + 12, escape(&e.label));
+            let _ = writeln!(
+                s,
+                r##"<rect x="14" y="{}" width="14" height="14" fill="{}" stroke="#202020" stroke-opacity="0.5"/>"##,
+                y + 2,
+                hex(c)
+            );
+            let _ =
+                writeln!(s, r#"<text x="{}" y="{}" {text}>{}</text>"#, 14 + line, y + 14, escape(&e.label));
         }
         s.push_str("</g>\n");
     }

@@ -34,6 +34,7 @@ use std::str::FromStr;
 use crate::colour::Srgb8;
 
 use super::colour_by::{ColourBy, Colouring, LegendEntry};
+use super::legend::{self, Rect};
 use super::toolpath::{Segment, Toolpath};
 
 /// Which way the print is looked at.
@@ -180,20 +181,13 @@ pub struct Projection {
 impl Projection {
     /// Fits the extents `lo..hi` into a panel `width x height` px whose left edge is at `x_px`.
     pub fn fit(kind: ViewKind, lo: [f32; 3], hi: [f32; 3], x_px: u32, width: u32, height: u32) -> Projection {
-        let mut umin = [f32::INFINITY; 2];
-        let mut umax = [f32::NEG_INFINITY; 2];
-        for i in 0..8 {
-            let p = [
-                if i & 1 == 0 { lo[0] } else { hi[0] },
-                if i & 2 == 0 { lo[1] } else { hi[1] },
-                if i & 4 == 0 { lo[2] } else { hi[2] },
-            ];
-            let uv = view_coords(kind, p);
-            for k in 0..2 {
-                umin[k] = umin[k].min(uv[k]);
-                umax[k] = umax[k].max(uv[k]);
-            }
-        }
+        Projection::fit_into(kind, lo, hi, [x_px, 0, width, height])
+    }
+
+    /// Fits the extents `lo..hi` into the rectangle `[left, top, width, height]` px.
+    pub fn fit_into(kind: ViewKind, lo: [f32; 3], hi: [f32; 3], rect: Rect) -> Projection {
+        let [x_px, y_px, width, height] = rect;
+        let (umin, umax) = view_extents(kind, lo, hi);
         let span = [(umax[0] - umin[0]).max(1.0), (umax[1] - umin[1]).max(1.0)];
         let usable = 1.0 - 2.0 * MARGIN;
         let scale_px_mm = (width as f32 * usable / span[0]).min(height as f32 * usable / span[1]);
@@ -201,13 +195,27 @@ impl Projection {
             kind,
             scale_px_mm,
             centre: [(umin[0] + umax[0]) / 2.0, (umin[1] + umax[1]) / 2.0],
-            origin_px: [x_px as f32 + width as f32 / 2.0, height as f32 / 2.0],
+            origin_px: [x_px as f32 + width as f32 / 2.0, y_px as f32 + height as f32 / 2.0],
         }
+    }
+
+    /// The pixels the extents `lo..hi` cover, widened by `pad_px` on every side.
+    pub fn covered(&self, lo: [f32; 3], hi: [f32; 3], pad_px: f32) -> Rect {
+        let (umin, umax) = view_extents(self.kind, lo, hi);
+        let a = self.project_view([umin[0], umax[1]]);
+        let b = self.project_view([umax[0], umin[1]]);
+        let (x0, y0) = ((a[0] - pad_px).floor().max(0.0), (a[1] - pad_px).floor().max(0.0));
+        let (x1, y1) = ((b[0] + pad_px).ceil().max(x0), (b[1] + pad_px).ceil().max(y0));
+        [x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32]
     }
 
     /// A point in mm to pixels.
     pub fn project(&self, p: [f32; 3]) -> [f32; 2] {
-        let uv = view_coords(self.kind, p);
+        self.project_view(view_coords(self.kind, p))
+    }
+
+    /// A point of the view plane (u, v), mm, to pixels.
+    fn project_view(&self, uv: [f32; 2]) -> [f32; 2] {
         [
             self.origin_px[0] + (uv[0] - self.centre[0]) * self.scale_px_mm,
             self.origin_px[1] - (uv[1] - self.centre[1]) * self.scale_px_mm,
@@ -218,6 +226,25 @@ impl Projection {
     pub fn scale_px_mm(&self) -> f32 {
         self.scale_px_mm
     }
+}
+
+/// The smallest and largest view-plane coordinates of the box `lo..hi`'s corners.
+fn view_extents(kind: ViewKind, lo: [f32; 3], hi: [f32; 3]) -> ([f32; 2], [f32; 2]) {
+    let mut umin = [f32::INFINITY; 2];
+    let mut umax = [f32::NEG_INFINITY; 2];
+    for i in 0..8 {
+        let p = [
+            if i & 1 == 0 { lo[0] } else { hi[0] },
+            if i & 2 == 0 { lo[1] } else { hi[1] },
+            if i & 4 == 0 { lo[2] } else { hi[2] },
+        ];
+        let uv = view_coords(kind, p);
+        for k in 0..2 {
+            umin[k] = umin[k].min(uv[k]);
+            umax[k] = umax[k].max(uv[k]);
+        }
+    }
+    (umin, umax)
 }
 
 /// View-plane coordinates (u right, v up), mm.
@@ -349,9 +376,11 @@ pub fn draw(tp: &Toolpath, options: &ViewOptions) -> Drawing {
     let Some((lo, hi)) = extents(options, std::iter::once(tp)) else {
         return d;
     };
-    let proj = Projection::fit(options.kind, lo, hi, 0, options.width_px, options.height_px);
-    d.strokes = strokes(tp, None, options, &proj, &colouring);
     d.legend = colouring.legend(&[tp]);
+    let panel = [0, 0, options.width_px, options.height_px];
+    let proj =
+        Projection::fit_into(options.kind, lo, hi, clear_of_legend(options.kind, lo, hi, panel, &d.legend));
+    d.strokes = strokes(tp, None, options, &proj, &colouring);
     d.panels.push(Panel {
         x_px: 0,
         width_px: options.width_px,
@@ -369,10 +398,13 @@ pub fn draw_compare(before: &Toolpath, after: &Toolpath, options: &ViewOptions) 
     let Some((lo, hi)) = extents(options, [before, after].into_iter()) else {
         return d;
     };
+    d.legend = colouring.legend(&[before, after]);
     let half = options.width_px / 2;
+    // Both sides in one scale: the left one kept clear of the legend, the right one alike.
+    let [dx, y, w, h] = clear_of_legend(options.kind, lo, hi, [0, 0, half, options.height_px], &d.legend);
     let sides = [(before, after, 0, "before"), (after, before, half, "after")];
     for (this, other, x_px, name) in sides {
-        let proj = Projection::fit(options.kind, lo, hi, x_px, half, options.height_px);
+        let proj = Projection::fit_into(options.kind, lo, hi, [x_px + dx, y, w, h]);
         let changed = changed_moves(this, other);
         let n = this.segments.iter().zip(&changed).filter(|(s, c)| **c && in_layers(options, s)).count();
         d.strokes.extend(strokes(this, Some(&changed), options, &proj, &colouring));
@@ -384,8 +416,18 @@ pub fn draw_compare(before: &Toolpath, after: &Toolpath, options: &ViewOptions) 
             projection: proj,
         });
     }
-    d.legend = colouring.legend(&[before, after]);
     d
+}
+
+/// Widest half stroke, px (strokes are at most 12 px wide, see [`strokes`]).
+const HALF_STROKE_PX: f32 = 6.0;
+
+/// Where in `panel` to fit the extents `lo..hi` so that the legend's box hides none of them
+/// ([`legend::clear_of`]).
+fn clear_of_legend(kind: ViewKind, lo: [f32; 3], hi: [f32; 3], panel: Rect, legend: &[LegendEntry]) -> Rect {
+    let drawn = Projection::fit_into(kind, lo, hi, panel).covered(lo, hi, HALF_STROKE_PX);
+    let scale = |r: Rect| Projection::fit_into(kind, lo, hi, r).scale_px_mm();
+    legend::clear_of(panel, drawn, legend::legend_box(legend), |a, b| scale(a) >= scale(b))
 }
 
 /// A drawing with nothing on it yet, of a file with `layers` layers.
@@ -464,7 +506,61 @@ fn strokes(
         // Changed moves on top of the grey ones.
         order.sort_by_key(|(_, st)| st.colour != UNCHANGED);
     }
-    order.into_iter().map(|(_, st)| st).collect()
+    with_rims(order.into_iter().map(|(_, st)| st))
+}
+
+/// A colour closer than this to the background (CIEDE2000) hardly shows on it: white filament,
+/// a calibration card's white swatch (#f5f5ee on #f7f7f5 is 1.9). 6 is about three times the
+/// difference an eye just tells apart side by side.
+const FAINT_DE00: f64 = 6.0;
+/// A faint colour's rim: the colour at this fraction of its value (#f5f5ee becomes #acaca7).
+const RIM_SHADE: f32 = 0.7;
+/// How much wider than the stroke its rim is, px (one pixel each side).
+const RIM_PX: f32 = 2.0;
+
+/// The strokes, each run of extruded strokes in faint colours (see [`FAINT_DE00`]) preceded
+/// by a rim: its strokes again, [`RIM_PX`] wider in a darker shade. Painted first, the rims
+/// show only round the outside of the run (a white swatch gets a grey edge, its inside stays
+/// white).
+fn with_rims(strokes: impl Iterator<Item = Stroke>) -> Vec<Stroke> {
+    use crate::colour::{Ciede2000, Lab};
+    let background = Lab::from(Srgb8::new(BACKGROUND[0], BACKGROUND[1], BACKGROUND[2]));
+    // Colours come in runs: the last one's answer is kept.
+    let mut last: Option<([u8; 3], bool)> = None;
+    let mut faint = |c: [u8; 3]| match last {
+        Some((l, f)) if l == c => f,
+        _ => {
+            let f = Lab::from(Srgb8::new(c[0], c[1], c[2])).difference(background) < FAINT_DE00;
+            last = Some((c, f));
+            f
+        }
+    };
+    let mut out = Vec::new();
+    let mut run: Vec<Stroke> = Vec::new();
+    let flush = |out: &mut Vec<Stroke>, run: &mut Vec<Stroke>| {
+        out.extend(run.iter().map(|s| Stroke {
+            colour: s.colour.map(|v| (f32::from(v) * RIM_SHADE).round() as u8),
+            width_px: s.width_px + RIM_PX,
+            ..*s
+        }));
+        out.append(run);
+    };
+    for s in strokes {
+        let rimmed = s.alpha == 1.0 && faint(s.colour);
+        // One run for every faint colour in a row: a swatch whose first lines are still
+        // tinted by the colour before (the chamber's washout) gets one rim round it, not one
+        // across it at each change of tint.
+        if !rimmed && !run.is_empty() {
+            flush(&mut out, &mut run);
+        }
+        if rimmed {
+            run.push(s);
+        } else {
+            out.push(s);
+        }
+    }
+    flush(&mut out, &mut run);
+    out
 }
 
 #[cfg(test)]
@@ -496,12 +592,22 @@ mod tests {
 
     #[test]
     fn top_view_fits_and_keeps_y_up() {
-        let options = ViewOptions { width_px: 200, height_px: 100, ..Default::default() };
+        // Wide enough that the legend (T0, T1) in the top left corner is clear of the square.
+        let options = ViewOptions { width_px: 400, height_px: 100, ..Default::default() };
         let d = draw(&square(), &options);
         assert_eq!(d.strokes.len(), 3);
         // 10 mm fits 100 px * 0.88 = 88 px; the square is centred.
         let p = d.strokes[0].from;
-        assert!((p[0] - 56.0).abs() < 1e-3 && (p[1] - 94.0).abs() < 1e-3, "{p:?}");
+        assert!((p[0] - 156.0).abs() < 1e-3 && (p[1] - 94.0).abs() < 1e-3, "{p:?}");
+        // At 200 px wide the centred square would run under the legend: it moves right of it,
+        // in the same scale (the strip right of the box is still 100 px high).
+        let d = draw(&square(), &ViewOptions { width_px: 200, ..options });
+        let legend = legend::legend_box(&d.legend).unwrap();
+        let p = d.strokes[0].from;
+        assert!(
+            p[0] - 6.0 >= (legend[0] + legend[2]) as f32 && (p[1] - 94.0).abs() < 1e-3,
+            "{p:?} {legend:?}"
+        );
         assert!(d.strokes[1].to[1] < d.strokes[1].from[1], "Y up on the bed is up in the picture");
     }
 

@@ -97,9 +97,9 @@ pub struct Swatch {
     pub id: u32,
     /// Normalised, input 0 first.
     pub ratios: Vec<f64>,
-    /// 0-based, row 0 at the front (smallest Y).
+    /// 1-based as `id` (and as the terminal summary says it), row 1 at the front (smallest Y).
     pub row: u32,
-    /// 0-based, column 0 at the left (smallest X).
+    /// 1-based, column 1 at the left (smallest X).
     pub column: u32,
     /// Centre of the patch, mm.
     pub x_mm: f64,
@@ -159,7 +159,8 @@ pub fn calibration_card(profile: &MixProfile) -> Result<(Vec<u8>, CardReport), M
     let mut swatches = Vec::new();
     for (k, mix) in card_mixes(profile.hardware.inputs.len()).into_iter().enumerate() {
         let id = k as u32 + 1;
-        let (row, column) = (k as u32 / card.columns, k as u32 % card.columns);
+        // Counted from 1 like the swatches: the card is read by people, not by code.
+        let (row, column) = (k as u32 / card.columns + 1, k as u32 % card.columns + 1);
         let name = format!("Swatch{id}");
         job.mix.insert(name.clone(), MixSpec::Ratios(mix.clone()));
         job.add_map(&format!("T{k}={name}"))?;
@@ -168,8 +169,8 @@ pub fn calibration_card(profile: &MixProfile) -> Result<(Vec<u8>, CardReport), M
             ratios: mix.ratios().to_vec(),
             row,
             column,
-            x_mm: card.x_mm + f64::from(column) * pitch + card.patch_mm / 2.0,
-            y_mm: card.y_mm + f64::from(row) * pitch + card.patch_mm / 2.0,
+            x_mm: card.x_mm + f64::from(column - 1) * pitch + card.patch_mm / 2.0,
+            y_mm: card.y_mm + f64::from(row - 1) * pitch + card.patch_mm / 2.0,
             predicted: model.predict(&mix)?.to_hex(),
         });
     }
@@ -325,7 +326,9 @@ mod tests {
         let (gcode, report) = calibration_card(&MixProfile::default()).unwrap();
         let text = String::from_utf8(gcode).unwrap();
         assert_eq!(report.swatches.len(), 26);
-        assert_eq!((report.swatches[6].row, report.swatches[6].column), (1, 0));
+        // Swatch 7 starts the second row: rows and columns count from 1, as ids do.
+        assert_eq!((report.swatches[6].id, report.swatches[6].row, report.swatches[6].column), (7, 2, 1));
+        assert_eq!((report.swatches[0].row, report.swatches[0].column), (1, 1));
         assert_eq!(report.mix.mixes.len(), 26);
         // 25 changes, each purged, and the purge before swatch 1.
         assert_eq!((report.mix.changes, report.mix.purge.count), (25, 26));
