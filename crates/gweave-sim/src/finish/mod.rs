@@ -225,13 +225,14 @@ mod tests {
         let layers = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster/layers");
         let job = JobOptions { inputs: vec![layers], ..JobOptions::default() }.job().unwrap();
         assert!(job.knows_its_figures());
-        let fast = || unreachable!("a fast estimate");
+        // The planner times it as it streams out (the default: no `--fast-estimate`).
+        let timer = crate::Estimator::line_timer;
         let (measured, direct) = (dir.path().join("measured.gcode"), dir.path().join("direct.gcode"));
-        let run = |t: &Target| job.run(t, &mut Quiet, fast).map_err(Failed::Job);
+        let run = |t: &Target| job.run(t, &mut Quiet, timer).map_err(Failed::Job);
         let time = |r: &JobReport| Some(r.time.total_s);
         let (a, _) =
             with_metadata_timed(None, &Target::File(measured.clone()), "raster l", run, time).unwrap();
-        let run = |out: &mut dyn Write| job.run_into(out, &mut Quiet, fast).map_err(Failed::Job);
+        let run = |out: &mut dyn Write| job.run_into(out, &mut Quiet, timer).map_err(Failed::Job);
         let figures = |r: &JobReport| Figures { time_s: [r.time.total_s; 2], ..Figures::default() };
         let (b, written) = with_own_figures(&Target::File(direct.clone()), "raster l", run, figures).unwrap();
         assert_eq!(written.as_deref(), Some(direct.as_path()));

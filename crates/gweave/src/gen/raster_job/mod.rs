@@ -655,7 +655,11 @@ mod tests {
     #[test]
     fn a_raster_knows_its_figures_unless_the_user_gcode_extrudes_or_shows_progress() {
         let dir = tempfile::tempdir().unwrap();
-        let options = JobOptions { inputs: vec![examples().join("layers")], ..JobOptions::default() };
+        let options = JobOptions {
+            inputs: vec![examples().join("layers")],
+            fast_estimate: true,
+            ..JobOptions::default()
+        };
         let job = options.job().unwrap();
         assert!(job.knows_its_figures());
         let mut out = Vec::new();
