@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use gweave::gcode::writer::Target;
+use gweave::post::metadata::Figures;
 
 pub use gweave_sim::finish::refuse_second_run;
 
@@ -27,6 +28,16 @@ pub fn with_metadata_timed<R>(
     own_time_s: impl FnOnce(&R) -> Option<f64>,
 ) -> Result<(R, Option<PathBuf>)> {
     gweave_sim::finish::with_metadata_timed(input, target, &command_line(input), write, own_time_s)
+}
+
+/// Writes straight to `target` what `write` writes, between this run's header and the footer
+/// of the `figures` it knows (`gweave_sim::finish::with_own_figures`).
+pub fn with_own_figures<R>(
+    target: &Target,
+    write: impl FnOnce(&mut dyn std::io::Write) -> Result<R>,
+    figures: impl FnOnce(&R) -> Figures,
+) -> Result<(R, Option<PathBuf>)> {
+    gweave_sim::finish::with_own_figures(target, &command_line(None), write, figures)
 }
 
 /// Flags that say where the G-code comes from and goes, or how the run reports, not what it

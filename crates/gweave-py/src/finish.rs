@@ -2,9 +2,11 @@
 //! run's header, the slicer's figures rewritten for the file as written, and a second run of
 //! the same transform on its own output refused (`ValueError` naming the earlier run).
 
+use std::io::Write;
 use std::path::Path;
 
 use gweave::gcode::writer::Target;
+use gweave::post::metadata::Figures;
 use gweave_sim::finish::{self, FinishError};
 use pyo3::exceptions::PyValueError;
 use pyo3::PyErr;
@@ -50,4 +52,23 @@ pub fn finished<R>(
         Ok(result)
     };
     run().map_err(|Failed(e)| e)
+}
+
+/// [`finished`] for a generator that knows its output's figures as it writes it (a raster job
+/// whose G-code holds nothing the metadata is measured from): `write` writes straight to
+/// `target`, between the run's header and the footer of `figures`
+/// (`gweave_sim::finish::with_own_figures`).
+pub fn finished_directly<R>(
+    target: &Target,
+    command: &str,
+    options: &str,
+    write: impl FnOnce(&mut dyn Write) -> Result<R, PyErr>,
+    figures: impl FnOnce(&R) -> Figures,
+) -> Result<R, PyErr> {
+    let line = format!("{command} {options}");
+    let write = |out: &mut dyn Write| write(out).map_err(Failed);
+    match finish::with_own_figures(target, line.trim_end(), write, figures) {
+        Ok((result, _)) => Ok(result),
+        Err(Failed(e)) => Err(e),
+    }
 }

@@ -2,11 +2,13 @@
 //! and STL slicing into layer images.
 
 use crate::interrupt::interruptible;
+use std::io::Write;
 use std::path::PathBuf;
 
 use gweave::gcode::writer::Target;
 use gweave::gen::raster_job::{JobError, JobOptions, JobReport};
 use gweave::pass::Quiet;
+use gweave::post::metadata::Figures;
 use gweave_sim::Estimator;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -96,11 +98,22 @@ pub(crate) fn raster_json(
         fast_estimate,
     };
     let job = job_options.job().map_err(job_err)?;
-    let write = |t: &Target| job.run(t, &mut Quiet, Estimator::line_timer).map_err(job_err);
-    // Its own time counts the printhead's firing, which the estimator does not know.
-    let own_time = |r: &JobReport| Some(r.time.total_s);
-    let target = Target::File(output);
-    let report = interruptible(py, || finish::finished(None, &target, "raster", options, write, own_time))??;
+    let target = Target::File(output.clone());
+    let report = if job.knows_its_figures() {
+        // Its time and filament (none) are known as it writes: nothing is read back.
+        let write =
+            |out: &mut dyn Write| job.run_into(out, &mut Quiet, Estimator::line_timer).map_err(job_err);
+        let figures = |r: &JobReport| Figures { time_s: [r.time.total_s; 2], ..Figures::default() };
+        let mut report =
+            interruptible(py, || finish::finished_directly(&target, "raster", options, write, figures))??;
+        report.output = output.display().to_string();
+        report
+    } else {
+        let write = |t: &Target| job.run(t, &mut Quiet, Estimator::line_timer).map_err(job_err);
+        // Its own time counts the printhead's firing, which the estimator does not know.
+        let own_time = |r: &JobReport| Some(r.time.total_s);
+        interruptible(py, || finish::finished(None, &target, "raster", options, write, own_time))??
+    };
     to_json(&report)
 }
 

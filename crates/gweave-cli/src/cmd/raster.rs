@@ -11,6 +11,7 @@ use gweave::gcode::writer::Target;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{FireOrder, DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
 use gweave::gen::raster_job::{JobOptions, JobReport, Source};
+use gweave::post::metadata::Figures;
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
 use gweave_sim::Estimator;
 
@@ -183,9 +184,15 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     let job = options.job_from(source, heads)?;
     let mut bar = LayerBar::new(args.report.quiet.quiet);
     // Its own time counts the printhead's firing, which the estimator does not know.
-    let run = |t: &Target| Ok(job.run(t, &mut bar, Estimator::line_timer)?);
-    let (mut report, _) =
-        finish::with_metadata_timed(None, &target, run, |r: &JobReport| Some(r.time.total_s))?;
+    let (mut report, _) = if job.knows_its_figures() {
+        // Its time and filament (none) are known as it writes: nothing is read back.
+        let run = |out: &mut dyn Write| Ok(job.run_into(out, &mut bar, Estimator::line_timer)?);
+        let figures = |r: &JobReport| Figures { time_s: [r.time.total_s; 2], ..Figures::default() };
+        finish::with_own_figures(&target, run, figures)?
+    } else {
+        let run = |t: &Target| Ok(job.run(t, &mut bar, Estimator::line_timer)?);
+        finish::with_metadata_timed(None, &target, run, |r: &JobReport| Some(r.time.total_s))?
+    };
     report.output = if to_stdout { "-".into() } else { args.output.display().to_string() };
     drop(bar);
     if args.report.emit(&report)? && !to_stdout {

@@ -13,13 +13,13 @@
 //! lives here, which the engine cannot depend on, so this crate joins them.
 
 use std::fs::File;
-use std::io::BufReader;
+use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::container;
 use gweave::gcode::temp::TempFile;
 use gweave::gcode::writer::{Output, Target};
-use gweave::post::metadata::{earlier_runs, header_line, Figures, MetadataPass};
+use gweave::post::metadata::{earlier_runs, header_line, write_footer, Figures, MetadataPass};
 
 use crate::motion::estimate::EstimateError;
 
@@ -109,6 +109,30 @@ pub fn with_metadata_timed<R, E: From<FinishError>>(
     Ok((result, written))
 }
 
+/// For a generator that knows its output's figures as it writes it (a raster job: constant
+/// feeds, straight lines, no extrusion): `write` writes straight to `target` (a temporary file
+/// renamed into place, as every output), after the run's header, and the footer
+/// ([`write_footer`]) follows with `figures` of what it returned. No scratch file, nothing read
+/// back: the caller has made sure the output holds no line the metadata is measured from (no
+/// progress line, no slicer figure, no extrusion), which [`with_metadata`] would rewrite.
+/// Returns what `write` returned and the path written (`None`: standard output).
+pub fn with_own_figures<R, E: From<FinishError>>(
+    target: &Target,
+    command_line: &str,
+    write: impl FnOnce(&mut dyn Write) -> Result<R, E>,
+    figures: impl FnOnce(&R) -> Figures,
+) -> Result<(R, Option<PathBuf>), E> {
+    let mut out = Output::create(target, None).map_err(FinishError::from)?;
+    let written = out.dest().map(Path::to_path_buf);
+    let shown = out.shown();
+    let failed = |e| FinishError::from(gweave::Error::io(&shown, e));
+    writeln!(out, "{}", header_line(command_line)).map_err(failed)?;
+    let result = write(&mut out)?;
+    write_footer(&figures(&result), b"\n", &mut out).map_err(failed)?;
+    out.commit().map_err(FinishError::from)?;
+    Ok((result, written))
+}
+
 /// Writes the scratch file `path` to `target` with the header and the metadata.
 fn finish(
     path: &Path,
@@ -188,6 +212,47 @@ mod tests {
         let header = header_line("rotary tube --length 10");
         assert!(text.starts_with(&format!("{header}\n")), "{text}");
         assert!(text.contains("; filament used [mm] = 5.00\n"), "{text}");
+    }
+
+    /// Regression: a raster's 2.8 GB output was written to a scratch file and read back by the
+    /// estimator (129x Python zlib's time) though the generator knows its time; written
+    /// directly, the file is the same to the byte.
+    #[test]
+    fn a_raster_written_directly_is_the_measured_file_to_the_byte() {
+        use gweave::gen::raster_job::{JobOptions, JobReport};
+        use gweave::pass::Quiet;
+        let dir = tempfile::tempdir().unwrap();
+        let layers = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster/layers");
+        let job = JobOptions { inputs: vec![layers], ..JobOptions::default() }.job().unwrap();
+        assert!(job.knows_its_figures());
+        // The planner times it as it streams out (the default: no `--fast-estimate`).
+        let timer = crate::Estimator::line_timer;
+        let (measured, direct) = (dir.path().join("measured.gcode"), dir.path().join("direct.gcode"));
+        let run = |t: &Target| job.run(t, &mut Quiet, timer).map_err(Failed::Job);
+        let time = |r: &JobReport| Some(r.time.total_s);
+        let (a, _) =
+            with_metadata_timed(None, &Target::File(measured.clone()), "raster l", run, time).unwrap();
+        let run = |out: &mut dyn Write| job.run_into(out, &mut Quiet, timer).map_err(Failed::Job);
+        let figures = |r: &JobReport| Figures { time_s: [r.time.total_s; 2], ..Figures::default() };
+        let (b, written) = with_own_figures(&Target::File(direct.clone()), "raster l", run, figures).unwrap();
+        assert_eq!(written.as_deref(), Some(direct.as_path()));
+        assert_eq!(a.time, b.time);
+        let (a, b) = (std::fs::read_to_string(measured).unwrap(), std::fs::read_to_string(direct).unwrap());
+        assert!(b.contains("\n; filament used [mm] = 0.00\n"), "{b}");
+        assert_eq!(a, b);
+    }
+
+    /// A raster job's error or the finishing's.
+    #[derive(Debug)]
+    enum Failed {
+        Job(#[allow(dead_code)] gweave::gen::raster_job::JobError),
+        Finish(#[allow(dead_code)] FinishError),
+    }
+
+    impl From<FinishError> for Failed {
+        fn from(e: FinishError) -> Self {
+            Failed::Finish(e)
+        }
     }
 
     fn t_path(t: &Target) -> &Path {

@@ -360,18 +360,32 @@ impl MetadataPass {
         }
         // A file without the slicer's figures (a generated one): PrusaSlicer's footer.
         self.end_open_line(out)?;
-        let f = &self.figures;
-        // A file that extrudes nothing (an inkjet raster) used none.
-        let list = |v: &[f64]| match v {
-            [] => "0.00".to_owned(),
-            v => v.iter().map(|x| format!("{x:.2}")).collect::<Vec<_>>().join(", "),
-        };
-        let eol = String::from_utf8_lossy(&self.eol).into_owned();
-        write!(out, "; filament used [mm] = {}{eol}", list(&f.filament_mm))?;
-        write!(out, "; filament used [cm3] = {}{eol}", list(&f.cm3()))?;
-        write!(out, "; estimated printing time (normal mode) = {}{eol}", prusa_duration(f.time_s[0]))?;
-        Ok(())
+        write_footer(&self.figures, &self.eol, out)
     }
+}
+
+/// Whether [`MetadataPass`] would rewrite the whole line `line` (without its end) from the
+/// figures: a progress line or one of the slicer's figures. A generator whose own lines never
+/// are, and whose user snippets hold none, knows its figures without measuring its output
+/// ([`write_footer`]).
+pub fn needs_figures(line: &[u8]) -> bool {
+    let mut pass =
+        MetadataPass::new(Figures { progress_s: vec![[0.0; 2]], ..Figures::default() }, String::new());
+    pass.rewrite(line).is_some()
+}
+
+/// The PrusaSlicer-style footer [`MetadataPass`] adds to a file without the slicer's figures,
+/// each line ended by `eol`.
+pub fn write_footer(f: &Figures, eol: &[u8], out: &mut dyn Write) -> io::Result<()> {
+    // A file that extrudes nothing (an inkjet raster) used none.
+    let list = |v: &[f64]| match v {
+        [] => "0.00".to_owned(),
+        v => v.iter().map(|x| format!("{x:.2}")).collect::<Vec<_>>().join(", "),
+    };
+    let eol = String::from_utf8_lossy(eol);
+    write!(out, "; filament used [mm] = {}{eol}", list(&f.filament_mm))?;
+    write!(out, "; filament used [cm3] = {}{eol}", list(&f.cm3()))?;
+    write!(out, "; estimated printing time (normal mode) = {}{eol}", prusa_duration(f.time_s[0]))
 }
 
 /// A duration as PrusaSlicer writes it: `5h 31m 58s`, `7m 46s`, `1d 0h 0m 1s`.

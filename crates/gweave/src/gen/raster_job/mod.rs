@@ -225,8 +225,26 @@ impl Job {
         planner: impl FnOnce() -> std::result::Result<Box<dyn LineTimer + 't>, BoxError>,
     ) -> Result<JobReport> {
         let mut out = Output::create(target, None)?;
+        let mut report = self.run_into(&mut out, progress, planner)?;
+        out.commit()?;
+        report.output = match target {
+            // Under `finish::with_metadata` this is its scratch file: name the output.
+            Target::File(p) => crate::gcode::temp::shown_name(p).display().to_string(),
+            _ => "-".into(),
+        };
+        Ok(report)
+    }
+
+    /// [`Job::run`] into `out`, which the caller opened and commits (the report's `output` is
+    /// left empty for it to name).
+    pub fn run_into<'t>(
+        &self,
+        out: &mut dyn Write,
+        progress: &mut dyn Progress,
+        planner: impl FnOnce() -> std::result::Result<Box<dyn LineTimer + 't>, BoxError>,
+    ) -> Result<JobReport> {
         let est = if self.planner_estimate { Some(planner().map_err(JobError::Planner)?) } else { None };
-        let mut tee = EstimatingWriter { inner: &mut out, est, partial: Vec::new(), error: None };
+        let mut tee = EstimatingWriter { inner: out, est, partial: Vec::new(), error: None };
         let (report, images_read) = self.write(&mut tee, progress)?;
         if let Some(e) = tee.error.take() {
             return Err(JobError::Estimate(e));
@@ -237,7 +255,6 @@ impl Job {
             }
             e.total_s()
         });
-        out.commit()?;
         let fire_s = self.profile.fire_time_s(report.fire_commands);
         let time = match motion_s {
             Some(motion_s) => {
@@ -250,12 +267,24 @@ impl Job {
                 total_s: report.estimated_time_s,
             },
         };
-        let output = match target {
-            // Under `finish::with_metadata` this is its scratch file: name the output.
-            Target::File(p) => crate::gcode::temp::shown_name(p).display().to_string(),
-            _ => "-".into(),
-        };
-        Ok(JobReport { output, heads: self.profile.heads.len(), images_read, raster: report, time })
+        let heads = self.profile.heads.len();
+        Ok(JobReport { output: String::new(), heads, images_read, raster: report, time })
+    }
+
+    /// Whether the job's output holds nothing its metadata is measured from, so that its own
+    /// figures are the metadata ([`crate::post::metadata::write_footer`]): the generator's lines
+    /// never extrude (the recoat has no E axis) and are no progress line nor slicer figure; the
+    /// user's start, end and recoat G-code must not either, nor end lines with `\r\n` (the footer
+    /// follows the first line's ending). A job that fails this is measured as before.
+    pub fn knows_its_figures(&self) -> bool {
+        let c = &self.config;
+        [&c.start_gcode, &c.end_gcode, &c.recoat_gcode].into_iter().all(|block| {
+            !block.contains('\r')
+                && block.lines().all(|line| {
+                    let code = line.split(';').next().unwrap_or_default();
+                    !code.contains(['E', 'e']) && !crate::post::metadata::needs_figures(line.as_bytes())
+                })
+        })
     }
 
     fn write<W: Write>(&self, out: W, progress: &mut dyn Progress) -> Result<(RasterReport, usize)> {
@@ -618,6 +647,42 @@ mod tests {
         let rep_fast = fast.run(&Target::File(out), &mut Quiet, never).unwrap();
         assert_eq!(rep_fast.time.method, "feed");
         assert_eq!(rep_fast.time.total_s, rep_fast.raster.estimated_time_s);
+    }
+
+    /// The direct write of a raster's metadata (no read-back) holds only while its output has
+    /// no line that metadata is measured from: the generator's own lines never are, and a
+    /// user's G-code that is sends the job the measured way.
+    #[test]
+    fn a_raster_knows_its_figures_unless_the_user_gcode_extrudes_or_shows_progress() {
+        let dir = tempfile::tempdir().unwrap();
+        let options = JobOptions {
+            inputs: vec![examples().join("layers")],
+            fast_estimate: true,
+            ..JobOptions::default()
+        };
+        let job = options.job().unwrap();
+        assert!(job.knows_its_figures());
+        let mut out = Vec::new();
+        job.run_into(&mut out, &mut Quiet, || unreachable!("a fast estimate")).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.lines().count() > 100, "{text}");
+        for line in text.lines() {
+            let code = line.split(';').next().unwrap();
+            assert!(
+                !code.contains(['E', 'e']) && !crate::post::metadata::needs_figures(line.as_bytes()),
+                "{line}"
+            );
+        }
+        let with_start = |gcode: &str| {
+            let start = dir.path().join("start.gcode");
+            std::fs::write(&start, gcode).unwrap();
+            JobOptions { start: Some(start), ..options.clone() }.job().unwrap().knows_its_figures()
+        };
+        assert!(with_start("G28 ; home\nM400\n"));
+        assert!(!with_start("G28\nM73 P0 R10\n"));
+        assert!(!with_start("G1 X5 E2 F600\n"));
+        assert!(!with_start("; estimated printing time (normal mode) = 1m 0s\n"));
+        assert!(!with_start("G28\r\n"));
     }
 
     #[test]
