@@ -4,8 +4,8 @@
 mod common;
 mod faults;
 mod heating;
-mod mixing;
 mod inkjet;
+mod mixing;
 mod motion;
 mod protocol;
 mod step_timing;
