@@ -120,6 +120,7 @@ MAP = {
             "predict": "- gweave.predict_colour(ratios, profile)",
             "initial-purge": "initial_purge",
             "calibration-card": "- a file: gweave.main(['mix', '--calibration-card', ...])",
+            "card-png": "- a picture of the card: gweave.main(['mix', '--calibration-card', ..., '--card-png', ...])",
             "fit": "- a file: gweave.main(['mix', '--fit', ...])",
         },
         ["path"],
