@@ -261,7 +261,7 @@ mod tests {
     #[test]
     fn long_lines_errors_and_stops_are_where_the_line_reader_has_them() {
         let mut text = b"G1 X1 \t\r\n\n;\xff\xfe odd\r\nG1 X2\rG1 X3\n".to_vec();
-        text.extend(std::iter::repeat(b'A').take(MAX_LINE + 10));
+        text.extend(std::iter::repeat_n(b'A', MAX_LINE + 10));
         text.extend_from_slice(b"\r\nG1 X4\nno newline at end");
         for strictness in [Strictness::Lenient, Strictness::Strict] {
             let [one, two] = both(|| &text[..], strictness, Record::default);
