@@ -19,6 +19,11 @@ if [ ! -s "$BIG" ]; then
   prusa-slicer -g --scale 200% --layer-height 0.15 --fill-pattern gyroid \
     --bed-shape 0x0,400x0,400x400,0x400 --center 200,200 \
     /usr/share/PrusaSlicer/shapes/bunny.stl -o "$BIG" >/dev/null 2>&1
+  # Seen 2026-11-29: Debian's PrusaSlicer 2.5 left pieces of its settings block after the
+  # block's last line (`r = 0`, `er_width = 60`: not G-code, and a strict `stats` refuses the
+  # file at them). The file ends at that last line.
+  end=$(grep -n -m1 '^; prusaslicer_config = end' "$BIG" | cut -d: -f1 || true)
+  if [ -n "$end" ]; then head -n "$end" "$BIG" > "$BIG.tmp" && mv "$BIG.tmp" "$BIG"; fi
 fi
 "$PY" -m pip install -q gcodeparser gcode-lib
 

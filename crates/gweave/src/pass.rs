@@ -15,6 +15,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::gcode::diag::{Finding, Severity};
+use crate::gcode::lexed;
 use crate::gcode::lexer::{parse_line, parse_line_lean};
 use crate::gcode::line::Block;
 use crate::gcode::reader::{LineReader, Part, RawLine};
@@ -226,70 +227,64 @@ pub fn drive_reader<P: Pass + ?Sized>(
     out: &mut dyn Write,
 ) -> Result<State> {
     let out_name = output.map_or_else(|| output_name(path), Path::to_path_buf);
-    Lines { reader: LineReader::new(input), path, out_name, strictness, progress }.run(options, pass, out)
+    let driver = Driver { path, out_name, strictness, progress, next_report: 0 };
+    let state = State::new(options);
+    if pass.reads_words() || state.reads_words() {
+        driver.drive::<true, P>(LineReader::new(input), state, pass, out)
+    } else {
+        driver.drive::<false, P>(LineReader::new(input), state, pass, out)
+    }
 }
 
-/// What the loop reads from, and how.
-struct Lines<'a, R> {
-    reader: LineReader<R>,
+/// [`drive_reader`] for a pass that writes nothing, with the input read and lexed on a second
+/// thread ([`crate::gcode::lexed`]): what `stats`, `check` and the previews read. The pass sees
+/// the same lines, blocks and states, but for a line longer than
+/// [`MAX_LINE`](crate::gcode::reader::MAX_LINE), which comes as one [`Part::Last`] without its
+/// bytes (a pass that copies long lines has an output, and [`drive_reader`]).
+pub fn scan_ahead<P: Pass + ?Sized>(
+    input: impl Read + Send,
+    path: &Path,
+    options: StateOptions,
+    strictness: Strictness,
+    progress: &mut dyn Progress,
+    pass: &mut P,
+) -> Result<State> {
+    let driver = Driver { path, out_name: output_name(path), strictness, progress, next_report: 0 };
+    let state = State::new(options);
+    let (lexer, lexed) = lexed::lexer(input, pass.reads_words() || state.reads_words());
+    std::thread::scope(|scope| {
+        scope.spawn(move || lexer.run());
+        // The receiver is dropped when this returns, which ends the lexer early after an
+        // error or a pass that stops.
+        driver.drive_lexed(lexed, state, pass, &mut io::sink())
+    })
+}
+
+/// What the loop reports to, and how it treats malformed lines.
+struct Driver<'a> {
     path: &'a Path,
     /// The name write errors show.
     out_name: PathBuf,
     strictness: Strictness,
     progress: &'a mut dyn Progress,
+    /// The offset at which progress is next reported.
+    next_report: u64,
 }
 
-impl<R: Read> Lines<'_, R> {
-    fn run<P: Pass + ?Sized>(
-        self,
-        options: StateOptions,
-        pass: &mut P,
-        out: &mut dyn Write,
-    ) -> Result<State> {
-        let state = State::new(options);
-        if pass.reads_words() || state.reads_words() {
-            self.drive::<true, P>(state, pass, out)
-        } else {
-            self.drive::<false, P>(state, pass, out)
-        }
-    }
-
+impl Driver<'_> {
     /// Every line through the state and the pass; `LIST_WORDS`: plain moves with their words
     /// listed ([`Pass::reads_words`]).
     fn drive<const LIST_WORDS: bool, P: Pass + ?Sized>(
         mut self,
+        mut reader: LineReader<impl Read>,
         mut state: State,
         pass: &mut P,
         out: &mut dyn Write,
     ) -> Result<State> {
-        let path = self.path;
         let mut block = Block::default();
-        let out_name = std::mem::take(&mut self.out_name);
-        // A pass's error, named: its output for a write, the input's line for a refusal.
-        let named = |e: PassError, line: Option<u64>| match e {
-            PassError::Write(e) => Error::io(&out_name, e),
-            PassError::Refused { column, source } => {
-                Error::Pass { path: path.to_path_buf(), line, column, source }
-            }
-        };
-        let mut next_report = 0u64;
-        while let Some(line) = self.reader.next_line().map_err(|e| Error::io(path, e))? {
+        while let Some(line) = reader.next_line().map_err(|e| Error::io(self.path, e))? {
             if line.part != Part::Whole {
-                match (self.strictness, line.part) {
-                    (Strictness::Lenient, _) => {
-                        pass.long_line(&line, out).map_err(|e| named(e, Some(line.number)))?
-                    }
-                    (Strictness::Strict, Part::Last { len }) => {
-                        return Err(Error::Syntax {
-                            path: path.to_path_buf(),
-                            line: line.number,
-                            column: 1,
-                            finding: Finding::LineTooLong { len },
-                        })
-                    }
-                    // Read through, to give the line's length.
-                    (Strictness::Strict, _) => {}
-                }
+                self.long_line(&line, pass, out)?;
                 continue;
             }
             if LIST_WORDS {
@@ -297,33 +292,122 @@ impl<R: Read> Lines<'_, R> {
             } else {
                 parse_line_lean(&line, &mut block);
             }
-            if self.strictness == Strictness::Strict {
-                if let Some(d) = block.diagnostics.iter().find(|d| d.finding.severity() == Severity::Error) {
-                    return Err(Error::Syntax {
-                        path: path.to_path_buf(),
-                        line: line.number,
-                        column: d.column,
-                        finding: d.finding.clone(),
-                    });
-                }
-            }
-            state.apply(line.bytes, &block);
-            let (offset, number) = (line.offset, line.number);
-            let flow = pass
-                .line(&Ctx { line, block: &block, effect: &state.effect, state: &state }, out)
-                .map_err(|e| named(e, Some(number)))?;
-            if offset >= next_report {
-                self.progress.advance(offset);
-                next_report = offset + (4 << 20);
-            }
-            if flow == Flow::Stop {
+            if self.line(line, &block, &mut state, pass, out)? == Flow::Stop {
                 break;
             }
         }
-        // What the pass refuses at the end belongs to no line of its own.
-        pass.finish(&state, out).map_err(|e| named(e, None))?;
-        self.progress.advance(self.reader.position());
+        self.finish(reader.position(), &state, pass, out)?;
         Ok(state)
+    }
+
+    /// [`Driver::drive`] over lines lexed on another thread.
+    fn drive_lexed<P: Pass + ?Sized>(
+        mut self,
+        mut lexed: lexed::Lexed,
+        mut state: State,
+        pass: &mut P,
+        out: &mut dyn Write,
+    ) -> Result<State> {
+        let mut position = 0;
+        'batches: while let Some(batch) = lexed.next_batch() {
+            let batch = batch.map_err(|e| Error::io(self.path, e))?;
+            let (mut lines, blocks) = batch.lines();
+            for block in blocks {
+                // The batch holds a block for each of its lines: never `None`.
+                let Some(line) = lines.next_line() else { break };
+                position = line.offset + (line.bytes.len() + line.eol.len()) as u64;
+                if let Part::Last { len } = line.part {
+                    position += len;
+                    self.long_line(&line, pass, out)?;
+                    continue;
+                }
+                if self.line(line, block, &mut state, pass, out)? == Flow::Stop {
+                    break 'batches;
+                }
+            }
+            lexed.recycle(batch);
+        }
+        self.finish(position, &state, pass, out)?;
+        Ok(state)
+    }
+
+    /// A pass's error, named: its output for a write, the input's line for a refusal.
+    fn named(&self, e: PassError, line: Option<u64>) -> Error {
+        match e {
+            PassError::Write(e) => Error::io(&self.out_name, e),
+            PassError::Refused { column, source } => {
+                Error::Pass { path: self.path.to_path_buf(), line, column, source }
+            }
+        }
+    }
+
+    /// A line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE), or a piece of one: a
+    /// lenient run hands it to the pass, a strict one refuses it with its length.
+    fn long_line<P: Pass + ?Sized>(
+        &self,
+        line: &RawLine<'_>,
+        pass: &mut P,
+        out: &mut dyn Write,
+    ) -> Result<()> {
+        match (self.strictness, line.part) {
+            (Strictness::Lenient, _) => {
+                pass.long_line(line, out).map_err(|e| self.named(e, Some(line.number)))
+            }
+            (Strictness::Strict, Part::Last { len }) => Err(Error::Syntax {
+                path: self.path.to_path_buf(),
+                line: line.number,
+                column: 1,
+                finding: Finding::LineTooLong { len },
+            }),
+            // Read through, to give the line's length.
+            (Strictness::Strict, _) => Ok(()),
+        }
+    }
+
+    /// One whole line, lexed into `block`, through the state and the pass.
+    #[inline(always)]
+    fn line<P: Pass + ?Sized>(
+        &mut self,
+        line: RawLine<'_>,
+        block: &Block,
+        state: &mut State,
+        pass: &mut P,
+        out: &mut dyn Write,
+    ) -> Result<Flow> {
+        if self.strictness == Strictness::Strict {
+            if let Some(d) = block.diagnostics.iter().find(|d| d.finding.severity() == Severity::Error) {
+                return Err(Error::Syntax {
+                    path: self.path.to_path_buf(),
+                    line: line.number,
+                    column: d.column,
+                    finding: d.finding.clone(),
+                });
+            }
+        }
+        state.apply(line.bytes, block);
+        let (offset, number) = (line.offset, line.number);
+        let flow = pass
+            .line(&Ctx { line, block, effect: &state.effect, state }, out)
+            .map_err(|e| self.named(e, Some(number)))?;
+        if offset >= self.next_report {
+            self.progress.advance(offset);
+            self.next_report = offset + (4 << 20);
+        }
+        Ok(flow)
+    }
+
+    /// The end of the input (or of the pass), `position` bytes read.
+    fn finish<P: Pass + ?Sized>(
+        &mut self,
+        position: u64,
+        state: &State,
+        pass: &mut P,
+        out: &mut dyn Write,
+    ) -> Result<()> {
+        // What the pass refuses at the end belongs to no line of its own.
+        pass.finish(state, out).map_err(|e| self.named(e, None))?;
+        self.progress.advance(position);
+        Ok(())
     }
 }
 

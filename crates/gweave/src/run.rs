@@ -27,7 +27,7 @@ use crate::gcode::flavour::{flavour_in, read_flavour, require_e_extruder};
 use crate::gcode::state::{State, StateOptions};
 use crate::gcode::writer::{Output, Target};
 use crate::malformed::Malformed;
-use crate::pass::{drive_reader, Counting, Pass, Progress, Quiet, Strictness};
+use crate::pass::{drive_reader, scan_ahead, Counting, Pass, Progress, Quiet, Strictness};
 
 /// The name a text in memory goes by in messages.
 pub const IN_MEMORY: &str = "<input>";
@@ -203,9 +203,10 @@ impl<'a> Run<'a> {
         again.scan(pass)
     }
 
-    /// Streams the input through `pass` without output. Returns the final state.
+    /// Streams the input through `pass` without output. Returns the final state. A file is
+    /// read and lexed on a second thread ([`scan_ahead`]).
     pub fn scan<P: Pass + ?Sized>(self, pass: &mut P) -> Result<State> {
-        self.drive(pass, &mut io::sink(), None)
+        self.drive(pass, &mut io::sink(), None, true)
     }
 
     /// Streams the input through `pass` to the run's [`Dest`].
@@ -245,19 +246,21 @@ impl<'a> Run<'a> {
         out_name: Option<&Path>,
     ) -> Result<Ran> {
         if self.strictness == Strictness::Strict {
-            let state = self.drive(pass, out, out_name)?;
+            let state = self.drive(pass, out, out_name, false)?;
             return Ok(Ran { state, malformed: Malformed::default(), output: Vec::new() });
         }
         let mut counting = Counting::new(pass);
-        let state = self.drive(&mut counting, out, out_name)?;
+        let state = self.drive(&mut counting, out, out_name, false)?;
         Ok(Ran { state, malformed: counting.malformed, output: Vec::new() })
     }
 
+    /// `ahead`: a file is read and lexed on a second thread (for a run without output).
     fn drive<P: Pass + ?Sized>(
         mut self,
         pass: &mut P,
         out: &mut dyn Write,
         out_name: Option<&Path>,
+        ahead: bool,
     ) -> Result<State> {
         let flavour = self.flavour()?.map(str::to_owned);
         let options = self.options.for_flavour(flavour.as_deref());
@@ -268,6 +271,9 @@ impl<'a> Run<'a> {
                 let input = container::open(path).map_err(|e| Error::io(path, e))?;
                 if let Some(len) = input.text_len {
                     progress.set_len(len);
+                }
+                if ahead {
+                    return scan_ahead(input, path, options, self.strictness, progress, pass);
                 }
                 drive_reader(input, path, out_name, options, self.strictness, progress, pass, out)
             }

@@ -12,6 +12,7 @@ pub mod encoding;
 pub mod ends;
 pub mod flavour;
 pub mod layers;
+pub mod lexed;
 pub mod lexer;
 pub mod limits;
 pub mod line;

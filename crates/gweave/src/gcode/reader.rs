@@ -349,13 +349,21 @@ pub struct Chunk {
 impl Chunk {
     /// The chunk's lines; `before` is the number of lines in the chunks before it.
     pub fn lines(&self, before: u64) -> ChunkLines<'_> {
+        self.lines_from(0, before)
+    }
+
+    /// The chunk's lines from byte `at`, where a line starts (0, or a [`ChunkLines::position`]
+    /// of its lines); `before` is the number of lines before that one in the file. A reader
+    /// can so take a chunk's lines up in batches, and another take the same batches up again.
+    pub fn lines_from(&self, at: usize, before: u64) -> ChunkLines<'_> {
+        let start = at.min(self.len);
         ChunkLines {
             buf: &self.buf,
-            start: 0,
+            start,
             end: self.len,
             number: before,
-            offset: self.offset,
-            long: self.long,
+            offset: self.offset + start as u64,
+            long: if start == 0 { self.long } else { None },
         }
     }
 
@@ -419,6 +427,11 @@ impl<'a> ChunkLines<'a> {
     pub fn number(&self) -> u64 {
         self.number
     }
+
+    /// Where the next line starts in the chunk, for [`Chunk::lines_from`].
+    pub fn position(&self) -> usize {
+        self.start
+    }
 }
 
 /// Where the last whole line of `buf` ends (past its ending), `None` if none does. A `\r` that
@@ -451,26 +464,35 @@ impl<R: Read> ChunkReader<R> {
     /// The next chunk, read into `buf` (whose contents are dropped); `None` at the end.
     pub fn next_chunk(&mut self, mut buf: Vec<u8>) -> io::Result<Option<Chunk>> {
         let first = self.offset == 0 && self.carry.is_empty();
-        buf.clear();
-        buf.append(&mut self.carry);
+        let carry = self.carry.len();
         // Enough that a line ends within it unless it is longer than MAX_LINE.
-        let want = CHUNK.max(buf.len() + MAX_LINE);
-        self.fill(&mut buf, want)?;
-        if first {
-            refuse_utf16(&buf)?;
+        let want = CHUNK.max(carry + MAX_LINE);
+        // A buffer handed back is read into as it is, its bytes overwritten: only room it
+        // lacks is zeroed (`read_to_end` zeroes all its spare room before reading, a memset of
+        // the whole chunk each time).
+        if buf.len() < want + LOOKAHEAD {
+            buf.resize(want + LOOKAHEAD, 0);
         }
-        let len = match last_line_end(&buf, self.eof) {
+        buf[..carry].copy_from_slice(&self.carry);
+        self.carry.clear();
+        let end = self.read_into(&mut buf[..want], carry)?;
+        if first {
+            refuse_utf16(&buf[..end])?;
+        }
+        let len = match last_line_end(&buf[..end], self.eof) {
             Some(len) => len,
-            None if self.eof => buf.len(),
+            None if self.eof => end,
             // No line ends in more than MAX_LINE bytes.
-            None => return self.skip_long_line(buf).map(Some),
+            None => {
+                buf.truncate(end);
+                return self.skip_long_line(buf).map(Some);
+            }
         };
         if len == 0 {
             return Ok(None);
         }
-        self.carry.extend_from_slice(&buf[len..]);
-        buf.truncate(len);
-        buf.resize(len + LOOKAHEAD, 0);
+        self.carry.extend_from_slice(&buf[len..end]);
+        buf[len..len + LOOKAHEAD].fill(0);
         let offset = self.offset;
         self.offset += len as u64;
         Ok(Some(Chunk { buf, len, offset, long: None }))
@@ -516,8 +538,26 @@ impl<R: Read> ChunkReader<R> {
         Ok(Chunk { buf, len: ending.len(), offset, long: Some(len) })
     }
 
-    /// Reads until `buf` holds `want` bytes or the input ends (into the spare capacity: the
-    /// bytes are not zeroed first).
+    /// Reads into `buf` after its first `filled` bytes until it is full or the input ends;
+    /// returns how many bytes it holds.
+    fn read_into(&mut self, buf: &mut [u8], mut filled: usize) -> io::Result<usize> {
+        while filled < buf.len() {
+            match self.inner.read(&mut buf[filled..]) {
+                Ok(0) => {
+                    self.eof = true;
+                    break;
+                }
+                // A reader that claims more than it was given room for is taken at its room.
+                Ok(n) => filled = (filled + n).min(buf.len()),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(filled)
+    }
+
+    /// Reads until `buf` holds `want` bytes or the input ends (for a long line, which is rare:
+    /// `read_to_end` zeroes the spare room first).
     fn fill(&mut self, buf: &mut Vec<u8>, want: usize) -> io::Result<()> {
         let need = want.saturating_sub(buf.len());
         if (&mut self.inner).take(need as u64).read_to_end(buf)? < need {

@@ -186,7 +186,6 @@ impl Front {
             }
             Part::Piece => return Ok(()),
         }
-        self.line += 1;
         // A plain move's words are read by no one here (only M-codes and extended commands
         // are, below): leave them unlisted where the state does without them.
         if self.state.reads_words() {
@@ -194,6 +193,39 @@ impl Front {
         } else {
             parse_line_lean(line, &mut self.block);
         }
+        self.lexed(line, jobs)
+    }
+
+    /// Whether lines given to [`Front::step_lexed`] must have a plain move's words listed.
+    pub(super) fn reads_words(&self) -> bool {
+        self.state.reads_words()
+    }
+
+    /// [`Front::step`] for a line lexed already into `block` (on the reading thread, as
+    /// [`Front::reads_words`] says), which takes the front's block in exchange.
+    #[inline(always)]
+    pub(super) fn step_lexed(
+        &mut self,
+        line: &RawLine<'_>,
+        block: &mut Block,
+        jobs: &mut Vec<Job>,
+    ) -> Result<(), EstimateError> {
+        match line.part {
+            Part::Whole => {}
+            Part::Last { .. } => {
+                self.skip_long_line();
+                return Ok(());
+            }
+            Part::Piece => return Ok(()),
+        }
+        std::mem::swap(&mut self.block, block);
+        self.lexed(line, jobs)
+    }
+
+    /// The rest of [`Front::step`] once [`Front::block`] holds the line.
+    #[inline(always)]
+    fn lexed(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        self.line += 1;
         self.count_malformed();
         self.state.apply(line.bytes, &self.block);
         if let Effect::Move(m) = &self.state.effect {

@@ -40,17 +40,18 @@
 //! side (`front`: lexer, modal state, time accounts, moves cut to straight chords) and the plan
 //! side (`back`: planner, steppers, clock). [`Estimator`] runs them one after the other on each
 //! line; [`estimate`] runs them on threads of their own, with a third one reading the file, and
-//! gets the same result to the bit.
+//! gets the same result to the bit (the third thread lexes the lines too: [`gweave::gcode::lexed`]).
 
 use std::collections::BTreeMap;
-use std::io::{self, Read};
+use std::io::Read;
 use std::sync::mpsc;
 
 use gweave::colour::dialect::{DialectError, MixingState};
 use gweave::firmware::Firmware;
 use gweave::gcode::layers::Feature;
+use gweave::gcode::lexed;
 use gweave::gcode::line::Block;
-use gweave::gcode::reader::{Chunk, ChunkReader, RawLine};
+use gweave::gcode::reader::RawLine;
 use gweave::gcode::state::{Effect, State};
 use thiserror::Error;
 
@@ -416,11 +417,9 @@ fn new_batch() -> Vec<Job> {
 /// Batches in flight between the threads; with [`BATCH`] this bounds the memory in between
 /// (under 1 MB).
 const BATCHES_IN_FLIGHT: usize = 4;
-/// Chunks of the file (about 1 MiB each) read ahead of the parser.
-const CHUNKS_IN_FLIGHT: usize = 2;
 
 /// Estimate a whole file read from `input`, step counts included. Three threads share the work:
-/// one reads the file in chunks of whole lines, one parses them and follows the modal state,
+/// one reads the file in chunks of whole lines and lexes them, one follows the modal state,
 /// one plans and steps. The result is the same, to the bit, as feeding every line to one
 /// [`Estimator`] (the plan side sees the same jobs in the same order); the memory is bounded by
 /// the chunks and batches in flight.
@@ -451,12 +450,11 @@ pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Resul
 fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
     let Estimator { mut front, mut back, jobs } = estimator;
     debug_assert!(jobs.is_empty());
-    let (to_front, chunks) = mpsc::sync_channel::<io::Result<Chunk>>(CHUNKS_IN_FLIGHT);
-    let (return_chunk, spare_chunks) = mpsc::channel::<Vec<u8>>();
+    let (lexer, lexed) = lexed::lexer(input, front.reads_words());
     let (to_back, batches) = mpsc::sync_channel::<Vec<Job>>(BATCHES_IN_FLIGHT);
     let (return_batch, spare_batches) = mpsc::channel::<Vec<Job>>();
     std::thread::scope(|scope| {
-        scope.spawn(move || read_chunks(input, &to_front, &spare_chunks));
+        scope.spawn(move || lexer.run());
         let planning = scope.spawn(move || -> Result<Back, EstimateError> {
             for mut batch in batches {
                 for job in &mut batch {
@@ -469,8 +467,8 @@ fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate
             Ok(back)
         });
         let mut batch = new_batch();
-        let handover = Handover { to_back: &to_back, spare: &spare_batches, return_chunk: &return_chunk };
-        let parsed = parse_chunks(chunks, &mut front, &mut batch, &handover);
+        let handover = Handover { to_back: &to_back, spare: &spare_batches };
+        let parsed = parse_lexed(lexed, &mut front, &mut batch, &handover);
         // The lines before an error are planned too: one of them may hold an earlier error. A
         // closed channel means the plan side stopped on an error, which it returns.
         let _ = to_back.send(batch);
@@ -483,49 +481,34 @@ fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate
     })
 }
 
-/// The reading thread: the file in chunks of whole lines, until the end, an error (passed on)
-/// or the parser stops taking them.
-fn read_chunks<R: Read>(
-    input: R,
-    to_front: &mpsc::SyncSender<io::Result<Chunk>>,
-    spare: &mpsc::Receiver<Vec<u8>>,
-) {
-    let mut reader = ChunkReader::new(input);
-    while let Some(next) = reader.next_chunk(spare.try_recv().unwrap_or_default()).transpose() {
-        let failed = next.is_err();
-        if to_front.send(next).is_err() || failed {
-            break;
-        }
-    }
-}
-
-/// Where the parse side hands its batches and takes empty ones, and returns read chunks.
+/// Where the parse side hands its batches and takes empty ones.
 struct Handover<'a> {
     to_back: &'a mpsc::SyncSender<Vec<Job>>,
     spare: &'a mpsc::Receiver<Vec<Job>>,
-    return_chunk: &'a mpsc::Sender<Vec<u8>>,
 }
 
-/// The parse side: every line into jobs, sent in batches. Stops early, with `Ok`, when the plan
-/// side has stopped (it reports its error itself).
-fn parse_chunks(
-    chunks: mpsc::Receiver<io::Result<Chunk>>,
+/// The parse side: every line, lexed on the reading thread ([`gweave::gcode::lexed`]), into
+/// jobs, sent in batches. Stops early, with `Ok`, when the plan side has stopped (it reports
+/// its error itself).
+fn parse_lexed(
+    mut lexed: lexed::Lexed,
     front: &mut Front,
     batch: &mut Vec<Job>,
     handover: &Handover,
 ) -> Result<(), EstimateError> {
-    let mut lines_before = 0;
-    // A stopped run (Python's Ctrl-C) stops here too, not only at the reader: the chunks
+    // A stopped run (Python's Ctrl-C) stops here too, not only at the reader: the lines
     // already read would otherwise be parsed and planned first.
     let stop = gweave::interrupt::current();
-    for chunk in chunks {
+    while let Some(lines) = lexed.next_batch() {
         if let Some(stop) = &stop {
             stop.check()?;
         }
-        let chunk = chunk?;
-        let mut lines = chunk.lines(lines_before);
-        while let Some(line) = lines.next_line() {
-            skip_mixing_errors(front.step(&line, batch))?;
+        let mut lines = lines?;
+        let (mut raw, blocks) = lines.lines_mut();
+        for block in blocks {
+            // The batch holds a block for each of its lines: never `None`.
+            let Some(line) = raw.next_line() else { break };
+            skip_mixing_errors(front.step_lexed(&line, block, batch))?;
             if batch.len() >= BATCH {
                 let next = handover.spare.try_recv().unwrap_or_else(|_| new_batch());
                 if handover.to_back.send(std::mem::replace(batch, next)).is_err() {
@@ -533,9 +516,7 @@ fn parse_chunks(
                 }
             }
         }
-        lines_before = lines.number();
-        // The reader may have finished and gone: then the buffer is not needed.
-        let _ = handover.return_chunk.send(chunk.into_buffer());
+        lexed.recycle(lines);
     }
     Ok(())
 }
