@@ -174,17 +174,27 @@ impl Front {
         self.malformed.add(self.line);
     }
 
+    /// Whether `line` is a whole line to estimate: the pieces of a line longer than
+    /// [`MAX_LINE`](gweave::gcode::reader::MAX_LINE) are not, and its last piece counts it as
+    /// malformed.
+    #[inline(always)]
+    fn is_whole(&mut self, line: &RawLine<'_>) -> bool {
+        match line.part {
+            Part::Whole => true,
+            Part::Last { .. } => {
+                self.skip_long_line();
+                false
+            }
+            Part::Piece => false,
+        }
+    }
+
     /// [`Front::parse`] and [`Front::run`] for a line from a reader, whose look-ahead bytes
     /// speed up the lexer. A move is read in place from the state (it is large).
     #[inline(always)]
     pub(super) fn step(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
-        match line.part {
-            Part::Whole => {}
-            Part::Last { .. } => {
-                self.skip_long_line();
-                return Ok(());
-            }
-            Part::Piece => return Ok(()),
+        if !self.is_whole(line) {
+            return Ok(());
         }
         // A plain move's words are read by no one here (only M-codes and extended commands
         // are, below): leave them unlisted where the state does without them.
@@ -210,13 +220,8 @@ impl Front {
         block: &mut Block,
         jobs: &mut Vec<Job>,
     ) -> Result<(), EstimateError> {
-        match line.part {
-            Part::Whole => {}
-            Part::Last { .. } => {
-                self.skip_long_line();
-                return Ok(());
-            }
-            Part::Piece => return Ok(()),
+        if !self.is_whole(line) {
+            return Ok(());
         }
         std::mem::swap(&mut self.block, block);
         self.lexed(line, jobs)
