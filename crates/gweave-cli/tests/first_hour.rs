@@ -180,3 +180,83 @@ fn check_takes_the_bed_of_a_machine_profile() {
     );
     assert!(ramps.contains(":4:4: warning: move outside the bed: X=250.000 mm"), "{ramps}");
 }
+
+/// A binder-jet user rasterised the badge and checked it on their machine: `sim --machine
+/// binder-jet` warned on every layer ("fired during a recoat", "the spreader reached 20.132 ..
+/// 29.657 mm, not across the bed"), since `raster` wrote the default recoat (an `M400`) and knew
+/// nothing of the machine. `raster --machine binder-jet` writes for its printhead, recoat and
+/// canvas: the virtual printer with the same machine finds every recoat whole.
+#[test]
+fn raster_for_the_binder_jet_machine_passes_its_recoat_checks() {
+    let dir = tempfile::tempdir().unwrap();
+    let layers = root().join("examples/raster/layers");
+    let sim_warnings = |gcode: &Path| {
+        let out = gweave(&["sim", gcode.to_str().unwrap(), "--machine", "binder-jet", "--json", "-q"]);
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let warnings = report["warnings"].as_array().unwrap().clone();
+        (report, warnings)
+    };
+    let raster = |extra: &[&str], name: &str| {
+        let out_file = dir.path().join(name);
+        let mut args = vec!["raster", layers.to_str().unwrap(), "-o", out_file.to_str().unwrap(), "-q"];
+        args.extend_from_slice(extra);
+        let out = gweave(&args);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        out_file
+    };
+
+    // Without the machine: the default recoat, which this machine's checks refuse on each of
+    // the 7 layers after the first (a fire during the recoat and a spreader short of the bed).
+    let plain = raster(&[], "plain.gcode");
+    let (_, warnings) = sim_warnings(&plain);
+    assert_eq!(warnings.len(), 14, "{warnings:?}");
+
+    let for_machine = raster(&["--machine", "binder-jet"], "machine.gcode");
+    let gcode = std::fs::read_to_string(&for_machine).unwrap();
+    // The profile's recoat before the second layer (0.1 mm layers from Z 0.1, powder ratio 1.5,
+    // spreader on Y from 5 mm across 190 mm).
+    let recoat = gcode.find("; gweave raster: recoat for layer 1\n").expect("the profile's recoat");
+    let block: Vec<&str> = gcode[recoat..].lines().take(9).collect();
+    assert_eq!(
+        block[1..],
+        [
+            "M400",
+            "G1 Z0.2 F120",
+            "G1 A0.15",
+            "G1 Y5 F3000",
+            "G1 Y195 F300",
+            "G1 Y5 F3000",
+            "G4 P500",
+            "G1 Z0.2"
+        ]
+    );
+    let (report, warnings) = sim_warnings(&for_machine);
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_eq!(report["inkjet"]["layers"], 8, "{report}");
+
+    // --head and --machine both name the printhead: one is refused.
+    let head = root().join("examples/raster/c6602.toml");
+    let both = gweave(&[
+        "raster",
+        layers.to_str().unwrap(),
+        "-o",
+        dir.path().join("both.gcode").to_str().unwrap(),
+        "--machine",
+        "binder-jet",
+        "--head",
+        head.to_str().unwrap(),
+    ]);
+    assert!(!both.status.success());
+    // A machine without a printhead is refused with what to give instead.
+    let fdm = gweave(&[
+        "raster",
+        layers.to_str().unwrap(),
+        "-o",
+        dir.path().join("fdm.gcode").to_str().unwrap(),
+        "--machine",
+        "prusa-mk3",
+    ]);
+    assert!(!fdm.status.success());
+    assert!(text(&fdm.stderr).contains("has no inkjet printhead"), "{}", text(&fdm.stderr));
+    assert!(!dir.path().join("fdm.gcode").exists());
+}

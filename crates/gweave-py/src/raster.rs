@@ -6,7 +6,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use gweave::gcode::writer::Target;
-use gweave::gen::raster_job::{JobError, JobOptions, JobReport};
+use gweave::gen::raster_job::{HeadSource, JobError, JobOptions, JobReport};
 use gweave::pass::Quiet;
 use gweave::post::metadata::Figures;
 use gweave_sim::Estimator;
@@ -36,11 +36,24 @@ fn job_err(e: JobError) -> PyErr {
     }
 }
 
+/// `head=` (a printhead profile file) or `machine=` (an inkjet machine profile, a file or a
+/// built-in name), as `--head` and `--machine`.
+fn head_source(head: Option<PathBuf>, machine: Option<PathBuf>) -> PyResult<Option<HeadSource>> {
+    match (head, machine) {
+        (Some(_), Some(_)) => Err(PyValueError::new_err("give head or machine, not both")),
+        (None, Some(m)) => {
+            let profile = crate::sim::machine_profile(Some(m))?;
+            Ok(Some(profile.raster_head().map_err(|e| PyValueError::new_err(e.to_string()))?))
+        }
+        (head, None) => Ok(head.map(HeadSource::File)),
+    }
+}
+
 /// Rasters layer images or a `.sl1` into inkjet G-code; the report as JSON text (see
 /// `gweave raster --json`).
 #[pyfunction]
-#[pyo3(signature = (inputs, output, *, head=None, threshold=0.5, invert=false, flip_y=false, one_way=false,
-    fire_order="after", density=1, origin=(20.0, 20.0), layer_height=None, pixel_mm=None, dpi=None, heads=None, channels=None,
+#[pyo3(signature = (inputs, output, *, head=None, machine=None, threshold=0.5, invert=false, flip_y=false, one_way=false,
+    fire_order="after", density=1, origin=None, layer_height=None, pixel_mm=None, dpi=None, heads=None, channels=None,
     recoat=None, start=None, end=None, dialect=None, feed=None, fast_estimate=false, options=""))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn raster_json(
@@ -48,13 +61,14 @@ pub(crate) fn raster_json(
     inputs: Vec<PathBuf>,
     output: PathBuf,
     head: Option<PathBuf>,
+    machine: Option<PathBuf>,
     threshold: f64,
     invert: bool,
     flip_y: bool,
     one_way: bool,
     fire_order: &str,
     density: u32,
-    origin: (f64, f64),
+    origin: Option<(f64, f64)>,
     layer_height: Option<f64>,
     pixel_mm: Option<f64>,
     dpi: Option<f64>,
@@ -70,7 +84,7 @@ pub(crate) fn raster_json(
 ) -> PyResult<String> {
     let job_options = JobOptions {
         inputs,
-        head,
+        head: head_source(head, machine)?,
         threshold,
         invert,
         flip_y,
@@ -119,20 +133,21 @@ pub(crate) fn raster_json(
 
 /// Writes a nozzle test pattern; the raster report as JSON text.
 #[pyfunction]
-#[pyo3(signature = (output, *, head=None, heads=None, dialect=None, columns=4, origin=(20.0, 20.0), options=""))]
+#[pyo3(signature = (output, *, head=None, machine=None, heads=None, dialect=None, columns=4, origin=None, options=""))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn raster_test_pattern_json(
     py: Python<'_>,
     output: PathBuf,
     head: Option<PathBuf>,
+    machine: Option<PathBuf>,
     heads: Option<usize>,
     dialect: Option<&str>,
     columns: usize,
-    origin: (f64, f64),
+    origin: Option<(f64, f64)>,
     options: &str,
 ) -> PyResult<String> {
     let job_options = JobOptions {
-        head,
+        head: head_source(head, machine)?,
         heads,
         dialect: crate::args::firmware("dialect", dialect)?,
         origin_mm: origin,

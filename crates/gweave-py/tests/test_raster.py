@@ -77,3 +77,21 @@ def test_slice_raster_then_raster(tmp_path):
     # The resolution is checked as the CLI checks --dpi (the library's SliceConfig::with_resolution).
     with pytest.raises(ValueError, match="^dpi = 0 is out of range"):
         gweave.slice_raster(RDATA / "torus.stl", tmp_path / "none", layer_height=0.1, dpi=0)
+
+
+def test_raster_for_the_binder_jet_machine_passes_its_recoat_checks(tmp_path):
+    """``machine="binder-jet"`` writes the machine's recoat on its canvas, as ``--machine``: the
+    virtual printer with the same machine warns of nothing (the default recoat: 14 warnings)."""
+    plain = tmp_path / "plain.gcode"
+    gweave.raster(EXAMPLES / "layers", plain, fast_estimate=True)
+    assert len(gweave.sim(plain, machine="binder-jet")["warnings"]) == 14
+    out = tmp_path / "machine.gcode"
+    r = gweave.raster(EXAMPLES / "layers", out, machine="binder-jet", fast_estimate=True)
+    assert r["drops_per_head"] == [6508]
+    text = out.read_text()
+    assert "G1 Y195 F300\n" in text and text.splitlines()[0].endswith(" raster --machine binder-jet --fast-estimate (generated)")
+    assert gweave.sim(out, machine="binder-jet")["warnings"] == []
+    with pytest.raises(ValueError, match="head or machine"):
+        gweave.raster(EXAMPLES / "layers", tmp_path / "x.gcode", machine="binder-jet", head=EXAMPLES / "c6602.toml")
+    with pytest.raises(ValueError, match="has no inkjet printhead"):
+        gweave.raster(EXAMPLES / "layers", tmp_path / "x.gcode", machine="prusa-mk3")

@@ -49,7 +49,7 @@ MAP = {
             **{
                 f: f.replace("-", "_")
                 for f in (
-                    "head threshold invert flip-y one-way fire-order density origin layer-height pixel-mm dpi "
+                    "head machine threshold invert flip-y one-way fire-order density origin layer-height pixel-mm dpi "
                     "heads channels recoat start end dialect feed fast-estimate"
                 ).split()
             },

@@ -10,11 +10,12 @@ use gweave::firmware::Firmware;
 use gweave::gcode::writer::Target;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{FireOrder, DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD};
-use gweave::gen::raster_job::{JobOptions, JobReport, Source};
+use gweave::gen::raster_job::{HeadSource, JobOptions, JobReport, Source};
 use gweave::post::metadata::Figures;
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
 use gweave_sim::Estimator;
 
+use crate::args::load_machine;
 use crate::common::{hms, in_range, numbers_in, print_summary, ReportArgs};
 use crate::files::Files;
 use crate::finish;
@@ -39,6 +40,11 @@ pub struct RasterArgs {
     /// Printhead profile (TOML; default: HP C6602, 12 nozzles at 96 dpi, one head).
     #[arg(long, value_name = "PROFILE.toml")]
     pub head: Option<PathBuf>,
+    /// Write for this inkjet machine (a profile file or a built-in name: binder-jet,
+    /// inkjet-c6602): its printhead, its powder recoat and its canvas origin, as `gweave sim
+    /// --machine` checks them. Instead of --head.
+    #[arg(long, value_name = "TOML|NAME", conflicts_with = "head")]
+    pub machine: Option<PathBuf>,
     /// Fraction of full scale at or above which a pixel gets binder.
     #[arg(long, default_value_t = 0.5, value_name = "0..1", value_parser = in_range(THRESHOLD))]
     pub threshold: f64,
@@ -59,9 +65,9 @@ pub struct RasterArgs {
     /// Fires per pixel (binder saturation).
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = in_range(DENSITY))]
     pub density: u32,
-    /// Bed position of the image corner, mm.
-    #[arg(long, value_name = "X,Y", default_value = "20,20", value_parser = numbers_in::<2>(POSITION_MM))]
-    pub origin: [f64; 2],
+    /// Bed position of the image corner, mm [default: the machine's canvas origin, else 20,20].
+    #[arg(long, value_name = "X,Y", value_parser = numbers_in::<2>(POSITION_MM))]
+    pub origin: Option<[f64; 2]>,
     /// Layer thickness, mm (default: the .sl1's own, else 0.1).
     #[arg(long, value_name = "MM", value_parser = in_range(LAYER_HEIGHT_MM))]
     pub layer_height: Option<f64>,
@@ -119,7 +125,10 @@ impl RasterArgs {
     fn options(&self) -> Result<JobOptions> {
         Ok(JobOptions {
             inputs: self.inputs.clone(),
-            head: self.head.clone(),
+            head: match (&self.machine, &self.head) {
+                (Some(machine), _) => Some(load_machine(machine)?.raster_head()?),
+                (None, head) => head.clone().map(HeadSource::File),
+            },
             threshold: self.threshold,
             invert: self.invert,
             flip_y: self.flip_y,
@@ -129,7 +138,7 @@ impl RasterArgs {
                 FireOrderArg::Before => FireOrder::Before,
             },
             density: self.density,
-            origin_mm: (self.origin[0], self.origin[1]),
+            origin_mm: self.origin.map(|[x, y]| (x, y)),
             layer_height_mm: self.layer_height,
             pixel_mm: self.pixel_mm,
             dpi: self.dpi,
@@ -155,6 +164,7 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     Files::new()
         .read_all("INPUTS", images)
         .read("--head", args.head.as_deref())
+        .read("--machine", args.machine.as_deref())
         .read("--recoat", args.recoat.as_deref())
         .read("--start", args.start.as_deref())
         .read("--end", args.end.as_deref())

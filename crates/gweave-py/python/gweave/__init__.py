@@ -203,18 +203,24 @@ def _machine_flags(
     )
 
 
+def _origin(origin: Optional[Sequence[float]]) -> Optional[Tuple[float, float]]:
+    """A raster's ``origin`` keyword as the engine takes it: None keeps the machine's or the default."""
+    return None if origin is None else (float(origin[0]), float(origin[1]))
+
+
 def raster(
     inputs: Union[PathLike, Sequence[PathLike]],
     output: PathLike,
     *,
     head: Optional[PathLike] = None,
+    machine: Optional[PathLike] = None,
     threshold: float = 0.5,
     invert: bool = False,
     flip_y: bool = False,
     one_way: bool = False,
     fire_order: str = "after",
     density: int = 1,
-    origin: Sequence[float] = (20.0, 20.0),
+    origin: Optional[Sequence[float]] = None,
     layer_height: Optional[float] = None,
     pixel_mm: Optional[float] = None,
     dpi: Optional[float] = None,
@@ -233,7 +239,9 @@ def raster(
     ``"reprap"`` still accepted; ``fire_order="before"``: fire, wait, then move, the binder-jet
     seed's order).
     Units: ``origin`` mm, ``layer_height`` mm, ``pixel_mm`` mm (or ``dpi``), ``feed`` mm/min;
-    ``recoat``/``start``/``end`` are files of G-code. ``head`` is a printhead profile TOML.
+    ``recoat``/``start``/``end`` are files of G-code. ``head`` is a printhead profile TOML;
+    ``machine`` (instead) an inkjet machine profile, a file or a built-in name (``binder-jet``):
+    its printhead, powder recoat and canvas origin (the default ``origin``, else 20, 20 mm).
     Returns the report of ``gweave raster --json`` (layers, bands, columns, drops per head,
     binder volume, ``time`` with the planner's estimate).
     """
@@ -243,13 +251,14 @@ def raster(
             [_path(p, "inputs") for p in paths],
             _path(output, "output"),
             head=_opt_path(head, "head"),
+            machine=_opt_path(machine, "machine"),
             threshold=threshold,
             invert=invert,
             flip_y=flip_y,
             one_way=one_way,
             fire_order=fire_order,
             density=density,
-            origin=(float(origin[0]), float(origin[1])),
+            origin=_origin(origin),
             layer_height=layer_height,
             pixel_mm=pixel_mm,
             dpi=dpi,
@@ -263,13 +272,14 @@ def raster(
             fast_estimate=fast_estimate,
             options=_flags(
                 ("--head", head),
+                ("--machine", machine),
                 ("--threshold", None if threshold == 0.5 else threshold),
                 ("--invert", invert),
                 ("--flip-y", flip_y),
                 ("--one-way", one_way),
                 ("--fire-order", None if fire_order == "after" else fire_order),
                 ("--density", None if density == 1 else density),
-                ("--origin", None if tuple(origin) == (20.0, 20.0) else tuple(origin)),
+                ("--origin", None if origin is None else tuple(origin)),
                 ("--layer-height", layer_height),
                 ("--pixel-mm", pixel_mm),
                 ("--dpi", dpi),
@@ -290,10 +300,11 @@ def raster_test_pattern(
     output: PathLike,
     *,
     head: Optional[PathLike] = None,
+    machine: Optional[PathLike] = None,
     heads: Optional[int] = None,
     dialect: Optional[str] = None,
     pattern_columns: int = 4,
-    origin: Sequence[float] = (20.0, 20.0),
+    origin: Optional[Sequence[float]] = None,
 ) -> Report:
     """Write a nozzle test pattern (``gweave raster --test-pattern``): ``pattern_columns`` columns
     per nozzle address, each address alone."""
@@ -301,17 +312,19 @@ def raster_test_pattern(
         _gweave.raster_test_pattern_json(
             _path(output, "output"),
             head=_opt_path(head, "head"),
+            machine=_opt_path(machine, "machine"),
             heads=heads,
             dialect=dialect,
             columns=pattern_columns,
-            origin=(float(origin[0]), float(origin[1])),
+            origin=_origin(origin),
             options=_flags(
                 ("--test-pattern", True),
                 ("--head", head),
+                ("--machine", machine),
                 ("--heads", heads),
                 ("--dialect", dialect),
                 ("--pattern-columns", None if pattern_columns == 4 else pattern_columns),
-                ("--origin", None if tuple(origin) == (20.0, 20.0) else tuple(origin)),
+                ("--origin", None if origin is None else tuple(origin)),
             ),
         )
     )

@@ -33,6 +33,7 @@ use std::fmt;
 use std::str::FromStr;
 
 use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
+use gweave::gen::raster_job::HeadSource;
 use gweave::range::{self, OutOfRange, Range};
 use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
@@ -81,6 +82,9 @@ pub enum MachineProfileError {
     /// A fault specification such as `hotend-cartridge-off@120s` that cannot be read.
     #[error("fault `{0}`: expected HEATER-FAULT@SECONDS, e.g. hotend-cartridge-off@120s, bed-thermistor-open@30s, hotend1-thermistor-shorted@5s")]
     Fault(String),
+    /// A raster job was given a machine without a printhead (its name).
+    #[error("machine `{0}` has no inkjet printhead (no [inkjet] table): give an inkjet machine (`gweave machine list`: binder-jet, inkjet-c6602) or a printhead profile")]
+    NoPrinthead(String),
 }
 
 /// The build volume: the soft limits moves are checked against, mm. The bed surface is Z = 0.
@@ -417,6 +421,18 @@ impl Default for MachineProfile {
 }
 
 impl MachineProfile {
+    /// The printhead and canvas origin a raster job writes for on this machine (`gweave raster
+    /// --machine`): its drops land on the canvas and its recoats are the ones this profile's
+    /// virtual printer checks.
+    pub fn raster_head(&self) -> Result<HeadSource, MachineProfileError> {
+        let inkjet =
+            self.inkjet.as_ref().ok_or_else(|| MachineProfileError::NoPrinthead(self.name.clone()))?;
+        Ok(HeadSource::Machine {
+            printhead: Box::new(inkjet.printhead.clone()),
+            origin_mm: (inkjet.origin_x_mm, inkjet.origin_y_mm),
+        })
+    }
+
     /// Read a profile from TOML text, fill derived defaults and check it.
     /// Files it names (`[thermal] thermistor_table`) are read from the current folder.
     pub fn from_toml_str(text: &str) -> Result<Self, MachineProfileError> {

@@ -388,8 +388,8 @@ fn pipelined<W: Write>(
 pub struct JobOptions {
     /// Folders, globs, image files in layer order, or one `.sl1` (`INPUTS`).
     pub inputs: Vec<PathBuf>,
-    /// Printhead profile TOML (None: the HP C6602 defaults).
-    pub head: Option<PathBuf>,
+    /// The printhead (None: the HP C6602 defaults).
+    pub head: Option<HeadSource>,
     /// Fraction of full scale at or above which a pixel gets binder.
     pub threshold: f64,
     /// Dark pixels get binder.
@@ -403,8 +403,8 @@ pub struct JobOptions {
     pub fire_order: FireOrder,
     /// Fires per pixel.
     pub density: u32,
-    /// Bed position of the image corner, mm.
-    pub origin_mm: (f64, f64),
+    /// Bed position of the image corner, mm (None: the machine's canvas origin, else 20, 20).
+    pub origin_mm: Option<(f64, f64)>,
     /// Layer thickness, mm (None: the `.sl1`'s own, else the generator's default).
     pub layer_height_mm: Option<f64>,
     /// Pixel size of the images, mm.
@@ -429,6 +429,23 @@ pub struct JobOptions {
     pub fast_estimate: bool,
 }
 
+/// Where a job's printhead comes from.
+#[derive(Debug, Clone)]
+pub enum HeadSource {
+    /// A printhead profile file (`--head`).
+    File(PathBuf),
+    /// A machine profile's inkjet table (`--machine`): its printhead, with the `[recoat]` the
+    /// machine's powder bed needs, and the bed position of its canvas, which becomes the job's
+    /// origin unless one is given, so that the virtual printer with the same machine finds every
+    /// drop and every recoat where it expects them.
+    Machine {
+        /// The printhead as the machine profile describes it.
+        printhead: Box<PrintheadProfile>,
+        /// Bed position of the canvas' pixel (0, 0) corner, mm.
+        origin_mm: (f64, f64),
+    },
+}
+
 impl Default for JobOptions {
     fn default() -> Self {
         let c = RasterConfig::default();
@@ -441,7 +458,7 @@ impl Default for JobOptions {
             one_way: false,
             fire_order: FireOrder::After,
             density: c.density,
-            origin_mm: (c.origin_x_mm, c.origin_y_mm),
+            origin_mm: None,
             layer_height_mm: None,
             pixel_mm: None,
             dpi: None,
@@ -461,9 +478,10 @@ impl JobOptions {
     /// The printhead profile: `head` file or the C6602 defaults, with `dialect` applied.
     pub fn profile(&self) -> Result<PrintheadProfile> {
         let mut p = match &self.head {
-            Some(path) => PrintheadProfile::from_toml(&read_text(path)?).map_err(|e| {
+            Some(HeadSource::File(path)) => PrintheadProfile::from_toml(&read_text(path)?).map_err(|e| {
                 crate::Error::Config { path: path.clone(), message: crate::error::with_causes(&e) }
             })?,
+            Some(HeadSource::Machine { printhead, .. }) => (**printhead).clone(),
             None => PrintheadProfile::default(),
         };
         if let Some(d) = self.dialect {
@@ -474,11 +492,23 @@ impl JobOptions {
         Ok(p)
     }
 
+    /// The image corner on the bed: the given origin, else the machine's canvas, else the
+    /// generator's default.
+    fn origin_mm(&self) -> (f64, f64) {
+        let default = RasterConfig::default();
+        match (&self.origin_mm, &self.head) {
+            (Some(o), _) => *o,
+            (None, Some(HeadSource::Machine { origin_mm, .. })) => *origin_mm,
+            (None, _) => (default.origin_x_mm, default.origin_y_mm),
+        }
+    }
+
     /// The validated raster settings.
     pub fn config(&self) -> Result<RasterConfig> {
+        let (origin_x_mm, origin_y_mm) = self.origin_mm();
         let mut c = RasterConfig {
-            origin_x_mm: self.origin_mm.0,
-            origin_y_mm: self.origin_mm.1,
+            origin_x_mm,
+            origin_y_mm,
             layer_height_mm: self.layer_height_mm,
             serpentine: !self.one_way,
             fire_order: self.fire_order,
