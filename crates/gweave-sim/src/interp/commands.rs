@@ -212,7 +212,7 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M80", what: "power on (firmware.psu_control)", run: accepted, needs: Feature::PsuControl, ..ROW },
     CommandSpec { codes: "M81", what: "power off: heaters and motors off", run: m81, ..ROW },
     CommandSpec { codes: "M82 M83", what: "absolute / relative extrusion", run: core, ..ROW },
-    CommandSpec { codes: "M92", what: "steps per unit X Y Z E of the steppers", run: settings, params: &[p("XYZE", range::STEPS_PER_UNIT)], ..ROW },
+    CommandSpec { codes: "M92", what: "steps per unit X Y Z E of the steppers", run: m92, params: &[p("XYZE", range::STEPS_PER_UNIT)], ..ROW },
     CommandSpec { codes: "M104 M109", what: "hotend target (T picks the hotend), M109 also waits: S while heating, R both ways", run: hotend_target, params: &[p("SRP", range::TEMPERATURE_C), p("T", TOOL)], ..ROW },
     CommandSpec { codes: "M105", what: "report temperatures and heater powers: ok T:.. /.. B:.. /.. @:.. B@:..", run: m105, while_halted: true, ..ROW },
     CommandSpec { codes: "M106 M107", what: "part fan speed / off (the fan cools the hotend)", run: fan, params: &[p("SP", range::PWM)], ..ROW },
@@ -233,22 +233,22 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M203", what: "maximum feed rate per axis", run: core, params: &[p("XYZE", range::SPEED_MM_S), p("A", limits::SPEED_DEG_S)], ..ROW },
     CommandSpec { codes: "M204", what: "print (P, S) / retract (R) / travel (T) acceleration", run: core, params: &[p("SPRT", range::ACCEL_MM_S2)], ..ROW },
     CommandSpec { codes: "M205", what: "junction deviation (J) or classic jerk (X Y Z E), minimum segment time (B), minimum feed rates (S T)", run: m205, params: &[p("XYZE", limits::JERK_MM_S), p("J", limits::JUNCTION_DEVIATION_MM), p("B", limits::MIN_SEGMENT_TIME_US), p("ST", range::SPEED_MM_S.or_zero())], ..ROW },
-    CommandSpec { codes: "M207 M208 M209", what: "firmware retraction: retract length (the planner's G10), recover, auto-retract", run: settings, params: &[p("SWZ", range::LEN_MM), p("F", range::FEED_MM_MIN)], needs: Feature::FwRetract, ..ROW },
+    CommandSpec { codes: "M207 M208 M209", what: "firmware retraction: retract length (the planner's G10), recover, auto-retract", run: retraction_settings, params: &[p("SWZ", range::LEN_MM), p("F", range::FEED_MM_MIN)], needs: Feature::FwRetract, ..ROW },
     CommandSpec { codes: "M211", what: "software endstops on/off and their limits", run: m211, ..ROW },
     CommandSpec { codes: "M220 M221", what: "feed rate / flow percentage (no S: report it)", run: percentage, params: &[p("S", PERCENT)], ..ROW },
     CommandSpec { codes: "M300", what: "beep (accepted)", run: accepted, needs: Feature::Buzzer, ..ROW },
     CommandSpec { codes: "M301", what: "set or report the hotend PID gains", run: m301, params: &[p("PID", control::GAIN), p("E", TOOL)], ..ROW },
     CommandSpec { codes: "M303", what: "PID autotune on the thermal plant (relay method), U1 applies the gains", run: m303, queue: Queue::Drains, params: &[p("S", range::TEMPERATURE_C), p("E", HEATER), p("C", AUTOTUNE_CYCLES)], ..ROW },
-    CommandSpec { codes: "M304", what: "set or report the bed PID gains", run: settings, params: &[p("PID", control::GAIN)], ..ROW },
+    CommandSpec { codes: "M304", what: "set or report the bed PID gains", run: m304, params: &[p("PID", control::GAIN)], ..ROW },
     CommandSpec { codes: "M400", what: "wait for the queued moves to finish; its ok takes that time in wall time too (hosts time it)", run: m400, queue: Queue::Drains, ..ROW },
     CommandSpec { codes: "M420", what: "bed levelling on/off (S), mesh report (V)", run: m420, needs: Feature::Mesh, ..ROW },
-    CommandSpec { codes: "M500 M501", what: "settings: save to / load from the EEPROM file (firmware.eeprom)", run: settings, needs: Feature::Eeprom, ..ROW },
-    CommandSpec { codes: "M502 M503", what: "settings: factory defaults, report", run: settings, ..ROW },
+    CommandSpec { codes: "M500 M501", what: "settings: save to / load from the EEPROM file (firmware.eeprom)", run: eeprom, needs: Feature::Eeprom, ..ROW },
+    CommandSpec { codes: "M502 M503", what: "settings: factory defaults, report", run: defaults_or_report, ..ROW },
     CommandSpec { codes: "M524", what: "abort the SD print", run: sd, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, ..ROW },
     CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, params: TOOL_TEMP, ..ROW },
     CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, needs: Feature::AdvancedPause, ..ROW },
-    CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: settings, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
+    CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: m851, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
     CommandSpec { codes: "M876", what: "answer a host prompt (firmware.prompt_support)", run: m876, needs: Feature::PromptSupport, ..ROW },
     CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M578 M700", what: "inkjet fire at the carriage position (machines with a printhead)", run: fire, params: &[p("P", HEAD), p("S", NOZZLE_BITS)], ..ROW },
@@ -381,8 +381,8 @@ pub(super) fn check(code: (u8, u32), params: &[Param], block: &Block, line: &[u8
     Ok(())
 }
 
-// The handlers. Families handled by one method of their own module (`sd`, `settings`) pass the
-// code's number on; the rest are one method or a few lines each.
+// The handlers. The SD card's family is one method of its own module (`sd`), given the code's
+// number; the rest are one method or a few lines each.
 
 fn motion(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.motion(c.line, c.effect, out)
@@ -513,8 +513,43 @@ fn m876(m: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
     m.m876()
 }
 
-fn settings(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.settings_command(c.number, out)
+fn m92(m: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    m.m92()
+}
+
+/// `M207` retraction, `M208` recovery, `M209` auto-retract.
+fn retraction_settings(m: &mut Machine, c: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    match c.number {
+        207 => m.m207(),
+        208 => m.m208(),
+        _ => m.m209(),
+    }
+}
+
+fn m304(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m304(out)
+}
+
+/// `M500` saves the settings to the EEPROM file, `M501` loads them.
+fn eeprom(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if c.number == 500 {
+        m.m500(out)
+    } else {
+        m.m501(out)
+    }
+}
+
+/// `M502` restores the factory settings, `M503` reports them.
+fn defaults_or_report(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if c.number == 502 {
+        m.m502(out)
+    } else {
+        m.m503(out)
+    }
+}
+
+fn m851(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m851(out)
 }
 
 /// Accepted, nothing to simulate (`M73`: the progress is the host's; `M110`, `M113`: the
