@@ -16,7 +16,7 @@ use gweave::pass::{drive_reader, keep, Ctx, Identity, Pass, Quiet, Step, Strictn
 pub fn check(bytes: &[u8]) {
     // The options the file's own flavour comment gives, as a run from a file reads them: the
     // fuzzer reaches the Klipper, RepRapFirmware and LinuxCNC rules by writing the comment.
-    let options = StateOptions::default().for_flavour(flavour_in(bytes).as_deref());
+    let options = StateOptions::default().resolved(None, flavour_in(bytes).as_deref());
 
     // `gweave cat`: plain moves lexed lean, the input read in one piece.
     let mut cat = Identity::default();

@@ -149,7 +149,7 @@ impl Reader {
         // The state reads the file's words as its flavour means them, as every command does.
         let flavour = read_flavour(&path).map_err(os_err)?;
         let file = container::open(&path).map_err(os_err)?;
-        let state = State::new(StateOptions::default().for_flavour(flavour.as_deref()));
+        let state = State::new(StateOptions::default().resolved(None, flavour.as_deref()));
         Ok(Reader { lines: LineReader::new(file), block: Block::default(), state })
     }
 

@@ -51,7 +51,7 @@ pub(crate) fn sim_json(
     }
     let report = interruptible(py, || {
         let mut m = gweave_sim::Machine::new(profile).map_err(sim_err)?;
-        m.read_as(read_firmware(&path).map_err(|e| os_error(&path, &e))?);
+        m.read_as(read_firmware(&path, None).map_err(|e| os_error(&path, &e))?);
         let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
         let mut reader = LineReader::new(file);
         let mut out = |_t: f64, _l: &str| {};
@@ -84,7 +84,7 @@ pub(crate) fn estimate_json(
 ) -> PyResult<String> {
     let profile = machine_profile(machine)?;
     let report = interruptible(py, || {
-        let firmware = read_firmware(&path).map_err(|e| os_error(&path, &e))?;
+        let firmware = read_firmware(&path, None).map_err(|e| os_error(&path, &e))?;
         let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
         gweave_sim::estimate_report(file, &profile, firmware, steps)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))

@@ -24,7 +24,7 @@ fn replies(profile: MachineProfile, line: &str) -> Vec<String> {
     out
 }
 
-/// The default machine with every optional firmware feature built in.
+/// The default machine with every build option built in (the defaults have the others).
 fn full_firmware() -> MachineProfile {
     let text = "[firmware]\npsu_control = true\nautoreport_pos = true\nprobe = true\nlfn_write = true\n";
     MachineProfile::from_toml_str(text).unwrap()
@@ -101,8 +101,10 @@ fn every_listed_command_is_carried_out() {
                 "M578" | "M700" => (example_machine("inkjet-c6602.toml"), format!("{code} P0 S1")),
                 "SET_VELOCITY_LIMIT" => (example_machine("klipper.toml"), format!("{code} ACCEL=1000")),
                 "SET_KINEMATIC_POSITION" => (example_machine("klipper.toml"), format!("{code} X=0")),
-                // Features a common Marlin build leaves out, declared here.
-                "M80" | "M154" | "M851" => (full_firmware(), code.to_owned()),
+                // A build option a common Marlin build leaves out, as the row says it needs.
+                _ if !MachineProfile::default().firmware.has(entry.needs) => {
+                    (full_firmware(), code.to_owned())
+                }
                 _ => (MachineProfile::default(), code.to_owned()),
             };
             let out = replies(profile, &line);

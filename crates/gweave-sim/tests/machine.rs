@@ -132,7 +132,7 @@ fn every_slicer_fixture_runs_without_a_thermal_error() {
         let text = std::fs::read(path).unwrap();
         let mut m = Machine::new(profile).unwrap();
         // Each file as its firmware reads it, as `gweave sim` runs it.
-        m.read_as(gweave::gcode::flavour::read_firmware(path).unwrap());
+        m.read_as(gweave::gcode::flavour::read_firmware(path, None).unwrap());
         let mut errors = Vec::new();
         let mut out = |t: f64, l: &str| {
             if l.starts_with("Error") {

@@ -206,6 +206,35 @@ impl MixCommands {
             MixCommands::RepRapFirmware => Firmware::RepRapFirmware,
         }
     }
+
+    /// Whether a mix is stored in a numbered tool and selected with `T<t>` (Marlin's virtual
+    /// tools, RepRapFirmware's tools), rather than set on the active tool at each change
+    /// (`M165`, direct mixing): only the first needs `hardware.virtual_tools`.
+    pub fn uses_tools(self) -> bool {
+        match self {
+            MixCommands::Marlin | MixCommands::RepRapFirmware => true,
+            MixCommands::MarlinDirect => false,
+        }
+    }
+
+    /// The most inputs a mix can name, when the command has a fixed set of words: `M165` has
+    /// six, `A B C D H I` (Marlin's `gcode/feature/mixing/M163-M165.cpp`); `M163 S<i>` and
+    /// `M567 E<a:b:..>` take any number.
+    pub fn max_inputs(self) -> Option<usize> {
+        match self {
+            MixCommands::MarlinDirect => Some(6),
+            MixCommands::Marlin | MixCommands::RepRapFirmware => None,
+        }
+    }
+
+    /// Whether a tool must be defined (`M563 P<t> D.. H..`) before its mix is set: on
+    /// RepRapFirmware a tool is not mixing until it is; Marlin's virtual tools always exist.
+    pub fn defines_tools(self) -> bool {
+        match self {
+            MixCommands::RepRapFirmware => true,
+            MixCommands::Marlin | MixCommands::MarlinDirect => false,
+        }
+    }
 }
 
 /// The mixing M-codes, of every firmware: one list, for every reader that must recognise them
@@ -308,6 +337,14 @@ mod tests {
         assert_eq!(Firmware::ALL.map(|f| f.relative_e(false, true)), [true, true, false, true]);
         assert_eq!(Firmware::RepRapFirmware.mix_commands(), MixCommands::RepRapFirmware);
         assert_eq!(Firmware::Klipper.mix_commands(), MixCommands::Marlin);
+    }
+
+    #[test]
+    fn what_each_mix_dialect_needs() {
+        let all = [MixCommands::Marlin, MixCommands::MarlinDirect, MixCommands::RepRapFirmware];
+        assert_eq!(all.map(MixCommands::uses_tools), [true, false, true]);
+        assert_eq!(all.map(MixCommands::max_inputs), [None, Some(6), None]);
+        assert_eq!(all.map(MixCommands::defines_tools), [false, false, true]);
     }
 
     #[test]

@@ -22,6 +22,7 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
+use crate::firmware::Firmware;
 use crate::gcode::container;
 use crate::gcode::flavour::{flavour_in, read_flavour, require_e_extruder};
 use crate::gcode::state::{State, StateOptions};
@@ -76,11 +77,13 @@ pub struct Ran {
     pub output: Vec<u8>,
 }
 
-/// A run's settings, built with the methods below (defaults: strict, Marlin options adjusted for
-/// the file's flavour, no progress, no `E` requirement).
+/// A run's settings, built with the methods below (defaults: strict, no configured firmware so
+/// the file's flavour names it, no progress, no `E` requirement).
 pub struct Run<'a> {
     source: Source<'a>,
     options: StateOptions,
+    /// The machine's firmware, if the caller knows it (a profile's key, a flag).
+    firmware: Option<Firmware>,
     strictness: Strictness,
     progress: Option<&'a mut dyn Progress>,
     /// `None`: not read yet.
@@ -105,6 +108,7 @@ impl<'a> Run<'a> {
         Run {
             source,
             options: StateOptions::default(),
+            firmware: None,
             strictness: Strictness::Strict,
             progress: None,
             flavour: None,
@@ -129,9 +133,18 @@ impl<'a> Run<'a> {
         self
     }
 
-    /// The machine options before the flavour adjusts them (default: Marlin's).
+    /// The machine options (default: Marlin's). Their `firmware` is replaced by the run's
+    /// ([`Run::resolved_firmware`]).
     pub fn options(mut self, options: StateOptions) -> Self {
         self.options = options;
+        self
+    }
+
+    /// The machine's firmware, when the caller knows it (a profile's key, a flag): it wins over
+    /// the one the file's flavour names ([`Firmware::resolve`]). `None` (the default) leaves the
+    /// choice to the flavour, then Marlin.
+    pub fn firmware(mut self, firmware: Option<Firmware>) -> Self {
+        self.firmware = firmware;
         self
     }
 
@@ -181,9 +194,17 @@ impl<'a> Run<'a> {
             },
         };
         if self.writes_e {
-            require_e_extruder(self.source.path(), flavour.as_deref())?;
+            let firmware = Firmware::resolve(self.firmware, flavour.as_deref());
+            require_e_extruder(self.source.path(), firmware, flavour.as_deref())?;
         }
         Ok(self.flavour.insert(flavour).as_deref())
+    }
+
+    /// The firmware the file is read as: the configured one ([`Run::firmware`]), else the one
+    /// its flavour names, else Marlin ([`Firmware::resolve`], the one rule).
+    pub fn resolved_firmware(&mut self) -> Result<Firmware> {
+        let configured = self.firmware;
+        Ok(Firmware::resolve(configured, self.flavour()?))
     }
 
     /// Streams the input through `pass` once more without output or progress, with the same
@@ -194,6 +215,7 @@ impl<'a> Run<'a> {
         let again = Run {
             source: self.source,
             options: self.options.clone(),
+            firmware: self.firmware,
             strictness: self.strictness,
             progress: None,
             flavour: Some(flavour),
@@ -262,8 +284,7 @@ impl<'a> Run<'a> {
         out_name: Option<&Path>,
         ahead: bool,
     ) -> Result<State> {
-        let flavour = self.flavour()?.map(str::to_owned);
-        let options = self.options.for_flavour(flavour.as_deref());
+        let options = StateOptions { firmware: self.resolved_firmware()?, ..self.options };
         let mut quiet = Quiet;
         let progress = self.progress.unwrap_or(&mut quiet);
         match self.source {
@@ -282,5 +303,45 @@ impl<'a> Run<'a> {
                 drive_reader(text, Path::new(IN_MEMORY), None, options, self.strictness, progress, pass, out)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pass::Identity;
+
+    /// Regression (for_flavour_overrode_the_configured_firmware): the runner let the file's
+    /// flavour override the firmware it was given, the reverse of [`Firmware::resolve`]. A file
+    /// sliced with Klipper's flavour, run on a machine configured for RepRapFirmware, reads as
+    /// RepRapFirmware: under `M82`, `G91` leaves E absolute (1 mm fed, not Klipper's 3).
+    #[test]
+    fn the_configured_firmware_wins_over_the_files_flavour() {
+        let text = b";FLAVOR:Klipper\nM82\nG1 E1\nG91\nG1 E1\nG1 E1\n";
+        let read = |firmware| Run::text(text).firmware(firmware).run(&mut Identity::default()).unwrap().state;
+        let flavoured = read(None);
+        assert_eq!((flavoured.options().firmware, flavoured.filament_mm[0]), (Firmware::Klipper, 3.0));
+        let configured = read(Some(Firmware::RepRapFirmware));
+        assert_eq!(
+            (configured.options().firmware, configured.filament_mm[0]),
+            (Firmware::RepRapFirmware, 1.0)
+        );
+    }
+
+    /// A transform that writes `E` refuses a file read as a LinuxCNC machine's (extruding with
+    /// `A`), whether its flavour says so or its machine is configured so, and accepts a `mach3`
+    /// file on a machine configured for Marlin.
+    #[test]
+    fn writing_e_follows_the_resolved_firmware() {
+        let mach3 = b"; gcode_flavor = mach3\nG1 X1 A1\n";
+        let refused = Run::text(mach3).writes_e().run(&mut Identity::default()).unwrap_err();
+        assert!(matches!(refused, Error::ForeignExtruder { letter: b'A', .. }), "{refused}");
+        let marlin =
+            Run::text(mach3).writes_e().firmware(Some(Firmware::Marlin)).run(&mut Identity::default());
+        assert_eq!(marlin.unwrap().state.options().firmware, Firmware::Marlin);
+        let plain = b"G1 X1 E1\n";
+        let linuxcnc =
+            Run::text(plain).writes_e().firmware(Some(Firmware::LinuxCnc)).run(&mut Identity::default());
+        assert!(matches!(linuxcnc, Err(Error::ForeignExtruder { letter: b'A', .. })));
     }
 }

@@ -460,7 +460,7 @@ mod tests {
         assert_eq!((blind.extrusion_bounds, blind.z_range_mm), (None, None));
         let warning = "the file's flavour (mach3) extrudes with A, but it was read with E: the flavour is named in the middle of the file, past where gweave looks for it (slicers name it at the start or the end)";
         assert!(blind.warnings.iter().any(|w| w == warning), "{:?}", blind.warnings);
-        let seen = run(StateOptions::default().for_flavour(Some("mach3")));
+        let seen = run(StateOptions::default().resolved(None, Some("mach3")));
         assert_eq!(seen.filament[0].extruded_mm, 2.0);
         let bounds = seen.extrusion_bounds.unwrap();
         assert_eq!((bounds.min, bounds.max), ([0.0; 3], [20.0, 0.0, 0.0]));

@@ -120,7 +120,7 @@ fn run(rel: &str, profile: MixProfile) -> Checked {
             assert!((r.iter().sum::<f64>() - 1.0).abs() < 1e-12, "RRF ratios must sum to 1: {l}");
             tools.insert(word(b'P') as u32, r);
         } else if let Some(t) = block.command.tool() {
-            assert!(report.dialect != MixCommands::MarlinDirect, "a T line with direct mixing: {l}");
+            assert!(report.dialect.uses_tools(), "a T line with direct mixing: {l}");
             active = Some(tools.get(&t).unwrap_or_else(|| panic!("T{t} used before it was defined")).clone());
         }
         if let Effect::Move(m) = effect {

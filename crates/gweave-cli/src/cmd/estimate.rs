@@ -56,7 +56,8 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         // A file or a built-in profile's name, as `sim` reads it.
         other => MachineArg { path: other.clone() }.load()?,
     };
-    let firmware = read_firmware(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
+    let firmware =
+        read_firmware(&args.input, None).with_context(|| format!("reading {}", args.input.display()))?;
     let file = container::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
     let mut bar = args.report.quiet.bar();
     bar.set_len(file.text_len.unwrap_or(0));

@@ -181,7 +181,7 @@ fn print_core(out: &mut dyn Write, input: &Path, r: &CoreReport) -> io::Result<(
 /// Executes every line until the end or a halt; returns the machine's `Error:` replies.
 fn run_file(machine: &mut Machine, input: &Path, quiet: Quiet) -> Result<Vec<String>> {
     // The file is read as `stats` reads it: as the firmware its flavour names.
-    machine.read_as(read_firmware(input).with_context(|| format!("reading {}", input.display()))?);
+    machine.read_as(read_firmware(input, None).with_context(|| format!("reading {}", input.display()))?);
     // A rotary program's F words follow the convention its header declares.
     if let Some(rotary) = gweave::rotary::cylinder::RotaryConfig::from_file_header(input) {
         machine.declare_rotary(rotary);

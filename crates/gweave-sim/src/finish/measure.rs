@@ -63,7 +63,7 @@ pub(super) fn measure(path: &Path) -> Result<Figures> {
         Ok(estimator)
     };
     let (normal, silent) = (estimator(&normal)?, silent.as_ref().map(estimator).transpose()?);
-    let options = StateOptions::default().for_flavour(flavour.as_deref());
+    let options = StateOptions { firmware, ..StateOptions::default() };
     let (tally, normal, silent) = on_threads(path, options, normal, silent)?;
     let silent = silent.as_ref().unwrap_or(&normal);
     let first_layer = |t: &Timed| t.estimate.layer_s.first().copied().unwrap_or(0.0);

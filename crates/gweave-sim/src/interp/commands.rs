@@ -27,6 +27,7 @@ use gweave::range::{self, OutOfRange, Range};
 
 use super::Machine;
 use crate::motion::limits;
+use crate::profile::build_options::Feature;
 use crate::thermal::control;
 
 /// What a handler is given: the line, the code's number, what the line does to the modal state
@@ -76,6 +77,33 @@ pub struct CommandSpec {
     /// The number words it reads and the values each may take: the dispatcher refuses the
     /// whole line before it changes anything if one is outside (`check`).
     pub params: &'static [Param],
+    /// The build option (`[firmware]` key) it needs; a board built without it answers
+    /// `Unknown command`, as Marlin does a command it was not compiled with.
+    pub needs: Feature,
+    /// Whether the serial link carries it out before the machine sees it.
+    pub link: Link,
+}
+
+/// Who carries a command out when a host sends it over the serial link
+/// ([`crate::link::serial`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Link {
+    /// The machine (the row's handler), behind the link: every command but the link's own.
+    Machine,
+    /// `M110 N<n>`: the link sets its line number (Marlin's `GCodeQueue`, `queue.cpp`); the
+    /// machine, reading a file, accepts it.
+    LineNumber,
+    /// `M113 S<s>`: the link's keepalive interval (Marlin's `host_keepalive_interval`,
+    /// `gcode/host/M113.cpp`), clamped into the row's range as Marlin caps it; reading a file,
+    /// the machine accepts it.
+    Keepalive,
+}
+
+impl CommandSpec {
+    /// The range the row declares for the word `letter`, if it reads it as a number.
+    pub fn range_of(&self, letter: u8) -> Option<Range> {
+        self.params.iter().find(|p| p.letters.as_bytes().contains(&letter)).map(|p| p.range)
+    }
 }
 
 /// Number words of a command that share one physical range.
@@ -99,6 +127,8 @@ impl std::fmt::Debug for CommandSpec {
             .field("while_halted", &self.while_halted)
             .field("queue", &self.queue)
             .field("params", &self.params)
+            .field("needs", &self.needs)
+            .field("link", &self.link)
             .finish_non_exhaustive()
     }
 }
@@ -117,78 +147,115 @@ const DWELL_MS: Range = Range::new(0.0, range::PERIOD_S.max * 1000.0, "ms");
 /// the machine does not have is Marlin's `Invalid extruder`.
 const TOOL: Range = Range::new(0.0, 255.0, "");
 
+/// `M303 E`: the heater to tune, a hotend index or -1 for the bed (Marlin's `M303 E-1`).
+const HEATER: Range = Range::new(-1.0, 255.0, "");
+/// `M303 C`: relay cycles. At least 3: the first is the heat-up, and the gains are those of two
+/// cycles that agree (`thermal::autotune`); Marlin takes 5 by default and a hundred is hours.
+const AUTOTUNE_CYCLES: Range = Range::new(3.0, 100.0, "cycles");
+/// `M700`/`M578 P`: the printhead, an index as a tool's.
+const HEAD: Range = Range::new(0.0, 255.0, "");
+/// `M700`/`M578 S`: a bit per nozzle, up to 64 nozzles
+/// ([`gweave::gen::printhead::MAX_NOZZLES`]); the firmware ignores the bits past the head's
+/// nozzles.
+const NOZZLE_BITS: Range = Range::new(0.0, u64::MAX as f64, "");
+/// `M26 S`: a byte position in the selected SD file (Marlin's `uint32_t`); past its end, the
+/// end.
+const SD_BYTE: Range = Range::new(0.0, 4_294_967_295.0, "bytes");
+/// `M113 S`: the keepalive interval, at most Marlin's `NOMORE(host_keepalive_interval, 60)`;
+/// 0 turns it off.
+const KEEPALIVE_S: Range = Range::new(0.0, crate::link::serial::MAX_KEEPALIVE_S as f64, "s");
+
 /// The words of the commands that take a period.
 const PERIOD: &[Param] = &[p("S", range::PERIOD_S)];
 /// RepRapFirmware's tool temperature, `G10 P<tool> S<active> R<standby>` and `M568`.
 const TOOL_TEMP: &[Param] = &[p("P", TOOL), p("SR", range::TEMPERATURE_C)];
 
+/// What a row says unless it says otherwise: a handler that accepts the command, a board that
+/// stops answering when halted, the moves left streaming, no number words, no build option, the
+/// machine carrying it out.
+const ROW: CommandSpec = CommandSpec {
+    codes: "",
+    what: "",
+    run: accepted,
+    while_halted: false,
+    queue: Queue::Streams,
+    params: &[],
+    needs: Feature::Always,
+    link: Link::Machine,
+};
+
 /// Every command the interpreter carries out, in the order of the help listing.
 pub const COMMANDS: &[CommandSpec] = &[
-    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, while_halted: false, queue: Queue::Streams, params: &[p("F", range::FEED_MM_MIN)] },
-    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, while_halted: false, queue: Queue::Streams, params: &[p("F", range::FEED_MM_MIN), p("IJR", range::POSITION_MM)] },
-    CommandSpec { codes: "G4", what: "dwell P milliseconds or S seconds, after the queued moves", run: dwell, while_halted: false, queue: Queue::Streams, params: &[p("S", range::PERIOD_S), p("P", DWELL_MS)] },
-    CommandSpec { codes: "G10 G11", what: "firmware retract / recover (45 / 8 mm/s), Marlin's `G10 S1` too; G10 with P (tool) and S sets a tool temperature (RepRapFirmware)", run: g10_g11, while_halted: false, queue: Queue::Streams, params: TOOL_TEMP },
-    CommandSpec { codes: "G20 G21", what: "inches / millimetres", run: core, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "G28", what: "home the named axes (all without words) against the endstops, with Marlin's bump", run: home, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "G29", what: "bed levelling (firmware.mesh): probe the grid in simulated time, store a flat mesh, levelling on", run: g29, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "G90 G91", what: "absolute / relative coordinates (E too)", run: core, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "G92", what: "set the logical position without moving", run: set_position, while_halted: false, queue: Queue::Streams, params: &[p("XYZ", range::POSITION_MM)] },
-    CommandSpec { codes: "M0 M1", what: "program stop: finish the moves, motors off; with m0 = \"seed\" also home and end the program", run: program_stop, while_halted: false, queue: Queue::Drains, params: &[] },
-    CommandSpec { codes: "M17 M18 M84", what: "motors on (accepted) / off (the axes must be homed again)", run: motors, while_halted: false, queue: Queue::Streams, params: PERIOD },
-    CommandSpec { codes: "M20 M21 M22", what: "SD card (firmware.sdcard, serve --sd DIR): list files (L: long names), mount, release", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M23 M24 M25 M26", what: "SD print: select a file, start/resume, pause, set the byte position", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M27", what: "SD print status (S<n>: every n s)", run: sd, while_halted: false, queue: Queue::Streams, params: PERIOD },
-    CommandSpec { codes: "M28 M29 M30 M32 M33", what: "SD upload to a file / end it, delete a file, select and start, long name of a file", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M31", what: "print job time", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M42", what: "set a pin (firmware.pin_control): P pin, S value", run: host, while_halted: false, queue: Queue::Streams, params: &[p("S", range::PWM)] },
-    CommandSpec { codes: "M226", what: "wait for a pin state (firmware.pin_control)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M73", what: "progress (accepted)", run: accepted, while_halted: false, queue: Queue::Streams, params: &[p("P", PROGRESS_PCT)] },
-    CommandSpec { codes: "M117", what: "status message, sent to the host as //action:notification", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M75 M76 M77", what: "print job timer start / pause / stop", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M80 M81", what: "power on (firmware.psu_control) / off: heaters and motors off", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M82 M83", what: "absolute / relative extrusion", run: core, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M92", what: "steps per unit X Y Z E of the steppers", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("XYZE", range::STEPS_PER_UNIT)] },
-    CommandSpec { codes: "M104 M109", what: "hotend target (T picks the hotend), M109 also waits: S while heating, R both ways", run: hotend_target, while_halted: false, queue: Queue::Streams, params: &[p("SRP", range::TEMPERATURE_C), p("T", TOOL)] },
-    CommandSpec { codes: "M105", what: "report temperatures and heater powers: ok T:.. /.. B:.. /.. @:.. B@:..", run: m105, while_halted: true, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M106 M107", what: "part fan speed / off (the fan cools the hotend)", run: fan, while_halted: false, queue: Queue::Streams, params: &[p("SP", range::PWM)] },
-    CommandSpec { codes: "M108 M410", what: "emergency parser: break a wait / quick stop (accepted: waits end by themselves)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M110", what: "set the line number (serial protocol)", run: accepted, while_halted: true, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M112", what: "emergency stop: heaters off, halted until M999", run: emergency_stop, while_halted: true, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M114", what: "position and motor counts after the queued moves", run: m114, while_halted: true, queue: Queue::Drains, params: &[] },
-    CommandSpec { codes: "M115", what: "firmware name, extruder count and the capabilities of the [firmware] table", run: m115, while_halted: true, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M116", what: "wait for every heater with a target (RepRapFirmware)", run: m116, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M118", what: "print a message to the host (A1: // prefix, E1: echo: prefix)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M119", what: "endstop states", run: m119, while_halted: true, queue: Queue::Drains, params: &[] },
-    CommandSpec { codes: "M140 M190", what: "bed target, M190 also waits: S while heating, R both ways", run: bed_target, while_halted: false, queue: Queue::Streams, params: &[p("SRP", range::TEMPERATURE_C)] },
-    CommandSpec { codes: "M154", what: "report the position every S seconds (firmware.autoreport_pos)", run: host, while_halted: false, queue: Queue::Streams, params: PERIOD },
-    CommandSpec { codes: "M155", what: "report temperatures every S seconds (0: off)", run: m155, while_halted: false, queue: Queue::Streams, params: PERIOD },
-    CommandSpec { codes: "M163 M164 M165 M166", what: "mixing: set a weight, store a virtual tool, mix at once, gradient (accepted)", run: mixing, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M201", what: "maximum acceleration per axis", run: core, while_halted: false, queue: Queue::Streams, params: &[p("XYZE", range::ACCEL_MM_S2), p("A", limits::ACCEL_DEG_S2)] },
-    CommandSpec { codes: "M203", what: "maximum feed rate per axis", run: core, while_halted: false, queue: Queue::Streams, params: &[p("XYZE", range::SPEED_MM_S), p("A", limits::SPEED_DEG_S)] },
-    CommandSpec { codes: "M204", what: "print (P, S) / retract (R) / travel (T) acceleration", run: core, while_halted: false, queue: Queue::Streams, params: &[p("SPRT", range::ACCEL_MM_S2)] },
-    CommandSpec { codes: "M205", what: "junction deviation (J) or classic jerk (X Y Z E), minimum segment time (B), minimum feed rates (S T)", run: m205, while_halted: false, queue: Queue::Streams, params: &[p("XYZE", limits::JERK_MM_S), p("J", limits::JUNCTION_DEVIATION_MM), p("B", limits::MIN_SEGMENT_TIME_US), p("ST", range::SPEED_MM_S.or_zero())] },
-    CommandSpec { codes: "M207 M208 M209", what: "firmware retraction: retract length (the planner's G10), recover, auto-retract", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("SWZ", range::LEN_MM), p("F", range::FEED_MM_MIN)] },
-    CommandSpec { codes: "M211", what: "software endstops on/off and their limits", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M220 M221", what: "feed rate / flow percentage (no S: report it)", run: percentage, while_halted: false, queue: Queue::Streams, params: &[p("S", PERCENT)] },
-    CommandSpec { codes: "M300", what: "beep (accepted)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M301", what: "set or report the hotend PID gains", run: m301, while_halted: false, queue: Queue::Streams, params: &[p("PID", control::GAIN), p("E", TOOL)] },
-    CommandSpec { codes: "M303", what: "PID autotune on the thermal plant (relay method), U1 applies the gains", run: m303, while_halted: false, queue: Queue::Drains, params: &[p("S", range::TEMPERATURE_C)] },
-    CommandSpec { codes: "M304", what: "set or report the bed PID gains", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("PID", control::GAIN)] },
-    CommandSpec { codes: "M400", what: "wait for the queued moves to finish; its ok takes that time in wall time too (hosts time it)", run: m400, while_halted: false, queue: Queue::Drains, params: &[] },
-    CommandSpec { codes: "M420", what: "bed levelling on/off (S), mesh report (V)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M500 M501 M502 M503", what: "settings: save to / load from the EEPROM file, factory defaults, report", run: settings, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M524", what: "abort the SD print", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, while_halted: false, queue: Queue::Streams, params: TOOL_TEMP },
-    CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: settings, while_halted: false, queue: Queue::Streams, params: &[p("XYZ", range::POSITION_MM)] },
-    CommandSpec { codes: "M876", what: "answer a host prompt (firmware.prompt_support)", run: host, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M578 M700", what: "inkjet fire at the carriage position (machines with a printhead)", run: fire, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "M999", what: "restart after a halt", run: restart, while_halted: true, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "T<n>", what: "select a tool (a virtual mixing tool on a mixing hotend)", run: tool_change, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "SET_VELOCITY_LIMIT SET_KINEMATIC_POSITION", what: "Klipper's limits and position (Klipper mode)", run: klipper, while_halted: false, queue: Queue::Streams, params: &[] },
-    CommandSpec { codes: "?", what: "this list", run: help, while_halted: true, queue: Queue::Streams, params: &[] },
+    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, params: &[p("F", range::FEED_MM_MIN)], ..ROW },
+    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, params: &[p("F", range::FEED_MM_MIN), p("IJR", range::POSITION_MM)], needs: Feature::Arcs, ..ROW },
+    CommandSpec { codes: "G4", what: "dwell P milliseconds or S seconds, after the queued moves", run: dwell, params: &[p("S", range::PERIOD_S), p("P", DWELL_MS)], ..ROW },
+    CommandSpec { codes: "G10 G11", what: "firmware retract / recover (45 / 8 mm/s), Marlin's `G10 S1` too; G10 with P (tool) and S sets a tool temperature (RepRapFirmware)", run: g10_g11, params: TOOL_TEMP, needs: Feature::FwRetract, ..ROW },
+    CommandSpec { codes: "G20 G21", what: "inches / millimetres", run: core, ..ROW },
+    CommandSpec { codes: "G28", what: "home the named axes (all without words) against the endstops, with Marlin's bump", run: home, ..ROW },
+    CommandSpec { codes: "G29", what: "bed levelling (firmware.mesh): probe the grid in simulated time, store a flat mesh, levelling on", run: g29, needs: Feature::Mesh, ..ROW },
+    CommandSpec { codes: "G90 G91", what: "absolute / relative coordinates (E too)", run: core, ..ROW },
+    CommandSpec { codes: "G92", what: "set the logical position without moving", run: set_position, params: &[p("XYZ", range::POSITION_MM)], ..ROW },
+    CommandSpec { codes: "M0 M1", what: "program stop: finish the moves, motors off; with m0 = \"seed\" also home and end the program", run: program_stop, queue: Queue::Drains, ..ROW },
+    CommandSpec { codes: "M17 M18 M84", what: "motors on (accepted) / off (the axes must be homed again)", run: motors, params: PERIOD, ..ROW },
+    CommandSpec { codes: "M20 M21 M22", what: "SD card (firmware.sdcard, serve --sd DIR): list files (L: long names), mount, release", run: sd, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M23 M24 M25", what: "SD print: select a file, start/resume, pause", run: sd, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M26", what: "SD print: set the byte position S", run: sd, params: &[p("S", SD_BYTE)], needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M27", what: "SD print status (S<n>: every n s)", run: sd, params: PERIOD, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M28 M29 M30 M32", what: "SD upload to a file / end it, delete a file, select and start", run: sd, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M33", what: "long name of a file (firmware.long_filenames)", run: sd, needs: Feature::LongFilenames, ..ROW },
+    CommandSpec { codes: "M31", what: "print job time", run: m31, ..ROW },
+    CommandSpec { codes: "M42", what: "set a pin (firmware.pin_control): P pin, S value", run: m42, params: &[p("S", range::PWM)], needs: Feature::PinControl, ..ROW },
+    CommandSpec { codes: "M226", what: "wait for a pin state (firmware.pin_control)", run: m226, needs: Feature::PinControl, ..ROW },
+    CommandSpec { codes: "M73", what: "progress (accepted)", run: accepted, params: &[p("P", PROGRESS_PCT)], needs: Feature::SetProgress, ..ROW },
+    CommandSpec { codes: "M117", what: "status message, sent to the host as //action:notification", run: m117, ..ROW },
+    CommandSpec { codes: "M75 M76 M77", what: "print job timer start / pause / stop", run: job_timer, ..ROW },
+    CommandSpec { codes: "M80", what: "power on (firmware.psu_control)", run: accepted, needs: Feature::PsuControl, ..ROW },
+    CommandSpec { codes: "M81", what: "power off: heaters and motors off", run: m81, ..ROW },
+    CommandSpec { codes: "M82 M83", what: "absolute / relative extrusion", run: core, ..ROW },
+    CommandSpec { codes: "M92", what: "steps per unit X Y Z E of the steppers", run: m92, params: &[p("XYZE", range::STEPS_PER_UNIT)], ..ROW },
+    CommandSpec { codes: "M104 M109", what: "hotend target (T picks the hotend), M109 also waits: S while heating, R both ways", run: hotend_target, params: &[p("SRP", range::TEMPERATURE_C), p("T", TOOL)], ..ROW },
+    CommandSpec { codes: "M105", what: "report temperatures and heater powers: ok T:.. /.. B:.. /.. @:.. B@:..", run: m105, while_halted: true, ..ROW },
+    CommandSpec { codes: "M106 M107", what: "part fan speed / off (the fan cools the hotend)", run: fan, params: &[p("SP", range::PWM)], ..ROW },
+    CommandSpec { codes: "M108 M410", what: "emergency parser: break a wait / quick stop (accepted: waits end by themselves)", run: accepted, ..ROW },
+    CommandSpec { codes: "M110", what: "set the line number (serial protocol)", run: accepted, while_halted: true, link: Link::LineNumber, ..ROW },
+    CommandSpec { codes: "M113", what: "host keepalive: busy lines every S seconds during a long command (serial protocol; 0: off, no S: report it)", run: accepted, while_halted: true, params: &[p("S", KEEPALIVE_S)], link: Link::Keepalive, ..ROW },
+    CommandSpec { codes: "M112", what: "emergency stop: heaters off, halted until M999", run: emergency_stop, while_halted: true, ..ROW },
+    CommandSpec { codes: "M114", what: "position and motor counts after the queued moves", run: m114, while_halted: true, queue: Queue::Drains, ..ROW },
+    CommandSpec { codes: "M115", what: "firmware name, extruder count and the capabilities of the [firmware] table", run: m115, while_halted: true, ..ROW },
+    CommandSpec { codes: "M116", what: "wait for every heater with a target (RepRapFirmware)", run: m116, ..ROW },
+    CommandSpec { codes: "M118", what: "print a message to the host (A1: // prefix, E1: echo: prefix)", run: m118, ..ROW },
+    CommandSpec { codes: "M119", what: "endstop states", run: m119, while_halted: true, queue: Queue::Drains, ..ROW },
+    CommandSpec { codes: "M140 M190", what: "bed target, M190 also waits: S while heating, R both ways", run: bed_target, params: &[p("SRP", range::TEMPERATURE_C)], ..ROW },
+    CommandSpec { codes: "M154", what: "report the position every S seconds (firmware.autoreport_pos)", run: m154, params: PERIOD, needs: Feature::AutoreportPos, ..ROW },
+    CommandSpec { codes: "M155", what: "report temperatures every S seconds (0: off)", run: m155, params: PERIOD, needs: Feature::AutoreportTemp, ..ROW },
+    CommandSpec { codes: "M163 M164 M165 M166", what: "mixing: set a weight, store a virtual tool, mix at once, gradient (accepted)", run: mixing, ..ROW },
+    CommandSpec { codes: "M201", what: "maximum acceleration per axis", run: core, params: &[p("XYZE", range::ACCEL_MM_S2), p("A", limits::ACCEL_DEG_S2)], ..ROW },
+    CommandSpec { codes: "M203", what: "maximum feed rate per axis", run: core, params: &[p("XYZE", range::SPEED_MM_S), p("A", limits::SPEED_DEG_S)], ..ROW },
+    CommandSpec { codes: "M204", what: "print (P, S) / retract (R) / travel (T) acceleration", run: core, params: &[p("SPRT", range::ACCEL_MM_S2)], ..ROW },
+    CommandSpec { codes: "M205", what: "junction deviation (J) or classic jerk (X Y Z E), minimum segment time (B), minimum feed rates (S T)", run: m205, params: &[p("XYZE", limits::JERK_MM_S), p("J", limits::JUNCTION_DEVIATION_MM), p("B", limits::MIN_SEGMENT_TIME_US), p("ST", range::SPEED_MM_S.or_zero())], ..ROW },
+    CommandSpec { codes: "M207 M208 M209", what: "firmware retraction: retract length (the planner's G10), recover, auto-retract", run: retraction_settings, params: &[p("SWZ", range::LEN_MM), p("F", range::FEED_MM_MIN)], needs: Feature::FwRetract, ..ROW },
+    CommandSpec { codes: "M211", what: "software endstops on/off and their limits", run: m211, ..ROW },
+    CommandSpec { codes: "M220 M221", what: "feed rate / flow percentage (no S: report it)", run: percentage, params: &[p("S", PERCENT)], ..ROW },
+    CommandSpec { codes: "M300", what: "beep (accepted)", run: accepted, needs: Feature::Buzzer, ..ROW },
+    CommandSpec { codes: "M301", what: "set or report the hotend PID gains", run: m301, params: &[p("PID", control::GAIN), p("E", TOOL)], ..ROW },
+    CommandSpec { codes: "M303", what: "PID autotune on the thermal plant (relay method), U1 applies the gains", run: m303, queue: Queue::Drains, params: &[p("S", range::TEMPERATURE_C), p("E", HEATER), p("C", AUTOTUNE_CYCLES)], ..ROW },
+    CommandSpec { codes: "M304", what: "set or report the bed PID gains", run: m304, params: &[p("PID", control::GAIN)], ..ROW },
+    CommandSpec { codes: "M400", what: "wait for the queued moves to finish; its ok takes that time in wall time too (hosts time it)", run: m400, queue: Queue::Drains, ..ROW },
+    CommandSpec { codes: "M420", what: "bed levelling on/off (S), mesh report (V)", run: m420, needs: Feature::Mesh, ..ROW },
+    CommandSpec { codes: "M500 M501", what: "settings: save to / load from the EEPROM file (firmware.eeprom)", run: eeprom, needs: Feature::Eeprom, ..ROW },
+    CommandSpec { codes: "M502 M503", what: "settings: factory defaults, report", run: defaults_or_report, ..ROW },
+    CommandSpec { codes: "M524", what: "abort the SD print", run: sd, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, ..ROW },
+    CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, params: TOOL_TEMP, ..ROW },
+    CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, needs: Feature::AdvancedPause, ..ROW },
+    CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: m851, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
+    CommandSpec { codes: "M876", what: "answer a host prompt (firmware.prompt_support)", run: m876, needs: Feature::PromptSupport, ..ROW },
+    CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M578 M700", what: "inkjet fire at the carriage position (machines with a printhead)", run: fire, params: &[p("P", HEAD), p("S", NOZZLE_BITS)], ..ROW },
+    CommandSpec { codes: "M999", what: "restart after a halt", run: restart, while_halted: true, ..ROW },
+    CommandSpec { codes: "T<n>", what: "select a tool (a virtual mixing tool on a mixing hotend)", run: tool_change, ..ROW },
+    CommandSpec { codes: "SET_VELOCITY_LIMIT SET_KINEMATIC_POSITION", what: "Klipper's limits and position (Klipper mode)", run: klipper, ..ROW },
+    CommandSpec { codes: "?", what: "this list", run: help, while_halted: true, ..ROW },
 ];
 
 /// The `?` reply: a title line, then `echo:  <codes>  <what>` per command.
@@ -247,7 +314,7 @@ fn table_slot(letter: u8, number: u32) -> Option<usize> {
 }
 
 /// The registry's entry for a parsed command (`name`: a named command's text), if it has one.
-pub(super) fn lookup(command: Command, name: &[u8]) -> Option<&'static CommandSpec> {
+pub(crate) fn lookup(command: Command, name: &[u8]) -> Option<&'static CommandSpec> {
     static INDEX: OnceLock<Index> = OnceLock::new();
     let index = INDEX.get_or_init(|| {
         let keys: HashMap<Key, usize> = COMMANDS
@@ -314,8 +381,8 @@ pub(super) fn check(code: (u8, u32), params: &[Param], block: &Block, line: &[u8
     Ok(())
 }
 
-// The handlers. Families handled by one method of their own module (`sd`, `host`,
-// `settings`) pass the code's number on; the rest are one method or a few lines each.
+// The handlers. The SD card's family is one method of its own module (`sd`), given the code's
+// number; the rest are one method or a few lines each.
 
 fn motion(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.motion(c.line, c.effect, out)
@@ -369,7 +436,7 @@ fn set_position(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 /// homes and ends the program.
 fn program_stop(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.run_core(c.line, &c.effect, out);
-    if c.number == 0 && m.profile.firmware.m0 == crate::profile::firmware::ProgramStop::Seed {
+    if c.number == 0 && m.profile.firmware.m0 == crate::profile::build_options::ProgramStop::Seed {
         m.execute(b"G28", out);
         // The motors go off again after the homing: the axes are no longer homed.
         m.homed = [false; 3];
@@ -396,16 +463,98 @@ fn sd(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.sd_command(c.line, c.number, out)
 }
 
-fn host(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.host_command(c.line, c.number, out)
+fn m31(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m31(out)
 }
 
-fn settings(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.settings_command(c.number, out)
+fn m42(m: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    m.m42()
 }
 
-/// Accepted, nothing to simulate (`M73`: the progress is the host's; `M110`: the line numbers
-/// are the serial layer's).
+fn m226(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m226(out)
+}
+
+fn m117(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m117(c.line, out)
+}
+
+/// `M75` starts the print job timer, `M76` pauses it, `M77` stops it (back to zero).
+fn job_timer(m: &mut Machine, c: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    match c.number {
+        75 => m.job_timer_start(),
+        76 => m.job_timer_pause(),
+        _ => m.job_timer_stop(),
+    }
+}
+
+/// `M81`: power off.
+fn m81(m: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    m.power_off()
+}
+
+fn m118(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m118(c.line, out)
+}
+
+fn m154(m: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    m.m154()
+}
+
+fn m211(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m211(out)
+}
+
+fn m420(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m420(out)
+}
+
+fn m876(m: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    m.m876()
+}
+
+fn m92(m: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    m.m92()
+}
+
+/// `M207` retraction, `M208` recovery, `M209` auto-retract.
+fn retraction_settings(m: &mut Machine, c: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
+    match c.number {
+        207 => m.m207(),
+        208 => m.m208(),
+        _ => m.m209(),
+    }
+}
+
+fn m304(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m304(out)
+}
+
+/// `M500` saves the settings to the EEPROM file, `M501` loads them.
+fn eeprom(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if c.number == 500 {
+        m.m500(out)
+    } else {
+        m.m501(out)
+    }
+}
+
+/// `M502` restores the factory settings, `M503` reports them.
+fn defaults_or_report(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if c.number == 502 {
+        m.m502(out)
+    } else {
+        m.m503(out)
+    }
+}
+
+fn m851(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.m851(out)
+}
+
+/// Accepted, nothing to simulate (`M73`: the progress is the host's; `M110`, `M113`: the
+/// serial link's; `M80`: the power is on; `M300`: a beep; `M108`, `M410`: emergency commands
+/// with nothing to interrupt, the waits end by themselves here).
 fn accepted(_: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {}
 
 fn hotend_target(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
@@ -583,5 +732,17 @@ mod tests {
         assert!(lookup(Command::Code { letter: b'G', number: 1, sub: None }, b"").is_some());
         assert!(lookup(Command::Code { letter: b'G', number: 1, sub: Some(1) }, b"").is_none());
         assert!(lookup(Command::Extended, b"set_velocity_limit").is_some());
+    }
+
+    /// The serial link's own commands are declared in their rows: `M110` and `M113` alone, and
+    /// `M113`'s interval has the range the link clamps into (Marlin's 60 s cap).
+    #[test]
+    fn the_links_own_commands_are_m110_and_m113() {
+        let own: Vec<(&str, Link)> =
+            COMMANDS.iter().filter(|c| c.link != Link::Machine).map(|c| (c.codes, c.link)).collect();
+        assert_eq!(own, [("M110", Link::LineNumber), ("M113", Link::Keepalive)]);
+        let m113 = lookup(Command::Code { letter: b'M', number: 113, sub: None }, b"").unwrap();
+        assert_eq!(m113.range_of(b'S').map(|r| (r.min, r.max)), Some((0.0, 60.0)));
+        assert_eq!(m113.range_of(b'P'), None);
     }
 }

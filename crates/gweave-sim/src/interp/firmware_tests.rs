@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::link::serial::{frame_line, Protocol, ProtocolConfig};
+use crate::profile::build_options::Feature;
 use crate::profile::MachineProfile;
 
 fn run(m: &mut Machine, text: &str) -> Vec<String> {
@@ -91,6 +92,36 @@ fn settings_drive_the_planner_and_survive_m500_m502_m501_and_power_on() {
     // Without EEPROM_SETTINGS, M500 is unknown, as in such a Marlin.
     let mut bare = Machine::new(profile("eeprom = false\n")).unwrap();
     assert_eq!(run(&mut bare, "M500"), ["echo:Unknown command: \"M500\""]);
+}
+
+/// The build options gate the commands through the registry's rows alone (`needs`): on a board
+/// built without any, each code of a gated row is unknown, and every code Marlin compiles in with
+/// an option is gated (those `knows_g`/`knows_m` listed before the rows said so; a new gated row
+/// needs no change here).
+#[test]
+fn a_board_without_its_build_options_does_not_know_their_commands() {
+    let bare = "eeprom = false\nsdcard = false\nlong_filenames = false\nautoreport_temp = false\n\
+                autoreport_sd = false\nhost_action_commands = false\nprompt_support = false\n\
+                advanced_pause = false\nfw_retract = false\narcs = false\nbuzzer = false\n\
+                set_progress = false\npin_control = false\nmesh = []\n";
+    let mut gated = Vec::new();
+    for spec in COMMANDS.iter().filter(|s| s.needs != Feature::Always) {
+        for code in spec.codes.split_whitespace() {
+            let mut m = Machine::new(profile(bare)).unwrap();
+            assert_eq!(run(&mut m, code), [format!("echo:Unknown command: \"{code}\"")], "{code}");
+            gated.push(code);
+        }
+    }
+    let want = "G2 G3 G10 G11 G29 M20 M21 M22 M23 M24 M25 M26 M27 M28 M29 M30 M32 M33 M42 M226 M73 M80 \
+                M154 M155 M207 M208 M209 M300 M420 M500 M501 M524 M600 M851 M876 M928";
+    for code in want.split_whitespace() {
+        assert!(gated.contains(&code), "{code} is gated by a build option");
+    }
+    let mut m = Machine::new(profile(bare)).unwrap();
+    assert_eq!(
+        run(&mut m, "M502\nM81\nM31"),
+        ["echo:Hardcoded Default Settings Loaded", "echo:Print time: 0s"]
+    );
 }
 
 #[test]

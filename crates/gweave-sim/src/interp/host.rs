@@ -1,8 +1,9 @@
 //! Commands that are about the board and its host rather than the motion: messages (`M117`,
-//! `M118`), the print job timer (`M31`, `M75`-`M77`), power (`M80`, `M81`), the buzzer (`M300`),
+//! `M118`), the print job timer (`M31`, `M75`-`M77`), power off (`M81`),
 //! software endstops (`M211`), pins (`M42`, `M226`), position auto-reports (`M154`), host prompts
-//! (`M876`), emergency commands (`M108`, `M410`) and bed levelling (`G29`, `M420`). Replies are
-//! Marlin 2.1's (`Marlin/src/gcode/...`, strings from `Marlin/src/core/language.h`).
+//! (`M876`) and bed levelling (`G29`, `M420`), one method per command, which the command's row
+//! in the registry (`commands.rs`) calls. Replies are Marlin 2.1's (`Marlin/src/gcode/...`,
+//! strings from `Marlin/src/core/language.h`).
 
 use super::Machine;
 
@@ -32,79 +33,83 @@ pub(super) struct HostState {
 }
 
 impl Machine {
-    /// The host commands (see the module documentation).
-    pub(super) fn host_command(&mut self, line: &[u8], number: u32, out: &mut dyn FnMut(f64, &str)) {
-        let now = self.now_s();
+    /// `M31`: the print job time, as Marlin's `duration_t` prints it.
+    pub(super) fn m31(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let text = duration_text(self.job_time_s());
+        out(self.now_s(), &format!("echo:Print time: {text}"));
+    }
+
+    /// `M81`: power off: heaters off, motors off (the axes must be homed again).
+    pub(super) fn power_off(&mut self) {
+        self.heaters_off();
+        self.core.drain();
+        self.homed = [false; 3];
+    }
+
+    /// `M118 [A1] [E1] text`: the text to the host, with the prefixes the flags ask for.
+    pub(super) fn m118(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        let (text, prefix) = m118_text(super::command_text(line));
+        out(self.now_s(), &format!("{prefix}{text}"));
+    }
+
+    /// `M154 S<s>`: the position auto-report period (0: off), from now.
+    pub(super) fn m154(&mut self) {
+        let period = self.core.block().get(b'S').unwrap_or(0.0);
+        self.host.autoreport_pos_s = period;
+        self.host.next_pos_report_s = self.now_s() + period;
+    }
+
+    /// `M211 [S0|S1]`: software endstops off/on, and their state and limits.
+    pub(super) fn m211(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        if let Some(s) = self.core.block().get(b'S') {
+            self.host.soft_endstops_off = s == 0.0;
+        }
+        let on = if self.host.soft_endstops_off { "Off" } else { "On" };
+        let [(x0, x1), (y0, y1), (z0, z1)] = self.profile.bed.ranges();
+        out(
+            self.now_s(),
+            &format!(
+                "echo:Soft endstops: {on}  Min:  X{x0:.2} Y{y0:.2} Z{z0:.2}   Max:  X{x1:.2} Y{y1:.2} Z{z1:.2}"
+            ),
+        );
+    }
+
+    /// `M42 P<pin> S<value>`: the virtual pin holds the value.
+    pub(super) fn m42(&mut self) {
         let b = self.core.block();
-        let s = b.get(b'S');
-        match number {
-            31 => {
-                let text = duration_text(self.job_time_s());
-                out(now, &format!("echo:Print time: {text}"));
-            }
-            75 => self.job_timer_start(),
-            76 => self.job_timer_pause(),
-            77 => {
-                self.job_timer_pause();
-                self.host.job_s = 0.0;
-            }
-            81 => {
-                // Power off: heaters off, motors off (the axes must be homed again).
-                self.heaters_off();
-                self.core.drain();
-                self.homed = [false; 3];
-            }
-            118 => {
-                let (text, prefix) = m118_text(super::command_text(line));
-                out(now, &format!("{prefix}{text}"));
-            }
-            154 => {
-                let period = s.unwrap_or(0.0);
-                self.host.autoreport_pos_s = period;
-                self.host.next_pos_report_s = now + period;
-            }
-            211 => {
-                if let Some(s) = s {
-                    self.host.soft_endstops_off = s == 0.0;
-                }
-                let on = if self.host.soft_endstops_off { "Off" } else { "On" };
-                let [(x0, x1), (y0, y1), (z0, z1)] = self.profile.bed.ranges();
-                out(
-                    now,
-                    &format!(
-                        "echo:Soft endstops: {on}  Min:  X{x0:.2} Y{y0:.2} Z{z0:.2}   Max:  X{x1:.2} Y{y1:.2} Z{z1:.2}"
-                    ),
-                );
-            }
-            42 => {
-                if let (Some(p), Some(s)) = (b.get(b'P'), s) {
-                    self.host.pins.insert(p as i64, s);
-                }
-            }
-            // M226 P<pin> S<state>: waits until the pin reads the state. The virtual pins hold
-            // what M42 wrote (0 otherwise) and nothing else changes them, so a wait for another
-            // state would never end: it is refused instead of hanging the board.
-            226 => {
-                let pin = b.get(b'P').map_or(-1, |p| p as i64);
-                let want = s.unwrap_or(-1.0);
-                let has = self.host.pins.get(&pin).copied().unwrap_or(0.0);
-                if want >= 0.0 && (has != 0.0) != (want != 0.0) {
-                    self.refuse(format!("M226: pin {pin} never reaches state {want}: not waiting"), out);
-                }
-            }
-            // `M876 P1` only says the host supports prompts; `S<n>` answers the open one.
-            876 if s.is_some() => self.answer_prompt(),
-            // HOST_STATUS_NOTIFICATIONS: the status message goes to the host too.
-            117 if self.profile.firmware.host_action_commands => {
-                let text = String::from_utf8_lossy(super::command_text(line)).into_owned();
-                let message = text.get(4..).unwrap_or("").trim_start();
-                out(now, &format!("//action:notification {message}"));
-            }
-            // Accepted: power on (PSU_CONTROL), a beep, emergency commands with nothing to
-            // interrupt (waits end by themselves here).
-            80 | 117 | 300 | 108 | 410 | 876 => {}
-            420 => self.m420(out),
-            _ => {}
+        if let (Some(p), Some(s)) = (b.get(b'P'), b.get(b'S')) {
+            self.host.pins.insert(p as i64, s);
+        }
+    }
+
+    /// `M226 P<pin> S<state>`: waits until the pin reads the state. The virtual pins hold what
+    /// `M42` wrote (0 otherwise) and nothing else changes them, so a wait for another state
+    /// would never end: it is refused instead of hanging the board.
+    pub(super) fn m226(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let b = self.core.block();
+        let pin = b.get(b'P').map_or(-1, |p| p as i64);
+        let want = b.get(b'S').unwrap_or(-1.0);
+        let has = self.host.pins.get(&pin).copied().unwrap_or(0.0);
+        if want >= 0.0 && (has != 0.0) != (want != 0.0) {
+            self.refuse(format!("M226: pin {pin} never reaches state {want}: not waiting"), out);
+        }
+    }
+
+    /// `M876 S<n>` answers the open host prompt; `M876 P1` only says the host supports them.
+    pub(super) fn m876(&mut self) {
+        if self.core.block().has(b'S') {
+            self.answer_prompt();
+        }
+    }
+
+    /// `M117 <text>`: the status message goes to the host too, as `//action:notification`
+    /// (Marlin's `HOST_STATUS_NOTIFICATIONS`, with `host_action_commands`); without host
+    /// actions it is accepted.
+    pub(super) fn m117(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        if self.profile.firmware.host_action_commands {
+            let text = String::from_utf8_lossy(super::command_text(line)).into_owned();
+            let message = text.get(4..).unwrap_or("").trim_start();
+            out(self.now_s(), &format!("//action:notification {message}"));
         }
     }
 
@@ -128,7 +133,7 @@ impl Machine {
     }
 
     /// `M420 [S0|S1] [V1]`: levelling off/on, report it (and the mesh with V).
-    fn m420(&mut self, out: &mut dyn FnMut(f64, &str)) {
+    pub(super) fn m420(&mut self, out: &mut dyn FnMut(f64, &str)) {
         let b = self.core.block();
         let (s, v) = (b.get(b'S'), b.get(b'V').is_some_and(|v| v != 0.0));
         if let Some(s) = s {
@@ -185,6 +190,12 @@ impl Machine {
     pub(super) fn job_timer_pause(&mut self) {
         self.host.job_s = self.job_time_s();
         self.host.job_since_s = None;
+    }
+
+    /// `M77`: the print job timer stops and reads zero again.
+    pub(super) fn job_timer_stop(&mut self) {
+        self.job_timer_pause();
+        self.host.job_s = 0.0;
     }
 
     /// The print job timer's present reading, s.

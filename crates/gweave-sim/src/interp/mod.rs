@@ -58,8 +58,9 @@ use crate::thermal::heater::HeaterId;
 use crate::thermal::protection::ThermalFault;
 use crate::thermal::{Thermal, ThermalError};
 
+pub(crate) use commands::lookup;
 use commands::Call;
-pub use commands::{help_lines, CommandSpec, Param, Queue, COMMANDS};
+pub use commands::{help_lines, CommandSpec, Link, Param, Queue, COMMANDS};
 pub use report::{HeaterStats, InkjetSummary, SimReport, SimTimes, SimWarning, WarningKind};
 
 /// Marlin's reply to any command while stopped (`STR_ERR_STOPPED`).
@@ -312,7 +313,7 @@ impl Machine {
         }
         match (command, spec) {
             (Command::None, _) => self.motion(line, effect, out),
-            (Command::Code { letter, number, .. }, Some(spec)) if self.built_with(letter, number) => {
+            (Command::Code { number, .. }, Some(spec)) if self.built_with(spec) => {
                 self.run_spec(spec, &Call { line, number, effect, before }, out)
             }
             (Command::Extended, Some(spec)) => {
@@ -344,8 +345,8 @@ impl Machine {
                 let code = Command::Code { letter: b'G', number, sub: None };
                 ((b'G', number), commands::lookup(code, b""))
             }
-            (Command::Code { letter, number, .. }, spec) if self.built_with(letter, number) => {
-                ((letter, number), spec)
+            (Command::Code { letter, number, .. }, Some(spec)) if self.built_with(spec) => {
+                ((letter, number), Some(spec))
             }
             _ => return Ok(()),
         };
@@ -475,13 +476,10 @@ impl Machine {
         (spec.run)(self, call, out);
     }
 
-    /// Whether this firmware build has the code (`[firmware]` options such as `sdcard`).
-    fn built_with(&self, letter: u8, number: u32) -> bool {
-        match letter {
-            b'G' => self.profile.firmware.knows_g(number),
-            b'M' => self.profile.firmware.knows_m(number),
-            _ => true,
-        }
+    /// Whether this firmware build has the command: the build option its row needs
+    /// (`[firmware]` options such as `sdcard`).
+    fn built_with(&self, spec: &CommandSpec) -> bool {
+        self.profile.firmware.has(spec.needs)
     }
 
     /// `M220`/`M221`: set the percentage (`S`), or report it.

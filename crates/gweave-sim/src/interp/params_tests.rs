@@ -32,7 +32,9 @@ fn snapshot(m: &Machine) -> String {
 /// when 0 is allowed too) and above its maximum.
 fn outside(range: Range) -> [f64; 2] {
     let below = if range.zero && range.min > 0.0 { range.min / 2.0 } else { range.min - 1.0 };
-    [below, range.max + 1.0]
+    // Past 2^53 one more is the same number (`M700 S`'s 64 nozzle bits): twice is past it.
+    let above = if range.max + 1.0 > range.max { range.max + 1.0 } else { range.max * 2.0 };
+    [below, above]
 }
 
 #[test]

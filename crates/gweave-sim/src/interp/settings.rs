@@ -61,62 +61,67 @@ impl Machine {
         }
     }
 
-    /// The settings commands: `M92`, `M500`-`M503`, `M207`-`M209`, `M304`, `M851`.
-    pub(super) fn settings_command(&mut self, number: u32, out: &mut dyn FnMut(f64, &str)) {
+    /// The words `letters` of the line, each if present.
+    fn words<const N: usize>(&self, letters: &[u8; N]) -> [Option<f64>; N] {
         let b = self.core.block();
-        let words = |letters: &[u8]| letters.iter().map(|&l| b.get(l)).collect::<Vec<_>>();
-        match number {
-            92 => {
-                for (axis, v) in words(b"XYZE").into_iter().enumerate() {
-                    if let Some(v) = v {
-                        self.settings.steps[axis] = v;
-                        self.core.steppers_mut().set_steps_per_unit(axis, v);
-                    }
-                }
+        letters.map(|l| b.get(l))
+    }
+
+    /// `M92 X Y Z E`: steps per unit, to the steppers and the saved settings.
+    pub(super) fn m92(&mut self) {
+        for (axis, v) in self.words(b"XYZE").into_iter().enumerate() {
+            if let Some(v) = v {
+                self.settings.steps[axis] = v;
+                self.core.steppers_mut().set_steps_per_unit(axis, v);
             }
-            207 => {
-                // S (the length) is the modal state's; W F Z are kept here.
-                let [_, w, f, z] = words(b"SWFZ")[..] else { return };
-                set(&mut self.settings.retract[0], w);
-                set(&mut self.settings.retract[1], f.map(|f| f / 60.0));
-                set(&mut self.settings.retract[2], z);
-            }
-            208 => {
-                let [s, w, f] = words(b"SWF")[..] else { return };
-                set(&mut self.settings.recover[0], s);
-                set(&mut self.settings.recover[1], w);
-                set(&mut self.settings.recover[2], f.map(|f| f / 60.0));
-            }
-            209 => {
-                if let Some(s) = b.get(b'S') {
-                    self.settings.auto_retract = s != 0.0;
-                }
-            }
-            304 => self.m304(out),
-            500 => self.m500(out),
-            501 => self.m501(out),
-            502 => self.m502(out),
-            503 => {
-                for l in self.report_lines() {
-                    out(self.now_s(), &l);
-                }
-            }
-            851 => {
-                let [x, y, z] = words(b"XYZ")[..] else { return };
-                if x.is_none() && y.is_none() && z.is_none() {
-                    let [x, y, z] = self.settings.probe_offset_mm;
-                    out(self.now_s(), &format!("echo:Probe Offset X{x:.2} Y{y:.2} Z{z:.2}"));
-                }
-                for (slot, v) in self.settings.probe_offset_mm.iter_mut().zip([x, y, z]) {
-                    set(slot, v);
-                }
-            }
-            _ => {}
+        }
+    }
+
+    /// `M207 S W F Z`: the firmware retraction; S (the length) is the modal state's, W F Z are
+    /// kept here.
+    pub(super) fn m207(&mut self) {
+        let [w, f, z] = self.words(b"WFZ");
+        set(&mut self.settings.retract[0], w);
+        set(&mut self.settings.retract[1], f.map(|f| f / 60.0));
+        set(&mut self.settings.retract[2], z);
+    }
+
+    /// `M208 S W F`: the recovery after a firmware retraction.
+    pub(super) fn m208(&mut self) {
+        let [s, w, f] = self.words(b"SWF");
+        set(&mut self.settings.recover[0], s);
+        set(&mut self.settings.recover[1], w);
+        set(&mut self.settings.recover[2], f.map(|f| f / 60.0));
+    }
+
+    /// `M209 S`: auto-retract on or off.
+    pub(super) fn m209(&mut self) {
+        if let [Some(s)] = self.words(b"S") {
+            self.settings.auto_retract = s != 0.0;
+        }
+    }
+
+    /// `M503`: the settings, as Marlin reports them.
+    pub(super) fn m503(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        for l in self.report_lines() {
+            out(self.now_s(), &l);
+        }
+    }
+
+    /// `M851 X Y Z`: the probe offsets, set, or reported without words.
+    pub(super) fn m851(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let [x, y, z] = self.words(b"XYZ");
+        if x.is_none() && y.is_none() && z.is_none() {
+            let [x, y, z] = self.settings.probe_offset_mm;
+            out(self.now_s(), &format!("echo:Probe Offset X{x:.2} Y{y:.2} Z{z:.2}"));
+        }
+        for (slot, v) in self.settings.probe_offset_mm.iter_mut().zip([x, y, z]) {
+            set(slot, v);
         }
     }
 
     /// `M304 [P] [I] [D]`: the bed's PID gains, set or reported.
-    fn m304(&mut self, out: &mut dyn FnMut(f64, &str)) {
+    pub(super) fn m304(&mut self, out: &mut dyn FnMut(f64, &str)) {
         let b = self.core.block();
         let (p, i, d) = (b.get(b'P'), b.get(b'I'), b.get(b'D'));
         let result = self.thermal.pid_gains(HeaterId::Bed).and_then(|g| {
@@ -215,7 +220,7 @@ impl Machine {
         lines
     }
 
-    fn m500(&mut self, out: &mut dyn FnMut(f64, &str)) {
+    pub(super) fn m500(&mut self, out: &mut dyn FnMut(f64, &str)) {
         let Some(path) = self.settings.eeprom.clone() else {
             return;
         };
@@ -228,7 +233,7 @@ impl Machine {
         }
     }
 
-    fn m501(&mut self, out: &mut dyn FnMut(f64, &str)) {
+    pub(super) fn m501(&mut self, out: &mut dyn FnMut(f64, &str)) {
         let Some(path) = self.settings.eeprom.clone() else {
             return;
         };
@@ -245,7 +250,7 @@ impl Machine {
     }
 
     /// `M502`: the settings of a fresh board of this profile.
-    fn m502(&mut self, out: &mut dyn FnMut(f64, &str)) {
+    pub(super) fn m502(&mut self, out: &mut dyn FnMut(f64, &str)) {
         let Ok(fresh) = Machine::new(self.profile.clone()) else { return };
         let commands: Vec<String> = fresh.setting_commands().into_iter().map(|(_, c)| c).collect();
         self.settings = Settings { eeprom: self.settings.eeprom.take(), ..fresh.settings };

@@ -45,8 +45,9 @@
 //! After a command the protocol prints `ok` (unless the device printed its own, as `ok T:...`
 //! for `M105`), also while the device is halted, so that the host can still send `M999`.
 //!
-//! `M110 N<n>` (numbered or not) and `M113 [S<s>]` are about the link, not the machine: the
-//! protocol answers them itself and the device never sees them.
+//! `M110 N<n>` (numbered or not) and `M113 [S<s>]` are about the link, not the machine: their
+//! rows in the command registry say so (`Link`, with `M113`'s range), the protocol answers them
+//! itself and the device never sees them.
 //!
 //! A command that waits for the user (`M600`, [`Device::waiting_for_user`]) holds the queue: its
 //! `ok` and the lines received after it wait (at most [`MAX_HELD_LINES`]), with
@@ -79,6 +80,8 @@
 
 use gweave::gcode::lexer::parse_into;
 use gweave::gcode::line::Block;
+
+use crate::interp::{lookup, Link};
 
 /// The longest line Marlin keeps: `MAX_CMD_SIZE` (96) less the NUL terminator.
 pub const MAX_LINE_BYTES: usize = 95;
@@ -475,22 +478,29 @@ impl<D: Device> Protocol<D> {
     /// lines interleaved by simulated time.
     fn run(&mut self, cmd: &[u8], out: &mut dyn FnMut(f64, &str), hold: &mut dyn FnMut(f64, f64)) {
         parse_into(cmd, &mut self.block);
-        if self.block.command.is_m(110) {
-            if let Some(n) = self.block.get(b'N') {
-                // The queue already took a numbered M110's number; an unnumbered one sets it here.
-                self.last_n = n as i64;
+        // The registry's row says whether the command is the link's own (`Link`).
+        let spec = lookup(self.block.command, self.block.command_span.of(cmd));
+        match spec.map_or(Link::Machine, |s| s.link) {
+            Link::LineNumber => {
+                if let Some(n) = self.block.get(b'N') {
+                    // The queue already took a numbered M110's number; an unnumbered one sets it
+                    // here.
+                    self.last_n = n as i64;
+                }
+                out(self.device.now_s(), "ok");
+                return;
             }
-            out(self.device.now_s(), "ok");
-            return;
-        }
-        if self.block.command.is_m(113) {
-            match self.block.get(b'S') {
-                // Marlin reads S as a byte and caps it at 60.
-                Some(s) => self.config.keepalive_s = s.clamp(0.0, f64::from(MAX_KEEPALIVE_S)) as u8,
-                None => out(self.device.now_s(), &format!("echo:M113 S{}", self.config.keepalive_s)),
+            Link::Keepalive => {
+                match (self.block.get(b'S'), spec.and_then(|s| s.range_of(b'S'))) {
+                    // Marlin caps the interval (`NOMORE`) rather than refuse it: into the row's
+                    // range, whole seconds as Marlin's byte holds them.
+                    (Some(s), Some(range)) => self.config.keepalive_s = s.clamp(range.min, range.max) as u8,
+                    _ => out(self.device.now_s(), &format!("echo:M113 S{}", self.config.keepalive_s)),
+                }
+                out(self.device.now_s(), "ok");
+                return;
             }
-            out(self.device.now_s(), "ok");
-            return;
+            Link::Machine => {}
         }
         self.stats.executed += 1;
         let start_s = self.device.now_s();

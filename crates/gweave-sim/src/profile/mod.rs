@@ -25,8 +25,8 @@
 //! assert!(MachineProfile::from_toml_str("[bed]\nx_nm = 1.0\n").is_err());
 //! ```
 
+pub mod build_options;
 pub mod builtin;
-pub mod firmware;
 pub mod m503;
 
 use std::fmt;
@@ -40,7 +40,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::motion::limits::MotionProfile;
-use crate::profile::firmware::{Firmware, FirmwareError};
+use crate::profile::build_options::{BuildOptions, BuildOptionsError};
 use crate::thermal::heater::{HeaterFault, HeaterId};
 use crate::thermal::thermistor::SensorFault;
 use crate::thermal::thermistor_csv::table_from_csv;
@@ -74,7 +74,7 @@ pub enum MachineProfileError {
     },
     /// A `[firmware]` value out of range.
     #[error("machine profile: {0}")]
-    Firmware(#[from] FirmwareError),
+    BuildOptions(#[from] BuildOptionsError),
     /// The thermistor table file named by `[thermal] thermistor_table` cannot be read.
     #[error("machine profile: [thermal] thermistor_table {}: {message}", path.display())]
     #[allow(missing_docs)] // the file and why
@@ -398,8 +398,8 @@ pub struct MachineProfile {
     pub inkjet: Option<Inkjet>,
     /// Faults to inject, e.g. `["hotend-cartridge-off@120s"]`.
     pub faults: Vec<FaultSpec>,
-    /// What the firmware was built with ([`Firmware`]).
-    pub firmware: Firmware,
+    /// What the firmware was built with ([`BuildOptions`]), the `[firmware]` table.
+    pub firmware: BuildOptions,
 }
 
 impl Default for MachineProfile {
@@ -415,7 +415,7 @@ impl Default for MachineProfile {
             rotary: None,
             inkjet: None,
             faults: Vec::new(),
-            firmware: Firmware::default(),
+            firmware: BuildOptions::default(),
         }
     }
 }

@@ -19,16 +19,17 @@ pub fn extrusion_letter(flavour: &str) -> u8 {
     Firmware::resolve(None, Some(flavour)).extrusion_letter()
 }
 
-/// For commands that write `E` words (purges, split moves): refuses a file whose flavour extrudes
-/// with another word, rather than write moves its machine would not extrude.
-pub fn require_e_extruder(path: &Path, flavour: Option<&str>) -> crate::Result<()> {
-    match flavour.map(|f| (f, extrusion_letter(f))) {
-        Some((flavour, letter)) if letter != b'E' => Err(crate::Error::ForeignExtruder {
+/// For commands that write `E` words (purges, split moves): refuses a file read as `firmware`
+/// (the run's, [`Firmware::resolve`]d from the configured one and the file's `flavour`) when it
+/// extrudes with another word, rather than write moves its machine would not extrude.
+pub fn require_e_extruder(path: &Path, firmware: Firmware, flavour: Option<&str>) -> crate::Result<()> {
+    match firmware.extrusion_letter() {
+        b'E' => Ok(()),
+        letter => Err(crate::Error::ForeignExtruder {
             path: path.to_path_buf(),
-            flavour: flavour.to_owned(),
+            flavour: flavour.unwrap_or(firmware.name()).to_owned(),
             letter,
         }),
-        _ => Ok(()),
     }
 }
 
@@ -53,11 +54,16 @@ pub fn read_flavour(path: &Path) -> io::Result<Option<String>> {
     Ok(first_flavour(&head).or_else(|| first_flavour(&tail)))
 }
 
-/// The firmware a file is read as: the one its flavour names ([`read_flavour`],
-/// [`Firmware::resolve`]), Marlin where it names none. `stats`, every transform, `sim` and
-/// `estimate` read a file this way.
-pub fn read_firmware(path: &Path) -> io::Result<Firmware> {
-    Ok(Firmware::resolve(None, read_flavour(path)?.as_deref()))
+/// The firmware a file is read as on a machine configured for `configured` (a profile's key, a
+/// flag), by the one rule [`Firmware::resolve`]: the configured firmware, else the one the file's
+/// flavour names ([`read_flavour`]), else Marlin. `sim` and `estimate` read a file this way, as
+/// [`crate::run::Run`] does for `stats` and every transform.
+pub fn read_firmware(path: &Path, configured: Option<Firmware>) -> io::Result<Firmware> {
+    match configured {
+        // The file is not opened for a flavour that would not count.
+        Some(firmware) => Ok(firmware),
+        None => Ok(Firmware::resolve(None, read_flavour(path)?.as_deref())),
+    }
 }
 
 /// The first flavour comment on a line of its own in `text` (lines end at `\n` or `\r`, as the
@@ -105,8 +111,12 @@ mod tests {
         assert_eq!(extrusion_letter("marlin2"), b'E');
         assert_eq!(extrusion_letter("reprapfirmware"), b'E');
         let p = Path::new("box.gcode");
-        assert!(require_e_extruder(p, Some("marlin2")).is_ok() && require_e_extruder(p, None).is_ok());
-        let err = require_e_extruder(p, Some("machinekit")).unwrap_err().to_string();
+        let check =
+            |configured, flavour| require_e_extruder(p, Firmware::resolve(configured, flavour), flavour);
+        assert!(check(None, Some("marlin2")).is_ok() && check(None, None).is_ok());
+        // A machine configured for Marlin extrudes with E, whatever the slicer guessed.
+        assert!(check(Some(Firmware::Marlin), Some("machinekit")).is_ok());
+        let err = check(None, Some("machinekit")).unwrap_err().to_string();
         assert_eq!(err, "box.gcode: the file is for machinekit, whose extruder is the A axis; this command writes E moves, which that machine would not extrude");
     }
 }

@@ -59,11 +59,12 @@ impl Default for StateOptions {
 
 impl StateOptions {
     /// These options for a file sliced for `flavour` (its `gcode_flavor`, see
-    /// [`crate::gcode::flavour`]): the firmware it names ([`Firmware::from_flavour`]), or
-    /// these options' own where it names none (Marlin by default).
-    pub fn for_flavour(self, flavour: Option<&str>) -> Self {
-        let firmware = flavour.and_then(Firmware::from_flavour).unwrap_or(self.firmware);
-        StateOptions { firmware, ..self }
+    /// [`crate::gcode::flavour`]) on a machine whose firmware is `configured` (a profile's key,
+    /// a flag, Python's `firmware=`), by the one rule, [`Firmware::resolve`]: the configured
+    /// firmware wins, else the one the flavour names, else Marlin. These options' own
+    /// `firmware` is replaced.
+    pub fn resolved(self, configured: Option<Firmware>, flavour: Option<&str>) -> Self {
+        StateOptions { firmware: Firmware::resolve(configured, flavour), ..self }
     }
 }
 
@@ -526,7 +527,7 @@ mod tests {
 
     #[test]
     fn reprapfirmware_g10_with_words_sets_a_tool_temperature_not_a_retraction() {
-        let mut s = State::new(StateOptions::default().for_flavour(Some("reprapfirmware")));
+        let mut s = State::new(StateOptions::default().resolved(None, Some("reprapfirmware")));
         let effects = run(&mut s, "T1\nG10 P0 S215 R170\nG10 S190\nM116\nG1 X10 E1 F600");
         assert_eq!(s.thermal.hotend_c, vec![215.0, 190.0]);
         assert!(s.thermal.hotend_set);
@@ -539,24 +540,24 @@ mod tests {
     /// write it), set it with `G92 A`, heat with `M104 P`, and write no `E`.
     #[test]
     fn a_as_the_extrusion_word() {
-        let options = StateOptions::default().for_flavour(Some("mach3"));
+        let options = StateOptions::default().resolved(None, Some("mach3"));
         let mut s = State::new(options);
         run(&mut s, "M104 P200\nG90\nG1 X10 A1 F600\nG1 A-1\nG1 A1\nG92 A0\nG1 X20 A2\nG1 E5");
         assert_eq!(s.thermal.hotend_c, vec![200.0]);
         assert_eq!(s.filament_mm[0], 3.0);
         assert_eq!((s.pos[E], s.pos[A], s.pos[X]), (2.0, 0.0, 20.0));
-        // A file that names no flavour keeps the caller's choice, E by default.
-        assert_eq!(StateOptions::default().for_flavour(None).firmware.extrusion_letter(), b'E');
+        // A file that names no flavour on a machine configured for none reads as Marlin's, E.
+        assert_eq!(StateOptions::default().resolved(None, None).firmware.extrusion_letter(), b'E');
     }
 
     /// `M106 P` is the fan speed in the LinuxCNC flavours (PrusaSlicer writes `M106 P237.15`),
     /// and Marlin's fan index elsewhere, where a missing `S` means full speed.
     #[test]
     fn fan_speed_word_follows_the_flavour() {
-        let mut s = State::new(StateOptions::default().for_flavour(Some("mach3")));
+        let mut s = State::new(StateOptions::default().resolved(None, Some("mach3")));
         run(&mut s, "M106 P191.25");
         assert_eq!(s.thermal.fan, 0.75);
-        let mut s = State::new(StateOptions::default().for_flavour(Some("marlin2")));
+        let mut s = State::new(StateOptions::default().resolved(None, Some("marlin2")));
         run(&mut s, "M106 P1");
         assert_eq!(s.thermal.fan, 1.0);
         run(&mut s, "M106 P0 S127.5");
@@ -593,7 +594,7 @@ mod tests {
         assert_eq!(effects, [Effect::FirmwareRetract { e_mm: -1.0 }, Effect::FirmwareRetract { e_mm: 1.0 }]);
         run(&mut s, "G10 P1 S215\nG10 L2 P1 X5");
         assert_eq!((s.thermal.hotend_c.as_slice(), s.pos[X]), (&[200.0, 215.0][..], 10.0));
-        let mut rrf = State::new(StateOptions::default().for_flavour(Some("reprapfirmware")));
+        let mut rrf = State::new(StateOptions::default().resolved(None, Some("reprapfirmware")));
         run(&mut rrf, "G10 S190");
         assert_eq!(rrf.thermal.hotend_c, vec![190.0]);
     }
@@ -607,14 +608,21 @@ mod tests {
             (Some("klipper"), Firmware::Klipper, 3.0),
             (Some("reprapfirmware"), Firmware::RepRapFirmware, 1.0),
         ] {
-            let options = StateOptions::default().for_flavour(flavour);
+            let options = StateOptions::default().resolved(None, flavour);
             assert_eq!(options.firmware, firmware, "{flavour:?}");
             let mut s = State::new(options);
             run(&mut s, text);
             assert_eq!(s.filament_mm[0], filament_mm, "{flavour:?}");
         }
+        // The configured firmware wins over the flavour the file names: a file sliced with
+        // Klipper's flavour, printed on a machine configured for RepRapFirmware, reads as RRF.
+        let options = StateOptions::default().resolved(Some(Firmware::RepRapFirmware), Some("klipper"));
+        assert_eq!(options.firmware, Firmware::RepRapFirmware);
+        let mut s = State::new(options);
+        run(&mut s, text);
+        assert_eq!(s.filament_mm[0], 1.0);
         // RepRapFirmware: M83 alone makes E relative, whatever G90 says.
-        let mut rrf = State::new(StateOptions::default().for_flavour(Some("reprapfirmware")));
+        let mut rrf = State::new(StateOptions::default().resolved(None, Some("reprapfirmware")));
         run(&mut rrf, "M83\nG90\nG1 E1\nG1 E1");
         assert_eq!(rrf.filament_mm[0], 2.0);
     }

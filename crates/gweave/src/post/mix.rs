@@ -237,9 +237,7 @@ impl MixPass {
                 MixCommands::MarlinDirect => {}
             }
         }
-        if hw.dialect() == MixCommands::RepRapFirmware
-            && self.plan.mixes.iter().any(|m| m.slot == Slot::Rotating)
-        {
+        if hw.dialect().defines_tools() && self.plan.mixes.iter().any(|m| m.slot == Slot::Rotating) {
             for t in self.plan.rotating_tools {
                 define_rrf_tool(t, &mut text)?;
             }
@@ -276,13 +274,18 @@ impl MixPass {
                 let t = tools[k];
                 if self.rotating[k] != Some(mix) {
                     text.push_str(&format!("; {} = T{t}, predicted {}\n", m.label, m.predicted.to_hex()));
-                    if self.profile.hardware.dialect() == MixCommands::RepRapFirmware {
-                        text.push_str(&rrf_m567(&m.mix, t, self.decimals()));
-                        text.push('\n');
-                    } else {
-                        for l in marlin_m163_m164(&m.mix, t as usize, self.decimals()) {
-                            text.push_str(&l);
+                    match self.profile.hardware.dialect() {
+                        MixCommands::RepRapFirmware => {
+                            text.push_str(&rrf_m567(&m.mix, t, self.decimals()));
                             text.push('\n');
+                        }
+                        // Direct mixing has no tools to rotate; were it to, a virtual tool is
+                        // what Marlin would store.
+                        MixCommands::Marlin | MixCommands::MarlinDirect => {
+                            for l in marlin_m163_m164(&m.mix, t as usize, self.decimals()) {
+                                text.push_str(&l);
+                                text.push('\n');
+                            }
                         }
                     }
                     self.rotating[k] = Some(mix);

@@ -395,10 +395,10 @@ impl MixProfile {
         if hw.inputs.is_empty() {
             return cfg("hardware.inputs: at least one input".into());
         }
-        if hw.dialect() == MixCommands::MarlinDirect && hw.inputs.len() > 6 {
-            return cfg("marlin-direct (M165) has letters for 6 inputs at most".into());
+        if let Some(max) = hw.dialect().max_inputs().filter(|&max| hw.inputs.len() > max) {
+            return cfg(format!("marlin-direct (M165) has letters for {max} inputs at most"));
         }
-        if hw.virtual_tools == 0 && hw.dialect() != MixCommands::MarlinDirect {
+        if hw.virtual_tools == 0 && hw.dialect().uses_tools() {
             return cfg("hardware.virtual_tools must be at least 1".into());
         }
         if hw.material2_index() >= hw.inputs.len() {

@@ -274,7 +274,7 @@ impl Plan {
         let mut mixes = r.mixes;
         let tools = hw.virtual_tools as u32;
         let mut rotating_tools = [0, 0];
-        if hw.dialect() != crate::firmware::MixCommands::MarlinDirect {
+        if hw.dialect().uses_tools() {
             if mixes.len() as u32 <= tools {
                 for (t, m) in (0u32..).zip(mixes.iter_mut()) {
                     m.slot = Slot::Fixed(t);

@@ -6,7 +6,9 @@
 //! the list and behave accordingly (OctoPrint stops polling `M105` when `AUTOREPORT_TEMP` is
 //! there, shows its SD panel when `SDCARD` is, answers `//action:prompt_begin` dialogs when
 //! `PROMPT_SUPPORT` is). The defaults are a common current Marlin 2.1 build for a printer with a
-//! display and an SD slot (the options of `Configuration.h`/`Configuration_adv.h` in brackets):
+//! display and an SD slot (the options of `Configuration.h`/`Configuration_adv.h` in brackets;
+//! which commands a key gates is said once, in their rows of the command registry,
+//! `interp/commands.rs`, as the [`Feature`] they need):
 //!
 //! ```toml
 //! [firmware]
@@ -33,10 +35,10 @@
 //! ```
 //!
 //! ```
-//! use gweave_sim::Firmware;
+//! use gweave_sim::{BuildOptions, Feature};
 //!
-//! let fw = Firmware::default();
-//! assert!(fw.knows_m(20) && fw.knows_m(600) && !fw.knows_m(80));
+//! let fw = BuildOptions::default();
+//! assert!(fw.has(Feature::Sdcard) && fw.has(Feature::AdvancedPause) && !fw.has(Feature::PsuControl));
 //! assert!(fw.capability_lines().contains(&"Cap:SDCARD:1".to_owned()));
 //! ```
 
@@ -45,7 +47,7 @@ use serde::{Deserialize, Serialize};
 /// The build features of the virtual board (see the module documentation for the defaults).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct Firmware {
+pub struct BuildOptions {
     /// Which firmware the board runs.
     pub kind: FirmwareKind,
     /// `EEPROM_SETTINGS`: `M500`/`M501` save and load the settings.
@@ -116,9 +118,9 @@ pub enum ProgramStop {
     Seed,
 }
 
-impl Default for Firmware {
+impl Default for BuildOptions {
     fn default() -> Self {
-        Firmware {
+        BuildOptions {
             kind: FirmwareKind::Marlin,
             eeprom: true,
             sdcard: true,
@@ -146,7 +148,7 @@ impl Default for Firmware {
 
 /// A `[firmware]` value that cannot be built.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum FirmwareError {
+pub enum BuildOptionsError {
     /// The mesh is not two sizes of 2 to 15 points.
     #[error("firmware.mesh must be [] or two grid sizes of 2 to 15 points (GRID_MAX_POINTS_X/Y), got {0:?}")]
     Mesh(Vec<u8>),
@@ -155,13 +157,13 @@ pub enum FirmwareError {
     Needs(&'static str, &'static str),
 }
 
-impl Firmware {
+impl BuildOptions {
     /// Checks the values that depend on each other.
-    pub fn validate(&self) -> Result<(), FirmwareError> {
+    pub fn validate(&self) -> Result<(), BuildOptionsError> {
         let mesh_ok =
             self.mesh.is_empty() || (self.mesh.len() == 2 && self.mesh.iter().all(|n| (2..=15).contains(n)));
         if !mesh_ok {
-            return Err(FirmwareError::Mesh(self.mesh.clone()));
+            return Err(BuildOptionsError::Mesh(self.mesh.clone()));
         }
         let needs = [
             (self.long_filenames, !self.sdcard, "long_filenames", "sdcard"),
@@ -170,7 +172,7 @@ impl Firmware {
             (self.prompt_support, !self.host_action_commands, "prompt_support", "host_action_commands"),
         ];
         match needs.iter().find(|(on, missing, ..)| *on && *missing) {
-            Some(&(_, _, what, needed)) => Err(FirmwareError::Needs(what, needed)),
+            Some(&(_, _, what, needed)) => Err(BuildOptionsError::Needs(what, needed)),
             None => Ok(()),
         }
     }
@@ -236,37 +238,67 @@ impl Firmware {
             .collect()
     }
 
-    /// Whether this build has the G-code `G<number>` (of those that depend on a feature).
-    pub fn knows_g(&self, number: u32) -> bool {
-        match number {
-            2 | 3 => self.arcs,
-            10 | 11 => self.fw_retract,
-            29 => self.grid().is_some(),
-            30 => self.probe,
-            _ => true,
+    /// Whether this build has `feature` (the `[firmware]` key a command's row in the registry,
+    /// `interp/commands.rs`, says it needs).
+    pub fn has(&self, feature: Feature) -> bool {
+        match feature {
+            Feature::Always => true,
+            Feature::Eeprom => self.eeprom,
+            Feature::Sdcard => self.sdcard,
+            Feature::LongFilenames => self.long_filenames,
+            Feature::AutoreportTemp => self.autoreport_temp,
+            Feature::AutoreportPos => self.autoreport_pos,
+            Feature::PromptSupport => self.prompt_support,
+            Feature::AdvancedPause => self.advanced_pause,
+            Feature::FwRetract => self.fw_retract,
+            Feature::Arcs => self.arcs,
+            Feature::PsuControl => self.psu_control,
+            Feature::Buzzer => self.buzzer,
+            Feature::SetProgress => self.set_progress,
+            Feature::PinControl => self.pin_control,
+            Feature::Probe => self.probe,
+            Feature::Mesh => self.grid().is_some(),
         }
     }
+}
 
-    /// Whether this build has the M-code `M<number>` (of those that depend on a feature).
-    pub fn knows_m(&self, number: u32) -> bool {
-        match number {
-            20..=30 | 32 | 524 | 928 => self.sdcard,
-            33 => self.long_filenames,
-            73 => self.set_progress,
-            80 => self.psu_control,
-            42 | 226 => self.pin_control,
-            600 => self.advanced_pause,
-            154 => self.autoreport_pos,
-            155 => self.autoreport_temp,
-            207..=209 => self.fw_retract,
-            300 => self.buzzer,
-            420 => self.grid().is_some(),
-            500 | 501 => self.eeprom,
-            851 => self.probe,
-            876 => self.prompt_support,
-            _ => true,
-        }
-    }
+/// The build option a command needs, named in its row of the registry (`interp/commands.rs`):
+/// a board built without it answers the command as Marlin does one it was not compiled with,
+/// `echo:Unknown command: "M600"`. Each is a key of the `[firmware]` table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Feature {
+    /// Built into every board.
+    Always,
+    /// `eeprom`: `M500`, `M501`.
+    Eeprom,
+    /// `sdcard`: the SD card commands.
+    Sdcard,
+    /// `long_filenames`: `M33`.
+    LongFilenames,
+    /// `autoreport_temp`: `M155`.
+    AutoreportTemp,
+    /// `autoreport_pos`: `M154`.
+    AutoreportPos,
+    /// `prompt_support`: `M876`.
+    PromptSupport,
+    /// `advanced_pause`: `M600`.
+    AdvancedPause,
+    /// `fw_retract`: `G10`, `G11`, `M207`-`M209`.
+    FwRetract,
+    /// `arcs`: `G2`, `G3`.
+    Arcs,
+    /// `psu_control`: `M80`.
+    PsuControl,
+    /// `buzzer`: `M300`.
+    Buzzer,
+    /// `set_progress`: `M73`.
+    SetProgress,
+    /// `pin_control`: `M42`, `M226`.
+    PinControl,
+    /// `probe`: `M851`.
+    Probe,
+    /// `mesh` not empty: `G29`, `M420`.
+    Mesh,
 }
 
 #[cfg(test)]
@@ -275,7 +307,7 @@ mod tests {
 
     #[test]
     fn m115_lists_marlin_2_1_capabilities_in_order() {
-        let lines = Firmware::default().capability_lines();
+        let lines = BuildOptions::default().capability_lines();
         assert_eq!(lines.first().map(String::as_str), Some("Cap:SERIAL_XON_XOFF:0"));
         assert_eq!(lines.last().map(String::as_str), Some("Cap:CONFIG_EXPORT:0"));
         for cap in [
@@ -293,8 +325,12 @@ mod tests {
         ] {
             assert!(lines.iter().any(|l| l == cap), "{cap} in {lines:?}");
         }
-        let bare =
-            Firmware { sdcard: false, long_filenames: false, autoreport_sd: false, ..Firmware::default() };
+        let bare = BuildOptions {
+            sdcard: false,
+            long_filenames: false,
+            autoreport_sd: false,
+            ..BuildOptions::default()
+        };
         let lines = bare.capability_lines();
         assert!(lines.contains(&"Cap:SDCARD:0".to_owned()));
         assert!(!lines.iter().any(|l| l.starts_with("Cap:MULTI_VOLUME")));
@@ -302,14 +338,14 @@ mod tests {
 
     #[test]
     fn firmware_table_checks_what_depends_on_what() {
-        assert_eq!(Firmware::default().validate(), Ok(()));
-        let fw = Firmware { sdcard: false, ..Firmware::default() };
-        assert_eq!(fw.validate(), Err(FirmwareError::Needs("long_filenames", "sdcard")));
-        let fw = Firmware { mesh: vec![3], ..Firmware::default() };
-        assert_eq!(fw.validate(), Err(FirmwareError::Mesh(vec![3])));
-        let fw: Firmware =
+        assert_eq!(BuildOptions::default().validate(), Ok(()));
+        let fw = BuildOptions { sdcard: false, ..BuildOptions::default() };
+        assert_eq!(fw.validate(), Err(BuildOptionsError::Needs("long_filenames", "sdcard")));
+        let fw = BuildOptions { mesh: vec![3], ..BuildOptions::default() };
+        assert_eq!(fw.validate(), Err(BuildOptionsError::Mesh(vec![3])));
+        let fw: BuildOptions =
             toml::from_str("sdcard = false\nlong_filenames = false\nautoreport_sd = false\n").unwrap();
-        assert!(!fw.knows_m(20) && !fw.knows_m(27) && fw.knows_m(105));
-        assert!(toml::from_str::<Firmware>("sd_card = true\n").is_err());
+        assert!(!fw.has(Feature::Sdcard) && !fw.has(Feature::LongFilenames) && fw.has(Feature::Always));
+        assert!(toml::from_str::<BuildOptions>("sd_card = true\n").is_err());
     }
 }
