@@ -42,6 +42,7 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
+use crate::colour::mixing::{TINT_EXPONENT, TINT_EXPONENT_MAX, TINT_EXPONENT_MIN};
 use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
 use crate::colour::shape::Shape;
 use crate::colour::{MixError, MixingModel, Srgb8};
@@ -88,6 +89,10 @@ pub struct Input {
     /// [`crate::colour::shape`]); unset, none. `gweave mix --fit` measures it.
     #[serde(default)]
     pub shape: Option<Shape>,
+    /// How its share weighs in a mix, `share^tint_exponent` (see [`crate::colour::mixing`],
+    /// step 3); unset, 1.7. `gweave mix --fit` measures it.
+    #[serde(default)]
+    pub tint_exponent: Option<f64>,
 }
 
 fn default_material() -> String {
@@ -131,6 +136,7 @@ impl Default for Hardware {
                     density_g_cm3: default_density(),
                     strength: None,
                     shape: None,
+                    tint_exponent: None,
                 })
                 .collect(),
             dialect: None,
@@ -149,7 +155,8 @@ impl Hardware {
         self.dialect.unwrap_or_default()
     }
 
-    /// The pigment model for the loaded filaments (their colours, strengths and shapes): the one model
+    /// The pigment model for the loaded filaments (their colours, strengths, shapes and tinting
+    /// exponents): the one model
     /// that the mix pass, `--predict`, previews and swatches use.
     pub fn mixing_model(&self) -> Result<MixingModel, MixError> {
         let colours: Vec<Srgb8> = self.inputs.iter().map(|i| i.colour).collect();
@@ -159,7 +166,8 @@ impl Hardware {
             .map(|i| i.strength.unwrap_or_else(|| MixingModel::default_strength(i.colour)))
             .collect();
         let shapes: Vec<Shape> = self.inputs.iter().map(|i| i.shape.unwrap_or_default()).collect();
-        MixingModel::with_shapes(&colours, &strengths, &shapes)
+        let tints: Vec<f64> = self.inputs.iter().map(|i| i.tint_exponent.unwrap_or(TINT_EXPONENT)).collect();
+        MixingModel::with_shapes(&colours, &strengths, &shapes)?.with_new_tint_exponents(&tints)
     }
 
     /// The input that holds material 2.
@@ -431,6 +439,8 @@ const INPUTS: Range = Range::new(1.0, 16.0, "inputs");
 const STRENGTH: Range = Range::new(0.001, 100.0, "");
 /// Spectral shape weights: `gweave mix --fit` keeps them within ±3 (see `colour::fit`).
 const SHAPE: Range = Range::new(-3.0, 3.0, "");
+/// Tinting exponents: the range `gweave mix --fit` keeps them in (see `colour::mixing`).
+const TINT_EXPONENT_RANGE: Range = Range::new(TINT_EXPONENT_MIN, TINT_EXPONENT_MAX, "");
 /// Filament densities, from foams to metal-filled filaments.
 const DENSITY_G_CM3: Range = Range::new(0.1, 25.0, "g/cm³");
 const VIRTUAL_TOOLS: Range = Range::new(0.0, 1_000.0, "tools");
@@ -469,6 +479,7 @@ impl CheckRanges for MixProfile {
             for (k, &a) in input.shape.iter().flatten().enumerate() {
                 item.check(&format!("shape[{k}]"), a, SHAPE)?;
             }
+            item.check_opt("tint_exponent", input.tint_exponent, TINT_EXPONENT_RANGE)?;
         }
         hardware.count("virtual_tools", hw.virtual_tools as u64, VIRTUAL_TOOLS)?;
         hardware.check("filament_diameter_mm", hw.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;
