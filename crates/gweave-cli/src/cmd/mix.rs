@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
-use gweave::colour::palette::{Palette, PaletteConfig};
+use gweave::colour::named_mixes::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
 use gweave::firmware::MixCommands;
 use gweave::gcode::writer::Target;

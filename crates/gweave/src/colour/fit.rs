@@ -327,7 +327,7 @@ fn solve_linear(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::colour::palette::CMYW_FILAMENTS;
+    use crate::colour::pigments::CMYW_FILAMENTS;
     use crate::post::mix::card::card_mixes;
 
     #[test]

@@ -59,7 +59,7 @@ fn a_fitted_card_predicts_blends_of_other_filaments_within_3_mean_6_max() {
         // The card as measured, 8-bit colours as from a photo, fitted from the default profile.
         let measured: Vec<Measurement> =
             (1..).zip(&set.card).map(|(id, c)| Measurement { id, lab: lab(*c) }).collect();
-        let start = MixingModel::new(&super::palette::CMYW_FILAMENTS).unwrap();
+        let start = MixingModel::new(&super::pigments::CMYW_FILAMENTS).unwrap();
         let fitted = fit(&start, &card_mixes(4), &measured).unwrap();
         assert_eq!(fitted.model.inputs(), &colours[..]);
         let ((plain_mean, plain_max), (mean, max)) = (errors(&plain, set), errors(&fitted.model, set));

@@ -223,7 +223,7 @@ impl MixingModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::colour::palette::CMYW_FILAMENTS;
+    use crate::colour::pigments::CMYW_FILAMENTS;
     use crate::colour::Ciede2000;
     use ::palette::Lch;
 
