@@ -356,7 +356,7 @@ fn generators_outputs_carry_the_gweave_header() {
     let out = dir.path().join("card.gcode");
     let text = transform(&["mix", "--calibration-card"], &out);
     check_output(&text, &out, "mix --calibration-card", false);
-    // 26 swatches on the default CMYW hotend, each its own virtual tool, and the time.
+    // 30 swatches on the default CMYW hotend, each its own virtual tool, and the time.
     let used = text.lines().find(|l| l.starts_with("; filament used [mm] = ")).unwrap();
     assert!(used.split(", ").count() >= 16, "{used}");
     assert!(text.contains("\n; estimated printing time (normal mode) = "), "{text}");

@@ -82,7 +82,7 @@ fn a_measured_card_fits_a_profile_that_predicts_other_blends() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let swatches: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
     let swatches = swatches["swatches"].as_array().unwrap();
-    assert_eq!(swatches.len(), 26);
+    assert_eq!(swatches.len(), 30);
     let ratios: Vec<String> = swatches
         .iter()
         .map(|s| s["ratios"].as_array().unwrap().iter().map(|r| r.to_string()).collect::<Vec<_>>().join(":"))
@@ -103,7 +103,8 @@ fn a_measured_card_fits_a_profile_that_predicts_other_blends() {
         fitted.to_str().unwrap(),
         "--json",
     ]));
-    assert_eq!(fit["swatches"].as_array().unwrap().len(), 26);
+    assert_eq!(fit["swatches"].as_array().unwrap().len(), 30);
+    assert_eq!(fit["tint_exponents"].as_array().unwrap().len(), 4, "{fit}");
     assert!(fit["mean_delta_e"].as_f64().unwrap() < 1.0, "{fit}");
     // Blends not on the card: the fitted profile follows the real filaments, the default does not.
     let off_card: Vec<String> =

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
-use gweave::colour::palette::{Palette, PaletteConfig};
+use gweave::colour::named_mixes::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
 use gweave::firmware::MixCommands;
 use gweave::gcode::writer::Target;
@@ -83,7 +83,7 @@ pub struct MixArgs {
     /// `{"ratios", "srgb", "lab"}`.
     #[arg(long, value_name = "RATIOS")]
     pub predict: Vec<String>,
-    /// Write a calibration card (G-code, to -o) for the profile's hotend and filaments: 26
+    /// Write a calibration card (G-code, to -o) for the profile's hotend and filaments: 30
     /// swatches for 4 inputs, purged between; --report lists each swatch's id and ratios.
     #[arg(long, conflicts_with_all = ["predict", "fit", "wizard"])]
     pub calibration_card: bool,

@@ -126,6 +126,7 @@ pub fn fit_profile(
         max_delta_e: f64,
         colours: Vec<String>,
         strengths: Vec<f64>,
+        tint_exponents: Vec<f64>,
     }
     let rows: Vec<Row> = fitted
         .delta_e
@@ -138,6 +139,7 @@ pub fn fit_profile(
         max_delta_e: rows.iter().map(|r| r.delta_e).fold(0.0, f64::max),
         colours: fitted.model.inputs().iter().map(|c| c.to_hex()).collect(),
         strengths: fitted.model.strengths().to_vec(),
+        tint_exponents: fitted.model.tint_exponents().to_vec(),
         swatches: rows,
     };
     if report.emit(&r)? {
@@ -147,8 +149,8 @@ pub fn fit_profile(
                 writeln!(out, "  {:>3}   {:>6.2} -> {:.2}", row.id, row.delta_e_before, row.delta_e)?;
             }
             writeln!(out, "mean {:.2}, max {:.2}", r.mean_delta_e, r.max_delta_e)?;
-            for (i, (c, s)) in r.colours.iter().zip(&r.strengths).enumerate() {
-                writeln!(out, "E{i} {c} strength {s:.4}")?;
+            for (i, ((c, s), p)) in r.colours.iter().zip(&r.strengths).zip(&r.tint_exponents).enumerate() {
+                writeln!(out, "E{i} {c} strength {s:.4} tint exponent {p:.3}")?;
             }
             writeln!(
                 out,

@@ -7,10 +7,10 @@
 //! mean CIEDE2000 1.6, max 3.9 from Mixbox's latent mixing, see [`super::mixing`]'s tests). The
 //! tables below were computed with its `lerp`, a blend of three or four inputs by chaining it
 //! (`lerp(lerp(a, b, 1/2), c, 1/3)` for 1:1:1), for four sets of cyan, magenta, yellow and white
-//! filaments unlike the defaults. Per set: `card`, the 26 swatches of
+//! filaments unlike the defaults. Per set: `card`, the 30 swatches of
 //! [`card_mixes`]`(4)` in its order (what a user measures on the printed card), and `blends`,
 //! 71 blends (the six pairs at 10 % to 90 % in 10 % steps, the four triples at 1:1:1 and 2:1:1
-//! in each order, all four at 1:1:1:1; 10 of them are on the card).
+//! in each order, all four at 1:1:1:1; 14 of them are on the card).
 
 use super::fit::{fit, Measurement};
 use super::mix::Mix;
@@ -22,7 +22,7 @@ use crate::post::mix::card::card_mixes;
 /// One set of filaments and FilamentMixer's colours of their blends.
 struct RefSet {
     filaments: [&'static str; 4],
-    card: [[u8; 3]; 26],
+    card: [[u8; 3]; 30],
     blends: [([f64; 4], [u8; 3]); 71],
 }
 
@@ -42,30 +42,30 @@ fn errors(model: &MixingModel, set: &RefSet) -> (f64, f64) {
 
 /// The bug: fitting the strengths alone could not move a filament's spectrum, so the fit
 /// bent the strengths to trade one blend's error for another's, and predicted blends off the
-/// card worse than the plain model (issue 39: mean 3.8, max 9.0 against 3.2 and 6.5). The fit
-/// now measures each filament's spectral shape too ([`super::shape`]).
+/// card worse than the plain model (issue 39: mean 3.8, max 9.0 against 3.2 and 6.5). The
+/// spectral shapes ([`super::shape`]) brought the means under 3, not the max: cyan : yellow 9:1
+/// stayed 7.46 and 9.02 off on sets 1 and 2, beyond the card's 3:1. The fit now measures each
+/// filament's tinting exponent too, on four more swatches at 9:1 and 1:9 (`card_mixes`).
 ///
-/// Measured (mean / max over the 71 blends), plain -> fitted: set 0 3.71 / 8.43 -> 2.58 / 5.44,
-/// set 1 4.96 / 11.84 -> 2.86 / 7.46, set 2 5.52 / 13.17 -> 2.94 / 9.02, set 3 3.46 / 8.31 ->
-/// 2.40 / 4.37. Strengths alone (the fit before): 3.71 / 8.23, 4.63 / 11.80, 4.95 / 9.95,
-/// 3.37 / 8.42. Sets 1 and 2 keep their worst blend at cyan : yellow 9:1, beyond the card's
-/// 3:1 (`docs/mix.md`).
+/// Measured (mean / max over the 71 blends), plain -> fitted: set 0 3.71 / 8.43 -> 2.46 / 5.39,
+/// set 1 4.96 / 11.84 -> 2.80 / 5.78, set 2 5.52 / 13.17 -> 2.90 / 5.24, set 3 3.46 / 8.31 ->
+/// 1.80 / 3.92. Strengths and shapes on the 26-swatch card (the fit before): 2.58 / 5.44,
+/// 2.86 / 7.46, 2.94 / 9.02, 2.40 / 4.37 (`docs/mix.md`).
 #[test]
-fn a_fitted_card_predicts_blends_of_other_filaments() {
+fn a_fitted_card_predicts_blends_of_other_filaments_within_3_mean_6_max() {
     for (k, set) in [SET_0, SET_1, SET_2, SET_3].iter().enumerate() {
         let colours: Vec<Srgb8> = set.filaments.iter().map(|h| Srgb8::parse_hex(h).unwrap()).collect();
         let plain = MixingModel::new(&colours).unwrap();
         // The card as measured, 8-bit colours as from a photo, fitted from the default profile.
         let measured: Vec<Measurement> =
             (1..).zip(&set.card).map(|(id, c)| Measurement { id, lab: lab(*c) }).collect();
-        let start = MixingModel::new(&super::palette::CMYW_FILAMENTS).unwrap();
+        let start = MixingModel::new(&super::pigments::CMYW_FILAMENTS).unwrap();
         let fitted = fit(&start, &card_mixes(4), &measured).unwrap();
         assert_eq!(fitted.model.inputs(), &colours[..]);
         let ((plain_mean, plain_max), (mean, max)) = (errors(&plain, set), errors(&fitted.model, set));
         eprintln!("set {k}: plain {plain_mean:.2} / {plain_max:.2}, fitted {mean:.2} / {max:.2}");
-        assert!(mean <= 3.0 && mean < plain_mean - 0.5 && max < plain_max, "set {k}: {mean:.2} / {max:.2}");
-        let max_limit = if k == 1 || k == 2 { 9.5 } else { 6.0 };
-        assert!(max <= max_limit, "set {k}: max {max:.2}");
+        assert!(mean <= 3.0 && max <= 6.0, "set {k}: {mean:.2} / {max:.2}");
+        assert!(mean < plain_mean - 0.5 && max < plain_max, "set {k}: {mean:.2} / {max:.2}");
     }
 }
 
@@ -98,6 +98,10 @@ const SET_0: RefSet = RefSet {
         [152, 110, 182],
         [152, 219, 122],
         [234, 146, 109],
+        [36, 167, 174],
+        [210, 211, 35],
+        [209, 32, 99],
+        [248, 182, 43],
     ],
     blends: [
         ([9.0, 1.0, 0.0, 0.0], [45, 120, 197]),
@@ -202,6 +206,10 @@ const SET_1: RefSet = RefSet {
         [154, 109, 189],
         [142, 218, 102],
         [244, 151, 99],
+        [15, 145, 154],
+        [189, 198, 8],
+        [229, 35, 106],
+        [245, 171, 16],
     ],
     blends: [
         ([9.0, 1.0, 0.0, 0.0], [35, 101, 188]),
@@ -306,6 +314,10 @@ const SET_2: RefSet = RefSet {
         [137, 132, 188],
         [144, 233, 107],
         [228, 168, 96],
+        [10, 176, 161],
+        [200, 214, 9],
+        [186, 52, 94],
+        [244, 188, 17],
     ],
     blends: [
         ([9.0, 1.0, 0.0, 0.0], [23, 133, 191]),
@@ -410,6 +422,10 @@ const SET_3: RefSet = RefSet {
         [160, 122, 167],
         [159, 202, 118],
         [231, 150, 107],
+        [56, 153, 151],
+        [206, 190, 43],
+        [215, 61, 100],
+        [238, 171, 49],
     ],
     blends: [
         ([9.0, 1.0, 0.0, 0.0], [65, 120, 170]),

@@ -30,7 +30,9 @@
 //!    and Mixbox stay blue. The tinting exponent `p` (`TINT_EXPONENT`, 1.7) is an empirical
 //!    correction (a melt of two filaments is not an ideal paint: the pigment of the minor one
 //!    is diluted and less dispersed), fitted once; Spectral.js uses the same kind of law with
-//!    `p = 2` (its concentration `f^2 T^2 L`).
+//!    `p = 2` (its concentration `f^2 T^2 L`). Each input has its own `p_i` (`w_i = c_i^p_i`):
+//!    1.7 unless the profile says otherwise; `gweave mix --fit` measures it, since how far 10 %
+//!    of a filament tints another depends on how its pigment disperses.
 //! 4. **Colour.** The mix's `R(λ)` lit by D65 and seen by the CIE 1931 observer gives XYZ
 //!    ([`super::spectrum`]), then linear sRGB and CIELAB.
 //!
@@ -59,8 +61,14 @@ const STRENGTH_FLOOR: f64 = 0.01;
 /// docs, step 3). Fitted once to published pigment mixing (Mixbox, measured locally on 2- and
 /// 3-input blends of the default filaments with their smoothest spectra; `docs/mix.md`): 1.0
 /// gives mean CIEDE2000 5.1, max 18.8; 1.7 gives 3.5 and 9.7. Spectral.js uses 2 (its
-/// concentration `f^2 T^2 L`).
-const TINT_EXPONENT: f64 = 1.7;
+/// concentration `f^2 T^2 L`). A profile's input without `tint_exponent` has this one, and a
+/// fit starts from it.
+pub(crate) const TINT_EXPONENT: f64 = 1.7;
+/// The tinting exponents a profile may give and a fit reaches: from below Duncan's 1 (a minor
+/// input tinting a little more than its share) to 3 (10 % weighing 0.1 %).
+pub(crate) const TINT_EXPONENT_MIN: f64 = 0.8;
+/// See [`TINT_EXPONENT_MIN`].
+pub(crate) const TINT_EXPONENT_MAX: f64 = 3.0;
 
 /// K/S of a reflectance in (0, 1).
 fn k_over_s(r: f64) -> f64 {
@@ -93,6 +101,8 @@ pub struct MixingModel {
     shapes: Vec<Shape>,
     /// K/S spectrum per input.
     k_over_s: Vec<Spectrum>,
+    /// Tinting exponent per input (see the module docs, step 3).
+    tint_exponents: Vec<f64>,
 }
 
 impl MixingModel {
@@ -122,7 +132,13 @@ impl MixingModel {
         }
         let k_over_s =
             inputs.iter().zip(shapes).map(|(&c, shape)| shaped_spectrum(c, shape).map(k_over_s)).collect();
-        Ok(Self { inputs: inputs.to_vec(), strengths: strengths.to_vec(), shapes: shapes.to_vec(), k_over_s })
+        Ok(Self {
+            inputs: inputs.to_vec(),
+            strengths: strengths.to_vec(),
+            shapes: shapes.to_vec(),
+            k_over_s,
+            tint_exponents: vec![TINT_EXPONENT; inputs.len()],
+        })
     }
 
     /// The same filaments with input `i` given another shape (only its spectrum is recomputed).
@@ -144,6 +160,14 @@ impl MixingModel {
         Xyz::<D65, f64>::from_color_unclamped(LinSrgb::from(c)).y + STRENGTH_FLOOR
     }
 
+    /// The same filaments with a tinting exponent per input (see the module docs, step 3).
+    pub(crate) fn with_new_tint_exponents(&self, tint_exponents: &[f64]) -> Result<Self, MixError> {
+        if tint_exponents.len() != self.inputs.len() {
+            return Err(MixError::InputCount { expected: self.inputs.len(), found: tint_exponents.len() });
+        }
+        Ok(Self { tint_exponents: tint_exponents.to_vec(), ..self.clone() })
+    }
+
     /// The filament colours, input 0 first.
     pub fn inputs(&self) -> &[Srgb8] {
         &self.inputs
@@ -157,6 +181,11 @@ impl MixingModel {
     /// The spectral shapes, input 0 first.
     pub fn shapes(&self) -> &[Shape] {
         &self.shapes
+    }
+
+    /// The tinting exponents, input 0 first.
+    pub fn tint_exponents(&self) -> &[f64] {
+        &self.tint_exponents
     }
 
     /// Predicted CIELAB colour of a mix.
@@ -175,8 +204,9 @@ impl MixingModel {
     pub(crate) fn lab_for_weights(&self, weights: &[f64]) -> Lab {
         let mut ks = [0.0; BANDS];
         let mut scattering = 0.0;
-        for ((input, w), s) in self.k_over_s.iter().zip(weights).zip(&self.strengths) {
-            let ws = w.powf(TINT_EXPONENT) * s;
+        let per_input = self.k_over_s.iter().zip(&self.strengths).zip(&self.tint_exponents);
+        for (((input, s), p), w) in per_input.zip(weights) {
+            let ws = w.powf(*p) * s;
             if ws == 0.0 {
                 continue;
             }
@@ -193,7 +223,7 @@ impl MixingModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::colour::palette::CMYW_FILAMENTS;
+    use crate::colour::pigments::CMYW_FILAMENTS;
     use crate::colour::Ciede2000;
     use ::palette::Lch;
 

@@ -11,7 +11,9 @@
 //!   (two-constant Kubelka-Munk on spectra, like pigments).
 //! - `predict`: a mix's predicted colour as `#rrggbb` and CIELAB (`gweave mix --predict`).
 //! - `solve`: the mix whose predicted colour is nearest a target.
-//! - `palette`: the mixing post-processor seed's (`docs/seeds.md`) 17 named CMY(K) colours plus user mixes from TOML.
+//! - `pigments`: the default filaments (`CMYW_FILAMENTS`) and their fitted reflectance spectra.
+//! - `named_mixes`: the mixing post-processor seed's (`docs/seeds.md`) 17 named CMY(K) colours
+//!   plus user mixes from TOML (its `Palette`; not the `palette` crate).
 //! - `dialect`: Marlin `M163`/`M164`/`M165` and RepRapFirmware `M563`/`M567`
 //!   lines from a mix, and `MixingState` following those commands in a stream.
 //! - `shape`: a filament's spectral shape, how its spectrum departs from the smoothest one.
@@ -20,15 +22,15 @@
 //! - `swatch`: a palette as a PNG chart.
 //!
 //! ```
-//! use gweave::colour::{dialect, palette, solve, MixingModel, Srgb8};
+//! use gweave::colour::{dialect, named_mixes, pigments, solve, MixingModel, Srgb8};
 //!
 //! // E0 cyan, E1 magenta, E2 yellow, E3 white.
-//! let model = MixingModel::new(&palette::CMYW_FILAMENTS).unwrap();
+//! let model = MixingModel::new(&pigments::CMYW_FILAMENTS).unwrap();
 //! let pink = solve::solve(&model, "#ff88aa".parse::<Srgb8>().unwrap());
 //! assert!(!pink.out_of_gamut);
 //!
 //! // The seed's "Green" with 30 % of a second material on E3, as virtual tool 1.
-//! let green = palette::Palette::seed().resolve("green", &model).unwrap().mix;
+//! let green = named_mixes::Palette::seed().resolve("green", &model).unwrap().mix;
 //! let lines = dialect::marlin_m163_m164(
 //!     &green.with_material2(0.3, 3).unwrap(),
 //!     1,
@@ -44,7 +46,7 @@ pub mod fit;
 mod fit_reference;
 pub(crate) mod mix;
 pub mod mixing;
-pub mod palette;
+pub mod named_mixes;
 pub mod pigments;
 pub mod predict;
 pub mod purge;

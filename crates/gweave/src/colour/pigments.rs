@@ -5,7 +5,7 @@
 //! (copper phthalocyanine) keeps reflecting blue-green light into the green, where the
 //! smoothest cyan falls off steadily from the violet, so its mixes with yellow come out too
 //! dull (and a little of it turns magenta violet). For the default cyan, magenta, yellow and white filaments
-//! ([`super::palette::CMYW_FILAMENTS`]) we store spectra fitted once, offline: each is the
+//! ([`CMYW_FILAMENTS`]) we store spectra fitted once, offline: each is the
 //! smoothest spectrum plus a sum of seven Gaussian bumps in the `tanh` domain (centres 400 to
 //! 700 nm every 50 nm, width 35 nm), projected back onto the filament's exact colour, with the
 //! bump weights minimising the squared CIEDE2000 between this model and Mixbox (S. Sochorová and
@@ -15,10 +15,18 @@
 //! come from that fit; no Mixbox data or code is in gweave. The accuracy this buys is in
 //! `docs/mix.md` and, against an independent table, in the tests of [`super::mixing`].
 
-use super::palette::CMYW_FILAMENTS;
 use super::reflectance::reflectance;
 use super::spectrum::Spectrum;
 use super::srgb::Srgb8;
+
+/// Typical PLA filament colours for the seed's inputs with white on E3
+/// (our estimate from vendor swatches; measure your own for accuracy).
+pub const CMYW_FILAMENTS: [Srgb8; 4] =
+    [Srgb8::new(0, 160, 224), Srgb8::new(224, 0, 122), Srgb8::new(255, 224, 0), Srgb8::new(245, 245, 240)];
+
+/// As `CMYW_FILAMENTS` with black on E3.
+pub const CMYK_FILAMENTS: [Srgb8; 4] =
+    [CMYW_FILAMENTS[0], CMYW_FILAMENTS[1], CMYW_FILAMENTS[2], Srgb8::new(28, 28, 28)];
 
 /// (filament colour, its fitted reflectance at 380, 390, .. 730 nm).
 const FITTED: [(Srgb8, Spectrum); 4] = [

@@ -2,9 +2,9 @@
 //! `gweave.predict_colour`.
 //!
 //! ```
-//! use gweave::colour::{palette, predict, MixingModel};
+//! use gweave::colour::{pigments, predict, MixingModel};
 //!
-//! let model = MixingModel::new(&palette::CMYW_FILAMENTS).unwrap();
+//! let model = MixingModel::new(&pigments::CMYW_FILAMENTS).unwrap();
 //! let green = predict::predict(&model, &predict::parse_ratios("1:0:1:0").unwrap()).unwrap();
 //! assert_eq!(green.ratios, [0.5, 0.0, 0.5, 0.0]);
 //! assert!(green.lab[1] < -20.0); // CIELAB a* < 0: green
@@ -51,7 +51,7 @@ pub fn predict(model: &MixingModel, mix: &Mix) -> Result<Prediction, MixError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::colour::palette::CMYW_FILAMENTS;
+    use crate::colour::pigments::CMYW_FILAMENTS;
 
     #[test]
     fn parses_and_predicts() {

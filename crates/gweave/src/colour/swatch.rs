@@ -16,7 +16,7 @@
 //!    #RRGGBB    #RRGGBB
 //! ```
 
-use super::palette::Resolved;
+use super::named_mixes::Resolved;
 use super::srgb::Srgb8;
 use crate::picture::{encode, text, Image};
 
@@ -132,7 +132,8 @@ pub fn render_resolved_png(resolved: &[Resolved], layout: &SwatchLayout) -> Resu
 mod tests {
     use super::*;
     use crate::colour::mixing::MixingModel;
-    use crate::colour::palette::{Palette, CMYW_FILAMENTS};
+    use crate::colour::named_mixes::Palette;
+    use crate::colour::pigments::CMYW_FILAMENTS;
 
     struct Decoded {
         width: u32,

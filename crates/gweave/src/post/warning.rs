@@ -20,7 +20,7 @@ pub enum Warning {
         delta_e: f64,
     },
     /// `mix`: a palette name whose colour the filaments cannot print (see
-    /// `colour::palette::NAME_GAMUT_DE`).
+    /// `colour::named_mixes::NAME_GAMUT_DE`).
     NameOutOfGamut {
         /// The mix's name.
         mix: String,

@@ -12,7 +12,8 @@ use super::{png_out, PreviewOptions, RenderError};
 use crate::colour::{Lab, Srgb8};
 use crate::pass::Quiet;
 use crate::picture::{text, Image};
-use crate::post::mix::card::{CardConfig, Swatch};
+use crate::post::mix::card::Swatch;
+use crate::post::mix::profile::CardConfig;
 
 /// Number colour on a light swatch.
 const DARK: [u8; 3] = [0x20, 0x20, 0x20];

@@ -22,7 +22,7 @@
 use std::collections::{BTreeMap, HashMap};
 
 use crate::colour::dialect::{MixingState, MixingUpdate, MARLIN_VIRTUAL_TOOLS};
-use crate::colour::palette::MixSpec;
+use crate::colour::named_mixes::MixSpec;
 use crate::colour::purge::{filament_mm_to_mm3, PurgeError, Washout};
 use crate::colour::{Mix, MixError, MixingModel, Srgb8};
 use crate::gcode::line::{Block, Command};
@@ -258,7 +258,7 @@ impl MixTracker {
 /// The seed palette's name of `ratios` (to 0.005 on each input; 4 inputs), else the ratios as
 /// `0.25:0.25:0.5:0`.
 fn mix_name(ratios: &[f64]) -> String {
-    let named = crate::colour::palette::Palette::seed().entries().iter().find_map(|e| match &e.spec {
+    let named = crate::colour::named_mixes::Palette::seed().entries().iter().find_map(|e| match &e.spec {
         MixSpec::Ratios(m)
             if m.inputs() == ratios.len()
                 && m.ratios().iter().zip(ratios).all(|(a, b)| (a - b).abs() < 0.005) =>

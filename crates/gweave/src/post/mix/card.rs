@@ -1,9 +1,9 @@
 //! `gweave mix --calibration-card`: a printable card of colour swatches that teaches the pigment
 //! model what a hotend really makes with its filaments.
 //!
-//! The swatches are the pure inputs, every pair at 1:3, 1:1 and 3:1, and every triple in equal
-//! parts (26 for 4 inputs), each a solid square patch `patch_mm` wide and `layers` layers high,
-//! opaque enough to measure. They lie in a grid in reading order from the front left corner:
+//! The swatches are the pure inputs, every pair at 1:3, 1:1 and 3:1, every triple in equal
+//! parts, and the third input with each of the first two at 9:1 and 1:9 (30 for 4 inputs), each
+//! a solid square patch `patch_mm` wide and `layers` layers high, opaque enough to measure. They lie in a grid in reading order from the front left corner:
 //! swatch 1 at the smallest X and Y, then along +X, `columns` to a row, rows along +Y. A small
 //! tab left of swatch 1, in its mix, marks that corner so the card reads the right way round.
 //!
@@ -14,81 +14,14 @@
 //! least its length before the first swatch too) and the Z cap all come from the profile, as
 //! for any print.
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use crate::colour::palette::MixSpec;
+use crate::colour::mixing::TINT_EXPONENT;
+use crate::colour::named_mixes::MixSpec;
 use crate::colour::{Mix, MixingModel};
-use crate::post::mix::profile::{MixProfile, PurgeMode};
+use crate::post::mix::profile::{CardConfig, MixProfile, PurgeMode};
 use crate::post::mix::report::MixReport;
 use crate::post::mix::{mix_bytes, MixPassError};
-use crate::range::{self, OutOfRange};
-use crate::settings::{CheckRanges, Table};
-
-/// The card's geometry and printing (`[card]` in the profile).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct CardConfig {
-    /// Side of a square swatch, mm.
-    pub patch_mm: f64,
-    /// Space between swatches, mm.
-    pub gap_mm: f64,
-    /// Swatches per row.
-    pub columns: u32,
-    /// Layers of each swatch.
-    pub layers: u32,
-    /// Layer height, mm.
-    pub layer_mm: f64,
-    /// Extrusion width and line spacing, mm.
-    pub line_mm: f64,
-    /// Front left corner of swatch 1, mm (away from the purge spot at X10 Y10).
-    pub x_mm: f64,
-    /// Y of the front left corner of swatch 1, mm.
-    pub y_mm: f64,
-    /// Hotend temperature, °C.
-    pub hotend_c: f64,
-    /// Bed temperature, °C.
-    pub bed_c: f64,
-    /// Feed while printing, mm/min.
-    pub print_feed_mm_min: f64,
-    /// Feed of travels, mm/min.
-    pub travel_feed_mm_min: f64,
-}
-
-impl Default for CardConfig {
-    fn default() -> Self {
-        CardConfig {
-            patch_mm: 15.0,
-            gap_mm: 5.0,
-            columns: 6,
-            layers: 5,
-            layer_mm: 0.2,
-            line_mm: 0.45,
-            x_mm: 40.0,
-            y_mm: 40.0,
-            hotend_c: 210.0,
-            bed_c: 60.0,
-            print_feed_mm_min: 1800.0,
-            travel_feed_mm_min: 6000.0,
-        }
-    }
-}
-
-impl CheckRanges for CardConfig {
-    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
-        t.check("patch_mm", self.patch_mm, range::Range::new(3.0, 100.0, "mm"))?;
-        t.check("gap_mm", self.gap_mm, range::Range::new(1.0, 100.0, "mm"))?;
-        t.count("columns", u64::from(self.columns), range::Range::new(1.0, 100.0, ""))?;
-        t.count("layers", u64::from(self.layers), range::Range::new(1.0, 100.0, ""))?;
-        t.check("layer_mm", self.layer_mm, range::LAYER_HEIGHT_MM)?;
-        t.check("line_mm", self.line_mm, range::Range::new(0.1, 3.0, "mm"))?;
-        t.check("x_mm", self.x_mm, range::POSITION_MM)?;
-        t.check("y_mm", self.y_mm, range::POSITION_MM)?;
-        t.check("hotend_c", self.hotend_c, range::Range::new(0.0, 500.0, "°C"))?;
-        t.check("bed_c", self.bed_c, range::Range::new(0.0, 150.0, "°C"))?;
-        t.check("print_feed_mm_min", self.print_feed_mm_min, range::FEED_MM_MIN)?;
-        t.check("travel_feed_mm_min", self.travel_feed_mm_min, range::FEED_MM_MIN)
-    }
-}
 
 /// One swatch of the card.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -118,7 +51,15 @@ pub struct CardReport {
     pub mix: MixReport,
 }
 
-/// The card's mixes for `inputs` inputs: pure, pairs at 1:3, 1:1, 3:1, triples in equal parts.
+/// The card's mixes for `inputs` inputs: pure, pairs at 1:3, 1:1, 3:1, triples in equal parts,
+/// then (with three inputs or more) input 2 with input 0 and with input 1 at 9:1 and 1:9.
+///
+/// Why those last four: the 3:1 pairs do not show how far 10 % of a filament tints another,
+/// which the fit's tinting exponents ([`crate::colour::fit`]) measure; in the usual C, M, Y order
+/// they are the greens and oranges at their ends, where 10 % moves the hue most. Measured
+/// against FilamentMixer on four sets of filaments (`colour/fit_reference.rs`): with them the
+/// worst blend is 5.78 ΔE00, with the same four swatches taken from other pairs (cyan with
+/// magenta, then yellow; each input tinted by the next) 5.98 to 12.2, without them 13.1.
 pub fn card_mixes(inputs: usize) -> Vec<Mix> {
     let unit = |i: usize| -> Vec<f64> { (0..inputs).map(|k| f64::from(u8::from(k == i))).collect() };
     let mut mixes: Vec<Vec<f64>> = (0..inputs).map(unit).collect();
@@ -136,6 +77,15 @@ pub fn card_mixes(inputs: usize) -> Vec<Mix> {
             for c in b + 1..inputs {
                 let mut w = vec![0.0; inputs];
                 (w[a], w[b], w[c]) = (1.0, 1.0, 1.0);
+                mixes.push(w);
+            }
+        }
+    }
+    if inputs >= 3 {
+        for a in [0, 1] {
+            for (wa, wb) in [(9.0, 1.0), (1.0, 9.0)] {
+                let mut w = vec![0.0; inputs];
+                (w[a], w[2]) = (wa, wb);
                 mixes.push(w);
             }
         }
@@ -180,8 +130,8 @@ pub fn calibration_card(profile: &MixProfile) -> Result<(Vec<u8>, CardReport), M
 }
 
 /// The profile `text` (TOML; empty for the defaults) with its `[[hardware.inputs]]` replaced by
-/// `profile`'s inputs carrying the fitted colours and strengths of `model`. Everything else is
-/// kept as values (comments are not).
+/// `profile`'s inputs carrying the fitted colours, strengths, shapes and tinting exponents of
+/// `model`. Everything else is kept as values (comments are not).
 pub fn fitted_profile_toml(
     text: &str,
     profile: &MixProfile,
@@ -194,8 +144,8 @@ pub fn fitted_profile_toml(
         .hardware
         .inputs
         .iter()
-        .zip(model.inputs().iter().zip(model.strengths()).zip(model.shapes()))
-        .map(|(input, ((colour, strength), shape))| {
+        .zip(model.inputs().iter().zip(model.strengths()).zip(model.shapes()).zip(model.tint_exponents()))
+        .map(|(input, (((colour, strength), shape), &tint))| {
             let mut t = toml::Table::new();
             t.insert("colour".into(), colour.to_hex().into());
             t.insert("material".into(), input.material.clone().into());
@@ -206,6 +156,10 @@ pub fn fitted_profile_toml(
                 // Four decimals: a change of 1e-4 in a bump weight moves no colour by 0.01 ΔE00.
                 let rounded = shape.map(|a| (a * 1e4).round() / 1e4);
                 t.insert("shape".into(), toml::Value::Array(rounded.iter().map(|&a| a.into()).collect()));
+            }
+            if tint != TINT_EXPONENT {
+                // Four decimals: 1e-4 in the exponent moves a 10 % share's weight by 0.02 %.
+                t.insert("tint_exponent".into(), ((tint * 1e4).round() / 1e4).into());
             }
             toml::Value::Table(t)
         })
@@ -287,6 +241,8 @@ mod tests {
             &[crate::colour::Srgb8::new(1, 2, 3), crate::colour::Srgb8::new(250, 250, 250)],
             &[0.123456, 2.0],
         )
+        .unwrap()
+        .with_new_tint_exponents(&[1.234567, TINT_EXPONENT])
         .unwrap();
         let out = fitted_profile_toml(text, &profile, &model).unwrap();
         let back = MixProfile::from_toml_str(&out).unwrap();
@@ -295,6 +251,12 @@ mod tests {
         assert_eq!(back.hardware.inputs[0].strength, Some(0.1235));
         assert_eq!(back.hardware.inputs[1].material, "PVA");
         assert_eq!(back.hardware.mixing_model().unwrap().strengths(), [0.1235, 2.0]);
+        // The default exponent is not written; a fitted one is, to four decimals.
+        assert_eq!(
+            (back.hardware.inputs[0].tint_exponent, back.hardware.inputs[1].tint_exponent),
+            (Some(1.2346), None)
+        );
+        assert_eq!(back.hardware.mixing_model().unwrap().tint_exponents(), [1.2346, TINT_EXPONENT]);
     }
 
     #[test]
@@ -303,6 +265,10 @@ mod tests {
             ("[card]\npatch_mm = 1000", "[card] patch_mm = 1000 is out of range: 3 to 100 mm"),
             ("[card]\ncolumns = 0", "[card] columns = 0 is out of range"),
             ("[[hardware.inputs]]\ncolour = \"#ffffff\"\nstrength = 0", "strength = 0 is out of range"),
+            (
+                "[[hardware.inputs]]\ncolour = \"#ffffff\"\ntint_exponent = 5",
+                "tint_exponent = 5 is out of range: 0.8 to 3",
+            ),
         ] {
             let err = MixProfile::from_toml_str(text).unwrap_err().to_string();
             assert!(err.contains(want), "{text}: {err}");
@@ -310,14 +276,23 @@ mod tests {
     }
 
     #[test]
-    fn four_inputs_make_26_swatches_over_the_gamut() {
+    fn four_inputs_make_30_swatches_over_the_gamut() {
         let mixes = card_mixes(4);
-        assert_eq!(mixes.len(), 4 + 6 * 3 + 4);
+        assert_eq!(mixes.len(), 4 + 6 * 3 + 4 + 4);
         assert_eq!(mixes[0].ratios(), [1.0, 0.0, 0.0, 0.0]);
         assert_eq!(mixes[4].ratios(), [0.5, 0.5, 0.0, 0.0]);
         assert_eq!(mixes[5].ratios(), [0.75, 0.25, 0.0, 0.0]);
-        let last = mixes[25].ratios();
-        assert!((last[1] - 1.0 / 3.0).abs() < 1e-12 && last[0] == 0.0, "{last:?}");
+        let last_triple = mixes[25].ratios();
+        assert!((last_triple[1] - 1.0 / 3.0).abs() < 1e-12 && last_triple[0] == 0.0, "{last_triple:?}");
+        // The tints: yellow with cyan, then with magenta, at 9:1 and 1:9.
+        let tints: Vec<Vec<f64>> =
+            mixes[26..].iter().map(|m| m.ratios().iter().map(|r| (r * 10.0).round()).collect()).collect();
+        assert_eq!(
+            tints,
+            [[9.0, 0.0, 1.0, 0.0], [1.0, 0.0, 9.0, 0.0], [0.0, 9.0, 1.0, 0.0], [0.0, 1.0, 9.0, 0.0]]
+        );
+        assert!((mixes[26].ratios()[0] - 0.9).abs() < 1e-12, "{:?}", mixes[26].ratios());
+        assert_eq!(card_mixes(3).len(), 3 + 3 * 3 + 1 + 4);
         assert_eq!(card_mixes(2).len(), 2 + 3);
     }
 
@@ -325,14 +300,17 @@ mod tests {
     fn the_card_defines_and_selects_every_swatch() {
         let (gcode, report) = calibration_card(&MixProfile::default()).unwrap();
         let text = String::from_utf8(gcode).unwrap();
-        assert_eq!(report.swatches.len(), 26);
+        assert_eq!(report.swatches.len(), 30);
         // Swatch 7 starts the second row: rows and columns count from 1, as ids do.
         assert_eq!((report.swatches[6].id, report.swatches[6].row, report.swatches[6].column), (7, 2, 1));
         assert_eq!((report.swatches[0].row, report.swatches[0].column), (1, 1));
-        assert_eq!(report.mix.mixes.len(), 26);
-        // 25 changes, each purged, and the purge before swatch 1.
-        assert_eq!((report.mix.changes, report.mix.purge.count), (25, 26));
+        assert_eq!(report.mix.mixes.len(), 30);
+        // 29 changes, each purged, and the purge before swatch 1.
+        assert_eq!((report.mix.changes, report.mix.purge.count), (29, 30));
         assert!(text.contains("; gweave card: swatch 26 ratios 0.0000:0.3333:0.3333:0.3333\n"), "{text}");
-        assert!(!text.lines().any(|l| l.starts_with("T25")), "slicer tools become comments");
+        assert!(text.contains("; gweave card: swatch 30 ratios 0.0000:0.1000:0.9000:0.0000\n"), "{text}");
+        // Swatch 30 closes the fifth row: row 5, column 6.
+        assert_eq!((report.swatches[29].id, report.swatches[29].row, report.swatches[29].column), (30, 5, 6));
+        assert!(!text.lines().any(|l| l.starts_with("T29")), "slicer tools become comments");
     }
 }

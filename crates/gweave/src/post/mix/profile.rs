@@ -42,12 +42,13 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-use crate::colour::palette::{MixSpec, CMYW_FILAMENTS};
+use crate::colour::mixing::{TINT_EXPONENT, TINT_EXPONENT_MAX, TINT_EXPONENT_MIN};
+use crate::colour::named_mixes::MixSpec;
+use crate::colour::pigments::CMYW_FILAMENTS;
 use crate::colour::shape::Shape;
 use crate::colour::{MixError, MixingModel, Srgb8};
 use crate::firmware::{Firmware, MixCommands};
 use crate::gcode::number::NumberFormat;
-use crate::post::mix::card::CardConfig;
 use crate::post::purge_block::PurgeMotion;
 use crate::range::{self, OutOfRange, Range, FILAMENT_DIAMETER_MM, LAYER_NUMBER, PURGE_MM, PURGE_MM3};
 use crate::settings::{CheckRanges, Table};
@@ -88,6 +89,10 @@ pub struct Input {
     /// [`crate::colour::shape`]); unset, none. `gweave mix --fit` measures it.
     #[serde(default)]
     pub shape: Option<Shape>,
+    /// How its share weighs in a mix, `share^tint_exponent` (see [`crate::colour::mixing`],
+    /// step 3); unset, 1.7. `gweave mix --fit` measures it.
+    #[serde(default)]
+    pub tint_exponent: Option<f64>,
 }
 
 fn default_material() -> String {
@@ -131,6 +136,7 @@ impl Default for Hardware {
                     density_g_cm3: default_density(),
                     strength: None,
                     shape: None,
+                    tint_exponent: None,
                 })
                 .collect(),
             dialect: None,
@@ -149,7 +155,8 @@ impl Hardware {
         self.dialect.unwrap_or_default()
     }
 
-    /// The pigment model for the loaded filaments (their colours, strengths and shapes): the one model
+    /// The pigment model for the loaded filaments (their colours, strengths, shapes and tinting
+    /// exponents): the one model
     /// that the mix pass, `--predict`, previews and swatches use.
     pub fn mixing_model(&self) -> Result<MixingModel, MixError> {
         let colours: Vec<Srgb8> = self.inputs.iter().map(|i| i.colour).collect();
@@ -159,12 +166,79 @@ impl Hardware {
             .map(|i| i.strength.unwrap_or_else(|| MixingModel::default_strength(i.colour)))
             .collect();
         let shapes: Vec<Shape> = self.inputs.iter().map(|i| i.shape.unwrap_or_default()).collect();
-        MixingModel::with_shapes(&colours, &strengths, &shapes)
+        let tints: Vec<f64> = self.inputs.iter().map(|i| i.tint_exponent.unwrap_or(TINT_EXPONENT)).collect();
+        MixingModel::with_shapes(&colours, &strengths, &shapes)?.with_new_tint_exponents(&tints)
     }
 
     /// The input that holds material 2.
     pub fn material2_index(&self) -> usize {
         self.material2_input.unwrap_or(self.inputs.len().saturating_sub(1))
+    }
+}
+
+/// The card's geometry and printing (`[card]` in the profile).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CardConfig {
+    /// Side of a square swatch, mm.
+    pub patch_mm: f64,
+    /// Space between swatches, mm.
+    pub gap_mm: f64,
+    /// Swatches per row.
+    pub columns: u32,
+    /// Layers of each swatch.
+    pub layers: u32,
+    /// Layer height, mm.
+    pub layer_mm: f64,
+    /// Extrusion width and line spacing, mm.
+    pub line_mm: f64,
+    /// Front left corner of swatch 1, mm (away from the purge spot at X10 Y10).
+    pub x_mm: f64,
+    /// Y of the front left corner of swatch 1, mm.
+    pub y_mm: f64,
+    /// Hotend temperature, °C.
+    pub hotend_c: f64,
+    /// Bed temperature, °C.
+    pub bed_c: f64,
+    /// Feed while printing, mm/min.
+    pub print_feed_mm_min: f64,
+    /// Feed of travels, mm/min.
+    pub travel_feed_mm_min: f64,
+}
+
+impl Default for CardConfig {
+    fn default() -> Self {
+        CardConfig {
+            patch_mm: 15.0,
+            gap_mm: 5.0,
+            columns: 6,
+            layers: 5,
+            layer_mm: 0.2,
+            line_mm: 0.45,
+            x_mm: 40.0,
+            y_mm: 40.0,
+            hotend_c: 210.0,
+            bed_c: 60.0,
+            print_feed_mm_min: 1800.0,
+            travel_feed_mm_min: 6000.0,
+        }
+    }
+}
+
+impl CheckRanges for CardConfig {
+    fn check_ranges(&self, t: &Table) -> Result<(), OutOfRange> {
+        t.check("patch_mm", self.patch_mm, range::Range::new(3.0, 100.0, "mm"))?;
+        t.check("gap_mm", self.gap_mm, range::Range::new(1.0, 100.0, "mm"))?;
+        t.count("columns", u64::from(self.columns), range::Range::new(1.0, 100.0, ""))?;
+        t.count("layers", u64::from(self.layers), range::Range::new(1.0, 100.0, ""))?;
+        t.check("layer_mm", self.layer_mm, range::LAYER_HEIGHT_MM)?;
+        t.check("line_mm", self.line_mm, range::Range::new(0.1, 3.0, "mm"))?;
+        t.check("x_mm", self.x_mm, range::POSITION_MM)?;
+        t.check("y_mm", self.y_mm, range::POSITION_MM)?;
+        t.check("hotend_c", self.hotend_c, range::Range::new(0.0, 500.0, "°C"))?;
+        t.check("bed_c", self.bed_c, range::Range::new(0.0, 150.0, "°C"))?;
+        t.check("print_feed_mm_min", self.print_feed_mm_min, range::FEED_MM_MIN)?;
+        t.check("travel_feed_mm_min", self.travel_feed_mm_min, range::FEED_MM_MIN)
     }
 }
 
@@ -431,6 +505,8 @@ const INPUTS: Range = Range::new(1.0, 16.0, "inputs");
 const STRENGTH: Range = Range::new(0.001, 100.0, "");
 /// Spectral shape weights: `gweave mix --fit` keeps them within ±3 (see `colour::fit`).
 const SHAPE: Range = Range::new(-3.0, 3.0, "");
+/// Tinting exponents: the range `gweave mix --fit` keeps them in (see `colour::mixing`).
+const TINT_EXPONENT_RANGE: Range = Range::new(TINT_EXPONENT_MIN, TINT_EXPONENT_MAX, "");
 /// Filament densities, from foams to metal-filled filaments.
 const DENSITY_G_CM3: Range = Range::new(0.1, 25.0, "g/cm³");
 const VIRTUAL_TOOLS: Range = Range::new(0.0, 1_000.0, "tools");
@@ -469,6 +545,7 @@ impl CheckRanges for MixProfile {
             for (k, &a) in input.shape.iter().flatten().enumerate() {
                 item.check(&format!("shape[{k}]"), a, SHAPE)?;
             }
+            item.check_opt("tint_exponent", input.tint_exponent, TINT_EXPONENT_RANGE)?;
         }
         hardware.count("virtual_tools", hw.virtual_tools as u64, VIRTUAL_TOOLS)?;
         hardware.check("filament_diameter_mm", hw.filament_diameter_mm, FILAMENT_DIAMETER_MM)?;

@@ -17,7 +17,7 @@
 use std::collections::BTreeMap;
 
 use crate::colour::dialect::{formatted, round_to_units, Decimals};
-use crate::colour::palette::{Palette, PaletteConfig};
+use crate::colour::named_mixes::{Palette, PaletteConfig};
 use crate::colour::solve::{lerp_perceived, solve};
 use crate::colour::{Mix, MixingModel, Srgb8};
 use crate::range::{Ceiling, LAYER_NUMBER, MAX_LAYERS, POSITION_MM};
@@ -386,7 +386,7 @@ mod tests {
         }
         p.mix.insert(
             "Pink".into(),
-            toml::from_str::<BTreeMap<String, crate::colour::palette::MixSpec>>(
+            toml::from_str::<BTreeMap<String, crate::colour::named_mixes::MixSpec>>(
                 "p = { ratios = [0, 0.6, 0.1, 0.3] }",
             )
             .unwrap()
@@ -446,7 +446,7 @@ mod tests {
     fn all_17_palette_colours_fit_16_tools_by_taking_turns() {
         // Refused before with "17 fixed mixes and gradient steps need 19 virtual tools".
         let mut p = MixProfile::default();
-        for (t, (name, _)) in crate::colour::palette::SEED_PALETTE.iter().enumerate() {
+        for (t, (name, _)) in crate::colour::named_mixes::SEED_PALETTE.iter().enumerate() {
             p.add_map(&format!("T{t}={name}")).unwrap();
         }
         let plan = Plan::new(&p).unwrap();
@@ -482,12 +482,12 @@ mod tests {
     #[test]
     fn every_seed_colour_is_written_with_the_seeds_ratios() {
         let mut p = MixProfile::default();
-        for (t, (name, _)) in crate::colour::palette::SEED_PALETTE.iter().enumerate() {
+        for (t, (name, _)) in crate::colour::named_mixes::SEED_PALETTE.iter().enumerate() {
             p.add_map(&format!("T{t}={name}")).unwrap();
         }
         p.hardware.virtual_tools = 17;
         let plan = Plan::new(&p).unwrap();
-        for (t, (name, ratios)) in crate::colour::palette::SEED_PALETTE.iter().enumerate() {
+        for (t, (name, ratios)) in crate::colour::named_mixes::SEED_PALETTE.iter().enumerate() {
             let m = &plan.mixes[plan.for_tool(t as u32).unwrap()];
             let sum: f64 = ratios.iter().sum();
             for (u, r) in m.units.iter().zip(ratios) {

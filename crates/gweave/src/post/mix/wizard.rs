@@ -12,7 +12,7 @@
 
 use std::io::{BufRead, Write};
 
-use crate::colour::palette::Palette;
+use crate::colour::named_mixes::Palette;
 use crate::gcode::state::MAX_TOOLS;
 
 use super::profile::MixProfile;

@@ -52,7 +52,7 @@ pub const SEED_PALETTE: [(&str, [f64; 4]); 17] = [
 
 /// The colour each seed name that names a hue means, for the gamut check of
 /// [`Palette::name_out_of_gamut`]: our estimate of a typical PLA filament sold under that name
-/// (from vendor swatches, as [`CMYW_FILAMENTS`]). Cyan, Magenta, Yellow and White are the
+/// (from vendor swatches, as [`super::pigments::CMYW_FILAMENTS`]). Cyan, Magenta, Yellow and White are the
 /// filaments themselves; the browns of one hue are not checked.
 pub const NAMED_COLOURS: [(&str, Srgb8); 10] = [
     ("Ocean", Srgb8::new(0x00, 0x77, 0xa8)),
@@ -88,15 +88,6 @@ pub struct NameOutOfGamut {
 
 /// Other names for palette entries: the seed's, where ours differ.
 pub const ALIASES: [(&str, &str); 1] = [("Key", "White")];
-
-/// Typical PLA filament colours for the seed's inputs with white on E3
-/// (our estimate from vendor swatches; measure your own for accuracy).
-pub const CMYW_FILAMENTS: [Srgb8; 4] =
-    [Srgb8::new(0, 160, 224), Srgb8::new(224, 0, 122), Srgb8::new(255, 224, 0), Srgb8::new(245, 245, 240)];
-
-/// As `CMYW_FILAMENTS` with black on E3.
-pub const CMYK_FILAMENTS: [Srgb8; 4] =
-    [CMYW_FILAMENTS[0], CMYW_FILAMENTS[1], CMYW_FILAMENTS[2], Srgb8::new(28, 28, 28)];
 
 /// Why a mix definition was rejected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -321,6 +312,7 @@ fn resolve_entry(entry: &PaletteEntry, model: &MixingModel) -> Result<Resolved, 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::colour::pigments::CMYW_FILAMENTS;
     use crate::colour::Lab;
     use ::palette::GetHue;
 
