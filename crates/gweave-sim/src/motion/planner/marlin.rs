@@ -18,7 +18,7 @@ use super::marlin_block::{populate, MarlinBlock, Previous, Settings, MINIMUM_PLA
 use super::marlin_steps::StepProfile;
 use super::trapezoid::Trapezoid;
 use super::{BlockSink, Lesser, PlannedBlock};
-use crate::motion::kinematics::{axis, Geometry, Move, MoveKind, Pos};
+use crate::motion::kinematics::{axis, deltas, extent, Move, MoveKind, Pos};
 use crate::motion::limits::MotionProfile;
 use crate::motion::rounding::round_i64;
 
@@ -173,8 +173,8 @@ fn emit_front(blocks: &mut VecDeque<Block>, sink: &mut dyn BlockSink) {
     let steps = StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, factor(entry_v2), factor(exit_v2));
     // The speeds along the path: Marlin's length, unless it measured a tiny XYZ move along
     // E; the times are the steps' either way.
-    let geo = Geometry::between(mv.start, mv.end);
-    let len = if b.xyz_below_min_steps && geo.kind == MoveKind::Kinematic { geo.len } else { b.mm };
+    let (geo_len, kind) = extent(&deltas(mv.start, mv.end));
+    let len = if b.xyz_below_min_steps && kind == MoveKind::Kinematic { geo_len } else { b.mm };
     let mm_per_step = len / b.steps;
     let trapezoid = Trapezoid {
         entry_v_mm_s: steps.initial_rate * mm_per_step,
@@ -184,7 +184,7 @@ fn emit_front(blocks: &mut VecDeque<Block>, sink: &mut dyn BlockSink) {
         cruise_t_s: steps.cruise_t_s,
         decel_t_s: steps.decel_t_s,
     };
-    sink.block(&PlannedBlock::new(&mv, &geo, b.accel, trapezoid));
+    sink.block(&PlannedBlock::new(&mv, (geo_len, kind), b.accel, trapezoid));
 }
 
 #[cfg(test)]
