@@ -111,14 +111,13 @@ impl Geometry {
     /// The geometry of a move by `delta` (end minus start, X Y Z E A).
     #[inline]
     fn of_delta(delta: [f64; 5]) -> Self {
-        let xyz = (delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2]).sqrt();
-        let (len, kind) = if xyz >= MIN_KINEMATIC_LEN_MM {
-            (xyz, MoveKind::Kinematic)
-        } else if delta[axis::A] != 0.0 {
-            (delta[axis::A].abs(), MoveKind::RotaryOnly)
-        } else {
-            (delta[axis::E].abs(), MoveKind::ExtrudeOnly)
-        };
+        let (len, kind) = extent(&delta);
+        Self::with_extent(delta, len, kind)
+    }
+
+    /// [`Geometry::of_delta`] with the move's [`extent`] known already.
+    #[inline]
+    pub(crate) fn with_extent(delta: [f64; 5], len: f64, kind: MoveKind) -> Self {
         let mut delta = delta;
         if kind != MoveKind::Kinematic {
             // Sub-nanometre XYZ wobble of a non-kinematic move is dropped, as Klipper does.
@@ -130,10 +129,32 @@ impl Geometry {
     }
 }
 
+/// The length a move's speeds refer to and what it drives, from its `delta` (end minus start, X Y
+/// Z E A): the XYZ length, else the A travel, else the E travel. All a planner that works in
+/// its own units (Marlin's steps) needs of a move's geometry, without the division and the
+/// ratios of [`Geometry`].
+#[inline]
+pub(crate) fn extent(delta: &[f64; 5]) -> (f64, MoveKind) {
+    let xyz = (delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2]).sqrt();
+    if xyz >= MIN_KINEMATIC_LEN_MM {
+        (xyz, MoveKind::Kinematic)
+    } else if delta[axis::A] != 0.0 {
+        (delta[axis::A].abs(), MoveKind::RotaryOnly)
+    } else {
+        (delta[axis::E].abs(), MoveKind::ExtrudeOnly)
+    }
+}
+
 impl Move {
     /// Check the move's numbers and compute its geometry.
     #[inline]
     pub fn geometry(&self) -> Result<Geometry, MoveError> {
+        self.checked_delta().map(Geometry::of_delta)
+    }
+
+    /// The move's `delta` (end minus start, X Y Z E A), once its numbers are checked.
+    #[inline]
+    pub(crate) fn checked_delta(&self) -> Result<[f64; 5], MoveError> {
         // A difference is finite exactly when both ends are (inf - inf is NaN): one test per
         // axis instead of two.
         let delta = deltas(self.start, self.end);
@@ -143,13 +164,13 @@ impl Move {
         if !(self.feed_mm_s.is_finite() && self.feed_mm_s > 0.0) {
             return Err(MoveError::BadFeed(self.feed_mm_s));
         }
-        Ok(Geometry::of_delta(delta))
+        Ok(delta)
     }
 }
 
 /// End minus start, X Y Z E A.
 #[inline]
-fn deltas(start: Pos, end: Pos) -> [f64; 5] {
+pub(crate) fn deltas(start: Pos, end: Pos) -> [f64; 5] {
     let (s, e) = (start.to_array(), end.to_array());
     std::array::from_fn(|i| e[i] - s[i])
 }

@@ -66,12 +66,31 @@ pub fn read_firmware(path: &Path, configured: Option<Firmware>) -> io::Result<Fi
     }
 }
 
+/// The words that start a flavour comment ([`flavour_of_comment`]).
+const FLAVOUR_WORDS: [&[u8]; 2] = [b"FLAVOR:", b"gcode_flavor ="];
+
 /// The first flavour comment on a line of its own in `text` (lines end at `\n` or `\r`, as the
-/// line reader ends them).
+/// line reader ends them). Every such line holds one of [`FLAVOUR_WORDS`], so only the lines
+/// around their occurrences are looked at: a search for a word (`memmem`, vectorised) costs
+/// about a tenth of what splitting 320 KB of text into lines did, a fixed cost of every run.
 fn first_flavour(text: &[u8]) -> Option<String> {
-    text.split(|&b| b == b'\n' || b == b'\r')
-        .find_map(|line| flavour_of_comment(line.trim_ascii_start().strip_prefix(b";")?))
-        .map(|f| String::from_utf8_lossy(f).into_owned())
+    FLAVOUR_WORDS
+        .iter()
+        .filter_map(|word| first_flavour_line(text, word))
+        .min_by_key(|&(line_start, _)| line_start)
+        .map(|(_, f)| String::from_utf8_lossy(f).into_owned())
+}
+
+/// The first line of `text` holding `word` that is a flavour comment: where the line starts,
+/// and the flavour it names.
+fn first_flavour_line<'t>(text: &'t [u8], word: &[u8]) -> Option<(usize, &'t [u8])> {
+    let is_end = |b: &u8| *b == b'\n' || *b == b'\r';
+    memchr::memmem::find_iter(text, word).find_map(|at| {
+        let start = text[..at].iter().rposition(is_end).map_or(0, |end| end + 1);
+        let end = text[at..].iter().position(is_end).map_or(text.len(), |len| at + len);
+        let line = &text[start..end];
+        flavour_of_comment(line.trim_ascii_start().strip_prefix(b";")?).map(|f| (start, f))
+    })
 }
 
 #[cfg(test)]
@@ -102,6 +121,28 @@ mod tests {
             flavour_in(b"G28\r; gcode_flavor = klipper\r; z_offset = 0\r").as_deref(),
             Some("klipper")
         );
+    }
+
+    /// What [`first_flavour`] did before it searched for the words: every line in turn.
+    fn first_flavour_line_by_line(text: &[u8]) -> Option<String> {
+        text.split(|&b| b == b'\n' || b == b'\r')
+            .find_map(|line| flavour_of_comment(line.trim_ascii_start().strip_prefix(b";")?))
+            .map(|f| String::from_utf8_lossy(f).into_owned())
+    }
+
+    proptest::proptest! {
+        /// The word search finds the flavour reading every line finds, in any mix of lines.
+        #[test]
+        fn searching_for_the_words_finds_what_reading_every_line_finds(
+            lines in proptest::collection::vec(
+                "( |\t)?;? ?(FLAVOR:|gcode_flavor =|gcode_flavor|G1 X1)? ?(Marlin|klipper)?( ;FLAVOR:RRF)?",
+                0..8,
+            ),
+            ends in proptest::collection::vec("\n|\r|\r\n", 8),
+        ) {
+            let text: String = lines.iter().zip(&ends).map(|(line, end)| format!("{line}{end}")).collect();
+            proptest::prop_assert_eq!(first_flavour(text.as_bytes()), first_flavour_line_by_line(text.as_bytes()));
+        }
     }
 
     #[test]

@@ -5,7 +5,8 @@
 //!
 //! The reading thread cuts the input into [`Chunk`]s of whole lines ([`ChunkReader`]) and lexes
 //! them in [`Batch`]es of at most [`BATCH`] lines; the other takes each batch's lines up again
-//! from the same chunk ([`Chunk::lines_from`]) beside their blocks. At most [`DEPTH`] batches
+//! from the same chunk ([`Chunk::lines_from`]) beside their blocks and lengths (so that it does
+//! not search for each line's end again: about 40 instructions a line). At most [`DEPTH`] batches
 //! wait between the two, and chunks and block buffers go back to the reading thread once used:
 //! memory stays bounded whatever the file.
 
@@ -15,7 +16,7 @@ use std::sync::Arc;
 
 use super::lexer::{parse_line, parse_line_lean};
 use super::line::Block;
-use super::reader::{Chunk, ChunkLines, ChunkReader, Part};
+use super::reader::{Chunk, ChunkLines, ChunkReader, Part, RawLine};
 
 /// Lines in a batch: the hand-over costs a few thousand instructions, a thousandth of a batch's
 /// lexing, and the blocks of a batch (about 200 bytes each) stay within a few hundred KiB.
@@ -30,20 +31,55 @@ pub struct Batch {
     at: usize,
     before: u64,
     blocks: Vec<Block>,
+    /// Each line's length and ending ([`pack`]), [`LONG`] for a line longer than
+    /// [`MAX_LINE`](super::reader::MAX_LINE) (which the taker reads as the chunk gives it).
+    ends: Vec<u32>,
     len: usize,
     /// The chunk's last batch: the chunk can go back to the reading thread after it.
     last: bool,
 }
 
+/// A line's length and the length of its ending (0 to 2) in one word: a whole line is at most
+/// [`MAX_LINE`](super::reader::MAX_LINE) (2^18) bytes long.
+#[inline(always)]
+fn pack(content: usize, eol: usize) -> u32 {
+    ((content as u32) << 2) | eol as u32
+}
+
+/// What [`Batch::ends`] holds for a line that is not whole (longer than the reader holds).
+const LONG: u32 = u32::MAX;
+
 impl Batch {
     /// The batch's lines, as [`ChunkLines`] gives them, and their blocks.
-    pub fn lines(&self) -> (ChunkLines<'_>, &[Block]) {
-        (self.chunk.lines_from(self.at, self.before), &self.blocks[..self.len])
+    pub fn lines(&self) -> (BatchLines<'_>, &[Block]) {
+        (BatchLines::of(&self.chunk, self.at, self.before, &self.ends[..self.len]), &self.blocks[..self.len])
     }
 
     /// [`Batch::lines`] with blocks the reader may take (they are cleared before reuse).
-    pub fn lines_mut(&mut self) -> (ChunkLines<'_>, &mut [Block]) {
-        (self.chunk.lines_from(self.at, self.before), &mut self.blocks[..self.len])
+    pub fn lines_mut(&mut self) -> (BatchLines<'_>, &mut [Block]) {
+        let lines = BatchLines::of(&self.chunk, self.at, self.before, &self.ends[..self.len]);
+        (lines, &mut self.blocks[..self.len])
+    }
+}
+
+/// A batch's lines, cut where the lexing thread found their ends.
+pub struct BatchLines<'a> {
+    lines: ChunkLines<'a>,
+    ends: std::slice::Iter<'a, u32>,
+}
+
+impl<'a> BatchLines<'a> {
+    fn of(chunk: &'a Chunk, at: usize, before: u64, ends: &'a [u32]) -> Self {
+        BatchLines { lines: chunk.lines_from(at, before), ends: ends.iter() }
+    }
+
+    /// The next line, as [`ChunkLines::next_line`] gives it; `None` at the batch's end.
+    #[inline(always)]
+    pub fn next_line(&mut self) -> Option<RawLine<'a>> {
+        match *self.ends.next()? {
+            LONG => self.lines.next_line(),
+            packed => Some(self.lines.next_known((packed >> 2) as usize, (packed & 3) as usize)),
+        }
     }
 }
 
@@ -51,7 +87,7 @@ impl Batch {
 pub struct Lexed {
     batches: Receiver<io::Result<Batch>>,
     spare_chunks: SyncSender<Vec<u8>>,
-    spare_blocks: SyncSender<Vec<Block>>,
+    spare_blocks: SyncSender<(Vec<Block>, Vec<u32>)>,
 }
 
 impl Lexed {
@@ -63,7 +99,7 @@ impl Lexed {
     /// Hands a used batch's buffers back to the reading thread.
     pub fn recycle(&mut self, batch: Batch) {
         // Full channels or a finished reader: the buffer is dropped instead.
-        let _ = self.spare_blocks.try_send(batch.blocks);
+        let _ = self.spare_blocks.try_send((batch.blocks, batch.ends));
         if batch.last {
             if let Ok(chunk) = Arc::try_unwrap(batch.chunk) {
                 let _ = self.spare_chunks.try_send(chunk.into_buffer());
@@ -78,7 +114,7 @@ pub struct Lexer<R> {
     list_words: bool,
     batches: SyncSender<io::Result<Batch>>,
     spare_chunks: Receiver<Vec<u8>>,
-    spare_blocks: Receiver<Vec<Block>>,
+    spare_blocks: Receiver<(Vec<Block>, Vec<u32>)>,
 }
 
 /// A lexer of `input` and the receiver of its batches. `list_words`: plain moves with their
@@ -119,15 +155,20 @@ impl<R: Read> Lexer<R> {
             };
             let mut at = 0;
             loop {
-                let mut blocks = self.spare_blocks.try_recv().unwrap_or_default();
+                let (mut blocks, mut ends) = self.spare_blocks.try_recv().unwrap_or_default();
                 let mut lines = chunk.lines_from(at, before);
                 let mut len = 0;
                 while len < BATCH {
                     let Some(line) = lines.next_line() else { break };
                     if blocks.len() == len {
                         blocks.push(Block::default());
+                        ends.push(LONG);
                     }
                     let block = &mut blocks[len];
+                    ends[len] = match line.part {
+                        Part::Whole => pack(line.bytes.len(), line.eol.len()),
+                        _ => LONG,
+                    };
                     match line.part {
                         Part::Whole if LIST_WORDS => parse_line(&line, block),
                         Part::Whole => parse_line_lean(&line, block),
@@ -136,7 +177,7 @@ impl<R: Read> Lexer<R> {
                     }
                     len += 1;
                 }
-                let batch = Batch { chunk: Arc::clone(&chunk), at, before, blocks, len, last: false };
+                let batch = Batch { chunk: Arc::clone(&chunk), at, before, blocks, ends, len, last: false };
                 (at, before) = (lines.position(), lines.number());
                 if len < BATCH {
                     // The chunk's last batch takes this thread's hold on it, so that the driver

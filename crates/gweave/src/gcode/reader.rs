@@ -393,6 +393,19 @@ pub struct ChunkLines<'a> {
 }
 
 impl<'a> ChunkLines<'a> {
+    /// The next line when the lexing thread has found its end already
+    /// ([`Batch`](super::lexed::Batch)): a whole line of `content` bytes and an ending of `eol`
+    /// (0 to 2), as [`ChunkLines::next_line`] gives it, without searching for its end again.
+    #[inline(always)]
+    pub fn next_known(&mut self, content: usize, eol: usize) -> RawLine<'a> {
+        let from = self.start;
+        self.number += 1;
+        self.start += content + eol;
+        let offset = self.offset;
+        self.offset += (content + eol) as u64;
+        line_at(self.buf, from, content, eol, self.number, offset, Part::Whole)
+    }
+
     /// The next line, or `None` at the end of the chunk.
     #[inline(always)]
     pub fn next_line(&mut self) -> Option<RawLine<'a>> {
@@ -469,8 +482,11 @@ impl<R: Read> ChunkReader<R> {
         let want = CHUNK.max(carry + MAX_LINE);
         // A buffer handed back is read into as it is, its bytes overwritten: only room it
         // lacks is zeroed (`read_to_end` zeroes all its spare room before reading, a memset of
-        // the whole chunk each time).
-        if buf.len() < want + LOOKAHEAD {
+        // the whole chunk each time). A new buffer is allocated zeroed (`calloc`: fresh pages
+        // from the kernel are zero already), not grown and then cleared byte by byte.
+        if buf.is_empty() {
+            buf = vec![0; want + LOOKAHEAD];
+        } else if buf.len() < want + LOOKAHEAD {
             buf.resize(want + LOOKAHEAD, 0);
         }
         buf[..carry].copy_from_slice(&self.carry);

@@ -137,22 +137,12 @@ impl Front {
     pub(super) fn lex(&mut self, raw: &[u8]) {
         self.line += 1;
         parse_into(raw, &mut self.block);
-        self.count_malformed();
+        count_malformed(&mut self.malformed, self.line, &self.block);
     }
 
     /// Second half of [`Front::parse`]: apply the line just read to the modal state.
     pub(super) fn apply(&mut self, raw: &[u8]) -> Effect {
         *self.state.apply(raw, &self.block)
-    }
-
-    /// Counts the line just parsed if it has an error.
-    #[inline(always)]
-    fn count_malformed(&mut self) {
-        if !self.block.diagnostics.is_empty()
-            && self.block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error)
-        {
-            self.malformed.add(self.line);
-        }
     }
 
     /// Accounts every layer after the first as one: the time accounts then stop growing with
@@ -203,7 +193,7 @@ impl Front {
         } else {
             parse_line_lean(line, &mut self.block);
         }
-        self.lexed(line, jobs)
+        self.lexed(line, None, jobs)
     }
 
     /// Whether lines given to [`Front::step_lexed`] must have a plain move's words listed.
@@ -212,7 +202,8 @@ impl Front {
     }
 
     /// [`Front::step`] for a line lexed already into `block` (on the reading thread, as
-    /// [`Front::reads_words`] says), which takes the front's block in exchange.
+    /// [`Front::reads_words`] says). A move is read from it in place; any other line's block
+    /// is taken in exchange for the front's own, which the commands below read.
     #[inline(always)]
     pub(super) fn step_lexed(
         &mut self,
@@ -223,19 +214,30 @@ impl Front {
         if !self.is_whole(line) {
             return Ok(());
         }
-        std::mem::swap(&mut self.block, block);
-        self.lexed(line, jobs)
+        self.lexed(line, Some(block), jobs)
     }
 
-    /// The rest of [`Front::step`] once [`Front::block`] holds the line.
+    /// The rest of [`Front::step`] once the line is lexed: into `lexed`, or into
+    /// [`Front::block`] when that is `None`. Most lines are moves, which need the block only
+    /// for the state: the lexed one is not swapped in for them (a block is some 240 bytes,
+    /// and a swap copies it twice: about 40 instructions a line).
     #[inline(always)]
-    fn lexed(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+    fn lexed(
+        &mut self,
+        line: &RawLine<'_>,
+        lexed: Option<&mut Block>,
+        jobs: &mut Vec<Job>,
+    ) -> Result<(), EstimateError> {
         self.line += 1;
-        self.count_malformed();
-        self.state.apply(line.bytes, &self.block);
+        let block = lexed.as_deref().unwrap_or(&self.block);
+        count_malformed(&mut self.malformed, self.line, block);
+        self.state.apply(line.bytes, block);
         if let Effect::Move(m) = &self.state.effect {
             self.book.motion(&self.state.structure, m, self.line, jobs);
             return Ok(());
+        }
+        if let Some(block) = lexed {
+            std::mem::swap(&mut self.block, block);
         }
         let effect = self.state.effect;
         self.run(line.bytes, &effect, jobs)
@@ -525,4 +527,14 @@ impl Chords {
 /// The machine position of the core's modal position.
 fn at(p: &state::Position) -> Pos {
     Pos { x_mm: p[state::X], y_mm: p[state::Y], z_mm: p[state::Z], e_mm: p[state::E], a_deg: p[state::A] }
+}
+
+/// Counts line `line` in `malformed` if its block has an error.
+#[inline(always)]
+fn count_malformed(malformed: &mut Malformed, line: u64, block: &Block) {
+    if !block.diagnostics.is_empty()
+        && block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error)
+    {
+        malformed.add(line);
+    }
 }

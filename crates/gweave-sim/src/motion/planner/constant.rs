@@ -41,7 +41,7 @@ pub(super) fn block(mv: &Move, geo: &Geometry, steps: &StepsPerUnit) -> PlannedB
         cruise_t_s: t_s,
         ..Trapezoid::default()
     };
-    PlannedBlock::new(mv, geo, 0.0, trapezoid)
+    PlannedBlock::new(mv, (geo.len, geo.kind), 0.0, trapezoid)
 }
 
 /// The time of `mv`: its dominant motor's steps, each `1 / (feed * steps_per_unit)` long.

@@ -100,7 +100,7 @@ impl QueuedMove {
 
     fn block(&self, entry_v2: f64, cruise_v2: f64, exit_v2: f64) -> PlannedBlock {
         let trapezoid = Trapezoid::from_v2(self.geo.len, self.accel, entry_v2, cruise_v2, exit_v2);
-        PlannedBlock::new(&self.mv, &self.geo, self.accel, trapezoid)
+        PlannedBlock::new(&self.mv, (self.geo.len, self.geo.kind), self.accel, trapezoid)
     }
 }
 

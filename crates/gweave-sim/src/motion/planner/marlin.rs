@@ -18,7 +18,7 @@ use super::marlin_block::{populate, MarlinBlock, Previous, Settings, MINIMUM_PLA
 use super::marlin_steps::StepProfile;
 use super::trapezoid::Trapezoid;
 use super::{BlockSink, Lesser, PlannedBlock};
-use crate::motion::kinematics::{axis, Geometry, Move, MoveKind, Pos};
+use crate::motion::kinematics::{axis, deltas, extent, Move, MoveKind, Pos};
 use crate::motion::limits::MotionProfile;
 use crate::motion::rounding::round_i64;
 
@@ -88,7 +88,9 @@ impl MarlinBuffer {
     }
 
     pub(crate) fn push(&mut self, mv: &Move, profile: &MotionProfile, sink: &mut dyn BlockSink) {
-        let set = *self.settings.get_or_insert_with(|| Settings::new(profile, self.tool));
+        // Borrowed, not copied: the settings are some 250 bytes, and a move's work a few
+        // hundred instructions.
+        let set = self.settings.get_or_insert_with(|| Settings::new(profile, self.tool));
         let e_steps_per_mm = set.steps_per_unit[axis::E];
         if e_steps_per_mm != self.e_steps_per_mm && self.e_steps_per_mm > 0.0 {
             // Another extruder with other E steps: the E position in its steps, as Marlin's
@@ -106,11 +108,11 @@ impl MarlinBuffer {
         let target = set.steps_at(mv.end);
         let delta = std::array::from_fn(|i| target[i] - self.position[i]);
         if self.blocks.len() + 1 >= set.buffer_size {
-            self.emit_front(sink);
+            emit_front(&mut self.blocks, sink);
         }
         // A move of fewer than MIN_STEPS_PER_SEGMENT steps is dropped: the position stays,
         // so its distance goes with the next move.
-        let Some(b) = populate(delta, mv.feed_mm_s, self.blocks.len(), &set, &mut self.prev) else {
+        let Some(b) = populate(delta, mv.feed_mm_s, self.blocks.len(), set, &mut self.prev) else {
             return;
         };
         self.position = target;
@@ -123,7 +125,7 @@ impl MarlinBuffer {
     /// Plan the rest of the buffer to a stop and emit it.
     pub(crate) fn flush(&mut self, sink: &mut dyn BlockSink) {
         while !self.blocks.is_empty() {
-            self.emit_front(sink);
+            emit_front(&mut self.blocks, sink);
         }
     }
 
@@ -157,32 +159,32 @@ impl MarlinBuffer {
             reach_v2 = b.reach_v2();
         }
     }
+}
 
-    fn emit_front(&mut self, sink: &mut dyn BlockSink) {
-        let Some(Block { mv, b, entry_v2, .. }) = self.blocks.pop_front() else {
-            return;
-        };
-        let exit_v2 = self.blocks.front().map_or(MIN_V2, |next| next.entry_v2);
-        // Speed over nominal speed, in single precision as Marlin's `recalculate_trapezoids`.
-        let inverse_nominal = 1.0 / (b.nominal_v2 as f32).sqrt();
-        let factor = |v2: f64| (v2 as f32).sqrt() * inverse_nominal;
-        let steps =
-            StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, factor(entry_v2), factor(exit_v2));
-        // The speeds along the path: Marlin's length, unless it measured a tiny XYZ move along
-        // E; the times are the steps' either way.
-        let geo = Geometry::between(mv.start, mv.end);
-        let len = if b.xyz_below_min_steps && geo.kind == MoveKind::Kinematic { geo.len } else { b.mm };
-        let mm_per_step = len / b.steps;
-        let trapezoid = Trapezoid {
-            entry_v_mm_s: steps.initial_rate * mm_per_step,
-            cruise_v_mm_s: steps.cruise_rate * mm_per_step,
-            exit_v_mm_s: steps.final_rate * mm_per_step,
-            accel_t_s: steps.accel_t_s,
-            cruise_t_s: steps.cruise_t_s,
-            decel_t_s: steps.decel_t_s,
-        };
-        sink.block(&PlannedBlock::new(&mv, &geo, b.accel, trapezoid));
-    }
+/// Takes the oldest block out of the buffer and hands it to `sink` with its step trapezoid.
+fn emit_front(blocks: &mut VecDeque<Block>, sink: &mut dyn BlockSink) {
+    let Some(Block { mv, b, entry_v2, .. }) = blocks.pop_front() else {
+        return;
+    };
+    let exit_v2 = blocks.front().map_or(MIN_V2, |next| next.entry_v2);
+    // Speed over nominal speed, in single precision as Marlin's `recalculate_trapezoids`.
+    let inverse_nominal = 1.0 / (b.nominal_v2 as f32).sqrt();
+    let factor = |v2: f64| (v2 as f32).sqrt() * inverse_nominal;
+    let steps = StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, factor(entry_v2), factor(exit_v2));
+    // The speeds along the path: Marlin's length, unless it measured a tiny XYZ move along
+    // E; the times are the steps' either way.
+    let (geo_len, kind) = extent(&deltas(mv.start, mv.end));
+    let len = if b.xyz_below_min_steps && kind == MoveKind::Kinematic { geo_len } else { b.mm };
+    let mm_per_step = len / b.steps;
+    let trapezoid = Trapezoid {
+        entry_v_mm_s: steps.initial_rate * mm_per_step,
+        cruise_v_mm_s: steps.cruise_rate * mm_per_step,
+        exit_v_mm_s: steps.final_rate * mm_per_step,
+        accel_t_s: steps.accel_t_s,
+        cruise_t_s: steps.cruise_t_s,
+        decel_t_s: steps.decel_t_s,
+    };
+    sink.block(&PlannedBlock::new(&mv, (geo_len, kind), b.accel, trapezoid));
 }
 
 #[cfg(test)]

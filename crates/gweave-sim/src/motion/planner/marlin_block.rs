@@ -37,7 +37,7 @@ use super::junction::HalfAngle;
 use super::Lesser;
 use crate::motion::kinematics::Pos;
 use crate::motion::limits::{MarlinCorners, MotionProfile};
-use crate::motion::rounding::{ceil, round_i64, trunc};
+use crate::motion::rounding::{ceil, round_f32, round_i64, trunc};
 
 /// `MIN_STEPS_PER_SEGMENT`.
 pub(crate) const MIN_STEPS_PER_SEGMENT: f64 = 6.0;
@@ -106,7 +106,7 @@ impl Settings {
     /// steps per mm are single precision).
     pub(crate) fn steps_at(&self, pos: Pos) -> [f64; 5] {
         let p = pos.to_array();
-        std::array::from_fn(|i| round_i64(f64::from(p[i] as f32 * self.steps_per_unit[i] as f32)) as f64)
+        std::array::from_fn(|i| round_f32(p[i] as f32 * self.steps_per_unit[i] as f32))
     }
 }
 

@@ -43,7 +43,7 @@ mod trapezoid;
 
 pub use trapezoid::Trapezoid;
 
-use crate::motion::kinematics::{Geometry, Move, MoveError, MoveKind, Pos};
+use crate::motion::kinematics::{extent, Geometry, Move, MoveError, MoveKind, Pos};
 use crate::motion::limits::{CornerMode, MotionProfile, ProfileError};
 use klipper::KlipperLookahead;
 use marlin::MarlinBuffer;
@@ -68,12 +68,12 @@ pub struct PlannedBlock {
 }
 
 impl PlannedBlock {
-    fn new(mv: &Move, geo: &Geometry, accel_mm_s2: f64, trapezoid: Trapezoid) -> Self {
+    fn new(mv: &Move, (len, kind): (f64, MoveKind), accel_mm_s2: f64, trapezoid: Trapezoid) -> Self {
         let mut end = mv.end;
-        if geo.kind != MoveKind::Kinematic {
+        if kind != MoveKind::Kinematic {
             (end.x_mm, end.y_mm, end.z_mm) = (mv.start.x_mm, mv.start.y_mm, mv.start.z_mm);
         }
-        Self { tag: mv.tag, start: mv.start, end, len: geo.len, accel_mm_s2, kind: geo.kind, trapezoid }
+        Self { tag: mv.tag, start: mv.start, end, len, accel_mm_s2, kind, trapezoid }
     }
 
     /// Time the block takes, s.
@@ -183,17 +183,20 @@ impl Planner {
     /// Queue a move; blocks whose speeds became final go to `sink`. A move that goes nowhere is
     /// dropped, as both firmwares do.
     pub fn push<S: BlockSink>(&mut self, mv: &Move, sink: &mut S) -> Result<(), MoveError> {
-        let geo = mv.geometry()?;
-        if geo.len == 0.0 {
+        let delta = mv.checked_delta()?;
+        let (len, kind) = extent(&delta);
+        if len == 0.0 {
             return Ok(());
         }
+        // Marlin's planner measures the move in its own steps: the ratios are not worked out.
         match (&mut self.engine, &self.profile.corners) {
             (Engine::Klipper(k), CornerMode::Klipper(limits)) => {
                 let rotary = (&self.profile.max_feed_mm_s, &self.profile.max_accel_mm_s2);
-                k.push(mv, geo, limits, rotary, sink);
+                k.push(mv, Geometry::with_extent(delta, len, kind), limits, rotary, sink);
             }
             (Engine::Marlin(m), CornerMode::Marlin { .. }) => m.push(mv, &self.profile, sink),
             (Engine::Constant, CornerMode::Constant {}) => {
+                let geo = Geometry::with_extent(delta, len, kind);
                 sink.block(&constant::block(mv, &geo, &self.profile.steps))
             }
             _ => unreachable!("set_profile keeps the corner mode of the engine"),
