@@ -473,6 +473,10 @@ mod tests {
     use super::*;
 
     fn identity(input: &[u8]) -> (Vec<u8>, CopyReport) {
+        try_identity(input).unwrap()
+    }
+
+    fn try_identity(input: &[u8]) -> Result<(Vec<u8>, CopyReport)> {
         let (mut out, mut pass) = (Vec::new(), Identity::default());
         drive_reader(
             input,
@@ -483,9 +487,8 @@ mod tests {
             &mut Quiet,
             &mut pass,
             &mut out,
-        )
-        .unwrap();
-        (out, pass.report)
+        )?;
+        Ok((out, pass.report))
     }
 
     #[test]
@@ -611,10 +614,25 @@ mod tests {
 
     proptest::proptest! {
         #[test]
+        /// Any bytes come out as they went in, except UTF-16 text, refused by name
+        /// (`gcode::encoding`): random bytes start with a byte order mark (FF FE) one time in
+        /// 65 536, which failed this property now and then.
         fn identity_round_trips_any_bytes(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..2000)) {
-            let (out, report) = identity(&bytes);
-            proptest::prop_assert_eq!(report.bytes, bytes.len() as u64);
-            proptest::prop_assert_eq!(out, bytes);
+            let head = &bytes[..bytes.len().min(crate::gcode::encoding::ENCODING_HEAD)];
+            if crate::gcode::encoding::refuse_utf16(head).is_err() {
+                proptest::prop_assert!(try_identity(&bytes).is_err());
+            } else {
+                let (out, report) = identity(&bytes);
+                proptest::prop_assert_eq!(report.bytes, bytes.len() as u64);
+                proptest::prop_assert_eq!(out, bytes);
+            }
+        }
+
+        #[test]
+        fn identity_refuses_utf16_after_a_byte_order_mark(rest in proptest::collection::vec(proptest::num::u8::ANY, 0..200), big: bool) {
+            let mut bytes = if big { vec![0xfe, 0xff] } else { vec![0xff, 0xfe] };
+            bytes.extend(rest);
+            proptest::prop_assert!(try_identity(&bytes).is_err());
         }
 
         #[test]
