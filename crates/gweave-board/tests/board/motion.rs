@@ -87,20 +87,39 @@ fn the_pins_accelerate_at_the_configured_rate() {
 /// `firmware/ramps/build.rs`).
 #[test]
 fn half_millimetre_segments_at_60_mm_s_never_run_dry() {
+    streamed_segments_never_run_dry(0.5, 60.0);
+}
+
+/// The same with 1 mm segments at 100 mm/s (10 ms of motion a line, 8000 steps/s on X).
+#[test]
+fn millimetre_segments_at_100_mm_s_never_run_dry() {
+    streamed_segments_never_run_dry(1.0, 100.0);
+}
+
+/// 200 lines of `segment_mm` along X at `speed_mm_s`, each sent after the last one's `ok`: the
+/// X steps of the run's middle come without a gap of more than 1.5 steps' time.
+fn streamed_segments_never_run_dry(segment_mm: f64, speed_mm_s: f64) {
+    const LINES: u32 = 200;
     let mut board = crate::common::booted(Wiring { record_steps: true, ..Wiring::default() });
     for line in ["G28", "G90", "G1 X10 Y10 F3600", "M400"] {
         assert_eq!(board.command(line, 60.0).unwrap().last().unwrap(), "ok", "{line}");
     }
     let first = board.axis(X).step_log.len();
-    for i in 1..=200 {
-        board.command(&format!("G1 X{:.1} F3600", 10.0 + 0.5 * f64::from(i)), 5.0).unwrap();
+    for i in 1..=LINES {
+        let x = 10.0 + segment_mm * f64::from(i);
+        board.command(&format!("G1 X{x:.1} F{:.0}", speed_mm_s * 60.0), 5.0).unwrap();
     }
     board.command("M400", 10.0).unwrap();
     let log = &board.axis(X).step_log[first..];
-    assert_eq!(log.len(), 200 * 40);
-    // Away from the ramps at either end: at 60 mm/s (4800 steps/s) a step is due every 3333
-    // cycles; a gap of 1.5 steps' time would be the head slowing for want of moves.
+    // 80 steps/mm (the default printer).
+    assert_eq!(log.len() as f64, f64::from(LINES) * segment_mm * 80.0);
+    // Away from the ramps at either end: a step is due every CPU_HZ / (80 v) cycles (3333 at
+    // 60 mm/s); a gap of 1.5 steps' time would be the head slowing for want of moves.
+    let step_cycles = f64::from(gweave_board::CPU_HZ) / (80.0 * speed_mm_s);
     let middle = &log[log.len() / 10..log.len() * 9 / 10];
     let longest = middle.windows(2).map(|w| w[1].0 - w[0].0).max().unwrap();
-    assert!(longest < 5000, "a gap of {longest} cycles between steps");
+    assert!(
+        (longest as f64) < 1.5 * step_cycles,
+        "a gap of {longest} cycles between steps ({step_cycles:.0} a step)"
+    );
 }
