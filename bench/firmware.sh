@@ -42,6 +42,12 @@ fi
 echo "== on the emulated board (stack, step interrupt, step rates)"
 cargo run -q --release -p gweave-board --example budgets -- "$ELF" 2>/dev/null | grep -v '^Loaded'
 
+# Where the main loop's time goes while a host streams 0.5 mm lines at 60 mm/s, and its margin:
+# the time to read and plan a line against the line's motion; then the cycles a line costs by
+# function (the program counter's profile, on a shadow call stack; symbols from avr-nm).
+echo "== streaming short segments: the main loop's margin and profile"
+cargo run -q --release -p gweave-board --example profile -- "$ELF" 2>/dev/null | grep -v '^Loaded'
+
 # The inkjet build (issue 38: M700 through an InkShield): its size, then its nozzle pulses on
 # the emulated board against the InkShield's 5 us, and how fast a host can fire.
 INK_ELF="$ROOT/firmware/out/gweave-ramps-inkjet.elf"

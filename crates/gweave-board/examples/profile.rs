@@ -15,10 +15,39 @@ const LINES: u32 = 200;
 const SEGMENT_MM: f64 = 0.5;
 const FEED_MM_MIN: f64 = 3600.0;
 /// How many functions to list.
-const TOP: usize = 25;
+const TOP: usize = 12;
 
 /// A function symbol of the ELF: (start byte address, size in bytes, name).
 type Function = (u32, u32, String);
+
+/// A Rust (v0-mangled) symbol's path, `crate::module::function`: its identifiers (a length,
+/// then so many characters), skipping crate hashes, disambiguators (`s..._`) and back
+/// references (`B..._`); avr-nm's `-C` does not know Rust's mangling. Other names unchanged.
+fn demangle(name: &str) -> String {
+    let Some(rest) = name.strip_prefix("_R") else { return name.to_owned() };
+    let bytes = rest.as_bytes();
+    let (mut parts, mut i) = (Vec::new(), 0);
+    while i < bytes.len() {
+        match bytes[i] {
+            b'0'..=b'9' => {
+                let digits = bytes[i..].iter().take_while(|b| b.is_ascii_digit()).count();
+                let n: usize = rest[i..i + digits].parse().unwrap_or(usize::MAX);
+                i += digits;
+                // An identifier starting with a digit or `_` has a `_` before it.
+                if bytes.get(i) == Some(&b'_') {
+                    i += 1;
+                }
+                let Some(ident) = rest.get(i..i.saturating_add(n)) else { break };
+                parts.push(ident);
+                i += n;
+            }
+            b's' | b'B' => i += bytes[i..].iter().position(|&b| b == b'_').map_or(bytes.len(), |p| p + 1),
+            b'N' => i += 2,
+            _ => i += 1,
+        }
+    }
+    parts.join("::")
+}
 
 /// Function symbols of `elf` (avr-nm), by address.
 fn functions(elf: &str) -> Result<Vec<Function>, Box<dyn std::error::Error>> {
@@ -31,7 +60,7 @@ fn functions(elf: &str) -> Result<Vec<Function>, Box<dyn std::error::Error>> {
             // Code: `t`/`T` (text); AVR's flash addresses are below 0x800000 (RAM's).
             let addr = u32::from_str_radix(addr, 16).ok()?;
             (kind.eq_ignore_ascii_case("t") && addr < 0x80_0000)
-                .then(|| Some((addr, u32::from_str_radix(size, 16).ok()?, name.to_owned())))?
+                .then(|| Some((addr, u32::from_str_radix(size, 16).ok()?, demangle(name))))?
         })
         .collect();
     symbols.sort();
