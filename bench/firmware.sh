@@ -53,6 +53,8 @@ cargo run -q --release -p gweave-board --example profile -- "$ELF" 2>/dev/null |
 INK_ELF="$ROOT/firmware/out/gweave-ramps-inkjet.elf"
 if [ -s "$INK_ELF" ]; then
   read -r itext idata ibss < <(avr-size "$INK_ELF" | awk 'NR == 2 { print $1, $2, $3 }')
+  # The base image's, beside it (sizes() keeps its own local).
+  read -r text data bss < <(avr-size "$ELF" | awk 'NR == 2 { print $1, $2, $3 }')
   echo "== firmware: $(basename "$INK_ELF")"
   printf "%-26s %7s KB   base image: %s KB (256 KB on the chip; issue 38: <= 128 KB)\n" "flash (text + data)" \
     "$(kb $((itext + idata)))" "$(kb $((text + data)))"
