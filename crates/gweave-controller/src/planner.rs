@@ -82,7 +82,8 @@ pub struct Planner {
     previous_unit: [f32; AXES],
     previous_nominal_v2: f32,
     /// How many of the oldest waiting blocks have their final entry (see the module's text).
-    planned: usize,
+    /// (A byte: at most [`PLANNER_BLOCKS`].)
+    planned: u8,
     /// Where the last planned move ends, in steps per axis.
     pub position_steps: [i32; AXES],
 }
@@ -178,6 +179,7 @@ impl Planner {
                 }
             }
         }
+        step.positive_bits = step.dir_bits;
         step.dir_bits ^= s.invert_dir;
         if step.events == 0 {
             return true;
@@ -260,7 +262,7 @@ impl Planner {
     /// The reverse and forward passes over the blocks whose entries can still change (see the
     /// module's text); the oldest block's entry is always fixed.
     fn recalculate(&mut self) {
-        let start = self.planned.max(1);
+        let start = usize::from(self.planned).max(1);
         let mut next_entry_v2 = 0.0; // the newest block ends at rest
         for i in (start..self.count).rev() {
             let b = self.at(i);
@@ -273,9 +275,9 @@ impl Planner {
             let next = self.at(i + 1);
             if reachable_v2 < next.entry_v2 {
                 next.entry_v2 = reachable_v2;
-                self.planned = i + 2; // accelerating all the way into block i + 1: final
+                self.planned = (i + 2) as u8; // accelerating all the way into block i + 1: final
             } else if next.entry_v2 == next.max_entry_v2 {
-                self.planned = i + 2; // at its limit: final
+                self.planned = (i + 2) as u8; // at its limit: final
             }
         }
     }
@@ -415,7 +417,7 @@ mod tests {
             let entries: Vec<f32> =
                 (0..p.count).map(|i| p.blocks[(p.first + i) % PLANNER_BLOCKS].entry_v2).collect();
             assert_eq!(entries, full_passes(&p), "after step {step}");
-            skipped += p.planned.saturating_sub(1);
+            skipped += usize::from(p.planned.saturating_sub(1));
         }
         // The point of it: most of the passes are skipped.
         assert!(skipped > 20_000, "only {skipped} blocks skipped");

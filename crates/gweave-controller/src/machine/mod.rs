@@ -25,7 +25,7 @@ use crate::serial::protocol::{self, LineError};
 use crate::serial::reader::LineReader;
 use crate::settings::Settings;
 use crate::stepper::prep::Prep;
-use crate::stepper::StepQueue;
+use crate::stepper::{StepQueue, COUNTED_AXES};
 use crate::{Inputs, Io, Outputs, AXES, BED, HEATERS};
 use homing::Homing;
 
@@ -169,6 +169,11 @@ impl<'q> Controller<'q> {
             Err(fault) => return self.kill(io, Some(fault)),
         }
         self.prep.fill(&mut self.planner, self.queue);
+        if !self.moving() {
+            // The stepper's counts go on from the planner's coordinates (homing and `G92` name
+            // new ones while nothing moves).
+            self.queue.set_counted_steps(self.counted_when_idle());
+        }
         self.carry_on(io);
         while self.wait == Wait::Nothing && !self.planner.is_full() {
             let Some(l) = self.reader.pop() else { break };
@@ -269,6 +274,13 @@ impl<'q> Controller<'q> {
             self.wait = Wait::Nothing;
             line(io, b"ok");
         }
+    }
+
+    /// X, Y and Z's motors in steps when nothing moves: where the planned moves end.
+    fn counted_when_idle(&self) -> [i32; COUNTED_AXES] {
+        let mut xyz = [0; COUNTED_AXES];
+        xyz.copy_from_slice(&self.planner.position_steps[..COUNTED_AXES]);
+        xyz
     }
 
     /// Whether moves are planned, being cut or being stepped.
