@@ -8,15 +8,15 @@ use crate::{Io, AXES, AXIS_LETTERS};
 
 /// `M115`: the firmware line, then the capabilities a host looks for. Hosts read `Cap:` lines
 /// to decide what to send (OctoPrint: `AUTOREPORT_TEMP`, `EMERGENCY_PARSER`); this core has the
-/// emergency parser (`M112` acts at once), EEPROM and thermal protection, and no SD card or
-/// auto-report.
+/// emergency parser (`M112` acts at once), EEPROM, thermal protection and the temperature
+/// auto-report (`M155`: OctoPrint then stops polling `M105`), and no SD card.
 pub(super) fn firmware(io: &mut impl Io) {
     line(io, b"FIRMWARE_NAME:gweave-controller PROTOCOL_VERSION:1.0 MACHINE_TYPE:RAMPS 1.4 EXTRUDER_COUNT:1");
     for cap in [
         &b"Cap:SERIAL_XON_XOFF:0"[..],
         b"Cap:BINARY_FILE_TRANSFER:0",
         b"Cap:EEPROM:1",
-        b"Cap:AUTOREPORT_TEMP:0",
+        b"Cap:AUTOREPORT_TEMP:1",
         b"Cap:EMERGENCY_PARSER:1",
         b"Cap:SDCARD:0",
         b"Cap:THERMAL_PROTECTION:1",

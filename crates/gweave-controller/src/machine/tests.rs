@@ -220,6 +220,32 @@ fn m114_count_is_the_steppers_position_mid_move() {
     assert!(b.take().ends_with("X:50.00 Y:-1.00 Z:0.00 E:0.00 Count X:4000 Y:-80 Z:0\nok\n"));
 }
 
+/// `M155 S<seconds>`: the temperatures every so many seconds unasked, as Marlin's auto-report
+/// (OctoPrint stops polling `M105` when `M115` says `AUTOREPORT_TEMP:1`); `S0` stops them.
+#[test]
+fn m155_reports_the_temperatures_every_interval_until_s0() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.run_ms(10);
+    b.take();
+    b.send("M115\n");
+    b.run_ms(20);
+    assert!(b.take().contains("Cap:AUTOREPORT_TEMP:1\n"));
+    b.send("M155 S2\n");
+    b.run_ms(20);
+    assert_eq!(b.take(), "ok\n");
+    // Reports at 2 s and 4 s: `M105`'s line without its `ok`.
+    b.run_ms(5000);
+    let t = b.take();
+    let lines: Vec<&str> = t.lines().collect();
+    assert_eq!(lines.len(), 2, "{t}");
+    for l in lines {
+        assert!(l.starts_with(" T:") && l.contains(" /0.00 B:") && l.ends_with(" @:0 B@:0"), "{l:?}");
+    }
+    b.send("M155 S0\nM155 S61\n");
+    b.run_ms(5000);
+    assert_eq!(b.take(), "ok\necho:M155 S = 61.00 is out of range: 0.00 to 60.00\nok\n");
+}
+
 #[test]
 fn a_cold_hotend_does_not_extrude() {
     let mut b = Bench::new(Settings::DEFAULT);
