@@ -115,10 +115,11 @@ firmware-cortex: firmware-deps
 	@llvm-size-22 $(FW_CORTEX_ELF)
 
 
-# The same firmware with `M9999` hanging its main loop (feature fault-injection), for the
-# emulated board's watchdog test only.
+# The test image: the firmware with `M9999` hanging its main loop (feature fault-injection),
+# for the emulated board's watchdog test, built for a RAMPS "EEB" printer (a second hotend on
+# D9, firmware/printer-eeb.toml) so the board tests heat the second hotend without a 4th image.
 firmware-fault: firmware-deps
-	$(call fw_image,gweave-ramps-fault,printer.toml,/fault,fault-injection)
+	$(call fw_image,gweave-ramps-fault,printer-eeb.toml,/fault,fault-injection)
 
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli

@@ -42,11 +42,19 @@ fi
 echo "== on the emulated board (stack, step interrupt, step rates)"
 cargo run -q --release -p gweave-board --example budgets -- "$ELF" 2>/dev/null | grep -v '^Loaded'
 
+# Where the main loop's time goes while a host streams 0.5 mm lines at 60 mm/s, and its margin:
+# the time to read and plan a line against the line's motion; then the cycles a line costs by
+# function (the program counter's profile, on a shadow call stack; symbols from avr-nm).
+echo "== streaming short segments: the main loop's margin and profile"
+cargo run -q --release -p gweave-board --example profile -- "$ELF" 2>/dev/null | grep -v '^Loaded'
+
 # The inkjet build (issue 38: M700 through an InkShield): its size, then its nozzle pulses on
 # the emulated board against the InkShield's 5 us, and how fast a host can fire.
 INK_ELF="$ROOT/firmware/out/gweave-ramps-inkjet.elf"
 if [ -s "$INK_ELF" ]; then
   read -r itext idata ibss < <(avr-size "$INK_ELF" | awk 'NR == 2 { print $1, $2, $3 }')
+  # The base image's, beside it (sizes() keeps its own local).
+  read -r text data bss < <(avr-size "$ELF" | awk 'NR == 2 { print $1, $2, $3 }')
   echo "== firmware: $(basename "$INK_ELF")"
   printf "%-26s %7s KB   base image: %s KB (256 KB on the chip; issue 38: <= 128 KB)\n" "flash (text + data)" \
     "$(kb $((itext + idata)))" "$(kb $((text + data)))"

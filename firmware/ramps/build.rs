@@ -67,6 +67,14 @@ const KEYS: &[(&str, &str, Kind)] = &[
 const DEFAULT_PRINTER: &str = "printer.toml";
 
 fn main() {
+    if std::env::var("CARGO_CFG_TARGET_ARCH").as_deref() == Ok("avr") {
+        // avr-libc's float arithmetic (libm.a: `__mulsf3`, `__addsf3`, `__divsf3`, ...,
+        // hand-written AVR assembly) before Rust's `compiler_builtins`, whose portable versions
+        // (weak symbols, so libm's win) multiply through 64-bit integers: about 8 times slower
+        // on the 8-bit chip, and the main loop then planned a line in 17 ms (docs/firmware.md,
+        // "Where the main loop's time goes").
+        println!("cargo::rustc-link-lib=m");
+    }
     println!("cargo::rerun-if-env-changed=GWEAVE_PRINTER");
     let name = std::env::var("GWEAVE_PRINTER").unwrap_or_else(|_| DEFAULT_PRINTER.to_string());
     let path = format!("{}/../{name}", env!("CARGO_MANIFEST_DIR"));

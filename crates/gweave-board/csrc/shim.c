@@ -35,6 +35,9 @@ typedef struct gw_pin {
 #define GW_MAX_PINS 32
 #define GW_ADC_CHANNELS 16
 #define GW_PORTS 12
+/* The ATmega2560's 256 KB of flash, in 16-bit words. */
+#define GW_PROFILE_WORDS (128 * 1024)
+#define GW_PROFILE_DEPTH 64
 
 typedef struct gw_board {
 	avr_t *avr;
@@ -61,7 +64,19 @@ typedef struct gw_board {
 	uint64_t isr_count;
 	/* Levels driven from outside, per port (A..L). */
 	avr_ioport_external_t external[GW_PORTS];
+	/* The program counter's profile, while on: the cycles spent at each flash word (`self`)
+	 * and in each function with what it calls (`inclusive`, by the function's first word).
+	 * The calls are followed on a shadow stack: a frame starts when the program counter
+	 * reaches a function's first word (`entry`, a bit per word), with the stack pointer then
+	 * (the return address pushed), and ends when the stack pointer rises above it (`ret`). */
+	uint32_t *profile;
+	uint32_t *inclusive;
+	uint8_t *entry;
+	struct { avr_flashaddr_t word; uint16_t sp; } frames[GW_PROFILE_DEPTH];
+	int depth;
 } gw_board;
+
+static void profile_free(gw_board *b);
 
 static void uart_out(struct avr_irq_t *irq, uint32_t value, void *param)
 {
@@ -175,6 +190,7 @@ void gw_board_free(gw_board *b)
 	if (!b)
 		return;
 	avr_terminate(b->avr);
+	profile_free(b);
 	free(b);
 }
 
@@ -257,6 +273,23 @@ static void uart_raise_udre(gw_board *b)
 		avr_raise_interrupt(b->avr, &u->udrc);
 }
 
+/* Count `cycles` spent at `pc` (before the step), then follow the calls and returns. */
+static void profile_step(gw_board *b, avr_flashaddr_t pc, uint32_t cycles)
+{
+	b->profile[(pc >> 1) & (GW_PROFILE_WORDS - 1)] += cycles;
+	for (int i = 0; i < b->depth; i++)
+		b->inclusive[b->frames[i].word] += cycles;
+	uint16_t sp = b->avr->data[0x5D] | (b->avr->data[0x5E] << 8);
+	while (b->depth > 0 && b->frames[b->depth - 1].sp < sp)
+		b->depth--;
+	avr_flashaddr_t word = (b->avr->pc >> 1) & (GW_PROFILE_WORDS - 1);
+	if (word != (pc >> 1) && (b->entry[word >> 3] >> (word & 7) & 1) && b->depth < GW_PROFILE_DEPTH) {
+		b->frames[b->depth].word = word;
+		b->frames[b->depth].sp = sp;
+		b->depth++;
+	}
+}
+
 /* Run until the cycle counter reaches `until`; 0 when it did, 1 when the firmware stopped
  * (cpu_Done), 2 when it crashed (cpu_Crashed). */
 int gw_board_run(gw_board *b, uint64_t until)
@@ -264,7 +297,11 @@ int gw_board_run(gw_board *b, uint64_t until)
 	avr_t *avr = b->avr;
 	int result = 0;
 	while (avr->cycle < until) {
+		avr_flashaddr_t pc = avr->pc;
+		avr_cycle_count_t before = avr->cycle;
 		int state = avr_run(avr);
+		if (b->profile)
+			profile_step(b, pc, (uint32_t)(avr->cycle - before));
 		if (state == cpu_Done || state == cpu_Crashed) {
 			result = state == cpu_Done ? 1 : 2;
 			break;
@@ -289,6 +326,45 @@ int gw_board_run(gw_board *b, uint64_t until)
 	uart_fix_byte_time(b);
 	uart_raise_udre(b);
 	return result;
+}
+
+static void profile_free(gw_board *b)
+{
+	free(b->profile);
+	free(b->inclusive);
+	free(b->entry);
+	b->profile = b->inclusive = NULL;
+	b->entry = NULL;
+	b->depth = 0;
+}
+
+/* Start the profile from zero, the functions starting at the `count` byte addresses `entries`
+ * (from the ELF's symbols); or stop it (`entries` NULL). -1: out of memory. */
+int gw_board_profile(gw_board *b, const uint32_t *entries, uint32_t count)
+{
+	profile_free(b);
+	if (!entries)
+		return 0;
+	b->profile = calloc(GW_PROFILE_WORDS, sizeof(uint32_t));
+	b->inclusive = calloc(GW_PROFILE_WORDS, sizeof(uint32_t));
+	b->entry = calloc(GW_PROFILE_WORDS / 8, 1);
+	if (!b->profile || !b->inclusive || !b->entry) {
+		profile_free(b);
+		return -1;
+	}
+	for (uint32_t i = 0; i < count; i++) {
+		uint32_t word = (entries[i] >> 1) & (GW_PROFILE_WORDS - 1);
+		b->entry[word >> 3] |= 1 << (word & 7);
+	}
+	return 0;
+}
+
+/* The profile's counters, GW_PROFILE_WORDS of them (word address = byte address / 2): the
+ * cycles at each word (`inclusive` 0), or in the function starting there with its callees
+ * (`inclusive` 1); NULL when off. */
+const uint32_t *gw_board_profile_counts(gw_board *b, int inclusive)
+{
+	return inclusive ? b->inclusive : b->profile;
 }
 
 uint64_t gw_board_cycle(gw_board *b)

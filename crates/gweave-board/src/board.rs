@@ -232,6 +232,20 @@ impl Board {
         self.avr.isr_mean_cycles()
     }
 
+    /// Profile the program counter from now on, the functions starting at the byte
+    /// addresses `entries` (the ELF's symbols), or stop (`None`): see
+    /// [`Board::profile_counts`].
+    pub fn profile(&mut self, entries: Option<&[u32]>) {
+        self.avr.profile(entries);
+    }
+
+    /// The cycles spent at each flash word (index: byte address / 2) since
+    /// [`Board::profile`] started, or with `inclusive`, in the function starting at each word
+    /// with what it called.
+    pub fn profile_counts(&self, inclusive: bool) -> Vec<u32> {
+        self.avr.profile_counts(inclusive)
+    }
+
     /// The lowest stack pointer seen: the stack's high-water mark is `0x21FF` minus it.
     pub fn min_stack_pointer(&self) -> u16 {
         self.avr.min_stack_pointer()

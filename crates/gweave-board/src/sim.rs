@@ -31,7 +31,12 @@ extern "C" {
     fn gw_board_time_vector(b: *mut GwBoard, vector: u32);
     fn gw_board_isr_max_cycles(b: *mut GwBoard) -> u64;
     fn gw_board_isr_mean_cycles(b: *mut GwBoard) -> u64;
+    fn gw_board_profile(b: *mut GwBoard, entries: *const u32, count: u32) -> c_int;
+    fn gw_board_profile_counts(b: *mut GwBoard, inclusive: c_int) -> *const u32;
 }
+
+/// The flash words the program-counter profile covers (the ATmega2560's 256 KB).
+pub const PROFILE_WORDS: usize = 128 * 1024;
 
 /// What `gw_board_run` returns when the firmware stopped or crashed.
 const RUN_DONE: c_int = 1;
@@ -238,6 +243,32 @@ impl<W: Wires> Avr<W> {
     pub fn isr_mean_cycles(&self) -> u64 {
         // SAFETY: a live board.
         unsafe { gw_board_isr_mean_cycles(self.board) }
+    }
+
+    /// Count, from now on, the cycles the chip spends at each flash word and in each
+    /// function with its callees, the functions starting at the byte addresses `entries` (the
+    /// ELF's symbols); `None` stops.
+    pub fn profile(&mut self, entries: Option<&[u32]>) {
+        let (ptr, len) = entries.map_or((std::ptr::null(), 0), |e| (e.as_ptr(), e.len() as u32));
+        // SAFETY: a live board; `ptr` is null or `len` valid addresses, read during the call.
+        let failed = unsafe { gw_board_profile(self.board, ptr, len) } != 0;
+        assert!(!failed, "no memory for the program counter's profile");
+    }
+
+    /// Since [`Avr::profile`] started: the cycles spent at each flash word (index: byte
+    /// address / 2), or with `inclusive`, in the function starting at that word with what it
+    /// called; empty when off.
+    pub fn profile_counts(&self, inclusive: bool) -> Vec<u32> {
+        // SAFETY: a live board; the shim's table, when on, has PROFILE_WORDS counters and
+        // lives until the next `gw_board_profile` call, which needs `&mut self`.
+        unsafe {
+            let counts = gw_board_profile_counts(self.board, c_int::from(inclusive));
+            if counts.is_null() {
+                Vec::new()
+            } else {
+                std::slice::from_raw_parts(counts, PROFILE_WORDS).to_vec()
+            }
+        }
     }
 
     /// The wires, between runs.

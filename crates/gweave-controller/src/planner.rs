@@ -35,6 +35,19 @@
 //!
 //! The oldest block's entry is fixed: it is the exit speed the block before it (already being
 //! stepped) was given, or rest. Speeds are kept squared, as the formulas want them.
+//!
+//! # Only what can change (GRBL's `block_buffer_planned`)
+//!
+//! A new move only ever raises the entries before it (the newest block no longer has to stop
+//! at its end), so an entry already at its junction limit is final, and so is one the forward
+//! pass lowered (the block before it accelerates all the way into it: a higher limit behind
+//! cannot raise it, and a block at its limit cuts what comes after it from what comes before).
+//! Everything up to the last such block keeps its entry, and the passes run over the blocks
+//! after it only: on a stream of short straight segments, one or two blocks a line instead of
+//! all 16. Reading and planning a line must take the chip less time than the line's motion
+//! (`half_millimetre_segments_at_60_mm_s_never_run_dry`, on the emulated board); the entries
+//! are those of the passes over every block, exactly
+//! (`planning_only_the_blocks_that_can_change_gives_the_full_passes_entries`).
 
 use crate::limits::{MAX_STEP_HZ, MIN_STEPS_PER_SEGMENT, PLANNER_BLOCKS};
 use crate::math::sqrt;
@@ -68,6 +81,9 @@ pub struct Planner {
     /// Unit direction of the last planned move (XYZE, in mm), for the next junction.
     previous_unit: [f32; AXES],
     previous_nominal_v2: f32,
+    /// How many of the oldest waiting blocks have their final entry (see the module's text).
+    /// (A byte: at most [`PLANNER_BLOCKS`].)
+    planned: u8,
     /// Where the last planned move ends, in steps per axis.
     pub position_steps: [i32; AXES],
 }
@@ -95,6 +111,7 @@ impl Planner {
             count: 0,
             previous_unit: [0.0; AXES],
             previous_nominal_v2: 0.0,
+            planned: 0,
             position_steps: [0; AXES],
         }
     }
@@ -112,6 +129,7 @@ impl Planner {
     /// Forgets every waiting move (a halt).
     pub fn clear(&mut self) {
         self.count = 0;
+        self.planned = 0;
     }
 
     /// Plans a move from [`Planner::position_steps`] to `target_steps` at `feed_mm_s` (within
@@ -161,6 +179,7 @@ impl Planner {
                 }
             }
         }
+        step.positive_bits = step.dir_bits;
         step.dir_bits ^= s.invert_dir;
         if step.events == 0 {
             return true;
@@ -240,19 +259,26 @@ impl Planner {
         &mut self.blocks[(self.first + i) % PLANNER_BLOCKS]
     }
 
-    /// The reverse and forward passes over the waiting blocks (see the module's text).
+    /// The reverse and forward passes over the blocks whose entries can still change (see the
+    /// module's text); the oldest block's entry is always fixed.
     fn recalculate(&mut self) {
+        let start = usize::from(self.planned).max(1);
         let mut next_entry_v2 = 0.0; // the newest block ends at rest
-        for i in (1..self.count).rev() {
+        for i in (start..self.count).rev() {
             let b = self.at(i);
             b.entry_v2 = b.max_entry_v2.min(next_entry_v2 + 2.0 * b.accel_mm_s2 * b.len_mm);
             next_entry_v2 = b.entry_v2;
         }
-        for i in 0..self.count.saturating_sub(1) {
-            let b = *self.at(i);
+        for i in start - 1..self.count.saturating_sub(1) {
+            let b = self.at(i);
             let reachable_v2 = b.entry_v2 + 2.0 * b.accel_mm_s2 * b.len_mm;
             let next = self.at(i + 1);
-            next.entry_v2 = next.entry_v2.min(reachable_v2);
+            if reachable_v2 < next.entry_v2 {
+                next.entry_v2 = reachable_v2;
+                self.planned = (i + 2) as u8; // accelerating all the way into block i + 1: final
+            } else if next.entry_v2 == next.max_entry_v2 {
+                self.planned = (i + 2) as u8; // at its limit: final
+            }
         }
     }
 
@@ -265,6 +291,7 @@ impl Planner {
         let block = self.blocks[self.first];
         self.first = (self.first + 1) % PLANNER_BLOCKS;
         self.count -= 1;
+        self.planned = self.planned.saturating_sub(1);
         let exit_v2 = if self.count > 0 { self.blocks[self.first].entry_v2 } else { 0.0 };
         Some((block, exit_v2))
     }
@@ -273,6 +300,7 @@ impl Planner {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::vec::Vec;
 
     fn planned(moves: &[[i32; AXES]]) -> Planner {
         let mut p = Planner::new();
@@ -343,6 +371,56 @@ mod tests {
         let (b, _) = p.pop().unwrap();
         // 5 mm along the path, 1600 Y steps: 40 000 steps/s is 125 mm/s along the path.
         assert!((sqrt(b.nominal_v2) - 125.0).abs() < 0.01, "{}", sqrt(b.nominal_v2));
+    }
+
+    /// The entries the reverse and forward passes over every waiting block give (the planner
+    /// before it planned only the blocks that can change).
+    fn full_passes(p: &Planner) -> Vec<f32> {
+        let mut b: Vec<Block> = (0..p.count).map(|i| p.blocks[(p.first + i) % PLANNER_BLOCKS]).collect();
+        let mut next_entry_v2 = 0.0;
+        for i in (1..b.len()).rev() {
+            b[i].entry_v2 = b[i].max_entry_v2.min(next_entry_v2 + 2.0 * b[i].accel_mm_s2 * b[i].len_mm);
+            next_entry_v2 = b[i].entry_v2;
+        }
+        for i in 0..b.len().saturating_sub(1) {
+            let reachable_v2 = b[i].entry_v2 + 2.0 * b[i].accel_mm_s2 * b[i].len_mm;
+            b[i + 1].entry_v2 = b[i + 1].entry_v2.min(reachable_v2);
+        }
+        b.iter().map(|b| b.entry_v2).collect()
+    }
+
+    #[test]
+    fn planning_only_the_blocks_that_can_change_gives_the_full_passes_entries() {
+        // Pseudo-random moves (short and long, corners, reversals, changes of speed), blocks
+        // taken by the stepper now and then, as a print streams them.
+        let mut seed = 0x2545_f491_u32;
+        let mut next = move |n: u32| {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed % n
+        };
+        let mut p = Planner::new();
+        let mut mixer = Mixer::new(0);
+        let mut target = [0i32; AXES];
+        let mut skipped = 0;
+        for step in 0..20_000 {
+            if p.is_full() || next(3) == 0 {
+                p.pop();
+            } else {
+                for axis in [0, 1, E] {
+                    target[axis] += next(400) as i32 - 200;
+                }
+                let feed_mm_s = [20.0, 60.0, 150.0][next(3) as usize];
+                assert!(p.add(target, feed_mm_s, 0, &Settings::DEFAULT, &mut mixer));
+            }
+            let entries: Vec<f32> =
+                (0..p.count).map(|i| p.blocks[(p.first + i) % PLANNER_BLOCKS].entry_v2).collect();
+            assert_eq!(entries, full_passes(&p), "after step {step}");
+            skipped += usize::from(p.planned.saturating_sub(1));
+        }
+        // The point of it: most of the passes are skipped.
+        assert!(skipped > 20_000, "only {skipped} blocks skipped");
     }
 
     #[test]

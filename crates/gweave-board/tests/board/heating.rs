@@ -85,3 +85,50 @@ fn m190_s60_heats_the_bed_then_holds_it() {
     assert!(peak_c <= 63.0, "overshoot to {peak_c} C");
     assert!(low_c >= 59.0 && peak_c <= 61.0, "held between {low_c} and {peak_c} C");
 }
+
+/// The test image (`make firmware-fault`, built for an "EEB" printer: a second hotend heated
+/// through D9 and read on A15), booted with D9 wired to hotend 1's heater.
+fn eeb_board() -> gweave_board::Board {
+    let wiring = Wiring { d9: gweave_board::D9::Hotend1, ..Wiring::default() };
+    let mut board = gweave_board::Board::new(&crate::common::fault_elf(), wiring).unwrap();
+    board.run_until_line(|l| l == "start", 1.0).unwrap();
+    // The first full set of oversampled readings.
+    board.run_for(0.2).unwrap();
+    board
+}
+
+/// RAMPS "EEB": `M104 T1` heats the second hotend through D9, read back on TEMP_1 (A15), and
+/// `M105` reports both hotends as Marlin does with two (`T0:` `T1:`, `@0:` `@1:`); the first
+/// hotend stays cold.
+#[test]
+fn m104_t1_heats_the_second_hotend_on_an_eeb_board() {
+    let mut board = eeb_board();
+    assert_eq!(board.command("M104 T1 S200", 1.0).unwrap(), ["ok"]);
+    board.run_for(20.0).unwrap();
+    let t1_c = board.plant(2).heater.sensor_c();
+    assert!(t1_c > 60.0, "hotend 1 at {t1_c} C after 20 s");
+    assert!((board.plant(0).heater.sensor_c() - 25.0).abs() < 1.0, "hotend 0 heated");
+    let report = board.command("M105", 1.0).unwrap();
+    let r = &report[0];
+    assert!(r.starts_with("ok T:") && r.contains(" /200.00 @:") && r.contains(" @1:"), "{r}");
+    assert!((crate::common::field(r, "T0:") - 25.0).abs() <= 1.0, "{r}");
+    assert!((crate::common::field(r, "T1:") - t1_c).abs() <= 2.0, "{r}");
+    assert!(crate::common::field(r, "@1:") > 0.0 && crate::common::field(r, "@0:") == 0.0, "{r}");
+}
+
+/// The thermal protection watches each hotend: an open thermistor on hotend 1 while it heats
+/// halts the EEB board with Marlin's words for heater 1, every heater off.
+#[test]
+fn an_open_thermistor_on_the_second_hotend_halts_the_eeb_board() {
+    let mut board = eeb_board();
+    assert_eq!(board.command("M104 T1 S200", 1.0).unwrap(), ["ok"]);
+    board.run_for(5.0).unwrap();
+    assert!(board.plant(2).heater.last_power_w() > 0.0, "hotend 1 heating before the fault");
+    board.shield_mut().fail_thermistor(2, SensorFault::Open);
+    let lines = board.run_until_line(|l| l.contains("kill() called"), 5.0).unwrap();
+    assert!(lines.iter().any(|l| l == "Error:MINTEMP triggered, system stopped! Heater_ID: 1"), "{lines:?}");
+    board.run_for(1.0).unwrap();
+    for i in 0..3 {
+        assert_eq!(board.plant(i).heater.last_power_w(), 0.0, "heater {i} still on");
+    }
+}

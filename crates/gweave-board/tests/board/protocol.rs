@@ -20,6 +20,28 @@ fn m115_names_the_firmware_and_its_capabilities() {
     assert_eq!(lines.last().unwrap(), "ok");
 }
 
+/// `M155 S1`: the board prints its temperatures every second unasked (OctoPrint's auto-report,
+/// announced by `AUTOREPORT_TEMP:1`); `S0` stops it.
+#[test]
+fn m155_s1_reports_the_temperatures_every_second() {
+    let mut board = crate::common::booted(Wiring::default());
+    let caps = board.command("M115", 1.0).unwrap();
+    assert!(caps.iter().any(|l| l == "Cap:AUTOREPORT_TEMP:1"), "{caps:?}");
+    assert_eq!(board.command("M155 S1", 1.0).unwrap(), ["ok"]);
+    let start = board.now_s();
+    for n in 1..=3 {
+        let lines = board.run_until_line(|l| l.starts_with(" T:"), 1.5).unwrap();
+        let at = board.now_s() - start;
+        // Room temperature through the thermistor table, as `M105` reads it.
+        let report = lines.last().unwrap();
+        assert!((crate::common::field(report, "T:") - 25.0).abs() <= 1.0, "{lines:?}");
+        assert!((at - f64::from(n)).abs() < 0.05, "report {n} at {at:.3} s");
+    }
+    assert_eq!(board.command("M155 S0", 1.0).unwrap(), ["ok"]);
+    board.run_for(2.5).unwrap();
+    assert!(board.lines().is_empty());
+}
+
 #[test]
 fn m105_reads_room_temperature_from_the_thermistors() {
     let mut board = crate::common::booted(Wiring::default());

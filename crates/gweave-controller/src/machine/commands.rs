@@ -27,6 +27,8 @@ const SETTING: (f32, f32) = (0.000_001, 1_000_000.0);
 const GAIN: (f32, f32) = (0.0, 100_000.0);
 const DUTY: (f32, f32) = (0.0, 255.0);
 const DWELL_MS: (f32, f32) = (0.0, 3_600_000.0);
+/// `M155 S`: seconds between temperature reports, 0 for none (Marlin caps it at 60).
+const AUTO_REPORT_S: (f32, f32) = (0.0, 60.0);
 /// An inkjet head (`M700 P`), of those a build may wire, and a C6602's nozzle mask (`S`, 12
 /// bits).
 #[cfg(feature = "inkjet")]
@@ -119,6 +121,13 @@ impl Controller<'_> {
                 return Some(Done::Quiet);
             }
             (b'M', 106) => self.fan_duty = w.get(b'S').unwrap_or(255.0) as u8,
+            (b'M', 155) => {
+                // Marlin's `M155 S<seconds>`: the first report one interval from now.
+                if let Some(seconds) = w.get(b'S') {
+                    self.auto_report_s = seconds as u8;
+                    self.next_report_ms = now.wrapping_add(u32::from(self.auto_report_s) * 1000);
+                }
+            }
             (b'M', 107) => self.fan_duty = 0,
             (b'M', 110) => {
                 if let Some(n) = w.get(b'N') {
@@ -279,6 +288,7 @@ impl Controller<'_> {
         }
         if wait && target.is_some() {
             self.wait = Wait::Heat { heater, both_ways: w.has(b'R') };
+            self.next_report_ms = now_ms.wrapping_add(super::HEAT_REPORT_MS);
             return Done::Quiet;
         }
         Done::Ok
@@ -329,6 +339,7 @@ fn out_of_range(w: &Words) -> Option<(u8, f32, (f32, f32))> {
         (b'G', 4) => &[(b"P", DWELL_MS), (b"S", (0.0, 3600.0))],
         (b'M', 104 | 109 | 140 | 190) => &[(b"SR", TEMP_C), (b"T", (0.0, 1.0))],
         (b'M', 106) => &[(b"S", DUTY)],
+        (b'M', 155) => &[(b"S", AUTO_REPORT_S)],
         (b'M', 110) => &[(b"N", (-1.0, 2_000_000_000.0))],
         (b'M', 92 | 201 | 203) => &[(b"XYZE", SETTING)],
         (b'M', 204) => &[(b"SPRT", SETTING)],

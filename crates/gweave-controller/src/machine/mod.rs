@@ -25,7 +25,7 @@ use crate::serial::protocol::{self, LineError};
 use crate::serial::reader::LineReader;
 use crate::settings::Settings;
 use crate::stepper::prep::Prep;
-use crate::stepper::StepQueue;
+use crate::stepper::{StepQueue, COUNTED_AXES};
 use crate::{Inputs, Io, Outputs, AXES, BED, HEATERS};
 use homing::Homing;
 
@@ -89,6 +89,9 @@ pub struct Controller<'q> {
     /// When the running command started, for the keepalive (ms).
     busy_since_ms: u32,
     next_report_ms: u32,
+    /// `M155`: the temperatures are printed every so many seconds (0: never; at most 60, so
+    /// a byte), next at `next_report_ms` (every second instead while `M109`/`M190` wait).
+    auto_report_s: u8,
     /// An `M112` was seen by the line reader: halt before anything else.
     emergency: bool,
     halted: bool,
@@ -121,6 +124,7 @@ impl<'q> Controller<'q> {
             wait: Wait::Nothing,
             busy_since_ms: 0,
             next_report_ms: 0,
+            auto_report_s: 0,
             emergency: false,
             halted: false,
             inputs: Inputs { now_ms: 0, adc: [0; HEATERS], endstops: 0 },
@@ -169,11 +173,16 @@ impl<'q> Controller<'q> {
             Err(fault) => return self.kill(io, Some(fault)),
         }
         self.prep.fill(&mut self.planner, self.queue);
+        self.report_temperatures_when_due(io, inputs.now_ms);
+        if !self.moving() {
+            // The stepper's counts go on from the planner's coordinates (homing and `G92` name
+            // new ones while nothing moves).
+            self.queue.set_counted_steps(self.counted_when_idle());
+        }
         self.carry_on(io);
         while self.wait == Wait::Nothing && !self.planner.is_full() {
             let Some(l) = self.reader.pop() else { break };
             self.busy_since_ms = inputs.now_ms;
-            self.next_report_ms = inputs.now_ms.wrapping_add(HEAT_REPORT_MS);
             self.run_line(io, l.bytes(), l.too_long);
             self.prep.fill(&mut self.planner, self.queue);
             if self.halted {
@@ -236,12 +245,6 @@ impl<'q> Controller<'q> {
             }
             Wait::Dwell { until_ms } => (now.wrapping_sub(until_ms) as i32) >= 0,
             Wait::Heat { heater, both_ways } => {
-                if (now.wrapping_sub(self.next_report_ms) as i32) >= 0 {
-                    self.next_report_ms = now.wrapping_add(HEAT_REPORT_MS);
-                    let mut r = Reply::new();
-                    self.heat.report(&self.settings, &mut r);
-                    r.send(io);
-                }
                 let h = &self.heat.heaters[heater];
                 h.target_c <= 0.0
                     || if both_ways {
@@ -269,6 +272,30 @@ impl<'q> Controller<'q> {
             self.wait = Wait::Nothing;
             line(io, b"ok");
         }
+    }
+
+    /// The temperatures unasked, `M105`'s line without its `ok`: every second while `M109` or
+    /// `M190` waits (Marlin's words while heating), else every `M155` interval (Marlin's
+    /// auto-report), if one is set.
+    fn report_temperatures_when_due(&mut self, io: &mut impl Io, now_ms: u32) {
+        let interval_ms = if matches!(self.wait, Wait::Heat { .. }) {
+            HEAT_REPORT_MS
+        } else {
+            u32::from(self.auto_report_s) * 1000
+        };
+        if interval_ms > 0 && (now_ms.wrapping_sub(self.next_report_ms) as i32) >= 0 {
+            self.next_report_ms = now_ms.wrapping_add(interval_ms);
+            let mut r = Reply::new();
+            self.heat.report(&self.settings, &mut r);
+            r.send(io);
+        }
+    }
+
+    /// X, Y and Z's motors in steps when nothing moves: where the planned moves end.
+    fn counted_when_idle(&self) -> [i32; COUNTED_AXES] {
+        let mut xyz = [0; COUNTED_AXES];
+        xyz.copy_from_slice(&self.planner.position_steps[..COUNTED_AXES]);
+        xyz
     }
 
     /// Whether moves are planned, being cut or being stepped.

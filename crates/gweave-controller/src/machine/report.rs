@@ -4,19 +4,19 @@
 
 use super::Controller;
 use crate::serial::out::{line, Reply};
-use crate::{Io, AXES, AXIS_LETTERS, E};
+use crate::{Io, AXES, AXIS_LETTERS};
 
 /// `M115`: the firmware line, then the capabilities a host looks for. Hosts read `Cap:` lines
 /// to decide what to send (OctoPrint: `AUTOREPORT_TEMP`, `EMERGENCY_PARSER`); this core has the
-/// emergency parser (`M112` acts at once), EEPROM and thermal protection, and no SD card or
-/// auto-report.
+/// emergency parser (`M112` acts at once), EEPROM, thermal protection and the temperature
+/// auto-report (`M155`: OctoPrint then stops polling `M105`), and no SD card.
 pub(super) fn firmware(io: &mut impl Io) {
     line(io, b"FIRMWARE_NAME:gweave-controller PROTOCOL_VERSION:1.0 MACHINE_TYPE:RAMPS 1.4 EXTRUDER_COUNT:1");
     for cap in [
         &b"Cap:SERIAL_XON_XOFF:0"[..],
         b"Cap:BINARY_FILE_TRANSFER:0",
         b"Cap:EEPROM:1",
-        b"Cap:AUTOREPORT_TEMP:0",
+        b"Cap:AUTOREPORT_TEMP:1",
         b"Cap:EMERGENCY_PARSER:1",
         b"Cap:SDCARD:0",
         b"Cap:THERMAL_PROTECTION:1",
@@ -26,8 +26,9 @@ pub(super) fn firmware(io: &mut impl Io) {
 }
 
 impl Controller<'_> {
-    /// `M114`: `X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0`. The counts are the
-    /// planner's (where the queued moves end), as the positions are.
+    /// `M114`: `X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0`, as Marlin's: the position
+    /// where the queued moves end (mm), then the steps the motors have made (the stepper's
+    /// counts, behind the planned position while moves run).
     pub(super) fn report_position(&self, io: &mut impl Io) {
         let mut r = Reply::new();
         for (axis, (&letter, &mm)) in AXIS_LETTERS.iter().zip(&self.position_mm).enumerate() {
@@ -37,7 +38,10 @@ impl Controller<'_> {
             r.s(&[letter, b':']).f2(mm);
         }
         r.s(b" Count");
-        for (&letter, &steps) in AXIS_LETTERS[..E].iter().zip(&self.planner.position_steps) {
+        // While nothing moves the motors are where the planner's moves end, in the coordinates
+        // a `G92` of this very turn may just have named.
+        let counted = if self.moving() { self.queue.counted_steps() } else { self.counted_when_idle() };
+        for (&letter, &steps) in AXIS_LETTERS.iter().zip(&counted) {
             r.s(&[b' ', letter, b':']).i32(steps);
         }
         r.send(io);

@@ -181,6 +181,71 @@ fn a_move_makes_exact_step_counts() {
     );
 }
 
+/// `M114`'s `Count` is where the motors are (the steps the stepper made), as Marlin's, not where
+/// the queued moves end: it once printed the planner's position.
+#[test]
+fn m114_count_is_the_steppers_position_mid_move() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.run_ms(10);
+    b.take();
+    let start = b.t.steps;
+    // 50 mm of X (4000 steps) and 1 mm of Y back, at 50 mm/s: about a second.
+    b.send(
+        "G1 X50 Y-1 F3000
+",
+    );
+    b.run_until_ok(1, 100);
+    b.run_ms(300);
+    b.take();
+    b.send(
+        "M114
+",
+    );
+    b.run_until_ok(1, 100);
+    let made = [b.t.steps[0] - start[0], b.t.steps[1] - start[1]];
+    let t = b.take();
+    // The position where the move ends, then the counts: behind it, at most a millisecond's
+    // steps (4 at 4000 steps/s) behind the pulses counted on the twin's pins since.
+    assert!(t.starts_with("X:50.00 Y:-1.00 Z:0.00 E:0.00 Count X:"), "{t}");
+    let count = |letter: &str| -> i64 {
+        let at = t.find("Count ").map(|c| c + t[c..].find(letter).unwrap() + letter.len()).unwrap();
+        t[at..].split([' ', '\n']).next().unwrap().parse().unwrap()
+    };
+    let (x, y) = (count("X:"), count("Y:"));
+    assert!(x > 400 && x < 4000 && made[0] - x <= 4 && x <= made[0], "Count X:{x}, made {made:?}: {t}");
+    assert!(y <= 0 && y > -80 && y >= made[1] && y - made[1] <= 4, "Count Y:{y}, made {made:?}: {t}");
+    // Once the move is done, the counts are the planned position.
+    b.send("M400\nM114\n");
+    b.run_until_ok(2, 3000);
+    assert!(b.take().ends_with("X:50.00 Y:-1.00 Z:0.00 E:0.00 Count X:4000 Y:-80 Z:0\nok\n"));
+}
+
+/// `M155 S<seconds>`: the temperatures every so many seconds unasked, as Marlin's auto-report
+/// (OctoPrint stops polling `M105` when `M115` says `AUTOREPORT_TEMP:1`); `S0` stops them.
+#[test]
+fn m155_reports_the_temperatures_every_interval_until_s0() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.run_ms(10);
+    b.take();
+    b.send("M115\n");
+    b.run_ms(20);
+    assert!(b.take().contains("Cap:AUTOREPORT_TEMP:1\n"));
+    b.send("M155 S2\n");
+    b.run_ms(20);
+    assert_eq!(b.take(), "ok\n");
+    // Reports at 2 s and 4 s: `M105`'s line without its `ok`.
+    b.run_ms(5000);
+    let t = b.take();
+    let lines: Vec<&str> = t.lines().collect();
+    assert_eq!(lines.len(), 2, "{t}");
+    for l in lines {
+        assert!(l.starts_with(" T:") && l.contains(" /0.00 B:") && l.ends_with(" @:0 B@:0"), "{l:?}");
+    }
+    b.send("M155 S0\nM155 S61\n");
+    b.run_ms(5000);
+    assert_eq!(b.take(), "ok\necho:M155 S = 61.00 is out of range: 0.00 to 60.00\nok\n");
+}
+
 #[test]
 fn a_cold_hotend_does_not_extrude() {
     let mut b = Bench::new(Settings::DEFAULT);

@@ -50,12 +50,21 @@ pub struct StepBlock {
     /// Endstop pins whose triggered level is low: an endstop is triggered when
     /// `(levels ^ endstop_invert) & bit` is set.
     pub endstop_invert: u8,
+    /// Motors whose steps go towards + (bit `1 << motor`, before the DIR inversion): how the
+    /// stepper counts X, Y and Z's steps ([`StepQueue::counted_steps`]).
+    pub positive_bits: u8,
 }
 
 impl StepBlock {
     /// No move.
-    pub const IDLE: StepBlock =
-        StepBlock { steps: [0; MOTORS], events: 0, dir_bits: 0, endstop_mask: 0, endstop_invert: 0 };
+    pub const IDLE: StepBlock = StepBlock {
+        steps: [0; MOTORS],
+        events: 0,
+        dir_bits: 0,
+        endstop_mask: 0,
+        endstop_invert: 0,
+        positive_bits: 0,
+    };
 }
 
 /// A few milliseconds of one block at a constant step rate.
@@ -92,7 +101,14 @@ pub struct StepQueue {
     abort: AtomicBool,
     /// Set by the stepper when an endstop ended a homing move; cleared by the producer.
     endstop_hit: AtomicBool,
+    /// Where X, Y and Z's motors are, in steps, counted by the stepper as it pulses them (from
+    /// the planner's coordinates, set while idle): `M114`'s `Count` (see
+    /// [`StepQueue::counted_steps`]).
+    counted: UnsafeCell<[i32; COUNTED_AXES]>,
 }
+
+/// The axes whose steps the stepper counts (X, Y, Z: `M114`'s `Count`, as Marlin's).
+pub const COUNTED_AXES: usize = 3;
 
 // SAFETY: the cells are shared between one producer and one consumer; `head`/`tail` hand each
 // slot over (written completely, then published with Release; read after an Acquire load), so
@@ -125,6 +141,36 @@ impl StepQueue {
             busy: AtomicBool::new(false),
             abort: AtomicBool::new(false),
             endstop_hit: AtomicBool::new(false),
+            counted: UnsafeCell::new([0; COUNTED_AXES]),
+        }
+    }
+
+    /// Producer, only while the steppers are idle (nothing queued, nothing running): the
+    /// counts go on from `steps` (the planner's coordinates, which homing and `G92` change).
+    pub fn set_counted_steps(&self, steps: [i32; COUNTED_AXES]) {
+        // SAFETY: the consumer writes the counts only when it steps, and it steps only segments
+        // the producer queued: none is queued or running now.
+        unsafe { core::ptr::write_volatile(self.counted.get(), steps) };
+    }
+
+    /// Producer: where X, Y and Z's motors are, in steps, as the stepper counted them (Marlin's
+    /// `count_position`): behind the planned position while moves run.
+    ///
+    /// The stepper may interrupt the read between two of its bytes (an AVR loads one byte at a
+    /// time), so the counts are read until two reads in a row agree: the interrupt changes
+    /// them by one step at most between two reads, and two whole reads without an interrupt
+    /// between agree.
+    pub fn counted_steps(&self) -> [i32; COUNTED_AXES] {
+        // SAFETY: only the consumer writes the counts; a read racing it is retried (above).
+        // Volatile: the compiler must load again each time.
+        let read = || unsafe { core::ptr::read_volatile(self.counted.get()) };
+        let mut last = read();
+        loop {
+            let now = read();
+            if now == last {
+                return now;
+            }
+            last = now;
         }
     }
 
@@ -334,13 +380,20 @@ impl<'q> Stepper<'q> {
         bits
     }
 
-    /// Bresenham for motor `M`: add its steps, and step when the counter reaches the events.
+    /// Bresenham for motor `M`: add its steps, and step when the counter reaches the events;
+    /// X, Y and Z's steps are counted (`M114`'s `Count`).
     #[inline(always)]
     fn motor_event<const M: usize>(&mut self, bits: &mut u8) {
         if self.moving & (1 << M) != 0 {
             let counter = self.counters[M] + self.block.steps[M];
             self.counters[M] = if counter >= self.block.events {
                 *bits |= 1 << M;
+                if M < COUNTED_AXES {
+                    // SAFETY: only the consumer writes the counts (see `counted_steps`).
+                    let count = unsafe { &mut (*self.queue.counted.get())[M] };
+                    *count =
+                        count.wrapping_add(if self.block.positive_bits & (1 << M) != 0 { 1 } else { -1 });
+                }
                 counter - self.block.events
             } else {
                 counter
