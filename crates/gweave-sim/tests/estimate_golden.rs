@@ -36,7 +36,7 @@ fn every_fixtures_estimate_is_the_same_to_the_bit() {
         let blocks: u64 = fields.next().unwrap().parse().unwrap();
         let figures: Vec<f64> = fields.map(|f| f.parse().unwrap()).collect();
         let path = root().join("tests/data").join(fixture);
-        let firmware = gweave::gcode::flavour::read_firmware(&path).unwrap();
+        let firmware = gweave::gcode::flavour::read_firmware(&path, None).unwrap();
         let file = std::fs::File::open(&path).unwrap();
         let report = estimate_report(file, &machine(name), firmware, false).unwrap();
         let est = &report.estimate;
