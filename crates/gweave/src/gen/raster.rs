@@ -48,8 +48,9 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
-use super::gcode_text::{push_fire, push_num, push_uint, TextTable};
-use super::printhead::{PrintheadError, PrintheadProfile, MAX_NOZZLES};
+use super::band::BandGather;
+use super::gcode_text::{push_fire, push_num, push_uint, SlotTable};
+use super::printhead::{HeadOffset, PrintheadError, PrintheadProfile};
 use super::sl1::{Sl1Error, Sl1Reader};
 use crate::range::{OutOfRange, Range, FEED_MM_MIN, LAYER_HEIGHT_MM, POSITION_MM};
 
@@ -224,11 +225,13 @@ pub struct RasterWriter<W: Write> {
     cfg: RasterConfig,
     layer_height_mm: f64,
     pitch_mm: f64,
-    row_to_s_bit: Vec<u32>,
+    band: BandGather,
     /// Per head: `G1 X<x>` of each column (grown with the widest image) ...
-    x_text: Vec<TextTable>,
-    /// ... and `M700 P<h> S<bits>\n` for every `S` below 2^12 (empty for bigger heads).
-    fire_text: Vec<TextTable>,
+    x_text: Vec<SlotTable<X_SLOT>>,
+    /// ... and `M700 P<h> S<bits>\n` for every `S` below 2^12 (empty for bigger heads) ...
+    fire_text: Vec<SlotTable<FIRE_SLOT>>,
+    /// ... and the drops each of those fires.
+    drops_of_s: Vec<u8>,
     /// Reused per pass: (column, S bits).
     columns: Vec<(usize, u64)>,
     pos_mm: Option<(f64, f64)>,
@@ -237,6 +240,14 @@ pub struct RasterWriter<W: Write> {
 }
 
 const FLUSH_BYTES: usize = 1 << 16;
+/// Slot sizes of the pre-formatted texts: `G1 X-12345.123456789` is 20 bytes, `M700 P9 S4095\n`
+/// 14. A text that does not fit is formatted where it is written.
+const X_SLOT: usize = 32;
+const FIRE_SLOT: usize = 16;
+/// Room for a column's text but its fires: the move (a slot), ` Y<y>` and two `\nM400\n`.
+const COLUMN_BYTES: usize = X_SLOT + 64 + 16;
+/// Room for a fire command formatted where it is written: `M<u32> P<usize> S<u64>\n`.
+const FIRE_BYTES: usize = 64;
 
 impl<W: Write> RasterWriter<W> {
     /// Validates the profile and config and writes the start G-code. `source_layer_height_mm`
@@ -258,9 +269,10 @@ impl<W: Write> RasterWriter<W> {
             cfg: cfg.clone(),
             layer_height_mm,
             pitch_mm: profile.pitch_mm(),
-            row_to_s_bit: profile.row_to_s_bit(),
-            x_text: vec![TextTable::default(); profile.heads.len()],
+            band: BandGather::new(&profile.row_to_s_bit()),
+            x_text: vec![SlotTable::default(); profile.heads.len()],
             fire_text: (0..profile.heads.len()).map(|h| fire_table(profile, h)).collect(),
+            drops_of_s: drops_table(profile),
             columns: Vec::new(),
             pos_mm: None,
             last_y_mm: None,
@@ -333,7 +345,7 @@ impl<W: Write> RasterWriter<W> {
                 if band * n >= plane.height() {
                     continue;
                 }
-                self.collect_band(plane, band * n);
+                self.band.collect(plane, band * n, &mut self.columns);
                 if self.columns.is_empty() {
                     self.report.bands_skipped += 1;
                     continue;
@@ -348,81 +360,76 @@ impl<W: Write> RasterWriter<W> {
         Ok(())
     }
 
-    /// Fills `self.columns` with the non-empty columns of the band starting at row `j0`,
-    /// left to right, each with its `S` word. Works on whole words: the OR of the band's rows
-    /// finds the inked columns, then each column's rows are gathered bit by bit.
-    fn collect_band(&mut self, plane: &Bitmap, j0: usize) {
-        self.columns.clear();
-        let rows = (plane.height() - j0).min(self.row_to_s_bit.len());
-        let s_bits = &self.row_to_s_bit[..rows];
-        let mut band = [0u64; MAX_NOZZLES as usize];
-        for wi in 0..plane.words_per_row() {
-            let mut any = 0u64;
-            for (k, w) in band[..rows].iter_mut().enumerate() {
-                *w = plane.row(j0 + k)[wi];
-                any |= *w;
-            }
-            while any != 0 {
-                let bit = any.trailing_zeros();
-                let mut s = 0u64;
-                for (&w, &sb) in band[..rows].iter().zip(s_bits) {
-                    s |= (w >> bit & 1) << sb;
-                }
-                self.columns.push((wi * 64 + bit as usize, s));
-                any &= any - 1;
-            }
-        }
-    }
-
     /// Carriage X that puts head `head` over the centre of column `i`.
     fn column_x_mm(&self, head: usize, i: usize) -> f64 {
-        self.cfg.origin_x_mm + (i as f64 + 0.5) * self.pitch_mm - self.profile.heads[head].offset_x_mm
+        column_x_mm(&self.cfg, self.pitch_mm, &self.profile.heads[head], i)
     }
 
     /// Pre-formats `G1 X<x>` for head `head` up to `width` columns.
     fn ensure_x_text(&mut self, head: usize, width: usize) {
+        let mut text = Vec::new();
         for i in self.x_text[head].len()..width {
-            let x = self.column_x_mm(head, i);
-            let table = &mut self.x_text[head];
-            table.text.extend_from_slice(b"G1 X");
-            push_num(&mut table.text, x, self.cfg.decimals);
-            table.ends.push(table.text.len());
+            text.clear();
+            text.extend_from_slice(b"G1 X");
+            push_num(&mut text, self.column_x_mm(head, i), self.cfg.decimals);
+            // A slot holds any position in range at up to 9 decimals (`POSITION_MM`).
+            let fits = self.x_text[head].push(&text);
+            debug_assert!(fits, "{}", String::from_utf8_lossy(&text));
         }
     }
 
+    /// Writes one pass of head `head` over the band at row `j0` (image `width` columns wide):
+    /// for each column of `self.columns`, in the pass's direction, the move onto it and its fires.
+    /// The text goes straight into `buf` grown ahead by whole slots (the padding overwritten by
+    /// what follows), and is cut to what was written at the end.
     fn write_pass(&mut self, head: usize, j0: usize, width: usize, forward: bool) -> Result<(), RasterError> {
         self.ensure_x_text(head, width);
         let y =
             self.cfg.origin_y_mm + (j0 as f64 + 0.5) * self.pitch_mm - self.profile.heads[head].offset_y_mm;
-        let density = u64::from(self.cfg.density);
+        let mut y_text = b" Y".to_vec();
+        push_num(&mut y_text, y, self.cfg.decimals);
+        let density = self.cfg.density as usize;
+        let column_bytes = COLUMN_BYTES + density * FIRE_BYTES;
+        let (x_text, fire_text) = (&self.x_text[head], &self.fire_text[head]);
+        // The seed's order drains the queue after the fire; the first fire of a pass still
+        // waits for the move onto the band.
+        let before = self.cfg.fire_order == FireOrder::Before;
         let mut fire = Vec::new();
         let (mut path_mm, mut drops) = (0.0, 0u64);
         let count = self.columns.len();
+        let buf = &mut self.buf;
+        let mut pos = buf.len();
         for idx in 0..count {
             let (i, s) = self.columns[if forward { idx } else { count - 1 - idx }];
-            let x = self.column_x_mm(head, i);
-            self.buf.extend_from_slice(self.x_text[head].get(i));
+            if buf.len() < pos + column_bytes {
+                // Room for 64 columns more: zero-filled once, written over.
+                buf.resize(pos + 64 * column_bytes, 0);
+            }
+            let x = column_x_mm(&self.cfg, self.pitch_mm, &self.profile.heads[head], i);
+            pos += x_text.put(i, &mut buf[pos..]);
             if self.last_y_mm != Some(y) {
-                self.buf.extend_from_slice(b" Y");
-                push_num(&mut self.buf, y, self.cfg.decimals);
+                buf[pos..pos + y_text.len()].copy_from_slice(&y_text);
+                pos += y_text.len();
                 self.last_y_mm = Some(y);
             }
-            // The seed's order drains the queue after the fire; the first fire of a pass still
-            // waits for the move onto the band.
-            let before = self.cfg.fire_order == FireOrder::Before;
-            self.buf.extend_from_slice(if before && idx > 0 { b"\n" } else { b"\nM400\n" });
-            let fire_line = if (s as usize) < self.fire_text[head].len() {
-                self.fire_text[head].get(s as usize)
+            pos += if before && idx > 0 { END } else { END_DRAIN }.put(&mut buf[pos..]);
+            let s_index = s as usize;
+            if s_index < fire_text.len() {
+                for _ in 0..density {
+                    pos += fire_text.put(s_index, &mut buf[pos..]);
+                }
+                drops += u64::from(self.drops_of_s[s_index]);
             } else {
                 fire.clear();
                 push_fire(&mut fire, self.profile.fire_code(), head, s);
-                &fire
-            };
-            for _ in 0..density {
-                self.buf.extend_from_slice(fire_line);
+                for _ in 0..density {
+                    buf[pos..pos + fire.len()].copy_from_slice(&fire);
+                    pos += fire.len();
+                }
+                drops += u64::from(self.profile.drops_of_fire(s));
             }
             if before {
-                self.buf.extend_from_slice(b"M400\n");
+                pos += DRAIN.put(&mut buf[pos..]);
             }
             if let Some((px, py)) = self.pos_mm {
                 // Within a pass only X changes; sqrt only for the move onto a new band.
@@ -430,8 +437,9 @@ impl<W: Write> RasterWriter<W> {
                     if py == y { (x - px).abs() } else { ((x - px).powi(2) + (y - py).powi(2)).sqrt() };
             }
             self.pos_mm = Some((x, y));
-            drops += u64::from(self.profile.drops_of_fire(s));
         }
+        buf.truncate(pos);
+        let density = density as u64;
         let r = &mut self.report;
         r.xy_path_mm += path_mm;
         r.xy_moves += count as u64;
@@ -455,19 +463,64 @@ impl<W: Write> RasterWriter<W> {
     }
 }
 
+/// Carriage X that puts `head` over the centre of column `i` at nozzle pitch `pitch_mm`.
+#[inline]
+fn column_x_mm(cfg: &RasterConfig, pitch_mm: f64, head: &HeadOffset, i: usize) -> f64 {
+    cfg.origin_x_mm + (i as f64 + 0.5) * pitch_mm - head.offset_x_mm
+}
+
 /// Nozzle counts up to this get every fire line pre-formatted (2^12 lines, about 64 KiB).
 const FIRE_TABLE_MAX_NOZZLES: u32 = 12;
 
-fn fire_table(profile: &PrintheadProfile, head: usize) -> TextTable {
-    let mut t = TextTable::default();
+fn fire_table(profile: &PrintheadProfile, head: usize) -> SlotTable<FIRE_SLOT> {
+    let mut t = SlotTable::default();
     if profile.nozzle_count <= FIRE_TABLE_MAX_NOZZLES {
+        let mut line = Vec::new();
         for s in 0..1u64 << profile.nozzle_count {
-            push_fire(&mut t.text, profile.fire_code(), head, s);
-            t.ends.push(t.text.len());
+            line.clear();
+            push_fire(&mut line, profile.fire_code(), head, s);
+            if !t.push(&line) {
+                // A long fire code or head number: every line formatted where it is written.
+                return SlotTable::default();
+            }
         }
     }
     t
 }
+
+/// The drops of each fire in [`fire_table`] (`S` below 2^12: at most 12).
+fn drops_table(profile: &PrintheadProfile) -> Vec<u8> {
+    let count = if profile.nozzle_count <= FIRE_TABLE_MAX_NOZZLES { 1u64 << profile.nozzle_count } else { 0 };
+    (0..count).map(|s| profile.drops_of_fire(s) as u8).collect()
+}
+
+/// A text of at most 8 bytes, zero-padded, and its length: one 8-byte copy writes it (a copy of
+/// its own length is a call to `memcpy`).
+struct Short([u8; 8], usize);
+
+impl Short {
+    const fn new(text: &[u8]) -> Short {
+        let mut padded = [0; 8];
+        let mut i = 0;
+        while i < text.len() {
+            padded[i] = text[i];
+            i += 1;
+        }
+        Short(padded, text.len())
+    }
+
+    /// Copies the text to the start of `out` (which must hold 8 bytes); returns its length.
+    #[inline]
+    fn put(&self, out: &mut [u8]) -> usize {
+        out[..8].copy_from_slice(&self.0);
+        self.1
+    }
+}
+
+/// The end of a move line; with the `M400` that drains the queue before a fire; that alone.
+const END: Short = Short::new(b"\n");
+const END_DRAIN: Short = Short::new(b"\nM400\n");
+const DRAIN: Short = Short::new(b"M400\n");
 
 /// Appends a user block, making sure it ends with a newline.
 fn push_block(buf: &mut Vec<u8>, block: &str) {
