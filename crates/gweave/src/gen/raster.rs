@@ -38,7 +38,7 @@
 //! every such fire. It reproduces the seed's file for a firmware whose fire command waits for
 //! the moves itself.
 //!
-//! The output is written in 64 KiB chunks to any `Write`; the layers come one at a time,
+//! The output is written in 1 MiB chunks to any `Write`; the layers come one at a time,
 //! so memory is bounded by one layer per head.
 
 use std::io::Write;
@@ -232,14 +232,18 @@ pub struct RasterWriter<W: Write> {
     fire_text: Vec<SlotTable<FIRE_SLOT>>,
     /// ... and the drops each of those fires.
     drops_of_s: Vec<u8>,
-    /// Reused per pass: (column, S bits).
+    /// Reused per pass: (column, S bits) ...
     columns: Vec<(usize, u64)>,
+    /// ... and its text.
+    pass: Vec<u8>,
     pos_mm: Option<(f64, f64)>,
     last_y_mm: Option<f64>,
     report: RasterReport,
 }
 
-const FLUSH_BYTES: usize = 1 << 16;
+/// The output is written in pieces of this size: as large as the output's buffer
+/// (`gcode::writer`), so that it takes them without copying them.
+const FLUSH_BYTES: usize = 1 << 20;
 /// Slot sizes of the pre-formatted texts: `G1 X-12345.123456789` is 20 bytes, `M700 P9 S4095\n`
 /// 14. A text that does not fit is formatted where it is written.
 const X_SLOT: usize = 32;
@@ -274,6 +278,7 @@ impl<W: Write> RasterWriter<W> {
             fire_text: (0..profile.heads.len()).map(|h| fire_table(profile, h)).collect(),
             drops_of_s: drops_table(profile),
             columns: Vec::new(),
+            pass: Vec::new(),
             pos_mm: None,
             last_y_mm: None,
             report: RasterReport { drops_per_head: vec![0; profile.heads.len()], ..RasterReport::default() },
@@ -380,8 +385,7 @@ impl<W: Write> RasterWriter<W> {
 
     /// Writes one pass of head `head` over the band at row `j0` (image `width` columns wide):
     /// for each column of `self.columns`, in the pass's direction, the move onto it and its fires.
-    /// The text goes straight into `buf` grown ahead by whole slots (the padding overwritten by
-    /// what follows), and is cut to what was written at the end.
+    /// Each text is copied as a whole slot (the padding overwritten by what follows).
     fn write_pass(&mut self, head: usize, j0: usize, width: usize, forward: bool) -> Result<(), RasterError> {
         self.ensure_x_text(head, width);
         let y =
@@ -397,20 +401,25 @@ impl<W: Write> RasterWriter<W> {
         let mut fire = Vec::new();
         let (mut path_mm, mut drops) = (0.0, 0u64);
         let count = self.columns.len();
-        let buf = &mut self.buf;
-        let mut pos = buf.len();
+        // The pass is written into `pass`, which keeps its length (zero-filled once, up to the
+        // longest pass), then appended to `buf` in one copy.
+        let buf = &mut self.pass;
+        let mut pos = 0;
+        // The carriage and the last Y written, kept in registers through the loop.
+        let (mut at_mm, mut last_y_mm) = (self.pos_mm, self.last_y_mm);
+        let head_offset = &self.profile.heads[head];
         for idx in 0..count {
             let (i, s) = self.columns[if forward { idx } else { count - 1 - idx }];
             if buf.len() < pos + column_bytes {
-                // Room for 64 columns more: zero-filled once, written over.
+                // Room for 64 columns more.
                 buf.resize(pos + 64 * column_bytes, 0);
             }
-            let x = column_x_mm(&self.cfg, self.pitch_mm, &self.profile.heads[head], i);
+            let x = column_x_mm(&self.cfg, self.pitch_mm, head_offset, i);
             pos += x_text.put(i, &mut buf[pos..]);
-            if self.last_y_mm != Some(y) {
+            if last_y_mm != Some(y) {
                 buf[pos..pos + y_text.len()].copy_from_slice(&y_text);
                 pos += y_text.len();
-                self.last_y_mm = Some(y);
+                last_y_mm = Some(y);
             }
             pos += if before && idx > 0 { END } else { END_DRAIN }.put(&mut buf[pos..]);
             let s_index = s as usize;
@@ -431,14 +440,15 @@ impl<W: Write> RasterWriter<W> {
             if before {
                 pos += DRAIN.put(&mut buf[pos..]);
             }
-            if let Some((px, py)) = self.pos_mm {
+            if let Some((px, py)) = at_mm {
                 // Within a pass only X changes; sqrt only for the move onto a new band.
                 path_mm +=
                     if py == y { (x - px).abs() } else { ((x - px).powi(2) + (y - py).powi(2)).sqrt() };
             }
-            self.pos_mm = Some((x, y));
+            at_mm = Some((x, y));
         }
-        buf.truncate(pos);
+        (self.pos_mm, self.last_y_mm) = (at_mm, last_y_mm);
+        self.buf.extend_from_slice(&self.pass[..pos]);
         let density = density as u64;
         let r = &mut self.report;
         r.xy_path_mm += path_mm;
