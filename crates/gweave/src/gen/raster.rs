@@ -405,49 +405,57 @@ impl<W: Write> RasterWriter<W> {
         // longest pass), then appended to `buf` in one copy.
         let buf = &mut self.pass;
         let mut pos = 0;
-        // The carriage and the last Y written, kept in registers through the loop.
-        let (mut at_mm, mut last_y_mm) = (self.pos_mm, self.last_y_mm);
         let head_offset = &self.profile.heads[head];
+        // Where the carriage was, in X: within a pass only X changes.
+        let mut last_x_mm = 0.0;
         for idx in 0..count {
             let (i, s) = self.columns[if forward { idx } else { count - 1 - idx }];
             if buf.len() < pos + column_bytes {
                 // Room for 64 columns more.
                 buf.resize(pos + 64 * column_bytes, 0);
             }
+            let column = &mut buf[pos..pos + column_bytes];
             let x = column_x_mm(&self.cfg, self.pitch_mm, head_offset, i);
-            pos += x_text.put(i, &mut buf[pos..]);
-            if last_y_mm != Some(y) {
-                buf[pos..pos + y_text.len()].copy_from_slice(&y_text);
-                pos += y_text.len();
-                last_y_mm = Some(y);
+            let mut n = x_text.put(i, column);
+            if idx == 0 {
+                // The move onto the band: Y if it changed, and its length (sqrt only here).
+                if self.last_y_mm != Some(y) {
+                    column[n..n + y_text.len()].copy_from_slice(&y_text);
+                    n += y_text.len();
+                    self.last_y_mm = Some(y);
+                }
+                if let Some((px, py)) = self.pos_mm {
+                    path_mm +=
+                        if py == y { (x - px).abs() } else { ((x - px).powi(2) + (y - py).powi(2)).sqrt() };
+                }
+            } else {
+                path_mm += (x - last_x_mm).abs();
             }
-            pos += if before && idx > 0 { END } else { END_DRAIN }.put(&mut buf[pos..]);
+            last_x_mm = x;
+            n += if before && idx > 0 { END } else { END_DRAIN }.put(&mut column[n..]);
             let s_index = s as usize;
             if s_index < fire_text.len() {
                 for _ in 0..density {
-                    pos += fire_text.put(s_index, &mut buf[pos..]);
+                    n += fire_text.put(s_index, &mut column[n..]);
                 }
                 drops += u64::from(self.drops_of_s[s_index]);
             } else {
                 fire.clear();
                 push_fire(&mut fire, self.profile.fire_code(), head, s);
                 for _ in 0..density {
-                    buf[pos..pos + fire.len()].copy_from_slice(&fire);
-                    pos += fire.len();
+                    column[n..n + fire.len()].copy_from_slice(&fire);
+                    n += fire.len();
                 }
                 drops += u64::from(self.profile.drops_of_fire(s));
             }
             if before {
-                pos += DRAIN.put(&mut buf[pos..]);
+                n += DRAIN.put(&mut column[n..]);
             }
-            if let Some((px, py)) = at_mm {
-                // Within a pass only X changes; sqrt only for the move onto a new band.
-                path_mm +=
-                    if py == y { (x - px).abs() } else { ((x - px).powi(2) + (y - py).powi(2)).sqrt() };
-            }
-            at_mm = Some((x, y));
+            pos += n;
         }
-        (self.pos_mm, self.last_y_mm) = (at_mm, last_y_mm);
+        if count > 0 {
+            self.pos_mm = Some((last_x_mm, y));
+        }
         self.buf.extend_from_slice(&self.pass[..pos]);
         let density = density as u64;
         let r = &mut self.report;
