@@ -232,10 +232,8 @@ pub struct RasterWriter<W: Write> {
     fire_text: Vec<SlotTable<FIRE_SLOT>>,
     /// ... and the drops each of those fires.
     drops_of_s: Vec<u8>,
-    /// Reused per pass: (column, S bits) ...
+    /// Reused per pass: (column, S bits).
     columns: Vec<(usize, u64)>,
-    /// ... and its text.
-    pass: Vec<u8>,
     pos_mm: Option<(f64, f64)>,
     last_y_mm: Option<f64>,
     report: RasterReport,
@@ -278,7 +276,6 @@ impl<W: Write> RasterWriter<W> {
             fire_text: (0..profile.heads.len()).map(|h| fire_table(profile, h)).collect(),
             drops_of_s: drops_table(profile),
             columns: Vec::new(),
-            pass: Vec::new(),
             pos_mm: None,
             last_y_mm: None,
             report: RasterReport { drops_per_head: vec![0; profile.heads.len()], ..RasterReport::default() },
@@ -401,17 +398,15 @@ impl<W: Write> RasterWriter<W> {
         let mut fire = Vec::new();
         let (mut path_mm, mut drops) = (0.0, 0u64);
         let count = self.columns.len();
-        // The pass is written into `pass`, which keeps its length (zero-filled once, up to the
-        // longest pass), then appended to `buf` in one copy.
-        let buf = &mut self.pass;
-        let mut pos = 0;
+        let buf = &mut self.buf;
+        let mut pos = buf.len();
         let head_offset = &self.profile.heads[head];
         // Where the carriage was, in X: within a pass only X changes.
         let mut last_x_mm = 0.0;
         for idx in 0..count {
             let (i, s) = self.columns[if forward { idx } else { count - 1 - idx }];
             if buf.len() < pos + column_bytes {
-                // Room for 64 columns more.
+                // Room for 64 columns more, zero-filled (what a pass does not write is cut off).
                 buf.resize(pos + 64 * column_bytes, 0);
             }
             let column = &mut buf[pos..pos + column_bytes];
@@ -456,7 +451,7 @@ impl<W: Write> RasterWriter<W> {
         if count > 0 {
             self.pos_mm = Some((last_x_mm, y));
         }
-        self.buf.extend_from_slice(&self.pass[..pos]);
+        buf.truncate(pos);
         let density = density as u64;
         let r = &mut self.report;
         r.xy_path_mm += path_mm;
