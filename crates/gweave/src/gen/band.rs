@@ -63,7 +63,10 @@ impl BandGather {
                 // Per group of eight rows, column `c`'s rows in byte `c`.
                 let mut by_column = [0u64; 8];
                 for (word, rows) in by_column[..groups].iter_mut().zip(band[..8 * groups].chunks_exact(8)) {
-                    let x = rows.iter().enumerate().fold(0, |x, (r, w)| x | ((w >> (8 * byte)) & 0xff) << (8 * r));
+                    let x = rows
+                        .iter()
+                        .enumerate()
+                        .fold(0, |x, (r, w)| x | ((w >> (8 * byte)) & 0xff) << (8 * r));
                     *word = transpose8(x);
                 }
                 let mut left = inked;
@@ -102,9 +105,8 @@ mod tests {
         let rows = (plane.height() - j0).min(row_to_s_bit.len());
         (0..plane.width())
             .filter_map(|i| {
-                let s = (0..rows)
-                    .filter(|&r| plane.get(i, j0 + r))
-                    .fold(0u64, |s, r| s | 1 << row_to_s_bit[r]);
+                let s =
+                    (0..rows).filter(|&r| plane.get(i, j0 + r)).fold(0u64, |s, r| s | 1 << row_to_s_bit[r]);
                 (s != 0).then_some((i, s))
             })
             .collect()

@@ -47,8 +47,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
 use super::band::BandGather;
+use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
 use super::gcode_text::{push_fire, push_num, push_uint, SlotTable};
 use super::printhead::{HeadOffset, PrintheadError, PrintheadProfile};
 use super::sl1::{Sl1Error, Sl1Reader};
