@@ -220,7 +220,13 @@ pub struct RasterReport {
 /// Streaming raster G-code writer: `new`, then `layer` per layer, then `finish`.
 pub struct RasterWriter<W: Write> {
     out: W,
+    /// The text not yet written out is `buf[..filled]`; past it, room made ahead for the passes
+    /// (zero-filled when made, then written over: a pass writes whole slots and the padding is
+    /// overwritten by what follows), kept from pass to pass so it is zero-filled only once.
     buf: Vec<u8>,
+    filled: usize,
+    /// The text of a layer's start, put into `buf` at once.
+    scratch: Vec<u8>,
     profile: PrintheadProfile,
     cfg: RasterConfig,
     layer_height_mm: f64,
@@ -267,6 +273,8 @@ impl<W: Write> RasterWriter<W> {
         let mut w = RasterWriter {
             out,
             buf: Vec::with_capacity(FLUSH_BYTES + 4096),
+            filled: 0,
+            scratch: Vec::new(),
             profile: profile.clone(),
             cfg: cfg.clone(),
             layer_height_mm,
@@ -280,11 +288,12 @@ impl<W: Write> RasterWriter<W> {
             last_y_mm: None,
             report: RasterReport { drops_per_head: vec![0; profile.heads.len()], ..RasterReport::default() },
         };
-        w.buf.extend_from_slice(b"; gweave raster: binder-jet inkjet\n");
-        push_block(&mut w.buf, &cfg.start_gcode);
-        w.buf.extend_from_slice(b"G1 F");
-        push_num(&mut w.buf, cfg.feed_mm_min, cfg.decimals);
-        w.buf.push(b'\n');
+        let mut start = b"; gweave raster: binder-jet inkjet\n".to_vec();
+        push_block(&mut start, &cfg.start_gcode);
+        start.extend_from_slice(b"G1 F");
+        push_num(&mut start, cfg.feed_mm_min, cfg.decimals);
+        start.push(b'\n');
+        w.put(&start);
         Ok(w)
     }
 
@@ -293,10 +302,20 @@ impl<W: Write> RasterWriter<W> {
         first + k as f64 * self.layer_height_mm
     }
 
+    /// Appends `text` to the text not yet written out.
+    fn put(&mut self, text: &[u8]) {
+        let end = self.filled + text.len();
+        if self.buf.len() < end {
+            self.buf.resize(end, 0);
+        }
+        self.buf[self.filled..end].copy_from_slice(text);
+        self.filled = end;
+    }
+
     fn flush_if_full(&mut self) -> Result<(), RasterError> {
-        if self.buf.len() >= FLUSH_BYTES {
-            self.out.write_all(&self.buf)?;
-            self.buf.clear();
+        if self.filled >= FLUSH_BYTES {
+            self.out.write_all(&self.buf[..self.filled])?;
+            self.filled = 0;
         }
         Ok(())
     }
@@ -306,12 +325,14 @@ impl<W: Write> RasterWriter<W> {
         let k = self.report.layers;
         let z = self.z_of_layer(k);
         let d = self.cfg.decimals;
-        self.buf.extend_from_slice(b";LAYER:");
-        push_uint(&mut self.buf, k);
-        self.buf.push(b'\n');
+        let mut text = std::mem::take(&mut self.scratch);
+        text.clear();
+        text.extend_from_slice(b";LAYER:");
+        push_uint(&mut text, k);
+        text.push(b'\n');
         let first_z = self.z_of_layer(0);
         if let (true, Some(recoat)) = (k > 0, &self.profile.recoat) {
-            recoat.write(&mut self.buf, k, z, first_z, d);
+            recoat.write(&mut text, k, z, first_z, d);
             // The spreader may ride on the carriage's axes: the next move states X and Y.
             self.last_y_mm = None;
             self.pos_mm = None;
@@ -323,11 +344,13 @@ impl<W: Write> RasterWriter<W> {
                 .recoat_gcode
                 .replace("{layer}", &k.to_string())
                 .replace("{z}", &String::from_utf8_lossy(&z_text));
-            push_block(&mut self.buf, &block);
+            push_block(&mut text, &block);
         }
-        self.buf.extend_from_slice(b"G1 Z");
-        push_num(&mut self.buf, z, d);
-        self.buf.push(b'\n');
+        text.extend_from_slice(b"G1 Z");
+        push_num(&mut text, z, d);
+        text.push(b'\n');
+        self.put(&text);
+        self.scratch = text;
         self.report.z_moves += 1;
         self.report.layers += 1;
     }
@@ -399,14 +422,14 @@ impl<W: Write> RasterWriter<W> {
         let (mut path_mm, mut drops) = (0.0, 0u64);
         let count = self.columns.len();
         let buf = &mut self.buf;
-        let mut pos = buf.len();
+        let mut pos = self.filled;
         let head_offset = &self.profile.heads[head];
         // Where the carriage was, in X: within a pass only X changes.
         let mut last_x_mm = 0.0;
         for idx in 0..count {
             let (i, s) = self.columns[if forward { idx } else { count - 1 - idx }];
             if buf.len() < pos + column_bytes {
-                // Room for 64 columns more, zero-filled (what a pass does not write is cut off).
+                // Room for 64 columns more.
                 buf.resize(pos + 64 * column_bytes, 0);
             }
             let column = &mut buf[pos..pos + column_bytes];
@@ -451,7 +474,7 @@ impl<W: Write> RasterWriter<W> {
         if count > 0 {
             self.pos_mm = Some((last_x_mm, y));
         }
-        buf.truncate(pos);
+        self.filled = pos;
         let density = density as u64;
         let r = &mut self.report;
         r.xy_path_mm += path_mm;
@@ -465,8 +488,10 @@ impl<W: Write> RasterWriter<W> {
 
     /// Writes the end G-code, flushes, and returns the writer and the report.
     pub fn finish(mut self) -> Result<(W, RasterReport), RasterError> {
-        push_block(&mut self.buf, &self.cfg.end_gcode);
-        self.out.write_all(&self.buf)?;
+        let mut end = Vec::new();
+        push_block(&mut end, &self.cfg.end_gcode);
+        self.put(&end);
+        self.out.write_all(&self.buf[..self.filled])?;
         self.out.flush()?;
         let drops: u64 = self.report.drops_per_head.iter().sum();
         self.report.binder_volume_ul = self.profile.binder_volume_ul(drops);
