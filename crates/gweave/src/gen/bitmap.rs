@@ -406,8 +406,8 @@ fn is_plain_1bit_grey_png(data: &[u8]) -> bool {
 /// expanding each pixel to a byte (the `image` crate's path, decoding to 8 bits a pixel and
 /// thresholding, took 7.3 times as long on 100 of the raster benchmark's 2000 x 2000 layers:
 /// 1.95 s against 0.27 s, docs/performance.md). PNG packs pixel `x` into bit `7 - x % 8` of
-/// byte `x / 8` (MSB first); the bitmap wants bit `x % 64` of word `x / 64`, so each byte is
-/// bit-reversed and eight of them make one little-endian word. A set bit is level 255, a clear
+/// byte `x / 8` (MSB first); the bitmap wants bit `x % 64` of word `x / 64`, so eight bytes are
+/// read as a big-endian word whose bits are reversed. A set bit is level 255, a clear
 /// one level 0, thresholded as usual.
 fn decode_png_1bit(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
     let cutoff = opts.cutoff()?;
@@ -430,11 +430,13 @@ fn decode_png_1bit(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitma
         let row = &buf[y * stride..y * stride + w.div_ceil(8)];
         let words = &mut b.words[y * wpr..(y + 1) * wpr];
         for (wi, word) in words.iter_mut().enumerate() {
+            // Read big-endian, the first byte's first pixel is the word's top bit: reversing
+            // the whole word puts pixel `x` at bit `x` (one reversal of 64 bits, not eight of 8).
             let mut bytes = [0u8; 8];
-            for (k, byte) in row.iter().skip(wi * 8).take(8).enumerate() {
-                bytes[k] = byte.reverse_bits();
-            }
-            let packed = u64::from_le_bytes(bytes);
+            let piece = row.get(wi * 8..).unwrap_or_default();
+            let n = piece.len().min(8);
+            bytes[..n].copy_from_slice(&piece[..n]);
+            let packed = u64::from_be_bytes(bytes).reverse_bits();
             let v = match (one_lit, zero_lit) {
                 (true, false) => packed,
                 (false, true) => !packed,

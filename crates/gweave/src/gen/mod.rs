@@ -6,6 +6,7 @@
 //! `M700`/`M578` G-code; [`raster_job`] runs a whole job (inputs to a timed, atomically written
 //! file) for the CLI and Python alike.
 
+mod band;
 pub mod bitmap;
 mod gcode_text;
 pub mod image_files;

@@ -38,7 +38,7 @@
 //! every such fire. It reproduces the seed's file for a firmware whose fire command waits for
 //! the moves itself.
 //!
-//! The output is written in 64 KiB chunks to any `Write`; the layers come one at a time,
+//! The output is written in 1 MiB chunks to any `Write`; the layers come one at a time,
 //! so memory is bounded by one layer per head.
 
 use std::io::Write;
@@ -47,9 +47,10 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use super::band::BandGather;
 use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
-use super::gcode_text::{push_fire, push_num, push_uint, TextTable};
-use super::printhead::{PrintheadError, PrintheadProfile, MAX_NOZZLES};
+use super::gcode_text::{push_fire, push_num, push_uint, SlotTable};
+use super::printhead::{HeadOffset, PrintheadError, PrintheadProfile};
 use super::sl1::{Sl1Error, Sl1Reader};
 use crate::range::{OutOfRange, Range, FEED_MM_MIN, LAYER_HEIGHT_MM, POSITION_MM};
 
@@ -219,16 +220,24 @@ pub struct RasterReport {
 /// Streaming raster G-code writer: `new`, then `layer` per layer, then `finish`.
 pub struct RasterWriter<W: Write> {
     out: W,
+    /// The text not yet written out is `buf[..filled]`; past it, room made ahead for the passes
+    /// (zero-filled when made, then written over: a pass writes whole slots and the padding is
+    /// overwritten by what follows), kept from pass to pass so it is zero-filled only once.
     buf: Vec<u8>,
+    filled: usize,
+    /// The text of a layer's start, put into `buf` at once.
+    scratch: Vec<u8>,
     profile: PrintheadProfile,
     cfg: RasterConfig,
     layer_height_mm: f64,
     pitch_mm: f64,
-    row_to_s_bit: Vec<u32>,
+    band: BandGather,
     /// Per head: `G1 X<x>` of each column (grown with the widest image) ...
-    x_text: Vec<TextTable>,
-    /// ... and `M700 P<h> S<bits>\n` for every `S` below 2^12 (empty for bigger heads).
-    fire_text: Vec<TextTable>,
+    x_text: Vec<SlotTable<X_SLOT>>,
+    /// ... and `M700 P<h> S<bits>\n` for every `S` below 2^12 (empty for bigger heads) ...
+    fire_text: Vec<SlotTable<FIRE_SLOT>>,
+    /// ... and the drops each of those fires.
+    drops_of_s: Vec<u8>,
     /// Reused per pass: (column, S bits).
     columns: Vec<(usize, u64)>,
     pos_mm: Option<(f64, f64)>,
@@ -236,7 +245,17 @@ pub struct RasterWriter<W: Write> {
     report: RasterReport,
 }
 
-const FLUSH_BYTES: usize = 1 << 16;
+/// The output is written in pieces of this size: as large as the output's buffer
+/// (`gcode::writer`), so that it takes them without copying them.
+const FLUSH_BYTES: usize = 1 << 20;
+/// Slot sizes of the pre-formatted texts: `G1 X-12345.123456789` is 20 bytes, `M700 P9 S4095\n`
+/// 14. A text that does not fit is formatted where it is written.
+const X_SLOT: usize = 32;
+const FIRE_SLOT: usize = 16;
+/// Room for a column's text but its fires: the move (a slot), ` Y<y>` and two `\nM400\n`.
+const COLUMN_BYTES: usize = X_SLOT + 64 + 16;
+/// Room for a fire command formatted where it is written: `M<u32> P<usize> S<u64>\n`.
+const FIRE_BYTES: usize = 64;
 
 impl<W: Write> RasterWriter<W> {
     /// Validates the profile and config and writes the start G-code. `source_layer_height_mm`
@@ -254,23 +273,27 @@ impl<W: Write> RasterWriter<W> {
         let mut w = RasterWriter {
             out,
             buf: Vec::with_capacity(FLUSH_BYTES + 4096),
+            filled: 0,
+            scratch: Vec::new(),
             profile: profile.clone(),
             cfg: cfg.clone(),
             layer_height_mm,
             pitch_mm: profile.pitch_mm(),
-            row_to_s_bit: profile.row_to_s_bit(),
-            x_text: vec![TextTable::default(); profile.heads.len()],
+            band: BandGather::new(&profile.row_to_s_bit()),
+            x_text: vec![SlotTable::default(); profile.heads.len()],
             fire_text: (0..profile.heads.len()).map(|h| fire_table(profile, h)).collect(),
+            drops_of_s: drops_table(profile),
             columns: Vec::new(),
             pos_mm: None,
             last_y_mm: None,
             report: RasterReport { drops_per_head: vec![0; profile.heads.len()], ..RasterReport::default() },
         };
-        w.buf.extend_from_slice(b"; gweave raster: binder-jet inkjet\n");
-        push_block(&mut w.buf, &cfg.start_gcode);
-        w.buf.extend_from_slice(b"G1 F");
-        push_num(&mut w.buf, cfg.feed_mm_min, cfg.decimals);
-        w.buf.push(b'\n');
+        let mut start = b"; gweave raster: binder-jet inkjet\n".to_vec();
+        push_block(&mut start, &cfg.start_gcode);
+        start.extend_from_slice(b"G1 F");
+        push_num(&mut start, cfg.feed_mm_min, cfg.decimals);
+        start.push(b'\n');
+        w.put(&start);
         Ok(w)
     }
 
@@ -279,10 +302,20 @@ impl<W: Write> RasterWriter<W> {
         first + k as f64 * self.layer_height_mm
     }
 
+    /// Appends `text` to the text not yet written out.
+    fn put(&mut self, text: &[u8]) {
+        let end = self.filled + text.len();
+        if self.buf.len() < end {
+            self.buf.resize(end, 0);
+        }
+        self.buf[self.filled..end].copy_from_slice(text);
+        self.filled = end;
+    }
+
     fn flush_if_full(&mut self) -> Result<(), RasterError> {
-        if self.buf.len() >= FLUSH_BYTES {
-            self.out.write_all(&self.buf)?;
-            self.buf.clear();
+        if self.filled >= FLUSH_BYTES {
+            self.out.write_all(&self.buf[..self.filled])?;
+            self.filled = 0;
         }
         Ok(())
     }
@@ -292,12 +325,14 @@ impl<W: Write> RasterWriter<W> {
         let k = self.report.layers;
         let z = self.z_of_layer(k);
         let d = self.cfg.decimals;
-        self.buf.extend_from_slice(b";LAYER:");
-        push_uint(&mut self.buf, k);
-        self.buf.push(b'\n');
+        let mut text = std::mem::take(&mut self.scratch);
+        text.clear();
+        text.extend_from_slice(b";LAYER:");
+        push_uint(&mut text, k);
+        text.push(b'\n');
         let first_z = self.z_of_layer(0);
         if let (true, Some(recoat)) = (k > 0, &self.profile.recoat) {
-            recoat.write(&mut self.buf, k, z, first_z, d);
+            recoat.write(&mut text, k, z, first_z, d);
             // The spreader may ride on the carriage's axes: the next move states X and Y.
             self.last_y_mm = None;
             self.pos_mm = None;
@@ -309,11 +344,13 @@ impl<W: Write> RasterWriter<W> {
                 .recoat_gcode
                 .replace("{layer}", &k.to_string())
                 .replace("{z}", &String::from_utf8_lossy(&z_text));
-            push_block(&mut self.buf, &block);
+            push_block(&mut text, &block);
         }
-        self.buf.extend_from_slice(b"G1 Z");
-        push_num(&mut self.buf, z, d);
-        self.buf.push(b'\n');
+        text.extend_from_slice(b"G1 Z");
+        push_num(&mut text, z, d);
+        text.push(b'\n');
+        self.put(&text);
+        self.scratch = text;
         self.report.z_moves += 1;
         self.report.layers += 1;
     }
@@ -333,7 +370,7 @@ impl<W: Write> RasterWriter<W> {
                 if band * n >= plane.height() {
                     continue;
                 }
-                self.collect_band(plane, band * n);
+                self.band.collect(plane, band * n, &mut self.columns);
                 if self.columns.is_empty() {
                     self.report.bands_skipped += 1;
                     continue;
@@ -348,90 +385,97 @@ impl<W: Write> RasterWriter<W> {
         Ok(())
     }
 
-    /// Fills `self.columns` with the non-empty columns of the band starting at row `j0`,
-    /// left to right, each with its `S` word. Works on whole words: the OR of the band's rows
-    /// finds the inked columns, then each column's rows are gathered bit by bit.
-    fn collect_band(&mut self, plane: &Bitmap, j0: usize) {
-        self.columns.clear();
-        let rows = (plane.height() - j0).min(self.row_to_s_bit.len());
-        let s_bits = &self.row_to_s_bit[..rows];
-        let mut band = [0u64; MAX_NOZZLES as usize];
-        for wi in 0..plane.words_per_row() {
-            let mut any = 0u64;
-            for (k, w) in band[..rows].iter_mut().enumerate() {
-                *w = plane.row(j0 + k)[wi];
-                any |= *w;
-            }
-            while any != 0 {
-                let bit = any.trailing_zeros();
-                let mut s = 0u64;
-                for (&w, &sb) in band[..rows].iter().zip(s_bits) {
-                    s |= (w >> bit & 1) << sb;
-                }
-                self.columns.push((wi * 64 + bit as usize, s));
-                any &= any - 1;
-            }
-        }
-    }
-
     /// Carriage X that puts head `head` over the centre of column `i`.
     fn column_x_mm(&self, head: usize, i: usize) -> f64 {
-        self.cfg.origin_x_mm + (i as f64 + 0.5) * self.pitch_mm - self.profile.heads[head].offset_x_mm
+        column_x_mm(&self.cfg, self.pitch_mm, &self.profile.heads[head], i)
     }
 
     /// Pre-formats `G1 X<x>` for head `head` up to `width` columns.
     fn ensure_x_text(&mut self, head: usize, width: usize) {
+        let mut text = Vec::new();
         for i in self.x_text[head].len()..width {
-            let x = self.column_x_mm(head, i);
-            let table = &mut self.x_text[head];
-            table.text.extend_from_slice(b"G1 X");
-            push_num(&mut table.text, x, self.cfg.decimals);
-            table.ends.push(table.text.len());
+            text.clear();
+            text.extend_from_slice(b"G1 X");
+            push_num(&mut text, self.column_x_mm(head, i), self.cfg.decimals);
+            // A slot holds any position in range at up to 9 decimals (`POSITION_MM`).
+            let fits = self.x_text[head].push(&text);
+            debug_assert!(fits, "{}", String::from_utf8_lossy(&text));
         }
     }
 
+    /// Writes one pass of head `head` over the band at row `j0` (image `width` columns wide):
+    /// for each column of `self.columns`, in the pass's direction, the move onto it and its fires.
+    /// Each text is copied as a whole slot (the padding overwritten by what follows).
     fn write_pass(&mut self, head: usize, j0: usize, width: usize, forward: bool) -> Result<(), RasterError> {
         self.ensure_x_text(head, width);
         let y =
             self.cfg.origin_y_mm + (j0 as f64 + 0.5) * self.pitch_mm - self.profile.heads[head].offset_y_mm;
-        let density = u64::from(self.cfg.density);
+        let mut y_text = b" Y".to_vec();
+        push_num(&mut y_text, y, self.cfg.decimals);
+        let density = self.cfg.density as usize;
+        let column_bytes = COLUMN_BYTES + density * FIRE_BYTES;
+        let (x_text, fire_text) = (&self.x_text[head], &self.fire_text[head]);
+        // The seed's order drains the queue after the fire; the first fire of a pass still
+        // waits for the move onto the band.
+        let before = self.cfg.fire_order == FireOrder::Before;
         let mut fire = Vec::new();
         let (mut path_mm, mut drops) = (0.0, 0u64);
         let count = self.columns.len();
+        let buf = &mut self.buf;
+        let mut pos = self.filled;
+        let head_offset = &self.profile.heads[head];
+        // Where the carriage was, in X: within a pass only X changes.
+        let mut last_x_mm = 0.0;
         for idx in 0..count {
             let (i, s) = self.columns[if forward { idx } else { count - 1 - idx }];
-            let x = self.column_x_mm(head, i);
-            self.buf.extend_from_slice(self.x_text[head].get(i));
-            if self.last_y_mm != Some(y) {
-                self.buf.extend_from_slice(b" Y");
-                push_num(&mut self.buf, y, self.cfg.decimals);
-                self.last_y_mm = Some(y);
+            if buf.len() < pos + column_bytes {
+                // Room for 64 columns more.
+                buf.resize(pos + 64 * column_bytes, 0);
             }
-            // The seed's order drains the queue after the fire; the first fire of a pass still
-            // waits for the move onto the band.
-            let before = self.cfg.fire_order == FireOrder::Before;
-            self.buf.extend_from_slice(if before && idx > 0 { b"\n" } else { b"\nM400\n" });
-            let fire_line = if (s as usize) < self.fire_text[head].len() {
-                self.fire_text[head].get(s as usize)
+            let column = &mut buf[pos..pos + column_bytes];
+            let x = column_x_mm(&self.cfg, self.pitch_mm, head_offset, i);
+            let mut n = x_text.put(i, column);
+            if idx == 0 {
+                // The move onto the band: Y if it changed, and its length (sqrt only here).
+                if self.last_y_mm != Some(y) {
+                    column[n..n + y_text.len()].copy_from_slice(&y_text);
+                    n += y_text.len();
+                    self.last_y_mm = Some(y);
+                }
+                if let Some((px, py)) = self.pos_mm {
+                    path_mm +=
+                        if py == y { (x - px).abs() } else { ((x - px).powi(2) + (y - py).powi(2)).sqrt() };
+                }
+            } else {
+                path_mm += (x - last_x_mm).abs();
+            }
+            last_x_mm = x;
+            n += if before && idx > 0 { END } else { END_DRAIN }.put(&mut column[n..]);
+            let s_index = s as usize;
+            if s_index < fire_text.len() {
+                for _ in 0..density {
+                    n += fire_text.put(s_index, &mut column[n..]);
+                }
+                drops += u64::from(self.drops_of_s[s_index]);
             } else {
                 fire.clear();
                 push_fire(&mut fire, self.profile.fire_code(), head, s);
-                &fire
-            };
-            for _ in 0..density {
-                self.buf.extend_from_slice(fire_line);
+                for _ in 0..density {
+                    column[n..n + fire.len()].copy_from_slice(&fire);
+                    n += fire.len();
+                }
+                drops += u64::from(self.profile.drops_of_fire(s));
             }
             if before {
-                self.buf.extend_from_slice(b"M400\n");
+                n += DRAIN.put(&mut column[n..]);
             }
-            if let Some((px, py)) = self.pos_mm {
-                // Within a pass only X changes; sqrt only for the move onto a new band.
-                path_mm +=
-                    if py == y { (x - px).abs() } else { ((x - px).powi(2) + (y - py).powi(2)).sqrt() };
-            }
-            self.pos_mm = Some((x, y));
-            drops += u64::from(self.profile.drops_of_fire(s));
+            pos += n;
         }
+        if count > 0 {
+            self.pos_mm = Some((last_x_mm, y));
+        }
+        self.filled = pos;
+        let density = density as u64;
         let r = &mut self.report;
         r.xy_path_mm += path_mm;
         r.xy_moves += count as u64;
@@ -444,8 +488,10 @@ impl<W: Write> RasterWriter<W> {
 
     /// Writes the end G-code, flushes, and returns the writer and the report.
     pub fn finish(mut self) -> Result<(W, RasterReport), RasterError> {
-        push_block(&mut self.buf, &self.cfg.end_gcode);
-        self.out.write_all(&self.buf)?;
+        let mut end = Vec::new();
+        push_block(&mut end, &self.cfg.end_gcode);
+        self.put(&end);
+        self.out.write_all(&self.buf[..self.filled])?;
         self.out.flush()?;
         let drops: u64 = self.report.drops_per_head.iter().sum();
         self.report.binder_volume_ul = self.profile.binder_volume_ul(drops);
@@ -455,19 +501,64 @@ impl<W: Write> RasterWriter<W> {
     }
 }
 
+/// Carriage X that puts `head` over the centre of column `i` at nozzle pitch `pitch_mm`.
+#[inline]
+fn column_x_mm(cfg: &RasterConfig, pitch_mm: f64, head: &HeadOffset, i: usize) -> f64 {
+    cfg.origin_x_mm + (i as f64 + 0.5) * pitch_mm - head.offset_x_mm
+}
+
 /// Nozzle counts up to this get every fire line pre-formatted (2^12 lines, about 64 KiB).
 const FIRE_TABLE_MAX_NOZZLES: u32 = 12;
 
-fn fire_table(profile: &PrintheadProfile, head: usize) -> TextTable {
-    let mut t = TextTable::default();
+fn fire_table(profile: &PrintheadProfile, head: usize) -> SlotTable<FIRE_SLOT> {
+    let mut t = SlotTable::default();
     if profile.nozzle_count <= FIRE_TABLE_MAX_NOZZLES {
+        let mut line = Vec::new();
         for s in 0..1u64 << profile.nozzle_count {
-            push_fire(&mut t.text, profile.fire_code(), head, s);
-            t.ends.push(t.text.len());
+            line.clear();
+            push_fire(&mut line, profile.fire_code(), head, s);
+            if !t.push(&line) {
+                // A long fire code or head number: every line formatted where it is written.
+                return SlotTable::default();
+            }
         }
     }
     t
 }
+
+/// The drops of each fire in [`fire_table`] (`S` below 2^12: at most 12).
+fn drops_table(profile: &PrintheadProfile) -> Vec<u8> {
+    let count = if profile.nozzle_count <= FIRE_TABLE_MAX_NOZZLES { 1u64 << profile.nozzle_count } else { 0 };
+    (0..count).map(|s| profile.drops_of_fire(s) as u8).collect()
+}
+
+/// A text of at most 8 bytes, zero-padded, and its length: one 8-byte copy writes it (a copy of
+/// its own length is a call to `memcpy`).
+struct Short([u8; 8], usize);
+
+impl Short {
+    const fn new(text: &[u8]) -> Short {
+        let mut padded = [0; 8];
+        let mut i = 0;
+        while i < text.len() {
+            padded[i] = text[i];
+            i += 1;
+        }
+        Short(padded, text.len())
+    }
+
+    /// Copies the text to the start of `out` (which must hold 8 bytes); returns its length.
+    #[inline]
+    fn put(&self, out: &mut [u8]) -> usize {
+        out[..8].copy_from_slice(&self.0);
+        self.1
+    }
+}
+
+/// The end of a move line; with the `M400` that drains the queue before a fire; that alone.
+const END: Short = Short::new(b"\n");
+const END_DRAIN: Short = Short::new(b"\nM400\n");
+const DRAIN: Short = Short::new(b"M400\n");
 
 /// Appends a user block, making sure it ends with a newline.
 fn push_block(buf: &mut Vec<u8>, block: &str) {
