@@ -35,10 +35,18 @@
 //!
 //! The oldest block's entry is fixed: it is the exit speed the block before it (already being
 //! stepped) was given, or rest. Speeds are kept squared, as the formulas want them.
+//!
+//! # A rotary axis
+//!
+//! On a lathe-type printer the mandrel's angle A is a fifth coordinate ([`crate::rotary`]): its
+//! steps go to [`A_MOTOR`], its degrees count in the move's direction (for the junctions) and
+//! in its length as the feed convention says ([`crate::rotary::Rotary::path_len`]), and its own speed and
+//! acceleration limits hold like any axis'.
 
 use crate::limits::{MAX_STEP_HZ, MIN_STEPS_PER_SEGMENT, PLANNER_BLOCKS};
 use crate::math::sqrt;
 use crate::mixing::Mixer;
+use crate::rotary::{Feed, A_MOTOR};
 use crate::settings::Settings;
 use crate::stepper::StepBlock;
 use crate::{AXES, E};
@@ -48,7 +56,8 @@ use crate::{AXES, E};
 pub struct Block {
     /// The steps, for the stepper.
     pub step: StepBlock,
-    /// Length of the move in mm (of X, Y and Z; of E for a move of the extruder alone).
+    /// Length of the move in mm (of X, Y and Z; of E for a move of the extruder alone; with a
+    /// rotary axis, as its feed convention says: [`crate::rotary::Rotary::path_len`]).
     pub len_mm: f32,
     /// Acceleration of the move along its path, mm/s².
     pub accel_mm_s2: f32,
@@ -65,11 +74,14 @@ pub struct Planner {
     blocks: [Block; PLANNER_BLOCKS],
     first: usize,
     count: usize,
-    /// Unit direction of the last planned move (XYZE, in mm), for the next junction.
-    previous_unit: [f32; AXES],
+    /// Unit direction of the last planned move (XYZE in mm, then A in degrees), for the next
+    /// junction.
+    previous_unit: [f32; AXES + 1],
     previous_nominal_v2: f32,
     /// Where the last planned move ends, in steps per axis.
     pub position_steps: [i32; AXES],
+    /// The same for the rotary axis A (0 without one).
+    pub position_a_steps: i32,
 }
 
 impl Default for Planner {
@@ -93,9 +105,10 @@ impl Planner {
             blocks: [EMPTY; PLANNER_BLOCKS],
             first: 0,
             count: 0,
-            previous_unit: [0.0; AXES],
+            previous_unit: [0.0; AXES + 1],
             previous_nominal_v2: 0.0,
             position_steps: [0; AXES],
+            position_a_steps: 0,
         }
     }
 
@@ -129,9 +142,25 @@ impl Planner {
         s: &Settings,
         mixer: &mut Mixer,
     ) -> bool {
+        let a_steps = self.position_a_steps;
+        self.add_with_a(target_steps, a_steps, Feed::PerSecond(feed_mm_s), endstop_mask, s, mixer)
+    }
+
+    /// [`Planner::add`] with the rotary axis at `target_a_steps` and the feed as `G93`/`G94`
+    /// give it ([`Feed`]). Without a rotary axis fitted, A stays where it is.
+    pub fn add_with_a(
+        &mut self,
+        target_steps: [i32; AXES],
+        target_a_steps: i32,
+        feed: Feed,
+        endstop_mask: u8,
+        s: &Settings,
+        mixer: &mut Mixer,
+    ) -> bool {
         if self.is_full() {
             return false;
         }
+        let rotary = s.rotary.fitted(s.mixing_inputs);
         let mut step =
             StepBlock { endstop_mask, endstop_invert: s.endstop_inverting, ..StepBlock::default() };
         let mut delta_mm = [0.0f32; AXES];
@@ -146,6 +175,9 @@ impl Planner {
             }
             delta_mm[axis] = delta as f32 / s.steps_per_mm[axis];
         }
+        let a_delta = if rotary { target_a_steps.saturating_sub(self.position_a_steps) } else { 0 };
+        step.events = step.events.max(a_delta.unsigned_abs());
+        let delta_deg = if rotary { a_delta as f32 / s.rotary.steps_per_deg } else { 0.0 };
         if step.events < MIN_STEPS_PER_SEGMENT && endstop_mask == 0 {
             // Too short to plan: the position stays, so the next move takes this one's steps.
             return true;
@@ -161,32 +193,44 @@ impl Planner {
                 }
             }
         }
+        // A's motor is E1's socket, which a mixing hotend's input would use: never both
+        // (`Rotary::fitted`).
+        step.steps[A_MOTOR] = step.steps[A_MOTOR].max(a_delta.unsigned_abs());
+        if a_delta > 0 {
+            step.dir_bits |= 1 << A_MOTOR;
+        }
         step.dir_bits ^= s.invert_dir;
         if step.events == 0 {
             return true;
         }
         let xyz_mm2: f32 = delta_mm[..E].iter().map(|d| d * d).sum();
-        let len_mm = if xyz_mm2 > 0.0 { sqrt(xyz_mm2) } else { delta_mm[E].abs() };
+        let len_mm = s.rotary.path_len(xyz_mm2, delta_deg, delta_mm[E]);
         // Speed and acceleration along the path, within every axis' own limits: an axis
         // covering a fraction `|d|/L` of the path moves at that fraction of the path's speed.
-        let mut feed_mm_s = feed_mm_s;
-        let mut accel_mm_s2 = if xyz_mm2 == 0.0 {
+        let mut feed_mm_s = feed.speed(len_mm);
+        let mut accel_mm_s2 = if xyz_mm2 == 0.0 && delta_deg == 0.0 {
             s.retract_accel_mm_s2
         } else if delta_mm[E] != 0.0 {
             s.print_accel_mm_s2
         } else {
             s.travel_accel_mm_s2
         };
-        let mut unit = [0.0f32; AXES];
+        let mut unit = [0.0f32; AXES + 1];
         let mut unit_norm2 = 0.0;
-        for axis in 0..AXES {
-            let fraction = delta_mm[axis].abs() / len_mm;
+        let limits = |axis: usize| match axis {
+            AXES => (s.rotary.max_feed_deg_s, s.rotary.max_accel_deg_s2),
+            _ => (s.max_feed_mm_s[axis], s.max_accel_mm_s2[axis]),
+        };
+        for axis in 0..=AXES {
+            let d = if axis == AXES { delta_deg } else { delta_mm[axis] };
+            let fraction = d.abs() / len_mm;
             if fraction > 0.0 {
-                feed_mm_s = feed_mm_s.min(s.max_feed_mm_s[axis] / fraction);
-                accel_mm_s2 = accel_mm_s2.min(s.max_accel_mm_s2[axis] / fraction);
+                let (max_feed, max_accel) = limits(axis);
+                feed_mm_s = feed_mm_s.min(max_feed / fraction);
+                accel_mm_s2 = accel_mm_s2.min(max_accel / fraction);
             }
-            unit[axis] = delta_mm[axis];
-            unit_norm2 += delta_mm[axis] * delta_mm[axis];
+            unit[axis] = d;
+            unit_norm2 += d * d;
         }
         // Marlin's MAX_STEP_FREQUENCY: the motor with the most steps (`events` of them over
         // `len_mm`) steps at most MAX_STEP_HZ times a second, so no speed asks more of the
@@ -219,12 +263,15 @@ impl Planner {
         self.previous_unit = unit;
         self.previous_nominal_v2 = nominal_v2;
         self.position_steps = target_steps;
+        if rotary {
+            self.position_a_steps = target_a_steps;
+        }
         self.recalculate();
         true
     }
 
     /// The junction limit between the last planned move and one in direction `unit`.
-    fn junction_v2(&self, unit: &[f32; AXES], accel_mm_s2: f32, deviation_mm: f32) -> f32 {
+    fn junction_v2(&self, unit: &[f32; AXES + 1], accel_mm_s2: f32, deviation_mm: f32) -> f32 {
         let cos_theta = -self.previous_unit.iter().zip(unit).map(|(p, u)| p * u).sum::<f32>();
         if cos_theta > 0.999_999 {
             return 0.0; // a full reversal

@@ -26,8 +26,9 @@ pub(super) fn firmware(io: &mut impl Io) {
 }
 
 impl Controller<'_> {
-    /// `M114`: `X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0`. The counts are the
-    /// planner's (where the queued moves end), as the positions are.
+    /// `M114`: `X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0` (and `A:` after E and Z on a
+    /// rotary machine, as the virtual printer prints it). The counts are the planner's (where
+    /// the queued moves end), as the positions are.
     pub(super) fn report_position(&self, io: &mut impl Io) {
         let mut r = Reply::new();
         for (axis, (&letter, &mm)) in AXIS_LETTERS.iter().zip(&self.position_mm).enumerate() {
@@ -36,9 +37,16 @@ impl Controller<'_> {
             }
             r.s(&[letter, b':']).f2(mm);
         }
+        let a = self.position_a();
+        if let Some((deg, _)) = a {
+            r.s(b" A:").f2(deg);
+        }
         r.s(b" Count");
         for (&letter, &steps) in AXIS_LETTERS[..E].iter().zip(&self.planner.position_steps) {
             r.s(&[b' ', letter, b':']).i32(steps);
+        }
+        if let Some((_, steps)) = a {
+            r.s(b" A:").i32(steps);
         }
         r.send(io);
     }
