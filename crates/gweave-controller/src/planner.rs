@@ -69,6 +69,20 @@ pub struct Block {
     pub entry_v2: f32,
 }
 
+/// Where a move goes and how fast, for [`Planner::add_with_a`]. One argument by reference: on
+/// the ATmega2560 the arguments that do not fit the registers go on the stack, and LLVM's AVR
+/// back end read them one byte off there (the 3-byte return address of a 256 KB part): the
+/// board crashed on the first move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Target {
+    /// X, Y, Z and E, steps.
+    pub steps: [i32; AXES],
+    /// The rotary axis A, steps.
+    pub a_steps: i32,
+    /// The feed.
+    pub feed: Feed,
+}
+
 /// The ring of planned moves, and where the planned moves end.
 pub struct Planner {
     blocks: [Block; PLANNER_BLOCKS],
@@ -134,6 +148,7 @@ impl Planner {
     /// On a mixing hotend the E steps go to the inputs by `mixer`'s active mix
     /// ([`Mixer::split`]), each input a motor of the block; the planner's speeds and lengths stay
     /// those of E.
+    #[inline(never)]
     pub fn add(
         &mut self,
         target_steps: [i32; AXES],
@@ -142,24 +157,18 @@ impl Planner {
         s: &Settings,
         mixer: &mut Mixer,
     ) -> bool {
-        let a_steps = self.position_a_steps;
-        self.add_with_a(target_steps, a_steps, Feed::PerSecond(feed_mm_s), endstop_mask, s, mixer)
+        let target =
+            Target { steps: target_steps, a_steps: self.position_a_steps, feed: Feed::PerSecond(feed_mm_s) };
+        self.add_with_a(&target, endstop_mask, s, mixer)
     }
 
-    /// [`Planner::add`] with the rotary axis at `target_a_steps` and the feed as `G93`/`G94`
-    /// give it ([`Feed`]). Without a rotary axis fitted, A stays where it is.
-    pub fn add_with_a(
-        &mut self,
-        target_steps: [i32; AXES],
-        target_a_steps: i32,
-        feed: Feed,
-        endstop_mask: u8,
-        s: &Settings,
-        mixer: &mut Mixer,
-    ) -> bool {
+    /// [`Planner::add`] with the rotary axis' target and the feed as `G93`/`G94` give it
+    /// ([`Target`]). Without a rotary axis fitted, A stays where it is.
+    pub fn add_with_a(&mut self, target: &Target, endstop_mask: u8, s: &Settings, mixer: &mut Mixer) -> bool {
         if self.is_full() {
             return false;
         }
+        let Target { steps: target_steps, a_steps: target_a_steps, feed } = *target;
         let rotary = s.rotary.fitted(s.mixing_inputs);
         let mut step =
             StepBlock { endstop_mask, endstop_invert: s.endstop_inverting, ..StepBlock::default() };

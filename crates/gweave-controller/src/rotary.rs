@@ -71,10 +71,11 @@ impl Rotary {
         feed: RotaryFeed::Nist,
     };
 
-    /// Whether the machine has the axis: steps per degree set, and no mixing hotend on its
-    /// motor.
+    /// Whether the machine has the axis: a build with the feature `rotary` (without it this is
+    /// a constant `false` and the axis' code compiles to nothing), steps per degree set, and no
+    /// mixing hotend on its motor.
     pub fn fitted(&self, mixing_inputs: u8) -> bool {
-        self.steps_per_deg > 0.0 && mixing_inputs == 0
+        cfg!(feature = "rotary") && self.steps_per_deg > 0.0 && mixing_inputs == 0
     }
 
     /// The length F is measured over for a move of `xyz_mm2` (the squared XYZ distance),

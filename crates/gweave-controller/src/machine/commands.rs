@@ -6,6 +6,7 @@ use super::homing::Homing;
 use super::{Controller, Wait};
 use crate::gcode::words::{Command, WordError, Words};
 use crate::math::round_i32;
+use crate::planner::Target;
 use crate::rotary::{Feed, A_MOTOR};
 use crate::serial::out::{line, Reply};
 use crate::{Io, AXES, AXIS_LETTERS, BED, E, HOTEND0, HOTEND1};
@@ -25,6 +26,7 @@ const FEED_MM_MIN: (f32, f32) = (0.01, 100_000.0);
 const POSITION_MM: (f32, f32) = (-100_000.0, 100_000.0);
 /// A rotary axis' angle: ±2 778 turns (past it a float's step is above a hundredth of a degree;
 /// `rotary tube` re-declares its angle every hundred turns).
+#[cfg(feature = "rotary")]
 const ANGLE_DEG: (f32, f32) = (-1_000_000.0, 1_000_000.0);
 const TEMP_C: (f32, f32) = (0.0, 500.0);
 const SETTING: (f32, f32) = (0.000_001, 1_000_000.0);
@@ -95,9 +97,12 @@ impl Controller<'_> {
             (b'G', 21) => {}
             (b'G', 90) => self.relative = 0,
             (b'G', 91) => self.relative = 0b11111,
-            // Inverse time (F is one over each move's minutes) and back to units per minute.
-            (b'G', 93) => self.inverse_time = Some(self.inverse_time.unwrap_or(0.0)),
-            (b'G', 94) => self.inverse_time = None,
+            // Inverse time (F is one over each move's minutes) and back to units per minute: in
+            // a rotary build (the files that use it turn a mandrel; the base image has no room).
+            (b'G', 93) if cfg!(feature = "rotary") => {
+                self.inverse_time = Some(self.inverse_time.unwrap_or(0.0))
+            }
+            (b'G', 94) if cfg!(feature = "rotary") => self.inverse_time = None,
             (b'G', 92) => self.set_position(w),
             (b'M', 82) => self.relative &= !(1 << E),
             (b'M', 83) => self.relative |= 1 << E,
@@ -221,9 +226,10 @@ impl Controller<'_> {
     /// machine's feed convention ([`crate::rotary`]).
     fn linear_move(&mut self, io: &mut impl Io, w: &Words) {
         if let Some(f) = w.get(b'F') {
+            // (`G93` exists in a rotary build only: elsewhere this is always the second arm.)
             match &mut self.inverse_time {
-                Some(moves_per_s) => *moves_per_s = f / 60.0,
-                None => self.feed_mm_s = f / 60.0,
+                Some(moves_per_s) if cfg!(feature = "rotary") => *moves_per_s = f / 60.0,
+                _ => self.feed_mm_s = f / 60.0,
             }
         }
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
@@ -249,11 +255,14 @@ impl Controller<'_> {
         self.steppers_enabled |= self.motors(self.all_axes());
         // A `G93` move before any F (LinuxCNC refuses it) runs at the last `G94` feed.
         let feed = match self.inverse_time {
-            Some(moves_per_s) if moves_per_s > 0.0 => Feed::InverseTime { moves_per_s },
+            Some(moves_per_s) if cfg!(feature = "rotary") && moves_per_s > 0.0 => {
+                Feed::InverseTime { moves_per_s }
+            }
             _ => Feed::PerSecond(self.feed_mm_s),
         };
         // Room was checked before the line was taken.
-        self.planner.add_with_a(target, target_a, feed, 0, &self.settings, &mut self.mixer);
+        let target = Target { steps: target, a_steps: target_a, feed };
+        self.planner.add_with_a(&target, 0, &self.settings, &mut self.mixer);
     }
 
     /// Every axis' bit (`1 << axis`), and the rotary axis' (`1 << AXES`, its motor's bit
@@ -376,8 +385,17 @@ fn set_axes(w: &Words, values: &mut [f32; AXES]) {
 fn out_of_range(w: &Words) -> Option<(u8, f32, (f32, f32))> {
     let Command { letter, code } = w.command;
     let ranges: &[(&[u8], (f32, f32))] = match (letter, code) {
-        (b'G', 0 | 1) => &[(b"XYZE", POSITION_MM), (b"A", ANGLE_DEG), (b"F", FEED_MM_MIN)],
-        (b'G', 92) => &[(b"XYZE", POSITION_MM), (b"A", ANGLE_DEG)],
+        (b'G', 0 | 1) => &[
+            (b"XYZE", POSITION_MM),
+            #[cfg(feature = "rotary")]
+            (b"A", ANGLE_DEG),
+            (b"F", FEED_MM_MIN),
+        ],
+        (b'G', 92) => &[
+            (b"XYZE", POSITION_MM),
+            #[cfg(feature = "rotary")]
+            (b"A", ANGLE_DEG),
+        ],
         (b'G', 4) => &[(b"P", DWELL_MS), (b"S", (0.0, 3600.0))],
         (b'M', 104 | 109 | 140 | 190) => &[(b"SR", TEMP_C), (b"T", (0.0, 1.0))],
         (b'M', 106) => &[(b"S", DUTY)],
