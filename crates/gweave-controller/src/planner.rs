@@ -69,10 +69,11 @@ pub struct Block {
     pub entry_v2: f32,
 }
 
-/// Where a move goes and how fast, for [`Planner::add_with_a`]. One argument by reference: on
-/// the ATmega2560 the arguments that do not fit the registers go on the stack, and LLVM's AVR
-/// back end read them one byte off there (the 3-byte return address of a 256 KB part): the
-/// board crashed on the first move.
+/// Where a move goes and how fast, for [`Planner::add_with_a`]. One argument by reference, not
+/// three: with seven arguments (more bytes than AVR's argument registers r8-r25) the firmware
+/// built by rustc-web 1.96 read the last one, the mixer, from its stack frame's return-address
+/// bytes while the caller had passed it in registers, and the emulated board crashed on a
+/// bogus pointer.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Target {
     /// X, Y, Z and E, steps.
