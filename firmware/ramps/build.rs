@@ -120,7 +120,10 @@ fn generate(file: &str, text: &str) -> String {
         if let Some(name) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
             section = name.trim().to_string();
             if !KEYS.iter().any(|(s, _, _)| *s == section) {
-                fail(n, &format!("unknown section [{section}] (known: [board], [motion], [heaters], [rotary])"));
+                fail(
+                    n,
+                    &format!("unknown section [{section}] (known: [board], [motion], [heaters], [rotary])"),
+                );
             }
             continue;
         }
@@ -269,10 +272,18 @@ fn generate(file: &str, text: &str) -> String {
 
 /// A `[rotary]` key's value as the Rust expression of its `Rotary` field (`invert_dir`: `true`
 /// or `false`, applied to the DIR bits by the caller).
-fn rotary_value(file: &str, n: usize, key: &'static str, kind: &Kind, value: &Value) -> (&'static str, String) {
+fn rotary_value(
+    file: &str,
+    n: usize,
+    key: &'static str,
+    kind: &Kind,
+    value: &Value,
+) -> (&'static str, String) {
     let text = match (kind, value) {
         (Kind::Float { min, max, .. }, _) => format!("{:?}", number(file, n, key, value, *min, *max)),
-        (_, Value::Text(t)) if key == "feed" && t == "nist" => "gweave_controller::rotary::RotaryFeed::Nist".into(),
+        (_, Value::Text(t)) if key == "feed" && t == "nist" => {
+            "gweave_controller::rotary::RotaryFeed::Nist".into()
+        }
         (_, Value::Text(t)) if key == "feed" && t == "combined" => {
             "gweave_controller::rotary::RotaryFeed::Combined".into()
         }
