@@ -11,8 +11,7 @@
 
 use std::path::{Path, PathBuf};
 
-use gweave::rotary::cylinder::{FeedConvention, RotaryConfig};
-use gweave::rotary::helix::TubeParams;
+use gweave::rotary::cylinder::RotaryConfig;
 use gweave_board::{Board, Wiring};
 use gweave_sim::core_board::{self, CoreReport};
 use gweave_sim::{FirmwareKind, Machine, MachineProfile};
@@ -177,28 +176,18 @@ fn a_pure_a_move_turns_at_f_degrees_per_minute_on_the_board() {
 }
 
 #[test]
-fn a_long_tube_steps_alike_on_the_twin_and_the_marlin_model_and_g93_runs_as_nist() {
-    // On the host only (seconds): 4 layers of 50 turns, the angle re-declared past 36 000
-    // degrees (`G92 A`), 11 minutes of printing, written under each feed convention. The
-    // firmware reads F the NIST way, and `G93` whatever it is set to: both files take the same
-    // time on it, within 1 % (the writer's figure is 10 min 53 s; the board's time adds the
-    // heating and the homing).
-    let mut time_s = Vec::new();
-    for convention in [FeedConvention::Nist, FeedConvention::InverseTime] {
-        let mut machine = RotaryConfig::new(20.0);
-        machine.feed_convention = convention;
-        let mut tube = TubeParams::new(machine);
-        (tube.length_mm, tube.layers) = (20.0, 4);
-        let mut text = Vec::new();
-        tube.write_gcode(&mut text).unwrap();
-        let text = String::from_utf8(text).unwrap();
-        assert!(text.contains("\nG92 A"), "the angle re-declared");
-        let r = twin(&text);
-        let on_twin = [r.axis_steps[0], r.axis_steps[2], r.axis_steps[3], r.rotary_steps.unwrap()];
-        assert!(on_twin[3].abs_diff(640_000) <= 1, "200 turns of 3200 steps: {on_twin:?}");
-        assert_eq!(on_twin, marlin_model(&text), "{convention:?}");
-        time_s.push(r.time_s);
-    }
-    assert!((time_s[0] / time_s[1] - 1.0).abs() < 0.01, "NIST {:.1} s, G93 {:.1} s", time_s[0], time_s[1]);
-    assert!(time_s[0] > 653.0, "{:.1} s", time_s[0]);
+fn a_re_declared_angle_steps_alike_on_the_twin_and_the_marlin_model() {
+    // On the host only: `rotary tube` re-declares the angle modulo a turn past 36 000 degrees
+    // (`G92 A`), `rotary wrap` after each short-way travel. Both count A's steps from where the
+    // angle was named, so fractions of a step are neither lost nor counted twice: 3600.4
+    // degrees is 32 003.6 steps (32 004); named A0.4 there, A720.4 is 6400 steps on, A-3.3 is
+    // -32.9 steps from the naming (6433 back); named A356.7, A360.05 is 29.8 steps on (30).
+    let header = "; gweave rotary tube: mandrel 20 mm\n\
+                  ; axes: axial X, rotary A (Degrees), radial Z (0 = on the mandrel); feed Nist\n";
+    let moves = "G92 A0\nG1 A3600.4 F43200\nG92 A0.4\nG1 A720.4\nG1 A-3.3\nG92 A356.7\nG1 A360.05\n";
+    let text = format!("{header}{moves}");
+    let r = twin(&text);
+    let a = r.rotary_steps.unwrap();
+    assert_eq!(a, 32_004 + 6400 + 6433 + 30, "{r:?}");
+    assert_eq!(marlin_model(&text)[3], a);
 }
