@@ -82,6 +82,12 @@ pub struct Target {
     pub a_steps: i32,
     /// The feed.
     pub feed: Feed,
+    /// The move as the G-code commands it (X, Y, Z, E in mm, then A in degrees), which F is
+    /// measured over; `None`: its steps' distances. A rotary program's helix advances 0.005 mm
+    /// of X per 5-degree chord at `F6.675` (NIST: F along X, A following): 0 or 1 step of X,
+    /// and measured in steps the chord is 0 mm (A alone: 5 degrees at 6.675 deg/min, 45 s, not
+    /// 45 ms) or 0.0125 mm (twice its time).
+    pub commanded: Option<[f32; AXES + 1]>,
 }
 
 /// The ring of planned moves, and where the planned moves end.
@@ -158,8 +164,12 @@ impl Planner {
         s: &Settings,
         mixer: &mut Mixer,
     ) -> bool {
-        let target =
-            Target { steps: target_steps, a_steps: self.position_a_steps, feed: Feed::PerSecond(feed_mm_s) };
+        let target = Target {
+            steps: target_steps,
+            a_steps: self.position_a_steps,
+            feed: Feed::PerSecond(feed_mm_s),
+            commanded: None,
+        };
         self.add_with_a(&target, endstop_mask, s, mixer)
     }
 
@@ -169,7 +179,7 @@ impl Planner {
         if self.is_full() {
             return false;
         }
-        let Target { steps: target_steps, a_steps: target_a_steps, feed } = *target;
+        let Target { steps: target_steps, a_steps: target_a_steps, feed, commanded } = *target;
         let rotary = s.rotary.fitted(s.mixing_inputs);
         let mut step =
             StepBlock { endstop_mask, endstop_invert: s.endstop_inverting, ..StepBlock::default() };
@@ -214,7 +224,10 @@ impl Planner {
             return true;
         }
         let xyz_mm2: f32 = delta_mm[..E].iter().map(|d| d * d).sum();
-        let len_mm = s.rotary.path_len(xyz_mm2, delta_deg, delta_mm[E]);
+        let len_mm = match commanded {
+            Some(c) if rotary => s.rotary.path_len(c[..E].iter().map(|d| d * d).sum(), c[AXES], c[E]),
+            _ => s.rotary.path_len(xyz_mm2, delta_deg, delta_mm[E]),
+        };
         // Speed and acceleration along the path, within every axis' own limits: an axis
         // covering a fraction `|d|/L` of the path moves at that fraction of the path's speed.
         let mut feed_mm_s = feed.speed(len_mm);

@@ -123,3 +123,19 @@ fn without_a_rotary_axis_a_moves_nothing() {
     assert!(replies.contains("X:1.00 Y:0.00 Z:0.00 E:0.00 Count X:80 Y:0 Z:0\n"), "{replies}");
     assert_eq!(t.pulses[A_MOTOR], 0);
 }
+
+#[test]
+fn a_helix_chord_of_less_than_a_step_of_x_takes_its_commanded_time() {
+    // `gweave rotary tube`'s helix under NIST: 0.005 mm of X per 5-degree chord at F6.675, 45 ms
+    // a chord (the mandrel at 111 deg/s). X makes 0 or 1 step a chord: measured in steps the
+    // move was A alone (5 degrees at 6.675 deg/min: 45 s a chord) or 0.0125 mm (90 ms). Twenty
+    // chords, straight on in X, A and E: 0.9 s.
+    let mut t = twin(RotaryFeed::Nist);
+    let chords: String = (1..=20)
+        .map(|k| format!("G1 X{:.3} A{} E{:.5} F6.675\n", 0.005 * k as f32, 5 * k, 0.03 * k as f32))
+        .collect();
+    let ticks = step_ticks(&mut t, A_MOTOR, &chords);
+    assert_eq!(ticks.len(), 889, "100 degrees");
+    let took_s = (ticks[ticks.len() - 1] - ticks[0]) as f64 / f64::from(TICKS_PER_S);
+    assert!((0.85..0.95).contains(&took_s), "{took_s} s");
+}

@@ -232,6 +232,7 @@ impl Controller<'_> {
                 _ => self.feed_mm_s = f / 60.0,
             }
         }
+        let (from_mm, from_deg) = (self.position_mm, self.position_a_deg);
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
             if let Some(v) = w.get(letter) {
                 let relative = self.relative & (1 << axis) != 0;
@@ -261,7 +262,16 @@ impl Controller<'_> {
             _ => Feed::PerSecond(self.feed_mm_s),
         };
         // Room was checked before the line was taken.
-        let target = Target { steps: target, a_steps: target_a, feed };
+        // On a rotary machine F is measured over the move as commanded ([`Target::commanded`]).
+        let commanded = rotary.then(|| {
+            let mut d = [0.0; AXES + 1];
+            for (axis, d) in d.iter_mut().enumerate().take(AXES) {
+                *d = self.position_mm[axis] - from_mm[axis];
+            }
+            d[AXES] = self.position_a_deg - from_deg;
+            d
+        });
+        let target = Target { steps: target, a_steps: target_a, feed, commanded };
         self.planner.add_with_a(&target, 0, &self.settings, &mut self.mixer);
     }
 
