@@ -94,12 +94,14 @@ define fw_image
 endef
 
 # The default printer (firmware/printer.toml), the same printer with a 4-input mixing hotend
-# (firmware/printer-mixing.toml), and an inkjet printer (M700 through an InkShield,
-# docs/firmware.md "Inkjet").
+# (firmware/printer-mixing.toml), an inkjet printer (M700 through an InkShield,
+# docs/firmware.md "Inkjet"), and a lathe-type printer (the rotary axis A on E1's socket,
+# firmware/printer-rotary.toml, docs/firmware.md "Rotary").
 firmware: firmware-deps
 	$(call fw_image,gweave-ramps,printer.toml,,)
 	$(call fw_image,gweave-ramps-mixing,printer-mixing.toml,-mixing,)
 	$(call fw_image,gweave-ramps-inkjet,printer.toml,-inkjet,inkjet)
+	$(call fw_image,gweave-ramps-rotary,printer-rotary.toml,-rotary,rotary)
 
 # The same core for a Cortex-M4F (STM32F405/F407, BTT SKR Pro's pin map; docs/firmware.md):
 # the ELF for QEMU and debuggers, the raw .bin a board's bootloader or st-flash writes at

@@ -3,8 +3,9 @@
 # (Marlin 1.1.9 for this board with EEPROM settings: 63.8 KB flash, 2.7 KB static RAM; at most
 # 64 KB and 4 KB), the stack's high-water mark, the longest step interrupt and the highest
 # step rate held (GRBL: 30 kHz on one axis; goal 20 kHz on three), measured on the emulated
-# board; then the inkjet build's size and nozzle pulses (issue 38). Not a test: `make firmware`
-# first, then `bash bench/firmware.sh`.
+# board; the highest step rate with X, Y and a 4-input mixing hotend stepping together (the
+# mixing image); the flash and RAM of every image; then the inkjet build's nozzle pulses (issue
+# 38). Not a test: `make firmware` first, then `bash bench/firmware.sh`.
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 ELF="$ROOT/firmware/out/gweave-ramps.elf"
@@ -21,10 +22,19 @@ sizes() {
   printf "%-26s %7s KB   goal <= %s KB\n" "static RAM (data + bss)" "$(kb $((data + bss)))" "$ram_goal"
   printf "%-26s %7s KB   of 8 KB\n" "RAM left for the stack" "$(kb $((8192 - data - bss)))"
 }
-# The base image (issue 37), and the machines image (issue 38: a 4-input mixing hotend on E0,
-# E1 and AUX-2).
+# The base image (issue 37), and the machines' images (issue 38: a 4-input mixing hotend on E0,
+# E1 and AUX-2; M700 through an InkShield; a lathe's axis A on E1), each against the base.
 sizes "$ELF" 64 4 " (Marlin 1.1.9: 63.8 KB, 2.7 KB RAM)"
-sizes "$MIXING_ELF" 128 6 ""
+read -r btext bdata bbss < <(avr-size "$ELF" | awk 'NR == 2 { print $1, $2, $3 }')
+for image in mixing inkjet rotary; do
+  elf="$ROOT/firmware/out/gweave-ramps-$image.elf"
+  if [ -s "$elf" ]; then
+    read -r text data bss < <(avr-size "$elf" | awk 'NR == 2 { print $1, $2, $3 }')
+    sizes "$elf" 128 6 " (base image: $(kb $((btext + bdata))) KB, $(kb $((bdata + bbss))) KB RAM)"
+  else
+    echo "== no $elf: run make firmware"
+  fi
+done
 
 # The 32-bit build (`make firmware-cortex`), beside the AVR's figures above: the same core for
 # a Cortex-M4F, against the smallest chip of the boards it is meant for (docs/firmware.md).
@@ -41,6 +51,9 @@ fi
 
 echo "== on the emulated board (stack, step interrupt, step rates)"
 cargo run -q --release -p gweave-board --example budgets -- "$ELF" 2>/dev/null | grep -v '^Loaded'
+# Six motors at one rate: X, Y and the four inputs of the mixing hotend (M165, a quarter each).
+echo "== the mixing image on the emulated board (X+Y and four mixing inputs)"
+cargo run -q --release -p gweave-board --example budgets -- "$MIXING_ELF" --mixing 2>/dev/null | grep -v '^Loaded'
 
 # Where the main loop's time goes while a host streams 0.5 mm lines at 60 mm/s, and its margin:
 # the time to read and plan a line against the line's motion; then the cycles a line costs by
@@ -48,18 +61,10 @@ cargo run -q --release -p gweave-board --example budgets -- "$ELF" 2>/dev/null |
 echo "== streaming short segments: the main loop's margin and profile"
 cargo run -q --release -p gweave-board --example profile -- "$ELF" 2>/dev/null | grep -v '^Loaded'
 
-# The inkjet build (issue 38: M700 through an InkShield): its size, then its nozzle pulses on
+# The inkjet build (issue 38: M700 through an InkShield): its nozzle pulses on
 # the emulated board against the InkShield's 5 us, and how fast a host can fire.
 INK_ELF="$ROOT/firmware/out/gweave-ramps-inkjet.elf"
 if [ -s "$INK_ELF" ]; then
-  read -r itext idata ibss < <(avr-size "$INK_ELF" | awk 'NR == 2 { print $1, $2, $3 }')
-  # The base image's, beside it (sizes() keeps its own local).
-  read -r text data bss < <(avr-size "$ELF" | awk 'NR == 2 { print $1, $2, $3 }')
-  echo "== firmware: $(basename "$INK_ELF")"
-  printf "%-26s %7s KB   base image: %s KB (256 KB on the chip; issue 38: <= 128 KB)\n" "flash (text + data)" \
-    "$(kb $((itext + idata)))" "$(kb $((text + data)))"
-  printf "%-26s %7s KB   base image: %s KB (goal <= 6 KB)\n" "static RAM (data + bss)" \
-    "$(kb $((idata + ibss)))" "$(kb $((data + bss)))"
   echo "== inkjet on the emulated board (nozzle pulses, fire rate)"
   cargo run -q --release -p gweave-board --example inkjet_budgets -- "$INK_ELF" 2>/dev/null | grep -v '^Loaded'
 else

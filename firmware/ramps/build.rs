@@ -61,6 +61,17 @@ const KEYS: &[(&str, &str, Kind)] = &[
     ("heaters", "thermistor", Kind::Bytes { field: "thermistor", len: 3, allowed: &[0, 1] }),
     ("heaters", "hotend_pid", Kind::Pid { field: "hotend_pid" }),
     ("heaters", "max_temp_c", Kind::Floats { field: "max_temp_c", len: 3, min: 0.0, max: 400.0 }),
+    // The rotary axis A on the E1 socket (docs/firmware.md, "Rotary"): steps per degree of the
+    // mandrel, its speed and acceleration limits, and what F means on a move that turns it.
+    ("rotary", "steps_per_deg", Kind::Float { field: "rotary.steps_per_deg", min: 0.01, max: 1_000.0 }),
+    ("rotary", "max_feed_deg_s", Kind::Float { field: "rotary.max_feed_deg_s", min: 0.1, max: 10_000.0 }),
+    (
+        "rotary",
+        "max_accel_deg_s2",
+        Kind::Float { field: "rotary.max_accel_deg_s2", min: 1.0, max: 1_000_000.0 },
+    ),
+    ("rotary", "feed", Kind::Board),
+    ("rotary", "invert_dir", Kind::Board),
 ];
 
 /// The file read when `GWEAVE_PRINTER` names none, relative to `firmware/`.
@@ -101,6 +112,10 @@ fn generate(file: &str, text: &str) -> String {
     let mut baud = 250_000u32;
     let mut hotends = 1u8;
     let mut mixing_inputs = 0u8;
+    // The [rotary] section's keys, gathered into one `Rotary` after the file is read.
+    let mut rotary: Vec<(&str, String)> = Vec::new();
+    let mut rotary_line = 0;
+    let mut invert_dir: Option<u8> = None;
     let mut fields = String::new();
     let mut section = String::new();
     let mut seen: Vec<(String, String)> = Vec::new();
@@ -113,7 +128,10 @@ fn generate(file: &str, text: &str) -> String {
         if let Some(name) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
             section = name.trim().to_string();
             if !KEYS.iter().any(|(s, _, _)| *s == section) {
-                fail(n, &format!("unknown section [{section}] (known: [board], [motion], [heaters])"));
+                fail(
+                    n,
+                    &format!("unknown section [{section}] (known: [board], [motion], [heaters], [rotary])"),
+                );
             }
             continue;
         }
@@ -121,7 +139,7 @@ fn generate(file: &str, text: &str) -> String {
         let key = key.trim();
         let value =
             parse_value(value.trim()).unwrap_or_else(|| fail(n, &format!("cannot read the value of {key}")));
-        let Some((_, _, kind)) = KEYS.iter().find(|(s, k, _)| *s == section && *k == key) else {
+        let Some((_, static_key, kind)) = KEYS.iter().find(|(s, k, _)| *s == section && *k == key) else {
             let known: Vec<&str> =
                 KEYS.iter().filter(|(s, _, _)| *s == section).map(|(_, k, _)| *k).collect();
             fail(n, &format!("unknown key {key} in [{section}] (known: {})", known.join(", ")));
@@ -130,6 +148,11 @@ fn generate(file: &str, text: &str) -> String {
             fail(n, &format!("{key} is set twice"));
         }
         seen.push((section.clone(), key.to_string()));
+        if section == "rotary" {
+            rotary_line = n;
+            rotary.push(rotary_value(file, n, static_key, kind, &value));
+            continue;
+        }
         match kind {
             Kind::Board if key == "baud" => match value {
                 Value::Number(b) if b == 250_000.0 || b == 115_200.0 => baud = b as u32,
@@ -166,7 +189,12 @@ fn generate(file: &str, text: &str) -> String {
                         _ => fail(n, &format!("{key} holds true or false per axis")),
                     }
                 }
-                let _ = writeln!(fields, "    {field}: {bits:#06b},");
+                if *field == "invert_dir" {
+                    // Written at the end, with the rotary axis' bit.
+                    invert_dir = Some(bits);
+                } else {
+                    let _ = writeln!(fields, "    {field}: {bits:#06b},");
+                }
             }
             Kind::Bytes { field, len, allowed } => {
                 let vs: Vec<String> = list(file, n, key, &value, *len)
@@ -205,8 +233,38 @@ fn generate(file: &str, text: &str) -> String {
             }
         }
     }
-    // The drivers the step interrupt runs: X, Y, Z, E0, and the other inputs of a mixing hotend.
-    let drivers = 4 + usize::from(mixing_inputs.max(1)) - 1;
+    // The drivers the step interrupt runs: X, Y, Z, E0, and the other inputs of a mixing hotend,
+    // or the rotary axis on E1's socket.
+    let mut drivers = 4 + usize::from(mixing_inputs.max(1)) - 1;
+    if !rotary.is_empty() {
+        if mixing_inputs > 0 {
+            fail(rotary_line, "a rotary axis turns the E1 socket's motor, which a mixing hotend uses");
+        }
+        if std::env::var_os("CARGO_FEATURE_ROTARY").is_none() {
+            fail(rotary_line, "[rotary] needs the build's feature `rotary` (`--features rotary`)");
+        }
+        let Some((_, steps)) = rotary.iter().find(|(k, _)| *k == "steps_per_deg") else {
+            fail(rotary_line, "[rotary] needs steps_per_deg")
+        };
+        let mut fields_a = format!("steps_per_deg: {steps}, ");
+        for key in ["max_feed_deg_s", "max_accel_deg_s2", "feed"] {
+            if let Some((_, v)) = rotary.iter().find(|(k, _)| *k == key) {
+                let _ = write!(fields_a, "{key}: {v}, ");
+            }
+        }
+        let _ = writeln!(
+            fields,
+            "    rotary: gweave_controller::rotary::Rotary {{ {fields_a}..gweave_controller::rotary::Rotary::NONE }},"
+        );
+        if rotary.iter().any(|(k, v)| *k == "invert_dir" && v == "true") {
+            // A's motor is the fifth (E1's socket): bit 1 << 4 of the DIR bits.
+            invert_dir = Some(invert_dir.unwrap_or(0) | 1 << 4);
+        }
+        drivers = 5;
+    }
+    if let Some(bits) = invert_dir {
+        let _ = writeln!(fields, "    invert_dir: {bits:#07b},");
+    }
     format!(
         "// Generated by build.rs from firmware/{file}: edit that file, not this one.\n\
          use gweave_controller::Settings;\n\n\
@@ -218,6 +276,30 @@ fn generate(file: &str, text: &str) -> String {
          #[allow(clippy::needless_update)]\n\
          pub const SETTINGS: Settings = Settings {{\n    hotends: {hotends},\n    mixing_inputs: {mixing_inputs},\n{fields}    ..Settings::DEFAULT\n}};\n"
     )
+}
+
+/// A `[rotary]` key's value as the Rust expression of its `Rotary` field (`invert_dir`: `true`
+/// or `false`, applied to the DIR bits by the caller).
+fn rotary_value(
+    file: &str,
+    n: usize,
+    key: &'static str,
+    kind: &Kind,
+    value: &Value,
+) -> (&'static str, String) {
+    let text = match (kind, value) {
+        (Kind::Float { min, max, .. }, _) => format!("{:?}", number(file, n, key, value, *min, *max)),
+        (_, Value::Text(t)) if key == "feed" && t == "nist" => {
+            "gweave_controller::rotary::RotaryFeed::Nist".into()
+        }
+        (_, Value::Text(t)) if key == "feed" && t == "combined" => {
+            "gweave_controller::rotary::RotaryFeed::Combined".into()
+        }
+        (_, Value::Bool(b)) if key == "invert_dir" => b.to_string(),
+        _ if key == "feed" => fail(file, n, "feed is \"nist\" or \"combined\""),
+        _ => fail(file, n, &format!("{key} is true or false")),
+    };
+    (key, text)
 }
 
 /// The line without its `#` comment (a `#` inside a string is kept).

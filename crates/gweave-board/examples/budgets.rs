@@ -1,8 +1,10 @@
 //! The firmware's budgets on the emulated board (run by `bench/firmware.sh`, not a test):
 //! the stack's high-water mark over a working session, and the highest step rate the step
-//! interrupt keeps up with on one axis and on X+Y+E together.
+//! interrupt keeps up with on one axis and on X+Y+E together; with `--mixing` (the mixing
+//! image), on X, Y and the four inputs of the mixing hotend together instead.
 //!
 //! `cargo run --release -p gweave-board --example budgets -- firmware/out/gweave-ramps.elf`
+//! `cargo run --release -p gweave-board --example budgets -- firmware/out/gweave-ramps-mixing.elf --mixing`
 
 use gweave_board::{Board, Wiring, CPU_HZ};
 
@@ -10,9 +12,12 @@ use gweave_board::{Board, Wiring, CPU_HZ};
 const RAMEND: u16 = 0x21FF;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let elf = std::env::args().nth(1).ok_or("usage: budgets FIRMWARE.elf")?;
+    let elf = std::env::args().nth(1).ok_or("usage: budgets FIRMWARE.elf [--mixing]")?;
     let mut board = Board::new(elf.as_ref(), Wiring { record_steps: true, ..Wiring::default() })?;
     board.run_until_line(|l| l == "start", 1.0)?;
+    if std::env::args().nth(2).as_deref() == Some("--mixing") {
+        return mixing_rates(&mut board);
+    }
     board.time_step_interrupt();
     // A working session: every reply path, homing, moves, heating, settings.
     for line in ["M115", "M503", "G28", "G1 X50 Y50 Z5 F6000", "M104 S200", "M105", "M114", "M119", "M400"] {
@@ -52,6 +57,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // hot (unheated), or the core would drop E (it has no M302).
     board.shield_mut().plants[0].heater.set_temperature(210.0);
     board.run_for(0.3)?;
+    limits_out_of_the_way(&mut board)?;
+    for (name, axes) in [("X alone", &[(0usize, 1.0)][..]), ("X+Y+E", &[(0, 1.0), (1, 1.0), (3, 1.0)][..])] {
+        highest_rate_held(&mut board, name, axes, &[axes[0].0], 2_500)?;
+    }
+    Ok(())
+}
+
+/// The hotend hot (unheated), or the core would drop E (it has no M302), and the limits out of
+/// the way, so the rate is the interrupt's, not the planner's.
+fn limits_out_of_the_way(board: &mut Board) -> Result<(), Box<dyn std::error::Error>> {
+    board.shield_mut().plants[0].heater.set_temperature(210.0);
+    board.run_for(0.3)?;
     for line in [
         "M104 S0",
         "M203 X2000 Y2000 E2000",
@@ -61,27 +78,53 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ] {
         board.command(line, 5.0)?;
     }
-    for (name, axes) in [("X alone", &[0usize][..]), ("X+Y+E", &[0, 1, 3][..])] {
-        let mut held_hz = 0;
-        for rate_hz in (2_500..=30_000).step_by(2_500) {
-            let achieved_hz = cruise_rate_hz(&mut board, axes, f64::from(rate_hz))?;
-            println!("  {name}: asked {rate_hz} steps/s, held {achieved_hz:.0}");
-            if achieved_hz < 0.99 * f64::from(rate_hz) {
-                // Faster starves the main loop, and the watchdog resets the board.
-                break;
-            }
-            held_hz = rate_hz;
-        }
-        println!("highest step rate held, {name}: {held_hz} steps/s per axis");
-    }
     Ok(())
 }
 
-/// Move `axes` together at `rate_hz` steps per second each and return the step rate of the
-/// first axis over the middle half of the move (the cruise).
+/// The mixing image: X, Y and the four inputs (E0 and E1 on their sockets, E2 and E3 on AUX-2)
+/// at once, each input a quarter of E (`M165`), so six motors step at the same rate.
+fn mixing_rates(board: &mut Board) -> Result<(), Box<dyn std::error::Error>> {
+    limits_out_of_the_way(board)?;
+    board.command("M165 A0.25 B0.25 C0.25 D0.25", 5.0)?;
+    board.time_step_interrupt();
+    highest_rate_held(board, "X+Y+4 mixing inputs", &[(0, 1.0), (1, 1.0), (3, 4.0)], &[0, 3, 4, 5, 6], 500)?;
+    println!(
+        "step interrupt meanwhile: longest {} cycles, mean {} cycles",
+        board.step_interrupt_max_cycles(),
+        board.step_interrupt_mean_cycles()
+    );
+    Ok(())
+}
+
+/// Raises the rate of `axes` (each `(axis, steps as a multiple of the rate)`) by `step_hz`
+/// until one of the `watched` sockets falls 1 % short of it; prints the highest held.
+fn highest_rate_held(
+    board: &mut Board,
+    name: &str,
+    axes: &[(usize, f64)],
+    watched: &[usize],
+    step_hz: usize,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let mut held_hz = 0;
+    for rate_hz in (step_hz as u32..=30_000).step_by(step_hz) {
+        let achieved_hz = cruise_rate_hz(board, axes, watched, f64::from(rate_hz))?;
+        println!("  {name}: asked {rate_hz} steps/s, held {achieved_hz:.0}");
+        if achieved_hz < 0.99 * f64::from(rate_hz) {
+            // Faster starves the main loop, and the watchdog resets the board.
+            break;
+        }
+        held_hz = rate_hz;
+    }
+    println!("highest step rate held, {name}: {held_hz} steps/s per motor");
+    Ok(())
+}
+
+/// Move `axes` together (each `(axis, factor)`: `factor × rate_hz` steps per second) and return
+/// the lowest step rate of the `watched` sockets over the middle half of the move (the cruise).
 fn cruise_rate_hz(
     board: &mut Board,
-    axes: &[usize],
+    axes: &[(usize, f64)],
+    watched: &[usize],
     rate_hz: f64,
 ) -> Result<f64, Box<dyn std::error::Error>> {
     const STEPS_PER_MM: [f64; 4] = [80.0, 80.0, 400.0, 93.0];
@@ -89,22 +132,26 @@ fn cruise_rate_hz(
     let steps = rate_hz * 0.5;
     let mut words = String::new();
     let mut path2_mm2 = 0.0;
-    for &a in axes {
-        let mm = steps / STEPS_PER_MM[a];
+    for &(a, factor) in axes {
+        let mm = factor * steps / STEPS_PER_MM[a];
         words += &format!(" {}{mm:.4}", ["X", "Y", "Z", "E"][a]);
         if a < 3 {
             path2_mm2 += mm * mm;
         }
     }
     let feed_mm_min = f64::sqrt(path2_mm2) / 0.5 * 60.0;
-    let first = board.axis(axes[0]).step_log.len();
+    let first: Vec<usize> = watched.iter().map(|&s| board.axis(s).step_log.len()).collect();
     board.command(&format!("G1{words} F{feed_mm_min:.1}"), 10.0)?;
     board.command("M400", 10.0)?;
-    let log = &board.axis(axes[0]).step_log[first..];
-    let (a, b) = (log.len() / 4, 3 * log.len() / 4);
-    if b <= a + 1 {
-        return Ok(0.0);
+    let mut lowest = f64::INFINITY;
+    for (&socket, &first) in watched.iter().zip(&first) {
+        let log = &board.axis(socket).step_log[first..];
+        let (a, b) = (log.len() / 4, 3 * log.len() / 4);
+        if b <= a + 1 {
+            return Ok(0.0);
+        }
+        let cycles = (log[b].0 - log[a].0) as f64;
+        lowest = lowest.min((b - a) as f64 * f64::from(CPU_HZ) / cycles);
     }
-    let cycles = (log[b].0 - log[a].0) as f64;
-    Ok((b - a) as f64 * f64::from(CPU_HZ) / cycles)
+    Ok(lowest)
 }

@@ -46,9 +46,12 @@ fn gweave_sim_reads_the_feed_convention_the_rotary_file_declares() {
         path
     };
     let (nist, combined) = (motion_s(&tube("nist")), motion_s(&tube("combined")));
+    // Inverse time: `G93` at the start, F = 1 / minutes of each move, `G94` at the end.
+    let inverse = motion_s(&tube("inverse-time"));
     // The writer's own figure ("time (F only)") is 3 min 6 s; the sim adds the accelerations.
-    for (name, t_s) in [("nist", nist), ("combined", combined)] {
+    for (name, t_s) in [("nist", nist), ("combined", combined), ("inverse-time", inverse)] {
         assert!((186.0..=200.0).contains(&t_s), "{name}: {t_s:.1} s of motion");
     }
     assert!((nist / combined - 1.0).abs() < 0.01, "nist {nist:.1} s, combined {combined:.1} s");
+    assert!((nist / inverse - 1.0).abs() < 0.01, "nist {nist:.1} s, inverse time {inverse:.1} s");
 }

@@ -88,6 +88,7 @@ pub mod machine;
 pub mod math;
 pub mod mixing;
 pub mod planner;
+pub mod rotary;
 pub mod serial;
 pub mod settings;
 pub mod stepper;

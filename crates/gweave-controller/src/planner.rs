@@ -48,10 +48,18 @@
 //! (`half_millimetre_segments_at_60_mm_s_never_run_dry`, on the emulated board); the entries
 //! are those of the passes over every block, exactly
 //! (`planning_only_the_blocks_that_can_change_gives_the_full_passes_entries`).
+//!
+//! # A rotary axis
+//!
+//! On a lathe-type printer the mandrel's angle A is a fifth coordinate ([`crate::rotary`]): its
+//! steps go to [`A_MOTOR`], its degrees count in the move's direction (for the junctions) and
+//! in its length as the feed convention says ([`crate::rotary::Rotary::path_len`]), and its own speed and
+//! acceleration limits hold like any axis'.
 
 use crate::limits::{MAX_STEP_HZ, MIN_STEPS_PER_SEGMENT, PLANNER_BLOCKS};
 use crate::math::sqrt;
 use crate::mixing::Mixer;
+use crate::rotary::{Feed, A_MOTOR};
 use crate::settings::Settings;
 use crate::stepper::StepBlock;
 use crate::{AXES, E};
@@ -61,7 +69,8 @@ use crate::{AXES, E};
 pub struct Block {
     /// The steps, for the stepper.
     pub step: StepBlock,
-    /// Length of the move in mm (of X, Y and Z; of E for a move of the extruder alone).
+    /// Length of the move in mm (of X, Y and Z; of E for a move of the extruder alone; with a
+    /// rotary axis, as its feed convention says: [`crate::rotary::Rotary::path_len`]).
     pub len_mm: f32,
     /// Acceleration of the move along its path, mm/s².
     pub accel_mm_s2: f32,
@@ -73,19 +82,43 @@ pub struct Block {
     pub entry_v2: f32,
 }
 
+/// Where a move goes and how fast, for [`Planner::add_with_a`]. One argument by reference, not
+/// three: with seven arguments (more bytes than AVR's argument registers r8-r25) the firmware
+/// built by rustc-web 1.96 read the last one, the mixer, from its stack frame's return-address
+/// bytes while the caller had passed it in registers, and the emulated board crashed on a
+/// bogus pointer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Target {
+    /// X, Y, Z and E, steps.
+    pub steps: [i32; AXES],
+    /// The rotary axis A, steps.
+    pub a_steps: i32,
+    /// The feed.
+    pub feed: Feed,
+    /// The move as the G-code commands it (X, Y, Z, E in mm, then A in degrees), which F is
+    /// measured over; `None`: its steps' distances. A rotary program's helix advances 0.005 mm
+    /// of X per 5-degree chord at `F6.675` (NIST: F along X, A following): 0 or 1 step of X,
+    /// and measured in steps the chord is 0 mm (A alone: 5 degrees at 6.675 deg/min, 45 s, not
+    /// 45 ms) or 0.0125 mm (twice its time).
+    pub commanded: Option<[f32; AXES + 1]>,
+}
+
 /// The ring of planned moves, and where the planned moves end.
 pub struct Planner {
     blocks: [Block; PLANNER_BLOCKS],
     first: usize,
     count: usize,
-    /// Unit direction of the last planned move (XYZE, in mm), for the next junction.
-    previous_unit: [f32; AXES],
+    /// Unit direction of the last planned move (XYZE in mm, then A in degrees), for the next
+    /// junction.
+    previous_unit: [f32; AXES + 1],
     previous_nominal_v2: f32,
     /// How many of the oldest waiting blocks have their final entry (see the module's text).
     /// (A byte: at most [`PLANNER_BLOCKS`].)
     planned: u8,
     /// Where the last planned move ends, in steps per axis.
     pub position_steps: [i32; AXES],
+    /// The same for the rotary axis A (0 without one).
+    pub position_a_steps: i32,
 }
 
 impl Default for Planner {
@@ -109,10 +142,11 @@ impl Planner {
             blocks: [EMPTY; PLANNER_BLOCKS],
             first: 0,
             count: 0,
-            previous_unit: [0.0; AXES],
+            previous_unit: [0.0; AXES + 1],
             previous_nominal_v2: 0.0,
             planned: 0,
             position_steps: [0; AXES],
+            position_a_steps: 0,
         }
     }
 
@@ -139,6 +173,7 @@ impl Planner {
     /// On a mixing hotend the E steps go to the inputs by `mixer`'s active mix
     /// ([`Mixer::split`]), each input a motor of the block; the planner's speeds and lengths stay
     /// those of E.
+    #[inline(never)]
     pub fn add(
         &mut self,
         target_steps: [i32; AXES],
@@ -147,9 +182,23 @@ impl Planner {
         s: &Settings,
         mixer: &mut Mixer,
     ) -> bool {
+        let target = Target {
+            steps: target_steps,
+            a_steps: self.position_a_steps,
+            feed: Feed::PerSecond(feed_mm_s),
+            commanded: None,
+        };
+        self.add_with_a(&target, endstop_mask, s, mixer)
+    }
+
+    /// [`Planner::add`] with the rotary axis' target and the feed as `G93`/`G94` give it
+    /// ([`Target`]). Without a rotary axis fitted, A stays where it is.
+    pub fn add_with_a(&mut self, target: &Target, endstop_mask: u8, s: &Settings, mixer: &mut Mixer) -> bool {
         if self.is_full() {
             return false;
         }
+        let Target { steps: target_steps, a_steps: target_a_steps, feed, commanded } = *target;
+        let rotary = s.rotary.fitted(s.mixing_inputs);
         let mut step =
             StepBlock { endstop_mask, endstop_invert: s.endstop_inverting, ..StepBlock::default() };
         let mut delta_mm = [0.0f32; AXES];
@@ -164,6 +213,9 @@ impl Planner {
             }
             delta_mm[axis] = delta as f32 / s.steps_per_mm[axis];
         }
+        let a_delta = if rotary { target_a_steps.saturating_sub(self.position_a_steps) } else { 0 };
+        step.events = step.events.max(a_delta.unsigned_abs());
+        let delta_deg = if rotary { a_delta as f32 / s.rotary.steps_per_deg } else { 0.0 };
         if step.events < MIN_STEPS_PER_SEGMENT && endstop_mask == 0 {
             // Too short to plan: the position stays, so the next move takes this one's steps.
             return true;
@@ -179,33 +231,48 @@ impl Planner {
                 }
             }
         }
+        // A's motor is E1's socket, which a mixing hotend's input would use: never both
+        // (`Rotary::fitted`).
+        step.steps[A_MOTOR] = step.steps[A_MOTOR].max(a_delta.unsigned_abs());
+        if a_delta > 0 {
+            step.dir_bits |= 1 << A_MOTOR;
+        }
         step.positive_bits = step.dir_bits;
         step.dir_bits ^= s.invert_dir;
         if step.events == 0 {
             return true;
         }
         let xyz_mm2: f32 = delta_mm[..E].iter().map(|d| d * d).sum();
-        let len_mm = if xyz_mm2 > 0.0 { sqrt(xyz_mm2) } else { delta_mm[E].abs() };
+        let len_mm = match commanded {
+            Some(c) if rotary => s.rotary.path_len(c[..E].iter().map(|d| d * d).sum(), c[AXES], c[E]),
+            _ => s.rotary.path_len(xyz_mm2, delta_deg, delta_mm[E]),
+        };
         // Speed and acceleration along the path, within every axis' own limits: an axis
         // covering a fraction `|d|/L` of the path moves at that fraction of the path's speed.
-        let mut feed_mm_s = feed_mm_s;
-        let mut accel_mm_s2 = if xyz_mm2 == 0.0 {
+        let mut feed_mm_s = feed.speed(len_mm);
+        let mut accel_mm_s2 = if xyz_mm2 == 0.0 && delta_deg == 0.0 {
             s.retract_accel_mm_s2
         } else if delta_mm[E] != 0.0 {
             s.print_accel_mm_s2
         } else {
             s.travel_accel_mm_s2
         };
-        let mut unit = [0.0f32; AXES];
+        let mut unit = [0.0f32; AXES + 1];
         let mut unit_norm2 = 0.0;
-        for axis in 0..AXES {
-            let fraction = delta_mm[axis].abs() / len_mm;
+        let limits = |axis: usize| match axis {
+            AXES => (s.rotary.max_feed_deg_s, s.rotary.max_accel_deg_s2),
+            _ => (s.max_feed_mm_s[axis], s.max_accel_mm_s2[axis]),
+        };
+        for axis in 0..=AXES {
+            let d = if axis == AXES { delta_deg } else { delta_mm[axis] };
+            let fraction = d.abs() / len_mm;
             if fraction > 0.0 {
-                feed_mm_s = feed_mm_s.min(s.max_feed_mm_s[axis] / fraction);
-                accel_mm_s2 = accel_mm_s2.min(s.max_accel_mm_s2[axis] / fraction);
+                let (max_feed, max_accel) = limits(axis);
+                feed_mm_s = feed_mm_s.min(max_feed / fraction);
+                accel_mm_s2 = accel_mm_s2.min(max_accel / fraction);
             }
-            unit[axis] = delta_mm[axis];
-            unit_norm2 += delta_mm[axis] * delta_mm[axis];
+            unit[axis] = d;
+            unit_norm2 += d * d;
         }
         // Marlin's MAX_STEP_FREQUENCY: the motor with the most steps (`events` of them over
         // `len_mm`) steps at most MAX_STEP_HZ times a second, so no speed asks more of the
@@ -238,12 +305,15 @@ impl Planner {
         self.previous_unit = unit;
         self.previous_nominal_v2 = nominal_v2;
         self.position_steps = target_steps;
+        if rotary {
+            self.position_a_steps = target_a_steps;
+        }
         self.recalculate();
         true
     }
 
     /// The junction limit between the last planned move and one in direction `unit`.
-    fn junction_v2(&self, unit: &[f32; AXES], accel_mm_s2: f32, deviation_mm: f32) -> f32 {
+    fn junction_v2(&self, unit: &[f32; AXES + 1], accel_mm_s2: f32, deviation_mm: f32) -> f32 {
         let cos_theta = -self.previous_unit.iter().zip(unit).map(|(p, u)| p * u).sum::<f32>();
         if cos_theta > 0.999_999 {
             return 0.0; // a full reversal

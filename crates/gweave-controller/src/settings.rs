@@ -6,6 +6,7 @@
 //! mm, endstops at the minimum of X, Y and Z reading high when triggered, every DIR pin high for
 //! a positive move, Marlin's default limits and thermal protection.
 
+use crate::rotary::Rotary;
 use crate::{AXES, HEATERS};
 
 /// PID gains of one heater, in per-second units: `Kp` in duty per °C, `Ki` in duty per °C·s,
@@ -77,6 +78,9 @@ pub struct Settings {
     /// pulse pin, `M700 P<head>`), or 0: no inkjet, and `M700` is unknown. A build-time fact,
     /// not kept by `M500`; only a build with the feature `inkjet` fires them.
     pub inkjet_heads: u8,
+    /// The rotary axis A of a lathe-type printer ([`crate::rotary`]), or
+    /// [`Rotary::NONE`]. A build-time fact, not kept by `M500`.
+    pub rotary: Rotary,
 }
 
 impl Settings {
@@ -103,6 +107,7 @@ impl Settings {
         max_temp_c: [275.0, 275.0, 150.0],
         mixing_inputs: 0,
         inkjet_heads: 0,
+        rotary: Rotary::NONE,
     };
 }
 

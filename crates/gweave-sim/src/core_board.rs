@@ -11,8 +11,13 @@
 //! homing travel), the homing speeds, bumps and order, one or two hotends, the hotend PID gains
 //! and MAXTEMPs. What the core cannot take is refused by name rather than ignored: Klipper or
 //! constant-speed corners, classic jerk, endstops at the maximum, a PID-controlled bed, a
-//! thermistor other than Marlin's type 1, rotary or inkjet hardware, a mixing hotend of more
-//! inputs than the core drives or whose inputs' steps per mm differ from E's.
+//! thermistor other than Marlin's type 1, inkjet hardware, a mixing hotend of more inputs than
+//! the core drives or whose inputs' steps per mm differ from E's, a mixing hotend and a rotary
+//! axis together (A turns the E1 socket's motor).
+//!
+//! A rotary axis (`[rotary]`, `motion.steps.a_per_deg`) runs on the core's axis A
+//! (docs/firmware.md, "Rotary"), with its feed convention (`[rotary] feed`); the report gives
+//! its step pulses, the Marlin model's `steps.axes[4]`.
 //!
 //! A mixing hotend (`mixing_inputs`, 2 to 4) runs on the core's mixer (docs/firmware.md,
 //! "Mixing"): the report gives each input's step pulses, the Marlin model's `steps.mixing`.
@@ -20,6 +25,7 @@
 use std::cell::Cell;
 
 use gweave_controller::limits::MIX_INPUTS;
+use gweave_controller::rotary::{Rotary, RotaryFeed, A_MOTOR};
 use gweave_controller::twin::{Memory, OwnedTwin, Plant, Twin, TwinError};
 use gweave_controller::{Settings, StepQueue, E, HEATERS};
 use serde::Serialize;
@@ -61,9 +67,24 @@ pub fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported> {
     if [p.endstops.x, p.endstops.y, p.endstops.z].contains(&EndstopSide::Max) {
         return Err(Unsupported("endstop at an axis maximum (endstops)"));
     }
-    if p.rotary.is_some() || p.inkjet.is_some() || t.hotends.len() > 2 {
-        return Err(Unsupported("rotary, inkjet or third hotend"));
+    if p.inkjet.is_some() || t.hotends.len() > 2 {
+        return Err(Unsupported("inkjet or third hotend"));
     }
+    if p.rotary.is_some() && p.mixing_inputs > 0 {
+        return Err(Unsupported("rotary axis beside a mixing hotend: both need the E1 socket"));
+    }
+    let rotary = match (&p.rotary, m.steps.a_per_deg) {
+        (Some(r), Some(steps_per_deg)) => Rotary {
+            steps_per_deg: steps_per_deg as f32,
+            max_feed_deg_s: m.max_feed_mm_s.a as f32,
+            max_accel_deg_s2: m.max_accel_mm_s2.a as f32,
+            feed: match r.feed {
+                crate::profile::RotaryFeed::Nist => RotaryFeed::Nist,
+                crate::profile::RotaryFeed::Combined => RotaryFeed::Combined,
+            },
+        },
+        _ => Rotary::NONE,
+    };
     if p.mixing_inputs > MIX_INPUTS {
         return Err(Unsupported("mixing hotend of more than 4 inputs (mixing_inputs)"));
     }
@@ -106,6 +127,7 @@ pub fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported> {
             t.bed_protection.max_temp_c as f32,
         ],
         mixing_inputs: p.mixing_inputs as u8,
+        rotary,
         ..d
     })
 }
@@ -114,6 +136,12 @@ pub fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported> {
 fn mixing_steps<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> Vec<u64> {
     let inputs = usize::from(twin.controller.settings().mixing_inputs);
     twin.pulses[E..E + inputs.min(MIX_INPUTS)].to_vec()
+}
+
+/// The step pulses of X, Y, Z and E, and of the rotary axis if there is one.
+fn step_pulses<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> ([u64; 4], Option<u64>) {
+    let axes = core::array::from_fn(|a| twin.pulses[a]);
+    (axes, twin.controller.position_a().map(|_| twin.pulses[A_MOTOR]))
 }
 
 /// The profile's heaters behind the core's thermistor inputs, read by a 10-bit ADC.
@@ -172,6 +200,12 @@ pub struct CoreReport {
     /// Step pulses of each input of a mixing hotend, E0 first, both directions counted (the
     /// Marlin model's `steps.mixing`); empty without one.
     pub mixing_steps: Vec<u64>,
+    /// Step pulses of X, Y, Z and E (E0), both directions counted (the Marlin model's
+    /// `steps.axes[..4]`).
+    pub axis_steps: [u64; 4],
+    /// Step pulses of the rotary axis A, both directions counted (the Marlin model's
+    /// `steps.axes[4]`); `None` without one.
+    pub rotary_steps: Option<u64>,
     /// Whether the board halted (a thermal fault or `M112`).
     pub halted: bool,
     /// The board's `Error:` lines.
@@ -197,6 +231,8 @@ pub fn run_file(
         time_s: 0.0,
         end_steps: [0; 4],
         mixing_steps: Vec::new(),
+        axis_steps: [0; 4],
+        rotary_steps: None,
         halted: false,
         errors: Vec::new(),
     };
@@ -229,6 +265,7 @@ pub fn run_file(
     report.time_s = twin.now_ms() as f64 / 1000.0;
     report.end_steps = twin.steps_from_home();
     report.mixing_steps = mixing_steps(&twin);
+    (report.axis_steps, report.rotary_steps) = step_pulses(&twin);
     report.halted |= twin.controller.is_halted();
     report.errors = String::from_utf8_lossy(&replies)
         .lines()
@@ -287,6 +324,8 @@ impl CoreDevice {
             time_s: self.now_s(),
             end_steps: twin.steps_from_home(),
             mixing_steps: mixing_steps(twin),
+            axis_steps: step_pulses(twin).0,
+            rotary_steps: step_pulses(twin).1,
             halted: twin.controller.is_halted(),
             errors: Vec::new(),
         }

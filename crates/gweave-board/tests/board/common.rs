@@ -23,6 +23,16 @@ pub fn fault_elf() -> PathBuf {
     path
 }
 
+/// The image `make firmware` built as `firmware/out/NAME` (the environment variable `var`
+/// overrides the path).
+pub fn image(var: &str, name: &str) -> PathBuf {
+    let path = std::env::var_os(var)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../firmware/out").join(name));
+    assert!(path.exists(), "{} is missing: run `make firmware` first", path.display());
+    path
+}
+
 /// A board wired as `wiring`, run until the firmware said `start`.
 pub fn booted(wiring: Wiring) -> Board {
     let mut board = Board::new(&elf(), wiring).unwrap();

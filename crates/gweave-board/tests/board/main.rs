@@ -8,4 +8,5 @@ mod inkjet;
 mod mixing;
 mod motion;
 mod protocol;
+mod rotary;
 mod step_timing;

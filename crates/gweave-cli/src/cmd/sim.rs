@@ -162,6 +162,12 @@ fn print_core(out: &mut dyn Write, input: &Path, r: &CoreReport) -> io::Result<(
     writeln!(out, "  time            {}", hms(r.time_s))?;
     let [x, y, z, e] = r.end_steps;
     writeln!(out, "  end position    Count X {x} Y {y} Z {z} E {e}")?;
+    let [x, y, z, e] = r.axis_steps;
+    write!(out, "  step pulses     X {x} Y {y} Z {z} E {e}")?;
+    if let Some(a) = r.rotary_steps {
+        write!(out, " A {a}")?;
+    }
+    writeln!(out)?;
     if !r.mixing_steps.is_empty() {
         write!(out, "  mixing steps   ")?;
         for (k, steps) in r.mixing_steps.iter().enumerate() {

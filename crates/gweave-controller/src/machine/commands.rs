@@ -6,6 +6,8 @@ use super::homing::Homing;
 use super::{Controller, Wait};
 use crate::gcode::words::{Command, WordError, Words};
 use crate::math::round_i32;
+use crate::planner::Target;
+use crate::rotary::{Feed, A_MOTOR};
 use crate::serial::out::{line, Reply};
 use crate::{Io, AXES, AXIS_LETTERS, BED, E, HOTEND0, HOTEND1};
 
@@ -22,6 +24,10 @@ pub(super) enum Done {
 /// positive and below a million.
 const FEED_MM_MIN: (f32, f32) = (0.01, 100_000.0);
 const POSITION_MM: (f32, f32) = (-100_000.0, 100_000.0);
+/// A rotary axis' angle: ±2 778 turns (past it a float's step is above a hundredth of a degree;
+/// `rotary tube` re-declares its angle every hundred turns).
+#[cfg(feature = "rotary")]
+const ANGLE_DEG: (f32, f32) = (-1_000_000.0, 1_000_000.0);
 const TEMP_C: (f32, f32) = (0.0, 500.0);
 const SETTING: (f32, f32) = (0.000_001, 1_000_000.0);
 const GAIN: (f32, f32) = (0.0, 100_000.0);
@@ -86,13 +92,19 @@ impl Controller<'_> {
             }
             (b'G', 28) => {
                 self.wait = Wait::Home(Homing::new(w));
-                self.steppers_enabled = self.motors(0b1111);
+                self.steppers_enabled = self.motors(self.all_axes());
                 return Some(Done::Quiet);
             }
             // Millimetres, the only unit this machine has.
             (b'G', 21) => {}
             (b'G', 90) => self.relative = 0,
-            (b'G', 91) => self.relative = 0b1111,
+            (b'G', 91) => self.relative = 0b11111,
+            // Inverse time (F is one over each move's minutes) and back to units per minute: in
+            // a rotary build (the files that use it turn a mandrel; the base image has no room).
+            (b'G', 93) if cfg!(feature = "rotary") => {
+                self.inverse_time = Some(self.inverse_time.unwrap_or(0.0))
+            }
+            (b'G', 94) if cfg!(feature = "rotary") => self.inverse_time = None,
             (b'G', 92) => self.set_position(w),
             (b'M', 82) => self.relative &= !(1 << E),
             (b'M', 83) => self.relative |= 1 << E,
@@ -102,12 +114,12 @@ impl Controller<'_> {
                     self.heat.all_off();
                     self.fan_duty = 0;
                 }
-                let mask = self.motors(axes_given(w).unwrap_or(0b1111));
+                let mask = self.motors(axes_given(w).unwrap_or(self.all_axes()));
                 self.steppers_enabled &= !mask;
                 self.wait = Wait::Moves { then_dwell_ms: 0 };
                 return Some(Done::Quiet);
             }
-            (b'M', 17) => self.steppers_enabled |= self.motors(axes_given(w).unwrap_or(0b1111)),
+            (b'M', 17) => self.steppers_enabled |= self.motors(axes_given(w).unwrap_or(self.all_axes())),
             (b'M', 104 | 109) => {
                 let heater = if w.get(b'T') == Some(1.0) { HOTEND1 } else { HOTEND0 };
                 return Some(self.set_temperature(w, heater, code == 109, now));
@@ -218,10 +230,18 @@ impl Controller<'_> {
     /// `PREVENT_COLD_EXTRUSION` does: cold plastic does not flow, the extruder would grind the
     /// filament. The move goes without its E part, E counts as moved, and the host hears
     /// `echo: cold extrusion prevented`.
+    ///
+    /// On a rotary machine `A` turns the mandrel (degrees) and F follows `G93`/`G94` and the
+    /// machine's feed convention ([`crate::rotary`]).
     fn linear_move(&mut self, io: &mut impl Io, w: &Words) {
         if let Some(f) = w.get(b'F') {
-            self.feed_mm_s = f / 60.0;
+            // (`G93` exists in a rotary build only: elsewhere this is always the second arm.)
+            match &mut self.inverse_time {
+                Some(moves_per_s) if cfg!(feature = "rotary") => *moves_per_s = f / 60.0,
+                _ => self.feed_mm_s = f / 60.0,
+            }
         }
+        let (from_mm, from_deg) = (self.position_mm, self.position_a_deg);
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
             if let Some(v) = w.get(letter) {
                 let relative = self.relative & (1 << axis) != 0;
@@ -231,14 +251,55 @@ impl Controller<'_> {
         // Every axis, named on the line or not: a move too short to plan left its steps to
         // this one (MIN_STEPS_PER_SEGMENT), E's included even if this line has no E.
         let target: [i32; AXES] = core::array::from_fn(|axis| self.target_steps(axis));
+        let rotary = self.rotary();
+        if let (Some(v), true) = (w.get(b'A'), rotary) {
+            let relative = self.relative & (1 << AXES) != 0;
+            self.position_a_deg = if relative { self.position_a_deg + v } else { v };
+        }
+        let target_a = self.target_a_steps();
         let cold = self.heat.heaters[HOTEND0].temp_c < self.settings.extrude_min_c;
         if target[E] != self.planner.position_steps[E] && cold {
             self.planner.position_steps[E] = target[E];
             line(io, b"echo: cold extrusion prevented");
         }
-        self.steppers_enabled |= self.motors(0b1111);
+        self.steppers_enabled |= self.motors(self.all_axes());
+        // A `G93` move before any F (LinuxCNC refuses it) runs at the last `G94` feed.
+        let feed = match self.inverse_time {
+            Some(moves_per_s) if cfg!(feature = "rotary") && moves_per_s > 0.0 => {
+                Feed::InverseTime { moves_per_s }
+            }
+            _ => Feed::PerSecond(self.feed_mm_s),
+        };
         // Room was checked before the line was taken.
-        self.planner.add(target, self.feed_mm_s, 0, &self.settings, &mut self.mixer);
+        // On a rotary machine F is measured over the move as commanded ([`Target::commanded`]).
+        let commanded = rotary.then(|| {
+            let mut d = [0.0; AXES + 1];
+            for (axis, d) in d.iter_mut().enumerate().take(AXES) {
+                *d = self.position_mm[axis] - from_mm[axis];
+            }
+            d[AXES] = self.position_a_deg - from_deg;
+            d
+        });
+        let target = Target { steps: target, a_steps: target_a, feed, commanded };
+        self.planner.add_with_a(&target, 0, &self.settings, &mut self.mixer);
+    }
+
+    /// Every axis' bit (`1 << axis`), and the rotary axis' (`1 << AXES`, its motor's bit
+    /// [`A_MOTOR`] in [`Controller::motors`]) on a rotary machine.
+    pub(super) fn all_axes(&self) -> u8 {
+        const _: () = assert!(A_MOTOR == AXES, "the A bit of an axis mask is its motor's bit");
+        0b1111 | if self.rotary() { 1 << AXES } else { 0 }
+    }
+
+    /// Where the rotary axis' motor goes for the angle now, in steps, counted from where the
+    /// angle was last named as E's are ([`Controller::target_steps`]); the planner's position
+    /// without a rotary axis.
+    fn target_a_steps(&self) -> i32 {
+        if !self.rotary() {
+            return self.planner.position_a_steps;
+        }
+        let spd = self.settings.rotary.steps_per_deg;
+        self.anchor_a_steps + round_i32((self.position_a_deg - self.anchor_a_deg) * spd)
     }
 
     /// Where `axis`'s motor goes for the logical position now, in steps. E counts from where it
@@ -277,6 +338,12 @@ impl Controller<'_> {
                 self.anchor(axis);
             }
         }
+        if let (Some(v), true) = (w.get(b'A').or((!w.any()).then_some(0.0)), self.rotary()) {
+            // The mandrel stays; its angle is named (a program re-declares it modulo a turn).
+            self.position_a_deg = v;
+            self.anchor_a_deg = v;
+            self.anchor_a_steps = self.planner.position_a_steps;
+        }
     }
 
     /// `M104`/`M109`, `M140`/`M190`: `S` the target (and for the waits, `R` a target to reach
@@ -312,8 +379,12 @@ fn unknown(io: &mut impl Io, body: &[u8]) {
 }
 
 /// The axes named on the line (bits), if any.
+/// (`A`: bit `1 << AXES`, the rotary axis).
 fn axes_given(w: &Words) -> Option<u8> {
-    let mask = (0..AXES).filter(|&a| w.has(AXIS_LETTERS[a])).fold(0u8, |m, a| m | 1 << a);
+    let mut mask = (0..AXES).filter(|&a| w.has(AXIS_LETTERS[a])).fold(0u8, |m, a| m | 1 << a);
+    if w.has(b'A') {
+        mask |= 1 << AXES;
+    }
     (mask != 0).then_some(mask)
 }
 
@@ -334,8 +405,17 @@ fn set_axes(w: &Words, values: &mut [f32; AXES]) {
 fn out_of_range(w: &Words) -> Option<(u8, f32, (f32, f32))> {
     let Command { letter, code } = w.command;
     let ranges: &[(&[u8], (f32, f32))] = match (letter, code) {
-        (b'G', 0 | 1) => &[(b"XYZE", POSITION_MM), (b"F", FEED_MM_MIN)],
-        (b'G', 92) => &[(b"XYZE", POSITION_MM)],
+        (b'G', 0 | 1) => &[
+            (b"XYZE", POSITION_MM),
+            #[cfg(feature = "rotary")]
+            (b"A", ANGLE_DEG),
+            (b"F", FEED_MM_MIN),
+        ],
+        (b'G', 92) => &[
+            (b"XYZE", POSITION_MM),
+            #[cfg(feature = "rotary")]
+            (b"A", ANGLE_DEG),
+        ],
         (b'G', 4) => &[(b"P", DWELL_MS), (b"S", (0.0, 3600.0))],
         (b'M', 104 | 109 | 140 | 190) => &[(b"SR", TEMP_C), (b"T", (0.0, 1.0))],
         (b'M', 106) => &[(b"S", DUTY)],

@@ -80,7 +80,15 @@ pub struct Controller<'q> {
     /// `Controller::target_steps`). X, Y and Z are named at 0 by homing, where the steps are 0.
     anchor_e_mm: f32,
     anchor_e_steps: i32,
-    /// Axes whose coordinates are relative (`G91`, and `M83` for E).
+    /// The rotary axis' angle, degrees, and where it was last named (`G92 A`) with its motor's
+    /// steps then: counted from there as E is, so a program that re-declares the angle every
+    /// hundred turns (`rotary tube`) loses no fraction of a step.
+    position_a_deg: f32,
+    anchor_a_deg: f32,
+    anchor_a_steps: i32,
+    /// `G93`: F is one over each move's time in minutes, this many moves a second (F / 60).
+    inverse_time: Option<f32>,
+    /// Axes whose coordinates are relative (`G91`, and `M83` for E; bit `1 << AXES`: A).
     relative: u8,
     feed_mm_s: f32,
     fan_duty: u8,
@@ -116,6 +124,10 @@ impl<'q> Controller<'q> {
             position_mm: [0.0; AXES],
             anchor_e_mm: 0.0,
             anchor_e_steps: 0,
+            position_a_deg: 0.0,
+            anchor_a_deg: 0.0,
+            anchor_a_steps: 0,
+            inverse_time: None,
             relative: 0,
             // Marlin's power-on feed rate: 1500 mm/min.
             feed_mm_s: 25.0,
@@ -363,5 +375,15 @@ impl<'q> Controller<'q> {
     /// The same in steps (the planner's position).
     pub fn position_steps(&self) -> [i32; AXES] {
         self.planner.position_steps
+    }
+
+    /// The rotary axis' angle (degrees) and its planner position (steps); `None` without one.
+    pub fn position_a(&self) -> Option<(f32, i32)> {
+        self.rotary().then_some((self.position_a_deg, self.planner.position_a_steps))
+    }
+
+    /// Whether the machine has a rotary axis ([`crate::rotary::Rotary::fitted`]).
+    fn rotary(&self) -> bool {
+        self.settings.rotary.fitted(self.settings.mixing_inputs)
     }
 }

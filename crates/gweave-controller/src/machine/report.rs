@@ -28,7 +28,8 @@ pub(super) fn firmware(io: &mut impl Io) {
 impl Controller<'_> {
     /// `M114`: `X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0`, as Marlin's: the position
     /// where the queued moves end (mm), then the steps the motors have made (the stepper's
-    /// counts, behind the planned position while moves run).
+    /// counts, behind the planned position while moves run). On a rotary machine `A:` follows E
+    /// and Z, as the virtual printer prints it; A's count is the planner's.
     pub(super) fn report_position(&self, io: &mut impl Io) {
         let mut r = Reply::new();
         for (axis, (&letter, &mm)) in AXIS_LETTERS.iter().zip(&self.position_mm).enumerate() {
@@ -37,12 +38,19 @@ impl Controller<'_> {
             }
             r.s(&[letter, b':']).f2(mm);
         }
+        let a = self.position_a();
+        if let Some((deg, _)) = a {
+            r.s(b" A:").f2(deg);
+        }
         r.s(b" Count");
         // While nothing moves the motors are where the planner's moves end, in the coordinates
         // a `G92` of this very turn may just have named.
         let counted = if self.moving() { self.queue.counted_steps() } else { self.counted_when_idle() };
         for (&letter, &steps) in AXIS_LETTERS.iter().zip(&counted) {
             r.s(&[b' ', letter, b':']).i32(steps);
+        }
+        if let Some((_, steps)) = a {
+            r.s(b" A:").i32(steps);
         }
         r.send(io);
     }

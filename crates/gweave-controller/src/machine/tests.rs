@@ -549,10 +549,19 @@ fn the_core_fits_the_ram_budget() {
     // An inkjet build's refill times (`M700`) come on top too, and their alignment.
     #[cfg(feature = "inkjet")]
     let mixing = mixing + core::mem::size_of::<crate::inkjet::Heads>() + 4;
+    // So does the rotary axis': its settings, the angle and its anchor, G93's F, the planner's
+    // A position and A's place in the junction direction, and their alignment (4 bytes: the
+    // controller's fields padded anew once M114's step counts joined them).
+    let mixing = mixing
+        + core::mem::size_of::<crate::rotary::Rotary>()
+        + 3 * 4
+        + core::mem::size_of::<Option<f32>>()
+        + 2 * 4
+        + 4;
     let size = core::mem::size_of::<Controller>() + core::mem::size_of::<StepQueue>();
     assert!(
         size + core::mem::size_of::<Stepper>() <= 2048 + mixing,
-        "{size} bytes, {mixing} of them mixing, stepper {}",
+        "{size} bytes, {mixing} of them mixing, inkjet and rotary, stepper {}",
         core::mem::size_of::<Stepper>()
     );
 }

@@ -249,7 +249,8 @@ impl Machine {
 
     /// Reads the F of the moves to come as the rotary program's header declares them
     /// (`gweave::rotary::cylinder::RotaryConfig::from_file_header`): a NIST or combined feed
-    /// with the rotary axis A in degrees; inverse time is not read (see `rotary_feed.rs`).
+    /// with the rotary axis A in degrees, or inverse time between `G93` and `G94` (see
+    /// `rotary_feed.rs`).
     pub fn declare_rotary(&mut self, machine: gweave::rotary::cylinder::RotaryConfig) {
         self.declared_feed = rotary_feed::DeclaredFeed::new(machine);
     }

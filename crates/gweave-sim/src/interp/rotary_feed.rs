@@ -13,7 +13,10 @@
 //! the one its declared convention gives (`RotaryConfig::time_from_feed`, the inverse of what
 //! the writer computed), and its F is rewritten so that the model's own rule takes that time.
 //!
-//! Inverse time (`G93`) is not read: a file declaring it keeps the model's reading.
+//! Inverse time: between a `G93` and a `G94` each move takes `1 / F` minutes, whatever the
+//! header declares (`rotary --feed-convention inverse-time` writes `G93` at the start and `G94`
+//! at the end; the gweave firmware's rotary image reads it the same way). A file that declares
+//! inverse time but moves outside `G93` keeps the model's reading there.
 
 use gweave::gcode::axes::{A, E, X, Y, Z};
 use gweave::gcode::effect::{Move, Path};
@@ -29,13 +32,15 @@ const MIN_STEPS_PER_SEGMENT: f64 = 6.0;
 #[derive(Debug, Clone)]
 pub(super) struct DeclaredFeed {
     machine: RotaryConfig,
+    /// Between `G93` and `G94`: F is one over the move's minutes.
+    pub(super) inverse_time: bool,
     /// Position indices of the axial, rotary and radial words.
     axes: [usize; 3],
 }
 
 impl DeclaredFeed {
-    /// The declared convention of `machine`, if the simulator can honour it: a per-minute
-    /// convention with the rotary axis A in degrees (the simulator's only rotary axis).
+    /// The declared convention of `machine`, if the simulator can honour it: the rotary axis A
+    /// in degrees (the simulator's only rotary axis).
     pub(super) fn new(machine: RotaryConfig) -> Option<DeclaredFeed> {
         let index = |letter: char| match letter {
             'X' => Some(X),
@@ -45,10 +50,8 @@ impl DeclaredFeed {
             _ => None,
         };
         let axes = [index(machine.axial_axis)?, index(machine.rotary_axis)?, index(machine.radial_axis)?];
-        let honoured = machine.feed_convention != FeedConvention::InverseTime
-            && machine.rotary_unit == RotaryUnit::Degrees
-            && axes[1] == A;
-        honoured.then_some(DeclaredFeed { machine, axes })
+        let honoured = machine.rotary_unit == RotaryUnit::Degrees && axes[1] == A;
+        honoured.then_some(DeclaredFeed { machine, inverse_time: false, axes })
     }
 
     /// The F (mm/min) that makes the model take the time the declared convention gives a
@@ -64,7 +67,13 @@ impl DeclaredFeed {
             radial_mm: d(self.axes[2]),
             e_mm: d(E),
         };
-        let t_s = self.machine.time_from_feed(&delta, m.feed_mm_min)?;
+        let t_s = if self.inverse_time {
+            (m.feed_mm_min > 0.0).then(|| 60.0 / m.feed_mm_min)?
+        } else if self.machine.feed_convention == FeedConvention::InverseTime {
+            return None;
+        } else {
+            self.machine.time_from_feed(&delta, m.feed_mm_min)?
+        };
         let len = model_len(m, steps, marlin);
         (len > 0.0).then(|| 60.0 * len / t_s)
     }
@@ -135,10 +144,20 @@ mod tests {
     }
 
     #[test]
-    fn inverse_time_and_a_rotary_axis_in_mm_are_left_to_the_model() {
+    fn between_g93_and_g94_a_move_takes_one_over_f_minutes() {
+        // G93 F600: 0.1 s; measured along A by Marlin's rule (3 X steps), 5.1 degrees in it.
         let mut machine = RotaryConfig::new(20.0);
         machine.feed_convention = FeedConvention::InverseTime;
-        assert!(DeclaredFeed::new(machine).is_none());
+        let mut declared = DeclaredFeed::new(machine).unwrap();
+        let steps = StepsPerUnit { x: 80.0, ..StepsPerUnit::default() };
+        assert_eq!(declared.model_feed_mm_min(&helix_step(600.0), &steps, true), None, "G94: the model's");
+        declared.inverse_time = true;
+        let f = declared.model_feed_mm_min(&helix_step(600.0), &steps, true).unwrap();
+        assert!((f - 60.0 * 5.1 / 0.1).abs() < 1e-6, "F{f}");
+    }
+
+    #[test]
+    fn a_rotary_axis_in_mm_is_left_to_the_model() {
         let mut machine = RotaryConfig::new(20.0);
         machine.rotary_axis = 'Y';
         machine.rotary_unit = RotaryUnit::Mm;

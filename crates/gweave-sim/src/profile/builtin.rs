@@ -50,6 +50,7 @@ pub const BUILTIN: &[BuiltinProfile] = &[
     example!("seed-controller", "seed_ntc.csv"),
     example!("gweave-ramps"),
     example!("gweave-mixing"),
+    example!("gweave-rotary"),
 ];
 
 /// The built-in profile called `name`.

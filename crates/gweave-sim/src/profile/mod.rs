@@ -253,11 +253,26 @@ pub struct Rotary {
     pub cylinder_radius_mm: f64,
     /// The axis turns without end (no out-of-range warnings for A).
     pub continuous: bool,
+    /// What F means on a `G94` move that turns A to the machine's firmware, when it is gweave's
+    /// controller core (`[firmware] kind = "gweave"`, the firmware's `[rotary] feed`): `nist`
+    /// or `combined`. The Marlin and Klipper models read the convention a rotary program's
+    /// header declares instead.
+    pub feed: RotaryFeed,
+}
+
+/// The gweave firmware's reading of F on a move that turns A (`gweave_controller::rotary`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RotaryFeed {
+    /// Along X, Y and Z when any of them moves, else in degrees per minute.
+    Nist,
+    /// Along `sqrt(dX² + dY² + dZ² + dA²)`.
+    Combined,
 }
 
 impl Default for Rotary {
     fn default() -> Self {
-        Self { cylinder_radius_mm: 10.0, continuous: true }
+        Self { cylinder_radius_mm: 10.0, continuous: true, feed: RotaryFeed::Nist }
     }
 }
 
