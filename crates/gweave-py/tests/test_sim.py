@@ -70,3 +70,19 @@ def test_check_against_a_machine_profiles_bed(tmp_path: Path) -> None:
     mk3 = gweave.check(g, machine="prusa-mk3")
     assert (mk3["warnings"], mk3["bed"]["y_mm"]) == (0, [-4.0, 212.5])
     assert gweave.check(g, machine=MACHINES / "marlin-ramps.toml")["warnings"] == 2
+
+
+def test_sim_stops_at_the_seeds_m0(tmp_path: Path) -> None:
+    # `gweave sim` stopped at the controller seed's M0 (`[firmware] m0 = "seed"`), `gweave.sim`
+    # ran on past it: the loop was written in both front ends. X500 is past the bed (out of
+    # bounds) and only Marlin's M0 reaches it.
+    job = tmp_path / "job.gcode"
+    job.write_text("G28\nG1 X50 F3000\nM0\nG1 X500\n")
+    marlin = tmp_path / "marlin.toml"
+    marlin.write_text('[firmware]\nm0 = "marlin"\n')
+    for profile, runs_on in [(MACHINES / "seed-controller.toml", False), (marlin, True)]:
+        r = gweave.sim(job, machine=profile)
+        out_of_bounds = any(w["kind"] == "out_of_bounds" for w in r["warnings"])
+        assert out_of_bounds == runs_on, profile
+        if not runs_on:
+            assert r["position"][0] == 50.0, r["position"]
