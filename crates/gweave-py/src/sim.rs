@@ -3,8 +3,6 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
-use gweave::gcode::container;
-use gweave::gcode::flavour::read_firmware;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -76,10 +74,10 @@ pub(crate) fn estimate_json(
 ) -> PyResult<String> {
     let profile = machine_profile(machine)?;
     let report = interruptible(py, || {
-        let firmware = read_firmware(&path, None).map_err(|e| os_error(&path, &e))?;
-        let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
-        gweave_sim::estimate_report(file, &profile, firmware, steps)
-            .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
+        gweave_sim::estimate_file(&path, &profile, steps, gweave::pass::Quiet).map_err(|e| match e {
+            gweave_sim::EstimateFileError::Read { path, source } => os_error(&path, &source),
+            e => PyValueError::new_err(e.to_string()),
+        })
     })??;
     to_json(&report)
 }

@@ -2,6 +2,8 @@
 
 from pathlib import Path
 
+import pytest
+
 import gweave
 
 MACHINES = Path(__file__).resolve().parents[3] / "examples" / "machines"
@@ -86,3 +88,13 @@ def test_sim_stops_at_the_seeds_m0(tmp_path: Path) -> None:
         assert out_of_bounds == runs_on, profile
         if not runs_on:
             assert r["position"][0] == 0.0, r["position"]  # the seed's M0 homes the axes
+
+
+def test_estimate_names_the_file_and_line_as_the_cli(tmp_path: Path) -> None:
+    # The estimate was set up in both front ends and its refusals drifted: Python said
+    # `bad.gcode: line 3: ...` where the CLI says `bad.gcode:3: ...`.
+    bad = tmp_path / "bad.gcode"
+    bad.write_text("G28\nG1 X1 F600\nM204 S-1\nG1 X5\n")
+    with pytest.raises(ValueError) as refused:
+        gweave.estimate(bad)
+    assert str(refused.value) == f"{bad}:3: M204 S must be positive and finite, got -1"

@@ -52,8 +52,8 @@ pub use link::serial::{frame_line, Device, Protocol, ProtocolConfig, DEFAULT_KEE
 pub use link::tcp::TcpEndpoint;
 pub use link::transport::{serve, Endpoint, Event as EndpointEvent, ServeOptions, ServeSummary};
 pub use motion::estimate::{
-    estimate, estimate_report, estimate_time, Estimate, EstimateError, EstimateReport, Estimator, HugeArcs,
-    Malformed, MAX_ARC_CHORDS,
+    estimate, estimate_file, estimate_report, estimate_time, Estimate, EstimateError, EstimateFileError,
+    EstimateReport, Estimator, HugeArcs, Malformed, MAX_ARC_CHORDS,
 };
 pub use motion::kinematics::{Move, Pos};
 pub use motion::limits::{
