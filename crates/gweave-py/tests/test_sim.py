@@ -98,3 +98,15 @@ def test_estimate_names_the_file_and_line_as_the_cli(tmp_path: Path) -> None:
     with pytest.raises(ValueError) as refused:
         gweave.estimate(bad)
     assert str(refused.value) == f"{bad}:3: M204 S must be positive and finite, got -1"
+
+
+def test_sim_runs_a_core_profile_on_the_core_as_the_cli(tmp_path: Path) -> None:
+    # `gweave sim` ran a `[firmware] kind = "gweave"` profile on the controller core; `gweave.sim`
+    # ran it on the Marlin model. G1 X10 after homing is 800 steps at the profile's 80 steps/mm.
+    job = tmp_path / "job.gcode"
+    job.write_text("G28\nG1 X10 F600\n")
+    r = gweave.sim(job, machine=MACHINES / "gweave-ramps.toml")
+    assert r["lines"] == 2 and not r["halted"], r
+    assert r["end_steps"][0] == 800, r
+    with pytest.raises(ValueError, match=r"^fault is for the Marlin model"):
+        gweave.sim(job, machine=MACHINES / "gweave-ramps.toml", fault=["hotend-cartridge-off@1s"])
