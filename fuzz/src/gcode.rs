@@ -8,7 +8,7 @@ use std::path::Path;
 use gweave::gcode::flavour::flavour_in;
 use gweave::gcode::reader::{ChunkReader, LineReader, RawLine};
 use gweave::gcode::state::StateOptions;
-use gweave::pass::{drive_reader, keep, Ctx, Identity, Pass, Quiet, Step, Strictness};
+use gweave::pass::{drive_reader, keep, Ctx, Identity, Pass, Reading, Step, Strictness};
 
 /// Runs `bytes` through the reader, lexer and state three ways, and checks each copy. An input
 /// may be refused (an encoding the reader does not read), but then the same way however it is
@@ -46,18 +46,12 @@ pub fn check(bytes: &[u8]) {
 /// `None` if reading failed.
 fn copy(input: impl Read, options: &StateOptions, pass: &mut impl Pass) -> Option<Vec<u8>> {
     let mut out = Vec::new();
-    drive_reader(
-        input,
-        Path::new("fuzz"),
-        None,
-        options.clone(),
-        Strictness::Lenient,
-        &mut Quiet,
-        pass,
-        &mut out,
-    )
-    .ok()
-    .map(|_| out)
+    let reading = Reading {
+        options: options.clone(),
+        strictness: Strictness::Lenient,
+        ..Reading::new(Path::new("fuzz"))
+    };
+    drive_reader(input, reading, pass, &mut out).ok().map(|_| out)
 }
 
 /// Copies every line, as [`Identity`] does, but asks for the words of plain moves too, so that the

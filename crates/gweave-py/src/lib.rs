@@ -16,25 +16,11 @@ mod transform;
 
 use args::os_error;
 
-/// The engine's error as a Python exception: `OSError` for the file system's, `ValueError` else.
-/// The refusals that name a flag say the keyword a Python caller passes instead.
+/// The engine's error as a Python exception: `OSError` for the file system's, `ValueError` else,
+/// in the engine's words (which name no front end's flags).
 fn err(e: gweave::Error) -> PyErr {
-    use gweave::Error::{BackupSlotsFull, Io, ReadOnly, WouldOverwriteInput};
     match &e {
-        Io { path, source } => os_error(path, source),
-        WouldOverwriteInput { path } => PyValueError::new_err(format!(
-            "refusing to overwrite the input {} (pass in_place=True to replace it)",
-            path.display()
-        )),
-        ReadOnly { path } => PyValueError::new_err(format!(
-            "{} is read-only: in_place=True would replace it (pass force=True to replace it anyway)",
-            path.display()
-        )),
-        BackupSlotsFull { path, slots } => PyValueError::new_err(format!(
-            "{} exists and is not a copy of the input, and {}.1 .. .{slots} are all taken: move old backups away or pass backup=False",
-            path.display(),
-            path.display(),
-        )),
+        gweave::Error::Io { path, source } => os_error(path, source),
         _ => PyValueError::new_err(e.to_string()),
     }
 }

@@ -3,10 +3,7 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
-use gweave::gcode::container;
-use gweave::gcode::flavour::read_firmware;
-use gweave::gcode::reader::{LineReader, Part};
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use crate::args::os_error;
@@ -44,32 +41,25 @@ pub(crate) fn sim_json(
     machine: Option<PathBuf>,
     fault: Vec<String>,
 ) -> PyResult<String> {
-    let mut profile = machine_profile(machine)?;
-    for spec in &fault {
-        let spec = spec.parse::<gweave_sim::FaultSpec>();
-        profile.faults.push(spec.map_err(|e| PyValueError::new_err(format!("fault: {e}")))?);
-    }
-    let report = interruptible(py, || {
-        let mut m = gweave_sim::Machine::new(profile).map_err(sim_err)?;
-        m.read_as(read_firmware(&path, None).map_err(|e| os_error(&path, &e))?);
-        let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
-        let mut reader = LineReader::new(file);
-        let mut out = |_t: f64, _l: &str| {};
-        while let Some(line) = reader.next_line().map_err(|e| PyOSError::new_err(e.to_string()))? {
-            match line.part {
-                Part::Whole => {
-                    if m.execute(line.bytes, &mut out) == gweave_sim::Outcome::Halted {
-                        break;
-                    }
-                }
-                Part::Piece => {}
-                Part::Last { .. } => m.skip_long_line(),
-            }
+    let faults = fault.iter().map(|spec| spec.parse::<gweave_sim::FaultSpec>());
+    let options = gweave_sim::SimOptions {
+        faults: faults.collect::<Result<_, _>>().map_err(|e| PyValueError::new_err(format!("fault: {e}")))?,
+        record_speed: false,
+    };
+    let profile = machine_profile(machine)?;
+    interruptible(py, || {
+        let simulation = gweave_sim::simulate(&path, profile, &options, &mut gweave::pass::Quiet).map_err(
+            |e| match e {
+                gweave_sim::SimJobError::Read { path, source } => os_error(&path, &source),
+                e => sim_err(e),
+            },
+        )?;
+        // The report `gweave sim --json` prints: the Marlin model's, or the controller core's.
+        match simulation {
+            gweave_sim::Simulation::Marlin { report, .. } => to_json(&report),
+            gweave_sim::Simulation::Core(report) => to_json(&report),
         }
-        m.finish(&mut out);
-        Ok::<_, PyErr>(m.report())
-    })??;
-    to_json(&report)
+    })?
 }
 
 /// Estimates a file's print time with the virtual printer's planner alone, on three threads; the
@@ -84,10 +74,10 @@ pub(crate) fn estimate_json(
 ) -> PyResult<String> {
     let profile = machine_profile(machine)?;
     let report = interruptible(py, || {
-        let firmware = read_firmware(&path, None).map_err(|e| os_error(&path, &e))?;
-        let file = container::open(&path).map_err(|e| os_error(&path, &e))?;
-        gweave_sim::estimate_report(file, &profile, firmware, steps)
-            .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
+        gweave_sim::estimate_file(&path, &profile, steps, gweave::pass::Quiet).map_err(|e| match e {
+            gweave_sim::EstimateFileError::Read { path, source } => os_error(&path, &source),
+            e => PyValueError::new_err(e.to_string()),
+        })
     })??;
     to_json(&report)
 }

@@ -2,6 +2,8 @@
 
 from pathlib import Path
 
+import pytest
+
 import gweave
 
 MACHINES = Path(__file__).resolve().parents[3] / "examples" / "machines"
@@ -70,3 +72,41 @@ def test_check_against_a_machine_profiles_bed(tmp_path: Path) -> None:
     mk3 = gweave.check(g, machine="prusa-mk3")
     assert (mk3["warnings"], mk3["bed"]["y_mm"]) == (0, [-4.0, 212.5])
     assert gweave.check(g, machine=MACHINES / "marlin-ramps.toml")["warnings"] == 2
+
+
+def test_sim_stops_at_the_seeds_m0(tmp_path: Path) -> None:
+    # `gweave sim` stopped at the controller seed's M0 (`[firmware] m0 = "seed"`), `gweave.sim`
+    # ran on past it: the loop was written in both front ends. X500 is past the bed (out of
+    # bounds) and only Marlin's M0 reaches it.
+    job = tmp_path / "job.gcode"
+    job.write_text("G28\nG1 X50 F3000\nM0\nG1 X500\n")
+    marlin = tmp_path / "marlin.toml"
+    marlin.write_text('[firmware]\nm0 = "marlin"\n')
+    for profile, runs_on in [(MACHINES / "seed-controller.toml", False), (marlin, True)]:
+        r = gweave.sim(job, machine=profile)
+        out_of_bounds = any(w["kind"] == "out_of_bounds" for w in r["warnings"])
+        assert out_of_bounds == runs_on, profile
+        if not runs_on:
+            assert r["position"][0] == 0.0, r["position"]  # the seed's M0 homes the axes
+
+
+def test_estimate_names_the_file_and_line_as_the_cli(tmp_path: Path) -> None:
+    # The estimate was set up in both front ends and its refusals drifted: Python said
+    # `bad.gcode: line 3: ...` where the CLI says `bad.gcode:3: ...`.
+    bad = tmp_path / "bad.gcode"
+    bad.write_text("G28\nG1 X1 F600\nM204 S-1\nG1 X5\n")
+    with pytest.raises(ValueError) as refused:
+        gweave.estimate(bad)
+    assert str(refused.value) == f"{bad}:3: M204 S must be positive and finite, got -1"
+
+
+def test_sim_runs_a_core_profile_on_the_core_as_the_cli(tmp_path: Path) -> None:
+    # `gweave sim` ran a `[firmware] kind = "gweave"` profile on the controller core; `gweave.sim`
+    # ran it on the Marlin model. G1 X10 after homing is 800 steps at the profile's 80 steps/mm.
+    job = tmp_path / "job.gcode"
+    job.write_text("G28\nG1 X10 F600\n")
+    r = gweave.sim(job, machine=MACHINES / "gweave-ramps.toml")
+    assert r["lines"] == 2 and not r["halted"], r
+    assert r["end_steps"][0] == 800, r
+    with pytest.raises(ValueError, match=r"^fault is for the Marlin model"):
+        gweave.sim(job, machine=MACHINES / "gweave-ramps.toml", fault=["hotend-cartridge-off@1s"])

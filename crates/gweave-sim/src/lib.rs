@@ -14,6 +14,7 @@
 //! - `profile/`: the [`MachineProfile`] TOML and its `[firmware]` build options;
 //! - [`core_board`]: `[firmware] kind = "gweave"`, the board running gweave's own controller
 //!   core (the firmware of the real board) instead of the Marlin model;
+//! - [`simulate`] (`job.rs`): a whole file through the one or the other, for every front end;
 //! - [`finish`]: what a front end does around a transform's output; [`plot`]: the charts.
 //!
 //! ```
@@ -31,6 +32,7 @@ pub mod core_board;
 pub mod finish;
 mod inkjet;
 mod interp;
+mod job;
 mod link;
 mod motion;
 pub mod plot;
@@ -44,13 +46,14 @@ pub use interp::{
     help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Param, Queue, SimError, SimReport,
     SimTimes, SimWarning, WarningKind, COMMANDS, STOPPED_LINE, UNKNOWN_KINDS, UNKNOWN_OTHERS,
 };
+pub use job::{simulate, SimJobError, SimOptions, Simulation};
 pub use link::pty::PtyEndpoint;
 pub use link::serial::{frame_line, Device, Protocol, ProtocolConfig, DEFAULT_KEEPALIVE_S};
 pub use link::tcp::TcpEndpoint;
 pub use link::transport::{serve, Endpoint, Event as EndpointEvent, ServeOptions, ServeSummary};
 pub use motion::estimate::{
-    estimate, estimate_report, estimate_time, Estimate, EstimateError, EstimateReport, Estimator, HugeArcs,
-    Malformed, MAX_ARC_CHORDS,
+    estimate, estimate_file, estimate_report, estimate_time, Estimate, EstimateError, EstimateFileError,
+    EstimateReport, Estimator, HugeArcs, Malformed, MAX_ARC_CHORDS,
 };
 pub use motion::kinematics::{Move, Pos};
 pub use motion::limits::{

@@ -402,7 +402,7 @@ fn is_griffin(letter: u8, number: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pass::{drive_reader, Quiet, Strictness};
+    use crate::pass::{drive_reader, Reading, Strictness};
     use std::io;
     use std::path::Path;
 
@@ -412,18 +412,8 @@ mod tests {
 
     fn findings_with(text: &str, options: CheckOptions) -> Vec<(u64, String)> {
         let mut pass = CheckPass::new(options);
-        let (options, strict) = (Default::default(), Strictness::Lenient);
-        drive_reader(
-            text.as_bytes(),
-            Path::new("t.gcode"),
-            None,
-            options,
-            strict,
-            &mut Quiet,
-            &mut pass,
-            &mut io::sink(),
-        )
-        .unwrap();
+        let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t.gcode")) };
+        drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
         pass.report.findings.iter().map(|f| (f.line, f.diagnostic.finding.to_string())).collect()
     }
 
@@ -446,17 +436,8 @@ mod tests {
         text.push_str(";TYPE:Skirt/Brim\nG1 X230 Y5 E3000\nG1 X231 Y5 E3001\nG13\nG13\n");
         let options = CheckOptions { bed: Some("200,200,200".parse().unwrap()), ..Default::default() };
         let mut pass = CheckPass::new(options);
-        drive_reader(
-            text.as_bytes(),
-            Path::new("t.gcode"),
-            None,
-            Default::default(),
-            Strictness::Lenient,
-            &mut Quiet,
-            &mut pass,
-            &mut io::sink(),
-        )
-        .unwrap();
+        let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t.gcode")) };
+        drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
         let groups: Vec<_> = pass
             .report
             .groups
@@ -494,17 +475,9 @@ mod tests {
         assert_eq!(found, [(3, message(256)), (4, message(4294967295))]);
         let mut pass = crate::stats::StatsPass::new(None);
         let text = "T2\nG1 X1 E1 F600\nT4294967295\nG1 X2 E2\n";
-        let state = crate::pass::drive_reader(
-            text.as_bytes(),
-            Path::new("t.gcode"),
-            None,
-            Default::default(),
-            Strictness::Strict,
-            &mut Quiet,
-            &mut pass,
-            &mut io::sink(),
-        )
-        .unwrap();
+        let state =
+            drive_reader(text.as_bytes(), Reading::new(Path::new("t.gcode")), &mut pass, &mut io::sink())
+                .unwrap();
         assert_eq!(state.tool, 2);
         let stats = pass.into_stats(&state);
         assert_eq!(stats.filament.iter().map(|f| f.extruded_mm).collect::<Vec<_>>(), [0.0, 0.0, 2.0]);

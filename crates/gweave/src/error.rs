@@ -47,23 +47,25 @@ pub enum Error {
         source: Box<dyn std::error::Error + Send + Sync>,
     },
 
-    /// An output that is the input itself, without `--in-place`.
-    #[error("refusing to overwrite the input {} (use --in-place to replace it)", path.display())]
+    // The messages below name the engine's options ([`Target::InPlace`](crate::gcode::writer::Target::InPlace) and its fields) in
+    // words, not by a front end's spelling: the CLI's `--in-place` is Python's `in_place=True`.
+    /// An output that is the input itself, not [`Target::InPlace`](crate::gcode::writer::Target::InPlace).
+    #[error("refusing to overwrite the input {}: the output is the input (replace it in place instead)", path.display())]
     WouldOverwriteInput {
         /// The input.
         path: PathBuf,
     },
 
-    /// A read-only input for `--in-place`, without `--force`.
-    #[error("{} is read-only: --in-place would replace it (add --force to replace it anyway)", path.display())]
+    /// A read-only input for [`Target::InPlace`](crate::gcode::writer::Target::InPlace), without `force`.
+    #[error("{} is read-only: it is replaced in place only when forced", path.display())]
     ReadOnly {
         /// The input.
         path: PathBuf,
     },
 
-    /// `--in-place` found no free backup name for the input.
+    /// [`Target::InPlace`](crate::gcode::writer::Target::InPlace) found no free backup name for the input.
     #[error(
-        "{} exists and is not a copy of the input, and {}.1 .. .{} are all taken: move old backups away or use --no-backup",
+        "{} exists and is not a copy of the input, and {}.1 .. .{} are all taken: move old backups away or replace the input without a backup",
         path.display(),
         path.display(),
         slots
@@ -75,8 +77,8 @@ pub enum Error {
         slots: u32,
     },
 
-    /// `--in-place` with standard input.
-    #[error("--in-place needs an input file")]
+    /// [`Target::InPlace`](crate::gcode::writer::Target::InPlace) with standard input.
+    #[error("replacing in place needs an input file")]
     InPlaceWithoutInput,
 
     /// A configuration file is invalid.

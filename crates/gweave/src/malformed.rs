@@ -8,16 +8,13 @@
 //! `estimate` do. The driver (`pass`) sits above this module and uses its counts.
 //!
 //! ```
-//! use gweave::pass::{drive_reader, Counting, Quiet, Strictness};
+//! use gweave::pass::{drive_reader, Counting, Reading, Strictness};
 //! use gweave::stats::StatsPass;
 //!
 //! let text = "G1 X1 F600\nG1 X1..2\nG1 X3\n";
 //! let mut pass = Counting::new(StatsPass::new(None));
-//! let path = std::path::Path::new("part.gcode");
-//! let options = Default::default();
-//! let lenient = Strictness::Lenient;
-//! drive_reader(text.as_bytes(), path, None, options, lenient, &mut Quiet, &mut pass, &mut std::io::sink())
-//!     .unwrap();
+//! let reading = Reading { strictness: Strictness::Lenient, ..Reading::new("part.gcode".as_ref()) };
+//! drive_reader(text.as_bytes(), reading, &mut pass, &mut std::io::sink()).unwrap();
 //! assert_eq!((pass.malformed.malformed_lines, pass.malformed.first_malformed_line), (1, Some(2)));
 //! ```
 

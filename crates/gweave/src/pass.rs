@@ -211,22 +211,50 @@ pub trait Progress {
 pub struct Quiet;
 impl Progress for Quiet {}
 
+/// One input read through a pass: what names it in errors, how its lines are read, and who
+/// hears of the progress. [`Reading::new`] is a strict reading with the default options, no
+/// output and no progress; the fields are public to change what differs:
+/// `Reading { strictness: Strictness::Lenient, ..Reading::new(path) }`.
+pub struct Reading<'a> {
+    /// The input's name in errors (`<path>:<line>:<column>: ...`).
+    pub path: &'a Path,
+    /// The name write errors show; `<path> (output)` without one.
+    pub output: Option<&'a Path>,
+    /// The machine state's options, fixed for the file (its firmware, ...).
+    pub options: StateOptions,
+    /// Whether a malformed line stops the reading or is counted and passed over.
+    pub strictness: Strictness,
+    /// Told how far the reading is; none: nobody.
+    pub progress: Option<&'a mut dyn Progress>,
+}
+
+impl<'a> Reading<'a> {
+    /// `path` read strictly, with the default state options, no output and no progress.
+    pub fn new(path: &'a Path) -> Reading<'a> {
+        Reading {
+            path,
+            output: None,
+            options: StateOptions::default(),
+            strictness: Strictness::Strict,
+            progress: None,
+        }
+    }
+}
+
 /// The loop itself, over any reader (files, in-memory text in tests and Python). Generic over
 /// the pass, so that a pass known at the call (`stats`) has its per-line code inlined into the
-/// loop; `&mut dyn Pass` works as well. Write errors name `output` (the file being written),
-/// or `<path> (output)` without one.
-#[allow(clippy::too_many_arguments)]
+/// loop; `&mut dyn Pass` works as well. Outside this crate, [`crate::run::Run`] opens the file,
+/// resolves its firmware and calls this.
 pub fn drive_reader<P: Pass + ?Sized>(
     input: impl Read,
-    path: &Path,
-    output: Option<&Path>,
-    options: StateOptions,
-    strictness: Strictness,
-    progress: &mut dyn Progress,
+    reading: Reading<'_>,
     pass: &mut P,
     out: &mut dyn Write,
 ) -> Result<State> {
+    let Reading { path, output, options, strictness, progress } = reading;
     let out_name = output.map_or_else(|| output_name(path), Path::to_path_buf);
+    let mut quiet = Quiet;
+    let progress = progress.unwrap_or(&mut quiet);
     let driver = Driver { path, out_name, strictness, progress, next_report: 0 };
     let state = State::new(options);
     if pass.reads_words() || state.reads_words() {
@@ -478,16 +506,8 @@ mod tests {
 
     fn try_identity(input: &[u8]) -> Result<(Vec<u8>, CopyReport)> {
         let (mut out, mut pass) = (Vec::new(), Identity::default());
-        drive_reader(
-            input,
-            Path::new("t"),
-            None,
-            StateOptions::default(),
-            Strictness::Lenient,
-            &mut Quiet,
-            &mut pass,
-            &mut out,
-        )?;
+        let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t")) };
+        drive_reader(input, reading, &mut pass, &mut out)?;
         Ok((out, pass.report))
     }
 
@@ -507,17 +527,9 @@ mod tests {
     #[test]
     fn strict_runs_name_line_and_column() {
         let mut out = Vec::new();
-        let err = drive_reader(
-            &b"G1 X1\nG1 Y2..3\n"[..],
-            Path::new("part.gcode"),
-            None,
-            StateOptions::default(),
-            Strictness::Strict,
-            &mut Quiet,
-            &mut Identity::default(),
-            &mut out,
-        )
-        .unwrap_err();
+        let reading = Reading::new(Path::new("part.gcode"));
+        let err =
+            drive_reader(&b"G1 X1\nG1 Y2..3\n"[..], reading, &mut Identity::default(), &mut out).unwrap_err();
         assert_eq!(err.to_string(), "part.gcode:2:5: malformed number after 'Y'");
     }
 
@@ -526,17 +538,8 @@ mod tests {
         let mut input = b"G1 X1\n".to_vec();
         input.extend(std::iter::repeat_n(0u8, 3 << 20));
         input.extend_from_slice(b"\rG1 X2\n");
-        let err = drive_reader(
-            &input[..],
-            Path::new("zeros.gcode"),
-            None,
-            StateOptions::default(),
-            Strictness::Strict,
-            &mut Quiet,
-            &mut Identity::default(),
-            &mut io::sink(),
-        )
-        .unwrap_err();
+        let reading = Reading::new(Path::new("zeros.gcode"));
+        let err = drive_reader(&input[..], reading, &mut Identity::default(), &mut io::sink()).unwrap_err();
         assert_eq!(
             err.to_string(),
             "zeros.gcode:2:1: line of 3145728 bytes is longer than the limit of 262144 (not read)"
@@ -587,18 +590,8 @@ mod tests {
             let text = std::fs::read(dir.join(file)).unwrap();
             let run = |reads_words: bool| {
                 let mut pass = Effects { reads_words, seen: Vec::new() };
-                let options = StateOptions::default();
-                drive_reader(
-                    &text[..],
-                    Path::new(file),
-                    None,
-                    options,
-                    Strictness::Lenient,
-                    &mut Quiet,
-                    &mut pass,
-                    &mut io::sink(),
-                )
-                .unwrap();
+                let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new(file)) };
+                drive_reader(&text[..], reading, &mut pass, &mut io::sink()).unwrap();
                 pass.seen
             };
             let (listed, lean) = (run(true), run(false));

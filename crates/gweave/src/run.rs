@@ -28,7 +28,7 @@ use crate::gcode::flavour::{flavour_in, read_flavour, require_e_extruder};
 use crate::gcode::state::{State, StateOptions};
 use crate::gcode::writer::{Output, Target};
 use crate::malformed::Malformed;
-use crate::pass::{drive_reader, scan_ahead, Counting, Pass, Progress, Quiet, Strictness};
+use crate::pass::{drive_reader, scan_ahead, Counting, Pass, Progress, Quiet, Reading, Strictness};
 
 /// The name a text in memory goes by in messages.
 pub const IN_MEMORY: &str = "<input>";
@@ -287,6 +287,7 @@ impl<'a> Run<'a> {
         let options = StateOptions { firmware: self.resolved_firmware()?, ..self.options };
         let mut quiet = Quiet;
         let progress = self.progress.unwrap_or(&mut quiet);
+        let strictness = self.strictness;
         match self.source {
             Source::File(path) => {
                 let input = container::open(path).map_err(|e| Error::io(path, e))?;
@@ -294,13 +295,21 @@ impl<'a> Run<'a> {
                     progress.set_len(len);
                 }
                 if ahead {
-                    return scan_ahead(input, path, options, self.strictness, progress, pass);
+                    return scan_ahead(input, path, options, strictness, progress, pass);
                 }
-                drive_reader(input, path, out_name, options, self.strictness, progress, pass, out)
+                let reading =
+                    Reading { path, output: out_name, options, strictness, progress: Some(progress) };
+                drive_reader(input, reading, pass, out)
             }
             // Write errors of an in-memory text name `<input> (output)`, whatever the output.
             Source::Text(text) => {
-                drive_reader(text, Path::new(IN_MEMORY), None, options, self.strictness, progress, pass, out)
+                let reading = Reading {
+                    options,
+                    strictness,
+                    progress: Some(progress),
+                    ..Reading::new(Path::new(IN_MEMORY))
+                };
+                drive_reader(text, reading, pass, out)
             }
         }
     }

@@ -421,20 +421,10 @@ mod tests {
     use crate::gcode::state::StateOptions;
 
     fn stats_of(text: &[u8], options: StateOptions) -> Stats {
-        use crate::pass::{drive_reader, Quiet, Strictness};
+        use crate::pass::{drive_reader, Reading};
         let mut pass = StatsPass::new(None);
-        let path = std::path::Path::new("t.gcode");
-        let state = drive_reader(
-            text,
-            path,
-            None,
-            options,
-            Strictness::Strict,
-            &mut Quiet,
-            &mut pass,
-            &mut io::sink(),
-        )
-        .unwrap();
+        let reading = Reading { options, ..Reading::new("t.gcode".as_ref()) };
+        let state = drive_reader(text, reading, &mut pass, &mut io::sink()).unwrap();
         pass.into_stats(&state)
     }
 
@@ -513,17 +503,8 @@ mod tests {
 G2 X5 Y5 I10 J0 E5
 G3 X25 Y5 I10 J0 E6
 ";
-        let state = crate::pass::drive_reader(
-            &text[..],
-            std::path::Path::new("t.gcode"),
-            None,
-            Default::default(),
-            crate::pass::Strictness::Strict,
-            &mut crate::pass::Quiet,
-            &mut pass,
-            &mut io::sink(),
-        )
-        .unwrap();
+        let reading = crate::pass::Reading::new("t.gcode".as_ref());
+        let state = crate::pass::drive_reader(&text[..], reading, &mut pass, &mut io::sink()).unwrap();
         let b = pass.into_stats(&state).extrusion_bounds.unwrap();
         // The full circle around (15, 5), then the lower half of it, counter-clockwise.
         assert_eq!((b.min, b.max), ([5.0, -5.0, 0.2], [25.0, 15.0, 0.2]));

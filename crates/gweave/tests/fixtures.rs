@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::layers::{Region, Slicer};
-use gweave::pass::{drive_reader, Identity, Quiet, Strictness};
+use gweave::pass::{drive_reader, Identity, Reading};
 use gweave::run::Run;
 use gweave::stats::{Stats, StatsPass};
 
@@ -33,17 +33,7 @@ fn every_fixture_round_trips_byte_exact() {
     for rel in FIXTURES {
         let bytes = std::fs::read(data(rel)).unwrap();
         let (mut out, mut copy) = (Vec::with_capacity(bytes.len()), Identity::default());
-        drive_reader(
-            &bytes[..],
-            Path::new(rel),
-            None,
-            Default::default(),
-            Strictness::Strict,
-            &mut Quiet,
-            &mut copy,
-            &mut out,
-        )
-        .unwrap();
+        drive_reader(&bytes[..], Reading::new(Path::new(rel)), &mut copy, &mut out).unwrap();
         assert!(out == bytes, "{rel} did not round-trip");
         let newlines = bytes.iter().filter(|&&b| b == b'\n').count() as u64;
         let lines = newlines + u64::from(bytes.last() != Some(&b'\n'));

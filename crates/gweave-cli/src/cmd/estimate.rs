@@ -1,23 +1,19 @@
 //! `gweave estimate`: the print time from the virtual printer's planner alone, fast.
 
-use std::io::{self, Read, Write};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{anyhow, Context, Result};
+use anyhow::{Context, Result};
 use clap::Args;
-use gweave::gcode::container;
-use gweave::gcode::flavour::read_firmware;
-use gweave::pass::Progress;
 use gweave_sim::slicer_limits;
 use gweave_sim::MachineProfile;
-use gweave_sim::{estimate_report, EstimateReport};
+use gweave_sim::{estimate_file, EstimateReport};
 
 use super::sim::{print_layers_and_features, print_malformed};
 use crate::args::MachineArg;
 use crate::common::{hms, print_summary, ReportArgs};
 use crate::files::Files;
-use crate::progress::Bar;
 
 /// Estimate the print time with the virtual printer's lookahead planner (Klipper or Marlin
 /// mode, from the machine profile), per layer and per feature, without heaters or the serial
@@ -56,16 +52,7 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         // A file or a built-in profile's name, as `sim` reads it.
         other => MachineArg { path: other.clone() }.load()?,
     };
-    let firmware =
-        read_firmware(&args.input, None).with_context(|| format!("reading {}", args.input.display()))?;
-    let file = container::open(&args.input).with_context(|| format!("opening {}", args.input.display()))?;
-    let mut bar = args.report.quiet.bar();
-    bar.set_len(file.text_len.unwrap_or(0));
-    let input = Counted { inner: file, bar, done: 0 };
-    let report = estimate_report(input, &profile, firmware, args.steps).map_err(|e| match e.line() {
-        Some(line) if line > 0 => anyhow!("{}:{line}: {}", args.input.display(), e.reason()),
-        _ => anyhow!("{}: {}", args.input.display(), e.reason()),
-    })?;
+    let report = estimate_file(&args.input, &profile, args.steps, args.report.quiet.bar())?;
     if args.report.emit(&report)? {
         print_summary(|out| print_human(out, &args.input, &report))?;
     }
@@ -84,22 +71,6 @@ fn slicer_profile(input: &Path) -> Result<MachineProfile> {
     eprintln!("{name}: {}", limits.used.join(", "));
     eprintln!("  (steps per mm and anything not listed: the default machine's)");
     Ok(MachineProfile { name, motion: limits.profile, ..base })
-}
-
-/// The input file, moving the progress bar as it is read.
-struct Counted {
-    inner: container::Input,
-    bar: Bar,
-    done: u64,
-}
-
-impl Read for Counted {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let n = self.inner.read(buf)?;
-        self.done += n as u64;
-        self.bar.advance(self.done);
-        Ok(n)
-    }
 }
 
 fn print_human(out: &mut dyn Write, input: &Path, r: &EstimateReport) -> io::Result<()> {

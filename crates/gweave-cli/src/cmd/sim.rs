@@ -5,22 +5,16 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use gweave::gcode::container;
-use gweave::gcode::flavour::read_firmware;
 use gweave::gcode::layers::Feature;
-use gweave::gcode::reader::{LineReader, Part};
-use gweave::pass::Progress;
-use gweave_sim::core_board::{self, CoreReport};
+use gweave_sim::core_board::CoreReport;
 use gweave_sim::plot::{save_speed_chart, save_temperature_chart, ChartFormat};
-use gweave_sim::FaultSpec;
 use gweave_sim::HeaterId;
-use gweave_sim::{FirmwareKind, MachineProfile};
-use gweave_sim::{HugeArcs, Malformed, MAX_ARC_CHORDS};
-use gweave_sim::{Machine, Outcome, SimReport};
+use gweave_sim::{simulate, FaultSpec, FirmwareKind, SimOptions, Simulation};
+use gweave_sim::{HugeArcs, Malformed, SimReport, MAX_ARC_CHORDS};
 
-use crate::args::{MachineArg, Quiet};
+use crate::args::MachineArg;
 use crate::common::{hms, print_summary, ReportArgs};
 use crate::files::{layer_png, Files};
 
@@ -69,91 +63,65 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
     for path in args.plot.iter().chain(&args.plot_speed) {
         ChartFormat::from_path(path)?;
     }
-    let mut profile = args.machine.load()?;
+    let profile = args.machine.load()?;
     if profile.firmware.kind == FirmwareKind::Gweave {
-        return run_core(&args, &profile);
-    }
-    for spec in &args.faults {
-        profile.faults.push(spec.parse::<FaultSpec>()?);
-    }
-    let mut machine = Machine::new(profile)?;
-    if args.plot_speed.is_some() {
-        machine.record_speed();
-    }
-    let errors = run_file(&mut machine, &args.input, args.report.quiet)?;
-    let report = machine.report();
-    if let Some(path) = &args.plot {
-        save_temperature_chart(machine.thermal().series(), path)?;
-    }
-    if let (Some(path), Some(trace)) = (&args.plot_speed, machine.speed_trace()) {
-        save_speed_chart(trace, &report.layer_s, &report.mixing_input_mm, path)?;
-    }
-    if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
-        canvas.write_layer_pngs(dir)?;
-    }
-    if args.report.emit(&report)? {
-        print_summary(|out| print_human(out, &args.input, &report, &errors))?;
-    } else {
-        // Without the summary (-q, --json) the printer's errors still reach standard error:
-        // -q never hides why a run failed.
-        for e in &errors {
-            eprintln!("gweave: the printer said: {e}");
+        // Refused by their flags' names before the options are read (the library names them as
+        // `SimOptions` does); the charts and canvases are drawn from the Marlin model's state.
+        let refused = [
+            ("--fault", !args.faults.is_empty()),
+            ("--plot", args.plot.is_some()),
+            ("--plot-speed", args.plot_speed.is_some()),
+            ("--raster-out", args.raster_out.is_some()),
+        ];
+        if let Some((flag, _)) = refused.iter().find(|(_, given)| *given) {
+            anyhow::bail!("{flag} is for the Marlin model: the machine profile runs the controller core ([firmware] kind = \"gweave\")");
         }
     }
-    Ok(if report.halted { ExitCode::from(1) } else { ExitCode::SUCCESS })
-}
-
-/// `[firmware] kind = "gweave"`: the file on gweave's own controller core (docs/firmware.md),
-/// as a host streams it to the board; the report is the board's time, its net steps per motor
-/// and its errors.
-fn run_core(args: &SimArgs, profile: &MachineProfile) -> Result<ExitCode> {
-    let refused = [
-        ("--fault", !args.faults.is_empty()),
-        ("--plot", args.plot.is_some()),
-        ("--plot-speed", args.plot_speed.is_some()),
-        ("--raster-out", args.raster_out.is_some()),
-    ];
-    if let Some((flag, _)) = refused.iter().find(|(_, given)| *given) {
-        anyhow::bail!("{flag} is for the Marlin model: the machine profile runs the controller core ([firmware] kind = \"gweave\")");
-    }
-    let input = &args.input;
-    let file = container::open(input).with_context(|| format!("opening {}", input.display()))?;
-    let mut reader = LineReader::new(file);
-    let mut read_error = None;
-    // Inside a line longer than the reader's buffer: its first piece was sent.
-    let mut in_long_line = false;
-    let mut next_line = || loop {
-        match reader.next_line() {
-            Ok(Some(line)) => match line.part {
-                Part::Whole => return Some(line.bytes.to_vec()),
-                // Far longer than the board's 95 bytes: its first bytes stand for it, and the
-                // board refuses the line as too long.
-                Part::Piece if !in_long_line => {
-                    in_long_line = true;
-                    return Some(line.bytes[..line.bytes.len().min(256)].to_vec());
-                }
-                Part::Piece => {}
-                Part::Last { .. } => in_long_line = false,
-            },
-            Ok(None) => return None,
-            Err(e) => {
-                read_error = Some(e);
-                return None;
+    let options = SimOptions {
+        faults: args.faults.iter().map(|spec| spec.parse::<FaultSpec>()).collect::<Result<_, _>>()?,
+        record_speed: args.plot_speed.is_some(),
+    };
+    let mut bar = args.report.quiet.bar();
+    let simulation = simulate(&args.input, profile, &options, &mut bar)?;
+    drop(bar);
+    match &simulation {
+        Simulation::Marlin { machine, report, errors } => {
+            if let Some(path) = &args.plot {
+                save_temperature_chart(machine.thermal().series(), path)?;
+            }
+            if let (Some(path), Some(trace)) = (&args.plot_speed, machine.speed_trace()) {
+                save_speed_chart(trace, &report.layer_s, &report.mixing_input_mm, path)?;
+            }
+            if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
+                canvas.write_layer_pngs(dir)?;
+            }
+            if args.report.emit(report)? {
+                print_summary(|out| print_human(out, &args.input, report, errors))?;
+                return Ok(exit_code(&simulation));
             }
         }
-    };
-    let report = core_board::run_file(profile, &mut next_line)?;
-    if let Some(e) = read_error {
-        return Err(e).with_context(|| format!("reading {}", input.display()));
-    }
-    if args.report.emit(&report)? {
-        print_summary(|out| print_core(out, input, &report))?;
-    } else {
-        for e in &report.errors {
-            eprintln!("gweave: the printer said: {e}");
+        Simulation::Core(report) => {
+            if args.report.emit(report)? {
+                print_summary(|out| print_core(out, &args.input, report))?;
+                return Ok(exit_code(&simulation));
+            }
         }
     }
-    Ok(if report.halted { ExitCode::from(1) } else { ExitCode::SUCCESS })
+    // Without the summary (-q, --json) the printer's errors still reach standard error: -q never
+    // hides why a run failed.
+    for e in simulation.errors() {
+        eprintln!("gweave: the printer said: {e}");
+    }
+    Ok(exit_code(&simulation))
+}
+
+/// 1 when the machine halted (a thermal fault or M112).
+fn exit_code(simulation: &Simulation) -> ExitCode {
+    if simulation.halted() {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    }
 }
 
 fn print_core(out: &mut dyn Write, input: &Path, r: &CoreReport) -> io::Result<()> {
@@ -182,46 +150,6 @@ fn print_core(out: &mut dyn Write, input: &Path, r: &CoreReport) -> io::Result<(
         writeln!(out, "  halted")?;
     }
     Ok(())
-}
-
-/// Executes every line until the end or a halt; returns the machine's `Error:` replies.
-fn run_file(machine: &mut Machine, input: &Path, quiet: Quiet) -> Result<Vec<String>> {
-    // The file is read as `stats` reads it: as the firmware its flavour names.
-    machine.read_as(read_firmware(input, None).with_context(|| format!("reading {}", input.display()))?);
-    // A rotary program's F words follow the convention its header declares.
-    if let Some(rotary) = gweave::rotary::cylinder::RotaryConfig::from_file_header(input) {
-        machine.declare_rotary(rotary);
-    }
-    let file = container::open(input).with_context(|| format!("opening {}", input.display()))?;
-    let len = file.text_len.unwrap_or(0);
-    let mut bar = quiet.bar();
-    bar.set_len(len);
-    let mut reader = LineReader::new(file);
-    let mut errors = Vec::new();
-    let mut out = |_t: f64, line: &str| {
-        if line.starts_with("Error:") {
-            errors.push(line.to_owned());
-        }
-    };
-    let mut n = 0u64;
-    while let Some(line) = reader.next_line().with_context(|| format!("reading {}", input.display()))? {
-        match line.part {
-            Part::Whole => {
-                // A halt stops the run, and so does the seed's M0 (`[firmware] m0 = "seed"`).
-                if machine.execute(line.bytes, &mut out) == Outcome::Halted || machine.program_ended() {
-                    break;
-                }
-            }
-            Part::Piece => continue,
-            Part::Last { .. } => machine.skip_long_line(),
-        }
-        n += 1;
-        if n.is_multiple_of(65_536) {
-            bar.advance(reader.position());
-        }
-    }
-    machine.finish(&mut out);
-    Ok(errors)
 }
 
 fn print_human(out: &mut dyn Write, input: &Path, r: &SimReport, errors: &[String]) -> io::Result<()> {

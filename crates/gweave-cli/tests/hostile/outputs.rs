@@ -211,7 +211,7 @@ fn in_place_refuses_a_read_only_file_unless_forced() {
     refused_in(
         dir.path(),
         &["purge-shift", "in.gcode", "--purge-mm", "2", "--in-place"],
-        "in.gcode is read-only: --in-place would replace it (add --force to replace it anyway)",
+        "in.gcode is read-only: it is replaced in place only when forced",
     );
     gweave(dir.path(), &["cat", "in.gcode", "--in-place", "--force", "-q"]).run().assert_ok();
     assert_eq!(fs::metadata(&input).unwrap().mode() & 0o777, 0o444);

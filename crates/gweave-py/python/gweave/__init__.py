@@ -137,6 +137,10 @@ def sim(path: PathLike, *, machine: Optional[PathLike] = None, fault: Sequence[s
     ``feature_s``, ``filament_mm`` (each motor's net feed; ``retracted_at_end_mm`` added to it
     is what left the nozzle, ``stats``'s figure), ``mixing_input_mm``, ``steps``, ``position``, ``count``,
     ``heaters``, ``thermal_faults``, ``halted``, ``unknown_commands`` and ``warnings``.
+    The run stops at a halt and at the end of program a profile declares (``[firmware] m0 =
+    "seed"``). A profile with ``[firmware] kind = "gweave"`` runs the file on gweave's controller
+    core instead, and the report is the core's, as ``gweave sim --json`` prints it: ``lines``,
+    ``time_s``, ``end_steps``, ``mixing_steps``, ``halted`` and ``errors``.
     """
     if isinstance(fault, str):
         fault = [fault]

@@ -20,7 +20,7 @@ use gweave::gcode::ends::read_ends;
 use gweave::gcode::flavour::flavour_in;
 use gweave::gcode::reader::{LineReader, Part};
 use gweave::gcode::state::StateOptions;
-use gweave::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Step, Strictness};
+use gweave::pass::{drive_reader, Ctx, Flow, Pass, Reading, Step, Strictness};
 use gweave::post::metadata::{is_progress_line, read_setting, Figures};
 use gweave::stats::{Stats, StatsPass};
 
@@ -222,16 +222,8 @@ struct Tally {
 
 fn tally(input: impl Read, path: &Path, options: StateOptions) -> Result<Tally> {
     let mut pass = TallyPass { stats: StatsPass::new(None), figures: Figures::default() };
-    let state = drive_reader(
-        input,
-        path,
-        None,
-        options,
-        Strictness::Lenient,
-        &mut Quiet,
-        &mut pass,
-        &mut io::sink(),
-    )?;
+    let reading = Reading { options, strictness: Strictness::Lenient, ..Reading::new(path) };
+    let state = drive_reader(input, reading, &mut pass, &mut io::sink())?;
     Ok(Tally { stats: pass.stats.into_stats(&state), figures: pass.figures })
 }
 

@@ -203,7 +203,9 @@ mod tests {
 
     use crate::gcode::reader::{Part, RawLine, MAX_LINE};
     use crate::gcode::state::{State, StateOptions};
-    use crate::pass::{drive_reader, scan_ahead, Ctx, Flow, Pass, PassError, Progress, Step, Strictness};
+    use crate::pass::{
+        drive_reader, scan_ahead, Ctx, Flow, Pass, PassError, Progress, Reading, Step, Strictness,
+    };
 
     /// Everything a pass is shown, line by line, and the progress reported last.
     #[derive(Default)]
@@ -258,16 +260,9 @@ mod tests {
         let options = StateOptions::default();
         let (mut one, mut two) = (template(), template());
         let (mut p1, mut p2) = (LastAdvance::default(), LastAdvance::default());
-        let r1 = drive_reader(
-            input(),
-            path,
-            None,
-            options.clone(),
-            strictness,
-            &mut p1,
-            &mut one,
-            &mut io::sink(),
-        );
+        let reading =
+            Reading { options: options.clone(), strictness, progress: Some(&mut p1), ..Reading::new(path) };
+        let r1 = drive_reader(input(), reading, &mut one, &mut io::sink());
         let r2 = scan_ahead(input(), path, options, strictness, &mut p2, &mut two);
         let shown = |r: crate::Result<State>, rec: Record| r.map(|_| rec.seen).map_err(|e| e.to_string());
         [(shown(r1, one), p1.0), (shown(r2, two), p2.0)]

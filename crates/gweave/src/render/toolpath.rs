@@ -517,23 +517,11 @@ impl Pass for ToolpathPass {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gcode::state::StateOptions;
-    use crate::pass::{drive_reader, Quiet, Strictness};
+    use crate::pass::{drive_reader, Reading};
     use std::io;
 
     fn read(text: &str, pass: &mut ToolpathPass) {
-        let (path, options) = (Path::new("t.gcode"), StateOptions::default());
-        drive_reader(
-            text.as_bytes(),
-            path,
-            None,
-            options,
-            Strictness::Strict,
-            &mut Quiet,
-            pass,
-            &mut io::sink(),
-        )
-        .unwrap();
+        drive_reader(text.as_bytes(), Reading::new(Path::new("t.gcode")), pass, &mut io::sink()).unwrap();
     }
 
     pub(crate) fn collect(text: &str, options: ToolpathOptions) -> Toolpath {

@@ -61,8 +61,12 @@ pub enum RotaryError {
         /// Why it was rejected.
         reason: String,
     },
-    /// No mandrel diameter: neither a flag (a keyword) nor the settings file gives one.
-    #[error("give --mandrel-diameter MM (or a config file with [machine] mandrel_diameter_mm)")]
+    /// No mandrel diameter: neither the options (a CLI flag, a Python keyword) nor the settings
+    /// file give one; named as neither front end spells it.
+    #[error(
+        "no mandrel diameter: give one ({}), or a config file with [machine] mandrel_diameter_mm",
+        cylinder::MANDREL_DIAMETER_MM
+    )]
     NoMandrel,
     /// A setting outside its physical range.
     #[error(transparent)]

@@ -208,7 +208,7 @@ mod tests {
         let none = WrapConfig::read(None, &MachineOverrides::default()).unwrap_err();
         assert_eq!(
             none.to_string(),
-            "give --mandrel-diameter MM (or a config file with [machine] mandrel_diameter_mm)"
+            "no mandrel diameter: give one (1 to 1000 mm), or a config file with [machine] mandrel_diameter_mm"
         );
         assert!(matches!(WrapConfig::read(Some("x = 1\n"), &mandrel(30.0)), Err(RotaryError::Toml(_))));
     }

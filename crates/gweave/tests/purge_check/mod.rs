@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::Path;
 
 use gweave::gcode::state::{Effect, Move, Path as MovePath, StateOptions, E, X, Y};
-use gweave::pass::{drive_reader, Ctx, Flow, Pass, Quiet, Step, Strictness};
+use gweave::pass::{drive_reader, Ctx, Flow, Pass, Reading, Step, Strictness};
 use gweave::post::purge_shift::PurgeShiftReport;
 
 /// What one line did, in a replay.
@@ -46,17 +46,12 @@ impl Pass for Recorder {
 
 pub fn replay(bytes: &[u8], options: &StateOptions) -> Replay {
     let mut rec = Recorder(Replay::default());
-    let state = drive_reader(
-        bytes,
-        Path::new("replay"),
-        None,
-        options.clone(),
-        Strictness::Lenient,
-        &mut Quiet,
-        &mut rec,
-        &mut std::io::sink(),
-    )
-    .unwrap();
+    let reading = Reading {
+        options: options.clone(),
+        strictness: Strictness::Lenient,
+        ..Reading::new(Path::new("replay"))
+    };
+    let state = drive_reader(bytes, reading, &mut rec, &mut std::io::sink()).unwrap();
     rec.0.net_mm = state.filament_mm.iter().sum();
     rec.0
 }

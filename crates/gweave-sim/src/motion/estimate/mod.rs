@@ -68,7 +68,7 @@ mod timer;
 use back::Back;
 use front::{Chords, Front};
 pub use front::{HugeArcs, Malformed, MAX_ARC_CHORDS};
-pub use report::{estimate_report, EstimateReport};
+pub use report::{estimate_file, estimate_report, EstimateFileError, EstimateReport};
 
 /// Feed rate before the file sets one, mm/s (Klipper `gcode_move`, Marlin `feedrate_mm_s`).
 pub const DEFAULT_FEED_MM_S: f64 = 25.0;

@@ -1,8 +1,12 @@
 //! The estimate of a whole file as `gweave estimate` and Python's `gweave.estimate` give it.
 
-use std::io::Read;
+use std::io::{self, Read};
+use std::path::{Path, PathBuf};
 
 use gweave::firmware::Firmware;
+use gweave::gcode::container;
+use gweave::gcode::flavour::read_firmware;
+use gweave::pass::Progress;
 use serde::Serialize;
 
 use super::{estimate_as, Estimate, EstimateError};
@@ -38,4 +42,67 @@ pub fn estimate_report<R: Read + Send>(
         CornerMode::Constant {} => "constant",
     };
     Ok(EstimateReport { machine: machine.name.clone(), planner, steps_counted: count_steps, estimate })
+}
+
+/// Why a file could not be estimated, naming the file and, when there is one, its line.
+#[derive(Debug, thiserror::Error)]
+pub enum EstimateFileError {
+    /// The file could not be opened, or its flavour read.
+    #[error("reading {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: io::Error,
+    },
+    /// A line the estimator refused, or a read error midway.
+    #[error("{}: {}", place(path, error.line()), error.reason())]
+    Estimate {
+        /// The file.
+        path: PathBuf,
+        /// What the estimator said.
+        error: EstimateError,
+    },
+}
+
+/// `path:line` for a line of the file, `path` alone for the profile (line 0) or the file as a
+/// whole.
+fn place(path: &Path, line: Option<u64>) -> String {
+    match line {
+        Some(line) if line > 0 => format!("{}:{line}", path.display()),
+        _ => path.display().to_string(),
+    }
+}
+
+/// The estimate of the file at `path` on `machine`, as `gweave estimate` and `gweave.estimate()`
+/// both make it: read as the firmware its flavour names, `progress` told of the bytes read.
+pub fn estimate_file(
+    path: &Path,
+    machine: &MachineProfile,
+    count_steps: bool,
+    mut progress: impl Progress + Send,
+) -> Result<EstimateReport, EstimateFileError> {
+    let read_error = |source| EstimateFileError::Read { path: path.to_owned(), source };
+    let firmware = read_firmware(path, None).map_err(read_error)?;
+    let file = container::open(path).map_err(read_error)?;
+    progress.set_len(file.text_len.unwrap_or(0));
+    let input = Counted { inner: file, progress, done: 0 };
+    estimate_report(input, machine, firmware, count_steps)
+        .map_err(|error| EstimateFileError::Estimate { path: path.to_owned(), error })
+}
+
+/// The input file, telling `progress` how much of it is read.
+struct Counted<P> {
+    inner: container::Input,
+    progress: P,
+    done: u64,
+}
+
+impl<P: Progress> Read for Counted<P> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.done += n as u64;
+        self.progress.advance(self.done);
+        Ok(n)
+    }
 }

@@ -1,0 +1,228 @@
+//! A file run through the virtual printer from its first line to its end: what `gweave sim` and
+//! `gweave.sim()` both do, written once so that the two cannot drift (they did: the command line
+//! stopped at the controller seed's `M0` and Python ran on past it).
+//!
+//! The file is read as a host streams it: line by line, in bounded memory, as the firmware its
+//! flavour names reads it. The machine profile decides which printer runs it: the Marlin model
+//! ([`Machine`]), or gweave's own controller core ([`core_board`], `[firmware] kind = "gweave"`).
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+use gweave::gcode::container;
+use gweave::gcode::flavour::read_firmware;
+use gweave::gcode::reader::{LineReader, Part};
+use gweave::pass::Progress;
+use gweave::rotary::cylinder::RotaryConfig;
+
+use crate::core_board::{self, CoreBoardError, CoreReport};
+use crate::interp::{Machine, Outcome, SimError, SimReport};
+use crate::profile::build_options::FirmwareKind;
+use crate::profile::{FaultSpec, MachineProfile};
+
+/// What a simulation is asked for beyond the file and the machine profile.
+#[derive(Debug, Clone, Default)]
+pub struct SimOptions {
+    /// Heater faults injected at given times, added to the profile's own.
+    pub faults: Vec<FaultSpec>,
+    /// Record the planned toolhead speed over time ([`Machine::speed_trace`]), for a chart.
+    pub record_speed: bool,
+}
+
+/// What ran the file, and what it did.
+pub enum Simulation {
+    /// The Marlin model: the machine after the run (its heaters' series, speed trace and inkjet
+    /// canvases, for charts), its report and the `Error:` lines it printed.
+    Marlin {
+        /// The machine as the run left it.
+        machine: Box<Machine>,
+        /// What it did.
+        report: Box<SimReport>,
+        /// Its `Error:` lines.
+        errors: Vec<String>,
+    },
+    /// The controller core: its report (its errors inside).
+    Core(CoreReport),
+}
+
+impl Simulation {
+    /// Whether the printer halted (a thermal fault or `M112`): a failed run.
+    pub fn halted(&self) -> bool {
+        match self {
+            Simulation::Marlin { report, .. } => report.halted,
+            Simulation::Core(report) => report.halted,
+        }
+    }
+
+    /// The `Error:` lines the printer printed.
+    pub fn errors(&self) -> &[String] {
+        match self {
+            Simulation::Marlin { errors, .. } => errors,
+            Simulation::Core(report) => &report.errors,
+        }
+    }
+}
+
+/// Why a file could not be simulated. The options are named as [`SimOptions`] names them; a
+/// front end names its own flag or keyword.
+#[derive(Debug, thiserror::Error)]
+pub enum SimJobError {
+    /// The file could not be opened or read.
+    #[error("reading {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: io::Error,
+    },
+    /// The Marlin model could not be built from the profile.
+    #[error(transparent)]
+    Machine(#[from] SimError),
+    /// The controller core could not be built from the profile.
+    #[error(transparent)]
+    Core(#[from] CoreBoardError),
+    /// An option the controller core has no model for (its heaters cannot be faulted, its
+    /// planner keeps no speed trace).
+    #[error("{option} is for the Marlin model: the machine profile runs the controller core ([firmware] kind = \"gweave\")")]
+    MarlinModelOnly {
+        /// The option, as [`SimOptions`] names it.
+        option: &'static str,
+    },
+}
+
+/// Runs `input` on the printer `profile` describes, until its end, a halt, or the program's end
+/// (the seed's `M0`, `[firmware] m0 = "seed"`); `progress` follows the bytes read.
+pub fn simulate(
+    input: &Path,
+    mut profile: MachineProfile,
+    options: &SimOptions,
+    progress: &mut dyn Progress,
+) -> Result<Simulation, SimJobError> {
+    let read_error = |source| SimJobError::Read { path: input.to_owned(), source };
+    if profile.firmware.kind == FirmwareKind::Gweave {
+        if !options.faults.is_empty() {
+            return Err(SimJobError::MarlinModelOnly { option: "fault" });
+        }
+        if options.record_speed {
+            return Err(SimJobError::MarlinModelOnly { option: "speed chart" });
+        }
+        return on_core(input, &profile).map(Simulation::Core);
+    }
+    profile.faults.extend(options.faults.iter().cloned());
+    let mut machine = Box::new(Machine::new(profile)?);
+    if options.record_speed {
+        machine.record_speed();
+    }
+    // The file is read as `stats` reads it: as the firmware its flavour names.
+    machine.read_as(read_firmware(input, None).map_err(read_error)?);
+    // A rotary program's F words follow the convention its header declares.
+    if let Some(rotary) = RotaryConfig::from_file_header(input) {
+        machine.declare_rotary(rotary);
+    }
+    let file = container::open(input).map_err(read_error)?;
+    progress.set_len(file.text_len.unwrap_or(0));
+    let mut reader = LineReader::new(file);
+    let mut errors = Vec::new();
+    let mut out = |_t: f64, line: &str| {
+        if line.starts_with("Error:") {
+            errors.push(line.to_owned());
+        }
+    };
+    let mut n = 0u64;
+    while let Some(line) = reader.next_line().map_err(read_error)? {
+        match line.part {
+            Part::Whole => {
+                // A halt stops the run, and so does the seed's M0 (`[firmware] m0 = "seed"`).
+                if machine.execute(line.bytes, &mut out) == Outcome::Halted || machine.program_ended() {
+                    break;
+                }
+            }
+            Part::Piece => continue,
+            Part::Last { .. } => machine.skip_long_line(),
+        }
+        n += 1;
+        if n.is_multiple_of(65_536) {
+            progress.advance(reader.position());
+        }
+    }
+    machine.finish(&mut out);
+    let report = Box::new(machine.report());
+    Ok(Simulation::Marlin { machine, report, errors })
+}
+
+/// `[firmware] kind = "gweave"`: the file on gweave's own controller core (docs/firmware.md), as
+/// a host streams it to the board.
+fn on_core(input: &Path, profile: &MachineProfile) -> Result<CoreReport, SimJobError> {
+    let read_error = |source| SimJobError::Read { path: input.to_owned(), source };
+    let mut reader = LineReader::new(container::open(input).map_err(read_error)?);
+    let mut failed = None;
+    // Inside a line longer than the reader's buffer: its first piece was sent.
+    let mut in_long_line = false;
+    let mut next_line = || loop {
+        match reader.next_line() {
+            Ok(Some(line)) => match line.part {
+                Part::Whole => return Some(line.bytes.to_vec()),
+                // Far longer than the board's 95 bytes: its first bytes stand for it, and the
+                // board refuses the line as too long.
+                Part::Piece if !in_long_line => {
+                    in_long_line = true;
+                    return Some(line.bytes[..line.bytes.len().min(256)].to_vec());
+                }
+                Part::Piece => {}
+                Part::Last { .. } => in_long_line = false,
+            },
+            Ok(None) => return None,
+            Err(e) => {
+                failed = Some(e);
+                return None;
+            }
+        }
+    };
+    let report = core_board::run_file(profile, &mut next_line)?;
+    match failed {
+        Some(e) => Err(read_error(e)),
+        None => Ok(report),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gweave::pass::Quiet;
+
+    /// The seed's M0 ends the program (it homes the axes, the seed's end of program): X500, past
+    /// the bed, is never reached; Marlin's M0 goes on to it.
+    #[test]
+    fn a_run_stops_at_the_seeds_m0() {
+        let dir = tempfile::tempdir().unwrap();
+        let job = dir.path().join("job.gcode");
+        std::fs::write(&job, "G28\nG1 X50 F3000\nM0\nG1 X500\n").unwrap();
+        for (stop, runs_on) in [(crate::ProgramStop::Seed, false), (crate::ProgramStop::Marlin, true)] {
+            let mut profile = MachineProfile::default();
+            profile.firmware.m0 = stop;
+            let Simulation::Marlin { report, .. } =
+                simulate(&job, profile, &SimOptions::default(), &mut Quiet).unwrap()
+            else {
+                panic!("the Marlin model runs the default profile")
+            };
+            let out_of_bounds = report.warnings.iter().any(|w| w.kind.name() == "out_of_bounds");
+            assert_eq!(out_of_bounds, runs_on, "{stop:?}: {:?}", report.warnings);
+            if !runs_on {
+                assert_eq!(report.position[0], 0.0, "homed by the seed's M0");
+            }
+        }
+    }
+
+    #[test]
+    fn a_missing_file_is_named() {
+        let e = simulate(
+            Path::new("/nowhere/job.gcode"),
+            MachineProfile::default(),
+            &SimOptions::default(),
+            &mut Quiet,
+        )
+        .err()
+        .unwrap();
+        assert!(e.to_string().starts_with("reading /nowhere/job.gcode: "), "{e}");
+    }
+}
