@@ -119,7 +119,8 @@ fn g93_runs_each_move_in_one_over_f_minutes() {
 fn without_a_rotary_axis_a_moves_nothing() {
     let queue: &'static StepQueue = Box::leak(Box::new(StepQueue::new()));
     let mut t = Twin::new(queue, Settings::DEFAULT, FirstOrder::default());
-    let replies = run(&mut t, "G1 X1 A360 F600\nM114\n");
+    // M400: M114 counts the steps made, which are all made once the move has finished.
+    let replies = run(&mut t, "G1 X1 A360 F600\nM400\nM114\n");
     assert!(replies.contains("X:1.00 Y:0.00 Z:0.00 E:0.00 Count X:80 Y:0 Z:0\n"), "{replies}");
     assert_eq!(t.pulses[A_MOTOR], 0);
 }

@@ -262,7 +262,27 @@ impl MoveWriter {
             return Ok(());
         }
         let t_s = self.machine.move_time_s(self.point_of(last), self.point_of(words), spec.speed_mm_s);
+        if let Some(turned) = self.crawl(last, words, t_s) {
+            // The turn with its extrusion, then the few microns at the surface speed.
+            self.finish_line(out, spec.rapid, last, turned, t_s, spec.comment)?;
+            let linear_mm = (words[AXIAL] - turned[AXIAL]).hypot(words[RADIAL] - turned[RADIAL]);
+            return self.finish_line(out, spec.rapid, turned, words, linear_mm / spec.speed_mm_s, None);
+        }
         self.finish_line(out, spec.rapid, last, words, t_s, spec.comment)
+    }
+
+    /// Under the NIST convention the F of a move that turns and moves a linear axis is the linear
+    /// speed alone: a turn that drifts a micron axially (a flat part's edge almost along the
+    /// wrap) would need F below any feed a firmware takes (`F0.679`: the virtual printer
+    /// refuses it, Marlin raises it to its minimum and rushes the turn). Such a move is written
+    /// as the turn alone, which ends at the words this returns, then the linear rest.
+    fn crawl(&self, last: [f64; 3], words: [f64; 3], t_s: f64) -> Option<[f64; 3]> {
+        let linear_mm = (words[AXIAL] - last[AXIAL]).hypot(words[RADIAL] - last[RADIAL]);
+        let crawls = self.machine.feed_convention == FeedConvention::Nist
+            && words[ROTARY] != last[ROTARY]
+            && linear_mm > 0.0
+            && 60.0 * linear_mm / t_s < crate::range::FEED_MM_MIN.min;
+        crawls.then_some([last[AXIAL], words[ROTARY], last[RADIAL]])
     }
 
     /// Writes an extruder-only move of `e_mm` at `speed_mm_s` of filament (a retraction).
@@ -408,6 +428,25 @@ mod tests {
             lines(&out).last().unwrap(),
             &format!("G1 X1.004 A5.000 E0.01000 F{}", number_text(&f, b'F', 0.004 * 60.0 / t_s))
         );
+    }
+
+    /// Regression: wrapping a PrusaSlicer pyramid wrote `G1 X101.364 A376.758 E6.76525 F0.679`
+    /// (X one micron on, a long turn): under NIST F is the axial speed alone, below the 1 mm/min
+    /// any firmware takes, and `gweave sim --machine rotary` refused the file. The turn is
+    /// written alone, then the micron at the surface speed: every F at least 1 mm/min, the
+    /// end where it was and the extrusion on the turn.
+    #[test]
+    fn a_turn_that_drifts_a_micron_is_not_written_at_a_crawl() {
+        let (mut w, mut out) = writer();
+        w.move_to(&mut out, CylPoint::new(1.001, 90.0, 10.1), 0.5, 10.0).unwrap();
+        let lines = lines(&out);
+        let feed = 90.0 * 60.0 / (10.1 * std::f64::consts::FRAC_PI_2 / 10.0);
+        let f = rotary_number_format();
+        assert_eq!(
+            lines[3..],
+            [format!("G1 A90.000 E0.50000 F{}", number_text(&f, b'F', feed)), "G1 X1.001 F600.000".into()]
+        );
+        assert_eq!(w.position(), Some(CylPoint::new(1.001, 90.0, 10.1)));
     }
 
     #[test]
