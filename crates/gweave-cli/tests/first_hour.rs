@@ -126,6 +126,8 @@ fn a_bmp_stack_hints_at_its_layer_height() {
     let said = text(&out.stderr);
     assert!(said.contains("images carry no layer height: the layers are 0.1 mm apart"), "{said}");
     assert!(said.contains("--layer-height 0.2000 (the pixel size given)"), "{said}");
+    // The pixel size was given: no word on it.
+    assert!(!said.contains("images carry no pixel size"), "{said}");
     let given = gweave(&[
         "raster",
         layers.to_str().unwrap(),
@@ -135,7 +137,13 @@ fn a_bmp_stack_hints_at_its_layer_height() {
         "0.2",
         "-q",
     ]);
-    assert!(text(&given.stderr).is_empty(), "{}", text(&given.stderr));
+    // Without --pixel-mm or --dpi each pixel is one nozzle pitch: a stack drawn at another
+    // resolution came out 1.32 times too large per side without a word (a new user's torus).
+    assert_eq!(
+        text(&given.stderr),
+        "gweave: note: images carry no pixel size: each pixel is one nozzle pitch (0.2646 mm, 96 dpi); \
+         if they were drawn at another resolution give --pixel-mm P or --dpi D so the part keeps its size\n"
+    );
 }
 
 /// `rotary wrap --helical` said "seam at flat y = 0": a helical wrap has no seam.

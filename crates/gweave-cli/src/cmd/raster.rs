@@ -211,6 +211,9 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     if from_images && args.layer_height.is_none() {
         eprintln!("gweave: note: {}", layer_height_hint(args.pixel_mm.or(args.dpi.map(|d| 25.4 / d))));
     }
+    if from_images && args.pixel_mm.is_none() && args.dpi.is_none() {
+        eprintln!("gweave: note: {}", pixel_size_hint(&job.profile));
+    }
     Ok(ExitCode::SUCCESS)
 }
 
@@ -226,6 +229,18 @@ fn layer_height_hint(pixel_mm: Option<f64>) -> String {
     format!(
         "images carry no layer height: the layers are {default} mm apart (the default); if the \
          stack was sliced at its pixel size (voxels), give {fix} so the part keeps its proportions"
+    )
+}
+
+/// Images carry no pixel size either: each pixel is printed one nozzle pitch wide, so a stack
+/// drawn at another resolution comes out larger or smaller (a PrusaSlicer `.sl1` exported to
+/// BMPs at 0.05 mm a pixel prints five times too large). Say so, with the size it took.
+fn pixel_size_hint(profile: &PrintheadProfile) -> String {
+    format!(
+        "images carry no pixel size: each pixel is one nozzle pitch ({:.4} mm, {} dpi); if they \
+         were drawn at another resolution give --pixel-mm P or --dpi D so the part keeps its size",
+        profile.pitch_mm(),
+        profile.dpi
     )
 }
 
