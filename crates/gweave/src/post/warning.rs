@@ -96,6 +96,8 @@ pub enum Shortfall {
     Inches,
     /// Not purged: the change opens its layer, and the purge may not reach the layer below.
     OpensItsLayer,
+    /// Accepted (the `partial` fallback), stopped by a feature the rules keep the purge off.
+    KeptOffAFeature,
     /// Accepted (the `partial` fallback).
     Accepted,
 }
@@ -164,6 +166,9 @@ impl fmt::Display for Shortfall {
             Shortfall::OpensItsLayer => {
                 f.write_str("; it opens its layer: --cross-layers lets the purge reach the layer below")
             }
+            Shortfall::KeptOffAFeature => f.write_str(
+                "; --allow-features lets more features take the purge (default: all but the outer wall)",
+            ),
             Shortfall::Accepted => Ok(()),
         }
     }

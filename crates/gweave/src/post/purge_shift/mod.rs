@@ -81,6 +81,9 @@ use split::{split, Splittable};
 
 /// What stops the walk back at a layer change (the report's `stopped_by`).
 const LAYER_CHANGE: &str = "a layer change";
+/// What stops a purge at an extrusion of a feature the rules keep it off (the outer wall by
+/// default).
+const KEPT_FEATURE: &str = "a feature that may not take the purge";
 /// Extrusion below this is a rounding remainder, not a piece of move worth splitting off, mm.
 const EPS_E_MM: f64 = 1e-6;
 /// Mixing inputs and virtual tools followed to recognise changes of mix (Marlin allows up to 6
@@ -483,6 +486,7 @@ impl PurgeShift {
             _ if change.moved_mm == 0.0 && change.stopped_by == Some(LAYER_CHANGE) => {
                 Shortfall::OpensItsLayer
             }
+            _ if change.stopped_by == Some(KEPT_FEATURE) => Shortfall::KeptOffAFeature,
             _ => Shortfall::Accepted,
         };
         self.report.warn(Warning::PurgeShort {
@@ -590,7 +594,7 @@ impl Pass for PurgeShift {
             Effect::Move(m) if m.is_extruding() => {
                 self.features.extrusion(structure.feature);
                 if !self.rules.allowed.contains(&structure.feature) {
-                    self.flush(out, "a feature that may not take the purge")?;
+                    self.flush(out, KEPT_FEATURE)?;
                     return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
                 }
                 if ctx.block.line_number.is_some() || ctx.block.checksum.is_some() {
