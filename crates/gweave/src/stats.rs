@@ -29,6 +29,11 @@ pub struct ToolFilament {
     /// which push a filament unloaded at an earlier tool change back down to the nozzle: none
     /// of that leaves the nozzle. Stationary purges are not in it.
     pub fed_moving_mm: f64,
+    /// Of `extruded_mm`, what the wipe tower's priming block (`; CP PRIMING START` to `; CP
+    /// PRIMING END`, PrusaSlicer's "prime all printing extruders") pushed out. PrusaSlicer 2.5
+    /// leaves it out of its `filament used [mm]`: `Print::_make_wipe_tower` has the tower
+    /// prime before it generates the tool changes, and generating resets the tower's count.
+    pub primed_mm: f64,
 }
 
 /// An axis-aligned box, mm.
@@ -130,7 +135,9 @@ pub struct StatsPass {
     lines_by_region: [u64; 3],
     /// Per tool: the filament out of its nozzle, its retraction in force, and the filament fed
     /// forwards on moves along X or Y ([`ToolFilament::fed_moving_mm`]).
-    feeds: Vec<(f64, Retraction, f64)>,
+    feeds: Vec<(f64, Retraction, f64, f64)>,
+    /// Inside a wipe tower's priming block ([`ToolFilament::primed_mm`]).
+    priming: bool,
     /// The box of extruding moves so far: empty (min above max) until the first.
     bounds: Bounds,
     /// The last move extruded and nothing has set the position since: the next move starts
@@ -167,11 +174,12 @@ impl StatsPass {
             .feeds
             .iter()
             .enumerate()
-            .map(|(tool, &(mm, _, moving_mm))| ToolFilament {
+            .map(|(tool, &(mm, _, moving_mm, primed_mm))| ToolFilament {
                 tool: tool as u32,
                 extruded_mm: mm,
                 extruded_mm3: mm * area_mm2,
                 fed_moving_mm: moving_mm,
+                primed_mm,
             })
             .collect();
         let mut warnings = Vec::new();
@@ -207,6 +215,8 @@ impl StatsPass {
         if filament_matches_slicer == Some(false) {
             if matches(&|i| self.feeds.get(i).map_or(0.0, |f| f.2)) == Some(true) {
                 warnings.push(refills_counted(&self.feeds));
+            } else if matches(&|i| self.feeds.get(i).map_or(0.0, |f| f.0 - f.3)) == Some(true) {
+                warnings.push(priming_left_out(&self.feeds));
             } else if let Some(theirs) = &self.figures.filament_used_mm {
                 warnings.push(figures_differ(&self.feeds, theirs));
             }
@@ -245,15 +255,21 @@ impl StatsPass {
         if self.feeds.len() <= tool {
             self.feeds.resize(tool + 1, Default::default());
         }
-        let (pushed_mm, retraction, _) = &mut self.feeds[tool];
-        *pushed_mm += retraction.feed(fed_mm);
+        let (pushed_mm, retraction, _, primed_mm) = &mut self.feeds[tool];
+        let out_mm = retraction.feed(fed_mm);
+        *pushed_mm += out_mm;
+        if self.priming {
+            *primed_mm += out_mm;
+        }
     }
 
     #[cold]
     #[inline(never)]
     fn read_figures(&mut self, comment: &[u8]) {
         let c = comment.trim_ascii();
-        if let Some(v) = c.strip_prefix(b"filament used [mm] =") {
+        if c == b"CP PRIMING START" || c == b"CP PRIMING END" {
+            self.priming = c == b"CP PRIMING START";
+        } else if let Some(v) = c.strip_prefix(b"filament used [mm] =") {
             self.figures.filament_used_mm = list(v);
         } else if let Some(v) = c.strip_prefix(b"filament used =") {
             // Slic3r: one line per extruder, `; filament used = 607.8mm (1.5cm3)`.
@@ -348,7 +364,7 @@ impl Pass for StatsPass {
 /// Why the slicer's filament figures are above the count, when they are what the file feeds
 /// forwards while moving ([`ToolFilament::fed_moving_mm`]): per tool, the difference.
 #[cold]
-fn refills_counted(feeds: &[(f64, Retraction, f64)]) -> String {
+fn refills_counted(feeds: &[(f64, Retraction, f64, f64)]) -> String {
     let more: Vec<String> =
         feeds.iter().enumerate().map(|(t, f)| format!("T{t} {:.2} mm", f.2 - f.0)).collect();
     format!(
@@ -357,10 +373,22 @@ fn refills_counted(feeds: &[(f64, Retraction, f64)]) -> String {
     )
 }
 
+/// Why the slicer's filament figures are below the count, when they are the count without the
+/// wipe tower's priming block ([`ToolFilament::primed_mm`]): per tool, what the priming pushed.
+#[cold]
+fn priming_left_out(feeds: &[(f64, Retraction, f64, f64)]) -> String {
+    let primed: Vec<String> =
+        feeds.iter().enumerate().map(|(t, f)| format!("T{t} {:.2} mm", f.3)).collect();
+    format!(
+        "the slicer's filament figures leave out what the wipe tower's priming block pushes out ({}): PrusaSlicer primes the tools before it counts the tower's filament; the count above includes it, as the spool does",
+        primed.join(", ")
+    )
+}
+
 /// The slicer's filament figures differ from the count and no rule known here explains it:
 /// per tool, by how much, so that the summary's "see the warnings" finds a warning.
 #[cold]
-fn figures_differ(feeds: &[(f64, Retraction, f64)], theirs: &[f64]) -> String {
+fn figures_differ(feeds: &[(f64, Retraction, f64, f64)], theirs: &[f64]) -> String {
     let by: Vec<String> = (0..theirs.len().max(feeds.len()))
         .map(|t| {
             let ours = feeds.get(t).map_or(0.0, |f| f.0);
@@ -517,6 +545,32 @@ mod tests {
         let stats = stats_of(text, StateOptions::default());
         assert_eq!(stats.filament_matches_slicer, Some(true));
         assert!(!stats.warnings.iter().any(|w| w.contains("slicer's filament")), "{:?}", stats.warnings);
+    }
+
+    /// The statistics of a fixture in tests/data, read as `gweave stats` reads it.
+    fn stats_of_fixture(name: &str) -> Stats {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(name);
+        let mut progress = crate::pass::Quiet;
+        stats_file(&path, None, crate::pass::Strictness::Strict, &mut progress).unwrap().report
+    }
+
+    /// Issue 39 point 3 (a new user's trial): on PrusaSlicer 2.5's three-tool box with a wipe
+    /// tower the count was 3.98 % (T1) and 0.75 % (T2) above the slicer's figures with no known
+    /// rule. The difference is exactly what the tower's priming block pushes out, which
+    /// PrusaSlicer counts before it resets the tower's filament count.
+    #[test]
+    fn a_wipe_tower_s_priming_is_left_out_of_the_slicer_s_figures() {
+        let stats = stats_of_fixture("prusaslicer/pr_box_3tool_tower.gcode");
+        let got: Vec<[String; 2]> = stats
+            .filament
+            .iter()
+            .map(|f| [format!("{:.2}", f.extruded_mm), format!("{:.2}", f.extruded_mm - f.primed_mm)])
+            .collect();
+        assert_eq!(got, [["0.00", "0.00"], ["1540.97", "1482.02"], ["1487.30", "1476.20"]].map(|p| p.map(String::from)));
+        assert_eq!(stats.slicer_figures.filament_used_mm, Some(vec![0.0, 1482.01, 1476.19]));
+        let said = stats.warnings.iter().find(|w| w.starts_with("the slicer's filament figures leave out")).unwrap();
+        assert!(said.contains("(T0 0.00 mm, T1 58.95 mm, T2 11.10 mm)"), "{said}");
+        assert!(!stats.warnings.iter().any(|w| w.starts_with("the count above differs")), "{:?}", stats.warnings);
     }
 
     /// Issue 39 (the closing trial): on a PrusaSlicer 2.5 file sliced with a wipe tower
