@@ -52,6 +52,23 @@ fn stats_state(path: &Path) -> (State, f64) {
     (state, fed.0)
 }
 
+/// The machine a fixture was sliced for, where the default one-hotend printer would refuse
+/// its tools: a file that heats and prints only T1 and T2 (a three-hotend printer) feeds no
+/// filament there, its nozzles cold.
+fn machine_for(path: &Path) -> String {
+    match path.file_name().and_then(|n| n.to_str()) {
+        Some("pr_box_3tool_tower.gcode") => {
+            let three =
+                std::env::temp_dir().join(format!("gweave-three-hotends-{}.toml", std::process::id()));
+            std::fs::write(&three, "[[thermal.hotends]]\n[[thermal.hotends]]\n[[thermal.hotends]]\n")
+                .unwrap();
+            three.to_str().unwrap().to_owned()
+        }
+        Some("pr_cyl_semm_tower.gcode") => "prusa-mk3-mmu".to_owned(),
+        _ => "marlin-ramps".to_owned(),
+    }
+}
+
 fn numbers(v: &serde_json::Value) -> Vec<f64> {
     v.as_array().unwrap().iter().map(|n| n.as_f64().unwrap()).collect()
 }
@@ -65,7 +82,7 @@ fn stats_and_sim_read_every_fixture_the_same_way() {
         let name = path.display();
         let p = path.to_str().unwrap();
         let stats = json(&["stats", p, "--json", "-q"]);
-        let sim = json(&["sim", p, "--json", "-q"]);
+        let sim = json(&["sim", p, "--machine", &machine_for(path), "--json", "-q"]);
         let (state, stats_mm) = stats_state(path);
         linuxcnc += usize::from(state.options().firmware.extrusion_letter() == b'A');
 
@@ -115,4 +132,35 @@ fn sim_filament_plus_what_stayed_retracted_is_stats_figure_per_tool() {
         );
     }
     assert!((back[0] - 20.0).abs() < 1e-9 && (back[1] - 6.5).abs() < 1e-9, "{back:?}");
+}
+
+/// Issue 39 point 5: a PrusaSlicer single-extruder multi-material file (two filaments, one
+/// nozzle, a wipe tower) put everything on T0 with `--machine prusa-mk3` (43 `invalid_extruder`
+/// warnings) and was refused as cold extrusion with `--machine dual-extruder` (the file heats
+/// one nozzle). The built-in `prusa-mk3-mmu` feeds five tools through one hotend: no tool is
+/// refused, nothing is cold, and each tool's filament is `stats`' own.
+#[test]
+fn a_single_nozzle_machine_runs_a_semm_file_with_stats_filament_per_tool() {
+    let data =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/prusaslicer/pr_cyl_semm_tower.gcode");
+    let p = data.to_str().unwrap();
+    let stats = json(&["stats", p, "--json", "-q"]);
+    let sim = json(&["sim", p, "--machine", "prusa-mk3-mmu", "--json", "-q"]);
+    let fed = numbers(&sim["filament_mm"]);
+    let back = numbers(&sim["retracted_at_end_mm"]);
+    let out: Vec<f64> =
+        stats["filament"].as_array().unwrap().iter().map(|t| t["extruded_mm"].as_f64().unwrap()).collect();
+    let mm = |v: f64| format!("{v:.2}");
+    let left: Vec<String> = fed.iter().zip(&back).map(|(f, b)| mm(f + b)).collect();
+    assert_eq!(left, ["4524.35", "4053.18"]);
+    assert_eq!(out.iter().map(|&v| mm(v)).collect::<Vec<_>>(), left);
+    // The only warnings: the file was sliced for RepRapFirmware (`gcode_flavor = reprap`), and
+    // its wipe tower switches pressure advance off with RepRapFirmware's `M572`, which the
+    // MK3S's firmware does not have (a file sliced for it writes `M900`).
+    let counts = sim["warning_counts"].as_object().unwrap();
+    assert_eq!(counts.keys().collect::<Vec<_>>(), ["unknown_command"], "{counts:?}");
+    assert_eq!(sim["unknown_commands"]["M572"].as_u64(), Some(85), "{}", sim["unknown_commands"]);
+    let heaters: Vec<String> =
+        sim["heaters"].as_array().unwrap().iter().map(|h| h["heater"].to_string()).collect();
+    assert_eq!(heaters, [r#"{"hotend":0}"#, r#""bed""#], "one hotend");
 }

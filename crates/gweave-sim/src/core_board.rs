@@ -70,6 +70,9 @@ pub fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported> {
     if p.inkjet.is_some() || t.hotends.len() > 2 {
         return Err(Unsupported("inkjet or third hotend"));
     }
+    if p.single_nozzle_tools > 0 {
+        return Err(Unsupported("several tools feeding one nozzle (single_nozzle_tools)"));
+    }
     if p.rotary.is_some() && p.mixing_inputs > 0 {
         return Err(Unsupported("rotary axis beside a mixing hotend: both need the E1 socket"));
     }

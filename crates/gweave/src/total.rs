@@ -51,6 +51,8 @@ impl StatsTotal {
                         x.extruded_mm += tf.extruded_mm;
                         x.extruded_mm3 += tf.extruded_mm3;
                         x.fed_moving_mm += tf.fed_moving_mm;
+                        x.primed_mm += tf.primed_mm;
+                        x.as_prusaslicer_mm += tf.as_prusaslicer_mm;
                     }
                     None => t.filament.push(tf.clone()),
                 }

@@ -102,7 +102,17 @@ fn print_human(out: &mut dyn Write, input: &std::path::Path, read: &WithMalforme
             .and_then(|l| l.get(i))
             .map(|v| format!("   slicer says {v:.2} mm"))
             .unwrap_or_default();
-        writeln!(out, "    T{:<3} {:>12.2} mm {:>10.1} mm3{theirs}", f.tool, f.extruded_mm, f.extruded_mm3)?;
+        // A wipe tower's priming and unloading/loading: PrusaSlicer's own way of counting.
+        let as_prusaslicer = if (f.as_prusaslicer_mm - f.extruded_mm).abs() >= 0.005 {
+            format!("   as PrusaSlicer counts {:.2} mm", f.as_prusaslicer_mm)
+        } else {
+            String::new()
+        };
+        writeln!(
+            out,
+            "    T{:<3} {:>12.2} mm {:>10.1} mm3{as_prusaslicer}{theirs}",
+            f.tool, f.extruded_mm, f.extruded_mm3
+        )?;
     }
     if let Some(matches) = s.filament_matches_slicer {
         writeln!(

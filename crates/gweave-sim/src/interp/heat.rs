@@ -29,7 +29,14 @@ impl Machine {
     pub(super) fn hotend_target(&mut self, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
         let (s, r) = self.target_words();
         let b = self.core.block();
-        let hotend = b.get(b'T').map_or(self.active_hotend_index(), |t| t.max(0.0) as u8);
+        // On a single nozzle `T` names a tool, and every tool heats the one hotend.
+        let hotend = b.get(b'T').map_or(self.active_hotend_index(), |t| {
+            if self.profile.single_nozzle_tools > 0 && self.profile.has_tool(t.max(0.0) as u32) {
+                0
+            } else {
+                t.max(0.0) as u8
+            }
+        });
         let id = HeaterId::Hotend(hotend);
         if self.thermal.target(id).is_err() {
             out(self.now_s(), &format!("echo:M{} Invalid extruder {hotend}", c.number));
@@ -93,7 +100,9 @@ impl Machine {
     pub(super) fn rrf_tool_temperature(&mut self, out: &mut dyn FnMut(f64, &str)) {
         let b = self.core.block();
         let hotend = match b.get(b'P') {
-            Some(tool) if self.profile.mixing_inputs == 0 => tool.max(0.0) as u8,
+            Some(tool) if self.profile.mixing_inputs == 0 => {
+                self.profile.hotend_of_tool(tool.max(0.0) as usize)
+            }
             _ => self.active_hotend_index(),
         };
         let s = b.get(b'S');
@@ -110,11 +119,7 @@ impl Machine {
     }
 
     fn active_hotend_index(&self) -> u8 {
-        if self.profile.mixing_inputs > 0 {
-            0
-        } else {
-            self.tool.min(usize::from(u8::MAX)) as u8
-        }
+        self.profile.hotend_of_tool(self.tool)
     }
 
     fn set_target(&mut self, id: HeaterId, celsius: Option<f64>, out: &mut dyn FnMut(f64, &str)) {

@@ -505,7 +505,7 @@ impl Machine {
             (number as usize) < gweave::colour::dialect::MARLIN_VIRTUAL_TOOLS
                 || self.core.mixing().is_some_and(|m| m.rrf_mix(number).is_some())
         } else {
-            number < u32::from(self.thermal.hotend_count())
+            self.profile.has_tool(number)
         };
         if !valid {
             out(self.now_s(), &format!("echo:T{number} Invalid extruder"));
@@ -516,8 +516,8 @@ impl Machine {
         self.core.drain();
         self.run_core(line, &effect, out);
         if !mixing {
-            // Checked above: the hotend exists.
-            let _ = self.thermal.set_active_extruder(number as u8);
+            // Checked above: the hotend exists (the one nozzle, for a tool of a single nozzle).
+            let _ = self.thermal.set_active_extruder(self.profile.hotend_of_tool(number as usize));
         }
         self.tool = number as usize;
         if self.filament_mm.len() <= self.tool {

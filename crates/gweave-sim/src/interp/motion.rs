@@ -91,11 +91,7 @@ impl Machine {
 
     /// The hotend that extrudes: the tool's on a multi-hotend machine, the only one otherwise.
     fn active_hotend(&self) -> u8 {
-        if self.profile.mixing_inputs > 0 {
-            0
-        } else {
-            self.tool.min(usize::from(u8::MAX)) as u8
-        }
+        self.profile.hotend_of_tool(self.tool)
     }
 
     /// Warns about a target outside the build volume (below the bed separately). Only the axes

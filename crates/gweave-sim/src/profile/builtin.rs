@@ -43,6 +43,7 @@ pub const BUILTIN: &[BuiltinProfile] = &[
     example!("prusa-mk3"),
     example!("klipper"),
     example!("dual-extruder"),
+    example!("prusa-mk3-mmu"),
     example!("mixing-4in"),
     example!("rotary"),
     example!("inkjet-c6602"),

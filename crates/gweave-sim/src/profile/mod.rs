@@ -61,6 +61,15 @@ pub enum MachineProfileError {
     /// `homing.order` is not some of `XYZ`, each at most once.
     #[error("machine profile: [homing] order = {0:?}: give some of XYZ, each at most once")]
     HomingOrder(String),
+    /// Several tools feed one nozzle (`single_nozzle_tools`), so the machine has one hotend
+    /// and no mixing inputs.
+    #[error("machine profile: single_nozzle_tools = {tools} feeds one nozzle: give one [[thermal.hotends]] entry (not {hotends}) and no mixing_inputs")]
+    SingleNozzle {
+        /// `single_nozzle_tools`.
+        tools: usize,
+        /// `[[thermal.hotends]]` entries.
+        hotends: usize,
+    },
     /// A rotary axis needs its steps per degree (`motion.steps.a_per_deg`).
     #[error("machine profile: [rotary] needs motion.steps.a_per_deg")]
     RotaryWithoutSteps,
@@ -105,6 +114,8 @@ pub struct Bed {
 
 /// A machine with a few inputs more than the largest mixing hotends (6 inputs).
 const MIXING_INPUTS: Range = Range::new(0.0, 16.0, "inputs");
+/// Marlin's `EXTRUDERS` goes to 8 (a Prusa MMU2S has 5 filaments).
+const SINGLE_NOZZLE_TOOLS: Range = Range::new(0.0, 8.0, "tools");
 /// The slow second touch of homing runs at `feed / divisor` (Marlin ships 2 to 10).
 const BUMP_DIVISOR: Range = Range::new(1.0, 100.0, "");
 /// The inkjet canvas: 20 000 pitches per side (5.3 m at 96 dpi) is more than any bed.
@@ -126,6 +137,7 @@ impl CheckRanges for MachineProfile {
         homing.each("bump_mm", &self.homing.bump_mm, range::LEN_MM)?;
         homing.each("bump_divisor", &self.homing.bump_divisor, BUMP_DIVISOR)?;
         t.count("mixing_inputs", self.mixing_inputs as u64, MIXING_INPUTS)?;
+        t.count("single_nozzle_tools", self.single_nozzle_tools as u64, SINGLE_NOZZLE_TOOLS)?;
         if let Some(r) = &self.rotary {
             t.sub("rotary").check("cylinder_radius_mm", r.cylinder_radius_mm, range::SIZE_MM)?;
         }
@@ -407,6 +419,11 @@ pub struct MachineProfile {
     /// Inputs of a mixing hotend (0: a plain extruder per hotend). Each input's steps/mm are in
     /// `motion.steps.mixing_e` (left empty, every input gets `motion.steps.e`).
     pub mixing_inputs: usize,
+    /// Tools that feed one nozzle (0: one tool per hotend). A single-extruder multi-material
+    /// printer (a Prusa MMU2S, Marlin's `SINGLENOZZLE` with `EXTRUDERS` filaments) changes
+    /// filament, not nozzle: `T0` to `T<n-1>` all print through the one hotend, at its
+    /// temperature, and each tool's filament is counted on its own.
+    pub single_nozzle_tools: usize,
     /// A rotary axis A.
     pub rotary: Option<Rotary>,
     /// An inkjet printhead.
@@ -427,6 +444,7 @@ impl Default for MachineProfile {
             endstops: Endstops::default(),
             homing: Homing::default(),
             mixing_inputs: 0,
+            single_nozzle_tools: 0,
             rotary: None,
             inkjet: None,
             faults: Vec::new(),
@@ -446,6 +464,26 @@ impl MachineProfile {
             printhead: Box::new(inkjet.printhead.clone()),
             origin_mm: (inkjet.origin_x_mm, inkjet.origin_y_mm),
         })
+    }
+
+    /// Whether tool `tool` exists: a tool per hotend, several on one nozzle
+    /// ([`Self::single_nozzle_tools`]); a mixing hotend's virtual tools are checked apart.
+    pub fn has_tool(&self, tool: u32) -> bool {
+        let tools = match self.single_nozzle_tools {
+            0 => self.thermal.hotends.len().max(1),
+            n => n,
+        };
+        (tool as usize) < tools
+    }
+
+    /// The hotend tool `tool` prints through: its own on a multi-hotend machine, the only one
+    /// on a mixing hotend or a single nozzle fed by several tools.
+    pub fn hotend_of_tool(&self, tool: usize) -> u8 {
+        if self.mixing_inputs > 0 || self.single_nozzle_tools > 0 {
+            0
+        } else {
+            tool.min(usize::from(u8::MAX)) as u8
+        }
     }
 
     /// Read a profile from TOML text, fill derived defaults and check it.
@@ -521,6 +559,10 @@ impl MachineProfile {
         if mixing != self.mixing_inputs {
             return Err(MachineProfileError::MixingSteps { inputs: self.mixing_inputs, steps: mixing });
         }
+        let hotends = self.thermal.hotends.len();
+        if self.single_nozzle_tools > 0 && (hotends != 1 || self.mixing_inputs > 0) {
+            return Err(MachineProfileError::SingleNozzle { tools: self.single_nozzle_tools, hotends });
+        }
         if self.rotary.is_some() && self.motion.steps.a_per_deg.is_none() {
             return Err(MachineProfileError::RotaryWithoutSteps);
         }
@@ -563,6 +605,26 @@ mod tests {
         // The defaults survive a TOML round trip.
         let text = toml::to_string(&p).unwrap();
         assert_eq!(MachineProfile::from_toml_str(&text).unwrap(), p);
+    }
+
+    /// Issue 39 point 5: several tools on one nozzle (a Prusa MMU2S) all print through
+    /// hotend 0; a profile that gives them several hotends or a mixing hotend is refused.
+    #[test]
+    fn single_nozzle_tools_share_the_one_hotend() {
+        let p = MachineProfile::from_toml_str("single_nozzle_tools = 5\n").unwrap();
+        let tools: Vec<(bool, u8)> = (0..6).map(|t| (p.has_tool(t), p.hotend_of_tool(t as usize))).collect();
+        assert_eq!(tools, [(true, 0), (true, 0), (true, 0), (true, 0), (true, 0), (false, 0)]);
+        let two = MachineProfile::from_toml_str("[[thermal.hotends]]\n[[thermal.hotends]]\n").unwrap();
+        assert_eq!((two.has_tool(1), two.hotend_of_tool(1), two.has_tool(2)), (true, 1, false));
+        let e = MachineProfile::from_toml_str(
+            "single_nozzle_tools = 2\n[[thermal.hotends]]\n[[thermal.hotends]]\n",
+        );
+        assert_eq!(
+            e.unwrap_err().to_string(),
+            "machine profile: single_nozzle_tools = 2 feeds one nozzle: give one [[thermal.hotends]] entry (not 2) and no mixing_inputs"
+        );
+        let e = MachineProfile::from_toml_str("single_nozzle_tools = 9\n").unwrap_err().to_string();
+        assert_eq!(e, "single_nozzle_tools = 9 is out of range: 0 to 8 tools");
     }
 
     #[test]

@@ -22,4 +22,5 @@ pub mod reader;
 pub mod retraction;
 pub mod state;
 pub mod temp;
+pub mod wipe_tower;
 pub mod writer;
