@@ -130,10 +130,15 @@ build: rust-deps
 build-debug: rust-deps
 	$(CARGO) build -p gweave-cli
 
+# The package's `gweave` command is the CLI's executable, built first into the wheel's data by
+# the package's build backend (crates/gweave-py/build_backend/gweave_build.py), which
+# `maturin develop` does not run; the CLI's build leaves the engine compiled for maturin's.
 python: python-deps
+	$(PY) crates/gweave-py/build_backend/gweave_build.py release >/dev/null
 	$(VENV)/bin/maturin develop --release -q -m crates/gweave-py/Cargo.toml
 
 python-debug: py-deps
+	$(PY) crates/gweave-py/build_backend/gweave_build.py dev >/dev/null
 	$(VENV)/bin/maturin develop -q -m crates/gweave-py/Cargo.toml
 
 lint: rust-deps

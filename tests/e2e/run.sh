@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# End-to-end: the installed `gweave` binary and the Python console script on real slicer files.
+# End-to-end: the installed `gweave` binary and the one the Python package installs (the same executable) on real slicer files.
 # Every check compares values; the script stops at the first failure and prints what differed.
 set -euo pipefail
 GWEAVE=$(realpath "${1:-target/release/gweave}")

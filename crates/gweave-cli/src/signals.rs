@@ -9,9 +9,8 @@
 //! - a signal the process inherited as ignored (`nohup` ignores SIGHUP, a shell starts
 //!   background jobs with SIGINT and SIGQUIT ignored): the run must go on through it, as the
 //!   one who started it asked (POSIX `nohup`, and "Signals" in the shell's job control);
-//! - a signal someone in the process already handles: the Python interpreter, which runs the
-//!   CLI inside itself (`gweave.main()`), handles SIGINT as `KeyboardInterrupt`; the run
-//!   leaves it to it (the Python package polls for it and stops the run).
+//! - a signal someone in the process already handles: a program that runs [`crate::run`] inside
+//!   itself (an interpreter handling SIGINT as `KeyboardInterrupt`) keeps its own handling.
 //!
 //! Faults a thread raises against itself (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGTRAP, SIGSYS,
 //! SIGABRT) are not guarded: the handler would return into the faulting instruction, and
@@ -19,9 +18,9 @@
 //!
 //! The handler itself only writes the signal number into a pipe (`write` is async-signal-safe);
 //! a thread reading the pipe does the work, which needs locks and allocation. The handlers are
-//! installed for the length of one run and the previous ones restored after it, because the
-//! Python package runs the CLI inside the interpreter, whose own handling must come back once
-//! the command returns.
+//! installed for the length of one run and the previous ones restored after it, so that a
+//! program running [`crate::run`] inside itself gets its own handling back once the command
+//! returns. (The Python package runs the `gweave` executable instead, as a child process.)
 
 #[cfg(unix)]
 mod imp {
@@ -77,7 +76,7 @@ mod imp {
     }
 
     impl Cleanup {
-        /// Installs the handlers, or does nothing when another run in this process (a Python
+        /// Installs the handlers, or does nothing when another run in this process (another
         /// thread) already has them.
         pub fn install() -> io::Result<Option<Cleanup>> {
             let mut fds = [-1; 2];
@@ -200,7 +199,7 @@ mod imp {
             }
         }
 
-        /// The Python package runs the CLI inside the interpreter: after a run, its own
+        /// A program that runs the CLI inside itself (an interpreter): after a run, its own
         /// handlers must be back (else Ctrl-C or SIGTERM would be swallowed or exit later).
         /// And a signal the process was started with ignored (`nohup` and SIGHUP) stays
         /// ignored during a run.
@@ -214,7 +213,7 @@ mod imp {
             let guard = Cleanup::install().unwrap().expect("first install");
             assert_eq!(current(libc::SIGHUP), on_signal as extern "C" fn(c_int) as usize);
             assert_eq!(current(libc::SIGUSR2), libc::SIG_IGN);
-            // A second run at the same time (another Python thread) leaves them alone.
+            // A second run at the same time (another thread) leaves them alone.
             assert!(Cleanup::install().unwrap().is_none());
             drop(guard);
             assert_eq!(current(libc::SIGHUP), before);

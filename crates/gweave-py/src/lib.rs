@@ -38,38 +38,12 @@ fn to_json<T: serde::Serialize>(value: &T) -> PyResult<String> {
     serde_json::to_string(value).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
-/// Runs the `gweave` command line with these arguments (argv[0] included); returns the exit code.
-/// A Ctrl-C stops the run (its scratch files removed, no output) and raises `SystemExit(130)`,
-/// as a Python command-line tool ends on Ctrl-C, with the `KeyboardInterrupt` as its cause:
-/// the interpreter unwinds, running `finally` blocks and `atexit` handlers.
-#[pyfunction]
-fn run_cli(py: Python<'_>, argv: Vec<String>) -> PyResult<i32> {
-    let code = interrupt::interruptible(py, || gweave_cli::run(argv)).map_err(|raised| {
-        if raised.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
-            let exit = pyo3::exceptions::PySystemExit::new_err(130);
-            exit.set_cause(py, Some(raised));
-            exit
-        } else {
-            raised
-        }
-    })?;
-    // ExitCode is opaque; the CLI only returns SUCCESS, FAILURE (1) or usage errors (2).
-    Ok(if code == std::process::ExitCode::SUCCESS {
-        0
-    } else if code == std::process::ExitCode::from(2) {
-        2
-    } else {
-        1
-    })
-}
-
 #[pymodule]
 fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(read::stats_json, m)?)?;
     m.add_function(wrap_pyfunction!(read::check_json, m)?)?;
     m.add_function(wrap_pyfunction!(read::cat_json, m)?)?;
-    m.add_function(wrap_pyfunction!(run_cli, m)?)?;
     // binder-jet raster
     m.add_function(wrap_pyfunction!(raster::raster_json, m)?)?;
     m.add_function(wrap_pyfunction!(raster::raster_test_pattern_json, m)?)?;

@@ -608,7 +608,8 @@ def predict_colour(ratios: Sequence[float], profile: Optional[PathLike] = None) 
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Run the ``gweave`` command line (the same binary as the Rust CLI); returns its exit code.
+    """Run the ``gweave`` command (the native executable installed with this package) with
+    ``argv`` (``sys.argv[1:]`` if ``None``); returns its exit code.
 
     A Ctrl-C stops the run (no output written) and raises ``SystemExit(130)``, with the
     ``KeyboardInterrupt`` as its ``__cause__``, as a command-line tool ends: ``finally`` blocks
@@ -616,8 +617,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """
     import sys
 
-    args = list(sys.argv if argv is None else ["gweave", *argv])
-    return _gweave.run_cli(args)
+    from . import _command
+
+    return _command.run(list(sys.argv[1:] if argv is None else argv))
 
 
 # ---- rotary (lathe-type) printing ----------------------------------------------------------

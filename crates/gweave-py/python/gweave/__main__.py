@@ -1,17 +1,17 @@
-"""``python -m gweave`` and the ``gweave`` console script: the Rust command line."""
+"""``python -m gweave``: the ``gweave`` command installed with this package."""
 
-import signal
+import os
 import sys
 
-from . import main as _main
+from . import _command
 
 
 def main() -> None:
-    # A CLI process: die quietly on a closed pipe (`gweave stats big.gcode | head`) like any
-    # Unix tool, instead of Python's default of ignoring SIGPIPE.
-    if hasattr(signal, "SIGPIPE"):
-        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
-    sys.exit(_main())
+    if os.name == "posix":
+        # The command takes this process's place: its exit status, its signals and its pipes are
+        # the caller's own, with no interpreter in between.
+        os.execv(_command.executable(), ["gweave", *sys.argv[1:]])
+    sys.exit(_command.run(sys.argv[1:]))
 
 
 if __name__ == "__main__":

@@ -20,7 +20,6 @@ def cat_json(
     force: bool = False,
     lenient: bool = False,
 ) -> str: ...
-def run_cli(argv: List[str]) -> int: ...
 
 # binder-jet raster
 def raster_json(
