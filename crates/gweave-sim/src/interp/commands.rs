@@ -25,7 +25,7 @@ use gweave::gcode::line::{Block, Command, Value};
 use gweave::gcode::state::{self, Effect};
 use gweave::range::{self, OutOfRange, Range};
 
-use super::Machine;
+use super::{sd, Machine};
 use crate::motion::limits;
 use crate::profile::build_options::Feature;
 use crate::thermal::control;
@@ -198,12 +198,19 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "G93 G94", what: "inverse-time feed (F = 1 / minutes of each move) / units per minute, in a rotary program (its header's feed convention)", run: feed_mode, ..ROW },
     CommandSpec { codes: "M0 M1", what: "program stop: finish the moves, motors off; with m0 = \"seed\" also home and end the program", run: program_stop, queue: Queue::Drains, ..ROW },
     CommandSpec { codes: "M17 M18 M84", what: "motors on (accepted) / off (the axes must be homed again)", run: motors, params: PERIOD, ..ROW },
-    CommandSpec { codes: "M20 M21 M22", what: "SD card (firmware.sdcard, serve --sd DIR): list files (L: long names), mount, release", run: sd, needs: Feature::Sdcard, ..ROW },
-    CommandSpec { codes: "M23 M24 M25", what: "SD print: select a file, start/resume, pause", run: sd, needs: Feature::Sdcard, ..ROW },
-    CommandSpec { codes: "M26", what: "SD print: set the byte position S", run: sd, params: &[p("S", SD_BYTE)], needs: Feature::Sdcard, ..ROW },
-    CommandSpec { codes: "M27", what: "SD print status (S<n>: every n s)", run: sd, params: PERIOD, needs: Feature::Sdcard, ..ROW },
-    CommandSpec { codes: "M28 M29 M30 M32", what: "SD upload to a file / end it, delete a file, select and start", run: sd, needs: Feature::Sdcard, ..ROW },
-    CommandSpec { codes: "M33", what: "long name of a file (firmware.long_filenames)", run: sd, needs: Feature::LongFilenames, ..ROW },
+    CommandSpec { codes: "M20", what: "SD card (firmware.sdcard, serve --sd DIR): list the files (L: long names)", run: sd::m20, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M21", what: "SD card: mount", run: sd::m21, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M22", what: "SD card: release", run: sd::m22, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M23", what: "SD print: select a file", run: sd::m23, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M24", what: "SD print: start or resume", run: sd::m24, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M25", what: "SD print: pause", run: sd::m25, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M26", what: "SD print: set the byte position S", run: sd::m26, params: &[p("S", SD_BYTE)], needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M27", what: "SD print status (S<n>: every n s)", run: sd::m27, params: PERIOD, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M28", what: "SD upload: the following lines to a file until M29", run: sd::m28, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M29", what: "SD upload: end it", run: sd::m29, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M30", what: "SD card: delete a file", run: sd::m30, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M32", what: "SD print: select a file and start", run: sd::m32, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M33", what: "long name of a file (firmware.long_filenames)", run: sd::m33, needs: Feature::LongFilenames, ..ROW },
     CommandSpec { codes: "M31", what: "print job time", run: m31, ..ROW },
     CommandSpec { codes: "M42", what: "set a pin (firmware.pin_control): P pin, S value", run: m42, params: &[p("S", range::PWM)], needs: Feature::PinControl, ..ROW },
     CommandSpec { codes: "M226", what: "wait for a pin state (firmware.pin_control)", run: m226, needs: Feature::PinControl, ..ROW },
@@ -245,13 +252,13 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M420", what: "bed levelling on/off (S), mesh report (V)", run: m420, needs: Feature::Mesh, ..ROW },
     CommandSpec { codes: "M500 M501", what: "settings: save to / load from the EEPROM file (firmware.eeprom)", run: eeprom, needs: Feature::Eeprom, ..ROW },
     CommandSpec { codes: "M502 M503", what: "settings: factory defaults, report", run: defaults_or_report, ..ROW },
-    CommandSpec { codes: "M524", what: "abort the SD print", run: sd, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M524", what: "abort the SD print", run: sd::m524, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, ..ROW },
     CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, params: TOOL_TEMP, ..ROW },
     CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, needs: Feature::AdvancedPause, ..ROW },
     CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: m851, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
     CommandSpec { codes: "M876", what: "answer a host prompt (firmware.prompt_support)", run: m876, needs: Feature::PromptSupport, ..ROW },
-    CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd::m928, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M578 M700", what: "inkjet fire at the carriage position (machines with a printhead)", run: fire, params: &[p("P", HEAD), p("S", NOZZLE_BITS)], ..ROW },
     CommandSpec { codes: "M999", what: "restart after a halt", run: restart, while_halted: true, ..ROW },
     CommandSpec { codes: "T<n>", what: "select a tool (a virtual mixing tool on a mixing hotend)", run: tool_change, ..ROW },
@@ -382,8 +389,8 @@ pub(super) fn check(code: (u8, u32), params: &[Param], block: &Block, line: &[u8
     Ok(())
 }
 
-// The handlers. The SD card's family is one method of its own module (`sd`), given the code's
-// number; the rest are one method or a few lines each.
+// The handlers. The SD card's are in its own module (`sd`); the rest are one method or a few
+// lines each.
 
 fn motion(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.motion(c.line, c.effect, out)
@@ -467,10 +474,6 @@ fn motors(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     if !m.core.block().has(b'S') {
         m.homed = [false; 3];
     }
-}
-
-fn sd(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.sd_command(c.line, c.number, out)
 }
 
 fn m31(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {

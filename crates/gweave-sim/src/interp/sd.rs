@@ -17,12 +17,16 @@
 //! no links, and the board reaches nothing outside its card, so the card never follows one:
 //! a link is not listed, not selected, not deleted and not written ([`open_to_read`],
 //! [`create`]), even if it appears between the listing and the open.
+//!
+//! Each SD command has its own row in the registry (`commands::COMMANDS`: codes, help, gating,
+//! ranges) and its own handler here (`m20` ... `m928`).
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufRead, BufReader, Seek, SeekFrom, Write};
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Component, Path, PathBuf};
 
+use super::commands::Call;
 use super::pause::PromptReason;
 use super::Machine;
 
@@ -129,84 +133,6 @@ impl Machine {
         }
         // M928 logs the commands and also runs them.
         !log
-    }
-
-    /// The SD commands `M20`-`M30`, `M32`, `M524`, `M928` (`M33` in [`Machine::sd_command`]
-    /// too).
-    pub(super) fn sd_command(&mut self, line: &[u8], number: u32, out: &mut dyn FnMut(f64, &str)) {
-        let now = self.now_s();
-        let text = String::from_utf8_lossy(super::command_text(line)).into_owned();
-        // The file name is the rest of the line after the code (Marlin's `parser.string_arg`).
-        let arg =
-            text.get(3..).unwrap_or("").trim_start_matches(|c: char| c.is_ascii_digit()).trim().to_owned();
-        if number != 21 && !self.sd.mounted {
-            out(now, "echo:No media");
-            return;
-        }
-        match number {
-            20 => {
-                let long = self.profile.firmware.long_filenames && has_flag(&arg, 'L');
-                out(now, "Begin file list");
-                for e in self.sd.entries() {
-                    let l = if long { format!(" {}", e.long) } else { String::new() };
-                    out(now, &format!("{} {}{l}", e.dos, e.size));
-                }
-                out(now, "End file list");
-            }
-            21 => {
-                self.sd.mounted = self.sd.dir.as_deref().is_some_and(Path::is_dir);
-                out(now, if self.sd.mounted { "echo:SD card ok" } else { "echo:SD init fail" });
-            }
-            22 => {
-                self.sd.mounted = false;
-                self.sd.open = None;
-                self.sd.writing = None;
-                out(now, "echo:SD card released");
-            }
-            23 => self.sd_select(&arg, out),
-            // Marlin 2.1's M24/M25 (`Marlin/src/gcode/sd/M24_M25.cpp`): the job timer, and a
-            // host prompt about it.
-            24 => {
-                self.sd_resume();
-                self.prompt(PromptReason::Info, "Resuming SD", &["Dismiss"], out);
-            }
-            25 => {
-                if let Some(p) = self.sd.open.as_mut() {
-                    p.running = false;
-                }
-                self.job_timer_pause();
-                self.prompt(PromptReason::PauseResume, "Pause SD", &["Resume"], out);
-            }
-            26 => {
-                if let (Some(p), Some(s)) = (self.sd.open.as_mut(), self.core.block().get(b'S')) {
-                    let pos = (s.max(0.0) as u64).min(p.size);
-                    if p.reader.seek(SeekFrom::Start(pos)).is_ok() {
-                        p.pos = pos;
-                    }
-                }
-            }
-            27 => self.m27(&arg, out),
-            28 | 928 => self.sd_open_write(&arg, number == 928, out),
-            // An M29 outside an upload: nothing to close.
-            29 => {}
-            30 => self.sd_delete(&arg, out),
-            32 => {
-                // `M32 [S<pos>] [P1] !<name>#`: select and start at once.
-                let name = arg.split('!').nth(1).map_or(arg.as_str(), |n| n.split('#').next().unwrap_or(n));
-                let name = name.trim().to_owned();
-                self.sd_select(&name, out);
-                if let Some(p) = self.sd.open.as_mut() {
-                    p.running = true;
-                }
-            }
-            33 => {
-                if let Some(e) = self.sd.find(&arg) {
-                    out(now, &e.long);
-                }
-            }
-            524 if self.sd.open.take().is_some() => out(now, "echo:Print Aborted"),
-            _ => {}
-        }
     }
 
     /// Starts or resumes the selected file, with the print job timer.
@@ -324,6 +250,163 @@ impl Machine {
             let late = ((now - self.sd.next_report_s) / period).floor() + 1.0;
             self.sd.next_report_s += late * period;
         }
+    }
+}
+
+// The SD commands' handlers, one per row of the registry (`commands::COMMANDS`), as Marlin has one
+// file per command under `Marlin/src/gcode/sd/`. Every one but `M21` needs the card mounted:
+// without it Marlin answers `echo:No media` and does nothing.
+
+/// Whether the card is mounted; if not, the reply says so.
+fn mounted(m: &Machine, out: &mut dyn FnMut(f64, &str)) -> bool {
+    if !m.sd.mounted {
+        out(m.now_s(), "echo:No media");
+    }
+    m.sd.mounted
+}
+
+/// The file name or flags of an SD command: the rest of the line after the code (Marlin's
+/// `parser.string_arg`).
+fn argument(c: &Call<'_>) -> String {
+    let text = String::from_utf8_lossy(super::command_text(c.line)).into_owned();
+    text.get(3..).unwrap_or("").trim_start_matches(|ch: char| ch.is_ascii_digit()).trim().to_owned()
+}
+
+/// `M20 [L]`: the file list, with the long names if asked and built with them.
+pub(super) fn m20(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if !mounted(m, out) {
+        return;
+    }
+    let now = m.now_s();
+    let long = m.profile.firmware.long_filenames && has_flag(&argument(c), 'L');
+    out(now, "Begin file list");
+    for e in m.sd.entries() {
+        let l = if long { format!(" {}", e.long) } else { String::new() };
+        out(now, &format!("{} {}{l}", e.dos, e.size));
+    }
+    out(now, "End file list");
+}
+
+/// `M21`: mount the card (the folder must still be there).
+pub(super) fn m21(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    m.sd.mounted = m.sd.dir.as_deref().is_some_and(Path::is_dir);
+    out(m.now_s(), if m.sd.mounted { "echo:SD card ok" } else { "echo:SD init fail" });
+}
+
+/// `M22`: release the card, closing the file printed or written.
+pub(super) fn m22(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if !mounted(m, out) {
+        return;
+    }
+    m.sd.mounted = false;
+    m.sd.open = None;
+    m.sd.writing = None;
+    out(m.now_s(), "echo:SD card released");
+}
+
+/// `M23 <name>`: select a file to print.
+pub(super) fn m23(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if mounted(m, out) {
+        m.sd_select(&argument(c), out);
+    }
+}
+
+/// `M24`: start or resume the selected file. Marlin 2.1's M24/M25
+/// (`Marlin/src/gcode/sd/M24_M25.cpp`) run the job timer and tell the host with a prompt.
+pub(super) fn m24(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if mounted(m, out) {
+        m.sd_resume();
+        m.prompt(PromptReason::Info, "Resuming SD", &["Dismiss"], out);
+    }
+}
+
+/// `M25`: pause the SD print.
+pub(super) fn m25(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if !mounted(m, out) {
+        return;
+    }
+    if let Some(p) = m.sd.open.as_mut() {
+        p.running = false;
+    }
+    m.job_timer_pause();
+    m.prompt(PromptReason::PauseResume, "Pause SD", &["Resume"], out);
+}
+
+/// `M26 S<byte>`: where the print goes on in the selected file; past its end, the end (the row
+/// declares S a byte position).
+pub(super) fn m26(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if !mounted(m, out) {
+        return;
+    }
+    if let (Some(p), Some(s)) = (m.sd.open.as_mut(), m.core.block().get(b'S')) {
+        let pos = (s.max(0.0) as u64).min(p.size);
+        if p.reader.seek(SeekFrom::Start(pos)).is_ok() {
+            p.pos = pos;
+        }
+    }
+}
+
+/// `M27 [C] [S<s>]`: the print's status, the file's name, or a status every s seconds.
+pub(super) fn m27(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if mounted(m, out) {
+        m.m27(&argument(c), out);
+    }
+}
+
+/// `M28 <name>`: the following lines go into the file until `M29` ([`Machine::sd_write_line`]).
+pub(super) fn m28(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if mounted(m, out) {
+        m.sd_open_write(&argument(c), false, out);
+    }
+}
+
+/// `M29` outside an upload (an upload's own ends it in [`Machine::sd_write_line`]): nothing to
+/// close.
+pub(super) fn m29(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    mounted(m, out);
+}
+
+/// `M30 <name>`: delete a file.
+pub(super) fn m30(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if mounted(m, out) {
+        m.sd_delete(&argument(c), out);
+    }
+}
+
+/// `M32 [S<pos>] [P1] !<name>#`: select a file and start it at once.
+pub(super) fn m32(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if !mounted(m, out) {
+        return;
+    }
+    let arg = argument(c);
+    let name = arg.split('!').nth(1).map_or(arg.as_str(), |n| n.split('#').next().unwrap_or(n));
+    m.sd_select(name.trim(), out);
+    if let Some(p) = m.sd.open.as_mut() {
+        p.running = true;
+    }
+}
+
+/// `M33 <name>`: a file's long name.
+pub(super) fn m33(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if !mounted(m, out) {
+        return;
+    }
+    if let Some(e) = m.sd.find(&argument(c)) {
+        out(m.now_s(), &e.long);
+    }
+}
+
+/// `M524`: abort the SD print.
+pub(super) fn m524(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if mounted(m, out) && m.sd.open.take().is_some() {
+        out(m.now_s(), "echo:Print Aborted");
+    }
+}
+
+/// `M928 <name>`: the following lines go into the file until `M29`, and run too (a log).
+pub(super) fn m928(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
+    if mounted(m, out) {
+        m.sd_open_write(&argument(c), true, out);
     }
 }
 
