@@ -219,6 +219,33 @@ fn rotary_machine_steps_a_and_reports_it() {
     assert_eq!(replies, ["X:10.00 Y:0.00 Z:0.00 A:450.00 E:1.00 Count X:800 Y:0 Z:0 A:4000"]);
 }
 
+/// The binder-jet profile's feed piston on A counted one step a millimetre (A's steps were
+/// only ever per degree, and A without them fell back to 1): 46 steps for a 46 mm rise.
+#[test]
+fn binder_jet_feed_piston_steps_are_per_mm() {
+    let text = std::fs::read_to_string(machines().join("binder-jet.toml")).unwrap();
+    let profile = MachineProfile::from_toml_str(&text).unwrap();
+    assert_eq!(profile.motion.steps.a_per_mm, Some(400.0));
+    let (rep, _) = sim("G28\nG1 Z0.2 F120\nG1 A0.3\nG1 A1.5\nM400", profile);
+    // A rises to 1.5 mm at 400 steps/mm; the build piston Z to 0.2 mm at 4000.
+    assert_eq!(rep.steps.axes[4], 600);
+    assert_eq!(rep.count[4], 600);
+    assert_eq!(rep.count[2], 800);
+}
+
+/// A piston on A without A's steps per mm, or A given both per degree and per mm, is refused
+/// naming the key.
+#[test]
+fn axis_a_needs_one_unit_for_a_piston() {
+    let text = std::fs::read_to_string(machines().join("binder-jet.toml")).unwrap();
+    let without = text.replace("a_per_mm = 400.0", "");
+    let e = MachineProfile::from_toml_str(&without).unwrap_err().to_string();
+    assert!(e.contains("motion.steps.a_per_mm"), "{e}");
+    let both = text.replace("a_per_mm = 400.0", "a_per_mm = 400.0\na_per_deg = 8.0");
+    let e = MachineProfile::from_toml_str(&both).unwrap_err().to_string();
+    assert!(e.contains("a_per_deg and a_per_mm"), "{e}");
+}
+
 /// The benchmark: a 40-hour print simulated with step counting in under 30 s. Needs
 /// `bench/data/bunny-gyroid.gcode` (made by `make bench`); run with
 /// `cargo test -p gweave-sim --release --test machine -- --ignored --nocapture`.

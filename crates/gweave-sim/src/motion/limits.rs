@@ -68,13 +68,26 @@ pub struct StepsPerUnit {
     pub e: f64,
     /// Rotary axis A steps per degree, when the machine has one (lathe printers).
     pub a_per_deg: Option<f64>,
+    /// Linear axis A steps per mm, when A drives something that slides (a binder jet's feed
+    /// piston). At most one of `a_per_deg` and `a_per_mm`: A either turns or slides.
+    pub a_per_mm: Option<f64>,
     /// Steps per mm of each input of a mixing hotend; empty for a plain extruder.
     pub mixing_e: Vec<f64>,
 }
 
+impl StepsPerUnit {
+    /// A's steps per unit: per degree on a rotary axis, per mm on a linear one. A machine that
+    /// declares neither has no A motor of its own; its A moves count one step a unit, which
+    /// the profile's checks keep away from every axis a machine really drives (a `[rotary]`
+    /// needs `a_per_deg`, a recoat piston on A needs `a_per_mm`).
+    pub fn a(&self) -> f64 {
+        self.a_per_deg.or(self.a_per_mm).unwrap_or(1.0)
+    }
+}
+
 impl Default for StepsPerUnit {
     fn default() -> Self {
-        Self { x: 80.0, y: 80.0, z: 4000.0, e: 500.0, a_per_deg: None, mixing_e: Vec::new() }
+        Self { x: 80.0, y: 80.0, z: 4000.0, e: 500.0, a_per_deg: None, a_per_mm: None, mixing_e: Vec::new() }
     }
 }
 
@@ -499,6 +512,7 @@ impl CheckRanges for MotionProfile {
             steps.check(key, v, range::STEPS_PER_UNIT)?;
         }
         steps.check_opt("a_per_deg", s.a_per_deg, range::STEPS_PER_UNIT)?;
+        steps.check_opt("a_per_mm", s.a_per_mm, range::STEPS_PER_UNIT)?;
         steps.each("mixing_e", &s.mixing_e, range::STEPS_PER_UNIT)?;
         let linear_and_a = |table: Table, limits: &AxisLimits, linear: Range, a: Range| {
             let l = limits;

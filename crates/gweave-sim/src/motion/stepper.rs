@@ -100,7 +100,7 @@ impl Steppers {
     /// Motors for these step rates, all at position 0 (a machine without an A axis gets an A
     /// counter with 1 step/degree that should never move).
     pub fn new(steps: &StepsPerUnit) -> Self {
-        let spu = [steps.x, steps.y, steps.z, steps.e, steps.a_per_deg.unwrap_or(1.0)];
+        let spu = [steps.x, steps.y, steps.z, steps.e, steps.a()];
         let mix: Vec<MixInput> =
             steps.mixing_e.iter().map(|&s| MixInput { scale: s / steps.e, ..MixInput::default() }).collect();
         Self {

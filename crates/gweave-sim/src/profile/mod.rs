@@ -73,6 +73,13 @@ pub enum MachineProfileError {
     /// A rotary axis needs its steps per degree (`motion.steps.a_per_deg`).
     #[error("machine profile: [rotary] needs motion.steps.a_per_deg")]
     RotaryWithoutSteps,
+    /// Axis A either turns (`a_per_deg`) or slides (`a_per_mm`), not both.
+    #[error("machine profile: motion.steps has both a_per_deg and a_per_mm: axis A either turns or slides, give one")]
+    AxisATurnsOrSlides,
+    /// A recoat piston on A slides: its steps are per mm (without them every layer's piston
+    /// move counted one step a millimetre).
+    #[error("machine profile: [inkjet.printhead.recoat] moves a piston on A: give motion.steps.a_per_mm (the piston's steps per mm)")]
+    PistonWithoutSteps,
     /// `mixing_inputs` and `motion.steps.mixing_e` disagree.
     #[error("machine profile: mixing_inputs = {inputs} but motion.steps.mixing_e has {steps} entries")]
     MixingSteps {
@@ -563,8 +570,17 @@ impl MachineProfile {
         if self.single_nozzle_tools > 0 && (hotends != 1 || self.mixing_inputs > 0) {
             return Err(MachineProfileError::SingleNozzle { tools: self.single_nozzle_tools, hotends });
         }
-        if self.rotary.is_some() && self.motion.steps.a_per_deg.is_none() {
+        let steps = &self.motion.steps;
+        if steps.a_per_deg.is_some() && steps.a_per_mm.is_some() {
+            return Err(MachineProfileError::AxisATurnsOrSlides);
+        }
+        if self.rotary.is_some() && steps.a_per_deg.is_none() {
             return Err(MachineProfileError::RotaryWithoutSteps);
+        }
+        let recoat = self.inkjet.as_ref().and_then(|ink| ink.printhead.recoat.as_ref());
+        let piston_on_a = recoat.is_some_and(|r| r.feed_piston_axis == 'A' || r.build_piston_axis == 'A');
+        if piston_on_a && steps.a_per_mm.is_none() {
+            return Err(MachineProfileError::PistonWithoutSteps);
         }
         if let Some(ink) = &self.inkjet {
             ink.printhead.validate().map_err(MachineProfileError::Printhead)?;

@@ -46,7 +46,7 @@ pub(super) fn block(mv: &Move, geo: &Geometry, steps: &StepsPerUnit) -> PlannedB
 
 /// The time of `mv`: its dominant motor's steps, each `1 / (feed * steps_per_unit)` long.
 fn duration_s(mv: &Move, steps: &StepsPerUnit) -> f64 {
-    let spu = [steps.x, steps.y, steps.z, steps.e, steps.a_per_deg.unwrap_or(1.0)];
+    let spu = [steps.x, steps.y, steps.z, steps.e, steps.a()];
     let (start, end) = (mv.start.to_array(), mv.end.to_array());
     let mut dominant = (0_u64, 1.0);
     for i in 0..5 {

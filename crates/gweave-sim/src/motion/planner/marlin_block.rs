@@ -74,7 +74,7 @@ impl Settings {
     pub(crate) fn new(profile: &MotionProfile, tool: usize) -> Self {
         let s = &profile.steps;
         let own = profile.extruders.get(tool).copied().unwrap_or_default();
-        let steps_per_unit = [s.x, s.y, s.z, own.steps_per_mm.unwrap_or(s.e), s.a_per_deg.unwrap_or(1.0)];
+        let steps_per_unit = [s.x, s.y, s.z, own.steps_per_mm.unwrap_or(s.e), s.a()];
         let mut max_accel = profile.max_accel_mm_s2.to_array();
         let mut max_feed = profile.max_feed_mm_s.to_array();
         max_accel[3] = own.max_accel_mm_s2.unwrap_or(max_accel[3]);
