@@ -26,6 +26,7 @@
 //! assert_eq!(replies, ["X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0"]);
 //! ```
 #![warn(missing_docs)]
+#![warn(unreachable_pub)]
 
 mod chart_canvas;
 pub mod core_board;

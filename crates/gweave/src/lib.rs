@@ -4,6 +4,12 @@
 //! each line says (with spans), the [`gcode::state`] tracks what the machine would do, and lines a
 //! pass does not change are written back byte for byte.
 //!
+//! The crate root re-exports what the front ends use (see "The public surface" in
+//! `docs/architecture.md`): [`Run`] and [`Pass`] to run a pass, [`LineReader`], [`Block`] and
+//! [`State`] to read a file, each job's entry point ([`stats_file`], [`check_file`],
+//! [`purge_shift`], [`mix`], [`wrap_file`], [`tube_file`], [`preview`]) with its options and
+//! report, and [`Error`]. The modules below hold the rest, by machine concept.
+//!
 //! ```
 //! use gweave::gcode::{lexer::parse_into, line::Block, state::{State, X}};
 //! let mut block = Block::default();
@@ -16,6 +22,7 @@
 //! ```
 
 #![warn(missing_docs)]
+#![warn(unreachable_pub)]
 
 pub mod bed;
 pub mod check;
@@ -42,9 +49,38 @@ pub mod stats;
 pub mod test_support;
 pub mod total;
 
+// The public surface: what the front ends (the CLI, the Python package, the simulator, the board)
+// start from, by what they do. The modules keep their full paths for the front ends that still
+// import through them; a module no front end needs is private (`pub(crate)`), and
+// `unreachable_pub` keeps its items from claiming more.
+
+// Errors and ranges: every number a front end passes in has a range, every failure is an `Error`.
 pub use error::{Error, Result};
-// The types most callers start from, as shortcuts; their modules keep the full paths.
-pub use gcode::line::Block;
-pub use gcode::state::State;
-pub use pass::{Pass, Progress, Quiet, Strictness};
-pub use range::Range;
+pub use range::{OutOfRange, Range};
+
+// Reading a file: its container (plain, binary G-code), its lines, their words and the machine
+// state they give.
+pub use gcode::container::{Container, Input};
+pub use gcode::diag::{Finding, Severity};
+pub use gcode::line::{Block, Command, Value};
+pub use gcode::reader::{LineReader, RawLine};
+pub use gcode::state::{Effect, State, StateOptions};
+
+// Running a pass: input to output, atomically (temp + rename), strict or lenient, stoppable.
+pub use firmware::{Firmware, MixCommands, MixingCode};
+pub use gcode::temp::TempFile;
+pub use gcode::writer::{Output, Target};
+pub use interrupt::Token;
+pub use malformed::{Malformed, Transformed};
+pub use pass::{Flow, Identity, Pass, Progress, Quiet, Strictness};
+pub use run::{Ran, Run, Source};
+
+// The jobs: each one's entry point, options and report.
+pub use bed::Bed;
+pub use check::{check_file, CheckOptions, CheckReport};
+pub use post::mix::{mix, MixPassError};
+pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftReport};
+pub use render::{preview, preview_with_progress, PreviewOptions, PreviewReport, Toolpath, ToolpathOptions};
+pub use rotary_job::{tube_file, wrap_file};
+pub use stats::{stats_file, Stats};
+pub use total::{CheckTotal, StatsTotal};

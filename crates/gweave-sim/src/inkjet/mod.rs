@@ -20,7 +20,7 @@
 //! so without an `M400` since the last move it fires while the carriage is still travelling;
 //! and the firmware reads `S` only when `P` is given, so `M700` without `P` fires nothing.
 
-pub mod recoat;
+pub(crate) mod recoat;
 
 use std::path::{Path, PathBuf};
 

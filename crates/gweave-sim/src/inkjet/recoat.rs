@@ -16,14 +16,14 @@ use crate::inkjet::InkjetWarning;
 const AXES: [char; 4] = ['X', 'Y', 'Z', 'A'];
 
 /// X, Y, Z, A of the machine, mm (A in its own unit).
-pub type Position = [f64; 4];
+pub(crate) type Position = [f64; 4];
 
 /// Piston travel off by more than this is reported, mm (the words' 4 decimals, with margin).
 const PISTON_TOLERANCE_MM: f64 = 1e-3;
 
 /// The recoat check of one machine.
 #[derive(Debug, Clone)]
-pub struct RecoatCheck {
+pub(crate) struct RecoatCheck {
     recoat: Recoat,
     /// Indices in [`Position`] of the spreader, feed piston and build piston.
     spreader: usize,
@@ -48,7 +48,7 @@ fn index(axis: char) -> Result<usize, String> {
 
 impl RecoatCheck {
     /// `bed_x_mm`, `bed_y_mm`: the powder bed (the inkjet canvas) along X and Y.
-    pub fn new(recoat: &Recoat, bed_x_mm: [f64; 2], bed_y_mm: [f64; 2]) -> Result<Self, String> {
+    pub(crate) fn new(recoat: &Recoat, bed_x_mm: [f64; 2], bed_y_mm: [f64; 2]) -> Result<Self, String> {
         let spreader = index(recoat.spreader_axis)?;
         let bed_mm = match spreader {
             0 => bed_x_mm,
@@ -73,7 +73,7 @@ impl RecoatCheck {
     }
 
     /// A move from `from` to `to`.
-    pub fn on_move(&mut self, from: Position, to: Position) {
+    pub(crate) fn on_move(&mut self, from: Position, to: Position) {
         if self.at_fire.is_none() {
             return;
         }
@@ -92,7 +92,7 @@ impl RecoatCheck {
     }
 
     /// A fire at `pos`, the carriage at Z `z_mm`: what was wrong since the last fire.
-    pub fn on_fire(&mut self, pos: Position, z_mm: f64, out: &mut Vec<InkjetWarning>) {
+    pub(crate) fn on_fire(&mut self, pos: Position, z_mm: f64, out: &mut Vec<InkjetWarning>) {
         let Some((before, z_before)) = self.at_fire else {
             self.at_fire = Some((pos, z_mm));
             return;
@@ -127,7 +127,7 @@ impl RecoatCheck {
     }
 
     /// The recoat under way at the end of the job, if its spreader never crossed the bed.
-    pub fn finish(&self, out: &mut Vec<InkjetWarning>) {
+    pub(crate) fn finish(&self, out: &mut Vec<InkjetWarning>) {
         if self.started && !self.spread() {
             let reach_mm = if self.reach_mm[0] <= self.reach_mm[1] { self.reach_mm } else { [0.0; 2] };
             out.push(InkjetWarning::SpreaderShort { reach_mm, bed_mm: self.bed_mm });

@@ -60,7 +60,8 @@ use crate::thermal::{Thermal, ThermalError};
 
 pub(crate) use commands::lookup;
 use commands::Call;
-pub use commands::{help_lines, CommandSpec, Link, Param, Queue, COMMANDS};
+pub(crate) use commands::Link;
+pub use commands::{help_lines, CommandSpec, Param, Queue, COMMANDS};
 pub use report::{HeaterStats, InkjetSummary, SimReport, SimTimes, SimWarning, WarningKind};
 
 /// Marlin's reply to any command while stopped (`STR_ERR_STOPPED`).

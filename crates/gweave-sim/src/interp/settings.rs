@@ -36,7 +36,7 @@ pub(super) struct Settings {
 }
 
 impl Settings {
-    pub fn new(steps: [f64; 4]) -> Self {
+    pub(super) fn new(steps: [f64; 4]) -> Self {
         // Marlin's Configuration_adv.h: MIN_SEGMENT_TIME_US, RETRACT_*, RETRACT_RECOVER_*.
         Settings {
             steps,

@@ -5,7 +5,7 @@
 //! over in-memory pipes. [`transport`] runs it in real time over an endpoint: a pseudo-terminal
 //! ([`pty`]) that looks like a USB serial port, or a loopback TCP socket ([`tcp`]) as network
 //! printers and OctoPrint's `socket://` URLs use.
-pub mod pty;
-pub mod serial;
-pub mod tcp;
-pub mod transport;
+pub(crate) mod pty;
+pub(crate) mod serial;
+pub(crate) mod tcp;
+pub(crate) mod transport;

@@ -84,13 +84,13 @@ use gweave::gcode::line::Block;
 use crate::interp::{lookup, Link};
 
 /// The longest line Marlin keeps: `MAX_CMD_SIZE` (96) less the NUL terminator.
-pub const MAX_LINE_BYTES: usize = 95;
+pub(crate) const MAX_LINE_BYTES: usize = 95;
 
 /// Marlin's `DEFAULT_KEEPALIVE_INTERVAL`, seconds.
 pub const DEFAULT_KEEPALIVE_S: u8 = 2;
 
 /// Marlin's `M113` limit: `NOMORE(host_keepalive_interval, 60)`.
-pub const MAX_KEEPALIVE_S: u8 = 60;
+pub(crate) const MAX_KEEPALIVE_S: u8 = 60;
 
 /// The machine behind the serial line: the interpreter, or a test double.
 pub trait Device {
@@ -139,7 +139,7 @@ pub trait Device {
     fn finish_user_wait(&mut self, _out: &mut dyn FnMut(f64, &str)) {}
 }
 
-pub use crate::interp::Outcome;
+pub(crate) use crate::interp::Outcome;
 
 /// The protocol's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -161,7 +161,7 @@ impl Default for ProtocolConfig {
 
 /// Why a line was refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LineError {
+pub(crate) enum LineError {
     /// `N` is not the last line number + 1.
     LineNumber,
     /// The `*` checksum is not the XOR of the bytes before it.
@@ -174,7 +174,7 @@ pub enum LineError {
 
 impl LineError {
     /// The text after `Error:` and before the last line number (Marlin's `STR_ERR_*`).
-    pub fn message(self) -> &'static str {
+    pub(crate) fn message(self) -> &'static str {
         match self {
             LineError::LineNumber => "Line Number is not Last Line Number+1, Last Line: ",
             LineError::ChecksumMismatch => "checksum mismatch, Last Line: ",
@@ -236,7 +236,7 @@ pub struct Protocol<D> {
 
 /// Lines a board keeps while its queue is held (Marlin's `BUFSIZE` 4 plus a serial receive
 /// buffer of 128 bytes hold fewer); a host that keeps sending past this loses the rest.
-pub const MAX_HELD_LINES: usize = 16;
+pub(crate) const MAX_HELD_LINES: usize = 16;
 
 impl<D: Device> Protocol<D> {
     /// The protocol in front of `device`.

@@ -27,7 +27,7 @@ use crate::link::transport::{wait_readable, write_all_nonblocking, Endpoint, Eve
 const CLOSE_GRACE: Duration = Duration::from_millis(100);
 
 /// What a host that connects while another is served reads before the server closes it.
-pub const REFUSAL: &str = "echo:busy: another host is connected\n";
+pub(crate) const REFUSAL: &str = "echo:busy: another host is connected\n";
 
 /// A loopback TCP listener serving one host at a time.
 pub struct TcpEndpoint {

@@ -33,17 +33,17 @@ use nix::poll::{poll, PollFd, PollFlags};
 use crate::link::serial::{Device, LinkStats, Protocol, ProtocolConfig};
 
 /// How long one wait for the host lasts before the loop looks at the stop flag again.
-pub const TICK: Duration = Duration::from_millis(100);
+pub(crate) const TICK: Duration = Duration::from_millis(100);
 
 /// How long the host must stay silent before the board lives in wall time. A streaming host
 /// answers an `ok` within milliseconds; a gap this long means nothing is coming (and draining
 /// the planner at a shorter gap would put stops into a print that Marlin, with its buffer of
 /// queued moves, would not make).
-pub const QUIET_AFTER: Duration = Duration::from_millis(500);
+pub(crate) const QUIET_AFTER: Duration = Duration::from_millis(500);
 
 /// The longest wall-clock hold of a wall-timed `ok` ([`Device::wall_timed`]) when not pacing: a
 /// board draining its planner buffer of a print (16 moves) takes well under this.
-pub const MAX_HOLD: Duration = Duration::from_secs(5);
+pub(crate) const MAX_HOLD: Duration = Duration::from_secs(5);
 
 /// How long the board's own work (an SD print) runs before the loop looks at the host again.
 const OWN_WORK_SLICE: Duration = Duration::from_millis(20);
@@ -371,7 +371,7 @@ impl<'a, 's> Output<'a, 's> {
 /// can send megabytes without a newline) is logged as its first bytes and its length, so the log
 /// and the server's memory stay small whatever the host sends. Marlin keeps 95 bytes of a line,
 /// so any line a host means seriously is logged whole.
-pub const LOG_LINE_BYTES: usize = 256;
+pub(crate) const LOG_LINE_BYTES: usize = 256;
 
 /// Splits received bytes into lines for the log.
 #[derive(Default)]

@@ -9,7 +9,7 @@
 use thiserror::Error;
 
 /// Below this XYZ distance a move is not a kinematic move (Klipper's threshold, mm).
-pub const MIN_KINEMATIC_LEN_MM: f64 = 1e-9;
+pub(crate) const MIN_KINEMATIC_LEN_MM: f64 = 1e-9;
 
 /// A machine position: X Y Z E in mm, the rotary axis A in degrees.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -39,17 +39,17 @@ impl Pos {
 }
 
 /// Index of each axis in [`Pos::to_array`] and [`Geometry::delta`].
-pub mod axis {
+pub(crate) mod axis {
     /// X.
-    pub const X: usize = 0;
+    pub(crate) const X: usize = 0;
     /// Y.
-    pub const Y: usize = 1;
+    pub(crate) const Y: usize = 1;
     /// Z.
-    pub const Z: usize = 2;
+    pub(crate) const Z: usize = 2;
     /// E.
-    pub const E: usize = 3;
+    pub(crate) const E: usize = 3;
     /// A (rotary).
-    pub const A: usize = 4;
+    pub(crate) const A: usize = 4;
 }
 
 /// One requested straight move, as the G-code asked for it.

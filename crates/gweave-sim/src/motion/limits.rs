@@ -23,7 +23,8 @@ use gweave::settings::{CheckRanges, Table};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-pub use crate::motion::marlin_limits::{ExtruderLimits, Jerk, MarlinCorners};
+pub use crate::motion::marlin_limits::Jerk;
+pub(crate) use crate::motion::marlin_limits::{ExtruderLimits, MarlinCorners};
 
 /// A value in a motion profile that cannot be used.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -374,7 +375,7 @@ impl Default for CornerMode {
 }
 
 /// Marlin's stock `JUNCTION_DEVIATION_MM`.
-pub const MARLIN_JUNCTION_DEVIATION_MM: f64 = 0.013;
+pub(crate) const MARLIN_JUNCTION_DEVIATION_MM: f64 = 0.013;
 
 fn default_lookahead_blocks() -> usize {
     16

@@ -67,7 +67,7 @@ impl CornerMode {
 /// Most extruders a Marlin build drives (`EXTRUDERS` in `Configuration.h`, "[0, 1, 2, 3, 4, 5,
 /// 6, 7, 8]"): tools `T0` to `T7`. `extruders` in a profile and `M92/M201/M203 T` in an `M503`
 /// report are held to it before anything is sized by them.
-pub const MAX_EXTRUDERS: usize = 8;
+pub(crate) const MAX_EXTRUDERS: usize = 8;
 
 /// One extruder's own E limits; `None` takes the shared value.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]

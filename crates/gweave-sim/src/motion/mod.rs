@@ -9,12 +9,12 @@
 //! [`stepper`] counts the exact motor steps of each block (Marlin's `stepper.cpp` Bresenham
 //! order, E split across a mixing hotend's inputs). The [`estimate`] drives all of it from a file
 //! for a print time; [`speed_trace`] keeps the planned speed over time for the chart.
-pub mod estimate;
-pub mod kinematics;
-pub mod limits;
-pub mod marlin_limits;
-pub mod planner;
+pub(crate) mod estimate;
+pub(crate) mod kinematics;
+pub(crate) mod limits;
+pub(crate) mod marlin_limits;
+pub(crate) mod planner;
 pub(crate) mod rounding;
-pub mod slicer_limits;
-pub mod speed_trace;
-pub mod stepper;
+pub(crate) mod slicer_limits;
+pub(crate) mod speed_trace;
+pub(crate) mod stepper;

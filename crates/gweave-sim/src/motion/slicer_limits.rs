@@ -65,7 +65,10 @@ pub fn slicer_limits(text: &[u8], base: &MotionProfile) -> Result<SlicerLimits, 
 }
 
 /// [`slicer_limits`] of the stealth (silent) mode: the second of each pair of values.
-pub fn slicer_limits_silent(text: &[u8], base: &MotionProfile) -> Result<SlicerLimits, SlicerLimitsError> {
+pub(crate) fn slicer_limits_silent(
+    text: &[u8],
+    base: &MotionProfile,
+) -> Result<SlicerLimits, SlicerLimitsError> {
     limits_of_mode(text, base, 1)
 }
 

@@ -25,9 +25,9 @@
 //! assert!(MachineProfile::from_toml_str("[bed]\nx_nm = 1.0\n").is_err());
 //! ```
 
-pub mod build_options;
+pub(crate) mod build_options;
 pub mod builtin;
-pub mod m503;
+pub(crate) mod m503;
 
 use std::fmt;
 use std::str::FromStr;

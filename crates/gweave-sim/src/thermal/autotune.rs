@@ -174,7 +174,7 @@ pub struct Cycle {
 
 /// Progress of a running autotune.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum AutotuneStatus {
+pub(crate) enum AutotuneStatus {
     /// Apply this heater power (`0..=127`, the `@:` scale) until the next update.
     Running { power: u8 },
     /// Done; the heater should be switched off.
@@ -185,7 +185,7 @@ pub enum AutotuneStatus {
 
 /// The M303 relay state machine. Feed it readings with [`Autotune::update`].
 #[derive(Debug, Clone)]
-pub struct Autotune {
+pub(crate) struct Autotune {
     cfg: AutotuneConfig,
     heater: HeaterId,
     heating: bool,
@@ -206,7 +206,7 @@ pub struct Autotune {
 
 impl Autotune {
     /// Start tuning `heater` at simulated time `now_s`.
-    pub fn new(heater: HeaterId, cfg: AutotuneConfig, now_s: f64) -> Result<Self, AutotuneError> {
+    pub(crate) fn new(heater: HeaterId, cfg: AutotuneConfig, now_s: f64) -> Result<Self, AutotuneError> {
         cfg.validate()?;
         let half = i64::from(cfg.max_power) / 2;
         let now_ms = to_ms(now_s);
@@ -230,17 +230,17 @@ impl Autotune {
     }
 
     /// Cycles measured so far.
-    pub fn cycles(&self) -> &[Cycle] {
+    pub(crate) fn cycles(&self) -> &[Cycle] {
         &self.cycles
     }
 
     /// Take the progress lines printed since the last call.
-    pub fn take_lines(&mut self) -> Vec<String> {
+    pub(crate) fn take_lines(&mut self) -> Vec<String> {
         std::mem::take(&mut self.lines)
     }
 
     /// Feed one reading taken at `now_s`; returns what to do next.
-    pub fn update(&mut self, now_s: f64, temp_c: f64) -> AutotuneStatus {
+    pub(crate) fn update(&mut self, now_s: f64, temp_c: f64) -> AutotuneStatus {
         if let Some(done) = self.outcome {
             return done;
         }

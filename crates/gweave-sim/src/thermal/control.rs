@@ -44,13 +44,13 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 /// Largest power a controller returns (Marlin's soft-PWM range, `@:127`).
-pub const POWER_MAX: u8 = 127;
+pub(crate) const POWER_MAX: u8 = 127;
 
 /// Full scale of the PID output before halving (Marlin `PID_MAX`).
-pub const PID_MAX: f64 = 255.0;
+pub(crate) const PID_MAX: f64 = 255.0;
 
 /// Duty cycle (0..=1) for a power value.
-pub fn duty(power: u8) -> f64 {
+pub(crate) fn duty(power: u8) -> f64 {
     f64::from(power.min(POWER_MAX)) / f64::from(POWER_MAX)
 }
 
@@ -158,7 +158,7 @@ impl Default for BangBangConfig {
 
 /// The seed's bang-bang controller.
 #[derive(Debug, Clone)]
-pub struct BangBang {
+pub(crate) struct BangBang {
     cfg: BangBangConfig,
     moving: bool,
     on: bool,
@@ -166,7 +166,7 @@ pub struct BangBang {
 }
 
 impl BangBang {
-    pub fn new(cfg: BangBangConfig) -> Result<Self, ControlError> {
+    pub(crate) fn new(cfg: BangBangConfig) -> Result<Self, ControlError> {
         ControlConfig::BangBang(cfg).check_ranges(&Table::root())?;
         Ok(Self { cfg, moving: false, on: false, next_eval_s: None })
     }
@@ -276,7 +276,7 @@ impl PidConfig {
 
 /// Marlin-style PID (module docs).
 #[derive(Debug, Clone)]
-pub struct Pid {
+pub(crate) struct Pid {
     cfg: PidConfig,
     integral: f64,
     derivative: f64,
@@ -284,7 +284,7 @@ pub struct Pid {
 }
 
 impl Pid {
-    pub fn new(cfg: PidConfig) -> Result<Self, ControlError> {
+    pub(crate) fn new(cfg: PidConfig) -> Result<Self, ControlError> {
         ControlConfig::Pid(cfg).check_ranges(&Table::root())?;
         Ok(Self { cfg, integral: 0.0, derivative: 0.0, last: None })
     }

@@ -29,17 +29,18 @@
 //! assert!(th.m105_report().starts_with("T:2"));
 //! ```
 
-pub mod autotune;
+pub(crate) mod autotune;
 mod config;
-pub mod control;
-pub mod heater;
-pub mod protection;
+pub(crate) mod control;
+pub(crate) mod heater;
+pub(crate) mod protection;
 mod series;
-pub mod thermistor;
-pub mod thermistor_csv;
+pub(crate) mod thermistor;
+pub(crate) mod thermistor_csv;
 
-pub use config::{ThermalConfig, WaitConfig};
-pub use series::{Sample, TimeSeries};
+pub use config::ThermalConfig;
+pub(crate) use config::WaitConfig;
+pub(crate) use series::{Sample, TimeSeries};
 
 use std::path::PathBuf;
 
@@ -90,7 +91,7 @@ pub enum ThermalError {
 
 /// Firmware loops one [`Thermal::step`] runs before it integrates the rest of the step in one
 /// go: 1 000 000 samples, 28 h of simulated time at the default 0.1 s period.
-pub const MAX_SAMPLES_PER_STEP: u32 = 1_000_000;
+pub(crate) const MAX_SAMPLES_PER_STEP: u32 = 1_000_000;
 
 /// A time on Marlin's `millis()` clock. The residency of a wait is counted in whole milliseconds
 /// as the firmware does, so a simulated clock made of many 0.1 s steps (which drifts by parts

@@ -181,7 +181,7 @@ fn whole_degrees(celsius: f64) -> i32 {
 
 /// The protection state of one heater.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Protection {
+pub(crate) struct Protection {
     heater: HeaterId,
     cfg: ProtectionConfig,
     /// `TEMP_HYSTERESIS`: the watch arms only this far (plus 1 C) beyond
@@ -195,7 +195,7 @@ pub struct Protection {
 impl Protection {
     /// The checks of `heater`; `watch_hysteresis_c` is Marlin's
     /// `TEMP_HYSTERESIS` (the M109/M190 settle band, 3 C by default).
-    pub fn new(heater: HeaterId, cfg: ProtectionConfig, watch_hysteresis_c: f64) -> Self {
+    pub(crate) fn new(heater: HeaterId, cfg: ProtectionConfig, watch_hysteresis_c: f64) -> Self {
         Self {
             heater,
             cfg,
@@ -209,7 +209,7 @@ impl Protection {
     /// Arm (or disarm) the heating watch after a new target was set
     /// (M104/M109/M140/M190): in whole degrees, armed only when
     /// `reading + increase < target - TEMP_HYSTERESIS - 1`.
-    pub fn start_watching(&mut self, now_s: f64, temp_c: f64, target_c: f64) {
+    pub(crate) fn start_watching(&mut self, now_s: f64, temp_c: f64, target_c: f64) {
         let target = whole_degrees(target_c);
         let must_reach_c = whole_degrees(temp_c) + whole_degrees(self.cfg.watch_increase_c);
         let margin = whole_degrees(self.watch_hysteresis_c) + 1;
@@ -218,7 +218,7 @@ impl Protection {
     }
 
     /// Run every check on a reading at `now_s`; the first fault found.
-    pub fn check(&mut self, now_s: f64, temp_c: f64, target_c: f64) -> Option<ThermalFault> {
+    pub(crate) fn check(&mut self, now_s: f64, temp_c: f64, target_c: f64) -> Option<ThermalFault> {
         let heater = self.heater;
         let fault = |kind| Some(ThermalFault { kind, heater, at_s: now_s });
         if temp_c > self.cfg.max_temp_c {

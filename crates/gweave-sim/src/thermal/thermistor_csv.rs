@@ -40,7 +40,10 @@ enum Column {
 }
 
 /// Reads a table in the format above; `circuit` gives the ADC and the pull-up.
-pub fn table_from_csv(text: &str, circuit: &BetaThermistor) -> Result<ThermistorTable, ThermistorError> {
+pub(crate) fn table_from_csv(
+    text: &str,
+    circuit: &BetaThermistor,
+) -> Result<ThermistorTable, ThermistorError> {
     let bad = |line: usize, message: String| ThermistorError::Csv { line, message };
     let mut column = None;
     let mut rows: Vec<(u32, f64)> = Vec::new();

@@ -1,7 +1,7 @@
 //! Fitting the pigment model to measured swatches (`gweave mix --fit`).
 //!
 //! The model has four things per filament: its colour, its strength, its spectral shape and
-//! its tinting exponent (see [`super::mixing`] and [`super::shape`]). A swatch of one input
+//! its tinting exponent (see `super::mixing` and `super::shape`). A swatch of one input
 //! alone shows that filament's colour directly (the model prints a pure input as its own
 //! colour, whatever the rest), so the colours are taken from the pure swatches, and an input
 //! without one keeps the colour it had. The rest then decides every blend. They are found by
@@ -23,7 +23,7 @@
 //! than the plain model (issue 39: mean ΔE00 3.8, max 9.0, against 3.2 and 6.5). A card of 30
 //! swatches has 26 blends, 78 numbers; the shapes add 28 unknowns, and the penalty keeps the
 //! spectra near the smoothest ones unless the card asks otherwise (2, as for the stored default
-//! spectra in [`super::pigments`]). Measured against FilamentMixer on four sets of non-default
+//! spectra in `super::pigments`). Measured against FilamentMixer on four sets of non-default
 //! filaments in `fit_reference.rs` and `docs/mix.md`.
 //!
 //! Why the tinting exponents: the shapes and strengths fitted to the card's 1:3, 1:1 and 3:1

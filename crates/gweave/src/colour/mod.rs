@@ -45,15 +45,15 @@ pub mod fit;
 #[cfg(test)]
 mod fit_reference;
 pub(crate) mod mix;
-pub mod mixing;
+pub(crate) mod mixing;
 pub mod named_mixes;
-pub mod pigments;
+pub(crate) mod pigments;
 pub mod predict;
-pub mod purge;
-pub mod reflectance;
-pub mod shape;
-pub mod solve;
-pub mod spectrum;
+pub(crate) mod purge;
+pub(crate) mod reflectance;
+pub(crate) mod shape;
+pub(crate) mod solve;
+pub(crate) mod spectrum;
 pub(crate) mod srgb;
 pub mod swatch;
 

@@ -52,7 +52,7 @@ pub const SEED_PALETTE: [(&str, [f64; 4]); 17] = [
 
 /// The colour each seed name that names a hue means, for the gamut check of
 /// [`Palette::name_out_of_gamut`]: our estimate of a typical PLA filament sold under that name
-/// (from vendor swatches, as [`super::pigments::CMYW_FILAMENTS`]). Cyan, Magenta, Yellow and White are the
+/// (from vendor swatches, as `super::pigments::CMYW_FILAMENTS`). Cyan, Magenta, Yellow and White are the
 /// filaments themselves; the browns of one hue are not checked.
 pub const NAMED_COLOURS: [(&str, Srgb8); 10] = [
     ("Ocean", Srgb8::new(0x00, 0x77, 0xa8)),
@@ -69,7 +69,7 @@ pub const NAMED_COLOURS: [(&str, Srgb8); 10] = [
 
 /// A palette name is out of the filaments' gamut when the nearest mix they make is more than
 /// this CIEDE2000 from the colour the name means ([`NAMED_COLOURS`]). Twice the
-/// [`OUT_OF_GAMUT_DE`] of a `#rrggbb` target: a name asks for a family of colours, not one, and a
+/// `OUT_OF_GAMUT_DE` of a `#rrggbb` target: a name asks for a family of colours, not one, and a
 /// difference of 10 is about the step from a colour to its neighbour with another name (a blue
 /// to a violet). With the default filaments only Blue (nearest #6165ae, 11.8) and Brown (a dark
 /// brown: these light filaments have no black; 10.9) are out.

@@ -21,12 +21,8 @@ use super::srgb::Srgb8;
 
 /// Typical PLA filament colours for the seed's inputs with white on E3
 /// (our estimate from vendor swatches; measure your own for accuracy).
-pub const CMYW_FILAMENTS: [Srgb8; 4] =
+pub(crate) const CMYW_FILAMENTS: [Srgb8; 4] =
     [Srgb8::new(0, 160, 224), Srgb8::new(224, 0, 122), Srgb8::new(255, 224, 0), Srgb8::new(245, 245, 240)];
-
-/// As `CMYW_FILAMENTS` with black on E3.
-pub const CMYK_FILAMENTS: [Srgb8; 4] =
-    [CMYW_FILAMENTS[0], CMYW_FILAMENTS[1], CMYW_FILAMENTS[2], Srgb8::new(28, 28, 28)];
 
 /// (filament colour, its fitted reflectance at 380, 390, .. 730 nm).
 const FITTED: [(Srgb8, Spectrum); 4] = [
@@ -201,7 +197,7 @@ const FITTED: [(Srgb8, Spectrum); 4] = [
 ];
 
 /// The reflectance spectrum the mixing model uses for a filament of colour `c`.
-pub fn spectrum(c: Srgb8) -> Spectrum {
+pub(crate) fn spectrum(c: Srgb8) -> Spectrum {
     match FITTED.iter().find(|(colour, _)| *colour == c) {
         Some((_, r)) => *r,
         None => reflectance(c.into()),

@@ -23,7 +23,7 @@ use std::f64::consts::PI;
 use super::srgb::Srgb8;
 
 /// OrcaSlicer's floor for a colour change, mm^3.
-pub const MIN_FLUSH_MM3: f64 = 60.0;
+pub(crate) const MIN_FLUSH_MM3: f64 = 60.0;
 
 /// Why purge settings are refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -89,7 +89,7 @@ fn luminance(c: Srgb8) -> f64 {
 }
 
 /// Purge volume in mm^3 to change from colour `from` to colour `to` (see module docs).
-pub fn flush_volume_mm3(from: Srgb8, to: Srgb8) -> f64 {
+pub(crate) fn flush_volume_mm3(from: Srgb8, to: Srgb8) -> f64 {
     let (h1, s1, v1) = hsv(from);
     let (h2, s2, v2) = hsv(to);
     let (x1, y1) = (s1 * v1 * h1.cos(), s1 * v1 * h1.sin());
@@ -138,12 +138,12 @@ fn filament_area_mm2(diameter_mm: f64) -> Result<f64, PurgeError> {
 }
 
 /// Length of filament of `diameter_mm` holding `volume_mm3`.
-pub fn mm3_to_filament_mm(volume_mm3: f64, diameter_mm: f64) -> Result<f64, PurgeError> {
+pub(crate) fn mm3_to_filament_mm(volume_mm3: f64, diameter_mm: f64) -> Result<f64, PurgeError> {
     Ok(volume_mm3 / filament_area_mm2(diameter_mm)?)
 }
 
 /// Volume of `length_mm` of filament of `diameter_mm`.
-pub fn filament_mm_to_mm3(length_mm: f64, diameter_mm: f64) -> Result<f64, PurgeError> {
+pub(crate) fn filament_mm_to_mm3(length_mm: f64, diameter_mm: f64) -> Result<f64, PurgeError> {
     Ok(length_mm * filament_area_mm2(diameter_mm)?)
 }
 

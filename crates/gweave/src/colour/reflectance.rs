@@ -30,7 +30,7 @@ use palette::LinSrgb;
 use super::spectrum::{to_linear_rgb_map, Spectrum, BANDS};
 
 /// Linear channels are kept within `[RGB_MIN, 1 - RGB_MIN]` (sRGB byte 3 at the dark end).
-pub const RGB_MIN: f64 = 1e-3;
+pub(crate) const RGB_MIN: f64 = 1e-3;
 
 const UNKNOWNS: usize = BANDS + 3;
 const MAX_STEPS: usize = 50;
@@ -38,7 +38,7 @@ const MAX_STEPS: usize = 50;
 const TOLERANCE: f64 = 1e-11;
 
 /// The smoothest reflectance spectrum (LHTSS) whose colour under D65 is `c`.
-pub fn reflectance(c: LinSrgb<f64>) -> Spectrum {
+pub(crate) fn reflectance(c: LinSrgb<f64>) -> Spectrum {
     let target = [c.red, c.green, c.blue].map(|v| v.clamp(RGB_MIN, 1.0 - RGB_MIN));
     let t = to_linear_rgb_map();
     let mut z = [0.0; BANDS];

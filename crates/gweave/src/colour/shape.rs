@@ -27,14 +27,14 @@ use super::spectrum::{to_linear_rgb_map, wavelength_nm, Spectrum, BANDS};
 use super::srgb::Srgb8;
 
 /// Bumps per filament.
-pub const BUMPS: usize = 7;
+pub(crate) const BUMPS: usize = 7;
 
 /// Standard deviation of a bump, nm: wide enough that neighbours (50 nm apart) overlap and the
 /// spectrum stays smooth.
-pub const BUMP_WIDTH_NM: f64 = 35.0;
+pub(crate) const BUMP_WIDTH_NM: f64 = 35.0;
 
 /// A filament's shape: the bump weights at 400, 450, .. 700 nm, in the `tanh` domain.
-pub type Shape = [f64; BUMPS];
+pub(crate) type Shape = [f64; BUMPS];
 
 /// Centre of bump `k`, nm.
 fn centre_nm(k: usize) -> f64 {
@@ -47,7 +47,7 @@ const TOLERANCE: f64 = 1e-12;
 
 /// The reflectance spectrum of a filament of colour `c` with shape `shape` (see the module
 /// docs); a zero shape gives [`spectrum`]`(c)` exactly.
-pub fn shaped_spectrum(c: Srgb8, shape: &Shape) -> Spectrum {
+pub(crate) fn shaped_spectrum(c: Srgb8, shape: &Shape) -> Spectrum {
     let base = spectrum(c);
     if shape.iter().all(|&a| a == 0.0) {
         return base;

@@ -24,7 +24,7 @@ use super::{Ciede2000, Lab};
 
 /// Above this CIEDE2000 the best mix is flagged `out_of_gamut` (a difference
 /// of 5 is obvious side by side; 1 is just noticeable).
-pub const OUT_OF_GAMUT_DE: f64 = 5.0;
+pub(crate) const OUT_OF_GAMUT_DE: f64 = 5.0;
 
 /// Grid points evaluated before refinement, at most.
 const GRID_BUDGET: usize = 1000;
@@ -51,7 +51,7 @@ pub struct Solution {
 }
 
 /// Ratios for `target` with the model's filaments.
-pub fn solve(model: &MixingModel, target: Srgb8) -> Solution {
+pub(crate) fn solve(model: &MixingModel, target: Srgb8) -> Solution {
     solve_lab(model, Lab::from(target))
 }
 
@@ -63,7 +63,7 @@ pub(crate) fn solve_lab(model: &MixingModel, target: Lab) -> Solution {
 /// The mix a fraction `t` of the way from `a` to `b` in *perceived* colour:
 /// interpolate the two predicted colours in Lab, then solve for that colour.
 /// Unlike `Mix::lerp`, equal steps of `t` look like equal steps of colour.
-pub fn lerp_perceived(model: &MixingModel, a: &Mix, b: &Mix, t: f64) -> Result<Solution, MixError> {
+pub(crate) fn lerp_perceived(model: &MixingModel, a: &Mix, b: &Mix, t: f64) -> Result<Solution, MixError> {
     if !(0.0..=1.0).contains(&t) {
         return Err(MixError::OutOfUnitRange { what: "interpolation parameter", value: t });
     }

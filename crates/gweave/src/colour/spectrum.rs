@@ -23,13 +23,13 @@ use palette::white_point::D65;
 use palette::{LinSrgb, Xyz};
 
 /// Number of wavelength bands.
-pub const BANDS: usize = 36;
+pub(crate) const BANDS: usize = 36;
 
 /// A spectrum sampled at [`wavelength_nm`]`(0..BANDS)`.
-pub type Spectrum = [f64; BANDS];
+pub(crate) type Spectrum = [f64; BANDS];
 
 /// Wavelength of band `i`, nm.
-pub fn wavelength_nm(i: usize) -> f64 {
+pub(crate) fn wavelength_nm(i: usize) -> f64 {
     380.0 + 10.0 * i as f64
 }
 
@@ -74,7 +74,7 @@ const CIE_TABLE: [(u32, [f64; 3], f64); BANDS] = [
 ];
 
 /// Row r of the map from reflectance to linear sRGB: `rgb[r] = Σ RGB[r][i] R(i)`.
-pub fn to_linear_rgb_map() -> &'static [Spectrum; 3] {
+pub(crate) fn to_linear_rgb_map() -> &'static [Spectrum; 3] {
     static MAP: OnceLock<[Spectrum; 3]> = OnceLock::new();
     MAP.get_or_init(|| {
         let y_white: f64 = CIE_TABLE.iter().map(|(_, cmf, d65)| cmf[1] * d65).sum();
@@ -96,7 +96,7 @@ pub fn to_linear_rgb_map() -> &'static [Spectrum; 3] {
 }
 
 /// The linear sRGB colour of a surface with reflectance `r` under D65.
-pub fn linear_rgb(r: &Spectrum) -> LinSrgb<f64> {
+pub(crate) fn linear_rgb(r: &Spectrum) -> LinSrgb<f64> {
     let [red, green, blue] =
         to_linear_rgb_map().each_ref().map(|row| row.iter().zip(r).map(|(m, x)| m * x).sum());
     LinSrgb::new(red, green, blue)

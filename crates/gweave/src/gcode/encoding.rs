@@ -7,12 +7,12 @@ use std::io;
 
 /// The bytes [`refuse_utf16`] looks at: a reader gives it this many, or the whole input if
 /// shorter, so that the answer does not depend on how the input arrives.
-pub const ENCODING_HEAD: usize = 32;
+pub(crate) const ENCODING_HEAD: usize = 32;
 
 /// An error if `head` (the first bytes of the input) is UTF-16: a byte order mark, or ASCII
 /// with a NUL after (little-endian) or before (big-endian) every character, which no G-code
 /// file holds.
-pub fn refuse_utf16(head: &[u8]) -> io::Result<()> {
+pub(crate) fn refuse_utf16(head: &[u8]) -> io::Result<()> {
     let order = match head {
         [0xff, 0xfe, ..] => "little-endian, with a byte order mark",
         [0xfe, 0xff, ..] => "big-endian, with a byte order mark",

@@ -15,7 +15,7 @@ const POW10: [f64; 23] = [
 
 /// Why the bytes after a word letter are not a number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum NumberError {
+pub(crate) enum NumberError {
     /// No digits at all (`X` followed by a space or another letter).
     Empty,
     /// Digits, then something a number cannot contain (`1..2`, `1.2.3`, `-+1`).
@@ -28,7 +28,7 @@ pub enum NumberError {
 /// digit. Returns the value and how many bytes it used. Exponents are not G-code and end the
 /// number (the `e` is then the next word's letter, as firmware reads it).
 #[inline]
-pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
+pub(crate) fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
     scan_at(bytes, 0)
 }
 
@@ -36,7 +36,7 @@ pub fn scan(bytes: &[u8]) -> Result<(f64, usize), NumberError> {
 /// `line` where the number ends. Seeing the whole line lets short numbers near its end be read
 /// eight bytes at a time too.
 #[inline(always)]
-pub fn scan_at(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
+pub(crate) fn scan_at(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
     scan_from::<true>(line, at)
 }
 
@@ -44,7 +44,7 @@ pub fn scan_at(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
 /// after the number is a space or the line's end: the test for a second point or a sign glued
 /// to the number (a typo [`scan_at`] reports) is left to it, since such a byte is neither.
 #[inline(always)]
-pub fn scan_before_space(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
+pub(crate) fn scan_before_space(line: &[u8], at: usize) -> Result<(f64, usize), NumberError> {
     scan_from::<false>(line, at)
 }
 

@@ -163,7 +163,7 @@ fn line_end_in_head(buf: &[u8], start: usize) -> Option<usize> {
 /// Reads lines from `R` without ever holding more than one chunk (1 MiB): a line longer than
 /// [`MAX_LINE`] is handed out in pieces. The buffer keeps 32 zero bytes past the data read
 /// (`PAD`), so that every line has at least [`LOOKAHEAD`] readable bytes after its content.
-/// UTF-16 text is refused on the first read ([`refuse_utf16`]).
+/// UTF-16 text is refused on the first read (`refuse_utf16`).
 pub struct LineReader<R> {
     inner: R,
     buf: Vec<u8>,

@@ -30,14 +30,14 @@ enum Part {
 
 /// Follows the wipe tower's parts over a file's comments and moves.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct WipeTower {
+pub(crate) struct WipeTower {
     priming: bool,
     part: Part,
 }
 
 impl WipeTower {
     /// Follows a comment's text (trimmed, without the `;`).
-    pub fn comment(&mut self, text: &[u8]) {
+    pub(crate) fn comment(&mut self, text: &[u8]) {
         match text {
             b"CP PRIMING START" => self.priming = true,
             b"CP PRIMING END" => {
@@ -54,7 +54,7 @@ impl WipeTower {
     /// Follows a move feeding `e_mm` of filament (negative: backwards), `moves_xy` whether it
     /// also moves along X or Y. Returns whether PrusaSlicer counts the feed in its figure.
     #[inline]
-    pub fn feed(&mut self, e_mm: f64, moves_xy: bool) -> bool {
+    pub(crate) fn feed(&mut self, e_mm: f64, moves_xy: bool) -> bool {
         if self.part == Part::Ramming && e_mm < 0.0 && !moves_xy {
             self.part = Part::Unloading;
         }
@@ -62,7 +62,7 @@ impl WipeTower {
     }
 
     /// Whether the file is inside the tower's priming block.
-    pub fn priming(&self) -> bool {
+    pub(crate) fn priming(&self) -> bool {
         self.priming
     }
 }

@@ -56,7 +56,7 @@ fn glob_match(pattern: &[u8], name: &[u8]) -> bool {
 
 /// Lists layer images: a directory (all `.bmp`/`.png`/`.tif`/`.tiff` files in it) or a file-name glob such as
 /// `layers/slice_*.png` (wildcards in the last path component only), sorted naturally.
-pub fn list_images(spec: &Path) -> Result<Vec<PathBuf>, BitmapError> {
+pub(crate) fn list_images(spec: &Path) -> Result<Vec<PathBuf>, BitmapError> {
     let (dir, pattern) = if spec.is_dir() {
         (spec.to_path_buf(), None)
     } else {

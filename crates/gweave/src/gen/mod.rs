@@ -9,7 +9,7 @@
 mod band;
 pub mod bitmap;
 mod gcode_text;
-pub mod image_files;
+pub(crate) mod image_files;
 pub mod printhead;
 pub mod raster;
 pub mod raster_job;

@@ -4,7 +4,7 @@
 //! A line of text is laid out on a baseline: each glyph's advance plus the kerning with the one
 //! before it, scaled to the size asked (the size is the font's height from descender to ascender
 //! in pixels, `ab_glyph`'s `PxScale`). The glyph outlines (lines and quadratic or cubic Beziers)
-//! become one path that [`super::raster`] fills like any other shape, with the same
+//! become one path that `super::raster` fills like any other shape, with the same
 //! anti-aliasing. The PNG charts of `gweave sim --plot` are drawn with these outlines too (their
 //! `plotters` backend lays text out with [`width`] and [`line_height`]); the SVG charts name the
 //! font and `plotters` measures them with the same file ([`FONT_TTF`]), so every picture gweave

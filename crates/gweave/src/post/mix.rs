@@ -14,7 +14,7 @@
 //!    purge happens where the nozzle is about to print.
 //! 3. When the wanted mix differs from the one in force, before that extrusion it writes the
 //!    selection (and, for gradients that outgrow the firmware's tools, the redefinition of a
-//!    free tool) and a purge block ([`crate::post::purge_block`]). No change, no purge.
+//!    free tool) and a purge block (`crate::post::purge_block`). No change, no purge.
 //! 4. Moves faster in Z than the cap are split or slowed ([`crate::post::zcap`]).
 //! 5. Optionally, the slicer's tool-change retraction (the retraction right before a `T<n>`) and
 //!    the matching unretraction after the tool is next selected are removed: one nozzle needs no
@@ -39,7 +39,7 @@
 //! ```
 
 pub mod card;
-pub mod job;
+pub(crate) mod job;
 pub mod overrides;
 pub mod profile;
 mod purge_table;

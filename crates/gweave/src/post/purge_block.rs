@@ -148,7 +148,7 @@ impl Default for PurgeMotion {
 
 /// What the nozzle does at the purge spot.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PurgePattern {
+pub(crate) enum PurgePattern {
     /// Extrude in place, a blob (the seed's purge, what `gweave mix` writes).
     Blob,
     /// A compact zigzag from the spot at the current Z: `rows` rows of `row_mm`, alternately
@@ -167,7 +167,7 @@ pub enum PurgePattern {
 /// One purge: how much, how, and the names in its comment lines
 /// (`; gweave <by>: purge <label>, <purge_mm> mm` ... `; gweave <by>: end purge`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PurgeJob<'a> {
+pub(crate) struct PurgeJob<'a> {
     /// Filament to purge, mm.
     pub purge_mm: f64,
     /// Where the filament goes.
@@ -180,7 +180,7 @@ pub struct PurgeJob<'a> {
 
 /// The machine where the block starts, in the file's logical millimetres.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PurgeStart {
+pub(crate) struct PurgeStart {
     /// X, Y, Z, E.
     pub pos: [f64; 4],
     /// G90 in force.
@@ -262,7 +262,7 @@ impl Emitter<'_> {
 
 /// Appends `gweave mix`'s purge block for `purge_mm` of filament to `out`; `label` names the
 /// change.
-pub fn write_purge(
+pub(crate) fn write_purge(
     out: &mut Vec<u8>,
     fmt: &NumberFormat,
     m: &PurgeMotion,
@@ -275,7 +275,7 @@ pub fn write_purge(
 }
 
 /// Appends a purge block to `out`, with the pattern and comment names of `job`.
-pub fn write_purge_job(
+pub(crate) fn write_purge_job(
     out: &mut Vec<u8>,
     fmt: &NumberFormat,
     m: &PurgeMotion,
@@ -334,13 +334,13 @@ pub fn write_purge_job(
 
 /// Appends `F<feed>` for a feed rate being restored: with at least 3 decimals whatever the
 /// number format, since the lines after it rely on exactly the feed rate the file set.
-pub fn write_exact_feed(out: &mut Vec<u8>, fmt: &NumberFormat, feed_mm_min: f64) {
+pub(crate) fn write_exact_feed(out: &mut Vec<u8>, fmt: &NumberFormat, feed_mm_min: f64) {
     out.push(b'F');
     fmt.write(out, feed_mm_min, fmt.feed_decimals.max(3));
 }
 
 /// X, Y, Z and E of a core position.
-pub fn purge_start_pos(pos: &crate::gcode::state::Position) -> [f64; 4] {
+pub(crate) fn purge_start_pos(pos: &crate::gcode::state::Position) -> [f64; 4] {
     [pos[X], pos[Y], pos[Z], pos[E]]
 }
 

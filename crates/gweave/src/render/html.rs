@@ -65,7 +65,7 @@ impl Blocks {
 
 /// How the page opens (the reader can change all of it).
 #[derive(Debug, Clone, PartialEq)]
-pub struct HtmlOptions {
+pub(crate) struct HtmlOptions {
     pub title: String,
     pub colour_by: ColourBy,
     pub view: ViewKind,
@@ -75,7 +75,7 @@ pub struct HtmlOptions {
 }
 
 /// One file the page shows: its toolpath, name and statistics.
-pub struct HtmlFile<'a> {
+pub(crate) struct HtmlFile<'a> {
     pub name: String,
     pub toolpath: &'a Toolpath,
     pub stats: Option<&'a Stats>,
@@ -131,7 +131,7 @@ struct FileData<'a> {
 
 /// The page for one toolpath, or two compared side by side (see [`HtmlFile::changed`]), with
 /// each file's stats when given.
-pub fn write_html(files: &[HtmlFile<'_>], options: &HtmlOptions) -> String {
+pub(crate) fn write_html(files: &[HtmlFile<'_>], options: &HtmlOptions) -> String {
     let toolpaths: Vec<&Toolpath> = files.iter().map(|f| f.toolpath).collect();
     let tools =
         toolpaths.iter().map(|tp| tp.tools as usize).max().unwrap_or(1).max(options.tool_colours.len());
@@ -295,7 +295,7 @@ fn quantise(v: f32, lo: f32, hi: f32) -> u16 {
 }
 
 /// Standard base64 (RFC 4648, with padding).
-pub fn base64(bytes: &[u8]) -> String {
+pub(crate) fn base64(bytes: &[u8]) -> String {
     const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for chunk in bytes.chunks(3) {

@@ -9,22 +9,22 @@ use super::colour_by::LegendEntry;
 use crate::picture::text;
 
 /// Size of legend text, px.
-pub const TEXT_PX: f32 = 16.0;
+pub(crate) const TEXT_PX: f32 = 16.0;
 /// Legend box's distance from the picture's edges, px.
 const INSET_PX: u32 = 8;
 /// Space kept between the legend box and the drawing, px.
 const GAP_PX: u32 = 8;
 
 /// A rectangle in the picture, px: left, top, width, height.
-pub type Rect = [u32; 4];
+pub(crate) type Rect = [u32; 4];
 
 /// Height of one legend line, px.
-pub fn line_px() -> u32 {
+pub(crate) fn line_px() -> u32 {
     text::line_height(TEXT_PX) + 4
 }
 
 /// The legend's box (`None` without a legend).
-pub fn legend_box(legend: &[LegendEntry]) -> Option<Rect> {
+pub(crate) fn legend_box(legend: &[LegendEntry]) -> Option<Rect> {
     if legend.is_empty() {
         return None;
     }
@@ -34,7 +34,7 @@ pub fn legend_box(legend: &[LegendEntry]) -> Option<Rect> {
 }
 
 /// Whether two rectangles share a pixel.
-pub fn overlap(a: Rect, b: Rect) -> bool {
+pub(crate) fn overlap(a: Rect, b: Rect) -> bool {
     a[0] < b[0] + b[2] && b[0] < a[0] + a[2] && a[1] < b[1] + b[3] && b[1] < a[1] + a[3]
 }
 
@@ -42,7 +42,12 @@ pub fn overlap(a: Rect, b: Rect) -> bool {
 /// lands when fitted into the whole panel) is clear of `legend`, else the larger of the strips
 /// right of and below the box (`larger` compares two candidate rectangles by the scale the
 /// drawing gets in each, and says whether the first is better).
-pub fn clear_of(panel: Rect, drawn: Rect, legend: Option<Rect>, larger: impl Fn(Rect, Rect) -> bool) -> Rect {
+pub(crate) fn clear_of(
+    panel: Rect,
+    drawn: Rect,
+    legend: Option<Rect>,
+    larger: impl Fn(Rect, Rect) -> bool,
+) -> Rect {
     let Some(b) = legend.filter(|b| overlap(*b, drawn)) else {
         return panel;
     };

@@ -90,7 +90,7 @@ impl PartialEq for MixColours {
 
 /// Follows a file's mixing lines and extrusion (see the module docs).
 #[derive(Debug, Clone)]
-pub struct MixTracker {
+pub(crate) struct MixTracker {
     colours: MixColours,
     state: MixingState,
     /// Ratios coming out when the last change happened, and the mix changed to.
@@ -119,7 +119,7 @@ pub struct MixTracker {
 }
 
 impl MixTracker {
-    pub fn new(colours: MixColours) -> Self {
+    pub(crate) fn new(colours: MixColours) -> Self {
         let inputs = colours.model.inputs().len();
         // At least one virtual tool: `new` cannot fail.
         let state = MixingState::new(inputs, MARLIN_VIRTUAL_TOOLS).expect("16 virtual tools");
@@ -152,7 +152,7 @@ impl MixTracker {
 
     /// One line of the file; `tool` is the core state's tool after it (RepRapFirmware mixes
     /// are per tool).
-    pub fn line(&mut self, raw: &[u8], block: &Block, tool: u32) {
+    pub(crate) fn line(&mut self, raw: &[u8], block: &Block, tool: u32) {
         if let Some(label) = Self::label_comment(raw, block) {
             self.pending_label = Some(label);
         }
@@ -215,7 +215,7 @@ impl MixTracker {
 
     /// An extruding move of `e_mm` filament (retractions, `e_mm <= 0`, wash nothing): its
     /// predicted colour.
-    pub fn extrude(&mut self, e_mm: f64) -> Srgb8 {
+    pub(crate) fn extrude(&mut self, e_mm: f64) -> Srgb8 {
         self.loaded = true;
         let v_mm3 = filament_mm_to_mm3(e_mm.max(0.0), self.colours.filament_diameter_mm).unwrap_or(0.0);
         let mid_mm3 = self.purged_mm3 + v_mm3 / 2.0;
@@ -236,7 +236,7 @@ impl MixTracker {
     }
 
     /// The names of the settled mixes' colours, for legends.
-    pub fn into_names(self) -> BTreeMap<[u8; 3], String> {
+    pub(crate) fn into_names(self) -> BTreeMap<[u8; 3], String> {
         self.names
     }
 

@@ -1,6 +1,6 @@
 //! Pictures of what a file prints: `gweave preview`, and the drawing tools other commands use.
 //!
-//! - [`toolpath`]: the segments of a file (start, end, tool, feature, feed, layer, extruding),
+//! - `toolpath`: the segments of a file (start, end, tool, feature, feed, layer, extruding),
 //!   collected in one streaming pass, with decimation for huge files.
 //! - [`colour_by`]: colour by tool, feature type, speed, layer or predicted mix colour.
 //! - `mix_colour`: the predicted mix colour of each move (mixing model and chamber washout).
@@ -14,7 +14,7 @@
 //!   of one file or two compared side by side.
 //!
 //! Binder-jet raster output (`gweave raster`) draws the drops of each layer
-//! ([`toolpath`] decodes the fire commands with [`PreviewOptions::printhead`]).
+//! (`toolpath` decodes the fire commands with [`PreviewOptions::printhead`]).
 //!
 //! Rotary programs (`gweave rotary wrap`/`tube` output, whose header names the machine, or any
 //! file with [`PreviewOptions::rotary`]) go through the same toolpath pass, each move's machine
@@ -33,11 +33,11 @@ pub mod card;
 pub mod colour_by;
 mod cull;
 pub(crate) mod html;
-pub mod legend;
+pub(crate) mod legend;
 pub(crate) mod mix_colour;
 pub mod png_out;
 pub mod svg;
-pub mod toolpath;
+pub(crate) mod toolpath;
 pub mod view;
 
 use std::io::{self, Write};

@@ -197,14 +197,15 @@ impl Toolpath {
 
 /// The pass that collects a [`Toolpath`].
 #[derive(Debug)]
-pub struct ToolpathPass {
+pub(crate) struct ToolpathPass {
     options: ToolpathOptions,
     out: Toolpath,
     /// A merged piece still growing (decimation).
     pending: Option<Segment>,
     mix: Option<MixTracker>,
     cylinder: CylinderLayers,
-    /// See [`Self::thinning`].
+    /// How many segments of each kind stand for one kept (1: none dropped), once merging could
+    /// not keep the toolpath under [`ToolpathOptions::max_segments`].
     thinning: u64,
     /// Segments of each kind (travel, extruding) offered since thinning began.
     thinning_seen: [u64; 2],
@@ -214,7 +215,7 @@ pub struct ToolpathPass {
 
 impl ToolpathPass {
     /// A pass collecting the toolpath with `options`.
-    pub fn new(options: ToolpathOptions) -> Self {
+    pub(crate) fn new(options: ToolpathOptions) -> Self {
         let mix = options.mix.clone().map(MixTracker::new);
         let out = Toolpath { tools: 1, ..Toolpath::default() };
         ToolpathPass {
@@ -230,7 +231,7 @@ impl ToolpathPass {
     }
 
     /// The collected toolpath.
-    pub fn finish_toolpath(mut self) -> Toolpath {
+    pub(crate) fn finish_toolpath(mut self) -> Toolpath {
         self.flush();
         if self.options.rotary.is_some() {
             self.out.layer_z_mm = self.cylinder.finish(&mut self.out.segments, self.options.layers.as_ref());
@@ -241,12 +242,6 @@ impl ToolpathPass {
             self.out.mix_names = mix.into_names();
         }
         self.out
-    }
-
-    /// The merge length in force: the option's, or more once [`ToolpathOptions::max_segments`]
-    /// was reached.
-    pub fn min_len_mm(&self) -> f32 {
-        self.options.min_len_mm
     }
 
     fn flush(&mut self) {
@@ -329,12 +324,6 @@ impl ToolpathPass {
         let n = &mut self.thinning_seen[usize::from(s.extruding)];
         *n += 1;
         *n % self.thinning != 1
-    }
-
-    /// How many segments of each kind stand for one kept (1: none dropped), once merging could
-    /// not keep the toolpath under [`ToolpathOptions::max_segments`].
-    pub fn thinning(&self) -> u64 {
-        self.thinning
     }
 
     fn push(&mut self, s: Segment) {
@@ -606,7 +595,7 @@ mod tests {
         };
         let mut pass = ToolpathPass::new(options);
         read(&text, &mut pass);
-        let min_len = pass.min_len_mm();
+        let min_len = pass.options.min_len_mm;
         let tp = pass.finish_toolpath();
         assert!(tp.segments.len() <= 100, "{}", tp.segments.len());
         // 100 mm in at most 100 pieces needs pieces of 1 mm or more: 0.05 doubled five times.
@@ -633,7 +622,7 @@ mod tests {
         };
         let mut pass = ToolpathPass::new(options);
         read(&text, &mut pass);
-        let (min_len, thinning) = (pass.min_len_mm(), pass.thinning());
+        let (min_len, thinning) = (pass.options.min_len_mm, pass.thinning);
         let tp = pass.finish_toolpath();
         assert!(tp.segments.len() <= 100, "{}", tp.segments.len());
         // 10 000 segments in at most 100: halved (per kind) until they fit, both kinds kept.

@@ -32,7 +32,7 @@ pub fn rotary_number_format() -> NumberFormat {
     }
 }
 
-/// Checks the decimal counts of the `[table]` (see [`NumberFormat`]'s ranges).
+/// Checks the decimal counts of the `[table]` (see `NumberFormat`'s ranges).
 pub fn validate_format(table: &str, format: &NumberFormat) -> Result<()> {
     use crate::settings::{CheckRanges, Table};
     Ok(format.check_ranges(&Table::root().sub(table))?)

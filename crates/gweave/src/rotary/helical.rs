@@ -77,14 +77,18 @@ impl Pass for ExtentPass {
 
 /// The extent of the part `run` reads (`None`: no extrusion in the print proper), read
 /// before the run proper.
-pub fn part_extent(run: &mut Run<'_>) -> crate::Result<Option<PartExtent>> {
+pub(crate) fn part_extent(run: &mut Run<'_>) -> crate::Result<Option<PartExtent>> {
     let mut pass = ExtentPass::default();
     run.prescan(&mut pass)?;
     Ok(pass.extent)
 }
 
 /// Refuses a part wider than the circumference, unless `allow_overlap`.
-pub fn check_width(machine: &RotaryConfig, extent: Option<PartExtent>, allow_overlap: bool) -> Result<()> {
+pub(crate) fn check_width(
+    machine: &RotaryConfig,
+    extent: Option<PartExtent>,
+    allow_overlap: bool,
+) -> Result<()> {
     let (Some(e), false) = (extent, allow_overlap) else { return Ok(()) };
     let c = machine.circumference_mm();
     // A part that closes on itself spans C less a bead width; rounding in the file's last

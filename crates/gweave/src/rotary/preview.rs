@@ -4,7 +4,7 @@
 //! ([`RotaryConfig::point_from_words`], the nozzle's position: radius `R0 + radial`) and times it
 //! as the firmware reads F under the machine's feed convention ([`RotaryConfig::time_from_feed`],
 //! no acceleration). Two passes read with it: the toolpath pass draws the program on its cylinder
-//! ([`crate::render::toolpath`], the preview of `gweave preview` and of `rotary --preview`), and
+//! (`crate::render::toolpath`, the preview of `gweave preview` and of `rotary --preview`), and
 //! [`ProgramPass`] adds up what the program does for the rotary reports: filament, time and per
 //! layer the radius, the angles and axial positions swept. Both number the layers alike: the
 //! slicer's layer comments when a wrapped file has them, else the rank of the nozzle radius among
@@ -153,7 +153,7 @@ impl RotaryReading {
 
 /// What a program does, added up as it streams by (see the module docs): per-layer figures,
 /// filament, time and beads, in one pass that keeps no bead. The layers are numbered as the
-/// toolpath pass numbers them for the preview ([`crate::render::toolpath`]), so that one read of
+/// toolpath pass numbers them for the preview (`crate::render::toolpath`), so that one read of
 /// a file can feed both.
 #[derive(Clone, Debug)]
 pub struct ProgramPass {

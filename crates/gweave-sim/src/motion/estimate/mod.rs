@@ -71,9 +71,9 @@ pub use front::{HugeArcs, Malformed, MAX_ARC_CHORDS};
 pub use report::{estimate_file, estimate_report, EstimateFileError, EstimateReport};
 
 /// Feed rate before the file sets one, mm/s (Klipper `gcode_move`, Marlin `feedrate_mm_s`).
-pub const DEFAULT_FEED_MM_S: f64 = 25.0;
+pub(crate) const DEFAULT_FEED_MM_S: f64 = 25.0;
 /// Longest chord an arc is cut into, mm.
-pub const ARC_CHORD_MM: f64 = 1.0;
+pub(crate) const ARC_CHORD_MM: f64 = 1.0;
 /// Klipper's `BUFFER_TIME_START`, s.
 const KLIPPER_START_BUFFER_S: f64 = 0.25;
 /// Klipper's two `DISABLE_STALL_TIME` dwells around `M84`, s.
@@ -431,7 +431,7 @@ pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Est
 /// [`estimate`] with the lines read as `firmware` reads them (a file's: see
 /// [`gweave::gcode::flavour::read_firmware`]), counting steps if asked (without, up to a fifth
 /// faster).
-pub fn estimate_as<R: Read + Send>(
+pub(crate) fn estimate_as<R: Read + Send>(
     input: R,
     profile: &MotionProfile,
     firmware: Firmware,

@@ -24,7 +24,7 @@
 
 /// The sine and cosine of half the corner angle `theta` (180 degrees = straight on).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HalfAngle {
+pub(super) struct HalfAngle {
     /// `sin(theta/2)`: 1 straight on, 0 for a full reversal.
     pub sin: f64,
     /// `cos(theta/2)`: 0 straight on, 1 for a full reversal.
@@ -33,19 +33,19 @@ pub struct HalfAngle {
 
 impl HalfAngle {
     /// From `c`, the negated dot product of the previous and the next unit direction.
-    pub fn from_neg_cos(c: f64) -> Self {
+    pub(super) fn from_neg_cos(c: f64) -> Self {
         Self { sin: (0.5 * (1.0 - c)).max(0.0).sqrt(), cos: (0.5 * (1.0 + c)).max(0.0).sqrt() }
     }
 
     /// The junction-deviation limit `a d sin/(1 - sin)`; `None` straight on (`sin = 1`,
     /// `cos = 0`), where the circle's radius is infinite and nothing limits the speed.
-    pub fn deviation_v2(&self, accel: f64, deviation_mm: f64) -> Option<f64> {
+    pub(super) fn deviation_v2(&self, accel: f64, deviation_mm: f64) -> Option<f64> {
         let one_minus_sin = 1.0 - self.sin;
         (one_minus_sin > 0.0 && self.cos > 0.0).then(|| self.sin / one_minus_sin * deviation_mm * accel)
     }
 
     /// Klipper's mid-move contact limit for a move with `delta_v2 = 2 a len`.
-    pub fn centripetal_v2(&self, delta_v2: f64) -> f64 {
+    pub(super) fn centripetal_v2(&self, delta_v2: f64) -> f64 {
         delta_v2 * 0.25 * self.sin / self.cos
     }
 }
@@ -53,7 +53,7 @@ impl HalfAngle {
 /// Klipper's extruder junction limit: the squared path speed at which the step in E speed,
 /// `v * |ratio_next - ratio_prev|`, equals `instantaneous_corner_velocity`; `None` when the
 /// ratio does not change.
-pub fn extruder_v2(icv_mm_s: f64, ratio_prev: f64, ratio_next: f64) -> Option<f64> {
+pub(super) fn extruder_v2(icv_mm_s: f64, ratio_prev: f64, ratio_next: f64) -> Option<f64> {
     let diff = ratio_next - ratio_prev;
     (diff != 0.0).then(|| (icv_mm_s / diff.abs()).powi(2))
 }

@@ -41,7 +41,7 @@ mod marlin_block;
 mod marlin_steps;
 mod trapezoid;
 
-pub use trapezoid::Trapezoid;
+pub(crate) use trapezoid::Trapezoid;
 
 use crate::motion::kinematics::{extent, Geometry, Move, MoveError, MoveKind, Pos};
 use crate::motion::limits::{CornerMode, MotionProfile, ProfileError};

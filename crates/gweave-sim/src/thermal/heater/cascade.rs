@@ -22,7 +22,7 @@ pub(super) struct Decay {
 }
 
 impl Decay {
-    pub fn new(rate: f64, t_s: f64) -> Self {
+    pub(super) fn new(rate: f64, t_s: f64) -> Self {
         Self { rate, factor: (-rate * t_s).exp() }
     }
 }

@@ -14,7 +14,7 @@ const DEPTH: usize = 4;
 const CHUNK: usize = 1 << 18;
 
 /// A reader fed by a decoding thread.
-pub struct Ahead {
+pub(crate) struct Ahead {
     /// In a mutex only to be `Sync` (Python's reader object must be); never contended.
     chunks: Mutex<Receiver<io::Result<Vec<u8>>>>,
     chunk: Vec<u8>,
@@ -25,7 +25,7 @@ pub struct Ahead {
 impl Ahead {
     /// Reads `source` on a new thread. The thread ends at the end of the source, at its first
     /// error (passed on to the reader), or when the reader is dropped.
-    pub fn new<R: Read + Send + 'static>(mut source: R) -> Ahead {
+    pub(crate) fn new<R: Read + Send + 'static>(mut source: R) -> Ahead {
         let (tx, rx) = sync_channel(DEPTH);
         thread::spawn(move || loop {
             let mut chunk = Vec::with_capacity(CHUNK);

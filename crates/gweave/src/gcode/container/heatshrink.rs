@@ -18,7 +18,7 @@ use std::io;
 
 /// Window and lookahead, in bits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Params {
+pub(crate) struct Params {
     pub window_bits: u32,
     pub lookahead_bits: u32,
 }
@@ -31,7 +31,7 @@ const COPY: usize = 16;
 const MAX_CHAIN: usize = 48;
 
 /// Decodes `input` into `out` (replacing what it held), which must come to `expected` bytes.
-pub fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>) -> io::Result<()> {
+pub(crate) fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>) -> io::Result<()> {
     // Room for a whole 16-byte copy past the end; not cleared (only grown: a block's buffer is
     // reused for the next), since every byte up to `expected` is written before it is read.
     out.resize(expected + COPY, 0);
@@ -132,7 +132,7 @@ impl Bits<'_> {
 }
 
 /// Encodes `input` into `out` (appended).
-pub fn encode(input: &[u8], p: Params, out: &mut Vec<u8>) {
+pub(crate) fn encode(input: &[u8], p: Params, out: &mut Vec<u8>) {
     const HASH_BITS: u32 = 14;
     let window = 1usize << p.window_bits;
     let max_len = 1usize << p.lookahead_bits;

@@ -161,7 +161,7 @@ static PAIR: [u64; 2 * 8 * 256] = {
 };
 
 /// Decodes one block's MeatPack bytes, appending the text to `out`.
-pub fn decode(input: &[u8], out: &mut Vec<u8>) {
+pub(crate) fn decode(input: &[u8], out: &mut Vec<u8>) {
     let start = out.len();
     // At most four bytes of text an input byte (two characters, each with a space), and room
     // for a whole 4-byte store past the last.

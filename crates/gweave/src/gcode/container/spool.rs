@@ -19,33 +19,33 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 /// The path that names standard input.
-pub const STDIN: &str = "-";
+pub(crate) const STDIN: &str = "-";
 
 /// Most bytes copied from one stream: larger than any sliced file (the largest real ones are a
 /// few GiB of text), small enough that an endless stream stops before a temporary directory
 /// on a small disk is full.
-pub const DEFAULT_LIMIT: u64 = 8 << 30;
+pub(crate) const DEFAULT_LIMIT: u64 = 8 << 30;
 
 /// The environment variable that sets another limit: bytes, or with `K`, `M` or `G` (powers
 /// of 1024).
-pub const LIMIT_VAR: &str = "GWEAVE_SPOOL_LIMIT";
+pub(crate) const LIMIT_VAR: &str = "GWEAVE_SPOOL_LIMIT";
 
 /// Copies made so far, by the path that named them.
 static SPOOLS: Mutex<Vec<(PathBuf, Arc<File>)>> = Mutex::new(Vec::new());
 
 /// An input opened for reading: a regular file, or the copy of a stream.
-pub enum Raw {
+pub(crate) enum Raw {
     File(File),
     Spool { file: Arc<File>, pos: u64 },
 }
 
 /// Whether `path` names standard input.
-pub fn is_stdin(path: &Path) -> bool {
+pub(crate) fn is_stdin(path: &Path) -> bool {
     path.as_os_str() == STDIN
 }
 
 /// Opens `path` (`-`: standard input), copying a stream to a spool the first time.
-pub fn open(path: &Path) -> io::Result<Raw> {
+pub(crate) fn open(path: &Path) -> io::Result<Raw> {
     // Looked up before anything is opened: opening a FIFO again would wait for a new writer.
     let mut spools = SPOOLS.lock().unwrap_or_else(|e| e.into_inner());
     if let Some((_, file)) = spools.iter().find(|(p, _)| p == path) {
@@ -129,7 +129,7 @@ fn size_text(bytes: u64) -> String {
 
 impl Raw {
     /// The input's length in bytes.
-    pub fn size(&self) -> io::Result<u64> {
+    pub(crate) fn size(&self) -> io::Result<u64> {
         match self {
             Raw::File(f) => Ok(f.metadata()?.len()),
             Raw::Spool { file, .. } => Ok(file.metadata()?.len()),

@@ -82,14 +82,14 @@ pub struct Input {
     #[serde(default = "default_density")]
     pub density_g_cm3: f64,
     /// How strongly it tints a mix (the scattering scale of the pigment model, see
-    /// [`crate::colour::mixing`]); unset, from its colour. `gweave mix --fit` measures it.
+    /// `crate::colour::mixing`); unset, from its colour. `gweave mix --fit` measures it.
     #[serde(default)]
     pub strength: Option<f64>,
     /// Its spectral shape (seven bump weights at 400, 450, .. 700 nm, see
-    /// [`crate::colour::shape`]); unset, none. `gweave mix --fit` measures it.
+    /// `crate::colour::shape`); unset, none. `gweave mix --fit` measures it.
     #[serde(default)]
     pub shape: Option<Shape>,
-    /// How its share weighs in a mix, `share^tint_exponent` (see [`crate::colour::mixing`],
+    /// How its share weighs in a mix, `share^tint_exponent` (see `crate::colour::mixing`,
     /// step 3); unset, 1.7. `gweave mix --fit` measures it.
     #[serde(default)]
     pub tint_exponent: Option<f64>,
@@ -304,7 +304,7 @@ pub struct PurgeConfig {
     pub on_gradient_steps: bool,
     /// Amounts for given changes of mix, over `mode`.
     pub pair: Vec<PairPurge>,
-    /// `seed`: the mixing seed's purge feeds ([`PurgeMotion::with_seed_feeds`]) over the feed
+    /// `seed`: the mixing seed's purge feeds (`PurgeMotion::with_seed_feeds`) over the feed
     /// and wipe keys.
     pub style: PurgeStyle,
 }

@@ -124,7 +124,7 @@ pub(crate) struct Accounting {
 }
 
 impl Accounting {
-    pub fn new(plan: &Plan, hw: &Hardware) -> Self {
+    pub(crate) fn new(plan: &Plan, hw: &Hardware) -> Self {
         let scale = 10f64.powi(hw.ratio_decimals as i32);
         let ratios: Vec<Vec<f64>> =
             plan.mixes.iter().map(|m| m.units.iter().map(|&u| u as f64 / scale).collect()).collect();
@@ -171,7 +171,7 @@ impl Accounting {
 
     /// `e_mm` of filament through the nozzle with `mix`; `printed` gives the layer and Z of a
     /// move that deposits it (not a retraction or unretraction).
-    pub fn filament(&mut self, mix: usize, e_mm: f64, printed: Option<(u32, f64)>) {
+    pub(crate) fn filament(&mut self, mix: usize, e_mm: f64, printed: Option<(u32, f64)>) {
         for (acc, r) in self.per_input_mm.iter_mut().zip(&self.ratios[mix]) {
             *acc += e_mm * r;
         }
@@ -203,7 +203,7 @@ impl Accounting {
     }
 
     /// A purge of `mm` with `mix`.
-    pub fn purge(&mut self, mix: usize, mm: f64) {
+    pub(crate) fn purge(&mut self, mix: usize, mm: f64) {
         self.purge.count += 1;
         self.purge.filament_mm += mm;
         self.purge.volume_mm3 += mm * self.area_mm2;
@@ -215,7 +215,7 @@ impl Accounting {
         }
     }
 
-    pub fn finish(mut self, hw: &Hardware) -> MixReport {
+    pub(crate) fn finish(mut self, hw: &Hardware) -> MixReport {
         self.close_layer();
         let grams = |mm: &[f64]| -> Vec<f64> {
             mm.iter().zip(&hw.inputs).map(|(l, i)| l * self.area_mm2 / 1000.0 * i.density_g_cm3).collect()

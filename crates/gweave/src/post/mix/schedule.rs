@@ -6,7 +6,7 @@
 //! first entry's mix is used. A gradient over layers `a..=b` every `n` layers has
 //! `S = (b - a) / n` steps after its first; layer `L` gets step `s = min((L - a) / n, S)` at
 //! `t = s / S` between the two mixes (linearly in ratio space, or in CIELAB and solved back,
-//! see [`crate::colour::solve::lerp_perceived`]). A Z gradient steps every `z_step_mm`.
+//! see `crate::colour::solve::lerp_perceived`). A Z gradient steps every `z_step_mm`.
 //!
 //! Virtual tools: when every distinct mix fits the firmware's tool count, each gets its own tool,
 //! all defined once at the start of the print. Otherwise the fixed mixes (schedule, map, the

@@ -64,12 +64,12 @@ pub(crate) struct Surroundings {
 
 impl Surroundings {
     /// Follows the retraction in force over one line of the file.
-    pub fn follow_retraction(&mut self, effect: &Effect) {
+    pub(super) fn follow_retraction(&mut self, effect: &Effect) {
         self.retraction.follow(effect);
     }
 
     /// Follows one move of the file.
-    pub fn observe(&mut self, mv: &Move, in_print: bool) {
+    pub(super) fn observe(&mut self, mv: &Move, in_print: bool) {
         let e_mm = mv.e_mm();
         if mv.is_extruding() {
             if let Some((mm, feed)) = self.pending.take() {
@@ -96,12 +96,12 @@ impl Surroundings {
     }
 
     /// A change of tool or mix: the retraction before it was the slicer's tool-change one.
-    pub fn tool_change(&mut self) {
+    pub(super) fn tool_change(&mut self) {
         self.pending = None;
     }
 
     /// Retraction the file has in force now, mm.
-    pub fn retracted_mm(&self) -> f64 {
+    pub(super) fn retracted_mm(&self) -> f64 {
         self.retraction.in_force_mm()
     }
 

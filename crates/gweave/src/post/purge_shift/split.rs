@@ -64,7 +64,7 @@ pub(crate) struct Halves {
 
 impl Splittable {
     /// The point at fraction `t` of the move.
-    pub fn point(&self, t: f64) -> Position {
+    pub(super) fn point(&self, t: f64) -> Position {
         let (from, to) = (self.mv.from, self.mv.to);
         let mut p: Position = std::array::from_fn(|i| from[i] + t * (to[i] - from[i]));
         if let Path::Arc(arc) = &self.mv.path {
@@ -78,7 +78,7 @@ impl Splittable {
     /// Where the machine is after `line`, a half [`split`] wrote for this move: its words read
     /// back as the firmware reads them (rounded as written), so what is inserted after the half
     /// starts from exactly the position the file has there.
-    pub fn end_of(&self, line: &[u8]) -> Position {
+    pub(super) fn end_of(&self, line: &[u8]) -> Position {
         let mut block = Block::default();
         parse_into(line, &mut block);
         let mut p = self.mv.from;

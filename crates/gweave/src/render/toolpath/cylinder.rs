@@ -33,7 +33,7 @@ pub(super) struct CylinderLayers {
 
 impl CylinderLayers {
     /// The layer (or provisional key) of move `m` in a layer the slicer numbered `commented`.
-    pub fn layer(&mut self, commented: Option<u32>, m: &RotaryMove) -> u32 {
+    pub(super) fn layer(&mut self, commented: Option<u32>, m: &RotaryMove) -> u32 {
         if !m.is_bead() {
             return commented.unwrap_or(self.last);
         }
@@ -64,7 +64,11 @@ impl CylinderLayers {
 
     /// Gives every segment its final layer, keeps those in `layers`, and returns the radius of
     /// each layer, mm (what a flat file's layer Z is to the preview).
-    pub fn finish(&self, segments: &mut Vec<Segment>, layers: Option<&RangeInclusive<u32>>) -> Vec<f32> {
+    pub(super) fn finish(
+        &self,
+        segments: &mut Vec<Segment>,
+        layers: Option<&RangeInclusive<u32>>,
+    ) -> Vec<f32> {
         let mut sorted = self.radii_um.clone();
         sorted.sort_unstable();
         let rank: Vec<u32> =

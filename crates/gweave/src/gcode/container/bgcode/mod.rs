@@ -7,17 +7,17 @@
 //!
 //! gweave reads such a file as the text libbgcode's `from_binary_to_ascii` makes of it: the
 //! metadata as `; key = value` comments and the thumbnails as PrusaSlicer's base64 comment
-//! blocks before the G-code, the print and slicer metadata after it ([`text`]). So `stats`
+//! blocks before the G-code, the print and slicer metadata after it (`text`). So `stats`
 //! finds the slicer's figures and flavour where it finds them in a text file, and
 //! `gweave cat x.bgcode -o x.gcode` writes what libbgcode's converter writes.
 //!
-//! Blocks are read and written one at a time ([`read`], [`mod@write`]); a block may hold at most
+//! Blocks are read and written one at a time ([`read`], `write`); a block may hold at most
 //! [`MAX_BLOCK`] bytes, so memory stays bounded whatever the file's size.
 
 pub mod read;
-pub mod summary;
-pub mod text;
-pub mod write;
+pub(crate) mod summary;
+pub(crate) mod text;
+pub(crate) mod write;
 
 use std::io::{self, Read};
 

@@ -1,5 +1,5 @@
 //! Reading a binary G-code file block by block, as a stream of text ([`Reader`] is a
-//! [`Read`]): the metadata rendered first ([`super::text::prefix`]), then each G-code block
+//! [`Read`]): the metadata rendered first (`super::text::prefix`), then each G-code block
 //! checked (CRC32), decompressed (deflate, heatshrink), decoded (MeatPack) and stripped of the
 //! empty lines libbgcode's converter leaves out, then the print and slicer metadata. Memory:
 //! one block, its decoded text, and the metadata.

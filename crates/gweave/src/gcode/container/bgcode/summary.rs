@@ -48,7 +48,7 @@ const PRINT_FIGURES: &[&str] = &[
 
 /// The printer and print metadata of a text whose settings are `settings` and whose end
 /// (before the settings block) is `tail`.
-pub fn of_text(settings: &Metadata, tail: &[u8]) -> (Metadata, Metadata) {
+pub(crate) fn of_text(settings: &Metadata, tail: &[u8]) -> (Metadata, Metadata) {
     let footer = footer(tail);
     let figure = |key: &&str| footer.iter().rev().find(|(k, _)| k == key).cloned();
     let mut printer: Vec<(String, String)> = PRINTER_SETTINGS

@@ -11,7 +11,7 @@ use super::{Metadata, Preamble};
 const THUMBNAIL_ROW: usize = 78;
 
 /// The text before the first G-code block.
-pub fn prefix(p: &Preamble) -> Vec<u8> {
+pub(crate) fn prefix(p: &Preamble) -> Vec<u8> {
     let mut t = String::new();
     if let Some(file) = &p.file {
         let mut producer = file.get("Producer").unwrap_or("Unknown").to_owned();
@@ -42,7 +42,7 @@ pub fn prefix(p: &Preamble) -> Vec<u8> {
 }
 
 /// The text after the last G-code block: the print metadata and the slicer settings.
-pub fn suffix(p: &Preamble) -> Vec<u8> {
+pub(crate) fn suffix(p: &Preamble) -> Vec<u8> {
     let mut t = String::from("\n");
     t += &lines(&p.print);
     t.push_str(&String::from_utf8_lossy(&slicer(p)));
@@ -89,7 +89,7 @@ fn read_lines(text: &[u8], keys: &[(String, String)]) -> Option<(Vec<(String, St
 /// first, such as its own header comment): the printer metadata as the text now says, the
 /// range the rendering takes. The file header and thumbnails must be as rendered; the printer
 /// values may have changed.
-pub fn find_prefix(text: &[u8], p: &Preamble) -> Option<(Metadata, std::ops::Range<usize>)> {
+pub(crate) fn find_prefix(text: &[u8], p: &Preamble) -> Option<(Metadata, std::ops::Range<usize>)> {
     let full = prefix(p);
     let rendered_file = p.file.as_ref().map(|_| {
         let printer_start = full.len() - after_file(p).len();
@@ -129,7 +129,7 @@ fn thumbnails_and_gap(p: &Preamble) -> Vec<u8> {
 /// Where [`suffix`] of `p` ends `text`: the print metadata as the text now says and where the
 /// rendering starts. The slicer settings must be as rendered; the print values may have changed
 /// (a transform updates the filament used and the time).
-pub fn find_suffix(text: &[u8], p: &Preamble) -> Option<(Metadata, usize)> {
+pub(crate) fn find_suffix(text: &[u8], p: &Preamble) -> Option<(Metadata, usize)> {
     let settings = slicer(p);
     let before = text.len().checked_sub(settings.len())?;
     if text[before..] != settings[..] {
@@ -152,7 +152,7 @@ pub fn find_suffix(text: &[u8], p: &Preamble) -> Option<(Metadata, usize)> {
 /// Takes PrusaSlicer's settings block (`; prusaslicer_config = begin`, `; key = value` lines,
 /// `; prusaslicer_config = end`, then only blank lines) off the end of a text; its items, none
 /// if the text does not end with one.
-pub fn take_settings(text: &mut Vec<u8>) -> Metadata {
+pub(crate) fn take_settings(text: &mut Vec<u8>) -> Metadata {
     const BEGIN: &[u8] = b"; prusaslicer_config = begin\n";
     const END: &[u8] = b"; prusaslicer_config = end";
     let body_end = text.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(0, |i| i + 1);
@@ -179,7 +179,7 @@ pub fn take_settings(text: &mut Vec<u8>) -> Metadata {
 }
 
 /// Standard base64 with padding (RFC 4648 section 4), as PrusaSlicer encodes thumbnails.
-pub fn base64(data: &[u8]) -> String {
+pub(crate) fn base64(data: &[u8]) -> String {
     const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut s = String::with_capacity(data.len().div_ceil(3) * 4);
     for chunk in data.chunks(3) {

@@ -24,7 +24,7 @@ use super::super::heatshrink;
 use super::{file_header, summary, text, Block, Compression, Header, Kind, Metadata, Preamble};
 
 /// The largest G-code block written (libbgcode's own limit, 65535 bytes).
-pub const BLOCK: usize = 65535;
+pub(crate) const BLOCK: usize = 65535;
 /// The end of a text input held back for its settings block (PrusaSlicer's is 10 to 100 KB).
 const SETTINGS_HOLD: usize = 1 << 20;
 /// Lines a transform may put before the rendered metadata are searched this far.
