@@ -95,3 +95,19 @@ def test_console_script_is_the_rust_cli(data, tmp_path):
     r = subprocess.run([sys.executable, "-m", "gweave", "check", str(tmp_path / "missing.gcode")], capture_output=True, text=True)
     assert r.returncode == 1 and "missing.gcode" in r.stderr
     assert gweave.main(["--version"]) == 0
+
+
+def test_the_command_is_the_native_executable_and_the_module_has_no_cli():
+    # The package carries the CLI's own executable (the wheel's scripts/), not a Python entry
+    # point into the extension, which no longer links the CLI crate.
+    from gweave import _command
+
+    exe = _command.executable()
+    with open(exe, "rb") as f:
+        magic = f.read(4)
+    if sys.platform.startswith("linux"):
+        assert magic == b"\x7fELF", exe
+    assert not hasattr(gweave._gweave, "run_cli")
+    # Its exit codes come through: 2 for a usage error (clap's), 1 for a failed run.
+    assert gweave.main(["--no-such-flag"]) == 2
+    assert gweave.main(["stats", "/nonexistent/x.gcode"]) == 1
