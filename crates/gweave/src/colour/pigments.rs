@@ -1,7 +1,7 @@
 //! Reflectance spectra for the default filaments, fitted to published pigment mixing.
 //!
 //! A filament of any other colour gets the smoothest spectrum that shows its colour
-//! ([`super::reflectance`]). The smoothest spectrum is a guess: a real cyan pigment
+//! (`super::reflectance`). The smoothest spectrum is a guess: a real cyan pigment
 //! (copper phthalocyanine) keeps reflecting blue-green light into the green, where the
 //! smoothest cyan falls off steadily from the violet, so its mixes with yellow come out too
 //! dull (and a little of it turns magenta violet). For the default cyan, magenta, yellow and white filaments
@@ -13,7 +13,7 @@
 //! 2.0, latent mixing) over 71 2-, 3- and 4-input blends of these filaments, plus a penalty on
 //! the weights (2 × their sum of squares) that keeps the spectra smooth. Only these 144 numbers
 //! come from that fit; no Mixbox data or code is in gweave. The accuracy this buys is in
-//! `docs/mix.md` and, against an independent table, in the tests of [`super::mixing`].
+//! `docs/mix.md` and, against an independent table, in the tests of `super::mixing`.
 
 use super::reflectance::reflectance;
 use super::spectrum::Spectrum;
@@ -21,7 +21,7 @@ use super::srgb::Srgb8;
 
 /// Typical PLA filament colours for the seed's inputs with white on E3
 /// (our estimate from vendor swatches; measure your own for accuracy).
-pub(crate) const CMYW_FILAMENTS: [Srgb8; 4] =
+pub const CMYW_FILAMENTS: [Srgb8; 4] =
     [Srgb8::new(0, 160, 224), Srgb8::new(224, 0, 122), Srgb8::new(255, 224, 0), Srgb8::new(245, 245, 240)];
 
 /// (filament colour, its fitted reflectance at 380, 390, .. 730 nm).

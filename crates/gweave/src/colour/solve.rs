@@ -51,7 +51,7 @@ pub struct Solution {
 }
 
 /// Ratios for `target` with the model's filaments.
-pub(crate) fn solve(model: &MixingModel, target: Srgb8) -> Solution {
+pub fn solve(model: &MixingModel, target: Srgb8) -> Solution {
     solve_lab(model, Lab::from(target))
 }
 
