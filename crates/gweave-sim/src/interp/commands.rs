@@ -686,7 +686,7 @@ fn m600(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 /// `M700`/`M578`: fire the printhead, on a machine that has one.
 fn fire(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     if m.inkjet.is_some() {
-        m.fire()
+        m.fire(c.line, out)
     } else {
         m.unknown_command(c.line, out)
     }
