@@ -26,7 +26,7 @@ fn replies(profile: MachineProfile, line: &str) -> Vec<String> {
 
 /// The default machine with every build option built in (the defaults have the others).
 fn full_firmware() -> MachineProfile {
-    let text = "[firmware]\npsu_control = true\nautoreport_pos = true\nprobe = true\nlfn_write = true\n";
+    let text = "[firmware]\npsu_control = true\nautoreport_pos = true\nprobe = true\nlfn_write = true\nlinear_advance = true\n";
     MachineProfile::from_toml_str(text).unwrap()
 }
 
@@ -140,4 +140,30 @@ fn no_code_is_carried_out_without_being_listed() {
         }
     }
     assert_eq!(unlisted, 2 * 1001 - listed.iter().filter(|c| c.starts_with(['G', 'M'])).count());
+}
+
+/// A PrusaSlicer file for RepRapFirmware (the SEMM cylinder) sets pressure advance per tool with
+/// `M572 D<tool> S0`: the virtual printer answered each with "Unknown command" (85 warnings).
+/// `M900` (Marlin's linear advance) is there on a build with `LIN_ADVANCE`, as Prusa's firmware
+/// has, and unknown on Marlin's shipped configuration, as Marlin answers.
+#[test]
+fn pressure_advance_is_known_where_the_firmware_has_it() {
+    let text =
+        std::fs::read_to_string(repo().join("tests/data/prusaslicer/pr_cyl_semm_tower.gcode")).unwrap();
+    assert_eq!(text.lines().filter(|l| l.starts_with("M572 D")).count(), 85);
+    let mut m = Machine::new(example_machine("prusa-mk3-mmu.toml")).unwrap();
+    for line in text.lines() {
+        m.execute(line.as_bytes(), &mut |_, _| {});
+    }
+    m.finish(&mut |_, _| {});
+    assert!(m.report().unknown_commands.is_empty(), "{:?}", m.report().unknown_commands);
+
+    let prusa = example_machine("prusa-mk3.toml");
+    assert_eq!(replies(prusa.clone(), "M900 K0.05"), Vec::<String>::new());
+    let too_much = replies(prusa, "M900 K11");
+    assert!(too_much.iter().any(|l| l.contains('K') && l.contains("0 to 10")), "{too_much:?}");
+    let mut marlin = Machine::new(MachineProfile::default()).unwrap();
+    let mut out = Vec::new();
+    marlin.execute(b"M900 K0.05", &mut |_, l| out.push(l.to_owned()));
+    assert_eq!(out, ["echo:Unknown command: \"M900 K0.05\""]);
 }

@@ -19,6 +19,15 @@
 //! firmware pitfalls become typed warnings (`sjkelly/Marlin` branch hpc6602, `Marlin_main.cpp`): `M700` runs as soon as it is parsed,
 //! so without an `M400` since the last move it fires while the carriage is still travelling;
 //! and the firmware reads `S` only when `P` is given, so `M700` without `P` fires nothing.
+//!
+//! **The time a fire takes.** The InkShield library (`NicholasCLewis/InkShield`,
+//! `InkShieldMega.cpp`, `spray_ink`) pulses each set nozzle for 5 us and then waits 800 us
+//! (`delayMicroseconds(800)`, "so we don't fire nozzles too fast and burn them out") whatever
+//! the mask, even an empty one; the patch calls it from the command parser, which waits too.
+//! After an `M400` nothing else runs meanwhile, so each fire adds the profile's
+//! `min_fire_interval_us` to the print, as the raster generator's own estimate counts it (the
+//! pulses, 60 us at most, are left out of both). A fire without the `M400` waits while the
+//! queued moves run on: it costs no time of its own.
 
 pub(crate) mod recoat;
 
@@ -144,7 +153,9 @@ impl InkjetCanvas {
 
     /// Records one fire command. `head` is the `P` word (None when absent), `bits` the `S`
     /// word, `x_mm`/`y_mm`/`z_mm` the carriage position when it runs, and `moved_since_m400`
-    /// whether a move was queued after the last `M400`.
+    /// whether a move was queued after the last `M400`. Returns the time the firmware waits
+    /// after it with nothing moving, s (see the module's notes): none when no head fired.
+    #[must_use]
     pub fn on_m700(
         &mut self,
         head: Option<u32>,
@@ -153,19 +164,22 @@ impl InkjetCanvas {
         y_mm: f64,
         z_mm: f64,
         moved_since_m400: bool,
-    ) {
+    ) -> f64 {
         let Some(head) = head else {
             self.warnings.push(InkjetWarning::MissingHead { x_mm, y_mm });
-            return;
+            return 0.0;
         };
         let heads = self.printhead.heads.len();
         if head as usize >= heads {
             self.warnings.push(InkjetWarning::UnknownHead { head });
-            return;
+            return 0.0;
         }
-        if moved_since_m400 {
+        let wait_s = if moved_since_m400 {
             self.warnings.push(InkjetWarning::FireWithoutM400 { head, x_mm, y_mm });
-        }
+            0.0
+        } else {
+            self.printhead.fire_time_s(1)
+        };
         let g = self.geometry;
         let same_layer = matches!(self.layers.last(), Some(l) if (l.z_mm - z_mm).abs() <= SAME_Z_MM);
         if !same_layer {
@@ -173,7 +187,7 @@ impl InkjetCanvas {
         }
         let canvas = match self.layers.last_mut() {
             Some(layer) => &mut layer.heads[head as usize],
-            None => return,
+            None => return wait_s,
         };
         self.drops_per_head[head as usize] += u64::from(self.printhead.drops_of_fire(bits));
         let mut lost = 0;
@@ -188,6 +202,7 @@ impl InkjetCanvas {
         if lost > 0 {
             self.warnings.push(InkjetWarning::OffCanvas { head, x_mm, y_mm, lost });
         }
+        wait_s
     }
 
     /// What went wrong with the fires so far.
@@ -257,16 +272,17 @@ mod tests {
         };
         let mut c = canvas(&profile);
         // Address 0 (bit 0) fires row 2; carriage at pixel (1, 0) centre.
-        c.on_m700(Some(0), 0b001, 11.5, 20.5, 0.1, false);
+        // Each fire after an M400 waits the profile's 800 us with nothing moving.
+        assert_eq!(c.on_m700(Some(0), 0b001, 11.5, 20.5, 0.1, false), 800.0 * 1e-6);
         // Head 1, address 1 -> row 0, shifted by (2, 1) mm -> pixel (3, 1).
-        c.on_m700(Some(1), 0b010, 11.5, 20.5, 0.1, false);
+        assert_eq!(c.on_m700(Some(1), 0b010, 11.5, 20.5, 0.1, false), 800.0 * 1e-6);
         assert!(c.warnings().is_empty(), "{:?}", c.warnings());
         let l = &c.layers()[0];
         assert_eq!(l.z_mm, 0.1);
         assert!(l.heads[0].get(1, 2) && l.heads[0].count_ones() == 1);
         assert!(l.heads[1].get(3, 1) && l.heads[1].count_ones() == 1);
         // A new Z opens a new layer.
-        c.on_m700(Some(0), 0b111, 11.5, 20.5, 0.2, false);
+        assert_eq!(c.on_m700(Some(0), 0b111, 11.5, 20.5, 0.2, false), 800.0 * 1e-6);
         assert_eq!(c.layers().len(), 2);
         assert_eq!(c.layers()[1].heads[0].count_ones(), 3);
         assert_eq!(c.drops_per_head(), &[4, 1]);
@@ -276,12 +292,14 @@ mod tests {
     fn typed_warnings() {
         let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
-        c.on_m700(None, 1, 10.5, 20.5, 0.1, false);
-        c.on_m700(Some(3), 1, 10.5, 20.5, 0.1, false);
-        c.on_m700(Some(0), 1, 10.5, 20.5, 0.1, true);
+        // No head fires without P or with an unknown one: no wait. A fire while the moves
+        // run (no M400) waits while they go on: no time of its own.
+        assert_eq!(c.on_m700(None, 1, 10.5, 20.5, 0.1, false), 0.0);
+        assert_eq!(c.on_m700(Some(3), 1, 10.5, 20.5, 0.1, false), 0.0);
+        assert_eq!(c.on_m700(Some(0), 1, 10.5, 20.5, 0.1, true), 0.0);
         // 12 rows from y pixel 0: rows 6..11 fall off the 6-row canvas; x = 9.5 is off too.
-        c.on_m700(Some(0), 0xFFF, 10.5, 20.5, 0.1, false);
-        c.on_m700(Some(0), 1, 9.5, 20.5, 0.1, false);
+        assert_eq!(c.on_m700(Some(0), 0xFFF, 10.5, 20.5, 0.1, false), 800.0 * 1e-6);
+        assert_eq!(c.on_m700(Some(0), 1, 9.5, 20.5, 0.1, false), 800.0 * 1e-6);
         assert_eq!(
             c.warnings(),
             &[
@@ -300,7 +318,7 @@ mod tests {
     fn layer_pngs_read_back() {
         let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
-        c.on_m700(Some(0), 0b101, 13.5, 20.5, 0.1, false);
+        let _wait_s = c.on_m700(Some(0), 0b101, 13.5, 20.5, 0.1, false);
         let dir = tempfile::tempdir().unwrap();
         let paths = c.write_layer_pngs(dir.path()).unwrap();
         assert_eq!(paths, vec![dir.path().join("layer_00000_head0.png")]);

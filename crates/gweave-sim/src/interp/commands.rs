@@ -165,6 +165,13 @@ const SD_BYTE: Range = Range::new(0.0, 4_294_967_295.0, "bytes");
 /// 0 turns it off.
 const KEEPALIVE_S: Range = Range::new(0.0, crate::link::serial::MAX_KEEPALIVE_S as f64, "s");
 
+/// `M900 K`: Marlin's linear advance factor, mm of filament per mm/s of extrusion speed; Marlin
+/// refuses one outside 0 to 10 (`M900.cpp`, "K value out of range").
+const ADVANCE_K: Range = Range::new(0.0, 10.0, "mm/(mm/s)");
+/// `M572 S`: RepRapFirmware's pressure advance, the seconds of extrusion speed the extruder
+/// runs ahead; tuned values are a few hundredths, a whole second is far past any nozzle.
+const PRESSURE_ADVANCE_S: Range = Range::new(0.0, 1.0, "s");
+
 /// The words of the commands that take a period.
 const PERIOD: &[Param] = &[p("S", range::PERIOD_S)];
 /// RepRapFirmware's tool temperature, `G10 P<tool> S<active> R<standby>` and `M568`.
@@ -254,9 +261,11 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M502 M503", what: "settings: factory defaults, report", run: defaults_or_report, ..ROW },
     CommandSpec { codes: "M524", what: "abort the SD print", run: sd::m524, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, ..ROW },
+    CommandSpec { codes: "M572", what: "pressure advance D<extruder> S<seconds> (RepRapFirmware; accepted: it shapes the extruder's motion, not the print's time)", run: accepted, params: &[p("D", TOOL), p("S", PRESSURE_ADVANCE_S)], ..ROW },
     CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, params: TOOL_TEMP, ..ROW },
     CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, needs: Feature::AdvancedPause, ..ROW },
     CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: m851, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
+    CommandSpec { codes: "M900", what: "linear advance K (firmware.linear_advance; accepted: it shapes the extruder's motion, not the print's time)", run: accepted, params: &[p("K", ADVANCE_K)], needs: Feature::LinearAdvance, ..ROW },
     CommandSpec { codes: "M876", what: "answer a host prompt (firmware.prompt_support)", run: m876, needs: Feature::PromptSupport, ..ROW },
     CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd::m928, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M578 M700", what: "inkjet fire at the carriage position (machines with a printhead)", run: fire, params: &[p("P", HEAD), p("S", NOZZLE_BITS)], ..ROW },
@@ -689,7 +698,7 @@ fn m600(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 /// `M700`/`M578`: fire the printhead, on a machine that has one.
 fn fire(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     if m.inkjet.is_some() {
-        m.fire()
+        m.fire(c.line, out)
     } else {
         m.unknown_command(c.line, out)
     }

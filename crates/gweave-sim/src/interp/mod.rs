@@ -527,8 +527,9 @@ impl Machine {
         }
     }
 
-    /// `M700 P<head> S<bits>` / `M578`: record the drops at the carriage position.
-    fn fire(&mut self) {
+    /// `M700 P<head> S<bits>` / `M578`: record the drops at the carriage position, and wait
+    /// as the firmware does after a fire (`inkjet`'s notes: a dwell when nothing is moving).
+    fn fire(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
         let b = self.core.block();
         let head = b.get(b'P').map(|p| p.max(0.0) as u32);
         let bits = b.get(b'S').map_or(0, |s| s.max(0.0) as u64);
@@ -538,7 +539,7 @@ impl Machine {
             return;
         };
         let seen = canvas.warnings().len();
-        canvas.on_m700(head, bits, x, y, z, moved);
+        let wait_s = canvas.on_m700(head, bits, x, y, z, moved);
         let mut new: Vec<_> = canvas.warnings()[seen..].to_vec();
         if let Some(check) = &mut self.recoat {
             let a = self.core.state().pos[state::A];
@@ -546,6 +547,9 @@ impl Machine {
         }
         for detail in new {
             self.warn(WarningKind::Inkjet { detail });
+        }
+        if wait_s > 0.0 {
+            self.run_core(line, &Effect::Dwell { t_s: wait_s }, out);
         }
     }
 

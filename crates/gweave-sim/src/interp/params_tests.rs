@@ -10,7 +10,7 @@ use crate::profile::MachineProfile;
 /// The default machine with every optional command built in.
 fn full_machine() -> Machine {
     let text = "[firmware]\npsu_control = true\nautoreport_pos = true\nprobe = true\npin_control = true\n\
-                fw_retract = true\n";
+                fw_retract = true\nlinear_advance = true\n";
     Machine::new(MachineProfile::from_toml_str(text).unwrap()).unwrap()
 }
 

@@ -31,6 +31,7 @@
 //! set_progress = true          # SET_PROGRESS_MANUALLY: M73
 //! pin_control = true           # DIRECT_PIN_CONTROL: M42 M226
 //! probe = false                # a bed probe: M851, G30 (Z_PROBE)
+//! linear_advance = false       # LIN_ADVANCE: M900 (off in Marlin's shipped configuration)
 //! mesh = [3, 3]                # bed levelling (AUTO_BED_LEVELING_BILINEAR grid): G29 M420; [] none
 //! ```
 //!
@@ -86,6 +87,8 @@ pub struct BuildOptions {
     pub pin_control: bool,
     /// A bed probe: `M851` probe offsets (`Z_PROBE`).
     pub probe: bool,
+    /// `LIN_ADVANCE`: `M900 K` sets the extruder's pressure advance.
+    pub linear_advance: bool,
     /// Bed levelling grid points in X and Y (`GRID_MAX_POINTS_X/Y`): `G29`, `M420`; empty when
     /// the board has no levelling.
     pub mesh: Vec<u8>,
@@ -140,6 +143,7 @@ impl Default for BuildOptions {
             set_progress: true,
             pin_control: true,
             probe: false,
+            linear_advance: false,
             mesh: vec![3, 3],
             m0: ProgramStop::Marlin,
         }
@@ -257,6 +261,7 @@ impl BuildOptions {
             Feature::SetProgress => self.set_progress,
             Feature::PinControl => self.pin_control,
             Feature::Probe => self.probe,
+            Feature::LinearAdvance => self.linear_advance,
             Feature::Mesh => self.grid().is_some(),
         }
     }
@@ -297,6 +302,8 @@ pub enum Feature {
     PinControl,
     /// `probe`: `M851`.
     Probe,
+    /// `linear_advance`: `M900`.
+    LinearAdvance,
     /// `mesh` not empty: `G29`, `M420`.
     Mesh,
 }
