@@ -132,7 +132,7 @@ build-debug: rust-deps
 
 # The package's `gweave` command is the CLI's executable, built first into the wheel's data by
 # the package's build backend (crates/gweave-py/build_backend/gweave_build.py), which
-# `maturin develop` does not run; the CLI's build leaves the engine compiled for maturin's.
+# `maturin develop` does not run.
 python: python-deps
 	$(PY) crates/gweave-py/build_backend/gweave_build.py release >/dev/null
 	$(VENV)/bin/maturin develop --release -q -m crates/gweave-py/Cargo.toml
