@@ -90,6 +90,8 @@ pub mod machine;
 pub mod math;
 pub mod mixing;
 pub mod planner;
+#[cfg(feature = "std")]
+pub mod printer_file;
 pub mod rotary;
 pub mod serial;
 pub mod settings;
