@@ -182,6 +182,19 @@ fn the_registry_is_exactly_what_the_controller_runs() {
     assert_eq!(rows, [41, 41 + 3 + 1000, 42, 42]);
 }
 
+/// Regression: the ranges were checked before knowing whether the machine has the command, so
+/// a mixing command on a printer without a mixing hotend was refused as out of range.
+#[test]
+fn a_mixing_command_without_a_mixing_hotend_is_unknown_even_out_of_range() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("M163 S0 P2000000\nM700 P0 S99999\n");
+    b.run_ms(2);
+    assert_eq!(
+        b.take(),
+        "start\necho:Unknown command: \"M163 S0 P2000000\"\nok\necho:Unknown command: \"M700 P0 S99999\"\nok\n"
+    );
+}
+
 #[test]
 fn a_value_out_of_range_is_refused_and_changes_nothing() {
     let mut b = Bench::new(Settings::DEFAULT);
