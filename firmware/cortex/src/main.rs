@@ -52,6 +52,9 @@ const APB2_HZ: u32 = CPU_HZ / 2;
 const _: () = assert!(step_timer::TICKS_PER_S == gweave_controller::limits::TICKS_PER_S);
 // The core asks for at most MAX_TIMER_TICKS at once; SysTick's 24 bits hold more.
 const _: () = assert!(gweave_controller::limits::MAX_TIMER_TICKS <= step_timer::MAX_TICKS);
+// The printer file's drivers fit the board's six (a 4-input mixing hotend needs seven): a
+// printer this board cannot drive stops the build.
+const _: () = assert!(config::DRIVERS <= DRIVERS.len(), "the printer needs more drivers than the board has");
 
 /// The raw 10-bit reading of every thermistor: 977 is 25 °C on the EPCOS 100 kΩ (type 1) with
 /// its 4.7 kΩ pull-up (`crates/gweave-controller/src/heat/thermistor.rs`). QEMU models no
