@@ -4,9 +4,10 @@
 //! (an Arduino Mega 2560 with a RAMPS 1.4 shield): it reads G-code from the serial line with the
 //! Marlin host protocol, plans moves with acceleration, turns them into step pulses, and keeps
 //! two hotends and a bed at temperature with PID control and Marlin's safety rules. It knows
-//! nothing of registers or pins. A board (the ATmega2560 firmware in `firmware/ramps`, the
+//! no chip's registers or pins. A board (the ATmega2560 firmware in `firmware/ramps`, the
 //! emulated board, the virtual printer) moves bytes, ADC readings, endstop levels and duties
-//! between this core and its hardware.
+//! between this core and its hardware; what every board's firmware shares (the main loop, the
+//! drivers' pins, a volatile register) is [`board`], written once.
 //!
 //! `#![no_std]`, no allocator, no `f64`, no `core::fmt` and no float parsing from `core` (on an
 //! 8-bit AVR they cost kilobytes of flash and RAM): numbers are read and written by hand
@@ -79,6 +80,7 @@
 #[cfg(any(test, feature = "std"))]
 extern crate std;
 
+pub mod board;
 pub mod gcode;
 pub mod heat;
 #[cfg(feature = "inkjet")]
@@ -88,6 +90,8 @@ pub mod machine;
 pub mod math;
 pub mod mixing;
 pub mod planner;
+#[cfg(feature = "std")]
+pub mod printer_file;
 pub mod rotary;
 pub mod serial;
 pub mod settings;

@@ -223,6 +223,14 @@ impl Planner {
         if mixer.inputs() > 0 {
             let e_delta = target_steps[E].saturating_sub(self.position_steps[E]);
             step.dir_bits &= !(1 << E);
+            // The step events are the most steps any motor makes. E's total was counted above
+            // (a move too short to plan is judged on it, as the Marlin model does), but once
+            // split no motor makes it: each input makes its share. Counted, it made the
+            // stepper run an event per E step, four times the inputs' rate with four of them,
+            // and the interrupt starved the main loop at 3 500 steps/s per motor
+            // (`x_y_and_four_mixing_inputs_hold_ten_thousand_steps_a_second`). A rotary axis is
+            // never beside a mixing hotend (`Rotary::fitted`).
+            step.events = step.steps[..E].iter().copied().max().unwrap_or(0);
             for (k, d) in mixer.split(e_delta).into_iter().enumerate() {
                 step.steps[E + k] = d.unsigned_abs();
                 step.events = step.events.max(step.steps[E + k]);
@@ -422,6 +430,26 @@ mod tests {
         assert!(p.is_empty() && p.position_steps == [0; AXES], "not planned");
         assert!(p.add([9, 0, 0, 2], 10.0, 0, &Settings::DEFAULT, &mut mixer));
         assert_eq!(p.pop().unwrap().0.step.steps, [9, 0, 0, 2, 0, 0, 0]);
+    }
+
+    #[test]
+    fn a_mixing_blocks_events_are_its_busiest_inputs_steps_not_es_total() {
+        // 10 mm of X (800 steps) and 4 × 800 steps of E split evenly over four inputs: each
+        // input makes 800 steps, so 800 events, not E's 3200 (which made the stepper run four
+        // events per input step and starved the mixing image's main loop).
+        let mut mixer = Mixer::new(4);
+        mixer.set_active([Some(1.0); 4]).unwrap();
+        let mut p = Planner::new();
+        assert!(p.add([800, 0, 0, 3200], 10.0, 0, &Settings::DEFAULT, &mut mixer));
+        let (b, _) = p.pop().unwrap();
+        assert_eq!(b.step.steps, [800, 0, 0, 800, 800, 800, 800]);
+        assert_eq!(b.step.events, 800);
+        // One input taking all of E: its steps are the events.
+        mixer.set_active([Some(1.0), Some(0.0), Some(0.0), Some(0.0)]).unwrap();
+        assert!(p.add([1600, 0, 0, 6400], 10.0, 0, &Settings::DEFAULT, &mut mixer));
+        let (b, _) = p.pop().unwrap();
+        assert_eq!(b.step.steps, [800, 0, 0, 3200, 0, 0, 0]);
+        assert_eq!(b.step.events, 3200);
     }
 
     #[test]

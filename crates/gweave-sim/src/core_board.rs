@@ -117,7 +117,9 @@ pub fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported> {
         homing_order: order,
         homing_bump_mm: axes([p.homing.bump_mm[0], p.homing.bump_mm[1], p.homing.bump_mm[2], 0.0]),
         hotends: t.hotends.len().max(1) as u8,
-        thermistor: [1, 1, if t.bed.is_some() { 1 } else { 0 }],
+        // No sensor (0) where no heater is fitted, as the printer files say (the core reads
+        // TEMP_1 only with two hotends either way).
+        thermistor: [1, u8::from(t.hotends.len() >= 2), u8::from(t.bed.is_some())],
         extrude_min_c: t.extrude_min_c.unwrap_or(0.0) as f32,
         hotend_pid: gweave_controller::settings::Pid {
             kp: gains.kp as f32,
@@ -443,6 +445,29 @@ mod tests {
         assert!(replies[8].starts_with("ok T:"), "{replies:?}");
         assert_eq!(replies.len(), 9, "{replies:?}");
         assert!(link.device().now_s() > 10.0, "homing takes board time");
+    }
+
+    /// One options type for the firmware's settings: the virtual printer's profiles of the
+    /// gweave boards (`--machine gweave-*`) give the core exactly the settings the firmware's
+    /// printer files build into the images (read by the core's own reader, as the build does).
+    #[test]
+    fn the_gweave_machine_profiles_are_the_firmwares_printer_files() {
+        let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        for (machine, printer) in [
+            ("gweave-ramps", "printer.toml"),
+            ("gweave-mixing", "printer-mixing.toml"),
+            ("gweave-rotary", "printer-rotary.toml"),
+        ] {
+            let profile =
+                MachineProfile::from_file(&repo.join(format!("examples/machines/{machine}.toml"))).unwrap();
+            let text = std::fs::read_to_string(repo.join("firmware").join(printer)).unwrap();
+            let file = gweave_controller::printer_file::read(&text).unwrap();
+            assert_eq!(
+                core_settings(&profile).unwrap(),
+                file.settings,
+                "{machine} against firmware/{printer}"
+            );
+        }
     }
 
     #[test]

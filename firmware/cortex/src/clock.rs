@@ -12,6 +12,8 @@
 
 use core::sync::atomic::{AtomicU32, AtomicU8, Ordering};
 
+use gweave_controller::board::Pin as _;
+
 use crate::pins::POWER;
 use crate::step_timer::TICKS_PER_S;
 

@@ -37,7 +37,8 @@ mod config {
 
 use core::cell::UnsafeCell;
 
-use gweave_controller::{Controller, Inputs, Io, StepQueue, Stepper, HEATERS, MOTORS};
+use gweave_controller::board::{self, Pin as _};
+use gweave_controller::{Controller, Inputs, Io, Outputs, StepQueue, Stepper, HEATERS, MOTORS};
 
 use crate::pins::{write_port, DRIVERS, PORTS};
 
@@ -51,6 +52,9 @@ const APB2_HZ: u32 = CPU_HZ / 2;
 const _: () = assert!(step_timer::TICKS_PER_S == gweave_controller::limits::TICKS_PER_S);
 // The core asks for at most MAX_TIMER_TICKS at once; SysTick's 24 bits hold more.
 const _: () = assert!(gweave_controller::limits::MAX_TIMER_TICKS <= step_timer::MAX_TICKS);
+// The printer file's drivers fit the board's six (a 4-input mixing hotend needs seven): a
+// printer this board cannot drive stops the build.
+const _: () = assert!(config::DRIVERS <= DRIVERS.len(), "the printer needs more drivers than the board has");
 
 /// The raw 10-bit reading of every thermistor: 977 is 25 °C on the EPCOS 100 kΩ (type 1) with
 /// its 4.7 kΩ pull-up (`crates/gweave-controller/src/heat/thermistor.rs`). QEMU models no
@@ -81,11 +85,14 @@ struct IsrOnly<T>(UnsafeCell<Option<T>>);
 unsafe impl<T> Sync for IsrOnly<T> {}
 static STEP: IsrOnly<StepState> = IsrOnly(UnsafeCell::new(None));
 
-/// What the core asks of the board: serial output, EEPROM, watchdog.
+/// What the core asks of the board: serial line, clock, thermistors, endstops, outputs,
+/// EEPROM, watchdog.
 struct Board {
     /// The settings `M500` saves: in RAM, so they last until power-off. A port keeps them in a
     /// flash sector (see the docs). Erased, as a new EEPROM is: 0xFF.
     eeprom: [u8; EEPROM_BYTES],
+    /// The stepper enables last written (none yet): pins are written only when they change.
+    enabled: Option<u8>,
 }
 
 /// Bytes of the emulated EEPROM: the core's settings and mixing tools.
@@ -116,15 +123,28 @@ impl Io for Board {
     }
 }
 
-/// The endstop pins' levels, bit `1 << axis` (X, Y, Z).
-fn endstops() -> u8 {
-    let mut bits = 0;
-    for (axis, pin) in pins::ENDSTOPS_MIN.iter().enumerate() {
-        if pin.read() {
-            bits |= 1 << axis;
+impl board::Board for Board {
+    fn receive(&mut self) -> Option<u8> {
+        uart::read()
+    }
+
+    fn inputs(&mut self) -> Inputs {
+        Inputs { now_ms: clock::now_ms(), adc: [ROOM_ADC; HEATERS], endstops: endstops() }
+    }
+
+    fn apply(&mut self, out: &Outputs) {
+        let [hotend0, hotend1, bed] = out.heater_duty;
+        clock::set_duty([hotend0, hotend1, bed, out.fan_duty]);
+        if self.enabled != Some(out.steppers_enabled) {
+            self.enabled = Some(out.steppers_enabled);
+            board::write_enables(&DRIVERS, out.steppers_enabled);
         }
     }
-    bits
+}
+
+/// The endstop pins' levels, bit `1 << axis` (X, Y, Z).
+fn endstops() -> u8 {
+    board::endstop_bits(&pins::ENDSTOPS_MIN)
 }
 
 /// The program, from the reset handler (`start.rs`). Never inlined there, so that no float
@@ -133,16 +153,7 @@ fn endstops() -> u8 {
 pub fn main() -> ! {
     let by_watchdog = watchdog::start();
     pins::enable_ports();
-    for d in &DRIVERS {
-        // Disabled (ENABLE high) before the pins become outputs, so no motor twitches.
-        d.enable.write(true);
-        d.enable.make_output();
-        d.step.make_output();
-        d.dir.make_output();
-    }
-    for e in pins::ENDSTOPS_MIN {
-        e.make_input_pullup();
-    }
+    board::set_up_pins(&DRIVERS, &pins::ENDSTOPS_MIN);
     for p in pins::POWER {
         p.write(false);
         p.make_output();
@@ -162,46 +173,7 @@ pub fn main() -> ! {
     unsafe { *STEP.0.get() = Some(state) };
     step_timer::start(first_ticks);
     regs::enable_interrupts();
-
-    let mut io = Board { eeprom: [0xFF; EEPROM_BYTES] };
-    if by_watchdog {
-        io.send(b"echo:Watchdog Reset\n");
-    }
-    let inputs = || Inputs { now_ms: clock::now_ms(), adc: [ROOM_ADC; HEATERS], endstops: endstops() };
-    controller.boot(&mut io, &inputs());
-    // A byte the controller refused (its line queue was full): offered again after its turn.
-    let mut held = None;
-    // The stepper enables last written (none yet): pins are written only when they change.
-    let mut enabled = None;
-    loop {
-        while let Some(byte) = held.take().or_else(uart::read) {
-            if !controller.receive(byte) {
-                held = Some(byte);
-                break;
-            }
-        }
-        controller.poll(&mut io, &inputs());
-        apply(&controller.outputs(), &mut enabled);
-        if controller.is_halted() {
-            // Halted (a thermal fault, M112) is a safe state that must last until the user
-            // resets the board: the watchdog must not restart it into a working printer.
-            watchdog::feed();
-        }
-    }
-}
-
-/// Drive the heaters, the fan and the stepper enables as the core asks; `enabled` is the
-/// enables last written.
-fn apply(out: &gweave_controller::Outputs, enabled: &mut Option<u8>) {
-    let [hotend0, hotend1, bed] = out.heater_duty;
-    clock::set_duty([hotend0, hotend1, bed, out.fan_duty]);
-    if *enabled != Some(out.steppers_enabled) {
-        *enabled = Some(out.steppers_enabled);
-        for (motor, d) in DRIVERS.iter().enumerate().take(MOTORS) {
-            // ENABLE is active low.
-            d.enable.write(out.steppers_enabled & (1 << motor) == 0);
-        }
-    }
+    board::run(&mut controller, &mut Board { eeprom: [0xFF; EEPROM_BYTES], enabled: None }, by_watchdog)
 }
 
 /// A step pulse's width: the DRV8825 needs 1.9 us high, the A4988 1 us, TMC22xx 100 ns.

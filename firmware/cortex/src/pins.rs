@@ -6,7 +6,9 @@
 //! read in IDR, and driven through BSRR, whose low half sets pins and high half clears them in
 //! one write: no read-modify-write, so the main loop and the interrupts never race on a port.
 
-use crate::regs::{Reg, RCC_AHB1ENR};
+use gweave_controller::board::{self, Driver};
+
+use crate::regs::{reg, Reg, RCC_AHB1ENR};
 
 /// GPIO port A's registers; port n is 0x400 further.
 const GPIO_BASE: usize = 0x4002_0000;
@@ -31,26 +33,13 @@ impl Pin {
     }
 
     fn reg(self, offset: usize) -> Reg {
-        Reg(GPIO_BASE + 0x400 * usize::from(self.port) + offset)
+        reg(GPIO_BASE + 0x400 * usize::from(self.port) + offset)
     }
 
     /// The pin's bit in BSRR's low half (set); shifted by 16 it clears.
     #[inline(always)]
     pub fn mask(self) -> u32 {
         1 << self.bit
-    }
-
-    /// A push-pull output (MODER 01). Start-up only.
-    pub fn make_output(self) {
-        let shift = 2 * u32::from(self.bit);
-        self.reg(MODER).modify(0b11 << shift, 0b01 << shift);
-    }
-
-    /// An input with the pull-up on (MODER 00, PUPDR 01). Start-up only.
-    pub fn make_input_pullup(self) {
-        let shift = 2 * u32::from(self.bit);
-        self.reg(MODER).modify(0b11 << shift, 0);
-        self.reg(PUPDR).modify(0b11 << shift, 0b01 << shift);
     }
 
     /// Alternate function `af` (MODER 10; pins 8-15, AFRH). Start-up only.
@@ -60,15 +49,29 @@ impl Pin {
         let af_shift = 4 * (u32::from(self.bit) - 8);
         self.reg(AFRH).modify(0xF << af_shift, af << af_shift);
     }
+}
 
-    /// Drive the pin high or low.
+impl board::Pin for Pin {
+    /// A push-pull output (MODER 01). Start-up only.
+    fn make_output(self) {
+        let shift = 2 * u32::from(self.bit);
+        self.reg(MODER).modify(0b11 << shift, 0b01 << shift);
+    }
+
+    /// MODER 00, PUPDR 01. Start-up only.
+    fn make_input_pullup(self) {
+        let shift = 2 * u32::from(self.bit);
+        self.reg(MODER).modify(0b11 << shift, 0);
+        self.reg(PUPDR).modify(0b11 << shift, 0b01 << shift);
+    }
+
+    /// One write of BSRR: safe against the step interrupt, which writes the same ports.
     #[inline(always)]
-    pub fn write(self, high: bool) {
+    fn write(self, high: bool) {
         write_port(usize::from(self.port), if high { self.mask() } else { self.mask() << 16 });
     }
 
-    /// The pin's level.
-    pub fn read(self) -> bool {
+    fn read(self) -> bool {
         self.reg(IDR).read() & self.mask() != 0
     }
 }
@@ -76,7 +79,7 @@ impl Pin {
 /// Write port `port`'s BSRR: the low half's bits go high, the high half's low.
 #[inline(always)]
 pub fn write_port(port: usize, bsrr: u32) {
-    Reg(GPIO_BASE + 0x400 * port + BSRR).write(bsrr);
+    reg(GPIO_BASE + 0x400 * port + BSRR).write(bsrr);
 }
 
 /// Switch the ports' clocks on (a port's registers do nothing until then).
@@ -84,17 +87,9 @@ pub fn enable_ports() {
     RCC_AHB1ENR.modify((1 << PORTS) - 1, (1 << PORTS) - 1);
 }
 
-/// A stepper driver's three pins.
-pub struct Driver {
-    pub step: Pin,
-    pub dir: Pin,
-    /// Active low, as on every common driver (A4988, DRV8825, TMC22xx).
-    pub enable: Pin,
-}
-
 /// The drivers in the core's motor order: X, Y, Z, E0, then E1 and E2 (the second and third
 /// inputs of a mixing hotend). The board has no seventh driver for a fourth mixing input.
-pub const DRIVERS: [Driver; 6] = [
+pub const DRIVERS: [Driver<Pin>; 6] = [
     Driver { step: Pin::new(b'E', 9), dir: Pin::new(b'F', 1), enable: Pin::new(b'F', 2) },
     Driver { step: Pin::new(b'E', 11), dir: Pin::new(b'E', 8), enable: Pin::new(b'D', 7) },
     Driver { step: Pin::new(b'E', 13), dir: Pin::new(b'C', 2), enable: Pin::new(b'C', 0) },

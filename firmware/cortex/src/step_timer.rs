@@ -9,13 +9,13 @@
 //! long the handler runs, to within the few cycles between reading the count and restarting
 //! it (a few nanoseconds at 168 MHz).
 
-use crate::regs::Reg;
+use crate::regs::{reg, Reg};
 
 /// SysTick's control and status, reload and current value; the interrupt controller's ICSR.
-const CSR: Reg = Reg(0xE000_E010);
-const RVR: Reg = Reg(0xE000_E014);
-const CVR: Reg = Reg(0xE000_E018);
-const ICSR: Reg = Reg(0xE000_ED04);
+const CSR: Reg = reg(0xE000_E010);
+const RVR: Reg = reg(0xE000_E014);
+const CVR: Reg = reg(0xE000_E018);
+const ICSR: Reg = reg(0xE000_ED04);
 /// CSR: counter on, exception on, counting the CPU clock; the count reached 0 since the last
 /// read of CSR.
 const ENABLE: u32 = 1;

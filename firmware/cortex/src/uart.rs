@@ -10,13 +10,13 @@ use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicU8, Ordering};
 
 use crate::pins;
-use crate::regs::{nvic_enable, Reg, RCC_APB2ENR};
+use crate::regs::{nvic_enable, reg, Reg, RCC_APB2ENR};
 
 const USART1: usize = 0x4001_1000;
-const SR: Reg = Reg(USART1);
-const DR: Reg = Reg(USART1 + 0x04);
-const BRR: Reg = Reg(USART1 + 0x08);
-const CR1: Reg = Reg(USART1 + 0x0C);
+const SR: Reg = reg(USART1);
+const DR: Reg = reg(USART1 + 0x04);
+const BRR: Reg = reg(USART1 + 0x08);
+const CR1: Reg = reg(USART1 + 0x0C);
 /// SR: a byte was received; the transmit register is empty.
 const RXNE: u32 = 1 << 5;
 const TXE: u32 = 1 << 7;

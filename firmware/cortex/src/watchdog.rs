@@ -2,12 +2,12 @@
 //! unless the main loop reloads it in time. A hang then ends in a reset, and a reset leaves
 //! every pin an input: heaters cold, motors free. Registers: RM0090, "IWDG register map".
 
-use crate::regs::{Reg, RCC_CSR};
+use crate::regs::{reg, Reg, RCC_CSR};
 
 const IWDG: usize = 0x4000_3000;
-const KR: Reg = Reg(IWDG);
-const PR: Reg = Reg(IWDG + 0x04);
-const RLR: Reg = Reg(IWDG + 0x08);
+const KR: Reg = reg(IWDG);
+const PR: Reg = reg(IWDG + 0x04);
+const RLR: Reg = reg(IWDG + 0x08);
 /// KR keys: reload the counter, start the watchdog, unlock PR and RLR.
 const RELOAD: u32 = 0xAAAA;
 const START: u32 = 0xCCCC;

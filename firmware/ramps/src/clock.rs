@@ -13,6 +13,8 @@
 
 use core::cell::UnsafeCell;
 
+use gweave_controller::board::Pin as _;
+
 use crate::pins::Pin;
 use crate::regs::{interrupt_free, OCR0A, TCCR0A, TCCR0B, TIMSK0};
 

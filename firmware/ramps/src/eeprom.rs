@@ -13,7 +13,7 @@ fn wait_ready() {
 pub fn read(addr: u16) -> u8 {
     wait_ready();
     EEAR.write(addr);
-    EECR.set(EERE);
+    EECR.set_bits(EERE);
     EEDR.read()
 }
 

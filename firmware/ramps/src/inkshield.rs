@@ -13,6 +13,7 @@
 //! splashes. The interrupts wait at most the pulse and its address writes (about 7 us) per
 //! nozzle, and run between nozzles.
 
+use gweave_controller::board::Pin as _;
 use gweave_controller::inkjet::{NOZZLES, PULSE_US};
 
 use crate::pins::{Pin, INKSHIELD_ADDRESS, INKSHIELD_PULSE};

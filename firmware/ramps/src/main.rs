@@ -37,7 +37,8 @@ mod config {
 
 use core::cell::UnsafeCell;
 
-use gweave_controller::{Controller, Inputs, Io, StepQueue, Stepper, HEATERS};
+use gweave_controller::board::{self, Pin as _};
+use gweave_controller::{Controller, Inputs, Io, Outputs, StepQueue, Stepper, HEATERS};
 
 /// The Mega's crystal.
 const CPU_HZ: u32 = 16_000_000;
@@ -59,8 +60,49 @@ static STEPPER: IsrOnly<Stepper<'static>> = IsrOnly(UnsafeCell::new(None));
 /// The ADC channels in the core's heater order: hotend 0 (A13), hotend 1 (A15), bed (A14).
 const ADC_CHANNELS: [u8; HEATERS] = [pins::ADC_TEMP_0, pins::ADC_TEMP_1, pins::ADC_TEMP_BED];
 
-/// What the core asks of the board: serial output, EEPROM, watchdog.
-struct Ramps;
+/// What the core asks of the board: serial line, clock, thermistors, endstops, outputs,
+/// EEPROM, watchdog.
+struct Ramps {
+    adc: adc::Sampler<HEATERS>,
+    /// The thermistors' latest readings (0-1023 each).
+    adc_now: [u16; HEATERS],
+}
+
+impl Ramps {
+    /// The board's peripherals, once the first full set of thermistor readings is in (16
+    /// rounds of 104 us conversions), so that the core's first turn sees real temperatures.
+    fn new() -> Self {
+        let mut adc = adc::Sampler::new(ADC_CHANNELS);
+        let adc_now = loop {
+            if let Some(sums) = adc.poll() {
+                break sums.map(|s| s / adc::OVERSAMPLE);
+            }
+        };
+        Ramps { adc, adc_now }
+    }
+}
+
+impl board::Board for Ramps {
+    fn receive(&mut self) -> Option<u8> {
+        uart::read()
+    }
+
+    fn inputs(&mut self) -> Inputs {
+        if let Some(sums) = self.adc.poll() {
+            self.adc_now = sums.map(|s| s / adc::OVERSAMPLE);
+        }
+        Inputs { now_ms: clock::now_ms(), adc: self.adc_now, endstops: endstops() }
+    }
+
+    fn apply(&mut self, out: &Outputs) {
+        let [hotend0, hotend1, bed] = out.heater_duty;
+        // D9 is the fan on an "EFB" board, the second hotend's heater on "EEB".
+        let d9 = if config::SETTINGS.hotends == 2 { hotend1 } else { out.fan_duty };
+        clock::set_duty([hotend0, bed, d9]);
+        pins::LED.write(hotend0 | hotend1 | bed != 0);
+        board::write_enables(&pins::DRIVERS[..config::DRIVERS], out.steppers_enabled);
+    }
+}
 
 impl Io for Ramps {
     fn send(&mut self, bytes: &[u8]) {
@@ -121,29 +163,18 @@ macro_rules! each_driver {
 /// The endstop pins' levels, bit `1 << axis` (X, Y, Z).
 #[inline(always)]
 fn endstops() -> u8 {
-    let [x, y, z] = pins::ENDSTOPS_MIN;
-    u8::from(x.read()) | u8::from(y.read()) << 1 | u8::from(z.read()) << 2
+    board::endstop_bits(&pins::ENDSTOPS_MIN)
 }
 
 #[no_mangle]
 pub extern "C" fn main() -> ! {
     let by_watchdog = watchdog::start();
-    for d in &pins::DRIVERS[..config::DRIVERS] {
-        // Disabled (ENABLE high) before the pins become outputs, so no motor twitches.
-        d.enable.write(true);
-        d.enable.make_output();
-        d.step.make_output();
-        d.dir.make_output();
-    }
-    for e in pins::ENDSTOPS_MIN {
-        e.make_input_pullup();
-    }
+    board::set_up_pins(&pins::DRIVERS[..config::DRIVERS], &pins::ENDSTOPS_MIN);
     pins::LED.make_output();
     #[cfg(feature = "inkjet")]
     inkshield::init();
     clock::init([pins::HEATER_0, pins::HEATER_BED, pins::D9]);
     uart::init(CPU_HZ, config::BAUD);
-    let mut adc = adc::Sampler::new(ADC_CHANNELS);
 
     #[cfg(not(feature = "inkjet"))]
     let settings = config::SETTINGS;
@@ -154,52 +185,7 @@ pub extern "C" fn main() -> ! {
     unsafe { *STEPPER.0.get() = Some(Stepper::new(&QUEUE)) };
     regs::enable_interrupts();
     step_timer::start(1000);
-
-    let mut io = Ramps;
-    if by_watchdog {
-        io.send(b"echo:Watchdog Reset\n");
-    }
-    // Wait for the first full set of thermistor readings (16 rounds of 104 us conversions).
-    let mut adc_now = loop {
-        if let Some(sums) = adc.poll() {
-            break sums.map(|s| s / adc::OVERSAMPLE);
-        }
-    };
-    let inputs = |adc: [u16; HEATERS]| Inputs { now_ms: clock::now_ms(), adc, endstops: endstops() };
-    controller.boot(&mut io, &inputs(adc_now));
-    // A byte the controller refused (its line queue was full): offered again after its turn.
-    let mut held = None;
-    loop {
-        while let Some(byte) = held.take().or_else(uart::read) {
-            if !controller.receive(byte) {
-                held = Some(byte);
-                break;
-            }
-        }
-        if let Some(sums) = adc.poll() {
-            adc_now = sums.map(|s| s / adc::OVERSAMPLE);
-        }
-        controller.poll(&mut io, &inputs(adc_now));
-        apply(&controller.outputs());
-        if controller.is_halted() {
-            // Halted (a thermal fault, M112) is a safe state that must last until the user
-            // resets the board: the watchdog must not restart it into a working printer.
-            watchdog::feed();
-        }
-    }
-}
-
-/// Drive the heaters, the fan and the stepper enables as the core asks.
-fn apply(out: &gweave_controller::Outputs) {
-    let [hotend0, hotend1, bed] = out.heater_duty;
-    // D9 is the fan on an "EFB" board, the second hotend's heater on "EEB".
-    let d9 = if config::SETTINGS.hotends == 2 { hotend1 } else { out.fan_duty };
-    clock::set_duty([hotend0, bed, d9]);
-    pins::LED.write(hotend0 | hotend1 | bed != 0);
-    for (motor, d) in pins::DRIVERS[..config::DRIVERS].iter().enumerate() {
-        // ENABLE is active low.
-        d.enable.write(out.steppers_enabled & (1 << motor) == 0);
-    }
+    board::run(&mut controller, &mut Ramps::new(), by_watchdog)
 }
 
 /// The step interrupt (Timer1 compare match A, vector 17).

@@ -6,7 +6,9 @@
 //! schematic (which port bit each header pin is):
 //! <https://github.com/MarlinFirmware/Marlin/blob/2.1.x/Marlin/src/pins/ramps/pins_RAMPS.h>.
 
-use crate::regs::{interrupt_free, Reg8};
+use gweave_controller::board::{self, Driver};
+
+use crate::regs::{interrupt_free, reg8, Reg8};
 
 /// One port (A..L): its PINx address; DDRx and PORTx follow it.
 #[derive(Clone, Copy)]
@@ -37,62 +39,53 @@ impl Pin {
     }
 
     fn pin_reg(self) -> Reg8 {
-        Reg8(self.port.0)
+        reg8(self.port.0)
     }
     fn ddr_reg(self) -> Reg8 {
-        Reg8(self.port.0 + 1)
+        reg8(self.port.0 + 1)
     }
     fn port_reg(self) -> Reg8 {
-        Reg8(self.port.0 + 2)
-    }
-
-    /// Make the pin an output, driven low (the safe level of every output here: heaters and
-    /// fans off, STEP idle; RAMPS's driver ENABLE is active low, so a low ENABLE is dealt with by
-    /// the caller, which drives it high first).
-    pub fn make_output(self) {
-        interrupt_free(|| {
-            self.ddr_reg().set(self.mask);
-        });
-    }
-
-    /// Make the pin an input with the chip's pull-up (about 35 kOhm to 5 V) on, so an open
-    /// switch reads high.
-    pub fn make_input_pullup(self) {
-        interrupt_free(|| {
-            self.ddr_reg().clear(self.mask);
-            self.port_reg().set(self.mask);
-        });
-    }
-
-    /// Drive an output high or low. The read-modify-write of PORTx runs with interrupts off:
-    /// the step interrupt writes other bits of the same ports.
-    pub fn write(self, high: bool) {
-        interrupt_free(|| self.write_in_interrupt(high));
+        reg8(self.port.0 + 2)
     }
 
     /// Drive an output from inside an interrupt (interrupts are already off there).
     #[inline(always)]
     pub fn write_in_interrupt(self, high: bool) {
         if high {
-            self.port_reg().set(self.mask);
+            self.port_reg().set_bits(self.mask);
         } else {
-            self.port_reg().clear(self.mask);
+            self.port_reg().clear_bits(self.mask);
         }
-    }
-
-    /// Read the pin's level.
-    pub fn read(self) -> bool {
-        self.pin_reg().read() & self.mask != 0
     }
 }
 
-/// STEP, DIR and ENABLE of one stepper driver socket.
-#[derive(Clone, Copy)]
-pub struct Driver {
-    pub step: Pin,
-    pub dir: Pin,
-    /// Active low: the driver holds its motor only while this pin is low.
-    pub enable: Pin,
+impl board::Pin for Pin {
+    /// An output, driven low (the safe level of every output here: heaters and fans off, STEP
+    /// idle; RAMPS's driver ENABLE is active low, and `board::set_up_pins` drives it high
+    /// first).
+    fn make_output(self) {
+        interrupt_free(|| {
+            self.ddr_reg().set_bits(self.mask);
+        });
+    }
+
+    /// The chip's pull-up is about 35 kOhm to 5 V.
+    fn make_input_pullup(self) {
+        interrupt_free(|| {
+            self.ddr_reg().clear_bits(self.mask);
+            self.port_reg().set_bits(self.mask);
+        });
+    }
+
+    /// The read-modify-write of PORTx runs with interrupts off: the step interrupt writes other
+    /// bits of the same ports.
+    fn write(self, high: bool) {
+        interrupt_free(|| self.write_in_interrupt(high));
+    }
+
+    fn read(self) -> bool {
+        self.pin_reg().read() & self.mask != 0
+    }
 }
 
 /// The driver sockets, in the order X, Y, Z, E0, E1 (D54/D55/D38, D60/D61/D56, D46/D48/D62,
@@ -102,7 +95,7 @@ pub struct Driver {
 /// pins; AUX-2's pins are the ones it leaves free when no TMC driver is wired over SPI
 /// (`HAS_FREE_AUX2_PINS`), and they are set up only in a build whose printer has those inputs
 /// (`config::DRIVERS`), so the base image leaves the header alone.
-pub const DRIVERS: [Driver; 7] = [
+pub const DRIVERS: [Driver<Pin>; 7] = [
     Driver { step: Pin::new(PORT_F, 0), dir: Pin::new(PORT_F, 1), enable: Pin::new(PORT_D, 7) },
     Driver { step: Pin::new(PORT_F, 6), dir: Pin::new(PORT_F, 7), enable: Pin::new(PORT_F, 2) },
     Driver { step: Pin::new(PORT_L, 3), dir: Pin::new(PORT_L, 1), enable: Pin::new(PORT_K, 0) },

@@ -8,39 +8,16 @@
 //! A crate generated from the vendor's register description (`avr-device`) would give every
 //! register of the chip, but takes minutes to build; the two dozen below take no time.
 
-use core::ptr::{read_volatile, write_volatile};
+use gweave_controller::board::Reg;
 
 /// One 8-bit register at a data-space address.
-#[derive(Clone, Copy)]
-pub struct Reg8(pub usize);
+pub type Reg8 = Reg<u8>;
 
-impl Reg8 {
-    /// Read the register.
-    #[inline(always)]
-    pub fn read(self) -> u8 {
-        // SAFETY: the address is one of the registers below, always mapped on the ATmega2560.
-        unsafe { read_volatile(self.0 as *const u8) }
-    }
-
-    /// Write the register.
-    #[inline(always)]
-    pub fn write(self, value: u8) {
-        // SAFETY: as in `read`.
-        unsafe { write_volatile(self.0 as *mut u8, value) }
-    }
-
-    /// Set the bits of `mask`, leaving the others (read, modify, write: not atomic, so callers
-    /// shared with an interrupt run it with interrupts off, see [`interrupt_free`]).
-    #[inline(always)]
-    pub fn set(self, mask: u8) {
-        self.write(self.read() | mask);
-    }
-
-    /// Clear the bits of `mask`, leaving the others (same caveat as [`Reg8::set`]).
-    #[inline(always)]
-    pub fn clear(self, mask: u8) {
-        self.write(self.read() & !mask);
-    }
+/// The register at data-space address `address`: only for the addresses of this module and
+/// of the ports in `pins.rs`, every one mapped on the ATmega2560.
+pub const fn reg8(address: usize) -> Reg8 {
+    // SAFETY: as said above; the datasheet's "Register Summary" lists each.
+    unsafe { Reg::new(address) }
 }
 
 /// One 16-bit register (a low byte and the high byte after it). The AVR latches the high byte
@@ -53,8 +30,8 @@ impl Reg16 {
     /// Read low byte first (it latches the high byte).
     #[inline(always)]
     pub fn read(self) -> u16 {
-        let lo = Reg8(self.0).read();
-        let hi = Reg8(self.0 + 1).read();
+        let lo = reg8(self.0).read();
+        let hi = reg8(self.0 + 1).read();
         u16::from_le_bytes([lo, hi])
     }
 
@@ -62,26 +39,26 @@ impl Reg16 {
     #[inline(always)]
     pub fn write(self, value: u16) {
         let [lo, hi] = value.to_le_bytes();
-        Reg8(self.0 + 1).write(hi);
-        Reg8(self.0).write(lo);
+        reg8(self.0 + 1).write(hi);
+        reg8(self.0).write(lo);
     }
 }
 
 /// Status register: bit 7 (I) enables interrupts globally.
-pub const SREG: Reg8 = Reg8(0x5F);
+pub const SREG: Reg8 = reg8(0x5F);
 
 /// MCU status: why the chip last reset (bit 3 WDRF: the watchdog, bit 0 PORF: power on).
-pub const MCUSR: Reg8 = Reg8(0x54);
+pub const MCUSR: Reg8 = reg8(0x54);
 pub const WDRF: u8 = 1 << 3;
 
 // Watchdog (datasheet 12.5): WDTCSR's WDCE + WDE unlock a change for four cycles.
-pub const WDTCSR: Reg8 = Reg8(0x60);
+pub const WDTCSR: Reg8 = reg8(0x60);
 pub const WDCE: u8 = 1 << 4;
 pub const WDE: u8 = 1 << 3;
 
 // EEPROM (datasheet 8.4): address, data, and the control register's enable bits.
-pub const EECR: Reg8 = Reg8(0x3F);
-pub const EEDR: Reg8 = Reg8(0x40);
+pub const EECR: Reg8 = reg8(0x3F);
+pub const EEDR: Reg8 = reg8(0x40);
 pub const EEAR: Reg16 = Reg16(0x41);
 /// Master write enable: opens a four-cycle window for EEPE.
 pub const EEMPE: u8 = 1 << 2;
@@ -91,32 +68,32 @@ pub const EEPE: u8 = 1 << 1;
 pub const EERE: u8 = 1 << 0;
 
 // Timer/Counter0, 8 bits: the millisecond clock.
-pub const TCCR0A: Reg8 = Reg8(0x44);
-pub const TCCR0B: Reg8 = Reg8(0x45);
-pub const OCR0A: Reg8 = Reg8(0x47);
-pub const TIMSK0: Reg8 = Reg8(0x6E);
+pub const TCCR0A: Reg8 = reg8(0x44);
+pub const TCCR0B: Reg8 = reg8(0x45);
+pub const OCR0A: Reg8 = reg8(0x47);
+pub const TIMSK0: Reg8 = reg8(0x6E);
 
 // Timer/Counter1, 16 bits: the step timer.
-pub const TCCR1A: Reg8 = Reg8(0x80);
-pub const TCCR1B: Reg8 = Reg8(0x81);
+pub const TCCR1A: Reg8 = reg8(0x80);
+pub const TCCR1B: Reg8 = reg8(0x81);
 pub const TCNT1: Reg16 = Reg16(0x84);
 pub const OCR1A: Reg16 = Reg16(0x88);
-pub const TIMSK1: Reg8 = Reg8(0x6F);
+pub const TIMSK1: Reg8 = reg8(0x6F);
 
 // The analog-to-digital converter.
 pub const ADCW: Reg16 = Reg16(0x78);
-pub const ADCSRA: Reg8 = Reg8(0x7A);
-pub const ADCSRB: Reg8 = Reg8(0x7B);
-pub const ADMUX: Reg8 = Reg8(0x7C);
+pub const ADCSRA: Reg8 = reg8(0x7A);
+pub const ADCSRB: Reg8 = reg8(0x7B);
+pub const ADMUX: Reg8 = reg8(0x7C);
 /// Digital input disable for ADC8-15 (saves power and noise on the analog pins).
-pub const DIDR2: Reg8 = Reg8(0x7D);
+pub const DIDR2: Reg8 = reg8(0x7D);
 
 // USART0, wired to the Mega's USB-serial chip.
-pub const UCSR0A: Reg8 = Reg8(0xC0);
-pub const UCSR0B: Reg8 = Reg8(0xC1);
-pub const UCSR0C: Reg8 = Reg8(0xC2);
+pub const UCSR0A: Reg8 = reg8(0xC0);
+pub const UCSR0B: Reg8 = reg8(0xC1);
+pub const UCSR0C: Reg8 = reg8(0xC2);
 pub const UBRR0: Reg16 = Reg16(0xC4);
-pub const UDR0: Reg8 = Reg8(0xC6);
+pub const UDR0: Reg8 = reg8(0xC6);
 
 /// Run `f` with interrupts off, then put the interrupt flag back as it was (so it also works
 /// inside an interrupt, where they are already off).

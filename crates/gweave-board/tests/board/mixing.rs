@@ -116,3 +116,43 @@ fn is_mix_change(line: &str) -> bool {
     let code = sent(line).unwrap_or_default();
     code.starts_with("M165") || (code.starts_with('T') && code[1..].bytes().all(|b| b.is_ascii_digit()))
 }
+
+/// Regression: the mixing image held only 3 500 steps/s per motor with X, Y and the four
+/// inputs moving (22 500 on X+Y+E0): the planner counted E's total steps as the block's step
+/// events after splitting them over the inputs, so the step interrupt ran four events per
+/// input step and left the main loop too little time. Here each of the six motors is asked
+/// 10 000 steps/s, and must hold it over the cruise.
+#[test]
+fn x_y_and_four_mixing_inputs_hold_ten_thousand_steps_a_second() {
+    const RATE_HZ: f64 = 10_000.0;
+    // Half a second of steps on each motor: X and Y 5000 steps (62.5 mm at 80 steps/mm), E
+    // four times 5000 (215.05 mm at 93 steps/mm), a quarter to each input by M165.
+    const STEPS: usize = 5000;
+    let mut board = Board::new(&mixing_elf(), Wiring { record_steps: true, ..Wiring::default() }).unwrap();
+    // Hot (unheated), or the core would drop E; the limits out of the way, so the rate is the
+    // board's, not the planner's.
+    board.shield_mut().plants[0].heater.set_temperature(210.0);
+    board.run_until_line(|l| l == "start", 1.0).unwrap();
+    board.run_for(0.3).unwrap();
+    for line in [
+        "M104 S0",
+        "M203 X2000 Y2000 E2000",
+        "M201 X200000 Y200000 E200000",
+        "M204 P200000 T200000 R200000",
+        "M165 A0.25 B0.25 C0.25 D0.25",
+        "G91",
+        "G1 X62.5 Y62.5 E215.0538 F10606.6",
+        "M400",
+    ] {
+        assert_eq!(board.command(line, 10.0).unwrap().last().unwrap(), "ok", "{line}");
+    }
+    for socket in [0, 1, 3, 4, 5, 6] {
+        let log = &board.axis(socket).step_log;
+        assert_eq!(log.len(), STEPS, "socket {socket}");
+        // The middle half of the move: the cruise.
+        let (a, b) = (STEPS / 4, 3 * STEPS / 4);
+        let held_hz = (b - a) as f64 * f64::from(gweave_board::CPU_HZ) / (log[b].0 - log[a].0) as f64;
+        assert!(held_hz >= 0.99 * RATE_HZ, "socket {socket} held {held_hz:.0} of {RATE_HZ} steps/s");
+        assert_eq!(board.axis(socket).steps_while_disabled, 0, "socket {socket}");
+    }
+}

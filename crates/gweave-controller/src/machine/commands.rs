@@ -1,8 +1,10 @@
 //! What each command does. The line's words are all read and checked first
-//! ([`Words::parse`]); a command then checks its own numbers' ranges before it changes
-//! anything, so a refused line leaves the machine as it was.
+//! ([`Words::parse`]); then the command's row in the registry (`registry.rs`) says whether this
+//! machine runs it and the range of each of its numbers, all checked before anything changes,
+//! so a refused line leaves the machine as it was.
 
 use super::homing::Homing;
+use super::registry::{self, Needs, Ranges};
 use super::{Controller, Wait};
 use crate::gcode::words::{Command, WordError, Words};
 use crate::math::round_i32;
@@ -19,32 +21,18 @@ pub(super) enum Done {
     Quiet,
 }
 
-/// The physical range of every number a command takes: a value outside is refused whole.
-/// Feed rates up to 100 000 mm/min, positions within ±100 m, temperatures 0-500 °C, settings
-/// positive and below a million.
-const FEED_MM_MIN: (f32, f32) = (0.01, 100_000.0);
-const POSITION_MM: (f32, f32) = (-100_000.0, 100_000.0);
-/// A rotary axis' angle: ±2 778 turns (past it a float's step is above a hundredth of a degree;
-/// `rotary tube` re-declares its angle every hundred turns).
-#[cfg(feature = "rotary")]
-const ANGLE_DEG: (f32, f32) = (-1_000_000.0, 1_000_000.0);
-const TEMP_C: (f32, f32) = (0.0, 500.0);
-const SETTING: (f32, f32) = (0.000_001, 1_000_000.0);
-const GAIN: (f32, f32) = (0.0, 100_000.0);
-const DUTY: (f32, f32) = (0.0, 255.0);
-const DWELL_MS: (f32, f32) = (0.0, 3_600_000.0);
-/// `M155 S`: seconds between temperature reports, 0 for none (Marlin caps it at 60).
-const AUTO_REPORT_S: (f32, f32) = (0.0, 60.0);
-/// An inkjet head (`M700 P`), of those a build may wire, and a C6602's nozzle mask (`S`, 12
-/// bits).
-#[cfg(feature = "inkjet")]
-const INKJET_HEAD: (f32, f32) = (0.0, (crate::limits::INKJET_HEADS - 1) as f32);
-#[cfg(feature = "inkjet")]
-const NOZZLE_MASK: (f32, f32) = (0.0, crate::inkjet::ALL_NOZZLES as f32);
-/// A mixing weight: only ratios matter, a negative one counts as 0; a million bounds the sum.
-const MIX_WEIGHT: (f32, f32) = (-1_000_000.0, 1_000_000.0);
-
 impl Controller<'_> {
+    /// Whether this machine has what a command needs (its row in the registry).
+    pub(super) fn has(&self, needs: Needs) -> bool {
+        match needs {
+            Needs::Nothing => true,
+            Needs::Mixing => self.mixer.inputs() > 0,
+            #[cfg(feature = "inkjet")]
+            Needs::Inkjet => self.settings.inkjet_heads > 0,
+            Needs::SecondHotend => crate::heat::Heat::fitted(&self.settings, HOTEND1),
+        }
+    }
+
     /// Runs one command line (line number and checksum removed).
     pub(super) fn run_command(&mut self, io: &mut impl Io, body: &[u8]) {
         let words = match Words::parse(body) {
@@ -61,11 +49,14 @@ impl Controller<'_> {
                 return line(io, b"ok");
             }
         };
-        if let Some((letter, value, (low, high))) = out_of_range(&words) {
+        let Command { letter: command, code } = words.command;
+        let Some(ranges) = registry::row(command, code, |needs| self.has(needs)) else {
+            return unknown(io, body);
+        };
+        if let Some((letter, value, (low, high))) = out_of_range(&words, ranges) {
             // As the virtual printer words it: `echo:M104 S = 600.00 is out of range: 0.00 to
             // 500.00`; the line is not run, the values in force stay. A fire refused is an
             // error (`Error:M700 S = ...`): the print would miss those drops, and a host stops.
-            let Command { letter: command, code } = words.command;
             let severity: &[u8] = if (command, code) == (b'M', 700) { b"Error:" } else { b"echo:" };
             let mut r = Reply::new();
             r.s(severity).s(&[command]).u32(u32::from(code)).s(&[b' ', letter]).s(b" = ").f2(value);
@@ -79,7 +70,9 @@ impl Controller<'_> {
         }
     }
 
-    fn dispatch(&mut self, io: &mut impl Io, w: &Words) -> Option<Done> {
+    /// Runs the command of `w` if this controller knows it (its row in the registry is checked
+    /// against this: `the_registry_is_exactly_what_the_controller_runs`).
+    pub(super) fn dispatch(&mut self, io: &mut impl Io, w: &Words) -> Option<Done> {
         let Command { letter, code } = w.command;
         let now = self.inputs.now_ms;
         let s = &mut self.settings;
@@ -400,37 +393,9 @@ fn set_axes(w: &Words, values: &mut [f32; AXES]) {
     }
 }
 
-/// The first letter whose value is outside its command's range, if any: the letter, the value
-/// and the range.
-fn out_of_range(w: &Words) -> Option<(u8, f32, (f32, f32))> {
-    let Command { letter, code } = w.command;
-    let ranges: &[(&[u8], (f32, f32))] = match (letter, code) {
-        (b'G', 0 | 1) => &[
-            (b"XYZE", POSITION_MM),
-            #[cfg(feature = "rotary")]
-            (b"A", ANGLE_DEG),
-            (b"F", FEED_MM_MIN),
-        ],
-        (b'G', 92) => &[
-            (b"XYZE", POSITION_MM),
-            #[cfg(feature = "rotary")]
-            (b"A", ANGLE_DEG),
-        ],
-        (b'G', 4) => &[(b"P", DWELL_MS), (b"S", (0.0, 3600.0))],
-        (b'M', 104 | 109 | 140 | 190) => &[(b"SR", TEMP_C), (b"T", (0.0, 1.0))],
-        (b'M', 106) => &[(b"S", DUTY)],
-        (b'M', 155) => &[(b"S", AUTO_REPORT_S)],
-        (b'M', 110) => &[(b"N", (-1.0, 2_000_000_000.0))],
-        (b'M', 92 | 201 | 203) => &[(b"XYZE", SETTING)],
-        (b'M', 204) => &[(b"SPRT", SETTING)],
-        (b'M', 205) => &[(b"J", (0.0, 10.0))],
-        (b'M', 301) => &[(b"PID", GAIN)],
-        (b'M', 163) => &[(b"P", MIX_WEIGHT)],
-        (b'M', 165) => &[(b"ABCD", MIX_WEIGHT)],
-        #[cfg(feature = "inkjet")]
-        (b'M', 700) => &[(b"P", INKJET_HEAD), (b"S", NOZZLE_MASK)],
-        _ => &[],
-    };
+/// The first letter whose value is outside its command's range (`ranges`, from the command's
+/// row in the registry), if any: the letter, the value and the range.
+fn out_of_range(w: &Words, ranges: Ranges) -> Option<(u8, f32, (f32, f32))> {
     for &(letters, (low, high)) in ranges {
         for &l in letters {
             if let Some(v) = w.get(l) {

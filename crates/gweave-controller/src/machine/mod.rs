@@ -13,6 +13,7 @@ mod homing;
 #[cfg(feature = "inkjet")]
 mod inkjet;
 mod mixing;
+mod registry;
 mod report;
 #[cfg(test)]
 mod tests;

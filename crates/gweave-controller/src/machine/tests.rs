@@ -7,6 +7,7 @@ use std::rc::Rc;
 use std::string::String;
 use std::vec::Vec;
 
+use crate::gcode::words::Words;
 use crate::limits::TICKS_PER_S;
 use crate::serial::protocol::frame;
 use crate::twin::{FirstOrder, Twin};
@@ -146,6 +147,52 @@ fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
     b.send("M105\n");
     b.run_ms(2);
     assert!(b.take().starts_with("ok T:"));
+}
+
+/// The registry (`registry.rs`) is exactly what the controller runs: on machines with and
+/// without each piece of hardware, the dispatch runs every G, M and T code from 0 to 1000 that
+/// has a row there, and no other (a dispatch arm without a row would never run).
+#[test]
+fn the_registry_is_exactly_what_the_controller_runs() {
+    let machines = [
+        Settings::DEFAULT,
+        Settings { mixing_inputs: 4, ..Settings::DEFAULT },
+        Settings { inkjet_heads: 2, ..Settings::DEFAULT },
+        Settings { hotends: 2, thermistor: [1, 1, 1], ..Settings::DEFAULT },
+    ];
+    let mut rows = Vec::new();
+    for settings in machines {
+        let mut declared_here = 0;
+        for letter in [b'G', b'M', b'T'] {
+            for code in 0..=1000u16 {
+                let mut b = Bench::new(settings);
+                let line = std::format!("{}{code}", char::from(letter));
+                let words = Words::parse(line.as_bytes()).unwrap();
+                let runs = b.t.controller.dispatch(&mut b.t.memory, &words).is_some();
+                let declared =
+                    super::registry::row(letter, code, |needs| b.t.controller.has(needs)).is_some();
+                assert_eq!(runs, declared, "{line} with {settings:?}");
+                declared_here += usize::from(declared);
+            }
+        }
+        rows.push(declared_here);
+    }
+    // 41 commands everywhere (10 G, 30 M, T0); a mixing hotend adds M163-M165 and the virtual
+    // tools T1-T1000 (the mixer refuses those past its 16), inkjet heads M700, two hotends T1.
+    assert_eq!(rows, [41, 41 + 3 + 1000, 42, 42]);
+}
+
+/// Regression: the ranges were checked before knowing whether the machine has the command, so
+/// a mixing command on a printer without a mixing hotend was refused as out of range.
+#[test]
+fn a_mixing_command_without_a_mixing_hotend_is_unknown_even_out_of_range() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("M163 S0 P2000000\nM700 P0 S99999\n");
+    b.run_ms(2);
+    assert_eq!(
+        b.take(),
+        "start\necho:Unknown command: \"M163 S0 P2000000\"\nok\necho:Unknown command: \"M700 P0 S99999\"\nok\n"
+    );
 }
 
 #[test]
