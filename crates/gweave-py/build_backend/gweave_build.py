@@ -26,7 +26,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any, Mapping, Optional
+from typing import Any, Callable, Mapping, Optional
 
 # crates/gweave-py: pyproject.toml's folder, where pip runs the backend.
 PACKAGE = Path(__file__).resolve().parent.parent
@@ -74,27 +74,27 @@ def maturin_profile(config_settings: Optional[Mapping[str, Any]]) -> str:
     return "release"
 
 
+def command_first(hook: str) -> Callable[..., str]:
+    """maturin's PEP 517 `hook` (a wheel, or an editable wheel), run once the command is built."""
+
+    def run(
+        wheel_directory: str,
+        config_settings: Optional[Mapping[str, Any]] = None,
+        metadata_directory: Optional[str] = None,
+    ) -> str:
+        import maturin
+
+        build_cli(maturin_profile(config_settings))
+        built: str = getattr(maturin, hook)(wheel_directory, config_settings, metadata_directory)
+        return built
+
+    run.__name__ = hook
+    return run
+
+
 # The PEP 517 hooks: maturin's, each wheel built after the command.
-def build_wheel(
-    wheel_directory: str,
-    config_settings: Optional[Mapping[str, Any]] = None,
-    metadata_directory: Optional[str] = None,
-) -> str:
-    import maturin
-
-    build_cli(maturin_profile(config_settings))
-    return maturin.build_wheel(wheel_directory, config_settings, metadata_directory)
-
-
-def build_editable(
-    wheel_directory: str,
-    config_settings: Optional[Mapping[str, Any]] = None,
-    metadata_directory: Optional[str] = None,
-) -> str:
-    import maturin
-
-    build_cli(maturin_profile(config_settings))
-    return maturin.build_editable(wheel_directory, config_settings, metadata_directory)
+build_wheel = command_first("build_wheel")
+build_editable = command_first("build_editable")
 
 
 def prepare_metadata_for_build_wheel(
