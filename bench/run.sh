@@ -29,7 +29,7 @@ fi
 
 mbps() { python3 -c "import sys; print(f'{float(sys.argv[1])/1e6/float(sys.argv[2]):.0f}')" "$1" "$2"; }
 
-size=$(stat -c %s "$BIG")
+size=$(stat -L -c %s "$BIG")
 cat "$BIG" > /dev/null  # warm the page cache so every tool reads from memory
 echo "== core: $(basename "$BIG"), $(python3 -c "print(f'{$size/1e6:.0f}')") MB, $(wc -l < "$BIG") lines"
 # Five rounds of the four in turn, the best of each (see besttime.py).
