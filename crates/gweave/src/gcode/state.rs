@@ -407,8 +407,9 @@ impl State {
         // The target is worked out in a copy and stored whole, once, to the position and the
         // move: copying `self.pos` into the move after writing its axes one by one read it back
         // in 16-byte pieces from two 8-byte stores still in flight, which the CPU cannot forward
-        // (the load waits for every older store to reach the cache; perf put 85 % of the
-        // interpreting thread's samples of `estimate` on that load).
+        // (the load waits for every older store to reach the cache, some of them to lines the
+        // planning core holds: in some runs of `estimate` perf put 85 % of the interpreting
+        // thread's samples on that load; docs/performance.md, twentieth session).
         let mut to = from;
         let (mut moved, feed) = match self.plain_move(block) {
             Some(plain) => plain_targets(plain, scale, self.relative_axes, &mut to),
