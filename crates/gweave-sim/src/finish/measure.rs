@@ -18,14 +18,13 @@ use gweave::firmware::Firmware;
 use gweave::gcode::container;
 use gweave::gcode::ends::read_ends;
 use gweave::gcode::flavour::flavour_in;
-use gweave::gcode::reader::{LineReader, Part};
 use gweave::gcode::state::StateOptions;
 use gweave::pass::{drive_reader, Ctx, Flow, Pass, Reading, Step, Strictness};
 use gweave::post::metadata::{is_progress_line, read_setting, Figures};
 use gweave::stats::{Stats, StatsPass};
 
 use super::Result;
-use crate::motion::estimate::{Estimate, EstimateError, Estimator};
+use crate::motion::estimate::{estimate_modes, ModeEstimate};
 use crate::motion::limits::MotionProfile;
 use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
 use crate::profile::MachineProfile;
@@ -55,68 +54,49 @@ pub(super) fn measure(path: &Path) -> Result<Figures> {
     let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
     let silent =
         (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
-    let estimator = |p: &MotionProfile| -> Result<Estimator> {
-        let mut estimator = Estimator::timing_only(p)?;
-        estimator.read_as(firmware);
-        // The metadata needs the total and the first layer: memory stays flat with the layers.
-        estimator.first_layer_only();
-        Ok(estimator)
-    };
-    let (normal, silent) = (estimator(&normal)?, silent.as_ref().map(estimator).transpose()?);
     let options = StateOptions { firmware, ..StateOptions::default() };
-    let (tally, normal, silent) = on_threads(path, options, normal, silent)?;
-    let silent = silent.as_ref().unwrap_or(&normal);
-    let first_layer = |t: &Timed| t.estimate.layer_s.first().copied().unwrap_or(0.0);
+    let silent: Vec<MotionProfile> = silent.into_iter().collect();
+    let (tally, (normal, silent)) = on_threads(path, options, &normal, &silent, firmware)?;
+    // Without a silent mode of its own, the normal mode's figures stand for it.
+    let silent = silent.first().unwrap_or(&normal);
+    let normal = &normal;
+    let first_layer = |t: &ModeEstimate| t.estimate.layer_s.first().copied().unwrap_or(0.0);
     let figures = Figures {
         filament_mm: tally.stats.filament.iter().map(|f| f.extruded_mm).collect(),
         diameter_mm: tally.stats.filament_diameter_mm,
         time_s: [normal.estimate.total_s, silent.estimate.total_s],
-        first_layer_s: [first_layer(&normal), first_layer(silent)],
+        first_layer_s: [first_layer(normal), first_layer(silent)],
         progress_s: normal.progress_s.iter().zip(&silent.progress_s).map(|(&n, &s)| [n, s]).collect(),
         ..tally.figures
     };
     Ok(figures)
 }
 
-/// The file read once and measured on threads: `stats` and the settings here, each estimator
-/// on a thread of its own.
+/// The file read once and measured on threads: `stats` and the settings here, the estimate of
+/// every mode on threads of its own ([`estimate_modes`]: one parse side, one plan side a mode).
 fn on_threads(
     path: &Path,
     options: StateOptions,
-    normal: Estimator,
-    silent: Option<Estimator>,
-) -> Result<(Tally, Timed, Option<Timed>)> {
+    normal: &MotionProfile,
+    others: &[MotionProfile],
+    firmware: Firmware,
+) -> Result<(Tally, (ModeEstimate, Vec<ModeEstimate>))> {
     let (to_tally, for_tally) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
-    let (to_normal, for_normal) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
-    let (to_silent, for_silent) = match silent {
-        Some(_) => {
-            let (to, from) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
-            (Some(to), Some(from))
-        }
-        None => (None, None),
-    };
+    let (to_modes, for_modes) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
     std::thread::scope(|scope| {
-        let readers = [Some(to_tally), Some(to_normal), to_silent];
-        scope.spawn(move || spread(path, readers));
-        let normal = scope.spawn(move || timed(Chunks::new(for_normal), normal));
-        let silent =
-            silent.zip(for_silent).map(|(est, chunks)| scope.spawn(move || timed(Chunks::new(chunks), est)));
+        scope.spawn(move || spread(path, [Some(to_tally), Some(to_modes)]));
+        let timed = scope.spawn(move || {
+            estimate_modes(Chunks::new(for_modes), normal, others, firmware, is_progress_line)
+        });
         let tally = tally(Chunks::new(for_tally), path, options);
-        let join = |t: std::thread::ScopedJoinHandle<'_, _>| {
-            t.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
-        };
-        let normal = join(normal);
-        let silent = silent.map(join).transpose();
-        // The first line at fault, normal mode's first (a serial pass would stop there); a read
-        // error (no line) is the tally's to report, with the file's name.
-        let fault = |e: Option<&EstimateError>| e.and_then(EstimateError::line);
-        let (n, s) = (fault(normal.as_ref().err()), fault(silent.as_ref().err()));
-        match (normal, silent) {
-            (Err(e), _) if n.is_some() && (s.is_none() || n <= s) => Err(e.into()),
-            (_, Err(e)) if s.is_some() => Err(e.into()),
-            (normal, silent) => {
+        let timed = timed.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+        match timed {
+            // A fault on a line is the estimate's to report; a read error (no line) is the
+            // tally's, with the file's name.
+            Err(e) if e.line().is_some() => Err(e.into()),
+            timed => {
                 let tally = tally?;
-                Ok((tally, normal?, silent?))
+                Ok((tally, timed?))
             }
         }
     })
@@ -194,26 +174,6 @@ impl Read for Chunks {
     }
 }
 
-/// An estimator's figures: its estimate and the time at each progress line, s.
-struct Timed {
-    estimate: Estimate,
-    progress_s: Vec<f64>,
-}
-
-/// An estimator's thread: every line, as the passes split them, and the clock read after each
-/// progress line.
-fn timed(input: impl Read, mut estimator: Estimator) -> Result<Timed, EstimateError> {
-    let mut reader = LineReader::new(input);
-    let mut progress_s = Vec::new();
-    while let Some(line) = reader.next_line()? {
-        estimator.read_line(&line)?;
-        if line.part == Part::Whole && is_progress_line(line.bytes) {
-            progress_s.push(estimator.now_s());
-        }
-    }
-    Ok(Timed { estimate: estimator.finish(), progress_s })
-}
-
 /// What this thread counts: `stats` and the settings the metadata needs.
 struct Tally {
     stats: Stats,
@@ -249,7 +209,10 @@ impl Pass for TallyPass {
 
 #[cfg(test)]
 mod tests {
+    use gweave::gcode::reader::{LineReader, Part};
+
     use super::*;
+    use crate::motion::estimate::Estimator;
 
     /// The serial pass the threads replaced: one estimator per mode fed every whole line, the
     /// clock read after each progress line.
