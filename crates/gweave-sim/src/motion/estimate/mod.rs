@@ -69,7 +69,7 @@ mod timer;
 use back::Back;
 use front::{Chords, Front};
 pub use front::{HugeArcs, Malformed, MAX_ARC_CHORDS};
-pub use modes::{estimate_modes, ModeEstimate};
+pub use modes::{estimate_modes, ModeEstimate, Modes};
 pub use report::{estimate_file, estimate_report, EstimateFileError, EstimateReport};
 
 /// Feed rate before the file sets one, mm/s (Klipper `gcode_move`, Marlin `feedrate_mm_s`).

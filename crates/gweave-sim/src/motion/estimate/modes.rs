@@ -15,6 +15,8 @@ use std::sync::{mpsc, Arc};
 
 use gweave::firmware::Firmware;
 use gweave::gcode::reader::{LineReader, Part};
+use gweave::gcode::state::State;
+use gweave::pass::Ctx;
 
 use super::back::Back;
 use super::front::Front;
@@ -22,24 +24,38 @@ use super::{new_batch, skip_mixing_errors, Estimate, EstimateError, Job, BATCH, 
 use crate::motion::limits::{MotionProfile, ProfileError};
 use crate::motion::planner::Planner;
 
+/// What [`estimate_modes`] found: each mode's estimate and the modal state after the last line.
+#[derive(Debug)]
+pub struct Modes {
+    /// The first profile's.
+    pub first: ModeEstimate,
+    /// The other profiles', in their order.
+    pub others: Vec<ModeEstimate>,
+    /// The modal state after the last line (what the lines given to `each_line` left).
+    pub state: State,
+}
+
 /// One mode's estimate and its clock at each progress line.
 #[derive(Debug)]
 pub struct ModeEstimate {
     /// The estimate, the first layer apart and every later one accounted as one
     /// ([`Estimator::first_layer_only`](super::Estimator::first_layer_only)).
     pub estimate: Estimate,
-    /// The clock after each line `is_progress` picked, s: the time the queued moves before it
+    /// The clock after each line `each_line` picked, s: the time the queued moves before it
     /// leave the planner is not counted yet, as [`Estimator::now_s`](super::Estimator::now_s).
     pub progress_s: Vec<f64>,
 }
 
 /// Estimates `input` in the mode of `first` and of each of `others` (timing only, without step
-/// counts), read as `firmware` reads it, with the clock read after each whole line
-/// `is_progress` picks. The profiles must plan alike (the same corner mode,
-/// [`Planner::check_change`]): only their limits differ. The result is one [`ModeEstimate`] per
-/// profile, `first`'s and then the others' in their order, each the same to the bit as an
-/// [`Estimator`](super::Estimator) of that profile fed every line. Memory is a few batches of
-/// jobs in flight.
+/// counts), read as `firmware` reads it. The profiles must plan alike (the same corner mode,
+/// [`Planner::check_change`]): only their limits differ. Each plan side sees the jobs an
+/// [`Estimator`](super::Estimator) of its profile fed every line would make, so its figures are
+/// that estimator's to the bit. Memory is a few batches of jobs in flight.
+///
+/// `each_line` reads every whole line beside the estimate, on the parse side's thread, with
+/// the block, effect and modal state of the pass machinery's [`drive_reader`](gweave::pass::drive_reader)
+/// for a pass that lists no words of plain moves (a transform's metadata: the `stats` count);
+/// it returns whether the clock is to be read after that line (a progress line).
 ///
 /// An error is the first line at fault: a parse side's (every mode's limits are checked) or a
 /// plan side's, the first profile's before the others' on the same line.
@@ -48,8 +64,8 @@ pub fn estimate_modes(
     first: &MotionProfile,
     others: &[MotionProfile],
     firmware: Firmware,
-    is_progress: impl Fn(&[u8]) -> bool,
-) -> Result<(ModeEstimate, Vec<ModeEstimate>), EstimateError> {
+    each_line: impl FnMut(&Ctx<'_>) -> bool,
+) -> Result<Modes, EstimateError> {
     let profile_error = |source: ProfileError| EstimateError::Profile { line: 0, source };
     others.iter().try_for_each(|p| Planner::check_change(first, p)).map_err(profile_error)?;
     // The first batch holds the jobs that set up the plan sides (the first mix).
@@ -75,7 +91,7 @@ pub fn estimate_modes(
                 (to_back, scope.spawn(move || plan(back, batches)))
             })
             .collect();
-        let parsed = parse(input, &mut front, &mut batch, &senders, is_progress);
+        let parsed = parse(input, &mut front, &mut batch, &senders, each_line);
         // The lines before an error are planned too: one of them may hold an earlier error.
         send(&senders, batch);
         drop(senders);
@@ -111,28 +127,33 @@ pub fn estimate_modes(
         let mut estimates = estimates.into_iter();
         // One plan side per profile, the first's first: none is missing without an error.
         match estimates.next() {
-            Some(first) => Ok((first, estimates.collect())),
+            Some(first) => Ok(Modes { first, others: estimates.collect(), state: front.state }),
             None => Err(EstimateError::Io(std::io::Error::other("no plan side"))),
         }
     })
 }
 
 /// The parse side: every line into jobs, sent in batches to every plan side, with a mark after
-/// each progress line. Stops early, with `Ok`, when a plan side has stopped (it reports its
-/// error itself).
+/// each line `each_line` picks. Stops early, with `Ok`, when a plan side has stopped (it reports
+/// its error itself).
 fn parse(
     input: impl Read,
     front: &mut Front,
     batch: &mut Vec<Job>,
     senders: &[mpsc::SyncSender<Arc<Vec<Job>>>],
-    is_progress: impl Fn(&[u8]) -> bool,
+    mut each_line: impl FnMut(&Ctx<'_>) -> bool,
 ) -> Result<(), EstimateError> {
     let stop = gweave::interrupt::current();
     let mut reader = LineReader::new(input);
     while let Some(line) = reader.next_line()? {
         skip_mixing_errors(front.step(&line, batch))?;
-        if line.part == Part::Whole && is_progress(line.bytes) {
-            batch.push(Job::Mark);
+        // The front lexed the line into its block (a plain move's words unlisted, as for a
+        // pass that reads none) and applied it to its state, as the pass driver does.
+        if line.part == Part::Whole {
+            let ctx = Ctx { line, block: &front.block, effect: &front.state.effect, state: &front.state };
+            if each_line(&ctx) {
+                batch.push(Job::Mark);
+            }
         }
         if batch.len() >= BATCH {
             if let Some(stop) = &stop {
@@ -228,9 +249,15 @@ mod tests {
         }
         text.push_str("M73 P100 R0\n");
         let (normal, silent) = (MotionProfile::default(), silent());
-        let (a, others) =
-            estimate_modes(text.as_bytes(), &normal, &[silent.clone()], Firmware::Marlin, is_progress)
-                .unwrap();
+        let progress = |ctx: &Ctx<'_>| is_progress(ctx.line.bytes);
+        let Modes { first: a, others, .. } = estimate_modes(
+            text.as_bytes(),
+            &normal,
+            std::slice::from_ref(&silent),
+            Firmware::Marlin,
+            progress,
+        )
+        .unwrap();
         let [b] = others.as_slice() else { panic!("{others:?}") };
         for (got, profile) in [(&a, &normal), (b, &silent)] {
             let (est, progress_s) = alone(text.as_bytes(), profile);
@@ -254,7 +281,7 @@ mod tests {
             &MotionProfile::default(),
             &[silent()],
             Firmware::Marlin,
-            is_progress,
+            |_: &Ctx<'_>| false,
         )
         .unwrap_err();
         assert_eq!(e.line(), Some(3), "{e}");
