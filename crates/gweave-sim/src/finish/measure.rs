@@ -22,6 +22,7 @@ use gweave::stats::StatsPass;
 
 use super::Result;
 use crate::motion::estimate::{estimate_modes, EstimateError, ModeEstimate, Modes};
+use crate::motion::limits::MotionProfile;
 use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
 use crate::profile::MachineProfile;
 
@@ -31,17 +32,7 @@ use crate::profile::MachineProfile;
 /// the default machine's, read from the file's ends, as the flavour.
 pub(super) fn measure(path: &Path) -> Result<Figures> {
     let ends = read_ends(path).map_err(|e| gweave::Error::io(path, e))?;
-    let flavour = flavour_in(&ends);
-    // Read as `stats` reads it (the metadata's filament comes from its pass).
-    let firmware = Firmware::resolve(None, flavour.as_deref());
-    let base = MachineProfile::default().motion;
-    let normal = slicer_limits(&ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
-    let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
-    // A second estimate only for a file that shows silent-mode figures (PrusaSlicer's footer is
-    // in its last 256 KiB, `M73 Q0 S..` in its first lines) with limits of their own.
-    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
-    let silent =
-        (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
+    let FileModes { firmware, normal, silent } = modes_of(&ends);
     let silent: Vec<_> = silent.into_iter().collect();
     let input = container::open(path).map_err(|e| gweave::Error::io(path, e))?;
     // The `stats` count and the settings from the estimate's own parse: every whole line, with
@@ -76,6 +67,29 @@ pub(super) fn measure(path: &Path) -> Result<Figures> {
     Ok(figures)
 }
 
+/// How a file is read and timed, from its ends (`ends`: its first and last 256 KiB).
+struct FileModes {
+    /// The firmware that reads it, as `stats` resolves it from the flavour (the metadata's
+    /// filament comes from that count).
+    firmware: Firmware,
+    /// The normal mode's limits: the slicer's, else the default machine's.
+    normal: MotionProfile,
+    /// The silent mode's, for a file that shows silent-mode figures (PrusaSlicer's footer,
+    /// `M73 Q0 S..` in its first lines) with limits of their own.
+    silent: Option<MotionProfile>,
+}
+
+fn modes_of(ends: &[u8]) -> FileModes {
+    let firmware = Firmware::resolve(None, flavour_in(ends).as_deref());
+    let base = MachineProfile::default().motion;
+    let normal = slicer_limits(ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
+    let silent = slicer_limits_silent(ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
+    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
+    let silent =
+        (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
+    FileModes { firmware, normal, silent }
+}
+
 /// The `stats` count and the settings ([`read_setting`]).
 struct TallyPass {
     stats: StatsPass,
@@ -100,8 +114,7 @@ mod tests {
     use gweave::gcode::reader::{LineReader, Part};
 
     use super::*;
-    use crate::motion::estimate::Estimator;
-    use crate::motion::limits::MotionProfile;
+    use crate::motion::estimate::{Estimate, Estimator};
     use gweave::gcode::state::StateOptions;
     use gweave::pass::{drive_reader, Reading, Strictness};
 
@@ -168,5 +181,99 @@ mod tests {
         let state = drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
         let counted: Vec<f64> = pass.into_stats(&state).filament.iter().map(|f| f.extruded_mm).collect();
         assert_eq!(figures.filament_mm, counted);
+    }
+
+    /// The old measure, line by line: one estimator per mode fed every line as the passes split
+    /// them, the clock read after each progress line, and a `stats` pass of its own.
+    fn measured_serially(path: &Path) -> Figures {
+        let text = std::fs::read(path).unwrap();
+        let FileModes { firmware, normal, silent } = modes_of(&read_ends(path).unwrap());
+        let timed = |profile: &MotionProfile| {
+            let mut est = Estimator::timing_only(profile).unwrap();
+            est.read_as(firmware);
+            est.first_layer_only();
+            let (mut reader, mut progress_s) = (LineReader::new(&text[..]), Vec::new());
+            while let Some(line) = reader.next_line().unwrap() {
+                est.read_line(&line).unwrap();
+                if line.part == Part::Whole && is_progress_line(line.bytes) {
+                    progress_s.push(est.now_s());
+                }
+            }
+            (est.finish(), progress_s)
+        };
+        let (normal, silent) = (timed(&normal), silent.as_ref().map(timed));
+        let silent = silent.as_ref().unwrap_or(&normal);
+        let mut pass = StatsPass::new(None);
+        let options = StateOptions { firmware, ..StateOptions::default() };
+        let reading = Reading { options, strictness: Strictness::Lenient, ..Reading::new(path) };
+        let state = drive_reader(&text[..], reading, &mut pass, &mut io::sink()).unwrap();
+        let stats = pass.into_stats(&state);
+        let first = |e: &Estimate| e.layer_s.first().copied().unwrap_or(0.0);
+        Figures {
+            filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
+            diameter_mm: stats.filament_diameter_mm,
+            time_s: [normal.0.total_s, silent.0.total_s],
+            first_layer_s: [first(&normal.0), first(&silent.0)],
+            progress_s: normal.1.iter().zip(&silent.1).map(|(&n, &s)| [n, s]).collect(),
+            ..Figures::default()
+        }
+    }
+
+    /// Regression (issue 35): the measure now parses once for both modes and `stats`; on every
+    /// fixture, as it is and with progress lines in both modes, its figures are the old line by
+    /// line measure's to the bit: the times, the first layer's, the clock at each progress line
+    /// and the filament per tool.
+    #[test]
+    fn every_fixture_measures_as_the_line_by_line_measure() {
+        let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data");
+        let dir = tempfile::tempdir().unwrap();
+        let (mut measured, mut two_modes) = (0, 0);
+        for kind in std::fs::read_dir(&data).unwrap() {
+            let kind = kind.unwrap().path();
+            if !kind.is_dir() {
+                continue;
+            }
+            for file in std::fs::read_dir(kind).unwrap() {
+                let path = file.unwrap().path();
+                if path.extension().is_none_or(|e| e != "gcode") {
+                    continue;
+                }
+                let text = std::fs::read_to_string(&path).unwrap();
+                let lines: Vec<&str> = text.lines().collect();
+                // The first 3000 lines and the last 400 (the settings, the footer): a debug
+                // build's planner is slow.
+                let cut = if lines.len() > 3400 {
+                    [&lines[..3000], &lines[lines.len() - 400..]].concat()
+                } else {
+                    lines
+                };
+                for m73 in [false, true] {
+                    let mut copy = String::new();
+                    for (i, line) in cut.iter().enumerate() {
+                        if m73 && i % 300 == 0 {
+                            copy.push_str("M73 P0 R0\nM73 Q0 S0\n");
+                        }
+                        copy.push_str(line);
+                        copy.push('\n');
+                    }
+                    let name = path.file_name().unwrap().to_string_lossy();
+                    let copy_path = dir.path().join(format!("{m73}-{name}"));
+                    std::fs::write(&copy_path, copy).unwrap();
+                    let (ours, old) = (measure(&copy_path).unwrap(), measured_serially(&copy_path));
+                    let bits = |f: &Figures| (f.time_s.map(f64::to_bits), f.first_layer_s.map(f64::to_bits));
+                    assert_eq!(bits(&ours), bits(&old), "{name}, M73 {m73}");
+                    assert_eq!(ours.progress_s, old.progress_s, "{name}, M73 {m73}");
+                    assert_eq!(ours.filament_mm, old.filament_mm, "{name}, M73 {m73}");
+                    assert_eq!(ours.diameter_mm, old.diameter_mm, "{name}, M73 {m73}");
+                    measured += 1;
+                    two_modes += usize::from(ours.time_s[0] != ours.time_s[1]);
+                    // Cura's files carry `;TIME_ELAPSED:` progress lines of their own.
+                    assert!(!m73 || ours.progress_s.len() >= 10, "{name}");
+                }
+            }
+        }
+        assert!(measured >= 20, "{measured} files");
+        // Some with silent-mode limits of their own: both planners ran apart.
+        assert!(two_modes >= 2, "{two_modes} files timed in two modes");
     }
 }
