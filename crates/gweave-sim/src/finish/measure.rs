@@ -23,7 +23,7 @@ use gweave::stats::StatsPass;
 use super::Result;
 use crate::motion::estimate::{estimate_modes, EstimateError, ModeEstimate, Modes};
 use crate::motion::limits::MotionProfile;
-use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
+use crate::motion::slicer_limits::slicer_limits_both;
 use crate::profile::MachineProfile;
 
 /// Measures the written file at `path`.
@@ -82,8 +82,9 @@ struct FileModes {
 fn modes_of(ends: &[u8]) -> FileModes {
     let firmware = Firmware::resolve(None, flavour_in(ends).as_deref());
     let base = MachineProfile::default().motion;
-    let normal = slicer_limits(ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
-    let silent = slicer_limits_silent(ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
+    let [normal, silent] = slicer_limits_both(ends, &base);
+    let normal = normal.map_or_else(|_| base.clone(), |l| l.profile);
+    let silent = silent.map_or_else(|_| normal.clone(), |l| l.profile);
     let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
     let silent =
         (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
@@ -161,8 +162,8 @@ mod tests {
         let figures = measure(&path).unwrap();
         let ends = read_ends(&path).unwrap();
         let base = MachineProfile::default().motion;
-        let normal = slicer_limits(&ends, &base).unwrap().profile;
-        let silent = slicer_limits_silent(&ends, &base).unwrap().profile;
+        let normal = slicer_limits_both(&ends, &base)[0].as_ref().unwrap().profile.clone();
+        let silent = slicer_limits_both(&ends, &base)[1].as_ref().unwrap().profile.clone();
         assert_ne!(normal, silent);
         let (normal_s, normal_progress) = serial(text.as_bytes(), &normal);
         let (silent_s, silent_progress) = serial(text.as_bytes(), &silent);
