@@ -155,17 +155,22 @@ fn parse(
                 batch.push(Job::Mark);
             }
         }
-        if batch.len() >= BATCH {
+        // A stopped run (Python's Ctrl-C) stops here too, not only at the reader: counted in
+        // lines, since a file of comments makes no jobs.
+        if line.number % STOP_CHECK_LINES == 0 {
             if let Some(stop) = &stop {
                 stop.check()?;
             }
-            if !send(senders, std::mem::replace(batch, new_batch())) {
-                return Ok(());
-            }
+        }
+        if batch.len() >= BATCH && !send(senders, std::mem::replace(batch, new_batch())) {
+            return Ok(());
         }
     }
     Ok(())
 }
+
+/// Lines between two looks at whether the run was stopped (an atomic load).
+const STOP_CHECK_LINES: u64 = 4096;
 
 /// Hands `batch` to every plan side; false when one has stopped (on an error).
 fn send(senders: &[mpsc::SyncSender<Arc<Vec<Job>>>], batch: Vec<Job>) -> bool {
