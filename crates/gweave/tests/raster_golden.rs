@@ -26,7 +26,7 @@ fn golden_dir() -> PathBuf {
 }
 
 /// Layer `k`: a ring whose radii grow with `k`, a solid bar (whole bytes and words inked on every
-/// row of a band) and a reproducible speckle (xorshift, about one pixel in twelve).
+/// row of a band, a whole 64-column word among them) and a reproducible speckle (xorshift, about one pixel in twelve).
 fn layer(k: usize) -> Bitmap {
     let mut b = Bitmap::new(WIDTH_PX, HEIGHT_PX);
     let (cx, cy) = (60.0, 14.0);
@@ -38,7 +38,7 @@ fn layer(k: usize) -> Bitmap {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
-            let bar = (90..150).contains(&x) && (2..26 - k).contains(&y);
+            let bar = (60..150).contains(&x) && (2..26 - k).contains(&y);
             if (r_in..r_out).contains(&r) || bar || state % 12 == 0 {
                 b.set(x, y, true);
             }
