@@ -39,7 +39,7 @@ fn layer(k: usize) -> Bitmap {
             state ^= state >> 7;
             state ^= state << 17;
             let bar = (60..150).contains(&x) && (2..26 - k).contains(&y);
-            if (r_in..r_out).contains(&r) || bar || state % 12 == 0 {
+            if (r_in..r_out).contains(&r) || bar || state.is_multiple_of(12) {
                 b.set(x, y, true);
             }
         }
