@@ -245,8 +245,11 @@ pub struct RasterWriter<W: Write> {
 }
 
 /// The output is written in pieces of this size: as large as the output's buffer
-/// (`gcode::writer`), so that it takes them without copying them.
+/// (`gcode::writer`), so that it takes them without copying them (pieces of 128 KiB, which
+/// would stay in the cache while written, were slower: the buffer copies them,
+/// docs/performance.md).
 const FLUSH_BYTES: usize = 1 << 20;
+
 impl<W: Write> RasterWriter<W> {
     /// Validates the profile and config and writes the start G-code. `source_layer_height_mm`
     /// is used when the config gives none.
