@@ -346,8 +346,6 @@ impl Bitmap {
     }
 }
 
-mod png_rows;
-
 fn io_err(path: &Path, source: std::io::Error) -> BitmapError {
     BitmapError::Io { path: path.to_path_buf(), source }
 }
@@ -413,26 +411,17 @@ fn is_plain_1bit_grey_png(data: &[u8]) -> bool {
 /// one level 0, thresholded as usual.
 fn decode_png_1bit(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, BitmapError> {
     let cutoff = opts.cutoff()?;
-    // IHDR's width and height (PNG spec 11.2.2), as in `decode`.
-    let field = |at: usize| u32::from_be_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]) as usize;
-    // The rows unfiltered here (each after its filter type byte), else by the `png` crate.
-    let (buf, stride, first, w, h) = match png_rows::rows(data, field(16), field(20)) {
-        Some(raw) => (raw, 1 + field(16).div_ceil(8), 1, field(16), field(20)),
-        None => {
-            let mut reader = png::Decoder::new(Cursor::new(data)).read_info()?;
-            let (w, h) = (reader.info().width as usize, reader.info().height as usize);
-            // None: the frame would not fit in memory's address space.
-            let too_large = || {
-                image::ImageError::Limits(image::error::LimitError::from_kind(
-                    image::error::LimitErrorKind::InsufficientMemory,
-                ))
-            };
-            let size = reader.output_buffer_size().ok_or_else(too_large)?;
-            let mut buf = vec![0u8; size];
-            let stride = reader.next_frame(&mut buf)?.line_size;
-            (buf, stride, 0, w, h)
-        }
+    let mut reader = png::Decoder::new(Cursor::new(data)).read_info()?;
+    let (w, h) = (reader.info().width as usize, reader.info().height as usize);
+    // None: the frame would not fit in memory's address space.
+    let too_large = || {
+        image::ImageError::Limits(image::error::LimitError::from_kind(
+            image::error::LimitErrorKind::InsufficientMemory,
+        ))
     };
+    let size = reader.output_buffer_size().ok_or_else(too_large)?;
+    let mut buf = vec![0u8; size];
+    let stride = reader.next_frame(&mut buf)?.line_size;
     // A set bit is level 255, a clear one level 0: which of them the threshold inks.
     let lit = |level_lit: bool| if level_lit { u64::MAX } else { 0 };
     let (one_lit, zero_lit) = (lit((cutoff <= 255) != opts.invert), lit((cutoff == 0) != opts.invert));
@@ -442,7 +431,7 @@ fn decode_png_1bit(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitma
     // The last word's bits past the width stay clear.
     let last_mask = u64::MAX >> (64 * wpr - w);
     for y in 0..h {
-        let row = &buf[y * stride + first..y * stride + first + w.div_ceil(8)];
+        let row = &buf[y * stride..y * stride + w.div_ceil(8)];
         let words = &mut b.words[y * wpr..(y + 1) * wpr];
         // Whole words straight from the row (a copy of a variable length per word was a call
         // to `memcpy`), then the row's last bytes padded.
