@@ -40,7 +40,8 @@
 
 pub mod card;
 pub mod job;
-pub mod overrides;
+pub mod options;
+pub use options::MixOptions;
 pub mod profile;
 mod purge_table;
 pub mod report;

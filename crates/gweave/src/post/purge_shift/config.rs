@@ -421,56 +421,6 @@ impl PurgeShiftConfig {
     }
 }
 
-/// Settings given as flags or keyword arguments, applied over a TOML file by
-/// [`PurgeShiftConfig::apply`] (the CLI and Python share it).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Overrides {
-    /// `--purge-mm`: filament per change, mm.
-    pub purge_mm: Option<f64>,
-    /// `--purge-mm3`: plastic per change, mm^3.
-    pub purge_mm3: Option<f64>,
-    /// `--filament-diameter-mm`, mm.
-    pub filament_diameter_mm: Option<f64>,
-    /// `true` allows crossing; `false` leaves the file's setting.
-    pub cross_layers: bool,
-    /// `--allow-features`: the features a change may move through.
-    pub allow_features: Option<Vec<String>>,
-    /// `--markers`: the comments that delimit the print proper.
-    pub markers: Option<[String; 2]>,
-    /// `--fallback`: `partial`, `block` or `tower`.
-    pub fallback: Option<String>,
-    /// The tower fallback's corner, mm.
-    pub tower_xy_mm: Option<[f64; 2]>,
-}
-
-impl PurgeShiftConfig {
-    /// Applies flags on top: a purge given as a flag replaces the file's (mm or mm^3).
-    pub fn apply(&mut self, o: &Overrides) {
-        if let Some(mm) = o.purge_mm {
-            (self.purge_mm, self.purge_mm3) = (Some(mm), None);
-        }
-        if let Some(v) = o.purge_mm3 {
-            (self.purge_mm, self.purge_mm3) = (None, Some(v));
-        }
-        if let Some(d) = o.filament_diameter_mm {
-            self.filament_diameter_mm = d;
-        }
-        self.cross_layers |= o.cross_layers;
-        if let Some(list) = &o.allow_features {
-            self.allow_features = list.iter().map(|s| s.trim().to_string()).collect();
-        }
-        if let Some(m) = &o.markers {
-            self.markers = Some(m.clone());
-        }
-        if let Some(f) = &o.fallback {
-            self.fallback = f.clone();
-        }
-        if let Some([x, y]) = o.tower_xy_mm {
-            (self.tower.x_mm, self.tower.y_mm) = (Some(x), Some(y));
-        }
-    }
-}
-
 impl Rules {
     /// The purge-shift seed's setting: a fixed purge of `purge_mm` of filament, other rules default.
     pub fn fixed(purge_mm: f64) -> Result<Rules, ConfigError> {
@@ -574,7 +524,7 @@ mod tests {
     #[test]
     fn flags_override_the_file() {
         let mut c = PurgeShiftConfig::parse_toml("purge_mm3 = 10.0\ncross_layers = true\n").unwrap();
-        c.apply(&Overrides {
+        c.apply(&super::super::PurgeShiftOptions {
             purge_mm: Some(3.0),
             allow_features: Some(vec![" infill".into()]),
             ..Default::default()
