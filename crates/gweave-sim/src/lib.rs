@@ -30,6 +30,7 @@
 mod chart_canvas;
 pub mod core_board;
 pub mod finish;
+pub mod transform;
 mod inkjet;
 mod interp;
 mod job;
