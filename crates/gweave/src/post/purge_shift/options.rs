@@ -27,7 +27,8 @@ crate::job_options! {
         /// Features the change may move through, comma separated [default: all but
         /// outer_wall].
         allow_features: Option<Vec<String>> = Shape::new("LIST"),
-        /// Explicit print-proper markers: the comment texts `begin,end`.
+        /// Explicit print-proper markers: the comment texts `begin,end` [default: the
+        /// slicer's own comments detected].
         markers: Option<[String; 2]> = Shape::new("BEGIN,END"),
         /// Too little room: `partial` (accept the shortfall), `block` (purge the rest in a
         /// purge block, as mix does) or `tower` (purge the rest on a small tower beside the
