@@ -157,7 +157,7 @@ mod tests {
         let err = parse::<PurgeShiftOptions>(&["--purge-mm", "2", "--purge-mm3", "3"]).unwrap_err();
         assert!(err.contains("'--purge-mm <MM>' cannot be used with '--purge-mm3 <MM3>'"), "{err}");
         let err = parse::<PurgeShiftOptions>(&["--tower-at", "1"]).unwrap_err();
-        assert!(err.contains("takes 2 comma-separated values (X,Y), not 1"), "{err}");
+        assert!(err.contains("takes 2 values (X,Y), not 1"), "{err}");
         let err = parse::<MixOptions>(&["--dialect", "klipper"]).unwrap_err();
         assert!(err.contains("for '--dialect <DIALECT>': unknown variant `klipper`"), "{err}");
     }

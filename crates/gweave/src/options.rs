@@ -254,7 +254,7 @@ impl OptionError {
         match &self.problem {
             Problem::OutOfRange { range, .. } => format!("out of range: {range}"),
             Problem::Count { expected, got, value_name } => {
-                format!("takes {expected} comma-separated values ({value_name}), not {got}")
+                format!("takes {expected} values ({value_name}), not {got}")
             }
             Problem::Invalid(why) => why.clone(),
             Problem::Conflict(other) => format!("cannot be given with {other}"),

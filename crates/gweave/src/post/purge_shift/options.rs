@@ -101,7 +101,7 @@ mod tests {
         assert_eq!(err.spelled(Spelling::Keyword), "tower_at = 1000000 is out of range: -10000 to 10000 mm");
         let err = set(&mut o, "markers", Value::Texts(vec!["only".into()])).unwrap_err();
         assert_eq!(err.problem, Problem::Count { expected: 2, got: 1, value_name: "BEGIN,END" });
-        assert_eq!(err.spelled(Spelling::Flag), "--markers: takes 2 comma-separated values (BEGIN,END), not 1");
+        assert_eq!(err.spelled(Spelling::Flag), "--markers: takes 2 values (BEGIN,END), not 1");
         assert_eq!(o, PurgeShiftOptions::default(), "a refused value leaves the option unset");
     }
 
