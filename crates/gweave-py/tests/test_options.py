@@ -104,3 +104,14 @@ def test_a_missing_config_file_is_file_not_found_naming_it(data, tmp_path):
     with pytest.raises(FileNotFoundError) as e:
         gweave.mix(data.joinpath(*TORUS), tmp_path / "o.gcode", config=missing)
     assert e.value.filename == str(missing)
+
+
+def test_machine_is_loaded_as_the_cli_loads_it(data, tmp_path):
+    """Regression (issue 40): one loader for `--machine` and `machine=`."""
+    with pytest.raises(FileNotFoundError) as e:
+        gweave.estimate(data.joinpath(*TORUS), machine=tmp_path / "nope.toml")
+    assert e.value.filename == str(tmp_path / "nope.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[bed]\nx_mm = -1\n")
+    with pytest.raises(ValueError, match=rf"^{bad}: .*x_mm = -1 is out of range"):
+        gweave.estimate(data.joinpath(*TORUS), machine=bad)
