@@ -144,7 +144,8 @@ mod tests {
         assert_eq!(o.tower_at, Some([10.0, 20.0]));
         assert!(o.cross_layers);
         assert_eq!(o.header(), "-c p.toml --purge-mm 2.5 --cross-layers --tower-at 10,20");
-        let m: MixOptions = parse(&["--at-layer", "0=Red", "--at-layer", "5=Blue", "--dialect", "reprap"]).unwrap();
+        let m: MixOptions =
+            parse(&["--at-layer", "0=Red", "--at-layer", "5=Blue", "--dialect", "reprap"]).unwrap();
         assert_eq!(m.at_layer, ["0=Red", "5=Blue"]);
         assert_eq!(m.header(), "--at-layer 0=Red --at-layer 5=Blue --dialect reprapfirmware");
         assert_eq!(parse::<MixOptions>(&[]).unwrap(), MixOptions::default());
@@ -153,7 +154,10 @@ mod tests {
     #[test]
     fn a_refused_value_is_named_by_its_flag() {
         let err = parse::<PurgeShiftOptions>(&["--purge-mm", "2000"]).unwrap_err();
-        assert!(err.contains("invalid value '2000' for '--purge-mm <MM>': out of range: 0 to 1000 mm"), "{err}");
+        assert!(
+            err.contains("invalid value '2000' for '--purge-mm <MM>': out of range: 0 to 1000 mm"),
+            "{err}"
+        );
         let err = parse::<PurgeShiftOptions>(&["--purge-mm", "2", "--purge-mm3", "3"]).unwrap_err();
         assert!(err.contains("'--purge-mm <MM>' cannot be used with '--purge-mm3 <MM3>'"), "{err}");
         let err = parse::<PurgeShiftOptions>(&["--tower-at", "1"]).unwrap_err();

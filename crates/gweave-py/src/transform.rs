@@ -1,11 +1,13 @@
 //! The post-processing transforms: `purge-shift` and `mix` (and the colour a mix prints).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+use gweave::gcode::writer::Target;
 
 use gweave::malformed::Transformed;
 use gweave::post::mix::MixOptions;
 use gweave::post::purge_shift::PurgeShiftOptions;
-use gweave_sim::transform::{self, Job};
+use gweave_sim::transform::{self, Job, Outcome};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -21,6 +23,7 @@ use crate::{strictness, to_json};
 /// `config`: a TOML file, ...), by the names the engine declares.
 #[pyfunction]
 #[pyo3(signature = (path, output=None, *, in_place=false, backup=true, force=false, lenient=false, **options))]
+#[allow(clippy::too_many_arguments)] // the keywords every transform shares, as Python spells them
 pub(crate) fn purge_shift_json(
     py: Python<'_>,
     path: PathBuf,
@@ -33,9 +36,22 @@ pub(crate) fn purge_shift_json(
 ) -> PyResult<String> {
     let options: PurgeShiftOptions = crate::options::read("purge_shift", options)?;
     let target = target_of(output, in_place, backup, force)?;
+    run(py, &options, &path, &target, lenient, transform::purge_shift)
+}
+
+/// Runs the transform `job` with `options` on `path` into `target`, Ctrl-C stopping it; the
+/// report as JSON text (with the lines a lenient run read past).
+fn run<O: Sync, R: serde::Serialize + Send>(
+    py: Python<'_>,
+    options: &O,
+    path: &Path,
+    target: &Target,
+    lenient: bool,
+    job: fn(&O, Job<'_>) -> Outcome<R>,
+) -> PyResult<String> {
     let strictness = strictness(lenient);
-    let job = || transform::purge_shift(&options, Job { strictness, ..Job::new(&path, &target) });
-    let (report, malformed) = interruptible(py, job)?.map_err(failed)?;
+    let work = || job(options, Job { strictness, ..Job::new(path, target) });
+    let (report, malformed) = interruptible(py, work)?.map_err(failed)?;
     to_json(&Transformed::new(&report, malformed, strictness))
 }
 
@@ -58,6 +74,7 @@ pub(crate) fn predict_colour_json(ratios: Vec<f64>, config: &str) -> PyResult<St
 /// `purge_mm`, ...), by the names the engine declares.
 #[pyfunction]
 #[pyo3(signature = (path, output=None, *, in_place=false, backup=true, force=false, lenient=false, **options))]
+#[allow(clippy::too_many_arguments)] // the keywords every transform shares, as Python spells them
 pub(crate) fn mix_json(
     py: Python<'_>,
     path: PathBuf,
@@ -70,8 +87,5 @@ pub(crate) fn mix_json(
 ) -> PyResult<String> {
     let options: MixOptions = crate::options::read("mix", options)?;
     let target = target_of(output, in_place, backup, force)?;
-    let strictness = strictness(lenient);
-    let job = || transform::mix(&options, Job { strictness, ..Job::new(&path, &target) });
-    let (report, malformed) = interruptible(py, job)?.map_err(failed)?;
-    to_json(&Transformed::new(&report, malformed, strictness))
+    run(py, &options, &path, &target, lenient, transform::mix)
 }

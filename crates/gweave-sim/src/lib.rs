@@ -30,7 +30,6 @@
 mod chart_canvas;
 pub mod core_board;
 pub mod finish;
-pub mod transform;
 mod inkjet;
 mod interp;
 mod job;
@@ -41,6 +40,7 @@ mod profile;
 #[cfg(any(test, feature = "test-support"))]
 pub mod test_support;
 mod thermal;
+pub mod transform;
 
 pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetLayer, InkjetWarning};
 pub use interp::{

@@ -44,6 +44,9 @@ impl<'a> Job<'a> {
     }
 }
 
+/// What a transform job returns: its report and the malformed lines a lenient run read past.
+pub type Outcome<R> = Result<(R, Malformed), TransformError>;
+
 /// Why a transform job failed.
 #[derive(Debug, thiserror::Error)]
 pub enum TransformError {
@@ -118,10 +121,7 @@ fn settings<T: Default, E: std::error::Error + 'static>(
 
 /// Moves every colour change earlier by the purge (docs/purge-shift.md): returns the report
 /// (its changes' output lines counting the header) and the malformed lines read past.
-pub fn purge_shift(
-    options: &PurgeShiftOptions,
-    job: Job<'_>,
-) -> Result<(PurgeShiftReport, Malformed), TransformError> {
+pub fn purge_shift(options: &PurgeShiftOptions, job: Job<'_>) -> Outcome<PurgeShiftReport> {
     options.check_conflicts()?;
     let mut config = settings(options.config.as_deref(), PurgeShiftConfig::parse_toml)?;
     config.apply(options);
@@ -147,16 +147,12 @@ pub fn mix_profile(options: &MixOptions) -> Result<MixProfile, TransformError> {
 }
 
 /// Rewrites a file for a mixing hotend (docs/mix.md) with the profile and options given.
-pub fn mix(options: &MixOptions, job: Job<'_>) -> Result<(MixReport, Malformed), TransformError> {
+pub fn mix(options: &MixOptions, job: Job<'_>) -> Outcome<MixReport> {
     mix_with(mix_profile(options)?, options, job)
 }
 
 /// [`mix`] with a profile made otherwise (`gweave mix --wizard`'s); `options` name the run.
-pub fn mix_with(
-    profile: MixProfile,
-    options: &MixOptions,
-    job: Job<'_>,
-) -> Result<(MixReport, Malformed), TransformError> {
+pub fn mix_with(profile: MixProfile, options: &MixOptions, job: Job<'_>) -> Outcome<MixReport> {
     finish::refuse_second_run(job.input, MixOptions::COMMAND)?;
     let line = command_line(options, job.strictness);
     let (input, target) = (job.input, job.target);

@@ -160,7 +160,6 @@ impl OptionSpec {
     /// `value` within the option's range and count, as both front ends check it.
     pub fn check(&self, value: Value) -> Result<Value, OptionError> {
         let refuse = |problem| Err(OptionError { option: self.name, problem });
-        let in_range = |v: f64| self.shape.range.map_or(true, |r| r.contains(v));
         let count = match (self.kind, &value) {
             (Kind::Texts(n) | Kind::Numbers(n), Value::Texts(v)) if n > 0 => Some((n, v.len())),
             (Kind::Numbers(n), Value::Numbers(v)) => Some((n, v.len())),
@@ -174,9 +173,13 @@ impl OptionSpec {
             Value::Numbers(v) => v.as_slice(),
             _ => &[],
         };
-        match (numbers.iter().find(|v| !in_range(**v)), self.shape.range) {
-            (Some(&v), Some(range)) => refuse(Problem::OutOfRange { value: v, range }),
-            _ => Ok(value),
+        match self
+            .shape
+            .range
+            .and_then(|range| Some((*numbers.iter().find(|v| !range.contains(**v))?, range)))
+        {
+            Some((value, range)) => refuse(Problem::OutOfRange { value, range }),
+            None => Ok(value),
         }
     }
 }
@@ -305,7 +308,8 @@ pub trait JobOptions: Default + Sized {
     /// The options given, in the CLI's words and [`JobOptions::SPEC`]'s order, for the run's
     /// header: `-c mix.toml --at-layer 0=Red --purge-mm 25`.
     fn header(&self) -> String {
-        let quote = |a: String| if a.is_empty() || a.contains([' ', '\t', '\'', '"']) { format!("{a:?}") } else { a };
+        let quote =
+            |a: String| if a.is_empty() || a.contains([' ', '\t', '\'', '"']) { format!("{a:?}") } else { a };
         let mut words = Vec::new();
         for (spec, value) in Self::SPEC.iter().zip(self.values()) {
             let flag = spec.shape.short.map_or_else(|| format!("--{}", spec.flag()), |c| format!("-{c}"));

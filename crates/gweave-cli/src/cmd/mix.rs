@@ -78,7 +78,8 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         None => None,
     };
     args.report.refuse_json_with_stdout(target.as_ref().is_some_and(Target::is_stdout))?;
-    let mut files = Files::new().read("INPUT", args.input.as_deref()).read("-c", args.options.config.as_deref());
+    let mut files =
+        Files::new().read("INPUT", args.input.as_deref()).read("-c", args.options.config.as_deref());
     if let (Some(input), Some(target)) = (&args.input, &target) {
         files = files.target(target, input);
     }
@@ -176,7 +177,8 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
         (Some(_), true) => Some(args.out.target()?),
         _ => None,
     };
-    let mut files = Files::new().read("INPUT", args.input.as_deref()).write("-c", args.options.config.as_deref());
+    let mut files =
+        Files::new().read("INPUT", args.input.as_deref()).write("-c", args.options.config.as_deref());
     if let (Some(input), Some(target)) = (&args.input, &target) {
         files = files.target(target, input);
     }

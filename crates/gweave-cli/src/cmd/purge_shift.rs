@@ -53,8 +53,7 @@ pub fn run(args: PurgeShiftArgs) -> Result<ExitCode> {
     let mut bar = args.report.quiet.bar();
     let strictness = args.lenient.strictness();
     let job = Job { strictness, progress: Some(&mut bar), ..Job::new(&args.input, &target) };
-    let (report, malformed) =
-        transform::purge_shift(&args.options, job).map_err(crate::options::failed)?;
+    let (report, malformed) = transform::purge_shift(&args.options, job).map_err(crate::options::failed)?;
     drop(bar);
     // Warnings print with -q too (docs/pipeline.md), one line per kind.
     for w in gweave::post::warning::grouped(&report.warnings) {

@@ -102,7 +102,9 @@ impl<'a> MachineSource<'a> {
     /// The profile; a missing file is named with the built-in names beside it.
     pub fn load(&self) -> Result<MachineProfile, LoadError> {
         match self {
-            MachineSource::Builtin(b) => b.profile().map_err(|source| LoadError::Profile { path: None, source }),
+            MachineSource::Builtin(b) => {
+                b.profile().map_err(|source| LoadError::Profile { path: None, source })
+            }
             MachineSource::File(path) => {
                 let text = gweave::settings::read_text(path)
                     .map_err(|source| LoadError::Read { path: path.to_path_buf(), source })?;

@@ -101,9 +101,16 @@ mod tests {
         assert_eq!((space.default)().as_deref(), Some("mix"));
         o.set(space, Value::Text("perceived".into())).unwrap();
         let err = o.set(space, Value::Text("lab".into())).unwrap_err();
-        assert_eq!(err.spelled(Spelling::Flag), "--gradient-space: unknown variant `lab`, expected `mix` or `perceived`");
+        assert_eq!(
+            err.spelled(Spelling::Flag),
+            "--gradient-space: unknown variant `lab`, expected `mix` or `perceived`"
+        );
         o.set(MixOptions::spec("dialect").unwrap(), Value::Text("reprap".into())).unwrap();
-        o.set(MixOptions::spec("at_layer").unwrap(), Value::Texts(vec!["0=Dark Red".into(), "5=Blue".into()])).unwrap();
+        o.set(
+            MixOptions::spec("at_layer").unwrap(),
+            Value::Texts(vec!["0=Dark Red".into(), "5=Blue".into()]),
+        )
+        .unwrap();
         assert_eq!(
             o.header(),
             r#"--at-layer "0=Dark Red" --at-layer 5=Blue --gradient-space perceived --dialect reprapfirmware"#
