@@ -89,12 +89,15 @@ impl<T: JobOptions> FromArgMatches for Options<T> {
     }
 }
 
-/// A job's failure as the CLI says it: an option named by its flag; any other error kept
-/// whole, its causes and its I/O kind (a closed pipe, a stop) for `crate::run` to read.
+/// A job's failure as the CLI says it: the options it names spelled as flags; an error that
+/// names none kept whole, its causes and its I/O kind (a closed pipe, a stop) for `crate::run`
+/// to read.
 pub fn failed(e: gweave_sim::transform::TransformError) -> anyhow::Error {
-    match e {
-        gweave_sim::transform::TransformError::Option(o) => anyhow::anyhow!(o.spelled(Spelling::Flag)),
-        e => e.into(),
+    let spelled = e.spelled(Spelling::Flag);
+    if spelled == e.to_string() {
+        e.into()
+    } else {
+        anyhow::anyhow!(spelled)
     }
 }
 

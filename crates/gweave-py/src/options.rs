@@ -41,13 +41,13 @@ pub fn read<T: JobOptions>(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -
     Ok(options)
 }
 
-/// A job's failure as Python raises it: the engine's errors as [`crate::err`] raises them, an
-/// option named by its keyword, the rest `ValueError`.
+/// A job's failure as Python raises it: a file the system refused as the `OSError` for its
+/// errno (as [`crate::err`]), the rest a `ValueError` with the options it names spelled as
+/// keywords.
 pub fn failed(e: TransformError) -> PyErr {
-    match e {
-        TransformError::Finish(gweave_sim::finish::FinishError::Engine(e))
-        | TransformError::Mix(gweave::post::mix::MixPassError::Engine(e)) => crate::err(e),
-        e => PyValueError::new_err(e.spelled(Spelling::Keyword)),
+    match e.engine() {
+        Some(gweave::Error::Io { path, source }) => crate::args::os_error(path, source),
+        _ => PyValueError::new_err(e.spelled(Spelling::Keyword)),
     }
 }
 

@@ -115,3 +115,27 @@ def test_machine_is_loaded_as_the_cli_loads_it(data, tmp_path):
     bad.write_text("[bed]\nx_mm = -1\n")
     with pytest.raises(ValueError, match=rf"^{bad}: .*x_mm = -1 is out of range"):
         gweave.estimate(data.joinpath(*TORUS), machine=bad)
+
+
+def test_a_refusal_names_the_options_by_their_keywords(tmp_path):
+    """Regression (issue 40): the engine's refusals named the CLI's flags; Python names the
+    keywords (the CLI the flags: `crates/gweave-cli/tests/lenient_transforms.rs`)."""
+    src = tmp_path / "t1.gcode"
+    src.write_text("M83\n;LAYER_CHANGE\nG1 X1 E1\nT1\nG1 X2 E1\n")
+    out = tmp_path / "out.gcode"
+    with pytest.raises(ValueError) as e:
+        gweave.mix(src, out, map=["T0=Red"])
+    assert str(e.value) == f"{src}:4: the file selects T1, which has no mix: add map T1=<mix>"
+    with pytest.raises(ValueError) as e:
+        gweave.mix(src, out)
+    assert str(e.value) == (
+        "mix profile: nothing to do: give a schedule (at_layer, at_z, [[schedule]]), "
+        "a gradient (gradient, [[gradient]]) or a tool map (map, [map])"
+    )
+    with pytest.raises(ValueError) as e:
+        gweave.purge_shift(src, out)
+    assert str(e.value) == (
+        "no purge amount: give purge_mm or purge_mm3, or in the config purge_mm, purge_mm3, "
+        "colours, pairs or a washout tolerance"
+    )
+    assert not out.exists()

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use gweave::gcode::writer::Target;
 use gweave::malformed::Malformed;
-use gweave::options::{JobOptions, OptionError, Spelling};
+use gweave::options::{JobOptions, OptionError, Said, Spelling};
 use gweave::pass::{Progress, Strictness};
 use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
@@ -84,7 +84,17 @@ impl TransformError {
     pub fn spelled(&self, spelling: Spelling) -> String {
         match self {
             TransformError::Option(e) => e.spelled(spelling),
-            e => e.to_string(),
+            TransformError::PurgeShift(e) => e.said().map_or_else(|| e.to_string(), |s| s.spelled(spelling)),
+            TransformError::Mix(MixPassError::Needs(said)) => said.spelled(spelling),
+            // A refusal in the middle of the file: the driver's place, then the sentence.
+            e => match e.engine().and_then(|inner| Some((inner, pass_needs(inner)?))) {
+                Some((inner, said)) => {
+                    let whole = inner.to_string();
+                    let place = whole.strip_suffix(&said.to_string()).unwrap_or("");
+                    format!("{place}{}", said.spelled(spelling))
+                }
+                None => e.to_string(),
+            },
         }
     }
 
@@ -97,6 +107,17 @@ impl TransformError {
             }
             _ => None,
         }
+    }
+}
+
+/// The sentence naming options of a mix refusal in the middle of the file, if it is one.
+fn pass_needs(e: &gweave::Error) -> Option<&Said> {
+    match e {
+        gweave::Error::Pass { source, .. } => match source.downcast_ref::<MixPassError>() {
+            Some(MixPassError::Needs(said)) => Some(said),
+            _ => None,
+        },
+        _ => None,
     }
 }
 

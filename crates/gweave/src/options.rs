@@ -203,6 +203,49 @@ impl Spelling {
     }
 }
 
+/// A sentence that names options (`nothing to do: give a schedule (at_layer, at_z)...`) with
+/// each option's identity kept, so that each front end writes it as it spells it
+/// ([`Said::spelled`]): the CLI `--at-layer`, Python `at_layer`. `Display` uses the keyword.
+///
+/// ```
+/// use gweave::options::{Said, Spelling};
+/// let said = Said::new("add a tool map for T1 (").option("map").text(" T1=<mix>)");
+/// assert_eq!(said.spelled(Spelling::Flag), "add a tool map for T1 (--map T1=<mix>)");
+/// assert_eq!(said.spelled(Spelling::Keyword), "add a tool map for T1 (map T1=<mix>)");
+/// ```
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Said(Vec<(String, Option<&'static str>)>);
+
+impl Said {
+    /// A sentence beginning with `text`.
+    pub fn new(text: impl Into<String>) -> Self {
+        Said(vec![(text.into(), None)])
+    }
+    /// Then `text`.
+    pub fn text(mut self, text: impl Into<String>) -> Self {
+        self.0.push((text.into(), None));
+        self
+    }
+    /// Then the option `name` (`at_layer`), as the reader's front end spells it.
+    pub fn option(mut self, name: &'static str) -> Self {
+        self.0.push((String::new(), Some(name)));
+        self
+    }
+    /// The sentence, its options spelled as `spelling` spells them.
+    pub fn spelled(&self, spelling: Spelling) -> String {
+        self.0
+            .iter()
+            .map(|(text, option)| option.map_or_else(|| text.clone(), |o| spelling.name(o)))
+            .collect()
+    }
+}
+
+impl fmt::Display for Said {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.spelled(Spelling::Keyword))
+    }
+}
+
 /// What is wrong with an option's value.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Problem {

@@ -36,6 +36,7 @@ use crate::colour::purge::{filament_mm_to_mm3, flush_volume_mm3, mm3_to_filament
 use crate::colour::Srgb8;
 use crate::gcode::layers::{Feature, Markers, ALL_FEATURES};
 use crate::gcode::limits::MAX_TOOLS;
+use crate::options::Said;
 use crate::post::purge_block::PurgeMotion;
 use crate::range::{self, OutOfRange, Range, FILAMENT_DIAMETER_MM, PURGE_MM, PURGE_MM3};
 use crate::settings::{CheckRanges, Table};
@@ -46,11 +47,8 @@ pub enum ConfigError {
     /// A number outside its range.
     #[error(transparent)]
     Range(#[from] OutOfRange),
-    /// No purge amount anywhere.
-    #[error(
-        "no purge amount: give `--purge-mm MM` or `--purge-mm3 MM3` (Python: `purge_mm=`, `purge_mm3=`), or in the config \
-         purge_mm, purge_mm3, colours, pairs or a washout tolerance"
-    )]
+    /// No purge amount anywhere ([`ConfigError::said`] names the options that give one).
+    #[error("{}", no_purge())]
     NoPurge,
     /// Both `purge_mm` and `purge_mm3`.
     #[error("give either purge_mm or purge_mm3, not both")]
@@ -418,6 +416,23 @@ impl PurgeShiftConfig {
         };
         rules.max_purge_mm = rules.all_amounts_mm().fold(0.0, f64::max);
         Ok(rules)
+    }
+}
+
+/// What [`ConfigError::NoPurge`] says, naming the options as each front end spells them.
+fn no_purge() -> Said {
+    Said::new("no purge amount: give ")
+        .option("purge_mm")
+        .text(" or ")
+        .option("purge_mm3")
+        .text(", or in the config purge_mm, purge_mm3, colours, pairs or a washout tolerance")
+}
+
+impl ConfigError {
+    /// The refusal as a sentence that names options by identity, for a front end to spell
+    /// ([`Said::spelled`]); `None` when it names none.
+    pub fn said(&self) -> Option<Said> {
+        matches!(self, ConfigError::NoPurge).then(no_purge)
     }
 }
 
