@@ -108,7 +108,10 @@ fn a_refusal_names_the_options_by_their_flags() {
     };
     assert_eq!(
         said(&["mix", "--map", "T0=Red"]),
-        format!("gweave: error: {}:4: the file selects T1, which has no mix: add --map T1=<mix>\n", input.display())
+        format!(
+            "gweave: error: {}:4: the file selects T1, which has no mix: add --map T1=<mix>\n",
+            input.display()
+        )
     );
     assert_eq!(
         said(&["mix"]),
