@@ -1,6 +1,6 @@
 //! A job's options, each declared once: its name, type, range, default and help.
 //!
-//! A job (`purge-shift`, `mix`) takes one options type declared with [`job_options!`]. Both
+//! A job (`purge-shift`, `mix`) takes one options type declared with [`job_options!`](crate::job_options). Both
 //! front ends are derived from that declaration: the CLI builds its flags from
 //! [`JobOptions::SPEC`] (`purge_mm` is `--purge-mm`, with the help, value name, range and
 //! aliases stated here), Python reads its keywords by the same names and a test holds the typed
@@ -70,7 +70,7 @@ pub enum Value {
 }
 
 /// How a front end shows an option besides its name and help: what it declares in
-/// [`job_options!`] after `=`.
+/// [`job_options!`](crate::job_options) after `=`.
 #[derive(Debug, Clone, Copy)]
 pub struct Shape {
     /// The value's placeholder in the CLI's help (`MM`, `X,Y`).
@@ -112,7 +112,7 @@ impl Shape {
     }
 }
 
-/// One option of a job, declared once in [`job_options!`].
+/// One option of a job, declared once in [`job_options!`](crate::job_options).
 #[derive(Debug, Clone, Copy)]
 pub struct OptionSpec {
     /// The Python keyword and the field (`purge_mm`); the CLI flag is [`OptionSpec::flag`].
@@ -295,7 +295,7 @@ impl OptionError {
     }
 
     /// The message without the option's name, for a front end that names it itself (clap's
-    /// "invalid value '1e9' for '--purge-mm <MM>': out of range: 0 to 1000 mm").
+    /// "invalid value '1e9' for '--purge-mm \<MM>': out of range: 0 to 1000 mm").
     pub fn reason(&self) -> String {
         match &self.problem {
             Problem::OutOfRange { range, .. } => format!("out of range: {range}"),
@@ -316,7 +316,7 @@ impl fmt::Display for OptionError {
 
 impl std::error::Error for OptionError {}
 
-/// A job's options type, implemented by [`job_options!`].
+/// A job's options type, implemented by [`job_options!`](crate::job_options).
 pub trait JobOptions: Default + Sized {
     /// The command it belongs to, as the CLI names it (`purge-shift`).
     const COMMAND: &'static str;
@@ -431,7 +431,7 @@ fn pair<T>(v: Vec<T>) -> Result<[T; 2], Problem> {
 }
 
 /// An enumeration read by its settings-file word (`perceived`, `reprapfirmware`): with
-/// [`word_option!`] it is an option of [`Kind::Text`], bare (its default is a value) or in an
+/// [`word_option!`](crate::word_option) it is an option of [`Kind::Text`], bare (its default is a value) or in an
 /// `Option` (unset by default).
 pub trait Word: Serialize + DeserializeOwned + Default + PartialEq {
     /// Reads the word as the settings file does.
