@@ -122,9 +122,20 @@ fn pass_needs(e: &gweave::Error) -> Option<&Said> {
 }
 
 /// The run's header, in the CLI's words: `purge-shift --purge-mm 2.5 --lenient`.
+///
+/// ```
+/// use gweave::pass::Strictness;
+/// use gweave::post::mix::MixOptions;
+/// use gweave_sim::transform::command_line;
+/// let options = MixOptions { at_layer: vec!["0=Dark  Red".into()], ..MixOptions::default() };
+/// assert_eq!(command_line(&options, Strictness::Lenient), r#"mix --at-layer "0=Dark  Red" --lenient"#);
+/// assert_eq!(command_line(&MixOptions::default(), Strictness::Lenient), "mix --lenient");
+/// assert_eq!(command_line(&MixOptions::default(), Strictness::Strict), "mix");
+/// ```
 pub fn command_line<O: JobOptions>(options: &O, strictness: Strictness) -> String {
-    let lenient = if strictness == Strictness::Lenient { " --lenient" } else { "" };
-    format!("{} {}{lenient}", O::COMMAND, options.header()).replace("  ", " ").trim_end().to_owned()
+    let lenient = (strictness == Strictness::Lenient).then_some("--lenient".to_owned());
+    let words = [Some(O::COMMAND.to_owned()), Some(options.header()), lenient];
+    words.into_iter().flatten().filter(|w| !w.is_empty()).collect::<Vec<_>>().join(" ")
 }
 
 /// A settings file named by an option, read with `parse`; the default without one.
