@@ -4,8 +4,6 @@
 //! [`job_options`].
 
 use gweave::options::{JobOptions, Kind, Spelling, Value};
-use gweave::post::mix::MixOptions;
-use gweave::post::purge_shift::PurgeShiftOptions;
 use gweave_sim::transform::TransformError;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -51,18 +49,17 @@ pub fn failed(e: TransformError) -> PyErr {
     }
 }
 
-/// The options of the job `command` (`purge-shift`, `mix`) as declared: a list of dicts
+/// The options of the job `command` (`purge-shift`, `mix`: `gweave_sim::transform::JOBS`) as declared: a list of dicts
 /// `{"name", "flag", "kind", "default", "range", "help"}`, for the tests that hold the typed
 /// wrappers to the declaration (and for documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
-    let specs = match command {
-        PurgeShiftOptions::COMMAND => PurgeShiftOptions::SPEC,
-        MixOptions::COMMAND => MixOptions::SPEC,
-        other => return Err(PyValueError::new_err(format!("no job {other:?} (purge-shift, mix)"))),
+    let Some((_, specs)) = gweave_sim::transform::JOBS.iter().find(|(name, _)| *name == command) else {
+        let known: Vec<&str> = gweave_sim::transform::JOBS.iter().map(|(name, _)| *name).collect();
+        return Err(PyValueError::new_err(format!("no job {command:?} ({})", known.join(", "))));
     };
     let list = PyList::empty(py);
-    for spec in specs {
+    for spec in *specs {
         let d = PyDict::new(py);
         d.set_item("name", spec.name)?;
         d.set_item("flag", format!("--{}", spec.flag()))?;

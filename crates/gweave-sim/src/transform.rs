@@ -44,6 +44,11 @@ impl<'a> Job<'a> {
     }
 }
 
+/// Every transform job's command and options, for a front end that lists them (Python's
+/// `_gweave.job_options`, which its tests hold the typed wrappers to).
+pub const JOBS: &[(&str, &[gweave::options::OptionSpec])] =
+    &[(PurgeShiftOptions::COMMAND, PurgeShiftOptions::SPEC), (MixOptions::COMMAND, MixOptions::SPEC)];
+
 /// What a transform job returns: its report and the malformed lines a lenient run read past.
 pub type Outcome<R> = Result<(R, Malformed), TransformError>;
 
