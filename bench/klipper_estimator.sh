@@ -79,10 +79,14 @@ row "klipper_estimator estimate" "$t_ke" "$u_ke" "$s_ke_sys" "$m_ke" "estimate $
 row "gweave sim (+ steps, heaters)" "$t_gw" "$u_gw" "$s_gw_sys" "$m_gw" \
   "estimate $s_gw s ($s_gw_all s with heating and homing)"
 row "gweave estimate (3 threads)" "$t_ge" "$u_ge" "$s_ge_sys" "$m_ge" "estimate $s_ge s"
-echo "klipper_estimator / gweave sim: $(ratio "$t_ke" "$t_gw")x wall time, $(ratio "$u_ke" "$u_gw")x user time," \
+# CPU time is user + system of all threads: klipper_estimator's system time (2.4-4.3 s, the
+# 3.6 GB it allocates) is part of its cost, and varies more than its user time.
+cpu() { python3 -c "import sys; print(float(sys.argv[1]) + float(sys.argv[2]))" "$1" "$2"; }
+c_ke=$(cpu "$u_ke" "$s_ke_sys")
+echo "klipper_estimator / gweave sim: $(ratio "$t_ke" "$t_gw")x wall time (goal >= 3x), $(ratio "$c_ke" "$(cpu "$u_gw" "$s_gw_sys")")x CPU time," \
   "$(ratio "$m_ke" "$m_gw")x peak memory; estimates differ by $d_s s ($d_ppm per million)"
-echo "klipper_estimator / gweave estimate: $(ratio "$t_ke" "$t_ge")x wall time (target 10x)," \
-  "$(ratio "$u_ke" "$u_ge")x user time (all threads), $(ratio "$m_ke" "$m_ge")x peak memory; estimates differ by $d_ge s"
-goal "estimate, $(python3 -c "print(f'{$(stat -c %s "$BIG")/1e6:.0f}')") MB: klipper_estimator's wall time" "$(ratio "$t_ke" "$t_ge")" ">=" 15 "x faster"
-goal "estimate: klipper_estimator's CPU time" "$(ratio "$(python3 -c "print($u_ke + $s_ke_sys)")" "$(python3 -c "print($u_ge + $s_ge_sys)")")" ">=" 10 "x less"
+echo "klipper_estimator / gweave estimate: $(ratio "$t_ke" "$t_ge")x wall time (goal >= 15x)," \
+  "$(ratio "$c_ke" "$(cpu "$u_ge" "$s_ge_sys")")x CPU time, all threads (goal >= 10x), $(ratio "$m_ke" "$m_ge")x peak memory; estimates differ by $d_ge s"
+goal "estimate, $(python3 -c "print(f'{$(stat -L -c %s "$BIG")/1e6:.0f}')") MB: klipper_estimator's wall time" "$(ratio "$t_ke" "$t_ge")" ">=" 15 "x faster"
+goal "estimate: klipper_estimator's CPU time" "$(ratio "$c_ke" "$(cpu "$u_ge" "$s_ge_sys")")" ">=" 10 "x less"
 goal "sim with steps and heaters: klipper_estimator" "$(ratio "$t_ke" "$t_gw")" ">=" 3 "x faster"

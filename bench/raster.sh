@@ -5,7 +5,10 @@
 # across, sliced by `gweave slice-raster` at 0.05 mm pixels and 0.2 mm layers, i.e. 500 layers of
 # 2000 x 2000 px (1-bit PNG). References measured in the same run: `cat` of the PNG files (the
 # I/O floor) and Python's zlib decompressing every PNG's image data (the decode floor of any
-# PNG reader).
+# PNG reader). Issue 35's goal is the generator to /dev/null in at most 3x zlib's CPU time: both
+# are measured as CPU (user + system) because the machine is shared, and the generator's CPU
+# counts both of its threads (the PNGs are decoded on a second one while the G-code is written),
+# so it is the work done, not the wall time the second core saves; the walls are printed too.
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
 DATA="$ROOT/bench/data/raster"
@@ -79,7 +82,8 @@ print(f"  {'cat of the PNGs (I/O floor)':36} {t['cat'][0]:7.2f}s {cpu('cat'):7.2
 print(f"  {'python zlib of the PNGs':36} {t['zlib'][0]:7.2f}s {cpu('zlib'):7.2f}s")
 ok = "PASS" if t["pipe"][0] < 10 else "FAIL (busy machine? see cpu)"
 print(f"  {'gweave raster -> /dev/null':36} {t['pipe'][0]:7.2f}s {cpu('pipe'):7.2f}s   "
-      f"{cpu('pipe') / cpu('zlib'):.2f} x zlib cpu; target < 10 s: {ok}")
+      f"{cpu('pipe') / cpu('zlib'):.2f} x zlib cpu ({t['pipe'][0] / t['zlib'][0]:.2f} x its wall); "
+      f"target < 10 s: {ok}")
 print(f"  {'gweave raster -> file':36} {t['file'][0]:7.2f}s {cpu('file'):7.2f}s   "
       f"{size / 1e9:.2f} GB G-code, {size / 1e6 / t['file'][0]:.0f} MB/s")
 print(f"  {r['columns_fired']} columns fired, {r['bands_printed']} bands, {sum(r['drops_per_head'])} drops")

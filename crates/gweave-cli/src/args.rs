@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
-use gweave_sim::builtin::MachineSource;
 use gweave_sim::MachineProfile;
 
 use crate::progress::Bar;
@@ -61,20 +60,11 @@ impl MachineArg {
     /// The profile, or the built-in printer without `--machine`. Files the profile names (a
     /// thermistor table) are read from its folder.
     pub fn load(&self) -> Result<MachineProfile> {
-        self.path.as_deref().map_or_else(|| Ok(MachineProfile::default()), load_machine)
+        Ok(gweave_sim::builtin::load_machine(self.path.as_deref())?)
     }
 }
 
 /// A `--machine` value: a profile file, or a built-in profile's name where no such file exists.
 pub fn load_machine(value: &Path) -> Result<MachineProfile> {
-    match MachineSource::of(value) {
-        MachineSource::Builtin(b) => Ok(b.profile()?),
-        MachineSource::File(path) => {
-            let folder = path.parent().unwrap_or(Path::new(""));
-            let text = gweave::settings::read_text(path)
-                .map_err(|e| anyhow::anyhow!(gweave_sim::builtin::not_found(path, &e)))?;
-            MachineProfile::from_toml_in(&text, folder)
-                .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), gweave::error::with_causes(&e)))
-        }
-    }
+    Ok(gweave_sim::builtin::load_machine(Some(value))?)
 }

@@ -196,17 +196,6 @@ where
         .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), gweave::error::with_causes(&e)))
 }
 
-/// [`load`] for an optional file: its default without one.
-pub fn load_or_default<T: Default, E>(
-    path: Option<&PathBuf>,
-    parse: impl FnOnce(&str) -> std::result::Result<T, E>,
-) -> Result<T>
-where
-    E: std::error::Error + Send + Sync + 'static,
-{
-    path.map_or_else(|| Ok(T::default()), |path| load(path, parse))
-}
-
 /// The lines a lenient read went past, as every summary reports them (nothing when none).
 pub fn print_malformed(out: &mut dyn Write, m: &gweave::malformed::Malformed) -> io::Result<()> {
     if let Some(first) = m.first_malformed_line {

@@ -10,6 +10,7 @@ mod files;
 mod finish;
 mod firmware_arg;
 mod format;
+mod options;
 mod progress;
 mod signals;
 

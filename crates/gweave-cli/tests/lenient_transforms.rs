@@ -91,3 +91,36 @@ fn a_strict_report_has_no_malformed_count() {
         assert!(j.get("malformed_lines").is_none(), "{name}: {j}");
     }
 }
+
+/// Regression (issue 40): the engine's refusals named the CLI's flags to Python users too; they
+/// carry the options' identity now, and the CLI names the flags (Python the keywords:
+/// `crates/gweave-py/tests/test_options.py`).
+#[test]
+fn a_refusal_names_the_options_by_their_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("t1.gcode");
+    std::fs::write(&input, "M83\n;LAYER_CHANGE\nG1 X1 E1\nT1\nG1 X2 E1\n").unwrap();
+    let output = dir.path().join("out.gcode");
+    let said = |options: &[&str]| {
+        let out = run(options[0], options, &input, &output, &["-q"]);
+        assert!(!out.status.success() && !output.exists());
+        text(&out.stderr)
+    };
+    assert_eq!(
+        said(&["mix", "--map", "T0=Red"]),
+        format!(
+            "gweave: error: {}:4: the file selects T1, which has no mix: add --map T1=<mix>\n",
+            input.display()
+        )
+    );
+    assert_eq!(
+        said(&["mix"]),
+        "gweave: error: mix profile: nothing to do: give a schedule (--at-layer, --at-z, [[schedule]]), \
+         a gradient (--gradient, [[gradient]]) or a tool map (--map, [map])\n"
+    );
+    assert_eq!(
+        said(&["purge-shift"]),
+        "gweave: error: no purge amount: give --purge-mm or --purge-mm3, or in the config purge_mm, \
+         purge_mm3, colours, pairs or a washout tolerance\n"
+    );
+}

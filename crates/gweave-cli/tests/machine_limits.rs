@@ -102,3 +102,26 @@ fn profile_from_an_m503_report() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Regression (issue 40): `--machine` was loaded by the CLI and by Python each its own way; one
+/// loader now says the same for both: a missing value names the built-in profiles, a refused
+/// profile names its file.
+#[test]
+fn machine_is_loaded_once_for_every_front_end() {
+    let file = fixture("prusaslicer/pr_torus_pva.gcode");
+    let file = file.to_str().unwrap();
+    let out = gweave(&["estimate", file, "--machine", "no-such-printer", "-q"]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        said.starts_with("gweave: error: reading no-such-printer: No such file or directory (os error 2) (neither a file nor a built-in profile; built in: "),
+        "{said}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "[bed]\nx_mm = -1\n").unwrap();
+    let out = gweave(&["sim", file, "--machine", bad.to_str().unwrap(), "-q"]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(said.starts_with(&format!("gweave: error: {}: ", bad.display())), "{said}");
+    assert!(said.contains("x_mm = -1 is out of range"), "{said}");
+}

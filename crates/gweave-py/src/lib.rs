@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 mod args;
 mod finish;
 mod interrupt;
+mod options;
 mod preview;
 mod raster;
 mod read;
@@ -44,6 +45,7 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read::stats_json, m)?)?;
     m.add_function(wrap_pyfunction!(read::check_json, m)?)?;
     m.add_function(wrap_pyfunction!(read::cat_json, m)?)?;
+    m.add_function(wrap_pyfunction!(options::job_options, m)?)?;
     // binder-jet raster
     m.add_function(wrap_pyfunction!(raster::raster_json, m)?)?;
     m.add_function(wrap_pyfunction!(raster::raster_test_pattern_json, m)?)?;

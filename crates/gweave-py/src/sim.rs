@@ -11,21 +11,15 @@ use crate::to_json;
 
 // --- gweave-sim: the virtual printer ---
 
-/// `machine=`: a profile file or a built-in profile's name (`gweave machine list`).
+/// `machine=`: a profile file or a built-in profile's name (`gweave machine list`), loaded as
+/// `--machine` is (`gweave_sim::builtin::load_machine`); an unreadable file is the `OSError` for
+/// its errno.
 pub(crate) fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::MachineProfile> {
-    use gweave_sim::builtin::MachineSource;
-    let Some(path) = machine else {
-        return Ok(gweave_sim::MachineProfile::default());
-    };
-    match MachineSource::of(&path) {
-        MachineSource::Builtin(b) => b.profile().map_err(|e| PyValueError::new_err(e.to_string())),
-        MachineSource::File(_) => {
-            let text = gweave::settings::read_text(&path).map_err(|e| os_error(&path, &e))?;
-            let folder = path.parent().unwrap_or(std::path::Path::new(""));
-            gweave_sim::MachineProfile::from_toml_in(&text, folder)
-                .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
-        }
-    }
+    use gweave_sim::builtin::{load_machine, LoadError};
+    load_machine(machine.as_deref()).map_err(|e| match &e {
+        LoadError::Read { path, source } => os_error(path, source),
+        LoadError::Profile { .. } => PyValueError::new_err(e.to_string()),
+    })
 }
 
 fn sim_err(e: impl std::fmt::Display) -> PyErr {

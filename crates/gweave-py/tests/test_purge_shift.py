@@ -43,7 +43,7 @@ def test_fallbacks_purge_the_shortfall(data, tmp_path):
     assert b["fallback_mm"] == r["fallback_mm"] and b["moved_mm"] == r["moved_mm"]
     # A corner is two numbers, as for `--tower-at X,Y`.
     for corner in [(150,), (150, 20, 0)]:
-        with pytest.raises(ValueError, match="tower_at: two numbers, x and y in mm"):
+        with pytest.raises(ValueError, match=r"^tower_at: takes 2 values \(X,Y\), not [13]$"):
             gweave.purge_shift(src, tmp_path / "x.gcode", purge_mm=2.5, fallback="tower", tower_at=corner)
 
 

@@ -40,6 +40,8 @@ def stub_params(node: ast.FunctionDef) -> List[Tuple[str, str, bool]]:
         out.append((p.arg, kind, i >= first_default))
     for p, d in zip(a.kwonlyargs, a.kw_defaults):
         out.append((p.arg, "KEYWORD_ONLY", d is not None))
+    if a.kwarg is not None:
+        out.append((a.kwarg.arg, "VAR_KEYWORD", False))
     return out
 
 

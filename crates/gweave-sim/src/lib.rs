@@ -41,6 +41,7 @@ mod profile;
 #[cfg(any(test, feature = "test-support"))]
 pub mod test_support;
 mod thermal;
+pub mod transform;
 
 pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetLayer, InkjetWarning};
 pub use interp::{

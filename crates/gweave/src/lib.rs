@@ -34,6 +34,7 @@ pub mod gcode;
 pub mod gen;
 pub mod interrupt;
 pub mod malformed;
+pub mod options;
 pub mod pass;
 pub mod picture;
 // purge-shift and other post-processing passes

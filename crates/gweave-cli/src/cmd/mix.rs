@@ -5,27 +5,21 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use gweave::colour::named_mixes::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
-use gweave::firmware::MixCommands;
 use gweave::gcode::writer::Target;
 use gweave::malformed::Transformed;
-use gweave::post::mix::overrides::Overrides;
-use gweave::post::mix::profile::{GradientSpace, MixProfile};
+use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
-use gweave::post::mix::{mix, wizard::run_wizard};
-use gweave::run::Run;
-
-use gweave::range::PURGE_MM;
+use gweave::post::mix::{wizard::run_wizard, MixOptions};
+use gweave_sim::transform::{self, Job};
 
 use crate::args::Lenient;
-use crate::common::{
-    in_range, load_or_default, print_malformed, print_summary, write_bytes, OutputArgs, ReportArgs,
-};
+use crate::common::{print_malformed, print_summary, write_bytes, OutputArgs, ReportArgs};
 use crate::files::Files;
-use crate::finish;
+use crate::options::{failed, Options};
 
 /// Colour a print on a mixing hotend: define mixes as virtual tools, change them by layer, by
 /// height, along a gradient or per slicer tool, purge at each change, cap the Z feed rate.
@@ -41,40 +35,10 @@ use crate::finish;
 pub struct MixArgs {
     /// The G-code file (may come last, as PrusaSlicer passes it).
     pub input: Option<PathBuf>,
-    /// The hardware profile and job (TOML); with --wizard, where to write it.
-    #[arg(short = 'c', long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
     #[command(flatten)]
     pub out: OutputArgs,
-    /// From this layer (0-based) on, print this mix: `10=Pink`, `0=#ff8800`, `5=Orange@0.3`.
-    #[arg(long = "at-layer", value_name = "LAYER=MIX")]
-    pub at_layer: Vec<String>,
-    /// From this height (mm) on, print this mix: `2.5=Blue`.
-    #[arg(long = "at-z", value_name = "Z=MIX")]
-    pub at_z: Vec<String>,
-    /// Slicer tool to mix: `T0=Orange`, `T1=support` (100 % of the material-2 input, E3), or a
-    /// material an input holds (`T1=PVA` with a profile that loads PVA, e.g.
-    /// examples/mix/pva_support.toml).
-    #[arg(long, value_name = "TN=MIX")]
-    pub map: Vec<String>,
-    /// A gradient: `0-50=Cyan..Magenta`, `0-50/2=...` (every 2 layers), `z1-8=...` (heights).
-    #[arg(long, value_name = "RANGE=MIX..MIX")]
-    pub gradient: Vec<String>,
-    /// How --gradient blends.
-    #[arg(long, value_enum, default_value = "mix")]
-    pub gradient_space: Space,
-    /// Firmware dialect: marlin (M163/M164), marlin-direct (M165) or reprapfirmware (M563/M567;
-    /// `reprap` still accepted); overrides the profile. Default: the profile's, else the file's
-    /// flavour (reprapfirmware for `gcode_flavor = reprapfirmware`), else marlin.
-    #[arg(long, value_name = "DIALECT", value_parser = |s: &str| s.parse::<MixCommands>().map_err(|e| e.to_string()))]
-    pub dialect: Option<MixCommands>,
-    /// Purge length at each change, mm of filament (0: no purge) [default: the profile's].
-    #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
-    pub purge_mm: Option<f64>,
-    /// Purge this much (mm of filament) in the first mix before the file's first extrusion,
-    /// to clear what the chamber held [default: the profile's `[purge] initial_mm`].
-    #[arg(long, value_name = "MM", value_parser = in_range(PURGE_MM))]
-    pub initial_purge: Option<f64>,
+    #[command(flatten)]
+    pub options: Options<MixOptions>,
     /// Draw the job's mixes (or the whole palette without a job) as a PNG swatch chart.
     #[arg(long, value_name = "PNG")]
     pub palette_png: Option<PathBuf>,
@@ -105,12 +69,6 @@ pub struct MixArgs {
     pub report: ReportArgs,
 }
 
-#[derive(ValueEnum, Clone, Copy, Debug)]
-pub enum Space {
-    Mix,
-    Perceived,
-}
-
 pub fn run(args: MixArgs) -> Result<ExitCode> {
     if args.wizard {
         return wizard(&args);
@@ -120,7 +78,8 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         None => None,
     };
     args.report.refuse_json_with_stdout(target.as_ref().is_some_and(Target::is_stdout))?;
-    let mut files = Files::new().read("INPUT", args.input.as_deref()).read("-c", args.config.as_deref());
+    let mut files =
+        Files::new().read("INPUT", args.input.as_deref()).read("-c", args.options.config.as_deref());
     if let (Some(input), Some(target)) = (&args.input, &target) {
         files = files.target(target, input);
     }
@@ -133,7 +92,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         .write("--card-png", args.card_png.as_deref())
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let profile = profile(&args)?;
+    let profile = transform::mix_profile(&args.options).map_err(failed)?;
     if !args.predict.is_empty() {
         return super::mix_colour::predict_all(&profile, &args.predict, &args.report);
     }
@@ -143,7 +102,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
         };
         return match &args.fit {
             Some(csv) => {
-                let text = match &args.config {
+                let text = match &args.options.config {
                     Some(path) => crate::common::read_text(path)?,
                     None => String::new(),
                 };
@@ -171,13 +130,10 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
 
 /// Mixes `input` into `target` and reports: the job of a plain run and of the wizard's.
 fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) -> Result<ExitCode> {
-    finish::refuse_second_run(input, "mix")?;
     let mut bar = args.report.quiet.bar();
     let strictness = args.lenient.strictness();
-    let ((report, malformed), _) = finish::with_metadata(Some(input), &target, |t| {
-        let (report, ran) = mix(profile, Run::file(input).to(t).progress(&mut bar).strictness(strictness))?;
-        Ok((report, ran.malformed))
-    })?;
+    let job = Job { strictness, progress: Some(&mut bar), ..Job::new(input, &target) };
+    let (report, malformed) = transform::mix_with(profile, &args.options, job).map_err(failed)?;
     drop(bar);
     for w in &report.warnings {
         eprintln!("gweave: warning: {w}");
@@ -195,25 +151,6 @@ fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) ->
         }
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// The profile file with the flags added on top.
-fn profile(args: &MixArgs) -> Result<MixProfile> {
-    let mut profile = load_or_default(args.config.as_ref(), MixProfile::from_toml_str)?;
-    profile.apply(&Overrides {
-        at_layer: args.at_layer.clone(),
-        at_z: args.at_z.clone(),
-        map: args.map.clone(),
-        gradient: args.gradient.clone(),
-        gradient_space: match args.gradient_space {
-            Space::Mix => GradientSpace::Mix,
-            Space::Perceived => GradientSpace::Perceived,
-        },
-        dialect: args.dialect,
-        purge_mm: args.purge_mm,
-        initial_purge_mm: args.initial_purge,
-    })?;
-    Ok(profile)
 }
 
 fn write_swatch(profile: &MixProfile, has_job: bool, png: &Path) -> Result<()> {
@@ -240,7 +177,8 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
         (Some(_), true) => Some(args.out.target()?),
         _ => None,
     };
-    let mut files = Files::new().read("INPUT", args.input.as_deref()).write("-c", args.config.as_deref());
+    let mut files =
+        Files::new().read("INPUT", args.input.as_deref()).write("-c", args.options.config.as_deref());
     if let (Some(input), Some(target)) = (&args.input, &target) {
         files = files.target(target, input);
     }
@@ -258,7 +196,7 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     };
     drop(prompts);
-    match &args.config {
+    match &args.options.config {
         Some(path) => {
             write_bytes(path, text.as_bytes())?;
             eprintln!("Wrote {}.", path.display());
@@ -272,7 +210,7 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
                 "gweave: the wizard only wrote the profile; {} was not processed: give -o OUT to process it too",
                 file.display()
             );
-        } else if let Some(path) = &args.config {
+        } else if let Some(path) = &args.options.config {
             eprintln!("Next: gweave mix part.gcode -c {} -o part.mix.gcode", path.display());
         }
         return Ok(ExitCode::SUCCESS);

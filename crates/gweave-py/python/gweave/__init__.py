@@ -360,6 +360,20 @@ def slice_raster(
     )
 
 
+def _job(function: Any, arguments: Dict[str, Any]) -> Report:
+    """Runs a transform job with a wrapper's own arguments (its ``locals()``): the file, where
+    it goes, and the job's options by the names the engine declares (``_gweave.job_options``),
+    which the engine reads and checks as the command line reads its flags. Paths may be
+    ``str``, ``bytes`` or ``os.PathLike``."""
+    options = dict(arguments)
+    path = _path(options.pop("path"), "path")
+    output = _opt_path(options.pop("output"), "output")
+    for name, value in options.items():
+        if isinstance(value, (bytes, os.PathLike)):
+            options[name] = _path(value, name)
+    return json.loads(function(path, output, **options))
+
+
 # purge-shift
 def purge_shift(
     path: PathLike,
@@ -368,64 +382,32 @@ def purge_shift(
     in_place: bool = False,
     backup: bool = True,
     force: bool = False,
+    lenient: bool = False,
+    config: Optional[PathLike] = None,
     purge_mm: Optional[float] = None,
     purge_mm3: Optional[float] = None,
-    config: Optional[PathLike] = None,
     filament_diameter: Optional[float] = None,
     cross_layers: bool = False,
     allow_features: Optional[Sequence[str]] = None,
     markers: Optional[Sequence[str]] = None,
     fallback: Optional[str] = None,
     tower_at: Optional[Sequence[float]] = None,
-    lenient: bool = False,
 ) -> Report:
     """Move every tool/mix change earlier by the purge so it prints inside the part (no wipe tower).
 
     ``purge_mm`` is mm of filament (or ``purge_mm3``, mm^3); ``config`` a TOML file with per-pair
-    amounts, colours, the washout model and rules (keyword arguments override it). With too
-    little room, ``fallback`` is ``"partial"`` (accept the shortfall), ``"block"`` (purge the rest
-    in a purge block, as ``mix`` does) or ``"tower"`` (on a small tower beside the part, its
-    corner ``tower_at`` = (x, y) mm if given). A malformed line raises ``ValueError`` naming file,
-    line and column unless ``lenient=True``, which copies it through and counts it
+    amounts, colours, the washout model and rules (keyword arguments override it);
+    ``filament_diameter`` (mm) converts mm^3; ``cross_layers=True`` lets a change move into the
+    previous layer; ``allow_features`` lists the features a change may move through;
+    ``markers`` = (begin, end) are explicit print-proper comments. With too little room,
+    ``fallback`` is ``"partial"`` (accept the shortfall), ``"block"`` (purge the rest in a purge
+    block, as ``mix`` does) or ``"tower"`` (on a small tower beside the part, its corner
+    ``tower_at`` = (x, y) mm if given). A malformed line raises ``ValueError`` naming file, line
+    and column unless ``lenient=True``, which copies it through and counts it
     (``malformed_lines``). Returns the report: per change the requested, moved and fallback purge,
     where the change now sits, and totals.
     """
-    text = None
-    if config is not None:
-        with open(_path(config, "config"), encoding="utf-8") as f:
-            text = f.read()
-    pair = None if markers is None else (str(markers[0]), str(markers[1]))
-    return json.loads(
-        _gweave.purge_shift_json(
-            _path(path, "path"),
-            _opt_path(output, "output"),
-            in_place=in_place,
-            backup=backup,
-            force=force,
-            purge_mm=purge_mm,
-            purge_mm3=purge_mm3,
-            config=text,
-            filament_diameter=filament_diameter,
-            cross_layers=cross_layers,
-            allow_features=None if allow_features is None else list(allow_features),
-            markers=pair,
-            fallback=fallback,
-            tower_at=_xy(tower_at, "tower_at"),
-            lenient=lenient,
-            options=_flags(
-                ("-c", config),
-                ("--purge-mm", purge_mm),
-                ("--purge-mm3", purge_mm3),
-                ("--filament-diameter", filament_diameter),
-                ("--cross-layers", cross_layers),
-                ("--allow-features", None if allow_features is None else tuple(allow_features)),
-                ("--markers", pair),
-                ("--fallback", fallback),
-                ("--tower-at", None if tower_at is None else tuple(tower_at)),
-                ("--lenient", lenient),
-            ),
-        )
-    )
+    return _job(_gweave.purge_shift_json, locals())
 
 # ---- preview (render) ----
 
@@ -531,6 +513,10 @@ def mix(
     path: PathLike,
     output: Optional[PathLike] = None,
     *,
+    in_place: bool = False,
+    backup: bool = True,
+    force: bool = False,
+    lenient: bool = False,
     config: Optional[PathLike] = None,
     at_layer: Sequence[str] = (),
     at_z: Sequence[str] = (),
@@ -540,10 +526,6 @@ def mix(
     dialect: Optional[str] = None,
     purge_mm: Optional[float] = None,
     initial_purge: Optional[float] = None,
-    in_place: bool = False,
-    backup: bool = True,
-    force: bool = False,
-    lenient: bool = False,
 ) -> Report:
     """Rewrite a file for a mixing hotend (see ``gweave mix``); returns the report.
 
@@ -555,41 +537,7 @@ def mix(
     extrusion; default: the profile's ``[purge] initial_mm``) work as the command line flags.
     ``lenient=True`` copies malformed lines through and counts them instead of raising.
     """
-    text = ""
-    if config is not None:
-        with open(_path(config, "config"), encoding="utf-8") as f:
-            text = f.read()
-    return json.loads(
-        _gweave.mix_json(
-            _path(path, "path"),
-            _opt_path(output, "output"),
-            config=text,
-            at_layer=list(at_layer),
-            at_z=list(at_z),
-            map=list(map),
-            gradient=list(gradient),
-            gradient_space=gradient_space,
-            dialect=dialect,
-            purge_mm=purge_mm,
-            initial_purge=initial_purge,
-            in_place=in_place,
-            backup=backup,
-            force=force,
-            lenient=lenient,
-            options=_flags(
-                ("-c", config),
-                ("--at-layer", list(at_layer)),
-                ("--at-z", list(at_z)),
-                ("--map", list(map)),
-                ("--gradient", list(gradient)),
-                ("--gradient-space", None if gradient_space == "mix" else gradient_space),
-                ("--dialect", dialect),
-                ("--purge-mm", purge_mm),
-                ("--initial-purge", initial_purge),
-                ("--lenient", lenient),
-            ),
-        )
-    )
+    return _job(_gweave.mix_json, locals())
 
 
 def predict_colour(ratios: Sequence[float], profile: Optional[PathLike] = None) -> Report:
@@ -636,16 +584,6 @@ def _axes(axes: Optional[Sequence[str]]) -> Optional[Tuple[str, str, str]]:
         raise ValueError("axes: three letters, axial, rotary, radial (e.g. 'X,A,Z')")
     axial, rotary, radial = letters
     return (axial, rotary, radial)
-
-
-def _xy(value: Optional[Sequence[float]], name: str) -> Optional[Tuple[float, float]]:
-    """A point ``(x, y)`` in mm, or ``None``."""
-    if value is None:
-        return None
-    xy = tuple(float(v) for v in value)
-    if len(xy) != 2:
-        raise ValueError(f"{name}: two numbers, x and y in mm")
-    return (xy[0], xy[1])
 
 
 _UNITS = {"deg": "degrees", "degrees": "degrees", "mm": "mm"}

@@ -63,6 +63,10 @@ def slice_raster_json(
     stl: str, out_dir: str, *, layer_height: float, dpi: float = 96.0, pixel_mm: Optional[float] = None, margin: int = 0
 ) -> str: ...
 
+# The transform jobs: their options are keyword arguments by the names the engine declares
+# (`job_options`); `gweave/__init__.py` types them, `tests/test_options.py` holds the two equal.
+def job_options(command: str) -> List[Dict[str, Any]]: ...
+
 # purge-shift
 def purge_shift_json(
     path: str,
@@ -71,17 +75,8 @@ def purge_shift_json(
     in_place: bool = False,
     backup: bool = True,
     force: bool = False,
-    purge_mm: Optional[float] = None,
-    purge_mm3: Optional[float] = None,
-    config: Optional[str] = None,
-    filament_diameter: Optional[float] = None,
-    cross_layers: bool = False,
-    allow_features: Optional[List[str]] = None,
-    markers: Optional[Tuple[str, str]] = None,
-    fallback: Optional[str] = None,
-    tower_at: Optional[Tuple[float, float]] = None,
     lenient: bool = False,
-    options: str = "",
+    **options: Any,
 ) -> str: ...
 
 # mix
@@ -90,20 +85,11 @@ def mix_json(
     path: str,
     output: Optional[str] = None,
     *,
-    config: str = "",
-    at_layer: List[str] = ...,
-    at_z: List[str] = ...,
-    map: List[str] = ...,
-    gradient: List[str] = ...,
-    gradient_space: str = "mix",
-    dialect: Optional[str] = None,
-    purge_mm: Optional[float] = None,
-    initial_purge: Optional[float] = None,
     in_place: bool = False,
     backup: bool = True,
     force: bool = False,
     lenient: bool = False,
-    options: str = "",
+    **options: Any,
 ) -> str: ...
 def preview_json(
     path: str,

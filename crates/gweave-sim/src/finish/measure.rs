@@ -1,42 +1,30 @@
 //! Measuring a written file for its metadata: its filament by the `stats` count, its settings,
 //! its estimated times (normal and silent mode) and the time at each progress line.
 //!
-//! The estimate is the costly part: Marlin's step-exact planner, about 1 900 instructions a line
-//! (docs/performance.md), twice for a file with silent-mode limits of its own. So the file is
-//! read once, by a thread of its own, and handed in chunks to one thread per estimator and to
-//! this one, which counts `stats`: the three work on as many cores as there are, at the pace of
-//! the slowest. Each estimator is fed every line in file order, as one [`Estimator`] fed line by
-//! line, so the figures are the same to the bit as a serial pass's; the channels are bounded, so
-//! the memory is a few chunks whatever the file's size, and one time per progress line.
+//! The estimate is the costly part: Marlin's step-exact planner, about 1 200 instructions a
+//! line and mode (docs/performance.md), twice for a file with silent-mode limits of its own. So
+//! the file is read once, on this thread, which parses it once for both modes
+//! ([`estimate_modes`]) and counts `stats` from the same parse; each mode's planner runs on a
+//! thread of its own, fed the jobs in file order, so the figures are the same to the bit as a
+//! serial pass's. The batches in flight are bounded, so the memory is a few batches whatever
+//! the file's size, and one time per progress line.
 
-use std::io::{self, Read};
+use std::io;
 use std::path::Path;
-use std::sync::mpsc::{self, Receiver, SyncSender};
-use std::sync::Arc;
 
 use gweave::firmware::Firmware;
 use gweave::gcode::container;
 use gweave::gcode::ends::read_ends;
 use gweave::gcode::flavour::flavour_in;
-use gweave::gcode::reader::{LineReader, Part};
-use gweave::gcode::state::StateOptions;
-use gweave::pass::{drive_reader, Ctx, Flow, Pass, Reading, Step, Strictness};
+use gweave::pass::{Ctx, Pass};
 use gweave::post::metadata::{is_progress_line, read_setting, Figures};
-use gweave::stats::{Stats, StatsPass};
+use gweave::stats::StatsPass;
 
 use super::Result;
-use crate::motion::estimate::{Estimate, EstimateError, Estimator};
+use crate::motion::estimate::{estimate_modes, EstimateError, ModeEstimate, Modes};
 use crate::motion::limits::MotionProfile;
-use crate::motion::slicer_limits::{slicer_limits, slicer_limits_silent};
+use crate::motion::slicer_limits::slicer_limits_both;
 use crate::profile::MachineProfile;
-
-/// A chunk of the file, shared by its readers, or the error reading it.
-type Shared = io::Result<Arc<[u8]>>;
-
-/// Bytes read at a time and handed to every reader of the file.
-const CHUNK: usize = 1 << 20;
-/// Chunks in flight to each reader: what bounds the memory (a few MiB).
-const CHUNKS_IN_FLIGHT: usize = 4;
 
 /// Measures the written file at `path`.
 ///
@@ -44,212 +32,92 @@ const CHUNKS_IN_FLIGHT: usize = 4;
 /// the default machine's, read from the file's ends, as the flavour.
 pub(super) fn measure(path: &Path) -> Result<Figures> {
     let ends = read_ends(path).map_err(|e| gweave::Error::io(path, e))?;
-    let flavour = flavour_in(&ends);
-    // Read as `stats` reads it (the metadata's filament comes from its pass).
-    let firmware = Firmware::resolve(None, flavour.as_deref());
-    let base = MachineProfile::default().motion;
-    let normal = slicer_limits(&ends, &base).map_or_else(|_| base.clone(), |l| l.profile);
-    let silent = slicer_limits_silent(&ends, &base).map_or_else(|_| normal.clone(), |l| l.profile);
-    // A second estimate only for a file that shows silent-mode figures (PrusaSlicer's footer is
-    // in its last 256 KiB, `M73 Q0 S..` in its first lines) with limits of their own.
-    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
-    let silent =
-        (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
-    let estimator = |p: &MotionProfile| -> Result<Estimator> {
-        let mut estimator = Estimator::timing_only(p)?;
-        estimator.read_as(firmware);
-        // The metadata needs the total and the first layer: memory stays flat with the layers.
-        estimator.first_layer_only();
-        Ok(estimator)
+    let FileModes { firmware, normal, silent } = modes_of(&ends);
+    let silent: Vec<_> = silent.into_iter().collect();
+    let input = container::open(path).map_err(|e| gweave::Error::io(path, e))?;
+    // The `stats` count and the settings from the estimate's own parse: every whole line, with
+    // the state `stats` would see (the same firmware's reading).
+    let mut tally = TallyPass { stats: StatsPass::new(None), figures: Figures::default(), failed: None };
+    let each_line = |ctx: &Ctx<'_>| {
+        tally.line(ctx);
+        is_progress_line(ctx.line.bytes)
     };
-    let (normal, silent) = (estimator(&normal)?, silent.as_ref().map(estimator).transpose()?);
-    let options = StateOptions { firmware, ..StateOptions::default() };
-    let (tally, normal, silent) = on_threads(path, options, normal, silent)?;
-    let silent = silent.as_ref().unwrap_or(&normal);
-    let first_layer = |t: &Timed| t.estimate.layer_s.first().copied().unwrap_or(0.0);
+    let Modes { first: normal, others: silent, state } =
+        estimate_modes(input, &normal, &silent, firmware, each_line).map_err(|e| match e {
+            // A read error names the file; a fault on a line is the estimate's.
+            EstimateError::Io(e) => gweave::Error::io(path, e).into(),
+            e => super::FinishError::from(e),
+        })?;
+    if let Some(e) = tally.failed {
+        return Err(gweave::Error::io(path, e).into());
+    }
+    let stats = tally.stats.into_stats(&state);
+    // Without a silent mode of its own, the normal mode's figures stand for it.
+    let silent = silent.first().unwrap_or(&normal);
+    let normal = &normal;
+    let first_layer = |t: &ModeEstimate| t.estimate.layer_s.first().copied().unwrap_or(0.0);
     let figures = Figures {
-        filament_mm: tally.stats.filament.iter().map(|f| f.extruded_mm).collect(),
-        diameter_mm: tally.stats.filament_diameter_mm,
+        filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
+        diameter_mm: stats.filament_diameter_mm,
         time_s: [normal.estimate.total_s, silent.estimate.total_s],
-        first_layer_s: [first_layer(&normal), first_layer(silent)],
+        first_layer_s: [first_layer(normal), first_layer(silent)],
         progress_s: normal.progress_s.iter().zip(&silent.progress_s).map(|(&n, &s)| [n, s]).collect(),
         ..tally.figures
     };
     Ok(figures)
 }
 
-/// The file read once and measured on threads: `stats` and the settings here, each estimator
-/// on a thread of its own.
-fn on_threads(
-    path: &Path,
-    options: StateOptions,
-    normal: Estimator,
-    silent: Option<Estimator>,
-) -> Result<(Tally, Timed, Option<Timed>)> {
-    let (to_tally, for_tally) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
-    let (to_normal, for_normal) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
-    let (to_silent, for_silent) = match silent {
-        Some(_) => {
-            let (to, from) = mpsc::sync_channel(CHUNKS_IN_FLIGHT);
-            (Some(to), Some(from))
-        }
-        None => (None, None),
-    };
-    std::thread::scope(|scope| {
-        let readers = [Some(to_tally), Some(to_normal), to_silent];
-        scope.spawn(move || spread(path, readers));
-        let normal = scope.spawn(move || timed(Chunks::new(for_normal), normal));
-        let silent =
-            silent.zip(for_silent).map(|(est, chunks)| scope.spawn(move || timed(Chunks::new(chunks), est)));
-        let tally = tally(Chunks::new(for_tally), path, options);
-        let join = |t: std::thread::ScopedJoinHandle<'_, _>| {
-            t.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
-        };
-        let normal = join(normal);
-        let silent = silent.map(join).transpose();
-        // The first line at fault, normal mode's first (a serial pass would stop there); a read
-        // error (no line) is the tally's to report, with the file's name.
-        let fault = |e: Option<&EstimateError>| e.and_then(EstimateError::line);
-        let (n, s) = (fault(normal.as_ref().err()), fault(silent.as_ref().err()));
-        match (normal, silent) {
-            (Err(e), _) if n.is_some() && (s.is_none() || n <= s) => Err(e.into()),
-            (_, Err(e)) if s.is_some() => Err(e.into()),
-            (normal, silent) => {
-                let tally = tally?;
-                Ok((tally, normal?, silent?))
-            }
-        }
-    })
+/// How a file is read and timed, from its ends (`ends`: its first and last 256 KiB).
+struct FileModes {
+    /// The firmware that reads it, as `stats` resolves it from the flavour (the metadata's
+    /// filament comes from that count).
+    firmware: Firmware,
+    /// The normal mode's limits: the slicer's, else the default machine's.
+    normal: MotionProfile,
+    /// The silent mode's, for a file that shows silent-mode figures (PrusaSlicer's footer,
+    /// `M73 Q0 S..` in its first lines) with limits of their own.
+    silent: Option<MotionProfile>,
 }
 
-/// The reading thread: the file in chunks to every reader, until the end or an error (passed
-/// to each). A reader that stopped (on an error of its own) is left out.
-fn spread<const N: usize>(path: &Path, mut readers: [Option<SyncSender<Shared>>; N]) {
-    let mut send = |chunk: Shared| {
-        for reader in &mut readers {
-            let sent = match (reader.as_ref(), &chunk) {
-                (None, _) => continue,
-                (Some(r), Ok(c)) => r.send(Ok(Arc::clone(c))),
-                (Some(r), Err(e)) => r.send(Err(io::Error::new(e.kind(), e.to_string()))),
-            };
-            if sent.is_err() {
-                *reader = None;
-            }
-        }
-        chunk.is_ok() && readers.iter().any(Option::is_some)
-    };
-    let mut input = match container::open(path) {
-        Ok(input) => input,
-        Err(e) => {
-            send(Err(e));
-            return;
-        }
-    };
-    loop {
-        // A short read makes a short chunk: the readers take the stream in any pieces.
-        let mut buf = vec![0; CHUNK];
-        match input.read(&mut buf) {
-            Ok(0) => return,
-            Ok(n) => {
-                buf.truncate(n);
-                if !send(Ok(buf.into())) {
-                    return;
-                }
-            }
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => {
-                send(Err(e));
-                return;
-            }
-        }
-    }
-}
-
-/// The chunks one reader receives, read as a stream.
-struct Chunks {
-    from: Receiver<Shared>,
-    chunk: Arc<[u8]>,
-    at: usize,
-}
-
-impl Chunks {
-    fn new(from: Receiver<Shared>) -> Self {
-        Chunks { from, chunk: Arc::from(&[][..]), at: 0 }
-    }
-}
-
-impl Read for Chunks {
-    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        while self.at == self.chunk.len() {
-            match self.from.recv() {
-                Ok(chunk) => (self.chunk, self.at) = (chunk?, 0),
-                // The reading thread is done: the end of the file.
-                Err(_) => return Ok(0),
-            }
-        }
-        let n = buf.len().min(self.chunk.len() - self.at);
-        buf[..n].copy_from_slice(&self.chunk[self.at..self.at + n]);
-        self.at += n;
-        Ok(n)
-    }
-}
-
-/// An estimator's figures: its estimate and the time at each progress line, s.
-struct Timed {
-    estimate: Estimate,
-    progress_s: Vec<f64>,
-}
-
-/// An estimator's thread: every line, as the passes split them, and the clock read after each
-/// progress line.
-fn timed(input: impl Read, mut estimator: Estimator) -> Result<Timed, EstimateError> {
-    let mut reader = LineReader::new(input);
-    let mut progress_s = Vec::new();
-    while let Some(line) = reader.next_line()? {
-        estimator.read_line(&line)?;
-        if line.part == Part::Whole && is_progress_line(line.bytes) {
-            progress_s.push(estimator.now_s());
-        }
-    }
-    Ok(Timed { estimate: estimator.finish(), progress_s })
-}
-
-/// What this thread counts: `stats` and the settings the metadata needs.
-struct Tally {
-    stats: Stats,
-    figures: Figures,
-}
-
-fn tally(input: impl Read, path: &Path, options: StateOptions) -> Result<Tally> {
-    let mut pass = TallyPass { stats: StatsPass::new(None), figures: Figures::default() };
-    let reading = Reading { options, strictness: Strictness::Lenient, ..Reading::new(path) };
-    let state = drive_reader(input, reading, &mut pass, &mut io::sink())?;
-    Ok(Tally { stats: pass.stats.into_stats(&state), figures: pass.figures })
+fn modes_of(ends: &[u8]) -> FileModes {
+    let firmware = Firmware::resolve(None, flavour_in(ends).as_deref());
+    let base = MachineProfile::default().motion;
+    let [normal, silent] = slicer_limits_both(ends, &base);
+    let normal = normal.map_or_else(|_| base.clone(), |l| l.profile);
+    let silent = silent.map_or_else(|_| normal.clone(), |l| l.profile);
+    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
+    let silent =
+        (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
+    FileModes { firmware, normal, silent }
 }
 
 /// The `stats` count and the settings ([`read_setting`]).
 struct TallyPass {
     stats: StatsPass,
     figures: Figures,
+    /// The count's first error (it writes nothing: none is expected).
+    failed: Option<io::Error>,
 }
 
-impl Pass for TallyPass {
-    fn reads_words(&self) -> bool {
-        false
-    }
-
-    fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn io::Write) -> Step {
-        self.stats.line(ctx, out)?;
+impl TallyPass {
+    fn line(&mut self, ctx: &Ctx<'_>) {
+        if let Err(e) = self.stats.line(ctx, &mut io::sink()) {
+            self.failed.get_or_insert_with(|| io::Error::other(e.to_string()));
+        }
         if let Some(c) = ctx.block.comment_text(ctx.line.bytes) {
             read_setting(c, &mut self.figures);
         }
-        Ok(Flow::Continue)
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use gweave::gcode::reader::{LineReader, Part};
+
     use super::*;
+    use crate::motion::estimate::{Estimate, Estimator};
+    use gweave::gcode::state::StateOptions;
+    use gweave::pass::{drive_reader, Reading, Strictness};
 
     /// The serial pass the threads replaced: one estimator per mode fed every whole line, the
     /// clock read after each progress line.
@@ -270,7 +138,8 @@ mod tests {
     }
 
     /// Regression: the metadata was measured by a serial pass after the transform (purge-shift
-    /// 17x `cat`); the threads must give its figures to the bit, both modes.
+    /// 17x `cat`); the threads must give its figures to the bit, both modes, and the `stats`
+    /// count read from the estimate's parse its filament.
     #[test]
     fn the_threaded_measure_gives_the_serial_figures_to_the_bit() {
         let fixture =
@@ -293,8 +162,8 @@ mod tests {
         let figures = measure(&path).unwrap();
         let ends = read_ends(&path).unwrap();
         let base = MachineProfile::default().motion;
-        let normal = slicer_limits(&ends, &base).unwrap().profile;
-        let silent = slicer_limits_silent(&ends, &base).unwrap().profile;
+        let normal = slicer_limits_both(&ends, &base)[0].as_ref().unwrap().profile.clone();
+        let silent = slicer_limits_both(&ends, &base)[1].as_ref().unwrap().profile.clone();
         assert_ne!(normal, silent);
         let (normal_s, normal_progress) = serial(text.as_bytes(), &normal);
         let (silent_s, silent_progress) = serial(text.as_bytes(), &silent);
@@ -305,5 +174,107 @@ mod tests {
         assert_eq!(figures.progress_s.len(), 2 * 13);
         assert_eq!(figures.progress_s, expected);
         assert!(figures.filament_mm.iter().sum::<f64>() > 100.0, "{figures:?}");
+        // The filament is the `stats` count's to the bit, as a pass of its own counts it.
+        let mut pass = StatsPass::new(None);
+        let firmware = Firmware::resolve(None, flavour_in(&ends).as_deref());
+        let options = StateOptions { firmware, ..StateOptions::default() };
+        let reading = Reading { options, strictness: Strictness::Lenient, ..Reading::new(&path) };
+        let state = drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
+        let counted: Vec<f64> = pass.into_stats(&state).filament.iter().map(|f| f.extruded_mm).collect();
+        assert_eq!(figures.filament_mm, counted);
+    }
+
+    /// The old measure, line by line: one estimator per mode fed every line as the passes split
+    /// them, the clock read after each progress line, and a `stats` pass of its own.
+    fn measured_serially(path: &Path) -> Figures {
+        let text = std::fs::read(path).unwrap();
+        let FileModes { firmware, normal, silent } = modes_of(&read_ends(path).unwrap());
+        let timed = |profile: &MotionProfile| {
+            let mut est = Estimator::timing_only(profile).unwrap();
+            est.read_as(firmware);
+            est.first_layer_only();
+            let (mut reader, mut progress_s) = (LineReader::new(&text[..]), Vec::new());
+            while let Some(line) = reader.next_line().unwrap() {
+                est.read_line(&line).unwrap();
+                if line.part == Part::Whole && is_progress_line(line.bytes) {
+                    progress_s.push(est.now_s());
+                }
+            }
+            (est.finish(), progress_s)
+        };
+        let (normal, silent) = (timed(&normal), silent.as_ref().map(timed));
+        let silent = silent.as_ref().unwrap_or(&normal);
+        let mut pass = StatsPass::new(None);
+        let options = StateOptions { firmware, ..StateOptions::default() };
+        let reading = Reading { options, strictness: Strictness::Lenient, ..Reading::new(path) };
+        let state = drive_reader(&text[..], reading, &mut pass, &mut io::sink()).unwrap();
+        let stats = pass.into_stats(&state);
+        let first = |e: &Estimate| e.layer_s.first().copied().unwrap_or(0.0);
+        Figures {
+            filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
+            diameter_mm: stats.filament_diameter_mm,
+            time_s: [normal.0.total_s, silent.0.total_s],
+            first_layer_s: [first(&normal.0), first(&silent.0)],
+            progress_s: normal.1.iter().zip(&silent.1).map(|(&n, &s)| [n, s]).collect(),
+            ..Figures::default()
+        }
+    }
+
+    /// Regression (issue 35): the measure now parses once for both modes and `stats`; on every
+    /// fixture, as it is and with progress lines in both modes, its figures are the old line by
+    /// line measure's to the bit: the times, the first layer's, the clock at each progress line
+    /// and the filament per tool.
+    #[test]
+    fn every_fixture_measures_as_the_line_by_line_measure() {
+        let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data");
+        let dir = tempfile::tempdir().unwrap();
+        let (mut measured, mut two_modes) = (0, 0);
+        for kind in std::fs::read_dir(&data).unwrap() {
+            let kind = kind.unwrap().path();
+            if !kind.is_dir() {
+                continue;
+            }
+            for file in std::fs::read_dir(kind).unwrap() {
+                let path = file.unwrap().path();
+                if path.extension().is_none_or(|e| e != "gcode") {
+                    continue;
+                }
+                let text = std::fs::read_to_string(&path).unwrap();
+                let lines: Vec<&str> = text.lines().collect();
+                // The first 3000 lines and the last 400 (the settings, the footer): a debug
+                // build's planner is slow.
+                let cut = if lines.len() > 3400 {
+                    [&lines[..3000], &lines[lines.len() - 400..]].concat()
+                } else {
+                    lines
+                };
+                for m73 in [false, true] {
+                    let mut copy = String::new();
+                    for (i, line) in cut.iter().enumerate() {
+                        if m73 && i % 300 == 0 {
+                            copy.push_str("M73 P0 R0\nM73 Q0 S0\n");
+                        }
+                        copy.push_str(line);
+                        copy.push('\n');
+                    }
+                    let name = path.file_name().unwrap().to_string_lossy();
+                    let copy_path = dir.path().join(format!("{m73}-{name}"));
+                    std::fs::write(&copy_path, copy).unwrap();
+                    let (ours, old) = (measure(&copy_path).unwrap(), measured_serially(&copy_path));
+                    let bits = |f: &Figures| (f.time_s.map(f64::to_bits), f.first_layer_s.map(f64::to_bits));
+                    assert_eq!(bits(&ours), bits(&old), "{name}, M73 {m73}");
+                    assert_eq!(ours.progress_s, old.progress_s, "{name}, M73 {m73}");
+                    assert_eq!(ours.filament_mm, old.filament_mm, "{name}, M73 {m73}");
+                    assert_eq!(ours.diameter_mm, old.diameter_mm, "{name}, M73 {m73}");
+                    measured += 1;
+                    two_modes += usize::from(ours.time_s[0] != ours.time_s[1]);
+                    // Cura's files carry `;TIME_ELAPSED:` progress lines of their own.
+                    assert!(!m73 || ours.progress_s.len() >= 10, "{name}");
+                }
+            }
+        }
+        assert!(measured >= 20, "{measured} files");
+        // Some with silent-mode limits of their own: both planners ran apart.
+        assert!(two_modes >= 2, "{two_modes} files timed in two modes");
     }
 }

@@ -3,9 +3,10 @@
 //! own output, and it writes metadata that is true for the file as written.
 //!
 //! The transform writes into a scratch file (registered like every temporary file, so Ctrl-C
-//! removes it). One streaming read of that file measures it on several cores (`measure.rs`): the
-//! filament by the `stats` count and the print time by the estimator, with the machine limits
-//! the slicer wrote into the file (normal and silent mode), else the default machine's. A copy
+//! removes it). One streaming read of that file measures it on several cores (`measure.rs`): one
+//! parse of its lines feeds the `stats` count (the filament) and the estimator's planners (the
+//! print time, one planner thread per mode), with the machine limits the slicer wrote into the
+//! file (normal and silent mode), else the default machine's. A copy
 //! that only splits lines writes it to the real target (a temporary file renamed into place,
 //! `--in-place` with its `.bak`, or standard output) with the run's header on top and the
 //! slicer's figures and `M73` progress rewritten (`gweave::post::metadata`). Memory stays

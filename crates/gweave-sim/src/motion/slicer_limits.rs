@@ -6,9 +6,9 @@
 //!   (`y`, `z`, `e`), `machine_max_feedrate_*`, `machine_max_jerk_*`,
 //!   `machine_max_acceleration_extruding` (M204 P), `_retracting` (R) and `_travel` (T), and
 //!   OrcaSlicer's `machine_max_junction_deviation`; each holds the normal mode's value, then the
-//!   stealth mode's (`9000,1000`): the first is used, the second by [`slicer_limits_silent`]
-//!   (for PrusaSlicer's silent-mode estimate; the first if there is no second). `gcode_flavor = klipper` plans with
-//!   Klipper's rules, every other flavour with Marlin's.
+//!   stealth mode's (`9000,1000`): the first is used, the second by [`slicer_limits_both`]
+//!   (for PrusaSlicer's silent-mode estimate; the first if there is no second).
+//!   `gcode_flavor = klipper` plans with Klipper's rules, every other flavour with Marlin's.
 //! - Cura puts the settings changed from the printer's definition in `;SETTING_3` lines at the
 //!   end (`machine_max_feedrate_x`, `machine_max_acceleration_x`, `machine_acceleration`,
 //!   `machine_max_jerk_xy`, `machine_max_jerk_z`, `machine_max_jerk_e`) and the flavour in its
@@ -61,28 +61,50 @@ pub struct SlicerLimits {
 /// Read the limits from `text` (the head and tail of a file are enough: the settings are in the
 /// first or the last few hundred KB) onto `base`.
 pub fn slicer_limits(text: &[u8], base: &MotionProfile) -> Result<SlicerLimits, SlicerLimitsError> {
-    limits_of_mode(text, base, 0)
+    limits_of_mode(&Written::read(text), base, 0)
 }
 
-/// [`slicer_limits`] of the stealth (silent) mode: the second of each pair of values.
-pub(crate) fn slicer_limits_silent(
+/// The limits of both modes, normal ([`slicer_limits`]) and stealth (silent: the second of each
+/// pair of values), with the settings read once (a few million instructions for the 256 KiB
+/// ends of a file: a transform's metadata needs both).
+pub(crate) fn slicer_limits_both(
     text: &[u8],
     base: &MotionProfile,
-) -> Result<SlicerLimits, SlicerLimitsError> {
-    limits_of_mode(text, base, 1)
+) -> [Result<SlicerLimits, SlicerLimitsError>; 2] {
+    let written = Written::read(text);
+    [0, 1].map(|mode| limits_of_mode(&written, base, mode))
+}
+
+/// The settings a slicer wrote, by key, which slicer, and the flavour the file names.
+struct Written {
+    settings: BTreeMap<String, String>,
+    slicer: &'static str,
+    flavour: Option<String>,
+}
+
+impl Written {
+    fn read(text: &[u8]) -> Self {
+        let text = String::from_utf8_lossy(text);
+        let (settings, slicer) = match prusa_settings(&text) {
+            s if !s.is_empty() => (s, "PrusaSlicer"),
+            _ => (cura_settings(&text), "Cura"),
+        };
+        let flavour = settings.get("gcode_flavor").cloned().or_else(|| {
+            text.lines().find_map(|l| l.trim().strip_prefix(";FLAVOR:")).map(|f| f.trim().to_owned())
+        });
+        Written { settings, slicer, flavour }
+    }
 }
 
 /// The limits of mode `mode` (0 normal, 1 stealth): the value at that place in each list, or
 /// the first.
-fn limits_of_mode(text: &[u8], base: &MotionProfile, mode: usize) -> Result<SlicerLimits, SlicerLimitsError> {
-    let text = String::from_utf8_lossy(text);
-    let (settings, slicer) = match prusa_settings(&text) {
-        s if !s.is_empty() => (s, "PrusaSlicer"),
-        _ => (cura_settings(&text), "Cura"),
-    };
-    let flavour = settings.get("gcode_flavor").cloned().or_else(|| {
-        text.lines().find_map(|l| l.trim().strip_prefix(";FLAVOR:")).map(|f| f.trim().to_owned())
-    });
+fn limits_of_mode(
+    written: &Written,
+    base: &MotionProfile,
+    mode: usize,
+) -> Result<SlicerLimits, SlicerLimitsError> {
+    let Written { settings, slicer, flavour } = written;
+    let (slicer, flavour) = (*slicer, flavour.clone());
     let mut used = Vec::new();
     let mut get = |key: &str| -> Result<Option<f64>, SlicerLimitsError> {
         let Some(value) = settings.get(key) else {
@@ -221,7 +243,10 @@ mod tests {
     /// PrusaSlicer's silent-mode estimate plans with the second of each pair.
     #[test]
     fn prusaslicer_silent_mode_limits() {
-        let l = slicer_limits_silent(PRUSA_TAIL.as_bytes(), &MotionProfile::default()).unwrap();
+        let l = {
+            let [_, silent] = slicer_limits_both(PRUSA_TAIL.as_bytes(), &MotionProfile::default());
+            silent.unwrap()
+        };
         let p = &l.profile;
         assert_eq!(p.max_accel_mm_s2.to_array()[..4], [1000.0, 1000.0, 200.0, 5000.0]);
         assert_eq!(p.max_feed_mm_s.to_array()[..4], [200.0, 200.0, 12.0, 120.0]);
@@ -230,7 +255,10 @@ mod tests {
         assert_eq!(p.corners.marlin_corners(), Some(MarlinCorners::Jerk(jerk)));
         // One value: the same in both modes.
         let one = "; machine_max_acceleration_x = 700\n";
-        let l = slicer_limits_silent(one.as_bytes(), &MotionProfile::default()).unwrap();
+        let l = {
+            let [_, silent] = slicer_limits_both(one.as_bytes(), &MotionProfile::default());
+            silent.unwrap()
+        };
         assert_eq!(l.profile.max_accel_mm_s2.x, 700.0);
     }
 

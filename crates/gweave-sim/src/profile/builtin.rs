@@ -100,15 +100,47 @@ impl<'a> MachineSource<'a> {
     }
 
     /// The profile; a missing file is named with the built-in names beside it.
-    pub fn load(&self) -> Result<MachineProfile, MachineProfileError> {
+    pub fn load(&self) -> Result<MachineProfile, LoadError> {
         match self {
-            MachineSource::Builtin(b) => b.profile(),
-            MachineSource::File(path) => match gweave::settings::read_text(path) {
-                Ok(text) => MachineProfile::from_toml_in(&text, path.parent().unwrap_or(Path::new(""))),
-                Err(e) => Err(MachineProfileError::Toml(not_found(path, &e))),
-            },
+            MachineSource::Builtin(b) => {
+                b.profile().map_err(|source| LoadError::Profile { path: None, source })
+            }
+            MachineSource::File(path) => {
+                let text = gweave::settings::read_text(path)
+                    .map_err(|source| LoadError::Read { path: path.to_path_buf(), source })?;
+                MachineProfile::from_toml_in(&text, path.parent().unwrap_or(Path::new("")))
+                    .map_err(|source| LoadError::Profile { path: Some(path.to_path_buf()), source })
+            }
         }
     }
+}
+
+/// A `--machine` value (`machine=` in Python): a profile file, or a built-in profile's name
+/// where no such file exists; the default printer (RAMPS 1.4 on Marlin) without one. What `sim`,
+/// `estimate`, `serve`, `check` and `raster` load, from either front end.
+pub fn load_machine(value: Option<&Path>) -> Result<MachineProfile, LoadError> {
+    value.map_or_else(|| Ok(MachineProfile::default()), |v| MachineSource::of(v).load())
+}
+
+/// Why a machine profile could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file cannot be read (for a missing one, the message lists the built-in names).
+    #[error("{}", not_found(path, source))]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The profile is refused (`path`: the file it came from, `None` for a built-in one).
+    #[error("{}{}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default(), gweave::error::with_causes(source))]
+    Profile {
+        /// The file, if it came from one.
+        path: Option<std::path::PathBuf>,
+        /// Why.
+        source: MachineProfileError,
+    },
 }
 
 /// `reading PATH: ERROR`, and for a missing file, the names `--machine` also takes.

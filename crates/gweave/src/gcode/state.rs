@@ -404,10 +404,18 @@ impl State {
         // Multiplying by 1 is exact, so one multiply serves both units without a branch.
         let scale = if self.inches { MM_PER_INCH } else { 1.0 };
         let from = self.pos;
+        // The target is worked out in a copy and stored whole, once, to the position and the
+        // move: copying `self.pos` into the move after writing its axes one by one read it back
+        // in 16-byte pieces from two 8-byte stores still in flight, which the CPU cannot forward
+        // (the load waits for every older store to reach the cache, some of them to lines the
+        // planning core holds: in some runs of `estimate` perf put 85 % of the interpreting
+        // thread's samples on that load; docs/performance.md, twentieth session).
+        let mut to = from;
         let (mut moved, feed) = match self.plain_move(block) {
-            Some(plain) => plain_targets(plain, scale, self.relative_axes, &mut self.pos),
-            None => targets(&block.words, &self.slots, scale, self.relative_axes, &mut self.pos),
+            Some(plain) => plain_targets(plain, scale, self.relative_axes, &mut to),
+            None => targets(&block.words, &self.slots, scale, self.relative_axes, &mut to),
         };
+        self.pos = to;
         if let Some(feed) = feed {
             self.feed_mm_min = feed;
         }
@@ -421,7 +429,7 @@ impl State {
         }
         self.effect = Effect::Move(Move {
             from,
-            to: self.pos,
+            to,
             path: Path::Line,
             rapid: self.motion == Motion::Rapid,
             feed_mm_min: self.feed_mm_min,

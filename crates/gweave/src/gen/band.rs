@@ -8,7 +8,9 @@
 //! columns are one 64-bit word (byte `r` = row `r`), which three swap steps transpose
 //! ([`transpose8`], Hacker's Delight 7-3) into byte `c` = column `c`'s rows; a table of 256
 //! entries per group of eight rows turns that byte into its `S` bits (the nozzle map and bit
-//! order folded in). About 20 instructions a column.
+//! order folded in). About 20 instructions a column. A part's inside is inked on every row: a
+//! byte (or a word) of columns inked on all of the band's rows takes the `S` word of all rows
+//! without transposing, a few instructions a column.
 
 use super::bitmap::Bitmap;
 
@@ -45,19 +47,36 @@ impl BandGather {
     /// to right, each with its `S` word.
     pub(crate) fn collect(&self, plane: &Bitmap, j0: usize, columns: &mut Vec<(usize, u64)>) {
         columns.clear();
+        columns.reserve(plane.width());
         let rows = (plane.height() - j0).min(self.nozzles);
         let groups = rows.div_ceil(8);
+        // The `S` word of a column inked on every row of the band.
+        let solid_s = self.s_of_rows[..groups].iter().enumerate().fold(0, |s, (g, table)| {
+            let rows_in_group = (rows - 8 * g).min(8);
+            s | table[(1usize << rows_in_group) - 1]
+        });
         // The band's words at the current column word, row by row (rows past the band: none).
         let mut band = [0u64; 64];
         for wi in 0..plane.words_per_row() {
-            let mut any = 0;
+            let (mut any, mut all) = (0, u64::MAX);
             for (k, w) in band[..rows].iter_mut().enumerate() {
                 *w = plane.row(j0 + k)[wi];
                 any |= *w;
+                all &= *w;
+            }
+            if all == u64::MAX {
+                // 64 solid columns (a part's inside): no transposing.
+                columns.extend((wi * 64..wi * 64 + 64).map(|i| (i, solid_s)));
+                continue;
             }
             for byte in 0..8 {
                 let inked = (any >> (8 * byte)) as u8;
                 if inked == 0 {
+                    continue;
+                }
+                let at = wi * 64 + 8 * byte;
+                if (all >> (8 * byte)) as u8 == 0xff {
+                    columns.extend((at..at + 8).map(|i| (i, solid_s)));
                     continue;
                 }
                 // Per group of eight rows, column `c`'s rows in byte `c`.
@@ -76,7 +95,7 @@ impl BandGather {
                         .iter()
                         .zip(&self.s_of_rows)
                         .fold(0, |s, (word, table)| s | table[((word >> (8 * c)) & 0xff) as usize]);
-                    columns.push((wi * 64 + 8 * byte + c, s));
+                    columns.push((at + c, s));
                     left &= left - 1;
                 }
             }
@@ -128,7 +147,8 @@ mod tests {
         fn bands_are_the_bit_by_bit_gathering(
             (width, height) in (1usize..200, 1usize..40),
             seed in any::<u64>(),
-            ink_per_256 in 0u64..256,
+            // Up to 256: every pixel inked (the solid bytes and words).
+            ink_per_256 in 0u64..=256,
             map in (1usize..=64).prop_flat_map(|n| Just((0..n as u32).collect::<Vec<_>>()).prop_shuffle()),
             j0_frac in 0.0f64..1.0,
         ) {

@@ -422,29 +422,32 @@ fn decode_png_1bit(data: &[u8], opts: &ThresholdOptions) -> Result<Bitmap, Bitma
     let size = reader.output_buffer_size().ok_or_else(too_large)?;
     let mut buf = vec![0u8; size];
     let stride = reader.next_frame(&mut buf)?.line_size;
-    let one_lit = (cutoff <= 255) != opts.invert;
-    let zero_lit = (cutoff == 0) != opts.invert;
+    // A set bit is level 255, a clear one level 0: which of them the threshold inks.
+    let lit = |level_lit: bool| if level_lit { u64::MAX } else { 0 };
+    let (one_lit, zero_lit) = (lit((cutoff <= 255) != opts.invert), lit((cutoff == 0) != opts.invert));
+    let inked = |packed: u64| (packed & one_lit) | (!packed & zero_lit);
     let mut b = Bitmap::new(w, h);
     let wpr = b.words_per_row;
+    // The last word's bits past the width stay clear.
+    let last_mask = u64::MAX >> (64 * wpr - w);
     for y in 0..h {
         let row = &buf[y * stride..y * stride + w.div_ceil(8)];
         let words = &mut b.words[y * wpr..(y + 1) * wpr];
-        for (wi, word) in words.iter_mut().enumerate() {
+        // Whole words straight from the row (a copy of a variable length per word was a call
+        // to `memcpy`), then the row's last bytes padded.
+        let (whole, tail) = row.as_chunks::<8>();
+        for (word, bytes) in words.iter_mut().zip(whole) {
             // Read big-endian, the first byte's first pixel is the word's top bit: reversing
             // the whole word puts pixel `x` at bit `x` (one reversal of 64 bits, not eight of 8).
+            *word = inked(u64::from_be_bytes(*bytes).reverse_bits());
+        }
+        if !tail.is_empty() {
             let mut bytes = [0u8; 8];
-            let piece = row.get(wi * 8..).unwrap_or_default();
-            let n = piece.len().min(8);
-            bytes[..n].copy_from_slice(&piece[..n]);
-            let packed = u64::from_be_bytes(bytes).reverse_bits();
-            let v = match (one_lit, zero_lit) {
-                (true, false) => packed,
-                (false, true) => !packed,
-                (true, true) => u64::MAX,
-                (false, false) => 0,
-            };
-            let valid = (w - wi * 64).min(64);
-            *word = if valid == 64 { v } else { v & ((1u64 << valid) - 1) };
+            bytes[..tail.len()].copy_from_slice(tail);
+            words[whole.len()] = inked(u64::from_be_bytes(bytes).reverse_bits());
+        }
+        if let Some(last) = words.last_mut() {
+            *last &= last_mask;
         }
     }
     Ok(b)

@@ -17,3 +17,4 @@ pub mod recoat;
 pub mod sl1;
 pub mod slice_raster;
 pub mod stl;
+mod sweep;

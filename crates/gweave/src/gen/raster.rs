@@ -49,9 +49,10 @@ use thiserror::Error;
 
 use super::band::BandGather;
 use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
-use super::gcode_text::{push_fire, push_num, push_uint, SlotTable};
+use super::gcode_text::{push_num, push_uint};
 use super::printhead::{HeadOffset, PrintheadError, PrintheadProfile};
 use super::sl1::{Sl1Error, Sl1Reader};
+use super::sweep::{drops_table, HeadText, Sweep};
 use crate::range::{OutOfRange, Range, FEED_MM_MIN, LAYER_HEIGHT_MM, POSITION_MM};
 
 /// Layer height used for image stacks when the configuration gives none.
@@ -232,11 +233,9 @@ pub struct RasterWriter<W: Write> {
     layer_height_mm: f64,
     pitch_mm: f64,
     band: BandGather,
-    /// Per head: `G1 X<x>` of each column (grown with the widest image) ...
-    x_text: Vec<SlotTable<X_SLOT>>,
-    /// ... and `M700 P<h> S<bits>\n` for every `S` below 2^12 (empty for bigger heads) ...
-    fire_text: Vec<SlotTable<FIRE_SLOT>>,
-    /// ... and the drops each of those fires.
+    /// Per head: the pre-formatted moves and fires ...
+    heads: Vec<HeadText>,
+    /// ... and the drops of each pre-formatted fire.
     drops_of_s: Vec<u8>,
     /// Reused per pass: (column, S bits).
     columns: Vec<(usize, u64)>,
@@ -246,16 +245,10 @@ pub struct RasterWriter<W: Write> {
 }
 
 /// The output is written in pieces of this size: as large as the output's buffer
-/// (`gcode::writer`), so that it takes them without copying them.
+/// (`gcode::writer`), so that it takes them without copying them (pieces of 128 KiB, which
+/// would stay in the cache while written, were slower: the buffer copies them,
+/// docs/performance.md).
 const FLUSH_BYTES: usize = 1 << 20;
-/// Slot sizes of the pre-formatted texts: `G1 X-12345.123456789` is 20 bytes, `M700 P9 S4095\n`
-/// 14. A text that does not fit is formatted where it is written.
-const X_SLOT: usize = 32;
-const FIRE_SLOT: usize = 16;
-/// Room for a column's text but its fires: the move (a slot), ` Y<y>` and two `\nM400\n`.
-const COLUMN_BYTES: usize = X_SLOT + 64 + 16;
-/// Room for a fire command formatted where it is written: `M<u32> P<usize> S<u64>\n`.
-const FIRE_BYTES: usize = 64;
 
 impl<W: Write> RasterWriter<W> {
     /// Validates the profile and config and writes the start G-code. `source_layer_height_mm`
@@ -280,8 +273,7 @@ impl<W: Write> RasterWriter<W> {
             layer_height_mm,
             pitch_mm: profile.pitch_mm(),
             band: BandGather::new(&profile.row_to_s_bit()),
-            x_text: vec![SlotTable::default(); profile.heads.len()],
-            fire_text: (0..profile.heads.len()).map(|h| fire_table(profile, h)).collect(),
+            heads: (0..profile.heads.len()).map(|h| HeadText::new(profile, h)).collect(),
             drops_of_s: drops_table(profile),
             columns: Vec::new(),
             pos_mm: None,
@@ -385,103 +377,42 @@ impl<W: Write> RasterWriter<W> {
         Ok(())
     }
 
-    /// Carriage X that puts head `head` over the centre of column `i`.
-    fn column_x_mm(&self, head: usize, i: usize) -> f64 {
-        column_x_mm(&self.cfg, self.pitch_mm, &self.profile.heads[head], i)
-    }
-
-    /// Pre-formats `G1 X<x>` for head `head` up to `width` columns.
-    fn ensure_x_text(&mut self, head: usize, width: usize) {
-        let mut text = Vec::new();
-        for i in self.x_text[head].len()..width {
-            text.clear();
-            text.extend_from_slice(b"G1 X");
-            push_num(&mut text, self.column_x_mm(head, i), self.cfg.decimals);
-            // A slot holds any position in range at up to 9 decimals (`POSITION_MM`).
-            let fits = self.x_text[head].push(&text);
-            debug_assert!(fits, "{}", String::from_utf8_lossy(&text));
-        }
-    }
-
     /// Writes one pass of head `head` over the band at row `j0` (image `width` columns wide):
-    /// for each column of `self.columns`, in the pass's direction, the move onto it and its fires.
-    /// Each text is copied as a whole slot (the padding overwritten by what follows).
+    /// for each column of `self.columns`, in the pass's direction, the move onto it and its fires
+    /// ([`Sweep`]).
     fn write_pass(&mut self, head: usize, j0: usize, width: usize, forward: bool) -> Result<(), RasterError> {
-        self.ensure_x_text(head, width);
-        let y =
-            self.cfg.origin_y_mm + (j0 as f64 + 0.5) * self.pitch_mm - self.profile.heads[head].offset_y_mm;
-        let mut y_text = b" Y".to_vec();
-        push_num(&mut y_text, y, self.cfg.decimals);
-        let density = self.cfg.density as usize;
-        let column_bytes = COLUMN_BYTES + density * FIRE_BYTES;
-        let (x_text, fire_text) = (&self.x_text[head], &self.fire_text[head]);
-        // The seed's order drains the queue after the fire; the first fire of a pass still
-        // waits for the move onto the band.
-        let before = self.cfg.fire_order == FireOrder::Before;
-        let mut fire = Vec::new();
-        let (mut path_mm, mut drops) = (0.0, 0u64);
-        let count = self.columns.len();
-        let buf = &mut self.buf;
-        let mut pos = self.filled;
-        let head_offset = &self.profile.heads[head];
-        // Where the carriage was, in X: within a pass only X changes.
-        let mut last_x_mm = 0.0;
-        for idx in 0..count {
-            let (i, s) = self.columns[if forward { idx } else { count - 1 - idx }];
-            if buf.len() < pos + column_bytes {
-                // Room for 64 columns more.
-                buf.resize(pos + 64 * column_bytes, 0);
-            }
-            let column = &mut buf[pos..pos + column_bytes];
-            let x = column_x_mm(&self.cfg, self.pitch_mm, head_offset, i);
-            let mut n = x_text.put(i, column);
-            if idx == 0 {
-                // The move onto the band: Y if it changed, and its length (sqrt only here).
-                if self.last_y_mm != Some(y) {
-                    column[n..n + y_text.len()].copy_from_slice(&y_text);
-                    n += y_text.len();
-                    self.last_y_mm = Some(y);
-                }
-                if let Some((px, py)) = self.pos_mm {
-                    path_mm +=
-                        if py == y { (x - px).abs() } else { ((x - px).powi(2) + (y - py).powi(2)).sqrt() };
-                }
-            } else {
-                path_mm += (x - last_x_mm).abs();
-            }
-            last_x_mm = x;
-            n += if before && idx > 0 { END } else { END_DRAIN }.put(&mut column[n..]);
-            let s_index = s as usize;
-            if s_index < fire_text.len() {
-                for _ in 0..density {
-                    n += fire_text.put(s_index, &mut column[n..]);
-                }
-                drops += u64::from(self.drops_of_s[s_index]);
-            } else {
-                fire.clear();
-                push_fire(&mut fire, self.profile.fire_code(), head, s);
-                for _ in 0..density {
-                    column[n..n + fire.len()].copy_from_slice(&fire);
-                    n += fire.len();
-                }
-                drops += u64::from(self.profile.drops_of_fire(s));
-            }
-            if before {
-                n += DRAIN.put(&mut column[n..]);
-            }
-            pos += n;
+        let (cfg, pitch_mm, offset) = (&self.cfg, self.pitch_mm, &self.profile.heads[head]);
+        self.heads[head]
+            .extend(width, cfg.fire_order, cfg.decimals, |i| column_x_mm(cfg, pitch_mm, offset, i));
+        let y = cfg.origin_y_mm + (j0 as f64 + 0.5) * pitch_mm - offset.offset_y_mm;
+        let mut y_text = Vec::new();
+        if self.last_y_mm != Some(y) {
+            y_text.extend_from_slice(b" Y");
+            push_num(&mut y_text, y, cfg.decimals);
         }
+        let sweep = Sweep {
+            text: &self.heads[head],
+            drops_of_s: &self.drops_of_s,
+            profile: &self.profile,
+            head,
+            density: cfg.density as usize,
+            order: cfg.fire_order,
+        };
+        let swept =
+            sweep.write(&self.columns, forward, &mut self.buf, self.filled, self.pos_mm, (y, &y_text));
+        self.filled = swept.end;
+        let count = self.columns.len() as u64;
         if count > 0 {
-            self.pos_mm = Some((last_x_mm, y));
+            self.pos_mm = Some((swept.x_mm, y));
+            self.last_y_mm = Some(y);
         }
-        self.filled = pos;
-        let density = density as u64;
+        let density = u64::from(cfg.density);
         let r = &mut self.report;
-        r.xy_path_mm += path_mm;
-        r.xy_moves += count as u64;
-        r.columns_fired += count as u64;
-        r.fire_commands += count as u64 * density;
-        r.drops_per_head[head] += drops * density;
+        r.xy_path_mm += swept.path_mm;
+        r.xy_moves += count;
+        r.columns_fired += count;
+        r.fire_commands += count * density;
+        r.drops_per_head[head] += swept.drops * density;
         r.bands_printed += 1;
         self.flush_if_full()
     }
@@ -506,59 +437,6 @@ impl<W: Write> RasterWriter<W> {
 fn column_x_mm(cfg: &RasterConfig, pitch_mm: f64, head: &HeadOffset, i: usize) -> f64 {
     cfg.origin_x_mm + (i as f64 + 0.5) * pitch_mm - head.offset_x_mm
 }
-
-/// Nozzle counts up to this get every fire line pre-formatted (2^12 lines, about 64 KiB).
-const FIRE_TABLE_MAX_NOZZLES: u32 = 12;
-
-fn fire_table(profile: &PrintheadProfile, head: usize) -> SlotTable<FIRE_SLOT> {
-    let mut t = SlotTable::default();
-    if profile.nozzle_count <= FIRE_TABLE_MAX_NOZZLES {
-        let mut line = Vec::new();
-        for s in 0..1u64 << profile.nozzle_count {
-            line.clear();
-            push_fire(&mut line, profile.fire_code(), head, s);
-            if !t.push(&line) {
-                // A long fire code or head number: every line formatted where it is written.
-                return SlotTable::default();
-            }
-        }
-    }
-    t
-}
-
-/// The drops of each fire in [`fire_table`] (`S` below 2^12: at most 12).
-fn drops_table(profile: &PrintheadProfile) -> Vec<u8> {
-    let count = if profile.nozzle_count <= FIRE_TABLE_MAX_NOZZLES { 1u64 << profile.nozzle_count } else { 0 };
-    (0..count).map(|s| profile.drops_of_fire(s) as u8).collect()
-}
-
-/// A text of at most 8 bytes, zero-padded, and its length: one 8-byte copy writes it (a copy of
-/// its own length is a call to `memcpy`).
-struct Short([u8; 8], usize);
-
-impl Short {
-    const fn new(text: &[u8]) -> Short {
-        let mut padded = [0; 8];
-        let mut i = 0;
-        while i < text.len() {
-            padded[i] = text[i];
-            i += 1;
-        }
-        Short(padded, text.len())
-    }
-
-    /// Copies the text to the start of `out` (which must hold 8 bytes); returns its length.
-    #[inline]
-    fn put(&self, out: &mut [u8]) -> usize {
-        out[..8].copy_from_slice(&self.0);
-        self.1
-    }
-}
-
-/// The end of a move line; with the `M400` that drains the queue before a fire; that alone.
-const END: Short = Short::new(b"\n");
-const END_DRAIN: Short = Short::new(b"\nM400\n");
-const DRAIN: Short = Short::new(b"M400\n");
 
 /// Appends a user block, making sure it ends with a newline.
 fn push_block(buf: &mut Vec<u8>, block: &str) {

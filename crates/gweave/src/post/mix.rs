@@ -39,8 +39,9 @@
 //! ```
 
 pub mod card;
-pub(crate) mod job;
-pub mod overrides;
+pub mod job;
+pub mod options;
+pub use options::MixOptions;
 pub mod profile;
 mod purge_table;
 pub mod report;
@@ -78,6 +79,10 @@ pub enum MixPassError {
     /// The profile is inconsistent (the message says how).
     #[error("mix profile: {0}")]
     Config(String),
+    /// Nothing the options and profile ask can be done as they stand: the sentence names the
+    /// options that would (each front end spells them: [`crate::options::Said::spelled`]).
+    #[error("{0}")]
+    Needs(crate::options::Said),
     /// A profile key out of its range (it names the table and the key).
     #[error(transparent)]
     Range(#[from] crate::range::OutOfRange),
@@ -770,6 +775,6 @@ mod tests {
         let mut p = MixProfile::default();
         p.add_map("T0=Red").unwrap();
         let err = mix_bytes(p, format!("{PRINT}T1\nG1 X5 E3\n").as_bytes()).unwrap_err();
-        assert_eq!(err.to_string(), "<input>:7: the file selects T1, which has no mix: add --map T1=<mix>");
+        assert_eq!(err.to_string(), "<input>:7: the file selects T1, which has no mix: add map T1=<mix>");
     }
 }

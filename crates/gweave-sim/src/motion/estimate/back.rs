@@ -53,6 +53,8 @@ pub(super) struct Back {
     klipper: bool,
     dwell_s: f64,
     overhead_s: f64,
+    /// The mode whose limits this side plans with ([`Job::Profile`]).
+    pub(super) mode: usize,
 }
 
 impl Back {
@@ -74,12 +76,15 @@ impl Back {
             klipper: matches!(profile.corners, CornerMode::Klipper(_)),
             dwell_s: 0.0,
             overhead_s: 0.0,
+            mode: 0,
         })
     }
 
-    /// Carry out one job, read in place (a move is large); what it owns is taken.
+    /// Carry out one job, read in place (a move is large): the plan sides of several modes
+    /// read the same batch ([`super::modes`]), so what a job owns (a mix, a profile: rare) is
+    /// copied.
     #[inline]
-    pub(super) fn execute(&mut self, job: &mut Job) -> Result<(), EstimateError> {
+    pub(super) fn execute(&mut self, job: &Job) -> Result<(), EstimateError> {
         match job {
             Job::Move { mv, line } => self
                 .planner
@@ -103,12 +108,14 @@ impl Back {
                 self.acc.keys.push(*key);
                 self.acc.key_s.push(0.0);
             }
-            Job::Mix(weights) => self.acc.mixes.push(std::mem::take(weights)),
+            Job::Mix(weights) => self.acc.mixes.push(weights.clone()),
             Job::Tool(tool) => self.planner.select_tool(*tool as usize),
-            Job::Profile { profile, line } => self
+            Job::Profile { profile, line, mode } if *mode == self.mode => self
                 .planner
-                .set_profile(std::mem::take(&mut **profile))
+                .set_profile((**profile).clone())
                 .map_err(|source| EstimateError::Profile { line: *line, source })?,
+            // Another mode's limits, or a mark read by the caller.
+            Job::Profile { .. } | Job::Mark => {}
         }
         Ok(())
     }

@@ -62,12 +62,14 @@ use crate::motion::stepper::{StepTotals, Steppers};
 
 mod back;
 mod front;
+mod modes;
 mod report;
 mod timer;
 
 use back::Back;
 use front::{Chords, Front};
 pub use front::{HugeArcs, Malformed, MAX_ARC_CHORDS};
+pub(crate) use modes::{estimate_modes, ModeEstimate, Modes};
 pub use report::{estimate_file, estimate_report, EstimateFileError, EstimateReport};
 
 /// Feed rate before the file sets one, mm/s (Klipper `gcode_move`, Marlin `feedrate_mm_s`).
@@ -197,8 +199,11 @@ enum Job {
     Mix(Vec<f64>),
     /// The following moves drive this extruder.
     Tool(u32),
-    /// The limits changed (already checked by the parse side).
-    Profile { profile: Box<MotionProfile>, line: u64 },
+    /// The limits of mode `mode` changed (already checked by the parse side); a plan side
+    /// takes its own mode's (0 for an estimate of one mode, [`modes`]).
+    Profile { profile: Box<MotionProfile>, line: u64, mode: usize },
+    /// The clock is read here: a progress line ([`modes`]).
+    Mark,
 }
 
 /// A streaming estimator: feed it lines, then [`Estimator::finish`].
@@ -296,7 +301,7 @@ impl Estimator {
 
     /// Hand the pending jobs to the plan side.
     fn execute(&mut self) -> Result<(), EstimateError> {
-        let result = self.jobs.iter_mut().try_for_each(|job| self.back.execute(job));
+        let result = self.jobs.iter().try_for_each(|job| self.back.execute(job));
         self.jobs.clear();
         result
     }
@@ -457,7 +462,7 @@ fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate
         scope.spawn(move || lexer.run());
         let planning = scope.spawn(move || -> Result<Back, EstimateError> {
             for mut batch in batches {
-                for job in &mut batch {
+                for job in &batch {
                     back.execute(job)?;
                 }
                 batch.clear();

@@ -20,6 +20,7 @@ use crate::colour::dialect::{formatted, round_to_units, Decimals};
 use crate::colour::named_mixes::{Palette, PaletteConfig};
 use crate::colour::solve::{lerp_perceived, solve};
 use crate::colour::{Mix, MixingModel, Srgb8};
+use crate::options::Said;
 use crate::range::{Ceiling, LAYER_NUMBER, MAX_LAYERS, POSITION_MM};
 
 use super::profile::{At, GradientSpace, MixBase, MixProfile, MixRef};
@@ -215,15 +216,12 @@ impl Plan {
 
         let mut segments = Vec::new();
         for entry in &profile.schedule {
-            let start = bounded(entry.at()?, "--at-layer/--at-z or [[schedule]]")?;
+            let start = bounded(entry.at()?, "a schedule entry's")?;
             segments.push(Segment { start, kind: Kind::Solid(r.add(&entry.mix)?) });
         }
         for g in &profile.gradient {
             let (start, end) = g.range()?;
-            let (start, end) = (
-                bounded(start, "--gradient or [[gradient]] start")?,
-                bounded(end, "--gradient or [[gradient]] end")?,
-            );
+            let (start, end) = (bounded(start, "a gradient's start")?, bounded(end, "a gradient's end")?);
             let a = r.add(&g.start)?;
             let b = r.add(&g.end)?;
             let (count, every) = match (start, end) {
@@ -265,9 +263,16 @@ impl Plan {
             tool_map.insert(tool, r.add(&mix)?);
         }
         if segments.is_empty() && tool_map.is_empty() {
-            return Err(MixPassError::Config(
-                "nothing to do: give a schedule (--at-layer, --at-z), a gradient or a tool map (--map)"
-                    .into(),
+            return Err(MixPassError::Needs(
+                Said::new("mix profile: nothing to do: give a schedule (")
+                    .option("at_layer")
+                    .text(", ")
+                    .option("at_z")
+                    .text(", [[schedule]]), a gradient (")
+                    .option("gradient")
+                    .text(", [[gradient]]) or a tool map (")
+                    .option("map")
+                    .text(", [map])"),
             ));
         }
 
@@ -313,9 +318,11 @@ impl Plan {
     /// The mix for slicer tool `tool`.
     pub(crate) fn for_tool(&self, tool: u32) -> Result<usize, MixPassError> {
         self.tool_map.get(&tool).copied().ok_or_else(|| {
-            MixPassError::Config(format!(
-                "the file selects T{tool}, which has no mix: add --map T{tool}=<mix>"
-            ))
+            MixPassError::Needs(
+                Said::new(format!("the file selects T{tool}, which has no mix: add "))
+                    .option("map")
+                    .text(format!(" T{tool}=<mix>")),
+            )
         })
     }
 

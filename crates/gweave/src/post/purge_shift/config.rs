@@ -36,6 +36,7 @@ use crate::colour::purge::{filament_mm_to_mm3, flush_volume_mm3, mm3_to_filament
 use crate::colour::Srgb8;
 use crate::gcode::layers::{Feature, Markers, ALL_FEATURES};
 use crate::gcode::limits::MAX_TOOLS;
+use crate::options::Said;
 use crate::post::purge_block::PurgeMotion;
 use crate::range::{self, OutOfRange, Range, FILAMENT_DIAMETER_MM, PURGE_MM, PURGE_MM3};
 use crate::settings::{CheckRanges, Table};
@@ -46,11 +47,8 @@ pub enum ConfigError {
     /// A number outside its range.
     #[error(transparent)]
     Range(#[from] OutOfRange),
-    /// No purge amount anywhere.
-    #[error(
-        "no purge amount: give `--purge-mm MM` or `--purge-mm3 MM3` (Python: `purge_mm=`, `purge_mm3=`), or in the config \
-         purge_mm, purge_mm3, colours, pairs or a washout tolerance"
-    )]
+    /// No purge amount anywhere ([`ConfigError::said`] names the options that give one).
+    #[error("{}", no_purge())]
     NoPurge,
     /// Both `purge_mm` and `purge_mm3`.
     #[error("give either purge_mm or purge_mm3, not both")]
@@ -421,53 +419,20 @@ impl PurgeShiftConfig {
     }
 }
 
-/// Settings given as flags or keyword arguments, applied over a TOML file by
-/// [`PurgeShiftConfig::apply`] (the CLI and Python share it).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Overrides {
-    /// `--purge-mm`: filament per change, mm.
-    pub purge_mm: Option<f64>,
-    /// `--purge-mm3`: plastic per change, mm^3.
-    pub purge_mm3: Option<f64>,
-    /// `--filament-diameter-mm`, mm.
-    pub filament_diameter_mm: Option<f64>,
-    /// `true` allows crossing; `false` leaves the file's setting.
-    pub cross_layers: bool,
-    /// `--allow-features`: the features a change may move through.
-    pub allow_features: Option<Vec<String>>,
-    /// `--markers`: the comments that delimit the print proper.
-    pub markers: Option<[String; 2]>,
-    /// `--fallback`: `partial`, `block` or `tower`.
-    pub fallback: Option<String>,
-    /// The tower fallback's corner, mm.
-    pub tower_xy_mm: Option<[f64; 2]>,
+/// What [`ConfigError::NoPurge`] says, naming the options as each front end spells them.
+fn no_purge() -> Said {
+    Said::new("no purge amount: give ")
+        .option("purge_mm")
+        .text(" or ")
+        .option("purge_mm3")
+        .text(", or in the config purge_mm, purge_mm3, colours, pairs or a washout tolerance")
 }
 
-impl PurgeShiftConfig {
-    /// Applies flags on top: a purge given as a flag replaces the file's (mm or mm^3).
-    pub fn apply(&mut self, o: &Overrides) {
-        if let Some(mm) = o.purge_mm {
-            (self.purge_mm, self.purge_mm3) = (Some(mm), None);
-        }
-        if let Some(v) = o.purge_mm3 {
-            (self.purge_mm, self.purge_mm3) = (None, Some(v));
-        }
-        if let Some(d) = o.filament_diameter_mm {
-            self.filament_diameter_mm = d;
-        }
-        self.cross_layers |= o.cross_layers;
-        if let Some(list) = &o.allow_features {
-            self.allow_features = list.iter().map(|s| s.trim().to_string()).collect();
-        }
-        if let Some(m) = &o.markers {
-            self.markers = Some(m.clone());
-        }
-        if let Some(f) = &o.fallback {
-            self.fallback = f.clone();
-        }
-        if let Some([x, y]) = o.tower_xy_mm {
-            (self.tower.x_mm, self.tower.y_mm) = (Some(x), Some(y));
-        }
+impl ConfigError {
+    /// The refusal as a sentence that names options by identity, for a front end to spell
+    /// ([`Said::spelled`]); `None` when it names none.
+    pub fn said(&self) -> Option<Said> {
+        matches!(self, ConfigError::NoPurge).then(no_purge)
     }
 }
 
@@ -574,7 +539,7 @@ mod tests {
     #[test]
     fn flags_override_the_file() {
         let mut c = PurgeShiftConfig::parse_toml("purge_mm3 = 10.0\ncross_layers = true\n").unwrap();
-        c.apply(&Overrides {
+        c.apply(&super::super::PurgeShiftOptions {
             purge_mm: Some(3.0),
             allow_features: Some(vec![" infill".into()]),
             ..Default::default()

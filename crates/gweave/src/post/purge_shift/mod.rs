@@ -52,6 +52,7 @@
 mod checks;
 pub(crate) mod config;
 mod fallback;
+mod options;
 pub mod report;
 mod split;
 
@@ -59,7 +60,8 @@ use std::collections::VecDeque;
 use std::io::{self, Write};
 use std::path::Path;
 
-pub use config::{ConfigError, Fallback, Overrides, PurgeShiftConfig, Rules, TowerConfig};
+pub use config::{ConfigError, Fallback, PurgeShiftConfig, Rules, TowerConfig};
+pub use options::PurgeShiftOptions;
 pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
 
 use crate::colour::dialect::MixingState;

@@ -1,0 +1,171 @@
+//! A job's options type ([`gweave::options`]) as the subcommand's flags: each option declared
+//! in the engine is a flag named, helped, bounded and defaulted as declared there
+//! (`purge_mm` is `--purge-mm MM`, refused out of its range before anything is read), so a new
+//! option needs nothing here. A subcommand takes them with
+//! `#[command(flatten)] options: Options<PurgeShiftOptions>`.
+
+use std::ops::Deref;
+
+use clap::error::ErrorKind;
+use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches};
+use gweave::options::{JobOptions, Kind, OptionSpec, Spelling, Value};
+
+/// The options `T` as read from the command line.
+#[derive(Debug, Clone, Default)]
+pub struct Options<T>(pub T);
+
+impl<T> Deref for Options<T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        &self.0
+    }
+}
+
+/// The flag of one option.
+fn arg<T: JobOptions>(spec: &'static OptionSpec) -> Arg {
+    let mut arg = Arg::new(spec.name).long(spec.flag()).help(spec.help()).aliases(spec.shape.aliases);
+    if let Some(letter) = spec.shape.short {
+        arg = arg.short(letter);
+    }
+    arg = spec.shape.conflicts.iter().fold(arg, |arg, other| arg.conflicts_with(*other));
+    if spec.kind == Kind::Flag {
+        return arg.action(ArgAction::SetTrue);
+    }
+    // Read and checked as the engine reads it, so an option the job would refuse is refused
+    // here, before anything is read, with clap's message naming the flag.
+    let parse = move |text: &str| -> Result<Value, String> {
+        let value = spec.parse(text).map_err(|e| e.reason())?;
+        T::default().set(spec, value.clone()).map_err(|e| e.reason())?;
+        Ok(value)
+    };
+    arg = arg.value_name(spec.shape.value_name).value_parser(parse);
+    if let Some(default) = (spec.default)() {
+        arg = arg.default_value(default);
+    }
+    match spec.kind {
+        Kind::Repeated => arg.action(ArgAction::Append),
+        _ => arg.action(ArgAction::Set),
+    }
+}
+
+impl<T: JobOptions + Send + Sync + 'static> Args for Options<T> {
+    fn augment_args(cmd: Command) -> Command {
+        T::SPEC.iter().fold(cmd, |cmd, spec| cmd.arg(arg::<T>(spec)))
+    }
+    fn augment_args_for_update(cmd: Command) -> Command {
+        Self::augment_args(cmd)
+    }
+}
+
+impl<T: JobOptions> FromArgMatches for Options<T> {
+    fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut options = T::default();
+        for spec in T::SPEC {
+            let value = match spec.kind {
+                Kind::Flag => m.get_flag(spec.name).then_some(Value::Flag(true)),
+                Kind::Repeated => m.get_many::<Value>(spec.name).map(|each| {
+                    Value::Texts(
+                        each.flat_map(|v| match v {
+                            Value::Texts(t) => t.clone(),
+                            _ => Vec::new(),
+                        })
+                        .collect(),
+                    )
+                }),
+                _ => m.get_one::<Value>(spec.name).cloned(),
+            };
+            if let Some(value) = value {
+                options
+                    .set(spec, value)
+                    .map_err(|e| clap::Error::raw(ErrorKind::ValueValidation, e.spelled(Spelling::Flag)))?;
+            }
+        }
+        Ok(Options(options))
+    }
+
+    fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+/// A job's failure as the CLI says it: the options it names spelled as flags; an error that
+/// names none kept whole, its causes and its I/O kind (a closed pipe, a stop) for `crate::run`
+/// to read.
+pub fn failed(e: gweave_sim::transform::TransformError) -> anyhow::Error {
+    let spelled = e.spelled(Spelling::Flag);
+    if spelled == e.to_string() {
+        e.into()
+    } else {
+        anyhow::anyhow!(spelled)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gweave::post::mix::MixOptions;
+    use gweave::post::purge_shift::PurgeShiftOptions;
+
+    #[derive(clap::Parser, Debug)]
+    struct Cli<T: JobOptions + Send + Sync + 'static> {
+        #[command(flatten)]
+        options: Options<T>,
+    }
+
+    fn parse<T: JobOptions + Send + Sync + 'static>(args: &[&str]) -> Result<T, String> {
+        use clap::Parser;
+        let all = std::iter::once("gweave").chain(args.iter().copied());
+        Cli::<T>::try_parse_from(all).map(|c| c.options.0).map_err(|e| e.to_string())
+    }
+
+    /// Every option of the job is a flag with the declared name, help, value name and aliases.
+    fn flags_match_the_declaration<T: JobOptions + Send + Sync + 'static>() {
+        let cmd = <Options<T> as Args>::augment_args(Command::new("t"));
+        let args: Vec<&Arg> = cmd.get_arguments().collect();
+        assert_eq!(args.len(), T::SPEC.len());
+        for (arg, spec) in args.iter().zip(T::SPEC) {
+            assert_eq!(arg.get_long(), Some(spec.flag().as_str()));
+            assert_eq!(arg.get_help().map(ToString::to_string), Some(spec.help()));
+            assert_eq!(arg.get_short(), spec.shape.short);
+            let aliases = arg.get_all_aliases().unwrap_or_default();
+            assert_eq!(aliases, spec.shape.aliases);
+        }
+    }
+
+    #[test]
+    fn every_option_is_a_flag_as_declared() {
+        flags_match_the_declaration::<PurgeShiftOptions>();
+        flags_match_the_declaration::<MixOptions>();
+    }
+
+    #[test]
+    fn flags_read_into_the_options_value() {
+        let o: PurgeShiftOptions =
+            parse(&["--purge", "2.5", "--tower-at", "10,20", "--cross-layers", "-c", "p.toml"]).unwrap();
+        assert_eq!(o.purge_mm, Some(2.5));
+        assert_eq!(o.tower_at, Some([10.0, 20.0]));
+        assert!(o.cross_layers);
+        assert_eq!(o.header(), "-c p.toml --purge-mm 2.5 --cross-layers --tower-at 10,20");
+        let m: MixOptions =
+            parse(&["--at-layer", "0=Red", "--at-layer", "5=Blue", "--dialect", "reprap"]).unwrap();
+        assert_eq!(m.at_layer, ["0=Red", "5=Blue"]);
+        assert_eq!(m.header(), "--at-layer 0=Red --at-layer 5=Blue --dialect reprapfirmware");
+        assert_eq!(parse::<MixOptions>(&[]).unwrap(), MixOptions::default());
+    }
+
+    #[test]
+    fn a_refused_value_is_named_by_its_flag() {
+        let err = parse::<PurgeShiftOptions>(&["--purge-mm", "2000"]).unwrap_err();
+        assert!(
+            err.contains("invalid value '2000' for '--purge-mm <MM>': out of range: 0 to 1000 mm"),
+            "{err}"
+        );
+        let err = parse::<PurgeShiftOptions>(&["--purge-mm", "2", "--purge-mm3", "3"]).unwrap_err();
+        assert!(err.contains("'--purge-mm <MM>' cannot be used with '--purge-mm3 <MM3>'"), "{err}");
+        let err = parse::<PurgeShiftOptions>(&["--tower-at", "1"]).unwrap_err();
+        assert!(err.contains("takes 2 values (X,Y), not 1"), "{err}");
+        let err = parse::<MixOptions>(&["--dialect", "klipper"]).unwrap_err();
+        assert!(err.contains("for '--dialect <DIALECT>': unknown variant `klipper`"), "{err}");
+    }
+}

@@ -1,0 +1,141 @@
+"""Each transform job's options are declared once, in the engine (name, kind, range, default,
+help): the typed wrappers in `gweave/__init__.py` take exactly those keywords with the same
+defaults, the compiled functions take them as `**options` (so the stub keeps no second list),
+and the engine checks each value, naming the keyword (the CLI names the flag)."""
+
+import ast
+import inspect
+import re
+from pathlib import Path
+from typing import Any, Dict
+
+import pytest
+
+import gweave
+from gweave import _gweave
+
+TORUS = ("prusaslicer", "pr_torus_pva.gcode")
+# Keywords every transform shares, not options of the job: the file, where it goes, strictness.
+SHARED = {"path", "output", "in_place", "backup", "force", "lenient"}
+JOBS = {"purge-shift": (gweave.purge_shift, "purge_shift_json"), "mix": (gweave.mix, "mix_json")}
+
+# The annotation each kind of option has in the typed wrapper, and its default there.
+ANNOTATION = {
+    "flag": ("bool", False),
+    "number": ("Optional[float]", None),
+    "path": ("Optional[PathLike]", None),
+    "repeated": ("Sequence[str]", ()),
+    "texts": ("Optional[Sequence[str]]", None),
+    "numbers": ("Optional[Sequence[float]]", None),
+}
+
+
+def declared(command: str) -> Dict[str, Dict[str, Any]]:
+    return {o["name"]: o for o in _gweave.job_options(command)}
+
+
+@pytest.mark.parametrize("command", sorted(JOBS))
+def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(command):
+    wrapper, _ = JOBS[command]
+    options = declared(command)
+    params = {n: p for n, p in inspect.signature(wrapper).parameters.items() if n not in SHARED}
+    assert list(params) == list(options), "the wrapper's keywords, in the declaration's order"
+    for name, p in params.items():
+        o = options[name]
+        assert p.kind is inspect.Parameter.KEYWORD_ONLY, name
+        if o["kind"] == "text":
+            # A word whose default is a value (gradient_space="mix") or unset.
+            expected = ("str", o["default"]) if o["default"] is not None else ("Optional[str]", None)
+        else:
+            expected = ANNOTATION[o["kind"]]
+        assert (p.annotation, p.default) == expected, name
+        assert re.search(f"``{name}[`=]", wrapper.__doc__), f"{name} is not in the docstring"
+
+
+@pytest.mark.parametrize("command", sorted(JOBS))
+def test_the_compiled_function_takes_the_options_as_keywords_and_its_stub_says_so(command):
+    _, compiled = JOBS[command]
+    params = inspect.signature(getattr(_gweave, compiled)).parameters
+    assert set(params) - {"options"} == SHARED
+    assert params["options"].kind is inspect.Parameter.VAR_KEYWORD
+    stub = ast.parse((Path(gweave.__file__).parent / "_gweave.pyi").read_text(encoding="utf-8"))
+    node = next(n for n in stub.body if isinstance(n, ast.FunctionDef) and n.name == compiled)
+    names = {a.arg for a in node.args.args + node.args.kwonlyargs}
+    assert names == SHARED and node.args.kwarg is not None and node.args.kwarg.arg == "options"
+
+
+def test_declared_ranges_and_help_are_those_of_the_flags():
+    purge_mm = declared("purge-shift")["purge_mm"]
+    assert purge_mm["flag"] == "--purge-mm" and purge_mm["range"] == (0.0, 1000.0)
+    assert purge_mm["help"].startswith("Purge per change, mm of filament")
+    assert declared("mix")["gradient_space"]["default"] == "mix"
+
+
+def test_a_value_out_of_range_names_the_keyword(data, tmp_path):
+    with pytest.raises(ValueError, match=r"^purge_mm = 2000 is out of range: 0 to 1000 mm$"):
+        gweave.purge_shift(data.joinpath(*TORUS), tmp_path / "o.gcode", purge_mm=2000)
+    with pytest.raises(ValueError, match=r"^tower_at = 1e\+06 is out of range|^tower_at = 1000000 is out of range"):
+        gweave.purge_shift(data.joinpath(*TORUS), tmp_path / "o.gcode", purge_mm=2, tower_at=(0, 1e6))
+    with pytest.raises(ValueError, match=r"^initial_purge = -1 is out of range: 0 to 1000 mm$"):
+        gweave.mix(data.joinpath(*TORUS), tmp_path / "o.gcode", initial_purge=-1)
+    with pytest.raises(ValueError, match=r"^gradient_space: unknown variant `lab`, expected `mix` or `perceived`$"):
+        gweave.mix(data.joinpath(*TORUS), tmp_path / "o.gcode", gradient_space="lab")
+    with pytest.raises(ValueError, match=r"^purge_mm and purge_mm3: give one of them$"):
+        gweave.purge_shift(data.joinpath(*TORUS), tmp_path / "o.gcode", purge_mm=2, purge_mm3=5)
+    with pytest.raises(ValueError, match=r"^markers: takes 2 values \(BEGIN,END\), not 1$"):
+        gweave.purge_shift(data.joinpath(*TORUS), tmp_path / "o.gcode", purge_mm=2, markers=["only"])
+    assert not (tmp_path / "o.gcode").exists()
+
+
+def test_an_unknown_keyword_is_a_type_error_as_python_raises_it(data, tmp_path):
+    with pytest.raises(TypeError, match=r"purge_shift\(\) got an unexpected keyword argument 'purge'"):
+        _gweave.purge_shift_json(str(data.joinpath(*TORUS)), str(tmp_path / "o.gcode"), purge=2.5)
+
+
+def test_the_header_is_written_from_the_options_value(data, tmp_path):
+    out = tmp_path / "o.gcode"
+    gweave.purge_shift(data.joinpath(*TORUS), out, purge_mm=2.5, tower_at=(10, 20.5), fallback="tower")
+    header = [l for l in out.read_text().splitlines() if l.startswith("; gweave ")][0]
+    assert header == f"; gweave {gweave.__version__} purge-shift --purge-mm 2.5 --fallback tower --tower-at 10,20.5 (generated)"
+
+
+def test_a_missing_config_file_is_file_not_found_naming_it(data, tmp_path):
+    missing = tmp_path / "nope.toml"
+    with pytest.raises(FileNotFoundError) as e:
+        gweave.mix(data.joinpath(*TORUS), tmp_path / "o.gcode", config=missing)
+    assert e.value.filename == str(missing)
+
+
+def test_machine_is_loaded_as_the_cli_loads_it(data, tmp_path):
+    """Regression (issue 40): one loader for `--machine` and `machine=`."""
+    with pytest.raises(FileNotFoundError) as e:
+        gweave.estimate(data.joinpath(*TORUS), machine=tmp_path / "nope.toml")
+    assert e.value.filename == str(tmp_path / "nope.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[bed]\nx_mm = -1\n")
+    with pytest.raises(ValueError, match=rf"^{bad}: .*x_mm = -1 is out of range"):
+        gweave.estimate(data.joinpath(*TORUS), machine=bad)
+
+
+def test_a_refusal_names_the_options_by_their_keywords(tmp_path):
+    """Regression (issue 40): the engine's refusals named the CLI's flags; Python names the
+    keywords (the CLI the flags: `crates/gweave-cli/tests/lenient_transforms.rs`)."""
+    src = tmp_path / "t1.gcode"
+    src.write_text("M83\n;LAYER_CHANGE\nG1 X1 E1\nT1\nG1 X2 E1\n")
+    out = tmp_path / "out.gcode"
+    with pytest.raises(ValueError) as e:
+        gweave.mix(src, out, map=["T0=Red"])
+    assert str(e.value) == f"{src}:4: the file selects T1, which has no mix: add map T1=<mix>"
+    with pytest.raises(ValueError) as e:
+        gweave.mix(src, out)
+    assert str(e.value) == (
+        "mix profile: nothing to do: give a schedule (at_layer, at_z, [[schedule]]), "
+        "a gradient (gradient, [[gradient]]) or a tool map (map, [map])"
+    )
+    with pytest.raises(ValueError) as e:
+        gweave.purge_shift(src, out)
+    assert str(e.value) == (
+        "no purge amount: give purge_mm or purge_mm3, or in the config purge_mm, purge_mm3, "
+        "colours, pairs or a washout tolerance"
+    )
+    assert not out.exists()

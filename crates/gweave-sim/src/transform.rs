@@ -1,0 +1,201 @@
+//! A transform job run on a file, as `gweave purge-shift` and `gweave.purge_shift()` (and `mix`)
+//! both run it: the options read over the settings file they name, the pass run, the output
+//! finished with the run's header and its metadata ([`crate::finish`]). Written once, so the
+//! front ends only read their options ([`gweave::options`]) and show the result.
+
+use std::path::{Path, PathBuf};
+
+use gweave::gcode::writer::Target;
+use gweave::malformed::Malformed;
+use gweave::options::{JobOptions, OptionError, Said, Spelling};
+use gweave::pass::{Progress, Strictness};
+use gweave::post::mix::profile::MixProfile;
+use gweave::post::mix::report::MixReport;
+use gweave::post::mix::{MixOptions, MixPassError};
+use gweave::post::purge_shift::{ConfigError, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
+use gweave::run::Run;
+
+use crate::finish::{self, FinishError};
+
+/// The file a job reads and where it writes.
+pub struct Job<'a> {
+    /// The G-code file read.
+    pub input: &'a Path,
+    /// Where the output goes.
+    pub target: &'a Target,
+    /// Stop at a malformed line, or copy it through and count it.
+    pub strictness: Strictness,
+    /// Told how far the read has come (a progress bar), if anything is.
+    pub progress: Option<&'a mut dyn Progress>,
+}
+
+impl<'a> Job<'a> {
+    /// `input` to `target`, strict, with no progress shown.
+    pub fn new(input: &'a Path, target: &'a Target) -> Self {
+        Job { input, target, strictness: Strictness::Strict, progress: None }
+    }
+
+    fn run(self, to: &Target) -> Run<'a> {
+        let run = Run::file(self.input).to(to).strictness(self.strictness);
+        match self.progress {
+            Some(p) => run.progress(p),
+            None => run,
+        }
+    }
+}
+
+/// Every transform job's command and options, for a front end that lists them (Python's
+/// `_gweave.job_options`, which its tests hold the typed wrappers to).
+pub const JOBS: &[(&str, &[gweave::options::OptionSpec])] =
+    &[(PurgeShiftOptions::COMMAND, PurgeShiftOptions::SPEC), (MixOptions::COMMAND, MixOptions::SPEC)];
+
+/// What a transform job returns: its report and the malformed lines a lenient run read past.
+pub type Outcome<R> = Result<(R, Malformed), TransformError>;
+
+/// Why a transform job failed.
+#[derive(Debug, thiserror::Error)]
+pub enum TransformError {
+    /// An option's value refused; the front end names the option its own way
+    /// ([`TransformError::spelled`]).
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    /// The settings file the options name cannot be read as settings.
+    #[error("{}: {message}", path.display())]
+    Settings {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it, its causes joined.
+        message: String,
+    },
+    /// purge-shift's settings are inconsistent.
+    #[error(transparent)]
+    PurgeShift(#[from] ConfigError),
+    /// The mix profile or the mix pass refused.
+    #[error(transparent)]
+    Mix(#[from] MixPassError),
+    /// Reading, writing, or finishing the output failed.
+    #[error(transparent)]
+    Finish(#[from] FinishError),
+}
+
+impl From<gweave::Error> for TransformError {
+    fn from(e: gweave::Error) -> Self {
+        TransformError::Finish(FinishError::Engine(e))
+    }
+}
+
+impl TransformError {
+    /// The message, an option named as `spelling` names it (`--purge-mm`, `purge_mm`).
+    pub fn spelled(&self, spelling: Spelling) -> String {
+        match self {
+            TransformError::Option(e) => e.spelled(spelling),
+            TransformError::PurgeShift(e) => e.said().map_or_else(|| e.to_string(), |s| s.spelled(spelling)),
+            TransformError::Mix(MixPassError::Needs(said)) => said.spelled(spelling),
+            // A refusal in the middle of the file: the driver's place, then the sentence.
+            e => match e.engine().and_then(|inner| Some((inner, pass_needs(inner)?))) {
+                Some((inner, said)) => {
+                    let whole = inner.to_string();
+                    let place = whole.strip_suffix(&said.to_string()).unwrap_or("");
+                    format!("{place}{}", said.spelled(spelling))
+                }
+                None => e.to_string(),
+            },
+        }
+    }
+
+    /// The engine's own error inside, if that is what failed (a file unreadable, a malformed
+    /// line): a front end raises it as it raises the engine's errors.
+    pub fn engine(&self) -> Option<&gweave::Error> {
+        match self {
+            TransformError::Finish(FinishError::Engine(e)) | TransformError::Mix(MixPassError::Engine(e)) => {
+                Some(e)
+            }
+            _ => None,
+        }
+    }
+}
+
+/// The sentence naming options of a mix refusal in the middle of the file, if it is one.
+fn pass_needs(e: &gweave::Error) -> Option<&Said> {
+    match e {
+        gweave::Error::Pass { source, .. } => match source.downcast_ref::<MixPassError>() {
+            Some(MixPassError::Needs(said)) => Some(said),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The run's header, in the CLI's words: `purge-shift --purge-mm 2.5 --lenient`.
+///
+/// ```
+/// use gweave::pass::Strictness;
+/// use gweave::post::mix::MixOptions;
+/// use gweave_sim::transform::command_line;
+/// let options = MixOptions { at_layer: vec!["0=Dark  Red".into()], ..MixOptions::default() };
+/// assert_eq!(command_line(&options, Strictness::Lenient), r#"mix --at-layer "0=Dark  Red" --lenient"#);
+/// assert_eq!(command_line(&MixOptions::default(), Strictness::Lenient), "mix --lenient");
+/// assert_eq!(command_line(&MixOptions::default(), Strictness::Strict), "mix");
+/// ```
+pub fn command_line<O: JobOptions>(options: &O, strictness: Strictness) -> String {
+    let lenient = (strictness == Strictness::Lenient).then_some("--lenient".to_owned());
+    let words = [Some(O::COMMAND.to_owned()), Some(options.header()), lenient];
+    words.into_iter().flatten().filter(|w| !w.is_empty()).collect::<Vec<_>>().join(" ")
+}
+
+/// A settings file named by an option, read with `parse`; the default without one.
+fn settings<T: Default, E: std::error::Error + 'static>(
+    path: Option<&Path>,
+    parse: impl FnOnce(&str) -> Result<T, E>,
+) -> Result<T, TransformError> {
+    let Some(path) = path else { return Ok(T::default()) };
+    let text = gweave::settings::read_text(path).map_err(|e| gweave::Error::io(path, e))?;
+    parse(&text).map_err(|e| TransformError::Settings {
+        path: path.to_path_buf(),
+        message: gweave::error::with_causes(&e),
+    })
+}
+
+/// Moves every colour change earlier by the purge (docs/purge-shift.md): returns the report
+/// (its changes' output lines counting the header) and the malformed lines read past.
+pub fn purge_shift(options: &PurgeShiftOptions, job: Job<'_>) -> Outcome<PurgeShiftReport> {
+    options.check_conflicts()?;
+    let mut config = settings(options.config.as_deref(), PurgeShiftConfig::parse_toml)?;
+    config.apply(options);
+    let rules = config.validate()?;
+    finish::refuse_second_run(job.input, PurgeShiftOptions::COMMAND)?;
+    let line = command_line(options, job.strictness);
+    let (input, target) = (job.input, job.target);
+    let ((mut report, malformed), _) = finish::with_metadata(Some(input), target, &line, |t| {
+        let (report, ran) = gweave::post::purge_shift::purge_shift(rules, job.run(t))?;
+        Ok::<_, TransformError>((report, ran.malformed))
+    })?;
+    // The run's header is one line above every change.
+    report.changes.offset_output_lines(1);
+    Ok((report, malformed))
+}
+
+/// The mix profile the options name, with the options applied over it.
+pub fn mix_profile(options: &MixOptions) -> Result<MixProfile, TransformError> {
+    options.check_conflicts()?;
+    let mut profile = settings(options.config.as_deref(), MixProfile::from_toml_str)?;
+    profile.apply(options)?;
+    Ok(profile)
+}
+
+/// Rewrites a file for a mixing hotend (docs/mix.md) with the profile and options given.
+pub fn mix(options: &MixOptions, job: Job<'_>) -> Outcome<MixReport> {
+    mix_with(mix_profile(options)?, options, job)
+}
+
+/// [`mix`] with a profile made otherwise (`gweave mix --wizard`'s); `options` name the run.
+pub fn mix_with(profile: MixProfile, options: &MixOptions, job: Job<'_>) -> Outcome<MixReport> {
+    finish::refuse_second_run(job.input, MixOptions::COMMAND)?;
+    let line = command_line(options, job.strictness);
+    let (input, target) = (job.input, job.target);
+    let ((report, malformed), _) = finish::with_metadata(Some(input), target, &line, |t| {
+        let (report, ran) = gweave::post::mix::mix(profile, job.run(t))?;
+        Ok::<_, TransformError>((report, ran.malformed))
+    })?;
+    Ok((report, malformed))
+}

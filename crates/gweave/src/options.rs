@@ -1,0 +1,546 @@
+//! A job's options, each declared once: its name, type, range, default and help.
+//!
+//! A job (`purge-shift`, `mix`) takes one options type declared with [`job_options!`](crate::job_options). Both
+//! front ends are derived from that declaration: the CLI builds its flags from
+//! [`JobOptions::SPEC`] (`purge_mm` is `--purge-mm`, with the help, value name, range and
+//! aliases stated here), Python reads its keywords by the same names and a test holds the typed
+//! wrapper's signature to the same list; the run's header (`; gweave 0.1.0 purge-shift
+//! --purge-mm 2.5 (generated)`) is written from the options value ([`JobOptions::header`]), in
+//! the CLI's words whichever front end ran it. Adding an option is a line in the declaration
+//! and its use.
+//!
+//! An option's value is checked here once, against its [`Range`] or its type's words, and a
+//! refusal is an [`OptionError`] carrying the option's identity: each front end spells it
+//! ([`Spelling::Flag`]: `--purge-mm`, [`Spelling::Keyword`]: `purge_mm`).
+//!
+//! ```
+//! use gweave::options::{JobOptions, Spelling, Value};
+//! use gweave::post::purge_shift::PurgeShiftOptions;
+//! let mut o = PurgeShiftOptions::default();
+//! let purge_mm = PurgeShiftOptions::spec("purge_mm").unwrap();
+//! o.set(purge_mm, Value::Number(2.5)).unwrap();
+//! assert_eq!(o.header(), "--purge-mm 2.5");
+//! let err = o.set(purge_mm, Value::Number(1e9)).unwrap_err();
+//! assert_eq!(err.spelled(Spelling::Flag), "--purge-mm 1e9 is out of range: 0 to 1000 mm");
+//! assert_eq!(err.spelled(Spelling::Keyword), "purge_mm = 1e9 is out of range: 0 to 1000 mm");
+//! ```
+
+use std::fmt;
+use std::path::PathBuf;
+
+use serde::de::{value::Error as WordError, DeserializeOwned, IntoDeserializer};
+use serde::Serialize;
+
+use crate::range::{short, Range};
+
+/// How an option takes its value, which decides how each front end reads it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// A switch (`--cross-layers`, `cross_layers=True`).
+    Flag,
+    /// One number within the option's range (`--purge-mm 2.5`, `purge_mm=2.5`).
+    Number,
+    /// One word (`--fallback tower`, `fallback="tower"`).
+    Text,
+    /// A file (`-c mix.toml`, `config="mix.toml"`).
+    Path,
+    /// Each use adds one text (`--at-layer 0=Red --at-layer 5=Blue`, `at_layer=["0=Red", ...]`).
+    Repeated,
+    /// Comma-separated texts, exactly this many unless 0 (`--markers BEGIN,END`).
+    Texts(usize),
+    /// Exactly this many comma-separated numbers, each within the range (`--tower-at 10,20`).
+    Numbers(usize),
+}
+
+/// An option's value as a front end read it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Value {
+    /// [`Kind::Flag`].
+    Flag(bool),
+    /// [`Kind::Number`].
+    Number(f64),
+    /// [`Kind::Text`].
+    Text(String),
+    /// [`Kind::Path`].
+    Path(PathBuf),
+    /// [`Kind::Repeated`] and [`Kind::Texts`].
+    Texts(Vec<String>),
+    /// [`Kind::Numbers`].
+    Numbers(Vec<f64>),
+}
+
+/// How a front end shows an option besides its name and help: what it declares in
+/// [`job_options!`](crate::job_options) after `=`.
+#[derive(Debug, Clone, Copy)]
+pub struct Shape {
+    /// The value's placeholder in the CLI's help (`MM`, `X,Y`).
+    pub value_name: &'static str,
+    /// The range of a number (or of each of several).
+    pub range: Option<Range>,
+    /// The CLI's one-letter flag (`-c`).
+    pub short: Option<char>,
+    /// Older CLI names still read (`--purge`); the header writes the option's own.
+    pub aliases: &'static [&'static str],
+    /// Options that cannot be given with this one.
+    pub conflicts: &'static [&'static str],
+}
+
+impl Shape {
+    /// An option whose value the CLI's help shows as `value_name` (empty for a switch).
+    pub const fn new(value_name: &'static str) -> Self {
+        Shape { value_name, range: None, short: None, aliases: &[], conflicts: &[] }
+    }
+    /// Its numbers within `range`.
+    pub const fn range(mut self, range: Range) -> Self {
+        self.range = Some(range);
+        self
+    }
+    /// Its one-letter CLI flag.
+    pub const fn short(mut self, letter: char) -> Self {
+        self.short = Some(letter);
+        self
+    }
+    /// Older CLI names still read.
+    pub const fn aliases(mut self, names: &'static [&'static str]) -> Self {
+        self.aliases = names;
+        self
+    }
+    /// Options refused with this one.
+    pub const fn conflicts(mut self, names: &'static [&'static str]) -> Self {
+        self.conflicts = names;
+        self
+    }
+}
+
+/// One option of a job, declared once in [`job_options!`](crate::job_options).
+#[derive(Debug, Clone, Copy)]
+pub struct OptionSpec {
+    /// The Python keyword and the field (`purge_mm`); the CLI flag is [`OptionSpec::flag`].
+    pub name: &'static str,
+    /// How it takes its value (from the field's type).
+    pub kind: Kind,
+    /// The doc comment of the field, as written.
+    pub doc: &'static str,
+    /// Its default as a word, where the default is a value (`mix`) rather than "unset".
+    pub default: fn() -> Option<String>,
+    /// Value name, range, short flag, aliases, conflicts.
+    pub shape: Shape,
+}
+
+impl OptionSpec {
+    /// The CLI's long flag, without the dashes (`purge-mm`).
+    pub fn flag(&self) -> String {
+        self.name.replace('_', "-")
+    }
+
+    /// The help text, one paragraph: the doc comment's lines joined.
+    pub fn help(&self) -> String {
+        self.doc.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(" ")
+    }
+
+    /// A value as the CLI types it (`2.5`, `10,20`), read and checked.
+    pub fn parse(&self, text: &str) -> Result<Value, OptionError> {
+        let refuse = |problem| OptionError { option: self.name, problem };
+        let number = |word: &str| -> Result<f64, OptionError> {
+            let word = word.trim();
+            word.parse().map_err(|e| refuse(Problem::Invalid(format!("{word:?}: {e}"))))
+        };
+        let value = match self.kind {
+            Kind::Flag => Value::Flag(true),
+            Kind::Number => Value::Number(number(text)?),
+            Kind::Text => Value::Text(text.to_owned()),
+            Kind::Path => Value::Path(PathBuf::from(text)),
+            Kind::Repeated => Value::Texts(vec![text.to_owned()]),
+            Kind::Texts(_) => Value::Texts(text.split(',').map(str::to_owned).collect()),
+            Kind::Numbers(_) => Value::Numbers(text.split(',').map(number).collect::<Result<_, _>>()?),
+        };
+        self.check(value)
+    }
+
+    /// `value` within the option's range and count, as both front ends check it.
+    pub fn check(&self, value: Value) -> Result<Value, OptionError> {
+        let refuse = |problem| Err(OptionError { option: self.name, problem });
+        let count = match (self.kind, &value) {
+            (Kind::Texts(n) | Kind::Numbers(n), Value::Texts(v)) if n > 0 => Some((n, v.len())),
+            (Kind::Numbers(n), Value::Numbers(v)) => Some((n, v.len())),
+            _ => None,
+        };
+        if let Some((expected, got)) = count.filter(|(n, got)| n != got) {
+            return refuse(Problem::Count { expected, got, value_name: self.shape.value_name });
+        }
+        let numbers = match &value {
+            Value::Number(v) => std::slice::from_ref(v),
+            Value::Numbers(v) => v.as_slice(),
+            _ => &[],
+        };
+        match self
+            .shape
+            .range
+            .and_then(|range| Some((*numbers.iter().find(|v| !range.contains(**v))?, range)))
+        {
+            Some((value, range)) => refuse(Problem::OutOfRange { value, range }),
+            None => Ok(value),
+        }
+    }
+}
+
+/// How a front end names an option in a message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Spelling {
+    /// The CLI's flag: `--purge-mm`.
+    Flag,
+    /// Python's keyword (and the settings file's key): `purge_mm`.
+    Keyword,
+}
+
+impl Spelling {
+    /// The option `name` (`purge_mm`) in this spelling.
+    pub fn name(self, name: &str) -> String {
+        match self {
+            Spelling::Flag => format!("--{}", name.replace('_', "-")),
+            Spelling::Keyword => name.to_owned(),
+        }
+    }
+}
+
+/// A sentence that names options (`nothing to do: give a schedule (at_layer, at_z)...`) with
+/// each option's identity kept, so that each front end writes it as it spells it
+/// ([`Said::spelled`]): the CLI `--at-layer`, Python `at_layer`. `Display` uses the keyword.
+///
+/// ```
+/// use gweave::options::{Said, Spelling};
+/// let said = Said::new("add a tool map for T1 (").option("map").text(" T1=<mix>)");
+/// assert_eq!(said.spelled(Spelling::Flag), "add a tool map for T1 (--map T1=<mix>)");
+/// assert_eq!(said.spelled(Spelling::Keyword), "add a tool map for T1 (map T1=<mix>)");
+/// ```
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Said(Vec<(String, Option<&'static str>)>);
+
+impl Said {
+    /// A sentence beginning with `text`.
+    pub fn new(text: impl Into<String>) -> Self {
+        Said(vec![(text.into(), None)])
+    }
+    /// Then `text`.
+    pub fn text(mut self, text: impl Into<String>) -> Self {
+        self.0.push((text.into(), None));
+        self
+    }
+    /// Then the option `name` (`at_layer`), as the reader's front end spells it.
+    pub fn option(mut self, name: &'static str) -> Self {
+        self.0.push((String::new(), Some(name)));
+        self
+    }
+    /// The sentence, its options spelled as `spelling` spells them.
+    pub fn spelled(&self, spelling: Spelling) -> String {
+        self.0
+            .iter()
+            .map(|(text, option)| option.map_or_else(|| text.clone(), |o| spelling.name(o)))
+            .collect()
+    }
+}
+
+impl fmt::Display for Said {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.spelled(Spelling::Keyword))
+    }
+}
+
+/// What is wrong with an option's value.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Problem {
+    /// A number outside the option's range.
+    OutOfRange {
+        /// The number given.
+        value: f64,
+        /// The option's range.
+        range: Range,
+    },
+    /// Not as many comma-separated values as the option takes.
+    Count {
+        /// How many it takes.
+        expected: usize,
+        /// How many were given.
+        got: usize,
+        /// Their placeholder (`X,Y`).
+        value_name: &'static str,
+    },
+    /// A value the option's type cannot read (its own message).
+    Invalid(String),
+    /// Given with an option it excludes (that option's name).
+    Conflict(&'static str),
+}
+
+/// An option refused: its identity and why; each front end spells the option its own way
+/// ([`OptionError::spelled`]); `Display` uses the keyword.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OptionError {
+    /// The option (`purge_mm`).
+    pub option: &'static str,
+    /// What is wrong.
+    pub problem: Problem,
+}
+
+impl OptionError {
+    /// The message, the option named as `spelling` names it.
+    pub fn spelled(&self, spelling: Spelling) -> String {
+        let name = spelling.name(self.option);
+        match &self.problem {
+            Problem::OutOfRange { value, range } => {
+                range.check(&name, *value).err().map_or_else(String::new, |e| e.to_string())
+            }
+            Problem::Conflict(other) => format!("{name} and {}: give one of them", spelling.name(other)),
+            _ => format!("{name}: {}", self.reason()),
+        }
+    }
+
+    /// The message without the option's name, for a front end that names it itself (clap's
+    /// "invalid value '1e9' for '--purge-mm \<MM>': out of range: 0 to 1000 mm").
+    pub fn reason(&self) -> String {
+        match &self.problem {
+            Problem::OutOfRange { range, .. } => format!("out of range: {range}"),
+            Problem::Count { expected, got, value_name } => {
+                format!("takes {expected} values ({value_name}), not {got}")
+            }
+            Problem::Invalid(why) => why.clone(),
+            Problem::Conflict(other) => format!("cannot be given with {other}"),
+        }
+    }
+}
+
+impl fmt::Display for OptionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.spelled(Spelling::Keyword))
+    }
+}
+
+impl std::error::Error for OptionError {}
+
+/// A job's options type, implemented by [`job_options!`](crate::job_options).
+pub trait JobOptions: Default + Sized {
+    /// The command it belongs to, as the CLI names it (`purge-shift`).
+    const COMMAND: &'static str;
+    /// Every option, in declaration order.
+    const SPEC: &'static [OptionSpec];
+
+    /// Sets the option `spec` (one of [`JobOptions::SPEC`]) to `value`, checked against its
+    /// range and type.
+    fn set(&mut self, spec: &OptionSpec, value: Value) -> Result<(), OptionError>;
+
+    /// The option called `name` (`purge_mm`), if there is one.
+    fn spec(name: &str) -> Option<&'static OptionSpec> {
+        Self::SPEC.iter().find(|s| s.name == name)
+    }
+
+    /// Each option's value in [`JobOptions::SPEC`]'s order; `None` where it is left at its
+    /// default.
+    fn values(&self) -> Vec<Option<Value>>;
+
+    /// Refuses two options given that exclude each other (`purge_mm` and `purge_mm3`).
+    fn check_conflicts(&self) -> Result<(), OptionError> {
+        let values = self.values();
+        let given = |name: &str| Self::SPEC.iter().zip(&values).any(|(s, v)| s.name == name && v.is_some());
+        for (spec, value) in Self::SPEC.iter().zip(&values) {
+            if let Some(other) = spec.shape.conflicts.iter().find(|o| value.is_some() && given(o)) {
+                return Err(OptionError { option: spec.name, problem: Problem::Conflict(other) });
+            }
+        }
+        Ok(())
+    }
+
+    /// The options given, in the CLI's words and [`JobOptions::SPEC`]'s order, for the run's
+    /// header: `-c mix.toml --at-layer 0=Red --purge-mm 25`.
+    fn header(&self) -> String {
+        let quote =
+            |a: String| if a.is_empty() || a.contains([' ', '\t', '\'', '"']) { format!("{a:?}") } else { a };
+        let mut words = Vec::new();
+        for (spec, value) in Self::SPEC.iter().zip(self.values()) {
+            let flag = spec.shape.short.map_or_else(|| format!("--{}", spec.flag()), |c| format!("-{c}"));
+            let each: Vec<String> = match value {
+                None | Some(Value::Flag(false)) => continue,
+                Some(Value::Flag(true)) => {
+                    words.push(flag);
+                    continue;
+                }
+                Some(Value::Number(v)) => vec![short(v)],
+                Some(Value::Text(t)) => vec![t],
+                Some(Value::Path(p)) => vec![p.display().to_string()],
+                Some(Value::Texts(t)) if spec.kind == Kind::Repeated => t,
+                Some(Value::Texts(t)) => vec![t.join(",")],
+                Some(Value::Numbers(v)) => vec![v.into_iter().map(short).collect::<Vec<_>>().join(",")],
+            };
+            for word in each {
+                words.extend([flag.clone(), quote(word)]);
+            }
+        }
+        words.join(" ")
+    }
+}
+
+/// A field type an option can have: how it takes a [`Value`] and gives it back.
+pub trait OptionField: Sized {
+    /// How its value is given.
+    const KIND: Kind;
+    /// The field from a checked value of its kind.
+    fn from_value(value: Value) -> Result<Self, Problem>;
+    /// Its value, `None` at the default (left out of the header).
+    fn to_value(&self) -> Option<Value>;
+    /// The default as a word, for a type whose default is a value.
+    fn default_word() -> Option<String> {
+        None
+    }
+}
+
+fn wrong_kind(value: &Value) -> Problem {
+    Problem::Invalid(format!("not a value of this option's kind: {value:?}"))
+}
+
+macro_rules! field {
+    ($ty:ty, $kind:expr, $pattern:pat => $field:expr, $this:ident => $value:expr) => {
+        impl OptionField for $ty {
+            const KIND: Kind = $kind;
+            fn from_value(value: Value) -> Result<Self, Problem> {
+                match value {
+                    $pattern => Ok($field),
+                    other => Err(wrong_kind(&other)),
+                }
+            }
+            fn to_value(&self) -> Option<Value> {
+                let $this = self;
+                $value
+            }
+        }
+    };
+}
+
+field!(bool, Kind::Flag, Value::Flag(b) => b, b => b.then_some(Value::Flag(true)));
+field!(Option<f64>, Kind::Number, Value::Number(v) => Some(v), v => v.map(Value::Number));
+field!(Option<String>, Kind::Text, Value::Text(t) => Some(t), t => t.clone().map(Value::Text));
+field!(Option<PathBuf>, Kind::Path, Value::Path(p) => Some(p), p => p.clone().map(Value::Path));
+field!(Vec<String>, Kind::Repeated, Value::Texts(t) => t,
+    t => (!t.is_empty()).then(|| Value::Texts(t.clone())));
+field!(Option<Vec<String>>, Kind::Texts(0), Value::Texts(t) => Some(t), t => t.clone().map(Value::Texts));
+field!(Option<[String; 2]>, Kind::Texts(2), Value::Texts(t) => Some(pair(t)?),
+    t => t.clone().map(|t| Value::Texts(t.into())));
+field!(Option<[f64; 2]>, Kind::Numbers(2), Value::Numbers(v) => Some(pair(v)?),
+    v => v.map(|v| Value::Numbers(v.into())));
+
+fn pair<T>(v: Vec<T>) -> Result<[T; 2], Problem> {
+    let got = v.len();
+    v.try_into().map_err(|_| Problem::Count { expected: 2, got, value_name: "A,B" })
+}
+
+/// An enumeration read by its settings-file word (`perceived`, `reprapfirmware`): with
+/// [`word_option!`](crate::word_option) it is an option of [`Kind::Text`], bare (its default is a value) or in an
+/// `Option` (unset by default).
+pub trait Word: Serialize + DeserializeOwned + Default + PartialEq {
+    /// Reads the word as the settings file does.
+    fn read(text: &str) -> Result<Self, Problem> {
+        Self::deserialize(text.into_deserializer()).map_err(|e: WordError| Problem::Invalid(e.to_string()))
+    }
+    /// The word for the value.
+    fn word(&self) -> String {
+        serde_json::to_value(self).ok().and_then(|v| v.as_str().map(str::to_owned)).unwrap_or_default()
+    }
+}
+
+/// Makes a [`Word`] type an option field, bare and in an `Option`.
+#[macro_export]
+macro_rules! word_option {
+    ($ty:ty) => {
+        impl $crate::options::Word for $ty {}
+        impl $crate::options::OptionField for $ty {
+            const KIND: $crate::options::Kind = $crate::options::Kind::Text;
+            fn from_value(value: $crate::options::Value) -> Result<Self, $crate::options::Problem> {
+                match value {
+                    $crate::options::Value::Text(t) => <$ty as $crate::options::Word>::read(&t),
+                    other => Err($crate::options::Problem::Invalid(format!("{other:?}"))),
+                }
+            }
+            fn to_value(&self) -> Option<$crate::options::Value> {
+                let default = <$ty as Default>::default();
+                (*self != default).then(|| $crate::options::Value::Text($crate::options::Word::word(self)))
+            }
+            fn default_word() -> Option<String> {
+                Some($crate::options::Word::word(&<$ty as Default>::default()))
+            }
+        }
+        impl $crate::options::OptionField for Option<$ty> {
+            const KIND: $crate::options::Kind = $crate::options::Kind::Text;
+            fn from_value(value: $crate::options::Value) -> Result<Self, $crate::options::Problem> {
+                <$ty as $crate::options::OptionField>::from_value(value).map(Some)
+            }
+            fn to_value(&self) -> Option<$crate::options::Value> {
+                self.as_ref().map(|v| $crate::options::Value::Text($crate::options::Word::word(v)))
+            }
+        }
+    };
+}
+
+/// Declares a job's options type: each field is an option, its doc comment the help, its type
+/// the kind of value ([`OptionField`]), and after `=` its [`Shape`] (value name, range, short
+/// flag, aliases, conflicts). The struct gets [`JobOptions`], `Default` (every option unset or
+/// at its default) and `PartialEq`.
+///
+/// ```
+/// gweave::job_options! {
+///     /// Options of a job.
+///     pub struct DemoOptions for "demo" {
+///         /// Purge per change, mm.
+///         purge_mm: Option<f64> = gweave::options::Shape::new("MM").range(gweave::range::PURGE_MM),
+///     }
+/// }
+/// use gweave::options::JobOptions;
+/// assert_eq!(DemoOptions::SPEC[0].help(), "Purge per change, mm.");
+/// ```
+#[macro_export]
+macro_rules! job_options {
+    (
+        $(#[doc = $doc:literal])*
+        pub struct $name:ident for $command:literal {
+            $(
+                $(#[doc = $help:literal])*
+                $field:ident: $ty:ty = $shape:expr,
+            )*
+        }
+    ) => {
+        $(#[doc = $doc])*
+        #[derive(Debug, Clone, Default, PartialEq)]
+        pub struct $name {
+            $( $(#[doc = $help])* pub $field: $ty, )*
+        }
+
+        impl $crate::options::JobOptions for $name {
+            const COMMAND: &'static str = $command;
+            const SPEC: &'static [$crate::options::OptionSpec] = &[$(
+                $crate::options::OptionSpec {
+                    name: stringify!($field),
+                    kind: <$ty as $crate::options::OptionField>::KIND,
+                    doc: concat!($($help, "\n"),*),
+                    default: <$ty as $crate::options::OptionField>::default_word,
+                    shape: $shape,
+                },
+            )*];
+
+            fn set(
+                &mut self,
+                spec: &$crate::options::OptionSpec,
+                value: $crate::options::Value,
+            ) -> Result<(), $crate::options::OptionError> {
+                let value = spec.check(value)?;
+                let refuse = |problem| $crate::options::OptionError { option: spec.name, problem };
+                match spec.name {
+                    $(stringify!($field) => {
+                        self.$field = $crate::options::OptionField::from_value(value).map_err(refuse)?;
+                    })*
+                    _ => {}
+                }
+                Ok(())
+            }
+
+            fn values(&self) -> Vec<Option<$crate::options::Value>> {
+                vec![$($crate::options::OptionField::to_value(&self.$field)),*]
+            }
+        }
+    };
+}
