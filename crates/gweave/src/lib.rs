@@ -79,8 +79,9 @@ pub use run::{Ran, Run, Source};
 // The jobs: each one's entry point, options and report.
 pub use bed::Bed;
 pub use check::{check_file, CheckOptions, CheckReport};
-pub use post::mix::{mix, MixPassError};
-pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftReport};
+pub use options::{JobOptions, OptionError, OptionSpec};
+pub use post::mix::{mix, MixOptions, MixPassError};
+pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
 pub use render::{preview, preview_with_progress, PreviewOptions, PreviewReport, Toolpath, ToolpathOptions};
 pub use rotary_job::{tube_file, wrap_file};
 pub use stats::{stats_file, Stats};
