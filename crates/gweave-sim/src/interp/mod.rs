@@ -288,11 +288,7 @@ impl Machine {
         }
         if trim(line) == b"?" {
             // Before the parser, which has no word for it; answered even when halted.
-            (commands::help_spec().run)(
-                self,
-                &Call { line, number: 0, before: [0.0; state::AXES] },
-                out,
-            );
+            (commands::help_spec().run)(self, &Call { line, number: 0, before: [0.0; state::AXES] }, out);
             return self.outcome();
         }
         let before = self.core.state().pos;
@@ -317,9 +313,7 @@ impl Machine {
             (Command::Code { number, .. }, Some(spec)) if self.built_with(spec) => {
                 self.run_spec(spec, &Call { line, number, before }, out)
             }
-            (Command::Extended, Some(spec)) => {
-                self.run_spec(spec, &Call { line, number: 0, before }, out)
-            }
+            (Command::Extended, Some(spec)) => self.run_spec(spec, &Call { line, number: 0, before }, out),
             _ => self.unknown_command(line, out),
         }
         self.sync(out);
