@@ -168,9 +168,6 @@ const KEEPALIVE_S: Range = Range::new(0.0, crate::link::serial::MAX_KEEPALIVE_S 
 /// `M900 K`: Marlin's linear advance factor, mm of filament per mm/s of extrusion speed; Marlin
 /// refuses one outside 0 to 10 (`M900.cpp`, "K value out of range").
 const ADVANCE_K: Range = Range::new(0.0, 10.0, "mm/(mm/s)");
-/// `M572 S`: RepRapFirmware's pressure advance, the seconds of extrusion speed the extruder
-/// runs ahead; tuned values are a few hundredths, a whole second is far past any nozzle.
-const PRESSURE_ADVANCE_S: Range = Range::new(0.0, 1.0, "s");
 
 /// The words of the commands that take a period.
 const PERIOD: &[Param] = &[p("S", range::PERIOD_S)];
@@ -254,7 +251,6 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M502 M503", what: "settings: factory defaults, report", run: defaults_or_report, ..ROW },
     CommandSpec { codes: "M524", what: "abort the SD print", run: sd, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, ..ROW },
-    CommandSpec { codes: "M572", what: "pressure advance D<extruder> S<seconds> (RepRapFirmware; accepted: it shapes the extruder's motion, not the print's time)", run: accepted, params: &[p("D", TOOL), p("S", PRESSURE_ADVANCE_S)], ..ROW },
     CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, params: TOOL_TEMP, ..ROW },
     CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, needs: Feature::AdvancedPause, ..ROW },
     CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: m851, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
