@@ -191,26 +191,40 @@ fn check_takes_the_bed_of_a_machine_profile() {
 
 /// `raster` counts 800 us after every fire (the InkShield library waits that long after each
 /// spray) but the virtual printer counted nothing for a fire: on a sphere `sim` came out
-/// 2 min 48 s shorter than the raster's own figure. Both now agree: the raster's motion and
-/// firing equal the virtual printer's motion and dwells (800 us a fire), homing aside.
+/// 2 min 48 s shorter than the raster's own figure. And `raster --machine` planned its time on
+/// Marlin's defaults whatever the machine (the binder jet's pistons, 400 steps/mm, took 0.5 s
+/// more in `sim` on the badge). Both now agree: the raster's motion and firing equal the
+/// virtual printer's motion and dwells on the same machine (800 us a fire, the recoats'
+/// dwells), homing aside.
 #[test]
 fn sim_waits_after_each_fire_as_raster_counts_it() {
     let dir = tempfile::tempdir().unwrap();
     let gcode = dir.path().join("badge.gcode");
     let layers = root().join("examples/raster/layers");
     let args = ["raster", layers.to_str().unwrap(), "-o", gcode.to_str().unwrap()];
-    let out = gweave(&[&args[..], &["--machine", "inkjet-c6602", "--json", "-q"]].concat());
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    let raster: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let fires = raster["fire_commands"].as_f64().unwrap();
-    assert_eq!(raster["time"]["fire_s"].as_f64().unwrap(), fires * 800.0 * 1e-6);
-    let out = gweave(&["sim", gcode.to_str().unwrap(), "--machine", "inkjet-c6602", "--json", "-q"]);
-    let sim: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let t = &sim["time"];
-    let sim_s = t["motion_s"].as_f64().unwrap() + t["dwell_s"].as_f64().unwrap();
-    let raster_s = raster["time"]["total_s"].as_f64().unwrap();
-    assert!((sim_s - raster_s).abs() < 1e-6, "sim {sim_s} s, raster {raster_s} s");
-    assert!((t["dwell_s"].as_f64().unwrap() - fires * 800e-6).abs() < 1e-9, "{t}");
+    // The badge's 8 layers: 7 recoats of 0.5 s on the binder jet, none on the bare printhead.
+    for (machine, recoat_dwells_s) in [("inkjet-c6602", 0.0), ("binder-jet", 7.0 * 0.5)] {
+        let out = gweave(&[&args[..], &["--machine", machine, "--json", "-q"]].concat());
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let raster: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let fires = raster["fire_commands"].as_f64().unwrap();
+        assert_eq!(raster["time"]["fire_s"].as_f64().unwrap(), fires * 800.0 * 1e-6);
+        let out = gweave(&["sim", gcode.to_str().unwrap(), "--machine", machine, "--json", "-q"]);
+        let sim: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let t = &sim["time"];
+        let sim_s = t["motion_s"].as_f64().unwrap() + t["dwell_s"].as_f64().unwrap();
+        let raster_s = raster["time"]["total_s"].as_f64().unwrap();
+        assert!((sim_s - raster_s).abs() < 1e-6, "{machine}: sim {sim_s} s, raster {raster_s} s");
+        let dwell_s = t["dwell_s"].as_f64().unwrap();
+        assert!((dwell_s - (recoat_dwells_s + fires * 800e-6)).abs() < 1e-9, "{machine}: {t}");
+    }
+    // The summary says which motion the time was planned on.
+    let out = gweave(&[&args[..], &["--machine", "binder-jet"]].concat());
+    assert!(
+        text(&out.stdout).contains("(planner, Binder jet, HP C6602, powder recoat: motion"),
+        "{}",
+        text(&out.stdout)
+    );
 }
 
 /// A binder-jet user rasterised the badge and checked it on their machine: `sim --machine

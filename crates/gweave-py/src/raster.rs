@@ -9,7 +9,7 @@ use gweave::gcode::writer::Target;
 use gweave::gen::raster_job::{HeadSource, JobError, JobOptions, JobReport};
 use gweave::pass::Quiet;
 use gweave::post::metadata::Figures;
-use gweave_sim::Estimator;
+use gweave_sim::{Estimator, MachineProfile};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 
@@ -37,15 +37,19 @@ fn job_err(e: JobError) -> PyErr {
 }
 
 /// `head=` (a printhead profile file) or `machine=` (an inkjet machine profile, a file or a
-/// built-in name), as `--head` and `--machine`.
-fn head_source(head: Option<PathBuf>, machine: Option<PathBuf>) -> PyResult<Option<HeadSource>> {
+/// built-in name), as `--head` and `--machine`: the printhead, and the machine when one is given.
+fn head_source(
+    head: Option<PathBuf>,
+    machine: Option<PathBuf>,
+) -> PyResult<(Option<HeadSource>, Option<MachineProfile>)> {
     match (head, machine) {
         (Some(_), Some(_)) => Err(PyValueError::new_err("give head or machine, not both")),
         (None, Some(m)) => {
             let profile = crate::sim::machine_profile(Some(m))?;
-            Ok(Some(profile.raster_head().map_err(|e| PyValueError::new_err(e.to_string()))?))
+            let head = profile.raster_head().map_err(|e| PyValueError::new_err(e.to_string()))?;
+            Ok((Some(head), Some(profile)))
         }
-        (head, None) => Ok(head.map(HeadSource::File)),
+        (head, None) => Ok((head.map(HeadSource::File), None)),
     }
 }
 
@@ -82,9 +86,13 @@ pub(crate) fn raster_json(
     fast_estimate: bool,
     options: &str,
 ) -> PyResult<String> {
+    let (head, machine) = head_source(head, machine)?;
+    // The planner times the job on the machine it is written for, else on Marlin's defaults.
+    let motion = machine.map(|m| m.motion).unwrap_or_default();
+    let timer = || Estimator::line_timer_on(&motion);
     let job_options = JobOptions {
         inputs,
-        head: head_source(head, machine)?,
+        head,
         threshold,
         invert,
         flip_y,
@@ -115,15 +123,14 @@ pub(crate) fn raster_json(
     let target = Target::File(output.clone());
     let report = if job.knows_its_figures() {
         // Its time and filament (none) are known as it writes: nothing is read back.
-        let write =
-            |out: &mut dyn Write| job.run_into(out, &mut Quiet, Estimator::line_timer).map_err(job_err);
+        let write = |out: &mut dyn Write| job.run_into(out, &mut Quiet, timer).map_err(job_err);
         let figures = |r: &JobReport| Figures { time_s: [r.time.total_s; 2], ..Figures::default() };
         let mut report =
             interruptible(py, || finish::finished_directly(&target, "raster", options, write, figures))??;
         report.output = output.display().to_string();
         report
     } else {
-        let write = |t: &Target| job.run(t, &mut Quiet, Estimator::line_timer).map_err(job_err);
+        let write = |t: &Target| job.run(t, &mut Quiet, timer).map_err(job_err);
         // Its own time counts the printhead's firing, which the estimator does not know.
         let own_time = |r: &JobReport| Some(r.time.total_s);
         interruptible(py, || finish::finished(None, &target, "raster", options, write, own_time))??
@@ -147,7 +154,7 @@ pub(crate) fn raster_test_pattern_json(
     options: &str,
 ) -> PyResult<String> {
     let job_options = JobOptions {
-        head: head_source(head, machine)?,
+        head: head_source(head, machine)?.0,
         heads,
         dialect: crate::args::firmware("dialect", dialect)?,
         origin_mm: origin,

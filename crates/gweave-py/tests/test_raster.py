@@ -79,6 +79,16 @@ def test_slice_raster_then_raster(tmp_path):
         gweave.slice_raster(RDATA / "torus.stl", tmp_path / "none", layer_height=0.1, dpi=0)
 
 
+def test_raster_for_a_machine_is_timed_as_sim_times_it_there(tmp_path):
+    """``machine=`` plans the raster's time on the machine's own motion (it was Marlin's defaults,
+    0.5 s short of ``sim`` on the binder jet's pistons), and both count 800 us after each fire."""
+    out = tmp_path / "badge.gcode"
+    r = gweave.raster(EXAMPLES / "layers", out, machine="binder-jet")
+    t = gweave.sim(out, machine="binder-jet")["time"]
+    assert r["time"]["total_s"] == pytest.approx(t["motion_s"] + t["dwell_s"], abs=1e-6)
+    assert t["dwell_s"] == pytest.approx(7 * 0.5 + r["fire_commands"] * 800e-6, abs=1e-9)
+
+
 def test_raster_for_the_binder_jet_machine_passes_its_recoat_checks(tmp_path):
     """``machine="binder-jet"`` writes the machine's recoat on its canvas, as ``--machine``: the
     virtual printer with the same machine warns of nothing (the default recoat: 14 warnings)."""

@@ -13,7 +13,7 @@ use gweave::gen::raster::{FireOrder, DENSITY, HEADS, PATTERN_COLUMNS, THRESHOLD}
 use gweave::gen::raster_job::{HeadSource, JobOptions, JobReport, Source};
 use gweave::post::metadata::Figures;
 use gweave::range::{DPI, FEED_MM_MIN, LAYER_HEIGHT_MM, PIXEL_MM, POSITION_MM};
-use gweave_sim::Estimator;
+use gweave_sim::{Estimator, MachineProfile};
 
 use crate::args::load_machine;
 use crate::common::{hms, in_range, numbers_in, print_summary, ReportArgs};
@@ -122,11 +122,12 @@ pub enum FireOrderArg {
 }
 
 impl RasterArgs {
-    fn options(&self) -> Result<JobOptions> {
+    /// The job's options; `machine` is the loaded `--machine`.
+    fn options(&self, machine: Option<&MachineProfile>) -> Result<JobOptions> {
         Ok(JobOptions {
             inputs: self.inputs.clone(),
-            head: match (&self.machine, &self.head) {
-                (Some(machine), _) => Some(load_machine(machine)?.raster_head()?),
+            head: match (machine, &self.head) {
+                (Some(machine), _) => Some(machine.raster_head()?),
                 (None, head) => head.clone().map(HeadSource::File),
             },
             threshold: self.threshold,
@@ -155,7 +156,12 @@ impl RasterArgs {
 }
 
 pub fn run(args: RasterArgs) -> Result<ExitCode> {
-    let options = args.options()?;
+    let machine = args.machine.as_deref().map(load_machine).transpose()?;
+    let options = args.options(machine.as_ref())?;
+    // The planner times the job on the machine it is written for, else on Marlin's defaults.
+    let motion = machine.as_ref().map(|m| m.motion.clone()).unwrap_or_default();
+    let timer = || Estimator::line_timer_on(&motion);
+    let planner = machine.as_ref().map_or("Marlin defaults", |m| m.name.as_str());
     let to_stdout = args.output == Path::new("-");
     args.report.refuse_json_with_stdout(to_stdout)?;
     let target = args.format.target(&args.output)?;
@@ -196,17 +202,17 @@ pub fn run(args: RasterArgs) -> Result<ExitCode> {
     // Its own time counts the printhead's firing, which the estimator does not know.
     let (mut report, _) = if job.knows_its_figures() {
         // Its time and filament (none) are known as it writes: nothing is read back.
-        let run = |out: &mut dyn Write| Ok(job.run_into(out, &mut bar, Estimator::line_timer)?);
+        let run = |out: &mut dyn Write| Ok(job.run_into(out, &mut bar, timer)?);
         let figures = |r: &JobReport| Figures { time_s: [r.time.total_s; 2], ..Figures::default() };
         finish::with_own_figures(&target, run, figures)?
     } else {
-        let run = |t: &Target| Ok(job.run(t, &mut bar, Estimator::line_timer)?);
+        let run = |t: &Target| Ok(job.run(t, &mut bar, timer)?);
         finish::with_metadata_timed(None, &target, run, |r: &JobReport| Some(r.time.total_s))?
     };
     report.output = if to_stdout { "-".into() } else { args.output.display().to_string() };
     drop(bar);
     if args.report.emit(&report)? && !to_stdout {
-        print_summary(|out| print_human(out, &report, &job.profile))?;
+        print_summary(|out| print_human(out, &report, &job.profile, planner))?;
     }
     if from_images && args.layer_height.is_none() {
         eprintln!("gweave: note: {}", layer_height_hint(args.pixel_mm.or(args.dpi.map(|d| 25.4 / d))));
@@ -244,7 +250,13 @@ fn pixel_size_hint(profile: &PrintheadProfile) -> String {
     )
 }
 
-fn print_human(out: &mut dyn Write, r: &JobReport, profile: &PrintheadProfile) -> io::Result<()> {
+/// The human summary; `planner` names the motion the time was planned on.
+fn print_human(
+    out: &mut dyn Write,
+    r: &JobReport,
+    profile: &PrintheadProfile,
+    planner: &str,
+) -> io::Result<()> {
     let rr = &r.raster;
     writeln!(out, "{}", r.output)?;
     writeln!(
@@ -275,8 +287,8 @@ fn print_human(out: &mut dyn Write, r: &JobReport, profile: &PrintheadProfile) -
         rr.z_moves
     )?;
     let method = match r.time.method {
-        "planner" => "planner, Marlin defaults",
-        _ => "path at feed rate, no acceleration",
+        "planner" => format!("planner, {planner}"),
+        _ => "path at feed rate, no acceleration".to_owned(),
     };
     writeln!(
         out,

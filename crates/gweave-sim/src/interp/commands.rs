@@ -30,16 +30,16 @@ use crate::motion::limits;
 use crate::profile::build_options::Feature;
 use crate::thermal::control;
 
-/// What a handler is given: the line, the code's number, what the line does to the modal state
-/// and the logical position before it.
+/// What a handler is given: the line, the code's number and the logical position before it.
+/// What the line does to the modal state is in the state
+/// ([`State::effect`](gweave::gcode::state::State::effect)), where handlers read and change it
+/// in place: a move is too large to copy per line (docs/performance.md).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Call<'a> {
     /// The raw line (without its line end).
     pub line: &'a [u8],
     /// The code's number (`104` for `M104`, the tool for `T<n>`; 0 for a named command).
     pub number: u32,
-    /// What the modal state made of the line.
-    pub effect: Effect,
     /// The logical position before the line.
     pub before: state::Position,
 }
@@ -168,9 +168,6 @@ const KEEPALIVE_S: Range = Range::new(0.0, crate::link::serial::MAX_KEEPALIVE_S 
 /// `M900 K`: Marlin's linear advance factor, mm of filament per mm/s of extrusion speed; Marlin
 /// refuses one outside 0 to 10 (`M900.cpp`, "K value out of range").
 const ADVANCE_K: Range = Range::new(0.0, 10.0, "mm/(mm/s)");
-/// `M572 S`: RepRapFirmware's pressure advance, the seconds of extrusion speed the extruder
-/// runs ahead; tuned values are a few hundredths, a whole second is far past any nozzle.
-const PRESSURE_ADVANCE_S: Range = Range::new(0.0, 1.0, "s");
 
 /// The words of the commands that take a period.
 const PERIOD: &[Param] = &[p("S", range::PERIOD_S)];
@@ -261,7 +258,6 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M502 M503", what: "settings: factory defaults, report", run: defaults_or_report, ..ROW },
     CommandSpec { codes: "M524", what: "abort the SD print", run: sd::m524, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, ..ROW },
-    CommandSpec { codes: "M572", what: "pressure advance D<extruder> S<seconds> (RepRapFirmware; accepted: it shapes the extruder's motion, not the print's time)", run: accepted, params: &[p("D", TOOL), p("S", PRESSURE_ADVANCE_S)], ..ROW },
     CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, params: TOOL_TEMP, ..ROW },
     CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, needs: Feature::AdvancedPause, ..ROW },
     CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: m851, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
@@ -402,21 +398,21 @@ pub(super) fn check(code: (u8, u32), params: &[Param], block: &Block, line: &[u8
 // lines each.
 
 fn motion(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.motion(c.line, c.effect, out)
+    m.motion(c.line, out)
 }
 
 fn core(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.run_core(c.line, &c.effect, out)
+    m.run_core(c.line, out)
 }
 
 fn dwell(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    match c.effect {
+    match m.core.state().effect {
         Effect::Dwell { t_s } if t_s > super::motion::MAX_COMMAND_S => {
             m.refuse(format!("a dwell of {t_s:.0} s: refused"), out)
         }
         _ => {
             m.thermal.set_moving(false);
-            m.run_core(c.line, &c.effect, out);
+            m.run_core(c.line, out);
             m.moved_since_m400 = false;
         }
     }
@@ -428,12 +424,12 @@ fn g10_g11(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     if c.number == 10 && m.core.state().g10_is_not_a_retraction(m.core.block()) {
         m.rrf_tool_temperature(out)
     } else {
-        m.run_core(c.line, &c.effect, out)
+        m.run_core(c.line, out)
     }
 }
 
 fn home(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.home(c.line, c.effect, &c.before, out)
+    m.home(c.line, &c.before, out)
 }
 
 fn g29(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
@@ -455,13 +451,13 @@ fn set_position(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     for (shift, (before, now)) in m.shift_mm.iter_mut().zip(c.before.iter().zip(pos)) {
         *shift += before - now;
     }
-    m.run_core(c.line, &c.effect, out);
+    m.run_core(c.line, out);
 }
 
 /// `M0`/`M1`: finish the moves (drained before), motors off; the controller seed's `M0` also
 /// homes and ends the program.
 fn program_stop(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.run_core(c.line, &c.effect, out);
+    m.run_core(c.line, out);
     if c.number == 0 && m.profile.firmware.m0 == crate::profile::build_options::ProgramStop::Seed {
         m.execute(b"G28", out);
         // The motors go off again after the homing: the axes are no longer homed.
@@ -478,7 +474,7 @@ fn motors(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     if c.number == 17 {
         return;
     }
-    m.run_core(c.line, &c.effect, out);
+    m.run_core(c.line, out);
     m.core.drain();
     if !m.core.block().has(b'S') {
         m.homed = [false; 3];
@@ -654,7 +650,7 @@ fn m119(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 /// tool definition (`M563`) are accepted.
 fn mixing(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     if MixingCode::sets_a_mix(c.number) {
-        m.run_core(c.line, &c.effect, out)
+        m.run_core(c.line, out)
     }
 }
 
@@ -666,7 +662,7 @@ fn m205(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
             *slot = v;
         }
     }
-    m.run_core(c.line, &c.effect, out);
+    m.run_core(c.line, out);
 }
 
 /// `M220`/`M221`: feed rate / flow percentage, or report it.
@@ -681,7 +677,7 @@ fn percentage(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 /// `M400`: the moves were drained before; its `ok` takes that time in wall time too.
 fn m400(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.thermal.set_moving(false);
-    m.run_core(c.line, &c.effect, out);
+    m.run_core(c.line, out);
     m.moved_since_m400 = false;
     m.wall_timed = true;
 }
@@ -711,14 +707,14 @@ fn restart(m: &mut Machine, _: &Call<'_>, _: &mut dyn FnMut(f64, &str)) {
 }
 
 fn tool_change(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.tool_change(c.line, c.number, c.effect, out)
+    m.tool_change(c.line, c.number, out)
 }
 
 /// Klipper's `SET_VELOCITY_LIMIT` and `SET_KINEMATIC_POSITION`, carried out by the motion core
 /// in Klipper mode; a Marlin board does not know them.
 fn klipper(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     if m.is_klipper() {
-        m.run_core(c.line, &c.effect, out)
+        m.run_core(c.line, out)
     } else {
         m.unknown_command(c.line, out)
     }

@@ -45,7 +45,7 @@ impl Machine {
         }
         self.set_target(id, s.or(r), out);
         if c.number == 109 {
-            self.run_core(c.line, &c.effect, out);
+            self.run_core(c.line, out);
             self.sync(out);
             self.wait_heater(id, mode(r.is_some() && s.is_none()), out);
         }
@@ -60,7 +60,7 @@ impl Machine {
         let (s, r) = self.target_words();
         self.set_target(HeaterId::Bed, s.or(r), out);
         if c.number == 190 {
-            self.run_core(c.line, &c.effect, out);
+            self.run_core(c.line, out);
             self.sync(out);
             self.wait_heater(HeaterId::Bed, mode(r.is_some() && s.is_none()), out);
         }
@@ -68,7 +68,7 @@ impl Machine {
 
     /// `M116` (RepRapFirmware): wait for every heater that has a target.
     pub(super) fn m116(&mut self, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-        self.run_core(c.line, &c.effect, out);
+        self.run_core(c.line, out);
         self.core.drain();
         self.sync(out);
         let ids = (0..self.thermal.hotend_count())

@@ -289,11 +289,7 @@ impl Machine {
         }
         if trim(line) == b"?" {
             // Before the parser, which has no word for it; answered even when halted.
-            (commands::help_spec().run)(
-                self,
-                &Call { line, number: 0, effect: Effect::None, before: [0.0; state::AXES] },
-                out,
-            );
+            (commands::help_spec().run)(self, &Call { line, number: 0, before: [0.0; state::AXES] }, out);
             return self.outcome();
         }
         let before = self.core.state().pos;
@@ -308,19 +304,17 @@ impl Machine {
                 return self.outcome();
             }
         }
-        let effect = self.core.apply(line);
+        self.core.apply(line);
         if halted {
             out(self.now_s(), STOPPED_LINE);
             return Outcome::Halted;
         }
         match (command, spec) {
-            (Command::None, _) => self.motion(line, effect, out),
+            (Command::None, _) => self.motion(line, out),
             (Command::Code { number, .. }, Some(spec)) if self.built_with(spec) => {
-                self.run_spec(spec, &Call { line, number, effect, before }, out)
+                self.run_spec(spec, &Call { line, number, before }, out)
             }
-            (Command::Extended, Some(spec)) => {
-                self.run_spec(spec, &Call { line, number: 0, effect, before }, out)
-            }
+            (Command::Extended, Some(spec)) => self.run_spec(spec, &Call { line, number: 0, before }, out),
             _ => self.unknown_command(line, out),
         }
         self.sync(out);
@@ -452,9 +446,10 @@ impl Machine {
         matches!(self.profile.motion.corners, crate::motion::limits::CornerMode::Klipper(_))
     }
 
-    /// Plans what the line does; a refusal becomes an `echo:` reply and a warning.
-    fn run_core(&mut self, line: &[u8], effect: &Effect, out: &mut dyn FnMut(f64, &str)) {
-        if let Err(e) = self.core.run(line, effect) {
+    /// Plans what the line does (the effect the modal state made of it, as the handlers left it
+    /// there); a refusal becomes an `echo:` reply and a warning.
+    fn run_core(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        if let Err(e) = self.core.run_applied(line) {
             let message = match &e {
                 EstimateError::Mixing { source, .. } => source.to_string(),
                 EstimateError::Profile { source, .. } => source.to_string(),
@@ -500,7 +495,7 @@ impl Machine {
         }
     }
 
-    fn tool_change(&mut self, line: &[u8], number: u32, effect: Effect, out: &mut dyn FnMut(f64, &str)) {
+    fn tool_change(&mut self, line: &[u8], number: u32, out: &mut dyn FnMut(f64, &str)) {
         let mixing = self.profile.mixing_inputs > 0;
         let valid = if mixing {
             (number as usize) < gweave::colour::dialect::MARLIN_VIRTUAL_TOOLS
@@ -515,7 +510,7 @@ impl Machine {
         }
         // Marlin finishes the moves before a tool change.
         self.core.drain();
-        self.run_core(line, &effect, out);
+        self.run_core(line, out);
         if !mixing {
             // Checked above: the hotend exists (the one nozzle, for a tool of a single nozzle).
             let _ = self.thermal.set_active_extruder(self.profile.hotend_of_tool(number as usize));
@@ -549,7 +544,9 @@ impl Machine {
             self.warn(WarningKind::Inkjet { detail });
         }
         if wait_s > 0.0 {
-            self.run_core(line, &Effect::Dwell { t_s: wait_s }, out);
+            // The wait is what the line does.
+            self.core.state_mut().effect = Effect::Dwell { t_s: wait_s };
+            self.run_core(line, out);
         }
     }
 

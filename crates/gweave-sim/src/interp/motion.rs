@@ -38,14 +38,14 @@ pub(super) fn rest_to_rest_s(d: f64, v: f64, a: f64) -> f64 {
 
 impl Machine {
     /// A line that moves (or a motion command without axis words, which only sets F).
-    pub(super) fn motion(&mut self, line: &[u8], mut effect: Effect, out: &mut dyn FnMut(f64, &str)) {
-        // The move is changed in place (feed and flow overrides, a refused extrusion): an
-        // `Effect` is two 7-axis positions and an arc, not worth copying twice per line.
-        let Effect::Move(m) = &mut effect else {
-            self.run_core(line, &effect, out);
+    pub(super) fn motion(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        // The move is changed in place in the modal state's effect (feed and flow overrides, a
+        // refused extrusion), where the core reads it: an `Effect` is two 7-axis positions and
+        // an arc, and a copy of it right after the state wrote it stalls (docs/performance.md).
+        let Effect::Move(m) = &mut self.core.state_mut().effect else {
+            self.run_core(line, out);
             return;
         };
-        let out_of_reach = self.check_bounds(&m.from, &m.to);
         if let Some(declared) = &self.declared_feed {
             let marlin = !matches!(self.profile.motion.corners, CornerMode::Klipper(_));
             if let Some(feed) = declared.model_feed_mm_min(m, &self.profile.motion.steps, marlin) {
@@ -55,15 +55,23 @@ impl Machine {
         if self.feed_pct != 100.0 {
             m.feed_mm_min *= self.feed_pct / 100.0;
         }
-        if let Some(message) = out_of_reach.or_else(|| too_long(m)) {
+        let too_long = too_long(m);
+        let xyza = |p: &state::Position| [p[state::X], p[state::Y], p[state::Z], p[state::A]];
+        let (from, to) = (xyza(&m.from), xyza(&m.to));
+        let (from_e, to_e) = (m.from[state::E], m.to[state::E]);
+        if let Some(message) = self.check_bounds(&from, &to).or(too_long) {
             // The machine stays where it was, as firmware that refuses a move does.
-            self.core.state_mut().pos = m.from;
+            let s = self.core.state_mut();
+            if let Effect::Move(m) = &s.effect {
+                s.pos = m.from;
+            }
             self.refuse(message, out);
             return;
         }
-        let de = m.to[state::E] - m.from[state::E];
+        let de = to_e - from_e;
         if de != 0.0 {
             let hotend = self.active_hotend();
+            let mut fed_to_e = to_e;
             if let Err(cold) = self.thermal.check_extrude(hotend) {
                 // Marlin drops the E part and goes on as if it had extruded.
                 out(self.now_s(), COLD_EXTRUSION_LINE);
@@ -72,21 +80,25 @@ impl Machine {
                     temp_c: cold.temp_c,
                     min_c: cold.min_c,
                 });
-                m.to[state::E] = m.from[state::E];
+                fed_to_e = from_e;
             } else if self.flow_pct != 100.0 {
-                m.to[state::E] = m.from[state::E] + de * self.flow_pct / 100.0;
+                fed_to_e = from_e + de * self.flow_pct / 100.0;
             }
-            let fed_mm = m.to[state::E] - m.from[state::E];
+            if fed_to_e != to_e {
+                if let Effect::Move(m) = &mut self.core.state_mut().effect {
+                    m.to[state::E] = fed_to_e;
+                }
+            }
+            let fed_mm = fed_to_e - from_e;
             self.filament_mm[self.tool] += fed_mm;
             self.retraction[self.tool].feed(fed_mm);
         }
         self.thermal.set_moving(true);
         self.moved_since_m400 = true;
         if let Some(check) = &mut self.recoat {
-            let axes = |p: &state::Position| [p[state::X], p[state::Y], p[state::Z], p[state::A]];
-            check.on_move(axes(&m.from), axes(&m.to));
+            check.on_move(from, to);
         }
-        self.run_core(line, &effect, out);
+        self.run_core(line, out);
     }
 
     /// The hotend that extrudes: the tool's on a multi-hotend machine, the only one otherwise.
@@ -101,7 +113,7 @@ impl Machine {
     /// travel outside it on some axis (a coordinate with stray digits, `X999999999`): such a move
     /// would run for days of simulated time, every heater tick of it simulated. A smaller
     /// excursion is only reported, and carried out.
-    fn check_bounds(&mut self, from: &state::Position, to: &state::Position) -> Option<String> {
+    fn check_bounds(&mut self, from: &[f64; 4], to: &[f64; 4]) -> Option<String> {
         let ranges = self.profile.bed.ranges();
         let mut out_of_reach = None;
         for (i, &(min_mm, max_mm)) in ranges.iter().enumerate() {
@@ -125,18 +137,12 @@ impl Machine {
     }
 
     /// `G28 [X] [Y] [Z]`.
-    pub(super) fn home(
-        &mut self,
-        line: &[u8],
-        effect: Effect,
-        before: &state::Position,
-        out: &mut dyn FnMut(f64, &str),
-    ) {
-        let Effect::Home { axes } = effect else {
+    pub(super) fn home(&mut self, line: &[u8], before: &state::Position, out: &mut dyn FnMut(f64, &str)) {
+        let Effect::Home { axes } = self.core.state().effect else {
             return;
         };
         // Drains the planner.
-        self.run_core(line, &effect, out);
+        self.run_core(line, out);
         self.thermal.set_moving(true);
         let ranges = self.profile.bed.ranges();
         let sides = self.profile.endstops.to_array();

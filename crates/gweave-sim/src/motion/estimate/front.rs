@@ -133,7 +133,7 @@ impl Front {
     /// Parse `raw` and apply it to the modal state.
     pub(super) fn parse(&mut self, raw: &[u8]) -> Effect {
         self.lex(raw);
-        self.apply(raw)
+        *self.apply(raw)
     }
 
     /// First half of [`Front::parse`]: read the line's words into [`Front::block`], counting
@@ -145,8 +145,8 @@ impl Front {
     }
 
     /// Second half of [`Front::parse`]: apply the line just read to the modal state.
-    pub(super) fn apply(&mut self, raw: &[u8]) -> Effect {
-        *self.state.apply(raw, &self.block)
+    pub(super) fn apply(&mut self, raw: &[u8]) -> &Effect {
+        self.state.apply(raw, &self.block)
     }
 
     /// Accounts every layer after the first as one: the time accounts then stop growing with
@@ -243,8 +243,22 @@ impl Front {
         if let Some(block) = lexed {
             std::mem::swap(&mut self.block, block);
         }
+        self.run_applied(line.bytes, jobs)
+    }
+
+    /// [`Front::run`] for the effect the modal state made of the line, as it is in the state
+    /// (changed there by the caller, if at all). A move is read in place: an `Effect` is two
+    /// 7-axis positions and an arc, which a copy right after the state wrote them field by
+    /// field loads in wide pieces the stores in flight cannot forward (docs/performance.md).
+    #[inline(always)]
+    pub(super) fn run_applied(&mut self, raw: &[u8], jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        if let Effect::Move(m) = &self.state.effect {
+            self.book.motion(&self.state.structure, m, self.line, jobs);
+            return Ok(());
+        }
+        // Any other effect is a few words, on a line that is rarely a print's.
         let effect = self.state.effect;
-        self.run(line.bytes, &effect, jobs)
+        self.run(raw, &effect, jobs)
     }
 
     /// Turn `effect` (what [`Front::parse`] said `raw` does, possibly changed by the caller)

@@ -284,8 +284,9 @@ impl Estimator {
         self.front.lex(raw)
     }
 
-    /// ...then apply it to the modal state and say what it does.
-    pub fn apply(&mut self, raw: &[u8]) -> Effect {
+    /// ...then apply it to the modal state and say what it does (kept in
+    /// [`State::effect`] until the next line).
+    pub fn apply(&mut self, raw: &[u8]) -> &Effect {
         self.front.apply(raw)
     }
 
@@ -294,6 +295,16 @@ impl Estimator {
     /// motion-related commands.
     pub fn run(&mut self, raw: &[u8], effect: &Effect) -> Result<(), EstimateError> {
         let ran = self.front.run(raw, effect, &mut self.jobs);
+        // What the line did before an error still happens, as in firmware.
+        self.execute()?;
+        ran
+    }
+
+    /// [`Estimator::run`] for the effect the modal state made of `raw` ([`Estimator::apply`]),
+    /// read where it is, in [`State::effect`]: the caller
+    /// changes it there (through [`Estimator::state_mut`]) instead of copying it.
+    pub fn run_applied(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
+        let ran = self.front.run_applied(raw, &mut self.jobs);
         // What the line did before an error still happens, as in firmware.
         self.execute()?;
         ran

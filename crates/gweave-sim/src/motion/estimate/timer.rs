@@ -22,7 +22,14 @@ impl Estimator {
     /// deviation 0.013 mm, every `M400` a full stop), as `JobReport::time` documents. Pass it
     /// to `Job::run`.
     pub fn line_timer() -> Result<Box<dyn LineTimer>, BoxError> {
-        Ok(Box::new(Estimator::new(&MotionProfile::default())?))
+        Estimator::line_timer_on(&MotionProfile::default())
+    }
+
+    /// The planner of a raster job written for a machine (`--machine`): the machine's own
+    /// motion, so the job's time is the one `gweave sim` gives on that machine (a binder jet's
+    /// pistons, its accelerations), not Marlin's defaults.
+    pub fn line_timer_on(motion: &MotionProfile) -> Result<Box<dyn LineTimer>, BoxError> {
+        Ok(Box::new(Estimator::new(motion)?))
     }
 }
 

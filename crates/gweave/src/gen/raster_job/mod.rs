@@ -124,8 +124,9 @@ pub fn with_heads(profile: &PrintheadProfile, heads: usize) -> PrintheadProfile 
 /// The print time of the job.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct TimeEstimate {
-    /// `planner`: gweave-sim's planner on the written G-code (Marlin defaults: 3000 mm/s²,
-    /// junction deviation 0.013 mm, every `M400` a full stop); `feed`: the report's path at the
+    /// `planner`: gweave-sim's planner on the written G-code (the timer the caller hands in: the
+    /// machine's motion, or Marlin's defaults, 3000 mm/s², junction deviation 0.013 mm; every
+    /// `M400` a full stop); `feed`: the report's path at the
     /// feed rate without acceleration.
     pub method: &'static str,
     /// Motion (and dwell) time, s.
