@@ -27,7 +27,7 @@ pub struct EstimateArgs {
     /// The G-code file to estimate.
     pub input: PathBuf,
     /// Machine profile: a TOML file (docs/machine.md) or a built-in profile's name (`gweave
-    /// machine list`); only its motion limits are used. Default: a RAMPS 1.4 printer on Marlin. `slicer`: the machine limits the slicer wrote into the file
+    /// machine list`); its motion limits are used, and a printhead's wait after each fire. Default: a RAMPS 1.4 printer on Marlin. `slicer`: the machine limits the slicer wrote into the file
     /// (PrusaSlicer, SuperSlicer, OrcaSlicer `machine_max_*`, Cura's `machine_max_*`); the
     /// settings used are listed on standard error.
     #[arg(long, value_name = "TOML|NAME|slicer")]

@@ -27,7 +27,9 @@
 //! After an `M400` nothing else runs meanwhile, so each fire adds the profile's
 //! `min_fire_interval_us` to the print, as the raster generator's own estimate counts it (the
 //! pulses, 60 us at most, are left out of both). A fire without the `M400` waits while the
-//! queued moves run on: it costs no time of its own.
+//! queued moves run on: it costs no time of its own. The estimator counts that wait
+//! ([`FireWait`], given by `Estimator::fires`), so `estimate`, `sim` and `raster` agree on an
+//! inkjet machine.
 
 pub(crate) mod recoat;
 
@@ -38,6 +40,35 @@ use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
 use gweave::range::{short, Ceiling, TooLarge, MAX_IMAGE_SIDE_PX};
 use serde::Serialize;
 use thiserror::Error;
+
+/// What a fire costs the print on a machine with a printhead: the firmware's wait after each
+/// fire that runs with nothing moving (after an `M400` or a `G4`), for a `P` naming one of its
+/// heads (no head fires otherwise, and the patch does not wait).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FireWait {
+    /// The wait after one fire, s (the profile's `min_fire_interval_us`).
+    pub wait_s: f64,
+    /// How many heads the machine has: `P0` up to `P<heads - 1>` fire.
+    pub heads: u32,
+}
+
+impl FireWait {
+    /// The wait of `printhead`'s fires.
+    pub fn of(printhead: &PrintheadProfile) -> Self {
+        let heads = u32::try_from(printhead.heads.len()).unwrap_or(u32::MAX);
+        Self { wait_s: printhead.fire_time_s(1), heads }
+    }
+
+    /// The head a `P` word names as the firmware reads it (an integer, negatives as 0).
+    pub fn head(p: f64) -> u32 {
+        p.max(0.0) as u32
+    }
+
+    /// Whether a fire with this `P` word fires one of the heads.
+    pub fn fires(&self, p: Option<f64>) -> bool {
+        p.is_some_and(|p| Self::head(p) < self.heads)
+    }
+}
 
 /// Errors of the inkjet executor.
 #[derive(Debug, Error)]
@@ -153,9 +184,8 @@ impl InkjetCanvas {
 
     /// Records one fire command. `head` is the `P` word (None when absent), `bits` the `S`
     /// word, `x_mm`/`y_mm`/`z_mm` the carriage position when it runs, and `moved_since_m400`
-    /// whether a move was queued after the last `M400`. Returns the time the firmware waits
-    /// after it with nothing moving, s (see the module's notes): none when no head fired.
-    #[must_use]
+    /// whether a move was queued after the last `M400`. The time it takes is the estimator's
+    /// ([`FireWait`]).
     pub fn on_m700(
         &mut self,
         head: Option<u32>,
@@ -164,22 +194,19 @@ impl InkjetCanvas {
         y_mm: f64,
         z_mm: f64,
         moved_since_m400: bool,
-    ) -> f64 {
+    ) {
         let Some(head) = head else {
             self.warnings.push(InkjetWarning::MissingHead { x_mm, y_mm });
-            return 0.0;
+            return;
         };
         let heads = self.printhead.heads.len();
         if head as usize >= heads {
             self.warnings.push(InkjetWarning::UnknownHead { head });
-            return 0.0;
+            return;
         }
-        let wait_s = if moved_since_m400 {
+        if moved_since_m400 {
             self.warnings.push(InkjetWarning::FireWithoutM400 { head, x_mm, y_mm });
-            0.0
-        } else {
-            self.printhead.fire_time_s(1)
-        };
+        }
         let g = self.geometry;
         let same_layer = matches!(self.layers.last(), Some(l) if (l.z_mm - z_mm).abs() <= SAME_Z_MM);
         if !same_layer {
@@ -187,7 +214,7 @@ impl InkjetCanvas {
         }
         let canvas = match self.layers.last_mut() {
             Some(layer) => &mut layer.heads[head as usize],
-            None => return wait_s,
+            None => return,
         };
         self.drops_per_head[head as usize] += u64::from(self.printhead.drops_of_fire(bits));
         let mut lost = 0;
@@ -202,7 +229,6 @@ impl InkjetCanvas {
         if lost > 0 {
             self.warnings.push(InkjetWarning::OffCanvas { head, x_mm, y_mm, lost });
         }
-        wait_s
     }
 
     /// What went wrong with the fires so far.
@@ -272,17 +298,16 @@ mod tests {
         };
         let mut c = canvas(&profile);
         // Address 0 (bit 0) fires row 2; carriage at pixel (1, 0) centre.
-        // Each fire after an M400 waits the profile's 800 us with nothing moving.
-        assert_eq!(c.on_m700(Some(0), 0b001, 11.5, 20.5, 0.1, false), 800.0 * 1e-6);
+        c.on_m700(Some(0), 0b001, 11.5, 20.5, 0.1, false);
         // Head 1, address 1 -> row 0, shifted by (2, 1) mm -> pixel (3, 1).
-        assert_eq!(c.on_m700(Some(1), 0b010, 11.5, 20.5, 0.1, false), 800.0 * 1e-6);
+        c.on_m700(Some(1), 0b010, 11.5, 20.5, 0.1, false);
         assert!(c.warnings().is_empty(), "{:?}", c.warnings());
         let l = &c.layers()[0];
         assert_eq!(l.z_mm, 0.1);
         assert!(l.heads[0].get(1, 2) && l.heads[0].count_ones() == 1);
         assert!(l.heads[1].get(3, 1) && l.heads[1].count_ones() == 1);
         // A new Z opens a new layer.
-        assert_eq!(c.on_m700(Some(0), 0b111, 11.5, 20.5, 0.2, false), 800.0 * 1e-6);
+        c.on_m700(Some(0), 0b111, 11.5, 20.5, 0.2, false);
         assert_eq!(c.layers().len(), 2);
         assert_eq!(c.layers()[1].heads[0].count_ones(), 3);
         assert_eq!(c.drops_per_head(), &[4, 1]);
@@ -292,14 +317,12 @@ mod tests {
     fn typed_warnings() {
         let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
-        // No head fires without P or with an unknown one: no wait. A fire while the moves
-        // run (no M400) waits while they go on: no time of its own.
-        assert_eq!(c.on_m700(None, 1, 10.5, 20.5, 0.1, false), 0.0);
-        assert_eq!(c.on_m700(Some(3), 1, 10.5, 20.5, 0.1, false), 0.0);
-        assert_eq!(c.on_m700(Some(0), 1, 10.5, 20.5, 0.1, true), 0.0);
+        c.on_m700(None, 1, 10.5, 20.5, 0.1, false);
+        c.on_m700(Some(3), 1, 10.5, 20.5, 0.1, false);
+        c.on_m700(Some(0), 1, 10.5, 20.5, 0.1, true);
         // 12 rows from y pixel 0: rows 6..11 fall off the 6-row canvas; x = 9.5 is off too.
-        assert_eq!(c.on_m700(Some(0), 0xFFF, 10.5, 20.5, 0.1, false), 800.0 * 1e-6);
-        assert_eq!(c.on_m700(Some(0), 1, 9.5, 20.5, 0.1, false), 800.0 * 1e-6);
+        c.on_m700(Some(0), 0xFFF, 10.5, 20.5, 0.1, false);
+        c.on_m700(Some(0), 1, 9.5, 20.5, 0.1, false);
         assert_eq!(
             c.warnings(),
             &[
@@ -318,7 +341,7 @@ mod tests {
     fn layer_pngs_read_back() {
         let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
-        let _wait_s = c.on_m700(Some(0), 0b101, 13.5, 20.5, 0.1, false);
+        c.on_m700(Some(0), 0b101, 13.5, 20.5, 0.1, false);
         let dir = tempfile::tempdir().unwrap();
         let paths = c.write_layer_pngs(dir.path()).unwrap();
         assert_eq!(paths, vec![dir.path().join("layer_00000_head0.png")]);

@@ -413,7 +413,6 @@ fn dwell(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
         _ => {
             m.thermal.set_moving(false);
             m.run_core(c.line, out);
-            m.moved_since_m400 = false;
         }
     }
 }
@@ -678,7 +677,6 @@ fn percentage(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 fn m400(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.thermal.set_moving(false);
     m.run_core(c.line, out);
-    m.moved_since_m400 = false;
     m.wall_timed = true;
 }
 

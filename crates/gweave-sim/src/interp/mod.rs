@@ -46,11 +46,11 @@ use std::collections::BTreeMap;
 use gweave::gcode::effect::Motion;
 use gweave::gcode::line::Command;
 use gweave::gcode::retraction::Retraction;
-use gweave::gcode::state::{self, Effect};
+use gweave::gcode::state;
 use thiserror::Error;
 
 use crate::inkjet::recoat::RecoatCheck;
-use crate::inkjet::{CanvasGeometry, InkjetCanvas, InkjetError};
+use crate::inkjet::{CanvasGeometry, FireWait, InkjetCanvas, InkjetError};
 use crate::motion::estimate::{EstimateError, Estimator};
 use crate::motion::speed_trace::SpeedTrace;
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
@@ -122,7 +122,6 @@ pub struct Machine {
     program_ended: bool,
     /// Physical minus logical X Y Z: `G92` moves the logical origin, homing resets it.
     shift_mm: [f64; 3],
-    moved_since_m400: bool,
     halt: Option<Halt>,
     /// Faults to inject, by time; `next_fault` is the first not yet injected.
     faults: Vec<FaultSpec>,
@@ -171,7 +170,10 @@ impl Machine {
     pub fn new(profile: MachineProfile) -> Result<Machine, SimError> {
         let mut profile = profile;
         profile.normalize()?;
-        let core = Estimator::new(&profile.motion)?;
+        let mut core = Estimator::new(&profile.motion)?;
+        if let Some(ink) = &profile.inkjet {
+            core.fires(FireWait::of(&ink.printhead));
+        }
         let thermal = Thermal::new(profile.thermal.clone())?;
         let inkjet = match &profile.inkjet {
             None => None,
@@ -213,7 +215,6 @@ impl Machine {
             declared_feed: None,
             program_ended: false,
             shift_mm: [0.0; 3],
-            moved_since_m400: true,
             halt: None,
             faults,
             next_fault: 0,
@@ -522,19 +523,19 @@ impl Machine {
         }
     }
 
-    /// `M700 P<head> S<bits>` / `M578`: record the drops at the carriage position, and wait
-    /// as the firmware does after a fire (`inkjet`'s notes: a dwell when nothing is moving).
+    /// `M700 P<head> S<bits>` / `M578`: record the drops at the carriage position; the
+    /// estimator counts the firmware's wait after the fire (`inkjet`'s notes, [`FireWait`]).
     fn fire(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
         let b = self.core.block();
-        let head = b.get(b'P').map(|p| p.max(0.0) as u32);
+        let head = b.get(b'P').map(FireWait::head);
         let bits = b.get(b'S').map_or(0, |s| s.max(0.0) as u64);
         let [x, y, z] = self.physical_xyz();
-        let moved = self.moved_since_m400;
+        let moved = self.core.moved_since_m400();
         let Some(canvas) = &mut self.inkjet else {
             return;
         };
         let seen = canvas.warnings().len();
-        let wait_s = canvas.on_m700(head, bits, x, y, z, moved);
+        canvas.on_m700(head, bits, x, y, z, moved);
         let mut new: Vec<_> = canvas.warnings()[seen..].to_vec();
         if let Some(check) = &mut self.recoat {
             let a = self.core.state().pos[state::A];
@@ -543,11 +544,7 @@ impl Machine {
         for detail in new {
             self.warn(WarningKind::Inkjet { detail });
         }
-        if wait_s > 0.0 {
-            // The wait is what the line does.
-            self.core.state_mut().effect = Effect::Dwell { t_s: wait_s };
-            self.run_core(line, out);
-        }
+        self.run_core(line, out);
     }
 
     /// Counts an unknown command by its name in the report (the first [`UNKNOWN_KINDS`] names;

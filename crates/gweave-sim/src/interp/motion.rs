@@ -94,7 +94,6 @@ impl Machine {
             self.retraction[self.tool].feed(fed_mm);
         }
         self.thermal.set_moving(true);
-        self.moved_since_m400 = true;
         if let Some(check) = &mut self.recoat {
             check.on_move(from, to);
         }
@@ -184,7 +183,6 @@ impl Machine {
         }
         self.core.idle(t_s);
         self.homing_s += t_s;
-        self.moved_since_m400 = true;
     }
 
     /// The acceleration homing moves use on `axis`: the axis limit, capped by Marlin's travel

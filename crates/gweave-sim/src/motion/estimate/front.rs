@@ -20,6 +20,7 @@ use super::{
     EstimateError, Job, Key, ARC_CHORD_MM, DEFAULT_FEED_MM_S, FW_RECOVER_FEED_MM_S, FW_RETRACT_FEED_MM_S,
     KLIPPER_MOTOR_OFF_S, KLIPPER_START_BUFFER_S,
 };
+use crate::inkjet::FireWait;
 use crate::motion::kinematics::{Move, Pos};
 use crate::motion::limits::{AxisUpdate, CornerMode, MotionProfile, ProfileError, M204};
 use crate::motion::planner::Planner;
@@ -85,6 +86,11 @@ struct Bookkeeping {
     huge_arcs: HugeArcs,
     /// Every layer after the first is accounted as one ([`Front::first_layer_only`]).
     fold_later_layers: bool,
+    /// The printhead's wait after a fire, on a machine that has one ([`Front::fires`]).
+    fire: Option<FireWait>,
+    /// Whether a move was queued since the last `M400` or `G4`: a fire then runs while the
+    /// carriage travels and waits no time of its own.
+    moved_since_m400: bool,
 }
 
 impl Front {
@@ -108,6 +114,8 @@ impl Front {
             motors_on: false,
             huge_arcs: HugeArcs::default(),
             fold_later_layers: false,
+            fire: None,
+            moved_since_m400: true,
         };
         let mut front = Self {
             block: Block::default(),
@@ -152,6 +160,16 @@ impl Front {
     /// Accounts every layer after the first as one: the time accounts then stop growing with
     /// the layers (a key per layer, feature and tool: tens of MB for a long print), for a
     /// caller that needs only the total and the first layer's time.
+    /// Counts the wait after each fire (`M700`/`M578`) of a printhead.
+    pub(super) fn fires(&mut self, fire: FireWait) {
+        self.book.fire = Some(fire);
+    }
+
+    /// Whether a move was queued since the last `M400` or `G4`.
+    pub(super) fn moved_since_m400(&self) -> bool {
+        self.book.moved_since_m400
+    }
+
     pub(super) fn first_layer_only(&mut self) {
         self.book.fold_later_layers = true;
     }
@@ -275,9 +293,8 @@ impl Front {
                 return Ok(());
             }
             Effect::Dwell { t_s } => {
-                jobs.push(Job::Drain);
-                let tag = self.book.tag(&self.state.structure, jobs);
-                jobs.push(Job::Dwell { t_s: *t_s, tag });
+                self.dwell(*t_s, jobs);
+                self.book.moved_since_m400 = false;
             }
             Effect::Home { .. } => jobs.push(Job::Drain),
             Effect::FirmwareRetract { e_mm } => {
@@ -299,7 +316,16 @@ impl Front {
         let axes =
             || AxisUpdate { x: b.get(b'X'), y: b.get(b'Y'), z: b.get(b'Z'), e: b.get(b'E'), a: b.get(b'A') };
         let changed = match number {
-            400 | 109 | 190 => {
+            400 => {
+                jobs.push(Job::Drain);
+                self.book.moved_since_m400 = false;
+                return Ok(());
+            }
+            700 | 578 => {
+                self.fire(jobs);
+                return Ok(());
+            }
+            109 | 190 => {
                 jobs.push(Job::Drain);
                 return Ok(());
             }
@@ -408,6 +434,23 @@ impl Front {
     }
 
     /// `M163`-`M165` and `M567` on a mixing hotend (ignored without one).
+    /// The queue drained, then `t_s` with nothing moving.
+    fn dwell(&mut self, t_s: f64, jobs: &mut Vec<Job>) {
+        jobs.push(Job::Drain);
+        let tag = self.book.tag(&self.state.structure, jobs);
+        jobs.push(Job::Dwell { t_s, tag });
+    }
+
+    /// `M700 P S` (Marlin's hpc6602 patch) / `M578 P S` (RepRapFirmware): a printhead's fire
+    /// runs when it is read; with nothing moving, the firmware's wait after it is the print's
+    /// (`crate::inkjet`'s notes). A fire while moves run waits beside them.
+    fn fire(&mut self, jobs: &mut Vec<Job>) {
+        let Some(fire) = self.book.fire else { return };
+        if fire.fires(self.block.get(b'P')) && !self.book.moved_since_m400 {
+            self.dwell(fire.wait_s, jobs);
+        }
+    }
+
     fn mixing_command(&mut self, raw: &[u8], jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
         let Some(mixing) = &mut self.mixing else {
             return Ok(());
@@ -500,6 +543,7 @@ impl Bookkeeping {
             }
         }
         self.motors_on = true;
+        self.moved_since_m400 = true;
     }
 
     /// A move of the file, on line `line`: straight, or an arc cut into chords.

@@ -55,6 +55,7 @@ use gweave::gcode::reader::RawLine;
 use gweave::gcode::state::{Effect, State};
 use thiserror::Error;
 
+use crate::inkjet::FireWait;
 use crate::motion::kinematics::{Move, MoveError};
 use crate::motion::limits::{MotionProfile, ProfileError};
 use crate::motion::speed_trace::SpeedTrace;
@@ -243,6 +244,17 @@ impl Estimator {
     /// Marlin reads them.
     pub fn read_as(&mut self, firmware: Firmware) {
         self.front.read_as(firmware);
+    }
+
+    /// Counts the wait after each fire of a printhead (`M700`/`M578`, [`FireWait`]), as the
+    /// firmware of an inkjet machine waits. Call before the first line.
+    pub fn fires(&mut self, fire: FireWait) {
+        self.front.fires(fire);
+    }
+
+    /// Whether a move was queued since the last `M400` or `G4` (a fire would land along it).
+    pub fn moved_since_m400(&self) -> bool {
+        self.front.moved_since_m400()
     }
 
     /// Keeps the first layer's time apart ([`Estimate::layer_s`]`[0]`, the same to the bit) and
@@ -441,26 +453,30 @@ const BATCHES_IN_FLIGHT: usize = 4;
 /// the chunks and batches in flight.
 /// The lines are read as Marlin reads them; `estimate_as` reads them as another firmware does.
 pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    estimate_as(input, profile, Firmware::Marlin, true)
+    estimate_as(input, profile, Firmware::Marlin, true, None)
 }
 
 /// [`estimate`] with the lines read as `firmware` reads them (a file's: see
 /// [`gweave::gcode::flavour::read_firmware`]), counting steps if asked (without, up to a fifth
-/// faster).
+/// faster), and the waits after a printhead's fires if the machine has one.
 pub(crate) fn estimate_as<R: Read + Send>(
     input: R,
     profile: &MotionProfile,
     firmware: Firmware,
     count_steps: bool,
+    fire: Option<FireWait>,
 ) -> Result<Estimate, EstimateError> {
     let mut estimator = Estimator::with_steps(profile, count_steps)?;
     estimator.read_as(firmware);
+    if let Some(fire) = fire {
+        estimator.fires(fire);
+    }
     on_threads(input, estimator)
 }
 
 /// [`estimate`] without the step counts (all zero), up to a fifth faster.
 pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    estimate_as(input, profile, Firmware::Marlin, false)
+    estimate_as(input, profile, Firmware::Marlin, false, None)
 }
 
 fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
@@ -591,6 +607,31 @@ mod tests {
         assert_eq!(sequential.blocks, u64::from(MAX_ARC_CHORDS) + 1);
         let threaded = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
         assert_eq!(threaded, sequential);
+    }
+
+    /// A printhead's fire waits 800 us when nothing moves: after `M400` or `G4`, for `P` naming
+    /// one of the heads; not while moves run (no `M400` since), nor without a head.
+    #[test]
+    fn a_fire_waits_only_with_nothing_moving_and_a_head_named() {
+        let fire = FireWait { wait_s: 800e-6, heads: 2 };
+        let dwell_s = |text: &str| {
+            let threaded = |fire: Option<FireWait>| {
+                estimate_as(text.as_bytes(), &MotionProfile::default(), Firmware::Marlin, false, fire)
+                    .unwrap()
+            };
+            assert_eq!(threaded(None).dwell_s, 0.0, "{text}: no printhead, no wait");
+            let mut est = Estimator::new(&MotionProfile::default()).unwrap();
+            est.fires(fire);
+            text.lines().for_each(|l| est.line(l.as_bytes()).unwrap());
+            let sequential = est.finish();
+            assert_eq!(threaded(Some(fire)).dwell_s, sequential.dwell_s, "{text}");
+            sequential.dwell_s
+        };
+        assert_eq!(dwell_s("G1 X10 F600\nM400\nM700 P0 S3\nM700 P1 S1\nM578 P1 S1\n"), 3.0 * 800e-6);
+        assert_eq!(dwell_s("G1 X10 F600\nM700 P0 S3\n"), 0.0);
+        assert_eq!(dwell_s("G1 X10 F600\nM400\nG1 X20\nM700 P0 S3\n"), 0.0);
+        assert_eq!(dwell_s("G1 X10 F600\nG4 P0\nM700 P1 S3\n"), 800e-6);
+        assert_eq!(dwell_s("M400\nM700 S3\nM700 P2 S3\nM700 P-1 S1\n"), 800e-6);
     }
 
     #[test]

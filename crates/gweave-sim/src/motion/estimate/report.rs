@@ -10,6 +10,7 @@ use gweave::pass::Progress;
 use serde::Serialize;
 
 use super::{estimate_as, Estimate, EstimateError};
+use crate::inkjet::FireWait;
 use crate::motion::limits::CornerMode;
 use crate::profile::MachineProfile;
 
@@ -28,14 +29,16 @@ pub struct EstimateReport {
 }
 
 /// Estimate the file read from `input` on `machine`, its lines read as `firmware` reads them (the
-/// file's: [`gweave::gcode::flavour::read_firmware`]), counting steps if asked.
+/// file's: [`gweave::gcode::flavour::read_firmware`]), counting steps if asked; on a machine
+/// with a printhead, with the wait after each fire.
 pub fn estimate_report<R: Read + Send>(
     input: R,
     machine: &MachineProfile,
     firmware: Firmware,
     count_steps: bool,
 ) -> Result<EstimateReport, EstimateError> {
-    let estimate = estimate_as(input, &machine.motion, firmware, count_steps)?;
+    let fire = machine.inkjet.as_ref().map(|ink| FireWait::of(&ink.printhead));
+    let estimate = estimate_as(input, &machine.motion, firmware, count_steps, fire)?;
     let planner = match machine.motion.corners {
         CornerMode::Klipper(_) => "klipper",
         CornerMode::Marlin { .. } => "marlin",
