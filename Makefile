@@ -17,7 +17,7 @@ OUT := out
 
 .PHONY: demo test bench deps rust-deps python-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
 .PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-fault firmware-test firmware-cortex
-.PHONY: guard
+.PHONY: guard sdist
 
 deps: rust-deps py-deps browser-deps cura-deps firmware-deps
 
@@ -140,6 +140,10 @@ python: python-deps
 python-debug: py-deps
 	$(PY) crates/gweave-py/build_backend/gweave_build.py dev >/dev/null
 	$(VENV)/bin/maturin develop -q -m crates/gweave-py/Cargo.toml
+
+# The Python package's source distribution, in dist/ (what `pip install gweave-*.tar.gz` builds from).
+sdist: py-deps
+	PATH=$(abspath $(VENV))/bin:$$PATH $(PY) crates/gweave-py/build_backend/gweave_build.py sdist dist
 
 lint: rust-deps
 	$(CARGO) fmt --all -- --check

@@ -15,16 +15,27 @@ derives through it (measured on the debug build: 1.3 min for the command, then 3
 module with PyO3).
 
 The Makefile's `python` and `python-debug` run this file as a script before `maturin develop`
-(`python gweave_build.py release|dev`), which does not go through a build backend.
+(`python gweave_build.py release|dev`), which does not go through a build backend; `make sdist`
+runs it as `python gweave_build.py sdist DIR` (`maturin sdist` alone would leave out what
+follows).
+
+A source distribution is maturin's with what a wheel built from it also needs: this backend
+(pyproject's `backend-path`, which maturin does not package), the command's crate as a member of
+the packaged workspace (maturin packages only the module's own path dependencies, and refuses
+`include` patterns outside the package's folder), and the built-in machine profiles the
+simulator compiles in (`examples/machines`, `gweave machine list`).
 """
 
 from __future__ import annotations
 
+import io
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
+import tarfile
 from pathlib import Path
 from typing import Any, Callable, Mapping, Optional
 
@@ -32,6 +43,10 @@ from typing import Any, Callable, Mapping, Optional
 PACKAGE = Path(__file__).resolve().parent.parent
 # `[tool.maturin] data` in pyproject.toml.
 SCRIPTS = PACKAGE / "wheel-data" / "scripts"
+# The command's crate, beside this package in the workspace.
+CLI_CRATE = "crates/gweave-cli"
+# Folders of the workspace a build needs beside the crates maturin packages (the module's notes).
+SDIST_EXTRAS = [CLI_CRATE, "examples/machines"]
 
 
 def build_cli(profile: str = "release") -> Path:
@@ -107,14 +122,64 @@ def prepare_metadata_for_build_wheel(
     return maturin.prepare_metadata_for_build_wheel(metadata_directory, config_settings)
 
 
+def build_sdist(sdist_directory: str, config_settings: Optional[Mapping[str, Any]] = None) -> str:
+    """maturin's source distribution, completed (the module's notes): a wheel builds from it."""
+    import maturin
+
+    name: str = maturin.build_sdist(sdist_directory, config_settings)
+    complete_sdist(Path(sdist_directory) / name)
+    return name
+
+
+def complete_sdist(sdist: Path) -> None:
+    """Adds this backend, the command's crate (to its workspace's members too) and the other
+    `SDIST_EXTRAS` to the `.tar.gz` at `sdist`, written to a temporary name and renamed over
+    it."""
+    workspace = PACKAGE.parent.parent
+    partial = sdist.with_name(sdist.name + ".partial")
+    with tarfile.open(sdist, "r:gz") as old, tarfile.open(partial, "w:gz") as new:
+        root = old.getnames()[0].split("/")[0]
+        for member in old.getmembers():
+            data = old.extractfile(member) if member.isfile() else None
+            if member.name == f"{root}/Cargo.toml" and data is not None:
+                manifest = with_member(data.read().decode(), CLI_CRATE).encode()
+                member.size = len(manifest)
+                data = io.BytesIO(manifest)
+            new.addfile(member, data)
+        extras = [(workspace / extra, extra) for extra in SDIST_EXTRAS]
+        for folder, into in [(PACKAGE / "build_backend", "build_backend"), *extras]:
+            for path in sorted(folder.rglob("*")):
+                if path.is_file() and "__pycache__" not in path.parts:
+                    new.add(path, f"{root}/{into}/{path.relative_to(folder).as_posix()}")
+    os.replace(partial, sdist)
+
+
+def with_member(manifest: str, crate: str) -> str:
+    """The workspace `manifest` with `crate` among its `members`."""
+    members = re.search(r"^members = \[([^\]]*)\]", manifest, re.MULTILINE)
+    if members is None:
+        raise RuntimeError("the source distribution's Cargo.toml has no workspace members")
+    if f'"{crate}"' in members.group(1):
+        return manifest
+    listed = f'{members.group(1)}, "{crate}"' if members.group(1).strip() else f'"{crate}"'
+    return manifest[: members.start(1)] + listed + manifest[members.end(1) :]
+
+
 def __getattr__(name: str) -> Any:
-    """Every other hook (sdist, metadata, requirements) is maturin's unchanged."""
+    """Every other hook (metadata, requirements) is maturin's unchanged."""
     import maturin
 
     return getattr(maturin, name)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        sys.exit("usage: gweave_build.py PROFILE (cargo's: release, dev, guard...)")
-    print(build_cli(sys.argv[1]))
+    if len(sys.argv) == 3 and sys.argv[1] == "sdist":
+        # `make sdist`: the completed source distribution, as a PEP 517 front end builds it
+        # (from pyproject.toml's folder).
+        out = Path(sys.argv[2]).resolve()
+        os.chdir(PACKAGE)
+        print(out / build_sdist(str(out)))
+    elif len(sys.argv) == 2:
+        print(build_cli(sys.argv[1]))
+    else:
+        sys.exit("usage: gweave_build.py PROFILE (cargo's: release, dev, guard...) | sdist DIR")
