@@ -466,7 +466,11 @@ fn strokes(
     let min_px = if options.kind == ViewKind::Iso { 2.0 } else { 1.0 };
     let width_px = (options.line_width_mm * proj.scale_px_mm()).clamp(min_px, 12.0);
     let eye = toward_eye(options.kind);
-    let mut order: Vec<(f32, Stroke)> = Vec::new();
+    // The drawing order is found on (key, segment) pairs, 8 bytes each, and the strokes are made
+    // in that order: sorting the strokes themselves (32 bytes each, and the sort's scratch)
+    // held a picture's 2 M strokes twice beside the toolpath, 50 MB more at the peak.
+    // Segment indices fit a u32: a picture keeps at most `MAX_SEGMENTS`.
+    let mut order: Vec<(f32, u32)> = Vec::new();
     for (i, s) in tp.segments.iter().enumerate() {
         // A stopped run (Python's Ctrl-C) projects no further: the drawing is thrown away.
         if i.is_multiple_of(crate::interrupt::CHECK_EVERY) && crate::interrupt::stopped() {
@@ -475,14 +479,21 @@ fn strokes(
         if !in_layers(options, s) {
             continue;
         }
-        let is_changed = changed.map(|c| c[i]);
+        // Drawing order: height for flat layers; on a cylinder see the module notes.
+        let key = if tp.on_cylinder { cylinder_order(s, eye) } else { (s.start[2] + s.end[2]) / 2.0 };
+        order.push((key, i as u32));
+    }
+    if options.kind == ViewKind::Iso || tp.on_cylinder {
+        // Low to high (far to near); stable, so equal keys keep file order.
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    let stroke = |&(_, i): &(f32, u32)| {
+        let s = &tp.segments[i as usize];
+        let is_changed = changed.map(|c| c[i as usize]);
         let mut colour = match is_changed {
             Some(false) => UNCHANGED,
             _ => colouring.colour(s),
         };
-        let mid = [0, 1, 2].map(|k| (s.start[k] + s.end[k]) / 2.0);
-        // Drawing order: height for flat layers; on a cylinder see the module notes.
-        let key = if tp.on_cylinder { cylinder_order(s, eye) } else { mid[2] };
         if tp.on_cylinder && s.extruding && is_changed != Some(false) {
             colour = shade_cylinder(s, eye, colour);
         } else if options.kind == ViewKind::Iso && s.extruding {
@@ -493,20 +504,16 @@ fn strokes(
             (true, Some(true)) => (width_px.max(2.0) * 1.6, 1.0),
             (true, _) => (width_px, 1.0),
         };
-        order.push((
-            key,
-            Stroke { from: proj.project(s.start), to: proj.project(s.end), colour, width_px: w, alpha },
-        ));
-    }
-    if options.kind == ViewKind::Iso || tp.on_cylinder {
-        // Low to high (far to near); stable, so equal keys keep file order.
-        order.sort_by(|a, b| a.0.total_cmp(&b.0));
-    }
+        Stroke { from: proj.project(s.start), to: proj.project(s.end), colour, width_px: w, alpha }
+    };
     if changed.is_some() {
+        let mut strokes: Vec<Stroke> = order.iter().map(stroke).collect();
+        drop(order);
         // Changed moves on top of the grey ones.
-        order.sort_by_key(|(_, st)| st.colour != UNCHANGED);
+        strokes.sort_by_key(|st| st.colour != UNCHANGED);
+        return with_rims(strokes.into_iter());
     }
-    with_rims(order.into_iter().map(|(_, st)| st))
+    with_rims(order.iter().map(stroke))
 }
 
 /// A colour closer than this to the background (CIEDE2000) hardly shows on it: white filament,
