@@ -62,7 +62,8 @@ impl<T: JobOptions> FromArgMatches for Options<T> {
         let mut options = T::default();
         for spec in T::SPEC {
             let value = match spec.kind {
-                Kind::Flag => m.get_flag(spec.name).then_some(Value::Flag(true)),
+                // `--no-interweave` sets `interweave` false.
+                Kind::Flag => m.get_flag(spec.name).then_some(Value::Flag(!spec.shape.negated)),
                 Kind::Repeated => m.get_many::<Value>(spec.name).map(|each| {
                     Value::Texts(
                         each.flat_map(|v| match v {

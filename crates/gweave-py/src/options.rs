@@ -50,7 +50,7 @@ pub fn failed(e: TransformError) -> PyErr {
 }
 
 /// The options of the job `command` (`purge-shift`, `mix`: `gweave_sim::transform::JOBS`) as declared: a list of dicts
-/// `{"name", "flag", "kind", "default", "range", "help"}`, for the tests that hold the typed
+/// `{"name", "flag", "kind", "count", "default", "range", "whole", "help"}`, for the tests that hold the typed
 /// wrappers to the declaration (and for documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
@@ -80,6 +80,7 @@ pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound
         d.set_item("count", count)?;
         d.set_item("default", (spec.default)())?;
         d.set_item("range", spec.shape.range.map(|r| (r.min, r.max)))?;
+        d.set_item("whole", spec.shape.whole)?;
         d.set_item("help", spec.help())?;
         list.append(d)?;
     }
