@@ -4,8 +4,9 @@
 //! [`job_options`].
 
 use gweave::options::{JobOptions, Kind, Spelling, Value};
+use gweave::rotary::RotaryError;
 use gweave_sim::transform::TransformError;
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyOSError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -40,11 +41,12 @@ pub fn read<T: JobOptions>(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -
 }
 
 /// A job's failure as Python raises it: a file the system refused as the `OSError` for its
-/// errno (as [`crate::err`]), the rest a `ValueError` with the options it names spelled as
-/// keywords.
+/// errno (as [`crate::err`]), a failed write of a rotary program an `OSError`, the rest a
+/// `ValueError` with the options it names spelled as keywords.
 pub fn failed(e: TransformError) -> PyErr {
-    match e.engine() {
-        Some(gweave::Error::Io { path, source }) => crate::args::os_error(path, source),
+    match (&e, e.engine()) {
+        (_, Some(gweave::Error::Io { path, source })) => crate::args::os_error(path, source),
+        (TransformError::Rotary(RotaryError::Io(_)), _) => PyOSError::new_err(e.to_string()),
         _ => PyValueError::new_err(e.spelled(Spelling::Keyword)),
     }
 }
