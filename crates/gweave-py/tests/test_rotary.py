@@ -122,3 +122,13 @@ def test_wrap_keywords_read_a_config_as_the_cli_flags_do(data, tmp_path):
     assert "--" not in str(refused.value)
     with pytest.raises(ValueError, match=r"^rotary_unit: unknown variant `inch`, expected one of `deg`, `degrees`, `mm`$"):
         gweave.rotary_wrap(plate, tmp_path / "bad.gcode", mandrel_diameter=30, rotary_unit="inch")
+
+
+def test_the_report_names_the_written_file_not_the_scratch_file(data, tmp_path):
+    """Regression (issue 40): Python's rotary reports named the scratch file the job wrote
+    first (`.gweave-*.tmp`); the one job names the output, as the CLI's --json does."""
+    out = tmp_path / "w.gcode"
+    assert gweave.rotary_wrap(data / "rotary" / "plate.gcode", out, mandrel_diameter=30)["output"] == str(out)
+    tube = tmp_path / "t.gcode"
+    assert gweave.rotary_tube(tube, mandrel_diameter=20, length=5, layer_count=1)["output"] == str(tube)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.gcode", "w.gcode"]
