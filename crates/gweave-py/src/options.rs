@@ -51,9 +51,10 @@ pub fn failed(e: TransformError) -> PyErr {
     }
 }
 
-/// The options of the job `command` (`purge-shift`, `mix`: `gweave_sim::transform::JOBS`) as declared: a list of dicts
-/// `{"name", "flag", "kind", "count", "default", "range", "whole", "help"}`, for the tests that hold the typed
-/// wrappers to the declaration (and for documentation).
+/// The options of the job `command` (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`:
+/// `gweave_sim::transform::JOBS`) as declared: a list of dicts `{"name", "flag", "kind",
+/// "count", "default", "range", "whole", "help"}`, for the tests that hold the typed wrappers to
+/// the declaration (and for documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
     let Some((_, specs)) = gweave_sim::transform::JOBS.iter().find(|(name, _)| *name == command) else {
