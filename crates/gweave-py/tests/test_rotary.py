@@ -132,3 +132,15 @@ def test_the_report_names_the_written_file_not_the_scratch_file(data, tmp_path):
     tube = tmp_path / "t.gcode"
     assert gweave.rotary_tube(tube, mandrel_diameter=20, length=5, layer_count=1)["output"] == str(tube)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.gcode", "w.gcode"]
+
+
+def test_keep_arc_length_false_turns_a_configs_off_for_a_helical_wrap(data, tmp_path):
+    """Regression (issue 40): a switch given as False (restoring the default over the config)
+    was counted as given, and `helical=True` refused as conflicting with it."""
+    toml = tmp_path / "wrap.toml"
+    toml.write_text("[unwrap]\nkeep_arc_length = true\n")
+    out = tmp_path / "h.gcode"
+    r = gweave.rotary_wrap(data / "rotary" / "plate.gcode", out, config=toml, mandrel_diameter=30,
+                           keep_arc_length=False, helical=True)
+    assert r["helical"] and not r["keep_arc_length"]
+    assert out.read_text().splitlines()[0].endswith(" rotary wrap --mandrel-diameter 30 -c " f"{toml} --helical (generated)")

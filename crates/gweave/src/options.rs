@@ -164,6 +164,18 @@ impl OptionSpec {
         }
     }
 
+    /// `value` (as [`JobOptions::values`] gives it) is one the CLI says with this option's flag:
+    /// given, and for a switch the way its flag turns it (`--helical` on, `--no-interweave`
+    /// off). A switch given the other way (`keep_arc_length=False` over a settings file's) only
+    /// restores a default: it conflicts with nothing and the header leaves it out.
+    pub fn said(&self, value: &Option<Value>) -> bool {
+        match value {
+            None => false,
+            Some(Value::Flag(on)) => *on != self.shape.negated,
+            Some(_) => true,
+        }
+    }
+
     /// The help text, one paragraph: the doc comment's lines joined.
     pub fn help(&self) -> String {
         self.doc.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(" ")
@@ -370,9 +382,9 @@ pub trait JobOptions: Default + Sized {
     /// Refuses two options given that exclude each other (`purge_mm` and `purge_mm3`).
     fn check_conflicts(&self) -> Result<(), OptionError> {
         let values = self.values();
-        let given = |name: &str| Self::SPEC.iter().zip(&values).any(|(s, v)| s.name == name && v.is_some());
+        let given = |name: &str| Self::SPEC.iter().zip(&values).any(|(s, v)| s.name == name && s.said(v));
         for (spec, value) in Self::SPEC.iter().zip(&values) {
-            if let Some(other) = spec.shape.conflicts.iter().find(|o| value.is_some() && given(o)) {
+            if let Some(other) = spec.shape.conflicts.iter().find(|o| spec.said(value) && given(o)) {
                 return Err(OptionError { option: spec.name, problem: Problem::Conflict(other) });
             }
         }
@@ -387,13 +399,13 @@ pub trait JobOptions: Default + Sized {
         let mut words = Vec::new();
         for (spec, value) in Self::SPEC.iter().zip(self.values()) {
             let flag = spec.shape.short.map_or_else(|| format!("--{}", spec.flag()), |c| format!("-{c}"));
+            if !spec.said(&value) {
+                continue;
+            }
             let each: Vec<String> = match value {
                 None => continue,
-                // A switch the CLI can say: `--helical` for true, `--no-interweave` for false.
-                Some(Value::Flag(on)) => {
-                    if on != spec.shape.negated {
-                        words.push(flag);
-                    }
+                Some(Value::Flag(_)) => {
+                    words.push(flag);
                     continue;
                 }
                 Some(Value::Number(v)) => vec![short(v)],
@@ -686,7 +698,7 @@ mod tests {
             /// Keep arcs.
             keep: Option<bool> = Shape::new(""),
             /// Wind helically.
-            helical: bool = Shape::new("").conflicts(&["axes"]),
+            helical: bool = Shape::new("").conflicts(&["axes", "keep"]),
         }
     }
 
@@ -733,6 +745,10 @@ mod tests {
         job.set(spec("interweave"), Value::Flag(false)).unwrap();
         job.set(spec("keep"), Value::Flag(true)).unwrap();
         assert_eq!(job.header(), "--no-interweave --keep");
+        // Regression: `keep_arc_length=False, helical=True` (a settings file's arc length turned
+        // off to wind helically) was refused as a conflict.
+        let off = Job { keep: Some(false), helical: true, ..Job::default() };
+        assert_eq!(off.check_conflicts(), Ok(()));
         assert_eq!(((spec("helical").default)(), (spec("keep").default)()), (Some("false".into()), None));
     }
 }
