@@ -8,8 +8,6 @@ use anyhow::Result;
 use gweave::gcode::writer::Target;
 use gweave::post::metadata::Figures;
 
-pub use gweave_sim::finish::refuse_second_run;
-
 /// Runs `write` into a scratch file, then writes that file to `target` with this run's header
 /// and its metadata recomputed (`gweave_sim::finish::with_metadata`).
 pub fn with_metadata<R>(

@@ -62,7 +62,8 @@ impl<T: JobOptions> FromArgMatches for Options<T> {
         let mut options = T::default();
         for spec in T::SPEC {
             let value = match spec.kind {
-                Kind::Flag => m.get_flag(spec.name).then_some(Value::Flag(true)),
+                // `--no-interweave` sets `interweave` false.
+                Kind::Flag => m.get_flag(spec.name).then_some(Value::Flag(!spec.shape.negated)),
                 Kind::Repeated => m.get_many::<Value>(spec.name).map(|each| {
                     Value::Texts(
                         each.flat_map(|v| match v {
@@ -106,6 +107,8 @@ mod tests {
     use super::*;
     use gweave::post::mix::MixOptions;
     use gweave::post::purge_shift::PurgeShiftOptions;
+    use gweave::rotary::cylinder::FeedConvention;
+    use gweave::rotary::options::{TubeOptions, WrapOptions};
 
     #[derive(clap::Parser, Debug)]
     struct Cli<T: JobOptions + Send + Sync + 'static> {
@@ -137,6 +140,42 @@ mod tests {
     fn every_option_is_a_flag_as_declared() {
         flags_match_the_declaration::<PurgeShiftOptions>();
         flags_match_the_declaration::<MixOptions>();
+        flags_match_the_declaration::<WrapOptions>();
+        flags_match_the_declaration::<TubeOptions>();
+    }
+
+    #[test]
+    fn rotary_flags_keep_their_spellings_and_aliases() {
+        let w: WrapOptions = parse(&[
+            "--seam-rotation",
+            "7.5",
+            "--feed",
+            "combined",
+            "--axes",
+            "x,y,z",
+            "--rotary-unit",
+            "deg",
+        ])
+        .unwrap();
+        assert_eq!(w.machine.feed_convention, Some(FeedConvention::Combined));
+        assert_eq!((w.machine.axes, w.seam_rotation), (Some(['X', 'Y', 'Z']), Some(7.5)));
+        // The machine's options first, each in its own name: the header of any spelling.
+        assert_eq!(
+            w.header(),
+            "--feed-convention combined --rotary-unit degrees --axes X,Y,Z --seam-rotation 7.5"
+        );
+        let t: TubeOptions =
+            parse(&["--layers", "3", "--no-interweave", "--mandrel-diameter", "20"]).unwrap();
+        assert_eq!(
+            (t.layer_count, t.interweave, t.machine.mandrel_diameter),
+            (Some(3), Some(false), Some(20.0))
+        );
+        assert_eq!(t.header(), "--mandrel-diameter 20 --layer-count 3 --no-interweave");
+        assert_eq!(parse::<TubeOptions>(&[]).unwrap().interweave, None, "no flag: the settings' own");
+        let err = parse::<TubeOptions>(&["--layer-count", "2.5"]).unwrap_err();
+        assert!(err.contains("for '--layer-count <N>': 2.5 is not a whole number"), "{err}");
+        let err = parse::<WrapOptions>(&["--helical", "--seam-rotation", "5"]).unwrap_err();
+        assert!(err.contains("'--helical' cannot be used with '--seam-rotation <DEG>'"), "{err}");
     }
 
     #[test]

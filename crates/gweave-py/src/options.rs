@@ -4,8 +4,9 @@
 //! [`job_options`].
 
 use gweave::options::{JobOptions, Kind, Spelling, Value};
+use gweave::rotary::RotaryError;
 use gweave_sim::transform::TransformError;
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyOSError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -40,18 +41,20 @@ pub fn read<T: JobOptions>(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -
 }
 
 /// A job's failure as Python raises it: a file the system refused as the `OSError` for its
-/// errno (as [`crate::err`]), the rest a `ValueError` with the options it names spelled as
-/// keywords.
+/// errno (as [`crate::err`]), a failed write of a rotary program an `OSError`, the rest a
+/// `ValueError` with the options it names spelled as keywords.
 pub fn failed(e: TransformError) -> PyErr {
-    match e.engine() {
-        Some(gweave::Error::Io { path, source }) => crate::args::os_error(path, source),
+    match (&e, e.engine()) {
+        (_, Some(gweave::Error::Io { path, source })) => crate::args::os_error(path, source),
+        (TransformError::Rotary(RotaryError::Io(_)), _) => PyOSError::new_err(e.to_string()),
         _ => PyValueError::new_err(e.spelled(Spelling::Keyword)),
     }
 }
 
-/// The options of the job `command` (`purge-shift`, `mix`: `gweave_sim::transform::JOBS`) as declared: a list of dicts
-/// `{"name", "flag", "kind", "default", "range", "help"}`, for the tests that hold the typed
-/// wrappers to the declaration (and for documentation).
+/// The options of the job `command` (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`:
+/// `gweave_sim::transform::JOBS`) as declared: a list of dicts `{"name", "flag", "kind",
+/// "count", "default", "range", "whole", "help"}`, for the tests that hold the typed wrappers to
+/// the declaration (and for documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
     let Some((_, specs)) = gweave_sim::transform::JOBS.iter().find(|(name, _)| *name == command) else {
@@ -80,6 +83,7 @@ pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound
         d.set_item("count", count)?;
         d.set_item("default", (spec.default)())?;
         d.set_item("range", spec.shape.range.map(|r| (r.min, r.max)))?;
+        d.set_item("whole", spec.shape.whole)?;
         d.set_item("help", spec.help())?;
         list.append(d)?;
     }

@@ -1,31 +1,27 @@
-//! Rotary (lathe-type) printing: wrapping flat G-code, helical tubes and paths.
+//! Rotary (lathe-type) printing: wrapping flat G-code, helical tubes and paths. The two jobs
+//! are `gweave_sim::transform`'s, their keywords read as the options the engine declares
+//! (`gweave::rotary::options`).
 
-use crate::interrupt::interruptible;
-use std::path::{Path, PathBuf};
-
-use gweave::gcode::writer::Target;
-use gweave::run::Run;
-use pyo3::exceptions::{PyOSError, PyValueError};
-use pyo3::prelude::*;
-
-use crate::args::{os_error, target_of};
-use crate::{err, finish, strictness, to_json};
-use gweave::malformed::{Malformed, Transformed};
-use gweave::rotary::report::WrapReport;
-
-// ---- rotary (lathe-type) printing: gweave::rotary ----
-
+use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use gweave::rotary::cylinder::{FeedConvention, RotaryConfig, RotaryUnit};
+use gweave::gcode::writer::Target;
+use gweave::rotary::cylinder::RotaryConfig;
 use gweave::rotary::helix::{
     self, Handedness, HelicalPath as RustHelicalPath, PrintSettings, Profile, Resolution,
 };
-use gweave::rotary::overrides::{MachineOverrides, TubeOverrides, WrapOverrides};
+use gweave::rotary::options::{TubeOptions, WrapOptions};
 use gweave::rotary::report::merged_settings;
-use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
-use gweave::rotary_job::{tube_file, wrap_file};
+use gweave_sim::transform::{self, Job};
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::args::target_of;
+use crate::interrupt::interruptible;
+use crate::options::failed;
+use crate::{err, to_json};
 
 fn rotary_err(e: RotaryError) -> PyErr {
     match e {
@@ -34,62 +30,14 @@ fn rotary_err(e: RotaryError) -> PyErr {
     }
 }
 
-/// The machine's keywords as `MachineOverrides` (`rotary_unit` `"deg"` or `"mm"`,
-/// `feed_convention` `"nist"`, `"combined"` or `"inverse-time"`, as the CLI spells them).
-fn machine(
-    mandrel_diameter: Option<f64>,
-    feed_convention: Option<&str>,
-    rotary_unit: Option<&str>,
-    axes: Option<(char, char, char)>,
-) -> PyResult<MachineOverrides> {
-    let feed_convention = match feed_convention {
-        None => None,
-        Some("nist") => Some(FeedConvention::Nist),
-        Some("combined") => Some(FeedConvention::Combined),
-        Some("inverse-time") => Some(FeedConvention::InverseTime),
-        Some(other) => {
-            let text = format!("feed_convention: 'nist', 'combined' or 'inverse-time', not {other:?}");
-            return Err(PyValueError::new_err(text));
-        }
-    };
-    let rotary_unit = match rotary_unit {
-        None => None,
-        Some("deg" | "degrees") => Some(RotaryUnit::Degrees),
-        Some("mm") => Some(RotaryUnit::Mm),
-        Some(other) => {
-            return Err(PyValueError::new_err(format!("rotary_unit: 'deg' or 'mm', not {other:?}")))
-        }
-    };
-    Ok(MachineOverrides {
-        mandrel_diameter_mm: mandrel_diameter,
-        feed_convention,
-        rotary_unit,
-        axes: axes.map(<[char; 3]>::from),
-    })
-}
-
-/// Settings read by `read` from the TOML file `config` (its errors name the file) or, without
-/// one, from the machine's keywords alone, as the CLI reads `-c`.
-fn read_settings<T>(
-    config: Option<&Path>,
-    machine: &MachineOverrides,
-    read: impl FnOnce(Option<&str>, &MachineOverrides) -> Result<T, RotaryError>,
-) -> PyResult<T> {
-    let Some(path) = config else {
-        return read(None, machine).map_err(rotary_err);
-    };
-    let text = gweave::settings::read_text(path).map_err(|e| os_error(path, &e))?;
-    read(Some(&text), machine)
-        .map_err(|e| PyValueError::new_err(format!("{}: {}", path.display(), gweave::error::with_causes(&e))))
-}
-
-/// Wraps a flat G-code file onto the mandrel; the keywords override the TOML file `config` as
-/// the CLI's flags do. Returns the report as JSON text (`rotary wrap --json`).
+/// Wraps a flat G-code file onto the mandrel (see `gweave rotary wrap`), drawing the executed
+/// path to the PNG `preview` if given; returns the report as JSON text. The keyword arguments
+/// are the options of `gweave.rotary_wrap` (`mandrel_diameter`, `config`: a TOML file, ...), by
+/// the names the engine declares.
 #[pyfunction]
-#[pyo3(signature = (input, output=None, *, in_place=false, backup=true, force=false, mandrel_diameter=None,
-    feed_convention=None, rotary_unit=None, axes=None, keep_arc_length=None, seam_rotation=None, helical=false,
-    allow_overlap=false, chord_tol=None, config=None, preview=None, lenient=false, options=""))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (input, output=None, *, in_place=false, backup=true, force=false, lenient=false, preview=None,
+    **options))]
+#[allow(clippy::too_many_arguments)] // the keywords every transform shares, as Python spells them
 pub(crate) fn rotary_wrap_json(
     py: Python<'_>,
     input: PathBuf,
@@ -97,97 +45,31 @@ pub(crate) fn rotary_wrap_json(
     in_place: bool,
     backup: bool,
     force: bool,
-    mandrel_diameter: Option<f64>,
-    feed_convention: Option<&str>,
-    rotary_unit: Option<&str>,
-    axes: Option<(char, char, char)>,
-    keep_arc_length: Option<bool>,
-    seam_rotation: Option<f64>,
-    helical: bool,
-    allow_overlap: bool,
-    chord_tol: Option<f64>,
-    config: Option<PathBuf>,
-    preview: Option<PathBuf>,
     lenient: bool,
-    options: &str,
+    preview: Option<PathBuf>,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
-    let machine = machine(mandrel_diameter, feed_convention, rotary_unit, axes)?;
-    let mut wrap = read_settings(config.as_deref(), &machine, WrapConfig::read)?;
-    wrap.apply(&WrapOverrides {
-        machine,
-        keep_arc_length,
-        helical,
-        allow_overlap,
-        seam_rotation_deg: seam_rotation,
-        chord_tolerance_mm: chord_tol,
-    })
-    .map_err(rotary_err)?;
-    let strictness = strictness(lenient);
-    let write = |t: &Target| {
-        let run = Run::file(&input).strictness(strictness).to(t);
-        wrap_file(&wrap, run, preview.as_deref()).map_err(rotary_err)
-    };
+    let options: WrapOptions = crate::options::read("rotary_wrap", options)?;
     let target = target_of(output, in_place, backup, force)?;
-    let own_time = |r: &(WrapReport, Malformed)| Some(r.0.time_s);
-    let (report, malformed) = interruptible(py, || {
-        finish::finished(Some(&input), &target, "rotary wrap", options, write, own_time)
-    })??;
-    to_json(&Transformed::new(&report, malformed, strictness))
+    let wrap = |o: &WrapOptions, job: Job<'_>| transform::rotary_wrap(o, job, preview.as_deref());
+    crate::transform::run(py, &options, &input, &target, lenient, wrap)
 }
 
-/// Generates a helical tube; the keywords override the TOML file `config` as the CLI's flags
-/// do. Returns the report as JSON text (`rotary tube --json`).
+/// Generates a helical tube (see `gweave rotary tube`), drawing it to the PNG `preview` if
+/// given; returns the report as JSON text. The keyword arguments are the options of
+/// `gweave.rotary_tube`, by the names the engine declares.
 #[pyfunction]
-#[pyo3(signature = (output, *, mandrel_diameter=None, length=None, layer_count=None, layer_height=None,
-    bead_width=None, pitch=None, interweave=None, segments_per_turn=None, chord_tol=None, speed=None, temp=None,
-    filament_diameter=None, feed_convention=None, rotary_unit=None, axes=None, config=None, preview=None, options=""))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (output, *, preview=None, **options))]
 pub(crate) fn rotary_tube_json(
     py: Python<'_>,
     output: PathBuf,
-    mandrel_diameter: Option<f64>,
-    length: Option<f64>,
-    layer_count: Option<u32>,
-    layer_height: Option<f64>,
-    bead_width: Option<f64>,
-    pitch: Option<f64>,
-    interweave: Option<bool>,
-    segments_per_turn: Option<u32>,
-    chord_tol: Option<f64>,
-    speed: Option<f64>,
-    temp: Option<f64>,
-    filament_diameter: Option<f64>,
-    feed_convention: Option<&str>,
-    rotary_unit: Option<&str>,
-    axes: Option<(char, char, char)>,
-    config: Option<PathBuf>,
     preview: Option<PathBuf>,
-    options: &str,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
-    let machine = machine(mandrel_diameter, feed_convention, rotary_unit, axes)?;
-    let mut params = read_settings(config.as_deref(), &machine, helix::TubeParams::read)?;
-    params
-        .apply(&TubeOverrides {
-            machine,
-            length_mm: length,
-            layers: layer_count,
-            layer_height_mm: layer_height,
-            bead_width_mm: bead_width,
-            pitch_mm: pitch,
-            interweave,
-            segments_per_turn,
-            chord_tolerance_mm: chord_tol,
-            print_speed_mm_s: speed,
-            nozzle_temp_c: temp,
-            filament_diameter_mm: filament_diameter,
-        })
-        .map_err(rotary_err)?;
-    let write = |t: &Target| tube_file(&params, t, preview.as_deref()).map_err(rotary_err);
+    let options: TubeOptions = crate::options::read("rotary_tube", options)?;
     let target = Target::File(output);
-    let own_time = |r: &gweave::rotary::report::TubeReport| Some(r.print_time_s);
-    let report =
-        interruptible(py, || finish::finished(None, &target, "rotary tube", options, write, own_time))??;
-    to_json(&report)
+    let report = interruptible(py, || transform::rotary_tube(&options, &target, preview.as_deref()))?;
+    to_json(&report.map_err(failed)?)
 }
 
 /// The first exception a Python profile function raised, re-raised after the path fails.

@@ -1,4 +1,5 @@
-//! The post-processing transforms: `purge-shift` and `mix` (and the colour a mix prints).
+//! The post-processing transforms: `purge-shift` and `mix` (and the colour a mix prints), and
+//! how every transform job runs from Python.
 
 use std::path::{Path, PathBuf};
 
@@ -41,13 +42,13 @@ pub(crate) fn purge_shift_json(
 
 /// Runs the transform `job` with `options` on `path` into `target`, Ctrl-C stopping it; the
 /// report as JSON text (with the lines a lenient run read past).
-fn run<O: Sync, R: serde::Serialize + Send>(
+pub(crate) fn run<O: Sync, R: serde::Serialize + Send>(
     py: Python<'_>,
     options: &O,
     path: &Path,
     target: &Target,
     lenient: bool,
-    job: fn(&O, Job<'_>) -> Outcome<R>,
+    job: impl FnOnce(&O, Job<'_>) -> Outcome<R> + Send,
 ) -> PyResult<String> {
     let strictness = strictness(lenient);
     let work = || job(options, Job { strictness, ..Job::new(path, target) });

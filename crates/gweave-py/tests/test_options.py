@@ -17,11 +17,17 @@ from gweave import _gweave
 TORUS = ("prusaslicer", "pr_torus_pva.gcode")
 # Keywords every transform shares, not options of the job: the file, where it goes, strictness.
 SHARED = {"path", "output", "in_place", "backup", "force", "lenient"}
-JOBS = {"purge-shift": (gweave.purge_shift, "purge_shift_json"), "mix": (gweave.mix, "mix_json")}
+# Each job's wrapper, its compiled function and the keywords that are not its options: the files
+# it reads and writes (a rotary job's `preview` picture too).
+JOBS = {
+    "purge-shift": (gweave.purge_shift, "purge_shift_json", SHARED),
+    "mix": (gweave.mix, "mix_json", SHARED),
+    "rotary wrap": (gweave.rotary_wrap, "rotary_wrap_json", SHARED - {"path"} | {"input", "preview"}),
+    "rotary tube": (gweave.rotary_tube, "rotary_tube_json", {"output", "preview"}),
+}
 
 # The annotation each kind of option has in the typed wrapper, and its default there.
 ANNOTATION = {
-    "flag": ("bool", False),
     "number": ("Optional[float]", None),
     "path": ("Optional[PathLike]", None),
     "repeated": ("Sequence[str]", ()),
@@ -36,9 +42,9 @@ def declared(command: str) -> Dict[str, Dict[str, Any]]:
 
 @pytest.mark.parametrize("command", sorted(JOBS))
 def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(command):
-    wrapper, _ = JOBS[command]
+    wrapper, _, shared = JOBS[command]
     options = declared(command)
-    params = {n: p for n, p in inspect.signature(wrapper).parameters.items() if n not in SHARED}
+    params = {n: p for n, p in inspect.signature(wrapper).parameters.items() if n not in shared}
     assert list(params) == list(options), "the wrapper's keywords, in the declaration's order"
     for name, p in params.items():
         o = options[name]
@@ -46,6 +52,11 @@ def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(co
         if o["kind"] == "text":
             # A word whose default is a value (gradient_space="mix") or unset.
             expected = ("str", o["default"]) if o["default"] is not None else ("Optional[str]", None)
+        elif o["kind"] == "flag":
+            # A switch off by default, or unset (keep_arc_length=False turns a config's on off).
+            expected = ("bool", False) if o["default"] == "false" else ("Optional[bool]", None)
+        elif o["whole"]:
+            expected = ("Optional[int]", None)
         else:
             expected = ANNOTATION[o["kind"]]
         assert (p.annotation, p.default) == expected, name
@@ -54,14 +65,14 @@ def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(co
 
 @pytest.mark.parametrize("command", sorted(JOBS))
 def test_the_compiled_function_takes_the_options_as_keywords_and_its_stub_says_so(command):
-    _, compiled = JOBS[command]
+    _, compiled, shared = JOBS[command]
     params = inspect.signature(getattr(_gweave, compiled)).parameters
-    assert set(params) - {"options"} == SHARED
+    assert set(params) - {"options"} == shared
     assert params["options"].kind is inspect.Parameter.VAR_KEYWORD
     stub = ast.parse((Path(gweave.__file__).parent / "_gweave.pyi").read_text(encoding="utf-8"))
     node = next(n for n in stub.body if isinstance(n, ast.FunctionDef) and n.name == compiled)
     names = {a.arg for a in node.args.args + node.args.kwonlyargs}
-    assert names == SHARED and node.args.kwarg is not None and node.args.kwarg.arg == "options"
+    assert names == shared and node.args.kwarg is not None and node.args.kwarg.arg == "options"
 
 
 def test_declared_ranges_and_help_are_those_of_the_flags():
@@ -69,6 +80,13 @@ def test_declared_ranges_and_help_are_those_of_the_flags():
     assert purge_mm["flag"] == "--purge-mm" and purge_mm["range"] == (0.0, 1000.0)
     assert purge_mm["help"].startswith("Purge per change, mm of filament")
     assert declared("mix")["gradient_space"]["default"] == "mix"
+    # Shared by both rotary jobs, declared once: the same options, first in each.
+    machine = [o["name"] for o in _gweave.job_options("rotary wrap")][:5]
+    assert machine == ["mandrel_diameter", "feed_convention", "rotary_unit", "axes", "config"]
+    assert [o["name"] for o in _gweave.job_options("rotary tube")][:5] == machine
+    layer_count = declared("rotary tube")["layer_count"]
+    assert layer_count["whole"] and layer_count["range"] == (1.0, 1000.0)
+    assert declared("rotary tube")["interweave"]["flag"] == "--no-interweave"
 
 
 def test_a_value_out_of_range_names_the_keyword(data, tmp_path):
@@ -87,6 +105,19 @@ def test_a_value_out_of_range_names_the_keyword(data, tmp_path):
     assert not (tmp_path / "o.gcode").exists()
 
 
+def test_rotary_values_are_checked_as_the_flags_are(data, tmp_path):
+    plate = data / "rotary" / "plate.gcode"
+    with pytest.raises(ValueError, match=r"^mandrel_diameter = 0.5 is out of range: 1 to 1000 mm$"):
+        gweave.rotary_wrap(plate, tmp_path / "o.gcode", mandrel_diameter=0.5)
+    with pytest.raises(ValueError, match=r"^helical and seam_rotation: give one of them$"):
+        gweave.rotary_wrap(plate, tmp_path / "o.gcode", mandrel_diameter=30, helical=True, seam_rotation=5)
+    with pytest.raises(ValueError, match=r"^layer_count: 2.5 is not a whole number$"):
+        gweave.rotary_tube(tmp_path / "o.gcode", mandrel_diameter=20, layer_count=2.5)
+    with pytest.raises(ValueError, match=r"^segments_per_turn = 2 is out of range: 3 to 3600$"):
+        gweave.rotary_tube(tmp_path / "o.gcode", mandrel_diameter=20, segments_per_turn=2)
+    assert not (tmp_path / "o.gcode").exists()
+
+
 def test_an_unknown_keyword_is_a_type_error_as_python_raises_it(data, tmp_path):
     with pytest.raises(TypeError, match=r"purge_shift\(\) got an unexpected keyword argument 'purge'"):
         _gweave.purge_shift_json(str(data.joinpath(*TORUS)), str(tmp_path / "o.gcode"), purge=2.5)
@@ -97,6 +128,14 @@ def test_the_header_is_written_from_the_options_value(data, tmp_path):
     gweave.purge_shift(data.joinpath(*TORUS), out, purge_mm=2.5, tower_at=(10, 20.5), fallback="tower")
     header = [l for l in out.read_text().splitlines() if l.startswith("; gweave ")][0]
     assert header == f"; gweave {gweave.__version__} purge-shift --purge-mm 2.5 --fallback tower --tower-at 10,20.5 (generated)"
+    wrapped = tmp_path / "w.gcode"
+    plate = data / "rotary" / "plate.gcode"
+    gweave.rotary_wrap(plate, wrapped, chord_tol=0.02, axes="x,a,z", rotary_unit="deg", mandrel_diameter=30, lenient=True)
+    header = wrapped.read_text().splitlines()[0]
+    assert header == (
+        f"; gweave {gweave.__version__} rotary wrap --mandrel-diameter 30 --rotary-unit degrees --axes X,A,Z "
+        "--chord-tol 0.02 --lenient (generated)"
+    )
 
 
 def test_a_missing_config_file_is_file_not_found_naming_it(data, tmp_path):

@@ -100,7 +100,7 @@ def test_callable_profiles_and_their_errors(tmp_path):
 
 def test_wrap_keywords_read_a_config_as_the_cli_flags_do(data, tmp_path):
     # A file without the [machine] table's required diameter, completed by the keyword, with a
-    # switch turned off and values replaced: the same library Overrides as the CLI's flags.
+    # switch turned off and values replaced: the same options value as the CLI's flags.
     toml = tmp_path / "wrap.toml"
     toml.write_text("chord_tolerance_mm = 0.05\n[unwrap]\nseam_rotation_per_layer_deg = 3\n")
     plate = data / "rotary" / "plate.gcode"
@@ -111,14 +111,36 @@ def test_wrap_keywords_read_a_config_as_the_cli_flags_do(data, tmp_path):
     assert r["machine"]["mandrel_diameter_mm"] == 30 and r["chord_tolerance_mm"] == 0.05
     assert r["seam_rotation_per_layer_deg"] == 7.5 and r["machine"]["axes"] == "XYZ"
     cli = tmp_path / "cli.gcode"
-    # The flags in the order Python's header lists them, so the headers match too.
-    flags = ["--mandrel-diameter", "30", "--feed-convention", "combined", "--rotary-unit", "mm", "--axes", "X,Y,Z",
-             "-c", str(toml), "--seam-rotation", "7.5"]
+    # In any order and spelling: both headers are written from the options value.
+    flags = ["--seam-rotation", "7.5", "-c", str(toml), "--feed", "combined", "--axes", "x,y,z", "--rotary-unit", "mm",
+             "--mandrel-diameter", "30"]
     assert gweave.main(["rotary", "wrap", str(plate), "-o", str(cli), *flags, "-q"]) == 0
     assert cli.read_bytes() == (tmp_path / "py.gcode").read_bytes()
     # Regression (engine errors named CLI flags): a Python caller was told to give --mandrel-diameter.
     with pytest.raises(ValueError, match=r"^no mandrel diameter: give one \(1 to 1000 mm\)") as refused:
         gweave.rotary_wrap(plate, tmp_path / "none.gcode")
     assert "--" not in str(refused.value)
-    with pytest.raises(ValueError, match='rotary_unit: .deg. or .mm., not "inch"'):
+    with pytest.raises(ValueError, match=r"^rotary_unit: unknown variant `inch`, expected one of `deg`, `degrees`, `mm`$"):
         gweave.rotary_wrap(plate, tmp_path / "bad.gcode", mandrel_diameter=30, rotary_unit="inch")
+
+
+def test_the_report_names_the_written_file_not_the_scratch_file(data, tmp_path):
+    """Regression (issue 40): Python's rotary reports named the scratch file the job wrote
+    first (`.gweave-*.tmp`); the one job names the output, as the CLI's --json does."""
+    out = tmp_path / "w.gcode"
+    assert gweave.rotary_wrap(data / "rotary" / "plate.gcode", out, mandrel_diameter=30)["output"] == str(out)
+    tube = tmp_path / "t.gcode"
+    assert gweave.rotary_tube(tube, mandrel_diameter=20, length=5, layer_count=1)["output"] == str(tube)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.gcode", "w.gcode"]
+
+
+def test_keep_arc_length_false_turns_a_configs_off_for_a_helical_wrap(data, tmp_path):
+    """Regression (issue 40): a switch given as False (restoring the default over the config)
+    was counted as given, and `helical=True` refused as conflicting with it."""
+    toml = tmp_path / "wrap.toml"
+    toml.write_text("[unwrap]\nkeep_arc_length = true\n")
+    out = tmp_path / "h.gcode"
+    r = gweave.rotary_wrap(data / "rotary" / "plate.gcode", out, config=toml, mandrel_diameter=30,
+                           keep_arc_length=False, helical=True)
+    assert r["helical"] and not r["keep_arc_length"]
+    assert out.read_text().splitlines()[0].endswith(" rotary wrap --mandrel-diameter 30 -c " f"{toml} --helical (generated)")

@@ -1,7 +1,8 @@
-//! A transform job run on a file, as `gweave purge-shift` and `gweave.purge_shift()` (and `mix`)
-//! both run it: the options read over the settings file they name, the pass run, the output
-//! finished with the run's header and its metadata ([`crate::finish`]). Written once, so the
-//! front ends only read their options ([`gweave::options`]) and show the result.
+//! A transform job run on a file, as `gweave purge-shift` and `gweave.purge_shift()` (and `mix`,
+//! `rotary wrap`, `rotary tube`) both run it: the options read over the settings file they name,
+//! the pass run, the output finished with the run's header and its metadata
+//! ([`crate::finish`]). Written once, so the front ends only read their options
+//! ([`gweave::options`]) and show the result.
 
 use std::path::{Path, PathBuf};
 
@@ -13,6 +14,12 @@ use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::{MixOptions, MixPassError};
 use gweave::post::purge_shift::{ConfigError, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
+use gweave::rotary::helix::TubeParams;
+use gweave::rotary::options::{MachineOptions, TubeOptions, WrapOptions};
+use gweave::rotary::report::{TubeReport, WrapReport};
+use gweave::rotary::wrap::WrapConfig;
+use gweave::rotary::RotaryError;
+use gweave::rotary_job::{tube_file, wrap_file};
 use gweave::run::Run;
 
 use crate::finish::{self, FinishError};
@@ -46,8 +53,12 @@ impl<'a> Job<'a> {
 
 /// Every transform job's command and options, for a front end that lists them (Python's
 /// `_gweave.job_options`, which its tests hold the typed wrappers to).
-pub const JOBS: &[(&str, &[gweave::options::OptionSpec])] =
-    &[(PurgeShiftOptions::COMMAND, PurgeShiftOptions::SPEC), (MixOptions::COMMAND, MixOptions::SPEC)];
+pub const JOBS: &[(&str, &[gweave::options::OptionSpec])] = &[
+    (PurgeShiftOptions::COMMAND, PurgeShiftOptions::SPEC),
+    (MixOptions::COMMAND, MixOptions::SPEC),
+    (WrapOptions::COMMAND, WrapOptions::SPEC),
+    (TubeOptions::COMMAND, TubeOptions::SPEC),
+];
 
 /// What a transform job returns: its report and the malformed lines a lenient run read past.
 pub type Outcome<R> = Result<(R, Malformed), TransformError>;
@@ -73,6 +84,9 @@ pub enum TransformError {
     /// The mix profile or the mix pass refused.
     #[error(transparent)]
     Mix(#[from] MixPassError),
+    /// The rotary settings are inconsistent, or wrapping or writing the tube failed.
+    #[error(transparent)]
+    Rotary(#[from] RotaryError),
     /// Reading, writing, or finishing the output failed.
     #[error(transparent)]
     Finish(#[from] FinishError),
@@ -107,9 +121,9 @@ impl TransformError {
     /// line): a front end raises it as it raises the engine's errors.
     pub fn engine(&self) -> Option<&gweave::Error> {
         match self {
-            TransformError::Finish(FinishError::Engine(e)) | TransformError::Mix(MixPassError::Engine(e)) => {
-                Some(e)
-            }
+            TransformError::Finish(FinishError::Engine(e))
+            | TransformError::Mix(MixPassError::Engine(e))
+            | TransformError::Rotary(RotaryError::Engine(e)) => Some(e),
             _ => None,
         }
     }
@@ -198,4 +212,53 @@ pub fn mix_with(profile: MixProfile, options: &MixOptions, job: Job<'_>) -> Outc
         Ok::<_, TransformError>((report, ran.malformed))
     })?;
     Ok((report, malformed))
+}
+
+/// The rotary settings `read` makes of the settings file the machine options name (its errors
+/// name the file) or, without one, of the options alone (`WrapConfig::read`, `TubeParams::read`).
+fn rotary_settings<T>(
+    machine: &MachineOptions,
+    read: impl Fn(Option<&str>, &MachineOptions) -> Result<T, RotaryError>,
+) -> Result<T, TransformError> {
+    let from_file = settings(machine.config.as_deref(), |text| read(Some(text), machine).map(Some))?;
+    match from_file {
+        Some(settings) => Ok(settings),
+        None => Ok(read(None, machine)?),
+    }
+}
+
+/// Wraps a part sliced flat onto the mandrel (docs/rotary.md), drawing the path as the machine
+/// runs it to the PNG `preview` if given: returns the report and the malformed lines read past.
+pub fn rotary_wrap(options: &WrapOptions, job: Job<'_>, preview: Option<&Path>) -> Outcome<WrapReport> {
+    options.check_conflicts()?;
+    let mut config = rotary_settings(&options.machine, WrapConfig::read)?;
+    config.apply(options)?;
+    finish::refuse_second_run(job.input, WrapOptions::COMMAND)?;
+    let line = command_line(options, job.strictness);
+    let (input, target) = (job.input, job.target);
+    let wrap = |t: &Target| Ok::<_, TransformError>(wrap_file(&config, job.run(t), preview)?);
+    // Its own time: the estimator's default machine does not read the rotary feed.
+    let own_time_s = |r: &(WrapReport, Malformed)| Some(r.0.time_s);
+    let ((mut report, malformed), written) =
+        finish::with_metadata_timed(Some(input), target, &line, wrap, own_time_s)?;
+    report.output = written;
+    Ok((report, malformed))
+}
+
+/// Writes a seam-free tube of continuous helical layers (docs/rotary.md) to `target`, drawing
+/// it to the PNG `preview` if given.
+pub fn rotary_tube(
+    options: &TubeOptions,
+    target: &Target,
+    preview: Option<&Path>,
+) -> Result<TubeReport, TransformError> {
+    options.check_conflicts()?;
+    let mut params = rotary_settings(&options.machine, TubeParams::read)?;
+    params.apply(options)?;
+    let line = command_line(options, Strictness::Strict);
+    let tube = |t: &Target| Ok::<_, TransformError>(tube_file(&params, t, preview)?);
+    let own_time_s = |r: &TubeReport| Some(r.print_time_s);
+    let (mut report, written) = finish::with_metadata_timed(None, target, &line, tube, own_time_s)?;
+    report.output = written;
+    Ok(report)
 }

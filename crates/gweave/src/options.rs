@@ -83,16 +83,41 @@ pub struct Shape {
     pub aliases: &'static [&'static str],
     /// Options that cannot be given with this one.
     pub conflicts: &'static [&'static str],
+    /// A whole number (an `Option<u32>` field, `--layer-count 4`): Python's keyword is an `int`.
+    pub whole: bool,
+    /// A switch whose CLI flag turns it off (`--no-interweave` sets `interweave` false); Python
+    /// takes the keyword itself (`interweave=False`).
+    pub negated: bool,
 }
 
 impl Shape {
     /// An option whose value the CLI's help shows as `value_name` (empty for a switch).
     pub const fn new(value_name: &'static str) -> Self {
-        Shape { value_name, range: None, short: None, aliases: &[], conflicts: &[] }
+        Shape {
+            value_name,
+            range: None,
+            short: None,
+            aliases: &[],
+            conflicts: &[],
+            whole: false,
+            negated: false,
+        }
     }
     /// Its numbers within `range`.
     pub const fn range(mut self, range: Range) -> Self {
         self.range = Some(range);
+        self
+    }
+    /// A whole number within `range` (a count: layers, chords per turn).
+    pub const fn whole(mut self, range: Range<u32>) -> Self {
+        self.range =
+            Some(Range { min: range.min as f64, max: range.max as f64, unit: range.unit, zero: range.zero });
+        self.whole = true;
+        self
+    }
+    /// Its CLI flag is `--no-<name>`, which sets it false.
+    pub const fn negated(mut self) -> Self {
+        self.negated = true;
         self
     }
     /// Its one-letter CLI flag.
@@ -128,9 +153,27 @@ pub struct OptionSpec {
 }
 
 impl OptionSpec {
-    /// The CLI's long flag, without the dashes (`purge-mm`).
+    /// The CLI's long flag, without the dashes (`purge-mm`; `no-interweave` for a negated
+    /// switch).
     pub fn flag(&self) -> String {
-        self.name.replace('_', "-")
+        let flag = self.name.replace('_', "-");
+        if self.shape.negated {
+            format!("no-{flag}")
+        } else {
+            flag
+        }
+    }
+
+    /// `value` (as [`JobOptions::values`] gives it) is one the CLI says with this option's flag:
+    /// given, and for a switch the way its flag turns it (`--helical` on, `--no-interweave`
+    /// off). A switch given the other way (`keep_arc_length=False` over a settings file's) only
+    /// restores a default: it conflicts with nothing and the header leaves it out.
+    pub fn said(&self, value: &Option<Value>) -> bool {
+        match value {
+            None => false,
+            Some(Value::Flag(on)) => *on != self.shape.negated,
+            Some(_) => true,
+        }
     }
 
     /// The help text, one paragraph: the doc comment's lines joined.
@@ -339,9 +382,9 @@ pub trait JobOptions: Default + Sized {
     /// Refuses two options given that exclude each other (`purge_mm` and `purge_mm3`).
     fn check_conflicts(&self) -> Result<(), OptionError> {
         let values = self.values();
-        let given = |name: &str| Self::SPEC.iter().zip(&values).any(|(s, v)| s.name == name && v.is_some());
+        let given = |name: &str| Self::SPEC.iter().zip(&values).any(|(s, v)| s.name == name && s.said(v));
         for (spec, value) in Self::SPEC.iter().zip(&values) {
-            if let Some(other) = spec.shape.conflicts.iter().find(|o| value.is_some() && given(o)) {
+            if let Some(other) = spec.shape.conflicts.iter().find(|o| spec.said(value) && given(o)) {
                 return Err(OptionError { option: spec.name, problem: Problem::Conflict(other) });
             }
         }
@@ -356,9 +399,12 @@ pub trait JobOptions: Default + Sized {
         let mut words = Vec::new();
         for (spec, value) in Self::SPEC.iter().zip(self.values()) {
             let flag = spec.shape.short.map_or_else(|| format!("--{}", spec.flag()), |c| format!("-{c}"));
+            if !spec.said(&value) {
+                continue;
+            }
             let each: Vec<String> = match value {
-                None | Some(Value::Flag(false)) => continue,
-                Some(Value::Flag(true)) => {
+                None => continue,
+                Some(Value::Flag(_)) => {
                     words.push(flag);
                     continue;
                 }
@@ -375,6 +421,28 @@ pub trait JobOptions: Default + Sized {
         }
         words.join(" ")
     }
+}
+
+/// The options of `parts` one after another, as one list of `N` (their lengths' sum): the
+/// [`JobOptions::SPEC`] of a job that shares a group of options with others
+/// ([`job_options!`](crate::job_options)'s `..group: Type,`).
+pub const fn joined<const N: usize>(parts: &[&[OptionSpec]]) -> [OptionSpec; N] {
+    let unset = OptionSpec { name: "", kind: Kind::Flag, doc: "", default: no_word, shape: Shape::new("") };
+    let mut all = [unset; N];
+    let (mut part, mut at, mut i) = (0, 0, 0);
+    while part < parts.len() {
+        while at < parts[part].len() {
+            all[i] = parts[part][at];
+            (at, i) = (at + 1, i + 1);
+        }
+        (part, at) = (part + 1, 0);
+    }
+    assert!(i == N, "N is the sum of the parts' lengths");
+    all
+}
+
+fn no_word() -> Option<String> {
+    None
 }
 
 /// A field type an option can have: how it takes a [`Value`] and gives it back.
@@ -396,7 +464,7 @@ fn wrong_kind(value: &Value) -> Problem {
 }
 
 macro_rules! field {
-    ($ty:ty, $kind:expr, $pattern:pat => $field:expr, $this:ident => $value:expr) => {
+    ($ty:ty, $kind:expr, $pattern:pat => $field:expr, $this:ident => $value:expr $(, default $word:literal)?) => {
         impl OptionField for $ty {
             const KIND: Kind = $kind;
             fn from_value(value: Value) -> Result<Self, Problem> {
@@ -409,12 +477,21 @@ macro_rules! field {
                 let $this = self;
                 $value
             }
+            $(fn default_word() -> Option<String> {
+                Some($word.to_owned())
+            })?
         }
     };
 }
 
-field!(bool, Kind::Flag, Value::Flag(b) => b, b => b.then_some(Value::Flag(true)));
+field!(bool, Kind::Flag, Value::Flag(b) => b, b => b.then_some(Value::Flag(true)), default "false");
+// Unset, or a switch given either way (`keep_arc_length=False` turns a settings file's on off).
+field!(Option<bool>, Kind::Flag, Value::Flag(b) => Some(b), b => b.map(Value::Flag));
 field!(Option<f64>, Kind::Number, Value::Number(v) => Some(v), v => v.map(Value::Number));
+field!(Option<u32>, Kind::Number, Value::Number(v) => Some(whole(v)?), v => v.map(|v| Value::Number(v.into())));
+// Three letters (axial, rotary, radial axes): `X,A,Z` or `XAZ`, either case.
+field!(Option<[char; 3]>, Kind::Texts(0), Value::Texts(t) => Some(letters(&t)?),
+    t => t.map(|t| Value::Texts(t.iter().map(char::to_string).collect())));
 field!(Option<String>, Kind::Text, Value::Text(t) => Some(t), t => t.clone().map(Value::Text));
 field!(Option<PathBuf>, Kind::Path, Value::Path(p) => Some(p), p => p.clone().map(Value::Path));
 field!(Vec<String>, Kind::Repeated, Value::Texts(t) => t,
@@ -424,6 +501,23 @@ field!(Option<[String; 2]>, Kind::Texts(2), Value::Texts(t) => Some(pair(t)?),
     t => t.clone().map(|t| Value::Texts(t.into())));
 field!(Option<[f64; 2]>, Kind::Numbers(2), Value::Numbers(v) => Some(pair(v)?),
     v => v.map(|v| Value::Numbers(v.into())));
+
+/// A number given for a count, if it is a whole one a `u32` holds (the range, checked first,
+/// is narrower).
+fn whole(v: f64) -> Result<u32, Problem> {
+    if v.fract() == 0.0 && (0.0..=f64::from(u32::MAX)).contains(&v) {
+        Ok(v as u32)
+    } else {
+        Err(Problem::Invalid(format!("{} is not a whole number", short(v))))
+    }
+}
+
+fn letters(texts: &[String]) -> Result<[char; 3], Problem> {
+    let all: Vec<char> =
+        texts.iter().flat_map(|t| t.trim().chars()).map(|c| c.to_ascii_uppercase()).collect();
+    all.try_into()
+        .map_err(|_| Problem::Invalid(format!("takes 3 letters (X,A,Z), not {:?}", texts.join(","))))
+}
 
 fn pair<T>(v: Vec<T>) -> Result<[T; 2], Problem> {
     let got = v.len();
@@ -482,6 +576,11 @@ macro_rules! word_option {
 /// flag, aliases, conflicts). The struct gets [`JobOptions`], `Default` (every option unset or
 /// at its default) and `PartialEq`.
 ///
+/// Options several jobs share are declared once as a type of their own (`rotary wrap` and
+/// `rotary tube` share the machine's), named first as `..machine: MachineOptions,`: the job's
+/// field `machine` holds them, and they come first in its [`JobOptions::SPEC`], its flags and
+/// its header.
+///
 /// ```
 /// gweave::job_options! {
 ///     /// Options of a job.
@@ -490,14 +589,28 @@ macro_rules! word_option {
 ///         purge_mm: Option<f64> = gweave::options::Shape::new("MM").range(gweave::range::PURGE_MM),
 ///     }
 /// }
+/// gweave::job_options! {
+///     /// A job sharing `DemoOptions`.
+///     pub struct MoreOptions for "more" {
+///         ..demo: DemoOptions,
+///         /// Layers.
+///         layer_count: Option<u32> = gweave::options::Shape::new("N").whole(gweave::range::LAYER_NUMBER),
+///     }
+/// }
 /// use gweave::options::JobOptions;
 /// assert_eq!(DemoOptions::SPEC[0].help(), "Purge per change, mm.");
+/// let names: Vec<&str> = MoreOptions::SPEC.iter().map(|s| s.name).collect();
+/// assert_eq!(names, ["purge_mm", "layer_count"]);
+/// let mut more = MoreOptions::default();
+/// more.set(&MoreOptions::SPEC[0], gweave::options::Value::Number(2.0)).unwrap();
+/// assert_eq!(more.demo.purge_mm, Some(2.0));
 /// ```
 #[macro_export]
 macro_rules! job_options {
     (
         $(#[doc = $doc:literal])*
         pub struct $name:ident for $command:literal {
+            $(..$group:ident: $group_ty:ty,)*
             $(
                 $(#[doc = $help:literal])*
                 $field:ident: $ty:ty = $shape:expr,
@@ -507,26 +620,38 @@ macro_rules! job_options {
         $(#[doc = $doc])*
         #[derive(Debug, Clone, Default, PartialEq)]
         pub struct $name {
+            $(#[doc = concat!("The options shared with other jobs (`", stringify!($group_ty), "`).")]
+            pub $group: $group_ty,)*
             $( $(#[doc = $help])* pub $field: $ty, )*
         }
 
         impl $crate::options::JobOptions for $name {
             const COMMAND: &'static str = $command;
-            const SPEC: &'static [$crate::options::OptionSpec] = &[$(
-                $crate::options::OptionSpec {
-                    name: stringify!($field),
-                    kind: <$ty as $crate::options::OptionField>::KIND,
-                    doc: concat!($($help, "\n"),*),
-                    default: <$ty as $crate::options::OptionField>::default_word,
-                    shape: $shape,
-                },
-            )*];
+            const SPEC: &'static [$crate::options::OptionSpec] = {
+                use $crate::options::OptionSpec;
+                const OWN: &[OptionSpec] = &[$(
+                    OptionSpec {
+                        name: stringify!($field),
+                        kind: <$ty as $crate::options::OptionField>::KIND,
+                        doc: concat!($($help, "\n"),*),
+                        default: <$ty as $crate::options::OptionField>::default_word,
+                        shape: $shape,
+                    },
+                )*];
+                const N: usize = 0 $(+ <$group_ty as $crate::options::JobOptions>::SPEC.len())* + OWN.len();
+                const ALL: [OptionSpec; N] =
+                    $crate::options::joined(&[$(<$group_ty as $crate::options::JobOptions>::SPEC,)* OWN]);
+                &ALL
+            };
 
             fn set(
                 &mut self,
                 spec: &$crate::options::OptionSpec,
                 value: $crate::options::Value,
             ) -> Result<(), $crate::options::OptionError> {
+                $(if <$group_ty as $crate::options::JobOptions>::spec(spec.name).is_some() {
+                    return $crate::options::JobOptions::set(&mut self.$group, spec, value);
+                })*
                 let value = spec.check(value)?;
                 let refuse = |problem| $crate::options::OptionError { option: spec.name, problem };
                 match spec.name {
@@ -539,8 +664,91 @@ macro_rules! job_options {
             }
 
             fn values(&self) -> Vec<Option<$crate::options::Value>> {
-                vec![$($crate::options::OptionField::to_value(&self.$field)),*]
+                let mut values: Vec<Option<$crate::options::Value>> = Vec::new();
+                $(values.extend($crate::options::JobOptions::values(&self.$group));)*
+                values.extend([$($crate::options::OptionField::to_value(&self.$field)),*]);
+                values
             }
         }
     };
+}
+
+#[cfg(test)]
+#[allow(unreachable_pub)] // `job_options!` declares public types, private to the tests here.
+mod tests {
+    use super::*;
+    use crate::range::LAYER_NUMBER;
+
+    crate::job_options! {
+        /// A group two jobs share.
+        pub struct Shared for "shared" {
+            /// Axes.
+            axes: Option<[char; 3]> = Shape::new("X,A,Z"),
+        }
+    }
+
+    crate::job_options! {
+        /// A job with the group, a count and both kinds of switch.
+        pub struct Job for "job" {
+            ..shared: Shared,
+            /// Layers.
+            layer_count: Option<u32> = Shape::new("N").whole(LAYER_NUMBER).aliases(&["layers"]),
+            /// Reverse every layer.
+            interweave: Option<bool> = Shape::new("").negated(),
+            /// Keep arcs.
+            keep: Option<bool> = Shape::new(""),
+            /// Wind helically.
+            helical: bool = Shape::new("").conflicts(&["axes", "keep"]),
+        }
+    }
+
+    fn set(job: &mut Job, name: &str, text: &str) -> Result<(), OptionError> {
+        let spec = Job::spec(name).unwrap();
+        job.set(spec, spec.parse(text)?)
+    }
+
+    #[test]
+    fn a_group_comes_first_and_is_set_through_its_field() {
+        let names: Vec<String> = Job::SPEC.iter().map(OptionSpec::flag).collect();
+        assert_eq!(names, ["axes", "layer-count", "no-interweave", "keep", "helical"]);
+        let mut job = Job::default();
+        set(&mut job, "axes", "x, y ,z").unwrap();
+        set(&mut job, "layer_count", "4").unwrap();
+        assert_eq!((job.shared.axes, job.layer_count), (Some(['X', 'Y', 'Z']), Some(4)));
+        set(&mut job, "axes", "XAZ").unwrap();
+        assert_eq!(job.header(), "--axes X,A,Z --layer-count 4");
+        job.helical = true;
+        let err = job.check_conflicts().unwrap_err();
+        assert_eq!(err.spelled(Spelling::Flag), "--helical and --axes: give one of them");
+    }
+
+    #[test]
+    fn a_count_is_whole_and_within_its_range() {
+        let mut job = Job::default();
+        let err = set(&mut job, "layer_count", "2.5").unwrap_err();
+        assert_eq!(err.spelled(Spelling::Keyword), "layer_count: 2.5 is not a whole number");
+        let err = set(&mut job, "layer_count", "2000000").unwrap_err();
+        assert_eq!(err.spelled(Spelling::Flag), "--layer-count 2000000 is out of range: 0 to 1000000");
+        let err = set(&mut job, "axes", "X,A").unwrap_err();
+        assert_eq!(err.spelled(Spelling::Flag), r#"--axes: takes 3 letters (X,A,Z), not "X,A""#);
+        assert_eq!(job, Job::default(), "a refused value leaves the option unset");
+    }
+
+    #[test]
+    fn a_switch_is_written_as_the_cli_says_it() {
+        let spec = |name| Job::spec(name).unwrap();
+        let mut job = Job::default();
+        job.set(spec("interweave"), Value::Flag(true)).unwrap();
+        job.set(spec("keep"), Value::Flag(false)).unwrap();
+        assert_eq!((job.interweave, job.keep), (Some(true), Some(false)));
+        assert_eq!(job.header(), "", "the CLI has no flag for either: the settings' default");
+        job.set(spec("interweave"), Value::Flag(false)).unwrap();
+        job.set(spec("keep"), Value::Flag(true)).unwrap();
+        assert_eq!(job.header(), "--no-interweave --keep");
+        // Regression: `keep_arc_length=False, helical=True` (a settings file's arc length turned
+        // off to wind helically) was refused as a conflict.
+        let off = Job { keep: Some(false), helical: true, ..Job::default() };
+        assert_eq!(off.check_conflicts(), Ok(()));
+        assert_eq!(((spec("helical").default)(), (spec("keep").default)()), (Some("false".into()), None));
+    }
 }

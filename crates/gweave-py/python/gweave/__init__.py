@@ -194,19 +194,6 @@ def _flags(*flags: Tuple[str, Any]) -> str:
     return " ".join(words)
 
 
-def _machine_flags(
-    mandrel_diameter: Any, feed_convention: Any, rotary_unit: Any, axes: Any, config: Any
-) -> Tuple[Tuple[str, Any], ...]:
-    """The rotary machine's flags (``gweave rotary wrap`` and ``tube`` share them), for a header."""
-    return (
-        ("--mandrel-diameter", mandrel_diameter),
-        ("--feed-convention", feed_convention),
-        ("--rotary-unit", rotary_unit),
-        ("--axes", axes if axes is None or isinstance(axes, str) else tuple(axes)),
-        ("-c", config),
-    )
-
-
 def _origin(origin: Optional[Sequence[float]]) -> Optional[Tuple[float, float]]:
     """A raster's ``origin`` keyword as the engine takes it: None keeps the machine's or the default."""
     return None if origin is None else (float(origin[0]), float(origin[1]))
@@ -360,18 +347,19 @@ def slice_raster(
     )
 
 
-def _job(function: Any, arguments: Dict[str, Any]) -> Report:
-    """Runs a transform job with a wrapper's own arguments (its ``locals()``): the file, where
-    it goes, and the job's options by the names the engine declares (``_gweave.job_options``),
-    which the engine reads and checks as the command line reads its flags. Paths may be
-    ``str``, ``bytes`` or ``os.PathLike``."""
+def _job(function: Any, arguments: Dict[str, Any], files: Sequence[str] = ("path", "output")) -> Report:
+    """Runs a transform job with a wrapper's own arguments (its ``locals()``): the ``files`` it
+    reads or writes, given in that order (the first required), where it goes, and the job's
+    options by the names the engine declares (``_gweave.job_options``), which the engine reads
+    and checks as the command line reads its flags. Paths may be ``str``, ``bytes`` or
+    ``os.PathLike``."""
     options = dict(arguments)
-    path = _path(options.pop("path"), "path")
-    output = _opt_path(options.pop("output"), "output")
+    first, *rest = files
+    paths = [_path(options.pop(first), first), *(_opt_path(options.pop(name), name) for name in rest)]
     for name, value in options.items():
         if isinstance(value, (bytes, os.PathLike)):
             options[name] = _path(value, name)
-    return json.loads(function(path, output, **options))
+    return json.loads(function(*paths, **options))
 
 
 # purge-shift
@@ -571,9 +559,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 
 # ---- rotary (lathe-type) printing ----------------------------------------------------------
-# The keywords below are the CLI's flags, which the binding turns into the library's rotary
-# `Overrides` as the CLI does; every default, check and computation is the Rust library's (the
-# same as `gweave rotary ... --json`).
+# The jobs' keywords are the options the engine declares (`_gweave.job_options("rotary wrap")`),
+# read and checked as the CLI reads its flags; every default, check and computation is the Rust
+# library's (the same as `gweave rotary ... --json`).
 
 def _axes(axes: Optional[Sequence[str]]) -> Optional[Tuple[str, str, str]]:
     """``axes`` as the three letters (axial, rotary, radial): ``"X,A,Z"`` or a sequence."""
@@ -619,12 +607,12 @@ def rotary_wrap(
     feed_convention: Optional[str] = None,
     rotary_unit: Optional[str] = None,
     axes: Optional[Sequence[str]] = None,
+    config: Optional[PathLike] = None,
     keep_arc_length: Optional[bool] = None,
     seam_rotation: Optional[float] = None,
     helical: bool = False,
     allow_overlap: bool = False,
     chord_tol: Optional[float] = None,
-    config: Optional[PathLike] = None,
     preview: Optional[PathLike] = None,
     lenient: bool = False,
 ) -> Report:
@@ -633,6 +621,7 @@ def rotary_wrap(
     Flat X runs along the mandrel, Y around it (``theta = 360*y/(pi*D)``), Z away from it
     (radius ``D/2 + z``). ``mandrel_diameter`` in mm; ``feed_convention`` is ``"nist"``, ``"combined"`` or
     ``"inverse-time"``; ``rotary_unit`` ``"deg"`` or ``"mm"``; ``axes`` like ``"X,A,Z"``;
+    ``keep_arc_length=True`` keeps flat arc lengths (``False`` turns the config's off);
     ``seam_rotation`` degrees per layer; ``helical=True`` winds each layer as one turn of a helix
     (no weld line); ``allow_overlap=True`` wraps a part wider than the circumference over itself;
     ``chord_tol`` mm; ``lenient=True`` copies malformed lines through and counts them instead of
@@ -642,41 +631,18 @@ def rotary_wrap(
     read-only file). Returns the report (per-layer radius, angles swept, seam angle; filament;
     time).
     """
-    text = _gweave.rotary_wrap_json(
-        _path(input, "input"),
-        _opt_path(output, "output"),
-        in_place=in_place,
-        backup=backup,
-        force=force,
-        mandrel_diameter=mandrel_diameter,
-        feed_convention=feed_convention,
-        rotary_unit=rotary_unit,
-        axes=_axes(axes),
-        keep_arc_length=keep_arc_length,
-        seam_rotation=seam_rotation,
-        helical=helical,
-        allow_overlap=allow_overlap,
-        chord_tol=chord_tol,
-        config=_opt_path(config, "config"),
-        preview=_opt_path(preview, "preview"),
-        lenient=lenient,
-        options=_flags(
-            *_machine_flags(mandrel_diameter, feed_convention, rotary_unit, axes, config),
-            ("--keep-arc-length", keep_arc_length),
-            ("--seam-rotation", seam_rotation),
-            ("--helical", helical),
-            ("--allow-overlap", allow_overlap),
-            ("--chord-tol", chord_tol),
-            ("--lenient", lenient),
-        ),
-    )
-    return json.loads(text)
+    axes = _axes(axes)
+    return _job(_gweave.rotary_wrap_json, locals(), ("input", "output"))
 
 
 def rotary_tube(
     output: PathLike,
     *,
     mandrel_diameter: Optional[float] = None,
+    feed_convention: Optional[str] = None,
+    rotary_unit: Optional[str] = None,
+    axes: Optional[Sequence[str]] = None,
+    config: Optional[PathLike] = None,
     length: Optional[float] = None,
     layer_count: Optional[int] = None,
     layer_height: Optional[float] = None,
@@ -688,55 +654,22 @@ def rotary_tube(
     speed: Optional[float] = None,
     temp: Optional[float] = None,
     filament_diameter: Optional[float] = None,
-    feed_convention: Optional[str] = None,
-    rotary_unit: Optional[str] = None,
-    axes: Optional[Sequence[str]] = None,
-    config: Optional[PathLike] = None,
     preview: Optional[PathLike] = None,
 ) -> Report:
     """Generate a seam-free tube of continuous helical layers (``gweave rotary tube``).
 
-    Layer k lies on radius ``D/2 + (k + 1/2)*layer_height``, advancing ``pitch`` mm per turn
-    (default the bead width: a closed wall), reversing its helix every layer unless
-    ``interweave=False``, at surface speed ``speed`` mm/s. Lengths in mm, ``temp`` in degrees C.
-    Keywords override the TOML ``config``. Returns the report (per-layer radius, handedness,
-    turns, spindle speed; filament and its volume against the wall volume; time).
+    ``layer_count`` layers, layer k on radius ``D/2 + (k + 1/2)*h`` (``D``: the
+    ``mandrel_diameter``, ``h``: the ``layer_height``), each ``length`` mm along the mandrel, advancing ``pitch`` mm per turn
+    (default the ``bead_width``: a closed wall), reversing its helix every layer unless
+    ``interweave=False``, at surface speed ``speed`` mm/s, at least ``segments_per_turn`` chords
+    per turn and chords within ``chord_tol`` mm. Lengths in mm, ``temp`` in degrees C,
+    ``filament_diameter`` mm; ``feed_convention``, ``rotary_unit`` and ``axes`` as for
+    :func:`rotary_wrap`. Keywords override the TOML ``config``; ``preview`` writes a 3D PNG of
+    the tube. Returns the report (per-layer radius, handedness, turns, spindle speed; filament
+    and its volume against the wall volume; time).
     """
-    text = _gweave.rotary_tube_json(
-        _path(output, "output"),
-        mandrel_diameter=mandrel_diameter,
-        length=length,
-        layer_count=layer_count,
-        layer_height=layer_height,
-        bead_width=bead_width,
-        pitch=pitch,
-        interweave=interweave,
-        segments_per_turn=segments_per_turn,
-        chord_tol=chord_tol,
-        speed=speed,
-        temp=temp,
-        filament_diameter=filament_diameter,
-        feed_convention=feed_convention,
-        rotary_unit=rotary_unit,
-        axes=_axes(axes),
-        config=_opt_path(config, "config"),
-        preview=_opt_path(preview, "preview"),
-        options=_flags(
-            *_machine_flags(mandrel_diameter, feed_convention, rotary_unit, axes, config),
-            ("--length", length),
-            ("--layer-count", layer_count),
-            ("--layer-height", layer_height),
-            ("--bead-width", bead_width),
-            ("--pitch", pitch),
-            ("--no-interweave", interweave is False),
-            ("--segments-per-turn", segments_per_turn),
-            ("--chord-tol", chord_tol),
-            ("--speed", speed),
-            ("--temp", temp),
-            ("--filament-diameter", filament_diameter),
-        ),
-    )
-    return json.loads(text)
+    axes = _axes(axes)
+    return _job(_gweave.rotary_tube_json, locals(), ("output",))
 
 
 def write_helical_paths(

@@ -67,8 +67,10 @@ use super::{in_range, Result, RotaryError};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RotaryUnit {
-    /// Degrees of mandrel rotation (a true rotary axis such as `A`).
+    /// Degrees of mandrel rotation (a true rotary axis such as `A`); `deg` as the CLI has
+    /// always spelled it.
     #[default]
+    #[serde(alias = "deg")]
     Degrees,
     /// Millimetres of circumference at the mandrel surface (a rotary axis configured as `Y`).
     Mm,

@@ -14,7 +14,8 @@
 //! - [`helix`]: seam-free helical tubes and custom helical paths (cones, variable pitch).
 //! - [`wrap`]: the streaming pass that prints a flat-sliced part onto the mandrel.
 //! - [`preview`]: any rotary program read back as the machine runs it, and drawn in 3D.
-//! - [`overrides`]: the flags and Python keywords laid over the TOML settings, shared by both.
+//! - [`options`]: the options of both jobs (the CLI's flags, Python's keywords), declared once,
+//!   and laid over the TOML settings.
 //! - [`report`]: both jobs end to end (write, read back, draw, report) for the CLI and Python.
 //!
 //! ```
@@ -42,7 +43,7 @@ pub mod cylinder;
 pub mod emit;
 pub(crate) mod helical;
 pub mod helix;
-pub mod overrides;
+pub mod options;
 pub mod preview;
 pub mod report;
 mod setup;

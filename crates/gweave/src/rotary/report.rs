@@ -4,8 +4,8 @@
 //! spindle speed and where the layer starts and ends (the next one starts there: there is no
 //! seam). The jobs themselves, which write, read back and draw, are [`crate::rotary_job`].
 //!
-//! The commands' flags and Python's keywords reach the settings through
-//! [`super::overrides`]; the settings of custom helical paths (`gweave.write_helical_paths`)
+//! The commands' flags and Python's keywords reach the settings as the options declared in
+//! [`super::options`]; the settings of custom helical paths (`gweave.write_helical_paths`)
 //! come as one JSON document merged over a TOML file ([`merged_settings`]).
 
 use std::path::{Path, PathBuf};
