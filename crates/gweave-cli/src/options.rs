@@ -93,7 +93,12 @@ impl<T: JobOptions> FromArgMatches for Options<T> {
 /// names none kept whole, its causes and its I/O kind (a closed pipe, a stop) for `crate::run`
 /// to read.
 pub fn failed(e: gweave_sim::transform::TransformError) -> anyhow::Error {
-    let spelled = e.spelled(Spelling::Flag);
+    failed_with(e.spelled(Spelling::Flag), e)
+}
+
+/// A job's error `e`, said as `spelled` (its options spelled as flags) where that differs from
+/// its own message, else kept whole (see [`failed`]).
+pub fn failed_with<E: std::error::Error + Send + Sync + 'static>(spelled: String, e: E) -> anyhow::Error {
     if spelled == e.to_string() {
         e.into()
     } else {
@@ -106,6 +111,7 @@ mod tests {
     use super::*;
     use gweave::post::mix::MixOptions;
     use gweave::post::purge_shift::PurgeShiftOptions;
+    use gweave_sim::reading::{EstimateOptions, SimOptions};
 
     #[derive(clap::Parser, Debug)]
     struct Cli<T: JobOptions + Send + Sync + 'static> {
@@ -137,6 +143,8 @@ mod tests {
     fn every_option_is_a_flag_as_declared() {
         flags_match_the_declaration::<PurgeShiftOptions>();
         flags_match_the_declaration::<MixOptions>();
+        flags_match_the_declaration::<SimOptions>();
+        flags_match_the_declaration::<EstimateOptions>();
     }
 
     #[test]

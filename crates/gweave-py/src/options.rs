@@ -49,13 +49,15 @@ pub fn failed(e: TransformError) -> PyErr {
     }
 }
 
-/// The options of the job `command` (`purge-shift`, `mix`: `gweave_sim::transform::JOBS`) as declared: a list of dicts
+/// The options of the job `command` (`purge-shift`, `mix`, `sim`, `estimate`:
+/// `gweave_sim::transform::JOBS`, `gweave_sim::reading::JOBS`) as declared: a list of dicts
 /// `{"name", "flag", "kind", "default", "range", "help"}`, for the tests that hold the typed
 /// wrappers to the declaration (and for documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
-    let Some((_, specs)) = gweave_sim::transform::JOBS.iter().find(|(name, _)| *name == command) else {
-        let known: Vec<&str> = gweave_sim::transform::JOBS.iter().map(|(name, _)| *name).collect();
+    let jobs = || gweave_sim::transform::JOBS.iter().chain(gweave_sim::reading::JOBS);
+    let Some((_, specs)) = jobs().find(|(name, _)| *name == command) else {
+        let known: Vec<&str> = jobs().map(|(name, _)| *name).collect();
         return Err(PyValueError::new_err(format!("no job {command:?} ({})", known.join(", "))));
     };
     let list = PyList::empty(py);

@@ -5,6 +5,7 @@ and the engine checks each value, naming the keyword (the CLI names the flag).""
 
 import ast
 import inspect
+import json
 import re
 from pathlib import Path
 from typing import Any, Dict
@@ -16,8 +17,16 @@ from gweave import _gweave
 
 TORUS = ("prusaslicer", "pr_torus_pva.gcode")
 # Keywords every transform shares, not options of the job: the file, where it goes, strictness.
-SHARED = {"path", "output", "in_place", "backup", "force", "lenient"}
-JOBS = {"purge-shift": (gweave.purge_shift, "purge_shift_json"), "mix": (gweave.mix, "mix_json")}
+TRANSFORM = {"path", "output", "in_place", "backup", "force", "lenient"}
+# A reading job (sim, estimate) takes its file, and writes nothing but what its options name.
+READING = {"path"}
+# command -> (typed wrapper, compiled function, the keywords that are no option of the job)
+JOBS = {
+    "purge-shift": (gweave.purge_shift, "purge_shift_json", TRANSFORM),
+    "mix": (gweave.mix, "mix_json", TRANSFORM),
+    "sim": (gweave.sim, "sim_json", READING),
+    "estimate": (gweave.estimate, "estimate_json", READING),
+}
 
 # The annotation each kind of option has in the typed wrapper, and its default there.
 ANNOTATION = {
@@ -36,9 +45,9 @@ def declared(command: str) -> Dict[str, Dict[str, Any]]:
 
 @pytest.mark.parametrize("command", sorted(JOBS))
 def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(command):
-    wrapper, _ = JOBS[command]
+    wrapper, _, shared = JOBS[command]
     options = declared(command)
-    params = {n: p for n, p in inspect.signature(wrapper).parameters.items() if n not in SHARED}
+    params = {n: p for n, p in inspect.signature(wrapper).parameters.items() if n not in shared}
     assert list(params) == list(options), "the wrapper's keywords, in the declaration's order"
     for name, p in params.items():
         o = options[name]
@@ -54,14 +63,14 @@ def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(co
 
 @pytest.mark.parametrize("command", sorted(JOBS))
 def test_the_compiled_function_takes_the_options_as_keywords_and_its_stub_says_so(command):
-    _, compiled = JOBS[command]
+    _, compiled, shared = JOBS[command]
     params = inspect.signature(getattr(_gweave, compiled)).parameters
-    assert set(params) - {"options"} == SHARED
+    assert set(params) - {"options"} == shared
     assert params["options"].kind is inspect.Parameter.VAR_KEYWORD
     stub = ast.parse((Path(gweave.__file__).parent / "_gweave.pyi").read_text(encoding="utf-8"))
     node = next(n for n in stub.body if isinstance(n, ast.FunctionDef) and n.name == compiled)
     names = {a.arg for a in node.args.args + node.args.kwonlyargs}
-    assert names == SHARED and node.args.kwarg is not None and node.args.kwarg.arg == "options"
+    assert names == shared and node.args.kwarg is not None and node.args.kwarg.arg == "options"
 
 
 def test_declared_ranges_and_help_are_those_of_the_flags():
@@ -139,3 +148,35 @@ def test_a_refusal_names_the_options_by_their_keywords(tmp_path):
         "colours, pairs or a washout tolerance"
     )
     assert not out.exists()
+
+
+def test_estimate_machine_slicer_plans_with_the_files_own_limits_as_the_cli_does(data, capfd):
+    """Regression (issue 40): `gweave estimate --machine slicer` planned with the limits the
+    slicer wrote into the file; `gweave.estimate(machine="slicer")` looked for a profile called
+    `slicer`. One job now runs both."""
+    torus = str(data.joinpath(*TORUS))
+    r = gweave.estimate(torus, machine="slicer")
+    assert r["machine"] == "PrusaSlicer's machine limits in the file, flavour marlin2"
+    capfd.readouterr()
+    assert gweave.main(["estimate", torus, "--machine", "slicer", "--json", "-q"]) == 0
+    assert json.loads(capfd.readouterr().out) == r
+    with pytest.raises(ValueError, match=r": machine slicer: the file holds no machine limits"):
+        gweave.estimate(data / "cura" / "cura_torus.gcode", machine="slicer")
+
+
+def test_sim_draws_the_charts_the_cli_draws(data, tmp_path):
+    """Regression (issue 40): `--plot`, `--plot-speed` and `--raster-out` had no keyword; the
+    job draws them for both front ends, and refuses a chart that is neither PNG nor SVG before
+    the run, naming the keyword."""
+    box = data / "prusaslicer" / "pr_box_mach3.gcode"
+    with pytest.raises(ValueError, match=r"^plot_speed: a plot is written as PNG or SVG \(by its extension\), not \"jpg\"$"):
+        gweave.sim(box, plot_speed=tmp_path / "s.jpg")
+    gweave.sim(box, plot=tmp_path / "t.svg", plot_speed=tmp_path / "s.png")
+    assert (tmp_path / "t.svg").read_text().lstrip().startswith("<svg")
+    assert (tmp_path / "s.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_marlin_model_option_on_the_controller_core_names_the_keyword(data, tmp_path):
+    profile = data.parent.parent / "examples" / "machines" / "gweave-ramps.toml"
+    with pytest.raises(ValueError, match=r"^raster_out is for the Marlin model: "):
+        gweave.sim(data.joinpath(*TORUS), machine=profile, raster_out=tmp_path / "canvases")

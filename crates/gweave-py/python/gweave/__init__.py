@@ -128,36 +128,48 @@ def cat(
     )
 
 
-def sim(path: PathLike, *, machine: Optional[PathLike] = None, fault: Sequence[str] = ()) -> Report:
+def sim(
+    path: PathLike,
+    *,
+    machine: Optional[PathLike] = None,
+    fault: Sequence[str] = (),
+    plot: Optional[PathLike] = None,
+    plot_speed: Optional[PathLike] = None,
+    raster_out: Optional[PathLike] = None,
+) -> Report:
     """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML or
     a built-in profile's name (``"prusa-mk3"``, ``"klipper"``: ``gweave machine list``).
 
     ``fault`` injects heater faults as ``--fault`` does (``["hotend-cartridge-off@120s"]``).
-    The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
+    ``plot`` charts each heater's temperature and target over time, ``plot_speed`` the planned
+    toolhead speed, each layer's time and each mixing input's filament (a ``.png`` or ``.svg``
+    file, by its extension); ``raster_out`` is a folder for the inkjet canvases (one PNG per
+    layer and head). The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
     ``feature_s``, ``filament_mm`` (each motor's net feed; ``retracted_at_end_mm`` added to it
     is what left the nozzle, ``stats``'s figure), ``mixing_input_mm``, ``steps``, ``position``, ``count``,
     ``heaters``, ``thermal_faults``, ``halted``, ``unknown_commands`` and ``warnings``.
     The run stops at a halt and at the end of program a profile declares (``[firmware] m0 =
     "seed"``). A profile with ``[firmware] kind = "gweave"`` runs the file on gweave's controller
     core instead, and the report is the core's, as ``gweave sim --json`` prints it: ``lines``,
-    ``time_s``, ``end_steps``, ``mixing_steps``, ``halted`` and ``errors``.
+    ``time_s``, ``end_steps``, ``mixing_steps``, ``halted`` and ``errors`` (``fault``, the charts
+    and the canvases are the Marlin model's, and refused there).
     """
     if isinstance(fault, str):
         fault = [fault]
-    return json.loads(
-        _gweave.sim_json(_path(path, "path"), machine=_opt_path(machine, "machine"), fault=list(fault))
-    )
+    return _job(_gweave.sim_json, locals())
 
 
 def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool = False) -> Report:
     """Estimate the print time with the virtual printer's planner alone (``gweave estimate``).
 
+    ``machine`` is a profile TOML, a built-in profile's name, or ``"slicer"``: the machine
+    limits the slicer wrote into the file (the report's ``machine`` says which slicer's).
     Faster than :func:`sim` (reading, parsing and planning on three threads, no heaters):
     ``total_s``, ``motion_s``, ``dwell_s``, ``overhead_s``, ``blocks``, ``layer_s``,
     ``feature_s``, and ``steps`` when ``steps=True``.
     Heating waits and homing are not timed.
     """
-    return json.loads(_gweave.estimate_json(_path(path, "path"), machine=_opt_path(machine, "machine"), steps=steps))
+    return _job(_gweave.estimate_json, locals())
 
 
 # ---- binder-jet raster ----
@@ -361,17 +373,19 @@ def slice_raster(
 
 
 def _job(function: Any, arguments: Dict[str, Any]) -> Report:
-    """Runs a transform job with a wrapper's own arguments (its ``locals()``): the file, where
+    """Runs a job with a wrapper's own arguments (its ``locals()``): the file, where
     it goes, and the job's options by the names the engine declares (``_gweave.job_options``),
     which the engine reads and checks as the command line reads its flags. Paths may be
     ``str``, ``bytes`` or ``os.PathLike``."""
     options = dict(arguments)
-    path = _path(options.pop("path"), "path")
-    output = _opt_path(options.pop("output"), "output")
+    # A reading job (sim, estimate) takes the file alone; a transform, where it goes too.
+    files = [_path(options.pop("path"), "path")]
+    if "output" in options:
+        files.append(_opt_path(options.pop("output"), "output"))
     for name, value in options.items():
         if isinstance(value, (bytes, os.PathLike)):
             options[name] = _path(value, name)
-    return json.loads(function(path, output, **options))
+    return json.loads(function(*files, **options))
 
 
 # purge-shift
