@@ -28,6 +28,8 @@ pub fn read<T: JobOptions>(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -
         let value = match spec.kind {
             Kind::Flag => Value::Flag(value.extract().map_err(typed)?),
             Kind::Number => Value::Number(value.extract().map_err(typed)?),
+            // An int, as Python types a count; a float (or a numeric string) is no layer.
+            Kind::Whole => Value::Number(value.extract::<i64>().map_err(typed)? as f64),
             Kind::Text => Value::Text(value.extract().map_err(typed)?),
             Kind::Path => Value::Path(value.extract().map_err(typed)?),
             Kind::Repeated | Kind::Texts(_) => Value::Texts(value.extract().map_err(typed)?),
@@ -68,6 +70,7 @@ pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound
         let kind = match spec.kind {
             Kind::Flag => "flag",
             Kind::Number => "number",
+            Kind::Whole => "whole",
             Kind::Text => "text",
             Kind::Path => "path",
             Kind::Repeated => "repeated",

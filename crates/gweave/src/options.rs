@@ -40,6 +40,8 @@ pub enum Kind {
     Flag,
     /// One number within the option's range (`--purge-mm 2.5`, `purge_mm=2.5`).
     Number,
+    /// One whole number within the option's range (`--layer 12`, `layer=12`).
+    Whole,
     /// One word (`--fallback tower`, `fallback="tower"`).
     Text,
     /// A file (`-c mix.toml`, `config="mix.toml"`).
@@ -57,7 +59,7 @@ pub enum Kind {
 pub enum Value {
     /// [`Kind::Flag`].
     Flag(bool),
-    /// [`Kind::Number`].
+    /// [`Kind::Number`] and [`Kind::Whole`].
     Number(f64),
     /// [`Kind::Text`].
     Text(String),
@@ -155,7 +157,7 @@ impl OptionSpec {
         };
         let value = match self.kind {
             Kind::Flag => Value::Flag(true),
-            Kind::Number => Value::Number(number(text)?),
+            Kind::Number | Kind::Whole => Value::Number(number(text)?),
             Kind::Text => Value::Text(text.to_owned()),
             Kind::Path => Value::Path(PathBuf::from(text)),
             Kind::Repeated => Value::Texts(vec![text.to_owned()]),
@@ -427,7 +429,7 @@ macro_rules! field {
 
 field!(bool, Kind::Flag, Value::Flag(b) => b, b => b.then_some(Value::Flag(true)));
 field!(Option<f64>, Kind::Number, Value::Number(v) => Some(v), v => v.map(Value::Number));
-field!(Option<u32>, Kind::Number, Value::Number(v) => Some(whole(v)?), v => v.map(|v| Value::Number(v.into())));
+field!(Option<u32>, Kind::Whole, Value::Number(v) => Some(whole(v)?), v => v.map(|v| Value::Number(v.into())));
 field!(Option<String>, Kind::Text, Value::Text(t) => Some(t), t => t.clone().map(Value::Text));
 field!(Option<PathBuf>, Kind::Path, Value::Path(p) => Some(p), p => p.clone().map(Value::Path));
 field!(Vec<String>, Kind::Repeated, Value::Texts(t) => t,
