@@ -111,6 +111,7 @@ mod tests {
     use super::*;
     use gweave::post::mix::MixOptions;
     use gweave::post::purge_shift::PurgeShiftOptions;
+    use gweave::render::job::PreviewOptions;
     use gweave_sim::reading::{EstimateOptions, SimOptions};
 
     #[derive(clap::Parser, Debug)]
@@ -145,6 +146,40 @@ mod tests {
         flags_match_the_declaration::<MixOptions>();
         flags_match_the_declaration::<SimOptions>();
         flags_match_the_declaration::<EstimateOptions>();
+        flags_match_the_declaration::<PreviewOptions>();
+    }
+
+    #[test]
+    fn preview_keeps_its_flags_spellings_defaults_and_conflicts() {
+        let o: PreviewOptions = parse(&[
+            "--color-by",
+            "feature",
+            "--size",
+            "640x480",
+            "--layers",
+            "3-5",
+            "--tool-colors",
+            "#ff0000,#00ff00",
+        ])
+        .unwrap();
+        assert_eq!(o.colour_by, gweave::render::ColourBy::Feature);
+        assert_eq!((o.size.width_px, o.size.height_px), (640, 480));
+        assert_eq!(o.layers, Some(3..=5));
+        assert_eq!(
+            o.header(),
+            "--layers 3-5 --colour-by feature --size 640x480 --tool-colours #ff0000,#00ff00"
+        );
+        let d: PreviewOptions = parse(&[]).unwrap();
+        assert_eq!(
+            (d.size.width_px, d.size.height_px, d.colour_by),
+            (1200, 900, gweave::render::ColourBy::Tool)
+        );
+        let err = parse::<PreviewOptions>(&["--layer", "2", "--layers", "3-4"]).unwrap_err();
+        assert!(err.contains("'--layer <N>' cannot be used with '--layers <A-B>'"), "{err}");
+        let err = parse::<PreviewOptions>(&["--size", "8x900"]).unwrap_err();
+        assert!(err.contains("for '--size <WIDTHxHEIGHT>': out of range: 16 to 16384 px"), "{err}");
+        let err = parse::<PreviewOptions>(&["--view", "side"]).unwrap_err();
+        assert!(err.contains(r#"unknown view "side" (top or iso)"#), "{err}");
     }
 
     #[test]

@@ -26,12 +26,21 @@ JOBS = {
     "mix": (gweave.mix, "mix_json", TRANSFORM),
     "sim": (gweave.sim, "sim_json", READING),
     "estimate": (gweave.estimate, "estimate_json", READING),
+    # preview returns the picture, writes it to `output` if named, and its report on request.
+    "preview": (gweave.preview, "preview_json", {"path", "output", "lenient", "report"}),
+}
+# Keywords Python takes in a wider type than the declaration's, turned into the command line's
+# text by the wrapper before the engine reads it: (annotation, default).
+WIDER = {
+    ("preview", "layers"): ("Union[str, Tuple[int, int], None]", None),  # (first, last) or "A-B"
+    ("preview", "size"): ("Tuple[int, int]", (1200, 900)),  # declared "1200x900"
 }
 
 # The annotation each kind of option has in the typed wrapper, and its default there.
 ANNOTATION = {
     "flag": ("bool", False),
     "number": ("Optional[float]", None),
+    "whole": ("Optional[int]", None),
     "path": ("Optional[PathLike]", None),
     "repeated": ("Sequence[str]", ()),
     "texts": ("Optional[Sequence[str]]", None),
@@ -52,7 +61,9 @@ def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(co
     for name, p in params.items():
         o = options[name]
         assert p.kind is inspect.Parameter.KEYWORD_ONLY, name
-        if o["kind"] == "text":
+        if (command, name) in WIDER:
+            expected = WIDER[command, name]
+        elif o["kind"] == "text":
             # A word whose default is a value (gradient_space="mix") or unset.
             expected = ("str", o["default"]) if o["default"] is not None else ("Optional[str]", None)
         else:
@@ -64,6 +75,7 @@ def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(co
 @pytest.mark.parametrize("command", sorted(JOBS))
 def test_the_compiled_function_takes_the_options_as_keywords_and_its_stub_says_so(command):
     _, compiled, shared = JOBS[command]
+    shared = shared - {"report"}  # the wrapper's own: what it returns
     params = inspect.signature(getattr(_gweave, compiled)).parameters
     assert set(params) - {"options"} == shared
     assert params["options"].kind is inspect.Parameter.VAR_KEYWORD
@@ -180,3 +192,36 @@ def test_a_marlin_model_option_on_the_controller_core_names_the_keyword(data, tm
     profile = data.parent.parent / "examples" / "machines" / "gweave-ramps.toml"
     with pytest.raises(ValueError, match=r"^raster_out is for the Marlin model: "):
         gweave.sim(data.joinpath(*TORUS), machine=profile, raster_out=tmp_path / "canvases")
+
+
+def test_preview_writes_its_output_whole_and_refuses_as_the_cli_does(data, tmp_path, capfd):
+    """Regression (issue 40): Python wrote the picture in place (a failed write left part of
+    it), checked `layer` against `layers` with a message of its own, and had no `format`."""
+    cura = data / "cura" / "cura_dual.gcode"
+    out = tmp_path / "p.svg"
+    data_svg, r = gweave.preview(cura, output=out, layers=(3, 4), size=(100, 80), report=True)
+    assert out.read_bytes() == data_svg and r["format"] == "svg" and r["layers_drawn"] == [3, 4]
+    cli = tmp_path / "cli.svg"
+    capfd.readouterr()
+    assert gweave.main(["preview", str(cura), "-o", str(cli), "--layers", "3-4", "--size", "100x80", "-q"]) == 0
+    assert cli.read_bytes() == data_svg, "the CLI and Python draw the same picture"
+    assert gweave.preview(cura, format="svg", layer=3, size=(100, 80)).lstrip().startswith(b"<svg")
+    with pytest.raises(ValueError, match=r"^layer and layers: give one of them$"):
+        gweave.preview(cura, layer=3, layers="3-4")
+    with pytest.raises(ValueError, match=r'^format: unknown output format "gif" \(png, svg or html\)$'):
+        gweave.preview(cura, format="gif")
+    with pytest.raises(TypeError, match=r"^layer: "):
+        gweave.preview(cura, layer=2.5)  # type: ignore[arg-type]
+    # The picture goes through the engine's writer (a temporary file renamed into place): a
+    # failed run leaves what was there and no temporary file; a missing folder is an OSError
+    # naming the file.
+    keep = tmp_path / "p.png"
+    keep.write_bytes(b"old")
+    bad = tmp_path / "bad.gcode"
+    bad.write_text("G1 X1 Y1 E1\nG1 X1..2\n")
+    with pytest.raises(ValueError, match=r"bad.gcode:2:"):
+        gweave.preview(bad, output=keep, size=(64, 48))
+    assert keep.read_bytes() == b"old"
+    with pytest.raises(OSError, match="no/p.png"):
+        gweave.preview(cura, output=tmp_path / "no" / "p.png", size=(64, 48))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.gcode", "cli.svg", "p.png", "p.svg"]

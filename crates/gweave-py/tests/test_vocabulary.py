@@ -136,7 +136,7 @@ MAP = {
                     "min-len lenient"
                 ).split()
             },
-            "format": "- the format follows the output's extension (standard output is the CLI's)",
+            "format": "format",
         },
         ["path"],
     ),

@@ -1,4 +1,5 @@
-//! The reading jobs, `gweave sim` and `gweave estimate` as both front ends run them
+//! The reading jobs, `gweave sim` and `gweave estimate` as both front ends run them (`gweave
+//! preview`'s is the engine's own, [`gweave::render::job`])
 //! (`gweave.sim()`, `gweave.estimate()`): each takes one options type declared once
 //! ([`gweave::options`]) and is one function here, so the command line and Python load the
 //! machine, read the file and refuse an option alike. They had drifted: `estimate
@@ -13,6 +14,7 @@ use std::path::{Path, PathBuf};
 
 use gweave::options::{JobOptions, OptionError, OptionSpec, Problem, Shape, Spelling};
 use gweave::pass::Progress;
+use gweave::render::job::PreviewOptions;
 
 use crate::inkjet::InkjetError;
 use crate::job::{simulate, SimJobError, SimSetup, Simulation};
@@ -61,10 +63,14 @@ gweave::job_options! {
     }
 }
 
-/// Every reading job's command and options, for a front end that lists them (Python's
-/// `_gweave.job_options`), beside [`crate::transform::JOBS`].
-pub const JOBS: &[(&str, &[OptionSpec])] =
-    &[(SimOptions::COMMAND, SimOptions::SPEC), (EstimateOptions::COMMAND, EstimateOptions::SPEC)];
+/// Every reading job's command and options (`preview`'s is the engine's,
+/// [`gweave::render::job`]), for a front end that lists them (Python's `_gweave.job_options`),
+/// beside [`crate::transform::JOBS`].
+pub const JOBS: &[(&str, &[OptionSpec])] = &[
+    (SimOptions::COMMAND, SimOptions::SPEC),
+    (EstimateOptions::COMMAND, EstimateOptions::SPEC),
+    (PreviewOptions::COMMAND, PreviewOptions::SPEC),
+];
 
 /// Why a reading job failed.
 #[derive(Debug, thiserror::Error)]

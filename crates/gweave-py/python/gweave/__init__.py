@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Dict, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 from . import _gweave
 from ._gweave import HelicalPath, Line, Machine, Reader
@@ -372,20 +372,26 @@ def slice_raster(
     )
 
 
-def _job(function: Any, arguments: Dict[str, Any]) -> Report:
-    """Runs a job with a wrapper's own arguments (its ``locals()``): the file, where
+def _call(function: Any, arguments: Dict[str, Any]) -> Any:
+    """Calls a compiled job with a wrapper's own arguments (its ``locals()``): the file, where
     it goes, and the job's options by the names the engine declares (``_gweave.job_options``),
     which the engine reads and checks as the command line reads its flags. Paths may be
     ``str``, ``bytes`` or ``os.PathLike``."""
     options = dict(arguments)
-    # A reading job (sim, estimate) takes the file alone; a transform, where it goes too.
-    files = [_path(options.pop("path"), "path")]
+    # A reading job (sim, estimate) takes the file alone; a transform and preview, where the
+    # output goes too.
+    files: List[Optional[str]] = [_path(options.pop("path"), "path")]
     if "output" in options:
         files.append(_opt_path(options.pop("output"), "output"))
     for name, value in options.items():
         if isinstance(value, (bytes, os.PathLike)):
             options[name] = _path(value, name)
-    return json.loads(function(*files, **options))
+    return function(*files, **options)
+
+
+def _job(function: Any, arguments: Dict[str, Any]) -> Report:
+    """Runs a job (:func:`_call`) whose result is its report as JSON text."""
+    return json.loads(_call(function, arguments))
 
 
 # purge-shift
@@ -431,6 +437,9 @@ def preview(
     path: PathLike,
     *,
     output: Optional[PathLike] = None,
+    lenient: bool = False,
+    report: bool = False,
+    format: Optional[str] = None,
     layer: Optional[int] = None,
     layers: Union[str, Tuple[int, int], None] = None,
     view: Optional[str] = None,
@@ -438,19 +447,18 @@ def preview(
     size: Tuple[int, int] = (1200, 900),
     compare: Optional[PathLike] = None,
     tool_colours: Optional[Sequence[str]] = None,
-    travel: bool = False,
     mix_profile: Optional[PathLike] = None,
     mandrel_diameter: Optional[float] = None,
     head: Optional[PathLike] = None,
+    travel: bool = False,
     min_len: Optional[float] = None,
-    lenient: bool = False,
-    report: bool = False,
 ) -> Union[bytes, Tuple[bytes, Report]]:
     """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None),
     or with ``report=True`` the bytes and the report ``gweave preview --json`` prints (format, view,
     layers drawn, strokes, moves, and the ``legend``: each colour and what it stands for).
 
-    ``output`` picks the format by extension (``.png``, ``.svg``, ``.html``) and is written.
+    ``output`` is written (whole, or not at all) and picks the format by extension (``.png``,
+    ``.svg``, ``.html``) unless ``format`` (``"png"``, ``"svg"``, ``"html"``) does.
     ``layer`` is one 0-based layer, ``layers`` an inclusive ``(first, last)`` range (or ``"A-B"``);
     ``min_len`` (mm) merges chained moves shorter than that; ``lenient=True`` draws past
     malformed lines and counts them in the report; ``view`` is ``"top"`` or
@@ -460,34 +468,18 @@ def preview(
     ``gweave mix`` profile ``mix_profile``); ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``
     colour the tools; ``mandrel_diameter`` (mm) draws a rotary program without a gweave header on
     its cylinder; ``head`` is the printhead profile of raster output; ``compare`` highlights moves that differ
-    from another file (in HTML, the two side by side); ``size`` is ``(width, height)`` in pixels.
+    from another file (in HTML, the two side by side); ``size`` is ``(width, height)`` in pixels;
+    ``travel=True`` draws travel moves too.
     """
-    out = _opt_path(output, "output")
-    # The format follows the output's extension, read by the engine as the CLI reads `-o`.
-    fmt = "png" if out is None else os.path.splitext(out)[1].lstrip(".")
-    if layer is not None and layers is not None:
-        raise ValueError("layer and layers: give one (as --layer and --layers)")
-    data, report_json = _gweave.preview_json(
-        _path(path, "path"),
-        format=fmt,
-        layer=layer,
-        layers=layers,
-        view=view,
-        colour_by=colour_by,
-        size=(int(size[0]), int(size[1])),
-        compare=_opt_path(compare, "compare"),
-        tool_colours=None if tool_colours is None else list(tool_colours),
-        travel=travel,
-        mix_profile=_opt_path(mix_profile, "mix_profile"),
-        mandrel_diameter=mandrel_diameter,
-        head=_opt_path(head, "head"),
-        min_len=min_len,
-        lenient=lenient,
-    )
-    if out is not None:
-        with open(out, "wb") as f:
-            f.write(data)
-    return (data, json.loads(report_json)) if report else data
+    arguments = dict(locals())
+    with_report = arguments.pop("report")
+    if isinstance(layers, (tuple, list)):
+        # The pair as the command line's `A-B`, read and checked by the engine.
+        arguments["layers"] = "-".join(str(n) for n in layers)
+    if tool_colours is not None:
+        arguments["tool_colours"] = list(tool_colours)
+    data, report_json = _call(_gweave.preview_json, arguments)
+    return (data, json.loads(report_json)) if with_report else data
 
 
 def toolpath(

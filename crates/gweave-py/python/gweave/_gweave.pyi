@@ -91,23 +91,9 @@ def mix_json(
     lenient: bool = False,
     **options: Any,
 ) -> str: ...
+# The options of preview are read by their declared names, as purge-shift's are.
 def preview_json(
-    path: str,
-    *,
-    format: str,
-    layer: Optional[int] = None,
-    layers: Union[str, Tuple[int, int], None] = None,
-    view: Optional[str] = None,
-    colour_by: str = "tool",
-    size: Tuple[int, int] = (1200, 900),
-    compare: Optional[str] = None,
-    tool_colours: Optional[List[str]] = None,
-    travel: bool = False,
-    mix_profile: Optional[str] = None,
-    mandrel_diameter: Optional[float] = None,
-    head: Optional[str] = None,
-    min_len: Optional[float] = None,
-    lenient: bool = False,
+    path: str, output: Optional[str] = None, *, lenient: bool = False, **options: Any
 ) -> Tuple[bytes, str]: ...
 def toolpath_columns(
     path: str, *, travel: bool = True, min_len: float = 0.0, mandrel_diameter: Optional[float] = None
