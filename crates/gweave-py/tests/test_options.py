@@ -176,14 +176,17 @@ def test_estimate_machine_slicer_plans_with_the_files_own_limits_as_the_cli_does
         gweave.estimate(data / "cura" / "cura_torus.gcode", machine="slicer")
 
 
-def test_sim_draws_the_charts_the_cli_draws(data, tmp_path):
+def test_sim_draws_the_charts_the_cli_draws(data, tmp_path, capfd):
     """Regression (issue 40): `--plot`, `--plot-speed` and `--raster-out` had no keyword; the
     job draws them for both front ends, and refuses a chart that is neither PNG nor SVG before
     the run, naming the keyword."""
     box = data / "prusaslicer" / "pr_box_mach3.gcode"
     with pytest.raises(ValueError, match=r"^plot_speed: a plot is written as PNG or SVG \(by its extension\), not \"jpg\"$"):
         gweave.sim(box, plot_speed=tmp_path / "s.jpg")
-    gweave.sim(box, plot=tmp_path / "t.svg", plot_speed=tmp_path / "s.png")
+    report = gweave.sim(box, plot=tmp_path / "t.svg", plot_speed=tmp_path / "s.png")
+    capfd.readouterr()
+    assert gweave.main(["sim", str(box), "--json", "-q"]) == 0
+    assert json.loads(capfd.readouterr().out) == report, "the CLI and Python report the same run"
     assert (tmp_path / "t.svg").read_text().lstrip().startswith("<svg")
     assert (tmp_path / "s.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

@@ -63,8 +63,8 @@ def slice_raster_json(
     stl: str, out_dir: str, *, layer_height: float, dpi: float = 96.0, pixel_mm: Optional[float] = None, margin: int = 0
 ) -> str: ...
 
-# The transform jobs: their options are keyword arguments by the names the engine declares
-# (`job_options`); `gweave/__init__.py` types them, `tests/test_options.py` holds the two equal.
+# The jobs (transforms, sim, estimate, preview): their options are keyword arguments by the
+# names the engine declares (`job_options`); `gweave/__init__.py` types them, `tests/test_options.py` holds the two equal.
 def job_options(command: str) -> List[Dict[str, Any]]: ...
 
 # purge-shift
