@@ -47,13 +47,17 @@ impl Lenient {
     }
 }
 
-/// `--machine`: the virtual printer's profile, for the commands that run it (`sim`, `serve`).
+/// `--machine`: the virtual printer's profile for `serve`, helped as `sim`'s option
+/// ([`gweave_sim::reading::SimOptions`]) is declared.
 #[derive(Args, Debug, Clone, Default)]
 pub struct MachineArg {
-    /// Machine profile: a TOML file (docs/machine.md) or a built-in profile's name
-    /// (`gweave machine list`: prusa-mk3, klipper, ...); default: a RAMPS 1.4 printer on Marlin.
-    #[arg(long = "machine", id = "machine", value_name = "TOML|NAME")]
+    #[arg(long = "machine", id = "machine", value_name = "TOML|NAME", help = machine_help())]
     pub path: Option<PathBuf>,
+}
+
+fn machine_help() -> String {
+    use gweave::options::JobOptions;
+    gweave_sim::reading::SimOptions::spec("machine").map(|s| s.help()).unwrap_or_default()
 }
 
 impl MachineArg {

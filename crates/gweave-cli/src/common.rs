@@ -183,19 +183,6 @@ pub fn read_text(path: &Path) -> Result<String> {
     gweave::settings::read_text(path).with_context(|| format!("reading {}", path.display()))
 }
 
-/// The settings file at `path` read with `parse`, naming the file in either error.
-///
-/// A settings error is one line, `printer.toml: [bed] x_mm = -1 is out of range: ...`: the
-/// causes are joined after the file name, each once (a cause its parent already prints is not
-/// repeated).
-pub fn load<T, E>(path: &Path, parse: impl FnOnce(&str) -> std::result::Result<T, E>) -> Result<T>
-where
-    E: std::error::Error + Send + Sync + 'static,
-{
-    parse(&read_text(path)?)
-        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), gweave::error::with_causes(&e)))
-}
-
 /// The lines a lenient read went past, as every summary reports them (nothing when none).
 pub fn print_malformed(out: &mut dyn Write, m: &gweave::malformed::Malformed) -> io::Result<()> {
     if let Some(first) = m.first_malformed_line {

@@ -94,7 +94,12 @@ impl<T: JobOptions> FromArgMatches for Options<T> {
 /// names none kept whole, its causes and its I/O kind (a closed pipe, a stop) for `crate::run`
 /// to read.
 pub fn failed(e: gweave_sim::transform::TransformError) -> anyhow::Error {
-    let spelled = e.spelled(Spelling::Flag);
+    failed_with(e.spelled(Spelling::Flag), e)
+}
+
+/// A job's error `e`, said as `spelled` (its options spelled as flags) where that differs from
+/// its own message, else kept whole (see [`failed`]).
+pub fn failed_with<E: std::error::Error + Send + Sync + 'static>(spelled: String, e: E) -> anyhow::Error {
     if spelled == e.to_string() {
         e.into()
     } else {
@@ -107,8 +112,10 @@ mod tests {
     use super::*;
     use gweave::post::mix::MixOptions;
     use gweave::post::purge_shift::PurgeShiftOptions;
+    use gweave::render::job::PreviewOptions;
     use gweave::rotary::cylinder::FeedConvention;
     use gweave::rotary::options::{TubeOptions, WrapOptions};
+    use gweave_sim::reading::{EstimateOptions, SimOptions};
 
     #[derive(clap::Parser, Debug)]
     struct Cli<T: JobOptions + Send + Sync + 'static> {
@@ -142,6 +149,9 @@ mod tests {
         flags_match_the_declaration::<MixOptions>();
         flags_match_the_declaration::<WrapOptions>();
         flags_match_the_declaration::<TubeOptions>();
+        flags_match_the_declaration::<SimOptions>();
+        flags_match_the_declaration::<EstimateOptions>();
+        flags_match_the_declaration::<PreviewOptions>();
     }
 
     #[test]
@@ -176,6 +186,39 @@ mod tests {
         assert!(err.contains("for '--layer-count <N>': 2.5 is not a whole number"), "{err}");
         let err = parse::<WrapOptions>(&["--helical", "--seam-rotation", "5"]).unwrap_err();
         assert!(err.contains("'--helical' cannot be used with '--seam-rotation <DEG>'"), "{err}");
+    }
+
+    #[test]
+    fn preview_keeps_its_flags_spellings_defaults_and_conflicts() {
+        let o: PreviewOptions = parse(&[
+            "--color-by",
+            "feature",
+            "--size",
+            "640x480",
+            "--layers",
+            "3-5",
+            "--tool-colors",
+            "#ff0000,#00ff00",
+        ])
+        .unwrap();
+        assert_eq!(o.colour_by, gweave::render::ColourBy::Feature);
+        assert_eq!((o.size.width_px, o.size.height_px), (640, 480));
+        assert_eq!(o.layers, Some(3..=5));
+        assert_eq!(
+            o.header(),
+            "--layers 3-5 --colour-by feature --size 640x480 --tool-colours #ff0000,#00ff00"
+        );
+        let d: PreviewOptions = parse(&[]).unwrap();
+        assert_eq!(
+            (d.size.width_px, d.size.height_px, d.colour_by),
+            (1200, 900, gweave::render::ColourBy::Tool)
+        );
+        let err = parse::<PreviewOptions>(&["--layer", "2", "--layers", "3-4"]).unwrap_err();
+        assert!(err.contains("'--layer <N>' cannot be used with '--layers <A-B>'"), "{err}");
+        let err = parse::<PreviewOptions>(&["--size", "8x900"]).unwrap_err();
+        assert!(err.contains("for '--size <WIDTHxHEIGHT>': out of range: 16 to 16384 px"), "{err}");
+        let err = parse::<PreviewOptions>(&["--view", "side"]).unwrap_err();
+        assert!(err.contains(r#"unknown view "side" (top or iso)"#), "{err}");
     }
 
     #[test]

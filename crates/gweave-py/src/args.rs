@@ -75,20 +75,3 @@ impl BedArg {
         text.parse::<Bed>().map_err(|e| PyValueError::new_err(format!("bed: {e}")))
     }
 }
-
-/// `layers=` as `gweave preview --layers` reads it: `"A-B"`, or the pair `(first, last)`.
-#[derive(FromPyObject)]
-pub enum LayersArg {
-    Text(String),
-    Pair((u32, u32)),
-}
-
-impl LayersArg {
-    pub fn range(self) -> PyResult<std::ops::RangeInclusive<u32>> {
-        let range = match self {
-            LayersArg::Text(t) => gweave::render::parse_layer_range(&t),
-            LayersArg::Pair((a, b)) => gweave::render::layer_range(a, b),
-        };
-        range.map_err(|e| PyValueError::new_err(format!("layers: {e}")))
-    }
-}

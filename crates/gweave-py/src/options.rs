@@ -29,6 +29,8 @@ pub fn read<T: JobOptions>(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -
         let value = match spec.kind {
             Kind::Flag => Value::Flag(value.extract().map_err(typed)?),
             Kind::Number => Value::Number(value.extract().map_err(typed)?),
+            // An int, as Python types a count; a float (or a numeric string) is no layer.
+            Kind::Whole => Value::Number(value.extract::<i64>().map_err(typed)? as f64),
             Kind::Text => Value::Text(value.extract().map_err(typed)?),
             Kind::Path => Value::Path(value.extract().map_err(typed)?),
             Kind::Repeated | Kind::Texts(_) => Value::Texts(value.extract().map_err(typed)?),
@@ -51,14 +53,16 @@ pub fn failed(e: TransformError) -> PyErr {
     }
 }
 
-/// The options of the job `command` (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`:
-/// `gweave_sim::transform::JOBS`) as declared: a list of dicts `{"name", "flag", "kind",
-/// "count", "default", "range", "whole", "help"}`, for the tests that hold the typed wrappers to
-/// the declaration (and for documentation).
+/// The options of the job `command` (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`, `sim`,
+/// `estimate`, `preview`: `gweave_sim::transform::JOBS`, `gweave_sim::reading::JOBS`) as
+/// declared: a list of dicts `{"name", "flag", "kind", "count", "default", "range", "help"}`,
+/// for the tests that hold the typed wrappers to the declaration (and for
+/// documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
-    let Some((_, specs)) = gweave_sim::transform::JOBS.iter().find(|(name, _)| *name == command) else {
-        let known: Vec<&str> = gweave_sim::transform::JOBS.iter().map(|(name, _)| *name).collect();
+    let jobs = || gweave_sim::transform::JOBS.iter().chain(gweave_sim::reading::JOBS);
+    let Some((_, specs)) = jobs().find(|(name, _)| *name == command) else {
+        let known: Vec<&str> = jobs().map(|(name, _)| *name).collect();
         return Err(PyValueError::new_err(format!("no job {command:?} ({})", known.join(", "))));
     };
     let list = PyList::empty(py);
@@ -69,6 +73,7 @@ pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound
         let kind = match spec.kind {
             Kind::Flag => "flag",
             Kind::Number => "number",
+            Kind::Whole => "whole",
             Kind::Text => "text",
             Kind::Path => "path",
             Kind::Repeated => "repeated",
@@ -83,7 +88,6 @@ pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound
         d.set_item("count", count)?;
         d.set_item("default", (spec.default)())?;
         d.set_item("range", spec.shape.range.map(|r| (r.min, r.max)))?;
-        d.set_item("whole", spec.shape.whole)?;
         d.set_item("help", spec.help())?;
         list.append(d)?;
     }

@@ -8,114 +8,45 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::args::{in_range, os_error, LayersArg};
 use crate::{err, strictness, to_json};
-use gweave::colour::Srgb8;
 use gweave::gcode::layers::ALL_FEATURES;
-use gweave::render::layer_range;
-use gweave::render::{
-    self, ColourBy, Format, PreviewOptions, Toolpath, ToolpathOptions, ViewKind, ViewOptions,
-};
+use gweave::options::Spelling;
+use gweave::render::job::{self, PreviewJobError, PreviewOptions};
+use gweave::render::{RenderError, Toolpath, ToolpathOptions};
 use pyo3::types::PyBytes;
 
 // ---- preview (render) ----
 
-/// A picture or viewer page of a file as bytes (`format`: png, svg or html) and the report of
-/// what it shows as JSON; see `gweave preview`.
+/// A picture or viewer page of a file as bytes and the report of what it shows as JSON; see
+/// `gweave preview`. `output`, if given, is written (whole, or not at all) and its extension
+/// picks the format unless `format` does; without either, PNG. The keyword arguments are the
+/// options of `gweave.preview` (`layer`, `layers`, `size`, ...), by the names the engine
+/// declares.
 #[pyfunction]
-#[pyo3(signature = (path, *, format, layer=None, layers=None, view=None, colour_by="tool", size=(1200, 900), compare=None, tool_colours=None, travel=false, mix_profile=None, mandrel_diameter=None, head=None, min_len=None, lenient=false))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (path, output=None, *, lenient=false, **options))]
 pub(crate) fn preview_json(
     py: Python<'_>,
     path: PathBuf,
-    format: &str,
-    layer: Option<u32>,
-    layers: Option<LayersArg>,
-    view: Option<&str>,
-    colour_by: &str,
-    size: (i64, i64),
-    compare: Option<PathBuf>,
-    tool_colours: Option<Vec<String>>,
-    travel: bool,
-    mix_profile: Option<PathBuf>,
-    mandrel_diameter: Option<f64>,
-    head: Option<PathBuf>,
-    min_len: Option<f32>,
+    output: Option<PathBuf>,
     lenient: bool,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<(Py<PyBytes>, String)> {
-    let read = |p: &PathBuf| gweave::settings::read_text(p).map_err(|e| os_error(p, &e));
-    let layer = in_range("layer", layer, gweave::range::LAYER_NUMBER)?;
-    // Read as any Python int, then held to the range under the keyword's name: as `(u32, u32)`,
-    // `size=(-1, 5)` was an OverflowError that did not say which argument.
-    let side = |name: &str, v: i64| -> PyResult<u32> {
-        let r = render::PICTURE_SIDE_PX;
-        let range = gweave::range::Range::new(i64::from(r.min), i64::from(r.max), r.unit);
-        range.check(name, v).map(|v| v as u32).map_err(|e| PyValueError::new_err(e.to_string()))
-    };
-    let size = (side("size[0]", size.0)?, side("size[1]", size.1)?);
-    let mandrel_diameter =
-        in_range("mandrel_diameter", mandrel_diameter, gweave::rotary::cylinder::MANDREL_DIAMETER_MM)?;
-    let printhead = match head {
-        Some(p) => Some(
-            gweave::gen::printhead::PrintheadProfile::from_toml(&read(&p)?)
-                .map_err(|e| PyValueError::new_err(e.to_string()))?,
-        ),
-        None => None,
-    };
-    let mix = match mix_profile {
-        Some(p) => {
-            let text = read(&p)?;
-            let profile = gweave::post::mix::profile::MixProfile::from_toml_str(&text)
-                .map_err(|e| PyValueError::new_err(e.to_string()))?;
-            Some(
-                render::MixColours::from_profile(&profile)
-                    .map_err(|e| PyValueError::new_err(e.to_string()))?,
-            )
-        }
-        None => None,
-    };
-    let format = Format::from_path(std::path::Path::new(&format!("x.{format}")))
-        .map_err(|e| PyValueError::new_err(format!("output: {e}")))?;
-    let tool_colours = tool_colours
-        .unwrap_or_default()
-        .iter()
-        .map(|c| c.parse::<Srgb8>().map_err(|e| PyValueError::new_err(e.to_string())))
-        .collect::<PyResult<Vec<_>>>()?;
-    let options = PreviewOptions {
-        view: ViewOptions {
-            kind: match view {
-                Some(v) => v.parse::<ViewKind>().map_err(PyValueError::new_err)?,
-                None => format.default_view(),
-            },
-            layers: match (layer, layers) {
-                (Some(l), _) => Some(layer_range(l, l).map_err(PyValueError::new_err)?),
-                (None, Some(range)) => Some(range.range()?),
-                (None, None) => None,
-            },
-            width_px: size.0,
-            height_px: size.1,
-            colour_by: colour_by.parse::<ColourBy>().map_err(PyValueError::new_err)?,
-            tool_colours,
-            travel,
-            ..ViewOptions::default()
-        },
-        mix,
-        rotary: mandrel_diameter.map(gweave::rotary::cylinder::RotaryConfig::new),
-        printhead,
-        min_len_mm: min_len,
-        strictness: strictness(lenient),
-    };
+    let options: PreviewOptions = crate::options::read("preview", options)?;
     let preview = interruptible(py, || {
-        render::preview_with_progress(&path, compare.as_deref(), format, &options, &mut Quiet)
+        job::preview(&options, &path, output.as_deref(), strictness(lenient), &mut Quiet)
     })?
-    .map_err(render_err)?;
+    .map_err(failed)?;
     Ok((PyBytes::new(py, &preview.bytes).unbind(), to_json(&preview.report)?))
 }
 
-fn render_err(e: render::RenderError) -> PyErr {
+/// A preview's failure as Python raises it: a file the system refused as the `OSError` for its
+/// errno, the rest a `ValueError` with the options it names spelled as keywords.
+fn failed(e: PreviewJobError) -> PyErr {
     match e {
-        render::RenderError::Gcode(e) => err(e),
-        other => PyValueError::new_err(other.to_string()),
+        PreviewJobError::Read(e)
+        | PreviewJobError::Write(e)
+        | PreviewJobError::Render(RenderError::Gcode(e)) => err(e),
+        e => PyValueError::new_err(e.spelled(Spelling::Keyword)),
     }
 }
 

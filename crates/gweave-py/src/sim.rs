@@ -3,8 +3,11 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
+use gweave::options::Spelling;
+use gweave_sim::reading::{self, EstimateOptions, ReadingError, SimOptions};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::args::os_error;
 use crate::to_json;
@@ -26,28 +29,34 @@ fn sim_err(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 
+/// A reading job's failure as Python raises it: a file the system refused as the `OSError` for
+/// its errno, the rest a `ValueError` with the options it names spelled as keywords.
+fn failed(e: ReadingError) -> PyErr {
+    use gweave_sim::builtin::LoadError;
+    match &e {
+        ReadingError::Machine(LoadError::Read { path, source })
+        | ReadingError::Read { path, source }
+        | ReadingError::Sim(gweave_sim::SimJobError::Read { path, source })
+        | ReadingError::Estimate(gweave_sim::EstimateFileError::Read { path, source }) => {
+            os_error(path, source)
+        }
+        _ => PyValueError::new_err(e.spelled(Spelling::Keyword)),
+    }
+}
+
 /// Runs a file through the virtual printer; the report as JSON text (see `gweave sim --json`).
+/// The keyword arguments are the options of `gweave.sim` (`machine`, `fault`, `plot`, ...), by
+/// the names the engine declares.
 #[pyfunction]
-#[pyo3(signature = (path, *, machine=None, fault=Vec::new()))]
+#[pyo3(signature = (path, **options))]
 pub(crate) fn sim_json(
     py: Python<'_>,
     path: PathBuf,
-    machine: Option<PathBuf>,
-    fault: Vec<String>,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
-    let faults = fault.iter().map(|spec| spec.parse::<gweave_sim::FaultSpec>());
-    let options = gweave_sim::SimOptions {
-        faults: faults.collect::<Result<_, _>>().map_err(|e| PyValueError::new_err(format!("fault: {e}")))?,
-        record_speed: false,
-    };
-    let profile = machine_profile(machine)?;
+    let options: SimOptions = crate::options::read("sim", options)?;
     interruptible(py, || {
-        let simulation = gweave_sim::simulate(&path, profile, &options, &mut gweave::pass::Quiet).map_err(
-            |e| match e {
-                gweave_sim::SimJobError::Read { path, source } => os_error(&path, &source),
-                e => sim_err(e),
-            },
-        )?;
+        let simulation = reading::sim(&options, &path, &mut gweave::pass::Quiet).map_err(failed)?;
         // The report `gweave sim --json` prints: the Marlin model's, or the controller core's.
         match simulation {
             gweave_sim::Simulation::Marlin { report, .. } => to_json(&report),
@@ -57,23 +66,19 @@ pub(crate) fn sim_json(
 }
 
 /// Estimates a file's print time with the virtual printer's planner alone, on three threads; the
-/// report as JSON text (see `gweave estimate --json`).
+/// report as JSON text (see `gweave estimate --json`). The keyword arguments are the options of
+/// `gweave.estimate` (`machine`, `steps`).
 #[pyfunction]
-#[pyo3(signature = (path, *, machine=None, steps=false))]
+#[pyo3(signature = (path, **options))]
 pub(crate) fn estimate_json(
     py: Python<'_>,
     path: PathBuf,
-    machine: Option<PathBuf>,
-    steps: bool,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
-    let profile = machine_profile(machine)?;
-    let report = interruptible(py, || {
-        gweave_sim::estimate_file(&path, &profile, steps, gweave::pass::Quiet).map_err(|e| match e {
-            gweave_sim::EstimateFileError::Read { path, source } => os_error(&path, &source),
-            e => PyValueError::new_err(e.to_string()),
-        })
-    })??;
-    to_json(&report)
+    let options: EstimateOptions = crate::options::read("estimate", options)?;
+    let estimated =
+        interruptible(py, || reading::estimate(&options, &path, gweave::pass::Quiet).map_err(failed))??;
+    to_json(&estimated.report)
 }
 
 /// A virtual printer to drive one command at a time, as a host would over a serial line.

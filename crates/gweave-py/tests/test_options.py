@@ -5,6 +5,7 @@ and the engine checks each value, naming the keyword (the CLI names the flag).""
 
 import ast
 import inspect
+import json
 import re
 from pathlib import Path
 from typing import Any, Dict
@@ -16,19 +17,33 @@ from gweave import _gweave
 
 TORUS = ("prusaslicer", "pr_torus_pva.gcode")
 # Keywords every transform shares, not options of the job: the file, where it goes, strictness.
-SHARED = {"path", "output", "in_place", "backup", "force", "lenient"}
-# Each job's wrapper, its compiled function and the keywords that are not its options: the files
-# it reads and writes (a rotary job's `preview` picture too).
+TRANSFORM = {"path", "output", "in_place", "backup", "force", "lenient"}
+# A reading job (sim, estimate) takes its file, and writes nothing but what its options name.
+READING = {"path"}
+# command -> (typed wrapper, compiled function, the keywords that are no option of the job: the
+# files it reads and writes, a rotary job's `preview` picture too)
 JOBS = {
-    "purge-shift": (gweave.purge_shift, "purge_shift_json", SHARED),
-    "mix": (gweave.mix, "mix_json", SHARED),
-    "rotary wrap": (gweave.rotary_wrap, "rotary_wrap_json", SHARED - {"path"} | {"input", "preview"}),
+    "purge-shift": (gweave.purge_shift, "purge_shift_json", TRANSFORM),
+    "mix": (gweave.mix, "mix_json", TRANSFORM),
+    "rotary wrap": (gweave.rotary_wrap, "rotary_wrap_json", TRANSFORM - {"path"} | {"input", "preview"}),
     "rotary tube": (gweave.rotary_tube, "rotary_tube_json", {"output", "preview"}),
+    "sim": (gweave.sim, "sim_json", READING),
+    "estimate": (gweave.estimate, "estimate_json", READING),
+    # preview returns the picture, writes it to `output` if named, and its report on request.
+    "preview": (gweave.preview, "preview_json", {"path", "output", "lenient", "report"}),
+}
+# Keywords Python takes in a wider type than the declaration's, turned into the command line's
+# text by the wrapper before the engine reads it: (annotation, default).
+WIDER = {
+    ("preview", "layers"): ("Union[str, Tuple[int, int], None]", None),  # (first, last) or "A-B"
+    ("preview", "size"): ("Tuple[int, int]", (1200, 900)),  # declared "1200x900"
+}
 }
 
 # The annotation each kind of option has in the typed wrapper, and its default there.
 ANNOTATION = {
     "number": ("Optional[float]", None),
+    "whole": ("Optional[int]", None),
     "path": ("Optional[PathLike]", None),
     "repeated": ("Sequence[str]", ()),
     "texts": ("Optional[Sequence[str]]", None),
@@ -49,14 +64,14 @@ def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(co
     for name, p in params.items():
         o = options[name]
         assert p.kind is inspect.Parameter.KEYWORD_ONLY, name
-        if o["kind"] == "text":
+        if (command, name) in WIDER:
+            expected = WIDER[command, name]
+        elif o["kind"] == "text":
             # A word whose default is a value (gradient_space="mix") or unset.
             expected = ("str", o["default"]) if o["default"] is not None else ("Optional[str]", None)
         elif o["kind"] == "flag":
             # A switch off by default, or unset (keep_arc_length=False turns a config's on off).
             expected = ("bool", False) if o["default"] == "false" else ("Optional[bool]", None)
-        elif o["whole"]:
-            expected = ("Optional[int]", None)
         else:
             expected = ANNOTATION[o["kind"]]
         assert (p.annotation, p.default) == expected, name
@@ -66,6 +81,7 @@ def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(co
 @pytest.mark.parametrize("command", sorted(JOBS))
 def test_the_compiled_function_takes_the_options_as_keywords_and_its_stub_says_so(command):
     _, compiled, shared = JOBS[command]
+    shared = shared - {"report"}  # the wrapper's own: what it returns
     params = inspect.signature(getattr(_gweave, compiled)).parameters
     assert set(params) - {"options"} == shared
     assert params["options"].kind is inspect.Parameter.VAR_KEYWORD
@@ -85,7 +101,7 @@ def test_declared_ranges_and_help_are_those_of_the_flags():
     assert machine == ["mandrel_diameter", "feed_convention", "rotary_unit", "axes", "config"]
     assert [o["name"] for o in _gweave.job_options("rotary tube")][:5] == machine
     layer_count = declared("rotary tube")["layer_count"]
-    assert layer_count["whole"] and layer_count["range"] == (1.0, 1000.0)
+    assert layer_count["kind"] == "whole" and layer_count["range"] == (1.0, 1000.0)
     assert declared("rotary tube")["interweave"]["flag"] == "--no-interweave"
 
 
@@ -178,3 +194,71 @@ def test_a_refusal_names_the_options_by_their_keywords(tmp_path):
         "colours, pairs or a washout tolerance"
     )
     assert not out.exists()
+
+
+def test_estimate_machine_slicer_plans_with_the_files_own_limits_as_the_cli_does(data, capfd):
+    """Regression (issue 40): `gweave estimate --machine slicer` planned with the limits the
+    slicer wrote into the file; `gweave.estimate(machine="slicer")` looked for a profile called
+    `slicer`. One job now runs both."""
+    torus = str(data.joinpath(*TORUS))
+    r = gweave.estimate(torus, machine="slicer")
+    assert r["machine"] == "PrusaSlicer's machine limits in the file, flavour marlin2"
+    capfd.readouterr()
+    assert gweave.main(["estimate", torus, "--machine", "slicer", "--json", "-q"]) == 0
+    assert json.loads(capfd.readouterr().out) == r
+    with pytest.raises(ValueError, match=r": machine slicer: the file holds no machine limits"):
+        gweave.estimate(data / "cura" / "cura_torus.gcode", machine="slicer")
+
+
+def test_sim_draws_the_charts_the_cli_draws(data, tmp_path, capfd):
+    """Regression (issue 40): `--plot`, `--plot-speed` and `--raster-out` had no keyword; the
+    job draws them for both front ends, and refuses a chart that is neither PNG nor SVG before
+    the run, naming the keyword."""
+    box = data / "prusaslicer" / "pr_box_mach3.gcode"
+    with pytest.raises(ValueError, match=r"^plot_speed: a plot is written as PNG or SVG \(by its extension\), not \"jpg\"$"):
+        gweave.sim(box, plot_speed=tmp_path / "s.jpg")
+    report = gweave.sim(box, plot=tmp_path / "t.svg", plot_speed=tmp_path / "s.png")
+    capfd.readouterr()
+    assert gweave.main(["sim", str(box), "--json", "-q"]) == 0
+    assert json.loads(capfd.readouterr().out) == report, "the CLI and Python report the same run"
+    assert (tmp_path / "t.svg").read_text().lstrip().startswith("<svg")
+    assert (tmp_path / "s.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_marlin_model_option_on_the_controller_core_names_the_keyword(data, tmp_path):
+    profile = data.parent.parent / "examples" / "machines" / "gweave-ramps.toml"
+    with pytest.raises(ValueError, match=r"^raster_out is for the Marlin model: "):
+        gweave.sim(data.joinpath(*TORUS), machine=profile, raster_out=tmp_path / "canvases")
+
+
+def test_preview_writes_its_output_whole_and_refuses_as_the_cli_does(data, tmp_path, capfd):
+    """Regression (issue 40): Python wrote the picture in place (a failed write left part of
+    it), checked `layer` against `layers` with a message of its own, and had no `format`."""
+    cura = data / "cura" / "cura_dual.gcode"
+    out = tmp_path / "p.svg"
+    data_svg, r = gweave.preview(cura, output=out, layers=(3, 4), size=(100, 80), report=True)
+    assert out.read_bytes() == data_svg and r["format"] == "svg" and r["layers_drawn"] == [3, 4]
+    cli = tmp_path / "cli.svg"
+    capfd.readouterr()
+    assert gweave.main(["preview", str(cura), "-o", str(cli), "--layers", "3-4", "--size", "100x80", "-q"]) == 0
+    assert cli.read_bytes() == data_svg, "the CLI and Python draw the same picture"
+    assert gweave.preview(cura, format="svg", layer=3, size=(100, 80)).lstrip().startswith(b"<svg")
+    with pytest.raises(ValueError, match=r"^layer and layers: give one of them$"):
+        gweave.preview(cura, layer=3, layers="3-4")
+    with pytest.raises(ValueError, match=r'^format: unknown output format "gif" \(png, svg or html\)$'):
+        gweave.preview(cura, format="gif")
+    with pytest.raises(TypeError, match=r"^layer: "):
+        gweave.preview(cura, layer=2.5)  # type: ignore[arg-type]
+    # The picture goes through the engine's writer (a temporary file renamed into place): a
+    # failed run leaves what was there and no temporary file; a missing folder is an OSError
+    # naming the file.
+    keep = tmp_path / "p.png"
+    keep.write_bytes(b"old")
+    bad = tmp_path / "bad.gcode"
+    bad.write_text("G1 X1 Y1 E1\nG1 X1..2\n")
+    with pytest.raises(ValueError, match=r"bad.gcode:2:"):
+        gweave.preview(bad, output=keep, size=(64, 48))
+    assert keep.read_bytes() == b"old"
+    with pytest.raises(OSError, match="no/p.png"):
+        gweave.preview(cura, output=tmp_path / "no" / "p.png", size=(64, 48))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.gcode", "cli.svg", "p.png", "p.svg"]

@@ -34,9 +34,9 @@ MAP = {
         {
             "machine": "machine",
             "fault": "fault",
-            "plot": "- pictures: the report has the series (Machine.report())",
-            "plot-speed": "- pictures: the report has the layer times",
-            "raster-out": "- pictures: gweave.main(['sim', ...])",
+            "plot": "plot",
+            "plot-speed": "plot_speed",
+            "raster-out": "raster_out",
         },
         ["path"],
     ),
@@ -136,7 +136,7 @@ MAP = {
                     "min-len lenient"
                 ).split()
             },
-            "format": "- the format follows the output's extension (standard output is the CLI's)",
+            "format": "format",
         },
         ["path"],
     ),

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use gweave::gcode::container;
 use gweave::gcode::flavour::read_firmware;
 use gweave::gcode::reader::{LineReader, Part};
+use gweave::options::Spelling;
 use gweave::pass::Progress;
 use gweave::rotary::cylinder::RotaryConfig;
 
@@ -22,7 +23,7 @@ use crate::profile::{FaultSpec, MachineProfile};
 
 /// What a simulation is asked for beyond the file and the machine profile.
 #[derive(Debug, Clone, Default)]
-pub struct SimOptions {
+pub struct SimSetup {
     /// Heater faults injected at given times, added to the profile's own.
     pub faults: Vec<FaultSpec>,
     /// Record the planned toolhead speed over time ([`Machine::speed_trace`]), for a chart.
@@ -63,8 +64,8 @@ impl Simulation {
     }
 }
 
-/// Why a file could not be simulated. The options are named as [`SimOptions`] names them; a
-/// front end names its own flag or keyword.
+/// Why a file could not be simulated. An option is named by its identity; a front end spells
+/// it as its flag or keyword ([`SimJobError::spelled`]).
 #[derive(Debug, thiserror::Error)]
 pub enum SimJobError {
     /// The file could not be opened or read.
@@ -83,11 +84,27 @@ pub enum SimJobError {
     Core(#[from] CoreBoardError),
     /// An option the controller core has no model for (its heaters cannot be faulted, its
     /// planner keeps no speed trace).
-    #[error("{option} is for the Marlin model: the machine profile runs the controller core ([firmware] kind = \"gweave\")")]
+    #[error("{}", marlin_model_only(option, Spelling::Keyword))]
     MarlinModelOnly {
-        /// The option, as [`SimOptions`] names it.
+        /// The option, by its identity in [`SimOptions`](crate::reading::SimOptions) (`fault`,
+        /// `plot_speed`).
         option: &'static str,
     },
+}
+
+impl SimJobError {
+    /// The message, an option named as `spelling` names it (`--plot-speed`, `plot_speed`).
+    pub fn spelled(&self, spelling: Spelling) -> String {
+        match self {
+            SimJobError::MarlinModelOnly { option } => marlin_model_only(option, spelling),
+            e => e.to_string(),
+        }
+    }
+}
+
+fn marlin_model_only(option: &str, spelling: Spelling) -> String {
+    let option = spelling.name(option);
+    format!("{option} is for the Marlin model: the machine profile runs the controller core ([firmware] kind = \"gweave\")")
 }
 
 /// Runs `input` on the printer `profile` describes, until its end, a halt, or the program's end
@@ -95,7 +112,7 @@ pub enum SimJobError {
 pub fn simulate(
     input: &Path,
     mut profile: MachineProfile,
-    options: &SimOptions,
+    options: &SimSetup,
     progress: &mut dyn Progress,
 ) -> Result<Simulation, SimJobError> {
     let read_error = |source| SimJobError::Read { path: input.to_owned(), source };
@@ -104,7 +121,7 @@ pub fn simulate(
             return Err(SimJobError::MarlinModelOnly { option: "fault" });
         }
         if options.record_speed {
-            return Err(SimJobError::MarlinModelOnly { option: "speed chart" });
+            return Err(SimJobError::MarlinModelOnly { option: "plot_speed" });
         }
         return on_core(input, &profile).map(Simulation::Core);
     }
@@ -201,7 +218,7 @@ mod tests {
             let mut profile = MachineProfile::default();
             profile.firmware.m0 = stop;
             let Simulation::Marlin { report, .. } =
-                simulate(&job, profile, &SimOptions::default(), &mut Quiet).unwrap()
+                simulate(&job, profile, &SimSetup::default(), &mut Quiet).unwrap()
             else {
                 panic!("the Marlin model runs the default profile")
             };
@@ -218,7 +235,7 @@ mod tests {
         let e = simulate(
             Path::new("/nowhere/job.gcode"),
             MachineProfile::default(),
-            &SimOptions::default(),
+            &SimSetup::default(),
             &mut Quiet,
         )
         .err()

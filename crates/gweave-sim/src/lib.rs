@@ -15,6 +15,8 @@
 //! - [`core_board`]: `[firmware] kind = "gweave"`, the board running gweave's own controller
 //!   core (the firmware of the real board) instead of the Marlin model;
 //! - [`simulate`] (`job.rs`): a whole file through the one or the other, for every front end;
+//! - [`reading`]: the jobs `gweave sim` and `gweave estimate`, each with its options declared
+//!   once, as both front ends run them ([`transform`]: the transform jobs);
 //! - [`finish`]: what a front end does around a transform's output; [`plot`]: the charts.
 //!
 //! ```
@@ -38,6 +40,7 @@ mod link;
 mod motion;
 pub mod plot;
 mod profile;
+pub mod reading;
 #[cfg(any(test, feature = "test-support"))]
 pub mod test_support;
 mod thermal;
@@ -48,7 +51,7 @@ pub use interp::{
     help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Param, Queue, SimError, SimReport,
     SimTimes, SimWarning, WarningKind, COMMANDS, STOPPED_LINE, UNKNOWN_KINDS, UNKNOWN_OTHERS,
 };
-pub use job::{simulate, SimJobError, SimOptions, Simulation};
+pub use job::{simulate, SimJobError, SimSetup, Simulation};
 pub use link::pty::PtyEndpoint;
 pub use link::serial::{frame_line, Device, Protocol, ProtocolConfig, DEFAULT_KEEPALIVE_S};
 pub use link::tcp::TcpEndpoint;

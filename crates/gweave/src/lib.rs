@@ -82,7 +82,7 @@ pub use check::{check_file, CheckOptions, CheckReport};
 pub use options::{JobOptions, OptionError, OptionSpec};
 pub use post::mix::{mix, MixOptions, MixPassError};
 pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
-pub use render::{preview, preview_with_progress, PreviewOptions, PreviewReport, Toolpath, ToolpathOptions};
+pub use render::{preview, preview_with_progress, PreviewReport, PreviewSettings, Toolpath, ToolpathOptions};
 pub use rotary_job::{tube_file, wrap_file};
 pub use stats::{stats_file, Stats};
 pub use total::{CheckTotal, StatsTotal};

@@ -40,6 +40,8 @@ pub enum Kind {
     Flag,
     /// One number within the option's range (`--purge-mm 2.5`, `purge_mm=2.5`).
     Number,
+    /// One whole number within the option's range (`--layer 12`, `layer=12`).
+    Whole,
     /// One word (`--fallback tower`, `fallback="tower"`).
     Text,
     /// A file (`-c mix.toml`, `config="mix.toml"`).
@@ -57,7 +59,7 @@ pub enum Kind {
 pub enum Value {
     /// [`Kind::Flag`].
     Flag(bool),
-    /// [`Kind::Number`].
+    /// [`Kind::Number`] and [`Kind::Whole`].
     Number(f64),
     /// [`Kind::Text`].
     Text(String),
@@ -83,11 +85,12 @@ pub struct Shape {
     pub aliases: &'static [&'static str],
     /// Options that cannot be given with this one.
     pub conflicts: &'static [&'static str],
-    /// A whole number (an `Option<u32>` field, `--layer-count 4`): Python's keyword is an `int`.
-    pub whole: bool,
     /// A switch whose CLI flag turns it off (`--no-interweave` sets `interweave` false); Python
     /// takes the keyword itself (`interweave=False`).
     pub negated: bool,
+    /// What separates the values of [`Kind::Texts`] and [`Kind::Numbers`] on the command line
+    /// and in the header (`,`: `10,20`; `x`: `1200x900`).
+    pub separator: char,
 }
 
 impl Shape {
@@ -99,8 +102,8 @@ impl Shape {
             short: None,
             aliases: &[],
             conflicts: &[],
-            whole: false,
             negated: false,
+            separator: ',',
         }
     }
     /// Its numbers within `range`.
@@ -108,11 +111,11 @@ impl Shape {
         self.range = Some(range);
         self
     }
-    /// A whole number within `range` (a count: layers, chords per turn).
+    /// Its whole numbers (an `Option<u32>` field: a count of layers, chords per turn) within
+    /// `range`.
     pub const fn whole(mut self, range: Range<u32>) -> Self {
         self.range =
             Some(Range { min: range.min as f64, max: range.max as f64, unit: range.unit, zero: range.zero });
-        self.whole = true;
         self
     }
     /// Its CLI flag is `--no-<name>`, which sets it false.
@@ -133,6 +136,11 @@ impl Shape {
     /// Options refused with this one.
     pub const fn conflicts(mut self, names: &'static [&'static str]) -> Self {
         self.conflicts = names;
+        self
+    }
+    /// Its several values separated by `separator` rather than `,` (`WIDTHxHEIGHT`).
+    pub const fn separator(mut self, separator: char) -> Self {
+        self.separator = separator;
         self
     }
 }
@@ -190,12 +198,14 @@ impl OptionSpec {
         };
         let value = match self.kind {
             Kind::Flag => Value::Flag(true),
-            Kind::Number => Value::Number(number(text)?),
+            Kind::Number | Kind::Whole => Value::Number(number(text)?),
             Kind::Text => Value::Text(text.to_owned()),
             Kind::Path => Value::Path(PathBuf::from(text)),
             Kind::Repeated => Value::Texts(vec![text.to_owned()]),
-            Kind::Texts(_) => Value::Texts(text.split(',').map(str::to_owned).collect()),
-            Kind::Numbers(_) => Value::Numbers(text.split(',').map(number).collect::<Result<_, _>>()?),
+            Kind::Texts(_) => Value::Texts(text.split(self.shape.separator).map(str::to_owned).collect()),
+            Kind::Numbers(_) => {
+                Value::Numbers(text.split(self.shape.separator).map(number).collect::<Result<_, _>>()?)
+            }
         };
         self.check(value)
     }
@@ -412,8 +422,10 @@ pub trait JobOptions: Default + Sized {
                 Some(Value::Text(t)) => vec![t],
                 Some(Value::Path(p)) => vec![p.display().to_string()],
                 Some(Value::Texts(t)) if spec.kind == Kind::Repeated => t,
-                Some(Value::Texts(t)) => vec![t.join(",")],
-                Some(Value::Numbers(v)) => vec![v.into_iter().map(short).collect::<Vec<_>>().join(",")],
+                Some(Value::Texts(t)) => vec![t.join(&spec.shape.separator.to_string())],
+                Some(Value::Numbers(v)) => {
+                    vec![v.into_iter().map(short).collect::<Vec<_>>().join(&spec.shape.separator.to_string())]
+                }
             };
             for word in each {
                 words.extend([flag.clone(), quote(word)]);
@@ -488,7 +500,7 @@ field!(bool, Kind::Flag, Value::Flag(b) => b, b => b.then_some(Value::Flag(true)
 // Unset, or a switch given either way (`keep_arc_length=False` turns a settings file's on off).
 field!(Option<bool>, Kind::Flag, Value::Flag(b) => Some(b), b => b.map(Value::Flag));
 field!(Option<f64>, Kind::Number, Value::Number(v) => Some(v), v => v.map(Value::Number));
-field!(Option<u32>, Kind::Number, Value::Number(v) => Some(whole(v)?), v => v.map(|v| Value::Number(v.into())));
+field!(Option<u32>, Kind::Whole, Value::Number(v) => Some(whole(v)?), v => v.map(|v| Value::Number(v.into())));
 // Three letters (axial, rotary, radial axes): `X,A,Z` or `XAZ`, either case.
 field!(Option<[char; 3]>, Kind::Texts(0), Value::Texts(t) => Some(letters(&t)?),
     t => t.map(|t| Value::Texts(t.iter().map(char::to_string).collect())));
@@ -502,9 +514,8 @@ field!(Option<[String; 2]>, Kind::Texts(2), Value::Texts(t) => Some(pair(t)?),
 field!(Option<[f64; 2]>, Kind::Numbers(2), Value::Numbers(v) => Some(pair(v)?),
     v => v.map(|v| Value::Numbers(v.into())));
 
-/// A number given for a count, if it is a whole one a `u32` holds (the range, checked first,
-/// is narrower).
-fn whole(v: f64) -> Result<u32, Problem> {
+/// `v` as a whole number (a layer, a pixel count); its range is the option's, checked before.
+pub fn whole(v: f64) -> Result<u32, Problem> {
     if v.fract() == 0.0 && (0.0..=f64::from(u32::MAX)).contains(&v) {
         Ok(v as u32)
     } else {
@@ -566,6 +577,46 @@ macro_rules! word_option {
             }
             fn to_value(&self) -> Option<$crate::options::Value> {
                 self.as_ref().map(|v| $crate::options::Value::Text($crate::options::Word::word(v)))
+            }
+        }
+    };
+}
+
+/// Makes a type read from its text (`FromStr`, written back with `Display`: `iso`, `10-20`) an
+/// option of [`Kind::Text`] in an `Option` (unset by default), and with `default` bare too (its
+/// `Default` is a value the header leaves out: `--colour-by tool`).
+#[macro_export]
+macro_rules! text_option {
+    ($ty:ty) => {
+        impl $crate::options::OptionField for Option<$ty> {
+            const KIND: $crate::options::Kind = $crate::options::Kind::Text;
+            fn from_value(value: $crate::options::Value) -> Result<Self, $crate::options::Problem> {
+                match value {
+                    $crate::options::Value::Text(t) => t
+                        .parse::<$ty>()
+                        .map(Some)
+                        .map_err(|e| $crate::options::Problem::Invalid(e.to_string())),
+                    other => Err($crate::options::Problem::Invalid(format!("{other:?}"))),
+                }
+            }
+            fn to_value(&self) -> Option<$crate::options::Value> {
+                self.as_ref().map(|v| $crate::options::Value::Text(v.to_string()))
+            }
+        }
+    };
+    ($ty:ty, default) => {
+        $crate::text_option!($ty);
+        impl $crate::options::OptionField for $ty {
+            const KIND: $crate::options::Kind = $crate::options::Kind::Text;
+            fn from_value(value: $crate::options::Value) -> Result<Self, $crate::options::Problem> {
+                <Option<$ty> as $crate::options::OptionField>::from_value(value)
+                    .map(Option::unwrap_or_default)
+            }
+            fn to_value(&self) -> Option<$crate::options::Value> {
+                (*self != <$ty as Default>::default()).then(|| $crate::options::Value::Text(self.to_string()))
+            }
+            fn default_word() -> Option<String> {
+                Some(<$ty as Default>::default().to_string())
             }
         }
     };
@@ -750,5 +801,78 @@ mod tests {
         let off = Job { keep: Some(false), helical: true, ..Job::default() };
         assert_eq!(off.check_conflicts(), Ok(()));
         assert_eq!(((spec("helical").default)(), (spec("keep").default)()), (Some("false".into()), None));
+    }
+
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub enum Side {
+        #[default]
+        Left,
+        Right,
+    }
+    impl std::str::FromStr for Side {
+        type Err = String;
+        fn from_str(s: &str) -> Result<Self, String> {
+            match s {
+                "left" => Ok(Side::Left),
+                "right" => Ok(Side::Right),
+                _ => Err(format!("unknown side {s:?} (left or right)")),
+            }
+        }
+    }
+    impl fmt::Display for Side {
+        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str(if *self == Side::Left { "left" } else { "right" })
+        }
+    }
+    crate::text_option!(Side, default);
+
+    crate::job_options! {
+        /// Options of a test job.
+        pub struct Demo for "demo" {
+            /// A side [default: left].
+            side: Side = Shape::new("SIDE"),
+            /// Another, unset by default.
+            other: Option<Side> = Shape::new("SIDE"),
+            /// A layer.
+            layer: Option<u32> = Shape::new("N").range(Range::new(0.0, 10.0, "")),
+            /// A size.
+            size: Option<[f64; 2]> = Shape::new("WxH").separator('x'),
+        }
+    }
+
+    #[test]
+    fn a_text_option_reads_its_words_and_the_header_leaves_its_default_out() {
+        let mut o = Demo::default();
+        let side = Demo::spec("side").unwrap();
+        assert_eq!((side.default)().as_deref(), Some("left"));
+        o.set(side, side.parse("right").unwrap()).unwrap();
+        let other = Demo::spec("other").unwrap();
+        assert_eq!((other.default)(), None);
+        let err = o.set(other, Value::Text("up".into())).unwrap_err();
+        assert_eq!(err.spelled(Spelling::Flag), r#"--other: unknown side "up" (left or right)"#);
+        assert_eq!(o.header(), "--side right");
+        o.side = Side::Left;
+        assert_eq!(o.header(), "");
+    }
+
+    #[test]
+    fn a_whole_number_option_refuses_a_fraction_and_its_range() {
+        let mut o = Demo::default();
+        let layer = Demo::spec("layer").unwrap();
+        o.set(layer, Value::Number(3.0)).unwrap();
+        assert_eq!(o.layer, Some(3));
+        let err = o.set(layer, Value::Number(2.5)).unwrap_err();
+        assert_eq!(err.spelled(Spelling::Keyword), "layer: 2.5 is not a whole number");
+        let err = o.set(layer, Value::Number(11.0)).unwrap_err();
+        assert_eq!(err.spelled(Spelling::Keyword), "layer = 11 is out of range: 0 to 10");
+    }
+
+    #[test]
+    fn numbers_split_and_join_at_their_separator() {
+        let mut o = Demo::default();
+        let size = Demo::spec("size").unwrap();
+        o.set(size, size.parse("640x480").unwrap()).unwrap();
+        assert_eq!(o.size, Some([640.0, 480.0]));
+        assert_eq!(o.header(), "--size 640x480");
     }
 }

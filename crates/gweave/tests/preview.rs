@@ -14,7 +14,7 @@ use gweave::render::colour_by::TOOL_COLOURS;
 use gweave::render::png_out::rasterise;
 use gweave::render::view::{Drawing, BACKGROUND, UNCHANGED};
 use gweave::render::{
-    drawing, preview, preview_with_progress, svg, Format, PreviewOptions, Toolpath, ToolpathOptions,
+    drawing, preview, preview_with_progress, svg, Format, PreviewSettings, Toolpath, ToolpathOptions,
     ViewKind, ViewOptions,
 };
 
@@ -26,8 +26,8 @@ fn dual() -> PathBuf {
     data("cura/cura_dual.gcode")
 }
 
-fn options(view: ViewOptions) -> PreviewOptions {
-    PreviewOptions { view, ..PreviewOptions::default() }
+fn options(view: ViewOptions) -> PreviewSettings {
+    PreviewSettings { view, ..PreviewSettings::default() }
 }
 
 fn layer(n: u32) -> ViewOptions {

@@ -16,7 +16,7 @@ use gweave::post::mix::profile::MixProfile;
 use gweave::post::purge_shift::{purge_shift_bytes, PurgeShiftConfig};
 use gweave::render::png_out::rasterise;
 use gweave::render::view::{Drawing, BACKGROUND};
-use gweave::render::{drawing, ColourBy, MixColours, PreviewOptions, ViewOptions};
+use gweave::render::{drawing, ColourBy, MixColours, PreviewSettings, ViewOptions};
 
 const BANDS: &str = include_str!("../../../examples/mix/bands.toml");
 
@@ -33,7 +33,7 @@ fn write_temp(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {
 }
 
 fn draw_layer(path: &Path, colours: &MixColours, layer: u32) -> (Drawing, Image) {
-    let options = PreviewOptions {
+    let options = PreviewSettings {
         view: ViewOptions {
             layers: Some(layer..=layer),
             colour_by: ColourBy::Mix,
@@ -42,7 +42,7 @@ fn draw_layer(path: &Path, colours: &MixColours, layer: u32) -> (Drawing, Image)
             ..ViewOptions::default()
         },
         mix: Some(colours.clone()),
-        ..PreviewOptions::default()
+        ..PreviewSettings::default()
     };
     let d = drawing(path, None, &options, &mut gweave::pass::Quiet).unwrap();
     let img = rasterise(&d);
@@ -139,7 +139,7 @@ fn the_viewer_page_colours_by_mix_with_the_users_names_whatever_it_opens_on() {
     let dir = tempfile::tempdir().unwrap();
     let path = write_temp(&dir, "seed_layers.mix.gcode", &mixed);
     let page = |path: &Path| {
-        let options = PreviewOptions::default();
+        let options = PreviewSettings::default();
         let p = gweave::render::preview_with_progress(
             path,
             None,

@@ -14,7 +14,7 @@ use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{RasterConfig, RasterWriter};
 use gweave::render::png_out::rasterise;
 use gweave::render::view::BACKGROUND;
-use gweave::render::{drawing, PreviewOptions, ViewOptions};
+use gweave::render::{drawing, PreviewSettings, ViewOptions};
 
 #[test]
 fn raster_output_lights_the_pixels_where_the_bmp_is_black() {
@@ -38,7 +38,7 @@ fn raster_output_lights_the_pixels_where_the_bmp_is_black() {
         line_width_mm: 0.2,
         ..Default::default()
     };
-    let options = PreviewOptions { view, ..PreviewOptions::default() };
+    let options = PreviewSettings { view, ..PreviewSettings::default() };
     let d = drawing(&path, None, &options, &mut gweave::pass::Quiet).unwrap();
     let img = rasterise(&d);
     let proj = d.panels[0].projection;

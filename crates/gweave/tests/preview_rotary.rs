@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use gweave::picture::Image;
 use gweave::render::png_out::rasterise;
 use gweave::render::view::BACKGROUND;
-use gweave::render::{drawing, ColourBy, Format, PreviewOptions, ViewKind, ViewOptions};
+use gweave::render::{drawing, ColourBy, Format, PreviewSettings, ViewKind, ViewOptions};
 use gweave::rotary::cylinder::RotaryConfig;
 use gweave::rotary::helix::TubeParams;
 
@@ -37,10 +37,10 @@ fn lit_rows(img: &Image, x: f32) -> Vec<u32> {
         .collect()
 }
 
-fn options(kind: ViewKind) -> PreviewOptions {
+fn options(kind: ViewKind) -> PreviewSettings {
     let view =
         ViewOptions { kind, width_px: 400, height_px: 400, colour_by: ColourBy::Layer, ..Default::default() };
-    PreviewOptions { view, ..PreviewOptions::default() }
+    PreviewSettings { view, ..PreviewSettings::default() }
 }
 
 #[test]

@@ -77,9 +77,7 @@ fn board_layers(fires: &[Fire], like: &[InkjetLayer]) -> Vec<InkjetLayer> {
     let mut canvas = InkjetCanvas::new(&inkjet.printhead, geometry).unwrap();
     for f in fires {
         let mm = |axis: usize| f.steps[axis] as f64 / STEPS_PER_MM[axis];
-        // Only where the drops land counts here, not the wait a fire costs.
-        let _wait_s =
-            canvas.on_m700(Some(u32::from(f.head)), u64::from(f.nozzles), mm(0), mm(1), mm(2), false);
+        canvas.on_m700(Some(u32::from(f.head)), u64::from(f.nozzles), mm(0), mm(1), mm(2), false);
     }
     assert!(canvas.warnings().is_empty(), "{:?}", canvas.warnings());
     canvas.layers().to_vec()

@@ -8,15 +8,16 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use gweave::gcode::layers::Feature;
+use gweave::options::Spelling;
 use gweave_sim::core_board::CoreReport;
-use gweave_sim::plot::{save_speed_chart, save_temperature_chart, ChartFormat};
+use gweave_sim::reading::{self, SimOptions};
 use gweave_sim::HeaterId;
-use gweave_sim::{simulate, FaultSpec, FirmwareKind, SimOptions, Simulation};
+use gweave_sim::Simulation;
 use gweave_sim::{HugeArcs, Malformed, SimReport, MAX_ARC_CHORDS};
 
-use crate::args::MachineArg;
 use crate::common::{hms, print_summary, ReportArgs};
 use crate::files::{layer_png, Files};
+use crate::options::Options;
 
 /// Simulate a print on a virtual Marlin-like printer: time per layer and feature (planner),
 /// filament per tool and mixing input, exact step counts per motor (Bresenham), heaters
@@ -30,71 +31,27 @@ pub struct SimArgs {
     /// The G-code file to run.
     pub input: PathBuf,
     #[command(flatten)]
-    pub machine: MachineArg,
-    /// Inject a heater fault, e.g. `hotend-cartridge-off@120s`, `bed-thermistor-open@30s`,
-    /// `hotend1-thermistor-shorted@5s` (repeatable).
-    #[arg(long = "fault", value_name = "SPEC")]
-    pub faults: Vec<String>,
-    /// Chart each heater's temperature and target over time into this PNG or SVG (by its
-    /// extension).
-    #[arg(long, value_name = "PNG|SVG")]
-    pub plot: Option<PathBuf>,
-    /// Chart the planned toolhead speed over time (mean and peak of each time slice), the time
-    /// of each layer and, on a mixing machine, each input's filament into this PNG or SVG.
-    #[arg(long, value_name = "PNG|SVG")]
-    pub plot_speed: Option<PathBuf>,
-    /// Write the inkjet canvases (one PNG per layer and head) into this directory.
-    #[arg(long, value_name = "DIR")]
-    pub raster_out: Option<PathBuf>,
+    pub options: Options<SimOptions>,
     #[command(flatten)]
     pub report: ReportArgs,
 }
 
 pub fn run(args: SimArgs) -> Result<ExitCode> {
+    let o = &args.options;
     Files::new()
         .read("INPUT", Some(&args.input))
-        .read("--machine", args.machine.path.as_deref())
-        .write("--plot", args.plot.as_deref())
-        .write("--plot-speed", args.plot_speed.as_deref())
-        .write_dir("--raster-out", args.raster_out.as_deref(), layer_png)
+        .read("--machine", o.machine.as_deref())
+        .write("--plot", o.plot.as_deref())
+        .write("--plot-speed", o.plot_speed.as_deref())
+        .write_dir("--raster-out", o.raster_out.as_deref(), layer_png)
         .write("--report", args.report.report.as_deref())
         .check()?;
-    // A chart's format comes from its extension: refused before a long run, not after it.
-    for path in args.plot.iter().chain(&args.plot_speed) {
-        ChartFormat::from_path(path)?;
-    }
-    let profile = args.machine.load()?;
-    if profile.firmware.kind == FirmwareKind::Gweave {
-        // Refused by their flags' names before the options are read (the library names them as
-        // `SimOptions` does); the charts and canvases are drawn from the Marlin model's state.
-        let refused = [
-            ("--fault", !args.faults.is_empty()),
-            ("--plot", args.plot.is_some()),
-            ("--plot-speed", args.plot_speed.is_some()),
-            ("--raster-out", args.raster_out.is_some()),
-        ];
-        if let Some((flag, _)) = refused.iter().find(|(_, given)| *given) {
-            anyhow::bail!("{flag} is for the Marlin model: the machine profile runs the controller core ([firmware] kind = \"gweave\")");
-        }
-    }
-    let options = SimOptions {
-        faults: args.faults.iter().map(|spec| spec.parse::<FaultSpec>()).collect::<Result<_, _>>()?,
-        record_speed: args.plot_speed.is_some(),
-    };
     let mut bar = args.report.quiet.bar();
-    let simulation = simulate(&args.input, profile, &options, &mut bar)?;
+    let simulation = reading::sim(o, &args.input, &mut bar)
+        .map_err(|e| crate::options::failed_with(e.spelled(Spelling::Flag), e))?;
     drop(bar);
     match &simulation {
-        Simulation::Marlin { machine, report, errors } => {
-            if let Some(path) = &args.plot {
-                save_temperature_chart(machine.thermal().series(), path)?;
-            }
-            if let (Some(path), Some(trace)) = (&args.plot_speed, machine.speed_trace()) {
-                save_speed_chart(trace, &report.layer_s, &report.mixing_input_mm, path)?;
-            }
-            if let (Some(dir), Some(canvas)) = (&args.raster_out, machine.inkjet()) {
-                canvas.write_layer_pngs(dir)?;
-            }
+        Simulation::Marlin { report, errors, .. } => {
             if args.report.emit(report)? {
                 print_summary(|out| print_human(out, &args.input, report, errors))?;
                 return Ok(exit_code(&simulation));

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Dict, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 from . import _gweave
 from ._gweave import HelicalPath, Line, Machine, Reader
@@ -128,36 +128,48 @@ def cat(
     )
 
 
-def sim(path: PathLike, *, machine: Optional[PathLike] = None, fault: Sequence[str] = ()) -> Report:
+def sim(
+    path: PathLike,
+    *,
+    machine: Optional[PathLike] = None,
+    fault: Sequence[str] = (),
+    plot: Optional[PathLike] = None,
+    plot_speed: Optional[PathLike] = None,
+    raster_out: Optional[PathLike] = None,
+) -> Report:
     """Run a file through the virtual printer (``gweave sim``); ``machine`` is a profile TOML or
     a built-in profile's name (``"prusa-mk3"``, ``"klipper"``: ``gweave machine list``).
 
     ``fault`` injects heater faults as ``--fault`` does (``["hotend-cartridge-off@120s"]``).
-    The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
+    ``plot`` charts each heater's temperature and target over time, ``plot_speed`` the planned
+    toolhead speed, each layer's time and each mixing input's filament (a ``.png`` or ``.svg``
+    file, by its extension); ``raster_out`` is a folder for the inkjet canvases (one PNG per
+    layer and head). The report has ``time`` (``total_s``, ``motion_s``, ``heating_s``...), ``layer_s``,
     ``feature_s``, ``filament_mm`` (each motor's net feed; ``retracted_at_end_mm`` added to it
     is what left the nozzle, ``stats``'s figure), ``mixing_input_mm``, ``steps``, ``position``, ``count``,
     ``heaters``, ``thermal_faults``, ``halted``, ``unknown_commands`` and ``warnings``.
     The run stops at a halt and at the end of program a profile declares (``[firmware] m0 =
     "seed"``). A profile with ``[firmware] kind = "gweave"`` runs the file on gweave's controller
     core instead, and the report is the core's, as ``gweave sim --json`` prints it: ``lines``,
-    ``time_s``, ``end_steps``, ``mixing_steps``, ``halted`` and ``errors``.
+    ``time_s``, ``end_steps``, ``mixing_steps``, ``halted`` and ``errors`` (``fault``, the charts
+    and the canvases are the Marlin model's, and refused there).
     """
     if isinstance(fault, str):
         fault = [fault]
-    return json.loads(
-        _gweave.sim_json(_path(path, "path"), machine=_opt_path(machine, "machine"), fault=list(fault))
-    )
+    return _job(_gweave.sim_json, locals())
 
 
 def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool = False) -> Report:
     """Estimate the print time with the virtual printer's planner alone (``gweave estimate``).
 
+    ``machine`` is a profile TOML, a built-in profile's name, or ``"slicer"``: the machine
+    limits the slicer wrote into the file (the report's ``machine`` says which slicer's).
     Faster than :func:`sim` (reading, parsing and planning on three threads, no heaters):
     ``total_s``, ``motion_s``, ``dwell_s``, ``overhead_s``, ``blocks``, ``layer_s``,
     ``feature_s``, and ``steps`` when ``steps=True``.
     Heating waits and homing are not timed.
     """
-    return json.loads(_gweave.estimate_json(_path(path, "path"), machine=_opt_path(machine, "machine"), steps=steps))
+    return _job(_gweave.estimate_json, locals())
 
 
 # ---- binder-jet raster ----
@@ -347,19 +359,25 @@ def slice_raster(
     )
 
 
-def _job(function: Any, arguments: Dict[str, Any], files: Sequence[str] = ("path", "output")) -> Report:
-    """Runs a transform job with a wrapper's own arguments (its ``locals()``): the ``files`` it
-    reads or writes, given in that order (the first required), where it goes, and the job's
-    options by the names the engine declares (``_gweave.job_options``), which the engine reads
-    and checks as the command line reads its flags. Paths may be ``str``, ``bytes`` or
-    ``os.PathLike``."""
+def _call(function: Any, arguments: Dict[str, Any], files: Sequence[str] = ("path", "output")) -> Any:
+    """Calls a compiled job with a wrapper's own arguments (its ``locals()``): the ``files`` it
+    reads or writes, in that order (the first required; a reading job such as sim or estimate
+    has no ``output``), and the job's options by the names the engine declares
+    (``_gweave.job_options``), which the engine reads and checks as the command line reads its
+    flags. Paths may be ``str``, ``bytes`` or ``os.PathLike``."""
     options = dict(arguments)
     first, *rest = files
-    paths = [_path(options.pop(first), first), *(_opt_path(options.pop(name), name) for name in rest)]
+    paths: List[Optional[str]] = [_path(options.pop(first), first)]
+    paths += [_opt_path(options.pop(name), name) for name in rest if name in options]
     for name, value in options.items():
         if isinstance(value, (bytes, os.PathLike)):
             options[name] = _path(value, name)
-    return json.loads(function(*paths, **options))
+    return function(*paths, **options)
+
+
+def _job(function: Any, arguments: Dict[str, Any], files: Sequence[str] = ("path", "output")) -> Report:
+    """Runs a job (:func:`_call`) whose result is its report as JSON text."""
+    return json.loads(_call(function, arguments, files))
 
 
 # purge-shift
@@ -405,6 +423,9 @@ def preview(
     path: PathLike,
     *,
     output: Optional[PathLike] = None,
+    lenient: bool = False,
+    report: bool = False,
+    format: Optional[str] = None,
     layer: Optional[int] = None,
     layers: Union[str, Tuple[int, int], None] = None,
     view: Optional[str] = None,
@@ -412,19 +433,18 @@ def preview(
     size: Tuple[int, int] = (1200, 900),
     compare: Optional[PathLike] = None,
     tool_colours: Optional[Sequence[str]] = None,
-    travel: bool = False,
     mix_profile: Optional[PathLike] = None,
     mandrel_diameter: Optional[float] = None,
     head: Optional[PathLike] = None,
+    travel: bool = False,
     min_len: Optional[float] = None,
-    lenient: bool = False,
-    report: bool = False,
 ) -> Union[bytes, Tuple[bytes, Report]]:
     """Draw a file as ``gweave preview`` does; returns the file's bytes (PNG when ``output`` is None),
     or with ``report=True`` the bytes and the report ``gweave preview --json`` prints (format, view,
     layers drawn, strokes, moves, and the ``legend``: each colour and what it stands for).
 
-    ``output`` picks the format by extension (``.png``, ``.svg``, ``.html``) and is written.
+    ``output`` is written (whole, or not at all) and picks the format by extension (``.png``,
+    ``.svg``, ``.html``) unless ``format`` (``"png"``, ``"svg"``, ``"html"``) does.
     ``layer`` is one 0-based layer, ``layers`` an inclusive ``(first, last)`` range (or ``"A-B"``);
     ``min_len`` (mm) merges chained moves shorter than that; ``lenient=True`` draws past
     malformed lines and counts them in the report; ``view`` is ``"top"`` or
@@ -434,34 +454,18 @@ def preview(
     ``gweave mix`` profile ``mix_profile``); ``tool_colours`` such as ``["#00ffff", "#ff00ff"]``
     colour the tools; ``mandrel_diameter`` (mm) draws a rotary program without a gweave header on
     its cylinder; ``head`` is the printhead profile of raster output; ``compare`` highlights moves that differ
-    from another file (in HTML, the two side by side); ``size`` is ``(width, height)`` in pixels.
+    from another file (in HTML, the two side by side); ``size`` is ``(width, height)`` in pixels;
+    ``travel=True`` draws travel moves too.
     """
-    out = _opt_path(output, "output")
-    # The format follows the output's extension, read by the engine as the CLI reads `-o`.
-    fmt = "png" if out is None else os.path.splitext(out)[1].lstrip(".")
-    if layer is not None and layers is not None:
-        raise ValueError("layer and layers: give one (as --layer and --layers)")
-    data, report_json = _gweave.preview_json(
-        _path(path, "path"),
-        format=fmt,
-        layer=layer,
-        layers=layers,
-        view=view,
-        colour_by=colour_by,
-        size=(int(size[0]), int(size[1])),
-        compare=_opt_path(compare, "compare"),
-        tool_colours=None if tool_colours is None else list(tool_colours),
-        travel=travel,
-        mix_profile=_opt_path(mix_profile, "mix_profile"),
-        mandrel_diameter=mandrel_diameter,
-        head=_opt_path(head, "head"),
-        min_len=min_len,
-        lenient=lenient,
-    )
-    if out is not None:
-        with open(out, "wb") as f:
-            f.write(data)
-    return (data, json.loads(report_json)) if report else data
+    arguments = dict(locals())
+    with_report = arguments.pop("report")
+    if isinstance(layers, (tuple, list)):
+        # The pair as the command line's `A-B`, read and checked by the engine.
+        arguments["layers"] = "-".join(str(n) for n in layers)
+    if tool_colours is not None:
+        arguments["tool_colours"] = list(tool_colours)
+    data, report_json = _call(_gweave.preview_json, arguments)
+    return (data, json.loads(report_json)) if with_report else data
 
 
 def toolpath(

@@ -63,8 +63,8 @@ def slice_raster_json(
     stl: str, out_dir: str, *, layer_height: float, dpi: float = 96.0, pixel_mm: Optional[float] = None, margin: int = 0
 ) -> str: ...
 
-# The transform jobs: their options are keyword arguments by the names the engine declares
-# (`job_options`); `gweave/__init__.py` types them, `tests/test_options.py` holds the two equal.
+# The jobs (transforms, sim, estimate, preview): their options are keyword arguments by the
+# names the engine declares (`job_options`); `gweave/__init__.py` types them, `tests/test_options.py` holds the two equal.
 def job_options(command: str) -> List[Dict[str, Any]]: ...
 
 # purge-shift
@@ -91,23 +91,9 @@ def mix_json(
     lenient: bool = False,
     **options: Any,
 ) -> str: ...
+# The options of preview are read by their declared names, as purge-shift's are.
 def preview_json(
-    path: str,
-    *,
-    format: str,
-    layer: Optional[int] = None,
-    layers: Union[str, Tuple[int, int], None] = None,
-    view: Optional[str] = None,
-    colour_by: str = "tool",
-    size: Tuple[int, int] = (1200, 900),
-    compare: Optional[str] = None,
-    tool_colours: Optional[List[str]] = None,
-    travel: bool = False,
-    mix_profile: Optional[str] = None,
-    mandrel_diameter: Optional[float] = None,
-    head: Optional[str] = None,
-    min_len: Optional[float] = None,
-    lenient: bool = False,
+    path: str, output: Optional[str] = None, *, lenient: bool = False, **options: Any
 ) -> Tuple[bytes, str]: ...
 def toolpath_columns(
     path: str, *, travel: bool = True, min_len: float = 0.0, mandrel_diameter: Optional[float] = None
@@ -136,8 +122,9 @@ class Reader:
     def __next__(self) -> Line: ...
 
 # gweave-sim: the virtual printer
-def sim_json(path: str, *, machine: Optional[str] = None, fault: List[str] = ...) -> str: ...
-def estimate_json(path: str, *, machine: Optional[str] = None, steps: bool = False) -> str: ...
+# The options of sim and estimate are read by their declared names, as purge-shift's are.
+def sim_json(path: str, **options: Any) -> str: ...
+def estimate_json(path: str, **options: Any) -> str: ...
 
 class Machine:
     def __init__(self, *, machine: Optional[str] = None) -> None: ...

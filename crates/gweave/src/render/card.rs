@@ -8,7 +8,7 @@ use std::path::Path;
 use super::colour_by::ColourBy;
 use super::mix_colour::MixColours;
 use super::view::{Drawing, ViewKind, ViewOptions};
-use super::{png_out, PreviewOptions, RenderError};
+use super::{png_out, PreviewSettings, RenderError};
 use crate::colour::{Lab, Srgb8};
 use crate::pass::Quiet;
 use crate::picture::{text, Image};
@@ -34,7 +34,7 @@ pub fn card_drawing(
     size_px: [u32; 2],
 ) -> Result<(Drawing, Vec<[f32; 2]>), RenderError> {
     let [width_px, height_px] = size_px;
-    let options = PreviewOptions {
+    let options = PreviewSettings {
         view: ViewOptions {
             kind: ViewKind::Top,
             width_px,
@@ -44,7 +44,7 @@ pub fn card_drawing(
             ..ViewOptions::default()
         },
         mix: Some(mix),
-        ..PreviewOptions::default()
+        ..PreviewSettings::default()
     };
     options.check()?;
     let d = super::drawing(card_gcode, None, &options, &mut Quiet)?;

@@ -10,22 +10,23 @@
 //!   rasteriser (`tiny-skia`), skipping the strokes that the ones in front hide (`cull`) or
 //!   that are past an ink budget.
 //! - [`svg`]: the same drawing as SVG paths.
+//! - [`job`]: `gweave preview` as both front ends run it, its options declared once.
 //! - `html`: a self-contained interactive viewer page (the beads as lit 3D tubes, WebGL 2),
 //!   of one file or two compared side by side.
 //!
 //! Binder-jet raster output (`gweave raster`) draws the drops of each layer
-//! (`toolpath` decodes the fire commands with [`PreviewOptions::printhead`]).
+//! (`toolpath` decodes the fire commands with [`PreviewSettings::printhead`]).
 //!
 //! Rotary programs (`gweave rotary wrap`/`tube` output, whose header names the machine, or any
-//! file with [`PreviewOptions::rotary`]) go through the same toolpath pass, each move's machine
+//! file with [`PreviewSettings::rotary`]) go through the same toolpath pass, each move's machine
 //! words read back on the cylinder ([`crate::rotary::preview::RotaryReading`]), and are drawn in
 //! 3D there, in the pictures and in the viewer, with the same colourings, travel and bounded
 //! memory as flat files; so are the `--preview` pictures of `gweave rotary wrap` and `tube`
 //! ([`crate::rotary_job`]).
 //!
 //! ```no_run
-//! use gweave::render::{preview, Format, PreviewOptions};
-//! let png = preview("part.gcode".as_ref(), None, Format::Png, &PreviewOptions::default()).unwrap();
+//! use gweave::render::{preview, Format, PreviewSettings};
+//! let png = preview("part.gcode".as_ref(), None, Format::Png, &PreviewSettings::default()).unwrap();
 //! std::fs::write("part.png", png).unwrap();
 //! ```
 
@@ -33,6 +34,7 @@ pub mod card;
 pub mod colour_by;
 mod cull;
 pub(crate) mod html;
+pub mod job;
 pub(crate) mod legend;
 pub(crate) mod mix_colour;
 pub mod png_out;
@@ -99,7 +101,7 @@ fn no_such_layer(first: u32, last: Option<u32>) -> String {
 }
 
 /// Refuses a layer range that starts past the last of `layers` layers.
-fn check_layers(options: &PreviewOptions, layers: u32) -> Result<(), RenderError> {
+fn check_layers(options: &PreviewSettings, layers: u32) -> Result<(), RenderError> {
     match &options.view.layers {
         Some(asked) if *asked.start() >= layers => {
             Err(RenderError::NoSuchLayer { first: *asked.start(), last: layers.checked_sub(1) })
@@ -157,7 +159,7 @@ pub const MIN_LEN_MM: Range<f32> = Range::new(0.0, 100.0, "mm");
 
 /// Everything `gweave preview` can be asked.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct PreviewOptions {
+pub struct PreviewSettings {
     /// What to draw and how.
     pub view: ViewOptions,
     /// Merge chained moves shorter than this, mm; `None` picks by file size
@@ -176,7 +178,7 @@ pub struct PreviewOptions {
     pub strictness: Strictness,
 }
 
-impl PreviewOptions {
+impl PreviewSettings {
     fn check(&self) -> Result<(), RenderError> {
         let (w, h) = (self.view.width_px, self.view.height_px);
         if !(PICTURE_SIDE_PX.contains(w) && PICTURE_SIDE_PX.contains(h)) {
@@ -266,7 +268,7 @@ pub fn preview(
     path: &Path,
     compare: Option<&Path>,
     format: Format,
-    options: &PreviewOptions,
+    options: &PreviewSettings,
 ) -> Result<Vec<u8>, RenderError> {
     preview_with_progress(path, compare, format, options, &mut Quiet).map(|p| p.bytes)
 }
@@ -312,7 +314,7 @@ pub struct PreviewReport {
 }
 
 impl PreviewReport {
-    fn new(format: Format, bytes: usize, options: &PreviewOptions) -> Self {
+    fn new(format: Format, bytes: usize, options: &PreviewSettings) -> Self {
         PreviewReport {
             format: match format {
                 Format::Png => "png",
@@ -339,7 +341,7 @@ pub fn preview_with_progress(
     path: &Path,
     compare: Option<&Path>,
     format: Format,
-    options: &PreviewOptions,
+    options: &PreviewSettings,
     progress: &mut dyn Progress,
 ) -> Result<Preview, RenderError> {
     options.check()?;
@@ -368,7 +370,7 @@ pub fn preview_with_progress(
 pub fn drawing(
     path: &Path,
     compare: Option<&Path>,
-    options: &PreviewOptions,
+    options: &PreviewSettings,
     progress: &mut dyn Progress,
 ) -> Result<view::Drawing, RenderError> {
     drawing_counted(path, compare, options, progress).map(|(d, _)| d)
@@ -378,7 +380,7 @@ pub fn drawing(
 fn drawing_counted(
     path: &Path,
     compare: Option<&Path>,
-    options: &PreviewOptions,
+    options: &PreviewSettings,
     progress: &mut dyn Progress,
 ) -> Result<(view::Drawing, Malformed), RenderError> {
     let mut malformed = Malformed::default();
@@ -406,7 +408,7 @@ fn drawing_counted(
 fn html_page(
     path: &Path,
     compare: Option<&Path>,
-    options: &PreviewOptions,
+    options: &PreviewSettings,
     progress: &mut dyn Progress,
 ) -> Result<Preview, RenderError> {
     let name = |p: &Path| p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

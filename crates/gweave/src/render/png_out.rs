@@ -366,7 +366,7 @@ mod tests {
                 height_px: 300,
                 ..Default::default()
             };
-            let options = crate::render::PreviewOptions { view, ..Default::default() };
+            let options = crate::render::PreviewSettings { view, ..Default::default() };
             let d = crate::render::drawing(&dual, None, &options, &mut Quiet).unwrap();
             let skipped = paint_strokes(&d, &d.strokes, true, &mut Quiet);
             let all = paint_strokes(&d, &d.strokes, false, &mut Quiet);
