@@ -149,9 +149,7 @@ impl KlipperLookahead {
         self.queue.len()
     }
 
-    /// Queue a move (with its already checked geometry) and flush what is final. Inlined into
-    /// [`Planner::push`](super::Planner::push), so that the geometry is not passed in memory.
-    #[inline]
+    /// Queue a move (with its already checked geometry) and flush what is final.
     pub(crate) fn push<S: BlockSink + ?Sized>(
         &mut self,
         mv: &Move,
@@ -233,9 +231,7 @@ impl KlipperLookahead {
     }
 
     /// `LookAheadQueue.flush`: the backward walk, then the forward walk over the moves that are
-    /// final. A lazy flush emits nothing until a run's peak is known. Out of line: it runs
-    /// once per tenths of a second of motion, and [`KlipperLookahead::push`] stays small.
-    #[inline(never)]
+    /// final. A lazy flush emits nothing until a run's peak is known.
     fn flush_queue<S: BlockSink + ?Sized>(&mut self, lazy: bool, sink: &mut S) {
         self.flush_budget_s = FLUSH_AFTER_LAZY_S;
         let n = self.queue.len();
