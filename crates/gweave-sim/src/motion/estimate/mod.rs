@@ -436,9 +436,10 @@ fn new_batch() -> Vec<Job> {
 const BATCHES_IN_FLIGHT: usize = 4;
 
 /// Estimate a whole file read from `input`, step counts included. Two threads share the work:
-/// one reads the file, lexes the lines and follows the modal state, one plans and steps. The result is the same, to the bit, as feeding every line to one
-/// [`Estimator`] (the plan side sees the same jobs in the same order); the memory is bounded by
-/// read buffer and the batches in flight.
+/// one reads the file, lexes the lines and follows the modal state, one plans and steps. The
+/// result is the same, to the bit, as feeding every line to one [`Estimator`] (the plan side
+/// sees the same jobs in the same order); the memory is bounded by the read buffer and the
+/// batches in flight.
 /// The lines are read as Marlin reads them; `estimate_as` reads them as another firmware does.
 pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
     estimate_as(input, profile, Firmware::Marlin, true)
