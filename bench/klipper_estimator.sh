@@ -8,7 +8,7 @@
 # (start buffer, M84 stalls, exit flush), against klipper_estimator's total less its
 # "Indeterminate time" (0.1 s it puts in for each G28, M109, M190). gweave sim's own total also
 # holds the heating and homing it simulates, which klipper_estimator does not model; gweave
-# estimate (the same planner without heaters; reading, parsing and planning on three threads) is
+# estimate (the same planner without heaters; reading and parsing on one thread, planning on another) is
 # the like-for-like comparison.
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
@@ -78,7 +78,7 @@ row() { printf "%-30s %7s s wall %6s s user %6s s sys %6s MB   %s\n" "$@"; }
 row "klipper_estimator estimate" "$t_ke" "$u_ke" "$s_ke_sys" "$m_ke" "estimate $s_ke s"
 row "gweave sim (+ steps, heaters)" "$t_gw" "$u_gw" "$s_gw_sys" "$m_gw" \
   "estimate $s_gw s ($s_gw_all s with heating and homing)"
-row "gweave estimate (3 threads)" "$t_ge" "$u_ge" "$s_ge_sys" "$m_ge" "estimate $s_ge s"
+row "gweave estimate (2 threads)" "$t_ge" "$u_ge" "$s_ge_sys" "$m_ge" "estimate $s_ge s"
 # CPU time is user + system of all threads: klipper_estimator's system time (2.4-4.3 s, the
 # 3.6 GB it allocates) is part of its cost, and varies more than its user time.
 cpu() { python3 -c "import sys; print(float(sys.argv[1]) + float(sys.argv[2]))" "$1" "$2"; }

@@ -18,7 +18,7 @@ use crate::options::Options;
 /// Estimate the print time with the virtual printer's lookahead planner (Klipper or Marlin
 /// mode, from the machine profile), per layer and per feature, without heaters or the serial
 /// face: what `gweave sim` reports as motion, dwell and overhead, with reading, parsing and
-/// planning on three threads. Heating waits and homing are not timed (`gweave sim` simulates
+/// planning on two threads. Heating waits and homing are not timed (`gweave sim` simulates
 /// them).
 ///
 /// Example: `gweave estimate part.gcode --machine examples/machines/klipper.toml`.

@@ -215,52 +215,15 @@ impl Front {
         } else {
             parse_line_lean(line, &mut self.block);
         }
-        self.lexed(line, None, jobs)
+        self.lexed(line, jobs)
     }
 
-    /// Whether lines given to [`Front::step_lexed`] must have a plain move's words listed.
-    pub(super) fn reads_words(&self) -> bool {
-        self.state.reads_words()
-    }
-
-    /// [`Front::step`] for a line lexed already into `block` (on the reading thread, as
-    /// [`Front::reads_words`] says). A move is read from it in place; any other line's block
-    /// is taken in exchange for the front's own, which the commands below read.
+    /// The rest of [`Front::step`] once the line is lexed into [`Front::block`].
     #[inline(always)]
-    pub(super) fn step_lexed(
-        &mut self,
-        line: &RawLine<'_>,
-        block: &mut Block,
-        jobs: &mut Vec<Job>,
-    ) -> Result<(), EstimateError> {
-        if !self.is_whole(line) {
-            return Ok(());
-        }
-        self.lexed(line, Some(block), jobs)
-    }
-
-    /// The rest of [`Front::step`] once the line is lexed: into `lexed`, or into
-    /// [`Front::block`] when that is `None`. Most lines are moves, which need the block only
-    /// for the state: the lexed one is not swapped in for them (a block is some 240 bytes,
-    /// and a swap copies it twice: about 40 instructions a line).
-    #[inline(always)]
-    fn lexed(
-        &mut self,
-        line: &RawLine<'_>,
-        lexed: Option<&mut Block>,
-        jobs: &mut Vec<Job>,
-    ) -> Result<(), EstimateError> {
+    fn lexed(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
         self.line += 1;
-        let block = lexed.as_deref().unwrap_or(&self.block);
-        count_malformed(&mut self.malformed, self.line, block);
-        self.state.apply(line.bytes, block);
-        if let Effect::Move(m) = &self.state.effect {
-            self.book.motion(&self.state.structure, m, self.line, jobs);
-            return Ok(());
-        }
-        if let Some(block) = lexed {
-            std::mem::swap(&mut self.block, block);
-        }
+        count_malformed(&mut self.malformed, self.line, &self.block);
+        self.state.apply(line.bytes, &self.block);
         self.run_applied(line.bytes, jobs)
     }
 
@@ -534,16 +497,25 @@ impl Bookkeeping {
         tag
     }
 
-    /// Motion is about to start: Klipper's start buffer before the first move.
+    /// Motion is about to start: Klipper's start buffer before the first move. Inlined (it
+    /// runs for every move; as a call it cost 16 instructions a move), the first move's work
+    /// out of line.
+    #[inline(always)]
     fn moving(&mut self, jobs: &mut Vec<Job>) {
         if !self.started {
-            self.started = true;
-            if self.klipper {
-                jobs.push(Job::Overhead { t_s: KLIPPER_START_BUFFER_S });
-            }
+            self.start(jobs);
         }
         self.motors_on = true;
         self.moved_since_m400 = true;
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn start(&mut self, jobs: &mut Vec<Job>) {
+        self.started = true;
+        if self.klipper {
+            jobs.push(Job::Overhead { t_s: KLIPPER_START_BUFFER_S });
+        }
     }
 
     /// A move of the file, on line `line`: straight, or an arc cut into chords.

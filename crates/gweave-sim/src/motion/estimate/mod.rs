@@ -39,8 +39,8 @@
 //! Inside, the work has two sides that share nothing but a queue of jobs: the parse
 //! side (`front`: lexer, modal state, time accounts, moves cut to straight chords) and the plan
 //! side (`back`: planner, steppers, clock). [`Estimator`] runs them one after the other on each
-//! line; [`estimate`] runs them on threads of their own, with a third one reading the file, and
-//! gets the same result to the bit (the third thread lexes the lines too: [`gweave::gcode::lexed`]).
+//! line; [`estimate`] runs them on two threads of their own (the parse side reads the file too)
+//! and gets the same result to the bit.
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -49,9 +49,8 @@ use std::sync::mpsc;
 use gweave::colour::dialect::{DialectError, MixingState};
 use gweave::firmware::Firmware;
 use gweave::gcode::layers::Feature;
-use gweave::gcode::lexed;
 use gweave::gcode::line::Block;
-use gweave::gcode::reader::RawLine;
+use gweave::gcode::reader::{LineReader, RawLine};
 use gweave::gcode::state::{Effect, State};
 use thiserror::Error;
 
@@ -426,7 +425,9 @@ impl Estimator {
     }
 }
 
-/// The firmware refuses a bad mixing command and goes on; so does the estimate.
+/// The firmware refuses a bad mixing command and goes on; so does the estimate. Inlined: it is
+/// called for every line, and as a call it cost 16 instructions a line of `estimate`.
+#[inline(always)]
 fn skip_mixing_errors(result: Result<(), EstimateError>) -> Result<(), EstimateError> {
     match result {
         Err(EstimateError::Mixing { .. }) => Ok(()),
@@ -446,11 +447,11 @@ fn new_batch() -> Vec<Job> {
 /// (under 1 MB).
 const BATCHES_IN_FLIGHT: usize = 4;
 
-/// Estimate a whole file read from `input`, step counts included. Three threads share the work:
-/// one reads the file in chunks of whole lines and lexes them, one follows the modal state,
-/// one plans and steps. The result is the same, to the bit, as feeding every line to one
-/// [`Estimator`] (the plan side sees the same jobs in the same order); the memory is bounded by
-/// the chunks and batches in flight.
+/// Estimate a whole file read from `input`, step counts included. Two threads share the work:
+/// one reads the file, lexes the lines and follows the modal state, one plans and steps. The
+/// result is the same, to the bit, as feeding every line to one [`Estimator`] (the plan side
+/// sees the same jobs in the same order); the memory is bounded by the read buffer and the
+/// batches in flight.
 /// The lines are read as Marlin reads them; `estimate_as` reads them as another firmware does.
 pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
     estimate_as(input, profile, Firmware::Marlin, true, None)
@@ -482,11 +483,9 @@ pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Resul
 fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
     let Estimator { mut front, mut back, jobs } = estimator;
     debug_assert!(jobs.is_empty());
-    let (lexer, lexed) = lexed::lexer(input, front.reads_words());
     let (to_back, batches) = mpsc::sync_channel::<Vec<Job>>(BATCHES_IN_FLIGHT);
     let (return_batch, spare_batches) = mpsc::channel::<Vec<Job>>();
     std::thread::scope(|scope| {
-        scope.spawn(move || lexer.run());
         let planning = scope.spawn(move || -> Result<Back, EstimateError> {
             for mut batch in batches {
                 for job in &batch {
@@ -500,7 +499,7 @@ fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate
         });
         let mut batch = new_batch();
         let handover = Handover { to_back: &to_back, spare: &spare_batches };
-        let parsed = parse_lexed(lexed, &mut front, &mut batch, &handover);
+        let parsed = parse_lines(LineReader::new(input), &mut front, &mut batch, &handover);
         // The lines before an error are planned too: one of them may hold an earlier error. A
         // closed channel means the plan side stopped on an error, which it returns.
         let _ = to_back.send(batch);
@@ -519,11 +518,19 @@ struct Handover<'a> {
     spare: &'a mpsc::Receiver<Vec<Job>>,
 }
 
-/// The parse side: every line, lexed on the reading thread ([`gweave::gcode::lexed`]), into
-/// jobs, sent in batches. Stops early, with `Ok`, when the plan side has stopped (it reports
-/// its error itself).
-fn parse_lexed(
-    mut lexed: lexed::Lexed,
+/// Lines between two looks at the stop token: a few milliseconds of parsing.
+const LINES_BETWEEN_STOP_CHECKS: u32 = 4096;
+
+/// The parse side: every line read, lexed and followed through the modal state on this thread,
+/// into jobs, sent in batches. Stops early, with `Ok`, when the plan side has stopped (it
+/// reports its error itself).
+///
+/// Reading and lexing on a thread of their own ([`gweave::gcode::lexed`], as `stats` does) cost
+/// more than they saved here: each line's block was written out to memory and read back on
+/// another core, and the three threads shared two cores (docs/performance.md, "Estimate on two
+/// threads").
+fn parse_lines<R: Read>(
+    mut reader: LineReader<R>,
     front: &mut Front,
     batch: &mut Vec<Job>,
     handover: &Handover,
@@ -531,24 +538,22 @@ fn parse_lexed(
     // A stopped run (Python's Ctrl-C) stops here too, not only at the reader: the lines
     // already read would otherwise be parsed and planned first.
     let stop = gweave::interrupt::current();
-    while let Some(lines) = lexed.next_batch() {
-        if let Some(stop) = &stop {
-            stop.check()?;
-        }
-        let mut lines = lines?;
-        let (mut raw, blocks) = lines.lines_mut();
-        for block in blocks {
-            // The batch holds a block for each of its lines: never `None`.
-            let Some(line) = raw.next_line() else { break };
-            skip_mixing_errors(front.step_lexed(&line, block, batch))?;
-            if batch.len() >= BATCH {
-                let next = handover.spare.try_recv().unwrap_or_else(|_| new_batch());
-                if handover.to_back.send(std::mem::replace(batch, next)).is_err() {
-                    return Ok(());
-                }
+    let mut until_check = LINES_BETWEEN_STOP_CHECKS;
+    while let Some(line) = reader.next_line()? {
+        skip_mixing_errors(front.step(&line, batch))?;
+        if batch.len() >= BATCH {
+            let next = handover.spare.try_recv().unwrap_or_else(|_| new_batch());
+            if handover.to_back.send(std::mem::replace(batch, next)).is_err() {
+                return Ok(());
             }
         }
-        lexed.recycle(lines);
+        until_check -= 1;
+        if until_check == 0 {
+            until_check = LINES_BETWEEN_STOP_CHECKS;
+            if let Some(stop) = &stop {
+                stop.check()?;
+            }
+        }
     }
     Ok(())
 }

@@ -39,11 +39,18 @@ const FLUSH_AFTER_LAZY_S: f64 = 0.15;
 /// The acceleration Klipper gives extrude-only moves before the extruder limits them.
 const EXTRUDE_ONLY_ACCEL_MM_S2: f64 = 99_999_999.9;
 
-/// One queued move with Klipper's planning quantities (squared speeds in (mm/s)^2).
+/// One queued move with Klipper's planning quantities (squared speeds in (mm/s)^2). Of its
+/// geometry it keeps what the junction with the next move and the block need: the length,
+/// the kind and the X Y Z E ratios (the deltas and the rotary ratio are read once, in
+/// [`KlipperLookahead::new_move`]): a queued move is copied in and out of the queue, and
+/// walked again at each flush attempt.
 #[derive(Debug, Clone)]
 struct QueuedMove {
     mv: Move,
-    geo: Geometry,
+    len: f64,
+    kind: MoveKind,
+    /// `delta / len` of X Y Z E ([`Geometry::ratio`]).
+    ratio: [f64; 4],
     accel: f64,
     junction_deviation_mm: f64,
     min_move_t: f64,
@@ -56,27 +63,29 @@ struct QueuedMove {
 
 impl QueuedMove {
     /// `limit_speed`: lower the cruise speed and the acceleration of this move.
+    #[inline(always)]
     fn limit_speed(&mut self, speed: f64, accel: f64) {
         let speed2 = speed * speed;
         if speed2 < self.max_cruise_v2 {
             self.max_cruise_v2 = speed2;
-            self.min_move_t = self.geo.len / speed;
+            self.min_move_t = self.len / speed;
         }
         self.accel = self.accel.lesser(accel);
-        self.delta_v2 = 2.0 * self.geo.len * self.accel;
+        self.delta_v2 = 2.0 * self.len * self.accel;
         self.mcr_delta_v2 = self.mcr_delta_v2.lesser(self.delta_v2);
     }
 
     fn is_kinematic(&self) -> bool {
-        self.geo.kind == MoveKind::Kinematic
+        self.kind == MoveKind::Kinematic
     }
 
     /// `calc_junction`: the highest entry speed allowed by the corner with `prev`.
+    #[inline(always)]
     fn calc_junction(&mut self, prev: &QueuedMove, icv_mm_s: f64) {
         if !self.is_kinematic() || !prev.is_kinematic() {
             return;
         }
-        let (r, pr) = (&self.geo.ratio, &prev.geo.ratio);
+        let (r, pr) = (&self.ratio, &prev.ratio);
         let e_v2 = extruder_v2(icv_mm_s, pr[axis::E], r[axis::E]).unwrap_or(self.max_cruise_v2);
         let mut v2 = self
             .max_cruise_v2
@@ -99,8 +108,8 @@ impl QueuedMove {
     }
 
     fn block(&self, entry_v2: f64, cruise_v2: f64, exit_v2: f64) -> PlannedBlock {
-        let trapezoid = Trapezoid::from_v2(self.geo.len, self.accel, entry_v2, cruise_v2, exit_v2);
-        PlannedBlock::new(&self.mv, (self.geo.len, self.geo.kind), self.accel, trapezoid)
+        let trapezoid = Trapezoid::from_v2(self.len, self.accel, entry_v2, cruise_v2, exit_v2);
+        PlannedBlock::new(&self.mv, (self.len, self.kind), self.accel, trapezoid)
     }
 }
 
@@ -141,13 +150,13 @@ impl KlipperLookahead {
     }
 
     /// Queue a move (with its already checked geometry) and flush what is final.
-    pub(crate) fn push(
+    pub(crate) fn push<S: BlockSink + ?Sized>(
         &mut self,
         mv: &Move,
         geo: Geometry,
         limits: &KlipperLimits,
         rotary: (&AxisLimits, &AxisLimits),
-        sink: &mut dyn BlockSink,
+        sink: &mut S,
     ) {
         let mut q = self.new_move(mv, geo, limits, rotary);
         let Some(prev) = self.queue.back() else {
@@ -163,12 +172,15 @@ impl KlipperLookahead {
     }
 
     /// Plan everything queued, ending at a stop.
-    pub(crate) fn flush(&mut self, sink: &mut dyn BlockSink) {
+    pub(crate) fn flush<S: BlockSink + ?Sized>(&mut self, sink: &mut S) {
         self.flush_queue(false, sink);
         self.flush_budget_s = FLUSH_AFTER_FULL_S;
     }
 
-    /// `Move.__init__` plus the kinematics' and the extruder's `check_move`.
+    /// `Move.__init__` plus the kinematics' and the extruder's `check_move`. Inlined, like
+    /// the two above, so that the move is put together in registers and stored once, into
+    /// the queue: a queued move is some 200 bytes, and each copy of it a call to `memcpy`.
+    #[inline(always)]
     fn new_move(
         &self,
         mv: &Move,
@@ -185,7 +197,9 @@ impl KlipperLookahead {
         let len = geo.len;
         let mut q = QueuedMove {
             mv: *mv,
-            geo,
+            len,
+            kind: geo.kind,
+            ratio: [geo.ratio[axis::X], geo.ratio[axis::Y], geo.ratio[axis::Z], geo.ratio[axis::E]],
             accel,
             junction_deviation_mm: k.junction_deviation_mm(),
             min_move_t: len / velocity,
@@ -218,7 +232,7 @@ impl KlipperLookahead {
 
     /// `LookAheadQueue.flush`: the backward walk, then the forward walk over the moves that are
     /// final. A lazy flush emits nothing until a run's peak is known.
-    fn flush_queue(&mut self, lazy: bool, sink: &mut dyn BlockSink) {
+    fn flush_queue<S: BlockSink + ?Sized>(&mut self, lazy: bool, sink: &mut S) {
         self.flush_budget_s = FLUSH_AFTER_LAZY_S;
         let n = self.queue.len();
         self.walk.clear();
@@ -258,11 +272,13 @@ impl KlipperLookahead {
             return;
         }
         let mut prev_cruise_v2: f64 = 0.0;
-        for (m, w) in self.queue.drain(..flush_count).zip(&self.walk) {
+        // Read in place, then dropped from the queue (no copy of each move on its way out).
+        for (m, w) in self.queue.iter().zip(&self.walk).take(flush_count) {
             let cruise_v2 = w.cruise_v2.unwrap_or_else(|| prev_cruise_v2.lesser(w.start_v2));
             sink.block(&m.block(w.start_v2.lesser(cruise_v2), cruise_v2, w.next_start_v2.lesser(cruise_v2)));
             prev_cruise_v2 = cruise_v2;
         }
+        self.queue.drain(..flush_count);
     }
 }
 
