@@ -194,7 +194,7 @@ impl Planner {
                 let rotary = (&self.profile.max_feed_mm_s, &self.profile.max_accel_mm_s2);
                 k.push(mv, Geometry::with_extent(delta, len, kind), limits, rotary, sink);
             }
-            (Engine::Marlin(m), CornerMode::Marlin { .. }) => m.push(mv, &self.profile, sink),
+            (Engine::Marlin(m), CornerMode::Marlin { .. }) => m.push(mv, (len, kind), &self.profile, sink),
             (Engine::Constant, CornerMode::Constant {}) => {
                 let geo = Geometry::with_extent(delta, len, kind);
                 sink.block(&constant::block(mv, &geo, &self.profile.steps))
