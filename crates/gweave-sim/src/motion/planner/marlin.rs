@@ -214,24 +214,20 @@ impl Queue {
     /// Takes the oldest block out of the buffer and hands it to `sink` with its step
     /// trapezoid.
     fn emit_front(&mut self, sink: &mut dyn BlockSink) {
-        let Some(&Block { mv, b, entry_v2, geo: (geo_len, kind), .. }) = self.blocks.get(self.head) else {
+        let queue = &self.blocks[self.head..];
+        // Read in place: a block is some 200 bytes.
+        let Some(Block { mv, b, entry_v2, geo: (geo_len, kind), .. }) = queue.first() else {
             return;
         };
-        self.head += 1;
-        self.planned = self.planned.saturating_sub(1);
-        let exit_v2 = self.blocks.get(self.head).map_or(MIN_V2, |next| next.entry_v2);
-        if self.head >= self.blocks.len() - self.head {
-            self.blocks.drain(..self.head);
-            self.head = 0;
-        }
+        let exit_v2 = queue.get(1).map_or(MIN_V2, |next| next.entry_v2);
         // Speed over nominal speed, in single precision as Marlin's `recalculate_trapezoids`.
         let inverse_nominal = 1.0 / (b.nominal_v2 as f32).sqrt();
         let factor = |v2: f64| (v2 as f32).sqrt() * inverse_nominal;
         let steps =
-            StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, factor(entry_v2), factor(exit_v2));
+            StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, factor(*entry_v2), factor(exit_v2));
         // The speeds along the path: Marlin's length, unless it measured a tiny XYZ move along
         // E; the times are the steps' either way.
-        let len = if b.xyz_below_min_steps && kind == MoveKind::Kinematic { geo_len } else { b.mm };
+        let len = if b.xyz_below_min_steps && *kind == MoveKind::Kinematic { *geo_len } else { b.mm };
         let mm_per_step = len / b.steps;
         let trapezoid = Trapezoid {
             entry_v_mm_s: steps.initial_rate * mm_per_step,
@@ -241,7 +237,13 @@ impl Queue {
             cruise_t_s: steps.cruise_t_s,
             decel_t_s: steps.decel_t_s,
         };
-        sink.block(&PlannedBlock::new(&mv, (geo_len, kind), b.accel, trapezoid));
+        sink.block(&PlannedBlock::new(mv, (*geo_len, *kind), b.accel, trapezoid));
+        self.head += 1;
+        self.planned = self.planned.saturating_sub(1);
+        if self.head >= self.blocks.len() - self.head {
+            self.blocks.drain(..self.head);
+            self.head = 0;
+        }
     }
 }
 

@@ -100,6 +100,23 @@ impl Lesser for f64 {
     }
 }
 
+/// The larger of two numbers in one `maxsd`, for the same reason as [`Lesser`]: Marlin's step
+/// trapezoid takes a few maxima a block (rates held to `MINIMAL_STEP_RATE`, step counts to 0).
+pub(crate) trait Greater {
+    fn greater(self, other: f64) -> f64;
+}
+
+impl Greater for f64 {
+    #[inline(always)]
+    fn greater(self, other: f64) -> f64 {
+        if self > other {
+            self
+        } else {
+            other
+        }
+    }
+}
+
 /// Receives planned blocks in order. Closures `FnMut(&PlannedBlock)` and `Vec<PlannedBlock>` are
 /// sinks.
 pub trait BlockSink {
