@@ -35,9 +35,10 @@ struct Block {
     /// next block cannot enter faster than this one's nominal speed: true under junction
     /// deviation, not always under classic jerk, whose "safe speed" at a junction may exceed
     /// the previous block's nominal speed (a slow Z hop followed by a fast travel). Then the
-    /// block is left faster than it runs, as in the firmware. Precomputed (with the same
-    /// rounding as `2.0 * accel * mm` in the passes) so that each pass is one add and one
-    /// `minsd` a block, without a branch.
+    /// block is left faster than it runs, as in the firmware. Worked out once, so that each
+    /// pass is one add and one `minsd` a block without a branch: the same numbers as the
+    /// passes worked out each time before (`(2 a) len`, and `x + inf = inf` where they skipped
+    /// the check).
     gain_v2: f64,
     b: MarlinBlock,
     /// The move, from the end of the last block made (dropped moves before it included), and

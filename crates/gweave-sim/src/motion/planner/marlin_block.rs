@@ -178,8 +178,8 @@ pub(crate) fn populate(
     let mut speed32: [f32; 5] = dist32.map(|d| d * inverse_s32);
     // An axis that does not move (speed 0) is never over its positive limit.
     let mut factor = 1.0f32;
-    for i in 0..5 {
-        let (cs, max) = (speed32[i].abs(), set.max_feed32[i]);
+    for (s, &max) in speed32.iter().zip(&set.max_feed32) {
+        let cs = s.abs();
         if cs > max {
             factor = factor.min(max / cs);
         }
@@ -310,8 +310,7 @@ fn deviation_v2(prev: &[f64; 5], unit: &[f64; 5], accel: f64, mm: f64, jd: f64, 
     let change = normalised(std::array::from_fn(|i| unit[i] - prev[i]));
     // An axis whose direction does not change (0) is never over its positive limit.
     let mut junction_accel = accel;
-    for i in 0..5 {
-        let (c, max) = (change[i], set.max_accel[i]);
+    for (&c, &max) in change.iter().zip(&set.max_accel) {
         if junction_accel * c.abs() > max {
             junction_accel = (max / c).abs();
         }
