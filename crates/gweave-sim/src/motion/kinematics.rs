@@ -156,12 +156,16 @@ impl Move {
     #[inline]
     pub(crate) fn checked_delta(&self) -> Result<[f64; 5], MoveError> {
         // A difference is finite exactly when both ends are (inf - inf is NaN): one test per
-        // axis instead of two.
+        // axis instead of two. And `d * 0` is zero for a finite `d`, NaN otherwise, so the sum
+        // of those is zero exactly when every axis is finite: a multiply and an add per axis
+        // (`is_finite` on each is some eight integer instructions, a sixth of the Marlin
+        // planner's own bookkeeping per move).
         let delta = deltas(self.start, self.end);
-        if !delta.iter().fold(true, |finite, d| finite & d.is_finite()) {
+        if delta.iter().fold(0.0, |sum, d| sum + d * 0.0) != 0.0 {
             return Err(MoveError::NonFinitePosition);
         }
-        if !(self.feed_mm_s.is_finite() && self.feed_mm_s > 0.0) {
+        // NaN fails both comparisons.
+        if !(self.feed_mm_s > 0.0 && self.feed_mm_s < f64::INFINITY) {
             return Err(MoveError::BadFeed(self.feed_mm_s));
         }
         Ok(delta)

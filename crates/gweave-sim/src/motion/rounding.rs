@@ -22,10 +22,15 @@ pub(crate) fn round_i64(x: f64) -> i64 {
 }
 
 /// `x.trunc()` without a call (see [`round_i64`]); every float from 2^52 on is whole already.
+/// Below 2^52 the conversion to `i64` cannot overflow, so it is the one `cvttsd2si` without
+/// the compares and moves of Rust's saturating `as` (seven instructions for one; the Marlin
+/// planner rounds some ten rates and step counts a block).
 #[inline]
 pub(crate) fn trunc(x: f64) -> f64 {
     if x.abs() < 4_503_599_627_370_496.0 {
-        x as i64 as f64
+        // SAFETY: `x` is finite (NaN fails the test) and |x| < 2^52 < 2^63, so its truncation
+        // is an `i64`.
+        unsafe { x.to_int_unchecked::<i64>() as f64 }
     } else {
         x
     }

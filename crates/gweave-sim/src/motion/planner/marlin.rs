@@ -12,8 +12,6 @@
 //! forwards. The oldest block's entry speed is never changed: the block before it has already
 //! left with that exit speed (or, on an empty buffer, the machine stands still).
 
-use std::collections::VecDeque;
-
 use super::marlin_block::{populate, MarlinBlock, Previous, Settings, MINIMUM_PLANNER_SPEED};
 use super::marlin_steps::StepProfile;
 use super::trapezoid::Trapezoid;
@@ -24,37 +22,49 @@ use crate::motion::rounding::round_i64;
 
 const MIN_V2: f64 = MINIMUM_PLANNER_SPEED * MINIMUM_PLANNER_SPEED;
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy)]
 struct Block {
-    /// The move, from the end of the last block made (dropped moves before it included).
-    mv: Move,
-    b: MarlinBlock,
     /// The entry allowed by the reverse pass alone (braking for everything after it).
     reverse_v2: f64,
     entry_v2: f64,
+    /// `2 a len`, the squared speed the block gains accelerating over its whole length (or
+    /// loses braking): the entry of the next block is at most `entry_v2 + gain_v2`, the entry
+    /// of this one at most `exit_v2 + gain_v2`. Infinite for a block of "nominal length" (one
+    /// long enough to brake from its nominal speed to a stop, Marlin's
+    /// `BLOCK_BIT_NOMINAL_LENGTH`), for which Marlin skips both checks on the grounds that the
+    /// next block cannot enter faster than this one's nominal speed: true under junction
+    /// deviation, not always under classic jerk, whose "safe speed" at a junction may exceed
+    /// the previous block's nominal speed (a slow Z hop followed by a fast travel). Then the
+    /// block is left faster than it runs, as in the firmware. Worked out once, so that each
+    /// pass is one add and one `minsd` a block without a branch: the same numbers as the
+    /// passes worked out each time before (`(2 a) len`, and `x + inf = inf` where they skipped
+    /// the check).
+    gain_v2: f64,
+    b: MarlinBlock,
+    /// The move, from the end of the last block made (dropped moves before it included), and
+    /// its length and kind along the path.
+    mv: Move,
+    geo: (f64, MoveKind),
 }
 
-impl Block {
-    /// The highest entry speed the next block can get from this one: `entry_v2 + 2 a len`, or
-    /// no limit for a block of "nominal length" (one long enough to brake from its nominal
-    /// speed to a stop, Marlin's `BLOCK_BIT_NOMINAL_LENGTH`). Marlin skips the check for those
-    /// on the grounds that the next block cannot enter faster than this one's nominal speed:
-    /// true under junction deviation, not always under classic jerk, whose "safe speed" at a
-    /// junction may exceed the previous block's nominal speed (a slow Z hop followed by a
-    /// fast travel). Then the block is left faster than it runs, as in the firmware.
-    fn reach_v2(&self) -> f64 {
-        if self.b.nominal_length {
-            f64::INFINITY
-        } else {
-            self.entry_v2 + 2.0 * self.b.accel * self.b.mm
-        }
-    }
+/// The queued blocks and how far they are planned.
+#[derive(Debug, Clone, Default)]
+struct Queue {
+    /// The queued blocks, oldest first, are `blocks[head..]`: a slice rather than a ring, so
+    /// that the passes run over contiguous memory without wrapping an index per block. The
+    /// blocks already emitted before `head` are dropped in one move once there are as many of
+    /// them as blocks queued (each block is moved at most once on average).
+    blocks: Vec<Block>,
+    head: usize,
+    /// The queued blocks whose entry speed is final, counted from the oldest (which always is):
+    /// `blocks[head..][..=planned]`. Marlin's `block_buffer_planned`, see [`Queue::replan`].
+    planned: usize,
 }
 
 /// The Marlin planner buffer.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct MarlinBuffer {
-    blocks: VecDeque<Block>,
+    queue: Queue,
     prev: Previous,
     /// The planner position, whole steps per axis.
     position: [f64; 5],
@@ -71,7 +81,7 @@ pub(crate) struct MarlinBuffer {
 
 impl MarlinBuffer {
     pub(crate) fn queued(&self) -> usize {
-        self.blocks.len()
+        self.queue.len()
     }
 
     /// Moves from now on drive extruder `tool`, with its own E limits if it has them.
@@ -87,7 +97,15 @@ impl MarlinBuffer {
         self.settings = None;
     }
 
-    pub(crate) fn push(&mut self, mv: &Move, profile: &MotionProfile, sink: &mut dyn BlockSink) {
+    /// Queue `mv`, whose length and kind along the path are `geo` (the planner measured them
+    /// already: see `extent`).
+    pub(crate) fn push(
+        &mut self,
+        mv: &Move,
+        geo: (f64, MoveKind),
+        profile: &MotionProfile,
+        sink: &mut dyn BlockSink,
+    ) {
         // Borrowed, not copied: the settings are some 250 bytes, and a move's work a few
         // hundred instructions.
         let set = self.settings.get_or_insert_with(|| Settings::new(profile, self.tool));
@@ -107,84 +125,127 @@ impl MarlinBuffer {
         self.last_end = Some(mv.end);
         let target = set.steps_at(mv.end);
         let delta = std::array::from_fn(|i| target[i] - self.position[i]);
-        if self.blocks.len() + 1 >= set.buffer_size {
-            emit_front(&mut self.blocks, sink);
+        if self.queue.len() + 1 >= set.buffer_size {
+            self.queue.emit_front(sink);
         }
         // A move of fewer than MIN_STEPS_PER_SEGMENT steps is dropped: the position stays,
         // so its distance goes with the next move.
-        let Some(b) = populate(delta, mv.feed_mm_s, self.blocks.len(), set, &mut self.prev) else {
+        let Some(b) = populate(delta, mv.feed_mm_s, self.queue.len(), set, &mut self.prev) else {
             return;
         };
         self.position = target;
+        // After a dropped move the block starts where the last block ended, not where `mv`
+        // does: measured afresh.
+        let geo = if self.block_end == mv.start { geo } else { extent(&deltas(self.block_end, mv.end)) };
         let mv = Move { start: self.block_end, ..*mv };
         self.block_end = mv.end;
-        self.blocks.push_back(Block { mv, b, reverse_v2: -1.0, entry_v2: MIN_V2 });
-        self.replan();
+        let gain_v2 = if b.nominal_length { f64::INFINITY } else { 2.0 * b.accel * b.mm };
+        self.queue.push(Block { reverse_v2: -1.0, entry_v2: MIN_V2, gain_v2, b, mv, geo });
     }
 
     /// Plan the rest of the buffer to a stop and emit it.
     pub(crate) fn flush(&mut self, sink: &mut dyn BlockSink) {
-        while !self.blocks.is_empty() {
-            emit_front(&mut self.blocks, sink);
-        }
-    }
-
-    /// The reverse and forward passes over the buffer, the oldest block excepted. The reverse
-    /// pass stops at the first block whose reverse limit did not change (nothing before it can
-    /// change either: Marlin's `block_buffer_planned`), and the forward pass starts there.
-    fn replan(&mut self) {
-        let n = self.blocks.len();
-        let mut first_changed = 1.min(n);
-        let mut exit_v2 = MIN_V2;
-        for i in (1..n).rev() {
-            let b = &mut self.blocks[i];
-            let reverse_v2 = if b.b.nominal_length {
-                b.b.max_entry_v2
-            } else {
-                b.b.max_entry_v2.lesser(exit_v2 + 2.0 * b.b.accel * b.b.mm)
-            };
-            if reverse_v2 == b.reverse_v2 {
-                first_changed = i;
-                break;
-            }
-            b.reverse_v2 = reverse_v2;
-            exit_v2 = reverse_v2;
-        }
-        let Some(before) = first_changed.checked_sub(1).and_then(|i| self.blocks.get(i)) else {
-            return;
-        };
-        let mut reach_v2 = before.reach_v2();
-        for b in self.blocks.iter_mut().skip(first_changed) {
-            b.entry_v2 = b.reverse_v2.lesser(reach_v2);
-            reach_v2 = b.reach_v2();
+        while self.queue.len() > 0 {
+            self.queue.emit_front(sink);
         }
     }
 }
 
-/// Takes the oldest block out of the buffer and hands it to `sink` with its step trapezoid.
-fn emit_front(blocks: &mut VecDeque<Block>, sink: &mut dyn BlockSink) {
-    let Some(Block { mv, b, entry_v2, .. }) = blocks.pop_front() else {
-        return;
-    };
-    let exit_v2 = blocks.front().map_or(MIN_V2, |next| next.entry_v2);
-    // Speed over nominal speed, in single precision as Marlin's `recalculate_trapezoids`.
-    let inverse_nominal = 1.0 / (b.nominal_v2 as f32).sqrt();
-    let factor = |v2: f64| (v2 as f32).sqrt() * inverse_nominal;
-    let steps = StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, factor(entry_v2), factor(exit_v2));
-    // The speeds along the path: Marlin's length, unless it measured a tiny XYZ move along
-    // E; the times are the steps' either way.
-    let (geo_len, kind) = extent(&deltas(mv.start, mv.end));
-    let len = if b.xyz_below_min_steps && kind == MoveKind::Kinematic { geo_len } else { b.mm };
-    let mm_per_step = len / b.steps;
-    let trapezoid = Trapezoid {
-        entry_v_mm_s: steps.initial_rate * mm_per_step,
-        cruise_v_mm_s: steps.cruise_rate * mm_per_step,
-        exit_v_mm_s: steps.final_rate * mm_per_step,
-        accel_t_s: steps.accel_t_s,
-        cruise_t_s: steps.cruise_t_s,
-        decel_t_s: steps.decel_t_s,
-    };
-    sink.block(&PlannedBlock::new(&mv, (geo_len, kind), b.accel, trapezoid));
+impl Queue {
+    fn len(&self) -> usize {
+        self.blocks.len() - self.head
+    }
+
+    /// Append a block and plan the queue again.
+    fn push(&mut self, block: Block) {
+        if block.b.max_entry_v2 < MIN_V2 {
+            // A junction slower than the exit the passes assume for the last block: the
+            // reverse limits of the blocks before it fall, and what was final is no longer.
+            self.planned = 0;
+            self.blocks[self.head..].iter_mut().for_each(|q| q.reverse_v2 = -1.0);
+        }
+        self.blocks.push(block);
+        self.replan();
+    }
+
+    /// The reverse and forward passes over the buffer, from the first block whose entry can
+    /// still change.
+    ///
+    /// Appending a block only raises the reverse limits before it (the last block's exit
+    /// goes from `MINIMUM_PLANNER_SPEED` to that block's entry limit, which `push` checks is
+    /// no lower). So an entry that is final stays final: the oldest block's (it is leaving),
+    /// and that of a block after a final one whose entry is its junction limit
+    /// (`max_entry_v2`, which the reverse limit never exceeds) or what the block before
+    /// reaches by accelerating over its length (a growing reverse limit no longer matters).
+    /// Those blocks are `queue[..=planned]`, as Marlin's `block_buffer_planned` and GRBL's
+    /// `block_buffer_planned` mark them, and the passes skip them. The reverse pass also stops
+    /// at the first block whose reverse limit did not change (nothing before it changes
+    /// either), and the forward pass starts there.
+    fn replan(&mut self) {
+        let queue = &mut self.blocks[self.head..];
+        let n = queue.len();
+        let mut first_changed = self.planned + 1;
+        let mut exit_v2 = MIN_V2;
+        for i in (self.planned + 1..n).rev() {
+            let q = &mut queue[i];
+            let reverse_v2 = q.b.max_entry_v2.lesser(exit_v2 + q.gain_v2);
+            if reverse_v2 == q.reverse_v2 {
+                first_changed = i + 1;
+                break;
+            }
+            q.reverse_v2 = reverse_v2;
+            exit_v2 = reverse_v2;
+        }
+        let Some(before) = first_changed.checked_sub(1).and_then(|i| queue.get(i)) else {
+            return;
+        };
+        let mut reach_v2 = before.entry_v2 + before.gain_v2;
+        for q in queue.iter_mut().skip(first_changed) {
+            q.entry_v2 = q.reverse_v2.lesser(reach_v2);
+            reach_v2 = q.entry_v2 + q.gain_v2;
+        }
+        while let [before, q, ..] = &queue[self.planned..] {
+            if q.entry_v2 != q.b.max_entry_v2 && q.entry_v2 != before.entry_v2 + before.gain_v2 {
+                break;
+            }
+            self.planned += 1;
+        }
+    }
+
+    /// Takes the oldest block out of the buffer and hands it to `sink` with its step
+    /// trapezoid.
+    fn emit_front(&mut self, sink: &mut dyn BlockSink) {
+        let queue = &self.blocks[self.head..];
+        // Read in place: a block is some 200 bytes.
+        let Some(Block { mv, b, entry_v2, geo: (geo_len, kind), .. }) = queue.first() else {
+            return;
+        };
+        let exit_v2 = queue.get(1).map_or(MIN_V2, |next| next.entry_v2);
+        // Speed over nominal speed, in single precision as Marlin's `recalculate_trapezoids`.
+        let inverse_nominal = 1.0 / (b.nominal_v2 as f32).sqrt();
+        let factor = |v2: f64| (v2 as f32).sqrt() * inverse_nominal;
+        let steps =
+            StepProfile::new(b.steps, b.nominal_rate, b.accel_steps, factor(*entry_v2), factor(exit_v2));
+        // The speeds along the path: Marlin's length, unless it measured a tiny XYZ move along
+        // E; the times are the steps' either way.
+        let len = if b.xyz_below_min_steps && *kind == MoveKind::Kinematic { *geo_len } else { b.mm };
+        let mm_per_step = len / b.steps;
+        let trapezoid = Trapezoid {
+            entry_v_mm_s: steps.initial_rate * mm_per_step,
+            cruise_v_mm_s: steps.cruise_rate * mm_per_step,
+            exit_v_mm_s: steps.final_rate * mm_per_step,
+            accel_t_s: steps.accel_t_s,
+            cruise_t_s: steps.cruise_t_s,
+            decel_t_s: steps.decel_t_s,
+        };
+        sink.block(&PlannedBlock::new(mv, (*geo_len, *kind), b.accel, trapezoid));
+        self.head += 1;
+        self.planned = self.planned.saturating_sub(1);
+        if self.head >= self.blocks.len() - self.head {
+            self.blocks.drain(..self.head);
+            self.head = 0;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -210,11 +271,15 @@ mod tests {
             for (dx, dy, feed) in steps {
                 let to = Pos::xyze(at.x_mm + dx, at.y_mm + dy, 0.0, at.e_mm + 0.1);
                 let mv = Move { start: at, end: to, feed_mm_s: feed, tag: 0 };
-                planner.push(&mv, &profile, &mut sink);
+                let geo = extent(&deltas(mv.start, mv.end));
+                planner.push(&mv, geo, &profile, &mut sink);
                 let mut full = planner.clone();
-                full.blocks.iter_mut().skip(1).for_each(|b| b.reverse_v2 = -1.0);
+                let full = &mut full.queue;
+                full.blocks.iter_mut().for_each(|b| b.reverse_v2 = -1.0);
+                full.planned = 0;
                 full.replan();
-                for (a, b) in planner.blocks.iter().zip(&full.blocks) {
+                let queue = &planner.queue.blocks[planner.queue.head..];
+                for (a, b) in queue.iter().zip(&full.blocks[full.head..]) {
                     prop_assert_eq!(a.entry_v2, b.entry_v2);
                 }
                 at = to;

@@ -34,7 +34,7 @@
 //! blocks' safe speeds exceed 99 % of that, the safe speed is used instead.
 
 use super::junction::HalfAngle;
-use super::Lesser;
+use super::{Greater, Lesser};
 use crate::motion::kinematics::Pos;
 use crate::motion::limits::{MarlinCorners, MotionProfile};
 use crate::motion::rounding::{ceil, round_f32, round_i64, trunc};
@@ -56,9 +56,11 @@ const SMALL_SEGMENT_NEG_COS: f64 = -std::f64::consts::FRAC_1_SQRT_2;
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Settings {
     pub steps_per_unit: [f64; 5],
-    /// `steps_to_mm`, single precision as in Marlin.
+    /// `axis_steps_per_mm` and `steps_to_mm`, single precision as in Marlin.
+    steps_per_unit32: [f32; 5],
     mm_per_step: [f32; 5],
-    max_feed: [f64; 5],
+    /// M203, single precision as Marlin compares it.
+    max_feed32: [f32; 5],
     max_accel: [f64; 5],
     /// M201 in whole steps/s² per motor (`max_acceleration_steps_per_s2`).
     max_accel_steps: [f64; 5],
@@ -91,8 +93,9 @@ impl Settings {
         };
         Self {
             steps_per_unit,
+            steps_per_unit32: steps_per_unit.map(|s| s as f32),
             mm_per_step: steps_per_unit.map(|s| 1.0 / s as f32),
-            max_feed,
+            max_feed32: max_feed.map(|m| m as f32),
             max_accel,
             max_accel_steps: std::array::from_fn(|i| trunc(max_accel[i] * steps_per_unit[i])),
             accel: [a.print_mm_s2, a.travel_mm_s2, a.retract_mm_s2],
@@ -106,7 +109,7 @@ impl Settings {
     /// steps per mm are single precision).
     pub(crate) fn steps_at(&self, pos: Pos) -> [f64; 5] {
         let p = pos.to_array();
-        std::array::from_fn(|i| round_f32(p[i] as f32 * self.steps_per_unit[i] as f32))
+        std::array::from_fn(|i| round_f32(p[i] as f32 * self.steps_per_unit32[i]))
     }
 }
 
@@ -153,7 +156,7 @@ pub(crate) fn populate(
     prev: &mut Previous,
 ) -> Option<MarlinBlock> {
     let steps_abs = delta.map(f64::abs);
-    let steps = steps_abs.iter().fold(0.0, |m: f64, s| m.max(*s));
+    let steps = steps_abs.iter().fold(0.0, |m: f64, &s| m.greater(s));
     if steps < MIN_STEPS_PER_SEGMENT {
         return None;
     }
@@ -173,14 +176,14 @@ pub(crate) fn populate(
     let mut nominal_v2_32 = (mm32 * inverse_s32) * (mm32 * inverse_s32);
     let mut nominal_rate = ceil(f64::from(steps32 * inverse_s32));
     let mut speed32: [f32; 5] = dist32.map(|d| d * inverse_s32);
-    let factor = (0..5).filter(|&i| speed32[i] != 0.0).fold(1.0f32, |f, i| {
-        let (cs, max) = (speed32[i].abs(), set.max_feed[i] as f32);
+    // An axis that does not move (speed 0) is never over its positive limit.
+    let mut factor = 1.0f32;
+    for (s, &max) in speed32.iter().zip(&set.max_feed32) {
+        let cs = s.abs();
         if cs > max {
-            f.min(max / cs)
-        } else {
-            f
+            factor = factor.min(max / cs);
         }
-    });
+    }
     if factor < 1.0 {
         speed32 = speed32.map(|s| s * factor);
         // `nominal_rate *= speed_factor` on an unsigned integer: truncated.
@@ -305,13 +308,13 @@ fn deviation_v2(prev: &[f64; 5], unit: &[f64; 5], accel: f64, mm: f64, jd: f64, 
     }
     let neg_cos = neg_cos.max(-REVERSAL_NEG_COS);
     let change = normalised(std::array::from_fn(|i| unit[i] - prev[i]));
-    let junction_accel = (0..5).filter(|&i| change[i] != 0.0).fold(accel, |a: f64, i| {
-        if a * change[i].abs() > set.max_accel[i] {
-            (set.max_accel[i] / change[i]).abs()
-        } else {
-            a
+    // An axis whose direction does not change (0) is never over its positive limit.
+    let mut junction_accel = accel;
+    for (&c, &max) in change.iter().zip(&set.max_accel) {
+        if junction_accel * c.abs() > max {
+            junction_accel = (max / c).abs();
         }
-    });
+    }
     let sin = HalfAngle::from_neg_cos(neg_cos).sin;
     let mut v2 = junction_accel * jd * sin / (1.0 - sin);
     if mm < SMALL_SEGMENT_MM && neg_cos < SMALL_SEGMENT_NEG_COS {

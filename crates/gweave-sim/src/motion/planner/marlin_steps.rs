@@ -25,6 +25,7 @@
 //! of its end rates (the constant-acceleration time), which is how Marlin's own host-side
 //! estimate (the `marlin-calc` tool of the PrintTimeGenius plugin) times a block.
 
+use super::{Greater, Lesser};
 use crate::motion::rounding::{ceil, floor, trunc};
 
 /// `MINIMAL_STEP_RATE`: the stepper timer cannot run slower, steps/s.
@@ -58,8 +59,8 @@ impl StepProfile {
         exit_factor: f32,
     ) -> Self {
         let (steps32, nominal32, accel32) = (steps as f32, nominal_rate as f32, accel as f32);
-        let initial_rate = ceil(f64::from(nominal32 * entry_factor)).max(MINIMAL_STEP_RATE);
-        let final_rate = ceil(f64::from(nominal32 * exit_factor)).max(MINIMAL_STEP_RATE);
+        let initial_rate = ceil(f64::from(nominal32 * entry_factor)).greater(MINIMAL_STEP_RATE);
+        let final_rate = ceil(f64::from(nominal32 * exit_factor)).greater(MINIMAL_STEP_RATE);
         let (initial32, final32) = (initial_rate as f32, final_rate as f32);
         let distance = |from: f32, to: f32| f64::from((to * to - from * from) / (accel32 * 2.0));
         // Marlin stores the step counts in unsigned integers. A negative acceleration distance
@@ -67,7 +68,7 @@ impl StepProfile {
         // braking distance (a block left faster than its nominal speed, which classic jerk
         // allows, see `marlin.rs`) wraps around and, through the same wrap in the cruise
         // count, means no braking: the block cruises to its end.
-        let mut accelerate = ceil(distance(initial32, nominal32)).max(0.0);
+        let mut accelerate = ceil(distance(initial32, nominal32)).greater(0.0);
         let decelerate = floor(distance(final32, nominal32));
         let mut plateau = steps - accelerate - decelerate;
         let cruise_rate = if plateau < 0.0 {
@@ -81,8 +82,8 @@ impl StepProfile {
             nominal_rate
         };
         let accel_steps = accelerate;
-        let cruise_steps = (accelerate + plateau).min(steps) - accel_steps;
-        let decel_steps = (steps - cruise_steps - accel_steps).max(0.0);
+        let cruise_steps = (accelerate + plateau).lesser(steps) - accel_steps;
+        let decel_steps = (steps - cruise_steps - accel_steps).greater(0.0);
         Self {
             initial_rate,
             cruise_rate,

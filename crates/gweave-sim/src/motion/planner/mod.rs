@@ -100,6 +100,23 @@ impl Lesser for f64 {
     }
 }
 
+/// The larger of two numbers in one `maxsd`, for the same reason as [`Lesser`]: Marlin's step
+/// trapezoid takes a few maxima a block (rates held to `MINIMAL_STEP_RATE`, step counts to 0).
+pub(crate) trait Greater {
+    fn greater(self, other: f64) -> f64;
+}
+
+impl Greater for f64 {
+    #[inline(always)]
+    fn greater(self, other: f64) -> f64 {
+        if self > other {
+            self
+        } else {
+            other
+        }
+    }
+}
+
 /// Receives planned blocks in order. Closures `FnMut(&PlannedBlock)` and `Vec<PlannedBlock>` are
 /// sinks.
 pub trait BlockSink {
@@ -194,7 +211,7 @@ impl Planner {
                 let rotary = (&self.profile.max_feed_mm_s, &self.profile.max_accel_mm_s2);
                 k.push(mv, Geometry::with_extent(delta, len, kind), limits, rotary, sink);
             }
-            (Engine::Marlin(m), CornerMode::Marlin { .. }) => m.push(mv, &self.profile, sink),
+            (Engine::Marlin(m), CornerMode::Marlin { .. }) => m.push(mv, (len, kind), &self.profile, sink),
             (Engine::Constant, CornerMode::Constant {}) => {
                 let geo = Geometry::with_extent(delta, len, kind);
                 sink.block(&constant::block(mv, &geo, &self.profile.steps))

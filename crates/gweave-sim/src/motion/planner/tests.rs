@@ -229,6 +229,25 @@ fn zero_length_moves_are_dropped_and_bad_moves_rejected() {
     assert_eq!(planner.queued(), 0);
     let bad = mv(Pos::default(), Pos::xyze(1.0, 0.0, 0.0, 0.0), -1.0, 0);
     assert_eq!(planner.push(&bad, &mut out), Err(MoveError::BadFeed(-1.0)));
+    for feed in [0.0, f64::INFINITY] {
+        let bad = mv(Pos::default(), Pos::xyze(1.0, 0.0, 0.0, 0.0), feed, 0);
+        assert_eq!(planner.push(&bad, &mut out), Err(MoveError::BadFeed(feed)));
+    }
+    let nan = mv(Pos::default(), Pos::xyze(1.0, 0.0, 0.0, 0.0), f64::NAN, 0);
+    assert!(matches!(planner.push(&nan, &mut out), Err(MoveError::BadFeed(f)) if f.is_nan()));
+    // Any axis, either end, infinite or NaN; a huge but finite position is fine.
+    for v in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+        for axis in 0..5 {
+            let mut end = [1.0, 0.0, 0.0, 0.0, 0.0];
+            end[axis] = v;
+            let to = Pos { x_mm: end[0], y_mm: end[1], z_mm: end[2], e_mm: end[3], a_deg: end[4] };
+            for (from, to) in [(Pos::default(), to), (to, Pos::default())] {
+                let bad = mv(from, to, 10.0, 0);
+                assert_eq!(planner.push(&bad, &mut out), Err(MoveError::NonFinitePosition), "{v} on {axis}");
+            }
+        }
+    }
+    assert!(planner.push(&mv(Pos::default(), Pos::xyze(1e300, 0.0, 0.0, 0.0), 10.0, 0), &mut out).is_ok());
 }
 
 #[test]
