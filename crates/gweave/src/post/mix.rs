@@ -395,7 +395,10 @@ impl MixPass {
         }
         match ctx.effect {
             Effect::ToolChange { to, .. } => {
-                if self.plan.maps_tools() && print {
+                // Every slicer `T<n>`, the start G-code's included: PrusaSlicer's wipe tower
+                // primes each tool in turn before layer 0 (`; CP PRIMING START`, no layer yet),
+                // and the tool it primes last is the one layer 0 starts with.
+                if self.plan.maps_tools() {
                     self.wanted = Some(self.plan.for_tool(*to)?);
                 }
                 self.slicer_tool = *to;
@@ -427,7 +430,9 @@ impl MixPass {
         if self.initial_purge_due && e_mm != 0.0 {
             self.initial_purge(mv, state);
         }
-        if print && self.started && mv.is_extruding() {
+        // A schedule starts at layer 0; a tool map follows the slicer's tools wherever they
+        // extrude, a tower's priming before layer 0 included (its filament is that tool's).
+        if (print || self.plan.maps_tools()) && self.started && mv.is_extruding() {
             if !self.plan.maps_tools() && self.decided_layer != Some(layer) {
                 self.wanted = self.plan.mix_at(layer, mv.to[Z]);
                 self.decided_layer = Some(layer);
