@@ -140,7 +140,7 @@ fn modes_of(ends: &[u8]) -> FileModes {
     let [normal, silent] = slicer_limits_both(ends, &base);
     let normal = normal.map_or_else(|_| base.clone(), |l| l.profile);
     let silent = silent.map_or_else(|_| normal.clone(), |l| l.profile);
-    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
+    let contains = |needle: &[u8]| memchr::memmem::find(ends, needle).is_some();
     let silent =
         (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
     FileModes { firmware, normal, silent }
@@ -257,8 +257,9 @@ mod tests {
         text
     }
 
-    /// Writes `text` to `path` as a transform does: in pieces that split lines, with pauses,
-    /// so that the measure catches up with the writer and waits at the file's end.
+    /// Writes `text` to `path` as a transform does (the same file, truncated): in pieces that
+    /// split lines, with pauses, so that the measure catches up with the writer and waits at
+    /// the file's end.
     fn write_slowly(path: &Path, text: &str) -> Result<()> {
         use std::io::Write;
         let mut file = File::create(path).map_err(|e| gweave::Error::io(path, e))?;
@@ -279,10 +280,12 @@ mod tests {
         let text = bunny_with_progress(4000);
         let (input, path) = (dir.path().join("in.gcode"), dir.path().join("scratch.gcode"));
         std::fs::write(&input, &text).unwrap();
+        // The scratch file exists before the transform writes it (`with_metadata` makes it).
+        std::fs::write(&path, "").unwrap();
         let ((), early) = measure_while_written(&path, Some(&input), || write_slowly(&path, &text)).unwrap();
         let after = measure(&path).unwrap();
         assert_eq!(early, after);
-        assert_eq!(early.progress_s.len(), 2 * 5);
+        assert_eq!(early.progress_s.len(), 2 * 9);
         assert_ne!(early.time_s[0].to_bits(), early.time_s[1].to_bits(), "two modes");
         // An input whose ends do not give the output's limits.
         let settings_at = text.rfind("; prusaslicer_config = begin").unwrap();
@@ -300,6 +303,8 @@ mod tests {
         let text = bunny_with_progress(2000);
         let (input, path) = (dir.path().join("in.gcode"), dir.path().join("scratch.gcode"));
         std::fs::write(&input, &text).unwrap();
+        // The scratch file exists before the transform writes it (`with_metadata` makes it).
+        std::fs::write(&path, "").unwrap();
         let failing = || -> Result<()> {
             write_slowly(&path, &text[..text.len() / 2])?;
             Err(gweave::Error::io(&input, io::Error::other("the transform failed")).into())
