@@ -409,8 +409,8 @@ fn write_fixed(out: &mut Vec<u8>, value: f64, decimals: u8) -> bool {
     const POW10: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
     let Some(&scale) = POW10.get(usize::from(decimals)) else { return false };
     let scaled = value.abs() * scale;
-    // Below 2^52 every integer and half is a double; `!(<)` also refuses NaN and infinity.
-    if !(scaled < 4.0e15) {
+    // Below 2^52 every integer and half is a double; NaN and infinity are not finite.
+    if !scaled.is_finite() || scaled >= 4.0e15 {
         return false;
     }
     let floor = scaled.floor();
