@@ -3,13 +3,18 @@
 //!
 //! The estimate is the costly part: Marlin's step-exact planner, about 1 200 instructions a
 //! line and mode (docs/performance.md), twice for a file with silent-mode limits of its own. So
-//! the file is read once, on this thread, which parses it once for both modes
+//! the file is read once, on one thread, which parses it once for both modes
 //! ([`estimate_modes`]) and counts `stats` from the same parse; each mode's planner runs on a
 //! thread of its own, fed the jobs in file order, so the figures are the same to the bit as a
 //! serial pass's. The batches in flight are bounded, so the memory is a few batches whatever
 //! the file's size, and one time per progress line.
+//!
+//! A transform's output is measured while it is written ([`measure_while_written`]): the
+//! measure follows the scratch file as it grows, on threads of its own, so the finishing step
+//! costs the slower of the two rather than their sum.
 
-use std::io;
+use std::fs::File;
+use std::io::{self, Read};
 use std::path::Path;
 
 use gweave::firmware::Firmware;
@@ -20,7 +25,8 @@ use gweave::pass::{Ctx, Pass};
 use gweave::post::metadata::{is_progress_line, read_setting, Figures};
 use gweave::stats::StatsPass;
 
-use super::Result;
+use super::growing::{Growing, Writer};
+use super::{FinishError, Result};
 use crate::motion::estimate::{estimate_modes, EstimateError, ModeEstimate, Modes};
 use crate::motion::limits::MotionProfile;
 use crate::motion::slicer_limits::slicer_limits_both;
@@ -31,10 +37,58 @@ use crate::profile::MachineProfile;
 /// The machine limits are the ones the slicer wrote into the file (normal and silent mode), else
 /// the default machine's, read from the file's ends, as the flavour.
 pub(super) fn measure(path: &Path) -> Result<Figures> {
-    let ends = read_ends(path).map_err(|e| gweave::Error::io(path, e))?;
-    let FileModes { firmware, normal, silent } = modes_of(&ends);
-    let silent: Vec<_> = silent.into_iter().collect();
+    let modes = modes_of(&ends_of(path)?);
     let input = container::open(path).map_err(|e| gweave::Error::io(path, e))?;
+    measure_read(input, path, &modes)
+}
+
+/// Runs `write`, which writes the scratch file at `path` (a transform of `input`), and measures
+/// that file while it is written: returns what `write` returned and the file's figures, the
+/// same to the bit as [`measure`] of the finished file.
+///
+/// The measure needs the machine limits and the flavour before the file is written, and they
+/// are read from its ends (PrusaSlicer's settings block is its last lines): the input's stand
+/// for them, since a transform keeps the slicer's settings. The finished file's are then read
+/// and compared; a transform that changed them (or an input whose ends cannot be read, or no
+/// input at all: a generator) has its file measured again, after the write, with its own.
+pub(super) fn measure_while_written<R, E: From<FinishError>>(
+    path: &Path,
+    input: Option<&Path>,
+    write: impl FnOnce() -> Result<R, E>,
+) -> Result<(R, Figures), E> {
+    let Some(guessed) = input.and_then(|i| read_ends(i).ok()).map(|ends| modes_of(&ends)) else {
+        let result = write()?;
+        return Ok((result, measure(path)?));
+    };
+    let file = File::open(path).map_err(|e| FinishError::from(gweave::Error::io(path, e)))?;
+    let writer = Writer::default();
+    let (result, early) = std::thread::scope(|scope| {
+        let measuring = scope.spawn(|| measure_read(Growing { file, writer: &writer }, path, &guessed));
+        let result = write();
+        match &result {
+            Ok(_) => writer.done(),
+            Err(_) => writer.failed(),
+        }
+        (result, measuring.join())
+    });
+    // A failed write is the error, whatever the measure made of the unfinished file.
+    let result = result?;
+    let early = early.unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+    let figures = match modes_of(&ends_of(path)?) == guessed {
+        true => early?,
+        false => measure(path)?,
+    };
+    Ok((result, figures))
+}
+
+fn ends_of(path: &Path) -> Result<Vec<u8>> {
+    read_ends(path).map_err(|e| gweave::Error::io(path, e).into())
+}
+
+/// Measures the text `input` of the file at `path` (errors name it), read as `modes` says.
+fn measure_read(input: impl Read, path: &Path, modes: &FileModes) -> Result<Figures> {
+    let FileModes { firmware, normal, silent } = modes;
+    let silent: Vec<_> = silent.iter().cloned().collect();
     // The `stats` count and the settings from the estimate's own parse: every whole line, with
     // the state `stats` would see (the same firmware's reading).
     let mut tally = TallyPass { stats: StatsPass::new(None), figures: Figures::default(), failed: None };
@@ -43,7 +97,7 @@ pub(super) fn measure(path: &Path) -> Result<Figures> {
         is_progress_line(ctx.line.bytes)
     };
     let Modes { first: normal, others: silent, state } =
-        estimate_modes(input, &normal, &silent, firmware, each_line).map_err(|e| match e {
+        estimate_modes(input, normal, &silent, *firmware, each_line).map_err(|e| match e {
             // A read error names the file; a fault on a line is the estimate's.
             EstimateError::Io(e) => gweave::Error::io(path, e).into(),
             e => super::FinishError::from(e),
@@ -68,6 +122,7 @@ pub(super) fn measure(path: &Path) -> Result<Figures> {
 }
 
 /// How a file is read and timed, from its ends (`ends`: its first and last 256 KiB).
+#[derive(Debug, PartialEq)]
 struct FileModes {
     /// The firmware that reads it, as `stats` resolves it from the flavour (the metadata's
     /// filament comes from that count).
@@ -85,7 +140,7 @@ fn modes_of(ends: &[u8]) -> FileModes {
     let [normal, silent] = slicer_limits_both(ends, &base);
     let normal = normal.map_or_else(|_| base.clone(), |l| l.profile);
     let silent = silent.map_or_else(|_| normal.clone(), |l| l.profile);
-    let contains = |needle: &[u8]| ends.windows(needle.len()).any(|w| w == needle);
+    let contains = |needle: &[u8]| memchr::memmem::find(ends, needle).is_some();
     let silent =
         (contains(b"(silent mode)") || contains(b"M73 Q")).then_some(silent).filter(|s| *s != normal);
     FileModes { firmware, normal, silent }
@@ -182,6 +237,80 @@ mod tests {
         let state = drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
         let counted: Vec<f64> = pass.into_stats(&state).filament.iter().map(|f| f.extruded_mm).collect();
         assert_eq!(figures.filament_mm, counted);
+    }
+
+    /// A file with progress lines in both modes every 500 lines: the 3-tool bunny's first
+    /// `lines` lines and its settings block (the silent mode's own limits).
+    fn bunny_with_progress(lines: usize) -> String {
+        let fixture =
+            format!("{}/../../tests/data/prusaslicer/pr_bunny_3tool_rel.gcode", env!("CARGO_MANIFEST_DIR"));
+        let whole = std::fs::read_to_string(fixture).unwrap();
+        let all: Vec<&str> = whole.lines().collect();
+        let mut text = String::new();
+        for (i, line) in all[..lines].iter().chain(&all[all.len() - 350..]).enumerate() {
+            if i % 500 == 0 {
+                text.push_str("M73 P0 R0\nM73 Q0 S0\n");
+            }
+            text.push_str(line);
+            text.push('\n');
+        }
+        text
+    }
+
+    /// Writes `text` to `path` as a transform does (the same file, truncated): in pieces that
+    /// split lines, with pauses, so that the measure catches up with the writer and waits at
+    /// the file's end.
+    fn write_slowly(path: &Path, text: &str) -> Result<()> {
+        use std::io::Write;
+        let mut file = File::create(path).map_err(|e| gweave::Error::io(path, e))?;
+        for piece in text.as_bytes().chunks(100_003) {
+            file.write_all(piece).map_err(|e| gweave::Error::io(path, e))?;
+            std::thread::sleep(std::time::Duration::from_millis(3));
+        }
+        Ok(())
+    }
+
+    /// Regression (issue 35): the measure waited for the transform to finish (their times
+    /// added up). Measured while it is written, the file's figures are its measure after, to the
+    /// bit, both with the input's ends standing for the output's and when they do not (the
+    /// input has no settings block: the file is measured again with its own).
+    #[test]
+    fn a_file_measured_while_written_has_the_figures_of_the_finished_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = bunny_with_progress(4000);
+        let (input, path) = (dir.path().join("in.gcode"), dir.path().join("scratch.gcode"));
+        std::fs::write(&input, &text).unwrap();
+        // The scratch file exists before the transform writes it (`with_metadata` makes it).
+        std::fs::write(&path, "").unwrap();
+        let ((), early) = measure_while_written(&path, Some(&input), || write_slowly(&path, &text)).unwrap();
+        let after = measure(&path).unwrap();
+        assert_eq!(early, after);
+        assert_eq!(early.progress_s.len(), 2 * 9);
+        assert_ne!(early.time_s[0].to_bits(), early.time_s[1].to_bits(), "two modes");
+        // An input whose ends do not give the output's limits.
+        let settings_at = text.rfind("; prusaslicer_config = begin").unwrap();
+        std::fs::write(&input, &text[..settings_at]).unwrap();
+        assert_ne!(modes_of(&read_ends(&input).unwrap()), modes_of(&read_ends(&path).unwrap()));
+        let ((), again) = measure_while_written(&path, Some(&input), || write_slowly(&path, &text)).unwrap();
+        assert_eq!(again, after);
+    }
+
+    /// A write that fails is the error, and the measure following it stops (it does not wait
+    /// for the rest of a file that will not come).
+    #[test]
+    fn a_failed_write_is_the_error_and_ends_the_measure() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = bunny_with_progress(2000);
+        let (input, path) = (dir.path().join("in.gcode"), dir.path().join("scratch.gcode"));
+        std::fs::write(&input, &text).unwrap();
+        // The scratch file exists before the transform writes it (`with_metadata` makes it).
+        std::fs::write(&path, "").unwrap();
+        let failing = || -> Result<()> {
+            write_slowly(&path, &text[..text.len() / 2])?;
+            Err(gweave::Error::io(&input, io::Error::other("the transform failed")).into())
+        };
+        let e = measure_while_written(&path, Some(&input), failing).unwrap_err();
+        assert!(e.to_string().contains("the transform failed"), "{e}");
     }
 
     /// The old measure, line by line: one estimator per mode fed every line as the passes split

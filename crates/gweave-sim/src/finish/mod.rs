@@ -3,8 +3,8 @@
 //! own output, and it writes metadata that is true for the file as written.
 //!
 //! The transform writes into a scratch file (registered like every temporary file, so Ctrl-C
-//! removes it). One streaming read of that file measures it on several cores (`measure.rs`): one
-//! parse of its lines feeds the `stats` count (the filament) and the estimator's planners (the
+//! removes it). While it writes, one streaming read of that file, following it as it grows,
+//! measures it on other cores (`measure.rs`, `growing.rs`): one parse of its lines feeds the `stats` count (the filament) and the estimator's planners (the
 //! print time, one planner thread per mode), with the machine limits the slicer wrote into the
 //! file (normal and silent mode), else the default machine's. A copy
 //! that only splits lines writes it to the real target (a temporary file renamed into place,
@@ -24,9 +24,10 @@ use gweave::post::metadata::{earlier_runs, header_line, write_footer, Figures, M
 
 use crate::motion::estimate::EstimateError;
 
+mod growing;
 mod measure;
 
-use measure::measure;
+use measure::measure_while_written;
 
 /// A result of finishing an output.
 pub type Result<T, E = FinishError> = std::result::Result<T, E>;
@@ -104,8 +105,11 @@ pub fn with_metadata_timed<R, E: From<FinishError>>(
         scratch.stand_for(output);
     }
     let path = scratch.path().to_path_buf();
-    let result = write(&Target::File(path.clone()))?;
-    let written = finish(&path, input, target, command_line, own_time_s(&result))?;
+    let (result, mut figures) = measure_while_written(&path, input, || write(&Target::File(path.clone())))?;
+    if let Some(t_s) = own_time_s(&result) {
+        scale_times(&mut figures, t_s);
+    }
+    let written = finish(&path, figures, input, target, command_line)?;
     drop(scratch);
     Ok((result, written))
 }
@@ -134,18 +138,14 @@ pub fn with_own_figures<R, E: From<FinishError>>(
     Ok((result, written))
 }
 
-/// Writes the scratch file `path` to `target` with the header and the metadata.
+/// Writes the scratch file `path` to `target` with the header and the metadata (`figures`).
 fn finish(
     path: &Path,
+    figures: Figures,
     input: Option<&Path>,
     target: &Target,
     command_line: &str,
-    own_time_s: Option<f64>,
 ) -> Result<Option<PathBuf>> {
-    let mut figures = measure(path)?;
-    if let Some(t_s) = own_time_s {
-        scale_times(&mut figures, t_s);
-    }
     let mut out = Output::create(target, input)?;
     let written = out.dest().map(Path::to_path_buf);
     let file = File::open(path).map_err(|e| gweave::Error::io(path, e))?;
@@ -213,6 +213,43 @@ mod tests {
         let header = header_line("rotary tube --length 10");
         assert!(text.starts_with(&format!("{header}\n")), "{text}");
         assert!(text.contains("; filament used [mm] = 5.00\n"), "{text}");
+    }
+
+    /// Regression (issue 35): the transform's output is written straight into the scratch file
+    /// and measured as it grows; the finished file is the one measured after the write (no
+    /// input to stand for it), and a transform that fails leaves no file behind, scratch
+    /// included.
+    #[test]
+    fn a_transform_measured_while_it_writes_finishes_the_same_file_and_fails_cleanly() {
+        use gweave::gcode::writer::Output;
+        let dir = tempfile::tempdir().unwrap();
+        let text = "; generated\nG92 E0\nM73 P0 R0\nG1 X10 E5 F600\nG1 X20 E9\nM73 P50 R1\n\
+                    G1 X0 Y20 F3000\n; filament used [mm] = 1.00\n";
+        let input = dir.path().join("in.gcode");
+        std::fs::write(&input, text).unwrap();
+        let transform = |fail: bool| {
+            move |t: &Target| -> Result<()> {
+                let mut out = Output::create(t, None)?;
+                out.write_all(text.as_bytes()).map_err(|e| gweave::Error::io(t_path(t), e))?;
+                match fail {
+                    true => Err(gweave::Error::io(t_path(t), std::io::Error::other("stopped")).into()),
+                    false => Ok(out.commit()?),
+                }
+            }
+        };
+        let (overlapped, after) = (dir.path().join("overlapped.gcode"), dir.path().join("after.gcode"));
+        with_metadata(Some(&input), &Target::File(overlapped.clone()), "mix", transform(false)).unwrap();
+        with_metadata(None, &Target::File(after.clone()), "mix", transform(false)).unwrap();
+        let written = std::fs::read_to_string(&overlapped).unwrap();
+        assert_eq!(written, std::fs::read_to_string(&after).unwrap());
+        assert!(written.contains("\n; filament used [mm] = 9.00\n"), "{written}");
+        let failed = Target::File(dir.path().join("failed.gcode"));
+        let e = with_metadata(Some(&input), &failed, "mix", transform(true));
+        assert!(e.is_err_and(|e| e.to_string().contains("stopped")));
+        let mut left: Vec<_> =
+            std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        left.sort();
+        assert_eq!(left, ["after.gcode", "in.gcode", "overlapped.gcode"]);
     }
 
     /// Regression: a raster's 2.8 GB output was written to a scratch file and read back by the

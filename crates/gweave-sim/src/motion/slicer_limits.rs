@@ -84,7 +84,7 @@ struct Written {
 
 impl Written {
     fn read(text: &[u8]) -> Self {
-        let text = String::from_utf8_lossy(text);
+        let text = gweave::gcode::ends::ends_text(text);
         let (settings, slicer) = match prusa_settings(&text) {
             s if !s.is_empty() => (s, "PrusaSlicer"),
             _ => (cura_settings(&text), "Cura"),
@@ -206,8 +206,11 @@ fn prusa_settings(text: &str) -> BTreeMap<String, String> {
     text.lines()
         .filter_map(|l| l.trim().strip_prefix(';'))
         .filter_map(|l| l.split_once(" = "))
-        .map(|(k, v)| (k.trim().to_owned(), v.trim().to_owned()))
-        .filter(|(k, _)| k.starts_with("machine_") || k == "gcode_flavor")
+        // Only the keys kept are copied: a PrusaSlicer file has some 300 settings.
+        .filter_map(|(k, v)| {
+            let k = k.trim();
+            (k.starts_with("machine_") || k == "gcode_flavor").then(|| (k.to_owned(), v.trim().to_owned()))
+        })
         .collect()
 }
 

@@ -364,8 +364,10 @@ impl NumberFormat {
     pub fn write(&self, out: &mut Vec<u8>, value: f64, decimals: u8) {
         use std::io::Write;
         let start = out.len();
-        // `write!` into a Vec cannot fail.
-        let _ = write!(out, "{:.*}", decimals as usize, value);
+        if !write_fixed(out, value, decimals) {
+            // `write!` into a Vec cannot fail.
+            let _ = write!(out, "{:.*}", decimals as usize, value);
+        }
         if self.trim_zeros && decimals > 0 {
             while out.last() == Some(&b'0') {
                 out.pop();
@@ -393,9 +395,95 @@ impl NumberFormat {
     }
 }
 
+/// Appends `value` with `decimals` places as `format!("{:.*}", decimals, value)` does, when an
+/// integer scaling gives the same digits; returns false (nothing written) when it may not.
+///
+/// The standard formatting rounds the exact binary value, which costs about 1 700 instructions
+/// a number when its fast method gives up (a mix's purge moves: 4 000 numbers on the guard's
+/// input, 4 % of its work), against about 60 here. `value` x 10^`decimals` is one rounded
+/// multiplication, off the exact product by at most half a unit in its last place; rounding
+/// it to the nearest integer gives the exact value's rounding unless the product lies within
+/// that error of a half, which is left to the standard formatting, as are values too large
+/// for the integer and more decimals than a G-code word carries.
+fn write_fixed(out: &mut Vec<u8>, value: f64, decimals: u8) -> bool {
+    const POW10: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+    let Some(&scale) = POW10.get(usize::from(decimals)) else { return false };
+    let scaled = value.abs() * scale;
+    // Below 2^52 every integer and half is a double; NaN and infinity are not finite.
+    if !scaled.is_finite() || scaled >= 4.0e15 {
+        return false;
+    }
+    let floor = scaled.floor();
+    let error = scaled * f64::EPSILON;
+    if (scaled - floor - 0.5).abs() <= error {
+        return false;
+    }
+    let units = (floor + if scaled - floor > 0.5 { 1.0 } else { 0.0 }) as u64;
+    if value.is_sign_negative() {
+        out.push(b'-');
+    }
+    let one = scale as u64;
+    let mut digits = [0u8; 20];
+    let whole = units / one;
+    let mut at = digits.len();
+    let mut rest = whole;
+    loop {
+        at -= 1;
+        digits[at] = b'0' + (rest % 10) as u8;
+        rest /= 10;
+        if rest == 0 {
+            break;
+        }
+    }
+    out.extend_from_slice(&digits[at..]);
+    if decimals > 0 {
+        out.push(b'.');
+        let mut fraction = units % one;
+        let start = out.len();
+        out.resize(start + usize::from(decimals), b'0');
+        for d in out[start..].iter_mut().rev() {
+            *d = b'0' + (fraction % 10) as u8;
+            fraction /= 10;
+        }
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The integer scaling writes what the standard formatting writes, to the byte: on values
+    /// near halves at every number of decimals (where the product's rounding matters), on
+    /// negative zero and on numbers of every magnitude.
+    #[test]
+    fn fixed_decimals_are_the_standard_formatting() {
+        let mut values =
+            vec![0.0, -0.0, 0.5, 1.5, 2.5, -2.5, 0.125, 0.0625, 1.005, 2.675, 1e15, 4.1e15, 123.4565];
+        for i in 0..20_000 {
+            let x = f64::from(i) * 0.000_5 - 3.0;
+            values.extend([x, x * 97.3, x / 7.0, x * 1e6 + 0.5]);
+        }
+        for &v in &values {
+            for decimals in 0..=11u8 {
+                let mut ours = Vec::new();
+                if write_fixed(&mut ours, v, decimals) {
+                    let std = format!("{:.*}", usize::from(decimals), v);
+                    assert_eq!(String::from_utf8(ours).unwrap(), std, "{v:e} with {decimals} decimals");
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn fixed_decimals_are_the_standard_formatting_anywhere(v in proptest::num::f64::ANY, decimals in 0u8..12) {
+            let mut ours = Vec::new();
+            if write_fixed(&mut ours, v, decimals) {
+                proptest::prop_assert_eq!(String::from_utf8(ours).unwrap(), format!("{:.*}", usize::from(decimals), v));
+            }
+        }
+    }
 
     #[test]
     fn scans_slicer_numbers() {

@@ -132,6 +132,11 @@ fn forget(path: &Path) {
     stands_for().retain(|(p, _)| p != path);
 }
 
+/// Whether `path` is a live temporary file of this process (one [`TempFile`] holds it).
+pub(crate) fn is_live(path: &Path) -> bool {
+    lock().as_ref().is_some_and(|paths| paths.iter().any(|p| p == path))
+}
+
 /// The name errors in writing `path` show, and reports: the output a scratch file stands for,
 /// else `path`.
 pub fn shown_name(path: &Path) -> PathBuf {

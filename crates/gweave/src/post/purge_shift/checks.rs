@@ -77,7 +77,7 @@ const TOWER_SETTINGS: [(&str, &str); 3] =
 /// is still printed. `ends` is the text the slicer's settings are in (the file's head and tail).
 pub(crate) fn refuse_wipe_tower(ends: &[u8], path: &Path) -> Result<()> {
     let keys = TOWER_SETTINGS.map(|(key, _)| key);
-    let set = crate::gcode::ends::settings(&String::from_utf8_lossy(ends), &keys);
+    let set = crate::gcode::ends::settings(&crate::gcode::ends::ends_text(ends), &keys);
     let found = TOWER_SETTINGS
         .iter()
         .find(|(key, on)| set.get(key).is_some_and(|v| v == on))
