@@ -316,3 +316,49 @@ fn raster_for_the_binder_jet_machine_passes_its_recoat_checks() {
     assert!(text(&fdm.stderr).contains("has no inkjet printhead"), "{}", text(&fdm.stderr));
     assert!(!dir.path().join("fdm.gcode").exists());
 }
+
+/// `slice-raster` ends with the command to run next, but it left out the layer height: the
+/// PNGs carry their pixel size and no layer height, so `raster` stacked the 52 layers of a
+/// part sliced at 0.25 mm 0.1 mm apart (its default), and the part came out 5.2 mm tall
+/// instead of 13. The suggested command now prints the part at its own height.
+#[test]
+fn slice_rasters_next_command_keeps_the_layer_height() {
+    let dir = tempfile::tempdir().unwrap();
+    let layers = dir.path().join("layers");
+    let stl = root().join("crates/gweave/tests/data/raster/torus.stl");
+    let out = gweave(&[
+        "slice-raster",
+        stl.to_str().unwrap(),
+        "--layer-height",
+        "0.25",
+        "--dpi",
+        "96",
+        "-o",
+        layers.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let said = text(&out.stdout);
+    let next = said.lines().find_map(|l| l.trim().strip_prefix("next")).expect("a next command");
+    let gcode = dir.path().join("part.gcode");
+    let args: Vec<String> = next
+        .split_whitespace()
+        .skip(1) // `gweave`
+        .map(|a| if a == "part.gcode" { gcode.to_str().unwrap().to_owned() } else { a.to_owned() })
+        .chain(["-q".to_owned()])
+        .collect();
+    let run = gweave(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(run.status.success(), "{next}: {}", text(&run.stderr));
+    // The stack's layers 0.25 mm apart: the last one at (layers - 1) x 0.25 mm above the first.
+    let zs: Vec<f64> = std::fs::read_to_string(&gcode)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("G1") || l.starts_with("G0"))
+        .flat_map(|l| l.split_whitespace().filter_map(|w| w.strip_prefix('Z')?.parse().ok()))
+        .collect();
+    let images = std::fs::read_dir(&layers).unwrap().count();
+    let (low, high) = zs.iter().fold((f64::MAX, f64::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+    assert!(
+        (high - low - (images - 1) as f64 * 0.25).abs() < 1e-6,
+        "{next}: Z {low} .. {high}, {images} layers"
+    );
+}

@@ -73,11 +73,14 @@ fn print_human(
     let total: u64 = r.pixels_per_layer.iter().sum();
     let max = r.pixels_per_layer.iter().max().copied().unwrap_or(0);
     writeln!(out, "  binder pixels   {total} (largest layer {max})")?;
+    // PNGs carry their pixel size but no layer height: the next command gives both, or the
+    // part would be printed at raster's default layer height.
     writeln!(
         out,
-        "  next            gweave raster {} --pixel-mm {} -o part.gcode",
+        "  next            gweave raster {} --pixel-mm {} --layer-height {} -o part.gcode",
         args.output.display(),
-        g.pixel_mm
+        g.pixel_mm,
+        g.layer_height_mm
     )?;
     Ok(())
 }
