@@ -129,18 +129,19 @@ fn gweave_estimate_reads_the_rotary_feed_convention_as_gweave_sim_does() {
                 (estimate_s - sim_s).abs() < 1e-6,
                 "{shape} {convention}: estimate {estimate_s} s, sim {sim_s} s"
             );
-            // The writer's time plus the accelerations: 8 min for the tube, 21 s for the plate.
-            let expected = if shape == "tube" { 470.0..=500.0 } else { 20.0..=23.0 };
+            // The writer's time ("time (F only)": 8 min 5 s for the tube, 29 min 53 s for the
+            // plate) plus the accelerations.
+            let expected = if shape == "tube" { 485.0..=500.0 } else { 1793.0..=1900.0 };
             assert!(expected.contains(&estimate_s), "{shape} {convention}: {estimate_s} s");
         }
     }
     // Without the header (`; axes: ... feed Nist`) both read F as Marlin does, along A for a
-    // move of fewer than 6 X steps: the plate's 21 s became 69 s.
-    let nist = std::fs::read_to_string(wrap(dir.path(), "nist")).unwrap();
-    let bare = dir.path().join("wrap-bare.gcode");
+    // helix step of fewer than 6 X steps: the 8-minute tube takes 90 h 44 min.
+    let nist = std::fs::read_to_string(tube(dir.path(), "nist")).unwrap();
+    let bare = dir.path().join("tube-bare.gcode");
     let lines: Vec<&str> = nist.lines().filter(|l| !l.starts_with("; axes:")).collect();
     std::fs::write(&bare, lines.join("\n")).unwrap();
     let (estimate_s, sim_s) = estimate_and_sim_s(&bare);
-    assert!((estimate_s - sim_s).abs() < 1e-6, "bare wrap: estimate {estimate_s} s, sim {sim_s} s");
-    assert!(estimate_s > 40.0, "bare wrap: {estimate_s} s");
+    assert!((estimate_s - sim_s).abs() < 1e-6, "bare tube: estimate {estimate_s} s, sim {sim_s} s");
+    assert!(estimate_s > 90.0 * 3600.0, "bare tube: {estimate_s} s");
 }
