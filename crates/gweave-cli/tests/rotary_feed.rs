@@ -1,4 +1,5 @@
-//! `gweave sim` on `gweave rotary` output: the feed convention the file declares.
+//! `gweave sim` and `gweave estimate` on `gweave rotary` output: the feed convention the file
+//! declares.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -9,11 +10,37 @@ fn gweave(args: &[&str]) -> Output {
     out
 }
 
+/// The `--json` report of `gweave COMMAND FILE --machine rotary` (the built-in lathe profile).
+fn on_lathe(command: &str, file: &Path) -> serde_json::Value {
+    let out = gweave(&[command, file.to_str().unwrap(), "--machine", "rotary", "--json"]);
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 /// The motion time `gweave sim --json` reports for a file on the built-in lathe profile, s.
 fn motion_s(file: &Path) -> f64 {
-    let out = gweave(&["sim", file.to_str().unwrap(), "--machine", "rotary", "--json"]);
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    report["time"]["motion_s"].as_f64().unwrap()
+    on_lathe("sim", file)["time"]["motion_s"].as_f64().unwrap()
+}
+
+/// `gweave rotary tube` of a 20 mm mandrel (`--length 20 --layer-count 3`: thousands of helix
+/// steps of a few X steps each) under `convention`, written to `dir`.
+fn tube(dir: &Path, convention: &str) -> std::path::PathBuf {
+    let path = dir.join(format!("tube-{convention}.gcode"));
+    let out = path.to_str().unwrap();
+    gweave(&[
+        "rotary",
+        "tube",
+        "-o",
+        out,
+        "--mandrel-diameter",
+        "20",
+        "--length",
+        "20",
+        "--layer-count",
+        "3",
+        "--feed-convention",
+        convention,
+    ]);
+    path
 }
 
 /// The bug: `gweave rotary tube` writes F under the NIST convention by default (the axial
@@ -54,4 +81,67 @@ fn gweave_sim_reads_the_feed_convention_the_rotary_file_declares() {
     }
     assert!((nist / combined - 1.0).abs() < 0.01, "nist {nist:.1} s, combined {combined:.1} s");
     assert!((nist / inverse - 1.0).abs() < 0.01, "nist {nist:.1} s, inverse time {inverse:.1} s");
+}
+
+/// `gweave rotary wrap` of the flat plate (tests/data/rotary) on a 30 mm mandrel under
+/// `convention`, written to `dir`.
+fn wrap(dir: &Path, convention: &str) -> std::path::PathBuf {
+    let plate = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/rotary/plate.gcode");
+    let path = dir.join(format!("wrap-{convention}.gcode"));
+    let (plate, out) = (plate.to_str().unwrap(), path.to_str().unwrap());
+    gweave(&[
+        "rotary",
+        "wrap",
+        plate,
+        "-o",
+        out,
+        "--mandrel-diameter",
+        "30",
+        "--feed-convention",
+        convention,
+    ]);
+    path
+}
+
+/// `gweave estimate`'s total and `gweave sim`'s motion and dwell (the sim also homes and heats,
+/// which the estimate does not count), s.
+fn estimate_and_sim_s(file: &Path) -> (f64, f64) {
+    let estimate = on_lathe("estimate", file)["total_s"].as_f64().unwrap();
+    let sim = on_lathe("sim", file);
+    let time = |key: &str| sim["time"][key].as_f64().unwrap();
+    (estimate, time("motion_s") + time("dwell_s"))
+}
+
+/// The bug: `gweave estimate` read a rotary program's F words as the firmware model does, not
+/// as its header declares them (which `gweave sim` had been taught): a NIST tube the generator
+/// times at 8 min was estimated at 90 h 44 min (sim: 8 min 6 s), and a wrapped plate at 69 s,
+/// 16 s and 88 s under the three conventions (sim: 21.5 s for each). Now both read the
+/// convention in one place, the estimator's, and agree to the microsecond; without the header
+/// both keep the model's reading.
+#[test]
+fn gweave_estimate_reads_the_rotary_feed_convention_as_gweave_sim_does() {
+    let dir = tempfile::tempdir().unwrap();
+    for convention in ["nist", "combined", "inverse-time"] {
+        for (shape, path) in [("tube", tube(dir.path(), convention)), ("wrap", wrap(dir.path(), convention))]
+        {
+            let (estimate_s, sim_s) = estimate_and_sim_s(&path);
+            assert!(
+                (estimate_s - sim_s).abs() < 1e-6,
+                "{shape} {convention}: estimate {estimate_s} s, sim {sim_s} s"
+            );
+            // The writer's time ("time (F only)": 8 min 5 s for the tube, 29 min 53 s for the
+            // plate) plus the accelerations.
+            let expected = if shape == "tube" { 485.0..=500.0 } else { 1793.0..=1900.0 };
+            assert!(expected.contains(&estimate_s), "{shape} {convention}: {estimate_s} s");
+        }
+    }
+    // Without the header (`; axes: ... feed Nist`) both read F as Marlin does, along A for a
+    // helix step of fewer than 6 X steps: the 8-minute tube takes 90 h 44 min.
+    let nist = std::fs::read_to_string(tube(dir.path(), "nist")).unwrap();
+    let bare = dir.path().join("tube-bare.gcode");
+    let lines: Vec<&str> = nist.lines().filter(|l| !l.starts_with("; axes:")).collect();
+    std::fs::write(&bare, lines.join("\n")).unwrap();
+    let (estimate_s, sim_s) = estimate_and_sim_s(&bare);
+    assert!((estimate_s - sim_s).abs() < 1e-6, "bare tube: estimate {estimate_s} s, sim {sim_s} s");
+    assert!(estimate_s > 90.0 * 3600.0, "bare tube: {estimate_s} s");
 }

@@ -199,7 +199,7 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "G29", what: "bed levelling (firmware.mesh): probe the grid in simulated time, store a flat mesh, levelling on", run: g29, needs: Feature::Mesh, ..ROW },
     CommandSpec { codes: "G90 G91", what: "absolute / relative coordinates (E too)", run: core, ..ROW },
     CommandSpec { codes: "G92", what: "set the logical position without moving", run: set_position, params: &[p("XYZ", range::POSITION_MM)], ..ROW },
-    CommandSpec { codes: "G93 G94", what: "inverse-time feed (F = 1 / minutes of each move) / units per minute, in a rotary program (its header's feed convention)", run: feed_mode, ..ROW },
+    CommandSpec { codes: "G93 G94", what: "inverse-time feed (F = 1 / minutes of each move) / units per minute, in a rotary program (its header's feed convention)", run: core, ..ROW },
     CommandSpec { codes: "M0 M1", what: "program stop: finish the moves, motors off; with m0 = \"seed\" also home and end the program", run: program_stop, queue: Queue::Drains, ..ROW },
     CommandSpec { codes: "M17 M18 M84", what: "motors on (accepted) / off (the axes must be homed again)", run: motors, params: PERIOD, ..ROW },
     CommandSpec { codes: "M20", what: "SD card (firmware.sdcard, serve --sd DIR): list the files (L: long names)", run: sd::m20, needs: Feature::Sdcard, ..ROW },
@@ -433,15 +433,6 @@ fn home(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 
 fn g29(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.g29(out)
-}
-
-/// `G93`/`G94`: the F of the moves to come is inverse time or per minute. Read in a rotary
-/// program (one whose header the simulator honours, [`Machine::declare_rotary`]); elsewhere
-/// accepted and F keeps the firmware model's reading.
-fn feed_mode(m: &mut Machine, c: &Call<'_>, _out: &mut dyn FnMut(f64, &str)) {
-    if let Some(declared) = &mut m.declared_feed {
-        declared.inverse_time = c.number == 93;
-    }
 }
 
 /// `G92`: the machine stays where it is; what changes is the logical origin.

@@ -36,7 +36,6 @@ mod host;
 mod motion;
 mod pause;
 mod report;
-mod rotary_feed;
 mod sd;
 mod settings;
 mod warning_text;
@@ -116,8 +115,6 @@ pub struct Machine {
     inkjet: Option<InkjetCanvas>,
     /// The recoat check of a binder-jet machine whose printhead has a `[recoat]` table.
     recoat: Option<RecoatCheck>,
-    /// The feed convention a rotary program declared ([`Machine::declare_rotary`]).
-    declared_feed: Option<rotary_feed::DeclaredFeed>,
     /// An `M0` with the seed's behaviour ended the program (see [`Machine::program_ended`]).
     program_ended: bool,
     /// Physical minus logical X Y Z: `G92` moves the logical origin, homing resets it.
@@ -212,7 +209,6 @@ impl Machine {
             thermal,
             inkjet,
             recoat,
-            declared_feed: None,
             program_ended: false,
             shift_mm: [0.0; 3],
             halt: None,
@@ -252,9 +248,9 @@ impl Machine {
     /// Reads the F of the moves to come as the rotary program's header declares them
     /// (`gweave::rotary::cylinder::RotaryConfig::from_file_header`): a NIST or combined feed
     /// with the rotary axis A in degrees, or inverse time between `G93` and `G94` (see
-    /// `rotary_feed.rs`).
+    /// the estimator's [`Estimator::declare_rotary`], which `gweave estimate` uses too).
     pub fn declare_rotary(&mut self, machine: gweave::rotary::cylinder::RotaryConfig) {
-        self.declared_feed = rotary_feed::DeclaredFeed::new(machine);
+        self.core.declare_rotary(machine);
     }
 
     /// Lines printed at power-on, as Marlin does: `start`, then `echo:` lines.

@@ -46,12 +46,6 @@ impl Machine {
             self.run_core(line, out);
             return;
         };
-        if let Some(declared) = &self.declared_feed {
-            let marlin = !matches!(self.profile.motion.corners, CornerMode::Klipper(_));
-            if let Some(feed) = declared.model_feed_mm_min(m, &self.profile.motion.steps, marlin) {
-                m.feed_mm_min = feed;
-            }
-        }
         if self.feed_pct != 100.0 {
             m.feed_mm_min *= self.feed_pct / 100.0;
         }

@@ -327,12 +327,16 @@ impl RotaryConfig {
         ]
     }
 
-    /// The machine named by the header of the file at `path`, read from its first 4 KiB;
-    /// `None` if it cannot be read or has no such header.
+    /// How far into a file its header is looked for, bytes (after the run's own header line
+    /// and the slicer's first comments).
+    pub const HEADER_BYTES: u64 = 4096;
+
+    /// The machine named by the header of the file at `path`, read from its first
+    /// [`Self::HEADER_BYTES`]; `None` if it cannot be read or has no such header.
     pub fn from_file_header(path: &std::path::Path) -> Option<RotaryConfig> {
         use std::io::Read;
         let mut head = Vec::new();
-        crate::gcode::container::open(path).ok()?.take(4096).read_to_end(&mut head).ok()?;
+        crate::gcode::container::open(path).ok()?.take(Self::HEADER_BYTES).read_to_end(&mut head).ok()?;
         Self::from_header(&String::from_utf8_lossy(&head))
     }
 

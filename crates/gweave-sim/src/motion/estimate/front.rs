@@ -15,7 +15,9 @@ use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
 use gweave::gcode::line::{Block, Command};
 use gweave::gcode::reader::{Part, RawLine};
 use gweave::gcode::state::{self, Effect, Path, State, StateOptions};
+use gweave::rotary::cylinder::RotaryConfig;
 
+use super::rotary_feed::DeclaredFeed;
 use super::{
     EstimateError, Job, Key, ARC_CHORD_MM, DEFAULT_FEED_MM_S, FW_RECOVER_FEED_MM_S, FW_RETRACT_FEED_MM_S,
     KLIPPER_MOTOR_OFF_S, KLIPPER_START_BUFFER_S,
@@ -42,6 +44,9 @@ pub(super) struct Front {
     pub(super) line: u64,
     /// Lines with an error, skipped as firmware skips them.
     pub(super) malformed: Malformed,
+    /// The feed convention a rotary program declared in its header ([`Front::declare_rotary`]):
+    /// `None` for every other file, which then costs one untaken branch a line.
+    rotary: Option<DeclaredFeed>,
 }
 
 /// Arcs longer than [`MAX_ARC_CHORDS`] chords of `ARC_CHORD_MM` (over 100 m: no printer's
@@ -127,6 +132,7 @@ impl Front {
             mixing,
             line: 0,
             malformed: Malformed::default(),
+            rotary: None,
         };
         front.refresh_mix(jobs);
         Ok(front)
@@ -136,6 +142,33 @@ impl Front {
     /// `stats` resolves it): before the first line, as the modal state starts afresh.
     pub(super) fn read_as(&mut self, firmware: Firmware) {
         self.state = State::new(StateOptions { firmware, ..StateOptions::default() });
+    }
+
+    /// Reads the F of the moves to come as a rotary program's header declares them (see
+    /// `rotary_feed.rs`): before the first line. A machine the convention cannot be honoured
+    /// on (a rotary axis in millimetres) keeps the firmware model's reading.
+    pub(super) fn declare_rotary(&mut self, machine: RotaryConfig) {
+        self.rotary = DeclaredFeed::new(machine);
+    }
+
+    /// `G93` (`true`) or `G94`: in a rotary program, the F of the moves to come is one over
+    /// their minutes, or per minute; elsewhere F keeps the firmware model's reading.
+    pub(super) fn inverse_time(&mut self, on: bool) {
+        if let Some(declared) = &mut self.rotary {
+            declared.inverse_time = on;
+        }
+    }
+
+    /// In a rotary program, the F of the move the modal state just made rewritten so that the
+    /// firmware model takes the time the declared convention gives ([`DeclaredFeed`]). One
+    /// place for `estimate` ([`Front::lexed`]) and the virtual printer ([`Front::apply`]).
+    #[inline(always)]
+    fn read_rotary_feed(&mut self) {
+        if let Some(declared) = &self.rotary {
+            if let Effect::Move(m) = &mut self.state.effect {
+                declared.rewrite_feed(m, &self.profile.steps, !self.book.klipper);
+            }
+        }
     }
 
     /// Parse `raw` and apply it to the modal state.
@@ -154,7 +187,9 @@ impl Front {
 
     /// Second half of [`Front::parse`]: apply the line just read to the modal state.
     pub(super) fn apply(&mut self, raw: &[u8]) -> &Effect {
-        self.state.apply(raw, &self.block)
+        self.state.apply(raw, &self.block);
+        self.read_rotary_feed();
+        &self.state.effect
     }
 
     /// Accounts every layer after the first as one: the time accounts then stop growing with
@@ -224,6 +259,7 @@ impl Front {
         self.line += 1;
         count_malformed(&mut self.malformed, self.line, &self.block);
         self.state.apply(line.bytes, &self.block);
+        self.read_rotary_feed();
         self.run_applied(line.bytes, jobs)
     }
 
@@ -269,6 +305,10 @@ impl Front {
         }
         match self.block.command {
             Command::Code { letter: b'M', number, sub: None } => self.m_code(raw, number, jobs),
+            Command::Code { letter: b'G', number: n @ (93 | 94), sub: None } => {
+                self.inverse_time(n == 93);
+                Ok(())
+            }
             Command::Extended => self.extended(raw, jobs),
             _ => Ok(()),
         }

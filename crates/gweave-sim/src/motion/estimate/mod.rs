@@ -52,6 +52,7 @@ use gweave::gcode::layers::Feature;
 use gweave::gcode::line::Block;
 use gweave::gcode::reader::{LineReader, RawLine};
 use gweave::gcode::state::{Effect, State};
+use gweave::rotary::cylinder::RotaryConfig;
 use thiserror::Error;
 
 use crate::inkjet::FireWait;
@@ -64,6 +65,7 @@ mod back;
 mod front;
 mod modes;
 mod report;
+mod rotary_feed;
 mod timer;
 
 use back::Back;
@@ -243,6 +245,14 @@ impl Estimator {
     /// Marlin reads them.
     pub fn read_as(&mut self, firmware: Firmware) {
         self.front.read_as(firmware);
+    }
+
+    /// Reads the F of the moves to come as the rotary program's header declares it
+    /// ([`RotaryConfig::from_header`]): a NIST or combined feed with the rotary axis A in
+    /// degrees, or inverse time between `G93` and `G94` (`rotary_feed.rs`). Call before the
+    /// first line; `gweave estimate` and the virtual printer both do for a file with the header.
+    pub fn declare_rotary(&mut self, machine: RotaryConfig) {
+        self.front.declare_rotary(machine);
     }
 
     /// Counts the wait after each fire of a printhead (`M700`/`M578`, [`FireWait`]), as the
@@ -454,30 +464,35 @@ const BATCHES_IN_FLIGHT: usize = 4;
 /// batches in flight.
 /// The lines are read as Marlin reads them; `estimate_as` reads them as another firmware does.
 pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    estimate_as(input, profile, Firmware::Marlin, true, None)
+    estimate_as(input, profile, Firmware::Marlin, true, None, None)
 }
 
 /// [`estimate`] with the lines read as `firmware` reads them (a file's: see
 /// [`gweave::gcode::flavour::read_firmware`]), counting steps if asked (without, up to a fifth
-/// faster), and the waits after a printhead's fires if the machine has one.
+/// faster), the waits after a printhead's fires if the machine has one, and the F words of a
+/// rotary program as its header declares them ([`Estimator::declare_rotary`]).
 pub(crate) fn estimate_as<R: Read + Send>(
     input: R,
     profile: &MotionProfile,
     firmware: Firmware,
     count_steps: bool,
     fire: Option<FireWait>,
+    rotary: Option<RotaryConfig>,
 ) -> Result<Estimate, EstimateError> {
     let mut estimator = Estimator::with_steps(profile, count_steps)?;
     estimator.read_as(firmware);
     if let Some(fire) = fire {
         estimator.fires(fire);
     }
+    if let Some(rotary) = rotary {
+        estimator.declare_rotary(rotary);
+    }
     on_threads(input, estimator)
 }
 
 /// [`estimate`] without the step counts (all zero), up to a fifth faster.
 pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    estimate_as(input, profile, Firmware::Marlin, false, None)
+    estimate_as(input, profile, Firmware::Marlin, false, None, None)
 }
 
 fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
@@ -621,7 +636,7 @@ mod tests {
         let fire = FireWait { wait_s: 800e-6, heads: 2 };
         let dwell_s = |text: &str| {
             let threaded = |fire: Option<FireWait>| {
-                estimate_as(text.as_bytes(), &MotionProfile::default(), Firmware::Marlin, false, fire)
+                estimate_as(text.as_bytes(), &MotionProfile::default(), Firmware::Marlin, false, fire, None)
                     .unwrap()
             };
             assert_eq!(threaded(None).dwell_s, 0.0, "{text}: no printhead, no wait");

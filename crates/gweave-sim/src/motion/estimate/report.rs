@@ -7,6 +7,7 @@ use gweave::firmware::Firmware;
 use gweave::gcode::container;
 use gweave::gcode::flavour::read_firmware;
 use gweave::pass::Progress;
+use gweave::rotary::cylinder::RotaryConfig;
 use serde::Serialize;
 
 use super::{estimate_as, Estimate, EstimateError};
@@ -30,7 +31,8 @@ pub struct EstimateReport {
 
 /// Estimate the file read from `input` on `machine`, its lines read as `firmware` reads them (the
 /// file's: [`gweave::gcode::flavour::read_firmware`]), counting steps if asked; on a machine
-/// with a printhead, with the wait after each fire.
+/// with a printhead, with the wait after each fire; a rotary program's F words as its header
+/// declares them, as `gweave sim` reads them (without the header, as the firmware model does).
 pub fn estimate_report<R: Read + Send>(
     input: R,
     machine: &MachineProfile,
@@ -38,13 +40,24 @@ pub fn estimate_report<R: Read + Send>(
     count_steps: bool,
 ) -> Result<EstimateReport, EstimateError> {
     let fire = machine.inkjet.as_ref().map(|ink| FireWait::of(&ink.printhead));
-    let estimate = estimate_as(input, &machine.motion, firmware, count_steps, fire)?;
+    let (rotary, input) = rotary_header(input)?;
+    let estimate = estimate_as(input, &machine.motion, firmware, count_steps, fire, rotary)?;
     let planner = match machine.motion.corners {
         CornerMode::Klipper(_) => "klipper",
         CornerMode::Marlin { .. } => "marlin",
         CornerMode::Constant {} => "constant",
     };
     Ok(EstimateReport { machine: machine.name.clone(), planner, steps_counted: count_steps, estimate })
+}
+
+/// The machine a rotary program's header names, read from the start of `input`
+/// ([`RotaryConfig::HEADER_BYTES`], as `gweave sim` reads it from the file), and `input` again
+/// from its first byte.
+fn rotary_header<R: Read>(mut input: R) -> io::Result<(Option<RotaryConfig>, impl Read)> {
+    let mut head = Vec::new();
+    input.by_ref().take(RotaryConfig::HEADER_BYTES).read_to_end(&mut head)?;
+    let rotary = RotaryConfig::from_header(&String::from_utf8_lossy(&head));
+    Ok((rotary, io::Cursor::new(head).chain(input)))
 }
 
 /// Why a file could not be estimated, naming the file and, when there is one, its line.

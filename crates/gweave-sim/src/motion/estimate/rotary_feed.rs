@@ -12,6 +12,10 @@
 //! (`gweave_sim_reads_the_feed_convention_the_rotary_file_declares`). So the time of a move is
 //! the one its declared convention gives (`RotaryConfig::time_from_feed`, the inverse of what
 //! the writer computed), and its F is rewritten so that the model's own rule takes that time.
+//! The estimator's parse side does the rewriting, right after the modal state made the move,
+//! so that `gweave estimate` and the virtual printer (whose motion core it is) read a rotary
+//! program alike: `gweave estimate` did not, and took 90 h 44 min over an 8-minute tube
+//! (`gweave_estimate_reads_the_rotary_feed_convention_as_gweave_sim_does`).
 //!
 //! Inverse time: between a `G93` and a `G94` each move takes `1 / F` minutes, whatever the
 //! header declares (`rotary --feed-convention inverse-time` writes `G93` at the start and `G94`
@@ -52,6 +56,16 @@ impl DeclaredFeed {
         let axes = [index(machine.axial_axis)?, index(machine.rotary_axis)?, index(machine.radial_axis)?];
         let honoured = machine.rotary_unit == RotaryUnit::Degrees && axes[1] == A;
         honoured.then_some(DeclaredFeed { machine, inverse_time: false, axes })
+    }
+
+    /// Rewrites the F of `m` to [`Self::model_feed_mm_min`]'s, if it has one. Cold: only a
+    /// rotary program's moves come here.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn rewrite_feed(&self, m: &mut Move, steps: &StepsPerUnit, marlin: bool) {
+        if let Some(feed) = self.model_feed_mm_min(m, steps, marlin) {
+            m.feed_mm_min = feed;
+        }
     }
 
     /// The F (mm/min) that makes the model take the time the declared convention gives a
