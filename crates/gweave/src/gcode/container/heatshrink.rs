@@ -39,42 +39,42 @@ pub(crate) fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>
     let (wb, lb) = (p.window_bits, p.lookahead_bits);
     // The longest token: a back-reference's tag, index and count.
     let longest = 1 + wb + lb;
+    let (index_mask, count_mask) = ((1u32 << wb) - 1, (1u32 << lb) - 1);
     let mut at = 0;
     while at < expected {
-        if bits.have < longest {
-            bits.refill();
-        }
-        if bits.have == 0 {
-            break;
-        }
-        if bits.peek(1) == 1 {
-            if bits.have < 9 {
-                break;
-            }
-            out[at] = (bits.peek(9) & 0xFF) as u8;
-            bits.consume(9);
-            at += 1;
-            continue;
-        }
-        if bits.have < longest {
+        // Topped up at every token: a test of what is left would be a branch taken one token
+        // in three or four, at random.
+        bits.refill();
+        let literal = bits.peek(1) == 1;
+        let need = if literal { 9 } else { longest };
+        if bits.have < need {
+            // Only the last byte's padding: zero bits that never complete a token.
             break;
         }
         let token = bits.peek(longest);
-        bits.consume(longest);
-        let dist = (token >> lb & ((1 << wb) - 1)) as usize + 1;
-        let len = ((token & ((1 << lb) - 1)) as usize + 1).min(expected - at);
-        if dist <= at && dist >= COPY && len <= COPY {
-            // A fixed-size copy (no call to memcpy); the bytes past `len` are overwritten later.
-            let from = at - dist;
-            let chunk: [u8; COPY] = out[from..from + COPY].try_into().expect("16 bytes");
-            out[at..at + COPY].copy_from_slice(&chunk);
-        } else {
-            // Overlapping (a run), or before the start, where the reference decoder's window
-            // is zero-filled.
+        // A literal is a copy of one byte: both kinds of token take the same path, so that
+        // the one branch on the token's kind (unpredictable: G-code mixes them about evenly)
+        // is a conditional move.
+        let dist = (token >> lb & index_mask) as usize + 1;
+        let len = if literal { 1 } else { ((token & count_mask) as usize + 1).min(expected - at) };
+        if !literal && (dist > at || dist < len) {
+            // Overlapping (a run), or reaching before the start, where the reference
+            // decoder's window is zero-filled: a byte at a time.
             for k in at..at + len {
                 out[k] = k.checked_sub(dist).map_or(0, |from| out[from]);
             }
+        } else {
+            // A fixed-size copy (no call to memcpy), loaded before it is stored, so that the
+            // bytes past `len` (read from the window or from the copy's own start) are only
+            // overwritten later. A literal copies any 16 bytes, its own first.
+            let from = if literal { at } else { at - dist };
+            let mut chunk: [u8; COPY] = out[from..from + COPY].try_into().expect("16 bytes");
+            if literal {
+                chunk[0] = bits.peek(9) as u8;
+            }
+            out[at..at + COPY].copy_from_slice(&chunk);
         }
+        bits.consume(need);
         at += len;
     }
     out.truncate(at);
@@ -266,6 +266,34 @@ mod tests {
         assert_eq!(err.to_string(), "heatshrink data decodes to 6 bytes, not the 7 its header says");
     }
 
+    /// The reference library's decoder, a bit at a time, with its zero-filled window.
+    fn bit_at_a_time(input: &[u8], p: Params, expected: usize) -> Vec<u8> {
+        let mut at = 0;
+        let mut bits = |n: u32| -> Option<usize> {
+            let mut v = 0;
+            for _ in 0..n {
+                let byte = input.get(at / 8)?;
+                v = v << 1 | usize::from(byte >> (7 - at % 8) & 1);
+                at += 1;
+            }
+            Some(v)
+        };
+        let mut out = Vec::new();
+        while out.len() < expected {
+            let Some(tag) = bits(1) else { break };
+            if tag == 1 {
+                let Some(b) = bits(8) else { break };
+                out.push(b as u8);
+                continue;
+            }
+            let (Some(index), Some(count)) = (bits(p.window_bits), bits(p.lookahead_bits)) else { break };
+            for _ in 0..(count + 1).min(expected - out.len()) {
+                out.push(out.len().checked_sub(index + 1).map_or(0, |from| out[from]));
+            }
+        }
+        out
+    }
+
     proptest::proptest! {
         #[test]
         fn any_bytes_round_trip(bytes in proptest::collection::vec(proptest::sample::select(b"G1 X0.5Y\n".to_vec()), 0..3000)) {
@@ -276,6 +304,23 @@ mod tests {
         #[test]
         fn garbage_never_panics(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..300), n in 0usize..2000) {
             let _ = decode(&bytes, P12, n, &mut Vec::new());
+        }
+
+        /// Any bits, decoded into a buffer that held another block's bytes, give what the
+        /// reference decoder gives reading a bit at a time: literals, copies (overlapping
+        /// ones too), copies reaching before the start (zeros), the end padding.
+        #[test]
+        fn decodes_as_a_bit_at_a_time(
+            bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..600),
+            n in 0usize..2000,
+            held in proptest::collection::vec(proptest::num::u8::ANY, 0..3000),
+            p in proptest::sample::select(vec![P11, P12]),
+        ) {
+            let mut out = held;
+            let result = decode(&bytes, p, n, &mut out);
+            let want = bit_at_a_time(&bytes, p, n);
+            proptest::prop_assert_eq!(result.is_ok(), want.len() == n);
+            proptest::prop_assert_eq!(out, want);
         }
     }
 }
