@@ -39,42 +39,42 @@ pub(crate) fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>
     let (wb, lb) = (p.window_bits, p.lookahead_bits);
     // The longest token: a back-reference's tag, index and count.
     let longest = 1 + wb + lb;
-    let (index_mask, count_mask) = ((1u32 << wb) - 1, (1u32 << lb) - 1);
     let mut at = 0;
     while at < expected {
-        // Topped up at every token: a test of what is left would be a branch taken one token
-        // in three or four, at random.
-        bits.refill();
-        let literal = bits.peek(1) == 1;
-        let need = if literal { 9 } else { longest };
-        if bits.have < need {
-            // Only the last byte's padding: zero bits that never complete a token.
+        if bits.have < longest {
+            bits.refill();
+        }
+        if bits.have == 0 {
+            break;
+        }
+        if bits.peek(1) == 1 {
+            if bits.have < 9 {
+                break;
+            }
+            out[at] = (bits.peek(9) & 0xFF) as u8;
+            bits.consume(9);
+            at += 1;
+            continue;
+        }
+        if bits.have < longest {
             break;
         }
         let token = bits.peek(longest);
-        // A literal is a copy of one byte: both kinds of token take the same path, so that
-        // the one branch on the token's kind (unpredictable: G-code mixes them about evenly)
-        // is a conditional move.
-        let dist = (token >> lb & index_mask) as usize + 1;
-        let len = if literal { 1 } else { ((token & count_mask) as usize + 1).min(expected - at) };
-        if !literal && (dist > at || dist < len) {
-            // Overlapping (a run), or reaching before the start, where the reference
-            // decoder's window is zero-filled: a byte at a time.
+        bits.consume(longest);
+        let dist = (token >> lb & ((1 << wb) - 1)) as usize + 1;
+        let len = ((token & ((1 << lb) - 1)) as usize + 1).min(expected - at);
+        if dist <= at && dist >= COPY && len <= COPY {
+            // A fixed-size copy (no call to memcpy); the bytes past `len` are overwritten later.
+            let from = at - dist;
+            let chunk: [u8; COPY] = out[from..from + COPY].try_into().expect("16 bytes");
+            out[at..at + COPY].copy_from_slice(&chunk);
+        } else {
+            // Overlapping (a run), or before the start, where the reference decoder's window
+            // is zero-filled.
             for k in at..at + len {
                 out[k] = k.checked_sub(dist).map_or(0, |from| out[from]);
             }
-        } else {
-            // A fixed-size copy (no call to memcpy), loaded before it is stored, so that the
-            // bytes past `len` (read from the window or from the copy's own start) are only
-            // overwritten later. A literal copies any 16 bytes, its own first.
-            let from = if literal { at } else { at - dist };
-            let mut chunk: [u8; COPY] = out[from..from + COPY].try_into().expect("16 bytes");
-            if literal {
-                chunk[0] = bits.peek(9) as u8;
-            }
-            out[at..at + COPY].copy_from_slice(&chunk);
         }
-        bits.consume(need);
         at += len;
     }
     out.truncate(at);
