@@ -266,6 +266,34 @@ mod tests {
         assert_eq!(err.to_string(), "heatshrink data decodes to 6 bytes, not the 7 its header says");
     }
 
+    /// The reference library's decoder, a bit at a time, with its zero-filled window.
+    fn bit_at_a_time(input: &[u8], p: Params, expected: usize) -> Vec<u8> {
+        let mut at = 0;
+        let mut bits = |n: u32| -> Option<usize> {
+            let mut v = 0;
+            for _ in 0..n {
+                let byte = input.get(at / 8)?;
+                v = v << 1 | usize::from(byte >> (7 - at % 8) & 1);
+                at += 1;
+            }
+            Some(v)
+        };
+        let mut out = Vec::new();
+        while out.len() < expected {
+            let Some(tag) = bits(1) else { break };
+            if tag == 1 {
+                let Some(b) = bits(8) else { break };
+                out.push(b as u8);
+                continue;
+            }
+            let (Some(index), Some(count)) = (bits(p.window_bits), bits(p.lookahead_bits)) else { break };
+            for _ in 0..(count + 1).min(expected - out.len()) {
+                out.push(out.len().checked_sub(index + 1).map_or(0, |from| out[from]));
+            }
+        }
+        out
+    }
+
     proptest::proptest! {
         #[test]
         fn any_bytes_round_trip(bytes in proptest::collection::vec(proptest::sample::select(b"G1 X0.5Y\n".to_vec()), 0..3000)) {
@@ -276,6 +304,23 @@ mod tests {
         #[test]
         fn garbage_never_panics(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..300), n in 0usize..2000) {
             let _ = decode(&bytes, P12, n, &mut Vec::new());
+        }
+
+        /// Any bits, decoded into a buffer that held another block's bytes, give what the
+        /// reference decoder gives reading a bit at a time: literals, copies (overlapping
+        /// ones too), copies reaching before the start (zeros), the end padding.
+        #[test]
+        fn decodes_as_a_bit_at_a_time(
+            bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..600),
+            n in 0usize..2000,
+            held in proptest::collection::vec(proptest::num::u8::ANY, 0..3000),
+            p in proptest::sample::select(vec![P11, P12]),
+        ) {
+            let mut out = held;
+            let result = decode(&bytes, p, n, &mut out);
+            let want = bit_at_a_time(&bytes, p, n);
+            proptest::prop_assert_eq!(result.is_ok(), want.len() == n);
+            proptest::prop_assert_eq!(out, want);
         }
     }
 }

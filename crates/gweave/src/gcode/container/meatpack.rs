@@ -16,7 +16,9 @@
 //! decoding is table-driven: [`CHAR`] gives, for a state and a character, the bytes it adds and
 //! the next state; [`PAIR`] does the same for a whole packed byte (two characters, up to four
 //! bytes of text with their spaces), the common case, which then costs one look-up and one
-//! 4-byte store. The tables are built at compile time from the rules above ([`step`]).
+//! 4-byte store; [`NEXT`] gives a packed byte's next state from every state at once, so that
+//! the state carried from byte to byte is a shift rather than a look-up. The tables are built at
+//! compile time from the rules above ([`step`]).
 
 /// The command that follows two signal bytes.
 const SIGNAL: u8 = 0xFF;
@@ -124,36 +126,64 @@ static CHAR: [u64; 8 * 256] = {
 /// [`PAIR`]'s entry for a byte with a `1111` nibble (a whole byte follows), signals included.
 const NOT_A_PAIR: u64 = u64::MAX;
 
-/// Every no-spaces mode by state by packed byte whose nibbles are both characters: the low
-/// nibble's character, then the high one's unless the first is a newline (libbgcode reads a
-/// newline as the end of the pair).
+/// [`PAIR`]'s entry for a packed byte `b` in state `st`: the low nibble's character, then the
+/// high one's unless the first is a newline (libbgcode reads a newline as the end of the pair).
+const fn pair(no_spaces: bool, st: u8, b: u8) -> u64 {
+    let (low, high) = (b & 0x0F, b >> 4);
+    if low == 0x0F || high == 0x0F {
+        return NOT_A_PAIR;
+    }
+    let first = char_of(low, no_spaces);
+    let (a, na, st1) = step(st, first);
+    if first == b'\n' {
+        return entry([a[0], a[1], 0, 0], na, st1);
+    }
+    let (b2, nb, st2) = step(st1, char_of(high, no_spaces));
+    let mut out = [0u8; 4];
+    let mut k = 0;
+    while k < nb {
+        out[na + k] = b2[k];
+        k += 1;
+    }
+    if na > 0 {
+        out[0] = a[0];
+    }
+    if na > 1 {
+        out[1] = a[1];
+    }
+    entry(out, na + nb, st2)
+}
+
+/// Every no-spaces mode by state by packed byte whose nibbles are both characters ([`pair`]).
 static PAIR: [u64; 2 * 8 * 256] = {
     let mut t = [NOT_A_PAIR; 2 * 8 * 256];
     let mut i = 0;
     while i < t.len() {
-        let (no_spaces, st, b) = (i >> 11 == 1, ((i >> 8) & 7) as u8, i as u8);
-        let (low, high) = (b & 0x0F, b >> 4);
-        if low != 0x0F && high != 0x0F {
-            let first = char_of(low, no_spaces);
-            let (a, na, st1) = step(st, first);
-            t[i] = if first == b'\n' {
-                entry([a[0], a[1], 0, 0], na, st1)
-            } else {
-                let (b2, nb, st2) = step(st1, char_of(high, no_spaces));
-                let mut out = [0u8; 4];
-                let mut k = 0;
-                while k < nb {
-                    out[na + k] = b2[k];
-                    k += 1;
-                }
-                if na > 0 {
-                    out[0] = a[0];
-                }
-                if na > 1 {
-                    out[1] = a[1];
-                }
-                entry(out, na + nb, st2)
-            };
+        t[i] = pair(i >> 11 == 1, ((i >> 8) & 7) as u8, i as u8);
+        i += 1;
+    }
+    t
+};
+
+/// Every no-spaces mode by packed byte: the state after the byte from each of the eight states,
+/// a byte per state (from state `s`, bits `8s..8s+8` hold eight times the next state), or
+/// [`NOT_A_PAIR`]. The state is all that carries from one byte to the next; looked up in
+/// [`PAIR`] it waits for a load (about five cycles) a byte, where this word depends on the
+/// input alone, is loaded ahead, and the next state is one shift of it.
+static NEXT: [u64; 2 * 256] = {
+    let mut t = [NOT_A_PAIR; 2 * 256];
+    let mut i = 0;
+    while i < t.len() {
+        let (no_spaces, b) = (i >> 8 == 1, i as u8);
+        if pair(no_spaces, 0, b) != NOT_A_PAIR {
+            let mut word = 0u64;
+            let mut st = 0;
+            while st < 8 {
+                let next = (pair(no_spaces, st, b) >> 40) as u8;
+                word |= ((next as u64) << 3) << (8 * st);
+                st += 1;
+            }
+            t[i] = word;
         }
         i += 1;
     }
@@ -180,17 +210,24 @@ pub(crate) fn decode(input: &[u8], out: &mut Vec<u8>) {
     let mut i = 0;
     while i < input.len() {
         if d.packing && d.queue == 0 && d.signals == 0 && !d.command {
-            // The common case, packed pairs one after the other: one look-up and one store a
-            // byte, until a byte that is not one (a whole byte follows, or a signal).
-            let pairs = &PAIR[usize::from(d.no_spaces) << 11..][..8 << 8];
+            // The common case, packed pairs one after the other: a byte is two look-ups (its
+            // text, its next state) and one store, until a byte that is not one (a whole byte
+            // follows, or a signal). The state is kept as eight times itself, a shift count.
+            let mode = usize::from(d.no_spaces);
+            let (pairs, next) = (&PAIR[mode << 11..][..8 << 8], &NEXT[mode << 8..][..256]);
+            let mut st8 = usize::from(d.st) << 3;
             while let Some(&c) = input.get(i) {
-                let e = pairs[usize::from(d.st) << 8 | usize::from(c)];
-                if e == NOT_A_PAIR {
+                let word = next[usize::from(c)];
+                if word == NOT_A_PAIR {
                     break;
                 }
-                d.put(e);
+                let e = pairs[st8 << 5 | usize::from(c)];
+                d.out[d.at..d.at + 4].copy_from_slice(&(e as u32).to_le_bytes());
+                d.at += (e >> 32 & 0xFF) as usize;
+                st8 = usize::from((word >> st8) as u8);
                 i += 1;
             }
+            d.st = (st8 >> 3) as u8;
             let Some(&c) = input.get(i) else { break };
             d.input(c);
         } else {

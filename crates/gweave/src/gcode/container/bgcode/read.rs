@@ -236,24 +236,34 @@ impl<R: Read> Reader<R> {
 
     /// Decodes the next G-code block into `buf`, or the suffix after the last.
     fn refill(&mut self) -> io::Result<()> {
-        self.buf.clear();
+        let mut buf = std::mem::take(&mut self.buf);
+        buf.clear();
+        let done = self.next_text(&mut buf);
+        self.buf = buf;
         self.pos = 0;
+        done
+    }
+
+    /// Appends the next G-code block's text to `out`, or the suffix after the last.
+    fn next_text(&mut self, out: &mut Vec<u8>) -> io::Result<()> {
         let Some(at) = self.next.take() else {
             if !self.suffix_done {
                 self.suffix_done = true;
-                self.buf = text::suffix(&self.preamble);
+                out.extend(text::suffix(&self.preamble));
             }
             return Ok(());
         };
         let block = self.block_data(at)?;
-        // Decoded straight into the text buffer (its room kept from block to block), the
-        // dropped lines taken out in place.
+        // Decoded straight into `out` (its room kept from block to block), the dropped lines
+        // taken out in place.
+        let start = out.len();
         match block.encoding() {
-            0 => std::mem::swap(&mut self.buf, &mut self.decoded),
-            1 | 2 => meatpack::decode(&self.decoded, &mut self.buf),
+            0 if start == 0 => std::mem::swap(out, &mut self.decoded),
+            0 => out.extend_from_slice(&self.decoded),
+            1 | 2 => meatpack::decode(&self.decoded, out),
             e => return Err(at.error(invalid(format!("unknown G-code encoding {e}")))),
         }
-        drop_empty_lines(&mut self.buf);
+        drop_empty_lines(out, start);
         self.scratch = block.data;
         self.next = match self.header()? {
             Some(next) if next.header.kind == Kind::GCode => Some(next),
@@ -265,6 +275,23 @@ impl<R: Read> Reader<R> {
             None => None,
         };
         Ok(())
+    }
+}
+
+/// The decoding thread's source (`super::super::ahead`): each block's text appended to the
+/// chunk it fills, without going through a buffer of the reader's own.
+impl<R: Read> super::super::ahead::Text for Reader<R> {
+    fn text_into(&mut self, out: &mut Vec<u8>) -> io::Result<usize> {
+        let start = out.len();
+        if self.pos < self.buf.len() {
+            // The metadata's text, rendered when the file was opened.
+            out.extend_from_slice(&self.buf[self.pos..]);
+            self.pos = self.buf.len();
+        }
+        while out.len() == start && !(self.next.is_none() && self.suffix_done) {
+            self.next_text(out)?;
+        }
+        Ok(out.len() - start)
     }
 }
 
@@ -329,15 +356,15 @@ fn decompress(data: &[u8], h: Header, out: &mut Vec<u8>) -> io::Result<()> {
     Ok(())
 }
 
-/// Takes out of `text` the lines libbgcode's converter drops: empty, blank (spaces and tabs),
-/// or a `;` with nothing but blanks after it. A last line without a newline gets one. Runs of
-/// kept lines move at once, and only after a dropped line: most lines start with a letter and
-/// are kept where they are.
-fn drop_empty_lines(text: &mut Vec<u8>) {
+/// Takes out of `text[from..]` (a block's text) the lines libbgcode's converter drops: empty,
+/// blank (spaces and tabs), or a `;` with nothing but blanks after it. A last line without a
+/// newline gets one. Runs of kept lines move at once, and only after a dropped line: most lines
+/// start with a letter and are kept where they are.
+fn drop_empty_lines(text: &mut Vec<u8>, from: usize) {
     let blank = |b: u8| b == b' ' || b == b'\t';
     let len = text.len();
     // Kept bytes end at `write`; the run of kept lines not yet moved starts at `run`.
-    let (mut write, mut run, mut start) = (0, 0, 0);
+    let (mut write, mut run, mut start) = (from, from, from);
     while start < len {
         let end = memchr::memchr(b'\n', &text[start..]).map_or(len, |i| start + i);
         let line = &text[start..end];
@@ -357,7 +384,7 @@ fn drop_empty_lines(text: &mut Vec<u8>) {
         }
         start = end + 1;
     }
-    let ends_line = text.last() == Some(&b'\n');
+    let ends_line = text[from..].last() == Some(&b'\n');
     if run < len {
         if run != write {
             text.copy_within(run..len, write);
@@ -430,13 +457,22 @@ mod tests {
     #[test]
     fn empty_lines_go_as_libbgcode_drops_them() {
         let mut text = b"G1 X1\n\n  \t\n;\n ;  \n; kept\r\n\r\nG1 Y2".to_vec();
-        drop_empty_lines(&mut text);
+        drop_empty_lines(&mut text, 0);
         assert_eq!(text, b"G1 X1\n; kept\r\n\r\nG1 Y2\n");
         for (text, kept) in [(&b"\n\nG1\n"[..], &b"G1\n"[..]), (b"G1\n;\n", b"G1\n"), (b"", b""), (b" ", b"")]
         {
             let mut t = text.to_vec();
-            drop_empty_lines(&mut t);
+            drop_empty_lines(&mut t, 0);
             assert_eq!(t, kept);
         }
+        // A block's text after another's: only its own lines are looked at, and its last line
+        // gets a newline even when the text before ends with one.
+        let mut text = b"G1 X1\n\n;\n".to_vec();
+        text.extend_from_slice(b"\n;\nG1 Y2");
+        drop_empty_lines(&mut text, 9);
+        assert_eq!(text, b"G1 X1\n\n;\nG1 Y2\n");
+        let mut text = b"G1 X1\n".to_vec();
+        drop_empty_lines(&mut text, 6);
+        assert_eq!(text, b"G1 X1\n");
     }
 }
