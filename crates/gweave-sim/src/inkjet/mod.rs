@@ -185,7 +185,7 @@ impl InkjetCanvas {
     /// Records one fire command. `head` is the `P` word (None when absent), `bits` the `S`
     /// word, `x_mm`/`y_mm`/`z_mm` the carriage position when it runs, and `moved_since_m400`
     /// whether a move was queued after the last `M400`. The time it takes is the estimator's
-    /// ([`FireWait`]).
+    /// (`FireWait`).
     pub fn on_m700(
         &mut self,
         head: Option<u32>,

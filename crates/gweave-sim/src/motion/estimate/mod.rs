@@ -255,7 +255,7 @@ impl Estimator {
         self.front.declare_rotary(machine);
     }
 
-    /// Counts the wait after each fire of a printhead (`M700`/`M578`, [`FireWait`]), as the
+    /// Counts the wait after each fire of a printhead (`M700`/`M578`, `FireWait`), as the
     /// firmware of an inkjet machine waits. Call before the first line.
     pub fn fires(&mut self, fire: FireWait) {
         self.front.fires(fire);
