@@ -14,8 +14,9 @@
 //! ([`crate::colour::dialect::MixingState`]): the tool number, the active Marlin mix and the
 //! active RepRapFirmware mix before and after the group must differ. Everything else a slicer
 //! writes around a tool change (retract, `G92 E0`, travel, temperature for the next tool,
-//! unretract) stays where it is: retracts and `G92` are E bookkeeping that does not depend on the
-//! tool of a mixing hotend, and the travel belongs to the new colour's path.
+//! unretract) stays where it is: the travel belongs to the new colour's path. A retraction
+//! belongs to the tool that makes it, though, so a moved change takes a bracket of E-only moves
+//! with it that leaves every tool with its own retraction (the `tool_retraction` module).
 //!
 //! ## Rules
 //! - Only extruding moves (positive E with XY motion) count; retractions, unretractions,
@@ -26,7 +27,8 @@
 //!   inside), at the previous change, at homing, at a line whose meaning depends on the active tool
 //!   (`M104`/`M109`/`M221`/`M900` without `T`), at mixing lines that are not part of the change
 //!   (the change must not be moved before the definition of its own tool), at numbered or
-//!   checksummed moves (which cannot be rewritten), and outside the print proper.
+//!   checksummed moves (which cannot be rewritten), at a `G10`/`G11` firmware retraction (kept
+//!   per tool by the firmware), and outside the print proper.
 //! - Too little room: the change goes as far back as allowed, a warning names layer, line and
 //!   shortfall, and the fallback applies: accept the shortfall (`partial`), or purge it right
 //!   after the change in a purge block (`block`) or on a small tower beside the part (`tower`),
