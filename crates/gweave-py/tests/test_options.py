@@ -38,7 +38,6 @@ WIDER = {
     ("preview", "layers"): ("Union[str, Tuple[int, int], None]", None),  # (first, last) or "A-B"
     ("preview", "size"): ("Tuple[int, int]", (1200, 900)),  # declared "1200x900"
 }
-}
 
 # The annotation each kind of option has in the typed wrapper, and its default there.
 ANNOTATION = {
