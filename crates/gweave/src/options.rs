@@ -418,14 +418,8 @@ pub trait JobOptions: Default + Sized {
                     words.push(flag);
                     continue;
                 }
-                Some(Value::Number(v)) => vec![short(v)],
-                Some(Value::Text(t)) => vec![t],
-                Some(Value::Path(p)) => vec![p.display().to_string()],
                 Some(Value::Texts(t)) if spec.kind == Kind::Repeated => t,
-                Some(Value::Texts(t)) => vec![t.join(&spec.shape.separator.to_string())],
-                Some(Value::Numbers(v)) => {
-                    vec![v.into_iter().map(short).collect::<Vec<_>>().join(&spec.shape.separator.to_string())]
-                }
+                Some(value) => vec![word(&value, spec.shape.separator)],
             };
             for word in each {
                 words.extend([flag.clone(), quote(word)]);
@@ -433,6 +427,32 @@ pub trait JobOptions: Default + Sized {
         }
         words.join(" ")
     }
+}
+
+/// `value` as one word of the command line (`2.5`, `10,20`, `1200x900`), its several values
+/// joined by `separator`.
+fn word(value: &Value, separator: char) -> String {
+    let join = |words: Vec<String>| words.join(&separator.to_string());
+    match value {
+        Value::Flag(on) => on.to_string(),
+        Value::Number(v) => short(*v),
+        Value::Text(t) => t.clone(),
+        Value::Path(p) => p.display().to_string(),
+        Value::Texts(t) => join(t.clone()),
+        Value::Numbers(v) => join(v.iter().copied().map(short).collect()),
+    }
+}
+
+/// The default of a field as its option's word, given the field at its declared default: a
+/// value (`0.5`, `after`), or the type's own word for an unset field ([`OptionField::default_word`]).
+pub fn default_word<F: OptionField>(field: &F, separator: char) -> Option<String> {
+    field.to_value().map(|v| word(&v, separator)).or_else(F::default_word)
+}
+
+/// A field's value for the header: `None` where it equals the declared default (`value`,
+/// `default` as [`OptionField::to_value`] gives them).
+pub fn unless_default(value: Option<Value>, default: Option<Value>) -> Option<Value> {
+    value.filter(|v| Some(v) != default.as_ref())
 }
 
 /// The options of `parts` one after another, as one list of `N` (their lengths' sum): the
@@ -500,7 +520,11 @@ field!(bool, Kind::Flag, Value::Flag(b) => b, b => b.then_some(Value::Flag(true)
 // Unset, or a switch given either way (`keep_arc_length=False` turns a settings file's on off).
 field!(Option<bool>, Kind::Flag, Value::Flag(b) => Some(b), b => b.map(Value::Flag));
 field!(Option<f64>, Kind::Number, Value::Number(v) => Some(v), v => v.map(Value::Number));
+// A number or count whose default is a value (`threshold: f64 = ... => 0.5`): always said; the
+// header leaves it out at its declared default.
+field!(f64, Kind::Number, Value::Number(v) => v, v => Some(Value::Number(*v)));
 field!(Option<u32>, Kind::Whole, Value::Number(v) => Some(whole(v)?), v => v.map(|v| Value::Number(v.into())));
+field!(u32, Kind::Whole, Value::Number(v) => whole(v)?, v => Some(Value::Number((*v).into())));
 // Three letters (axial, rotary, radial axes): `X,A,Z` or `XAZ`, either case.
 field!(Option<[char; 3]>, Kind::Texts(0), Value::Texts(t) => Some(letters(&t)?),
     t => t.map(|t| Value::Texts(t.iter().map(char::to_string).collect())));
@@ -624,8 +648,10 @@ macro_rules! text_option {
 
 /// Declares a job's options type: each field is an option, its doc comment the help, its type
 /// the kind of value ([`OptionField`]), and after `=` its [`Shape`] (value name, range, short
-/// flag, aliases, conflicts). The struct gets [`JobOptions`], `Default` (every option unset or
-/// at its default) and `PartialEq`.
+/// flag, aliases, conflicts), then for a number or count whose default is a value, `=> value`
+/// (`threshold: f64 = Shape::new("0..1") => 0.5`: the CLI shows and parses that default,
+/// Python's keyword has it, the header leaves it out). The struct gets [`JobOptions`],
+/// `Default` (every option unset or at its default) and `PartialEq`.
 ///
 /// Options several jobs share are declared once as a type of their own (`rotary wrap` and
 /// `rotary tube` share the machine's), named first as `..machine: MachineOptions,`: the job's
@@ -664,16 +690,26 @@ macro_rules! job_options {
             $(..$group:ident: $group_ty:ty,)*
             $(
                 $(#[doc = $help:literal])*
-                $field:ident: $ty:ty = $shape:expr,
+                $field:ident: $ty:ty = $shape:expr $(=> $default:expr)?,
             )*
         }
     ) => {
         $(#[doc = $doc])*
-        #[derive(Debug, Clone, Default, PartialEq)]
+        #[derive(Debug, Clone, PartialEq)]
         pub struct $name {
             $(#[doc = concat!("The options shared with other jobs (`", stringify!($group_ty), "`).")]
             pub $group: $group_ty,)*
             $( $(#[doc = $help])* pub $field: $ty, )*
+        }
+
+        impl Default for $name {
+            /// Every option unset, or at its declared default.
+            fn default() -> Self {
+                $name {
+                    $($group: Default::default(),)*
+                    $($field: $crate::__option_default!($ty $(, $default)?),)*
+                }
+            }
         }
 
         impl $crate::options::JobOptions for $name {
@@ -685,7 +721,10 @@ macro_rules! job_options {
                         name: stringify!($field),
                         kind: <$ty as $crate::options::OptionField>::KIND,
                         doc: concat!($($help, "\n"),*),
-                        default: <$ty as $crate::options::OptionField>::default_word,
+                        default: || {
+                            let default = <$name as Default>::default();
+                            $crate::options::default_word(&default.$field, ($shape).separator)
+                        },
                         shape: $shape,
                     },
                 )*];
@@ -717,10 +756,27 @@ macro_rules! job_options {
             fn values(&self) -> Vec<Option<$crate::options::Value>> {
                 let mut values: Vec<Option<$crate::options::Value>> = Vec::new();
                 $(values.extend($crate::options::JobOptions::values(&self.$group));)*
-                values.extend([$($crate::options::OptionField::to_value(&self.$field)),*]);
+                let default = <$name as Default>::default();
+                values.extend([$($crate::options::unless_default(
+                    $crate::options::OptionField::to_value(&self.$field),
+                    $crate::options::OptionField::to_value(&default.$field),
+                )),*]);
                 values
             }
         }
+    };
+}
+
+/// A field's default in [`job_options!`](crate::job_options): the declared one (`=> 0.5`), else
+/// its type's (unset).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __option_default {
+    ($ty:ty) => {
+        <$ty as Default>::default()
+    };
+    ($ty:ty, $default:expr) => {
+        $default
     };
 }
 
@@ -837,7 +893,29 @@ mod tests {
             layer: Option<u32> = Shape::new("N").range(Range::new(0.0, 10.0, "")),
             /// A size.
             size: Option<[f64; 2]> = Shape::new("WxH").separator('x'),
+            /// A fraction whose default is a value.
+            fraction: f64 = Shape::new("F").range(Range::new(0.0, 1.0, "")) => 0.5,
+            /// A count whose default is a value.
+            count: u32 = Shape::new("N").whole(LAYER_NUMBER) => 4,
         }
+    }
+
+    #[test]
+    fn a_default_that_is_a_value_is_the_fields_its_word_and_left_out_of_the_header() {
+        let mut o = Demo::default();
+        assert_eq!((o.fraction, o.count), (0.5, 4));
+        let (fraction, count) = (Demo::spec("fraction").unwrap(), Demo::spec("count").unwrap());
+        assert_eq!(((fraction.default)(), (count.default)()), (Some("0.5".into()), Some("4".into())));
+        o.set(fraction, Value::Number(0.5)).unwrap();
+        assert_eq!(o.header(), "", "given at its default: the same run");
+        o.set(fraction, fraction.parse("0.25").unwrap()).unwrap();
+        o.set(count, count.parse("12").unwrap()).unwrap();
+        assert_eq!(o.header(), "--fraction 0.25 --count 12");
+        let err = o.set(count, Value::Number(2.5)).unwrap_err();
+        assert_eq!(err.spelled(Spelling::Keyword), "count: 2.5 is not a whole number");
+        let err = o.set(fraction, Value::Number(2.0)).unwrap_err();
+        assert_eq!(err.spelled(Spelling::Flag), "--fraction 2 is out of range: 0 to 1");
+        assert_eq!((o.fraction, o.count), (0.25, 12), "a refused value leaves the option as it was");
     }
 
     #[test]
