@@ -146,23 +146,6 @@ where
     }
 }
 
-/// A clap value parser for `N` comma-separated numbers, each within `range`, for flags such as
-/// `--bed 220,220,250` or `--origin 10,20`.
-pub fn numbers_in<const N: usize>(
-    range: Range<f64>,
-) -> impl Fn(&str) -> Result<[f64; N], String> + Clone + Send + Sync + 'static {
-    move |text| {
-        let parts: Vec<&str> = text.split(',').collect();
-        let parts: [&str; N] =
-            parts.try_into().map_err(|_| format!("expected {N} comma-separated numbers, got {text:?}"))?;
-        let mut out = [0.0; N];
-        for (slot, part) in out.iter_mut().zip(parts) {
-            *slot = in_range(range)(part).map_err(|e| format!("{}: {e}", part.trim()))?;
-        }
-        Ok(out)
-    }
-}
-
 /// Writes `bytes` to `path` through a temporary file renamed into place (see `write_file`).
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     write_file(path, |out| -> Result<()> { Ok(out.write_all(bytes)?) })

@@ -1,12 +1,12 @@
-//! The CLI's side of finishing a transform's output (`gweave_sim::finish`): the header names
-//! the run by its command line as typed, canonicalised by the command's own clap definitions,
-//! which only the CLI has.
+//! The CLI's side of finishing a generated output that has no options type yet (`mix
+//! --calibration-card`; every job with one writes its header from its options value,
+//! `gweave_sim::transform::command_line`): the header names the run by its command line as
+//! typed, canonicalised by the command's own clap definitions, which only the CLI has.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use gweave::gcode::writer::Target;
-use gweave::post::metadata::Figures;
 
 /// Runs `write` into a scratch file, then writes that file to `target` with this run's header
 /// and its metadata recomputed (`gweave_sim::finish::with_metadata`).
@@ -16,26 +16,6 @@ pub fn with_metadata<R>(
     write: impl FnOnce(&Target) -> Result<R>,
 ) -> Result<(R, Option<PathBuf>)> {
     gweave_sim::finish::with_metadata(input, target, &command_line(input), write)
-}
-
-/// [`with_metadata`] for a command that times its own output (`own_time_s`, s).
-pub fn with_metadata_timed<R>(
-    input: Option<&Path>,
-    target: &Target,
-    write: impl FnOnce(&Target) -> Result<R>,
-    own_time_s: impl FnOnce(&R) -> Option<f64>,
-) -> Result<(R, Option<PathBuf>)> {
-    gweave_sim::finish::with_metadata_timed(input, target, &command_line(input), write, own_time_s)
-}
-
-/// Writes straight to `target` what `write` writes, between this run's header and the footer
-/// of the `figures` it knows (`gweave_sim::finish::with_own_figures`).
-pub fn with_own_figures<R>(
-    target: &Target,
-    write: impl FnOnce(&mut dyn std::io::Write) -> Result<R>,
-    figures: impl FnOnce(&R) -> Figures,
-) -> Result<(R, Option<PathBuf>)> {
-    gweave_sim::finish::with_own_figures(target, &command_line(None), write, figures)
 }
 
 /// Flags that say where the G-code comes from and goes, or how the run reports, not what it

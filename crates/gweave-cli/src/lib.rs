@@ -8,7 +8,6 @@ mod cmd;
 mod common;
 mod files;
 mod finish;
-mod firmware_arg;
 mod format;
 mod options;
 mod progress;

@@ -110,6 +110,7 @@ pub fn failed_with<E: std::error::Error + Send + Sync + 'static>(spelled: String
 #[cfg(test)]
 mod tests {
     use super::*;
+    use gweave::gen::raster_job::RasterOptions;
     use gweave::post::mix::MixOptions;
     use gweave::post::purge_shift::PurgeShiftOptions;
     use gweave::render::job::PreviewOptions;
@@ -152,6 +153,27 @@ mod tests {
         flags_match_the_declaration::<SimOptions>();
         flags_match_the_declaration::<EstimateOptions>();
         flags_match_the_declaration::<PreviewOptions>();
+        flags_match_the_declaration::<RasterOptions>();
+    }
+
+    #[test]
+    fn raster_keeps_its_flags_defaults_and_conflicts() {
+        let o: RasterOptions =
+            parse(&["--dialect", "reprap", "--fire-order", "before", "--origin", "10,20", "--heads", "2"])
+                .unwrap();
+        assert_eq!((o.threshold, o.density, o.pattern_columns), (0.5, 1, 4), "the defaults");
+        assert_eq!((o.origin, o.heads), (Some([10.0, 20.0]), Some(2)));
+        assert_eq!(
+            o.header(),
+            "--fire-order before --origin 10,20 --heads 2 --dialect reprapfirmware",
+            "the defaults left out, the dialect by its name"
+        );
+        let err = parse::<RasterOptions>(&["--head", "h.toml", "--machine", "binder-jet"]).unwrap_err();
+        assert!(err.contains("'--head <PROFILE.toml>' cannot be used with '--machine <TOML|NAME>'"), "{err}");
+        let err = parse::<RasterOptions>(&["--dialect", "klipper"]).unwrap_err();
+        assert!(err.contains("klipper has no inkjet fire command"), "{err}");
+        let err = parse::<RasterOptions>(&["--heads", "1.5"]).unwrap_err();
+        assert!(err.contains("for '--heads <N>': 1.5 is not a whole number"), "{err}");
     }
 
     #[test]

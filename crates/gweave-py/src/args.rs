@@ -5,7 +5,6 @@
 use std::path::{Path, PathBuf};
 
 use gweave::bed::Bed;
-use gweave::firmware::Firmware;
 use gweave::gcode::writer::Target;
 use gweave::range::{Quantity, Range};
 use pyo3::exceptions::{PyOSError, PyValueError};
@@ -24,12 +23,6 @@ pub fn os_error(path: &Path, e: &std::io::Error) -> PyErr {
         }
         None => PyOSError::new_err(format!("{filename}: {e}")),
     }
-}
-
-/// A firmware by its name or an older spelling (`dialect="reprapfirmware"`, `"reprap"`), or a
-/// `ValueError` naming the parameter.
-pub fn firmware(name: &str, value: Option<&str>) -> PyResult<Option<Firmware>> {
-    value.map(str::parse).transpose().map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
 }
 
 /// Where a transform writes, from the keywords every transform shares (`output`, `in_place`,

@@ -5,7 +5,6 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 mod args;
-mod finish;
 mod interrupt;
 mod options;
 mod preview;
@@ -48,7 +47,6 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(options::job_options, m)?)?;
     // binder-jet raster
     m.add_function(wrap_pyfunction!(raster::raster_json, m)?)?;
-    m.add_function(wrap_pyfunction!(raster::raster_test_pattern_json, m)?)?;
     m.add_function(wrap_pyfunction!(raster::slice_raster_json, m)?)?;
     // purge-shift
     m.add_function(wrap_pyfunction!(transform::purge_shift_json, m)?)?;

@@ -54,13 +54,17 @@ pub fn failed(e: TransformError) -> PyErr {
 }
 
 /// The options of the job `command` (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`, `sim`,
-/// `estimate`, `preview`: `gweave_sim::transform::JOBS`, `gweave_sim::reading::JOBS`) as
+/// `estimate`, `preview`, `raster`: `gweave_sim::transform::JOBS`, `gweave_sim::reading::JOBS`,
+/// `gweave_sim::raster_job::JOBS`) as
 /// declared: a list of dicts `{"name", "flag", "kind", "count", "default", "range", "help"}`,
 /// for the tests that hold the typed wrappers to the declaration (and for
 /// documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
-    let jobs = || gweave_sim::transform::JOBS.iter().chain(gweave_sim::reading::JOBS);
+    let jobs = || {
+        let (transforms, reading) = (gweave_sim::transform::JOBS, gweave_sim::reading::JOBS);
+        transforms.iter().chain(reading).chain(gweave_sim::raster_job::JOBS)
+    };
     let Some((_, specs)) = jobs().find(|(name, _)| *name == command) else {
         let known: Vec<&str> = jobs().map(|(name, _)| *name).collect();
         return Err(PyValueError::new_err(format!("no job {command:?} ({})", known.join(", "))));

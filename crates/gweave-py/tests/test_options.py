@@ -31,6 +31,8 @@ JOBS = {
     "estimate": (gweave.estimate, "estimate_json", READING),
     # preview returns the picture, writes it to `output` if named, and its report on request.
     "preview": (gweave.preview, "preview_json", {"path", "output", "lenient", "report"}),
+    # raster reads layer images (or one .sl1), a list.
+    "raster": (gweave.raster, "raster_json", {"inputs", "output"}),
 }
 # Keywords Python takes in a wider type than the declaration's, turned into the command line's
 # text by the wrapper before the engine reads it: (annotation, default).
@@ -48,6 +50,10 @@ ANNOTATION = {
     "texts": ("Optional[Sequence[str]]", None),
     "numbers": ("Optional[Sequence[float]]", None),
 }
+
+
+# A number or count whose default is a value: its annotation in the wrapper, and its type.
+VALUED = {"number": ("float", float), "whole": ("int", int)}
 
 
 def declared(command: str) -> Dict[str, Dict[str, Any]]:
@@ -71,6 +77,10 @@ def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(co
         elif o["kind"] == "flag":
             # A switch off by default, or unset (keep_arc_length=False turns a config's on off).
             expected = ("bool", False) if o["default"] == "false" else ("Optional[bool]", None)
+        elif o["kind"] in VALUED and o["default"] is not None:
+            # A number or count whose default is a value (raster's threshold=0.5, density=1).
+            annotation, kind = VALUED[o["kind"]]
+            expected = (annotation, kind(o["default"]))
         else:
             expected = ANNOTATION[o["kind"]]
         assert (p.annotation, p.default) == expected, name
@@ -263,3 +273,35 @@ def test_preview_writes_its_output_whole_and_refuses_as_the_cli_does(data, tmp_p
     with pytest.raises(OSError, match="no/p.png"):
         gweave.preview(cura, output=tmp_path / "no" / "p.png", size=(64, 48))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.gcode", "cli.svg", "p.png", "p.svg"]
+
+
+def test_the_test_pattern_wrapper_takes_raster_options_with_their_defaults():
+    """`raster_test_pattern` is `raster(test_pattern=True)` with the options a pattern uses:
+    each is one of raster's, with the same annotation and default."""
+    raster = inspect.signature(gweave.raster).parameters
+    pattern = inspect.signature(gweave.raster_test_pattern).parameters
+    for name, p in pattern.items():
+        if name != "output":
+            assert (p.annotation, p.default) == (raster[name].annotation, raster[name].default), name
+    assert set(pattern) - {"output"} <= set(declared("raster"))
+
+
+def test_raster_is_checked_and_headed_from_its_options(tmp_path):
+    """Regression (issue 40): raster's keywords were a hand-kept signature and its header a
+    hand-kept `_flags` list with the defaults typed again; both come from the declaration now."""
+    layers = Path(__file__).resolve().parents[3] / "examples" / "raster" / "layers"
+    out = tmp_path / "r.gcode"
+    gweave.raster(layers, out, threshold=0.5, density=2, dialect="reprap", origin=(10, 20.5), fast_estimate=True)
+    header = out.read_text().splitlines()[0]
+    assert header == (
+        f"; gweave {gweave.__version__} raster --density 2 --origin 10,20.5 --dialect reprapfirmware "
+        "--fast-estimate (generated)"
+    )
+    with pytest.raises(ValueError, match=r"^density = 17 is out of range: 1 to 16 fires per pixel$"):
+        gweave.raster(layers, out, density=17)
+    with pytest.raises(TypeError, match=r"^density: "):
+        gweave.raster(layers, out, density=1.5)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"^fire_order: unknown variant `sideways`, expected `after` or `before`$"):
+        gweave.raster(layers, out, fire_order="sideways")
+    with pytest.raises(ValueError, match=r"^pixel_mm and dpi: give one of them$"):
+        gweave.raster(layers, out, pixel_mm=0.1, dpi=300)

@@ -101,7 +101,7 @@ def test_raster_for_the_binder_jet_machine_passes_its_recoat_checks(tmp_path):
     text = out.read_text()
     assert "G1 Y195 F300\n" in text and text.splitlines()[0].endswith(" raster --machine binder-jet --fast-estimate (generated)")
     assert gweave.sim(out, machine="binder-jet")["warnings"] == []
-    with pytest.raises(ValueError, match="head or machine"):
+    with pytest.raises(ValueError, match="^machine and head: give one of them$"):
         gweave.raster(EXAMPLES / "layers", tmp_path / "x.gcode", machine="binder-jet", head=EXAMPLES / "c6602.toml")
     with pytest.raises(ValueError, match="has no inkjet printhead"):
         gweave.raster(EXAMPLES / "layers", tmp_path / "x.gcode", machine="prusa-mk3")

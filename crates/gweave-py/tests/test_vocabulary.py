@@ -50,11 +50,9 @@ MAP = {
                 f: f.replace("-", "_")
                 for f in (
                     "head machine threshold invert flip-y one-way fire-order density origin layer-height pixel-mm dpi "
-                    "heads channels recoat start end dialect feed fast-estimate"
+                    "heads channels recoat start end dialect feed fast-estimate test-pattern pattern-columns"
                 ).split()
             },
-            "test-pattern": "- a function of its own: raster_test_pattern",
-            "pattern-columns": "- raster_test_pattern(pattern_columns=)",
         },
         ["inputs"],
     ),

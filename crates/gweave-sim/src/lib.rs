@@ -40,6 +40,7 @@ mod link;
 mod motion;
 pub mod plot;
 mod profile;
+pub mod raster_job;
 pub mod reading;
 #[cfg(any(test, feature = "test-support"))]
 pub mod test_support;

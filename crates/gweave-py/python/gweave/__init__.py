@@ -15,6 +15,7 @@ Example::
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
@@ -175,42 +176,6 @@ def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool 
 # ---- binder-jet raster ----
 
 
-def _word(value: Any) -> str:
-    """One value as the command line would have it: ``20`` for 20.0, a path as its text, a
-    pair as ``x,y``; quoted as gweave's header quotes a word with a space or a quote."""
-    if isinstance(value, (tuple, list)):
-        text = ",".join(_word(v) for v in value)
-    elif isinstance(value, float) and value.is_integer():
-        text = str(int(value))
-    elif isinstance(value, (bytes, os.PathLike)):
-        text = os.fsdecode(value)
-    else:
-        text = str(value)
-    if text == "" or any(c in text for c in " \t'\""):
-        return json.dumps(text)
-    return text
-
-
-def _flags(*flags: Tuple[str, Any]) -> str:
-    """The options of the CLI run equivalent to a call, for the header the transform writes
-    (``; gweave 0.1.0 mix --purge-mm 20 (generated)``): ``(flag, value)`` pairs with the CLI's
-    flag names; None and False are left out, True is the bare flag, a list repeats the flag."""
-    words = []
-    for flag, value in flags:
-        for v in value if isinstance(value, list) else [value]:
-            if v is None or v is False:
-                continue
-            words.append(flag)
-            if v is not True:
-                words.append(_word(v))
-    return " ".join(words)
-
-
-def _origin(origin: Optional[Sequence[float]]) -> Optional[Tuple[float, float]]:
-    """A raster's ``origin`` keyword as the engine takes it: None keeps the machine's or the default."""
-    return None if origin is None else (float(origin[0]), float(origin[1]))
-
-
 def raster(
     inputs: Union[PathLike, Sequence[PathLike]],
     output: PathLike,
@@ -235,68 +200,32 @@ def raster(
     dialect: Optional[str] = None,
     feed: Optional[float] = None,
     fast_estimate: bool = False,
+    test_pattern: bool = False,
+    pattern_columns: int = 4,
 ) -> Report:
     """Layer images (folders, globs, image files) or one ``.sl1`` to binder-jet inkjet G-code.
 
     Per inked column: ``G1 X``, ``M400``, ``M700 P<head> S<bits>`` (``dialect="reprapfirmware"``: M578;
     ``"reprap"`` still accepted; ``fire_order="before"``: fire, wait, then move, the binder-jet
-    seed's order).
+    seed's order). A pixel at or above ``threshold`` (a fraction of full scale) gets binder, a
+    dark one with ``invert=True``; ``flip_y=True`` prints the images' first row at the far edge;
+    ``one_way=True`` prints every pass left to right; ``density`` fires per pixel.
     Units: ``origin`` mm, ``layer_height`` mm, ``pixel_mm`` mm (or ``dpi``), ``feed`` mm/min;
+    ``heads`` heads, one image channel each as ``channels`` lists them (``"r,b"``);
     ``recoat``/``start``/``end`` are files of G-code. ``head`` is a printhead profile TOML;
     ``machine`` (instead) an inkjet machine profile, a file or a built-in name (``binder-jet``):
     its printhead, powder recoat and canvas origin (the default ``origin``, else 20, 20 mm).
+    ``fast_estimate=True`` times the print from the path at the feed rate instead of the planner.
+    ``test_pattern=True`` writes the nozzle test pattern instead (no ``inputs``: give ``[]``),
+    ``pattern_columns`` columns per nozzle address (see :func:`raster_test_pattern`).
     Returns the report of ``gweave raster --json`` (layers, bands, columns, drops per head,
     binder volume, ``time`` with the planner's estimate).
     """
-    paths = [inputs] if isinstance(inputs, (str, bytes, os.PathLike)) else list(inputs)
-    return json.loads(
-        _gweave.raster_json(
-            [_path(p, "inputs") for p in paths],
-            _path(output, "output"),
-            head=_opt_path(head, "head"),
-            machine=_opt_path(machine, "machine"),
-            threshold=threshold,
-            invert=invert,
-            flip_y=flip_y,
-            one_way=one_way,
-            fire_order=fire_order,
-            density=density,
-            origin=_origin(origin),
-            layer_height=layer_height,
-            pixel_mm=pixel_mm,
-            dpi=dpi,
-            heads=heads,
-            channels=channels,
-            recoat=_opt_path(recoat, "recoat"),
-            start=_opt_path(start, "start"),
-            end=_opt_path(end, "end"),
-            dialect=dialect,
-            feed=feed,
-            fast_estimate=fast_estimate,
-            options=_flags(
-                ("--head", head),
-                ("--machine", machine),
-                ("--threshold", None if threshold == 0.5 else threshold),
-                ("--invert", invert),
-                ("--flip-y", flip_y),
-                ("--one-way", one_way),
-                ("--fire-order", None if fire_order == "after" else fire_order),
-                ("--density", None if density == 1 else density),
-                ("--origin", None if origin is None else tuple(origin)),
-                ("--layer-height", layer_height),
-                ("--pixel-mm", pixel_mm),
-                ("--dpi", dpi),
-                ("--heads", heads),
-                ("--channels", channels),
-                ("--recoat", recoat),
-                ("--start", start),
-                ("--end", end),
-                ("--dialect", dialect),
-                ("--feed", feed),
-                ("--fast-estimate", fast_estimate),
-            ),
-        )
-    )
+    arguments = dict(locals())
+    sources = arguments.pop("inputs")
+    paths = [sources] if isinstance(sources, (str, bytes, os.PathLike)) else list(sources)
+    compiled = functools.partial(_gweave.raster_json, [_path(p, "inputs") for p in paths])
+    return _job(compiled, arguments, ("output",))
 
 
 def raster_test_pattern(
@@ -310,27 +239,8 @@ def raster_test_pattern(
     origin: Optional[Sequence[float]] = None,
 ) -> Report:
     """Write a nozzle test pattern (``gweave raster --test-pattern``): ``pattern_columns`` columns
-    per nozzle address, each address alone."""
-    return json.loads(
-        _gweave.raster_test_pattern_json(
-            _path(output, "output"),
-            head=_opt_path(head, "head"),
-            machine=_opt_path(machine, "machine"),
-            heads=heads,
-            dialect=dialect,
-            columns=pattern_columns,
-            origin=_origin(origin),
-            options=_flags(
-                ("--test-pattern", True),
-                ("--head", head),
-                ("--machine", machine),
-                ("--heads", heads),
-                ("--dialect", dialect),
-                ("--pattern-columns", None if pattern_columns == 4 else pattern_columns),
-                ("--origin", None if origin is None else tuple(origin)),
-            ),
-        )
-    )
+    per nozzle address, each address alone; the other keywords as for :func:`raster`."""
+    return raster([], test_pattern=True, **locals())
 
 
 def slice_raster(

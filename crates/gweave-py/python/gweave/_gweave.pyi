@@ -21,44 +21,8 @@ def cat_json(
     lenient: bool = False,
 ) -> str: ...
 
-# binder-jet raster
-def raster_json(
-    inputs: List[str],
-    output: str,
-    *,
-    head: Optional[str] = None,
-    machine: Optional[str] = None,
-    threshold: float = 0.5,
-    invert: bool = False,
-    flip_y: bool = False,
-    one_way: bool = False,
-    fire_order: str = "after",
-    density: int = 1,
-    origin: Optional[Tuple[float, float]] = None,
-    layer_height: Optional[float] = None,
-    pixel_mm: Optional[float] = None,
-    dpi: Optional[float] = None,
-    heads: Optional[int] = None,
-    channels: Optional[str] = None,
-    recoat: Optional[str] = None,
-    start: Optional[str] = None,
-    end: Optional[str] = None,
-    dialect: Optional[str] = None,
-    feed: Optional[float] = None,
-    fast_estimate: bool = False,
-    options: str = "",
-) -> str: ...
-def raster_test_pattern_json(
-    output: str,
-    *,
-    head: Optional[str] = None,
-    machine: Optional[str] = None,
-    heads: Optional[int] = None,
-    dialect: Optional[str] = None,
-    columns: int = 4,
-    origin: Optional[Tuple[float, float]] = None,
-    options: str = "",
-) -> str: ...
+# binder-jet raster (its options: `job_options("raster")`)
+def raster_json(inputs: List[str], output: str, **options: Any) -> str: ...
 def slice_raster_json(
     stl: str, out_dir: str, *, layer_height: float, dpi: float = 96.0, pixel_mm: Optional[float] = None, margin: int = 0
 ) -> str: ...

@@ -257,11 +257,11 @@ mod tests {
     /// directly, the file is the same to the byte.
     #[test]
     fn a_raster_written_directly_is_the_measured_file_to_the_byte() {
-        use gweave::gen::raster_job::{JobOptions, JobReport};
+        use gweave::gen::raster_job::{JobReport, RasterOptions, Setup};
         use gweave::pass::Quiet;
         let dir = tempfile::tempdir().unwrap();
         let layers = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster/layers");
-        let job = JobOptions { inputs: vec![layers], ..JobOptions::default() }.job().unwrap();
+        let job = Setup::new(vec![layers], RasterOptions::default()).job().unwrap();
         assert!(job.knows_its_figures());
         // The planner times it as it streams out (the default: no `--fast-estimate`).
         let timer = crate::Estimator::line_timer;

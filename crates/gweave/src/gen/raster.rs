@@ -92,9 +92,9 @@ pub enum RasterError {
 /// Fires per pixel (binder saturation): past 16 the powder is flooded.
 pub const DENSITY: Range<u32> = Range::new(1, 16, "fires per pixel");
 /// Columns per nozzle address in the test pattern.
-pub const PATTERN_COLUMNS: Range<usize> = Range::new(1, 100, "columns");
+pub const PATTERN_COLUMNS: Range<u32> = Range::new(1, 100, "columns");
 /// Heads a job drives (the fire command's P).
-pub const HEADS: Range<usize> = Range::new(1, 16, "heads");
+pub const HEADS: Range<u32> = Range::new(1, 16, "heads");
 /// Fraction of full scale at or above which a pixel gets binder.
 pub const THRESHOLD: Range<f64> = Range::new(0.0, 1.0, "");
 
@@ -525,9 +525,9 @@ pub fn test_pattern<W: Write>(
     out: W,
     profile: &PrintheadProfile,
     cfg: &RasterConfig,
-    group_columns: usize,
+    group_columns: u32,
 ) -> Result<RasterReport, RasterError> {
-    PATTERN_COLUMNS.check("pattern columns", group_columns)?;
+    let group_columns = PATTERN_COLUMNS.check("pattern columns", group_columns)? as usize;
     let mut w = RasterWriter::new(out, profile, cfg, None)?;
     w.begin_layer();
     let n = profile.nozzle_count as usize;

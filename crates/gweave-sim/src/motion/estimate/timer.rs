@@ -38,7 +38,7 @@ mod tests {
     use std::path::Path;
 
     use gweave::gcode::writer::Target;
-    use gweave::gen::raster_job::JobOptions;
+    use gweave::gen::raster_job::{RasterOptions, Setup};
     use gweave::pass::Quiet;
 
     use super::*;
@@ -48,8 +48,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("badge.gcode");
         let layers = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster/layers");
-        let options = JobOptions { inputs: vec![layers], flip_y: true, density: 2, ..JobOptions::default() };
-        let rep = options
+        let options = RasterOptions { flip_y: true, density: 2, ..RasterOptions::default() };
+        let rep = Setup::new(vec![layers.clone()], options.clone())
             .job()
             .unwrap()
             .run(&Target::File(out.clone()), &mut Quiet, Estimator::line_timer)
@@ -58,7 +58,7 @@ mod tests {
         assert_eq!(rep.time.method, "planner");
         assert_eq!(rep.time.motion_s, whole.total_s);
         // The planner's time exceeds the feed-rate bound: every column starts and stops.
-        let fast = JobOptions { fast_estimate: true, ..options }.job().unwrap();
+        let fast = Setup::new(vec![layers], RasterOptions { fast_estimate: true, ..options }).job().unwrap();
         let rep_fast = fast.run(&Target::File(out), &mut Quiet, Estimator::line_timer).unwrap();
         assert_eq!(rep_fast.time.method, "feed");
         assert!(rep.time.total_s > rep_fast.time.total_s, "{:?} {:?}", rep.time, rep_fast.time);

@@ -142,7 +142,7 @@ impl InputSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gen::raster_job::JobOptions;
+    use crate::gen::raster_job::{RasterOptions, Setup};
 
     fn examples() -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster")
@@ -174,9 +174,10 @@ mod tests {
         assert!(spec(vec![PathBuf::from("a.sl1"), layers], None, "").resolve().is_err());
         assert!(parse_channels("r,x").is_err());
         let sl1 = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/raster/sphere.sl1");
-        let with_dpi = JobOptions { inputs: vec![sl1.clone()], dpi: Some(300.0), ..JobOptions::default() };
+        let with_dpi =
+            Setup::new(vec![sl1.clone()], RasterOptions { dpi: Some(300.0), ..RasterOptions::default() });
         assert!(with_dpi.job().is_err());
-        let job = JobOptions { inputs: vec![sl1], ..JobOptions::default() }.job().unwrap();
+        let job = Setup::new(vec![sl1], RasterOptions::default()).job().unwrap();
         assert!(matches!(job.source, Source::Sl1 { .. }));
         assert_eq!(job.profile.heads.len(), 1);
     }

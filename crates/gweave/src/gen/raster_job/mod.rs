@@ -14,11 +14,8 @@ use serde::Serialize;
 
 use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
 use super::printhead::{PrintheadError, PrintheadProfile};
-use super::raster::{
-    test_pattern, FireOrder, RasterConfig, RasterError, RasterReport, RasterWriter, HEADS, THRESHOLD,
-};
+use super::raster::{test_pattern, RasterConfig, RasterError, RasterReport, RasterWriter, HEADS, THRESHOLD};
 use super::sl1::{Sl1Error, Sl1Reader};
-use crate::firmware::Firmware;
 use crate::gcode::writer::{Output, Target};
 use crate::pass::Progress;
 use crate::range::{OutOfRange, DPI, PIXEL_MM};
@@ -106,7 +103,9 @@ macro_rules! invalid {
 }
 
 mod inputs;
+mod options;
 pub use inputs::{parse_channels, InputSpec, Source};
+pub use options::{FireDialect, RasterOptions};
 
 /// The text of a file the job reads.
 fn read_text(path: &Path) -> Result<String> {
@@ -383,51 +382,16 @@ fn pipelined<W: Write>(
     })
 }
 
-/// Every setting of a job as the user gives it (CLI flags, Python keywords), turned into the
-/// library's validated types by [`JobOptions::job`].
-#[derive(Debug, Clone)]
-pub struct JobOptions {
+/// A raster job as given: the layer sources, the options, and the printhead the options name
+/// (a `head` file, or the machine profile's printhead, which is read above the engine).
+#[derive(Debug, Clone, Default)]
+pub struct Setup {
     /// Folders, globs, image files in layer order, or one `.sl1` (`INPUTS`).
     pub inputs: Vec<PathBuf>,
+    /// The options ([`RasterOptions`]).
+    pub options: RasterOptions,
     /// The printhead (None: the HP C6602 defaults).
     pub head: Option<HeadSource>,
-    /// Fraction of full scale at or above which a pixel gets binder.
-    pub threshold: f64,
-    /// Dark pixels get binder.
-    pub invert: bool,
-    /// The images' first row is the far edge (+Y up).
-    pub flip_y: bool,
-    /// Every pass left to right instead of serpentine.
-    pub one_way: bool,
-    /// Fire after the move onto a column (default) or, as binder-jet printers have done, before
-    /// the move to the next one.
-    pub fire_order: FireOrder,
-    /// Fires per pixel.
-    pub density: u32,
-    /// Bed position of the image corner, mm (None: the machine's canvas origin, else 20, 20).
-    pub origin_mm: Option<(f64, f64)>,
-    /// Layer thickness, mm (None: the `.sl1`'s own, else the generator's default).
-    pub layer_height_mm: Option<f64>,
-    /// Pixel size of the images, mm.
-    pub pixel_mm: Option<f64>,
-    /// Resolution of the images, dots per inch (pixel = 25.4 / dpi mm).
-    pub dpi: Option<f64>,
-    /// Heads to use.
-    pub heads: Option<usize>,
-    /// One image channel per head, `r,b` (r, g, b, luma).
-    pub channels: Option<String>,
-    /// A file with the G-code between layers (powder recoat).
-    pub recoat: Option<PathBuf>,
-    /// A file with the G-code before the first layer.
-    pub start: Option<PathBuf>,
-    /// A file with the G-code after the last layer.
-    pub end: Option<PathBuf>,
-    /// The fire command's firmware (None: the profile's).
-    pub dialect: Option<Firmware>,
-    /// Carriage feed rate, mm/min (None: the generator's default).
-    pub feed_mm_min: Option<f64>,
-    /// Time the job from the path at the feed rate instead of running the planner.
-    pub fast_estimate: bool,
 }
 
 /// Where a job's printhead comes from.
@@ -447,35 +411,14 @@ pub enum HeadSource {
     },
 }
 
-impl Default for JobOptions {
-    fn default() -> Self {
-        let c = RasterConfig::default();
-        JobOptions {
-            inputs: Vec::new(),
-            head: None,
-            threshold: ThresholdOptions::default().threshold,
-            invert: false,
-            flip_y: false,
-            one_way: false,
-            fire_order: FireOrder::After,
-            density: c.density,
-            origin_mm: None,
-            layer_height_mm: None,
-            pixel_mm: None,
-            dpi: None,
-            heads: None,
-            channels: None,
-            recoat: None,
-            start: None,
-            end: None,
-            dialect: None,
-            feed_mm_min: None,
-            fast_estimate: false,
-        }
+impl Setup {
+    /// `inputs` with `options`, the printhead the options' `head` file (a machine's is set by
+    /// the caller that reads the machine profile).
+    pub fn new(inputs: Vec<PathBuf>, options: RasterOptions) -> Self {
+        let head = options.head.clone().map(HeadSource::File);
+        Setup { inputs, options, head }
     }
-}
 
-impl JobOptions {
     /// The printhead profile: `head` file or the C6602 defaults, with `dialect` applied.
     pub fn profile(&self) -> Result<PrintheadProfile> {
         let mut p = match &self.head {
@@ -485,7 +428,7 @@ impl JobOptions {
             Some(HeadSource::Machine { printhead, .. }) => (**printhead).clone(),
             None => PrintheadProfile::default(),
         };
-        if let Some(d) = self.dialect {
+        if let Some(FireDialect(d)) = self.options.dialect {
             p.dialect = d;
             // A firmware without a fire command is refused here, as in a profile.
             p.validate()?;
@@ -497,8 +440,8 @@ impl JobOptions {
     /// generator's default.
     fn origin_mm(&self) -> (f64, f64) {
         let default = RasterConfig::default();
-        match (&self.origin_mm, &self.head) {
-            (Some(o), _) => *o,
+        match (&self.options.origin, &self.head) {
+            (Some([x, y]), _) => (*x, *y),
             (None, Some(HeadSource::Machine { origin_mm, .. })) => *origin_mm,
             (None, _) => (default.origin_x_mm, default.origin_y_mm),
         }
@@ -510,19 +453,19 @@ impl JobOptions {
         let mut c = RasterConfig {
             origin_x_mm,
             origin_y_mm,
-            layer_height_mm: self.layer_height_mm,
-            serpentine: !self.one_way,
-            fire_order: self.fire_order,
-            density: self.density,
+            layer_height_mm: self.options.layer_height,
+            serpentine: !self.options.one_way,
+            fire_order: self.options.fire_order,
+            density: self.options.density,
             ..RasterConfig::default()
         };
-        if let Some(f) = self.feed_mm_min {
+        if let Some(f) = self.options.feed {
             c.feed_mm_min = f;
         }
         for (file, slot) in [
-            (&self.start, &mut c.start_gcode),
-            (&self.end, &mut c.end_gcode),
-            (&self.recoat, &mut c.recoat_gcode),
+            (&self.options.start, &mut c.start_gcode),
+            (&self.options.end, &mut c.end_gcode),
+            (&self.options.recoat, &mut c.recoat_gcode),
         ] {
             if let Some(path) = file {
                 *slot = read_text(path)?;
@@ -540,68 +483,75 @@ impl JobOptions {
 
     /// Resolves the inputs (lists folders and globs, reads no image) into the layer source and
     /// the heads it needs, so that a caller can check the files before any is read. The
-    /// numbers are checked first: the CLI's parser checked them already, Python keywords
-    /// arrive here unchecked.
+    /// numbers are checked first, for options made in code rather than read as a front end
+    /// reads them ([`crate::options::JobOptions::set`]).
     pub fn source(&self) -> Result<(Source, usize)> {
-        if self.pixel_mm.is_some() && self.dpi.is_some() {
+        let o = &self.options;
+        if o.pixel_mm.is_some() && o.dpi.is_some() {
             invalid!("give the image resolution once: pixel size or dpi");
         }
-        if let Some(px) = self.pixel_mm {
+        if let Some(px) = o.pixel_mm {
             PIXEL_MM.check("pixel_mm", px)?;
         }
-        if let Some(dpi) = self.dpi {
+        if let Some(dpi) = o.dpi {
             DPI.check("dpi", dpi)?;
         }
-        if let Some(heads) = self.heads {
+        if let Some(heads) = o.heads {
             HEADS.check("heads", heads)?;
         }
-        THRESHOLD.check("threshold", self.threshold)?;
+        THRESHOLD.check("threshold", o.threshold)?;
         let spec = InputSpec {
             inputs: self.inputs.clone(),
-            heads: self.heads,
-            channels: match &self.channels {
+            heads: self.heads(),
+            channels: match &o.channels {
                 Some(c) => parse_channels(c)?,
                 None => Vec::new(),
             },
             threshold: ThresholdOptions {
-                threshold: self.threshold,
-                invert: self.invert,
+                threshold: o.threshold,
+                invert: o.invert,
                 ..ThresholdOptions::default()
             },
-            flip_y: self.flip_y,
+            flip_y: o.flip_y,
         };
         spec.resolve()
     }
 
-    /// Builds the job from a resolved [`JobOptions::source`]: reads the profile and snippets.
+    /// The heads the options ask for, if they do.
+    fn heads(&self) -> Option<usize> {
+        self.options.heads.map(|h| h as usize)
+    }
+
+    /// Builds the job from a resolved [`Setup::source`]: reads the profile and snippets.
     pub fn job_from(&self, source: Source, heads: usize) -> Result<Job> {
-        if matches!(source, Source::Sl1 { .. }) && (self.pixel_mm.is_some() || self.dpi.is_some()) {
+        let o = &self.options;
+        if matches!(source, Source::Sl1 { .. }) && (o.pixel_mm.is_some() || o.dpi.is_some()) {
             invalid!("a .sl1 archive carries its own pixel size: drop the pixel size / dpi");
         }
         let profile = self.profile()?;
-        if profile.recoat.is_some() && self.recoat.is_some() {
+        if profile.recoat.is_some() && o.recoat.is_some() {
             invalid!(
                 "the printhead profile's [recoat] table and --recoat both describe the recoat: give one"
             );
         }
         Ok(Job {
             source,
-            profile: with_heads(&profile, self.heads.unwrap_or(heads)),
+            profile: with_heads(&profile, self.heads().unwrap_or(heads)),
             config: self.config()?,
-            pixel_mm: self.pixel_mm.or(self.dpi.map(|d| 25.4 / d)),
-            planner_estimate: !self.fast_estimate,
+            pixel_mm: o.pixel_mm.or(o.dpi.map(|d| 25.4 / d)),
+            planner_estimate: !o.fast_estimate,
         })
     }
 
-    /// Writes a nozzle test pattern (`columns` columns per nozzle address) to `target`; the
-    /// profile keeps its heads unless `heads` is set.
-    pub fn test_pattern(&self, target: &Target, columns: usize) -> Result<(RasterReport, PrintheadProfile)> {
-        let profile = match self.heads {
+    /// Writes a nozzle test pattern (the options' `pattern_columns` columns per nozzle address)
+    /// to `target`; the profile keeps its heads unless the options set them.
+    pub fn test_pattern(&self, target: &Target) -> Result<(RasterReport, PrintheadProfile)> {
+        let profile = match self.heads() {
             Some(h) => with_heads(&self.profile()?, h),
             None => self.profile()?,
         };
         let mut out = Output::create(target, None)?;
-        let rep = test_pattern(&mut out, &profile, &self.config()?, columns)?;
+        let rep = test_pattern(&mut out, &profile, &self.config()?, self.options.pattern_columns)?;
         out.commit()?;
         Ok((rep, profile))
     }
@@ -653,15 +603,12 @@ mod tests {
     fn the_planner_times_the_written_file_and_a_fast_estimate_never_asks_for_it() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("badge.gcode");
-        let options = JobOptions {
-            inputs: vec![examples().join("layers")],
-            flip_y: true,
-            density: 2,
-            ..JobOptions::default()
-        };
+        let options = RasterOptions { flip_y: true, density: 2, ..RasterOptions::default() };
+        let setup = |options| Setup::new(vec![examples().join("layers")], options);
         let seen = Lines::default();
         let timer = || Ok(Box::new(Lines(seen.0.clone())) as Box<dyn LineTimer>);
-        let rep = options.job().unwrap().run(&Target::File(out.clone()), &mut Quiet, timer).unwrap();
+        let rep =
+            setup(options.clone()).job().unwrap().run(&Target::File(out.clone()), &mut Quiet, timer).unwrap();
         let written = std::fs::read(&out).unwrap();
         let lines = written.split(|&b| b == b'\n').filter(|l| !l.is_empty()).count();
         assert_eq!(seen.0.borrow().len(), lines);
@@ -671,7 +618,7 @@ mod tests {
         assert!((rep.time.fire_s - 2.0 * 844.0 * 800e-6).abs() < 1e-12);
         assert_eq!(rep.time.total_s, rep.time.motion_s + rep.time.fire_s);
         assert_eq!(rep.images_read, 8);
-        let fast = JobOptions { fast_estimate: true, ..options }.job().unwrap();
+        let fast = setup(RasterOptions { fast_estimate: true, ..options }).job().unwrap();
         let never = || -> std::result::Result<Box<dyn LineTimer>, BoxError> {
             panic!("a fast estimate ran the planner")
         };
@@ -686,12 +633,9 @@ mod tests {
     #[test]
     fn a_raster_knows_its_figures_unless_the_user_gcode_extrudes_or_shows_progress() {
         let dir = tempfile::tempdir().unwrap();
-        let options = JobOptions {
-            inputs: vec![examples().join("layers")],
-            fast_estimate: true,
-            ..JobOptions::default()
-        };
-        let job = options.job().unwrap();
+        let options = RasterOptions { fast_estimate: true, ..RasterOptions::default() };
+        let setup = |options| Setup::new(vec![examples().join("layers")], options);
+        let job = setup(options.clone()).job().unwrap();
         assert!(job.knows_its_figures());
         let mut out = Vec::new();
         job.run_into(&mut out, &mut Quiet, || unreachable!("a fast estimate")).unwrap();
@@ -707,7 +651,7 @@ mod tests {
         let with_start = |gcode: &str| {
             let start = dir.path().join("start.gcode");
             std::fs::write(&start, gcode).unwrap();
-            JobOptions { start: Some(start), ..options.clone() }.job().unwrap().knows_its_figures()
+            setup(RasterOptions { start: Some(start), ..options.clone() }).job().unwrap().knows_its_figures()
         };
         assert!(with_start("G28 ; home\nM400\n"));
         assert!(!with_start("G28\nM73 P0 R10\n"));
@@ -729,8 +673,7 @@ mod tests {
         }
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("badge.gcode");
-        let job =
-            JobOptions { inputs: vec![examples().join("layers")], ..JobOptions::default() }.job().unwrap();
+        let job = Setup::new(vec![examples().join("layers")], RasterOptions::default()).job().unwrap();
         let e = job.run(&Target::File(out.clone()), &mut Quiet, || Ok(Box::new(Refuses))).unwrap_err();
         assert_eq!(e.to_string(), "estimating the print time");
         assert_eq!(std::error::Error::source(&e).unwrap().to_string(), "line 1: no");
