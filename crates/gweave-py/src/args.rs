@@ -4,9 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use gweave::bed::Bed;
-use gweave::gcode::writer::Target;
-use gweave::range::{Quantity, Range};
+use gweave::range::Quantity;
+use gweave::{Bed, Range, Target};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 

@@ -1,7 +1,7 @@
 //! Ctrl-C during a long call. Python's own SIGINT handler only notes the signal; the interpreter
 //! raises `KeyboardInterrupt` when it next runs Python code, which a call busy in Rust for
 //! minutes never does. So every call that may take long runs on a thread of its own under a
-//! `gweave::interrupt::Token`, while the caller's thread waits without the GIL and, every
+//! `gweave::Token`, while the caller's thread waits without the GIL and, every
 //! [`POLL`], takes it to ask Python whether a signal came (`Python::check_signals`, which runs
 //! the handlers). On `KeyboardInterrupt` (or whatever a handler raised) the token is stopped:
 //! the run fails at its next read or write, removes its scratch files and writes no output, and
@@ -13,7 +13,8 @@
 use std::sync::mpsc;
 use std::time::Duration;
 
-use gweave::interrupt::{run_under, Token};
+use gweave::interrupt::run_under;
+use gweave::Token;
 use pyo3::prelude::*;
 
 /// How often the waiting thread asks Python for signals: a stop within a tenth of a second,

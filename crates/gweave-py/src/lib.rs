@@ -26,11 +26,11 @@ fn err(e: gweave::Error) -> PyErr {
 }
 
 /// `lenient=` as `--lenient`.
-fn strictness(lenient: bool) -> gweave::pass::Strictness {
+fn strictness(lenient: bool) -> gweave::Strictness {
     if lenient {
-        gweave::pass::Strictness::Lenient
+        gweave::Strictness::Lenient
     } else {
-        gweave::pass::Strictness::Strict
+        gweave::Strictness::Strict
     }
 }
 

@@ -3,8 +3,9 @@
 //! `gweave/__init__.py` declares the typed keywords; `tests/test_options.py` holds them to
 //! [`job_options`].
 
-use gweave::options::{JobOptions, Kind, Spelling, Value};
+use gweave::options::{Kind, Spelling, Value};
 use gweave::rotary::RotaryError;
+use gweave::JobOptions;
 use gweave_sim::transform::TransformError;
 use pyo3::exceptions::{PyOSError, PyTypeError, PyValueError};
 use pyo3::prelude::*;

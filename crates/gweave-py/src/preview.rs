@@ -3,7 +3,7 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
-use gweave::pass::Quiet;
+use gweave::{Quiet, Toolpath, ToolpathOptions};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -12,7 +12,7 @@ use crate::{err, strictness, to_json};
 use gweave::gcode::layers::ALL_FEATURES;
 use gweave::options::Spelling;
 use gweave::render::job::{self, PreviewJobError, PreviewOptions};
-use gweave::render::{RenderError, Toolpath, ToolpathOptions};
+use gweave::render::RenderError;
 use pyo3::types::PyBytes;
 
 // ---- preview (render) ----

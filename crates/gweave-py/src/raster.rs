@@ -4,10 +4,9 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
-use gweave::gcode::writer::Target;
 use gweave::gen::raster_job::RasterOptions;
 use gweave::options::Spelling;
-use gweave::pass::Quiet;
+use gweave::{Quiet, Target};
 use gweave_sim::builtin::LoadError;
 use gweave_sim::raster_job::{Raster, RasterJobError};
 use pyo3::exceptions::{PyOSError, PyValueError};

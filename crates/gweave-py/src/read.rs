@@ -4,17 +4,16 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
-use gweave::check::{check_file, CheckOptions};
-use gweave::gcode::container::{self, Input};
-use gweave::gcode::diag::{Diagnostic, Finding};
+use gweave::gcode::container::{self};
+use gweave::gcode::diag::Diagnostic;
 use gweave::gcode::flavour::read_flavour;
 use gweave::gcode::lexer::{parse_into, parse_line};
-use gweave::gcode::line::{Block, Command, Value};
-use gweave::gcode::reader::{LineReader, Part};
-use gweave::gcode::state::{Effect, State, StateOptions, E, X, Y, Z};
-use gweave::pass::{Identity, Quiet};
-use gweave::run::Run;
-use gweave::stats::stats_file;
+use gweave::gcode::reader::Part;
+use gweave::gcode::state::{E, X, Y, Z};
+use gweave::{
+    check_file, stats_file, Block, CheckOptions, Command, Effect, Finding, Identity, Input, LineReader,
+    Quiet, Run, State, StateOptions, Value,
+};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

@@ -5,7 +5,6 @@
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use gweave::gcode::writer::Target;
 use gweave::rotary::cylinder::RotaryConfig;
 use gweave::rotary::helix::{
     self, Handedness, HelicalPath as RustHelicalPath, PrintSettings, Profile, Resolution,
@@ -13,6 +12,7 @@ use gweave::rotary::helix::{
 use gweave::rotary::options::{TubeOptions, WrapOptions};
 use gweave::rotary::report::merged_settings;
 use gweave::rotary::RotaryError;
+use gweave::Target;
 use gweave_sim::transform::{self, Job};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -186,7 +186,7 @@ pub(crate) fn write_helical_paths_json(
 ) -> PyResult<String> {
     let s: PathsSettings = merged_settings(config.as_deref(), &settings).map_err(rotary_err)?;
     let rust: Vec<RustHelicalPath> = paths.iter().map(|p| p.path.clone()).collect();
-    let mut out = gweave::gcode::writer::Output::create(&Target::File(output), None).map_err(err)?;
+    let mut out = gweave::Output::create(&Target::File(output), None).map_err(err)?;
     let summary = helix::write_paths(&s.machine, &s.print, &rust, std::io::BufWriter::new(&mut out));
     let summary = summary.map_err(|e| match paths.iter().find_map(|p| p.errors.lock().ok()?.take()) {
         Some(raised) => raised,

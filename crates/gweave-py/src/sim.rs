@@ -56,7 +56,7 @@ pub(crate) fn sim_json(
 ) -> PyResult<String> {
     let options: SimOptions = crate::options::read("sim", options)?;
     interruptible(py, || {
-        let simulation = reading::sim(&options, &path, &mut gweave::pass::Quiet).map_err(failed)?;
+        let simulation = reading::sim(&options, &path, &mut gweave::Quiet).map_err(failed)?;
         // The report `gweave sim --json` prints: the Marlin model's, or the controller core's.
         match simulation {
             gweave_sim::Simulation::Marlin { report, .. } => to_json(&report),
@@ -76,8 +76,7 @@ pub(crate) fn estimate_json(
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
     let options: EstimateOptions = crate::options::read("estimate", options)?;
-    let estimated =
-        interruptible(py, || reading::estimate(&options, &path, gweave::pass::Quiet).map_err(failed))??;
+    let estimated = interruptible(py, || reading::estimate(&options, &path, gweave::Quiet).map_err(failed))??;
     to_json(&estimated.report)
 }
 
