@@ -11,10 +11,10 @@ use std::path::{Path, PathBuf};
 
 use gweave::gcode::container;
 use gweave::gcode::flavour::read_firmware;
-use gweave::gcode::reader::{LineReader, Part};
+use gweave::gcode::reader::Part;
 use gweave::options::Spelling;
-use gweave::pass::Progress;
 use gweave::rotary::cylinder::RotaryConfig;
+use gweave::{LineReader, Progress};
 
 use crate::core_board::{self, CoreBoardError, CoreReport};
 use crate::interp::{Machine, Outcome, SimError, SimReport};
@@ -205,7 +205,7 @@ fn on_core(input: &Path, profile: &MachineProfile) -> Result<CoreReport, SimJobE
 #[cfg(test)]
 mod tests {
     use super::*;
-    use gweave::pass::Quiet;
+    use gweave::Quiet;
 
     /// The seed's M0 ends the program (it homes the axes, the seed's end of program): X500, past
     /// the bed, is never reached; Marlin's M0 goes on to it.

@@ -14,13 +14,12 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use gweave::gcode::writer::Target;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::RasterReport;
 use gweave::gen::raster_job::{BoxError, Job, JobError, JobReport, LineTimer, RasterOptions, Setup, Source};
-use gweave::options::{JobOptions, OptionError, OptionSpec, Spelling};
-use gweave::pass::{Progress, Strictness};
+use gweave::options::Spelling;
 use gweave::post::metadata::Figures;
+use gweave::{JobOptions, OptionError, OptionSpec, Progress, Strictness, Target};
 use serde::Serialize;
 
 use crate::builtin::{load_machine, LoadError};
@@ -173,7 +172,7 @@ fn target_name(target: &Target) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use gweave::pass::Quiet;
+    use gweave::Quiet;
 
     fn layers() -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster/layers")

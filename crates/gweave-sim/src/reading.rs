@@ -12,9 +12,9 @@
 
 use std::path::{Path, PathBuf};
 
-use gweave::options::{JobOptions, OptionError, OptionSpec, Problem, Shape, Spelling};
-use gweave::pass::Progress;
+use gweave::options::{Problem, Shape, Spelling};
 use gweave::render::job::PreviewOptions;
+use gweave::{JobOptions, OptionError, OptionSpec, Progress};
 
 use crate::inkjet::InkjetError;
 use crate::job::{simulate, SimJobError, SimSetup, Simulation};
@@ -223,7 +223,7 @@ fn slicer_profile(input: &Path) -> Result<(MachineProfile, Vec<String>), Reading
 #[cfg(test)]
 mod tests {
     use super::*;
-    use gweave::pass::Quiet;
+    use gweave::Quiet;
 
     fn fixture(name: &str) -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(name)

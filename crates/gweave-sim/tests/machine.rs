@@ -261,7 +261,7 @@ fn forty_hour_print_in_under_30_s() {
     let profile = MachineProfile::from_toml_str("[bed]\nx_mm = 400.0\ny_mm = 400.0\nz_mm = 400.0\n").unwrap();
     let mut m = Machine::new(profile).unwrap();
     let started = std::time::Instant::now();
-    let mut reader = gweave::gcode::reader::LineReader::new(BufReader::new(file));
+    let mut reader = gweave::LineReader::new(BufReader::new(file));
     let mut out = |_t: f64, _l: &str| {};
     while let Some(line) = reader.next_line().unwrap() {
         assert_eq!(m.execute(line.bytes, &mut out), Outcome::Ok);

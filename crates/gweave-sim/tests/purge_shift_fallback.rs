@@ -4,7 +4,8 @@
 
 use std::path::PathBuf;
 
-use gweave::post::purge_shift::{purge_shift_bytes, PurgeShiftConfig};
+use gweave::post::purge_shift::purge_shift_bytes;
+use gweave::PurgeShiftConfig;
 use gweave_sim::MachineProfile;
 use gweave_sim::{Machine, SimReport};
 

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use gweave::render::{Toolpath, ToolpathOptions};
+use gweave::{Toolpath, ToolpathOptions};
 use gweave_sim::plot::{speed_chart, ChartFormat};
 use gweave_sim::MachineProfile;
 use gweave_sim::{Machine, Outcome};

@@ -17,13 +17,13 @@ use std::fs::File;
 use std::io::{self, Read};
 use std::path::Path;
 
-use gweave::firmware::Firmware;
 use gweave::gcode::container;
 use gweave::gcode::ends::read_ends;
 use gweave::gcode::flavour::flavour_in;
-use gweave::pass::{Ctx, Pass};
+use gweave::pass::Ctx;
 use gweave::post::metadata::{is_progress_line, read_setting, Figures};
 use gweave::stats::StatsPass;
+use gweave::{Firmware, Pass};
 
 use super::growing::{Growing, Writer};
 use super::{FinishError, Result};
@@ -167,12 +167,14 @@ impl TallyPass {
 
 #[cfg(test)]
 mod tests {
-    use gweave::gcode::reader::{LineReader, Part};
+    use gweave::gcode::reader::Part;
+    use gweave::LineReader;
 
     use super::*;
     use crate::motion::estimate::{Estimate, Estimator};
-    use gweave::gcode::state::StateOptions;
-    use gweave::pass::{drive_reader, Reading, Strictness};
+    use gweave::pass::{drive_reader, Reading};
+    use gweave::StateOptions;
+    use gweave::Strictness;
 
     /// The serial pass the threads replaced: one estimator per mode fed every whole line, the
     /// clock read after each progress line.

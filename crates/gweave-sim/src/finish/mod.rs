@@ -18,9 +18,8 @@ use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::container;
-use gweave::gcode::temp::TempFile;
-use gweave::gcode::writer::{Output, Target};
 use gweave::post::metadata::{earlier_runs, header_line, write_footer, Figures, MetadataPass};
+use gweave::{Output, Target, TempFile};
 
 use crate::motion::estimate::EstimateError;
 
@@ -221,7 +220,7 @@ mod tests {
     /// included.
     #[test]
     fn a_transform_measured_while_it_writes_finishes_the_same_file_and_fails_cleanly() {
-        use gweave::gcode::writer::Output;
+        use gweave::Output;
         let dir = tempfile::tempdir().unwrap();
         let text = "; generated\nG92 E0\nM73 P0 R0\nG1 X10 E5 F600\nG1 X20 E9\nM73 P50 R1\n\
                     G1 X0 Y20 F3000\n; filament used [mm] = 1.00\n";
@@ -258,7 +257,7 @@ mod tests {
     #[test]
     fn a_raster_written_directly_is_the_measured_file_to_the_byte() {
         use gweave::gen::raster_job::{JobReport, RasterOptions, Setup};
-        use gweave::pass::Quiet;
+        use gweave::Quiet;
         let dir = tempfile::tempdir().unwrap();
         let layers = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster/layers");
         let job = Setup::new(vec![layers], RasterOptions::default()).job().unwrap();

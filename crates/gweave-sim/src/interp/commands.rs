@@ -20,10 +20,9 @@
 use std::collections::HashMap;
 use std::sync::OnceLock;
 
-use gweave::firmware::MixingCode;
-use gweave::gcode::line::{Block, Command, Value};
-use gweave::gcode::state::{self, Effect};
-use gweave::range::{self, OutOfRange, Range};
+use gweave::gcode::state::{self};
+use gweave::range::{self};
+use gweave::{Block, Command, Effect, MixingCode, OutOfRange, Range, Value};
 
 use super::{sd, Machine};
 use crate::motion::limits;
@@ -32,7 +31,7 @@ use crate::thermal::control;
 
 /// What a handler is given: the line, the code's number and the logical position before it.
 /// What the line does to the modal state is in the state
-/// ([`State::effect`](gweave::gcode::state::State::effect)), where handlers read and change it
+/// ([`State::effect`](gweave::State::effect)), where handlers read and change it
 /// in place: a move is too large to copy per line (docs/performance.md).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Call<'a> {

@@ -43,9 +43,9 @@ mod warning_text;
 use std::collections::BTreeMap;
 
 use gweave::gcode::effect::Motion;
-use gweave::gcode::line::Command;
 use gweave::gcode::retraction::Retraction;
 use gweave::gcode::state;
+use gweave::Command;
 use thiserror::Error;
 
 use crate::inkjet::recoat::RecoatCheck;
@@ -241,7 +241,7 @@ impl Machine {
     /// Reads the lines to come as `firmware` reads them: a file's, as `stats` reads it
     /// ([`gweave::gcode::flavour::read_firmware`]). Call before the first line; a host on the
     /// serial line is read as Marlin reads it.
-    pub fn read_as(&mut self, firmware: gweave::firmware::Firmware) {
+    pub fn read_as(&mut self, firmware: gweave::Firmware) {
         self.core.read_as(firmware);
     }
 
@@ -326,7 +326,7 @@ impl Machine {
         command: Command,
         spec: Option<&CommandSpec>,
         line: &[u8],
-    ) -> Result<(), gweave::range::OutOfRange> {
+    ) -> Result<(), gweave::OutOfRange> {
         let (code, spec) = match (command, spec) {
             (Command::None, _) => {
                 let number = match self.core.state().motion {

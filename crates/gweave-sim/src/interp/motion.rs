@@ -7,7 +7,8 @@
 //! enough to cruise (`d >= v^2 / a`), and `2 sqrt(d / a)` (a triangle) otherwise. The motors
 //! step the legs too, so the step totals include homing.
 
-use gweave::gcode::state::{self, Effect};
+use gweave::gcode::state::{self};
+use gweave::Effect;
 
 use super::{Machine, WarningKind};
 use crate::motion::kinematics::{Geometry, Pos};

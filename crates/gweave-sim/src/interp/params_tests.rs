@@ -2,7 +2,8 @@
 //! end of its range and a word that is not a number are refused with the uniform `echo:` reply,
 //! and the line changes nothing.
 
-use gweave::range::{self, Range};
+use gweave::range::{self};
+use gweave::Range;
 
 use super::{Machine, COMMANDS};
 use crate::profile::MachineProfile;

@@ -79,7 +79,7 @@
 //! ```
 
 use gweave::gcode::lexer::parse_into;
-use gweave::gcode::line::Block;
+use gweave::Block;
 
 use crate::interp::{lookup, Link};
 

@@ -18,8 +18,9 @@
 //! max_accel_mm_s2 = 3000.0
 //! ```
 
-use gweave::range::{self, OutOfRange, Range};
+use gweave::range::{self};
 use gweave::settings::{CheckRanges, Table};
+use gweave::{OutOfRange, Range};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 

@@ -4,8 +4,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use gweave::range::{self, OutOfRange};
+use gweave::range::{self};
 use gweave::settings::{CheckRanges, Table};
+use gweave::OutOfRange;
 
 use crate::motion::limits::{
     non_negative, AxisUpdate, CornerMode, MotionProfile, ProfileError, JERK_MM_S,

@@ -34,8 +34,9 @@ use std::str::FromStr;
 
 use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
 use gweave::gen::raster_job::HeadSource;
-use gweave::range::{self, OutOfRange, Range};
+use gweave::range::{self};
 use gweave::settings::{CheckRanges, Table};
+use gweave::{OutOfRange, Range};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -183,9 +184,9 @@ impl Bed {
     }
 
     /// The volume `gweave check --machine` holds moves to: this one.
-    pub fn to_check(self) -> Result<gweave::bed::Bed, gweave::bed::BedError> {
+    pub fn to_check(self) -> Result<gweave::Bed, gweave::bed::BedError> {
         let [x, y, z] = self.ranges();
-        gweave::bed::Bed::new([x.0, y.0], [x.1, y.1], Some(z.1))
+        gweave::Bed::new([x.0, y.0], [x.1, y.1], Some(z.1))
     }
 }
 

@@ -4,8 +4,9 @@
 
 use std::path::PathBuf;
 
-use gweave::range::{self, OutOfRange, Range};
+use gweave::range::{self};
 use gweave::settings::{CheckRanges, Table};
+use gweave::{OutOfRange, Range};
 use serde::{Deserialize, Serialize};
 
 use super::control::{ControlConfig, PidConfig, PidGains};

@@ -55,8 +55,8 @@
 
 use std::fmt;
 
-use gweave::range::{OutOfRange, Range};
 use gweave::settings::{CheckRanges, Table};
+use gweave::{OutOfRange, Range};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 

@@ -44,8 +44,8 @@ pub(crate) use series::{Sample, TimeSeries};
 
 use std::path::PathBuf;
 
-use gweave::range::OutOfRange;
 use gweave::settings::{CheckRanges, Table};
+use gweave::OutOfRange;
 use thiserror::Error;
 
 use crate::thermal::autotune::{Autotune, AutotuneConfig, AutotuneError, AutotuneFailure, AutotuneStatus};

@@ -30,8 +30,9 @@
 //! Defaults (Marlin's `Configuration.h`: `THERMAL_PROTECTION_*`, `WATCH_*`): hotend runaway 40 s / 4 C and watch
 //! 20 s / +2 C; bed runaway 20 s / 2 C and watch 60 s / +2 C.
 
-use gweave::range::{self, OutOfRange, Range};
+use gweave::range::{self};
 use gweave::settings::{CheckRanges, Table};
+use gweave::{OutOfRange, Range};
 use serde::{Deserialize, Serialize};
 
 use crate::thermal::heater::HeaterId;

@@ -38,8 +38,8 @@
 //! entry and MINTEMP fires); a **shorted** one pulls the input to ground, the
 //! ADC reads ~0 (the table clamps to its hottest entry and MAXTEMP fires).
 
-use gweave::range::{OutOfRange, Range};
 use gweave::settings::{CheckRanges, Table};
+use gweave::{OutOfRange, Range};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 

@@ -21,7 +21,7 @@
 //! firmware reads it, so a table that does not describe that sensor reads wrong temperatures,
 //! as it would on a real board.
 
-use gweave::range::Range;
+use gweave::Range;
 
 use crate::thermal::thermistor::{BetaThermistor, ThermistorError, ThermistorTable};
 

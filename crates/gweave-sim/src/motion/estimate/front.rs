@@ -7,15 +7,13 @@
 use std::collections::HashMap;
 
 use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
-use gweave::firmware::{Firmware, MixingCode};
 use gweave::gcode::arc::Arc;
-use gweave::gcode::diag::Severity;
 use gweave::gcode::layers::Structure;
 use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
-use gweave::gcode::line::{Block, Command};
-use gweave::gcode::reader::{Part, RawLine};
-use gweave::gcode::state::{self, Effect, Path, State, StateOptions};
+use gweave::gcode::reader::Part;
+use gweave::gcode::state::{self, Path};
 use gweave::rotary::cylinder::RotaryConfig;
+use gweave::{Block, Command, Effect, Firmware, MixingCode, RawLine, Severity, State, StateOptions};
 
 use super::rotary_feed::DeclaredFeed;
 use super::{
@@ -71,7 +69,7 @@ impl HugeArcs {
 pub const MAX_ARC_CHORDS: u32 = 100_000;
 
 /// Lines that could not be read: the engine's tally, as `stats --lenient` reports it.
-pub use gweave::malformed::Malformed;
+pub use gweave::Malformed;
 
 /// What turns a move into jobs besides the move itself: its time account (tag) and the
 /// firmware's fixed overheads. Apart from the state, so that a move can be read in place from

@@ -47,12 +47,9 @@ use std::io::Read;
 use std::sync::mpsc;
 
 use gweave::colour::dialect::{DialectError, MixingState};
-use gweave::firmware::Firmware;
 use gweave::gcode::layers::Feature;
-use gweave::gcode::line::Block;
-use gweave::gcode::reader::{LineReader, RawLine};
-use gweave::gcode::state::{Effect, State};
 use gweave::rotary::cylinder::RotaryConfig;
+use gweave::{Block, Effect, Firmware, LineReader, RawLine, State};
 use thiserror::Error;
 
 use crate::inkjet::FireWait;
@@ -281,7 +278,7 @@ impl Estimator {
         skip_mixing_errors(self.run(raw, &effect))
     }
 
-    /// [`Estimator::line`] for a line from a [`LineReader`](gweave::gcode::reader::LineReader),
+    /// [`Estimator::line`] for a line from a [`LineReader`](gweave::LineReader),
     /// whose look-ahead bytes speed up the lexer: the same result to the bit. The pieces of a
     /// line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE) count as one malformed
     /// line ([`Estimator::skip_long_line`]).
@@ -575,7 +572,7 @@ fn parse_lines<R: Read>(
 
 #[cfg(test)]
 mod tests {
-    use gweave::gcode::reader::LineReader;
+    use gweave::LineReader;
 
     use super::*;
 

@@ -13,10 +13,9 @@
 use std::io::Read;
 use std::sync::{mpsc, Arc};
 
-use gweave::firmware::Firmware;
-use gweave::gcode::reader::{LineReader, Part};
-use gweave::gcode::state::State;
+use gweave::gcode::reader::Part;
 use gweave::pass::Ctx;
+use gweave::{Firmware, LineReader, State};
 
 use super::back::Back;
 use super::front::Front;
@@ -194,7 +193,7 @@ fn plan(mut back: Back, batches: mpsc::Receiver<Arc<Vec<Job>>>) -> Result<(Back,
 
 #[cfg(test)]
 mod tests {
-    use gweave::gcode::reader::LineReader;
+    use gweave::LineReader;
 
     use super::*;
     use crate::motion::estimate::Estimator;

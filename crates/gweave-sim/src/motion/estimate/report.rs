@@ -3,11 +3,10 @@
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 
-use gweave::firmware::Firmware;
 use gweave::gcode::container;
 use gweave::gcode::flavour::read_firmware;
-use gweave::pass::Progress;
 use gweave::rotary::cylinder::RotaryConfig;
+use gweave::{Firmware, Progress};
 use serde::Serialize;
 
 use super::{estimate_as, Estimate, EstimateError};

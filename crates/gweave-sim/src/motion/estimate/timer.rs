@@ -37,9 +37,9 @@ impl Estimator {
 mod tests {
     use std::path::Path;
 
-    use gweave::gcode::writer::Target;
     use gweave::gen::raster_job::{RasterOptions, Setup};
-    use gweave::pass::Quiet;
+    use gweave::Quiet;
+    use gweave::Target;
 
     use super::*;
 
