@@ -38,11 +38,11 @@ pub struct Lenient {
 }
 
 impl Lenient {
-    pub fn strictness(&self) -> gweave::pass::Strictness {
+    pub fn strictness(&self) -> gweave::Strictness {
         if self.lenient {
-            gweave::pass::Strictness::Lenient
+            gweave::Strictness::Lenient
         } else {
-            gweave::pass::Strictness::Strict
+            gweave::Strictness::Strict
         }
     }
 }
@@ -56,7 +56,7 @@ pub struct MachineArg {
 }
 
 fn machine_help() -> String {
-    use gweave::options::JobOptions;
+    use gweave::JobOptions;
     gweave_sim::reading::SimOptions::spec("machine").map(|s| s.help()).unwrap_or_default()
 }
 

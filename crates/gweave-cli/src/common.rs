@@ -8,9 +8,10 @@ use std::str::FromStr;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use gweave::gcode::writer::{write_file, Target};
-use gweave::range::{Quantity, Range};
+use gweave::gcode::writer::write_file;
+use gweave::range::Quantity;
 use gweave::total::{Named, PerFile};
+use gweave::{Range, Target};
 use serde::Serialize;
 
 use crate::args::Quiet;
@@ -167,7 +168,7 @@ pub fn read_text(path: &Path) -> Result<String> {
 }
 
 /// The lines a lenient read went past, as every summary reports them (nothing when none).
-pub fn print_malformed(out: &mut dyn Write, m: &gweave::malformed::Malformed) -> io::Result<()> {
+pub fn print_malformed(out: &mut dyn Write, m: &gweave::Malformed) -> io::Result<()> {
     if let Some(first) = m.first_malformed_line {
         let n = m.malformed_lines;
         writeln!(out, "  malformed       {n} lines skipped (first: line {first}; see gweave check)")?;

@@ -14,7 +14,7 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
-use gweave::gcode::writer::Target;
+use gweave::Target;
 
 /// Which file names in an output folder a command writes (e.g. `layer_00012.png`).
 pub type Owns = fn(&OsStr) -> bool;
@@ -211,7 +211,7 @@ fn inode(_meta: &std::fs::Metadata) -> Option<(u64, u64)> {
 /// every output is written through.
 pub fn check_writable(flag: &str, path: &Path) -> Result<()> {
     let folder = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    match gweave::gcode::temp::TempFile::new_in(folder) {
+    match gweave::TempFile::new_in(folder) {
         Ok(_) => Ok(()),
         Err(e) => bail!("{flag} {}: {e}", path.display()),
     }

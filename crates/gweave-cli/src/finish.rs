@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use gweave::gcode::writer::Target;
+use gweave::Target;
 
 /// Runs `write` into a scratch file, then writes that file to `target` with this run's header
 /// and its metadata recomputed (`gweave_sim::finish::with_metadata`).

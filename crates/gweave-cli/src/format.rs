@@ -1,13 +1,12 @@
 //! `--format`: how a command's G-code output is stored, for every command that writes G-code
 //! (cat, mix, purge-shift, rotary wrap and tube, raster). A file's name says it (`.gz`,
-//! `.bgcode`: `gweave::gcode::container::Container::of_output`); standard output has no name, so
+//! `.bgcode`: `gweave::Container::of_output`); standard output has no name, so
 //! `-o - --format bgcode` is how a pipe carries binary G-code. With a file, `--format` must
 //! agree with the name: a `.gcode` file holding binary G-code would fool the next program.
 
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
-use gweave::gcode::container::Container;
-use gweave::gcode::writer::Target;
+use gweave::{Container, Target};
 use std::path::Path;
 
 /// How the output G-code is stored.

@@ -8,7 +8,8 @@ use std::ops::Deref;
 
 use clap::error::ErrorKind;
 use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches};
-use gweave::options::{JobOptions, Kind, OptionSpec, Spelling, Value};
+use gweave::options::{Kind, Spelling, Value};
+use gweave::{JobOptions, OptionSpec};
 
 /// The options `T` as read from the command line.
 #[derive(Debug, Clone, Default)]
@@ -111,11 +112,11 @@ pub fn failed_with<E: std::error::Error + Send + Sync + 'static>(spelled: String
 mod tests {
     use super::*;
     use gweave::gen::raster_job::RasterOptions;
-    use gweave::post::mix::MixOptions;
-    use gweave::post::purge_shift::PurgeShiftOptions;
     use gweave::render::job::PreviewOptions;
     use gweave::rotary::cylinder::FeedConvention;
     use gweave::rotary::options::{TubeOptions, WrapOptions};
+    use gweave::MixOptions;
+    use gweave::PurgeShiftOptions;
     use gweave_sim::reading::{EstimateOptions, SimOptions};
 
     #[derive(clap::Parser, Debug)]

@@ -18,7 +18,7 @@ impl Bar {
     }
 }
 
-impl gweave::pass::Progress for Bar {
+impl gweave::Progress for Bar {
     fn set_len(&mut self, bytes: u64) {
         if let Some(bar) = &self.0 {
             if bytes < MIN_BYTES {

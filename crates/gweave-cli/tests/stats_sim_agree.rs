@@ -1,5 +1,5 @@
 //! `stats` and `sim` read every file the same way (issue 27): as the firmware its flavour names
-//! (`gweave::firmware::Firmware`). Over every fixture, the virtual printer ends where the modal
+//! (`gweave::Firmware`). Over every fixture, the virtual printer ends where the modal
 //! state `stats` reads with ends (X Y Z, the extrusion axis E and the rotary A), its moves have
 //! fed the same filament, and it counts the same layers. A LinuxCNC file extrudes with A: read as Marlin,
 //! the printer would move a rotary A and feed nothing.
@@ -7,9 +7,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use gweave::gcode::state::{Effect, State, A, E, X, Y, Z};
-use gweave::pass::{Ctx, Flow, Pass, Step};
-use gweave::run::Run;
+use gweave::gcode::state::{A, E, X, Y, Z};
+use gweave::pass::{Ctx, Step};
+use gweave::{Effect, Flow, Pass, Run, State};
 
 fn json(args: &[&str]) -> serde_json::Value {
     let out = Command::new(env!("CARGO_BIN_EXE_gweave")).args(args).output().unwrap();

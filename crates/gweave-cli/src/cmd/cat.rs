@@ -7,10 +7,8 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::gcode::container::Container;
-use gweave::gcode::writer::Target;
-use gweave::pass::{CopyReport, Identity, Strictness};
-use gweave::run::Run;
+use gweave::pass::CopyReport;
+use gweave::{Container, Identity, Run, Strictness, Target};
 
 use crate::common::{print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;

@@ -6,11 +6,8 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::bed::Bed;
-use gweave::check::{check_file, CheckOptions, CheckReport};
-use gweave::gcode::diag::Finding;
 use gweave::range::FEED_MM_MIN;
-use gweave::total::CheckTotal;
+use gweave::{check_file, Bed, CheckOptions, CheckReport, CheckTotal, Finding};
 
 use crate::args::load_machine;
 use crate::common::{in_range, print_summary, ReportArgs};
@@ -90,8 +87,8 @@ fn print_file(out: &mut dyn Write, input: &Path, report: &CheckReport, quiet: bo
     for g in &report.groups {
         let f = &g.first;
         let level = match f.severity {
-            gweave::gcode::diag::Severity::Error => "error",
-            gweave::gcode::diag::Severity::Warning => "warning",
+            gweave::Severity::Error => "error",
+            gweave::Severity::Warning => "warning",
         };
         write!(out, "{name}:{}:{}: {level}: ", f.line, f.diagnostic.column)?;
         match (&f.diagnostic.finding, g.range_mm) {

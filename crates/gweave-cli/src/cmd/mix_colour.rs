@@ -7,11 +7,11 @@ use std::process::ExitCode;
 use anyhow::{anyhow, bail, Result};
 use gweave::colour::fit::{fit, parse_csv, FitError};
 use gweave::colour::predict::{parse_ratios, predict, Prediction};
-use gweave::gcode::writer::{Output, Target};
 use gweave::post::mix::card::{calibration_card, card_mixes, fitted_profile_toml};
 use gweave::post::mix::profile::MixProfile;
 use gweave::render::card::card_png;
 use gweave::render::MixColours;
+use gweave::{Output, Target};
 
 use crate::common::{print_summary, read_text, write_bytes, ReportArgs};
 

@@ -8,7 +8,7 @@ use anyhow::Result;
 use clap::Args;
 use gweave::options::Spelling;
 use gweave::render::job::{self, PreviewOptions};
-use gweave::render::PreviewReport;
+use gweave::PreviewReport;
 
 use crate::args::Lenient;
 use crate::common::{print_malformed, print_summary, ReportArgs};

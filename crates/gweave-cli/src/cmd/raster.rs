@@ -190,7 +190,7 @@ impl LayerBar {
     }
 }
 
-impl gweave::pass::Progress for LayerBar {
+impl gweave::Progress for LayerBar {
     fn set_len(&mut self, layers: u64) {
         if let Some(bar) = &self.0 {
             if layers < MIN_LAYERS {

@@ -10,10 +10,10 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::{Args, Subcommand};
-use gweave::malformed::Transformed;
 use gweave::rotary::cylinder::{FeedConvention, RotaryUnit};
 use gweave::rotary::options::{TubeOptions, WrapOptions};
 use gweave::rotary::report::{MachineReport, TubeReport, WrapReport};
+use gweave::Transformed;
 use gweave_sim::transform::{self, Job};
 
 use crate::args::Lenient;

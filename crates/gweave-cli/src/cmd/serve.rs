@@ -20,7 +20,7 @@ use gweave_sim::{serve, Endpoint, ServeOptions, ServeSummary};
 use gweave_sim::{FirmwareKind, Machine};
 use gweave_sim::{ProtocolConfig, DEFAULT_KEEPALIVE_S};
 
-use gweave::range::Range;
+use gweave::Range;
 
 use crate::args::MachineArg;
 use crate::common::in_range;

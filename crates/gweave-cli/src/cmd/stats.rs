@@ -7,8 +7,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use gweave::malformed::WithMalformed;
-use gweave::stats::{stats_file, Stats};
-use gweave::total::StatsTotal;
+use gweave::{stats_file, Stats, StatsTotal};
 
 use gweave::range::FILAMENT_DIAMETER_MM;
 
