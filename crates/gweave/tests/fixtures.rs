@@ -4,9 +4,9 @@
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::layers::{Region, Slicer};
-use gweave::pass::{drive_reader, Identity, Reading};
-use gweave::run::Run;
-use gweave::stats::{Stats, StatsPass};
+use gweave::pass::{drive_reader, Reading};
+use gweave::stats::StatsPass;
+use gweave::{Identity, Run, Stats};
 
 fn data(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel)
@@ -22,7 +22,7 @@ const FIXTURES: [&str; 7] = [
     "slic3r/slic3r_cone_2tool.gcode",
 ];
 
-fn stats(rel: &str) -> (Stats, gweave::gcode::state::State) {
+fn stats(rel: &str) -> (Stats, gweave::State) {
     let mut pass = StatsPass::new(None);
     let state = Run::file(&data(rel)).scan(&mut pass).unwrap();
     (pass.into_stats(&state), state)
@@ -105,7 +105,8 @@ fn tool_changes_as_the_fixture_readme_says() {
 /// which Ultimaker's firmware knows (the file says `;FLAVOR:Griffin`).
 #[test]
 fn check_finds_only_real_problems_in_the_fixtures() {
-    use gweave::check::{CheckOptions, CheckPass};
+    use gweave::check::CheckPass;
+    use gweave::CheckOptions;
     for rel in FIXTURES {
         let mut pass = CheckPass::new(CheckOptions::default());
         Run::file(&data(rel)).scan(&mut pass).unwrap();

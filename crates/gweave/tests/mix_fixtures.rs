@@ -9,14 +9,13 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use gweave::firmware::MixCommands;
 use gweave::gcode::lexer::parse_into;
-use gweave::gcode::line::Block;
-use gweave::gcode::state::{Effect, State, E, X, Y, Z};
+use gweave::gcode::state::{E, X, Y, Z};
+use gweave::post::mix::mix_bytes;
 use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
-use gweave::post::mix::{mix, mix_bytes};
 use gweave::post::zcap::z_feed_mm_min;
+use gweave::{mix, Block, Effect, MixCommands, State};
 
 fn data(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel)
@@ -315,8 +314,8 @@ fn golden_small_case() {
     // The streaming file path gives the same bytes.
     let tmp = tempfile::tempdir().unwrap();
     let dest = tmp.path().join("out.gcode");
-    let target = gweave::gcode::writer::Target::File(dest.clone());
-    mix(profile, gweave::run::Run::file(&dir.join("small.gcode")).to(&target)).unwrap();
+    let target = gweave::Target::File(dest.clone());
+    mix(profile, gweave::Run::file(&dir.join("small.gcode")).to(&target)).unwrap();
     assert_eq!(std::fs::read(dest).unwrap(), std::fs::read(golden).unwrap());
 }
 
@@ -465,8 +464,8 @@ fn mix_map_selects_the_mix_of_each_tool_a_wipe_tower_primes() {
     let mixed = tmp.path().join("mixed.gcode");
     std::fs::write(&mixed, &out).unwrap();
     let stats = |p: &Path| {
-        let mut quiet = gweave::pass::Quiet;
-        gweave::stats::stats_file(p, None, gweave::pass::Strictness::Strict, &mut quiet).unwrap().report
+        let mut quiet = gweave::Quiet;
+        gweave::stats_file(p, None, gweave::Strictness::Strict, &mut quiet).unwrap().report
     };
     let (before, after) = (stats(&data(rel)), stats(&mixed));
     for f in &before.filament {

@@ -7,16 +7,13 @@
 
 use std::path::{Path, PathBuf};
 
-use gweave::pass::Quiet;
 use gweave::picture::decode;
 use gweave::picture::Image;
 use gweave::render::colour_by::TOOL_COLOURS;
 use gweave::render::png_out::rasterise;
 use gweave::render::view::{Drawing, BACKGROUND, UNCHANGED};
-use gweave::render::{
-    drawing, preview, preview_with_progress, svg, Format, PreviewSettings, Toolpath, ToolpathOptions,
-    ViewKind, ViewOptions,
-};
+use gweave::render::{drawing, svg, Format, ViewKind, ViewOptions};
+use gweave::{preview, preview_with_progress, PreviewSettings, Quiet, Toolpath, ToolpathOptions};
 
 fn data(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel)
@@ -35,7 +32,7 @@ fn layer(n: u32) -> ViewOptions {
 }
 
 fn draw(path: &Path, compare: Option<&Path>, view: ViewOptions) -> (Drawing, Image) {
-    let d = drawing(path, compare, &options(view), &mut gweave::pass::Quiet).unwrap();
+    let d = drawing(path, compare, &options(view), &mut gweave::Quiet).unwrap();
     let img = rasterise(&d);
     (d, img)
 }
@@ -316,7 +313,7 @@ fn the_html_report_says_the_layers_asked_for() {
 #[derive(Default)]
 struct Recorder(Vec<(&'static str, u64)>);
 
-impl gweave::pass::Progress for Recorder {
+impl gweave::Progress for Recorder {
     fn set_len(&mut self, bytes: u64) {
         self.0.push(("len", bytes));
     }

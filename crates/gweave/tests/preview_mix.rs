@@ -13,10 +13,11 @@ use std::path::{Path, PathBuf};
 use gweave::picture::Image;
 use gweave::post::mix::mix_bytes;
 use gweave::post::mix::profile::MixProfile;
-use gweave::post::purge_shift::{purge_shift_bytes, PurgeShiftConfig};
+use gweave::post::purge_shift::purge_shift_bytes;
 use gweave::render::png_out::rasterise;
 use gweave::render::view::{Drawing, BACKGROUND};
-use gweave::render::{drawing, ColourBy, MixColours, PreviewSettings, ViewOptions};
+use gweave::render::{drawing, ColourBy, MixColours, ViewOptions};
+use gweave::{PreviewSettings, PurgeShiftConfig};
 
 const BANDS: &str = include_str!("../../../examples/mix/bands.toml");
 
@@ -44,7 +45,7 @@ fn draw_layer(path: &Path, colours: &MixColours, layer: u32) -> (Drawing, Image)
         mix: Some(colours.clone()),
         ..PreviewSettings::default()
     };
-    let d = drawing(path, None, &options, &mut gweave::pass::Quiet).unwrap();
+    let d = drawing(path, None, &options, &mut gweave::Quiet).unwrap();
     let img = rasterise(&d);
     (d, img)
 }
@@ -140,12 +141,12 @@ fn the_viewer_page_colours_by_mix_with_the_users_names_whatever_it_opens_on() {
     let path = write_temp(&dir, "seed_layers.mix.gcode", &mixed);
     let page = |path: &Path| {
         let options = PreviewSettings::default();
-        let p = gweave::render::preview_with_progress(
+        let p = gweave::preview_with_progress(
             path,
             None,
             gweave::render::Format::Html,
             &options,
-            &mut gweave::pass::Quiet,
+            &mut gweave::Quiet,
         )
         .unwrap();
         String::from_utf8(p.bytes).unwrap()

@@ -14,7 +14,8 @@ use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{RasterConfig, RasterWriter};
 use gweave::render::png_out::rasterise;
 use gweave::render::view::BACKGROUND;
-use gweave::render::{drawing, PreviewSettings, ViewOptions};
+use gweave::render::{drawing, ViewOptions};
+use gweave::PreviewSettings;
 
 #[test]
 fn raster_output_lights_the_pixels_where_the_bmp_is_black() {
@@ -39,7 +40,7 @@ fn raster_output_lights_the_pixels_where_the_bmp_is_black() {
         ..Default::default()
     };
     let options = PreviewSettings { view, ..PreviewSettings::default() };
-    let d = drawing(&path, None, &options, &mut gweave::pass::Quiet).unwrap();
+    let d = drawing(&path, None, &options, &mut gweave::Quiet).unwrap();
     let img = rasterise(&d);
     let proj = d.panels[0].projection;
     let p = head.pitch_mm();

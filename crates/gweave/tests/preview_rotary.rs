@@ -12,9 +12,10 @@ use std::path::PathBuf;
 use gweave::picture::Image;
 use gweave::render::png_out::rasterise;
 use gweave::render::view::BACKGROUND;
-use gweave::render::{drawing, ColourBy, Format, PreviewSettings, ViewKind, ViewOptions};
+use gweave::render::{drawing, ColourBy, Format, ViewKind, ViewOptions};
 use gweave::rotary::cylinder::RotaryConfig;
 use gweave::rotary::helix::TubeParams;
+use gweave::PreviewSettings;
 
 /// A two-layer tube written to `name` in `dir` (a test's own temporary folder).
 fn tube_file(dir: &tempfile::TempDir, name: &str) -> (PathBuf, TubeParams) {
@@ -50,7 +51,7 @@ fn a_tube_is_drawn_round_on_its_cylinder() {
     let r_mm = (tube.layer_radius_mm(1) + tube.print.layer_height_mm / 2.0) as f32;
     assert!((r_mm - 10.4).abs() < 1e-4, "{r_mm}");
     // The header names the machine: no rotary option needed.
-    let d = drawing(&path, None, &options(ViewKind::Top), &mut gweave::pass::Quiet).unwrap();
+    let d = drawing(&path, None, &options(ViewKind::Top), &mut gweave::Quiet).unwrap();
     let img = rasterise(&d);
     let proj = d.panels[0].projection;
     let x_mm = 10.0;
@@ -72,7 +73,7 @@ fn a_tube_is_drawn_round_on_its_cylinder() {
     assert!(centre > near_edge + 60, "centre {centre}, near the edge {near_edge}");
 
     // Isometric: the outline is symmetric about the projected axis.
-    let d = drawing(&path, None, &options(ViewKind::Iso), &mut gweave::pass::Quiet).unwrap();
+    let d = drawing(&path, None, &options(ViewKind::Iso), &mut gweave::Quiet).unwrap();
     let img = rasterise(&d);
     let proj = d.panels[0].projection;
     let [ax, ay] = proj.project([x_mm, 0.0, 0.0]);
@@ -89,7 +90,7 @@ fn a_tube_is_drawn_round_on_its_cylinder() {
 fn the_viewer_page_of_a_tube_carries_its_3d_segments() {
     let dir = tempfile::tempdir().unwrap();
     let (path, _) = tube_file(&dir, "tube_html.gcode");
-    let html = gweave::render::preview(&path, None, Format::Html, &options(ViewKind::Iso)).unwrap();
+    let html = gweave::preview(&path, None, Format::Html, &options(ViewKind::Iso)).unwrap();
     let html = String::from_utf8(html).unwrap();
     // Quantisation bounds of the 3D segments: Y and Z span the outer diameter, not the
     // circumference or the radial word.
@@ -111,10 +112,10 @@ fn shade_of(p: [u8; 4], base: [u8; 3]) -> bool {
 /// coloured by tool when the program changes tools.
 #[test]
 fn a_wrapped_two_tool_part_previews_in_both_tools_colours() {
-    use gweave::gcode::writer::Target;
     use gweave::render::colour_by::TOOL_COLOURS;
     use gweave::rotary::wrap::WrapConfig;
-    use gweave::rotary_job::wrap_file;
+    use gweave::wrap_file;
+    use gweave::Target;
 
     // A band of each tool, 20 mm across the flat Y (76 degrees of a 30 mm mandrel), the travel
     // between them never drawn.
@@ -138,7 +139,7 @@ fn a_wrapped_two_tool_part_previews_in_both_tools_colours() {
     std::fs::write(&input, flat).unwrap();
     let config = WrapConfig::new(RotaryConfig::new(30.0));
     let target = Target::File(output);
-    wrap_file(&config, gweave::run::Run::file(&input).to(&target), Some(&png)).unwrap();
+    wrap_file(&config, gweave::Run::file(&input).to(&target), Some(&png)).unwrap();
     let img = gweave::picture::decode(&std::fs::read(&png).unwrap()).unwrap();
     let count = |c: gweave::colour::Srgb8| {
         (0..img.height)

@@ -6,9 +6,8 @@ mod purge_check;
 use std::path::PathBuf;
 
 use gweave::gcode::layers::Feature;
-use gweave::pass::Strictness;
-use gweave::post::purge_shift::{purge_shift, PurgeShift, PurgeShiftConfig, PurgeShiftReport, Rules};
-use gweave::run::Run;
+use gweave::post::purge_shift::{PurgeShift, Rules};
+use gweave::{purge_shift, PurgeShiftConfig, PurgeShiftReport, Run, Strictness};
 
 fn fixture(rel: &str) -> Vec<u8> {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel);

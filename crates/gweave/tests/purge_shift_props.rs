@@ -3,10 +3,9 @@
 
 mod purge_check;
 
-use gweave::pass::Strictness;
 use gweave::post::purge_shift::report::KEPT_CHANGES;
-use gweave::post::purge_shift::{purge_shift, PurgeShift, PurgeShiftConfig, PurgeShiftReport, Rules};
-use gweave::run::Run;
+use gweave::post::purge_shift::{PurgeShift, Rules};
+use gweave::{purge_shift, PurgeShiftConfig, PurgeShiftReport, Run, Strictness};
 use proptest::prelude::*;
 
 /// The pass over text in memory, reading past malformed lines (what these properties feed it).
@@ -106,7 +105,7 @@ fn program(steps: &[Step], absolute_e: bool) -> String {
     s
 }
 
-fn check(text: &str, rules: Rules) -> gweave::post::purge_shift::PurgeShiftReport {
+fn check(text: &str, rules: Rules) -> gweave::PurgeShiftReport {
     let options = PurgeShift::new(rules.clone()).state_options();
     let (out, report) = lenient(rules, text.as_bytes()).unwrap();
     purge_check::check(text.as_bytes(), &out, &report, &options);

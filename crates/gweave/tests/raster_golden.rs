@@ -116,7 +116,7 @@ fn the_default_head_writes_the_golden_bytes() {
 fn two_heads_in_the_seeds_order_write_the_golden_bytes() {
     let profile = PrintheadProfile {
         heads: vec![HeadOffset::default(), HeadOffset { offset_x_mm: 25.4, offset_y_mm: -1.5 }],
-        dialect: gweave::firmware::Firmware::RepRapFirmware,
+        dialect: gweave::Firmware::RepRapFirmware,
         drop_volume_pl: Some(32.0),
         ..PrintheadProfile::default()
     };

@@ -4,11 +4,9 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
-use gweave::gcode::writer::Target;
 use gweave::rotary::cylinder::{FeedConvention, RotaryConfig};
 use gweave::rotary::wrap::WrapConfig;
-use gweave::rotary_job::wrap_file;
-use gweave::run::Run;
+use gweave::{wrap_file, Run, Target};
 
 fn plate() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/rotary/plate.gcode")

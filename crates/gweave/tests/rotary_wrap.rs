@@ -4,14 +4,14 @@
 use std::f64::consts::PI;
 
 use gweave::gcode::lexer::parse_into;
-use gweave::gcode::line::Block;
-use gweave::gcode::state::{Effect, State, AXIS_LETTERS};
+use gweave::gcode::state::AXIS_LETTERS;
 use gweave::rotary::cylinder::{
     surface_length_mm, CylPoint, FeedConvention, MachineDelta, RotaryConfig, RotaryUnit, UnwrapConfig,
 };
 use gweave::rotary::emit::{number_text, rotary_number_format};
 use gweave::rotary::wrap::{wrap_bytes, WrapConfig};
 use gweave::rotary::RotaryError;
+use gweave::{Block, Effect, State};
 use proptest::prelude::*;
 
 /// A mandrel whose circumference is exactly 60 mm.

@@ -4,9 +4,9 @@
 use std::io::Write;
 use std::path::Path;
 
-use gweave::gcode::state::{Effect, Move, Path as MovePath, StateOptions, E, X, Y};
-use gweave::pass::{drive_reader, Ctx, Flow, Pass, Reading, Step, Strictness};
-use gweave::post::purge_shift::PurgeShiftReport;
+use gweave::gcode::state::{Move, Path as MovePath, E, X, Y};
+use gweave::pass::{drive_reader, Ctx, Reading, Step};
+use gweave::{Effect, Flow, Pass, PurgeShiftReport, StateOptions, Strictness};
 
 /// What one line did, in a replay.
 #[derive(Debug, Clone)]
