@@ -29,7 +29,7 @@ pub mod check;
 pub mod colour;
 pub mod eol;
 pub mod error;
-pub mod firmware;
+pub(crate) mod firmware;
 pub mod gcode;
 pub mod gen;
 pub mod interrupt;
@@ -68,7 +68,7 @@ pub use gcode::reader::{LineReader, RawLine};
 pub use gcode::state::{Effect, State, StateOptions};
 
 // Running a pass: input to output, atomically (temp + rename), strict or lenient, stoppable.
-pub use firmware::{Firmware, MixCommands, MixingCode};
+pub use firmware::{Firmware, MixCommands, MixingCode, UnknownFirmware};
 pub use gcode::temp::TempFile;
 pub use gcode::writer::{Output, Target};
 pub use interrupt::Token;
