@@ -3,22 +3,16 @@
 //!
 //! A transform composes new text with `\n` and hands it over; the emitter ends each line with
 //! the ending it learned from the lines read ([`Eol::learn`]), except the last, which takes the
-//! ending of the line it replaces (none after the last line of a file that has none).
-//!
-//! ```
-//! use gweave::eol::Eol;
-//! let mut eol = Eol::default();
-//! eol.learn(b"\r\n");
-//! let mut out = Vec::new();
-//! eol.text(&mut out, b"G92 E0\nG1 X1\n", b"").unwrap();
-//! assert_eq!((out.as_slice(), eol.lines()), (&b"G92 E0\r\nG1 X1"[..], 2));
-//! ```
+//! ending of the line it replaces (none after the last line of a file that has none): after a
+//! `\r\n` line, `G92 E0\nG1 X1\n` replacing a last line without an ending is written
+//! `G92 E0\r\nG1 X1` (`a_crlf_files_new_text_is_crlf`). Private to the engine: the front ends
+//! call the transforms, which write through it.
 
 use std::io::{self, Write};
 
 /// Writes lines with the file's line endings, counting them.
 #[derive(Debug, Clone)]
-pub struct Eol {
+pub(crate) struct Eol {
     /// The ending of the last line read that had one (`\n` before any).
     eol: Vec<u8>,
     lines: u64,
@@ -32,7 +26,7 @@ impl Default for Eol {
 
 impl Eol {
     /// Learns the file's line ending from a line read (a line without one teaches nothing).
-    pub fn learn(&mut self, eol: &[u8]) {
+    pub(crate) fn learn(&mut self, eol: &[u8]) {
         if !eol.is_empty() && eol != self.eol.as_slice() {
             self.eol.clear();
             self.eol.extend_from_slice(eol);
@@ -40,17 +34,17 @@ impl Eol {
     }
 
     /// The file's line ending.
-    pub fn get(&self) -> &[u8] {
+    pub(crate) fn get(&self) -> &[u8] {
         &self.eol
     }
 
     /// Lines written so far.
-    pub fn lines(&self) -> u64 {
+    pub(crate) fn lines(&self) -> u64 {
         self.lines
     }
 
     /// One line, as read or as composed, with its own ending.
-    pub fn line(&mut self, out: &mut dyn Write, bytes: &[u8], eol: &[u8]) -> io::Result<()> {
+    pub(crate) fn line(&mut self, out: &mut dyn Write, bytes: &[u8], eol: &[u8]) -> io::Result<()> {
         self.lines += 1;
         out.write_all(bytes)?;
         out.write_all(eol)
@@ -58,7 +52,7 @@ impl Eol {
 
     /// `\n`-separated `text` (a final `\n` is optional): the file's ending after each line,
     /// `last_eol` after the last. Empty text writes nothing.
-    pub fn text(&mut self, out: &mut dyn Write, text: &[u8], last_eol: &[u8]) -> io::Result<()> {
+    pub(crate) fn text(&mut self, out: &mut dyn Write, text: &[u8], last_eol: &[u8]) -> io::Result<()> {
         if text.is_empty() {
             return Ok(());
         }
@@ -73,7 +67,7 @@ impl Eol {
     }
 
     /// [`Eol::text`] ending every line, the last too, with the file's ending.
-    pub fn block(&mut self, out: &mut dyn Write, text: &[u8]) -> io::Result<()> {
+    pub(crate) fn block(&mut self, out: &mut dyn Write, text: &[u8]) -> io::Result<()> {
         let eol = self.eol.clone();
         self.text(out, text, &eol)
     }
@@ -96,5 +90,14 @@ mod tests {
         eol.line(&mut out, b"e", b"").unwrap();
         assert_eq!(out, b"a\nb\nx\r\ny\r\nc\r\nd\ne");
         assert_eq!(eol.lines(), 7);
+    }
+
+    #[test]
+    fn a_crlf_files_new_text_is_crlf() {
+        let mut eol = Eol::default();
+        eol.learn(b"\r\n");
+        let mut out = Vec::new();
+        eol.text(&mut out, b"G92 E0\nG1 X1\n", b"").unwrap();
+        assert_eq!((out.as_slice(), eol.lines()), (&b"G92 E0\r\nG1 X1"[..], 2));
     }
 }

@@ -27,7 +27,7 @@
 pub mod bed;
 pub mod check;
 pub mod colour;
-pub mod eol;
+pub(crate) mod eol;
 pub mod error;
 pub(crate) mod firmware;
 pub mod gcode;
