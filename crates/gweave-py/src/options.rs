@@ -54,19 +54,19 @@ pub fn failed(e: TransformError) -> PyErr {
 }
 
 /// The options of the job `command` (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`, `sim`,
-/// `estimate`, `preview`: `gweave_sim::transform::JOBS`, `gweave_sim::reading::JOBS`) as
+/// `estimate`, `preview`: `gweave_sim::transform::jobs`, `gweave_sim::reading::JOBS`) as
 /// declared: a list of dicts `{"name", "flag", "kind", "count", "default", "range", "help"}`,
 /// for the tests that hold the typed wrappers to the declaration (and for
 /// documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
-    let jobs = || gweave_sim::transform::JOBS.iter().chain(gweave_sim::reading::JOBS);
+    let jobs = || gweave_sim::transform::jobs().into_iter().chain(gweave_sim::reading::JOBS.iter().copied());
     let Some((_, specs)) = jobs().find(|(name, _)| *name == command) else {
-        let known: Vec<&str> = jobs().map(|(name, _)| *name).collect();
+        let known: Vec<&str> = jobs().map(|(name, _)| name).collect();
         return Err(PyValueError::new_err(format!("no job {command:?} ({})", known.join(", "))));
     };
     let list = PyList::empty(py);
-    for spec in *specs {
+    for spec in specs {
         let d = PyDict::new(py);
         d.set_item("name", spec.name)?;
         d.set_item("flag", format!("--{}", spec.flag()))?;
