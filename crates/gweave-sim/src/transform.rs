@@ -93,7 +93,6 @@ pub trait EachTransform {
 pub fn transforms(each: &mut impl EachTransform) {
     each.transform::<PurgeShift>();
     each.transform::<Mix>();
-    each.transform::<FanCap>();
 }
 
 /// Every transform job's command and options, for a front end that lists them (Python's
@@ -391,21 +390,4 @@ pub fn rotary_tube(
     let (mut report, written) = finish::with_metadata_timed(None, target, &line, tube, own_time_s)?;
     report.output = written;
     Ok(report)
-}
-
-/// `fan-cap`'s row in [`transforms`].
-pub struct FanCap;
-
-impl Transform for FanCap {
-    type Options = gweave::post::fan_cap::FanCapOptions;
-    type Report = gweave::post::fan_cap::FanCapReport;
-    const HELP: &'static str = "Cap the part-cooling fan: lower every `M106 S` above --max to it.";
-
-    fn run(options: &Self::Options, job: Job<'_>) -> Outcome<Self::Report> {
-        finished(options, job, |run| gweave::post::fan_cap::fan_cap(options, run))
-    }
-
-    fn summary(report: &Self::Report) -> String {
-        format!("fan commands    {} ({} capped)\n", report.fan_commands, report.capped)
-    }
 }

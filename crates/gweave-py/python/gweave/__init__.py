@@ -37,8 +37,6 @@ __all__ += ["raster", "raster_test_pattern", "slice_raster"]
 __all__ += ["purge_shift"]
 # mix
 __all__ += ["mix", "predict_colour"]
-# fan-cap
-__all__ += ["fan_cap"]
 
 __all__ += ["rotary_wrap", "rotary_tube", "HelicalPath", "write_helical_paths"]
 
@@ -507,21 +505,6 @@ def toolpath(
     out["layer_z"] = cols["layer_z"]
     out["on_cylinder"] = cols["on_cylinder"]
     return out
-
-
-# fan-cap
-def fan_cap(
-    path: PathLike,
-    output: Optional[PathLike] = None,
-    *,
-    in_place: bool = False,
-    backup: bool = True,
-    force: bool = False,
-    lenient: bool = False,
-    max: Optional[float] = None,
-) -> Report:
-    """Lower every part-cooling fan speed (``M106 S``) above ``max`` (PWM 0 to 255) to it."""
-    return _transform("fan-cap", locals())
 
 
 # mix

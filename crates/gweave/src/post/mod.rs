@@ -13,9 +13,6 @@ pub mod mix;
 pub(crate) mod purge_block;
 pub mod zcap;
 
-// fan-cap: the part-cooling fan's speed capped.
-pub mod fan_cap;
-
 // metadata: the slicer's figures rewritten for the file as written, and the run's header.
 pub mod metadata;
 
