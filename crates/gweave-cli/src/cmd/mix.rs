@@ -13,10 +13,9 @@ use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{wizard::run_wizard, MixOptions};
-use gweave_sim::transform::{self, Job, Mix, Transform};
+use gweave_sim::transform::{self, Job, Mix};
 
 use super::transform::Shown;
-
 use crate::args::Lenient;
 use crate::common::{print_summary, write_bytes, OutputArgs, ReportArgs};
 use crate::files::Files;
@@ -132,10 +131,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
 /// Mixes `input` into `target` and reports: the job of a plain run and of the wizard's.
 fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) -> Result<ExitCode> {
     let job = |job: Job<'_>| transform::mix_with(profile, &args.options, job);
-    let shown = Shown {
-        warnings: Mix::warnings,
-        summary: |r: &MixReport, out: &mut dyn Write| write!(out, "{}", Mix::summary(r)),
-    };
+    let shown = Shown::of::<Mix>();
     super::transform::run_job(&args.report, args.lenient.strictness(), input, &target, job, shown)
 }
 

@@ -16,7 +16,6 @@ use gweave::rotary::report::{MachineReport, TubeReport, WrapReport};
 use gweave_sim::transform::{self, Job};
 
 use super::transform::Shown;
-
 use crate::args::Lenient;
 use crate::common::hms;
 use crate::common::{print_summary, OutputArgs, ReportArgs};
@@ -108,10 +107,7 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let job = |job: Job<'_>| transform::rotary_wrap(&args.options, job, preview);
-    let shown = Shown {
-        warnings: |_: &WrapReport| Vec::new(),
-        summary: |r: &WrapReport, out: &mut dyn Write| print_wrap(out, r),
-    };
+    let shown = Shown { warnings: |_| Vec::new(), summary: |r, out| print_wrap(out, r) };
     super::transform::run_job(&args.report, args.lenient.strictness(), &args.input, &target, job, shown)
 }
 

@@ -60,18 +60,8 @@ fn run<T: Transform>(args: TransformArgs<T::Options>) -> Result<ExitCode> {
         .target(&target, &args.input)
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let shown = Shown {
-        warnings: T::warnings,
-        summary: |r: &T::Report, out: &mut dyn Write| write!(out, "{}", T::summary(r)),
-    };
-    run_job(
-        &args.report,
-        args.lenient.strictness(),
-        &args.input,
-        &target,
-        |job| T::run(&args.options, job),
-        shown,
-    )
+    let job = |job: Job<'_>| T::run(&args.options, job);
+    run_job(&args.report, args.lenient.strictness(), &args.input, &target, job, Shown::of::<T>())
 }
 
 /// The settings file a job's options name (the option `config`), and its flag as the CLI
@@ -92,24 +82,31 @@ fn settings_file<O: JobOptions>(options: &O) -> (String, Option<PathBuf>) {
 }
 
 /// What a transform shows after its run besides its report.
-pub struct Shown<R, S: Fn(&R, &mut dyn Write) -> std::io::Result<()>> {
+pub struct Shown<R> {
     /// Its warnings, one line each after `gweave: `.
     pub warnings: fn(&R) -> Vec<String>,
     /// Its human summary.
-    pub summary: S,
+    pub summary: fn(&R, &mut dyn Write) -> std::io::Result<()>,
+}
+
+impl<R> Shown<R> {
+    /// What the registry's job `T` shows: its warnings and its summary.
+    pub fn of<T: Transform<Report = R>>() -> Self {
+        Shown { warnings: T::warnings, summary: |r, out| write!(out, "{}", T::summary(r)) }
+    }
 }
 
 /// Runs a transform job on `input` into `target` with a progress bar, prints its warnings (with
 /// -q too: docs/pipeline.md), then emits its report (`--json`, `--report`) or prints its summary
 /// with the malformed lines read past, on standard error when the G-code goes to standard
 /// output.
-pub fn run_job<R: Serialize, S: Fn(&R, &mut dyn Write) -> std::io::Result<()>>(
+pub fn run_job<R: Serialize>(
     report_args: &ReportArgs,
     strictness: Strictness,
     input: &Path,
     target: &Target,
     job: impl FnOnce(Job<'_>) -> Outcome<R>,
-    shown: Shown<R, S>,
+    shown: Shown<R>,
 ) -> Result<ExitCode> {
     let mut bar = report_args.quiet.bar();
     let (report, malformed) =
