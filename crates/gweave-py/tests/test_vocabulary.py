@@ -8,6 +8,7 @@ import re
 import pytest
 
 import gweave
+from gweave import _gweave
 
 # Flags every command shares that have no place in a function call: the report is the return
 # value, and nothing is drawn on a terminal.
@@ -141,6 +142,18 @@ MAP = {
         ["path"],
     ),
 }
+
+# A transform of the engine's registry without a row above (a new one) maps as its declaration
+# says: the shared flags, and each option's flag to its keyword.
+for _command in _gweave.transforms():
+    MAP.setdefault(
+        _command,
+        (
+            _command.replace("-", "_"),
+            {**TARGET, "lenient": "lenient", **{o["flag"][2:]: o["name"] for o in _gweave.job_options(_command)}},
+            ["path"],
+        ),
+    )
 
 # Keywords with no flag: what a function returns instead of printing.
 PYTHON_ONLY = {("preview", "report"): "return the report with the bytes"}
