@@ -10,7 +10,6 @@ use gweave::colour::named_mixes::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
 use gweave::gcode::writer::Target;
 use gweave::post::mix::profile::MixProfile;
-use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{wizard::run_wizard, MixOptions};
 use gweave_sim::transform::{self, Job, Mix};
