@@ -2,7 +2,9 @@
 //! `rotary wrap`, `rotary tube`) both run it: the options read over the settings file they name,
 //! the pass run, the output finished with the run's header and its metadata
 //! ([`crate::finish`]). Written once, so the front ends only read their options
-//! ([`gweave::options`]) and show the result.
+//! ([`gweave::options`]) and show the result. The registry [`transforms`] lists the jobs
+//! ([`Transform`]) the front ends derive their commands from: a row gives a job its CLI
+//! subcommand and its Python function, with no code in either.
 
 use std::path::{Path, PathBuf};
 
