@@ -266,6 +266,9 @@ mod tests {
                 self.1.push(name);
             }
         }
+        // clap's own checks first: a row named as another command would be a second `gweave
+        // <command>`, refused here.
+        crate::command().debug_assert();
         let mut check = Check(crate::command(), Vec::new());
         transforms(&mut check);
         assert!(check.1.contains(&"purge-shift") && check.1.contains(&"mix"), "{:?}", check.1);
