@@ -1,7 +1,9 @@
 //! The `gweave` command line, as a library so that the Python package installs the same CLI.
 //!
 //! Each subcommand lives in `cmd/<name>.rs`: clap arguments in, validated library config out,
-//! the library does the work, and the subcommand prints a human summary or JSON.
+//! the library does the work, and the subcommand prints a human summary or JSON. The transforms
+//! of the registry (`gweave_sim::transform::transforms`: `purge-shift`, ...) have no file of
+//! their own: `cmd/transform.rs` derives their subcommands from it.
 
 mod args;
 mod cmd;

@@ -195,3 +195,19 @@ fn us_spellings_and_older_names_run() {
         .success());
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
 }
+
+/// Regression (issue 40): `rotary wrap -o -` printed no summary at all, where every other
+/// transform writes it to standard error (docs/pipeline.md: `-o -` writes the output, and
+/// nothing else, to standard output); it now runs through the transforms' one run.
+#[test]
+fn rotary_wrap_to_standard_output_says_its_summary_on_standard_error() {
+    let plate = fixture("rotary/plate.gcode");
+    let out = gweave(&["rotary", "wrap", &plate, "-o", "-", "--mandrel-diameter", "30"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(stdout.starts_with("; gweave 0.1.0 rotary wrap --mandrel-diameter 30 (generated)"), "{stdout}");
+    assert!(!stdout.contains("  mandrel "), "the summary stays off the G-code");
+    assert!(stderr.contains("  mandrel         30.000 mm (circumference 94.248 mm)"), "{stderr}");
+    let quiet = gweave(&["rotary", "wrap", &plate, "-o", "-", "--mandrel-diameter", "30", "-q"]);
+    assert_eq!((quiet.stdout, text(&quiet.stderr)), (out.stdout, String::new()));
+}

@@ -48,10 +48,10 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // binder-jet raster
     m.add_function(wrap_pyfunction!(raster::raster_json, m)?)?;
     m.add_function(wrap_pyfunction!(raster::slice_raster_json, m)?)?;
-    // purge-shift
-    m.add_function(wrap_pyfunction!(transform::purge_shift_json, m)?)?;
+    // the transforms of the registry (purge-shift, mix, ...)
+    m.add_function(wrap_pyfunction!(transform::transform_json, m)?)?;
+    m.add_function(wrap_pyfunction!(transform::transforms_list, m)?)?;
     // mix
-    m.add_function(wrap_pyfunction!(transform::mix_json, m)?)?;
     m.add_function(wrap_pyfunction!(transform::predict_colour_json, m)?)?;
     m.add_class::<read::Line>()?;
     m.add_class::<read::Reader>()?;

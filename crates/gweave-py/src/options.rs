@@ -55,7 +55,7 @@ pub fn failed(e: TransformError) -> PyErr {
 }
 
 /// The options of the job `command` (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`, `sim`,
-/// `estimate`, `preview`, `raster`: `gweave_sim::transform::JOBS`, `gweave_sim::reading::JOBS`,
+/// `estimate`, `preview`, `raster`: `gweave_sim::transform::jobs`, `gweave_sim::reading::JOBS`,
 /// `gweave_sim::raster_job::JOBS`) as
 /// declared: a list of dicts `{"name", "flag", "kind", "count", "default", "range", "help"}`,
 /// for the tests that hold the typed wrappers to the declaration (and for
@@ -63,15 +63,15 @@ pub fn failed(e: TransformError) -> PyErr {
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
     let jobs = || {
-        let (transforms, reading) = (gweave_sim::transform::JOBS, gweave_sim::reading::JOBS);
-        transforms.iter().chain(reading).chain(gweave_sim::raster_job::JOBS)
+        let (reading, raster) = (gweave_sim::reading::JOBS.iter(), gweave_sim::raster_job::JOBS.iter());
+        gweave_sim::transform::jobs().into_iter().chain(reading.copied()).chain(raster.copied())
     };
     let Some((_, specs)) = jobs().find(|(name, _)| *name == command) else {
-        let known: Vec<&str> = jobs().map(|(name, _)| *name).collect();
+        let known: Vec<&str> = jobs().map(|(name, _)| name).collect();
         return Err(PyValueError::new_err(format!("no job {command:?} ({})", known.join(", "))));
     };
     let list = PyList::empty(py);
-    for spec in *specs {
+    for spec in specs {
         let d = PyDict::new(py);
         d.set_item("name", spec.name)?;
         d.set_item("flag", format!("--{}", spec.flag()))?;

@@ -1,14 +1,13 @@
-//! The post-processing transforms: `purge-shift` and `mix` (and the colour a mix prints), and
-//! how every transform job runs from Python.
+//! The transform jobs of the registry, run by their command (`transform_json`), the colour a
+//! mix prints, and how every transform job runs from Python.
 
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::writer::Target;
 
 use gweave::malformed::Transformed;
-use gweave::post::mix::MixOptions;
-use gweave::post::purge_shift::PurgeShiftOptions;
-use gweave_sim::transform::{self, Job, Outcome};
+use gweave::options::JobOptions;
+use gweave_sim::transform::{transforms, EachTransform, Job, Outcome, Transform};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -18,15 +17,17 @@ use crate::interrupt::interruptible;
 use crate::options::failed;
 use crate::{strictness, to_json};
 
-// purge-shift
-/// Moves every colour change earlier by the purge (see `gweave purge-shift`); returns the report
-/// as JSON text. The keyword arguments are the options of `gweave.options` (`purge_mm`,
-/// `config`: a TOML file, ...), by the names the engine declares.
+/// Runs the transform `command` of the registry (`purge-shift`, `mix`:
+/// `gweave_sim::transform::transforms`) on `path`, as `gweave <command>` runs it; returns the
+/// report as JSON text. The keyword arguments are the job's options by the names the engine
+/// declares (`purge_mm`, `config`: a TOML file, ...); the typed wrappers of `gweave/__init__.py`
+/// call it.
 #[pyfunction]
-#[pyo3(signature = (path, output=None, *, in_place=false, backup=true, force=false, lenient=false, **options))]
+#[pyo3(signature = (command, path, output=None, *, in_place=false, backup=true, force=false, lenient=false, **options))]
 #[allow(clippy::too_many_arguments)] // the keywords every transform shares, as Python spells them
-pub(crate) fn purge_shift_json(
+pub(crate) fn transform_json(
     py: Python<'_>,
+    command: &str,
     path: PathBuf,
     output: Option<PathBuf>,
     in_place: bool,
@@ -35,9 +36,55 @@ pub(crate) fn purge_shift_json(
     lenient: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
-    let options: PurgeShiftOptions = crate::options::read("purge_shift", options)?;
-    let target = target_of(output, in_place, backup, force)?;
-    run(py, &options, &path, &target, lenient, transform::purge_shift)
+    /// The row called `command`, run when the registry reaches it.
+    struct Called<'a, 'py> {
+        py: Python<'py>,
+        command: &'a str,
+        options: Option<&'a Bound<'py, PyDict>>,
+        path: &'a Path,
+        target: &'a dyn Fn() -> PyResult<Target>,
+        lenient: bool,
+        result: Option<PyResult<String>>,
+    }
+    impl EachTransform for Called<'_, '_> {
+        fn transform<T: Transform>(&mut self) {
+            if T::Options::COMMAND != self.command {
+                return;
+            }
+            let run = || -> PyResult<String> {
+                // Python's name of the function, for a keyword it does not take.
+                let function = self.command.replace('-', "_");
+                let options: T::Options = crate::options::read(&function, self.options)?;
+                run(self.py, &options, self.path, &(self.target)()?, self.lenient, T::run)
+            };
+            self.result = Some(run());
+        }
+    }
+    let target = || target_of(output.clone(), in_place, backup, force);
+    let mut called = Called { py, command, options, path: &path, target: &target, lenient, result: None };
+    transforms(&mut called);
+    called.result.unwrap_or_else(|| {
+        Err(PyValueError::new_err(format!("no transform {command:?} ({})", commands().join(", "))))
+    })
+}
+
+/// The commands of the transform registry, in its order: each one `transform_json` runs, a
+/// `gweave` subcommand and a typed function of `gweave` (held to that by the tests).
+#[pyfunction(name = "transforms")]
+pub(crate) fn transforms_list() -> Vec<&'static str> {
+    commands()
+}
+
+fn commands() -> Vec<&'static str> {
+    struct Names(Vec<&'static str>);
+    impl EachTransform for Names {
+        fn transform<T: Transform>(&mut self) {
+            self.0.push(T::Options::COMMAND);
+        }
+    }
+    let mut names = Names(Vec::new());
+    transforms(&mut names);
+    names.0
 }
 
 /// Runs the transform `job` with `options` on `path` into `target`, Ctrl-C stopping it; the
@@ -68,25 +115,4 @@ pub(crate) fn predict_colour_json(ratios: Vec<f64>, config: &str) -> PyResult<St
     let model = profile.hardware.mixing_model().map_err(|e| bad(&e))?;
     let mix = gweave::colour::Mix::new(&ratios).map_err(|e| bad(&e))?;
     to_json(&gweave::colour::predict::predict(&model, &mix).map_err(|e| bad(&e))?)
-}
-
-/// `gweave mix` on a file: returns the report as JSON text (see `gweave mix --json`). The
-/// keyword arguments are the options of `gweave.mix` (`config`: a profile TOML file, `at_layer`,
-/// `purge_mm`, ...), by the names the engine declares.
-#[pyfunction]
-#[pyo3(signature = (path, output=None, *, in_place=false, backup=true, force=false, lenient=false, **options))]
-#[allow(clippy::too_many_arguments)] // the keywords every transform shares, as Python spells them
-pub(crate) fn mix_json(
-    py: Python<'_>,
-    path: PathBuf,
-    output: Option<PathBuf>,
-    in_place: bool,
-    backup: bool,
-    force: bool,
-    lenient: bool,
-    options: Option<&Bound<'_, PyDict>>,
-) -> PyResult<String> {
-    let options: MixOptions = crate::options::read("mix", options)?;
-    let target = target_of(output, in_place, backup, force)?;
-    run(py, &options, &path, &target, lenient, transform::mix)
 }

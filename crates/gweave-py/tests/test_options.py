@@ -23,8 +23,6 @@ READING = {"path"}
 # command -> (typed wrapper, compiled function, the keywords that are no option of the job: the
 # files it reads and writes, a rotary job's `preview` picture too)
 JOBS = {
-    "purge-shift": (gweave.purge_shift, "purge_shift_json", TRANSFORM),
-    "mix": (gweave.mix, "mix_json", TRANSFORM),
     "rotary wrap": (gweave.rotary_wrap, "rotary_wrap_json", TRANSFORM - {"path"} | {"input", "preview"}),
     "rotary tube": (gweave.rotary_tube, "rotary_tube_json", {"output", "preview"}),
     "sim": (gweave.sim, "sim_json", READING),
@@ -34,6 +32,10 @@ JOBS = {
     # raster reads layer images (or one .sl1), a list.
     "raster": (gweave.raster, "raster_json", {"inputs", "output"}),
 }
+# The transforms of the engine's registry (purge-shift, mix, ...): one compiled function runs
+# them all by their command, each has the typed wrapper named as its command.
+TRANSFORMS = _gweave.transforms()
+JOBS.update({c: (getattr(gweave, c.replace("-", "_"), None), "transform_json", TRANSFORM) for c in TRANSFORMS})
 # Keywords Python takes in a wider type than the declaration's, turned into the command line's
 # text by the wrapper before the engine reads it: (annotation, default).
 WIDER = {
@@ -91,6 +93,8 @@ def test_the_wrapper_takes_the_declared_options_with_their_defaults_and_types(co
 def test_the_compiled_function_takes_the_options_as_keywords_and_its_stub_says_so(command):
     _, compiled, shared = JOBS[command]
     shared = shared - {"report"}  # the wrapper's own: what it returns
+    if compiled == "transform_json":
+        shared = shared | {"command"}  # the registry's row it runs
     params = inspect.signature(getattr(_gweave, compiled)).parameters
     assert set(params) - {"options"} == shared
     assert params["options"].kind is inspect.Parameter.VAR_KEYWORD
@@ -147,7 +151,24 @@ def test_rotary_values_are_checked_as_the_flags_are(data, tmp_path):
 
 def test_an_unknown_keyword_is_a_type_error_as_python_raises_it(data, tmp_path):
     with pytest.raises(TypeError, match=r"purge_shift\(\) got an unexpected keyword argument 'purge'"):
-        _gweave.purge_shift_json(str(data.joinpath(*TORUS)), str(tmp_path / "o.gcode"), purge=2.5)
+        _gweave.transform_json("purge-shift", str(data.joinpath(*TORUS)), str(tmp_path / "o.gcode"), purge=2.5)
+    with pytest.raises(ValueError, match=r'^no transform "purge" \(purge-shift, mix'):
+        _gweave.transform_json("purge", str(data.joinpath(*TORUS)), str(tmp_path / "o.gcode"))
+
+
+@pytest.mark.parametrize("command", TRANSFORMS)
+def test_every_transform_of_the_registry_is_a_command_and_a_typed_function(command, capfd):
+    """Regression (issue 40): a transform was written into each front end by hand (13 files
+    for one); now it is one row of the engine's registry, from which the CLI derives its
+    subcommand and `transform_json` runs it: the typed wrapper, named as the command, is the
+    one thing Python adds (held to the declaration above)."""
+    name = command.replace("-", "_")
+    assert JOBS[command][0] is not None, f"no typed wrapper gweave.{name}"
+    assert name in gweave.__all__
+    assert f'_transform("{command}", locals())' in inspect.getsource(JOBS[command][0]), "it runs its own row"
+    capfd.readouterr()
+    assert gweave.main([command, "--help"]) == 0
+    assert f"Usage: gweave {command} " in capfd.readouterr().out
 
 
 def test_the_header_is_written_from_the_options_value(data, tmp_path):

@@ -4,10 +4,12 @@ the map (docs/pipeline.md, "One vocabulary"); this test fails when either side d
 
 import inspect
 import re
+from typing import Dict
 
 import pytest
 
 import gweave
+from gweave import _gweave
 
 # Flags every command shares that have no place in a function call: the report is the return
 # value, and nothing is drawn on a terminal.
@@ -24,23 +26,20 @@ COMMON = {
 FORMAT = {"format": "- standard output's container: Python writes files, whose names say it"}
 TARGET = {"output": "output", "in-place": "in_place", "no-backup": "backup", "force": "force", **FORMAT}
 
+
+def declared(command: str) -> Dict[str, str]:
+    """The flags of a job's options as the engine declares them (`_gweave.job_options`), each
+    to its keyword: a new option of a job needs no line here."""
+    return {o["flag"][2:]: o["name"] for o in _gweave.job_options(command)}
+
+
 # command -> (function, {flag: keyword, or "-" and the reason}, positional arguments)
 MAP = {
     "stats": ("stats", {"filament-diameter": "filament_diameter", "lenient": "lenient"}, ["path"]),
     "check": ("check", {"bed": "bed", "machine": "machine", "max-feed": "max_feed", "strict": "strict"}, ["path"]),
     "cat": ("cat", {**TARGET, "lenient": "lenient"}, ["path"]),
-    "sim": (
-        "sim",
-        {
-            "machine": "machine",
-            "fault": "fault",
-            "plot": "plot",
-            "plot-speed": "plot_speed",
-            "raster-out": "raster_out",
-        },
-        ["path"],
-    ),
-    "estimate": ("estimate", {"machine": "machine", "steps": "steps"}, ["path"]),
+    "sim": ("sim", declared("sim"), ["path"]),
+    "estimate": ("estimate", declared("estimate"), ["path"]),
     "raster": (
         "raster",
         {
@@ -61,84 +60,30 @@ MAP = {
         {"layer-height": "layer_height", "dpi": "dpi", "pixel-mm": "pixel_mm", "margin": "margin", "output": "out_dir"},
         ["stl"],
     ),
-    "purge-shift": (
-        "purge_shift",
-        {
-            **TARGET,
-            **{
-                f: f.replace("-", "_")
-                for f in (
-                    "purge-mm purge-mm3 config filament-diameter cross-layers allow-features markers fallback tower-at "
-                    "lenient"
-                ).split()
-            },
-        },
-        ["path"],
-    ),
-    "rotary wrap": (
-        "rotary_wrap",
-        {
-            **TARGET,
-            **{
-                f: f.replace("-", "_")
-                for f in (
-                    "mandrel-diameter feed-convention rotary-unit axes config preview keep-arc-length seam-rotation "
-                    "helical allow-overlap chord-tol lenient"
-                ).split()
-            },
-        },
-        ["input"],
-    ),
-    "rotary tube": (
-        "rotary_tube",
-        {
-            "output": "output",
-            **FORMAT,
-            "no-interweave": "interweave",
-            **{
-                f: f.replace("-", "_")
-                for f in (
-                    "mandrel-diameter feed-convention rotary-unit axes config preview length layer-count layer-height "
-                    "bead-width pitch segments-per-turn chord-tol speed temp filament-diameter"
-                ).split()
-            },
-        },
-        [],
-    ),
+    "rotary wrap": ("rotary_wrap", {**TARGET, "preview": "preview", "lenient": "lenient", **declared("rotary wrap")}, ["input"]),
+    "rotary tube": ("rotary_tube", {"output": "output", **FORMAT, "preview": "preview", **declared("rotary tube")}, []),
     "mix": (
         "mix",
         {
             **TARGET,
-            **{
-                f: f.replace("-", "_")
-                for f in "config at-layer at-z map gradient gradient-space dialect purge-mm lenient".split()
-            },
+            "lenient": "lenient",
+            **declared("mix"),
             "palette-png": "- a picture: gweave.main(['mix', '--palette-png', ...])",
             "wizard": "- asks questions on a terminal",
             "predict": "- gweave.predict_colour(ratios, profile)",
-            "initial-purge": "initial_purge",
             "calibration-card": "- a file: gweave.main(['mix', '--calibration-card', ...])",
             "card-png": "- a picture of the card: gweave.main(['mix', '--calibration-card', ..., '--card-png', ...])",
             "fit": "- a file: gweave.main(['mix', '--fit', ...])",
         },
         ["path"],
     ),
-    "preview": (
-        "preview",
-        {
-            "output": "output",
-            **{
-                f: f.replace("-", "_")
-                for f in (
-                    "layer layers view colour-by size compare tool-colours mix-profile mandrel-diameter head travel "
-                    "min-len lenient"
-                ).split()
-            },
-            "format": "format",
-        },
-        ["path"],
-    ),
+    "preview": ("preview", {"output": "output", "lenient": "lenient", **declared("preview")}, ["path"]),
 }
+
+# A transform of the engine's registry without a row above (purge-shift, a new one) maps as its
+# declaration says: the shared flags, and each option's flag to its keyword.
+for _command in _gweave.transforms():
+    MAP.setdefault(_command, (_command.replace("-", "_"), {**TARGET, "lenient": "lenient", **declared(_command)}, ["path"]))
 
 # Keywords with no flag: what a function returns instead of printing.
 PYTHON_ONLY = {("preview", "report"): "return the report with the bytes"}

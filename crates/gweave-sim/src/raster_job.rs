@@ -28,7 +28,7 @@ use crate::transform::command_line;
 use crate::{Estimator, MachineProfile, MachineProfileError};
 
 /// The raster job's command and options, for a front end that lists them (Python's
-/// `_gweave.job_options`), beside [`crate::transform::JOBS`].
+/// `_gweave.job_options`), beside [`crate::transform::jobs`].
 pub const JOBS: &[(&str, &[OptionSpec])] = &[(RasterOptions::COMMAND, RasterOptions::SPEC)];
 
 /// Why a raster job failed.

@@ -2,13 +2,15 @@
 //! `rotary wrap`, `rotary tube`) both run it: the options read over the settings file they name,
 //! the pass run, the output finished with the run's header and its metadata
 //! ([`crate::finish`]). Written once, so the front ends only read their options
-//! ([`gweave::options`]) and show the result.
+//! ([`gweave::options`]) and show the result. The registry [`transforms`] lists the jobs
+//! ([`Transform`]) the front ends derive their commands from: a row gives a job its CLI
+//! subcommand and its Python function, with no code in either.
 
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::writer::Target;
 use gweave::malformed::Malformed;
-use gweave::options::{JobOptions, OptionError, Said, Spelling};
+use gweave::options::{JobOptions, OptionError, OptionSpec, Said, Spelling};
 use gweave::pass::{Progress, Strictness};
 use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
@@ -20,7 +22,7 @@ use gweave::rotary::report::{TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
 use gweave::rotary_job::{tube_file, wrap_file};
-use gweave::run::Run;
+use gweave::run::{Ran, Run};
 
 use crate::finish::{self, FinishError};
 
@@ -51,14 +53,66 @@ impl<'a> Job<'a> {
     }
 }
 
+/// A transform job as both front ends run it: `gweave <command> INPUT -o OUT [options]` and
+/// `gweave.<command>(path, output, **options)`. Its row in [`transforms`] is all a front end
+/// needs: the CLI derives the subcommand (its help [`Transform::HELP`], a flag per option, the
+/// shared `-o`, `--lenient`, `--json` groups, the summary and warnings printed after the run)
+/// and Python's `_gweave.transform_json(command, ...)` runs it by its command.
+pub trait Transform: 'static {
+    /// Its options, declared once (`gweave::job_options!`); their `COMMAND` names the job.
+    type Options: JobOptions + Clone + std::fmt::Debug + Send + Sync + 'static;
+    /// What it reports: the JSON document of `--json`, `--report` and Python.
+    type Report: serde::Serialize + Send;
+    /// The command's help as the CLI shows it, written as a doc comment is: its first
+    /// paragraph for `-h` and the list of commands, the whole for `--help`.
+    const HELP: &'static str;
+    /// The command line has a subcommand of its own for the job (`mix`: `--wizard`,
+    /// `--predict`, `--calibration-card`), which runs it as a derived one does; Python and the
+    /// option lists still take the job from its row.
+    const OWN_COMMAND: bool = false;
+    /// Runs the job (the one function both front ends call).
+    fn run(options: &Self::Options, job: Job<'_>) -> Outcome<Self::Report>;
+    /// What a person reads after the run (the CLI's summary, on standard error when the G-code
+    /// goes to standard output).
+    fn summary(report: &Self::Report) -> String;
+    /// The warnings the CLI prints after the run, one line each (after `gweave: `), even with
+    /// `-q`.
+    fn warnings(_report: &Self::Report) -> Vec<String> {
+        Vec::new()
+    }
+}
+
+/// What a front end does with each row of [`transforms`] (add its subcommand, find the one
+/// called, run the one named).
+pub trait EachTransform {
+    /// Called once per transform job, in the registry's order.
+    fn transform<T: Transform>(&mut self);
+}
+
+/// The registry of transform jobs, one row each, in the order the CLI lists them. A new
+/// transform is its pass, its job ([`Transform`]) and one row here (docs/architecture.md,
+/// "Adding a pass").
+pub fn transforms(each: &mut impl EachTransform) {
+    each.transform::<PurgeShift>();
+    each.transform::<Mix>();
+}
+
 /// Every transform job's command and options, for a front end that lists them (Python's
-/// `_gweave.job_options`, which its tests hold the typed wrappers to).
-pub const JOBS: &[(&str, &[gweave::options::OptionSpec])] = &[
-    (PurgeShiftOptions::COMMAND, PurgeShiftOptions::SPEC),
-    (MixOptions::COMMAND, MixOptions::SPEC),
-    (WrapOptions::COMMAND, WrapOptions::SPEC),
-    (TubeOptions::COMMAND, TubeOptions::SPEC),
-];
+/// `_gweave.job_options`, which its tests hold the typed wrappers to): the registry's rows,
+/// then `rotary wrap` and `rotary tube` (each its own command in both front ends: `wrap` draws
+/// a preview, `tube` reads no file).
+pub fn jobs() -> Vec<(&'static str, &'static [OptionSpec])> {
+    struct List(Vec<(&'static str, &'static [OptionSpec])>);
+    impl EachTransform for List {
+        fn transform<T: Transform>(&mut self) {
+            self.0.push((T::Options::COMMAND, T::Options::SPEC));
+        }
+    }
+    let mut list = List(Vec::new());
+    transforms(&mut list);
+    list.0.extend([(WrapOptions::COMMAND, WrapOptions::SPEC), (TubeOptions::COMMAND, TubeOptions::SPEC)]);
+    list.0
+}
 
 /// What a transform job returns: its report and the malformed lines a lenient run read past.
 pub type Outcome<R> = Result<(R, Malformed), TransformError>;
@@ -157,6 +211,28 @@ pub fn command_line<O: JobOptions>(options: &O, strictness: Strictness) -> Strin
     words.into_iter().flatten().filter(|w| !w.is_empty()).collect::<Vec<_>>().join(" ")
 }
 
+/// Runs a transform's pass on the job's file (`pass`: the engine's function that runs it on
+/// a [`Run`]), refusing a file an earlier run of the same command wrote, and finishes the
+/// output with the run's header ([`command_line`] of `options`) and the slicer's figures
+/// rewritten for the file as written ([`finish::with_metadata`]).
+pub fn finished<O: JobOptions, R, E>(
+    options: &O,
+    job: Job<'_>,
+    pass: impl FnOnce(Run<'_>) -> Result<(R, Ran), E>,
+) -> Outcome<R>
+where
+    TransformError: From<E>,
+{
+    finish::refuse_second_run(job.input, O::COMMAND)?;
+    let line = command_line(options, job.strictness);
+    let (input, target) = (job.input, job.target);
+    let (done, _) = finish::with_metadata(Some(input), target, &line, |t| {
+        let (report, ran) = pass(job.run(t))?;
+        Ok::<_, TransformError>((report, ran.malformed))
+    })?;
+    Ok(done)
+}
+
 /// A settings file named by an option, read with `parse`; the default without one.
 fn settings<T: Default, E: std::error::Error + 'static>(
     path: Option<&Path>,
@@ -170,6 +246,48 @@ fn settings<T: Default, E: std::error::Error + 'static>(
     })
 }
 
+/// `purge-shift`'s row in [`transforms`].
+pub struct PurgeShift;
+
+impl Transform for PurgeShift {
+    type Options = PurgeShiftOptions;
+    type Report = PurgeShiftReport;
+    const HELP: &'static str = "
+        Move each tool/mix change earlier by the purge, so the old colour is purged inside the part.
+
+        For every `T<n>` (and `M163`/`M164`, `M165`, `M567` mix change) the old colour's extruding
+        moves are walked back until the purge amount of filament is found; that move is split at the
+        exact point and the change goes there. Works with absolute and relative E, `G92 E` resets,
+        retractions and firmware retraction; never crosses a layer change (unless --cross-layers),
+        the outer wall (unless allowed) or the previous change. With too little room the rest of
+        the purge is accepted as missing, or purged in a block or on a small tower (--fallback).
+
+        As a PrusaSlicer post-processing script: `/path/to/gweave purge-shift --purge-mm 2.5 --in-place
+        --no-backup` (PrusaSlicer appends the file name). Chains after `gweave mix`.
+        Example: `gweave purge-shift part.gcode -o part.shifted.gcode --purge-mm 2.5`.";
+
+    fn run(options: &PurgeShiftOptions, job: Job<'_>) -> Outcome<PurgeShiftReport> {
+        purge_shift(options, job)
+    }
+
+    fn summary(report: &PurgeShiftReport) -> String {
+        report.summary()
+    }
+
+    /// One line per kind of warning (docs/pipeline.md), and how many more were only counted.
+    fn warnings(report: &PurgeShiftReport) -> Vec<String> {
+        let mut lines: Vec<String> = gweave::post::warning::grouped(&report.warnings)
+            .iter()
+            .map(|w| format!("warning: {w}"))
+            .collect();
+        let kept = report.warnings.len() as u64;
+        if report.warnings_total > kept {
+            lines.push(format!("... {} more warnings, counted only", report.warnings_total - kept));
+        }
+        lines
+    }
+}
+
 /// Moves every colour change earlier by the purge (docs/purge-shift.md): returns the report
 /// (its changes' output lines counting the header) and the malformed lines read past.
 pub fn purge_shift(options: &PurgeShiftOptions, job: Job<'_>) -> Outcome<PurgeShiftReport> {
@@ -177,16 +295,36 @@ pub fn purge_shift(options: &PurgeShiftOptions, job: Job<'_>) -> Outcome<PurgeSh
     let mut config = settings(options.config.as_deref(), PurgeShiftConfig::parse_toml)?;
     config.apply(options);
     let rules = config.validate()?;
-    finish::refuse_second_run(job.input, PurgeShiftOptions::COMMAND)?;
-    let line = command_line(options, job.strictness);
-    let (input, target) = (job.input, job.target);
-    let ((mut report, malformed), _) = finish::with_metadata(Some(input), target, &line, |t| {
-        let (report, ran) = gweave::post::purge_shift::purge_shift(rules, job.run(t))?;
-        Ok::<_, TransformError>((report, ran.malformed))
-    })?;
+    let (mut report, malformed) =
+        finished(options, job, |run| gweave::post::purge_shift::purge_shift(rules, run))?;
     // The run's header is one line above every change.
     report.changes.offset_output_lines(1);
     Ok((report, malformed))
+}
+
+/// `mix`'s row in [`transforms`]; the CLI's `gweave mix` is its own command (the wizard, the
+/// predicted colours, the calibration card) around the same run.
+pub struct Mix;
+
+impl Transform for Mix {
+    type Options = MixOptions;
+    type Report = MixReport;
+    const HELP: &'static str =
+        "Colour a print on a mixing hotend: define mixes as virtual tools, change them by layer, by
+        height, along a gradient or per slicer tool, purge at each change, cap the Z feed rate.";
+    const OWN_COMMAND: bool = true;
+
+    fn run(options: &MixOptions, job: Job<'_>) -> Outcome<MixReport> {
+        mix(options, job)
+    }
+
+    fn summary(report: &MixReport) -> String {
+        report.summary()
+    }
+
+    fn warnings(report: &MixReport) -> Vec<String> {
+        report.warnings.iter().map(|w| format!("warning: {w}")).collect()
+    }
 }
 
 /// The mix profile the options name, with the options applied over it.
@@ -204,14 +342,7 @@ pub fn mix(options: &MixOptions, job: Job<'_>) -> Outcome<MixReport> {
 
 /// [`mix`] with a profile made otherwise (`gweave mix --wizard`'s); `options` name the run.
 pub fn mix_with(profile: MixProfile, options: &MixOptions, job: Job<'_>) -> Outcome<MixReport> {
-    finish::refuse_second_run(job.input, MixOptions::COMMAND)?;
-    let line = command_line(options, job.strictness);
-    let (input, target) = (job.input, job.target);
-    let ((report, malformed), _) = finish::with_metadata(Some(input), target, &line, |t| {
-        let (report, ran) = gweave::post::mix::mix(profile, job.run(t))?;
-        Ok::<_, TransformError>((report, ran.malformed))
-    })?;
-    Ok((report, malformed))
+    finished(options, job, |run| gweave::post::mix::mix(profile, run))
 }
 
 /// The rotary settings `read` makes of the settings file the machine options name (its errors

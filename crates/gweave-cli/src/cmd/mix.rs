@@ -9,15 +9,14 @@ use clap::Args;
 use gweave::colour::named_mixes::{Palette, PaletteConfig};
 use gweave::colour::swatch::{render_png, render_resolved_png, SwatchEntry, SwatchLayout};
 use gweave::gcode::writer::Target;
-use gweave::malformed::Transformed;
 use gweave::post::mix::profile::MixProfile;
-use gweave::post::mix::report::MixReport;
 use gweave::post::mix::schedule::Plan;
 use gweave::post::mix::{wizard::run_wizard, MixOptions};
-use gweave_sim::transform::{self, Job};
+use gweave_sim::transform::{self, Job, Mix};
 
+use super::transform::Shown;
 use crate::args::Lenient;
-use crate::common::{print_malformed, print_summary, write_bytes, OutputArgs, ReportArgs};
+use crate::common::{print_summary, write_bytes, OutputArgs, ReportArgs};
 use crate::files::Files;
 use crate::options::{failed, Options};
 
@@ -130,27 +129,9 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
 
 /// Mixes `input` into `target` and reports: the job of a plain run and of the wizard's.
 fn run_job(args: &MixArgs, profile: MixProfile, input: &Path, target: Target) -> Result<ExitCode> {
-    let mut bar = args.report.quiet.bar();
-    let strictness = args.lenient.strictness();
-    let job = Job { strictness, progress: Some(&mut bar), ..Job::new(input, &target) };
-    let (report, malformed) = transform::mix_with(profile, &args.options, job).map_err(failed)?;
-    drop(bar);
-    for w in &report.warnings {
-        eprintln!("gweave: warning: {w}");
-    }
-    if args.report.emit(&Transformed::new(&report, malformed, strictness))? {
-        let human = |out: &mut dyn Write| {
-            print_human(out, &report)?;
-            print_malformed(out, &malformed)
-        };
-        // Keep standard output clean when the G-code goes there.
-        if target.is_stdout() {
-            human(&mut std::io::stderr().lock())?;
-        } else {
-            print_summary(human)?;
-        }
-    }
-    Ok(ExitCode::SUCCESS)
+    let job = |job: Job<'_>| transform::mix_with(profile, &args.options, job);
+    let shown = Shown::of::<Mix>();
+    super::transform::run_job(&args.report, args.lenient.strictness(), input, &target, job, shown)
 }
 
 fn write_swatch(profile: &MixProfile, has_job: bool, png: &Path) -> Result<()> {
@@ -216,51 +197,4 @@ fn wizard(args: &MixArgs) -> Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     };
     run_job(args, MixProfile::from_toml_str(&text)?, file, target)
-}
-
-fn print_human(out: &mut dyn Write, r: &MixReport) -> std::io::Result<()> {
-    match &r.flavour {
-        Some(f) => writeln!(out, "mixes ({:?}; the file's flavour: {f})", r.dialect)?,
-        None => writeln!(out, "mixes ({:?})", r.dialect)?,
-    }
-    for m in &r.mixes {
-        let tool = m.tool.map_or("-".to_owned(), |t| format!("T{t}"));
-        let ratios: Vec<String> = m.ratios.iter().map(|x| format!("{x:.4}")).collect();
-        let de = match (m.target.as_deref(), m.delta_e) {
-            (Some(t), Some(d)) => {
-                format!("  target {t} dE {d:.1}{}", if m.out_of_gamut { " (out of gamut)" } else { "" })
-            }
-            _ => String::new(),
-        };
-        let layers: Vec<String> =
-            m.layers.iter().map(|[a, b]| if a == b { a.to_string() } else { format!("{a}-{b}") }).collect();
-        writeln!(
-            out,
-            "  {tool:<4} {:<22} {:<32} {}  layers {}  {:.1} mm{de}",
-            m.name,
-            ratios.join(":"),
-            m.predicted,
-            if layers.is_empty() { "none".to_owned() } else { layers.join(",") },
-            m.filament_mm
-        )?;
-    }
-    writeln!(out, "changes         {}", r.changes)?;
-    writeln!(
-        out,
-        "purge           {} x, {:.1} mm, {:.0} mm3, {:.2} g",
-        r.purge.count, r.purge.filament_mm, r.purge.volume_mm3, r.purge.mass_g
-    )?;
-    let per: Vec<String> = r
-        .filament_per_input_mm
-        .iter()
-        .zip(&r.filament_per_input_g)
-        .enumerate()
-        .map(|(i, (mm, g))| format!("E{i} {mm:.1} mm ({g:.2} g)"))
-        .collect();
-    writeln!(out, "filament        {}", per.join(", "))?;
-    writeln!(out, "z-capped lines  {}", r.z_capped_lines)?;
-    if r.dropped_retractions > 0 {
-        writeln!(out, "dropped slicer tool-change retractions {}", r.dropped_retractions)?;
-    }
-    Ok(())
 }

@@ -11,8 +11,8 @@ mod sim;
 // binder-jet raster
 mod raster;
 mod slice_raster;
-// purge-shift
-mod purge_shift;
+// the transforms of the registry (purge-shift, ...)
+mod transform;
 // mix
 mod mix;
 mod mix_colour;
@@ -40,8 +40,9 @@ pub enum Command {
     Machine(machine::MachineArgs),
     Raster(Box<raster::RasterArgs>),
     SliceRaster(slice_raster::SliceRasterArgs),
-    // purge-shift
-    PurgeShift(purge_shift::PurgeShiftArgs),
+    // the transforms of the registry (purge-shift, ...)
+    #[command(flatten)]
+    Transform(transform::Transforms),
 
     Rotary(rotary::RotaryArgs),
     Serve(serve::ServeArgs),
@@ -68,8 +69,8 @@ pub fn run(command: Command) -> Result<ExitCode> {
         Command::Machine(a) => machine::run(a),
         Command::Raster(a) => raster::run(*a),
         Command::SliceRaster(a) => slice_raster::run(a),
-        // purge-shift
-        Command::PurgeShift(a) => purge_shift::run(a),
+        // the transforms of the registry (purge-shift, ...)
+        Command::Transform(t) => t.run(),
 
         Command::Rotary(a) => rotary::run(a),
         Command::Serve(a) => serve::run(a),

@@ -16,9 +16,10 @@ use gweave::rotary::report::{MachineReport, TubeReport, WrapReport};
 use gweave::Transformed;
 use gweave_sim::transform::{self, Job};
 
+use super::transform::Shown;
 use crate::args::Lenient;
 use crate::common::hms;
-use crate::common::{print_malformed, print_summary, OutputArgs, ReportArgs};
+use crate::common::{print_summary, OutputArgs, ReportArgs};
 use crate::files::Files;
 use crate::options::{failed, Options};
 
@@ -106,18 +107,9 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
         .write("--preview", preview)
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let mut bar = args.report.quiet.bar();
-    let strictness = args.lenient.strictness();
-    let job = Job { strictness, progress: Some(&mut bar), ..Job::new(&args.input, &target) };
-    let (report, malformed) = transform::rotary_wrap(&args.options, job, preview).map_err(failed)?;
-    drop(bar);
-    if args.report.emit(&Transformed::new(&report, malformed, strictness))? && !target.is_stdout() {
-        print_summary(|out| {
-            print_wrap(out, &report)?;
-            print_malformed(out, &malformed)
-        })?;
-    }
-    Ok(ExitCode::SUCCESS)
+    let job = |job: Job<'_>| transform::rotary_wrap(&args.options, job, preview);
+    let shown = Shown { warnings: |_| Vec::new(), summary: |r, out| print_wrap(out, r) };
+    super::transform::run_job(&args.report, args.lenient.strictness(), &args.input, &target, job, shown)
 }
 
 fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {

@@ -290,6 +290,12 @@ def _job(function: Any, arguments: Dict[str, Any], files: Sequence[str] = ("path
     return json.loads(_call(function, arguments, files))
 
 
+def _transform(command: str, arguments: Dict[str, Any]) -> Report:
+    """Runs the transform ``command`` of the engine's registry (``_gweave.transforms()``, each
+    one a ``gweave`` subcommand too) with a typed wrapper's own arguments (:func:`_job`)."""
+    return _job(functools.partial(_gweave.transform_json, command), arguments)
+
+
 # purge-shift
 def purge_shift(
     path: PathLike,
@@ -323,7 +329,7 @@ def purge_shift(
     (``malformed_lines``). Returns the report: per change the requested, moved and fallback purge,
     where the change now sits, and totals.
     """
-    return _job(_gweave.purge_shift_json, locals())
+    return _transform("purge-shift", locals())
 
 # ---- preview (render) ----
 
@@ -439,7 +445,7 @@ def mix(
     extrusion; default: the profile's ``[purge] initial_mm``) work as the command line flags.
     ``lenient=True`` copies malformed lines through and counts them instead of raising.
     """
-    return _job(_gweave.mix_json, locals())
+    return _transform("mix", locals())
 
 
 def predict_colour(ratios: Sequence[float], profile: Optional[PathLike] = None) -> Report:

@@ -31,8 +31,10 @@ def slice_raster_json(
 # names the engine declares (`job_options`); `gweave/__init__.py` types them, `tests/test_options.py` holds the two equal.
 def job_options(command: str) -> List[Dict[str, Any]]: ...
 
-# purge-shift
-def purge_shift_json(
+# The transforms of the engine's registry (purge-shift, mix, ...), run by their command: the
+# typed wrappers of `gweave/__init__.py` call it with the job's options as keywords.
+def transform_json(
+    command: str,
     path: str,
     output: Optional[str] = None,
     *,
@@ -42,19 +44,10 @@ def purge_shift_json(
     lenient: bool = False,
     **options: Any,
 ) -> str: ...
+def transforms() -> List[str]: ...
 
 # mix
 def predict_colour_json(ratios: List[float], *, config: str = "") -> str: ...
-def mix_json(
-    path: str,
-    output: Optional[str] = None,
-    *,
-    in_place: bool = False,
-    backup: bool = True,
-    force: bool = False,
-    lenient: bool = False,
-    **options: Any,
-) -> str: ...
 # The options of preview are read by their declared names, as purge-shift's are.
 def preview_json(
     path: str, output: Optional[str] = None, *, lenient: bool = False, **options: Any

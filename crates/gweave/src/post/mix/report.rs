@@ -101,6 +101,61 @@ impl MixReport {
     pub fn layer_colours(&self) -> Vec<(u32, Srgb8)> {
         self.layers.iter().filter_map(|l| l.colour.parse().ok().map(|c| (l.layer, c))).collect()
     }
+
+    /// A short human summary (what the CLI prints): each mix with its tool, ratios, predicted
+    /// colour, layers and filament; the changes, the purge waste and each input's filament.
+    pub fn summary(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        let _ = match &self.flavour {
+            Some(f) => writeln!(s, "mixes ({:?}; the file's flavour: {f})", self.dialect),
+            None => writeln!(s, "mixes ({:?})", self.dialect),
+        };
+        for m in &self.mixes {
+            let tool = m.tool.map_or("-".to_owned(), |t| format!("T{t}"));
+            let ratios: Vec<String> = m.ratios.iter().map(|x| format!("{x:.4}")).collect();
+            let de = match (m.target.as_deref(), m.delta_e) {
+                (Some(t), Some(d)) => {
+                    format!("  target {t} dE {d:.1}{}", if m.out_of_gamut { " (out of gamut)" } else { "" })
+                }
+                _ => String::new(),
+            };
+            let layers: Vec<String> = m
+                .layers
+                .iter()
+                .map(|[a, b]| if a == b { a.to_string() } else { format!("{a}-{b}") })
+                .collect();
+            let _ = writeln!(
+                s,
+                "  {tool:<4} {:<22} {:<32} {}  layers {}  {:.1} mm{de}",
+                m.name,
+                ratios.join(":"),
+                m.predicted,
+                if layers.is_empty() { "none".to_owned() } else { layers.join(",") },
+                m.filament_mm
+            );
+        }
+        let _ = writeln!(s, "changes         {}", self.changes);
+        let p = &self.purge;
+        let _ = writeln!(
+            s,
+            "purge           {} x, {:.1} mm, {:.0} mm3, {:.2} g",
+            p.count, p.filament_mm, p.volume_mm3, p.mass_g
+        );
+        let per: Vec<String> = self
+            .filament_per_input_mm
+            .iter()
+            .zip(&self.filament_per_input_g)
+            .enumerate()
+            .map(|(i, (mm, g))| format!("E{i} {mm:.1} mm ({g:.2} g)"))
+            .collect();
+        let _ = writeln!(s, "filament        {}", per.join(", "));
+        let _ = writeln!(s, "z-capped lines  {}", self.z_capped_lines);
+        if self.dropped_retractions > 0 {
+            let _ = writeln!(s, "dropped slicer tool-change retractions {}", self.dropped_retractions);
+        }
+        s
+    }
 }
 
 /// A layer being printed: index, Z, and filament per mix in it.
