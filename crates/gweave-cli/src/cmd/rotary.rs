@@ -13,7 +13,6 @@ use clap::{Args, Subcommand};
 use gweave::rotary::cylinder::{FeedConvention, RotaryUnit};
 use gweave::rotary::options::{TubeOptions, WrapOptions};
 use gweave::rotary::report::{MachineReport, TubeReport, WrapReport};
-use gweave::Transformed;
 use gweave_sim::transform::{self, Job};
 
 use super::transform::Shown;
