@@ -14,8 +14,9 @@
 //! ([`crate::colour::dialect::MixingState`]): the tool number, the active Marlin mix and the
 //! active RepRapFirmware mix before and after the group must differ. Everything else a slicer
 //! writes around a tool change (retract, `G92 E0`, travel, temperature for the next tool,
-//! unretract) stays where it is: retracts and `G92` are E bookkeeping that does not depend on the
-//! tool of a mixing hotend, and the travel belongs to the new colour's path.
+//! unretract) stays where it is: the travel belongs to the new colour's path. A retraction
+//! belongs to the tool that makes it, though, so a moved change takes a bracket of E-only moves
+//! with it that leaves every tool with its own retraction (the `tool_retraction` module).
 //!
 //! ## Rules
 //! - Only extruding moves (positive E with XY motion) count; retractions, unretractions,
@@ -26,7 +27,8 @@
 //!   inside), at the previous change, at homing, at a line whose meaning depends on the active tool
 //!   (`M104`/`M109`/`M221`/`M900` without `T`), at mixing lines that are not part of the change
 //!   (the change must not be moved before the definition of its own tool), at numbered or
-//!   checksummed moves (which cannot be rewritten), and outside the print proper.
+//!   checksummed moves (which cannot be rewritten), at a `G10`/`G11` firmware retraction (kept
+//!   per tool by the firmware), and outside the print proper.
 //! - Too little room: the change goes as far back as allowed, a warning names layer, line and
 //!   shortfall, and the fallback applies: accept the shortfall (`partial`), or purge it right
 //!   after the change in a purge block (`block`) or on a small tower beside the part (`tower`),
@@ -55,6 +57,7 @@ mod fallback;
 mod options;
 pub mod report;
 mod split;
+mod tool_retraction;
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
@@ -62,7 +65,7 @@ use std::path::Path;
 
 pub use config::{ConfigError, Fallback, PurgeShiftConfig, Rules, TowerConfig};
 pub use options::PurgeShiftOptions;
-pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
+pub use report::{ChangeReport, PurgeShiftReport, RetractionMove, SplitPoint};
 
 use crate::colour::dialect::MixingState;
 use crate::eol::Eol;
@@ -80,6 +83,7 @@ use crate::run::{Ran, Run, Source};
 use checks::{require_markers, FeatureComments};
 use fallback::{write_fallback, Spot, Surroundings};
 use split::{split, Splittable};
+use tool_retraction::{write_bracket, Bracket, ToolRetractions};
 
 /// What stops the walk back at a layer change (the report's `stopped_by`).
 const LAYER_CHANGE: &str = "a layer change";
@@ -111,6 +115,8 @@ struct Held {
     layer: Option<u32>,
     feature: Feature,
     seq: u64,
+    /// The active tool's retraction in force before the line (in the input), mm.
+    retracted_mm: f64,
 }
 
 impl Held {
@@ -158,6 +164,13 @@ pub struct PurgeShift {
     /// Buffers of written lines, reused for new held lines.
     spare: Vec<OwnedLine>,
     features: FeatureComments,
+    /// Each tool's retraction, as the input has it.
+    tools: ToolRetractions,
+    /// The active tool's retraction before the line being read, mm.
+    line_retracted_mm: f64,
+    /// The old tool's retraction in force at the group, and what the new tool has parked, mm.
+    group_retracted_mm: f64,
+    group_parked_mm: f64,
 }
 
 impl PurgeShift {
@@ -189,6 +202,10 @@ impl PurgeShift {
             report,
             spare: Vec::new(),
             features: FeatureComments::default(),
+            tools: ToolRetractions::default(),
+            line_retracted_mm: 0.0,
+            group_retracted_mm: 0.0,
+            group_parked_mm: 0.0,
         }
     }
 
@@ -350,7 +367,7 @@ impl PurgeShift {
 
     fn held(&mut self, line: OwnedLine, kind: Kind, layer: Option<u32>, feature: Feature) -> Held {
         self.seq += 1;
-        Held { line, kind, layer, feature, seq: self.seq }
+        Held { line, kind, layer, feature, seq: self.seq, retracted_mm: self.line_retracted_mm }
     }
 
     /// Walks back from the change, places it, writes the window and the group.
@@ -396,6 +413,7 @@ impl PurgeShift {
             moved_mm,
             fallback_mm: 0.0,
             fallback_lines: 0,
+            retraction: None,
             requested_mm3: self.rules.mm3(requested_mm),
             achieved_mm3: 0.0,
             layer: self.group_layer,
@@ -409,6 +427,14 @@ impl PurgeShift {
         let held: Vec<Held> = self.window.drain(..).collect();
         self.window_e_mm = 0.0;
         let (at, fraction) = place.unwrap_or((held.len(), None));
+        // Each tool keeps its retraction (the tool_retraction module): what the old tool had in
+        // force where the change now goes, inside or before an extrusion.
+        let bracket = held.get(at).filter(|_| from_tool != to_tool).map(|h| {
+            let head_mm = fraction.map_or(0.0, |t| t * h.e_mm());
+            let r_place_mm = (h.retracted_mm - head_mm).max(0.0);
+            Bracket::new(r_place_mm, self.group_retracted_mm, self.group_parked_mm)
+        });
+        let feed_mm_min = self.rules.block.retract_feed_mm_min;
         // Where the machine is when the change runs: before the move it now precedes, at the
         // split point, or (not moved) where the change was.
         let mut spot = self.group_spot;
@@ -428,8 +454,9 @@ impl PurgeShift {
             if let Kind::Extrude { split: s, .. } = &h.kind {
                 let halves = split(&h.line.bytes, s, t);
                 self.emit(out, &halves.first, &h.line.eol)?;
-                change.output_line = self.emitted.lines() + 1;
-                self.emit_change(out, group, &mut change, Some(spot_of(s, &s.end_of(&halves.first))))?;
+                let at_split = spot_of(s, &s.end_of(&halves.first));
+                let lines = bracket.map(|b| (b, write_bracket(&at_split, b.old_mm, b.new_mm, feed_mm_min)));
+                self.emit_change(out, group, &mut change, Some(at_split), lines)?;
                 match &halves.second {
                     Some(second) => self.emit(out, second, &h.line.eol)?,
                     None => self.emit_line(out, &h.line)?,
@@ -441,11 +468,22 @@ impl PurgeShift {
             }
         }
         if change.split.is_none() {
-            change.output_line = self.emitted.lines() + 1;
-            self.emit_change(out, group, &mut change, spot)?;
+            let lines =
+                bracket.zip(spot).map(|(b, s)| (b, write_bracket(&s, b.old_mm, b.new_mm, feed_mm_min)));
+            self.emit_change(out, group, &mut change, spot, lines)?;
         }
         for h in &held[rest..] {
             self.emit_line(out, &h.line)?;
+        }
+        // Where the change was, the new tool is brought to the retraction it had parked.
+        if let (Some(b), Some(here)) = (bracket, self.group_spot) {
+            let [head, tail] = write_bracket(&here, 0.0, b.settle_mm, feed_mm_min);
+            let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
+            let offset = self.emitted.lines() + 1 - change.output_line;
+            let written = self.emit_text(out, &head, &eol)? + self.emit_text(out, &tail, &eol)?;
+            if let Some(r) = change.retraction.as_mut().filter(|_| written > 0) {
+                (r.settle_lines, r.settle_offset) = (written, offset);
+            }
         }
         let room = SPARE_LINES.saturating_sub(self.spare.len());
         self.spare.extend(held.into_iter().take(room).map(|h| h.line));
@@ -459,18 +497,46 @@ impl PurgeShift {
         self.report.add(change)
     }
 
-    /// Writes the change lines, then the fallback purge of what the move back could not find,
-    /// and warns about that shortfall.
+    /// Writes `\n`-separated lines with the ending `eol`; returns how many.
+    fn emit_text(&mut self, out: &mut dyn Write, text: &[u8], eol: &[u8]) -> io::Result<u64> {
+        let mut n = 0;
+        for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
+            self.emit(out, line, eol)?;
+            n += 1;
+        }
+        Ok(n)
+    }
+
+    /// Writes the change lines between the two parts of its retraction bracket, then the
+    /// fallback purge of what the move back could not find, and warns about that shortfall.
     fn emit_change(
         &mut self,
         out: &mut dyn Write,
         group: &[OwnedLine],
         change: &mut ChangeReport,
         spot: Option<Spot>,
+        bracket: Option<(Bracket, [Vec<u8>; 2])>,
     ) -> io::Result<()> {
+        let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
+        let (b, [before, after]) = match bracket {
+            Some((b, lines)) => (Some(b), lines),
+            None => (None, Default::default()),
+        };
+        let lines_before = self.emit_text(out, &before, &eol)?;
+        change.output_line = self.emitted.lines() + 1;
         for line in group {
             self.emit_line(out, line)?;
         }
+        let lines_after = self.emit_text(out, &after, &eol)?;
+        change.retraction = b.filter(|_| lines_before + lines_after > 0).map(|b| RetractionMove {
+            old_mm: b.old_mm,
+            new_mm: b.new_mm,
+            settle_mm: b.settle_mm,
+            lines_before,
+            lines_after,
+            settle_lines: 0,
+            settle_offset: 0,
+        });
         let short_mm = change.shortfall_mm;
         if short_mm <= 1e-9 {
             return Ok(());
@@ -503,7 +569,6 @@ impl PurgeShift {
             then,
         });
         if let Some(text) = text {
-            let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
             for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
                 self.emit(out, line, &eol)?;
                 change.fallback_lines += 1;
@@ -558,6 +623,8 @@ impl Pass for PurgeShift {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
         self.env.follow_retraction(ctx.effect);
+        self.line_retracted_mm = self.tools.in_force_mm();
+        self.tools.follow(ctx.state.tool, ctx.effect);
         if let Effect::Move(m) = ctx.effect {
             self.env.observe(m, in_print);
         }
@@ -569,7 +636,9 @@ impl Pass for PurgeShift {
                 self.group_spot = Some(self.spot_here(ctx.state));
                 self.group_layer = structure.layer;
                 self.group_feature = structure.feature;
+                self.group_retracted_mm = self.line_retracted_mm;
             }
+            self.group_parked_mm = self.tools.in_force_mm();
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
             self.group.extend(tail);
@@ -614,6 +683,12 @@ impl Pass for PurgeShift {
             }
             Effect::Home { .. } => {
                 self.flush(out, "homing")?;
+                return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
+            }
+            // The firmware keeps a G10 per tool and a G11 recovers only the tool it retracted:
+            // E moves cannot carry it across a moved change, so the change stays after it.
+            Effect::FirmwareRetract { .. } => {
+                self.flush(out, "a firmware retraction")?;
                 return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
             }
             _ if tool_dependent(ctx.block) => {
