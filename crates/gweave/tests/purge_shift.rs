@@ -474,6 +474,31 @@ fn tool_change_retraction_stays_with_its_tool() {
     assert_close(&after.retracted_mm, &[10.0, 0.0]);
 }
 
+/// Regression (found by the property test in CI): a change moved back across a `G92 E0`
+/// carries the old tool's retraction before the reset and the new tool's unretraction after
+/// it, so in relative E the counter after the reset is 0.5 mm off the input's: the checker
+/// compared the split point's E coordinate and failed a correct file. The filament each tool
+/// feeds is the input's, in relative and absolute E.
+#[test]
+fn a_retraction_carried_across_a_g92_keeps_each_tools_filament() {
+    let options = gweave::gcode::state::StateOptions::default();
+    for (mode, last) in [("M83", "E1.21645"), ("M82", "E0.71645")] {
+        let text = format!(
+            "{mode}\nG1 X0 Y0 F1200\nG1 X0.010 Y0 E0.00050\nG92 E0\nG1 E-0.5\n; end of the old filament\n\
+             T1\nG0 X0.010 Y8\nG0 Y0\nG1 X24.339 Y0 {last}\nT0\n"
+        );
+        let before = purge_check::ledger(text.as_bytes(), &options);
+        let (out, r) = run(Rules::fixed(0.05).unwrap(), text.as_bytes());
+        assert_eq!(r.changes.kept().len(), 2, "{mode}");
+        let after = purge_check::ledger(&out, &options);
+        // T0's 0.0005 mm went to T1 (the first change moved as far as it could), T1's last
+        // 0.05 mm to T0; each tool ends with the retraction it had.
+        let moved = 0.05 - 0.0005;
+        assert_close(&after.left_mm, &[before.left_mm[0] + moved, before.left_mm[1] - moved]);
+        assert_close(&after.retracted_mm, &before.retracted_mm);
+    }
+}
+
 fn assert_close(got: &[f64], want: &[f64]) {
     assert!(
         got.len() == want.len() && got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6),

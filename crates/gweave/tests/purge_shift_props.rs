@@ -98,6 +98,13 @@ fn program(steps: &[Step], absolute_e: bool) -> String {
             Step::Change => {
                 tool = 1 - tool;
                 s.push_str(&format!("T{tool}\n"));
+                // A tool put away retracted is unretracted when it is taken again, as a slicer
+                // writes it: it never extrudes while still retracted (that file's "purge" would
+                // leave no filament, which the checker's tool ledger does not model).
+                if parked_mm[tool as usize] > 0.0 {
+                    feed(&mut s, "G1".into(), parked_mm[tool as usize], &mut e);
+                    parked_mm[tool as usize] = 0.0;
+                }
             }
             Step::RetractedChange(mm) => {
                 feed(&mut s, "G1".into(), -mm, &mut e);

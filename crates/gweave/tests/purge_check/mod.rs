@@ -119,6 +119,22 @@ pub fn ledger(bytes: &[u8], options: &StateOptions) -> ToolLedger {
     l.ledger
 }
 
+/// Each tool's figure in the input (`before_mm`, per tool; at least `tools` of them) as the
+/// purges change it: a moved purge goes from the old tool to the new one, a fallback's purge is
+/// the new tool's.
+fn with_purges(before_mm: &[f64], tools: usize, report: &PurgeShiftReport) -> Vec<f64> {
+    let mut expected = before_mm.to_vec();
+    expected.resize(tools.max(expected.len()), 0.0);
+    for c in report.changes.kept().iter() {
+        if c.from_tool != c.to_tool {
+            expected[c.from_tool as usize] -= c.moved_mm;
+            expected[c.to_tool as usize] += c.moved_mm;
+        }
+        expected[c.to_tool as usize] += c.fallback_mm;
+    }
+    expected
+}
+
 /// Each tool keeps its own retraction across the moved changes: at every change the tool put
 /// away has the retraction it had in the input and the tool taken has its own, at the end every
 /// tool has what it had, and what left each nozzle differs from the input by the purge alone
@@ -137,15 +153,7 @@ pub fn check_tools(input: &[u8], output: &[u8], report: &PurgeShiftReport, optio
     for (t, (x, y)) in a.retracted_mm.iter().zip(&b.retracted_mm).enumerate() {
         assert!((x - y).abs() < 1e-5, "T{t} ends with {y} mm retracted, {x} in the input");
     }
-    let mut expected = a.left_mm.clone();
-    expected.resize(b.left_mm.len().max(expected.len()), 0.0);
-    for c in report.changes.kept().iter() {
-        if c.from_tool != c.to_tool {
-            expected[c.from_tool as usize] -= c.moved_mm;
-            expected[c.to_tool as usize] += c.moved_mm;
-        }
-        expected[c.to_tool as usize] += c.fallback_mm;
-    }
+    let expected = with_purges(&a.left_mm, b.left_mm.len(), report);
     for (t, want) in expected.iter().enumerate() {
         let got = b.left_mm.get(t).copied().unwrap_or(0.0);
         assert!((got - want).abs() < 1e-4, "T{t}: {got} mm left the nozzle, expected {want}");
@@ -232,15 +240,7 @@ pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &S
     // goes from the old tool to the new one, a fallback's purge is the new tool's. A tool-change
     // retraction left to the wrong tool shows here as its length lost by one tool and gained by
     // the other.
-    let tools = a.tool_net_mm.len().max(b.tool_net_mm.len());
-    let mut expected: Vec<f64> = (0..tools).map(|t| a.tool_net_mm.get(t).copied().unwrap_or(0.0)).collect();
-    for c in report.changes.kept().iter() {
-        if c.from_tool != c.to_tool {
-            expected[c.from_tool as usize] -= c.moved_mm;
-            expected[c.to_tool as usize] += c.moved_mm;
-        }
-        expected[c.to_tool as usize] += c.fallback_mm;
-    }
+    let expected = with_purges(&a.tool_net_mm, b.tool_net_mm.len(), report);
     for (t, want) in expected.iter().enumerate() {
         let got = b.tool_net_mm.get(t).copied().unwrap_or(0.0);
         assert!(
@@ -322,12 +322,19 @@ pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &S
             removed_out.insert(c.output_line + n + la + k);
             // The split point (where the output is when the change runs) lies on the original move.
             let mv = a.lines[(s.line - 1) as usize].mv.expect("split line is a move");
-            let p = b.lines[(c.output_line - lb - 2) as usize].pos_after;
+            let first = &b.lines[(c.output_line - lb - 2) as usize];
+            let p = first.pos_after;
             let (off, within) = off_path_mm(&mv, [p[X], p[Y]]);
             assert!(off < 2e-5 && within, "split point {p:?} off the move {mv:?} by {off}");
+            // The first half feeds the move's E up to the split. Its E feed, not its E
+            // coordinate: a tool's retraction carried with a change across a `G92 E0` (relative
+            // E) shifts the counter after the reset, not the filament (what each tool feeds is
+            // held to the input by `check_tools` and the per-tool sums above).
             let t = s.fraction;
-            let e_at = mv.from[E] + t * (mv.to[E] - mv.from[E]);
-            assert!((p[E] - e_at).abs() < 2e-6, "E at the split {} vs {e_at}", p[E]);
+            let half = first.mv.expect("the first half of the split is a move");
+            let (fed, e_at) = (half.to[E] - half.from[E], t * (mv.to[E] - mv.from[E]));
+            assert!((fed - e_at).abs() < 2e-6, "E to the split {fed} vs {e_at}");
+            assert!((half.from[E] - (p[E] - fed)).abs() < 1e-12, "E along the first half");
             // The second half ends where the original move ended.
             let end = b.lines[(c.output_line + n + la + k - 1) as usize].pos_after;
             for axis in 0..3 {
