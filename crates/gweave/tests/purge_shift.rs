@@ -46,17 +46,18 @@ fn slic3r_absolute_e_first_change_by_hand() {
     let c = &r.changes.kept()[0];
     // T1 was at line 553 after `G1 X109.750 Y109.550 E24.30781`; 2.5 mm back is E21.80781, inside
     // `G1 X104.913 Y87.264 E21.85317` (line 509, from X104.282 Y87.038 E21.79225).
-    assert_eq!((c.change_lines.as_slice(), c.output_line, c.at_line), (&[553][..], 512, 509));
+    assert_eq!((c.change_lines.as_slice(), c.output_line, c.at_line), (&[553][..], 511, 509));
     let t = (21.80781 - 21.79225) / (21.85317 - 21.79225);
     assert!((c.split.as_ref().unwrap().fraction - t).abs() < 1e-9);
-    // T0's 10 mm tool-change retraction goes with the change (T1, never used, has nothing to
-    // unretract), E counted from 0 and put back.
+    // T0's 10 mm tool-change retraction goes with the change, in the file's own E coordinates
+    // (no `G92` between the split and it: the first half is 4.5 X steps, a move the planner
+    // drops and carries into the next one); T1, never used, has nothing to unretract, and E is
+    // put back where the file has it.
     assert_eq!(
-        lines(&out, 509, 7),
+        lines(&out, 509, 6),
         [
             "G1 X104.44317 Y87.09572 E21.80781",
-            "G92 E0",
-            "G1 E-10 F2400",
+            "G1 E11.80781 F2400",
             "T1",
             "G92 E21.80781",
             "G1 F1800",
@@ -64,24 +65,18 @@ fn slic3r_absolute_e_first_change_by_hand() {
         ],
         "x = 104.282 + {t} * 0.631"
     );
-    // The slicer's toolchange block stays: retract (now T1's), G92 E0, (T1 gone), G92 E0, and
-    // where T1 was, T1 feeds back those 10 mm: it starts its own path with nothing retracted,
-    // as in the input.
+    // The slicer's toolchange block stays but for its retraction, made by T0 at the new place:
+    // a `G92` puts E where the retraction would have (the line itself then moves nothing and
+    // still sets its feed rate), G92 E0, (T1 gone), G92 E0, and T1's own travel retraction.
     assert_eq!(
-        lines(&out, 557, 8),
-        [
-            "G1 E14.30781 F2400.00000",
-            "G92 E0",
-            "G92 E0",
-            "G1 E10 F2400",
-            "G92 E0",
-            "G1 F2400",
-            "G92 E0",
-            "G1 E-2.00000 F2400.00000"
-        ]
+        lines(&out, 556, 5),
+        ["G92 E14.30781", "G1 E14.30781 F2400.00000", "G92 E0", "G92 E0", "G1 E-2.00000 F2400.00000"]
     );
     let moved = c.retraction.as_ref().unwrap();
-    assert_eq!((moved.old_mm, moved.new_mm, moved.settle_mm), (-10.0, 0.0, 10.0));
+    assert_eq!(
+        (moved.old_mm, moved.new_mm, moved.settle_mm, moved.dropped_mm, moved.absorbed_mm),
+        (-10.0, 0.0, 0.0, 10.0, 0.0)
+    );
     assert!(r.changes.kept().iter().all(|c| c.feature == Feature::Unknown));
     assert_eq!(r.changes.kept().iter().filter(|c| c.shortfall_mm == 0.0).count(), 79);
 }
@@ -327,9 +322,9 @@ fn tower_fallback_beside_the_part() {
     assert!(rows.iter().all(|l| l.starts_with("G1 X78.56436 E") || l.starts_with("G1 X75 E")), "{rows:?}");
     // 5 mm right of the extent seen so far (X 50..70, Y 60..80), the file's 0.8 mm retraction
     // at its feed around the travels, then E back to 0 for the file's own next move.
-    // T0's 5 mm tool-change retraction goes with the change (T1 has none parked), the E and the
-    // feed put back before the tower.
-    assert!(text.contains("G92 E0\nG1 E-5 F2400\nT1\nG92 E0\nG1 F1800\n; gweave purge-shift: purge T0->T1 shortfall, 1.5 mm\nG92 E0\nG1 E-0.8 F2100\nG0 X75 Y60 F6000\n"), "{text}");
+    // T0's 5 mm tool-change retraction goes with the change (T1 has none parked), in the file's
+    // E coordinates (E is 0 there), the E and the feed put back before the tower.
+    assert!(text.contains("F1800\nG1 E-5 F2400\nT1\nG92 E0\nG1 F1800\n; gweave purge-shift: purge T0->T1 shortfall, 1.5 mm\nG92 E0\nG1 E-0.8 F2100\nG0 X75 Y60 F6000\n"), "{text}");
     assert!(
         text.contains("\nG1 X78.56436 E1.5 F1200\nG1 E0.7 F2100\nG0 X50 Y60 F6000\nG1 E1.5 F2100\nG92 E0\n"),
         "{text}"
@@ -444,15 +439,15 @@ fn tool_change_retraction_stays_with_its_tool() {
     assert_eq!((before.left_mm, before.retracted_mm), (vec![2.0, 5.0], vec![10.0, 0.0]));
     let (out, r) = run(Rules::fixed(3.0).unwrap(), TOOL_CYCLE.as_bytes());
     // T0->T1 after the outer wall stays; T1->T0 moves 3 mm back into T1's infill, taking T1's
-    // retraction and T0's unretraction with it; the lines where it was are T0's travel
-    // retraction now.
+    // retraction and T0's unretraction with it; where it was, the file's `G1 E-10` and `G1 E10`
+    // are taken out (their feed rate stays), so T0 travels as T1 did, with nothing retracted.
     let moved = &r.changes.kept()[1];
     assert_eq!((moved.from_tool, moved.to_tool, moved.moved_mm), (1, 0, 3.0));
     let text = String::from_utf8(out.clone()).unwrap();
     assert!(
         text.contains(
             "G1 X35 E1 F1800\nG1 E-10 F2400\nT0\nG1 E10 F2400\nG1 F1800\nG1 X40 E1 F1800\nG1 X50 E2\n\
-             G1 E-10 F2400\n;END gcode for filament\nG1 X60 Y0 F7800\nG1 E10 F2400\n"
+             G1 F2400\n;END gcode for filament\nG1 X60 Y0 F7800\nG1 F2400\n;TYPE:External perimeter\n"
         ),
         "{text}"
     );
@@ -460,8 +455,12 @@ fn tool_change_retraction_stays_with_its_tool() {
     // The 3 mm purge went from T1 to T0, and nothing else moved between the tools.
     assert_close(&after.left_mm, &[5.0, 2.0]);
     assert_close(&after.retracted_mm, &[10.0, 0.0]);
+    // No E motion added: the retraction and the unretraction are moved, not made twice.
+    let e_motion = |bytes: &[u8]| purge_check::e_only_motion_mm(bytes, &options);
+    assert_eq!(e_motion(&out), e_motion(TOOL_CYCLE.as_bytes()));
     // (`run` checks too that at every change each tool has the retraction it had in the input.)
-    // Absolute E: the same, E counted from 0 around the change and put back.
+    // Absolute E: the same, in the file's E coordinates; where the change was, a `G92` puts E
+    // where the file's retraction and unretraction take it, and the lines then move nothing.
     let abs = "G90\nM82\nG92 E0\n;LAYER_CHANGE\n;Z:0.2\nG1 Z0.2 F600\n;TYPE:External perimeter\n\
         G1 X10 Y0 F1800\nG1 X20 E1\nG1 E-9 F2400\nT1\nG1 X30 Y5 F7800\n;TYPE:Solid infill\n\
         G1 X40 E-7 F1800\nG1 X50 E-5\nG1 E-15 F2400\nT0\nG1 X60 Y0 F7800\nG1 E-5 F2400\n\
@@ -469,9 +468,18 @@ fn tool_change_retraction_stays_with_its_tool() {
         ;TYPE:Solid infill\nG1 X90 E-3\n";
     assert_close(&purge_check::ledger(abs.as_bytes(), &options).left_mm, &[2.0, 5.0]);
     let (out, _) = run(Rules::fixed(3.0).unwrap(), abs.as_bytes());
+    let text = String::from_utf8(out.clone()).unwrap();
+    assert!(
+        text.contains(
+            "G1 X35 E-8 F1800\nG1 E-18 F2400\nT0\nG1 E-8 F2400\nG1 F1800\nG1 X40 E-7 F1800\nG1 X50 E-5\n\
+             G92 E-15\nG1 E-15 F2400\nG1 X60 Y0 F7800\nG92 E-5\nG1 E-5 F2400\n"
+        ),
+        "{text}"
+    );
     let after = purge_check::ledger(&out, &options);
     assert_close(&after.left_mm, &[5.0, 2.0]);
     assert_close(&after.retracted_mm, &[10.0, 0.0]);
+    assert_eq!(e_motion(&out), e_motion(abs.as_bytes()));
 }
 
 /// Regression (found by the property test in CI): a change moved back across a `G92 E0`

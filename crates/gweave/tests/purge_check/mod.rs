@@ -60,6 +60,14 @@ pub fn replay(bytes: &[u8], options: &StateOptions) -> Replay {
     rec.0
 }
 
+/// Filament moved by E-only moves (retractions, unretractions, standing purges), both ways, mm:
+/// the E motion a moved change must not add to (a retraction and an unretraction made twice
+/// cost E-feed-limited time for nothing).
+pub fn e_only_motion_mm(bytes: &[u8], options: &StateOptions) -> f64 {
+    let r = replay(bytes, options);
+    r.lines.iter().filter_map(|l| l.mv).filter(|m| m.from[..3] == m.to[..3]).map(|m| m.e_mm().abs()).sum()
+}
+
 /// Each tool's filament as the tool itself sees it: what left its nozzle and what it has
 /// retracted, the retraction of a tool following that tool alone (`G10`/`G11` included).
 #[derive(Debug, Default, PartialEq)]
@@ -166,6 +174,19 @@ fn is_change_text(t: &[u8]) -> bool {
         || [&b"M163"[..], b"M164", b"M165", b"M567"].iter().any(|m| t.starts_with(m))
 }
 
+/// An E-only move, a feed-rate-only `G0`/`G1` or a `G92` of E alone: the lines a moved
+/// retraction adds or takes out.
+fn feeds_filament_only(l: &Seen) -> bool {
+    let text = String::from_utf8_lossy(&l.text);
+    let words: Vec<&str> = text.split(';').next().unwrap_or("").split_whitespace().collect();
+    let only = |allowed: &[char]| words[1..].iter().all(|w| w.starts_with(allowed));
+    match words.first() {
+        Some(&"G92") => only(&['E']),
+        Some(&"G0") | Some(&"G1") => only(&['E', 'F']),
+        _ => false,
+    }
+}
+
 /// Distance of `p` from the path of `mv` in XY, and whether it lies within the move.
 fn off_path_mm(mv: &Move, p: [f64; 2]) -> (f64, bool) {
     match &mv.path {
@@ -266,8 +287,10 @@ pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &S
         if let Some(r) = &c.retraction {
             let settle = c.output_line + r.settle_offset;
             removed_out.extend(settle..settle + r.settle_lines);
-            // Net, the moved retractions feed nothing: each tool's is moved, not changed.
-            assert!((r.old_mm + r.new_mm + r.settle_mm).abs() < 1e-9, "{r:?}");
+            // Net, the moved retractions feed nothing: each tool's is moved, not changed (what is
+            // inserted is what is taken out of the file's own retraction and unretraction).
+            let net_mm = r.old_mm + r.new_mm + r.settle_mm + r.dropped_mm - r.absorbed_mm;
+            assert!(net_mm.abs() < 1e-9, "{r:?}");
             // They only feed filament: the nozzle stays where it is.
             let bracket = (c.output_line - lb..c.output_line)
                 .chain(c.output_line + n..c.output_line + n + la)
@@ -342,11 +365,16 @@ pub fn check(input: &[u8], output: &[u8], report: &PurgeShiftReport, options: &S
             }
         }
     }
+    // A moved change takes the file's E-only tool-change retraction and unretraction out where
+    // it was (replaced by a `G92 E` in absolute E, or by the feed rate alone in relative E):
+    // those lines are the tools' filament, held to the input by `check_tools` above, and left
+    // out here on both sides; every other line must be the input's.
     let kept = |r: &Replay, removed: &std::collections::BTreeSet<u64>| -> Vec<Vec<u8>> {
         r.lines
             .iter()
             .enumerate()
             .filter(|(i, _)| !removed.contains(&(*i as u64 + 1)))
+            .filter(|(_, l)| !feeds_filament_only(l))
             .map(|(_, l)| l.text.clone())
             .collect()
     };

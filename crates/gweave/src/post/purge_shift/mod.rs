@@ -83,7 +83,7 @@ use crate::run::{Ran, Run, Source};
 use checks::{require_markers, FeatureComments};
 use fallback::{write_fallback, Spot, Surroundings};
 use split::{split, Splittable};
-use tool_retraction::{write_bracket, Bracket, ToolRetractions};
+use tool_retraction::{write_bracket, Bracket, EOnly, ToolRetractions};
 
 /// What stops the walk back at a layer change (the report's `stopped_by`).
 const LAYER_CHANGE: &str = "a layer change";
@@ -117,6 +117,10 @@ struct Held {
     seq: u64,
     /// The active tool's retraction in force before the line (in the input), mm.
     retracted_mm: f64,
+    /// Filament the line feeds (negative: retracts), mm, and the line as an E-only move the
+    /// pass may take out (none for a line the pass wrote).
+    fed_mm: f64,
+    e_only: Option<EOnly>,
 }
 
 impl Held {
@@ -171,6 +175,9 @@ pub struct PurgeShift {
     /// The old tool's retraction in force at the group, and what the new tool has parked, mm.
     group_retracted_mm: f64,
     group_parked_mm: f64,
+    /// What is still to be taken out of the file's unretraction after the last moved change
+    /// (the new tool made it at the new place), mm.
+    owed_mm: f64,
 }
 
 impl PurgeShift {
@@ -206,6 +213,7 @@ impl PurgeShift {
             line_retracted_mm: 0.0,
             group_retracted_mm: 0.0,
             group_parked_mm: 0.0,
+            owed_mm: 0.0,
         }
     }
 
@@ -343,7 +351,7 @@ impl PurgeShift {
         }
         let tail = std::mem::take(&mut self.group_tail);
         for line in tail {
-            let held = self.held(line, Kind::Other, None, Feature::Unknown);
+            let held = self.held(line, Kind::Other, None, Feature::Unknown, 0.0, None);
             self.push(out, held)?;
         }
         Ok(())
@@ -365,9 +373,26 @@ impl PurgeShift {
         }
     }
 
-    fn held(&mut self, line: OwnedLine, kind: Kind, layer: Option<u32>, feature: Feature) -> Held {
+    fn held(
+        &mut self,
+        line: OwnedLine,
+        kind: Kind,
+        layer: Option<u32>,
+        feature: Feature,
+        fed_mm: f64,
+        e_only: Option<EOnly>,
+    ) -> Held {
         self.seq += 1;
-        Held { line, kind, layer, feature, seq: self.seq, retracted_mm: self.line_retracted_mm }
+        Held {
+            line,
+            kind,
+            layer,
+            feature,
+            seq: self.seq,
+            retracted_mm: self.line_retracted_mm,
+            fed_mm,
+            e_only,
+        }
     }
 
     /// Walks back from the change, places it, writes the window and the group.
@@ -427,12 +452,21 @@ impl PurgeShift {
         let held: Vec<Held> = self.window.drain(..).collect();
         self.window_e_mm = 0.0;
         let (at, fraction) = place.unwrap_or((held.len(), None));
+        // The held lines after the change's new place (after the first half of a split).
+        let moved_from = if fraction.is_some() && at < held.len() { at + 1 } else { at };
+        // The slicer's tool-change retraction: the E-only retractions after the last line that
+        // feeds forward, taken out where the change was (the old tool makes it at the new place).
+        let tail = (moved_from..held.len()).rev().take_while(|&i| held[i].fed_mm <= 0.0).last();
+        let drops =
+            |i: usize| tail.is_some_and(|t| i >= t) && held[i].e_only.is_some() && held[i].fed_mm < 0.0;
         // Each tool keeps its retraction (the tool_retraction module): what the old tool had in
         // force where the change now goes, inside or before an extrusion.
         let bracket = held.get(at).filter(|_| from_tool != to_tool).map(|h| {
             let head_mm = fraction.map_or(0.0, |t| t * h.e_mm());
             let r_place_mm = (h.retracted_mm - head_mm).max(0.0);
-            Bracket::new(r_place_mm, self.group_retracted_mm, self.group_parked_mm)
+            let dropped_mm: f64 =
+                (moved_from..held.len()).filter(|&i| drops(i)).map(|i| -held[i].fed_mm).sum();
+            Bracket::new(r_place_mm, self.group_retracted_mm, self.group_parked_mm, dropped_mm)
         });
         let feed_mm_min = self.rules.block.retract_feed_mm_min;
         // Where the machine is when the change runs: before the move it now precedes, at the
@@ -472,9 +506,16 @@ impl PurgeShift {
                 bracket.zip(spot).map(|(b, s)| (b, write_bracket(&s, b.old_mm, b.new_mm, feed_mm_min)));
             self.emit_change(out, group, &mut change, spot, lines)?;
         }
-        for h in &held[rest..] {
-            self.emit_line(out, &h.line)?;
+        for (i, h) in held.iter().enumerate().skip(rest) {
+            match h.e_only.filter(|_| bracket.is_some() && drops(i)) {
+                Some(e) => {
+                    let eol = h.line.eol.clone();
+                    self.emit_text(out, &e.feeding(&h.line.bytes, 0.0), &eol)?;
+                }
+                None => self.emit_line(out, &h.line)?,
+            }
         }
+        self.owed_mm = bracket.map_or(0.0, |b| b.absorbed_mm);
         // Where the change was, the new tool is brought to the retraction it had parked.
         if let (Some(b), Some(here)) = (bracket, self.group_spot) {
             let [head, tail] = write_bracket(&here, 0.0, b.settle_mm, feed_mm_min);
@@ -532,6 +573,8 @@ impl PurgeShift {
             old_mm: b.old_mm,
             new_mm: b.new_mm,
             settle_mm: b.settle_mm,
+            dropped_mm: b.dropped_mm,
+            absorbed_mm: b.absorbed_mm,
             lines_before,
             lines_after,
             settle_lines: 0,
@@ -628,7 +671,15 @@ impl Pass for PurgeShift {
         if let Effect::Move(m) = ctx.effect {
             self.env.observe(m, in_print);
         }
+        let e_only = EOnly::of(ctx);
+        let fed_mm = match ctx.effect {
+            Effect::Move(m) => m.e_mm(),
+            _ => 0.0,
+        };
         if is_change_line(ctx.block) {
+            if self.owed_mm > 0.0 {
+                self.settle_owed(ctx, out)?;
+            }
             self.env.tool_change();
             if self.group_before.is_none() {
                 self.group_before = Some(self.colour.clone());
@@ -653,6 +704,9 @@ impl Pass for PurgeShift {
                 return Ok(Flow::Continue);
             }
             self.close_group(out)?;
+        }
+        if self.owed_mm > 0.0 && self.absorb(ctx, out, e_only, fed_mm)? {
+            return Ok(Flow::Continue);
         }
         if !in_print {
             self.flush(out, "the start of the print proper")?;
@@ -698,14 +752,21 @@ impl Pass for PurgeShift {
             _ => Kind::Other,
         };
         let owned = self.own(&ctx.line);
-        let held = self.held(owned, kind, structure.layer, structure.feature);
+        let held = self.held(owned, kind, structure.layer, structure.feature, fed_mm, e_only);
         self.push(out, held)?;
         Ok(Flow::Continue)
     }
 
-    fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> Result<(), PassError> {
+    fn finish(&mut self, state: &crate::gcode::state::State, out: &mut dyn Write) -> Result<(), PassError> {
         self.close_group(out)?;
         self.flush(out, "the end of the file")?;
+        if self.owed_mm > 0.0 {
+            // The file ended before the new tool's unretraction: it ends retracted as there.
+            let [retract, restore] = self.owed_retraction(&self.spot_here(state));
+            self.owed_mm = 0.0;
+            self.emit_text(out, &retract, b"\n")?;
+            self.emit_text(out, &restore, b"\n")?;
+        }
         if let Some(w) = self.features.warning(&self.rules.allowed) {
             self.report.warn_first(w);
         }

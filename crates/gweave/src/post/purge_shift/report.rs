@@ -36,6 +36,12 @@ pub struct RetractionMove {
     pub new_mm: f64,
     /// Fed by the new tool where the change was, mm.
     pub settle_mm: f64,
+    /// The file's E-only tool-change retraction taken out where the change was (the old tool
+    /// made it at the new place), mm.
+    pub dropped_mm: f64,
+    /// The file's unretraction after the change taken out (the new tool made it at the new
+    /// place), mm.
+    pub absorbed_mm: f64,
     /// Lines inserted right before the change lines.
     pub lines_before: u64,
     /// Lines inserted right after them (before a fallback's lines).

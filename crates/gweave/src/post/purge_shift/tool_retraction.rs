@@ -17,24 +17,45 @@
 //!
 //! ```text
 //!   at the new place:  old tool feeds -(r_change - r_place)   T   new tool feeds p_new - r_place
-//!   where it was:      new tool feeds r_change - p_new
 //! ```
 //!
 //! The old tool ends retracted by `r_change`, as in the file. The new tool starts the moved
 //! lines with `r_place` in force, as the old tool did, so it feeds them exactly as the old tool
-//! would have (the slicer's retraction among them: it becomes an ordinary travel retraction),
-//! ends them with `r_change`, and the last feed brings it to `p_new`, which the file's own
-//! unretraction after the change then undoes as it did before. With the usual slicer file
-//! (`r_place = 0`, `r_change = p_new`) that is the file's retraction and unretraction moved with
-//! the change and nothing where it was. Lines between two moved places see every tool in the
-//! state they had in the input: per-tool totals are the input's, moved purge apart.
+//! would have. The slicer's tool-change retraction among them (E-only moves after the last
+//! forward feed, `dropped_mm` in all) has just been made by the old tool at the new place, so it
+//! is taken out: the new tool reaches the place of the change with `r_change - dropped_mm` in
+//! force, and it must be at `p_new` for the file's own unretraction after the travel. With
+//! `left = r_change - dropped_mm - p_new`:
+//!
+//! ```text
+//!   where it was:  left > 0: the new tool feeds left;  left < 0: -left of the file's
+//!                  unretraction after the change is taken out (`absorbed_mm`)
+//! ```
+//!
+//! For the usual slicer file (`r_place = 0`, `r_change = dropped_mm = p_new`) the file's
+//! retraction and unretraction are moved to the new place and nothing else feeds: the output's
+//! E motion is the input's. Lines between two moved places see every tool in the state they had
+//! in the input: per-tool totals are the input's, moved purge apart.
+//!
+//! ## No `G92` right after the split
+//! In absolute E the inserted moves are written in the file's own E coordinates, not from a
+//! `G92 E0`: the first half of a split can be shorter than Marlin's `MIN_STEPS_PER_SEGMENT` (6
+//! steps), which the planner drops and carries into the next block; a position reset before that
+//! block makes the virtual printer re-set every axis (its `set_position_mm`) and lose the
+//! carried steps, so the head would end a few steps off (13 X steps on the Slic3r cone). An
+//! E-only move right after the split carries them instead. A `G92 E` comes only after the
+//! inserted moves, when they do not bring E back to where the file has it.
 
 use std::collections::HashMap;
 
 use super::fallback::Spot;
+use super::{Feature, Kind, PurgeShift, Region, EPS_E_MM};
+use crate::gcode::reader::RawLine;
 use crate::gcode::retraction::Retraction;
 use crate::gcode::state::{Effect, MM_PER_INCH};
+use crate::pass::{Ctx, OwnedLine};
 use crate::post::purge_block::write_exact_feed;
+use std::io::{self, Write};
 
 /// Tools whose parked retraction is remembered (a file naming more keeps the first ones; a tool
 /// beyond them is taken as parked with nothing retracted).
@@ -83,24 +104,35 @@ pub(crate) struct Bracket {
     pub new_mm: f64,
     /// Fed by the new tool where the change was.
     pub settle_mm: f64,
+    /// The file's tool-change retraction taken out where the change was.
+    pub dropped_mm: f64,
+    /// The file's unretraction after the change taken out.
+    pub absorbed_mm: f64,
 }
 
 impl Bracket {
     /// The bracket for a change moved from where the old tool had `r_change_mm` retracted to
-    /// where it had `r_place_mm`, the new tool having `p_new_mm` parked (the module's formula).
-    pub(super) fn new(r_place_mm: f64, r_change_mm: f64, p_new_mm: f64) -> Self {
+    /// where it had `r_place_mm`, the new tool having `p_new_mm` parked and the file's E-only
+    /// retraction `dropped_mm` before the change being taken out (the module's formula).
+    pub(super) fn new(r_place_mm: f64, r_change_mm: f64, p_new_mm: f64, dropped_mm: f64) -> Self {
+        let left_mm = r_change_mm - dropped_mm - p_new_mm;
+        let (settle_mm, absorbed_mm) =
+            if left_mm.abs() < EPS_MM { (0.0, 0.0) } else { (left_mm.max(0.0), (-left_mm).max(0.0)) };
         Bracket {
             old_mm: -(r_change_mm - r_place_mm),
             new_mm: p_new_mm - r_place_mm,
-            settle_mm: r_change_mm - p_new_mm,
+            settle_mm,
+            dropped_mm,
+            absorbed_mm,
         }
     }
 }
 
 /// The lines of a bracket at `spot`: the old tool's feed `old_mm` (before the change lines) and
 /// the new tool's `new_mm` (after them), as E-only moves at `feed_mm_min` in the file's E mode
-/// and units, the second part ending with the E and the feed rate the file has at `spot`
-/// restored. `\n`-terminated lines; nothing when both feeds are below a micrometre.
+/// and units, the second part ending with the E (absolute E: a `G92 E` when the feeds do not add
+/// up to nothing) and the feed rate the file has at `spot` restored. `\n`-terminated lines;
+/// nothing when both feeds are below a micrometre.
 pub(crate) fn write_bracket(spot: &Spot, old_mm: f64, new_mm: f64, feed_mm_min: f64) -> [Vec<u8>; 2] {
     let mut parts = [Vec::new(), Vec::new()];
     if old_mm.abs() < EPS_MM && new_mm.abs() < EPS_MM {
@@ -109,11 +141,9 @@ pub(crate) fn write_bracket(spot: &Spot, old_mm: f64, new_mm: f64, feed_mm_min: 
     let fmt = super::fallback::FORMAT;
     let start = &spot.start;
     let unit = if spot.inches { MM_PER_INCH } else { 1.0 };
-    if !start.relative_e {
-        // E counted from 0 here, the file's E put back after: the lines do not depend on it.
-        parts[0].extend_from_slice(b"G92 E0\n");
-    }
-    let mut e_mm = 0.0;
+    // Absolute E: counted from the E the file has here (no reset right after the split: the
+    // module says why).
+    let mut e_mm = if start.relative_e { 0.0 } else { start.pos[3] };
     for (out, f) in parts.iter_mut().zip([old_mm, new_mm]) {
         if f.abs() < EPS_MM {
             continue;
@@ -127,17 +157,170 @@ pub(crate) fn write_bracket(spot: &Spot, old_mm: f64, new_mm: f64, feed_mm_min: 
         out.push(b'\n');
     }
     let out = &mut parts[1];
-    if !start.relative_e {
-        out.extend_from_slice(b"G92 E");
-        fmt.write(out, start.pos[3] / unit, fmt.extrusion_decimals.max(5));
-        out.push(b'\n');
+    if !start.relative_e && (old_mm + new_mm).abs() >= EPS_MM {
+        write_e_reset(out, start.pos[3] / unit);
     }
-    if start.feed_mm_min > 0.0 {
-        out.extend_from_slice(if start.rapid_mode { b"G0 " } else { b"G1 " });
-        write_exact_feed(out, &fmt, start.feed_mm_min / unit);
-        out.push(b'\n');
-    }
+    write_feed(out, spot);
     parts
+}
+
+/// `G92 E<e>`, file units.
+pub(crate) fn write_e_reset(out: &mut Vec<u8>, e: f64) {
+    let fmt = super::fallback::FORMAT;
+    out.extend_from_slice(b"G92 E");
+    fmt.write(out, e, fmt.extrusion_decimals.max(5));
+    out.push(b'\n');
+}
+
+/// The feed rate (and G0/G1 mode) in force at `spot`, restored after inserted moves.
+pub(crate) fn write_feed(out: &mut Vec<u8>, spot: &Spot) {
+    let start = &spot.start;
+    if start.feed_mm_min > 0.0 {
+        let unit = if spot.inches { MM_PER_INCH } else { 1.0 };
+        out.extend_from_slice(if start.rapid_mode { b"G0 " } else { b"G1 " });
+        write_exact_feed(out, &super::fallback::FORMAT, start.feed_mm_min / unit);
+        out.push(b'\n');
+    }
+}
+
+/// An E-only move of the input (no X, Y or Z motion), as the pass may take it out: the E the
+/// file has after it, the modes it is written in and the feed rate it sets.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EOnly {
+    /// The file's E after the line, mm.
+    pub e_after_mm: f64,
+    pub relative_e: bool,
+    pub inches: bool,
+    /// The feed rate the line sets (its own `F`), mm/min, and whether it is a `G0`.
+    pub sets_feed_mm_min: Option<f64>,
+    pub rapid: bool,
+}
+
+impl EOnly {
+    /// The line `ctx` as an E-only move that can be rewritten (not numbered or checksummed).
+    pub(crate) fn of(ctx: &Ctx<'_>) -> Option<EOnly> {
+        match ctx.effect {
+            Effect::Move(m)
+                if m.from[..3] == m.to[..3]
+                    && m.e_mm() != 0.0
+                    && ctx.block.line_number.is_none()
+                    && ctx.block.checksum.is_none() =>
+            {
+                Some(EOnly {
+                    e_after_mm: ctx.state.pos[crate::gcode::state::E],
+                    relative_e: ctx.state.relative_e(),
+                    inches: ctx.state.inches,
+                    sets_feed_mm_min: ctx.block.has(b'F').then_some(ctx.state.feed_mm_min),
+                    rapid: m.rapid,
+                })
+            }
+            _ => None,
+        }
+    }
+
+    /// The line `line` of this move, feeding only `fed_mm` of its feed (0: none): in relative
+    /// E its E word replaced (or only its feed rate kept); in absolute E a `G92` puts E where the
+    /// line then moves it by `fed_mm` alone, and the line stays as it is. `\n`-terminated lines.
+    pub(crate) fn feeding(&self, line: &[u8], fed_mm: f64) -> Vec<u8> {
+        let fmt = super::fallback::FORMAT;
+        let unit = if self.inches { MM_PER_INCH } else { 1.0 };
+        let mut out = Vec::new();
+        if !self.relative_e {
+            write_e_reset(&mut out, (self.e_after_mm - fed_mm) / unit);
+            out.extend_from_slice(line);
+            out.push(b'\n');
+            return out;
+        }
+        if fed_mm.abs() < EPS_MM && self.sets_feed_mm_min.is_none() {
+            return out;
+        }
+        out.extend_from_slice(if self.rapid { b"G0" } else { b"G1" });
+        if fed_mm.abs() >= EPS_MM {
+            out.push(b' ');
+            fmt.write_word(&mut out, b'E', fed_mm / unit);
+        }
+        if let Some(f) = self.sets_feed_mm_min {
+            out.push(b' ');
+            write_exact_feed(&mut out, &fmt, f / unit);
+        }
+        out.push(b'\n');
+        out
+    }
+}
+
+/// Where the change was: the file's unretraction after it, already made at the new place.
+impl PurgeShift {
+    /// Holds lines the pass wrote (`\n`-separated `text`) as passed over by the walk, feeding
+    /// `fed_mm` in all, numbered as the line `like` they stand for.
+    fn hold_text(
+        &mut self,
+        out: &mut dyn Write,
+        text: &[u8],
+        like: &RawLine<'_>,
+        fed_mm: f64,
+    ) -> io::Result<()> {
+        for bytes in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
+            let line = OwnedLine { bytes: bytes.to_vec(), eol: like.eol.to_vec(), number: like.number };
+            let held = self.held(line, Kind::Other, None, Feature::Unknown, fed_mm, None);
+            self.push(out, held)?;
+        }
+        Ok(())
+    }
+
+    /// After a moved change the new tool has already unretracted what the file's unretraction
+    /// after the travel feeds (the tool_retraction module): E-only forward feeds give up to
+    /// `owed_mm`. A line feeding otherwise (an extrusion, a retraction), a change or the end of
+    /// the print proper gets the rest first, as a retraction of the new tool. Returns whether
+    /// the line was written (taken out or replaced).
+    pub(super) fn absorb(
+        &mut self,
+        ctx: &Ctx<'_>,
+        out: &mut dyn Write,
+        e_only: Option<EOnly>,
+        fed_mm: f64,
+    ) -> io::Result<bool> {
+        let in_print = ctx.state.structure.region == Region::Print;
+        if let Some(e) = e_only.filter(|_| fed_mm > 0.0 && in_print) {
+            let taken_mm = fed_mm.min(self.owed_mm);
+            self.owed_mm = if self.owed_mm - taken_mm < EPS_E_MM { 0.0 } else { self.owed_mm - taken_mm };
+            let text = e.feeding(ctx.line.bytes, fed_mm - taken_mm);
+            if e.relative_e {
+                self.hold_text(out, &text, &ctx.line, fed_mm - taken_mm)?;
+                return Ok(true);
+            }
+            // Absolute E: the `G92` before the line, which then follows as it is.
+            let reset = text.split(|&b| b == b'\n').next().unwrap_or_default().to_vec();
+            self.hold_text(out, &reset, &ctx.line, 0.0)?;
+            return Ok(false);
+        }
+        let feeds = match ctx.effect {
+            Effect::Move(m) => m.e_mm() != 0.0,
+            Effect::FirmwareRetract { .. } => true,
+            _ => false,
+        };
+        if feeds || !in_print {
+            self.settle_owed(ctx, out)?;
+        }
+        Ok(false)
+    }
+
+    /// The rest of the unretraction the new tool made at the new place, retracted before the
+    /// line `ctx` (the file's unretraction after the change was shorter than that).
+    pub(super) fn settle_owed(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> io::Result<()> {
+        let mut before = self.spot_here(ctx.state);
+        if let Effect::Move(m) = ctx.effect {
+            before.start.pos[3] = m.from[crate::gcode::state::E];
+        }
+        let [retract, restore] = self.owed_retraction(&before);
+        self.hold_text(out, &retract, &ctx.line, -self.owed_mm)?;
+        self.owed_mm = 0.0;
+        self.hold_text(out, &restore, &ctx.line, 0.0)
+    }
+
+    /// The lines retracting what is still owed at `spot` (the module's `settle_owed`).
+    pub(super) fn owed_retraction(&self, spot: &Spot) -> [Vec<u8>; 2] {
+        write_bracket(spot, -self.owed_mm, 0.0, self.rules.block.retract_feed_mm_min)
+    }
 }
 
 #[cfg(test)]
@@ -147,11 +330,25 @@ mod tests {
     #[test]
     fn the_usual_slicer_change_moves_its_retraction_and_unretraction() {
         // PrusaSlicer: `G1 E-10` before `T0`, T0 parked with 10 mm, the change split into an
-        // extrusion (nothing retracted there).
-        assert_eq!(Bracket::new(0.0, 10.0, 10.0), Bracket { old_mm: -10.0, new_mm: 10.0, settle_mm: 0.0 });
-        // The first change to a tool never used: it has nothing to unretract, so the moved
-        // lines' 10 mm retraction is undone where the change was.
-        assert_eq!(Bracket::new(0.0, 10.0, 0.0), Bracket { old_mm: -10.0, new_mm: 0.0, settle_mm: 10.0 });
+        // extrusion (nothing retracted there): the file's `G1 E-10` and T0's `G1 E10` after the
+        // travel are taken out, what feeds is the same 10 mm each way at the new place.
+        let b = |old_mm, new_mm, settle_mm, dropped_mm, absorbed_mm| Bracket {
+            old_mm,
+            new_mm,
+            settle_mm,
+            dropped_mm,
+            absorbed_mm,
+        };
+        assert_eq!(Bracket::new(0.0, 10.0, 10.0, 10.0), b(-10.0, 10.0, 0.0, 10.0, 10.0));
+        // The first change to a tool never used: it has nothing to unretract, and the file's
+        // 10 mm retraction is the one made at the new place.
+        assert_eq!(Bracket::new(0.0, 10.0, 0.0, 10.0), b(-10.0, 0.0, 0.0, 10.0, 0.0));
+        // A wipe retracted 0.5 mm of the 10 along XY (kept: the new tool wipes now), 9.5 mm
+        // E-only taken out: the new tool unretracts only those 0.5 mm after the travel.
+        assert_eq!(Bracket::new(0.0, 10.0, 10.0, 9.5), b(-10.0, 10.0, 0.0, 9.5, 9.5));
+        // Nothing E-only to take out (a lift-and-retract), a tool never used: the new tool
+        // feeds back where the change was what the moved lines retracted.
+        assert_eq!(Bracket::new(0.0, 10.0, 0.0, 0.0), b(-10.0, 0.0, 10.0, 0.0, 0.0));
     }
 
     #[test]
