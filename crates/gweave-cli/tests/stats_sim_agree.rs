@@ -197,6 +197,13 @@ fn tool_change_retraction_stays_with_its_tool_in_the_virtual_printer() {
             (fed_out[0] - 48.668).abs() < 2e-3 && (fed_out[1] - 37.413).abs() < 2e-3,
             "{name}: {fed_out:?}"
         );
+        // The same steps on every motor (E: the same filament fed), and the input's motion time
+        // but for the splits' extra junctions (89.497 s -> 89.518 s): the moved retraction and
+        // unretraction are taken out where the change was, not made twice.
+        assert_eq!(numbers(&after["count"]), numbers(&before["count"]), "{name}");
+        let motion_s = |r: &serde_json::Value| r["time"]["motion_s"].as_f64().unwrap();
+        let extra_s = motion_s(&after) - motion_s(&before);
+        assert!((0.0..0.05).contains(&extra_s), "{name}: {} s -> {} s", motion_s(&before), motion_s(&after));
         let stats = json(&["stats", o, "--json", "-q"]);
         assert_eq!(stats["filament_matches_slicer"], serde_json::Value::Bool(true), "{name}");
         let left: Vec<f64> = stats["filament"]
