@@ -15,8 +15,9 @@
 //! active RepRapFirmware mix before and after the group must differ. Everything else a slicer
 //! writes around a tool change (retract, `G92 E0`, travel, temperature for the next tool,
 //! unretract) stays where it is: the travel belongs to the new colour's path. A retraction
-//! belongs to the tool that makes it, though, so a moved change takes a bracket of E-only moves
-//! with it that leaves every tool with its own retraction (the `tool_retraction` module).
+//! belongs to the tool that makes it, though, so a moved change takes the tool-change retraction
+//! and the new tool's unretraction with it (E-only moves at the new place, the file's taken out
+//! where it was), leaving every tool with its own retraction (the `tool_retraction` module).
 //!
 //! ## Rules
 //! - Only extruding moves (positive E with XY motion) count; retractions, unretractions,
