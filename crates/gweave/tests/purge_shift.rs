@@ -545,3 +545,29 @@ fn tool_change_retraction_stays_with_its_tool_on_a_sliced_screw() {
         }
     }
 }
+
+/// A file whose tool extrudes while still retracted (no unretraction after the change: the
+/// first 1 mm only refills T0's nozzle). The moved change has T0 unretract its 10 mm at the new
+/// place, and there is nothing after the change to take out: T0 retracts them again before its
+/// next extrusion, so each tool ends as in the input (T0 with 9 mm retracted, T1 with 10).
+#[test]
+fn a_tool_taken_without_its_unretraction_is_retracted_again() {
+    let options = gweave::gcode::state::StateOptions::default();
+    let input = "G90\nM83\n;LAYER_CHANGE\n;Z:0.2\nG1 Z0.2 F600\n;TYPE:Solid infill\nG1 X10 Y0 F1800\n\
+        G1 X20 E1\nG1 E-10 F2400\nT1\nG1 X30 E2\nG1 X40 E2\nG1 E-10 F2400\nT0\nG1 X50 E1\n";
+    let before = purge_check::ledger(input.as_bytes(), &options);
+    assert_close(&before.left_mm, &[1.0, 4.0]);
+    assert_close(&before.retracted_mm, &[9.0, 10.0]);
+    let (out, r) = run(Rules::fixed(3.0).unwrap(), input.as_bytes());
+    let text = String::from_utf8(out.clone()).unwrap();
+    assert!(
+        text.contains("G1 X25 E1\nG1 E-10 F2400\nT0\nG1 E10 F2400\nG1 F2400\nG1 X30 E1\nG1 X40 E2\nG1 F2400\nG1 E-10 F2400\nG1 F2400\nG1 X50 E1\n"),
+        "{text}"
+    );
+    let moved = r.changes.kept()[1].retraction.clone().unwrap();
+    assert_eq!((moved.dropped_mm, moved.absorbed_mm), (10.0, 10.0));
+    // 1 mm of T0's moved to T1, 3 mm of T1's to T0.
+    let after = purge_check::ledger(&out, &options);
+    assert_close(&after.left_mm, &[3.0, 2.0]);
+    assert_close(&after.retracted_mm, &before.retracted_mm);
+}

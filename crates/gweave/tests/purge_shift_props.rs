@@ -132,6 +132,11 @@ fn check(text: &str, rules: Rules) -> gweave::post::purge_shift::PurgeShiftRepor
     let options = PurgeShift::new(rules.clone()).state_options();
     let (out, report) = lenient(rules, text.as_bytes()).unwrap();
     purge_check::check(text.as_bytes(), &out, &report, &options);
+    // A slicer-style program (no wipe, nothing retracted while extruding): a moved change takes
+    // the file's retraction and unretraction with it, so the E-only motion is the input's.
+    let e_motion = |bytes: &[u8]| purge_check::e_only_motion_mm(bytes, &options);
+    let (before, after) = (e_motion(text.as_bytes()), e_motion(&out));
+    assert!((before - after).abs() < 1e-4, "E-only motion {before} mm -> {after} mm");
     report
 }
 
