@@ -66,12 +66,9 @@ fn slic3r_absolute_e_first_change_by_hand() {
         "x = 104.282 + {t} * 0.631"
     );
     // The slicer's toolchange block stays but for its retraction, made by T0 at the new place:
-    // a `G92` puts E where the retraction would have (the line itself then moves nothing and
-    // still sets its feed rate), G92 E0, (T1 gone), G92 E0, and T1's own travel retraction.
-    assert_eq!(
-        lines(&out, 556, 5),
-        ["G92 E14.30781", "G1 E14.30781 F2400.00000", "G92 E0", "G92 E0", "G1 E-2.00000 F2400.00000"]
-    );
+    // the line keeps only the feed rate it sets, and E needs no putting back, the file resets it
+    // right after (G92 E0, T1 gone, G92 E0), then T1's own travel retraction.
+    assert_eq!(lines(&out, 556, 4), ["G1 F2400", "G92 E0", "G92 E0", "G1 E-2.00000 F2400.00000"]);
     let moved = c.retraction.as_ref().unwrap();
     assert_eq!(
         (moved.old_mm, moved.new_mm, moved.settle_mm, moved.dropped_mm, moved.absorbed_mm),
@@ -459,8 +456,9 @@ fn tool_change_retraction_stays_with_its_tool() {
     let e_motion = |bytes: &[u8]| purge_check::e_only_motion_mm(bytes, &options);
     assert_eq!(e_motion(&out), e_motion(TOOL_CYCLE.as_bytes()));
     // (`run` checks too that at every change each tool has the retraction it had in the input.)
-    // Absolute E: the same, in the file's E coordinates; where the change was, a `G92` puts E
-    // where the file's retraction and unretraction take it, and the lines then move nothing.
+    // Absolute E: the same, in the file's E coordinates; where the change was, the retraction
+    // and the unretraction keep their feed rate only, and a `G92` puts E where the file has it
+    // before the next line that reads E.
     let abs = "G90\nM82\nG92 E0\n;LAYER_CHANGE\n;Z:0.2\nG1 Z0.2 F600\n;TYPE:External perimeter\n\
         G1 X10 Y0 F1800\nG1 X20 E1\nG1 E-9 F2400\nT1\nG1 X30 Y5 F7800\n;TYPE:Solid infill\n\
         G1 X40 E-7 F1800\nG1 X50 E-5\nG1 E-15 F2400\nT0\nG1 X60 Y0 F7800\nG1 E-5 F2400\n\
@@ -472,7 +470,7 @@ fn tool_change_retraction_stays_with_its_tool() {
     assert!(
         text.contains(
             "G1 X35 E-8 F1800\nG1 E-18 F2400\nT0\nG1 E-8 F2400\nG1 F1800\nG1 X40 E-7 F1800\nG1 X50 E-5\n\
-             G92 E-15\nG1 E-15 F2400\nG1 X60 Y0 F7800\nG92 E-5\nG1 E-5 F2400\n"
+             G1 F2400\nG1 X60 Y0 F7800\nG1 F2400\n;TYPE:External perimeter\nG92 E-5\nG1 X70 E-4\n"
         ),
         "{text}"
     );

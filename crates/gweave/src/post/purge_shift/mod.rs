@@ -84,7 +84,7 @@ use crate::run::{Ran, Run, Source};
 use checks::{require_markers, FeatureComments};
 use fallback::{write_fallback, Spot, Surroundings};
 use split::{split, Splittable};
-use tool_retraction::{write_bracket, Bracket, EOnly, ToolRetractions};
+use tool_retraction::{write_bracket, Bracket, EWord, Feeds, ToolRetractions};
 
 /// What stops the walk back at a layer change (the report's `stopped_by`).
 const LAYER_CHANGE: &str = "a layer change";
@@ -118,10 +118,8 @@ struct Held {
     seq: u64,
     /// The active tool's retraction in force before the line (in the input), mm.
     retracted_mm: f64,
-    /// Filament the line feeds (negative: retracts), mm, and the line as an E-only move the
-    /// pass may take out (none for a line the pass wrote).
-    fed_mm: f64,
-    e_only: Option<EOnly>,
+    /// What the line feeds, and how the pass may rewrite it.
+    feeds: Feeds,
 }
 
 impl Held {
@@ -179,6 +177,9 @@ pub struct PurgeShift {
     /// What is still to be taken out of the file's unretraction after the last moved change
     /// (the new tool made it at the new place), mm.
     owed_mm: f64,
+    /// The file's E (file units) a `G92 E` must put back before the next line that reads E,
+    /// after an E-only move was taken out in absolute E.
+    e_reset: Option<f64>,
 }
 
 impl PurgeShift {
@@ -215,6 +216,7 @@ impl PurgeShift {
             group_retracted_mm: 0.0,
             group_parked_mm: 0.0,
             owed_mm: 0.0,
+            e_reset: None,
         }
     }
 
@@ -352,7 +354,7 @@ impl PurgeShift {
         }
         let tail = std::mem::take(&mut self.group_tail);
         for line in tail {
-            let held = self.held(line, Kind::Other, None, Feature::Unknown, 0.0, None);
+            let held = self.held(line, Kind::Other, None, Feature::Unknown, Feeds::written(0.0));
             self.push(out, held)?;
         }
         Ok(())
@@ -380,20 +382,10 @@ impl PurgeShift {
         kind: Kind,
         layer: Option<u32>,
         feature: Feature,
-        fed_mm: f64,
-        e_only: Option<EOnly>,
+        feeds: Feeds,
     ) -> Held {
         self.seq += 1;
-        Held {
-            line,
-            kind,
-            layer,
-            feature,
-            seq: self.seq,
-            retracted_mm: self.line_retracted_mm,
-            fed_mm,
-            e_only,
-        }
+        Held { line, kind, layer, feature, seq: self.seq, retracted_mm: self.line_retracted_mm, feeds }
     }
 
     /// Walks back from the change, places it, writes the window and the group.
@@ -457,16 +449,17 @@ impl PurgeShift {
         let moved_from = if fraction.is_some() && at < held.len() { at + 1 } else { at };
         // The slicer's tool-change retraction: the E-only retractions after the last line that
         // feeds forward, taken out where the change was (the old tool makes it at the new place).
-        let tail = (moved_from..held.len()).rev().take_while(|&i| held[i].fed_mm <= 0.0).last();
-        let drops =
-            |i: usize| tail.is_some_and(|t| i >= t) && held[i].e_only.is_some() && held[i].fed_mm < 0.0;
+        let tail = (moved_from..held.len()).rev().take_while(|&i| held[i].feeds.fed_mm <= 0.0).last();
+        let drops = |i: usize| {
+            tail.is_some_and(|t| i >= t) && held[i].feeds.e_only.is_some() && held[i].feeds.fed_mm < 0.0
+        };
         // Each tool keeps its retraction (the tool_retraction module): what the old tool had in
         // force where the change now goes, inside or before an extrusion.
         let bracket = held.get(at).filter(|_| from_tool != to_tool).map(|h| {
             let head_mm = fraction.map_or(0.0, |t| t * h.e_mm());
             let r_place_mm = (h.retracted_mm - head_mm).max(0.0);
             let dropped_mm: f64 =
-                (moved_from..held.len()).filter(|&i| drops(i)).map(|i| -held[i].fed_mm).sum();
+                (moved_from..held.len()).filter(|&i| drops(i)).map(|i| -held[i].feeds.fed_mm).sum();
             Bracket::new(r_place_mm, self.group_retracted_mm, self.group_parked_mm, dropped_mm)
         });
         let feed_mm_min = self.rules.block.retract_feed_mm_min;
@@ -508,18 +501,29 @@ impl PurgeShift {
             self.emit_change(out, group, &mut change, spot, lines)?;
         }
         for (i, h) in held.iter().enumerate().skip(rest) {
-            match h.e_only.filter(|_| bracket.is_some() && drops(i)) {
+            match h.feeds.e_only.filter(|_| bracket.is_some() && drops(i)) {
                 Some(e) => {
                     let eol = h.line.eol.clone();
                     self.emit_text(out, &e.feeding(&h.line.bytes, 0.0), &eol)?;
+                    if !e.relative_e {
+                        self.e_reset = Some(e.e_after());
+                    }
                 }
-                None => self.emit_line(out, &h.line)?,
+                None => {
+                    let reset = self.owed_e_reset(h.feeds.e_word);
+                    self.emit_text(out, &reset, &h.line.eol)?;
+                    self.emit_line(out, &h.line)?;
+                }
             }
         }
         self.owed_mm = bracket.map_or(0.0, |b| b.absorbed_mm);
         // Where the change was, the new tool is brought to the retraction it had parked.
         if let (Some(b), Some(here)) = (bracket, self.group_spot) {
-            let [head, tail] = write_bracket(&here, 0.0, b.settle_mm, feed_mm_min);
+            let [mut head, tail] = write_bracket(&here, 0.0, b.settle_mm, feed_mm_min);
+            if !head.is_empty() {
+                // Its E words are the file's: E put back first if a line was taken out.
+                head.splice(0..0, self.owed_e_reset(EWord::Reads));
+            }
             let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
             let offset = self.emitted.lines() + 1 - change.output_line;
             let written = self.emit_text(out, &head, &eol)? + self.emit_text(out, &tail, &eol)?;
@@ -672,11 +676,7 @@ impl Pass for PurgeShift {
         if let Effect::Move(m) = ctx.effect {
             self.env.observe(m, in_print);
         }
-        let e_only = EOnly::of(ctx);
-        let fed_mm = match ctx.effect {
-            Effect::Move(m) => m.e_mm(),
-            _ => 0.0,
-        };
+        let feeds = Feeds::of(ctx);
         if is_change_line(ctx.block) {
             if self.owed_mm > 0.0 {
                 self.settle_owed(ctx, out)?;
@@ -706,8 +706,12 @@ impl Pass for PurgeShift {
             }
             self.close_group(out)?;
         }
-        if self.owed_mm > 0.0 && self.absorb(ctx, out, e_only, fed_mm)? {
+        if self.owed_mm > 0.0 && self.absorb(ctx, out, feeds)? {
             return Ok(Flow::Continue);
+        }
+        if self.e_reset.is_some() {
+            let reset = self.owed_e_reset(feeds.e_word);
+            self.hold_text(out, &reset, &ctx.line, 0.0)?;
         }
         if !in_print {
             self.flush(out, "the start of the print proper")?;
@@ -753,7 +757,7 @@ impl Pass for PurgeShift {
             _ => Kind::Other,
         };
         let owned = self.own(&ctx.line);
-        let held = self.held(owned, kind, structure.layer, structure.feature, fed_mm, e_only);
+        let held = self.held(owned, kind, structure.layer, structure.feature, feeds);
         self.push(out, held)?;
         Ok(Flow::Continue)
     }
@@ -763,7 +767,8 @@ impl Pass for PurgeShift {
         self.flush(out, "the end of the file")?;
         if self.owed_mm > 0.0 {
             // The file ended before the new tool's unretraction: it ends retracted as there.
-            let [retract, restore] = self.owed_retraction(&self.spot_here(state));
+            let spot = self.spot_here(state);
+            let [retract, restore] = self.owed_retraction(&spot);
             self.owed_mm = 0.0;
             self.emit_text(out, &retract, b"\n")?;
             self.emit_text(out, &restore, b"\n")?;

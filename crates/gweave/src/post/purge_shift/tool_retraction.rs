@@ -218,14 +218,21 @@ impl EOnly {
         }
     }
 
-    /// The line `line` of this move, feeding only `fed_mm` of its feed (0: none): in relative
-    /// E its E word replaced (or only its feed rate kept); in absolute E a `G92` puts E where the
-    /// line then moves it by `fed_mm` alone, and the line stays as it is. `\n`-terminated lines.
+    /// The file's E after the line, file units.
+    pub(crate) fn e_after(&self) -> f64 {
+        self.e_after_mm / if self.inches { MM_PER_INCH } else { 1.0 }
+    }
+
+    /// The line `line` of this move, feeding only `fed_mm` of its feed: nothing fed, only the
+    /// feed rate it sets (in absolute E the caller owes a `G92 E` to [`EOnly::e_after`] before
+    /// the next line that reads E); in relative E its E word replaced; in absolute E a `G92`
+    /// puts E where the line then moves it by `fed_mm` alone, and the line stays as it is.
+    /// `\n`-terminated lines.
     pub(crate) fn feeding(&self, line: &[u8], fed_mm: f64) -> Vec<u8> {
         let fmt = super::fallback::FORMAT;
         let unit = if self.inches { MM_PER_INCH } else { 1.0 };
         let mut out = Vec::new();
-        if !self.relative_e {
+        if !self.relative_e && fed_mm.abs() >= EPS_MM {
             write_e_reset(&mut out, (self.e_after_mm - fed_mm) / unit);
             out.extend_from_slice(line);
             out.push(b'\n');
@@ -248,11 +255,78 @@ impl EOnly {
     }
 }
 
+/// How a line reads the E coordinate: an E taken out in absolute E leaves the machine's E off
+/// the file's until a `G92 E` puts it back, which is written only before a line that reads E
+/// (and not at all when the file resets E first, as slicers do right after the tool-change
+/// retraction): a `G92` right after a move too short for the planner would lose its carried
+/// steps in the virtual printer (the module's "No `G92` right after the split").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum EWord {
+    None,
+    /// `G92 E`: sets E itself.
+    Reset,
+    /// A move or command with an E word.
+    Reads,
+}
+
+impl EWord {
+    pub(crate) fn of(block: &crate::gcode::line::Block) -> EWord {
+        if !block.has(b'E') {
+            EWord::None
+        } else if block.command.is_g(92) {
+            EWord::Reset
+        } else {
+            EWord::Reads
+        }
+    }
+}
+
+/// What a held line feeds and how the pass may rewrite it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Feeds {
+    /// Filament the line feeds (negative: retracts), mm.
+    pub fed_mm: f64,
+    /// The line as an E-only move the pass may take out (none for a line the pass wrote).
+    pub e_only: Option<EOnly>,
+    pub e_word: EWord,
+}
+
+impl Feeds {
+    /// The line `ctx` of the input.
+    pub(crate) fn of(ctx: &Ctx<'_>) -> Feeds {
+        let fed_mm = match ctx.effect {
+            Effect::Move(m) => m.e_mm(),
+            _ => 0.0,
+        };
+        Feeds { fed_mm, e_only: EOnly::of(ctx), e_word: EWord::of(ctx.block) }
+    }
+
+    /// A line the pass wrote, feeding `fed_mm`.
+    pub(crate) fn written(fed_mm: f64) -> Feeds {
+        Feeds { fed_mm, e_only: None, e_word: EWord::None }
+    }
+}
+
 /// Where the change was: the file's unretraction after it, already made at the new place.
 impl PurgeShift {
+    /// Before a line that reads E as `e_word` says: the `G92 E` owed since an E was taken out
+    /// (none if the line resets E itself), as text.
+    pub(super) fn owed_e_reset(&mut self, e_word: EWord) -> Vec<u8> {
+        let mut text = Vec::new();
+        match (e_word, self.e_reset) {
+            (EWord::Reset, Some(_)) => self.e_reset = None,
+            (EWord::Reads, Some(e)) => {
+                write_e_reset(&mut text, e);
+                self.e_reset = None;
+            }
+            _ => {}
+        }
+        text
+    }
+
     /// Holds lines the pass wrote (`\n`-separated `text`) as passed over by the walk, feeding
     /// `fed_mm` in all, numbered as the line `like` they stand for.
-    fn hold_text(
+    pub(super) fn hold_text(
         &mut self,
         out: &mut dyn Write,
         text: &[u8],
@@ -261,7 +335,7 @@ impl PurgeShift {
     ) -> io::Result<()> {
         for bytes in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
             let line = OwnedLine { bytes: bytes.to_vec(), eol: like.eol.to_vec(), number: like.number };
-            let held = self.held(line, Kind::Other, None, Feature::Unknown, fed_mm, None);
+            let held = self.held(line, Kind::Other, None, Feature::Unknown, Feeds::written(fed_mm));
             self.push(out, held)?;
         }
         Ok(())
@@ -272,25 +346,25 @@ impl PurgeShift {
     /// `owed_mm`. A line feeding otherwise (an extrusion, a retraction), a change or the end of
     /// the print proper gets the rest first, as a retraction of the new tool. Returns whether
     /// the line was written (taken out or replaced).
-    pub(super) fn absorb(
-        &mut self,
-        ctx: &Ctx<'_>,
-        out: &mut dyn Write,
-        e_only: Option<EOnly>,
-        fed_mm: f64,
-    ) -> io::Result<bool> {
+    pub(super) fn absorb(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write, feeds: Feeds) -> io::Result<bool> {
+        let fed_mm = feeds.fed_mm;
         let in_print = ctx.state.structure.region == Region::Print;
-        if let Some(e) = e_only.filter(|_| fed_mm > 0.0 && in_print) {
+        if let Some(e) = feeds.e_only.filter(|_| fed_mm > 0.0 && in_print) {
             let taken_mm = fed_mm.min(self.owed_mm);
             self.owed_mm = if self.owed_mm - taken_mm < EPS_E_MM { 0.0 } else { self.owed_mm - taken_mm };
-            let text = e.feeding(ctx.line.bytes, fed_mm - taken_mm);
-            if e.relative_e {
-                self.hold_text(out, &text, &ctx.line, fed_mm - taken_mm)?;
+            let left_mm = fed_mm - taken_mm;
+            let text = e.feeding(ctx.line.bytes, left_mm);
+            if e.relative_e || left_mm < EPS_E_MM {
+                self.hold_text(out, &text, &ctx.line, left_mm)?;
+                if !e.relative_e {
+                    self.e_reset = Some(e.e_after());
+                }
                 return Ok(true);
             }
-            // Absolute E: the `G92` before the line, which then follows as it is.
+            // Absolute E, part of it fed: the `G92` before the line, which then follows as it is.
             let reset = text.split(|&b| b == b'\n').next().unwrap_or_default().to_vec();
             self.hold_text(out, &reset, &ctx.line, 0.0)?;
+            self.e_reset = None;
             return Ok(false);
         }
         let feeds = match ctx.effect {
@@ -317,9 +391,13 @@ impl PurgeShift {
         self.hold_text(out, &restore, &ctx.line, 0.0)
     }
 
-    /// The lines retracting what is still owed at `spot` (the module's `settle_owed`).
-    pub(super) fn owed_retraction(&self, spot: &Spot) -> [Vec<u8>; 2] {
-        write_bracket(spot, -self.owed_mm, 0.0, self.rules.block.retract_feed_mm_min)
+    /// The lines retracting what is still owed at `spot` (the module's `settle_owed`), after
+    /// the `G92 E` owed if a line was taken out (their E words are the file's).
+    pub(super) fn owed_retraction(&mut self, spot: &Spot) -> [Vec<u8>; 2] {
+        let [mut retract, restore] =
+            write_bracket(spot, -self.owed_mm, 0.0, self.rules.block.retract_feed_mm_min);
+        retract.splice(0..0, self.owed_e_reset(EWord::Reads));
+        [retract, restore]
     }
 }
 
