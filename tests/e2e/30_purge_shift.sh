@@ -6,17 +6,19 @@
 set -euo pipefail
 
 # 1. Slic3r, absolute E: T1 moves from line 553 to a split inside line 509 (E21.80781 = 24.30781 - 2.5);
-#    the output has the run's header on line 1, so the split is on lines 510-512.
+#    the output has the run's header on line 1, so the split is on lines 510 and 515, with T0's
+#    10 mm tool-change retraction before T1 (in the file's E coordinates) and E and the feed
+#    rate put back after it.
 "$GWEAVE" purge-shift "$DATA/slic3r/slic3r_cone_2tool.gcode" -o "$WORK/cone.gcode" --purge 2.5 -q \
   --report "$WORK/cone.json" > /dev/null 2>&1
-[ "$(sed -n 510,512p "$WORK/cone.gcode" | tr '\n' '|')" = "G1 X104.44317 Y87.09572 E21.80781|T1|G1 X104.913 Y87.264 E21.85317|" ] \
-  || { echo "slic3r split lines: $(sed -n 510,512p "$WORK/cone.gcode")"; exit 1; }
+[ "$(sed -n 510,515p "$WORK/cone.gcode" | tr '\n' '|')" = "G1 X104.44317 Y87.09572 E21.80781|G1 E11.80781 F2400|T1|G92 E21.80781|G1 F1800|G1 X104.913 Y87.264 E21.85317|" ] \
+  || { echo "slic3r split lines: $(sed -n 510,515p "$WORK/cone.gcode")"; exit 1; }
 python3 - "$WORK/cone.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 assert len(r["changes"]) == 108, len(r["changes"])
 c = r["changes"][0]
-assert c["change_lines"] == [553] and c["output_line"] == 511 and c["achieved_mm"] == 2.5, c
+assert c["change_lines"] == [553] and c["output_line"] == 512 and c["achieved_mm"] == 2.5, c
 assert abs(r["achieved_mm"] - 241.02) < 0.01, r["achieved_mm"]
 PY
 # Same number of lines plus one per split; same number of T lines.
@@ -27,8 +29,9 @@ PY
 cp "$DATA/prusaslicer/pr_bunny_3tool_rel.gcode" "$WORK/bunny.gcode"
 "$GWEAVE" purge-shift --purge 2.5 --in-place --no-backup -q "$WORK/bunny.gcode" > /dev/null 2>&1
 [ ! -e "$WORK/bunny.gcode.bak" ] || { echo "backup left"; exit 1; }
-[ "$(sed -n 764,766p "$WORK/bunny.gcode" | tr '\n' '|')" = "G1 X70.82035 Y87.24949 E1.21026|T0|G1 X70.555 Y86.738 E0.04197|" ] \
-  || { echo "bunny split lines: $(sed -n 764,766p "$WORK/bunny.gcode")"; exit 1; }
+#    T2's retraction and T0's unretraction go with the change (relative E).
+[ "$(sed -n 764,769p "$WORK/bunny.gcode" | tr '\n' '|')" = "G1 X70.82035 Y87.24949 E1.21026|G1 E-10 F2400|T0|G1 E10 F2400|G1 F3600|G1 X70.555 Y86.738 E0.04197|" ] \
+  || { echo "bunny split lines: $(sed -n 764,769p "$WORK/bunny.gcode")"; exit 1; }
 
 # 3. Config file with a per-pair table, crossing layers, JSON on stdout.
 cat > "$WORK/purge.toml" <<'TOML'
@@ -69,7 +72,10 @@ blocks = [c for c in changes if c["fallback_mm"] > 0]
 assert len(blocks) == 29, len(blocks)
 lines = open(sys.argv[4]).read().split("\n")
 for c in blocks:
-    first = c["output_line"] + len(c["change_lines"]) - 1  # 0-based index of the block's first line
+    # 0-based index of the block's first line: after the change lines and the new tool's
+    # unretraction moved with them.
+    after = c["retraction"]["lines_after"] if c["retraction"] else 0
+    first = c["output_line"] + len(c["change_lines"]) - 1 + after
     assert lines[first].startswith("; gweave purge-shift: purge T"), (c, lines[first])
     assert lines[first + c["fallback_lines"] - 1] == "; gweave purge-shift: end purge", c
 fed = sum(b["filament_mm"]) - sum(a["filament_mm"])

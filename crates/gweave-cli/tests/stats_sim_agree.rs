@@ -164,3 +164,56 @@ fn a_single_nozzle_machine_runs_a_semm_file_with_stats_filament_per_tool() {
         sim["heaters"].as_array().unwrap().iter().map(|h| h["heater"].to_string()).collect();
     assert_eq!(heaters, [r#"{"hotend":0}"#, r#""bed""#], "one hotend");
 }
+
+/// The purge-shift bug found on a screw sliced for two extruders: a moved change left the old
+/// tool's 10 mm tool-change retraction to the new tool, so the virtual printer ran T0 to -68.91
+/// mm and T1 to 700.25 mm (355.12 / 276.22 in the input) while `stats` said the rewritten
+/// figures matched. On the screw's first 7 layers, relative and absolute E: each tool feeds what
+/// it fed in the input but for the moved purge (8.24 mm from T1 to T0), ends with the
+/// retraction it had, and the output's own figures are what left each nozzle.
+#[test]
+fn tool_change_retraction_stays_with_its_tool_in_the_virtual_printer() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/prusaslicer");
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["pr_screw_2t_trim.gcode", "pr_screw_2t_abs_trim.gcode"] {
+        let input = data.join(name);
+        let out = dir.path().join(name);
+        let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+        let shift = json(&["purge-shift", i, "--purge-mm", "3", "-o", o, "--json", "-q"]);
+        let moved_mm = shift["moved_mm"].as_f64().unwrap();
+        assert!((moved_mm - 8.24027).abs() < 1e-4, "{name}: {moved_mm}");
+        let before = json(&["sim", i, "--machine", "dual-extruder", "--json", "-q"]);
+        let after = json(&["sim", o, "--machine", "dual-extruder", "--json", "-q"]);
+        let (fed_in, fed_out) = (numbers(&before["filament_mm"]), numbers(&after["filament_mm"]));
+        let back = numbers(&after["retracted_at_end_mm"]);
+        assert_eq!(numbers(&before["retracted_at_end_mm"]), back, "{name}");
+        assert!((back[0] - 10.0).abs() < 1e-9 && back[1] == 0.0, "{name}: {back:?}");
+        let want = [fed_in[0] + moved_mm, fed_in[1] - moved_mm];
+        for t in 0..2 {
+            assert!((fed_out[t] - want[t]).abs() < 1e-4, "{name} T{t}: {fed_out:?} vs {want:?}");
+        }
+        // 40.43 mm fed by T0 in the input (and 10 mm retracted), 45.65 by T1.
+        assert!(
+            (fed_out[0] - 48.668).abs() < 2e-3 && (fed_out[1] - 37.413).abs() < 2e-3,
+            "{name}: {fed_out:?}"
+        );
+        // The same steps on every motor (E: the same filament fed), and the input's motion time
+        // but for the splits' extra junctions (89.497 s -> 89.518 s): the moved retraction and
+        // unretraction are taken out where the change was, not made twice.
+        assert_eq!(numbers(&after["count"]), numbers(&before["count"]), "{name}");
+        let motion_s = |r: &serde_json::Value| r["time"]["motion_s"].as_f64().unwrap();
+        let extra_s = motion_s(&after) - motion_s(&before);
+        assert!((0.0..0.05).contains(&extra_s), "{name}: {} s -> {} s", motion_s(&before), motion_s(&after));
+        let stats = json(&["stats", o, "--json", "-q"]);
+        assert_eq!(stats["filament_matches_slicer"], serde_json::Value::Bool(true), "{name}");
+        let left: Vec<f64> = stats["filament"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t["extruded_mm"].as_f64().unwrap())
+            .collect();
+        for t in 0..2 {
+            assert!((left[t] - (fed_out[t] + back[t])).abs() < 1e-6, "{name} T{t}: {left:?}");
+        }
+    }
+}

@@ -11,11 +11,20 @@ def test_slic3r_first_change_is_split_by_hand(data, tmp_path):
     assert len(r["changes"]) == 108
     c = r["changes"][0]
     # Output lines count the run's header on top.
-    assert c["change_lines"] == [553] and c["output_line"] == 511
+    assert c["change_lines"] == [553] and c["output_line"] == 512
     assert c["achieved_mm"] == 2.5 and c["split"]["line"] == 509
     lines = out.read_text().splitlines()
-    # 24.30781 - 2.5 = 21.80781, inside the move from E21.79225 to E21.85317.
-    assert lines[509:512] == ["G1 X104.44317 Y87.09572 E21.80781", "T1", "G1 X104.913 Y87.264 E21.85317"]
+    # 24.30781 - 2.5 = 21.80781, inside the move from E21.79225 to E21.85317; T0's 10 mm
+    # tool-change retraction goes with the change (T1, never used, has none to undo).
+    assert lines[509:515] == [
+        "G1 X104.44317 Y87.09572 E21.80781",
+        "G1 E11.80781 F2400",
+        "T1",
+        "G92 E21.80781",
+        "G1 F1800",
+        "G1 X104.913 Y87.264 E21.85317",
+    ]
+    assert c["retraction"]["old_mm"] == -10 and c["retraction"]["dropped_mm"] == 10
 
 
 def test_config_and_keywords(data, tmp_path):

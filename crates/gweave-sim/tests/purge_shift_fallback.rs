@@ -56,3 +56,36 @@ fn fallbacks_feed_the_shortfall_and_stay_on_the_bed() {
         }
     }
 }
+
+/// Regression (CI, on the tool-change retraction fix): the Slic3r cone's first change splits a
+/// move 4.5 X steps from its start, a move the planner drops and carries into the next block; a
+/// `G92 E0` written right after it made the virtual printer re-set its position and lose those
+/// steps, and the shifted file ended 13 X steps and 1 Y step off (`[13, 8005, 99800]` against
+/// `[0, 8006, 99800]`) at the same logical position. Cura's tool change begins with a 3-step
+/// move, and a `G92 E` written in place of the retraction after it lost 9 X and 18 Y steps the
+/// same way. Without a fallback too, E included (the file feeds what it fed), and the motion
+/// time of the cone is the input's: the moved retraction and unretraction are not made twice (a
+/// kept retraction undone at once cost 88 s of 985).
+#[test]
+fn a_split_too_short_to_plan_keeps_the_stepper_counts() {
+    for (file, moved_mm) in [("slic3r/slic3r_cone_2tool.gcode", 241.02), ("cura/cura_dual.gcode", 45.10)] {
+        let input = fixture(file);
+        let before = sim(&input);
+        let rules = PurgeShiftConfig::from_toml("purge_mm = 2.5\n").unwrap();
+        let (out, report) = purge_shift_bytes(rules, &input).unwrap();
+        assert!((report.moved_mm - moved_mm).abs() < 0.01, "{file}: {}", report.moved_mm);
+        let after = sim(&out);
+        assert_eq!(after.position[..3], before.position[..3], "{file}");
+        assert_eq!(after.count[..4], before.count[..4], "{file}");
+        if file.starts_with("slic3r") {
+            // 984.909 s in, 984.926 s out: the splits' extra junctions.
+            let extra_s = after.time.motion_s - before.time.motion_s;
+            assert!(
+                (0.0..0.05).contains(&extra_s),
+                "{} s -> {} s",
+                before.time.motion_s,
+                after.time.motion_s
+            );
+        }
+    }
+}

@@ -45,18 +45,33 @@ fn slic3r_absolute_e_first_change_by_hand() {
     let c = &r.changes.kept()[0];
     // T1 was at line 553 after `G1 X109.750 Y109.550 E24.30781`; 2.5 mm back is E21.80781, inside
     // `G1 X104.913 Y87.264 E21.85317` (line 509, from X104.282 Y87.038 E21.79225).
-    assert_eq!((c.change_lines.as_slice(), c.output_line, c.at_line), (&[553][..], 510, 509));
+    assert_eq!((c.change_lines.as_slice(), c.output_line, c.at_line), (&[553][..], 511, 509));
     let t = (21.80781 - 21.79225) / (21.85317 - 21.79225);
     assert!((c.split.as_ref().unwrap().fraction - t).abs() < 1e-9);
+    // T0's 10 mm tool-change retraction goes with the change, in the file's own E coordinates
+    // (no `G92` between the split and it: the first half is 4.5 X steps, a move the planner
+    // drops and carries into the next one); T1, never used, has nothing to unretract, and E is
+    // put back where the file has it.
     assert_eq!(
-        lines(&out, 509, 3),
-        ["G1 X104.44317 Y87.09572 E21.80781", "T1", "G1 X104.913 Y87.264 E21.85317"],
+        lines(&out, 509, 6),
+        [
+            "G1 X104.44317 Y87.09572 E21.80781",
+            "G1 E11.80781 F2400",
+            "T1",
+            "G92 E21.80781",
+            "G1 F1800",
+            "G1 X104.913 Y87.264 E21.85317"
+        ],
         "x = 104.282 + {t} * 0.631"
     );
-    // The slicer's toolchange block stays: retract, G92 E0, (T1 gone), G92 E0, retract, travel.
+    // The slicer's toolchange block stays but for its retraction, made by T0 at the new place:
+    // the line keeps only the feed rate it sets, and E needs no putting back, the file resets it
+    // right after (G92 E0, T1 gone, G92 E0), then T1's own travel retraction.
+    assert_eq!(lines(&out, 556, 4), ["G1 F2400", "G92 E0", "G92 E0", "G1 E-2.00000 F2400.00000"]);
+    let moved = c.retraction.as_ref().unwrap();
     assert_eq!(
-        lines(&out, 553, 4),
-        ["G1 E14.30781 F2400.00000", "G92 E0", "G92 E0", "G1 E-2.00000 F2400.00000"]
+        (moved.old_mm, moved.new_mm, moved.settle_mm, moved.dropped_mm, moved.absorbed_mm),
+        (-10.0, 0.0, 0.0, 10.0, 0.0)
     );
     assert!(r.changes.kept().iter().all(|c| c.feature == Feature::Unknown));
     assert_eq!(r.changes.kept().iter().filter(|c| c.shortfall_mm == 0.0).count(), 79);
@@ -71,7 +86,19 @@ fn prusaslicer_relative_e_splits_the_e_word() {
     assert_eq!((c.from_tool, c.to_tool, c.feature), (2, 0, Feature::Bridge));
     // `G1 X70.555 Y86.738 E1.25223`: the last 0.04197 mm of it, after the change, completes 2.5 mm
     // with the three moves after it (0.02048 + 0.02501 + 1.20551 + 1.15498 + 0.05205).
-    assert_eq!(lines(&out, 763, 3), ["G1 X70.82035 Y87.24949 E1.21026", "T0", "G1 X70.555 Y86.738 E0.04197"]);
+    // T2's 10 mm tool-change retraction and T0's unretraction go with the change, then the
+    // feed rate in force.
+    assert_eq!(
+        lines(&out, 763, 6),
+        [
+            "G1 X70.82035 Y87.24949 E1.21026",
+            "G1 E-10 F2400",
+            "T0",
+            "G1 E10 F2400",
+            "G1 F3600",
+            "G1 X70.555 Y86.738 E0.04197"
+        ]
+    );
     // The outer wall is a barrier by default: the change after it cannot move at all.
     assert_eq!(r.changes.kept()[0].achieved_mm, 0.0);
     assert_eq!(r.changes.kept()[0].stopped_by, Some("a feature that may not take the purge"));
@@ -291,7 +318,9 @@ fn tower_fallback_beside_the_part() {
     assert!(rows.iter().all(|l| l.starts_with("G1 X78.56436 E") || l.starts_with("G1 X75 E")), "{rows:?}");
     // 5 mm right of the extent seen so far (X 50..70, Y 60..80), the file's 0.8 mm retraction
     // at its feed around the travels, then E back to 0 for the file's own next move.
-    assert!(text.contains("T1\n; gweave purge-shift: purge T0->T1 shortfall, 1.5 mm\nG92 E0\nG1 E-0.8 F2100\nG0 X75 Y60 F6000\n"), "{text}");
+    // T0's 5 mm tool-change retraction goes with the change (T1 has none parked), in the file's
+    // E coordinates (E is 0 there), the E and the feed put back before the tower.
+    assert!(text.contains("F1800\nG1 E-5 F2400\nT1\nG92 E0\nG1 F1800\n; gweave purge-shift: purge T0->T1 shortfall, 1.5 mm\nG92 E0\nG1 E-0.8 F2100\nG0 X75 Y60 F6000\n"), "{text}");
     assert!(
         text.contains("\nG1 X78.56436 E1.5 F1200\nG1 E0.7 F2100\nG0 X50 Y60 F6000\nG1 E1.5 F2100\nG92 E0\n"),
         "{text}"
@@ -383,4 +412,159 @@ fn a_file_sliced_with_a_wipe_tower_is_refused_naming_the_setting() {
     // Without the tower (a key that merely ends in wipe_tower is not it), the file shifts.
     let none = format!("{body}; filament_minimal_purge_on_wipe_tower = 15\n; wipe_tower = 0\n");
     assert!(gweave::post::purge_shift::purge_shift_bytes(rules, none.as_bytes()).is_ok());
+}
+
+/// A PrusaSlicer-like change (relative E): the old tool retracts 10 mm, `T`, a travel, the new
+/// tool unretracts the 10 mm it retracted when it was put away.
+const TOOL_CYCLE: &str = "G90\nM83\n;LAYER_CHANGE\n;Z:0.2\nG1 Z0.2 F600\n;TYPE:External perimeter\n\
+    G1 X10 Y0 F1800\nG1 X20 E1\nG1 E-10 F2400\n;END gcode for filament\nT1\nG1 X30 Y5 F7800\n\
+    ;TYPE:Solid infill\nG1 X40 E2 F1800\nG1 X50 E2\nG1 E-10 F2400\n;END gcode for filament\nT0\n\
+    G1 X60 Y0 F7800\nG1 E10 F2400\n;TYPE:External perimeter\nG1 F1800\nG1 X70 E1\nG1 E-10 F2400\nT1\n\
+    G1 X80 Y5 F7800\nG1 E10 F2400\n;TYPE:Solid infill\nG1 X90 E1\n";
+
+/// The bug found on a screw sliced for two extruders: a change moved back went before the old
+/// tool's tool-change retraction, so the new tool did both the `G1 E-10` and its own `G1 E10`,
+/// and at the next change (held by the outer wall) the old tool retracted again and the other
+/// "unretracted" 10 mm it never retracted: 10 mm lost by one tool and blobbed by the other per
+/// cycle, the file's E total unchanged and nothing said.
+#[test]
+fn tool_change_retraction_stays_with_its_tool() {
+    let options = gweave::gcode::state::StateOptions::default();
+    let before = purge_check::ledger(TOOL_CYCLE.as_bytes(), &options);
+    // T0 prints 1 + 1 mm, T1 2 + 2 + 1 mm; T0 ends with its 10 mm retracted, T1 with none.
+    assert_eq!((before.left_mm, before.retracted_mm), (vec![2.0, 5.0], vec![10.0, 0.0]));
+    let (out, r) = run(Rules::fixed(3.0).unwrap(), TOOL_CYCLE.as_bytes());
+    // T0->T1 after the outer wall stays; T1->T0 moves 3 mm back into T1's infill, taking T1's
+    // retraction and T0's unretraction with it; where it was, the file's `G1 E-10` and `G1 E10`
+    // are taken out (their feed rate stays), so T0 travels as T1 did, with nothing retracted.
+    let moved = &r.changes.kept()[1];
+    assert_eq!((moved.from_tool, moved.to_tool, moved.moved_mm), (1, 0, 3.0));
+    let text = String::from_utf8(out.clone()).unwrap();
+    assert!(
+        text.contains(
+            "G1 X35 E1 F1800\nG1 E-10 F2400\nT0\nG1 E10 F2400\nG1 F1800\nG1 X40 E1 F1800\nG1 X50 E2\n\
+             G1 F2400\n;END gcode for filament\nG1 X60 Y0 F7800\nG1 F2400\n;TYPE:External perimeter\n"
+        ),
+        "{text}"
+    );
+    let after = purge_check::ledger(&out, &options);
+    // The 3 mm purge went from T1 to T0, and nothing else moved between the tools.
+    assert_close(&after.left_mm, &[5.0, 2.0]);
+    assert_close(&after.retracted_mm, &[10.0, 0.0]);
+    // No E motion added: the retraction and the unretraction are moved, not made twice.
+    let e_motion = |bytes: &[u8]| purge_check::e_only_motion_mm(bytes, &options);
+    assert_eq!(e_motion(&out), e_motion(TOOL_CYCLE.as_bytes()));
+    // (`run` checks too that at every change each tool has the retraction it had in the input.)
+    // Absolute E: the same, in the file's E coordinates; where the change was, the retraction
+    // and the unretraction keep their feed rate only, and a `G92` puts E where the file has it
+    // before the next line that reads E.
+    let abs = "G90\nM82\nG92 E0\n;LAYER_CHANGE\n;Z:0.2\nG1 Z0.2 F600\n;TYPE:External perimeter\n\
+        G1 X10 Y0 F1800\nG1 X20 E1\nG1 E-9 F2400\nT1\nG1 X30 Y5 F7800\n;TYPE:Solid infill\n\
+        G1 X40 E-7 F1800\nG1 X50 E-5\nG1 E-15 F2400\nT0\nG1 X60 Y0 F7800\nG1 E-5 F2400\n\
+        ;TYPE:External perimeter\nG1 X70 E-4\nG1 E-14 F2400\nT1\nG1 X80 Y5 F7800\nG1 E-4 F2400\n\
+        ;TYPE:Solid infill\nG1 X90 E-3\n";
+    assert_close(&purge_check::ledger(abs.as_bytes(), &options).left_mm, &[2.0, 5.0]);
+    let (out, _) = run(Rules::fixed(3.0).unwrap(), abs.as_bytes());
+    let text = String::from_utf8(out.clone()).unwrap();
+    assert!(
+        text.contains(
+            "G1 X35 E-8 F1800\nG1 E-18 F2400\nT0\nG1 E-8 F2400\nG1 F1800\nG1 X40 E-7 F1800\nG1 X50 E-5\n\
+             G1 F2400\nG1 X60 Y0 F7800\nG1 F2400\n;TYPE:External perimeter\nG92 E-5\nG1 X70 E-4\n"
+        ),
+        "{text}"
+    );
+    let after = purge_check::ledger(&out, &options);
+    assert_close(&after.left_mm, &[5.0, 2.0]);
+    assert_close(&after.retracted_mm, &[10.0, 0.0]);
+    assert_eq!(e_motion(&out), e_motion(abs.as_bytes()));
+}
+
+/// Regression (found by the property test in CI): a change moved back across a `G92 E0`
+/// carries the old tool's retraction before the reset and the new tool's unretraction after
+/// it, so in relative E the counter after the reset is 0.5 mm off the input's: the checker
+/// compared the split point's E coordinate and failed a correct file. The filament each tool
+/// feeds is the input's, in relative and absolute E.
+#[test]
+fn a_retraction_carried_across_a_g92_keeps_each_tools_filament() {
+    let options = gweave::gcode::state::StateOptions::default();
+    for (mode, last) in [("M83", "E1.21645"), ("M82", "E0.71645")] {
+        let text = format!(
+            "{mode}\nG1 X0 Y0 F1200\nG1 X0.010 Y0 E0.00050\nG92 E0\nG1 E-0.5\n; end of the old filament\n\
+             T1\nG0 X0.010 Y8\nG0 Y0\nG1 X24.339 Y0 {last}\nT0\n"
+        );
+        let before = purge_check::ledger(text.as_bytes(), &options);
+        let (out, r) = run(Rules::fixed(0.05).unwrap(), text.as_bytes());
+        assert_eq!(r.changes.kept().len(), 2, "{mode}");
+        let after = purge_check::ledger(&out, &options);
+        // T0's 0.0005 mm went to T1 (the first change moved as far as it could), T1's last
+        // 0.05 mm to T0; each tool ends with the retraction it had.
+        let moved = 0.05 - 0.0005;
+        assert_close(&after.left_mm, &[before.left_mm[0] + moved, before.left_mm[1] - moved]);
+        assert_close(&after.retracted_mm, &before.retracted_mm);
+    }
+}
+
+fn assert_close(got: &[f64], want: &[f64]) {
+    assert!(
+        got.len() == want.len() && got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6),
+        "{got:?} vs {want:?}"
+    );
+}
+
+/// The same on the screw's first seven layers, relative and absolute E, with each fallback: each
+/// tool's filament is the input's but for the purge (sim of the whole screw before the fix:
+/// T0 -68.91 mm, T1 700.25 mm for 355.12 and 276.22 in the input).
+#[test]
+fn tool_change_retraction_stays_with_its_tool_on_a_sliced_screw() {
+    let options = gweave::gcode::state::StateOptions::default();
+    for file in ["prusaslicer/pr_screw_2t_trim.gcode", "prusaslicer/pr_screw_2t_abs_trim.gcode"] {
+        let input = fixture(file);
+        let before = purge_check::ledger(&input, &options);
+        assert_close(&before.retracted_mm, &[10.0, 0.0]);
+        for fallback in ["partial", "block", "tower"] {
+            let rules = config(&format!("purge_mm = 3.0\nfallback = \"{fallback}\"\n"));
+            let (out, r) = run(rules, &input);
+            let after = purge_check::ledger(&out, &options);
+            // T1->T0 changes move into T1's infill (8.24 mm in all); T0->T1 ones follow the
+            // outer wall and stay; the fallbacks purge the 12.76 mm shortfall with the new tool.
+            assert!((r.moved_mm - 8.24027).abs() < 1e-4, "{file} {fallback}: moved {}", r.moved_mm);
+            let to_t1 = if fallback == "partial" { 0.0 } else { 12.0 };
+            let to_t0 = if fallback == "partial" { 0.0 } else { 0.75973 };
+            let want = [before.left_mm[0] + 8.24027 + to_t0, before.left_mm[1] - 8.24027 + to_t1];
+            for t in 0..2 {
+                assert!(
+                    (after.left_mm[t] - want[t]).abs() < 2e-4,
+                    "{file} {fallback}: {:?} vs {want:?}",
+                    after.left_mm
+                );
+            }
+            assert_close(&after.retracted_mm, &[10.0, 0.0]);
+        }
+    }
+}
+
+/// A file whose tool extrudes while still retracted (no unretraction after the change: the
+/// first 1 mm only refills T0's nozzle). The moved change has T0 unretract its 10 mm at the new
+/// place, and there is nothing after the change to take out: T0 retracts them again before its
+/// next extrusion, so each tool ends as in the input (T0 with 9 mm retracted, T1 with 10).
+#[test]
+fn a_tool_taken_without_its_unretraction_is_retracted_again() {
+    let options = gweave::gcode::state::StateOptions::default();
+    let input = "G90\nM83\n;LAYER_CHANGE\n;Z:0.2\nG1 Z0.2 F600\n;TYPE:Solid infill\nG1 X10 Y0 F1800\n\
+        G1 X20 E1\nG1 E-10 F2400\nT1\nG1 X30 E2\nG1 X40 E2\nG1 E-10 F2400\nT0\nG1 X50 E1\n";
+    let before = purge_check::ledger(input.as_bytes(), &options);
+    assert_close(&before.left_mm, &[1.0, 4.0]);
+    assert_close(&before.retracted_mm, &[9.0, 10.0]);
+    let (out, r) = run(Rules::fixed(3.0).unwrap(), input.as_bytes());
+    let text = String::from_utf8(out.clone()).unwrap();
+    assert!(
+        text.contains("G1 X25 E1\nG1 E-10 F2400\nT0\nG1 E10 F2400\nG1 F2400\nG1 X30 E1\nG1 X40 E2\nG1 F2400\nG1 E-10 F2400\nG1 F2400\nG1 X50 E1\n"),
+        "{text}"
+    );
+    let moved = r.changes.kept()[1].retraction.clone().unwrap();
+    assert_eq!((moved.dropped_mm, moved.absorbed_mm), (10.0, 10.0));
+    // 1 mm of T0's moved to T1, 3 mm of T1's to T0.
+    let after = purge_check::ledger(&out, &options);
+    assert_close(&after.left_mm, &[3.0, 2.0]);
+    assert_close(&after.retracted_mm, &before.retracted_mm);
 }

@@ -26,6 +26,9 @@ enum Step {
     ResetE,
     Travel(f64),
     Change,
+    /// A slicer's change: the old tool retracts this much, the new one unretracts what it
+    /// retracted when it was put away (PrusaSlicer's tool-change retraction).
+    RetractedChange(f64),
     Layer,
     OuterWall,
     FwRetract,
@@ -38,6 +41,7 @@ fn step() -> impl Strategy<Value = Step> {
         1 => Just(Step::ResetE),
         1 => (0.1f64..20.0).prop_map(Step::Travel),
         2 => Just(Step::Change),
+        2 => (0.5f64..12.0).prop_map(|mm| Step::RetractedChange((mm * 100.0).round() / 100.0)),
         1 => Just(Step::Layer),
         1 => Just(Step::OuterWall),
         1 => Just(Step::FwRetract),
@@ -49,6 +53,7 @@ fn program(steps: &[Step], absolute_e: bool) -> String {
     let mut s = String::from(if absolute_e { "G90\nM82\n" } else { "G90\nM83\n" });
     s.push_str(";LAYER_CHANGE\n;Z:0.2\nG1 Z0.2\n;TYPE:Perimeter\n");
     let (mut x, mut e, mut layer, mut tool, mut dir) = (0.0f64, 0.0f64, 0, 0, 1.0f64);
+    let mut parked_mm = [0.0f64; 2];
     let feed = |s: &mut String, words: String, de: f64, e: &mut f64| {
         if absolute_e {
             *e += de;
@@ -92,6 +97,23 @@ fn program(steps: &[Step], absolute_e: bool) -> String {
             Step::Change => {
                 tool = 1 - tool;
                 s.push_str(&format!("T{tool}\n"));
+                // A tool put away retracted is unretracted when it is taken again, as a slicer
+                // writes it: it never extrudes while still retracted (that file's "purge" would
+                // leave no filament, which the checker's tool ledger does not model).
+                if parked_mm[tool as usize] > 0.0 {
+                    feed(&mut s, "G1".into(), parked_mm[tool as usize], &mut e);
+                    parked_mm[tool as usize] = 0.0;
+                }
+            }
+            Step::RetractedChange(mm) => {
+                feed(&mut s, "G1".into(), -mm, &mut e);
+                parked_mm[tool as usize] += mm;
+                tool = 1 - tool;
+                s.push_str(&format!("; end of the old filament\nT{tool}\nG0 X{x:.3} Y8\nG0 Y0\n"));
+                if parked_mm[tool as usize] > 0.0 {
+                    feed(&mut s, "G1".into(), parked_mm[tool as usize], &mut e);
+                    parked_mm[tool as usize] = 0.0;
+                }
             }
             Step::Layer => {
                 layer += 1;
@@ -109,6 +131,11 @@ fn check(text: &str, rules: Rules) -> gweave::PurgeShiftReport {
     let options = PurgeShift::new(rules.clone()).state_options();
     let (out, report) = lenient(rules, text.as_bytes()).unwrap();
     purge_check::check(text.as_bytes(), &out, &report, &options);
+    // A slicer-style program (no wipe, nothing retracted while extruding): a moved change takes
+    // the file's retraction and unretraction with it, so the E-only motion is the input's.
+    let e_motion = |bytes: &[u8]| purge_check::e_only_motion_mm(bytes, &options);
+    let (before, after) = (e_motion(text.as_bytes()), e_motion(&out));
+    assert!((before - after).abs() < 1e-4, "E-only motion {before} mm -> {after} mm");
     report
 }
 

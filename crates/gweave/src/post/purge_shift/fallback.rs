@@ -28,7 +28,7 @@ use crate::gcode::state::{Effect, Move, X, Y};
 use crate::post::purge_block::{write_purge_job, PurgeJob, PurgeMotion, PurgePattern, PurgeStart};
 
 /// Inserted lines carry the split's precision: 0.01 um positions, 1e-6 mm of filament.
-const FORMAT: NumberFormat = NumberFormat {
+pub(super) const FORMAT: NumberFormat = NumberFormat {
     position_decimals: super::split::POSITION_DECIMALS,
     extrusion_decimals: super::split::E_DECIMALS,
     feed_decimals: 0,

@@ -14,8 +14,10 @@
 //! ([`crate::colour::dialect::MixingState`]): the tool number, the active Marlin mix and the
 //! active RepRapFirmware mix before and after the group must differ. Everything else a slicer
 //! writes around a tool change (retract, `G92 E0`, travel, temperature for the next tool,
-//! unretract) stays where it is: retracts and `G92` are E bookkeeping that does not depend on the
-//! tool of a mixing hotend, and the travel belongs to the new colour's path.
+//! unretract) stays where it is: the travel belongs to the new colour's path. A retraction
+//! belongs to the tool that makes it, though, so a moved change takes the tool-change retraction
+//! and the new tool's unretraction with it (E-only moves at the new place, the file's taken out
+//! where it was), leaving every tool with its own retraction (the `tool_retraction` module).
 //!
 //! ## Rules
 //! - Only extruding moves (positive E with XY motion) count; retractions, unretractions,
@@ -26,7 +28,8 @@
 //!   inside), at the previous change, at homing, at a line whose meaning depends on the active tool
 //!   (`M104`/`M109`/`M221`/`M900` without `T`), at mixing lines that are not part of the change
 //!   (the change must not be moved before the definition of its own tool), at numbered or
-//!   checksummed moves (which cannot be rewritten), and outside the print proper.
+//!   checksummed moves (which cannot be rewritten), at a `G10`/`G11` firmware retraction (kept
+//!   per tool by the firmware), and outside the print proper.
 //! - Too little room: the change goes as far back as allowed, a warning names layer, line and
 //!   shortfall, and the fallback applies: accept the shortfall (`partial`), or purge it right
 //!   after the change in a purge block (`block`) or on a small tower beside the part (`tower`),
@@ -55,6 +58,7 @@ mod fallback;
 mod options;
 pub mod report;
 mod split;
+mod tool_retraction;
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
@@ -62,7 +66,7 @@ use std::path::Path;
 
 pub use config::{ConfigError, Fallback, PurgeShiftConfig, Rules, TowerConfig};
 pub use options::PurgeShiftOptions;
-pub use report::{ChangeReport, PurgeShiftReport, SplitPoint};
+pub use report::{ChangeReport, PurgeShiftReport, RetractionMove, SplitPoint};
 
 use crate::colour::dialect::MixingState;
 use crate::eol::Eol;
@@ -80,6 +84,7 @@ use crate::run::{Ran, Run, Source};
 use checks::{require_markers, FeatureComments};
 use fallback::{write_fallback, Spot, Surroundings};
 use split::{split, Splittable};
+use tool_retraction::{write_bracket, Bracket, EWord, Feeds, ToolRetractions};
 
 /// What stops the walk back at a layer change (the report's `stopped_by`).
 const LAYER_CHANGE: &str = "a layer change";
@@ -111,6 +116,10 @@ struct Held {
     layer: Option<u32>,
     feature: Feature,
     seq: u64,
+    /// The active tool's retraction in force before the line (in the input), mm.
+    retracted_mm: f64,
+    /// What the line feeds, and how the pass may rewrite it.
+    feeds: Feeds,
 }
 
 impl Held {
@@ -158,6 +167,19 @@ pub struct PurgeShift {
     /// Buffers of written lines, reused for new held lines.
     spare: Vec<OwnedLine>,
     features: FeatureComments,
+    /// Each tool's retraction, as the input has it.
+    tools: ToolRetractions,
+    /// The active tool's retraction before the line being read, mm.
+    line_retracted_mm: f64,
+    /// The old tool's retraction in force at the group, and what the new tool has parked, mm.
+    group_retracted_mm: f64,
+    group_parked_mm: f64,
+    /// What is still to be taken out of the file's unretraction after the last moved change
+    /// (the new tool made it at the new place), mm.
+    owed_mm: f64,
+    /// The file's E (file units) a `G92 E` must put back before the next line that reads E,
+    /// after an E-only move was taken out in absolute E.
+    e_reset: Option<f64>,
 }
 
 impl PurgeShift {
@@ -189,6 +211,12 @@ impl PurgeShift {
             report,
             spare: Vec::new(),
             features: FeatureComments::default(),
+            tools: ToolRetractions::default(),
+            line_retracted_mm: 0.0,
+            group_retracted_mm: 0.0,
+            group_parked_mm: 0.0,
+            owed_mm: 0.0,
+            e_reset: None,
         }
     }
 
@@ -326,7 +354,7 @@ impl PurgeShift {
         }
         let tail = std::mem::take(&mut self.group_tail);
         for line in tail {
-            let held = self.held(line, Kind::Other, None, Feature::Unknown);
+            let held = self.held(line, Kind::Other, None, Feature::Unknown, Feeds::written(0.0));
             self.push(out, held)?;
         }
         Ok(())
@@ -348,9 +376,16 @@ impl PurgeShift {
         }
     }
 
-    fn held(&mut self, line: OwnedLine, kind: Kind, layer: Option<u32>, feature: Feature) -> Held {
+    fn held(
+        &mut self,
+        line: OwnedLine,
+        kind: Kind,
+        layer: Option<u32>,
+        feature: Feature,
+        feeds: Feeds,
+    ) -> Held {
         self.seq += 1;
-        Held { line, kind, layer, feature, seq: self.seq }
+        Held { line, kind, layer, feature, seq: self.seq, retracted_mm: self.line_retracted_mm, feeds }
     }
 
     /// Walks back from the change, places it, writes the window and the group.
@@ -396,6 +431,7 @@ impl PurgeShift {
             moved_mm,
             fallback_mm: 0.0,
             fallback_lines: 0,
+            retraction: None,
             requested_mm3: self.rules.mm3(requested_mm),
             achieved_mm3: 0.0,
             layer: self.group_layer,
@@ -409,6 +445,24 @@ impl PurgeShift {
         let held: Vec<Held> = self.window.drain(..).collect();
         self.window_e_mm = 0.0;
         let (at, fraction) = place.unwrap_or((held.len(), None));
+        // The held lines after the change's new place (after the first half of a split).
+        let moved_from = if fraction.is_some() && at < held.len() { at + 1 } else { at };
+        // The slicer's tool-change retraction: the E-only retractions after the last line that
+        // feeds forward, taken out where the change was (the old tool makes it at the new place).
+        let tail = (moved_from..held.len()).rev().take_while(|&i| held[i].feeds.fed_mm <= 0.0).last();
+        let drops = |i: usize| {
+            tail.is_some_and(|t| i >= t) && held[i].feeds.e_only.is_some() && held[i].feeds.fed_mm < 0.0
+        };
+        // Each tool keeps its retraction (the tool_retraction module): what the old tool had in
+        // force where the change now goes, inside or before an extrusion.
+        let bracket = held.get(at).filter(|_| from_tool != to_tool).map(|h| {
+            let head_mm = fraction.map_or(0.0, |t| t * h.e_mm());
+            let r_place_mm = (h.retracted_mm - head_mm).max(0.0);
+            let dropped_mm: f64 =
+                (moved_from..held.len()).filter(|&i| drops(i)).map(|i| -held[i].feeds.fed_mm).sum();
+            Bracket::new(r_place_mm, self.group_retracted_mm, self.group_parked_mm, dropped_mm)
+        });
+        let feed_mm_min = self.rules.block.retract_feed_mm_min;
         // Where the machine is when the change runs: before the move it now precedes, at the
         // split point, or (not moved) where the change was.
         let mut spot = self.group_spot;
@@ -428,8 +482,9 @@ impl PurgeShift {
             if let Kind::Extrude { split: s, .. } = &h.kind {
                 let halves = split(&h.line.bytes, s, t);
                 self.emit(out, &halves.first, &h.line.eol)?;
-                change.output_line = self.emitted.lines() + 1;
-                self.emit_change(out, group, &mut change, Some(spot_of(s, &s.end_of(&halves.first))))?;
+                let at_split = spot_of(s, &s.end_of(&halves.first));
+                let lines = bracket.map(|b| (b, write_bracket(&at_split, b.old_mm, b.new_mm, feed_mm_min)));
+                self.emit_change(out, group, &mut change, Some(at_split), lines)?;
                 match &halves.second {
                     Some(second) => self.emit(out, second, &h.line.eol)?,
                     None => self.emit_line(out, &h.line)?,
@@ -441,11 +496,40 @@ impl PurgeShift {
             }
         }
         if change.split.is_none() {
-            change.output_line = self.emitted.lines() + 1;
-            self.emit_change(out, group, &mut change, spot)?;
+            let lines =
+                bracket.zip(spot).map(|(b, s)| (b, write_bracket(&s, b.old_mm, b.new_mm, feed_mm_min)));
+            self.emit_change(out, group, &mut change, spot, lines)?;
         }
-        for h in &held[rest..] {
-            self.emit_line(out, &h.line)?;
+        for (i, h) in held.iter().enumerate().skip(rest) {
+            match h.feeds.e_only.filter(|_| bracket.is_some() && drops(i)) {
+                Some(e) => {
+                    let eol = h.line.eol.clone();
+                    self.emit_text(out, &e.feeding(&h.line.bytes, 0.0), &eol)?;
+                    if !e.relative_e {
+                        self.e_reset = Some(e.e_after());
+                    }
+                }
+                None => {
+                    let reset = self.owed_e_reset(h.feeds.e_word);
+                    self.emit_text(out, &reset, &h.line.eol)?;
+                    self.emit_line(out, &h.line)?;
+                }
+            }
+        }
+        self.owed_mm = bracket.map_or(0.0, |b| b.absorbed_mm);
+        // Where the change was, the new tool is brought to the retraction it had parked.
+        if let (Some(b), Some(here)) = (bracket, self.group_spot) {
+            let [mut head, tail] = write_bracket(&here, 0.0, b.settle_mm, feed_mm_min);
+            if !head.is_empty() {
+                // Its E words are the file's: E put back first if a line was taken out.
+                head.splice(0..0, self.owed_e_reset(EWord::Reads));
+            }
+            let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
+            let offset = self.emitted.lines() + 1 - change.output_line;
+            let written = self.emit_text(out, &head, &eol)? + self.emit_text(out, &tail, &eol)?;
+            if let Some(r) = change.retraction.as_mut().filter(|_| written > 0) {
+                (r.settle_lines, r.settle_offset) = (written, offset);
+            }
         }
         let room = SPARE_LINES.saturating_sub(self.spare.len());
         self.spare.extend(held.into_iter().take(room).map(|h| h.line));
@@ -459,18 +543,48 @@ impl PurgeShift {
         self.report.add(change)
     }
 
-    /// Writes the change lines, then the fallback purge of what the move back could not find,
-    /// and warns about that shortfall.
+    /// Writes `\n`-separated lines with the ending `eol`; returns how many.
+    fn emit_text(&mut self, out: &mut dyn Write, text: &[u8], eol: &[u8]) -> io::Result<u64> {
+        let mut n = 0;
+        for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
+            self.emit(out, line, eol)?;
+            n += 1;
+        }
+        Ok(n)
+    }
+
+    /// Writes the change lines between the two parts of its retraction bracket, then the
+    /// fallback purge of what the move back could not find, and warns about that shortfall.
     fn emit_change(
         &mut self,
         out: &mut dyn Write,
         group: &[OwnedLine],
         change: &mut ChangeReport,
         spot: Option<Spot>,
+        bracket: Option<(Bracket, [Vec<u8>; 2])>,
     ) -> io::Result<()> {
+        let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
+        let (b, [before, after]) = match bracket {
+            Some((b, lines)) => (Some(b), lines),
+            None => (None, Default::default()),
+        };
+        let lines_before = self.emit_text(out, &before, &eol)?;
+        change.output_line = self.emitted.lines() + 1;
         for line in group {
             self.emit_line(out, line)?;
         }
+        let lines_after = self.emit_text(out, &after, &eol)?;
+        change.retraction = b.filter(|_| lines_before + lines_after > 0).map(|b| RetractionMove {
+            old_mm: b.old_mm,
+            new_mm: b.new_mm,
+            settle_mm: b.settle_mm,
+            dropped_mm: b.dropped_mm,
+            absorbed_mm: b.absorbed_mm,
+            lines_before,
+            lines_after,
+            settle_lines: 0,
+            settle_offset: 0,
+        });
         let short_mm = change.shortfall_mm;
         if short_mm <= 1e-9 {
             return Ok(());
@@ -503,7 +617,6 @@ impl PurgeShift {
             then,
         });
         if let Some(text) = text {
-            let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
             for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
                 self.emit(out, line, &eol)?;
                 change.fallback_lines += 1;
@@ -558,10 +671,16 @@ impl Pass for PurgeShift {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
         self.env.follow_retraction(ctx.effect);
+        self.line_retracted_mm = self.tools.in_force_mm();
+        self.tools.follow(ctx.state.tool, ctx.effect);
         if let Effect::Move(m) = ctx.effect {
             self.env.observe(m, in_print);
         }
+        let feeds = Feeds::of(ctx);
         if is_change_line(ctx.block) {
+            if self.owed_mm > 0.0 {
+                self.settle_owed(ctx, out)?;
+            }
             self.env.tool_change();
             if self.group_before.is_none() {
                 self.group_before = Some(self.colour.clone());
@@ -569,7 +688,9 @@ impl Pass for PurgeShift {
                 self.group_spot = Some(self.spot_here(ctx.state));
                 self.group_layer = structure.layer;
                 self.group_feature = structure.feature;
+                self.group_retracted_mm = self.line_retracted_mm;
             }
+            self.group_parked_mm = self.tools.in_force_mm();
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
             self.group.extend(tail);
@@ -584,6 +705,13 @@ impl Pass for PurgeShift {
                 return Ok(Flow::Continue);
             }
             self.close_group(out)?;
+        }
+        if self.owed_mm > 0.0 && self.absorb(ctx, out, feeds)? {
+            return Ok(Flow::Continue);
+        }
+        if self.e_reset.is_some() {
+            let reset = self.owed_e_reset(feeds.e_word);
+            self.hold_text(out, &reset, &ctx.line, 0.0)?;
         }
         if !in_print {
             self.flush(out, "the start of the print proper")?;
@@ -616,6 +744,12 @@ impl Pass for PurgeShift {
                 self.flush(out, "homing")?;
                 return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
             }
+            // The firmware keeps a G10 per tool and a G11 recovers only the tool it retracted:
+            // E moves cannot carry it across a moved change, so the change stays after it.
+            Effect::FirmwareRetract { .. } => {
+                self.flush(out, "a firmware retraction")?;
+                return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
+            }
             _ if tool_dependent(ctx.block) => {
                 self.flush(out, "a command for the active tool")?;
                 return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
@@ -623,14 +757,22 @@ impl Pass for PurgeShift {
             _ => Kind::Other,
         };
         let owned = self.own(&ctx.line);
-        let held = self.held(owned, kind, structure.layer, structure.feature);
+        let held = self.held(owned, kind, structure.layer, structure.feature, feeds);
         self.push(out, held)?;
         Ok(Flow::Continue)
     }
 
-    fn finish(&mut self, _state: &crate::gcode::state::State, out: &mut dyn Write) -> Result<(), PassError> {
+    fn finish(&mut self, state: &crate::gcode::state::State, out: &mut dyn Write) -> Result<(), PassError> {
         self.close_group(out)?;
         self.flush(out, "the end of the file")?;
+        if self.owed_mm > 0.0 {
+            // The file ended before the new tool's unretraction: it ends retracted as there.
+            let spot = self.spot_here(state);
+            let [retract, restore] = self.owed_retraction(&spot);
+            self.owed_mm = 0.0;
+            self.emit_text(out, &retract, b"\n")?;
+            self.emit_text(out, &restore, b"\n")?;
+        }
         if let Some(w) = self.features.warning(&self.rules.allowed) {
             self.report.warn_first(w);
         }

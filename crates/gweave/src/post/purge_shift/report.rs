@@ -26,6 +26,32 @@ pub struct SplitPoint {
     pub point_mm: [f64; 3],
 }
 
+/// The retractions carried with a moved change of tool, so that each tool keeps its own
+/// (`docs/purge-shift.md`): E-only moves inserted around the change lines and where they were.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RetractionMove {
+    /// Filament fed by the old tool right before the change lines, mm (negative: retracted).
+    pub old_mm: f64,
+    /// Fed by the new tool right after them, mm.
+    pub new_mm: f64,
+    /// Fed by the new tool where the change was, mm.
+    pub settle_mm: f64,
+    /// The file's E-only tool-change retraction taken out where the change was (the old tool
+    /// made it at the new place), mm.
+    pub dropped_mm: f64,
+    /// The file's unretraction after the change taken out (the new tool made it at the new
+    /// place), mm.
+    pub absorbed_mm: f64,
+    /// Lines inserted right before the change lines.
+    pub lines_before: u64,
+    /// Lines inserted right after them (before a fallback's lines).
+    pub lines_after: u64,
+    /// Lines inserted where the change was.
+    pub settle_lines: u64,
+    /// How far the first of them is after the first change line, in output lines.
+    pub settle_offset: u64,
+}
+
 /// One change of tool or mix.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ChangeReport {
@@ -47,8 +73,10 @@ pub struct ChangeReport {
     pub moved_mm: f64,
     /// Purge extruded by the `block` or `tower` fallback right after the change.
     pub fallback_mm: f64,
-    /// Lines the fallback inserted right after the change lines (in the output).
+    /// Lines the fallback inserted after the change lines and the new tool's unretraction.
     pub fallback_lines: u64,
+    /// The retractions moved with the change (none when it did not move, or kept its tool).
+    pub retraction: Option<RetractionMove>,
     /// Purge asked for, mm^3.
     pub requested_mm3: f64,
     /// Purge done, mm^3.
