@@ -20,6 +20,7 @@
 
 use std::collections::BTreeMap;
 
+use gweave::gcode::ends::lines_naming;
 use thiserror::Error;
 
 use crate::motion::limits::{
@@ -203,9 +204,8 @@ fn marlin_corners(base: &CornerMode, jerk: [Option<f64>; 4], jd: Option<f64>) ->
 
 /// PrusaSlicer's `; key = value` lines.
 fn prusa_settings(text: &str) -> BTreeMap<String, String> {
-    // Only the lines that name a key kept are looked at, found by a vector search: a file's
-    // ends are some 13 000 lines, read twice a transform, and walking, trimming and splitting
-    // each cost about 250 instructions a line (3.3 M a read).
+    // Only the lines that name a key kept are looked at (3.3 M instructions a read of the ends
+    // when every line was trimmed and split, twice a transform).
     lines_naming(text, &["machine_", "gcode_flavor"])
         .filter_map(|l| l.trim().strip_prefix(';'))
         .filter_map(|l| l.split_once(" = "))
@@ -215,28 +215,6 @@ fn prusa_settings(text: &str) -> BTreeMap<String, String> {
             (k.starts_with("machine_") || k == "gcode_flavor").then(|| (k.to_owned(), v.trim().to_owned()))
         })
         .collect()
-}
-
-/// The lines of `text` (split at `\n`, as [`str::lines`], the `\r` of a `\r\n` kept) that
-/// hold one of `needles`, each once, in the file's order. Each needle's search skips to the end
-/// of the line it found, so the work is one pass of the text per needle.
-fn lines_naming<'t>(text: &'t str, needles: &[&str]) -> impl Iterator<Item = &'t str> {
-    let bytes = text.as_bytes();
-    let mut lines = Vec::new();
-    for needle in needles {
-        let finder = memchr::memmem::Finder::new(needle);
-        let mut from = 0;
-        while let Some(at) = finder.find(&bytes[from..]).map(|i| from + i) {
-            let start = memchr::memrchr(b'\n', &bytes[..at]).map_or(0, |i| i + 1);
-            let end = memchr::memchr(b'\n', &bytes[at..]).map_or(bytes.len(), |i| at + i);
-            lines.push((start, end));
-            from = end;
-        }
-    }
-    lines.sort_unstable();
-    lines.dedup();
-    // Cut at `\n` bytes, which are whole characters.
-    lines.into_iter().map(move |(start, end)| &text[start..end])
 }
 
 /// Cura's `;SETTING_3` lines: one serialised document cut into lines, whose `[values]`
