@@ -80,7 +80,8 @@ impl Files {
     pub fn target(mut self, target: &Target, input: &Path) -> Files {
         match target {
             Target::File(path) => self.write("-o", Some(path)),
-            Target::Stdout(_) => self,
+            // A scratch file is the run's own, not a file the user named.
+            Target::Stdout(_) | Target::Scratch(_) => self,
             Target::InPlace { keep_backup, .. } => {
                 let replaces = self.inputs.iter().position(|e| e.path == input);
                 let entry = Entry { flag: "--in-place".into(), path: input.into(), dir: None, replaces };

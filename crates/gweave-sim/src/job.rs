@@ -132,12 +132,14 @@ pub fn simulate(
     }
     // The file is read as `stats` reads it: as the firmware its flavour names.
     machine.read_as(read_firmware(input, None).map_err(read_error)?);
-    // A rotary program's F words follow the convention its header declares.
-    if let Some(rotary) = RotaryConfig::from_file_header(input) {
-        machine.declare_rotary(rotary);
-    }
     let file = container::open(input).map_err(read_error)?;
     progress.set_len(file.text_len.unwrap_or(0));
+    // A rotary program's F words follow the convention its header declares, read from the
+    // stream's head as `estimate` reads it.
+    let (rotary, file) = RotaryConfig::from_stream_head(file).map_err(read_error)?;
+    if let Some(rotary) = rotary {
+        machine.declare_rotary(rotary);
+    }
     let mut reader = LineReader::new(file);
     let mut errors = Vec::new();
     let mut out = |_t: f64, line: &str| {

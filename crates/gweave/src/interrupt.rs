@@ -5,7 +5,7 @@
 //! end the call, remove what it was writing and raise `KeyboardInterrupt`. The binding runs the
 //! call on a thread of its own under a [`Token`] ([`run_under`]) and stops the token when
 //! Python reports the signal; the run then fails at its next read of the input or write of an
-//! output, which every long run does all the time (a 1 MiB read of G-code, a 64 KiB write), and
+//! output, which every long run does all the time (a 1 MiB read of G-code, a 1 MiB write), and
 //! unwinds as from any I/O error: its scratch files are dropped, so no output is written.
 //!
 //! The token is the current thread's, taken when an input is opened ([`crate::gcode::container`])

@@ -36,6 +36,7 @@ pub const PREVIEW_SIZE_PX: [u32; 2] = [800, 600];
 fn written_path(target: &Target, input: Option<&Path>) -> Option<PathBuf> {
     match target {
         Target::File(p) => Some(p.clone()),
+        Target::Scratch(s) => Some(s.path().to_path_buf()),
         Target::InPlace { .. } => input.map(Path::to_path_buf),
         Target::Stdout(_) => None,
     }

@@ -56,13 +56,14 @@ fn print_human(out: &mut dyn Write, input: &Path, target: &Target, r: &CopyRepor
             writeln!(out, "{} (in place, kept {}.bak)", input.display(), input.display())?
         }
         Target::InPlace { keep_backup: false, .. } => writeln!(out, "{} (in place)", input.display())?,
-        Target::Stdout(_) => {}
+        Target::Stdout(_) | Target::Scratch(_) => {}
     }
     // Binary G-code keeps no empty line, nor one of a lone `;` (as libbgcode's converter).
     let container = match target {
         Target::File(dest) => Container::of_output(dest),
         Target::InPlace { .. } => Container::of_output(input),
         Target::Stdout(container) => *container,
+        Target::Scratch(_) => Container::Text,
     };
     let how = match container {
         Container::Bgcode => "written as binary G-code: empty lines and lone `;` not kept",

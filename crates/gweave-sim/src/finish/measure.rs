@@ -10,22 +10,21 @@
 //! the file's size, and one time per progress line.
 //!
 //! A transform's output is measured while it is written ([`measure_while_written`]): the
-//! measure follows the scratch file as it grows, on threads of its own, so the finishing step
-//! costs the slower of the two rather than their sum.
+//! measure follows the scratch file as it grows, woken by each write, on threads of its own, so
+//! the finishing step costs the slower of the two rather than their sum.
 
-use std::fs::File;
 use std::io::{self, Read};
 use std::path::Path;
 
 use gweave::gcode::container;
 use gweave::gcode::ends::read_ends;
 use gweave::gcode::flavour::flavour_in;
+use gweave::gcode::scratch::ScratchFile;
 use gweave::pass::Ctx;
 use gweave::post::metadata::{is_progress_line, read_setting, Figures};
 use gweave::stats::StatsPass;
-use gweave::{Firmware, Pass};
+use gweave::{Firmware, Pass, Target};
 
-use super::growing::{Growing, Writer};
 use super::{FinishError, Result};
 use crate::motion::estimate::{estimate_modes, EstimateError, ModeEstimate, Modes};
 use crate::motion::limits::MotionProfile;
@@ -42,7 +41,7 @@ pub(super) fn measure(path: &Path) -> Result<Figures> {
     measure_read(input, path, &modes)
 }
 
-/// Runs `write`, which writes the scratch file at `path` (a transform of `input`), and measures
+/// Runs `write`, which writes the target of `scratch` (a transform of `input`), and measures
 /// that file while it is written: returns what `write` returned and the file's figures, the
 /// same to the bit as [`measure`] of the finished file.
 ///
@@ -52,23 +51,24 @@ pub(super) fn measure(path: &Path) -> Result<Figures> {
 /// and compared; a transform that changed them (or an input whose ends cannot be read, or no
 /// input at all: a generator) has its file measured again, after the write, with its own.
 pub(super) fn measure_while_written<R, E: From<FinishError>>(
-    path: &Path,
+    scratch: &ScratchFile,
     input: Option<&Path>,
-    write: impl FnOnce() -> Result<R, E>,
+    write: impl FnOnce(&Target) -> Result<R, E>,
 ) -> Result<(R, Figures), E> {
+    let path = scratch.path();
+    let target = scratch.target();
     let Some(guessed) = input.and_then(|i| read_ends(i).ok()).map(|ends| modes_of(&ends)) else {
-        let result = write()?;
+        let result = write(&target)?;
         return Ok((result, measure(path)?));
     };
-    let file = File::open(path).map_err(|e| FinishError::from(gweave::Error::io(path, e)))?;
-    let writer = Writer::default();
+    let growing = scratch.follow().map_err(|e| FinishError::from(gweave::Error::io(path, e)))?;
     let (result, early) = std::thread::scope(|scope| {
-        let measuring = scope.spawn(|| measure_read(Growing { file, writer: &writer }, path, &guessed));
-        let result = write();
-        match &result {
-            Ok(_) => writer.done(),
-            Err(_) => writer.failed(),
-        }
+        let measuring = scope.spawn(|| measure_read(growing, path, &guessed));
+        // Ended before the measure is joined, also when `write` fails or unwinds: the measure
+        // then stops rather than wait for the rest of the file.
+        let writing = scratch.writing();
+        let result = write(&target);
+        writing.end(result.is_ok());
         (result, measuring.join())
     });
     // A failed write is the error, whatever the measure made of the unfinished file.
@@ -259,17 +259,19 @@ mod tests {
         text
     }
 
-    /// Writes `text` to `path` as a transform does (the same file, truncated): in pieces that
-    /// split lines, with pauses, so that the measure catches up with the writer and waits at
-    /// the file's end.
-    fn write_slowly(path: &Path, text: &str) -> Result<()> {
+    /// Writes `text` to `target` as a transform does (through an output): in pieces that
+    /// split lines, each flushed, with pauses, so that the measure catches up with the writer
+    /// and sleeps at the file's end until the next piece wakes it.
+    fn write_slowly(target: &Target, text: &str) -> Result<()> {
+        use gweave::gcode::writer::Output;
         use std::io::Write;
-        let mut file = File::create(path).map_err(|e| gweave::Error::io(path, e))?;
+        let mut out = Output::create(target, None)?;
+        let name = out.shown();
         for piece in text.as_bytes().chunks(100_003) {
-            file.write_all(piece).map_err(|e| gweave::Error::io(path, e))?;
+            out.write_all(piece).and_then(|()| out.flush()).map_err(|e| gweave::Error::io(&name, e))?;
             std::thread::sleep(std::time::Duration::from_millis(3));
         }
-        Ok(())
+        Ok(out.commit()?)
     }
 
     /// Regression (issue 35): the measure waited for the transform to finish (their times
@@ -280,20 +282,20 @@ mod tests {
     fn a_file_measured_while_written_has_the_figures_of_the_finished_file() {
         let dir = tempfile::tempdir().unwrap();
         let text = bunny_with_progress(4000);
-        let (input, path) = (dir.path().join("in.gcode"), dir.path().join("scratch.gcode"));
+        let input = dir.path().join("in.gcode");
         std::fs::write(&input, &text).unwrap();
-        // The scratch file exists before the transform writes it (`with_metadata` makes it).
-        std::fs::write(&path, "").unwrap();
-        let ((), early) = measure_while_written(&path, Some(&input), || write_slowly(&path, &text)).unwrap();
-        let after = measure(&path).unwrap();
+        let scratch = ScratchFile::new_in(dir.path(), None).unwrap();
+        let ((), early) = measure_while_written(&scratch, Some(&input), |t| write_slowly(t, &text)).unwrap();
+        let after = measure(scratch.path()).unwrap();
         assert_eq!(early, after);
         assert_eq!(early.progress_s.len(), 2 * 9);
         assert_ne!(early.time_s[0].to_bits(), early.time_s[1].to_bits(), "two modes");
         // An input whose ends do not give the output's limits.
         let settings_at = text.rfind("; prusaslicer_config = begin").unwrap();
         std::fs::write(&input, &text[..settings_at]).unwrap();
-        assert_ne!(modes_of(&read_ends(&input).unwrap()), modes_of(&read_ends(&path).unwrap()));
-        let ((), again) = measure_while_written(&path, Some(&input), || write_slowly(&path, &text)).unwrap();
+        assert_ne!(modes_of(&read_ends(&input).unwrap()), modes_of(&read_ends(scratch.path()).unwrap()));
+        let scratch = ScratchFile::new_in(dir.path(), None).unwrap();
+        let ((), again) = measure_while_written(&scratch, Some(&input), |t| write_slowly(t, &text)).unwrap();
         assert_eq!(again, after);
     }
 
@@ -303,15 +305,14 @@ mod tests {
     fn a_failed_write_is_the_error_and_ends_the_measure() {
         let dir = tempfile::tempdir().unwrap();
         let text = bunny_with_progress(2000);
-        let (input, path) = (dir.path().join("in.gcode"), dir.path().join("scratch.gcode"));
+        let input = dir.path().join("in.gcode");
         std::fs::write(&input, &text).unwrap();
-        // The scratch file exists before the transform writes it (`with_metadata` makes it).
-        std::fs::write(&path, "").unwrap();
-        let failing = || -> Result<()> {
-            write_slowly(&path, &text[..text.len() / 2])?;
+        let scratch = ScratchFile::new_in(dir.path(), None).unwrap();
+        let failing = |t: &Target| -> Result<()> {
+            write_slowly(t, &text[..text.len() / 2])?;
             Err(gweave::Error::io(&input, io::Error::other("the transform failed")).into())
         };
-        let e = measure_while_written(&path, Some(&input), failing).unwrap_err();
+        let e = measure_while_written(&scratch, Some(&input), failing).unwrap_err();
         assert!(e.to_string().contains("the transform failed"), "{e}");
     }
 

@@ -3,10 +3,11 @@
 //! own output, and it writes metadata that is true for the file as written.
 //!
 //! The transform writes into a scratch file (registered like every temporary file, so Ctrl-C
-//! removes it). While it writes, one streaming read of that file, following it as it grows,
-//! measures it on other cores (`measure.rs`, `growing.rs`): one parse of its lines feeds the `stats` count (the filament) and the estimator's planners (the
-//! print time, one planner thread per mode), with the machine limits the slicer wrote into the
-//! file (normal and silent mode), else the default machine's. A copy
+//! removes it). While it writes, one streaming read of that file, following it as it grows and
+//! woken by each of its writes (`gweave::gcode::scratch`), measures it on other cores
+//! (`measure.rs`): one parse of its lines feeds the `stats` count (the filament) and the
+//! estimator's planners (the print time, one planner thread per mode), with the machine limits
+//! the slicer wrote into the file (normal and silent mode), else the default machine's. A copy
 //! that only splits lines writes it to the real target (a temporary file renamed into place,
 //! `--in-place` with its `.bak`, or standard output) with the run's header on top and the
 //! slicer's figures and `M73` progress rewritten (`gweave::post::metadata`). Memory stays
@@ -18,12 +19,12 @@ use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::container;
+use gweave::gcode::scratch::ScratchFile;
 use gweave::post::metadata::{earlier_runs, header_line, write_footer, Figures, MetadataPass};
-use gweave::{Output, Target, TempFile};
+use gweave::{Output, Target};
 
 use crate::motion::estimate::EstimateError;
 
-mod growing;
 mod measure;
 
 use measure::measure_while_written;
@@ -97,18 +98,15 @@ pub fn with_metadata_timed<R, E: From<FinishError>>(
 ) -> Result<(R, Option<PathBuf>), E> {
     let output = beside(target, input);
     let dir = scratch_dir(output);
-    let scratch = TempFile::new_in(&dir).map_err(|e| FinishError::from(gweave::Error::io(&dir, e)))?;
     // Beside the output, on its file system: a disk that fills up while the transform writes
     // is the output's, and errors name the output, which the user named.
-    if let Some(output) = output {
-        scratch.stand_for(output);
-    }
-    let path = scratch.path().to_path_buf();
-    let (result, mut figures) = measure_while_written(&path, input, || write(&Target::File(path.clone())))?;
+    let scratch =
+        ScratchFile::new_in(&dir, output).map_err(|e| FinishError::from(gweave::Error::io(&dir, e)))?;
+    let (result, mut figures) = measure_while_written(&scratch, input, write)?;
     if let Some(t_s) = own_time_s(&result) {
         scale_times(&mut figures, t_s);
     }
-    let written = finish(&path, figures, input, target, command_line)?;
+    let written = finish(scratch.path(), figures, input, target, command_line)?;
     drop(scratch);
     Ok((result, written))
 }
@@ -201,10 +199,8 @@ mod tests {
     fn a_run_writes_its_header_and_true_filament() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("out.gcode");
-        let write = |t: &Target| -> Result<()> {
-            std::fs::write(t_path(t), "G92 E0\nG1 X10 E5 F600\n; filament used [mm] = 1.00\n")
-                .map_err(|e| gweave::Error::io(t_path(t), e).into())
-        };
+        let write =
+            |t: &Target| write_text(t, "G92 E0\nG1 X10 E5 F600\n; filament used [mm] = 1.00\n", false);
         let ((), written) =
             with_metadata(None, &Target::File(out.clone()), "rotary tube --length 10", write).unwrap();
         assert_eq!(written.as_deref(), Some(out.as_path()));
@@ -220,22 +216,12 @@ mod tests {
     /// included.
     #[test]
     fn a_transform_measured_while_it_writes_finishes_the_same_file_and_fails_cleanly() {
-        use gweave::Output;
         let dir = tempfile::tempdir().unwrap();
         let text = "; generated\nG92 E0\nM73 P0 R0\nG1 X10 E5 F600\nG1 X20 E9\nM73 P50 R1\n\
                     G1 X0 Y20 F3000\n; filament used [mm] = 1.00\n";
         let input = dir.path().join("in.gcode");
         std::fs::write(&input, text).unwrap();
-        let transform = |fail: bool| {
-            move |t: &Target| -> Result<()> {
-                let mut out = Output::create(t, None)?;
-                out.write_all(text.as_bytes()).map_err(|e| gweave::Error::io(t_path(t), e))?;
-                match fail {
-                    true => Err(gweave::Error::io(t_path(t), std::io::Error::other("stopped")).into()),
-                    false => Ok(out.commit()?),
-                }
-            }
-        };
+        let transform = |fail: bool| move |t: &Target| write_text(t, text, fail);
         let (overlapped, after) = (dir.path().join("overlapped.gcode"), dir.path().join("after.gcode"));
         with_metadata(Some(&input), &Target::File(overlapped.clone()), "mix", transform(false)).unwrap();
         with_metadata(None, &Target::File(after.clone()), "mix", transform(false)).unwrap();
@@ -292,10 +278,14 @@ mod tests {
         }
     }
 
-    fn t_path(t: &Target) -> &Path {
-        match t {
-            Target::File(p) => p,
-            _ => unreachable!("the scratch file is a file"),
+    /// A transform that writes `text` to its target, then fails (`fail`) or commits.
+    fn write_text(t: &Target, text: &str, fail: bool) -> Result<()> {
+        let mut out = Output::create(t, None)?;
+        let name = out.shown();
+        out.write_all(text.as_bytes()).map_err(|e| gweave::Error::io(&name, e))?;
+        match fail {
+            true => Err(gweave::Error::io(&name, std::io::Error::other("stopped")).into()),
+            false => Ok(out.commit()?),
         }
     }
 }

@@ -246,7 +246,7 @@ impl Machine {
     }
 
     /// Reads the F of the moves to come as the rotary program's header declares them
-    /// (`gweave::rotary::cylinder::RotaryConfig::from_file_header`): a NIST or combined feed
+    /// (`gweave::rotary::cylinder::RotaryConfig::from_stream_head`): a NIST or combined feed
     /// with the rotary axis A in degrees, or inverse time between `G93` and `G94` (see
     /// the estimator's [`Estimator::declare_rotary`], which `gweave estimate` uses too).
     pub fn declare_rotary(&mut self, machine: gweave::rotary::cylinder::RotaryConfig) {

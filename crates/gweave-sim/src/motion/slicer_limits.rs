@@ -20,6 +20,7 @@
 
 use std::collections::BTreeMap;
 
+use gweave::gcode::ends::lines_naming;
 use thiserror::Error;
 
 use crate::motion::limits::{
@@ -203,7 +204,9 @@ fn marlin_corners(base: &CornerMode, jerk: [Option<f64>; 4], jd: Option<f64>) ->
 
 /// PrusaSlicer's `; key = value` lines.
 fn prusa_settings(text: &str) -> BTreeMap<String, String> {
-    text.lines()
+    // Only the lines that name a key kept are looked at (3.3 M instructions a read of the ends
+    // when every line was trimmed and split, twice a transform).
+    lines_naming(text, &["machine_", "gcode_flavor"])
         .filter_map(|l| l.trim().strip_prefix(';'))
         .filter_map(|l| l.split_once(" = "))
         // Only the keys kept are copied: a PrusaSlicer file has some 300 settings.
@@ -312,5 +315,43 @@ mod tests {
         assert!(matches!(bad, Err(SlicerLimitsError::NotANumber { .. })), "{bad:?}");
         let zero = slicer_limits(b"; machine_max_feedrate_x = 0,0\n", &MotionProfile::default());
         assert!(matches!(zero, Err(SlicerLimitsError::Profile(_))), "{zero:?}");
+    }
+
+    /// Regression (issue 35): the settings are read only from lines that can hold a key kept
+    /// (the ends were trimmed and split line by line, 3-4 M instructions a read). The lines
+    /// looked at give what every line gave: on every fixture's ends, and on lines spaced, cut
+    /// or named to sit at the edge of the filter.
+    #[test]
+    fn the_settings_read_from_the_lines_that_can_hold_them_are_every_lines() {
+        fn every_line(text: &str) -> BTreeMap<String, String> {
+            text.lines()
+                .filter_map(|l| l.trim().strip_prefix(';'))
+                .filter_map(|l| l.split_once(" = "))
+                .filter_map(|(k, v)| {
+                    let k = k.trim();
+                    (k.starts_with("machine_") || k == "gcode_flavor")
+                        .then(|| (k.to_owned(), v.trim().to_owned()))
+                })
+                .collect()
+        }
+        let edges = "; machine_max_feedrate_x =\n; machine_max_jerk_y = 3 ; gcode_flavor machine_\r\n  ;  machine_max_jerk_x = 1 \n;machine_a = 2\n\
+                     ; gcode_flavor = marlin2\n; gcode_flavorx = 1\nmachine_b = 3\n;\u{a0}machine_c = 4\n\
+                     ; machine_d=5\n; machine_e = 6 = 7\n\t; machine_f = 8\t\n; = machine_g\n;\nmachine_";
+        assert_eq!(prusa_settings(edges), every_line(edges));
+        assert_eq!(prusa_settings(edges).len(), 7, "{:?}", prusa_settings(edges));
+        let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data");
+        let mut read = 0;
+        for kind in std::fs::read_dir(data).unwrap() {
+            for file in std::fs::read_dir(kind.unwrap().path()).into_iter().flatten() {
+                let path = file.unwrap().path();
+                if path.extension().is_some_and(|e| e == "gcode") {
+                    let ends = gweave::gcode::ends::read_ends(&path).unwrap();
+                    let text = gweave::gcode::ends::ends_text(&ends);
+                    assert_eq!(prusa_settings(&text), every_line(&text), "{}", path.display());
+                    read += usize::from(!prusa_settings(&text).is_empty());
+                }
+            }
+        }
+        assert!(read >= 5, "{read} fixtures with settings");
     }
 }

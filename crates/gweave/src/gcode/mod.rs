@@ -20,6 +20,7 @@ pub(crate) mod number;
 pub mod reader;
 // The retraction in force, followed alike by `stats` and the passes that insert purges.
 pub mod retraction;
+pub mod scratch;
 pub mod state;
 pub mod temp;
 pub(crate) mod wipe_tower;

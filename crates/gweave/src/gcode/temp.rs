@@ -16,9 +16,6 @@ use std::sync::Mutex;
 /// exiting).
 static LIVE: Mutex<Option<Vec<PathBuf>>> = Mutex::new(Some(Vec::new()));
 
-/// Live scratch files and the output each stands for ([`TempFile::stand_for`]).
-static STANDS_FOR: Mutex<Vec<(PathBuf, PathBuf)>> = Mutex::new(Vec::new());
-
 /// A temporary file beside a destination: removed when dropped unless persisted.
 pub struct TempFile {
     file: Option<tempfile::NamedTempFile>,
@@ -52,13 +49,6 @@ impl TempFile {
     /// The file's path.
     pub fn path(&self) -> &Path {
         self.inner().path()
-    }
-
-    /// Makes errors in writing this file name `output`: for a scratch file holding a run's
-    /// output until it is finished into `output`, beside it on its file system. The user
-    /// named `output` and knows nothing of the scratch file; forgotten with the file.
-    pub fn stand_for(&self, output: &Path) {
-        stands_for().push((self.path().to_path_buf(), output.to_path_buf()));
     }
 
     /// Renames the file to `dest` (atomically, on the same file system) and forgets it.
@@ -129,23 +119,6 @@ fn forget(path: &Path) {
     if let Some(paths) = lock().as_mut() {
         paths.retain(|p| p != path);
     }
-    stands_for().retain(|(p, _)| p != path);
-}
-
-/// Whether `path` is a live temporary file of this process (one [`TempFile`] holds it).
-pub(crate) fn is_live(path: &Path) -> bool {
-    lock().as_ref().is_some_and(|paths| paths.iter().any(|p| p == path))
-}
-
-/// The name errors in writing `path` show, and reports: the output a scratch file stands for,
-/// else `path`.
-pub fn shown_name(path: &Path) -> PathBuf {
-    let aliases = stands_for();
-    aliases.iter().find(|(p, _)| p == path).map_or(path, |(_, output)| output).to_path_buf()
-}
-
-fn stands_for() -> std::sync::MutexGuard<'static, Vec<(PathBuf, PathBuf)>> {
-    STANDS_FOR.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// The registry, even if a thread panicked while holding it (a list of paths stays valid).

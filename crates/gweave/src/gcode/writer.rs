@@ -13,6 +13,7 @@ use std::io::{self, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
 use super::container::{self, Container, Encoder};
+use super::scratch::Scratch;
 use super::temp::TempFile;
 use crate::error::{Error, Result};
 
@@ -32,6 +33,9 @@ pub enum Target {
     /// Standard output (`-o -`), stored in this container (the CLI's `--format`): a pipe has no
     /// name to say how its G-code is stored, so the target says it.
     Stdout(Container),
+    /// A transform's scratch file, which the finishing step reads as it grows and then copies
+    /// to the real target: written in place, as text, each write waking its reader.
+    Scratch(Scratch),
 }
 
 impl Target {
@@ -48,40 +52,37 @@ pub const BACKUP_SLOTS: u32 = 9;
 /// deletes the temporary file. A file named `*.gz` or `*.bgcode` is written compressed or as
 /// binary G-code ([`Container::of_output`]); standard output as its [`Target::Stdout`] says.
 pub struct Output {
-    /// The writes gathered in front of the container: a pass writes each line in two or three
-    /// small writes, which then cost an inlined copy each rather than a call through the
+    /// The one buffer between a pass and the system: a pass writes each line in two or three
+    /// small writes, which cost an inlined copy each here rather than a call through the
     /// container and the sink (about 50 instructions a write, a tenth of a transform's work
-    /// per line on top of its pass).
+    /// per line on top of its pass); the container and the sink behind it are unbuffered and
+    /// take a [`BUFFER`] at a time (a compressing container writes its own blocks).
     sink: BufWriter<Encoder<Sink>>,
 }
 
-/// What [`Output`] gathers before handing it to its container.
-const GATHER: usize = 1 << 16;
+/// What [`Output`] gathers before a write reaches the container: 1 MiB, a few hundred
+/// microseconds of a transform's output, so a write costs one system call per 1 MiB.
+const BUFFER: usize = 1 << 20;
 
 enum Sink {
     File {
-        file: BufWriter<TempFile>,
+        file: TempFile,
+        /// The file replaced in the end, the name errors show (not the temporary file's).
         dest: PathBuf,
-        /// The name errors show: `dest`, or the output a scratch `dest` stands for
-        /// ([`TempFile::stand_for`]).
-        shown: PathBuf,
         backup: Option<PathBuf>,
     },
     /// A device or pipe (`/dev/null`, a FIFO): written directly, since renaming a file over it
-    /// would replace the device itself. Also a scratch file of this process (a live
-    /// [`TempFile`]): already removed by its owner and on a signal, so a second temporary file
-    /// and a rename would add nothing but hide the bytes from a reader following it as it grows
-    /// (the finishing step measures a transform's output while it is written).
+    /// would replace the device itself.
     Special {
-        file: BufWriter<fs::File>,
+        file: fs::File,
         dest: PathBuf,
-        /// The name errors show: `dest`, or the output a scratch `dest` stands for.
-        shown: PathBuf,
     },
-    Stdout(BufWriter<io::Stdout>),
+    /// A scratch file ([`Target::Scratch`]): already removed by its owner and on a signal, so a
+    /// second temporary file and a rename would add nothing but hide the bytes from the reader
+    /// following it as it grows.
+    Scratch(Scratch),
+    Stdout(io::Stdout),
 }
-
-const BUFFER: usize = 1 << 20;
 
 impl Output {
     /// Opens the output for `target`, given the `input` the command reads (for in-place and for
@@ -94,7 +95,7 @@ impl Output {
         let container = match (&sink, target) {
             (Sink::File { dest, .. } | Sink::Special { dest, .. }, _) => Container::of_output(dest),
             (Sink::Stdout(_), Target::Stdout(container)) => *container,
-            (Sink::Stdout(_), _) => Container::Text,
+            (Sink::Stdout(_) | Sink::Scratch(_), _) => Container::Text,
         };
         // A binary input's metadata and thumbnails go into a binary output.
         let carried = match (container, input) {
@@ -104,33 +105,28 @@ impl Output {
             _ => None,
         };
         let sink = Encoder::new(container, sink, carried).map_err(|e| Error::io(shown, e))?;
-        Ok(Output { sink: BufWriter::with_capacity(GATHER, sink) })
+        Ok(Output { sink: BufWriter::with_capacity(BUFFER, sink) })
     }
 
     /// An output written as it is, whatever its name (side files: reports, images).
     fn plain(target: &Target) -> Result<Output> {
-        Ok(Output { sink: BufWriter::with_capacity(GATHER, Encoder::Text(Self::sink(target, None)?)) })
+        Ok(Output { sink: BufWriter::with_capacity(BUFFER, Encoder::Text(Self::sink(target, None)?)) })
     }
 
     fn sink(target: &Target, input: Option<&Path>) -> Result<Sink> {
         let (dest, backup) = match target {
-            Target::Stdout(_) => return Ok(Sink::Stdout(BufWriter::with_capacity(BUFFER, io::stdout()))),
+            Target::Stdout(_) => return Ok(Sink::Stdout(io::stdout())),
+            Target::Scratch(scratch) => return Ok(Sink::Scratch(scratch.clone())),
             Target::File(path) => {
                 if let Some(input) = input {
                     if same_file(input, path) {
                         return Err(Error::WouldOverwriteInput { path: path.clone() });
                     }
                 }
-                let scratch = super::temp::is_live(path);
-                if scratch || fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
-                    let shown = super::temp::shown_name(path);
-                    let file = fs::OpenOptions::new()
-                        .write(true)
-                        .truncate(scratch)
-                        .open(path)
-                        .map_err(|e| Error::io(&shown, e))?;
-                    let file = BufWriter::with_capacity(BUFFER, file);
-                    return Ok(Sink::Special { file, dest: path.clone(), shown });
+                if fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+                    let file =
+                        fs::OpenOptions::new().write(true).open(path).map_err(|e| Error::io(path, e))?;
+                    return Ok(Sink::Special { file, dest: path.clone() });
                 }
                 (path.clone(), None)
             }
@@ -158,15 +154,15 @@ impl Output {
                 (dest, backup)
             }
         };
-        let shown = super::temp::shown_name(&dest);
-        let tmp = TempFile::new_in(&parent_dir(&dest)).map_err(|e| Error::io(&shown, e))?;
-        Ok(Sink::File { file: BufWriter::with_capacity(BUFFER, tmp), dest, shown, backup })
+        let file = TempFile::new_in(&parent_dir(&dest)).map_err(|e| Error::io(&dest, e))?;
+        Ok(Sink::File { file, dest, backup })
     }
 
     /// The file being written (`None` for standard output): the name write errors should show.
     pub fn dest(&self) -> Option<&Path> {
         match self.inner_sink() {
-            Sink::File { shown, .. } | Sink::Special { shown, .. } => Some(shown),
+            Sink::File { dest, .. } | Sink::Special { dest, .. } => Some(dest),
+            Sink::Scratch(scratch) => Some(scratch.shown()),
             Sink::Stdout(_) => None,
         }
     }
@@ -200,20 +196,20 @@ impl Output {
             Err(e) => return Err(Error::io(name, e)),
         };
         match sink {
-            Sink::Special { mut file, shown, .. } => file.flush().map_err(|e| Error::io(&shown, e)),
+            // Unbuffered: every byte has reached the file.
+            Sink::Special { .. } | Sink::Scratch(_) => Ok(()),
             Sink::Stdout(mut w) => match w.flush() {
                 Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>", e)),
                 _ => Ok(()),
             },
-            Sink::File { file, dest, shown, backup } => {
-                let tmp = file.into_inner().map_err(|e| Error::io(&shown, e.into_error()))?;
-                tmp.as_file().sync_all().map_err(|e| Error::io(&shown, e))?;
+            Sink::File { file: tmp, dest, backup } => {
+                tmp.as_file().sync_all().map_err(|e| Error::io(&dest, e))?;
                 let replaced = fs::metadata(&dest).ok();
-                keep_metadata(&tmp, replaced.as_ref()).map_err(|e| Error::io(&shown, e))?;
+                keep_metadata(&tmp, replaced.as_ref()).map_err(|e| Error::io(&dest, e))?;
                 if let Some(backup) = backup {
                     write_backup(&dest, &backup, replaced.as_ref())?;
                 }
-                tmp.persist(&dest).map_err(|e| Error::io(&shown, e))
+                tmp.persist(&dest).map_err(|e| Error::io(&dest, e))
             }
         }
     }
@@ -249,7 +245,8 @@ impl Sink {
     /// The name errors show.
     fn name(&self) -> PathBuf {
         match self {
-            Sink::File { shown, .. } | Sink::Special { shown, .. } => shown.clone(),
+            Sink::File { dest, .. } | Sink::Special { dest, .. } => dest.clone(),
+            Sink::Scratch(scratch) => scratch.shown().to_path_buf(),
             Sink::Stdout(_) => PathBuf::from("<stdout>"),
         }
     }
@@ -260,6 +257,7 @@ impl Write for Sink {
         match self {
             Sink::File { file, .. } => file.write(buf),
             Sink::Special { file, .. } => file.write(buf),
+            Sink::Scratch(scratch) => scratch.write(buf),
             Sink::Stdout(w) => w.write(buf),
         }
     }
@@ -268,6 +266,7 @@ impl Write for Sink {
         match self {
             Sink::File { file, .. } => file.write_all(buf),
             Sink::Special { file, .. } => file.write_all(buf),
+            Sink::Scratch(scratch) => scratch.write_all(buf),
             Sink::Stdout(w) => w.write_all(buf),
         }
     }
@@ -276,6 +275,7 @@ impl Write for Sink {
         match self {
             Sink::File { file, .. } => file.flush(),
             Sink::Special { file, .. } => file.flush(),
+            Sink::Scratch(scratch) => scratch.flush(),
             Sink::Stdout(w) => w.flush(),
         }
     }

@@ -331,13 +331,24 @@ impl RotaryConfig {
     /// and the slicer's first comments).
     pub const HEADER_BYTES: u64 = 4096;
 
-    /// The machine named by the header of the file at `path`, read from its first
-    /// [`Self::HEADER_BYTES`]; `None` if it cannot be read or has no such header.
-    pub fn from_file_header(path: &std::path::Path) -> Option<RotaryConfig> {
+    /// The machine named by the header at the start of `input` (its first
+    /// [`Self::HEADER_BYTES`]), and `input` again from its first byte: a file is read once, as
+    /// it comes (standard input, a decompressed or decoded stream), the head kept for the reader.
+    pub fn from_stream_head<R: std::io::Read>(
+        mut input: R,
+    ) -> std::io::Result<(Option<RotaryConfig>, impl std::io::Read)> {
         use std::io::Read;
         let mut head = Vec::new();
-        crate::gcode::container::open(path).ok()?.take(Self::HEADER_BYTES).read_to_end(&mut head).ok()?;
-        Self::from_header(&String::from_utf8_lossy(&head))
+        input.by_ref().take(Self::HEADER_BYTES).read_to_end(&mut head)?;
+        let rotary = Self::from_header(&String::from_utf8_lossy(&head));
+        Ok((rotary, std::io::Cursor::new(head).chain(input)))
+    }
+
+    /// The machine named by the header of the file at `path` ([`Self::from_stream_head`]), for
+    /// a reader that sets its reading up before it reads (a preview's toolpath options); `None`
+    /// if it cannot be read or has no such header.
+    pub fn from_file_header(path: &std::path::Path) -> Option<RotaryConfig> {
+        Self::from_stream_head(crate::gcode::container::open(path).ok()?).ok()?.0
     }
 
     /// The machine named by a program's header ([`Self::header_lines`]) in `text`, the start

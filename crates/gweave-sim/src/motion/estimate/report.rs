@@ -39,7 +39,7 @@ pub fn estimate_report<R: Read + Send>(
     count_steps: bool,
 ) -> Result<EstimateReport, EstimateError> {
     let fire = machine.inkjet.as_ref().map(|ink| FireWait::of(&ink.printhead));
-    let (rotary, input) = rotary_header(input)?;
+    let (rotary, input) = RotaryConfig::from_stream_head(input)?;
     let estimate = estimate_as(input, &machine.motion, firmware, count_steps, fire, rotary)?;
     let planner = match machine.motion.corners {
         CornerMode::Klipper(_) => "klipper",
@@ -47,16 +47,6 @@ pub fn estimate_report<R: Read + Send>(
         CornerMode::Constant {} => "constant",
     };
     Ok(EstimateReport { machine: machine.name.clone(), planner, steps_counted: count_steps, estimate })
-}
-
-/// The machine a rotary program's header names, read from the start of `input`
-/// ([`RotaryConfig::HEADER_BYTES`], as `gweave sim` reads it from the file), and `input` again
-/// from its first byte.
-fn rotary_header<R: Read>(mut input: R) -> io::Result<(Option<RotaryConfig>, impl Read)> {
-    let mut head = Vec::new();
-    input.by_ref().take(RotaryConfig::HEADER_BYTES).read_to_end(&mut head)?;
-    let rotary = RotaryConfig::from_header(&String::from_utf8_lossy(&head));
-    Ok((rotary, io::Cursor::new(head).chain(input)))
 }
 
 /// Why a file could not be estimated, naming the file and, when there is one, its line.

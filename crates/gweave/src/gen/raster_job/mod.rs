@@ -225,13 +225,12 @@ impl Job {
         planner: impl FnOnce() -> std::result::Result<Box<dyn LineTimer + 't>, BoxError>,
     ) -> Result<JobReport> {
         let mut out = Output::create(target, None)?;
+        // Under `finish::with_metadata` the target is its scratch file: the output it stands
+        // for is named.
+        let output = out.dest().map_or_else(|| "-".into(), |p| p.display().to_string());
         let mut report = self.run_into(&mut out, progress, planner)?;
         out.commit()?;
-        report.output = match target {
-            // Under `finish::with_metadata` this is its scratch file: name the output.
-            Target::File(p) => crate::gcode::temp::shown_name(p).display().to_string(),
-            _ => "-".into(),
-        };
+        report.output = output;
         Ok(report)
     }
 
