@@ -4,7 +4,7 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
-use gweave::check::{check_file, CheckOptions};
+use gweave::check::{check_file_with, CheckOptions};
 use gweave::gcode::container::{self, Input};
 use gweave::gcode::diag::{Diagnostic, Finding};
 use gweave::gcode::flavour::read_flavour;
@@ -62,7 +62,10 @@ pub(crate) fn check_json(
     if let Some(f) = in_range("max_feed", max_feed, gweave::range::FEED_MM_MIN)? {
         options.max_feed_mm_min = f;
     }
-    let report = interruptible(py, || check_file(&path, options, &mut Quiet))?.map_err(err)?;
+    let report = interruptible(py, || {
+        check_file_with(&path, options, Some(&gweave_sim::REGISTRY_RANGES), &mut Quiet)
+    })?
+    .map_err(err)?;
     let mut doc = serde_json::to_value(&report).map_err(|e| PyValueError::new_err(e.to_string()))?;
     doc["failed"] = report.failed(strict).into();
     to_json(&doc)

@@ -20,8 +20,10 @@
 use std::collections::HashMap;
 use std::sync::OnceLock;
 
+use gweave::check::WordRanges;
 use gweave::firmware::MixingCode;
-use gweave::gcode::line::{Block, Command, Value};
+use gweave::gcode::effect::Motion;
+use gweave::gcode::line::{Block, Command, PlainMove, Value};
 use gweave::gcode::state::{self, Effect};
 use gweave::range::{self, OutOfRange, Range};
 
@@ -169,6 +171,11 @@ const KEEPALIVE_S: Range = Range::new(0.0, crate::link::serial::MAX_KEEPALIVE_S 
 /// refuses one outside 0 to 10 (`M900.cpp`, "K value out of range").
 const ADVANCE_K: Range = Range::new(0.0, 10.0, "mm/(mm/s)");
 
+/// A move's words: its feed rate and its X Y Z, an absolute position or a relative step, within
+/// 10 m of the origin either way (`range::POSITION_MM`: the largest gantry; `X1e29` is a typo
+/// the planner would take for 10^29 mm). E and A are not bounded: an absolute E counts up the
+/// whole print's filament (hundreds of metres), a rotary program's A its turns.
+const MOVE: &[Param] = &[p("F", range::FEED_MM_MIN), p("XYZ", range::POSITION_MM)];
 /// The words of the commands that take a period.
 const PERIOD: &[Param] = &[p("S", range::PERIOD_S)];
 /// RepRapFirmware's tool temperature, `G10 P<tool> S<active> R<standby>` and `M568`.
@@ -190,8 +197,8 @@ const ROW: CommandSpec = CommandSpec {
 
 /// Every command the interpreter carries out, in the order of the help listing.
 pub const COMMANDS: &[CommandSpec] = &[
-    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, params: &[p("F", range::FEED_MM_MIN)], ..ROW },
-    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, params: &[p("F", range::FEED_MM_MIN), p("IJR", range::POSITION_MM)], needs: Feature::Arcs, ..ROW },
+    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, params: MOVE, ..ROW },
+    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, params: &[p("F", range::FEED_MM_MIN), p("XYZIJR", range::POSITION_MM)], needs: Feature::Arcs, ..ROW },
     CommandSpec { codes: "G4", what: "dwell P milliseconds or S seconds, after the queued moves", run: dwell, params: &[p("S", range::PERIOD_S), p("P", DWELL_MS)], ..ROW },
     CommandSpec { codes: "G10 G11", what: "firmware retract / recover (45 / 8 mm/s), Marlin's `G10 S1` too; G10 with P (tool) and S sets a tool temperature (RepRapFirmware)", run: g10_g11, params: TOOL_TEMP, needs: Feature::FwRetract, ..ROW },
     CommandSpec { codes: "G20 G21", what: "inches / millimetres", run: core, ..ROW },
@@ -362,6 +369,96 @@ pub(crate) fn lookup(command: Command, name: &[u8]) -> Option<&'static CommandSp
 /// The registry's entry for `?`.
 pub(super) fn help_spec() -> &'static CommandSpec {
     COMMANDS.iter().find(|c| c.codes == "?").expect("`?` is in the registry")
+}
+
+/// The words of the line in `block` against the ranges its command's row declares
+/// ([`check`]), before the line changes anything: what the virtual printer refuses, and what
+/// `estimate` skips, alike. A line without a command is a move in the modal motion `modal`; a
+/// command the machine does not have (not in the registry, or `known` says it was not built
+/// with it) is not checked: it is unknown, not out of range. A plain move, most lines of a
+/// print, is checked by [`PlainRanges`] (its words may not be listed in the block).
+#[inline]
+pub(crate) fn check_line(
+    block: &Block,
+    line: &[u8],
+    modal: Motion,
+    known: impl Fn(&CommandSpec) -> bool,
+) -> Result<(), OutOfRange> {
+    if block.plain.present != 0 {
+        return PlainRanges::get().check(&block.plain);
+    }
+    if block.words.is_empty() {
+        return Ok(());
+    }
+    let command = match block.command {
+        Command::None => {
+            let number = match modal {
+                Motion::Rapid => 0,
+                Motion::Linear => 1,
+                Motion::ArcCw => 2,
+                Motion::ArcCcw => 3,
+            };
+            Command::Code { letter: b'G', number, sub: None }
+        }
+        command => command,
+    };
+    match (command, lookup(command, b"")) {
+        (Command::Code { letter, number, .. }, Some(spec)) if known(spec) => {
+            check((letter, number), spec.params, block, line)
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The ranges the `G0 G1` row declares for a plain move's words, in the order of
+/// [`PlainMove::LETTERS`]: a plain move is checked without a search of its row (a few
+/// comparisons a move, on the hot path of `estimate` and `sim`).
+struct PlainRanges([Option<Range>; PlainMove::LETTERS.len()]);
+
+impl PlainRanges {
+    #[inline]
+    fn get() -> &'static PlainRanges {
+        static RANGES: OnceLock<PlainRanges> = OnceLock::new();
+        RANGES.get_or_init(|| {
+            let g1 = lookup(Command::Code { letter: b'G', number: 1, sub: None }, b"");
+            PlainRanges(PlainMove::LETTERS.map(|letter| g1.and_then(|row| row.range_of(letter))))
+        })
+    }
+
+    #[inline]
+    fn check(&self, plain: &PlainMove) -> Result<(), OutOfRange> {
+        for (i, range) in self.0.iter().enumerate() {
+            if let Some(range) = range {
+                if plain.present >> i & 1 != 0 && !range.contains(plain.values[i]) {
+                    return Err(plain_refusal(plain, i, range));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The refusal of a plain move's word `i`, outside `range`.
+#[cold]
+#[inline(never)]
+fn plain_refusal(plain: &PlainMove, i: usize, range: &Range) -> OutOfRange {
+    let name = format!("G{} {}", u8::from(!plain.rapid), PlainMove::LETTERS[i] as char);
+    OutOfRange { name, value: range::short(plain.values[i]), range: range.to_string() }
+}
+
+/// The registry's ranges, lent to the engine's lint (`gweave check`): it flags the words
+/// [`check_line`] refuses, a line the virtual printer would refuse (every command taken as
+/// built).
+#[derive(Debug)]
+pub struct RegistryRanges;
+
+/// The one [`RegistryRanges`].
+pub static REGISTRY_RANGES: RegistryRanges = RegistryRanges;
+
+impl WordRanges for RegistryRanges {
+    fn check(&self, block: &Block, line: &[u8], motion: Motion) -> Result<(), OutOfRange> {
+        check_line(block, line, motion, |_| true)
+    }
 }
 
 /// Refuses a line whose words are outside what `params` declares, before it changes anything

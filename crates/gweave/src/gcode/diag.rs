@@ -94,6 +94,16 @@ pub enum Finding {
         /// The tool number written.
         tool: u32,
     },
+    /// A number word outside the physical range its command declares (the machine's table,
+    /// [`WordRanges`](crate::check::WordRanges)): the printer refuses the whole line.
+    OutOfRange {
+        /// The command and the word (`G4 S`).
+        word: String,
+        /// The value written.
+        value: String,
+        /// The range (`0 to 86400 s`).
+        range: String,
+    },
     /// A line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE): not parsed.
     LineTooLong {
         /// The line's length in bytes, line ending excluded.
@@ -168,6 +178,9 @@ impl fmt::Display for Finding {
                 "line of {len} bytes is longer than the limit of {} (not read)",
                 super::reader::MAX_LINE
             ),
+            Finding::OutOfRange { word, value, range } => {
+                write!(f, "{word} = {value} is out of range: {range} (the printer refuses the line)")
+            }
             Finding::MoreFindings { count } => write!(f, "{count} more findings on this line"),
             Finding::ToolOutOfRange { tool } => write!(
                 f,
