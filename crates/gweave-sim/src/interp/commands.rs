@@ -377,16 +377,28 @@ pub(super) fn help_spec() -> &'static CommandSpec {
 /// command the machine does not have (not in the registry, or `known` says it was not built
 /// with it) is not checked: it is unknown, not out of range. A plain move, most lines of a
 /// print, is checked by [`PlainRanges`] (its words may not be listed in the block).
-#[inline]
+#[inline(always)]
 pub(crate) fn check_line(
     block: &Block,
     line: &[u8],
     modal: Motion,
     known: impl Fn(&CommandSpec) -> bool,
 ) -> Result<(), OutOfRange> {
+    // Inlined, a plain move costs its comparisons and no call.
     if block.plain.present != 0 {
         return PlainRanges::get().check(&block.plain);
     }
+    check_other_line(block, line, modal, known)
+}
+
+/// [`check_line`] for a line that is not a plain move.
+#[inline(never)]
+fn check_other_line(
+    block: &Block,
+    line: &[u8],
+    modal: Motion,
+    known: impl Fn(&CommandSpec) -> bool,
+) -> Result<(), OutOfRange> {
     if block.words.is_empty() {
         return Ok(());
     }
@@ -411,9 +423,16 @@ pub(crate) fn check_line(
 }
 
 /// The ranges the `G0 G1` row declares for a plain move's words, in the order of
-/// [`PlainMove::LETTERS`]: a plain move is checked without a search of its row (a few
-/// comparisons a move, on the hot path of `estimate` and `sim`).
-struct PlainRanges([Option<Range>; PlainMove::LETTERS.len()]);
+/// [`PlainMove::LETTERS`], as bounds side by side: a plain move, most lines of a print, is
+/// checked without a search of its row, two comparisons for each bounded letter it has (it
+/// is on the hot path of `estimate`, `sim` and `check`; walking the row's `Range`s letter by
+/// letter cost about 50 instructions a move).
+struct PlainRanges {
+    min: [f64; PlainMove::LETTERS.len()],
+    max: [f64; PlainMove::LETTERS.len()],
+    /// Bit i: letter i has a range.
+    bounded: u8,
+}
 
 impl PlainRanges {
     #[inline]
@@ -421,16 +440,47 @@ impl PlainRanges {
         static RANGES: OnceLock<PlainRanges> = OnceLock::new();
         RANGES.get_or_init(|| {
             let g1 = lookup(Command::Code { letter: b'G', number: 1, sub: None }, b"");
-            PlainRanges(PlainMove::LETTERS.map(|letter| g1.and_then(|row| row.range_of(letter))))
+            let ranges = PlainMove::LETTERS.map(|letter| g1.and_then(|row| row.range_of(letter)));
+            let bounded =
+                ranges.iter().enumerate().fold(0, |bits, (i, r)| bits | (u8::from(r.is_some()) << i));
+            // A range that also takes 0 ([`Range::or_zero`]) keeps its bounds: a 0 goes to
+            // `refusal`, which reads the range itself and lets it pass.
+            PlainRanges {
+                min: ranges.map(|r| r.map_or(f64::NEG_INFINITY, |r| r.min)),
+                max: ranges.map(|r| r.map_or(f64::INFINITY, |r| r.max)),
+                bounded,
+            }
         })
     }
 
-    #[inline]
+    #[inline(always)]
     fn check(&self, plain: &PlainMove) -> Result<(), OutOfRange> {
-        for (i, range) in self.0.iter().enumerate() {
-            if let Some(range) = range {
-                if plain.present >> i & 1 != 0 && !range.contains(plain.values[i]) {
-                    return Err(plain_refusal(plain, i, range));
+        // Only the letters the line has and the row bounds (a move is mostly X, Y and an
+        // unbounded E): two or three comparisons.
+        let mut letters = plain.present & self.bounded;
+        while letters != 0 {
+            let i = letters.trailing_zeros() as usize;
+            let v = plain.values[i];
+            // NaN is never inside.
+            if !(v >= self.min[i] && v <= self.max[i]) {
+                return self.refusal(plain);
+            }
+            letters &= letters - 1;
+        }
+        Ok(())
+    }
+
+    /// The first word of the line out of its range, in the order of the row's words, as
+    /// [`check`] finds it on the same words (a 0 may be in a range that takes it).
+    #[cold]
+    #[inline(never)]
+    fn refusal(&self, plain: &PlainMove) -> Result<(), OutOfRange> {
+        let g1 = lookup(Command::Code { letter: b'G', number: 1, sub: None }, b"");
+        for param in g1.map_or(&[][..], |row| row.params) {
+            for letter in param.letters.bytes() {
+                let Some(i) = PlainMove::LETTERS.iter().position(|&l| l == letter) else { continue };
+                if plain.present >> i & 1 != 0 && !param.range.contains(plain.values[i]) {
+                    return Err(plain_refusal(plain, i, &param.range));
                 }
             }
         }
@@ -836,6 +886,29 @@ mod tests {
         assert!(lookup(Command::Code { letter: b'G', number: 1, sub: None }, b"").is_some());
         assert!(lookup(Command::Code { letter: b'G', number: 1, sub: Some(1) }, b"").is_none());
         assert!(lookup(Command::Extended, b"set_velocity_limit").is_some());
+    }
+
+    /// A plain move (the lexer's fast path: its words may go unlisted) is refused exactly as the
+    /// same words read the general way (here with a comment after them), by the `G0 G1` row.
+    #[test]
+    fn a_plain_move_is_checked_by_its_rows_ranges() {
+        let cases = [
+            ("G1 X10 Y-5 Z0.2 E1 F600", None),
+            ("G1 X10 E100000000 F1", None),
+            ("G0 X20000", Some("G0 X = 20000 is out of range: -10000 to 10000 mm")),
+            ("G1 Y5 Z-10001", Some("G1 Z = -10001 is out of range: -10000 to 10000 mm")),
+            ("G1 X1 F0", Some("G1 F = 0 is out of range: 1 to 100000 mm/min")),
+            ("G1 F1000000 X99999", Some("G1 F = 1000000 is out of range: 1 to 100000 mm/min")),
+        ];
+        for (text, want) in cases {
+            for line in [text.to_owned(), format!("{text} ; the general way")] {
+                let mut block = Block::default();
+                gweave::gcode::lexer::parse_into(line.as_bytes(), &mut block);
+                assert_eq!(block.plain.present != 0, !line.contains(';'), "{line}");
+                let got = check_line(&block, line.as_bytes(), Motion::Linear, |_| true);
+                assert_eq!(got.map_err(|e| e.to_string()).err().as_deref(), want, "{line}");
+            }
+        }
     }
 
     /// The serial link's own commands are declared in their rows: `M110` and `M113` alone, and
