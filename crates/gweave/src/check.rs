@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::bed::Bed;
 use crate::error::{Error, Result};
 use crate::firmware::Firmware;
-use crate::gcode::diag::{Diagnostic, Finding, Severity};
+use crate::gcode::diag::{Diagnostic, Finding, Severity, WordOutOfRange};
 use crate::gcode::effect::Motion;
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Feature;
@@ -103,7 +103,7 @@ impl GroupKey {
         let (detail, feature) = match finding {
             Finding::OutsideBed { axis, .. } => (axis.to_string(), feature),
             Finding::UnknownCommand { command } => (command.clone(), Feature::Unknown),
-            Finding::OutOfRange { word, .. } => (word.clone(), Feature::Unknown),
+            Finding::OutOfRange(w) => (w.word.clone(), Feature::Unknown),
             Finding::MalformedNumber { letter }
             | Finding::NotFinite { letter }
             | Finding::MissingValue { letter } => (letter.to_string(), Feature::Unknown),
@@ -191,7 +191,8 @@ impl CheckPass {
             let letter = refusal.name.bytes().last().unwrap_or(0);
             let column = block.word(letter).map_or(0, |w| w.span.start as usize);
             let OutOfRange { name: word, value, range } = refusal;
-            self.add(ctx.line.number, Diagnostic::at(column, Finding::OutOfRange { word, value, range }));
+            let finding = Finding::OutOfRange(Box::new(WordOutOfRange { word, value, range }));
+            self.add(ctx.line.number, Diagnostic::at(column, finding));
         }
     }
 

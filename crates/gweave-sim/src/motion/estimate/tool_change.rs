@@ -63,7 +63,7 @@ mod tests {
 
     fn machine(hotends: usize, single_nozzle_tools: usize, mixing_inputs: usize) -> MachineProfile {
         let mut m = MachineProfile { single_nozzle_tools, mixing_inputs, ..MachineProfile::default() };
-        let hotend = m.thermal.hotends[0].clone();
+        let hotend = m.thermal.hotends[0];
         m.thermal.hotends = vec![hotend; hotends];
         m
     }
