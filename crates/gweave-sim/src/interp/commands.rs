@@ -496,9 +496,9 @@ fn plain_refusal(plain: &PlainMove, i: usize, range: &Range) -> OutOfRange {
     OutOfRange { name, value: range::short(plain.values[i]), range: range.to_string() }
 }
 
-/// The registry's ranges, lent to the engine's lint (`gweave check`): it flags the words
-/// [`check_line`] refuses, a line the virtual printer would refuse (every command taken as
-/// built).
+/// The registry's ranges, lent to the engine's lint (`gweave check`): it flags the words the
+/// virtual printer refuses a line for (every command taken as built), and `estimate` skips one
+/// for.
 #[derive(Debug)]
 pub struct RegistryRanges;
 
