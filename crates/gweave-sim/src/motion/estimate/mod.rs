@@ -318,7 +318,9 @@ impl Estimator {
     }
 
     /// First half of [`Estimator::line`]: parse the line and apply it to the modal state; say
-    /// what it does. Nothing is planned yet.
+    /// what it does. Nothing is planned yet, and no word is held to its range: the caller that
+    /// splits a line so decides what it refuses (the virtual printer checks the words between
+    /// [`Estimator::lex`] and [`Estimator::apply`]).
     pub fn parse(&mut self, raw: &[u8]) -> Effect {
         self.front.parse(raw)
     }
