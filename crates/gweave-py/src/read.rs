@@ -11,7 +11,7 @@ use gweave::gcode::lexer::{parse_into, parse_line};
 use gweave::gcode::reader::Part;
 use gweave::gcode::state::{E, X, Y, Z};
 use gweave::{
-    check_file, stats_file, Block, CheckOptions, Command, Effect, Finding, Identity, Input, LineReader,
+    check_file_with, stats_file, Block, CheckOptions, Command, Effect, Finding, Identity, Input, LineReader,
     Quiet, Run, State, StateOptions, Value,
 };
 use pyo3::exceptions::{PyOSError, PyValueError};
@@ -61,7 +61,10 @@ pub(crate) fn check_json(
     if let Some(f) = in_range("max_feed", max_feed, gweave::range::FEED_MM_MIN)? {
         options.max_feed_mm_min = f;
     }
-    let report = interruptible(py, || check_file(&path, options, &mut Quiet))?.map_err(err)?;
+    let report = interruptible(py, || {
+        check_file_with(&path, options, Some(&gweave_sim::REGISTRY_RANGES), &mut Quiet)
+    })?
+    .map_err(err)?;
     let mut doc = serde_json::to_value(&report).map_err(|e| PyValueError::new_err(e.to_string()))?;
     doc["failed"] = report.failed(strict).into();
     to_json(&doc)

@@ -48,6 +48,7 @@ mod thermal;
 pub mod transform;
 
 pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetLayer, InkjetWarning};
+pub use interp::commands::{RegistryRanges, REGISTRY_RANGES};
 pub use interp::{
     help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Param, Queue, SimError, SimReport,
     SimTimes, SimWarning, WarningKind, COMMANDS, STOPPED_LINE, UNKNOWN_KINDS, UNKNOWN_OTHERS,
@@ -59,7 +60,7 @@ pub use link::tcp::TcpEndpoint;
 pub use link::transport::{serve, Endpoint, Event as EndpointEvent, ServeOptions, ServeSummary};
 pub use motion::estimate::{
     estimate, estimate_file, estimate_report, estimate_time, Estimate, EstimateError, EstimateFileError,
-    EstimateReport, Estimator, HugeArcs, Malformed, MAX_ARC_CHORDS,
+    EstimateReport, Estimator, HugeArcs, Malformed, Refused, ToolChange, MAX_ARC_CHORDS,
 };
 pub use motion::kinematics::{Move, Pos};
 pub use motion::limits::{

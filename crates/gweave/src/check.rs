@@ -1,7 +1,8 @@
 //! `gweave check`: a lint for G-code before it reaches a printer. It reports what would go wrong
 //! on a machine: bad checksums and line numbers, malformed or unknown commands, extrusion before
 //! any hotend temperature, moves off the bed, absurd feed rates, and extrusion values that drift
-//! in single-precision firmware.
+//! in single-precision firmware, and (given the machine's table, [`WordRanges`]) number words
+//! outside their command's physical range, which the printer refuses.
 
 use std::io::Write;
 
@@ -10,14 +11,27 @@ use serde::Serialize;
 use crate::bed::Bed;
 use crate::error::{Error, Result};
 use crate::firmware::Firmware;
-use crate::gcode::diag::{Diagnostic, Finding, Severity};
+use crate::gcode::diag::{Diagnostic, Finding, Severity, WordOutOfRange};
+use crate::gcode::effect::Motion;
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Feature;
-use crate::gcode::line::{Command, Value};
+use crate::gcode::line::{Block, Command, Value};
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
 use crate::pass::{Ctx, Flow, Pass, PassError, Progress, Step, Strictness};
+use crate::range::OutOfRange;
 use crate::run::Run;
+
+/// The physical range of each command's number words, as the machine that reads the file
+/// declares them. The engine reads G-code for every firmware and keeps no such table: the
+/// virtual printer's command registry has one (`gweave_sim::REGISTRY_RANGES`, the ranges its
+/// `sim` refuses a line by and its `estimate` skips one by), and a caller that links both
+/// (`gweave check`, Python's `gweave.check`) lends it to [`check_file_with`].
+pub trait WordRanges: std::fmt::Debug + Sync {
+    /// The first number word of the line in `block` (read from `line`; a line without a
+    /// command is a move in the modal `motion`) outside its command's range.
+    fn check(&self, block: &Block, line: &[u8], motion: Motion) -> Result<(), OutOfRange>;
+}
 
 /// Lint settings.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
@@ -89,6 +103,7 @@ impl GroupKey {
         let (detail, feature) = match finding {
             Finding::OutsideBed { axis, .. } => (axis.to_string(), feature),
             Finding::UnknownCommand { command } => (command.clone(), Feature::Unknown),
+            Finding::OutOfRange(w) => (w.word.clone(), Feature::Unknown),
             Finding::MalformedNumber { letter }
             | Finding::NotFinite { letter }
             | Finding::MissingValue { letter } => (letter.to_string(), Feature::Unknown),
@@ -146,6 +161,8 @@ pub struct CheckPass {
     group_of: std::collections::HashMap<GroupKey, usize>,
     /// The feature of the line being checked.
     feature: Feature,
+    /// The machine's word ranges, if lent ([`CheckPass::with_ranges`]).
+    ranges: Option<&'static dyn WordRanges>,
 }
 
 impl CheckPass {
@@ -154,6 +171,29 @@ impl CheckPass {
         let bed_from = options.bed.map(|_| "given".to_owned());
         let report = CheckReport { bed: options.bed, bed_from, ..Default::default() };
         CheckPass { options, report, ..Default::default() }
+    }
+
+    /// Also flags number words outside the ranges `ranges` declares.
+    pub fn with_ranges(self, ranges: &'static dyn WordRanges) -> Self {
+        CheckPass { ranges: Some(ranges), ..self }
+    }
+
+    /// A word of the line outside its command's range, on a line that is not already malformed
+    /// (a malformed number is outside every range, and already an error).
+    fn check_ranges(&mut self, ctx: &Ctx<'_>) {
+        let Some(ranges) = self.ranges else { return };
+        let block = ctx.block;
+        if block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error) {
+            return;
+        }
+        if let Err(refusal) = ranges.check(block, ctx.line.bytes, ctx.state.motion) {
+            // The name ends with the word's letter (`G4 S`).
+            let letter = refusal.name.bytes().last().unwrap_or(0);
+            let column = block.word(letter).map_or(0, |w| w.span.start as usize);
+            let OutOfRange { name: word, value, range } = refusal;
+            let finding = Finding::OutOfRange(Box::new(WordOutOfRange { word, value, range }));
+            self.add(ctx.line.number, Diagnostic::at(column, finding));
+        }
     }
 
     fn add(&mut self, line: u64, diagnostic: Diagnostic) {
@@ -282,6 +322,7 @@ impl Pass for CheckPass {
                 }
             }
         }
+        self.check_ranges(ctx);
         match *ctx.effect {
             Effect::Move(m) => {
                 let e = m.e_mm();
@@ -355,7 +396,17 @@ fn round3(v: f64) -> f64 {
 /// ([`Bed::from_file`]).
 pub fn check_file(
     path: &std::path::Path,
+    options: CheckOptions,
+    progress: &mut dyn Progress,
+) -> Result<CheckReport> {
+    check_file_with(path, options, None, progress)
+}
+
+/// [`check_file`], with number words also held to the machine's `ranges` if given.
+pub fn check_file_with(
+    path: &std::path::Path,
     mut options: CheckOptions,
+    ranges: Option<&'static dyn WordRanges>,
     progress: &mut dyn Progress,
 ) -> Result<CheckReport> {
     let mut from_file = None;
@@ -366,6 +417,9 @@ pub fn check_file(
         }
     }
     let mut pass = CheckPass::new(options);
+    if let Some(ranges) = ranges {
+        pass = pass.with_ranges(ranges);
+    }
     Run::file(path).progress(progress).strictness(Strictness::Lenient).scan(&mut pass)?;
     if from_file.is_some() {
         pass.report.bed_from = from_file;

@@ -66,6 +66,13 @@ fn print_human(out: &mut dyn Write, input: &Path, r: &EstimateReport) -> io::Res
     )?;
     print_layers_and_features(out, &e.layer_s, e.unlayered_s, &e.feature_s)?;
     print_malformed(out, &e.malformed, &e.huge_arcs)?;
+    if let (Some(first), Some(why)) = (e.refused.first_refused_line, &e.refused.first_refusal) {
+        let n = e.refused.refused_lines;
+        writeln!(
+            out,
+            "  refused         {n} lines out of range, skipped as the printer refuses them (first: line {first}, {why}; see gweave check)"
+        )?;
+    }
     if r.steps_counted {
         let s = &e.steps.axes;
         writeln!(out, "  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4])?;

@@ -177,21 +177,32 @@ fn a_huge_arc_is_planned_without_a_vec_of_chords() {
     let input = "M104 S200\nG28\nG1 X0 Y0 F600\nG2 X0 Y0 I10000000 J0 E1\nG1 X10\nM104 S0\n";
     write(d, "arc.gcode", input.as_bytes());
     let limit = std::time::Duration::from_secs(20);
+    // Both refuse the arc's centre, 10 km away: beyond any machine (the G2 row's range).
     let run = gweave(d, &["estimate", "arc.gcode"]).limit(limit).run();
     run.assert_ok().assert_peak_under(PEAK_MIB);
     let text = run.stdout_text();
     assert!(
-        text.contains(
-            "huge arcs       1 of more than 100000 chords, planned with longer ones (first: line 4)"
-        ),
+        text.contains("refused         1 lines out of range, skipped as the printer refuses them (first: line 4, G2 I = 10000000 is out of range: -10000 to 10000 mm"),
         "{text}"
     );
-    // The virtual printer refuses the arc's centre, 10 km away: beyond any machine.
     let run = gweave(d, &["sim", "arc.gcode"]).limit(limit).run();
     run.assert_ok().assert_peak_under(PEAK_MIB);
     assert!(
         run.stdout_text().contains("line 4: refused: G2 I = 10000000 is out of range: -10000 to 10000 mm"),
         "{}",
         run.stdout_text()
+    );
+    // In inches the same words are in range (the ranges are on the words as written): a radius
+    // of 254 m, 1.6 million chords of 1 mm, planned as 100 000 longer ones.
+    let input = "M104 S200\nG28\nG20\nG1 X0 Y0 F600\nG2 X0 Y0 I10000 J0 E1\nG1 X10\nM104 S0\n";
+    write(d, "arc-inches.gcode", input.as_bytes());
+    let run = gweave(d, &["estimate", "arc-inches.gcode"]).limit(limit).run();
+    run.assert_ok().assert_peak_under(PEAK_MIB);
+    let text = run.stdout_text();
+    assert!(
+        text.contains(
+            "huge arcs       1 of more than 100000 chords, planned with longer ones (first: line 5)"
+        ),
+        "{text}"
     );
 }

@@ -24,3 +24,4 @@ mod signals;
 mod sizes;
 mod spools;
 mod sweep;
+mod values;

@@ -20,9 +20,11 @@
 use std::collections::HashMap;
 use std::sync::OnceLock;
 
+use gweave::gcode::effect::Motion;
+use gweave::gcode::line::PlainMove;
 use gweave::gcode::state::{self};
 use gweave::range::{self};
-use gweave::{Block, Command, Effect, MixingCode, OutOfRange, Range, Value};
+use gweave::{Block, Command, Effect, MixingCode, OutOfRange, Range, Value, WordRanges};
 
 use super::{sd, Machine};
 use crate::motion::limits;
@@ -168,6 +170,11 @@ const KEEPALIVE_S: Range = Range::new(0.0, crate::link::serial::MAX_KEEPALIVE_S 
 /// refuses one outside 0 to 10 (`M900.cpp`, "K value out of range").
 const ADVANCE_K: Range = Range::new(0.0, 10.0, "mm/(mm/s)");
 
+/// A move's words: its feed rate and its X Y Z, an absolute position or a relative step, within
+/// 10 m of the origin either way (`range::POSITION_MM`: the largest gantry; `X1e29` is a typo
+/// the planner would take for 10^29 mm). E and A are not bounded: an absolute E counts up the
+/// whole print's filament (hundreds of metres), a rotary program's A its turns.
+const MOVE: &[Param] = &[p("F", range::FEED_MM_MIN), p("XYZ", range::POSITION_MM)];
 /// The words of the commands that take a period.
 const PERIOD: &[Param] = &[p("S", range::PERIOD_S)];
 /// RepRapFirmware's tool temperature, `G10 P<tool> S<active> R<standby>` and `M568`.
@@ -189,8 +196,8 @@ const ROW: CommandSpec = CommandSpec {
 
 /// Every command the interpreter carries out, in the order of the help listing.
 pub const COMMANDS: &[CommandSpec] = &[
-    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, params: &[p("F", range::FEED_MM_MIN)], ..ROW },
-    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, params: &[p("F", range::FEED_MM_MIN), p("IJR", range::POSITION_MM)], needs: Feature::Arcs, ..ROW },
+    CommandSpec { codes: "G0 G1", what: "linear move (G0 a travel), through the lookahead planner and the steppers", run: motion, params: MOVE, ..ROW },
+    CommandSpec { codes: "G2 G3", what: "arc clockwise / counter-clockwise in XY (I J centre or R), planned as 1 mm chords", run: motion, params: &[p("F", range::FEED_MM_MIN), p("XYZIJR", range::POSITION_MM)], needs: Feature::Arcs, ..ROW },
     CommandSpec { codes: "G4", what: "dwell P milliseconds or S seconds, after the queued moves", run: dwell, params: &[p("S", range::PERIOD_S), p("P", DWELL_MS)], ..ROW },
     CommandSpec { codes: "G10 G11", what: "firmware retract / recover (45 / 8 mm/s), Marlin's `G10 S1` too; G10 with P (tool) and S sets a tool temperature (RepRapFirmware)", run: g10_g11, params: TOOL_TEMP, needs: Feature::FwRetract, ..ROW },
     CommandSpec { codes: "G20 G21", what: "inches / millimetres", run: core, ..ROW },
@@ -361,6 +368,146 @@ pub(crate) fn lookup(command: Command, name: &[u8]) -> Option<&'static CommandSp
 /// The registry's entry for `?`.
 pub(super) fn help_spec() -> &'static CommandSpec {
     COMMANDS.iter().find(|c| c.codes == "?").expect("`?` is in the registry")
+}
+
+/// The words of the line in `block` against the ranges its command's row declares
+/// ([`check`]), before the line changes anything: what the virtual printer refuses, and what
+/// `estimate` skips, alike. A line without a command is a move in the modal motion `modal`; a
+/// command the machine does not have (not in the registry, or `known` says it was not built
+/// with it) is not checked: it is unknown, not out of range. A plain move, most lines of a
+/// print, is checked by [`PlainRanges`] (its words may not be listed in the block).
+#[inline(always)]
+pub(crate) fn check_line(
+    block: &Block,
+    line: &[u8],
+    modal: Motion,
+    known: impl Fn(&CommandSpec) -> bool,
+) -> Result<(), OutOfRange> {
+    // Inlined, a plain move costs its comparisons and no call.
+    if block.plain.present != 0 {
+        return PlainRanges::get().check(&block.plain);
+    }
+    check_other_line(block, line, modal, known)
+}
+
+/// [`check_line`] for a line that is not a plain move.
+#[inline(never)]
+fn check_other_line(
+    block: &Block,
+    line: &[u8],
+    modal: Motion,
+    known: impl Fn(&CommandSpec) -> bool,
+) -> Result<(), OutOfRange> {
+    if block.words.is_empty() {
+        return Ok(());
+    }
+    let command = match block.command {
+        Command::None => {
+            let number = match modal {
+                Motion::Rapid => 0,
+                Motion::Linear => 1,
+                Motion::ArcCw => 2,
+                Motion::ArcCcw => 3,
+            };
+            Command::Code { letter: b'G', number, sub: None }
+        }
+        command => command,
+    };
+    match (command, lookup(command, b"")) {
+        (Command::Code { letter, number, .. }, Some(spec)) if known(spec) => {
+            check((letter, number), spec.params, block, line)
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The ranges the `G0 G1` row declares for a plain move's words, in the order of
+/// [`PlainMove::LETTERS`], as bounds side by side: a plain move, most lines of a print, is
+/// checked without a search of its row, two comparisons for each bounded letter it has (it
+/// is on the hot path of `estimate`, `sim` and `check`; walking the row's `Range`s letter by
+/// letter cost about 50 instructions a move).
+struct PlainRanges {
+    min: [f64; PlainMove::LETTERS.len()],
+    max: [f64; PlainMove::LETTERS.len()],
+    /// Bit i: letter i has a range.
+    bounded: u8,
+}
+
+impl PlainRanges {
+    #[inline]
+    fn get() -> &'static PlainRanges {
+        static RANGES: OnceLock<PlainRanges> = OnceLock::new();
+        RANGES.get_or_init(|| {
+            let g1 = lookup(Command::Code { letter: b'G', number: 1, sub: None }, b"");
+            let ranges = PlainMove::LETTERS.map(|letter| g1.and_then(|row| row.range_of(letter)));
+            let bounded =
+                ranges.iter().enumerate().fold(0, |bits, (i, r)| bits | (u8::from(r.is_some()) << i));
+            // A range that also takes 0 ([`Range::or_zero`]) keeps its bounds: a 0 goes to
+            // `refusal`, which reads the range itself and lets it pass.
+            PlainRanges {
+                min: ranges.map(|r| r.map_or(f64::NEG_INFINITY, |r| r.min)),
+                max: ranges.map(|r| r.map_or(f64::INFINITY, |r| r.max)),
+                bounded,
+            }
+        })
+    }
+
+    #[inline(always)]
+    fn check(&self, plain: &PlainMove) -> Result<(), OutOfRange> {
+        // Only the letters the line has and the row bounds (a move is mostly X, Y and an
+        // unbounded E): two or three comparisons.
+        let mut letters = plain.present & self.bounded;
+        while letters != 0 {
+            let i = letters.trailing_zeros() as usize;
+            let v = plain.values[i];
+            // NaN is never inside.
+            if !(v >= self.min[i] && v <= self.max[i]) {
+                return self.refusal(plain);
+            }
+            letters &= letters - 1;
+        }
+        Ok(())
+    }
+
+    /// The first word of the line out of its range, in the order of the row's words, as
+    /// [`check`] finds it on the same words (a 0 may be in a range that takes it).
+    #[cold]
+    #[inline(never)]
+    fn refusal(&self, plain: &PlainMove) -> Result<(), OutOfRange> {
+        let g1 = lookup(Command::Code { letter: b'G', number: 1, sub: None }, b"");
+        for param in g1.map_or(&[][..], |row| row.params) {
+            for letter in param.letters.bytes() {
+                let Some(i) = PlainMove::LETTERS.iter().position(|&l| l == letter) else { continue };
+                if plain.present >> i & 1 != 0 && !param.range.contains(plain.values[i]) {
+                    return Err(plain_refusal(plain, i, &param.range));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The refusal of a plain move's word `i`, outside `range`.
+#[cold]
+#[inline(never)]
+fn plain_refusal(plain: &PlainMove, i: usize, range: &Range) -> OutOfRange {
+    let name = format!("G{} {}", u8::from(!plain.rapid), PlainMove::LETTERS[i] as char);
+    OutOfRange { name, value: range::short(plain.values[i]), range: range.to_string() }
+}
+
+/// The registry's ranges, lent to the engine's lint (`gweave check`): it flags the words the
+/// virtual printer refuses a line for (every command taken as built), and `estimate` skips one
+/// for.
+#[derive(Debug)]
+pub struct RegistryRanges;
+
+/// The one [`RegistryRanges`].
+pub static REGISTRY_RANGES: RegistryRanges = RegistryRanges;
+
+impl WordRanges for RegistryRanges {
+    fn check(&self, block: &Block, line: &[u8], motion: Motion) -> Result<(), OutOfRange> {
+        check_line(block, line, motion, |_| true)
+    }
 }
 
 /// Refuses a line whose words are outside what `params` declares, before it changes anything
@@ -738,6 +885,29 @@ mod tests {
         assert!(lookup(Command::Code { letter: b'G', number: 1, sub: None }, b"").is_some());
         assert!(lookup(Command::Code { letter: b'G', number: 1, sub: Some(1) }, b"").is_none());
         assert!(lookup(Command::Extended, b"set_velocity_limit").is_some());
+    }
+
+    /// A plain move (the lexer's fast path: its words may go unlisted) is refused exactly as the
+    /// same words read the general way (here with a comment after them), by the `G0 G1` row.
+    #[test]
+    fn a_plain_move_is_checked_by_its_rows_ranges() {
+        let cases = [
+            ("G1 X10 Y-5 Z0.2 E1 F600", None),
+            ("G1 X10 E100000000 F1", None),
+            ("G0 X20000", Some("G0 X = 20000 is out of range: -10000 to 10000 mm")),
+            ("G1 Y5 Z-10001", Some("G1 Z = -10001 is out of range: -10000 to 10000 mm")),
+            ("G1 X1 F0", Some("G1 F = 0 is out of range: 1 to 100000 mm/min")),
+            ("G1 F1000000 X99999", Some("G1 F = 1000000 is out of range: 1 to 100000 mm/min")),
+        ];
+        for (text, want) in cases {
+            for line in [text.to_owned(), format!("{text} ; the general way")] {
+                let mut block = Block::default();
+                gweave::gcode::lexer::parse_into(line.as_bytes(), &mut block);
+                assert_eq!(block.plain.present != 0, !line.contains(';'), "{line}");
+                let got = check_line(&block, line.as_bytes(), Motion::Linear, |_| true);
+                assert_eq!(got.map_err(|e| e.to_string()).err().as_deref(), want, "{line}");
+            }
+        }
     }
 
     /// The serial link's own commands are declared in their rows: `M110` and `M113` alone, and

@@ -30,7 +30,7 @@
 //! `ok T:.. /.. B:.. /.. @:.. B@:..` itself (see [`Machine::acknowledged`]); every other command
 //! leaves the final `ok` to the caller (the serial protocol or `gweave sim`).
 
-mod commands;
+pub(crate) mod commands;
 mod heat;
 mod host;
 mod motion;
@@ -42,7 +42,6 @@ mod warning_text;
 
 use std::collections::BTreeMap;
 
-use gweave::gcode::effect::Motion;
 use gweave::gcode::retraction::Retraction;
 use gweave::gcode::state;
 use gweave::Command;
@@ -50,7 +49,7 @@ use thiserror::Error;
 
 use crate::inkjet::recoat::RecoatCheck;
 use crate::inkjet::{CanvasGeometry, FireWait, InkjetCanvas, InkjetError};
-use crate::motion::estimate::{EstimateError, Estimator};
+use crate::motion::estimate::{EstimateError, Estimator, ToolChange};
 use crate::motion::speed_trace::SpeedTrace;
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
 use crate::thermal::heater::HeaterId;
@@ -168,6 +167,7 @@ impl Machine {
         let mut profile = profile;
         profile.normalize()?;
         let mut core = Estimator::new(&profile.motion)?;
+        core.tool_changes(ToolChange::of(&profile));
         if let Some(ink) = &profile.inkjet {
             core.fires(FireWait::of(&ink.printhead));
         }
@@ -295,7 +295,10 @@ impl Machine {
         let spec = commands::lookup(command, self.core.block().command_span.of(line));
         let halted = self.halt.is_some() && !spec.is_some_and(|s| s.while_halted);
         if !halted {
-            if let Err(e) = self.check_words(command, spec, line) {
+            let built_with = |spec: &CommandSpec| self.built_with(spec);
+            if let Err(e) =
+                commands::check_line(self.core.block(), line, self.core.state().motion, built_with)
+            {
                 // Nothing of the line happened: the values in force stay.
                 self.refuse(e.to_string(), out);
                 return self.outcome();
@@ -317,36 +320,6 @@ impl Machine {
         self.sync(out);
         self.timed_reports(out);
         self.outcome()
-    }
-
-    /// The words of the line just read, against the ranges its command declares
-    /// ([`commands::check`]); a line without a command is a move in the modal motion (`G0`..`G3`).
-    fn check_words(
-        &self,
-        command: Command,
-        spec: Option<&CommandSpec>,
-        line: &[u8],
-    ) -> Result<(), gweave::OutOfRange> {
-        let (code, spec) = match (command, spec) {
-            (Command::None, _) => {
-                let number = match self.core.state().motion {
-                    Motion::Rapid => 0,
-                    Motion::Linear => 1,
-                    Motion::ArcCw => 2,
-                    Motion::ArcCcw => 3,
-                };
-                let code = Command::Code { letter: b'G', number, sub: None };
-                ((b'G', number), commands::lookup(code, b""))
-            }
-            (Command::Code { letter, number, .. }, Some(spec)) if self.built_with(spec) => {
-                ((letter, number), Some(spec))
-            }
-            _ => return Ok(()),
-        };
-        match spec {
-            Some(spec) => commands::check(code, spec.params, self.core.block(), line),
-            None => Ok(()),
-        }
     }
 
     /// The auto-reports that are not the heaters' (`M154` position, `M27 S` SD status).
@@ -501,12 +474,15 @@ impl Machine {
             self.profile.has_tool(number)
         };
         if !valid {
+            // Marlin with several extruders synchronizes before it looks at the tool.
+            if self.core.tool_change() == ToolChange::Synchronize {
+                self.core.drain();
+            }
             out(self.now_s(), &format!("echo:T{number} Invalid extruder"));
             self.warn(WarningKind::InvalidExtruder { tool: number });
             return;
         }
-        // Marlin finishes the moves before a tool change.
-        self.core.drain();
+        // The core waits for the queued moves if the firmware does ([`ToolChange`]).
         self.run_core(line, out);
         if !mixing {
             // Checked above: the hotend exists (the one nozzle, for a tool of a single nozzle).

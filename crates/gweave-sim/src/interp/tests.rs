@@ -300,15 +300,25 @@ fn rrf_tool_temperature_and_m116() {
 }
 
 /// A target with stray digits, far beyond the machine, is refused and the machine stays put
-/// (simulating the move would take days of heater ticks); a near miss is carried out.
+/// (simulating the move would take days of heater ticks); a near miss is carried out. Past
+/// 10 m (the G1 row's range, which `estimate` refuses by too) the word itself is refused;
+/// within it, a target more than the machine's travel off its bed.
 #[test]
 fn moves_out_of_reach_are_refused() {
     let mut m = machine();
-    let (r, _) = run(&mut m, "G28\nG1 X10 F6000\nG1 X999999999999 Y5\nG1 X20\nG1 X250\nM400");
-    let refused = "echo:X999999999999.000 is out of reach (0..200 mm): move refused";
-    assert_eq!(r.iter().filter(|l| l.as_str() == refused).count(), 1, "{r:?}");
+    let text = "G28\nG1 X10 F6000\nG1 X999999999999 Y5\nG1 X9999 Y5\nG1 X20\nG1 X250\nM400";
+    let (r, _) = run(&mut m, text);
+    let refusals: Vec<_> = r.iter().filter(|l| l.starts_with("echo:")).collect();
+    assert_eq!(
+        refusals,
+        [
+            "echo:G1 X = 9.99999999999e11 is out of range: -10000 to 10000 mm",
+            "echo:X9999.000 is out of reach (0..200 mm): move refused"
+        ],
+        "{r:?}"
+    );
     let report = m.report();
-    assert_eq!(report.warning_counts.get("refused"), Some(&1), "{:?}", report.warning_counts);
+    assert_eq!(report.warning_counts.get("refused"), Some(&2), "{:?}", report.warning_counts);
     assert_eq!(report.warning_counts.get("out_of_bounds"), Some(&2), "{:?}", report.warning_counts);
     // X went 10 -> 20 -> 250; the refused move changed nothing.
     assert_eq!(m.report().position[0], 250.0);

@@ -94,6 +94,10 @@ pub enum Finding {
         /// The tool number written.
         tool: u32,
     },
+    /// A number word outside the physical range its command declares (the machine's table,
+    /// [`WordRanges`](crate::check::WordRanges)): the printer refuses the whole line. Boxed: a
+    /// finding travels with every block, and three strings inline made each a third larger.
+    OutOfRange(Box<WordOutOfRange>),
     /// A line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE): not parsed.
     LineTooLong {
         /// The line's length in bytes, line ending excluded.
@@ -168,6 +172,13 @@ impl fmt::Display for Finding {
                 "line of {len} bytes is longer than the limit of {} (not read)",
                 super::reader::MAX_LINE
             ),
+            Finding::OutOfRange(w) => {
+                write!(
+                    f,
+                    "{} = {} is out of range: {} (the printer refuses the line)",
+                    w.word, w.value, w.range
+                )
+            }
             Finding::MoreFindings { count } => write!(f, "{count} more findings on this line"),
             Finding::ToolOutOfRange { tool } => write!(
                 f,
@@ -176,6 +187,17 @@ impl fmt::Display for Finding {
             ),
         }
     }
+}
+
+/// A word outside its command's range ([`Finding::OutOfRange`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct WordOutOfRange {
+    /// The command and the word (`G4 S`).
+    pub word: String,
+    /// The value written.
+    pub value: String,
+    /// The range (`0 to 86400 s`).
+    pub range: String,
 }
 
 /// Findings kept per line; the rest are counted in one [`Finding::MoreFindings`]. A line of

@@ -13,14 +13,17 @@ use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
 use gweave::gcode::reader::Part;
 use gweave::gcode::state::{self, Path};
 use gweave::rotary::cylinder::RotaryConfig;
+use gweave::OutOfRange;
 use gweave::{Block, Command, Effect, Firmware, MixingCode, RawLine, Severity, State, StateOptions};
 
 use super::rotary_feed::DeclaredFeed;
+use super::tool_change::ToolChange;
 use super::{
     EstimateError, Job, Key, ARC_CHORD_MM, DEFAULT_FEED_MM_S, FW_RECOVER_FEED_MM_S, FW_RETRACT_FEED_MM_S,
     KLIPPER_MOTOR_OFF_S, KLIPPER_START_BUFFER_S,
 };
 use crate::inkjet::FireWait;
+use crate::interp::commands;
 use crate::motion::kinematics::{Move, Pos};
 use crate::motion::limits::{AxisUpdate, CornerMode, MotionProfile, ProfileError, M204};
 use crate::motion::planner::Planner;
@@ -42,9 +45,13 @@ pub(super) struct Front {
     pub(super) line: u64,
     /// Lines with an error, skipped as firmware skips them.
     pub(super) malformed: Malformed,
+    /// Lines with a word out of its range, skipped as the virtual printer refuses them.
+    pub(super) refused: Refused,
     /// The feed convention a rotary program declared in its header ([`Front::declare_rotary`]):
     /// `None` for every other file, which then costs one untaken branch a line.
     rotary: Option<DeclaredFeed>,
+    /// Whether a `T<n>` waits for the queued moves ([`Front::tool_changes`]).
+    tool_change: ToolChange,
 }
 
 /// Arcs longer than [`MAX_ARC_CHORDS`] chords of `ARC_CHORD_MM` (over 100 m: no printer's
@@ -62,6 +69,18 @@ impl HugeArcs {
         self.huge_arcs += 1;
         self.first_huge_arc_line.get_or_insert(line);
     }
+}
+
+/// Lines with a word outside the range its command declares (the virtual printer's registry,
+/// `interp::commands`): skipped, as the virtual printer refuses them, and counted.
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Refused {
+    /// How many lines.
+    pub refused_lines: u64,
+    /// The first of them, 1-based.
+    pub first_refused_line: Option<u64>,
+    /// Why the first was refused (`G4 S = 1e30 is out of range: 0 to 86400 s`).
+    pub first_refusal: Option<String>,
 }
 
 /// The most chords an arc is cut into: 100 m of arc at `ARC_CHORD_MM`. A `G2` with
@@ -130,7 +149,9 @@ impl Front {
             mixing,
             line: 0,
             malformed: Malformed::default(),
+            refused: Refused::default(),
             rotary: None,
+            tool_change: ToolChange::default(),
         };
         front.refresh_mix(jobs);
         Ok(front)
@@ -147,6 +168,16 @@ impl Front {
     /// on (a rotary axis in millimetres) keeps the firmware model's reading.
     pub(super) fn declare_rotary(&mut self, machine: RotaryConfig) {
         self.rotary = DeclaredFeed::new(machine);
+    }
+
+    /// Changes tool as `tool_change` says the machine's firmware does: before the first line.
+    pub(super) fn tool_changes(&mut self, tool_change: ToolChange) {
+        self.tool_change = tool_change;
+    }
+
+    /// How a `T<n>` is carried out ([`Front::tool_changes`]).
+    pub(super) fn tool_change(&self) -> ToolChange {
+        self.tool_change
     }
 
     /// `G93` (`true`) or `G94`: in a rotary program, the F of the moves to come is one over
@@ -181,6 +212,34 @@ impl Front {
         self.line += 1;
         parse_into(raw, &mut self.block);
         count_malformed(&mut self.malformed, self.line, &self.block);
+    }
+
+    /// Whether the line just read ([`Front::lex`]) has a word outside the range its command
+    /// declares: then none of it happens (the caller applies nothing), as the virtual printer
+    /// refuses it, and it is counted in [`Front::refused`]. The same check as the virtual
+    /// printer's, on the same ranges ([`commands::check_line`]); every command is taken as built.
+    #[inline(always)]
+    pub(super) fn refuses(&mut self, raw: &[u8]) -> bool {
+        match commands::check_line(&self.block, raw, self.state.motion, |_| true) {
+            Ok(()) => false,
+            Err(refusal) => {
+                self.refuse(refusal);
+                true
+            }
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn refuse(&mut self, refusal: OutOfRange) {
+        let refused = &mut self.refused;
+        refused.refused_lines += 1;
+        if refused.first_refused_line.is_none() {
+            refused.first_refused_line = Some(self.line);
+            refused.first_refusal = Some(refusal.to_string());
+        }
+        // Nothing of the line happened: a reader of the state's effect (`modes`) sees none.
+        self.state.effect = Effect::None;
     }
 
     /// Second half of [`Front::parse`]: apply the line just read to the modal state.
@@ -256,6 +315,9 @@ impl Front {
     fn lexed(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
         self.line += 1;
         count_malformed(&mut self.malformed, self.line, &self.block);
+        if self.refuses(line.bytes) {
+            return Ok(());
+        }
         self.state.apply(line.bytes, &self.block);
         self.read_rotary_feed();
         self.run_applied(line.bytes, jobs)
@@ -462,9 +524,12 @@ impl Front {
         Ok(())
     }
 
-    /// `T<n>`: on a mixing hotend, select virtual tool n (Marlin) or the tool's `M567` mix
-    /// (RepRapFirmware).
+    /// `T<n>`: the queued moves run out first if the firmware waits ([`ToolChange`]); on a
+    /// mixing hotend, select virtual tool n (Marlin) or the tool's `M567` mix (RepRapFirmware).
     fn select_tool(&mut self, tool: u32, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
+        if self.tool_change.waits(self.book.tool, tool) {
+            jobs.push(Job::Drain);
+        }
         if let Some(mixing) = &mut self.mixing {
             if mixing.rrf_mix(tool).is_none() {
                 let line = self.line;

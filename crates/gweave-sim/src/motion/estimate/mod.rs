@@ -14,7 +14,9 @@
 //!
 //! What waits for the motion queue to drain, and so ends the lookahead at a stop: `G4`, `M400`,
 //! `M109`/`M190` (the heating time itself is not estimated), `G28`, `M84`/`M18`, and Klipper's
-//! `SET_KINEMATIC_POSITION`. Arcs are cut into chords of at most 1 mm, as both firmwares do
+//! `SET_KINEMATIC_POSITION`; `T<n>` as the machine's firmware changes tool ([`ToolChange`]:
+//! Marlin with several extruders at every `T`, Klipper's `ACTIVATE_EXTRUDER` when the extruder
+//! changes, a mixing hotend or a single extruder never). Arcs are cut into chords of at most 1 mm, as both firmwares do
 //! (Klipper `[gcode_arcs] resolution`, Marlin `MM_PER_ARC_SEGMENT`). Moves before any `F` run at
 //! both firmwares' default of 25 mm/s.
 //!
@@ -64,12 +66,14 @@ mod modes;
 mod report;
 mod rotary_feed;
 mod timer;
+mod tool_change;
 
 use back::Back;
 use front::{Chords, Front};
-pub use front::{HugeArcs, Malformed, MAX_ARC_CHORDS};
+pub use front::{HugeArcs, Malformed, Refused, MAX_ARC_CHORDS};
 pub(crate) use modes::{estimate_modes, ModeEstimate, Modes};
 pub use report::{estimate_file, estimate_report, EstimateFileError, EstimateReport};
+pub use tool_change::ToolChange;
 
 /// Feed rate before the file sets one, mm/s (Klipper `gcode_move`, Marlin `feedrate_mm_s`).
 pub(crate) const DEFAULT_FEED_MM_S: f64 = 25.0;
@@ -167,6 +171,10 @@ pub struct Estimate {
     /// Arcs too long to cut into chords of `ARC_CHORD_MM`.
     #[serde(flatten)]
     pub huge_arcs: HugeArcs,
+    /// Lines skipped because a word is out of its command's range, as the virtual printer
+    /// refuses them.
+    #[serde(flatten)]
+    pub refused: Refused,
 }
 
 /// What a block's time is attributed to, the mix its E steps are split by and the tool they
@@ -258,6 +266,18 @@ impl Estimator {
         self.front.fires(fire);
     }
 
+    /// Changes tool as the machine's firmware does ([`ToolChange::of`] the machine): whether a
+    /// `T<n>` waits for the queued moves. Call before the first line; without it, nothing waits
+    /// (one extruder, or a mixing hotend).
+    pub fn tool_changes(&mut self, tool_change: ToolChange) {
+        self.front.tool_changes(tool_change);
+    }
+
+    /// How a `T<n>` is carried out ([`Estimator::tool_changes`]).
+    pub fn tool_change(&self) -> ToolChange {
+        self.front.tool_change()
+    }
+
     /// Whether a move was queued since the last `M400` or `G4` (a fire would land along it).
     pub fn moved_since_m400(&self) -> bool {
         self.front.moved_since_m400()
@@ -272,9 +292,14 @@ impl Estimator {
     }
 
     /// Execute one line (without its line ending). Mixing commands the firmware would refuse
-    /// are skipped.
+    /// are skipped, and so are lines with a word out of its command's range, as the virtual
+    /// printer refuses them ([`Estimate::refused`]).
     pub fn line(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
-        let effect = self.parse(raw);
+        self.front.lex(raw);
+        if self.front.refuses(raw) {
+            return Ok(());
+        }
+        let effect = *self.front.apply(raw);
         skip_mixing_errors(self.run(raw, &effect))
     }
 
@@ -290,7 +315,9 @@ impl Estimator {
     }
 
     /// First half of [`Estimator::line`]: parse the line and apply it to the modal state; say
-    /// what it does. Nothing is planned yet.
+    /// what it does. Nothing is planned yet, and no word is held to its range: the caller that
+    /// splits a line so decides what it refuses (the virtual printer checks the words between
+    /// [`Estimator::lex`] and [`Estimator::apply`]).
     pub fn parse(&mut self, raw: &[u8]) -> Effect {
         self.front.parse(raw)
     }
@@ -422,7 +449,12 @@ impl Estimator {
 
     /// The times so far (moves still queued in the planner are not counted).
     pub fn summary(&self) -> Estimate {
-        Estimate { malformed: self.front.malformed, huge_arcs: self.front.huge_arcs(), ..self.back.summary() }
+        Estimate {
+            malformed: self.front.malformed,
+            huge_arcs: self.front.huge_arcs(),
+            refused: self.front.refused.clone(),
+            ..self.back.summary()
+        }
     }
 
     /// Counts a line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE) (given in
@@ -461,13 +493,14 @@ const BATCHES_IN_FLIGHT: usize = 4;
 /// batches in flight.
 /// The lines are read as Marlin reads them; `estimate_as` reads them as another firmware does.
 pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    estimate_as(input, profile, Firmware::Marlin, true, None, None)
+    estimate_as(input, profile, Firmware::Marlin, true, None, None, ToolChange::Select)
 }
 
 /// [`estimate`] with the lines read as `firmware` reads them (a file's: see
 /// [`gweave::gcode::flavour::read_firmware`]), counting steps if asked (without, up to a fifth
-/// faster), the waits after a printhead's fires if the machine has one, and the F words of a
-/// rotary program as its header declares them ([`Estimator::declare_rotary`]).
+/// faster), the waits after a printhead's fires if the machine has one, the F words of a
+/// rotary program as its header declares them ([`Estimator::declare_rotary`]), and the waits at
+/// a tool change as the machine's firmware makes them ([`Estimator::tool_changes`]).
 pub(crate) fn estimate_as<R: Read + Send>(
     input: R,
     profile: &MotionProfile,
@@ -475,9 +508,11 @@ pub(crate) fn estimate_as<R: Read + Send>(
     count_steps: bool,
     fire: Option<FireWait>,
     rotary: Option<RotaryConfig>,
+    tool_change: ToolChange,
 ) -> Result<Estimate, EstimateError> {
     let mut estimator = Estimator::with_steps(profile, count_steps)?;
     estimator.read_as(firmware);
+    estimator.tool_changes(tool_change);
     if let Some(fire) = fire {
         estimator.fires(fire);
     }
@@ -489,7 +524,7 @@ pub(crate) fn estimate_as<R: Read + Send>(
 
 /// [`estimate`] without the step counts (all zero), up to a fifth faster.
 pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    estimate_as(input, profile, Firmware::Marlin, false, None, None)
+    estimate_as(input, profile, Firmware::Marlin, false, None, None, ToolChange::Select)
 }
 
 fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
@@ -520,7 +555,12 @@ fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate
         let mut back = planning.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
         parsed?;
         back.end();
-        Ok(Estimate { malformed: front.malformed, huge_arcs: front.huge_arcs(), ..back.summary() })
+        Ok(Estimate {
+            malformed: front.malformed,
+            huge_arcs: front.huge_arcs(),
+            refused: front.refused,
+            ..back.summary()
+        })
     })
 }
 
@@ -611,15 +651,16 @@ mod tests {
 
     #[test]
     fn a_huge_arc_is_planned_without_a_vec_of_chords() {
-        // A radius of 10 km: 63 million chords of 1 mm.
-        let text = "G1 X0 Y0 F600\nG2 X0 Y0 I10000000 J0 E1\nG1 X10\n";
+        // A radius of 10 000 inches (the registry's ranges are on the words as written), 254 m:
+        // 1.6 million chords of 1 mm.
+        let text = "G20\nG1 X0 Y0 F600\nG2 X0 Y0 I10000 J0 E1\nG1 X10\n";
         let mut est = Estimator::new(&MotionProfile::default()).unwrap();
         for line in text.lines() {
             est.line(line.as_bytes()).unwrap();
             assert!(est.jobs.capacity() < 64, "{} jobs held", est.jobs.capacity());
         }
         let sequential = est.finish();
-        assert_eq!(sequential.huge_arcs, HugeArcs { huge_arcs: 1, first_huge_arc_line: Some(2) });
+        assert_eq!(sequential.huge_arcs, HugeArcs { huge_arcs: 1, first_huge_arc_line: Some(3) });
         // The first move goes nowhere: the arc's chords and the last move.
         assert_eq!(sequential.blocks, u64::from(MAX_ARC_CHORDS) + 1);
         let threaded = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
@@ -633,8 +674,16 @@ mod tests {
         let fire = FireWait { wait_s: 800e-6, heads: 2 };
         let dwell_s = |text: &str| {
             let threaded = |fire: Option<FireWait>| {
-                estimate_as(text.as_bytes(), &MotionProfile::default(), Firmware::Marlin, false, fire, None)
-                    .unwrap()
+                estimate_as(
+                    text.as_bytes(),
+                    &MotionProfile::default(),
+                    Firmware::Marlin,
+                    false,
+                    fire,
+                    None,
+                    ToolChange::Select,
+                )
+                .unwrap()
             };
             assert_eq!(threaded(None).dwell_s, 0.0, "{text}: no printhead, no wait");
             let mut est = Estimator::new(&MotionProfile::default()).unwrap();
@@ -648,7 +697,10 @@ mod tests {
         assert_eq!(dwell_s("G1 X10 F600\nM700 P0 S3\n"), 0.0);
         assert_eq!(dwell_s("G1 X10 F600\nM400\nG1 X20\nM700 P0 S3\n"), 0.0);
         assert_eq!(dwell_s("G1 X10 F600\nG4 P0\nM700 P1 S3\n"), 800e-6);
-        assert_eq!(dwell_s("M400\nM700 S3\nM700 P2 S3\nM700 P-1 S1\n"), 800e-6);
+        assert_eq!(dwell_s("M400\nM700 S3\nM700 P2 S3\nM700 P0.4 S1\n"), 800e-6);
+        // A negative head is out of the registry's range: refused, as the virtual printer
+        // refuses it, so it fires nothing.
+        assert_eq!(dwell_s("M400\nM700 P-1 S1\n"), 0.0);
     }
 
     #[test]
@@ -719,14 +771,15 @@ mod tests {
 
     #[test]
     fn an_error_planning_a_late_line_is_reported_with_that_line() {
-        // Thousands of lines (several batches between the threads), then two relative moves of
-        // 9.99e307 mm, which is finite, then infinite: the planner refuses the second.
+        // Thousands of lines (several batches between the threads), then two relative turns of
+        // 9.99e307 degrees (A has no range: a rotary program counts its turns), which is
+        // finite, then infinite: the planner refuses the second.
         let mut text = String::from("G1 F600\n");
         for i in 0..3000 {
             text.push_str(&format!("G1 X{}\n", i % 7));
         }
         let huge = "9".repeat(308);
-        text.push_str(&format!("G91\nG1 X{huge}\nG1 X{huge}\nG1 X1\nM204 S-5\n"));
+        text.push_str(&format!("G91\nG1 A{huge}\nG1 A{huge}\nG1 X1\nM204 S-5\n"));
         let err = estimate(text.as_bytes(), &MotionProfile::default()).unwrap_err();
         assert!(
             matches!(err, EstimateError::Move { line: 3004, source: MoveError::NonFinitePosition }),
@@ -736,9 +789,32 @@ mod tests {
         assert!(matches!(err, EstimateError::Move { line: 3004, .. }), "{err}");
     }
 
+    /// A limit the planner cannot take stops the estimate at its line: Klipper's
+    /// `SET_VELOCITY_LIMIT` has no declared ranges, its values are checked by the planner.
     #[test]
     fn bad_input_is_an_error_with_its_line() {
-        let err = estimate("G1 X1 F600\nM204 S-5\n".as_bytes(), &MotionProfile::default()).unwrap_err();
+        let klipper = MotionProfile::klipper(crate::motion::limits::KlipperLimits::default());
+        let text = "G1 X1 F600\nSET_VELOCITY_LIMIT ACCEL=-5\n";
+        let err = estimate(text.as_bytes(), &klipper).unwrap_err();
         assert!(matches!(err, EstimateError::Profile { line: 2, .. }), "{err}");
+    }
+
+    /// Regression (estimate_plans_values_sim_refuses): a word outside its command's range (the
+    /// virtual printer's registry) was planned: `G4 P` of 10^30 ms, a move of 10^29 mm. Such
+    /// a line is skipped and counted, on both the threaded and the line-by-line path, and the
+    /// lines around it are planned as before: one 10 mm move at 10 mm/s and a 1 s dwell.
+    #[test]
+    fn a_word_out_of_its_range_is_refused_and_counted() {
+        let huge = format!("1{}", "0".repeat(29));
+        let text = format!("G1 X10 F600\nG4 P{huge}0\nG1 X{huge}\nM204 S-5\nG1 F0\nG4 S1\n");
+        let threaded = estimate(text.as_bytes(), &MotionProfile::default()).unwrap();
+        assert_eq!(threaded, sequential(text.as_bytes(), &MotionProfile::default()).unwrap());
+        let first = "G4 P = 1e30 is out of range: 0 to 86400000 ms".to_owned();
+        assert_eq!(
+            threaded.refused,
+            Refused { refused_lines: 4, first_refused_line: Some(2), first_refusal: Some(first) }
+        );
+        assert_eq!((threaded.blocks, threaded.dwell_s, threaded.steps.axes[0]), (1, 1.0, 800));
+        assert!(threaded.total_s < 3.0, "{}", threaded.total_s);
     }
 }

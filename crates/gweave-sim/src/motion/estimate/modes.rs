@@ -114,6 +114,7 @@ pub(crate) fn estimate_modes(
                     let estimate = Estimate {
                         malformed: front.malformed,
                         huge_arcs: front.huge_arcs(),
+                        refused: front.refused.clone(),
                         ..back.summary()
                     };
                     estimates.push(ModeEstimate { estimate, progress_s });
@@ -276,14 +277,17 @@ mod tests {
         assert!(b.estimate.layer_s[0] > a.estimate.layer_s[0] + 0.1, "{a:?} {b:?}");
     }
 
-    /// A limit one mode refuses stops the estimate at its line, as that mode's estimator does.
+    /// A limit one mode refuses stops the estimate at its line, as that mode's estimator does
+    /// (Klipper's `SET_VELOCITY_LIMIT`: a value out of a declared range, `M204 S-5`, is a line
+    /// refused and skipped before any mode sees it).
     #[test]
     fn a_limit_refused_names_its_line() {
-        let text = "G1 X10 F600\nG1 X20\nM204 S-5\nG1 X30\n";
+        let text = "G1 X10 F600\nG1 X20\nSET_VELOCITY_LIMIT ACCEL=-5\nG1 X30\n";
+        let klipper = MotionProfile::klipper(crate::motion::limits::KlipperLimits::default());
         let e = estimate_modes(
             text.as_bytes(),
-            &MotionProfile::default(),
-            &[silent()],
+            &klipper,
+            &[MotionProfile { max_feed_mm_s: silent().max_feed_mm_s, ..klipper.clone() }],
             Firmware::Marlin,
             |_: &Ctx<'_>| false,
         )

@@ -9,7 +9,7 @@ use gweave::rotary::cylinder::RotaryConfig;
 use gweave::{Firmware, Progress};
 use serde::Serialize;
 
-use super::{estimate_as, Estimate, EstimateError};
+use super::{estimate_as, Estimate, EstimateError, ToolChange};
 use crate::inkjet::FireWait;
 use crate::motion::limits::CornerMode;
 use crate::profile::MachineProfile;
@@ -31,7 +31,8 @@ pub struct EstimateReport {
 /// Estimate the file read from `input` on `machine`, its lines read as `firmware` reads them (the
 /// file's: [`gweave::gcode::flavour::read_firmware`]), counting steps if asked; on a machine
 /// with a printhead, with the wait after each fire; a rotary program's F words as its header
-/// declares them, as `gweave sim` reads them (without the header, as the firmware model does).
+/// declares them, as `gweave sim` reads them (without the header, as the firmware model does);
+/// each tool change waiting for the queued moves as the machine's firmware makes it wait.
 pub fn estimate_report<R: Read + Send>(
     input: R,
     machine: &MachineProfile,
@@ -40,7 +41,8 @@ pub fn estimate_report<R: Read + Send>(
 ) -> Result<EstimateReport, EstimateError> {
     let fire = machine.inkjet.as_ref().map(|ink| FireWait::of(&ink.printhead));
     let (rotary, input) = RotaryConfig::from_stream_head(input)?;
-    let estimate = estimate_as(input, &machine.motion, firmware, count_steps, fire, rotary)?;
+    let tool_change = ToolChange::of(machine);
+    let estimate = estimate_as(input, &machine.motion, firmware, count_steps, fire, rotary, tool_change)?;
     let planner = match machine.motion.corners {
         CornerMode::Klipper(_) => "klipper",
         CornerMode::Marlin { .. } => "marlin",
