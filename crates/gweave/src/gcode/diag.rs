@@ -31,6 +31,20 @@ pub enum Finding {
         /// The word's letter.
         letter: char,
     },
+    /// A number in exponent notation (`F1e300`), read as two words (`F1 E300`) as Marlin and
+    /// Klipper do.
+    ExponentNotation {
+        /// The word as written, exponent included (`F1e300`).
+        word: String,
+        /// A lower-case `e` after an upper-case letter, as `printf` writes it (an error; the
+        /// same case as the letter may be words written without spaces: a warning).
+        mixed_case: bool,
+    },
+    /// The file's last line has no line ending and is malformed: the file looks cut short.
+    Truncated {
+        /// What is wrong with the line.
+        cause: Box<Finding>,
+    },
     /// A byte that cannot start a word.
     UnexpectedByte {
         /// The byte found.
@@ -115,7 +129,8 @@ impl Finding {
             | Finding::OutsideBed { .. }
             | Finding::RelativeEDrift { .. }
             | Finding::AbsoluteEPrecision { .. }
-            | Finding::LineNumberSequence { .. } => Severity::Warning,
+            | Finding::LineNumberSequence { .. }
+            | Finding::ExponentNotation { mixed_case: false, .. } => Severity::Warning,
             // The findings it stands for were errors, each counted when kept.
             Finding::MoreFindings { .. } => Severity::Error,
             _ => Severity::Error,
@@ -129,6 +144,23 @@ impl fmt::Display for Finding {
             Finding::MalformedNumber { letter } => write!(f, "malformed number after '{letter}'"),
             Finding::NotFinite { letter } => write!(f, "'{letter}' is not a finite number"),
             Finding::MissingValue { letter } => write!(f, "'{letter}' has no number"),
+            Finding::ExponentNotation { word, .. } => {
+                // `F1e300`: the letter, the number up to the `e`, and the word the rest makes.
+                let upper = word.to_ascii_uppercase();
+                let split = upper.get(1..).and_then(|rest| rest.find('E')).map_or(upper.len(), |i| i + 1);
+                let (first, second) = upper.split_at(split);
+                write!(
+                    f,
+                    "'{word}' is exponent notation, which G-code does not have: read as {first} and \
+                     {second}, as Marlin and Klipper do (RepRapFirmware reads one number)"
+                )
+            }
+            Finding::Truncated { cause } => {
+                write!(
+                    f,
+                    "the file looks truncated (its last line is malformed and has no line ending): {cause}"
+                )
+            }
             Finding::UnexpectedByte { byte } => {
                 if byte.is_ascii_graphic() {
                     write!(f, "unexpected character '{}'", *byte as char)
