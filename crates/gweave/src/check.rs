@@ -93,8 +93,8 @@ impl GroupKey {
             | Finding::NotFinite { letter }
             | Finding::MissingValue { letter } => (letter.to_string(), Feature::Unknown),
             // Grouped by letter too: every `F` written `1e300` apart from `X`s written `1e-05`.
-            Finding::ExponentNotation { word, mixed_case } => {
-                (format!("{}{mixed_case}", word.get(..1).unwrap_or_default()), Feature::Unknown)
+            Finding::ExponentNotation { word } => {
+                (format!("{}{:?}", word.get(..1).unwrap_or_default(), finding.severity()), Feature::Unknown)
             }
             _ => (String::new(), Feature::Unknown),
         };

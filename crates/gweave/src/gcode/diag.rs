@@ -34,11 +34,11 @@ pub enum Finding {
     /// A number in exponent notation (`F1e300`), read as two words (`F1 E300`) as Marlin and
     /// Klipper do.
     ExponentNotation {
-        /// The word as written, exponent included (`F1e300`).
-        word: String,
-        /// A lower-case `e` after an upper-case letter, as `printf` writes it (an error; the
-        /// same case as the letter may be words written without spaces: a warning).
-        mixed_case: bool,
+        /// The word as written, exponent included (`F1e300`): a lower-case `e` after an
+        /// upper-case letter, as `printf` writes it, is an error; one case (words written
+        /// without spaces, maybe) a warning. Boxed, and the case read from it, to keep every
+        /// finding (and the errors that carry one) as small as before.
+        word: Box<str>,
     },
     /// The file's last line has no line ending and is malformed: the file looks cut short.
     Truncated {
@@ -121,6 +121,17 @@ pub enum Finding {
 }
 
 impl Finding {
+    /// Exponent notation as `printf` writes it into a template: `F1e300`, an upper-case letter
+    /// and a lower-case `e`.
+    fn is_mixed_case_exponent(&self) -> bool {
+        match self {
+            Finding::ExponentNotation { word } => {
+                word.starts_with(|c: char| c.is_ascii_uppercase()) && word.contains('e')
+            }
+            _ => false,
+        }
+    }
+
     /// How serious this finding is.
     pub fn severity(&self) -> Severity {
         match self {
@@ -129,8 +140,8 @@ impl Finding {
             | Finding::OutsideBed { .. }
             | Finding::RelativeEDrift { .. }
             | Finding::AbsoluteEPrecision { .. }
-            | Finding::LineNumberSequence { .. }
-            | Finding::ExponentNotation { mixed_case: false, .. } => Severity::Warning,
+            | Finding::LineNumberSequence { .. } => Severity::Warning,
+            Finding::ExponentNotation { .. } if !self.is_mixed_case_exponent() => Severity::Warning,
             // The findings it stands for were errors, each counted when kept.
             Finding::MoreFindings { .. } => Severity::Error,
             _ => Severity::Error,

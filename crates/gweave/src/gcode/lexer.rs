@@ -397,9 +397,8 @@ fn exponent(raw: &[u8], start: usize, e_at: usize, block: &mut Block) {
         return;
     }
     let end = digits_at + raw[digits_at..].iter().take_while(|b| b.is_ascii_digit()).count();
-    let word = String::from_utf8_lossy(&raw[start..end]).into_owned();
-    let mixed_case = raw[start].is_ascii_uppercase() && raw[e_at] == b'e';
-    block.diagnose(Diagnostic::at(start, Finding::ExponentNotation { word, mixed_case }));
+    let word = String::from_utf8_lossy(&raw[start..end]).into();
+    block.diagnose(Diagnostic::at(start, Finding::ExponentNotation { word }));
 }
 
 /// A word without a number (`G1 X113.115 Y`, a line cut short): on a move an error, whatever the
@@ -588,7 +587,7 @@ mod tests {
     /// lost in transfer) was one finding for the NUL and one for each byte after it.
     #[test]
     fn one_nul_in_a_number_is_one_finding() {
-        let b = parse("G1 X1\042.303 Y2 E.5");
+        let b = parse("G1 X1\x0042.303 Y2 E.5");
         assert_eq!(b.diagnostics, [Diagnostic::at(5, Finding::UnexpectedByte { byte: 0 })]);
         assert_eq!((b.get(b'X'), b.get(b'Y'), b.get(b'E')), (Some(1.0), Some(2.0), Some(0.5)));
         // A run of stray bytes glued to the next word leaves that word readable.
@@ -603,7 +602,7 @@ mod tests {
     fn exponent_notation_is_read_as_firmware_does_and_reported() {
         let b = parse("G1 F1e300");
         assert_eq!((b.get(b'F'), b.get(b'E')), (Some(1.0), Some(300.0)));
-        let finding = Finding::ExponentNotation { word: "F1e300".into(), mixed_case: true };
+        let finding = Finding::ExponentNotation { word: "F1e300".into() };
         assert_eq!(b.diagnostics, [Diagnostic::at(3, finding.clone())]);
         assert_eq!(finding.severity(), Severity::Error);
         assert_eq!(
@@ -614,14 +613,11 @@ mod tests {
         // Python's str(0.00001): a 5 mm retraction on Marlin.
         let b = parse("G1 X1e-05 Y2");
         assert_eq!((b.get(b'X'), b.get(b'E'), b.get(b'Y')), (Some(1.0), Some(-5.0), Some(2.0)));
-        assert_eq!(
-            b.diagnostics[0].finding,
-            Finding::ExponentNotation { word: "X1e-05".into(), mixed_case: true }
-        );
+        assert_eq!(b.diagnostics[0].finding, Finding::ExponentNotation { word: "X1e-05".into() });
         // Words without spaces, one case: maybe meant as two words; a warning.
         for (raw, word) in [("G1X10E5", "X10E5"), ("g1x1.5e+2", "x1.5e+2")] {
             let b = parse(raw);
-            let finding = Finding::ExponentNotation { word: word.into(), mixed_case: false };
+            let finding = Finding::ExponentNotation { word: word.into() };
             assert_eq!(b.diagnostics.iter().map(|d| &d.finding).collect::<Vec<_>>(), [&finding], "{raw}");
             assert_eq!(finding.severity(), Severity::Warning);
         }
