@@ -262,5 +262,12 @@ fn print_human(out: &mut dyn Write, r: &MixReport) -> std::io::Result<()> {
     if r.dropped_retractions > 0 {
         writeln!(out, "dropped slicer tool-change retractions {}", r.dropped_retractions)?;
     }
+    if r.tool_temperatures > 0 {
+        writeln!(
+            out,
+            "slicer tool temperatures rewritten {} (one nozzle: the printing tool's kept, others made comments)",
+            r.tool_temperatures
+        )?;
+    }
     Ok(())
 }
