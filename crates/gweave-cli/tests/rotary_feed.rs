@@ -178,3 +178,32 @@ fn a_rotary_header_is_read_from_the_stream_in_every_container_and_from_standard_
     let s_s = sim["time"]["motion_s"].as_f64().unwrap() + sim["time"]["dwell_s"].as_f64().unwrap();
     assert!((e_s - estimate_s).abs() < 1e-6 && (s_s - sim_s).abs() < 1e-6, "stdin: {e_s} s, {s_s} s");
 }
+
+/// Regression (stats_of_a_rotary_wrap_ignores_a, end to end): `stats` of a wrapped plate read
+/// the mandrel's turns as no move. Measured on the mandrel, its print is the flat one's with
+/// each circumferential length grown by (R0 + z) / R0 (z 0.2 to 2 mm on a 15 mm radius), its
+/// axial extents the flat X ones and its angles within one turn.
+#[test]
+fn stats_of_a_rotary_wrap_measures_the_mandrel() {
+    let dir = tempfile::tempdir().unwrap();
+    let plate = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/data/rotary/plate.gcode");
+    let wrapped = dir.path().join("wrapped.gcode");
+    gweave(&["rotary", "wrap", plate, "-o", wrapped.to_str().unwrap(), "--mandrel-diameter", "30", "-q"]);
+    let stats = |file: &str| -> serde_json::Value {
+        serde_json::from_slice(&gweave(&["stats", file, "--json"]).stdout).unwrap()
+    };
+    let (flat, round) = (stats(plate), stats(wrapped.to_str().unwrap()));
+    let (flat_mm, round_mm) = (flat["print_mm"].as_f64().unwrap(), round["print_mm"].as_f64().unwrap());
+    assert!(flat_mm < round_mm && round_mm < flat_mm * 17.0 / 15.0, "{flat_mm} -> {round_mm}");
+    assert!(flat.get("rotary").is_none());
+    let r = &round["rotary"];
+    assert_eq!(r["mandrel_diameter_mm"], 30.0);
+    let bounds = &flat["extrusion_bounds"];
+    for (i, side) in ["min", "max"].iter().enumerate() {
+        let flat_x = bounds[side][0].as_f64().unwrap();
+        assert!((r["axial_mm"][i].as_f64().unwrap() - flat_x).abs() < 1e-3, "{r}");
+        assert!((0.0..=360.0).contains(&r["angle_deg"][i].as_f64().unwrap()), "{r}");
+        let radius = r["radius_mm"][i].as_f64().unwrap();
+        assert!((15.2 - 1e-6..=17.0 + 1e-6).contains(&radius), "{r}");
+    }
+}

@@ -107,6 +107,10 @@ impl GroupKey {
             Finding::MalformedNumber { letter }
             | Finding::NotFinite { letter }
             | Finding::MissingValue { letter } => (letter.to_string(), Feature::Unknown),
+            // Grouped by letter too: every `F` written `1e300` apart from `X`s written `1e-05`.
+            Finding::ExponentNotation { word } => {
+                (format!("{}{:?}", word.get(..1).unwrap_or_default(), finding.severity()), Feature::Unknown)
+            }
             _ => (String::new(), Feature::Unknown),
         };
         GroupKey { kind: std::mem::discriminant(finding), detail, feature }
@@ -293,20 +297,6 @@ impl Pass for CheckPass {
             if letter == b'T' && number >= MAX_TOOLS {
                 let at = block.command_span.start as usize;
                 self.add(n, Diagnostic::at(at, Finding::ToolOutOfRange { tool: number }));
-            }
-            let is_motion = letter == b'G' && matches!(number, 0..=3);
-            if is_motion {
-                for w in &block.words {
-                    if w.value == Value::Empty && (AXIS_LETTERS.contains(&w.letter) || w.letter == b'F') {
-                        self.add(
-                            n,
-                            Diagnostic::at(
-                                w.span.start as usize,
-                                Finding::MissingValue { letter: w.letter as char },
-                            ),
-                        );
-                    }
-                }
             }
         }
         if let Some(w) = block.word(b'F') {

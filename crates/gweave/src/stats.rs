@@ -145,6 +145,10 @@ pub struct Stats {
     pub filament_matches_slicer: Option<bool>,
     /// What the file does that is worth a look.
     pub warnings: Vec<String>,
+    /// A rotary program (its header names the machine): the extents on the mandrel; the
+    /// lengths and times above are then measured on its surface ([`crate::rotary::surface`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotary: Option<crate::rotary::surface::RotarySurface>,
 }
 
 /// The pass that gathers [`Stats`].
@@ -267,6 +271,7 @@ impl StatsPass {
             slicer_figures: self.figures,
             filament_matches_slicer,
             warnings,
+            rotary: None,
         }
     }
 
@@ -474,17 +479,32 @@ pub fn stats_file(
 ) -> crate::Result<crate::malformed::WithMalformed<Stats>> {
     use crate::malformed::{Malformed, WithMalformed};
     use crate::pass::Counting;
+    use crate::rotary::{preview::RotaryReading, surface::SurfacePass};
+    // A program whose header names a rotary machine is measured on its mandrel.
+    let rotary = RotaryReading::for_file(path, None).ok().flatten();
     let run = crate::run::Run::file(path).progress(progress).strictness(strictness);
-    Ok(match strictness {
-        crate::pass::Strictness::Strict => {
+    Ok(match (strictness, rotary) {
+        (crate::pass::Strictness::Strict, None) => {
             let mut pass = StatsPass::new(diameter_mm);
             let state = run.scan(&mut pass)?;
             WithMalformed { report: pass.into_stats(&state), malformed: Malformed::default() }
         }
-        crate::pass::Strictness::Lenient => {
+        (crate::pass::Strictness::Strict, Some(reading)) => {
+            let mut pass = SurfacePass::new(StatsPass::new(diameter_mm), reading);
+            let state = run.scan(&mut pass)?;
+            let report = pass.into_stats(|flat| flat.into_stats(&state));
+            WithMalformed { report, malformed: Malformed::default() }
+        }
+        (crate::pass::Strictness::Lenient, None) => {
             let mut pass = Counting::new(StatsPass::new(diameter_mm));
             let state = run.scan(&mut pass)?;
             WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed }
+        }
+        (crate::pass::Strictness::Lenient, Some(reading)) => {
+            let mut pass = SurfacePass::new(Counting::new(StatsPass::new(diameter_mm)), reading);
+            let state = run.scan(&mut pass)?;
+            let malformed = pass.inner.malformed;
+            WithMalformed { report: pass.into_stats(|c| c.pass.into_stats(&state)), malformed }
         }
     })
 }

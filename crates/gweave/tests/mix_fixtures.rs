@@ -161,9 +161,10 @@ fn run(rel: &str, profile: MixProfile) -> Checked {
     let mut rewritten = 0u64;
     // Lines the pass writes of its own; only these may stand between two input lines.
     let inserted = |o: &str| {
-        ["; gweave", ";T", ";G", "M16", "M56", "T", "G92 E", "G0 ", "G1 ", "; ", "M568"]
+        ["; gweave", ";T", ";G", "M16", "M56", "T", "G92 E", "G0 ", "G1 ", "; ", "M568", ";M104", ";M109"]
             .iter()
             .any(|p| o.starts_with(p))
+            || o.contains("; gweave mix: the mixing hotend, for the slicer's T")
     };
     for l in input.lines() {
         let t = l.trim_start();
@@ -185,14 +186,19 @@ fn run(rel: &str, profile: MixProfile) -> Checked {
         match found {
             Some(d) => k += d + 1,
             None => {
-                assert!(t.starts_with('T') || t.starts_with("G0") || t.starts_with("G1"), "changed: {l}");
+                // A slicer tool's temperature: for the one nozzle, or a comment.
+                let tool_heat = (t.starts_with("M104") || t.starts_with("M109")) && t.contains(" T");
+                assert!(
+                    t.starts_with('T') || t.starts_with("G0") || t.starts_with("G1") || tool_heat,
+                    "changed: {l}"
+                );
                 rewritten += 1;
             }
         }
     }
     let t_lines = input.lines().filter(|l| l.starts_with('T')).count() as u64;
     let dropped = if keep { 0 } else { report.dropped_retractions };
-    assert_eq!(rewritten, report.z_capped_lines + t_lines + dropped);
+    assert_eq!(rewritten, report.z_capped_lines + t_lines + dropped + report.tool_temperatures);
     Checked { report, ratios_by_layer, purges }
 }
 

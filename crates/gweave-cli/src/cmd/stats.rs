@@ -81,10 +81,19 @@ fn print_human(out: &mut dyn Write, input: &std::path::Path, read: &WithMalforme
     writeln!(out, "  slicer          {}{flavour}", s.slicer.name())?;
     writeln!(out, "  lines           {} ({:.1} MB)", s.lines, s.bytes as f64 / 1e6)?;
     writeln!(out, "  layers          {}", s.layers)?;
-    if let Some([lo, hi]) = s.z_range_mm {
+    if let Some(r) = &s.rotary {
+        // A rotary program: its words are not a flat box (the mandrel turns where Y moved).
+        writeln!(out, "  mandrel         {} mm (lengths and times on its surface)", r.mandrel_diameter_mm)?;
+        if let (Some([a0, a1]), Some([t0, t1]), Some([r0, r1])) = (r.axial_mm, r.angle_deg, r.radius_mm) {
+            writeln!(
+                out,
+                "  extents         axial {a0:.2}..{a1:.2} mm  angle {t0:.1}..{t1:.1} deg  radius {r0:.3}..{r1:.3} mm"
+            )?;
+        }
+    } else if let Some([lo, hi]) = s.z_range_mm {
         writeln!(out, "  z range         {lo:.3} .. {hi:.3} mm")?;
     }
-    if let Some(b) = s.extrusion_bounds {
+    if let (Some(b), None) = (s.extrusion_bounds, &s.rotary) {
         writeln!(
             out,
             "  extents         X {:.2}..{:.2}  Y {:.2}..{:.2} mm",

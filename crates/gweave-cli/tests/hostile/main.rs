@@ -17,6 +17,7 @@ mod counts;
 mod hosts;
 mod image_bombs;
 mod messages;
+mod odd_inputs;
 mod outputs;
 mod sd_links;
 mod serve;

@@ -31,6 +31,20 @@ pub enum Finding {
         /// The word's letter.
         letter: char,
     },
+    /// A number in exponent notation (`F1e300`), read as two words (`F1 E300`) as Marlin and
+    /// Klipper do.
+    ExponentNotation {
+        /// The word as written, exponent included (`F1e300`): a lower-case `e` after an
+        /// upper-case letter, as `printf` writes it, is an error; one case (words written
+        /// without spaces, maybe) a warning. Boxed, and the case read from it, to keep every
+        /// finding (and the errors that carry one) as small as before.
+        word: Box<str>,
+    },
+    /// The file's last line has no line ending and is malformed: the file looks cut short.
+    Truncated {
+        /// What is wrong with the line.
+        cause: Box<Finding>,
+    },
     /// A byte that cannot start a word.
     UnexpectedByte {
         /// The byte found.
@@ -111,6 +125,17 @@ pub enum Finding {
 }
 
 impl Finding {
+    /// Exponent notation as `printf` writes it into a template: `F1e300`, an upper-case letter
+    /// and a lower-case `e`.
+    fn is_mixed_case_exponent(&self) -> bool {
+        match self {
+            Finding::ExponentNotation { word } => {
+                word.starts_with(|c: char| c.is_ascii_uppercase()) && word.contains('e')
+            }
+            _ => false,
+        }
+    }
+
     /// How serious this finding is.
     pub fn severity(&self) -> Severity {
         match self {
@@ -120,6 +145,7 @@ impl Finding {
             | Finding::RelativeEDrift { .. }
             | Finding::AbsoluteEPrecision { .. }
             | Finding::LineNumberSequence { .. } => Severity::Warning,
+            Finding::ExponentNotation { .. } if !self.is_mixed_case_exponent() => Severity::Warning,
             // The findings it stands for were errors, each counted when kept.
             Finding::MoreFindings { .. } => Severity::Error,
             _ => Severity::Error,
@@ -133,6 +159,23 @@ impl fmt::Display for Finding {
             Finding::MalformedNumber { letter } => write!(f, "malformed number after '{letter}'"),
             Finding::NotFinite { letter } => write!(f, "'{letter}' is not a finite number"),
             Finding::MissingValue { letter } => write!(f, "'{letter}' has no number"),
+            Finding::ExponentNotation { word, .. } => {
+                // `F1e300`: the letter, the number up to the `e`, and the word the rest makes.
+                let upper = word.to_ascii_uppercase();
+                let split = upper.get(1..).and_then(|rest| rest.find('E')).map_or(upper.len(), |i| i + 1);
+                let (first, second) = upper.split_at(split);
+                write!(
+                    f,
+                    "'{word}' is exponent notation, which G-code does not have: read as {first} and \
+                     {second}, as Marlin and Klipper do (RepRapFirmware reads one number)"
+                )
+            }
+            Finding::Truncated { cause } => {
+                write!(
+                    f,
+                    "the file looks truncated (its last line is malformed and has no line ending): {cause}"
+                )
+            }
             Finding::UnexpectedByte { byte } => {
                 if byte.is_ascii_graphic() {
                     write!(f, "unexpected character '{}'", *byte as char)

@@ -8,7 +8,8 @@
 //! quoted string (`P"text"`) or an `{expression}`. String commands (`M117 text`, `M23 name.gcode`)
 //! keep their argument as text. A malformed word becomes a diagnostic and parsing goes on.
 
-use super::diag::{Diagnostic, Finding};
+use super::axes::axis_of;
+use super::diag::{Diagnostic, Finding, Severity};
 use super::line::{Block, Checksum, Command, PlainMove, Span, Value, Word};
 use super::number::{scan_at, scan_before_space, NumberError};
 use super::reader::RawLine;
@@ -43,6 +44,9 @@ pub fn parse_into(raw: &[u8], block: &mut Block) {
 #[inline]
 pub fn parse_line(line: &RawLine<'_>, block: &mut Block) {
     parse_ahead::<true>(line.bytes, line.with_lookahead(), block);
+    if line.eol.is_empty() {
+        mark_truncated(block);
+    }
 }
 
 /// [`parse_line`] for a reader that takes a plain move's numbers from [`Block::plain`] alone:
@@ -52,6 +56,22 @@ pub fn parse_line(line: &RawLine<'_>, block: &mut Block) {
 #[inline]
 pub fn parse_line_lean(line: &RawLine<'_>, block: &mut Block) {
     parse_ahead::<false>(line.bytes, line.with_lookahead(), block);
+    if line.eol.is_empty() {
+        mark_truncated(block);
+    }
+}
+
+/// A line without a line ending is the file's last. Many files end so, and that alone is fine;
+/// but a last line that is also malformed (`G1 X113.115 Y`, `G1 X1 (comm`) is what a copy or an
+/// upload cut short leaves: its first error says so ([`Finding::Truncated`]), and a strict run
+/// stops there with it.
+#[cold]
+#[inline(never)]
+pub(crate) fn mark_truncated(block: &mut Block) {
+    if let Some(d) = block.diagnostics.iter_mut().find(|d| d.finding.severity() == Severity::Error) {
+        let cause = std::mem::replace(&mut d.finding, Finding::MoreFindings { count: 0 });
+        d.finding = Finding::Truncated { cause: Box::new(cause) };
+    }
 }
 
 /// Parses `raw`; `ahead` is `raw` followed by any bytes that may be read past it, the first of
@@ -274,10 +294,24 @@ fn words(raw: &[u8], mut i: usize, block: &mut Block) {
             }
             _ => {
                 block.diagnose(Diagnostic::at(i, Finding::UnexpectedByte { byte: b }));
-                i += 1;
+                i = junk_end(raw, i + 1);
             }
         }
     }
+}
+
+/// The end of a run of bytes that start no token, from `at`: a stray byte and the digits after
+/// it (`X1\0375`, a NUL in a number) are one finding, not one per byte; the next letter, space,
+/// comment or checksum starts the next token.
+fn junk_end(raw: &[u8], mut at: usize) -> usize {
+    while at < raw.len()
+        && !raw[at].is_ascii_alphabetic()
+        && !is_space(raw[at])
+        && !matches!(raw[at], b';' | b'(' | b'*')
+    {
+        at += 1;
+    }
+    at
 }
 
 /// The end of the token at `at`: a bad token is skipped whole, so that its pieces do not read as
@@ -319,8 +353,15 @@ fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
             Ok((v, end)) if raw.get(end) == Some(&b':') => {
                 (Value::Number(v), colon_list_end(raw, end, letter, block))
             }
+            Ok((v, end)) if raw.get(end).is_some_and(|&b| b | 0x20 == b'e') => {
+                exponent(raw, start, end, block);
+                (Value::Number(v), end)
+            }
             Ok((v, end)) => (Value::Number(v), end),
-            Err(NumberError::Empty) => (Value::Empty, at),
+            Err(NumberError::Empty) => {
+                missing_value(letter, start, block);
+                (Value::Empty, at)
+            }
             Err(e) => {
                 let finding = match e {
                     NumberError::NotFinite => Finding::NotFinite { letter: letter as char },
@@ -333,6 +374,47 @@ fn word(raw: &[u8], start: usize, block: &mut Block) -> usize {
     };
     block.push_word(Word { letter, value, span: Span::new(start, end) });
     end
+}
+
+/// A number glued to an `e` and an exponent's digits (`F1e300`, `X1.5E-05`), at `start`, its
+/// number ending at `e_at`. G-code has no exponent notation, and firmware disagree on it: Marlin
+/// reads a number up to the `E` (`parser.h`, `value_float`) and takes `E300` as the next word
+/// when the `E` is upper case or its lower-case G-code option is on (off by default: then the
+/// `e300` is ignored); Klipper upper-cases the line and reads `F1 E300` too; RepRapFirmware's
+/// number reader takes the exponent, `1e300`. gweave reads `F1 E300`, as Marlin and Klipper,
+/// and says so. A lower-case `e` after an upper-case letter is what `printf`'s `%g` or Python's
+/// `str` writes into a template, never a slicer: an error (the 274 mm extrusion of `F1e300`
+/// stops a strict run). The same case as the letter (`X10E5`, `x10e5`) may be words written
+/// without spaces, which firmware takes as two: a warning.
+#[cold]
+#[inline(never)]
+fn exponent(raw: &[u8], start: usize, e_at: usize, block: &mut Block) {
+    let mut digits_at = e_at + 1;
+    if matches!(raw.get(digits_at), Some(b'+' | b'-')) {
+        digits_at += 1;
+    }
+    if !raw.get(digits_at).is_some_and(u8::is_ascii_digit) {
+        return;
+    }
+    let end = digits_at + raw[digits_at..].iter().take_while(|b| b.is_ascii_digit()).count();
+    let word = String::from_utf8_lossy(&raw[start..end]).into();
+    block.diagnose(Diagnostic::at(start, Finding::ExponentNotation { word }));
+}
+
+/// A word without a number (`G1 X113.115 Y`, a line cut short): on a move an error, whatever the
+/// firmware makes of it (Marlin ignores the word, Klipper refuses the move, others read 0 and
+/// move there); elsewhere (`G28 X`, `M84 E`) a letter alone is how commands take an axis.
+#[cold]
+#[inline(never)]
+fn missing_value(letter: u8, start: usize, block: &mut Block) {
+    let is_move = match block.command {
+        Command::Code { letter: b'G', number, .. } => number <= 3,
+        Command::None => true,
+        _ => false,
+    };
+    if is_move && (axis_of(letter).is_some() || matches!(letter, b'F' | b'I' | b'J' | b'R')) {
+        block.diagnose(Diagnostic::at(start, Finding::MissingValue { letter: letter as char }));
+    }
 }
 
 /// A RepRapFirmware string: `"..."`, with `""` standing for one quote.
@@ -492,12 +574,105 @@ mod tests {
 
     #[test]
     fn a_line_of_malformed_tokens_keeps_a_few_findings_and_a_count() {
-        let b = parse(&"\0".repeat(100_000));
+        let b = parse(&"\0 ".repeat(100_000));
         assert_eq!(b.diagnostics.len(), MAX_LINE_DIAGNOSTICS + 1);
         assert_eq!(b.diagnostics[0], Diagnostic::at(0, Finding::UnexpectedByte { byte: 0 }));
+        assert_eq!(b.diagnostics[1], Diagnostic::at(2, Finding::UnexpectedByte { byte: 0 }));
         let more = &b.diagnostics[MAX_LINE_DIAGNOSTICS];
         assert_eq!(more.finding, Finding::MoreFindings { count: 100_000 - MAX_LINE_DIAGNOSTICS as u32 });
         assert_eq!(more.finding.to_string(), "99984 more findings on this line");
+    }
+
+    /// Regression (check_counts_one_nul_as_7_errors): a NUL in a number (`X1\042.303`, a byte
+    /// lost in transfer) was one finding for the NUL and one for each byte after it.
+    #[test]
+    fn one_nul_in_a_number_is_one_finding() {
+        let b = parse("G1 X1\x0042.303 Y2 E.5");
+        assert_eq!(b.diagnostics, [Diagnostic::at(5, Finding::UnexpectedByte { byte: 0 })]);
+        assert_eq!((b.get(b'X'), b.get(b'Y'), b.get(b'E')), (Some(1.0), Some(2.0), Some(0.5)));
+        // A run of stray bytes glued to the next word leaves that word readable.
+        let b = parse("G1 X1\0\x01-7Y2");
+        assert_eq!(b.diagnostics.len(), 1);
+        assert_eq!(b.get(b'Y'), Some(2.0));
+    }
+
+    /// Regression (exponent_notation_extrudes_300_mm): `G1 F1e300` was read as `F1 E300` without
+    /// a word of it. It still is (as Marlin and Klipper read it), with an error at the word.
+    #[test]
+    fn exponent_notation_is_read_as_firmware_does_and_reported() {
+        let b = parse("G1 F1e300");
+        assert_eq!((b.get(b'F'), b.get(b'E')), (Some(1.0), Some(300.0)));
+        let finding = Finding::ExponentNotation { word: "F1e300".into() };
+        assert_eq!(b.diagnostics, [Diagnostic::at(3, finding.clone())]);
+        assert_eq!(finding.severity(), Severity::Error);
+        assert_eq!(
+            finding.to_string(),
+            "'F1e300' is exponent notation, which G-code does not have: read as F1 and E300, \
+             as Marlin and Klipper do (RepRapFirmware reads one number)"
+        );
+        // Python's str(0.00001): a 5 mm retraction on Marlin.
+        let b = parse("G1 X1e-05 Y2");
+        assert_eq!((b.get(b'X'), b.get(b'E'), b.get(b'Y')), (Some(1.0), Some(-5.0), Some(2.0)));
+        assert_eq!(b.diagnostics[0].finding, Finding::ExponentNotation { word: "X1e-05".into() });
+        // Words without spaces, one case: maybe meant as two words; a warning.
+        for (raw, word) in [("G1X10E5", "X10E5"), ("g1x1.5e+2", "x1.5e+2")] {
+            let b = parse(raw);
+            let finding = Finding::ExponentNotation { word: word.into() };
+            assert_eq!(b.diagnostics.iter().map(|d| &d.finding).collect::<Vec<_>>(), [&finding], "{raw}");
+            assert_eq!(finding.severity(), Severity::Warning);
+        }
+        // An `E` word glued to a number, not followed by digits: no exponent.
+        for raw in ["G1 X10E.4", "G1 X-2.5E", "G1 X1 E2"] {
+            assert!(
+                !parse(raw).diagnostics.iter().any(|d| matches!(d.finding, Finding::ExponentNotation { .. })),
+                "{raw}"
+            );
+        }
+    }
+
+    /// Regression (truncated_file_passes_every_command): a word without a number on a move is an
+    /// error from the lexer, so strict transforms stop at it, not only `check`.
+    #[test]
+    fn a_motion_word_without_a_number_is_an_error() {
+        for (raw, column, letter) in
+            [("G1 X113.115 Y", 13, 'Y'), ("G0 F", 4, 'F'), ("X", 1, 'X'), ("G2 X1 I", 7, 'I')]
+        {
+            let b = parse(raw);
+            assert_eq!(
+                b.diagnostics,
+                [Diagnostic { column, finding: Finding::MissingValue { letter } }],
+                "{raw}"
+            );
+        }
+        // Elsewhere a letter alone names an axis.
+        for raw in ["G28 X Y", "M84 E", "G92 E", "M18 X"] {
+            assert!(parse(raw).diagnostics.is_empty(), "{raw}");
+        }
+    }
+
+    /// Regression (truncated_file_passes_every_command): the last line of a file, cut mid-word
+    /// and without a line ending, says the file looks truncated; a good last line without one
+    /// (as some slicers end) and a malformed line with one do not.
+    #[test]
+    fn a_malformed_last_line_without_an_ending_looks_truncated() {
+        let block_of_last = |text: &str| {
+            let mut reader = crate::gcode::reader::LineReader::new(text.as_bytes());
+            let mut block = Block::default();
+            while let Some(line) = reader.next_line().unwrap() {
+                parse_line_lean(&line, &mut block);
+            }
+            block
+        };
+        let b = block_of_last("G28\nG1 X113.115 Y");
+        let cause = Box::new(Finding::MissingValue { letter: 'Y' });
+        assert_eq!(b.diagnostics, [Diagnostic { column: 13, finding: Finding::Truncated { cause } }]);
+        assert_eq!(
+            b.diagnostics[0].finding.to_string(),
+            "the file looks truncated (its last line is malformed and has no line ending): 'Y' has no number"
+        );
+        assert!(matches!(block_of_last("G1 X1 (a comm").diagnostics[0].finding, Finding::Truncated { .. }));
+        assert!(block_of_last("G28\nG1 X113.115 Y2").diagnostics.is_empty());
+        assert_eq!(block_of_last("G1 X1 Y\n").diagnostics[0].finding, Finding::MissingValue { letter: 'Y' });
     }
 
     #[test]
@@ -601,6 +776,9 @@ mod tests {
             let (mut from_reader, mut alone) = (Block::default(), Block::default());
             parse_line(&line, &mut from_reader);
             parse_into(line.bytes, &mut alone);
+            if line.eol.is_empty() {
+                mark_truncated(&mut alone);
+            }
             proptest::prop_assert_eq!(format!("{from_reader:?}"), format!("{alone:?}"));
         }
 

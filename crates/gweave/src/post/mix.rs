@@ -21,6 +21,13 @@
 //!    multi-material unload. Removed E moves become `G92 E` so the file's E positions still hold.
 //!    This looks back over at most [`HOLD_LINES`] lines (between a retraction and a `T<n>`).
 //!
+//! 6. A hotend temperature the slicer sets for one of its tools (`M104`/`M109 ... T<n>`) is for
+//!    the one nozzle only while that tool prints: for the tool printing it is the nozzle's
+//!    (`T0` kept as written, another `T` dropped, since Marlin's mixing build has one hotend and
+//!    answers `M104 T1` with "Invalid extruder"); for any other tool (a preheat before a change,
+//!    a standby after one) it becomes a comment, since on the one nozzle it would either do
+//!    nothing or set the idle tool's standby under the tool printing.
+//!
 //! Every other line is copied byte for byte; new lines use the profile's number format and the
 //! file's line endings.
 //!
@@ -408,6 +415,7 @@ impl MixPass {
                 self.replaced = true;
             }
             Effect::Move(mv) => self.process_move(ctx, mv)?,
+            Effect::None if is_hotend_target(ctx) => self.hotend_target(ctx),
             // The purge block primes and retracts again a firmware retraction in force too.
             Effect::FirmwareRetract { .. } => {
                 self.retraction.follow(ctx.effect);
@@ -415,6 +423,33 @@ impl MixPass {
             _ => {}
         }
         Ok(())
+    }
+
+    /// `M104`/`M109` with a `T` word: the nozzle's when `T` is the slicer tool printing, a
+    /// comment otherwise (step 6 of the module docs).
+    fn hotend_target(&mut self, ctx: &Ctx<'_>) {
+        let Some(t) = ctx.block.word(b'T') else { return };
+        let tool = t.number().filter(|n| (0.0..f64::from(u32::MAX)).contains(n)).map(|n| n as u32);
+        let line = ctx.line.bytes;
+        match tool {
+            Some(0) if self.slicer_tool == 0 => {}
+            Some(tool) if tool == self.slicer_tool => {
+                // The T word out, the rest as written: `M109 S215 T1` -> `M109 S215`.
+                let (start, end) = (t.span.start as usize, t.span.end as usize);
+                let before = line[..start].strip_suffix(b" ").unwrap_or(&line[..start]);
+                self.repl.extend_from_slice(before);
+                self.repl.extend_from_slice(&line[end..]);
+                self.repl.extend_from_slice(b" ; gweave mix: the mixing hotend, for the slicer's T");
+                self.repl.extend_from_slice(tool.to_string().as_bytes());
+                self.replaced = true;
+                self.acc.tool_temperatures += 1;
+            }
+            _ => {
+                self.repl.extend_from_slice(&other_tool_heat(line, self.slicer_tool));
+                self.replaced = true;
+                self.acc.tool_temperatures += 1;
+            }
+        }
     }
 
     fn process_move(&mut self, ctx: &Ctx<'_>, mv: &Move) -> Result<(), MixPassError> {
@@ -550,6 +585,25 @@ impl MixPass {
         }
         Ok(())
     }
+}
+
+/// Whether the line sets a hotend's temperature for a named tool: `M104`/`M109` with `T`.
+fn is_hotend_target(ctx: &Ctx<'_>) -> bool {
+    (ctx.block.command.is_m(104) || ctx.block.command.is_m(109)) && ctx.block.has(b'T')
+}
+
+/// The comment a temperature for a tool not printing becomes (`line` as written, `printing`
+/// the slicer tool printing): kept readable, so that nothing the slicer wrote is lost.
+fn other_tool_heat(line: &[u8], printing: u32) -> Vec<u8> {
+    let mut out = b";".to_vec();
+    out.extend_from_slice(line);
+    out.extend_from_slice(
+        format!(
+            " ; gweave mix: for a slicer tool not printing (T{printing} prints): one nozzle, one temperature"
+        )
+        .as_bytes(),
+    );
+    out
 }
 
 /// The pass's error for the line it was given (the driver names the file and the line).
@@ -781,5 +835,39 @@ mod tests {
         p.add_map("T0=Red").unwrap();
         let err = mix_bytes(p, format!("{PRINT}T1\nG1 X5 E3\n").as_bytes()).unwrap_err();
         assert_eq!(err.to_string(), "<input>:7: the file selects T1, which has no mix: add map T1=<mix>");
+    }
+
+    /// Regression (mix_keeps_m104_for_a_tool_the_mixing_machine_lacks): `mix` kept the slicer's
+    /// `M104 S215 T1` (`sim --machine mixing-4in`: "Invalid extruder"). A temperature for the
+    /// tool printing is the one nozzle's; one for another tool (a preheat, a standby, T0's too)
+    /// is a comment, so the idle tool's standby never cools the nozzle printing.
+    #[test]
+    fn mix_keeps_m104_for_a_tool_the_mixing_machine_lacks() {
+        let mut p = MixProfile::default();
+        p.add_map("T0=Red").unwrap();
+        p.add_map("T1=Blue").unwrap();
+        let input = "M104 S215 T0\nM104 S215 T1 ; preheat\nM109 S215 T0\n;LAYER_CHANGE\nG1 Z0.2 F100\n\
+                     G1 X10 E1 F1800\nM104 T1 S210\nT1\nM109 T1 S210 ; wait\nM104 T0 S150\nG1 X0 E2\n";
+        let (out, report) = mix_bytes(p, input.as_bytes()).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let temperatures: Vec<&str> =
+            text.lines().filter(|l| l.contains("M104") || l.contains("M109")).collect();
+        let other = |l: &str, t: u32| {
+            format!(
+                "{l} ; gweave mix: for a slicer tool not printing (T{t} prints): one nozzle, one temperature"
+            )
+        };
+        assert_eq!(
+            temperatures,
+            [
+                "M104 S215 T0".to_string(),
+                other(";M104 S215 T1 ; preheat", 0),
+                "M109 S215 T0".to_string(),
+                other(";M104 T1 S210", 0),
+                "M109 S210 ; wait ; gweave mix: the mixing hotend, for the slicer's T1".to_string(),
+                other(";M104 T0 S150", 1),
+            ]
+        );
+        assert_eq!(report.tool_temperatures, 4);
     }
 }

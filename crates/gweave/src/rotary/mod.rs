@@ -16,6 +16,7 @@
 //! - [`preview`]: any rotary program read back as the machine runs it, and drawn in 3D.
 //! - [`options`]: the options of both jobs (the CLI's flags, Python's keywords), declared once,
 //!   and laid over the TOML settings.
+//! - [`surface`]: `gweave stats` of a rotary program, lengths and extents on the mandrel.
 //! - [`report`]: both jobs end to end (write, read back, draw, report) for the CLI and Python.
 //!
 //! ```
@@ -47,6 +48,7 @@ pub mod options;
 pub mod preview;
 pub mod report;
 mod setup;
+pub mod surface;
 pub mod wrap;
 
 use thiserror::Error;

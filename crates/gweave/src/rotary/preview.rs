@@ -126,6 +126,11 @@ impl RotaryReading {
         Ok(Self { machine: machine.clone(), axes })
     }
 
+    /// The diameter of the mandrel the program is read on, mm.
+    pub fn mandrel_diameter_mm(&self) -> f64 {
+        self.machine.mandrel_diameter_mm
+    }
+
     /// How the file at `path` reads: on `machine` when given, else on the machine its header
     /// names ([`RotaryConfig::from_file_header`]); `None` for a flat file.
     pub fn for_file(path: &std::path::Path, machine: Option<&RotaryConfig>) -> Result<Option<Self>> {

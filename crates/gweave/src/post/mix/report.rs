@@ -90,6 +90,10 @@ pub struct MixReport {
     pub z_capped_lines: u64,
     /// Slicer tool-change retractions and unretractions removed.
     pub dropped_retractions: u64,
+    /// Hotend temperatures the slicer set for one of its tools, rewritten for the one nozzle:
+    /// for the tool printing without its `T` (but `T0`, kept as written), for another tool (a
+    /// preheat, a standby) made a comment.
+    pub tool_temperatures: u64,
     /// The dominant mix of each layer.
     pub layers: Vec<LayerMix>,
     /// What the run noticed and did anyway.
@@ -154,6 +158,13 @@ impl MixReport {
         if self.dropped_retractions > 0 {
             let _ = writeln!(s, "dropped slicer tool-change retractions {}", self.dropped_retractions);
         }
+        if self.tool_temperatures > 0 {
+            let _ = writeln!(
+                s,
+                "slicer tool temperatures rewritten {} (one nozzle: the printing tool's kept, others made comments)",
+                self.tool_temperatures
+            );
+        }
         s
     }
 }
@@ -172,6 +183,7 @@ pub(crate) struct Accounting {
     pub changes: u32,
     pub z_capped_lines: u64,
     pub dropped_retractions: u64,
+    pub tool_temperatures: u64,
     layers: Vec<LayerMix>,
     /// The layer being printed.
     current: Option<OpenLayer>,
@@ -213,6 +225,7 @@ impl Accounting {
             changes: 0,
             z_capped_lines: 0,
             dropped_retractions: 0,
+            tool_temperatures: 0,
             layers: Vec::new(),
             current: None,
             warnings: plan.warnings.clone(),
@@ -286,6 +299,7 @@ impl Accounting {
             changes: self.changes,
             z_capped_lines: self.z_capped_lines,
             dropped_retractions: self.dropped_retractions,
+            tool_temperatures: self.tool_temperatures,
             layers: self.layers,
             warnings: self.warnings,
         }
