@@ -93,11 +93,15 @@ def test_sim_stops_at_the_seeds_m0(tmp_path: Path) -> None:
 def test_estimate_names_the_file_and_line_as_the_cli(tmp_path: Path) -> None:
     # The estimate was set up in both front ends and its refusals drifted: Python said
     # `bad.gcode: line 3: ...` where the CLI says `bad.gcode:3: ...`.
+    # (Marlin's `M204 S-1` is now skipped and counted, as the virtual printer refuses it and
+    # carries on; a Klipper limit out of range still stops the estimate.)
     bad = tmp_path / "bad.gcode"
-    bad.write_text("G28\nG1 X1 F600\nM204 S-1\nG1 X5\n")
+    bad.write_text("G28\nG1 X1 F600\nSET_VELOCITY_LIMIT ACCEL=-1\nG1 X5\n")
     with pytest.raises(ValueError) as refused:
-        gweave.estimate(bad)
-    assert str(refused.value) == f"{bad}:3: M204 S must be positive and finite, got -1"
+        gweave.estimate(bad, machine=MACHINES / "klipper.toml")
+    assert str(refused.value) == (
+        f"{bad}:3: [motion.corners] max_accel_mm_s2 = -1 is out of range: 0.001 to 1000000 mm/s²"
+    )
 
 
 def test_sim_runs_a_core_profile_on_the_core_as_the_cli(tmp_path: Path) -> None:
