@@ -43,10 +43,19 @@ pub fn ends_text(ends: &[u8]) -> Cow<'_, str> {
 /// footer comes after the header.
 pub(crate) fn settings<'k>(text: &str, keys: &[&'k str]) -> BTreeMap<&'k str, String> {
     // Only the lines that name a key are looked at ([`lines_naming`]).
-    let cura: String =
-        lines_naming(text, &[";SETTING_3 "]).filter_map(|l| l.strip_prefix(";SETTING_3 ")).collect();
+    settings_in(lines_naming(text, &[";SETTING_3 "]), lines_naming(text, keys), keys)
+}
+
+/// The settings `keys` in Cura's `;SETTING_3` lines `cura` and the comment lines `comments`
+/// (lines that may hold other things too: each is read for `; key = value`).
+fn settings_in<'t, 'k>(
+    cura: impl Iterator<Item = &'t str>,
+    comments: impl Iterator<Item = &'t str>,
+    keys: &[&'k str],
+) -> BTreeMap<&'k str, String> {
+    let cura: String = cura.filter_map(|l| l.strip_prefix(";SETTING_3 ")).collect();
     let cura = cura.replace("\\\\n", "\n").replace("\\n", "\n");
-    let comments = lines_naming(text, keys).filter_map(|l| l.trim().strip_prefix(';'));
+    let comments = comments.filter_map(|l| l.trim().strip_prefix(';'));
     let mut found = BTreeMap::new();
     for line in comments.chain(cura.lines()) {
         let Some((k, v)) = line.split_once('=') else { continue };
@@ -91,17 +100,7 @@ mod tests {
 
     /// The lookup as it was: every line of the ends walked, trimmed and split.
     fn every_line<'k>(text: &str, keys: &[&'k str]) -> BTreeMap<&'k str, String> {
-        let cura: String = text.lines().filter_map(|l| l.strip_prefix(";SETTING_3 ")).collect();
-        let cura = cura.replace("\\\\n", "\n").replace("\\n", "\n");
-        let comments = text.lines().filter_map(|l| l.trim().strip_prefix(';'));
-        let mut found = BTreeMap::new();
-        for line in comments.chain(cura.lines()) {
-            let Some((k, v)) = line.split_once('=') else { continue };
-            if let Some(key) = keys.iter().find(|key| **key == k.trim()) {
-                found.insert(*key, v.trim().trim_end_matches(['"', '}', ',']).trim().to_owned());
-            }
-        }
-        found
+        settings_in(text.lines(), text.lines(), keys)
     }
 
     /// Regression (issue 35): a settings lookup walked every line of the ends (purge-shift's
