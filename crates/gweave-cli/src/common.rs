@@ -171,7 +171,7 @@ pub fn read_text(path: &Path) -> Result<String> {
 pub fn print_malformed(out: &mut dyn Write, m: &gweave::Malformed) -> io::Result<()> {
     if let Some(first) = m.first_malformed_line {
         let n = m.malformed_lines;
-        writeln!(out, "  malformed       {n} lines skipped (first: line {first}; see gweave check)")?;
+        writeln!(out, "  malformed       {n} lines read past (first: line {first}; see gweave check)")?;
     }
     Ok(())
 }

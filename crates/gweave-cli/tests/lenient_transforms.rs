@@ -71,7 +71,7 @@ fn a_lenient_transform_copies_the_bad_line_through_and_counts_it() {
         let out = run(name, &options, &input, &output, &["--lenient"]);
         let said = text(&out.stdout);
         assert!(
-            said.contains("malformed       1 lines skipped (first: line 7; see gweave check)"),
+            said.contains("malformed       1 lines read past (first: line 7; see gweave check)"),
             "{name}: {said}"
         );
     }

@@ -154,7 +154,7 @@ fn stats_and_preview_read_past_malformed_lines_with_lenient() {
     let png = png.to_str().unwrap();
     assert_eq!(gweave(&["preview", &bad, "-o", png]).status.code(), Some(1));
     let out = gweave(&["preview", &bad, "-o", png, "--lenient"]);
-    assert!(text(&out.stdout).contains("malformed       2 lines skipped (first: line 3; see gweave check)"));
+    assert!(text(&out.stdout).contains("malformed       2 lines read past (first: line 3; see gweave check)"));
 }
 
 #[test]

@@ -40,21 +40,7 @@ MAP = {
     "cat": ("cat", {**TARGET, "lenient": "lenient"}, ["path"]),
     "sim": ("sim", declared("sim"), ["path"]),
     "estimate": ("estimate", declared("estimate"), ["path"]),
-    "raster": (
-        "raster",
-        {
-            "output": "output",
-            **FORMAT,
-            **{
-                f: f.replace("-", "_")
-                for f in (
-                    "head machine threshold invert flip-y one-way fire-order density origin layer-height pixel-mm dpi "
-                    "heads channels recoat start end dialect feed fast-estimate test-pattern pattern-columns"
-                ).split()
-            },
-        },
-        ["inputs"],
-    ),
+    "raster": ("raster", {"output": "output", **FORMAT, **declared("raster")}, ["inputs"]),
     "slice-raster": (
         "slice_raster",
         {"layer-height": "layer_height", "dpi": "dpi", "pixel-mm": "pixel_mm", "margin": "margin", "output": "out_dir"},

@@ -15,7 +15,7 @@ use gweave::rotary::options::{TubeOptions, WrapOptions};
 use gweave::rotary::report::{MachineReport, TubeReport, WrapReport};
 use gweave_sim::transform::{self, Job};
 
-use super::transform::Shown;
+use super::transform::{settings_file, Shown};
 use crate::args::Lenient;
 use crate::common::hms;
 use crate::common::{print_summary, OutputArgs, ReportArgs};
@@ -99,9 +99,10 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     let target = args.out.target()?;
     args.report.refuse_json_with_stdout(target.is_stdout())?;
     let preview = args.preview.preview.as_deref();
+    let (settings_flag, settings) = settings_file(&*args.options);
     Files::new()
         .read("INPUT", Some(&args.input))
-        .read("-c", args.options.machine.config.as_deref())
+        .read(&settings_flag, settings.as_deref())
         .target(&target, &args.input)
         .write("--preview", preview)
         .write("--report", args.report.report.as_deref())
@@ -181,8 +182,9 @@ fn run_tube(args: TubeArgs) -> Result<ExitCode> {
     let target = args.format.target(&args.output)?;
     args.report.refuse_json_with_stdout(target.is_stdout())?;
     let preview = args.preview.preview.as_deref();
+    let (settings_flag, settings) = settings_file(&*args.options);
     Files::new()
-        .read("-c", args.options.machine.config.as_deref())
+        .read(&settings_flag, settings.as_deref())
         .write("-o", Some(&args.output))
         .write("--preview", preview)
         .write("--report", args.report.report.as_deref())

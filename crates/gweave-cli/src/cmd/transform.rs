@@ -66,7 +66,7 @@ fn run<T: Transform>(args: TransformArgs<T::Options>) -> Result<ExitCode> {
 
 /// The settings file a job's options name (the option `config`), and its flag as the CLI
 /// spells it (`-c`), for the files checked before the run.
-fn settings_file<O: JobOptions>(options: &O) -> (String, Option<PathBuf>) {
+pub(crate) fn settings_file<O: JobOptions>(options: &O) -> (String, Option<PathBuf>) {
     let config = O::SPEC.iter().zip(options.values()).find(|(spec, _)| spec.name == "config");
     match config {
         Some((spec, value)) => {

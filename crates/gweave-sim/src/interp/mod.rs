@@ -1,7 +1,7 @@
 //! The interpreter: a virtual Marlin-like printer that executes one command at a time on a
 //! simulated clock.
 //!
-//! A line goes through the core parser and modal state ([`Estimator::parse`]), the machine
+//! A line goes through the core parser and modal state ([`Estimator::lex`] and [`Estimator::apply`]), the machine
 //! looks at what it does (refuses a cold extrusion, scales the feed by `M220` and the flow by
 //! `M221`, warns about moves outside the build volume), and the motion core plans it
 //! ([`Estimator::run`]): the lookahead planner streams blocks to the steppers, and the clock is

@@ -159,7 +159,7 @@ impl fmt::Display for Finding {
             Finding::MalformedNumber { letter } => write!(f, "malformed number after '{letter}'"),
             Finding::NotFinite { letter } => write!(f, "'{letter}' is not a finite number"),
             Finding::MissingValue { letter } => write!(f, "'{letter}' has no number"),
-            Finding::ExponentNotation { word, .. } => {
+            Finding::ExponentNotation { word } => {
                 // `F1e300`: the letter, the number up to the `e`, and the word the rest makes.
                 let upper = word.to_ascii_uppercase();
                 let split = upper.get(1..).and_then(|rest| rest.find('E')).map_or(upper.len(), |i| i + 1);

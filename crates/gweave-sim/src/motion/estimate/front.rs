@@ -200,13 +200,7 @@ impl Front {
         }
     }
 
-    /// Parse `raw` and apply it to the modal state.
-    pub(super) fn parse(&mut self, raw: &[u8]) -> Effect {
-        self.lex(raw);
-        *self.apply(raw)
-    }
-
-    /// First half of [`Front::parse`]: read the line's words into [`Front::block`], counting
+    /// First half of reading a line: read the line's words into [`Front::block`], counting
     /// it; the modal state is not touched yet.
     pub(super) fn lex(&mut self, raw: &[u8]) {
         self.line += 1;
@@ -242,16 +236,13 @@ impl Front {
         self.state.effect = Effect::None;
     }
 
-    /// Second half of [`Front::parse`]: apply the line just read to the modal state.
+    /// Second half of reading a line: apply the line just read to the modal state.
     pub(super) fn apply(&mut self, raw: &[u8]) -> &Effect {
         self.state.apply(raw, &self.block);
         self.read_rotary_feed();
         &self.state.effect
     }
 
-    /// Accounts every layer after the first as one: the time accounts then stop growing with
-    /// the layers (a key per layer, feature and tool: tens of MB for a long print), for a
-    /// caller that needs only the total and the first layer's time.
     /// Counts the wait after each fire (`M700`/`M578`) of a printhead.
     pub(super) fn fires(&mut self, fire: FireWait) {
         self.book.fire = Some(fire);
@@ -262,6 +253,9 @@ impl Front {
         self.book.moved_since_m400
     }
 
+    /// Accounts every layer after the first as one: the time accounts then stop growing with
+    /// the layers (a key per layer, feature and tool: tens of MB for a long print), for a
+    /// caller that needs only the total and the first layer's time.
     pub(super) fn first_layer_only(&mut self) {
         self.book.fold_later_layers = true;
     }
@@ -293,7 +287,7 @@ impl Front {
         }
     }
 
-    /// [`Front::parse`] and [`Front::run`] for a line from a reader, whose look-ahead bytes
+    /// [`Front::lex`], [`Front::apply`] and [`Front::run`] for a line from a reader, whose look-ahead bytes
     /// speed up the lexer. A move is read in place from the state (it is large).
     #[inline(always)]
     pub(super) fn step(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
@@ -338,7 +332,7 @@ impl Front {
         self.run(raw, &effect, jobs)
     }
 
-    /// Turn `effect` (what [`Front::parse`] said `raw` does, possibly changed by the caller)
+    /// Turn `effect` (what [`Front::apply`] said `raw` does, possibly changed by the caller)
     /// and the line's motion-related commands into jobs.
     pub(super) fn run(
         &mut self,
@@ -496,7 +490,6 @@ impl Front {
         Ok(())
     }
 
-    /// `M163`-`M165` and `M567` on a mixing hotend (ignored without one).
     /// The queue drained, then `t_s` with nothing moving.
     fn dwell(&mut self, t_s: f64, jobs: &mut Vec<Job>) {
         jobs.push(Job::Drain);
@@ -514,6 +507,7 @@ impl Front {
         }
     }
 
+    /// `M163`-`M165` and `M567` on a mixing hotend (ignored without one).
     fn mixing_command(&mut self, raw: &[u8], jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
         let Some(mixing) = &mut self.mixing else {
             return Ok(());
