@@ -67,7 +67,7 @@ pub use motion::limits::{
     AxisLimits, CornerMode, Jerk, KlipperLimits, MotionProfile, MoveAccel, StepsPerUnit,
 };
 pub use motion::marlin_limits::{ExtruderLimits, MarlinCorners};
-pub use motion::planner::{PlannedBlock, Planner};
+pub use motion::planner::{PlannedBlock, Planner, PositionSet};
 pub use motion::slicer_limits::slicer_limits;
 pub use motion::stepper::{BresenhamWalk, Steppers};
 pub use profile::build_options::{BuildOptions, Feature, FirmwareKind, ProgramStop};

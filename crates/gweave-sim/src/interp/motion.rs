@@ -176,6 +176,7 @@ impl Machine {
             self.core.state_mut().pos[axis] = stop_mm;
             self.homed[axis] = true;
         }
+        self.core.homed(axes);
         self.core.idle(t_s);
         self.homing_s += t_s;
     }

@@ -36,6 +36,11 @@ impl Pos {
     pub fn to_array(self) -> [f64; 5] {
         [self.x_mm, self.y_mm, self.z_mm, self.e_mm, self.a_deg]
     }
+
+    /// The position of coordinates in the order X Y Z E A.
+    pub(crate) fn from_array([x_mm, y_mm, z_mm, e_mm, a_deg]: [f64; 5]) -> Self {
+        Self { x_mm, y_mm, z_mm, e_mm, a_deg }
+    }
 }
 
 /// Index of each axis in [`Pos::to_array`] and [`Geometry::delta`].

@@ -98,6 +98,7 @@ impl Back {
                 }
             }
             Job::Drain => self.drain(),
+            Job::SetPosition { pos, by } => self.planner.set_position(*pos, *by),
             Job::Dwell { t_s, tag } => {
                 self.dwell_s += *t_s;
                 self.acc.t_s += *t_s;

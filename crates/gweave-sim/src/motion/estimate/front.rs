@@ -26,7 +26,7 @@ use crate::inkjet::FireWait;
 use crate::interp::commands;
 use crate::motion::kinematics::{Move, Pos};
 use crate::motion::limits::{AxisUpdate, CornerMode, MotionProfile, ProfileError, M204};
-use crate::motion::planner::Planner;
+use crate::motion::planner::{Planner, PositionSet};
 
 /// Parser, modal state and the bookkeeping that turns lines into jobs.
 #[derive(Debug)]
@@ -349,7 +349,14 @@ impl Front {
                 self.dwell(*t_s, jobs);
                 self.book.moved_since_m400 = false;
             }
-            Effect::Home { .. } => jobs.push(Job::Drain),
+            Effect::Home { axes } => {
+                jobs.push(Job::Drain);
+                let pos = at(&self.state.pos);
+                jobs.push(Job::SetPosition { pos, by: PositionSet::Home { axes: *axes } });
+            }
+            Effect::SetPosition => {
+                jobs.push(Job::SetPosition { pos: at(&self.state.pos), by: PositionSet::G92 });
+            }
             Effect::FirmwareRetract { e_mm } => {
                 self.firmware_retract(*e_mm, jobs);
                 return Ok(());
@@ -690,7 +697,7 @@ fn push_move(jobs: &mut Vec<Job>, mv: Move, line: u64) {
 }
 
 /// The machine position of the core's modal position.
-fn at(p: &state::Position) -> Pos {
+pub(super) fn at(p: &state::Position) -> Pos {
     Pos { x_mm: p[state::X], y_mm: p[state::Y], z_mm: p[state::Z], e_mm: p[state::E], a_deg: p[state::A] }
 }
 

@@ -55,8 +55,9 @@ use gweave::{Block, Effect, Firmware, LineReader, RawLine, State};
 use thiserror::Error;
 
 use crate::inkjet::FireWait;
-use crate::motion::kinematics::{Move, MoveError};
+use crate::motion::kinematics::{Move, MoveError, Pos};
 use crate::motion::limits::{MotionProfile, ProfileError};
+use crate::motion::planner::PositionSet;
 use crate::motion::speed_trace::SpeedTrace;
 use crate::motion::stepper::{StepTotals, Steppers};
 
@@ -196,6 +197,9 @@ enum Job {
     Arc { chords: Box<Chords>, line: u64 },
     /// Plan every queued move to a stop (the firmware waits for its queue to drain).
     Drain,
+    /// The logical position became `pos` without a move (`G92`, homing): a planner in whole
+    /// steps re-sets the axes the firmware does.
+    SetPosition { pos: Pos, by: PositionSet },
     /// A `G4` dwell, attributed to `tag` (after a [`Job::Drain`]).
     Dwell { t_s: f64, tag: u64 },
     /// Firmware bookkeeping time that belongs to no layer.
@@ -367,6 +371,14 @@ impl Estimator {
     /// The modal state, to set what the machine found out itself (the position after homing).
     pub fn state_mut(&mut self) -> &mut State {
         &mut self.front.state
+    }
+
+    /// The machine homed `axes` (bit i: axis i of X Y Z) and the caller set where that left it
+    /// in [`Estimator::state_mut`]: the planner takes its position afresh from there, as the
+    /// firmware does after homing.
+    pub fn homed(&mut self, axes: u8) {
+        let pos = front::at(&self.front.state.pos);
+        self.back.planner.set_position(pos, PositionSet::Home { axes });
     }
 
     /// Lines parsed so far (the 1-based number of the last one).

@@ -13,12 +13,12 @@
 //! left with that exit speed (or, on an empty buffer, the machine stands still).
 
 use super::marlin_block::{populate, MarlinBlock, Previous, Settings, MINIMUM_PLANNER_SPEED};
+use super::marlin_position::{PositionSet, StepPosition};
 use super::marlin_steps::StepProfile;
 use super::trapezoid::Trapezoid;
 use super::{BlockSink, Lesser, PlannedBlock};
-use crate::motion::kinematics::{axis, deltas, extent, Move, MoveKind, Pos};
+use crate::motion::kinematics::{deltas, extent, Move, MoveKind, Pos};
 use crate::motion::limits::MotionProfile;
-use crate::motion::rounding::round_i64;
 
 const MIN_V2: f64 = MINIMUM_PLANNER_SPEED * MINIMUM_PLANNER_SPEED;
 
@@ -66,15 +66,10 @@ struct Queue {
 pub(crate) struct MarlinBuffer {
     queue: Queue,
     prev: Previous,
-    /// The planner position, whole steps per axis.
-    position: [f64; 5],
-    /// Where the last block made ended (the start of the next block), and where the last move
-    /// pushed ended: a move that starts elsewhere follows a `G92` or homing.
-    block_end: Pos,
-    last_end: Option<Pos>,
-    /// The extruder moves drive, and the E steps per mm the position is in.
+    /// The planner position in whole steps, and where the last block ended.
+    at: StepPosition,
+    /// The extruder moves drive.
     tool: usize,
-    e_steps_per_mm: f64,
     /// The settings in force, taken from the profile at the first move after a change.
     settings: Option<Settings>,
 }
@@ -109,22 +104,10 @@ impl MarlinBuffer {
         // Borrowed, not copied: the settings are some 250 bytes, and a move's work a few
         // hundred instructions.
         let set = self.settings.get_or_insert_with(|| Settings::new(profile, self.tool));
-        let e_steps_per_mm = set.steps_per_unit[axis::E];
-        if e_steps_per_mm != self.e_steps_per_mm && self.e_steps_per_mm > 0.0 {
-            // Another extruder with other E steps: the E position in its steps, as Marlin's
-            // `buffer_segment` rescales it.
-            self.position[axis::E] =
-                round_i64(self.position[axis::E] * e_steps_per_mm / self.e_steps_per_mm) as f64;
-        }
-        self.e_steps_per_mm = e_steps_per_mm;
-        if self.last_end != Some(mv.start) {
-            // Marlin's `set_position_mm`: every axis takes the new position, in whole steps.
-            self.position = set.steps_at(mv.start);
-            self.block_end = mv.start;
-        }
-        self.last_end = Some(mv.end);
-        let target = set.steps_at(mv.end);
-        let delta = std::array::from_fn(|i| target[i] - self.position[i]);
+        self.at.use_settings(set);
+        self.at.moving(mv.start, mv.end, set);
+        let target = self.at.steps_at(mv.end, set);
+        let delta = std::array::from_fn(|i| target[i] - self.at.steps[i]);
         if self.queue.len() + 1 >= set.buffer_size {
             self.queue.emit_front(sink);
         }
@@ -133,14 +116,23 @@ impl MarlinBuffer {
         let Some(b) = populate(delta, mv.feed_mm_s, self.queue.len(), set, &mut self.prev) else {
             return;
         };
-        self.position = target;
+        self.at.steps = target;
         // After a dropped move the block starts where the last block ended, not where `mv`
         // does: measured afresh.
-        let geo = if self.block_end == mv.start { geo } else { extent(&deltas(self.block_end, mv.end)) };
-        let mv = Move { start: self.block_end, ..*mv };
-        self.block_end = mv.end;
+        let block_end = self.at.block_end;
+        let geo = if block_end == mv.start { geo } else { extent(&deltas(block_end, mv.end)) };
+        let mv = Move { start: block_end, ..*mv };
+        self.at.block_end = mv.end;
         let gain_v2 = if b.nominal_length { f64::INFINITY } else { 2.0 * b.accel * b.mm };
         self.queue.push(Block { reverse_v2: -1.0, entry_v2: MIN_V2, gain_v2, b, mv, geo });
+    }
+
+    /// The logical position became `pos` without a move (`G92`, homing): the planner's steps
+    /// change as Marlin's do (see `marlin_position.rs`).
+    pub(crate) fn set_position(&mut self, pos: Pos, by: PositionSet, profile: &MotionProfile) {
+        let set = self.settings.get_or_insert_with(|| Settings::new(profile, self.tool));
+        self.at.use_settings(set);
+        self.at.set(pos, by, set);
     }
 
     /// Plan the rest of the buffer to a stop and emit it.

@@ -105,11 +105,13 @@ impl Settings {
         }
     }
 
-    /// The planner position of `pos`: each axis rounded to whole steps (Marlin's positions and
-    /// steps per mm are single precision).
-    pub(crate) fn steps_at(&self, pos: Pos) -> [f64; 5] {
+    /// The planner position of logical position `pos` with the workspace shifted by `shift`
+    /// (native = logical - shift, see `marlin_position.rs`): each axis rounded to whole steps
+    /// (Marlin's positions and steps per mm are single precision; without a shift the native
+    /// position is the logical one to the bit).
+    pub(crate) fn steps_at(&self, pos: Pos, shift: &[f32; 5]) -> [f64; 5] {
         let p = pos.to_array();
-        std::array::from_fn(|i| round_f32(p[i] as f32 * self.steps_per_unit32[i]))
+        std::array::from_fn(|i| round_f32((p[i] as f32 - shift[i]) * self.steps_per_unit32[i]))
     }
 }
 

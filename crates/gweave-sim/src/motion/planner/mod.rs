@@ -38,9 +38,11 @@ mod junction;
 mod klipper;
 mod marlin;
 mod marlin_block;
+mod marlin_position;
 mod marlin_steps;
 mod trapezoid;
 
+pub use marlin_position::PositionSet;
 pub(crate) use trapezoid::Trapezoid;
 
 use crate::motion::kinematics::{extent, Geometry, Move, MoveError, MoveKind, Pos};
@@ -219,6 +221,18 @@ impl Planner {
             _ => unreachable!("set_profile keeps the corner mode of the engine"),
         }
         Ok(())
+    }
+
+    /// The logical position became `pos` without a move (`G92`, homing). Marlin's planner
+    /// keeps its position in whole steps and changes it as the firmware does (`G92 E` takes E
+    /// afresh and leaves X Y Z their steps; `G92 X` shifts the origin; homing takes every axis
+    /// afresh: see `marlin_position.rs`); Klipper's (`klippy/extras/gcode_move.py`: `G92` only
+    /// moves the G-code offsets) and the constant-speed planner measure each move on its own,
+    /// and need nothing.
+    pub fn set_position(&mut self, pos: Pos, by: PositionSet) {
+        if let Engine::Marlin(m) = &mut self.engine {
+            m.set_position(pos, by, &self.profile);
+        }
     }
 
     /// Moves from now on drive extruder `tool` (`T<n>`): in Marlin mode with its own E limits,
