@@ -1,7 +1,8 @@
 //! Marlin's planner buffer (`Marlin/src/module/planner.cpp`: `Planner::recalculate`,
 //! `reverse_pass`, `forward_pass`, `recalculate_trapezoids`), in whole steps as the firmware
 //! plans (see `marlin_block.rs` for how a move becomes a block, `marlin_steps.rs` for its
-//! step trapezoid and time).
+//! step trapezoid and time, `marlin_position.rs` for the position in whole steps and what
+//! `G92` and homing do to it).
 //!
 //! The ring buffer has `lookahead_blocks` slots and, like any ring buffer that tells full
 //! from empty by its two indices, holds one block less. A new move waits for a free slot: when
