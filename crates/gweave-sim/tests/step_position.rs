@@ -2,7 +2,7 @@
 //! (`marlin_position.rs`): regressions for the X and Y steps a `G92 E0` used to lose after a
 //! dropped short move, and for the step pulses a purge-shifted file makes.
 
-use gweave_sim::{Estimator, MotionProfile};
+use gweave_sim::{Estimator, KlipperLimits, MotionProfile};
 
 /// The motor positions (X Y Z E A, steps) and step pulses (both directions) after running
 /// `lines` on the default Marlin profile (80 steps/mm on X and Y, 500 on E), every move made.
@@ -69,4 +69,25 @@ fn purge_shift_split_under_min_steps_makes_fewer_pulses_not_lost_steps() {
     assert_eq!(input_pulses[..2], [4575 + 77, 7482 + 78]);
     assert_eq!(shifted_pulses[..2], [4575 + 77, 7482 + 68]);
     assert_eq!(shifted_pulses[3], input_pulses[3] + 10_000);
+}
+
+/// `G92 E0` after a dropped travel plans as the same file with E counted on (no `G92`): the
+/// same blocks, times and step pulses, on Marlin's planner (E alone re-set, the travel's 4 X
+/// and Y steps carried into the next block) and on Klipper's (G92 only moves its offsets).
+#[test]
+fn g92_e0_plans_as_the_file_without_it_on_both_planners() {
+    let travel = "G1 X10 Y10 E1 F3000\nG1 X10.05 Y10.05\n";
+    let with_g92 = format!("{travel}G92 E0\nG1 X20 Y20 E1\nG1 X30 Y10 E2\n");
+    let without = format!("{travel}G1 X20 Y20 E2\nG1 X30 Y10 E3\n");
+    for profile in [MotionProfile::default(), MotionProfile::klipper(KlipperLimits::default())] {
+        let estimate = |text: &str| {
+            let mut est = Estimator::new(&profile).unwrap();
+            text.lines().for_each(|line| est.line(line.as_bytes()).unwrap());
+            est.finish()
+        };
+        let (a, b) = (estimate(&with_g92), estimate(&without));
+        assert_eq!((a.blocks, a.motion_s), (b.blocks, b.motion_s), "{:?}", profile.corners);
+        assert_eq!(a.steps.axes, b.steps.axes, "{:?}", profile.corners);
+        assert_eq!(a.steps.axes[..2], [2400, 2400]);
+    }
 }
