@@ -70,7 +70,7 @@ pub use motion::marlin_limits::{ExtruderLimits, MarlinCorners};
 pub use motion::planner::{PlannedBlock, Planner, PositionSet};
 pub use motion::slicer_limits::slicer_limits;
 pub use motion::stepper::{BresenhamWalk, Steppers};
-pub use profile::build_options::{BuildOptions, Feature, FirmwareKind, ProgramStop};
+pub use profile::build_options::{BuildOptions, BuildOptionsError, Feature, FirmwareKind, ProgramStop};
 pub use profile::builtin;
 pub use profile::m503::from_m503;
 pub use profile::{FaultSpec, Inkjet, MachineProfile, MachineProfileError};

@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use gweave_sim::MachineProfile;
 use gweave_sim::{help_lines, Machine, COMMANDS};
+use gweave_sim::{BuildOptions, BuildOptionsError, MachineProfile};
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -38,21 +38,58 @@ fn help_reply_is_the_command_list() {
     assert_eq!(out[1], format!("echo:  {:<19}  {}", "G0 G1", COMMANDS[0].what));
 }
 
+/// The table of commands in `docs/gcode.md` is the registry's: one row per entry, its codes, the
+/// build option it needs (from `needs`, the one list of what an option gates) and what it does.
 #[test]
 fn docs_gcode_md_lists_the_same_commands() {
     let text = std::fs::read_to_string(repo().join("docs/gcode.md")).unwrap();
-    let section = section(&text, "## The virtual printer's commands");
-    let rows: Vec<(String, String)> = section
+    let rows: Vec<&str> = section(&text, "## The virtual printer's commands")
         .lines()
-        .filter_map(|l| l.strip_prefix("| `"))
-        .map(|l| {
-            let (codes, rest) = l.split_once("` | ").unwrap_or_else(|| panic!("bad row: {l}"));
-            (codes.to_owned(), rest.trim_end_matches(" |").to_owned())
+        .filter(|l| l.starts_with("| `"))
+        .collect();
+    let want: Vec<String> = COMMANDS
+        .iter()
+        .map(|c| {
+            let option = c.needs.key().map(|k| format!("`{k}`")).unwrap_or_default();
+            format!("| `{}` | {option} | {} |", c.codes, c.what)
         })
         .collect();
-    let want: Vec<(String, String)> =
-        COMMANDS.iter().map(|c| (c.codes.to_owned(), c.what.to_owned())).collect();
-    assert_eq!(rows, want);
+    assert_eq!(rows, want, "the table should be:\n{}", want.join("\n"));
+}
+
+/// Each build option a row needs is named by the `[firmware]` key that builds it in: a board
+/// built without that key (and what needs it) answers every command of the row `Unknown command`,
+/// and one built with it carries them out (`every_listed_command_is_carried_out`).
+#[test]
+fn every_gated_command_is_unknown_without_the_key_its_row_names() {
+    let mut gated = 0;
+    for entry in COMMANDS {
+        let Some(key) = entry.needs.key() else { continue };
+        let mut table = toml::Value::try_from(full_firmware().firmware).unwrap();
+        let mut off = key;
+        // Switch off the key, then whatever the profile refuses without it (`lfn_write` needs
+        // `long_filenames`, which needs `sdcard`).
+        loop {
+            let value = if off == "mesh" { toml::Value::Array(vec![]) } else { toml::Value::Boolean(false) };
+            table.as_table_mut().unwrap().insert(off.to_owned(), value);
+            let fw: BuildOptions = table.clone().try_into().unwrap();
+            match fw.validate() {
+                Err(BuildOptionsError::Needs(dependant, _)) => off = dependant,
+                Ok(()) => break,
+                Err(e) => panic!("{key}: {e}"),
+            }
+        }
+        let profile = MachineProfile { firmware: table.try_into().unwrap(), ..MachineProfile::default() };
+        assert!(!profile.firmware.has(entry.needs), "{key} = false still has {:?}", entry.needs);
+        let mut m = Machine::new(profile).unwrap();
+        for code in entry.codes.split_whitespace() {
+            let mut out = Vec::new();
+            m.execute(code.as_bytes(), &mut |_t, l| out.push(l.to_owned()));
+            assert_eq!(out, [format!("echo:Unknown command: \"{code}\"")], "{key} = false");
+            gated += 1;
+        }
+    }
+    assert!(gated > 20, "{gated} gated codes");
 }
 
 /// The section of `text` under `heading`, up to the next heading of its level.

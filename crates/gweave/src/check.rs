@@ -30,7 +30,19 @@ use crate::run::Run;
 pub trait WordRanges: std::fmt::Debug + Sync {
     /// The first number word of the line in `block` (read from `line`; a line without a
     /// command is a move in the modal `motion`) outside its command's range.
-    fn check(&self, block: &Block, line: &[u8], motion: Motion) -> Result<(), OutOfRange>;
+    fn check(&self, block: &Block, line: &[u8], motion: Motion) -> Result<(), RefusedWord>;
+}
+
+/// A number word outside the range its command declares ([`WordRanges::check`]): which word,
+/// so that the finding points at its column, and the refusal the printer replies with
+/// (`G4 S = -1 is out of range: 0 to 86400 s`).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{refusal}")]
+pub struct RefusedWord {
+    /// The word's letter (`b'S'`).
+    pub letter: u8,
+    /// The refusal, naming the command and the word (`G4 S`).
+    pub refusal: OutOfRange,
 }
 
 /// Lint settings.
@@ -190,9 +202,7 @@ impl CheckPass {
         if block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error) {
             return;
         }
-        if let Err(refusal) = ranges.check(block, ctx.line.bytes, ctx.state.motion) {
-            // The name ends with the word's letter (`G4 S`).
-            let letter = refusal.name.bytes().last().unwrap_or(0);
+        if let Err(RefusedWord { letter, refusal }) = ranges.check(block, ctx.line.bytes, ctx.state.motion) {
             let column = block.word(letter).map_or(0, |w| w.span.start as usize);
             let OutOfRange { name: word, value, range } = refusal;
             let finding = Finding::OutOfRange(Box::new(WordOutOfRange { word, value, range }));
@@ -459,6 +469,45 @@ mod tests {
         let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t.gcode")) };
         drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
         pass.report.findings.iter().map(|f| (f.line, f.diagnostic.finding.to_string())).collect()
+    }
+
+    /// A machine's table that refuses every `S` word, under a name that does not end with it.
+    #[derive(Debug)]
+    struct RefusesS;
+
+    impl WordRanges for RefusesS {
+        fn check(&self, block: &Block, _: &[u8], _: Motion) -> std::result::Result<(), RefusedWord> {
+            match block.get(b'S') {
+                Some(v) => Err(RefusedWord {
+                    letter: b'S',
+                    refusal: OutOfRange {
+                        name: "the period".into(),
+                        value: v.to_string(),
+                        range: "0 to 1 s".into(),
+                    },
+                }),
+                None => Ok(()),
+            }
+        }
+    }
+
+    /// Regression (check_ranges_letter_from_message): the finding's column is the refused word's,
+    /// carried as its letter, not read back from the end of the refusal's text.
+    #[test]
+    fn a_refused_word_is_found_at_its_column_whatever_the_refusal_says() {
+        let mut pass = CheckPass::new(CheckOptions::default()).with_ranges(&RefusesS);
+        let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t.gcode")) };
+        drive_reader(&b"G4 P1 S5\nG4 P1\n"[..], reading, &mut pass, &mut io::sink()).unwrap();
+        let found: Vec<(u64, u32, String)> = pass
+            .report
+            .findings
+            .iter()
+            .map(|f| (f.line, f.diagnostic.column, f.diagnostic.finding.to_string()))
+            .collect();
+        assert_eq!(
+            found,
+            [(1, 7, "the period = 5 is out of range: 0 to 1 s (the printer refuses the line)".to_owned())]
+        );
     }
 
     #[test]

@@ -78,7 +78,7 @@ pub use run::{Ran, Run, Source};
 
 // The jobs: each one's entry point, options and report.
 pub use bed::Bed;
-pub use check::{check_file, check_file_with, CheckOptions, CheckReport, WordRanges};
+pub use check::{check_file, check_file_with, CheckOptions, CheckReport, RefusedWord, WordRanges};
 pub use options::{JobOptions, OptionError, OptionSpec};
 pub use post::mix::{mix, MixOptions, MixPassError};
 pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};

@@ -24,7 +24,7 @@ use gweave::gcode::effect::Motion;
 use gweave::gcode::line::PlainMove;
 use gweave::gcode::state::{self};
 use gweave::range::{self};
-use gweave::{Block, Command, Effect, MixingCode, OutOfRange, Range, Value, WordRanges};
+use gweave::{Block, Command, Effect, MixingCode, OutOfRange, Range, RefusedWord, Value, WordRanges};
 
 use super::{sd, Machine};
 use crate::motion::limits;
@@ -66,7 +66,8 @@ pub enum Queue {
 pub struct CommandSpec {
     /// The codes, space-separated, as written in G-code (`G0 G1`, `T<n>`, `?`).
     pub codes: &'static str,
-    /// What the virtual printer does with them, one line (the `?` reply and `docs/gcode.md`).
+    /// What the virtual printer does with them, one line (the `?` reply and `docs/gcode.md`);
+    /// the build option it needs is [`needs`](Self::needs), which both show beside it.
     pub what: &'static str,
     /// Carries the command out.
     pub(super) run: Handler,
@@ -79,7 +80,8 @@ pub struct CommandSpec {
     /// whole line before it changes anything if one is outside (`check`).
     pub params: &'static [Param],
     /// The build option (`[firmware]` key) it needs; a board built without it answers
-    /// `Unknown command`, as Marlin does a command it was not compiled with.
+    /// `Unknown command`, as Marlin does a command it was not compiled with. The one list of
+    /// the commands an option gates: the `?` reply and docs/gcode.md show it from here.
     pub needs: Feature,
     /// Whether the serial link carries it out before the machine sees it.
     pub link: Link,
@@ -202,13 +204,13 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "G10 G11", what: "firmware retract / recover (45 / 8 mm/s), Marlin's `G10 S1` too; G10 with P (tool) and S sets a tool temperature (RepRapFirmware)", run: g10_g11, params: TOOL_TEMP, needs: Feature::FwRetract, ..ROW },
     CommandSpec { codes: "G20 G21", what: "inches / millimetres", run: core, ..ROW },
     CommandSpec { codes: "G28", what: "home the named axes (all without words) against the endstops, with Marlin's bump", run: home, ..ROW },
-    CommandSpec { codes: "G29", what: "bed levelling (firmware.mesh): probe the grid in simulated time, store a flat mesh, levelling on", run: g29, needs: Feature::Mesh, ..ROW },
+    CommandSpec { codes: "G29", what: "bed levelling: probe the grid in simulated time, store a flat mesh, levelling on", run: g29, needs: Feature::Mesh, ..ROW },
     CommandSpec { codes: "G90 G91", what: "absolute / relative coordinates (E too)", run: core, ..ROW },
     CommandSpec { codes: "G92", what: "set the logical position without moving", run: set_position, params: &[p("XYZ", range::POSITION_MM)], ..ROW },
     CommandSpec { codes: "G93 G94", what: "inverse-time feed (F = 1 / minutes of each move) / units per minute, in a rotary program (its header's feed convention)", run: core, ..ROW },
     CommandSpec { codes: "M0 M1", what: "program stop: finish the moves, motors off; with m0 = \"seed\" also home and end the program", run: program_stop, queue: Queue::Drains, ..ROW },
     CommandSpec { codes: "M17 M18 M84", what: "motors on (accepted) / off (the axes must be homed again)", run: motors, params: PERIOD, ..ROW },
-    CommandSpec { codes: "M20", what: "SD card (firmware.sdcard, serve --sd DIR): list the files (L: long names)", run: sd::m20, needs: Feature::Sdcard, ..ROW },
+    CommandSpec { codes: "M20", what: "SD card (serve --sd DIR): list the files (L: long names)", run: sd::m20, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M21", what: "SD card: mount", run: sd::m21, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M22", what: "SD card: release", run: sd::m22, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M23", what: "SD print: select a file", run: sd::m23, needs: Feature::Sdcard, ..ROW },
@@ -220,14 +222,14 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M29", what: "SD upload: end it", run: sd::m29, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M30", what: "SD card: delete a file", run: sd::m30, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M32", what: "SD print: select a file and start", run: sd::m32, needs: Feature::Sdcard, ..ROW },
-    CommandSpec { codes: "M33", what: "long name of a file (firmware.long_filenames)", run: sd::m33, needs: Feature::LongFilenames, ..ROW },
+    CommandSpec { codes: "M33", what: "long name of a file", run: sd::m33, needs: Feature::LongFilenames, ..ROW },
     CommandSpec { codes: "M31", what: "print job time", run: m31, ..ROW },
-    CommandSpec { codes: "M42", what: "set a pin (firmware.pin_control): P pin, S value", run: m42, params: &[p("S", range::PWM)], needs: Feature::PinControl, ..ROW },
-    CommandSpec { codes: "M226", what: "wait for a pin state (firmware.pin_control)", run: m226, needs: Feature::PinControl, ..ROW },
+    CommandSpec { codes: "M42", what: "set a pin: P pin, S value", run: m42, params: &[p("S", range::PWM)], needs: Feature::PinControl, ..ROW },
+    CommandSpec { codes: "M226", what: "wait for a pin state", run: m226, needs: Feature::PinControl, ..ROW },
     CommandSpec { codes: "M73", what: "progress (accepted)", run: accepted, params: &[p("P", PROGRESS_PCT)], needs: Feature::SetProgress, ..ROW },
     CommandSpec { codes: "M117", what: "status message, sent to the host as //action:notification", run: m117, ..ROW },
     CommandSpec { codes: "M75 M76 M77", what: "print job timer start / pause / stop", run: job_timer, ..ROW },
-    CommandSpec { codes: "M80", what: "power on (firmware.psu_control)", run: accepted, needs: Feature::PsuControl, ..ROW },
+    CommandSpec { codes: "M80", what: "power on", run: accepted, needs: Feature::PsuControl, ..ROW },
     CommandSpec { codes: "M81", what: "power off: heaters and motors off", run: m81, ..ROW },
     CommandSpec { codes: "M82 M83", what: "absolute / relative extrusion", run: core, ..ROW },
     CommandSpec { codes: "M92", what: "steps per unit X Y Z E of the steppers", run: m92, params: &[p("XYZE", range::STEPS_PER_UNIT)], ..ROW },
@@ -244,7 +246,7 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M118", what: "print a message to the host (A1: // prefix, E1: echo: prefix)", run: m118, ..ROW },
     CommandSpec { codes: "M119", what: "endstop states", run: m119, while_halted: true, queue: Queue::Drains, ..ROW },
     CommandSpec { codes: "M140 M190", what: "bed target, M190 also waits: S while heating, R both ways", run: bed_target, params: &[p("SRP", range::TEMPERATURE_C)], ..ROW },
-    CommandSpec { codes: "M154", what: "report the position every S seconds (firmware.autoreport_pos)", run: m154, params: PERIOD, needs: Feature::AutoreportPos, ..ROW },
+    CommandSpec { codes: "M154", what: "report the position every S seconds", run: m154, params: PERIOD, needs: Feature::AutoreportPos, ..ROW },
     CommandSpec { codes: "M155", what: "report temperatures every S seconds (0: off)", run: m155, params: PERIOD, needs: Feature::AutoreportTemp, ..ROW },
     CommandSpec { codes: "M163 M164 M165 M166", what: "mixing: set a weight, store a virtual tool, mix at once, gradient (accepted)", run: mixing, ..ROW },
     CommandSpec { codes: "M201", what: "maximum acceleration per axis", run: core, params: &[p("XYZE", range::ACCEL_MM_S2), p("A", limits::ACCEL_DEG_S2)], ..ROW },
@@ -260,15 +262,15 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M304", what: "set or report the bed PID gains", run: m304, params: &[p("PID", control::GAIN)], ..ROW },
     CommandSpec { codes: "M400", what: "wait for the queued moves to finish; its ok takes that time in wall time too (hosts time it)", run: m400, queue: Queue::Drains, ..ROW },
     CommandSpec { codes: "M420", what: "bed levelling on/off (S), mesh report (V)", run: m420, needs: Feature::Mesh, ..ROW },
-    CommandSpec { codes: "M500 M501", what: "settings: save to / load from the EEPROM file (firmware.eeprom)", run: eeprom, needs: Feature::Eeprom, ..ROW },
+    CommandSpec { codes: "M500 M501", what: "settings: save to / load from the EEPROM file", run: eeprom, needs: Feature::Eeprom, ..ROW },
     CommandSpec { codes: "M502 M503", what: "settings: factory defaults, report", run: defaults_or_report, ..ROW },
     CommandSpec { codes: "M524", what: "abort the SD print", run: sd::m524, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M563 M567", what: "tool definition (accepted) and mix ratios (RepRapFirmware)", run: mixing, ..ROW },
     CommandSpec { codes: "M568", what: "tool temperature, as G10 P S (RepRapFirmware 3.3+; on a mixing hotend, the nozzle's)", run: rrf_tool_temperature, params: TOOL_TEMP, ..ROW },
-    CommandSpec { codes: "M600", what: "filament change (firmware.advanced_pause): park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, needs: Feature::AdvancedPause, ..ROW },
-    CommandSpec { codes: "M851", what: "probe offsets X Y Z (firmware.probe)", run: m851, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
-    CommandSpec { codes: "M900", what: "linear advance K (firmware.linear_advance; accepted: it shapes the extruder's motion, not the print's time)", run: accepted, params: &[p("K", ADVANCE_K)], needs: Feature::LinearAdvance, ..ROW },
-    CommandSpec { codes: "M876", what: "answer a host prompt (firmware.prompt_support)", run: m876, needs: Feature::PromptSupport, ..ROW },
+    CommandSpec { codes: "M600", what: "filament change: park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, needs: Feature::AdvancedPause, ..ROW },
+    CommandSpec { codes: "M851", what: "probe offsets X Y Z", run: m851, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
+    CommandSpec { codes: "M900", what: "linear advance K (accepted: it shapes the extruder's motion, not the print's time)", run: accepted, params: &[p("K", ADVANCE_K)], needs: Feature::LinearAdvance, ..ROW },
+    CommandSpec { codes: "M876", what: "answer a host prompt", run: m876, needs: Feature::PromptSupport, ..ROW },
     CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd::m928, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M578 M700", what: "inkjet fire at the carriage position (machines with a printhead)", run: fire, params: &[p("P", HEAD), p("S", NOZZLE_BITS)], ..ROW },
     CommandSpec { codes: "M999", what: "restart after a halt", run: restart, while_halted: true, ..ROW },
@@ -277,10 +279,14 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "?", what: "this list", run: help, while_halted: true, ..ROW },
 ];
 
-/// The `?` reply: a title line, then `echo:  <codes>  <what>` per command.
+/// The `?` reply: a title line, then `echo:  <codes>  <what>` per command, with the build
+/// option it needs from its row (`[firmware.sdcard]`), so that no help text repeats the gating.
 pub fn help_lines() -> Vec<String> {
     std::iter::once("echo:gweave-sim commands:".to_owned())
-        .chain(COMMANDS.iter().map(|c| format!("echo:  {:<19}  {}", c.codes, c.what)))
+        .chain(COMMANDS.iter().map(|c| match c.needs.key() {
+            Some(key) => format!("echo:  {:<19}  {} [firmware.{key}]", c.codes, c.what),
+            None => format!("echo:  {:<19}  {}", c.codes, c.what),
+        }))
         .collect()
 }
 
@@ -372,22 +378,25 @@ pub(super) fn help_spec() -> &'static CommandSpec {
 
 /// The words of the line in `block` against the ranges its command's row declares
 /// ([`check`]), before the line changes anything: what the virtual printer refuses, and what
-/// `estimate` skips, alike. A line without a command is a move in the modal motion `modal`; a
-/// command the machine does not have (not in the registry, or `known` says it was not built
-/// with it) is not checked: it is unknown, not out of range. A plain move, most lines of a
-/// print, is checked by [`PlainRanges`] (its words may not be listed in the block).
+/// `estimate` skips, alike. A line without a command is a move in the modal motion `modal`.
+/// `row` gives the row of a command, `None` for one the machine does not have (not in the
+/// registry, or not in its build): that is unknown, not out of range, and is not checked. The
+/// dispatcher, which has looked the line's command up already, answers with that row
+/// (`commands::lookup` once a line); `estimate` and `check` with [`lookup`], every command
+/// taken as built. A plain move, most lines of a print, is checked by [`PlainRanges`] without
+/// asking `row` (its words may not be listed in the block).
 #[inline(always)]
 pub(crate) fn check_line(
     block: &Block,
     line: &[u8],
     modal: Motion,
-    known: impl Fn(&CommandSpec) -> bool,
-) -> Result<(), OutOfRange> {
+    row: impl FnOnce(Command) -> Option<&'static CommandSpec>,
+) -> Result<(), RefusedWord> {
     // Inlined, a plain move costs its comparisons and no call.
     if block.plain.present != 0 {
         return PlainRanges::get().check(&block.plain);
     }
-    check_other_line(block, line, modal, known)
+    check_other_line(block, line, modal, row)
 }
 
 /// [`check_line`] for a line that is not a plain move.
@@ -396,8 +405,8 @@ fn check_other_line(
     block: &Block,
     line: &[u8],
     modal: Motion,
-    known: impl Fn(&CommandSpec) -> bool,
-) -> Result<(), OutOfRange> {
+    row: impl FnOnce(Command) -> Option<&'static CommandSpec>,
+) -> Result<(), RefusedWord> {
     if block.words.is_empty() {
         return Ok(());
     }
@@ -413,10 +422,11 @@ fn check_other_line(
         }
         command => command,
     };
-    match (command, lookup(command, b"")) {
-        (Command::Code { letter, number, .. }, Some(spec)) if known(spec) => {
-            check((letter, number), spec.params, block, line)
-        }
+    match command {
+        Command::Code { letter, number, .. } => match row(command) {
+            Some(spec) => check((letter, number), spec.params, block, line),
+            None => Ok(()),
+        },
         _ => Ok(()),
     }
 }
@@ -453,7 +463,7 @@ impl PlainRanges {
     }
 
     #[inline(always)]
-    fn check(&self, plain: &PlainMove) -> Result<(), OutOfRange> {
+    fn check(&self, plain: &PlainMove) -> Result<(), RefusedWord> {
         // Only the letters the line has and the row bounds (a move is mostly X, Y and an
         // unbounded E): two or three comparisons.
         let mut letters = plain.present & self.bounded;
@@ -473,7 +483,7 @@ impl PlainRanges {
     /// [`check`] finds it on the same words (a 0 may be in a range that takes it).
     #[cold]
     #[inline(never)]
-    fn refusal(&self, plain: &PlainMove) -> Result<(), OutOfRange> {
+    fn refusal(&self, plain: &PlainMove) -> Result<(), RefusedWord> {
         let g1 = lookup(Command::Code { letter: b'G', number: 1, sub: None }, b"");
         for param in g1.map_or(&[][..], |row| row.params) {
             for letter in param.letters.bytes() {
@@ -490,9 +500,13 @@ impl PlainRanges {
 /// The refusal of a plain move's word `i`, outside `range`.
 #[cold]
 #[inline(never)]
-fn plain_refusal(plain: &PlainMove, i: usize, range: &Range) -> OutOfRange {
-    let name = format!("G{} {}", u8::from(!plain.rapid), PlainMove::LETTERS[i] as char);
-    OutOfRange { name, value: range::short(plain.values[i]), range: range.to_string() }
+fn plain_refusal(plain: &PlainMove, i: usize, range: &Range) -> RefusedWord {
+    let letter = PlainMove::LETTERS[i];
+    let name = format!("G{} {}", u8::from(!plain.rapid), letter as char);
+    RefusedWord {
+        letter,
+        refusal: OutOfRange { name, value: range::short(plain.values[i]), range: range.to_string() },
+    }
 }
 
 /// The registry's ranges, lent to the engine's lint (`gweave check`): it flags the words the
@@ -505,8 +519,8 @@ pub struct RegistryRanges;
 pub static REGISTRY_RANGES: RegistryRanges = RegistryRanges;
 
 impl WordRanges for RegistryRanges {
-    fn check(&self, block: &Block, line: &[u8], motion: Motion) -> Result<(), OutOfRange> {
-        check_line(block, line, motion, |_| true)
+    fn check(&self, block: &Block, line: &[u8], motion: Motion) -> Result<(), RefusedWord> {
+        check_line(block, line, motion, |command| lookup(command, b""))
     }
 }
 
@@ -514,22 +528,28 @@ impl WordRanges for RegistryRanges {
 /// (as GRBL's parser checks a whole line first): the first such word as the uniform reply,
 /// `M104 S = 600 is out of range: 0 to 500 °C`. `code` names the command (`M104`); a word that
 /// is not a number (`Snan`, `S1..2`) is outside every range, written as it was.
-pub(super) fn check(code: (u8, u32), params: &[Param], block: &Block, line: &[u8]) -> Result<(), OutOfRange> {
+pub(super) fn check(
+    code: (u8, u32),
+    params: &[Param],
+    block: &Block,
+    line: &[u8],
+) -> Result<(), RefusedWord> {
     for param in params {
         for letter in param.letters.bytes() {
             let Some(word) = block.word(letter) else { continue };
             let name = || format!("{}{} {}", code.0 as char, code.1, letter as char);
             match word.value {
                 Value::Number(v) => {
-                    param.range.check(&name(), v)?;
+                    param.range.check(&name(), v).map_err(|refusal| RefusedWord { letter, refusal })?;
                 }
                 Value::Invalid => {
                     let written = word.span.of(line).get(1..).unwrap_or_default();
-                    return Err(OutOfRange {
+                    let refusal = OutOfRange {
                         name: name(),
                         value: String::from_utf8_lossy(written).into_owned(),
                         range: param.range.to_string(),
-                    });
+                    };
+                    return Err(RefusedWord { letter, refusal });
                 }
                 // A bare letter (`G28 X`), a quoted string or an expression (RepRapFirmware's
                 // `{...}`) is not a number the command reads.
@@ -904,7 +924,7 @@ mod tests {
                 let mut block = Block::default();
                 gweave::gcode::lexer::parse_into(line.as_bytes(), &mut block);
                 assert_eq!(block.plain.present != 0, !line.contains(';'), "{line}");
-                let got = check_line(&block, line.as_bytes(), Motion::Linear, |_| true);
+                let got = check_line(&block, line.as_bytes(), Motion::Linear, |c| lookup(c, b""));
                 assert_eq!(got.map_err(|e| e.to_string()).err().as_deref(), want, "{line}");
             }
         }

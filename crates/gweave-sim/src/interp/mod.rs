@@ -292,13 +292,16 @@ impl Machine {
         let before = self.core.state().pos;
         self.core.lex(line);
         let command = self.core.block().command;
+        // The one lookup of the line's command: its words are checked against this row, and
+        // it runs this row's handler.
         let spec = commands::lookup(command, self.core.block().command_span.of(line));
         let halted = self.halt.is_some() && !spec.is_some_and(|s| s.while_halted);
         if !halted {
-            let built_with = |spec: &CommandSpec| self.built_with(spec);
-            if let Err(e) =
-                commands::check_line(self.core.block(), line, self.core.state().motion, built_with)
-            {
+            // A line without a command is checked against the modal motion's row instead.
+            let row = |c: Command| {
+                if c == command { spec } else { commands::lookup(c, b"") }.filter(|s| self.built_with(s))
+            };
+            if let Err(e) = commands::check_line(self.core.block(), line, self.core.state().motion, row) {
                 // Nothing of the line happened: the values in force stay.
                 self.refuse(e.to_string(), out);
                 return self.outcome();

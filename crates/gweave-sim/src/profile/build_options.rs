@@ -6,33 +6,35 @@
 //! the list and behave accordingly (OctoPrint stops polling `M105` when `AUTOREPORT_TEMP` is
 //! there, shows its SD panel when `SDCARD` is, answers `//action:prompt_begin` dialogs when
 //! `PROMPT_SUPPORT` is). The defaults are a common current Marlin 2.1 build for a printer with a
-//! display and an SD slot (the options of `Configuration.h`/`Configuration_adv.h` in brackets;
-//! which commands a key gates is said once, in their rows of the command registry,
-//! `interp/commands.rs`, as the [`Feature`] they need):
+//! display and an SD slot (the options of `Configuration.h`/`Configuration_adv.h` in the
+//! comments). Which commands a key gates is said once, by the rows of the command registry
+//! (`interp/commands.rs`) that need its [`Feature`], and shown beside each command in
+//! docs/gcode.md's table of the virtual printer's commands; this table says only what a key
+//! changes that is not a whole command:
 //!
 //! ```toml
 //! [firmware]
 //! kind = "marlin"              # the Marlin model; "gweave": gweave's own controller core
-//! eeprom = true                # EEPROM_SETTINGS: M500 M501 (a file next to the session)
-//! sdcard = true                # SDSUPPORT: M20-M30 M32 M524 M928
-//! long_filenames = true        # LONG_FILENAME_HOST_SUPPORT: M33, M20 L (EXTENDED_M20)
-//! lfn_write = false            # LONG_FILENAME_WRITE_SUPPORT: M28 with a long name
-//! autoreport_temp = true       # AUTO_REPORT_TEMPERATURES: M155
-//! autoreport_pos = false       # AUTO_REPORT_POSITION: M154
-//! autoreport_sd = true         # AUTO_REPORT_SD_STATUS: M27 S
+//! eeprom = true                # EEPROM_SETTINGS (a file next to the session)
+//! sdcard = true                # SDSUPPORT
+//! long_filenames = true        # LONG_FILENAME_HOST_SUPPORT: long names in M20 L (EXTENDED_M20)
+//! lfn_write = false            # LONG_FILENAME_WRITE_SUPPORT: M28 creates a long name
+//! autoreport_temp = true       # AUTO_REPORT_TEMPERATURES
+//! autoreport_pos = false       # AUTO_REPORT_POSITION
+//! autoreport_sd = true         # AUTO_REPORT_SD_STATUS: M27 S<seconds>
 //! host_action_commands = true  # HOST_ACTION_COMMANDS: //action:...
-//! prompt_support = true        # HOST_PROMPT_SUPPORT: //action:prompt_..., M876
+//! prompt_support = true        # HOST_PROMPT_SUPPORT: //action:prompt_... dialogs
 //! emergency_parser = true      # EMERGENCY_PARSER: M108 M112 M410 M876 act at once
-//! advanced_pause = true        # ADVANCED_PAUSE_FEATURE: M600 with host prompts
-//! fw_retract = true            # FWRETRACT: G10 G11 M207 M208 M209
-//! arcs = true                  # ARC_SUPPORT: G2 G3
-//! psu_control = false          # PSU_CONTROL: M80 (M81 is always there)
-//! buzzer = true                # a speaker: M300
-//! set_progress = true          # SET_PROGRESS_MANUALLY: M73
-//! pin_control = true           # DIRECT_PIN_CONTROL: M42 M226
-//! probe = false                # a bed probe: M851, G30 (Z_PROBE)
-//! linear_advance = false       # LIN_ADVANCE: M900 (off in Marlin's shipped configuration)
-//! mesh = [3, 3]                # bed levelling (AUTO_BED_LEVELING_BILINEAR grid): G29 M420; [] none
+//! advanced_pause = true        # ADVANCED_PAUSE_FEATURE (with host prompts)
+//! fw_retract = true            # FWRETRACT
+//! arcs = true                  # ARC_SUPPORT
+//! psu_control = false          # PSU_CONTROL
+//! buzzer = true                # a speaker
+//! set_progress = true          # SET_PROGRESS_MANUALLY
+//! pin_control = true           # DIRECT_PIN_CONTROL
+//! probe = false                # a bed probe (Z_PROBE)
+//! linear_advance = false       # LIN_ADVANCE (off in Marlin's shipped configuration)
+//! mesh = [3, 3]                # bed levelling (AUTO_BED_LEVELING_BILINEAR grid); [] none
 //! ```
 //!
 //! ```
@@ -51,46 +53,46 @@ use serde::{Deserialize, Serialize};
 pub struct BuildOptions {
     /// Which firmware the board runs.
     pub kind: FirmwareKind,
-    /// `EEPROM_SETTINGS`: `M500`/`M501` save and load the settings.
+    /// `EEPROM_SETTINGS`: the settings are saved and loaded.
     pub eeprom: bool,
-    /// `SDSUPPORT`: the SD card commands.
+    /// `SDSUPPORT`: an SD card.
     pub sdcard: bool,
-    /// `LONG_FILENAME_HOST_SUPPORT`: `M33`, long names in `M20 L` (`EXTENDED_M20`).
+    /// `LONG_FILENAME_HOST_SUPPORT`: long names, listed by `M20 L` (`EXTENDED_M20`).
     pub long_filenames: bool,
     /// `LONG_FILENAME_WRITE_SUPPORT`: `M28` creates a file under a long name.
     pub lfn_write: bool,
-    /// `AUTO_REPORT_TEMPERATURES`: `M155`.
+    /// `AUTO_REPORT_TEMPERATURES`: temperatures reported every few seconds.
     pub autoreport_temp: bool,
-    /// `AUTO_REPORT_POSITION`: `M154`.
+    /// `AUTO_REPORT_POSITION`: the position reported every few seconds.
     pub autoreport_pos: bool,
     /// `AUTO_REPORT_SD_STATUS`: `M27 S<seconds>`.
     pub autoreport_sd: bool,
     /// `HOST_ACTION_COMMANDS`: `//action:paused`, `//action:resumed`...
     pub host_action_commands: bool,
-    /// `HOST_PROMPT_SUPPORT`: `//action:prompt_begin`... dialogs answered with `M876`.
+    /// `HOST_PROMPT_SUPPORT`: `//action:prompt_begin`... dialogs the host answers.
     pub prompt_support: bool,
     /// `EMERGENCY_PARSER`.
     pub emergency_parser: bool,
-    /// `ADVANCED_PAUSE_FEATURE`: `M600` filament change (with host prompts).
+    /// `ADVANCED_PAUSE_FEATURE`: the filament change (with host prompts).
     pub advanced_pause: bool,
-    /// `FWRETRACT`: `G10`/`G11` and their settings `M207`-`M209`.
+    /// `FWRETRACT`: retraction done by the firmware, with its settings.
     pub fw_retract: bool,
-    /// `ARC_SUPPORT`: `G2`/`G3`.
+    /// `ARC_SUPPORT`: arcs.
     pub arcs: bool,
-    /// `PSU_CONTROL`: `M80` (`SOFTWARE_POWER`).
+    /// `PSU_CONTROL`: the power supply switched on by G-code (`SOFTWARE_POWER`).
     pub psu_control: bool,
-    /// A speaker or buzzer: `M300`.
+    /// A speaker or buzzer.
     pub buzzer: bool,
-    /// `SET_PROGRESS_MANUALLY`: `M73` (`BUILD_PERCENT`).
+    /// `SET_PROGRESS_MANUALLY`: the host sets the progress (`BUILD_PERCENT`).
     pub set_progress: bool,
-    /// `DIRECT_PIN_CONTROL`: `M42`, `M226`.
+    /// `DIRECT_PIN_CONTROL`: pins set and read by G-code.
     pub pin_control: bool,
-    /// A bed probe: `M851` probe offsets (`Z_PROBE`).
+    /// A bed probe (`Z_PROBE`).
     pub probe: bool,
-    /// `LIN_ADVANCE`: `M900 K` sets the extruder's pressure advance.
+    /// `LIN_ADVANCE`: the extruder's pressure advance.
     pub linear_advance: bool,
-    /// Bed levelling grid points in X and Y (`GRID_MAX_POINTS_X/Y`): `G29`, `M420`; empty when
-    /// the board has no levelling.
+    /// Bed levelling grid points in X and Y (`GRID_MAX_POINTS_X/Y`); empty when the board has
+    /// no levelling.
     pub mesh: Vec<u8>,
     /// What `M0` does: Marlin's stop, or the controller seed's end of program.
     pub m0: ProgramStop,
@@ -269,43 +271,70 @@ impl BuildOptions {
 
 /// The build option a command needs, named in its row of the registry (`interp/commands.rs`):
 /// a board built without it answers the command as Marlin does one it was not compiled with,
-/// `echo:Unknown command: "M600"`. Each is a key of the `[firmware]` table.
+/// `echo:Unknown command: "M600"`. Each is a key of the `[firmware]` table ([`Feature::key`]);
+/// which commands need it is said by their rows alone.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Feature {
     /// Built into every board.
     Always,
-    /// `eeprom`: `M500`, `M501`.
+    /// `eeprom`.
     Eeprom,
-    /// `sdcard`: the SD card commands.
+    /// `sdcard`.
     Sdcard,
-    /// `long_filenames`: `M33`.
+    /// `long_filenames`.
     LongFilenames,
-    /// `autoreport_temp`: `M155`.
+    /// `autoreport_temp`.
     AutoreportTemp,
-    /// `autoreport_pos`: `M154`.
+    /// `autoreport_pos`.
     AutoreportPos,
-    /// `prompt_support`: `M876`.
+    /// `prompt_support`.
     PromptSupport,
-    /// `advanced_pause`: `M600`.
+    /// `advanced_pause`.
     AdvancedPause,
-    /// `fw_retract`: `G10`, `G11`, `M207`-`M209`.
+    /// `fw_retract`.
     FwRetract,
-    /// `arcs`: `G2`, `G3`.
+    /// `arcs`.
     Arcs,
-    /// `psu_control`: `M80`.
+    /// `psu_control`.
     PsuControl,
-    /// `buzzer`: `M300`.
+    /// `buzzer`.
     Buzzer,
-    /// `set_progress`: `M73`.
+    /// `set_progress`.
     SetProgress,
-    /// `pin_control`: `M42`, `M226`.
+    /// `pin_control`.
     PinControl,
-    /// `probe`: `M851`.
+    /// `probe`.
     Probe,
-    /// `linear_advance`: `M900`.
+    /// `linear_advance`.
     LinearAdvance,
-    /// `mesh` not empty: `G29`, `M420`.
+    /// `mesh` not empty.
     Mesh,
+}
+
+impl Feature {
+    /// The `[firmware]` key that builds it in, as the `?` reply and docs/gcode.md name it beside
+    /// the command (`None`: every board has it).
+    pub fn key(self) -> Option<&'static str> {
+        Some(match self {
+            Feature::Always => return None,
+            Feature::Eeprom => "eeprom",
+            Feature::Sdcard => "sdcard",
+            Feature::LongFilenames => "long_filenames",
+            Feature::AutoreportTemp => "autoreport_temp",
+            Feature::AutoreportPos => "autoreport_pos",
+            Feature::PromptSupport => "prompt_support",
+            Feature::AdvancedPause => "advanced_pause",
+            Feature::FwRetract => "fw_retract",
+            Feature::Arcs => "arcs",
+            Feature::PsuControl => "psu_control",
+            Feature::Buzzer => "buzzer",
+            Feature::SetProgress => "set_progress",
+            Feature::PinControl => "pin_control",
+            Feature::Probe => "probe",
+            Feature::LinearAdvance => "linear_advance",
+            Feature::Mesh => "mesh",
+        })
+    }
 }
 
 #[cfg(test)]

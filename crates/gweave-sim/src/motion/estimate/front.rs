@@ -13,7 +13,7 @@ use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
 use gweave::gcode::reader::Part;
 use gweave::gcode::state::{self, Path};
 use gweave::rotary::cylinder::RotaryConfig;
-use gweave::OutOfRange;
+use gweave::RefusedWord;
 use gweave::{Block, Command, Effect, Firmware, MixingCode, RawLine, Severity, State, StateOptions};
 
 use super::rotary_feed::DeclaredFeed;
@@ -214,7 +214,7 @@ impl Front {
     /// printer's, on the same ranges ([`commands::check_line`]); every command is taken as built.
     #[inline(always)]
     pub(super) fn refuses(&mut self, raw: &[u8]) -> bool {
-        match commands::check_line(&self.block, raw, self.state.motion, |_| true) {
+        match commands::check_line(&self.block, raw, self.state.motion, |c| commands::lookup(c, b"")) {
             Ok(()) => false,
             Err(refusal) => {
                 self.refuse(refusal);
@@ -225,7 +225,7 @@ impl Front {
 
     #[cold]
     #[inline(never)]
-    fn refuse(&mut self, refusal: OutOfRange) {
+    fn refuse(&mut self, refusal: RefusedWord) {
         let refused = &mut self.refused;
         refused.refused_lines += 1;
         if refused.first_refused_line.is_none() {
