@@ -10,7 +10,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::write_file;
 use gweave::range::Quantity;
-use gweave::total::{Named, PerFile};
+use gweave::{Named, PerFile};
 use gweave::{Range, Target};
 use serde::Serialize;
 

@@ -8,8 +8,7 @@
 //! before it builds its pass (`mix` chooses its dialect from it) asks [`Run::flavour`] first.
 //!
 //! ```
-//! use gweave::pass::{Identity, Strictness};
-//! use gweave::run::Run;
+//! use gweave::{Identity, Run, Strictness};
 //! let text = b"G1 X1\nG1 X1..2\nG1 X3\n";
 //! let mut pass = Identity::default();
 //! let ran = Run::text(text).to_memory().strictness(Strictness::Lenient).run(&mut pass).unwrap();
@@ -31,7 +30,7 @@ use crate::malformed::Malformed;
 use crate::pass::{drive_reader, scan_ahead, Counting, Pass, Progress, Quiet, Reading, Strictness};
 
 /// The name a text in memory goes by in messages.
-pub const IN_MEMORY: &str = "<input>";
+pub(crate) const IN_MEMORY: &str = "<input>";
 
 /// What a run reads.
 #[derive(Debug, Clone, Copy)]
