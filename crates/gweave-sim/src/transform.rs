@@ -1,7 +1,7 @@
 //! A transform job run on a file, as `gweave purge-shift` and `gweave.purge_shift()` (and `mix`,
 //! `rotary wrap`, `rotary tube`) both run it: the options read over the settings file they name,
 //! the pass run, the output finished with the run's header and its metadata
-//! ([`crate::finish`]). Written once, so the front ends only read their options
+//! ([`crate::with_metadata`]). Written once, so the front ends only read their options
 //! ([`gweave::options`]) and show the result. The registry [`transforms`] lists the jobs
 //! ([`Transform`]) the front ends derive their commands from: a row gives a job its CLI
 //! subcommand and its Python function, with no code in either.
@@ -15,7 +15,7 @@ use gweave::post::mix::report::MixReport;
 use gweave::post::mix::{MixOptions, MixPassError};
 use gweave::post::purge_shift::{ConfigError, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
 use gweave::rotary::helix::TubeParams;
-use gweave::rotary::options::{MachineOptions, TubeOptions, WrapOptions};
+use gweave::rotary::options::MachineOptions;
 use gweave::rotary::report::{TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
@@ -23,6 +23,7 @@ use gweave::Malformed;
 use gweave::{tube_file, wrap_file};
 use gweave::{Progress, Strictness};
 use gweave::{Ran, Run};
+use gweave::{TubeOptions, WrapOptions};
 
 use crate::finish::{self, FinishError};
 

@@ -43,7 +43,7 @@ impl Token {
         CURRENT.with(|c| c.borrow().clone())
     }
 
-    /// `Err(`[`stopped_error`]`)` once stopped.
+    /// The error a stopped run fails with ([`is_stopped`]) once stopped.
     pub fn check(&self) -> io::Result<()> {
         if self.stopped() {
             Err(stopped_error())
@@ -99,7 +99,7 @@ pub(crate) fn stopped_error() -> io::Error {
     io::Error::other(Stopped)
 }
 
-/// Whether `e` is [`stopped_error`].
+/// Whether `e` is the error of a stopped run.
 pub fn is_stopped(e: &io::Error) -> bool {
     e.get_ref().is_some_and(|inner| inner.is::<Stopped>())
 }

@@ -80,11 +80,16 @@ pub use run::{Dest, Ran, Run, Source};
 
 // The jobs: each one's entry point, options and report, and the passes a front end composes.
 pub use bed::{Bed, BedError, SlicerBed};
-pub use check::{check_file, check_file_with, CheckOptions, CheckPass, CheckReport, WordRanges};
+pub use check::{
+    check_file, check_file_with, CheckOptions, CheckPass, CheckReport, FindingGroup, LineFinding, WordRanges,
+};
+pub use gen::raster_job::RasterOptions;
 pub use options::{JobOptions, OptionError, OptionSpec};
 pub use post::mix::{mix, MixOptions, MixPassError};
 pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
+pub use render::job::PreviewOptions;
 pub use render::{preview, preview_with_progress, PreviewReport, PreviewSettings, Toolpath, ToolpathOptions};
+pub use rotary::options::{TubeOptions, WrapOptions};
 pub use rotary_job::{tube_file, wrap_file};
-pub use stats::{stats_file, Stats, StatsPass};
+pub use stats::{stats_file, Bounds, SlicerFigures, Stats, StatsPass, ToolFilament};
 pub use total::{CheckTotal, Named, PerFile, StatsTotal};

@@ -37,7 +37,7 @@ pub(crate) const IN_MEMORY: &str = "<input>";
 pub enum Source<'a> {
     /// A file: text, gzip or binary G-code, or standard input as `-` (see [`container::open`]).
     File(&'a Path),
-    /// A whole text in memory (tests, Python), named [`IN_MEMORY`] in messages.
+    /// A whole text in memory (tests, Python), named `<input>` in messages.
     Text(&'a [u8]),
 }
 
@@ -225,7 +225,7 @@ impl<'a> Run<'a> {
     }
 
     /// Streams the input through `pass` without output. Returns the final state. A file is
-    /// read and lexed on a second thread ([`scan_ahead`]).
+    /// read and lexed on a second thread.
     pub fn scan<P: Pass + ?Sized>(self, pass: &mut P) -> Result<State> {
         self.drive(pass, &mut io::sink(), None, true)
     }
