@@ -1,6 +1,6 @@
 //! gweave: a lossless, streaming G-code engine for unconventional 3D printers.
 //!
-//! Every command is a [`pass::Pass`] over a stream of lines: the [`gcode::lexer`] records what
+//! Every command is a [`Pass`] over a stream of lines: the [`gcode::lexer`] records what
 //! each line says (with spans), the [`gcode::state`] tracks what the machine would do, and lines a
 //! pass does not change are written back byte for byte.
 //!
@@ -8,7 +8,8 @@
 //! `docs/architecture.md`): [`Run`] and [`Pass`] to run a pass, [`LineReader`], [`Block`] and
 //! [`State`] to read a file, each job's entry point ([`stats_file`], [`check_file`],
 //! [`purge_shift`], [`mix`], [`wrap_file`], [`tube_file`], [`preview`]) with its options and
-//! report, and [`Error`]. The modules below hold the rest, by machine concept.
+//! report, and [`Error`]. The runner, the pass machinery and the jobs live in private modules;
+//! the public modules below are the vocabularies a front end reads by path, by machine concept.
 //!
 //! ```
 //! use gweave::gcode::{lexer::parse_into, line::Block, state::{State, X}};
