@@ -79,7 +79,7 @@ where
     }
 }
 
-/// A run stopped by its caller ([`gweave::interrupt`]), whatever error it unwound with.
+/// A run stopped by its caller ([`gweave::is_stopped`]), whatever error it unwound with.
 fn is_stopped(e: &anyhow::Error) -> bool {
     e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(gweave::is_stopped))
 }
