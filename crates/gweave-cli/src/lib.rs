@@ -12,6 +12,7 @@ mod files;
 mod finish;
 mod format;
 mod options;
+mod per_file;
 mod progress;
 mod signals;
 

@@ -93,4 +93,4 @@ pub use render::{preview, preview_with_progress, PreviewReport, PreviewSettings,
 pub use rotary::options::{TubeOptions, WrapOptions};
 pub use rotary_job::{tube_file, wrap_file};
 pub use stats::{stats_file, Bounds, SlicerFigures, Stats, StatsPass, ToolFilament};
-pub use total::{CheckTotal, Named, PerFile, StatsTotal};
+pub use total::{CheckTotal, StatsTotal};
