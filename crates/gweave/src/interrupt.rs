@@ -43,7 +43,7 @@ impl Token {
         CURRENT.with(|c| c.borrow().clone())
     }
 
-    /// The error a stopped run fails with ([`is_stopped`]) once stopped.
+    /// Fails once stopped, with the error [`is_stopped`] recognises.
     pub fn check(&self) -> io::Result<()> {
         if self.stopped() {
             Err(stopped_error())
