@@ -3,12 +3,12 @@
 //! must be the input, byte for byte. Nothing may panic, whatever the bytes.
 
 use std::io::{self, Read, Write};
-use std::path::Path;
 
 use gweave::gcode::flavour::flavour_in;
 use gweave::gcode::reader::{ChunkReader, LineReader, RawLine};
 use gweave::gcode::state::StateOptions;
-use gweave::pass::{drive_reader, keep, Ctx, Identity, Pass, Reading, Step, Strictness};
+use gweave::test_support::read_lenient;
+use gweave::{keep, Ctx, Identity, Pass, Step};
 
 /// Runs `bytes` through the reader, lexer and state three ways, and checks each copy. An input
 /// may be refused (an encoding the reader does not read), but then the same way however it is
@@ -46,12 +46,7 @@ pub fn check(bytes: &[u8]) {
 /// `None` if reading failed.
 fn copy(input: impl Read, options: &StateOptions, pass: &mut impl Pass) -> Option<Vec<u8>> {
     let mut out = Vec::new();
-    let reading = Reading {
-        options: options.clone(),
-        strictness: Strictness::Lenient,
-        ..Reading::new(Path::new("fuzz"))
-    };
-    drive_reader(input, reading, pass, &mut out).ok().map(|_| out)
+    read_lenient(input, options.clone(), pass, &mut out).ok().map(|_| out)
 }
 
 /// Copies every line, as [`Identity`] does, but asks for the words of plain moves too, so that the

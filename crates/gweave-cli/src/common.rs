@@ -10,11 +10,11 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::write_file;
 use gweave::range::Quantity;
-use gweave::total::{Named, PerFile};
 use gweave::{Range, Target};
 use serde::Serialize;
 
 use crate::args::Quiet;
+use crate::per_file::{Named, PerFile};
 
 /// Where a transform writes.
 #[derive(Args, Debug)]

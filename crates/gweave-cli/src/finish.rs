@@ -9,13 +9,13 @@ use anyhow::Result;
 use gweave::Target;
 
 /// Runs `write` into a scratch file, then writes that file to `target` with this run's header
-/// and its metadata recomputed (`gweave_sim::finish::with_metadata`).
+/// and its metadata recomputed (`gweave_sim::with_metadata`).
 pub fn with_metadata<R>(
     input: Option<&Path>,
     target: &Target,
     write: impl FnOnce(&Target) -> Result<R>,
 ) -> Result<(R, Option<PathBuf>)> {
-    gweave_sim::finish::with_metadata(input, target, &command_line(input), write)
+    gweave_sim::with_metadata(input, target, &command_line(input), write)
 }
 
 /// Flags that say where the G-code comes from and goes, or how the run reports, not what it

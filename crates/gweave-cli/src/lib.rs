@@ -12,6 +12,7 @@ mod files;
 mod finish;
 mod format;
 mod options;
+mod per_file;
 mod progress;
 mod signals;
 
@@ -79,9 +80,9 @@ where
     }
 }
 
-/// A run stopped by its caller ([`gweave::interrupt`]), whatever error it unwound with.
+/// A run stopped by its caller ([`gweave::is_stopped`]), whatever error it unwound with.
 fn is_stopped(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(gweave::interrupt::is_stopped))
+    e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(gweave::is_stopped))
 }
 
 /// A closed pipe (`gweave cat x | head`) is not an error.

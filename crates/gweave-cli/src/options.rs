@@ -111,12 +111,10 @@ pub fn failed_with<E: std::error::Error + Send + Sync + 'static>(spelled: String
 #[cfg(test)]
 mod tests {
     use super::*;
-    use gweave::gen::raster_job::RasterOptions;
-    use gweave::render::job::PreviewOptions;
     use gweave::rotary::cylinder::FeedConvention;
-    use gweave::rotary::options::{TubeOptions, WrapOptions};
     use gweave::MixOptions;
     use gweave::PurgeShiftOptions;
+    use gweave::{PreviewOptions, RasterOptions, TubeOptions, WrapOptions};
     use gweave_sim::reading::{EstimateOptions, SimOptions};
 
     #[derive(clap::Parser, Debug)]

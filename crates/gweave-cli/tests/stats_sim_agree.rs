@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use gweave::gcode::state::{A, E, X, Y, Z};
-use gweave::pass::{Ctx, Step};
+use gweave::{Ctx, Step};
 use gweave::{Effect, Flow, Pass, Run, State};
 
 fn json(args: &[&str]) -> serde_json::Value {

@@ -13,7 +13,7 @@
 use std::sync::mpsc;
 use std::time::Duration;
 
-use gweave::interrupt::run_under;
+use gweave::run_under;
 use gweave::Token;
 use pyo3::prelude::*;
 

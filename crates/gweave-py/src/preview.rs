@@ -11,8 +11,9 @@ use pyo3::types::PyDict;
 use crate::{err, strictness, to_json};
 use gweave::gcode::layers::ALL_FEATURES;
 use gweave::options::Spelling;
-use gweave::render::job::{self, PreviewJobError, PreviewOptions};
+use gweave::render::job::{self, PreviewJobError};
 use gweave::render::RenderError;
+use gweave::PreviewOptions;
 use pyo3::types::PyBytes;
 
 // ---- preview (render) ----

@@ -4,8 +4,8 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
-use gweave::gen::raster_job::RasterOptions;
 use gweave::options::Spelling;
+use gweave::RasterOptions;
 use gweave::{Quiet, Target};
 use gweave_sim::builtin::LoadError;
 use gweave_sim::raster_job::{Raster, RasterJobError};

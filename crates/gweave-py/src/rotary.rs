@@ -9,10 +9,10 @@ use gweave::rotary::cylinder::RotaryConfig;
 use gweave::rotary::helix::{
     self, Handedness, HelicalPath as RustHelicalPath, PrintSettings, Profile, Resolution,
 };
-use gweave::rotary::options::{TubeOptions, WrapOptions};
 use gweave::rotary::report::merged_settings;
 use gweave::rotary::RotaryError;
 use gweave::Target;
+use gweave::{TubeOptions, WrapOptions};
 use gweave_sim::transform::{self, Job};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;

@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use gweave::gcode::writer::Target;
 
-use gweave::malformed::Transformed;
 use gweave::options::JobOptions;
+use gweave::Transformed;
 use gweave_sim::transform::{transforms, EachTransform, Job, Outcome, Transform};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;

@@ -44,7 +44,7 @@ use crate::thermal::thermistor::BetaThermistor;
 pub struct Unsupported(pub &'static str);
 
 /// The core's settings for a machine profile.
-pub fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported> {
+pub(crate) fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported> {
     let m = &p.motion;
     let junction_deviation_mm = match &m.corners {
         CornerMode::Marlin { jerk_mm_s: Some(_), .. } => {
@@ -150,14 +150,14 @@ fn step_pulses<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> ([u64; 
 }
 
 /// The profile's heaters behind the core's thermistor inputs, read by a 10-bit ADC.
-pub struct SimPlant {
+pub(crate) struct SimPlant {
     heaters: [Option<Heater>; HEATERS],
     sensor: BetaThermistor,
 }
 
 impl SimPlant {
     /// The plants of `p`'s hotends and bed at ambient temperature.
-    pub fn new(p: &MachineProfile) -> Result<SimPlant, crate::thermal::heater::HeaterError> {
+    pub(crate) fn new(p: &MachineProfile) -> Result<SimPlant, crate::thermal::heater::HeaterError> {
         let t = &p.thermal;
         let plant = |c: Option<&HeaterConfig>| c.map(|c| Heater::new(*c)).transpose();
         Ok(SimPlant {
@@ -165,11 +165,6 @@ impl SimPlant {
             // The core reads single samples, not Marlin's sums of 16.
             sensor: BetaThermistor { oversample: 1, ..t.thermistor },
         })
-    }
-
-    /// The temperature each heater's sensor sees, °C.
-    pub fn sensor_c(&self) -> [Option<f64>; HEATERS] {
-        self.heaters.each_ref().map(|h| h.as_ref().map(Heater::sensor_c))
     }
 }
 
@@ -223,7 +218,7 @@ const LINE_LIMIT_MS: u64 = 3_600_000;
 
 /// Runs the lines `next_line` gives on the core, as a host streaming a file does (one line after
 /// each `ok`), until the end or a halt, then waits for the moves to end.
-pub fn run_file(
+pub fn run_on_core(
     profile: &MachineProfile,
     next_line: &mut dyn FnMut() -> Option<Vec<u8>>,
 ) -> Result<CoreReport, CoreBoardError> {
@@ -402,7 +397,7 @@ mod tests {
     fn the_default_profile_runs_on_the_core_with_exact_steps() {
         let p = MachineProfile::default();
         let text = "G28\nG1 X10 Y5 Z0.2 F3000\nM109 S200\nG1 E2.5 F1800\nG1 X12.5 E3\nM104 S0\n";
-        let r = run_file(&p, &mut lines(text)).unwrap();
+        let r = run_on_core(&p, &mut lines(text)).unwrap();
         assert!(!r.halted && r.errors.is_empty(), "{r:?}");
         let st = &p.motion.steps;
         let want = [12.5 * st.x, 5.0 * st.y, 0.2 * st.z, 3.0 * st.e];
@@ -412,7 +407,7 @@ mod tests {
     #[test]
     fn m109_heats_the_profiles_hotend() {
         let p = MachineProfile::default();
-        let r = run_file(&p, &mut lines("M109 S200\nM105\n")).unwrap();
+        let r = run_on_core(&p, &mut lines("M109 S200\nM105\n")).unwrap();
         assert!(!r.halted && r.time_s > 30.0, "{r:?}");
     }
 

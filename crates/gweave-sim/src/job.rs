@@ -197,7 +197,7 @@ fn on_core(input: &Path, profile: &MachineProfile) -> Result<CoreReport, SimJobE
             }
         }
     };
-    let report = core_board::run_file(profile, &mut next_line)?;
+    let report = core_board::run_on_core(profile, &mut next_line)?;
     match failed {
         Some(e) => Err(read_error(e)),
         None => Ok(report),

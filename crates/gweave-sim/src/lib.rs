@@ -12,12 +12,14 @@
 //!   ([`PtyEndpoint`], [`TcpEndpoint`]);
 //! - `inkjet/`: the drops of a printhead ([`InkjetCanvas`]) and the recoats of a binder-jet bed;
 //! - `profile/`: the [`MachineProfile`] TOML and its `[firmware]` build options;
-//! - [`core_board`]: `[firmware] kind = "gweave"`, the board running gweave's own controller
-//!   core (the firmware of the real board) instead of the Marlin model;
+//! - `core_board.rs`: `[firmware] kind = "gweave"`, the board running gweave's own controller
+//!   core (the firmware of the real board) instead of the Marlin model ([`run_on_core`],
+//!   [`CoreDevice`], [`CoreReport`]);
 //! - [`simulate`] (`job.rs`): a whole file through the one or the other, for every front end;
 //! - [`reading`]: the jobs `gweave sim` and `gweave estimate`, each with its options declared
 //!   once, as both front ends run them ([`transform`]: the transform jobs);
-//! - [`finish`]: what a front end does around a transform's output; [`plot`]: the charts.
+//! - `finish/`: what a front end does around a transform's output ([`with_metadata`]); `plot.rs`:
+//!   the charts ([`speed_chart`]).
 //!
 //! ```
 //! use gweave_sim::{Machine, MachineProfile, Outcome};
@@ -31,14 +33,14 @@
 #![warn(unreachable_pub)]
 
 mod chart_canvas;
-pub mod core_board;
-pub mod finish;
+mod core_board;
+mod finish;
 mod inkjet;
 mod interp;
 mod job;
 mod link;
 mod motion;
-pub mod plot;
+mod plot;
 mod profile;
 pub mod raster_job;
 pub mod reading;
@@ -47,6 +49,8 @@ pub mod test_support;
 mod thermal;
 pub mod transform;
 
+pub use core_board::{run_on_core, CoreBoardError, CoreDevice, CoreReport, Unsupported};
+pub use finish::{with_metadata, FinishError};
 pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetLayer, InkjetWarning};
 pub use interp::commands::{RegistryRanges, REGISTRY_RANGES};
 pub use interp::{
@@ -70,6 +74,7 @@ pub use motion::marlin_limits::{ExtruderLimits, MarlinCorners};
 pub use motion::planner::{PlannedBlock, Planner, PositionSet};
 pub use motion::slicer_limits::slicer_limits;
 pub use motion::stepper::{BresenhamWalk, Steppers};
+pub use plot::{speed_chart, temperature_chart, ChartFormat, PlotError, SpeedAxes};
 pub use profile::build_options::{BuildOptions, BuildOptionsError, Feature, FirmwareKind, ProgramStop};
 pub use profile::builtin;
 pub use profile::m503::from_m503;

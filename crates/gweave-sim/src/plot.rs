@@ -73,28 +73,28 @@ impl ChartFormat {
 }
 
 /// Size of the temperature chart, px.
-pub const TEMPERATURE_PX: (u32, u32) = (1000, 500);
+pub(crate) const TEMPERATURE_PX: (u32, u32) = (1000, 500);
 /// Size of the speed chart, px (a third more with the mixing inputs' panel).
-pub const SPEED_PX: (u32, u32) = (1000, 640);
+pub(crate) const SPEED_PX: (u32, u32) = (1000, 640);
 const MIXING_PANEL_PX: u32 = 220;
 
 /// Line colours per heater (hotends in order, the bed its own).
 /// Temperature chart colours of the hotends, in order, and of the bed.
-pub const HOTEND_COLOURS: [RGBColor; 4] =
+pub(crate) const HOTEND_COLOURS: [RGBColor; 4] =
     [RGBColor(200, 40, 30), RGBColor(30, 90, 200), RGBColor(30, 150, 60), RGBColor(150, 60, 170)];
 /// See [`HOTEND_COLOURS`].
-pub const BED_COLOUR: RGBColor = RGBColor(230, 140, 20);
+pub(crate) const BED_COLOUR: RGBColor = RGBColor(230, 140, 20);
 /// Speed chart colours: mean, peak, layer bars, mixing inputs.
-pub const SPEED_MEAN: RGBColor = RGBColor(30, 90, 200);
+pub(crate) const SPEED_MEAN: RGBColor = RGBColor(30, 90, 200);
 /// See [`SPEED_MEAN`].
-pub const SPEED_PEAK: RGBColor = RGBColor(170, 195, 240);
+pub(crate) const SPEED_PEAK: RGBColor = RGBColor(170, 195, 240);
 /// See [`SPEED_MEAN`].
-pub const LAYER_BAR: RGBColor = RGBColor(230, 140, 20);
+pub(crate) const LAYER_BAR: RGBColor = RGBColor(230, 140, 20);
 /// See [`SPEED_MEAN`].
-pub const INPUT_BAR: RGBColor = RGBColor(60, 150, 110);
+pub(crate) const INPUT_BAR: RGBColor = RGBColor(60, 150, 110);
 
 /// A panel's mapping from (time or index, value) to pixels, for tests and callers that mark it.
-pub type Axes = Cartesian2d<RangedCoordf64, RangedCoordf64>;
+pub(crate) type Axes = Cartesian2d<RangedCoordf64, RangedCoordf64>;
 
 /// Lighter shade of a colour, for targets.
 fn light(c: RGBColor) -> RGBColor {
@@ -103,7 +103,7 @@ fn light(c: RGBColor) -> RGBColor {
 }
 
 /// The legend name of a heater.
-pub fn heater_name(id: HeaterId) -> String {
+pub(crate) fn heater_name(id: HeaterId) -> String {
     match id {
         HeaterId::Hotend(n) => format!("hotend T{n}"),
         HeaterId::Bed => "bed".to_owned(),
@@ -298,7 +298,7 @@ pub fn temperature_chart(series: &TimeSeries, format: ChartFormat) -> Result<(Ve
 }
 
 /// [`temperature_chart`] into a file, PNG or SVG by its extension.
-pub fn save_temperature_chart(series: &TimeSeries, path: &Path) -> Result<(), PlotError> {
+pub(crate) fn save_temperature_chart(series: &TimeSeries, path: &Path) -> Result<(), PlotError> {
     save(&Temperatures(series), path)
 }
 
@@ -419,7 +419,7 @@ pub fn speed_chart(
 }
 
 /// [`speed_chart`] into a file, PNG or SVG by its extension.
-pub fn save_speed_chart(
+pub(crate) fn save_speed_chart(
     trace: &SpeedTrace,
     layer_s: &[f64],
     mixing_input_mm: &[f64],

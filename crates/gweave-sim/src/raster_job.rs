@@ -1,7 +1,7 @@
 //! A raster job, as `gweave raster` and `gweave.raster()` both run it: the options
 //! ([`RasterOptions`], declared once) read, the machine they name loaded, the layer images
 //! resolved, then the G-code written and finished with the run's header, written from the
-//! options, and its metadata ([`crate::finish`]). The engine's generator
+//! options, and its metadata ([`crate::with_metadata`]). The engine's generator
 //! ([`gweave::gen::raster_job`]) cannot load a machine profile nor time the print on the
 //! virtual printer's planner; this joins them, so the front ends only read their options and
 //! show the result.
@@ -16,9 +16,10 @@ use std::path::{Path, PathBuf};
 
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::RasterReport;
-use gweave::gen::raster_job::{BoxError, Job, JobError, JobReport, LineTimer, RasterOptions, Setup, Source};
+use gweave::gen::raster_job::{BoxError, Job, JobError, JobReport, LineTimer, Setup, Source};
 use gweave::options::Spelling;
 use gweave::post::metadata::Figures;
+use gweave::RasterOptions;
 use gweave::{JobOptions, OptionError, OptionSpec, Progress, Strictness, Target};
 use serde::Serialize;
 

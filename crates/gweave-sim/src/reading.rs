@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 
 use gweave::options::{Problem, Shape, Spelling};
-use gweave::render::job::PreviewOptions;
+use gweave::PreviewOptions;
 use gweave::{JobOptions, OptionError, OptionSpec, Progress};
 
 use crate::inkjet::InkjetError;

@@ -1,7 +1,7 @@
 //! A transform job run on a file, as `gweave purge-shift` and `gweave.purge_shift()` (and `mix`,
 //! `rotary wrap`, `rotary tube`) both run it: the options read over the settings file they name,
 //! the pass run, the output finished with the run's header and its metadata
-//! ([`crate::finish`]). Written once, so the front ends only read their options
+//! ([`crate::with_metadata`]). Written once, so the front ends only read their options
 //! ([`gweave::options`]) and show the result. The registry [`transforms`] lists the jobs
 //! ([`Transform`]) the front ends derive their commands from: a row gives a job its CLI
 //! subcommand and its Python function, with no code in either.
@@ -9,20 +9,21 @@
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::writer::Target;
-use gweave::malformed::Malformed;
 use gweave::options::{JobOptions, OptionError, OptionSpec, Said, Spelling};
-use gweave::pass::{Progress, Strictness};
 use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::{MixOptions, MixPassError};
 use gweave::post::purge_shift::{ConfigError, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
 use gweave::rotary::helix::TubeParams;
-use gweave::rotary::options::{MachineOptions, TubeOptions, WrapOptions};
+use gweave::rotary::options::MachineOptions;
 use gweave::rotary::report::{TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
-use gweave::rotary_job::{tube_file, wrap_file};
-use gweave::run::{Ran, Run};
+use gweave::Malformed;
+use gweave::{tube_file, wrap_file};
+use gweave::{Progress, Strictness};
+use gweave::{Ran, Run};
+use gweave::{TubeOptions, WrapOptions};
 
 use crate::finish::{self, FinishError};
 
@@ -197,7 +198,7 @@ fn pass_needs(e: &gweave::Error) -> Option<&Said> {
 /// The run's header, in the CLI's words: `purge-shift --purge-mm 2.5 --lenient`.
 ///
 /// ```
-/// use gweave::pass::Strictness;
+/// use gweave::Strictness;
 /// use gweave::post::mix::MixOptions;
 /// use gweave_sim::transform::command_line;
 /// let options = MixOptions { at_layer: vec!["0=Dark  Red".into()], ..MixOptions::default() };
@@ -240,10 +241,8 @@ fn settings<T: Default, E: std::error::Error + 'static>(
 ) -> Result<T, TransformError> {
     let Some(path) = path else { return Ok(T::default()) };
     let text = gweave::settings::read_text(path).map_err(|e| gweave::Error::io(path, e))?;
-    parse(&text).map_err(|e| TransformError::Settings {
-        path: path.to_path_buf(),
-        message: gweave::error::with_causes(&e),
-    })
+    parse(&text)
+        .map_err(|e| TransformError::Settings { path: path.to_path_buf(), message: gweave::with_causes(&e) })
 }
 
 /// `purge-shift`'s row in [`transforms`].

@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use gweave::{Toolpath, ToolpathOptions};
-use gweave_sim::plot::{speed_chart, ChartFormat};
 use gweave_sim::MachineProfile;
+use gweave_sim::{speed_chart, ChartFormat};
 use gweave_sim::{Machine, Outcome};
 
 #[test]

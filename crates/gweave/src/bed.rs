@@ -9,7 +9,7 @@
 //!   `;SETTING_3` footer, and some start G-code prints them as `;machine_width = 220` lines.
 //!
 //! ```
-//! use gweave::bed::Bed;
+//! use gweave::Bed;
 //! let bed: Bed = "0,-4,250,210,210".parse().unwrap();
 //! assert!(bed.contains(1, -3.0) && !bed.contains(1, -5.0));
 //! let bed: Bed = "220,220,250".parse().unwrap();

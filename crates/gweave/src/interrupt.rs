@@ -38,7 +38,12 @@ impl Token {
         self.0.load(Ordering::Relaxed)
     }
 
-    /// `Err(`[`stopped_error`]`)` once stopped.
+    /// This thread's token, if a run here can be stopped ([`run_under`]).
+    pub fn current() -> Option<Token> {
+        CURRENT.with(|c| c.borrow().clone())
+    }
+
+    /// Fails once stopped, with the error [`is_stopped`] recognises.
     pub fn check(&self) -> io::Result<()> {
         if self.stopped() {
             Err(stopped_error())
@@ -65,25 +70,20 @@ pub fn run_under<T>(token: &Token, work: impl FnOnce() -> T) -> T {
     work()
 }
 
-/// This thread's token, if a run here can be stopped.
-pub fn current() -> Option<Token> {
-    CURRENT.with(|c| c.borrow().clone())
-}
-
 /// Whether this thread's run was stopped: for a long loop that neither reads nor writes (a
 /// preview's projection and painting), which then ends early, its result to be thrown away.
 /// A thread-local read, a few nanoseconds: call it every [`CHECK_EVERY`] items.
-pub fn stopped() -> bool {
+pub(crate) fn stopped() -> bool {
     CURRENT.with(|c| c.borrow().as_ref().is_some_and(Token::stopped))
 }
 
 /// Items between two [`stopped`] checks in a loop: a few thousand strokes take well under a
 /// millisecond even in a debug build.
-pub const CHECK_EVERY: usize = 1 << 12;
+pub(crate) const CHECK_EVERY: usize = 1 << 12;
 
 /// The error a stopped run fails with.
 #[derive(Debug)]
-pub struct Stopped;
+pub(crate) struct Stopped;
 
 impl std::fmt::Display for Stopped {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -95,11 +95,11 @@ impl std::error::Error for Stopped {}
 
 /// The I/O error of a stopped run. Not `ErrorKind::Interrupted`: that one (EINTR) means "try
 /// again", and readers do.
-pub fn stopped_error() -> io::Error {
+pub(crate) fn stopped_error() -> io::Error {
     io::Error::other(Stopped)
 }
 
-/// Whether `e` is [`stopped_error`].
+/// Whether `e` is the error of a stopped run.
 pub fn is_stopped(e: &io::Error) -> bool {
     e.get_ref().is_some_and(|inner| inner.is::<Stopped>())
 }
@@ -110,15 +110,15 @@ mod tests {
 
     #[test]
     fn a_token_is_current_only_within_its_run() {
-        assert!(current().is_none());
+        assert!(Token::current().is_none());
         let token = Token::new();
         run_under(&token, || {
-            let seen = current().expect("a current token");
+            let seen = Token::current().expect("a current token");
             assert!(seen.check().is_ok() && !stopped());
             token.stop();
             assert!(is_stopped(&seen.check().unwrap_err()) && stopped());
         });
-        assert!(current().is_none() && !stopped());
+        assert!(Token::current().is_none() && !stopped());
         assert!(!is_stopped(&io::Error::from(io::ErrorKind::Interrupted)));
     }
 }

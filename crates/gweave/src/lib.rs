@@ -1,6 +1,6 @@
 //! gweave: a lossless, streaming G-code engine for unconventional 3D printers.
 //!
-//! Every command is a [`pass::Pass`] over a stream of lines: the [`gcode::lexer`] records what
+//! Every command is a [`Pass`] over a stream of lines: the [`gcode::lexer`] records what
 //! each line says (with spans), the [`gcode::state`] tracks what the machine would do, and lines a
 //! pass does not change are written back byte for byte.
 //!
@@ -8,7 +8,8 @@
 //! `docs/architecture.md`): [`Run`] and [`Pass`] to run a pass, [`LineReader`], [`Block`] and
 //! [`State`] to read a file, each job's entry point ([`stats_file`], [`check_file`],
 //! [`purge_shift`], [`mix`], [`wrap_file`], [`tube_file`], [`preview`]) with its options and
-//! report, and [`Error`]. The modules below hold the rest, by machine concept.
+//! report, and [`Error`]. The runner, the pass machinery and the jobs live in private modules;
+//! the public modules below are the vocabularies a front end reads by path, by machine concept.
 //!
 //! ```
 //! use gweave::gcode::{lexer::parse_into, line::Block, state::{State, X}};
@@ -24,39 +25,41 @@
 #![warn(missing_docs)]
 #![warn(unreachable_pub)]
 
-pub mod bed;
-pub mod check;
+mod bed;
+mod check;
 pub mod colour;
 pub(crate) mod eol;
-pub mod error;
+mod error;
 pub(crate) mod firmware;
 pub mod gcode;
 pub mod gen;
-pub mod interrupt;
-pub mod malformed;
+mod interrupt;
+mod malformed;
 pub mod options;
-pub mod pass;
+mod pass;
 pub mod picture;
 // purge-shift and other post-processing passes
 pub mod post;
 pub mod range;
 pub mod render;
 pub mod rotary;
-pub mod rotary_job;
-pub mod run;
+mod rotary_job;
+mod run;
 pub mod settings;
-pub mod stats;
+mod stats;
 #[cfg(any(test, feature = "test-support"))]
 pub mod test_support;
-pub mod total;
+mod total;
 
 // The public surface: what the front ends (the CLI, the Python package, the simulator, the board)
-// start from, by what they do. The modules keep their full paths for the front ends that still
-// import through them; a module no front end needs is private (`pub(crate)`), and
-// `unreachable_pub` keeps its items from claiming more.
+// start from, by what they do. The jobs, the runner and the pass machinery are private modules
+// whose items are named here; the modules still public are vocabularies a front end reads by
+// path (the G-code reader's, the generators', the options', the ranges'...). `unreachable_pub`
+// keeps an item of a private module from claiming more than `pub(crate)` unless it is named
+// here.
 
 // Errors and ranges: every number a front end passes in has a range, every failure is an `Error`.
-pub use error::{Error, Result};
+pub use error::{with_causes, Error, Result};
 pub use range::{OutOfRange, Range};
 
 // Reading a file: its container (plain, binary G-code), its lines, their words and the machine
@@ -71,18 +74,24 @@ pub use gcode::state::{Effect, State, StateOptions};
 pub use firmware::{Firmware, MixCommands, MixingCode, UnknownFirmware};
 pub use gcode::temp::TempFile;
 pub use gcode::writer::{Output, Target};
-pub use interrupt::Token;
-pub use malformed::{Malformed, Transformed};
-pub use pass::{Flow, Identity, Pass, Progress, Quiet, Strictness};
-pub use run::{Ran, Run, Source};
+pub use interrupt::{is_stopped, run_under, Token};
+pub use malformed::{Malformed, Transformed, WithMalformed};
+pub use pass::{keep, CopyReport, Ctx, Flow, Identity, Pass, PassError, Progress, Quiet, Step, Strictness};
+pub use run::{Dest, Ran, Run, Source};
 
-// The jobs: each one's entry point, options and report.
-pub use bed::Bed;
-pub use check::{check_file, check_file_with, CheckOptions, CheckReport, RefusedWord, WordRanges};
+// The jobs: each one's entry point, options and report, and the passes a front end composes.
+pub use bed::{Bed, BedError, SlicerBed};
+pub use check::{
+    check_file, check_file_with, CheckOptions, CheckPass, CheckReport, FindingGroup, LineFinding,
+    RefusedWord, WordRanges,
+};
+pub use gen::raster_job::RasterOptions;
 pub use options::{JobOptions, OptionError, OptionSpec};
 pub use post::mix::{mix, MixOptions, MixPassError};
 pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
+pub use render::job::PreviewOptions;
 pub use render::{preview, preview_with_progress, PreviewReport, PreviewSettings, Toolpath, ToolpathOptions};
+pub use rotary::options::{TubeOptions, WrapOptions};
 pub use rotary_job::{tube_file, wrap_file};
-pub use stats::{stats_file, Stats};
+pub use stats::{stats_file, Bounds, SlicerFigures, Stats, StatsPass, ToolFilament};
 pub use total::{CheckTotal, StatsTotal};

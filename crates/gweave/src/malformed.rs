@@ -8,14 +8,12 @@
 //! `estimate` do. The driver (`pass`) sits above this module and uses its counts.
 //!
 //! ```
-//! use gweave::pass::{drive_reader, Counting, Reading, Strictness};
-//! use gweave::stats::StatsPass;
+//! use gweave::{Run, StatsPass, Strictness};
 //!
-//! let text = "G1 X1 F600\nG1 X1..2\nG1 X3\n";
-//! let mut pass = Counting::new(StatsPass::new(None));
-//! let reading = Reading { strictness: Strictness::Lenient, ..Reading::new("part.gcode".as_ref()) };
-//! drive_reader(text.as_bytes(), reading, &mut pass, &mut std::io::sink()).unwrap();
-//! assert_eq!((pass.malformed.malformed_lines, pass.malformed.first_malformed_line), (1, Some(2)));
+//! let text = b"G1 X1 F600\nG1 X1..2\nG1 X3\n";
+//! let mut pass = StatsPass::new(None);
+//! let ran = Run::text(text).strictness(Strictness::Lenient).run(&mut pass).unwrap();
+//! assert_eq!((ran.malformed.malformed_lines, ran.malformed.first_malformed_line), (1, Some(2)));
 //! ```
 
 use serde::Serialize;

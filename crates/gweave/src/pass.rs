@@ -132,7 +132,7 @@ pub fn keep(ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
 
 /// A line copied out of the reader's buffer, for passes that hold lines back.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct OwnedLine {
+pub(crate) struct OwnedLine {
     /// The line, without its ending.
     pub bytes: Vec<u8>,
     /// The line's ending (`\n`, `\r\n` or none).
@@ -143,21 +143,15 @@ pub struct OwnedLine {
 
 impl OwnedLine {
     /// A copy of `line`.
-    pub fn from_raw(line: &RawLine<'_>) -> Self {
+    pub(crate) fn from_raw(line: &RawLine<'_>) -> Self {
         OwnedLine { bytes: line.bytes.to_vec(), eol: line.eol.to_vec(), number: line.number }
-    }
-
-    /// Writes the line and its ending.
-    pub fn write_to(&self, out: &mut dyn Write) -> io::Result<()> {
-        out.write_all(&self.bytes)?;
-        out.write_all(&self.eol)
     }
 }
 
 /// A pass that counts the malformed lines its inner pass sees (an error-level diagnostic, or a
 /// line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE)).
 #[derive(Debug, Default)]
-pub struct Counting<P> {
+pub(crate) struct Counting<P> {
     /// The inner pass.
     pub pass: P,
     /// The malformed lines it saw.
@@ -166,7 +160,7 @@ pub struct Counting<P> {
 
 impl<P> Counting<P> {
     /// Counting for `pass`.
-    pub fn new(pass: P) -> Self {
+    pub(crate) fn new(pass: P) -> Self {
         Counting { pass, malformed: Malformed::default() }
     }
 }
@@ -215,7 +209,7 @@ impl Progress for Quiet {}
 /// hears of the progress. [`Reading::new`] is a strict reading with the default options, no
 /// output and no progress; the fields are public to change what differs:
 /// `Reading { strictness: Strictness::Lenient, ..Reading::new(path) }`.
-pub struct Reading<'a> {
+pub(crate) struct Reading<'a> {
     /// The input's name in errors (`<path>:<line>:<column>: ...`).
     pub path: &'a Path,
     /// The name write errors show; `<path> (output)` without one.
@@ -230,7 +224,7 @@ pub struct Reading<'a> {
 
 impl<'a> Reading<'a> {
     /// `path` read strictly, with the default state options, no output and no progress.
-    pub fn new(path: &'a Path) -> Reading<'a> {
+    pub(crate) fn new(path: &'a Path) -> Reading<'a> {
         Reading {
             path,
             output: None,
@@ -245,7 +239,7 @@ impl<'a> Reading<'a> {
 /// the pass, so that a pass known at the call (`stats`) has its per-line code inlined into the
 /// loop; `&mut dyn Pass` works as well. Outside this crate, [`crate::run::Run`] opens the file,
 /// resolves its firmware and calls this.
-pub fn drive_reader<P: Pass + ?Sized>(
+pub(crate) fn drive_reader<P: Pass + ?Sized>(
     input: impl Read,
     reading: Reading<'_>,
     pass: &mut P,
@@ -269,7 +263,7 @@ pub fn drive_reader<P: Pass + ?Sized>(
 /// the same lines, blocks and states, but for a line longer than
 /// [`MAX_LINE`](crate::gcode::reader::MAX_LINE), which comes as one [`Part::Last`] without its
 /// bytes (a pass that copies long lines has an output, and [`drive_reader`]).
-pub fn scan_ahead<P: Pass + ?Sized>(
+pub(crate) fn scan_ahead<P: Pass + ?Sized>(
     input: impl Read + Send,
     path: &Path,
     options: StateOptions,

@@ -27,10 +27,10 @@ use crate::run::{Dest, Run};
 
 /// Bead width drawn in the preview of a wrapped part, mm: 0, thin (2 px) toolpaths, so that
 /// the infill, the layers below and the weld line stay visible through a solid skin.
-pub const WRAP_PREVIEW_BEAD_MM: f64 = 0.0;
+pub(crate) const WRAP_PREVIEW_BEAD_MM: f64 = 0.0;
 
 /// Size of a `--preview` picture, pixels.
-pub const PREVIEW_SIZE_PX: [u32; 2] = [800, 600];
+pub(crate) const PREVIEW_SIZE_PX: [u32; 2] = [800, 600];
 
 /// The file a target writes to, if it can be read back.
 fn written_path(target: &Target, input: Option<&Path>) -> Option<PathBuf> {

@@ -8,8 +8,7 @@
 //! before it builds its pass (`mix` chooses its dialect from it) asks [`Run::flavour`] first.
 //!
 //! ```
-//! use gweave::pass::{Identity, Strictness};
-//! use gweave::run::Run;
+//! use gweave::{Identity, Run, Strictness};
 //! let text = b"G1 X1\nG1 X1..2\nG1 X3\n";
 //! let mut pass = Identity::default();
 //! let ran = Run::text(text).to_memory().strictness(Strictness::Lenient).run(&mut pass).unwrap();
@@ -31,14 +30,14 @@ use crate::malformed::Malformed;
 use crate::pass::{drive_reader, scan_ahead, Counting, Pass, Progress, Quiet, Reading, Strictness};
 
 /// The name a text in memory goes by in messages.
-pub const IN_MEMORY: &str = "<input>";
+pub(crate) const IN_MEMORY: &str = "<input>";
 
 /// What a run reads.
 #[derive(Debug, Clone, Copy)]
 pub enum Source<'a> {
     /// A file: text, gzip or binary G-code, or standard input as `-` (see [`container::open`]).
     File(&'a Path),
-    /// A whole text in memory (tests, Python), named [`IN_MEMORY`] in messages.
+    /// A whole text in memory (tests, Python), named `<input>` in messages.
     Text(&'a [u8]),
 }
 
@@ -226,7 +225,7 @@ impl<'a> Run<'a> {
     }
 
     /// Streams the input through `pass` without output. Returns the final state. A file is
-    /// read and lexed on a second thread ([`scan_ahead`]).
+    /// read and lexed on a second thread.
     pub fn scan<P: Pass + ?Sized>(self, pass: &mut P) -> Result<State> {
         self.drive(pass, &mut io::sink(), None, true)
     }

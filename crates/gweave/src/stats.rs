@@ -180,7 +180,7 @@ pub struct StatsPass {
 }
 
 /// Filament diameter when neither the file nor the user says, mm.
-pub const DEFAULT_FILAMENT_DIAMETER_MM: f64 = 1.75;
+pub(crate) const DEFAULT_FILAMENT_DIAMETER_MM: f64 = 1.75;
 
 impl StatsPass {
     /// Statistics with the filament diameter forced to `diameter_override_mm`, if given.

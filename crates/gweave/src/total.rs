@@ -93,26 +93,6 @@ impl CheckTotal {
     }
 }
 
-/// Several files' reports, each with its path, and their total: the JSON `stats` and `check`
-/// print for more than one file.
-#[derive(Debug, Clone, Serialize)]
-pub struct PerFile<T, Total> {
-    /// Each file's report.
-    pub files: Vec<Named<T>>,
-    /// Their total.
-    pub total: Total,
-}
-
-/// One file's report with its path first.
-#[derive(Debug, Clone, Serialize)]
-pub struct Named<T> {
-    /// The file's path as given.
-    pub path: String,
-    /// Its report.
-    #[serde(flatten)]
-    pub report: T,
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

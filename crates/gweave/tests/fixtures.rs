@@ -4,9 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::layers::{Region, Slicer};
-use gweave::pass::{drive_reader, Reading};
-use gweave::stats::StatsPass;
-use gweave::{Identity, Run, Stats};
+use gweave::{Identity, Run, Stats, StatsPass};
 
 fn data(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel)
@@ -32,8 +30,8 @@ fn stats(rel: &str) -> (Stats, gweave::State) {
 fn every_fixture_round_trips_byte_exact() {
     for rel in FIXTURES {
         let bytes = std::fs::read(data(rel)).unwrap();
-        let (mut out, mut copy) = (Vec::with_capacity(bytes.len()), Identity::default());
-        drive_reader(&bytes[..], Reading::new(Path::new(rel)), &mut copy, &mut out).unwrap();
+        let mut copy = Identity::default();
+        let out = Run::text(&bytes).to_memory().run(&mut copy).unwrap().output;
         assert!(out == bytes, "{rel} did not round-trip");
         let newlines = bytes.iter().filter(|&&b| b == b'\n').count() as u64;
         let lines = newlines + u64::from(bytes.last() != Some(&b'\n'));
@@ -105,8 +103,7 @@ fn tool_changes_as_the_fixture_readme_says() {
 /// which Ultimaker's firmware knows (the file says `;FLAVOR:Griffin`).
 #[test]
 fn check_finds_only_real_problems_in_the_fixtures() {
-    use gweave::check::CheckPass;
-    use gweave::CheckOptions;
+    use gweave::{CheckOptions, CheckPass};
     for rel in FIXTURES {
         let mut pass = CheckPass::new(CheckOptions::default());
         Run::file(&data(rel)).scan(&mut pass).unwrap();

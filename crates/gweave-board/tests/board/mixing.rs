@@ -8,8 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use gweave_board::{Board, Wiring};
-use gweave_sim::core_board::{self, CoreReport};
 use gweave_sim::MachineProfile;
+use gweave_sim::{run_on_core, CoreReport};
 
 /// Sockets E0..E3 (E0 on the E0 socket, E1 on E1, E2 and E3 on AUX-2).
 const INPUTS: std::ops::Range<usize> = 3..7;
@@ -40,7 +40,7 @@ fn sim(lines: &[&str]) -> CoreReport {
     let path = repo("examples/machines/gweave-mixing.toml");
     let profile = MachineProfile::from_file(&path).unwrap();
     let mut next = lines.iter().map(|l| l.as_bytes().to_vec());
-    core_board::run_file(&profile, &mut || next.next()).unwrap()
+    run_on_core(&profile, &mut || next.next()).unwrap()
 }
 
 /// The lines a host sends: comments and blank lines are not (printcore and OctoPrint strip

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use gweave::rotary::cylinder::RotaryConfig;
 use gweave_board::{Board, Wiring};
-use gweave_sim::core_board::{self, CoreReport};
+use gweave_sim::{run_on_core, CoreReport};
 use gweave_sim::{FirmwareKind, Machine, MachineProfile};
 
 /// The sockets: X, Z, E0 and E1 (the mandrel).
@@ -43,7 +43,7 @@ fn profile() -> MachineProfile {
 /// firmware's core on the host.
 fn twin(text: &str) -> CoreReport {
     let mut next = text.lines().map(|l| l.as_bytes().to_vec());
-    let report = core_board::run_file(&profile(), &mut || next.next()).unwrap();
+    let report = run_on_core(&profile(), &mut || next.next()).unwrap();
     assert!(!report.halted && report.errors.is_empty(), "{:?}", report.errors);
     report
 }

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::pass::CopyReport;
+use gweave::CopyReport;
 use gweave::{Container, Identity, Run, Strictness, Target};
 
 use crate::common::{print_summary, OutputArgs, ReportArgs};

@@ -7,7 +7,8 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use gweave::options::Spelling;
-use gweave::render::job::{self, PreviewOptions};
+use gweave::render::job;
+use gweave::PreviewOptions;
 use gweave::PreviewReport;
 
 use crate::args::Lenient;

@@ -7,8 +7,9 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use gweave::gen::printhead::PrintheadProfile;
-use gweave::gen::raster_job::{JobReport, RasterOptions};
+use gweave::gen::raster_job::JobReport;
 use gweave::options::Spelling;
+use gweave::RasterOptions;
 use gweave_sim::raster_job::{Raster, RasterJobError, Written};
 
 use crate::common::{hms, print_summary, ReportArgs};

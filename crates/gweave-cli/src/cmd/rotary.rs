@@ -11,8 +11,8 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::{Args, Subcommand};
 use gweave::rotary::cylinder::{FeedConvention, RotaryUnit};
-use gweave::rotary::options::{TubeOptions, WrapOptions};
 use gweave::rotary::report::{MachineReport, TubeReport, WrapReport};
+use gweave::{TubeOptions, WrapOptions};
 use gweave_sim::transform::{self, Job};
 
 use super::transform::{settings_file, Shown};

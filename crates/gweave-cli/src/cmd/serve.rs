@@ -13,7 +13,7 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use gweave::gcode::writer::write_file;
-use gweave_sim::core_board::CoreDevice;
+use gweave_sim::CoreDevice;
 use gweave_sim::PtyEndpoint;
 use gweave_sim::TcpEndpoint;
 use gweave_sim::{serve, Endpoint, ServeOptions, ServeSummary};

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::malformed::WithMalformed;
+use gweave::WithMalformed;
 use gweave::{stats_file, Stats, StatsTotal};
 
 use gweave::range::FILAMENT_DIAMETER_MM;

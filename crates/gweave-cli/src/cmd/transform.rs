@@ -13,9 +13,9 @@ use anyhow::Result;
 use clap::error::ErrorKind;
 use clap::{ArgMatches, Args, Command, FromArgMatches, Subcommand};
 use gweave::gcode::writer::Target;
-use gweave::malformed::Transformed;
 use gweave::options::{JobOptions, Value};
-use gweave::pass::Strictness;
+use gweave::Strictness;
+use gweave::Transformed;
 use gweave_sim::transform::{transforms, EachTransform, Job, Outcome, Transform};
 use serde::Serialize;
 

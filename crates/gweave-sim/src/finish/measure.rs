@@ -20,9 +20,9 @@ use gweave::gcode::container;
 use gweave::gcode::ends::read_ends;
 use gweave::gcode::flavour::flavour_in;
 use gweave::gcode::scratch::ScratchFile;
-use gweave::pass::Ctx;
 use gweave::post::metadata::{is_progress_line, read_setting, Figures};
-use gweave::stats::StatsPass;
+use gweave::Ctx;
+use gweave::StatsPass;
 use gweave::{Firmware, Pass, Target};
 
 use super::{FinishError, Result};
@@ -172,9 +172,8 @@ mod tests {
 
     use super::*;
     use crate::motion::estimate::{Estimate, Estimator};
-    use gweave::pass::{drive_reader, Reading};
+    use gweave::test_support::read_lenient;
     use gweave::StateOptions;
-    use gweave::Strictness;
 
     /// The serial pass the threads replaced: one estimator per mode fed every whole line, the
     /// clock read after each progress line.
@@ -235,8 +234,7 @@ mod tests {
         let mut pass = StatsPass::new(None);
         let firmware = Firmware::resolve(None, flavour_in(&ends).as_deref());
         let options = StateOptions { firmware, ..StateOptions::default() };
-        let reading = Reading { options, strictness: Strictness::Lenient, ..Reading::new(&path) };
-        let state = drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
+        let state = read_lenient(text.as_bytes(), options, &mut pass, &mut io::sink()).unwrap();
         let counted: Vec<f64> = pass.into_stats(&state).filament.iter().map(|f| f.extruded_mm).collect();
         assert_eq!(figures.filament_mm, counted);
     }
@@ -338,8 +336,7 @@ mod tests {
         let silent = silent.as_ref().unwrap_or(&normal);
         let mut pass = StatsPass::new(None);
         let options = StateOptions { firmware, ..StateOptions::default() };
-        let reading = Reading { options, strictness: Strictness::Lenient, ..Reading::new(path) };
-        let state = drive_reader(&text[..], reading, &mut pass, &mut io::sink()).unwrap();
+        let state = read_lenient(&text[..], options, &mut pass, &mut io::sink()).unwrap();
         let stats = pass.into_stats(&state);
         let first = |e: &Estimate| e.layer_s.first().copied().unwrap_or(0.0);
         Figures {

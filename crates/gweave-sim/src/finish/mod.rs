@@ -30,7 +30,7 @@ mod measure;
 use measure::measure_while_written;
 
 /// A result of finishing an output.
-pub type Result<T, E = FinishError> = std::result::Result<T, E>;
+pub(crate) type Result<T, E = FinishError> = std::result::Result<T, E>;
 
 /// Why a transform's output could not be finished.
 #[derive(Debug, thiserror::Error)]
@@ -55,7 +55,7 @@ pub enum FinishError {
 
 /// Refuses to run `command` (`mix`, `purge-shift`, `rotary wrap`) on a file an earlier run of
 /// it wrote: a second run would stack on the first (shift the changes again, purge twice).
-pub fn refuse_second_run(input: &Path, command: &str) -> Result<()> {
+pub(crate) fn refuse_second_run(input: &Path, command: &str) -> Result<()> {
     // Read through its container: a `.gcode.gz` or `.bgcode` written by gweave holds the header
     // in its text. An input that cannot be opened or read (a damaged block) is the transform's
     // to report, with the file, block and line it names.
@@ -89,7 +89,7 @@ pub fn with_metadata<R, E: From<FinishError>>(
 /// [`with_metadata`] for a transform that times its own output better than the estimator's
 /// machine can (`own_time_s`, s: a rotary axis, whose feed convention the default machine does
 /// not read): the times are scaled to it, progress lines keeping their estimated proportions.
-pub fn with_metadata_timed<R, E: From<FinishError>>(
+pub(crate) fn with_metadata_timed<R, E: From<FinishError>>(
     input: Option<&Path>,
     target: &Target,
     command_line: &str,
@@ -118,7 +118,7 @@ pub fn with_metadata_timed<R, E: From<FinishError>>(
 /// back: the caller has made sure the output holds no line the metadata is measured from (no
 /// progress line, no slicer figure, no extrusion), which [`with_metadata`] would rewrite.
 /// Returns what `write` returned and the path written (`None`: standard output).
-pub fn with_own_figures<R, E: From<FinishError>>(
+pub(crate) fn with_own_figures<R, E: From<FinishError>>(
     target: &Target,
     command_line: &str,
     write: impl FnOnce(&mut dyn Write) -> Result<R, E>,
@@ -242,8 +242,9 @@ mod tests {
     /// directly, the file is the same to the byte.
     #[test]
     fn a_raster_written_directly_is_the_measured_file_to_the_byte() {
-        use gweave::gen::raster_job::{JobReport, RasterOptions, Setup};
+        use gweave::gen::raster_job::{JobReport, Setup};
         use gweave::Quiet;
+        use gweave::RasterOptions;
         let dir = tempfile::tempdir().unwrap();
         let layers = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/raster/layers");
         let job = Setup::new(vec![layers], RasterOptions::default()).job().unwrap();

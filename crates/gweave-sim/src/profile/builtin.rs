@@ -134,7 +134,7 @@ pub enum LoadError {
         source: std::io::Error,
     },
     /// The profile is refused (`path`: the file it came from, `None` for a built-in one).
-    #[error("{}{}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default(), gweave::error::with_causes(source))]
+    #[error("{}{}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default(), gweave::with_causes(source))]
     Profile {
         /// The file, if it came from one.
         path: Option<std::path::PathBuf>,

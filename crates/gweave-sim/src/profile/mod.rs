@@ -184,7 +184,7 @@ impl Bed {
     }
 
     /// The volume `gweave check --machine` holds moves to: this one.
-    pub fn to_check(self) -> Result<gweave::Bed, gweave::bed::BedError> {
+    pub fn to_check(self) -> Result<gweave::Bed, gweave::BedError> {
         let [x, y, z] = self.ranges();
         gweave::Bed::new([x.0, y.0], [x.1, y.1], Some(z.1))
     }

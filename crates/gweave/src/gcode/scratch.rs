@@ -76,7 +76,7 @@ impl ScratchFile {
             shown: output.unwrap_or(&path).to_path_buf(),
             path,
             file: file.as_file().try_clone()?,
-            stop: crate::interrupt::current(),
+            stop: crate::interrupt::Token::current(),
             growth: Mutex::new(Growth { written_bytes: 0, end: End::Writing }),
             grown: Condvar::new(),
         };

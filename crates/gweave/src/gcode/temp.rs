@@ -38,7 +38,7 @@ impl TempFile {
             .tempfile_in(dir)
             .map_err(without_temp_name)?;
         paths.push(file.path().to_path_buf());
-        Ok(TempFile { file: Some(file), stop: crate::interrupt::current() })
+        Ok(TempFile { file: Some(file), stop: crate::interrupt::Token::current() })
     }
 
     /// The open file.

@@ -83,7 +83,7 @@ pub fn earlier_runs(input: impl BufRead) -> io::Result<Vec<EarlierRun>> {
 pub struct Figures {
     /// Filament out of the nozzle per tool, mm (`stats`'s count).
     pub filament_mm: Vec<f64>,
-    /// Filament diameter, mm (0: [`DEFAULT_FILAMENT_DIAMETER_MM`]).
+    /// Filament diameter, mm (0: `stats`' default, 1.75 mm).
     pub diameter_mm: f64,
     /// The file's `filament_density` per tool, g/cm³ (the first for tools past the list).
     pub density_g_cm3: Vec<f64>,

@@ -22,7 +22,7 @@
 //! words read back on the cylinder ([`crate::rotary::preview::RotaryReading`]), and are drawn in
 //! 3D there, in the pictures and in the viewer, with the same colourings, travel and bounded
 //! memory as flat files; so are the `--preview` pictures of `gweave rotary wrap` and `tube`
-//! ([`crate::rotary_job`]).
+//! ([`crate::wrap_file`], [`crate::tube_file`]).
 //!
 //! ```no_run
 //! use gweave::render::{preview, Format, PreviewSettings};

@@ -11,15 +11,14 @@
 //! the radii beads were laid at, from the mandrel out.
 //!
 //! ```
-//! use gweave::pass::{drive_reader, Reading};
+//! use gweave::Run;
 //! use gweave::rotary::{cylinder::RotaryConfig, helix::TubeParams, preview};
 //! let mut tube = TubeParams::new(RotaryConfig::new(10.0));
 //! (tube.length_mm, tube.layers, tube.pitch_mm) = (4.0, 2, Some(2.0));
 //! let mut gcode = Vec::new();
 //! tube.write_gcode(&mut gcode).unwrap();
 //! let mut pass = preview::ProgramPass::new(preview::RotaryReading::new(&tube.machine).unwrap());
-//! let reading = Reading::new("tube.gcode".as_ref());
-//! drive_reader(gcode.as_slice(), reading, &mut pass, &mut std::io::sink()).unwrap();
+//! Run::text(&gcode).scan(&mut pass).unwrap();
 //! let program = pass.finish();
 //! assert_eq!(program.layers.len(), 2);
 //! // Layer 1's nozzle rides one layer height above layer 0's.

@@ -2,7 +2,8 @@
 //! and `gweave rotary tube`): per layer of a wrap the radius, the angles the beads sweep and
 //! where the weld line (flat y = 0) lies; per layer of a tube the radius, handedness, turns,
 //! spindle speed and where the layer starts and ends (the next one starts there: there is no
-//! seam). The jobs themselves, which write, read back and draw, are [`crate::rotary_job`].
+//! seam). The jobs themselves, which write, read back and draw, are [`crate::wrap_file`] and
+//! [`crate::tube_file`].
 //!
 //! The commands' flags and Python's keywords reach the settings as the options declared in
 //! [`super::options`]; the settings of custom helical paths (`gweave.write_helical_paths`)

@@ -2,13 +2,12 @@
 //! replayed through the machine state and compared line by line.
 
 use std::io::Write;
-use std::path::Path;
 
 use gweave::gcode::retraction::Retraction;
 use gweave::gcode::state::{Move, Path as MovePath, E, X, Y};
-use gweave::pass::{drive_reader, Ctx, Reading, Step};
 use gweave::post::purge_shift::ChangeReport;
-use gweave::{Effect, Flow, Pass, PurgeShiftReport, StateOptions, Strictness};
+use gweave::test_support::read_lenient;
+use gweave::{Ctx, Effect, Flow, Pass, PurgeShiftReport, StateOptions, Step};
 
 /// What one line did, in a replay.
 #[derive(Debug, Clone)]
@@ -50,12 +49,7 @@ impl Pass for Recorder {
 
 pub fn replay(bytes: &[u8], options: &StateOptions) -> Replay {
     let mut rec = Recorder(Replay::default());
-    let reading = Reading {
-        options: options.clone(),
-        strictness: Strictness::Lenient,
-        ..Reading::new(Path::new("replay"))
-    };
-    let state = drive_reader(bytes, reading, &mut rec, &mut std::io::sink()).unwrap();
+    let state = read_lenient(bytes, options.clone(), &mut rec, &mut std::io::sink()).unwrap();
     rec.0.net_mm = state.filament_mm.iter().sum();
     rec.0.tool_net_mm = state.filament_mm.clone();
     rec.0
@@ -118,12 +112,7 @@ impl Pass for Ledger {
 pub fn ledger(bytes: &[u8], options: &StateOptions) -> ToolLedger {
     let mut l = Ledger { tool: 0, tools: Vec::new(), ledger: ToolLedger::default() };
     l.at(0);
-    let reading = Reading {
-        options: options.clone(),
-        strictness: Strictness::Lenient,
-        ..Reading::new(Path::new("ledger"))
-    };
-    drive_reader(bytes, reading, &mut l, &mut std::io::sink()).unwrap();
+    read_lenient(bytes, options.clone(), &mut l, &mut std::io::sink()).unwrap();
     l.ledger.retracted_mm = l.tools.iter().map(Retraction::in_force_mm).collect();
     l.ledger
 }

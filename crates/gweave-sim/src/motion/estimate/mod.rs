@@ -593,7 +593,7 @@ fn parse_lines<R: Read>(
 ) -> Result<(), EstimateError> {
     // A stopped run (Python's Ctrl-C) stops here too, not only at the reader: the lines
     // already read would otherwise be parsed and planned first.
-    let stop = gweave::interrupt::current();
+    let stop = gweave::Token::current();
     let mut until_check = LINES_BETWEEN_STOP_CHECKS;
     while let Some(line) = reader.next_line()? {
         skip_mixing_errors(front.step(&line, batch))?;

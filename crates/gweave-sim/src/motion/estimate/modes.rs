@@ -14,7 +14,7 @@ use std::io::Read;
 use std::sync::{mpsc, Arc};
 
 use gweave::gcode::reader::Part;
-use gweave::pass::Ctx;
+use gweave::Ctx;
 use gweave::{Firmware, LineReader, State};
 
 use super::back::Back;
@@ -52,7 +52,7 @@ pub(crate) struct ModeEstimate {
 /// that estimator's to the bit. Memory is a few batches of jobs in flight.
 ///
 /// `each_line` reads every whole line beside the estimate, on the parse side's thread, with
-/// the block, effect and modal state of the pass machinery's [`drive_reader`](gweave::pass::drive_reader)
+/// the block, effect and modal state a [`gweave::Run`] gives a pass
 /// for a pass that lists no words of plain moves (a transform's metadata: the `stats` count);
 /// it returns whether the clock is to be read after that line (a progress line).
 ///
@@ -143,7 +143,7 @@ fn parse(
     senders: &[mpsc::SyncSender<Arc<Vec<Job>>>],
     mut each_line: impl FnMut(&Ctx<'_>) -> bool,
 ) -> Result<(), EstimateError> {
-    let stop = gweave::interrupt::current();
+    let stop = gweave::Token::current();
     let mut reader = LineReader::new(input);
     while let Some(line) = reader.next_line()? {
         skip_mixing_errors(front.step(&line, batch))?;

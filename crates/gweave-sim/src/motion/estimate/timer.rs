@@ -37,8 +37,9 @@ impl Estimator {
 mod tests {
     use std::path::Path;
 
-    use gweave::gen::raster_job::{RasterOptions, Setup};
+    use gweave::gen::raster_job::Setup;
     use gweave::Quiet;
+    use gweave::RasterOptions;
     use gweave::Target;
 
     use super::*;

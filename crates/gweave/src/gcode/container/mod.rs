@@ -85,7 +85,7 @@ pub fn open(path: &Path) -> io::Result<Input> {
             (None, Box::new(ahead::Ahead::new(reader)))
         }
     };
-    Ok(Input { text_len, reader, stop: crate::interrupt::current() })
+    Ok(Input { text_len, reader, stop: crate::interrupt::Token::current() })
 }
 
 /// A gzip file's text: its members one after the other (as `gzip -d` reads them), and bytes

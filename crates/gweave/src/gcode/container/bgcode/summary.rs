@@ -6,7 +6,7 @@
 //!
 //! Both come from the text itself: the settings from its settings block (the slicer metadata),
 //! the figures from its footer comments (`; filament used [mm] = ...`), which for a transform's
-//! output are gweave's own figures (`gweave_sim::finish` rewrites the footer before the text
+//! output are gweave's own figures (`gweave_sim::with_metadata` rewrites the footer before the text
 //! reaches the writer). A key the text does not have is left out, as PrusaSlicer leaves out
 //! what it does not know.
 
