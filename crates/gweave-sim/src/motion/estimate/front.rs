@@ -622,19 +622,26 @@ impl Bookkeeping {
         }
     }
 
-    /// A move of the file, on line `line`: straight, or an arc cut into chords.
-    #[inline]
+    /// A move of the file, on line `line`: straight, or an arc cut into chords. Inlined into
+    /// the parse loop (most lines are a straight move: as a call it cost some 10 instructions a
+    /// line of saving and restoring registers), the arc out of line.
+    #[inline(always)]
     fn motion(&mut self, s: &Structure, m: &state::Move, line: u64, jobs: &mut Vec<Job>) {
         let feed_mm_s = if m.feed_mm_min > 0.0 { m.feed_mm_min / 60.0 } else { DEFAULT_FEED_MM_S };
         let tag = self.tag(s, jobs);
         self.moving(jobs);
+        match &m.path {
+            Path::Arc(arc) => self.arc(m, arc, feed_mm_s, tag, line, jobs),
+            Path::Line => push_move(jobs, Move { start: at(&m.from), end: at(&m.to), feed_mm_s, tag }, line),
+        }
+    }
+
+    /// An arc of the file, cut into chords as the plan side takes them ([`Chords`]): a huge
+    /// arc costs time, never memory. Past MAX_ARC_CHORDS they are longer than ARC_CHORD_MM, and
+    /// counted.
+    #[inline(never)]
+    fn arc(&mut self, m: &state::Move, arc: &Arc, feed_mm_s: f64, tag: u64, line: u64, jobs: &mut Vec<Job>) {
         let (start, end) = (at(&m.from), at(&m.to));
-        let Path::Arc(arc) = &m.path else {
-            push_move(jobs, Move { start, end, feed_mm_s, tag }, line);
-            return;
-        };
-        // The chords are cut as the plan side takes them ([`Chords`]): a huge arc costs time,
-        // never memory. Past MAX_ARC_CHORDS they are longer than ARC_CHORD_MM, and counted.
         let wanted = (m.len_mm() / ARC_CHORD_MM).ceil();
         if wanted > MAX_ARC_CHORDS as f64 {
             self.huge_arcs.add(line);

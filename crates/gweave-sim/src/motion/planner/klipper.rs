@@ -149,7 +149,11 @@ impl KlipperLookahead {
         self.queue.len()
     }
 
-    /// Queue a move (with its already checked geometry) and flush what is final.
+    /// Queue a move (with its already checked geometry) and flush what is final. Never inlined
+    /// into [`super::Planner::push`]: there `VecDeque::push_back` went out of line and copied
+    /// each move with `memcpy` (+20 instructions a move), and whether the compiler did so
+    /// changed with unrelated edits elsewhere in the crate (+47 a line in the guard build once).
+    #[inline(never)]
     pub(crate) fn push<S: BlockSink + ?Sized>(
         &mut self,
         mv: &Move,
