@@ -1,6 +1,7 @@
 """The core through Python: the same numbers as the Rust tests, from real slicer files."""
 
 import filecmp
+import re
 import subprocess
 import sys
 
@@ -63,8 +64,26 @@ def test_cat_is_byte_exact_and_never_overwrites_input(data, tmp_path):
     raw = src.read_bytes()
     assert copied == {"lines": raw.count(b"\n"), "bytes": len(raw), "malformed_lines": 0, "first_malformed_line": None}
     # The engine's words, as the CLI shows them: Python rewrote the message that named --in-place.
-    with pytest.raises(ValueError, match=r"refusing to overwrite .*: the output is the input \(replace it in place instead\)"):
+    with pytest.raises(ValueError) as e:
         gweave.cat(out, out)
+    assert str(e.value) == (
+        f"refusing to overwrite the input file {out}: the output names the file being read; "
+        "name another output file, or replace the input in place"
+    )
+
+
+def test_an_output_naming_the_input_says_which_input_by_its_path(tmp_path, capfd):
+    """Regression (a new user's trial): the CLI refused ``-o same.gcode`` with "names the input
+    (INPUT)", which reads like a placeholder; both front ends name the input by its path."""
+    src = tmp_path / "same.gcode"
+    src.write_text("G1 X1\n")
+    with pytest.raises(ValueError, match=rf"^refusing to overwrite the input file {re.escape(str(src))}: "):
+        gweave.cat(src, tmp_path / "." / "same.gcode")
+    assert not (tmp_path / "same.gcode.bak").exists() and src.read_text() == "G1 X1\n"
+    capfd.readouterr()
+    assert gweave.main(["cat", str(src), "-o", str(src)]) == 1
+    err = capfd.readouterr().err
+    assert f"-o {src} would overwrite the input file {src}; name another file" in err, err
 
 
 def test_check_reports_line_and_column(tmp_path):
