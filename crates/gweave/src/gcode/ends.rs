@@ -146,7 +146,7 @@ impl Footer {
 /// common and harmless (a file written by hand, a footer trimmed by a user); both together are
 /// what a cut leaves, and the test costs two searches of the ends already read.
 pub fn missing_footer(ends: &[u8]) -> Option<Footer> {
-    if ends.last().map_or(true, |b| matches!(b, b'\n' | b'\r')) {
+    if matches!(ends.last(), None | Some(b'\n' | b'\r')) {
         return None;
     }
     let head = &ends[..ends.len().min(HEAD_BYTES)];
