@@ -87,7 +87,7 @@ cp "$WORK/t.gcode" "$WORK/t.orig"
 if "$GWEAVE" stats "$WORK/t.gcode" --report "$WORK/t.gcode" 2> "$WORK/rep.err" > /dev/null; then
   fail "stats --report replaced its input"
 else
-  cmp -s "$WORK/t.gcode" "$WORK/t.orig" && grep -q "names the input (INPUT); name another file" "$WORK/rep.err" && ok \
+  cmp -s "$WORK/t.gcode" "$WORK/t.orig" && grep -q "would overwrite the input file $WORK/t.gcode; name another file" "$WORK/rep.err" && ok \
     || fail "stats --report onto its input: $(cat "$WORK/rep.err")"
 fi
 

@@ -107,20 +107,10 @@ impl Files {
                     continue;
                 }
                 if collide(out, out_id.as_ref(), input, in_id.as_ref()) {
+                    let (flag, path, input) = (&out.flag, out.path.display(), read_by(input));
                     match out.dir {
-                        Some(_) => bail!(
-                            "{} {} would write over the input {} ({}); name another folder",
-                            out.flag,
-                            out.path.display(),
-                            input.path.display(),
-                            input.flag
-                        ),
-                        None => bail!(
-                            "{} {} names the input ({}); name another file",
-                            out.flag,
-                            out.path.display(),
-                            input.flag
-                        ),
+                        Some(_) => bail!("{flag} {path} would write over {input}; name another folder"),
+                        None => bail!("{flag} {path} would overwrite {input}; name another file"),
                     }
                 }
             }
@@ -149,6 +139,16 @@ impl Files {
             }
         }
         Ok(())
+    }
+}
+
+/// An input in a user's words, by its path (perhaps spelled otherwise than the output that
+/// names it: `./in.gcode`, a link): "the input file in.gcode" for the command's own input (a
+/// positional argument, `INPUT`), "m.toml, the file --machine reads" for a flag's.
+fn read_by(input: &Entry) -> String {
+    match input.flag.starts_with('-') {
+        true => format!("{}, the file {} reads", input.path.display(), input.flag),
+        false => format!("the input file {}", input.path.display()),
     }
 }
 
@@ -245,9 +245,10 @@ mod tests {
         let input = dir.path().join("in.gcode");
         std::fs::write(&input, "G1\n").unwrap();
         let err = refused(Files::new().read("INPUT", Some(&input)).write("--plot", Some(&input)));
-        assert!(
-            err.starts_with("--plot ") && err.ends_with("names the input (INPUT); name another file"),
-            "{err}"
+        let input_path = input.display();
+        assert_eq!(
+            err,
+            format!("--plot {input_path} would overwrite the input file {input_path}; name another file")
         );
         // Another spelling of the same file, and a hard link to it.
         let other = dir.path().join(".").join("in.gcode");
@@ -282,7 +283,9 @@ mod tests {
         std::fs::write(&layer, "").unwrap();
         let owns: Owns = |n| n.to_string_lossy().starts_with("layer_");
         let err = refused(Files::new().read("--head", Some(&layer)).write_dir("-o", Some(dir.path()), owns));
-        assert!(err.contains("would write over the input") && err.contains("(--head)"), "{err}");
+        let head =
+            format!("would write over {}, the file --head reads; name another folder", layer.display());
+        assert!(err.ends_with(&head), "{err}");
         let other = dir.path().join("part.stl");
         Files::new().read("MODEL", Some(&other)).write_dir("-o", Some(dir.path()), owns).check().unwrap();
     }
@@ -302,6 +305,6 @@ mod tests {
         let err = refused(
             Files::new().read("INPUT", Some(&input)).target(&target, &input).write("--report", Some(&input)),
         );
-        assert!(err.contains("names the input (INPUT)"), "{err}");
+        assert!(err.contains("would overwrite the input file"), "{err}");
     }
 }

@@ -1,6 +1,7 @@
 """The core through Python: the same numbers as the Rust tests, from real slicer files."""
 
 import filecmp
+import re
 import subprocess
 import sys
 
@@ -63,8 +64,26 @@ def test_cat_is_byte_exact_and_never_overwrites_input(data, tmp_path):
     raw = src.read_bytes()
     assert copied == {"lines": raw.count(b"\n"), "bytes": len(raw), "malformed_lines": 0, "first_malformed_line": None}
     # The engine's words, as the CLI shows them: Python rewrote the message that named --in-place.
-    with pytest.raises(ValueError, match=r"refusing to overwrite .*: the output is the input \(replace it in place instead\)"):
+    with pytest.raises(ValueError) as e:
         gweave.cat(out, out)
+    assert str(e.value) == (
+        f"refusing to overwrite the input file {out}: the output names the file being read; "
+        "name another output file, or replace the input in place"
+    )
+
+
+def test_an_output_naming_the_input_says_which_input_by_its_path(tmp_path, capfd):
+    """Regression (a new user's trial): the CLI refused ``-o same.gcode`` with "names the input
+    (INPUT)", which reads like a placeholder; both front ends name the input by its path."""
+    src = tmp_path / "same.gcode"
+    src.write_text("G1 X1\n")
+    with pytest.raises(ValueError, match=rf"^refusing to overwrite the input file {re.escape(str(src))}: "):
+        gweave.cat(src, tmp_path / "." / "same.gcode")
+    assert not (tmp_path / "same.gcode.bak").exists() and src.read_text() == "G1 X1\n"
+    capfd.readouterr()
+    assert gweave.main(["cat", str(src), "-o", str(src)]) == 1
+    err = capfd.readouterr().err
+    assert f"-o {src} would overwrite the input file {src}; name another file" in err, err
 
 
 def test_check_reports_line_and_column(tmp_path):
@@ -111,3 +130,25 @@ def test_the_command_is_the_native_executable_and_the_module_has_no_cli():
     # Its exit codes come through: 2 for a usage error (clap's), 1 for a failed run.
     assert gweave.main(["--no-such-flag"]) == 2
     assert gweave.main(["stats", "/nonexistent/x.gcode"]) == 1
+
+
+def test_a_file_cut_mid_number_without_its_footer_looks_truncated(data, tmp_path):
+    """Regression (a new user's trial): a file cut at `E1` of `E17.55707`, no final newline,
+    passed `check` silently and `purge_shift` appended its footer to it. Its slicer ends every
+    file with `; prusaslicer_config = end`: `check` warns where the text stops, the transform
+    raises naming the file, line and column and writes nothing, `lenient=True` writes it."""
+    text = (data / "prusaslicer" / "pr_cone_2tool.gcode").read_text()
+    cut_at = text.index("G1 X112.194 Y106.138 E17.55707") + len("G1 X112.194 Y106.138 E1")
+    cut = tmp_path / "cut.gcode"
+    cut.write_text(text[:cut_at])
+    report = gweave.check(cut)
+    assert (report["errors"], report["warnings"], report["failed"]) == (0, 1, False)
+    finding = report["findings"][0]
+    assert (finding["line"], finding["column"], finding["kind"], finding["footer"]) == (387, 24, "no_footer", "prusaslicer")
+    assert gweave.check(cut, strict=True)["failed"]
+    out = tmp_path / "out.gcode"
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(cut))}:387:24: the file looks truncated: "):
+        gweave.purge_shift(cut, out, purge_mm=2)
+    assert not out.exists()
+    gweave.purge_shift(cut, out, purge_mm=2, lenient=True)
+    assert "G1 X112.194 Y106.138 E1\n" in out.read_text()

@@ -157,15 +157,30 @@ def test_an_unknown_keyword_is_a_type_error_as_python_raises_it(data, tmp_path):
 
 
 @pytest.mark.parametrize("command", TRANSFORMS)
-def test_every_transform_of_the_registry_is_a_command_and_a_typed_function(command, capfd):
+def test_every_transform_of_the_registry_is_a_command_and_a_typed_function(command, capfd, monkeypatch, tmp_path):
     """Regression (issue 40): a transform was written into each front end by hand (13 files
     for one); now it is one row of the engine's registry, from which the CLI derives its
     subcommand and `transform_json` runs it: the typed wrapper, named as the command, is the
     one thing Python adds (held to the declaration above)."""
     name = command.replace("-", "_")
-    assert JOBS[command][0] is not None, f"no typed wrapper gweave.{name}"
+    wrapper = JOBS[command][0]
+    assert wrapper is not None, f"no typed wrapper gweave.{name}"
     assert name in gweave.__all__
-    assert f'_transform("{command}", locals())' in inspect.getsource(JOBS[command][0]), "it runs its own row"
+    # It runs its own row, with its files and every declared option by its keyword: what it
+    # hands the compiled function, recorded in its place (the test read the wrapper's source
+    # text for the call, which a wrapper running another row with the right text passed).
+    calls = []
+
+    def recorded(*args: Any, **options: Any) -> str:
+        calls.append((args, options))
+        return '{"recorded": true}'
+
+    monkeypatch.setattr(_gweave, "transform_json", recorded)
+    src, out = tmp_path / "in.gcode", tmp_path / "out.gcode"
+    assert wrapper(src, out) == {"recorded": True}
+    assert [args for args, _ in calls] == [(command, str(src), str(out))]
+    assert set(calls[0][1]) == set(declared(command)) | (TRANSFORM - {"path", "output"})
+    monkeypatch.undo()
     capfd.readouterr()
     assert gweave.main([command, "--help"]) == 0
     assert f"Usage: gweave {command} " in capfd.readouterr().out

@@ -54,7 +54,7 @@ def test_wrap_replaces_its_input_only_when_asked_as_the_cli(data, tmp_path):
     src = tmp_path / "plate.gcode"
     shutil.copy(data / "rotary" / "plate.gcode", src)
     original = src.read_bytes()
-    with pytest.raises(ValueError, match=r"refusing to overwrite the input .*: the output is the input \(replace it in place instead\)"):
+    with pytest.raises(ValueError, match=r"refusing to overwrite the input file .*: the output names the file being read; name another output file, or replace the input in place"):
         gweave.rotary_wrap(src, src, mandrel_diameter=30)
     with pytest.raises(ValueError, match="give an output path or in_place=True"):
         gweave.rotary_wrap(src, mandrel_diameter=30)

@@ -225,6 +225,7 @@ where
     TransformError: From<E>,
 {
     finish::refuse_second_run(job.input, O::COMMAND)?;
+    finish::refuse_cut_input(job.input, job.strictness)?;
     let line = command_line(options, job.strictness);
     let (input, target) = (job.input, job.target);
     let (done, _) = finish::with_metadata(Some(input), target, &line, |t| {
@@ -364,6 +365,7 @@ pub fn rotary_wrap(options: &WrapOptions, job: Job<'_>, preview: Option<&Path>) 
     let mut config = rotary_settings(&options.machine, WrapConfig::read)?;
     config.apply(options)?;
     finish::refuse_second_run(job.input, WrapOptions::COMMAND)?;
+    finish::refuse_cut_input(job.input, job.strictness)?;
     let line = command_line(options, job.strictness);
     let (input, target) = (job.input, job.target);
     let wrap = |t: &Target| Ok::<_, TransformError>(wrap_file(&config, job.run(t), preview)?);

@@ -13,6 +13,7 @@ use crate::error::{Error, Result};
 use crate::firmware::Firmware;
 use crate::gcode::diag::{Diagnostic, Finding, Severity, WordOutOfRange};
 use crate::gcode::effect::Motion;
+use crate::gcode::ends::{missing_footer, read_ends, Footer};
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Feature;
 use crate::gcode::line::{Block, Command, Value};
@@ -179,6 +180,9 @@ pub struct CheckPass {
     feature: Feature,
     /// The machine's word ranges, if lent ([`CheckPass::with_ranges`]).
     ranges: Option<&'static dyn WordRanges>,
+    /// The footer the file's ends lack, if it looks cut short ([`missing_footer`]): flagged at
+    /// its last line.
+    missing_footer: Option<Footer>,
 }
 
 impl CheckPass {
@@ -323,6 +327,10 @@ impl Pass for CheckPass {
             }
         }
         self.check_ranges(ctx);
+        if let (true, Some(footer)) = (ctx.line.eol.is_empty(), self.missing_footer) {
+            // Where the text stops: just past the last line's last byte.
+            self.add(n, Diagnostic::at(ctx.line.bytes.len(), Finding::NoFooter { footer }));
+        }
         match *ctx.effect {
             Effect::Move(m) => {
                 let e = m.e_mm();
@@ -410,13 +418,14 @@ pub fn check_file_with(
     progress: &mut dyn Progress,
 ) -> Result<CheckReport> {
     let mut from_file = None;
+    let ends = read_ends(path).map_err(|e| Error::io(path, e))?;
     if options.bed.is_none() {
-        if let Some(found) = Bed::from_file(path).map_err(|e| Error::io(path, e))? {
+        if let Some(found) = Bed::from_settings(&ends) {
             options.bed = Some(found.bed);
             from_file = Some(found.from.join(", "));
         }
     }
-    let mut pass = CheckPass::new(options);
+    let mut pass = CheckPass { missing_footer: missing_footer(&ends), ..CheckPass::new(options) };
     if let Some(ranges) = ranges {
         pass = pass.with_ranges(ranges);
     }

@@ -50,7 +50,7 @@ pub enum Error {
     // The messages below name the engine's options ([`Target::InPlace`](crate::gcode::writer::Target::InPlace) and its fields) in
     // words, not by a front end's spelling: the CLI's `--in-place` is Python's `in_place=True`.
     /// An output that is the input itself, not [`Target::InPlace`](crate::gcode::writer::Target::InPlace).
-    #[error("refusing to overwrite the input {}: the output is the input (replace it in place instead)", path.display())]
+    #[error("refusing to overwrite the input file {}: the output names the file being read; name another output file, or replace the input in place", path.display())]
     WouldOverwriteInput {
         /// The input.
         path: PathBuf,

@@ -44,6 +44,51 @@ fn truncated_file_passes_every_command() {
     assert_no_temp_left(d);
 }
 
+/// Regression (a new user's trial): a text file cut mid-number (`G1 X112.194 Y106.138 E1` of
+/// `E17.55707`, no final newline) reads as a whole line, so `check` passed it silently and
+/// `purge-shift` appended its footer to it. Its slicer always ends its files with `;
+/// prusaslicer_config = end`: without a line ending and without that line, `check` warns where
+/// its text stops, the transforms refuse to finish it and write nothing, and `--lenient`
+/// writes it.
+#[test]
+fn truncated_text_without_a_footer_passes_check() {
+    let (dir, _) = dir_with_fixture("prusaslicer/pr_cone_2tool.gcode", "whole.gcode");
+    let d = dir.path();
+    let text = fs::read_to_string(d.join("whole.gcode")).unwrap();
+    let cut_at = text.find("G1 X112.194 Y106.138 E17.55707").unwrap() + "G1 X112.194 Y106.138 E1".len();
+    fs::write(d.join("cut.gcode"), &text[..cut_at]).unwrap();
+    let line = text[..cut_at].lines().count();
+    assert_eq!(line, 387);
+    let message = "the file looks truncated: its last line has no line ending, and the file lacks the line \
+                   PrusaSlicer ends its files with ('; prusaslicer_config = end')";
+    let check = gweave(d, &["check", "cut.gcode"]).run();
+    check.assert_ok();
+    let said = check.stdout_text();
+    assert!(said.contains(&format!("cut.gcode:387:24: warning: {message}")), "{said}");
+    assert!(said.contains("387 lines, 0 errors, 1 warnings"), "{said}");
+    gweave(d, &["check", "--strict", "cut.gcode"]).run().assert_refused("");
+    for args in [
+        &["purge-shift", "cut.gcode", "-o", "out.gcode", "--purge-mm", "2"][..],
+        &["mix", "cut.gcode", "-o", "out.gcode", "--map", "T0=Cyan", "--map", "T1=Red"],
+        &["rotary", "wrap", "cut.gcode", "-o", "out.gcode", "--mandrel-diameter", "30"],
+    ] {
+        gweave(d, args)
+            .run()
+            .assert_refused(&format!("cut.gcode:387:24: {message}; the transform would write"));
+        assert!(!d.join("out.gcode").exists(), "{args:?} wrote an output");
+    }
+    let lenient =
+        gweave(d, &["purge-shift", "cut.gcode", "-o", "out.gcode", "--purge-mm", "2", "--lenient", "-q"]);
+    lenient.run().assert_ok();
+    assert!(fs::read_to_string(d.join("out.gcode")).unwrap().contains("G1 X112.194 Y106.138 E1\n"));
+    // The whole file, and the cut one with its line ending, pass as before.
+    gweave(d, &["check", "--strict", "whole.gcode"]).run().assert_ok();
+    fs::write(d.join("ended.gcode"), format!("{}\n", &text[..cut_at])).unwrap();
+    let ended = gweave(d, &["check", "ended.gcode"]).run();
+    assert!(ended.stdout_text().contains("387 lines, 0 errors, 0 warnings"), "{}", ended.stdout_text());
+    assert_no_temp_left(d);
+}
+
 /// Regression: `G1 F1e300` was read as `F1` and `E300`, a 274 mm extrusion, and `check` said
 /// nothing. It is still read so (Marlin and Klipper do), and it is an error at its column.
 #[test]

@@ -31,7 +31,7 @@ fn report_naming_the_input_is_refused() {
     refused_in(
         dir.path(),
         &["stats", "in.gcode", "--report", "in.gcode"],
-        "--report in.gcode names the input (INPUT); name another file",
+        "--report in.gcode would overwrite the input file in.gcode; name another file",
     );
 }
 
@@ -40,11 +40,29 @@ fn report_naming_the_input_is_refused() {
 fn sim_plot_naming_the_input_is_refused() {
     let (dir, _) = torus();
     for flag in ["--plot", "--plot-speed"] {
-        let message = format!("{flag} in.gcode names the input (INPUT); name another file");
+        let message = format!("{flag} in.gcode would overwrite the input file in.gcode; name another file");
         refused_in(dir.path(), &["sim", "in.gcode", flag, "in.gcode", "-q"], &message);
     }
     // Another spelling of the input is the same file.
-    refused_in(dir.path(), &["sim", "in.gcode", "--plot", "./in.gcode", "-q"], "names the input (INPUT)");
+    refused_in(
+        dir.path(),
+        &["sim", "in.gcode", "--plot", "./in.gcode", "-q"],
+        "--plot ./in.gcode would overwrite the input file in.gcode;",
+    );
+}
+
+/// Regression (a new user's trial): `cat same.gcode -o same.gcode` was refused with "-o
+/// same.gcode names the input (INPUT)", which reads like a placeholder; the input is named by
+/// its path, as given (`./same.gcode` for `same.gcode` is the same file).
+#[test]
+fn output_naming_the_input_says_which_input_not_input() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("same.gcode"), "G1 X1\n").unwrap();
+    refused_in(
+        dir.path(),
+        &["cat", "./same.gcode", "-o", "same.gcode"],
+        "-o same.gcode would overwrite the input file ./same.gcode; name another file",
+    );
 }
 
 /// Regression: `rotary wrap in.gcode -o x --preview in.gcode` replaced the input by a PNG.
@@ -54,7 +72,7 @@ fn rotary_wrap_preview_naming_the_input_is_refused() {
     refused_in(
         dir.path(),
         &["rotary", "wrap", "in.gcode", "-o", "x.gcode", "--mandrel-diameter", "30", "--preview", "in.gcode"],
-        "--preview in.gcode names the input (INPUT); name another file",
+        "--preview in.gcode would overwrite the input file in.gcode; name another file",
     );
     refused_in(
         dir.path(),
@@ -82,14 +100,18 @@ fn raster_output_naming_an_input_image_is_refused() {
     refused_in(
         dir.path(),
         &["raster", "layers/badge_0.bmp", "-o", "layers/badge_0.bmp"],
-        "-o layers/badge_0.bmp names the input (INPUTS); name another file",
+        "-o layers/badge_0.bmp would overwrite the input file layers/badge_0.bmp; name another file",
     );
     refused_in(
         dir.path(),
         &["raster", "layers", "-o", "layers/badge_3.bmp"],
-        "-o layers/badge_3.bmp names the input (INPUTS)",
+        "-o layers/badge_3.bmp would overwrite the input file layers/badge_3.bmp",
     );
-    refused_in(dir.path(), &["raster", "layers/badge_?.bmp", "-o", "layers/badge_7.bmp"], "names the input");
+    refused_in(
+        dir.path(),
+        &["raster", "layers/badge_?.bmp", "-o", "layers/badge_7.bmp"],
+        "would overwrite the input file",
+    );
 }
 
 /// Regression: `raster ... --recoat r.gcode --report r.gcode` replaced the recoat snippet.
@@ -100,7 +122,7 @@ fn raster_report_naming_the_recoat_snippet_is_refused() {
     refused_in(
         dir.path(),
         &["raster", "layers", "-o", "out.gcode", "--recoat", "r.gcode", "--report", "r.gcode"],
-        "--report r.gcode names the input (--recoat); name another file",
+        "--report r.gcode would overwrite r.gcode, the file --recoat reads; name another file",
     );
 }
 
@@ -112,7 +134,7 @@ fn mix_palette_png_naming_the_input_is_refused() {
     refused_in(
         dir.path(),
         &["mix", "in.gcode", "--at-layer", "0=Orange", "-o", "m.gcode", "--palette-png", "in.gcode", "-q"],
-        "--palette-png in.gcode names the input (INPUT); name another file",
+        "--palette-png in.gcode would overwrite the input file in.gcode; name another file",
     );
 }
 
@@ -163,7 +185,7 @@ fn a_file_among_the_layers_an_output_folder_gets_is_refused() {
     refused_in(
         dir.path(),
         &["sim", "layers/layer_00001_head0.png", "--raster-out", "layers", "-q"],
-        "--raster-out layers would write over the input layers/layer_00001_head0.png (INPUT); name another folder",
+        "--raster-out layers would write over the input file layers/layer_00001_head0.png; name another folder",
     );
 }
 
@@ -176,7 +198,7 @@ fn an_output_naming_a_profile_is_refused() {
     refused_in(
         dir.path(),
         &["estimate", "in.gcode", "--machine", "m.toml", "--report", "m.toml"],
-        "--report m.toml names the input (--machine)",
+        "--report m.toml would overwrite m.toml, the file --machine reads",
     );
 }
 
@@ -441,7 +463,11 @@ fn serve_report_path_is_checked_before_serving() {
     let args = [&serve[..], &["--report", "missing/r.json"]].concat();
     refused_in(dir.path(), &args, "--report missing/r.json: No such file or directory");
     let args = [&serve[..], &["--eeprom", "e.gcode", "--report", "e.gcode"]].concat();
-    refused_in(dir.path(), &args, "--report e.gcode names the input (--eeprom); name another file");
+    refused_in(
+        dir.path(),
+        &args,
+        "--report e.gcode would overwrite e.gcode, the file --eeprom reads; name another file",
+    );
 }
 
 /// Regression (a new user's trial): `machine from-m503 m.txt -o m.txt` read the transcript and
@@ -453,7 +479,7 @@ fn machine_from_m503_naming_its_input_is_refused_before_reading() {
         .unwrap();
     let before = snapshot(dir.path());
     let out = gweave(dir.path(), &["machine", "from-m503", "m.txt", "-o", "m.txt"]).run();
-    out.assert_refused("-o m.txt names the input (INPUT); name another file");
+    out.assert_refused("-o m.txt would overwrite the input file m.txt; name another file");
     assert!(!out.stderr.contains("not used"), "read before refusing: {}", out.stderr);
     assert_eq!(snapshot(dir.path()), before);
 }

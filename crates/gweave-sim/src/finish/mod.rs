@@ -15,11 +15,13 @@
 //! lives here, which the engine cannot depend on, so this crate joins them.
 
 use std::fs::File;
-use std::io::{BufReader, Write};
+use std::io::{BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::container;
+use gweave::gcode::ends::{missing_footer, read_ends, Footer};
 use gweave::gcode::scratch::ScratchFile;
+use gweave::pass::Strictness;
 use gweave::post::metadata::{earlier_runs, header_line, write_footer, Figures, MetadataPass};
 use gweave::{Output, Target};
 
@@ -51,6 +53,53 @@ pub enum FinishError {
     )]
     #[allow(missing_docs)] // the input, the header's line, what ran and this command's name
     SecondRun { path: PathBuf, line: u64, run: String, command: String },
+
+    /// The input looks cut short ([`missing_footer`]): its last line, `line`, ends at `column`
+    /// without a line ending, and the slicer's last line is missing.
+    #[error(
+        "{}:{line}:{column}: {}; the transform would write its footer after a cut print, which would then look whole: slice or copy the file again (a lenient run writes it anyway)",
+        path.display(),
+        gweave::gcode::diag::Finding::NoFooter { footer: *footer }
+    )]
+    #[allow(missing_docs)] // the input, where its text stops, and the slicer it lacks the last line of
+    Cut { path: PathBuf, line: u64, column: u64, footer: Footer },
+}
+
+/// Refuses, in a strict run, an input that looks cut short: no line ending at its end, and not
+/// the line its slicer ends every file with ([`missing_footer`]). A transform appends its
+/// footer (the slicer's figures rewritten for the file, its times): after a cut print, the
+/// output would look whole to a host and print a part of the object. A lenient run, asked to
+/// copy what is malformed through, writes it. The whole file is read only when the ends
+/// already say it is cut, to name the line and column where its text stops.
+pub fn refuse_cut_input(input: &Path, strictness: Strictness) -> Result<()> {
+    if strictness == Strictness::Lenient {
+        return Ok(());
+    }
+    // An input that cannot be read is the transform's to report, naming what failed.
+    let Some(footer) = read_ends(input).ok().and_then(|ends| missing_footer(&ends)) else { return Ok(()) };
+    let failed = |e| FinishError::from(gweave::Error::io(input, e));
+    let mut text = container::open(input).map_err(failed)?;
+    let (mut newlines, mut last_line_bytes, mut buf) = (0u64, 0u64, vec![0u8; 64 * 1024]);
+    loop {
+        let n = match text.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(failed(e)),
+        };
+        let chunk = &buf[..n];
+        newlines += memchr::memchr_iter(b'\n', chunk).count() as u64;
+        last_line_bytes = match memchr::memrchr(b'\n', chunk) {
+            Some(i) => (n - i - 1) as u64,
+            None => last_line_bytes + n as u64,
+        };
+    }
+    Err(FinishError::Cut {
+        path: input.to_path_buf(),
+        line: newlines + 1,
+        column: last_line_bytes + 1,
+        footer,
+    })
 }
 
 /// Refuses to run `command` (`mix`, `purge-shift`, `rotary wrap`) on a file an earlier run of

@@ -45,6 +45,13 @@ pub enum Finding {
         /// What is wrong with the line.
         cause: Box<Finding>,
     },
+    /// The file's last line has no line ending, and the file lacks the last line its slicer
+    /// always writes ([`missing_footer`](crate::gcode::ends::missing_footer)): the file looks
+    /// cut short, though its last line reads (`G1 X1 E1` of `E17.54688`).
+    NoFooter {
+        /// The slicer, and the line it ends its files with.
+        footer: crate::gcode::ends::Footer,
+    },
     /// A byte that cannot start a word.
     UnexpectedByte {
         /// The byte found.
@@ -144,7 +151,8 @@ impl Finding {
             | Finding::OutsideBed { .. }
             | Finding::RelativeEDrift { .. }
             | Finding::AbsoluteEPrecision { .. }
-            | Finding::LineNumberSequence { .. } => Severity::Warning,
+            | Finding::LineNumberSequence { .. }
+            | Finding::NoFooter { .. } => Severity::Warning,
             Finding::ExponentNotation { .. } if !self.is_mixed_case_exponent() => Severity::Warning,
             // The findings it stands for were errors, each counted when kept.
             Finding::MoreFindings { .. } => Severity::Error,
@@ -176,6 +184,13 @@ impl fmt::Display for Finding {
                     "the file looks truncated (its last line is malformed and has no line ending): {cause}"
                 )
             }
+            Finding::NoFooter { footer } => write!(
+                f,
+                "the file looks truncated: its last line has no line ending, and the file lacks the line \
+                 {} ends its files with ('{}')",
+                footer.slicer(),
+                footer.marker().trim_end()
+            ),
             Finding::UnexpectedByte { byte } => {
                 if byte.is_ascii_graphic() {
                     write!(f, "unexpected character '{}'", *byte as char)

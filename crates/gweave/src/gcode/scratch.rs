@@ -98,7 +98,12 @@ impl ScratchFile {
     /// writer is done, and fails once it has failed. Call [`ScratchFile::writing`] around the
     /// write.
     pub fn follow(&self) -> io::Result<Growing> {
-        Ok(Growing { file: File::open(self.path())?, scratch: self.scratch.clone() })
+        Ok(Growing {
+            file: File::open(self.path())?,
+            scratch: self.scratch.clone(),
+            #[cfg(test)]
+            empty_reads: 0,
+        })
     }
 
     /// Says how the write ends: [`Writing::end`], or failed if dropped without it (an error
@@ -198,6 +203,11 @@ impl fmt::Debug for Scratch {
 pub struct Growing {
     file: File,
     scratch: Scratch,
+    /// Reads that found the file's end while the writer was still writing: each is followed
+    /// by one sleep until the next write, so a reader that is woken makes one per write, and
+    /// one that polls makes one per poll (the tests hold it to the first).
+    #[cfg(test)]
+    empty_reads: u64,
 }
 
 impl Read for Growing {
@@ -212,6 +222,10 @@ impl Read for Growing {
             let n = self.file.read(buf)?;
             if n > 0 || growth.end == End::Done {
                 return Ok(n);
+            }
+            #[cfg(test)]
+            {
+                self.empty_reads += 1;
             }
             // At the end of what was written when the state was taken: sleep until the
             // writer writes more (or ends). Waiting on the count, not on this reader's
@@ -260,31 +274,39 @@ mod tests {
     }
 
     /// Regression (issue 35): the reader polled the file's end every 2 ms. Woken by the
-    /// writer, it reads each write before the next is made: the writer here waits for the
-    /// reader to have read a piece before writing the next, which a reader that is not woken
-    /// never lets happen (the writing ends as failed after 10 s and the reader fails).
+    /// writer, it reads each write before the next is made, and finds the file's end at most
+    /// once per write: the writer here waits for the reader to have read a piece, then pauses
+    /// 20 ms before writing the next, in which a reader polling every 2 ms would read the
+    /// file's end about ten times (a reader that is never woken fails after 10 s).
     #[test]
     fn the_reader_is_woken_by_each_write() {
+        const PIECES: u64 = 20;
         let dir = tempfile::tempdir().unwrap();
         let scratch = ScratchFile::new_in(dir.path(), None).unwrap();
         let mut growing = scratch.follow().unwrap();
         let (read_tx, read_rx) = mpsc::channel();
-        std::thread::scope(|s| {
-            s.spawn(move || {
+        let empty_reads = std::thread::scope(|s| {
+            let reader = s.spawn(move || {
                 let mut buf = [0u8; 64];
                 while let Ok(n @ 1..) = growing.read(&mut buf) {
                     read_tx.send(buf[..n].to_vec()).unwrap();
                 }
+                growing.empty_reads
             });
             let (mut out, writing) = (writer_of(&scratch), scratch.writing());
-            for i in 0..100 {
+            for i in 0..PIECES {
+                std::thread::sleep(Duration::from_millis(20));
                 let piece = format!("G1 X{i}\n");
                 out.write_all(piece.as_bytes()).unwrap();
                 let got = read_rx.recv_timeout(Duration::from_secs(10));
                 assert_eq!(got.as_deref(), Ok(piece.as_bytes()), "piece {i}");
             }
             writing.end(true);
+            reader.join().unwrap()
         });
+        // At most one empty read before each piece and one before the end: 21, where polling
+        // makes about 200.
+        assert!(empty_reads <= PIECES + 1, "{empty_reads} empty reads for {PIECES} writes");
     }
 
     /// A writer that fails (or unwinds: the write ends as failed when dropped) ends the read
