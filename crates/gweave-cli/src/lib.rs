@@ -9,7 +9,6 @@ mod args;
 mod cmd;
 mod common;
 mod files;
-mod finish;
 mod format;
 mod options;
 mod progress;
@@ -41,7 +40,6 @@ where
     T: Into<OsString> + Clone,
 {
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
-    finish::remember_args(&args);
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {

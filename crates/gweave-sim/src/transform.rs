@@ -6,12 +6,14 @@
 //! ([`Transform`]) the front ends derive their commands from: a row gives a job its CLI
 //! subcommand and its Python function, with no code in either.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::writer::Target;
 use gweave::malformed::Malformed;
 use gweave::options::{JobOptions, OptionError, OptionSpec, Said, Spelling};
 use gweave::pass::{Progress, Strictness};
+use gweave::post::mix::card::CardReport;
 use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::{MixOptions, MixPassError};
@@ -23,6 +25,7 @@ use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
 use gweave::rotary_job::{tube_file, wrap_file};
 use gweave::run::{Ran, Run};
+use gweave::Output;
 
 use crate::finish::{self, FinishError};
 
@@ -206,9 +209,14 @@ fn pass_needs(e: &gweave::Error) -> Option<&Said> {
 /// assert_eq!(command_line(&MixOptions::default(), Strictness::Strict), "mix");
 /// ```
 pub fn command_line<O: JobOptions>(options: &O, strictness: Strictness) -> String {
-    let lenient = (strictness == Strictness::Lenient).then_some("--lenient".to_owned());
-    let words = [Some(O::COMMAND.to_owned()), Some(options.header()), lenient];
-    words.into_iter().flatten().filter(|w| !w.is_empty()).collect::<Vec<_>>().join(" ")
+    header_of(O::COMMAND, options, strictness)
+}
+
+/// The header of `command` (`mix --calibration-card`) run with `options`.
+fn header_of<O: JobOptions>(command: &str, options: &O, strictness: Strictness) -> String {
+    let lenient = if strictness == Strictness::Lenient { "--lenient" } else { "" };
+    let header = options.header();
+    [command, header.as_str(), lenient].into_iter().filter(|w| !w.is_empty()).collect::<Vec<_>>().join(" ")
 }
 
 /// Runs a transform's pass on the job's file (`pass`: the engine's function that runs it on
@@ -344,6 +352,42 @@ pub fn mix(options: &MixOptions, job: Job<'_>) -> Outcome<MixReport> {
 pub fn mix_with(profile: MixProfile, options: &MixOptions, job: Job<'_>) -> Outcome<MixReport> {
     finished(options, job, |run| gweave::post::mix::mix(profile, run))
 }
+
+/// Writes a calibration card (docs/mix.md: a swatch per mix of `card_mixes`, purged between)
+/// for the hotend and filaments of `profile` (made of `options`, [`mix_profile`]) to `target`,
+/// finished as every job's output: the header written from the options (`mix
+/// --calibration-card -c mix.toml`, whatever order or alias was typed) and the metadata.
+///
+/// ```
+/// use gweave::post::mix::MixOptions;
+/// use gweave::Target;
+/// use gweave_sim::transform::{calibration_card, mix_profile};
+/// let dir = tempfile::tempdir().unwrap();
+/// let out = dir.path().join("card.gcode");
+/// let options = MixOptions { purge_mm: Some(20.0), ..MixOptions::default() };
+/// let card = calibration_card(&mix_profile(&options).unwrap(), &options, &Target::File(out.clone())).unwrap();
+/// assert_eq!(card.swatches.len(), 30);
+/// let text = std::fs::read_to_string(&out).unwrap();
+/// let version = env!("CARGO_PKG_VERSION");
+/// assert!(text.starts_with(&format!("; gweave {version} mix --calibration-card --purge-mm 20 (generated)\n")), "{text:.80}");
+/// ```
+pub fn calibration_card(
+    profile: &MixProfile,
+    options: &MixOptions,
+    target: &Target,
+) -> Result<CardReport, TransformError> {
+    let (gcode, card) = gweave::post::mix::card::calibration_card(profile)?;
+    let line = header_of(CALIBRATION_CARD, options, Strictness::Strict);
+    finish::with_metadata(None, target, &line, |t| {
+        let mut out = Output::create(t, None)?;
+        out.write_all(&gcode).map_err(|e| gweave::Error::io(&out.shown(), e))?;
+        Ok::<_, TransformError>(out.commit()?)
+    })?;
+    Ok(card)
+}
+
+/// The command a calibration card's header names.
+const CALIBRATION_CARD: &str = "mix --calibration-card";
 
 /// The rotary settings `read` makes of the settings file the machine options name (its errors
 /// name the file) or, without one, of the options alone (`WrapConfig::read`, `TubeParams::read`).
