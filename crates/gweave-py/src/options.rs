@@ -9,7 +9,7 @@ use gweave::JobOptions;
 use gweave_sim::transform::TransformError;
 use pyo3::exceptions::{PyOSError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyDict, PyList, PyString};
 
 /// The options `T` from the keyword arguments of `function`: a keyword that is no option is a
 /// `TypeError` as Python raises it, a value out of range or unreadable a `ValueError` naming it.
@@ -34,6 +34,11 @@ pub fn read<T: JobOptions>(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -
             Kind::Whole => Value::Number(value.extract::<i64>().map_err(typed)? as f64),
             Kind::Text => Value::Text(value.extract().map_err(typed)?),
             Kind::Path => Value::Path(value.extract().map_err(typed)?),
+            // A list as the CLI writes it (`"X,A,Z"`, `"XAZ"`, `"10,20"`) is read by the
+            // engine's own parser, the flag's, so both front ends take the same spellings.
+            Kind::Texts(_) | Kind::Numbers(_) if value.is_instance_of::<PyString>() => spec
+                .parse(&value.extract::<String>()?)
+                .map_err(|e| PyValueError::new_err(e.spelled(Spelling::Keyword)))?,
             Kind::Repeated | Kind::Texts(_) => Value::Texts(value.extract().map_err(typed)?),
             Kind::Numbers(_) => Value::Numbers(value.extract().map_err(typed)?),
         };
