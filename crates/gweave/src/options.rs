@@ -401,6 +401,19 @@ pub trait JobOptions: Default + Sized {
         Ok(())
     }
 
+    /// Checks the options as the declaration states them: each value within its range and
+    /// count ([`OptionSpec::check`], as [`JobOptions::set`] checks a value read), then no two
+    /// given that exclude each other. For options made in code (a struct literal), which no
+    /// front end has read: the one check, with the messages a front end's would give.
+    fn check(&self) -> Result<(), OptionError> {
+        for (spec, value) in Self::SPEC.iter().zip(self.values()) {
+            if let Some(value) = value {
+                spec.check(value)?;
+            }
+        }
+        self.check_conflicts()
+    }
+
     /// The options given, in the CLI's words and [`JobOptions::SPEC`]'s order, for the run's
     /// header: `-c mix.toml --at-layer 0=Red --purge-mm 25`.
     fn header(&self) -> String {
