@@ -231,14 +231,30 @@ pub fn finished<O: JobOptions, R, E>(
 where
     TransformError: From<E>,
 {
+    let pass = |run: Run<'_>| pass(run).map(|(report, ran)| (report, ran.malformed));
+    let (done, _) = finished_timed(options, job, pass, |_| None)?;
+    Ok(done)
+}
+
+/// [`finished`] for a pass that times its output better than the estimator's machine can
+/// (`own_time_s`, s: a rotary axis, whose feed convention the default machine does not read;
+/// [`finish::with_metadata_timed`]), also returning the path written (`None`: standard
+/// output).
+fn finished_timed<O: JobOptions, R, E>(
+    options: &O,
+    job: Job<'_>,
+    pass: impl FnOnce(Run<'_>) -> Result<(R, Malformed), E>,
+    own_time_s: impl FnOnce(&R) -> Option<f64>,
+) -> Result<((R, Malformed), Option<PathBuf>), TransformError>
+where
+    TransformError: From<E>,
+{
     finish::refuse_second_run(job.input, O::COMMAND)?;
     let line = command_line(options, job.strictness);
     let (input, target) = (job.input, job.target);
-    let (done, _) = finish::with_metadata(Some(input), target, &line, |t| {
-        let (report, ran) = pass(job.run(t))?;
-        Ok::<_, TransformError>((report, ran.malformed))
-    })?;
-    Ok(done)
+    let write = |t: &Target| Ok::<_, TransformError>(pass(job.run(t))?);
+    let own_time_s = |done: &(R, Malformed)| own_time_s(&done.0);
+    finish::with_metadata_timed(Some(input), target, &line, write, own_time_s)
 }
 
 /// A settings file named by an option, read with `parse`; the default without one.
@@ -408,14 +424,10 @@ pub fn rotary_wrap(options: &WrapOptions, job: Job<'_>, preview: Option<&Path>) 
     options.check_conflicts()?;
     let mut config = rotary_settings(&options.machine, WrapConfig::read)?;
     config.apply(options)?;
-    finish::refuse_second_run(job.input, WrapOptions::COMMAND)?;
-    let line = command_line(options, job.strictness);
-    let (input, target) = (job.input, job.target);
-    let wrap = |t: &Target| Ok::<_, TransformError>(wrap_file(&config, job.run(t), preview)?);
+    let wrap = |run: Run<'_>| wrap_file(&config, run, preview);
     // Its own time: the estimator's default machine does not read the rotary feed.
-    let own_time_s = |r: &(WrapReport, Malformed)| Some(r.0.time_s);
     let ((mut report, malformed), written) =
-        finish::with_metadata_timed(Some(input), target, &line, wrap, own_time_s)?;
+        finished_timed(options, job, wrap, |r: &WrapReport| Some(r.time_s))?;
     report.output = written;
     Ok((report, malformed))
 }
