@@ -9,7 +9,7 @@ use std::ops::Deref;
 use clap::error::ErrorKind;
 use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches};
 use gweave::options::{Kind, Spelling, Value};
-use gweave::{JobOptions, OptionSpec};
+use gweave::{JobFailure, JobOptions, OptionSpec};
 
 /// The options `T` as read from the command line.
 #[derive(Debug, Clone, Default)]
@@ -91,16 +91,11 @@ impl<T: JobOptions> FromArgMatches for Options<T> {
     }
 }
 
-/// A job's failure as the CLI says it: the options it names spelled as flags; an error that
-/// names none kept whole, its causes and its I/O kind (a closed pipe, a stop) for `crate::run`
-/// to read.
-pub fn failed(e: gweave_sim::transform::TransformError) -> anyhow::Error {
-    failed_with(e.spelled(Spelling::Flag), e)
-}
-
-/// A job's error `e`, said as `spelled` (its options spelled as flags) where that differs from
-/// its own message, else kept whole (see [`failed`]).
-pub fn failed_with<E: std::error::Error + Send + Sync + 'static>(spelled: String, e: E) -> anyhow::Error {
+/// A job's failure as the CLI says it, for every job: the options it names spelled as flags;
+/// an error that names none kept whole, its causes and its I/O kind (a closed pipe, a stop) for
+/// `crate::run` to read.
+pub fn failed<E: JobFailure + Send + Sync>(e: E) -> anyhow::Error {
+    let spelled = e.spelled(Spelling::Flag);
     if spelled == e.to_string() {
         e.into()
     } else {

@@ -4,9 +4,7 @@
 //! [`job_options`].
 
 use gweave::options::{Kind, Spelling, Value};
-use gweave::rotary::RotaryError;
-use gweave::JobOptions;
-use gweave_sim::transform::TransformError;
+use gweave::{JobFailure, JobOptions};
 use pyo3::exceptions::{PyOSError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
@@ -48,14 +46,19 @@ pub fn read<T: JobOptions>(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -
     Ok(options)
 }
 
-/// A job's failure as Python raises it: a file the system refused as the `OSError` for its
-/// errno (as [`crate::err`]), a failed write of a rotary program an `OSError`, the rest a
-/// `ValueError` with the options it names spelled as keywords.
-pub fn failed(e: TransformError) -> PyErr {
-    match (&e, e.engine()) {
-        (_, Some(gweave::Error::Io { path, source })) => crate::args::os_error(path, source),
-        (TransformError::Rotary(RotaryError::Io(_)), _) => PyOSError::new_err(e.to_string()),
-        _ => PyValueError::new_err(e.spelled(Spelling::Keyword)),
+/// A job's failure as Python raises it, for every job: a file the system refused as the
+/// `OSError` for its errno (as [`crate::err`]), another refusal of the system (a write) an
+/// `OSError`, the rest a `ValueError` with the options it names spelled as keywords; the text
+/// is the message and the causes it does not say, `: `-separated.
+pub fn failed<E: JobFailure>(e: E) -> PyErr {
+    if let Some((path, source)) = e.refused_file() {
+        return crate::args::os_error(path, source);
+    }
+    let text = e.said(Spelling::Keyword);
+    if e.io_failed() {
+        PyOSError::new_err(text)
+    } else {
+        PyValueError::new_err(text)
     }
 }
 

@@ -19,7 +19,7 @@ use gweave::gen::raster::RasterReport;
 use gweave::gen::raster_job::{BoxError, Job, JobError, JobReport, LineTimer, RasterOptions, Setup, Source};
 use gweave::options::Spelling;
 use gweave::post::metadata::Figures;
-use gweave::{JobOptions, OptionError, OptionSpec, Progress, Strictness, Target};
+use gweave::{JobFailure, JobOptions, OptionError, OptionSpec, Progress, Strictness, Target};
 use serde::Serialize;
 
 use crate::builtin::{load_machine, LoadError};
@@ -52,12 +52,19 @@ pub enum RasterJobError {
     Finish(#[from] FinishError),
 }
 
-impl RasterJobError {
+impl JobFailure for RasterJobError {
     /// The message, an option named as `spelling` names it (`--machine`, `machine`).
-    pub fn spelled(&self, spelling: Spelling) -> String {
+    fn spelled(&self, spelling: Spelling) -> String {
         match self {
             RasterJobError::Option(e) => e.spelled(spelling),
             e => e.to_string(),
+        }
+    }
+
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        match self {
+            RasterJobError::Machine(LoadError::Read { path, source }) => Some((path, source)),
+            _ => None,
         }
     }
 }

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use gweave::gcode::writer::Target;
 use gweave::malformed::Malformed;
-use gweave::options::{JobOptions, OptionError, OptionSpec, Said, Spelling};
+use gweave::options::{JobFailure, JobOptions, OptionError, OptionSpec, Said, Spelling};
 use gweave::pass::{Progress, Strictness};
 use gweave::post::mix::card::CardReport;
 use gweave::post::mix::profile::MixProfile;
@@ -155,9 +155,9 @@ impl From<gweave::Error> for TransformError {
     }
 }
 
-impl TransformError {
+impl JobFailure for TransformError {
     /// The message, an option named as `spelling` names it (`--purge-mm`, `purge_mm`).
-    pub fn spelled(&self, spelling: Spelling) -> String {
+    fn spelled(&self, spelling: Spelling) -> String {
         match self {
             TransformError::Option(e) => e.spelled(spelling),
             TransformError::PurgeShift(e) => e.said().map_or_else(|| e.to_string(), |s| s.spelled(spelling)),
@@ -174,6 +174,12 @@ impl TransformError {
         }
     }
 
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        self.engine().and_then(JobFailure::refused_file)
+    }
+}
+
+impl TransformError {
     /// The engine's own error inside, if that is what failed (a file unreadable, a malformed
     /// line): a front end raises it as it raises the engine's errors.
     pub fn engine(&self) -> Option<&gweave::Error> {

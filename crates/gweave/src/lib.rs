@@ -79,7 +79,7 @@ pub use run::{Ran, Run, Source};
 // The jobs: each one's entry point, options and report.
 pub use bed::Bed;
 pub use check::{check_file, check_file_with, CheckOptions, CheckReport, WordRanges};
-pub use options::{JobOptions, OptionError, OptionSpec};
+pub use options::{JobFailure, JobOptions, OptionError, OptionSpec};
 pub use post::mix::{mix, MixOptions, MixPassError};
 pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
 pub use render::{preview, preview_with_progress, PreviewReport, PreviewSettings, Toolpath, ToolpathOptions};

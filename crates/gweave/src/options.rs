@@ -26,7 +26,7 @@
 //! ```
 
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::de::{value::Error as WordError, DeserializeOwned, IntoDeserializer};
 use serde::Serialize;
@@ -252,6 +252,63 @@ impl Spelling {
         match self {
             Spelling::Flag => format!("--{}", name.replace('_', "-")),
             Spelling::Keyword => name.to_owned(),
+        }
+    }
+}
+
+/// A job's error as a front end reports it, one way for every job: the message with the
+/// options it names spelled the front end's way, and whether the system refused a file or an
+/// operation, which a front end raises as its I/O error (Python's `OSError` for the errno).
+pub trait JobFailure: std::error::Error + Sized + 'static {
+    /// The message, an option named as `spelling` names it (`--purge-mm`, `purge_mm`).
+    fn spelled(&self, spelling: Spelling) -> String;
+
+    /// The file the system refused and its error, if that is what failed.
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        None
+    }
+
+    /// Whether the system refused something that names no file (a write): an I/O error among
+    /// the causes.
+    fn io_failed(&self) -> bool {
+        causes(self).any(|c| c.is::<std::io::Error>())
+    }
+
+    /// [`JobFailure::spelled`], then each cause the message does not already say,
+    /// `: `-separated (`reading x.png: invalid PNG signature`), for a front end that shows one
+    /// line.
+    fn said(&self, spelling: Spelling) -> String {
+        let mut text = self.spelled(spelling);
+        // What is said so far in the engine's own words, which a cause's text is held to (the
+        // spelled text may name its options otherwise).
+        let mut known = self.to_string();
+        for cause in causes(self) {
+            let cause = cause.to_string();
+            if !known.contains(&cause) {
+                text = format!("{text}: {cause}");
+                known = format!("{known}: {cause}");
+            }
+        }
+        text
+    }
+}
+
+/// The causes of `e`, nearest first.
+fn causes<'e>(
+    e: &'e (dyn std::error::Error + 'static),
+) -> impl Iterator<Item = &'e (dyn std::error::Error + 'static)> {
+    std::iter::successors(e.source(), |c| c.source())
+}
+
+impl JobFailure for crate::Error {
+    fn spelled(&self, _: Spelling) -> String {
+        self.to_string()
+    }
+
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        match self {
+            crate::Error::Io { path, source } => Some((path, source)),
+            _ => None,
         }
     }
 }
@@ -965,5 +1022,41 @@ mod tests {
         o.set(size, size.parse("640x480").unwrap()).unwrap();
         assert_eq!(o.size, Some([640.0, 480.0]));
         assert_eq!(o.header(), "--size 640x480");
+    }
+
+    /// Every job's error reaches a front end one way (issue 40: four `failed` functions in
+    /// Python, four in the CLI): the message spelled, each cause not already said, and the file
+    /// the system refused.
+    #[test]
+    fn a_jobs_failure_says_its_causes_once_and_names_the_refused_file() {
+        #[derive(Debug, thiserror::Error)]
+        enum Failed {
+            #[error("reading layer.png")]
+            Read(#[source] std::io::Error),
+            #[error("settings: {0}")]
+            Said(#[source] OptionError),
+        }
+        impl JobFailure for Failed {
+            fn spelled(&self, spelling: Spelling) -> String {
+                match self {
+                    Failed::Said(e) => format!("settings: {}", e.spelled(spelling)),
+                    e => e.to_string(),
+                }
+            }
+        }
+        let denied = || std::io::Error::new(std::io::ErrorKind::PermissionDenied, "denied");
+        let read = Failed::Read(denied());
+        assert_eq!(
+            (read.said(Spelling::Keyword), read.io_failed()),
+            ("reading layer.png: denied".into(), true)
+        );
+        let range = Range::new(0.0, 1.0, "");
+        let option = OptionError { option: "purge_mm", problem: Problem::OutOfRange { value: 2.0, range } };
+        let said = Failed::Said(option);
+        assert_eq!(said.said(Spelling::Flag), "settings: --purge-mm 2 is out of range: 0 to 1");
+        assert!(!said.io_failed() && said.refused_file().is_none());
+        let engine = crate::Error::io(Path::new("/x/part.gcode"), denied());
+        let (path, source) = engine.refused_file().unwrap();
+        assert_eq!((path, source.kind()), (Path::new("/x/part.gcode"), std::io::ErrorKind::PermissionDenied));
     }
 }

@@ -15,7 +15,9 @@ use super::{
 };
 use crate::colour::Srgb8;
 use crate::gen::printhead::PrintheadProfile;
-use crate::options::{whole, JobOptions, Kind, OptionError, OptionField, Problem, Shape, Spelling, Value};
+use crate::options::{
+    whole, JobFailure, JobOptions, Kind, OptionError, OptionField, Problem, Shape, Spelling, Value,
+};
 use crate::pass::{Progress, Strictness};
 use crate::post::mix::profile::MixProfile;
 use crate::range::{Range, LAYER_NUMBER};
@@ -163,12 +165,21 @@ pub enum PreviewJobError {
     Write(crate::Error),
 }
 
-impl PreviewJobError {
+impl JobFailure for PreviewJobError {
     /// The message, an option named as `spelling` names it (`--layer`, `layer`).
-    pub fn spelled(&self, spelling: Spelling) -> String {
+    fn spelled(&self, spelling: Spelling) -> String {
         match self {
             PreviewJobError::Option(e) => e.spelled(spelling),
             e => e.to_string(),
+        }
+    }
+
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        match self {
+            PreviewJobError::Read(e)
+            | PreviewJobError::Write(e)
+            | PreviewJobError::Render(RenderError::Gcode(e)) => e.refused_file(),
+            _ => None,
         }
     }
 }
