@@ -514,9 +514,9 @@ fn word(value: &Value, separator: char) -> String {
 }
 
 /// The default of a field as its option's word, given the field at its declared default: a
-/// value (`0.5`, `after`), or the type's own word for an unset field ([`OptionField::default_word`]).
+/// value (`0.5`, `after`, `false`), or `None` for an unset field.
 pub fn default_word<F: OptionField>(field: &F, separator: char) -> Option<String> {
-    field.to_value().map(|v| word(&v, separator)).or_else(F::default_word)
+    field.to_value().map(|v| word(&v, separator))
 }
 
 /// A field's value for the header: `None` where it equals the declared default (`value`,
@@ -553,12 +553,9 @@ pub trait OptionField: Sized {
     const KIND: Kind;
     /// The field from a checked value of its kind.
     fn from_value(value: Value) -> Result<Self, Problem>;
-    /// Its value, `None` at the default (left out of the header).
+    /// Its value, `None` when unset; a type whose default is a value always has one (the
+    /// header leaves it out at the declared default: [`unless_default`]).
     fn to_value(&self) -> Option<Value>;
-    /// The default as a word, for a type whose default is a value.
-    fn default_word() -> Option<String> {
-        None
-    }
 }
 
 fn wrong_kind(value: &Value) -> Problem {
@@ -566,7 +563,7 @@ fn wrong_kind(value: &Value) -> Problem {
 }
 
 macro_rules! field {
-    ($ty:ty, $kind:expr, $pattern:pat => $field:expr, $this:ident => $value:expr $(, default $word:literal)?) => {
+    ($ty:ty, $kind:expr, $pattern:pat => $field:expr, $this:ident => $value:expr) => {
         impl OptionField for $ty {
             const KIND: Kind = $kind;
             fn from_value(value: Value) -> Result<Self, Problem> {
@@ -579,14 +576,11 @@ macro_rules! field {
                 let $this = self;
                 $value
             }
-            $(fn default_word() -> Option<String> {
-                Some($word.to_owned())
-            })?
         }
     };
 }
 
-field!(bool, Kind::Flag, Value::Flag(b) => b, b => b.then_some(Value::Flag(true)), default "false");
+field!(bool, Kind::Flag, Value::Flag(b) => b, b => Some(Value::Flag(*b)));
 // Unset, or a switch given either way (`keep_arc_length=False` turns a settings file's on off).
 field!(Option<bool>, Kind::Flag, Value::Flag(b) => Some(b), b => b.map(Value::Flag));
 field!(Option<f64>, Kind::Number, Value::Number(v) => Some(v), v => v.map(Value::Number));
@@ -657,11 +651,7 @@ macro_rules! word_option {
                 }
             }
             fn to_value(&self) -> Option<$crate::options::Value> {
-                let default = <$ty as Default>::default();
-                (*self != default).then(|| $crate::options::Value::Text($crate::options::Word::word(self)))
-            }
-            fn default_word() -> Option<String> {
-                Some($crate::options::Word::word(&<$ty as Default>::default()))
+                Some($crate::options::Value::Text($crate::options::Word::word(self)))
             }
         }
         impl $crate::options::OptionField for Option<$ty> {
@@ -707,10 +697,7 @@ macro_rules! text_option {
                     .map(Option::unwrap_or_default)
             }
             fn to_value(&self) -> Option<$crate::options::Value> {
-                (*self != <$ty as Default>::default()).then(|| $crate::options::Value::Text(self.to_string()))
-            }
-            fn default_word() -> Option<String> {
-                Some(<$ty as Default>::default().to_string())
+                Some($crate::options::Value::Text(self.to_string()))
             }
         }
     };

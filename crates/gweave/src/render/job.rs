@@ -104,12 +104,7 @@ impl OptionField for PictureSize {
         }
     }
     fn to_value(&self) -> Option<Value> {
-        let numbers = vec![f64::from(self.width_px), f64::from(self.height_px)];
-        (*self != PictureSize::default()).then_some(Value::Numbers(numbers))
-    }
-    fn default_word() -> Option<String> {
-        let PictureSize { width_px, height_px } = PictureSize::default();
-        Some(format!("{width_px}x{height_px}"))
+        Some(Value::Numbers(vec![f64::from(self.width_px), f64::from(self.height_px)]))
     }
 }
 
