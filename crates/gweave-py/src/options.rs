@@ -62,24 +62,26 @@ pub fn failed<E: JobFailure>(e: E) -> PyErr {
     }
 }
 
-/// The options of the job `command` (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`, `sim`,
-/// `estimate`, `preview`, `raster`: `gweave_sim::transform::jobs`, `gweave_sim::reading::JOBS`,
-/// `gweave_sim::raster_job::JOBS`) as
-/// declared: a list of dicts `{"name", "flag", "kind", "count", "default", "range", "help"}`,
-/// for the tests that hold the typed wrappers to the declaration (and for
-/// documentation).
+/// The commands of every job (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`, `sim`,
+/// `estimate`, `preview`, `raster`: `gweave_sim::transform::jobs`), for the tests that hold the
+/// typed wrappers to them.
+#[pyfunction]
+pub(crate) fn jobs() -> Vec<&'static str> {
+    gweave_sim::transform::jobs().into_iter().map(|(command, _)| command).collect()
+}
+
+/// The options of the job `command` (one of [`jobs`]) as declared: a list of dicts `{"name",
+/// "flag", "kind", "count", "default", "range", "help"}`, for the tests that hold the typed
+/// wrappers to the declaration (and for documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
-    let jobs = || {
-        let (reading, raster) = (gweave_sim::reading::JOBS.iter(), gweave_sim::raster_job::JOBS.iter());
-        gweave_sim::transform::jobs().into_iter().chain(reading.copied()).chain(raster.copied())
-    };
-    let Some((_, specs)) = jobs().find(|(name, _)| *name == command) else {
-        let known: Vec<&str> = jobs().map(|(name, _)| name).collect();
+    let all = gweave_sim::transform::jobs();
+    let Some((_, specs)) = all.iter().find(|(name, _)| *name == command) else {
+        let known: Vec<&str> = all.iter().map(|(name, _)| *name).collect();
         return Err(PyValueError::new_err(format!("no job {command:?} ({})", known.join(", "))));
     };
     let list = PyList::empty(py);
-    for spec in specs {
+    for spec in *specs {
         let d = PyDict::new(py);
         d.set_item("name", spec.name)?;
         d.set_item("flag", format!("--{}", spec.flag()))?;

@@ -27,8 +27,7 @@ use crate::finish::{self, FinishError};
 use crate::transform::command_line;
 use crate::{Estimator, MachineProfile, MachineProfileError};
 
-/// The raster job's command and options, for a front end that lists them (Python's
-/// `_gweave.job_options`), beside [`crate::transform::jobs`].
+/// The raster job's command and options, part of [`crate::transform::jobs`].
 pub const JOBS: &[(&str, &[OptionSpec])] = &[(RasterOptions::COMMAND, RasterOptions::SPEC)];
 
 /// Why a raster job failed.

@@ -64,8 +64,7 @@ gweave::job_options! {
 }
 
 /// Every reading job's command and options (`preview`'s is the engine's,
-/// [`gweave::render::job`]), for a front end that lists them (Python's `_gweave.job_options`),
-/// beside [`crate::transform::jobs`].
+/// [`gweave::render::job`]), part of [`crate::transform::jobs`].
 pub const JOBS: &[(&str, &[OptionSpec])] = &[
     (SimOptions::COMMAND, SimOptions::SPEC),
     (EstimateOptions::COMMAND, EstimateOptions::SPEC),

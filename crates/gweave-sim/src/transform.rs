@@ -100,10 +100,12 @@ pub fn transforms(each: &mut impl EachTransform) {
     each.transform::<Mix>();
 }
 
-/// Every transform job's command and options, for a front end that lists them (Python's
-/// `_gweave.job_options`, which its tests hold the typed wrappers to): the registry's rows,
-/// then `rotary wrap` and `rotary tube` (each its own command in both front ends: `wrap` draws
-/// a preview, `tube` reads no file).
+/// Every job's command and options, the one list of them, for a front end that lists them
+/// (Python's `_gweave.jobs` and `_gweave.job_options`, which its tests hold the typed wrappers
+/// to; the CLI's tests hold its subcommands to it): the registry's rows, then `rotary wrap` and
+/// `rotary tube` (each its own command in both front ends: `wrap` draws a preview, `tube` reads
+/// no file), the reading jobs ([`crate::reading::JOBS`]) and `raster`
+/// ([`crate::raster_job::JOBS`]).
 pub fn jobs() -> Vec<(&'static str, &'static [OptionSpec])> {
     struct List(Vec<(&'static str, &'static [OptionSpec])>);
     impl EachTransform for List {
@@ -114,6 +116,7 @@ pub fn jobs() -> Vec<(&'static str, &'static [OptionSpec])> {
     let mut list = List(Vec::new());
     transforms(&mut list);
     list.0.extend([(WrapOptions::COMMAND, WrapOptions::SPEC), (TubeOptions::COMMAND, TubeOptions::SPEC)]);
+    list.0.extend(crate::reading::JOBS.iter().chain(crate::raster_job::JOBS).copied());
     list.0
 }
 

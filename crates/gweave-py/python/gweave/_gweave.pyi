@@ -29,6 +29,7 @@ def slice_raster_json(
 
 # The jobs (transforms, sim, estimate, preview): their options are keyword arguments by the
 # names the engine declares (`job_options`); `gweave/__init__.py` types them, `tests/test_options.py` holds the two equal.
+def jobs() -> List[str]: ...
 def job_options(command: str) -> List[Dict[str, Any]]: ...
 
 # The transforms of the engine's registry (purge-shift, mix, ...), run by their command: the
