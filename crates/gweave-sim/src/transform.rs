@@ -405,7 +405,7 @@ pub fn calibration_card(
     let line = header_of(CALIBRATION_CARD, options, Strictness::Strict);
     finish::with_metadata(None, target, &line, |t| {
         let mut out = Output::create(t, None)?;
-        out.write_all(&gcode).map_err(|e| gweave::Error::io(&out.shown(), e))?;
+        out.write_all(&gcode).map_err(|e| gweave::Error::io(out.shown(), e))?;
         Ok::<_, TransformError>(out.commit()?)
     })?;
     Ok(card)
