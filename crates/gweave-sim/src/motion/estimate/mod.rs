@@ -237,7 +237,7 @@ impl Estimator {
 
     /// An estimator for `machine` as its firmware runs it: its motion, each tool change waiting
     /// for the queued moves as the firmware makes it wait ([`ToolChange::of`]), and, on a
-    /// machine with a printhead, the wait after each fire ([`FireWait::of`]); stepping the
+    /// machine with a printhead, the wait after each fire (`FireWait::of`); stepping the
     /// motors if `count_steps`. The lines are read as Marlin reads them until
     /// [`Estimator::read_as`] says otherwise.
     pub fn for_machine(machine: &MachineProfile, count_steps: bool) -> Result<Self, EstimateError> {
@@ -498,7 +498,7 @@ const BATCHES_IN_FLIGHT: usize = 4;
 /// result is the same, to the bit, as feeding every line to one [`Estimator`] (the plan side
 /// sees the same jobs in the same order); the memory is bounded by the read buffer and the
 /// batches in flight.
-/// The lines are read as Marlin reads them; [`estimate_on`] runs an estimator set up otherwise
+/// The lines are read as Marlin reads them; `estimate_report` runs an estimator set up otherwise
 /// ([`Estimator::for_machine`], [`Estimator::read_as`]).
 pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
     estimate_on(input, Estimator::new(profile)?)
