@@ -9,7 +9,6 @@ mod args;
 mod cmd;
 mod common;
 mod files;
-mod finish;
 mod format;
 mod options;
 mod per_file;
@@ -42,7 +41,6 @@ where
     T: Into<OsString> + Clone,
 {
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
-    finish::remember_args(&args);
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {

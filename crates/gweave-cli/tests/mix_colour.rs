@@ -238,3 +238,33 @@ fn the_card_counts_rows_from_1_in_the_terminal_and_the_json_and_draws_numbered_s
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("--card-png draws the card from its file"));
 }
+
+/// Regression (issue 40): the card's header was the command line as typed (argv through a
+/// global mutex), so the same card typed in another order or with an alias named another run.
+/// It is written from the options now, as every job's: the library's header to the byte.
+#[test]
+fn the_card_header_is_written_from_the_options_whatever_was_typed() {
+    use gweave::post::mix::MixOptions;
+    use gweave::Strictness;
+    let dir = tempfile::tempdir().unwrap();
+    let profile = dir.path().join("mix profile.toml");
+    std::fs::write(&profile, "").unwrap();
+    let card = dir.path().join("card.gcode");
+    let header = |args: &[&str]| {
+        let mut all = vec!["mix"];
+        all.extend(args);
+        all.extend(["-o", card.to_str().unwrap(), "-q"]);
+        let out = gweave(&all);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        std::fs::read_to_string(&card).unwrap().lines().next().unwrap().to_owned()
+    };
+    let c = profile.to_str().unwrap();
+    let typed = header(&["--purge-mm", "20", "--calibration-card", "-c", c]);
+    assert_eq!(typed, header(&["--calibration-card", "--config", c, "--purge-mm", "20"]));
+    let options = MixOptions { config: Some(profile.clone()), purge_mm: Some(20.0), ..MixOptions::default() };
+    let from_options = gweave_sim::transform::command_line(&options, Strictness::Strict);
+    let version = env!("CARGO_PKG_VERSION");
+    let words = from_options.strip_prefix("mix ").unwrap();
+    assert_eq!(typed, format!("; gweave {version} mix --calibration-card {words} (generated)"));
+    assert_eq!(words, format!("-c {c:?} --purge-mm 20"));
+}

@@ -44,6 +44,7 @@ fn _gweave(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read::stats_json, m)?)?;
     m.add_function(wrap_pyfunction!(read::check_json, m)?)?;
     m.add_function(wrap_pyfunction!(read::cat_json, m)?)?;
+    m.add_function(wrap_pyfunction!(options::jobs, m)?)?;
     m.add_function(wrap_pyfunction!(options::job_options, m)?)?;
     // binder-jet raster
     m.add_function(wrap_pyfunction!(raster::raster_json, m)?)?;

@@ -4,12 +4,10 @@
 //! [`job_options`].
 
 use gweave::options::{Kind, Spelling, Value};
-use gweave::rotary::RotaryError;
-use gweave::JobOptions;
-use gweave_sim::transform::TransformError;
+use gweave::{JobFailure, JobOptions};
 use pyo3::exceptions::{PyOSError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyDict, PyList, PyString};
 
 /// The options `T` from the keyword arguments of `function`: a keyword that is no option is a
 /// `TypeError` as Python raises it, a value out of range or unreadable a `ValueError` naming it.
@@ -34,6 +32,11 @@ pub fn read<T: JobOptions>(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -
             Kind::Whole => Value::Number(value.extract::<i64>().map_err(typed)? as f64),
             Kind::Text => Value::Text(value.extract().map_err(typed)?),
             Kind::Path => Value::Path(value.extract().map_err(typed)?),
+            // A list as the CLI writes it (`"X,A,Z"`, `"XAZ"`, `"10,20"`) is read by the
+            // engine's own parser, the flag's, so both front ends take the same spellings.
+            Kind::Texts(_) | Kind::Numbers(_) if value.is_instance_of::<PyString>() => spec
+                .parse(&value.extract::<String>()?)
+                .map_err(|e| PyValueError::new_err(e.spelled(Spelling::Keyword)))?,
             Kind::Repeated | Kind::Texts(_) => Value::Texts(value.extract().map_err(typed)?),
             Kind::Numbers(_) => Value::Numbers(value.extract().map_err(typed)?),
         };
@@ -43,35 +46,42 @@ pub fn read<T: JobOptions>(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -
     Ok(options)
 }
 
-/// A job's failure as Python raises it: a file the system refused as the `OSError` for its
-/// errno (as [`crate::err`]), a failed write of a rotary program an `OSError`, the rest a
-/// `ValueError` with the options it names spelled as keywords.
-pub fn failed(e: TransformError) -> PyErr {
-    match (&e, e.engine()) {
-        (_, Some(gweave::Error::Io { path, source })) => crate::args::os_error(path, source),
-        (TransformError::Rotary(RotaryError::Io(_)), _) => PyOSError::new_err(e.to_string()),
-        _ => PyValueError::new_err(e.spelled(Spelling::Keyword)),
+/// A job's failure as Python raises it, for every job: a file the system refused as the
+/// `OSError` for its errno (as [`crate::err`]), another refusal of the system (a write) an
+/// `OSError`, the rest a `ValueError` with the options it names spelled as keywords; the text
+/// is the message and the causes it does not say, `: `-separated.
+pub fn failed<E: JobFailure>(e: E) -> PyErr {
+    if let Some((path, source)) = e.refused_file() {
+        return crate::args::os_error(path, source);
+    }
+    let text = e.said(Spelling::Keyword);
+    if e.io_failed() {
+        PyOSError::new_err(text)
+    } else {
+        PyValueError::new_err(text)
     }
 }
 
-/// The options of the job `command` (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`, `sim`,
-/// `estimate`, `preview`, `raster`: `gweave_sim::transform::jobs`, `gweave_sim::reading::JOBS`,
-/// `gweave_sim::raster_job::JOBS`) as
-/// declared: a list of dicts `{"name", "flag", "kind", "count", "default", "range", "help"}`,
-/// for the tests that hold the typed wrappers to the declaration (and for
-/// documentation).
+/// The commands of every job (`purge-shift`, `mix`, `rotary wrap`, `rotary tube`, `sim`,
+/// `estimate`, `preview`, `raster`: `gweave_sim::transform::jobs`), for the tests that hold the
+/// typed wrappers to them.
+#[pyfunction]
+pub(crate) fn jobs() -> Vec<&'static str> {
+    gweave_sim::transform::jobs().into_iter().map(|(command, _)| command).collect()
+}
+
+/// The options of the job `command` (one of [`jobs`]) as declared: a list of dicts `{"name",
+/// "flag", "kind", "count", "default", "range", "help"}`, for the tests that hold the typed
+/// wrappers to the declaration (and for documentation).
 #[pyfunction]
 pub(crate) fn job_options<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
-    let jobs = || {
-        let (reading, raster) = (gweave_sim::reading::JOBS.iter(), gweave_sim::raster_job::JOBS.iter());
-        gweave_sim::transform::jobs().into_iter().chain(reading.copied()).chain(raster.copied())
-    };
-    let Some((_, specs)) = jobs().find(|(name, _)| *name == command) else {
-        let known: Vec<&str> = jobs().map(|(name, _)| name).collect();
+    let all = gweave_sim::transform::jobs();
+    let Some((_, specs)) = all.iter().find(|(name, _)| *name == command) else {
+        let known: Vec<&str> = all.iter().map(|(name, _)| *name).collect();
         return Err(PyValueError::new_err(format!("no job {command:?} ({})", known.join(", "))));
     };
     let list = PyList::empty(py);
-    for spec in specs {
+    for spec in *specs {
         let d = PyDict::new(py);
         d.set_item("name", spec.name)?;
         d.set_item("flag", format!("--{}", spec.flag()))?;

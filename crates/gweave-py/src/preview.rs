@@ -8,11 +8,10 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::options::failed;
 use crate::{err, strictness, to_json};
 use gweave::gcode::layers::ALL_FEATURES;
-use gweave::options::Spelling;
-use gweave::render::job::{self, PreviewJobError};
-use gweave::render::RenderError;
+use gweave::render::job;
 use gweave::PreviewOptions;
 use pyo3::types::PyBytes;
 
@@ -38,17 +37,6 @@ pub(crate) fn preview_json(
     })?
     .map_err(failed)?;
     Ok((PyBytes::new(py, &preview.bytes).unbind(), to_json(&preview.report)?))
-}
-
-/// A preview's failure as Python raises it: a file the system refused as the `OSError` for its
-/// errno, the rest a `ValueError` with the options it names spelled as keywords.
-fn failed(e: PreviewJobError) -> PyErr {
-    match e {
-        PreviewJobError::Read(e)
-        | PreviewJobError::Write(e)
-        | PreviewJobError::Render(RenderError::Gcode(e)) => err(e),
-        e => PyValueError::new_err(e.spelled(Spelling::Keyword)),
-    }
 }
 
 /// A file's toolpath as little-endian column bytes: (segment count, {name: bytes}) with start

@@ -4,41 +4,17 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
-use gweave::options::Spelling;
 use gweave::RasterOptions;
 use gweave::{Quiet, Target};
-use gweave_sim::builtin::LoadError;
-use gweave_sim::raster_job::{Raster, RasterJobError};
+use gweave_sim::raster_job::Raster;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::options::failed;
 use crate::to_json;
 
 // ---- binder-jet raster (gweave raster, slice-raster) ----
-
-/// A raster job's error as Python raises it: a machine profile the system refused as the
-/// `OSError` for its errno, `OSError` when another file could not be read or written (an I/O
-/// error among its causes), else `ValueError` naming an option by its keyword; the text is the
-/// message and its causes, `: `-separated.
-fn failed(e: RasterJobError) -> PyErr {
-    if let RasterJobError::Machine(LoadError::Read { path, source }) = &e {
-        return crate::args::os_error(path, source);
-    }
-    let mut text = e.spelled(Spelling::Keyword);
-    let mut io = false;
-    let mut cause = std::error::Error::source(&e);
-    while let Some(c) = cause {
-        io |= c.downcast_ref::<std::io::Error>().is_some();
-        text = format!("{text}: {c}");
-        cause = c.source();
-    }
-    if io {
-        PyOSError::new_err(text)
-    } else {
-        PyValueError::new_err(text)
-    }
-}
 
 /// Rasters layer images or a `.sl1` into inkjet G-code, or writes the nozzle test pattern
 /// (`test_pattern=True`, no inputs); the report as JSON text (see `gweave raster --json`). The

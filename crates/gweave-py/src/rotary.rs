@@ -9,6 +9,7 @@ use gweave::rotary::cylinder::RotaryConfig;
 use gweave::rotary::helix::{
     self, Handedness, HelicalPath as RustHelicalPath, PrintSettings, Profile, Resolution,
 };
+use gweave::rotary::options::MachineOptions;
 use gweave::rotary::report::merged_settings;
 use gweave::rotary::RotaryError;
 use gweave::Target;
@@ -174,17 +175,29 @@ struct PathsSettings {
     print: PrintSettings,
 }
 
-/// Writes a program printing `paths` in order; `settings` as for the tube's `machine` and
-/// `print` tables. Returns `{"filament_mm", "print_time_s"}` as JSON text.
+/// Writes a program printing `paths` in order; `settings` the tube's `print` table as JSON
+/// text, `machine` the machine's keywords (`mandrel_diameter`, `axes`, ... read as the options
+/// the engine declares, `gweave::rotary::options::MachineOptions`), each over the TOML
+/// `config`'s. Returns `{"filament_mm", "print_time_s"}` as JSON text.
 #[pyfunction]
-#[pyo3(signature = (paths, output, *, settings, config=None))]
+#[pyo3(signature = (paths, output, *, settings, config=None, **machine))]
 pub(crate) fn write_helical_paths_json(
     paths: Vec<PyRef<'_, HelicalPath>>,
     output: PathBuf,
     settings: String,
     config: Option<PathBuf>,
+    machine: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
-    let s: PathsSettings = merged_settings(config.as_deref(), &settings).map_err(rotary_err)?;
+    let machine: MachineOptions = crate::options::read("write_helical_paths", machine)?;
+    let mut overrides: serde_json::Value =
+        serde_json::from_str(&settings).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    // The `[machine]` table requires the diameter: a keyword completes a file without one.
+    if let Some(d) = machine.mandrel_diameter {
+        overrides["machine"]["mandrel_diameter_mm"] = d.into();
+    }
+    let mut s: PathsSettings =
+        merged_settings(config.as_deref(), &overrides.to_string()).map_err(rotary_err)?;
+    machine.apply(&mut s.machine);
     let rust: Vec<RustHelicalPath> = paths.iter().map(|p| p.path.clone()).collect();
     let mut out = gweave::Output::create(&Target::File(output), None).map_err(err)?;
     let summary = helix::write_paths(&s.machine, &s.print, &rust, std::io::BufWriter::new(&mut out));

@@ -3,13 +3,13 @@
 use crate::interrupt::interruptible;
 use std::path::PathBuf;
 
-use gweave::options::Spelling;
-use gweave_sim::reading::{self, EstimateOptions, ReadingError, SimOptions};
+use gweave_sim::reading::{self, EstimateOptions, SimOptions};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::args::os_error;
+use crate::options::failed;
 use crate::to_json;
 
 // --- gweave-sim: the virtual printer ---
@@ -27,21 +27,6 @@ pub(crate) fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::
 
 fn sim_err(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
-}
-
-/// A reading job's failure as Python raises it: a file the system refused as the `OSError` for
-/// its errno, the rest a `ValueError` with the options it names spelled as keywords.
-fn failed(e: ReadingError) -> PyErr {
-    use gweave_sim::builtin::LoadError;
-    match &e {
-        ReadingError::Machine(LoadError::Read { path, source })
-        | ReadingError::Read { path, source }
-        | ReadingError::Sim(gweave_sim::SimJobError::Read { path, source })
-        | ReadingError::Estimate(gweave_sim::EstimateFileError::Read { path, source }) => {
-            os_error(path, source)
-        }
-        _ => PyValueError::new_err(e.spelled(Spelling::Keyword)),
-    }
 }
 
 /// Runs a file through the virtual printer; the report as JSON text (see `gweave sim --json`).

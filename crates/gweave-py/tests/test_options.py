@@ -156,6 +156,14 @@ def test_an_unknown_keyword_is_a_type_error_as_python_raises_it(data, tmp_path):
         _gweave.transform_json("purge", str(data.joinpath(*TORUS)), str(tmp_path / "o.gcode"))
 
 
+def test_every_job_of_the_engine_is_held_to_its_declaration_here():
+    """Regression (issue 40): the jobs were listed by hand here, in the CLI's tests and in the
+    compiled module, with nothing holding the lists equal; the engine's list is the one now
+    (`gweave_sim::transform::jobs`), and a job missing from `JOBS` has no wrapper checked."""
+    assert sorted(JOBS) == sorted(_gweave.jobs())
+    assert _gweave.jobs()[: len(TRANSFORMS)] == TRANSFORMS, "the registry's rows first"
+
+
 @pytest.mark.parametrize("command", TRANSFORMS)
 def test_every_transform_of_the_registry_is_a_command_and_a_typed_function(command, capfd, monkeypatch, tmp_path):
     """Regression (issue 40): a transform was written into each front end by hand (13 files

@@ -144,3 +144,27 @@ def test_keep_arc_length_false_turns_a_configs_off_for_a_helical_wrap(data, tmp_
                            keep_arc_length=False, helical=True)
     assert r["helical"] and not r["keep_arc_length"]
     assert out.read_text().splitlines()[0].endswith(" rotary wrap --mandrel-diameter 30 -c " f"{toml} --helical (generated)")
+
+
+def test_axes_take_the_cli_spellings_xaz_and_x_comma_a_comma_z(data, tmp_path):
+    """Regression (issue 40): Python split ``axes`` itself and refused ``"XAZ"``, which
+    ``--axes`` takes; the engine's one parser reads both front ends' text now."""
+    plate = data / "rotary" / "plate.gcode"
+    written = {}
+    for axes in ["XYZ", "x,y,z", ("X", "Y", "Z")]:
+        out = tmp_path / f"py-{len(written)}.gcode"
+        r = gweave.rotary_wrap(plate, out, mandrel_diameter=30, axes=axes)
+        assert r["machine"]["axes"] == "XYZ", axes
+        written[str(axes)] = out.read_bytes()
+    for axes in ["XYZ", "x,y,z"]:
+        cli = tmp_path / f"cli-{axes}.gcode"
+        assert gweave.main(["rotary", "wrap", str(plate), "-o", str(cli), "--mandrel-diameter", "30", "--axes", axes, "-q"]) == 0
+        assert cli.read_bytes() == written[axes]
+    assert len(set(written.values())) == 1
+    tube = gweave.rotary_tube(tmp_path / "t.gcode", mandrel_diameter=20, length=5, layer_count=1, axes="XAY")
+    assert tube["machine"]["axes"] == "XAY"
+    path = gweave.HelicalPath(0, 5, radius=10.1, pitch=0.4)
+    gweave.write_helical_paths([path], tmp_path / "h.gcode", mandrel_diameter=20, axes="XBZ", rotary_unit="deg")
+    assert " B" in (tmp_path / "h.gcode").read_text()
+    with pytest.raises(ValueError, match=r"^axes: takes 3 letters \(X,A,Z\), not \"XA\""):
+        gweave.rotary_wrap(plate, tmp_path / "bad.gcode", mandrel_diameter=30, axes="XA")

@@ -20,7 +20,7 @@ use gweave::gen::raster_job::{BoxError, Job, JobError, JobReport, LineTimer, Set
 use gweave::options::Spelling;
 use gweave::post::metadata::Figures;
 use gweave::RasterOptions;
-use gweave::{JobOptions, OptionError, OptionSpec, Progress, Strictness, Target};
+use gweave::{JobFailure, JobOptions, OptionError, OptionSpec, Progress, Strictness, Target};
 use serde::Serialize;
 
 use crate::builtin::{load_machine, LoadError};
@@ -28,8 +28,7 @@ use crate::finish::{self, FinishError};
 use crate::transform::command_line;
 use crate::{Estimator, MachineProfile, MachineProfileError};
 
-/// The raster job's command and options, for a front end that lists them (Python's
-/// `_gweave.job_options`), beside [`crate::transform::jobs`].
+/// The raster job's command and options, part of [`crate::transform::jobs`].
 pub const JOBS: &[(&str, &[OptionSpec])] = &[(RasterOptions::COMMAND, RasterOptions::SPEC)];
 
 /// Why a raster job failed.
@@ -53,12 +52,19 @@ pub enum RasterJobError {
     Finish(#[from] FinishError),
 }
 
-impl RasterJobError {
+impl JobFailure for RasterJobError {
     /// The message, an option named as `spelling` names it (`--machine`, `machine`).
-    pub fn spelled(&self, spelling: Spelling) -> String {
+    fn spelled(&self, spelling: Spelling) -> String {
         match self {
             RasterJobError::Option(e) => e.spelled(spelling),
             e => e.to_string(),
+        }
+    }
+
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        match self {
+            RasterJobError::Machine(LoadError::Read { path, source }) => Some((path, source)),
+            _ => None,
         }
     }
 }
@@ -98,7 +104,9 @@ pub struct Raster {
 impl Raster {
     /// The job of `options` on `inputs` (none for the test pattern).
     pub fn new(inputs: Vec<PathBuf>, options: RasterOptions) -> Result<Self, RasterJobError> {
-        options.check_conflicts()?;
+        // The one check of the options, the declaration's (a front end has read them through
+        // it already; a caller in code may have made them with a struct literal).
+        options.check()?;
         let machine = options.machine.as_deref().map(|m| load_machine(Some(m))).transpose()?;
         let mut setup = Setup::new(inputs, options);
         if let Some(machine) = &machine {
@@ -135,14 +143,14 @@ impl Raster {
         let from_images = matches!(source, Source::Stacks(_));
         let job = self.setup.job_from(source, heads)?;
         let motion = self.machine.map(|m| m.motion).unwrap_or_default();
-        let mut report = write(&job, target, &line, progress, || Estimator::line_timer_on(&motion))?;
-        report.output = target_name(target);
+        let report = write(&job, target, &line, progress, || Estimator::line_timer_on(&motion))?;
         Ok(Outcome { written: Written::Layers(report), profile: job.profile, from_images })
     }
 }
 
 /// Writes `job` to `target` under the header `line`, its own figures the metadata when it knows
-/// them, else measured from the file written.
+/// them, else measured from the file written; the report names the file written (the one
+/// place a raster's output is named).
 fn write<'t>(
     job: &Job,
     target: &Target,
@@ -150,7 +158,7 @@ fn write<'t>(
     progress: &mut dyn Progress,
     timer: impl FnOnce() -> Result<Box<dyn LineTimer + 't>, BoxError>,
 ) -> Result<JobReport, RasterJobError> {
-    let (report, _) = if job.knows_its_figures() {
+    let (mut report, written) = if job.knows_its_figures() {
         let run = |out: &mut dyn Write| Ok::<_, RasterJobError>(job.run_into(out, progress, timer)?);
         let figures = |r: &JobReport| Figures { time_s: [r.time.total_s; 2], ..Figures::default() };
         finish::with_own_figures(target, line, run, figures)?
@@ -159,15 +167,8 @@ fn write<'t>(
         // Its own time counts the printhead's firing, which the estimator does not know.
         finish::with_metadata_timed(None, target, line, run, |r: &JobReport| Some(r.time.total_s))?
     };
+    report.output = written.map_or_else(|| "-".to_owned(), |path| path.display().to_string());
     Ok(report)
-}
-
-/// The output as a report names it: the file, or `-` for standard output.
-fn target_name(target: &Target) -> String {
-    match target {
-        Target::File(path) => path.display().to_string(),
-        _ => "-".to_owned(),
-    }
 }
 
 #[cfg(test)]
@@ -222,6 +223,46 @@ mod tests {
             header(&out),
             format!("; gweave {version} raster --test-pattern --pattern-columns 2 (generated)")
         );
+    }
+
+    /// The report names the file written whichever way the output is finished (its own
+    /// figures, or measured when the user's start G-code extrudes): named once, from the file
+    /// the finishing step wrote (issue 40: it was worked out three times).
+    #[test]
+    fn the_report_names_the_file_written_either_way() {
+        let dir = tempfile::tempdir().unwrap();
+        let start = dir.path().join("start.gcode");
+        std::fs::write(&start, "G1 E1 F300\n").unwrap();
+        for (name, start) in [("own.gcode", None), ("measured.gcode", Some(start))] {
+            let out = dir.path().join(name);
+            let options = RasterOptions { start, fast_estimate: true, ..RasterOptions::default() };
+            let raster = Raster::new(vec![layers()], options).unwrap();
+            let done = raster.run(&Target::File(out.clone()), &mut Quiet).unwrap();
+            let Written::Layers(report) = done.written else { panic!("layers written") };
+            assert_eq!(report.output, out.display().to_string(), "{name}");
+        }
+    }
+
+    /// Regression (issue 40): options made in code were checked a second time by hand in the
+    /// engine (`Setup::source`), with messages of their own ("threshold 1.5 ..." naming neither
+    /// front end's spelling); the declaration's check is the one check now.
+    #[test]
+    fn options_made_in_code_are_checked_by_the_declaration_alone() {
+        let refused = |options: RasterOptions| Raster::new(vec![layers()], options).unwrap_err();
+        let err = refused(RasterOptions { threshold: 1.5, ..RasterOptions::default() });
+        assert_eq!(err.spelled(Spelling::Flag), "--threshold 1.5 is out of range: 0 to 1");
+        assert_eq!(err.spelled(Spelling::Keyword), "threshold = 1.5 is out of range: 0 to 1");
+        let err =
+            refused(RasterOptions { pixel_mm: Some(0.05), dpi: Some(300.0), ..RasterOptions::default() });
+        assert_eq!(err.spelled(Spelling::Flag), "--pixel-mm and --dpi: give one of them");
+        let err = refused(RasterOptions { heads: Some(0), ..RasterOptions::default() });
+        assert!(err.spelled(Spelling::Flag).starts_with("--heads 0 is out of range: "), "{err}");
+        // The test pattern reads no layer, and is checked all the same.
+        let err = Raster::new(
+            Vec::new(),
+            RasterOptions { test_pattern: true, density: 0, ..RasterOptions::default() },
+        );
+        assert!(err.unwrap_err().spelled(Spelling::Keyword).starts_with("density = 0 is out of range: "));
     }
 
     #[test]

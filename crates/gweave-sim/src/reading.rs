@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use gweave::options::{Problem, Shape, Spelling};
 use gweave::PreviewOptions;
-use gweave::{JobOptions, OptionError, OptionSpec, Progress};
+use gweave::{JobFailure, JobOptions, OptionError, OptionSpec, Progress};
 
 use crate::inkjet::InkjetError;
 use crate::job::{simulate, SimJobError, SimSetup, Simulation};
@@ -64,8 +64,7 @@ gweave::job_options! {
 }
 
 /// Every reading job's command and options (`preview`'s is the engine's,
-/// [`gweave::render::job`]), for a front end that lists them (Python's `_gweave.job_options`),
-/// beside [`crate::transform::jobs`].
+/// [`gweave::render::job`]), part of [`crate::transform::jobs`].
 pub const JOBS: &[(&str, &[OptionSpec])] = &[
     (SimOptions::COMMAND, SimOptions::SPEC),
     (EstimateOptions::COMMAND, EstimateOptions::SPEC),
@@ -111,9 +110,9 @@ pub enum ReadingError {
     Canvas(#[from] InkjetError),
 }
 
-impl ReadingError {
+impl JobFailure for ReadingError {
     /// The message, an option named as `spelling` names it (`--plot`, `plot`).
-    pub fn spelled(&self, spelling: Spelling) -> String {
+    fn spelled(&self, spelling: Spelling) -> String {
         match self {
             ReadingError::Option(e) => e.spelled(spelling),
             ReadingError::SlicerLimits { path, source } => {
@@ -121,6 +120,16 @@ impl ReadingError {
             }
             ReadingError::Sim(e) => e.spelled(spelling),
             e => e.to_string(),
+        }
+    }
+
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        match self {
+            ReadingError::Machine(LoadError::Read { path, source })
+            | ReadingError::Read { path, source }
+            | ReadingError::Sim(SimJobError::Read { path, source })
+            | ReadingError::Estimate(EstimateFileError::Read { path, source }) => Some((path, source)),
+            _ => None,
         }
     }
 }

@@ -6,10 +6,12 @@
 //! ([`Transform`]) the front ends derive their commands from: a row gives a job its CLI
 //! subcommand and its Python function, with no code in either.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::writer::Target;
-use gweave::options::{JobOptions, OptionError, OptionSpec, Said, Spelling};
+use gweave::options::{JobFailure, JobOptions, OptionError, OptionSpec, Said, Spelling};
+use gweave::post::mix::card::CardReport;
 use gweave::post::mix::profile::MixProfile;
 use gweave::post::mix::report::MixReport;
 use gweave::post::mix::{MixOptions, MixPassError};
@@ -20,6 +22,7 @@ use gweave::rotary::report::{TubeReport, WrapReport};
 use gweave::rotary::wrap::WrapConfig;
 use gweave::rotary::RotaryError;
 use gweave::Malformed;
+use gweave::Output;
 use gweave::{tube_file, wrap_file};
 use gweave::{Progress, Strictness};
 use gweave::{Ran, Run};
@@ -98,10 +101,12 @@ pub fn transforms(each: &mut impl EachTransform) {
     each.transform::<Mix>();
 }
 
-/// Every transform job's command and options, for a front end that lists them (Python's
-/// `_gweave.job_options`, which its tests hold the typed wrappers to): the registry's rows,
-/// then `rotary wrap` and `rotary tube` (each its own command in both front ends: `wrap` draws
-/// a preview, `tube` reads no file).
+/// Every job's command and options, the one list of them, for a front end that lists them
+/// (Python's `_gweave.jobs` and `_gweave.job_options`, which its tests hold the typed wrappers
+/// to; the CLI's tests hold its subcommands to it): the registry's rows, then `rotary wrap` and
+/// `rotary tube` (each its own command in both front ends: `wrap` draws a preview, `tube` reads
+/// no file), the reading jobs ([`crate::reading::JOBS`]) and `raster`
+/// ([`crate::raster_job::JOBS`]).
 pub fn jobs() -> Vec<(&'static str, &'static [OptionSpec])> {
     struct List(Vec<(&'static str, &'static [OptionSpec])>);
     impl EachTransform for List {
@@ -112,6 +117,7 @@ pub fn jobs() -> Vec<(&'static str, &'static [OptionSpec])> {
     let mut list = List(Vec::new());
     transforms(&mut list);
     list.0.extend([(WrapOptions::COMMAND, WrapOptions::SPEC), (TubeOptions::COMMAND, TubeOptions::SPEC)]);
+    list.0.extend(crate::reading::JOBS.iter().chain(crate::raster_job::JOBS).copied());
     list.0
 }
 
@@ -153,9 +159,9 @@ impl From<gweave::Error> for TransformError {
     }
 }
 
-impl TransformError {
+impl JobFailure for TransformError {
     /// The message, an option named as `spelling` names it (`--purge-mm`, `purge_mm`).
-    pub fn spelled(&self, spelling: Spelling) -> String {
+    fn spelled(&self, spelling: Spelling) -> String {
         match self {
             TransformError::Option(e) => e.spelled(spelling),
             TransformError::PurgeShift(e) => e.said().map_or_else(|| e.to_string(), |s| s.spelled(spelling)),
@@ -172,6 +178,12 @@ impl TransformError {
         }
     }
 
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        self.engine().and_then(JobFailure::refused_file)
+    }
+}
+
+impl TransformError {
     /// The engine's own error inside, if that is what failed (a file unreadable, a malformed
     /// line): a front end raises it as it raises the engine's errors.
     pub fn engine(&self) -> Option<&gweave::Error> {
@@ -207,9 +219,14 @@ fn pass_needs(e: &gweave::Error) -> Option<&Said> {
 /// assert_eq!(command_line(&MixOptions::default(), Strictness::Strict), "mix");
 /// ```
 pub fn command_line<O: JobOptions>(options: &O, strictness: Strictness) -> String {
-    let lenient = (strictness == Strictness::Lenient).then_some("--lenient".to_owned());
-    let words = [Some(O::COMMAND.to_owned()), Some(options.header()), lenient];
-    words.into_iter().flatten().filter(|w| !w.is_empty()).collect::<Vec<_>>().join(" ")
+    header_of(O::COMMAND, options, strictness)
+}
+
+/// The header of `command` (`mix --calibration-card`) run with `options`.
+fn header_of<O: JobOptions>(command: &str, options: &O, strictness: Strictness) -> String {
+    let lenient = if strictness == Strictness::Lenient { "--lenient" } else { "" };
+    let header = options.header();
+    [command, header.as_str(), lenient].into_iter().filter(|w| !w.is_empty()).collect::<Vec<_>>().join(" ")
 }
 
 /// Runs a transform's pass on the job's file (`pass`: the engine's function that runs it on
@@ -224,15 +241,31 @@ pub fn finished<O: JobOptions, R, E>(
 where
     TransformError: From<E>,
 {
+    let pass = |run: Run<'_>| pass(run).map(|(report, ran)| (report, ran.malformed));
+    let (done, _) = finished_timed(options, job, pass, |_| None)?;
+    Ok(done)
+}
+
+/// [`finished`] for a pass that times its output better than the estimator's machine can
+/// (`own_time_s`, s: a rotary axis, whose feed convention the default machine does not read;
+/// [`finish::with_metadata_timed`]), also returning the path written (`None`: standard
+/// output).
+fn finished_timed<O: JobOptions, R, E>(
+    options: &O,
+    job: Job<'_>,
+    pass: impl FnOnce(Run<'_>) -> Result<(R, Malformed), E>,
+    own_time_s: impl FnOnce(&R) -> Option<f64>,
+) -> Result<((R, Malformed), Option<PathBuf>), TransformError>
+where
+    TransformError: From<E>,
+{
     finish::refuse_second_run(job.input, O::COMMAND)?;
     finish::refuse_cut_input(job.input, job.strictness)?;
     let line = command_line(options, job.strictness);
     let (input, target) = (job.input, job.target);
-    let (done, _) = finish::with_metadata(Some(input), target, &line, |t| {
-        let (report, ran) = pass(job.run(t))?;
-        Ok::<_, TransformError>((report, ran.malformed))
-    })?;
-    Ok(done)
+    let write = |t: &Target| Ok::<_, TransformError>(pass(job.run(t))?);
+    let own_time_s = |done: &(R, Malformed)| own_time_s(&done.0);
+    finish::with_metadata_timed(Some(input), target, &line, write, own_time_s)
 }
 
 /// A settings file named by an option, read with `parse`; the default without one.
@@ -345,6 +378,42 @@ pub fn mix_with(profile: MixProfile, options: &MixOptions, job: Job<'_>) -> Outc
     finished(options, job, |run| gweave::post::mix::mix(profile, run))
 }
 
+/// Writes a calibration card (docs/mix.md: a swatch per mix of `card_mixes`, purged between)
+/// for the hotend and filaments of `profile` (made of `options`, [`mix_profile`]) to `target`,
+/// finished as every job's output: the header written from the options (`mix
+/// --calibration-card -c mix.toml`, whatever order or alias was typed) and the metadata.
+///
+/// ```
+/// use gweave::post::mix::MixOptions;
+/// use gweave::Target;
+/// use gweave_sim::transform::{calibration_card, mix_profile};
+/// let dir = tempfile::tempdir().unwrap();
+/// let out = dir.path().join("card.gcode");
+/// let options = MixOptions { purge_mm: Some(20.0), ..MixOptions::default() };
+/// let card = calibration_card(&mix_profile(&options).unwrap(), &options, &Target::File(out.clone())).unwrap();
+/// assert_eq!(card.swatches.len(), 30);
+/// let text = std::fs::read_to_string(&out).unwrap();
+/// let version = env!("CARGO_PKG_VERSION");
+/// assert!(text.starts_with(&format!("; gweave {version} mix --calibration-card --purge-mm 20 (generated)\n")), "{text:.80}");
+/// ```
+pub fn calibration_card(
+    profile: &MixProfile,
+    options: &MixOptions,
+    target: &Target,
+) -> Result<CardReport, TransformError> {
+    let (gcode, card) = gweave::post::mix::card::calibration_card(profile)?;
+    let line = header_of(CALIBRATION_CARD, options, Strictness::Strict);
+    finish::with_metadata(None, target, &line, |t| {
+        let mut out = Output::create(t, None)?;
+        out.write_all(&gcode).map_err(|e| gweave::Error::io(out.shown(), e))?;
+        Ok::<_, TransformError>(out.commit()?)
+    })?;
+    Ok(card)
+}
+
+/// The command a calibration card's header names.
+const CALIBRATION_CARD: &str = "mix --calibration-card";
+
 /// The rotary settings `read` makes of the settings file the machine options name (its errors
 /// name the file) or, without one, of the options alone (`WrapConfig::read`, `TubeParams::read`).
 fn rotary_settings<T>(
@@ -364,15 +433,10 @@ pub fn rotary_wrap(options: &WrapOptions, job: Job<'_>, preview: Option<&Path>) 
     options.check_conflicts()?;
     let mut config = rotary_settings(&options.machine, WrapConfig::read)?;
     config.apply(options)?;
-    finish::refuse_second_run(job.input, WrapOptions::COMMAND)?;
-    finish::refuse_cut_input(job.input, job.strictness)?;
-    let line = command_line(options, job.strictness);
-    let (input, target) = (job.input, job.target);
-    let wrap = |t: &Target| Ok::<_, TransformError>(wrap_file(&config, job.run(t), preview)?);
+    let wrap = |run: Run<'_>| wrap_file(&config, run, preview);
     // Its own time: the estimator's default machine does not read the rotary feed.
-    let own_time_s = |r: &(WrapReport, Malformed)| Some(r.0.time_s);
     let ((mut report, malformed), written) =
-        finish::with_metadata_timed(Some(input), target, &line, wrap, own_time_s)?;
+        finished_timed(options, job, wrap, |r: &WrapReport| Some(r.time_s))?;
     report.output = written;
     Ok((report, malformed))
 }

@@ -86,7 +86,7 @@ pub use check::{
     RefusedWord, WordRanges,
 };
 pub use gen::raster_job::RasterOptions;
-pub use options::{JobOptions, OptionError, OptionSpec};
+pub use options::{JobFailure, JobOptions, OptionError, OptionSpec};
 pub use post::mix::{mix, MixOptions, MixPassError};
 pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};
 pub use render::job::PreviewOptions;

@@ -26,7 +26,7 @@
 //! ```
 
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::de::{value::Error as WordError, DeserializeOwned, IntoDeserializer};
 use serde::Serialize;
@@ -256,6 +256,63 @@ impl Spelling {
     }
 }
 
+/// A job's error as a front end reports it, one way for every job: the message with the
+/// options it names spelled the front end's way, and whether the system refused a file or an
+/// operation, which a front end raises as its I/O error (Python's `OSError` for the errno).
+pub trait JobFailure: std::error::Error + Sized + 'static {
+    /// The message, an option named as `spelling` names it (`--purge-mm`, `purge_mm`).
+    fn spelled(&self, spelling: Spelling) -> String;
+
+    /// The file the system refused and its error, if that is what failed.
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        None
+    }
+
+    /// Whether the system refused something that names no file (a write): an I/O error among
+    /// the causes.
+    fn io_failed(&self) -> bool {
+        causes(self).any(|c| c.is::<std::io::Error>())
+    }
+
+    /// [`JobFailure::spelled`], then each cause the message does not already say,
+    /// `: `-separated (`reading x.png: invalid PNG signature`), for a front end that shows one
+    /// line.
+    fn said(&self, spelling: Spelling) -> String {
+        let mut text = self.spelled(spelling);
+        // What is said so far in the engine's own words, which a cause's text is held to (the
+        // spelled text may name its options otherwise).
+        let mut known = self.to_string();
+        for cause in causes(self) {
+            let cause = cause.to_string();
+            if !known.contains(&cause) {
+                text = format!("{text}: {cause}");
+                known = format!("{known}: {cause}");
+            }
+        }
+        text
+    }
+}
+
+/// The causes of `e`, nearest first.
+fn causes<'e>(
+    e: &'e (dyn std::error::Error + 'static),
+) -> impl Iterator<Item = &'e (dyn std::error::Error + 'static)> {
+    std::iter::successors(e.source(), |c| c.source())
+}
+
+impl JobFailure for crate::Error {
+    fn spelled(&self, _: Spelling) -> String {
+        self.to_string()
+    }
+
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        match self {
+            crate::Error::Io { path, source } => Some((path, source)),
+            _ => None,
+        }
+    }
+}
+
 /// A sentence that names options (`nothing to do: give a schedule (at_layer, at_z)...`) with
 /// each option's identity kept, so that each front end writes it as it spells it
 /// ([`Said::spelled`]): the CLI `--at-layer`, Python `at_layer`. `Display` uses the keyword.
@@ -401,6 +458,19 @@ pub trait JobOptions: Default + Sized {
         Ok(())
     }
 
+    /// Checks the options as the declaration states them: each value within its range and
+    /// count ([`OptionSpec::check`], as [`JobOptions::set`] checks a value read), then no two
+    /// given that exclude each other. For options made in code (a struct literal), which no
+    /// front end has read: the one check, with the messages a front end's would give.
+    fn check(&self) -> Result<(), OptionError> {
+        for (spec, value) in Self::SPEC.iter().zip(self.values()) {
+            if let Some(value) = value {
+                spec.check(value)?;
+            }
+        }
+        self.check_conflicts()
+    }
+
     /// The options given, in the CLI's words and [`JobOptions::SPEC`]'s order, for the run's
     /// header: `-c mix.toml --at-layer 0=Red --purge-mm 25`.
     fn header(&self) -> String {
@@ -444,9 +514,9 @@ fn word(value: &Value, separator: char) -> String {
 }
 
 /// The default of a field as its option's word, given the field at its declared default: a
-/// value (`0.5`, `after`), or the type's own word for an unset field ([`OptionField::default_word`]).
+/// value (`0.5`, `after`, `false`), or `None` for an unset field.
 pub fn default_word<F: OptionField>(field: &F, separator: char) -> Option<String> {
-    field.to_value().map(|v| word(&v, separator)).or_else(F::default_word)
+    field.to_value().map(|v| word(&v, separator))
 }
 
 /// A field's value for the header: `None` where it equals the declared default (`value`,
@@ -483,12 +553,9 @@ pub trait OptionField: Sized {
     const KIND: Kind;
     /// The field from a checked value of its kind.
     fn from_value(value: Value) -> Result<Self, Problem>;
-    /// Its value, `None` at the default (left out of the header).
+    /// Its value, `None` when unset; a type whose default is a value always has one (the
+    /// header leaves it out at the declared default: [`unless_default`]).
     fn to_value(&self) -> Option<Value>;
-    /// The default as a word, for a type whose default is a value.
-    fn default_word() -> Option<String> {
-        None
-    }
 }
 
 fn wrong_kind(value: &Value) -> Problem {
@@ -496,7 +563,7 @@ fn wrong_kind(value: &Value) -> Problem {
 }
 
 macro_rules! field {
-    ($ty:ty, $kind:expr, $pattern:pat => $field:expr, $this:ident => $value:expr $(, default $word:literal)?) => {
+    ($ty:ty, $kind:expr, $pattern:pat => $field:expr, $this:ident => $value:expr) => {
         impl OptionField for $ty {
             const KIND: Kind = $kind;
             fn from_value(value: Value) -> Result<Self, Problem> {
@@ -509,14 +576,11 @@ macro_rules! field {
                 let $this = self;
                 $value
             }
-            $(fn default_word() -> Option<String> {
-                Some($word.to_owned())
-            })?
         }
     };
 }
 
-field!(bool, Kind::Flag, Value::Flag(b) => b, b => b.then_some(Value::Flag(true)), default "false");
+field!(bool, Kind::Flag, Value::Flag(b) => b, b => Some(Value::Flag(*b)));
 // Unset, or a switch given either way (`keep_arc_length=False` turns a settings file's on off).
 field!(Option<bool>, Kind::Flag, Value::Flag(b) => Some(b), b => b.map(Value::Flag));
 field!(Option<f64>, Kind::Number, Value::Number(v) => Some(v), v => v.map(Value::Number));
@@ -587,11 +651,7 @@ macro_rules! word_option {
                 }
             }
             fn to_value(&self) -> Option<$crate::options::Value> {
-                let default = <$ty as Default>::default();
-                (*self != default).then(|| $crate::options::Value::Text($crate::options::Word::word(self)))
-            }
-            fn default_word() -> Option<String> {
-                Some($crate::options::Word::word(&<$ty as Default>::default()))
+                Some($crate::options::Value::Text($crate::options::Word::word(self)))
             }
         }
         impl $crate::options::OptionField for Option<$ty> {
@@ -637,10 +697,7 @@ macro_rules! text_option {
                     .map(Option::unwrap_or_default)
             }
             fn to_value(&self) -> Option<$crate::options::Value> {
-                (*self != <$ty as Default>::default()).then(|| $crate::options::Value::Text(self.to_string()))
-            }
-            fn default_word() -> Option<String> {
-                Some(<$ty as Default>::default().to_string())
+                Some($crate::options::Value::Text(self.to_string()))
             }
         }
     };
@@ -952,5 +1009,41 @@ mod tests {
         o.set(size, size.parse("640x480").unwrap()).unwrap();
         assert_eq!(o.size, Some([640.0, 480.0]));
         assert_eq!(o.header(), "--size 640x480");
+    }
+
+    /// Every job's error reaches a front end one way (issue 40: four `failed` functions in
+    /// Python, four in the CLI): the message spelled, each cause not already said, and the file
+    /// the system refused.
+    #[test]
+    fn a_jobs_failure_says_its_causes_once_and_names_the_refused_file() {
+        #[derive(Debug, thiserror::Error)]
+        enum Failed {
+            #[error("reading layer.png")]
+            Read(#[source] std::io::Error),
+            #[error("settings: {0}")]
+            Said(#[source] OptionError),
+        }
+        impl JobFailure for Failed {
+            fn spelled(&self, spelling: Spelling) -> String {
+                match self {
+                    Failed::Said(e) => format!("settings: {}", e.spelled(spelling)),
+                    e => e.to_string(),
+                }
+            }
+        }
+        let denied = || std::io::Error::new(std::io::ErrorKind::PermissionDenied, "denied");
+        let read = Failed::Read(denied());
+        assert_eq!(
+            (read.said(Spelling::Keyword), read.io_failed()),
+            ("reading layer.png: denied".into(), true)
+        );
+        let range = Range::new(0.0, 1.0, "");
+        let option = OptionError { option: "purge_mm", problem: Problem::OutOfRange { value: 2.0, range } };
+        let said = Failed::Said(option);
+        assert_eq!(said.said(Spelling::Flag), "settings: --purge-mm 2 is out of range: 0 to 1");
+        assert!(!said.io_failed() && said.refused_file().is_none());
+        let engine = crate::Error::io(Path::new("/x/part.gcode"), denied());
+        let (path, source) = engine.refused_file().unwrap();
+        assert_eq!((path, source.kind()), (Path::new("/x/part.gcode"), std::io::ErrorKind::PermissionDenied));
     }
 }

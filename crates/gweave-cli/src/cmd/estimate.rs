@@ -6,7 +6,6 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::options::Spelling;
 use gweave_sim::reading::{self, EstimateOptions};
 use gweave_sim::EstimateReport;
 
@@ -41,7 +40,7 @@ pub fn run(args: EstimateArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let estimated = reading::estimate(&args.options, &args.input, args.report.quiet.bar())
-        .map_err(|e| crate::options::failed_with(e.spelled(Spelling::Flag), e))?;
+        .map_err(crate::options::failed)?;
     let report = estimated.report;
     if let Some(used) = estimated.slicer_settings {
         eprintln!("{}: {}", report.machine, used.join(", "));

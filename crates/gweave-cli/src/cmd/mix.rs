@@ -109,6 +109,7 @@ pub fn run(args: MixArgs) -> Result<ExitCode> {
             }
             None => super::mix_colour::card(
                 &profile,
+                &args.options,
                 out,
                 &args.out.format.target(out)?,
                 args.card_png.as_deref(),

@@ -1,19 +1,20 @@
 //! `gweave mix`'s colour tools: `--predict`, `--calibration-card`, `--fit` (see `docs/mix.md`).
 
-use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
 
 use anyhow::{anyhow, bail, Result};
 use gweave::colour::fit::{fit, parse_csv, FitError};
 use gweave::colour::predict::{parse_ratios, predict, Prediction};
-use gweave::post::mix::card::{calibration_card, card_mixes, fitted_profile_toml};
+use gweave::post::mix::card::{card_mixes, fitted_profile_toml};
 use gweave::post::mix::profile::MixProfile;
 use gweave::render::card::card_png;
 use gweave::render::MixColours;
-use gweave::{Output, Target};
+use gweave::{MixOptions, Target};
+use gweave_sim::transform::calibration_card;
 
 use crate::common::{print_summary, read_text, write_bytes, ReportArgs};
+use crate::options::failed;
 
 /// `--predict C:M:Y:W ...`: each mix's predicted colour, with the profile's filaments.
 pub fn predict_all(profile: &MixProfile, mixes: &[String], report: &ReportArgs) -> Result<ExitCode> {
@@ -36,12 +37,13 @@ pub fn predict_all(profile: &MixProfile, mixes: &[String], report: &ReportArgs) 
 /// Size of `--card-png`'s picture, px (a preview's default).
 const CARD_PICTURE_PX: [u32; 2] = [1200, 900];
 
-/// `--calibration-card -o card.gcode [--report card.json] [--card-png card.png]`.
-/// The card is written as every G-code gweave makes: the `; gweave` header, and the metadata
-/// footer (filament, time) a slicer would write.
-/// With `picture`, the card's picture is drawn from the file written (numbered swatches).
+/// `--calibration-card -o card.gcode [--report card.json] [--card-png card.png]`: the card is
+/// written by the library's job (`gweave_sim::transform::calibration_card`, its header from
+/// `options`). With `picture`, the card's picture is drawn from the file written (numbered
+/// swatches).
 pub fn card(
     profile: &MixProfile,
+    options: &MixOptions,
     output: &Path,
     target: &Target,
     picture: Option<&Path>,
@@ -50,12 +52,7 @@ pub fn card(
     if picture.is_some() && target.is_stdout() {
         bail!("--card-png draws the card from its file: give -o FILE, not -");
     }
-    let (gcode, card) = calibration_card(profile)?;
-    crate::finish::with_metadata(None, target, |t| {
-        let mut out = Output::create(t, None)?;
-        out.write_all(&gcode)?;
-        Ok(out.commit()?)
-    })?;
+    let card = calibration_card(profile, options, target).map_err(failed)?;
     if let Some(png) = picture {
         let mix = MixColours::from_profile(profile)?;
         let bytes = card_png(output, &card.swatches, mix, &profile.card, CARD_PICTURE_PX)?;

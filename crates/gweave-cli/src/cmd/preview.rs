@@ -6,7 +6,6 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use gweave::options::Spelling;
 use gweave::render::job;
 use gweave::PreviewOptions;
 use gweave::PreviewReport;
@@ -62,7 +61,7 @@ pub fn run(args: PreviewArgs) -> Result<ExitCode> {
     args.report.refuse_json_with_stdout(to_stdout)?;
     let mut bar = args.report.quiet.bar();
     let preview = job::preview(o, &args.input, Some(&args.output), args.lenient.strictness(), &mut bar)
-        .map_err(|e| crate::options::failed_with(e.spelled(Spelling::Flag), e))?;
+        .map_err(crate::options::failed)?;
     drop(bar);
     if to_stdout {
         print_summary(|out| out.write_all(&preview.bytes))?;

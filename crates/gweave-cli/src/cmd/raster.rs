@@ -8,13 +8,12 @@ use anyhow::Result;
 use clap::Args;
 use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster_job::JobReport;
-use gweave::options::Spelling;
 use gweave::RasterOptions;
-use gweave_sim::raster_job::{Raster, RasterJobError, Written};
+use gweave_sim::raster_job::{Raster, Written};
 
 use crate::common::{hms, print_summary, ReportArgs};
 use crate::files::Files;
-use crate::options::{failed_with, Options};
+use crate::options::{failed, Options};
 
 /// Layer images to inkjet G-code for binder jetting: bands as tall as the nozzle row, per
 /// inked column `G1 X`, `M400`, `M700 P<head> S<bits>` (Marlin hpc6602) or `M578` (RepRapFirmware).
@@ -36,11 +35,6 @@ pub struct RasterArgs {
     pub options: Options<RasterOptions>,
     #[command(flatten)]
     pub report: ReportArgs,
-}
-
-/// A raster job's failure as the CLI says it: an option named by its flag.
-fn failed(e: RasterJobError) -> anyhow::Error {
-    failed_with(e.spelled(Spelling::Flag), e)
 }
 
 pub fn run(args: RasterArgs) -> Result<ExitCode> {

@@ -8,7 +8,6 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use gweave::gcode::layers::Feature;
-use gweave::options::Spelling;
 use gweave_sim::reading::{self, SimOptions};
 use gweave_sim::CoreReport;
 use gweave_sim::HeaterId;
@@ -47,8 +46,7 @@ pub fn run(args: SimArgs) -> Result<ExitCode> {
         .write("--report", args.report.report.as_deref())
         .check()?;
     let mut bar = args.report.quiet.bar();
-    let simulation = reading::sim(o, &args.input, &mut bar)
-        .map_err(|e| crate::options::failed_with(e.spelled(Spelling::Flag), e))?;
+    let simulation = reading::sim(o, &args.input, &mut bar).map_err(crate::options::failed)?;
     drop(bar);
     match &simulation {
         Simulation::Marlin { report, errors, .. } => {

@@ -483,39 +483,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 # read and checked as the CLI reads its flags; every default, check and computation is the Rust
 # library's (the same as `gweave rotary ... --json`).
 
-def _axes(axes: Optional[Sequence[str]]) -> Optional[Tuple[str, str, str]]:
-    """``axes`` as the three letters (axial, rotary, radial): ``"X,A,Z"`` or a sequence."""
-    if axes is None:
-        return None
-    letters = tuple(axes.split(",") if isinstance(axes, str) else axes)
-    if len(letters) != 3:
-        raise ValueError("axes: three letters, axial, rotary, radial (e.g. 'X,A,Z')")
-    axial, rotary, radial = letters
-    return (axial, rotary, radial)
-
-
-_UNITS = {"deg": "degrees", "degrees": "degrees", "mm": "mm"}
-
-
-def _machine(
-    mandrel_diameter: Optional[float],
-    feed_convention: Optional[str],
-    rotary_unit: Optional[str],
-    axes: Optional[Sequence[str]],
-) -> Report:
-    """The ``[machine]`` table of :func:`write_helical_paths`'s settings (the commands take
-    the keywords themselves)."""
-    machine: Dict[str, Any] = {
-        "mandrel_diameter_mm": mandrel_diameter,
-        "feed_convention": feed_convention,
-        "rotary_unit": None if rotary_unit is None else _UNITS.get(rotary_unit, rotary_unit),
-    }
-    letters = _axes(axes)
-    if letters is not None:
-        machine.update(axial_axis=letters[0], rotary_axis=letters[1], radial_axis=letters[2])
-    return machine
-
-
 def rotary_wrap(
     input: PathLike,
     output: Optional[PathLike] = None,
@@ -540,7 +507,7 @@ def rotary_wrap(
 
     Flat X runs along the mandrel, Y around it (``theta = 360*y/(pi*D)``), Z away from it
     (radius ``D/2 + z``). ``mandrel_diameter`` in mm; ``feed_convention`` is ``"nist"``, ``"combined"`` or
-    ``"inverse-time"``; ``rotary_unit`` ``"deg"`` or ``"mm"``; ``axes`` like ``"X,A,Z"``;
+    ``"inverse-time"``; ``rotary_unit`` ``"deg"`` or ``"mm"``; ``axes`` like ``"X,A,Z"`` or ``"XAZ"`` (read as ``--axes`` is) or a sequence of three letters;
     ``keep_arc_length=True`` keeps flat arc lengths (``False`` turns the config's off);
     ``seam_rotation`` degrees per layer; ``helical=True`` winds each layer as one turn of a helix
     (no weld line); ``allow_overlap=True`` wraps a part wider than the circumference over itself;
@@ -551,7 +518,6 @@ def rotary_wrap(
     read-only file). Returns the report (per-layer radius, angles swept, seam angle; filament;
     time).
     """
-    axes = _axes(axes)
     return _job(_gweave.rotary_wrap_json, locals(), ("input", "output"))
 
 
@@ -588,7 +554,6 @@ def rotary_tube(
     the tube. Returns the report (per-layer radius, handedness, turns, spindle speed; filament
     and its volume against the wall volume; time).
     """
-    axes = _axes(axes)
     return _job(_gweave.rotary_tube_json, locals(), ("output",))
 
 
@@ -621,7 +586,6 @@ def write_helical_paths(
         gweave.write_helical_paths([cone], "cone.gcode", mandrel_diameter=20)
     """
     settings = {
-        "machine": _machine(mandrel_diameter, feed_convention, rotary_unit, axes),
         "print": {
             "layer_height_mm": layer_height,
             "bead_width_mm": bead_width,
@@ -633,6 +597,13 @@ def write_helical_paths(
         },
     }
     text = _gweave.write_helical_paths_json(
-        list(paths), _path(output, "output"), settings=json.dumps(settings), config=_opt_path(config, "config")
+        list(paths),
+        _path(output, "output"),
+        settings=json.dumps(settings),
+        config=_opt_path(config, "config"),
+        mandrel_diameter=mandrel_diameter,
+        feed_convention=feed_convention,
+        rotary_unit=rotary_unit,
+        axes=axes,
     )
     return json.loads(text)

@@ -21,9 +21,8 @@ use std::path::{Path, PathBuf};
 use gweave::gcode::container;
 use gweave::gcode::ends::{missing_footer, read_ends, Footer};
 use gweave::gcode::scratch::ScratchFile;
-use gweave::pass::Strictness;
 use gweave::post::metadata::{earlier_runs, header_line, write_footer, Figures, MetadataPass};
-use gweave::{Output, Target};
+use gweave::{Output, Strictness, Target};
 
 use crate::motion::estimate::EstimateError;
 
@@ -71,7 +70,7 @@ pub enum FinishError {
 /// output would look whole to a host and print a part of the object. A lenient run, asked to
 /// copy what is malformed through, writes it. The whole file is read only when the ends
 /// already say it is cut, to name the line and column where its text stops.
-pub fn refuse_cut_input(input: &Path, strictness: Strictness) -> Result<()> {
+pub(crate) fn refuse_cut_input(input: &Path, strictness: Strictness) -> Result<()> {
     if strictness == Strictness::Lenient {
         return Ok(());
     }

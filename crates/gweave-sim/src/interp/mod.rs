@@ -166,11 +166,7 @@ impl Machine {
     pub fn new(profile: MachineProfile) -> Result<Machine, SimError> {
         let mut profile = profile;
         profile.normalize()?;
-        let mut core = Estimator::new(&profile.motion)?;
-        core.tool_changes(ToolChange::of(&profile));
-        if let Some(ink) = &profile.inkjet {
-            core.fires(FireWait::of(&ink.printhead));
-        }
+        let core = Estimator::for_machine(&profile, true)?;
         let thermal = Thermal::new(profile.thermal.clone())?;
         let inkjet = match &profile.inkjet {
             None => None,

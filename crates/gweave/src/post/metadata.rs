@@ -40,7 +40,7 @@ const HEADER_SEARCH_LINES: usize = 200;
 const HEADER_SEARCH_BYTES: u64 = 256 * 1024;
 
 /// The header line for a run of `command_line` (the command and the options that shape its
-/// output, as typed).
+/// output, written from the job's options value).
 pub fn header_line(command_line: &str) -> String {
     format!("{HEADER_START}{} {command_line}{HEADER_END}", env!("CARGO_PKG_VERSION"))
 }

@@ -15,7 +15,9 @@ use super::{
 };
 use crate::colour::Srgb8;
 use crate::gen::printhead::PrintheadProfile;
-use crate::options::{whole, JobOptions, Kind, OptionError, OptionField, Problem, Shape, Spelling, Value};
+use crate::options::{
+    whole, JobFailure, JobOptions, Kind, OptionError, OptionField, Problem, Shape, Spelling, Value,
+};
 use crate::pass::{Progress, Strictness};
 use crate::post::mix::profile::MixProfile;
 use crate::range::{Range, LAYER_NUMBER};
@@ -102,12 +104,7 @@ impl OptionField for PictureSize {
         }
     }
     fn to_value(&self) -> Option<Value> {
-        let numbers = vec![f64::from(self.width_px), f64::from(self.height_px)];
-        (*self != PictureSize::default()).then_some(Value::Numbers(numbers))
-    }
-    fn default_word() -> Option<String> {
-        let PictureSize { width_px, height_px } = PictureSize::default();
-        Some(format!("{width_px}x{height_px}"))
+        Some(Value::Numbers(vec![f64::from(self.width_px), f64::from(self.height_px)]))
     }
 }
 
@@ -163,12 +160,21 @@ pub enum PreviewJobError {
     Write(crate::Error),
 }
 
-impl PreviewJobError {
+impl JobFailure for PreviewJobError {
     /// The message, an option named as `spelling` names it (`--layer`, `layer`).
-    pub fn spelled(&self, spelling: Spelling) -> String {
+    fn spelled(&self, spelling: Spelling) -> String {
         match self {
             PreviewJobError::Option(e) => e.spelled(spelling),
             e => e.to_string(),
+        }
+    }
+
+    fn refused_file(&self) -> Option<(&Path, &std::io::Error)> {
+        match self {
+            PreviewJobError::Read(e)
+            | PreviewJobError::Write(e)
+            | PreviewJobError::Render(RenderError::Gcode(e)) => e.refused_file(),
+            _ => None,
         }
     }
 }

@@ -132,7 +132,7 @@ impl MachineOptions {
     }
 
     /// Lays the options over a machine.
-    fn apply(&self, machine: &mut RotaryConfig) {
+    pub fn apply(&self, machine: &mut RotaryConfig) {
         if let Some(d) = self.mandrel_diameter {
             machine.mandrel_diameter_mm = d;
         }

@@ -60,6 +60,7 @@ use crate::motion::limits::{MotionProfile, ProfileError};
 use crate::motion::planner::PositionSet;
 use crate::motion::speed_trace::SpeedTrace;
 use crate::motion::stepper::{StepTotals, Steppers};
+use crate::profile::MachineProfile;
 
 mod back;
 mod front;
@@ -236,6 +237,20 @@ impl Estimator {
     /// (what a transform's metadata needs).
     pub fn timing_only(profile: &MotionProfile) -> Result<Self, EstimateError> {
         Self::with_steps(profile, false)
+    }
+
+    /// An estimator for `machine` as its firmware runs it: its motion, each tool change waiting
+    /// for the queued moves as the firmware makes it wait ([`ToolChange::of`]), and, on a
+    /// machine with a printhead, the wait after each fire (`FireWait::of`); stepping the
+    /// motors if `count_steps`. The lines are read as Marlin reads them until
+    /// [`Estimator::read_as`] says otherwise.
+    pub fn for_machine(machine: &MachineProfile, count_steps: bool) -> Result<Self, EstimateError> {
+        let mut est = Self::with_steps(&machine.motion, count_steps)?;
+        est.tool_changes(ToolChange::of(machine));
+        if let Some(ink) = &machine.inkjet {
+            est.fires(FireWait::of(&ink.printhead));
+        }
+        Ok(est)
     }
 
     /// An estimator that steps the motors (`count_steps`) or only keeps time, which is faster.
@@ -495,43 +510,20 @@ const BATCHES_IN_FLIGHT: usize = 4;
 /// result is the same, to the bit, as feeding every line to one [`Estimator`] (the plan side
 /// sees the same jobs in the same order); the memory is bounded by the read buffer and the
 /// batches in flight.
-/// The lines are read as Marlin reads them; `estimate_as` reads them as another firmware does.
+/// The lines are read as Marlin reads them; `estimate_report` runs an estimator set up otherwise
+/// ([`Estimator::for_machine`], [`Estimator::read_as`]).
 pub fn estimate<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    estimate_as(input, profile, Firmware::Marlin, true, None, None, ToolChange::Select)
-}
-
-/// [`estimate`] with the lines read as `firmware` reads them (a file's: see
-/// [`gweave::gcode::flavour::read_firmware`]), counting steps if asked (without, up to a fifth
-/// faster), the waits after a printhead's fires if the machine has one, the F words of a
-/// rotary program as its header declares them ([`Estimator::declare_rotary`]), and the waits at
-/// a tool change as the machine's firmware makes them ([`Estimator::tool_changes`]).
-pub(crate) fn estimate_as<R: Read + Send>(
-    input: R,
-    profile: &MotionProfile,
-    firmware: Firmware,
-    count_steps: bool,
-    fire: Option<FireWait>,
-    rotary: Option<RotaryConfig>,
-    tool_change: ToolChange,
-) -> Result<Estimate, EstimateError> {
-    let mut estimator = Estimator::with_steps(profile, count_steps)?;
-    estimator.read_as(firmware);
-    estimator.tool_changes(tool_change);
-    if let Some(fire) = fire {
-        estimator.fires(fire);
-    }
-    if let Some(rotary) = rotary {
-        estimator.declare_rotary(rotary);
-    }
-    on_threads(input, estimator)
+    estimate_on(input, Estimator::new(profile)?)
 }
 
 /// [`estimate`] without the step counts (all zero), up to a fifth faster.
 pub fn estimate_time<R: Read + Send>(input: R, profile: &MotionProfile) -> Result<Estimate, EstimateError> {
-    estimate_as(input, profile, Firmware::Marlin, false, None, None, ToolChange::Select)
+    estimate_on(input, Estimator::timing_only(profile)?)
 }
 
-fn on_threads<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
+/// [`estimate`] on `estimator`, set up and fed no line yet (its firmware, the machine's tool
+/// changes and fires, a rotary program's feed: see `estimate_report`).
+pub(crate) fn estimate_on<R: Read + Send>(input: R, estimator: Estimator) -> Result<Estimate, EstimateError> {
     let Estimator { mut front, mut back, jobs } = estimator;
     debug_assert!(jobs.is_empty());
     let (to_back, batches) = mpsc::sync_channel::<Vec<Job>>(BATCHES_IN_FLIGHT);
@@ -678,16 +670,11 @@ mod tests {
         let fire = FireWait { wait_s: 800e-6, heads: 2 };
         let dwell_s = |text: &str| {
             let threaded = |fire: Option<FireWait>| {
-                estimate_as(
-                    text.as_bytes(),
-                    &MotionProfile::default(),
-                    Firmware::Marlin,
-                    false,
-                    fire,
-                    None,
-                    ToolChange::Select,
-                )
-                .unwrap()
+                let mut est = Estimator::timing_only(&MotionProfile::default()).unwrap();
+                if let Some(fire) = fire {
+                    est.fires(fire);
+                }
+                estimate_on(text.as_bytes(), est).unwrap()
             };
             assert_eq!(threaded(None).dwell_s, 0.0, "{text}: no printhead, no wait");
             let mut est = Estimator::new(&MotionProfile::default()).unwrap();

@@ -9,8 +9,7 @@ use gweave::rotary::cylinder::RotaryConfig;
 use gweave::{Firmware, Progress};
 use serde::Serialize;
 
-use super::{estimate_as, Estimate, EstimateError, ToolChange};
-use crate::inkjet::FireWait;
+use super::{estimate_on, Estimate, EstimateError, Estimator};
 use crate::motion::limits::CornerMode;
 use crate::profile::MachineProfile;
 
@@ -39,10 +38,13 @@ pub fn estimate_report<R: Read + Send>(
     firmware: Firmware,
     count_steps: bool,
 ) -> Result<EstimateReport, EstimateError> {
-    let fire = machine.inkjet.as_ref().map(|ink| FireWait::of(&ink.printhead));
+    let mut estimator = Estimator::for_machine(machine, count_steps)?;
+    estimator.read_as(firmware);
     let (rotary, input) = RotaryConfig::from_stream_head(input)?;
-    let tool_change = ToolChange::of(machine);
-    let estimate = estimate_as(input, &machine.motion, firmware, count_steps, fire, rotary, tool_change)?;
+    if let Some(rotary) = rotary {
+        estimator.declare_rotary(rotary);
+    }
+    let estimate = estimate_on(input, estimator)?;
     let planner = match machine.motion.corners {
         CornerMode::Klipper(_) => "klipper",
         CornerMode::Marlin { .. } => "marlin",

@@ -14,11 +14,11 @@ use serde::Serialize;
 
 use super::bitmap::{load_image, Bitmap, BitmapError, ThresholdOptions};
 use super::printhead::{PrintheadError, PrintheadProfile};
-use super::raster::{test_pattern, RasterConfig, RasterError, RasterReport, RasterWriter, HEADS, THRESHOLD};
+use super::raster::{test_pattern, RasterConfig, RasterError, RasterReport, RasterWriter};
 use super::sl1::{Sl1Error, Sl1Reader};
 use crate::gcode::writer::{Output, Target};
+use crate::options::{JobOptions, OptionError};
 use crate::pass::Progress;
-use crate::range::{OutOfRange, DPI, PIXEL_MM};
 
 /// Any error, boxed: what a [`LineTimer`] (a planner outside the engine) fails with.
 pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
@@ -66,9 +66,9 @@ pub enum JobError {
     /// The printhead profile is invalid.
     #[error(transparent)]
     Printhead(#[from] PrintheadError),
-    /// A number outside its range.
+    /// An option's value out of its declared range, or given with one it excludes.
     #[error(transparent)]
-    Range(#[from] OutOfRange),
+    Option(#[from] OptionError),
     /// The output (or a settings file) failed.
     #[error(transparent)]
     Engine(#[from] crate::Error),
@@ -139,7 +139,8 @@ pub struct TimeEstimate {
 /// What a job did.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct JobReport {
-    /// The file written, `-` for standard output.
+    /// The file written, `-` for standard output: named by the caller that finishes the output
+    /// (`gweave_sim::raster_job`, from the file it wrote), empty until then.
     pub output: String,
     /// Heads that printed.
     pub heads: usize,
@@ -225,17 +226,12 @@ impl Job {
         planner: impl FnOnce() -> std::result::Result<Box<dyn LineTimer + 't>, BoxError>,
     ) -> Result<JobReport> {
         let mut out = Output::create(target, None)?;
-        // Under `finish::with_metadata` the target is its scratch file: the output it stands
-        // for is named.
-        let output = out.dest().map_or_else(|| "-".into(), |p| p.display().to_string());
-        let mut report = self.run_into(&mut out, progress, planner)?;
+        let report = self.run_into(&mut out, progress, planner)?;
         out.commit()?;
-        report.output = output;
         Ok(report)
     }
 
-    /// [`Job::run`] into `out`, which the caller opened and commits (the report's `output` is
-    /// left empty for it to name).
+    /// [`Job::run`] into `out`, which the caller opened and commits.
     pub fn run_into<'t>(
         &self,
         out: &mut dyn Write,
@@ -474,31 +470,19 @@ impl Setup {
         Ok(c)
     }
 
-    /// Resolves the inputs and builds the job.
+    /// Checks the options as declared ([`JobOptions::check`]: each number within its range,
+    /// `pixel_mm` and `dpi` not both), resolves the inputs and builds the job.
     pub fn job(&self) -> Result<Job> {
+        self.options.check()?;
         let (source, heads) = self.source()?;
         self.job_from(source, heads)
     }
 
     /// Resolves the inputs (lists folders and globs, reads no image) into the layer source and
-    /// the heads it needs, so that a caller can check the files before any is read. The
-    /// numbers are checked first, for options made in code rather than read as a front end
-    /// reads them ([`crate::options::JobOptions::set`]).
+    /// the heads it needs, so that a caller can check the files before any is read. The options
+    /// are the caller's to check first ([`JobOptions::check`]), as [`Setup::job`] does.
     pub fn source(&self) -> Result<(Source, usize)> {
         let o = &self.options;
-        if o.pixel_mm.is_some() && o.dpi.is_some() {
-            invalid!("give the image resolution once: pixel size or dpi");
-        }
-        if let Some(px) = o.pixel_mm {
-            PIXEL_MM.check("pixel_mm", px)?;
-        }
-        if let Some(dpi) = o.dpi {
-            DPI.check("dpi", dpi)?;
-        }
-        if let Some(heads) = o.heads {
-            HEADS.check("heads", heads)?;
-        }
-        THRESHOLD.check("threshold", o.threshold)?;
         let spec = InputSpec {
             inputs: self.inputs.clone(),
             heads: self.heads(),
