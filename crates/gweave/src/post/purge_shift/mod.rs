@@ -35,6 +35,9 @@
 //!   after the change in a purge block (`block`) or on a small tower beside the part (`tower`),
 //!   returning to the exact position (the `fallback` module).
 //!
+//! - A file sliced for a nozzle per tool (a dual extruder) is refused: there is nothing to purge,
+//!   and a moved change would print before the new nozzle is heated (the `nozzles` module).
+//!
 //! ## Bounded memory
 //! The pass streams. It holds back only the lines a later change could still be moved before:
 //! a line is written out as soon as the positive extrusion held after it reaches the largest purge
@@ -55,6 +58,7 @@
 mod checks;
 pub(crate) mod config;
 mod fallback;
+mod nozzles;
 mod options;
 pub mod report;
 mod split;
@@ -65,6 +69,7 @@ use std::io::{self, Write};
 use std::path::Path;
 
 pub use config::{ConfigError, Fallback, PurgeShiftConfig, Rules, TowerConfig};
+pub use nozzles::SeparateNozzles;
 pub use options::PurgeShiftOptions;
 pub use report::{ChangeReport, PurgeShiftReport, RetractionMove, SplitPoint};
 
@@ -83,6 +88,7 @@ use crate::run::IN_MEMORY;
 use crate::run::{Ran, Run, Source};
 use checks::{require_markers, FeatureComments};
 use fallback::{write_fallback, Spot, Surroundings};
+use nozzles::Nozzles;
 use split::{split, Splittable};
 use tool_retraction::{write_bracket, Bracket, EWord, Feeds, ToolRetractions};
 
@@ -180,6 +186,8 @@ pub struct PurgeShift {
     /// The file's E (file units) a `G92 E` must put back before the next line that reads E,
     /// after an E-only move was taken out in absolute E.
     e_reset: Option<f64>,
+    /// The evidence of a nozzle per tool, which the pass refuses (the nozzles module).
+    nozzles: Nozzles,
 }
 
 impl PurgeShift {
@@ -217,6 +225,7 @@ impl PurgeShift {
             group_parked_mm: 0.0,
             owed_mm: 0.0,
             e_reset: None,
+            nozzles: Nozzles::default(),
         }
     }
 
@@ -670,6 +679,7 @@ impl Pass for PurgeShift {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
+        self.nozzles.line(ctx.block, ctx.line.number).map_err(PassError::refuse)?;
         self.env.follow_retraction(ctx.effect);
         self.line_retracted_mm = self.tools.in_force_mm();
         self.tools.follow(ctx.state.tool, ctx.effect);
@@ -691,6 +701,7 @@ impl Pass for PurgeShift {
                 self.group_retracted_mm = self.line_retracted_mm;
             }
             self.group_parked_mm = self.tools.in_force_mm();
+            self.nozzles.tool_change(self.colour.tool, ctx.state.tool).map_err(PassError::refuse)?;
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
             self.group.extend(tail);
@@ -787,13 +798,13 @@ impl Pass for PurgeShift {
 pub fn purge_shift(rules: Rules, run: Run<'_>) -> Result<(PurgeShiftReport, Ran)> {
     let mut run = run.writes_e();
     run.flavour()?;
-    match run.source() {
+    let nozzles = match run.source() {
         Source::File(path) => {
             let ends = crate::gcode::ends::read_ends(path).map_err(|e| crate::Error::io(path, e))?;
-            checks::refuse_wipe_tower(&ends, path)?;
+            nozzles::ends_checks(&ends, path)?
         }
-        Source::Text(text) => checks::refuse_wipe_tower(text, Path::new(IN_MEMORY))?,
-    }
+        Source::Text(text) => nozzles::ends_checks(text, Path::new(IN_MEMORY))?,
+    };
     if rules.markers().begin.is_some() {
         match run.source() {
             Source::File(path) => {
@@ -804,6 +815,7 @@ pub fn purge_shift(rules: Rules, run: Run<'_>) -> Result<(PurgeShiftReport, Ran)
         }
     }
     let mut pass = PurgeShift::new(rules);
+    pass.nozzles = nozzles;
     let ran = run.options(pass.state_options()).run(&mut pass)?;
     Ok((pass.into_report(), ran))
 }
