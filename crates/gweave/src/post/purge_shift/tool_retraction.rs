@@ -131,7 +131,8 @@ impl Bracket {
 /// The lines of a bracket at `spot`: the old tool's feed `old_mm` (before the change lines) and
 /// the new tool's `new_mm` (after them), as E-only moves at `feed_mm_min` in the file's E mode
 /// and units, the second part ending with the E (absolute E: a `G92 E` when the feeds do not add
-/// up to nothing) and the feed rate the file has at `spot` restored. `\n`-terminated lines;
+/// up to nothing) and the feed rate the file has at `spot` restored (unless it is `feed_mm_min`
+/// in G1 already). `\n`-terminated lines;
 /// nothing when both feeds are below a micrometre.
 pub(crate) fn write_bracket(spot: &Spot, old_mm: f64, new_mm: f64, feed_mm_min: f64) -> [Vec<u8>; 2] {
     let mut parts = [Vec::new(), Vec::new()];
@@ -160,7 +161,10 @@ pub(crate) fn write_bracket(spot: &Spot, old_mm: f64, new_mm: f64, feed_mm_min: 
     if !start.relative_e && (old_mm + new_mm).abs() >= EPS_MM {
         write_e_reset(out, start.pos[3] / unit);
     }
-    write_feed(out, spot);
+    // The moves set `feed_mm_min` in G1: if that is what the file has in force, it stays.
+    if start.rapid_mode || start.feed_mm_min != feed_mm_min {
+        write_feed(out, spot);
+    }
     parts
 }
 
@@ -427,6 +431,32 @@ mod tests {
         // Nothing E-only to take out (a lift-and-retract), a tool never used: the new tool
         // feeds back where the change was what the moved lines retracted.
         assert_eq!(Bracket::new(0.0, 10.0, 0.0, 0.0), b(-10.0, 0.0, 10.0, 0.0, 0.0));
+    }
+
+    /// Regression: the feed rate was restored after the inserted moves even when they had just
+    /// set it (`G1 E-10 F2400`, then `G1 F2400`, after a slicer's own retraction at F2400).
+    #[test]
+    fn the_feed_rate_is_restored_only_when_the_moves_changed_it() {
+        use crate::post::purge_block::PurgeStart;
+        let spot = |feed_mm_min, rapid_mode| Spot {
+            start: PurgeStart {
+                pos: [0.0, 0.0, 0.2, 5.0],
+                absolute_xyz: true,
+                relative_e: true,
+                feed_mm_min,
+                rapid_mode,
+                retracted_mm: 0.0,
+            },
+            inches: false,
+        };
+        let text = |parts: [Vec<u8>; 2]| parts.map(|p| String::from_utf8(p).unwrap());
+        assert_eq!(text(write_bracket(&spot(2400.0, false), 0.0, 10.0, 2400.0)), ["", "G1 E10 F2400\n"]);
+        assert_eq!(
+            text(write_bracket(&spot(1800.0, false), -10.0, 10.0, 2400.0)),
+            ["G1 E-10 F2400\n", "G1 E10 F2400\nG1 F1800\n"]
+        );
+        // G0 modal in the file: the mode is put back, with its feed rate.
+        assert_eq!(text(write_bracket(&spot(2400.0, true), 0.0, 10.0, 2400.0)), ["", "G1 E10 F2400\nG0 F2400\n"]);
     }
 
     #[test]
