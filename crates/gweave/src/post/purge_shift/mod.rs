@@ -686,7 +686,6 @@ impl Pass for PurgeShift {
         if let Effect::Move(m) = ctx.effect {
             self.env.observe(m, in_print);
         }
-        let feeds = Feeds::of(ctx);
         if is_change_line(ctx.block) {
             if self.owed_mm > 0.0 {
                 self.settle_owed(ctx, out)?;
@@ -717,11 +716,11 @@ impl Pass for PurgeShift {
             }
             self.close_group(out)?;
         }
-        if self.owed_mm > 0.0 && self.absorb(ctx, out, feeds)? {
+        if self.owed_mm > 0.0 && self.absorb(ctx, out, Feeds::of(ctx))? {
             return Ok(Flow::Continue);
         }
         if self.e_reset.is_some() {
-            let reset = self.owed_e_reset(feeds.e_word);
+            let reset = self.owed_e_reset(EWord::of(ctx.block));
             self.hold_text(out, &reset, &ctx.line, 0.0)?;
         }
         if !in_print {
@@ -768,7 +767,8 @@ impl Pass for PurgeShift {
             _ => Kind::Other,
         };
         let owned = self.own(&ctx.line);
-        let held = self.held(owned, kind, structure.layer, structure.feature, feeds);
+        // What the line feeds is read only for a line held back (not for one written at once).
+        let held = self.held(owned, kind, structure.layer, structure.feature, Feeds::of(ctx));
         self.push(out, held)?;
         Ok(Flow::Continue)
     }
