@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # purge-shift end to end: the CLI as a PrusaSlicer post-processing script (in place, file name
 # last), the JSON report, the config file, the block fallback through the virtual printer, and
-# the refusal of unknown fallbacks.
+# the refusal of unknown fallbacks and of a file for a nozzle per tool.
 # Gets GWEAVE, PYGWEAVE, DATA, WORK from run.sh.
 set -euo pipefail
 
@@ -42,7 +42,10 @@ from = 1
 to = 0
 purge_mm = 1.0
 TOML
-"$GWEAVE" purge-shift "$DATA/cura/cura_dual.gcode" -o "$WORK/dual.gcode" -c "$WORK/purge.toml" --json -q \
+#    Cura's dual file as for one nozzle (its temperatures for named tools made comments, as
+#    `gweave mix` does): purge-shift refuses a nozzle per tool (6.).
+sed -E 's/^(M10[49] T)/;\1/' "$DATA/cura/cura_dual.gcode" > "$WORK/dual_one_nozzle.gcode"
+"$GWEAVE" purge-shift "$WORK/dual_one_nozzle.gcode" -o "$WORK/dual.gcode" -c "$WORK/purge.toml" --json -q \
   2> /dev/null > "$WORK/dual.json"
 python3 - "$WORK/dual.json" <<'PY'
 import json, sys
@@ -91,3 +94,14 @@ if "$GWEAVE" purge-shift "$DATA/cura/cura_dual.gcode" -o "$WORK/x.gcode" --purge
 fi
 grep -q 'unknown fallback "wipe" (known: partial, block, tower)' "$WORK/err" || { echo "error text: $(cat "$WORK/err")"; exit 1; }
 [ ! -e "$WORK/x.gcode" ] || { echo "output written"; exit 1; }
+
+# 6. A file sliced for a nozzle per tool (Cura's dual extrusion) is refused, naming the line
+#    that shows it and the way out, with no output.
+if "$GWEAVE" purge-shift "$DATA/cura/cura_dual.gcode" -o "$WORK/y.gcode" --purge 2 2> "$WORK/err"; then
+  echo "a file for a nozzle per tool accepted"; exit 1
+fi
+if ! grep -q "cura_dual.gcode:4249: line 4247 sets T0's nozzle to 200 °C while T1's is at 215 °C (line 3974): the file heats a nozzle per tool" "$WORK/err" \
+  || ! grep -q 'or run `gweave mix` on it first' "$WORK/err"; then
+  echo "error text: $(cat "$WORK/err")"; exit 1
+fi
+[ ! -e "$WORK/y.gcode" ] || { echo "output written"; exit 1; }

@@ -1,6 +1,9 @@
 //! Metadata that stays true after every transform, and second runs that never stack (issue 21),
 //! through the real binary on the real slicer fixtures.
 
+#[path = "../../gweave/tests/one_nozzle/mod.rs"]
+mod one_nozzle;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -93,6 +96,11 @@ fn stats_of_every_transform_agrees_with_the_metadata_inside_it() {
         assert!(before.is_null() || before != stated(&stats(&out)), "{rel}: {before}");
 
         let out = dir.path().join(format!("{name}.shifted.gcode"));
+        // purge-shift refuses Cura's dual file as sliced (a nozzle per tool): as for one nozzle.
+        let input = match *rel {
+            "cura/cura_dual.gcode" => one_nozzle::one_nozzle_in(dir.path(), rel).to_str().unwrap().to_owned(),
+            _ => input,
+        };
         let text = transform(&["purge-shift", &input, "--purge-mm", "2.5"], &out);
         check_output(&text, &out, "purge-shift", true);
     }
@@ -240,13 +248,55 @@ fn a_chain_of_transforms_keeps_one_header_line_per_run() {
     assert_eq!(stats(&shifted)["slicer"], "prusaslicer");
 }
 
+/// Regression: purge-shift moved the changes of Cura's dual-extrusion file (a nozzle per tool)
+/// before the file's heating of the new nozzle (13 cold extrusions on `sim --machine
+/// dual-extruder`). It is refused, naming the line and the way out, and writes nothing; the file
+/// after `gweave mix` (one nozzle) is accepted, and so is PrusaSlicer's after mix, though mix
+/// keeps its `; single_extruder_multi_material = 0`.
+#[test]
+fn a_file_for_a_nozzle_per_tool_is_refused_and_mix_output_accepted() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("shifted.gcode");
+    let (dual, cone) = (fixture("cura/cura_dual.gcode"), fixture("prusaslicer/pr_cone_2tool.gcode"));
+    let refused = gweave(&["purge-shift", &dual, "--purge-mm", "2.5", "-o", out.to_str().unwrap(), "-q"]);
+    assert_eq!(refused.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        err.starts_with(&format!(
+            "gweave: error: {dual}:4249: line 4247 sets T0's nozzle to 200 °C while T1's is at 215 °C \
+             (line 3974): the file heats a nozzle per tool. purge-shift moves colour changes on one nozzle"
+        )),
+        "{err}"
+    );
+    assert!(err.contains("or run `gweave mix` on it first"), "{err}");
+    assert!(!out.exists() && std::fs::read_dir(dir.path()).unwrap().next().is_none());
+    let refused = gweave(&["purge-shift", &cone, "--purge-mm", "2.5", "-o", out.to_str().unwrap(), "-q"]);
+    assert_eq!(refused.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    let setting = "(`; single_extruder_multi_material = 0`) and this line changes to T1";
+    assert!(
+        err.starts_with(&format!(
+            "gweave: error: {cone}:504: the file was sliced for a nozzle per extruder {setting}"
+        )),
+        "{err}"
+    );
+    assert!(!out.exists());
+    for input in [dual, cone] {
+        let mixed = dir.path().join("mixed.gcode");
+        transform(&["mix", &input, "-c", &fixture("../../examples/mix/tool_map.toml")], &mixed);
+        let text = transform(&["purge-shift", mixed.to_str().unwrap(), "--purge-mm", "2.5"], &out);
+        assert!(text.contains("; gweave 0.1.0 purge-shift --purge-mm 2.5 (generated)\n"), "{input}");
+    }
+}
+
 /// Cura's Griffin header must stay at the very top (Ultimaker printers read it there): the
 /// gweave line goes after it. Cura's placeholder `;TIME:` and `;Filament used: 0m` are filled.
 #[test]
 fn cura_headers_stay_first_and_get_true_figures() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("dual.gcode");
-    let text = transform(&["purge-shift", &fixture("cura/cura_dual.gcode"), "--purge-mm", "2.5"], &out);
+    let input = one_nozzle::one_nozzle_in(dir.path(), "cura/cura_dual.gcode");
+    let text = transform(&["purge-shift", input.to_str().unwrap(), "--purge-mm", "2.5"], &out);
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], ";START_OF_HEADER");
     let end = lines.iter().position(|l| *l == ";END_OF_HEADER").unwrap();

@@ -4,6 +4,9 @@
 //! fed the same filament, and it counts the same layers. A LinuxCNC file extrudes with A: read as Marlin,
 //! the printer would move a rotary A and feed nothing.
 
+#[path = "../../gweave/tests/one_nozzle/mod.rs"]
+mod one_nozzle;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -165,7 +168,8 @@ fn a_single_nozzle_machine_runs_a_semm_file_with_stats_filament_per_tool() {
     assert_eq!(heaters, [r#"{"hotend":0}"#, r#""bed""#], "one hotend");
 }
 
-/// The purge-shift bug found on a screw sliced for two extruders: a moved change left the old
+/// The purge-shift bug found on a screw sliced for two extruders (here as for one nozzle shared
+/// by both, which purge-shift is for: the `one_nozzle` module): a moved change left the old
 /// tool's 10 mm tool-change retraction to the new tool, so the virtual printer ran T0 to -68.91
 /// mm and T1 to 700.25 mm (355.12 / 276.22 in the input) while `stats` said the rewritten
 /// figures matched. On the screw's first 7 layers, relative and absolute E: each tool feeds what
@@ -173,11 +177,10 @@ fn a_single_nozzle_machine_runs_a_semm_file_with_stats_filament_per_tool() {
 /// retraction it had, and the output's own figures are what left each nozzle.
 #[test]
 fn tool_change_retraction_stays_with_its_tool_in_the_virtual_printer() {
-    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/prusaslicer");
     let dir = tempfile::tempdir().unwrap();
     for name in ["pr_screw_2t_trim.gcode", "pr_screw_2t_abs_trim.gcode"] {
-        let input = data.join(name);
-        let out = dir.path().join(name);
+        let input = one_nozzle::one_nozzle_in(dir.path(), &format!("prusaslicer/{name}"));
+        let out = dir.path().join(format!("shifted_{name}"));
         let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
         let shift = json(&["purge-shift", i, "--purge-mm", "3", "-o", o, "--json", "-q"]);
         let moved_mm = shift["moved_mm"].as_f64().unwrap();

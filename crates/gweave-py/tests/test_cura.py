@@ -50,8 +50,8 @@ def in_cura(pkgs: Path, gcode: Path, out: Path, settings: dict) -> dict:
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
-def test_cura_script_purge_shift_equals_the_cli(cura_python, data, tmp_path):
-    fixture = data / "cura" / "cura_dual.gcode"
+def test_cura_script_purge_shift_equals_the_cli(cura_python, cura_one_nozzle, tmp_path):
+    fixture = cura_one_nozzle
     pieces = in_cura(cura_python, fixture, tmp_path / "cura.gcode", {"mode": "purge-shift", "purge_mm": 2.5})
     # Cura's list comes back as long, each piece starting where it did (one per layer).
     assert pieces == {"pieces_in": 206, "pieces_out": 206, "firsts_equal": True}
@@ -85,9 +85,9 @@ def test_cura_script_reports_gweave_error(cura_python, data, tmp_path):
     assert "No such file or directory: '/nonexistent/mix.toml'" in r.stderr, r.stderr[-2000:]
 
 
-def test_cura_script_falls_back_to_the_gweave_command(cura_python, data, tmp_path):
+def test_cura_script_falls_back_to_the_gweave_command(cura_python, cura_one_nozzle, tmp_path):
     """Cura's Python without the package (the AppImage): the `gweave` command on PATH does the job."""
-    fixture = data / "cura" / "cura_dual.gcode"
+    fixture = cura_one_nozzle
     r = harness(fixture, tmp_path / "cura.gcode", {"mode": "purge-shift", "purge_mm": 2.5},
                 {"PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin"})
     assert r.returncode == 0, r.stderr[-3000:]

@@ -27,12 +27,10 @@ def test_slic3r_first_change_is_split_by_hand(data, tmp_path):
     assert c["retraction"]["old_mm"] == -10 and c["retraction"]["dropped_mm"] == 10
 
 
-def test_config_and_keywords(data, tmp_path):
+def test_config_and_keywords(cura_one_nozzle, tmp_path):
     cfg = tmp_path / "purge.toml"
     cfg.write_text("purge_mm = 2.5\n[[pair]]\nfrom = 1\nto = 0\npurge_mm = 1.0\n")
-    r = gweave.purge_shift(
-        data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode", config=cfg, cross_layers=True
-    )
+    r = gweave.purge_shift(cura_one_nozzle, tmp_path / "o.gcode", config=cfg, cross_layers=True)
     assert {c["requested_mm"] for c in r["changes"] if c["from_tool"] == 1} == {1.0}
     assert all(abs(c["achieved_mm"] + c["shortfall_mm"] - c["requested_mm"]) < 1e-9 for c in r["changes"])
 
@@ -62,3 +60,17 @@ def test_refusals(data, tmp_path):
     with pytest.raises(ValueError, match="no purge amount"):
         gweave.purge_shift(data / "cura" / "cura_dual.gcode", tmp_path / "o.gcode")
     assert not (tmp_path / "o.gcode").exists()
+
+
+def test_a_file_for_a_nozzle_per_tool_is_refused(data, tmp_path):
+    """Regression: Cura's dual-extrusion changes were moved before the file heated the new
+    nozzle (13 cold extrusions on the virtual dual extruder): refused, nothing written."""
+    dual = data / "cura" / "cura_dual.gcode"
+    want = (
+        rf"^{dual}:4249: line 4247 sets T0's nozzle to 200 °C while T1's is at 215 °C \(line 3974\): "
+        r"the file heats a nozzle per tool\. purge-shift moves colour changes on one nozzle .* "
+        r"or run `gweave mix` on it first and purge-shift mix's output$"
+    )
+    with pytest.raises(ValueError, match=want):
+        gweave.purge_shift(dual, tmp_path / "o.gcode", purge_mm=2.5)
+    assert list(tmp_path.iterdir()) == []

@@ -2,6 +2,9 @@
 //! machine the shifted file feeds exactly the fallback purge more filament than the original,
 //! ends at the same place with the same step counts on X Y Z, and no move leaves the bed.
 
+#[path = "../../gweave/tests/one_nozzle/mod.rs"]
+mod one_nozzle;
+
 use std::path::PathBuf;
 
 use gweave::post::purge_shift::purge_shift_bytes;
@@ -9,10 +12,7 @@ use gweave::PurgeShiftConfig;
 use gweave_sim::MachineProfile;
 use gweave_sim::{Machine, SimReport};
 
-fn fixture(rel: &str) -> Vec<u8> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel);
-    std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
+use one_nozzle::fixture;
 
 fn sim(text: &[u8]) -> SimReport {
     sim_on(MachineProfile::default(), text)
@@ -74,7 +74,9 @@ fn fallbacks_feed_the_shortfall_and_stay_on_the_bed() {
 #[test]
 fn a_split_too_short_to_plan_keeps_the_stepper_counts() {
     for (file, moved_mm) in [("slic3r/slic3r_cone_2tool.gcode", 241.02), ("cura/cura_dual.gcode", 45.10)] {
-        let input = fixture(file);
+        // Cura's dual file as for one nozzle (the `one_nozzle` module): purge-shift refuses a
+        // nozzle per tool.
+        let input = one_nozzle::one_nozzle(&fixture(file));
         let before = sim(&input);
         let rules = PurgeShiftConfig::from_toml("purge_mm = 2.5\n").unwrap();
         let (out, report) = purge_shift_bytes(rules, &input).unwrap();

@@ -1,6 +1,7 @@
 //! purge-shift on real slicer output and hand-built cases: every invariant of
 //! `purge_check::check` on every change, plus hand-computed split lines.
 
+mod one_nozzle;
 mod purge_check;
 
 use std::path::PathBuf;
@@ -9,10 +10,7 @@ use gweave::gcode::layers::Feature;
 use gweave::post::purge_shift::{PurgeShift, Rules};
 use gweave::{purge_shift, PurgeShiftConfig, PurgeShiftReport, Run, Strictness};
 
-fn fixture(rel: &str) -> Vec<u8> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(rel);
-    std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
+use one_nozzle::fixture;
 
 /// Runs the pass and checks every invariant against the input. Lenient: RepRapFirmware's
 /// colon lists (`M567 P0 E0.3:0.7`) are malformed words to the lexer, which a strict run stops at.
@@ -23,6 +21,11 @@ fn run(rules: Rules, input: &[u8]) -> (Vec<u8>, PurgeShiftReport) {
     let out = ran.output;
     purge_check::check(input, &out, &report, &options);
     (out, report)
+}
+
+/// The fixture as for one nozzle (the `one_nozzle` module; unchanged if it is one nozzle's).
+fn fixture_for_one_nozzle(rel: &str) -> Vec<u8> {
+    one_nozzle::one_nozzle(&fixture(rel))
 }
 
 fn config(toml: &str) -> Rules {
@@ -124,7 +127,7 @@ fn prusaslicer_relative_e_splits_the_e_word() {
 
 #[test]
 fn cura_dual_with_and_without_crossing_layers() {
-    let input = fixture("cura/cura_dual.gcode");
+    let input = fixture_for_one_nozzle("cura/cura_dual.gcode");
     let (_, r) = run(Rules::fixed(2.5).unwrap(), &input);
     assert_eq!((r.changes.total(), r.untouched_changes), (77, 0));
     // T0 right after `;LAYER:1` cannot go back by default...
@@ -250,7 +253,7 @@ fn fallbacks_purge_the_shortfall_and_return() {
         ("prusaslicer/pr_bunny_3tool_rel.gcode", 793),
         ("cura/cura_dual.gcode", 77),
     ] {
-        let input = fixture(file);
+        let input = fixture_for_one_nozzle(file);
         let (_, partial) = run(Rules::fixed(2.5).unwrap(), &input);
         for fallback in ["block", "tower"] {
             let (out, r) = run(config(&format!("purge_mm = 2.5\nfallback = \"{fallback}\"\n")), &input);
@@ -511,14 +514,14 @@ fn assert_close(got: &[f64], want: &[f64]) {
     );
 }
 
-/// The same on the screw's first seven layers, relative and absolute E, with each fallback: each
+/// The same on the screw's first seven layers (as for one nozzle), relative and absolute E, with each fallback: each
 /// tool's filament is the input's but for the purge (sim of the whole screw before the fix:
 /// T0 -68.91 mm, T1 700.25 mm for 355.12 and 276.22 in the input).
 #[test]
 fn tool_change_retraction_stays_with_its_tool_on_a_sliced_screw() {
     let options = gweave::gcode::state::StateOptions::default();
     for file in ["prusaslicer/pr_screw_2t_trim.gcode", "prusaslicer/pr_screw_2t_abs_trim.gcode"] {
-        let input = fixture(file);
+        let input = fixture_for_one_nozzle(file);
         let before = purge_check::ledger(&input, &options);
         assert_close(&before.retracted_mm, &[10.0, 0.0]);
         for fallback in ["partial", "block", "tower"] {
@@ -558,7 +561,9 @@ fn a_tool_taken_without_its_unretraction_is_retracted_again() {
     let (out, r) = run(Rules::fixed(3.0).unwrap(), input.as_bytes());
     let text = String::from_utf8(out.clone()).unwrap();
     assert!(
-        text.contains("G1 X25 E1\nG1 E-10 F2400\nT0\nG1 E10 F2400\nG1 F2400\nG1 X30 E1\nG1 X40 E2\nG1 F2400\nG1 E-10 F2400\nG1 F2400\nG1 X50 E1\n"),
+        // The feed rate in force is the moves' own (2400 mm/min, from the file's retraction), so
+        // it is not restored after them.
+        text.contains("G1 X25 E1\nG1 E-10 F2400\nT0\nG1 E10 F2400\nG1 X30 E1\nG1 X40 E2\nG1 F2400\nG1 E-10 F2400\nG1 X50 E1\n"),
         "{text}"
     );
     let moved = r.changes.kept()[1].retraction.clone().unwrap();
@@ -567,4 +572,39 @@ fn a_tool_taken_without_its_unretraction_is_retracted_again() {
     let after = purge_check::ledger(&out, &options);
     assert_close(&after.left_mm, &[3.0, 2.0]);
     assert_close(&after.retracted_mm, &before.retracted_mm);
+}
+
+/// Regression: purge-shift moved the changes of Cura's dual-extrusion file (a nozzle per tool)
+/// before the file's heating of the new tool's nozzle, so the virtual dual extruder refused 13
+/// cold extrusions. Such a file is refused, at the evidence: Cura's standby of the last nozzle
+/// under the next one's temperature; PrusaSlicer's setting at the first change of tool.
+#[test]
+fn a_file_for_a_nozzle_per_tool_is_refused() {
+    use gweave::post::purge_shift::SeparateNozzles;
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data");
+    let refused = |rel: &str| {
+        let path = data.join(rel);
+        match purge_shift(Rules::fixed(2.5).unwrap(), Run::file(&path).to_memory()) {
+            Err(gweave::Error::Pass { line, source, .. }) => {
+                (line, source.downcast_ref::<SeparateNozzles>().cloned())
+            }
+            other => panic!("{rel}: {:?}", other.map(|(r, _)| r.changes.total())),
+        }
+    };
+    let temperatures = SeparateNozzles::Temperatures {
+        line: 4247,
+        tool: 0,
+        celsius: 200.0,
+        other: 1,
+        other_celsius: 215.0,
+        other_line: 3974,
+    };
+    assert_eq!(refused("cura/cura_dual.gcode"), (Some(4249), Some(temperatures)));
+    assert_eq!(
+        refused("prusaslicer/pr_cone_2tool.gcode"),
+        (Some(504), Some(SeparateNozzles::Setting { tool: 1 }))
+    );
+    // The same file as for one nozzle is accepted.
+    let (_, r) = run(Rules::fixed(2.5).unwrap(), &fixture_for_one_nozzle("cura/cura_dual.gcode"));
+    assert_eq!(r.changes.total(), 77);
 }

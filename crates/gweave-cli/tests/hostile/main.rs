@@ -9,6 +9,8 @@
 mod bgcode_bombs;
 mod bombs;
 mod harness;
+#[path = "../../../gweave/tests/one_nozzle/mod.rs"]
+mod one_nozzle;
 
 mod bytes;
 mod config;

@@ -397,7 +397,9 @@ fn a_full_disk_leaves_nothing_behind() {
 /// writes before the header and metadata go on), not the output the user gave.
 #[test]
 fn write_errors_during_a_transform_name_the_output() {
-    let input = fixture_path("cura/cura_dual.gcode");
+    // Cura's dual file as for one nozzle: purge-shift refuses a nozzle per tool.
+    let dir = tempfile::tempdir().unwrap();
+    let input = crate::one_nozzle::one_nozzle_in(dir.path(), "cura/cura_dual.gcode");
     let input = input.to_string_lossy();
     for args in [
         &["purge-shift", &input, "--purge-mm", "25", "-o", "out.gcode", "-q"][..],
@@ -412,7 +414,8 @@ fn write_errors_during_a_transform_name_the_output() {
 /// `.gweave-XXXX.tmp (output)`, not the output.
 #[test]
 fn write_errors_while_the_metadata_is_written_name_the_output() {
-    let input = fixture_path("cura/cura_dual.gcode");
+    let dir = tempfile::tempdir().unwrap();
+    let input = crate::one_nozzle::one_nozzle_in(dir.path(), "cura/cura_dual.gcode");
     write_error_names_the_output(
         "4m",
         &["purge-shift", &input.to_string_lossy(), "--purge-mm", "25", "-o", "out.gcode", "-q"],
@@ -438,7 +441,8 @@ fn write_error_names_the_output(size: &str, args: &[&str]) {
 fn a_closed_pipe_leaves_no_scratch_file() {
     use std::io::Read;
     let tmp = tempfile::tempdir().unwrap();
-    let input = fixture_path("cura/cura_dual.gcode");
+    let dir = tempfile::tempdir().unwrap();
+    let input = crate::one_nozzle::one_nozzle_in(dir.path(), "cura/cura_dual.gcode");
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_gweave"))
         .args(["purge-shift", &input.to_string_lossy(), "--purge-mm", "25", "-o", "-", "-q"])
         .env("TMPDIR", tmp.path())

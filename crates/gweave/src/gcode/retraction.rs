@@ -10,6 +10,7 @@
 //! retraction and the prime that undoes it cancel, and a stationary purge counts. Firmware
 //! retraction (`G10`/`G11`) is followed the same way.
 
+use crate::gcode::number::NumberFormat;
 use crate::gcode::state::{Effect, Move, X, Y};
 
 /// Follows the retraction in force over the moves of a file.
@@ -62,6 +63,42 @@ impl Retraction {
     pub fn in_force_mm(&self) -> f64 {
         self.in_force_mm
     }
+}
+
+/// `G92 E<e>` (file units, at least 5 decimals), no line ending: after E-only moves a pass
+/// inserted or took out (a purge block, a moved or dropped tool-change retraction), E is put
+/// back where the file has it, so the file's next E words mean what they meant.
+pub(crate) fn write_e_reset(out: &mut Vec<u8>, fmt: &NumberFormat, e: f64) {
+    out.extend_from_slice(b"G92 E");
+    fmt.write(out, e, fmt.extrusion_decimals.max(5));
+}
+
+/// `G0`/`G1` (`rapid`) with the E word `fed` and the feed rate `feed_mm_min` (written exactly,
+/// [`write_exact_feed`]) each if given, no line ending: an E-only move a pass writes, or, without
+/// `fed`, the feed rate (and motion mode) a line it took out had set, which the next lines rely on.
+pub(crate) fn write_e_only(
+    out: &mut Vec<u8>,
+    fmt: &NumberFormat,
+    rapid: bool,
+    fed: Option<f64>,
+    feed_mm_min: Option<f64>,
+) {
+    out.extend_from_slice(if rapid { b"G0" } else { b"G1" });
+    if let Some(e) = fed {
+        out.push(b' ');
+        fmt.write_word(out, b'E', e);
+    }
+    if let Some(f) = feed_mm_min {
+        out.push(b' ');
+        write_exact_feed(out, fmt, f);
+    }
+}
+
+/// Appends `F<feed>` for a feed rate being restored: with at least 3 decimals whatever the
+/// number format, since the lines after it rely on exactly the feed rate the file set.
+pub(crate) fn write_exact_feed(out: &mut Vec<u8>, fmt: &NumberFormat, feed_mm_min: f64) {
+    out.push(b'F');
+    fmt.write(out, feed_mm_min, fmt.feed_decimals.max(3));
 }
 
 #[cfg(test)]

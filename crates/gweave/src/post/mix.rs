@@ -64,10 +64,10 @@ use crate::eol::Eol;
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
-use crate::gcode::retraction::Retraction;
+use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction};
 use crate::gcode::state::{Effect, Motion, Move, State, E, X, Y, Z};
 use crate::pass::{keep, Ctx, Flow, Pass, PassError, Step};
-use crate::post::purge_block::{purge_start_pos, write_exact_feed, write_purge, PurgeMotion, PurgeStart};
+use crate::post::purge_block::{purge_start_pos, write_purge, PurgeMotion, PurgeStart};
 use crate::post::warning::Warning;
 use crate::post::zcap::ZCap;
 use crate::run::{Ran, Run};
@@ -516,23 +516,18 @@ impl MixPass {
         let fmt = self.profile.numbers;
         let mut text = b";".to_vec();
         text.extend_from_slice(ctx.line.bytes);
-        text.extend_from_slice(b" ; gweave mix: slicer tool-change unretraction dropped\nG92 E");
-        fmt.write(&mut text, mv.from[E] + dropped, fmt.extrusion_decimals.max(5));
+        text.extend_from_slice(b" ; gweave mix: slicer tool-change unretraction dropped\n");
+        write_e_reset(&mut text, &fmt, mv.from[E] + dropped);
         text.push(b'\n');
         if kept > 1e-9 {
             if ctx.state.relative_e() {
-                text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
-                fmt.write_word(&mut text, b'E', kept);
-                text.push(b' ');
-                write_exact_feed(&mut text, &fmt, mv.feed_mm_min);
-                text.push(b'\n');
+                write_e_only(&mut text, &fmt, mv.rapid, Some(kept), Some(mv.feed_mm_min));
             } else {
                 text.extend_from_slice(ctx.line.bytes);
-                text.push(b'\n');
             }
+            text.push(b'\n');
         } else if ctx.block.has(b'F') {
-            text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
-            write_exact_feed(&mut text, &fmt, mv.feed_mm_min);
+            write_e_only(&mut text, &fmt, mv.rapid, None, Some(mv.feed_mm_min));
             text.push(b'\n');
         }
         self.repl = text;
@@ -548,12 +543,10 @@ impl MixPass {
         text.extend_from_slice(ctx.line.bytes);
         text.extend_from_slice(b" ; gweave mix: slicer tool-change retraction dropped");
         text.extend_from_slice(self.eol.get());
-        text.extend_from_slice(b"G92 E");
-        fmt.write(&mut text, mv.to[E], fmt.extrusion_decimals.max(5));
+        write_e_reset(&mut text, fmt, mv.to[E]);
         text.extend_from_slice(self.eol.get());
         if ctx.block.has(b'F') {
-            text.extend_from_slice(if mv.rapid { b"G0 " } else { b"G1 " });
-            write_exact_feed(&mut text, fmt, mv.feed_mm_min);
+            write_e_only(&mut text, fmt, mv.rapid, None, Some(mv.feed_mm_min));
             text.extend_from_slice(self.eol.get());
         }
         text

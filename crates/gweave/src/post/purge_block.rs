@@ -41,6 +41,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::gcode::number::NumberFormat;
+use crate::gcode::retraction::{write_e_only, write_e_reset};
 use crate::gcode::state::{E, X, Y, Z};
 use crate::range::{self, OutOfRange};
 use crate::settings::{CheckRanges, Table};
@@ -321,22 +322,15 @@ pub(crate) fn write_purge_job(
     if r > 0.0 {
         w.go(false, [None; 3], r, m.unretract_feed_mm_min.unwrap_or(m.retract_feed_mm_min));
     }
-    let mut tail = b"G92 E".to_vec();
-    fmt.write(&mut tail, e0, fmt.extrusion_decimals.max(5));
+    let mut tail = Vec::new();
+    write_e_reset(&mut tail, fmt, e0);
     w.line(&String::from_utf8_lossy(&tail));
     if start.feed_mm_min > 0.0 {
-        let mut feed = if start.rapid_mode { b"G0 ".to_vec() } else { b"G1 ".to_vec() };
-        write_exact_feed(&mut feed, fmt, start.feed_mm_min);
+        let mut feed = Vec::new();
+        write_e_only(&mut feed, fmt, start.rapid_mode, None, Some(start.feed_mm_min));
         w.line(&String::from_utf8_lossy(&feed));
     }
     w.line(&format!("; gweave {}: end purge", job.by));
-}
-
-/// Appends `F<feed>` for a feed rate being restored: with at least 3 decimals whatever the
-/// number format, since the lines after it rely on exactly the feed rate the file set.
-pub(crate) fn write_exact_feed(out: &mut Vec<u8>, fmt: &NumberFormat, feed_mm_min: f64) {
-    out.push(b'F');
-    fmt.write(out, feed_mm_min, fmt.feed_decimals.max(3));
 }
 
 /// X, Y, Z and E of a core position.

@@ -20,8 +20,8 @@
 
 use crate::gcode::line::{Block, Command};
 use crate::gcode::number::NumberFormat;
+use crate::gcode::retraction::write_exact_feed;
 use crate::gcode::state::{Move, Path, E, X, Y, Z};
-use crate::post::purge_block::write_exact_feed;
 
 pub use super::mix::profile::ZCapMode;
 

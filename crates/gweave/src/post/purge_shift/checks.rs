@@ -11,8 +11,9 @@
 use std::io::Read;
 use std::path::Path;
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
+use super::nozzles::SEMM_KEY;
 use crate::error::{Error, Result};
 use crate::gcode::layers::{trim, Feature, Markers, ALL_FEATURES};
 use crate::gcode::lexer::parse_line_lean;
@@ -71,13 +72,18 @@ pub(crate) fn require_markers(input: impl Read, path: &Path, markers: &Markers) 
 const TOWER_SETTINGS: [(&str, &str); 3] =
     [("wipe_tower", "1"), ("enable_prime_tower", "1"), ("prime_tower_enable", "True")];
 
+/// The settings the checks of a file's ends look up in `ends` (its ends, or all of a text): the
+/// wipe tower's and the nozzles' ([`super::nozzles`]), in one search of the text.
+pub(crate) fn ends_settings(ends: &[u8]) -> BTreeMap<&'static str, String> {
+    let [a, b, c] = TOWER_SETTINGS.map(|(key, _)| key);
+    crate::gcode::ends::settings(&crate::gcode::ends::ends_text(ends), &[a, b, c, SEMM_KEY])
+}
+
 /// Refuses a file sliced with a wipe tower. purge-shift is the tower's replacement: on a file
 /// that has one, the slicer's tool changes sit at the tower, so each would be moved back into
 /// the tower's own moves and ramming, and the report would count a saving against a tower that
-/// is still printed. `ends` is the text the slicer's settings are in (the file's head and tail).
-pub(crate) fn refuse_wipe_tower(ends: &[u8], path: &Path) -> Result<()> {
-    let keys = TOWER_SETTINGS.map(|(key, _)| key);
-    let set = crate::gcode::ends::settings(&crate::gcode::ends::ends_text(ends), &keys);
+/// is still printed. `set` is the file's settings ([`ends_settings`]).
+pub(crate) fn refuse_wipe_tower(set: &BTreeMap<&str, String>, path: &Path) -> Result<()> {
     let found = TOWER_SETTINGS
         .iter()
         .find(|(key, on)| set.get(key).is_some_and(|v| v == on))

@@ -35,6 +35,9 @@
 //!   after the change in a purge block (`block`) or on a small tower beside the part (`tower`),
 //!   returning to the exact position (the `fallback` module).
 //!
+//! - A file sliced for a nozzle per tool (a dual extruder) is refused: there is nothing to purge,
+//!   and a moved change would print before the new nozzle is heated (the `nozzles` module).
+//!
 //! ## Bounded memory
 //! The pass streams. It holds back only the lines a later change could still be moved before:
 //! a line is written out as soon as the positive extrusion held after it reaches the largest purge
@@ -55,7 +58,9 @@
 mod checks;
 pub(crate) mod config;
 mod fallback;
+mod nozzles;
 mod options;
+mod place;
 pub mod report;
 mod split;
 mod tool_retraction;
@@ -65,6 +70,7 @@ use std::io::{self, Write};
 use std::path::Path;
 
 pub use config::{ConfigError, Fallback, PurgeShiftConfig, Rules, TowerConfig};
+pub use nozzles::SeparateNozzles;
 pub use options::PurgeShiftOptions;
 pub use report::{ChangeReport, PurgeShiftReport, RetractionMove, SplitPoint};
 
@@ -75,16 +81,16 @@ use crate::firmware::MixingCode;
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::line::Block;
 use crate::gcode::reader::RawLine;
-use crate::gcode::state::{Effect, StateOptions, X, Y, Z};
+use crate::gcode::state::{Effect, StateOptions};
 use crate::pass::{Ctx, Flow, OwnedLine, Pass, PassError, Step};
 use crate::post::purge_block::{purge_start_pos, PurgeStart};
-use crate::post::warning::{Shortfall, Warning};
 use crate::run::IN_MEMORY;
 use crate::run::{Ran, Run, Source};
 use checks::{require_markers, FeatureComments};
-use fallback::{write_fallback, Spot, Surroundings};
-use split::{split, Splittable};
-use tool_retraction::{write_bracket, Bracket, EWord, Feeds, ToolRetractions};
+use fallback::{Spot, Surroundings};
+use nozzles::Nozzles;
+use split::Splittable;
+use tool_retraction::{EWord, Feeds, ToolRetractions};
 
 /// What stops the walk back at a layer change (the report's `stopped_by`).
 const LAYER_CHANGE: &str = "a layer change";
@@ -180,6 +186,8 @@ pub struct PurgeShift {
     /// The file's E (file units) a `G92 E` must put back before the next line that reads E,
     /// after an E-only move was taken out in absolute E.
     e_reset: Option<f64>,
+    /// The evidence of a nozzle per tool, which the pass refuses (the nozzles module).
+    nozzles: Nozzles,
 }
 
 impl PurgeShift {
@@ -217,6 +225,7 @@ impl PurgeShift {
             group_parked_mm: 0.0,
             owed_mm: 0.0,
             e_reset: None,
+            nozzles: Nozzles::default(),
         }
     }
 
@@ -360,6 +369,16 @@ impl PurgeShift {
         Ok(())
     }
 
+    /// Writes `\n`-separated lines with the ending `eol`; returns how many.
+    fn emit_text(&mut self, out: &mut dyn Write, text: &[u8], eol: &[u8]) -> io::Result<u64> {
+        let mut n = 0;
+        for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
+            self.emit(out, line, eol)?;
+            n += 1;
+        }
+        Ok(n)
+    }
+
     /// The machine as `state` leaves it, with the retraction in force (the file's E-only
     /// retractions and a firmware `G10`).
     fn spot_here(&self, state: &crate::gcode::state::State) -> Spot {
@@ -386,262 +405,6 @@ impl PurgeShift {
     ) -> Held {
         self.seq += 1;
         Held { line, kind, layer, feature, seq: self.seq, retracted_mm: self.line_retracted_mm, feeds }
-    }
-
-    /// Walks back from the change, places it, writes the window and the group.
-    fn shift(&mut self, out: &mut dyn Write, from_tool: u32, group: &[OwnedLine]) -> io::Result<()> {
-        let to_tool = self.colour.tool;
-        let (requested_mm, known) = self.rules.purge_mm(from_tool, to_tool);
-        if !known {
-            self.report.warn(Warning::NoPurgeAmount {
-                line: group[0].number,
-                from_tool,
-                to_tool,
-                used_mm: requested_mm,
-            });
-        }
-        // Walk back: `need` is what is still to be found.
-        let mut need = requested_mm;
-        let mut place: Option<(usize, Option<f64>)> = None;
-        let mut earliest = None;
-        for i in (0..self.window.len()).rev() {
-            let e_mm = self.window[i].e_mm();
-            if e_mm <= 0.0 {
-                continue;
-            }
-            if e_mm >= need - EPS_E_MM {
-                let head = e_mm - need;
-                place = Some(if head <= EPS_E_MM { (i, None) } else { (i, Some(head / e_mm)) });
-                need = 0.0;
-                break;
-            }
-            need -= e_mm;
-            earliest = Some(i);
-        }
-        let place = place.or(earliest.map(|i| (i, None)));
-        let moved_mm = requested_mm - need;
-        let mut change = ChangeReport {
-            from_tool,
-            to_tool,
-            change_lines: group.iter().map(|l| l.number).collect(),
-            output_line: 0,
-            requested_mm,
-            achieved_mm: moved_mm,
-            shortfall_mm: need,
-            moved_mm,
-            fallback_mm: 0.0,
-            fallback_lines: 0,
-            retraction: None,
-            requested_mm3: self.rules.mm3(requested_mm),
-            achieved_mm3: 0.0,
-            layer: self.group_layer,
-            feature: self.group_feature,
-            at_line: group[0].number,
-            split: None,
-            stopped_by: (need > 0.0).then_some(self.floor),
-            residual_fraction: None,
-            transition_mm: None,
-        };
-        let held: Vec<Held> = self.window.drain(..).collect();
-        self.window_e_mm = 0.0;
-        let (at, fraction) = place.unwrap_or((held.len(), None));
-        // The held lines after the change's new place (after the first half of a split).
-        let moved_from = if fraction.is_some() && at < held.len() { at + 1 } else { at };
-        // The slicer's tool-change retraction: the E-only retractions after the last line that
-        // feeds forward, taken out where the change was (the old tool makes it at the new place).
-        let tail = (moved_from..held.len()).rev().take_while(|&i| held[i].feeds.fed_mm <= 0.0).last();
-        let drops = |i: usize| {
-            tail.is_some_and(|t| i >= t) && held[i].feeds.e_only.is_some() && held[i].feeds.fed_mm < 0.0
-        };
-        // Each tool keeps its retraction (the tool_retraction module): what the old tool had in
-        // force where the change now goes, inside or before an extrusion.
-        let bracket = held.get(at).filter(|_| from_tool != to_tool).map(|h| {
-            let head_mm = fraction.map_or(0.0, |t| t * h.e_mm());
-            let r_place_mm = (h.retracted_mm - head_mm).max(0.0);
-            let dropped_mm: f64 =
-                (moved_from..held.len()).filter(|&i| drops(i)).map(|i| -held[i].feeds.fed_mm).sum();
-            Bracket::new(r_place_mm, self.group_retracted_mm, self.group_parked_mm, dropped_mm)
-        });
-        let feed_mm_min = self.rules.block.retract_feed_mm_min;
-        // Where the machine is when the change runs: before the move it now precedes, at the
-        // split point, or (not moved) where the change was.
-        let mut spot = self.group_spot;
-        if let Some(h) = held.get(at) {
-            change.layer = h.layer;
-            change.feature = h.feature;
-            change.at_line = h.line.number;
-            if let Kind::Extrude { split: s, .. } = &h.kind {
-                spot = Some(spot_of(s, &s.mv.from));
-            }
-        }
-        for h in &held[..at] {
-            self.emit_line(out, &h.line)?;
-        }
-        let mut rest = at;
-        if let (Some(t), Some(h)) = (fraction, held.get(at)) {
-            if let Kind::Extrude { split: s, .. } = &h.kind {
-                let halves = split(&h.line.bytes, s, t);
-                self.emit(out, &halves.first, &h.line.eol)?;
-                let at_split = spot_of(s, &s.end_of(&halves.first));
-                let lines = bracket.map(|b| (b, write_bracket(&at_split, b.old_mm, b.new_mm, feed_mm_min)));
-                self.emit_change(out, group, &mut change, Some(at_split), lines)?;
-                match &halves.second {
-                    Some(second) => self.emit(out, second, &h.line.eol)?,
-                    None => self.emit_line(out, &h.line)?,
-                }
-                let p = halves.point;
-                change.split =
-                    Some(SplitPoint { line: h.line.number, fraction: t, point_mm: [p[X], p[Y], p[Z]] });
-                rest = at + 1;
-            }
-        }
-        if change.split.is_none() {
-            let lines =
-                bracket.zip(spot).map(|(b, s)| (b, write_bracket(&s, b.old_mm, b.new_mm, feed_mm_min)));
-            self.emit_change(out, group, &mut change, spot, lines)?;
-        }
-        for (i, h) in held.iter().enumerate().skip(rest) {
-            match h.feeds.e_only.filter(|_| bracket.is_some() && drops(i)) {
-                Some(e) => {
-                    let eol = h.line.eol.clone();
-                    self.emit_text(out, &e.feeding(&h.line.bytes, 0.0), &eol)?;
-                    if !e.relative_e {
-                        self.e_reset = Some(e.e_after());
-                    }
-                }
-                None => {
-                    let reset = self.owed_e_reset(h.feeds.e_word);
-                    self.emit_text(out, &reset, &h.line.eol)?;
-                    self.emit_line(out, &h.line)?;
-                }
-            }
-        }
-        self.owed_mm = bracket.map_or(0.0, |b| b.absorbed_mm);
-        // Where the change was, the new tool is brought to the retraction it had parked.
-        if let (Some(b), Some(here)) = (bracket, self.group_spot) {
-            let [mut head, tail] = write_bracket(&here, 0.0, b.settle_mm, feed_mm_min);
-            if !head.is_empty() {
-                // Its E words are the file's: E put back first if a line was taken out.
-                head.splice(0..0, self.owed_e_reset(EWord::Reads));
-            }
-            let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
-            let offset = self.emitted.lines() + 1 - change.output_line;
-            let written = self.emit_text(out, &head, &eol)? + self.emit_text(out, &tail, &eol)?;
-            if let Some(r) = change.retraction.as_mut().filter(|_| written > 0) {
-                (r.settle_lines, r.settle_offset) = (written, offset);
-            }
-        }
-        let room = SPARE_LINES.saturating_sub(self.spare.len());
-        self.spare.extend(held.into_iter().take(room).map(|h| h.line));
-        self.floor = "the previous change";
-        change.achieved_mm3 = self.rules.mm3(change.achieved_mm);
-        if let Some(w) = &self.rules.washout {
-            change.residual_fraction = Some(w.residual_fraction(change.achieved_mm3));
-            let clean_mm3 = w.purge_for_tolerance_mm3(self.rules.tolerance).unwrap_or(0.0);
-            change.transition_mm = Some((clean_mm3 - change.achieved_mm3).max(0.0) / self.rules.mm3(1.0));
-        }
-        self.report.add(change)
-    }
-
-    /// Writes `\n`-separated lines with the ending `eol`; returns how many.
-    fn emit_text(&mut self, out: &mut dyn Write, text: &[u8], eol: &[u8]) -> io::Result<u64> {
-        let mut n = 0;
-        for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
-            self.emit(out, line, eol)?;
-            n += 1;
-        }
-        Ok(n)
-    }
-
-    /// Writes the change lines between the two parts of its retraction bracket, then the
-    /// fallback purge of what the move back could not find, and warns about that shortfall.
-    fn emit_change(
-        &mut self,
-        out: &mut dyn Write,
-        group: &[OwnedLine],
-        change: &mut ChangeReport,
-        spot: Option<Spot>,
-        bracket: Option<(Bracket, [Vec<u8>; 2])>,
-    ) -> io::Result<()> {
-        let eol = group.last().map_or_else(|| b"\n".to_vec(), |l| l.eol.clone());
-        let (b, [before, after]) = match bracket {
-            Some((b, lines)) => (Some(b), lines),
-            None => (None, Default::default()),
-        };
-        let lines_before = self.emit_text(out, &before, &eol)?;
-        change.output_line = self.emitted.lines() + 1;
-        for line in group {
-            self.emit_line(out, line)?;
-        }
-        let lines_after = self.emit_text(out, &after, &eol)?;
-        change.retraction = b.filter(|_| lines_before + lines_after > 0).map(|b| RetractionMove {
-            old_mm: b.old_mm,
-            new_mm: b.new_mm,
-            settle_mm: b.settle_mm,
-            dropped_mm: b.dropped_mm,
-            absorbed_mm: b.absorbed_mm,
-            lines_before,
-            lines_after,
-            settle_lines: 0,
-            settle_offset: 0,
-        });
-        let short_mm = change.shortfall_mm;
-        if short_mm <= 1e-9 {
-            return Ok(());
-        }
-        let (from, to) = (change.from_tool, change.to_tool);
-        let label = format!("T{from}->T{to} shortfall");
-        let text = spot.and_then(|spot| {
-            write_fallback(&self.rules, &mut self.env, &spot, change.layer, short_mm, &label)
-        });
-        let then = match (&text, spot) {
-            (Some(_), _) => Shortfall::Purged(self.rules.fallback.name()),
-            (None, Some(s)) if s.inches && self.rules.fallback != Fallback::Partial => Shortfall::Inches,
-            // A change that opens its layer, as `gweave mix` writes them, cannot move at all
-            // unless the purge may reach into the layer below.
-            _ if change.moved_mm == 0.0 && change.stopped_by == Some(LAYER_CHANGE) => {
-                Shortfall::OpensItsLayer
-            }
-            _ if change.stopped_by == Some(KEPT_FEATURE) => Shortfall::KeptOffAFeature,
-            _ => Shortfall::Accepted,
-        };
-        self.report.warn(Warning::PurgeShort {
-            layer: change.layer,
-            line: change.change_lines[0],
-            from_tool: from,
-            to_tool: to,
-            short_mm,
-            moved_mm: change.moved_mm,
-            requested_mm: change.requested_mm,
-            stopped_by: change.stopped_by.unwrap_or_default(),
-            then,
-        });
-        if let Some(text) = text {
-            for line in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
-                self.emit(out, line, &eol)?;
-                change.fallback_lines += 1;
-            }
-            change.fallback_mm = short_mm;
-            change.achieved_mm += short_mm;
-            change.shortfall_mm = 0.0;
-        }
-        Ok(())
-    }
-}
-
-/// The machine at `pos` on the held move `s` (the move's own modes; no retraction in force
-/// before an extruding move).
-fn spot_of(s: &Splittable, pos: &crate::gcode::state::Position) -> Spot {
-    Spot {
-        start: PurgeStart {
-            pos: purge_start_pos(pos),
-            absolute_xyz: !s.relative_axes,
-            relative_e: s.relative_e,
-            feed_mm_min: s.mv.feed_mm_min,
-            rapid_mode: s.mv.rapid,
-            retracted_mm: 0.0,
-        },
-        inches: s.inches,
     }
 }
 
@@ -670,13 +433,13 @@ impl Pass for PurgeShift {
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
+        self.nozzles.line(ctx.block, ctx.line.number).map_err(PassError::refuse)?;
         self.env.follow_retraction(ctx.effect);
         self.line_retracted_mm = self.tools.in_force_mm();
         self.tools.follow(ctx.state.tool, ctx.effect);
         if let Effect::Move(m) = ctx.effect {
             self.env.observe(m, in_print);
         }
-        let feeds = Feeds::of(ctx);
         if is_change_line(ctx.block) {
             if self.owed_mm > 0.0 {
                 self.settle_owed(ctx, out)?;
@@ -691,6 +454,7 @@ impl Pass for PurgeShift {
                 self.group_retracted_mm = self.line_retracted_mm;
             }
             self.group_parked_mm = self.tools.in_force_mm();
+            self.nozzles.tool_change(self.colour.tool, ctx.state.tool).map_err(PassError::refuse)?;
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
             self.group.extend(tail);
@@ -706,11 +470,11 @@ impl Pass for PurgeShift {
             }
             self.close_group(out)?;
         }
-        if self.owed_mm > 0.0 && self.absorb(ctx, out, feeds)? {
+        if self.owed_mm > 0.0 && self.absorb(ctx, out, Feeds::of(ctx))? {
             return Ok(Flow::Continue);
         }
         if self.e_reset.is_some() {
-            let reset = self.owed_e_reset(feeds.e_word);
+            let reset = self.owed_e_reset(EWord::of(ctx.block));
             self.hold_text(out, &reset, &ctx.line, 0.0)?;
         }
         if !in_print {
@@ -757,7 +521,8 @@ impl Pass for PurgeShift {
             _ => Kind::Other,
         };
         let owned = self.own(&ctx.line);
-        let held = self.held(owned, kind, structure.layer, structure.feature, feeds);
+        // What the line feeds is read only for a line held back (not for one written at once).
+        let held = self.held(owned, kind, structure.layer, structure.feature, Feeds::of(ctx));
         self.push(out, held)?;
         Ok(Flow::Continue)
     }
@@ -787,13 +552,13 @@ impl Pass for PurgeShift {
 pub fn purge_shift(rules: Rules, run: Run<'_>) -> Result<(PurgeShiftReport, Ran)> {
     let mut run = run.writes_e();
     run.flavour()?;
-    match run.source() {
+    let nozzles = match run.source() {
         Source::File(path) => {
             let ends = crate::gcode::ends::read_ends(path).map_err(|e| crate::Error::io(path, e))?;
-            checks::refuse_wipe_tower(&ends, path)?;
+            nozzles::ends_checks(&ends, path)?
         }
-        Source::Text(text) => checks::refuse_wipe_tower(text, Path::new(IN_MEMORY))?,
-    }
+        Source::Text(text) => nozzles::ends_checks(text, Path::new(IN_MEMORY))?,
+    };
     if rules.markers().begin.is_some() {
         match run.source() {
             Source::File(path) => {
@@ -804,6 +569,7 @@ pub fn purge_shift(rules: Rules, run: Run<'_>) -> Result<(PurgeShiftReport, Ran)
         }
     }
     let mut pass = PurgeShift::new(rules);
+    pass.nozzles = nozzles;
     let ran = run.options(pass.state_options()).run(&mut pass)?;
     Ok((pass.into_report(), ran))
 }

@@ -51,10 +51,9 @@ use std::collections::HashMap;
 use super::fallback::Spot;
 use super::{Feature, Kind, PurgeShift, Region, EPS_E_MM};
 use crate::gcode::reader::RawLine;
-use crate::gcode::retraction::Retraction;
+use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction};
 use crate::gcode::state::{Effect, MM_PER_INCH};
 use crate::pass::{Ctx, OwnedLine};
-use crate::post::purge_block::write_exact_feed;
 use std::io::{self, Write};
 
 /// Tools whose parked retraction is remembered (a file naming more keeps the first ones; a tool
@@ -131,7 +130,8 @@ impl Bracket {
 /// The lines of a bracket at `spot`: the old tool's feed `old_mm` (before the change lines) and
 /// the new tool's `new_mm` (after them), as E-only moves at `feed_mm_min` in the file's E mode
 /// and units, the second part ending with the E (absolute E: a `G92 E` when the feeds do not add
-/// up to nothing) and the feed rate the file has at `spot` restored. `\n`-terminated lines;
+/// up to nothing) and the feed rate the file has at `spot` restored (unless it is `feed_mm_min`
+/// in G1 already). `\n`-terminated lines;
 /// nothing when both feeds are below a micrometre.
 pub(crate) fn write_bracket(spot: &Spot, old_mm: f64, new_mm: f64, feed_mm_min: f64) -> [Vec<u8>; 2] {
     let mut parts = [Vec::new(), Vec::new()];
@@ -158,29 +158,16 @@ pub(crate) fn write_bracket(spot: &Spot, old_mm: f64, new_mm: f64, feed_mm_min: 
     }
     let out = &mut parts[1];
     if !start.relative_e && (old_mm + new_mm).abs() >= EPS_MM {
-        write_e_reset(out, start.pos[3] / unit);
-    }
-    write_feed(out, spot);
-    parts
-}
-
-/// `G92 E<e>`, file units.
-pub(crate) fn write_e_reset(out: &mut Vec<u8>, e: f64) {
-    let fmt = super::fallback::FORMAT;
-    out.extend_from_slice(b"G92 E");
-    fmt.write(out, e, fmt.extrusion_decimals.max(5));
-    out.push(b'\n');
-}
-
-/// The feed rate (and G0/G1 mode) in force at `spot`, restored after inserted moves.
-pub(crate) fn write_feed(out: &mut Vec<u8>, spot: &Spot) {
-    let start = &spot.start;
-    if start.feed_mm_min > 0.0 {
-        let unit = if spot.inches { MM_PER_INCH } else { 1.0 };
-        out.extend_from_slice(if start.rapid_mode { b"G0 " } else { b"G1 " });
-        write_exact_feed(out, &super::fallback::FORMAT, start.feed_mm_min / unit);
+        write_e_reset(out, &fmt, start.pos[3] / unit);
         out.push(b'\n');
     }
+    // The moves set `feed_mm_min` in G1: if that is what the file has in force, it stays;
+    // else the feed rate (and G0/G1 mode) in force at `spot` is restored.
+    if start.feed_mm_min > 0.0 && (start.rapid_mode || start.feed_mm_min != feed_mm_min) {
+        write_e_only(out, &fmt, start.rapid_mode, None, Some(start.feed_mm_min / unit));
+        out.push(b'\n');
+    }
+    parts
 }
 
 /// An E-only move of the input (no X, Y or Z motion), as the pass may take it out: the E the
@@ -233,23 +220,17 @@ impl EOnly {
         let unit = if self.inches { MM_PER_INCH } else { 1.0 };
         let mut out = Vec::new();
         if !self.relative_e && fed_mm.abs() >= EPS_MM {
-            write_e_reset(&mut out, (self.e_after_mm - fed_mm) / unit);
+            write_e_reset(&mut out, &fmt, (self.e_after_mm - fed_mm) / unit);
+            out.push(b'\n');
             out.extend_from_slice(line);
             out.push(b'\n');
             return out;
         }
-        if fed_mm.abs() < EPS_MM && self.sets_feed_mm_min.is_none() {
+        let fed = (fed_mm.abs() >= EPS_MM).then_some(fed_mm / unit);
+        if fed.is_none() && self.sets_feed_mm_min.is_none() {
             return out;
         }
-        out.extend_from_slice(if self.rapid { b"G0" } else { b"G1" });
-        if fed_mm.abs() >= EPS_MM {
-            out.push(b' ');
-            fmt.write_word(&mut out, b'E', fed_mm / unit);
-        }
-        if let Some(f) = self.sets_feed_mm_min {
-            out.push(b' ');
-            write_exact_feed(&mut out, &fmt, f / unit);
-        }
+        write_e_only(&mut out, &fmt, self.rapid, fed, self.sets_feed_mm_min.map(|f| f / unit));
         out.push(b'\n');
         out
     }
@@ -316,7 +297,8 @@ impl PurgeShift {
         match (e_word, self.e_reset) {
             (EWord::Reset, Some(_)) => self.e_reset = None,
             (EWord::Reads, Some(e)) => {
-                write_e_reset(&mut text, e);
+                write_e_reset(&mut text, &super::fallback::FORMAT, e);
+                text.push(b'\n');
                 self.e_reset = None;
             }
             _ => {}
@@ -427,6 +409,35 @@ mod tests {
         // Nothing E-only to take out (a lift-and-retract), a tool never used: the new tool
         // feeds back where the change was what the moved lines retracted.
         assert_eq!(Bracket::new(0.0, 10.0, 0.0, 0.0), b(-10.0, 0.0, 10.0, 0.0, 0.0));
+    }
+
+    /// Regression: the feed rate was restored after the inserted moves even when they had just
+    /// set it (`G1 E-10 F2400`, then `G1 F2400`, after a slicer's own retraction at F2400).
+    #[test]
+    fn the_feed_rate_is_restored_only_when_the_moves_changed_it() {
+        use crate::post::purge_block::PurgeStart;
+        let spot = |feed_mm_min, rapid_mode| Spot {
+            start: PurgeStart {
+                pos: [0.0, 0.0, 0.2, 5.0],
+                absolute_xyz: true,
+                relative_e: true,
+                feed_mm_min,
+                rapid_mode,
+                retracted_mm: 0.0,
+            },
+            inches: false,
+        };
+        let text = |parts: [Vec<u8>; 2]| parts.map(|p| String::from_utf8(p).unwrap());
+        assert_eq!(text(write_bracket(&spot(2400.0, false), 0.0, 10.0, 2400.0)), ["", "G1 E10 F2400\n"]);
+        assert_eq!(
+            text(write_bracket(&spot(1800.0, false), -10.0, 10.0, 2400.0)),
+            ["G1 E-10 F2400\n", "G1 E10 F2400\nG1 F1800\n"]
+        );
+        // G0 modal in the file: the mode is put back, with its feed rate.
+        assert_eq!(
+            text(write_bracket(&spot(2400.0, true), 0.0, 10.0, 2400.0)),
+            ["", "G1 E10 F2400\nG0 F2400\n"]
+        );
     }
 
     #[test]
