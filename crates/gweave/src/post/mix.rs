@@ -14,7 +14,9 @@
 //!    purge happens where the nozzle is about to print.
 //! 3. When the wanted mix differs from the one in force, before that extrusion it writes the
 //!    selection (and, for gradients that outgrow the firmware's tools, the redefinition of a
-//!    free tool) and a purge block (`crate::post::purge_block`). No change, no purge.
+//!    free tool) and a purge block (`crate::post::purge_block`). No change, no purge. On the one
+//!    nozzle the block also primes what the slicer tool left behind retracted and the new tool
+//!    will never undo (a first change to a tool; a refill of its own when there is no purge).
 //! 4. Moves faster in Z than the cap are split or slowed ([`crate::post::zcap`]).
 //! 5. Optionally, the slicer's tool-change retraction (the retraction right before a `T<n>`) and
 //!    the matching unretraction after the tool is next selected are removed: one nozzle needs no
