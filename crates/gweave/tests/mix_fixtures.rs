@@ -2,7 +2,8 @@
 //! every model move (one that moves XYZ) keeps its end point and its extrusion, in order, outside
 //! the inserted purge blocks; every virtual tool is defined (M163/M164 or M567) before `T<n>`
 //! selects it; the E position is the same after each purge block as before it, and the block fed
-//! exactly its purge length; no move runs Z faster than the cap; every input line not
+//! exactly its purge length and the retraction it refilled; the one nozzle is never retracted at
+//! the first extrusion after a change of mix (the slicer unretracts only the tool it retracted); no move runs Z faster than the cap; every input line not
 //! deliberately rewritten is in the output byte for byte; and the mix in force at each extrusion
 //! is the one the schedule or tool map asks for.
 
@@ -10,6 +11,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::lexer::parse_into;
+use gweave::gcode::retraction::Retraction;
 use gweave::gcode::state::{E, X, Y, Z};
 use gweave::post::mix::mix_bytes;
 use gweave::post::mix::profile::MixProfile;
@@ -100,11 +102,15 @@ fn run(rel: &str, profile: MixProfile) -> Checked {
     let mut tools: BTreeMap<u32, Vec<f64>> = BTreeMap::new();
     let mut active: Option<Vec<f64>> = None;
     let mut ratios_by_layer: BTreeMap<u32, Vec<Vec<f64>>> = BTreeMap::new();
-    let mut purge_start: Option<([f64; 4], f64, f64)> = None;
+    let mut purge_start: Option<([f64; 4], f64, f64, f64)> = None;
     let mut purges = 0;
+    let mut nozzle = Retraction::default();
+    let mut changed = false;
     for l in out.lines() {
         parse_into(l.as_bytes(), &mut block);
         let effect = *state.apply(l.as_bytes(), &block);
+        let retracted_mm = nozzle.in_force_mm();
+        nozzle.follow(&effect);
         let fed = state.filament_mm.iter().sum::<f64>();
         let word = |c: u8| block.get(c).unwrap();
         if block.command.is_m(163) {
@@ -123,6 +129,13 @@ fn run(rel: &str, profile: MixProfile) -> Checked {
             active = Some(tools.get(&t).unwrap_or_else(|| panic!("T{t} used before it was defined")).clone());
         }
         if let Effect::Move(m) = effect {
+            if changed && m.is_extruding() {
+                assert!(
+                    retracted_mm < 1e-6,
+                    "{retracted_mm} mm retracted at the first extrusion after a change: {l}"
+                );
+                changed = false;
+            }
             let z = z_feed_mm_min(&m);
             assert!(z <= cap * (1.0 + 1e-9), "Z at {z} mm/min > {cap}: {l}");
             if m.is_extruding() && state.structure.region == gweave::gcode::layers::Region::Print {
@@ -135,16 +148,20 @@ fn run(rel: &str, profile: MixProfile) -> Checked {
             }
         }
         if l.starts_with("; gweave mix: purge") {
-            purge_start =
-                Some(([state.pos[X], state.pos[Y], state.pos[Z], state.pos[E]], fed, state.feed_mm_min));
+            let pos = [state.pos[X], state.pos[Y], state.pos[Z], state.pos[E]];
+            purge_start = Some((pos, fed, state.feed_mm_min, nozzle.in_force_mm()));
+        }
+        if l.starts_with("; gweave mix: end ") {
+            changed = true;
         }
         if l.starts_with("; gweave mix: end purge") {
-            let (pos, fed0, feed0) = purge_start.take().unwrap();
+            let (pos, fed0, feed0, retracted0_mm) = purge_start.take().unwrap();
+            let refilled_mm = retracted0_mm - nozzle.in_force_mm();
             let now = [state.pos[X], state.pos[Y], state.pos[Z], state.pos[E]];
             for k in 0..4 {
                 assert!((pos[k] - now[k]).abs() < 1e-5, "purge moved axis {k}: {pos:?} -> {now:?}");
             }
-            assert!((fed - fed0 - 25.0).abs() < 1e-6, "the purge fed {} mm", fed - fed0);
+            assert!((fed - fed0 - 25.0 - refilled_mm).abs() < 1e-6, "the purge fed {} mm", fed - fed0);
             assert_eq!(state.feed_mm_min, feed0);
             purges += 1;
         }
@@ -488,7 +505,10 @@ fn mix_map_selects_the_mix_of_each_tool_a_wipe_tower_primes() {
 /// and a retraction nothing undoes counts nothing. They differ by exactly the retractions
 /// never undone: T0's 10 mm tool-change retraction at the first change (PrusaSlicer's
 /// `retract_length_toolchange`: T1, a nozzle of its own to the slicer, starts without undoing
-/// it) and its 2 mm retraction at the end (`retract_length`).
+/// it) and its 2 mm retraction at the end (`retract_length`). On the one nozzle the first
+/// purge into Blue refills those 10 mm
+/// (`mix_left_the_one_nozzle_retracted_at_a_first_change_to_a_new_tool`), so Blue's mix
+/// counts them: 10 mm over `stats`'s T1.
 #[test]
 fn mix_report_t0_12_mm_under_stats_is_the_retractions_never_undone() {
     let rel = "prusaslicer/pr_cone_2tool.gcode";
@@ -503,12 +523,13 @@ fn mix_report_t0_12_mm_under_stats_is_the_retractions_never_undone() {
     assert!((stats_mm(0) - 506.51).abs() < 0.005 && (stats_mm(1) - 577.33).abs() < 0.005);
     let (toolchange_mm, end_mm) = (10.0, 2.0);
     assert!((mix_mm("Red") - (stats_mm(0) - toolchange_mm - end_mm)).abs() < 1e-6, "Red {}", mix_mm("Red"));
-    assert!((mix_mm("Blue") - stats_mm(1)).abs() < 1e-6, "Blue {}", mix_mm("Blue"));
+    assert!((mix_mm("Blue") - (stats_mm(1) + toolchange_mm)).abs() < 1e-6, "Blue {}", mix_mm("Blue"));
     // Purges are counted apart: 76 changes of the default 25 mm.
     assert_eq!((report.changes, report.purge.count), (76, 76));
     assert!((report.purge.filament_mm - 1900.0).abs() < 1e-6);
-    // `stats` of the output, per virtual tool: printed plus 38 purges of 25 mm; Red's tool
-    // refills the first change's 10 mm with its first purge.
+    // `stats` of the output, per virtual tool (it follows each tool's retraction apart):
+    // printed plus 38 purges of 25 mm; Red's tool refills its own 10 mm with its first purge,
+    // and Blue's first purge pushes 10 mm more, the nozzle's refill.
     let tmp = tempfile::tempdir().unwrap();
     let mixed = tmp.path().join("mixed.gcode");
     std::fs::write(&mixed, &out).unwrap();
@@ -516,5 +537,59 @@ fn mix_report_t0_12_mm_under_stats_is_the_retractions_never_undone() {
     let tool_of = |name: &str| report.mixes.iter().find(|m| m.name == name).unwrap().tool.unwrap();
     let after_mm = |tool: u32| after.filament.iter().find(|f| f.tool == tool).unwrap().extruded_mm;
     assert!((after_mm(tool_of("Red")) - (stats_mm(0) + 950.0 - toolchange_mm)).abs() < 1e-6);
-    assert!((after_mm(tool_of("Blue")) - (stats_mm(1) + 950.0)).abs() < 1e-6);
+    let blue = after_mm(tool_of("Blue"));
+    assert!((blue - (stats_mm(1) + 950.0 + toolchange_mm)).abs() < 1e-6, "Blue's tool {blue}");
+}
+
+/// The filament the one nozzle holds back at the first extrusion after line `after` of
+/// `text` (1-based): the retraction in force, mm.
+fn retracted_at_first_extrusion_after(text: &str, after: usize) -> f64 {
+    let (mut state, mut block, mut nozzle) = (State::default(), Block::default(), Retraction::default());
+    for (i, l) in text.lines().enumerate() {
+        parse_into(l.as_bytes(), &mut block);
+        let effect = *state.apply(l.as_bytes(), &block);
+        if i + 1 > after && matches!(effect, Effect::Move(m) if m.is_extruding()) {
+            return nozzle.in_force_mm();
+        }
+        nozzle.follow(&effect);
+    }
+    panic!("no extrusion after line {after}")
+}
+
+/// Regression (found on PrusaSlicer's two-tool cone): with the default
+/// `keep_slicer_retractions`, T0 retracts `retract_length_toolchange` (10 mm) before the first
+/// `T1`, and T1, never retracted to the slicer, never undoes it. The purge block restored the
+/// retraction it found, so Blue's first 25 moves (128 mm of solid infill) only refilled the
+/// nozzle. Now the block primes those 10 mm with its purge (E35, then E31 not E21), and without
+/// a purge a refill of its own does.
+#[test]
+fn mix_left_the_one_nozzle_retracted_at_a_first_change_to_a_new_tool() {
+    let rel = "prusaslicer/pr_cone_2tool.gcode";
+    let input = std::fs::read_to_string(data(rel)).unwrap();
+    let first_t1 = input.lines().position(|l| l == "T1").unwrap() + 1;
+    assert!((retracted_at_first_extrusion_after(&input, first_t1) - 10.0).abs() < 1e-9);
+    let mixed = |toml: &str| {
+        let (out, _) = mix_bytes(MixProfile::from_toml_str(toml).unwrap(), input.as_bytes()).unwrap();
+        String::from_utf8(out).unwrap()
+    };
+    let block_of = |text: &str, from: &str, to: &str| -> Vec<String> {
+        let lines: Vec<&str> = text.lines().collect();
+        let a = lines.iter().position(|l| l.starts_with(from)).unwrap();
+        let b = a + lines[a..].iter().position(|l| l.starts_with(to)).unwrap();
+        lines[a..=b].iter().filter(|l| l.contains('E')).map(|l| l.to_string()).collect()
+    };
+    let map = "[map]\nT0 = \"Red\"\nT1 = \"Blue\"\n";
+    let out = mixed(map);
+    let purge = block_of(&out, "; gweave mix: purge Red -> Blue", "; gweave mix: end purge");
+    // -4 (its own), +4 +10 +25 (prime, refill, purge), -4 (its own only), +4: net 35.
+    assert_eq!(purge, ["G92 E0", "G1 E-4 F2400", "G1 E35 F200", "G1 E31 F2400", "G1 E35 F2400", "G92 E2"]);
+    let end = out.lines().position(|l| l == "; gweave mix: end purge").unwrap() + 1;
+    assert!(retracted_at_first_extrusion_after(&out, end) < 1e-9);
+    // Without a purge the change still refills the 10 mm, at the retraction feed.
+    let out = mixed(&format!("{map}[purge]\nmode = \"off\"\n"));
+    let refill = block_of(&out, "; gweave mix: refill 10 mm", "; gweave mix: end refill");
+    assert_eq!(refill, ["G92 E0", "G1 E10 F2400", "G92 E2"]);
+    let end = out.lines().position(|l| l == "; gweave mix: end refill").unwrap() + 1;
+    assert!(retracted_at_first_extrusion_after(&out, end) < 1e-9);
+    assert_eq!(out.matches("; gweave mix: refill").count(), 1);
 }

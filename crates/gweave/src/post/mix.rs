@@ -14,7 +14,9 @@
 //!    purge happens where the nozzle is about to print.
 //! 3. When the wanted mix differs from the one in force, before that extrusion it writes the
 //!    selection (and, for gradients that outgrow the firmware's tools, the redefinition of a
-//!    free tool) and a purge block (`crate::post::purge_block`). No change, no purge.
+//!    free tool) and a purge block (`crate::post::purge_block`). No change, no purge. On the one
+//!    nozzle the block also primes what the slicer tool left behind retracted and the new tool
+//!    will never undo (a first change to a tool; a refill of its own when there is no purge).
 //! 4. Moves faster in Z than the cap are split or slowed ([`crate::post::zcap`]).
 //! 5. Optionally, the slicer's tool-change retraction (the retraction right before a `T<n>`) and
 //!    the matching unretraction after the tool is next selected are removed: one nozzle needs no
@@ -67,7 +69,7 @@ use crate::gcode::number::NumberFormat;
 use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction};
 use crate::gcode::state::{Effect, Motion, Move, State, E, X, Y, Z};
 use crate::pass::{keep, Ctx, Flow, Pass, PassError, Step};
-use crate::post::purge_block::{purge_start_pos, write_purge, PurgeMotion, PurgeStart};
+use crate::post::purge_block::{purge_start_pos, write_purge, write_refill, PurgeMotion, PurgeStart};
 use crate::post::warning::Warning;
 use crate::post::zcap::ZCap;
 use crate::run::{Ran, Run};
@@ -129,7 +131,11 @@ pub struct MixPass {
     rotating: [Option<usize>; 2],
     slicer_tool: u32,
     decided_layer: Option<u32>,
+    /// The one nozzle's retraction in force.
     retraction: Retraction,
+    /// The retraction in force per slicer tool, as the slicer sees it (a nozzle per tool): of
+    /// the nozzle's, what the tool printing will undo itself.
+    tool_retraction: BTreeMap<u32, Retraction>,
     /// Dropped tool-change retraction per slicer tool, to drop again from its unretraction, mm.
     owed_mm: BTreeMap<u32, f64>,
     held: Vec<Held>,
@@ -170,6 +176,7 @@ impl MixPass {
             slicer_tool: 0,
             decided_layer: None,
             retraction: Retraction::default(),
+            tool_retraction: BTreeMap::new(),
             owed_mm: BTreeMap::new(),
             held: Vec::new(),
             feed_before: 0.0,
@@ -358,25 +365,65 @@ impl MixPass {
         let purge_mm = self.purge_mm(from, to)?;
         if purge_mm > 0.0 {
             self.purge(mv, state, to, purge_mm, &label);
+        } else {
+            let (start, refill_mm) = self.purge_start(mv, state);
+            if refill_mm > 0.0 {
+                let mut block = Vec::new();
+                write_refill(&mut block, &self.profile.numbers, &self.motion, &start, refill_mm);
+                self.pre.extend_from_slice(&block);
+                self.refilled(to, refill_mm);
+            }
         }
         Ok(())
     }
 
-    /// Writes a purge block of `mm` in mix `to` before the current line, from where the move
-    /// starts, and counts it.
-    fn purge(&mut self, mv: &Move, state: &State, to: usize, mm: f64, label: &str) {
+    /// Where a block before `mv` starts, and the retraction in force that no line after it will
+    /// undo, mm: the nozzle's beyond the slicer tool's own. PrusaSlicer retracts the tool it
+    /// leaves by `retract_length_toolchange` and unretracts a tool only if that tool retracted,
+    /// so the first change to a tool leaves the one nozzle retracted by the old tool's amount.
+    fn purge_start(&self, mv: &Move, state: &State) -> (PurgeStart, f64) {
+        let nozzle_mm = self.retraction.in_force_mm();
+        let tool_mm = self.tool_retraction.get(&self.slicer_tool).map_or(0.0, Retraction::in_force_mm);
+        // Below a micrometre it is the rounding of the file's E words, not a retraction.
+        let (retracted_mm, refill_mm) =
+            if nozzle_mm - tool_mm > 1e-6 { (tool_mm, nozzle_mm - tool_mm) } else { (nozzle_mm, 0.0) };
         let start = PurgeStart {
             pos: purge_start_pos(&mv.from),
             absolute_xyz: state.absolute(),
             relative_e: state.relative_e(),
             feed_mm_min: self.feed_before,
             rapid_mode: self.rapid_before,
-            retracted_mm: self.retraction.in_force_mm(),
+            retracted_mm,
         };
+        (start, refill_mm)
+    }
+
+    /// Follows a block's prime of `refill_mm` in mix `to`: the nozzle is that much less
+    /// retracted, and the filament is the mix's.
+    fn refilled(&mut self, to: usize, refill_mm: f64) {
+        self.retraction.feed(refill_mm);
+        self.acc.filament(to, refill_mm, None);
+    }
+
+    /// Writes a purge block of `mm` in mix `to` before the current line, from where the move
+    /// starts, and counts it.
+    fn purge(&mut self, mv: &Move, state: &State, to: usize, mm: f64, label: &str) {
+        let (start, refill_mm) = self.purge_start(mv, state);
         let mut block = Vec::new();
-        write_purge(&mut block, &self.profile.numbers, &self.motion, &start, mm, label);
+        write_purge(&mut block, &self.profile.numbers, &self.motion, &start, mm, refill_mm, label);
         self.pre.extend_from_slice(&block);
         self.acc.purge(to, mm);
+        if refill_mm > 0.0 {
+            self.refilled(to, refill_mm);
+        }
+    }
+
+    /// Follows `fed_mm` of filament fed by the slicer tool printing, on the nozzle and for the tool.
+    fn feed(&mut self, fed_mm: f64) {
+        self.retraction.feed(fed_mm);
+        if fed_mm != 0.0 {
+            self.tool_retraction.entry(self.slicer_tool).or_default().feed(fed_mm);
+        }
     }
 
     /// The purge of `[purge] initial_mm` before the first move of filament, in the first mix:
@@ -417,9 +464,7 @@ impl MixPass {
             Effect::Move(mv) => self.process_move(ctx, mv)?,
             Effect::None if is_hotend_target(ctx) => self.hotend_target(ctx),
             // The purge block primes and retracts again a firmware retraction in force too.
-            Effect::FirmwareRetract { .. } => {
-                self.retraction.follow(ctx.effect);
-            }
+            Effect::FirmwareRetract { e_mm } => self.feed(*e_mm),
             _ => {}
         }
         Ok(())
@@ -480,7 +525,7 @@ impl MixPass {
         // tool-change retraction is owed; the rewrite keeps E and F alone.
         let unretraction = e_mm > 0.0 && Retraction::moves_filament_only(mv) && mv.from[Z] == mv.to[Z];
         let fed_mm = if unretraction { self.unretract(ctx, mv)? } else { e_mm };
-        self.retraction.feed(fed_mm);
+        self.feed(fed_mm);
         if let Some(a) = self.active {
             let printed = (print && mv.is_extruding()).then_some((layer, state.structure.layer_z_mm));
             self.acc.filament(a, fed_mm, printed);
@@ -571,6 +616,7 @@ impl MixPass {
                     out.write_all(&instead)?;
                     *self.owed_mm.entry(self.slicer_tool).or_insert(0.0) += mm;
                     self.retraction.withdraw(mm);
+                    self.tool_retraction.entry(self.slicer_tool).or_default().withdraw(mm);
                     self.acc.dropped_retractions += 1;
                 }
                 _ => out.write_all(&h.bytes)?,

@@ -11,6 +11,12 @@
 //!   net: p of filament at the spot; retraction in force afterwards: d, as before
 //! ```
 //!
+//! `d` is only what the slicer will undo itself. A retraction in force that nothing after the
+//! block undoes, `f` ([`PurgeJob::refill_mm`]: on one mixing nozzle, the old slicer tool's
+//! tool-change retraction, which the new tool never unretracts), is primed with the purge and
+//! not retracted again: `+(r + d + f + p)` at the spot, net `f + p`, and the next extrusion
+//! starts from the nozzle the slicer meant.
+//!
 //! In absolute extrusion (M82) the block starts with `G92 E0`, so its numbers are small and
 //! exact; in relative extrusion (M83, or G91 on Marlin) it writes increments. Either way it ends
 //! with `G92 E<e>`, the position the file had before the block, so the next line of the file
@@ -177,6 +183,11 @@ pub(crate) struct PurgeJob<'a> {
     pub by: &'a str,
     /// The mix or tool purged into, for the comments.
     pub label: &'a str,
+    /// Retraction in force beyond [`PurgeStart::retracted_mm`] that nothing after the block
+    /// undoes, mm: on one nozzle, the tool-change retraction of a slicer tool the next tool
+    /// never unretracts (it has its own nozzle to the slicer). The block primes it with the
+    /// purge and leaves it unretracted, so the next extrusion starts from a full nozzle.
+    pub refill_mm: f64,
 }
 
 /// The machine where the block starts, in the file's logical millimetres.
@@ -192,7 +203,7 @@ pub(crate) struct PurgeStart {
     pub feed_mm_min: f64,
     /// G0 was the modal motion (restored with it).
     pub rapid_mode: bool,
-    /// Retraction the slicer has in force, mm.
+    /// Retraction the slicer has in force and will undo itself, mm.
     pub retracted_mm: f64,
 }
 
@@ -235,6 +246,19 @@ impl Emitter<'_> {
         self.out.push(b'\n');
     }
 
+    /// Ends a block: the file's E position `e0` and, if the file set one, its feed rate and
+    /// motion mode, which the next line may rely on.
+    fn restore(&mut self, e0: f64) {
+        let mut tail = Vec::new();
+        write_e_reset(&mut tail, self.fmt, e0);
+        self.line(&String::from_utf8_lossy(&tail));
+        if self.start.feed_mm_min > 0.0 {
+            let mut feed = Vec::new();
+            write_e_only(&mut feed, self.fmt, self.start.rapid_mode, None, Some(self.start.feed_mm_min));
+            self.line(&String::from_utf8_lossy(&feed));
+        }
+    }
+
     /// Extrudes `purge_mm` along the zigzag of [`PurgePattern::Zigzag`] from the current point.
     /// Each segment feeds the difference of the cumulative feed rounded to the written decimals,
     /// so in relative E the written words add up to the rounded purge exactly.
@@ -261,17 +285,18 @@ impl Emitter<'_> {
     }
 }
 
-/// Appends `gweave mix`'s purge block for `purge_mm` of filament to `out`; `label` names the
-/// change.
+/// Appends `gweave mix`'s purge block for `purge_mm` of filament, priming `refill_mm` with it
+/// ([`PurgeJob::refill_mm`]), to `out`; `label` names the change.
 pub(crate) fn write_purge(
     out: &mut Vec<u8>,
     fmt: &NumberFormat,
     m: &PurgeMotion,
     start: &PurgeStart,
     purge_mm: f64,
+    refill_mm: f64,
     label: &str,
 ) {
-    let job = PurgeJob { purge_mm, pattern: PurgePattern::Blob, by: "mix", label };
+    let job = PurgeJob { purge_mm, pattern: PurgePattern::Blob, by: "mix", label, refill_mm };
     write_purge_job(out, fmt, m, start, &job);
 }
 
@@ -292,7 +317,7 @@ pub(crate) fn write_purge_job(
     if !start.relative_e {
         w.line("G92 E0");
     }
-    let (r, d) = (m.retract_mm, start.retracted_mm.max(0.0));
+    let (r, d, refill) = (m.retract_mm, start.retracted_mm.max(0.0), job.refill_mm.max(0.0));
     if r > 0.0 {
         w.go(false, [None; 3], -r, m.retract_feed_mm_min);
     }
@@ -301,10 +326,10 @@ pub(crate) fn write_purge_job(
     }
     w.go(true, [Some(m.x_mm), Some(m.y_mm), None], 0.0, m.travel_feed_mm_min);
     match job.pattern {
-        PurgePattern::Blob => w.go(false, [None; 3], r + d + purge_mm, m.extrude_feed_mm_min),
+        PurgePattern::Blob => w.go(false, [None; 3], r + d + refill + purge_mm, m.extrude_feed_mm_min),
         PurgePattern::Zigzag { rows, row_mm, pitch_mm } => {
-            if r + d > 0.0 {
-                w.go(false, [None; 3], r + d, m.retract_feed_mm_min);
+            if r + d + refill > 0.0 {
+                w.go(false, [None; 3], r + d + refill, m.retract_feed_mm_min);
             }
             w.zigzag(m, purge_mm, rows.max(1), row_mm, pitch_mm);
         }
@@ -322,15 +347,34 @@ pub(crate) fn write_purge_job(
     if r > 0.0 {
         w.go(false, [None; 3], r, m.unretract_feed_mm_min.unwrap_or(m.retract_feed_mm_min));
     }
-    let mut tail = Vec::new();
-    write_e_reset(&mut tail, fmt, e0);
-    w.line(&String::from_utf8_lossy(&tail));
-    if start.feed_mm_min > 0.0 {
-        let mut feed = Vec::new();
-        write_e_only(&mut feed, fmt, start.rapid_mode, None, Some(start.feed_mm_min));
-        w.line(&String::from_utf8_lossy(&feed));
-    }
+    w.restore(e0);
     w.line(&format!("; gweave {}: end purge", job.by));
+}
+
+/// Appends the prime of `refill_mm` that a change of mix without a purge block still owes
+/// ([`PurgeJob::refill_mm`]): an E-only move where the nozzle stands, at the unretraction feed,
+/// then the file's E position and feed rate restored.
+pub(crate) fn write_refill(
+    out: &mut Vec<u8>,
+    fmt: &NumberFormat,
+    m: &PurgeMotion,
+    start: &PurgeStart,
+    refill_mm: f64,
+) {
+    let [x, y, z, e0] = start.pos;
+    let mut w = Emitter { out, fmt, start: *start, xyz: [x, y, z], e: 0.0 };
+    let mut head = Vec::new();
+    fmt.write(&mut head, refill_mm, 2);
+    w.line(&format!(
+        "; gweave mix: refill {} mm another slicer tool left retracted",
+        String::from_utf8_lossy(&head)
+    ));
+    if !start.relative_e {
+        w.line("G92 E0");
+    }
+    w.go(false, [None; 3], refill_mm, m.unretract_feed_mm_min.unwrap_or(m.retract_feed_mm_min));
+    w.restore(e0);
+    w.line("; gweave mix: end refill");
 }
 
 /// X, Y, Z and E of a core position.
@@ -367,7 +411,7 @@ mod tests {
             retracted_mm,
         };
         let mut out = Vec::new();
-        write_purge(&mut out, &NumberFormat::default(), &SEED, &start, 25.0, "A -> B");
+        write_purge(&mut out, &NumberFormat::default(), &SEED, &start, 25.0, 0.0, "A -> B");
         let text = String::from_utf8(out).unwrap();
         let before = state.filament_mm[0];
         let mut max_z_feed: f64 = 0.0;
@@ -431,7 +475,7 @@ mod tests {
         };
         let m = SEED.with_seed_feeds();
         let mut out = Vec::new();
-        write_purge(&mut out, &NumberFormat::default(), &m, &start, 25.0, "A -> B");
+        write_purge(&mut out, &NumberFormat::default(), &m, &start, 25.0, 0.0, "A -> B");
         let text = String::from_utf8(out).unwrap();
         let feeds: Vec<&str> =
             text.lines().filter_map(|l| l.split_whitespace().find(|w| w.starts_with('F'))).collect();
@@ -468,7 +512,8 @@ mod tests {
                 PurgeMotion { retract_mm: 0.8, lift_mm: 0.0, x_mm: 130.0, y_mm: 70.0, wipe_mm: 0.0, ..SEED };
             let fmt = NumberFormat { extrusion_decimals: 6, position_decimals: 5, ..NumberFormat::default() };
             let pattern = PurgePattern::Zigzag { rows: 7, row_mm: 3.1, pitch_mm: 0.5 };
-            let job = PurgeJob { purge_mm: 1.2345678, pattern, by: "purge-shift", label: "T0->T1" };
+            let job =
+                PurgeJob { purge_mm: 1.2345678, pattern, by: "purge-shift", label: "T0->T1", refill_mm: 0.0 };
             let mut out = Vec::new();
             write_purge_job(&mut out, &fmt, &m, &start, &job);
             let text = String::from_utf8(out).unwrap();

@@ -176,6 +176,12 @@ pub(crate) fn write_fallback(
     };
     let by = "purge-shift";
     let mut out = Vec::new();
-    write_purge_job(&mut out, &FORMAT, &motion, &spot.start, &PurgeJob { purge_mm, pattern, by, label });
+    write_purge_job(
+        &mut out,
+        &FORMAT,
+        &motion,
+        &spot.start,
+        &PurgeJob { purge_mm, pattern, by, label, refill_mm: 0.0 },
+    );
     Some(out)
 }
