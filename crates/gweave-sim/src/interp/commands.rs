@@ -85,7 +85,16 @@ pub struct CommandSpec {
     pub needs: Feature,
     /// Whether the serial link carries it out before the machine sees it.
     pub link: Link,
+    /// What Marlin's emergency parser (`EMERGENCY_PARSER`, `Marlin/src/feature/e_parser.h`) does
+    /// with it the moment it arrives, ahead of the held command queue (while `M600` waits for the
+    /// user): `None` for the commands it does not know. The row's handler still runs when the
+    /// line's turn in the queue comes.
+    pub(super) urgent: Option<Urgent>,
 }
+
+/// What the emergency parser does at once with a command, given the code's number and the
+/// command's text (see [`CommandSpec::urgent`]).
+pub(super) type Urgent = fn(&mut Machine, u32, &[u8], &mut dyn FnMut(f64, &str));
 
 /// Who carries a command out when a host sends it over the serial link
 /// ([`crate::link::serial`]).
@@ -132,6 +141,7 @@ impl std::fmt::Debug for CommandSpec {
             .field("params", &self.params)
             .field("needs", &self.needs)
             .field("link", &self.link)
+            .field("urgent", &self.urgent.is_some())
             .finish_non_exhaustive()
     }
 }
@@ -194,6 +204,7 @@ const ROW: CommandSpec = CommandSpec {
     params: &[],
     needs: Feature::Always,
     link: Link::Machine,
+    urgent: None,
 };
 
 /// Every command the interpreter carries out, in the order of the help listing.
@@ -236,10 +247,10 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M104 M109", what: "hotend target (T picks the hotend), M109 also waits: S while heating, R both ways", run: hotend_target, params: &[p("SRP", range::TEMPERATURE_C), p("T", TOOL)], ..ROW },
     CommandSpec { codes: "M105", what: "report temperatures and heater powers: ok T:.. /.. B:.. /.. @:.. B@:..", run: m105, while_halted: true, ..ROW },
     CommandSpec { codes: "M106 M107", what: "part fan speed / off (the fan cools the hotend)", run: fan, params: &[p("SP", range::PWM)], ..ROW },
-    CommandSpec { codes: "M108 M410", what: "emergency parser: break a wait / quick stop (accepted: waits end by themselves)", run: accepted, ..ROW },
+    CommandSpec { codes: "M108 M410", what: "emergency parser: break a wait / quick stop (accepted: waits end by themselves)", run: accepted, urgent: Some(break_wait), ..ROW },
     CommandSpec { codes: "M110", what: "set the line number (serial protocol)", run: accepted, while_halted: true, link: Link::LineNumber, ..ROW },
     CommandSpec { codes: "M113", what: "host keepalive: busy lines every S seconds during a long command (serial protocol; 0: off, no S: report it)", run: accepted, while_halted: true, params: &[p("S", KEEPALIVE_S)], link: Link::Keepalive, ..ROW },
-    CommandSpec { codes: "M112", what: "emergency stop: heaters off, halted until M999", run: emergency_stop, while_halted: true, ..ROW },
+    CommandSpec { codes: "M112", what: "emergency stop: heaters off, halted until M999", run: emergency_stop, while_halted: true, urgent: Some(kill_now), ..ROW },
     CommandSpec { codes: "M114", what: "position and motor counts after the queued moves", run: m114, while_halted: true, queue: Queue::Drains, ..ROW },
     CommandSpec { codes: "M115", what: "firmware name, extruder count and the capabilities of the [firmware] table", run: m115, while_halted: true, ..ROW },
     CommandSpec { codes: "M116", what: "wait for every heater with a target (RepRapFirmware)", run: m116, ..ROW },
@@ -270,7 +281,7 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M600", what: "filament change: park, host prompts, wait for M108 / M876 S0, purge, resume", run: m600, needs: Feature::AdvancedPause, ..ROW },
     CommandSpec { codes: "M851", what: "probe offsets X Y Z", run: m851, params: &[p("XYZ", range::POSITION_MM)], needs: Feature::Probe, ..ROW },
     CommandSpec { codes: "M900", what: "linear advance K (accepted: it shapes the extruder's motion, not the print's time)", run: accepted, params: &[p("K", ADVANCE_K)], needs: Feature::LinearAdvance, ..ROW },
-    CommandSpec { codes: "M876", what: "answer a host prompt", run: m876, needs: Feature::PromptSupport, ..ROW },
+    CommandSpec { codes: "M876", what: "answer a host prompt", run: m876, needs: Feature::PromptSupport, urgent: Some(answer_now), ..ROW },
     CommandSpec { codes: "M928", what: "log the following commands to an SD file until M29", run: sd::m928, needs: Feature::Sdcard, ..ROW },
     CommandSpec { codes: "M578 M700", what: "inkjet fire at the carriage position (machines with a printhead)", run: fire, params: &[p("P", HEAD), p("S", NOZZLE_BITS)], ..ROW },
     CommandSpec { codes: "M999", what: "restart after a halt", run: restart, while_halted: true, ..ROW },
@@ -769,6 +780,30 @@ fn emergency_stop(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str))
     m.halt = Some(super::Halt::Emergency);
     m.heaters_off();
     out(m.now_s(), crate::thermal::protection::KILL_LINE);
+}
+
+/// The emergency parser's `M108` ends a wait for the user; its `M410` (quick stop) finds no
+/// moves to stop while the board waits.
+fn break_wait(m: &mut Machine, number: u32, _: &[u8], _: &mut dyn FnMut(f64, &str)) {
+    if number == 108 {
+        m.end_user_wait();
+    }
+}
+
+/// The emergency parser's `M112`: killed at once, the wait ended with it.
+fn kill_now(m: &mut Machine, _: u32, _: &[u8], out: &mut dyn FnMut(f64, &str)) {
+    m.end_user_wait();
+    m.halt = Some(super::Halt::Emergency);
+    m.heaters_off();
+    out(m.now_s(), crate::thermal::protection::KILL_LINE);
+}
+
+/// The emergency parser's `M876`: `S<n>` answers the open prompt; `M876 P1` only says the host
+/// supports prompts.
+fn answer_now(m: &mut Machine, _: u32, text: &[u8], _: &mut dyn FnMut(f64, &str)) {
+    if text.windows(2).any(|w| w[0].eq_ignore_ascii_case(&b'S') && w[1].is_ascii_digit()) {
+        m.answer_prompt();
+    }
 }
 
 fn m114(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {

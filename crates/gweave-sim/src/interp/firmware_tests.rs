@@ -287,6 +287,38 @@ fn m600_prompts_the_host_and_holds_the_queue_until_m876() {
     assert!(!p.waiting_for_user());
 }
 
+/// The emergency parser's commands were a `match` of their own beside the registry (issue 40):
+/// now the rows that say `urgent` are the ones it acts on, at once, while `M600` holds the queue.
+#[test]
+fn the_emergency_parser_acts_on_the_rows_that_say_urgent() {
+    let urgent: Vec<&str> =
+        super::commands::COMMANDS.iter().filter(|c| c.urgent.is_some()).map(|c| c.codes).collect();
+    assert_eq!(urgent, ["M108 M410", "M112", "M876"]);
+    let waiting = |firmware: &str| {
+        let mut p = Protocol::new(Machine::new(profile(firmware)).unwrap(), ProtocolConfig::default());
+        feed(&mut p, 1, &["M600"]);
+        assert!(p.waiting_for_user());
+        p
+    };
+    let mut p = waiting("");
+    feed(&mut p, 2, &["M410"]);
+    assert!(p.waiting_for_user(), "a quick stop ends no wait");
+    feed(&mut p, 3, &["M108"]);
+    assert!(!p.waiting_for_user(), "M108 ends the wait at once");
+    // Built without the parser, `M108` waits its turn behind the `M600` it was to end.
+    let mut p = waiting("emergency_parser = false\n");
+    feed(&mut p, 2, &["M108"]);
+    assert!(p.waiting_for_user());
+    // Without prompt support, `M876 S0` is no answer.
+    let mut p = waiting("prompt_support = false\n");
+    feed(&mut p, 2, &["M876 S0"]);
+    assert!(p.waiting_for_user());
+    let mut p = waiting("");
+    let out = feed(&mut p, 2, &["M112"]);
+    assert!(out.iter().any(|l| l == crate::thermal::protection::KILL_LINE), "{out:?}");
+    assert!(!p.waiting_for_user());
+}
+
 #[test]
 fn m600_without_advanced_pause_is_unknown_and_a_file_run_does_not_wait() {
     let mut m = Machine::new(profile("advanced_pause = false\n")).unwrap();

@@ -48,39 +48,36 @@ impl Machine {
         self.host.waiting_for_user
     }
 
-    /// The emergency parser saw `line` while the board waits for the user: `M108` and `M876`
-    /// end the wait, `M112` kills. True when the line was one of those.
+    /// The emergency parser saw `line` while the board waits for the user: a command whose row
+    /// says what the parser does at once ([`super::commands::CommandSpec::urgent`]: `M108` and
+    /// `M876` end the wait, `M112` kills) is done. True when the line was one of those.
     pub fn emergency(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> bool {
-        if !self.profile.firmware.emergency_parser {
-            return false;
-        }
-        if self.halt.is_some() {
+        if !self.profile.firmware.emergency_parser || self.halt.is_some() {
             return false;
         }
         let text = super::command_text(line);
-        let code: String = text.iter().take_while(|b| !b.is_ascii_whitespace()).map(|&b| b as char).collect();
-        match code.to_ascii_uppercase().as_str() {
-            "M108" => {
-                self.host.waiting_for_user = false;
-                true
-            }
-            "M876" => {
-                // `M876 P1` only says the host supports prompts; `S<n>` answers one.
-                if text.windows(2).any(|w| w[0].eq_ignore_ascii_case(&b'S') && w[1].is_ascii_digit()) {
-                    self.answer_prompt();
-                }
-                true
-            }
-            "M112" => {
-                self.host.waiting_for_user = false;
-                self.halt = Some(super::Halt::Emergency);
-                self.heaters_off();
-                out(self.now_s(), crate::thermal::protection::KILL_LINE);
-                true
-            }
-            "M410" => true,
-            _ => false,
+        // The parser reads `M`, the number, then a space or the end (Marlin's `e_parser.h`).
+        let Some((letter, rest)) = text.split_first() else { return false };
+        let digits = rest.iter().take_while(|b| b.is_ascii_digit()).count();
+        let after = rest.get(digits);
+        if !letter.eq_ignore_ascii_case(&b'M')
+            || digits == 0
+            || digits > 4
+            || after.is_some_and(|b| !b.is_ascii_whitespace())
+        {
+            return false;
         }
+        let number = rest[..digits].iter().fold(0u32, |n, d| n * 10 + u32::from(d - b'0'));
+        let command = gweave::Command::Code { letter: b'M', number, sub: None };
+        let Some(row) = super::commands::lookup(command, b"") else { return false };
+        let Some(urgent) = row.urgent.filter(|_| self.profile.firmware.has(row.needs)) else { return false };
+        urgent(self, number, text, out);
+        true
+    }
+
+    /// The wait for the user ends (the emergency parser's `M108`, `M112`).
+    pub(super) fn end_user_wait(&mut self) {
+        self.host.waiting_for_user = false;
     }
 
     /// `M600`: pause and ask for the filament (steps 1 and 2 above).
