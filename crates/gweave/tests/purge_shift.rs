@@ -507,6 +507,34 @@ fn a_retraction_carried_across_a_g92_keeps_each_tools_filament() {
     }
 }
 
+/// Regression: the walk back counted an extrusion that only refills the tool's retraction as
+/// purge. T0 comes back with the 0.5 mm it retracted when it was put away, and its one
+/// extrusion feeds 0.0005 mm of them back: nothing leaves the nozzle, so there is no T0 colour
+/// to purge and the last change stays where it is (it was moved before that move, reporting
+/// 0.0005 mm).
+#[test]
+fn a_refill_of_the_retraction_is_not_counted_as_purge() {
+    let input = "M83\nG1 E-0.5\nT1\nG1 E-0.5\nT0\nG1 X0.01 Y0 E0.0005\nT1\nG1 E0.5\n";
+    let (out, r) = run(Rules::fixed(0.05).unwrap(), input.as_bytes());
+    let last = r.changes.kept().last().unwrap();
+    assert_eq!((last.from_tool, last.to_tool, last.moved_mm, last.split.is_none()), (0, 1, 0.0, true));
+    assert_eq!(r.moved_mm, 0.0);
+    // Unchanged, byte for byte: no change moved, no bracket written.
+    assert_eq!(out, input.as_bytes());
+    // A move feeding 0.6 mm refills the 0.5 first and prints 0.1: the 0.05 mm purge is the
+    // end of it, so the change goes at (0.6 - 0.05) / 0.6 of the move, X 11 of 12.
+    let input = input.replace("X0.01 Y0 E0.0005", "X12 Y0 E0.6");
+    let (out, r) = run(Rules::fixed(0.05).unwrap(), input.as_bytes());
+    let last = r.changes.kept().last().unwrap();
+    assert_eq!((last.moved_mm, last.split.as_ref().map(|s| s.point_mm[0])), (0.05, Some(11.0)));
+    // T0 refills and prints 0.05 mm, T1 unretracts the 0.5 mm it had parked (the file's
+    // `G1 E0.5` after the change is taken out: T1 made it here) and prints the purge.
+    assert_eq!(
+        String::from_utf8(out).unwrap(),
+        "M83\nG1 E-0.5\nT1\nG1 E-0.5\nT0\nG1 X11 Y0 E0.55\nT1\nG1 E0.5 F2400\nG1 X12 Y0 E0.05\n"
+    );
+}
+
 fn assert_close(got: &[f64], want: &[f64]) {
     assert!(
         got.len() == want.len() && got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6),

@@ -2,8 +2,8 @@
 //!
 //! After a change of tool or mix the old colour still fills the nozzle. Instead of purging it
 //! into a tower, this pass moves every change *earlier* in the file by the purge amount: it walks
-//! back along the old colour's extruding moves, summing their positive extrusion, until the purge
-//! is reached, splits that move at the exact point (the `split` module explains the maths) and puts the
+//! back along the old colour's extruding moves, summing what they put out of the nozzle, until the
+//! purge is reached, splits that move at the exact point (the `split` module explains the maths) and puts the
 //! change lines there. The purge is then printed inside the part, with the old colour's path, and
 //! the new colour comes out clean where its own path begins.
 //!
@@ -20,7 +20,9 @@
 //! where it was), leaving every tool with its own retraction (the `tool_retraction` module).
 //!
 //! ## Rules
-//! - Only extruding moves (positive E with XY motion) count; retractions, unretractions,
+//! - Only extruding moves (positive E with XY motion) count, and only for what leaves the nozzle:
+//!   an extrusion made with a retraction in force first refills it, and that part is no purge
+//!   (a refill prints nothing of the old colour). Retractions, unretractions,
 //!   `G10`/`G11`, travels and extrude-only primes do not. The change is always put inside or
 //!   directly before an extruding move, never inside a retract/travel/unretract sequence.
 //! - The walk back stops at a layer change (unless `cross_layers`, then at the second one), at an
@@ -40,7 +42,7 @@
 //!
 //! ## Bounded memory
 //! The pass streams. It holds back only the lines a later change could still be moved before:
-//! a line is written out as soon as the positive extrusion held after it reaches the largest purge
+//! a line is written out as soon as the purge held after it reaches the largest purge
 //! any change can ask for, or when a barrier above passes. With layer crossing the window also
 //! never reaches back past the previous layer's start, and `max_window_lines` caps it in any case.
 //! So memory is the purge length plus at most one layer of lines, whatever the file size; the
@@ -135,6 +137,14 @@ impl Held {
             Kind::Other => 0.0,
         }
     }
+
+    /// What the line puts out of the nozzle, mm: its extrusion beyond the refill of the
+    /// retraction in force before it. The first `retracted_mm` of its feed only bring the
+    /// filament back to the nozzle (nothing of the old colour comes out there), so only the
+    /// rest is purge.
+    fn purge_mm(&self) -> f64 {
+        (self.e_mm() - self.retracted_mm).max(0.0)
+    }
 }
 
 /// What selects the colour: the tool, the active Marlin mix, the active RepRapFirmware mix.
@@ -150,7 +160,8 @@ struct Colour {
 pub struct PurgeShift {
     rules: Rules,
     window: VecDeque<Held>,
-    window_e_mm: f64,
+    /// What the held lines put out of the nozzle (`Held::purge_mm`), mm.
+    window_purge_mm: f64,
     /// Why the window starts where it does (the last barrier).
     floor: &'static str,
     layer_start_seq: Option<u64>,
@@ -201,7 +212,7 @@ impl PurgeShift {
         PurgeShift {
             rules,
             window: VecDeque::new(),
-            window_e_mm: 0.0,
+            window_purge_mm: 0.0,
             floor: "start of the print",
             layer_start_seq: None,
             seq: 0,
@@ -286,26 +297,26 @@ impl PurgeShift {
         while let Some(h) = self.window.pop_front() {
             self.retire(out, h.line)?;
         }
-        self.window_e_mm = 0.0;
+        self.window_purge_mm = 0.0;
         self.floor = reason;
         Ok(())
     }
 
     fn pop_front(&mut self, out: &mut dyn Write) -> io::Result<()> {
         if let Some(h) = self.window.pop_front() {
-            self.window_e_mm -= h.e_mm();
+            self.window_purge_mm -= h.purge_mm();
             self.retire(out, h.line)?;
         }
         Ok(())
     }
 
     fn push(&mut self, out: &mut dyn Write, held: Held) -> io::Result<()> {
-        self.window_e_mm += held.e_mm();
+        self.window_purge_mm += held.purge_mm();
         self.window.push_back(held);
         self.report.max_window_lines = self.report.max_window_lines.max(self.window.len());
         // The front line is no longer needed once the moves after it hold the largest purge.
         while let Some(front) = self.window.front() {
-            let after_front = self.window_e_mm - front.e_mm();
+            let after_front = self.window_purge_mm - front.purge_mm();
             if after_front >= self.rules.max_purge_mm + EPS_E_MM {
                 self.pop_front(out)?;
             } else if self.window.len() > self.rules.max_window_lines {

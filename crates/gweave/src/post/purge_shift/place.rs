@@ -39,18 +39,20 @@ impl PurgeShift {
         let mut need = requested_mm;
         let mut place: Option<(usize, Option<f64>)> = None;
         let mut earliest = None;
+        // Only what leaves the nozzle counts: an extrusion first refills the retraction in
+        // force before it, and the purge is the end of the move, past that refill.
         for i in (0..self.window.len()).rev() {
-            let e_mm = self.window[i].e_mm();
-            if e_mm <= 0.0 {
+            let (e_mm, purge_mm) = (self.window[i].e_mm(), self.window[i].purge_mm());
+            if purge_mm <= 0.0 {
                 continue;
             }
-            if e_mm >= need - EPS_E_MM {
-                let head = e_mm - need;
+            if purge_mm >= need - EPS_E_MM {
+                let head = (e_mm - need).max(0.0);
                 place = Some(if head <= EPS_E_MM { (i, None) } else { (i, Some(head / e_mm)) });
                 need = 0.0;
                 break;
             }
-            need -= e_mm;
+            need -= purge_mm;
             earliest = Some(i);
         }
         let place = place.or(earliest.map(|i| (i, None)));
@@ -78,7 +80,7 @@ impl PurgeShift {
             transition_mm: None,
         };
         let held: Vec<Held> = self.window.drain(..).collect();
-        self.window_e_mm = 0.0;
+        self.window_purge_mm = 0.0;
         let (at, fraction) = place.unwrap_or((held.len(), None));
         // The held lines after the change's new place (after the first half of a split).
         let moved_from = if fraction.is_some() && at < held.len() { at + 1 } else { at };
