@@ -49,7 +49,7 @@ impl Machine {
     }
 
     /// The emergency parser saw `line` while the board waits for the user: a command whose row
-    /// says what the parser does at once ([`super::commands::CommandSpec::urgent`]: `M108` and
+    /// says what the parser does at once (its `urgent` in `interp/commands.rs`: `M108` and
     /// `M876` end the wait, `M112` kills) is done. True when the line was one of those.
     pub fn emergency(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> bool {
         if !self.profile.firmware.emergency_parser || self.halt.is_some() {
