@@ -39,9 +39,14 @@ fn arg<T: JobOptions>(spec: &'static OptionSpec) -> Arg {
         T::default().set(spec, value.clone()).map_err(|e| e.reason())?;
         Ok(value)
     };
-    // A value may be a negative number (`--seam-rotation -7.5`): clap otherwise takes `-7.5`
-    // for a short flag and refuses it.
+    // A value may be a negative number (`--seam-rotation -7.5`), or a list starting with one
+    // (`--origin -10,20`): clap otherwise takes `-7.5` or `-10,20` for a short flag and refuses
+    // it. A list of numbers takes any value starting with a hyphen, which `parse` then refuses
+    // if it is no list of numbers.
     arg = arg.value_name(spec.shape.value_name).value_parser(parse).allow_negative_numbers(true);
+    if matches!(spec.kind, Kind::Numbers(_)) {
+        arg = arg.allow_hyphen_values(true);
+    }
     if let Some(default) = (spec.default)() {
         arg = arg.default_value(default);
     }
@@ -134,7 +139,11 @@ mod tests {
         let jobs = gweave_sim::transform::jobs();
         // The list holds at least the jobs the engine had when this was written (a new job needs
         // no edit here: the loop below holds it to its subcommand).
-        let names: Vec<&str> = jobs.iter().map(|(command, _)| *command).collect();
+        let mut names: Vec<&str> = jobs.iter().map(|(command, _)| *command).collect();
+        let listed = names.len();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), listed, "a job listed twice: {names:?}");
         for job in
             ["purge-shift", "mix", "rotary wrap", "rotary tube", "sim", "estimate", "preview", "raster"]
         {
@@ -270,6 +279,11 @@ mod tests {
         assert_eq!(w.seam_rotation, Some(-7.5));
         let w: WrapOptions = parse(&["--seam-rotation", "-7.5e0"]).unwrap();
         assert_eq!(w.seam_rotation, Some(-7.5));
+        // A list starting with a negative number (a review found `--origin -10,20` refused).
+        let r: RasterOptions = parse(&["--origin", "-10,20"]).unwrap();
+        assert_eq!(r.origin, Some([-10.0, 20.0]));
+        let p: PurgeShiftOptions = parse(&["--tower-at", "-5,10"]).unwrap();
+        assert_eq!(p.tower_at, Some([-5.0, 10.0]));
     }
 
     #[test]
