@@ -777,9 +777,7 @@ fn m303(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
 
 /// `M112`: heaters off, halted until `M999`.
 fn emergency_stop(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
-    m.halt = Some(super::Halt::Emergency);
-    m.heaters_off();
-    out(m.now_s(), crate::thermal::protection::KILL_LINE);
+    m.kill(out);
 }
 
 /// The emergency parser's `M108` ends a wait for the user; its `M410` (quick stop) finds no
@@ -793,9 +791,7 @@ fn break_wait(m: &mut Machine, number: u32, _: &[u8], _: &mut dyn FnMut(f64, &st
 /// The emergency parser's `M112`: killed at once, the wait ended with it.
 fn kill_now(m: &mut Machine, _: u32, _: &[u8], out: &mut dyn FnMut(f64, &str)) {
     m.end_user_wait();
-    m.halt = Some(super::Halt::Emergency);
-    m.heaters_off();
-    out(m.now_s(), crate::thermal::protection::KILL_LINE);
+    m.kill(out);
 }
 
 /// The emergency parser's `M876`: `S<n>` answers the open prompt; `M876 P1` only says the host

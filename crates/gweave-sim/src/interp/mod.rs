@@ -444,7 +444,7 @@ impl Machine {
 
     /// Whether this firmware build has the command: the build option its row needs
     /// (`[firmware]` options such as `sdcard`).
-    fn built_with(&self, spec: &CommandSpec) -> bool {
+    pub(super) fn built_with(&self, spec: &CommandSpec) -> bool {
         self.profile.firmware.has(spec.needs)
     }
 

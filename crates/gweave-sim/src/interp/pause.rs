@@ -50,29 +50,33 @@ impl Machine {
 
     /// The emergency parser saw `line` while the board waits for the user: a command whose row
     /// says what the parser does at once (its `urgent` in `interp/commands.rs`: `M108` and
-    /// `M876` end the wait, `M112` kills) is done. True when the line was one of those.
-    pub fn emergency(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> bool {
+    /// `M876` end the wait, `M112` kills) is done; any other line waits its turn.
+    pub fn emergency(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
         if !self.profile.firmware.emergency_parser || self.halt.is_some() {
-            return false;
+            return;
         }
         let text = super::command_text(line);
         // The parser reads `M`, the number, then a space or the end (Marlin's `e_parser.h`).
-        let Some((letter, rest)) = text.split_first() else { return false };
+        let Some((letter, rest)) = text.split_first() else { return };
         let digits = rest.iter().take_while(|b| b.is_ascii_digit()).count();
-        let after = rest.get(digits);
-        if !letter.eq_ignore_ascii_case(&b'M')
-            || digits == 0
-            || digits > 4
-            || after.is_some_and(|b| !b.is_ascii_whitespace())
-        {
-            return false;
+        let ends = rest.get(digits).is_none_or(u8::is_ascii_whitespace);
+        if !letter.eq_ignore_ascii_case(&b'M') || !(1..=4).contains(&digits) || !ends {
+            return;
         }
         let number = rest[..digits].iter().fold(0u32, |n, d| n * 10 + u32::from(d - b'0'));
         let command = gweave::Command::Code { letter: b'M', number, sub: None };
-        let Some(row) = super::commands::lookup(command, b"") else { return false };
-        let Some(urgent) = row.urgent.filter(|_| self.profile.firmware.has(row.needs)) else { return false };
-        urgent(self, number, text, out);
-        true
+        if let Some(row) = super::commands::lookup(command, b"") {
+            if let Some(urgent) = row.urgent.filter(|_| self.built_with(row)) {
+                urgent(self, number, text, out);
+            }
+        }
+    }
+
+    /// Heaters off, halted until `M999`, as `M112` leaves the board.
+    pub(super) fn kill(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        self.halt = Some(super::Halt::Emergency);
+        self.heaters_off();
+        out(self.now_s(), crate::thermal::protection::KILL_LINE);
     }
 
     /// The wait for the user ends (the emergency parser's `M108`, `M112`).

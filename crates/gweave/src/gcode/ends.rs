@@ -178,9 +178,11 @@ mod tests {
         assert_eq!(missing_footer(b"G1 X1 E1"), None);
         assert_eq!(missing_footer(b""), None);
         let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data");
-        for rel in
-            ["prusaslicer/pr_cone_2tool.gcode", "cura/cura_dual.gcode", "slic3r/slic3r_cone_2tool.gcode"]
-        {
+        for (rel, footer) in [
+            ("prusaslicer/pr_cone_2tool.gcode", Footer::PrusaSlicer),
+            ("cura/cura_dual.gcode", Footer::Cura),
+            ("slic3r/slic3r_cone_2tool.gcode", Footer::Slic3r),
+        ] {
             let ends = read_ends(&data.join(rel)).unwrap();
             assert_eq!(missing_footer(&ends), None, "{rel}");
             let text = std::fs::read(data.join(rel)).unwrap();
@@ -188,7 +190,7 @@ mod tests {
             let cut = &cut[..cut.iter().rposition(|b| *b == b'\n').unwrap() + 4];
             let tail = &cut[cut.len().saturating_sub(TAIL_BYTES)..];
             let ends = [&cut[..HEAD_BYTES.min(cut.len())], b"\n", tail].concat();
-            assert!(missing_footer(&ends).is_some(), "{rel} cut");
+            assert_eq!(missing_footer(&ends), Some(footer), "{rel} cut");
         }
     }
 
