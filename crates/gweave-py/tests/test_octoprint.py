@@ -172,6 +172,49 @@ def test_octoprint_analysis_reports_progress_in_bounded_memory(plugin, data, tmp
     assert runs[4]["time"] > 3.9 * runs[1]["time"]
 
 
+# A child reading a file as gweave does: its two ends first (the settings, a cut file's footer:
+# the last 256 KB), closed, then the whole file forward in steps.
+ENDS_THEN_READ = """
+import os, sys, time
+path = sys.argv[1]
+with open(path, "rb") as f:
+    f.read(64 * 1024)
+    f.seek(-256 * 1024, os.SEEK_END)
+    f.read()
+    time.sleep(0.15)  # several sample periods positioned at the tail
+with open(path, "rb") as f:
+    while f.read(64 * 1024):
+        time.sleep(0.01)
+"""
+
+
+# The plugin's watcher on that child, sampling every 20 ms; prints what it reported.
+WATCH = """
+import json, subprocess, sys, threading
+from octoprint_gweave import runner
+runner.POLL_S = 0.02
+seen, stop = [], threading.Event()
+child = subprocess.Popen([sys.executable, "-c", sys.argv[1], sys.argv[2]])
+watcher = threading.Thread(target=runner._watch, args=(child.pid, sys.argv[2], seen.append, stop))
+watcher.start()
+child.wait(timeout=60)
+stop.set()
+watcher.join()
+print(json.dumps(seen))
+"""
+
+
+def test_octoprint_progress_never_goes_back_when_gweave_reads_the_tail_first(plugin, tmp_path):
+    big = tmp_path / "big.gcode"
+    big.write_bytes(b"G1 X1 Y1 E0.1\n" * 200_000)  # 2.8 MB: 44 reads, ~0.5 s
+    out = subprocess.run([sys.executable, "-c", WATCH, ENDS_THEN_READ, str(big)], capture_output=True, text=True,
+                         check=True)
+    seen = json.loads(out.stdout)
+    assert seen == sorted(seen), seen
+    # The main read's progress, not the tail's position: the first figure is early in the file.
+    assert seen and seen[0] < 0.5 and len(seen) >= 5, seen
+
+
 # A checksum error on line 2 (gweave check: an error; gweave stats refuses the file).
 BAD = b"M104 S200\nN1 G1 X10 Y10*99\nG1 X20 E1\n"
 

@@ -31,6 +31,8 @@ from typing import Callable, Dict, List, Optional, Sequence
 KEEP_FINDINGS = 20
 # How often the read position is sampled, seconds.
 POLL_S = 0.25
+# The bytes gweave reads from a file's end before its main read (`TAIL_BYTES`, gcode/ends.rs).
+ENDS_TAIL = 256 * 1024
 
 Progress = Callable[[float], None]
 
@@ -133,7 +135,16 @@ def _tail(stream, keep: List[str], n: int = 20) -> None:
 
 
 def _watch(pid: int, path: str, progress: Progress, stop: threading.Event) -> None:
-    """Samples the child's read offset in ``path`` until ``stop``."""
+    """Samples the child's read offset in ``path`` until ``stop``, reporting it as a fraction
+    that never goes back.
+
+    gweave opens the file more than once: before its main read it reads the file's two ends
+    (the slicer's settings, a cut file's missing footer), seeking to the last 256 KB. A sample
+    that lands there must not count as progress, or the bar would jump near 1 and fall back. So a
+    position in the last ``ENDS_TAIL`` bytes counts only when the same descriptor has moved
+    forward to it since the last sample: the ends are read in one go and then stand still (or
+    close), the main read goes on forward. Any figure below one already shown is dropped.
+    """
     try:
         size = os.path.getsize(path)
         real = os.path.realpath(path)
@@ -141,7 +152,7 @@ def _watch(pid: int, path: str, progress: Progress, stop: threading.Event) -> No
         return
     if size <= 0 or not os.path.isdir(f"/proc/{pid}/fd"):
         return
-    fd = None
+    fd, seen, shown = None, None, 0.0
     while not stop.wait(POLL_S):
         try:
             if fd is None:
@@ -155,9 +166,13 @@ def _watch(pid: int, path: str, progress: Progress, stop: threading.Event) -> No
                 pos = int(next(line for line in f if line.startswith("pos:")).split()[1])
         except (OSError, StopIteration, ValueError):
             # The child closed the file or exited: nothing left to measure.
-            fd = None
+            fd, seen = None, None
             continue
-        progress(min(pos / size, 1.0))
+        moved = seen is not None and pos > seen
+        seen = pos
+        if (moved or pos < size - ENDS_TAIL) and pos / size > shown:
+            shown = min(pos / size, 1.0)
+            progress(shown)
 
 
 # `path:line:column: severity: message`, as `gweave check` prints each finding.
