@@ -10,6 +10,7 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::container;
+use gweave::gcode::ends::{missing_footer, read_ends};
 use gweave::gcode::flavour::read_firmware;
 use gweave::gcode::reader::Part;
 use gweave::options::Spelling;
@@ -148,11 +149,15 @@ pub fn simulate(
         }
     };
     let mut n = 0u64;
+    // The last line read had no line ending, and the whole file was read.
+    let mut unterminated = false;
     while let Some(line) = reader.next_line().map_err(read_error)? {
         match line.part {
             Part::Whole => {
+                unterminated = line.eol.is_empty();
                 // A halt stops the run, and so does the seed's M0 (`[firmware] m0 = "seed"`).
                 if machine.execute(line.bytes, &mut out) == Outcome::Halted || machine.program_ended() {
+                    unterminated = false;
                     break;
                 }
             }
@@ -163,6 +168,14 @@ pub fn simulate(
         if n.is_multiple_of(65_536) {
             progress.advance(reader.position());
         }
+    }
+    // A file cut short (a copy or an upload stopped) runs to its cut and stops there, as on a
+    // printer: said as `check` says it, on the last line. The ends are read only for a file whose
+    // last line has no ending.
+    if let Some(footer) =
+        unterminated.then(|| read_ends(input).ok().and_then(|e| missing_footer(&e))).flatten()
+    {
+        machine.file_cut(footer);
     }
     machine.finish(&mut out);
     let report = Box::new(machine.report());
@@ -230,6 +243,41 @@ mod tests {
                 assert_eq!(report.position[0], 0.0, "homed by the seed's M0");
             }
         }
+    }
+
+    /// Regression: `check` warned that a file cut mid-number looks truncated, and the virtual
+    /// printer ran it to its cut without a word. The warning is on the last line; the whole
+    /// file gets none.
+    #[test]
+    fn a_file_cut_short_is_said_truncated_on_its_last_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let fixture =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/prusaslicer/pr_cone_2tool.gcode");
+        let text = std::fs::read(&fixture).unwrap();
+        let cut = &text[..text.len() / 2];
+        let cut = &cut[..cut.iter().rposition(|&b| b == b'.').unwrap() + 1];
+        let (whole, part) = (dir.path().join("whole.gcode"), dir.path().join("cut.gcode"));
+        std::fs::write(&whole, &text).unwrap();
+        std::fs::write(&part, cut).unwrap();
+        let truncated = |path: &Path| {
+            let run = simulate(path, MachineProfile::default(), &SimSetup::default(), &mut Quiet).unwrap();
+            let Simulation::Marlin { report, .. } = run else {
+                panic!("the Marlin model runs the default profile")
+            };
+            let said: Vec<_> =
+                report.warnings.iter().filter(|w| w.kind.name() == "truncated").cloned().collect();
+            (report.warning_counts.get("truncated").copied(), said, report.lines)
+        };
+        let (count, said, lines) = truncated(&part);
+        let newlines = cut.iter().filter(|&&b| b == b'\n').count() as u64;
+        assert_eq!((count, lines), (Some(1), newlines + 1));
+        assert_eq!(said[0].line, newlines + 1);
+        assert_eq!(
+            said[0].kind,
+            crate::interp::WarningKind::Truncated { footer: gweave::gcode::ends::Footer::PrusaSlicer }
+        );
+        assert!(said[0].kind.to_string().starts_with("the file looks truncated"), "{}", said[0].kind);
+        assert_eq!(truncated(&whole).0, None);
     }
 
     #[test]

@@ -532,6 +532,12 @@ impl Machine {
         self.warn(WarningKind::UnknownCommand { command: text });
     }
 
+    /// The file ended at the last line executed without its slicer's last line and without a
+    /// line ending: it looks cut short ([`WarningKind::Truncated`]).
+    pub(crate) fn file_cut(&mut self, footer: gweave::gcode::ends::Footer) {
+        self.warn(WarningKind::Truncated { footer });
+    }
+
     fn warn(&mut self, kind: WarningKind) {
         *self.warning_counts.entry(kind.name()).or_default() += 1;
         if self.warnings.len() < MAX_WARNINGS {

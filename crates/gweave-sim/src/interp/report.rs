@@ -119,6 +119,13 @@ pub enum WarningKind {
         /// What was wrong.
         detail: InkjetWarning,
     },
+    /// The file looks cut short: its last line has no line ending and the line its slicer ends
+    /// every file with is missing (`gweave check`'s warning, on the last line): a printer runs
+    /// it to that line and stops with part of the object printed.
+    Truncated {
+        /// The slicer whose last line is missing.
+        footer: gweave::gcode::ends::Footer,
+    },
 }
 
 impl WarningKind {
@@ -134,6 +141,7 @@ impl WarningKind {
             WarningKind::Thermal { .. } => "thermal",
             WarningKind::WaitTimeout { .. } => "wait_timeout",
             WarningKind::Inkjet { .. } => "inkjet",
+            WarningKind::Truncated { .. } => "truncated",
         }
     }
 }

@@ -25,6 +25,9 @@ impl fmt::Display for WarningKind {
             WarningKind::Thermal { message } => write!(f, "{}", message.escape_debug()),
             WarningKind::WaitTimeout { heater } => write!(f, "heater {heater} never reached its target"),
             WarningKind::Inkjet { detail } => write!(f, "inkjet: {detail}"),
+            WarningKind::Truncated { footer } => {
+                write!(f, "{}", gweave::gcode::diag::Finding::NoFooter { footer: *footer })
+            }
         }
     }
 }
