@@ -1,6 +1,8 @@
 //! What the finishing copy writes for one line: the slicer's figures and the progress lines,
 //! from [`Figures`](super::Figures), and nothing for any other line.
 
+use memchr::memchr;
+
 use super::{is_progress_line, prusa_duration, MetadataPass};
 
 impl MetadataPass {
@@ -32,9 +34,7 @@ impl MetadataPass {
             |v: &[f64], decimals: usize| v.iter().map(|x| format!("{x:.decimals$}")).collect::<Vec<_>>();
         let keep_key = |key_end: usize| line[..line.len() - text.len() + key_end].to_vec();
         // PrusaSlicer family: `; key = value`.
-        if let Some((key, end)) =
-            text.iter().position(|&b| b == b'=').map(|i| (text[..i].trim_ascii(), i + 1))
-        {
+        if let Some((key, end)) = memchr(b'=', text).map(|i| (text[..i].trim_ascii(), i + 1)) {
             let value = match key {
                 b"filament used [mm]" => {
                     self.wrote_filament = true;
@@ -64,7 +64,7 @@ impl MetadataPass {
             return Some(out);
         }
         // Cura: `;KEY:value`.
-        let (key, colon) = text.iter().position(|&b| b == b':').map(|i| (&text[..i], i + 1))?;
+        let (key, colon) = memchr(b':', text).map(|i| (&text[..i], i + 1))?;
         // Keep the space after the colon, if any (`;Filament used: 0m`, `;TIME:6666`).
         let end = colon + text[colon..].iter().take_while(|b| **b == b' ').count();
         let value = match key {
@@ -75,12 +75,9 @@ impl MetadataPass {
             b"TIME" | b"PRINT.TIME" => format!("{:.0}", f.time_s[0]),
             _ => {
                 // `EXTRUDER_TRAIN.<n>.MATERIAL.VOLUME_USED`, mm³.
-                let tool: usize = std::str::from_utf8(key)
-                    .ok()?
-                    .strip_prefix("EXTRUDER_TRAIN.")?
-                    .strip_suffix(".MATERIAL.VOLUME_USED")?
-                    .parse()
-                    .ok()?;
+                // The key's ends are ASCII: it is UTF-8 if what lies between them is.
+                let tool = key.strip_prefix(b"EXTRUDER_TRAIN.")?.strip_suffix(b".MATERIAL.VOLUME_USED")?;
+                let tool: usize = std::str::from_utf8(tool).ok()?.parse().ok()?;
                 format!("{:.0}", f.filament_mm.get(tool).copied().unwrap_or(0.0) * f.area_mm2())
             }
         };
