@@ -25,7 +25,7 @@ use memchr::{memchr2, memrchr2};
 use super::MetadataPass;
 use crate::error::Error;
 use crate::gcode::encoding::{refuse_utf16, ENCODING_HEAD};
-use crate::gcode::reader::MAX_LINE;
+use crate::gcode::reader::{find_line_end, MAX_LINE};
 
 /// Bytes read at a time: what is written at once when no line in them changes. More than
 /// [`MAX_LINE`], so a whole line always fits after the unfinished one moved to the front.
@@ -103,8 +103,13 @@ impl MetadataPass {
         let (mut written, mut from) = (0, 0);
         while let Some(found) = memchr2(b'M', b'm', &lines[from..]) {
             let at = from + found;
-            let start = memrchr2(b'\n', b'\r', &lines[from..at]).map_or(from, |i| from + i + 1);
-            let end = memchr2(b'\n', b'\r', &lines[at..]).map_or(lines.len(), |i| at + i);
+            // Most lines found are commands (`M104 S210`): the `M` opens the line, and the line
+            // is short enough for the reader's inline search for its end.
+            let start = match at.checked_sub(1).map(|before| lines[before]) {
+                None | Some(b'\n' | b'\r') => at,
+                Some(_) => memrchr2(b'\n', b'\r', &lines[from..at]).map_or(from, |i| from + i + 1),
+            };
+            let end = find_line_end(&lines[at..]).map_or(lines.len(), |i| at + i);
             let line = &lines[start..end];
             if line.len() <= MAX_LINE {
                 if let Some(rewritten) = self.rewritten(line) {
