@@ -58,6 +58,10 @@ impl MetadataPass {
             }
             chunks.start += copied;
         }
+        // The input ended inside a long line, its last, copied in pieces without an ending.
+        if std::mem::take(&mut self.long_line) {
+            self.open_line = true;
+        }
         self.finish(out).map_err(written)
     }
 
@@ -77,8 +81,10 @@ impl MetadataPass {
         };
         let line = content + eol;
         if std::mem::take(&mut self.long_line) || content > MAX_LINE {
-            // The end of a long line, or all of one: copied as it is.
+            // The end of a long line, or all of one: copied as it is. Without an ending, it is
+            // the file's last line, which what follows must not run on in.
             out.write_all(&data[..line])?;
+            self.open_line = eol == 0;
         } else if !self.header_written {
             self.line(&data[..content], &data[content..line], out)?;
         } else {
@@ -121,13 +127,9 @@ impl MetadataPass {
             from = end;
         }
         out.write_all(&lines[written..])?;
-        // The file's last line, without an ending: what follows it must start a line, if it
-        // was a whole line (a long one's pieces leave the flag as it was, as line by line).
+        // The file's last line, without an ending: what follows it must start a line.
         if lines.last().is_some_and(|b| !matches!(b, b'\n' | b'\r')) {
-            let start = memrchr2(b'\n', b'\r', lines).map_or(0, |i| i + 1);
-            if lines.len() - start <= MAX_LINE {
-                self.open_line = true;
-            }
+            self.open_line = true;
         }
         Ok(())
     }
@@ -235,6 +237,10 @@ mod tests {
                 pass.line(line.bytes, line.eol, &mut out).unwrap();
             } else {
                 out.extend_from_slice(&[line.bytes, line.eol].concat());
+                // As the copy is held to since a long last line's footer ran on in it.
+                if let Part::Last { .. } = line.part {
+                    pass.open_line = line.eol.is_empty();
+                }
             }
         }
         pass.finish(&mut out).unwrap();
@@ -374,6 +380,26 @@ mod tests {
                     "file {i}, read {step} bytes at a time"
                 );
             }
+        }
+    }
+
+    /// Regression: after a last line longer than [`MAX_LINE`] without a line ending, the footer
+    /// ran on in it (`xxx; filament used [mm] = 0.00`), as did the header after a file of one
+    /// such line: the line-by-line copy set the flag for whole lines only.
+    #[test]
+    fn what_follows_a_long_unterminated_last_line_starts_a_line() {
+        let long = format!("M73 P1 R1 ;{}", "x".repeat(MAX_LINE));
+        let header = header_line("mix a.gcode");
+        let footer = "; filament used [mm] = 0.00\r\n; filament used [cm3] = 0.00\r\n; estimated printing time (normal mode) = 0s\r\n";
+        let no_figures = || MetadataPass::new(Figures::default(), header.clone());
+        for step in [CHUNK, 100_003] {
+            let out = copied(no_figures(), format!("G1 X1\r\n{long}").as_bytes(), step);
+            assert!(
+                out == format!("{header}\r\nG1 X1\r\n{long}\r\n{footer}").into_bytes(),
+                "read {step} at a time"
+            );
+            let out = copied(no_figures(), long.as_bytes(), step);
+            assert!(out == format!("{long}\n{header}\n{}", footer.replace('\r', "")).into_bytes());
         }
     }
 
