@@ -8,7 +8,7 @@
 //! (`measure.rs`): one parse of its lines feeds the `stats` count (the filament) and the
 //! estimator's planners (the print time, one planner thread per mode), with the machine limits
 //! the slicer wrote into the file (normal and silent mode), else the default machine's. A copy
-//! that only splits lines writes it to the real target (a temporary file renamed into place,
+//! that looks only at the lines that can change writes it to the real target (a temporary file renamed into place,
 //! `--in-place` with its `.bak`, or standard output) with the run's header on top and the
 //! slicer's figures and `M73` progress rewritten (`gweave::post::metadata`). Memory stays
 //! bounded: the passes stream, and what is kept is one time per progress line. The estimator

@@ -93,7 +93,7 @@ fn line_ends16(chunk: &[u8; 16]) -> u32 {
 /// (a call, a dispatch and an alignment prologue before its loop) costs more than the search:
 /// the first 256 bytes are tested 16 at a time inline, and only longer lines go to `memchr2`.
 #[inline(always)]
-fn find_line_end(haystack: &[u8]) -> Option<usize> {
+pub(crate) fn find_line_end(haystack: &[u8]) -> Option<usize> {
     let mut i = 0;
     while let Some(chunk) = haystack.get(i..i + 16) {
         let mask = line_ends16(chunk.try_into().expect("16 bytes"));

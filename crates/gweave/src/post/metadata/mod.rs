@@ -15,20 +15,21 @@
 //! [`Figures`] measured on that file (its filament by the `stats` count, its times by the
 //! virtual printer's estimate: the caller, which can depend on the estimator, fills them in).
 //! Lines it does not know are copied byte for byte; a file that carries no such line (a
-//! generated one) gets a PrusaSlicer-style footer, so `stats` can compare. The copy only splits
-//! lines ([`MetadataPass::copy`]): what it rewrites is found by its first bytes, so nothing is
-//! lexed, and it runs at the speed of `memchr` rather than of the parser.
+//! generated one) gets a PrusaSlicer-style footer, so `stats` can compare. The copy looks only
+//! at the lines that hold an `M` or an `m`, found by a vector search, and writes the bytes
+//! between the lines it changes in large writes (`copy.rs`): it costs little more than copying
+//! the file. What it writes for a line is `rewrite.rs`'s.
 //!
 //! It also writes the run's header, one comment line `; gweave 0.1.0 mix -c mix.toml
 //! (generated)`, which [`earlier_runs`] finds again: running the same transform on its own
 //! output would stack (shift the changes twice, purge twice), and the caller refuses it.
 
-use std::io::{self, BufRead, Read, Write};
-use std::path::Path;
+use std::io::{self, BufRead, Write};
 
-use crate::error::Error;
-use crate::gcode::reader::{LineReader, Part};
 use crate::stats::DEFAULT_FILAMENT_DIAMETER_MM;
+
+mod copy;
+mod rewrite;
 
 /// The start of gweave's header line.
 const HEADER_START: &str = "; gweave ";
@@ -156,6 +157,9 @@ pub struct MetadataPass {
     /// The last line written has no line ending (the file's last line, unterminated): what is
     /// added after it starts a line of its own.
     open_line: bool,
+    /// The copy is inside a line longer than [`MAX_LINE`](crate::gcode::reader::MAX_LINE),
+    /// whose start it has copied as it is, as it copies the rest.
+    long_line: bool,
 }
 
 impl MetadataPass {
@@ -171,115 +175,8 @@ impl MetadataPass {
             slic3r_tool: 0,
             eol: b"\n".to_vec(),
             open_line: false,
+            long_line: false,
         }
-    }
-
-    /// The rewritten line, or `None` to keep it.
-    fn rewrite(&mut self, line: &[u8]) -> Option<Vec<u8>> {
-        if is_progress_line(line) {
-            let [t, t_silent] = self.figures.progress_s.get(self.progress).copied()?;
-            self.progress += 1;
-            return Some(self.progress_line(line, t, t_silent));
-        }
-        let text = line.trim_ascii_start().strip_prefix(b";")?;
-        let f = &self.figures;
-        let list =
-            |v: &[f64], decimals: usize| v.iter().map(|x| format!("{x:.decimals$}")).collect::<Vec<_>>();
-        let keep_key = |key_end: usize| line[..line.len() - text.len() + key_end].to_vec();
-        // PrusaSlicer family: `; key = value`.
-        if let Some((key, end)) =
-            text.iter().position(|&b| b == b'=').map(|i| (text[..i].trim_ascii(), i + 1))
-        {
-            let value = match key {
-                b"filament used [mm]" => {
-                    self.wrote_filament = true;
-                    list(&f.filament_mm, 2).join(", ")
-                }
-                b"filament used [cm3]" => list(&f.cm3(), 2).join(", "),
-                b"filament used [g]" => list(&f.grams(), 2).join(", "),
-                b"total filament used [g]" => format!("{:.2}", f.grams().iter().sum::<f64>()),
-                b"total filament cost" => format!("{:.2}", f.cost()),
-                b"estimated printing time (normal mode)" => prusa_duration(f.time_s[0]),
-                b"estimated printing time (silent mode)" => prusa_duration(f.time_s[1]),
-                b"estimated first layer printing time (normal mode)" => prusa_duration(f.first_layer_s[0]),
-                b"estimated first layer printing time (silent mode)" => prusa_duration(f.first_layer_s[1]),
-                b"filament used" => {
-                    // Slic3r: one line per extruder.
-                    let tool = self.slic3r_tool;
-                    self.slic3r_tool += 1;
-                    self.wrote_filament = true;
-                    let mm = f.filament_mm.get(tool).copied().unwrap_or(0.0);
-                    format!("{mm:.1}mm ({:.1}cm3)", mm * f.area_mm2() / 1000.0)
-                }
-                _ => return None,
-            };
-            let mut out = keep_key(end);
-            out.push(b' ');
-            out.extend_from_slice(value.as_bytes());
-            return Some(out);
-        }
-        // Cura: `;KEY:value`.
-        let (key, colon) = text.iter().position(|&b| b == b':').map(|i| (&text[..i], i + 1))?;
-        // Keep the space after the colon, if any (`;Filament used: 0m`, `;TIME:6666`).
-        let end = colon + text[colon..].iter().take_while(|b| **b == b' ').count();
-        let value = match key {
-            b"Filament used" => {
-                self.wrote_filament = true;
-                f.filament_mm.iter().map(|mm| format!("{:.5}m", mm / 1000.0)).collect::<Vec<_>>().join(", ")
-            }
-            b"TIME" | b"PRINT.TIME" => format!("{:.0}", f.time_s[0]),
-            _ => {
-                // `EXTRUDER_TRAIN.<n>.MATERIAL.VOLUME_USED`, mm³.
-                let tool: usize = std::str::from_utf8(key)
-                    .ok()?
-                    .strip_prefix("EXTRUDER_TRAIN.")?
-                    .strip_suffix(".MATERIAL.VOLUME_USED")?
-                    .parse()
-                    .ok()?;
-                format!("{:.0}", f.filament_mm.get(tool).copied().unwrap_or(0.0) * f.area_mm2())
-            }
-        };
-        let mut out = keep_key(end);
-        out.extend_from_slice(value.as_bytes());
-        Some(out)
-    }
-
-    /// `M73 P.. R..` (normal mode), `M73 Q.. S..` (silent mode) or `;TIME_ELAPSED:` at the
-    /// estimated elapsed times `t_s` and `t_silent_s`: percent done and minutes left, both
-    /// rounded, so they move monotonically to 100 and 0.
-    fn progress_line(&self, line: &[u8], t_s: f64, t_silent_s: f64) -> Vec<u8> {
-        let text = String::from_utf8_lossy(line);
-        if text.trim_start().starts_with(";TIME_ELAPSED:") {
-            let indent = &text[..text.len() - text.trim_start().len()];
-            return format!("{indent};TIME_ELAPSED:{t_s:.6}").into_bytes();
-        }
-        let [total, total_silent] = self.figures.time_s;
-        let percent =
-            |t: f64, total: f64| if total > 0.0 { (100.0 * t / total).round().min(100.0) } else { 100.0 };
-        let minutes_left = |t: f64, total: f64| ((total - t).max(0.0) / 60.0).round();
-        let (code, comment) = match text.find(';') {
-            Some(i) => (&text[..i], &text[i..]),
-            None => (&text[..], ""),
-        };
-        let words: Vec<String> = code
-            .split_whitespace()
-            .map(|w| {
-                let value = match w.as_bytes()[0].to_ascii_uppercase() {
-                    b'P' => percent(t_s, total),
-                    b'R' => minutes_left(t_s, total),
-                    b'Q' => percent(t_silent_s, total_silent),
-                    b'S' => minutes_left(t_silent_s, total_silent),
-                    _ => return w.to_owned(),
-                };
-                format!("{}{value:.0}", &w[..1])
-            })
-            .collect();
-        let mut out = words.join(" ");
-        if !comment.is_empty() {
-            out.push(' ');
-            out.push_str(comment);
-        }
-        out.into_bytes()
     }
 
     fn write_header(&mut self, out: &mut dyn Write) -> io::Result<()> {
@@ -295,72 +192,6 @@ impl MetadataPass {
             out.write_all(&self.eol)?;
         }
         Ok(())
-    }
-}
-
-impl MetadataPass {
-    /// Copies `input` (read from `path`) to `out` with the header and the metadata; errors
-    /// name `path` for a read and `shown` (the output the user named) for a write. Lines are
-    /// split as every pass splits them ([`LineReader`]): the pieces of a line longer than
-    /// [`MAX_LINE`](crate::gcode::reader::MAX_LINE) are copied as they are.
-    pub fn copy(
-        mut self,
-        input: impl Read,
-        path: &Path,
-        shown: &Path,
-        out: &mut dyn Write,
-    ) -> crate::Result<()> {
-        let mut reader = LineReader::new(input);
-        let written = |e| Error::io(shown, e);
-        while let Some(line) = reader.next_line().map_err(|e| Error::io(path, e))? {
-            if line.part == Part::Whole {
-                self.line(line.bytes, line.eol, out).map_err(written)?;
-            } else {
-                out.write_all(line.bytes).and_then(|()| out.write_all(line.eol)).map_err(written)?;
-            }
-        }
-        self.finish(out).map_err(written)
-    }
-
-    /// One whole line, `bytes` without its line ending `eol`.
-    fn line(&mut self, bytes: &[u8], eol: &[u8], out: &mut dyn Write) -> io::Result<()> {
-        let cura_flavour_first = self.first_line && bytes.starts_with(b";FLAVOR:");
-        if self.first_line {
-            self.first_line = false;
-            if !eol.is_empty() {
-                self.eol = eol.to_vec();
-            }
-            // Ultimaker's printers read the Griffin header only at the very top, and Cura's
-            // post-processing scripts expect its `;FLAVOR:` line to open the file (its first
-            // piece): the header goes after them.
-            if bytes != b";START_OF_HEADER" && !cura_flavour_first {
-                self.write_header(out)?;
-            }
-        }
-        // Only comments and `M73` are rewritten: any other line is copied without a look.
-        let rewritten = match bytes.trim_ascii_start().first() {
-            Some(b';' | b'M' | b'm') => self.rewrite(bytes),
-            _ => None,
-        };
-        out.write_all(rewritten.as_deref().unwrap_or(bytes))?;
-        out.write_all(eol)?;
-        self.open_line = eol.is_empty();
-        if !self.header_written && (bytes == b";END_OF_HEADER" || cura_flavour_first) {
-            self.write_header(out)?;
-        }
-        Ok(())
-    }
-
-    fn finish(&mut self, out: &mut dyn Write) -> io::Result<()> {
-        if self.first_line || !self.header_written {
-            self.write_header(out)?;
-        }
-        if self.wrote_filament {
-            return Ok(());
-        }
-        // A file without the slicer's figures (a generated one): PrusaSlicer's footer.
-        self.end_open_line(out)?;
-        write_footer(&self.figures, &self.eol, out)
     }
 }
 
