@@ -10,6 +10,7 @@ use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
 use gweave::gcode::arc::Arc;
 use gweave::gcode::layers::Structure;
 use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
+use gweave::gcode::line::PlainMove;
 use gweave::gcode::reader::Part;
 use gweave::gcode::state::{self, Path};
 use gweave::rotary::cylinder::RotaryConfig;
@@ -54,6 +55,8 @@ pub(super) struct Front {
     rotary: Option<DeclaredFeed>,
     /// Whether a `T<n>` waits for the queued moves ([`Front::tool_changes`]).
     tool_change: ToolChange,
+    /// The plain move of the line `estimate`'s own reader read last (`plain_move.rs`).
+    plain: PlainMove,
 }
 
 /// Arcs longer than [`MAX_ARC_CHORDS`] chords of `ARC_CHORD_MM` (over 100 m: no printer's
@@ -154,6 +157,7 @@ impl Front {
             refused: Refused::default(),
             rotary: None,
             tool_change: ToolChange::default(),
+            plain: PlainMove::default(),
         };
         front.refresh_mix(jobs);
         Ok(front)

@@ -8,7 +8,6 @@
 //! every word; `estimate` reads nothing of a plain move but its five numbers.
 
 use gweave::gcode::lexer::read_plain_move;
-use gweave::gcode::line::PlainMove;
 use gweave::gcode::reader::Part;
 use gweave::RawLine;
 
@@ -17,20 +16,32 @@ use crate::interp::commands;
 
 impl Front {
     /// [`Front::step`] for `estimate`, whose lines are read by nothing else: a plain move is
-    /// read by [`read_plain_move`] and planned from the modal position before and after it
-    /// (the same jobs, to the bit; the property test in `estimate/mod.rs` says so).
+    /// read by [`read_plain_move`] into [`Front::plain`] (kept from line to line: made afresh,
+    /// its six fields cost six stores a line) and planned from the modal position before and
+    /// after it (the same jobs, to the bit: the tests below).
     #[inline(always)]
     pub(in super::super) fn read(
         &mut self,
         line: &RawLine<'_>,
         jobs: &mut Vec<Job>,
     ) -> Result<(), EstimateError> {
-        let mut plain = PlainMove::default();
-        if self.reads_plain_moves() && line.part == Part::Whole && read_plain_move(line, &mut plain) {
-            self.plain_move(&plain, jobs);
+        if !(self.reads_plain_moves() && line.part == Part::Whole && read_plain_move(line, &mut self.plain)) {
+            return self.step(line, jobs);
+        }
+        // What `Front::step` does with a plain move: counted, checked against the `G0 G1` row's
+        // ranges (refused whole, as the virtual printer refuses it), followed by the modal
+        // state, and planned if it moves.
+        self.line += 1;
+        if let Err(refusal) = commands::check_plain(&self.plain) {
+            self.refuse(refusal);
             return Ok(());
         }
-        self.step(line, jobs)
+        let from = at(&self.state.pos);
+        if self.state.apply_plain(&self.plain) {
+            let to = at(&self.state.pos);
+            self.book.straight(&self.state.structure, from, to, self.state.feed_mm_min, self.line, jobs);
+        }
+        Ok(())
     }
 
     /// Whether a plain move's numbers are all its meaning here: E extrudes
@@ -39,28 +50,13 @@ impl Front {
     fn reads_plain_moves(&self) -> bool {
         !self.state.reads_words() && self.rotary.is_none()
     }
-
-    /// What [`Front::step`] does with a plain move's line: counted, checked against the `G0 G1`
-    /// row's ranges (refused whole, as the virtual printer refuses it), followed by the modal
-    /// state, and planned if it moves.
-    #[inline(always)]
-    fn plain_move(&mut self, plain: &PlainMove, jobs: &mut Vec<Job>) {
-        self.line += 1;
-        if let Err(refusal) = commands::check_plain(plain) {
-            self.refuse(refusal);
-            return;
-        }
-        let from = at(&self.state.pos);
-        if self.state.apply_plain(plain) {
-            let to = at(&self.state.pos);
-            self.book.straight(&self.state.structure, from, to, self.state.feed_mm_min, self.line, jobs);
-        }
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use gweave::LineReader;
+
+    use gweave::gcode::line::PlainMove;
 
     use super::*;
     use crate::motion::limits::{KlipperLimits, MotionProfile};
