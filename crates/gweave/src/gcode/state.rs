@@ -236,17 +236,17 @@ impl State {
         self.structure.observe_command(|| true);
         self.motion = if plain.rapid { Motion::Rapid } else { Motion::Linear };
         let scale = if self.inches { MM_PER_INCH } else { 1.0 };
-        let from = self.pos;
-        let mut to = from;
-        let (moved, feed) = plain_targets(plain, scale, self.relative_axes, &mut to);
-        self.pos = to;
+        // Changed in place: no move is copied out of the position here (see `motion_words`).
+        let (x, y, e) = (self.pos[X], self.pos[Y], self.pos[E]);
+        let (moved, feed) = plain_targets(plain, scale, self.relative_axes, &mut self.pos);
         if let Some(feed) = feed {
             self.feed_mm_min = feed;
         }
         if moved {
             // What [`Move::is_extruding`] and [`Move::e_mm`] say of a straight move.
-            let e_mm = to[E] - from[E];
-            if e_mm > 0.0 && (to[X] != from[X] || to[Y] != from[Y]) {
+            let to = &self.pos;
+            let e_mm = to[E] - e;
+            if e_mm > 0.0 && (to[X] != x || to[Y] != y) {
                 self.structure.observe_extrusion(to[Z]);
             }
             self.feed(e_mm);
