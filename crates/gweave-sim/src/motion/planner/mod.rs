@@ -56,7 +56,7 @@ pub struct PlannedBlock {
     /// The tag of the move it came from.
     pub tag: u64,
     /// Start position (the origin for a sink that reads no positions:
-    /// [`BlockSink::reads_positions`]).
+    /// `BlockSink::reads_positions`).
     pub start: Pos,
     /// End position (for a move without XYZ travel, XYZ stay at the start; the origin for a
     /// sink that reads no positions).
