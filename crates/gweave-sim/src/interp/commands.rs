@@ -405,9 +405,15 @@ pub(crate) fn check_line(
 ) -> Result<(), RefusedWord> {
     // Inlined, a plain move costs its comparisons and no call.
     if block.plain.present != 0 {
-        return PlainRanges::get().check(&block.plain);
+        return check_plain(&block.plain);
     }
     check_other_line(block, line, modal, row)
+}
+
+/// [`check_line`] for a plain move read without a [`Block`] (`estimate`'s own reader).
+#[inline(always)]
+pub(crate) fn check_plain(plain: &PlainMove) -> Result<(), RefusedWord> {
+    PlainRanges::get().check(plain)
 }
 
 /// [`check_line`] for a line that is not a plain move.

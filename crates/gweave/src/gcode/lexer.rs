@@ -116,9 +116,27 @@ fn parse_general(raw: &[u8], block: &mut Block) {
 /// malformed number...) and the general lexer reads it from the start.
 #[inline(always)]
 fn plain_motion<const LIST_WORDS: bool>(raw: &[u8], ahead: &[u8], block: &mut Block) -> bool {
-    let number = match raw {
-        [b'G', b'0', ..] => 0,
-        [b'G', b'1', ..] => 1,
+    let Block { plain, words, .. } = block;
+    if !plain_words(raw, ahead, plain, |word| {
+        if LIST_WORDS {
+            words.push(word);
+        }
+    }) {
+        return false;
+    }
+    let number = u32::from(!block.plain.rapid);
+    block.command = Command::Code { letter: b'G', number, sub: None };
+    block.command_span = Span::new(0, 2);
+    true
+}
+
+/// A plain move's words into `plain` (each also given to `word`, in written order), as
+/// [`plain_motion`] takes them; `false` for any other line, with `plain` half written.
+#[inline(always)]
+fn plain_words(raw: &[u8], ahead: &[u8], plain: &mut PlainMove, mut word: impl FnMut(Word)) -> bool {
+    plain.rapid = match raw {
+        [b'G', b'0', ..] => true,
+        [b'G', b'1', ..] => false,
         _ => return false,
     };
     let mut i = 2;
@@ -138,17 +156,23 @@ fn plain_motion<const LIST_WORDS: bool>(raw: &[u8], ahead: &[u8], block: &mut Bl
         // part of one. What follows it is tested as the loop goes on.
         let Ok((value, end)) = scan_before_space(ahead, i + 1) else { return false };
         debug_assert!(end <= raw.len());
-        if LIST_WORDS {
-            block.push_word(Word { letter, value: Value::Number(value), span: Span::new(i, end) });
-        }
-        block.plain.values[index] = value;
-        block.plain.present |= 1 << index;
+        word(Word { letter, value: Value::Number(value), span: Span::new(i, end) });
+        plain.values[index] = value;
+        plain.present |= 1 << index;
         i = end;
     }
-    block.command = Command::Code { letter: b'G', number, sub: None };
-    block.command_span = Span::new(0, 2);
-    block.plain.rapid = number == 0;
     true
+}
+
+/// A whole line from a [`LineReader`](super::reader::LineReader) read as a plain move with at
+/// least one word (`G0`/`G1` with X, Y, Z, E and F numbers, nothing else), its numbers into
+/// `plain`, without a [`Block`]: for a reader that needs those numbers alone, and reads every
+/// other line with [`parse_line`] (`false`, `plain` then meaning nothing). The numbers, to
+/// the bit, and the lines taken are those of the lexer's own fast path, which this is.
+#[inline(always)]
+pub fn read_plain_move(line: &RawLine<'_>, plain: &mut PlainMove) -> bool {
+    plain.present = 0;
+    plain_words(line.bytes, line.with_lookahead(), plain, |_| {}) && plain.present != 0
 }
 
 fn line_number(raw: &[u8], start: usize, block: &mut Block) -> usize {

@@ -217,13 +217,51 @@ impl State {
                 self.structure.observe_extrusion(m.to[Z]);
             }
         }
-        let fed_mm = self.effect.filament_mm();
+        self.feed(self.effect.filament_mm());
+        &self.effect
+    }
+
+    /// [`State::apply`] for a plain move read without a [`Block`] (a reader of its own, such
+    /// as `estimate`'s: [`read_plain_move`](super::lexer::read_plain_move)): the same state
+    /// after it, to the bit, except [`State::effect`], which is left [`Effect::None`] (the
+    /// caller has the move: [`State::pos`] before and after). Returns whether it moved. Only
+    /// where plain moves are read by letter ([`State::reads_words`] is `false`), and for a
+    /// `plain` with at least one word; any other line goes through [`State::apply`].
+    #[inline(always)]
+    pub fn apply_plain(&mut self, plain: &PlainMove) -> bool {
+        debug_assert!(self.reads_plain_moves && plain.present != 0);
+        self.effect = Effect::None;
+        self.structure.layer_started = false;
+        // A command without a comment: a bare one.
+        self.structure.observe_command(|| true);
+        self.motion = if plain.rapid { Motion::Rapid } else { Motion::Linear };
+        let scale = if self.inches { MM_PER_INCH } else { 1.0 };
+        // Changed in place: no move is copied out of the position here (see `motion_words`).
+        let (x, y, e) = (self.pos[X], self.pos[Y], self.pos[E]);
+        let (moved, feed) = plain_targets(plain, scale, self.relative_axes, &mut self.pos);
+        if let Some(feed) = feed {
+            self.feed_mm_min = feed;
+        }
+        if moved {
+            // What [`Move::is_extruding`] and [`Move::e_mm`] say of a straight move.
+            let to = &self.pos;
+            let e_mm = to[E] - e;
+            if e_mm > 0.0 && (to[X] != x || to[Y] != y) {
+                self.structure.observe_extrusion(to[Z]);
+            }
+            self.feed(e_mm);
+        }
+        moved
+    }
+
+    /// `fed_mm` of filament fed (negative: retracted) by the active tool.
+    #[inline(always)]
+    fn feed(&mut self, fed_mm: f64) {
         if fed_mm != 0.0 {
             if let Some(fed) = self.filament_mm.get_mut(self.tool as usize) {
                 *fed += fed_mm;
             }
         }
-        &self.effect
     }
 
     /// The line's words by letter, if it is a plain move read that way ([`PlainMove`]) and they

@@ -43,6 +43,11 @@ impl BlockSink for Accounts {
         self.last_motion_end_s = self.t_s;
         self.blocks += 1;
     }
+
+    /// The steppers and the speed trace read the positions; the time accounts do not.
+    fn reads_positions(&self) -> bool {
+        self.count_steps || self.speed.is_some()
+    }
 }
 
 /// Planner, steppers and clock.

@@ -10,6 +10,7 @@ use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
 use gweave::gcode::arc::Arc;
 use gweave::gcode::layers::Structure;
 use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
+use gweave::gcode::line::PlainMove;
 use gweave::gcode::reader::Part;
 use gweave::gcode::state::{self, Path};
 use gweave::rotary::cylinder::RotaryConfig;
@@ -18,6 +19,8 @@ use gweave::{Block, Command, Effect, Firmware, MixingCode, RawLine, Severity, St
 
 use super::rotary_feed::DeclaredFeed;
 use super::tool_change::ToolChange;
+mod plain_move;
+
 use super::{
     EstimateError, Job, Key, ARC_CHORD_MM, DEFAULT_FEED_MM_S, FW_RECOVER_FEED_MM_S, FW_RETRACT_FEED_MM_S,
     KLIPPER_MOTOR_OFF_S, KLIPPER_START_BUFFER_S,
@@ -52,6 +55,8 @@ pub(super) struct Front {
     rotary: Option<DeclaredFeed>,
     /// Whether a `T<n>` waits for the queued moves ([`Front::tool_changes`]).
     tool_change: ToolChange,
+    /// The plain move of the line `estimate`'s own reader read last (`plain_move.rs`).
+    plain: PlainMove,
 }
 
 /// Arcs longer than [`MAX_ARC_CHORDS`] chords of `ARC_CHORD_MM` (over 100 m: no printer's
@@ -152,6 +157,7 @@ impl Front {
             refused: Refused::default(),
             rotary: None,
             tool_change: ToolChange::default(),
+            plain: PlainMove::default(),
         };
         front.refresh_mix(jobs);
         Ok(front)
@@ -627,13 +633,38 @@ impl Bookkeeping {
     /// line of saving and restoring registers), the arc out of line.
     #[inline(always)]
     fn motion(&mut self, s: &Structure, m: &state::Move, line: u64, jobs: &mut Vec<Job>) {
-        let feed_mm_s = if m.feed_mm_min > 0.0 { m.feed_mm_min / 60.0 } else { DEFAULT_FEED_MM_S };
+        match &m.path {
+            Path::Arc(arc) => {
+                let (feed_mm_s, tag) = self.moving_at(s, m.feed_mm_min, jobs);
+                self.arc(m, arc, feed_mm_s, tag, line, jobs)
+            }
+            Path::Line => self.straight(s, at(&m.from), at(&m.to), m.feed_mm_min, line, jobs),
+        }
+    }
+
+    /// A straight move of the file from `start` to `end` at `feed_mm_min` (0: none set yet),
+    /// on line `line`.
+    #[inline(always)]
+    fn straight(
+        &mut self,
+        s: &Structure,
+        start: Pos,
+        end: Pos,
+        feed_mm_min: f64,
+        line: u64,
+        jobs: &mut Vec<Job>,
+    ) {
+        let (feed_mm_s, tag) = self.moving_at(s, feed_mm_min, jobs);
+        push_move(jobs, Move { start, end, feed_mm_s, tag }, line);
+    }
+
+    /// A move starts at `feed_mm_min`: its feed in mm/s and its tag.
+    #[inline(always)]
+    fn moving_at(&mut self, s: &Structure, feed_mm_min: f64, jobs: &mut Vec<Job>) -> (f64, u64) {
+        let feed_mm_s = if feed_mm_min > 0.0 { feed_mm_min / 60.0 } else { DEFAULT_FEED_MM_S };
         let tag = self.tag(s, jobs);
         self.moving(jobs);
-        match &m.path {
-            Path::Arc(arc) => self.arc(m, arc, feed_mm_s, tag, line, jobs),
-            Path::Line => push_move(jobs, Move { start: at(&m.from), end: at(&m.to), feed_mm_s, tag }, line),
-        }
+        (feed_mm_s, tag)
     }
 
     /// An arc of the file, cut into chords as the plan side takes them ([`Chords`]): a huge

@@ -588,7 +588,7 @@ fn parse_lines<R: Read>(
     let stop = gweave::Token::current();
     let mut until_check = LINES_BETWEEN_STOP_CHECKS;
     while let Some(line) = reader.next_line()? {
-        skip_mixing_errors(front.step(&line, batch))?;
+        skip_mixing_errors(front.read(&line, batch))?;
         if batch.len() >= BATCH {
             let next = handover.spare.try_recv().unwrap_or_else(|_| new_batch());
             if handover.to_back.send(std::mem::replace(batch, next)).is_err() {

@@ -107,9 +107,16 @@ impl QueuedMove {
         self.max_mcr_start_v2 = v2.lesser(prev.max_mcr_start_v2 + prev.mcr_delta_v2);
     }
 
-    fn block(&self, entry_v2: f64, cruise_v2: f64, exit_v2: f64) -> PlannedBlock {
+    /// The planned block, with the move's positions if `positions` ([`BlockSink::reads_positions`]).
+    #[inline(always)]
+    fn block(&self, entry_v2: f64, cruise_v2: f64, exit_v2: f64, positions: bool) -> PlannedBlock {
         let trapezoid = Trapezoid::from_v2(self.len, self.accel, entry_v2, cruise_v2, exit_v2);
-        PlannedBlock::new(&self.mv, (self.len, self.kind), self.accel, trapezoid)
+        let extent = (self.len, self.kind);
+        if positions {
+            PlannedBlock::new(&self.mv, extent, self.accel, trapezoid)
+        } else {
+            PlannedBlock::timing(&self.mv, extent, self.accel, trapezoid)
+        }
     }
 }
 
@@ -276,10 +283,12 @@ impl KlipperLookahead {
             return;
         }
         let mut prev_cruise_v2: f64 = 0.0;
+        let positions = sink.reads_positions();
         // Read in place, then dropped from the queue (no copy of each move on its way out).
         for (m, w) in self.queue.iter().zip(&self.walk).take(flush_count) {
             let cruise_v2 = w.cruise_v2.unwrap_or_else(|| prev_cruise_v2.lesser(w.start_v2));
-            sink.block(&m.block(w.start_v2.lesser(cruise_v2), cruise_v2, w.next_start_v2.lesser(cruise_v2)));
+            let (entry_v2, exit_v2) = (w.start_v2.lesser(cruise_v2), w.next_start_v2.lesser(cruise_v2));
+            sink.block(&m.block(entry_v2, cruise_v2, exit_v2, positions));
             prev_cruise_v2 = cruise_v2;
         }
         self.queue.drain(..flush_count);
