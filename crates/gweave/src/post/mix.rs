@@ -66,7 +66,7 @@ use crate::eol::Eol;
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Region;
 use crate::gcode::number::NumberFormat;
-use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction};
+use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction, ToolRetractions};
 use crate::gcode::state::{Effect, Motion, Move, State, E, X, Y, Z};
 use crate::pass::{keep, Ctx, Flow, Pass, PassError, Step};
 use crate::post::purge_block::{purge_start_pos, write_purge, write_refill, PurgeMotion, PurgeStart};
@@ -131,11 +131,9 @@ pub struct MixPass {
     rotating: [Option<usize>; 2],
     slicer_tool: u32,
     decided_layer: Option<u32>,
-    /// The one nozzle's retraction in force.
-    retraction: Retraction,
-    /// The retraction in force per slicer tool, as the slicer sees it (a nozzle per tool): of
-    /// the nozzle's, what the tool printing will undo itself.
-    tool_retraction: BTreeMap<u32, Retraction>,
+    /// The one nozzle's retraction in force, and per slicer tool, as the slicer sees it (a
+    /// nozzle per tool), what the tool printing will undo itself.
+    retractions: ToolRetractions,
     /// Dropped tool-change retraction per slicer tool, to drop again from its unretraction, mm.
     owed_mm: BTreeMap<u32, f64>,
     held: Vec<Held>,
@@ -175,8 +173,7 @@ impl MixPass {
             rotating: [None; 2],
             slicer_tool: 0,
             decided_layer: None,
-            retraction: Retraction::default(),
-            tool_retraction: BTreeMap::new(),
+            retractions: ToolRetractions::default(),
             owed_mm: BTreeMap::new(),
             held: Vec::new(),
             feed_before: 0.0,
@@ -382,8 +379,8 @@ impl MixPass {
     /// leaves by `retract_length_toolchange` and unretracts a tool only if that tool retracted,
     /// so the first change to a tool leaves the one nozzle retracted by the old tool's amount.
     fn purge_start(&self, mv: &Move, state: &State) -> (PurgeStart, f64) {
-        let nozzle_mm = self.retraction.in_force_mm();
-        let tool_mm = self.tool_retraction.get(&self.slicer_tool).map_or(0.0, Retraction::in_force_mm);
+        let nozzle_mm = self.retractions.nozzle_mm();
+        let tool_mm = self.retractions.tool_mm(self.slicer_tool);
         // Below a micrometre it is the rounding of the file's E words, not a retraction.
         let (retracted_mm, refill_mm) =
             if nozzle_mm - tool_mm > 1e-6 { (tool_mm, nozzle_mm - tool_mm) } else { (nozzle_mm, 0.0) };
@@ -401,7 +398,7 @@ impl MixPass {
     /// Follows a block's prime of `refill_mm` in mix `to`: the nozzle is that much less
     /// retracted, and the filament is the mix's.
     fn refilled(&mut self, to: usize, refill_mm: f64) {
-        self.retraction.feed(refill_mm);
+        self.retractions.refill_nozzle(refill_mm);
         self.acc.filament(to, refill_mm, None);
     }
 
@@ -420,10 +417,7 @@ impl MixPass {
 
     /// Follows `fed_mm` of filament fed by the slicer tool printing, on the nozzle and for the tool.
     fn feed(&mut self, fed_mm: f64) {
-        self.retraction.feed(fed_mm);
-        if fed_mm != 0.0 {
-            self.tool_retraction.entry(self.slicer_tool).or_default().feed(fed_mm);
-        }
+        self.retractions.feed(self.slicer_tool, fed_mm);
     }
 
     /// The purge of `[purge] initial_mm` before the first move of filament, in the first mix:
@@ -550,7 +544,7 @@ impl MixPass {
         if self.profile.tool_change.keep_slicer_retractions || owed <= 0.0 {
             return Ok(amount);
         }
-        let keep_for_retraction = amount.min(self.retraction.in_force_mm());
+        let keep_for_retraction = amount.min(self.retractions.nozzle_mm());
         let dropped = (amount - keep_for_retraction).min(owed);
         if dropped <= 1e-9 {
             return Ok(amount);
@@ -615,8 +609,7 @@ impl MixPass {
                 Some((instead, mm)) if drop => {
                     out.write_all(&instead)?;
                     *self.owed_mm.entry(self.slicer_tool).or_insert(0.0) += mm;
-                    self.retraction.withdraw(mm);
-                    self.tool_retraction.entry(self.slicer_tool).or_default().withdraw(mm);
+                    self.retractions.withdraw(self.slicer_tool, mm);
                     self.acc.dropped_retractions += 1;
                 }
                 _ => out.write_all(&h.bytes)?,

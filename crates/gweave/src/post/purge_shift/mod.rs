@@ -83,6 +83,7 @@ use crate::firmware::MixingCode;
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::line::Block;
 use crate::gcode::reader::RawLine;
+use crate::gcode::retraction::ToolRetractions;
 use crate::gcode::state::{Effect, StateOptions};
 use crate::pass::{Ctx, Flow, OwnedLine, Pass, PassError, Step};
 use crate::post::purge_block::{purge_start_pos, PurgeStart};
@@ -92,7 +93,7 @@ use checks::{require_markers, FeatureComments};
 use fallback::{Spot, Surroundings};
 use nozzles::Nozzles;
 use split::Splittable;
-use tool_retraction::{EWord, Feeds, ToolRetractions};
+use tool_retraction::{EWord, Feeds};
 
 /// What stops the walk back at a layer change (the report's `stopped_by`).
 const LAYER_CHANGE: &str = "a layer change";
@@ -184,7 +185,7 @@ pub struct PurgeShift {
     /// Buffers of written lines, reused for new held lines.
     spare: Vec<OwnedLine>,
     features: FeatureComments,
-    /// Each tool's retraction, as the input has it.
+    /// The nozzle's retraction and each tool's, as the input has them.
     tools: ToolRetractions,
     /// The active tool's retraction before the line being read, mm.
     line_retracted_mm: f64,
@@ -400,7 +401,7 @@ impl PurgeShift {
                 relative_e: state.relative_e(),
                 feed_mm_min: state.feed_mm_min,
                 rapid_mode: state.motion == crate::gcode::state::Motion::Rapid,
-                retracted_mm: self.env.retracted_mm(),
+                retracted_mm: self.tools.nozzle_mm(),
             },
             inches: state.inches,
         }
@@ -445,8 +446,7 @@ impl Pass for PurgeShift {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
         self.nozzles.line(ctx.block, ctx.line.number).map_err(PassError::refuse)?;
-        self.env.follow_retraction(ctx.effect);
-        self.line_retracted_mm = self.tools.in_force_mm();
+        self.line_retracted_mm = self.tools.active_mm();
         self.tools.follow(ctx.state.tool, ctx.effect);
         if let Effect::Move(m) = ctx.effect {
             self.env.observe(m, in_print);
@@ -464,7 +464,7 @@ impl Pass for PurgeShift {
                 self.group_feature = structure.feature;
                 self.group_retracted_mm = self.line_retracted_mm;
             }
-            self.group_parked_mm = self.tools.in_force_mm();
+            self.group_parked_mm = self.tools.active_mm();
             self.nozzles.tool_change(self.colour.tool, ctx.state.tool).map_err(PassError::refuse)?;
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
@@ -498,7 +498,7 @@ impl Pass for PurgeShift {
         let kind = match ctx.effect {
             Effect::Move(m) if m.is_extruding() => {
                 self.features.extrusion(structure.feature);
-                if !self.rules.allowed.contains(&structure.feature) {
+                if !self.rules.allowed.contains(structure.feature) {
                     self.flush(out, KEPT_FEATURE)?;
                     return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
                 }
@@ -549,7 +549,7 @@ impl Pass for PurgeShift {
             self.emit_text(out, &retract, b"\n")?;
             self.emit_text(out, &restore, b"\n")?;
         }
-        if let Some(w) = self.features.warning(&self.rules.allowed) {
+        if let Some(w) = self.features.warning(self.rules.allowed) {
             self.report.warn_first(w);
         }
         let r = &mut self.report;
