@@ -50,6 +50,13 @@ impl Eol {
         out.write_all(eol)
     }
 
+    /// One line and its own ending, as one slice.
+    #[inline]
+    pub(crate) fn whole_line(&mut self, out: &mut dyn Write, line_with_eol: &[u8]) -> io::Result<()> {
+        self.lines += 1;
+        out.write_all(line_with_eol)
+    }
+
     /// `\n`-separated `text` (a final `\n` is optional): the file's ending after each line,
     /// `last_eol` after the last. Empty text writes nothing.
     pub(crate) fn text(&mut self, out: &mut dyn Write, text: &[u8], last_eol: &[u8]) -> io::Result<()> {

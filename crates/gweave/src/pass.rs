@@ -125,8 +125,7 @@ impl<P: Pass + ?Sized> Pass for &mut P {
 /// Writes a line exactly as it was read.
 #[inline]
 pub fn keep(ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
-    out.write_all(ctx.line.bytes)?;
-    out.write_all(ctx.line.eol)?;
+    out.write_all(ctx.line.with_eol())?;
     Ok(Flow::Continue)
 }
 

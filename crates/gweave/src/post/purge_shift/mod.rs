@@ -60,6 +60,7 @@
 mod checks;
 pub(crate) mod config;
 mod fallback;
+mod held_text;
 mod nozzles;
 mod options;
 mod place;
@@ -91,6 +92,7 @@ use crate::run::IN_MEMORY;
 use crate::run::{Ran, Run, Source};
 use checks::{require_markers, FeatureComments};
 use fallback::{Spot, Surroundings};
+use held_text::{HeldText, TextRef};
 use nozzles::Nozzles;
 use split::Splittable;
 use tool_retraction::{EWord, Feeds};
@@ -106,8 +108,6 @@ const EPS_E_MM: f64 = 1e-6;
 /// inputs in `M165` and 16 virtual tools by default; more costs nothing).
 const MIX_INPUTS: usize = 8;
 const MIX_TOOLS: usize = 64;
-/// Line buffers kept for reuse.
-const SPARE_LINES: usize = 4096;
 
 /// What a held line is to the walk back.
 #[derive(Debug, Clone)]
@@ -120,7 +120,10 @@ enum Kind {
 
 #[derive(Debug, Clone)]
 struct Held {
-    line: OwnedLine,
+    /// The line's text, in [`PurgeShift::text`].
+    text: TextRef,
+    /// Its number in the input (a line the pass wrote: the number of the line it stands for).
+    number: u64,
     kind: Kind,
     layer: Option<u32>,
     feature: Feature,
@@ -161,6 +164,8 @@ struct Colour {
 pub struct PurgeShift {
     rules: Rules,
     window: VecDeque<Held>,
+    /// The held lines' text.
+    text: HeldText,
     /// What the held lines put out of the nozzle (`Held::purge_mm`), mm.
     window_purge_mm: f64,
     /// Why the window starts where it does (the last barrier).
@@ -182,8 +187,6 @@ pub struct PurgeShift {
     /// Lines written, with the ending each had.
     emitted: Eol,
     report: PurgeShiftReport,
-    /// Buffers of written lines, reused for new held lines.
-    spare: Vec<OwnedLine>,
     features: FeatureComments,
     /// The nozzle's retraction and each tool's, as the input has them.
     tools: ToolRetractions,
@@ -213,6 +216,7 @@ impl PurgeShift {
         PurgeShift {
             rules,
             window: VecDeque::new(),
+            text: HeldText::default(),
             window_purge_mm: 0.0,
             floor: "start of the print",
             layer_start_seq: None,
@@ -229,7 +233,6 @@ impl PurgeShift {
             colour,
             emitted: Eol::default(),
             report,
-            spare: Vec::new(),
             features: FeatureComments::default(),
             tools: ToolRetractions::default(),
             line_retracted_mm: 0.0,
@@ -268,36 +271,17 @@ impl PurgeShift {
         self.emit(out, ctx.line.bytes, ctx.line.eol)
     }
 
-    /// A copy of the line, in a buffer of a line written earlier if one is free: held lines
-    /// then cost no allocation once the window has reached its size.
-    fn own(&mut self, raw: &RawLine<'_>) -> OwnedLine {
-        match self.spare.pop() {
-            Some(mut line) => {
-                line.bytes.clear();
-                line.bytes.extend_from_slice(raw.bytes);
-                line.eol.clear();
-                line.eol.extend_from_slice(raw.eol);
-                line.number = raw.number;
-                line
-            }
-            None => OwnedLine::from_raw(raw),
-        }
-    }
-
-    /// Writes a held line and keeps its buffers for reuse.
-    fn retire(&mut self, out: &mut dyn Write, line: OwnedLine) -> io::Result<()> {
-        self.emit_line(out, &line)?;
-        if self.spare.len() < SPARE_LINES {
-            self.spare.push(line);
-        }
-        Ok(())
+    /// Writes a held line as it was read (or written by the pass), ending included.
+    fn emit_held(&mut self, out: &mut dyn Write, h: &Held) -> io::Result<()> {
+        self.emitted.whole_line(out, self.text.whole(h.text))
     }
 
     /// Writes every held line: nothing before this point can take a change any more.
     fn flush(&mut self, out: &mut dyn Write, reason: &'static str) -> io::Result<()> {
         while let Some(h) = self.window.pop_front() {
-            self.retire(out, h.line)?;
+            self.emit_held(out, &h)?;
         }
+        self.text.written_up_to(None);
         self.window_purge_mm = 0.0;
         self.floor = reason;
         Ok(())
@@ -306,7 +290,8 @@ impl PurgeShift {
     fn pop_front(&mut self, out: &mut dyn Write) -> io::Result<()> {
         if let Some(h) = self.window.pop_front() {
             self.window_purge_mm -= h.purge_mm();
-            self.retire(out, h.line)?;
+            self.emit_held(out, &h)?;
+            self.text.written_up_to(self.window.front().map(|f| f.text));
         }
         Ok(())
     }
@@ -375,7 +360,8 @@ impl PurgeShift {
         }
         let tail = std::mem::take(&mut self.group_tail);
         for line in tail {
-            let held = self.held(line, Kind::Other, None, Feature::Unknown, Feeds::written(0.0));
+            let text = self.text.push(&line.bytes, &line.eol);
+            let held = self.held(text, line.number, Kind::Other, None, Feature::Unknown, Feeds::written(0.0));
             self.push(out, held)?;
         }
         Ok(())
@@ -407,16 +393,27 @@ impl PurgeShift {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn held(
         &mut self,
-        line: OwnedLine,
+        text: TextRef,
+        number: u64,
         kind: Kind,
         layer: Option<u32>,
         feature: Feature,
         feeds: Feeds,
     ) -> Held {
         self.seq += 1;
-        Held { line, kind, layer, feature, seq: self.seq, retracted_mm: self.line_retracted_mm, feeds }
+        Held {
+            text,
+            number,
+            kind,
+            layer,
+            feature,
+            seq: self.seq,
+            retracted_mm: self.line_retracted_mm,
+            feeds,
+        }
     }
 }
 
@@ -448,7 +445,9 @@ impl Pass for PurgeShift {
         self.nozzles.line(ctx.block, ctx.line.number).map_err(PassError::refuse)?;
         self.line_retracted_mm = self.tools.active_mm();
         self.tools.follow(ctx.state.tool, ctx.effect);
-        if let Effect::Move(m) = ctx.effect {
+        // What the surroundings follow (the print's extent, the file's own retraction) only
+        // the tower fallback reads.
+        if let (Effect::Move(m), Fallback::Tower) = (ctx.effect, self.rules.fallback) {
             self.env.observe(m, in_print);
         }
         if is_change_line(ctx.block) {
@@ -469,14 +468,12 @@ impl Pass for PurgeShift {
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
             self.group.extend(tail);
-            let owned = self.own(&ctx.line);
-            self.group.push(owned);
+            self.group.push(OwnedLine::from_raw(&ctx.line));
             return Ok(Flow::Continue);
         }
         if self.group_before.is_some() {
             if ctx.block.is_empty() {
-                let owned = self.own(&ctx.line);
-                self.group_tail.push(owned);
+                self.group_tail.push(OwnedLine::from_raw(&ctx.line));
                 return Ok(Flow::Continue);
             }
             self.close_group(out)?;
@@ -531,9 +528,10 @@ impl Pass for PurgeShift {
             }
             _ => Kind::Other,
         };
-        let owned = self.own(&ctx.line);
+        let text = self.text.push_whole(ctx.line.with_eol(), ctx.line.eol.len());
         // What the line feeds is read only for a line held back (not for one written at once).
-        let held = self.held(owned, kind, structure.layer, structure.feature, Feeds::of(ctx));
+        let number = ctx.line.number;
+        let held = self.held(text, number, kind, structure.layer, structure.feature, Feeds::of(ctx));
         self.push(out, held)?;
         Ok(Flow::Continue)
     }

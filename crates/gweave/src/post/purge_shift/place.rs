@@ -11,7 +11,7 @@ use super::fallback::{write_fallback, Spot};
 use super::report::{ChangeReport, RetractionMove, SplitPoint};
 use super::split::{split, Splittable};
 use super::tool_retraction::{write_bracket, Bracket, EWord};
-use super::{Fallback, Held, Kind, PurgeShift, EPS_E_MM, KEPT_FEATURE, LAYER_CHANGE, SPARE_LINES};
+use super::{Fallback, Held, Kind, PurgeShift, EPS_E_MM, KEPT_FEATURE, LAYER_CHANGE};
 use crate::gcode::state::{X, Y, Z};
 use crate::pass::OwnedLine;
 use crate::post::purge_block::{purge_start_pos, PurgeStart};
@@ -106,29 +106,28 @@ impl PurgeShift {
         if let Some(h) = held.get(at) {
             change.layer = h.layer;
             change.feature = h.feature;
-            change.at_line = h.line.number;
+            change.at_line = h.number;
             if let Kind::Extrude { split: s, .. } = &h.kind {
                 spot = Some(spot_of(s, &s.mv.from));
             }
         }
         for h in &held[..at] {
-            self.emit_line(out, &h.line)?;
+            self.emit_held(out, h)?;
         }
         let mut rest = at;
         if let (Some(t), Some(h)) = (fraction, held.get(at)) {
             if let Kind::Extrude { split: s, .. } = &h.kind {
-                let halves = split(&h.line.bytes, s, t);
-                self.emit(out, &halves.first, &h.line.eol)?;
+                let halves = split(self.text.bytes(h.text), s, t);
+                self.emitted.line(out, &halves.first, self.text.eol(h.text))?;
                 let at_split = spot_of(s, &s.end_of(&halves.first));
                 let lines = bracket.map(|b| (b, write_bracket(&at_split, b.old_mm, b.new_mm, feed_mm_min)));
                 self.emit_change(out, group, &mut change, Some(at_split), lines)?;
                 match &halves.second {
-                    Some(second) => self.emit(out, second, &h.line.eol)?,
-                    None => self.emit_line(out, &h.line)?,
+                    Some(second) => self.emitted.line(out, second, self.text.eol(h.text))?,
+                    None => self.emit_held(out, h)?,
                 }
                 let p = halves.point;
-                change.split =
-                    Some(SplitPoint { line: h.line.number, fraction: t, point_mm: [p[X], p[Y], p[Z]] });
+                change.split = Some(SplitPoint { line: h.number, fraction: t, point_mm: [p[X], p[Y], p[Z]] });
                 rest = at + 1;
             }
         }
@@ -140,16 +139,19 @@ impl PurgeShift {
         for (i, h) in held.iter().enumerate().skip(rest) {
             match h.feeds.e_only.filter(|_| bracket.is_some() && drops(i)) {
                 Some(e) => {
-                    let eol = h.line.eol.clone();
-                    self.emit_text(out, &e.feeding(&h.line.bytes, 0.0), &eol)?;
+                    let eol = self.text.eol(h.text).to_vec();
+                    self.emit_text(out, &e.feeding(self.text.bytes(h.text), 0.0), &eol)?;
                     if !e.relative_e {
                         self.e_reset = Some(e.e_after());
                     }
                 }
                 None => {
                     let reset = self.owed_e_reset(h.feeds.e_word);
-                    self.emit_text(out, &reset, &h.line.eol)?;
-                    self.emit_line(out, &h.line)?;
+                    if !reset.is_empty() {
+                        let eol = self.text.eol(h.text).to_vec();
+                        self.emit_text(out, &reset, &eol)?;
+                    }
+                    self.emit_held(out, h)?;
                 }
             }
         }
@@ -168,8 +170,7 @@ impl PurgeShift {
                 (r.settle_lines, r.settle_offset) = (written, offset);
             }
         }
-        let room = SPARE_LINES.saturating_sub(self.spare.len());
-        self.spare.extend(held.into_iter().take(room).map(|h| h.line));
+        self.text.written_up_to(self.window.front().map(|f| f.text));
         self.floor = "the previous change";
         change.achieved_mm3 = self.rules.mm3(change.achieved_mm);
         if let Some(w) = &self.rules.washout {

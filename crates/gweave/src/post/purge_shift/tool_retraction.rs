@@ -51,7 +51,7 @@ use super::{Feature, Kind, PurgeShift, Region, EPS_E_MM};
 use crate::gcode::reader::RawLine;
 use crate::gcode::retraction::{write_e_only, write_e_reset};
 use crate::gcode::state::{Effect, MM_PER_INCH};
-use crate::pass::{Ctx, OwnedLine};
+use crate::pass::Ctx;
 use std::io::{self, Write};
 
 /// Feeds below this are rounding remainders, not a retraction worth a line, mm.
@@ -280,8 +280,9 @@ impl PurgeShift {
         fed_mm: f64,
     ) -> io::Result<()> {
         for bytes in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
-            let line = OwnedLine { bytes: bytes.to_vec(), eol: like.eol.to_vec(), number: like.number };
-            let held = self.held(line, Kind::Other, None, Feature::Unknown, Feeds::written(fed_mm));
+            let text = self.text.push(bytes, like.eol);
+            let held =
+                self.held(text, like.number, Kind::Other, None, Feature::Unknown, Feeds::written(fed_mm));
             self.push(out, held)?;
         }
         Ok(())
