@@ -75,7 +75,7 @@ use crate::post::zcap::ZCap;
 use crate::run::{Ran, Run};
 
 use crate::firmware::{Firmware, MixCommands};
-use profile::{MixProfile, PurgeMode};
+use profile::{MixProfile, PurgeMode, ZCapMode};
 use report::{Accounting, MixReport};
 use schedule::{Plan, Slot};
 
@@ -437,8 +437,8 @@ impl MixPass {
         // The first filament the file moves, a start G-code's prime line included, is already
         // the first mix: the firmware's default mix (often input 0 alone) would otherwise fill
         // the chamber before layer 0.
-        let moves_filament = matches!(ctx.effect, Effect::Move(mv) if mv.e_mm() != 0.0);
-        if !self.started && (print || moves_filament) {
+        let moves_filament = || matches!(ctx.effect, Effect::Move(mv) if mv.e_mm() != 0.0);
+        if !self.started && (print || moves_filament()) {
             self.start_print(state)?;
         }
         match ctx.effect {
@@ -525,7 +525,9 @@ impl MixPass {
             self.acc.filament(a, fed_mm, printed);
         }
         if !self.replaced {
-            if let Some(zc) = self.zcap {
+            // A move without Z motion is never too fast in Z (the seed's rule reads the Z word
+            // instead, so it asks for every move): most moves skip the call.
+            if let Some(zc) = self.zcap.filter(|zc| mv.from[Z] != mv.to[Z] || zc.mode == ZCapMode::Seed) {
                 if zc.rewrite(ctx.line.bytes, ctx.block, mv, &self.profile.numbers, &mut self.repl) {
                     self.replaced = true;
                     self.acc.z_capped_lines += 1;
