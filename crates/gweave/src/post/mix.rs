@@ -65,6 +65,8 @@ use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
 use crate::eol::Eol;
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Region;
+use crate::gcode::lexer::parse_line;
+use crate::gcode::line::Block;
 use crate::gcode::number::NumberFormat;
 use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction, ToolRetractions};
 use crate::gcode::state::{Effect, Motion, Move, State, E, X, Y, Z};
@@ -528,7 +530,16 @@ impl MixPass {
             // A move without Z motion is never too fast in Z (the seed's rule reads the Z word
             // instead, so it asks for every move): most moves skip the call.
             if let Some(zc) = self.zcap.filter(|zc| mv.from[Z] != mv.to[Z] || zc.mode == ZCapMode::Seed) {
-                if zc.rewrite(ctx.line.bytes, ctx.block, mv, &self.profile.numbers, &mut self.repl) {
+                // A plain move comes with its words unlisted (`reads_words`): the few moves the
+                // cap may rewrite, word by word, are read again whole.
+                let mut listed = Block::default();
+                let block = if ctx.block.words.is_empty() && ctx.block.plain.present != 0 {
+                    parse_line(&ctx.line, &mut listed);
+                    &listed
+                } else {
+                    ctx.block
+                };
+                if zc.rewrite(ctx.line.bytes, block, mv, &self.profile.numbers, &mut self.repl) {
                     self.replaced = true;
                     self.acc.z_capped_lines += 1;
                 }
@@ -567,7 +578,7 @@ impl MixPass {
                 text.extend_from_slice(ctx.line.bytes);
             }
             text.push(b'\n');
-        } else if ctx.block.has(b'F') {
+        } else if ctx.block.names(b'F') {
             write_e_only(&mut text, &fmt, mv.rapid, None, Some(mv.feed_mm_min));
             text.push(b'\n');
         }
@@ -586,7 +597,7 @@ impl MixPass {
         text.extend_from_slice(self.eol.get());
         write_e_reset(&mut text, fmt, mv.to[E]);
         text.extend_from_slice(self.eol.get());
-        if ctx.block.has(b'F') {
+        if ctx.block.names(b'F') {
             write_e_only(&mut text, fmt, mv.rapid, None, Some(mv.feed_mm_min));
             text.extend_from_slice(self.eol.get());
         }
@@ -655,6 +666,13 @@ fn write(out: &mut dyn Write, bytes: &[u8]) -> Step {
 }
 
 impl Pass for MixPass {
+    /// Plain moves' words are read only under the seed's Z cap, which looks for the Z word on
+    /// every move; otherwise the pass asks only whether a move names F ([`Block::names`]) and
+    /// reads again the few moves the cap rewrites.
+    fn reads_words(&self) -> bool {
+        self.zcap.is_some_and(|zc| zc.mode == ZCapMode::Seed)
+    }
+
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         self.eol.learn(ctx.line.eol);
         self.pre.clear();
