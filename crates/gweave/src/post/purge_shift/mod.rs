@@ -114,8 +114,9 @@ const MIX_TOOLS: usize = 64;
 enum Kind {
     /// An extruding move of an allowed feature: counts, and may be split.
     Extrude { e_mm: f64, split: Splittable },
-    /// Passed over by the walk (travel, retraction, comments, `G92`...).
-    Other,
+    /// Passed over by the walk (travel, retraction, comments, `G92`...), with what it feeds
+    /// and how the pass may rewrite it.
+    Other(Feeds),
 }
 
 #[derive(Debug, Clone)]
@@ -130,15 +131,23 @@ struct Held {
     seq: u64,
     /// The active tool's retraction in force before the line (in the input), mm.
     retracted_mm: f64,
-    /// What the line feeds, and how the pass may rewrite it.
-    feeds: Feeds,
 }
 
 impl Held {
     fn e_mm(&self) -> f64 {
         match self.kind {
             Kind::Extrude { e_mm, .. } => e_mm,
-            Kind::Other => 0.0,
+            Kind::Other(_) => 0.0,
+        }
+    }
+
+    /// What the line feeds, and how the pass may rewrite it. An extrusion feeds its E forwards
+    /// and names it: it is never one of the E-only moves the pass takes out, so it does not
+    /// carry the 50 bytes of [`Feeds`] that four lines in five would copy for nothing.
+    fn feeds(&self) -> Feeds {
+        match self.kind {
+            Kind::Extrude { e_mm, .. } => Feeds { fed_mm: e_mm, e_only: None, e_word: EWord::Reads },
+            Kind::Other(feeds) => feeds,
         }
     }
 
@@ -361,7 +370,7 @@ impl PurgeShift {
         let tail = std::mem::take(&mut self.group_tail);
         for line in tail {
             let text = self.text.push(&line.bytes, &line.eol);
-            let held = self.held(text, line.number, Kind::Other, None, Feature::Unknown, Feeds::written(0.0));
+            let held = self.held(text, line.number, Kind::Other(Feeds::written(0.0)), None, Feature::Unknown);
             self.push(out, held)?;
         }
         Ok(())
@@ -393,27 +402,9 @@ impl PurgeShift {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn held(
-        &mut self,
-        text: TextRef,
-        number: u64,
-        kind: Kind,
-        layer: Option<u32>,
-        feature: Feature,
-        feeds: Feeds,
-    ) -> Held {
+    fn held(&mut self, text: TextRef, number: u64, kind: Kind, layer: Option<u32>, feature: Feature) -> Held {
         self.seq += 1;
-        Held {
-            text,
-            number,
-            kind,
-            layer,
-            feature,
-            seq: self.seq,
-            retracted_mm: self.line_retracted_mm,
-            feeds,
-        }
+        Held { text, number, kind, layer, feature, seq: self.seq, retracted_mm: self.line_retracted_mm }
     }
 }
 
@@ -430,6 +421,12 @@ fn is_change_line(block: &Block) -> bool {
 }
 
 impl Pass for PurgeShift {
+    /// Plain moves' words are not read: the pass asks only whether a move names E or F
+    /// ([`Block::names`]), and a move it splits is read again whole.
+    fn reads_words(&self) -> bool {
+        false
+    }
+
     /// A line too long to read (only a lenient run gets here): nothing is moved across it, and
     /// the lines held back go out before it, so that it keeps its place.
     fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> Result<(), PassError> {
@@ -526,12 +523,11 @@ impl Pass for PurgeShift {
                 self.flush(out, "a command for the active tool")?;
                 return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
             }
-            _ => Kind::Other,
+            // What the line feeds is read only for a line held back (not for one written at once).
+            _ => Kind::Other(Feeds::of(ctx)),
         };
         let text = self.text.push_whole(ctx.line.with_eol(), ctx.line.eol.len());
-        // What the line feeds is read only for a line held back (not for one written at once).
-        let number = ctx.line.number;
-        let held = self.held(text, number, kind, structure.layer, structure.feature, Feeds::of(ctx));
+        let held = self.held(text, ctx.line.number, kind, structure.layer, structure.feature);
         self.push(out, held)?;
         Ok(Flow::Continue)
     }

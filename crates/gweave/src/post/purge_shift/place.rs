@@ -86,9 +86,9 @@ impl PurgeShift {
         let moved_from = if fraction.is_some() && at < held.len() { at + 1 } else { at };
         // The slicer's tool-change retraction: the E-only retractions after the last line that
         // feeds forward, taken out where the change was (the old tool makes it at the new place).
-        let tail = (moved_from..held.len()).rev().take_while(|&i| held[i].feeds.fed_mm <= 0.0).last();
+        let tail = (moved_from..held.len()).rev().take_while(|&i| held[i].feeds().fed_mm <= 0.0).last();
         let drops = |i: usize| {
-            tail.is_some_and(|t| i >= t) && held[i].feeds.e_only.is_some() && held[i].feeds.fed_mm < 0.0
+            tail.is_some_and(|t| i >= t) && held[i].feeds().e_only.is_some() && held[i].feeds().fed_mm < 0.0
         };
         // Each tool keeps its retraction (the tool_retraction module): what the old tool had in
         // force where the change now goes, inside or before an extrusion.
@@ -96,7 +96,7 @@ impl PurgeShift {
             let head_mm = fraction.map_or(0.0, |t| t * h.e_mm());
             let r_place_mm = (h.retracted_mm - head_mm).max(0.0);
             let dropped_mm: f64 =
-                (moved_from..held.len()).filter(|&i| drops(i)).map(|i| -held[i].feeds.fed_mm).sum();
+                (moved_from..held.len()).filter(|&i| drops(i)).map(|i| -held[i].feeds().fed_mm).sum();
             Bracket::new(r_place_mm, self.group_retracted_mm, self.group_parked_mm, dropped_mm)
         });
         let feed_mm_min = self.rules.block.retract_feed_mm_min;
@@ -137,7 +137,7 @@ impl PurgeShift {
             self.emit_change(out, group, &mut change, spot, lines)?;
         }
         for (i, h) in held.iter().enumerate().skip(rest) {
-            match h.feeds.e_only.filter(|_| bracket.is_some() && drops(i)) {
+            match h.feeds().e_only.filter(|_| bracket.is_some() && drops(i)) {
                 Some(e) => {
                     let eol = self.text.eol(h.text).to_vec();
                     self.emit_text(out, &e.feeding(self.text.bytes(h.text), 0.0), &eol)?;
@@ -146,7 +146,7 @@ impl PurgeShift {
                     }
                 }
                 None => {
-                    let reset = self.owed_e_reset(h.feeds.e_word);
+                    let reset = self.owed_e_reset(h.feeds().e_word);
                     if !reset.is_empty() {
                         let eol = self.text.eol(h.text).to_vec();
                         self.emit_text(out, &reset, &eol)?;

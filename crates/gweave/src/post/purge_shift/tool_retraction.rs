@@ -161,7 +161,7 @@ impl EOnly {
                     e_after_mm: ctx.state.pos[crate::gcode::state::E],
                     relative_e: ctx.state.relative_e(),
                     inches: ctx.state.inches,
-                    sets_feed_mm_min: ctx.block.has(b'F').then_some(ctx.state.feed_mm_min),
+                    sets_feed_mm_min: ctx.block.names(b'F').then_some(ctx.state.feed_mm_min),
                     rapid: m.rapid,
                 })
             }
@@ -216,7 +216,7 @@ pub(crate) enum EWord {
 
 impl EWord {
     pub(crate) fn of(block: &crate::gcode::line::Block) -> EWord {
-        if !block.has(b'E') {
+        if !block.names(b'E') {
             EWord::None
         } else if block.command.is_g(92) {
             EWord::Reset
@@ -282,7 +282,7 @@ impl PurgeShift {
         for bytes in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
             let text = self.text.push(bytes, like.eol);
             let held =
-                self.held(text, like.number, Kind::Other, None, Feature::Unknown, Feeds::written(fed_mm));
+                self.held(text, like.number, Kind::Other(Feeds::written(fed_mm)), None, Feature::Unknown);
             self.push(out, held)?;
         }
         Ok(())
