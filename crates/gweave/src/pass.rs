@@ -125,7 +125,8 @@ impl<P: Pass + ?Sized> Pass for &mut P {
 /// Writes a line exactly as it was read.
 #[inline]
 pub fn keep(ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
-    out.write_all(ctx.line.with_eol())?;
+    out.write_all(ctx.line.bytes)?;
+    out.write_all(ctx.line.eol)?;
     Ok(Flow::Continue)
 }
 

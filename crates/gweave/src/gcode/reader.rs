@@ -52,13 +52,6 @@ impl<'a> RawLine<'a> {
     pub fn with_lookahead(&self) -> &'a [u8] {
         self.ahead
     }
-
-    /// The content and the line ending, one slice (they are one in the reader's buffer): a
-    /// line copied as it is costs one write, not two.
-    #[inline]
-    pub fn with_eol(&self) -> &'a [u8] {
-        &self.ahead[..self.bytes.len() + self.eol.len()]
-    }
 }
 
 /// Bytes readable past the end of every line's content.

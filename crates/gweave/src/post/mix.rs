@@ -70,7 +70,7 @@ use crate::gcode::line::Block;
 use crate::gcode::number::NumberFormat;
 use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction, ToolRetractions};
 use crate::gcode::state::{Effect, Motion, Move, State, E, X, Y, Z};
-use crate::pass::{keep, Ctx, Flow, Pass, PassError, Step};
+use crate::pass::{Ctx, Flow, Pass, PassError, Step};
 use crate::post::purge_block::{purge_start_pos, write_purge, write_refill, PurgeMotion, PurgeStart};
 use crate::post::warning::Warning;
 use crate::post::zcap::ZCap;
@@ -690,8 +690,8 @@ impl Pass for MixPass {
             && self.plan.maps_tools()
             && ctx.state.structure.region == Region::Print;
         if !dropping && self.held.is_empty() && self.pre.is_empty() && !self.replaced {
-            // The common case: the line as it was, without a copy.
-            return keep(ctx, out);
+            // The common case: the line as it was, without a copy, its ending in the same write.
+            return write(out, crate::eol::with_ending(&ctx.line));
         }
         let mut bytes = Vec::with_capacity(ctx.line.bytes.len() + self.pre.len() + self.repl.len() + 2);
         self.render(ctx, &mut bytes);

@@ -526,7 +526,7 @@ impl Pass for PurgeShift {
             // What the line feeds is read only for a line held back (not for one written at once).
             _ => Kind::Other(Feeds::of(ctx)),
         };
-        let text = self.text.push_whole(ctx.line.with_eol(), ctx.line.eol.len());
+        let text = self.text.push_whole(crate::eol::with_ending(&ctx.line), ctx.line.eol.len());
         let held = self.held(text, ctx.line.number, kind, structure.layer, structure.feature);
         self.push(out, held)?;
         Ok(Flow::Continue)
