@@ -45,7 +45,8 @@
 //! a line is written out as soon as the purge held after it reaches the largest purge
 //! any change can ask for, or when a barrier above passes. With layer crossing the window also
 //! never reaches back past the previous layer's start, and `max_window_lines` caps it in any case.
-//! So memory is the purge length plus at most one layer of lines, whatever the file size; the
+//! So memory is the purge length plus at most one layer of lines (their text in one buffer of at
+//! most twice theirs and 64 KiB, the `held_text` module), whatever the file size; the
 //! report's `max_window_lines` says how many lines were ever held at once.
 //!
 //! ```
