@@ -248,6 +248,14 @@ impl Accounting {
         }
         self.mixes[mix].filament_mm += e_mm;
         let Some((layer, z_mm)) = printed else { return };
+        // Most moves: a mix already printing on the layer being printed, whose range of layers
+        // took this layer when it first printed on it (a move on another layer closes it).
+        if let Some(cur) = self.current.as_mut().filter(|c| c.0 == layer) {
+            if let Some((_, e)) = cur.2.iter_mut().find(|(m, _)| *m == mix) {
+                *e += e_mm;
+                return;
+            }
+        }
         let ranges = &mut self.mixes[mix].layers;
         match ranges.last_mut() {
             Some([_, b]) if *b == layer => {}
