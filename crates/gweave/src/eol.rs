@@ -10,6 +10,16 @@
 
 use std::io::{self, Write};
 
+use crate::gcode::reader::RawLine;
+
+/// A line read and its ending, one slice: the reader hands out the content followed by its
+/// ending and more ([`RawLine::with_lookahead`]), so a line copied as it is costs one write,
+/// not two.
+#[inline]
+pub(crate) fn with_ending<'a>(line: &RawLine<'a>) -> &'a [u8] {
+    &line.with_lookahead()[..line.bytes.len() + line.eol.len()]
+}
+
 /// Writes lines with the file's line endings, counting them.
 #[derive(Debug, Clone)]
 pub(crate) struct Eol {
@@ -48,6 +58,13 @@ impl Eol {
         self.lines += 1;
         out.write_all(bytes)?;
         out.write_all(eol)
+    }
+
+    /// One line and its own ending, as one slice.
+    #[inline]
+    pub(crate) fn whole_line(&mut self, out: &mut dyn Write, line_with_eol: &[u8]) -> io::Result<()> {
+        self.lines += 1;
+        out.write_all(line_with_eol)
     }
 
     /// `\n`-separated `text` (a final `\n` is optional): the file's ending after each line,
@@ -90,6 +107,18 @@ mod tests {
         eol.line(&mut out, b"e", b"").unwrap();
         assert_eq!(out, b"a\nb\nx\r\ny\r\nc\r\nd\ne");
         assert_eq!(eol.lines(), 7);
+    }
+
+    #[test]
+    fn a_line_with_its_ending_is_the_line_and_its_ending() {
+        let text = b"G1 X1 E2\r\nG1 X2\n\n;last";
+        let mut reader = crate::gcode::reader::LineReader::new(&text[..]);
+        let mut copied = Vec::new();
+        while let Some(line) = reader.next_line().unwrap() {
+            assert_eq!(with_ending(&line), [line.bytes, line.eol].concat());
+            copied.extend_from_slice(with_ending(&line));
+        }
+        assert_eq!(copied, text);
     }
 
     #[test]

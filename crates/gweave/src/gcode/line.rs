@@ -275,6 +275,13 @@ impl Block {
         self.word(letter).is_some()
     }
 
+    /// Whether the letter is present, listed or as a plain move's number: [`Block::has`] for a
+    /// pass that leaves plain moves' words unlisted ([`crate::Pass::reads_words`]).
+    #[inline]
+    pub fn names(&self, letter: u8) -> bool {
+        PlainMove::index_of(letter).is_some_and(|i| self.plain.present >> i & 1 != 0) || self.has(letter)
+    }
+
     /// The comment text (after `;`), from the raw line this block was parsed from.
     pub fn comment_text<'a>(&self, raw: &'a [u8]) -> Option<&'a [u8]> {
         self.comment.map(|s| s.of(raw))

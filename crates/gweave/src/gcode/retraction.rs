@@ -65,6 +65,109 @@ impl Retraction {
     }
 }
 
+/// Tools whose parked retraction is remembered by [`ToolRetractions`] (a file naming more keeps
+/// the first ones; a tool beyond them comes back with nothing retracted).
+const PARKED_TOOLS: usize = 256;
+
+/// The one nozzle's retraction in force and, as the slicer sees it (a nozzle per tool), each
+/// tool's: the tracker of the passes that rewrite tool changes (`mix`, `purge-shift`).
+///
+/// A slicer ends a tool with its tool-change retraction and unretracts a tool only if that tool
+/// retracted, so on one nozzle the retraction in force is the nozzle's, but what the next line
+/// will undo is the tool's. Each line is fed to the nozzle and to the active tool; a change of
+/// tool parks the active tool's retraction and takes back what the new one parked. The active
+/// tool is kept apart, so the common line (an extrusion, no change of tool) pays one comparison
+/// for the tool, not a map lookup.
+#[derive(Debug, Clone, Default)]
+pub struct ToolRetractions {
+    nozzle: Retraction,
+    tool: u32,
+    active: Retraction,
+    /// The retraction each tool left in force when it was put away, mm.
+    parked: Vec<(u32, f64)>,
+}
+
+impl ToolRetractions {
+    /// Makes `tool` the active one (its parked retraction back in force).
+    #[inline]
+    fn select(&mut self, tool: u32) {
+        if tool != self.tool {
+            self.switch(tool);
+        }
+    }
+
+    #[cold]
+    fn switch(&mut self, tool: u32) {
+        let (old, mm) = (self.tool, self.active.in_force_mm());
+        if let Some((_, parked)) = self.parked.iter_mut().find(|(t, _)| *t == old) {
+            *parked = mm;
+        } else if self.parked.len() < PARKED_TOOLS {
+            self.parked.push((old, mm));
+        }
+        self.active = Retraction { in_force_mm: self.parked_mm(tool) };
+        self.tool = tool;
+    }
+
+    /// What `tool` (not the active one) parked, mm.
+    fn parked_mm(&self, tool: u32) -> f64 {
+        self.parked.iter().find(|(t, _)| *t == tool).map_or(0.0, |&(_, mm)| mm)
+    }
+
+    /// Follows one line run by `tool` (the filament its effect feeds, [`Retraction::follow`]).
+    #[inline]
+    pub fn follow(&mut self, tool: u32, effect: &Effect) {
+        self.select(tool);
+        let fed_mm = match effect {
+            Effect::Move(mv) => mv.e_mm(),
+            Effect::FirmwareRetract { e_mm } => *e_mm,
+            _ => return,
+        };
+        self.feed(tool, fed_mm);
+    }
+
+    /// Follows `fed_mm` of filament fed by `tool` (negative: retracted), on the nozzle and for
+    /// the tool.
+    #[inline]
+    pub fn feed(&mut self, tool: u32, fed_mm: f64) {
+        self.select(tool);
+        self.nozzle.feed(fed_mm);
+        self.active.feed(fed_mm);
+    }
+
+    /// A prime a pass wrote of `mm`: the nozzle is that much less retracted (no tool will undo
+    /// it).
+    pub fn refill_nozzle(&mut self, mm: f64) {
+        self.nozzle.feed(mm);
+    }
+
+    /// Part of `tool`'s retraction was taken out of the output (a dropped tool-change
+    /// retraction): the nozzle's and the tool's.
+    pub fn withdraw(&mut self, tool: u32, mm: f64) {
+        self.nozzle.withdraw(mm);
+        self.select(tool);
+        self.active.withdraw(mm);
+    }
+
+    /// The nozzle's retraction in force, mm.
+    pub fn nozzle_mm(&self) -> f64 {
+        self.nozzle.in_force_mm()
+    }
+
+    /// The retraction in force of the tool that ran the last line followed, mm.
+    pub fn active_mm(&self) -> f64 {
+        self.active.in_force_mm()
+    }
+
+    /// `tool`'s retraction in force, mm (what it parked, if it is not the active one).
+    pub fn tool_mm(&self, tool: u32) -> f64 {
+        if tool == self.tool {
+            self.active.in_force_mm()
+        } else {
+            self.parked_mm(tool)
+        }
+    }
+}
+
 /// `G92 E<e>` (file units, at least 5 decimals), no line ending: after E-only moves a pass
 /// inserted or took out (a purge block, a moved or dropped tool-change retraction), E is put
 /// back where the file has it, so the file's next E words mean what they meant.
@@ -123,5 +226,35 @@ mod tests {
         r.withdraw(1.5);
         assert!((r.in_force_mm() - 0.5).abs() < 1e-12);
         assert_eq!(r.feed(0.5), 0.0);
+    }
+
+    #[test]
+    fn each_tool_keeps_its_own_retraction_across_changes() {
+        use crate::gcode::state::{Path, Position, E};
+        let e = |e_mm: f64| {
+            let from = Position::default();
+            let mut to = from;
+            to[E] = e_mm;
+            Effect::Move(Move { from, to, path: Path::Line, rapid: false, feed_mm_min: 0.0 })
+        };
+        let mut t = ToolRetractions::default();
+        t.follow(0, &e(-10.0));
+        assert_eq!((t.active_mm(), t.nozzle_mm()), (10.0, 10.0));
+        t.follow(1, &Effect::None);
+        assert_eq!((t.active_mm(), t.tool_mm(0), t.nozzle_mm()), (0.0, 10.0, 10.0));
+        t.follow(1, &e(-4.0));
+        t.follow(0, &Effect::None);
+        assert_eq!((t.active_mm(), t.tool_mm(1), t.nozzle_mm()), (10.0, 4.0, 14.0));
+        t.follow(0, &e(10.0));
+        assert_eq!((t.active_mm(), t.nozzle_mm()), (0.0, 4.0));
+        t.follow(1, &Effect::None);
+        assert_eq!(t.active_mm(), 4.0);
+        // A dropped retraction of tool 0 (not the active one) leaves tool 1's alone.
+        t.feed(0, -3.0);
+        t.withdraw(0, 2.0);
+        assert_eq!((t.tool_mm(0), t.tool_mm(1), t.nozzle_mm()), (1.0, 4.0, 5.0));
+        // A prime a pass wrote refills the nozzle only.
+        t.refill_nozzle(5.0);
+        assert_eq!((t.tool_mm(0), t.tool_mm(1), t.nozzle_mm()), (1.0, 4.0, 0.0));
     }
 }

@@ -65,17 +65,19 @@ use crate::colour::purge::{flush_volume_mm3, mm3_to_filament_mm, Washout};
 use crate::eol::Eol;
 use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Region;
+use crate::gcode::lexer::parse_line;
+use crate::gcode::line::Block;
 use crate::gcode::number::NumberFormat;
-use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction};
+use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction, ToolRetractions};
 use crate::gcode::state::{Effect, Motion, Move, State, E, X, Y, Z};
-use crate::pass::{keep, Ctx, Flow, Pass, PassError, Step};
+use crate::pass::{Ctx, Flow, Pass, PassError, Step};
 use crate::post::purge_block::{purge_start_pos, write_purge, write_refill, PurgeMotion, PurgeStart};
 use crate::post::warning::Warning;
 use crate::post::zcap::ZCap;
 use crate::run::{Ran, Run};
 
 use crate::firmware::{Firmware, MixCommands};
-use profile::{MixProfile, PurgeMode};
+use profile::{MixProfile, PurgeMode, ZCapMode};
 use report::{Accounting, MixReport};
 use schedule::{Plan, Slot};
 
@@ -131,11 +133,9 @@ pub struct MixPass {
     rotating: [Option<usize>; 2],
     slicer_tool: u32,
     decided_layer: Option<u32>,
-    /// The one nozzle's retraction in force.
-    retraction: Retraction,
-    /// The retraction in force per slicer tool, as the slicer sees it (a nozzle per tool): of
-    /// the nozzle's, what the tool printing will undo itself.
-    tool_retraction: BTreeMap<u32, Retraction>,
+    /// The one nozzle's retraction in force, and per slicer tool, as the slicer sees it (a
+    /// nozzle per tool), what the tool printing will undo itself.
+    retractions: ToolRetractions,
     /// Dropped tool-change retraction per slicer tool, to drop again from its unretraction, mm.
     owed_mm: BTreeMap<u32, f64>,
     held: Vec<Held>,
@@ -175,8 +175,7 @@ impl MixPass {
             rotating: [None; 2],
             slicer_tool: 0,
             decided_layer: None,
-            retraction: Retraction::default(),
-            tool_retraction: BTreeMap::new(),
+            retractions: ToolRetractions::default(),
             owed_mm: BTreeMap::new(),
             held: Vec::new(),
             feed_before: 0.0,
@@ -382,8 +381,8 @@ impl MixPass {
     /// leaves by `retract_length_toolchange` and unretracts a tool only if that tool retracted,
     /// so the first change to a tool leaves the one nozzle retracted by the old tool's amount.
     fn purge_start(&self, mv: &Move, state: &State) -> (PurgeStart, f64) {
-        let nozzle_mm = self.retraction.in_force_mm();
-        let tool_mm = self.tool_retraction.get(&self.slicer_tool).map_or(0.0, Retraction::in_force_mm);
+        let nozzle_mm = self.retractions.nozzle_mm();
+        let tool_mm = self.retractions.tool_mm(self.slicer_tool);
         // Below a micrometre it is the rounding of the file's E words, not a retraction.
         let (retracted_mm, refill_mm) =
             if nozzle_mm - tool_mm > 1e-6 { (tool_mm, nozzle_mm - tool_mm) } else { (nozzle_mm, 0.0) };
@@ -401,7 +400,7 @@ impl MixPass {
     /// Follows a block's prime of `refill_mm` in mix `to`: the nozzle is that much less
     /// retracted, and the filament is the mix's.
     fn refilled(&mut self, to: usize, refill_mm: f64) {
-        self.retraction.feed(refill_mm);
+        self.retractions.refill_nozzle(refill_mm);
         self.acc.filament(to, refill_mm, None);
     }
 
@@ -420,10 +419,7 @@ impl MixPass {
 
     /// Follows `fed_mm` of filament fed by the slicer tool printing, on the nozzle and for the tool.
     fn feed(&mut self, fed_mm: f64) {
-        self.retraction.feed(fed_mm);
-        if fed_mm != 0.0 {
-            self.tool_retraction.entry(self.slicer_tool).or_default().feed(fed_mm);
-        }
+        self.retractions.feed(self.slicer_tool, fed_mm);
     }
 
     /// The purge of `[purge] initial_mm` before the first move of filament, in the first mix:
@@ -443,8 +439,8 @@ impl MixPass {
         // The first filament the file moves, a start G-code's prime line included, is already
         // the first mix: the firmware's default mix (often input 0 alone) would otherwise fill
         // the chamber before layer 0.
-        let moves_filament = matches!(ctx.effect, Effect::Move(mv) if mv.e_mm() != 0.0);
-        if !self.started && (print || moves_filament) {
+        let moves_filament = || matches!(ctx.effect, Effect::Move(mv) if mv.e_mm() != 0.0);
+        if !self.started && (print || moves_filament()) {
             self.start_print(state)?;
         }
         match ctx.effect {
@@ -531,8 +527,19 @@ impl MixPass {
             self.acc.filament(a, fed_mm, printed);
         }
         if !self.replaced {
-            if let Some(zc) = self.zcap {
-                if zc.rewrite(ctx.line.bytes, ctx.block, mv, &self.profile.numbers, &mut self.repl) {
+            // A move without Z motion is never too fast in Z (the seed's rule reads the Z word
+            // instead, so it asks for every move): most moves skip the call.
+            if let Some(zc) = self.zcap.filter(|zc| mv.from[Z] != mv.to[Z] || zc.mode == ZCapMode::Seed) {
+                // A plain move comes with its words unlisted (`reads_words`): the few moves the
+                // cap may rewrite, word by word, are read again whole.
+                let mut listed = Block::default();
+                let block = if ctx.block.words.is_empty() && ctx.block.plain.present != 0 {
+                    parse_line(&ctx.line, &mut listed);
+                    &listed
+                } else {
+                    ctx.block
+                };
+                if zc.rewrite(ctx.line.bytes, block, mv, &self.profile.numbers, &mut self.repl) {
                     self.replaced = true;
                     self.acc.z_capped_lines += 1;
                 }
@@ -550,7 +557,7 @@ impl MixPass {
         if self.profile.tool_change.keep_slicer_retractions || owed <= 0.0 {
             return Ok(amount);
         }
-        let keep_for_retraction = amount.min(self.retraction.in_force_mm());
+        let keep_for_retraction = amount.min(self.retractions.nozzle_mm());
         let dropped = (amount - keep_for_retraction).min(owed);
         if dropped <= 1e-9 {
             return Ok(amount);
@@ -571,7 +578,7 @@ impl MixPass {
                 text.extend_from_slice(ctx.line.bytes);
             }
             text.push(b'\n');
-        } else if ctx.block.has(b'F') {
+        } else if ctx.block.names(b'F') {
             write_e_only(&mut text, &fmt, mv.rapid, None, Some(mv.feed_mm_min));
             text.push(b'\n');
         }
@@ -590,7 +597,7 @@ impl MixPass {
         text.extend_from_slice(self.eol.get());
         write_e_reset(&mut text, fmt, mv.to[E]);
         text.extend_from_slice(self.eol.get());
-        if ctx.block.has(b'F') {
+        if ctx.block.names(b'F') {
             write_e_only(&mut text, fmt, mv.rapid, None, Some(mv.feed_mm_min));
             text.extend_from_slice(self.eol.get());
         }
@@ -615,8 +622,7 @@ impl MixPass {
                 Some((instead, mm)) if drop => {
                     out.write_all(&instead)?;
                     *self.owed_mm.entry(self.slicer_tool).or_insert(0.0) += mm;
-                    self.retraction.withdraw(mm);
-                    self.tool_retraction.entry(self.slicer_tool).or_default().withdraw(mm);
+                    self.retractions.withdraw(self.slicer_tool, mm);
                     self.acc.dropped_retractions += 1;
                 }
                 _ => out.write_all(&h.bytes)?,
@@ -660,6 +666,13 @@ fn write(out: &mut dyn Write, bytes: &[u8]) -> Step {
 }
 
 impl Pass for MixPass {
+    /// Plain moves' words are read only under the seed's Z cap, which looks for the Z word on
+    /// every move; otherwise the pass asks only whether a move names F ([`Block::names`]) and
+    /// reads again the few moves the cap rewrites.
+    fn reads_words(&self) -> bool {
+        self.zcap.is_some_and(|zc| zc.mode == ZCapMode::Seed)
+    }
+
     fn line(&mut self, ctx: &Ctx<'_>, out: &mut dyn Write) -> Step {
         self.eol.learn(ctx.line.eol);
         self.pre.clear();
@@ -677,8 +690,8 @@ impl Pass for MixPass {
             && self.plan.maps_tools()
             && ctx.state.structure.region == Region::Print;
         if !dropping && self.held.is_empty() && self.pre.is_empty() && !self.replaced {
-            // The common case: the line as it was, without a copy.
-            return keep(ctx, out);
+            // The common case: the line as it was, without a copy, its ending in the same write.
+            return write(out, crate::eol::with_ending(&ctx.line));
         }
         let mut bytes = Vec::with_capacity(ctx.line.bytes.len() + self.pre.len() + self.repl.len() + 2);
         self.render(ctx, &mut bytes);

@@ -177,7 +177,8 @@ type OpenLayer = (u32, f64, Vec<(usize, f64)>);
 pub(crate) struct Accounting {
     area_mm2: f64,
     pub mixes: Vec<MixUse>,
-    ratios: Vec<Vec<f64>>,
+    /// Each mix's ratios, one mix after the other (`per_input_mm.len()` numbers each).
+    ratios: Vec<f64>,
     pub per_input_mm: Vec<f64>,
     pub purge: PurgeTotals,
     pub changes: u32,
@@ -219,7 +220,7 @@ impl Accounting {
         Accounting {
             area_mm2: std::f64::consts::PI * d * d / 4.0,
             mixes,
-            ratios,
+            ratios: ratios.concat(),
             per_input_mm: vec![0.0; hw.inputs.len()],
             purge: PurgeTotals { per_input_mm: vec![0.0; hw.inputs.len()], ..PurgeTotals::default() },
             changes: 0,
@@ -239,12 +240,22 @@ impl Accounting {
 
     /// `e_mm` of filament through the nozzle with `mix`; `printed` gives the layer and Z of a
     /// move that deposits it (not a retraction or unretraction).
+    #[inline]
     pub(crate) fn filament(&mut self, mix: usize, e_mm: f64, printed: Option<(u32, f64)>) {
-        for (acc, r) in self.per_input_mm.iter_mut().zip(&self.ratios[mix]) {
+        let n = self.per_input_mm.len();
+        for (acc, r) in self.per_input_mm.iter_mut().zip(&self.ratios[mix * n..][..n]) {
             *acc += e_mm * r;
         }
         self.mixes[mix].filament_mm += e_mm;
         let Some((layer, z_mm)) = printed else { return };
+        // Most moves: a mix already printing on the layer being printed, whose range of layers
+        // took this layer when it first printed on it (a move on another layer closes it).
+        if let Some(cur) = self.current.as_mut().filter(|c| c.0 == layer) {
+            if let Some((_, e)) = cur.2.iter_mut().find(|(m, _)| *m == mix) {
+                *e += e_mm;
+                return;
+            }
+        }
         let ranges = &mut self.mixes[mix].layers;
         match ranges.last_mut() {
             Some([_, b]) if *b == layer => {}
@@ -275,9 +286,9 @@ impl Accounting {
         self.purge.count += 1;
         self.purge.filament_mm += mm;
         self.purge.volume_mm3 += mm * self.area_mm2;
-        for ((acc, total), r) in
-            self.purge.per_input_mm.iter_mut().zip(&mut self.per_input_mm).zip(&self.ratios[mix])
-        {
+        let n = self.per_input_mm.len();
+        let ratios = &self.ratios[mix * n..][..n];
+        for ((acc, total), r) in self.purge.per_input_mm.iter_mut().zip(&mut self.per_input_mm).zip(ratios) {
             *acc += mm * r;
             *total += mm * r;
         }

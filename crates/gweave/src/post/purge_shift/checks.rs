@@ -11,8 +11,9 @@
 use std::io::Read;
 use std::path::Path;
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 
+use super::config::FeatureSet;
 use super::nozzles::SEMM_KEY;
 use crate::error::{Error, Result};
 use crate::gcode::layers::{trim, Feature, Markers, ALL_FEATURES};
@@ -119,12 +120,12 @@ impl FeatureComments {
 
     /// The warning, when the file has extrusions, none with a feature, and the rules keep the
     /// change off some feature while letting it through unmarked extrusions.
-    pub(crate) fn warning(&self, allowed: &BTreeSet<Feature>) -> Option<Warning> {
-        if !self.extruded || self.known || !allowed.contains(&Feature::Unknown) {
+    pub(crate) fn warning(&self, allowed: FeatureSet) -> Option<Warning> {
+        if !self.extruded || self.known || !allowed.contains(Feature::Unknown) {
             return None;
         }
         let kept_off: Vec<&str> =
-            ALL_FEATURES.iter().filter(|f| !allowed.contains(f)).map(|f| f.name()).collect();
+            ALL_FEATURES.iter().filter(|&&f| !allowed.contains(f)).map(|f| f.name()).collect();
         if kept_off.is_empty() {
             return None;
         }
@@ -183,22 +184,21 @@ mod tests {
 
     #[test]
     fn unmarked_extrusions_warn_when_a_feature_is_kept_off() {
-        let default: BTreeSet<Feature> =
-            ALL_FEATURES.iter().copied().filter(|&f| f != Feature::OuterWall).collect();
+        let default: FeatureSet = ALL_FEATURES.iter().copied().filter(|&f| f != Feature::OuterWall).collect();
         let mut seen = FeatureComments::default();
-        assert_eq!(seen.warning(&default), None, "no extrusion, no warning");
+        assert_eq!(seen.warning(default), None, "no extrusion, no warning");
         seen.extrusion(Feature::Unknown);
-        let w = seen.warning(&default).unwrap().to_string();
+        let w = seen.warning(default).unwrap().to_string();
         assert!(
             w.starts_with(
                 "the file has no feature comments (;TYPE:), so the rule keeping changes off outer_wall"
             ),
             "{w}"
         );
-        let all: BTreeSet<Feature> = ALL_FEATURES.iter().copied().collect();
-        assert_eq!(seen.warning(&all), None, "every feature allowed: no rule to miss");
+        let all: FeatureSet = ALL_FEATURES.iter().copied().collect();
+        assert_eq!(seen.warning(all), None, "every feature allowed: no rule to miss");
         seen.extrusion(Feature::InnerWall);
-        assert_eq!(seen.warning(&default), None, "the file marks its features");
+        assert_eq!(seen.warning(default), None, "the file marks its features");
     }
 
     #[test]

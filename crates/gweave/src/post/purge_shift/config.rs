@@ -28,8 +28,6 @@
 //! y_mm = 20.0
 //! ```
 
-use std::collections::BTreeSet;
-
 use serde::{Deserialize, Serialize};
 
 use crate::colour::purge::{filament_mm_to_mm3, flush_volume_mm3, mm3_to_filament_mm, Washout};
@@ -237,6 +235,34 @@ impl Default for PurgeShiftConfig {
     }
 }
 
+/// A set of features (the ones a change may move through): one bit per [`Feature`], so the
+/// test each extruding move makes is a shift and a mask, not a tree search.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct FeatureSet(u32);
+
+impl FeatureSet {
+    fn bit(f: Feature) -> u32 {
+        1 << f as u32
+    }
+
+    pub(crate) fn insert(&mut self, f: Feature) {
+        self.0 |= Self::bit(f);
+    }
+
+    #[inline]
+    pub(crate) fn contains(self, f: Feature) -> bool {
+        self.0 & Self::bit(f) != 0
+    }
+}
+
+impl FromIterator<Feature> for FeatureSet {
+    fn from_iter<I: IntoIterator<Item = Feature>>(features: I) -> Self {
+        let mut set = FeatureSet::default();
+        features.into_iter().for_each(|f| set.insert(f));
+        set
+    }
+}
+
 /// The validated settings the pass runs with: all amounts in mm of filament.
 #[derive(Debug, Clone)]
 pub struct Rules {
@@ -248,7 +274,7 @@ pub struct Rules {
     pub(crate) area_mm2: f64,
     pub(crate) diameter_mm: f64,
     pub(crate) cross_layers: bool,
-    pub(crate) allowed: BTreeSet<Feature>,
+    pub(crate) allowed: FeatureSet,
     pub(crate) markers: Markers,
     pub(crate) fallback: Fallback,
     pub(crate) block: PurgeMotion,
@@ -372,7 +398,7 @@ impl PurgeShiftConfig {
         if default_mm.is_none() && pairs.is_empty() && colours.is_empty() {
             return Err(ConfigError::NoPurge);
         }
-        let mut allowed = BTreeSet::new();
+        let mut allowed = FeatureSet::default();
         for name in &self.allow_features {
             allowed.insert(Feature::parse(name).ok_or_else(|| ConfigError::Feature(name.clone()))?);
         }
@@ -510,8 +536,8 @@ mod tests {
     fn defaults_and_sources() {
         let r = Rules::fixed(2.5).unwrap();
         assert_eq!(r.purge_mm(0, 1), (2.5, true));
-        assert!(!r.allowed.contains(&Feature::OuterWall));
-        assert!(r.allowed.contains(&Feature::Infill));
+        assert!(!r.allowed.contains(Feature::OuterWall));
+        assert!(r.allowed.contains(Feature::Infill));
         let r = PurgeShiftConfig::from_toml(
             "purge_mm3 = 24.0525\nfilament_diameter_mm = 1.75\n[[pair]]\nfrom = 0\nto = 1\npurge_mm = 4.0\n",
         )
@@ -547,7 +573,7 @@ mod tests {
         let r = c.validate().unwrap();
         assert_eq!(r.purge_mm(0, 1), (3.0, true));
         assert!(r.cross_layers);
-        assert_eq!(r.allowed.iter().copied().collect::<Vec<_>>(), [Feature::Infill]);
+        assert_eq!(r.allowed, [Feature::Infill].into_iter().collect());
     }
 
     #[test]

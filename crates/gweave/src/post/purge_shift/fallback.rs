@@ -24,7 +24,7 @@
 use super::config::{Fallback, Rules, TowerConfig};
 use crate::gcode::number::NumberFormat;
 use crate::gcode::retraction::Retraction;
-use crate::gcode::state::{Effect, Move, X, Y};
+use crate::gcode::state::{Move, X, Y};
 use crate::post::purge_block::{write_purge_job, PurgeJob, PurgeMotion, PurgePattern, PurgeStart};
 
 /// Inserted lines carry the split's precision: 0.01 um positions, 1e-6 mm of filament.
@@ -56,18 +56,12 @@ pub(crate) struct Surroundings {
     retract_feed_mm_min: Option<f64>,
     /// The last retraction since the last extrusion: ordinary if an extrusion comes before a change.
     pending: Option<(f64, f64)>,
-    retraction: Retraction,
     /// The layer of the last tower, and the Y its towers take up so far on that layer, mm.
     tower_layer: Option<u32>,
     tower_used_y_mm: f64,
 }
 
 impl Surroundings {
-    /// Follows the retraction in force over one line of the file.
-    pub(super) fn follow_retraction(&mut self, effect: &Effect) {
-        self.retraction.follow(effect);
-    }
-
     /// Follows one move of the file.
     pub(super) fn observe(&mut self, mv: &Move, in_print: bool) {
         let e_mm = mv.e_mm();
@@ -98,11 +92,6 @@ impl Surroundings {
     /// A change of tool or mix: the retraction before it was the slicer's tool-change one.
     pub(super) fn tool_change(&mut self) {
         self.pending = None;
-    }
-
-    /// Retraction the file has in force now, mm.
-    pub(super) fn retracted_mm(&self) -> f64 {
-        self.retraction.in_force_mm()
     }
 
     /// The tower's zigzag for `purge_mm` and its corner on layer `layer`.

@@ -45,7 +45,8 @@
 //! a line is written out as soon as the purge held after it reaches the largest purge
 //! any change can ask for, or when a barrier above passes. With layer crossing the window also
 //! never reaches back past the previous layer's start, and `max_window_lines` caps it in any case.
-//! So memory is the purge length plus at most one layer of lines, whatever the file size; the
+//! So memory is the purge length plus at most one layer of lines (their text in one buffer of at
+//! most twice theirs and 64 KiB, the `held_text` module), whatever the file size; the
 //! report's `max_window_lines` says how many lines were ever held at once.
 //!
 //! ```
@@ -60,6 +61,7 @@
 mod checks;
 pub(crate) mod config;
 mod fallback;
+mod held_text;
 mod nozzles;
 mod options;
 mod place;
@@ -83,6 +85,7 @@ use crate::firmware::MixingCode;
 use crate::gcode::layers::{Feature, Region};
 use crate::gcode::line::Block;
 use crate::gcode::reader::RawLine;
+use crate::gcode::retraction::ToolRetractions;
 use crate::gcode::state::{Effect, StateOptions};
 use crate::pass::{Ctx, Flow, OwnedLine, Pass, PassError, Step};
 use crate::post::purge_block::{purge_start_pos, PurgeStart};
@@ -90,9 +93,10 @@ use crate::run::IN_MEMORY;
 use crate::run::{Ran, Run, Source};
 use checks::{require_markers, FeatureComments};
 use fallback::{Spot, Surroundings};
+use held_text::{HeldText, TextRef};
 use nozzles::Nozzles;
 use split::Splittable;
-use tool_retraction::{EWord, Feeds, ToolRetractions};
+use tool_retraction::{EWord, Feeds};
 
 /// What stops the walk back at a layer change (the report's `stopped_by`).
 const LAYER_CHANGE: &str = "a layer change";
@@ -105,36 +109,46 @@ const EPS_E_MM: f64 = 1e-6;
 /// inputs in `M165` and 16 virtual tools by default; more costs nothing).
 const MIX_INPUTS: usize = 8;
 const MIX_TOOLS: usize = 64;
-/// Line buffers kept for reuse.
-const SPARE_LINES: usize = 4096;
 
 /// What a held line is to the walk back.
 #[derive(Debug, Clone)]
 enum Kind {
     /// An extruding move of an allowed feature: counts, and may be split.
     Extrude { e_mm: f64, split: Splittable },
-    /// Passed over by the walk (travel, retraction, comments, `G92`...).
-    Other,
+    /// Passed over by the walk (travel, retraction, comments, `G92`...), with what it feeds
+    /// and how the pass may rewrite it.
+    Other(Feeds),
 }
 
 #[derive(Debug, Clone)]
 struct Held {
-    line: OwnedLine,
+    /// The line's text, in [`PurgeShift::text`].
+    text: TextRef,
+    /// Its number in the input (a line the pass wrote: the number of the line it stands for).
+    number: u64,
     kind: Kind,
     layer: Option<u32>,
     feature: Feature,
     seq: u64,
     /// The active tool's retraction in force before the line (in the input), mm.
     retracted_mm: f64,
-    /// What the line feeds, and how the pass may rewrite it.
-    feeds: Feeds,
 }
 
 impl Held {
     fn e_mm(&self) -> f64 {
         match self.kind {
             Kind::Extrude { e_mm, .. } => e_mm,
-            Kind::Other => 0.0,
+            Kind::Other(_) => 0.0,
+        }
+    }
+
+    /// What the line feeds, and how the pass may rewrite it. An extrusion feeds its E forwards
+    /// and names it: it is never one of the E-only moves the pass takes out, so it does not
+    /// carry the 50 bytes of [`Feeds`] that four lines in five would copy for nothing.
+    fn feeds(&self) -> Feeds {
+        match self.kind {
+            Kind::Extrude { e_mm, .. } => Feeds { fed_mm: e_mm, e_only: None, e_word: EWord::Reads },
+            Kind::Other(feeds) => feeds,
         }
     }
 
@@ -160,6 +174,8 @@ struct Colour {
 pub struct PurgeShift {
     rules: Rules,
     window: VecDeque<Held>,
+    /// The held lines' text.
+    text: HeldText,
     /// What the held lines put out of the nozzle (`Held::purge_mm`), mm.
     window_purge_mm: f64,
     /// Why the window starts where it does (the last barrier).
@@ -181,10 +197,8 @@ pub struct PurgeShift {
     /// Lines written, with the ending each had.
     emitted: Eol,
     report: PurgeShiftReport,
-    /// Buffers of written lines, reused for new held lines.
-    spare: Vec<OwnedLine>,
     features: FeatureComments,
-    /// Each tool's retraction, as the input has it.
+    /// The nozzle's retraction and each tool's, as the input has them.
     tools: ToolRetractions,
     /// The active tool's retraction before the line being read, mm.
     line_retracted_mm: f64,
@@ -212,6 +226,7 @@ impl PurgeShift {
         PurgeShift {
             rules,
             window: VecDeque::new(),
+            text: HeldText::default(),
             window_purge_mm: 0.0,
             floor: "start of the print",
             layer_start_seq: None,
@@ -228,7 +243,6 @@ impl PurgeShift {
             colour,
             emitted: Eol::default(),
             report,
-            spare: Vec::new(),
             features: FeatureComments::default(),
             tools: ToolRetractions::default(),
             line_retracted_mm: 0.0,
@@ -267,36 +281,17 @@ impl PurgeShift {
         self.emit(out, ctx.line.bytes, ctx.line.eol)
     }
 
-    /// A copy of the line, in a buffer of a line written earlier if one is free: held lines
-    /// then cost no allocation once the window has reached its size.
-    fn own(&mut self, raw: &RawLine<'_>) -> OwnedLine {
-        match self.spare.pop() {
-            Some(mut line) => {
-                line.bytes.clear();
-                line.bytes.extend_from_slice(raw.bytes);
-                line.eol.clear();
-                line.eol.extend_from_slice(raw.eol);
-                line.number = raw.number;
-                line
-            }
-            None => OwnedLine::from_raw(raw),
-        }
-    }
-
-    /// Writes a held line and keeps its buffers for reuse.
-    fn retire(&mut self, out: &mut dyn Write, line: OwnedLine) -> io::Result<()> {
-        self.emit_line(out, &line)?;
-        if self.spare.len() < SPARE_LINES {
-            self.spare.push(line);
-        }
-        Ok(())
+    /// Writes a held line as it was read (or written by the pass), ending included.
+    fn emit_held(&mut self, out: &mut dyn Write, h: &Held) -> io::Result<()> {
+        self.emitted.whole_line(out, self.text.whole(h.text))
     }
 
     /// Writes every held line: nothing before this point can take a change any more.
     fn flush(&mut self, out: &mut dyn Write, reason: &'static str) -> io::Result<()> {
         while let Some(h) = self.window.pop_front() {
-            self.retire(out, h.line)?;
+            self.emit_held(out, &h)?;
         }
+        self.text.written_up_to(None);
         self.window_purge_mm = 0.0;
         self.floor = reason;
         Ok(())
@@ -305,7 +300,8 @@ impl PurgeShift {
     fn pop_front(&mut self, out: &mut dyn Write) -> io::Result<()> {
         if let Some(h) = self.window.pop_front() {
             self.window_purge_mm -= h.purge_mm();
-            self.retire(out, h.line)?;
+            self.emit_held(out, &h)?;
+            self.text.written_up_to(self.window.front().map(|f| f.text));
         }
         Ok(())
     }
@@ -374,7 +370,8 @@ impl PurgeShift {
         }
         let tail = std::mem::take(&mut self.group_tail);
         for line in tail {
-            let held = self.held(line, Kind::Other, None, Feature::Unknown, Feeds::written(0.0));
+            let text = self.text.push(&line.bytes, &line.eol);
+            let held = self.held(text, line.number, Kind::Other(Feeds::written(0.0)), None, Feature::Unknown);
             self.push(out, held)?;
         }
         Ok(())
@@ -400,22 +397,15 @@ impl PurgeShift {
                 relative_e: state.relative_e(),
                 feed_mm_min: state.feed_mm_min,
                 rapid_mode: state.motion == crate::gcode::state::Motion::Rapid,
-                retracted_mm: self.env.retracted_mm(),
+                retracted_mm: self.tools.nozzle_mm(),
             },
             inches: state.inches,
         }
     }
 
-    fn held(
-        &mut self,
-        line: OwnedLine,
-        kind: Kind,
-        layer: Option<u32>,
-        feature: Feature,
-        feeds: Feeds,
-    ) -> Held {
+    fn held(&mut self, text: TextRef, number: u64, kind: Kind, layer: Option<u32>, feature: Feature) -> Held {
         self.seq += 1;
-        Held { line, kind, layer, feature, seq: self.seq, retracted_mm: self.line_retracted_mm, feeds }
+        Held { text, number, kind, layer, feature, seq: self.seq, retracted_mm: self.line_retracted_mm }
     }
 }
 
@@ -432,6 +422,12 @@ fn is_change_line(block: &Block) -> bool {
 }
 
 impl Pass for PurgeShift {
+    /// Plain moves' words are not read: the pass asks only whether a move names E or F
+    /// ([`Block::names`]), and a move it splits is read again whole.
+    fn reads_words(&self) -> bool {
+        false
+    }
+
     /// A line too long to read (only a lenient run gets here): nothing is moved across it, and
     /// the lines held back go out before it, so that it keeps its place.
     fn long_line(&mut self, piece: &RawLine<'_>, out: &mut dyn Write) -> Result<(), PassError> {
@@ -445,10 +441,11 @@ impl Pass for PurgeShift {
         let structure = &ctx.state.structure;
         let in_print = structure.region == Region::Print;
         self.nozzles.line(ctx.block, ctx.line.number).map_err(PassError::refuse)?;
-        self.env.follow_retraction(ctx.effect);
-        self.line_retracted_mm = self.tools.in_force_mm();
+        self.line_retracted_mm = self.tools.active_mm();
         self.tools.follow(ctx.state.tool, ctx.effect);
-        if let Effect::Move(m) = ctx.effect {
+        // What the surroundings follow (the print's extent, the file's own retraction) only
+        // the tower fallback reads.
+        if let (Effect::Move(m), Fallback::Tower) = (ctx.effect, self.rules.fallback) {
             self.env.observe(m, in_print);
         }
         if is_change_line(ctx.block) {
@@ -464,19 +461,17 @@ impl Pass for PurgeShift {
                 self.group_feature = structure.feature;
                 self.group_retracted_mm = self.line_retracted_mm;
             }
-            self.group_parked_mm = self.tools.in_force_mm();
+            self.group_parked_mm = self.tools.active_mm();
             self.nozzles.tool_change(self.colour.tool, ctx.state.tool).map_err(PassError::refuse)?;
             self.follow_mixing(ctx);
             let tail = std::mem::take(&mut self.group_tail);
             self.group.extend(tail);
-            let owned = self.own(&ctx.line);
-            self.group.push(owned);
+            self.group.push(OwnedLine::from_raw(&ctx.line));
             return Ok(Flow::Continue);
         }
         if self.group_before.is_some() {
             if ctx.block.is_empty() {
-                let owned = self.own(&ctx.line);
-                self.group_tail.push(owned);
+                self.group_tail.push(OwnedLine::from_raw(&ctx.line));
                 return Ok(Flow::Continue);
             }
             self.close_group(out)?;
@@ -498,7 +493,7 @@ impl Pass for PurgeShift {
         let kind = match ctx.effect {
             Effect::Move(m) if m.is_extruding() => {
                 self.features.extrusion(structure.feature);
-                if !self.rules.allowed.contains(&structure.feature) {
+                if !self.rules.allowed.contains(structure.feature) {
                     self.flush(out, KEPT_FEATURE)?;
                     return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
                 }
@@ -529,11 +524,11 @@ impl Pass for PurgeShift {
                 self.flush(out, "a command for the active tool")?;
                 return self.emit_raw(out, ctx).map(|()| Flow::Continue).map_err(PassError::from);
             }
-            _ => Kind::Other,
+            // What the line feeds is read only for a line held back (not for one written at once).
+            _ => Kind::Other(Feeds::of(ctx)),
         };
-        let owned = self.own(&ctx.line);
-        // What the line feeds is read only for a line held back (not for one written at once).
-        let held = self.held(owned, kind, structure.layer, structure.feature, Feeds::of(ctx));
+        let text = self.text.push_whole(crate::eol::with_ending(&ctx.line), ctx.line.eol.len());
+        let held = self.held(text, ctx.line.number, kind, structure.layer, structure.feature);
         self.push(out, held)?;
         Ok(Flow::Continue)
     }
@@ -549,7 +544,7 @@ impl Pass for PurgeShift {
             self.emit_text(out, &retract, b"\n")?;
             self.emit_text(out, &restore, b"\n")?;
         }
-        if let Some(w) = self.features.warning(&self.rules.allowed) {
+        if let Some(w) = self.features.warning(self.rules.allowed) {
             self.report.warn_first(w);
         }
         let r = &mut self.report;

@@ -122,19 +122,25 @@ impl Nozzles {
     /// temperatures are compared after a run of temperature lines, at the next command: a
     /// slicer sets its tools one line after the other (Slic3r's `M104 S210 T0`, `M104 S210 T1`),
     /// and one nozzle is between two temperatures only while it reads them.
+    #[inline]
     pub(crate) fn line(
         &mut self,
         block: &crate::gcode::line::Block,
         line: u64,
     ) -> Result<(), SeparateNozzles> {
         let c = block.command;
-        if !(c.is_m(104) || c.is_m(109)) {
-            if self.unchecked && !block.is_empty() {
-                self.unchecked = false;
-                return self.compare();
-            }
-            return Ok(());
+        if c.is_m(104) || c.is_m(109) {
+            return self.heat(block, line);
         }
+        if self.unchecked && !block.is_empty() {
+            self.unchecked = false;
+            return self.compare();
+        }
+        Ok(())
+    }
+
+    /// A hotend temperature line (`block`, number `line`), kept if it names its tool.
+    fn heat(&mut self, block: &crate::gcode::line::Block, line: u64) -> Result<(), SeparateNozzles> {
         // Marlin's `M109 R` waits for heating or cooling to the temperature; `S` wins.
         let Some(celsius) = block.get(b'S').or_else(|| block.get(b'R')).filter(|c| c.is_finite()) else {
             return Ok(());

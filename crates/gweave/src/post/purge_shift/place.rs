@@ -11,7 +11,7 @@ use super::fallback::{write_fallback, Spot};
 use super::report::{ChangeReport, RetractionMove, SplitPoint};
 use super::split::{split, Splittable};
 use super::tool_retraction::{write_bracket, Bracket, EWord};
-use super::{Fallback, Held, Kind, PurgeShift, EPS_E_MM, KEPT_FEATURE, LAYER_CHANGE, SPARE_LINES};
+use super::{Fallback, Held, Kind, PurgeShift, EPS_E_MM, KEPT_FEATURE, LAYER_CHANGE};
 use crate::gcode::state::{X, Y, Z};
 use crate::pass::OwnedLine;
 use crate::post::purge_block::{purge_start_pos, PurgeStart};
@@ -86,9 +86,9 @@ impl PurgeShift {
         let moved_from = if fraction.is_some() && at < held.len() { at + 1 } else { at };
         // The slicer's tool-change retraction: the E-only retractions after the last line that
         // feeds forward, taken out where the change was (the old tool makes it at the new place).
-        let tail = (moved_from..held.len()).rev().take_while(|&i| held[i].feeds.fed_mm <= 0.0).last();
+        let tail = (moved_from..held.len()).rev().take_while(|&i| held[i].feeds().fed_mm <= 0.0).last();
         let drops = |i: usize| {
-            tail.is_some_and(|t| i >= t) && held[i].feeds.e_only.is_some() && held[i].feeds.fed_mm < 0.0
+            tail.is_some_and(|t| i >= t) && held[i].feeds().e_only.is_some() && held[i].feeds().fed_mm < 0.0
         };
         // Each tool keeps its retraction (the tool_retraction module): what the old tool had in
         // force where the change now goes, inside or before an extrusion.
@@ -96,7 +96,7 @@ impl PurgeShift {
             let head_mm = fraction.map_or(0.0, |t| t * h.e_mm());
             let r_place_mm = (h.retracted_mm - head_mm).max(0.0);
             let dropped_mm: f64 =
-                (moved_from..held.len()).filter(|&i| drops(i)).map(|i| -held[i].feeds.fed_mm).sum();
+                (moved_from..held.len()).filter(|&i| drops(i)).map(|i| -held[i].feeds().fed_mm).sum();
             Bracket::new(r_place_mm, self.group_retracted_mm, self.group_parked_mm, dropped_mm)
         });
         let feed_mm_min = self.rules.block.retract_feed_mm_min;
@@ -106,29 +106,28 @@ impl PurgeShift {
         if let Some(h) = held.get(at) {
             change.layer = h.layer;
             change.feature = h.feature;
-            change.at_line = h.line.number;
+            change.at_line = h.number;
             if let Kind::Extrude { split: s, .. } = &h.kind {
                 spot = Some(spot_of(s, &s.mv.from));
             }
         }
         for h in &held[..at] {
-            self.emit_line(out, &h.line)?;
+            self.emit_held(out, h)?;
         }
         let mut rest = at;
         if let (Some(t), Some(h)) = (fraction, held.get(at)) {
             if let Kind::Extrude { split: s, .. } = &h.kind {
-                let halves = split(&h.line.bytes, s, t);
-                self.emit(out, &halves.first, &h.line.eol)?;
+                let halves = split(self.text.bytes(h.text), s, t);
+                self.emitted.line(out, &halves.first, self.text.eol(h.text))?;
                 let at_split = spot_of(s, &s.end_of(&halves.first));
                 let lines = bracket.map(|b| (b, write_bracket(&at_split, b.old_mm, b.new_mm, feed_mm_min)));
                 self.emit_change(out, group, &mut change, Some(at_split), lines)?;
                 match &halves.second {
-                    Some(second) => self.emit(out, second, &h.line.eol)?,
-                    None => self.emit_line(out, &h.line)?,
+                    Some(second) => self.emitted.line(out, second, self.text.eol(h.text))?,
+                    None => self.emit_held(out, h)?,
                 }
                 let p = halves.point;
-                change.split =
-                    Some(SplitPoint { line: h.line.number, fraction: t, point_mm: [p[X], p[Y], p[Z]] });
+                change.split = Some(SplitPoint { line: h.number, fraction: t, point_mm: [p[X], p[Y], p[Z]] });
                 rest = at + 1;
             }
         }
@@ -138,18 +137,21 @@ impl PurgeShift {
             self.emit_change(out, group, &mut change, spot, lines)?;
         }
         for (i, h) in held.iter().enumerate().skip(rest) {
-            match h.feeds.e_only.filter(|_| bracket.is_some() && drops(i)) {
+            match h.feeds().e_only.filter(|_| bracket.is_some() && drops(i)) {
                 Some(e) => {
-                    let eol = h.line.eol.clone();
-                    self.emit_text(out, &e.feeding(&h.line.bytes, 0.0), &eol)?;
+                    let eol = self.text.eol(h.text).to_vec();
+                    self.emit_text(out, &e.feeding(self.text.bytes(h.text), 0.0), &eol)?;
                     if !e.relative_e {
                         self.e_reset = Some(e.e_after());
                     }
                 }
                 None => {
-                    let reset = self.owed_e_reset(h.feeds.e_word);
-                    self.emit_text(out, &reset, &h.line.eol)?;
-                    self.emit_line(out, &h.line)?;
+                    let reset = self.owed_e_reset(h.feeds().e_word);
+                    if !reset.is_empty() {
+                        let eol = self.text.eol(h.text).to_vec();
+                        self.emit_text(out, &reset, &eol)?;
+                    }
+                    self.emit_held(out, h)?;
                 }
             }
         }
@@ -168,8 +170,7 @@ impl PurgeShift {
                 (r.settle_lines, r.settle_offset) = (written, offset);
             }
         }
-        let room = SPARE_LINES.saturating_sub(self.spare.len());
-        self.spare.extend(held.into_iter().take(room).map(|h| h.line));
+        self.text.written_up_to(self.window.front().map(|f| f.text));
         self.floor = "the previous change";
         change.achieved_mm3 = self.rules.mm3(change.achieved_mm);
         if let Some(w) = &self.rules.washout {

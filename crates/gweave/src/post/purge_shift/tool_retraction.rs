@@ -46,52 +46,16 @@
 //! E-only move right after the split carries them instead. A `G92 E` comes only after the
 //! inserted moves, when they do not bring E back to where the file has it.
 
-use std::collections::HashMap;
-
 use super::fallback::Spot;
 use super::{Feature, Kind, PurgeShift, Region, EPS_E_MM};
 use crate::gcode::reader::RawLine;
-use crate::gcode::retraction::{write_e_only, write_e_reset, Retraction};
+use crate::gcode::retraction::{write_e_only, write_e_reset};
 use crate::gcode::state::{Effect, MM_PER_INCH};
-use crate::pass::{Ctx, OwnedLine};
+use crate::pass::Ctx;
 use std::io::{self, Write};
 
-/// Tools whose parked retraction is remembered (a file naming more keeps the first ones; a tool
-/// beyond them is taken as parked with nothing retracted).
-const TOOLS: usize = 256;
 /// Feeds below this are rounding remainders, not a retraction worth a line, mm.
 const EPS_MM: f64 = 1e-6;
-
-/// The retraction in force of every tool, following the input (each line fed by the tool that
-/// is active there in the input).
-#[derive(Debug, Default)]
-pub(crate) struct ToolRetractions {
-    tool: u32,
-    active: Retraction,
-    parked: HashMap<u32, f64>,
-}
-
-impl ToolRetractions {
-    /// Follows one line of the input, run by `tool`.
-    pub(super) fn follow(&mut self, tool: u32, effect: &Effect) {
-        if tool != self.tool {
-            let mm = self.active.in_force_mm();
-            if self.parked.len() < TOOLS || self.parked.contains_key(&self.tool) {
-                self.parked.insert(self.tool, mm);
-            }
-            self.active = Retraction::default();
-            let new = self.parked.get(&tool).copied().unwrap_or(0.0);
-            self.active.feed(-new);
-            self.tool = tool;
-        }
-        self.active.follow(effect);
-    }
-
-    /// The active tool's retraction in force, mm.
-    pub(super) fn in_force_mm(&self) -> f64 {
-        self.active.in_force_mm()
-    }
-}
 
 /// The feeds that keep each tool's retraction with it across a moved change, mm (negative:
 /// retract).
@@ -197,7 +161,7 @@ impl EOnly {
                     e_after_mm: ctx.state.pos[crate::gcode::state::E],
                     relative_e: ctx.state.relative_e(),
                     inches: ctx.state.inches,
-                    sets_feed_mm_min: ctx.block.has(b'F').then_some(ctx.state.feed_mm_min),
+                    sets_feed_mm_min: ctx.block.names(b'F').then_some(ctx.state.feed_mm_min),
                     rapid: m.rapid,
                 })
             }
@@ -252,7 +216,7 @@ pub(crate) enum EWord {
 
 impl EWord {
     pub(crate) fn of(block: &crate::gcode::line::Block) -> EWord {
-        if !block.has(b'E') {
+        if !block.names(b'E') {
             EWord::None
         } else if block.command.is_g(92) {
             EWord::Reset
@@ -316,8 +280,9 @@ impl PurgeShift {
         fed_mm: f64,
     ) -> io::Result<()> {
         for bytes in text.split(|&b| b == b'\n').filter(|l| !l.is_empty()) {
-            let line = OwnedLine { bytes: bytes.to_vec(), eol: like.eol.to_vec(), number: like.number };
-            let held = self.held(line, Kind::Other, None, Feature::Unknown, Feeds::written(fed_mm));
+            let text = self.text.push(bytes, like.eol);
+            let held =
+                self.held(text, like.number, Kind::Other(Feeds::written(fed_mm)), None, Feature::Unknown);
             self.push(out, held)?;
         }
         Ok(())
@@ -438,34 +403,5 @@ mod tests {
             text(write_bracket(&spot(2400.0, true), 0.0, 10.0, 2400.0)),
             ["", "G1 E10 F2400\nG0 F2400\n"]
         );
-    }
-
-    #[test]
-    fn each_tool_keeps_its_own_retraction_across_changes() {
-        use crate::gcode::state::Move;
-        let mut t = ToolRetractions::default();
-        let e = |e_mm: f64| {
-            let from: crate::gcode::state::Position = Default::default();
-            let mut to = from;
-            to[crate::gcode::state::E] = e_mm;
-            Effect::Move(Move {
-                from,
-                to,
-                path: crate::gcode::state::Path::Line,
-                rapid: false,
-                feed_mm_min: 0.0,
-            })
-        };
-        t.follow(0, &e(-10.0));
-        assert_eq!(t.in_force_mm(), 10.0);
-        t.follow(1, &Effect::None);
-        assert_eq!(t.in_force_mm(), 0.0);
-        t.follow(1, &e(-4.0));
-        t.follow(0, &Effect::None);
-        assert_eq!(t.in_force_mm(), 10.0);
-        t.follow(0, &e(10.0));
-        assert_eq!(t.in_force_mm(), 0.0);
-        t.follow(1, &Effect::None);
-        assert_eq!(t.in_force_mm(), 4.0);
     }
 }
