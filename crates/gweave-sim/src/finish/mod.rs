@@ -26,6 +26,7 @@ use gweave::{Output, Strictness, Target};
 
 use crate::motion::estimate::EstimateError;
 
+mod diff;
 mod measure;
 
 use measure::measure_while_written;
