@@ -14,7 +14,7 @@
 //! Memory is bounded: each file's buffered lines are capped ([`LineDiff::new`]); a change
 //! longer than that is [`DiffError::PastCap`], and the caller measures the output in full.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::VecDeque;
 use std::io::{self, Read};
 
 use gweave::LineReader;
@@ -52,9 +52,10 @@ pub(super) struct LineDiff<R> {
     ahead: VecDeque<Vec<u8>>,
     /// Output lines since the files differ, not yet matched.
     pending: Vec<Vec<u8>>,
-    /// While the files differ: the positions in `ahead` and in `pending` of each line's hash.
-    ahead_at: HashMap<u64, Vec<usize>>,
-    pending_at: HashMap<u64, Vec<usize>>,
+    /// While the files differ: the hash of each line in `ahead` and in `pending` (a change is
+    /// tens of lines: a scan of them costs less than a map).
+    ahead_hashes: Vec<u64>,
+    pending_hashes: Vec<u64>,
     /// Output lines matched again after a change, to compare from the input's matched lines on.
     replay: VecDeque<Vec<u8>>,
     /// The shortest change found so far (the input's and the output's lines before the
@@ -75,8 +76,8 @@ impl<R: Read> LineDiff<R> {
             input_ended: false,
             ahead: VecDeque::new(),
             pending: Vec::new(),
-            ahead_at: HashMap::new(),
-            pending_at: HashMap::new(),
+            ahead_hashes: Vec::new(),
+            pending_hashes: Vec::new(),
             replay: VecDeque::new(),
             best: None,
             output_ended: false,
@@ -148,14 +149,12 @@ impl<R: Read> LineDiff<R> {
                 }
             }
             // The files differ from here: what is read ahead is where they may agree again.
-            self.ahead_at.clear();
-            self.pending_at.clear();
-            for i in 0..self.ahead.len() {
-                self.ahead_at.entry(hash(&self.ahead[i])).or_default().push(i);
-            }
+            self.ahead_hashes.clear();
+            self.ahead_hashes.extend(self.ahead.iter().map(|l| hash(l)));
+            self.pending_hashes.clear();
         }
         let owned = owned(&mut self.spare, line);
-        self.pending_at.entry(hash(&owned)).or_default().push(self.pending.len());
+        self.pending_hashes.push(hash(&owned));
         self.pending.push(owned);
         self.best = min_anchor(self.best, self.anchor_ending_output());
         // Read the input ahead of the output, so that a block the output dropped is found
@@ -189,7 +188,7 @@ impl<R: Read> LineDiff<R> {
             return Ok(false);
         };
         let next = owned(&mut self.spare, next.bytes);
-        self.ahead_at.entry(hash(&next)).or_default().push(self.ahead.len());
+        self.ahead_hashes.push(hash(&next));
         self.ahead.push_back(next);
         Ok(true)
     }
@@ -197,15 +196,15 @@ impl<R: Read> LineDiff<R> {
     /// The anchor, if any, whose run of equal lines ends at the output's last line.
     fn anchor_ending_output(&self) -> Option<(usize, usize)> {
         let j = self.pending.len().checked_sub(RESYNC_LINES)?;
-        let at = self.ahead_at.get(&hash(&self.pending[j]))?;
-        at.iter().copied().find(|&i| self.agree(i, j)).map(|i| (i, j))
+        let h = self.pending_hashes[j];
+        (0..self.ahead_hashes.len()).find(|&i| self.ahead_hashes[i] == h && self.agree(i, j)).map(|i| (i, j))
     }
 
     /// The anchor, if any, whose run of equal lines ends at the input's last line read.
     fn anchor_ending_input(&self) -> Option<(usize, usize)> {
         let i = self.ahead.len().checked_sub(RESYNC_LINES)?;
-        let at = self.pending_at.get(&hash(&self.ahead[i]))?;
-        at.iter().copied().find(|&j| self.agree(i, j)).map(|j| (i, j))
+        let h = self.ahead_hashes[i];
+        (0..self.pending_hashes.len()).find(|&j| self.pending_hashes[j] == h && self.agree(i, j)).map(|j| (i, j))
     }
 
     /// Whether the input's lines from `i` and the output's from `j` agree on
@@ -226,8 +225,8 @@ impl<R: Read> LineDiff<R> {
         }
         self.spare.append(&mut self.pending);
         self.spare.iter_mut().for_each(Vec::clear);
-        self.ahead_at.clear();
-        self.pending_at.clear();
+        self.ahead_hashes.clear();
+        self.pending_hashes.clear();
         Ok(())
     }
 

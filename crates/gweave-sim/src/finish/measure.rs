@@ -25,6 +25,12 @@ use gweave::Ctx;
 use gweave::StatsPass;
 use gweave::{Firmware, Pass, Target};
 
+use gweave::gcode::lexer::{parse_line, parse_line_lean};
+use gweave::gcode::reader::Part;
+use gweave::{Block, LineReader, State, StateOptions};
+
+use super::delta::{Stated, Times, Windows};
+use super::diff::{DiffError, LineDiff};
 use super::{FinishError, Result};
 use crate::motion::estimate::{estimate_modes, EstimateError, ModeEstimate, Modes};
 use crate::motion::limits::MotionProfile;
@@ -57,13 +63,21 @@ pub(super) fn measure_while_written<R, E: From<FinishError>>(
 ) -> Result<(R, Figures), E> {
     let path = scratch.path();
     let target = scratch.target();
-    let Some(guessed) = input.and_then(|i| read_ends(i).ok()).map(|ends| modes_of(&ends)) else {
+    let read = |input: &Path| read_ends(input).ok().map(|ends| (Timing::of(&ends, &modes_of(&ends)), modes_of(&ends)));
+    let Some((input, (timing, guessed))) = input.and_then(|i| Some((i, read(i)?))) else {
         let result = write(&target)?;
         return Ok((result, measure(path)?));
     };
     let growing = scratch.follow().map_err(|e| FinishError::from(gweave::Error::io(path, e)))?;
     let (result, early) = std::thread::scope(|scope| {
-        let measuring = scope.spawn(|| measure_read(growing, path, &guessed));
+        let measuring = scope.spawn(|| match timing {
+            Timing::Full => measure_read(growing, path, &guessed).map(Some),
+            Timing::Changes => {
+                let text = container::open(input).map_err(|e| gweave::Error::io(input, e))?;
+                measure_changes(growing, path, Some((text, input)), &guessed)
+            }
+            Timing::Unused => measure_changes(growing, path, None::<(io::Empty, _)>, &guessed),
+        });
         // Ended before the measure is joined, also when `write` fails or unwinds: the measure
         // then stops rather than wait for the rest of the file.
         let writing = scratch.writing();
@@ -74,11 +88,159 @@ pub(super) fn measure_while_written<R, E: From<FinishError>>(
     // A failed write is the error, whatever the measure made of the unfinished file.
     let result = result?;
     let early = early.unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-    let figures = match modes_of(&ends_of(path)?) == guessed {
-        true => early?,
-        false => measure(path)?,
+    let figures = match (modes_of(&ends_of(path)?) == guessed, early?) {
+        (true, Some(figures)) => figures,
+        // Limits that changed, or changes that could not be timed: the file in full.
+        _ => measure(path)?,
     };
     Ok((result, figures))
+}
+
+/// How a transform's output is timed, from its input's ends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Timing {
+    /// The input states its times: they plus what the transform changed ([`measure_changes`]).
+    Changes,
+    /// The output needs times the input does not state (a footer to add, a placeholder, a
+    /// progress line): a full estimate of the output ([`measure_read`]).
+    Full,
+    /// No line of the output shows a time (Slic3r states filament only): not planned at all,
+    /// unless a progress line turns up in the middle of the file.
+    Unused,
+}
+
+impl Timing {
+    fn of(ends: &[u8], modes: &FileModes) -> Self {
+        let contains = |needle: &[u8]| memchr::memmem::find(ends, needle).is_some();
+        if Stated::in_ends(ends, modes.silent.is_some()) {
+            return Timing::Changes;
+        }
+        let times = [&b"estimated printing time"[..], b"\n;TIME:", b"\n;PRINT.TIME:", b"\nM73", b";TIME_ELAPSED:"];
+        // Without a filament line of the slicer's, the output gets a footer with a time.
+        let filament = [&b"; filament used ["[..], b"; filament used =", b";Filament used:"];
+        match times.iter().any(|t| contains(t)) || !filament.iter().any(|f| contains(f)) {
+            true => Timing::Full,
+            false => Timing::Unused,
+        }
+    }
+}
+
+/// Measures the output `output` (at `path`) of a transform of `input` (its text, and its
+/// path for errors) that states its times: the `stats` count of the output, and its times as
+/// the input states them plus what the transform changed ([`delta`](super::delta)). Without an
+/// input, the times are not measured (no line shows them: [`Timing::Unused`]). `None`: the
+/// times cannot be found so (a change past the cap, a line the estimator refuses, no stated
+/// total after all, a progress line where none was expected): the caller measures the output
+/// in full.
+fn measure_changes(
+    output: impl Read,
+    path: &Path,
+    input: Option<(impl Read, &Path)>,
+    modes: &FileModes,
+) -> Result<Option<Figures>> {
+    measure_changes_in(output, path, input, modes, |w| w)
+}
+
+/// [`measure_changes`] with the windows `windows` makes of its own.
+fn measure_changes_in(
+    output: impl Read,
+    path: &Path,
+    input: Option<(impl Read, &Path)>,
+    modes: &FileModes,
+    windows: impl FnOnce(Windows) -> Windows,
+) -> Result<Option<Figures>> {
+    let FileModes { firmware, normal, silent } = modes;
+    let profiles: Vec<&MotionProfile> = std::iter::once(normal).chain(silent.as_ref()).collect();
+    let (input_path, mut diff) = match input {
+        Some((text, p)) => (p, Some(LineDiff::new(text, DIFF_CAP_LINES))),
+        None => (path, None),
+    };
+    let Ok(mut windows) = Windows::new(&profiles, *firmware).map(windows) else { return Ok(None) };
+    let mut tally = TallyPass { stats: StatsPass::new(None), figures: Figures::default(), failed: None };
+    let mut stated = Stated::default();
+    let mut state = State::new(StateOptions { firmware: *firmware, ..StateOptions::default() });
+    let (mut block, mut ops) = (Block::default(), Vec::new());
+    let mut reader = LineReader::new(output);
+    let stop = gweave::Token::current();
+    let read_failed = |e| FinishError::from(gweave::Error::io(path, e));
+    while let Some(line) = reader.next_line().map_err(read_failed)? {
+        let at = line.number - 1;
+        if diff.is_some() {
+            windows.line(line.bytes, &state);
+        }
+        if line.part == Part::Whole {
+            // As `stats` reads it (a lenient run: the transform has read it already).
+            match state.reads_words() {
+                true => parse_line(&line, &mut block),
+                false => parse_line_lean(&line, &mut block),
+            }
+            state.apply(line.bytes, &block);
+            tally.line(&Ctx { line, block: &block, effect: &state.effect, state: &state });
+            stated.line(at, line.bytes, windows.delta_s);
+        }
+        if let Some(diff) = &mut diff {
+            if !compared(diff.push(line.bytes, &mut ops), input_path)? {
+                return Ok(None);
+            }
+            for op in ops.drain(..) {
+                if windows.op(op, &mut stated).is_err() {
+                    return Ok(None);
+                }
+            }
+        }
+        if line.number % STOP_CHECK_LINES == 0 {
+            if let Some(stop) = &stop {
+                stop.check().map_err(|e| gweave::Error::io(path, e))?;
+            }
+        }
+    }
+    if let Some(diff) = &mut diff {
+        if !compared(diff.finish(&mut ops), input_path)? {
+            return Ok(None);
+        }
+        for op in ops.drain(..) {
+            if windows.op(op, &mut stated).is_err() {
+                return Ok(None);
+            }
+        }
+        if windows.finish(&mut stated).is_err() {
+            return Ok(None);
+        }
+    }
+    if let Some(e) = tally.failed {
+        return Err(gweave::Error::io(path, e).into());
+    }
+    let times = match diff {
+        Some(_) => stated.figures(&windows, silent.is_some()),
+        None if stated.has_progress() => None,
+        None => Some(Times { total_s: [0.0; 2], first_layer_s: [0.0; 2], progress_s: Vec::new() }),
+    };
+    let Some(times) = times else { return Ok(None) };
+    let stats = tally.stats.into_stats(&state);
+    Ok(Some(Figures {
+        filament_mm: stats.filament.iter().map(|f| f.extruded_mm).collect(),
+        diameter_mm: stats.filament_diameter_mm,
+        time_s: times.total_s,
+        first_layer_s: times.first_layer_s,
+        progress_s: times.progress_s,
+        ..tally.figures
+    }))
+}
+
+/// Lines of a change the comparison holds at most (of each file); past it, the output is
+/// measured in full.
+const DIFF_CAP_LINES: usize = 4096;
+/// Lines between two looks at whether the run was stopped.
+const STOP_CHECK_LINES: u64 = 4096;
+
+/// Whether the comparison goes on: an input that cannot be read is the error, naming it; a
+/// change past the cap ends it.
+fn compared(result: std::result::Result<(), DiffError>, input: &Path) -> Result<bool> {
+    match result {
+        Ok(()) => Ok(true),
+        Err(DiffError::Io(e)) => Err(gweave::Error::io(input, e).into()),
+        Err(DiffError::PastCap(_)) => Ok(false),
+    }
 }
 
 fn ends_of(path: &Path) -> Result<Vec<u8>> {
@@ -405,5 +567,26 @@ mod tests {
         assert!(measured >= 20, "{measured} files");
         // Some with silent-mode limits of their own: both planners ran apart.
         assert!(two_modes >= 2, "{two_modes} files timed in two modes");
+    }
+
+    /// The context a change's window needs (docs/performance.md): the total written against
+    /// the difference of the two files' full estimates, for context from 1 to 32 code lines.
+    /// `DELTA_IN`, `DELTA_OUT`: a transform's input and output.
+    #[test]
+    #[ignore]
+    fn context_sweep() {
+        let (input, output) = (std::env::var("DELTA_IN").unwrap(), std::env::var("DELTA_OUT").unwrap());
+        let (input, output) = (Path::new(&input), Path::new(&output));
+        let modes = modes_of(&read_ends(output).unwrap());
+        let (full_in, full_out) = (measure(input).unwrap(), measure(output).unwrap());
+        let stated = measure_changes(std::fs::File::open(input).unwrap(), input, Some((std::fs::File::open(input).unwrap(), input)), &modes).unwrap().unwrap();
+        let expected = [0, 1].map(|m| full_out.time_s[m] - full_in.time_s[m]);
+        println!("full estimates differ by {expected:?} s; stated {:?}", stated.time_s);
+        for k in [1, 2, 3, 4, 6, 8, 12, 16, 24, 32] {
+            let open = |p: &Path| std::fs::File::open(p).unwrap();
+            let f = measure_changes_in(open(output), output, Some((open(input), input)), &modes, |w| w.with_context(k)).unwrap().unwrap();
+            let got = [0, 1].map(|m| f.time_s[m] - stated.time_s[m]);
+            println!("K {k:2}: changes {got:?} s, error {:?} s", [0, 1].map(|m| got[m] - expected[m]));
+        }
     }
 }

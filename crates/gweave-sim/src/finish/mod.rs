@@ -26,6 +26,7 @@ use gweave::{Output, Strictness, Target};
 
 use crate::motion::estimate::EstimateError;
 
+mod delta;
 mod diff;
 mod measure;
 
