@@ -62,10 +62,9 @@ struct Progress {
 /// What a progress line says of the time elapsed.
 #[derive(Debug, Clone, Copy)]
 enum Said {
-    /// `M73 R` (mode 0) or `S` (mode 1): minutes left.
-    Left { mode: usize, minutes: f64 },
-    /// `M73 P` (mode 0) or `Q` (mode 1): percent done.
-    Percent { mode: usize, percent: f64 },
+    /// `M73 P.. R..` (mode 0) or `Q.. S..` (mode 1): percent done and minutes left, either or
+    /// both.
+    M73 { mode: usize, percent: Option<f64>, minutes_left: Option<f64> },
     /// Cura's `;TIME_ELAPSED:`, s.
     Elapsed(f64),
     /// Nothing readable: as the line before.
@@ -155,11 +154,24 @@ impl Stated {
                 // The elapsed time in the mode the line speaks of, the other in proportion.
                 let share = |mode: usize, elapsed: f64| {
                     let ratio = if total_in[mode] > 0.0 { elapsed / total_in[mode] } else { 0.0 };
-                    [ratio * total_in[0], ratio * total_in[1]]
+                    let mut both = [ratio * total_in[0], ratio * total_in[1]];
+                    both[mode] = elapsed;
+                    both
                 };
                 let elapsed = match p.said {
-                    Said::Left { mode, minutes } => share(mode, total_in[mode] - 60.0 * minutes),
-                    Said::Percent { mode, percent } => share(mode, total_in[mode] * percent / 100.0),
+                    Said::M73 { mode, percent, minutes_left } => {
+                        let total = total_in[mode];
+                        // Minutes are rounded to 30 s, percent to 0.5 % of the total: the
+                        // finer of the two (percent under 100 minutes).
+                        let from_left = minutes_left.map(|m| total - 60.0 * m);
+                        let from_percent = percent.map(|p| total * p / 100.0);
+                        let finer = if total / 200.0 < 30.0 {
+                            from_percent.or(from_left)
+                        } else {
+                            from_left.or(from_percent)
+                        };
+                        finer.map_or(before, |t| share(mode, t))
+                    }
                     Said::Elapsed(t) => share(0, t),
                     Said::Nothing => before,
                 };
@@ -181,22 +193,24 @@ pub(super) struct Times {
     pub progress_s: Vec<[f64; 2]>,
 }
 
-/// `M73`'s time: minutes left if it says them, else percent done.
+/// What an `M73` line says, in the first mode it speaks of.
 fn m73(line: &[u8]) -> Said {
     let code = line.split(|&b| b == b';').next().unwrap_or_default();
-    let mut said = Said::Nothing;
+    let (mut percent, mut left) = ([None; 2], [None; 2]);
     for word in code.split(|b| b.is_ascii_whitespace()).skip(1) {
         let Some((&letter, v)) = word.split_first() else { continue };
-        let Some(v) = number(v) else { continue };
-        said = match (letter.to_ascii_uppercase(), said) {
-            (b'R', _) => Said::Left { mode: 0, minutes: v },
-            (b'S', _) => Said::Left { mode: 1, minutes: v },
-            (b'P', Said::Nothing) => Said::Percent { mode: 0, percent: v },
-            (b'Q', Said::Nothing) => Said::Percent { mode: 1, percent: v },
-            (_, said) => said,
-        };
+        match letter.to_ascii_uppercase() {
+            b'P' => percent[0] = number(v),
+            b'R' => left[0] = number(v),
+            b'Q' => percent[1] = number(v),
+            b'S' => left[1] = number(v),
+            _ => {}
+        }
     }
-    said
+    match (0..2).find(|&m| percent[m].is_some() || left[m].is_some()) {
+        Some(mode) => Said::M73 { mode, percent: percent[mode], minutes_left: left[mode] },
+        None => Said::Nothing,
+    }
 }
 
 fn number(v: &[u8]) -> Option<f64> {
@@ -389,8 +403,9 @@ impl Windows {
             self.codes += 1;
             if sets_limits(t) {
                 let code = &t[..4];
-                let same: Vec<usize> =
-                    (0..self.limits.len()).filter(|&i| self.limits[i].1[..4].eq_ignore_ascii_case(code)).collect();
+                let same: Vec<usize> = (0..self.limits.len())
+                    .filter(|&i| self.limits[i].1[..4].eq_ignore_ascii_case(code))
+                    .collect();
                 if same.len() >= LIMITS_KEPT {
                     self.limits.remove(same[0]);
                 }
@@ -425,7 +440,8 @@ impl Windows {
                     self.forget();
                     let Some(first) = self.held.front() else { return Err(Unmeasured::PastCap) };
                     let (start, modal) = (self.held_from, first.modal);
-                    self.open = Some(Window { start, modal, first_change: at, changes: Vec::new(), equal_codes: 0 });
+                    self.open =
+                        Some(Window { start, modal, first_change: at, changes: Vec::new(), equal_codes: 0 });
                 }
                 if let Some(w) = &mut self.open {
                     w.changes.push((at, added as u64, removed));
@@ -460,7 +476,10 @@ impl Windows {
     /// the next undecided line, and its window starts the context's code lines before it.
     fn forget(&mut self) {
         let codes = self.codes_before(self.decided);
-        while self.held.len() > 1 && self.held[1].codes + self.context <= codes && self.held_from < self.decided {
+        while self.held.len() > 1
+            && self.held[1].codes + self.context <= codes
+            && self.held_from < self.decided
+        {
             if let Some(h) = self.held.pop_front() {
                 self.spare.push(h.bytes);
             }
@@ -482,7 +501,9 @@ impl Windows {
         }
         self.window_set_limits = self.limits.iter().any(|(at, _)| (w.start..end).contains(at));
         let g92 = w.modal.g92();
-        let held = |from: u64, to: u64| (from..to).map(|i| self.held[(i - self.held_from) as usize].bytes.as_slice());
+        let held = |from: u64, to: u64| {
+            (from..to).map(|i| self.held[(i - self.held_from) as usize].bytes.as_slice())
+        };
         let output: Vec<&[u8]> = held(w.start, end).collect();
         let mut input: Vec<&[u8]> = Vec::with_capacity(output.len());
         let mut next = w.start;
@@ -501,6 +522,14 @@ impl Windows {
             };
             let t_out = time(&mut self.output_side[mode], &output).map_err(|_| Unmeasured::Estimate)?;
             let t_in = time(&mut self.input_side[mode], &input).map_err(|_| Unmeasured::Estimate)?;
+            // A change whose modal state outlasts the window (a feed rate, a position, a mode
+            // not put back) goes on changing the moves after it: the window grows until the
+            // two sides agree again, and is timed again then.
+            if !same_modes(self.output_side[mode].state(), self.input_side[mode].state()) {
+                let w = Window { equal_codes: 0, ..w };
+                self.open = Some(w);
+                return Ok(());
+            }
             delta_s[mode] = t_out - t_in;
         }
         if self.output_side.len() == 1 {
@@ -531,6 +560,19 @@ fn time_of(est: &mut Estimator, lines: &[&[u8]]) -> Result<f64, EstimateError> {
     // Drained: the next window starts at rest.
     est.line(b"M400")?;
     Ok(est.now_s() - t0)
+}
+
+/// Whether two sides left the machine in the same modal state: what the lines after a window
+/// read (the feed rate, the modes, the position; E only where it is absolute). Not the tool:
+/// `mix` renumbers them for good, and with the file's limits (no extruder's own) a tool plans
+/// as any other.
+fn same_modes(a: &State, b: &State) -> bool {
+    a.feed_mm_min == b.feed_mm_min
+        && a.absolute() == b.absolute()
+        && a.relative_e() == b.relative_e()
+        && a.inches == b.inches
+        && [X, Y, Z].iter().all(|&i| a.pos[i] == b.pos[i])
+        && (a.relative_e() || a.pos[E] == b.pos[E])
 }
 
 /// Whether the code line `t` sets the planner's limits (`M201`, `M203`, `M204`, `M205`).

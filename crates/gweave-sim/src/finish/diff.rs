@@ -204,7 +204,9 @@ impl<R: Read> LineDiff<R> {
     fn anchor_ending_input(&self) -> Option<(usize, usize)> {
         let i = self.ahead.len().checked_sub(RESYNC_LINES)?;
         let h = self.ahead_hashes[i];
-        (0..self.pending_hashes.len()).find(|&j| self.pending_hashes[j] == h && self.agree(i, j)).map(|j| (i, j))
+        (0..self.pending_hashes.len())
+            .find(|&j| self.pending_hashes[j] == h && self.agree(i, j))
+            .map(|j| (i, j))
     }
 
     /// Whether the input's lines from `i` and the output's from `j` agree on
