@@ -27,7 +27,7 @@ use gweave::gcode::state::{Position, E, X, Y, Z};
 use gweave::post::metadata::is_progress_line;
 use gweave::{Firmware, State};
 
-use super::diff::Op;
+use super::diff::{recycle, Op};
 use crate::motion::estimate::{EstimateError, Estimator};
 use crate::motion::limits::MotionProfile;
 
@@ -362,6 +362,8 @@ impl Windows {
                 .map(|p| {
                     let mut est = Estimator::timing_only(p)?;
                     est.read_as(firmware);
+                    // Its accounts per layer would grow with the file.
+                    est.first_layer_only();
                     Ok(est)
                 })
                 .collect::<Result<Vec<_>, EstimateError>>()
@@ -481,7 +483,7 @@ impl Windows {
             && self.held_from < self.decided
         {
             if let Some(h) = self.held.pop_front() {
-                self.spare.push(h.bytes);
+                recycle(&mut self.spare, h.bytes);
             }
             self.held_from += 1;
         }
@@ -494,7 +496,7 @@ impl Windows {
         let mut limits: Vec<&[u8]> = Vec::new();
         // The limits in force at the window's start, if they changed since the last replay.
         let in_force = self.limits.iter().filter(|(at, _)| *at < w.start);
-        let latest = in_force.clone().map(|(at, _)| *at).last();
+        let latest = in_force.clone().map(|(at, _)| *at).next_back();
         if latest != self.replayed || self.window_set_limits {
             limits.extend(in_force.map(|(_, line)| line.as_slice()));
             self.replayed = latest;
@@ -514,18 +516,19 @@ impl Windows {
         }
         input.extend(held(next, end));
         let mut delta_s = [0.0; 2];
-        for mode in 0..self.output_side.len() {
+        let sides = self.output_side.iter_mut().zip(self.input_side.iter_mut());
+        for (mode, (out_est, in_est)) in sides.enumerate() {
             let time = |est: &mut Estimator, lines: &[&[u8]]| {
                 limits.iter().try_for_each(|l| est.line(l))?;
                 w.modal.set(est, &g92)?;
                 time_of(est, lines)
             };
-            let t_out = time(&mut self.output_side[mode], &output).map_err(|_| Unmeasured::Estimate)?;
-            let t_in = time(&mut self.input_side[mode], &input).map_err(|_| Unmeasured::Estimate)?;
+            let t_out = time(out_est, &output).map_err(|_| Unmeasured::Estimate)?;
+            let t_in = time(in_est, &input).map_err(|_| Unmeasured::Estimate)?;
             // A change whose modal state outlasts the window (a feed rate, a position, a mode
             // not put back) goes on changing the moves after it: the window grows until the
             // two sides agree again, and is timed again then.
-            if !same_modes(self.output_side[mode].state(), self.input_side[mode].state()) {
+            if !same_modes(out_est.state(), in_est.state()) {
                 let w = Window { equal_codes: 0, ..w };
                 self.open = Some(w);
                 return Ok(());
@@ -536,15 +539,15 @@ impl Windows {
             delta_s[1] = delta_s[0];
         }
         stated.add_from(w.first_change, delta_s);
-        for m in 0..2 {
-            self.delta_s[m] += delta_s[m];
+        for (m, d) in delta_s.into_iter().enumerate() {
+            self.delta_s[m] += d;
             if w.modal.first_layer {
-                self.first_layer_delta_s[m] += delta_s[m];
+                self.first_layer_delta_s[m] += d;
             }
         }
         self.timed += 1;
         for (_, _, removed) in w.changes {
-            self.spare.extend(removed);
+            removed.into_iter().for_each(|line| recycle(&mut self.spare, line));
         }
         self.forget();
         Ok(())

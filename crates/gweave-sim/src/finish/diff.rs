@@ -98,7 +98,7 @@ impl<R: Read> LineDiff<R> {
     fn replay(&mut self, ops: &mut Vec<Op>) -> Result<(), DiffError> {
         while let Some(line) = self.replay.pop_front() {
             self.push_one(&line, ops)?;
-            self.spare.push(line);
+            recycle(&mut self.spare, line);
         }
         Ok(())
     }
@@ -131,7 +131,7 @@ impl<R: Read> LineDiff<R> {
             if let Some(next) = self.ahead.front() {
                 if next == line {
                     let next = self.ahead.pop_front().unwrap_or_default();
-                    self.spare.push(next);
+                    recycle(&mut self.spare, next);
                     ops.push(Op::Same);
                     return Ok(());
                 }
@@ -225,8 +225,9 @@ impl<R: Read> LineDiff<R> {
         for line in self.pending.drain(j..).rev() {
             self.replay.push_front(line);
         }
-        self.spare.append(&mut self.pending);
-        self.spare.iter_mut().for_each(Vec::clear);
+        for line in self.pending.drain(..) {
+            recycle(&mut self.spare, line);
+        }
         self.ahead_hashes.clear();
         self.pending_hashes.clear();
         Ok(())
@@ -237,6 +238,17 @@ impl<R: Read> LineDiff<R> {
             true => Err(DiffError::PastCap(self.cap)),
             false => Ok(()),
         }
+    }
+}
+
+/// Line buffers kept for reuse at most: a change's worth, so that their memory does not grow
+/// with the file.
+pub(super) const SPARE_LINES: usize = 1024;
+
+/// Keeps `line`'s buffer for reuse, if `spare` has room.
+pub(super) fn recycle(spare: &mut Vec<Vec<u8>>, line: Vec<u8>) {
+    if spare.len() < SPARE_LINES {
+        spare.push(line);
     }
 }
 

@@ -1,17 +1,21 @@
 //! Measuring a written file for its metadata: its filament by the `stats` count, its settings,
-//! its estimated times (normal and silent mode) and the time at each progress line.
+//! its times (normal and silent mode) and the time at each progress line.
 //!
-//! The estimate is the costly part: Marlin's step-exact planner, about 1 200 instructions a
-//! line and mode (docs/performance.md), twice for a file with silent-mode limits of its own. So
-//! the file is read once, on one thread, which parses it once for both modes
+//! A transform's output is measured while it is written ([`measure_while_written`]): the
+//! measure follows the scratch file as it grows, woken by each write, on a thread of its own,
+//! so the finishing step costs the slower of the two rather than their sum. How its times are
+//! found depends on the input ([`Timing`]): an input that states its times has them kept, plus
+//! what the transform changed ([`measure_changes`], `delta.rs`); one that states none has its
+//! output estimated in full ([`measure_read`]); a Slic3r file, which shows no time, is not
+//! planned at all.
+//!
+//! The full estimate is the costly part: Marlin's step-exact planner, about 1 100 instructions
+//! a line and mode (docs/performance.md), twice for a file with silent-mode limits of its own.
+//! So the file is read once, on one thread, which parses it once for both modes
 //! ([`estimate_modes`]) and counts `stats` from the same parse; each mode's planner runs on a
 //! thread of its own, fed the jobs in file order, so the figures are the same to the bit as a
 //! serial pass's. The batches in flight are bounded, so the memory is a few batches whatever
 //! the file's size, and one time per progress line.
-//!
-//! A transform's output is measured while it is written ([`measure_while_written`]): the
-//! measure follows the scratch file as it grows, woken by each write, on threads of its own, so
-//! the finishing step costs the slower of the two rather than their sum.
 
 use std::io::{self, Read};
 use std::path::Path;
@@ -64,7 +68,9 @@ pub(super) fn measure_while_written<R, E: From<FinishError>>(
     let path = scratch.path();
     let target = scratch.target();
     let read = |input: &Path| {
-        read_ends(input).ok().map(|ends| (Timing::of(&ends, &modes_of(&ends)), modes_of(&ends)))
+        let ends = read_ends(input).ok()?;
+        let modes = modes_of(&ends);
+        Some((Timing::of(&ends, &modes), modes))
     };
     let Some((input, (timing, guessed))) = input.and_then(|i| Some((i, read(i)?))) else {
         let result = write(&target)?;
