@@ -172,8 +172,10 @@ fn measure_changes_in(
     let mut reader = LineReader::new(output);
     let stop = gweave::Token::current();
     let read_failed = |e| FinishError::from(gweave::Error::io(path, e));
+    // Output lines as the comparison counts them: the pieces of a line too long to hold are
+    // lines of their own.
+    let mut at = 0;
     while let Some(line) = reader.next_line().map_err(read_failed)? {
-        let at = line.number - 1;
         if diff.is_some() {
             windows.line(line.bytes, &state);
         }
@@ -202,6 +204,7 @@ fn measure_changes_in(
                 stop.check().map_err(|e| gweave::Error::io(path, e))?;
             }
         }
+        at += 1;
     }
     if let Some(diff) = &mut diff {
         if !compared(diff.finish(&mut ops), input_path)? {
