@@ -28,7 +28,7 @@ use gweave::post::metadata::is_progress_line;
 use gweave::{Firmware, State};
 
 use super::diff::{recycle, Op};
-use crate::motion::estimate::{EstimateError, Estimator};
+use crate::motion::estimate::{EstimateError, ModesEstimator};
 use crate::motion::limits::MotionProfile;
 
 /// Unchanged code lines (not comments) planned on each side of a change: a change closer than
@@ -263,7 +263,7 @@ impl Modal {
     /// Puts `est` (drained, at rest) in this state: the position by a `G92` line (`g92`, this
     /// state's, written once for every estimator), the modes by their commands if they differ,
     /// the rest in its state.
-    fn set(&self, est: &mut Estimator, g92: &[u8]) -> Result<(), EstimateError> {
+    fn set(&self, est: &mut ModesEstimator, g92: &[u8]) -> Result<(), EstimateError> {
         est.state_mut().inches = false;
         est.line(g92)?;
         if est.state().absolute() != self.absolute {
@@ -322,9 +322,11 @@ pub(super) enum Unmeasured {
 /// The windows of a transform's changes, gathered from the output's lines and the
 /// comparison's [`Op`]s, and timed as they close.
 pub(super) struct Windows {
-    /// One estimator per mode, for the input's side and the output's.
-    input_side: Vec<Estimator>,
-    output_side: Vec<Estimator>,
+    /// The input's side and the output's, each estimated in every mode from one parse.
+    input_side: ModesEstimator,
+    output_side: ModesEstimator,
+    /// Modes: 2 for a file with silent-mode limits of its own, else 1.
+    modes: usize,
     /// The output's lines from where the next window would start on.
     held: VecDeque<Held>,
     held_from: u64,
@@ -356,21 +358,10 @@ impl Windows {
     /// Windows timed with the limits of each of `profiles` (normal mode, then silent), the
     /// lines read as `firmware` reads them.
     pub(super) fn new(profiles: &[&MotionProfile], firmware: Firmware) -> Result<Self, EstimateError> {
-        let side = || {
-            profiles
-                .iter()
-                .map(|p| {
-                    let mut est = Estimator::timing_only(p)?;
-                    est.read_as(firmware);
-                    // Its accounts per layer would grow with the file.
-                    est.first_layer_only();
-                    Ok(est)
-                })
-                .collect::<Result<Vec<_>, EstimateError>>()
-        };
         Ok(Windows {
-            input_side: side()?,
-            output_side: side()?,
+            input_side: ModesEstimator::new(profiles, firmware)?,
+            output_side: ModesEstimator::new(profiles, firmware)?,
+            modes: profiles.len(),
             held: VecDeque::new(),
             held_from: 0,
             lines: 0,
@@ -515,29 +506,26 @@ impl Windows {
             next = at + added;
         }
         input.extend(held(next, end));
-        let mut delta_s = [0.0; 2];
-        let sides = self.output_side.iter_mut().zip(self.input_side.iter_mut());
-        for (mode, (out_est, in_est)) in sides.enumerate() {
-            let time = |est: &mut Estimator, lines: &[&[u8]]| {
-                limits.iter().try_for_each(|l| est.line(l))?;
-                w.modal.set(est, &g92)?;
-                time_of(est, lines)
-            };
-            let t_out = time(out_est, &output).map_err(|_| Unmeasured::Estimate)?;
-            let t_in = time(in_est, &input).map_err(|_| Unmeasured::Estimate)?;
-            // A change whose modal state outlasts the window (a feed rate, a position, a mode
-            // not put back) goes on changing the moves after it: the window grows until the
-            // two sides agree again, and is timed again then.
-            if !same_modes(out_est.state(), in_est.state()) {
-                let w = Window { equal_codes: 0, ..w };
-                self.open = Some(w);
-                return Ok(());
-            }
-            delta_s[mode] = t_out - t_in;
+        let time = |est: &mut ModesEstimator, lines: &[&[u8]]| {
+            limits.iter().try_for_each(|l| est.line(l))?;
+            w.modal.set(est, &g92)?;
+            time_of(est, lines)
+        };
+        let t_out = time(&mut self.output_side, &output).map_err(|_| Unmeasured::Estimate)?;
+        let t_in = time(&mut self.input_side, &input).map_err(|_| Unmeasured::Estimate)?;
+        // A change whose modal state outlasts the window (a feed rate, a position, a mode not
+        // put back) goes on changing the moves after it: the window grows until the two sides
+        // agree again, and is timed again then.
+        if !same_modes(self.output_side.state(), self.input_side.state()) {
+            let w = Window { equal_codes: 0, ..w };
+            self.open = Some(w);
+            return Ok(());
         }
-        if self.output_side.len() == 1 {
-            delta_s[1] = delta_s[0];
-        }
+        // Without a silent mode of its own, the normal mode's difference stands for it.
+        let delta_s = [0, 1].map(|m| {
+            let m = m.min(self.modes - 1);
+            t_out[m] - t_in[m]
+        });
         stated.add_from(w.first_change, delta_s);
         for (m, d) in delta_s.into_iter().enumerate() {
             self.delta_s[m] += d;
@@ -554,15 +542,18 @@ impl Windows {
     }
 }
 
-/// The time `lines` take on `est`, from rest to rest, s.
-fn time_of(est: &mut Estimator, lines: &[&[u8]]) -> Result<f64, EstimateError> {
-    let t0 = est.now_s();
+/// The time `lines` take on `est` in each mode, from rest to rest, s.
+fn time_of(est: &mut ModesEstimator, lines: &[&[u8]]) -> Result<[f64; 2], EstimateError> {
+    let mut t0 = [0.0; 2];
+    t0.iter_mut().zip(est.now_s()).for_each(|(t, now)| *t = now);
     for line in lines {
         est.line(line)?;
     }
     // Drained: the next window starts at rest.
     est.line(b"M400")?;
-    Ok(est.now_s() - t0)
+    let mut t = [0.0; 2];
+    t.iter_mut().zip(est.now_s()).zip(t0).for_each(|((t, now), t0)| *t = now - t0);
+    Ok(t)
 }
 
 /// Whether two sides left the machine in the same modal state: what the lines after a window
