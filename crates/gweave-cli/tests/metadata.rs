@@ -105,9 +105,9 @@ fn estimate_s(path: &Path) -> f64 {
     est["total_s"].as_f64().unwrap()
 }
 
-/// A copy of `path` whose `machine_max_*` pairs are swapped, so that `estimate --machine slicer`
-/// estimates its silent mode.
-fn silent_copy(path: &Path) -> PathBuf {
+/// A copy of `path`, in `dir`, whose `machine_max_*` pairs are swapped, so that
+/// `estimate --machine slicer` estimates its silent mode.
+fn silent_copy(path: &Path, dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(path).unwrap();
     let swapped: String = text
         .lines()
@@ -119,7 +119,7 @@ fn silent_copy(path: &Path) -> PathBuf {
             _ => format!("{l}\n"),
         })
         .collect();
-    let copy = path.with_extension("silent.gcode");
+    let copy = dir.join(format!("{}.silent.gcode", path.file_stem().unwrap().to_str().unwrap()));
     std::fs::write(&copy, swapped).unwrap();
     copy
 }
@@ -157,7 +157,11 @@ fn check_output(text: &str, out: &Path, command: &str, time: Time<'_>) {
                 let stated_out = footer_s(text, mode).unwrap();
                 let (est_in, est_out) = match mode {
                     "normal" => (estimate_s(input), estimate_s(out)),
-                    _ => (estimate_s(&silent_copy(input)), estimate_s(&silent_copy(out))),
+                    _ => {
+                        // Beside the output, in the test's directory (the input is a fixture).
+                        let dir = out.parent().unwrap();
+                        (estimate_s(&silent_copy(input, dir)), estimate_s(&silent_copy(out, dir)))
+                    }
                 };
                 let (stated, estimated) = (stated_out - stated_in, est_out - est_in);
                 assert!(
