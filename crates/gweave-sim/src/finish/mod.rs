@@ -4,15 +4,19 @@
 //!
 //! The transform writes into a scratch file (registered like every temporary file, so Ctrl-C
 //! removes it). While it writes, one streaming read of that file, following it as it grows and
-//! woken by each of its writes (`gweave::gcode::scratch`), measures it on other cores
-//! (`measure.rs`): one parse of its lines feeds the `stats` count (the filament) and the
-//! estimator's planners (the print time, one planner thread per mode), with the machine limits
-//! the slicer wrote into the file (normal and silent mode), else the default machine's. A copy
-//! that looks only at the lines that can change writes it to the real target (a temporary file renamed into place,
-//! `--in-place` with its `.bak`, or standard output) with the run's header on top and the
-//! slicer's figures and `M73` progress rewritten (`gweave::post::metadata`). Memory stays
-//! bounded: the passes stream, and what is kept is one time per progress line. The estimator
-//! lives here, which the engine cannot depend on, so this crate joins them.
+//! woken by each of its writes (`gweave::gcode::scratch`), measures it on another core
+//! (`measure.rs`): the `stats` count (the filament) and its times. An input that states its
+//! times (the slicer's footer, `M73`, Cura's `;TIME:`) keeps them, plus what the transform
+//! changed: the measure reads the input beside the output (`diff.rs`) and plans each change
+//! with a few unchanged lines around it, as the input had it and as the output has it
+//! (`delta.rs`). An input that states none has its output estimated in full (one planner thread
+//! per mode), with the machine limits the slicer wrote into the file (normal and silent mode),
+//! else the default machine's. A copy that looks only at the lines that can change writes it to the real target (a
+//! temporary file renamed into place, `--in-place` with its `.bak`, or standard output) with
+//! the run's header on top and the slicer's figures and `M73` progress rewritten
+//! (`gweave::post::metadata`). Memory stays bounded: the passes stream, the comparison holds a
+//! change's lines at most, and what is kept is one time per progress line. The estimator lives
+//! here, which the engine cannot depend on, so this crate joins them.
 
 use std::fs::File;
 use std::io::{BufReader, Read, Write};
@@ -26,6 +30,8 @@ use gweave::{Output, Strictness, Target};
 
 use crate::motion::estimate::EstimateError;
 
+mod delta;
+mod diff;
 mod measure;
 
 use measure::measure_while_written;

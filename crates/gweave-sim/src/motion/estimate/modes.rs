@@ -192,6 +192,85 @@ fn plan(mut back: Back, batches: mpsc::Receiver<Arc<Vec<Job>>>) -> Result<(Back,
     Ok((back, progress_s))
 }
 
+/// The same lines estimated in several modes on the caller's thread: one parse, one plan side
+/// per mode, each fed the jobs in order, as [`estimate_modes`] does on threads for a whole
+/// file. For a few lines at a time (a transform's changes, timed where they are:
+/// `finish/delta.rs`), where threads would cost more than they share.
+#[derive(Debug)]
+pub(crate) struct ModesEstimator {
+    front: Front,
+    backs: Vec<Back>,
+    jobs: Vec<Job>,
+}
+
+impl ModesEstimator {
+    /// An estimator in the mode of each of `profiles` (the first the parse side's; they must
+    /// plan alike, as for [`estimate_modes`]), timing only, reading lines as `firmware` does and
+    /// keeping every layer after the first as one account.
+    pub(crate) fn new(profiles: &[&MotionProfile], firmware: Firmware) -> Result<Self, EstimateError> {
+        let profile_error = |source: ProfileError| EstimateError::Profile { line: 0, source };
+        let Some((first, others)) = profiles.split_first() else {
+            return Err(EstimateError::Io(std::io::Error::other("no mode to estimate in")));
+        };
+        others.iter().try_for_each(|p| Planner::check_change(first, p)).map_err(profile_error)?;
+        let mut jobs = Vec::new();
+        let mut front = Front::new(first, &mut jobs)?;
+        front.read_as(firmware);
+        front.first_layer_only();
+        front.other_modes = others.iter().map(|p| (*p).clone()).collect();
+        let backs = profiles
+            .iter()
+            .enumerate()
+            .map(|(mode, p)| {
+                let mut back = Back::new(p, false).map_err(profile_error)?;
+                back.mode = mode;
+                Ok(back)
+            })
+            .collect::<Result<Vec<_>, EstimateError>>()?;
+        let mut est = ModesEstimator { front, backs, jobs };
+        est.execute()?;
+        Ok(est)
+    }
+
+    /// Executes one line (without its line ending) in every mode, as
+    /// [`Estimator::line`](super::Estimator::line) does in one.
+    pub(crate) fn line(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
+        self.front.lex(raw);
+        if self.front.refuses(raw) {
+            return Ok(());
+        }
+        let effect = *self.front.apply(raw);
+        let ran = self.front.run(raw, &effect, &mut self.jobs);
+        // What the line did before an error still happens, as in firmware.
+        self.execute()?;
+        skip_mixing_errors(ran)
+    }
+
+    /// Hands the pending jobs to every plan side.
+    fn execute(&mut self) -> Result<(), EstimateError> {
+        let jobs = &self.jobs;
+        let result =
+            self.backs.iter_mut().try_for_each(|back| jobs.iter().try_for_each(|job| back.execute(job)));
+        self.jobs.clear();
+        result
+    }
+
+    /// Each mode's clock, s ([`Estimator::now_s`](super::Estimator::now_s)).
+    pub(crate) fn now_s(&self) -> impl Iterator<Item = f64> + '_ {
+        self.backs.iter().map(|b| b.acc.t_s)
+    }
+
+    /// The modal state after the line last executed.
+    pub(crate) fn state(&self) -> &State {
+        &self.front.state
+    }
+
+    /// The modal state, to set what the caller knows (where a window of lines starts).
+    pub(crate) fn state_mut(&mut self) -> &mut State {
+        &mut self.front.state
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use gweave::LineReader;
