@@ -76,16 +76,8 @@ pub(super) fn measure_while_written<R, E: From<FinishError>>(
         let result = write(&target)?;
         return Ok((result, measure(path)?));
     };
-    let growing = scratch.follow().map_err(|e| FinishError::from(gweave::Error::io(path, e)))?;
     let (result, early) = std::thread::scope(|scope| {
-        let measuring = scope.spawn(|| match timing {
-            Timing::Full => measure_read(growing, path, &guessed).map(Some),
-            Timing::Changes => {
-                let text = container::open(input).map_err(|e| gweave::Error::io(input, e))?;
-                measure_changes(growing, path, Some((text, input)), &guessed)
-            }
-            Timing::Unused => measure_changes(growing, path, None::<(io::Empty, _)>, &guessed),
-        });
+        let measuring = scope.spawn(|| measure_growing(scratch, input, timing, &guessed));
         // Ended before the measure is joined, also when `write` fails or unwinds: the measure
         // then stops rather than wait for the rest of the file.
         let writing = scratch.writing();
@@ -102,6 +94,34 @@ pub(super) fn measure_while_written<R, E: From<FinishError>>(
         _ => measure(path)?,
     };
     Ok((result, figures))
+}
+
+/// Measures the scratch file of a transform of `input` while it is written, as `timing` says.
+/// When the changes cannot be timed by windows (a change longer than the comparison holds: a
+/// `rotary wrap` rewrites every line; a progress line where none was expected), the output is
+/// estimated in full from its first line, still while it is written: the estimate then costs
+/// the slower of the transform and itself, not their sum. `None`: the caller measures the
+/// finished file (its limits differ from the input's, or the write failed).
+fn measure_growing(
+    scratch: &ScratchFile,
+    input: &Path,
+    timing: Timing,
+    modes: &FileModes,
+) -> Result<Option<Figures>> {
+    let path = scratch.path();
+    let follow = || scratch.follow().map_err(|e| FinishError::from(gweave::Error::io(path, e)));
+    let by_changes = match timing {
+        Timing::Full => return measure_read(follow()?, path, modes).map(Some),
+        Timing::Changes => {
+            let text = container::open(input).map_err(|e| gweave::Error::io(input, e))?;
+            measure_changes(follow()?, path, Some((text, input)), modes)?
+        }
+        Timing::Unused => measure_changes(follow()?, path, None::<(io::Empty, _)>, modes)?,
+    };
+    match by_changes {
+        Some(figures) => Ok(Some(figures)),
+        None => measure_read(follow()?, path, modes).map(Some),
+    }
 }
 
 /// How a transform's output is timed, from its input's ends.
@@ -696,6 +716,31 @@ mod tests {
         let ((), figures) =
             measure_while_written(&scratch, Some(&in_path), |t| write_slowly(t, &output)).unwrap();
         assert_eq!(figures, measure(scratch.path()).unwrap());
+    }
+
+    /// Regression (issue 35): a change too long to compare (a `rotary wrap` rewrites every
+    /// line) gave up on the measure while the file was written, and the whole output was
+    /// estimated after the write, serially: the measure now switches to the full estimate from
+    /// the output's first line, on its own thread, with the same figures.
+    #[test]
+    fn a_change_past_the_cap_is_estimated_in_full_while_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = bunny_as_sliced(2000);
+        let output: String = input.lines().map(|l| format!("{l} ;wrapped\n")).collect();
+        let in_path = dir.path().join("in.gcode");
+        std::fs::write(&in_path, &input).unwrap();
+        let modes = modes_of(&read_ends(&in_path).unwrap());
+        let scratch = ScratchFile::new_in(dir.path(), None).unwrap();
+        let writing = scratch.writing();
+        write_slowly(&scratch.target(), &output).unwrap();
+        writing.end(true);
+        let while_written = measure_growing(&scratch, &in_path, Timing::Changes, &modes).unwrap();
+        // The input's limits, as the measure takes them while the file is written (the
+        // comment after each line hides the output's own silent-mode limits).
+        let after =
+            measure_read(std::fs::File::open(scratch.path()).unwrap(), scratch.path(), &modes).unwrap();
+        assert_ne!(after.time_s[0], after.time_s[1], "both modes timed");
+        assert_eq!(while_written, Some(after));
     }
 
     /// The context a change's window needs (docs/performance.md): the total written against
