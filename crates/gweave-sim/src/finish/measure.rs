@@ -436,15 +436,19 @@ mod tests {
     /// A file with progress lines in both modes every 500 lines: the 3-tool bunny's first
     /// `lines` lines and its settings block (the silent mode's own limits).
     fn bunny_with_progress(lines: usize) -> String {
+        bunny(lines, |i| (i % 500 == 0).then(|| "M73 P0 R0\nM73 Q0 S0\n".to_owned()))
+    }
+
+    /// The 3-tool bunny's first `lines` lines and its last 350 (the settings block and
+    /// footer), with `progress(i)` before the `i`-th of them.
+    fn bunny(lines: usize, progress: impl Fn(usize) -> Option<String>) -> String {
         let fixture =
             format!("{}/../../tests/data/prusaslicer/pr_bunny_3tool_rel.gcode", env!("CARGO_MANIFEST_DIR"));
         let whole = std::fs::read_to_string(fixture).unwrap();
         let all: Vec<&str> = whole.lines().collect();
         let mut text = String::new();
         for (i, line) in all[..lines].iter().chain(&all[all.len() - 350..]).enumerate() {
-            if i % 500 == 0 {
-                text.push_str("M73 P0 R0\nM73 Q0 S0\n");
-            }
+            text.extend(progress(i));
             text.push_str(line);
             text.push('\n');
         }
@@ -610,27 +614,19 @@ mod tests {
     /// times it states: 19 918 s in all, 20 544 s in silent mode, in proportion to the lines),
     /// and its settings block and footer.
     fn bunny_as_sliced(lines: usize) -> String {
-        let fixture =
-            format!("{}/../../tests/data/prusaslicer/pr_bunny_3tool_rel.gcode", env!("CARGO_MANIFEST_DIR"));
-        let whole = std::fs::read_to_string(fixture).unwrap();
-        let all: Vec<&str> = whole.lines().collect();
-        let mut text = String::new();
-        for (i, line) in all[..lines].iter().chain(&all[all.len() - 350..]).enumerate() {
-            if i % 500 == 0 && i < lines {
-                let done = i as f64 / lines as f64;
-                let left = |total: f64| (total * (1.0 - done) / 60.0).round();
-                text.push_str(&format!(
+        bunny(lines, |i| {
+            let done = i as f64 / lines as f64;
+            let left = |total: f64| (total * (1.0 - done) / 60.0).round();
+            (i % 500 == 0 && i < lines).then(|| {
+                format!(
                     "M73 P{:.0} R{}\nM73 Q{:.0} S{}\n",
                     100.0 * done,
                     left(19918.0),
                     100.0 * done,
                     left(20544.0)
-                ));
-            }
-            text.push_str(line);
-            text.push('\n');
-        }
-        text
+                )
+            })
+        })
     }
 
     /// The figures of `output` as a transform of `input`, by its changes.

@@ -45,6 +45,33 @@ pub(crate) struct ModeEstimate {
     pub progress_s: Vec<f64>,
 }
 
+/// The parse side, its set-up jobs in `jobs`, and a plan side per mode (`first`, then each of
+/// `others`) for a timing-only estimate in several modes: the profiles must plan alike
+/// ([`Planner::check_change`]), every layer after the first one account.
+fn sides(
+    first: &MotionProfile,
+    others: &[MotionProfile],
+    firmware: Firmware,
+    jobs: &mut Vec<Job>,
+) -> Result<(Front, Vec<Back>), EstimateError> {
+    let profile_error = |source: ProfileError| EstimateError::Profile { line: 0, source };
+    others.iter().try_for_each(|p| Planner::check_change(first, p)).map_err(profile_error)?;
+    let mut front = Front::new(first, jobs)?;
+    front.read_as(firmware);
+    front.first_layer_only();
+    front.other_modes = others.to_vec();
+    let backs = std::iter::once(first)
+        .chain(others)
+        .enumerate()
+        .map(|(mode, p)| {
+            let mut back = Back::new(p, false).map_err(profile_error)?;
+            back.mode = mode;
+            Ok(back)
+        })
+        .collect::<Result<Vec<_>, EstimateError>>()?;
+    Ok((front, backs))
+}
+
 /// Estimates `input` in the mode of `first` and of each of `others` (timing only, without step
 /// counts), read as `firmware` reads it. The profiles must plan alike (the same corner mode,
 /// [`Planner::check_change`]): only their limits differ. Each plan side sees the jobs an
@@ -65,23 +92,9 @@ pub(crate) fn estimate_modes(
     firmware: Firmware,
     each_line: impl FnMut(&Ctx<'_>) -> bool,
 ) -> Result<Modes, EstimateError> {
-    let profile_error = |source: ProfileError| EstimateError::Profile { line: 0, source };
-    others.iter().try_for_each(|p| Planner::check_change(first, p)).map_err(profile_error)?;
     // The first batch holds the jobs that set up the plan sides (the first mix).
     let mut batch = new_batch();
-    let mut front = Front::new(first, &mut batch)?;
-    front.read_as(firmware);
-    front.first_layer_only();
-    front.other_modes = others.to_vec();
-    let backs = std::iter::once(first)
-        .chain(others)
-        .enumerate()
-        .map(|(mode, p)| {
-            let mut back = Back::new(p, false).map_err(profile_error)?;
-            back.mode = mode;
-            Ok(back)
-        })
-        .collect::<Result<Vec<_>, EstimateError>>()?;
+    let (mut front, backs) = sides(first, others, firmware, &mut batch)?;
     std::thread::scope(|scope| {
         let (senders, planning): (Vec<_>, Vec<_>) = backs
             .into_iter()
@@ -208,25 +221,12 @@ impl ModesEstimator {
     /// plan alike, as for [`estimate_modes`]), timing only, reading lines as `firmware` does and
     /// keeping every layer after the first as one account.
     pub(crate) fn new(profiles: &[&MotionProfile], firmware: Firmware) -> Result<Self, EstimateError> {
-        let profile_error = |source: ProfileError| EstimateError::Profile { line: 0, source };
         let Some((first, others)) = profiles.split_first() else {
             return Err(EstimateError::Io(std::io::Error::other("no mode to estimate in")));
         };
-        others.iter().try_for_each(|p| Planner::check_change(first, p)).map_err(profile_error)?;
+        let others: Vec<MotionProfile> = others.iter().map(|p| (*p).clone()).collect();
         let mut jobs = Vec::new();
-        let mut front = Front::new(first, &mut jobs)?;
-        front.read_as(firmware);
-        front.first_layer_only();
-        front.other_modes = others.iter().map(|p| (*p).clone()).collect();
-        let backs = profiles
-            .iter()
-            .enumerate()
-            .map(|(mode, p)| {
-                let mut back = Back::new(p, false).map_err(profile_error)?;
-                back.mode = mode;
-                Ok(back)
-            })
-            .collect::<Result<Vec<_>, EstimateError>>()?;
+        let (front, backs) = sides(first, &others, firmware, &mut jobs)?;
         let mut est = ModesEstimator { front, backs, jobs };
         est.execute()?;
         Ok(est)
