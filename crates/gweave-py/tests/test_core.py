@@ -152,3 +152,8 @@ def test_a_file_cut_mid_number_without_its_footer_looks_truncated(data, tmp_path
     assert not out.exists()
     gweave.purge_shift(cut, out, purge_mm=2, lenient=True)
     assert "G1 X112.194 Y106.138 E1\n" in out.read_text()
+    # `stats` and `estimate` count and time it to its cut, and say so first.
+    said = "the file looks truncated: its last line has no line ending"
+    assert gweave.stats(cut)["warnings"][0].startswith(said)
+    assert gweave.estimate(cut)["warnings"][0].startswith(said)
+    assert "warnings" not in gweave.estimate(data / "prusaslicer" / "pr_cone_2tool.gcode")

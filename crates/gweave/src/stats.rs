@@ -7,6 +7,7 @@ use std::io::Write;
 
 use serde::Serialize;
 
+use crate::gcode::ends::{missing_footer, read_ends};
 use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
 use crate::gcode::retraction::Retraction;
@@ -155,6 +156,8 @@ pub struct Stats {
 #[derive(Debug, Default)]
 pub struct StatsPass {
     bytes: u64,
+    /// The last line read had no line ending: a file written by hand, or one cut short.
+    unended: bool,
     /// Lines in each region of the file, indexed by `Region as usize`.
     lines_by_region: [u64; 3],
     /// Per tool: the filament out of its nozzle, its retraction in force, and the filament fed
@@ -186,6 +189,12 @@ impl StatsPass {
     /// Statistics with the filament diameter forced to `diameter_override_mm`, if given.
     pub fn new(diameter_override_mm: Option<f64>) -> Self {
         StatsPass { diameter_override_mm, ..Default::default() }
+    }
+
+    /// Whether the last line read had no line ending (the file may be cut short:
+    /// [`missing_footer`]).
+    pub(crate) fn unended(&self) -> bool {
+        self.unended
     }
 
     /// Turns what was gathered into the report, given the state after the last line.
@@ -336,6 +345,7 @@ impl Pass for StatsPass {
     #[inline(always)]
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
         self.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
+        self.unended = ctx.line.eol.is_empty();
         self.lines_by_region[ctx.state.structure.region as usize] += 1;
         if let Some(c) = ctx.block.comment_text(ctx.line.bytes) {
             if c.len() > 8 {
@@ -483,30 +493,39 @@ pub fn stats_file(
     // A program whose header names a rotary machine is measured on its mandrel.
     let rotary = RotaryReading::for_file(path, None).ok().flatten();
     let run = crate::run::Run::file(path).progress(progress).strictness(strictness);
-    Ok(match (strictness, rotary) {
+    let (mut stats, unended) = match (strictness, rotary) {
         (crate::pass::Strictness::Strict, None) => {
             let mut pass = StatsPass::new(diameter_mm);
             let state = run.scan(&mut pass)?;
-            WithMalformed { report: pass.into_stats(&state), malformed: Malformed::default() }
+            let unended = pass.unended();
+            (WithMalformed { report: pass.into_stats(&state), malformed: Malformed::default() }, unended)
         }
         (crate::pass::Strictness::Strict, Some(reading)) => {
             let mut pass = SurfacePass::new(StatsPass::new(diameter_mm), reading);
             let state = run.scan(&mut pass)?;
+            let unended = pass.inner.unended();
             let report = pass.into_stats(|flat| flat.into_stats(&state));
-            WithMalformed { report, malformed: Malformed::default() }
+            (WithMalformed { report, malformed: Malformed::default() }, unended)
         }
         (crate::pass::Strictness::Lenient, None) => {
             let mut pass = Counting::new(StatsPass::new(diameter_mm));
             let state = run.scan(&mut pass)?;
-            WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed }
+            let unended = pass.pass.unended();
+            (WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed }, unended)
         }
         (crate::pass::Strictness::Lenient, Some(reading)) => {
             let mut pass = SurfacePass::new(Counting::new(StatsPass::new(diameter_mm)), reading);
             let state = run.scan(&mut pass)?;
-            let malformed = pass.inner.malformed;
-            WithMalformed { report: pass.into_stats(|c| c.pass.into_stats(&state)), malformed }
+            let (malformed, unended) = (pass.inner.malformed, pass.inner.pass.unended());
+            (WithMalformed { report: pass.into_stats(|c| c.pass.into_stats(&state)), malformed }, unended)
         }
-    })
+    };
+    // A file cut short is counted to its cut: said first, in `check`'s words. The ends are read
+    // (again) only when its last line has no ending.
+    if let Some(footer) = unended.then(|| read_ends(path).ok().and_then(|e| missing_footer(&e))).flatten() {
+        stats.report.warnings.insert(0, crate::gcode::diag::Finding::NoFooter { footer }.to_string());
+    }
+    Ok(stats)
 }
 
 #[cfg(test)]
@@ -605,6 +624,32 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(name);
         let mut progress = crate::pass::Quiet;
         stats_file(&path, None, crate::pass::Strictness::Strict, &mut progress).unwrap().report
+    }
+
+    /// Regression: `check` and `sim` said a file cut short (a last line that reads, no line
+    /// ending, no slicer's last line) looks truncated; `stats` counted it to the cut and said
+    /// only that no end G-code was seen. It now says so first, in `check`'s words; the whole
+    /// file gets no such word.
+    #[test]
+    fn a_file_cut_short_is_said_truncated_by_stats() {
+        let dir = tempfile::tempdir().unwrap();
+        let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../tests/data/prusaslicer/pr_cone_2tool.gcode");
+        let text = std::fs::read(&fixture).unwrap();
+        let cut = &text[..text.len() / 2];
+        // Cut just after a decimal point: the last line reads (`E1.` of `E1.234`).
+        let cut = &cut[..cut.iter().rposition(|&b| b == b'.').unwrap() + 1];
+        let path = dir.path().join("cut.gcode");
+        std::fs::write(&path, cut).unwrap();
+        let mut progress = crate::pass::Quiet;
+        let stats = stats_file(&path, None, crate::pass::Strictness::Strict, &mut progress).unwrap().report;
+        assert_eq!(
+            stats.warnings[0],
+            "the file looks truncated: its last line has no line ending, and the file lacks the line \
+             PrusaSlicer ends its files with ('; prusaslicer_config = end')"
+        );
+        let whole = stats_of_fixture("prusaslicer/pr_cone_2tool.gcode");
+        assert!(!whole.warnings.iter().any(|w| w.contains("truncated")), "{:?}", whole.warnings);
     }
 
     /// Per tool, [extruded, as PrusaSlicer counts, primed], to 0.01 mm.

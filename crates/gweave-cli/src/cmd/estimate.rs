@@ -76,5 +76,8 @@ fn print_human(out: &mut dyn Write, input: &Path, r: &EstimateReport) -> io::Res
         let s = &e.steps.axes;
         writeln!(out, "  steps           X {}  Y {}  Z {}  E {}  A {}", s[0], s[1], s[2], s[3], s[4])?;
     }
+    for w in &r.warnings {
+        writeln!(out, "  warning: {w}")?;
+    }
     Ok(())
 }

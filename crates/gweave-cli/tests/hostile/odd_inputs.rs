@@ -77,6 +77,16 @@ fn truncated_text_without_a_footer_passes_check() {
             .assert_refused(&format!("cut.gcode:387:24: {message}; the transform would write"));
         assert!(!d.join("out.gcode").exists(), "{args:?} wrote an output");
     }
+    // `stats` and `estimate` count and time it to its cut, as a printer runs it, and say so.
+    for args in [&["stats", "cut.gcode"][..], &["estimate", "cut.gcode"]] {
+        let run = gweave(d, args).run();
+        run.assert_ok();
+        assert!(
+            run.stdout_text().contains(&format!("  warning: {message}\n")),
+            "{args:?}: {}",
+            run.stdout_text()
+        );
+    }
     let lenient =
         gweave(d, &["purge-shift", "cut.gcode", "-o", "out.gcode", "--purge-mm", "2", "--lenient", "-q"]);
     lenient.run().assert_ok();

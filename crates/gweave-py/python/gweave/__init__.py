@@ -167,8 +167,8 @@ def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool 
     limits the slicer wrote into the file (the report's ``machine`` says which slicer's).
     Faster than :func:`sim` (reading, parsing and planning on three threads, no heaters):
     ``total_s``, ``motion_s``, ``dwell_s``, ``overhead_s``, ``blocks``, ``layer_s``,
-    ``feature_s``, and ``steps`` when ``steps=True``.
-    Heating waits and homing are not timed.
+    ``feature_s``, and ``steps`` when ``steps=True``; ``warnings`` when the file looks cut
+    short (timed to its cut, as a printer runs it). Heating waits and homing are not timed.
     """
     return _job(_gweave.estimate_json, locals())
 

@@ -4,6 +4,8 @@ use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::container;
+use gweave::gcode::diag::Finding;
+use gweave::gcode::ends::{missing_footer, read_ends};
 use gweave::gcode::flavour::read_firmware;
 use gweave::rotary::cylinder::RotaryConfig;
 use gweave::{Firmware, Progress};
@@ -25,6 +27,10 @@ pub struct EstimateReport {
     /// The estimate itself.
     #[serde(flatten)]
     pub estimate: Estimate,
+    /// What the file does that is worth a look (a file cut short), as `gweave stats` says it;
+    /// left out of the JSON when there is none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// Estimate the file read from `input` on `machine`, its lines read as `firmware` reads them (the
@@ -50,7 +56,13 @@ pub fn estimate_report<R: Read + Send>(
         CornerMode::Marlin { .. } => "marlin",
         CornerMode::Constant {} => "constant",
     };
-    Ok(EstimateReport { machine: machine.name.clone(), planner, steps_counted: count_steps, estimate })
+    Ok(EstimateReport {
+        machine: machine.name.clone(),
+        planner,
+        steps_counted: count_steps,
+        estimate,
+        warnings: Vec::new(),
+    })
 }
 
 /// Why a file could not be estimated, naming the file and, when there is one, its line.
@@ -95,23 +107,65 @@ pub fn estimate_file(
     let firmware = read_firmware(path, None).map_err(read_error)?;
     let file = container::open(path).map_err(read_error)?;
     progress.set_len(file.text_len.unwrap_or(0));
-    let input = Counted { inner: file, progress, done: 0 };
-    estimate_report(input, machine, firmware, count_steps)
-        .map_err(|error| EstimateFileError::Estimate { path: path.to_owned(), error })
+    let mut last_byte = b'\n';
+    let input = Counted { inner: file, progress, done: 0, last_byte: &mut last_byte };
+    let mut report = estimate_report(input, machine, firmware, count_steps)
+        .map_err(|error| EstimateFileError::Estimate { path: path.to_owned(), error })?;
+    // A file cut short is timed to its cut, as a printer would run it: said, in `check`'s
+    // words. Its ends are read (again) only when its text ends without a line ending.
+    let unended = !matches!(last_byte, b'\n' | b'\r');
+    if let Some(footer) = unended.then(|| read_ends(path).ok().and_then(|e| missing_footer(&e))).flatten() {
+        report.warnings.push(Finding::NoFooter { footer }.to_string());
+    }
+    Ok(report)
 }
 
-/// The input file, telling `progress` how much of it is read.
-struct Counted<P> {
+/// The input file, telling `progress` how much of it is read, and keeping the last byte read.
+struct Counted<'a, P> {
     inner: container::Input,
     progress: P,
     done: u64,
+    last_byte: &'a mut u8,
 }
 
-impl<P: Progress> Read for Counted<P> {
+impl<P: Progress> Read for Counted<'_, P> {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
         let n = self.inner.read(buf)?;
         self.done += n as u64;
         self.progress.advance(self.done);
+        if let Some(&b) = buf[..n].last() {
+            *self.last_byte = b;
+        }
         Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gweave::Quiet;
+
+    /// Regression: `check` and `sim` said a file cut short looks truncated; `estimate` timed it
+    /// to the cut without a word (a shorter print, silently). It now says so, in `check`'s
+    /// words, and times what is there; the whole file gets no such word, and no `warnings` key
+    /// in its JSON.
+    #[test]
+    fn a_file_cut_short_is_said_truncated_by_estimate() {
+        let dir = tempfile::tempdir().unwrap();
+        let fixture =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/prusaslicer/pr_cone_2tool.gcode");
+        let text = std::fs::read(&fixture).unwrap();
+        let cut = &text[..text.len() / 2];
+        let cut = &cut[..cut.iter().rposition(|&b| b == b'.').unwrap() + 1];
+        let path = dir.path().join("cut.gcode");
+        std::fs::write(&path, cut).unwrap();
+        let machine = MachineProfile::default();
+        let part = estimate_file(&path, &machine, false, Quiet).unwrap();
+        assert_eq!(part.warnings.len(), 1, "{:?}", part.warnings);
+        assert!(part.warnings[0].starts_with("the file looks truncated: its last line has no line ending"));
+        let whole = estimate_file(&fixture, &machine, false, Quiet).unwrap();
+        assert_eq!(whole.warnings, Vec::<String>::new());
+        assert!(part.estimate.total_s < whole.estimate.total_s);
+        assert!(!serde_json::to_string(&whole).unwrap().contains("\"warnings\""));
     }
 }
