@@ -24,9 +24,10 @@
 use std::collections::VecDeque;
 
 use gweave::post::metadata::is_progress_line;
+use gweave::post::purge_shift::held_text::{HeldText, TextRef};
 use gweave::{Firmware, State};
 
-use super::diff::{recycle, Op};
+use super::diff::Op;
 use super::window::{Modal, Sides, WindowLines};
 use crate::motion::estimate::EstimateError;
 use crate::motion::limits::MotionProfile;
@@ -235,10 +236,11 @@ fn duration_s(v: &[u8]) -> Option<f64> {
     total
 }
 
-/// An output line held for the windows.
+/// An output line held for the windows: its text in [`Windows`]' one buffer (a `Vec` per line
+/// cost an allocation's bookkeeping and a copy each way for every line of the output).
 #[derive(Debug)]
 struct Held {
-    bytes: Vec<u8>,
+    text: TextRef,
     /// Code lines before it.
     codes: u64,
     /// The state before it.
@@ -278,6 +280,7 @@ pub(super) struct Windows {
     /// The output's lines from where the next window would start on.
     held: VecDeque<Held>,
     held_from: u64,
+    text: HeldText,
     /// Output lines given, and given an op.
     lines: u64,
     decided: u64,
@@ -296,7 +299,6 @@ pub(super) struct Windows {
     pub first_layer_delta_s: [f64; 2],
     /// Windows timed.
     pub timed: u64,
-    spare: Vec<Vec<u8>>,
 }
 
 /// Lines that set limits kept per command.
@@ -311,6 +313,7 @@ impl Windows {
             modes: profiles.len(),
             held: VecDeque::new(),
             held_from: 0,
+            text: HeldText::default(),
             lines: 0,
             decided: 0,
             codes: 0,
@@ -322,7 +325,6 @@ impl Windows {
             delta_s: [0.0; 2],
             first_layer_delta_s: [0.0; 2],
             timed: 0,
-            spare: Vec::new(),
         })
     }
 
@@ -334,10 +336,8 @@ impl Windows {
 
     /// The output's next line, `state` being the state before it.
     pub(super) fn line(&mut self, bytes: &[u8], state: &State) {
-        let mut held = self.spare.pop().unwrap_or_default();
-        held.clear();
-        held.extend_from_slice(bytes);
-        self.held.push_back(Held { bytes: held, codes: self.codes, modal: Modal::of(state) });
+        let text = self.text.push(bytes, b"");
+        self.held.push_back(Held { text, codes: self.codes, modal: Modal::of(state) });
         let t = bytes.trim_ascii_start();
         if !matches!(t.first(), None | Some(b';')) {
             self.codes += 1;
@@ -420,11 +420,10 @@ impl Windows {
             && self.held[1].codes + self.context <= codes
             && self.held_from < self.decided
         {
-            if let Some(h) = self.held.pop_front() {
-                recycle(&mut self.spare, h.bytes);
-            }
+            self.held.pop_front();
             self.held_from += 1;
         }
+        self.text.written_up_to(self.held.front().map(|h| h.text));
     }
 
     /// Times the open window on both sides in every mode, and adds the difference.
@@ -442,7 +441,7 @@ impl Windows {
         self.window_set_limits = self.limits.iter().any(|(at, _)| (w.start..end).contains(at));
         let g92 = w.modal.g92();
         let held = |from: u64, to: u64| {
-            (from..to).map(|i| self.held[(i - self.held_from) as usize].bytes.as_slice())
+            (from..to).map(|i| self.text.bytes(self.held[(i - self.held_from) as usize].text))
         };
         // The lines before the first change are the same on both sides: planned once.
         let shared: Vec<&[u8]> = held(w.start, w.first_change).collect();
@@ -485,9 +484,6 @@ impl Windows {
             }
         }
         self.timed += 1;
-        for (_, _, removed) in w.changes {
-            removed.into_iter().for_each(|line| recycle(&mut self.spare, line));
-        }
         self.forget();
         Ok(())
     }
