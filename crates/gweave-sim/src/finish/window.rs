@@ -154,17 +154,7 @@ mod tests {
     use proptest::prelude::*;
 
     use super::*;
-    use crate::motion::limits::AxisLimits;
-
-    /// A silent mode: lower accelerations and feeds.
-    fn silent() -> MotionProfile {
-        let p = MotionProfile::default();
-        MotionProfile {
-            max_accel_mm_s2: AxisLimits { x: 1000.0, y: 1000.0, ..p.max_accel_mm_s2 },
-            max_feed_mm_s: AxisLimits { x: 100.0, y: 100.0, ..p.max_feed_mm_s },
-            ..p
-        }
-    }
+    use crate::motion::estimate::silent;
 
     /// A line of a print: extrusions, travels with a feed, retractions, a Z lift, a dwell,
     /// a limit, a mode, a comment.

@@ -289,7 +289,7 @@ impl Clone for ModesEstimator {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use gweave::LineReader;
 
     use super::*;
@@ -317,7 +317,7 @@ mod tests {
     }
 
     /// A second mode: the same machine with lower accelerations and feeds (a silent mode).
-    fn silent() -> MotionProfile {
+    pub(crate) fn silent() -> MotionProfile {
         let p = MotionProfile::default();
         MotionProfile {
             max_accel_mm_s2: AxisLimits { x: 1000.0, y: 1000.0, ..p.max_accel_mm_s2 },

@@ -13,8 +13,8 @@
 //! ## Bounded memory
 //! Positions are counted from the start of the run, so they survive the buffer being cut: the
 //! bytes before the first line still held are dropped when the window empties, or when they are
-//! at least [`CUT_BYTES`] and half the buffer (each byte is moved at most once on average). The
-//! buffer is at most about twice the held lines' text plus [`CUT_BYTES`].
+//! at least `CUT_BYTES` (64 KiB) and half the buffer (each byte is moved at most once on
+//! average). The buffer is at most about twice the held lines' text plus `CUT_BYTES`.
 
 /// Bytes written from the front that are dropped at once, at least (a cut moves what is left).
 const CUT_BYTES: usize = 64 << 10;
