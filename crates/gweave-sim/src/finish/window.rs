@@ -8,9 +8,10 @@
 //! deterministic, so planning those twice gives twice the same queue, the same clock and the
 //! same state. They are planned once, on the output's side, and the estimator is copied
 //! ([`ModesEstimator`]'s `clone_from`, into the allocations of the last window's copy) to plan
-//! the input's lines from there: a Marlin plan costs about 2 000 instructions a line in each
-//! mode, a copy of the estimator (its parse side, each mode's planner queue and clock) a few
-//! hundred instructions a window. The output's side is the estimator that lives from window to
+//! the input's lines from there: a line planned costs about 2 500 instructions (parsed once,
+//! planned in both modes), a copy of the estimator (its parse side, each mode's planner queue
+//! and clock) about 8 000 a window, against a shared part of a dozen lines or more
+//! (docs/performance.md). The output's side is the estimator that lives from window to
 //! window; the input's is the copy, made afresh at each window, so each window's input side
 //! starts exactly where its output side does.
 
