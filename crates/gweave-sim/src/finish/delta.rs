@@ -23,12 +23,13 @@
 
 use std::collections::VecDeque;
 
-use gweave::gcode::state::{Position, E, X, Y, Z};
 use gweave::post::metadata::is_progress_line;
+use gweave::post::purge_shift::held_text::{HeldText, TextRef};
 use gweave::{Firmware, State};
 
-use super::diff::{recycle, Op};
-use crate::motion::estimate::{EstimateError, ModesEstimator};
+use super::diff::Op;
+use super::window::{Modal, Sides, WindowLines};
+use crate::motion::estimate::EstimateError;
 use crate::motion::limits::MotionProfile;
 
 /// Unchanged code lines (not comments) planned on each side of a change: a change closer than
@@ -235,61 +236,11 @@ fn duration_s(v: &[u8]) -> Option<f64> {
     total
 }
 
-/// What a window's lines start from: the output's modal state before its first line.
-#[derive(Debug, Clone, Copy)]
-struct Modal {
-    pos: Position,
-    absolute: bool,
-    relative_e: bool,
-    inches: bool,
-    feed_mm_min: f64,
-    tool: u32,
-    first_layer: bool,
-}
-
-impl Modal {
-    fn of(state: &State) -> Self {
-        Modal {
-            pos: state.pos,
-            absolute: state.absolute(),
-            relative_e: state.relative_e(),
-            inches: state.inches,
-            feed_mm_min: state.feed_mm_min,
-            tool: state.tool,
-            first_layer: state.structure.layer == Some(0),
-        }
-    }
-
-    /// Puts `est` (drained, at rest) in this state: the position by a `G92` line (`g92`, this
-    /// state's, written once for every estimator), the modes by their commands if they differ,
-    /// the rest in its state.
-    fn set(&self, est: &mut ModesEstimator, g92: &[u8]) -> Result<(), EstimateError> {
-        est.state_mut().inches = false;
-        est.line(g92)?;
-        if est.state().absolute() != self.absolute {
-            est.line(if self.absolute { b"G90" } else { b"G91" })?;
-        }
-        if est.state().relative_e() != self.relative_e {
-            est.line(if self.relative_e { b"M83" } else { b"M82" })?;
-        }
-        let state = est.state_mut();
-        state.inches = self.inches;
-        state.feed_mm_min = self.feed_mm_min;
-        state.tool = self.tool;
-        Ok(())
-    }
-
-    /// The `G92` line that sets this position, in mm.
-    fn g92(&self) -> Vec<u8> {
-        let p = &self.pos;
-        format!("G92 X{} Y{} Z{} E{}", p[X], p[Y], p[Z], p[E]).into_bytes()
-    }
-}
-
-/// An output line held for the windows.
+/// An output line held for the windows: its text in [`Windows`]' one buffer (a `Vec` per line
+/// cost an allocation's bookkeeping and a copy each way for every line of the output).
 #[derive(Debug)]
 struct Held {
-    bytes: Vec<u8>,
+    text: TextRef,
     /// Code lines before it.
     codes: u64,
     /// The state before it.
@@ -322,14 +273,14 @@ pub(super) enum Unmeasured {
 /// The windows of a transform's changes, gathered from the output's lines and the
 /// comparison's [`Op`]s, and timed as they close.
 pub(super) struct Windows {
-    /// The input's side and the output's, each estimated in every mode from one parse.
-    input_side: ModesEstimator,
-    output_side: ModesEstimator,
+    /// The output's side and the input's, each estimated in every mode from one parse.
+    sides: Sides,
     /// Modes: 2 for a file with silent-mode limits of its own, else 1.
     modes: usize,
     /// The output's lines from where the next window would start on.
     held: VecDeque<Held>,
     held_from: u64,
+    text: HeldText,
     /// Output lines given, and given an op.
     lines: u64,
     decided: u64,
@@ -348,7 +299,6 @@ pub(super) struct Windows {
     pub first_layer_delta_s: [f64; 2],
     /// Windows timed.
     pub timed: u64,
-    spare: Vec<Vec<u8>>,
 }
 
 /// Lines that set limits kept per command.
@@ -359,11 +309,11 @@ impl Windows {
     /// lines read as `firmware` reads them.
     pub(super) fn new(profiles: &[&MotionProfile], firmware: Firmware) -> Result<Self, EstimateError> {
         Ok(Windows {
-            input_side: ModesEstimator::new(profiles, firmware)?,
-            output_side: ModesEstimator::new(profiles, firmware)?,
+            sides: Sides::new(profiles, firmware)?,
             modes: profiles.len(),
             held: VecDeque::new(),
             held_from: 0,
+            text: HeldText::default(),
             lines: 0,
             decided: 0,
             codes: 0,
@@ -375,7 +325,6 @@ impl Windows {
             delta_s: [0.0; 2],
             first_layer_delta_s: [0.0; 2],
             timed: 0,
-            spare: Vec::new(),
         })
     }
 
@@ -387,10 +336,8 @@ impl Windows {
 
     /// The output's next line, `state` being the state before it.
     pub(super) fn line(&mut self, bytes: &[u8], state: &State) {
-        let mut held = self.spare.pop().unwrap_or_default();
-        held.clear();
-        held.extend_from_slice(bytes);
-        self.held.push_back(Held { bytes: held, codes: self.codes, modal: Modal::of(state) });
+        let text = self.text.push(bytes, b"");
+        self.held.push_back(Held { text, codes: self.codes, modal: Modal::of(state) });
         let t = bytes.trim_ascii_start();
         if !matches!(t.first(), None | Some(b';')) {
             self.codes += 1;
@@ -473,11 +420,10 @@ impl Windows {
             && self.held[1].codes + self.context <= codes
             && self.held_from < self.decided
         {
-            if let Some(h) = self.held.pop_front() {
-                recycle(&mut self.spare, h.bytes);
-            }
+            self.held.pop_front();
             self.held_from += 1;
         }
+        self.text.written_up_to(self.held.front().map(|h| h.text));
     }
 
     /// Times the open window on both sides in every mode, and adds the difference.
@@ -495,28 +441,32 @@ impl Windows {
         self.window_set_limits = self.limits.iter().any(|(at, _)| (w.start..end).contains(at));
         let g92 = w.modal.g92();
         let held = |from: u64, to: u64| {
-            (from..to).map(|i| self.held[(i - self.held_from) as usize].bytes.as_slice())
+            (from..to).map(|i| self.text.bytes(self.held[(i - self.held_from) as usize].text))
         };
-        let output: Vec<&[u8]> = held(w.start, end).collect();
+        // The lines before the first change are the same on both sides: planned once.
+        let shared: Vec<&[u8]> = held(w.start, w.first_change).collect();
+        let output: Vec<&[u8]> = held(w.first_change, end).collect();
         let mut input: Vec<&[u8]> = Vec::with_capacity(output.len());
-        let mut next = w.start;
+        let mut next = w.first_change;
         for (at, added, removed) in &w.changes {
             input.extend(held(next, *at));
             input.extend(removed.iter().map(Vec::as_slice));
             next = at + added;
         }
         input.extend(held(next, end));
-        let time = |est: &mut ModesEstimator, lines: &[&[u8]]| {
-            limits.iter().try_for_each(|l| est.line(l))?;
-            w.modal.set(est, &g92)?;
-            time_of(est, lines)
+        let lines = WindowLines {
+            limits: &limits,
+            modal: &w.modal,
+            g92: &g92,
+            shared: &shared,
+            output: &output,
+            input: &input,
         };
-        let t_out = time(&mut self.output_side, &output).map_err(|_| Unmeasured::Estimate)?;
-        let t_in = time(&mut self.input_side, &input).map_err(|_| Unmeasured::Estimate)?;
+        let [t_out, t_in] = self.sides.time(&lines).map_err(|_| Unmeasured::Estimate)?;
         // A change whose modal state outlasts the window (a feed rate, a position, a mode not
         // put back) goes on changing the moves after it: the window grows until the two sides
         // agree again, and is timed again then.
-        if !same_modes(self.output_side.state(), self.input_side.state()) {
+        if !self.sides.agree() {
             let w = Window { equal_codes: 0, ..w };
             self.open = Some(w);
             return Ok(());
@@ -534,39 +484,9 @@ impl Windows {
             }
         }
         self.timed += 1;
-        for (_, _, removed) in w.changes {
-            removed.into_iter().for_each(|line| recycle(&mut self.spare, line));
-        }
         self.forget();
         Ok(())
     }
-}
-
-/// The time `lines` take on `est` in each mode, from rest to rest, s.
-fn time_of(est: &mut ModesEstimator, lines: &[&[u8]]) -> Result<[f64; 2], EstimateError> {
-    let mut t0 = [0.0; 2];
-    t0.iter_mut().zip(est.now_s()).for_each(|(t, now)| *t = now);
-    for line in lines {
-        est.line(line)?;
-    }
-    // Drained: the next window starts at rest.
-    est.line(b"M400")?;
-    let mut t = [0.0; 2];
-    t.iter_mut().zip(est.now_s()).zip(t0).for_each(|((t, now), t0)| *t = now - t0);
-    Ok(t)
-}
-
-/// Whether two sides left the machine in the same modal state: what the lines after a window
-/// read (the feed rate, the modes, the position; E only where it is absolute). Not the tool:
-/// `mix` renumbers them for good, and with the file's limits (no extruder's own) a tool plans
-/// as any other.
-fn same_modes(a: &State, b: &State) -> bool {
-    a.feed_mm_min == b.feed_mm_min
-        && a.absolute() == b.absolute()
-        && a.relative_e() == b.relative_e()
-        && a.inches == b.inches
-        && [X, Y, Z].iter().all(|&i| a.pos[i] == b.pos[i])
-        && (a.relative_e() || a.pos[E] == b.pos[E])
 }
 
 /// Whether the code line `t` sets the planner's limits (`M201`, `M203`, `M204`, `M205`).

@@ -9,7 +9,7 @@ use crate::motion::speed_trace::SpeedTrace;
 use crate::motion::stepper::Steppers;
 
 /// Times per key, steppers, the timeline: where planned blocks go.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub(super) struct Accounts {
     keys: Vec<Key>,
     key_s: Vec<f64>,
@@ -51,7 +51,7 @@ impl BlockSink for Accounts {
 }
 
 /// Planner, steppers and clock.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub(super) struct Back {
     pub(super) planner: Planner,
     pub(super) acc: Accounts,

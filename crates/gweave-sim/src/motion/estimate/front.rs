@@ -32,7 +32,7 @@ use crate::motion::limits::{AxisUpdate, CornerMode, MotionProfile, ProfileError,
 use crate::motion::planner::{Planner, PositionSet};
 
 /// Parser, modal state and the bookkeeping that turns lines into jobs.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub(super) struct Front {
     pub(super) block: Block,
     pub(super) state: State,
@@ -98,7 +98,7 @@ pub use gweave::Malformed;
 /// What turns a move into jobs besides the move itself: its time account (tag) and the
 /// firmware's fixed overheads. Apart from the state, so that a move can be read in place from
 /// the state's effect while this changes.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 struct Bookkeeping {
     key_index: HashMap<Key, u64>,
     /// The last key looked up and its tag.

@@ -271,8 +271,25 @@ impl ModesEstimator {
     }
 }
 
+/// A copy plans the lines after it as the original would, to the bit: the parse side, each
+/// mode's planner queue and clock are copied whole (the pending jobs are none between two
+/// lines). A transform's windows plan the lines both files share once and copy the estimator
+/// for the lines where they differ (`finish/window.rs`).
+impl Clone for ModesEstimator {
+    fn clone(&self) -> Self {
+        ModesEstimator { front: self.front.clone(), backs: self.backs.clone(), jobs: Vec::new() }
+    }
+
+    /// Into the vectors `self` has already.
+    fn clone_from(&mut self, source: &Self) {
+        self.front.clone_from(&source.front);
+        self.backs.clone_from(&source.backs);
+        self.jobs.clear();
+    }
+}
+
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use gweave::LineReader;
 
     use super::*;
@@ -300,7 +317,7 @@ mod tests {
     }
 
     /// A second mode: the same machine with lower accelerations and feeds (a silent mode).
-    fn silent() -> MotionProfile {
+    pub(crate) fn silent() -> MotionProfile {
         let p = MotionProfile::default();
         MotionProfile {
             max_accel_mm_s2: AxisLimits { x: 1000.0, y: 1000.0, ..p.max_accel_mm_s2 },

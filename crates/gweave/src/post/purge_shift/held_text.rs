@@ -1,4 +1,5 @@
-//! The text of the lines purge-shift holds back, in one buffer.
+//! The text of the lines purge-shift holds back, in one buffer (and the lines the finishing
+//! step's windows hold, `gweave-sim`'s `finish/delta.rs`, for the same reason).
 //!
 //! ## Why
 //! Every line of the print proper is held until the extrusion after it reaches the largest
@@ -12,8 +13,8 @@
 //! ## Bounded memory
 //! Positions are counted from the start of the run, so they survive the buffer being cut: the
 //! bytes before the first line still held are dropped when the window empties, or when they are
-//! at least [`CUT_BYTES`] and half the buffer (each byte is moved at most once on average). The
-//! buffer is at most about twice the held lines' text plus [`CUT_BYTES`].
+//! at least `CUT_BYTES` (64 KiB) and half the buffer (each byte is moved at most once on
+//! average). The buffer is at most about twice the held lines' text plus `CUT_BYTES`.
 
 /// Bytes written from the front that are dropped at once, at least (a cut moves what is left).
 const CUT_BYTES: usize = 64 << 10;
@@ -21,7 +22,7 @@ const CUT_BYTES: usize = 64 << 10;
 /// Where a held line's text is: its start (counted from the start of the run) and the lengths
 /// of its content and its ending.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct TextRef {
+pub struct TextRef {
     start: u64,
     len: u32,
     eol_len: u8,
@@ -29,7 +30,7 @@ pub(super) struct TextRef {
 
 /// The held lines' text; see the module docs.
 #[derive(Debug, Default)]
-pub(super) struct HeldText {
+pub struct HeldText {
     buf: Vec<u8>,
     /// The position of `buf[0]`.
     base: u64,
@@ -38,7 +39,7 @@ pub(super) struct HeldText {
 impl HeldText {
     /// Appends a line (its content and its ending, at most 2 bytes) and says where it is.
     #[inline]
-    pub(super) fn push(&mut self, bytes: &[u8], eol: &[u8]) -> TextRef {
+    pub fn push(&mut self, bytes: &[u8], eol: &[u8]) -> TextRef {
         let start = self.base + self.buf.len() as u64;
         self.buf.reserve(bytes.len() + eol.len());
         self.buf.extend_from_slice(bytes);
@@ -49,7 +50,7 @@ impl HeldText {
 
     /// Appends a line whose content and ending are one slice (`whole`, ending `eol_len` bytes).
     #[inline]
-    pub(super) fn push_whole(&mut self, whole: &[u8], eol_len: usize) -> TextRef {
+    pub fn push_whole(&mut self, whole: &[u8], eol_len: usize) -> TextRef {
         let start = self.base + self.buf.len() as u64;
         self.buf.extend_from_slice(whole);
         TextRef { start, len: (whole.len() - eol_len) as u32, eol_len: eol_len as u8 }
@@ -57,19 +58,19 @@ impl HeldText {
 
     /// The line with its ending.
     #[inline]
-    pub(super) fn whole(&self, r: TextRef) -> &[u8] {
+    pub fn whole(&self, r: TextRef) -> &[u8] {
         let at = (r.start - self.base) as usize;
         &self.buf[at..at + r.len as usize + usize::from(r.eol_len)]
     }
 
     /// The line's content.
-    pub(super) fn bytes(&self, r: TextRef) -> &[u8] {
+    pub fn bytes(&self, r: TextRef) -> &[u8] {
         let at = (r.start - self.base) as usize;
         &self.buf[at..at + r.len as usize]
     }
 
     /// The line's ending.
-    pub(super) fn eol(&self, r: TextRef) -> &[u8] {
+    pub fn eol(&self, r: TextRef) -> &[u8] {
         let at = (r.start - self.base) as usize + r.len as usize;
         &self.buf[at..at + usize::from(r.eol_len)]
     }
@@ -77,7 +78,7 @@ impl HeldText {
     /// Every line before `first` (the first line still held; none: no line is held) has been
     /// written: its text may go.
     #[inline]
-    pub(super) fn written_up_to(&mut self, first: Option<TextRef>) {
+    pub fn written_up_to(&mut self, first: Option<TextRef>) {
         let Some(first) = first else {
             self.base += self.buf.len() as u64;
             self.buf.clear();

@@ -61,7 +61,7 @@
 mod checks;
 pub(crate) mod config;
 mod fallback;
-mod held_text;
+pub mod held_text;
 mod nozzles;
 mod options;
 mod place;
