@@ -218,6 +218,25 @@ enum Job {
     Mark,
 }
 
+impl Job {
+    /// Whether the job holds memory of its own (to drop with it). Every variant is named, so
+    /// that a new one is decided on here.
+    #[inline(always)]
+    fn owns_memory(&self) -> bool {
+        match self {
+            Job::Arc { .. } | Job::Mix(_) | Job::Profile { .. } => true,
+            Job::Move { .. }
+            | Job::Drain
+            | Job::SetPosition { .. }
+            | Job::Dwell { .. }
+            | Job::Overhead { .. }
+            | Job::Key(_)
+            | Job::Tool(_)
+            | Job::Mark => false,
+        }
+    }
+}
+
 /// A streaming estimator: feed it lines, then [`Estimator::finish`].
 #[derive(Debug)]
 pub struct Estimator {
@@ -531,10 +550,19 @@ pub(crate) fn estimate_on<R: Read + Send>(input: R, estimator: Estimator) -> Res
     std::thread::scope(|scope| {
         let planning = scope.spawn(move || -> Result<Back, EstimateError> {
             for mut batch in batches {
+                let mut owns_memory = false;
                 for job in &batch {
+                    owns_memory |= job.owns_memory();
                     back.execute(job)?;
                 }
-                batch.clear();
+                if owns_memory {
+                    batch.clear();
+                } else {
+                    // SAFETY: an empty length is within the capacity, and no job in the batch
+                    // owns memory, so none needs its drop: forgetting them leaks nothing and
+                    // saves looking at each job again (13 instructions a move).
+                    unsafe { batch.set_len(0) };
+                }
                 // The parse side may have finished and gone: then the batch is not needed.
                 let _ = return_batch.send(batch);
             }
