@@ -44,7 +44,7 @@ const EXTRUDE_ONLY_ACCEL_MM_S2: f64 = 99_999_999.9;
 /// the kind and the X Y Z E ratios (the deltas and the rotary ratio are read once, in
 /// [`KlipperLookahead::new_move`]): a queued move is copied in and out of the queue, and
 /// walked again at each flush attempt. Its positions are kept apart, and only for a sink that
-/// reads them ([`KlipperLookahead::ends`]): 128 bytes a move instead of 208.
+/// reads them ([`KlipperLookahead::ends`]): 120 bytes a move instead of 208.
 #[derive(Debug, Clone)]
 struct QueuedMove {
     /// The move's tag, for its block.
