@@ -27,26 +27,42 @@ pub(super) struct Accounts {
 }
 
 impl BlockSink for Accounts {
+    /// Inlined into the planner's flush: a block's time is a few additions; the speed trace and
+    /// the steppers, when kept, are out of line (as one function with them, it saved and
+    /// restored six registers a block).
+    #[inline]
     fn block(&mut self, block: &PlannedBlock) {
         let d = block.duration_s();
-        if let Some(trace) = &mut self.speed {
-            trace.add(self.t_s, block);
+        if self.count_steps || self.speed.is_some() {
+            self.trace_and_step(block);
         }
-        let key = self.keys[block.tag as usize];
         self.key_s[block.tag as usize] += d;
-        if self.count_steps {
-            self.steppers.select_tool(key.tool as usize);
-            self.steppers.step_block(block, &self.mixes[key.mix]);
-        }
         self.motion_s += d;
         self.t_s += d;
         self.last_motion_end_s = self.t_s;
         self.blocks += 1;
     }
 
-    /// The steppers and the speed trace read the positions; the time accounts do not.
+    /// The steppers read the positions; the time accounts and the speed trace (speeds and
+    /// times only) do not. Fixed for the run, as a sink's answer must be.
     fn reads_positions(&self) -> bool {
-        self.count_steps || self.speed.is_some()
+        self.count_steps
+    }
+}
+
+impl Accounts {
+    /// The speed trace from the block's start (the clock before its time is added), and the
+    /// motors' steps.
+    #[inline(never)]
+    fn trace_and_step(&mut self, block: &PlannedBlock) {
+        if let Some(trace) = &mut self.speed {
+            trace.add(self.t_s, block);
+        }
+        if self.count_steps {
+            let key = self.keys[block.tag as usize];
+            self.steppers.select_tool(key.tool as usize);
+            self.steppers.step_block(block, &self.mixes[key.mix]);
+        }
     }
 }
 

@@ -568,9 +568,6 @@ struct Handover<'a> {
     spare: &'a mpsc::Receiver<Vec<Job>>,
 }
 
-/// Lines between two looks at the stop token: a few milliseconds of parsing.
-const LINES_BETWEEN_STOP_CHECKS: u32 = 4096;
-
 /// The parse side: every line read, lexed and followed through the modal state on this thread,
 /// into jobs, sent in batches. Stops early, with `Ok`, when the plan side has stopped (it
 /// reports its error itself).
@@ -586,22 +583,20 @@ fn parse_lines<R: Read>(
     handover: &Handover,
 ) -> Result<(), EstimateError> {
     // A stopped run (Python's Ctrl-C) stops here too, not only at the reader: the lines
-    // already read would otherwise be parsed and planned first.
+    // already read would otherwise be parsed and planned first. It is looked at with each batch
+    // (a millisecond of parsing), not every few thousand lines by a count of its own (6
+    // instructions a line): lines that make no job cost little, and the reader stops at its
+    // next read.
     let stop = gweave::Token::current();
-    let mut until_check = LINES_BETWEEN_STOP_CHECKS;
     while let Some(line) = reader.next_line()? {
         skip_mixing_errors(front.read(&line, batch))?;
         if batch.len() >= BATCH {
+            if let Some(stop) = &stop {
+                stop.check()?;
+            }
             let next = handover.spare.try_recv().unwrap_or_else(|_| new_batch());
             if handover.to_back.send(std::mem::replace(batch, next)).is_err() {
                 return Ok(());
-            }
-        }
-        until_check -= 1;
-        if until_check == 0 {
-            until_check = LINES_BETWEEN_STOP_CHECKS;
-            if let Some(stop) = &stop {
-                stop.check()?;
             }
         }
     }

@@ -28,7 +28,7 @@ use std::collections::VecDeque;
 
 use super::junction::{extruder_v2, HalfAngle};
 use super::{BlockSink, Lesser, PlannedBlock};
-use crate::motion::kinematics::{axis, Geometry, Move, MoveKind};
+use crate::motion::kinematics::{axis, Geometry, Move, MoveKind, Pos};
 use crate::motion::limits::{AxisLimits, KlipperLimits};
 use crate::motion::planner::trapezoid::Trapezoid;
 
@@ -43,10 +43,12 @@ const EXTRUDE_ONLY_ACCEL_MM_S2: f64 = 99_999_999.9;
 /// geometry it keeps what the junction with the next move and the block need: the length,
 /// the kind and the X Y Z E ratios (the deltas and the rotary ratio are read once, in
 /// [`KlipperLookahead::new_move`]): a queued move is copied in and out of the queue, and
-/// walked again at each flush attempt.
+/// walked again at each flush attempt. Its positions are kept apart, and only for a sink that
+/// reads them ([`KlipperLookahead::ends`]): 120 bytes a move instead of 208.
 #[derive(Debug, Clone)]
 struct QueuedMove {
-    mv: Move,
+    /// The move's tag, for its block.
+    tag: u64,
     len: f64,
     kind: MoveKind,
     /// `delta / len` of X Y Z E ([`Geometry::ratio`]).
@@ -107,15 +109,19 @@ impl QueuedMove {
         self.max_mcr_start_v2 = v2.lesser(prev.max_mcr_start_v2 + prev.mcr_delta_v2);
     }
 
-    /// The planned block, with the move's positions if `positions` ([`BlockSink::reads_positions`]).
+    /// The planned block, at `ends` (the move's start and the block's end, the origin for a
+    /// sink that reads no positions).
     #[inline(always)]
-    fn block(&self, entry_v2: f64, cruise_v2: f64, exit_v2: f64, positions: bool) -> PlannedBlock {
+    fn block(&self, entry_v2: f64, cruise_v2: f64, exit_v2: f64, [start, end]: [Pos; 2]) -> PlannedBlock {
         let trapezoid = Trapezoid::from_v2(self.len, self.accel, entry_v2, cruise_v2, exit_v2);
-        let extent = (self.len, self.kind);
-        if positions {
-            PlannedBlock::new(&self.mv, extent, self.accel, trapezoid)
-        } else {
-            PlannedBlock::timing(&self.mv, extent, self.accel, trapezoid)
+        PlannedBlock {
+            tag: self.tag,
+            start,
+            end,
+            len: self.len,
+            accel_mm_s2: self.accel,
+            kind: self.kind,
+            trapezoid,
         }
     }
 }
@@ -133,23 +139,42 @@ struct Walk {
 #[derive(Debug, Clone)]
 pub(crate) struct KlipperLookahead {
     queue: VecDeque<QueuedMove>,
+    /// The start of each queued move and the end of its block, in step with `queue`, kept only
+    /// while the sink reads positions ([`BlockSink::reads_positions`]: a sink says the same for
+    /// the whole run, as `estimate`'s time accounts and a `Vec` do).
+    ends: VecDeque<[Pos; 2]>,
     walk: Vec<Walk>,
     flush_budget_s: f64,
     /// `max_z_velocity` / `max_z_accel` resolved against the limits at start, as Klipper reads
     /// them from the config once.
     z_velocity_mm_s: f64,
     z_accel_mm_s2: f64,
+    /// The limits' [`KlipperLimits::junction_deviation_mm`] and
+    /// [`KlipperLimits::mcr_pseudo_accel_mm_s2`], worked out when the limits are set
+    /// ([`KlipperLookahead::set_limits`]) instead of at every move (a division a move).
+    junction_deviation_mm: f64,
+    mcr_accel_mm_s2: f64,
 }
 
 impl KlipperLookahead {
     pub(crate) fn new(limits: &KlipperLimits) -> Self {
         Self {
             queue: VecDeque::new(),
+            ends: VecDeque::new(),
             walk: Vec::new(),
             flush_budget_s: FLUSH_AFTER_FULL_S,
             z_velocity_mm_s: limits.max_z_velocity_mm_s.unwrap_or(limits.max_velocity_mm_s),
             z_accel_mm_s2: limits.max_z_accel_mm_s2.unwrap_or(limits.max_accel_mm_s2),
+            junction_deviation_mm: limits.junction_deviation_mm(),
+            mcr_accel_mm_s2: limits.mcr_pseudo_accel_mm_s2(),
         }
+    }
+
+    /// The limits of the moves pushed from now on are `limits` (`SET_VELOCITY_LIMIT`); the Z
+    /// limits stay those read at start, as Klipper reads them from its config once.
+    pub(crate) fn set_limits(&mut self, limits: &KlipperLimits) {
+        self.junction_deviation_mm = limits.junction_deviation_mm();
+        self.mcr_accel_mm_s2 = limits.mcr_pseudo_accel_mm_s2();
     }
 
     pub(crate) fn queued(&self) -> usize {
@@ -169,6 +194,9 @@ impl KlipperLookahead {
         rotary: (&AxisLimits, &AxisLimits),
         sink: &mut S,
     ) {
+        if sink.reads_positions() {
+            self.ends.push_back([mv.start, PlannedBlock::end_of(mv, geo.kind)]);
+        }
         let mut q = self.new_move(mv, geo, limits, rotary);
         let Some(prev) = self.queue.back() else {
             self.queue.push_back(q);
@@ -207,18 +235,18 @@ impl KlipperLookahead {
         };
         let len = geo.len;
         let mut q = QueuedMove {
-            mv: *mv,
+            tag: mv.tag,
             len,
             kind: geo.kind,
             ratio: [geo.ratio[axis::X], geo.ratio[axis::Y], geo.ratio[axis::Z], geo.ratio[axis::E]],
             accel,
-            junction_deviation_mm: k.junction_deviation_mm(),
+            junction_deviation_mm: self.junction_deviation_mm,
             min_move_t: len / velocity,
             max_start_v2: 0.0,
             max_cruise_v2: velocity * velocity,
             delta_v2: 2.0 * len * accel,
             max_mcr_start_v2: 0.0,
-            mcr_delta_v2: 2.0 * len * k.mcr_pseudo_accel_mm_s2(),
+            mcr_delta_v2: 2.0 * len * self.mcr_accel_mm_s2,
         };
         let d = geo.delta;
         if kinematic && d[axis::Z] != 0.0 {
@@ -239,6 +267,25 @@ impl KlipperLookahead {
             q.limit_speed(max_feed.a / a_ratio, max_accel.a / a_ratio);
         }
         q
+    }
+
+    /// The forward walk: the first `flush_count` queued moves to `sink`, at `ends` (their
+    /// start and their block's end). Read in place, then dropped from the queue by the caller
+    /// (no copy of each move on its way out).
+    #[inline(always)]
+    fn emit<S: BlockSink + ?Sized>(
+        &self,
+        flush_count: usize,
+        ends: impl Iterator<Item = [Pos; 2]>,
+        sink: &mut S,
+    ) {
+        let mut prev_cruise_v2: f64 = 0.0;
+        for ((m, w), ends) in self.queue.iter().zip(&self.walk).zip(ends).take(flush_count) {
+            let cruise_v2 = w.cruise_v2.unwrap_or_else(|| prev_cruise_v2.lesser(w.start_v2));
+            let (entry_v2, exit_v2) = (w.start_v2.lesser(cruise_v2), w.next_start_v2.lesser(cruise_v2));
+            sink.block(&m.block(entry_v2, cruise_v2, exit_v2, ends));
+            prev_cruise_v2 = cruise_v2;
+        }
     }
 
     /// `LookAheadQueue.flush`: the backward walk, then the forward walk over the moves that are
@@ -282,45 +329,67 @@ impl KlipperLookahead {
         if searching || flush_count == 0 {
             return;
         }
-        let mut prev_cruise_v2: f64 = 0.0;
-        let positions = sink.reads_positions();
-        // Read in place, then dropped from the queue (no copy of each move on its way out).
-        for (m, w) in self.queue.iter().zip(&self.walk).take(flush_count) {
-            let cruise_v2 = w.cruise_v2.unwrap_or_else(|| prev_cruise_v2.lesser(w.start_v2));
-            let (entry_v2, exit_v2) = (w.start_v2.lesser(cruise_v2), w.next_start_v2.lesser(cruise_v2));
-            sink.block(&m.block(entry_v2, cruise_v2, exit_v2, positions));
-            prev_cruise_v2 = cruise_v2;
+        // Two loops, with and without positions: one that looks up each move's ends cost 30
+        // instructions a move more.
+        let origin = [Pos::default(); 2];
+        if sink.reads_positions() {
+            debug_assert_eq!(self.ends.len(), n, "a sink that reads positions from the first move");
+            let ends = self.ends.iter().copied().chain(std::iter::repeat(origin));
+            self.emit(flush_count, ends, sink);
+        } else {
+            self.emit(flush_count, std::iter::repeat(origin), sink);
         }
         self.queue.drain(..flush_count);
+        self.ends.drain(..flush_count.min(self.ends.len()));
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::kinematics::Pos;
     use crate::motion::limits::MotionProfile;
     use proptest::prelude::*;
 
-    /// Plan a path; with `full` no lazy flush ever happens before the final flush.
-    fn plan(moves: &[Move], full: bool) -> Vec<PlannedBlock> {
-        let limits = KlipperLimits {
+    fn limits() -> KlipperLimits {
+        KlipperLimits {
             max_extrude_only_velocity_mm_s: Some(40.0),
             max_extrude_only_accel_mm_s2: Some(900.0),
             ..KlipperLimits::default()
-        };
+        }
+    }
+
+    /// Plan a path into `sink`; with `full` no lazy flush ever happens before the final flush.
+    fn plan_into<S: BlockSink>(moves: &[Move], full: bool, sink: &mut S) {
+        let limits = limits();
         let profile = MotionProfile::klipper(limits);
         let rotary = (&profile.max_feed_mm_s, &profile.max_accel_mm_s2);
         let mut k = KlipperLookahead::new(&limits);
-        let mut out: Vec<PlannedBlock> = Vec::new();
         for mv in moves {
             if full {
                 k.flush_budget_s = f64::INFINITY;
             }
-            k.push(mv, mv.geometry().unwrap(), &limits, rotary, &mut out);
+            k.push(mv, mv.geometry().unwrap(), &limits, rotary, sink);
         }
-        k.flush(&mut out);
+        k.flush(sink);
+    }
+
+    fn plan(moves: &[Move], full: bool) -> Vec<PlannedBlock> {
+        let mut out: Vec<PlannedBlock> = Vec::new();
+        plan_into(moves, full, &mut out);
         out
+    }
+
+    /// A sink that keeps only time, as `estimate`'s accounts do without step counts.
+    struct TimeOnly(Vec<PlannedBlock>);
+
+    impl BlockSink for TimeOnly {
+        fn block(&mut self, block: &PlannedBlock) {
+            self.0.push(*block);
+        }
+
+        fn reads_positions(&self) -> bool {
+            false
+        }
     }
 
     fn path() -> impl Strategy<Value = Vec<Move>> {
@@ -351,6 +420,25 @@ mod tests {
     }
 
     proptest! {
+        /// The queue keeps the moves' positions apart, only for a sink that reads them: such a
+        /// sink gets each move's start and its block's end, one that does not gets the origin,
+        /// and both the same speeds and times to the bit.
+        #[test]
+        fn positions_are_kept_only_for_a_sink_that_reads_them(moves in path()) {
+            let with = plan(&moves, false);
+            let mut without = TimeOnly(Vec::new());
+            plan_into(&moves, false, &mut without);
+            prop_assert_eq!(with.len(), without.0.len());
+            for (a, b) in with.iter().zip(&without.0) {
+                let mv = &moves[a.tag as usize];
+                prop_assert_eq!(a.start, mv.start);
+                prop_assert_eq!(a.end, PlannedBlock::end_of(mv, a.kind));
+                let at_origin = PlannedBlock { start: Pos::default(), end: Pos::default(), ..*a };
+                // Debug shows each number to the bit it round-trips to (and -0 apart from 0).
+                prop_assert_eq!(format!("{at_origin:?}"), format!("{b:?}"));
+            }
+        }
+
         /// Klipper's lazy flushing commits a move only once no later move can change its speeds.
         #[test]
         fn lazy_flushing_equals_full_lookahead(moves in path()) {
@@ -370,5 +458,51 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Regression for the junction deviation and the smoothed acceleration worked out when the
+    /// limits are set, not at each move: after `SET_VELOCITY_LIMIT` (a square corner velocity
+    /// of 1 instead of 5, half the acceleration, a minimum cruise ratio) the moves plan as a
+    /// planner started with those limits plans them, to the bit.
+    #[test]
+    fn limits_set_mid_stream_plan_as_a_planner_started_with_them() {
+        use crate::motion::planner::Planner;
+        let square = |n: usize| -> Vec<Move> {
+            let corners = [(0.0, 0.0), (20.0, 0.0), (20.0, 20.0), (0.0, 20.0)];
+            (0..n)
+                .map(|i| {
+                    let (a, b) = (corners[i % 4], corners[(i + 1) % 4]);
+                    let start = Pos::xyze(a.0, a.1, 0.2, i as f64);
+                    let end = Pos::xyze(b.0, b.1, 0.2, i as f64 + 1.0);
+                    Move { start, end, feed_mm_s: 150.0, tag: i as u64 }
+                })
+                .collect()
+        };
+        let before = limits();
+        let after = KlipperLimits {
+            square_corner_velocity_mm_s: 1.0,
+            max_accel_mm_s2: before.max_accel_mm_s2 / 2.0,
+            minimum_cruise_ratio: 0.25,
+            ..before
+        };
+        let mut changed = Planner::new(MotionProfile::klipper(before)).unwrap();
+        let mut fresh = Planner::new(MotionProfile::klipper(after)).unwrap();
+        let mut sink: Vec<PlannedBlock> = Vec::new();
+        for mv in square(9) {
+            changed.push(&mv, &mut sink).unwrap();
+        }
+        changed.flush(&mut sink);
+        changed.set_profile(MotionProfile::klipper(after)).unwrap();
+        let (mut got, mut want): (Vec<PlannedBlock>, Vec<PlannedBlock>) = (Vec::new(), Vec::new());
+        for mv in square(12) {
+            changed.push(&mv, &mut got).unwrap();
+            fresh.push(&mv, &mut want).unwrap();
+        }
+        changed.flush(&mut got);
+        fresh.flush(&mut want);
+        assert_eq!(format!("{got:?}"), format!("{want:?}"));
+        // The corners are planned with the new limits: 1 mm/s at the square corners (the
+        // junction deviation formula gives exactly the square corner velocity there).
+        assert!((got[1].trapezoid.entry_v_mm_s - 1.0).abs() < 1e-9, "{:?}", got[1].trapezoid);
     }
 }

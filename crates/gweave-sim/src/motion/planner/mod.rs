@@ -73,23 +73,12 @@ pub struct PlannedBlock {
 
 impl PlannedBlock {
     fn new(mv: &Move, (len, kind): (f64, MoveKind), accel_mm_s2: f64, trapezoid: Trapezoid) -> Self {
-        Self {
-            start: mv.start,
-            end: Self::end_of(mv, kind),
-            ..Self::timing(mv, (len, kind), accel_mm_s2, trapezoid)
-        }
-    }
-
-    /// [`PlannedBlock::new`] without the move's positions (both at the origin), for a sink that
-    /// reads none ([`BlockSink::reads_positions`]): ten coordinates fewer copied per move.
-    #[inline(always)]
-    fn timing(mv: &Move, (len, kind): (f64, MoveKind), accel_mm_s2: f64, trapezoid: Trapezoid) -> Self {
-        let origin = Pos::default();
-        Self { tag: mv.tag, start: origin, end: origin, len, accel_mm_s2, kind, trapezoid }
+        Self { tag: mv.tag, start: mv.start, end: Self::end_of(mv, kind), len, accel_mm_s2, kind, trapezoid }
     }
 
     /// Where the block ends: for a move without XYZ travel, XYZ stay at the start.
-    fn end_of(mv: &Move, kind: MoveKind) -> Pos {
+    #[inline(always)]
+    pub(super) fn end_of(mv: &Move, kind: MoveKind) -> Pos {
         let mut end = mv.end;
         if kind != MoveKind::Kinematic {
             (end.x_mm, end.y_mm, end.z_mm) = (mv.start.x_mm, mv.start.y_mm, mv.start.z_mm);
@@ -146,7 +135,8 @@ pub trait BlockSink {
 
     /// Whether this sink reads a block's [`PlannedBlock::start`] and [`PlannedBlock::end`]:
     /// one that keeps only time (`estimate` without step counts) says no, and Klipper's
-    /// planner then leaves them at the origin instead of copying each move's positions.
+    /// planner then leaves them at the origin instead of keeping each move's positions. A
+    /// sink gives the same answer for the whole run of a planner.
     fn reads_positions(&self) -> bool {
         true
     }
@@ -202,8 +192,10 @@ impl Planner {
     pub fn set_profile(&mut self, profile: MotionProfile) -> Result<(), ProfileError> {
         Self::check_change(&self.profile, &profile)?;
         self.profile = profile;
-        if let Engine::Marlin(m) = &mut self.engine {
-            m.profile_changed();
+        match (&mut self.engine, &self.profile.corners) {
+            (Engine::Marlin(m), _) => m.profile_changed(),
+            (Engine::Klipper(k), CornerMode::Klipper(limits)) => k.set_limits(limits),
+            _ => {}
         }
         Ok(())
     }
