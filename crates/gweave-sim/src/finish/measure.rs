@@ -765,6 +765,37 @@ mod tests {
         assert!(thread.first_layer_s[0] > 0.0);
     }
 
+    /// Issue 35: a write that fails while windows are being planned on their thread is the
+    /// error, and ends the measure and the planner thread (joined when the measure drops it:
+    /// a thread left waiting would hang the test).
+    #[test]
+    fn a_failed_write_ends_the_windows_planner() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = bunny_as_sliced(4000);
+        let output: String = input
+            .lines()
+            .enumerate()
+            .map(|(i, l)| match i % 50 {
+                0 => format!("G4 P100\n{l}\n"),
+                _ => format!("{l}\n"),
+            })
+            .collect();
+        let in_path = dir.path().join("in.gcode");
+        std::fs::write(&in_path, &input).unwrap();
+        let scratch = ScratchFile::new_in(dir.path(), None).unwrap();
+        let failing = |t: &Target| -> Result<()> {
+            write_slowly(t, &output[..output.len() * 3 / 4])?;
+            Err(gweave::Error::io(&in_path, io::Error::other("the transform failed")).into())
+        };
+        let e = measure_while_written(&scratch, Some(&in_path), failing).unwrap_err();
+        assert!(e.to_string().contains("the transform failed"), "{e}");
+        let scratch = ScratchFile::new_in(dir.path(), None).unwrap();
+        let ((), figures) =
+            measure_while_written(&scratch, Some(&in_path), |t| write_slowly(t, &output)).unwrap();
+        // Some 80 dwells of 0.1 s timed by the windows.
+        assert!(figures.time_s[0] > 19918.0 + 7.0, "{:?}", figures.time_s);
+    }
+
     /// Regression (issue 35): a change too long to compare (a `rotary wrap` rewrites every
     /// line) gave up on the measure while the file was written, and the whole output was
     /// estimated after the write, serially: the measure now switches to the full estimate from
