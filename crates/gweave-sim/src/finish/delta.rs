@@ -28,7 +28,8 @@ use gweave::post::purge_shift::held_text::{HeldText, TextRef};
 use gweave::{Firmware, State};
 
 use super::diff::Op;
-use super::window::{Modal, Sides, WindowLines};
+use super::planner_thread::{Planner, WindowJob};
+use super::window::{Modal, Sides};
 use crate::motion::estimate::EstimateError;
 use crate::motion::limits::MotionProfile;
 
@@ -268,13 +269,19 @@ pub(super) enum Unmeasured {
     PastCap,
     /// The estimator refused a line (the full measure names it).
     Estimate,
+    /// The planner thread could not be started.
+    NoPlanner,
 }
 
 /// The windows of a transform's changes, gathered from the output's lines and the
-/// comparison's [`Op`]s, and timed as they close.
+/// comparison's [`Op`]s, and timed as they close, on the planner thread
+/// ([`super::planner_thread`]).
 pub(super) struct Windows {
-    /// The output's side and the input's, each estimated in every mode from one parse.
-    sides: Sides,
+    /// The output's side and the input's, each read by the estimators' parse side alone: they
+    /// say where a window ends.
+    follower: Sides,
+    /// The thread that plans the windows, on the sides proper.
+    planner: Planner,
     /// Modes: 2 for a file with silent-mode limits of its own, else 1.
     modes: usize,
     /// The output's lines from where the next window would start on.
@@ -294,7 +301,8 @@ pub(super) struct Windows {
     open: Option<Window>,
     /// Unchanged code lines planned on each side of a change ([`CONTEXT_LINES`]).
     context: u64,
-    /// The changes' times so far, normal and silent mode, s; and those in the first layer.
+    /// The changes' times so far (the windows planned and taken back), normal and silent
+    /// mode, s; and those in the first layer.
     pub delta_s: [f64; 2],
     pub first_layer_delta_s: [f64; 2],
     /// Windows timed.
@@ -308,8 +316,10 @@ impl Windows {
     /// Windows timed with the limits of each of `profiles` (normal mode, then silent), the
     /// lines read as `firmware` reads them.
     pub(super) fn new(profiles: &[&MotionProfile], firmware: Firmware) -> Result<Self, EstimateError> {
+        let sides = Sides::new(profiles, firmware)?;
         Ok(Windows {
-            sides: Sides::new(profiles, firmware)?,
+            follower: sides.parse_only(),
+            planner: Planner::new(sides),
             modes: profiles.len(),
             held: VecDeque::new(),
             held_from: 0,
@@ -332,6 +342,13 @@ impl Windows {
     #[cfg(test)]
     pub(super) fn with_context(self, context: u64) -> Self {
         Windows { context, ..self }
+    }
+
+    /// The same planned on the caller's thread ([`Planner::here`]).
+    #[cfg(test)]
+    pub(super) fn planned_here(mut self) -> Self {
+        self.planner = std::mem::replace(&mut self.planner, Planner::new(self.follower.clone())).here();
+        self
     }
 
     /// The output's next line, `state` being the state before it.
@@ -396,12 +413,15 @@ impl Windows {
         Ok(())
     }
 
-    /// The output has ended: the last window is timed.
+    /// The output has ended: the last window is timed, and every window's times are added.
     pub(super) fn finish(&mut self, stated: &mut Stated) -> Result<(), Unmeasured> {
-        match self.open.is_some() {
-            true => self.close(stated),
-            false => Ok(()),
+        if self.open.is_some() {
+            self.close(stated)?;
         }
+        while let Some(job) = self.planner.wait() {
+            self.add(job, stated)?;
+        }
+        Ok(())
     }
 
     /// Code lines before output line `at` (given already, or the next).
@@ -426,65 +446,71 @@ impl Windows {
         self.text.written_up_to(self.held.front().map(|h| h.text));
     }
 
-    /// Times the open window on both sides in every mode, and adds the difference.
+    /// Hands the open window to the planner, to be timed on both sides in every mode, and adds
+    /// the differences of those planned already.
     fn close(&mut self, stated: &mut Stated) -> Result<(), Unmeasured> {
         let Some(w) = self.open.take() else { return Ok(()) };
         let end = self.decided;
-        let mut limits: Vec<&[u8]> = Vec::new();
+        let mut job = self.planner.job(w.modal, w.first_change);
         // The limits in force at the window's start, if they changed since the last replay.
         let in_force = self.limits.iter().filter(|(at, _)| *at < w.start);
         let latest = in_force.clone().map(|(at, _)| *at).next_back();
         if latest != self.replayed || self.window_set_limits {
-            limits.extend(in_force.map(|(_, line)| line.as_slice()));
+            in_force.for_each(|(_, line)| job.limits.push(line));
             self.replayed = latest;
         }
         self.window_set_limits = self.limits.iter().any(|(at, _)| (w.start..end).contains(at));
-        let g92 = w.modal.g92();
-        let held = |from: u64, to: u64| {
-            (from..to).map(|i| self.text.bytes(self.held[(i - self.held_from) as usize].text))
-        };
+        let held = |i: u64| self.text.bytes(self.held[(i - self.held_from) as usize].text);
         // The lines before the first change are the same on both sides: planned once.
-        let shared: Vec<&[u8]> = held(w.start, w.first_change).collect();
-        let output: Vec<&[u8]> = held(w.first_change, end).collect();
-        let mut input: Vec<&[u8]> = Vec::with_capacity(output.len());
+        (w.start..w.first_change).for_each(|i| job.shared.push(held(i)));
+        (w.first_change..end).for_each(|i| job.output.push(held(i)));
         let mut next = w.first_change;
         for (at, added, removed) in &w.changes {
-            input.extend(held(next, *at));
-            input.extend(removed.iter().map(Vec::as_slice));
+            (next..*at).for_each(|i| job.input.push(held(i)));
+            removed.iter().for_each(|line| job.input.push(line));
             next = at + added;
         }
-        input.extend(held(next, end));
-        let lines = WindowLines {
-            limits: &limits,
-            modal: &w.modal,
-            g92: &g92,
-            shared: &shared,
-            output: &output,
-            input: &input,
-        };
-        let [t_out, t_in] = self.sides.time(&lines).map_err(|_| Unmeasured::Estimate)?;
+        (next..end).for_each(|i| job.input.push(held(i)));
+        job.with_lines(|lines| self.follower.time(lines)).map_err(|_| Unmeasured::Estimate)?;
         // A change whose modal state outlasts the window (a feed rate, a position, a mode not
         // put back) goes on changing the moves after it: the window grows until the two sides
-        // agree again, and is timed again then.
-        if !self.sides.agree() {
-            let w = Window { equal_codes: 0, ..w };
-            self.open = Some(w);
-            return Ok(());
+        // agree again, and is timed again then. The attempt is planned all the same: it moves
+        // the estimators' clocks on, as it did when the windows were planned here.
+        job.closes = self.follower.agree();
+        let closes = job.closes;
+        self.planner.send(job)?;
+        while let Some(job) = self.planner.planned() {
+            self.add(job, stated)?;
         }
-        // Without a silent mode of its own, the normal mode's difference stands for it.
-        let delta_s = [0, 1].map(|m| {
-            let m = m.min(self.modes - 1);
-            t_out[m] - t_in[m]
-        });
-        stated.add_from(w.first_change, delta_s);
-        for (m, d) in delta_s.into_iter().enumerate() {
-            self.delta_s[m] += d;
-            if w.modal.first_layer {
-                self.first_layer_delta_s[m] += d;
+        match closes {
+            true => self.forget(),
+            false => self.open = Some(Window { equal_codes: 0, ..w }),
+        }
+        Ok(())
+    }
+
+    /// Adds the difference a planned window makes, if it closed. The windows come back in the
+    /// order they closed, so each sum is made in the same order as when they were planned
+    /// here: the figures are the same to the bit. A progress line read since the window
+    /// closed is after its first change, and gets its difference from `add_from`.
+    fn add(&mut self, job: WindowJob, stated: &mut Stated) -> Result<(), Unmeasured> {
+        let [t_out, t_in] = job.times_s.ok_or(Unmeasured::Estimate)?;
+        if job.closes {
+            // Without a silent mode of its own, the normal mode's difference stands for it.
+            let delta_s = [0, 1].map(|m| {
+                let m = m.min(self.modes - 1);
+                t_out[m] - t_in[m]
+            });
+            stated.add_from(job.first_change, delta_s);
+            for (m, d) in delta_s.into_iter().enumerate() {
+                self.delta_s[m] += d;
+                if job.modal.first_layer {
+                    self.first_layer_delta_s[m] += d;
+                }
             }
+            self.timed += 1;
         }
-        self.timed += 1;
-        self.forget();
+        self.planner.recycle(job);
         Ok(())
     }
 }

@@ -714,6 +714,88 @@ mod tests {
         assert_eq!(figures, measure(scratch.path()).unwrap());
     }
 
+    /// Issue 35: the windows planned on a thread of their own give the figures of the
+    /// windows planned on the measure's thread, to the bit (the total, the first layer's and
+    /// every progress line's, in both modes), for changes all over the file: dwells added,
+    /// retractions removed, and feed rates changed for good (windows that grow until the sides
+    /// agree, their first attempts planned all the same).
+    #[test]
+    fn windows_planned_on_their_thread_give_the_figures_planned_here() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = bunny_as_sliced(6000);
+        let mut output = String::new();
+        for (i, line) in input.lines().enumerate() {
+            match i % 97 {
+                0 => output.push_str("G4 P200\n"),
+                30..=40 if line.starts_with("G1 E-") => continue,
+                60..=70 if line.starts_with("G1 X") && !line.contains(['F', ';']) => {
+                    output.push_str(line);
+                    output.push_str(" F1234\n");
+                    continue;
+                }
+                _ => {}
+            }
+            output.push_str(line);
+            output.push('\n');
+        }
+        assert!(output.matches(" F1234").count() > 20);
+        let (in_path, out_path) = (dir.path().join("in.gcode"), dir.path().join("out.gcode"));
+        std::fs::write(&in_path, &input).unwrap();
+        std::fs::write(&out_path, &output).unwrap();
+        let modes = modes_of(&read_ends(&in_path).unwrap());
+        let open = |p: &Path| std::fs::File::open(p).unwrap();
+        let measured = |here: bool| {
+            let input = Some((open(&in_path), in_path.as_path()));
+            measure_changes_in(open(&out_path), &out_path, input, &modes, |w| match here {
+                true => w.planned_here(),
+                false => w,
+            })
+            .unwrap()
+            .unwrap()
+        };
+        let (thread, here) = (measured(false), measured(true));
+        let bits = |f: &Figures| {
+            let progress: Vec<_> = f.progress_s.iter().map(|p| p.map(f64::to_bits)).collect();
+            (f.time_s.map(f64::to_bits), f.first_layer_s.map(f64::to_bits), progress)
+        };
+        assert_eq!(bits(&thread), bits(&here));
+        assert_eq!(thread.filament_mm, here.filament_mm);
+        // The changes were timed: over 60 dwells of 0.2 s.
+        assert!(thread.time_s[0] > 19918.0 + 60.0 * 0.2, "{:?}", thread.time_s);
+        assert!(thread.first_layer_s[0] > 0.0);
+    }
+
+    /// Issue 35: a write that fails while windows are being planned on their thread is the
+    /// error, and ends the measure and the planner thread (joined when the measure drops it:
+    /// a thread left waiting would hang the test).
+    #[test]
+    fn a_failed_write_ends_the_windows_planner() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = bunny_as_sliced(4000);
+        let output: String = input
+            .lines()
+            .enumerate()
+            .map(|(i, l)| match i % 50 {
+                0 => format!("G4 P100\n{l}\n"),
+                _ => format!("{l}\n"),
+            })
+            .collect();
+        let in_path = dir.path().join("in.gcode");
+        std::fs::write(&in_path, &input).unwrap();
+        let scratch = ScratchFile::new_in(dir.path(), None).unwrap();
+        let failing = |t: &Target| -> Result<()> {
+            write_slowly(t, &output[..output.len() * 3 / 4])?;
+            Err(gweave::Error::io(&in_path, io::Error::other("the transform failed")).into())
+        };
+        let e = measure_while_written(&scratch, Some(&in_path), failing).unwrap_err();
+        assert!(e.to_string().contains("the transform failed"), "{e}");
+        let scratch = ScratchFile::new_in(dir.path(), None).unwrap();
+        let ((), figures) =
+            measure_while_written(&scratch, Some(&in_path), |t| write_slowly(t, &output)).unwrap();
+        // Some 80 dwells of 0.1 s timed by the windows.
+        assert!(figures.time_s[0] > 19918.0 + 7.0, "{:?}", figures.time_s);
+    }
+
     /// Regression (issue 35): a change too long to compare (a `rotary wrap` rewrites every
     /// line) gave up on the measure while the file was written, and the whole output was
     /// estimated after the write, serially: the measure now switches to the full estimate from

@@ -7,9 +7,9 @@
 //! woken by each of its writes (`gweave::gcode::scratch`), measures it on another core
 //! (`measure.rs`): the `stats` count (the filament) and its times. An input that states its
 //! times (the slicer's footer, `M73`, Cura's `;TIME:`) keeps them, plus what the transform
-//! changed: the measure reads the input beside the output (`diff.rs`) and plans each change
-//! with a few unchanged lines around it, as the input had it and as the output has it
-//! (`delta.rs`). An input that states none has its output estimated in full (one planner thread
+//! changed: the measure reads the input beside the output (`diff.rs`) and gathers each change
+//! with a few unchanged lines around it in a window (`delta.rs`), which a third thread plans as
+//! the input had it and as the output has it (`planner_thread.rs`, `window.rs`). An input that states none has its output estimated in full (one planner thread
 //! per mode), with the machine limits the slicer wrote into the file (normal and silent mode),
 //! else the default machine's. A copy that looks only at the lines that can change writes it to the real target (a
 //! temporary file renamed into place, `--in-place` with its `.bak`, or standard output) with
@@ -33,6 +33,7 @@ use crate::motion::estimate::EstimateError;
 mod delta;
 mod diff;
 mod measure;
+mod planner_thread;
 mod window;
 
 use measure::measure_while_written;

@@ -88,6 +88,7 @@ pub(super) struct WindowLines<'a> {
 }
 
 /// The two sides' estimators.
+#[derive(Clone)]
 pub(super) struct Sides {
     output: ModesEstimator,
     /// A copy of `output` at the window's first change.
@@ -100,6 +101,13 @@ impl Sides {
     pub(super) fn new(profiles: &[&MotionProfile], firmware: Firmware) -> Result<Self, EstimateError> {
         let output = ModesEstimator::new(profiles, firmware)?;
         Ok(Sides { input: output.clone(), output })
+    }
+
+    /// The same sides reading lines only ([`ModesEstimator::parse_only`]): they end each
+    /// window in the modal state these would, so they say whether the sides agree
+    /// ([`Sides::agree`]), and time nothing.
+    pub(super) fn parse_only(&self) -> Self {
+        Sides { output: self.output.parse_only(), input: self.input.parse_only() }
     }
 
     /// The time `lines` take on the output's side and on the input's, in each mode, from rest

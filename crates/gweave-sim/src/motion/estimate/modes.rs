@@ -269,6 +269,14 @@ impl ModesEstimator {
     pub(crate) fn state_mut(&mut self) -> &mut State {
         &mut self.front.state
     }
+
+    /// A copy of the parse side alone: it reads the lines after it as this estimator would and
+    /// ends in the same modal state, planning nothing (its clock is none). A transform's
+    /// windows decide with it, on the measure's thread, where a window ends, while the planning
+    /// runs on a thread of its own (`finish/planner_thread.rs`).
+    pub(crate) fn parse_only(&self) -> Self {
+        ModesEstimator { front: self.front.clone(), backs: Vec::new(), jobs: Vec::new() }
+    }
 }
 
 /// A copy plans the lines after it as the original would, to the bit: the parse side, each
