@@ -33,6 +33,7 @@ use crate::motion::estimate::EstimateError;
 mod delta;
 mod diff;
 mod measure;
+mod tally;
 
 use measure::measure_while_written;
 
