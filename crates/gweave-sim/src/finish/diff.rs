@@ -6,7 +6,7 @@
 //! they agree, the two readers' buffered bytes are compared at once, eight bytes at a time
 //! ([`LineDiff::compare_ahead`]): each output line within the equal stretch is the input's next
 //! line by its length alone, and the input's reader passes over it without looking for its end
-//! ([`LineDiff::push_line`]). Where the stretch ends (a difference, or the end of what either
+//! ([`LineDiff::same_in_stretch`]). Where the stretch ends (a difference, or the end of what either
 //! reader holds), the input is read one line at a time, and equal lines advance both. At the
 //! first difference it
 //! buffers lines of both files until they agree again on [`RESYNC_LINES`] lines in a row (a
@@ -98,8 +98,8 @@ impl<R: Read> LineDiff<R> {
 
     /// The output's bytes read and not yet given as lines (`unread`: from its next line's
     /// start on). While the files are in step, they are compared with the input's at once
-    /// (when the last stretch found is used up): [`LineDiff::push_line`] then matches each
-    /// line within the equal stretch by its length.
+    /// (when the last stretch found is used up): [`LineDiff::same_in_stretch`] then matches
+    /// each line within the equal stretch by its length.
     #[inline]
     pub(super) fn compare_ahead(&mut self, unread: &[u8]) {
         if self.equal == 0 && self.pending.is_empty() && self.ahead.is_empty() {
@@ -107,32 +107,32 @@ impl<R: Read> LineDiff<R> {
         }
     }
 
-    /// [`LineDiff::push`] for a line of the output's reader: a whole line within the equal
-    /// stretch ([`LineDiff::compare_ahead`]) is the input's next line, whose reader passes
-    /// over it. Its ending must be `\n` or `\r\n`: after a lone `\r` the input's reader looks
-    /// at the next byte (a `\n` would make it one `\r\n` ending), which the output's line
-    /// does not say.
+    /// Whether the output's next line `line` is the input's next by the equal stretch
+    /// ([`LineDiff::compare_ahead`]): its op is then [`Op::Same`], and the input's reader has
+    /// passed over the line; else nothing is read, and the line goes to [`LineDiff::push`]. A
+    /// whole line only, ended by `\n` or `\r\n`: after a lone `\r` the input's reader looks at
+    /// the next byte (a `\n` would make it one `\r\n` ending), which the output's line does not
+    /// say. (The op is not added to a list: copying it there cost more than the match.)
     #[inline]
-    pub(super) fn push_line(&mut self, line: &RawLine<'_>, ops: &mut Vec<Op>) -> Result<(), DiffError> {
+    pub(super) fn same_in_stretch(&mut self, line: &RawLine<'_>) -> bool {
         let len = line.bytes.len() + line.eol.len();
-        if len <= self.equal
+        let same = len <= self.equal
             && line.part == Part::Whole
             && line.eol.last() == Some(&b'\n')
-            && self.input.skip_line(len)
-        {
+            && self.input.skip_line(len);
+        if same {
             self.equal -= len;
-            ops.push(Op::Same);
-            return Ok(());
         }
-        // The input is read past the stretch from here: it is no longer known.
-        self.equal = 0;
-        self.push(line.bytes, ops)
+        same
     }
 
     /// The output's next line (without its line ending): appends to `ops` what is now known of
     /// the output's lines not yet given an [`Op`], possibly none (the files differ and have not
     /// agreed again yet).
     pub(super) fn push(&mut self, line: &[u8], ops: &mut Vec<Op>) -> Result<(), DiffError> {
+        // The input is read line by line from here: the stretch no longer starts at its
+        // unread bytes.
+        self.equal = 0;
         self.push_one(line, ops)?;
         self.replay(ops)
     }
@@ -484,7 +484,11 @@ mod tests {
         loop {
             d.compare_ahead(reader.unread());
             let Some(line) = reader.next_line()? else { break };
-            d.push_line(&line, &mut ops)?;
+            if d.same_in_stretch(&line) {
+                ops.push(Op::Same);
+            } else {
+                d.push(line.bytes, &mut ops)?;
+            }
         }
         d.finish(&mut ops)?;
         Ok(ops)

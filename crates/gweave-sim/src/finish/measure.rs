@@ -30,7 +30,7 @@ use gweave::post::metadata::{is_progress_line, Figures};
 use gweave::{Block, Ctx, Firmware, LineReader, State, StateOptions, Target};
 
 use super::delta::{Stated, Times, Windows};
-use super::diff::{DiffError, LineDiff};
+use super::diff::{DiffError, LineDiff, Op};
 use super::tally::TallyPass;
 use super::{FinishError, Result};
 use crate::motion::estimate::{estimate_modes, EstimateError, ModeEstimate, Modes};
@@ -192,11 +192,14 @@ fn measure_changes_in(
     // Output lines as the comparison counts them: the pieces of a line too long to hold are
     // lines of their own.
     let mut at = 0;
-    loop {
-        if let Some(diff) = &mut diff {
+    // The output's bytes from the next line on, against the input's (while they agree).
+    let compare_ahead = |diff: &mut Option<LineDiff<_>>, reader: &LineReader<_>| {
+        if let Some(diff) = diff {
             diff.compare_ahead(reader.unread());
         }
-        let Some(line) = reader.next_line().map_err(read_failed)? else { break };
+    };
+    compare_ahead(&mut diff, &reader);
+    while let Some(line) = reader.next_line().map_err(read_failed)? {
         if diff.is_some() {
             windows.line(line.bytes, &state);
         }
@@ -205,30 +208,28 @@ fn measure_changes_in(
             stated.line(at, line.bytes, windows.delta_s);
         }
         if let Some(diff) = &mut diff {
-            if !compared(diff.push_line(&line, &mut ops), input_path)? {
+            let handed_over = match diff.same_in_stretch(&line) {
+                true => windows.op(Op::Same, &mut stated).is_ok(),
+                false => {
+                    compared(diff.push(line.bytes, &mut ops), input_path)?
+                        && hand_over(&mut ops, &mut windows, &mut stated)
+                }
+            };
+            if !handed_over {
                 return Ok(None);
             }
-            for op in ops.drain(..) {
-                if windows.op(op, &mut stated).is_err() {
-                    return Ok(None);
-                }
-            }
         }
-        if line.number % STOP_CHECK_LINES == 0 {
+        if at % STOP_CHECK_LINES == 0 {
             if let Some(stop) = &stop {
                 stop.check().map_err(|e| gweave::Error::io(path, e))?;
             }
         }
         at += 1;
+        compare_ahead(&mut diff, &reader);
     }
     if let Some(diff) = &mut diff {
-        if !compared(diff.finish(&mut ops), input_path)? {
+        if !compared(diff.finish(&mut ops), input_path)? || !hand_over(&mut ops, &mut windows, &mut stated) {
             return Ok(None);
-        }
-        for op in ops.drain(..) {
-            if windows.op(op, &mut stated).is_err() {
-                return Ok(None);
-            }
         }
         if windows.finish(&mut stated).is_err() {
             return Ok(None);
@@ -259,6 +260,12 @@ fn measure_changes_in(
 const DIFF_CAP_LINES: usize = 4096;
 /// Lines between two looks at whether the run was stopped.
 const STOP_CHECK_LINES: u64 = 4096;
+
+/// Gives the comparison's ops to the windows, in order: `false` if the changes cannot be timed
+/// so.
+fn hand_over(ops: &mut Vec<Op>, windows: &mut Windows, stated: &mut Stated) -> bool {
+    ops.drain(..).all(|op| windows.op(op, stated).is_ok())
+}
 
 /// Whether the comparison goes on: an input that cannot be read is the error, naming it; a
 /// change past the cap ends it.
