@@ -466,8 +466,14 @@ mod tests {
 
     /// The ops of `output` against `input` (whole texts) as the measure finds them: the
     /// output read by a line reader that takes `step` bytes at a time (a file still written),
-    /// each stretch of it compared at once with the input's.
-    fn diff_by_stretches(input: &[u8], output: &[u8], step: usize, cap: usize) -> Result<Vec<Op>, DiffError> {
+    /// each stretch of it compared at once with the input's. Also how many lines were matched
+    /// in a stretch.
+    fn diff_by_stretches(
+        input: &[u8],
+        output: &[u8],
+        step: usize,
+        cap: usize,
+    ) -> Result<(Vec<Op>, usize), DiffError> {
         /// Reads at most `self.1` bytes a time.
         struct Trickle<'a>(&'a [u8], usize);
         impl Read for Trickle<'_> {
@@ -480,18 +486,19 @@ mod tests {
         }
         let mut d = LineDiff::new(input, cap);
         let mut reader = LineReader::new(Trickle(output, step));
-        let mut ops = Vec::new();
+        let (mut ops, mut in_stretch) = (Vec::new(), 0);
         loop {
             d.compare_ahead(reader.unread());
             let Some(line) = reader.next_line()? else { break };
             if d.same_in_stretch(&line) {
                 ops.push(Op::Same);
+                in_stretch += 1;
             } else {
                 d.push(line.bytes, &mut ops)?;
             }
         }
         d.finish(&mut ops)?;
-        Ok(ops)
+        Ok((ops, in_stretch))
     }
 
     proptest::proptest! {
@@ -537,22 +544,26 @@ mod tests {
                 d.finish(&mut ops).unwrap();
                 ops
             };
-            proptest::prop_assert_eq!(diff_by_stretches(&input, &output, step, 100).unwrap(), by_lines);
+            proptest::prop_assert_eq!(diff_by_stretches(&input, &output, step, 100).unwrap().0, by_lines);
         }
     }
 
     /// The comparison by stretches on two copies of a long file (past a reader's buffer) finds
-    /// every line the same, and one change in the middle of it.
+    /// every line the same, and one change in the middle of it; nearly every line is matched in
+    /// a stretch, not read from the input (only those where a read of the output or the input
+    /// ends, and around the change).
     #[test]
     fn a_long_file_is_compared_by_stretches() {
         let lines: Vec<String> = moves(60_000).into_iter().map(|l| l + "\n").collect();
         let input = lines.concat();
-        let ops = diff_by_stretches(input.as_bytes(), input.as_bytes(), 1 << 16, 100).unwrap();
+        let (ops, in_stretch) = diff_by_stretches(input.as_bytes(), input.as_bytes(), 1 << 16, 100).unwrap();
         assert_eq!(ops, vec![Op::Same; 60_000]);
+        assert!(in_stretch > 59_000, "{in_stretch} lines in a stretch");
         let output = [lines[..30_000].concat(), "T1\n".into(), lines[30_000..].concat()].concat();
-        let ops = diff_by_stretches(input.as_bytes(), output.as_bytes(), 1 << 16, 100).unwrap();
+        let (ops, in_stretch) = diff_by_stretches(input.as_bytes(), output.as_bytes(), 1 << 16, 100).unwrap();
         assert_eq!(changes(&ops), [(0, 1)]);
         assert_eq!(ops.len(), 60_001);
+        assert!(in_stretch > 59_000, "{in_stretch} lines in a stretch");
     }
 
     #[test]
