@@ -10,8 +10,9 @@ use serde::Serialize;
 use crate::gcode::ends::{missing_footer, read_ends};
 use crate::gcode::flavour::{extrusion_letter, flavour_of_comment};
 use crate::gcode::layers::{Region, Slicer, ALL_FEATURES};
+use crate::gcode::reader::RawLine;
 use crate::gcode::retraction::Retraction;
-use crate::gcode::state::{Effect, Path, State, X, Y, Z};
+use crate::gcode::state::{Effect, Motion, Move, Path, Position, State, X, Y, Z};
 use crate::gcode::wipe_tower::WipeTower;
 use crate::pass::{Ctx, Flow, Pass, Step};
 
@@ -353,44 +354,7 @@ impl Pass for StatsPass {
             }
         }
         match ctx.effect {
-            Effect::Move(m) => {
-                let len_mm = m.len_mm();
-                let e_mm = m.e_mm();
-                if e_mm != 0.0 {
-                    let moves_xy = m.to[X] != m.from[X] || m.to[Y] != m.from[Y];
-                    let f = self.feed(ctx.state.tool, e_mm, moves_xy);
-                    if e_mm > 0.0 && moves_xy {
-                        f.fed_moving_mm += e_mm;
-                    }
-                }
-                // A print move extrudes while moving (any of X, Y, Z).
-                if e_mm > 0.0 && len_mm > 0.0 {
-                    self.print_mm += len_mm;
-                    // Extrusions come in runs, each starting where the last ended: the start
-                    // is needed only after a travel (a test the processor guesses right).
-                    if !self.start_in_bounds {
-                        self.bounds.grow([m.from[X], m.from[Y], m.from[Z]]);
-                    }
-                    self.bounds.grow([m.to[X], m.to[Y], m.to[Z]]);
-                    self.start_in_bounds = true;
-                    // An arc bulges past its end points (its Z stays between theirs).
-                    if let Path::Arc(arc) = &m.path {
-                        let [min, max] = arc.bounds();
-                        self.bounds.grow([min[0], min[1], m.to[Z]]);
-                        self.bounds.grow([max[0], max[1], m.to[Z]]);
-                    }
-                } else {
-                    self.travel_mm += len_mm;
-                    self.start_in_bounds = false;
-                }
-                let dist_mm = if len_mm > 0.0 { len_mm } else { e_mm.abs() };
-                if m.feed_mm_min > 0.0 {
-                    self.time_by_feature_s[ctx.state.structure.feature as usize] +=
-                        dist_mm * 60.0 / m.feed_mm_min;
-                } else if dist_mm > 0.0 {
-                    self.zero_feed_moves += 1;
-                }
-            }
+            Effect::Move(m) => self.count_move(m, ctx.state),
             Effect::FirmwareRetract { e_mm } => {
                 self.feed(ctx.state.tool, *e_mm, false);
             }
@@ -403,6 +367,71 @@ impl Pass for StatsPass {
             _ => {}
         }
         Ok(Flow::Continue)
+    }
+}
+
+impl StatsPass {
+    /// [`Pass::line`] for a plain move read without a [`Block`](crate::Block)
+    /// ([`read_plain_move`](crate::gcode::lexer::read_plain_move), then
+    /// [`State::apply_plain`]), which says what it did by the position before it (`from`), the
+    /// state after it and whether it moved (`moved`, what `apply_plain` returned): the same
+    /// count, to the bit, as the line through the lexer and [`State::apply`].
+    #[inline(always)]
+    pub fn plain_move(&mut self, line: &RawLine<'_>, from: &Position, moved: bool, state: &State) {
+        self.bytes += (line.bytes.len() + line.eol.len()) as u64;
+        self.lines_by_region[state.structure.region as usize] += 1;
+        // A plain move has no comment to read; if it moved, `State::apply` would have made
+        // this move its effect.
+        if moved {
+            let m = Move {
+                from: *from,
+                to: state.pos,
+                path: Path::Line,
+                rapid: state.motion == Motion::Rapid,
+                feed_mm_min: state.feed_mm_min,
+            };
+            self.count_move(&m, state);
+        }
+    }
+
+    /// Counts the move `m`, by the tool and the feature of `state` (the state after it).
+    #[inline(always)]
+    fn count_move(&mut self, m: &Move, state: &State) {
+        let len_mm = m.len_mm();
+        let e_mm = m.e_mm();
+        if e_mm != 0.0 {
+            let moves_xy = m.to[X] != m.from[X] || m.to[Y] != m.from[Y];
+            let f = self.feed(state.tool, e_mm, moves_xy);
+            if e_mm > 0.0 && moves_xy {
+                f.fed_moving_mm += e_mm;
+            }
+        }
+        // A print move extrudes while moving (any of X, Y, Z).
+        if e_mm > 0.0 && len_mm > 0.0 {
+            self.print_mm += len_mm;
+            // Extrusions come in runs, each starting where the last ended: the start
+            // is needed only after a travel (a test the processor guesses right).
+            if !self.start_in_bounds {
+                self.bounds.grow([m.from[X], m.from[Y], m.from[Z]]);
+            }
+            self.bounds.grow([m.to[X], m.to[Y], m.to[Z]]);
+            self.start_in_bounds = true;
+            // An arc bulges past its end points (its Z stays between theirs).
+            if let Path::Arc(arc) = &m.path {
+                let [min, max] = arc.bounds();
+                self.bounds.grow([min[0], min[1], m.to[Z]]);
+                self.bounds.grow([max[0], max[1], m.to[Z]]);
+            }
+        } else {
+            self.travel_mm += len_mm;
+            self.start_in_bounds = false;
+        }
+        let dist_mm = if len_mm > 0.0 { len_mm } else { e_mm.abs() };
+        if m.feed_mm_min > 0.0 {
+            self.time_by_feature_s[state.structure.feature as usize] += dist_mm * 60.0 / m.feed_mm_min;
+        } else if dist_mm > 0.0 {
+            self.zero_feed_moves += 1;
+        }
     }
 }
 

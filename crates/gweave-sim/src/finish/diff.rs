@@ -2,8 +2,13 @@
 //!
 //! A transform copies most of its input byte for byte: `mix` and `purge-shift` change a few
 //! lines at each tool change (a purge added, a retraction dropped, a change moved earlier) and
-//! keep the thousands of moves between. [`LineDiff`] reads the input beside the output, one
-//! line of each at a time: equal lines advance both, with no copy. At the first difference it
+//! keep the thousands of moves between. [`LineDiff`] reads the input beside the output. While
+//! they agree, the two readers' buffered bytes are compared at once, eight bytes at a time
+//! ([`LineDiff::compare_ahead`]): each output line within the equal stretch is the input's next
+//! line by its length alone, and the input's reader passes over it without looking for its end
+//! ([`LineDiff::same_in_stretch`]). Where the stretch ends (a difference, or the end of what either
+//! reader holds), the input is read one line at a time, and equal lines advance both. At the
+//! first difference it
 //! buffers lines of both files until they agree again on [`RESYNC_LINES`] lines in a row (a
 //! hash of each buffered line finds the candidates; the lines are then compared byte for byte).
 //! Several equal lines, not one, because slicers repeat lines (`G1 E-.8 F2100`, `G1 Z.4`) and
@@ -17,6 +22,7 @@
 use std::collections::VecDeque;
 use std::io::{self, Read};
 
+use gweave::gcode::reader::{Part, RawLine};
 use gweave::LineReader;
 
 /// Equal lines in a row that end a change.
@@ -66,6 +72,9 @@ pub(super) struct LineDiff<R> {
     cap: usize,
     /// Line buffers to reuse.
     spare: Vec<Vec<u8>>,
+    /// Bytes at the front of the input's unread ones known to be the output's from its next
+    /// line on ([`LineDiff::compare_ahead`]); 0 but while the files are in step.
+    equal: usize,
 }
 
 impl<R: Read> LineDiff<R> {
@@ -83,13 +92,47 @@ impl<R: Read> LineDiff<R> {
             output_ended: false,
             cap,
             spare: Vec::new(),
+            equal: 0,
         }
+    }
+
+    /// The output's bytes read and not yet given as lines (`unread`: from its next line's
+    /// start on). While the files are in step, they are compared with the input's at once
+    /// (when the last stretch found is used up): [`LineDiff::same_in_stretch`] then matches
+    /// each line within the equal stretch by its length.
+    #[inline]
+    pub(super) fn compare_ahead(&mut self, unread: &[u8]) {
+        if self.equal == 0 && self.pending.is_empty() && self.ahead.is_empty() {
+            self.equal = common_prefix(unread, self.input.unread());
+        }
+    }
+
+    /// Whether the output's next line `line` is the input's next by the equal stretch
+    /// ([`LineDiff::compare_ahead`]): its op is then [`Op::Same`], and the input's reader has
+    /// passed over the line; else nothing is read, and the line goes to [`LineDiff::push`]. A
+    /// whole line only, ended by `\n` or `\r\n`: after a lone `\r` the input's reader looks at
+    /// the next byte (a `\n` would make it one `\r\n` ending), which the output's line does not
+    /// say. (The op is not added to a list: copying it there cost more than the match.)
+    #[inline]
+    pub(super) fn same_in_stretch(&mut self, line: &RawLine<'_>) -> bool {
+        let len = line.bytes.len() + line.eol.len();
+        let same = len <= self.equal
+            && line.part == Part::Whole
+            && line.eol.last() == Some(&b'\n')
+            && self.input.skip_line(len);
+        if same {
+            self.equal -= len;
+        }
+        same
     }
 
     /// The output's next line (without its line ending): appends to `ops` what is now known of
     /// the output's lines not yet given an [`Op`], possibly none (the files differ and have not
     /// agreed again yet).
     pub(super) fn push(&mut self, line: &[u8], ops: &mut Vec<Op>) -> Result<(), DiffError> {
+        // The input is read line by line from here: the stretch no longer starts at its
+        // unread bytes.
+        self.equal = 0;
         self.push_one(line, ops)?;
         self.replay(ops)
     }
@@ -268,6 +311,24 @@ fn min_anchor(a: Option<(usize, usize)>, b: Option<(usize, usize)>) -> Option<(u
     }
 }
 
+/// How many bytes `a` and `b` start with alike: eight at a time, the first that differ found
+/// by the lowest set bit of the difference (a line is a few dozen bytes: a few instructions
+/// each, against a search for its end and a comparison of its own).
+fn common_prefix(a: &[u8], b: &[u8]) -> usize {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut at = 0;
+    for (x, y) in a.chunks_exact(8).zip(b.chunks_exact(8)) {
+        let (Ok(x), Ok(y)) = (<[u8; 8]>::try_from(x), <[u8; 8]>::try_from(y)) else { break };
+        let differ = u64::from_le_bytes(x) ^ u64::from_le_bytes(y);
+        if differ != 0 {
+            return at + differ.trailing_zeros() as usize / 8;
+        }
+        at += 8;
+    }
+    at + a[at..].iter().zip(&b[at..]).take_while(|(x, y)| x == y).count()
+}
+
 /// FNV-1a: lines are short, and only those of a change are hashed.
 fn hash(line: &[u8]) -> u64 {
     line.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
@@ -401,6 +462,108 @@ mod tests {
         // Under the cap, the same change is found.
         let ops = diff(&input, &output, 400).unwrap();
         assert_eq!(changes(&ops), [(0, 150)]);
+    }
+
+    /// The ops of `output` against `input` (whole texts) as the measure finds them: the
+    /// output read by a line reader that takes `step` bytes at a time (a file still written),
+    /// each stretch of it compared at once with the input's. Also how many lines were matched
+    /// in a stretch.
+    fn diff_by_stretches(
+        input: &[u8],
+        output: &[u8],
+        step: usize,
+        cap: usize,
+    ) -> Result<(Vec<Op>, usize), DiffError> {
+        /// Reads at most `self.1` bytes a time.
+        struct Trickle<'a>(&'a [u8], usize);
+        impl Read for Trickle<'_> {
+            fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+                let n = buf.len().min(self.1).min(self.0.len());
+                buf[..n].copy_from_slice(&self.0[..n]);
+                self.0 = &self.0[n..];
+                Ok(n)
+            }
+        }
+        let mut d = LineDiff::new(input, cap);
+        let mut reader = LineReader::new(Trickle(output, step));
+        let (mut ops, mut in_stretch) = (Vec::new(), 0);
+        loop {
+            d.compare_ahead(reader.unread());
+            let Some(line) = reader.next_line()? else { break };
+            if d.same_in_stretch(&line) {
+                ops.push(Op::Same);
+                in_stretch += 1;
+            } else {
+                d.push(line.bytes, &mut ops)?;
+            }
+        }
+        d.finish(&mut ops)?;
+        Ok((ops, in_stretch))
+    }
+
+    proptest::proptest! {
+        /// Regression of the comparison by stretches: the ops are those of the line by line
+        /// comparison for any edit of any file, whatever its line endings (a lone `\r`, `\r\n`,
+        /// endings that differ between the files) and however the output's bytes arrive.
+        #[test]
+        fn stretches_give_the_ops_of_the_line_by_line_comparison(
+            lines in proptest::collection::vec(("G1 X[0-9]{1,3}( E[0-9])?|G1 E-0.8|;c|", 0..3usize), 1..80),
+            edits in proptest::collection::vec((0..80usize, 0..3usize, "G1 Z[0-9]|T[0-2]|G1 E-0.8|;c|"), 0..6),
+            changed_eols in proptest::bool::ANY,
+            step in 1usize..200,
+        ) {
+            let eols = [&b"\n"[..], b"\r\n", b"\r"];
+            let text = |lines: &[(String, usize)]| -> Vec<u8> {
+                lines.iter().flat_map(|(l, e)| [l.as_bytes(), eols[*e]].concat()).collect()
+            };
+            let mut output = lines.clone();
+            for (at, kind, line) in &edits {
+                let at = at % (output.len() + 1);
+                match kind {
+                    0 => output.insert(at, (line.clone(), 0)),
+                    1 if at < output.len() => drop(output.remove(at)),
+                    _ if at < output.len() && changed_eols => output[at].1 = (output[at].1 + 1) % 3,
+                    _ => {}
+                }
+            }
+            let (input, output) = (text(&lines), text(&output));
+            let line_texts = |text: &[u8]| -> Vec<Vec<u8>> {
+                let mut r = LineReader::new(text);
+                let mut all = Vec::new();
+                while let Some(l) = r.next_line().unwrap() {
+                    all.push(l.bytes.to_vec());
+                }
+                all
+            };
+            let by_lines = {
+                let mut d = LineDiff::new(&input[..], 100);
+                let mut ops = Vec::new();
+                for line in line_texts(&output) {
+                    d.push(&line, &mut ops).unwrap();
+                }
+                d.finish(&mut ops).unwrap();
+                ops
+            };
+            proptest::prop_assert_eq!(diff_by_stretches(&input, &output, step, 100).unwrap().0, by_lines);
+        }
+    }
+
+    /// The comparison by stretches on two copies of a long file (past a reader's buffer) finds
+    /// every line the same, and one change in the middle of it; nearly every line is matched in
+    /// a stretch, not read from the input (only those where a read of the output or the input
+    /// ends, and around the change).
+    #[test]
+    fn a_long_file_is_compared_by_stretches() {
+        let lines: Vec<String> = moves(60_000).into_iter().map(|l| l + "\n").collect();
+        let input = lines.concat();
+        let (ops, in_stretch) = diff_by_stretches(input.as_bytes(), input.as_bytes(), 1 << 16, 100).unwrap();
+        assert_eq!(ops, vec![Op::Same; 60_000]);
+        assert!(in_stretch > 59_000, "{in_stretch} lines in a stretch");
+        let output = [lines[..30_000].concat(), "T1\n".into(), lines[30_000..].concat()].concat();
+        let (ops, in_stretch) = diff_by_stretches(input.as_bytes(), output.as_bytes(), 1 << 16, 100).unwrap();
+        assert_eq!(changes(&ops), [(0, 1)]);
+        assert_eq!(ops.len(), 60_001);
+        assert!(in_stretch > 59_000, "{in_stretch} lines in a stretch");
     }
 
     #[test]

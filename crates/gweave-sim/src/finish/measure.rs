@@ -23,18 +23,15 @@ use std::path::Path;
 use gweave::gcode::container;
 use gweave::gcode::ends::read_ends;
 use gweave::gcode::flavour::flavour_in;
-use gweave::gcode::scratch::ScratchFile;
-use gweave::post::metadata::{is_progress_line, read_setting, Figures};
-use gweave::Ctx;
-use gweave::StatsPass;
-use gweave::{Firmware, Pass, Target};
-
-use gweave::gcode::lexer::{parse_line, parse_line_lean};
+use gweave::gcode::line::PlainMove;
 use gweave::gcode::reader::Part;
-use gweave::{Block, LineReader, State, StateOptions};
+use gweave::gcode::scratch::ScratchFile;
+use gweave::post::metadata::{is_progress_line, Figures};
+use gweave::{Block, Ctx, Firmware, LineReader, State, StateOptions, Target};
 
 use super::delta::{Stated, Times, Windows};
-use super::diff::{DiffError, LineDiff};
+use super::diff::{DiffError, LineDiff, Op};
+use super::tally::TallyPass;
 use super::{FinishError, Result};
 use crate::motion::estimate::{estimate_modes, EstimateError, ModeEstimate, Modes};
 use crate::motion::limits::MotionProfile;
@@ -185,55 +182,54 @@ fn measure_changes_in(
         None => (path, None),
     };
     let Ok(mut windows) = Windows::new(&profiles, *firmware).map(windows) else { return Ok(None) };
-    let mut tally = TallyPass { stats: StatsPass::new(None), figures: Figures::default(), failed: None };
+    let mut tally = TallyPass::new();
     let mut stated = Stated::default();
     let mut state = State::new(StateOptions { firmware: *firmware, ..StateOptions::default() });
-    let (mut block, mut ops) = (Block::default(), Vec::new());
+    let (mut block, mut plain, mut ops) = (Block::default(), PlainMove::default(), Vec::new());
     let mut reader = LineReader::new(output);
     let stop = gweave::Token::current();
     let read_failed = |e| FinishError::from(gweave::Error::io(path, e));
     // Output lines as the comparison counts them: the pieces of a line too long to hold are
     // lines of their own.
     let mut at = 0;
+    // The output's bytes from the next line on, against the input's (while they agree).
+    let compare_ahead = |diff: &mut Option<LineDiff<_>>, reader: &LineReader<_>| {
+        if let Some(diff) = diff {
+            diff.compare_ahead(reader.unread());
+        }
+    };
+    compare_ahead(&mut diff, &reader);
     while let Some(line) = reader.next_line().map_err(read_failed)? {
         if diff.is_some() {
             windows.line(line.bytes, &state);
         }
-        if line.part == Part::Whole {
-            // As `stats` reads it (a lenient run: the transform has read it already).
-            match state.reads_words() {
-                true => parse_line(&line, &mut block),
-                false => parse_line_lean(&line, &mut block),
-            }
-            state.apply(line.bytes, &block);
-            tally.line(&Ctx { line, block: &block, effect: &state.effect, state: &state });
+        // A plain move states no time (`Stated` reads `M` and `;` lines).
+        if line.part == Part::Whole && !tally.read(&line, &mut state, &mut block, &mut plain) {
             stated.line(at, line.bytes, windows.delta_s);
         }
         if let Some(diff) = &mut diff {
-            if !compared(diff.push(line.bytes, &mut ops), input_path)? {
+            let handed_over = match diff.same_in_stretch(&line) {
+                true => windows.op(Op::Same, &mut stated).is_ok(),
+                false => {
+                    compared(diff.push(line.bytes, &mut ops), input_path)?
+                        && hand_over(&mut ops, &mut windows, &mut stated)
+                }
+            };
+            if !handed_over {
                 return Ok(None);
             }
-            for op in ops.drain(..) {
-                if windows.op(op, &mut stated).is_err() {
-                    return Ok(None);
-                }
-            }
         }
-        if line.number % STOP_CHECK_LINES == 0 {
+        if at % STOP_CHECK_LINES == 0 {
             if let Some(stop) = &stop {
                 stop.check().map_err(|e| gweave::Error::io(path, e))?;
             }
         }
         at += 1;
+        compare_ahead(&mut diff, &reader);
     }
     if let Some(diff) = &mut diff {
-        if !compared(diff.finish(&mut ops), input_path)? {
+        if !compared(diff.finish(&mut ops), input_path)? || !hand_over(&mut ops, &mut windows, &mut stated) {
             return Ok(None);
-        }
-        for op in ops.drain(..) {
-            if windows.op(op, &mut stated).is_err() {
-                return Ok(None);
-            }
         }
         if windows.finish(&mut stated).is_err() {
             return Ok(None);
@@ -265,6 +261,12 @@ const DIFF_CAP_LINES: usize = 4096;
 /// Lines between two looks at whether the run was stopped.
 const STOP_CHECK_LINES: u64 = 4096;
 
+/// Gives the comparison's ops to the windows, in order: `false` if the changes cannot be timed
+/// so.
+fn hand_over(ops: &mut Vec<Op>, windows: &mut Windows, stated: &mut Stated) -> bool {
+    ops.drain(..).all(|op| windows.op(op, stated).is_ok())
+}
+
 /// Whether the comparison goes on: an input that cannot be read is the error, naming it; a
 /// change past the cap ends it.
 fn compared(result: std::result::Result<(), DiffError>, input: &Path) -> Result<bool> {
@@ -285,7 +287,7 @@ fn measure_read(input: impl Read, path: &Path, modes: &FileModes) -> Result<Figu
     let silent: Vec<_> = silent.iter().cloned().collect();
     // The `stats` count and the settings from the estimate's own parse: every whole line, with
     // the state `stats` would see (the same firmware's reading).
-    let mut tally = TallyPass { stats: StatsPass::new(None), figures: Figures::default(), failed: None };
+    let mut tally = TallyPass::new();
     let each_line = |ctx: &Ctx<'_>| {
         tally.line(ctx);
         is_progress_line(ctx.line.bytes)
@@ -340,25 +342,6 @@ fn modes_of(ends: &[u8]) -> FileModes {
     FileModes { firmware, normal, silent }
 }
 
-/// The `stats` count and the settings ([`read_setting`]).
-struct TallyPass {
-    stats: StatsPass,
-    figures: Figures,
-    /// The count's first error (it writes nothing: none is expected).
-    failed: Option<io::Error>,
-}
-
-impl TallyPass {
-    fn line(&mut self, ctx: &Ctx<'_>) {
-        if let Err(e) = self.stats.line(ctx, &mut io::sink()) {
-            self.failed.get_or_insert_with(|| io::Error::other(e.to_string()));
-        }
-        if let Some(c) = ctx.block.comment_text(ctx.line.bytes) {
-            read_setting(c, &mut self.figures);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use gweave::gcode::reader::Part;
@@ -367,7 +350,7 @@ mod tests {
     use super::*;
     use crate::motion::estimate::{Estimate, Estimator};
     use gweave::test_support::read_lenient;
-    use gweave::StateOptions;
+    use gweave::{StateOptions, StatsPass};
 
     /// The serial pass the threads replaced: one estimator per mode fed every whole line, the
     /// clock read after each progress line.

@@ -34,6 +34,7 @@ mod delta;
 mod diff;
 mod measure;
 mod planner_thread;
+mod tally;
 mod window;
 
 use measure::measure_while_written;

@@ -228,6 +228,34 @@ impl<R: Read> LineReader<R> {
         self.next_line_searching()
     }
 
+    /// The bytes read and not yet handed out: the next lines, as far as the buffer holds them
+    /// (perhaps none, or a line's start only: reading the next line reads more). Empty while a
+    /// long line's pieces are handed out. For a reader that compares them with another file's
+    /// at once and then passes over the lines it knows ([`LineReader::skip_line`]).
+    #[inline]
+    pub fn unread(&self) -> &[u8] {
+        match self.long {
+            Some(_) => &[],
+            None => &self.buf[self.start..self.end],
+        }
+    }
+
+    /// Passes over the next line, as [`LineReader::next_line`] would hand it out, without
+    /// looking for its end: the caller knows it, having compared [`LineReader::unread`] with a
+    /// line of another file. `len`: the line's length with its ending, which is `\n` or
+    /// `\r\n` (its content holds no `\r` or `\n`). `false`, and nothing passed over, if the
+    /// unread bytes are fewer, or `len` is 0, or the `len`-th is not a `\n`.
+    #[inline]
+    pub fn skip_line(&mut self, len: usize) -> bool {
+        if len == 0 || len > self.unread().len() || self.buf[self.start + len - 1] != b'\n' {
+            return false;
+        }
+        self.start += len;
+        self.number += 1;
+        self.offset += len as u64;
+        true
+    }
+
     /// [`LineReader::next_line`] for a line the first look did not end: a long one, one ended
     /// by a lone `\r`, or one that needs more data read.
     #[inline(never)]

@@ -230,6 +230,37 @@ proptest::proptest! {
         }
         proptest::prop_assert_eq!(got, want);
     }
+
+    /// Passing over a line known from elsewhere (`skip_line`, its length taken from the
+    /// reference) leaves the reader where reading it would: the lines after it are the
+    /// reference's, numbered and placed alike, in any pieces. A line not ended by `\n` (a lone
+    /// `\r`, the last without one) or not all read yet is not passed over, and is read.
+    #[test]
+    fn skipping_a_known_line_reads_on_as_reading_it(
+        lines in proptest::collection::vec(("[ -~]{0,40}", 0..4u8), 0..60),
+        last_eol in proptest::bool::ANY,
+        skip in proptest::collection::vec(proptest::bool::ANY, 60),
+        step in 1usize..50,
+    ) {
+        let input = joined(&lines, last_eol);
+        let want = reference_lines(&input);
+        let mut r = LineReader::new(Trickle(&input, step));
+        let mut got = Vec::new();
+        for (i, line) in want.iter().enumerate() {
+            let len = line.0.len() + line.1.len();
+            let passable = line.1.ends_with(b"\n") && r.unread().len() >= len;
+            if skip[i % skip.len()] && r.skip_line(len) {
+                proptest::prop_assert!(passable);
+                got.push(line.clone());
+                continue;
+            }
+            proptest::prop_assert!(!skip[i % skip.len()] || !passable);
+            let l = r.next_line().unwrap().unwrap();
+            got.push((l.bytes.to_vec(), l.eol.to_vec(), l.number, l.offset));
+        }
+        proptest::prop_assert!(r.next_line().unwrap().is_none());
+        proptest::prop_assert_eq!(got, want);
+    }
 }
 
 #[test]
