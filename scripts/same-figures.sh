@@ -2,7 +2,7 @@
 # Whether a change that must keep every figure to the bit did: two builds of gweave run the
 # same commands on every G-code file given (default: the bundled fixtures, tests/data/*/*.gcode),
 # and their outputs, messages and exit codes are compared byte for byte. The commands are the
-# ones whose figures are computed rather than copied: `estimate --json` (Marlin by default,
+# ones whose figures are computed rather than copied: `stats --json`, `estimate --json` (Marlin by default,
 # Klipper with bench/klipper-big-bed.toml, each also with --steps), `sim --json` (both machines),
 # and the transforms whose metadata the finishing step recomputes (`mix`, `purge-shift`).
 # For every command's output on the fixtures, see scripts/outputs.sh.
@@ -22,6 +22,7 @@ KLIPPER="$ROOT/bench/klipper-big-bed.toml"
 # name|command and arguments (the file goes after the command's name)|what the run writes:
 # json (standard output) or file (-o).
 RUNS=(
+  "stats|stats --json|json"
   "estimate|estimate --json -q|json"
   "estimate-steps|estimate --steps --json -q|json"
   "estimate-klipper|estimate --machine $KLIPPER --json -q|json"
