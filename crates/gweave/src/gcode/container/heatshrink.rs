@@ -67,14 +67,13 @@ pub(crate) fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>
         let bytes = (w >> 55 & 0xFF) | (w >> 38 & 0xFF00) | (w >> 21 & 0xFF_0000) | (w >> 4 & 0xFF00_0000);
         out[at..at + LITERALS].copy_from_slice(&(bytes as u32).to_le_bytes());
         at += run_bits / 9;
-        let (dist, len) = if run_bits < 9 * LITERALS {
-            bit += run_bits + longest;
-            token(w << run_bits, at)
-        } else {
-            bit += run_bits;
-            // No back-reference: an empty copy, from far enough back to take the fast path.
-            (at.max(COPY), 0)
-        };
+        // The back-reference, unless the four were literals: then an empty copy, from far
+        // enough back to take the fast path. Masks, not a branch: which of the two comes is as
+        // unpredictable as the kinds.
+        let follows = usize::from(run_bits < 9 * LITERALS).wrapping_neg();
+        let (dist, len) = token(w << run_bits, at);
+        bit += run_bits + (longest & follows);
+        let (dist, len) = (dist & follows | at.max(COPY) & !follows, len & follows);
         copy(out, at, dist, len);
         at += len;
     }
