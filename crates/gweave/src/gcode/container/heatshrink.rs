@@ -51,8 +51,8 @@ pub(crate) fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>
     let mut at = 0;
     // Far from both ends, in rounds: the literals among the next four tokens up to the first
     // back-reference, then that back-reference. A round's cost is set by the chain from one
-    // round's position to the next (a load, a shift, a count of leading zeros, an add: about
-    // 15 cycles), so the round neither branches on a token's kind (the kinds come mixed, about
+    // round's position to the next (a load, shifts, a count of leading zeros, a compare, adds:
+    // about 20 cycles for some six bytes out), so the round neither branches on a token's kind (the kinds come mixed, about
     // three literals to a back-reference) nor keeps a bit buffer to top up: it loads the 64
     // bits at its position, of which it takes at most 3 x 9 + `longest` = 44. The four
     // candidates' bytes are stored at once (those past the run are overwritten later); a round
