@@ -12,7 +12,8 @@
 //! Why not the `heatshrink` crate (0.2): its encoder tries every position of the window for every
 //! byte (about 2^12 x 16 comparisons a byte with window 12, minutes for one print), and its
 //! decoder reads one bit at a time through a state machine. A G-code file has tens of thousands
-//! of blocks; this module decodes with a 64-bit bit buffer and encodes with hash chains.
+//! of blocks; this module decodes from 64-bit windows of the input, up to four tokens at a time,
+//! and encodes with hash chains.
 
 use std::io;
 
@@ -26,6 +27,9 @@ pub(crate) struct Params {
 /// Bytes a back-reference copies at once: the longest one (lookahead 4 bits).
 const COPY: usize = 16;
 
+/// Tokens the decoder looks at for a run of literals at once.
+const LITERALS: usize = 4;
+
 /// Longest chain of earlier positions the encoder follows for one match: enough for G-code's
 /// repetitive text (the compressed size is within 1 % of following them all), bounded time.
 const MAX_CHAIN: usize = 48;
@@ -35,47 +39,61 @@ pub(crate) fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>
     // Room for a whole 16-byte copy past the end; not cleared (only grown: a block's buffer is
     // reused for the next), since every byte up to `expected` is written before it is read.
     out.resize(expected + COPY, 0);
-    let mut bits = Bits { input, pos: 0, buf: 0, have: 0 };
     let (wb, lb) = (p.window_bits, p.lookahead_bits);
     // The longest token: a back-reference's tag, index and count.
-    let longest = 1 + wb + lb;
+    let longest = (1 + wb + lb) as usize;
+    let token = |w: u64, at: usize| {
+        let t = (w >> (64 - longest)) as usize;
+        ((t >> lb & ((1 << wb) - 1)) + 1, ((t & ((1 << lb) - 1)) + 1).min(expected - at))
+    };
+    // The position in the input, in bits: all that carries from one token to the next.
+    let mut bit = 0;
     let mut at = 0;
-    while at < expected {
-        if bits.have < longest {
-            bits.refill();
-        }
-        if bits.have == 0 {
-            break;
-        }
-        if bits.peek(1) == 1 {
-            if bits.have < 9 {
-                break;
-            }
-            out[at] = (bits.peek(9) & 0xFF) as u8;
-            bits.consume(9);
-            at += 1;
-            continue;
-        }
-        if bits.have < longest {
-            break;
-        }
-        let token = bits.peek(longest);
-        bits.consume(longest);
-        let dist = (token >> lb & ((1 << wb) - 1)) as usize + 1;
-        let len = ((token & ((1 << lb) - 1)) as usize + 1).min(expected - at);
-        if dist <= at && dist >= COPY && len <= COPY {
-            // A fixed-size copy (no call to memcpy); the bytes past `len` are overwritten later.
-            let from = at - dist;
-            let chunk: [u8; COPY] = out[from..from + COPY].try_into().expect("16 bytes");
-            out[at..at + COPY].copy_from_slice(&chunk);
-        } else {
-            // Overlapping (a run), or before the start, where the reference decoder's window
-            // is zero-filled.
-            for k in at..at + len {
-                out[k] = k.checked_sub(dist).map_or(0, |from| out[from]);
-            }
-        }
+    // Far from both ends, in rounds: the literals among the next four tokens up to the first
+    // back-reference, then that back-reference. A round's cost is set by the chain from one
+    // round's position to the next (a load, shifts, a count of leading zeros, a compare, adds:
+    // about 20 cycles for some six bytes out), so the round neither branches on a token's kind (the kinds come mixed, about
+    // three literals to a back-reference) nor keeps a bit buffer to top up: it loads the 64
+    // bits at its position, of which it takes at most 3 x 9 + `longest` = 44. The four
+    // candidates' bytes are stored at once (those past the run are overwritten later); a round
+    // of four literals makes an empty copy.
+    while at + LITERALS + COPY <= expected && bit / 8 + 8 <= input.len() {
+        let w = u64::from_be_bytes(input[bit / 8..bit / 8 + 8].try_into().expect("8 bytes")) << (bit % 8);
+        // Bits before the first zero among the tags the four tokens would have as literals
+        // (bits 63, 54, 45, 36), 36 when they are all literals: nine times the run.
+        let run_bits = (!w & LITERAL_TAGS | 1 << 27).leading_zeros() as usize;
+        // One 4-byte store: a later copy's 16-byte load over bytes stored one at a time would
+        // wait for all of them to be written (no store forwarding from several stores).
+        let bytes = (w >> 55 & 0xFF) | (w >> 38 & 0xFF00) | (w >> 21 & 0xFF_0000) | (w >> 4 & 0xFF00_0000);
+        out[at..at + LITERALS].copy_from_slice(&(bytes as u32).to_le_bytes());
+        at += run_bits / 9;
+        // The back-reference, unless the four were literals: then an empty copy, from far
+        // enough back to take the fast path. Masks, not a branch: which of the two comes is as
+        // unpredictable as the kinds.
+        let follows = usize::from(run_bits < 9 * LITERALS).wrapping_neg();
+        let (dist, len) = token(w << run_bits, at);
+        bit += run_bits + (longest & follows);
+        let (dist, len) = (dist & follows | at.max(COPY) & !follows, len & follows);
+        copy(out, at, dist, len);
         at += len;
+    }
+    // Near the ends, a token at a time, as long as the input holds a whole one (the last
+    // byte's padding never does).
+    while at < expected {
+        let left = 8 * input.len() - bit;
+        let w = window(input, bit);
+        if left >= 9 && w >> 63 == 1 {
+            out[at] = (w >> 55) as u8;
+            bit += 9;
+            at += 1;
+        } else if left >= longest && w >> 63 == 0 {
+            let (dist, len) = token(w, at);
+            bit += longest;
+            copy(out, at, dist, len);
+            at += len;
+        } else {
+            break;
+        }
     }
     out.truncate(at);
     if at != expected {
@@ -87,47 +105,32 @@ pub(crate) fn decode(input: &[u8], p: Params, expected: usize, out: &mut Vec<u8>
     Ok(())
 }
 
-/// Reads bits, most significant first, through a 64-bit buffer whose `have` top bits are
-/// valid (the rest zero).
-struct Bits<'a> {
-    input: &'a [u8],
-    pos: usize,
-    buf: u64,
-    have: u32,
+/// Where the tags of four literals in a row sit in 64 bits read most significant first.
+const LITERAL_TAGS: u64 = 1 << 63 | 1 << 54 | 1 << 45 | 1 << 36;
+
+/// The (up to) 64 bits of `input` from bit `bit` on, most significant first; zeros past its end.
+fn window(input: &[u8], bit: usize) -> u64 {
+    let rest = &input[bit / 8..];
+    let mut bytes = [0u8; 8];
+    let n = rest.len().min(8);
+    bytes[..n].copy_from_slice(&rest[..n]);
+    u64::from_be_bytes(bytes) << (bit % 8)
 }
 
-impl Bits<'_> {
-    /// Tops the buffer up to at least 57 bits, or to the end of the input.
-    #[inline]
-    fn refill(&mut self) {
-        if let Some(next) = self.input.get(self.pos..self.pos + 8) {
-            let v = u64::from_be_bytes(next.try_into().expect("8 bytes"));
-            let bytes = (63 - self.have) / 8;
-            let added = bytes * 8;
-            // Only the whole bytes taken, below the bits already held.
-            self.buf |= (v >> self.have) & !(u64::MAX >> (self.have + added));
-            self.have += added;
-            self.pos += bytes as usize;
-        } else {
-            while self.have <= 56 {
-                let Some(&b) = self.input.get(self.pos) else { break };
-                self.buf |= u64::from(b) << (56 - self.have);
-                self.have += 8;
-                self.pos += 1;
-            }
+/// Copies `len` bytes from `dist` back to `at`, with room for [`COPY`] bytes past `at`.
+#[inline(always)]
+fn copy(out: &mut [u8], at: usize, dist: usize, len: usize) {
+    if dist <= at && dist >= COPY && len <= COPY {
+        // A fixed-size copy (no call to memcpy); the bytes past `len` are overwritten later.
+        let from = at - dist;
+        let chunk: [u8; COPY] = out[from..from + COPY].try_into().expect("16 bytes");
+        out[at..at + COPY].copy_from_slice(&chunk);
+    } else {
+        // Overlapping (a run), or before the start, where the reference decoder's window is
+        // zero-filled.
+        for k in at..at + len {
+            out[k] = k.checked_sub(dist).map_or(0, |from| out[from]);
         }
-    }
-
-    /// The next `n` bits (1 to 32; `n <= have`).
-    #[inline]
-    fn peek(&self, n: u32) -> u32 {
-        (self.buf >> (64 - n)) as u32
-    }
-
-    #[inline]
-    fn consume(&mut self, n: u32) {
-        self.buf <<= n;
-        self.have -= n;
     }
 }
 

@@ -111,6 +111,18 @@ const fn char_of(nibble: u8, no_spaces: bool) -> u8 {
     }
 }
 
+/// Every no-spaces mode by nibble: its character ([`char_of`]).
+static NIBBLE: [[u8; 16]; 2] = {
+    let mut t = [[0u8; 16]; 2];
+    let mut n = 0;
+    while n < 16 {
+        t[0][n] = char_of(n as u8, false);
+        t[1][n] = char_of(n as u8, true);
+        n += 1;
+    }
+    t
+};
+
 /// Every state by every character.
 static CHAR: [u64; 8 * 256] = {
     let mut t = [0u64; 8 * 256];
@@ -127,16 +139,20 @@ static CHAR: [u64; 8 * 256] = {
 const NOT_A_PAIR: u64 = u64::MAX;
 
 /// [`PAIR`]'s entry for a packed byte `b` in state `st`: the low nibble's character, then the
-/// high one's unless the first is a newline (libbgcode reads a newline as the end of the pair).
+/// high one's unless the first is a newline (libbgcode reads a newline as the end of the pair,
+/// so a newline beside `1111` is a pair too: no whole byte follows it).
 const fn pair(no_spaces: bool, st: u8, b: u8) -> u64 {
     let (low, high) = (b & 0x0F, b >> 4);
-    if low == 0x0F || high == 0x0F {
+    if low == 0x0F {
         return NOT_A_PAIR;
     }
     let first = char_of(low, no_spaces);
     let (a, na, st1) = step(st, first);
     if first == b'\n' {
         return entry([a[0], a[1], 0, 0], na, st1);
+    }
+    if high == 0x0F {
+        return NOT_A_PAIR;
     }
     let (b2, nb, st2) = step(st1, char_of(high, no_spaces));
     let mut out = [0u8; 4];
@@ -211,21 +227,39 @@ pub(crate) fn decode(input: &[u8], out: &mut Vec<u8>) {
     while i < input.len() {
         if d.packing && d.queue == 0 && d.signals == 0 && !d.command {
             // The common case, packed pairs one after the other: a byte is two look-ups (its
-            // text, its next state) and one store, until a byte that is not one (a whole byte
-            // follows, or a signal). The state is kept as eight times itself, a shift count.
+            // text, its next state) and one store. The state is kept as eight times itself, a
+            // shift count. A character packed beside a whole byte (a `1111` nibble: a letter
+            // such as `Y`, `Z` or `F`, one byte in twelve of a G-code block) is decoded here
+            // too, a character at a time; a signal ends the run.
             let mode = usize::from(d.no_spaces);
             let (pairs, next) = (&PAIR[mode << 11..][..8 << 8], &NEXT[mode << 8..][..256]);
+            let nibbles = &NIBBLE[mode];
             let mut st8 = usize::from(d.st) << 3;
             while let Some(&c) = input.get(i) {
                 let word = next[usize::from(c)];
-                if word == NOT_A_PAIR {
+                if word != NOT_A_PAIR {
+                    // `st8` is a multiple of 8 below 64; the mask tells the compiler so.
+                    let e = pairs[(st8 & 0x38) << 5 | usize::from(c)];
+                    store(d.out, &mut d.at, e);
+                    st8 = usize::from((word >> st8) as u8);
+                    i += 1;
+                    continue;
+                }
+                let Some(&whole) = input.get(i + 1) else { break };
+                if c == SIGNAL || whole == SIGNAL {
                     break;
                 }
-                let e = pairs[st8 << 5 | usize::from(c)];
-                d.out[d.at..d.at + 4].copy_from_slice(&(e as u32).to_le_bytes());
-                d.at += (e >> 32 & 0xFF) as usize;
-                st8 = usize::from((word >> st8) as u8);
-                i += 1;
+                // libbgcode's queue: the whole byte first when it stands for the low nibble
+                // (the high one's character waits for it), else after the low one's character.
+                let (low, high) = (usize::from(c & 0x0F), usize::from(c >> 4));
+                let (first, second) =
+                    if low == 0x0F { (whole, nibbles[high]) } else { (nibbles[low], whole) };
+                for ch in [first, second] {
+                    let e = CHAR[(st8 & 0x38) << 5 | usize::from(ch)];
+                    store(d.out, &mut d.at, e);
+                    st8 = usize::from((e >> 40) as u8) << 3;
+                }
+                i += 2;
             }
             d.st = (st8 >> 3) as u8;
             let Some(&c) = input.get(i) else { break };
@@ -237,6 +271,14 @@ pub(crate) fn decode(input: &[u8], out: &mut Vec<u8>) {
     }
     let end = start + d.at;
     out.truncate(end);
+}
+
+/// Stores a table entry's four bytes at `at` (those past its count are overwritten later) and
+/// moves `at` past its text.
+#[inline(always)]
+fn store(out: &mut [u8], at: &mut usize, e: u64) {
+    out[*at..*at + 4].copy_from_slice(&(e as u32).to_le_bytes());
+    *at += (e >> 32 & 0xFF) as usize;
 }
 
 /// The decoder's state between input bytes.
@@ -324,11 +366,9 @@ impl Decoder<'_> {
         self.put(CHAR[usize::from(self.st) << 8 | usize::from(c)]);
     }
 
-    /// Stores a table entry's four bytes (those past its count are overwritten later).
     #[inline(always)]
     fn put(&mut self, e: u64) {
-        self.out[self.at..self.at + 4].copy_from_slice(&(e as u32).to_le_bytes());
-        self.at += (e >> 32 & 0xFF) as usize;
+        store(self.out, &mut self.at, e);
         self.st = (e >> 40) as u8;
     }
 }
