@@ -8,7 +8,7 @@ use std::collections::HashMap;
 
 use gweave::colour::dialect::{MixingState, MARLIN_VIRTUAL_TOOLS};
 use gweave::gcode::arc::Arc;
-use gweave::gcode::layers::{Feature, Structure};
+use gweave::gcode::layers::Structure;
 use gweave::gcode::lexer::{parse_into, parse_line, parse_line_lean};
 use gweave::gcode::line::PlainMove;
 use gweave::gcode::reader::Part;
@@ -101,9 +101,8 @@ pub use gweave::Malformed;
 #[derive(Debug, Clone)]
 struct Bookkeeping {
     key_index: HashMap<Key, u64>,
-    /// The layer and feature (as the structure has them, before [`Bookkeeping::fold_later_layers`])
-    /// the last tag was looked up for, and the tag: `None` once the mix or the tool changed.
-    last_tag: Option<(Option<u32>, Feature, u64)>,
+    /// The last key looked up and its tag.
+    last_tag: Option<(Key, u64)>,
     mix: usize,
     /// The selected tool (`T<n>` carried out by [`Front::run`]), for per-tool E steps.
     tool: u32,
@@ -265,7 +264,6 @@ impl Front {
     /// caller that needs only the total and the first layer's time.
     pub(super) fn first_layer_only(&mut self) {
         self.book.fold_later_layers = true;
-        self.book.last_tag = None;
     }
 
     /// The arcs too long for chords of [`ARC_CHORD_MM`] so far.
@@ -546,7 +544,6 @@ impl Front {
             }
         }
         self.book.tool = tool;
-        self.book.last_tag = None;
         jobs.push(Job::Tool(tool));
         self.refresh_mix(jobs);
         Ok(())
@@ -564,7 +561,6 @@ impl Front {
         let bits: Vec<u64> = weights.iter().map(|w| w.to_bits()).collect();
         // Index 0 is the plan side's "no mix" entry.
         let next = self.mix_index.len() + 1;
-        self.book.last_tag = None;
         self.book.mix = *self.mix_index.entry(bits).or_insert_with(|| {
             jobs.push(Job::Mix(weights.to_vec()));
             next
@@ -585,31 +581,29 @@ impl Front {
 impl Bookkeeping {
     /// The tag for the current layer, feature and mix. The key changes only at a new layer,
     /// feature, mix or tool, so the last one is kept: hashing it for every move cost a tenth
-    /// of the whole simulation. Kept by the structure's layer and feature alone (the mix and
-    /// the tool forget it when they change): two comparisons a move, where building the whole
-    /// key, its layers folded, and comparing it cost 12 instructions.
-    #[inline(always)]
+    /// of the whole simulation.
+    #[inline]
     fn tag(&mut self, s: &Structure, jobs: &mut Vec<Job>) -> u64 {
-        match self.last_tag {
-            Some((layer, feature, tag)) if layer == s.layer && feature == s.feature => tag,
-            _ => self.new_tag(s, jobs),
-        }
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn new_tag(&mut self, s: &Structure, jobs: &mut Vec<Job>) -> u64 {
         let layer = match s.layer {
             Some(l) if l > 0 && self.fold_later_layers => Some(1),
             layer => layer,
         };
         let key = Key { layer, feature: s.feature, mix: self.mix, tool: self.tool };
+        match self.last_tag {
+            Some((last, tag)) if last == key => tag,
+            _ => self.new_tag(key, jobs),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn new_tag(&mut self, key: Key, jobs: &mut Vec<Job>) -> u64 {
         let next = self.key_index.len() as u64;
         let tag = *self.key_index.entry(key).or_insert_with(|| {
             jobs.push(Job::Key(key));
             next
         });
-        self.last_tag = Some((s.layer, s.feature, tag));
+        self.last_tag = Some((key, tag));
         tag
     }
 
