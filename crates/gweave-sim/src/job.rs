@@ -251,14 +251,7 @@ mod tests {
     #[test]
     fn a_file_cut_short_is_said_truncated_on_its_last_line() {
         let dir = tempfile::tempdir().unwrap();
-        let fixture =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/prusaslicer/pr_cone_2tool.gcode");
-        let text = std::fs::read(&fixture).unwrap();
-        let cut = &text[..text.len() / 2];
-        let cut = &cut[..cut.iter().rposition(|&b| b == b'.').unwrap() + 1];
-        let (whole, part) = (dir.path().join("whole.gcode"), dir.path().join("cut.gcode"));
-        std::fs::write(&whole, &text).unwrap();
-        std::fs::write(&part, cut).unwrap();
+        let (whole, part, newlines) = crate::test_support::cone_cut_short(dir.path());
         let truncated = |path: &Path| {
             let run = simulate(path, MachineProfile::default(), &SimSetup::default(), &mut Quiet).unwrap();
             let Simulation::Marlin { report, .. } = run else {
@@ -269,7 +262,6 @@ mod tests {
             (report.warning_counts.get("truncated").copied(), said, report.lines)
         };
         let (count, said, lines) = truncated(&part);
-        let newlines = cut.iter().filter(|&&b| b == b'\n').count() as u64;
         assert_eq!((count, lines), (Some(1), newlines + 1));
         assert_eq!(said[0].line, newlines + 1);
         assert_eq!(

@@ -1,9 +1,11 @@
-//! Helpers for tests that talk to the virtual printer over TCP as a host does: this crate's link
-//! tests and the hostile tests of `gweave serve`. Built for tests only: `cfg(test)` here, the
-//! `test-support` feature in a dev-dependency.
+//! Helpers for tests that talk to the virtual printer over TCP as a host does (this crate's link
+//! tests and the hostile tests of `gweave serve`), and a file cut short for the commands that
+//! must say so. Built for tests only: `cfg(test)` here, the `test-support` feature in a
+//! dev-dependency.
 
 use std::io::{self, BufRead, BufReader};
 use std::net::{SocketAddr, TcpStream};
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// A TCP host with a 10 s read limit: its stream and a reader of the replies.
@@ -49,4 +51,20 @@ pub fn reset(stream: TcpStream) {
         )
     };
     assert_eq!(rc, 0, "{}", io::Error::last_os_error());
+}
+
+/// A PrusaSlicer fixture (the two-tool cone) written into `dir` whole and cut short, as a copy
+/// or an upload stopped mid-number leaves it: cut halfway, just after a decimal point, so its
+/// last line reads (`E1.` of `E1.234`), has no line ending, and the slicer's last line is
+/// missing. The paths of the whole file and the cut one, and the line endings the cut keeps.
+pub fn cone_cut_short(dir: &Path) -> (PathBuf, PathBuf, u64) {
+    let fixture =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/prusaslicer/pr_cone_2tool.gcode");
+    let text = std::fs::read(&fixture).unwrap();
+    let cut = &text[..text.len() / 2];
+    let cut = &cut[..cut.iter().rposition(|&b| b == b'.').unwrap() + 1];
+    let (whole, part) = (dir.join("whole.gcode"), dir.join("cut.gcode"));
+    std::fs::write(&whole, &text).unwrap();
+    std::fs::write(&part, cut).unwrap();
+    (whole, part, cut.iter().filter(|&&b| b == b'\n').count() as u64)
 }

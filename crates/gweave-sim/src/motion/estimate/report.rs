@@ -152,13 +152,7 @@ mod tests {
     #[test]
     fn a_file_cut_short_is_said_truncated_by_estimate() {
         let dir = tempfile::tempdir().unwrap();
-        let fixture =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/prusaslicer/pr_cone_2tool.gcode");
-        let text = std::fs::read(&fixture).unwrap();
-        let cut = &text[..text.len() / 2];
-        let cut = &cut[..cut.iter().rposition(|&b| b == b'.').unwrap() + 1];
-        let path = dir.path().join("cut.gcode");
-        std::fs::write(&path, cut).unwrap();
+        let (fixture, path, _) = crate::test_support::cone_cut_short(dir.path());
         let machine = MachineProfile::default();
         let part = estimate_file(&path, &machine, false, Quiet).unwrap();
         assert_eq!(part.warnings.len(), 1, "{:?}", part.warnings);
