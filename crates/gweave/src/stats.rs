@@ -345,9 +345,7 @@ impl Pass for StatsPass {
 
     #[inline(always)]
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn Write) -> Step {
-        self.bytes += (ctx.line.bytes.len() + ctx.line.eol.len()) as u64;
-        self.unended = ctx.line.eol.is_empty();
-        self.lines_by_region[ctx.state.structure.region as usize] += 1;
+        self.count_line(&ctx.line, ctx.state);
         if let Some(c) = ctx.block.comment_text(ctx.line.bytes) {
             if c.len() > 8 {
                 self.read_figures(c);
@@ -378,8 +376,7 @@ impl StatsPass {
     /// count, to the bit, as the line through the lexer and [`State::apply`].
     #[inline(always)]
     pub fn plain_move(&mut self, line: &RawLine<'_>, from: &Position, moved: bool, state: &State) {
-        self.bytes += (line.bytes.len() + line.eol.len()) as u64;
-        self.lines_by_region[state.structure.region as usize] += 1;
+        self.count_line(line, state);
         // A plain move has no comment to read; if it moved, `State::apply` would have made
         // this move its effect.
         if moved {
@@ -392,6 +389,14 @@ impl StatsPass {
             };
             self.count_move(&m, state);
         }
+    }
+
+    /// Counts the line `line` (its bytes, its region in `state`, whether it ends).
+    #[inline(always)]
+    fn count_line(&mut self, line: &RawLine<'_>, state: &State) {
+        self.bytes += (line.bytes.len() + line.eol.len()) as u64;
+        self.unended = line.eol.is_empty();
+        self.lines_by_region[state.structure.region as usize] += 1;
     }
 
     /// Counts the move `m`, by the tool and the feature of `state` (the state after it).
