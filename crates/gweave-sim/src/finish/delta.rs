@@ -29,7 +29,7 @@ use gweave::{Firmware, State};
 
 use super::diff::Op;
 use super::planner_thread::{Planner, WindowJob};
-use super::window::{Modal, Sides};
+use super::window::{sides, Modal, Readers, WindowLines};
 use crate::motion::estimate::EstimateError;
 use crate::motion::limits::MotionProfile;
 
@@ -278,8 +278,8 @@ pub(super) enum Unmeasured {
 /// ([`super::planner_thread`]).
 pub(super) struct Windows {
     /// The output's side and the input's, each read by the estimators' parse side alone: they
-    /// say where a window ends.
-    follower: Sides,
+    /// say where a window ends, and read its lines into the jobs the planner plans.
+    follower: Readers,
     /// The thread that plans the windows, on the sides proper.
     planner: Planner,
     /// Modes: 2 for a file with silent-mode limits of its own, else 1.
@@ -316,10 +316,10 @@ impl Windows {
     /// Windows timed with the limits of each of `profiles` (normal mode, then silent), the
     /// lines read as `firmware` reads them.
     pub(super) fn new(profiles: &[&MotionProfile], firmware: Firmware) -> Result<Self, EstimateError> {
-        let sides = Sides::new(profiles, firmware)?;
+        let (readers, plans) = sides(profiles, firmware)?;
         Ok(Windows {
-            follower: sides.parse_only(),
-            planner: Planner::new(sides),
+            follower: readers,
+            planner: Planner::new(plans),
             modes: profiles.len(),
             held: VecDeque::new(),
             held_from: 0,
@@ -347,7 +347,7 @@ impl Windows {
     /// The same planned on the caller's thread ([`Planner::here`]).
     #[cfg(test)]
     pub(super) fn planned_here(mut self) -> Self {
-        self.planner = std::mem::replace(&mut self.planner, Planner::new(self.follower.clone())).here();
+        self.planner.plan_here();
         self
     }
 
@@ -451,27 +451,38 @@ impl Windows {
     fn close(&mut self, stated: &mut Stated) -> Result<(), Unmeasured> {
         let Some(w) = self.open.take() else { return Ok(()) };
         let end = self.decided;
-        let mut job = self.planner.job(w.modal, w.first_change);
+        let mut job = self.planner.job(w.modal.first_layer, w.first_change);
         // The limits in force at the window's start, if they changed since the last replay.
         let in_force = self.limits.iter().filter(|(at, _)| *at < w.start);
         let latest = in_force.clone().map(|(at, _)| *at).next_back();
+        let mut limits = Vec::new();
         if latest != self.replayed || self.window_set_limits {
-            in_force.for_each(|(_, line)| job.limits.push(line));
+            limits.extend(in_force.map(|(_, line)| line.as_slice()));
             self.replayed = latest;
         }
         self.window_set_limits = self.limits.iter().any(|(at, _)| (w.start..end).contains(at));
         let held = |i: u64| self.text.bytes(self.held[(i - self.held_from) as usize].text);
-        // The lines before the first change are the same on both sides: planned once.
-        (w.start..w.first_change).for_each(|i| job.shared.push(held(i)));
-        (w.first_change..end).for_each(|i| job.output.push(held(i)));
+        // The lines before the first change are the same on both sides: read and planned once.
+        let shared: Vec<&[u8]> = (w.start..w.first_change).map(held).collect();
+        let output: Vec<&[u8]> = (w.first_change..end).map(held).collect();
+        let mut input = Vec::with_capacity(output.len());
         let mut next = w.first_change;
         for (at, added, removed) in &w.changes {
-            (next..*at).for_each(|i| job.input.push(held(i)));
-            removed.iter().for_each(|line| job.input.push(line));
+            input.extend((next..*at).map(held));
+            input.extend(removed.iter().map(Vec::as_slice));
             next = at + added;
         }
-        (next..end).for_each(|i| job.input.push(held(i)));
-        job.with_lines(|lines| self.follower.time(lines)).map_err(|_| Unmeasured::Estimate)?;
+        input.extend((next..end).map(held));
+        let g92 = w.modal.g92();
+        let lines = WindowLines {
+            limits: &limits,
+            modal: &w.modal,
+            g92: &g92,
+            shared: &shared,
+            output: &output,
+            input: &input,
+        };
+        self.follower.read(&lines, &mut job.jobs).map_err(|_| Unmeasured::Estimate)?;
         // A change whose modal state outlasts the window (a feed rate, a position, a mode not
         // put back) goes on changing the moves after it: the window grows until the two sides
         // agree again, and is timed again then. The attempt is planned all the same: it moves
@@ -504,7 +515,7 @@ impl Windows {
             stated.add_from(job.first_change, delta_s);
             for (m, d) in delta_s.into_iter().enumerate() {
                 self.delta_s[m] += d;
-                if job.modal.first_layer {
+                if job.first_layer {
                     self.first_layer_delta_s[m] += d;
                 }
             }

@@ -3,16 +3,17 @@
 //! The measure of a transform's output (`measure.rs`) reads the output, parses it, counts
 //! `stats`, compares it with the input (`diff.rs`) and gathers the changes' windows
 //! (`delta.rs`) on one thread, beside the transform's. Planning a window (`window.rs`) costs
-//! about 2 500 instructions a line, and a `mix` plans a window of some 50 lines every 70 lines
-//! of its output: that is most of the measure's time. So the measure only decides where a
-//! window ends, with the estimators' parse side alone (the modal state the sides end in
-//! depends on the lines, not on the plan: [`Sides::parse_only`]), and hands each attempt at a
-//! window, with its lines copied, to the planner thread here, which plans it on the two sides
-//! exactly as the measure's thread did before: the same estimators, fed the same lines in the
-//! same order (also the attempts whose sides did not agree: they move the estimators' clocks
-//! on), so each window's times are the same to the bit. The measure takes the planned windows
-//! back in the order it sent them and adds their times then, in that order, so the sums it
-//! writes are the same to the bit too.
+//! about 2 000 instructions a line, and a `mix` plans a window of some 50 lines every 70 lines
+//! of its output: that is most of the measure's time. So the measure only reads each attempt
+//! at a window, with the estimators' parse side ([`Readers`]: the modal state the sides end
+//! in depends on the lines, not on the plan, so it decides where the window ends), and hands
+//! the jobs that reading made ([`WindowJobs`]) to the planner thread here, which plans them on
+//! the two sides in every mode ([`Plans`]) as an estimator fed the lines would: the same jobs
+//! in the same order (also the attempts whose sides did not agree: they move the plan sides'
+//! clocks on), so each window's times are the same to the bit. The lines are parsed once, on
+//! the measure's thread; the planner thread parses nothing. The measure takes the planned
+//! windows back in the order it sent them and adds their times then, in that order, so the
+//! sums it writes are the same to the bit too.
 //!
 //! Memory is bounded: [`WINDOWS_IN_FLIGHT`] windows wait at most (the measure waits when they
 //! are that many), and the planned ones come back with their buffers, which the next windows
@@ -25,73 +26,28 @@ use std::sync::mpsc::{self, Receiver, Sender, SyncSender};
 use std::thread::JoinHandle;
 
 use super::delta::Unmeasured;
-use super::window::{Modal, Sides, WindowLines};
+use super::window::{Plans, WindowJobs};
 
 /// Windows handed to the planner and not yet planned, at most: enough to ride out a long
 /// window on either side (a window is 50 lines or so, its cap 8 192), few enough that the
 /// lines held stay a few hundred kilobytes at worst.
 const WINDOWS_IN_FLIGHT: usize = 16;
 
-/// Lines owned in one buffer, kept from window to window (one allocation per line would cost
-/// more than the copy).
-#[derive(Debug, Default)]
-pub(super) struct Lines {
-    text: Vec<u8>,
-    /// Where each line ends in `text`.
-    ends: Vec<usize>,
-}
-
-impl Lines {
-    pub(super) fn push(&mut self, line: &[u8]) {
-        self.text.extend_from_slice(line);
-        self.ends.push(self.text.len());
-    }
-
-    fn clear(&mut self) {
-        self.text.clear();
-        self.ends.clear();
-    }
-
-    fn slices(&self) -> Vec<&[u8]> {
-        let starts = std::iter::once(0).chain(self.ends.iter().copied());
-        starts.zip(&self.ends).map(|(from, &to)| &self.text[from..to]).collect()
-    }
-}
-
-/// One attempt at timing a window ([`WindowLines`], owned), and what the planner made of it.
+/// One attempt at timing a window, and what the planner made of it.
 #[derive(Debug)]
 pub(super) struct WindowJob {
-    pub limits: Lines,
-    pub modal: Modal,
-    pub g92: Vec<u8>,
-    pub shared: Lines,
-    pub output: Lines,
-    pub input: Lines,
+    /// What its lines came to on both sides, read on the measure's thread.
+    pub jobs: WindowJobs,
+    /// In the first layer: the window's change counts in the first layer's time.
+    pub first_layer: bool,
     /// The window's first change's output line.
     pub first_change: u64,
     /// Whether the two sides agree after it, as the parse side found: the window closes and
     /// its times count (else it grows and is timed again).
     pub closes: bool,
-    /// Once planned: the output's side's time and the input's, in each mode, s; `None` if the
-    /// estimator refused a line (or, which would be a bug, the sides' agreement was not the
-    /// parse side's).
+    /// Once planned: the output's side's time and the input's, in each mode, s; `None` if a
+    /// plan side refused a job.
     pub times_s: Option<[[f64; 2]; 2]>,
-}
-
-impl WindowJob {
-    /// Runs `f` with the job's lines as [`Sides::time`] reads them.
-    pub(super) fn with_lines<T>(&self, f: impl FnOnce(&WindowLines<'_>) -> T) -> T {
-        let (limits, shared) = (self.limits.slices(), self.shared.slices());
-        let (output, input) = (self.output.slices(), self.input.slices());
-        f(&WindowLines {
-            limits: &limits,
-            modal: &self.modal,
-            g92: &self.g92,
-            shared: &shared,
-            output: &output,
-            input: &input,
-        })
-    }
 }
 
 /// The thread, while it runs.
@@ -105,11 +61,11 @@ struct Running {
 /// Where the windows are planned.
 enum At {
     /// Nowhere yet: the thread starts at the first window (an unchanged output plans none).
-    Idle(Sides),
+    Idle(Plans),
     Thread(Running),
     /// On the measure's thread, as each is sent: where no thread can be started.
     Here {
-        sides: Sides,
+        sides: Plans,
         refused: bool,
         planned: VecDeque<WindowJob>,
     },
@@ -125,43 +81,24 @@ pub(super) struct Planner {
 }
 
 impl Planner {
-    pub(super) fn new(sides: Sides) -> Self {
+    pub(super) fn new(sides: Plans) -> Self {
         Planner { at: At::Idle(sides), spare: Vec::new() }
     }
 
     /// Planning on the caller's thread, each window as it is sent, as the measure did before
     /// the planner thread: what the thread's figures are checked against.
     #[cfg(test)]
-    pub(super) fn here(mut self) -> Self {
+    pub(super) fn plan_here(&mut self) {
         if let At::Idle(sides) = std::mem::replace(&mut self.at, At::Ended) {
             self.at = At::Here { sides, refused: false, planned: VecDeque::new() };
         }
-        self
     }
 
-    /// An empty job for a window starting in `modal`, its first change at output line
-    /// `first_change`.
-    pub(super) fn job(&mut self, modal: Modal, first_change: u64) -> WindowJob {
-        let g92 = modal.g92();
-        match self.spare.pop() {
-            Some(mut job) => {
-                for lines in [&mut job.limits, &mut job.shared, &mut job.output, &mut job.input] {
-                    lines.clear();
-                }
-                WindowJob { modal, g92, first_change, closes: false, times_s: None, ..job }
-            }
-            None => WindowJob {
-                limits: Lines::default(),
-                modal,
-                g92,
-                shared: Lines::default(),
-                output: Lines::default(),
-                input: Lines::default(),
-                first_change,
-                closes: false,
-                times_s: None,
-            },
-        }
+    /// A job for a window, its first change at output line `first_change` (in the first
+    /// layer: `first_layer`), its jobs to be read into.
+    pub(super) fn job(&mut self, first_layer: bool, first_change: u64) -> WindowJob {
+        let jobs = self.spare.pop().map(|job| job.jobs).unwrap_or_default();
+        WindowJob { jobs, first_layer, first_change, closes: false, times_s: None }
     }
 
     /// Hands `job` to the planner thread (started now if it is the first), waiting while
@@ -255,7 +192,7 @@ impl Drop for Planner {
 }
 
 /// The planner thread: plans each job on `sides`, in order, and hands it back.
-fn plan(mut sides: Sides, jobs: Receiver<WindowJob>, planned: Sender<WindowJob>) {
+fn plan(mut sides: Plans, jobs: Receiver<WindowJob>, planned: Sender<WindowJob>) {
     let mut refused = false;
     for mut job in jobs {
         plan_one(&mut sides, &mut job, &mut refused);
@@ -267,10 +204,10 @@ fn plan(mut sides: Sides, jobs: Receiver<WindowJob>, planned: Sender<WindowJob>)
 
 /// Plans `job` on `sides`, unless a line was `refused` already: the estimators are then
 /// where it left them, and the measure gives up on the windows at that job.
-fn plan_one(sides: &mut Sides, job: &mut WindowJob, refused: &mut bool) {
+fn plan_one(sides: &mut Plans, job: &mut WindowJob, refused: &mut bool) {
     job.times_s = match refused {
         true => None,
-        false => job.with_lines(|lines| sides.time(lines)).ok().filter(|_| sides.agree() == job.closes),
+        false => sides.time(&job.jobs).ok(),
     };
     *refused = job.times_s.is_none();
 }

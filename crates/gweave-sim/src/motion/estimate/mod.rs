@@ -75,7 +75,7 @@ use front::{Chords, Front};
 pub use front::{HugeArcs, Malformed, Refused, MAX_ARC_CHORDS};
 #[cfg(test)]
 pub(crate) use modes::tests::silent;
-pub(crate) use modes::{estimate_modes, ModeEstimate, Modes, ModesEstimator};
+pub(crate) use modes::{estimate_modes, modes_sides, Jobs, ModeEstimate, Modes, ModesParse, ModesPlan};
 pub use report::{estimate_file, estimate_report, EstimateFileError, EstimateReport};
 pub use tool_change::ToolChange;
 

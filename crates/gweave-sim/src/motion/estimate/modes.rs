@@ -205,62 +205,65 @@ fn plan(mut back: Back, batches: mpsc::Receiver<Arc<Vec<Job>>>) -> Result<(Back,
     Ok((back, progress_s))
 }
 
-/// The same lines estimated in several modes on the caller's thread: one parse, one plan side
-/// per mode, each fed the jobs in order, as [`estimate_modes`] does on threads for a whole
-/// file. For a few lines at a time (a transform's changes, timed where they are:
-/// `finish/delta.rs`), where threads would cost more than they share.
-#[derive(Debug)]
-pub(crate) struct ModesEstimator {
-    front: Front,
-    backs: Vec<Back>,
-    jobs: Vec<Job>,
+/// The same lines estimated in several modes on the caller's thread, for a few lines at a
+/// time (a transform's changes, timed where they are: `finish/delta.rs`), where threads would
+/// cost more than they share. The two sides of [`estimate_modes`] apart, so that they can run
+/// at different places: [`ModesParse`] reads the lines once into [`Jobs`], and [`ModesPlan`]
+/// plans those jobs in every mode, in order, as [`estimate_modes`]' plan sides do (the same
+/// figures, to the bit). A transform's measure reads each window on its own thread and hands
+/// the jobs to the thread that plans them (`finish/planner_thread.rs`), which then parses
+/// nothing.
+///
+/// Both sides are [`Clone`]: a copy goes on as the original would, to the bit (the parse
+/// side's state, each mode's planner queue and clock are copied whole). A transform's windows
+/// read and plan the lines both files share once and copy each side for the lines where they
+/// differ (`finish/window.rs`).
+pub(crate) fn modes_sides(
+    profiles: &[&MotionProfile],
+    firmware: Firmware,
+) -> Result<(ModesParse, ModesPlan), EstimateError> {
+    let Some((first, others)) = profiles.split_first() else {
+        return Err(EstimateError::Io(std::io::Error::other("no mode to estimate in")));
+    };
+    let others: Vec<MotionProfile> = others.iter().map(|p| (*p).clone()).collect();
+    let mut jobs = Jobs::default();
+    let (front, backs) = sides(first, &others, firmware, &mut jobs.0)?;
+    let mut plan = ModesPlan { backs };
+    plan.execute(&jobs)?;
+    Ok((ModesParse { front }, plan))
 }
 
-impl ModesEstimator {
-    /// An estimator in the mode of each of `profiles` (the first the parse side's; they must
-    /// plan alike, as for [`estimate_modes`]), timing only, reading lines as `firmware` does and
-    /// keeping every layer after the first as one account.
-    pub(crate) fn new(profiles: &[&MotionProfile], firmware: Firmware) -> Result<Self, EstimateError> {
-        let Some((first, others)) = profiles.split_first() else {
-            return Err(EstimateError::Io(std::io::Error::other("no mode to estimate in")));
-        };
-        let others: Vec<MotionProfile> = others.iter().map(|p| (*p).clone()).collect();
-        let mut jobs = Vec::new();
-        let (front, backs) = sides(first, &others, firmware, &mut jobs)?;
-        let mut est = ModesEstimator { front, backs, jobs };
-        est.execute()?;
-        Ok(est)
-    }
+/// Jobs a [`ModesParse`] made, in order, for a [`ModesPlan`].
+#[derive(Debug, Default)]
+pub(crate) struct Jobs(Vec<Job>);
 
-    /// Executes one line (without its line ending) in every mode, as
-    /// [`Estimator::line`](super::Estimator::line) does in one.
-    pub(crate) fn line(&mut self, raw: &[u8]) -> Result<(), EstimateError> {
+impl Jobs {
+    /// Empties it, keeping its room.
+    pub(crate) fn clear(&mut self) {
+        self.0.clear();
+    }
+}
+
+/// The parse side of an estimate in several modes (the modes share it: only their limits
+/// differ): lines in, [`Jobs`] out.
+#[derive(Debug, Clone)]
+pub(crate) struct ModesParse {
+    front: Front,
+}
+
+impl ModesParse {
+    /// Reads one line (without its line ending), adding its jobs to `jobs`, as
+    /// [`Estimator::line`](super::Estimator::line) reads it.
+    pub(crate) fn line(&mut self, raw: &[u8], jobs: &mut Jobs) -> Result<(), EstimateError> {
         self.front.lex(raw);
         if self.front.refuses(raw) {
             return Ok(());
         }
         let effect = *self.front.apply(raw);
-        let ran = self.front.run(raw, &effect, &mut self.jobs);
-        // What the line did before an error still happens, as in firmware.
-        self.execute()?;
-        skip_mixing_errors(ran)
+        skip_mixing_errors(self.front.run(raw, &effect, &mut jobs.0))
     }
 
-    /// Hands the pending jobs to every plan side.
-    fn execute(&mut self) -> Result<(), EstimateError> {
-        let jobs = &self.jobs;
-        let result =
-            self.backs.iter_mut().try_for_each(|back| jobs.iter().try_for_each(|job| back.execute(job)));
-        self.jobs.clear();
-        result
-    }
-
-    /// Each mode's clock, s ([`Estimator::now_s`](super::Estimator::now_s)).
-    pub(crate) fn now_s(&self) -> impl Iterator<Item = f64> + '_ {
-        self.backs.iter().map(|b| b.acc.t_s)
-    }
-
-    /// The modal state after the line last executed.
+    /// The modal state after the line last read.
     pub(crate) fn state(&self) -> &State {
         &self.front.state
     }
@@ -270,29 +273,33 @@ impl ModesEstimator {
         &mut self.front.state
     }
 
-    /// A copy of the parse side alone: it reads the lines after it as this estimator would and
-    /// ends in the same modal state, planning nothing (its clock is none). A transform's
-    /// windows decide with it, on the measure's thread, where a window ends, while the planning
-    /// runs on a thread of its own (`finish/planner_thread.rs`).
-    pub(crate) fn parse_only(&self) -> Self {
-        ModesEstimator { front: self.front.clone(), backs: Vec::new(), jobs: Vec::new() }
+    /// Into the allocations `self` has already.
+    pub(crate) fn copy_from(&mut self, source: &Self) {
+        self.front.clone_from(&source.front);
     }
 }
 
-/// A copy plans the lines after it as the original would, to the bit: the parse side, each
-/// mode's planner queue and clock are copied whole (the pending jobs are none between two
-/// lines). A transform's windows plan the lines both files share once and copy the estimator
-/// for the lines where they differ (`finish/window.rs`).
-impl Clone for ModesEstimator {
-    fn clone(&self) -> Self {
-        ModesEstimator { front: self.front.clone(), backs: self.backs.clone(), jobs: Vec::new() }
+/// The plan sides of an estimate in several modes, one per mode, fed the jobs of one
+/// [`ModesParse`].
+#[derive(Debug, Clone)]
+pub(crate) struct ModesPlan {
+    backs: Vec<Back>,
+}
+
+impl ModesPlan {
+    /// Plans `jobs` in every mode.
+    pub(crate) fn execute(&mut self, jobs: &Jobs) -> Result<(), EstimateError> {
+        self.backs.iter_mut().try_for_each(|back| jobs.0.iter().try_for_each(|job| back.execute(job)))
     }
 
-    /// Into the vectors `self` has already.
-    fn clone_from(&mut self, source: &Self) {
-        self.front.clone_from(&source.front);
+    /// Each mode's clock, s ([`Estimator::now_s`](super::Estimator::now_s)).
+    pub(crate) fn now_s(&self) -> impl Iterator<Item = f64> + '_ {
+        self.backs.iter().map(|b| b.acc.t_s)
+    }
+
+    /// Into the allocations `self` has already.
+    pub(crate) fn copy_from(&mut self, source: &Self) {
         self.backs.clone_from(&source.backs);
-        self.jobs.clear();
     }
 }
 
