@@ -384,7 +384,7 @@ impl Windows {
                         w.equal_codes += u64::from(code);
                         // Comments cost no time: a long run of them ends a window too.
                         if w.equal_codes >= context || self.decided - w.start > WINDOW_CAP_LINES {
-                            self.close(stated)?;
+                            self.close(stated, false)?;
                         }
                     }
                     None => self.forget(),
@@ -416,7 +416,7 @@ impl Windows {
     /// The output has ended: the last window is timed, and every window's times are added.
     pub(super) fn finish(&mut self, stated: &mut Stated) -> Result<(), Unmeasured> {
         if self.open.is_some() {
-            self.close(stated)?;
+            self.close(stated, true)?;
         }
         while let Some(job) = self.planner.wait() {
             self.add(job, stated)?;
@@ -447,8 +447,10 @@ impl Windows {
     }
 
     /// Hands the open window to the planner, to be timed on both sides in every mode, and adds
-    /// the differences of those planned already.
-    fn close(&mut self, stated: &mut Stated) -> Result<(), Unmeasured> {
+    /// the differences of those planned already. At the output's end (`at_end`) the window
+    /// closes whether or not its sides agree: no line follows that their states would plan
+    /// differently.
+    fn close(&mut self, stated: &mut Stated, at_end: bool) -> Result<(), Unmeasured> {
         let Some(w) = self.open.take() else { return Ok(()) };
         let end = self.decided;
         let mut job = self.planner.job(w.modal.first_layer, w.first_change);
@@ -487,7 +489,7 @@ impl Windows {
         // put back) goes on changing the moves after it: the window grows until the two sides
         // agree again, and is timed again then. The attempt is planned all the same: it moves
         // the estimators' clocks on, as it did when the windows were planned here.
-        job.closes = self.follower.agree();
+        job.closes = at_end || self.follower.agree();
         let closes = job.closes;
         self.planner.send(job)?;
         while let Some(job) = self.planner.planned() {

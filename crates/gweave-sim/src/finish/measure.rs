@@ -680,6 +680,33 @@ mod tests {
         }
     }
 
+    /// Regression (issue 35): a change whose modal state lasts to the output's end (a move
+    /// added after the print's last, which leaves the head elsewhere) has a window whose sides
+    /// never agree; it was left open at the end and its time never counted. At the end it
+    /// closes: what it adds is what the full estimates differ by, in both modes.
+    #[test]
+    fn a_change_that_lasts_to_the_end_is_counted() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = bunny_as_sliced(3000);
+        let last_move = input.rfind("\nG1 X").unwrap() + 1;
+        let after = last_move + input[last_move..].find('\n').unwrap() + 1;
+        let output = format!("{}G1 X5 Y5 F600\n{}", &input[..after], &input[after..]);
+        let f = by_changes(dir.path(), &input, &output).unwrap();
+        let stated = by_changes(dir.path(), &input, &input).unwrap();
+        let full = |text: &str, name: &str| {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).unwrap();
+            measure(&path).unwrap()
+        };
+        let (full_in, full_out) = (full(&input, "full_in.gcode"), full(&output, "full_out.gcode"));
+        for m in 0..2 {
+            let (changes, estimated) =
+                (f.time_s[m] - stated.time_s[m], full_out.time_s[m] - full_in.time_s[m]);
+            assert!(estimated > 1.0, "mode {m}: the full estimates differ by {estimated} s");
+            assert!((changes - estimated).abs() < 0.05, "mode {m}: {changes} s, estimates {estimated} s");
+        }
+    }
+
     /// A change longer than the comparison holds is not timed by windows: the output is
     /// measured in full (and so it is, by `measure_while_written`).
     #[test]
