@@ -130,7 +130,7 @@ pub fn print_summary(print: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Re
 /// A clap value parser for one number within `range`:
 /// `#[arg(long, value_parser = in_range(MANDREL_DIAMETER_MM))]`. Clap then refuses
 /// `--mandrel-diameter 1e-9` before anything is read, naming the flag and the range
-/// ("invalid value '1e-9' for '--mandrel-diameter <MM>': out of range: 1 to 1000 mm"), so every
+/// (`invalid value '1e-9' for '--mandrel-diameter <MM>': out of range: 1 to 1000 mm`), so every
 /// numeric flag is bounded the same way, by the range the library states once.
 pub fn in_range<T>(range: Range<T>) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
 where

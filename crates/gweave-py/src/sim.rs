@@ -50,7 +50,7 @@ pub(crate) fn sim_json(
     })?
 }
 
-/// Estimates a file's print time with the virtual printer's planner alone, on three threads; the
+/// Estimates a file's print time with the virtual printer's planner alone, on two threads; the
 /// report as JSON text (see `gweave estimate --json`). The keyword arguments are the options of
 /// `gweave.estimate` (`machine`, `steps`).
 #[pyfunction]

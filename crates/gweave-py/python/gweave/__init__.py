@@ -165,7 +165,7 @@ def estimate(path: PathLike, *, machine: Optional[PathLike] = None, steps: bool 
 
     ``machine`` is a profile TOML, a built-in profile's name, or ``"slicer"``: the machine
     limits the slicer wrote into the file (the report's ``machine`` says which slicer's).
-    Faster than :func:`sim` (reading, parsing and planning on three threads, no heaters):
+    Faster than :func:`sim` (reading and parsing on one thread, planning on another, no heaters):
     ``total_s``, ``motion_s``, ``dwell_s``, ``overhead_s``, ``blocks``, ``layer_s``,
     ``feature_s``, and ``steps`` when ``steps=True``; ``warnings`` when the file looks cut
     short (timed to its cut, as a printer runs it). Heating waits and homing are not timed.

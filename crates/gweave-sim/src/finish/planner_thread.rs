@@ -5,15 +5,15 @@
 //! (`delta.rs`) on one thread, beside the transform's. Planning a window (`window.rs`) costs
 //! about 2 000 instructions a line, and a `mix` plans a window of some 50 lines every 70 lines
 //! of its output: that is most of the measure's time. So the measure only reads each attempt
-//! at a window, with the estimators' parse side ([`Readers`]: the modal state the sides end
-//! in depends on the lines, not on the plan, so it decides where the window ends), and hands
-//! the jobs that reading made ([`WindowJobs`]) to the planner thread here, which plans them on
-//! the two sides in every mode ([`Plans`]) as an estimator fed the lines would: the same jobs
-//! in the same order (also the attempts whose sides did not agree: they move the plan sides'
-//! clocks on), so each window's times are the same to the bit. The lines are parsed once, on
-//! the measure's thread; the planner thread parses nothing. The measure takes the planned
-//! windows back in the order it sent them and adds their times then, in that order, so the
-//! sums it writes are the same to the bit too.
+//! at a window, with the estimators' parse side ([`Readers`](super::window::Readers): the
+//! modal state the sides end in depends on the lines, not on the plan, so it decides where the
+//! window ends), and hands the jobs that reading made ([`WindowJobs`]) to the planner thread
+//! here, which plans them on the two sides in every mode ([`Plans`]) as an estimator fed the
+//! lines would: the same jobs in the same order (also the attempts whose sides did not agree:
+//! they move the plan sides' clocks on), so each window's times are the same to the bit. The
+//! lines are parsed once, on the measure's thread; the planner thread parses nothing. The
+//! measure takes the planned windows back in the order it sent them and adds their times then,
+//! in that order, so the sums it writes are the same to the bit too.
 //!
 //! Memory is bounded: [`WINDOWS_IN_FLIGHT`] windows wait at most (the measure waits when they
 //! are that many), and the planned ones come back with their buffers, which the next windows

@@ -6,7 +6,8 @@
 //! extrusion temperature `thermal.extrude_min_c`), the build volume and endstops, homing, an
 //! optional mixing hotend, rotary axis and inkjet printhead, and faults to inject. What the
 //! board's firmware was built with (Marlin's `Configuration.h` and `Configuration_adv.h`
-//! options: `EEPROM_SETTINGS`, `SDSUPPORT`, ...) is its [`firmware`] table; [`m503`] reads a
+//! options: `EEPROM_SETTINGS`, `SDSUPPORT`, ...) is its `[firmware]` table
+//! ([`MachineProfile::firmware`]); [`m503`] reads a
 //! profile back from a real board's `M503` report.
 //!
 //! Every key has a default; together they describe a common RAMPS 1.4 printer running Marlin's

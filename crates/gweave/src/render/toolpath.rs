@@ -26,7 +26,7 @@
 //! keep more, so pictures also set [`ToolpathOptions::max_segments`]: when the toolpath reaches
 //! it, the merge length doubles and the segments kept so far are merged again, as often as
 //! needed. Memory then has a ceiling whatever the file's size, and the picture loses only detail
-//! finer than the final merge length (reported by [`ToolpathPass::min_len_mm`]). Moves that
+//! finer than the final merge length (the pass's `options.min_len_mm` at the end). Moves that
 //! never chain (travel and extrusion taking turns) cannot merge: then every second segment of
 //! each kind is dropped instead, as often as needed ([`ToolpathPass::thinning`]), so the ceiling
 //! holds for any file.

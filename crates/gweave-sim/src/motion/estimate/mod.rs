@@ -324,7 +324,7 @@ impl Estimator {
         skip_mixing_errors(self.run(raw, &effect))
     }
 
-    /// [`Estimator::line`] for a line from a [`LineReader`](gweave::LineReader),
+    /// [`Estimator::line`] for a line from a [`LineReader`],
     /// whose look-ahead bytes speed up the lexer: the same result to the bit. The pieces of a
     /// line longer than [`MAX_LINE`](gweave::gcode::reader::MAX_LINE) count as one malformed
     /// line ([`Estimator::skip_long_line`]).
