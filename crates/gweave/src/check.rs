@@ -102,12 +102,14 @@ pub struct FindingGroup {
     pub feature: Option<Feature>,
 }
 
-/// What makes two findings one kind: the finding, the axis or command it names, and for moves
-/// off the bed the feature they print (a wipe tower apart from a skirt).
+/// What makes two findings one kind: the finding, the axis or command it names, its severity
+/// (an exponent a firmware misreads is an error, one it reads a warning), and for moves off the
+/// bed the feature they print (a wipe tower apart from a skirt).
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 struct GroupKey {
     kind: std::mem::Discriminant<Finding>,
     detail: String,
+    severity: Severity,
     feature: Feature,
 }
 
@@ -122,11 +124,11 @@ impl GroupKey {
             | Finding::MissingValue { letter } => (letter.to_string(), Feature::Unknown),
             // Grouped by letter too: every `F` written `1e300` apart from `X`s written `1e-05`.
             Finding::ExponentNotation { word } => {
-                (format!("{}{:?}", word.get(..1).unwrap_or_default(), finding.severity()), Feature::Unknown)
+                (word.get(..1).unwrap_or_default().to_owned(), Feature::Unknown)
             }
             _ => (String::new(), Feature::Unknown),
         };
-        GroupKey { kind: std::mem::discriminant(finding), detail, feature }
+        GroupKey { kind: std::mem::discriminant(finding), detail, severity: finding.severity(), feature }
     }
 }
 
@@ -557,6 +559,24 @@ mod tests {
         );
         assert_eq!(pass.report.warnings, 1395);
         assert_eq!(pass.report.findings.len(), 1000);
+    }
+
+    /// Exponents group by letter and severity: `F1e300` (a template's `printf`, read as `F1
+    /// E300`: an error) apart from `F2E3` (a warning), and both apart from `X`s. The severity
+    /// is part of the group's key, not spelled into its text.
+    #[test]
+    fn exponents_group_by_letter_and_severity() {
+        let text = "M104 S200\nG1 F1e300\nG1 F2E3\nG1 F1e200\nG1 X1e2\nG1 F3E1\n";
+        let mut pass = CheckPass::new(CheckOptions::default());
+        let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t.gcode")) };
+        drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
+        let groups: Vec<_> = pass
+            .report
+            .groups
+            .iter()
+            .map(|g| (g.first.line, g.count, g.first.diagnostic.finding.severity()))
+            .collect();
+        assert_eq!(groups, [(2, 2, Severity::Error), (3, 2, Severity::Warning), (5, 1, Severity::Error)]);
     }
 
     /// An arc whose ends are on the bed but whose bulge is not.

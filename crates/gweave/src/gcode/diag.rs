@@ -3,7 +3,7 @@
 use std::fmt;
 
 /// How serious a finding is. Errors make `gweave check` fail and stop transforms.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Severity {
     /// Suspicious but the line still means something; `gweave check` passes.
