@@ -183,7 +183,8 @@ test: deps firmware lint cargo-test pytest e2e guard
 demo: build
 	bash examples/demo.sh $(GWEAVE) $(OUT)
 
-bench: build python
+# The whole benchmark (docs/performance.md); the firmware's budgets are read from its images.
+bench: build python firmware
 	bash bench/run.sh $(GWEAVE)
 
 docs-images: build

@@ -25,7 +25,9 @@ if [ ! -s "$BIG" ]; then
   end=$(grep -n -m1 '^; prusaslicer_config = end' "$BIG" | cut -d: -f1 || true)
   if [ -n "$end" ]; then head -n "$end" "$BIG" > "$BIG.tmp" && mv "$BIG.tmp" "$BIG"; fi
 fi
-"$PY" -m pip install -q gcodeparser gcode-lib
+# The Python peers, and libbgcode's binding, which writes the PrusaSlicer `.bgcode`
+# (MeatPack) of bench/containers.sh (the same requirement as the tests').
+"$PY" -m pip install -q gcodeparser gcode-lib "$(grep -m1 '^pybgcode' "$ROOT/crates/gweave-py/requirements-dev.txt")"
 
 mbps() { python3 -c "import sys; print(f'{float(sys.argv[1])/1e6/float(sys.argv[2]):.0f}')" "$1" "$2"; }
 
