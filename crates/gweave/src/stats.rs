@@ -151,6 +151,10 @@ pub struct Stats {
     /// lengths and times above are then measured on its surface ([`crate::rotary::surface`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rotary: Option<crate::rotary::surface::RotarySurface>,
+    /// The last line has no line ending: a file written by hand, or one cut short
+    /// ([`stats_file`] then reads its ends for the slicer's last line, [`missing_footer`]).
+    #[serde(skip)]
+    pub(crate) unended: bool,
 }
 
 /// The pass that gathers [`Stats`].
@@ -190,12 +194,6 @@ impl StatsPass {
     /// Statistics with the filament diameter forced to `diameter_override_mm`, if given.
     pub fn new(diameter_override_mm: Option<f64>) -> Self {
         StatsPass { diameter_override_mm, ..Default::default() }
-    }
-
-    /// Whether the last line read had no line ending (the file may be cut short:
-    /// [`missing_footer`]).
-    pub(crate) fn unended(&self) -> bool {
-        self.unended
     }
 
     /// Turns what was gathered into the report, given the state after the last line.
@@ -282,6 +280,7 @@ impl StatsPass {
             filament_matches_slicer,
             warnings,
             rotary: None,
+            unended: self.unended,
         }
     }
 
@@ -527,36 +526,35 @@ pub fn stats_file(
     // A program whose header names a rotary machine is measured on its mandrel.
     let rotary = RotaryReading::for_file(path, None).ok().flatten();
     let run = crate::run::Run::file(path).progress(progress).strictness(strictness);
-    let (mut stats, unended) = match (strictness, rotary) {
+    let malformed = Malformed::default();
+    let mut stats = match (strictness, rotary) {
         (crate::pass::Strictness::Strict, None) => {
             let mut pass = StatsPass::new(diameter_mm);
             let state = run.scan(&mut pass)?;
-            let unended = pass.unended();
-            (WithMalformed { report: pass.into_stats(&state), malformed: Malformed::default() }, unended)
+            WithMalformed { report: pass.into_stats(&state), malformed }
         }
         (crate::pass::Strictness::Strict, Some(reading)) => {
             let mut pass = SurfacePass::new(StatsPass::new(diameter_mm), reading);
             let state = run.scan(&mut pass)?;
-            let unended = pass.inner.unended();
-            let report = pass.into_stats(|flat| flat.into_stats(&state));
-            (WithMalformed { report, malformed: Malformed::default() }, unended)
+            WithMalformed { report: pass.into_stats(|flat| flat.into_stats(&state)), malformed }
         }
         (crate::pass::Strictness::Lenient, None) => {
             let mut pass = Counting::new(StatsPass::new(diameter_mm));
             let state = run.scan(&mut pass)?;
-            let unended = pass.pass.unended();
-            (WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed }, unended)
+            WithMalformed { report: pass.pass.into_stats(&state), malformed: pass.malformed }
         }
         (crate::pass::Strictness::Lenient, Some(reading)) => {
             let mut pass = SurfacePass::new(Counting::new(StatsPass::new(diameter_mm)), reading);
             let state = run.scan(&mut pass)?;
-            let (malformed, unended) = (pass.inner.malformed, pass.inner.pass.unended());
-            (WithMalformed { report: pass.into_stats(|c| c.pass.into_stats(&state)), malformed }, unended)
+            let malformed = pass.inner.malformed;
+            WithMalformed { report: pass.into_stats(|c| c.pass.into_stats(&state)), malformed }
         }
     };
     // A file cut short is counted to its cut: said first, in `check`'s words. The ends are read
     // (again) only when its last line has no ending.
-    if let Some(footer) = unended.then(|| read_ends(path).ok().and_then(|e| missing_footer(&e))).flatten() {
+    if let Some(footer) =
+        stats.report.unended.then(|| read_ends(path).ok().and_then(|e| missing_footer(&e))).flatten()
+    {
         stats.report.warnings.insert(0, crate::gcode::diag::Finding::NoFooter { footer }.to_string());
     }
     Ok(stats)
