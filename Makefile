@@ -65,8 +65,8 @@ cura-deps:
 # libsimavr for the emulated board of the tests. Installed with apt-get when running as root.
 # The 32-bit build links with LLVM's lld (rust-web-llvm's `rust-lld` points to lld-22's) and
 # runs in the tests on qemu-system-arm's Netduino Plus 2 (an STM32F405).
-FW_PACKAGES := rustc-web cargo-web rust-web-src gcc-avr avr-libc binutils-avr simavr libsimavr-dev \
-  lld-22 llvm-22 qemu-system-arm
+FW_PACKAGES := rustc-web cargo-web rust-web-src rust-web-llvm gcc-avr avr-libc binutils-avr simavr \
+  libsimavr-dev lld-22 llvm-22 qemu-system-arm
 FW_OUT := firmware/out
 # Its own target folder: another compiler and another target than the workspace's.
 FW_TARGET_DIR ?= $(CURDIR)/target/avr
