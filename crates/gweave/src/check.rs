@@ -476,10 +476,15 @@ mod tests {
     }
 
     fn findings_with(text: &str, options: CheckOptions) -> Vec<(u64, String)> {
+        checked(text, options).findings.iter().map(|f| (f.line, f.diagnostic.finding.to_string())).collect()
+    }
+
+    /// The report of `text` checked with `options`, read leniently.
+    fn checked(text: &str, options: CheckOptions) -> CheckReport {
         let mut pass = CheckPass::new(options);
         let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t.gcode")) };
         drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
-        pass.report.findings.iter().map(|f| (f.line, f.diagnostic.finding.to_string())).collect()
+        pass.report
     }
 
     /// A machine's table that refuses every `S` word, under a name that does not end with it.
@@ -539,11 +544,8 @@ mod tests {
         }
         text.push_str(";TYPE:Skirt/Brim\nG1 X230 Y5 E3000\nG1 X231 Y5 E3001\nG13\nG13\n");
         let options = CheckOptions { bed: Some("200,200,200".parse().unwrap()), ..Default::default() };
-        let mut pass = CheckPass::new(options);
-        let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t.gcode")) };
-        drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
-        let groups: Vec<_> = pass
-            .report
+        let report = checked(&text, options);
+        let groups: Vec<_> = report
             .groups
             .iter()
             .map(|g| (g.first.line, g.count, g.last_line, g.range_mm, g.feature))
@@ -557,8 +559,8 @@ mod tests {
                 (2008, 2, 2009, None, None),
             ]
         );
-        assert_eq!(pass.report.warnings, 1395);
-        assert_eq!(pass.report.findings.len(), 1000);
+        assert_eq!(report.warnings, 1395);
+        assert_eq!(report.findings.len(), 1000);
     }
 
     /// Exponents group by letter and severity: `F1e300` (a template's `printf`, read as `F1
@@ -567,11 +569,7 @@ mod tests {
     #[test]
     fn exponents_group_by_letter_and_severity() {
         let text = "M104 S200\nG1 F1e300\nG1 F2E3\nG1 F1e200\nG1 X1e2\nG1 F3E1\n";
-        let mut pass = CheckPass::new(CheckOptions::default());
-        let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t.gcode")) };
-        drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
-        let groups: Vec<_> = pass
-            .report
+        let groups: Vec<_> = checked(text, CheckOptions::default())
             .groups
             .iter()
             .map(|g| (g.first.line, g.count, g.first.diagnostic.finding.severity()))

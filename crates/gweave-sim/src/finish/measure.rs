@@ -623,6 +623,17 @@ mod tests {
             .unwrap()
     }
 
+    /// The figures of `input` and of `output` each measured in full (the whole file
+    /// estimated), written into `dir`.
+    fn full_estimates(dir: &Path, input: &str, output: &str) -> (Figures, Figures) {
+        let full = |text: &str, name: &str| {
+            let path = dir.join(name);
+            std::fs::write(&path, text).unwrap();
+            measure(&path).unwrap()
+        };
+        (full(input, "full_in.gcode"), full(output, "full_out.gcode"))
+    }
+
     /// Issue 35: an output the same as its input states the slicer's figures to the bit (no
     /// window is planned: nothing changed), its filament is the `stats` count, and its progress
     /// lines the times they state.
@@ -658,12 +669,7 @@ mod tests {
         lines.splice(middle..middle, ["G4 P1500", "G1 E25 F200", "G1 E-0.8 F2100"]);
         let output: String = lines.iter().map(|l| format!("{l}\n")).collect();
         let f = by_changes(dir.path(), &input, &output).unwrap();
-        let full = |text: &str, name: &str| {
-            let path = dir.path().join(name);
-            std::fs::write(&path, text).unwrap();
-            measure(&path).unwrap()
-        };
-        let (full_in, full_out) = (full(&input, "full_in.gcode"), full(&output, "full_out.gcode"));
+        let (full_in, full_out) = full_estimates(dir.path(), &input, &output);
         let stated = by_changes(dir.path(), &input, &input).unwrap();
         for m in 0..2 {
             let (changes, estimated) =
@@ -693,12 +699,7 @@ mod tests {
         let output = format!("{}G1 X5 Y5 F600\n{}", &input[..after], &input[after..]);
         let f = by_changes(dir.path(), &input, &output).unwrap();
         let stated = by_changes(dir.path(), &input, &input).unwrap();
-        let full = |text: &str, name: &str| {
-            let path = dir.path().join(name);
-            std::fs::write(&path, text).unwrap();
-            measure(&path).unwrap()
-        };
-        let (full_in, full_out) = (full(&input, "full_in.gcode"), full(&output, "full_out.gcode"));
+        let (full_in, full_out) = full_estimates(dir.path(), &input, &output);
         for m in 0..2 {
             let (changes, estimated) =
                 (f.time_s[m] - stated.time_s[m], full_out.time_s[m] - full_in.time_s[m]);
