@@ -30,7 +30,7 @@ use super::window::{Plans, WindowJobs};
 
 /// Windows handed to the planner and not yet planned, at most: enough to ride out a long
 /// window on either side (a window is 50 lines or so, its cap 8 192), few enough that the
-/// lines held stay a few hundred kilobytes at worst.
+/// jobs held (a planned move or so a line) stay a few megabytes at worst.
 const WINDOWS_IN_FLIGHT: usize = 16;
 
 /// One attempt at timing a window, and what the planner made of it.
