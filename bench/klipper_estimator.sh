@@ -13,9 +13,6 @@
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
 KE=${KLIPPER_ESTIMATOR:-$(command -v klipper_estimator || true)}
-if [ -z "$KE" ] && [ -x /work/kest-src/target/release/klipper_estimator ]; then
-  KE=/work/kest-src/target/release/klipper_estimator
-fi
 if [ -z "$KE" ] || [ ! -x "$KE" ]; then
   echo "skipped: build dalegaard/klipper_estimator and set KLIPPER_ESTIMATOR"
   exit 0

@@ -44,7 +44,7 @@ use std::collections::BTreeMap;
 
 use gweave::gcode::retraction::Retraction;
 use gweave::gcode::state;
-use gweave::Command;
+use gweave::{Block, Command};
 use thiserror::Error;
 
 use crate::inkjet::recoat::RecoatCheck;
@@ -270,6 +270,39 @@ impl Machine {
     /// the final "ok" go to `out` with their simulated timestamps (e.g. M109 status lines once a
     /// second, M105/M114/M119 texts, `echo:Unknown command: "G123"`, Error: lines).
     pub fn execute(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) -> Outcome {
+        self.execute_block(line, None, out)
+    }
+
+    /// Whether the lines given to [`Machine::execute_lexed`] must have the words of their plain
+    /// moves listed ([`gweave::gcode::lexer::parse_line`]) rather than only in
+    /// [`Block::plain`] ([`gweave::gcode::lexer::parse_line_lean`]): the firmware the file is
+    /// read as decides ([`Machine::read_as`]).
+    pub fn reads_words(&self) -> bool {
+        self.core.state().reads_words()
+    }
+
+    /// [`Machine::execute`] for a line a file reader has lexed already, on another thread
+    /// ([`gweave::gcode::lexed`]): `block` is what the lexer made of `line` (its plain moves'
+    /// words listed as [`Machine::reads_words`] says), and gets back a block to reuse. The
+    /// reader ends a line at any `\r` or `\n`, so the line is as [`Machine::execute`] trims
+    /// it; the lexer only adds, to the first error of a last line without an ending, that the
+    /// file may be cut there, which the machine counts alike.
+    pub fn execute_lexed(
+        &mut self,
+        line: &[u8],
+        block: &mut Block,
+        out: &mut dyn FnMut(f64, &str),
+    ) -> Outcome {
+        self.execute_block(line, Some(block), out)
+    }
+
+    /// [`Machine::execute`] of `line`, lexed already into `lexed` if given.
+    fn execute_block(
+        &mut self,
+        line: &[u8],
+        lexed: Option<&mut Block>,
+        out: &mut dyn FnMut(f64, &str),
+    ) -> Outcome {
         self.acknowledged = false;
         self.wall_timed = false;
         let line = trim_line_end(line);
@@ -286,7 +319,10 @@ impl Machine {
             return self.outcome();
         }
         let before = self.core.state().pos;
-        self.core.lex(line);
+        match lexed {
+            Some(block) => self.core.take_lexed(block),
+            None => self.core.lex(line),
+        }
         let command = self.core.block().command;
         // The one lookup of the line's command: its words are checked against this row, and
         // it runs this row's handler.

@@ -209,8 +209,21 @@ impl Front {
     /// First half of reading a line: read the line's words into [`Front::block`], counting
     /// it; the modal state is not touched yet.
     pub(super) fn lex(&mut self, raw: &[u8]) {
-        self.line += 1;
         parse_into(raw, &mut self.block);
+        self.count_lexed();
+    }
+
+    /// [`Front::lex`] for a line lexed already, into `block` (by another thread): it is taken
+    /// in, and `block` gets the one it replaces, for the lexer to reuse.
+    pub(super) fn take_lexed(&mut self, block: &mut Block) {
+        std::mem::swap(&mut self.block, block);
+        self.count_lexed();
+    }
+
+    /// Counts the line now in [`Front::block`].
+    #[inline(always)]
+    fn count_lexed(&mut self) {
+        self.line += 1;
         count_malformed(&mut self.malformed, self.line, &self.block);
     }
 

@@ -342,6 +342,12 @@ impl Estimator {
         self.front.lex(raw)
     }
 
+    /// [`Estimator::lex`] for a line already lexed into `block`, which gets the block it
+    /// replaces.
+    pub fn take_lexed(&mut self, block: &mut Block) {
+        self.front.take_lexed(block)
+    }
+
     /// ...then apply it to the modal state and say what it does (kept in
     /// [`State::effect`] until the next line).
     pub fn apply(&mut self, raw: &[u8]) -> &Effect {
