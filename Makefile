@@ -150,8 +150,10 @@ lint: rust-deps
 	$(CARGO) fmt --manifest-path firmware/ramps/Cargo.toml -- --check
 	$(CARGO) fmt --manifest-path firmware/cortex/Cargo.toml -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
-	# Broken or private links in the API docs fail too.
+	# Broken or private links in the API docs fail too, and broken links in the docs of private
+	# items (what a contributor reads beside the code).
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --exclude gweave-py -q
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --exclude gweave-py -q --document-private-items
 
 # The emulated boards' tests (crates/gweave-board/tests) run the firmware `make firmware`,
 # `make firmware-fault` and `make firmware-cortex` built (tests/cortex.rs starts QEMU: about 2 s).

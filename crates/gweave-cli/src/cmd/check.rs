@@ -23,9 +23,9 @@ pub struct CheckArgs {
     /// The G-code files to check.
     #[arg(required = true, value_name = "INPUT")]
     pub inputs: Vec<PathBuf>,
-    /// Printable volume, mm: X,Y,Z from the origin, or X0,Y0,X1,Y1[,Z] from a corner (Z not
-    /// checked without it); moves outside it are reported [default: the bed the slicer's
-    /// settings in the file give (PrusaSlicer's bed_shape and max_print_height, Cura's
+    /// Printable volume, mm: X,Y,Z from the origin, or X0,Y0,X1,Y1 (or X0,Y0,X1,Y1,Z) from a
+    /// corner (Z not checked without it); moves outside it are reported [default: the bed the
+    /// slicer's settings in the file give (PrusaSlicer's bed_shape and max_print_height, Cura's
     /// machine_width, machine_depth, machine_height, machine_center_is_zero), else none].
     #[arg(long, value_name = "X,Y,Z|X0,Y0,X1,Y1[,Z]", value_parser = |s: &str| s.parse::<Bed>().map_err(|e| e.to_string()))]
     pub bed: Option<Bed>,

@@ -113,7 +113,6 @@ impl WindowJobs {
 
 /// The two sides' parse sides: they read a window's lines and end in the modal state the
 /// lines leave, so they say whether the sides agree ([`Readers::agree`]).
-#[derive(Clone)]
 pub(super) struct Readers {
     output: ModesParse,
     /// A copy of `output` at the window's first change.
