@@ -43,16 +43,28 @@ import json, sys; g = json.load(open(sys.argv[1]))['grid']
 assert (g['layers'], g['width_px'], g['height_px']) == (500, 2000, 2000), g" "$DATA/slice.json"
 
 # Each step's wall, user and system time (bash's `time`); CPU time shows the cost even when
-# the machine is busy with other work (the load average is printed with the results).
+# the machine is busy with other work (the load average is printed with the results). The
+# goal's two figures (zlib's and the generator's) are the best of three runs each, taken in
+# turn: on this machine one run's CPU time scatters by a third.
 TIMEFORMAT='%R %U %S'
 timed() { # label command...
   local label=$1; shift
   { time "$@" > /dev/null 2>&1 ; } 2>> "$DATA/times.txt" || { echo "raster bench: $label failed"; exit 1; }
   sed -i "\$s/^/$label /" "$DATA/times.txt"
 }
+# The best wall and the best CPU (user + system) time of each step, in seconds.
+BEST='
+import sys
+t = {}
+for l in open(sys.argv[1]):
+    k, wall, user, system = l.split()
+    w, c = t.get(k, (float("inf"), float("inf")))
+    t[k] = (min(w, float(wall)), min(c, float(user) + float(system)))
+'
 : > "$DATA/times.txt"
 timed cat bash -c 'cat "$0"/*.png' "$LAYERS"
-timed zlib python3 -c '
+for round in 1 2 3; do
+  timed zlib python3 -c '
 import os, struct, sys, zlib
 d = sys.argv[1]
 for n in sorted(os.listdir(d)):
@@ -66,16 +78,17 @@ for n in sorted(os.listdir(d)):
     zlib.decompress(b"".join(idat))
 ' "$LAYERS"
 # G-code to /dev/null: the generator's own speed (the 10 s target) ...
-timed pipe "$GWEAVE" raster "$LAYERS" --fast-estimate -q -o -
+  timed pipe "$GWEAVE" raster "$LAYERS" --fast-estimate -q -o -
+done
 # ... and to a file on disk (atomic write with fsync), with its size.
 timed file "$GWEAVE" raster "$LAYERS" --fast-estimate -q -o "$DATA/out.gcode" --report "$DATA/raster.json"
 size=$(stat -c %s "$DATA/out.gcode")
 rm -f "$DATA/out.gcode"
-python3 - "$DATA/times.txt" "$size" "$DATA/raster.json" "$(cut -d' ' -f1-3 /proc/loadavg)" <<'PY'
-import json, sys
-t = {l.split()[0]: [float(v) for v in l.split()[1:]] for l in open(sys.argv[1])}
+python3 -c "$BEST
+$(cat <<'PY'
+import json
 size, r, load = int(sys.argv[2]), json.load(open(sys.argv[3])), sys.argv[4]
-cpu = lambda k: t[k][1] + t[k][2]
+cpu = lambda k: t[k][1]
 print(f"raster bench: 500 layers of 2000 x 2000 px (solid sphere, 1-bit PNG); load average {load}")
 print(f"  {'':36} {'wall':>8} {'cpu':>8}")
 print(f"  {'cat of the PNGs (I/O floor)':36} {t['cat'][0]:7.2f}s {cpu('cat'):7.2f}s")
@@ -88,7 +101,6 @@ print(f"  {'gweave raster -> file':36} {t['file'][0]:7.2f}s {cpu('file'):7.2f}s 
       f"{size / 1e9:.2f} GB G-code, {size / 1e6 / t['file'][0]:.0f} MB/s")
 print(f"  {r['columns_fired']} columns fired, {r['bands_printed']} bands, {sum(r['drops_per_head'])} drops")
 PY
-goal "raster, 500 layers of 2000 x 2000 px, CPU time" "$(python3 -c "
-import sys
-t = {l.split()[0]: [float(v) for v in l.split()[1:]] for l in open(sys.argv[1])}
-print(f'{(t[\"pipe\"][1] + t[\"pipe\"][2]) / (t[\"zlib\"][1] + t[\"zlib\"][2]):.2f}')" "$DATA/times.txt")" "<=" 3 "x Python zlib's"
+)" "$DATA/times.txt" "$size" "$DATA/raster.json" "$(cut -d' ' -f1-3 /proc/loadavg)"
+goal "raster, 500 layers of 2000 x 2000 px, CPU time (best of 3 each)" "$(python3 -c "$BEST
+print(f'{t[\"pipe\"][1] / t[\"zlib\"][1]:.2f}')" "$DATA/times.txt")" "<=" 3 "x Python zlib's"
