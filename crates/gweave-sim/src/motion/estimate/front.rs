@@ -326,8 +326,7 @@ impl Front {
     /// The rest of [`Front::step`] once the line is lexed into [`Front::block`].
     #[inline(always)]
     fn lexed(&mut self, line: &RawLine<'_>, jobs: &mut Vec<Job>) -> Result<(), EstimateError> {
-        self.line += 1;
-        count_malformed(&mut self.malformed, self.line, &self.block);
+        self.count_lexed();
         if self.refuses(line.bytes) {
             return Ok(());
         }
