@@ -17,7 +17,7 @@ OUT := out
 
 .PHONY: demo test bench deps rust-deps python-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean
 .PHONY: browser-deps cura-deps fuzz docs-images firmware firmware-deps firmware-fault firmware-test firmware-cortex
-.PHONY: guard sdist
+.PHONY: guard sdist rust-and-python-tests
 
 deps: rust-deps py-deps browser-deps cura-deps firmware-deps
 
@@ -68,7 +68,9 @@ cura-deps:
 FW_PACKAGES := rustc-web cargo-web rust-web-src rust-web-llvm gcc-avr avr-libc binutils-avr simavr \
   libsimavr-dev lld-22 llvm-22 qemu-system-arm
 FW_OUT := firmware/out
-# Its own target folder: another compiler and another target than the workspace's.
+# Its own target folder: another compiler and another target than the workspace's. Every AVR
+# image shares it, so `core` is built for the AVR once (40 s on two cores) and each image after
+# it takes seconds (a folder per image built `core` five times: over 3 minutes of `make test`).
 FW_TARGET_DIR ?= $(CURDIR)/target/avr
 
 firmware-deps:
@@ -80,15 +82,15 @@ firmware-deps:
 	  apt-get install -y -q --no-install-recommends $$missing || { apt-get update -q && apt-get install -y -q --no-install-recommends $$missing; }; \
 	else echo "firmware-deps: missing$$missing (install them as root: apt-get install$$missing)"; exit 1; fi
 
-# One image per printer file and features: $(call fw_image,NAME,TOML,FOLDER,FEATURES) builds
-# firmware/TOML with the cargo FEATURES into $(FW_OUT)/NAME.elf and .hex, in a target folder of
-# its own (the printer's settings and the features are constants of the build, so two images
-# sharing a folder would rebuild each other).
+# One image per printer file and features: $(call fw_image,NAME,TOML,FEATURES) builds
+# firmware/TOML with the cargo FEATURES into $(FW_OUT)/NAME.elf and .hex. The printer's settings
+# are constants of the build (firmware/ramps/build.rs): the base and the mixing image (the same
+# features, two printer files) rebuild each other's last crate, a few seconds each.
 define fw_image
-	cd firmware/ramps && GWEAVE_PRINTER=$(2) CARGO_TARGET_DIR=$(FW_TARGET_DIR)$(3) RUSTC=/usr/bin/rustc \
-	  RUSTC_BOOTSTRAP=1 /usr/bin/cargo build --release -q --features "$(4)"
+	cd firmware/ramps && GWEAVE_PRINTER=$(2) CARGO_TARGET_DIR=$(FW_TARGET_DIR) RUSTC=/usr/bin/rustc \
+	  RUSTC_BOOTSTRAP=1 /usr/bin/cargo build --release -q --features "$(3)"
 	@mkdir -p $(FW_OUT)
-	cp $(FW_TARGET_DIR)$(3)/avr-none/release/gweave-ramps.elf $(FW_OUT)/$(1).elf
+	cp $(FW_TARGET_DIR)/avr-none/release/gweave-ramps.elf $(FW_OUT)/$(1).elf
 	avr-objcopy -O ihex -R .eeprom $(FW_OUT)/$(1).elf $(FW_OUT)/$(1).hex
 	@avr-size $(FW_OUT)/$(1).elf
 endef
@@ -98,10 +100,10 @@ endef
 # docs/firmware.md "Inkjet"), and a lathe-type printer (the rotary axis A on E1's socket,
 # firmware/printer-rotary.toml, docs/firmware.md "Rotary").
 firmware: firmware-deps
-	$(call fw_image,gweave-ramps,printer.toml,,)
-	$(call fw_image,gweave-ramps-mixing,printer-mixing.toml,-mixing,)
-	$(call fw_image,gweave-ramps-inkjet,printer.toml,-inkjet,inkjet)
-	$(call fw_image,gweave-ramps-rotary,printer-rotary.toml,-rotary,rotary)
+	$(call fw_image,gweave-ramps,printer.toml,)
+	$(call fw_image,gweave-ramps-mixing,printer-mixing.toml,)
+	$(call fw_image,gweave-ramps-inkjet,printer.toml,inkjet)
+	$(call fw_image,gweave-ramps-rotary,printer-rotary.toml,rotary)
 
 # The same core for a Cortex-M4F (STM32F405/F407, BTT SKR Pro's pin map; docs/firmware.md):
 # the ELF for QEMU and debuggers, the raw .bin a board's bootloader or st-flash writes at
@@ -121,7 +123,7 @@ firmware-cortex: firmware-deps
 # for the emulated board's watchdog test, built for a RAMPS "EEB" printer (a second hotend on
 # D9, firmware/printer-eeb.toml) so the board tests heat the second hotend without a 4th image.
 firmware-fault: firmware-deps
-	$(call fw_image,gweave-ramps-fault,printer-eeb.toml,/fault,fault-injection)
+	$(call fw_image,gweave-ramps-fault,printer-eeb.toml,fault-injection)
 
 build: rust-deps
 	$(CARGO) build --release -p gweave-cli
@@ -157,14 +159,29 @@ lint: rust-deps
 
 # The emulated boards' tests (crates/gweave-board/tests) run the firmware `make firmware`,
 # `make firmware-fault` and `make firmware-cortex` built (tests/cortex.rs starts QEMU: about 2 s).
+RUST_TESTS := $(CARGO) test --workspace --exclude gweave-py
 cargo-test: rust-deps firmware firmware-fault firmware-cortex
-	$(CARGO) test --workspace --exclude gweave-py
+	$(RUST_TESTS)
 
+# The package's annotations agree with the compiled module's stub (_gweave.pyi); pytest takes
+# whole test files to one worker a core (a file's OctoPrint or browser starts once). Exit code 5
+# (no tests collected) is a failure here, as every other non-zero code.
+PYTESTS := $(PY) -m mypy crates/gweave-py/python/gweave && \
+  $(PY) -m pytest crates/gweave-py/tests -q -n auto --dist loadfile
 pytest: python-debug
-	# The package's annotations agree with the compiled module's stub (_gweave.pyi).
-	$(PY) -m mypy crates/gweave-py/python/gweave
-	# Exit code 5 (no tests collected) is a failure here, as every other non-zero code.
-	$(PY) -m pytest crates/gweave-py/tests -q
+	$(PYTESTS)
+
+# `make test` runs the two side by side once both are built: pytest mostly waits on its servers,
+# its browser and its hosts while the Rust tests keep both cores busy, so on two cores this takes
+# minutes less than one after the other (README.md, "Set up and run", says how long `make test`
+# takes). pytest's output is kept and shown after the Rust tests'.
+rust-and-python-tests: rust-deps firmware firmware-fault firmware-cortex python-debug
+	$(RUST_TESTS) --no-run
+	@log=$$(mktemp); ( $(PYTESTS) ) > $$log 2>&1 & pytests=$$!; \
+	rust=0; $(RUST_TESTS) || rust=$$?; \
+	python=0; wait $$pytests || python=$$?; \
+	echo "mypy and pytest (run beside the Rust tests):"; cat $$log; rm -f $$log; \
+	[ $$rust = 0 ] && [ $$python = 0 ]
 
 e2e: build-debug python-debug
 	bash tests/e2e/run.sh target/debug/gweave
@@ -177,7 +194,7 @@ guard: rust-deps
 	$(CARGO) build --profile guard -p gweave-cli
 	bash bench/guard.sh $${CARGO_TARGET_DIR:-target}/guard/gweave
 
-test: deps firmware lint cargo-test pytest e2e guard
+test: deps lint rust-and-python-tests e2e guard
 	@echo "make test: all passed"
 
 # The demo runs the command line only: one release build of the engine, no Python environment
