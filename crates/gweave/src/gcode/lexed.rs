@@ -7,9 +7,8 @@
 //! them in batches of at most [`BATCH`] lines; the other takes each batch's lines up again from
 //! the same chunk ([`Chunk::lines_from`]) beside their blocks and lengths (so that it does not
 //! search for each line's end again: about 40 instructions a line), through
-//! [`Lexed::each_line`]. At most [`DEPTH`] batches
-//! wait between the two, and chunks and block buffers go back to the reading thread once used:
-//! memory stays bounded whatever the file.
+//! [`Lexed::each_line`]. At most [`DEPTH`] batches wait between the two, and chunks and block
+//! buffers go back to the reading thread once used: memory stays bounded whatever the file.
 
 use std::io::{self, Read};
 use std::ops::ControlFlow;
