@@ -166,25 +166,28 @@ cargo-test: rust-deps firmware firmware-fault firmware-cortex
 # The package's annotations agree with the compiled module's stub (_gweave.pyi); pytest takes
 # whole test files to one worker a core (a file's OctoPrint or browser starts once). Exit code 5
 # (no tests collected) is a failure here, as every other non-zero code.
+# The tests that measure speed (marked `timed`: the viewer's frame rate) run alone afterwards,
+# on a quiet machine.
 MYPY := $(PY) -m mypy crates/gweave-py/python/gweave
-PYTEST := $(PY) -m pytest crates/gweave-py/tests -q -n auto --dist loadfile
+PYTEST := $(PY) -m pytest crates/gweave-py/tests -q -n auto --dist loadfile -m 'not timed'
+PYTEST_TIMED := $(PY) -m pytest crates/gweave-py/tests -q -m timed
 pytest: python-debug
 	$(MYPY)
 	$(PYTEST)
+	$(PYTEST_TIMED)
 
 # `make test` runs the two side by side once both are built: pytest mostly waits on its servers,
 # its browser and its hosts while the Rust tests keep both cores busy, so on two cores this takes
 # two minutes less than one after the other (README.md, "Set up and run", says how long `make
-# test` takes). pytest's output is kept and shown after the Rust tests'. The tests that measure
-# speed (marked `timed`: the viewer's frame rate) run alone afterwards, on a quiet machine.
+# test` takes). pytest's output is kept and shown after the Rust tests'; the timed tests follow.
 rust-and-python-tests: rust-deps firmware firmware-fault firmware-cortex python-debug
 	$(RUST_TESTS) --no-run
-	@log=$$(mktemp); ( $(MYPY) && $(PYTEST) -m 'not timed' ) > $$log 2>&1 & pytests=$$!; \
+	@log=$$(mktemp); ( $(MYPY) && $(PYTEST) ) > $$log 2>&1 & pytests=$$!; \
 	rust=0; $(RUST_TESTS) || rust=$$?; \
 	python=0; wait $$pytests || python=$$?; \
 	echo "mypy and pytest (run beside the Rust tests):"; cat $$log; rm -f $$log; \
 	[ $$rust = 0 ] && [ $$python = 0 ]
-	$(PY) -m pytest crates/gweave-py/tests -q -m timed
+	$(PYTEST_TIMED)
 
 e2e: build-debug python-debug
 	bash tests/e2e/run.sh target/debug/gweave
