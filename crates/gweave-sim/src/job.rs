@@ -7,7 +7,6 @@
 //! ([`Machine`]), or gweave's own controller core ([`core_board`], `[firmware] kind = "gweave"`).
 
 use std::io;
-use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 
 use gweave::gcode::container;
@@ -177,18 +176,19 @@ pub fn simulate(
 /// has no line ending.
 fn run_lexed(
     machine: &mut Machine,
-    lexed: Lexed,
+    mut lexed: Lexed,
     out: &mut dyn FnMut(f64, &str),
     progress: &mut dyn Progress,
 ) -> io::Result<bool> {
-    let (mut unterminated, mut reported) = (false, 0u64);
-    lexed.each_line(
-        |e| e,
-        |line, block, position| {
-            if position >= reported + PROGRESS_BYTES {
-                progress.advance(position);
-                reported = position;
-            }
+    let mut unterminated = false;
+    let (mut position, mut reported) = (0u64, 0u64);
+    while let Some(batch) = lexed.next_batch() {
+        let mut batch = batch?;
+        let (mut lines, blocks) = batch.lines_mut();
+        for block in blocks {
+            // The batch holds a block for each of its lines: never `None`.
+            let Some(line) = lines.next_line() else { break };
+            position = line.offset + (line.bytes.len() + line.eol.len()) as u64;
             match line.part {
                 Part::Whole => {
                     unterminated = line.eol.is_empty();
@@ -196,16 +196,22 @@ fn run_lexed(
                     if machine.execute_lexed(line.bytes, block, out) == Outcome::Halted
                         || machine.program_ended()
                     {
-                        unterminated = false;
-                        return Ok(ControlFlow::Break(()));
+                        return Ok(false);
                     }
                 }
-                Part::Piece => {}
-                Part::Last { .. } => machine.skip_long_line(),
+                Part::Piece => continue,
+                Part::Last { len } => {
+                    position += len;
+                    machine.skip_long_line();
+                }
             }
-            Ok(ControlFlow::Continue(()))
-        },
-    )?;
+        }
+        if position >= reported + PROGRESS_BYTES {
+            progress.advance(position);
+            reported = position;
+        }
+        lexed.recycle(batch);
+    }
     Ok(unterminated)
 }
 

@@ -9,7 +9,6 @@
 //! flavour) is the [`Run`](crate::run::Run) builder's.
 
 use std::io::{self, Read, Write};
-use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
@@ -326,25 +325,30 @@ impl Driver<'_> {
     /// [`Driver::drive`] over lines lexed on another thread.
     fn drive_lexed<P: Pass + ?Sized>(
         mut self,
-        lexed: lexed::Lexed,
+        mut lexed: lexed::Lexed,
         mut state: State,
         pass: &mut P,
         out: &mut dyn Write,
     ) -> Result<State> {
-        let path = self.path;
-        let position = lexed.each_line(
-            |e| Error::io(path, e),
-            |line, block, _| {
-                if let Part::Last { .. } = line.part {
+        let mut position = 0;
+        'batches: while let Some(batch) = lexed.next_batch() {
+            let batch = batch.map_err(|e| Error::io(self.path, e))?;
+            let (mut lines, blocks) = batch.lines();
+            for block in blocks {
+                // The batch holds a block for each of its lines: never `None`.
+                let Some(line) = lines.next_line() else { break };
+                position = line.offset + (line.bytes.len() + line.eol.len()) as u64;
+                if let Part::Last { len } = line.part {
+                    position += len;
                     self.long_line(&line, pass, out)?;
-                    return Ok(ControlFlow::Continue(()));
+                    continue;
                 }
-                Ok(match self.line(line, block, &mut state, pass, out)? {
-                    Flow::Stop => ControlFlow::Break(()),
-                    Flow::Continue => ControlFlow::Continue(()),
-                })
-            },
-        )?;
+                if self.line(line, block, &mut state, pass, out)? == Flow::Stop {
+                    break 'batches;
+                }
+            }
+            lexed.recycle(batch);
+        }
         self.finish(position, &state, pass, out)?;
         Ok(state)
     }

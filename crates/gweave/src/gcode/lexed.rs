@@ -4,14 +4,13 @@
 //! reads (`stats`, `check`) takes about the time of the slower half instead of the sum.
 //!
 //! The reading thread cuts the input into [`Chunk`]s of whole lines ([`ChunkReader`]) and lexes
-//! them in batches of at most [`BATCH`] lines; the other takes each batch's lines up again from
-//! the same chunk ([`Chunk::lines_from`]) beside their blocks and lengths (so that it does not
-//! search for each line's end again: about 40 instructions a line), through
-//! [`Lexed::each_line`]. At most [`DEPTH`] batches wait between the two, and chunks and block
-//! buffers go back to the reading thread once used: memory stays bounded whatever the file.
+//! them in [`Batch`]es of at most [`BATCH`] lines; the other takes each batch's lines up again
+//! from the same chunk ([`Chunk::lines_from`]) beside their blocks and lengths (so that it does
+//! not search for each line's end again: about 40 instructions a line). At most [`DEPTH`] batches
+//! wait between the two, and chunks and block buffers go back to the reading thread once used:
+//! memory stays bounded whatever the file.
 
 use std::io::{self, Read};
-use std::ops::ControlFlow;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::Arc;
 
@@ -27,7 +26,7 @@ pub const DEPTH: usize = 4;
 
 /// Lexed lines: the chunk they are in, where the first starts, and a block for each (in file
 /// order; a line longer than [`MAX_LINE`](super::reader::MAX_LINE) has a cleared block).
-struct Batch {
+pub struct Batch {
     chunk: Arc<Chunk>,
     at: usize,
     before: u64,
@@ -51,16 +50,20 @@ fn pack(content: usize, eol: usize) -> u32 {
 const LONG: u32 = u32::MAX;
 
 impl Batch {
-    /// The batch's lines, as [`ChunkLines`] gives them, and their blocks (which the taker may
-    /// take: they are cleared before reuse).
-    fn lines_mut(&mut self) -> (BatchLines<'_>, &mut [Block]) {
+    /// The batch's lines, as [`ChunkLines`] gives them, and their blocks.
+    pub fn lines(&self) -> (BatchLines<'_>, &[Block]) {
+        (BatchLines::of(&self.chunk, self.at, self.before, &self.ends[..self.len]), &self.blocks[..self.len])
+    }
+
+    /// [`Batch::lines`] with blocks the reader may take (they are cleared before reuse).
+    pub fn lines_mut(&mut self) -> (BatchLines<'_>, &mut [Block]) {
         let lines = BatchLines::of(&self.chunk, self.at, self.before, &self.ends[..self.len]);
         (lines, &mut self.blocks[..self.len])
     }
 }
 
 /// A batch's lines, cut where the lexing thread found their ends.
-struct BatchLines<'a> {
+pub struct BatchLines<'a> {
     lines: ChunkLines<'a>,
     ends: std::slice::Iter<'a, u32>,
 }
@@ -72,7 +75,7 @@ impl<'a> BatchLines<'a> {
 
     /// The next line, as [`ChunkLines::next_line`] gives it; `None` at the batch's end.
     #[inline(always)]
-    fn next_line(&mut self) -> Option<RawLine<'a>> {
+    pub fn next_line(&mut self) -> Option<RawLine<'a>> {
         match *self.ends.next()? {
             LONG => self.lines.next_line(),
             packed => Some(self.lines.next_known((packed >> 2) as usize, (packed & 3) as usize)),
@@ -88,39 +91,13 @@ pub struct Lexed {
 }
 
 impl Lexed {
-    /// Hands every line to `each` in file order, beside its block (cleared for a line longer
-    /// than [`MAX_LINE`](super::reader::MAX_LINE), which comes as the chunk reader gives it) and
-    /// the byte position after it, until the end of the input or until `each` breaks. Returns
-    /// the position after the last line handed, or the first error: the input's (through
-    /// `read_error`) or `each`'s. Each batch goes back to the reading thread once walked.
-    #[inline(always)]
-    pub fn each_line<E>(
-        mut self,
-        read_error: impl Fn(io::Error) -> E,
-        mut each: impl FnMut(RawLine<'_>, &mut Block, u64) -> Result<ControlFlow<()>, E>,
-    ) -> Result<u64, E> {
-        let mut position = 0;
-        while let Ok(batch) = self.batches.recv() {
-            let mut batch = batch.map_err(&read_error)?;
-            let (mut lines, blocks) = batch.lines_mut();
-            for block in blocks {
-                // The batch holds a block for each of its lines: never `None`.
-                let Some(line) = lines.next_line() else { break };
-                position = line.offset + (line.bytes.len() + line.eol.len()) as u64;
-                if let Part::Last { len } = line.part {
-                    position += len;
-                }
-                if each(line, block, position)?.is_break() {
-                    return Ok(position);
-                }
-            }
-            self.recycle(batch);
-        }
-        Ok(position)
+    /// The next batch; `None` at the end of the input.
+    pub fn next_batch(&mut self) -> Option<io::Result<Batch>> {
+        self.batches.recv().ok()
     }
 
     /// Hands a used batch's buffers back to the reading thread.
-    fn recycle(&mut self, batch: Batch) {
+    pub fn recycle(&mut self, batch: Batch) {
         // Full channels or a finished reader: the buffer is dropped instead.
         let _ = self.spare_blocks.try_send((batch.blocks, batch.ends));
         if batch.last {

@@ -421,8 +421,8 @@ pub struct ChunkLines<'a> {
 }
 
 impl<'a> ChunkLines<'a> {
-    /// The next line when the lexing thread has found its end already (a lexed batch,
-    /// [`lexed`](super::lexed)): a whole line of `content` bytes and an ending of `eol`
+    /// The next line when the lexing thread has found its end already
+    /// ([`Batch`](super::lexed::Batch)): a whole line of `content` bytes and an ending of `eol`
     /// (0 to 2), as [`ChunkLines::next_line`] gives it, without searching for its end again.
     #[inline(always)]
     pub fn next_known(&mut self, content: usize, eol: usize) -> RawLine<'a> {
