@@ -200,7 +200,11 @@ guard: rust-deps
 	$(CARGO) build --profile guard -p gweave-cli
 	bash bench/guard.sh $${CARGO_TARGET_DIR:-target}/guard/gweave
 
-test: deps lint rust-and-python-tests e2e guard
+# pip (mostly downloads) runs beside `make lint` (clippy keeps both cores busy): about 40 s less.
+# The system packages come first, one apt-get at a time (apt holds a lock).
+test: rust-deps browser-deps cura-deps firmware-deps
+	$(MAKE) -j2 py-deps lint
+	$(MAKE) rust-and-python-tests e2e guard
 	@echo "make test: all passed"
 
 # The demo runs the command line only: one release build of the engine, no Python environment
