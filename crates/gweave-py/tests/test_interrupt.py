@@ -36,6 +36,20 @@ def scratch_files(folder: Path) -> List[Path]:
     return [p for p in folder.iterdir() if p.name.startswith(".gweave-")]
 
 
+def bytes_read() -> int:
+    """What this process has read so far, all threads (``rchar`` of ``/proc/self/io``)."""
+    for line in Path("/proc/self/io").read_text().splitlines():
+        if line.startswith("rchar:"):
+            return int(line.split()[1])
+    raise AssertionError("no rchar in /proc/self/io")
+
+
+# A call that writes nothing is interrupted once it has read this much of its input: well into
+# its work, and far from its end, with a debug build as with a release one (a fixed delay let a
+# release build's `estimate` finish first: 0.3 s for the 100 MB).
+READ_BEFORE_CTRL_C = 8 << 20
+
+
 def interrupt_when(ready: Callable[[], bool], sent: List[float], ended: threading.Event) -> None:
     """A thread that sends this process SIGINT (a real Ctrl-C) once ``ready()``, noting when;
     nothing if the call ``ended`` first."""
@@ -78,11 +92,15 @@ def test_ctrl_c_stops_a_long_call_within_a_second_and_writes_nothing(big, tmp_pa
     out = tmp_path / "out.gcode"
     call = calls(big, out)[name]
     sent: List[float] = []
-    started = time.monotonic()
     # Transforms are interrupted once their scratch file exists; the others (the preview draws
-    # only after reading) after a moment.
+    # only after reading) once they are reading.
     writes = name not in ("preview", "sim", "estimate")
-    ready = (lambda: bool(scratch_files(tmp_path))) if writes else (lambda: time.monotonic() - started > 0.3)
+    read_at_start = bytes_read()
+    ready = (
+        (lambda: bool(scratch_files(tmp_path)))
+        if writes
+        else (lambda: bytes_read() - read_at_start > READ_BEFORE_CTRL_C)
+    )
     ended = threading.Event()
     interrupt_when(ready, sent, ended)
     try:
