@@ -8,11 +8,12 @@ installs those files next to the environment's `python`, on `PATH`), then hands 
 So `pip install ./crates/gweave-py` installs the same native `gweave` as `cargo install`, built
 from the same checkout as the module, and the extension links no command-line code.
 
-Both builds use one target folder and one profile, so the third-party libraries are shared,
-but the engine (`gweave`, `gweave-sim`) is compiled once for each: the CLI's `clap` derive turns
-on `syn`'s `full` feature, which changes the build of `serde_derive` and so of everything that
-derives through it (measured on the debug build: 1.3 min for the command, then 3.5 min for the
-module with PyO3).
+Both builds use one target folder and one profile, so the third-party libraries and the engine
+(`gweave`, `gweave-sim`) are compiled once for both. That holds because the module's crate
+declares `syn` with its `full` feature (crates/gweave-py/Cargo.toml says why): the CLI's `clap`
+derive turns it on, and without it the module's build resolved another `syn`, so another
+`serde_derive` and everything that derives through it, the engine included (the module's debug
+build took 108-124 s more).
 
 The Makefile's `python` and `python-debug` run this file as a script before `maturin develop`
 (`python gweave_build.py release|dev`), which does not go through a build backend; `make sdist`
