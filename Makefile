@@ -21,6 +21,11 @@ OUT := out
 
 deps: rust-deps py-deps browser-deps cura-deps firmware-deps
 
+# apt-get for the system packages (as root), one at a time even under `make -j`: a second
+# apt-get fails at once on the lock the first holds (`apt-get update` ignores
+# DPkg::Lock::Timeout), so each waits for the others on a lock file of our own.
+APT_GET := flock /var/lock/gweave-apt.lock apt-get
+
 rust-deps:
 	@command -v $(CARGO) >/dev/null || { echo "cargo is needed (Rust 1.80 or newer)"; exit 1; }
 
@@ -48,7 +53,7 @@ $(VENV)/.deps: $(VENV)/.python-deps crates/gweave-py/requirements-dev.txt crates
 browser-deps:
 	@if [ -x /usr/bin/chromium ]; then :; \
 	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
-	  apt-get install -y -q chromium || { apt-get update -q && apt-get install -y -q chromium; }; \
+	  $(APT_GET) install -y -q chromium || { $(APT_GET) update -q && $(APT_GET) install -y -q chromium; }; \
 	else echo "browser-deps: no /usr/bin/chromium and not root: the viewer test will be skipped"; fi
 
 # Debian's Cura 4.13 (its PostProcessingPlugin and Uranium) for the Cura script's test
@@ -57,7 +62,7 @@ browser-deps:
 cura-deps:
 	@if [ -f /usr/lib/cura/plugins/PostProcessingPlugin/Script.py ]; then :; \
 	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
-	  apt-get install -y -q --no-install-recommends cura || { apt-get update -q && apt-get install -y -q --no-install-recommends cura; }; \
+	  $(APT_GET) install -y -q --no-install-recommends cura || { $(APT_GET) update -q && $(APT_GET) install -y -q --no-install-recommends cura; }; \
 	else echo "cura-deps: no Debian cura package and not root: the Cura script test will be skipped"; fi
 
 # The firmware (docs/firmware.md): Debian's Rust (rustc-web 1.96 with the library source, which
@@ -79,7 +84,7 @@ firmware-deps:
 	done; \
 	if [ -z "$$missing" ]; then :; \
 	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
-	  apt-get install -y -q --no-install-recommends $$missing || { apt-get update -q && apt-get install -y -q --no-install-recommends $$missing; }; \
+	  $(APT_GET) install -y -q --no-install-recommends $$missing || { $(APT_GET) update -q && $(APT_GET) install -y -q --no-install-recommends $$missing; }; \
 	else echo "firmware-deps: missing$$missing (install them as root: apt-get install$$missing)"; exit 1; fi
 
 # One image per printer file and features: $(call fw_image,NAME,TOML,FEATURES) builds
@@ -196,12 +201,12 @@ e2e: build-debug python-debug
 # against bench/guard-baseline.txt, failing past +15 % (bench/guard.sh; docs/performance.md). It
 # measures the `guard` profile (release without fat LTO: minutes less to build than `release`).
 guard: rust-deps
-	@command -v valgrind >/dev/null || { [ "$$(id -u)" = 0 ] && apt-get install -y -q valgrind >/dev/null; } || true
+	@command -v valgrind >/dev/null || { [ "$$(id -u)" = 0 ] && $(APT_GET) install -y -q valgrind >/dev/null; } || true
 	$(CARGO) build --profile guard -p gweave-cli
 	bash bench/guard.sh $${CARGO_TARGET_DIR:-target}/guard/gweave
 
 # pip (mostly downloads) runs beside `make lint` (clippy keeps both cores busy): about 40 s less.
-# The system packages come first, one apt-get at a time (apt holds a lock).
+# The system packages come first.
 test: rust-deps browser-deps cura-deps firmware-deps
 	$(MAKE) -j2 py-deps lint
 	$(MAKE) rust-and-python-tests e2e guard
