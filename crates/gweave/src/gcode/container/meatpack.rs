@@ -287,6 +287,8 @@ pub(crate) fn decode(input: &[u8], out: &mut Vec<u8>) {
 /// moves `at` past its text, at most four bytes.
 #[inline(always)]
 fn store(out: &mut [MaybeUninit<u8>], at: &mut usize, e: u64) {
+    // What `decode`'s `set_len` relies on; the property tests run it on random streams.
+    debug_assert!(e >> 32 & 0xFF <= 4, "an entry of more than four bytes: {e:#x}");
     out[*at..*at + 4].copy_from_slice(&(e as u32).to_le_bytes().map(MaybeUninit::new));
     *at += (e >> 32 & 0xFF) as usize;
 }
