@@ -12,7 +12,7 @@ use std::process::Command;
 
 use gweave::gcode::state::{A, E, X, Y, Z};
 use gweave::{Ctx, Step};
-use gweave::{Effect, Flow, Pass, Run, State};
+use gweave::{Flow, Pass, Run, State};
 
 fn json(args: &[&str]) -> serde_json::Value {
     let out = Command::new(env!("CARGO_BIN_EXE_gweave")).args(args).output().unwrap();
@@ -33,24 +33,23 @@ fn fixtures() -> Vec<PathBuf> {
     all
 }
 
-/// Filament the moves fed, mm: the printer's `filament_mm` (which leaves out `G10`/`G11`
-/// firmware retractions, where the state's own count has them).
+/// Filament the motor fed, mm, net: the moves' E and the firmware retractions (`G10`, `G11`),
+/// as the printer's `filament_mm` counts it (which left the retractions out until a breaking
+/// session found `pr_sphere_rrf_fwretract`'s last `G10` missing from it).
 #[derive(Default)]
-struct MovesFed(f64);
+struct MotorFed(f64);
 
-impl Pass for MovesFed {
+impl Pass for MotorFed {
     fn line(&mut self, ctx: &Ctx<'_>, _out: &mut dyn std::io::Write) -> Step {
-        if let Effect::Move(m) = ctx.effect {
-            self.0 += m.e_mm();
-        }
+        self.0 += ctx.effect.filament_mm();
         Ok(Flow::Continue)
     }
 }
 
 /// The modal state `stats` ends with, through the same driver (`Run`, which reads the file's
-/// flavour) as `gweave stats`, and the filament its moves fed.
+/// flavour) as `gweave stats`, and the filament its motor fed.
 fn stats_state(path: &Path) -> (State, f64) {
-    let mut fed = MovesFed::default();
+    let mut fed = MotorFed::default();
     let state = Run::file(path).scan(&mut fed).unwrap();
     (state, fed.0)
 }

@@ -610,6 +610,9 @@ fn g10_g11(m: &mut Machine, c: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     if c.number == 10 && m.core.state().g10_is_not_a_retraction(m.core.block()) {
         m.rrf_tool_temperature(out)
     } else {
+        if let Effect::FirmwareRetract { e_mm } = m.core.state().effect {
+            m.feed_filament(e_mm);
+        }
         m.run_core(c.line, out)
     }
 }

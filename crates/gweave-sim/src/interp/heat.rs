@@ -90,7 +90,7 @@ impl Machine {
 
     /// `M155 S<seconds>`: report the temperatures every S seconds (0: off).
     pub(super) fn m155(&mut self) {
-        self.autoreport_s = self.core.block().get(b'S').unwrap_or(0.0);
+        self.autoreport_s = self.report_period_s().unwrap_or(0.0);
         self.next_report_s = self.now_s() + self.autoreport_s;
     }
 

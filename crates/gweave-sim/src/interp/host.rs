@@ -54,7 +54,7 @@ impl Machine {
 
     /// `M154 S<s>`: the position auto-report period (0: off), from now.
     pub(super) fn m154(&mut self) {
-        let period = self.core.block().get(b'S').unwrap_or(0.0);
+        let period = self.report_period_s().unwrap_or(0.0);
         self.host.autoreport_pos_s = period;
         self.host.next_pos_report_s = self.now_s() + period;
     }

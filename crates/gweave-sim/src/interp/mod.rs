@@ -327,24 +327,25 @@ impl Machine {
         // The one lookup of the line's command: its words are checked against this row, and
         // it runs this row's handler.
         let spec = commands::lookup(command, self.core.block().command_span.of(line));
-        let halted = self.halt.is_some() && !spec.is_some_and(|s| s.while_halted);
-        if !halted {
-            // A line without a command is checked against the modal motion's row instead.
-            let row = |c: Command| {
-                if c == command { spec } else { commands::lookup(c, b"") }.filter(|s| self.built_with(s))
-            };
-            if let Err(e) = commands::check_line(self.core.block(), line, self.core.state().motion, row) {
-                // Nothing of the line happened: the values in force stay.
-                self.refuse(e.to_string(), out);
-                return self.outcome();
-            }
-        }
-        self.core.apply(line);
-        if halted {
+        if self.halt.is_some() && !spec.is_some_and(|s| s.while_halted) {
+            // A stopped Marlin reads no destination and changes no mode (`G0_G1` reads its
+            // words only `if (IsRunning())`): nothing of the line happens, so `M999` finds the
+            // machine where and as it stopped.
             out(self.now_s(), STOPPED_LINE);
             return Outcome::Halted;
         }
+        // A line without a command is checked against the modal motion's row instead.
+        let row = |c: Command| {
+            if c == command { spec } else { commands::lookup(c, b"") }.filter(|s| self.built_with(s))
+        };
+        if let Err(e) = commands::check_line(self.core.block(), line, self.core.state().motion, row) {
+            // Nothing of the line happened: the values in force stay.
+            self.refuse(e.to_string(), out);
+            return self.outcome();
+        }
+        self.core.apply(line);
         match (command, spec) {
+            (Command::None, _) if self.core.block().starts_unreadable() => self.unknown_command(line, out),
             (Command::None, _) => self.motion(line, out),
             (Command::Code { number, .. }, Some(spec)) if self.built_with(spec) => {
                 self.run_spec(spec, &Call { line, number, before }, out)
@@ -572,6 +573,13 @@ impl Machine {
     /// line ending: it looks cut short ([`WarningKind::Truncated`]).
     pub(crate) fn file_cut(&mut self, footer: gweave::gcode::ends::Footer) {
         self.warn(WarningKind::Truncated { footer });
+    }
+
+    /// An auto-report's period, the line's `S` (`M27`, `M154`, `M155`): whole seconds, as
+    /// Marlin reads it (`parser.value_byte()`), so `S0.5` is 0, off. Read as a fraction,
+    /// `M155 S0.000001` sent the host a report every simulated microsecond.
+    fn report_period_s(&self) -> Option<f64> {
+        self.core.block().get(b'S').map(f64::trunc)
     }
 
     fn warn(&mut self, kind: WarningKind) {

@@ -54,7 +54,11 @@ impl Machine {
         let xyza = |p: &state::Position| [p[state::X], p[state::Y], p[state::Z], p[state::A]];
         let (from, to) = (xyza(&m.from), xyza(&m.to));
         let (from_e, to_e) = (m.from[state::E], m.to[state::E]);
-        if let Some(message) = self.check_bounds(&from, &to).or(too_long) {
+        let arc_box = match &m.path {
+            state::Path::Arc(arc) => Some(arc.bounds()),
+            state::Path::Line => None,
+        };
+        if let Some(message) = self.check_bounds(&from, &to, arc_box).or(too_long) {
             // The machine stays where it was, as firmware that refuses a move does.
             let s = self.core.state_mut();
             if let Effect::Move(m) = &s.effect {
@@ -84,9 +88,7 @@ impl Machine {
                     m.to[state::E] = fed_to_e;
                 }
             }
-            let fed_mm = fed_to_e - from_e;
-            self.filament_mm[self.tool] += fed_mm;
-            self.retraction[self.tool].feed(fed_mm);
+            self.feed_filament(fed_to_e - from_e);
         }
         self.thermal.set_moving(true);
         if let Some(check) = &mut self.recoat {
@@ -95,26 +97,51 @@ impl Machine {
         self.run_core(line, out);
     }
 
+    /// Counts `fed_mm` of filament the active tool's motor fed (negative: retracted), by a move
+    /// or by a firmware retraction or recovery (`G10`, `G11`).
+    pub(super) fn feed_filament(&mut self, fed_mm: f64) {
+        self.filament_mm[self.tool] += fed_mm;
+        self.retraction[self.tool].feed(fed_mm);
+    }
+
     /// The hotend that extrudes: the tool's on a multi-hotend machine, the only one otherwise.
     fn active_hotend(&self) -> u8 {
         self.profile.hotend_of_tool(self.tool)
     }
 
     /// Warns about a target outside the build volume (below the bed separately). Only the axes
-    /// the move changes are checked, so one excursion is reported once.
+    /// the move changes are checked, so one excursion is reported once. An arc reaches past its
+    /// end points: in X and Y its box (`arc_box`, `[min, max]`) is checked, the full circle's
+    /// included, whose end is its start.
     ///
     /// Returns why the target cannot be driven at all, if it is more than the machine's own
     /// travel outside it on some axis (a coordinate with stray digits, `X999999999`): such a move
     /// would run for days of simulated time, every heater tick of it simulated. A smaller
     /// excursion is only reported, and carried out.
-    fn check_bounds(&mut self, from: &[f64; 4], to: &[f64; 4]) -> Option<String> {
+    fn check_bounds(
+        &mut self,
+        from: &[f64; 4],
+        to: &[f64; 4],
+        arc_box: Option<[[f64; 2]; 2]>,
+    ) -> Option<String> {
         let ranges = self.profile.bed.ranges();
         let mut out_of_reach = None;
         for (i, &(min_mm, max_mm)) in ranges.iter().enumerate() {
-            if to[i] == from[i] {
-                continue;
-            }
-            let value_mm = to[i] + self.shift_mm[i];
+            let value_mm = match arc_box {
+                Some([lo, hi]) if i < 2 => {
+                    // The arc's point farthest outside on this axis, if any is.
+                    let (lo, hi) = (lo[i] + self.shift_mm[i], hi[i] + self.shift_mm[i]);
+                    if lo < min_mm - BOUNDS_EPS_MM {
+                        lo
+                    } else if hi > max_mm + BOUNDS_EPS_MM {
+                        hi
+                    } else {
+                        continue;
+                    }
+                }
+                _ if to[i] == from[i] => continue,
+                _ => to[i] + self.shift_mm[i],
+            };
             if i == state::Z && value_mm < -BOUNDS_EPS_MM {
                 self.warn(WarningKind::BelowBed { z_mm: value_mm });
             } else if value_mm < min_mm - BOUNDS_EPS_MM || value_mm > max_mm + BOUNDS_EPS_MM {

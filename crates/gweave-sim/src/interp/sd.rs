@@ -169,7 +169,7 @@ impl Machine {
 
     fn m27(&mut self, arg: &str, out: &mut dyn FnMut(f64, &str)) {
         let now = self.now_s();
-        if let Some(s) = self.core.block().get(b'S') {
+        if let Some(s) = self.report_period_s() {
             if self.profile.firmware.autoreport_sd {
                 self.sd.report_s = if s.is_finite() && s > 0.0 { s } else { 0.0 };
                 self.sd.next_report_s = now + self.sd.report_s;

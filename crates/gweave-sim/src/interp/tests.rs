@@ -207,6 +207,70 @@ fn m112_halts_until_m999() {
     assert_eq!(run(&mut m, "M999\nG28").1, Outcome::Ok);
 }
 
+/// A breaking session found that lines refused while halted still changed the machine: after
+/// `M112`, `G91`, `G20` and `G1 X10` each answered the stop line, yet `M999` found relative
+/// inches and a logical X moved without its motor; a halted `G1 X1e23` (its range check was
+/// skipped) then made `G28` home for millions of simulated seconds, deaf to SIGTERM.
+#[test]
+fn a_halted_machine_changes_nothing_of_a_refused_line() {
+    let mut m = warm_machine();
+    run(&mut m, "G28\nG1 X50 Y50 Z10 F3000\nM112");
+    let (r, o) = run(&mut m, "G91\nG20\nG1 X10\nG92 Y0\nG1 X99999999999999999999999\nM83");
+    assert_eq!((r, o), (vec![STOPPED_LINE.to_owned(); 6], Outcome::Halted));
+    let (r, o) = run(&mut m, "M999\nM114\nG1 X60\nG28 X\nM114");
+    assert_eq!(o, Outcome::Ok);
+    assert_eq!(
+        r,
+        [
+            "X:50.00 Y:50.00 Z:10.00 E:0.00 Count X:4000 Y:4000 Z:40000",
+            "X:0.00 Y:50.00 Z:10.00 E:0.00 Count X:0 Y:4000 Z:40000",
+        ]
+    );
+    assert!(m.now_s() < 60.0, "{} s", m.now_s());
+}
+
+/// A breaking session found `!!! Z5` run as a move (a bare `ok` from `serve`): junk where the
+/// command belongs is an unknown command, as Marlin answers it, and nothing moves.
+#[test]
+fn a_line_that_starts_with_junk_is_an_unknown_command() {
+    let mut m = warm_machine();
+    let (r, _) = run(&mut m, "G1 X10 F6000\n!!! Z5\n#x X100\nM114");
+    assert_eq!(
+        r,
+        [
+            "echo:Unknown command: \"!!! Z5\"",
+            "echo:Unknown command: \"#x X100\"",
+            "X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0",
+        ]
+    );
+    assert_eq!(m.report().warning_counts["unknown_command"], 2);
+}
+
+/// A breaking session found arcs never checked against the bed: `G3 X190 Y10 I90 J0` from
+/// (10, 10) dips to Y -80 without a warning (two `G1` along the same points warned), and the
+/// full circle `G2 X100 Y100 I9999` ran 20 m off a 200 mm bed for 630 s.
+#[test]
+fn an_arc_is_checked_where_it_goes_not_only_where_it_ends() {
+    let mut m = warm_machine();
+    let (r, o) = run(&mut m, "G1 X10 Y10 F6000\nG3 X190 Y10 I90 J0\nM400");
+    assert_eq!((r, o), (vec![], Outcome::Ok));
+    let warnings: Vec<WarningKind> = m.report().warnings.into_iter().map(|w| w.kind).collect();
+    assert_eq!(
+        warnings,
+        [WarningKind::OutOfBounds { axis: 'Y', value_mm: -80.0, min_mm: 0.0, max_mm: 200.0 }]
+    );
+    let mut m = warm_machine();
+    let (r, _) = run(&mut m, "G1 X100 Y100 F6000\nG2 X100 Y100 I9999 J0\nM114");
+    // The circle's centre is at X 10 099, its right-most point at 20 098.
+    assert_eq!(
+        r,
+        [
+            "echo:X20098.000 is out of reach (0..200 mm): move refused",
+            "X:100.00 Y:100.00 Z:0.00 E:0.00 Count X:8000 Y:8000 Z:0",
+        ]
+    );
+}
+
 #[test]
 fn mixing_inputs_share_e_by_the_virtual_tool() {
     let mut p = MachineProfile::from_toml_str("mixing_inputs = 4\n").unwrap();
@@ -295,8 +359,11 @@ fn rrf_tool_temperature_and_m116() {
     assert!(r.iter().all(|l| l.starts_with(" T:")), "{r:?}");
     assert!((m.thermal().temperature(HeaterId::Hotend(0)).unwrap() - 200.0).abs() < 3.0);
     // G10 without words is still a firmware retraction (1 mm by default).
+    // The motor is back where it started: nothing fed, net, and 1 mm stays retracted
+    // (`a_firmware_retraction_is_filament_fed_back`).
     assert_eq!(m.report().count[3], 0);
-    assert_eq!(m.report().filament_mm, vec![1.0]);
+    assert_eq!(m.report().filament_mm, vec![0.0]);
+    assert_eq!(m.report().retracted_at_end_mm, vec![1.0]);
 }
 
 /// A target with stray digits, far beyond the machine, is refused and the machine stays put
@@ -362,6 +429,21 @@ fn marlin_swap_retraction_is_not_a_temperature() {
     assert_eq!(report.filament_mm, vec![2.0]);
 }
 
+/// A breaking session found `G10` missing from `sim`'s filament: `G1 X10 E5` then `G10` said
+/// 5 mm fed and nothing retracted, while the E motor stood 4 mm on (`G1 E4` said 4 and 1).
+#[test]
+fn a_firmware_retraction_is_filament_fed_back() {
+    let mut m = warm_machine();
+    run(&mut m, "M207 S1.5\nG1 X10 E5 F1200\nG10\nM400");
+    let report = m.report();
+    assert_eq!(report.filament_mm, vec![3.5]);
+    assert_eq!(report.retracted_at_end_mm, vec![1.5]);
+    assert_eq!(report.count[3], 1750);
+    run(&mut m, "G11\nM400");
+    let report = m.report();
+    assert_eq!((report.filament_mm, report.retracted_at_end_mm), (vec![5.0], vec![0.0]));
+}
+
 /// `M568` (RepRapFirmware 3.3+, and what `gweave mix` writes for its RRF tools) heats like
 /// `G10 P S`; on a mixing hotend every tool's temperature is the one nozzle's.
 #[test]
@@ -378,6 +460,21 @@ fn rrf_m568_heats_the_tools_nozzle() {
     let report = mixing.report();
     assert!(report.warning_counts.is_empty(), "{:?}", report.warning_counts);
     assert_eq!(report.filament_mm, vec![0.0, 1.0]);
+}
+
+/// A breaking session found `M155 S0.000001` flooding the host with a report every simulated
+/// microsecond (16.7 MB in 3 s): Marlin reads the period in whole seconds, so it is 0, off, and
+/// `S2.9` reports every 2 s.
+#[test]
+fn an_auto_report_period_is_whole_seconds() {
+    let mut m = machine();
+    run(&mut m, "M155 S0.000001\nM154 S0.5");
+    let mut stamped = Vec::new();
+    m.idle(3.0, &mut |t, l| stamped.push((t, l.to_owned())));
+    assert_eq!(stamped, []);
+    run(&mut m, "M155 S2.9");
+    m.idle(4.5, &mut |t, _| stamped.push((t, String::new())));
+    assert_eq!(stamped.iter().map(|(t, _)| *t).collect::<Vec<f64>>(), [5.0, 7.0]);
 }
 
 #[test]

@@ -100,6 +100,11 @@ pub enum MachineProfileError {
     /// A fault specification such as `hotend-cartridge-off@120s` that cannot be read.
     #[error("fault `{0}`: expected HEATER-FAULT@SECONDS, e.g. hotend-cartridge-off@120s, bed-thermistor-open@30s, hotend1-thermistor-shorted@5s")]
     Fault(String),
+    /// A fault for a heater the machine does not have (it would never happen, and the run
+    /// would look as if the firmware had survived it).
+    #[error("fault `{fault}`: this machine has no such heater (its heaters: {heaters})")]
+    #[allow(missing_docs)] // the fault as given, and the heaters the machine has
+    FaultHeater { fault: String, heaters: String },
     /// A raster job was given a machine without a printhead (its name).
     #[error("machine `{0}` has no inkjet printhead (no [inkjet] table): give an inkjet machine (`gweave machine list`: binder-jet, inkjet-c6602) or a printhead profile")]
     NoPrinthead(String),
@@ -569,6 +574,20 @@ impl MachineProfile {
             return Err(MachineProfileError::MixingSteps { inputs: self.mixing_inputs, steps: mixing });
         }
         let hotends = self.thermal.hotends.len();
+        for f in &self.faults {
+            let present = match f.heater {
+                HeaterId::Bed => self.thermal.bed.is_some(),
+                HeaterId::Hotend(n) => (n as usize) < hotends,
+            };
+            if !present {
+                let names =
+                    (0..hotends).map(|n| if n == 0 { "hotend".to_owned() } else { format!("hotend{n}") });
+                let heaters: Vec<String> =
+                    names.chain(self.thermal.bed.as_ref().map(|_| "bed".to_owned())).collect();
+                let heaters = if heaters.is_empty() { "none".to_owned() } else { heaters.join(", ") };
+                return Err(MachineProfileError::FaultHeater { fault: f.to_string(), heaters });
+            }
+        }
         if self.single_nozzle_tools > 0 && (hotends != 1 || self.mixing_inputs > 0) {
             return Err(MachineProfileError::SingleNozzle { tools: self.single_nozzle_tools, hotends });
         }
@@ -593,6 +612,24 @@ impl MachineProfile {
 
 #[cfg(test)]
 mod tests {
+
+    /// A breaking session found `--fault hotend1-cartridge-off@5s` on a one-hotend machine run
+    /// to its end without a fault and without a word: the user believed it injected.
+    #[test]
+    fn a_fault_for_a_heater_the_machine_lacks_is_refused() {
+        let e = MachineProfile::from_toml_str("faults = [\"hotend1-cartridge-off@5s\"]\n").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "fault `hotend1-cartridge-off@5s`: this machine has no such heater (its heaters: hotend, bed)"
+        );
+        let mut no_bed = MachineProfile::default();
+        no_bed.thermal.bed = None;
+        no_bed.faults = vec!["bed-thermistor-open@1s".parse().unwrap()];
+        let e = no_bed.validate().unwrap_err().to_string();
+        assert!(e.ends_with("(its heaters: hotend)"), "{e}");
+        let two = "faults = [\"hotend1-thermistor-open@1s\", \"bed-thermistor-open@1s\"]\n[[thermal.hotends]]\n[[thermal.hotends]]\n";
+        assert_eq!(MachineProfile::from_toml_str(two).unwrap().faults.len(), 2);
+    }
 
     /// docs/machine.md says every key is optional, but a `[[thermal.hotends]]` entry failed
     /// with "missing field `heat_capacity_j_k`" until all six were given.

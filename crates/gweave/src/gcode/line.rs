@@ -2,7 +2,7 @@
 //! checksum, each with its byte span in the original line. Nothing here knows what the machine
 //! does with it; that is [`crate::gcode::state`].
 
-use super::diag::{Diagnostic, Finding, MAX_LINE_DIAGNOSTICS};
+use super::diag::{Diagnostic, Finding, Severity, MAX_LINE_DIAGNOSTICS};
 
 /// A byte range `start..end` inside one line (without its line ending).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -229,6 +229,17 @@ impl Block {
         self.tape_marker = false;
         self.diagnostics.clear();
         self.plain.present = 0;
+    }
+
+    /// Whether the line starts with bytes no firmware reads, before any word (`!!! Z5`,
+    /// `$x Y30`) and with no command: a firmware finds no command there (Marlin answers
+    /// `Unknown command`, Klipper too), so the words after the junk are no modal move.
+    pub fn starts_unreadable(&self) -> bool {
+        let first_word = self.words.first().map_or(u32::MAX, |w| w.span.start);
+        self.command == Command::None
+            && self.diagnostics.first().is_some_and(|d| {
+                d.finding.severity() == Severity::Error && d.column.saturating_sub(1) < first_word
+            })
     }
 
     /// Records a finding: the first [`MAX_LINE_DIAGNOSTICS`], then a count of the rest in one

@@ -294,6 +294,8 @@ impl State {
                 self.grow_tool(number);
                 self.effect = Effect::ToolChange { from, to: number };
             }
+            // Junk where the command belongs: nothing of the line is read.
+            Command::None if block.starts_unreadable() => {}
             Command::None if block.words.iter().any(|w| axis_of(w.letter).is_some()) => {
                 self.motion_words(block)
             }
@@ -557,6 +559,22 @@ mod tests {
                 *state.apply(l.as_bytes(), &block)
             })
             .collect()
+    }
+
+    /// A breaking session found `!!! Z5` counted as malformed yet run as a modal move to Z5 by
+    /// every reader (`stats --lenient`, `estimate`, `sim`, `serve`): junk where the command
+    /// belongs is no command, as Marlin and Klipper answer. Junk after a command is read past,
+    /// the command kept, as firmware reads it.
+    #[test]
+    fn a_line_that_starts_with_junk_moves_nothing() {
+        let mut s = State::default();
+        let effects = run(&mut s, "G1 X10 F600\n!!! Z5\n  $junk Y30 F9\n#x X100\nX1..2 Y20\nG1 !! X30");
+        assert!(effects[1..4].iter().all(|e| *e == Effect::None), "{effects:?}");
+        assert_eq!(s.feed_mm_min, 600.0);
+        // Words alone still continue the motion; the malformed word is left out.
+        assert!(matches!(effects[4], Effect::Move(m) if m.to[Y] == 20.0 && m.to[X] == 10.0));
+        assert!(matches!(effects[5], Effect::Move(m) if m.to[X] == 30.0));
+        assert_eq!([s.pos[X], s.pos[Y], s.pos[Z]], [30.0, 20.0, 0.0]);
     }
 
     #[test]
