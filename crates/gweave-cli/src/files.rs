@@ -138,6 +138,19 @@ impl Files {
                 );
             }
         }
+        // Every output file can be written, checked before the run: the outputs are renamed
+        // into place one after the other at its end, so a report that failed there (a missing
+        // folder, a folder where the file should be) came after `-o` or `--in-place` had been
+        // written, and the run failed with the input already replaced.
+        for (out, id) in &outputs {
+            if out.dir.is_some() || id.is_none() {
+                continue;
+            }
+            if out.path.is_dir() {
+                bail!("{} {} is a folder: name a file", out.flag, out.path.display());
+            }
+            check_writable(&out.flag, &out.path)?;
+        }
         Ok(())
     }
 }
@@ -256,6 +269,20 @@ mod tests {
         std::fs::hard_link(&input, dir.path().join("link.gcode")).unwrap();
         let link = dir.path().join("link.gcode");
         assert!(Files::new().read("INPUT", Some(&input)).write("-o", Some(&link)).check().is_err());
+    }
+
+    /// A breaking session found a report that could not be written failing the run after
+    /// `-o` or `--in-place` had been written: each output file is checked first.
+    #[test]
+    fn an_output_that_cannot_be_written_is_refused_before_the_run() {
+        let dir = tempfile::tempdir().unwrap();
+        let err = refused(Files::new().write("--report", Some(dir.path())));
+        assert_eq!(err, format!("--report {} is a folder: name a file", dir.path().display()));
+        let missing = dir.path().join("nodir").join("r.json");
+        let out = dir.path().join("out.gcode");
+        let err = refused(Files::new().write("-o", Some(&out)).write("--report", Some(&missing)));
+        assert!(err.starts_with(&format!("--report {}: ", missing.display())), "{err}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "a probe was left behind");
     }
 
     #[test]

@@ -63,6 +63,14 @@ pub enum Error {
         path: PathBuf,
     },
 
+    /// An input for [`Target::InPlace`](crate::gcode::writer::Target::InPlace) that is not a
+    /// file of the user's: a pipe, a device, or a system alias such as `/dev/stdin`.
+    #[error("{} is not a regular file: only a file can be replaced in place; name the file itself, or write the output elsewhere", path.display())]
+    NotAFileToReplace {
+        /// The input.
+        path: PathBuf,
+    },
+
     /// [`Target::InPlace`](crate::gcode::writer::Target::InPlace) found no free backup name for the input.
     #[error(
         "{} exists and is not a copy of the input, and {}.1 .. .{} are all taken: move old backups away or replace the input without a backup",

@@ -190,6 +190,10 @@ pub fn run(args: ServeArgs) -> Result<ExitCode> {
         serve(endpoint.as_mut(), &mut make, &mut finished, &options, log, &stop)?
     };
     drop(endpoint);
+    // The session folder goes before the summary is printed: with standard error a closed
+    // pipe (`gweave serve ... 2>&1 | head -1`), that print ends the process (SIGPIPE, as Unix
+    // tools end), which left the folder behind.
+    drop(session_dir);
     print_summary(&summary);
     match report_error {
         Some(e) => Err(e),

@@ -35,6 +35,31 @@ fn report_naming_the_input_is_refused() {
     );
 }
 
+/// A breaking session found a report that could not be written failing the run after the
+/// other outputs were in place: `cat in -o out --report rep` (a folder) wrote `out`, and
+/// `purge-shift in --in-place --report nodir/r.json` replaced the input and kept a `.bak`, then
+/// exited 1. Every output file is checked before anything is read.
+#[test]
+fn a_report_that_cannot_be_written_stops_the_run_before_any_output() {
+    let (dir, _) = torus();
+    fs::create_dir(dir.path().join("rep")).unwrap();
+    refused_in(
+        dir.path(),
+        &["cat", "in.gcode", "-o", "out.gcode", "--report", "rep"],
+        "--report rep is a folder: name a file",
+    );
+    refused_in(
+        dir.path(),
+        &["purge-shift", "in.gcode", "--in-place", "--purge-mm", "1", "--report", "nodir/r.json"],
+        "--report nodir/r.json: ",
+    );
+    refused_in(
+        dir.path(),
+        &["mix", "in.gcode", "-o", "out.gcode", "--map", "T0=Cyan", "--report", "nodir/r.json"],
+        "--report nodir/r.json: ",
+    );
+}
+
 /// Regression: `sim in.gcode --plot in.gcode` (and `--plot-speed`) replaced the input by a PNG.
 #[test]
 fn sim_plot_naming_the_input_is_refused() {

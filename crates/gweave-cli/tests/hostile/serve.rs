@@ -85,6 +85,43 @@ impl Drop for Server {
     }
 }
 
+/// A breaking session found `gweave serve ... 2>&1 | head -1` killed by SIGPIPE at Ctrl-C (its
+/// summary printed to the closed pipe) before it removed its session folder, left in /tmp.
+#[test]
+fn serve_with_standard_error_closed_leaves_no_session_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let addr = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_gweave"))
+        .args(["serve", "--tcp", &addr.to_string()])
+        .env("TMPDIR", tmp.path())
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Its first line says it listens; then the reader goes, as `head -1` goes.
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut first = String::new();
+    stderr.read_line(&mut first).unwrap();
+    assert!(first.contains("listening on"), "{first}");
+    // The session folder comes a moment after that line.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while std::fs::read_dir(tmp.path()).unwrap().count() == 0 {
+        assert!(Instant::now() < deadline, "no session folder in {}", tmp.path().display());
+        thread::sleep(Duration::from_millis(20));
+    }
+    drop(stderr);
+    // SAFETY: kill(2) on the child's own pid.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while child.try_wait().unwrap().is_none() {
+        assert!(Instant::now() < deadline, "serve did not stop");
+        thread::sleep(Duration::from_millis(20));
+    }
+    let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
 /// The boot lines and the answer to one M105, checked.
 #[track_caller]
 fn assert_fresh_board_answers_m105(got: &[String]) {

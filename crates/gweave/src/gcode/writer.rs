@@ -136,6 +136,14 @@ impl Output {
             Target::InPlace { keep_backup, force } => {
                 let input = input.ok_or(Error::InPlaceWithoutInput)?;
                 let meta = fs::metadata(input).map_err(|e| Error::io(input, e))?;
+                // A pipe or a device cannot be replaced (a FIFO read to its end and opened again
+                // waited for a writer forever), and a name under /dev or /proc (`/dev/stdin`)
+                // is the system's alias of an open file, where the backup has no place.
+                let alias =
+                    std::path::absolute(input).is_ok_and(|p| p.starts_with("/dev") || p.starts_with("/proc"));
+                if !meta.is_file() || alias {
+                    return Err(Error::NotAFileToReplace { path: input.to_path_buf() });
+                }
                 if !force && is_read_only(input, &meta) {
                     return Err(Error::ReadOnly { path: input.to_path_buf() });
                 }
@@ -523,6 +531,28 @@ mod tests {
             .file_name()
             .to_string_lossy()
             .ends_with(".tmp")));
+    }
+
+    /// A breaking session found `cat FIFO --in-place` waiting for a writer forever (the pipe,
+    /// read to its end, was opened again), and `cat /dev/stdin --in-place < in.gcode` writing
+    /// `/dev/stdin.bak` into /dev: only a file of the user's is replaced in place.
+    #[cfg(unix)]
+    #[test]
+    fn a_pipe_or_a_system_alias_is_not_replaced_in_place() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("pipe.gcode");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        // What `/dev/stdin` names when standard input is a file: the file, through /proc.
+        let file = dir.path().join("in.gcode");
+        fs::write(&file, b"old\n").unwrap();
+        let open = fs::File::open(&file).unwrap();
+        let alias = PathBuf::from(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&open)));
+        for input in [fifo.as_path(), Path::new("/dev/null"), alias.as_path()] {
+            let err = in_place(input, b"new\n", true).unwrap_err();
+            assert!(matches!(err, Error::NotAFileToReplace { .. }), "{}: {err}", input.display());
+        }
+        assert_eq!(fs::read(&file).unwrap(), b"old\n");
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 
     /// Regression: `--in-place` replaced a read-only file.
