@@ -65,7 +65,7 @@ pub enum Error {
 
     /// An input for [`Target::InPlace`](crate::gcode::writer::Target::InPlace) that is not a
     /// file of the user's: a pipe, a device, or a system alias such as `/dev/stdin`.
-    #[error("{} is not a regular file: only a file can be replaced in place; name the file itself, or write the output elsewhere", path.display())]
+    #[error("{} cannot be replaced in place: it is a pipe, a device or a system name of an open file (under /dev or /proc); name the file itself, or write the output elsewhere", path.display())]
     NotAFileToReplace {
         /// The input.
         path: PathBuf,

@@ -91,7 +91,15 @@ impl Drop for Server {
 fn serve_with_standard_error_closed_leaves_no_session_folder() {
     let tmp = tempfile::tempdir().unwrap();
     let addr = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_gweave"))
+    /// Killed if an assertion fails before the server stopped.
+    struct Child(std::process::Child);
+    impl Drop for Child {
+        fn drop(&mut self) {
+            let _ = self.0.kill();
+            let _ = self.0.wait();
+        }
+    }
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_gweave"))
         .args(["serve", "--tcp", &addr.to_string()])
         .env("TMPDIR", tmp.path())
         .stdin(std::process::Stdio::null())
@@ -99,8 +107,9 @@ fn serve_with_standard_error_closed_leaves_no_session_folder() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
+    let mut child = Child(child);
     // Its first line says it listens; then the reader goes, as `head -1` goes.
-    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut stderr = BufReader::new(child.0.stderr.take().unwrap());
     let mut first = String::new();
     stderr.read_line(&mut first).unwrap();
     assert!(first.contains("listening on"), "{first}");
@@ -112,9 +121,9 @@ fn serve_with_standard_error_closed_leaves_no_session_folder() {
     }
     drop(stderr);
     // SAFETY: kill(2) on the child's own pid.
-    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    unsafe { libc::kill(child.0.id() as i32, libc::SIGINT) };
     let deadline = Instant::now() + Duration::from_secs(10);
-    while child.try_wait().unwrap().is_none() {
+    while child.0.try_wait().unwrap().is_none() {
         assert!(Instant::now() < deadline, "serve did not stop");
         thread::sleep(Duration::from_millis(20));
     }
