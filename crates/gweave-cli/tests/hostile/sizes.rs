@@ -130,6 +130,43 @@ fn slice_raster_refuses_sizes_past_its_ceilings_before_writing() {
     }
 }
 
+/// Regression (B8): a NaN vertex was sliced (exit 0, 100 layers) where an infinite one was
+/// refused; a mesh with no Y extent failed in the PNG encoder ("Zero height not allowed"); one
+/// with no Z extent wrote 0 layers of 0 x 0 px, exited 0 and still suggested `gweave raster`.
+/// Each is refused naming the model and why, with no folder made.
+#[test]
+fn b8_slice_raster_refuses_nan_vertices_and_flat_meshes_before_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tilted = [[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 10.0]];
+    let cases = [
+        (
+            "nan.stl",
+            vec![[[f64::NAN, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 10.0]], tilted],
+            "the mesh has a vertex coordinate of nan (triangle 1)",
+        ),
+        (
+            "flat_y.stl",
+            vec![[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 10.0]]],
+            "the mesh is flat in Y (all of its vertices at Y = 0 mm): it has no volume to slice",
+        ),
+        (
+            "flat_z.stl",
+            vec![[[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 0.0]]],
+            "the mesh is flat in Z (all of its vertices at Z = 0 mm): it has no volume to slice",
+        ),
+    ];
+    for (model, triangles, needle) in cases {
+        fs::write(d.join(model), ascii(&facets(&triangles))).unwrap();
+        let out = gweave(d, &["slice-raster", model, "--layer-height", "0.1", "-o", "out"])
+            .limit(Duration::from_secs(20))
+            .run();
+        out.assert_refused(&format!("gweave: error: slicing {model}\n")).assert_refused(needle);
+        assert!(out.stdout.is_empty(), "{model}: {}", out.stdout_text());
+        assert!(!d.join("out").exists(), "{model}: the output folder was made");
+    }
+}
+
 /// Regression: `raster` took layer images of different sizes silently (the .sl1 path refuses).
 #[test]
 fn raster_refuses_layer_images_of_different_sizes() {
