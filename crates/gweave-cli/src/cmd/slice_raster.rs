@@ -48,7 +48,8 @@ pub fn run(args: SliceRasterArgs) -> Result<ExitCode> {
         .check()?;
     let mesh = read_stl(&args.model).with_context(|| format!("reading {}", args.model.display()))?;
     let cfg = SliceConfig::with_resolution(args.layer_height, args.pixel_mm, args.dpi, args.margin)?;
-    let rep = slice_to_dir(&mesh, &cfg, &args.output)?;
+    let rep = slice_to_dir(&mesh, &cfg, &args.output)
+        .with_context(|| format!("slicing {}", args.model.display()))?;
     if args.report.emit(&rep)? {
         print_summary(|out| print_human(out, &args, &rep, mesh.triangles.len()))?;
     }

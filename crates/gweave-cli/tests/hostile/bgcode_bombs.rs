@@ -28,7 +28,7 @@ const READERS: &[&[&str]] = &[
 /// Each reader on `file`: refused with `message` (`check` reports on standard output), within
 /// budget and time, with no output and no scratch file left.
 #[track_caller]
-fn refused_by_every_reader(file: &[u8], message: &str) {
+pub(crate) fn refused_by_every_reader(file: &[u8], message: &str) {
     let dir = tempfile::tempdir().unwrap();
     fs::write(dir.path().join("in.bgcode"), file).unwrap();
     for args in READERS {

@@ -1,6 +1,7 @@
 //! Settings files: mutated copies of every shipped profile (each numeric key set to 1e308, -1,
 //! nan and 0) run through the command that reads them, under a time limit: refused cleanly with
-//! a one-line message naming the file, or run fine; never a hang or a panic.
+//! a one-line message naming the file, or run fine; never a hang or a panic. The settings inside
+//! an `.sl1` archive likewise.
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -183,4 +184,91 @@ fn every_purge_shift_config_key_mutated_is_refused_or_runs() {
     let args = ["purge-shift", "in.gcode", "-c", "ps.toml", "-o", "out.gcode"];
     let failures = sweep(dir.path(), &example, "ps.toml", &args);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A copy of `tests/data/sla/sphere.sl1` at `path`, `old` replaced by `new` in its settings file
+/// `member` (the layers copied as they are stored).
+fn edited_sl1(path: &Path, member: &str, old: &str, new: &str) {
+    use std::io::{Read, Write};
+    let mut src =
+        zip::ZipArchive::new(std::fs::File::open(repo().join("tests/data/sla/sphere.sl1")).unwrap()).unwrap();
+    let mut out = zip::ZipWriter::new(std::fs::File::create(path).unwrap());
+    for i in 0..src.len() {
+        let mut entry = src.by_index(i).unwrap();
+        if entry.name() != member {
+            out.raw_copy_file(entry).unwrap();
+            continue;
+        }
+        let mut text = String::new();
+        entry.read_to_string(&mut text).unwrap();
+        assert!(text.contains(old), "{old}");
+        out.start_file(member, zip::write::SimpleFileOptions::default()).unwrap();
+        out.write_all(text.replace(old, new).as_bytes()).unwrap();
+    }
+    out.finish().unwrap();
+}
+
+/// Regression (B3): an `.sl1`'s `layerHeight` was never range-checked: `nan` wrote `G1 ZNaN`,
+/// `-5` wrote `G1 Z-5`, `1e300` a 301-digit Z, all with exit 0; `display_width = 0.0000001` left
+/// no pixel for a nozzle and printed nothing, exit 0; `display_width = -120` was refused naming
+/// another key (`display_pixels_x`). `raster` refuses each, naming the archive, the file in it,
+/// the key, the value and its range, and writes nothing.
+#[test]
+fn b3_raster_refuses_sl1_settings_out_of_their_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases = [
+        (
+            "nan",
+            "config.ini",
+            "layerHeight = 0.1",
+            "layerHeight = nan",
+            "layerHeight = nan is out of range: 0.001 to 10 mm",
+        ),
+        (
+            "neg",
+            "config.ini",
+            "layerHeight = 0.1",
+            "layerHeight = -5",
+            "layerHeight = -5 is out of range: 0.001 to 10 mm",
+        ),
+        (
+            "huge",
+            "config.ini",
+            "layerHeight = 0.1",
+            "layerHeight = 1e300",
+            "layerHeight = 1e300 is out of range: 0.001 to 10 mm",
+        ),
+        (
+            "tinypx",
+            "prusaslicer.ini",
+            "display_width = 120",
+            "display_width = 0.0000001",
+            "display_width = 1e-7 is out of range: 1 to 10000 mm",
+        ),
+        (
+            "negw",
+            "prusaslicer.ini",
+            "display_width = 120",
+            "display_width = -120",
+            "display_width = -120 is out of range: 1 to 10000 mm",
+        ),
+    ];
+    for (name, member, old, new, message) in cases {
+        edited_sl1(&d.join(format!("{name}.sl1")), member, old, new);
+        let out = gweave(d, &["raster", &format!("{name}.sl1"), "-o", "out.gcode"])
+            .limit(Duration::from_secs(20))
+            .run();
+        out.assert_refused(&format!(
+            "gweave: error: reading {name}.sl1\n  caused by: sl1 {member}: {message}\n"
+        ));
+        assert!(!d.join("out.gcode").exists(), "{name}: an output was written");
+        assert_no_temp_left(d);
+    }
+    // The archive as shipped prints its 308 layers, 0.1 mm apart.
+    edited_sl1(&d.join("sphere.sl1"), "config.ini", "layerHeight = 0.1", "layerHeight = 0.1");
+    gweave(d, &["raster", "sphere.sl1", "-o", "out.gcode"]).limit(Duration::from_secs(60)).run().assert_ok();
+    let text = std::fs::read_to_string(d.join("out.gcode")).unwrap();
+    let z: Vec<&str> = text.lines().filter(|l| l.starts_with("G1 Z")).collect();
+    assert_eq!((z.len(), z[0], z[307]), (308, "G1 Z0.1", "G1 Z30.8"));
 }

@@ -1,12 +1,13 @@
 //! Standard streams, gzip and Prusa binary G-code: `-` reads standard input and `-o -` writes
 //! only the output to standard output, through a real shell pipeline; `.gz` and `.bgcode` round
-//! trip; a damaged binary block (bad CRC, truncated) is refused naming the file and the block,
-//! with nothing written.
+//! trip; a damaged binary block (bad CRC, truncated, a size its data does not decode to) is
+//! refused naming the file and the block, with nothing written.
 
 use std::fs;
 use std::path::Path;
 use std::process::Command;
 
+use crate::bgcode_bombs::refused_by_every_reader;
 use crate::harness::*;
 
 /// `sh -c SCRIPT` in `dir` with the binary as `$G`: (exit code, stdout, stderr).
@@ -194,4 +195,50 @@ fn damaged_bgcode_blocks_are_refused() {
     assert!(out.stderr.contains("truncated"), "{}", out.stderr);
     assert!(!dir.path().join("out.bgcode").exists());
     assert_no_temp_left(dir.path());
+}
+
+/// The first heatshrink-compressed G-code block of a binary G-code file with CRC32s: its
+/// number, the byte offset of its header, its uncompressed size and the offset of its CRC32
+/// (libbgcode's layout: type, compression, uncompressed size, stored size, parameters, data,
+/// CRC32).
+fn first_heatshrink_gcode_block(file: &[u8]) -> (u32, usize, u32, usize) {
+    let u16_at = |at: usize| u16::from_le_bytes([file[at], file[at + 1]]);
+    let u32_at = |at: usize| u32::from_le_bytes(file[at..at + 4].try_into().unwrap());
+    let (mut at, mut number) = (10, 1);
+    loop {
+        let (kind, compression, size) = (u16_at(at), u16_at(at + 2), u32_at(at + 4));
+        let (header, stored) = if compression == 0 { (8, size) } else { (12, u32_at(at + 8)) };
+        let params = if kind == 5 { 6 } else { 2 };
+        let crc = at + header + params + stored as usize;
+        if kind == 1 && compression == 3 {
+            return (number, at, size, crc);
+        }
+        (at, number) = (crc + 4, number + 1);
+    }
+}
+
+/// Regression (B2): a heatshrink G-code block whose header gave a smaller size than its data
+/// decodes to was cut short without a word. The first block's size set to 0 (its CRC32 made
+/// good again): `cat` wrote 266 991 bytes of the 332 504 and exited 0, and so did `stats`,
+/// `check`, `estimate` and `purge-shift`. Every reader refuses it, as it refused a larger size,
+/// naming the block and both sizes; one byte short or over too.
+#[test]
+fn b2_a_heatshrink_block_whose_header_lowers_its_size_is_refused() {
+    let (dir, _) = dir_with_fixture("prusaslicer/pr_torus_pva.gcode", "a.gcode");
+    gweave(dir.path(), &["cat", "a.gcode", "-o", "a.bgcode"]).run().assert_ok();
+    let good = fs::read(dir.path().join("a.bgcode")).unwrap();
+    let (number, at, size, crc) = first_heatshrink_gcode_block(&good);
+    for lie in [0, size - 1, size + 1] {
+        let mut file = good.clone();
+        file[at + 4..at + 8].copy_from_slice(&lie.to_le_bytes());
+        let checksum = crc32fast::hash(&file[at..crc]);
+        file[crc..crc + 4].copy_from_slice(&checksum.to_le_bytes());
+        refused_by_every_reader(
+            &file,
+            &format!(
+                "in.bgcode: block {number} (G-code at byte {at}): heatshrink data decodes to {size} bytes, \
+                 not the {lie} its header says"
+            ),
+        );
+    }
 }

@@ -130,6 +130,43 @@ fn slice_raster_refuses_sizes_past_its_ceilings_before_writing() {
     }
 }
 
+/// Regression (B8): a NaN vertex was sliced (exit 0, 100 layers) where an infinite one was
+/// refused; a mesh with no Y extent failed in the PNG encoder ("Zero height not allowed"); one
+/// with no Z extent wrote 0 layers of 0 x 0 px, exited 0 and still suggested `gweave raster`.
+/// Each is refused naming the model and why, with no folder made.
+#[test]
+fn b8_slice_raster_refuses_nan_vertices_and_flat_meshes_before_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tilted = [[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 10.0]];
+    let cases = [
+        (
+            "nan.stl",
+            vec![[[f64::NAN, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 10.0]], tilted],
+            "the mesh has a vertex coordinate of nan (triangle 1)",
+        ),
+        (
+            "flat_y.stl",
+            vec![[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 10.0]]],
+            "the mesh is flat in Y (all of its vertices at Y = 0 mm): it has no volume to slice",
+        ),
+        (
+            "flat_z.stl",
+            vec![[[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 0.0]]],
+            "the mesh is flat in Z (all of its vertices at Z = 0 mm): it has no volume to slice",
+        ),
+    ];
+    for (model, triangles, needle) in cases {
+        fs::write(d.join(model), ascii(&facets(&triangles))).unwrap();
+        let out = gweave(d, &["slice-raster", model, "--layer-height", "0.1", "-o", "out"])
+            .limit(Duration::from_secs(20))
+            .run();
+        out.assert_refused(&format!("gweave: error: slicing {model}\n")).assert_refused(needle);
+        assert!(out.stdout.is_empty(), "{model}: {}", out.stdout_text());
+        assert!(!d.join("out").exists(), "{model}: the output folder was made");
+    }
+}
+
 /// Regression: `raster` took layer images of different sizes silently (the .sl1 path refuses).
 #[test]
 fn raster_refuses_layer_images_of_different_sizes() {
@@ -159,6 +196,54 @@ fn a_gradient_of_endless_steps_is_refused() {
         out.assert_refused(needle).assert_peak_under(64.0);
         assert!(!dir.path().join("m.gcode").exists());
         assert_no_temp_left(dir.path());
+    }
+}
+
+/// Regression (B4): each gradient was held to 100 000 steps but not their total, and every
+/// declared step was resolved before the first line: 20 gradients over layers 0 to 99 999 (a
+/// 1.1 KB profile) took 72 s on the 28-layer torus, and 3 500 (203 KB, under the 256 KiB of a
+/// settings file) would have run for hours. Steps are resolved as the file's layers need them:
+/// the last gradient is the one in force, and its steps at t = layer / 99 999 round (4
+/// decimals) to Cyan up to layer 4, then 0.9999:0.0001 from layer 5, 0.9998:0.0002 from 15 and
+/// 0.9997:0.0003 from 25.
+#[test]
+fn b4_gradient_steps_cost_the_files_layers_not_the_declared_span() {
+    let (dir, _) = dir_with_fixture("cura/cura_torus.gcode", "in.gcode");
+    let gradient = "{from_layer=0,to_layer=99999,start=\"Cyan\",end=\"Magenta\"}";
+    for n in [20, 3500] {
+        let toml = format!("gradient = [{}]\n", vec![gradient; n].join(","));
+        fs::write(dir.path().join("g.toml"), &toml).unwrap();
+        let out = gweave(dir.path(), &["mix", "-c", "g.toml", "in.gcode", "-o", "m.gcode", "--json"])
+            .limit(Duration::from_secs(60))
+            .cpu_limit(Duration::from_secs(20))
+            .run();
+        out.assert_ok();
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let mixes: Vec<(&str, Vec<f64>)> = report["mixes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| {
+                let ratios = m["ratios"].as_array().unwrap().iter().map(|r| r.as_f64().unwrap()).collect();
+                (m["name"].as_str().unwrap(), ratios)
+            })
+            .collect();
+        let steps: Vec<(&str, Vec<f64>)> = vec![
+            ("Cyan", vec![1.0, 0.0, 0.0, 0.0]),
+            ("Magenta", vec![0.0, 1.0, 0.0, 0.0]),
+            ("Cyan..Magenta 5/99999", vec![0.9999, 0.0001, 0.0, 0.0]),
+            ("Cyan..Magenta 15/99999", vec![0.9998, 0.0002, 0.0, 0.0]),
+            ("Cyan..Magenta 25/99999", vec![0.9997, 0.0003, 0.0, 0.0]),
+        ];
+        assert_eq!(mixes, steps, "{n} gradients");
+        assert_eq!(report["changes"].as_u64(), Some(3), "{n} gradients");
+        let gcode = fs::read_to_string(dir.path().join("m.gcode")).unwrap();
+        assert!(
+            gcode.contains(
+                "\n; gweave mix: 2 mixes and gradient steps as their layers come, 4 inputs, Marlin dialect\n"
+            ),
+            "{n} gradients"
+        );
     }
 }
 

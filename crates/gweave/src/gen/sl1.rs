@@ -23,6 +23,10 @@
 //!
 //! Layers are decoded one at a time straight from the archive, so memory stays bounded by one
 //! layer whatever the number of layers.
+//!
+//! Every number of the two settings files has a physical range (below, beside the keys), checked
+//! when the archive is opened: an archive is a file anyone can edit, and a `layerHeight` of
+//! `nan` or `-5` would otherwise be written into the G-code as `G1 ZNaN` or `G1 Z-5`.
 
 use std::collections::HashMap;
 use std::io::{Read, Seek};
@@ -31,6 +35,18 @@ use std::path::Path;
 use thiserror::Error;
 
 use super::bitmap::{decode, Bitmap, BitmapError, ThresholdOptions};
+use crate::range::{
+    OutOfRange, Range, BED_SIZE_MM, LAYER_HEIGHT_MM, MAX_IMAGE_SIDE_PX, MAX_LAYERS, PIXEL_MM,
+};
+
+/// `display_pixels_x`, `display_pixels_y`: each layer is made a bed image of this size, so it is
+/// held to the side of any generated image (the largest resin printers' masks are about
+/// 15 000 px) before any is allocated.
+const DISPLAY_PX: Range = Range::new(1.0, MAX_IMAGE_SIDE_PX as f64, "px");
+/// `display_width`, `display_height`: the display is the printer's bed, and spans what a bed may.
+const DISPLAY_MM: Range = BED_SIZE_MM;
+/// `numFast`, `numSlow`: layers printed with each tilt, so no more than a print's layers.
+const TILT_LAYERS: Range<u32> = Range::new(0, MAX_LAYERS as u32, "layers");
 
 /// Errors from reading an `.sl1` archive.
 #[derive(Debug, Error)]
@@ -46,7 +62,7 @@ pub enum Sl1Error {
     /// The archive is not a valid zip.
     #[error("sl1 archive: {0}")]
     Zip(#[from] zip::result::ZipError),
-    /// A key of the archive's `config.ini` is missing or invalid.
+    /// A key of the archive's settings is missing or not a number.
     #[error("sl1 {file}: missing or invalid key {key}")]
     Key {
         /// The file inside the archive.
@@ -54,9 +70,14 @@ pub enum Sl1Error {
         /// The key.
         key: &'static str,
     },
-    /// A size in the archive's settings past its ceiling.
-    #[error("sl1: {0}")]
-    TooLarge(#[from] crate::range::TooLarge),
+    /// A key of the archive's settings out of its physical range.
+    #[error("sl1 {file}: {source}")]
+    Range {
+        /// The file inside the archive.
+        file: &'static str,
+        /// The key, its value and its range.
+        source: OutOfRange,
+    },
     /// No layer image in the archive.
     #[error("sl1 has no layer images {0}NNNNN.png")]
     NoLayers(String),
@@ -178,12 +199,65 @@ fn read_entry<R: Read + Seek>(
     Ok(Some(s))
 }
 
-fn key<T: std::str::FromStr>(
-    map: &HashMap<String, String>,
-    file: &'static str,
-    key: &'static str,
-) -> Result<T, Sl1Error> {
-    map.get(key).and_then(|v| v.parse().ok()).ok_or(Sl1Error::Key { file, key })
+/// The archive's two settings files: the job's `config.ini` and the printer's `prusaslicer.ini`.
+struct Settings {
+    job: HashMap<String, String>,
+    printer: HashMap<String, String>,
+}
+
+/// Where a key is looked up.
+#[derive(Clone, Copy)]
+enum File {
+    /// `config.ini`.
+    Job,
+    /// `prusaslicer.ini`, then `config.ini` (hand-made archives put printer keys there).
+    Printer,
+}
+
+impl Settings {
+    /// The value of `key` and the name of the file that gives it; the first file to look in
+    /// when none does.
+    fn find(&self, file: File, key: &str) -> (&'static str, Option<&str>) {
+        let job = ("config.ini", self.job.get(key).map(String::as_str));
+        match file {
+            File::Job => job,
+            File::Printer => match self.printer.get(key) {
+                Some(v) => ("prusaslicer.ini", Some(v)),
+                None if job.1.is_some() => job,
+                None => ("prusaslicer.ini", None),
+            },
+        }
+    }
+
+    /// `key` as a number in `range`: missing or not a number is refused, as is a value out of
+    /// range (NaN and infinities included), naming the file and the key.
+    fn number<T: crate::range::Quantity + std::str::FromStr>(
+        &self,
+        file: File,
+        key: &'static str,
+        range: Range<T>,
+    ) -> Result<T, Sl1Error> {
+        let (file, value) = self.find(file, key);
+        let v = value.and_then(|v| v.parse().ok()).ok_or(Sl1Error::Key { file, key })?;
+        range.check(key, v).map_err(|source| Sl1Error::Range { file, source })
+    }
+
+    /// A count of pixels (`display_pixels_x`): a whole number in [`DISPLAY_PX`].
+    fn pixels(&self, key: &'static str) -> Result<u32, Sl1Error> {
+        let px = self.number(File::Printer, key, DISPLAY_PX)?;
+        if px.fract() != 0.0 {
+            return Err(Sl1Error::Key { file: self.find(File::Printer, key).0, key });
+        }
+        Ok(px as u32)
+    }
+
+    /// An optional count (`numFast`): 0 when missing, refused when invalid or out of `range`.
+    fn optional(&self, key: &'static str, range: Range<u32>) -> Result<u32, Sl1Error> {
+        match self.find(File::Job, key) {
+            (_, None) => Ok(0),
+            _ => self.number(File::Job, key, range),
+        }
+    }
 }
 
 impl Sl1Reader<std::io::BufReader<std::fs::File>> {
@@ -199,36 +273,39 @@ impl<R: Read + Seek> Sl1Reader<R> {
     /// Reads the configuration and the list of layer images.
     pub fn new(reader: R) -> Result<Self, Sl1Error> {
         let mut archive = zip::ZipArchive::new(reader)?;
-        let job = parse_ini(
-            &read_entry(&mut archive, "config.ini")?
-                .ok_or(Sl1Error::Key { file: "config.ini", key: "(file)" })?,
-        );
-        let printer = parse_ini(&read_entry(&mut archive, "prusaslicer.ini")?.unwrap_or_default());
-        // Printer keys may also appear in config.ini in hand-made archives.
-        let pick = |k: &'static str| -> Result<f64, Sl1Error> {
-            key(&printer, "prusaslicer.ini", k).or_else(|_| key(&job, "config.ini", k))
+        let settings = Settings {
+            job: parse_ini(
+                &read_entry(&mut archive, "config.ini")?
+                    .ok_or(Sl1Error::Key { file: "config.ini", key: "(file)" })?,
+            ),
+            printer: parse_ini(&read_entry(&mut archive, "prusaslicer.ini")?.unwrap_or_default()),
         };
+        let printer = &settings.printer;
         let flag = |k: &str| printer.get(k).is_some_and(|v| v == "1");
-        let job_dir: String = key(&job, "config.ini", "jobDir")?;
-        let layer_height_mm: f64 = key(&job, "config.ini", "layerHeight")?;
-        let display_pixels_x = pick("display_pixels_x")? as u32;
-        let display_pixels_y = pick("display_pixels_y")? as u32;
-        let display_width_mm = pick("display_width")?;
-        let display_height_mm = pick("display_height")?;
-        if display_pixels_x == 0 || display_pixels_y == 0 || display_width_mm <= 0.0 {
-            return Err(Sl1Error::Key { file: "prusaslicer.ini", key: "display_pixels_x" });
+        let job_dir =
+            settings.job.get("jobDir").ok_or(Sl1Error::Key { file: "config.ini", key: "jobDir" })?.clone();
+        // The G-code's Z steps: the range of any layer height.
+        let layer_height_mm = settings.number(File::Job, "layerHeight", LAYER_HEIGHT_MM)?;
+        let display_pixels_x = settings.pixels("display_pixels_x")?;
+        let display_pixels_y = settings.pixels("display_pixels_y")?;
+        let display_width_mm = settings.number(File::Printer, "display_width", DISPLAY_MM)?;
+        let display_height_mm = settings.number(File::Printer, "display_height", DISPLAY_MM)?;
+        // The pixel, resampled to the nozzle pitch: the span of any pixel size (`--pixel-mm`).
+        // A 0.0000001 mm display in range of nothing else made pixels that no nozzle reached,
+        // and the print was dropped without a word.
+        let px_w = display_width_mm / f64::from(display_pixels_x);
+        let px_h = display_height_mm / f64::from(display_pixels_y);
+        for (key, keys, px) in [
+            ("display_width", "display_width / display_pixels_x", px_w),
+            ("display_height", "display_height / display_pixels_y", px_h),
+        ] {
+            let file = settings.find(File::Printer, key).0;
+            PIXEL_MM.check(keys, px).map_err(|source| Sl1Error::Range { file, source })?;
         }
-        // Each layer is made a bed image of this size: held to the ceiling of an image side
-        // before any is allocated (the largest resin printers' masks are about 15 000 px).
-        let side = f64::from(display_pixels_x.max(display_pixels_y));
-        crate::range::Ceiling::new(crate::range::MAX_IMAGE_SIDE_PX, "pixels per image side")
-            .check(side, || "the archive's display (display_pixels_x, display_pixels_y)".to_owned())?;
         let orientation = match printer.get("display_orientation").map(String::as_str) {
             Some("portrait") => Orientation::Portrait,
             _ => Orientation::Landscape,
         };
-        let px_w = display_width_mm / f64::from(display_pixels_x);
-        let px_h = display_height_mm / f64::from(display_pixels_y);
         let (image_width_px, image_height_px, pixel_x_mm, pixel_y_mm) = match orientation {
             Orientation::Landscape => (display_pixels_x, display_pixels_y, px_w, px_h),
             Orientation::Portrait => (display_pixels_y, display_pixels_x, px_h, px_w),
@@ -249,8 +326,8 @@ impl<R: Read + Seek> Sl1Reader<R> {
         }
         layers.sort();
         let info = Sl1Info {
-            num_fast: key(&job, "config.ini", "numFast").unwrap_or(0),
-            num_slow: key(&job, "config.ini", "numSlow").unwrap_or(0),
+            num_fast: settings.optional("numFast", TILT_LAYERS)?,
+            num_slow: settings.optional("numSlow", TILT_LAYERS)?,
             job_dir,
             layer_height_mm,
             display_pixels_x,
@@ -388,6 +465,89 @@ mod tests {
             r.layer(308, &ThresholdOptions::default()),
             Err(Sl1Error::LayerIndex { index: 308, count: 308 })
         ));
+    }
+
+    /// The sphere's settings and first layer as an archive in memory, each `(file, old, new)`
+    /// of `edits` replacing `old` by `new` in that settings file.
+    fn edited(edits: &[(&str, &str, &str)]) -> Vec<u8> {
+        use std::io::Write;
+        let mut src = zip::ZipArchive::new(std::fs::File::open(fixture()).unwrap()).unwrap();
+        let mut out = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        for name in ["config.ini", "prusaslicer.ini", "sphere00000.png"] {
+            let mut data = Vec::new();
+            src.by_name(name).unwrap().read_to_end(&mut data).unwrap();
+            for &(_, old, new) in edits.iter().filter(|e| e.0 == name) {
+                let text = String::from_utf8(data).unwrap();
+                assert!(text.contains(old), "{old}");
+                data = text.replace(old, new).into_bytes();
+            }
+            out.start_file(name, zip::write::SimpleFileOptions::default()).unwrap();
+            out.write_all(&data).unwrap();
+        }
+        out.finish().unwrap().into_inner()
+    }
+
+    /// Regression (B3): `layerHeight` was never range-checked (`nan` and `inf` wrote `G1 ZNaN`,
+    /// `-5` wrote `G1 Z-5`, `1e300` a 301-digit Z, all with exit 0); `display_width =
+    /// 0.0000001` dropped the print without a word (no pixel reached a nozzle); and `-120` or
+    /// `0` was refused naming another key (display_pixels_x). Each key has its range, and a
+    /// refusal names the file inside the archive, the key, the value and the range.
+    #[test]
+    fn b3_every_number_of_the_settings_is_in_its_range() {
+        let job = |old: &str, new: &str| edited(&[("config.ini", old, new)]);
+        let printer = |old: &str, new: &str| edited(&[("prusaslicer.ini", old, new)]);
+        let height = "layerHeight = 0.1";
+        let width = "display_width = 120";
+        let cases = [
+            (job(height, "layerHeight = nan"), "sl1 config.ini: layerHeight = nan is out of range: 0.001 to 10 mm"),
+            (job(height, "layerHeight = inf"), "sl1 config.ini: layerHeight = inf is out of range: 0.001 to 10 mm"),
+            (job(height, "layerHeight = -5"), "sl1 config.ini: layerHeight = -5 is out of range: 0.001 to 10 mm"),
+            (job(height, "layerHeight = 1e300"), "sl1 config.ini: layerHeight = 1e300 is out of range: 0.001 to 10 mm"),
+            (job(height, "layerHeight = thin"), "sl1 config.ini: missing or invalid key layerHeight"),
+            (job("numFast = 308", "numFast = 1000000"), "sl1 config.ini: numFast = 1000000 is out of range: 0 to 100000 layers"),
+            (job("numSlow = 0", "numSlow = -1"), "sl1 config.ini: missing or invalid key numSlow"),
+            (
+                printer(width, "display_width = 0.0000001"),
+                "sl1 prusaslicer.ini: display_width = 1e-7 is out of range: 1 to 10000 mm",
+            ),
+            (printer(width, "display_width = -120"), "sl1 prusaslicer.ini: display_width = -120 is out of range: 1 to 10000 mm"),
+            (printer(width, "display_width = 0"), "sl1 prusaslicer.ini: display_width = 0 is out of range: 1 to 10000 mm"),
+            (
+                printer("display_height = 80", "display_height = nan"),
+                "sl1 prusaslicer.ini: display_height = nan is out of range: 1 to 10000 mm",
+            ),
+            (
+                printer("display_pixels_x = 600", "display_pixels_x = 0"),
+                "sl1 prusaslicer.ini: display_pixels_x = 0 is out of range: 1 to 20000 px",
+            ),
+            (
+                printer("display_pixels_y = 400", "display_pixels_y = 1e9"),
+                "sl1 prusaslicer.ini: display_pixels_y = 1e9 is out of range: 1 to 20000 px",
+            ),
+            (printer("display_pixels_x = 600", "display_pixels_x = 600.5"), "sl1 prusaslicer.ini: missing or invalid key display_pixels_x"),
+            // In range each, but a pixel of 16.7 mm: no printer's.
+            (
+                printer(width, "display_width = 10000"),
+                "sl1 prusaslicer.ini: display_width / display_pixels_x = 16.6667 is out of range: 0.00254 to 2.54 mm",
+            ),
+        ];
+        for (archive, message) in cases {
+            let err = Sl1Reader::new(std::io::Cursor::new(archive)).err().expect(message);
+            assert_eq!(err.to_string(), message);
+        }
+        // A printer key that a hand-made archive puts in config.ini is named there.
+        let moved = edited(&[
+            ("prusaslicer.ini", width, ""),
+            ("config.ini", height, "layerHeight = 0.1\ndisplay_width = 0"),
+        ]);
+        let err = Sl1Reader::new(std::io::Cursor::new(moved)).err().unwrap();
+        assert_eq!(err.to_string(), "sl1 config.ini: display_width = 0 is out of range: 1 to 10000 mm");
+        // The fixture itself reads, its numbers unchanged.
+        let info = Sl1Reader::new(std::io::Cursor::new(edited(&[]))).unwrap().info().clone();
+        assert_eq!(
+            (info.layer_height_mm, info.display_width_mm, info.display_pixels_x, info.num_fast),
+            (0.1, 120.0, 600, 308)
+        );
     }
 
     /// Every orientation and mirror setting gives the same bed view of the L plate:

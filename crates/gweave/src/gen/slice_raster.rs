@@ -10,7 +10,9 @@
 //! convention as the raster generator, so slicing then rastering keeps the part's orientation.
 //!
 //! The grid covers the mesh's XY bounds plus a margin: `origin = min - margin p`,
-//! `width = ceil((max - min) / p) + 2 margin`.
+//! `width = ceil((max - min) / p) + 2 margin`. A mesh flat along X, Y or Z (no column, row or
+//! layer in its bounds) has no volume and is refused before anything is written, as is a vertex
+//! coordinate that is NaN or infinite.
 
 use std::path::{Path, PathBuf};
 
@@ -31,8 +33,21 @@ pub enum SliceError {
     #[error("the mesh is empty")]
     EmptyMesh,
     /// A vertex coordinate that is NaN or infinite.
-    #[error("the mesh has a vertex coordinate of {0}")]
-    NonFinite(f64),
+    #[error("the mesh has a vertex coordinate of {} (triangle {triangle})", short(*value))]
+    NonFinite {
+        /// The triangle, from 1 in file order.
+        triangle: usize,
+        /// The coordinate.
+        value: f64,
+    },
+    /// A mesh with no extent along an axis: no pixel across it, or no layer.
+    #[error("the mesh is flat in {axis} (all of its vertices at {axis} = {} mm): it has no volume to slice", short(*at_mm))]
+    Flat {
+        /// `X`, `Y` or `Z`.
+        axis: &'static str,
+        /// Where its vertices are along that axis.
+        at_mm: f64,
+    },
     /// A setting outside its range.
     #[error(transparent)]
     Range(#[from] OutOfRange),
@@ -126,10 +141,15 @@ impl SliceGrid {
     /// Plans the grid for a mesh.
     pub(crate) fn for_mesh(mesh: &Mesh, cfg: &SliceConfig) -> Result<Self, SliceError> {
         cfg.validate()?;
-        let (lo, hi) = mesh.bounds().ok_or(SliceError::EmptyMesh)?;
-        if let Some(v) = lo.iter().chain(&hi).find(|v| !v.is_finite()) {
-            return Err(SliceError::NonFinite(*v));
+        // Every coordinate, not the bounds: `min` and `max` pass over a NaN.
+        let non_finite = mesh.triangles.iter().enumerate().find_map(|(i, t)| {
+            let v = t.iter().flatten().find(|v| !v.is_finite())?;
+            Some(SliceError::NonFinite { triangle: i + 1, value: f64::from(*v) })
+        });
+        if let Some(e) = non_finite {
+            return Err(e);
         }
+        let (lo, hi) = mesh.bounds().ok_or(SliceError::EmptyMesh)?;
         let p = cfg.pixel_mm;
         let m = cfg.margin_px as f64;
         // Sizes in floating point first, checked against their ceilings before anything is
@@ -143,12 +163,19 @@ impl SliceGrid {
             let name = ["X", "Y"][axis];
             move || format!("a {} mm {name} extent at {} mm per pixel", short(span(axis)), short(p))
         };
-        let width_px = side.check(cells(span(0)) + 2.0 * m, because(0))?;
-        let height_px = side.check(cells(span(1)) + 2.0 * m, because(1))?;
-        let layers = Ceiling::new(MAX_LAYERS, "layers")
-            .check((span(2) / cfg.layer_height_mm - 1e-6).ceil().max(0.0), || {
-                format!("a part {} mm tall at {} mm per layer", short(span(2)), short(cfg.layer_height_mm))
-            })?;
+        let columns_rows_layers =
+            [cells(span(0)), cells(span(1)), (span(2) / cfg.layer_height_mm - 1e-6).ceil().max(0.0)];
+        // Nothing to print along one axis: images 0 px tall (the PNG encoder's "Zero height not
+        // allowed"), or no layer at all and a summary that went on to suggest printing it.
+        if let Some(axis) = columns_rows_layers.iter().position(|&n| n == 0.0) {
+            return Err(SliceError::Flat { axis: ["X", "Y", "Z"][axis], at_mm: lo[axis] });
+        }
+        let [columns, rows, layers] = columns_rows_layers;
+        let width_px = side.check(columns + 2.0 * m, because(0))?;
+        let height_px = side.check(rows + 2.0 * m, because(1))?;
+        let layers = Ceiling::new(MAX_LAYERS, "layers").check(layers, || {
+            format!("a part {} mm tall at {} mm per layer", short(span(2)), short(cfg.layer_height_mm))
+        })?;
         Ok(SliceGrid {
             origin_x_mm: lo[0] - m * p,
             origin_y_mm: lo[1] - m * p,
@@ -175,7 +202,8 @@ pub struct Slicer<'m> {
 }
 
 impl<'m> Slicer<'m> {
-    /// A slicer for `mesh` on the grid `cfg` gives (refused for an empty or non-finite mesh).
+    /// A slicer for `mesh` on the grid `cfg` gives (refused for an empty, flat or non-finite
+    /// mesh).
     pub fn new(mesh: &'m Mesh, cfg: &SliceConfig) -> Result<Self, SliceError> {
         let grid = SliceGrid::for_mesh(mesh, cfg)?;
         Ok(Slicer { mesh, grid, crossings: vec![Vec::new(); grid.height_px] })
@@ -398,6 +426,54 @@ mod tests {
         let img = load_image(&listed[2], &ThresholdOptions::default(), 0.1).unwrap();
         assert_eq!((img.width(), img.height(), img.count_ones()), (8, 4, 32));
         assert!(matches!(slice_to_dir(&Mesh::default(), &cfg, dir.path()), Err(SliceError::EmptyMesh)));
+    }
+
+    /// Regression (B8): a NaN vertex was sliced (`min` and `max` pass over a NaN: 100 layers)
+    /// where an infinite one was refused; a mesh with no Y extent reached the PNG encoder ("Zero
+    /// height not allowed"); one with no Z extent gave 0 layers of 0 x 0 px. Each is refused
+    /// before the folder is made.
+    #[test]
+    fn b8_nan_vertices_and_flat_meshes_are_refused_before_writing() {
+        let tilted = [[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 10.0]];
+        let cases: [(Vec<[[f32; 3]; 3]>, &str); 5] = [
+            (
+                vec![tilted, [[0.0, 0.0, 0.0], [10.0, f32::NAN, 0.0], [0.0, 10.0, 10.0]]],
+                "the mesh has a vertex coordinate of nan (triangle 2)",
+            ),
+            (
+                vec![[[0.0, 0.0, f32::NEG_INFINITY], [10.0, 0.0, 0.0], [0.0, 10.0, 10.0]]],
+                "of -inf (triangle 1)",
+            ),
+            (
+                vec![[[5.0, 0.0, 0.0], [5.0, 1.0, 0.0], [5.0, 0.0, 10.0]]],
+                "the mesh is flat in X (all of its vertices at X = 5 mm): it has no volume to slice",
+            ),
+            (
+                vec![[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 10.0]]],
+                "flat in Y (all of its vertices at Y = 0 mm)",
+            ),
+            (
+                vec![[[0.0, 0.0, 2.5], [10.0, 0.0, 2.5], [0.0, 10.0, 2.5]]],
+                "flat in Z (all of its vertices at Z = 2.5 mm)",
+            ),
+        ];
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("layers");
+        for (triangles, message) in cases {
+            let mesh = Mesh { triangles };
+            let err = slice_to_dir(&mesh, &SliceConfig::default(), &out).unwrap_err().to_string();
+            assert!(err.contains(message), "{err}");
+            assert!(!out.exists());
+        }
+        // A margin makes no image of a flat mesh either.
+        let flat = Mesh { triangles: vec![[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 10.0]]] };
+        let cfg = SliceConfig { margin_px: 5, ..SliceConfig::default() };
+        assert!(matches!(Slicer::new(&flat, &cfg), Err(SliceError::Flat { axis: "Y", .. })));
+        // The tilted triangle alone has an extent on every axis: it is sliced (into empty
+        // layers, a lone triangle enclosing nothing).
+        let lone = Mesh { triangles: vec![tilted] };
+        let grid = *Slicer::new(&lone, &SliceConfig::default()).unwrap().grid();
+        assert_eq!((grid.width_px, grid.height_px, grid.layers), (38, 38, 100));
     }
 
     /// Differential check against PrusaSlicer 2.5.0: the L plate (`tests/data/raster/L.stl`)

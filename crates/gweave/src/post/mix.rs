@@ -219,8 +219,9 @@ impl MixPass {
         self.started = true;
         let hw = &self.profile.hardware;
         let n = hw.inputs.len();
+        let to_come = if self.plan.steps_to_come() { " and gradient steps as their layers come" } else { "" };
         let mut text = format!(
-            "; gweave mix: {} mixes, {} inputs, {:?} dialect\n",
+            "; gweave mix: {} mixes{to_come}, {} inputs, {:?} dialect\n",
             self.plan.mixes.len(),
             n,
             hw.dialect()
@@ -262,6 +263,7 @@ impl MixPass {
         }
         self.pre.extend_from_slice(text.as_bytes());
         let first = self.plan.initial(self.slicer_tool)?;
+        self.acc.learn(&self.plan);
         self.select(first)?;
         self.wanted = Some(first);
         Ok(())
@@ -510,7 +512,8 @@ impl MixPass {
         // extrude, a tower's priming before layer 0 included (its filament is that tool's).
         if (print || self.plan.maps_tools()) && self.started && mv.is_extruding() {
             if !self.plan.maps_tools() && self.decided_layer != Some(layer) {
-                self.wanted = self.plan.mix_at(layer, mv.to[Z]);
+                self.wanted = self.plan.mix_at(layer, mv.to[Z])?;
+                self.acc.learn(&self.plan);
                 self.decided_layer = Some(layer);
             }
             if let Some(w) = self.wanted.filter(|w| Some(*w) != self.active) {

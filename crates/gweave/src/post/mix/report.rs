@@ -176,6 +176,8 @@ type OpenLayer = (u32, f64, Vec<(usize, f64)>);
 #[derive(Debug, Clone)]
 pub(crate) struct Accounting {
     area_mm2: f64,
+    /// Ratio units in a whole (10^ratio_decimals).
+    scale: f64,
     pub mixes: Vec<MixUse>,
     /// Each mix's ratios, one mix after the other (`per_input_mm.len()` numbers each).
     ratios: Vec<f64>,
@@ -193,16 +195,35 @@ pub(crate) struct Accounting {
 
 impl Accounting {
     pub(crate) fn new(plan: &Plan, hw: &Hardware) -> Self {
-        let scale = 10f64.powi(hw.ratio_decimals as i32);
-        let ratios: Vec<Vec<f64>> =
-            plan.mixes.iter().map(|m| m.units.iter().map(|&u| u as f64 / scale).collect()).collect();
-        let mixes = plan
-            .mixes
-            .iter()
-            .zip(&ratios)
-            .map(|(m, r)| MixUse {
+        let d = hw.filament_diameter_mm;
+        let mut acc = Accounting {
+            area_mm2: std::f64::consts::PI * d * d / 4.0,
+            scale: 10f64.powi(hw.ratio_decimals as i32),
+            mixes: Vec::new(),
+            ratios: Vec::new(),
+            per_input_mm: vec![0.0; hw.inputs.len()],
+            purge: PurgeTotals { per_input_mm: vec![0.0; hw.inputs.len()], ..PurgeTotals::default() },
+            changes: 0,
+            z_capped_lines: 0,
+            dropped_retractions: 0,
+            tool_temperatures: 0,
+            layers: Vec::new(),
+            current: None,
+            warnings: plan.warnings.clone(),
+        };
+        acc.learn(plan);
+        acc
+    }
+
+    /// Takes in the mixes the plan resolved since the last call (gradient steps, as the layers
+    /// that print them come).
+    pub(crate) fn learn(&mut self, plan: &Plan) {
+        for m in &plan.mixes[self.mixes.len()..] {
+            let ratios: Vec<f64> = m.units.iter().map(|&u| u as f64 / self.scale).collect();
+            self.ratios.extend_from_slice(&ratios);
+            self.mixes.push(MixUse {
                 name: m.label.clone(),
-                ratios: r.clone(),
+                ratios,
                 predicted: m.predicted.to_hex(),
                 target: m.target.map(Srgb8::to_hex),
                 delta_e: m.delta_e,
@@ -214,22 +235,7 @@ impl Accounting {
                 gradient_step: m.gradient_step,
                 layers: Vec::new(),
                 filament_mm: 0.0,
-            })
-            .collect();
-        let d = hw.filament_diameter_mm;
-        Accounting {
-            area_mm2: std::f64::consts::PI * d * d / 4.0,
-            mixes,
-            ratios: ratios.concat(),
-            per_input_mm: vec![0.0; hw.inputs.len()],
-            purge: PurgeTotals { per_input_mm: vec![0.0; hw.inputs.len()], ..PurgeTotals::default() },
-            changes: 0,
-            z_capped_lines: 0,
-            dropped_retractions: 0,
-            tool_temperatures: 0,
-            layers: Vec::new(),
-            current: None,
-            warnings: plan.warnings.clone(),
+            });
         }
     }
 

@@ -13,8 +13,16 @@
 //! ends of gradients) keep their tools and the gradient steps take turns on the last two tools:
 //! the next step is written into the tool not in use, at the layer start where it is needed,
 //! then selected, so a tool is never redefined while it prints.
+//!
+//! Gradient steps cost what the file prints, not what the profile declares: a gradient over
+//! layers 0 to 99 999 on a 28-layer file solves 28 steps. Steps are resolved when a layer first
+//! needs one, except when all the gradients' steps together could fit the tools (at most
+//! `virtual_tools` of them, 1 000): those are resolved at once, to be defined at the start.
+//! Resolving every declared step up front took 72 s for 20 gradients of 100 000 steps on a
+//! 28-layer file (each step compared with every mix before it), and a perceived step (a colour
+//! solved) takes about 5 ms: 100 000 of them, nine minutes.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 use crate::colour::dialect::{formatted, round_to_units, Decimals};
 use crate::colour::named_mixes::{Palette, PaletteConfig};
@@ -23,7 +31,7 @@ use crate::colour::{Mix, MixingModel, Srgb8};
 use crate::options::Said;
 use crate::range::{Ceiling, LAYER_NUMBER, MAX_LAYERS, POSITION_MM};
 
-use super::profile::{At, GradientSpace, MixBase, MixProfile, MixRef};
+use super::profile::{At, GradientSpace, GradientSpec, MixBase, MixProfile, MixRef};
 use super::MixPassError;
 use crate::post::warning::Warning;
 
@@ -61,27 +69,51 @@ pub struct PlannedMix {
     pub slot: Slot,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy)]
 enum Kind {
     Solid(usize),
-    Gradient { end: At, steps: Vec<usize>, end_mix: usize, every: f64 },
+    /// `steps` indexes [`Plan::gradients`].
+    Gradient {
+        end: At,
+        steps: usize,
+        every: f64,
+    },
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy)]
 struct Segment {
     start: At,
     kind: Kind,
 }
 
+/// A gradient's steps: step `s` is the mix at `t = s / count` from `ends[0]` to `ends[1]`.
+#[derive(Debug, Clone)]
+struct Steps {
+    ends: [usize; 2],
+    count: u32,
+    space: GradientSpace,
+    /// `Cyan..Magenta`, for the steps' labels.
+    label: String,
+    /// The steps resolved so far, with their mixes.
+    resolved: BTreeMap<u32, usize>,
+}
+
 /// The resolved job; see the module docs.
 #[derive(Debug, Clone)]
 pub struct Plan {
-    /// Every mix the job uses.
+    /// Every mix the job uses (gradient steps: those resolved so far).
     pub mixes: Vec<PlannedMix>,
+    /// Each mix by its ratios as written, so that a new mix is found in one look-up.
+    by_units: HashMap<Vec<u64>, usize>,
+    model: MixingModel,
     segments: Vec<Segment>,
+    gradients: Vec<Steps>,
     tool_map: BTreeMap<u32, usize>,
     /// The two tools gradient steps take turns on (when they do not all fit).
     pub rotating_tools: [u32; 2],
+    /// Where a gradient step resolved while the print runs lives (a rotating tool, or written
+    /// directly); until the plan is made, where every new mix starts.
+    late_slot: Slot,
     /// What planning noticed and did anyway.
     pub warnings: Vec<Warning>,
     /// Decimals of the ratios written.
@@ -91,16 +123,14 @@ pub struct Plan {
 struct Resolver<'a> {
     profile: &'a MixProfile,
     palette: Palette,
-    model: MixingModel,
-    decimals: Decimals,
-    mixes: Vec<PlannedMix>,
-    warnings: Vec<Warning>,
+    plan: Plan,
 }
 
 impl Resolver<'_> {
     /// The index of the mix `r` names, adding it if new.
     fn add(&mut self, r: &MixRef) -> Result<usize, MixPassError> {
         let hw = &self.profile.hardware;
+        let model = &self.plan.model;
         let unit = |i: usize| {
             let mut w = vec![0.0; hw.inputs.len()];
             w[i] = 1.0;
@@ -108,26 +138,24 @@ impl Resolver<'_> {
         };
         let (mut mix, target, delta_e, out_of_gamut) = match &r.base {
             MixBase::Colour(c) => {
-                let s = solve(&self.model, *c);
+                let s = solve(model, *c);
                 (s.mix, Some(*c), Some(s.delta_e), s.out_of_gamut)
             }
             MixBase::Name(name) => match self.palette.get(name) {
                 Some(_) => {
-                    let res = self
-                        .palette
-                        .resolve(name, &self.model)
-                        .map_err(|e| MixPassError::Config(e.to_string()))?;
-                    if let Some(miss) = self.palette.name_out_of_gamut(name, &self.model) {
+                    let res =
+                        self.palette.resolve(name, model).map_err(|e| MixPassError::Config(e.to_string()))?;
+                    if let Some(miss) = self.palette.name_out_of_gamut(name, model) {
                         let warning = Warning::NameOutOfGamut {
                             mix: res.name.clone(),
                             meant_hex: miss.meant.to_hex(),
                             predicted_hex: miss.predicted.to_hex(),
                             nearest_hex: miss.nearest.predicted.to_hex(),
-                            nearest_ratios: formatted(&miss.nearest.mix, self.decimals).join(":"),
+                            nearest_ratios: formatted(&miss.nearest.mix, self.plan.decimals).join(":"),
                             delta_e: miss.nearest.delta_e,
                         };
-                        if !self.warnings.contains(&warning) {
-                            self.warnings.push(warning);
+                        if !self.plan.warnings.contains(&warning) {
+                            self.plan.warnings.push(warning);
                         }
                     }
                     (res.mix, res.target, res.delta_e, res.out_of_gamut)
@@ -153,44 +181,14 @@ impl Resolver<'_> {
         }
         if out_of_gamut {
             if let (Some(t), Some(de)) = (target, delta_e) {
-                self.warnings.push(Warning::OutOfGamut {
+                self.plan.warnings.push(Warning::OutOfGamut {
                     mix: r.label(),
                     target_hex: t.to_hex(),
                     delta_e: de,
                 });
             }
         }
-        self.push(r.label(), mix, target, delta_e, out_of_gamut, false)
-    }
-
-    fn push(
-        &mut self,
-        label: String,
-        mix: Mix,
-        target: Option<Srgb8>,
-        delta_e: Option<f64>,
-        out_of_gamut: bool,
-        gradient_step: bool,
-    ) -> Result<usize, MixPassError> {
-        let units = round_to_units(&mix, self.decimals);
-        if let Some(i) = self.mixes.iter().position(|m| m.units == units) {
-            // The same ratios under another name: one tool. A fixed use wins over a step.
-            self.mixes[i].gradient_step &= gradient_step;
-            return Ok(i);
-        }
-        let predicted = self.model.predict(&mix).map_err(|e| MixPassError::Config(e.to_string()))?;
-        self.mixes.push(PlannedMix {
-            label,
-            mix,
-            units,
-            predicted,
-            target,
-            delta_e,
-            out_of_gamut,
-            gradient_step,
-            slot: Slot::Direct,
-        });
-        Ok(self.mixes.len() - 1)
+        self.plan.push(r.label(), mix, target, delta_e, out_of_gamut, false)
     }
 }
 
@@ -205,64 +203,63 @@ fn bounded(at: At, what: &str) -> Result<At, MixPassError> {
 }
 
 impl Plan {
-    /// Resolves every mix of `profile` and gives each a place in the firmware.
+    /// Resolves every mix of `profile` and gives each a place in the firmware; gradient steps
+    /// are resolved as the layers that print them ask for them, unless they could all fit the
+    /// tools (see the module docs).
     pub fn new(profile: &MixProfile) -> Result<Plan, MixPassError> {
         profile.validate()?;
         let hw = &profile.hardware;
         let model = hw.mixing_model().map_err(|e| MixPassError::Config(e.to_string()))?;
         let decimals = Decimals::new(hw.ratio_decimals).map_err(|e| MixPassError::Config(e.to_string()))?;
         let palette = Palette::seed().with_config(PaletteConfig { mix: profile.mix.clone() });
-        let mut r = Resolver { profile, palette, model, decimals, mixes: Vec::new(), warnings: Vec::new() };
+        let plan = Plan {
+            mixes: Vec::new(),
+            by_units: HashMap::new(),
+            model,
+            segments: Vec::new(),
+            gradients: Vec::new(),
+            tool_map: BTreeMap::new(),
+            rotating_tools: [0, 0],
+            late_slot: Slot::Direct,
+            warnings: Vec::new(),
+            decimals,
+        };
+        let mut r = Resolver { profile, palette, plan };
 
-        let mut segments = Vec::new();
         for entry in &profile.schedule {
             let start = bounded(entry.at()?, "a schedule entry's")?;
-            segments.push(Segment { start, kind: Kind::Solid(r.add(&entry.mix)?) });
+            let kind = Kind::Solid(r.add(&entry.mix)?);
+            r.plan.segments.push(Segment { start, kind });
         }
-        for g in &profile.gradient {
-            let (start, end) = g.range()?;
-            let (start, end) = (bounded(start, "a gradient's start")?, bounded(end, "a gradient's end")?);
-            let a = r.add(&g.start)?;
-            let b = r.add(&g.end)?;
-            let (count, every) = match (start, end) {
-                (At::Layer(x), At::Layer(y)) => {
-                    (f64::from((y - x) / g.every_layers), f64::from(g.every_layers))
+        let spans: Vec<(At, At, u32, f64)> = profile.gradient.iter().map(span).collect::<Result<_, _>>()?;
+        let declared: u64 = spans.iter().map(|&(.., count, _)| u64::from(count) + 1).sum();
+        let eager = declared <= hw.virtual_tools as u64;
+        for (g, (start, end, count, every)) in profile.gradient.iter().zip(spans) {
+            let ends = [r.add(&g.start)?, r.add(&g.end)?];
+            let label = format!("{}..{}", g.start.label(), g.end.label());
+            let steps = r.plan.gradients.len();
+            r.plan.gradients.push(Steps { ends, count, space: g.space, label, resolved: BTreeMap::new() });
+            if eager {
+                for s in 0..=count {
+                    r.plan.step(steps, s)?;
                 }
-                (At::Z(x), At::Z(y)) => (((y - x) / g.z_step_mm - 1e-9).ceil().max(0.0), g.z_step_mm),
-                _ => unreachable!("range() gives two ends of one kind"),
-            };
-            // A step per layer at most: `z0-1e308` must be refused, not allocated.
-            let count = Ceiling::new(MAX_LAYERS, "gradient steps")
-                .check(count, || format!("the gradient {}..{}", g.start.label(), g.end.label()))
-                .map_err(|e| MixPassError::Config(e.to_string()))? as u32;
-            let mut steps = Vec::with_capacity(count as usize + 1);
-            for s in 0..=count {
-                let t = if count == 0 { 0.0 } else { f64::from(s) / f64::from(count) };
-                let (ma, mb) = (r.mixes[a].mix.clone(), r.mixes[b].mix.clone());
-                let mix = match g.space {
-                    GradientSpace::Mix => ma.lerp(&mb, t),
-                    GradientSpace::Perceived => lerp_perceived(&r.model, &ma, &mb, t).map(|s| s.mix),
-                }
-                .map_err(|e| MixPassError::Config(e.to_string()))?;
-                let label = format!("{}..{} {}/{}", g.start.label(), g.end.label(), s, count);
-                let step = r.push(label, mix, None, None, false, true)?;
-                steps.push(step);
             }
-            segments.push(Segment { start, kind: Kind::Gradient { end, steps, end_mix: b, every } });
+            r.plan.segments.push(Segment { start, kind: Kind::Gradient { end, steps, every } });
         }
         let layer_kind = |s: &Segment| matches!(s.start, At::Layer(_));
-        if segments.iter().any(layer_kind) && !segments.iter().all(layer_kind) {
+        if r.plan.segments.iter().any(layer_kind) && !r.plan.segments.iter().all(layer_kind) {
             return Err(MixPassError::Config(
                 "a schedule uses layers or heights, not both (convert one to the other)".into(),
             ));
         }
-        segments.sort_by(|x, y| key(x.start).total_cmp(&key(y.start)));
+        r.plan.segments.sort_by(|x, y| key(x.start).total_cmp(&key(y.start)));
 
-        let mut tool_map = BTreeMap::new();
         for (tool, mix) in profile.tool_map()? {
-            tool_map.insert(tool, r.add(&mix)?);
+            let i = r.add(&mix)?;
+            r.plan.tool_map.insert(tool, i);
         }
-        if segments.is_empty() && tool_map.is_empty() {
+        let mut plan = r.plan;
+        if plan.segments.is_empty() && plan.tool_map.is_empty() {
             return Err(MixPassError::Needs(
                 Said::new("mix profile: nothing to do: give a schedule (")
                     .option("at_layer")
@@ -276,12 +273,12 @@ impl Plan {
             ));
         }
 
-        let mut mixes = r.mixes;
         let tools = hw.virtual_tools as u32;
-        let mut rotating_tools = [0, 0];
         if hw.dialect().uses_tools() {
-            if mixes.len() as u32 <= tools {
-                for (t, m) in (0u32..).zip(mixes.iter_mut()) {
+            // Steps left to resolve while the print runs are more than the tools (that is why
+            // they were left): they take turns, as resolved steps that do not fit do.
+            if eager && plan.mixes.len() as u32 <= tools {
+                for (t, m) in (0u32..).zip(plan.mixes.iter_mut()) {
                     m.slot = Slot::Fixed(t);
                 }
             } else {
@@ -289,14 +286,18 @@ impl Plan {
                 // before it is selected, while the other prints); the mixes before them keep
                 // a tool each, gradient steps always rotate.
                 if tools < 2 {
+                    let n = plan.mixes.len();
+                    let need = if eager {
+                        format!("{n} mixes need {n} virtual tools")
+                    } else {
+                        format!("{n} mixes and {declared} gradient steps need a virtual tool each")
+                    };
                     return Err(MixPassError::Config(format!(
-                        "{} mixes need {} virtual tools, or 2 to take turns; the firmware has {tools}",
-                        mixes.len(),
-                        mixes.len()
+                        "{need}, or 2 to take turns; the firmware has {tools}"
                     )));
                 }
                 let mut t = 0;
-                for m in &mut mixes {
+                for m in &mut plan.mixes {
                     m.slot = if m.gradient_step || t + 2 >= tools {
                         Slot::Rotating
                     } else {
@@ -304,10 +305,68 @@ impl Plan {
                         Slot::Fixed(t - 1)
                     };
                 }
-                rotating_tools = [tools - 2, tools - 1];
+                plan.rotating_tools = [tools - 2, tools - 1];
+                plan.late_slot = Slot::Rotating;
             }
         }
-        Ok(Plan { mixes, segments, tool_map, rotating_tools, warnings: r.warnings, decimals })
+        Ok(plan)
+    }
+
+    /// The index of `mix`, added if no mix has its ratios as written (the same ratios under
+    /// another name are one tool; a fixed use wins over a step).
+    fn push(
+        &mut self,
+        label: String,
+        mix: Mix,
+        target: Option<Srgb8>,
+        delta_e: Option<f64>,
+        out_of_gamut: bool,
+        gradient_step: bool,
+    ) -> Result<usize, MixPassError> {
+        let units = round_to_units(&mix, self.decimals);
+        if let Some(&i) = self.by_units.get(&units) {
+            self.mixes[i].gradient_step &= gradient_step;
+            return Ok(i);
+        }
+        let predicted = self.model.predict(&mix).map_err(|e| MixPassError::Config(e.to_string()))?;
+        self.by_units.insert(units.clone(), self.mixes.len());
+        self.mixes.push(PlannedMix {
+            label,
+            mix,
+            units,
+            predicted,
+            target,
+            delta_e,
+            out_of_gamut,
+            gradient_step,
+            slot: self.late_slot,
+        });
+        Ok(self.mixes.len() - 1)
+    }
+
+    /// The mix of step `s` of gradient `g`, resolved the first time it is asked for.
+    fn step(&mut self, g: usize, s: u32) -> Result<usize, MixPassError> {
+        let steps = &self.gradients[g];
+        if let Some(&i) = steps.resolved.get(&s) {
+            return Ok(i);
+        }
+        let count = steps.count;
+        let t = if count == 0 { 0.0 } else { f64::from(s) / f64::from(count) };
+        let (ma, mb) = (&self.mixes[steps.ends[0]].mix, &self.mixes[steps.ends[1]].mix);
+        let mix = match steps.space {
+            GradientSpace::Mix => ma.lerp(mb, t),
+            GradientSpace::Perceived => lerp_perceived(&self.model, ma, mb, t).map(|s| s.mix),
+        }
+        .map_err(|e| MixPassError::Config(e.to_string()))?;
+        let label = format!("{} {s}/{count}", steps.label);
+        let i = self.push(label, mix, None, None, false, true)?;
+        self.gradients[g].resolved.insert(s, i);
+        Ok(i)
+    }
+
+    /// Whether some gradient steps are still to be resolved (as layers ask for them).
+    pub(crate) fn steps_to_come(&self) -> bool {
+        self.gradients.iter().any(|g| g.resolved.len() <= g.count as usize)
     }
 
     /// Whether slicer tools are mapped (multi-tool input) rather than scheduled by layer.
@@ -326,36 +385,55 @@ impl Plan {
         })
     }
 
-    /// The mix wanted at `layer` (0-based) printed at `z_mm`.
-    pub(crate) fn mix_at(&self, layer: u32, z_mm: f64) -> Option<usize> {
-        let first = self.segments.first()?;
+    /// The mix wanted at `layer` (0-based) printed at `z_mm` (a gradient's step is resolved
+    /// here the first time a layer needs it).
+    pub(crate) fn mix_at(&mut self, layer: u32, z_mm: f64) -> Result<Option<usize>, MixPassError> {
+        let Some(first) = self.segments.first() else { return Ok(None) };
         let k = match first.start {
             At::Layer(_) => f64::from(layer),
             At::Z(_) => z_mm,
         };
-        let seg = self.segments.iter().rev().find(|s| key(s.start) <= k + 1e-9).unwrap_or(first);
-        Some(match &seg.kind {
-            Kind::Solid(i) => *i,
-            Kind::Gradient { end, steps, end_mix, every } => {
-                if k > key(*end) + 1e-9 {
-                    *end_mix
-                } else {
-                    let s = ((k - key(seg.start)) / every + 1e-9).floor().max(0.0) as usize;
-                    steps[s.min(steps.len() - 1)]
-                }
+        let seg = *self.segments.iter().rev().find(|s| key(s.start) <= k + 1e-9).unwrap_or(first);
+        match seg.kind {
+            Kind::Solid(i) => Ok(Some(i)),
+            Kind::Gradient { end, steps, .. } if k > key(end) + 1e-9 => {
+                Ok(Some(self.gradients[steps].ends[1]))
             }
-        })
+            Kind::Gradient { steps, every, .. } => {
+                // Within 0..=count, so the cast is exact.
+                let s = ((k - key(seg.start)) / every + 1e-9)
+                    .floor()
+                    .clamp(0.0, f64::from(self.gradients[steps].count));
+                self.step(steps, s as u32).map(Some)
+            }
+        }
     }
 
     /// The mix to select when the print starts.
-    pub fn initial(&self, slicer_tool: u32) -> Result<usize, MixPassError> {
+    pub fn initial(&mut self, slicer_tool: u32) -> Result<usize, MixPassError> {
         if self.maps_tools() {
             self.for_tool(slicer_tool)
         } else {
             // Layer 0, or the lowest height of a Z schedule.
-            Ok(self.mix_at(0, f64::NEG_INFINITY).unwrap_or(0))
+            Ok(self.mix_at(0, f64::NEG_INFINITY)?.unwrap_or(0))
         }
     }
+}
+
+/// Where a gradient starts and ends, its steps after the first, and the layers or mm between
+/// steps. A step per layer at most: `z0-1e308` must be refused, not stepped.
+fn span(g: &GradientSpec) -> Result<(At, At, u32, f64), MixPassError> {
+    let (start, end) = g.range()?;
+    let (start, end) = (bounded(start, "a gradient's start")?, bounded(end, "a gradient's end")?);
+    let (count, every) = match (start, end) {
+        (At::Layer(x), At::Layer(y)) => (f64::from((y - x) / g.every_layers), f64::from(g.every_layers)),
+        (At::Z(x), At::Z(y)) => (((y - x) / g.z_step_mm - 1e-9).ceil().max(0.0), g.z_step_mm),
+        _ => unreachable!("range() gives two ends of one kind"),
+    };
+    let count = Ceiling::new(MAX_LAYERS, "gradient steps")
+        .check(count, || format!("the gradient {}..{}", g.start.label(), g.end.label()))
+        .map_err(|e| MixPassError::Config(e.to_string()))?;
+    Ok((start, end, count as u32, every))
 }
 
 fn key(at: At) -> f64 {
@@ -405,8 +483,11 @@ mod tests {
 
     #[test]
     fn the_seeds_schedule() {
-        let plan = Plan::new(&seed_schedule()).unwrap();
-        let label = |l| plan.mixes[plan.mix_at(l, 0.0).unwrap()].label.clone();
+        let mut plan = Plan::new(&seed_schedule()).unwrap();
+        let mut label = |l| {
+            let i = plan.mix_at(l, 0.0).unwrap().unwrap();
+            plan.mixes[i].label.clone()
+        };
         assert_eq!(
             [label(0), label(9), label(10), label(24), label(25), label(74), label(75), label(500)],
             ["Orange", "Orange", "Pink", "Pink", "Orange", "Orange", "Blue", "Blue"]
@@ -473,17 +554,72 @@ mod tests {
     fn gradient_steps_share_two_tools_when_they_do_not_fit() {
         let mut p = MixProfile::default();
         p.gradient.push(GradientSpec::parse("0-40=Cyan..Magenta", GradientSpace::Mix).unwrap());
-        let plan = Plan::new(&p).unwrap();
-        // 41 steps (ends included, deduplicated with the two fixed ends) on 16 tools.
-        assert_eq!(plan.mixes.len(), 41);
+        let mut plan = Plan::new(&p).unwrap();
+        // 41 steps (ends included) on 16 tools: the ends have tools of their own, and a step is
+        // resolved when a layer first needs it.
+        assert_eq!(plan.mixes.len(), 2);
         assert_eq!(plan.rotating_tools, [14, 15]);
-        let step = |l| &plan.mixes[plan.mix_at(l, 0.0).unwrap()];
+        let mut step = |l| {
+            let i = plan.mix_at(l, 0.0).unwrap().unwrap();
+            plan.mixes[i].clone()
+        };
         assert_eq!(step(0).slot, Slot::Fixed(0));
         assert_eq!(step(40).slot, Slot::Fixed(1));
         assert_eq!(step(20).slot, Slot::Rotating);
         assert_eq!(step(20).units, [5000, 5000, 0, 0]);
         assert_eq!(step(10).units, [7500, 2500, 0, 0]);
         assert_eq!(step(99).units, [0, 10000, 0, 0]);
+        for l in 0..=40 {
+            step(l);
+        }
+        // Deduplicated with the two fixed ends.
+        assert_eq!(plan.mixes.len(), 41);
+    }
+
+    /// A gradient whose steps fit the tools with the fixed mixes: every step resolved at once,
+    /// each with a tool of its own defined at the start, in the order the profile gives them.
+    #[test]
+    fn gradient_steps_that_fit_get_tools_of_their_own() {
+        let mut p = MixProfile::default();
+        for g in ["0-2=Cyan..Magenta", "3-5=Orange..Yellow"] {
+            p.gradient.push(GradientSpec::parse(g, GradientSpace::Mix).unwrap());
+        }
+        let plan = Plan::new(&p).unwrap();
+        let labels: Vec<&str> = plan.mixes.iter().map(|m| m.label.as_str()).collect();
+        assert_eq!(
+            labels,
+            ["Cyan", "Magenta", "Cyan..Magenta 1/2", "Orange", "Yellow", "Orange..Yellow 1/2"]
+        );
+        let slots: Vec<Slot> = plan.mixes.iter().map(|m| m.slot).collect();
+        assert_eq!(slots, (0..6).map(Slot::Fixed).collect::<Vec<_>>());
+    }
+
+    /// Regression (B4): each gradient was held to 100 000 steps but not their total, and every
+    /// declared step was resolved before the first line, each compared with every mix before
+    /// it: 20 gradients over layers 0 to 99 999 took 72 s on a 28-layer file, 3 500 of them
+    /// hours. The plan now resolves the ends, and a step when a layer first asks for it: the
+    /// layers printed cost a step each, whatever span the profile declares.
+    #[test]
+    fn b4_gradient_steps_cost_the_layers_printed_not_the_layers_declared() {
+        let mut p = MixProfile::default();
+        for space in [GradientSpace::Mix; 19].into_iter().chain([GradientSpace::Perceived]) {
+            p.gradient.push(GradientSpec::parse("0-99999=Cyan..Magenta", space).unwrap());
+        }
+        let mut plan = Plan::new(&p).unwrap();
+        assert_eq!(plan.mixes.len(), 2);
+        assert!(plan.gradients.iter().all(|g| g.resolved.is_empty()));
+        // The last gradient given is the one in force (they all start at layer 0).
+        for layer in 0..28 {
+            plan.mix_at(layer, 0.0).unwrap();
+            plan.mix_at(layer, 0.0).unwrap();
+        }
+        let resolved: Vec<usize> = plan.gradients.iter().map(|g| g.resolved.len()).collect();
+        assert_eq!(resolved, [[0; 19].as_slice(), &[28]].concat());
+        // Past the declared span, the end.
+        assert_eq!(plan.mix_at(100_000, 0.0).unwrap(), Some(1));
+        // The total is not refused: the file's layers bound the work.
+        let declared: u64 = p.gradient.iter().map(|g| u64::from(span(g).unwrap().2) + 1).sum();
+        assert_eq!(declared, 2_000_000);
     }
 
     #[test]

@@ -341,7 +341,14 @@ fn decompress(data: &[u8], h: Header, out: &mut Vec<u8>) -> io::Result<()> {
                 .take(expected as u64 + 1)
                 .read_to_end(out)
                 .map_err(|e| invalid(format!("deflate data: {e}")))?;
-            if out.len() != expected {
+            // Read one byte past the header's size and no further (a bomb is not inflated to
+            // find how far it goes): past it, the data decodes to more.
+            if out.len() > expected {
+                return Err(invalid(format!(
+                    "deflate data decodes to more than the {expected} bytes its header says"
+                )));
+            }
+            if out.len() < expected {
                 return Err(invalid(format!(
                     "deflate data decodes to {} bytes, not the {expected} its header says",
                     out.len()
@@ -513,6 +520,71 @@ mod tests {
         let mut text = b"G1 X1\n".to_vec();
         drop_empty_lines(&mut text, 6);
         assert_eq!(text, b"G1 X1\n");
+    }
+
+    /// Regression (B2): a heatshrink block whose header gave fewer bytes than its data decodes
+    /// to was cut at the header's size without a word. Both compressions refuse a size the data
+    /// does not decode to, either way, naming what it decodes to (heatshrink counts the rest of
+    /// its tokens; deflate is read one byte past the size, no further).
+    #[test]
+    fn b2_a_size_the_data_does_not_decode_to_is_refused_both_ways() {
+        use std::io::Write;
+        let text = b"G1 X10.5 Y20 E0.4\n".repeat(50);
+        let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+        z.write_all(&text).unwrap();
+        let deflated = z.finish().unwrap();
+        let mut packed = Vec::new();
+        heatshrink::encode(&text, heatshrink::Params { window_bits: 12, lookahead_bits: 4 }, &mut packed);
+        let n = text.len() as u32;
+        let cases = [
+            (
+                Compression::Deflate,
+                &deflated,
+                0,
+                "deflate data decodes to more than the 0 bytes its header says",
+            ),
+            (
+                Compression::Deflate,
+                &deflated,
+                n - 1,
+                "deflate data decodes to more than the 899 bytes its header says",
+            ),
+            (
+                Compression::Deflate,
+                &deflated,
+                n + 1,
+                "deflate data decodes to 900 bytes, not the 901 its header says",
+            ),
+            (
+                Compression::Heatshrink12,
+                &packed,
+                0,
+                "heatshrink data decodes to 900 bytes, not the 0 its header says",
+            ),
+            (
+                Compression::Heatshrink12,
+                &packed,
+                n - 1,
+                "heatshrink data decodes to 900 bytes, not the 899 its header says",
+            ),
+            (
+                Compression::Heatshrink12,
+                &packed,
+                n + 1,
+                "heatshrink data decodes to 900 bytes, not the 901 its header says",
+            ),
+        ];
+        for (compression, data, uncompressed, message) in cases {
+            let h = Header { kind: Kind::GCode, compression, uncompressed, stored: data.len() as u32 };
+            let err = decompress(data, h, &mut Vec::new()).unwrap_err();
+            assert_eq!(err.to_string(), message);
+        }
+        for (compression, data) in [(Compression::Deflate, &deflated), (Compression::Heatshrink12, &packed)] {
+            let h = Header { kind: Kind::GCode, compression, uncompressed: n, stored: data.len() as u32 };
+            let mut out = Vec::new();
+            decompress(data, h, &mut out).unwrap();
+            assert!(out == text);
+        }
     }
 
     /// libbgcode's rule a line at a time: a line goes when, past its leading blanks, it is
