@@ -42,8 +42,9 @@ fn seed_fire_order_fires_while_moving_and_lands_on_the_same_pixels() {
         machine.finish(&mut |_, _| {});
         let canvas = machine.inkjet().unwrap();
         assert_eq!(canvas.layers()[0].heads[0], image, "{order:?}: the drops land on the image");
+        let sim = machine.report();
         let moving =
-            canvas.warnings().iter().filter(|w| matches!(w, InkjetWarning::FireWithoutM400 { .. })).count();
+            sim.inkjet_warnings().filter(|w| matches!(w, InkjetWarning::FireWithoutM400 { .. })).count();
         let expected = match order {
             FireOrder::After => 0,
             FireOrder::Before => (report.columns_fired - report.bands_printed) as usize,

@@ -75,11 +75,18 @@ fn board_layers(fires: &[Fire], like: &[InkjetLayer]) -> Vec<InkjetLayer> {
         height_px: first.height(),
     };
     let mut canvas = InkjetCanvas::new(&inkjet.printhead, geometry).unwrap();
+    let mut warnings = Vec::new();
     for f in fires {
         let mm = |axis: usize| f.steps[axis] as f64 / STEPS_PER_MM[axis];
-        canvas.on_m700(Some(u32::from(f.head)), u64::from(f.nozzles), mm(0), mm(1), mm(2), false);
+        canvas.on_m700(
+            Some(u32::from(f.head)),
+            u64::from(f.nozzles),
+            [mm(0), mm(1), mm(2)],
+            false,
+            &mut warnings,
+        );
     }
-    assert!(canvas.warnings().is_empty(), "{:?}", canvas.warnings());
+    assert!(warnings.is_empty(), "{warnings:?}");
     canvas.layers().to_vec()
 }
 

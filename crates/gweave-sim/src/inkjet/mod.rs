@@ -146,7 +146,6 @@ pub struct InkjetCanvas {
     printhead: PrintheadProfile,
     pitch_mm: f64,
     layers: Vec<InkjetLayer>,
-    warnings: Vec<InkjetWarning>,
     drops_per_head: Vec<u64>,
 }
 
@@ -177,35 +176,36 @@ impl InkjetCanvas {
             printhead: profile.clone(),
             pitch_mm: profile.pitch_mm(),
             layers: Vec::new(),
-            warnings: Vec::new(),
             drops_per_head: vec![0; profile.heads.len()],
         })
     }
 
     /// Records one fire command. `head` is the `P` word (None when absent), `bits` the `S`
-    /// word, `x_mm`/`y_mm`/`z_mm` the carriage position when it runs, and `moved_since_m400`
-    /// whether a move was queued after the last `M400`. The time it takes is the estimator's
-    /// (`FireWait`).
+    /// word, `at_mm` the carriage's X, Y and Z when it runs, and `moved_since_m400`
+    /// whether a move was queued after the last `M400`. What was wrong with it is added to
+    /// `warnings`: the canvas keeps none, since a file of a million bad fires would grow them
+    /// without bound (the machine's report keeps the first ones and counts the rest). The time
+    /// it takes is the estimator's (`FireWait`).
     pub fn on_m700(
         &mut self,
         head: Option<u32>,
         bits: u64,
-        x_mm: f64,
-        y_mm: f64,
-        z_mm: f64,
+        at_mm: [f64; 3],
         moved_since_m400: bool,
+        warnings: &mut Vec<InkjetWarning>,
     ) {
+        let [x_mm, y_mm, z_mm] = at_mm;
         let Some(head) = head else {
-            self.warnings.push(InkjetWarning::MissingHead { x_mm, y_mm });
+            warnings.push(InkjetWarning::MissingHead { x_mm, y_mm });
             return;
         };
         let heads = self.printhead.heads.len();
         if head as usize >= heads {
-            self.warnings.push(InkjetWarning::UnknownHead { head });
+            warnings.push(InkjetWarning::UnknownHead { head });
             return;
         }
         if moved_since_m400 {
-            self.warnings.push(InkjetWarning::FireWithoutM400 { head, x_mm, y_mm });
+            warnings.push(InkjetWarning::FireWithoutM400 { head, x_mm, y_mm });
         }
         let g = self.geometry;
         let same_layer = matches!(self.layers.last(), Some(l) if (l.z_mm - z_mm).abs() <= SAME_Z_MM);
@@ -227,13 +227,8 @@ impl InkjetCanvas {
             }
         }
         if lost > 0 {
-            self.warnings.push(InkjetWarning::OffCanvas { head, x_mm, y_mm, lost });
+            warnings.push(InkjetWarning::OffCanvas { head, x_mm, y_mm, lost });
         }
-    }
-
-    /// What went wrong with the fires so far.
-    pub fn warnings(&self) -> &[InkjetWarning] {
-        &self.warnings
     }
 
     /// Layers with at least one fire, in the order they were started.
@@ -297,17 +292,18 @@ mod tests {
             ..PrintheadProfile::default()
         };
         let mut c = canvas(&profile);
+        let mut w = Vec::new();
         // Address 0 (bit 0) fires row 2; carriage at pixel (1, 0) centre.
-        c.on_m700(Some(0), 0b001, 11.5, 20.5, 0.1, false);
+        c.on_m700(Some(0), 0b001, [11.5, 20.5, 0.1], false, &mut w);
         // Head 1, address 1 -> row 0, shifted by (2, 1) mm -> pixel (3, 1).
-        c.on_m700(Some(1), 0b010, 11.5, 20.5, 0.1, false);
-        assert!(c.warnings().is_empty(), "{:?}", c.warnings());
+        c.on_m700(Some(1), 0b010, [11.5, 20.5, 0.1], false, &mut w);
+        assert!(w.is_empty(), "{w:?}");
         let l = &c.layers()[0];
         assert_eq!(l.z_mm, 0.1);
         assert!(l.heads[0].get(1, 2) && l.heads[0].count_ones() == 1);
         assert!(l.heads[1].get(3, 1) && l.heads[1].count_ones() == 1);
         // A new Z opens a new layer.
-        c.on_m700(Some(0), 0b111, 11.5, 20.5, 0.2, false);
+        c.on_m700(Some(0), 0b111, [11.5, 20.5, 0.2], false, &mut w);
         assert_eq!(c.layers().len(), 2);
         assert_eq!(c.layers()[1].heads[0].count_ones(), 3);
         assert_eq!(c.drops_per_head(), &[4, 1]);
@@ -317,15 +313,16 @@ mod tests {
     fn typed_warnings() {
         let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
-        c.on_m700(None, 1, 10.5, 20.5, 0.1, false);
-        c.on_m700(Some(3), 1, 10.5, 20.5, 0.1, false);
-        c.on_m700(Some(0), 1, 10.5, 20.5, 0.1, true);
+        let mut w = Vec::new();
+        c.on_m700(None, 1, [10.5, 20.5, 0.1], false, &mut w);
+        c.on_m700(Some(3), 1, [10.5, 20.5, 0.1], false, &mut w);
+        c.on_m700(Some(0), 1, [10.5, 20.5, 0.1], true, &mut w);
         // 12 rows from y pixel 0: rows 6..11 fall off the 6-row canvas; x = 9.5 is off too.
-        c.on_m700(Some(0), 0xFFF, 10.5, 20.5, 0.1, false);
-        c.on_m700(Some(0), 1, 9.5, 20.5, 0.1, false);
+        c.on_m700(Some(0), 0xFFF, [10.5, 20.5, 0.1], false, &mut w);
+        c.on_m700(Some(0), 1, [9.5, 20.5, 0.1], false, &mut w);
         assert_eq!(
-            c.warnings(),
-            &[
+            w,
+            [
                 InkjetWarning::MissingHead { x_mm: 10.5, y_mm: 20.5 },
                 InkjetWarning::UnknownHead { head: 3 },
                 InkjetWarning::FireWithoutM400 { head: 0, x_mm: 10.5, y_mm: 20.5 },
@@ -341,7 +338,7 @@ mod tests {
     fn layer_pngs_read_back() {
         let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
-        c.on_m700(Some(0), 0b101, 13.5, 20.5, 0.1, false);
+        c.on_m700(Some(0), 0b101, [13.5, 20.5, 0.1], false, &mut Vec::new());
         let dir = tempfile::tempdir().unwrap();
         let paths = c.write_layer_pngs(dir.path()).unwrap();
         assert_eq!(paths, vec![dir.path().join("layer_00000_head0.png")]);

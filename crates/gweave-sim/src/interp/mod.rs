@@ -541,14 +541,13 @@ impl Machine {
         let Some(canvas) = &mut self.inkjet else {
             return;
         };
-        let seen = canvas.warnings().len();
-        canvas.on_m700(head, bits, x, y, z, moved);
-        let mut new: Vec<_> = canvas.warnings()[seen..].to_vec();
+        let mut found = Vec::new();
+        canvas.on_m700(head, bits, [x, y, z], moved, &mut found);
         if let Some(check) = &mut self.recoat {
             let a = self.core.state().pos[state::A];
-            check.on_fire([x, y, z, a], z, &mut new);
+            check.on_fire([x, y, z, a], z, &mut found);
         }
-        for detail in new {
+        for detail in found {
             self.warn(WarningKind::Inkjet { detail });
         }
         self.run_core(line, out);

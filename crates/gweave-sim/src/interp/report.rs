@@ -211,6 +211,16 @@ pub struct SimReport {
     pub huge_arcs: HugeArcs,
 }
 
+impl SimReport {
+    /// The inkjet warnings among the first warnings kept ([`SimReport::warnings`]), in order.
+    pub fn inkjet_warnings(&self) -> impl Iterator<Item = &InkjetWarning> {
+        self.warnings.iter().filter_map(|w| match &w.kind {
+            WarningKind::Inkjet { detail } => Some(detail),
+            _ => None,
+        })
+    }
+}
+
 impl Machine {
     /// What the run so far did. Moves still queued in the planner are not counted yet; call
     /// [`Machine::finish`] at the end of a job first.
