@@ -5,6 +5,7 @@
 
 use std::collections::BTreeSet;
 use std::path::Path;
+use std::sync::mpsc;
 
 use gweave::gen::bitmap::{Bitmap, Channel, ThresholdOptions};
 use gweave::gen::printhead::{HeadOffset, PrintheadProfile};
@@ -43,6 +44,8 @@ fn drive(gcode: &str, printhead: &PrintheadProfile, geometry: CanvasGeometry) ->
     };
     let mut machine =
         Machine::new(MachineProfile { inkjet: Some(inkjet), ..MachineProfile::default() }).unwrap();
+    let (sink, finished) = mpsc::channel();
+    machine.send_inkjet_layers_to(Box::new(sink));
     let mut replies = Vec::new();
     for raw in gcode.lines() {
         let mut out = |_t: f64, l: &str| replies.push(format!("{raw}: {l}"));
@@ -52,7 +55,7 @@ fn drive(gcode: &str, printhead: &PrintheadProfile, geometry: CanvasGeometry) ->
     assert!(replies.is_empty(), "{:?}", &replies[..1]);
     let report = machine.report();
     assert!(report.warnings.iter().all(|w| w.kind.name() == "inkjet"), "{:?}", report.warnings);
-    Driven { report, layers: machine.inkjet().unwrap().layers().to_vec() }
+    Driven { report, layers: finished.try_iter().collect() }
 }
 
 /// Y values of every G1 that moves in Y.

@@ -48,7 +48,7 @@ use gweave::{Block, Command};
 use thiserror::Error;
 
 use crate::inkjet::recoat::RecoatCheck;
-use crate::inkjet::{CanvasGeometry, FireWait, InkjetCanvas, InkjetError};
+use crate::inkjet::{CanvasGeometry, FireWait, InkjetCanvas, InkjetError, LayerSink};
 use crate::motion::estimate::{EstimateError, Estimator, ToolChange};
 use crate::motion::speed_trace::SpeedTrace;
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
@@ -401,6 +401,20 @@ impl Machine {
         self.inkjet.as_ref()
     }
 
+    /// Hands each finished inkjet layer to `sink` (`gweave sim --raster-out`), on a machine
+    /// with a printhead; without a sink a finished layer is only cleared for the next.
+    pub fn send_inkjet_layers_to(&mut self, sink: Box<dyn LayerSink>) {
+        if let Some(canvas) = &mut self.inkjet {
+            canvas.send_layers_to(sink);
+        }
+    }
+
+    /// Why a finished inkjet layer could not be handed over: the sink's first failure (the
+    /// layers after it were not handed over). Taken: a second call says nothing.
+    pub fn take_inkjet_failure(&mut self) -> Option<InkjetError> {
+        self.inkjet.as_mut().and_then(InkjetCanvas::take_failure)
+    }
+
     /// Record the planned toolhead speed over time from now on (for the speed chart).
     pub fn record_speed(&mut self) {
         self.core.record_speed();
@@ -424,11 +438,14 @@ impl Machine {
     }
 
     /// The end of a job: plan and execute everything still queued (and, in Klipper mode, add
-    /// Klipper's exit flush). Later calls do nothing.
+    /// Klipper's exit flush), and hand the last inkjet layer over. Later calls do nothing.
     pub fn finish(&mut self, out: &mut dyn FnMut(f64, &str)) {
         if !std::mem::replace(&mut self.ended, true) {
             self.core.end();
             self.sync(out);
+            if let Some(canvas) = &mut self.inkjet {
+                canvas.finish();
+            }
             let mut unfinished = Vec::new();
             if let Some(check) = &self.recoat {
                 check.finish(&mut unfinished);

@@ -267,7 +267,7 @@ impl Machine {
             warning_counts: self.warning_counts.iter().map(|(k, v)| ((*k).to_owned(), *v)).collect(),
             warnings: self.warnings.clone(),
             inkjet: self.inkjet.as_ref().map(|c| InkjetSummary {
-                layers: c.layers().len(),
+                layers: c.layer_count(),
                 drops_per_head: c.drops_per_head().to_vec(),
             }),
             malformed: est.malformed,
