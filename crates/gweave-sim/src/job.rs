@@ -19,6 +19,8 @@ use gweave::rotary::cylinder::RotaryConfig;
 use gweave::{LineReader, Progress};
 
 use crate::core_board::{self, CoreBoardError, CoreReport};
+use crate::inkjet::layers::LayerPngs;
+use crate::inkjet::InkjetError;
 use crate::interp::{Machine, Outcome, SimError, SimReport};
 use crate::profile::build_options::FirmwareKind;
 use crate::profile::{FaultSpec, MachineProfile};
@@ -30,12 +32,15 @@ pub struct SimSetup {
     pub faults: Vec<FaultSpec>,
     /// Record the planned toolhead speed over time ([`Machine::speed_trace`]), for a chart.
     pub record_speed: bool,
+    /// Write each inkjet layer, once it is finished, as PNGs into this folder (on a machine
+    /// with a printhead): `layer_<k>_head<h>.png`.
+    pub raster_out: Option<PathBuf>,
 }
 
 /// What ran the file, and what it did.
 pub enum Simulation {
-    /// The Marlin model: the machine after the run (its heaters' series, speed trace and inkjet
-    /// canvases, for charts), its report and the `Error:` lines it printed.
+    /// The Marlin model: the machine after the run (its heaters' series and speed trace, for
+    /// charts), its report and the `Error:` lines it printed.
     Marlin {
         /// The machine as the run left it.
         machine: Box<Machine>,
@@ -84,6 +89,9 @@ pub enum SimJobError {
     /// The controller core could not be built from the profile.
     #[error(transparent)]
     Core(#[from] CoreBoardError),
+    /// An inkjet layer could not be written (`raster_out`); it names the file.
+    #[error(transparent)]
+    RasterOut(InkjetError),
     /// An option the controller core has no model for (its heaters cannot be faulted, its
     /// planner keeps no speed trace).
     #[error("{}", marlin_model_only(option, Spelling::Keyword))]
@@ -132,6 +140,11 @@ pub fn simulate(
     if options.record_speed {
         machine.record_speed();
     }
+    if let (Some(dir), Some(_)) = (&options.raster_out, machine.inkjet()) {
+        // Each layer is written as it is finished: the machine holds one layer, not the print.
+        let pngs = LayerPngs::new(dir).map_err(SimJobError::RasterOut)?;
+        machine.send_inkjet_layers_to(Box::new(pngs));
+    }
     // The file is read as `stats` reads it: as the firmware its flavour names.
     machine.read_as(read_firmware(input, None).map_err(read_error)?);
     let file = container::open(input).map_err(read_error)?;
@@ -167,6 +180,9 @@ pub fn simulate(
         machine.file_cut(footer);
     }
     machine.finish(&mut out);
+    if let Some(failure) = machine.take_inkjet_failure() {
+        return Err(SimJobError::RasterOut(failure));
+    }
     let report = Box::new(machine.report());
     Ok(Simulation::Marlin { machine, report, errors })
 }

@@ -51,7 +51,9 @@ pub mod transform;
 
 pub use core_board::{run_on_core, CoreBoardError, CoreDevice, CoreReport, Unsupported};
 pub use finish::{with_metadata, FinishError};
-pub use inkjet::{CanvasGeometry, InkjetCanvas, InkjetLayer, InkjetWarning};
+pub use inkjet::{
+    CanvasGeometry, InkjetCanvas, InkjetError, InkjetLayer, InkjetWarning, LayerSink, CANVAS_BUDGET_BYTES,
+};
 pub use interp::commands::{RegistryRanges, REGISTRY_RANGES};
 pub use interp::{
     help_lines, CommandSpec, HeaterStats, InkjetSummary, Machine, Outcome, Param, Queue, SimError, SimReport,

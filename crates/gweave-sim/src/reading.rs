@@ -8,7 +8,9 @@
 //! charts Python could not ask for.
 //!
 //! Neither writes G-code, so neither writes a run header; what they write besides their report
-//! (the charts, the inkjet canvases) is named by options, checked before the run.
+//! (the charts, the inkjet canvases) is named by options, checked before the run. The inkjet
+//! canvases are written during the run, each layer once it is finished ([`SimSetup`]); the
+//! charts after it.
 
 use std::path::{Path, PathBuf};
 
@@ -16,7 +18,6 @@ use gweave::options::{Problem, Shape, Spelling};
 use gweave::PreviewOptions;
 use gweave::{JobFailure, JobOptions, OptionError, OptionSpec, Progress};
 
-use crate::inkjet::InkjetError;
 use crate::job::{simulate, SimJobError, SimSetup, Simulation};
 use crate::motion::estimate::{estimate_file, EstimateFileError, EstimateReport};
 use crate::motion::slicer_limits::{slicer_limits, SlicerLimitsError};
@@ -105,9 +106,6 @@ pub enum ReadingError {
     /// A chart could not be drawn or written.
     #[error(transparent)]
     Chart(#[from] PlotError),
-    /// The inkjet canvases could not be written.
-    #[error(transparent)]
-    Canvas(#[from] InkjetError),
 }
 
 impl JobFailure for ReadingError {
@@ -172,7 +170,11 @@ pub fn sim(
             return Err(SimJobError::MarlinModelOnly { option }.into());
         }
     }
-    let setup = SimSetup { faults, record_speed: options.plot_speed.is_some() };
+    let setup = SimSetup {
+        faults,
+        record_speed: options.plot_speed.is_some(),
+        raster_out: options.raster_out.clone(),
+    };
     let simulation = simulate(input, profile, &setup, progress)?;
     if let Simulation::Marlin { machine, report, .. } = &simulation {
         if let Some(path) = &options.plot {
@@ -180,9 +182,6 @@ pub fn sim(
         }
         if let (Some(path), Some(trace)) = (&options.plot_speed, machine.speed_trace()) {
             save_speed_chart(trace, &report.layer_s, &report.mixing_input_mm, path)?;
-        }
-        if let (Some(dir), Some(canvas)) = (&options.raster_out, machine.inkjet()) {
-            canvas.write_layer_pngs(dir)?;
         }
     }
     Ok(simulation)

@@ -36,14 +36,18 @@ fn seed_fire_order_fires_while_moving_and_lands_on_the_same_pixels() {
         };
         let mut machine =
             Machine::new(MachineProfile { inkjet: Some(inkjet), ..MachineProfile::default() }).unwrap();
+        let (sink, finished) = std::sync::mpsc::channel();
+        machine.send_inkjet_layers_to(Box::new(sink));
         for line in gcode.split(|&b| b == b'\n') {
             assert_eq!(machine.execute(line, &mut |_, _| {}), Outcome::Ok);
         }
         machine.finish(&mut |_, _| {});
-        let canvas = machine.inkjet().unwrap();
-        assert_eq!(canvas.layers()[0].heads[0], image, "{order:?}: the drops land on the image");
+        let layers: Vec<_> = finished.try_iter().collect();
+        assert_eq!(layers.len(), 1);
+        assert_eq!(layers[0].heads[0], image, "{order:?}: the drops land on the image");
+        let sim = machine.report();
         let moving =
-            canvas.warnings().iter().filter(|w| matches!(w, InkjetWarning::FireWithoutM400 { .. })).count();
+            sim.inkjet_warnings().filter(|w| matches!(w, InkjetWarning::FireWithoutM400 { .. })).count();
         let expected = match order {
             FireOrder::After => 0,
             FireOrder::Before => (report.columns_fired - report.bands_printed) as usize,

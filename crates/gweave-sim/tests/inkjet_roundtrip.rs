@@ -5,22 +5,36 @@
 
 use std::collections::BTreeSet;
 use std::path::Path;
+use std::sync::mpsc;
 
 use gweave::gen::bitmap::{Bitmap, Channel, ThresholdOptions};
 use gweave::gen::printhead::{HeadOffset, PrintheadProfile};
 use gweave::gen::raster::{raster_image_stacks, raster_sl1, ImageStack, RasterConfig};
 use gweave::gen::sl1::Sl1Reader;
-use gweave_sim::{CanvasGeometry, InkjetCanvas, InkjetWarning};
+use gweave_sim::{CanvasGeometry, InkjetLayer, InkjetWarning};
 use gweave_sim::{Inkjet, MachineProfile};
-use gweave_sim::{Machine, Outcome};
+use gweave_sim::{Machine, Outcome, SimReport};
 
 fn word(line: &str, letter: char) -> Option<&str> {
     line.split_whitespace().find_map(|w| w.strip_prefix(letter))
 }
 
+/// What a machine carrying the printhead made of the G-code: its report and the canvases of
+/// every layer it fired.
+struct Driven {
+    report: SimReport,
+    layers: Vec<InkjetLayer>,
+}
+
+impl Driven {
+    fn warnings(&self) -> Vec<&InkjetWarning> {
+        self.report.inkjet_warnings().collect()
+    }
+}
+
 /// Runs G-code through a machine carrying this printhead, with the canvas at `geometry`.
-/// Every line must be accepted without a reply; the machine is returned for its canvas.
-fn drive(gcode: &str, printhead: &PrintheadProfile, geometry: CanvasGeometry) -> Machine {
+/// Every line must be accepted without a reply, and warn of nothing but inkjet fires.
+fn drive(gcode: &str, printhead: &PrintheadProfile, geometry: CanvasGeometry) -> Driven {
     let inkjet = Inkjet {
         printhead: printhead.clone(),
         origin_x_mm: geometry.origin_x_mm,
@@ -30,6 +44,8 @@ fn drive(gcode: &str, printhead: &PrintheadProfile, geometry: CanvasGeometry) ->
     };
     let mut machine =
         Machine::new(MachineProfile { inkjet: Some(inkjet), ..MachineProfile::default() }).unwrap();
+    let (sink, finished) = mpsc::channel();
+    machine.send_inkjet_layers_to(Box::new(sink));
     let mut replies = Vec::new();
     for raw in gcode.lines() {
         let mut out = |_t: f64, l: &str| replies.push(format!("{raw}: {l}"));
@@ -39,7 +55,7 @@ fn drive(gcode: &str, printhead: &PrintheadProfile, geometry: CanvasGeometry) ->
     assert!(replies.is_empty(), "{:?}", &replies[..1]);
     let report = machine.report();
     assert!(report.warnings.iter().all(|w| w.kind.name() == "inkjet"), "{:?}", report.warnings);
-    machine
+    Driven { report, layers: finished.try_iter().collect() }
 }
 
 /// Y values of every G1 that moves in Y.
@@ -49,9 +65,9 @@ fn y_moves(gcode: &str) -> BTreeSet<String> {
 
 /// Compares each head's canvas of each layer with the expected images; empty expected layers
 /// must have no canvas at all.
-fn assert_layers_equal(canvas: &InkjetCanvas, expected: &[Vec<Bitmap>], z_of: impl Fn(usize) -> f64) {
-    assert!(canvas.warnings().is_empty(), "{:?}", &canvas.warnings()[..1]);
-    let mut layers = canvas.layers().iter().peekable();
+fn assert_layers_equal(run: &Driven, expected: &[Vec<Bitmap>], z_of: impl Fn(usize) -> f64) {
+    assert!(run.warnings().is_empty(), "{:?}", &run.warnings()[..1]);
+    let mut layers = run.layers.iter().peekable();
     for (k, planes) in expected.iter().enumerate() {
         let z = z_of(k);
         if planes.iter().all(|p| p.count_ones() == 0) {
@@ -92,12 +108,11 @@ fn sl1_roundtrip(serpentine: bool) {
     // The 120 mm x 80 mm display at 25.4/96 mm: round(453.54) x round(302.36) px.
     assert_eq!((w, h), (454, 302));
     let geometry = CanvasGeometry { origin_x_mm: 20.0, origin_y_mm: 20.0, width_px: w, height_px: h };
-    let machine = drive(&gcode, &profile, geometry);
-    let canvas = machine.inkjet().unwrap();
-    assert_layers_equal(canvas, &expected, |k| 0.1 * (k + 1) as f64);
+    let run = drive(&gcode, &profile, geometry);
+    assert_layers_equal(&run, &expected, |k| 0.1 * (k + 1) as f64);
     let drops: u64 = expected.iter().map(|p| p[0].count_ones()).sum();
     assert_eq!(report.drops_per_head, vec![drops]);
-    assert_eq!(canvas.drops_per_head(), &[drops]);
+    assert_eq!(run.report.inkjet.as_ref().unwrap().drops_per_head, [drops]);
     assert_eq!(report.layers, 308);
     assert!(drops > 1_000_000, "{drops}");
 }
@@ -202,10 +217,9 @@ fn bmp_roundtrip(serpentine: bool, heads: usize) {
     let report = raster_image_stacks(&mut gcode, &profile, &cfg, &stacks, None).unwrap();
     let gcode = String::from_utf8(gcode).unwrap();
     let geometry = CanvasGeometry { origin_x_mm: 40.0, origin_y_mm: 20.0, width_px: w, height_px: h };
-    let machine = drive(&gcode, &profile, geometry);
-    let canvas = machine.inkjet().unwrap();
+    let run = drive(&gcode, &profile, geometry);
     let expected: Vec<Vec<Bitmap>> = masks.iter().map(|m| m[..heads].to_vec()).collect();
-    assert_layers_equal(canvas, &expected, |k| 0.2 * (k + 1) as f64);
+    assert_layers_equal(&run, &expected, |k| 0.2 * (k + 1) as f64);
     assert_eq!(report.layers, 4);
     // Band 1 (rows 12..24) is empty in every layer: no move ever goes to its Y.
     let pitch = profile.pitch_mm();
@@ -254,10 +268,9 @@ fn bmp_stack_two_heads_one_way() {
 fn driver_reports_fire_without_m400() {
     let profile = PrintheadProfile::default();
     let geometry = CanvasGeometry { origin_x_mm: 0.0, origin_y_mm: 0.0, width_px: 10, height_px: 12 };
-    let machine = drive("G1 X1 Y0.2\nM400\nM700 P0 S1\nG1 X2\nM700 P0 S1\nM700 S3\n", &profile, geometry);
-    let canvas = machine.inkjet().unwrap();
+    let run = drive("G1 X1 Y0.2\nM400\nM700 P0 S1\nG1 X2\nM700 P0 S1\nM700 S3\n", &profile, geometry);
     assert!(matches!(
-        canvas.warnings(),
+        run.warnings()[..],
         [InkjetWarning::FireWithoutM400 { head: 0, .. }, InkjetWarning::MissingHead { .. }]
     ));
 }
@@ -321,15 +334,14 @@ mod prop {
                 width_px: width,
                 height_px: height,
             };
-            let machine = drive(&gcode, &profile, geometry);
-            let canvas = machine.inkjet().unwrap();
-            prop_assert!(canvas.warnings().is_empty());
+            let run = drive(&gcode, &profile, geometry);
+            prop_assert!(run.warnings().is_empty());
             let total: u64 = planes.iter().map(Bitmap::count_ones).sum();
-            prop_assert_eq!(canvas.layers().len(), usize::from(total > 0));
+            prop_assert_eq!(run.layers.len(), usize::from(total > 0));
             for (h, plane) in planes.iter().enumerate() {
                 let want = plane.count_ones();
                 prop_assert_eq!(report.drops_per_head[h], want * u64::from(density));
-                if let Some(layer) = canvas.layers().first() {
+                if let Some(layer) = run.layers.first() {
                     let got = &layer.heads[h];
                     prop_assert_eq!(got.count_ones(), want);
                     for y in 0..plane.height() {

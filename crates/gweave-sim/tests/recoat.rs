@@ -9,7 +9,7 @@ use gweave::gen::printhead::PrintheadProfile;
 use gweave::gen::raster::{RasterConfig, RasterWriter};
 use gweave_sim::InkjetWarning;
 use gweave_sim::MachineProfile;
-use gweave_sim::{Machine, Outcome, WarningKind};
+use gweave_sim::{Machine, Outcome};
 
 fn machine_profile() -> MachineProfile {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/machines/binder-jet.toml");
@@ -42,15 +42,7 @@ fn run(profile: &MachineProfile, head: &PrintheadProfile) -> (Vec<InkjetWarning>
     }
     machine.finish(&mut |_, _| {});
     assert!(replies.iter().all(|r| !r.starts_with("Error") && !r.contains("Unknown")), "{replies:?}");
-    let warnings = machine
-        .report()
-        .warnings
-        .into_iter()
-        .filter_map(|w| match w.kind {
-            WarningKind::Inkjet { detail } => Some(detail),
-            _ => None,
-        })
-        .collect();
+    let warnings = machine.report().inkjet_warnings().cloned().collect();
     (warnings, String::from_utf8(gcode).unwrap())
 }
 

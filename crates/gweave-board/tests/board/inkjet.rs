@@ -4,6 +4,7 @@
 //! on the binder-jet machine (`examples/machines/inkjet-c6602.toml`). docs/firmware.md, "Inkjet".
 
 use std::path::{Path, PathBuf};
+use std::sync::mpsc;
 
 use gweave::gen::bitmap::ThresholdOptions;
 use gweave::gen::raster::{raster_image_stacks, test_pattern, ImageStack, RasterConfig};
@@ -35,11 +36,13 @@ fn machine_profile() -> MachineProfile {
 /// What `gweave sim` deposits for `gcode`: the canvas of every layer.
 fn sim_layers(gcode: &str) -> Vec<InkjetLayer> {
     let mut machine = Machine::new(machine_profile()).unwrap();
+    let (sink, finished) = mpsc::channel();
+    machine.send_inkjet_layers_to(Box::new(sink));
     for line in gcode.lines() {
         assert_eq!(machine.execute(line.as_bytes(), &mut |_, _| {}), Outcome::Ok, "{line}");
     }
     machine.finish(&mut |_, _| {});
-    machine.inkjet().unwrap().layers().to_vec()
+    finished.try_iter().collect()
 }
 
 /// Streams `gcode` to the inkjet board as a host does (a line after each `ok`), starting with
@@ -75,12 +78,22 @@ fn board_layers(fires: &[Fire], like: &[InkjetLayer]) -> Vec<InkjetLayer> {
         height_px: first.height(),
     };
     let mut canvas = InkjetCanvas::new(&inkjet.printhead, geometry).unwrap();
+    let (sink, finished) = mpsc::channel();
+    canvas.send_layers_to(Box::new(sink));
+    let mut warnings = Vec::new();
     for f in fires {
         let mm = |axis: usize| f.steps[axis] as f64 / STEPS_PER_MM[axis];
-        canvas.on_m700(Some(u32::from(f.head)), u64::from(f.nozzles), mm(0), mm(1), mm(2), false);
+        canvas.on_m700(
+            Some(u32::from(f.head)),
+            u64::from(f.nozzles),
+            [mm(0), mm(1), mm(2)],
+            false,
+            &mut warnings,
+        );
     }
-    assert!(canvas.warnings().is_empty(), "{:?}", canvas.warnings());
-    canvas.layers().to_vec()
+    assert!(warnings.is_empty(), "{warnings:?}");
+    canvas.finish();
+    finished.try_iter().collect()
 }
 
 /// The pulses' timing against the InkShield's: 5 us pulses (at most 6), at least a microsecond

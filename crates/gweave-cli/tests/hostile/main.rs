@@ -13,6 +13,7 @@ mod harness;
 mod one_nozzle;
 
 mod bytes;
+mod canvases;
 mod config;
 mod containers;
 mod counts;

@@ -15,7 +15,10 @@
 //! with `pitch = 25.4 / dpi`: the generator aims at pixel centres, so rounding of the written
 //! coordinates (well under half a pitch) never moves a drop to the next pixel.
 //!
-//! One canvas per head per layer; a new layer starts when a fire happens at a new Z. Two
+//! One canvas per head per layer; a new layer starts when a fire happens at a new Z. Only the
+//! layer being fired is held: a finished one goes to the machine's [`LayerSink`] and its
+//! canvases are cleared for the next ([`layers`]), so memory stays at one layer's canvases,
+//! held to [`CANVAS_BUDGET_BYTES`], however many layers a file or a host fires. Two
 //! firmware pitfalls become typed warnings (`sjkelly/Marlin` branch hpc6602, `Marlin_main.cpp`): `M700` runs as soon as it is parsed,
 //! so without an `M400` since the last move it fires while the carriage is still travelling;
 //! and the firmware reads `S` only when `P` is given, so `M700` without `P` fires nothing.
@@ -31,15 +34,19 @@
 //! ([`FireWait`], given by `Estimator::fires`), so `estimate`, `sim` and `raster` agree on an
 //! inkjet machine.
 
+pub(crate) mod layers;
 pub(crate) mod recoat;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use gweave::gen::bitmap::{Bitmap, BitmapError};
+use gweave::gen::bitmap::BitmapError;
 use gweave::gen::printhead::{PrintheadError, PrintheadProfile};
 use gweave::range::{short, Ceiling, TooLarge, MAX_IMAGE_SIDE_PX};
 use serde::Serialize;
 use thiserror::Error;
+
+use layers::HeldLayer;
+pub use layers::{InkjetLayer, LayerSink, CANVAS_BUDGET_BYTES};
 
 /// What a fire costs the print on a machine with a printhead: the firmware's wait after each
 /// fire that runs with nothing moving (after an `M400` or a `G4`), for a `P` naming one of its
@@ -73,15 +80,29 @@ impl FireWait {
 /// Errors of the inkjet executor.
 #[derive(Debug, Error)]
 pub enum InkjetError {
+    /// The printhead profile is not usable.
     #[error(transparent)]
     Profile(#[from] PrintheadError),
+    /// The canvas' origin is not a finite position.
     #[error("canvas pixel size must be positive and finite")]
     Geometry,
+    /// A layer's image could not be written.
     #[error(transparent)]
     Image(#[from] BitmapError),
+    /// A canvas side past [`MAX_IMAGE_SIDE_PX`].
     #[error(transparent)]
     TooLarge(#[from] TooLarge),
+    /// One layer's canvases would hold more than [`CANVAS_BUDGET_BYTES`].
+    #[error(
+        "the inkjet canvases of one layer, {width_px} x {height_px} nozzle pitches for each of {heads} heads, would take {} MiB, more than the limit of {} MiB: give a smaller [inkjet] width_px and height_px (left out, they reach the bed's end at the printhead's dpi) or fewer [[inkjet.printhead.heads]]",
+        mib(*bytes),
+        CANVAS_BUDGET_BYTES >> 20
+    )]
+    #[allow(missing_docs)] // the canvas' size in nozzle pitches, the heads and the bytes needed
+    OverBudget { width_px: usize, height_px: usize, heads: usize, bytes: u64 },
+    /// The folder of the layers' images could not be made.
     #[error("{path}: {source}")]
+    #[allow(missing_docs)] // the folder and why
     Io { path: PathBuf, source: std::io::Error },
 }
 
@@ -129,25 +150,26 @@ pub struct CanvasGeometry {
     pub height_px: usize,
 }
 
-/// The drops of one layer, one bitmap per head (row 0 at the lowest Y).
-#[derive(Debug, Clone, PartialEq)]
-pub struct InkjetLayer {
-    /// The carriage's Z when the layer's first fire ran, mm.
-    pub z_mm: f64,
-    /// One canvas per head, in head order.
-    pub heads: Vec<Bitmap>,
-}
-
-/// Collects fired drops into per-layer 1-bit canvases.
-#[derive(Debug, Clone)]
+/// Collects fired drops into 1-bit canvases, one per head, a layer at a time.
+#[derive(Debug)]
 pub struct InkjetCanvas {
     geometry: CanvasGeometry,
     /// The heads, which say where a fire command's drops land.
     printhead: PrintheadProfile,
     pitch_mm: f64,
-    layers: Vec<InkjetLayer>,
-    warnings: Vec<InkjetWarning>,
+    /// The layer being fired, its canvases made at the first fire and reused after.
+    held: Option<HeldLayer>,
+    /// Layers started so far, each with at least one fire.
+    layers: usize,
+    /// Where finished layers go, and its first failure, after which they are only cleared.
+    sink: Option<Box<dyn LayerSink>>,
+    failure: Option<InkjetError>,
     drops_per_head: Vec<u64>,
+}
+
+/// MiB, with one decimal.
+fn mib(bytes: u64) -> String {
+    format!("{:.1}", bytes as f64 / f64::from(1 << 20))
 }
 
 /// Two Z values closer than this are the same layer.
@@ -172,98 +194,124 @@ impl InkjetCanvas {
             )
         };
         side.check(geometry.width_px.max(geometry.height_px) as f64, because)?;
+        // Then what one layer of them takes, every head together: the only layer ever held.
+        let (width_px, height_px, heads) = (geometry.width_px, geometry.height_px, profile.heads.len());
+        let bytes = layers::layer_bytes(heads, width_px, height_px);
+        if bytes > CANVAS_BUDGET_BYTES {
+            return Err(InkjetError::OverBudget { width_px, height_px, heads, bytes });
+        }
         Ok(InkjetCanvas {
             geometry,
             printhead: profile.clone(),
             pitch_mm: profile.pitch_mm(),
-            layers: Vec::new(),
-            warnings: Vec::new(),
-            drops_per_head: vec![0; profile.heads.len()],
+            held: None,
+            layers: 0,
+            sink: None,
+            failure: None,
+            drops_per_head: vec![0; heads],
         })
     }
 
+    /// Hands each finished layer to `sink` from now on.
+    pub fn send_layers_to(&mut self, sink: Box<dyn LayerSink>) {
+        self.sink = Some(sink);
+    }
+
     /// Records one fire command. `head` is the `P` word (None when absent), `bits` the `S`
-    /// word, `x_mm`/`y_mm`/`z_mm` the carriage position when it runs, and `moved_since_m400`
-    /// whether a move was queued after the last `M400`. The time it takes is the estimator's
-    /// (`FireWait`).
+    /// word, `at_mm` the carriage's X, Y and Z when it runs, and `moved_since_m400`
+    /// whether a move was queued after the last `M400`. What was wrong with it is added to
+    /// `warnings`: the canvas keeps none, since a file of a million bad fires would grow them
+    /// without bound (the machine's report keeps the first ones and counts the rest). The time
+    /// it takes is the estimator's (`FireWait`).
     pub fn on_m700(
         &mut self,
         head: Option<u32>,
         bits: u64,
-        x_mm: f64,
-        y_mm: f64,
-        z_mm: f64,
+        at_mm: [f64; 3],
         moved_since_m400: bool,
+        warnings: &mut Vec<InkjetWarning>,
     ) {
+        let [x_mm, y_mm, z_mm] = at_mm;
         let Some(head) = head else {
-            self.warnings.push(InkjetWarning::MissingHead { x_mm, y_mm });
+            warnings.push(InkjetWarning::MissingHead { x_mm, y_mm });
             return;
         };
         let heads = self.printhead.heads.len();
         if head as usize >= heads {
-            self.warnings.push(InkjetWarning::UnknownHead { head });
+            warnings.push(InkjetWarning::UnknownHead { head });
             return;
         }
         if moved_since_m400 {
-            self.warnings.push(InkjetWarning::FireWithoutM400 { head, x_mm, y_mm });
+            warnings.push(InkjetWarning::FireWithoutM400 { head, x_mm, y_mm });
         }
         let g = self.geometry;
-        let same_layer = matches!(self.layers.last(), Some(l) if (l.z_mm - z_mm).abs() <= SAME_Z_MM);
+        let same_layer = matches!(&self.held, Some(h) if (h.layer().z_mm - z_mm).abs() <= SAME_Z_MM);
         if !same_layer {
-            self.layers.push(InkjetLayer { z_mm, heads: vec![Bitmap::new(g.width_px, g.height_px); heads] });
+            self.hand_over();
+            match &mut self.held {
+                Some(held) => held.restart(z_mm),
+                None => self.held = Some(HeldLayer::new(z_mm, heads, g.width_px, g.height_px)),
+            }
+            self.layers += 1;
         }
-        let canvas = match self.layers.last_mut() {
-            Some(layer) => &mut layer.heads[head as usize],
-            None => return,
+        let Some(held) = &mut self.held else {
+            return;
         };
         self.drops_per_head[head as usize] += u64::from(self.printhead.drops_of_fire(bits));
         let mut lost = 0;
         for [x, y] in self.printhead.drops_mm(head as usize, bits, [x_mm, y_mm]) {
             let px = ((x - g.origin_x_mm) / self.pitch_mm).floor();
             let py = ((y - g.origin_y_mm) / self.pitch_mm).floor();
-            let inside = px >= 0.0 && py >= 0.0 && canvas.set(px as usize, py as usize, true);
+            let inside = px >= 0.0 && py >= 0.0 && held.ink(head as usize, px as usize, py as usize);
             if !inside {
                 lost += 1;
             }
         }
         if lost > 0 {
-            self.warnings.push(InkjetWarning::OffCanvas { head, x_mm, y_mm, lost });
+            warnings.push(InkjetWarning::OffCanvas { head, x_mm, y_mm, lost });
         }
     }
 
-    /// What went wrong with the fires so far.
-    pub fn warnings(&self) -> &[InkjetWarning] {
-        &self.warnings
+    /// Lends the layer being fired to the sink, unless an earlier layer failed there.
+    fn hand_over(&mut self) {
+        if let (Some(held), Some(sink), None) = (&self.held, &mut self.sink, &self.failure) {
+            if let Err(e) = sink.layer(self.layers - 1, held.layer()) {
+                self.failure = Some(e);
+            }
+        }
     }
 
-    /// Layers with at least one fire, in the order they were started.
-    pub fn layers(&self) -> &[InkjetLayer] {
-        &self.layers
+    /// The end of the job: the last layer goes to the sink, and its canvases are let go.
+    pub fn finish(&mut self) {
+        self.hand_over();
+        self.held = None;
     }
 
-    /// Hands over the recorded layers (to stream them out and bound memory).
-    pub fn take_layers(&mut self) -> Vec<InkjetLayer> {
-        std::mem::take(&mut self.layers)
+    /// The sink's first failure, if a layer could not be handed over (the layers after it
+    /// were not).
+    pub fn take_failure(&mut self) -> Option<InkjetError> {
+        self.failure.take()
+    }
+
+    /// Layers with at least one fire so far.
+    pub fn layer_count(&self) -> usize {
+        self.layers
+    }
+
+    /// The layer being fired, if any.
+    pub fn layer(&self) -> Option<&InkjetLayer> {
+        self.held.as_ref().map(HeldLayer::layer)
+    }
+
+    /// The bytes the canvases hold now: one layer's (at most [`CANVAS_BUDGET_BYTES`]), or none
+    /// before the first fire and after [`InkjetCanvas::finish`].
+    pub fn held_bytes(&self) -> u64 {
+        self.held.as_ref().map_or(0, HeldLayer::bytes)
     }
 
     /// Drops fired by each head (inside or outside the canvas).
     pub fn drops_per_head(&self) -> &[u64] {
         &self.drops_per_head
-    }
-
-    /// Writes every layer and head as a 1-bit PNG `layer_<k>_head<h>.png` (k from 0, five
-    /// digits) into `dir` and returns the paths.
-    pub fn write_layer_pngs(&self, dir: &Path) -> Result<Vec<PathBuf>, InkjetError> {
-        std::fs::create_dir_all(dir).map_err(|source| InkjetError::Io { path: dir.to_path_buf(), source })?;
-        let mut paths = Vec::new();
-        for (k, layer) in self.layers.iter().enumerate() {
-            for (h, bitmap) in layer.heads.iter().enumerate() {
-                let path = dir.join(format!("layer_{k:05}_head{h}.png"));
-                bitmap.save_png(&path)?;
-                paths.push(path);
-            }
-        }
-        Ok(paths)
     }
 }
 
@@ -287,6 +335,26 @@ mod tests {
         assert!(err.to_string().ends_with("pixels per canvas side, more than the limit of 20000"), "{err}");
     }
 
+    /// The budget holds one layer, every head together: one head of the largest canvas fits,
+    /// sixteen are refused before anything is made, naming the keys that size them.
+    #[test]
+    fn a_layer_past_the_canvas_budget_is_refused_naming_its_keys() {
+        let largest =
+            CanvasGeometry { origin_x_mm: 0.0, origin_y_mm: 0.0, width_px: 20_000, height_px: 20_000 };
+        let one = InkjetCanvas::new(&PrintheadProfile::default(), largest).unwrap();
+        assert_eq!(one.held_bytes(), 0, "nothing is made before the first fire");
+        let sixteen =
+            PrintheadProfile { heads: vec![HeadOffset::default(); 16], ..PrintheadProfile::default() };
+        let err = InkjetCanvas::new(&sixteen, largest).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "the inkjet canvases of one layer, 20000 x 20000 nozzle pitches for each of 16 heads, would \
+             take 765.7 MiB, more than the limit of 64 MiB: give a smaller [inkjet] width_px and \
+             height_px (left out, they reach the bed's end at the printhead's dpi) or fewer \
+             [[inkjet.printhead.heads]]"
+        );
+    }
+
     #[test]
     fn drops_land_on_rows_after_map_and_offsets() {
         let profile = PrintheadProfile {
@@ -297,19 +365,25 @@ mod tests {
             ..PrintheadProfile::default()
         };
         let mut c = canvas(&profile);
+        let (sink, finished) = std::sync::mpsc::channel();
+        c.send_layers_to(Box::new(sink));
+        let mut w = Vec::new();
         // Address 0 (bit 0) fires row 2; carriage at pixel (1, 0) centre.
-        c.on_m700(Some(0), 0b001, 11.5, 20.5, 0.1, false);
+        c.on_m700(Some(0), 0b001, [11.5, 20.5, 0.1], false, &mut w);
         // Head 1, address 1 -> row 0, shifted by (2, 1) mm -> pixel (3, 1).
-        c.on_m700(Some(1), 0b010, 11.5, 20.5, 0.1, false);
-        assert!(c.warnings().is_empty(), "{:?}", c.warnings());
-        let l = &c.layers()[0];
+        c.on_m700(Some(1), 0b010, [11.5, 20.5, 0.1], false, &mut w);
+        assert!(w.is_empty(), "{w:?}");
+        assert!(finished.try_recv().is_err(), "the layer is still being fired");
+        // A new Z opens a new layer: the first is handed over, and its drops cleared.
+        c.on_m700(Some(0), 0b111, [11.5, 20.5, 0.2], false, &mut w);
+        let l = finished.try_recv().unwrap();
         assert_eq!(l.z_mm, 0.1);
         assert!(l.heads[0].get(1, 2) && l.heads[0].count_ones() == 1);
         assert!(l.heads[1].get(3, 1) && l.heads[1].count_ones() == 1);
-        // A new Z opens a new layer.
-        c.on_m700(Some(0), 0b111, 11.5, 20.5, 0.2, false);
-        assert_eq!(c.layers().len(), 2);
-        assert_eq!(c.layers()[1].heads[0].count_ones(), 3);
+        c.finish();
+        let l = finished.try_recv().unwrap();
+        assert_eq!((l.z_mm, l.heads[0].count_ones(), l.heads[1].count_ones()), (0.2, 3, 0));
+        assert_eq!((c.layer_count(), c.held_bytes()), (2, 0));
         assert_eq!(c.drops_per_head(), &[4, 1]);
     }
 
@@ -317,15 +391,16 @@ mod tests {
     fn typed_warnings() {
         let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
-        c.on_m700(None, 1, 10.5, 20.5, 0.1, false);
-        c.on_m700(Some(3), 1, 10.5, 20.5, 0.1, false);
-        c.on_m700(Some(0), 1, 10.5, 20.5, 0.1, true);
+        let mut w = Vec::new();
+        c.on_m700(None, 1, [10.5, 20.5, 0.1], false, &mut w);
+        c.on_m700(Some(3), 1, [10.5, 20.5, 0.1], false, &mut w);
+        c.on_m700(Some(0), 1, [10.5, 20.5, 0.1], true, &mut w);
         // 12 rows from y pixel 0: rows 6..11 fall off the 6-row canvas; x = 9.5 is off too.
-        c.on_m700(Some(0), 0xFFF, 10.5, 20.5, 0.1, false);
-        c.on_m700(Some(0), 1, 9.5, 20.5, 0.1, false);
+        c.on_m700(Some(0), 0xFFF, [10.5, 20.5, 0.1], false, &mut w);
+        c.on_m700(Some(0), 1, [9.5, 20.5, 0.1], false, &mut w);
         assert_eq!(
-            c.warnings(),
-            &[
+            w,
+            [
                 InkjetWarning::MissingHead { x_mm: 10.5, y_mm: 20.5 },
                 InkjetWarning::UnknownHead { head: 3 },
                 InkjetWarning::FireWithoutM400 { head: 0, x_mm: 10.5, y_mm: 20.5 },
@@ -334,19 +409,44 @@ mod tests {
             ]
         );
         // The fire without M400 still lands where it was asked (here: pixel (0, 0)).
-        assert_eq!(c.layers()[0].heads[0].count_ones(), 6);
+        assert_eq!(c.layer().unwrap().heads[0].count_ones(), 6);
     }
 
     #[test]
     fn layer_pngs_read_back() {
         let profile = PrintheadProfile { dpi: 25.4, ..PrintheadProfile::default() };
         let mut c = canvas(&profile);
-        c.on_m700(Some(0), 0b101, 13.5, 20.5, 0.1, false);
         let dir = tempfile::tempdir().unwrap();
-        let paths = c.write_layer_pngs(dir.path()).unwrap();
-        assert_eq!(paths, vec![dir.path().join("layer_00000_head0.png")]);
-        let back = gweave::gen::bitmap::load_image(&paths[0], &Default::default(), 0.1).unwrap();
-        assert_eq!(back, c.layers()[0].heads[0]);
-        assert!(back.get(3, 0) && back.get(3, 2));
+        c.send_layers_to(Box::new(layers::LayerPngs::new(dir.path()).unwrap()));
+        c.on_m700(Some(0), 0b101, [13.5, 20.5, 0.1], false, &mut Vec::new());
+        c.on_m700(Some(0), 0b1, [10.5, 20.5, 0.2], false, &mut Vec::new());
+        c.finish();
+        assert!(c.take_failure().is_none());
+        let read = |k: usize| {
+            let path = dir.path().join(format!("layer_{k:05}_head0.png"));
+            gweave::gen::bitmap::load_image(&path, &Default::default(), 0.1).unwrap()
+        };
+        let (first, second) = (read(0), read(1));
+        assert!(first.get(3, 0) && first.get(3, 2) && first.count_ones() == 2);
+        assert!(second.get(0, 0) && second.count_ones() == 1);
+    }
+
+    /// A layer that cannot be written is the run's error, said once; the layers after it are
+    /// not handed over.
+    #[test]
+    fn a_layer_that_cannot_be_written_is_the_failure() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut c = canvas(&PrintheadProfile::default());
+        c.send_layers_to(Box::new(layers::LayerPngs::new(dir.path()).unwrap()));
+        // A folder in the way of the first layer's file.
+        std::fs::create_dir(dir.path().join("layer_00000_head0.png")).unwrap();
+        for z in [0.1, 0.2, 0.3] {
+            c.on_m700(Some(0), 1, [10.1, 20.1, z], false, &mut Vec::new());
+        }
+        c.finish();
+        let err = c.take_failure().unwrap();
+        assert!(err.to_string().contains("layer_00000_head0.png"), "{err}");
+        assert!(c.take_failure().is_none());
+        assert!(!dir.path().join("layer_00001_head0.png").exists());
     }
 }

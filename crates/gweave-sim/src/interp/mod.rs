@@ -48,7 +48,7 @@ use gweave::{Block, Command};
 use thiserror::Error;
 
 use crate::inkjet::recoat::RecoatCheck;
-use crate::inkjet::{CanvasGeometry, FireWait, InkjetCanvas, InkjetError};
+use crate::inkjet::{CanvasGeometry, FireWait, InkjetCanvas, InkjetError, LayerSink};
 use crate::motion::estimate::{EstimateError, Estimator, ToolChange};
 use crate::motion::speed_trace::SpeedTrace;
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
@@ -402,6 +402,20 @@ impl Machine {
         self.inkjet.as_ref()
     }
 
+    /// Hands each finished inkjet layer to `sink` (`gweave sim --raster-out`), on a machine
+    /// with a printhead; without a sink a finished layer is only cleared for the next.
+    pub fn send_inkjet_layers_to(&mut self, sink: Box<dyn LayerSink>) {
+        if let Some(canvas) = &mut self.inkjet {
+            canvas.send_layers_to(sink);
+        }
+    }
+
+    /// Why a finished inkjet layer could not be handed over: the sink's first failure (the
+    /// layers after it were not handed over). Taken: a second call says nothing.
+    pub fn take_inkjet_failure(&mut self) -> Option<InkjetError> {
+        self.inkjet.as_mut().and_then(InkjetCanvas::take_failure)
+    }
+
     /// Record the planned toolhead speed over time from now on (for the speed chart).
     pub fn record_speed(&mut self) {
         self.core.record_speed();
@@ -425,11 +439,14 @@ impl Machine {
     }
 
     /// The end of a job: plan and execute everything still queued (and, in Klipper mode, add
-    /// Klipper's exit flush). Later calls do nothing.
+    /// Klipper's exit flush), and hand the last inkjet layer over. Later calls do nothing.
     pub fn finish(&mut self, out: &mut dyn FnMut(f64, &str)) {
         if !std::mem::replace(&mut self.ended, true) {
             self.core.end();
             self.sync(out);
+            if let Some(canvas) = &mut self.inkjet {
+                canvas.finish();
+            }
             let mut unfinished = Vec::new();
             if let Some(check) = &self.recoat {
                 check.finish(&mut unfinished);
@@ -542,14 +559,13 @@ impl Machine {
         let Some(canvas) = &mut self.inkjet else {
             return;
         };
-        let seen = canvas.warnings().len();
-        canvas.on_m700(head, bits, x, y, z, moved);
-        let mut new: Vec<_> = canvas.warnings()[seen..].to_vec();
+        let mut found = Vec::new();
+        canvas.on_m700(head, bits, [x, y, z], moved, &mut found);
         if let Some(check) = &mut self.recoat {
             let a = self.core.state().pos[state::A];
-            check.on_fire([x, y, z, a], z, &mut new);
+            check.on_fire([x, y, z, a], z, &mut found);
         }
-        for detail in new {
+        for detail in found {
             self.warn(WarningKind::Inkjet { detail });
         }
         self.run_core(line, out);

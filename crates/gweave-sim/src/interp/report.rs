@@ -211,6 +211,16 @@ pub struct SimReport {
     pub huge_arcs: HugeArcs,
 }
 
+impl SimReport {
+    /// The inkjet warnings among the first warnings kept ([`SimReport::warnings`]), in order.
+    pub fn inkjet_warnings(&self) -> impl Iterator<Item = &InkjetWarning> {
+        self.warnings.iter().filter_map(|w| match &w.kind {
+            WarningKind::Inkjet { detail } => Some(detail),
+            _ => None,
+        })
+    }
+}
+
 impl Machine {
     /// What the run so far did. Moves still queued in the planner are not counted yet; call
     /// [`Machine::finish`] at the end of a job first.
@@ -257,7 +267,7 @@ impl Machine {
             warning_counts: self.warning_counts.iter().map(|(k, v)| ((*k).to_owned(), *v)).collect(),
             warnings: self.warnings.clone(),
             inkjet: self.inkjet.as_ref().map(|c| InkjetSummary {
-                layers: c.layers().len(),
+                layers: c.layer_count(),
                 drops_per_head: c.drops_per_head().to_vec(),
             }),
             malformed: est.malformed,

@@ -146,6 +146,12 @@ impl Bitmap {
         Bitmap { width, height, words_per_row, words: vec![0; words_per_row * height] }
     }
 
+    /// The bytes a `width` x `height` image holds (its rows packed into 64-bit words), before
+    /// it is made: what a caller holds an image's size to.
+    pub fn bytes_for(width: usize, height: usize) -> u64 {
+        width.div_ceil(64) as u64 * 8 * height as u64
+    }
+
     /// Width, px.
     pub fn width(&self) -> usize {
         self.width
@@ -184,6 +190,13 @@ impl Bitmap {
             *w &= !bit;
         }
         true
+    }
+
+    /// Clears row `y` (outside the image: nothing).
+    pub fn clear_row(&mut self, y: usize) {
+        if y < self.height {
+            self.words[y * self.words_per_row..(y + 1) * self.words_per_row].fill(0);
+        }
     }
 
     /// Sets pixels `x0..x1` of row `y` (clipped to the image), a word at a time.
@@ -532,6 +545,19 @@ mod tests {
             decode_png_1bit(&png_bytes, &ThresholdOptions { invert: true, ..opts() }).unwrap().count_ones(),
             70 * 3 - 7
         );
+    }
+
+    #[test]
+    fn a_cleared_row_is_empty_and_the_others_stay() {
+        let mut b = Bitmap::new(70, 3);
+        b.fill_span(0, 0, 70);
+        b.fill_span(1, 3, 66);
+        b.clear_row(1);
+        b.clear_row(7);
+        assert_eq!((b.count_ones(), b.row(1)), (70, &[0, 0][..]));
+        // Two words a row of 70: what `new` holds.
+        assert_eq!(Bitmap::bytes_for(70, 3), 48);
+        assert_eq!(Bitmap::bytes_for(20_000, 20_000), 50_080_000);
     }
 
     #[test]
