@@ -173,7 +173,8 @@ fn a_failed_report_names_its_file_once() {
     assert_eq!(out.status.code(), Some(1));
     assert_eq!(
         text(&out.stderr),
-        "gweave: error: --report: /nonexistent/r.json: No such file or directory (os error 2)\n"
+        // Refused before the run now (every output is checked first), as `serve --report`.
+        "gweave: error: --report /nonexistent/r.json: No such file or directory (os error 2)\n"
     );
 }
 

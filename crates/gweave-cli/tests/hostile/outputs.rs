@@ -51,12 +51,12 @@ fn a_report_that_cannot_be_written_stops_the_run_before_any_output() {
     refused_in(
         dir.path(),
         &["purge-shift", "in.gcode", "--in-place", "--purge-mm", "1", "--report", "nodir/r.json"],
-        "--report nodir/r.json: ",
+        "--report nodir/r.json: No such file or directory",
     );
     refused_in(
         dir.path(),
         &["mix", "in.gcode", "-o", "out.gcode", "--map", "T0=Cyan", "--report", "nodir/r.json"],
-        "--report nodir/r.json: ",
+        "--report nodir/r.json: No such file or directory",
     );
 }
 
