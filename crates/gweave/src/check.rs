@@ -18,7 +18,7 @@ use crate::gcode::flavour::flavour_of_comment;
 use crate::gcode::layers::Feature;
 use crate::gcode::line::{Block, Command, Value};
 use crate::gcode::reader::{Part, RawLine};
-use crate::gcode::state::{Effect, Path, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
+use crate::gcode::state::{Effect, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
 use crate::pass::{Ctx, Flow, Pass, PassError, Progress, Step, Strictness};
 use crate::range::OutOfRange;
 use crate::run::Run;
@@ -342,16 +342,9 @@ impl Pass for CheckPass {
                     self.add(n, Diagnostic::at(col, Finding::ExtrusionBeforeHeating));
                 }
                 if let Some(bed) = self.options.bed {
-                    // An arc reaches past its end point: check the box around it in X and Y.
-                    let arc_box = match &m.path {
-                        Path::Arc(arc) => Some(arc.bounds()),
-                        Path::Line => None,
-                    };
+                    let reach = m.reach();
                     for axis in [X, Y, Z] {
-                        let (lo, hi) = match arc_box {
-                            Some([min, max]) if axis != Z => (min[axis], max[axis]),
-                            _ => (m.to[axis], m.to[axis]),
-                        };
+                        let [lo, hi] = reach[axis];
                         let v = if bed.contains(axis, lo) { hi } else { lo };
                         if !bed.contains(axis, v) {
                             let letter = AXIS_LETTERS[axis];

@@ -389,7 +389,8 @@ pub(super) fn help_spec() -> &'static CommandSpec {
 
 /// The words of the line in `block` against the ranges its command's row declares
 /// ([`check`]), before the line changes anything: what the virtual printer refuses, and what
-/// `estimate` skips, alike. A line without a command is a move in the modal motion `modal`.
+/// `estimate` skips, alike. A line without a command is a move in the modal motion `modal`
+/// (not one that starts with junk: [`Block::starts_unreadable`], which no firmware reads).
 /// `row` gives the row of a command, `None` for one the machine does not have (not in the
 /// registry, or not in its build): that is unknown, not out of range, and is not checked. The
 /// dispatcher, which has looked the line's command up already, answers with that row
@@ -428,6 +429,8 @@ fn check_other_line(
         return Ok(());
     }
     let command = match block.command {
+        // Junk where the command belongs (`!!! Z5`): no command and no move, nothing to check.
+        Command::None if block.starts_unreadable() => return Ok(()),
         Command::None => {
             let number = match modal {
                 Motion::Rapid => 0,

@@ -345,6 +345,7 @@ impl Machine {
         }
         self.core.apply(line);
         match (command, spec) {
+            // Junk where the command belongs: no command, so no modal move either.
             (Command::None, _) if self.core.block().starts_unreadable() => self.unknown_command(line, out),
             (Command::None, _) => self.motion(line, out),
             (Command::Code { number, .. }, Some(spec)) if self.built_with(spec) => {

@@ -54,11 +54,8 @@ impl Machine {
         let xyza = |p: &state::Position| [p[state::X], p[state::Y], p[state::Z], p[state::A]];
         let (from, to) = (xyza(&m.from), xyza(&m.to));
         let (from_e, to_e) = (m.from[state::E], m.to[state::E]);
-        let arc_box = match &m.path {
-            state::Path::Arc(arc) => Some(arc.bounds()),
-            state::Path::Line => None,
-        };
-        if let Some(message) = self.check_bounds(&from, &to, arc_box).or(too_long) {
+        let reach = m.reach();
+        if let Some(message) = self.check_bounds(&from, &to, &reach).or(too_long) {
             // The machine stays where it was, as firmware that refuses a move does.
             let s = self.core.state_mut();
             if let Effect::Move(m) = &s.effect {
@@ -109,39 +106,25 @@ impl Machine {
         self.profile.hotend_of_tool(self.tool)
     }
 
-    /// Warns about a target outside the build volume (below the bed separately). Only the axes
-    /// the move changes are checked, so one excursion is reported once. An arc reaches past its
-    /// end points: in X and Y its box (`arc_box`, `[min, max]`) is checked, the full circle's
-    /// included, whose end is its start.
+    /// Warns about a target outside the build volume (below the bed separately), or a point an
+    /// arc passes (`reach`, [`Move::reach`](gweave::gcode::effect::Move::reach): the lowest and
+    /// highest the move reaches on each axis). Only the axes the move changes are checked, so
+    /// one excursion is reported once; an arc changes X and Y even when it ends where it started.
     ///
     /// Returns why the target cannot be driven at all, if it is more than the machine's own
     /// travel outside it on some axis (a coordinate with stray digits, `X999999999`): such a move
     /// would run for days of simulated time, every heater tick of it simulated. A smaller
     /// excursion is only reported, and carried out.
-    fn check_bounds(
-        &mut self,
-        from: &[f64; 4],
-        to: &[f64; 4],
-        arc_box: Option<[[f64; 2]; 2]>,
-    ) -> Option<String> {
+    fn check_bounds(&mut self, from: &[f64; 4], to: &[f64; 4], reach: &[[f64; 2]; 3]) -> Option<String> {
         let ranges = self.profile.bed.ranges();
         let mut out_of_reach = None;
         for (i, &(min_mm, max_mm)) in ranges.iter().enumerate() {
-            let value_mm = match arc_box {
-                Some([lo, hi]) if i < 2 => {
-                    // The arc's point farthest outside on this axis, if any is.
-                    let (lo, hi) = (lo[i] + self.shift_mm[i], hi[i] + self.shift_mm[i]);
-                    if lo < min_mm - BOUNDS_EPS_MM {
-                        lo
-                    } else if hi > max_mm + BOUNDS_EPS_MM {
-                        hi
-                    } else {
-                        continue;
-                    }
-                }
-                _ if to[i] == from[i] => continue,
-                _ => to[i] + self.shift_mm[i],
-            };
+            let [lo, hi] = reach[i].map(|v| v + self.shift_mm[i]);
+            if lo == hi && to[i] == from[i] {
+                continue;
+            }
+            // The end of a line; for an arc, the side it passes farthest out (if any is out).
+            let value_mm = if lo < min_mm - BOUNDS_EPS_MM { lo } else { hi };
             if i == state::Z && value_mm < -BOUNDS_EPS_MM {
                 self.warn(WarningKind::BelowBed { z_mm: value_mm });
             } else if value_mm < min_mm - BOUNDS_EPS_MM || value_mm > max_mm + BOUNDS_EPS_MM {

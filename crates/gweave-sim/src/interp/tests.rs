@@ -234,12 +234,13 @@ fn a_halted_machine_changes_nothing_of_a_refused_line() {
 #[test]
 fn a_line_that_starts_with_junk_is_an_unknown_command() {
     let mut m = warm_machine();
-    let (r, _) = run(&mut m, "G1 X10 F6000\n!!! Z5\n#x X100\nM114");
+    let (r, _) = run(&mut m, "G1 X10 F6000\n!!! Z5\n#x X99999\nM114");
     assert_eq!(
         r,
         [
             "echo:Unknown command: \"!!! Z5\"",
-            "echo:Unknown command: \"#x X100\"",
+            // Not a move out of range: no move at all.
+            "echo:Unknown command: \"#x X99999\"",
             "X:10.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0",
         ]
     );

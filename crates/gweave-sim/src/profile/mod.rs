@@ -386,17 +386,22 @@ impl FromStr for FaultSpec {
 
 impl fmt::Display for FaultSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.heater {
-            HeaterId::Bed => f.write_str("bed")?,
-            HeaterId::Hotend(0) => f.write_str("hotend")?,
-            HeaterId::Hotend(n) => write!(f, "hotend{n}")?,
-        }
+        f.write_str(&fault_heater(self.heater))?;
         let fault = match self.fault {
             HeaterFault::CartridgeDisconnected => "cartridge-off",
             HeaterFault::Sensor(SensorFault::Open) => "thermistor-open",
             HeaterFault::Sensor(SensorFault::Shorted) => "thermistor-shorted",
         };
         write!(f, "-{fault}@{}s", self.at_s)
+    }
+}
+
+/// A heater as a fault names it: `hotend`, `hotend1`, `bed`.
+fn fault_heater(heater: HeaterId) -> String {
+    match heater {
+        HeaterId::Bed => "bed".to_owned(),
+        HeaterId::Hotend(0) => "hotend".to_owned(),
+        HeaterId::Hotend(n) => format!("hotend{n}"),
     }
 }
 
@@ -580,10 +585,9 @@ impl MachineProfile {
                 HeaterId::Hotend(n) => (n as usize) < hotends,
             };
             if !present {
-                let names =
-                    (0..hotends).map(|n| if n == 0 { "hotend".to_owned() } else { format!("hotend{n}") });
-                let heaters: Vec<String> =
-                    names.chain(self.thermal.bed.as_ref().map(|_| "bed".to_owned())).collect();
+                let hotend_ids = (0..hotends).map(|n| HeaterId::Hotend(n as u8));
+                let ids = hotend_ids.chain(self.thermal.bed.as_ref().map(|_| HeaterId::Bed));
+                let heaters: Vec<String> = ids.map(fault_heater).collect();
                 let heaters = if heaters.is_empty() { "none".to_owned() } else { heaters.join(", ") };
                 return Err(MachineProfileError::FaultHeater { fault: f.to_string(), heaters });
             }

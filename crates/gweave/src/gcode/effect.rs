@@ -49,6 +49,20 @@ impl Move {
         self.to[E] - self.from[E]
     }
 
+    /// The lowest and highest value the move reaches in X, Y and Z, `[lo, hi]` each: its end,
+    /// or in X and Y an arc's box ([`Arc::bounds`]), which reaches past its end points (a full
+    /// circle ends where it starts). What a bed check holds against the bed.
+    pub fn reach(&self) -> [[f64; 2]; 3] {
+        let end = |axis: usize| [self.to[axis], self.to[axis]];
+        match &self.path {
+            Path::Line => [end(X), end(Y), end(Z)],
+            Path::Arc(arc) => {
+                let [min, max] = arc.bounds();
+                [[min[0], max[0]], [min[1], max[1]], end(Z)]
+            }
+        }
+    }
+
     /// XY length, following the arc for G2/G3.
     pub fn xy_len_mm(&self) -> f64 {
         match &self.path {
