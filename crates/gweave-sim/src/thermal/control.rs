@@ -97,6 +97,10 @@ impl CheckRanges for PidGains {
 
 /// A heater control algorithm. Every call carries the simulated time; no
 /// implementation reads a clock.
+///
+/// With a target of 0, `update` returns 0 and keeps nothing that the next update reads but
+/// what that update writes again (the PID's last sample): the thermal loop passes over such
+/// updates while every heater rests (`thermal/rest.rs`), and runs the last one in full.
 pub trait Control: fmt::Debug + Send {
     /// Decide the heater power (`0..=POWER_MAX`) at `now_s` from the
     /// measured temperature and the target. A target of 0 means off.

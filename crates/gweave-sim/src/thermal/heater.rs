@@ -63,8 +63,10 @@ use thiserror::Error;
 use crate::thermal::thermistor::{BetaThermistor, SensorFault};
 
 use cascade::Decay;
+use memo::Memo;
 
 mod cascade;
+mod memo;
 
 /// Which heater: a hotend by index, or the bed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -278,19 +280,8 @@ pub struct Heater {
     cartridge_disconnected: bool,
     sensor_fault: Option<SensorFault>,
     last_power_w: f64,
-    /// The response to the last step's length and fan.
-    response: Cached,
-}
-
-/// A computed [`Response`] kept for the next step: not part of the plant's state, so two
-/// heaters in the same state compare equal whatever they have cached.
-#[derive(Debug, Clone, Copy, Default)]
-struct Cached(Option<Response>);
-
-impl PartialEq for Cached {
-    fn eq(&self, _other: &Self) -> bool {
-        true
-    }
+    /// The step response kept for the next step, and the steps the plant is known still under.
+    memo: Memo,
 }
 
 /// The plant's exact response over one step of `t_s` with loss conductance `k_w_k`: measured
@@ -354,7 +345,7 @@ impl Heater {
             cartridge_disconnected: false,
             sensor_fault: None,
             last_power_w: 0.0,
-            response: Cached::default(),
+            memo: Memo::default(),
         })
     }
 
@@ -389,6 +380,7 @@ impl Heater {
         self.block_c = celsius;
         self.sensor_c = celsius;
         self.heat_flow_w = 0.0;
+        self.memo.moved();
     }
 
     /// Part-cooling fan fraction, clamped to 0..=1.
@@ -422,20 +414,63 @@ impl Heater {
             return;
         }
         let duty = if duty.is_nan() { 0.0 } else { duty.clamp(0.0, 1.0) };
+        // The response is worked out once and reused by the steps of about the same length
+        // (`memo`'s notes).
+        let r = self.memo.response(&self.cfg, dt_s, self.loss_w_k());
+        if duty == 0.0 {
+            let before = self.state_bits();
+            self.advance(0.0, &r);
+            if self.state_bits() == before {
+                self.memo.still(self.memo.kept());
+                return;
+            }
+        } else {
+            // Only a heater off comes to rest: a step with power is not looked at (a print's
+            // firmware loop costs what it did).
+            self.advance(duty, &r);
+        }
+        self.memo.moved();
+    }
+
+    /// A step of `dt_s` with the heater off, if it leaves the plant as it is, to the bit
+    /// (`memo`'s notes): known for the steps it was found still under since it last moved, tried
+    /// on a copy for another; only the step response kept then moves, as the step would move it.
+    /// False, with the plant as it was, if the step would move it (a plant that moved at its last
+    /// step has not settled: false at once). Keeping the response of a step the caller then runs
+    /// changes nothing: the step keeps the same one.
+    pub(crate) fn rest(&mut self, dt_s: f64) -> bool {
+        let k_w_k = self.loss_w_k();
+        let key = self.memo.key_for(dt_s, k_w_k);
+        if !self.memo.is_still(key) {
+            if !self.memo.knows_still() {
+                return false;
+            }
+            let mut copy = self.clone();
+            copy.advance(0.0, &Response::new(&self.cfg, key.k_w_k, key.t_s));
+            if copy.state_bits() != self.state_bits() {
+                return false;
+            }
+            self.memo.still(key);
+        }
+        self.memo.keep(dt_s, k_w_k);
+        true
+    }
+
+    /// The loss conductance with the fan as it is, W/K.
+    fn loss_w_k(&self) -> f64 {
+        self.cfg.loss_w_k + self.fan_fraction * self.cfg.fan_loss_w_k
+    }
+
+    /// What a step changes, to the bit.
+    fn state_bits(&self) -> [u64; 4] {
+        [self.heat_flow_w, self.block_c, self.sensor_c, self.last_power_w].map(f64::to_bits)
+    }
+
+    /// The step of response `r` with `duty` held.
+    fn advance(&mut self, duty: f64, r: &Response) {
         let power_w = if self.cartridge_disconnected { 0.0 } else { duty * self.cfg.power_w };
-        let k_w_k = self.cfg.loss_w_k + self.fan_fraction * self.cfg.fan_loss_w_k;
-        // The firmware loop steps every heater by the same sample period, so the response is
-        // worked out once and reused until the period or the fan changes. The clock's sample
-        // instants are multiples of the period in floating point, so the periods between them
-        // differ in their last bits (more so as the clock grows: parts in 1e11 after two
-        // days); a step within 1e-9 of the cached one reuses it, an error of that fraction of
-        // one step's change of temperature.
-        let r = match self.response.0 {
-            Some(r) if (r.t_s - dt_s).abs() <= 1e-9 * dt_s && r.k_w_k == k_w_k => r,
-            _ => *self.response.0.insert(Response::new(&self.cfg, k_w_k, dt_s)),
-        };
         // Everything is measured from where the chain settles with this power held.
-        let settle_c = self.cfg.ambient_c + power_w / k_w_k;
+        let settle_c = self.cfg.ambient_c + power_w / r.k_w_k;
         let flow0_w = if self.cfg.heater_lag_s > 0.0 { self.heat_flow_w - power_w } else { 0.0 };
         let block0_c = self.block_c - settle_c;
         let sensor0_c = self.sensor_c - settle_c;
@@ -552,6 +587,53 @@ mod tests {
         assert_eq!(a, b);
         b.step(1.0, 0.1);
         assert_ne!(a, b);
+    }
+
+    /// At a clock of ten days the periods between the firmware's sample instants differ by more
+    /// than the 1e-9 within which a step reuses the kept response, so steps at rest keep
+    /// changing it; a rest (the loop passed over) keeps the one each step would, and the first
+    /// step with power after it gives the same temperatures.
+    #[test]
+    fn a_rest_keeps_the_step_response_a_step_would() {
+        let periods: Vec<f64> =
+            (8_640_001u64..8_650_000).map(|k| k as f64 * 0.1 - (k - 1) as f64 * 0.1).collect();
+        let (mut stepped, mut rested) = (hotend(), hotend());
+        stepped.step(0.0, periods[0]);
+        rested.step(0.0, periods[0]);
+        let mut changes = 0;
+        for &h_s in &periods {
+            let kept = stepped.memo.kept();
+            stepped.step(0.0, h_s);
+            changes += usize::from(stepped.memo.kept() != kept);
+            assert!(rested.rest(h_s));
+            assert_eq!(rested.memo.kept(), stepped.memo.kept());
+        }
+        assert!(changes > 1000, "{changes}");
+        stepped.step(1.0, periods[1]);
+        rested.step(1.0, periods[1]);
+        assert_eq!(rested.state_bits(), stepped.state_bits());
+        assert!(rested.block_c() > 25.0);
+    }
+
+    /// Off and cooling, a plant comes to rest within rounding of ambient, not at it, and stays
+    /// there to the bit under the steps it came to rest with (a long step takes it on to
+    /// ambient); a step that moves it forgets that it was still.
+    #[test]
+    fn a_cooled_plant_stays_still_above_ambient() {
+        let mut h = hotend();
+        h.set_temperature(200.0);
+        assert!(!h.rest(0.1), "it moved at its last change");
+        let mut steps = 0;
+        while !h.rest(0.1) {
+            h.step(0.0, 0.1);
+            steps += 1;
+            assert!(steps < 200_000, "not still after {steps} steps: {} C", h.block_c());
+        }
+        assert!(h.block_c() > 25.0 && h.block_c() - 25.0 < 1e-11, "{}", h.block_c());
+        h.step(0.0, 0.1);
+        assert!(h.rest(0.1) && !h.rest(1000.0));
+        h.step(0.5, 0.1);
+        assert!(!h.rest(0.1));
     }
 
     #[test]

@@ -34,6 +34,7 @@ mod config;
 pub(crate) mod control;
 pub(crate) mod heater;
 pub(crate) mod protection;
+mod rest;
 mod series;
 pub(crate) mod thermistor;
 pub(crate) mod thermistor_csv;
@@ -173,6 +174,8 @@ pub struct Thermal {
     /// inputs, so they are advanced only when a sample (or a change of input) needs them.
     plant_s: f64,
     samples_taken: u64,
+    /// Firmware loops run in full; the others were passed over at rest (`rest`).
+    loops_run: u64,
     halted: Option<ThermalFault>,
     autotune: Option<(HeaterId, Autotune, bool)>,
     autotune_lines: Vec<String>,
@@ -230,6 +233,7 @@ impl Thermal {
             now_s: 0.0,
             plant_s: 0.0,
             samples_taken: 0,
+            loops_run: 0,
             halted: None,
             autotune: None,
             autotune_lines: Vec::new(),
@@ -412,6 +416,12 @@ impl Thermal {
         &self.series
     }
 
+    /// Firmware loops run in full so far: the loops of the clock, less those passed over while
+    /// every heater rested ([`Thermal::step`]). What the heaters cost a run.
+    pub fn loops_run(&self) -> u64 {
+        self.loops_run
+    }
+
     /// Advance the simulated clock by `dt_s`, running the firmware loop at every sample instant
     /// on the way. Returns the fault if the printer halted during this step.
     ///
@@ -424,6 +434,10 @@ impl Thermal {
     /// have long settled, so the rest of the step is integrated with the last power and the
     /// loop resumes at its end. A dwell of a century (or a clock pushed to 1e308 s by a huge
     /// move) then costs a bounded time instead of hanging.
+    ///
+    /// While every heater rests (off, and its plant still to the bit) a loop changes nothing
+    /// but the clock, and the loops are passed over: only what the clock moves is carried out
+    /// (see `rest`), with the same temperatures, records and faults as running each in full.
     pub fn step(&mut self, dt_s: f64) -> Option<ThermalFault> {
         let end_s = self.now_s + dt_s;
         if !(dt_s > 0.0 && end_s.is_finite()) {
@@ -446,6 +460,10 @@ impl Thermal {
             self.settle_plants();
             self.sample();
             self.samples_taken += 1;
+            self.loops_run += 1;
+            if self.at_rest() {
+                budget -= self.rest(end_s, budget);
+            }
         }
         self.now_s = end_s;
         if was_halted {
@@ -504,9 +522,14 @@ impl Thermal {
                 _ => ch.control.update(now_s, ch.reading_c, ch.target_c),
             };
         }
-        if !self.series.due(now_s) {
-            return;
+        if self.series.due(now_s) {
+            self.record();
         }
+    }
+
+    /// Records every heater's reading, target and power now in the series.
+    fn record(&mut self) {
+        let now_s = self.now_s;
         let samples = self
             .channels
             .iter()

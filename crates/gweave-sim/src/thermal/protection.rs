@@ -218,6 +218,13 @@ impl Protection {
             .then_some(Watch { must_reach_c, deadline_s: now_s + self.cfg.watch_period_s });
     }
 
+    /// Whether no check is armed (no heating watch, no runaway state: no target): a reading is
+    /// then held to MINTEMP and MAXTEMP alone, and one that does not change neither faults
+    /// anew nor changes this state.
+    pub(crate) fn idle(&self) -> bool {
+        self.watch.is_none() && matches!(self.runaway, Runaway::Inactive)
+    }
+
     /// Run every check on a reading at `now_s`; the first fault found.
     pub(crate) fn check(&mut self, now_s: f64, temp_c: f64, target_c: f64) -> Option<ThermalFault> {
         let heater = self.heater;
