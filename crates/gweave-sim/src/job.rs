@@ -25,6 +25,16 @@ use crate::interp::{Machine, Outcome, SimError, SimReport};
 use crate::profile::build_options::FirmwareKind;
 use crate::profile::{FaultSpec, MachineProfile};
 
+/// The longest a run of a file may hold the simulated clock, s: 30 days, past which the
+/// machine stops ([`Machine::limit_clock`]). A heater that is on is simulated loop by loop, as
+/// the firmware runs it every 0.1 s: a quarter of a second of CPU a simulated day on the
+/// default machine, more with more heaters, and there is no exact shortcut (its PID integrates
+/// each loop's error over that loop's period, which differs from the next in its last bits). A
+/// command is held to a week (`interp::motion::MAX_COMMAND_S`), but lines of
+/// them add up: 200 of `G4 S86400` (2 KB) ran for 54 s. The longest prints run for days, a
+/// large-format one a week or two; a month is past any, and costs seconds.
+pub const MAX_FILE_RUN_S: f64 = 30.0 * 24.0 * 3600.0;
+
 /// What a simulation is asked for beyond the file and the machine profile.
 #[derive(Debug, Clone, Default)]
 pub struct SimSetup {
@@ -137,6 +147,7 @@ pub fn simulate(
     }
     profile.faults.extend(options.faults.iter().cloned());
     let mut machine = Box::new(Machine::new(profile)?);
+    machine.limit_clock(MAX_FILE_RUN_S);
     if options.record_speed {
         machine.record_speed();
     }
@@ -378,6 +389,30 @@ mod tests {
                 report.blocks
             );
         }
+    }
+
+    /// Regression (B5): 200 lines of `G4 S86400` ran 200 simulated days, 54 s of CPU with the
+    /// hotend on. A file's run stops at 30 days; cold, the heaters rest and their loops are
+    /// passed over, so the month costs a few loops a dwell (the hot month runs loop by loop,
+    /// `interp`'s `a_clock_past_its_limit_halts_the_machine` holds that to the limit).
+    #[test]
+    fn two_hundred_days_of_dwell_stop_at_a_files_time_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        let job = dir.path().join("dwell.gcode");
+        std::fs::write(&job, "G4 S86400\n".repeat(200)).unwrap();
+        let Simulation::Marlin { machine, report, errors } =
+            simulate(&job, MachineProfile::default(), &SimSetup::default(), &mut Quiet).unwrap()
+        else {
+            panic!("the Marlin model runs the default profile")
+        };
+        assert!(report.halted);
+        assert_eq!(report.lines, 31, "the 31st dwell passes the limit");
+        assert_eq!(
+            errors,
+            ["Error:gweave-sim: the run reached its limit of 30 days of simulated time: stopped"]
+        );
+        assert_eq!(machine.thermal().now_s(), MAX_FILE_RUN_S);
+        assert!(machine.thermal().loops_run() < 100, "{}", machine.thermal().loops_run());
     }
 
     #[test]

@@ -153,6 +153,9 @@ impl Machine {
                 break;
             }
             self.idle_for(step_s, out);
+            if self.halt == Some(Halt::ClockLimit) {
+                break;
+            }
             if self.now_s() + 1e-9 >= report_s {
                 let text = self.thermal.wait_status_line(&wait);
                 out(self.now_s(), &text);
@@ -226,7 +229,7 @@ impl Machine {
         }
         let step_s = self.profile.thermal.sample_period_s;
         let start_s = self.now_s();
-        while self.thermal.autotune_running() && self.now_s() - start_s <= MAX_WAIT_S {
+        while self.thermal.autotune_running() && self.halt.is_none() && self.now_s() - start_s <= MAX_WAIT_S {
             self.idle_for(step_s, out);
             for l in self.thermal.take_autotune_lines() {
                 out(self.now_s(), &l);
@@ -238,9 +241,11 @@ impl Machine {
         self.thermal.take_autotune_result();
     }
 
-    /// Step the heaters up to the machine clock, injecting faults and auto-reporting on time.
+    /// Step the heaters up to the machine clock, injecting faults and auto-reporting on time; a
+    /// clock past its limit ([`Machine::limit_clock`]) steps them to the limit and halts.
     pub(super) fn sync(&mut self, out: &mut dyn FnMut(f64, &str)) {
-        let target_s = self.core.now_s();
+        let clock_s = self.core.now_s();
+        let target_s = clock_s.min(self.clock_limit_s);
         loop {
             let now_s = self.thermal.now_s();
             if let Some(f) = self.faults.get(self.next_fault) {
@@ -288,6 +293,20 @@ impl Machine {
                 }
             }
         }
+        if clock_s > self.clock_limit_s && self.halt.is_none() {
+            self.stop_at_clock_limit(out);
+        }
+    }
+
+    /// The clock passed its limit: say so, switch the heaters off and halt.
+    #[cold]
+    #[inline(never)]
+    fn stop_at_clock_limit(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let limit = WarningKind::ClockLimit { limit_s: self.clock_limit_s };
+        out(self.clock_limit_s, &format!("Error:gweave-sim: {limit}"));
+        self.warn(limit);
+        self.halt = Some(Halt::ClockLimit);
+        self.heaters_off();
     }
 }
 

@@ -103,6 +103,8 @@ pub enum Outcome {
 enum Halt {
     Thermal(ThermalFault),
     Emergency,
+    /// The clock passed the run's limit ([`Machine::limit_clock`]).
+    ClockLimit,
 }
 
 /// The virtual printer.
@@ -119,6 +121,8 @@ pub struct Machine {
     /// Physical minus logical X Y Z: `G92` moves the logical origin, homing resets it.
     shift_mm: [f64; 3],
     halt: Option<Halt>,
+    /// The clock the machine stops at ([`Machine::limit_clock`]), s; infinite for a host's board.
+    clock_limit_s: f64,
     /// Faults to inject, by time; `next_fault` is the first not yet injected.
     faults: Vec<FaultSpec>,
     next_fault: usize,
@@ -208,6 +212,7 @@ impl Machine {
             program_ended: false,
             shift_mm: [0.0; 3],
             halt: None,
+            clock_limit_s: f64::INFINITY,
             faults,
             next_fault: 0,
             autoreport_s: 0.0,
@@ -415,6 +420,15 @@ impl Machine {
     /// layers after it were not handed over). Taken: a second call says nothing.
     pub fn take_inkjet_failure(&mut self) -> Option<InkjetError> {
         self.inkjet.as_mut().and_then(InkjetCanvas::take_failure)
+    }
+
+    /// Stops the machine once its clock passes `max_s`: the heaters are simulated up to it and
+    /// no further, an `Error:` line and a `time_limit` warning say so, and the machine halts with
+    /// its heaters off, as on a fault (a run of a file stops there). A run of a file is held to
+    /// [`MAX_FILE_RUN_S`](crate::MAX_FILE_RUN_S); a host's board has no limit, its clock
+    /// following the wall clock for as long as the server runs.
+    pub fn limit_clock(&mut self, max_s: f64) {
+        self.clock_limit_s = max_s;
     }
 
     /// Record the planned toolhead speed over time from now on (for the speed chart).

@@ -119,6 +119,11 @@ pub enum WarningKind {
         /// What was wrong.
         detail: InkjetWarning,
     },
+    /// The clock passed the run's limit ([`Machine::limit_clock`]): the machine stopped there.
+    ClockLimit {
+        /// The limit, s.
+        limit_s: f64,
+    },
     /// The file looks cut short: its last line has no line ending and the line its slicer ends
     /// every file with is missing (`gweave check`'s warning, on the last line): a printer runs
     /// it to that line and stops with part of the object printed.
@@ -141,6 +146,7 @@ impl WarningKind {
             WarningKind::Thermal { .. } => "thermal",
             WarningKind::WaitTimeout { .. } => "wait_timeout",
             WarningKind::Inkjet { .. } => "inkjet",
+            WarningKind::ClockLimit { .. } => "time_limit",
             WarningKind::Truncated { .. } => "truncated",
         }
     }

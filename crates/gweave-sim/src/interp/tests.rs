@@ -417,6 +417,32 @@ fn commands_longer_than_a_week_are_refused() {
     assert!(m.now_s() > 600.0 && m.now_s() < 700.0, "{}", m.now_s());
 }
 
+/// A clock past the machine's limit (a run of a file's: 30 days) stops it: the heaters are
+/// simulated up to the limit and no further, loop by loop while one is on (the count of their
+/// loops says so), an `Error:` line and a `time_limit` warning say why, and the commands after
+/// it are refused as on a halt; a heating wait under way ends there.
+#[test]
+fn a_clock_past_its_limit_halts_the_machine() {
+    let mut m = machine();
+    m.limit_clock(3600.0);
+    let (r, o) = run(&mut m, "M104 S200\nG4 S3000\nG4 S3000\nG4 S3000");
+    assert_eq!(o, Outcome::Halted);
+    let stop = "Error:gweave-sim: the run reached its limit of 0.0416667 days of simulated time: stopped";
+    assert_eq!(r, [stop, STOPPED_LINE]);
+    assert_eq!(m.thermal().now_s(), 3600.0);
+    assert_eq!(m.thermal().loops_run(), 36_001);
+    assert_eq!(m.thermal().target(HeaterId::Hotend(0)).unwrap(), 0.0, "heaters off");
+    let report = m.report();
+    assert!(report.halted);
+    assert_eq!(report.warning_counts["time_limit"], 1);
+    assert_eq!(report.warnings[0].kind.to_string(), stop["Error:gweave-sim: ".len()..]);
+    let mut m = machine();
+    m.limit_clock(60.0);
+    let (r, o) = run(&mut m, "M109 S200");
+    assert_eq!((o, m.thermal().now_s()), (Outcome::Halted, 60.0));
+    assert_eq!(r.last().map(String::as_str), Some(stop.replace("0.0416667", "0.000694444").as_str()));
+}
+
 /// Marlin's `G10 S1` (the swap retraction before a tool change on a multi-extruder machine)
 /// retracts; it does not set the hotend to 1 °C, which would refuse the next extrusion as cold.
 #[test]

@@ -25,6 +25,11 @@ impl fmt::Display for WarningKind {
             WarningKind::Thermal { message } => write!(f, "{}", message.escape_debug()),
             WarningKind::WaitTimeout { heater } => write!(f, "heater {heater} never reached its target"),
             WarningKind::Inkjet { detail } => write!(f, "inkjet: {detail}"),
+            WarningKind::ClockLimit { limit_s } => write!(
+                f,
+                "the run reached its limit of {} days of simulated time: stopped",
+                gweave::range::short(limit_s / 86_400.0)
+            ),
             WarningKind::Truncated { footer } => {
                 write!(f, "{}", gweave::gcode::diag::Finding::NoFooter { footer: *footer })
             }
