@@ -84,7 +84,7 @@ pub enum InkjetError {
     #[error(transparent)]
     Profile(#[from] PrintheadError),
     /// The canvas' origin is not a finite position.
-    #[error("canvas pixel size must be positive and finite")]
+    #[error("the inkjet canvas' origin must be a finite position on the bed")]
     Geometry,
     /// A layer's image could not be written.
     #[error(transparent)]

@@ -131,7 +131,7 @@ impl Output {
                         fs::OpenOptions::new().write(true).open(path).map_err(|e| Error::io(path, e))?;
                     return Ok(Sink::Special { file, dest: path.clone() });
                 }
-                (path.clone(), None)
+                (through_link(path)?, None)
             }
             Target::InPlace { keep_backup, force } => {
                 let input = input.ok_or(Error::InPlaceWithoutInput)?;
@@ -154,15 +154,7 @@ impl Output {
                         return Err(Error::BackupSlotsFull { path: backup.clone(), slots: BACKUP_SLOTS });
                     }
                 }
-                // A link is kept and its target replaced, as an editor saving through the link
-                // does (`sed -i` without --follow-symlinks replaced the link by a file and left
-                // the target as it was).
-                let is_link = input.symlink_metadata().is_ok_and(|m| m.file_type().is_symlink());
-                let dest = match is_link {
-                    true => fs::canonicalize(input).map_err(|e| Error::io(input, e))?,
-                    false => input.to_path_buf(),
-                };
-                (dest, backup)
+                (through_link(input)?, backup)
             }
         };
         let file = TempFile::new_in(&parent_dir(&dest)).map_err(|e| Error::io(&dest, e))?;
@@ -223,6 +215,18 @@ impl Output {
                 tmp.persist(&dest).map_err(|e| Error::io(&dest, e))
             }
         }
+    }
+}
+
+/// Where a file named `path` is written: the file a link names, so that the link is kept and
+/// its target replaced, as an editor saving through the link does and `cp` writes through it
+/// (renaming the new file onto the link's own name replaced the link by a file and left the
+/// target as it was: `sed -i` without `--follow-symlinks` does that). A link to nothing is an
+/// error naming the link, as `cp` refuses to write through a dangling link.
+fn through_link(path: &Path) -> Result<PathBuf> {
+    match path.symlink_metadata() {
+        Ok(meta) if meta.file_type().is_symlink() => fs::canonicalize(path).map_err(|e| Error::io(path, e)),
+        _ => Ok(path.to_path_buf()),
     }
 }
 
@@ -496,6 +500,28 @@ mod tests {
         fs::write(&input, b"old\n").unwrap();
         let err = Output::create(&Target::File(input.clone()), Some(&input)).err().unwrap();
         assert!(matches!(err, Error::WouldOverwriteInput { .. }));
+    }
+
+    /// Regression (a breaking session): `-o link.gcode` renamed the new file onto the link,
+    /// replacing the link by a file and leaving its target as it was. The target is written
+    /// and the link kept, as `cp` does; a link to nothing is refused, nothing created.
+    #[cfg(unix)]
+    #[test]
+    fn an_output_through_a_link_writes_its_target() {
+        let dir = tempfile::tempdir().unwrap();
+        let (target, link) = (dir.path().join("target.gcode"), dir.path().join("link.gcode"));
+        fs::write(&target, b"old\n").unwrap();
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let mut out = Output::create(&Target::File(link.clone()), None).unwrap();
+        out.write_all(b"new\n").unwrap();
+        out.commit().unwrap();
+        assert!(link.symlink_metadata().unwrap().file_type().is_symlink());
+        assert_eq!(fs::read(&target).unwrap(), b"new\n");
+        let dangling = dir.path().join("dangling.gcode");
+        std::os::unix::fs::symlink(dir.path().join("nowhere.gcode"), &dangling).unwrap();
+        let err = Output::create(&Target::File(dangling.clone()), None).err().unwrap();
+        assert!(err.to_string().contains("dangling.gcode"), "{err}");
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 3);
     }
 
     fn in_place(input: &Path, bytes: &[u8], force: bool) -> Result<()> {
