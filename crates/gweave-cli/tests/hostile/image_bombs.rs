@@ -70,3 +70,18 @@ fn an_image_within_the_ceiling_rasters() {
     let text = fs::read_to_string(dir.path().join("out.gcode")).unwrap();
     assert!(text.contains("M700 P0 S4095"), "every nozzle fires on black pixels with --invert");
 }
+
+/// Regression (a breaking session): an RGB image within the side ceiling whose pixels take more
+/// than the `image` crate's allocation limit (13 500 x 13 500 px, 521 MiB) was refused with its
+/// bare "Memory limit exceeded". The message says the size, the format and the way out, from
+/// the header, before anything is decoded.
+#[test]
+fn an_image_too_large_to_decode_says_why() {
+    raster_refuses(
+        "rgb.bmp",
+        &bmp_header(14_000, 14_000),
+        &[],
+        "the image is 14000 x 14000 px of Rgb8: 561 MiB decoded, more than the 512 MiB an image may take; save it \
+         as 8-bit greyscale (a byte a pixel) or 1-bit",
+    );
+}

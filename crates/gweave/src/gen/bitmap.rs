@@ -68,6 +68,20 @@ pub enum BitmapError {
         /// The largest bed, mm.
         bed_mm: f64,
     },
+    /// An image whose decoded pixels would take more than the `image` crate's allocation limit.
+    #[error("the image is {width} x {height} px of {colour}: {mb} MiB decoded, more than the {limit_mb} MiB an image may take; save it as 8-bit greyscale (a byte a pixel) or 1-bit")]
+    DecodedSize {
+        /// The width, px.
+        width: u32,
+        /// The height, px.
+        height: u32,
+        /// The pixel format, as the decoder names it (`Rgb8`).
+        colour: String,
+        /// What the decoded pixels take, MiB.
+        mb: u64,
+        /// The most an image may take decoded, MiB.
+        limit_mb: u64,
+    },
     /// A pixel buffer of the wrong length for its size.
     #[error("pixel buffer has {got} values, expected {expected}")]
     BufferSize {
@@ -385,6 +399,18 @@ pub fn decode(data: &[u8], opts: &ThresholdOptions, pixel_mm: f64) -> Result<Bit
     // The header's size (the decoder reads no pixel for it), checked before decoding.
     let (width, height) = reader()?.into_dimensions()?;
     check_size(u64::from(width), u64::from(height), pixel_mm)?;
+    // What the decoded pixels take: the `image` crate refuses more than its allocation limit
+    // with a bare "Memory limit exceeded"; say the size, its cause and the way out instead.
+    let decoder = reader()?.into_decoder()?;
+    let (bytes, colour) =
+        (image::ImageDecoder::total_bytes(&decoder), image::ImageDecoder::color_type(&decoder));
+    let limit = image::Limits::default().max_alloc.unwrap_or(u64::MAX);
+    if bytes > limit {
+        let mb = |b: u64| b.div_ceil(1 << 20);
+        let colour = format!("{colour:?}");
+        return Err(BitmapError::DecodedSize { width, height, colour, mb: mb(bytes), limit_mb: mb(limit) });
+    }
+    drop(decoder);
     let img = reader()?.decode()?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let colour = img.color();
