@@ -250,7 +250,7 @@ pub const COMMANDS: &[CommandSpec] = &[
     CommandSpec { codes: "M108 M410", what: "emergency parser: break a wait / quick stop (accepted: waits end by themselves)", run: accepted, urgent: Some(break_wait), ..ROW },
     CommandSpec { codes: "M110", what: "set the line number (serial protocol)", run: accepted, while_halted: true, link: Link::LineNumber, ..ROW },
     CommandSpec { codes: "M113", what: "host keepalive: busy lines every S seconds during a long command (serial protocol; 0: off, no S: report it)", run: accepted, while_halted: true, params: &[p("S", KEEPALIVE_S)], link: Link::Keepalive, ..ROW },
-    CommandSpec { codes: "M112", what: "emergency stop: heaters off, halted until M999", run: emergency_stop, while_halted: true, urgent: Some(kill_now), ..ROW },
+    CommandSpec { codes: "M112", what: "emergency stop: queued moves dropped, heaters off, halted until M999", run: emergency_stop, while_halted: true, urgent: Some(kill_now), ..ROW },
     CommandSpec { codes: "M114", what: "position and motor counts after the queued moves", run: m114, while_halted: true, queue: Queue::Drains, ..ROW },
     CommandSpec { codes: "M115", what: "firmware name, extruder count and the capabilities of the [firmware] table", run: m115, while_halted: true, ..ROW },
     CommandSpec { codes: "M116", what: "wait for every heater with a target (RepRapFirmware)", run: m116, ..ROW },
@@ -791,7 +791,7 @@ fn m303(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.m303(out)
 }
 
-/// `M112`: heaters off, halted until `M999`.
+/// `M112`: the moves still queued dropped, heaters off, halted until `M999`.
 fn emergency_stop(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str)) {
     m.kill(out);
 }

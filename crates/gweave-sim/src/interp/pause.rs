@@ -74,6 +74,8 @@ impl Machine {
 
     /// Heaters off, halted until `M999`, as `M112` leaves the board.
     pub(super) fn kill(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        // The motors stop at once: what the planner still held never runs.
+        self.core.quick_stop();
         self.halt = Some(super::Halt::Emergency);
         self.heaters_off();
         out(self.now_s(), crate::thermal::protection::KILL_LINE);

@@ -207,6 +207,24 @@ fn m112_halts_until_m999() {
     assert_eq!(run(&mut m, "M999\nG28").1, Outcome::Ok);
 }
 
+/// A breaking session found that `M112` let the moves queued before it run: `G1 X200 F60`
+/// then `M112` still counted the 200 s move and its steps. The motors stop at once (Marlin's
+/// `kill()` after `quick_stop()`): the queued moves add no time and no steps, and the position
+/// is where the executed moves left the machine, in the coordinates in force (a `G92` after
+/// the dropped move keeps its shift).
+#[test]
+fn m112_drops_the_queued_moves() {
+    let mut m = warm_machine();
+    run(&mut m, "G28\nG1 X10 F6000\nM400");
+    let (before_s, before_steps) = (m.now_s(), m.report().steps.axes);
+    let (r, o) = run(&mut m, "G1 X200 F60\nG92 X0\nM112\nM114");
+    assert_eq!(o, Outcome::Halted);
+    // `G92 X0` made the queued end X200 the origin: the motor stopped at X10, logical -190.
+    assert_eq!(r, [KILL_LINE, "X:-190.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0"]);
+    assert_eq!(m.now_s(), before_s, "the 190 s move never ran");
+    assert_eq!(m.report().steps.axes, before_steps);
+}
+
 /// A breaking session found that lines refused while halted still changed the machine: after
 /// `M112`, `G91`, `G20` and `G1 X10` each answered the stop line, yet `M999` found relative
 /// inches and a logical X moved without its motor; a halted `G1 X1e23` (its range check was
@@ -219,12 +237,10 @@ fn a_halted_machine_changes_nothing_of_a_refused_line() {
     assert_eq!((r, o), (vec![STOPPED_LINE.to_owned(); 6], Outcome::Halted));
     let (r, o) = run(&mut m, "M999\nM114\nG1 X60\nG28 X\nM114");
     assert_eq!(o, Outcome::Ok);
+    // The move before M112 was still queued: the quick stop dropped it (m112_drops_...).
     assert_eq!(
         r,
-        [
-            "X:50.00 Y:50.00 Z:10.00 E:0.00 Count X:4000 Y:4000 Z:40000",
-            "X:0.00 Y:50.00 Z:10.00 E:0.00 Count X:0 Y:4000 Z:40000",
-        ]
+        ["X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0", "X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0",]
     );
     assert!(m.now_s() < 60.0, "{} s", m.now_s());
 }

@@ -50,6 +50,7 @@ use std::sync::mpsc;
 
 use gweave::colour::dialect::{DialectError, MixingState};
 use gweave::gcode::layers::Feature;
+use gweave::gcode::state::{A, E, X, Y, Z};
 use gweave::rotary::cylinder::RotaryConfig;
 use gweave::{Block, Effect, Firmware, LineReader, RawLine, State};
 use thiserror::Error;
@@ -455,6 +456,18 @@ impl Estimator {
     pub fn idle(&mut self, t_s: f64) {
         if t_s > 0.0 {
             self.back.acc.t_s += t_s;
+        }
+    }
+
+    /// An emergency stop: the moves still queued in the planner are dropped unexecuted (they
+    /// add no time, no steps, no filament) and the position goes back to where the executed
+    /// blocks left the machine, in the coordinates in force (a `G92` after a dropped move
+    /// keeps its shift: the dropped distances are taken off, not the old positions put back).
+    pub fn quick_stop(&mut self) {
+        let undone = self.back.planner.discard();
+        let pos = &mut self.front.state.pos;
+        for (axis, d) in [X, Y, Z, E, A].into_iter().zip(undone) {
+            pos[axis] -= d;
         }
     }
 

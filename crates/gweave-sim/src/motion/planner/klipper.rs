@@ -28,7 +28,7 @@ use std::collections::VecDeque;
 
 use super::junction::{extruder_v2, HalfAngle};
 use super::{BlockSink, Lesser, PlannedBlock};
-use crate::motion::kinematics::{axis, Geometry, Move, MoveKind, Pos};
+use crate::motion::kinematics::{axis, deltas, Geometry, Move, MoveKind, Pos};
 use crate::motion::limits::{AxisLimits, KlipperLimits};
 use crate::motion::planner::trapezoid::Trapezoid;
 
@@ -208,6 +208,31 @@ impl KlipperLookahead {
         if self.flush_budget_s <= 0.0 {
             self.flush_queue(true, sink);
         }
+    }
+
+    /// Drops every queued move unexecuted, as Klipper's emergency stop (`M112`) leaves the
+    /// lookahead queue. Returns how far the moves would have moved each axis, X Y Z E A: from
+    /// their positions, kept while the sink reads them (the virtual printer's does), else from
+    /// their lengths along X Y Z E.
+    pub(crate) fn discard(&mut self) -> [f64; 5] {
+        let mut undone = [0.0; 5];
+        if self.ends.len() == self.queue.len() {
+            for [start, end] in &self.ends {
+                for (sum, d) in undone.iter_mut().zip(deltas(*start, *end)) {
+                    *sum += d;
+                }
+            }
+        } else {
+            for q in &self.queue {
+                for (sum, r) in undone.iter_mut().zip(q.ratio) {
+                    *sum += r * q.len;
+                }
+            }
+        }
+        self.queue.clear();
+        self.ends.clear();
+        self.flush_budget_s = FLUSH_AFTER_FULL_S;
+        undone
     }
 
     /// Plan everything queued, ending at a stop.

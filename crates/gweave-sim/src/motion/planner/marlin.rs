@@ -136,6 +136,24 @@ impl MarlinBuffer {
         self.at.set(pos, by, set);
     }
 
+    /// Drops every queued block unexecuted, as `Planner::quick_stop()` empties the buffer and
+    /// forgets the previous block's speed (the machine stands). Returns how far the blocks
+    /// would have moved each axis, X Y Z E A. The position in steps stays where the last
+    /// block would have ended: the next move, starting where the machine stopped, takes every
+    /// axis afresh, as `set_current_from_steppers_for_axis` and `sync_plan_position` do after
+    /// a quick stop.
+    pub(crate) fn discard(&mut self) -> [f64; 5] {
+        let mut undone = [0.0; 5];
+        for block in &self.queue.blocks[self.queue.head..] {
+            for (sum, d) in undone.iter_mut().zip(deltas(block.mv.start, block.mv.end)) {
+                *sum += d;
+            }
+        }
+        self.queue = Queue::default();
+        self.prev = Previous::default();
+        undone
+    }
+
     /// Plan the rest of the buffer to a stop and emit it.
     pub(crate) fn flush(&mut self, sink: &mut dyn BlockSink) {
         while self.queue.len() > 0 {

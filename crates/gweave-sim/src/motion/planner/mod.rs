@@ -270,6 +270,18 @@ impl Planner {
         }
     }
 
+    /// Drops every queued move unexecuted (an emergency stop: Marlin's `quick_stop()`,
+    /// Klipper's shutdown): returns how far they would have moved each axis, X Y Z E A, so
+    /// that the caller can take its position back to where the emitted blocks left the
+    /// machine. A block already emitted has run.
+    pub fn discard(&mut self) -> [f64; 5] {
+        match &mut self.engine {
+            Engine::Klipper(k) => k.discard(),
+            Engine::Marlin(m) => m.discard(),
+            Engine::Constant => [0.0; 5],
+        }
+    }
+
     /// How many moves wait in the lookahead queue.
     pub fn queued(&self) -> usize {
         match &self.engine {

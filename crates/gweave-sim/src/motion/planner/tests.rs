@@ -343,3 +343,35 @@ fn plan_random(profile: MotionProfile, path: &[([f64; 4], f64)]) -> (Vec<Planned
     planner.flush(&mut out);
     (out, feeds)
 }
+
+/// An emergency stop drops what is queued unexecuted (Marlin's `quick_stop()`, Klipper's
+/// shutdown) and says how far it would have gone, so that the caller takes its position back;
+/// the next move plans from a standstill, alone.
+#[test]
+fn a_discarded_queue_runs_nothing_and_says_how_far_it_went() {
+    for profile in [marlin(), klipper()] {
+        let mut planner = Planner::new(profile).unwrap();
+        let mut out = Vec::new();
+        let points = [[0.0; 4], [10.0, 0.0, 0.0, 1.0], [10.0, 5.0, 0.0, 1.5], [20.0, 5.0, 1.0, 1.5]];
+        for (i, w) in points.windows(2).enumerate() {
+            let p = |a: [f64; 4]| Pos::xyze(a[0], a[1], a[2], a[3]);
+            planner.push(&mv(p(w[0]), p(w[1]), 50.0, i as u64), &mut out).unwrap();
+        }
+        assert!(out.is_empty(), "nothing emitted before the stop: {out:?}");
+        let undone = planner.discard();
+        assert!(
+            undone.iter().zip([20.0, 5.0, 1.0, 1.5, 0.0]).all(|(u, w)| close(*u, w, 1e-12)),
+            "{undone:?}"
+        );
+        assert_eq!(planner.queued(), 0);
+        planner.flush(&mut out);
+        assert!(out.is_empty(), "the dropped moves never run: {out:?}");
+        // From where the machine stopped, the next move alone, from a standstill.
+        let start = Pos::xyze(0.0, 0.0, 0.0, 0.0);
+        planner.push(&mv(start, Pos::xyze(100.0, 0.0, 0.0, 0.0), 50.0, 9), &mut out).unwrap();
+        planner.flush(&mut out);
+        assert_eq!(out.len(), 1);
+        let alone = plan(planner.profile().clone(), &[[0.0; 4], [100.0, 0.0, 0.0, 0.0]], 50.0);
+        assert_eq!(out[0].duration_s(), alone[0].duration_s());
+    }
+}
