@@ -12,7 +12,8 @@ SHELL := /bin/bash
 VENV := .venv
 PY := $(VENV)/bin/python
 CARGO := cargo
-GWEAVE := target/release/gweave
+# The release binary, where cargo puts it (a CARGO_TARGET_DIR of the user's moves it).
+GWEAVE := $(or $(CARGO_TARGET_DIR),target)/release/gweave
 OUT := out
 
 .PHONY: demo test bench deps rust-deps python-deps py-deps build build-debug python python-debug lint cargo-test pytest e2e clean

@@ -26,3 +26,4 @@ for step in "$ROOT"/examples/demo.d/[0-9]*.sh; do
 done
 echo "== results in $OUT"
 ls -1 "$OUT"
+echo "== the gweave command: $GWEAVE (export PATH=\"$(dirname "$GWEAVE"):\$PATH\" to type gweave)"

@@ -100,7 +100,7 @@ grep -q 'unknown fallback "wipe" (known: partial, block, tower)' "$WORK/err" || 
 if "$GWEAVE" purge-shift "$DATA/cura/cura_dual.gcode" -o "$WORK/y.gcode" --purge 2 2> "$WORK/err"; then
   echo "a file for a nozzle per tool accepted"; exit 1
 fi
-if ! grep -q "cura_dual.gcode:4249: line 4247 sets T0's nozzle to 200 °C while T1's is at 215 °C (line 3974): the file heats a nozzle per tool" "$WORK/err" \
+if ! grep -q "cura_dual.gcode:4249: here, at the first command after the temperatures, T0's nozzle is at 200 °C (set on line 4247) and T1's at 215 °C (line 3974): the file heats a nozzle per tool" "$WORK/err" \
   || ! grep -q 'or run `gweave mix` on it first' "$WORK/err"; then
   echo "error text: $(cat "$WORK/err")"; exit 1
 fi

@@ -376,8 +376,9 @@ fn a_file_for_a_nozzle_per_tool_is_refused_and_mix_output_accepted() {
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(
         err.starts_with(&format!(
-            "gweave: error: {dual}:4249: line 4247 sets T0's nozzle to 200 °C while T1's is at 215 °C \
-             (line 3974): the file heats a nozzle per tool. purge-shift moves colour changes on one nozzle"
+            "gweave: error: {dual}:4249: here, at the first command after the temperatures, T0's nozzle is \
+             at 200 °C (set on line 4247) and T1's at 215 °C (line 3974): the file heats a nozzle per tool. \
+             purge-shift moves colour changes on one nozzle"
         )),
         "{err}"
     );

@@ -67,7 +67,8 @@ def test_a_file_for_a_nozzle_per_tool_is_refused(data, tmp_path):
     nozzle (13 cold extrusions on the virtual dual extruder): refused, nothing written."""
     dual = data / "cura" / "cura_dual.gcode"
     want = (
-        rf"^{dual}:4249: line 4247 sets T0's nozzle to 200 °C while T1's is at 215 °C \(line 3974\): "
+        rf"^{dual}:4249: here, at the first command after the temperatures, T0's nozzle is at 200 °C "
+        r"\(set on line 4247\) and T1's at 215 °C \(line 3974\): "
         r"the file heats a nozzle per tool\. purge-shift moves colour changes on one nozzle .* "
         r"or run `gweave mix` on it first and purge-shift mix's output$"
     )

@@ -146,7 +146,15 @@ pub enum LoadError {
 /// `reading PATH: ERROR`, and for a missing file, the names `--machine` also takes.
 pub fn not_found(path: &Path, e: &std::io::Error) -> String {
     let mut message = format!("reading {}: {e}", path.display());
-    if e.kind() == std::io::ErrorKind::NotFound {
+    if e.kind() == std::io::ErrorKind::NotFound && path.as_os_str() == "slicer" {
+        // `estimate --machine slicer` times a file by its slicer's own limits; a machine to run
+        // (sim, serve, check's bed) has to be one.
+        message = format!(
+            "--machine slicer (the limits the slicer wrote into the file) is for `gweave estimate` \
+             only: this command runs a machine; built in: {}; see `gweave machine list`",
+            names()
+        );
+    } else if e.kind() == std::io::ErrorKind::NotFound {
         message.push_str(&format!(
             " (neither a file nor a built-in profile; built in: {}; see `gweave machine list`)",
             names()
@@ -158,6 +166,21 @@ pub fn not_found(path: &Path, e: &std::io::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A new user's trial: `sim --machine slicer` looked for a file called `slicer`; the
+    /// message says the name is `estimate`'s only.
+    #[test]
+    fn the_slicers_limits_are_named_estimates_only() {
+        let e = std::io::Error::from(std::io::ErrorKind::NotFound);
+        let said = not_found(Path::new("slicer"), &e);
+        assert!(
+            said.starts_with(
+                "--machine slicer (the limits the slicer wrote into the file) is for `gweave estimate` only"
+            ),
+            "{said}"
+        );
+        assert!(said.contains("prusa-mk3"), "{said}");
+    }
 
     #[test]
     fn every_builtin_profile_loads() {

@@ -57,8 +57,9 @@ pub enum SeparateNozzles {
     /// Two nozzles held at different temperatures at once (refused at the command after the
     /// temperature lines).
     #[error(
-        "line {line} sets T{tool}'s nozzle to {celsius} °C while T{other}'s is at {other_celsius} °C \
-         (line {other_line}): the file heats a nozzle per tool. {ADVICE}"
+        "here, at the first command after the temperatures, T{tool}'s nozzle is at {celsius} °C \
+         (set on line {line}) and T{other}'s at {other_celsius} °C (line {other_line}): the file \
+         heats a nozzle per tool. {ADVICE}"
     )]
     Temperatures {
         /// The line that set the last temperature.
@@ -225,7 +226,10 @@ mod tests {
             }
         );
         assert!(
-            e.to_string().starts_with("line 6 sets T0's nozzle to 200 °C while T1's is at 215 °C (line 2): "),
+            e.to_string().starts_with(
+                "here, at the first command after the temperatures, T0's nozzle is at 200 °C (set on \
+                 line 6) and T1's at 215 °C (line 2): "
+            ),
             "{e}"
         );
     }
