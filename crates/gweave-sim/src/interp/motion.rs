@@ -23,6 +23,8 @@ const XYZ: [char; 3] = ['X', 'Y', 'Z'];
 /// digit in a feed rate or a dwell (`F0.0001`, `G4 S99999999`) would otherwise keep the virtual
 /// printer busy for hours; such a command is refused instead.
 pub(super) const MAX_COMMAND_S: f64 = 7.0 * 24.0 * 3600.0;
+/// Marlin's reply to a move feeding more than `EXTRUDE_MAXLENGTH` (`STR_ERR_LONG_EXTRUDE_STOP`).
+pub(super) const LONG_EXTRUSION_LINE: &str = "echo: too long extrusion prevented";
 /// Tolerance of the bounds check, mm: coordinates are written with a few decimals.
 const BOUNDS_EPS_MM: f64 = 1e-6;
 
@@ -77,6 +79,11 @@ impl Machine {
                     min_c: cold.min_c,
                 });
                 fed_to_e = from_e;
+            } else if let Some(max_mm) = self.too_long_extrusion(de * self.flow_pct / 100.0) {
+                // `PREVENT_LENGTHY_EXTRUDE`: the same, for a feed past `EXTRUDE_MAXLENGTH`.
+                out(self.now_s(), LONG_EXTRUSION_LINE);
+                self.warn(WarningKind::LongExtrusion { fed_mm: de * self.flow_pct / 100.0, max_mm });
+                fed_to_e = from_e;
             } else if self.flow_pct != 100.0 {
                 fed_to_e = from_e + de * self.flow_pct / 100.0;
             }
@@ -92,6 +99,27 @@ impl Machine {
             check.on_move(from, to);
         }
         self.run_core(line, out);
+    }
+
+    /// `EXTRUDE_MAXLENGTH` (mm), if feeding `fed_mm` (the flow factor applied) would pass it:
+    /// Marlin's planner compares the E steps with the limit's, and a mixing extruder's the
+    /// share of its most loaded input (`Planner::_populate_block`), so that a move one input
+    /// could feed runs.
+    fn too_long_extrusion(&self, fed_mm: f64) -> Option<f64> {
+        let max_mm = f64::from(self.profile.firmware.extrude_max_mm);
+        let share = match self.core.mixing() {
+            Some(mixer) => {
+                let c = mixer.collector();
+                let sum: f64 = c.iter().sum();
+                if sum > 0.0 {
+                    c.iter().fold(0.0, |m: f64, v| m.max(*v)) / sum
+                } else {
+                    1.0
+                }
+            }
+            None => 1.0,
+        };
+        (max_mm > 0.0 && fed_mm.abs() * share > max_mm).then_some(max_mm)
     }
 
     /// Counts `fed_mm` of filament the active tool's motor fed (negative: retracted), by a move

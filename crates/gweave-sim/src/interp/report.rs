@@ -88,6 +88,14 @@ pub enum WarningKind {
         /// The minimum, C.
         min_c: f64,
     },
+    /// A move that would feed more filament than `EXTRUDE_MAXLENGTH` ran without its E part
+    /// (`PREVENT_LENGTHY_EXTRUDE`, the `[firmware]` table's `extrude_max_mm`).
+    LongExtrusion {
+        /// What the move asked to feed, mm (the flow factor applied).
+        fed_mm: f64,
+        /// The limit, mm.
+        max_mm: f64,
+    },
     /// A command the machine does not know.
     UnknownCommand {
         /// The command as written (without comment).
@@ -140,6 +148,7 @@ impl WarningKind {
             WarningKind::OutOfBounds { .. } => "out_of_bounds",
             WarningKind::BelowBed { .. } => "below_bed",
             WarningKind::ColdExtrusion { .. } => "cold_extrusion",
+            WarningKind::LongExtrusion { .. } => "long_extrusion",
             WarningKind::UnknownCommand { .. } => "unknown_command",
             WarningKind::InvalidExtruder { .. } => "invalid_extruder",
             WarningKind::Refused { .. } => "refused",

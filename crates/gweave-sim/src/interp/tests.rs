@@ -560,3 +560,25 @@ fn idle_runs_queued_moves_to_a_stop_first() {
     assert!(m.now_s() > before_s + 1.5, "the move and then the idle second");
     assert_eq!(report.count[0], 100 * 80);
 }
+
+/// A new user's trial found `G1 X10 Y10 E1000000` run as a million millimetres of filament
+/// (11 hours, no warning). Marlin's `PREVENT_LENGTHY_EXTRUDE` (on in its shipped
+/// configuration, `EXTRUDE_MAXLENGTH` 200) runs such a move without its E part and says so; a
+/// feed within the limit runs, and a board built without it (`extrude_max_mm = 0`) feeds all.
+#[test]
+fn a_move_feeding_past_extrude_maxlength_runs_without_its_e() {
+    let mut m = warm_machine();
+    let (r, _) = run(&mut m, "G1 X10 Y10 E1000000 F3000\nG92 E0\nG1 X20 E200\nM114");
+    assert_eq!(r[0], super::motion::LONG_EXTRUSION_LINE);
+    assert_eq!(r[1], "X:20.00 Y:10.00 Z:0.00 E:200.00 Count X:1600 Y:800 Z:0");
+    assert_eq!(m.report().filament_mm, [200.0]);
+    assert_eq!(m.report().warning_counts["long_extrusion"], 1);
+    assert!(m.now_s() < 10.0, "{} s", m.now_s());
+    let mut p = MachineProfile::default();
+    p.thermal.extrude_min_c = None;
+    p.firmware.extrude_max_mm = 0;
+    let mut m = Machine::new(p).unwrap();
+    let (r, _) = run(&mut m, "G1 E500 F6000");
+    assert!(r.is_empty(), "{r:?}");
+    assert_eq!(m.report().filament_mm, [500.0]);
+}

@@ -17,6 +17,13 @@ impl fmt::Display for WarningKind {
                 f,
                 "cold extrusion refused: hotend {hotend} at {temp_c:.1} C, below the minimum {min_c:.1} C"
             ),
+            WarningKind::LongExtrusion { fed_mm, max_mm } => write!(
+                f,
+                "too long extrusion refused: {} mm in one move, more than the {} mm the firmware allows \
+                 (EXTRUDE_MAXLENGTH); the move ran without it",
+                gweave::range::short(*fed_mm),
+                gweave::range::short(*max_mm)
+            ),
             WarningKind::UnknownCommand { command } => {
                 write!(f, "unknown command {}", command.escape_debug())
             }

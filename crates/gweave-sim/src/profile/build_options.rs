@@ -35,6 +35,7 @@
 //! probe = false                # a bed probe (Z_PROBE)
 //! linear_advance = false       # LIN_ADVANCE (off in Marlin's shipped configuration)
 //! mesh = [3, 3]                # bed levelling (AUTO_BED_LEVELING_BILINEAR grid); [] none
+//! extrude_max_mm = 200         # PREVENT_LENGTHY_EXTRUDE, EXTRUDE_MAXLENGTH; 0: not built in
 //! ```
 //!
 //! ```
@@ -45,6 +46,7 @@
 //! assert!(fw.capability_lines().contains(&"Cap:SDCARD:1".to_owned()));
 //! ```
 
+use gweave::range;
 use serde::{Deserialize, Serialize};
 
 /// The build features of the virtual board (see the module documentation for the defaults).
@@ -94,6 +96,10 @@ pub struct BuildOptions {
     /// Bed levelling grid points in X and Y (`GRID_MAX_POINTS_X/Y`); empty when the board has
     /// no levelling.
     pub mesh: Vec<u8>,
+    /// `PREVENT_LENGTHY_EXTRUDE` with its `EXTRUDE_MAXLENGTH`, mm of filament: a move that
+    /// would feed more in one go (a stray digit, `E1000000`) runs without its E part, as a cold
+    /// extrusion does, and the board says `echo: too long extrusion prevented`. 0: not built in.
+    pub extrude_max_mm: u32,
     /// What `M0` does: Marlin's stop, or the controller seed's end of program.
     pub m0: ProgramStop,
 }
@@ -147,6 +153,7 @@ impl Default for BuildOptions {
             probe: false,
             linear_advance: false,
             mesh: vec![3, 3],
+            extrude_max_mm: 200,
             m0: ProgramStop::Marlin,
         }
     }
@@ -158,6 +165,9 @@ pub enum BuildOptionsError {
     /// The mesh is not two sizes of 2 to 15 points.
     #[error("firmware.mesh must be [] or two grid sizes of 2 to 15 points (GRID_MAX_POINTS_X/Y), got {0:?}")]
     Mesh(Vec<u8>),
+    /// `EXTRUDE_MAXLENGTH` past the longest move there is.
+    #[error("firmware.extrude_max_mm = {0} is out of range: 0 (not built in) to 10000 mm")]
+    ExtrudeMax(u32),
     /// A feature that needs another one.
     #[error("firmware.{0} needs firmware.{1}")]
     Needs(&'static str, &'static str),
@@ -170,6 +180,9 @@ impl BuildOptions {
             self.mesh.is_empty() || (self.mesh.len() == 2 && self.mesh.iter().all(|n| (2..=15).contains(n)));
         if !mesh_ok {
             return Err(BuildOptionsError::Mesh(self.mesh.clone()));
+        }
+        if self.extrude_max_mm > range::LEN_MM.max as u32 {
+            return Err(BuildOptionsError::ExtrudeMax(self.extrude_max_mm));
         }
         let needs = [
             (self.long_filenames, !self.sdcard, "long_filenames", "sdcard"),
