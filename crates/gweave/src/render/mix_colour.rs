@@ -10,10 +10,15 @@
 //! mix and is washed out by the new one ([`Washout`], a stirred chamber behind a plug-flow dead
 //! volume). After a change, with `V` mm^3 extruded since, the old mix's share of what comes out
 //! is `c = residual_fraction(V)`, and the ratios printed are `c * old + (1 - c) * new`. The
-//! colour of a move is taken at the middle of its volume. A second change before the first has
-//! washed out starts from the blend then coming out (exact for the stirred chamber, a close
-//! approximation while the dead volume is still flushing). Every extruding move counts, also
-//! the ones a picture leaves out (purges, other layers), since they all wash the chamber. This is what makes a purge-shifted transition visible: the old colour
+//! colour of a move is taken at the middle of its volume. The chamber and the dead volume are
+//! linear in what flows through them, so changes that follow each other faster than they wash
+//! out add up: what comes out is the first mix plus, for each change `k` at `V_k` from `a` to
+//! `b`, `(b - a) * (1 - residual_fraction(V - V_k))` (a gradient on a spiral vase changes the
+//! mix every few mm^3, less than the dead volume: restarting the washout at each change from
+//! the blend then coming out held the first colour for the whole vase). A change that has
+//! washed out is folded into the first mix; at most [`PENDING`] are followed, an older one
+//! merged into the next. Every extruding move counts, also the ones a picture leaves out
+//! (purges, other layers), since they all wash the chamber. This is what makes a purge-shifted transition visible: the old colour
 //! fades into the new one along the part's own path, where `purge-shift` put it. The nozzle is
 //! taken to be loaded with the mix the print's first extrusion uses (a printer is loaded and
 //! primed with its first colour; the toolpath does not count the start G-code's prime lines),
@@ -30,6 +35,11 @@ use crate::post::mix::profile::MixProfile;
 
 /// Below this old-colour share a transition is over: 1/512 moves no 8-bit channel.
 const SETTLED: f64 = 1.0 / 512.0;
+
+/// Changes followed while they wash out: a gradient's every few mm^3 over a dead volume and a
+/// chamber of some tens of mm^3 are a few dozen; a file that changes the mix at every move
+/// would make the list, and each move's sum, as long as the file.
+const PENDING: usize = 64;
 
 /// Why the mix colouring cannot be set up.
 #[derive(Debug, thiserror::Error)]
@@ -93,11 +103,15 @@ impl PartialEq for MixColours {
 pub(crate) struct MixTracker {
     colours: MixColours,
     state: MixingState,
-    /// Ratios coming out when the last change happened, and the mix changed to.
-    from: Vec<f64>,
+    /// The mix the changes that have washed out left: what comes out but for the pending ones.
+    base: Vec<f64>,
+    /// The changes still washing out, oldest first: where each happened (in `extruded_mm3`)
+    /// and what it changed the mix by (new minus old ratios).
+    pending: std::collections::VecDeque<(f64, Vec<f64>)>,
+    /// The mix the file extrudes now (`base` plus every pending change).
     to: Vec<f64>,
-    /// Extruded since that change, mm^3.
-    purged_mm3: f64,
+    /// Extruded since the start, mm^3.
+    extruded_mm3: f64,
     /// Nothing extruded yet: the nozzle is taken to be loaded with the first mix used.
     loaded: bool,
     /// The colour of each settled mix (quantised ratios), predicted once.
@@ -127,9 +141,10 @@ impl MixTracker {
         MixTracker {
             colours,
             state,
-            from: to.clone(),
+            base: to.clone(),
+            pending: std::collections::VecDeque::new(),
             to,
-            purged_mm3: f64::INFINITY,
+            extruded_mm3: 0.0,
             loaded: false,
             cache: HashMap::new(),
             names: BTreeMap::new(),
@@ -179,12 +194,22 @@ impl MixTracker {
         self.printing_tool =
             if self.state.rrf_mix(tool).is_some() { tool } else { self.state.active_tool() as u32 };
         let target = self.active_ratios(tool);
-        if target != self.to && self.loaded {
-            self.from = self.output(self.purged_mm3);
-            self.purged_mm3 = 0.0;
+        if target == self.to {
+            return;
         }
-        if target != self.to {
-            self.settled = None;
+        self.settled = None;
+        if self.loaded {
+            let change = target.iter().zip(&self.to).map(|(b, a)| b - a).collect();
+            self.pending.push_back((self.extruded_mm3, change));
+            if self.pending.len() > PENDING {
+                // The oldest taken as happening with the next: its share arrives a little late.
+                let (_, oldest) = self.pending.pop_front().expect("more than PENDING");
+                let next = &mut self.pending[0].1;
+                next.iter_mut().zip(oldest).for_each(|(n, o)| *n += o);
+            }
+        } else {
+            // Not printing yet: the nozzle is loaded with the mix it starts with.
+            self.base = target.clone();
         }
         self.to = target;
     }
@@ -204,13 +229,29 @@ impl MixTracker {
         }
     }
 
-    /// Ratios coming out after `purged_mm3` of the current mix.
-    fn output(&self, purged_mm3: f64) -> Vec<f64> {
-        let c = self.colours.washout.residual_fraction(purged_mm3);
-        if c < SETTLED {
-            return self.to.clone();
+    /// Folds into `base` the changes washed out when `at_mm3` has been extruded; true when
+    /// none is left (then `base` is `to`).
+    fn settle(&mut self, at_mm3: f64) -> bool {
+        while let Some((v_k, change)) = self.pending.front() {
+            if self.colours.washout.residual_fraction(at_mm3 - v_k) >= SETTLED {
+                return false;
+            }
+            self.base.iter_mut().zip(change).for_each(|(b, d)| *b += d);
+            self.pending.pop_front();
         }
-        self.from.iter().zip(&self.to).map(|(a, b)| c * a + (1.0 - c) * b).collect()
+        // Exactly the mix in force, not its sum of changes.
+        self.base.clone_from(&self.to);
+        true
+    }
+
+    /// Ratios coming out when `at_mm3` has been extruded (see the module notes).
+    fn output(&self, at_mm3: f64) -> Vec<f64> {
+        let mut out = self.base.clone();
+        for (v_k, change) in &self.pending {
+            let arrived = 1.0 - self.colours.washout.residual_fraction(at_mm3 - v_k);
+            out.iter_mut().zip(change).for_each(|(o, d)| *o += d * arrived);
+        }
+        out
     }
 
     /// An extruding move of `e_mm` filament (retractions, `e_mm <= 0`, wash nothing): its
@@ -218,9 +259,9 @@ impl MixTracker {
     pub(crate) fn extrude(&mut self, e_mm: f64) -> Srgb8 {
         self.loaded = true;
         let v_mm3 = filament_mm_to_mm3(e_mm.max(0.0), self.colours.filament_diameter_mm).unwrap_or(0.0);
-        let mid_mm3 = self.purged_mm3 + v_mm3 / 2.0;
-        self.purged_mm3 += v_mm3;
-        let settled = self.colours.washout.residual_fraction(mid_mm3) < SETTLED;
+        let mid_mm3 = self.extruded_mm3 + v_mm3 / 2.0;
+        self.extruded_mm3 += v_mm3;
+        let settled = self.pending.is_empty() || self.settle(mid_mm3);
         if let (true, Some(c)) = (settled, self.settled) {
             return c;
         }
@@ -313,6 +354,51 @@ mod tests {
         assert_eq!(names.get(&[pure1.r, pure1.g, pure1.b]).map(String::as_str), Some("0:1"));
         assert_eq!(mix_name(&[0.5, 0.0, 0.5, 0.0]), "Green");
         assert_eq!(mix_name(&[0.25, 0.0, 0.75, 0.0]), "0.25:0:0.75:0");
+    }
+
+    /// A new user's trial: a gradient on a spiral vase (a mix change every 6.7 mm^3, less than
+    /// the 10 mm^3 dead volume) previewed in its first colour from bottom to top, each change
+    /// restarting the washout from the blend then coming out, still the first mix. Changes that
+    /// follow each other add up, each washing in from where it happened.
+    #[test]
+    fn changes_faster_than_the_washout_add_up() {
+        let cyan = Srgb8::new(0, 160, 224);
+        let yellow = Srgb8::new(255, 224, 0);
+        let washout = Washout::new(40.0, 10.0).unwrap();
+        let colours = MixColours::new(MixingModel::new(&[cyan, yellow]).unwrap(), washout, 1.75).unwrap();
+        let mut t = MixTracker::new(colours.clone());
+        for line in ["M163 S0 P0.5", "M163 S1 P0.5", "M164 S2", "T0"] {
+            feed(&mut t, line);
+        }
+        let mm3 = 2.405_281_5; // a millimetre of 1.75 mm filament
+        t.extrude(10.0);
+        feed(&mut t, "T2"); // at 10 mm: half of each
+        t.extrude(1.0);
+        feed(&mut t, "T1"); // at 11 mm, the first change still in the dead volume
+        let r = |since_mm3: f64| (-(since_mm3 - 10.0).max(0.0) / 40.0).exp();
+        // The middle of the next 20 mm: 10 mm past the second change, 11 past the first.
+        let (first, second) = (1.0 - r(11.0 * mm3), 1.0 - r(10.0 * mm3));
+        let yellow_share = 0.5 * first + 0.5 * second;
+        let want = colours.predict(&[1.0 - yellow_share, yellow_share]).unwrap();
+        assert_eq!(t.extrude(20.0), want);
+        assert!(yellow_share > 0.3, "both changes show: {yellow_share}");
+        t.extrude(400.0);
+        assert_eq!(t.extrude(1.0), colours.predict(&[0.0, 1.0]).unwrap(), "washed out");
+        assert!(t.pending.is_empty());
+    }
+
+    /// A file that changes the mix at every move keeps at most PENDING changes in hand.
+    #[test]
+    fn the_changes_followed_are_bounded() {
+        let mut t = MixTracker::new(MixColours::cmyw());
+        t.extrude(1.0);
+        for i in 0..10_000 {
+            feed(&mut t, if i % 2 == 0 { "T1" } else { "T0" });
+            t.extrude(0.01);
+        }
+        assert_eq!(t.pending.len(), PENDING);
+        t.extrude(1000.0);
+        assert!(t.pending.is_empty());
     }
 
     #[test]
