@@ -469,6 +469,11 @@ impl Machine {
             for detail in unfinished {
                 self.warn(WarningKind::Inkjet { detail });
             }
+            // A fault asked for past the run's end never happened: said, not silently dropped.
+            let end_s = self.now_s();
+            for spec in self.faults[self.next_fault..].to_vec() {
+                self.warn(WarningKind::FaultNotInjected { fault: spec.to_string(), end_s });
+            }
         }
     }
 

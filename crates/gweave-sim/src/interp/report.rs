@@ -132,6 +132,13 @@ pub enum WarningKind {
         /// The limit, s.
         limit_s: f64,
     },
+    /// A fault asked for (`--fault`, the profile's `faults`) at a time the run never reached.
+    FaultNotInjected {
+        /// The fault as it was asked for (`hotend-cartridge-off@4000s`).
+        fault: String,
+        /// When the run ended, s.
+        end_s: f64,
+    },
     /// The file looks cut short: its last line has no line ending and the line its slicer ends
     /// every file with is missing (`gweave check`'s warning, on the last line): a printer runs
     /// it to that line and stops with part of the object printed.
@@ -156,6 +163,7 @@ impl WarningKind {
             WarningKind::WaitTimeout { .. } => "wait_timeout",
             WarningKind::Inkjet { .. } => "inkjet",
             WarningKind::ClockLimit { .. } => "time_limit",
+            WarningKind::FaultNotInjected { .. } => "fault_not_injected",
             WarningKind::Truncated { .. } => "truncated",
         }
     }

@@ -582,3 +582,22 @@ fn a_move_feeding_past_extrude_maxlength_runs_without_its_e() {
     assert!(r.is_empty(), "{r:?}");
     assert_eq!(m.report().filament_mm, [500.0]);
 }
+
+/// A new user's trial: `--fault hotend-cartridge-off@4000s` on a print of 334 s exited 0 with
+/// no word of the fault. A fault the run never reached is a warning at its end.
+#[test]
+fn a_fault_past_the_runs_end_is_said() {
+    let mut p = MachineProfile::default();
+    p.faults = vec!["hotend-cartridge-off@4000s".parse().unwrap(), "bed-thermistor-open@1s".parse().unwrap()];
+    let mut m = Machine::new(p).unwrap();
+    let mut out = |_t: f64, _l: &str| {};
+    m.execute(b"G4 S5", &mut out);
+    m.finish(&mut out);
+    let report = m.report();
+    assert_eq!(report.warning_counts.get("fault_not_injected"), Some(&1));
+    let said: Vec<String> = report.warnings.iter().map(|w| w.kind.to_string()).collect();
+    assert!(
+        said.contains(&"fault hotend-cartridge-off@4000s never injected: the run ended at 5 s".to_owned()),
+        "{said:?}"
+    );
+}

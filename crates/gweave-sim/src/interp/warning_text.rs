@@ -24,6 +24,9 @@ impl fmt::Display for WarningKind {
                 gweave::range::short(*fed_mm),
                 gweave::range::short(*max_mm)
             ),
+            WarningKind::FaultNotInjected { fault, end_s } => {
+                write!(f, "fault {fault} never injected: the run ended at {} s", gweave::range::short(*end_s))
+            }
             WarningKind::UnknownCommand { command } => {
                 write!(f, "unknown command {}", command.escape_debug())
             }
