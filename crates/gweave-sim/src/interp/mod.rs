@@ -471,8 +471,12 @@ impl Machine {
             }
             // A fault asked for past the run's end never happened: said, not silently dropped.
             let end_s = self.now_s();
-            for spec in self.faults[self.next_fault..].to_vec() {
-                self.warn(WarningKind::FaultNotInjected { fault: spec.to_string(), end_s });
+            let missed: Vec<WarningKind> = self.faults[self.next_fault..]
+                .iter()
+                .map(|spec| WarningKind::FaultNotInjected { fault: spec.to_string(), end_s })
+                .collect();
+            for warning in missed {
+                self.warn(warning);
             }
         }
     }
