@@ -587,7 +587,8 @@ fn a_move_feeding_past_extrude_maxlength_runs_without_its_e() {
 /// no word of the fault. A fault the run never reached is a warning at its end.
 #[test]
 fn a_fault_past_the_runs_end_is_said() {
-    let faults = vec!["hotend-cartridge-off@4000s".parse().unwrap(), "bed-thermistor-open@1s".parse().unwrap()];
+    let faults =
+        vec!["hotend-cartridge-off@4000s".parse().unwrap(), "bed-thermistor-open@1s".parse().unwrap()];
     let mut m = Machine::new(MachineProfile { faults, ..MachineProfile::default() }).unwrap();
     let mut out = |_t: f64, _l: &str| {};
     m.execute(b"G4 S5", &mut out);
