@@ -444,3 +444,24 @@ fn leave_feed_mode_ends_g94_with_the_files_line_ending() {
     assert!(out.ends_with("\r\nM106 S255\r\nG94"), "{out:?}");
     assert!(!out.replace("\r\n", "").contains('\n'), "a bare LF in {out:?}");
 }
+
+/// A new user's trial: a part wider than the mandrel was refused as "invalid rotary setting
+/// `allow_overlap`", a setting the user never gave. The refusal says the part does not fit,
+/// by how much, and the two ways out; `allow_overlap` wraps it over itself.
+#[test]
+fn a_part_wider_than_the_mandrel_does_not_fit() {
+    let input = "G1 F1200\nG1 X0 Y0 Z0.2\nG1 X10 Y70 E5\n";
+    let err = wrap_bytes(WrapConfig::new(machine()), input.as_bytes()).unwrap_err();
+    assert!(matches!(err, RotaryError::WiderThanMandrel(_)), "{err}");
+    let said = err.to_string();
+    assert!(
+        said.starts_with("the part does not fit round the mandrel: the part's extrusions span 70.000 mm"),
+        "{said}"
+    );
+    assert!(
+        said.ends_with("use a mandrel of at least 22.282 mm, or allow it with --allow-overlap"),
+        "{said}"
+    );
+    let allowed = WrapConfig { allow_overlap: true, ..WrapConfig::new(machine()) };
+    assert!(wrap_bytes(allowed, input.as_bytes()).is_ok());
+}

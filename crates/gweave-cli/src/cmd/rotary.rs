@@ -112,6 +112,23 @@ fn run_wrap(args: WrapArgs) -> Result<ExitCode> {
     super::transform::run_job(&args.report, args.lenient.strictness(), &args.input, &target, job, shown)
 }
 
+/// Layers a summary lists in full: a part of a few hundred layers printed a line each (a
+/// new user's 535-layer wrap, 540 lines); past this, the first and last halves and a count.
+const LAYERS_SHOWN: usize = 20;
+
+/// One line a layer, [`LAYERS_SHOWN`] at most, the rest counted (every layer is in `--json`).
+fn print_layers<T>(out: &mut dyn Write, layers: &[T], line: impl Fn(&T) -> String) -> io::Result<()> {
+    let half = LAYERS_SHOWN / 2;
+    for (i, l) in layers.iter().enumerate() {
+        if layers.len() <= LAYERS_SHOWN || i < half || i >= layers.len() - half {
+            writeln!(out, "{}", line(l))?;
+        } else if i == half {
+            writeln!(out, "    ... {} more layers (see --json)", layers.len() - LAYERS_SHOWN)?;
+        }
+    }
+    Ok(())
+}
+
 fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {
     if let Some(dest) = &r.output {
         writeln!(out, "{} -> {}", r.input.display(), dest.display())?;
@@ -124,9 +141,8 @@ fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {
     };
     writeln!(out, "  mapping         {mapping}")?;
     writeln!(out, "  layers          {}", r.layers.len())?;
-    for l in &r.layers {
-        writeln!(
-            out,
+    print_layers(out, &r.layers, |l| {
+        format!(
             "    layer {:<4} r {:>8.3} mm  theta {:>9.3} .. {:>9.3} deg (span {:>7.3})  seam {:>7.3} deg  {:>9.2} mm",
             l.layer.index,
             l.layer.radius_mm,
@@ -135,8 +151,8 @@ fn print_wrap(out: &mut dyn Write, r: &WrapReport) -> io::Result<()> {
             l.span_deg,
             l.seam_deg,
             l.layer.filament_mm
-        )?;
-    }
+        )
+    })?;
     if r.helical {
         // Each layer is one turn of a helix that ends where the next begins (docs/rotary.md).
         writeln!(
@@ -211,9 +227,8 @@ fn print_tube(out: &mut dyn Write, r: &TubeReport) -> io::Result<()> {
         if r.interweave { "interwoven" } else { "one handedness" }
     )?;
     writeln!(out, "  layers          {}", r.layers.len())?;
-    for l in &r.layers {
-        writeln!(
-            out,
+    print_layers(out, &r.layers, |l| {
+        format!(
             "    layer {:<3} r {:>8.3} mm  {:<5} {:>8.2} turns  {:>8.3} deg/s  X {:.3} -> {:.3}  A {:.1} -> {:.1}",
             l.index,
             l.radius_mm,
@@ -224,8 +239,8 @@ fn print_tube(out: &mut dyn Write, r: &TubeReport) -> io::Result<()> {
             l.axial_mm[1],
             l.theta_deg[0],
             l.theta_deg[1]
-        )?;
-    }
+        )
+    })?;
     writeln!(out, "  seam            none: each layer starts where the one below ended, no travel")?;
     let share = 100.0 * r.extruded_mm3 / r.wall_volume_mm3;
     let versus = if r.pitch_mm == r.bead_width_mm {
@@ -239,4 +254,25 @@ fn print_tube(out: &mut dyn Write, r: &TubeReport) -> io::Result<()> {
         writeln!(out, "  read back       {n} extruding moves")?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A new user's trial: a 535-layer wrap printed 540 lines. Past LAYERS_SHOWN the first and
+    /// last ten are listed and the rest counted; up to it, every layer.
+    #[test]
+    fn a_long_summary_lists_the_ends_of_its_layers() {
+        let lines = |n: usize| {
+            let mut out = Vec::new();
+            print_layers(&mut out, &(0..n).collect::<Vec<_>>(), |l| format!("layer {l}")).unwrap();
+            String::from_utf8(out).unwrap().lines().map(str::to_owned).collect::<Vec<_>>()
+        };
+        assert_eq!(lines(20).len(), 20);
+        let long = lines(535);
+        assert_eq!(long.len(), 21);
+        assert_eq!((long[9].as_str(), long[11].as_str()), ("layer 9", "layer 525"));
+        assert_eq!(long[10], "    ... 515 more layers (see --json)");
+    }
 }

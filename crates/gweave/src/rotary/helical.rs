@@ -96,9 +96,7 @@ pub(crate) fn check_width(
     if e.width_mm() <= c + 1e-3 {
         return Ok(());
     }
-    Err(RotaryError::Config {
-        key: "allow_overlap",
-        reason: format!(
+    Err(RotaryError::WiderThanMandrel(format!(
             "the part's extrusions span {:.3} mm round the mandrel (flat Y {:.3} .. {:.3}), more than its \
              circumference {c:.3} mm (mandrel {:.3} mm): it would wrap over itself ({:.1} deg); use a mandrel \
              of at least {:.3} mm, or allow it with --allow-overlap",
@@ -108,8 +106,7 @@ pub(crate) fn check_width(
             machine.mandrel_diameter_mm,
             360.0 * e.width_mm() / c,
             e.width_mm() / std::f64::consts::PI,
-        ),
-    })
+    )))
 }
 
 /// The helical ramp of the layer being wrapped.

@@ -64,6 +64,11 @@ pub enum RotaryError {
         /// Why it was rejected.
         reason: String,
     },
+    /// The part is wider than the mandrel's circumference and overlap was not allowed: no
+    /// setting of the user's is wrong, the part and the mandrel do not fit (the reason says by
+    /// how much, and the two ways out).
+    #[error("the part does not fit round the mandrel: {0}")]
+    WiderThanMandrel(String),
     /// No mandrel diameter: neither the options (a CLI flag, a Python keyword) nor the settings
     /// file give one; named as neither front end spells it.
     #[error(
