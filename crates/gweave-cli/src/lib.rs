@@ -73,6 +73,13 @@ where
                 }
                 shown = text;
             }
+            // A strict run stopped at a line it cannot read: the way past it, which a new user
+            // would not find from the message alone.
+            if e.chain()
+                .any(|c| matches!(c.downcast_ref::<gweave::Error>(), Some(gweave::Error::Syntax { .. })))
+            {
+                eprintln!("  hint: --lenient reads past such lines (a transform copies them unchanged)");
+            }
             ExitCode::FAILURE
         }
     }

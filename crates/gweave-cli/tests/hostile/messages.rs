@@ -145,3 +145,23 @@ fn serve_says_when_its_log_cannot_be_written() {
     assert_eq!(outcome.stderr.matches(&warning).count(), 1, "{}", outcome.stderr);
     assert!(outcome.stderr.contains("the log stops here, the printer goes on"), "{}", outcome.stderr);
 }
+
+/// A new user's trial: a strict run stopped at an unreadable line (`unexpected byte 0xa0`, a
+/// 50 MB line) without a word of `--lenient`, which reads past it. The error says the way
+/// past; an error of another kind does not.
+#[test]
+fn a_line_that_cannot_be_read_points_to_lenient() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("in.gcode"), b"G1 X10\xa0Y10\n").unwrap();
+    let out = gweave(dir.path(), &["cat", "in.gcode", "-o", "out.gcode"]).run();
+    out.assert_refused("in.gcode:1:7: unexpected byte 0xa0");
+    assert!(
+        out.stderr.ends_with("  hint: --lenient reads past such lines (a transform copies them unchanged)\n"),
+        "{}",
+        out.stderr
+    );
+    gweave(dir.path(), &["cat", "in.gcode", "-o", "out.gcode", "--lenient"]).run().assert_ok();
+    assert_eq!(fs::read(dir.path().join("out.gcode")).unwrap(), b"G1 X10\xa0Y10\n");
+    let missing = gweave(dir.path(), &["cat", "nowhere.gcode", "-o", "o2.gcode"]).run();
+    assert!(!missing.stderr.contains("hint"), "{}", missing.stderr);
+}
