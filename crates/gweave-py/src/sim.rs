@@ -21,7 +21,7 @@ pub(crate) fn machine_profile(machine: Option<PathBuf>) -> PyResult<gweave_sim::
     use gweave_sim::builtin::{load_machine, LoadError};
     load_machine(machine.as_deref()).map_err(|e| match &e {
         LoadError::Read { path, source } => os_error(path, source),
-        LoadError::Profile { .. } => PyValueError::new_err(e.to_string()),
+        LoadError::Profile { .. } | LoadError::SlicerLimits => PyValueError::new_err(e.to_string()),
     })
 }
 

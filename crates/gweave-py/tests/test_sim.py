@@ -38,6 +38,16 @@ def test_machine_by_the_name_of_a_built_in_profile(data: Path, tmp_path: Path, m
     assert gweave.estimate(path, machine="klipper")["machine"] == "mine"
 
 
+def test_the_slicers_limits_are_estimates_only(data: Path, tmp_path: Path, monkeypatch) -> None:
+    # A new user's trial: `sim(machine="slicer")` raised a bare FileNotFoundError('slicer').
+    monkeypatch.chdir(tmp_path)
+    path = data / "prusaslicer" / "pr_box_3tool_tower.gcode"
+    said = r"^--machine slicer \(the limits the slicer wrote into the file\) is for `gweave estimate` only"
+    with pytest.raises(ValueError, match=said):
+        gweave.sim(path, machine="slicer")
+    assert gweave.estimate(path, machine="slicer")["total_s"] > 0
+
+
 def test_estimate_plans_like_the_virtual_printer(data: Path) -> None:
     path = data / "cura" / "cura_torus.gcode"
     klipper = MACHINES / "klipper.toml"

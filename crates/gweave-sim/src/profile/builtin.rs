@@ -106,8 +106,15 @@ impl<'a> MachineSource<'a> {
                 b.profile().map_err(|source| LoadError::Profile { path: None, source })
             }
             MachineSource::File(path) => {
-                let text = gweave::settings::read_text(path)
-                    .map_err(|source| LoadError::Read { path: path.to_path_buf(), source })?;
+                let text = gweave::settings::read_text(path).map_err(|source| {
+                    // `slicer` names the limits a slicer wrote into the file, `estimate`'s only,
+                    // not a file: said as such, not as a missing file.
+                    if path.as_os_str() == "slicer" && source.kind() == std::io::ErrorKind::NotFound {
+                        LoadError::SlicerLimits
+                    } else {
+                        LoadError::Read { path: path.to_path_buf(), source }
+                    }
+                })?;
                 MachineProfile::from_toml_in(&text, path.parent().unwrap_or(Path::new("")))
                     .map_err(|source| LoadError::Profile { path: Some(path.to_path_buf()), source })
             }
@@ -133,6 +140,14 @@ pub enum LoadError {
         /// The operating system's error.
         source: std::io::Error,
     },
+    /// `slicer` (the limits a slicer wrote into the file, which `estimate` reads) given to a
+    /// command that runs a machine.
+    #[error(
+        "--machine slicer (the limits the slicer wrote into the file) is for `gweave estimate` only: \
+         this command runs a machine; built in: {}; see `gweave machine list`",
+        names()
+    )]
+    SlicerLimits,
     /// The profile is refused (`path`: the file it came from, `None` for a built-in one).
     #[error("{}{}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default(), gweave::with_causes(source))]
     Profile {
@@ -146,15 +161,7 @@ pub enum LoadError {
 /// `reading PATH: ERROR`, and for a missing file, the names `--machine` also takes.
 pub fn not_found(path: &Path, e: &std::io::Error) -> String {
     let mut message = format!("reading {}: {e}", path.display());
-    if e.kind() == std::io::ErrorKind::NotFound && path.as_os_str() == "slicer" {
-        // `estimate --machine slicer` times a file by its slicer's own limits; a machine to run
-        // (sim, serve, check's bed) has to be one.
-        message = format!(
-            "--machine slicer (the limits the slicer wrote into the file) is for `gweave estimate` \
-             only: this command runs a machine; built in: {}; see `gweave machine list`",
-            names()
-        );
-    } else if e.kind() == std::io::ErrorKind::NotFound {
+    if e.kind() == std::io::ErrorKind::NotFound {
         message.push_str(&format!(
             " (neither a file nor a built-in profile; built in: {}; see `gweave machine list`)",
             names()
@@ -171,8 +178,9 @@ mod tests {
     /// message says the name is `estimate`'s only.
     #[test]
     fn the_slicers_limits_are_named_estimates_only() {
-        let e = std::io::Error::from(std::io::ErrorKind::NotFound);
-        let said = not_found(Path::new("slicer"), &e);
+        let err = load_machine(Some(Path::new("slicer"))).unwrap_err();
+        assert!(matches!(err, LoadError::SlicerLimits), "{err}");
+        let said = err.to_string();
         assert!(
             said.starts_with(
                 "--machine slicer (the limits the slicer wrote into the file) is for `gweave estimate` only"
