@@ -70,6 +70,8 @@ impl Machine {
         if de != 0.0 {
             let hotend = self.active_hotend();
             let mut fed_to_e = to_e;
+            // What the motor would feed, the flow factor (`M221`) applied.
+            let fed_mm = de * self.flow_pct / 100.0;
             if let Err(cold) = self.thermal.check_extrude(hotend) {
                 // Marlin drops the E part and goes on as if it had extruded.
                 out(self.now_s(), COLD_EXTRUSION_LINE);
@@ -79,13 +81,13 @@ impl Machine {
                     min_c: cold.min_c,
                 });
                 fed_to_e = from_e;
-            } else if let Some(max_mm) = self.too_long_extrusion(de * self.flow_pct / 100.0) {
+            } else if let Some(max_mm) = self.too_long_extrusion(fed_mm) {
                 // `PREVENT_LENGTHY_EXTRUDE`: the same, for a feed past `EXTRUDE_MAXLENGTH`.
                 out(self.now_s(), LONG_EXTRUSION_LINE);
-                self.warn(WarningKind::LongExtrusion { fed_mm: de * self.flow_pct / 100.0, max_mm });
+                self.warn(WarningKind::LongExtrusion { fed_mm, max_mm });
                 fed_to_e = from_e;
             } else if self.flow_pct != 100.0 {
-                fed_to_e = from_e + de * self.flow_pct / 100.0;
+                fed_to_e = from_e + fed_mm;
             }
             if fed_to_e != to_e {
                 if let Effect::Move(m) = &mut self.core.state_mut().effect {
@@ -102,23 +104,13 @@ impl Machine {
     }
 
     /// `EXTRUDE_MAXLENGTH` (mm), if feeding `fed_mm` (the flow factor applied) would pass it:
-    /// Marlin's planner compares the E steps with the limit's, and a mixing extruder's the
-    /// share of its most loaded input (`Planner::_populate_block`), so that a move one input
-    /// could feed runs.
+    /// Marlin's planner compares the E steps with the limit's, and on a mixing extruder the
+    /// share of the active virtual tool's most loaded input (`Planner::_populate_block`, the
+    /// tool's mix through `refresh_collector`), so that a move its inputs could feed runs.
     fn too_long_extrusion(&self, fed_mm: f64) -> Option<f64> {
         let max_mm = f64::from(self.profile.firmware.extrude_max_mm);
-        let share = match self.core.mixing() {
-            Some(mixer) => {
-                let c = mixer.collector();
-                let sum: f64 = c.iter().sum();
-                if sum > 0.0 {
-                    c.iter().fold(0.0, |m: f64, v| m.max(*v)) / sum
-                } else {
-                    1.0
-                }
-            }
-            None => 1.0,
-        };
+        let share =
+            self.core.mixing().map_or(1.0, |m| m.active_mix().ratios().iter().fold(0.0, |a, &r| r.max(a)));
         (max_mm > 0.0 && fed_mm.abs() * share > max_mm).then_some(max_mm)
     }
 

@@ -583,6 +583,23 @@ fn a_move_feeding_past_extrude_maxlength_runs_without_its_e() {
     assert_eq!(m.report().filament_mm, [500.0]);
 }
 
+/// On a mixing extruder Marlin holds each input to the limit: 400 mm of an even four-way mix
+/// is 100 mm an input and runs; the same 400 mm through one input is refused. The mix is the
+/// active virtual tool's, not the `M163` factors not yet stored.
+#[test]
+fn a_mixing_extruder_holds_each_input_to_extrude_maxlength() {
+    let mut p = MachineProfile { mixing_inputs: 4, ..MachineProfile::default() };
+    p.thermal.extrude_min_c = None;
+    let mut m = Machine::new(p).unwrap();
+    let even = "M163 S0 P1\nM163 S1 P1\nM163 S2 P1\nM163 S3 P1\nM164 S1\nT1\n";
+    let (r, _) = run(&mut m, &format!("{even}M163 S0 P1\nM163 S1 P0\nM163 S2 P0\nM163 S3 P0\nG1 E400 F6000"));
+    assert!(!r.iter().any(|l| l == super::motion::LONG_EXTRUSION_LINE), "{r:?}");
+    assert_eq!(m.report().filament_mm, [0.0, 400.0]);
+    let (r, _) = run(&mut m, "M164 S2\nT2\nG1 E800");
+    assert!(r.iter().any(|l| l == super::motion::LONG_EXTRUSION_LINE), "{r:?}");
+    assert_eq!(m.report().filament_mm, [0.0, 400.0, 0.0]);
+}
+
 /// A new user's trial: `--fault hotend-cartridge-off@4000s` on a print of 334 s exited 0 with
 /// no word of the fault. A fault the run never reached is a warning at its end.
 #[test]
