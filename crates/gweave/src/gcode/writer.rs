@@ -225,7 +225,14 @@ impl Output {
 /// error naming the link, as `cp` refuses to write through a dangling link.
 fn through_link(path: &Path) -> Result<PathBuf> {
     match path.symlink_metadata() {
-        Ok(meta) if meta.file_type().is_symlink() => fs::canonicalize(path).map_err(|e| Error::io(path, e)),
+        Ok(meta) if meta.file_type().is_symlink() => fs::canonicalize(path).map_err(|e| {
+            // "No such file or directory" of a name `ls` shows would puzzle: say it is a link.
+            let to = fs::read_link(path).map_or_else(|_| "?".into(), |t| t.display().to_string());
+            Error::io(
+                path,
+                io::Error::new(e.kind(), format!("a link to {to}, which cannot be written through: {e}")),
+            )
+        }),
         _ => Ok(path.to_path_buf()),
     }
 }
@@ -520,7 +527,15 @@ mod tests {
         let dangling = dir.path().join("dangling.gcode");
         std::os::unix::fs::symlink(dir.path().join("nowhere.gcode"), &dangling).unwrap();
         let err = Output::create(&Target::File(dangling.clone()), None).err().unwrap();
-        assert!(err.to_string().contains("dangling.gcode"), "{err}");
+        let to = dir.path().join("nowhere.gcode");
+        assert!(
+            err.to_string().starts_with(&format!(
+                "{}: a link to {}, which cannot be written through: No such file or directory",
+                dangling.display(),
+                to.display()
+            )),
+            "{err}"
+        );
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 3);
     }
 
