@@ -11,6 +11,8 @@ use serde::Serialize;
 use crate::bed::Bed;
 use crate::error::{Error, Result};
 use crate::firmware::Firmware;
+use crate::gcode::arc::ArcRefusal;
+use crate::gcode::diag::RefusedArc;
 use crate::gcode::diag::{Diagnostic, Finding, Severity, WordOutOfRange};
 use crate::gcode::effect::Motion;
 use crate::gcode::ends::{missing_footer, read_ends, Footer};
@@ -119,6 +121,9 @@ impl GroupKey {
             Finding::OutsideBed { axis, .. } => (axis.to_string(), feature),
             Finding::UnknownCommand { command } => (command.clone(), Feature::Unknown),
             Finding::OutOfRange(w) => (w.word.clone(), Feature::Unknown),
+            Finding::ArcRefused(arc) => {
+                (format!("{:?}", std::mem::discriminant(&arc.refusal)), Feature::Unknown)
+            }
             Finding::MalformedNumber { letter }
             | Finding::NotFinite { letter }
             | Finding::MissingValue { letter } => (letter.to_string(), Feature::Unknown),
@@ -382,6 +387,16 @@ impl Pass for CheckPass {
                     self.add(n, Diagnostic::at(0, Finding::AbsoluteEPrecision { e_mm: round3(m.to[E]) }));
                 }
             }
+            Effect::ArcRefused(refusal) => {
+                let firmware = ctx.state.options().firmware;
+                // At the R word when the radius is the cause, else at the command.
+                let col = match refusal {
+                    ArcRefusal::NoCentre | ArcRefusal::Relative => 0,
+                    _ => block.word(b'R').map_or(0, |w| w.span.start as usize),
+                };
+                let arc = RefusedArc { firmware, refusal: *refusal };
+                self.add(n, Diagnostic::at(col, Finding::ArcRefused(Box::new(arc))));
+            }
             Effect::SetPosition if block.has(b'E') => {
                 self.relative_e_since_reset_mm = 0.0;
                 self.drift_reported = false;
@@ -519,6 +534,54 @@ mod tests {
         assert_eq!(
             found,
             [(1, 7, "the period = 5 is out of range: 0 to 1 s (the printer refuses the line)".to_owned())]
+        );
+    }
+
+    /// Regression (a G2/G3 its firmware refuses passed `check`, and moved in a straight line):
+    /// an error at the R word when the radius is the cause, else at the command, in the words
+    /// of the firmware the file is read for.
+    #[test]
+    fn an_arc_the_firmware_refuses_is_an_error_where_its_cause_is() {
+        let text = "G1 X0 Y0\nG2 X10 Y0\nG2 X10 Y0 R4\nG3 X0 Y0 R-5\n";
+        let read_as = |firmware: Firmware| {
+            let mut pass = CheckPass::new(CheckOptions::default());
+            let options = crate::StateOptions { firmware, ..Default::default() };
+            let reading = Reading { options, ..Reading::new(Path::new("t.gcode")) };
+            drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
+            let report = pass.report;
+            assert_eq!(report.errors as usize, report.findings.len());
+            let found = report.findings.iter();
+            found.map(|f| (f.line, f.diagnostic.column, f.diagnostic.finding.to_string())).collect::<Vec<_>>()
+        };
+        let no_centre =
+            "refuses this arc, and the machine does not move: an arc needs R or a non-zero I or J";
+        assert_eq!(read_as(Firmware::Marlin), [(2, 1, format!("marlin {no_centre}"))]);
+        assert_eq!(
+            read_as(Firmware::RepRapFirmware),
+            [
+                (2, 1, format!("reprapfirmware {no_centre}")),
+                (
+                    3,
+                    11,
+                    "reprapfirmware refuses this arc, and the machine does not move: R4.0000 cannot reach \
+                     an end point 10.0000 mm away (half of it is 5.0000 mm)"
+                        .to_owned()
+                ),
+                // Line 3 did not move, so line 4 ends where it starts.
+                (
+                    4,
+                    10,
+                    "reprapfirmware refuses this arc, and the machine does not move: an R arc must end \
+                     elsewhere than it starts"
+                        .to_owned()
+                )
+            ]
+        );
+        let klipper = read_as(Firmware::Klipper);
+        assert_eq!(klipper.len(), 3);
+        assert_eq!(
+            klipper[2],
+            (4, 10, "klipper refuses this arc, and the machine does not move: arcs are read by I and J only, not R".into())
         );
     }
 

@@ -24,6 +24,8 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
+use crate::gcode::arc::{ArcRules, ShortRadius};
+
 /// A firmware family: how it reads G-code and which commands it speaks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 pub enum Firmware {
@@ -142,6 +144,22 @@ impl Firmware {
         match self {
             Firmware::Marlin | Firmware::Klipper | Firmware::LinuxCnc => false,
             Firmware::RepRapFirmware => true,
+        }
+    }
+
+    /// How it reads G2/G3: which forms it takes, and what it does with a radius too short to
+    /// reach the end point (sources in [`crate::gcode::arc`]).
+    pub(crate) fn arcs(self) -> ArcRules {
+        let rules = ArcRules { by_radius: true, in_relative: true, short_radius: ShortRadius::HalfCircle };
+        match self {
+            Firmware::Marlin => rules,
+            Firmware::Klipper => ArcRules { by_radius: false, in_relative: false, ..rules },
+            Firmware::RepRapFirmware => {
+                ArcRules { short_radius: ShortRadius::HalfCircleWithin { share: 0.02 }, ..rules }
+            }
+            Firmware::LinuxCnc => {
+                ArcRules { short_radius: ShortRadius::RefusedPast { mm: 0.005, inch: 0.0005 }, ..rules }
+            }
         }
     }
 

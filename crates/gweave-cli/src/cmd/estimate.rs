@@ -69,7 +69,7 @@ fn print_human(out: &mut dyn Write, input: &Path, r: &EstimateReport) -> io::Res
         let n = e.refused.refused_lines;
         writeln!(
             out,
-            "  refused         {n} lines out of range, skipped as the printer refuses them (first: line {first}, {why}; see gweave check)"
+            "  refused         {n} lines, skipped as the printer refuses them (first: line {first}, {why}; see gweave check)"
         )?;
     }
     if r.steps_counted {

@@ -182,7 +182,7 @@ fn a_huge_arc_is_planned_without_a_vec_of_chords() {
     run.assert_ok().assert_peak_under(PEAK_MIB);
     let text = run.stdout_text();
     assert!(
-        text.contains("refused         1 lines out of range, skipped as the printer refuses them (first: line 4, G2 I = 10000000 is out of range: -10000 to 10000 mm"),
+        text.contains("refused         1 lines, skipped as the printer refuses them (first: line 4, G2 I = 10000000 is out of range: -10000 to 10000 mm"),
         "{text}"
     );
     let run = gweave(d, &["sim", "arc.gcode"]).limit(limit).run();

@@ -25,6 +25,8 @@ const XYZ: [char; 3] = ['X', 'Y', 'Z'];
 pub(super) const MAX_COMMAND_S: f64 = 7.0 * 24.0 * 3600.0;
 /// Marlin's reply to a move feeding more than `EXTRUDE_MAXLENGTH` (`STR_ERR_LONG_EXTRUDE_STOP`).
 pub(super) const LONG_EXTRUSION_LINE: &str = "echo: too long extrusion prevented";
+/// Marlin's reply to a `G2`/`G3` without a centre it can find (`STR_ERR_ARC_ARGS`).
+const ARC_REFUSED_LINE: &str = "Error:G2/G3 bad parameters";
 /// Tolerance of the bounds check, mm: coordinates are written with a few decimals.
 const BOUNDS_EPS_MM: f64 = 1e-6;
 
@@ -45,9 +47,20 @@ impl Machine {
         // The move is changed in place in the modal state's effect (feed and flow overrides, a
         // refused extrusion), where the core reads it: an `Effect` is two 7-axis positions and
         // an arc, and a copy of it right after the state wrote it stalls (docs/performance.md).
-        let Effect::Move(m) = &mut self.core.state_mut().effect else {
-            self.run_core(line, out);
-            return;
+        let m = match &mut self.core.state_mut().effect {
+            Effect::Move(m) => m,
+            Effect::ArcRefused(refusal) => {
+                // Marlin's reply to an arc it cannot draw (`STR_ERR_ARC_ARGS`); the machine stays.
+                let refusal = *refusal;
+                out(self.now_s(), ARC_REFUSED_LINE);
+                self.warn(WarningKind::ArcRefused { refusal });
+                self.run_core(line, out);
+                return;
+            }
+            _ => {
+                self.run_core(line, out);
+                return;
+            }
         };
         if self.feed_pct != 100.0 {
             m.feed_mm_min *= self.feed_pct / 100.0;

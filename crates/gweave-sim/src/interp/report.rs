@@ -96,6 +96,12 @@ pub enum WarningKind {
         /// The limit, mm.
         max_mm: f64,
     },
+    /// A `G2`/`G3` the firmware refuses (`Error:G2/G3 bad parameters`): the machine did not
+    /// move ([`gweave::gcode::arc`]).
+    ArcRefused {
+        /// Why.
+        refusal: gweave::gcode::arc::ArcRefusal,
+    },
     /// A command the machine does not know.
     UnknownCommand {
         /// The command as written (without comment).
@@ -156,6 +162,7 @@ impl WarningKind {
             WarningKind::BelowBed { .. } => "below_bed",
             WarningKind::ColdExtrusion { .. } => "cold_extrusion",
             WarningKind::LongExtrusion { .. } => "long_extrusion",
+            WarningKind::ArcRefused { .. } => "arc_refused",
             WarningKind::UnknownCommand { .. } => "unknown_command",
             WarningKind::InvalidExtruder { .. } => "invalid_extruder",
             WarningKind::Refused { .. } => "refused",

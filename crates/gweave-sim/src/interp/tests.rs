@@ -618,3 +618,28 @@ fn a_fault_past_the_runs_end_is_said() {
         "{said:?}"
     );
 }
+
+/// Regression (a G2/G3 Marlin refuses ran as a straight move): `Error:G2/G3 bad parameters`, an
+/// `arc_refused` warning, and the motors do not turn; an R too short for its chord is half a
+/// circle, as Marlin draws it.
+#[test]
+fn an_arc_without_a_centre_is_refused_and_the_machine_stays() {
+    let mut m = warm_machine();
+    let (r, _) = run(&mut m, "G1 X10 Y10 F3000\nG2 X30 Y10 E5\nM114");
+    assert!(r.iter().any(|l| l == "Error:G2/G3 bad parameters"), "{r:?}");
+    assert!(r.iter().any(|l| l.starts_with("X:10.00 Y:10.00 Z:0.00 E:0.00 Count X:800 Y:800 ")), "{r:?}");
+    let report = m.report();
+    assert_eq!(report.warning_counts.get("arc_refused"), Some(&1));
+    assert_eq!(
+        report.warnings[0].kind.to_string(),
+        "arc refused, the machine did not move: an arc needs R or a non-zero I or J"
+    );
+    // R1 between ends 20 mm apart: half a circle of radius 10 round (20, 195), clockwise from
+    // the left over the top, where it leaves the 200 mm bed by 5 mm.
+    let (r, _) = run(&mut m, "G1 X10 Y195\nG2 X30 Y195 R1\nM114");
+    assert!(r.iter().any(|l| l.starts_with("X:30.00 Y:195.00 ")), "{r:?}");
+    let report = m.report();
+    assert_eq!(report.warning_counts.get("arc_refused"), Some(&1));
+    let out = WarningKind::OutOfBounds { axis: 'Y', value_mm: 205.0, min_mm: 0.0, max_mm: 200.0 };
+    assert!(report.warnings.iter().any(|w| w.kind == out), "{:?}", report.warnings);
+}

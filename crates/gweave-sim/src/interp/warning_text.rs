@@ -27,6 +27,9 @@ impl fmt::Display for WarningKind {
             WarningKind::FaultNotInjected { fault, end_s } => {
                 write!(f, "fault {fault} never injected: the run ended at {} s", gweave::range::short(*end_s))
             }
+            WarningKind::ArcRefused { refusal } => {
+                write!(f, "arc refused, the machine did not move: {refusal}")
+            }
             WarningKind::UnknownCommand { command } => {
                 write!(f, "unknown command {}", command.escape_debug())
             }

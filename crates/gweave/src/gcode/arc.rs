@@ -5,8 +5,84 @@
 //! is `hypot(|phi| * r, dz)`. Linearising with chords: a chord over angle `a` deviates from the
 //! circle by the sagitta `r * (1 - cos(a/2))`, so `n = ceil(|phi| / (2 acos(1 - tol/r)))` chords
 //! keep every point within `tol` of the true arc.
+//!
+//! Firmwares differ on the arcs they refuse (`ArcRules`, from `Firmware::arcs`): a
+//! refused arc does not move the machine at all, its words forgotten (the firmware answers with
+//! an error and reads the next line from where the machine is).
+//! - A radius too short to reach the end point (`R` under half the chord `d/2`): Marlin
+//!   (`gcode/motion/G2_G3.cpp`) takes `h = 0` and turns half a circle around the chord's
+//!   midpoint; RepRapFirmware (`GCodes.cpp`, `DoArcMove`) does the same up to `h^2 = -0.02 r^2`
+//!   (a radius about 1 % short) and refuses past it; LinuxCNC (`interp_arc.cc`, `arc_data_r`)
+//!   refuses once `d/2 - |r|` passes its length tolerance (`TOLERANCE_MM` 0.005 mm,
+//!   `TOLERANCE_INCH` 0.0005 in).
+//! - Klipper (`klippy/extras/gcode_arcs.py`) takes no `R` form at all, and no arc in relative
+//!   coordinates (`G91`).
+//! - All refuse an arc without a centre: `R` with the end point at the start, or `I` and `J` both
+//!   zero or missing (Marlin's `G2/G3 bad parameters`).
 
 use std::f64::consts::TAU;
+use std::fmt;
+
+/// How a firmware reads G2/G3 (see the module's documentation for the sources).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ArcRules {
+    /// The `R` form is read.
+    pub by_radius: bool,
+    /// Arcs are read in relative coordinates (`G91`) too.
+    pub in_relative: bool,
+    /// What a radius too short to reach the end point does.
+    pub short_radius: ShortRadius,
+}
+
+/// What a firmware does with an `R` shorter than half the chord.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum ShortRadius {
+    /// Half a circle around the chord's midpoint, however short (Marlin).
+    HalfCircle,
+    /// Half a circle while `h^2 = r^2 - (d/2)^2` is at least `-share * r^2`, refused past it
+    /// (RepRapFirmware: 0.02).
+    HalfCircleWithin { share: f64 },
+    /// Refused once `d/2 - |r|` passes a length, given in the units the file is written in
+    /// (LinuxCNC): millimetres, and inches under `G20`.
+    RefusedPast { mm: f64, inch: f64 },
+}
+
+/// Why a firmware refuses a G2/G3 line (it then does not move).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum ArcRefusal {
+    /// Neither `R` nor a non-zero `I` or `J`: no centre to turn around.
+    NoCentre,
+    /// An `R` arc whose end point is its start point in XY: no centre follows from a radius.
+    RadiusWithoutChord,
+    /// `R` shorter than half the distance to the end point, by more than the firmware allows.
+    RadiusTooShort {
+        /// The radius written, mm.
+        radius_mm: f64,
+        /// Half the distance from the start to the end point, mm.
+        half_chord_mm: f64,
+    },
+    /// The firmware has no `R` form (Klipper).
+    RadiusForm,
+    /// The firmware reads arcs in absolute coordinates only (Klipper, under `G91`).
+    Relative,
+}
+
+impl fmt::Display for ArcRefusal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ArcRefusal::NoCentre => write!(f, "an arc needs R or a non-zero I or J"),
+            ArcRefusal::RadiusWithoutChord => write!(f, "an R arc must end elsewhere than it starts"),
+            ArcRefusal::RadiusTooShort { radius_mm, half_chord_mm } => write!(
+                f,
+                "R{radius_mm:.4} cannot reach an end point {:.4} mm away (half of it is {half_chord_mm:.4} mm)",
+                2.0 * half_chord_mm
+            ),
+            ArcRefusal::RadiusForm => write!(f, "arcs are read by I and J only, not R"),
+            ArcRefusal::Relative => write!(f, "arcs are read in absolute coordinates only (G90), not after G91"),
+        }
+    }
+}
 
 /// An arc in the XY plane (G17), resolved to absolute millimetres.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,11 +100,16 @@ pub struct Arc {
 impl Arc {
     /// From start and end points and the I/J centre offset (relative to the start).
     /// Equal start and end points make a full circle, as in Marlin and RepRapFirmware.
-    pub(crate) fn from_offset(start: [f64; 2], end: [f64; 2], ij: [f64; 2], clockwise: bool) -> Option<Arc> {
+    pub(crate) fn from_offset(
+        start: [f64; 2],
+        end: [f64; 2],
+        ij: [f64; 2],
+        clockwise: bool,
+    ) -> Result<Arc, ArcRefusal> {
         let center = [start[0] + ij[0], start[1] + ij[1]];
         let radius_mm = ij[0].hypot(ij[1]);
         if !(radius_mm.is_finite() && radius_mm > 0.0) {
-            return None;
+            return Err(ArcRefusal::NoCentre);
         }
         let start_rad = (start[1] - center[1]).atan2(start[0] - center[0]);
         let end_rad = (end[1] - center[1]).atan2(end[0] - center[0]);
@@ -49,20 +130,42 @@ impl Arc {
                 sweep = TAU;
             }
         }
-        Some(Arc { center, radius_mm, start_rad, sweep_rad: sweep })
+        Ok(Arc { center, radius_mm, start_rad, sweep_rad: sweep })
     }
 
-    /// From start and end points and a radius; a negative radius asks for the arc longer than half
-    /// a circle (RS-274 convention).
-    pub(crate) fn from_radius(start: [f64; 2], end: [f64; 2], r: f64, clockwise: bool) -> Option<Arc> {
+    /// From start and end points and a radius, as `rules` read it (`inches`: the file is in
+    /// inches, for a tolerance given in the file's units); a negative radius asks for the arc
+    /// longer than half a circle (RS-274 convention).
+    pub(crate) fn from_radius(
+        start: [f64; 2],
+        end: [f64; 2],
+        r: f64,
+        clockwise: bool,
+        (rules, inches): (ArcRules, bool),
+    ) -> Result<Arc, ArcRefusal> {
+        if !rules.by_radius {
+            return Err(ArcRefusal::RadiusForm);
+        }
         let (dx, dy) = (end[0] - start[0], end[1] - start[1]);
         let chord = dx.hypot(dy);
-        if chord.is_nan() || chord <= 0.0 || r.is_nan() || r.abs() * 2.0 < chord - 1e-9 {
-            return None;
+        if !(chord > 0.0 && chord.is_finite() && r != 0.0 && r.is_finite()) {
+            return Err(ArcRefusal::RadiusWithoutChord);
         }
+        let half = chord / 2.0;
         // Distance from the chord's midpoint to the centre, on the side chosen by direction and
-        // by the sign of R.
-        let h = (r * r - chord * chord / 4.0).max(0.0).sqrt();
+        // by the sign of R; factored as Marlin does, to round less near a half circle.
+        let h2 = (r.abs() - half) * (r.abs() + half);
+        let refused = match rules.short_radius {
+            ShortRadius::HalfCircle => false,
+            ShortRadius::HalfCircleWithin { share } => h2 < -share * r * r,
+            ShortRadius::RefusedPast { mm, inch } => {
+                half - r.abs() > if inches { inch * super::state::MM_PER_INCH } else { mm }
+            }
+        };
+        if refused {
+            return Err(ArcRefusal::RadiusTooShort { radius_mm: r, half_chord_mm: half });
+        }
+        let h = h2.max(0.0).sqrt();
         let mut side = if clockwise { 1.0 } else { -1.0 };
         if r < 0.0 {
             side = -side;
@@ -118,15 +221,56 @@ impl Arc {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Firmware;
+
+    fn marlin() -> (ArcRules, bool) {
+        (Firmware::Marlin.arcs(), false)
+    }
+
+    /// Regression (an arc whose R is too short was drawn as a straight line): each firmware's
+    /// reading of a radius short of half the chord, here 10 mm between the ends. Marlin turns
+    /// half a circle around the midpoint however short; RepRapFirmware up to about 1 % short;
+    /// LinuxCNC up to 0.005 mm (0.0005 in under G20); Klipper takes no R at all.
+    #[test]
+    fn a_short_radius_is_half_a_circle_or_refused_as_each_firmware_reads_it() {
+        let (start, end) = ([0.0, 0.0], [10.0, 0.0]);
+        let arc = |firmware: Firmware, r: f64, inches: bool| {
+            Arc::from_radius(start, end, r, true, (firmware.arcs(), inches))
+        };
+        let half_circle = |a: Arc| {
+            assert!((a.center[0] - 5.0).abs() < 1e-12 && a.center[1].abs() < 1e-12, "{a:?}");
+            assert!(
+                (a.radius_mm - 5.0).abs() < 1e-12 && (a.sweep_rad + std::f64::consts::PI).abs() < 1e-12,
+                "{a:?}"
+            );
+            // Clockwise from (0, 0) to (10, 0) around (5, 0): over the top.
+            assert!((a.point(0.5)[1] - 5.0).abs() < 1e-9, "{a:?}");
+        };
+        half_circle(arc(Firmware::Marlin, 1.0, false).unwrap());
+        half_circle(arc(Firmware::Marlin, 4.99, false).unwrap());
+        half_circle(arc(Firmware::RepRapFirmware, 4.96, false).unwrap());
+        let short = ArcRefusal::RadiusTooShort { radius_mm: 4.9, half_chord_mm: 5.0 };
+        assert_eq!(arc(Firmware::RepRapFirmware, 4.9, false), Err(short));
+        half_circle(arc(Firmware::LinuxCnc, 4.996, false).unwrap());
+        let short = ArcRefusal::RadiusTooShort { radius_mm: 4.994, half_chord_mm: 5.0 };
+        assert_eq!(arc(Firmware::LinuxCnc, 4.994, false), Err(short));
+        // 0.006 mm short is within 0.0005 in (0.0127 mm).
+        half_circle(arc(Firmware::LinuxCnc, 4.994, true).unwrap());
+        assert_eq!(arc(Firmware::Klipper, 5.0, false), Err(ArcRefusal::RadiusForm));
+        // No centre: R with both ends the same, I and J zero.
+        assert_eq!(Arc::from_radius(start, start, 5.0, true, marlin()), Err(ArcRefusal::RadiusWithoutChord));
+        assert_eq!(Arc::from_radius(start, end, 0.0, true, marlin()), Err(ArcRefusal::RadiusWithoutChord));
+        assert_eq!(Arc::from_offset(start, end, [0.0, 0.0], true), Err(ArcRefusal::NoCentre));
+    }
 
     #[test]
     fn quarter_circle_both_forms() {
         let a = Arc::from_offset([10.0, 0.0], [0.0, 10.0], [-10.0, 0.0], false).unwrap();
         assert!((a.sweep_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         assert!((a.xy_len_mm() - 5.0 * std::f64::consts::PI).abs() < 1e-9);
-        let b = Arc::from_radius([10.0, 0.0], [0.0, 10.0], 10.0, false).unwrap();
+        let b = Arc::from_radius([10.0, 0.0], [0.0, 10.0], 10.0, false, marlin()).unwrap();
         assert!((b.center[0]).abs() < 1e-9 && (b.center[1]).abs() < 1e-9, "{b:?}");
-        let c = Arc::from_radius([10.0, 0.0], [0.0, 10.0], -10.0, false).unwrap();
+        let c = Arc::from_radius([10.0, 0.0], [0.0, 10.0], -10.0, false, marlin()).unwrap();
         assert!((c.sweep_rad - 1.5 * std::f64::consts::PI).abs() < 1e-9, "{c:?}");
     }
 

@@ -124,6 +124,9 @@ pub enum Finding {
         /// The line's length in bytes, line ending excluded.
         len: u64,
     },
+    /// A `G2`/`G3` the firmware the file is read for refuses ([`crate::gcode::arc`]): the
+    /// machine does not move (Klipper stops the print). Boxed, as [`Finding::OutOfRange`].
+    ArcRefused(Box<RefusedArc>),
     /// More findings on the line than are kept ([`MAX_LINE_DIAGNOSTICS`]).
     MoreFindings {
         /// How many findings were dropped.
@@ -237,6 +240,9 @@ impl fmt::Display for Finding {
                     w.word, w.value, w.range
                 )
             }
+            Finding::ArcRefused(arc) => {
+                write!(f, "{} refuses this arc, and the machine does not move: {}", arc.firmware, arc.refusal)
+            }
             Finding::MoreFindings { count } => write!(f, "{count} more findings on this line"),
             Finding::ToolOutOfRange { tool } => write!(
                 f,
@@ -245,6 +251,16 @@ impl fmt::Display for Finding {
             ),
         }
     }
+}
+
+/// An arc its firmware refuses ([`Finding::ArcRefused`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RefusedArc {
+    /// The firmware the file is read for.
+    pub firmware: crate::Firmware,
+    /// Why it refuses the arc.
+    #[serde(flatten)]
+    pub refusal: crate::gcode::arc::ArcRefusal,
 }
 
 /// A word outside its command's range ([`Finding::OutOfRange`]).

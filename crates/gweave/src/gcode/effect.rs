@@ -1,7 +1,7 @@
 //! What a line did to the machine: the move it commanded (a line or an arc, in absolute
 //! logical millimetres) or another effect (a tool change, a firmware retraction, a dwell).
 
-use super::arc::Arc;
+use super::arc::{Arc, ArcRefusal};
 use super::axes::{Position, E, X, Y, Z};
 
 /// The motion mode that axis words on a line without a command continue.
@@ -129,6 +129,8 @@ pub enum Effect {
         /// Dwell time, s.
         t_s: f64,
     },
+    /// A `G2`/`G3` the firmware refuses: the machine does not move.
+    ArcRefused(ArcRefusal),
 }
 
 impl Effect {

@@ -5,7 +5,7 @@
 //! sees absolute millimetres. `G92` changes the logical origin; the cumulative filament fed per
 //! tool is tracked separately from the E coordinate so that resets do not lose it.
 
-use super::arc::Arc;
+use super::arc::{Arc, ArcRefusal};
 use super::layers::{Markers, Structure};
 use super::line::{Block, Command, PlainMove, Value, Word};
 use crate::firmware::Firmware;
@@ -461,11 +461,15 @@ impl State {
             None => targets(&block.words, &self.slots, scale, self.relative_axes, &mut to),
         };
         self.pos = to;
+        let feed_before = self.feed_mm_min;
         if let Some(feed) = feed {
             self.feed_mm_min = feed;
         }
         let arc = match self.motion {
-            Motion::ArcCw | Motion::ArcCcw => self.arc(block, &from),
+            Motion::ArcCw | Motion::ArcCcw => match self.arc(block, &from) {
+                Ok(arc) => Some(arc),
+                Err(refusal) => return self.refuse_arc(refusal, from, feed_before),
+            },
             _ => None,
         };
         moved |= arc.is_some();
@@ -485,21 +489,37 @@ impl State {
         }
     }
 
-    /// The arc of a G2/G3 from `from` to the current position, from its R or I/J words; `None`
-    /// when they describe no arc (the move is then straight).
+    /// The arc of a G2/G3 from `from` to the current position, from its R or I/J words, as the
+    /// firmware reads them ([`Firmware::arcs`]); why it refuses them otherwise.
     #[inline(never)]
-    fn arc(&self, block: &Block, from: &Position) -> Option<Arc> {
+    fn arc(&self, block: &Block, from: &Position) -> Result<Arc, ArcRefusal> {
+        let rules = self.options.firmware.arcs();
+        if !rules.in_relative && self.relative_axes >> X & 1 != 0 {
+            return Err(ArcRefusal::Relative);
+        }
         let cw = self.motion == Motion::ArcCw;
         let start = [from[X], from[Y]];
         let end = [self.pos[X], self.pos[Y]];
         match block.get(b'R') {
-            Some(r) => Arc::from_radius(start, end, self.to_mm(r), cw),
+            Some(r) => Arc::from_radius(start, end, self.to_mm(r), cw, (rules, self.inches)),
             None => {
                 let ij =
                     [self.to_mm(block.get(b'I').unwrap_or(0.0)), self.to_mm(block.get(b'J').unwrap_or(0.0))];
                 Arc::from_offset(start, end, ij, cw)
             }
         }
+    }
+
+    /// A G2/G3 the firmware refuses: the machine stays at `from`, and the feed rate is
+    /// `feed_before` again where the firmware takes the line's F only with its move
+    /// (Klipper and RepRapFirmware check the arc first; Marlin reads F with the target).
+    #[cold]
+    fn refuse_arc(&mut self, refusal: ArcRefusal, from: Position, feed_before: f64) {
+        self.pos = from;
+        if matches!(self.options.firmware, Firmware::Klipper | Firmware::RepRapFirmware) {
+            self.feed_mm_min = feed_before;
+        }
+        self.effect = Effect::ArcRefused(refusal);
     }
 }
 
@@ -723,8 +743,40 @@ mod tests {
         assert_eq!(fx[5], Effect::None);
         assert_eq!(fx[6], Effect::FirmwareRetract { e_mm: 2.0 });
         assert_eq!(s.filament_mm, vec![1.0, 0.0]);
-        // A bare axis word continues the modal G3; with no centre given it is a straight line.
-        assert_eq!(s.pos[X], 5.0);
+        // A bare axis word continues the modal G3; with no centre given every firmware refuses
+        // it (Marlin: `G2/G3 bad parameters`) and the machine stays where it was.
+        assert_eq!(fx[7], Effect::ArcRefused(ArcRefusal::NoCentre));
+        assert_eq!((s.pos[X], s.pos[Y]), (0.0, 10.0));
+    }
+
+    /// Regression (a G2/G3 a firmware refuses moved in a straight line): the machine stays,
+    /// whatever the line's words; the next move starts where it stayed; its F is kept by Marlin
+    /// (read with the target) and not by Klipper (which checks the arc first); Klipper refuses
+    /// R arcs and arcs after G91.
+    #[test]
+    fn a_refused_arc_does_not_move_the_machine() {
+        let read = |firmware: Firmware, text: &str| {
+            let mut s = State::new(StateOptions { firmware, ..StateOptions::default() });
+            let fx = run(&mut s, text);
+            (s, fx)
+        };
+        let (s, fx) = read(Firmware::Marlin, "G1 X10 Y10 F600\nG2 X20 Y10 E5 F1200\nG1 Y20");
+        assert_eq!(fx[1], Effect::ArcRefused(ArcRefusal::NoCentre));
+        match fx[2] {
+            Effect::Move(m) => assert_eq!((m.from[X], m.from[Y], m.from[E]), (10.0, 10.0, 0.0)),
+            e => panic!("{e:?}"),
+        }
+        assert_eq!((s.pos[X], s.pos[Y], s.filament_mm[0]), (10.0, 20.0, 0.0));
+        assert_eq!(s.feed_mm_min, 1200.0);
+        let (s, fx) = read(Firmware::Klipper, "G1 X10 Y10 F600\nG2 X20 Y10 R5 F1200");
+        assert_eq!(fx[1], Effect::ArcRefused(ArcRefusal::RadiusForm));
+        assert_eq!((s.pos[X], s.feed_mm_min), (10.0, 600.0));
+        let (_, fx) = read(Firmware::Klipper, "G91\nG2 X10 I5");
+        assert_eq!(fx[1], Effect::ArcRefused(ArcRefusal::Relative));
+        // Marlin draws both, the R one as half a circle over a 10 mm chord with R1.
+        let (s, fx) = read(Firmware::Marlin, "G91\nG2 X10 I5\nG90\nG2 X20 Y0 R1");
+        assert!(matches!(fx[1], Effect::Move(_)) && matches!(fx[3], Effect::Move(_)), "{fx:?}");
+        assert_eq!(s.pos[X], 20.0);
     }
 
     proptest::proptest! {

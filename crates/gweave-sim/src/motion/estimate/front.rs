@@ -245,14 +245,20 @@ impl Front {
     #[cold]
     #[inline(never)]
     fn refuse(&mut self, refusal: RefusedWord) {
+        self.count_refused(|| refusal.to_string());
+        // Nothing of the line happened: a reader of the state's effect (`modes`) sees none.
+        self.state.effect = Effect::None;
+    }
+
+    /// Counts the line just read as refused, `why` the first time.
+    #[cold]
+    fn count_refused(&mut self, why: impl FnOnce() -> String) {
         let refused = &mut self.refused;
         refused.refused_lines += 1;
         if refused.first_refused_line.is_none() {
             refused.first_refused_line = Some(self.line);
-            refused.first_refusal = Some(refusal.to_string());
+            refused.first_refusal = Some(why());
         }
-        // Nothing of the line happened: a reader of the state's effect (`modes`) sees none.
-        self.state.effect = Effect::None;
     }
 
     /// Second half of reading a line: apply the line just read to the modal state.
@@ -375,6 +381,8 @@ impl Front {
             Effect::SetPosition => {
                 jobs.push(Job::SetPosition { pos: at(&self.state.pos), by: PositionSet::G92 });
             }
+            // The state kept the machine where it was ([`gweave::gcode::arc`]).
+            Effect::ArcRefused(refusal) => self.count_refused(|| format!("the arc is refused: {refusal}")),
             Effect::FirmwareRetract { e_mm } => {
                 self.firmware_retract(*e_mm, jobs);
                 return Ok(());

@@ -661,6 +661,24 @@ mod tests {
         assert_eq!(est.steps.axes[0], 20 * 80);
     }
 
+    /// Regression (a refused arc was planned as a straight move): an arc Marlin refuses takes
+    /// no time and moves nothing, the next move starts where the machine stayed, and the
+    /// estimate counts the line refused.
+    #[test]
+    fn a_refused_arc_takes_no_time() {
+        let refused =
+            estimate("G1 X0 Y0 F600\nG2 X20 Y0 E5\nG1 Y10\n".as_bytes(), &MotionProfile::default()).unwrap();
+        let without = estimate("G1 X0 Y0 F600\nG1 Y10\n".as_bytes(), &MotionProfile::default()).unwrap();
+        assert_eq!(
+            (refused.total_s, refused.blocks, refused.steps.axes),
+            (without.total_s, 1, without.steps.axes)
+        );
+        assert_eq!(refused.refused.refused_lines, 1);
+        assert_eq!(refused.refused.first_refused_line, Some(2));
+        let why = refused.refused.first_refusal.as_deref();
+        assert_eq!(why, Some("the arc is refused: an arc needs R or a non-zero I or J"));
+    }
+
     #[test]
     fn a_huge_arc_is_planned_without_a_vec_of_chords() {
         // A radius of 10 000 inches (the registry's ranges are on the words as written), 254 m:
