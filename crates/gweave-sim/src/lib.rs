@@ -60,6 +60,7 @@ pub use interp::{
     SimTimes, SimWarning, WarningKind, COMMANDS, STOPPED_LINE, UNKNOWN_KINDS, UNKNOWN_OTHERS,
 };
 pub use job::{simulate, SimJobError, SimSetup, Simulation, MAX_FILE_RUN_S};
+pub use link::early::EarlyLines;
 pub use link::pty::PtyEndpoint;
 pub use link::serial::{frame_line, Device, Protocol, ProtocolConfig, DEFAULT_KEEPALIVE_S};
 pub use link::tcp::TcpEndpoint;

@@ -801,6 +801,7 @@ fn emergency_stop(m: &mut Machine, _: &Call<'_>, out: &mut dyn FnMut(f64, &str))
 fn break_wait(m: &mut Machine, number: u32, _: &[u8], _: &mut dyn FnMut(f64, &str)) {
     if number == 108 {
         m.end_user_wait();
+        m.end_heating_wait();
     }
 }
 

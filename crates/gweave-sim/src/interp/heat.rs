@@ -142,10 +142,16 @@ impl Machine {
         let step_s = self.profile.thermal.sample_period_s;
         let start_s = self.now_s();
         let mut report_s = start_s + WAIT_REPORT_S;
+        self.host.wait_for_heatup = true;
         loop {
             match self.thermal.poll_wait(&mut wait) {
                 WaitStatus::Reached | WaitStatus::Halted => break,
                 WaitStatus::Waiting => {}
+            }
+            // `gweave serve`, paced: the host's `M108` or `M112` sent meanwhile acts now.
+            self.hear_early(out);
+            if !self.host.wait_for_heatup || self.halt.is_some() {
+                break;
             }
             if self.now_s() - start_s > MAX_WAIT_S {
                 self.warn(WarningKind::WaitTimeout { heater: id });
@@ -162,6 +168,12 @@ impl Machine {
                 report_s += WAIT_REPORT_S;
             }
         }
+    }
+
+    /// The emergency parser's `M108`: a heating wait ends where it is (Marlin clears
+    /// `wait_for_heatup`; the command then answers `ok`).
+    pub(super) fn end_heating_wait(&mut self) {
+        self.host.wait_for_heatup = false;
     }
 
     /// The host is quiet: `t_s` seconds of its wall clock pass on a board with no command

@@ -28,6 +28,9 @@ pub(super) struct HostState {
     levelling_on: bool,
     /// `M600` waits for the user ([`Machine::waiting_for_user`]).
     pub waiting_for_user: bool,
+    /// A heating wait runs until this is false (Marlin's `wait_for_heatup`, which the
+    /// emergency parser's `M108` clears).
+    pub wait_for_heatup: bool,
     /// The host prompt that is open, if any.
     pub prompt: Option<super::pause::PromptReason>,
 }

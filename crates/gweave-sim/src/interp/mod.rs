@@ -49,6 +49,7 @@ use thiserror::Error;
 
 use crate::inkjet::recoat::RecoatCheck;
 use crate::inkjet::{CanvasGeometry, FireWait, InkjetCanvas, InkjetError, LayerSink};
+use crate::link::early::EarlyLines;
 use crate::motion::estimate::{EstimateError, Estimator, ToolChange};
 use crate::motion::speed_trace::SpeedTrace;
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
@@ -144,6 +145,9 @@ pub struct Machine {
     settings: settings::Settings,
     /// Job timer, prompts, pins, levelling.
     host: host::HostState,
+    /// What the host sends while a command runs, for the emergency parser (`gweave serve`
+    /// paced: [`Machine::listen`]).
+    early: Option<EarlyLines>,
     sd: sd::SdCard,
     ended: bool,
     heating_s: f64,
@@ -227,6 +231,7 @@ impl Machine {
             wall_timed: false,
             settings,
             host: host::HostState::default(),
+            early: None,
             sd: sd::SdCard::default(),
             ended: false,
             heating_s: 0.0,

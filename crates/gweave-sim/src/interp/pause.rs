@@ -19,6 +19,7 @@
 //! to wait for: the next command continues as if the user had pressed Continue at once.
 
 use super::Machine;
+use crate::link::early::EarlyLines;
 
 /// Why a host prompt is open (Marlin's `PromptReason`): what answering it with `M876` does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -69,6 +70,21 @@ impl Machine {
             if let Some(urgent) = row.urgent.filter(|_| self.built_with(row)) {
                 urgent(self, number, text, out);
             }
+        }
+    }
+
+    /// Lines the host sends while a command runs reach the emergency parser through `lines`
+    /// ([`EarlyLines`]), looked at between the steps of a heating wait.
+    pub fn listen(&mut self, lines: EarlyLines) {
+        self.early = Some(lines);
+    }
+
+    /// The emergency parser's look at what the host sent since the last look, while a command
+    /// runs: `M108` ends a heating wait, `M112` kills (see [`Machine::emergency`]).
+    pub(super) fn hear_early(&mut self, out: &mut dyn FnMut(f64, &str)) {
+        let Some(early) = &self.early else { return };
+        for line in early.take() {
+            self.emergency(&line, out);
         }
     }
 

@@ -82,6 +82,7 @@ use gweave::gcode::lexer::parse_into;
 use gweave::Block;
 
 use crate::interp::{lookup, Link};
+use crate::link::early::EarlyLines;
 
 /// The longest line Marlin keeps: `MAX_CMD_SIZE` (96) less the NUL terminator.
 pub(crate) const MAX_LINE_BYTES: usize = 95;
@@ -137,6 +138,10 @@ pub trait Device {
     fn emergency(&mut self, _line: &[u8], _out: &mut dyn FnMut(f64, &str)) {}
     /// The rest of the command that waited for the user, once answered.
     fn finish_user_wait(&mut self, _out: &mut dyn FnMut(f64, &str)) {}
+    /// Lines the host sends while a command runs will be put in `lines` as they arrive
+    /// ([`EarlyLines`]), for the emergency parser to act on before the command ends. By
+    /// default nobody listens.
+    fn listen(&mut self, _lines: EarlyLines) {}
 }
 
 pub(crate) use crate::interp::Outcome;
@@ -292,6 +297,12 @@ impl<D: Device> Protocol<D> {
     /// The device behind the protocol.
     pub fn device(&self) -> &D {
         &self.device
+    }
+
+    /// Lines the host sends while a command runs reach the device through `lines`
+    /// ([`Device::listen`]).
+    pub fn listen(&mut self, lines: EarlyLines) {
+        self.device.listen(lines);
     }
 
     /// The host has been quiet for `t_s` seconds: the board lives them ([`Device::idle`]). A
@@ -557,7 +568,7 @@ impl Keepalive {
 
 /// The command of an accepted line: without its `N<n>` and, on a numbered line, without its
 /// `*<checksum>` (what Marlin's parser skips).
-fn command_body(cmd: &[u8]) -> &[u8] {
+pub(super) fn command_body(cmd: &[u8]) -> &[u8] {
     if cmd.first() != Some(&b'N') {
         return cmd;
     }
@@ -654,6 +665,10 @@ impl Device for crate::interp::Machine {
 
     fn finish_user_wait(&mut self, out: &mut dyn FnMut(f64, &str)) {
         crate::interp::Machine::finish_user_wait(self, out)
+    }
+
+    fn listen(&mut self, lines: EarlyLines) {
+        crate::interp::Machine::listen(self, lines)
     }
 }
 

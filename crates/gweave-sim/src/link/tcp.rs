@@ -239,6 +239,49 @@ mod tests {
         assert!((board.t_s - (100.5 + board.idle_s)).abs() < 1e-9, "{}", board.t_s);
     }
 
+    /// Regression (the emergency parser did not act during a paced wait: `M108` and `M112`
+    /// sent during `M109` acted when its 84 s of heating had been paced out): at 20 times real
+    /// time the wait is 4.2 s of wall time; `M108` sent once it has begun ends it at once, with
+    /// its `ok`, and `M112` kills the board, heaters off, as soon as it arrives.
+    #[test]
+    fn tcp_the_emergency_parser_acts_during_a_paced_heating_wait() {
+        use crate::interp::Machine;
+        use crate::profile::MachineProfile;
+        let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
+        let addr = endpoint.local_addr().unwrap();
+        let options = ServeOptions { speed: Some(20.0), ..ServeOptions::default() };
+        let make = || Machine::new(MachineProfile::default());
+        let (summary, ended, ()) = serving(&mut endpoint, make, &options, None, || {
+            for urgent in ["M108", "M112"] {
+                let (mut host, mut reader) = connect(addr);
+                lines_through(&mut reader, "echo:Machine:");
+                host.write_all(b"M109 S200\n").unwrap();
+                lines_through(&mut reader, " T:");
+                let sent = Instant::now();
+                host.write_all(format!("{urgent}\n").as_bytes()).unwrap();
+                let last = if urgent == "M108" { "ok" } else { "Error:Printer halted" };
+                let got = lines_through(&mut reader, last);
+                let waited = sent.elapsed();
+                assert!(waited < Duration::from_millis(1500), "{urgent}: {waited:?} for {got:?}");
+                if urgent == "M108" {
+                    // The wait ended, not the heating: the target stays.
+                    host.write_all(b"M105\n").unwrap();
+                    let report = lines_through(&mut reader, "ok T:");
+                    assert!(report.last().unwrap().contains(" /200.00 "), "{report:?}");
+                }
+            }
+        });
+        summary.unwrap();
+        // Each board heated a few seconds of its 84, and the second was killed.
+        assert_eq!(ended.len(), 2);
+        for board in &ended {
+            assert!(board.now_s() < 30.0, "{}", board.now_s());
+        }
+        let killed = ended[1].report();
+        assert!(killed.halted);
+        assert!(killed.heaters.iter().all(|h| h.target_c == 0.0), "{:?}", killed.heaters);
+    }
+
     #[test]
     fn refuses_non_loopback() {
         let addr: SocketAddr = "0.0.0.0:0".parse().unwrap();

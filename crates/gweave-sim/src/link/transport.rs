@@ -30,6 +30,7 @@ use std::time::{Duration, Instant};
 use nix::errno::Errno;
 use nix::poll::{poll, PollFd, PollFlags};
 
+use crate::link::early::{Early, EarlyLines};
 use crate::link::serial::{Device, LinkStats, Protocol, ProtocolConfig};
 
 /// How long one wait for the host lasts before the loop looks at the stop flag again.
@@ -163,6 +164,9 @@ where
             Event::Connected => {
                 let device = make_device().map_err(|e| TransportError::Device(Box::new(e)))?;
                 let mut fresh = Protocol::new(device, options.protocol);
+                let early = EarlyLines::default();
+                fresh.listen(early.clone());
+                out.early = Early::new(early);
                 summary.sessions += 1;
                 out.note(&format!("host connected, session {}", summary.sessions));
                 out.rebase(fresh.device().now_s());
@@ -177,15 +181,7 @@ where
                 let Some(p) = link.as_mut() else { continue };
                 // The quiet time before these bytes, lived first: an M105 reads the present.
                 clock.catch_up(p, &mut out, endpoint);
-                let bytes = &buf[..n];
-                received.push(bytes, p.device().now_s(), &mut out);
-                out.rebase(p.device().now_s());
-                let speed = options.speed;
-                p.feed_held(bytes, &mut |t_s, line| out.line(endpoint, t_s, line), &mut |from_s, to_s| {
-                    if speed.is_none() {
-                        hold(to_s - from_s, stop);
-                    }
-                });
+                feed(p, &buf[..n], &mut out, endpoint, &mut received, options.speed, stop);
                 clock.busy();
             }
             Event::Disconnected => {
@@ -204,6 +200,18 @@ where
                         clock.catch_up(p, &mut out, endpoint);
                     }
                 }
+            }
+        }
+        // What the host sent while the board was busy, queued now in the order it came (the
+        // emergency parser has seen it already: `crate::link::early`).
+        if let Some(p) = link.as_mut() {
+            loop {
+                let early = out.early.take_bytes();
+                if early.is_empty() || out.failed.is_some() {
+                    break;
+                }
+                feed(p, &early, &mut out, endpoint, &mut received, options.speed, stop);
+                clock.busy();
             }
         }
         if link.as_ref().is_some_and(|p| p.device().link_closed()) {
@@ -229,6 +237,26 @@ where
         summary.end_session(p, finished);
     }
     Ok(summary)
+}
+
+/// Feeds the host's `bytes` to the protocol, its replies to `out`: paced, or with a wall-timed
+/// `ok` held for its command's duration when not pacing.
+fn feed<D: Device>(
+    p: &mut Protocol<D>,
+    bytes: &[u8],
+    out: &mut Output<'_, '_>,
+    endpoint: &mut dyn Endpoint,
+    received: &mut LineLog,
+    speed: Option<f64>,
+    stop: &AtomicBool,
+) {
+    received.push(bytes, p.device().now_s(), out);
+    out.rebase(p.device().now_s());
+    p.feed_held(bytes, &mut |t_s, line| out.line(endpoint, t_s, line), &mut |from_s, to_s| {
+        if speed.is_none() {
+            hold(to_s - from_s, stop);
+        }
+    });
 }
 
 /// Holds a wall-timed `ok` for `t_s` seconds (at most [`MAX_HOLD`]), in ticks so that a stop
@@ -303,11 +331,23 @@ struct Output<'a, 's> {
     stop: &'s AtomicBool,
     failed: Option<io::Error>,
     bytes: Vec<u8>,
+    /// What the host sends while replies wait for their time, and a buffer to read it into.
+    early: Early,
+    received: Vec<u8>,
 }
 
 impl<'a, 's> Output<'a, 's> {
     fn new(speed: Option<f64>, log: Option<&'a mut dyn Write>, stop: &'s AtomicBool) -> Self {
-        Output { speed, anchor: (Instant::now(), 0.0), log, stop, failed: None, bytes: Vec::new() }
+        Output {
+            speed,
+            anchor: (Instant::now(), 0.0),
+            log,
+            stop,
+            failed: None,
+            bytes: Vec::new(),
+            early: Early::default(),
+            received: vec![0u8; 4096],
+        }
     }
 
     /// New bytes arrived with the device at `sim_s`: if the pacing has fallen behind the wall
@@ -340,7 +380,10 @@ impl<'a, 's> Output<'a, 's> {
                     self.failed = Some(io::Error::from(io::ErrorKind::BrokenPipe));
                     return;
                 }
-                std::thread::sleep((due - now).min(TICK));
+                self.read_ahead(endpoint, (due - now).min(TICK));
+                if self.failed.is_some() {
+                    return;
+                }
             }
         }
         self.write_log(&format!("{t_s:>12.3} < {text}"));
@@ -350,6 +393,23 @@ impl<'a, 's> Output<'a, 's> {
         self.bytes.push(b'\n');
         if let Err(e) = endpoint.send(&self.bytes, self.stop) {
             self.failed = Some(e);
+        }
+    }
+
+    /// Waits at most `wait` for the host while a reply waits for its time, keeping what it
+    /// sends for the board's emergency parser and, later, its queue ([`Early`]); once the
+    /// read-ahead is full, only waits.
+    fn read_ahead(&mut self, endpoint: &mut dyn Endpoint, wait: Duration) {
+        let room = self.early.room().min(self.received.len());
+        if room == 0 {
+            std::thread::sleep(wait);
+            return;
+        }
+        match endpoint.wait(&mut self.received[..room], wait) {
+            Ok(Event::Data(n)) => self.early.receive(&self.received[..n]),
+            Ok(Event::Disconnected) => self.failed = Some(io::Error::from(io::ErrorKind::BrokenPipe)),
+            Ok(Event::Connected | Event::Nothing) => {}
+            Err(e) => self.failed = Some(e),
         }
     }
 
