@@ -60,6 +60,12 @@ pub struct CheckOptions {
     pub max_relative_e_mm: f64,
     /// Absolute E beyond this loses resolution in single precision, mm.
     pub max_absolute_e_mm: f64,
+    /// Marlin's `EXTRUDE_MAXLENGTH`, mm: it skips the E of a move feeding more (200 in its
+    /// shipped configuration; 0: no limit).
+    pub marlin_extrude_max_mm: f64,
+    /// Klipper's `max_extrude_only_distance`, mm: an extrude-only or retraction move longer in
+    /// E stops the print (50 by default in its `[extruder]` section; 0: no limit).
+    pub klipper_extrude_only_max_mm: f64,
     /// At most this many findings are kept (all are counted).
     pub max_findings: usize,
 }
@@ -71,6 +77,8 @@ impl Default for CheckOptions {
             max_feed_mm_min: 60_000.0,
             max_relative_e_mm: 100_000.0,
             max_absolute_e_mm: 100_000.0,
+            marlin_extrude_max_mm: 200.0,
+            klipper_extrude_only_max_mm: 50.0,
             max_findings: 1000,
         }
     }
@@ -367,6 +375,11 @@ impl Pass for CheckPass {
                         }
                     }
                 }
+                if let Some(limit) = self.extrusion_limit(ctx.state.options().firmware, m) {
+                    let letter = ctx.state.options().firmware.extrusion_letter();
+                    let col = block.word(letter).map_or(0, |w| w.span.start as usize);
+                    self.add(n, Diagnostic::at(col, limit));
+                }
                 if ctx.state.relative_e() {
                     self.relative_e_since_reset_mm += e.abs();
                     if self.relative_e_since_reset_mm > self.options.max_relative_e_mm && !self.drift_reported
@@ -404,6 +417,33 @@ impl Pass for CheckPass {
             _ => {}
         }
         Ok(Flow::Continue)
+    }
+}
+
+impl CheckPass {
+    /// The firmware's limit on the filament one move feeds, if `m` passes it: Marlin's
+    /// `PREVENT_LENGTHY_EXTRUDE` (`Marlin/src/module/planner.cpp`: the E part is dropped with
+    /// `echo: too long extrusion prevented`), Klipper's `max_extrude_only_distance` on an
+    /// extrude-only or retraction move (`klippy/kinematics/extruder.py`, `check_move`: "Extrude
+    /// only move too long", which stops the print). One comparison for every other move.
+    #[inline]
+    fn extrusion_limit(&self, firmware: Firmware, m: &crate::gcode::effect::Move) -> Option<Finding> {
+        let e = m.e_mm();
+        let max_mm = match firmware {
+            Firmware::Marlin => self.options.marlin_extrude_max_mm,
+            Firmware::Klipper => self.options.klipper_extrude_only_max_mm,
+            Firmware::RepRapFirmware | Firmware::LinuxCnc => return None,
+        };
+        if !(max_mm > 0.0 && e.abs() > max_mm) {
+            return None;
+        }
+        // Klipper holds only a move that does not move X or Y, or retracts, to its limit.
+        let extrude_only = e < 0.0 || m.xy_len_mm() == 0.0;
+        (firmware != Firmware::Klipper || extrude_only).then(|| Finding::LongExtrusion {
+            firmware,
+            e_mm: round3(e),
+            max_mm: max_mm as f32,
+        })
     }
 }
 
@@ -537,6 +577,16 @@ mod tests {
         );
     }
 
+    /// The findings of `text` read for `firmware`: line, column, severity, text.
+    fn findings_for(text: &str, firmware: Firmware) -> Vec<(u64, u32, Severity, String)> {
+        let mut pass = CheckPass::new(CheckOptions::default());
+        let options = crate::StateOptions { firmware, ..Default::default() };
+        let reading = Reading { options, ..Reading::new(Path::new("t.gcode")) };
+        drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
+        let found = pass.report.findings.iter();
+        found.map(|f| (f.line, f.diagnostic.column, f.severity, f.diagnostic.finding.to_string())).collect()
+    }
+
     /// Regression (a G2/G3 its firmware refuses passed `check`, and moved in a straight line):
     /// an error at the R word when the radius is the cause, else at the command, in the words
     /// of the firmware the file is read for.
@@ -544,14 +594,9 @@ mod tests {
     fn an_arc_the_firmware_refuses_is_an_error_where_its_cause_is() {
         let text = "G1 X0 Y0\nG2 X10 Y0\nG2 X10 Y0 R4\nG3 X0 Y0 R-5\n";
         let read_as = |firmware: Firmware| {
-            let mut pass = CheckPass::new(CheckOptions::default());
-            let options = crate::StateOptions { firmware, ..Default::default() };
-            let reading = Reading { options, ..Reading::new(Path::new("t.gcode")) };
-            drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
-            let report = pass.report;
-            assert_eq!(report.errors as usize, report.findings.len());
-            let found = report.findings.iter();
-            found.map(|f| (f.line, f.diagnostic.column, f.diagnostic.finding.to_string())).collect::<Vec<_>>()
+            let found = findings_for(text, firmware);
+            assert!(found.iter().all(|f| f.2 == Severity::Error), "{found:?}");
+            found.into_iter().map(|(line, column, _, text)| (line, column, text)).collect::<Vec<_>>()
         };
         let no_centre =
             "refuses this arc, and the machine does not move: an arc needs R or a non-zero I or J";
@@ -585,6 +630,36 @@ mod tests {
         );
     }
 
+    /// Regression (one move feeding 1 000 000 mm of filament passed `check`, while `sim` runs
+    /// it without its E as Marlin does): each firmware's limit on one move's filament, at the
+    /// E word. Marlin drops the E past 200 mm (a warning); Klipper stops the print on an
+    /// extrude-only move or a retraction past 50 mm (an error), not on a printing move.
+    #[test]
+    fn a_move_feeding_more_than_the_firmware_takes_is_found_at_its_e() {
+        let text = "M104 S200\nM83\nG1 X10 Y10 E60\nG1 E150\nG1 X20 E250\nG1 E-60\n";
+        let read_as = |firmware: Firmware| findings_for(text, firmware);
+        assert_eq!(
+            read_as(Firmware::Marlin),
+            [(
+                5,
+                8,
+                Severity::Warning,
+                "a move feeding 250.000 mm of filament: marlin skips the E of a move past 200 mm ('too long \
+                 extrusion prevented', its EXTRUDE_MAXLENGTH)"
+                    .to_owned()
+            )]
+        );
+        let klipper = read_as(Firmware::Klipper);
+        let lines: Vec<(u64, Severity)> = klipper.iter().map(|f| (f.0, f.2)).collect();
+        assert_eq!(lines, [(4, Severity::Error), (6, Severity::Error)]);
+        assert_eq!(
+            klipper[0].3,
+            "an extrude-only move of 150.000 mm: klipper stops the print past 50 mm ('Extrude only move too \
+             long', its max_extrude_only_distance)"
+        );
+        assert!(read_as(Firmware::RepRapFirmware).is_empty());
+    }
+
     #[test]
     fn g280_is_known_only_to_griffin_files() {
         let found = findings(";FLAVOR:Marlin\nG280\nG281\n");
@@ -601,7 +676,7 @@ mod tests {
         for i in 0..2000 {
             text.push_str(&format!("G1 X{} Y20 E{}\n", 180 + i % 70, 2 + i));
         }
-        text.push_str(";TYPE:Skirt/Brim\nG1 X230 Y5 E3000\nG1 X231 Y5 E3001\nG13\nG13\n");
+        text.push_str(";TYPE:Skirt/Brim\nG1 X230 Y5 E2002\nG1 X231 Y5 E2003\nG13\nG13\n");
         let options = CheckOptions { bed: Some("200,200,200".parse().unwrap()), ..Default::default() };
         let report = checked(&text, options);
         let groups: Vec<_> = report
@@ -633,7 +708,17 @@ mod tests {
             .iter()
             .map(|g| (g.first.line, g.count, g.first.diagnostic.finding.severity()))
             .collect();
-        assert_eq!(groups, [(2, 2, Severity::Error), (3, 2, Severity::Warning), (5, 1, Severity::Error)]);
+        // And a group of its own: `F1e300`'s `E300`, then `F2E3`'s `E3` (297 mm back), feed more
+        // than Marlin takes in one move.
+        assert_eq!(
+            groups,
+            [
+                (2, 2, Severity::Error),
+                (2, 2, Severity::Warning),
+                (3, 2, Severity::Warning),
+                (5, 1, Severity::Error)
+            ]
+        );
     }
 
     /// An arc whose ends are on the bed but whose bulge is not.

@@ -127,6 +127,17 @@ pub enum Finding {
     /// A `G2`/`G3` the firmware the file is read for refuses ([`crate::gcode::arc`]): the
     /// machine does not move (Klipper stops the print). Boxed, as [`Finding::OutOfRange`].
     ArcRefused(Box<RefusedArc>),
+    /// One move feeding more filament than the firmware takes in one move
+    /// ([`CheckOptions`](crate::CheckOptions)): Marlin drops its E, Klipper stops the print.
+    LongExtrusion {
+        /// The firmware the file is read for.
+        firmware: crate::Firmware,
+        /// The filament the move feeds, mm (negative: a retraction).
+        e_mm: f64,
+        /// The firmware's limit, mm (single precision keeps a finding, which travels with every
+        /// line, at its size).
+        max_mm: f32,
+    },
     /// More findings on the line than are kept ([`MAX_LINE_DIAGNOSTICS`]).
     MoreFindings {
         /// How many findings were dropped.
@@ -156,6 +167,10 @@ impl Finding {
             | Finding::AbsoluteEPrecision { .. }
             | Finding::LineNumberSequence { .. }
             | Finding::NoFooter { .. } => Severity::Warning,
+            // Marlin goes on without the E; Klipper stops the print.
+            Finding::LongExtrusion { firmware, .. } if *firmware != crate::Firmware::Klipper => {
+                Severity::Warning
+            }
             Finding::ExponentNotation { .. } if !self.is_mixed_case_exponent() => Severity::Warning,
             // The findings it stands for were errors, each counted when kept.
             Finding::MoreFindings { .. } => Severity::Error,
@@ -243,6 +258,16 @@ impl fmt::Display for Finding {
             Finding::ArcRefused(arc) => {
                 write!(f, "{} refuses this arc, and the machine does not move: {}", arc.firmware, arc.refusal)
             }
+            Finding::LongExtrusion { firmware: crate::Firmware::Klipper, e_mm, max_mm } => write!(
+                f,
+                "an extrude-only move of {e_mm:.3} mm: klipper stops the print past {max_mm} mm ('Extrude only \
+                 move too long', its max_extrude_only_distance)"
+            ),
+            Finding::LongExtrusion { firmware, e_mm, max_mm } => write!(
+                f,
+                "a move feeding {e_mm:.3} mm of filament: {firmware} skips the E of a move past {max_mm} mm \
+                 ('too long extrusion prevented', its EXTRUDE_MAXLENGTH)"
+            ),
             Finding::MoreFindings { count } => write!(f, "{count} more findings on this line"),
             Finding::ToolOutOfRange { tool } => write!(
                 f,
