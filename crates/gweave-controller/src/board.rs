@@ -143,10 +143,34 @@ pub fn write_enables<P: Pin>(drivers: &[Driver<P>], steppers_enabled: u8) {
 pub trait Board: Io {
     /// The next byte the serial line received, if any (from the receive interrupt's buffer).
     fn receive(&mut self) -> Option<u8>;
+    /// The byte `ahead` places after the next one in the receive buffer, if received, left
+    /// there: the emergency parser hears what waits behind a full line queue.
+    fn peek(&self, ahead: usize) -> Option<u8>;
     /// The clock, the thermistors' latest readings and the endstops, read for one turn.
     fn inputs(&mut self) -> Inputs;
     /// Drives the heaters, the fan and the stepper enables as the core asks after a turn.
     fn apply(&mut self, outputs: &Outputs);
+}
+
+/// The bytes received: each heard by the emergency parser once, as it arrives, then queued
+/// while the line queue takes them. `heard` bytes at the front of the board's buffer were heard
+/// before; returns how many are now. Only heard bytes are queued: one the receive interrupt
+/// adds meanwhile is heard at the next turn (queueing it unheard once let the count go wrong
+/// and the parser hear nothing more, so an `M112` waited its turn).
+fn hear_and_queue(controller: &mut Controller<'_>, board: &mut impl Board, mut heard: usize) -> usize {
+    while let Some(byte) = board.peek(heard) {
+        controller.hear(byte);
+        heard += 1;
+    }
+    while heard > 0 {
+        let Some(byte) = board.peek(0) else { break };
+        if !controller.receive(byte) {
+            break;
+        }
+        let _ = board.receive();
+        heard -= 1;
+    }
+    heard
 }
 
 /// The main loop, the same on every board: `start` (after `echo:Watchdog Reset` if the
@@ -158,15 +182,12 @@ pub fn run(controller: &mut Controller<'_>, board: &mut impl Board, by_watchdog:
     }
     let inputs = board.inputs();
     controller.boot(board, &inputs);
-    // A byte the controller refused (its line queue was full): offered again after its turn.
-    let mut held = None;
+    // How many bytes at the front of the receive buffer the emergency parser has heard: each
+    // is heard once, when it arrives, and queued when the line queue has room (a byte the
+    // controller refuses stays in the buffer, offered again after its turn).
+    let mut heard = 0;
     loop {
-        while let Some(byte) = held.take().or_else(|| board.receive()) {
-            if !controller.receive(byte) {
-                held = Some(byte);
-                break;
-            }
-        }
+        heard = hear_and_queue(controller, board, heard);
         let inputs = board.inputs();
         controller.poll(board, &inputs);
         board.apply(&controller.outputs());
@@ -175,5 +196,76 @@ pub fn run(controller: &mut Controller<'_>, board: &mut impl Board, by_watchdog:
             // resets the board: the watchdog must not restart it into a working printer.
             board.watchdog_feed();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::cell::RefCell;
+    use std::collections::VecDeque;
+    use std::vec::Vec;
+
+    use super::*;
+    use crate::{Settings, StepQueue};
+
+    /// A board whose receive interrupt delivers one more byte each time the main loop looks at
+    /// the front of its buffer: bytes arrive between hearing and queueing.
+    struct Racing {
+        buffer: RefCell<VecDeque<u8>>,
+        arriving: RefCell<VecDeque<u8>>,
+        sent: Vec<u8>,
+    }
+
+    impl Io for Racing {
+        fn send(&mut self, bytes: &[u8]) {
+            self.sent.extend_from_slice(bytes);
+        }
+        fn build_settings(&self) -> Settings {
+            Settings::DEFAULT
+        }
+    }
+
+    impl Board for Racing {
+        fn receive(&mut self) -> Option<u8> {
+            self.buffer.get_mut().pop_front()
+        }
+        fn peek(&self, ahead: usize) -> Option<u8> {
+            if ahead == 0 {
+                if let Some(b) = self.arriving.borrow_mut().pop_front() {
+                    self.buffer.borrow_mut().push_back(b);
+                }
+            }
+            self.buffer.borrow().get(ahead).copied()
+        }
+        fn inputs(&mut self) -> Inputs {
+            Inputs { now_ms: 0, adc: [1000; crate::HEATERS], endstops: 0 }
+        }
+        fn apply(&mut self, _: &Outputs) {}
+    }
+
+    /// Regression (the breaking session's `M112` behind a full queue, and on the first fix the
+    /// emulated board: bytes that arrived between hearing and queueing were queued unheard, and
+    /// the parser heard nothing after): every byte is heard once, in order, whatever arrives
+    /// when, and an `M112` among them halts the board.
+    #[test]
+    fn every_byte_is_heard_once_however_it_arrives() {
+        let queue = StepQueue::new();
+        let mut controller = Controller::new(&queue, Settings::DEFAULT);
+        let text = b"G4 S10\nM105\nM112\n";
+        let mut board = Racing {
+            buffer: RefCell::default(),
+            arriving: RefCell::new(text.iter().copied().collect()),
+            sent: Vec::new(),
+        };
+        let inputs = board.inputs();
+        controller.boot(&mut board, &inputs);
+        let mut heard = 0;
+        for _ in 0..text.len() * 2 {
+            heard = hear_and_queue(&mut controller, &mut board, heard);
+            assert!(heard <= board.buffer.borrow().len());
+        }
+        controller.poll(&mut board, &inputs);
+        assert!(controller.is_halted());
+        assert!(std::str::from_utf8(&board.sent).unwrap().contains("Error:Printer halted. kill() called!"));
     }
 }

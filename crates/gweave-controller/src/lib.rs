@@ -23,6 +23,7 @@
 //! struct Board { sent: Vec<u8> }
 //! impl Io for Board {
 //!     fn send(&mut self, bytes: &[u8]) { self.sent.extend_from_slice(bytes); }
+//!     fn build_settings(&self) -> Settings { Settings::DEFAULT }
 //! }
 //!
 //! // The queue between the main loop (producer) and the step interrupt (consumer). On a board
@@ -165,6 +166,9 @@ pub trait Io {
     /// Sends bytes to the host (UART transmit). A board may block until they are written or
     /// queue them; the core writes at most a few hundred bytes per turn.
     fn send(&mut self, bytes: &[u8]);
+    /// The board's build-time settings (its printer file), which `M502` restores. The board
+    /// keeps them where it keeps its program (flash), not the core in RAM.
+    fn build_settings(&self) -> Settings;
     /// Reads `buf.len()` bytes of EEPROM from `addr`. Erased EEPROM reads `0xFF`.
     fn eeprom_read(&mut self, addr: u16, buf: &mut [u8]) {
         let _ = addr;

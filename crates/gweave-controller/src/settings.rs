@@ -222,6 +222,9 @@ mod tests {
     struct Eeprom([u8; 4096]);
     impl crate::Io for Eeprom {
         fn send(&mut self, _: &[u8]) {}
+        fn build_settings(&self) -> Settings {
+            Settings::DEFAULT
+        }
         fn eeprom_read(&mut self, addr: u16, buf: &mut [u8]) {
             buf.copy_from_slice(&self.0[usize::from(addr)..usize::from(addr) + buf.len()]);
         }

@@ -95,8 +95,10 @@ pub fn type_1_adc(t_c: f32) -> u16 {
 }
 
 /// The board's serial output and EEPROM, in memory.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Memory {
+    /// The build's settings (`M502`).
+    pub build: Settings,
     /// Everything the core sent.
     pub sent: Vec<u8>,
     /// The EEPROM (grows as written; unwritten bytes read `0xFF`).
@@ -111,6 +113,9 @@ pub struct Memory {
 impl Io for Memory {
     fn send(&mut self, bytes: &[u8]) {
         self.sent.extend_from_slice(bytes);
+    }
+    fn build_settings(&self) -> Settings {
+        self.build
     }
     fn eeprom_read(&mut self, addr: u16, buf: &mut [u8]) {
         for (i, b) in buf.iter_mut().enumerate() {
@@ -200,7 +205,8 @@ impl<'q, P: Plant> Twin<'q, P> {
         let mut twin = Twin {
             controller: Controller::new(queue, settings),
             stepper: Stepper::new(queue),
-            memory,
+            // The board's build is what it was given: `M502` restores it.
+            memory: Memory { build: settings, ..memory },
             plant,
             steps: [0; AXES],
             endstop_steps: [-(100.0 * spm[0]) as i64, -(100.0 * spm[1]) as i64, -(50.0 * spm[2]) as i64],
@@ -243,9 +249,12 @@ impl<'q, P: Plant> Twin<'q, P> {
         Inputs { now_ms: self.now_ms() as u32, adc: self.plant.adc(), endstops }
     }
 
-    /// Offers bytes to the core as a UART's receive buffer does, running the board while its
-    /// line queue is full.
+    /// Offers bytes to the core as a UART's receive buffer does: all heard by the emergency
+    /// parser as they arrive, then queued, the board running while its line queue is full.
     pub fn send(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.controller.hear(b);
+        }
         for &b in bytes {
             while !self.controller.receive(b) {
                 self.run_ms(1);

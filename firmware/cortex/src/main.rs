@@ -104,6 +104,10 @@ impl Io for Board {
         uart::write(bytes);
     }
 
+    fn build_settings(&self) -> gweave_controller::Settings {
+        config::SETTINGS
+    }
+
     fn eeprom_read(&mut self, addr: u16, buf: &mut [u8]) {
         for (i, b) in buf.iter_mut().enumerate() {
             *b = self.eeprom.get(usize::from(addr) + i).copied().unwrap_or(0xFF);
@@ -126,6 +130,10 @@ impl Io for Board {
 impl board::Board for Board {
     fn receive(&mut self) -> Option<u8> {
         uart::read()
+    }
+
+    fn peek(&self, ahead: usize) -> Option<u8> {
+        uart::peek(ahead)
     }
 
     fn inputs(&mut self) -> Inputs {

@@ -92,6 +92,15 @@ pub fn read() -> Option<u8> {
     Some(byte)
 }
 
+/// The byte `ahead` places after the next one, if received, left in the buffer.
+pub fn peek(ahead: usize) -> Option<u8> {
+    let tail = RX.tail.load(Ordering::Relaxed);
+    let waiting = RX.head.load(Ordering::Acquire).wrapping_sub(tail);
+    // SAFETY: as in `read`: the slot was written before `head` moved past it.
+    (ahead < usize::from(waiting))
+        .then(|| unsafe { (*RX.buf.get())[usize::from(tail.wrapping_add(ahead as u8))] })
+}
+
 /// Send bytes, each when the transmitter can take it.
 pub fn write(bytes: &[u8]) {
     for &b in bytes {

@@ -87,6 +87,10 @@ impl board::Board for Ramps {
         uart::read()
     }
 
+    fn peek(&self, ahead: usize) -> Option<u8> {
+        uart::peek(ahead)
+    }
+
     fn inputs(&mut self) -> Inputs {
         if let Some(sums) = self.adc.poll() {
             self.adc_now = sums.map(|s| s / adc::OVERSAMPLE);
@@ -107,6 +111,10 @@ impl board::Board for Ramps {
 impl Io for Ramps {
     fn send(&mut self, bytes: &[u8]) {
         uart::write(bytes);
+    }
+
+    fn build_settings(&self) -> gweave_controller::Settings {
+        build_settings()
     }
 
     fn eeprom_read(&mut self, addr: u16, buf: &mut [u8]) {
@@ -176,16 +184,22 @@ pub extern "C" fn main() -> ! {
     clock::init([pins::HEATER_0, pins::HEATER_BED, pins::D9]);
     uart::init(CPU_HZ, config::BAUD);
 
-    #[cfg(not(feature = "inkjet"))]
-    let settings = config::SETTINGS;
-    #[cfg(feature = "inkjet")]
-    let settings = gweave_controller::Settings { inkjet_heads: inkshield::HEADS, ..config::SETTINGS };
-    let mut controller = Controller::new(&QUEUE, settings);
+    let mut controller = Controller::new(&QUEUE, build_settings());
     // SAFETY: the step interrupt is not enabled yet, so nothing else reads STEPPER.
     unsafe { *STEPPER.0.get() = Some(Stepper::new(&QUEUE)) };
     regs::enable_interrupts();
     step_timer::start(1000);
     board::run(&mut controller, &mut Ramps::new(), by_watchdog)
+}
+
+/// The printer file's settings, and an inkjet build's heads: what the core starts with and
+/// what `M502` restores (built from the program's constants, in flash, not kept in RAM).
+fn build_settings() -> gweave_controller::Settings {
+    #[cfg(not(feature = "inkjet"))]
+    let settings = config::SETTINGS;
+    #[cfg(feature = "inkjet")]
+    let settings = gweave_controller::Settings { inkjet_heads: inkshield::HEADS, ..config::SETTINGS };
+    settings
 }
 
 /// The step interrupt (Timer1 compare match A, vector 17).

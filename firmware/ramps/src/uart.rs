@@ -84,6 +84,17 @@ pub fn read() -> Option<u8> {
     }
 }
 
+/// The byte `ahead` places after the next one, if received, left in the buffer.
+pub fn peek(ahead: usize) -> Option<u8> {
+    // SAFETY: as in `read`: `head` is read once, a single byte; the slots before it are written.
+    unsafe {
+        let tail = *RX.tail.get();
+        let waiting = core::ptr::read_volatile(RX.head.get()).wrapping_sub(tail);
+        (ahead < usize::from(waiting))
+            .then(|| core::ptr::read_volatile(&(*RX.buf.get())[usize::from(tail.wrapping_add(ahead as u8))]))
+    }
+}
+
 /// Send one byte, waiting until the transmitter can take it.
 pub fn write_byte(byte: u8) {
     while UCSR0A.read() & UDRE0 == 0 {}

@@ -28,13 +28,16 @@ pub enum WordError {
     BadWord(u8),
 }
 
-/// The parameters of a line: for each letter A-Z, whether it was given and its value (0 for a
-/// letter given without a number, as in `G28 X`).
+/// The parameters of a line: for each letter A-Z, whether it was given, and its value if it
+/// was given one. A letter alone (`G28 X`) is given without a value: Marlin's `seen` but not
+/// its `seenval`, so `G1 Z` moves nothing and `M104 S` sets nothing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Words {
     /// The command.
     pub command: Command,
     seen: u32,
+    /// The letters given with a number.
+    valued: u32,
     values: [f32; 26],
 }
 
@@ -53,7 +56,7 @@ impl Words {
             },
             _ => return Err(WordError::NoCommand),
         };
-        let mut words = Words { command, seen: 0, values: [0.0; 26] };
+        let mut words = Words { command, seen: 0, valued: 0, values: [0.0; 26] };
         loop {
             i = skip_spaces(line, i);
             let Some(&b) = line.get(i) else { break };
@@ -75,6 +78,7 @@ impl Words {
                         return Err(WordError::BadWord(i.min(255) as u8));
                     };
                     words.values[index] = value;
+                    words.valued |= 1 << index;
                     i += used;
                 }
             }
@@ -87,9 +91,10 @@ impl Words {
         letter.is_ascii_uppercase() && self.seen & (1 << (letter - b'A')) != 0
     }
 
-    /// The value of `letter` (upper case), if given.
+    /// The value of `letter` (upper case), if given with one.
     pub fn get(&self, letter: u8) -> Option<f32> {
-        self.has(letter).then(|| self.values[usize::from(letter - b'A')])
+        (letter.is_ascii_uppercase() && self.valued & (1 << (letter - b'A')) != 0)
+            .then(|| self.values[usize::from(letter - b'A')])
     }
 
     /// Whether any parameter was given.
@@ -130,11 +135,16 @@ mod tests {
         }
     }
 
+    /// Regression (a breaking session: `G1 Z` drove Z to 0, into the bed, and `M104 S` switched
+    /// the hotend off: a letter alone read as 0): a letter alone is given, without a value, as
+    /// Marlin's `seen` without `seenval`.
     #[test]
-    fn a_letter_alone_is_given_with_zero() {
+    fn a_letter_alone_is_given_without_a_value() {
         let w = Words::parse(b"G28 X Y").unwrap();
         assert!(w.has(b'X') && w.has(b'Y') && !w.has(b'Z'));
-        assert_eq!(w.get(b'X'), Some(0.0));
+        assert_eq!(w.get(b'X'), None);
+        let w = Words::parse(b"G1 Z X0").unwrap();
+        assert_eq!((w.has(b'Z'), w.get(b'Z'), w.get(b'X')), (true, None, Some(0.0)));
     }
 
     #[test]

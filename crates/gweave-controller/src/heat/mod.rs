@@ -59,8 +59,16 @@ impl Heat {
             return;
         }
         let h = &mut self.heaters[i];
-        h.target_c = target_c.clamp(0.0, settings.max_temp_c[i] - 15.0);
-        h.guard.new_target(Heat::rules(i), h.target_c, h.temp_c, now_ms);
+        let target_c = target_c.clamp(0.0, settings.max_temp_c[i] - 15.0);
+        if target_c == h.target_c {
+            // The same target again (a slicer's `M104` every layer): the heating watch starts
+            // over, as Marlin's `start_watching_hotend` does at every `M104`, but the runaway
+            // watch goes on: Marlin restarts it only when the target changes.
+            h.guard.rewatch(Heat::rules(i), target_c, h.temp_c, now_ms);
+        } else {
+            h.target_c = target_c;
+            h.guard.new_target(Heat::rules(i), target_c, h.temp_c, now_ms);
+        }
     }
 
     /// Reads the sensors; every [`PERIOD_MS`] runs the PID loops and the safety rules. Returns
@@ -80,6 +88,8 @@ impl Heat {
         for (i, (h, &reading)) in self.heaters.iter_mut().zip(adc).enumerate() {
             let Some(table) = thermistor::table(settings.thermistor[i]).filter(|_| Heat::fitted(settings, i))
             else {
+                // A heater no rule watches gets no power, whatever it was given before.
+                (h.target_c, h.duty) = (0.0, 0);
                 continue;
             };
             h.temp_c = thermistor::celsius(table, reading);

@@ -112,7 +112,7 @@ impl Guard {
                     return Err(Fault::HeatingFailed);
                 }
                 // It rose as it should: watch the next period from here, as Marlin does.
-                self.new_target_watch(rules, target_c, temp_c, now_ms);
+                self.rewatch(rules, target_c, temp_c, now_ms);
             }
         }
         match self.runaway_deadline_ms {
@@ -129,7 +129,8 @@ impl Guard {
         Ok(())
     }
 
-    fn new_target_watch(&mut self, rules: &Rules, target_c: f32, temp_c: f32, now_ms: u32) {
+    /// The heating watch starts over from `temp_c`; the runaway watch goes on.
+    pub fn rewatch(&mut self, rules: &Rules, target_c: f32, temp_c: f32, now_ms: u32) {
         let runaway = self.runaway_deadline_ms;
         self.new_target(rules, target_c, temp_c, now_ms);
         self.runaway_deadline_ms = runaway;

@@ -71,7 +71,10 @@ impl Controller<'_> {
     }
 
     /// Runs the command of `w` if this controller knows it (its row in the registry is checked
-    /// against this: `the_registry_is_exactly_what_the_controller_runs`).
+    /// against this: `the_registry_is_exactly_what_the_controller_runs`). Never inlined: in the
+    /// main loop's one function, the AVR's jumps over it (`rjmp`, 4 KB either way) no longer
+    /// reached, and the image did not link ("relocation truncated to fit: R_AVR_13_PCREL").
+    #[inline(never)]
     pub(super) fn dispatch(&mut self, io: &mut impl Io, w: &Words) -> Option<Done> {
         let Command { letter, code } = w.command;
         let now = self.inputs.now_ms;
@@ -140,6 +143,9 @@ impl Controller<'_> {
                 }
             }
             (b'M', 112) => self.kill(io, None),
+            // Done by the emergency parser as it arrived (a heating wait ended); in its turn,
+            // nothing, as in Marlin with `EMERGENCY_PARSER`.
+            (b'M', 108) => {}
             // Fault injection (feature `fault-injection`, never in a normal build): the main
             // loop hangs as a bug would, heaters as they are, so a board's test can check that
             // its watchdog resets the chip into a safe state.
@@ -194,9 +200,9 @@ impl Controller<'_> {
                 None => line(io, b"echo:No settings stored in EEPROM: settings unchanged"),
             },
             (b'M', 502) => {
-                // The build's fixed facts stay (the inputs fitted); the rest is the default.
-                let (mixing_inputs, inkjet_heads) = (self.settings.mixing_inputs, self.settings.inkjet_heads);
-                self.settings = crate::Settings { mixing_inputs, inkjet_heads, ..crate::Settings::DEFAULT };
+                // The board's own defaults, as Marlin's compiled `Configuration.h`: its printer
+                // file (hotends, sensors, directions, travel, the rotary axis), not the core's.
+                self.settings = io.build_settings();
                 self.mixer.reset_tools();
                 line(io, b"echo:Hardcoded Default Settings Loaded");
             }
@@ -347,7 +353,14 @@ impl Controller<'_> {
             self.heat.set_target(&self.settings, heater, t, now_ms);
         }
         if wait && target.is_some() {
-            self.wait = Wait::Heat { heater, both_ways: w.has(b'R') };
+            // The first cooling check passes (Marlin starts from 9999 °C), the next a minute on.
+            let (cooled_from_c, check_ms) = (f32::INFINITY, self.inputs.now_ms);
+            // A heater index is below `HEATERS` (3).
+            let heater = heater as u8;
+            self.wait = Wait::Heat { heater, both_ways: w.has(b'R'), cooled_from_c, check_ms };
+            // An `M108` heard before the wait began does not end it (Marlin sets
+            // `wait_for_heatup` as the wait starts).
+            self.continue_heard = false;
             self.next_report_ms = now_ms.wrapping_add(super::HEAT_REPORT_MS);
             return Done::Quiet;
         }

@@ -13,6 +13,10 @@
 //! The axes home one after the other in the settings' order (by default Z, Y, X, the
 //! controller document's order; Marlin homes X, Y, Z), each only if named on the line, all
 //! three if none is.
+//!
+//! A move towards the endstop that ends without the switch closing (unplugged, broken, or the
+//! axis stalled) is a failure: the position is unknown and the next moves could crash the
+//! head. As Marlin's `validate_homing_move`, the board says `Error:Homing Failed` and halts.
 
 use super::Controller;
 use crate::gcode::words::Words;
@@ -35,14 +39,18 @@ impl Homing {
         Homing { axes: if named == 0 { 1 << X | 1 << Y | 1 << Z } else { named }, phase: 0 }
     }
 
-    /// Called when the machine is still: queues the next move; returns `true` when every axis
-    /// is home.
-    pub(super) fn next(&mut self, c: &mut Controller<'_>) -> bool {
+    /// Called when the machine is still: queues the next move; returns `Ok(true)` when every
+    /// axis is home, `Err(())` when a move towards the endstop ended without reaching it.
+    pub(super) fn next(&mut self, c: &mut Controller<'_>) -> Result<bool, ()> {
         let order = c.settings.homing_order.map(usize::from);
         let Some(&axis) = order.iter().find(|&&a| a <= Z && self.axes & (1 << a) != 0) else {
             // Every axis home (an order that leaves one out never homes it).
-            return true;
+            return Ok(true);
         };
+        // Phases 1 and 3 drove towards the endstop: the switch must have closed.
+        if matches!(self.phase, 1 | 3) && !c.queue.endstop_hit() {
+            return Err(());
+        }
         let s = c.settings;
         let feed_mm_s = s.homing_feed_mm_s[axis];
         // Moves relative to where the axis is taken to be now.
@@ -63,9 +71,9 @@ impl Homing {
                 c.planner.position_steps[axis] = 0;
                 self.axes &= !(1 << axis);
                 self.phase = 0;
-                return self.axes == 0;
+                return Ok(self.axes == 0);
             }
         }
-        false
+        Ok(false)
     }
 }

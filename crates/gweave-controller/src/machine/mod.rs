@@ -21,6 +21,7 @@ mod tests;
 use crate::heat::Heat;
 use crate::mixing::Mixer;
 use crate::planner::Planner;
+use crate::serial::emergency::{EmergencyParser, Urgent};
 use crate::serial::out::{line, Reply};
 use crate::serial::protocol::{self, LineError};
 use crate::serial::reader::LineReader;
@@ -40,6 +41,12 @@ const HEAT_REPORT_MS: u32 = 1_000;
 /// Marlin's `TEMP_WINDOW` / `TEMP_BED_WINDOW`: a wait for a temperature ends within this of it.
 const TEMP_WINDOW_C: f32 = 1.0;
 
+/// Marlin's `MIN_COOLING_SLOPE_DEG` and `MIN_COOLING_SLOPE_TIME` (hotend and bed alike): a wait
+/// to cool down (`M109 R`, `M190 R`) gives up once the temperature fell less than this much in
+/// that long, so a target below the room's (`M109 R10`) does not wait for ever.
+const MIN_COOLING_SLOPE_C: f32 = 1.5;
+const MIN_COOLING_SLOPE_MS: u32 = 60_000;
+
 /// What the running command waits for before its `ok`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Wait {
@@ -50,8 +57,8 @@ enum Wait {
     /// Until this time (ms).
     Dwell { until_ms: u32 },
     /// Heater `heater` to reach its target (`M109`, `M190`); `both_ways`: also to cool down
-    /// to it (`R`).
-    Heat { heater: usize, both_ways: bool },
+    /// to it (`R`), the temperature at the last cooling check and the next check's time.
+    Heat { heater: u8, both_ways: bool, cooled_from_c: f32, check_ms: u32 },
     /// The homing sequence.
     Home(Homing),
     /// The moves to finish and the head to refill, then fire these nozzles (`M700`).
@@ -101,8 +108,11 @@ pub struct Controller<'q> {
     /// `M155`: the temperatures are printed every so many seconds (0: never; at most 60, so
     /// a byte), next at `next_report_ms` (every second instead while `M109`/`M190` wait).
     auto_report_s: u8,
-    /// An `M112` was seen by the line reader: halt before anything else.
+    /// The emergency parser, and what it heard: an `M112` (halt before anything else), an
+    /// `M108` (a heating wait ends).
+    emergency_parser: EmergencyParser,
     emergency: bool,
+    continue_heard: bool,
     halted: bool,
     inputs: Inputs,
 }
@@ -138,7 +148,9 @@ impl<'q> Controller<'q> {
             busy_since_ms: 0,
             next_report_ms: 0,
             auto_report_s: 0,
+            emergency_parser: EmergencyParser::default(),
             emergency: false,
+            continue_heard: false,
             halted: false,
             inputs: Inputs { now_ms: 0, adc: [0; HEATERS], endstops: 0 },
         }
@@ -154,15 +166,22 @@ impl<'q> Controller<'q> {
         self.load_tools(io);
     }
 
-    /// Takes one byte from the host. Returns `false`, taking nothing, when the byte would end a
-    /// line and the line queue is full: offer it again after the next [`Controller::poll`].
+    /// The emergency parser hears one byte, as it arrives and before it is queued
+    /// ([`crate::serial::emergency`]): every byte exactly once, in order, even while the line
+    /// queue is full. An `M112` halts the board at the next turn, an `M108` ends a heating wait.
+    pub fn hear(&mut self, byte: u8) {
+        match self.emergency_parser.hear(byte) {
+            Some(Urgent::Kill) => self.emergency = true,
+            Some(Urgent::Continue) => self.continue_heard = true,
+            None => {}
+        }
+    }
+
+    /// Takes one byte from the host into the line queue (heard first: [`Controller::hear`]).
+    /// Returns `false`, taking nothing, when the byte would end a line and the line queue is
+    /// full: offer it again after the next [`Controller::poll`].
     #[must_use = "a byte refused must be offered again, or the line it ends is lost"]
     pub fn receive(&mut self, byte: u8) -> bool {
-        // The emergency parser (Marlin's `EMERGENCY_PARSER`): an `M112` acts before the lines
-        // queued ahead of it run, even if the queue is full.
-        if matches!(byte, b'\n' | b'\r') && self.reader.current_is_m112() {
-            self.emergency = true;
-        }
         self.reader.push(byte)
     }
 
@@ -257,11 +276,21 @@ impl<'q> Controller<'q> {
                 }
             }
             Wait::Dwell { until_ms } => (now.wrapping_sub(until_ms) as i32) >= 0,
-            Wait::Heat { heater, both_ways } => {
-                let h = &self.heat.heaters[heater];
-                h.target_c <= 0.0
+            Wait::Heat { heater, both_ways, cooled_from_c, check_ms } => {
+                let h = &self.heat.heaters[usize::from(heater)];
+                let cooling = both_ways && h.temp_c > h.target_c;
+                let stalled = cooling && (now.wrapping_sub(check_ms) as i32) >= 0 && {
+                    let stalled = cooled_from_c - h.temp_c < MIN_COOLING_SLOPE_C;
+                    let next_ms = now.wrapping_add(MIN_COOLING_SLOPE_MS);
+                    self.wait = Wait::Heat { heater, both_ways, cooled_from_c: h.temp_c, check_ms: next_ms };
+                    stalled
+                };
+                // `M108` heard: Marlin's `wait_for_heatup` cleared, the wait ends here.
+                core::mem::take(&mut self.continue_heard)
+                    || stalled
+                    || h.target_c <= 0.0
                     || if both_ways {
-                        self.heat.at_target(heater, TEMP_WINDOW_C)
+                        self.heat.at_target(usize::from(heater), TEMP_WINDOW_C)
                     } else {
                         h.temp_c >= h.target_c - TEMP_WINDOW_C
                     }
@@ -272,7 +301,11 @@ impl<'q> Controller<'q> {
                 if self.moving() {
                     false
                 } else {
-                    let finished = homing.next(self);
+                    let Ok(finished) = homing.next(self) else {
+                        // Marlin's `STR_ERR_HOMING_FAILED`, then its `kill()`.
+                        line(io, b"Error:Homing Failed");
+                        return self.kill(io, None);
+                    };
                     if !finished {
                         self.wait = Wait::Home(homing);
                         self.prep.fill(&mut self.planner, self.queue);

@@ -103,7 +103,9 @@ pub(crate) fn row(letter: u8, code: u16, has: impl Fn(Needs) -> bool) -> Option<
         (b'M', 205) => declared(Nothing, &[(b"J", JUNCTION_MM)]),
         (b'M', 301) => declared(Nothing, &[(b"PID", GAIN)]),
         // Reports, the fan off, the kill, waiting for the moves, the EEPROM's settings.
-        (b'M', 105 | 107 | 112 | 114 | 115 | 119 | 400 | 500 | 501 | 502 | 503) => declared(Nothing, &[]),
+        (b'M', 105 | 107 | 108 | 112 | 114 | 115 | 119 | 400 | 500 | 501 | 502 | 503) => {
+            declared(Nothing, &[])
+        }
         (b'M', 163) => declared(Mixing, &[(b"P", MIX_WEIGHT)]),
         (b'M', 164) => declared(Mixing, &[]),
         (b'M', 165) => declared(Mixing, &[(b"ABCD", MIX_WEIGHT)]),

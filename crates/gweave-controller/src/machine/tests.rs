@@ -177,9 +177,9 @@ fn the_registry_is_exactly_what_the_controller_runs() {
         }
         rows.push(declared_here);
     }
-    // 41 commands everywhere (10 G, 30 M, T0); a mixing hotend adds M163-M165 and the virtual
+    // 42 commands everywhere (10 G, 31 M, T0); a mixing hotend adds M163-M165 and the virtual
     // tools T1-T1000 (the mixer refuses those past its 16), inkjet heads M700, two hotends T1.
-    assert_eq!(rows, [41, 41 + 3 + 1000, 42, 42]);
+    assert_eq!(rows, [42, 42 + 3 + 1000, 43, 43]);
 }
 
 /// Regression: the ranges were checked before knowing whether the machine has the command, so
@@ -541,9 +541,11 @@ fn m112_stops_everything_at_once() {
     b.send("M104 S200\nG1 X100 F600\n");
     b.run_ms(500);
     let before = b.t.steps[0];
-    // Queued behind a dwell and a full line queue, M112 still acts at once (the emergency
-    // parser), its line refused or not.
+    // Queued behind a dwell and a full line queue, M112 still acts at once: the emergency
+    // parser hears every byte as it arrives, its line queued or not (the board's loop hears
+    // what waits in its receive buffer behind a refused byte).
     for &byte in b"G4 S10\nG4 S1\nG4 S1\nG4 S1\nG4 S1\nM112\n" {
+        b.t.controller.hear(byte);
         let _ = b.t.controller.receive(byte);
     }
     b.run_ms(1);
@@ -640,4 +642,117 @@ fn thirty_thousand_steps_a_second_come_four_per_interrupt_on_the_profiles_time()
     let total_s = (t[7999] - t[0]) as f64 / f64::from(TICKS_PER_S);
     let planned_s = 2.0 * 0.125 + 53.125 / 375.0 - (2.0 * 0.0125f64 / 3000.0).sqrt();
     assert!((total_s - planned_s).abs() < 0.0002, "{total_s} s, planned {planned_s} s");
+}
+
+/// Regression (a breaking session: `M502` on a two-hotend board loaded the core's one-hotend
+/// defaults; hotend 1's heater kept its last duty with no rule watching it, 408 °C after six
+/// minutes): `M502` restores the board's own build (its printer file: here two hotends and
+/// 100 steps/mm on X), so `M104 T1 S0` still switches the second hotend off.
+#[test]
+fn m502_restores_the_boards_build_and_every_heater_stays_watched() {
+    let mut steps_per_mm = Settings::DEFAULT.steps_per_mm;
+    steps_per_mm[0] = 100.0;
+    let eeb = Settings { hotends: 2, thermistor: [1, 1, 1], steps_per_mm, ..Settings::DEFAULT };
+    let mut b = Bench::new(eeb);
+    b.send("M104 T1 S240\nM92 X80\n");
+    b.run_ms(20_000);
+    assert_eq!(b.t.controller.outputs().heater_duty[1], 255);
+    b.send("M502\nM104 T1 S0\nM104 S0\nM105\n");
+    b.run_ms(1000);
+    assert_eq!(*b.t.controller.settings(), eeb);
+    let t = b.take();
+    assert!(t.contains(" T1:"), "M105 lists the second hotend: {t}");
+    assert_eq!(b.t.controller.outputs().heater_duty, [0; HEATERS]);
+}
+
+/// Regression (a breaking session: any `M104` cleared the runaway watch, re-armed only once the
+/// reading was back at target; a slicer's `M104 S210` every layer let a thermistor that slipped
+/// out read 190 °C and creep up while the heater ran at full power until MAXTEMP, the block at
+/// 363 °C): the same target again keeps the runaway watch, as Marlin restarts it only when the
+/// target changes, and the fault comes 40 s after the reading fell away.
+#[test]
+fn the_same_target_again_keeps_the_runaway_watch() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("M109 S210\n");
+    b.run_until_ok(1, 400_000);
+    b.run_ms(30_000);
+    let mut reading_c = 190.0;
+    for second in 1..=60 {
+        b.t.plant.adc_override[0] = Some(crate::twin::type_1_adc(reading_c));
+        if second % 10 == 0 {
+            b.send("M104 S210\n");
+        }
+        b.run_ms(1000);
+        reading_c += 3.0 / 20.0;
+        if b.t.controller.is_halted() {
+            assert!((40..=42).contains(&second), "halted after {second} s");
+            return assert_halted(&mut b, "Error:Thermal Runaway, system stopped! Heater_ID: 0");
+        }
+    }
+    panic!("no runaway after 60 s: {}", b.take());
+}
+
+/// Regression (a breaking session: `G1 Z` drove Z to 0 and `M104 S` switched the hotend off):
+/// a letter without a number changes nothing, as Marlin reads it.
+#[test]
+fn a_letter_without_a_number_changes_nothing() {
+    let mut b = Bench::hot(Settings::DEFAULT);
+    b.send("M104 S200\nG1 X10 Z10 F3000\nG1 Z\nM104 S\n");
+    b.run_ms(10_000);
+    assert_eq!(b.t.controller.position_mm()[2], 10.0);
+    assert_eq!(b.t.controller.heat().heaters[0].target_c, 200.0);
+}
+
+/// Regression (a breaking session: `M108` sent during `M109 S250` waited its turn in the queue
+/// while the heater went on heating, though `M115` says `EMERGENCY_PARSER`): the emergency
+/// parser hears it at once and the wait ends with its `ok`, the target kept; an `M108` heard
+/// before a wait does not end it.
+#[test]
+fn m108_ends_a_heating_wait_at_once() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("M108\nM109 S250\n");
+    b.run_ms(5_000);
+    // M108's own `ok` in its turn (a command that does nothing then); the wait goes on.
+    assert_eq!(b.take().matches("ok\n").count(), 1);
+    b.send("M108\n");
+    b.run_ms(2);
+    let t = b.take();
+    assert!(t.ends_with("ok\nok\n") && !t.contains("Unknown"), "{t}");
+    assert_eq!(b.t.controller.heat().heaters[0].target_c, 250.0);
+    assert!(b.t.plant.temp_c[0] < 100.0);
+}
+
+/// Regression (a breaking session: `M109 R10` and `M190 R20`, targets below the room's, waited
+/// for ever): a wait to cool down gives up once the temperature fell less than 1.5 °C in a
+/// minute (Marlin's `MIN_COOLING_SLOPE_DEG` / `_TIME`), with its `ok`.
+#[test]
+fn a_wait_to_cool_below_the_room_gives_up_after_a_minute() {
+    for command in ["M109 R10\n", "M190 R15\n"] {
+        let mut b = Bench::new(Settings::DEFAULT);
+        b.take();
+        b.send(command);
+        b.run_ms(59_000);
+        assert!(!b.text().contains("ok\n"), "{command}: gave up too early");
+        b.run_ms(2_000);
+        assert!(b.take().ends_with("ok\n"), "{command}: still waiting after 61 s");
+    }
+    // A heater that cools as it should is waited for: from 200 °C down to 150 °C.
+    let mut b = Bench::hot(Settings::DEFAULT);
+    b.send("M109 R150\n");
+    b.run_until_ok(1, 600_000);
+    assert!(b.t.plant.temp_c[0] < 151.0, "{}", b.t.plant.temp_c[0]);
+}
+
+/// Regression (a breaking session: `G28 X` answered `ok` and called the axis 0 with the
+/// carriage 195 mm from an endstop that never closed): a move towards the endstop that ends
+/// without it is `Error:Homing Failed` and a halt, as Marlin's `validate_homing_move`.
+#[test]
+fn homing_that_never_meets_its_endstop_halts() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    // The X switch is farther than 1.5 times the travel: the approach ends without it.
+    b.t.endstop_steps[0] = -1_000_000;
+    b.take();
+    b.send("G28 X\n");
+    b.run_ms(60_000);
+    assert_halted(&mut b, "Error:Homing Failed");
 }

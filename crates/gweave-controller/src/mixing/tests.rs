@@ -100,6 +100,9 @@ fn tools_survive_eeprom_and_a_worn_byte_is_noticed() {
     struct Eeprom([u8; 512]);
     impl Io for Eeprom {
         fn send(&mut self, _: &[u8]) {}
+        fn build_settings(&self) -> crate::Settings {
+            crate::Settings::DEFAULT
+        }
         fn eeprom_read(&mut self, addr: u16, buf: &mut [u8]) {
             buf.copy_from_slice(&self.0[usize::from(addr)..usize::from(addr) + buf.len()]);
         }

@@ -112,13 +112,6 @@ impl LineReader {
         self.count = 0;
     }
 
-    /// Whether the line being received (about to end) holds an `M112` (emergency stop), which
-    /// must act at once rather than in its turn, even when the queue is full.
-    pub fn current_is_m112(&self) -> bool {
-        let bytes = self.current.bytes();
-        bytes.windows(5).any(|w| &w[..4] == b"M112" && !w[4].is_ascii_digit()) || bytes.ends_with(b"M112")
-    }
-
     /// Whether a complete line waits.
     pub fn has_line(&self) -> bool {
         self.count > 0
@@ -161,20 +154,6 @@ mod tests {
         assert_eq!(got[0].0.len(), MAX_LINE);
         assert!(got[0].0.starts_with(b"N7 G1 X111"));
         assert_eq!(got[1], (b"M105".to_vec(), false));
-    }
-
-    #[test]
-    fn an_m112_is_seen_before_its_line_ends() {
-        let mut r = LineReader::new();
-        for &b in b"N5 M112*3" {
-            r.push(b);
-        }
-        assert!(r.current_is_m112());
-        r.push(b'\n');
-        for &b in b"M1120 ; M112" {
-            r.push(b);
-        }
-        assert!(!r.current_is_m112());
     }
 
     #[test]
