@@ -83,7 +83,7 @@ impl Controller<'_> {
             (b'G', 0 | 1) => self.linear_move(io, w),
             (b'G', 4) => {
                 let ms = w.get(b'P').unwrap_or(0.0) + w.get(b'S').unwrap_or(0.0) * 1000.0;
-                self.wait = Wait::Moves { then_dwell_ms: ms as u32 };
+                self.wait = Wait::Moves { then_dwell_ms: ms as u32, then_off: 0 };
                 return Some(Done::Quiet);
             }
             (b'G', 28) => {
@@ -110,9 +110,8 @@ impl Controller<'_> {
                     self.heat.all_off();
                     self.fan_duty = 0;
                 }
-                let mask = self.motors(axes_given(w).unwrap_or(self.all_axes()));
-                self.steppers_enabled &= !mask;
-                self.wait = Wait::Moves { then_dwell_ms: 0 };
+                let then_off = self.motors(axes_given(w).unwrap_or(self.all_axes()));
+                self.wait = Wait::Moves { then_dwell_ms: 0, then_off };
                 return Some(Done::Quiet);
             }
             (b'M', 17) => self.steppers_enabled |= self.motors(axes_given(w).unwrap_or(self.all_axes())),
@@ -157,7 +156,7 @@ impl Controller<'_> {
             (b'M', 115) => super::report::firmware(io),
             (b'M', 119) => self.report_endstops(io),
             (b'M', 400) => {
-                self.wait = Wait::Moves { then_dwell_ms: 0 };
+                self.wait = Wait::Moves { then_dwell_ms: 0, then_off: 0 };
                 return Some(Done::Quiet);
             }
             (b'M', 92) => {

@@ -52,8 +52,9 @@ const MIN_COOLING_SLOPE_MS: u32 = 60_000;
 enum Wait {
     /// Nothing: the next line may run.
     Nothing,
-    /// The moves to finish (`M400`, `M84`, `M0`, before `G4`), then maybe a dwell (ms).
-    Moves { then_dwell_ms: u32 },
+    /// The moves to finish (`M400`, `M84`, `M0`, before `G4`), then maybe a dwell (ms), and
+    /// the motors to switch off then (`M84`, `M18`, `M0`: bits of [`Controller::motors`]).
+    Moves { then_dwell_ms: u32, then_off: u8 },
     /// Until this time (ms).
     Dwell { until_ms: u32 },
     /// Heater `heater` to reach its target (`M109`, `M190`); `both_ways`: also to cool down
@@ -265,9 +266,15 @@ impl<'q> Controller<'q> {
         let now = self.inputs.now_ms;
         let done = match self.wait {
             Wait::Nothing => return,
-            Wait::Moves { then_dwell_ms } => {
+            Wait::Moves { then_dwell_ms, then_off } => {
                 if self.moving() {
                     false
+                } else if then_off != 0 {
+                    // The moves have ended: only now do the drivers let go (Marlin's `M84`
+                    // waits with `planner.synchronize()`; a driver off mid-move loses steps).
+                    self.steppers_enabled &= !then_off;
+                    self.wait = Wait::Moves { then_dwell_ms, then_off: 0 };
+                    then_dwell_ms == 0
                 } else if then_dwell_ms > 0 {
                     self.wait = Wait::Dwell { until_ms: now.wrapping_add(then_dwell_ms) };
                     false

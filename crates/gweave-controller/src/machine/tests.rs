@@ -756,3 +756,20 @@ fn homing_that_never_meets_its_endstop_halts() {
     b.run_ms(60_000);
     assert_halted(&mut b, "Error:Homing Failed");
 }
+
+/// Regression (a breaking session: `M84` switched the drivers off at once, while the moves
+/// before it still ran: on the board the X driver was off in 1286 of 2000 samples of the next
+/// second while X stepped): the drivers let go once the moves have ended, as Marlin's `M84`
+/// waits for them.
+#[test]
+fn m84_switches_the_motors_off_after_the_moves() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    let start = b.t.steps[0];
+    b.send("G1 X20 F600\nM84\n");
+    b.run_ms(1000);
+    assert_ne!(b.t.controller.outputs().steppers_enabled & 1, 0, "X let go mid-move");
+    b.run_ms(3000);
+    assert_eq!(b.t.steps[0] - start, 20 * 80, "the whole move");
+    assert_eq!(b.t.controller.outputs().steppers_enabled, 0);
+    assert!(b.take().ends_with("ok\n"));
+}
