@@ -146,9 +146,13 @@ impl Arc {
         if !rules.by_radius {
             return Err(ArcRefusal::RadiusForm);
         }
+        // `R0` is no radius (Marlin reads `R` only when it is not 0).
+        if !(r != 0.0 && r.is_finite()) {
+            return Err(ArcRefusal::NoCentre);
+        }
         let (dx, dy) = (end[0] - start[0], end[1] - start[1]);
         let chord = dx.hypot(dy);
-        if !(chord > 0.0 && chord.is_finite() && r != 0.0 && r.is_finite()) {
+        if !(chord > 0.0 && chord.is_finite()) {
             return Err(ArcRefusal::RadiusWithoutChord);
         }
         let half = chord / 2.0;
@@ -259,7 +263,7 @@ mod tests {
         assert_eq!(arc(Firmware::Klipper, 5.0, false), Err(ArcRefusal::RadiusForm));
         // No centre: R with both ends the same, I and J zero.
         assert_eq!(Arc::from_radius(start, start, 5.0, true, marlin()), Err(ArcRefusal::RadiusWithoutChord));
-        assert_eq!(Arc::from_radius(start, end, 0.0, true, marlin()), Err(ArcRefusal::RadiusWithoutChord));
+        assert_eq!(Arc::from_radius(start, end, 0.0, true, marlin()), Err(ArcRefusal::NoCentre));
         assert_eq!(Arc::from_offset(start, end, [0.0, 0.0], true), Err(ArcRefusal::NoCentre));
     }
 
