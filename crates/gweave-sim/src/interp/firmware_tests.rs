@@ -305,6 +305,11 @@ fn the_emergency_parser_acts_on_the_rows_that_say_urgent() {
     assert!(p.waiting_for_user(), "a quick stop ends no wait");
     feed(&mut p, 3, &["M108"]);
     assert!(!p.waiting_for_user(), "M108 ends the wait at once");
+    // Regression (review of the emergency parser: a line with a comment was not looked at):
+    // the parser reads the command before the comment, as Marlin's does.
+    let mut p = waiting("");
+    p.feed(b"  M108 ; the filament is in\n", &mut |_, _| {});
+    assert!(!p.waiting_for_user(), "M108 with a comment ends the wait");
     // Built without the parser, `M108` waits its turn behind the `M600` it was to end.
     let mut p = waiting("emergency_parser = false\n");
     feed(&mut p, 2, &["M108"]);

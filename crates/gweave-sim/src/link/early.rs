@@ -13,16 +13,16 @@
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, PoisonError};
 
-use super::serial::{command_body, MAX_LINE_BYTES};
+use super::assembly::{urgent_text, Assembler, Scan};
 
 /// At most this many bytes are read ahead while the board is busy: a host that streams more
 /// waits in its own buffer (the socket's or the pty's), as it waits for a board's full receive
 /// buffer; memory stays small whatever it sends.
-const MAX_EARLY_BYTES: usize = 64 * 1024;
+pub(crate) const MAX_EARLY_BYTES: usize = 64 * 1024;
 
 /// Lines received while the board is busy, for its emergency parser: the transport puts, the
-/// board takes. Each is the command as Marlin's parser sees it (comment, leading spaces, `N<n>`
-/// and `*<checksum>` removed).
+/// board takes. Each is an `M` command as Marlin's parser sees it (comment, spaces around it,
+/// `N<n>` and `*<checksum>` removed); other lines cannot be urgent and are not kept.
 #[derive(Debug, Clone, Default)]
 pub struct EarlyLines(Arc<Mutex<VecDeque<Vec<u8>>>>);
 
@@ -40,23 +40,13 @@ impl EarlyLines {
 }
 
 /// The transport's side: bytes read ahead while the board is busy.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-enum Scan {
-    #[default]
-    Normal,
-    Comment,
-    Overflow,
-}
-
 #[derive(Debug, Default)]
 pub(crate) struct Early {
     /// Everything read ahead, for the protocol once the command is answered.
     bytes: Vec<u8>,
-    /// The line being completed, comment excluded, at most [`MAX_LINE_BYTES`].
-    line: Vec<u8>,
-    /// Where the line is: its comment is not looked at, and a line past Marlin's limit is no
-    /// command (the protocol refuses it).
-    scan: Scan,
+    /// Every byte of the host's passes through this assembler, read ahead or not, so that a
+    /// line begun in one way and ended in the other is the line the queue sees.
+    assembler: Assembler,
     lines: EarlyLines,
 }
 
@@ -71,27 +61,33 @@ impl Early {
         MAX_EARLY_BYTES.saturating_sub(self.bytes.len())
     }
 
-    /// Bytes the host sent: kept for the protocol, and each line they complete handed to the
-    /// board.
+    /// Bytes the host sent while the board is busy: kept for the protocol, and each line they
+    /// complete handed to the board.
     pub(crate) fn receive(&mut self, bytes: &[u8]) {
         self.bytes.extend_from_slice(bytes);
+        self.assemble(bytes, true);
+    }
+
+    /// Bytes the host sent while the board was free, which go to the protocol at once: only
+    /// followed, as the board runs the lines they complete in turn.
+    pub(crate) fn follow(&mut self, bytes: &[u8]) {
+        self.assemble(bytes, false);
+    }
+
+    fn assemble(&mut self, bytes: &[u8], hear: bool) {
         for &b in bytes {
-            match (b, self.scan) {
-                (b'\n' | b'\r', scan) => {
-                    let start = self.line.iter().position(|&b| b != b' ').unwrap_or(self.line.len());
-                    let end = self.line.iter().rposition(|&b| b != b' ').map_or(start, |i| i + 1);
-                    let body = command_body(&self.line[start..end]);
-                    if scan != Scan::Overflow && !body.is_empty() {
-                        self.lines.put(body.to_vec());
-                    }
-                    self.line.clear();
-                    self.scan = Scan::Normal;
-                }
-                (_, Scan::Comment | Scan::Overflow) => {}
-                (b';', Scan::Normal) => self.scan = Scan::Comment,
-                (_, Scan::Normal) if self.line.len() >= MAX_LINE_BYTES => self.scan = Scan::Overflow,
-                (_, Scan::Normal) => self.line.push(b),
+            if !self.assembler.push(b) {
+                continue;
             }
+            let text = urgent_text(&self.assembler.line);
+            // Only an `M` command can be urgent; the others are not kept.
+            if hear
+                && self.assembler.scan != Scan::Overflow
+                && text.first().is_some_and(|c| c.eq_ignore_ascii_case(&b'M'))
+            {
+                self.lines.put(text.to_vec());
+            }
+            self.assembler.restart();
         }
     }
 
@@ -108,8 +104,8 @@ impl Early {
 mod tests {
     use super::*;
 
-    /// Each completed line reaches the board as the emergency parser reads it, in any chunking;
-    /// every byte is kept for the protocol; a half line waits for its end.
+    /// Each completed `M` line reaches the board as the emergency parser reads it, in any
+    /// chunking; every byte is kept for the protocol; a half line waits for its end.
     #[test]
     fn lines_reach_the_board_as_they_complete_and_the_bytes_stay_for_the_queue() {
         let lines = EarlyLines::default();
@@ -120,23 +116,35 @@ mod tests {
         assert_eq!(lines.take(), [b"M112".to_vec(), b"M108".to_vec()]);
         assert_eq!(early.take_bytes(), b"N5 M112*23\n  M108 ; go on\r\n;only a comment\nG1 X");
         assert!(early.take_bytes().is_empty());
-        early.receive(b"1\n");
-        assert_eq!(lines.take(), [b"G1 X1".to_vec()]);
+        // Lines that cannot be urgent are not kept for the board.
+        early.receive(b"1\nm105 \nG4 P1\n");
+        assert_eq!(lines.take(), [b"m105".to_vec()]);
         // A line the board did not hear while busy goes to the queue only.
         early.receive(b"M108\n");
-        assert_eq!(early.take_bytes(), b"1\nM108\n");
+        assert_eq!(early.take_bytes(), b"1\nm105 \nG4 P1\nM108\n");
         assert!(lines.take().is_empty());
     }
 
-    /// A host that streams while the board is busy is read up to a bound, and a line past
-    /// Marlin's limit is no command.
+    /// Regression (review of the emergency parser during paced waits: a line begun in the
+    /// bytes read ahead and ended in bytes the board read itself stayed half in the early
+    /// assembler, so the next `M112` completed `G1 XM112`, or, after a `;`, was skipped as a
+    /// comment): the bytes the board reads while free are followed too.
     #[test]
-    fn reading_ahead_is_bounded() {
+    fn a_line_cut_between_the_read_ahead_and_the_board_leaves_no_half_line_behind() {
+        for (ahead, free) in [(&b"G1 X"[..], &b"1\n"[..]), (b"G1 X1 ; a comment", b" to its end\n")] {
+            let lines = EarlyLines::default();
+            let mut early = Early::new(lines.clone());
+            early.receive(ahead);
+            early.take_bytes();
+            early.follow(free);
+            early.receive(b"M112\n");
+            assert_eq!(lines.take(), [b"M112".to_vec()], "{:?}", String::from_utf8_lossy(ahead));
+        }
+        // What the board reads while free is never handed to it early.
         let lines = EarlyLines::default();
         let mut early = Early::new(lines.clone());
-        early.receive(&vec![b'X'; 10_000]);
-        assert_eq!(early.room(), MAX_EARLY_BYTES - 10_000);
-        early.receive(b"\n");
-        assert!(lines.take().is_empty());
+        early.follow(b"M108\nM11");
+        early.receive(b"2\n");
+        assert_eq!(lines.take(), [b"M112".to_vec()]);
     }
 }

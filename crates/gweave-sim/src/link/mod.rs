@@ -5,6 +5,7 @@
 //! over in-memory pipes. [`transport`] runs it in real time over an endpoint: a pseudo-terminal
 //! ([`pty`]) that looks like a USB serial port, or a loopback TCP socket ([`tcp`]) as network
 //! printers and OctoPrint's `socket://` URLs use.
+pub(crate) mod assembly;
 pub(crate) mod early;
 pub(crate) mod pty;
 pub(crate) mod serial;

@@ -9,10 +9,10 @@
 //! transports only move bytes ([`crate::link::transport`]), so everything here is tested over
 //! in-memory buffers.
 //!
-//! Line assembly, per byte: `\n` or `\r` ends a line; `;` starts a comment that runs to the end of
-//! the line and is dropped before anything else looks at the line; a line keeps at most
-//! [`MAX_LINE_BYTES`] bytes (Marlin's `MAX_CMD_SIZE` 96 less the terminating NUL). An empty line or
-//! a comment-only line gets no reply at all, as in Marlin.
+//! Line assembly ([`crate::link::assembly`]), per byte: `\n` or `\r` ends a line; `;` starts a
+//! comment that runs to the end of the line and is dropped before anything else looks at the
+//! line; a line keeps at most [`MAX_LINE_BYTES`] bytes (Marlin's `MAX_CMD_SIZE` 96 less the
+//! terminating NUL). An empty line or a comment-only line gets no reply at all, as in Marlin.
 //!
 //! A line whose first non-space byte is `N` is checked, in Marlin's order:
 //! 1. the number after `N` (for a line containing `M110`, after the first `N` past its fourth
@@ -82,6 +82,7 @@ use gweave::gcode::lexer::parse_into;
 use gweave::Block;
 
 use crate::interp::{lookup, Link};
+use crate::link::assembly::{command_body, urgent_text, Assembler, Scan};
 use crate::link::early::EarlyLines;
 
 /// The longest line Marlin keeps: `MAX_CMD_SIZE` (96) less the NUL terminator.
@@ -204,16 +205,6 @@ pub struct LinkStats {
     pub busy: u64,
 }
 
-/// Where the line assembler is inside the current line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Scan {
-    Normal,
-    /// After `;`: drop bytes up to the end of the line.
-    Comment,
-    /// Past [`MAX_LINE_BYTES`]: drop bytes, refuse the line.
-    Overflow,
-}
-
 /// What the line-number check decided.
 enum Verdict {
     Accept(i64),
@@ -225,8 +216,7 @@ enum Verdict {
 pub struct Protocol<D> {
     device: D,
     config: ProtocolConfig,
-    line: Vec<u8>,
-    scan: Scan,
+    assembler: Assembler,
     /// Marlin's `last_N`: the last line number accepted (or set by M110).
     last_n: i64,
     halted: bool,
@@ -249,8 +239,7 @@ impl<D: Device> Protocol<D> {
         Protocol {
             device,
             config,
-            line: Vec::with_capacity(MAX_LINE_BYTES),
-            scan: Scan::Normal,
+            assembler: Assembler::new(),
             last_n: 0,
             halted: false,
             stats: LinkStats::default(),
@@ -284,12 +273,8 @@ impl<D: Device> Protocol<D> {
         hold: &mut dyn FnMut(f64, f64),
     ) {
         for &b in bytes {
-            match (b, self.scan) {
-                (b'\n' | b'\r', _) => self.end_line(out, hold),
-                (_, Scan::Comment | Scan::Overflow) => {}
-                (b';', Scan::Normal) => self.scan = Scan::Comment,
-                (_, Scan::Normal) if self.line.len() >= MAX_LINE_BYTES => self.scan = Scan::Overflow,
-                (_, Scan::Normal) => self.line.push(b),
+            if self.assembler.push(b) {
+                self.end_line(out, hold);
             }
         }
     }
@@ -361,21 +346,21 @@ impl<D: Device> Protocol<D> {
     }
 
     fn end_line(&mut self, out: &mut dyn FnMut(f64, &str), hold: &mut dyn FnMut(f64, f64)) {
-        let scan = std::mem::replace(&mut self.scan, Scan::Normal);
+        let scan = self.assembler.scan;
         // A line of nothing but blanks (after its comment is gone) is an empty line.
-        if self.line.iter().all(u8::is_ascii_whitespace) {
-            self.line.clear();
+        if self.assembler.line.iter().all(u8::is_ascii_whitespace) {
+            self.assembler.restart();
             return;
         }
         if self.user_wait.is_some() {
             self.during_user_wait(scan, out, hold);
             return;
         }
-        let line = std::mem::take(&mut self.line);
+        let line = std::mem::take(&mut self.assembler.line);
         self.accept(&line, scan, out, hold);
         // Give the buffer back so that assembling lines allocates nothing in the long run.
-        self.line = line;
-        self.line.clear();
+        self.assembler.line = line;
+        self.assembler.restart();
     }
 
     /// A line that arrives while a command waits for the user (`M600`): the command queue is
@@ -388,10 +373,10 @@ impl<D: Device> Protocol<D> {
         out: &mut dyn FnMut(f64, &str),
         hold: &mut dyn FnMut(f64, f64),
     ) {
-        let line = std::mem::take(&mut self.line);
-        let start = line.iter().position(|&b| b != b' ').unwrap_or(line.len());
-        if scan == Scan::Normal {
-            self.device.emergency(command_body(&line[start..]), out);
+        let line = std::mem::take(&mut self.assembler.line);
+        self.assembler.restart();
+        if scan != Scan::Overflow {
+            self.device.emergency(urgent_text(&line), out);
         }
         // A full receive buffer loses what does not fit, as a board's does.
         if self.waiting_lines.len() < MAX_HELD_LINES {
@@ -564,21 +549,6 @@ impl Keepalive {
             self.next_s += self.interval_s;
         }
     }
-}
-
-/// The command of an accepted line: without its `N<n>` and, on a numbered line, without its
-/// `*<checksum>` (what Marlin's parser skips).
-pub(super) fn command_body(cmd: &[u8]) -> &[u8] {
-    if cmd.first() != Some(&b'N') {
-        return cmd;
-    }
-    let end = cmd.iter().rposition(|&b| b == b'*').unwrap_or(cmd.len());
-    let number_end =
-        cmd[1..].iter().position(|b| !(b.is_ascii_digit() || *b == b'-')).map_or(cmd.len(), |i| i + 1);
-    let body = &cmd[number_end.min(end)..end];
-    let first = body.iter().position(|&b| b != b' ').unwrap_or(body.len());
-    let last = body.iter().rposition(|&b| b != b' ').map_or(first, |i| i + 1);
-    &body[first..last]
 }
 
 /// The checksum check of a numbered line: `None` when it passes. The XOR runs over every byte

@@ -260,7 +260,7 @@ fn a_20_mb_line_is_refused_without_being_buffered() {
     }
     // Nothing is answered before the line ends, and the line buffer never grew past Marlin's.
     assert!(log.is_empty());
-    assert!(p.line.capacity() <= MAX_LINE_BYTES, "{}", p.line.capacity());
+    assert!(p.assembler.line.capacity() <= MAX_LINE_BYTES, "{}", p.assembler.line.capacity());
     let log = send(&mut p, "\nM105\n");
     assert_eq!(texts(&log), ["Error:Line too long, Last Line: 0", "ok", "ok T:20.00 /0.00"]);
     assert_eq!(p.device().ran, ["M105"]);

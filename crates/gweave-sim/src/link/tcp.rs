@@ -282,6 +282,40 @@ mod tests {
         assert!(killed.heaters.iter().all(|h| h.target_c == 0.0), "{:?}", killed.heaters);
     }
 
+    /// Regression (review of the emergency parser during paced waits): a line whose start was
+    /// read ahead during a paced dwell and whose end the board read itself, once free, left the
+    /// early assembler inside a comment, and the `M108` sent during the next heating wait was
+    /// skipped as part of it: the wait ran its whole 4.2 s of wall time.
+    #[test]
+    fn tcp_a_line_cut_across_a_paced_reply_leaves_the_emergency_parser_listening() {
+        use crate::interp::Machine;
+        use crate::profile::MachineProfile;
+        let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
+        let addr = endpoint.local_addr().unwrap();
+        let options = ServeOptions { speed: Some(20.0), ..ServeOptions::default() };
+        let make = || Machine::new(MachineProfile::default());
+        let (summary, _, ()) = serving(&mut endpoint, make, &options, None, || {
+            let (mut host, mut reader) = connect(addr);
+            lines_through(&mut reader, "echo:Machine:");
+            // A 6 s dwell is 0.3 s of wall time: the half line arrives while its `ok` waits.
+            host.write_all(b"G4 S6\n").unwrap();
+            std::thread::sleep(Duration::from_millis(100));
+            host.write_all(b"M117 cut ; a comment").unwrap();
+            lines_through(&mut reader, "ok");
+            std::thread::sleep(Duration::from_millis(100));
+            host.write_all(b" that ends here\n").unwrap();
+            lines_through(&mut reader, "ok");
+            host.write_all(b"M109 S200\n").unwrap();
+            lines_through(&mut reader, " T:");
+            let sent = Instant::now();
+            host.write_all(b"M108\n").unwrap();
+            let got = lines_through(&mut reader, "ok");
+            let waited = sent.elapsed();
+            assert!(waited < Duration::from_millis(1500), "{waited:?} for {got:?}");
+        });
+        summary.unwrap();
+    }
+
     #[test]
     fn refuses_non_loopback() {
         let addr: SocketAddr = "0.0.0.0:0".parse().unwrap();

@@ -181,6 +181,9 @@ where
                 let Some(p) = link.as_mut() else { continue };
                 // The quiet time before these bytes, lived first: an M105 reads the present.
                 clock.catch_up(p, &mut out, endpoint);
+                // The emergency parser sees every byte: a line begun here may end in bytes read
+                // ahead while the board is busy.
+                out.early.follow(&buf[..n]);
                 feed(p, &buf[..n], &mut out, endpoint, &mut received, options.speed, stop);
                 clock.busy();
             }
@@ -563,6 +566,42 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A host that always has more to send.
+    struct Flood {
+        asked: usize,
+    }
+
+    impl Endpoint for Flood {
+        fn wait(&mut self, buf: &mut [u8], _: Duration) -> io::Result<Event> {
+            self.asked += buf.len();
+            buf.fill(b'X');
+            Ok(Event::Data(buf.len()))
+        }
+
+        fn send(&mut self, _: &[u8], _: &AtomicBool) -> io::Result<()> {
+            Ok(())
+        }
+
+        fn hang_up(&mut self) {}
+    }
+
+    /// A host that streams while a reply waits for its time is read up to the bound and then
+    /// left waiting in its own buffer: memory stays small whatever it sends.
+    #[test]
+    fn reading_ahead_stops_at_its_bound() {
+        let stop = AtomicBool::new(false);
+        let mut out = Output::new(Some(1.0), None, &stop);
+        let mut host = Flood { asked: 0 };
+        for _ in 0..100 {
+            out.read_ahead(&mut host, Duration::ZERO);
+        }
+        assert_eq!(host.asked, crate::link::early::MAX_EARLY_BYTES);
+        assert_eq!(out.early.take_bytes().len(), crate::link::early::MAX_EARLY_BYTES);
+        // Once the board has taken them, reading goes on.
+        out.read_ahead(&mut host, Duration::ZERO);
+        assert_eq!(host.asked, crate::link::early::MAX_EARLY_BYTES + 4096);
+    }
 
     #[test]
     fn log_a_150_mb_line_is_cut_to_its_head_and_length() {
