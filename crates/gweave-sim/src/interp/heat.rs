@@ -78,6 +78,10 @@ impl Machine {
             .collect::<Vec<_>>();
         for id in ids {
             self.wait_heater(id, WaitMode::HeatOnly, out);
+            // The emergency parser's `M108` ends the whole command, not one heater's wait.
+            if !self.host.wait_for_heatup || self.halt.is_some() {
+                break;
+            }
         }
     }
 

@@ -369,6 +369,24 @@ fn out_of_range_parameters_are_refused_uniformly() {
     assert_eq!(m.report().warning_counts.get("refused"), Some(&3));
 }
 
+/// Regression (review of the emergency parser during paced waits: `M108` ended only the first
+/// heater's wait of an `M116`, which went on to wait for the bed): the command ends, and the
+/// targets stay.
+#[test]
+fn m108_ends_the_whole_m116_wait() {
+    let mut m = machine();
+    run(&mut m, "M104 S200\nM140 S60");
+    let early = crate::link::early::EarlyLines::default();
+    m.listen(early.clone());
+    let mut host = crate::link::early::Early::new(early);
+    host.receive(b"M108\n");
+    let before_s = m.now_s();
+    run(&mut m, "M116");
+    assert!(m.now_s() - before_s < 1.0, "waited {} s", m.now_s() - before_s);
+    assert_eq!(m.thermal().target(HeaterId::Hotend(0)).unwrap(), 200.0);
+    assert_eq!(m.thermal().target(HeaterId::Bed).unwrap(), 60.0);
+}
+
 #[test]
 fn rrf_tool_temperature_and_m116() {
     let mut m = machine();
