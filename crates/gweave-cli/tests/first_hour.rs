@@ -189,6 +189,33 @@ fn check_takes_the_bed_of_a_machine_profile() {
     assert!(ramps.contains(":4:4: warning: move outside the bed: X=250.000 mm"), "{ramps}");
 }
 
+/// Regression (review of `check`'s long-extrusion warning: `--machine` took the profile's bed
+/// but always held moves to Marlin's shipped 200 mm): the profile's `[firmware]
+/// extrude_max_mm` is the limit, as `sim` holds moves to it; 0 is no limit.
+#[test]
+fn check_holds_extrusion_to_the_machine_profiles_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("load.gcode");
+    std::fs::write(&file, "M104 S215\nM83\nG1 E250 F300\n").unwrap();
+    let check = |extrude_max: &str| {
+        let machine = dir.path().join(format!("m{extrude_max}.toml"));
+        std::fs::write(&machine, format!("[firmware]\nextrude_max_mm = {extrude_max}\n")).unwrap();
+        let out = gweave(&["check", file.to_str().unwrap(), "--machine", machine.to_str().unwrap()]);
+        text(&out.stdout)
+    };
+    let short = check("100");
+    assert!(
+        short.contains(
+            ":3:4: warning: a move feeding 250.000 mm of filament: marlin skips the E of a move past 100 mm"
+        ),
+        "{short}"
+    );
+    for no_warning in ["300", "0"] {
+        let said = check(no_warning);
+        assert!(said.contains("3 lines, 0 errors, 0 warnings"), "{no_warning}: {said}");
+    }
+}
+
 /// `raster` counts 800 us after every fire (the InkShield library waits that long after each
 /// spray) but the virtual printer counted nothing for a fire: on a sphere `sim` came out
 /// 2 min 48 s shorter than the raster's own figure. And `raster --machine` planned its time on

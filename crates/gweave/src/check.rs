@@ -222,7 +222,7 @@ impl CheckPass {
             return;
         }
         if let Err(RefusedWord { letter, refusal }) = ranges.check(block, ctx.line.bytes, ctx.state.motion) {
-            let column = block.word(letter).map_or(0, |w| w.span.start as usize);
+            let column = column_of(block, letter);
             let OutOfRange { name: word, value, range } = refusal;
             let finding = Finding::OutOfRange(Box::new(WordOutOfRange { word, value, range }));
             self.add(ctx.line.number, Diagnostic::at(column, finding));
@@ -354,7 +354,7 @@ impl Pass for CheckPass {
                 let e = m.e_mm();
                 if e > 0.0 && !ctx.state.thermal.hotend_set && !self.cold_reported {
                     self.cold_reported = true;
-                    let col = block.word(b'E').map_or(0, |w| w.span.start as usize);
+                    let col = column_of(block, b'E');
                     self.add(n, Diagnostic::at(col, Finding::ExtrusionBeforeHeating));
                 }
                 if let Some(bed) = self.options.bed {
@@ -364,7 +364,7 @@ impl Pass for CheckPass {
                         let v = if bed.contains(axis, lo) { hi } else { lo };
                         if !bed.contains(axis, v) {
                             let letter = AXIS_LETTERS[axis];
-                            let col = block.word(letter).map_or(0, |w| w.span.start as usize);
+                            let col = column_of(block, letter);
                             self.add(
                                 n,
                                 Diagnostic::at(
@@ -375,10 +375,8 @@ impl Pass for CheckPass {
                         }
                     }
                 }
-                if let Some(limit) = self.extrusion_limit(ctx.state.options().firmware, m) {
-                    let letter = ctx.state.options().firmware.extrusion_letter();
-                    let col = block.word(letter).map_or(0, |w| w.span.start as usize);
-                    self.add(n, Diagnostic::at(col, limit));
+                if let Some(limit) = self.extrusion_limit(ctx.state.options().firmware, e, m) {
+                    self.add(n, Diagnostic::at(column_of(block, b'E'), limit));
                 }
                 if ctx.state.relative_e() {
                     self.relative_e_since_reset_mm += e.abs();
@@ -404,8 +402,8 @@ impl Pass for CheckPass {
                 let firmware = ctx.state.options().firmware;
                 // At the R word when the radius is the cause, else at the command.
                 let col = match refusal {
-                    ArcRefusal::NoCentre | ArcRefusal::Relative => 0,
-                    _ => block.word(b'R').map_or(0, |w| w.span.start as usize),
+                    ArcRefusal::NoCentre | ArcRefusal::Relative => block.command_span.start as usize,
+                    _ => column_of(block, b'R'),
                 };
                 let arc = RefusedArc { firmware, refusal: *refusal };
                 self.add(n, Diagnostic::at(col, Finding::ArcRefused(Box::new(arc))));
@@ -425,10 +423,10 @@ impl CheckPass {
     /// `PREVENT_LENGTHY_EXTRUDE` (`Marlin/src/module/planner.cpp`: the E part is dropped with
     /// `echo: too long extrusion prevented`), Klipper's `max_extrude_only_distance` on an
     /// extrude-only or retraction move (`klippy/kinematics/extruder.py`, `check_move`: "Extrude
-    /// only move too long", which stops the print). One comparison for every other move.
+    /// only move too long", which stops the print). One comparison for every other move, whose
+    /// filament `e` (mm) the caller has read.
     #[inline]
-    fn extrusion_limit(&self, firmware: Firmware, m: &crate::gcode::effect::Move) -> Option<Finding> {
-        let e = m.e_mm();
+    fn extrusion_limit(&self, firmware: Firmware, e: f64, m: &crate::gcode::effect::Move) -> Option<Finding> {
         let max_mm = match firmware {
             Firmware::Marlin => self.options.marlin_extrude_max_mm,
             Firmware::Klipper => self.options.klipper_extrude_only_max_mm,
@@ -445,6 +443,11 @@ impl CheckPass {
             max_mm: max_mm as f32,
         })
     }
+}
+
+/// Where the word `letter` starts in the line, for a finding about it (0, the line, without one).
+fn column_of(block: &Block, letter: u8) -> usize {
+    block.word(letter).map_or(0, |w| w.span.start as usize)
 }
 
 /// A figure as the finding shows it, to the micrometre (JSON keeps it a number).
@@ -592,7 +595,8 @@ mod tests {
     /// of the firmware the file is read for.
     #[test]
     fn an_arc_the_firmware_refuses_is_an_error_where_its_cause_is() {
-        let text = "G1 X0 Y0\nG2 X10 Y0\nG2 X10 Y0 R4\nG3 X0 Y0 R-5\n";
+        // Numbered, as a host sends it: the command is not the line's start.
+        let text = "G1 X0 Y0\nN2 G2 X10 Y0\nG2 X10 Y0 R4\nG3 X0 Y0 R-5\n";
         let read_as = |firmware: Firmware| {
             let found = findings_for(text, firmware);
             assert!(found.iter().all(|f| f.2 == Severity::Error), "{found:?}");
@@ -600,11 +604,11 @@ mod tests {
         };
         let no_centre =
             "refuses this arc, and the machine does not move: an arc needs R or a non-zero I or J";
-        assert_eq!(read_as(Firmware::Marlin), [(2, 1, format!("marlin {no_centre}"))]);
+        assert_eq!(read_as(Firmware::Marlin), [(2, 4, format!("marlin {no_centre}"))]);
         assert_eq!(
             read_as(Firmware::RepRapFirmware),
             [
-                (2, 1, format!("reprapfirmware {no_centre}")),
+                (2, 4, format!("reprapfirmware {no_centre}")),
                 (
                     3,
                     11,

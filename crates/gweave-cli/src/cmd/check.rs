@@ -30,7 +30,7 @@ pub struct CheckArgs {
     #[arg(long, value_name = "X,Y,Z|X0,Y0,X1,Y1[,Z]", value_parser = |s: &str| s.parse::<Bed>().map_err(|e| e.to_string()))]
     pub bed: Option<Bed>,
     /// The bed of this machine profile (a TOML file or a built-in name, `gweave machine list`):
-    /// its `[bed]` travel, as `sim` holds moves to it.
+    /// its `[bed]` travel, as `sim` holds moves to it, and its `[firmware] extrude_max_mm`.
     #[arg(long, value_name = "TOML|NAME", conflicts_with = "bed")]
     pub machine: Option<PathBuf>,
     /// Feed rates above this are absurd, mm/min.
@@ -49,11 +49,14 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
         .read_all("INPUT", args.inputs.iter().map(PathBuf::as_path))
         .write("--report", args.report.report.as_deref())
         .check()?;
-    let bed = match &args.machine {
-        Some(m) => Some(load_machine(m)?.bed.to_check()?),
-        None => args.bed,
-    };
-    let options = CheckOptions { bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
+    let mut options =
+        CheckOptions { bed: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
+    if let Some(m) = &args.machine {
+        // The profile's bed, and the longest extrusion its firmware takes (as `sim` holds it).
+        let profile = load_machine(m)?;
+        options.bed = Some(profile.bed.to_check()?);
+        options.marlin_extrude_max_mm = f64::from(profile.firmware.extrude_max_mm);
+    }
     let mut reports = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {
         let mut bar = args.report.quiet.bar();
