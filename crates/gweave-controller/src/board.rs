@@ -143,8 +143,8 @@ pub fn write_enables<P: Pin>(drivers: &[Driver<P>], steppers_enabled: u8) {
 pub trait Board: Io {
     /// The next byte the serial line received, if any (from the receive interrupt's buffer).
     fn receive(&mut self) -> Option<u8>;
-    /// The byte `ahead` places after the next one in the receive buffer, if received, left
-    /// there: the emergency parser hears what waits behind a full line queue.
+    /// The byte at `ahead` in the receive buffer (0: the next one), if received, left there:
+    /// the emergency parser hears what waits behind a full line queue.
     fn peek(&self, ahead: usize) -> Option<u8>;
     /// The clock, the thermistors' latest readings and the endstops, read for one turn.
     fn inputs(&mut self) -> Inputs;
@@ -251,7 +251,8 @@ mod tests {
     fn every_byte_is_heard_once_however_it_arrives() {
         let queue = StepQueue::new();
         let mut controller = Controller::new(&queue, Settings::DEFAULT);
-        let text = b"G4 S10\nM105\nM112\n";
+        // More lines than the line queue holds: the `M112` waits behind a full queue.
+        let text = b"G4 S10\nM105\nM105\nM105\nM105\nM105\nM112\n";
         let mut board = Racing {
             buffer: RefCell::default(),
             arriving: RefCell::new(text.iter().copied().collect()),
@@ -264,6 +265,12 @@ mod tests {
             heard = hear_and_queue(&mut controller, &mut board, heard);
             assert!(heard <= board.buffer.borrow().len());
         }
+        // Everything arrived and was heard; what the queue could not take waits in the buffer,
+        // the end of the text, in order (the rest was queued, each byte once).
+        assert!(board.arriving.borrow().is_empty());
+        let waiting: Vec<u8> = board.buffer.borrow().iter().copied().collect();
+        assert_eq!(heard, waiting.len());
+        assert!(waiting.len() >= b"M112\n".len() && text.ends_with(&waiting), "{waiting:?}");
         controller.poll(&mut board, &inputs);
         assert!(controller.is_halted());
         assert!(std::str::from_utf8(&board.sent).unwrap().contains("Error:Printer halted. kill() called!"));

@@ -36,8 +36,10 @@
 //! // Power on: `start`, and the settings kept in EEPROM (none here: the defaults stay).
 //! let inputs = Inputs { now_ms: 0, adc: [1000, 1000, 1000], endstops: 0 };
 //! controller.boot(&mut board, &inputs);
-//! // The main loop: bytes from the UART, then one turn of the machine.
+//! // The main loop: bytes from the UART, each heard by the emergency parser as it arrives
+//! // (`M112` acts even behind a full queue), then queued; then one turn of the machine.
 //! for &b in b"N1 G1 X1 F600*48\n" {
+//!     controller.hear(b);
 //!     assert!(controller.receive(b)); // `false`: the line queue is full, offer it again later
 //! }
 //! controller.poll(&mut board, &inputs);
@@ -57,8 +59,10 @@
 //!
 //! # How a line travels
 //!
-//! 1. [`Controller::receive`] collects bytes into lines ([`serial::reader`], bounded; a line too
-//!    long or with bytes no G-code has is refused, never executed in part).
+//! 1. [`Controller::hear`] gives each byte to the emergency parser as it arrives
+//!    ([`serial::emergency`]: `M112` kills, `M108` ends a heating wait, before any queue);
+//!    [`Controller::receive`] collects bytes into lines ([`serial::reader`], bounded; a line
+//!    too long or with bytes no G-code has is refused, never executed in part).
 //! 2. [`Controller::poll`] takes one line when the machine can take it, checks its line number
 //!    and checksum ([`serial::protocol`]), parses all its words ([`gcode::words`]: the whole
 //!    line is checked before anything changes, as GRBL does), and runs the command

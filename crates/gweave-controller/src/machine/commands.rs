@@ -345,9 +345,10 @@ impl Controller<'_> {
     }
 
     /// `M104`/`M109`, `M140`/`M190`: `S` the target (and for the waits, `R` a target to reach
-    /// both ways, heating or cooling).
+    /// both ways, heating or cooling). As Marlin's `M109`, `S` wins over `R`, and a letter
+    /// without a number is not there.
     fn set_temperature(&mut self, w: &Words, heater: usize, wait: bool, now_ms: u32) -> Done {
-        let target = w.get(b'R').or(w.get(b'S'));
+        let target = w.get(b'S').or(w.get(b'R'));
         if let Some(t) = target {
             self.heat.set_target(&self.settings, heater, t, now_ms);
         }
@@ -356,7 +357,7 @@ impl Controller<'_> {
             let (cooled_from_c, check_ms) = (f32::INFINITY, self.inputs.now_ms);
             // A heater index is below `HEATERS` (3).
             let heater = heater as u8;
-            self.wait = Wait::Heat { heater, both_ways: w.has(b'R'), cooled_from_c, check_ms };
+            self.wait = Wait::Heat { heater, both_ways: w.get(b'S').is_none(), cooled_from_c, check_ms };
             // An `M108` heard before the wait began does not end it (Marlin sets
             // `wait_for_heatup` as the wait starts).
             self.continue_heard = false;

@@ -10,6 +10,8 @@
 //! 3. towards it again at half speed: the switch is met more gently, so the place it closes at
 //!    is repeatable to a step or two.
 //!
+//! A bump distance of 0 leaves out moves 2 and 3: the first touch is the origin.
+//!
 //! The axes home one after the other in the settings' order (by default Z, Y, X, the
 //! controller document's order; Marlin homes X, Y, Z), each only if named on the line, all
 //! three if none is.
@@ -61,6 +63,11 @@ impl Homing {
             c.planner.add(target, feed_mm_s, if stop_at_endstop { 1 << axis } else { 0 }, &s, &mut c.mixer);
         };
         self.phase += 1;
+        // Without a bump distance the first touch is the origin: there is nothing to back off
+        // (Marlin's `homeaxis` skips both moves when `HOMING_BUMP_MM` is 0).
+        if self.phase == 2 && round_i32(s.homing_bump_mm[axis] * s.steps_per_mm[axis]) == 0 {
+            self.phase = 4;
+        }
         match self.phase {
             1 => go(c, -1.5 * s.travel_mm[axis], feed_mm_s, true),
             2 => go(c, s.homing_bump_mm[axis], feed_mm_s, false),

@@ -424,6 +424,20 @@ fn g28_homes_in_the_settings_order_z_y_x_by_default() {
     assert_eq!(homing_sequence([0, 1, 2]), [0, 1, 2]);
 }
 
+/// Regression (review of the homing failure: with `homing_bump_mm` 0, which a printer file may
+/// set, the second touch had no steps, so no move found the switch and every `G28` halted the
+/// board with `Error:Homing Failed`): the first touch is the origin.
+#[test]
+fn g28_without_a_bump_homes_at_the_first_touch() {
+    let mut b = Bench::new(Settings { homing_bump_mm: [0.0; 4], ..Settings::DEFAULT });
+    b.t.steps = [4000, 2400, 8000, 0];
+    b.take();
+    b.send("G28\n");
+    b.run_until_ok(1, 60_000);
+    assert!(b.take().ends_with("processing\nok\n"));
+    assert_eq!(b.t.steps_from_home()[..3], [0, 0, 0]);
+}
+
 #[test]
 fn g28_with_one_axis_homes_only_it() {
     let mut b = Bench::new(Settings::DEFAULT);
@@ -741,6 +755,21 @@ fn a_wait_to_cool_below_the_room_gives_up_after_a_minute() {
     b.send("M109 R150\n");
     b.run_until_ok(1, 600_000);
     assert!(b.t.plant.temp_c[0] < 151.0, "{}", b.t.plant.temp_c[0]);
+}
+
+/// Regression (review of the cooling wait: `M109 R S150` waited to cool, for the `R` without a
+/// number, and `M109 R100 S150` took `R`): as Marlin's `M109`, `S` is the target and the wait
+/// only heats; `R` without a number is not there. At 200 °C both answer at once.
+#[test]
+fn m109_with_s_only_heats_whatever_r_says() {
+    for command in ["M109 R S150\n", "M109 R100 S150\n"] {
+        let mut b = Bench::hot(Settings::DEFAULT);
+        b.take();
+        b.send(command);
+        b.run_ms(1_500);
+        assert!(b.take().ends_with("ok\n"), "{command}: waited to cool");
+        assert!(b.t.plant.temp_c[0] > 195.0, "{command}: {}", b.t.plant.temp_c[0]);
+    }
 }
 
 /// Regression (a breaking session: `G28 X` answered `ok` and called the axis 0 with the
