@@ -53,7 +53,6 @@ use crate::link::early::EarlyLines;
 use crate::motion::estimate::{EstimateError, Estimator, ToolChange};
 use crate::motion::speed_trace::SpeedTrace;
 use crate::profile::{FaultSpec, MachineProfile, MachineProfileError};
-use crate::thermal::heater::HeaterId;
 use crate::thermal::protection::ThermalFault;
 use crate::thermal::{Thermal, ThermalError};
 
@@ -635,13 +634,7 @@ impl Machine {
     }
 
     fn heaters_off(&mut self) {
-        let ids = (0..self.thermal.hotend_count())
-            .map(HeaterId::Hotend)
-            .chain(self.profile.thermal.bed.map(|_| HeaterId::Bed));
-        for id in ids.collect::<Vec<_>>() {
-            // Only fails when already halted by a fault, which switched everything off.
-            let _ = self.thermal.set_target(id, 0.0);
-        }
+        self.thermal.all_off();
     }
 
     fn physical_xyz(&self) -> [f64; 3] {

@@ -1,6 +1,7 @@
 use super::motion::rest_to_rest_s;
 use super::*;
 use crate::profile::MachineProfile;
+use crate::thermal::heater::HeaterId;
 use crate::thermal::protection::KILL_LINE;
 
 /// Runs lines, returning the replies and the last outcome.
@@ -367,6 +368,23 @@ fn out_of_range_parameters_are_refused_uniformly() {
         ]
     );
     assert_eq!(m.report().warning_counts.get("refused"), Some(&3));
+}
+
+/// Regression (a new user's trial of `serve`: an `M105` sent just after `M112` said `@:127`,
+/// the heater's power of the last sample): `kill()` switches the heaters' outputs off at once,
+/// as Marlin's `disable_all_heaters` does, and `M81` too.
+#[test]
+fn m112_and_m81_switch_the_heaters_outputs_off_at_once() {
+    for off in ["M112", "M81"] {
+        let mut m = machine();
+        run(&mut m, "M104 S200\nM140 S60\nG4 S5");
+        assert!(m.thermal().power(HeaterId::Hotend(0)).unwrap() > 0);
+        run(&mut m, off);
+        for id in [HeaterId::Hotend(0), HeaterId::Bed] {
+            assert_eq!(m.thermal().power(id).unwrap(), 0, "{off}: {id:?}");
+            assert_eq!(m.thermal().target(id).unwrap(), 0.0, "{off}: {id:?}");
+        }
+    }
 }
 
 /// Regression (review of the emergency parser during paced waits: `M108` ended only the first

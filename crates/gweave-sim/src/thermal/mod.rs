@@ -285,6 +285,20 @@ impl Thermal {
         Ok(())
     }
 
+    /// Every heater off at once, as Marlin's `disable_all_heaters` (`kill()`, `M81`): the
+    /// targets 0 and the outputs low now, not at the next sample (an `M105` just after an
+    /// `M112` said `@:127`).
+    pub fn all_off(&mut self) {
+        self.settle_plants();
+        let now_s = self.now_s;
+        for ch in &mut self.channels {
+            ch.target_c = 0.0;
+            ch.power = 0;
+            ch.control.reset();
+            ch.protection.start_watching(now_s, ch.reading_c, 0.0);
+        }
+    }
+
     /// The current target, C.
     pub fn target(&self, id: HeaterId) -> Result<f64, ThermalError> {
         Ok(self.channel(id)?.target_c)
