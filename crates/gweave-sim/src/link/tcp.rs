@@ -180,6 +180,18 @@ mod tests {
         ended
     }
 
+    /// Runs a server of virtual printers (the default profile) paced at `speed` times real
+    /// time on a free loopback port for the body; the boards of the sessions, as they ended.
+    fn with_virtual_printers(speed: f64, body: impl FnOnce(SocketAddr)) -> Vec<crate::interp::Machine> {
+        let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
+        let addr = endpoint.local_addr().unwrap();
+        let options = ServeOptions { speed: Some(speed), ..ServeOptions::default() };
+        let make = || crate::interp::Machine::new(crate::profile::MachineProfile::default());
+        let (summary, ended, ()) = serving(&mut endpoint, make, &options, None, || body(addr));
+        summary.unwrap();
+        ended
+    }
+
     #[test]
     fn tcp_a_connection_right_after_an_abrupt_close_is_served() {
         with_server(ServeOptions::default(), |addr| {
@@ -245,13 +257,7 @@ mod tests {
     /// its `ok`, and `M112` kills the board, heaters off, as soon as it arrives.
     #[test]
     fn tcp_the_emergency_parser_acts_during_a_paced_heating_wait() {
-        use crate::interp::Machine;
-        use crate::profile::MachineProfile;
-        let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
-        let addr = endpoint.local_addr().unwrap();
-        let options = ServeOptions { speed: Some(20.0), ..ServeOptions::default() };
-        let make = || Machine::new(MachineProfile::default());
-        let (summary, ended, ()) = serving(&mut endpoint, make, &options, None, || {
+        let ended = with_virtual_printers(20.0, |addr| {
             for urgent in ["M108", "M112"] {
                 let (mut host, mut reader) = connect(addr);
                 lines_through(&mut reader, "echo:Machine:");
@@ -271,7 +277,6 @@ mod tests {
                 }
             }
         });
-        summary.unwrap();
         // Each board heated a few seconds of its 84, and the second was killed.
         assert_eq!(ended.len(), 2);
         for board in &ended {
@@ -288,13 +293,7 @@ mod tests {
     /// skipped as part of it: the wait ran its whole 4.2 s of wall time.
     #[test]
     fn tcp_a_line_cut_across_a_paced_reply_leaves_the_emergency_parser_listening() {
-        use crate::interp::Machine;
-        use crate::profile::MachineProfile;
-        let mut endpoint = TcpEndpoint::bind("127.0.0.1:0".parse().unwrap()).unwrap();
-        let addr = endpoint.local_addr().unwrap();
-        let options = ServeOptions { speed: Some(20.0), ..ServeOptions::default() };
-        let make = || Machine::new(MachineProfile::default());
-        let (summary, _, ()) = serving(&mut endpoint, make, &options, None, || {
+        with_virtual_printers(20.0, |addr| {
             let (mut host, mut reader) = connect(addr);
             lines_through(&mut reader, "echo:Machine:");
             // A 6 s dwell is 0.3 s of wall time: the half line arrives while its `ok` waits.
@@ -313,7 +312,6 @@ mod tests {
             let waited = sent.elapsed();
             assert!(waited < Duration::from_millis(1500), "{waited:?} for {got:?}");
         });
-        summary.unwrap();
     }
 
     #[test]
