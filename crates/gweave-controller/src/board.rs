@@ -14,6 +14,7 @@ use core::marker::PhantomData;
 use core::ops::{BitAnd, BitOr, Not};
 use core::ptr::{read_volatile, write_volatile};
 
+use crate::serial::emergency::Heard;
 use crate::{Controller, Inputs, Io, Outputs};
 
 /// One memory-mapped peripheral register of `T` (a byte on the AVR, a word on a Cortex-M):
@@ -143,34 +144,25 @@ pub fn write_enables<P: Pin>(drivers: &[Driver<P>], steppers_enabled: u8) {
 pub trait Board: Io {
     /// The next byte the serial line received, if any (from the receive interrupt's buffer).
     fn receive(&mut self) -> Option<u8>;
-    /// The byte at `ahead` in the receive buffer (0: the next one), if received, left there:
-    /// the emergency parser hears what waits behind a full line queue.
-    fn peek(&self, ahead: usize) -> Option<u8>;
+    /// What the receive interrupt's emergency parser heard since the last call
+    /// ([`crate::serial::emergency`]: it reads each byte as it arrives, even one the full
+    /// buffer has no room for).
+    fn heard(&mut self) -> Heard;
     /// The clock, the thermistors' latest readings and the endstops, read for one turn.
     fn inputs(&mut self) -> Inputs;
     /// Drives the heaters, the fan and the stepper enables as the core asks after a turn.
     fn apply(&mut self, outputs: &Outputs);
 }
 
-/// The bytes received: each heard by the emergency parser once, as it arrives, then queued
-/// while the line queue takes them. `heard` bytes at the front of the board's buffer were heard
-/// before; returns how many are now. Only heard bytes are queued: one the receive interrupt
-/// adds meanwhile is heard at the next turn (queueing it unheard once let the count go wrong
-/// and the parser hear nothing more, so an `M112` waited its turn).
-fn hear_and_queue(controller: &mut Controller<'_>, board: &mut impl Board, mut heard: usize) -> usize {
-    while let Some(byte) = board.peek(heard) {
-        controller.hear(byte);
-        heard += 1;
-    }
-    while heard > 0 {
-        let Some(byte) = board.peek(0) else { break };
+/// The bytes received, into the line queue while it takes them. A byte it refuses (the line it
+/// ends finds the queue full) is kept in `refused` and offered first at the next turn.
+fn queue_received(controller: &mut Controller<'_>, board: &mut impl Board, refused: &mut Option<u8>) {
+    while let Some(byte) = refused.take().or_else(|| board.receive()) {
         if !controller.receive(byte) {
-            break;
+            *refused = Some(byte);
+            return;
         }
-        let _ = board.receive();
-        heard -= 1;
     }
-    heard
 }
 
 /// The main loop, the same on every board: `start` (after `echo:Watchdog Reset` if the
@@ -182,12 +174,11 @@ pub fn run(controller: &mut Controller<'_>, board: &mut impl Board, by_watchdog:
     }
     let inputs = board.inputs();
     controller.boot(board, &inputs);
-    // How many bytes at the front of the receive buffer the emergency parser has heard: each
-    // is heard once, when it arrives, and queued when the line queue has room (a byte the
-    // controller refuses stays in the buffer, offered again after its turn).
-    let mut heard = 0;
+    let mut refused = None;
     loop {
-        heard = hear_and_queue(controller, board, heard);
+        // What the emergency parser heard first: an `M112` behind a full queue acts now.
+        controller.heard(board.heard());
+        queue_received(controller, board, &mut refused);
         let inputs = board.inputs();
         controller.poll(board, &inputs);
         board.apply(&controller.outputs());
@@ -201,22 +192,54 @@ pub fn run(controller: &mut Controller<'_>, board: &mut impl Board, by_watchdog:
 
 #[cfg(test)]
 mod tests {
-    use std::cell::RefCell;
     use std::collections::VecDeque;
     use std::vec::Vec;
 
     use super::*;
+    use crate::serial::emergency::EmergencyParser;
     use crate::{Settings, StepQueue};
 
-    /// A board whose receive interrupt delivers one more byte each time the main loop looks at
-    /// the front of its buffer: bytes arrive between hearing and queueing.
-    struct Racing {
-        buffer: RefCell<VecDeque<u8>>,
-        arriving: RefCell<VecDeque<u8>>,
+    /// A serial line into a receive buffer of `room` bytes, with the emergency parser in its
+    /// receive interrupt, as the boards have it.
+    struct Wire {
+        arriving: VecDeque<u8>,
+        buffer: VecDeque<u8>,
+        room: usize,
+        parser: EmergencyParser,
+        heard: Heard,
         sent: Vec<u8>,
     }
 
-    impl Io for Racing {
+    impl Wire {
+        fn new(text: &[u8], room: usize) -> Wire {
+            let arriving = text.iter().copied().collect();
+            Wire {
+                arriving,
+                buffer: VecDeque::new(),
+                room,
+                parser: EmergencyParser::default(),
+                heard: Heard::default(),
+                sent: Vec::new(),
+            }
+        }
+
+        /// The receive interrupt, for `n` more bytes: each heard, then kept if there is room.
+        fn arrive(&mut self, n: usize) {
+            for _ in 0..n {
+                let Some(b) = self.arriving.pop_front() else { return };
+                self.parser.hear_into(b, &mut self.heard);
+                if self.buffer.len() < self.room {
+                    self.buffer.push_back(b);
+                }
+            }
+        }
+
+        fn replies(&self) -> &str {
+            std::str::from_utf8(&self.sent).unwrap()
+        }
+    }
+
+    impl Io for Wire {
         fn send(&mut self, bytes: &[u8]) {
             self.sent.extend_from_slice(bytes);
         }
@@ -225,17 +248,12 @@ mod tests {
         }
     }
 
-    impl Board for Racing {
+    impl Board for Wire {
         fn receive(&mut self) -> Option<u8> {
-            self.buffer.get_mut().pop_front()
+            self.buffer.pop_front()
         }
-        fn peek(&self, ahead: usize) -> Option<u8> {
-            if ahead == 0 {
-                if let Some(b) = self.arriving.borrow_mut().pop_front() {
-                    self.buffer.borrow_mut().push_back(b);
-                }
-            }
-            self.buffer.borrow().get(ahead).copied()
+        fn heard(&mut self) -> Heard {
+            core::mem::take(&mut self.heard)
         }
         fn inputs(&mut self) -> Inputs {
             Inputs { now_ms: 0, adc: [1000; crate::HEATERS], endstops: 0 }
@@ -243,36 +261,49 @@ mod tests {
         fn apply(&mut self, _: &Outputs) {}
     }
 
-    /// Regression (the breaking session's `M112` behind a full queue, and on the first fix the
-    /// emulated board: bytes that arrived between hearing and queueing were queued unheard, and
-    /// the parser heard nothing after): every byte is heard once, in order, whatever arrives
-    /// when, and an `M112` among them halts the board.
+    /// Regression (review of the emergency parser: the main loop heard only what the receive
+    /// buffer kept, so an `M112` sent behind a full line queue and a full buffer was lost, and
+    /// earlier the breaking session's `M112` waited behind a full queue): the parser hears
+    /// every byte as it arrives, kept or not, and the board halts at its next turn.
     #[test]
-    fn every_byte_is_heard_once_however_it_arrives() {
+    fn an_m112_past_a_full_queue_and_a_full_buffer_halts_the_board() {
         let queue = StepQueue::new();
         let mut controller = Controller::new(&queue, Settings::DEFAULT);
-        // More lines than the line queue holds: the `M112` waits behind a full queue.
-        let text = b"G4 S10\nM105\nM105\nM105\nM105\nM105\nM112\n";
-        let mut board = Racing {
-            buffer: RefCell::default(),
-            arriving: RefCell::new(text.iter().copied().collect()),
-            sent: Vec::new(),
-        };
+        let mut text = b"G4 S10\n".repeat(20);
+        text.extend_from_slice(b"M112\n");
+        let mut board = Wire::new(&text, 32);
         let inputs = board.inputs();
         controller.boot(&mut board, &inputs);
-        let mut heard = 0;
-        for _ in 0..text.len() * 2 {
-            heard = hear_and_queue(&mut controller, &mut board, heard);
-            assert!(heard <= board.buffer.borrow().len());
+        let mut refused = None;
+        // No turn runs a line: the queue fills, then the buffer, then bytes are lost.
+        for _ in 0..20 {
+            board.arrive(8);
+            controller.heard(board.heard());
+            queue_received(&mut controller, &mut board, &mut refused);
         }
-        // Everything arrived and was heard; what the queue could not take waits in the buffer,
-        // the end of the text, in order (the rest was queued, each byte once).
-        assert!(board.arriving.borrow().is_empty());
-        let waiting: Vec<u8> = board.buffer.borrow().iter().copied().collect();
-        assert_eq!(heard, waiting.len());
-        assert!(waiting.len() >= b"M112\n".len() && text.ends_with(&waiting), "{waiting:?}");
+        assert!(board.arriving.is_empty() && board.buffer.len() == 32, "the buffer overflowed");
         controller.poll(&mut board, &inputs);
         assert!(controller.is_halted());
-        assert!(std::str::from_utf8(&board.sent).unwrap().contains("Error:Printer halted. kill() called!"));
+        assert!(board.replies().ends_with("Error:Printer halted. kill() called!\n"), "{}", board.replies());
+    }
+
+    /// A byte the full line queue refuses is offered again at the next turn, not lost: six
+    /// `M105`s through a queue of four, each answered.
+    #[test]
+    fn a_refused_byte_is_offered_again() {
+        let queue = StepQueue::new();
+        let mut controller = Controller::new(&queue, Settings::DEFAULT);
+        let mut board = Wire::new(&b"M105\n".repeat(6), 256);
+        let inputs = board.inputs();
+        controller.boot(&mut board, &inputs);
+        board.arrive(usize::MAX);
+        let mut refused = None;
+        queue_received(&mut controller, &mut board, &mut refused);
+        assert_eq!(refused, Some(b'\n'), "the queue is full before the last lines");
+        for _ in 0..10 {
+            controller.poll(&mut board, &inputs);
+            queue_received(&mut controller, &mut board, &mut refused);
+        }
+        assert_eq!(board.replies().matches("ok T:").count(), 6, "{}", board.replies());
     }
 }

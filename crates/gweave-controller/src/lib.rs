@@ -18,6 +18,7 @@
 //!
 //! ```
 //! use gweave_controller::{Controller, Inputs, Io, Settings, StepQueue, Stepper};
+//! use gweave_controller::serial::emergency::{EmergencyParser, Heard};
 //!
 //! /// What the board does with the core's requests: here, collect the serial output.
 //! struct Board { sent: Vec<u8> }
@@ -36,10 +37,16 @@
 //! // Power on: `start`, and the settings kept in EEPROM (none here: the defaults stay).
 //! let inputs = Inputs { now_ms: 0, adc: [1000, 1000, 1000], endstops: 0 };
 //! controller.boot(&mut board, &inputs);
-//! // The main loop: bytes from the UART, each heard by the emergency parser as it arrives
-//! // (`M112` acts even behind a full queue), then queued; then one turn of the machine.
-//! for &b in b"N1 G1 X1 F600*48\n" {
-//!     controller.hear(b);
+//! // The receive interrupt: each byte heard by the emergency parser as it arrives (`M112`
+//! // acts even behind a full queue), then kept in the receive buffer.
+//! let (mut parser, mut heard) = (EmergencyParser::default(), Heard::default());
+//! let line = b"N1 G1 X1 F600*48\n";
+//! for &b in line {
+//!     parser.hear_into(b, &mut heard);
+//! }
+//! // The main loop: what the parser heard, the bytes into the line queue, one turn.
+//! controller.heard(heard);
+//! for &b in line {
 //!     assert!(controller.receive(b)); // `false`: the line queue is full, offer it again later
 //! }
 //! controller.poll(&mut board, &inputs);
@@ -59,8 +66,9 @@
 //!
 //! # How a line travels
 //!
-//! 1. [`Controller::hear`] gives each byte to the emergency parser as it arrives
-//!    ([`serial::emergency`]: `M112` kills, `M108` ends a heating wait, before any queue);
+//! 1. The board's receive interrupt gives each byte to the emergency parser as it arrives
+//!    ([`serial::emergency`]: `M112` kills, `M108` ends a heating wait, ahead of any queue),
+//!    and the main loop passes on what it heard ([`Controller::heard`]);
 //!    [`Controller::receive`] collects bytes into lines ([`serial::reader`], bounded; a line
 //!    too long or with bytes no G-code has is refused, never executed in part).
 //! 2. [`Controller::poll`] takes one line when the machine can take it, checks its line number

@@ -22,6 +22,7 @@ use std::vec::Vec;
 
 use crate::heat::thermistor::TYPE_1;
 use crate::limits::TICKS_PER_S;
+use crate::serial::emergency::{EmergencyParser, Heard};
 use crate::{Controller, Inputs, Io, Settings, StepQueue, Stepper, AXES, HEATERS, MOTORS};
 
 /// The temperatures behind the thermistor inputs, driven by the heater duties.
@@ -160,6 +161,8 @@ pub struct Twin<'q, P: Plant> {
     /// The controller (the main loop's half).
     pub controller: Controller<'q>,
     stepper: Stepper<'q>,
+    /// The receive interrupt's emergency parser: it hears each byte as it arrives.
+    parser: EmergencyParser,
     /// Serial output and EEPROM.
     pub memory: Memory,
     /// The thermal plant.
@@ -205,6 +208,7 @@ impl<'q, P: Plant> Twin<'q, P> {
         let mut twin = Twin {
             controller: Controller::new(queue, settings),
             stepper: Stepper::new(queue),
+            parser: EmergencyParser::default(),
             // The board's build is what it was given: `M502` restores it.
             memory: Memory { build: settings, ..memory },
             plant,
@@ -225,6 +229,7 @@ impl<'q, P: Plant> Twin<'q, P> {
 
     /// Restarts the core as a reset does (the EEPROM kept, the motors where they are).
     pub fn power_on(&mut self) {
+        self.parser = EmergencyParser::default();
         let inputs = self.inputs();
         self.controller.boot(&mut self.memory, &inputs);
     }
@@ -249,17 +254,29 @@ impl<'q, P: Plant> Twin<'q, P> {
         Inputs { now_ms: self.now_ms() as u32, adc: self.plant.adc(), endstops }
     }
 
-    /// Offers bytes to the core as a UART's receive buffer does: all heard by the emergency
+    /// Offers bytes to the core as a UART does: all heard by the receive interrupt's emergency
     /// parser as they arrive, then queued, the board running while its line queue is full.
     pub fn send(&mut self, bytes: &[u8]) {
+        let mut heard = Heard::default();
         for &b in bytes {
-            self.controller.hear(b);
+            self.parser.hear_into(b, &mut heard);
         }
+        self.controller.heard(heard);
         for &b in bytes {
             while !self.controller.receive(b) {
                 self.run_ms(1);
             }
         }
+    }
+
+    /// One byte off the wire, the board not running meanwhile: heard by the receive
+    /// interrupt's emergency parser, then offered to the line queue. `false` when the queue
+    /// refused it (a full receive buffer then loses it).
+    pub fn arrive(&mut self, byte: u8) -> bool {
+        let mut heard = Heard::default();
+        self.parser.hear_into(byte, &mut heard);
+        self.controller.heard(heard);
+        self.controller.receive(byte)
     }
 
     /// Runs the board for `ms` of its time: the step interrupt when its timer says, the main

@@ -1,13 +1,16 @@
 //! USART1: the serial link to the host.
 //!
-//! Receiving: each byte raises the "receive register not empty" interrupt, whose handler puts
-//! it in a ring buffer; the main loop takes bytes out when it has time (at 250000 baud a byte
+//! Receiving: each byte raises the "receive register not empty" interrupt, whose handler gives
+//! it to the emergency parser (`M112`, `M108`: heard the moment they arrive, even when the
+//! buffer is full, as Marlin's parser in its receive interrupt) and puts it in a ring buffer; the main loop takes bytes out when it has time (at 250000 baud a byte
 //! comes every 40 us, and planning a move or printing a reply takes longer). Sending: the main
 //! loop waits until the transmit register is empty (TXE) and writes the next byte.
 //! Registers: RM0090, "USART register map".
 
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicU8, Ordering};
+
+use gweave_controller::serial::emergency::{EmergencyParser, Heard};
 
 use crate::pins;
 use crate::regs::{nvic_enable, reg, Reg, RCC_APB2ENR};
@@ -38,13 +41,24 @@ struct Ring {
     buf: UnsafeCell<[u8; RX_SIZE]>,
     head: AtomicU8,
     tail: AtomicU8,
+    /// The emergency parser's state: the interrupt's alone.
+    parser: UnsafeCell<EmergencyParser>,
+    /// What it heard ([`Heard::bits`]): the interrupt adds, the main loop takes.
+    heard: AtomicU8,
 }
 
 // SAFETY: one core; a slot is written by the interrupt before `head` moves past it (Release)
-// and read by the main loop after it saw `head` move (Acquire), never both at once.
+// and read by the main loop after it saw `head` move (Acquire), never both at once; `parser`
+// is touched by the interrupt only.
 unsafe impl Sync for Ring {}
 
-static RX: Ring = Ring { buf: UnsafeCell::new([0; RX_SIZE]), head: AtomicU8::new(0), tail: AtomicU8::new(0) };
+static RX: Ring = Ring {
+    buf: UnsafeCell::new([0; RX_SIZE]),
+    head: AtomicU8::new(0),
+    tail: AtomicU8::new(0),
+    parser: UnsafeCell::new(EmergencyParser::new()),
+    heard: AtomicU8::new(0),
+};
 
 /// Set the port up at `baud`, 8N1, with the receive interrupt on. `apb2_hz` is the clock of
 /// the bus USART1 sits on.
@@ -59,8 +73,9 @@ pub fn init(apb2_hz: u32, baud: u32) {
     nvic_enable(crate::start::USART1_INTERRUPT);
 }
 
-/// The receive interrupt: store the byte. With the buffer full it is lost: the host's line
-/// checksum catches the damaged line and it is sent again.
+/// The receive interrupt: the emergency parser hears the byte, then it is stored. With the
+/// buffer full it is lost (heard all the same): the host's line checksum catches the damaged
+/// line and it is sent again.
 ///
 /// # Safety
 /// Called by the core for USART1's interrupt only.
@@ -70,6 +85,12 @@ pub unsafe extern "C" fn receive_interrupt() {
     }
     // Reading DR clears RXNE (and the interrupt).
     let byte = DR.read() as u8;
+    let mut heard = Heard::new();
+    // SAFETY: only this interrupt touches the parser, and it does not interrupt itself.
+    unsafe { (*RX.parser.get()).hear_into(byte, &mut heard) };
+    if heard != Heard::new() {
+        RX.heard.fetch_or(heard.bits(), Ordering::Relaxed);
+    }
     let head = RX.head.load(Ordering::Relaxed);
     let next = head.wrapping_add(1);
     if next != RX.tail.load(Ordering::Acquire) {
@@ -92,13 +113,9 @@ pub fn read() -> Option<u8> {
     Some(byte)
 }
 
-/// The byte `ahead` places after the next one, if received, left in the buffer.
-pub fn peek(ahead: usize) -> Option<u8> {
-    let tail = RX.tail.load(Ordering::Relaxed);
-    let waiting = RX.head.load(Ordering::Acquire).wrapping_sub(tail);
-    // SAFETY: as in `read`: the slot was written before `head` moved past it.
-    (ahead < usize::from(waiting))
-        .then(|| unsafe { (*RX.buf.get())[usize::from(tail.wrapping_add(ahead as u8))] })
+/// What the emergency parser heard since the last call.
+pub fn heard() -> Heard {
+    Heard::from_bits(RX.heard.swap(0, Ordering::Relaxed))
 }
 
 /// Send bytes, each when the transmitter can take it.

@@ -38,6 +38,7 @@ mod config {
 use core::cell::UnsafeCell;
 
 use gweave_controller::board::{self, Pin as _};
+use gweave_controller::serial::emergency::Heard;
 use gweave_controller::{Controller, Inputs, Io, Outputs, StepQueue, Stepper, HEATERS};
 
 /// The Mega's crystal.
@@ -87,8 +88,8 @@ impl board::Board for Ramps {
         uart::read()
     }
 
-    fn peek(&self, ahead: usize) -> Option<u8> {
-        uart::peek(ahead)
+    fn heard(&mut self) -> Heard {
+        uart::heard()
     }
 
     fn inputs(&mut self) -> Inputs {

@@ -1,12 +1,16 @@
 //! USART0: the serial link to the host through the Mega's USB-serial chip.
 //!
-//! Receiving: each byte raises the "receive complete" interrupt, whose handler puts it in a
-//! ring buffer; the main loop takes bytes out when it has time. Without the buffer a byte that
+//! Receiving: each byte raises the "receive complete" interrupt, whose handler gives it to the
+//! emergency parser (`M112`, `M108`: heard the moment they arrive, as Marlin's parser in its
+//! receive interrupt, even when the buffer is full) and puts it in a ring buffer; the main loop
+//! takes bytes out when it has time. Without the buffer a byte that
 //! arrives while the main loop is busy (planning a move, printing a reply) would be overwritten
 //! by the next one after 40 us at 250000 baud. Sending: the main loop waits until the transmit
 //! register is free (UDRE) and writes the next byte; a reply of 30 bytes takes 1.2 ms.
 
 use core::cell::UnsafeCell;
+
+use gweave_controller::serial::emergency::{EmergencyParser, Heard};
 
 use crate::regs::{interrupt_free, UBRR0, UCSR0A, UCSR0B, UCSR0C, UDR0};
 
@@ -27,19 +31,29 @@ const FRAME_8N1: u8 = (1 << 2) | (1 << 1);
 const RX_SIZE: usize = 256;
 
 /// The ring buffer: the interrupt writes at `head`, the main loop reads at `tail`; each side
-/// writes only its own index, so no lock is needed beyond reading the other index once.
+/// writes only its own index, so no lock is needed beyond reading the other index once. The
+/// emergency parser's state is the interrupt's alone; what it heard the main loop takes with
+/// interrupts off.
 struct Ring {
     buf: UnsafeCell<[u8; RX_SIZE]>,
     head: UnsafeCell<u8>,
     tail: UnsafeCell<u8>,
+    parser: UnsafeCell<EmergencyParser>,
+    heard: UnsafeCell<Heard>,
 }
 
 // SAFETY: the firmware has one core; the interrupt and the main loop each own one index, and
-// every access to the other side's index is a single byte read (atomic on the AVR).
+// every access to the other side's index is a single byte read (atomic on the AVR); `parser`
+// is touched by the interrupt only, `heard` by the main loop only with interrupts off.
 unsafe impl Sync for Ring {}
 
-static RX: Ring =
-    Ring { buf: UnsafeCell::new([0; RX_SIZE]), head: UnsafeCell::new(0), tail: UnsafeCell::new(0) };
+static RX: Ring = Ring {
+    buf: UnsafeCell::new([0; RX_SIZE]),
+    head: UnsafeCell::new(0),
+    tail: UnsafeCell::new(0),
+    parser: UnsafeCell::new(EmergencyParser::new()),
+    heard: UnsafeCell::new(Heard::new()),
+};
 
 /// Set the port up at `baud` (250000 or 115200, 8N1) with the receive interrupt on.
 pub fn init(cpu_hz: u32, baud: u32) {
@@ -54,13 +68,16 @@ pub fn init(cpu_hz: u32, baud: u32) {
     });
 }
 
-/// The receive-complete interrupt (vector 25, USART0_RX): store the byte. With the buffer full
-/// it is lost: the host's line checksum catches the damaged line and it is sent again.
+/// The receive-complete interrupt (vector 25, USART0_RX): the emergency parser hears the byte,
+/// then it is stored. With the buffer full it is lost (heard all the same): the host's line
+/// checksum catches the damaged line and it is sent again.
 #[no_mangle]
 pub unsafe extern "avr-interrupt" fn __vector_25() {
     let byte = UDR0.read();
-    // SAFETY: interrupts are off inside the handler; only it writes `head`.
+    // SAFETY: interrupts are off inside the handler; only it writes `head` and the parser, and
+    // the main loop reads `heard` with interrupts off.
     unsafe {
+        (*RX.parser.get()).hear_into(byte, &mut *RX.heard.get());
         let head = *RX.head.get();
         let next = head.wrapping_add(1);
         if next != core::ptr::read_volatile(RX.tail.get()) {
@@ -84,15 +101,10 @@ pub fn read() -> Option<u8> {
     }
 }
 
-/// The byte `ahead` places after the next one, if received, left in the buffer.
-pub fn peek(ahead: usize) -> Option<u8> {
-    // SAFETY: as in `read`: `head` is read once, a single byte; the slots before it are written.
-    unsafe {
-        let tail = *RX.tail.get();
-        let waiting = core::ptr::read_volatile(RX.head.get()).wrapping_sub(tail);
-        (ahead < usize::from(waiting))
-            .then(|| core::ptr::read_volatile(&(*RX.buf.get())[usize::from(tail.wrapping_add(ahead as u8))]))
-    }
+/// What the emergency parser heard since the last call.
+pub fn heard() -> Heard {
+    // SAFETY: with interrupts off the receive interrupt cannot write `heard` meanwhile.
+    interrupt_free(|| unsafe { core::mem::take(&mut *RX.heard.get()) })
 }
 
 /// Send one byte, waiting until the transmitter can take it.

@@ -60,6 +60,24 @@ fn m112_stops_a_move_at_once() {
     assert_eq!(board.plant(0).heater.last_power_w(), 0.0);
 }
 
+/// Regression (review of the emergency parser: the main loop heard only what the 255-byte
+/// receive buffer kept, so an `M112` sent after a buffer's worth of lines was lost): during an
+/// `M109` wait, which holds the line queue, a host streams 600 bytes and then `M112`; the
+/// buffer has long overflowed, and the parser in the receive interrupt hears it all the same.
+#[test]
+fn m112_past_a_full_receive_buffer_halts_the_board() {
+    let mut board = crate::common::booted(Wiring::default());
+    board.send_line("M109 S200");
+    board.run_for(0.2).unwrap();
+    for _ in 0..100 {
+        board.send_line("G4 P1");
+    }
+    board.send_line("M112");
+    board.run_until_line(|l| l == "Error:Printer halted. kill() called!", 1.0).unwrap();
+    board.run_for(1.5).unwrap();
+    assert_safe(&board);
+}
+
 #[test]
 fn a_kilobyte_line_and_binary_garbage_get_errors_and_the_board_carries_on() {
     let mut board = crate::common::booted(Wiring::default());

@@ -21,7 +21,7 @@ mod tests;
 use crate::heat::Heat;
 use crate::mixing::Mixer;
 use crate::planner::Planner;
-use crate::serial::emergency::{EmergencyParser, Urgent};
+use crate::serial::emergency::{Heard, Urgent};
 use crate::serial::out::{line, Reply};
 use crate::serial::protocol::{self, LineError};
 use crate::serial::reader::LineReader;
@@ -109,9 +109,8 @@ pub struct Controller<'q> {
     /// `M155`: the temperatures are printed every so many seconds (0: never; at most 60, so
     /// a byte), next at `next_report_ms` (every second instead while `M109`/`M190` wait).
     auto_report_s: u8,
-    /// The emergency parser, and what it heard: an `M112` (halt before anything else), an
-    /// `M108` (a heating wait ends).
-    emergency_parser: EmergencyParser,
+    /// What the emergency parser heard: an `M112` (halt before anything else), an `M108` (a
+    /// heating wait ends).
     emergency: bool,
     continue_heard: bool,
     halted: bool,
@@ -149,7 +148,6 @@ impl<'q> Controller<'q> {
             busy_since_ms: 0,
             next_report_ms: 0,
             auto_report_s: 0,
-            emergency_parser: EmergencyParser::default(),
             emergency: false,
             continue_heard: false,
             halted: false,
@@ -167,18 +165,16 @@ impl<'q> Controller<'q> {
         self.load_tools(io);
     }
 
-    /// The emergency parser hears one byte, as it arrives and before it is queued
-    /// ([`crate::serial::emergency`]): every byte exactly once, in order, even while the line
-    /// queue is full. An `M112` halts the board at the next turn, an `M108` ends a heating wait.
-    pub fn hear(&mut self, byte: u8) {
-        match self.emergency_parser.hear(byte) {
-            Some(Urgent::Kill) => self.emergency = true,
-            Some(Urgent::Continue) => self.continue_heard = true,
-            None => {}
-        }
+    /// What the board's emergency parser heard as the bytes arrived, ahead of every queue
+    /// ([`crate::serial::emergency`], run by the receive interrupt): an `M112` halts the board
+    /// at the next turn, an `M108` ends a heating wait.
+    pub fn heard(&mut self, heard: Heard) {
+        self.emergency |= heard.has(Urgent::Kill);
+        self.continue_heard |= heard.has(Urgent::Continue);
     }
 
-    /// Takes one byte from the host into the line queue (heard first: [`Controller::hear`]).
+    /// Takes one byte from the host into the line queue (the emergency parser heard it as it
+    /// arrived: [`Controller::heard`]).
     /// Returns `false`, taking nothing, when the byte would end a line and the line queue is
     /// full: offer it again after the next [`Controller::poll`].
     #[must_use = "a byte refused must be offered again, or the line it ends is lost"]

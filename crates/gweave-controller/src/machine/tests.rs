@@ -555,12 +555,10 @@ fn m112_stops_everything_at_once() {
     b.send("M104 S200\nG1 X100 F600\n");
     b.run_ms(500);
     let before = b.t.steps[0];
-    // Queued behind a dwell and a full line queue, M112 still acts at once: the emergency
-    // parser hears every byte as it arrives, its line queued or not (the board's loop hears
-    // what waits in its receive buffer behind a refused byte).
+    // Queued behind a dwell and a full line queue, M112 still acts at once: the receive
+    // interrupt's emergency parser hears every byte as it arrives, its line queued or lost.
     for &byte in b"G4 S10\nG4 S1\nG4 S1\nG4 S1\nG4 S1\nM112\n" {
-        b.t.controller.hear(byte);
-        let _ = b.t.controller.receive(byte);
+        let _ = b.t.arrive(byte);
     }
     b.run_ms(1);
     let t = b.take();

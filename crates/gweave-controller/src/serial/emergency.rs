@@ -4,10 +4,11 @@
 //! the board reading the serial line at all. `M112` (stop everything) and `M108` (stop waiting
 //! for a heater) cannot wait: the host sends them because the board is busy. Marlin's
 //! `EMERGENCY_PARSER` (`Marlin/src/feature/e_parser.h`) reads every byte as it is received,
-//! ahead of the queue, with a small state machine; this is the same machine. The board feeds it
-//! each byte when the byte arrives ([`crate::board::run`] hears what waits in the receive buffer
-//! before it queues any of it), so a queue full of lines does not hide an `M112` behind them.
-//! The line still goes to the queue in its turn, as in Marlin.
+//! ahead of the queue, with a small state machine; this is the same machine. As in Marlin, the
+//! board's receive interrupt feeds it each byte the moment the byte arrives, before it is put
+//! in the receive buffer, so neither a queue full of lines nor a buffer full of bytes hides an
+//! `M112`: what it hears waits as [`Heard`] for the main loop
+//! ([`crate::Controller::heard`]). The line still goes to the queue in its turn, as in Marlin.
 //!
 //! A line is urgent when its command, after an optional line number (`N12 M112*7`), is one of
 //! these, followed by the end of the line, a space, a parameter or the checksum: `M117 Press
@@ -20,6 +21,38 @@ pub enum Urgent {
     Continue,
     /// `M112`: kill the board.
     Kill,
+}
+
+/// The urgent commands heard since the main loop last looked: the receive interrupt adds, the
+/// main loop takes. One byte of RAM.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Heard(u8);
+
+impl Heard {
+    /// Nothing heard (a `const`, for a board's `static`).
+    pub const fn new() -> Heard {
+        Heard(0)
+    }
+
+    /// As one byte, and back: for a board that keeps what its interrupt heard in an atomic.
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+
+    /// See [`Heard::bits`].
+    pub const fn from_bits(bits: u8) -> Heard {
+        Heard(bits)
+    }
+
+    /// `urgent` was heard too.
+    pub fn add(&mut self, urgent: Urgent) {
+        self.0 |= 1 << urgent as u8;
+    }
+
+    /// Whether `urgent` was heard.
+    pub fn has(self, urgent: Urgent) -> bool {
+        self.0 & (1 << urgent as u8) != 0
+    }
 }
 
 /// Where the parser is in the current line.
@@ -45,6 +78,19 @@ pub struct EmergencyParser {
 }
 
 impl EmergencyParser {
+    /// At the start of a line (a `const`, for a board's `static`).
+    pub const fn new() -> EmergencyParser {
+        EmergencyParser { state: State::LineStart }
+    }
+
+    /// Reads one received byte into `heard`: at the end of an urgent line, what to do.
+    #[inline]
+    pub fn hear_into(&mut self, byte: u8, heard: &mut Heard) {
+        if let Some(urgent) = self.hear(byte) {
+            heard.add(urgent);
+        }
+    }
+
     /// Reads one received byte; at the end of an urgent line, what to do.
     pub fn hear(&mut self, byte: u8) -> Option<Urgent> {
         if matches!(byte, b'\n' | b'\r') {
@@ -121,5 +167,22 @@ mod tests {
     fn each_line_is_read_on_its_own() {
         assert_eq!(heard(b"G4 S10\nG4 S1\nM112\nM105\nM108\n"), [Urgent::Kill, Urgent::Continue]);
         assert_eq!(heard(b"M112"), []);
+    }
+
+    /// What the interrupt hears between two looks of the main loop is kept, each kind once.
+    #[test]
+    fn heard_keeps_each_urgent_command_until_taken() {
+        let (mut p, mut heard) = (EmergencyParser::default(), Heard::default());
+        for &b in b"M108\nG1 X1\nM108\n" {
+            p.hear_into(b, &mut heard);
+        }
+        assert!(heard.has(Urgent::Continue) && !heard.has(Urgent::Kill));
+        for &b in b"M112\n" {
+            p.hear_into(b, &mut heard);
+        }
+        assert!(heard.has(Urgent::Continue) && heard.has(Urgent::Kill));
+        // Taken by the main loop, the set starts empty again.
+        assert!(core::mem::take(&mut heard).has(Urgent::Kill));
+        assert_eq!(heard, Heard::default());
     }
 }
