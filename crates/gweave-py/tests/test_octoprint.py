@@ -357,10 +357,12 @@ class Browser:
         return self.call("Runtime.evaluate", expression=expression, returnByValue=True)["result"].get("value")
 
     def wait(self, expression: str, timeout_s: float = 60):
+        """Evaluates `expression` in the page every half second until it is truthy; its value."""
         deadline = time.monotonic() + timeout_s
-        while not self.js(expression):
+        while not (value := self.js(expression)):
             assert time.monotonic() < deadline, f"never true in the page: {expression}"
             time.sleep(0.5)
+        return value
 
     def screenshot(self, path: Path) -> None:
         import base64
@@ -395,12 +397,14 @@ def test_octoprint_page_shows_the_badge_and_settings(octoprint, data, tmp_path):
     try:
         browser.call("Page.navigate", url=octoprint.url)
         # Badges settle once no analysis is running (OctoPrint may analyse a file again, and
-        # its progress label shows until that ends).
-        browser.wait(
+        # its progress label shows until that ends). They are read in the same evaluation as
+        # the condition: read apart, an analysis that began in between once showed its
+        # progress label in the torus' badge (`gweave 15 % gweave 00:12:02`).
+        badges = browser.wait(
             "document.querySelectorAll('.gweave-badge .label').length >= 4"
             " && document.querySelectorAll('.gweave-badge .label-info').length == 0"
+            " && Array.from(document.querySelectorAll('.gweave-badge')).map(e => e.innerText.trim())"
         )
-        badges = browser.js("Array.from(document.querySelectorAll('.gweave-badge')).map(e => e.innerText.trim())")
         t = int(gweave.estimate(data / "cura" / "cura_torus.gcode")["total_s"])  # OctoPrint floors
         torus = f"gweave {t // 3600:02}:{t // 60 % 60:02}:{t % 60:02}"
         assert any(b.startswith(torus) for b in badges), (torus, badges)
