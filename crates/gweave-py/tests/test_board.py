@@ -16,6 +16,7 @@ names it, as `make pytest` does).
 import json
 import os
 import re
+import signal
 import subprocess
 import time
 from pathlib import Path
@@ -100,6 +101,20 @@ def stop_board(proc: subprocess.Popen) -> None:
     if proc.poll() is None:
         proc.kill()
     proc.wait(timeout=30)
+
+
+def test_ctrl_c_ends_the_board_and_removes_its_link(tmp_path):
+    """Regression (a new user's trial: Ctrl-C or a TERM killed `gweave-board` and left its pty
+    link behind, pointing at a terminal that no longer exists): the board ends with status 0 and
+    the link is gone."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        proc, log = start_board(board_binary(), tmp_path, ["--seconds", "600"])
+        try:
+            proc.send_signal(sig)
+            assert proc.wait(timeout=30) == 0, log.read_text()
+            assert not (tmp_path / "ramps").is_symlink()
+        finally:
+            stop_board(proc)
 
 
 def test_board_keeps_running_when_a_host_probes_the_port_without_a_byte(tmp_path):

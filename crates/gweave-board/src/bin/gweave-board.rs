@@ -6,7 +6,8 @@
 //! opening a Mega's USB port does (the serial chip's DTR line pulls RESET low).
 
 use std::path::PathBuf;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
@@ -60,13 +61,18 @@ fn run(args: Args) -> anyhow::Result<()> {
     }
     let mut pty = PtyEndpoint::open(&args.pty).with_context(|| format!("opening {}", args.pty.display()))?;
     eprintln!("gweave-board: {} on {}", args.elf.display(), args.pty.display());
-    let stop = AtomicBool::new(false);
+    // Ctrl-C or a TERM ends the loop, so that the endpoint's drop removes the link (the
+    // default action killed the process and left the link behind).
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(signal, Arc::clone(&stop)).context("installing the signal handler")?;
+    }
     let start = Instant::now();
     let start_board_s = board.now_s();
     let mut buf = [0u8; 512];
     // Bytes the connected host has sent since it opened the port.
     let mut session_bytes = 0usize;
-    loop {
+    while !stop.load(Ordering::Relaxed) {
         if args.seconds.is_some_and(|s| board.now_s() >= s) {
             return Ok(());
         }
@@ -98,6 +104,7 @@ fn run(args: Args) -> anyhow::Result<()> {
             }
         }
     }
+    Ok(())
 }
 
 /// The pins' account of the session: per socket (X, Y, Z, E0, E1) the position in microsteps
