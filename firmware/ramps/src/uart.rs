@@ -103,8 +103,14 @@ pub fn read() -> Option<u8> {
 
 /// What the emergency parser heard since the last call.
 pub fn heard() -> Heard {
-    // SAFETY: with interrupts off the receive interrupt cannot write `heard` meanwhile.
-    interrupt_free(|| unsafe { core::mem::take(&mut *RX.heard.get()) })
+    // SAFETY: with interrupts off the receive interrupt cannot write `heard` meanwhile. Volatile,
+    // so that the compiler cannot move the clearing store past `interrupt_free`'s restoring of
+    // the interrupt flag (a store of 0 after an `M112` heard in between would lose it).
+    interrupt_free(|| unsafe {
+        let heard = core::ptr::read_volatile(RX.heard.get());
+        core::ptr::write_volatile(RX.heard.get(), Heard::new());
+        heard
+    })
 }
 
 /// Send one byte, waiting until the transmitter can take it.

@@ -71,7 +71,7 @@ enum State {
     Ignore,
 }
 
-/// The parser's state: one byte of the board's RAM.
+/// The parser's state: a few bytes of the board's RAM (the code read so far is a `u16`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct EmergencyParser {
     state: State,

@@ -79,13 +79,13 @@ impl Early {
             if !self.assembler.push(b) {
                 continue;
             }
-            let text = urgent_text(&self.assembler.line);
-            // Only an `M` command can be urgent; the others are not kept.
-            if hear
-                && self.assembler.scan != Scan::Overflow
-                && text.first().is_some_and(|c| c.eq_ignore_ascii_case(&b'M'))
-            {
-                self.lines.put(text.to_vec());
+            // Only an `M` command can be urgent; the others are not kept. A line past Marlin's
+            // limit is no command (the protocol refuses it).
+            if hear && self.assembler.scan != Scan::Overflow {
+                let text = urgent_text(&self.assembler.line);
+                if text.first().is_some_and(|c| c.eq_ignore_ascii_case(&b'M')) {
+                    self.lines.put(text.to_vec());
+                }
             }
             self.assembler.restart();
         }
@@ -140,6 +140,11 @@ mod tests {
             early.receive(b"M112\n");
             assert_eq!(lines.take(), [b"M112".to_vec()], "{:?}", String::from_utf8_lossy(ahead));
         }
+        // A line past Marlin's limit is no command, urgent or not, read ahead or not.
+        let lines = EarlyLines::default();
+        let mut early = Early::new(lines.clone());
+        early.receive(format!("M112 {}\nM108\n", "X".repeat(100)).as_bytes());
+        assert_eq!(lines.take(), [b"M108".to_vec()]);
         // What the board reads while free is never handed to it early.
         let lines = EarlyLines::default();
         let mut early = Early::new(lines.clone());

@@ -179,11 +179,11 @@ where
                 last_heard = Instant::now();
                 // Bytes before a connection (a pty buffer from an earlier host) are dropped.
                 let Some(p) = link.as_mut() else { continue };
+                // The emergency parser sees every byte, in order: a line begun here may end in
+                // bytes read ahead while the board is busy (the catching up below may read ahead).
+                out.early.follow(&buf[..n]);
                 // The quiet time before these bytes, lived first: an M105 reads the present.
                 clock.catch_up(p, &mut out, endpoint);
-                // The emergency parser sees every byte: a line begun here may end in bytes read
-                // ahead while the board is busy.
-                out.early.follow(&buf[..n]);
                 feed(p, &buf[..n], &mut out, endpoint, &mut received, options.speed, stop);
                 clock.busy();
             }

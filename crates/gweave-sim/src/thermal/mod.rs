@@ -290,6 +290,8 @@ impl Thermal {
     /// `M112` said `@:127`).
     pub fn all_off(&mut self) {
         self.settle_plants();
+        // An autotune running gave its power back at the next sample.
+        self.autotune = None;
         let now_s = self.now_s;
         for ch in &mut self.channels {
             ch.target_c = 0.0;
