@@ -102,12 +102,14 @@ define fw_image
 endef
 
 # The default printer (firmware/printer.toml), the same printer with a 4-input mixing hotend
-# (firmware/printer-mixing.toml), an inkjet printer (M700 through an InkShield,
-# docs/firmware.md "Inkjet"), and a lathe-type printer (the rotary axis A on E1's socket,
+# (firmware/printer-mixing.toml), with two hotends and extruders (RAMPS "EEB",
+# firmware/printer-eeb.toml), an inkjet printer (M700 through an InkShield, docs/firmware.md
+# "Inkjet"), and a lathe-type printer (the rotary axis A on E1's socket,
 # firmware/printer-rotary.toml, docs/firmware.md "Rotary").
 firmware: firmware-deps
 	$(call fw_image,gweave-ramps,printer.toml,)
 	$(call fw_image,gweave-ramps-mixing,printer-mixing.toml,)
+	$(call fw_image,gweave-ramps-eeb,printer-eeb.toml,)
 	$(call fw_image,gweave-ramps-inkjet,printer.toml,inkjet)
 	$(call fw_image,gweave-ramps-rotary,printer-rotary.toml,rotary)
 

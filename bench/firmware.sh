@@ -23,10 +23,11 @@ sizes() {
   printf "%-26s %7s KB   of 8 KB\n" "RAM left for the stack" "$(kb $((8192 - data - bss)))"
 }
 # The base image (issue 37), and the machines' images (issue 38: a 4-input mixing hotend on E0,
-# E1 and AUX-2; M700 through an InkShield; a lathe's axis A on E1), each against the base.
+# E1 and AUX-2; two hotends and extruders, EEB; M700 through an InkShield; a lathe's axis A
+# on E1), each against the base.
 sizes "$ELF" 64 4 " (Marlin 1.1.9: 63.8 KB, 2.7 KB RAM)"
 read -r btext bdata bbss < <(avr-size "$ELF" | awk 'NR == 2 { print $1, $2, $3 }')
-for image in mixing inkjet rotary; do
+for image in mixing eeb inkjet rotary; do
   elf="$ROOT/firmware/out/gweave-ramps-$image.elf"
   if [ -s "$elf" ]; then
     read -r text data bss < <(avr-size "$elf" | awk 'NR == 2 { print $1, $2, $3 }')

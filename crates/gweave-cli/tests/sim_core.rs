@@ -149,3 +149,35 @@ fn gweave_mix_output_splits_alike_on_the_core_and_the_marlin_model() {
     // The torus has 28 layers: Orange and Pink only, no cyan (E0).
     assert_eq!(core, [0, 31815, 40121, 12189]);
 }
+
+/// Regression (the thirty-second session's breaking session: on the EEB board `T1` was accepted
+/// but every E step went to E0): a real two-extruder PrusaSlicer file, both hotends heated, runs
+/// on the core's EEB board (`--machine gweave-ramps-eeb`) with each extruder's steps equal to
+/// the Marlin model's per tool, exactly, and shown in the summary.
+#[test]
+fn a_two_extruder_file_steps_each_extruder_alike_on_the_core_and_the_marlin_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = repo("tests/data/prusaslicer/pr_screw_2t_trim.gcode");
+    let core_profile = repo("examples/machines/gweave-ramps-eeb.toml");
+    let marlin_profile = dir.path().join("marlin.toml");
+    let profile = std::fs::read_to_string(&core_profile).unwrap();
+    std::fs::write(&marlin_profile, profile.replace("kind = \"gweave\"", "kind = \"marlin\"")).unwrap();
+    let sim = |p: &Path, json: bool| {
+        let mut args = vec!["sim", input.to_str().unwrap(), "--machine", p.to_str().unwrap()];
+        args.extend(json.then_some("--json"));
+        let out = gweave(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        out
+    };
+    let steps = |out: &Output, pointer: &str| -> Vec<u64> {
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let steps = report.pointer(pointer).unwrap_or_else(|| panic!("{pointer} in the report"));
+        steps.as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect()
+    };
+    let core = steps(&sim(&core_profile, true), "/extruder_steps");
+    assert_eq!(core, steps(&sim(&marlin_profile, true), "/steps/tools"));
+    // Four changes each way: both extruders print.
+    assert_eq!(core, [11944, 10570]);
+    let summary = String::from_utf8(sim(&core_profile, false).stdout).unwrap();
+    assert!(summary.contains("  extruder steps  E0 11944 E1 10570\n"), "{summary}");
+}

@@ -119,6 +119,9 @@ pub struct Planner {
     pub position_steps: [i32; AXES],
     /// The same for the rotary axis A (0 without one).
     pub position_a_steps: i32,
+    /// The extruder the moves planned from now on drive: 0, or 1 after `T1` on a board with two
+    /// hotends (RAMPS "EEB"), whose E steps go to the motor after E0's, on E1's socket.
+    pub extruder: u8,
 }
 
 impl Default for Planner {
@@ -147,6 +150,7 @@ impl Planner {
             planned: 0,
             position_steps: [0; AXES],
             position_a_steps: 0,
+            extruder: 0,
         }
     }
 
@@ -237,6 +241,16 @@ impl Planner {
                 if d > 0 {
                     step.dir_bits |= 1 << (E + k);
                 }
+            }
+        } else if self.extruder > 0 {
+            // A second extruder: E's steps and direction go to its motor. E's position stays one
+            // count for both, as Marlin keeps one E position across a tool change: a file's E
+            // values run on from one extruder to the other. (A rotary axis, on the same socket,
+            // is never fitted beside a second hotend: `printer_file`.)
+            let motor = E + usize::from(self.extruder);
+            step.steps[motor] = core::mem::take(&mut step.steps[E]);
+            if step.dir_bits & (1 << E) != 0 {
+                step.dir_bits ^= (1 << E) | (1 << motor);
             }
         }
         // A's motor is E1's socket, which a mixing hotend's input would use: never both
@@ -450,6 +464,25 @@ mod tests {
         let (b, _) = p.pop().unwrap();
         assert_eq!(b.step.steps, [800, 0, 0, 3200, 0, 0, 0]);
         assert_eq!(b.step.events, 3200);
+    }
+
+    #[test]
+    fn the_second_extruders_moves_step_its_own_motor_both_ways() {
+        // `T1` on a board with two hotends: E's steps and direction go to the motor after E0's
+        // (E1's socket), E0 makes none; back on extruder 0 they are E0's again.
+        let mut p = Planner::new();
+        let mut mixer = Mixer::new(0);
+        p.extruder = 1;
+        assert!(p.add([800, 0, 0, 93], 10.0, 0, &Settings::DEFAULT, &mut mixer));
+        let (b, _) = p.pop().unwrap();
+        assert_eq!((b.step.steps, b.step.positive_bits), ([800, 0, 0, 0, 93, 0, 0], 0b1_0001));
+        assert!(p.add([800, 0, 0, 0], 10.0, 0, &Settings::DEFAULT, &mut mixer));
+        let (b, _) = p.pop().unwrap();
+        assert_eq!((b.step.steps, b.step.positive_bits), ([0, 0, 0, 0, 93, 0, 0], 0));
+        p.extruder = 0;
+        assert!(p.add([800, 0, 0, 40], 10.0, 0, &Settings::DEFAULT, &mut mixer));
+        let (b, _) = p.pop().unwrap();
+        assert_eq!((b.step.steps, b.step.positive_bits), ([0, 0, 0, 40, 0, 0, 0], 0b1000));
     }
 
     #[test]

@@ -176,6 +176,7 @@ pub fn read(text: &str) -> Result<PrinterFile, PrinterFileError> {
     let mut file = PrinterFile { baud: 250_000, drivers: 4, settings: Settings::DEFAULT };
     let s = &mut file.settings;
     let mut rotary_line = None;
+    let mut eeb_line = None;
     let mut rotary_invert = false;
     let mut section = String::new();
     let mut seen: Vec<(String, String)> = Vec::new();
@@ -226,7 +227,10 @@ pub fn read(text: &str) -> Result<PrinterFile, PrinterFileError> {
                     return Err(fail("mixing_inputs is 0 (no mixing hotend), 2, 3 or 4".into()))
                 }
                 ("layout", Value::Text(t)) if t == "EFB" => s.hotends = 1,
-                ("layout", Value::Text(t)) if t == "EEB" => s.hotends = 2,
+                ("layout", Value::Text(t)) if t == "EEB" => {
+                    s.hotends = 2;
+                    eeb_line = Some(n);
+                }
                 ("layout", _) => return Err(fail("layout is \"EFB\" or \"EEB\"".into())),
                 ("feed", Value::Text(t)) if t == "nist" => s.rotary.feed = RotaryFeed::Nist,
                 ("feed", Value::Text(t)) if t == "combined" => s.rotary.feed = RotaryFeed::Combined,
@@ -289,12 +293,21 @@ pub fn read(text: &str) -> Result<PrinterFile, PrinterFileError> {
         }
     }
     // The drivers the step interrupt runs: X, Y, Z, E0, and the other inputs of a mixing hotend,
-    // or the rotary axis on E1's socket.
-    file.drivers = 4 + usize::from(s.mixing_inputs.max(1)) - 1;
+    // or the second extruder or the rotary axis on E1's socket.
+    file.drivers = 4 + usize::from(s.mixing_inputs.max(s.hotends).max(1)) - 1;
+    if let (Some(line), true) = (eeb_line, s.mixing_inputs > 0) {
+        let message = "an EEB board's second extruder is on the E1 socket, which a mixing hotend uses";
+        return Err(PrinterFileError { line, message: message.into() });
+    }
     if let Some(line) = rotary_line {
         let fail = |message: &str| PrinterFileError { line, message: message.into() };
         if s.mixing_inputs > 0 {
             return Err(fail("a rotary axis turns the E1 socket's motor, which a mixing hotend uses"));
+        }
+        if s.hotends == 2 {
+            return Err(fail(
+                "a rotary axis turns the E1 socket's motor, which an EEB board's second extruder uses",
+            ));
         }
         if s.rotary.steps_per_deg == Rotary::NONE.steps_per_deg {
             return Err(fail("[rotary] needs steps_per_deg"));
@@ -424,7 +437,8 @@ mod tests {
         assert_eq!(rotary.drivers, 5);
         assert!(rotary.has_rotary() && rotary.settings.rotary.steps_per_deg > 0.0);
         let eeb = read(include_str!("../../../firmware/printer-eeb.toml")).unwrap();
-        assert_eq!(eeb.settings.hotends, 2);
+        // The second extruder's driver, on the E1 socket, is stepped.
+        assert_eq!((eeb.settings.hotends, eeb.drivers), (2, 5));
     }
 
     #[test]
@@ -445,6 +459,9 @@ mod tests {
             err("[heaters]\nthermistor = [1, 5, 1]\n").message,
             "thermistor entries are one of [0, 1]"
         );
+        // Two users of the E1 socket.
+        assert_eq!(err("[board]\nlayout = \"EEB\"\nmixing_inputs = 2\n").line, 2);
+        assert_eq!(err("[board]\nlayout = \"EEB\"\n[rotary]\nsteps_per_deg = 10\n").line, 4);
         assert_eq!(err("[motion]\nhoming_order = \"XXZ\"\n").line, 2);
         assert_eq!(
             err("[motion]\ntravel_mm = [1, 2, 3, 4]\ntravel_mm = [1, 2, 3, 4]\n").message,

@@ -21,6 +21,10 @@
 //!
 //! A mixing hotend (`mixing_inputs`, 2 to 4) runs on the core's mixer (docs/firmware.md,
 //! "Mixing"): the report gives each input's step pulses, the Marlin model's `steps.mixing`.
+//!
+//! Two hotends (two `[[thermal.hotends]]`) are the core's RAMPS "EEB" board: `T1` drives the
+//! second extruder on E1's socket, and the report gives each extruder's step pulses, the
+//! Marlin model's `steps.tools`.
 
 use std::cell::Cell;
 
@@ -75,6 +79,12 @@ pub(crate) fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported>
     }
     if p.rotary.is_some() && p.mixing_inputs > 0 {
         return Err(Unsupported("rotary axis beside a mixing hotend: both need the E1 socket"));
+    }
+    if p.rotary.is_some() && t.hotends.len() == 2 {
+        return Err(Unsupported("rotary axis beside a second hotend: both need the E1 socket"));
+    }
+    if p.mixing_inputs > 0 && t.hotends.len() == 2 {
+        return Err(Unsupported("second hotend beside a mixing hotend: both need the E1 socket"));
     }
     let rotary = match (&p.rotary, m.steps.a_per_deg) {
         (Some(r), Some(steps_per_deg)) => Rotary {
@@ -143,6 +153,15 @@ fn mixing_steps<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> Vec<u6
     twin.pulses[E..E + inputs.min(MIX_INPUTS)].to_vec()
 }
 
+/// Each extruder's step pulses on a board with two hotends (E0's motor, then E1's, the one
+/// after it); empty with one.
+fn extruder_steps<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> Vec<u64> {
+    match twin.controller.settings().hotends {
+        2 => twin.pulses[E..=E + 1].to_vec(),
+        _ => Vec::new(),
+    }
+}
+
 /// The step pulses of X, Y, Z and E, and of the rotary axis if there is one.
 fn step_pulses<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> ([u64; 4], Option<u64>) {
     let axes = core::array::from_fn(|a| twin.pulses[a]);
@@ -200,6 +219,9 @@ pub struct CoreReport {
     /// Step pulses of each input of a mixing hotend, E0 first, both directions counted (the
     /// Marlin model's `steps.mixing`); empty without one.
     pub mixing_steps: Vec<u64>,
+    /// Step pulses of each extruder of a board with two hotends, E0 then E1 (`T1`), both
+    /// directions counted (the Marlin model's `steps.tools`); empty with one.
+    pub extruder_steps: Vec<u64>,
     /// Step pulses of X, Y, Z and E (E0), both directions counted (the Marlin model's
     /// `steps.axes[..4]`).
     pub axis_steps: [u64; 4],
@@ -231,6 +253,7 @@ pub fn run_on_core(
         time_s: 0.0,
         end_steps: [0; 4],
         mixing_steps: Vec::new(),
+        extruder_steps: Vec::new(),
         axis_steps: [0; 4],
         rotary_steps: None,
         halted: false,
@@ -265,6 +288,7 @@ pub fn run_on_core(
     report.time_s = twin.now_ms() as f64 / 1000.0;
     report.end_steps = twin.steps_from_home();
     report.mixing_steps = mixing_steps(&twin);
+    report.extruder_steps = extruder_steps(&twin);
     (report.axis_steps, report.rotary_steps) = step_pulses(&twin);
     report.halted |= twin.controller.is_halted();
     report.errors = String::from_utf8_lossy(&replies)
@@ -324,6 +348,7 @@ impl CoreDevice {
             time_s: self.now_s(),
             end_steps: twin.steps_from_home(),
             mixing_steps: mixing_steps(twin),
+            extruder_steps: extruder_steps(twin),
             axis_steps: step_pulses(twin).0,
             rotary_steps: step_pulses(twin).1,
             halted: twin.controller.is_halted(),
@@ -450,6 +475,7 @@ mod tests {
         let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
         for (machine, printer) in [
             ("gweave-ramps", "printer.toml"),
+            ("gweave-ramps-eeb", "printer-eeb.toml"),
             ("gweave-mixing", "printer-mixing.toml"),
             ("gweave-rotary", "printer-rotary.toml"),
         ] {

@@ -40,6 +40,17 @@ pub fn booted(wiring: Wiring) -> Board {
     board
 }
 
+/// The test image (`make firmware-fault`, built for an "EEB" printer: a second hotend heated
+/// through D9 and read on A15, a second extruder on the E1 socket), booted as `wiring` with D9
+/// wired to hotend 1's heater.
+pub fn eeb_board(wiring: Wiring) -> Board {
+    let mut board = Board::new(&fault_elf(), Wiring { d9: gweave_board::D9::Hotend1, ..wiring }).unwrap();
+    board.run_until_line(|l| l == "start", 1.0).unwrap();
+    // The first full set of oversampled readings.
+    board.run_for(0.2).unwrap();
+    board
+}
+
 /// `N<n> <command>*<checksum>`: a line as a host numbers it (the checksum is the XOR of every
 /// byte before the `*`).
 pub fn numbered(n: u32, command: &str) -> String {

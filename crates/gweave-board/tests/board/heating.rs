@@ -86,23 +86,12 @@ fn m190_s60_heats_the_bed_then_holds_it() {
     assert!(low_c >= 59.0 && peak_c <= 61.0, "held between {low_c} and {peak_c} C");
 }
 
-/// The test image (`make firmware-fault`, built for an "EEB" printer: a second hotend heated
-/// through D9 and read on A15), booted with D9 wired to hotend 1's heater.
-fn eeb_board() -> gweave_board::Board {
-    let wiring = Wiring { d9: gweave_board::D9::Hotend1, ..Wiring::default() };
-    let mut board = gweave_board::Board::new(&crate::common::fault_elf(), wiring).unwrap();
-    board.run_until_line(|l| l == "start", 1.0).unwrap();
-    // The first full set of oversampled readings.
-    board.run_for(0.2).unwrap();
-    board
-}
-
 /// RAMPS "EEB": `M104 T1` heats the second hotend through D9, read back on TEMP_1 (A15), and
 /// `M105` reports both hotends as Marlin does with two (`T0:` `T1:`, `@0:` `@1:`); the first
 /// hotend stays cold.
 #[test]
 fn m104_t1_heats_the_second_hotend_on_an_eeb_board() {
-    let mut board = eeb_board();
+    let mut board = crate::common::eeb_board(Wiring::default());
     assert_eq!(board.command("M104 T1 S200", 1.0).unwrap(), ["ok"]);
     board.run_for(20.0).unwrap();
     let t1_c = board.plant(2).heater.sensor_c();
@@ -120,7 +109,7 @@ fn m104_t1_heats_the_second_hotend_on_an_eeb_board() {
 /// halts the EEB board with Marlin's words for heater 1, every heater off.
 #[test]
 fn an_open_thermistor_on_the_second_hotend_halts_the_eeb_board() {
-    let mut board = eeb_board();
+    let mut board = crate::common::eeb_board(Wiring::default());
     assert_eq!(board.command("M104 T1 S200", 1.0).unwrap(), ["ok"]);
     board.run_for(5.0).unwrap();
     assert!(board.plant(2).heater.last_power_w() > 0.0, "hotend 1 heating before the fault");

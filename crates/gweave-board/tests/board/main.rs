@@ -2,6 +2,7 @@
 //! binary, so the board's tests share one build and run in parallel.
 
 mod common;
+mod extruders;
 mod faults;
 mod heating;
 mod inkjet;

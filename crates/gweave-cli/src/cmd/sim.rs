@@ -98,6 +98,13 @@ fn print_core(out: &mut dyn Write, input: &Path, r: &CoreReport) -> io::Result<(
         }
         writeln!(out)?;
     }
+    if !r.extruder_steps.is_empty() {
+        write!(out, "  extruder steps ")?;
+        for (k, steps) in r.extruder_steps.iter().enumerate() {
+            write!(out, " E{k} {steps}")?;
+        }
+        writeln!(out)?;
+    }
     for error in &r.errors {
         writeln!(out, "  the printer said: {error}")?;
     }

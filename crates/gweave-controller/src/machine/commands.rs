@@ -116,7 +116,13 @@ impl Controller<'_> {
             }
             (b'M', 17) => self.steppers_enabled |= self.motors(axes_given(w).unwrap_or(self.all_axes())),
             (b'M', 104 | 109) => {
-                let heater = if w.get(b'T') == Some(1.0) { HOTEND1 } else { HOTEND0 };
+                // `T` names the hotend; without it, the active extruder's (Marlin's
+                // `get_target_extruder_from_command`).
+                let heater = match w.get(b'T') {
+                    Some(1.0) => HOTEND1,
+                    Some(_) => HOTEND0,
+                    None => self.hotend(),
+                };
                 return Some(self.set_temperature(w, heater, code == 109, now));
             }
             (b'M', 140 | 190) => return Some(self.set_temperature(w, BED, code == 190, now)),
@@ -214,8 +220,11 @@ impl Controller<'_> {
             }
             #[cfg(feature = "inkjet")]
             (b'M', 700) if self.settings.inkjet_heads > 0 => return Some(self.inkjet_command(io, w)),
-            (b'T', 0) => {}
-            (b'T', 1) if crate::heat::Heat::fitted(&self.settings, HOTEND1) => {}
+            // The extruder of the moves planned from now on (on E0's socket, or E1's), and of
+            // the cold-extrusion check. No park, no wait for the moves: Marlin's tool change
+            // without hotend offsets moves nothing, and the moves already planned keep theirs.
+            (b'T', 0) => self.planner.extruder = 0,
+            (b'T', 1) if crate::heat::Heat::fitted(&self.settings, HOTEND1) => self.planner.extruder = 1,
             _ => return None,
         }
         Some(Done::Ok)
@@ -227,7 +236,7 @@ impl Controller<'_> {
     /// Extruding below the settings' minimum hotend temperature is refused as Marlin's
     /// `PREVENT_COLD_EXTRUSION` does: cold plastic does not flow, the extruder would grind the
     /// filament. The move goes without its E part, E counts as moved, and the host hears
-    /// `echo: cold extrusion prevented`.
+    /// `echo: cold extrusion prevented`. The hotend judged is the active extruder's (`T1`).
     ///
     /// On a rotary machine `A` turns the mandrel (degrees) and F follows `G93`/`G94` and the
     /// machine's feed convention ([`crate::rotary`]).
@@ -255,7 +264,7 @@ impl Controller<'_> {
             self.position_a_deg = if relative { self.position_a_deg + v } else { v };
         }
         let target_a = self.target_a_steps();
-        let cold = self.heat.heaters[HOTEND0].temp_c < self.settings.extrude_min_c;
+        let cold = self.heat.heaters[self.hotend()].temp_c < self.settings.extrude_min_c;
         if target[E] != self.planner.position_steps[E] && cold {
             self.planner.position_steps[E] = target[E];
             line(io, b"echo: cold extrusion prevented");
@@ -280,6 +289,22 @@ impl Controller<'_> {
         });
         let target = Target { steps: target, a_steps: target_a, feed, commanded };
         self.planner.add_with_a(&target, 0, &self.settings, &mut self.mixer);
+    }
+
+    /// The steppers of `axes` (bit `1 << axis`): E's stands for every input of a mixing hotend,
+    /// and for both extruders of a board with two hotends.
+    pub(super) fn motors(&self, axes: u8) -> u8 {
+        let inputs = self.mixer.inputs().max(usize::from(self.settings.hotends)).max(1);
+        if axes & (1 << E) != 0 {
+            axes | (((1u16 << (AXES - 1 + inputs)) - 1) as u8 & !((1 << E) - 1))
+        } else {
+            axes
+        }
+    }
+
+    /// The hotend of the active extruder ([`HOTEND0`], or [`HOTEND1`] after `T1`).
+    fn hotend(&self) -> usize {
+        usize::from(self.planner.extruder)
     }
 
     /// Every axis' bit (`1 << axis`), and the rotary axis' (`1 << AXES`, its motor's bit

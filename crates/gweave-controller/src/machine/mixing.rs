@@ -7,7 +7,7 @@ use crate::gcode::words::{Command, Words};
 use crate::limits::{MIX_INPUTS, MIX_TOOLS};
 use crate::mixing::{MixError, MIX_UNITS};
 use crate::serial::out::{line, Reply};
-use crate::{Io, AXES, E};
+use crate::Io;
 
 /// `M165`'s letters, inputs 0 to 3 (Marlin's `A B C D H I`, of which a 4-input hotend uses 4).
 const M165_LETTERS: [u8; MIX_INPUTS] = *b"ABCD";
@@ -47,16 +47,6 @@ impl Controller<'_> {
             r.s(&[b' ', word]).s(b" = ").f2(value).s(b" is out of range: 0.00 to ").f2(high as f32).send(io);
         }
         Done::Ok
-    }
-
-    /// The steppers of `axes` (bit `1 << axis`): E's stands for every input of a mixing hotend.
-    pub(super) fn motors(&self, axes: u8) -> u8 {
-        let inputs = self.mixer.inputs().max(1);
-        if axes & (1 << E) != 0 {
-            axes | (((1u16 << (AXES - 1 + inputs)) - 1) as u8 & !((1 << E) - 1))
-        } else {
-            axes
-        }
     }
 
     pub(super) fn save_tools(&self, io: &mut impl Io) {

@@ -313,6 +313,39 @@ fn a_cold_hotend_does_not_extrude() {
     assert_eq!(b.t.steps[3] - start[3], 93);
 }
 
+/// Regression (the thirty-second session's breaking session: on a two-hotend board `T1` was
+/// accepted but E moves still stepped E0, held to hotend 0's temperature): after `T1` E's
+/// steps go to E1's motor, back to E0's after `T0`, E counting on across the changes as
+/// Marlin's one E position does; the cold-extrusion check and `M104` without `T` are the
+/// active extruder's.
+#[test]
+fn t1_drives_the_second_extruder_on_a_two_hotend_board() {
+    let eeb = Settings { hotends: 2, thermistor: [1, 1, 1], ..Settings::DEFAULT };
+    let mut b = Bench::new(eeb);
+    b.t.plant.temp_c[0] = 200.0;
+    b.run_ms(200);
+    b.take();
+    let start = b.t.steps;
+    // Hotend 1 is cold: its first extrusion is refused, E counting as moved.
+    b.send("G1 E2 F600\nT1\nG1 E3\nM400\n");
+    b.run_until_ok(4, 5000);
+    assert_eq!(b.take(), "ok\nok\necho: cold extrusion prevented\nok\nok\n");
+    assert_eq!((b.t.pulses[3], b.t.pulses[4]), (186, 0));
+    // `M104` without `T` heats the active extruder's hotend.
+    b.send("M104 S215\n");
+    b.run_ms(10);
+    assert_eq!(b.t.controller.heat.heaters[1].target_c, 215.0);
+    assert_eq!(b.t.controller.heat.heaters[0].target_c, 0.0);
+    b.t.plant.temp_c[1] = 200.0;
+    b.run_ms(200);
+    assert_eq!(b.take(), "ok\n");
+    b.send("G1 E6\nT0\nG1 E5\nM400\n");
+    b.run_until_ok(4, 5000);
+    // E1: 3 mm (E 3 to 6); E0: 2 mm forward, then 1 mm back (E 6 to 5).
+    assert_eq!((b.t.pulses[3], b.t.pulses[4]), (186 + 93, 279));
+    assert_eq!(b.t.steps[3] - start[3], 93);
+}
+
 #[test]
 fn a_move_slower_than_the_16_bit_timer_keeps_its_pace() {
     // 0.015 mm of Z at 1 mm/min: 6 steps (the fewest a move plans: MIN_STEPS_PER_SEGMENT)

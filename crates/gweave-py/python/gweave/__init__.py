@@ -152,7 +152,8 @@ def sim(
     The run stops at a halt and at the end of program a profile declares (``[firmware] m0 =
     "seed"``). A profile with ``[firmware] kind = "gweave"`` runs the file on gweave's controller
     core instead, and the report is the core's, as ``gweave sim --json`` prints it: ``lines``,
-    ``time_s``, ``end_steps``, ``mixing_steps``, ``halted`` and ``errors`` (``fault``, the charts
+    ``time_s``, ``end_steps``, ``axis_steps``, ``mixing_steps``, ``extruder_steps`` (two hotends),
+    ``rotary_steps``, ``halted`` and ``errors`` (``fault``, the charts
     and the canvases are the Marlin model's, and refused there).
     """
     if isinstance(fault, str):

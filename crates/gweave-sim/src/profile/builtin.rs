@@ -50,6 +50,7 @@ pub const BUILTIN: &[BuiltinProfile] = &[
     example!("binder-jet"),
     example!("seed-controller", "seed_ntc.csv"),
     example!("gweave-ramps"),
+    example!("gweave-ramps-eeb"),
     example!("gweave-mixing"),
     example!("gweave-rotary"),
 ];
