@@ -46,6 +46,24 @@ fn g28_homes_z_then_y_then_x_against_the_endstops() {
     assert!(report[0].starts_with("X:0.00 Y:0.00 Z:0.00"), "{report:?}");
 }
 
+/// Software endstops on the board: once homed, `G1 X300 Z-3` on the default printer's 200 mm
+/// rails stops X at its end (16 000 steps from the switch) and Z on its switch, and `M211 S0`
+/// lets the next move past.
+#[test]
+fn a_homed_axis_stops_at_the_end_of_its_rail() {
+    let mut board = crate::common::booted(Wiring::default());
+    for line in ["G28", "G1 X300 Z-3 F6000", "M400"] {
+        assert_eq!(board.command(line, 120.0).unwrap().last().unwrap(), "ok", "{line}");
+    }
+    assert_eq!((board.axis(X).position, board.axis(Z).position), (16000, 0));
+    let report = board.command("M114", 1.0).unwrap();
+    assert!(report[0].starts_with("X:200.00 Y:0.00 Z:0.00"), "{report:?}");
+    for line in ["M211 S0", "G1 X201", "M400"] {
+        assert_eq!(board.command(line, 10.0).unwrap().last().unwrap(), "ok", "{line}");
+    }
+    assert_eq!(board.axis(X).position, 16080);
+}
+
 /// `M114` while a long move runs (no `M400` before it): `Count` is where the motors are, the
 /// steps made, behind the planned position, as Marlin's `count_position` (it once printed the
 /// planner's position, where the queued moves end).

@@ -114,6 +114,12 @@ impl Controller<'_> {
                 self.wait = Wait::Moves { then_dwell_ms: 0, then_off };
                 return Some(Done::Quiet);
             }
+            (b'M', 211) => {
+                if let Some(on) = w.get(b'S') {
+                    self.soft_endstops.set_enabled(on != 0.0);
+                }
+                self.soft_endstops.report(io, &self.settings.travel_mm);
+            }
             (b'M', 17) => self.steppers_enabled |= self.motors(axes_given(w).unwrap_or(self.all_axes())),
             (b'M', 104 | 109) => {
                 // `T` names the hotend; without it, the active extruder's (Marlin's
@@ -255,6 +261,7 @@ impl Controller<'_> {
                 self.position_mm[axis] = if relative { self.position_mm[axis] + v } else { v };
             }
         }
+        self.soft_endstops.clamp(&mut self.position_mm, &self.settings.travel_mm);
         // Every axis, named on the line or not: a move too short to plan left its steps to
         // this one (MIN_STEPS_PER_SEGMENT), E's included even if this line has no E.
         let target: [i32; AXES] = core::array::from_fn(|axis| self.target_steps(axis));
@@ -357,6 +364,7 @@ impl Controller<'_> {
     fn set_position(&mut self, w: &Words) {
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
             if let Some(v) = w.get(letter).or((!w.any()).then_some(0.0)) {
+                self.soft_endstops.renamed(axis, self.position_mm[axis], v);
                 self.position_mm[axis] = v;
                 self.anchor(axis);
             }

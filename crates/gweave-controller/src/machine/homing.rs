@@ -76,6 +76,7 @@ impl Homing {
                 // At the endstop: this is 0.
                 c.position_mm[axis] = 0.0;
                 c.planner.position_steps[axis] = 0;
+                c.soft_endstops.homed(axis);
                 self.axes &= !(1 << axis);
                 self.phase = 0;
                 return Ok(self.axes == 0);

@@ -15,6 +15,7 @@ mod inkjet;
 mod mixing;
 mod registry;
 mod report;
+mod soft_endstops;
 #[cfg(test)]
 mod tests;
 
@@ -30,6 +31,7 @@ use crate::stepper::prep::Prep;
 use crate::stepper::{StepQueue, COUNTED_AXES};
 use crate::{Inputs, Io, Outputs, AXES, BED, HEATERS};
 use homing::Homing;
+use soft_endstops::SoftEndstops;
 
 /// Marlin's `DEFAULT_KEEPALIVE_INTERVAL`: while a command runs longer, the host hears
 /// `echo:busy: processing` this often, so it knows the board is alive.
@@ -99,6 +101,8 @@ pub struct Controller<'q> {
     inverse_time: Option<f32>,
     /// Axes whose coordinates are relative (`G91`, and `M83` for E; bit `1 << AXES`: A).
     relative: u8,
+    /// The travel moves are kept within once homed (`M211`).
+    soft_endstops: SoftEndstops,
     feed_mm_s: f32,
     fan_duty: u8,
     steppers_enabled: u8,
@@ -140,6 +144,7 @@ impl<'q> Controller<'q> {
             anchor_a_steps: 0,
             inverse_time: None,
             relative: 0,
+            soft_endstops: SoftEndstops::new(),
             // Marlin's power-on feed rate: 1500 mm/min.
             feed_mm_s: 25.0,
             fan_duty: 0,

@@ -33,6 +33,8 @@ const DWELL_S: (f32, f32) = (0.0, 3600.0);
 const HOTEND: (f32, f32) = (0.0, 1.0);
 /// `M110 N`: the next line's number; printcore's `N-1` starts a print at `N0`.
 const LINE_NUMBER: (f32, f32) = (-1.0, 2_000_000_000.0);
+/// `M211 S`: software endstops off (0) or on (1).
+const ON_OFF: (f32, f32) = (0.0, 1.0);
 /// `M155 S`: seconds between temperature reports, 0 for none (Marlin caps it at 60).
 const AUTO_REPORT_S: (f32, f32) = (0.0, 60.0);
 /// `M205 J`: the junction deviation, mm.
@@ -101,6 +103,7 @@ pub(crate) fn row(letter: u8, code: u16, has: impl Fn(Needs) -> bool) -> Option<
         (b'M', 155) => declared(Nothing, &[(b"S", AUTO_REPORT_S)]),
         (b'M', 204) => declared(Nothing, &[(b"SPRT", SETTING)]),
         (b'M', 205) => declared(Nothing, &[(b"J", JUNCTION_MM)]),
+        (b'M', 211) => declared(Nothing, &[(b"S", ON_OFF)]),
         (b'M', 301) => declared(Nothing, &[(b"PID", GAIN)]),
         // Reports, the fan off, the kill, waiting for the moves, the EEPROM's settings.
         (b'M', 105 | 107 | 108 | 112 | 114 | 115 | 119 | 400 | 500 | 501 | 502 | 503) => {

@@ -177,9 +177,9 @@ fn the_registry_is_exactly_what_the_controller_runs() {
         }
         rows.push(declared_here);
     }
-    // 42 commands everywhere (10 G, 31 M, T0); a mixing hotend adds M163-M165 and the virtual
+    // 43 commands everywhere (10 G, 32 M, T0); a mixing hotend adds M163-M165 and the virtual
     // tools T1-T1000 (the mixer refuses those past its 16), inkjet heads M700, two hotends T1.
-    assert_eq!(rows, [42, 42 + 3 + 1000, 43, 43]);
+    assert_eq!(rows, [43, 43 + 3 + 1000, 44, 44]);
 }
 
 /// Regression: the ranges were checked before knowing whether the machine has the command, so
@@ -381,6 +381,45 @@ fn many_short_moves_add_up_exactly() {
     assert_eq!(b.t.steps[0] - start[0], want((x * 1000.0).round() / 1000.0, 80.0));
     assert_eq!(b.t.steps[1] - start[1], want((y * 1000.0).round() / 1000.0, 80.0));
     assert_eq!(b.t.steps[3] - start[3], want((e * 10000.0).round() / 10000.0, 93.0));
+}
+
+/// Regression (left alone since the thirty-second session: no software endstops, so
+/// `G1 X300` on a 200 mm rail drove the carriage into the frame): once homed, a target past the
+/// rail's ends is clamped to them, as Marlin's `apply_motion_limits`, the position becomes the
+/// clamped one, `G92` renames the ends with the position, and `M211 S0` lets a move past them;
+/// an axis not homed is not clamped.
+#[test]
+fn software_endstops_keep_a_homed_axis_on_its_rail() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.t.steps = [4000, 2400, 8000, 0];
+    b.send("G1 X-20 F6000\nM400\n");
+    b.run_until_ok(2, 20_000);
+    assert_eq!(b.t.steps[0], 4000 - 1600, "before homing X is not clamped");
+    b.send("G28\nG1 X300 Y-5 Z250 F6000\nM400\nM114\n");
+    b.run_until_ok(6, 200_000);
+    assert_eq!(&b.t.steps[..3], &[16000, 0, 80000], "X and Z at the end of their 200 mm, Y at 0");
+    assert!(
+        b.text().ends_with("X:200.00 Y:0.00 Z:200.00 E:0.00 Count X:16000 Y:0 Z:80000\nok\n"),
+        "{}",
+        b.text()
+    );
+    b.take();
+    // Relative moves count from the clamped position.
+    b.send("G91\nG1 X-10\nG90\nM400\nM211\n");
+    b.run_until_ok(5, 20_000);
+    assert_eq!(b.t.steps[0], 15200);
+    let report = "echo:Soft endstops: On  Min:  X0.00 Y0.00 Z0.00   Max:  X200.00 Y200.00 Z200.00\nok\n";
+    assert!(b.take().ends_with(report));
+    // `G92 X0` at X 190: the rail runs from X -190 to X 10.
+    b.send("G92 X0\nG1 X50\nM400\nM211\n");
+    b.run_until_ok(4, 20_000);
+    assert_eq!(b.t.steps[0], 16000);
+    assert!(b.take().contains("Min:  X-190.00 Y0.00 Z0.00   Max:  X10.00 Y200.00"));
+    // Off: the move goes past the end.
+    b.send("M211 S0\nG1 X15\nM400\n");
+    b.run_until_ok(3, 20_000);
+    assert_eq!(b.t.steps[0], 16400);
+    assert!(b.take().starts_with("echo:Soft endstops: Off  Min:"));
 }
 
 #[test]
@@ -652,6 +691,9 @@ fn the_core_fits_the_ram_budget() {
         + core::mem::size_of::<Option<f32>>()
         + 2 * 4
         + 4;
+    // And the software endstops (the homed axes, where each rail starts) and the active
+    // extruder of a two-hotend board, with the planner's alignment on the host (8 bytes).
+    let mixing = mixing + core::mem::size_of::<super::soft_endstops::SoftEndstops>() + 8;
     let size = core::mem::size_of::<Controller>() + core::mem::size_of::<StepQueue>();
     assert!(
         size + core::mem::size_of::<Stepper>() <= 2048 + mixing,
