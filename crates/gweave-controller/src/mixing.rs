@@ -174,6 +174,18 @@ impl Mixer {
         usize::from(self.active)
     }
 
+    /// The largest input's share of the active tool's E steps (1 without a mixing hotend): the
+    /// most one motor feeds of a move's E.
+    pub fn largest_share(&self) -> f32 {
+        match self.inputs {
+            0 => 1.0,
+            _ => {
+                f32::from(self.tools[usize::from(self.active)].iter().copied().max().unwrap_or(0))
+                    / f32::from(MIX_UNITS)
+            }
+        }
+    }
+
     /// Tool `t`'s mix.
     pub fn tool(&self, t: usize) -> Mix {
         self.tools[t]

@@ -118,6 +118,8 @@ pub const KEYS: &[(&str, &str, Kind)] = &[
     ("heaters", "thermistor", Kind::Bytes { field: |s| &mut s.thermistor, allowed: &[0, 1] }),
     ("heaters", "hotend_pid", Kind::Pid { field: |s| &mut s.hotend_pid }),
     ("heaters", "max_temp_c", Kind::Floats { field: |s| &mut s.max_temp_c, min: 0.0, max: 400.0 }),
+    ("heaters", "extrude_min_c", Kind::Float { field: |s| &mut s.extrude_min_c, min: 0.0, max: 400.0 }),
+    ("motion", "extrude_max_mm", Kind::Float { field: |s| &mut s.extrude_max_mm, min: 0.0, max: 10_000.0 }),
     // The rotary axis A on the E1 socket (docs/firmware.md, "Rotary"): steps per degree of the
     // mandrel, its speed and acceleration limits, and what F means on a move that turns it.
     (
@@ -348,7 +350,7 @@ impl PrinterFile {
              homing_order: {:?},\n    homing_bump_mm: {:?},\n    invert_dir: {:#09b},\n    \
              endstop_inverting: {:#05b},\n    hotends: {},\n    thermistor: {:?},\n    \
              hotend_pid: {c}::settings::Pid {{ kp: {kp:?}, ki: {ki:?}, kd: {kd:?} }},\n    \
-             extrude_min_c: {:?},\n    max_temp_c: {:?},\n    mixing_inputs: {},\n    inkjet_heads: {},\n    \
+             extrude_min_c: {:?},\n    extrude_max_mm: {:?},\n    max_temp_c: {:?},\n    mixing_inputs: {},\n    inkjet_heads: {},\n    \
              rotary: {c}::rotary::Rotary {{ steps_per_deg: {steps_per_deg:?}, max_feed_deg_s: {max_feed_deg_s:?}, \
              max_accel_deg_s2: {max_accel_deg_s2:?}, feed: {c}::rotary::RotaryFeed::{feed:?} }},\n}};\n",
             s.steps_per_mm,
@@ -367,6 +369,7 @@ impl PrinterFile {
             s.hotends,
             s.thermistor,
             s.extrude_min_c,
+            s.extrude_max_mm,
             s.max_temp_c,
             s.mixing_inputs,
             s.inkjet_heads,

@@ -69,6 +69,9 @@ pub struct Settings {
     /// Lowest hotend temperature an extruding move may run at, °C (Marlin's `EXTRUDE_MINTEMP`,
     /// 170); 0 allows cold extrusion.
     pub extrude_min_c: f32,
+    /// Longest extrusion one move may make, mm of filament (Marlin's `EXTRUDE_MAXLENGTH`, 200);
+    /// a longer one is refused as `PREVENT_LENGTHY_EXTRUDE` does. 0 allows any.
+    pub extrude_max_mm: f32,
     /// Highest temperature allowed per heater, °C: above it the machine halts (MAXTEMP).
     pub max_temp_c: [f32; HEATERS],
     /// Inputs of a mixing hotend, 2 to [`crate::limits::MIX_INPUTS`] (E0, E1, ...; see
@@ -104,6 +107,7 @@ impl Settings {
         thermistor: [1, 0, 1],
         hotend_pid: Pid { kp: 22.2, ki: 1.08, kd: 114.0 },
         extrude_min_c: 170.0,
+        extrude_max_mm: 200.0,
         max_temp_c: [275.0, 275.0, 150.0],
         mixing_inputs: 0,
         inkjet_heads: 0,

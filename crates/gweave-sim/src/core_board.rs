@@ -131,6 +131,7 @@ pub(crate) fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported>
         // TEMP_1 only with two hotends either way).
         thermistor: [1, u8::from(t.hotends.len() >= 2), u8::from(t.bed.is_some())],
         extrude_min_c: t.extrude_min_c.unwrap_or(0.0) as f32,
+        extrude_max_mm: p.firmware.extrude_max_mm as f32,
         hotend_pid: gweave_controller::settings::Pid {
             kp: gains.kp as f32,
             ki: gains.ki as f32,

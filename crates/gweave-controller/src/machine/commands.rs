@@ -243,6 +243,11 @@ impl Controller<'_> {
     /// `PREVENT_COLD_EXTRUSION` does: cold plastic does not flow, the extruder would grind the
     /// filament. The move goes without its E part, E counts as moved, and the host hears
     /// `echo: cold extrusion prevented`. The hotend judged is the active extruder's (`T1`).
+    /// An extrusion longer than the settings' `extrude_max_mm` is refused the same way, as
+    /// Marlin's `PREVENT_LENGTHY_EXTRUDE` (`echo: too long extrusion prevented`): a stray digit
+    /// (`E1000` for `E10.00`) would otherwise push half a metre of filament through a nozzle
+    /// that cannot pass it, stripping the filament. On a mixing hotend the limit is on the most
+    /// loaded input's share, as Marlin's.
     ///
     /// On a rotary machine `A` turns the mandrel (degrees) and F follows `G93`/`G94` and the
     /// machine's feed convention ([`crate::rotary`]).
@@ -272,9 +277,17 @@ impl Controller<'_> {
         }
         let target_a = self.target_a_steps();
         let cold = self.heat.heaters[self.hotend()].temp_c < self.settings.extrude_min_c;
-        if target[E] != self.planner.position_steps[E] && cold {
+        let e_steps = target[E].saturating_sub(self.planner.position_steps[E]);
+        let max_mm = self.settings.extrude_max_mm;
+        let too_long = max_mm > 0.0
+            && e_steps.unsigned_abs() as f32 * self.mixer.largest_share()
+                > max_mm * self.settings.steps_per_mm[E];
+        if e_steps != 0 && (cold || too_long) {
             self.planner.position_steps[E] = target[E];
-            line(io, b"echo: cold extrusion prevented");
+            line(
+                io,
+                if cold { b"echo: cold extrusion prevented" } else { b"echo: too long extrusion prevented" },
+            );
         }
         self.steppers_enabled |= self.motors(self.all_axes());
         // A `G93` move before any F (LinuxCNC refuses it) runs at the last `G94` feed.

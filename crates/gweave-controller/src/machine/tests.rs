@@ -346,6 +346,36 @@ fn t1_drives_the_second_extruder_on_a_two_hotend_board() {
     assert_eq!(b.t.steps[3] - start[3], 93);
 }
 
+/// Regression (left alone since the thirty-second session: the controller had no
+/// `EXTRUDE_MAXLENGTH`, so `E1000` for `E10.00` pushed a metre of filament): an extrusion
+/// longer than 200 mm is refused as Marlin's `PREVENT_LENGTHY_EXTRUDE`, E counting as moved;
+/// on a mixing hotend only the most loaded input's share counts; `extrude_max_mm = 0` allows
+/// any.
+#[test]
+fn a_lengthy_extrusion_is_refused() {
+    let mut b = Bench::hot(Settings::DEFAULT);
+    b.take();
+    let start = b.t.steps[3];
+    b.send("G1 X1 E250 F6000\nG1 E260\nM400\n");
+    b.run_until_ok(3, 20_000);
+    assert_eq!(b.take(), "echo: too long extrusion prevented\nok\nok\nok\n");
+    assert_eq!(b.t.steps[3] - start, 930, "only the 10 mm after it");
+    // Four inputs sharing alike: 250 mm of E is 62.5 mm on each.
+    let mut b = Bench::hot(Settings { mixing_inputs: 4, ..Settings::DEFAULT });
+    b.take();
+    b.send("M165 A1 B1 C1 D1\nG1 E250 F6000\nM165 A1\nG1 E500\nM400\n");
+    b.run_until_ok(5, 60_000);
+    // (A 10 s extrusion: the host hears that the board is busy.)
+    let replies = b.take().replace("echo:busy: processing\n", "");
+    assert_eq!(replies, "ok\nok\nok\necho: too long extrusion prevented\nok\nok\n");
+    assert_eq!(b.t.pulses[3..7], [5813, 5812, 5813, 5812]);
+    let mut b = Bench::hot(Settings { extrude_max_mm: 0.0, ..Settings::DEFAULT });
+    b.take();
+    b.send("G1 E250 F6000\nM400\n");
+    b.run_until_ok(2, 60_000);
+    assert_eq!((b.take().replace("echo:busy: processing\n", ""), b.t.pulses[3]), ("ok\nok\n".into(), 23250));
+}
+
 #[test]
 fn a_move_slower_than_the_16_bit_timer_keeps_its_pace() {
     // 0.015 mm of Z at 1 mm/min: 6 steps (the fewest a move plans: MIN_STEPS_PER_SEGMENT)
