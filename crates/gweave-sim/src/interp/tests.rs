@@ -198,6 +198,42 @@ fn injected_cartridge_fault_trips_thermal_runaway() {
     assert_eq!(m.report().thermal_faults.len(), 1);
 }
 
+/// Regression (left alone since the thirty-second session: a thermal fault halted the machine
+/// but the moves the planner still held ran at the end of the run, their time and steps
+/// counted): the fault stops the motors as `M112` does (Marlin's `kill()` after
+/// `quick_stop()`), so the run ends within a move of the fault, and where its executed moves
+/// left the machine.
+#[test]
+fn a_thermal_fault_drops_the_queued_moves() {
+    let p = MachineProfile {
+        faults: vec!["hotend-cartridge-off@300s".parse().unwrap()],
+        ..MachineProfile::default()
+    };
+    let mut m = Machine::new(p).unwrap();
+    let mut stamped = Vec::new();
+    let mut out = |t: f64, l: &str| stamped.push((t, l.to_owned()));
+    assert_eq!(m.execute(b"M109 S200", &mut out), Outcome::Ok);
+    // Ten-millimetre moves of a second each, for longer than the runaway takes to trip.
+    let mut outcome = Outcome::Ok;
+    for i in 0..800 {
+        let line = format!("G1 X{} F600", if i % 2 == 0 { 20 } else { 10 });
+        outcome = m.execute(line.as_bytes(), &mut out);
+        if outcome == Outcome::Halted {
+            break;
+        }
+    }
+    assert_eq!(outcome, Outcome::Halted);
+    m.finish(&mut out);
+    let fault_s = stamped.iter().find(|(_, l)| l.starts_with("Error:Thermal Runaway")).expect("a runaway").0;
+    // A line's executed moves may end after the fault's time; the queued ones (16 s) never run.
+    assert!(m.now_s() - fault_s < 2.0, "halted at {fault_s} s, the run ends at {} s", m.now_s());
+    let x = m.position()[0];
+    let steps = m.report().steps.axes[0];
+    assert!(x == 10.0 || x == 20.0, "X at {x}");
+    // Every X step made is of the moves run: 10 mm (800 steps) each, after the first 20.
+    assert_eq!((steps - 1600) % 800, 0, "{steps} steps");
+}
+
 #[test]
 fn m112_halts_until_m999() {
     let mut m = machine();
