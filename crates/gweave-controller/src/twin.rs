@@ -257,11 +257,7 @@ impl<'q, P: Plant> Twin<'q, P> {
     /// Offers bytes to the core as a UART does: all heard by the receive interrupt's emergency
     /// parser as they arrive, then queued, the board running while its line queue is full.
     pub fn send(&mut self, bytes: &[u8]) {
-        let mut heard = Heard::default();
-        for &b in bytes {
-            self.parser.hear_into(b, &mut heard);
-        }
-        self.controller.heard(heard);
+        self.hear(bytes);
         for &b in bytes {
             while !self.controller.receive(b) {
                 self.run_ms(1);
@@ -273,10 +269,22 @@ impl<'q, P: Plant> Twin<'q, P> {
     /// interrupt's emergency parser, then offered to the line queue. `false` when the queue
     /// refused it (a full receive buffer then loses it).
     pub fn arrive(&mut self, byte: u8) -> bool {
-        let mut heard = Heard::default();
-        self.parser.hear_into(byte, &mut heard);
-        self.controller.heard(heard);
+        self.hear(&[byte]);
         self.controller.receive(byte)
+    }
+
+    /// Bytes heard by the receive interrupt's emergency parser alone, and handed to the main
+    /// loop: for a host link whose own protocol layer refused their line (`gweave serve`'s,
+    /// which checks line numbers and checksums before the core's queue sees a line), as the
+    /// board's parser hears every byte before its queue judges the line. Whether an urgent
+    /// command was heard.
+    pub fn hear(&mut self, bytes: &[u8]) -> bool {
+        let mut heard = Heard::default();
+        for &b in bytes {
+            self.parser.hear_into(b, &mut heard);
+        }
+        self.controller.heard(heard);
+        heard != Heard::default()
     }
 
     /// Runs the board for `ms` of its time: the step interrupt when its timer says, the main
@@ -376,6 +384,11 @@ impl<P: Plant> OwnedTwin<P> {
     /// [`Twin::send`].
     pub fn send(&mut self, bytes: &[u8]) {
         self.twin.send(bytes);
+    }
+
+    /// [`Twin::hear`].
+    pub fn hear(&mut self, bytes: &[u8]) -> bool {
+        self.twin.hear(bytes)
     }
 
     /// [`Twin::run_ms`].

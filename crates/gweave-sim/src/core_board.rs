@@ -389,6 +389,17 @@ impl Device for CoreDevice {
         true
     }
 
+    /// A line the protocol layer refused (too long, a broken checksum): the core's emergency
+    /// parser heard its bytes all the same, and an urgent command acts at the main loop's next
+    /// turn.
+    fn emergency(&mut self, line: &[u8], out: &mut dyn FnMut(f64, &str)) {
+        self.board.hear(line);
+        if self.board.hear(b"\n") {
+            self.board.run_ms(1);
+            self.forward(out);
+        }
+    }
+
     fn idle(&mut self, t_s: f64, out: &mut dyn FnMut(f64, &str)) {
         // The board lives the host's silence (heaters heat, moves end), at most an hour at once.
         let ms = (t_s * 1000.0).clamp(0.0, LINE_LIMIT_MS as f64) as u64;

@@ -13,7 +13,7 @@
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, PoisonError};
 
-use super::assembly::{urgent_text, Assembler, Scan};
+use super::assembly::{urgent_text, Assembler};
 
 /// At most this many bytes are read ahead while the board is busy: a host that streams more
 /// waits in its own buffer (the socket's or the pty's), as it waits for a board's full receive
@@ -80,8 +80,9 @@ impl Early {
                 continue;
             }
             // Only an `M` command can be urgent; the others are not kept. A line past Marlin's
-            // limit is no command (the protocol refuses it).
-            if hear && self.assembler.scan != Scan::Overflow {
+            // limit is heard too: the parser reads bytes, not the queue's lines (the protocol
+            // then refuses it, as the queue does).
+            if hear {
                 let text = urgent_text(&self.assembler.line);
                 if text.first().is_some_and(|c| c.eq_ignore_ascii_case(&b'M')) {
                     self.lines.put(text.to_vec());
@@ -140,11 +141,14 @@ mod tests {
             early.receive(b"M112\n");
             assert_eq!(lines.take(), [b"M112".to_vec()], "{:?}", String::from_utf8_lossy(ahead));
         }
-        // A line past Marlin's limit is no command, urgent or not, read ahead or not.
+        // Regression (the previous session's note: the firmware's parser, in its receive
+        // interrupt, heard `M112` in a line past Marlin's limit, and serve did not): an overlong
+        // line's command is heard, as Marlin's `e_parser.h` reads bytes, not lines.
         let lines = EarlyLines::default();
         let mut early = Early::new(lines.clone());
         early.receive(format!("M112 {}\nM108\n", "X".repeat(100)).as_bytes());
-        assert_eq!(lines.take(), [b"M108".to_vec()]);
+        let heard: Vec<Vec<u8>> = lines.take().iter().map(|l| l[..4].to_vec()).collect();
+        assert_eq!(heard, [b"M112".to_vec(), b"M108".to_vec()]);
         // What the board reads while free is never handed to it early.
         let lines = EarlyLines::default();
         let mut early = Early::new(lines.clone());

@@ -135,7 +135,9 @@ pub trait Device {
     fn waiting_for_user(&self) -> bool {
         false
     }
-    /// The emergency parser's look at a line received while the board waits for the user.
+    /// The emergency parser's look at a line the queue does not run now: one received while
+    /// the board waits for the user, or one the protocol refused (too long, a broken checksum,
+    /// out of order), whose bytes the parser read as they arrived.
     fn emergency(&mut self, _line: &[u8], _out: &mut dyn FnMut(f64, &str)) {}
     /// The rest of the command that waited for the user, once answered.
     fn finish_user_wait(&mut self, _out: &mut dyn FnMut(f64, &str)) {}
@@ -375,9 +377,7 @@ impl<D: Device> Protocol<D> {
     ) {
         let line = std::mem::take(&mut self.assembler.line);
         self.assembler.restart();
-        if scan != Scan::Overflow {
-            self.device.emergency(urgent_text(&line), out);
-        }
+        self.device.emergency(urgent_text(&line), out);
         // A full receive buffer loses what does not fit, as a board's does.
         if self.waiting_lines.len() < MAX_HELD_LINES {
             self.waiting_lines.push_back((line, scan));
@@ -416,8 +416,16 @@ impl<D: Device> Protocol<D> {
         let start = line.iter().position(|&b| b != b' ').unwrap_or(line.len());
         let cmd = &line[start..];
         let numbered = cmd.first() == Some(&b'N');
+        // A line the queue refuses was still read by the emergency parser, byte by byte as it
+        // arrived, as Marlin's (`e_parser.h`) and gweave's firmware's read them: an `M112` too
+        // long for the queue, or with a checksum the line noise broke, stops the board all the
+        // same. (An accepted one runs as the command, to the same end.)
+        let refused = |this: &mut Self, e: LineError, numbered: bool, out: &mut dyn FnMut(f64, &str)| {
+            this.device.emergency(urgent_text(line), out);
+            this.refuse(e, numbered, out);
+        };
         if scan == Scan::Overflow {
-            self.refuse(LineError::TooLong, numbered, out);
+            refused(self, LineError::TooLong, numbered, out);
         } else if !numbered {
             self.run(cmd, out, hold);
         } else {
@@ -430,7 +438,7 @@ impl<D: Device> Protocol<D> {
                     self.stats.duplicates += 1;
                     out(self.device.now_s(), "ok");
                 }
-                Verdict::Refuse(e) => self.refuse(e, true, out),
+                Verdict::Refuse(e) => refused(self, e, true, out),
             }
         }
     }

@@ -432,3 +432,34 @@ fn m109_over_serial_prints_status_with_residency_countdown() {
     assert_eq!(counted, (0..counted.len() as u64).rev().collect::<Vec<_>>(), "{w:?}");
     assert!((9..=10).contains(&counted.len()), "{w:?}");
 }
+
+/// Regression (the previous session's note: gweave's firmware, whose emergency parser reads
+/// each byte in its receive interrupt, stopped at an `M112` the queue then refused, and serve
+/// did not): an `M112` too long for the queue, or whose checksum the line noise broke, stops
+/// the board all the same, as Marlin's `e_parser.h` reads bytes before the queue judges the
+/// line; the queue's refusal still follows. On the virtual printer's Marlin model and on the
+/// controller core alike.
+#[test]
+fn an_m112_the_queue_refuses_still_stops_the_board() {
+    let long = format!("M112 {}\n", "X".repeat(MAX_LINE_BYTES));
+    let broken = "N1 M112*0\n";
+    let marlin = || crate::interp::Machine::new(Default::default()).unwrap();
+    let core = || {
+        let profile = crate::profile::builtin::find("gweave-ramps").unwrap().profile().unwrap();
+        crate::core_board::CoreDevice::new(&profile, Vec::new()).unwrap()
+    };
+    for bytes in [long.as_str(), broken] {
+        let mut p = Protocol::new(marlin(), ProtocolConfig::default());
+        let mut log = Log::new();
+        p.feed(bytes.as_bytes(), &mut |t, l| log.push((t, l.to_string())));
+        let replies = texts(&log);
+        assert_eq!(replies[0], crate::thermal::protection::KILL_LINE, "{bytes:?}: {replies:?}");
+        assert!(replies[1].starts_with("Error:"), "{replies:?}");
+        assert!(p.device().report().halted, "{bytes:?}");
+        let mut p = Protocol::new(core(), ProtocolConfig::default());
+        let mut log = Log::new();
+        p.feed(bytes.as_bytes(), &mut |t, l| log.push((t, l.to_string())));
+        assert!(texts(&log).iter().any(|l| l.contains("kill() called")), "{bytes:?}: {log:?}");
+        assert!(p.device().report("gweave-ramps").halted, "{bytes:?}");
+    }
+}
