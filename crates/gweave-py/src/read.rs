@@ -40,26 +40,31 @@ pub(crate) fn stats_json(
 /// bed the slicer's settings in the file give; `failed` is whether the file fails the check (an
 /// error, or with `strict` a warning: `gweave check`'s exit code 1).
 #[pyfunction]
-#[pyo3(signature = (path, *, bed=None, machine=None, max_feed=None, strict=false))]
+#[pyo3(signature = (path, *, bed=None, machine=None, max_feed=None, klipper_max_extrude_cross_section=None, strict=false))]
 pub(crate) fn check_json(
     py: Python<'_>,
     path: PathBuf,
     bed: Option<BedArg>,
     machine: Option<PathBuf>,
     max_feed: Option<f64>,
+    klipper_max_extrude_cross_section: Option<f64>,
     strict: bool,
 ) -> PyResult<String> {
-    let bed = match (bed, machine) {
+    let mut options = match (bed, machine) {
         (Some(_), Some(_)) => return Err(PyValueError::new_err("give bed or machine, not both")),
-        (None, Some(m)) => {
-            let bed = crate::sim::machine_profile(Some(m))?.bed.to_check();
-            Some(bed.map_err(|e| PyValueError::new_err(format!("machine: {e}")))?)
-        }
-        (bed, None) => bed.map(BedArg::bed).transpose()?,
+        (None, Some(m)) => crate::sim::machine_profile(Some(m))?
+            .check_options(CheckOptions::default())
+            .map_err(|e| PyValueError::new_err(format!("machine: {e}")))?,
+        (bed, None) => CheckOptions { bed: bed.map(BedArg::bed).transpose()?, ..CheckOptions::default() },
     };
-    let mut options = CheckOptions { bed, ..CheckOptions::default() };
     if let Some(f) = in_range("max_feed", max_feed, gweave::range::FEED_MM_MIN)? {
         options.max_feed_mm_min = f;
+    }
+    let cross_section = gweave::range::CROSS_SECTION_MM2;
+    if let Some(mm2) =
+        in_range("klipper_max_extrude_cross_section", klipper_max_extrude_cross_section, cross_section)?
+    {
+        options.klipper.max_extrude_cross_section_mm2 = mm2;
     }
     let report = interruptible(py, || {
         check_file_with(&path, options, Some(&gweave_sim::REGISTRY_RANGES), &mut Quiet)

@@ -70,6 +70,19 @@ def test_check_strict_fails_on_warnings(tmp_path: Path) -> None:
     assert gweave.check(f, bed="250,210,210", strict=True)["failed"] is True
 
 
+def test_check_holds_a_klipper_file_to_its_cross_section_as_the_cli_does(tmp_path: Path) -> None:
+    # A purge of 10 mm of filament over 7 mm: a 3.4 mm² bead, past Klipper's default 0.64 mm²
+    # (4 x the file's 0.4 mm nozzle squared), unless the printer raised it.
+    f = tmp_path / "purge.gcode"
+    f.write_text("; gcode_flavor = klipper\nM104 S215\nG1 X5 Y5 E10\n; nozzle_diameter = 0.4\n")
+    found = gweave.check(f)["findings"]
+    assert [(x["line"], x["kind"], x["severity"]) for x in found] == [(3, "over_extrusion", "error")]
+    assert found[0]["area_mm2"] == 3.402
+    assert gweave.check(f, klipper_max_extrude_cross_section=5)["findings"] == []
+    with pytest.raises(ValueError, match=r"^klipper_max_extrude_cross_section = 0 is out of range: 0.001 to 1000 mm²$"):
+        gweave.check(f, klipper_max_extrude_cross_section=0)
+
+
 def test_preview_layer_arguments_are_typed(data: Path) -> None:
     path = data / "cura" / "cura_dual.gcode"
     # Regression: `layer="3"` raised IndexError.

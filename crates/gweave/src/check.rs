@@ -21,6 +21,7 @@ use crate::gcode::layers::Feature;
 use crate::gcode::line::{Block, Command, Value};
 use crate::gcode::reader::{Part, RawLine};
 use crate::gcode::state::{Effect, AXIS_LETTERS, E, MAX_TOOLS, X, Y, Z};
+use crate::klipper_extruder::KlipperExtruder;
 use crate::pass::{Ctx, Flow, Pass, PassError, Progress, Step, Strictness};
 use crate::range::OutOfRange;
 use crate::run::Run;
@@ -63,9 +64,11 @@ pub struct CheckOptions {
     /// Marlin's `EXTRUDE_MAXLENGTH`, mm: it skips the E of a move feeding more (200 in its
     /// shipped configuration; 0: no limit).
     pub marlin_extrude_max_mm: f64,
-    /// Klipper's `max_extrude_only_distance`, mm: an extrude-only or retraction move longer in
-    /// E stops the print (50 by default in its `[extruder]` section; 0: no limit).
-    pub klipper_extrude_only_max_mm: f64,
+    /// Klipper's `[extruder]` limits, for a file read for Klipper: its `max_extrude_only_distance`
+    /// and `max_extrude_cross_section`, whose moves past them stop the print
+    /// ([`KlipperExtruder`]). [`check_file`] takes the nozzle and filament the file's slicer
+    /// settings state.
+    pub klipper: KlipperExtruder,
     /// At most this many findings are kept (all are counted).
     pub max_findings: usize,
 }
@@ -78,7 +81,7 @@ impl Default for CheckOptions {
             max_relative_e_mm: 100_000.0,
             max_absolute_e_mm: 100_000.0,
             marlin_extrude_max_mm: 200.0,
-            klipper_extrude_only_max_mm: 50.0,
+            klipper: KlipperExtruder::default(),
             max_findings: 1000,
         }
     }
@@ -421,27 +424,23 @@ impl Pass for CheckPass {
 impl CheckPass {
     /// The firmware's limit on the filament one move feeds, if `m` passes it: Marlin's
     /// `PREVENT_LENGTHY_EXTRUDE` (`Marlin/src/module/planner.cpp`: the E part is dropped with
-    /// `echo: too long extrusion prevented`), Klipper's `max_extrude_only_distance` on an
-    /// extrude-only or retraction move (`klippy/kinematics/extruder.py`, `check_move`: "Extrude
-    /// only move too long", which stops the print). One comparison for every other move, whose
+    /// `echo: too long extrusion prevented`), Klipper's extruder checks, which stop the print
+    /// ([`KlipperExtruder::refusal`]). One comparison for every other Marlin move, whose
     /// filament `e` (mm) the caller has read.
     #[inline]
     fn extrusion_limit(&self, firmware: Firmware, e: f64, m: &crate::gcode::effect::Move) -> Option<Finding> {
-        let max_mm = match firmware {
-            Firmware::Marlin => self.options.marlin_extrude_max_mm,
-            Firmware::Klipper => self.options.klipper_extrude_only_max_mm,
-            Firmware::RepRapFirmware | Firmware::LinuxCnc => return None,
-        };
-        if !(max_mm > 0.0 && e.abs() > max_mm) {
-            return None;
+        match firmware {
+            Firmware::Marlin => {
+                let max_mm = self.options.marlin_extrude_max_mm;
+                (max_mm > 0.0 && e.abs() > max_mm).then(|| Finding::LongExtrusion {
+                    firmware,
+                    e_mm: round3(e),
+                    max_mm: max_mm as f32,
+                })
+            }
+            Firmware::Klipper => self.options.klipper.refusal(e, m),
+            Firmware::RepRapFirmware | Firmware::LinuxCnc => None,
         }
-        // Klipper holds only a move that does not move X or Y, or retracts, to its limit.
-        let extrude_only = e < 0.0 || m.xy_len_mm() == 0.0;
-        (firmware != Firmware::Klipper || extrude_only).then(|| Finding::LongExtrusion {
-            firmware,
-            e_mm: round3(e),
-            max_mm: max_mm as f32,
-        })
     }
 }
 
@@ -475,6 +474,7 @@ pub fn check_file_with(
 ) -> Result<CheckReport> {
     let mut from_file = None;
     let ends = read_ends(path).map_err(|e| Error::io(path, e))?;
+    options.klipper = options.klipper.from_settings(&ends);
     if options.bed.is_none() {
         if let Some(found) = Bed::from_settings(&ends) {
             options.bed = Some(found.bed);
@@ -582,7 +582,15 @@ mod tests {
 
     /// The findings of `text` read for `firmware`: line, column, severity, text.
     fn findings_for(text: &str, firmware: Firmware) -> Vec<(u64, u32, Severity, String)> {
-        let mut pass = CheckPass::new(CheckOptions::default());
+        findings_for_with(text, firmware, CheckOptions::default())
+    }
+
+    fn findings_for_with(
+        text: &str,
+        firmware: Firmware,
+        options: CheckOptions,
+    ) -> Vec<(u64, u32, Severity, String)> {
+        let mut pass = CheckPass::new(options);
         let options = crate::StateOptions { firmware, ..Default::default() };
         let reading = Reading { options, ..Reading::new(Path::new("t.gcode")) };
         drive_reader(text.as_bytes(), reading, &mut pass, &mut io::sink()).unwrap();
@@ -637,7 +645,8 @@ mod tests {
     /// Regression (one move feeding 1 000 000 mm of filament passed `check`, while `sim` runs
     /// it without its E as Marlin does): each firmware's limit on one move's filament, at the
     /// E word. Marlin drops the E past 200 mm (a warning); Klipper stops the print on an
-    /// extrude-only move or a retraction past 50 mm (an error), not on a printing move.
+    /// extrude-only move or a retraction past 50 mm (an error), and on a printing move by its
+    /// bead's cross-section (`a_bead_wider_than_klipper_takes_is_found_at_its_e`).
     #[test]
     fn a_move_feeding_more_than_the_firmware_takes_is_found_at_its_e() {
         let text = "M104 S200\nM83\nG1 X10 Y10 E60\nG1 E150\nG1 X20 E250\nG1 E-60\n";
@@ -655,13 +664,41 @@ mod tests {
         );
         let klipper = read_as(Firmware::Klipper);
         let lines: Vec<(u64, Severity)> = klipper.iter().map(|f| (f.0, f.2)).collect();
-        assert_eq!(lines, [(4, Severity::Error), (6, Severity::Error)]);
+        // Lines 3 and 5 print blobs: 60 mm of filament over 14 mm, 250 over 10.
+        assert_eq!(lines, [3, 4, 5, 6].map(|n| (n, Severity::Error)));
+        assert!(klipper[0].3.starts_with("a move extruding a 10.205 mm² bead"), "{}", klipper[0].3);
         assert_eq!(
-            klipper[0].3,
+            klipper[1].3,
             "an extrude-only move of 150.000 mm: klipper stops the print past 50 mm ('Extrude only move too \
              long', its max_extrude_only_distance)"
         );
         assert!(read_as(Firmware::RepRapFirmware).is_empty());
+    }
+
+    /// Regression (`check` passed the printing moves Klipper stops a print at, "Move exceeds
+    /// maximum extrusion": a purge pushed over a few millimetres, a wipe tower's ramming): a
+    /// bead wider than `max_extrude_cross_section` (4 x 0.4² = 0.64 mm² by default) is an
+    /// error at its E word; a normal line, a tiny dab and a cross-section the printer raised
+    /// pass.
+    #[test]
+    fn a_bead_wider_than_klipper_takes_is_found_at_its_e() {
+        let text = "M104 S200\nM83\nG1 X10 E0.4\nG1 X12 E3\nG1 X12.1 E0.1\n";
+        let found = findings_for(text, Firmware::Klipper);
+        assert_eq!(
+            found,
+            [(
+                4,
+                8,
+                Severity::Error,
+                "a move extruding a 3.608 mm² bead: klipper stops the print past 0.640 mm² ('Move exceeds \
+                 maximum extrusion', its max_extrude_cross_section: 4 x nozzle_diameter² unless set)"
+                    .to_owned()
+            )]
+        );
+        assert!(findings_for(text, Firmware::Marlin).is_empty());
+        let raised = KlipperExtruder { max_extrude_cross_section_mm2: 5.0, ..KlipperExtruder::default() };
+        let options = CheckOptions { klipper: raised, ..CheckOptions::default() };
+        assert!(findings_for_with(text, Firmware::Klipper, options).is_empty());
     }
 
     #[test]

@@ -34,6 +34,7 @@ pub(crate) mod firmware;
 pub mod gcode;
 pub mod gen;
 mod interrupt;
+mod klipper_extruder;
 mod malformed;
 pub mod options;
 mod pass;
@@ -86,6 +87,7 @@ pub use check::{
     RefusedWord, WordRanges,
 };
 pub use gen::raster_job::RasterOptions;
+pub use klipper_extruder::KlipperExtruder;
 pub use options::{JobFailure, JobOptions, OptionError, OptionSpec};
 pub use post::mix::{mix, MixOptions, MixPassError};
 pub use post::purge_shift::{purge_shift, PurgeShiftConfig, PurgeShiftOptions, PurgeShiftReport};

@@ -73,6 +73,9 @@ pub const LAYER_NUMBER: Range<u32> = Range::new(0, 1_000_000, "");
 pub const PURGE_MM: Range = Range::new(0.0, 1_000.0, "mm");
 /// Purge per colour change as a volume (1000 mm of 3 mm filament is 7 069 mm3).
 pub const PURGE_MM3: Range = Range::new(0.0, 10_000.0, "mm3");
+/// A bead's cross-section, mm² (Klipper's `max_extrude_cross_section`: 0.64 for a 0.4 mm
+/// nozzle by default; MMU setups raise it to 50 for their ramming).
+pub const CROSS_SECTION_MM2: Range = Range::new(0.001, 1_000.0, "mm²");
 
 /// A number as a person reads it: plain for ordinary magnitudes, `1e308` / `1e-9` for the rest,
 /// so that no message prints a 309-digit number.

@@ -97,6 +97,30 @@ fn tool_changes_as_the_fixture_readme_says() {
     assert!(bunny.filament.len() == 3);
 }
 
+/// Klipper's `max_extrude_cross_section` check finds no bead too wide in any fixture read for
+/// Klipper: real slicer output, purge lines, wipe towers and their ramming print on a Klipper
+/// printer with its defaults (the nozzle and filament from each file's settings, as
+/// `check_file` takes them), so the check flags blobs, not prints.
+#[test]
+fn no_fixture_makes_a_bead_wider_than_klipper_takes() {
+    use gweave::{CheckOptions, CheckPass, Finding, Firmware, KlipperExtruder};
+    for rel in FIXTURES {
+        let path = data(rel);
+        let ends = gweave::gcode::ends::read_ends(&path).unwrap();
+        let klipper = KlipperExtruder::default().from_settings(&ends);
+        let mut pass = CheckPass::new(CheckOptions { klipper, ..CheckOptions::default() });
+        Run::file(&path).firmware(Some(Firmware::Klipper)).scan(&mut pass).unwrap();
+        let wide: Vec<(u64, String)> = pass
+            .report
+            .findings
+            .iter()
+            .filter(|f| matches!(f.diagnostic.finding, Finding::OverExtrusion { .. }))
+            .map(|f| (f.line, f.diagnostic.finding.to_string()))
+            .collect();
+        assert_eq!(wide, Vec::new(), "{rel}");
+    }
+}
+
 /// `gweave check` finds nothing wrong in any fixture: they are real slicer output that prints.
 /// In particular PrusaSlicer's RepRapFirmware flavour heats with `G10 P0 S200` (then `M116`),
 /// which is a temperature, not a missing one, and Cura's Griffin flavour primes with `G280`,

@@ -37,6 +37,11 @@ pub struct CheckArgs {
     #[arg(long, value_name = "MM_MIN", default_value_t = CheckOptions::default().max_feed_mm_min,
           value_parser = in_range(FEED_MM_MIN))]
     pub max_feed: f64,
+    /// A Klipper printer's `max_extrude_cross_section` (its printer.cfg's `[extruder]`), mm²,
+    /// if raised from Klipper's default, 4 x the nozzle diameter² (the nozzle the file's slicer
+    /// settings state, else 0.4 mm): a printing move extruding a wider bead stops the print.
+    #[arg(long, value_name = "MM2", value_parser = in_range(gweave::range::CROSS_SECTION_MM2))]
+    pub klipper_max_extrude_cross_section: Option<f64>,
     /// Treat warnings as errors.
     #[arg(long)]
     pub strict: bool,
@@ -51,11 +56,11 @@ pub fn run(args: CheckArgs) -> Result<ExitCode> {
         .check()?;
     let mut options =
         CheckOptions { bed: args.bed, max_feed_mm_min: args.max_feed, ..CheckOptions::default() };
+    if let Some(mm2) = args.klipper_max_extrude_cross_section {
+        options.klipper.max_extrude_cross_section_mm2 = mm2;
+    }
     if let Some(m) = &args.machine {
-        // The profile's bed, and the longest extrusion its firmware takes (as `sim` holds it).
-        let profile = load_machine(m)?;
-        options.bed = Some(profile.bed.to_check()?);
-        options.marlin_extrude_max_mm = f64::from(profile.firmware.extrude_max_mm);
+        options = load_machine(m)?.check_options(options)?;
     }
     let mut reports = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {

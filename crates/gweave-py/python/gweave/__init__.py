@@ -83,9 +83,11 @@ def check(
     bed: Union[str, Sequence[float], None] = None,
     machine: Optional[PathLike] = None,
     max_feed: Optional[float] = None,
+    klipper_max_extrude_cross_section: Optional[float] = None,
     strict: bool = False,
 ) -> Report:
-    """Lint a G-code file, as ``gweave check`` does; ``max_feed`` in mm/min.
+    """Lint a G-code file, as ``gweave check`` does; ``max_feed`` in mm/min,
+    ``klipper_max_extrude_cross_section`` in mm² (``--klipper-max-extrude-cross-section``).
 
     ``bed`` is the printable volume in mm as ``--bed`` reads it: ``"X,Y,Z"`` from the origin or
     ``"X0,Y0,X1,Y1[,Z]"`` from a corner, as text or as a sequence of those 3, 4 or 5 numbers.
@@ -97,7 +99,12 @@ def check(
     """
     return json.loads(
         _gweave.check_json(
-            _path(path, "path"), bed=bed, machine=_opt_path(machine, "machine"), max_feed=max_feed, strict=strict
+            _path(path, "path"),
+            bed=bed,
+            machine=_opt_path(machine, "machine"),
+            max_feed=max_feed,
+            klipper_max_extrude_cross_section=klipper_max_extrude_cross_section,
+            strict=strict,
         )
     )
 

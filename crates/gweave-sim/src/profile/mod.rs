@@ -473,6 +473,20 @@ impl Default for MachineProfile {
 }
 
 impl MachineProfile {
+    /// `check` against this machine (`gweave check --machine`, Python's `check(machine=)`): its
+    /// `[bed]` travel, as `sim` holds moves to it, and the longest extrusion its firmware takes
+    /// (`[firmware] extrude_max_mm`), over `options`.
+    pub fn check_options(
+        &self,
+        options: gweave::CheckOptions,
+    ) -> Result<gweave::CheckOptions, gweave::BedError> {
+        Ok(gweave::CheckOptions {
+            bed: Some(self.bed.to_check()?),
+            marlin_extrude_max_mm: f64::from(self.firmware.extrude_max_mm),
+            ..options
+        })
+    }
+
     /// The printhead and canvas origin a raster job writes for on this machine (`gweave raster
     /// --machine`): its drops land on the canvas and its recoats are the ones this profile's
     /// virtual printer checks.

@@ -138,6 +138,15 @@ pub enum Finding {
         /// line, at its size).
         max_mm: f32,
     },
+    /// A printing move whose filament makes a wider bead than Klipper's
+    /// `max_extrude_cross_section` ([`KlipperExtruder`](crate::KlipperExtruder)): Klipper
+    /// stops the print ("Move exceeds maximum extrusion").
+    OverExtrusion {
+        /// The bead's cross-section, mm²: the filament fed per mm of path times its area.
+        area_mm2: f64,
+        /// Klipper's limit, mm².
+        max_mm2: f32,
+    },
     /// More findings on the line than are kept ([`MAX_LINE_DIAGNOSTICS`]).
     MoreFindings {
         /// How many findings were dropped.
@@ -267,6 +276,12 @@ impl fmt::Display for Finding {
                 f,
                 "a move feeding {e_mm:.3} mm of filament: {firmware} skips the E of a move past {max_mm} mm \
                  ('too long extrusion prevented', its EXTRUDE_MAXLENGTH)"
+            ),
+            Finding::OverExtrusion { area_mm2, max_mm2 } => write!(
+                f,
+                "a move extruding a {area_mm2:.3} mm² bead: klipper stops the print past {max_mm2:.3} mm² \
+                 ('Move exceeds maximum extrusion', its max_extrude_cross_section: 4 x nozzle_diameter² \
+                 unless set)"
             ),
             Finding::MoreFindings { count } => write!(f, "{count} more findings on this line"),
             Finding::ToolOutOfRange { tool } => write!(
