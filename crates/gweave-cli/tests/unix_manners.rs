@@ -75,7 +75,8 @@ fn check_of_several_files_fails_when_one_fails_and_totals_them() {
 #[test]
 fn check_json_writes_figures_as_numbers() {
     let dir = tempfile::tempdir().unwrap();
-    let file = write(&dir, "far.gcode", "M104 S200\nG1 X300.12345 Y5 F200000\n");
+    // (Two lines: a feed rate out of range refuses its line, which then moves nowhere.)
+    let file = write(&dir, "far.gcode", "M104 S200\nG1 X300.12345 Y5\nG1 F200000\n");
     let j = json(&gweave(&["check", &file, "--bed", "200,200,200", "--json"]));
     let findings = j["findings"].as_array().unwrap();
     let feed = findings.iter().find(|f| f["kind"] == "absurd_feed_rate").unwrap();

@@ -217,19 +217,22 @@ impl CheckPass {
     }
 
     /// A word of the line outside its command's range, on a line that is not already malformed
-    /// (a malformed number is outside every range, and already an error).
-    fn check_ranges(&mut self, ctx: &Ctx<'_>) {
-        let Some(ranges) = self.ranges else { return };
+    /// (a malformed number is outside every range, and already an error). Whether it found one.
+    fn check_ranges(&mut self, ctx: &Ctx<'_>) -> bool {
+        let Some(ranges) = self.ranges else { return false };
         let block = ctx.block;
         if block.diagnostics.iter().any(|d| d.finding.severity() == Severity::Error) {
-            return;
+            return false;
         }
-        if let Err(RefusedWord { letter, refusal }) = ranges.check(block, ctx.line.bytes, ctx.state.motion) {
-            let column = column_of(block, letter);
-            let OutOfRange { name: word, value, range } = refusal;
-            let finding = Finding::OutOfRange(Box::new(WordOutOfRange { word, value, range }));
-            self.add(ctx.line.number, Diagnostic::at(column, finding));
-        }
+        let Err(RefusedWord { letter, refusal }) = ranges.check(block, ctx.line.bytes, ctx.state.motion)
+        else {
+            return false;
+        };
+        let column = column_of(block, letter);
+        let OutOfRange { name: word, value, range } = refusal;
+        let finding = Finding::OutOfRange(Box::new(WordOutOfRange { word, value, range }));
+        self.add(ctx.line.number, Diagnostic::at(column, finding));
+        true
     }
 
     fn add(&mut self, line: u64, diagnostic: Diagnostic) {
@@ -328,7 +331,10 @@ impl Pass for CheckPass {
             }
             if letter == b'T' && number >= MAX_TOOLS {
                 let at = block.command_span.start as usize;
-                self.add(n, Diagnostic::at(at, Finding::ToolOutOfRange { tool: number }));
+                let command = String::from_utf8_lossy(block.command_span.of(ctx.line.bytes))
+                    .to_ascii_uppercase()
+                    .into();
+                self.add(n, Diagnostic::at(at, Finding::ToolOutOfRange { command }));
             }
         }
         if let Some(w) = block.word(b'F') {
@@ -344,10 +350,14 @@ impl Pass for CheckPass {
                 }
             }
         }
-        self.check_ranges(ctx);
         if let (true, Some(footer)) = (ctx.line.eol.is_empty(), self.missing_footer) {
             // Where the text stops: just past the last line's last byte.
             self.add(n, Diagnostic::at(ctx.line.bytes.len(), Finding::NoFooter { footer }));
+        }
+        if self.check_ranges(ctx) {
+            // The printer refuses the whole line: it does not move, so what the move would
+            // have done (off the bed, too much filament) is not found as well.
+            return Ok(Flow::Continue);
         }
         // The effect by reference: a copy of the move (its two positions and its path, read
         // back just after the state wrote them) made `check` a fifth slower on bench/data's
@@ -580,6 +590,27 @@ mod tests {
         );
     }
 
+    /// Regression (a new user's trial: `G1 X1e11` was both out of range and "outside the bed"):
+    /// a line the printer refuses does not move, so its move is not also found off the bed;
+    /// the next line's move is.
+    #[test]
+    fn a_refused_line_is_not_also_found_off_the_bed() {
+        let bed = Bed::new([0.0, 0.0], [200.0, 200.0], Some(200.0)).unwrap();
+        let mut pass =
+            CheckPass::new(CheckOptions { bed: Some(bed), ..CheckOptions::default() }).with_ranges(&RefusesS);
+        let reading = Reading { strictness: Strictness::Lenient, ..Reading::new(Path::new("t.gcode")) };
+        drive_reader(&b"G1 X300 S5\nG1 X310\n"[..], reading, &mut pass, &mut io::sink()).unwrap();
+        let found: Vec<(u64, String)> =
+            pass.report.findings.iter().map(|f| (f.line, f.diagnostic.finding.to_string())).collect();
+        assert_eq!(
+            found,
+            [
+                (1, "the period = 5 is out of range: 0 to 1 s (the printer refuses the line)".to_owned()),
+                (2, "move outside the bed: X=310.000 mm".to_owned())
+            ]
+        );
+    }
+
     /// The findings of `text` read for `firmware`: line, column, severity, text.
     fn findings_for(text: &str, firmware: Firmware) -> Vec<(u64, u32, Severity, String)> {
         findings_for_with(text, firmware, CheckOptions::default())
@@ -772,12 +803,17 @@ mod tests {
     }
 
     /// A tool number past what anything has is an error, and the machine state keeps the tool
-    /// it had (a huge `T` once made the per-tool tables of `stats` ask for 32 GB).
+    /// it had (a huge `T` once made the per-tool tables of `stats` ask for 32 GB). The finding
+    /// quotes the command as written (regression, a new user's trial: `T99999999999999999999`
+    /// was quoted as `T4294967295`, the saturated number).
     #[test]
     fn tools_out_of_range() {
-        let found = findings("M104 S200\nT255\nT256\nT4294967295\n");
-        let message = |t: u32| format!("T{t} names no tool (at most 256 are read; the tool stays as it was)");
-        assert_eq!(found, [(3, message(256)), (4, message(4294967295))]);
+        let found = findings("M104 S200\nT255\nT256\nT4294967295\nt99999999999999999999\n");
+        let message = |t: &str| format!("{t} names no tool (at most 256 are read; the tool stays as it was)");
+        assert_eq!(
+            found,
+            [(3, message("T256")), (4, message("T4294967295")), (5, message("T99999999999999999999"))]
+        );
         let mut pass = crate::stats::StatsPass::new(None);
         let text = "T2\nG1 X1 E1 F600\nT4294967295\nG1 X2 E2\n";
         let state =

@@ -37,9 +37,9 @@ pub struct CheckArgs {
     #[arg(long, value_name = "MM_MIN", default_value_t = CheckOptions::default().max_feed_mm_min,
           value_parser = in_range(FEED_MM_MIN))]
     pub max_feed: f64,
-    /// A Klipper printer's `max_extrude_cross_section` (its printer.cfg's `[extruder]`), mm²,
-    /// if raised from Klipper's default, 4 x the nozzle diameter² (the nozzle the file's slicer
-    /// settings state, else 0.4 mm): a printing move extruding a wider bead stops the print.
+    /// A Klipper printer's `max_extrude_cross_section` (its printer.cfg's `[extruder]`), mm²: a
+    /// printing move extruding a wider bead stops the print [default: Klipper's, 4 x the nozzle
+    /// diameter², the nozzle the file's slicer settings state, else 0.4 mm]
     #[arg(long, value_name = "MM2", value_parser = in_range(gweave::range::CROSS_SECTION_MM2))]
     pub klipper_max_extrude_cross_section: Option<f64>,
     /// Treat warnings as errors.

@@ -112,8 +112,11 @@ pub enum Finding {
     },
     /// `T<n>` past [`MAX_TOOLS`](super::limits::MAX_TOOLS): no machine has that tool.
     ToolOutOfRange {
-        /// The tool number written.
-        tool: u32,
+        /// The command as written, in upper case (`T99999999999999999999`: its number read
+        /// saturates, so the text is what a user recognises). Boxed: a second `String` beside
+        /// [`Finding::UnknownCommand`]'s made every finding, and every error that may hold one,
+        /// 8 bytes larger.
+        command: Box<str>,
     },
     /// A number word outside the physical range its command declares (the machine's table,
     /// [`WordRanges`](crate::check::WordRanges)): the printer refuses the whole line. Boxed: a
@@ -284,9 +287,9 @@ impl fmt::Display for Finding {
                  unless set)"
             ),
             Finding::MoreFindings { count } => write!(f, "{count} more findings on this line"),
-            Finding::ToolOutOfRange { tool } => write!(
+            Finding::ToolOutOfRange { command } => write!(
                 f,
-                "T{tool} names no tool (at most {} are read; the tool stays as it was)",
+                "{command} names no tool (at most {} are read; the tool stays as it was)",
                 super::limits::MAX_TOOLS
             ),
         }
