@@ -14,7 +14,7 @@
 //! assert!(bed.contains(1, -3.0) && !bed.contains(1, -5.0));
 //! let bed: Bed = "220,220,250".parse().unwrap();
 //! assert_eq!((bed.x_mm, bed.y_mm, bed.z_mm), ([0.0, 220.0], [0.0, 220.0], Some(250.0)));
-//! let prusa = b"G1 X1\n; bed_shape = 0x-4,250x-4,250x210,0x210\n; max_print_height = 210\n";
+//! let prusa = "G1 X1\n; bed_shape = 0x-4,250x-4,250x210,0x210\n; max_print_height = 210\n";
 //! let found = Bed::from_settings(prusa).unwrap();
 //! assert_eq!(found.bed.y_mm, [-4.0, 210.0]);
 //! ```
@@ -100,14 +100,14 @@ impl Bed {
     /// The bed the slicer's settings at the ends of the file at `path` describe (see
     /// [`read_ends`](crate::gcode::ends::read_ends)).
     pub fn from_file(path: &std::path::Path) -> std::io::Result<Option<SlicerBed>> {
-        Ok(Bed::from_settings(&crate::gcode::ends::read_ends(path)?))
+        Ok(Bed::from_settings(&String::from_utf8_lossy(&crate::gcode::ends::read_ends(path)?)))
     }
 
     /// The bed the slicer's settings in `text` describe (the head and tail of a file hold
-    /// them), or `None` when they give none.
-    pub fn from_settings(text: &[u8]) -> Option<SlicerBed> {
-        let text = String::from_utf8_lossy(text);
-        let s = crate::gcode::ends::settings(&text, &BED_KEYS);
+    /// them, [`read_ends`](crate::gcode::ends::read_ends), read as UTF-8 once for every
+    /// setting a caller looks up), or `None` when they give none.
+    pub fn from_settings(text: &str) -> Option<SlicerBed> {
+        let s = crate::gcode::ends::settings(text, &BED_KEYS);
         let z =
             |key: &str| s.get(key).and_then(|v| v.parse::<f64>().ok()).filter(|z| BED_SIZE_MM.contains(*z));
         if let Some(shape) = s.get("bed_shape") {
@@ -224,7 +224,7 @@ mod tests {
             proptest::prop_assert_eq!(bed, Bed { x_mm: [x0, x1], y_mm: [y0, y1], z_mm: Some(z) });
             proptest::prop_assert!(bed.contains(0, x0) && bed.contains(1, y1) && !bed.contains(2, z + 1.0));
             let _ = junk.parse::<Bed>();
-            let _ = Bed::from_settings(format!("; bed_shape = {junk}\n;SETTING_3 {junk}").as_bytes());
+            let _ = Bed::from_settings(&format!("; bed_shape = {junk}\n;SETTING_3 {junk}"));
         }
     }
 
@@ -233,8 +233,8 @@ mod tests {
         let footer =
             ";SETTING_3 {\"global_quality\": \"[general]\\\\nversion = 4\\\\n[values]\\\\nmachine_ce\n\
             ;SETTING_3 nter_is_zero = True\\\\nmachine_depth = 200\\\\nmachine_width = 300\\\\n\"}\n";
-        let found = Bed::from_settings(footer.as_bytes()).unwrap();
+        let found = Bed::from_settings(footer).unwrap();
         assert_eq!(found.bed, Bed { x_mm: [-150.0, 150.0], y_mm: [-100.0, 100.0], z_mm: None });
-        assert!(Bed::from_settings(b";FLAVOR:Marlin\nG1 X1\n").is_none());
+        assert!(Bed::from_settings(";FLAVOR:Marlin\nG1 X1\n").is_none());
     }
 }

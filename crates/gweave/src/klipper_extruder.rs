@@ -59,11 +59,10 @@ const DIAMETER_MM: std::ops::RangeInclusive<f64> = 0.05..=5.0;
 
 impl KlipperExtruder {
     /// These limits with the nozzle and filament the slicer settings in `ends` (a file's ends,
-    /// [`crate::gcode::ends::read_ends`]) state, each where it does (the first extruder's of a
-    /// list such as `0.4,0.4`).
-    pub fn from_settings(self, ends: &[u8]) -> KlipperExtruder {
-        let text = String::from_utf8_lossy(ends);
-        let settings = crate::gcode::ends::settings(&text, &SETTING_KEYS);
+    /// [`crate::gcode::ends::read_ends`], as text) state, each where it does (the first
+    /// extruder's of a list such as `0.4,0.4`).
+    pub fn from_settings(self, ends: &str) -> KlipperExtruder {
+        let settings = crate::gcode::ends::settings(ends, &SETTING_KEYS);
         let diameter = |keys: [&str; 2]| {
             keys.iter()
                 .filter_map(|k| settings.get(k))
@@ -152,15 +151,15 @@ mod tests {
 
     #[test]
     fn the_slicers_nozzle_and_filament_are_taken_from_the_file() {
-        let prusa = b"; filament_diameter = 2.85,2.85\n; nozzle_diameter = 0.6,0.4\n";
+        let prusa = "; filament_diameter = 2.85,2.85\n; nozzle_diameter = 0.6,0.4\n";
         let k = KlipperExtruder::default().from_settings(prusa);
         assert_eq!((k.nozzle_diameter_mm, k.filament_diameter_mm), (0.6, 2.85));
         assert!((k.max_cross_section_mm2() - 1.44).abs() < 1e-12);
-        let cura = b";SETTING_3 {\"global_quality\": \"[general]\\\\nmachine_nozzle_size = 0.25\\\\nmaterial_diameter = 1.75\\\\n\"}\n";
+        let cura = ";SETTING_3 {\"global_quality\": \"[general]\\\\nmachine_nozzle_size = 0.25\\\\nmaterial_diameter = 1.75\\\\n\"}\n";
         let k = KlipperExtruder::default().from_settings(cura);
         assert_eq!((k.nozzle_diameter_mm, k.filament_diameter_mm), (0.25, 1.75));
         // Nothing stated, or nonsense: the limits given stay.
-        let k = KlipperExtruder::default().from_settings(b"; nozzle_diameter = 40\n");
+        let k = KlipperExtruder::default().from_settings("; nozzle_diameter = 40\n");
         assert_eq!(k, KlipperExtruder::default());
         // A cross-section set in printer.cfg wins over the default.
         let set = KlipperExtruder { max_extrude_cross_section_mm2: 5.0, ..KlipperExtruder::default() };

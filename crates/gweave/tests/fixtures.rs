@@ -107,7 +107,7 @@ fn no_fixture_makes_a_bead_wider_than_klipper_takes() {
     for rel in FIXTURES {
         let path = data(rel);
         let ends = gweave::gcode::ends::read_ends(&path).unwrap();
-        let klipper = KlipperExtruder::default().from_settings(&ends);
+        let klipper = KlipperExtruder::default().from_settings(&String::from_utf8_lossy(&ends));
         let mut pass = CheckPass::new(CheckOptions { klipper, ..CheckOptions::default() });
         Run::file(&path).firmware(Some(Firmware::Klipper)).scan(&mut pass).unwrap();
         let wide: Vec<(u64, String)> = pass
