@@ -9,6 +9,7 @@ def check_json(
     bed: Union[str, Sequence[float], None] = None,
     machine: Optional[str] = None,
     max_feed: Optional[float] = None,
+    klipper_max_extrude_cross_section: Optional[float] = None,
     strict: bool = False,
 ) -> str: ...
 def cat_json(
