@@ -227,10 +227,16 @@ impl Controller<'_> {
             #[cfg(feature = "inkjet")]
             (b'M', 700) if self.settings.inkjet_heads > 0 => return Some(self.inkjet_command(io, w)),
             // The extruder of the moves planned from now on (on E0's socket, or E1's), and of
-            // the cold-extrusion check. No park, no wait for the moves: Marlin's tool change
-            // without hotend offsets moves nothing, and the moves already planned keep theirs.
-            (b'T', 0) => self.planner.extruder = 0,
-            (b'T', 1) if crate::heat::Heat::fitted(&self.settings, HOTEND1) => self.planner.extruder = 1,
+            // the cold-extrusion check. A change waits for the moves planned before it, as
+            // Marlin's `tool_change()` synchronises first: the planner joins moves through one
+            // E axis, and one extruder must not stop dead while the other starts at speed.
+            (b'T', 0 | 1) if code == 0 || crate::heat::Heat::fitted(&self.settings, HOTEND1) => {
+                if u16::from(self.planner.extruder) != code {
+                    self.planner.extruder = code as u8;
+                    self.wait = Wait::Moves { then_dwell_ms: 0, then_off: 0 };
+                    return Some(Done::Quiet);
+                }
+            }
             _ => return None,
         }
         Some(Done::Ok)
