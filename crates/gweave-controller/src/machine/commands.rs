@@ -114,12 +114,10 @@ impl Controller<'_> {
                 self.wait = Wait::Moves { then_dwell_ms: 0, then_off };
                 return Some(Done::Quiet);
             }
-            (b'M', 211) => {
-                if let Some(on) = w.get(b'S') {
-                    self.soft_endstops.set_enabled(on != 0.0);
-                }
-                self.soft_endstops.report(io, &self.settings.travel_mm);
-            }
+            // Marlin 2.1's `M211`: `S` switches, silently (`S` without a number is on, as its
+            // `value_bool` reads it); alone, it reports.
+            (b'M', 211) if w.has(b'S') => self.soft_endstops.set_enabled(w.get(b'S') != Some(0.0)),
+            (b'M', 211) => self.soft_endstops.report(io, &self.settings.travel_mm),
             (b'M', 17) => self.steppers_enabled |= self.motors(axes_given(w).unwrap_or(self.all_axes())),
             (b'M', 104 | 109) => {
                 // `T` names the hotend; without it, the active extruder's (Marlin's

@@ -14,11 +14,15 @@
 //!
 //! `G92` renames the position without moving: the rail's ends keep their place, so they are
 //! renamed with it (Marlin's position shift). `M211 S0` switches the clamping off (a machine
-//! whose travel is set too short), `M211 S1` back on; `M211` reports it, with the limits in the
-//! coordinates in force: `echo:Soft endstops: On  Min:  X0.00 Y0.00 Z0.00   Max:  X200.00
-//! Y200.00 Z200.00`.
+//! whose travel is set too short), `M211 S1` back on; `M211` alone reports it in Marlin 2.1's
+//! words (`M211_report`), with the limits in the coordinates in force:
+//!
+//! ```text
+//!   M211 S1 ; ON
+//!   Min:  X0.00 Y0.00 Z0.00   Max:  X200.00 Y200.00 Z200.00
+//! ```
 
-use crate::serial::out::Reply;
+use crate::serial::out::{line, Reply};
 use crate::{Io, AXES, AXIS_LETTERS, Z};
 
 /// The software endstops' state.
@@ -72,10 +76,11 @@ impl SoftEndstops {
         }
     }
 
-    /// `M211`'s report, as Marlin words it.
+    /// `M211`'s report, as Marlin 2.1 words it: its state as the line that sets it, then the
+    /// limits.
     pub(super) fn report(&self, io: &mut impl Io, travel_mm: &[f32; AXES]) {
+        line(io, if self.enabled { b"  M211 S1 ; ON" } else { b"  M211 S0 ; OFF" });
         let mut r = Reply::new();
-        r.s(b"echo:Soft endstops: ").s(if self.enabled { b"On" } else { b"Off" });
         // The minima, then the maxima, in one loop: each float written is an AVR call, and an
         // unrolled loop of them was 800 bytes of flash.
         for i in 0..6 {

@@ -62,19 +62,19 @@ impl Machine {
         self.host.next_pos_report_s = self.now_s() + period;
     }
 
-    /// `M211 [S0|S1]`: software endstops off/on, and their state and limits.
+    /// `M211 [S0|S1]`: software endstops off or on, silently (`S` without a number is on, as
+    /// Marlin's `value_bool` reads it); alone, their state and limits in Marlin 2.1's words
+    /// (`M211_report`), as gweave's firmware prints them.
     pub(super) fn m211(&mut self, out: &mut dyn FnMut(f64, &str)) {
-        if let Some(s) = self.core.block().get(b'S') {
-            self.host.soft_endstops_off = s == 0.0;
+        let block = self.core.block();
+        if block.has(b'S') {
+            self.host.soft_endstops_off = block.get(b'S') == Some(0.0);
+            return;
         }
-        let on = if self.host.soft_endstops_off { "Off" } else { "On" };
+        let on = if self.host.soft_endstops_off { "  M211 S0 ; OFF" } else { "  M211 S1 ; ON" };
         let [(x0, x1), (y0, y1), (z0, z1)] = self.profile.bed.ranges();
-        out(
-            self.now_s(),
-            &format!(
-                "echo:Soft endstops: {on}  Min:  X{x0:.2} Y{y0:.2} Z{z0:.2}   Max:  X{x1:.2} Y{y1:.2} Z{z1:.2}"
-            ),
-        );
+        out(self.now_s(), on);
+        out(self.now_s(), &format!("  Min:  X{x0:.2} Y{y0:.2} Z{z0:.2}   Max:  X{x1:.2} Y{y1:.2} Z{z1:.2}"));
     }
 
     /// `M42 P<pin> S<value>`: the virtual pin holds the value.

@@ -715,3 +715,16 @@ fn an_arc_without_a_centre_is_refused_and_the_machine_stays() {
     let out = WarningKind::OutOfBounds { axis: 'Y', value_mm: 205.0, min_mm: 0.0, max_mm: 200.0 };
     assert!(report.warnings.iter().any(|w| w.kind == out), "{:?}", report.warnings);
 }
+
+/// `M211` as Marlin 2.1 (`M211_report`) and gweave's firmware word it: alone, the state as the
+/// line that sets it and the bed's limits; with `S`, silent (the review of the session that
+/// gave the firmware its software endstops: both printed Marlin 2.0's
+/// `echo:Soft endstops: On  Min: ...` at every `M211`).
+#[test]
+fn m211_reports_alone_and_switches_silently() {
+    let mut m = machine();
+    let (r, _) = run(&mut m, "M211\nM211 S0\nM211");
+    let limits = "  Min:  X0.00 Y0.00 Z0.00   Max:  X200.00 Y200.00 Z200.00";
+    assert_eq!(r, ["  M211 S1 ; ON", limits, "  M211 S0 ; OFF", limits]);
+    assert_eq!(run(&mut m, "M211 S\nM211").0, ["  M211 S1 ; ON", limits]);
+}
