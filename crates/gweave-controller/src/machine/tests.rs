@@ -376,6 +376,37 @@ fn a_lengthy_extrusion_is_refused() {
     assert_eq!((b.take().replace("echo:busy: processing\n", ""), b.t.pulses[3]), ("ok\nok\n".into(), 23250));
 }
 
+/// Regression (the review of the session that made `T1` drive E1: the planner joined E0's
+/// last move to E1's first through its one E axis, at speed, so E0 stopped dead from 20 mm/s
+/// and E1 started at it): a change of extruder waits for the moves before it, as Marlin's
+/// `tool_change()` synchronises: E0 slows to a stop, then E1 starts from rest.
+#[test]
+fn a_change_of_extruder_waits_for_the_moves_before_it() {
+    let eeb = Settings { hotends: 2, thermistor: [1, 1, 1], ..Settings::DEFAULT };
+    let mut b = Bench::new(eeb);
+    b.t.plant.temp_c = [200.0, 200.0, 20.0];
+    b.run_ms(200);
+    let steps: Rc<RefCell<Vec<(usize, u64)>>> = Rc::new(RefCell::new(Vec::new()));
+    let sink = Rc::clone(&steps);
+    b.t.on_step = Some(Box::new(move |motor, tick| sink.borrow_mut().push((motor, tick))));
+    // E0's last move still waits in the planner when `T1` comes.
+    b.send("G1 E5 F1200\nG1 E10\nG1 E15\nG1 E20\nT1\nG1 E40\nM400\n");
+    b.run_until_ok(7, 20_000);
+    let steps = steps.borrow();
+    let times = |motor: usize| steps.iter().filter(|s| s.0 == motor).map(|s| s.1).collect::<Vec<u64>>();
+    let (e0, e1) = (times(3), times(4));
+    assert_eq!((e0.len(), e1.len()), (1860, 1860));
+    assert!(e0[e0.len() - 1] < e1[0], "E1 started at {} before E0 ended at {}", e1[0], e0[e0.len() - 1]);
+    // Each slows to a stop or starts from rest: their end intervals are longer than the cruise's
+    // (1075 ticks at 20 mm/s); joined at speed, they were the cruise's.
+    let cruise = e1[931] - e1[930];
+    let (e0_last, e1_first) = (e0[e0.len() - 1] - e0[e0.len() - 2], e1[1] - e1[0]);
+    assert!(
+        e0_last > 3 * cruise / 2 && e1_first > 3 * cruise / 2,
+        "{e0_last} and {e1_first} ticks, cruise {cruise}"
+    );
+}
+
 #[test]
 fn a_move_slower_than_the_16_bit_timer_keeps_its_pace() {
     // 0.015 mm of Z at 1 mm/min: 6 steps (the fewest a move plans: MIN_STEPS_PER_SEGMENT)
