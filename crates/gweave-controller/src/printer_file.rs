@@ -48,12 +48,15 @@ pub enum Kind {
         /// Highest value allowed.
         max: f64,
     },
-    /// Booleans per axis (`len` of them), stored as the bits of a byte.
+    /// Booleans per axis or motor (`min` to `max` of them, the rest false), stored as the
+    /// bits of a byte.
     Bits {
         /// The field.
         field: fn(&mut Settings) -> &mut u8,
-        /// Entries.
-        len: usize,
+        /// Fewest entries.
+        min: usize,
+        /// Most entries.
+        max: usize,
     },
     /// Small integers, one per entry, each one of `allowed`.
     Bytes {
@@ -113,8 +116,9 @@ pub const KEYS: &[(&str, &str, Kind)] = &[
     ("motion", "homing_feed_mm_s", Kind::Floats { field: |s| &mut s.homing_feed_mm_s, min: 0.0, max: 300.0 }),
     ("motion", "homing_order", Kind::AxisOrder { field: |s| &mut s.homing_order }),
     ("motion", "homing_bump_mm", Kind::Floats { field: |s| &mut s.homing_bump_mm, min: 0.0, max: 50.0 }),
-    ("motion", "invert_dir", Kind::Bits { field: |s| &mut s.invert_dir, len: 4 }),
-    ("motion", "endstop_inverting", Kind::Bits { field: |s| &mut s.endstop_inverting, len: 3 }),
+    // X, Y, Z, E0, then the E1 socket's motor (a second extruder, a mixing input) and AUX-2's.
+    ("motion", "invert_dir", Kind::Bits { field: |s| &mut s.invert_dir, min: 4, max: crate::MOTORS }),
+    ("motion", "endstop_inverting", Kind::Bits { field: |s| &mut s.endstop_inverting, min: 3, max: 3 }),
     ("heaters", "thermistor", Kind::Bytes { field: |s| &mut s.thermistor, allowed: &[0, 1] }),
     ("heaters", "hotend_pid", Kind::Pid { field: |s| &mut s.hotend_pid }),
     ("heaters", "max_temp_c", Kind::Floats { field: |s| &mut s.max_temp_c, min: 0.0, max: 400.0 }),
@@ -250,9 +254,9 @@ pub fn read(text: &str) -> Result<PrinterFile, PrinterFileError> {
                     *v = number(key, item, *min, *max).map_err(fail)? as f32;
                 }
             }
-            Kind::Bits { field, len } => {
+            Kind::Bits { field, min, max } => {
                 let mut bits = 0u8;
-                for (axis, v) in list(key, &value, *len).map_err(fail)?.iter().enumerate() {
+                for (axis, v) in list_of(key, &value, *min, *max).map_err(fail)?.iter().enumerate() {
                     match v {
                         Value::Bool(true) => bits |= 1 << axis,
                         Value::Bool(false) => {}
@@ -416,9 +420,15 @@ fn number(key: &str, value: &Value, min: f64, max: f64) -> Result<f64, String> {
 }
 
 fn list<'a>(key: &str, value: &'a Value, len: usize) -> Result<&'a [Value], String> {
+    list_of(key, value, len, len)
+}
+
+/// [`list`] of `min` to `max` values.
+fn list_of<'a>(key: &str, value: &'a Value, min: usize, max: usize) -> Result<&'a [Value], String> {
     match value {
-        Value::List(items) if items.len() == len => Ok(items),
-        _ => Err(format!("{key} is a list of {len} values")),
+        Value::List(items) if (min..=max).contains(&items.len()) => Ok(items),
+        _ if min == max => Err(format!("{key} is a list of {min} values")),
+        _ => Err(format!("{key} is a list of {min} to {max} values")),
     }
 }
 
@@ -461,6 +471,16 @@ mod tests {
         assert_eq!(
             err("[heaters]\nthermistor = [1, 5, 1]\n").message,
             "thermistor entries are one of [0, 1]"
+        );
+        // A fifth direction for the E1 socket's motor (EEB's second extruder); not eight.
+        let eeb =
+            read("[board]\nlayout = \"EEB\"\n[motion]\ninvert_dir = [false, false, false, true, false]\n");
+        assert_eq!(eeb.unwrap().settings.invert_dir, 0b0_1000);
+        let e1 = read("[motion]\ninvert_dir = [false, false, false, false, true]\n").unwrap();
+        assert_eq!(e1.settings.invert_dir, 0b1_0000);
+        assert_eq!(
+            err("[motion]\ninvert_dir = [true, true, true, true, true, true, true, true]\n").message,
+            "invert_dir is a list of 4 to 7 values"
         );
         // Two users of the E1 socket.
         assert_eq!(err("[board]\nlayout = \"EEB\"\nmixing_inputs = 2\n").line, 2);
