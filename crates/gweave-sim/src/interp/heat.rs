@@ -306,9 +306,8 @@ impl Machine {
                 self.warn(WarningKind::Thermal { message: fault.error_line() });
                 if self.halt.is_none() {
                     self.halt = Some(Halt::Thermal(fault));
-                    // Marlin's `kill()` stops the motors at once: what the planner still holds
-                    // never runs (the moves executed up to this line's clock have run).
-                    self.core.quick_stop();
+                    // The moves executed up to this line's clock have run.
+                    self.stop_motors();
                 }
             }
         }

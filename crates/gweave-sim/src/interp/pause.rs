@@ -90,11 +90,19 @@ impl Machine {
 
     /// Heaters off, halted until `M999`, as `M112` leaves the board.
     pub(super) fn kill(&mut self, out: &mut dyn FnMut(f64, &str)) {
-        // The motors stop at once: what the planner still held never runs.
-        self.core.quick_stop();
+        self.stop_motors();
         self.halt = Some(super::Halt::Emergency);
         self.heaters_off();
         out(self.now_s(), crate::thermal::protection::KILL_LINE);
+    }
+
+    /// The motors stop at once, as Marlin's `kill()` after `quick_stop()` (`M112`, a thermal
+    /// fault): what the planner still held never runs, and the filament its moves were counted
+    /// as feeding when they were queued is taken back (the queue holds one tool's moves: a
+    /// tool change waits for the moves before it).
+    pub(super) fn stop_motors(&mut self) {
+        let undone_mm = self.core.quick_stop();
+        self.filament_mm[self.tool] -= undone_mm;
     }
 
     /// The wait for the user ends (the emergency parser's `M108`, `M112`).

@@ -252,14 +252,17 @@ fn m112_halts_until_m999() {
 #[test]
 fn m112_drops_the_queued_moves() {
     let mut m = warm_machine();
-    run(&mut m, "G28\nG1 X10 F6000\nM400");
+    run(&mut m, "G28\nG1 X10 E2 F6000\nM400");
     let (before_s, before_steps) = (m.now_s(), m.report().steps.axes);
-    let (r, o) = run(&mut m, "G1 X200 F60\nG92 X0\nM112\nM114");
+    let (r, o) = run(&mut m, "G1 X200 E22 F60\nG92 X0\nM112\nM114");
     assert_eq!(o, Outcome::Halted);
     // `G92 X0` made the queued end X200 the origin: the motor stopped at X10, logical -190.
-    assert_eq!(r, [KILL_LINE, "X:-190.00 Y:0.00 Z:0.00 E:0.00 Count X:800 Y:0 Z:0"]);
+    assert_eq!(r, [KILL_LINE, "X:-190.00 Y:0.00 Z:0.00 E:2.00 Count X:800 Y:0 Z:0"]);
     assert_eq!(m.now_s(), before_s, "the 190 s move never ran");
     assert_eq!(m.report().steps.axes, before_steps);
+    // Nor did its 20 mm of filament leave the nozzle (the review of the thirty-fourth session:
+    // counted when queued, it stayed counted).
+    assert_eq!(m.report().filament_mm, [2.0]);
 }
 
 /// A breaking session found that lines refused while halted still changed the machine: after

@@ -463,12 +463,14 @@ impl Estimator {
     /// add no time, no steps, no filament) and the position goes back to where the executed
     /// blocks left the machine, in the coordinates in force (a `G92` after a dropped move
     /// keeps its shift: the dropped distances are taken off, not the old positions put back).
-    pub fn quick_stop(&mut self) {
+    /// Returns the filament the dropped moves would have fed, mm.
+    pub fn quick_stop(&mut self) -> f64 {
         let undone = self.back.planner.discard();
         let pos = &mut self.front.state.pos;
         for (axis, d) in [X, Y, Z, E, A].into_iter().zip(undone) {
             pos[axis] -= d;
         }
+        undone[3]
     }
 
     /// Plan every queued move to a stop and execute it (what `M400` waits for).
