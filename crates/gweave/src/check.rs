@@ -460,7 +460,7 @@ fn column_of(block: &Block, letter: u8) -> usize {
 }
 
 /// A figure as the finding shows it, to the micrometre (JSON keeps it a number).
-fn round3(v: f64) -> f64 {
+pub(crate) fn round3(v: f64) -> f64 {
     (v * 1000.0).round() / 1000.0
 }
 

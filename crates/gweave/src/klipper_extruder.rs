@@ -20,6 +20,7 @@ use std::f64::consts::PI;
 
 use serde::Serialize;
 
+use crate::check::round3;
 use crate::gcode::diag::Finding;
 use crate::gcode::effect::Move;
 use crate::Firmware;
@@ -110,11 +111,6 @@ impl KlipperExtruder {
         }
         Some(Finding::OverExtrusion { area_mm2: round3(ratio * filament_mm2), max_mm2: max_mm2 as f32 })
     }
-}
-
-/// A figure as the finding shows it, to the thousandth (Klipper's own precision).
-fn round3(v: f64) -> f64 {
-    (v * 1000.0).round() / 1000.0
 }
 
 #[cfg(test)]
