@@ -96,11 +96,6 @@ impl Words {
         (letter.is_ascii_uppercase() && self.valued & (1 << (letter - b'A')) != 0)
             .then(|| self.values[usize::from(letter - b'A')])
     }
-
-    /// Whether any parameter was given.
-    pub fn any(&self) -> bool {
-        self.seen != 0
-    }
 }
 
 fn skip_spaces(line: &[u8], mut i: usize) -> usize {

@@ -377,16 +377,18 @@ impl Controller<'_> {
         }
     }
 
-    /// `G92`: names the current place (all axes 0 with no letter).
+    /// `G92`: names the current place of the axes given a number, as Marlin's (`seenval`): a
+    /// bare `G92` names nothing (it zeroed every axis here, and moved the software endstops'
+    /// range with them, where Marlin and the virtual printer's Marlin model do nothing).
     fn set_position(&mut self, w: &Words) {
         for (axis, &letter) in AXIS_LETTERS.iter().enumerate() {
-            if let Some(v) = w.get(letter).or((!w.any()).then_some(0.0)) {
+            if let Some(v) = w.get(letter) {
                 self.soft_endstops.renamed(axis, self.position_mm[axis], v);
                 self.position_mm[axis] = v;
                 self.anchor(axis);
             }
         }
-        if let (Some(v), true) = (w.get(b'A').or((!w.any()).then_some(0.0)), self.rotary()) {
+        if let (Some(v), true) = (w.get(b'A'), self.rotary()) {
             // The mandrel stays; its angle is named (a program re-declares it modulo a turn).
             self.position_a_deg = v;
             self.anchor_a_deg = v;

@@ -487,6 +487,17 @@ fn software_endstops_keep_a_homed_axis_on_its_rail() {
     assert_eq!((b.take().as_str(), b.t.steps[0]), ("ok\nok\nok\n", 16000));
 }
 
+/// Regression (the review of the session that added the software endstops: a bare `G92`
+/// zeroed every axis, so a stray one at X 200 turned the rail into X -200..0, where Marlin and
+/// the virtual printer's Marlin model do nothing): `G92` names only the axes given a number.
+#[test]
+fn a_bare_g92_names_nothing() {
+    let mut b = Bench::new(Settings::DEFAULT);
+    b.send("G28\nG1 X50 F6000\nG92\nG92 Y\nG1 X60\nM400\nM114\n");
+    b.run_until_ok(7, 60_000);
+    assert!(b.text().ends_with("X:60.00 Y:0.00 Z:0.00 E:0.00 Count X:4800 Y:0 Z:0\nok\n"), "{}", b.text());
+}
+
 #[test]
 fn g28_homes_z_then_y_then_x_to_zero() {
     let mut b = Bench::new(Settings::DEFAULT);
