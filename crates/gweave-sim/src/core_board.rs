@@ -148,27 +148,6 @@ pub(crate) fn core_settings(p: &MachineProfile) -> Result<Settings, Unsupported>
     })
 }
 
-/// Each mixing input's step pulses (input `k` is the motor `k` places after E's).
-fn mixing_steps<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> Vec<u64> {
-    let inputs = usize::from(twin.controller.settings().mixing_inputs);
-    twin.pulses[E..E + inputs.min(MIX_INPUTS)].to_vec()
-}
-
-/// Each extruder's step pulses on a board with two hotends (E0's motor, then E1's, the one
-/// after it); empty with one.
-fn extruder_steps<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> Vec<u64> {
-    match twin.controller.settings().hotends {
-        2 => twin.pulses[E..=E + 1].to_vec(),
-        _ => Vec::new(),
-    }
-}
-
-/// The step pulses of X, Y, Z and E, and of the rotary axis if there is one.
-fn step_pulses<P: gweave_controller::twin::Plant>(twin: &Twin<'_, P>) -> ([u64; 4], Option<u64>) {
-    let axes = core::array::from_fn(|a| twin.pulses[a]);
-    (axes, twin.controller.position_a().map(|_| twin.pulses[A_MOTOR]))
-}
-
 /// The profile's heaters behind the core's thermistor inputs, read by a 10-bit ADC.
 pub(crate) struct SimPlant {
     heaters: [Option<Heater>; HEATERS],
@@ -235,6 +214,28 @@ pub struct CoreReport {
     pub errors: Vec<String>,
 }
 
+impl CoreReport {
+    /// What the board `twin` of `machine` has done so far: its time, where its motors are and
+    /// the step pulses each made, whether it halted (no line counted, no error read yet).
+    fn of<P: gweave_controller::twin::Plant>(machine: &str, twin: &Twin<'_, P>) -> CoreReport {
+        let settings = twin.controller.settings();
+        // A mixing hotend's inputs, or a second extruder, are the motors after E0's.
+        let motors_from_e = |n: usize| twin.pulses[E..E + n.min(MIX_INPUTS)].to_vec();
+        CoreReport {
+            machine: machine.to_owned(),
+            lines: 0,
+            time_s: twin.now_ms() as f64 / 1000.0,
+            end_steps: twin.steps_from_home(),
+            mixing_steps: motors_from_e(usize::from(settings.mixing_inputs)),
+            extruder_steps: if settings.hotends == 2 { motors_from_e(2) } else { Vec::new() },
+            axis_steps: core::array::from_fn(|a| twin.pulses[a]),
+            rotary_steps: twin.controller.position_a().map(|_| twin.pulses[A_MOTOR]),
+            halted: twin.controller.is_halted(),
+            errors: Vec::new(),
+        }
+    }
+}
+
 /// One command waits at most this long for its `ok` (an hour of board time: a bed heating from
 /// cold takes minutes).
 const LINE_LIMIT_MS: u64 = 3_600_000;
@@ -248,29 +249,18 @@ pub fn run_on_core(
     let settings = core_settings(profile)?;
     let queue = StepQueue::new();
     let mut twin = Twin::new(&queue, settings, SimPlant::new(profile)?);
-    let mut report = CoreReport {
-        machine: profile.name.clone(),
-        lines: 0,
-        time_s: 0.0,
-        end_steps: [0; 4],
-        mixing_steps: Vec::new(),
-        extruder_steps: Vec::new(),
-        axis_steps: [0; 4],
-        rotary_steps: None,
-        halted: false,
-        errors: Vec::new(),
-    };
+    let (mut lines, mut halted) = (0, false);
     let mut replies = Vec::new();
     let mut line = next_line();
     while let Some(text) = line.take() {
-        report.lines += 1;
+        lines += 1;
         let mut framed = text;
         framed.push(b'\n');
         match twin.run_lines(&framed, LINE_LIMIT_MS) {
             Ok(r) => replies.extend(r),
             Err(TwinError::Halted(r)) => {
                 replies.extend(r);
-                report.halted = true;
+                halted = true;
                 break;
             }
             Err(TwinError::Timeout(r)) => {
@@ -281,17 +271,13 @@ pub fn run_on_core(
         }
         line = next_line();
     }
-    if !report.halted {
+    if !halted {
         if let Ok(r) = twin.run_lines(b"M400\n", LINE_LIMIT_MS) {
             replies.extend(r);
         }
     }
-    report.time_s = twin.now_ms() as f64 / 1000.0;
-    report.end_steps = twin.steps_from_home();
-    report.mixing_steps = mixing_steps(&twin);
-    report.extruder_steps = extruder_steps(&twin);
-    (report.axis_steps, report.rotary_steps) = step_pulses(&twin);
-    report.halted |= twin.controller.is_halted();
+    let mut report = CoreReport { lines, ..CoreReport::of(&profile.name, &twin) };
+    report.halted |= halted;
     report.errors = String::from_utf8_lossy(&replies)
         .lines()
         .filter(|l| l.starts_with("Error:"))
@@ -342,19 +328,7 @@ impl CoreDevice {
 
     /// What the session did, as `gweave sim` reports it.
     pub fn report(&self, machine: &str) -> CoreReport {
-        let twin = self.board.twin();
-        CoreReport {
-            machine: machine.to_owned(),
-            lines: 0,
-            time_s: self.now_s(),
-            end_steps: twin.steps_from_home(),
-            mixing_steps: mixing_steps(twin),
-            extruder_steps: extruder_steps(twin),
-            axis_steps: step_pulses(twin).0,
-            rotary_steps: step_pulses(twin).1,
-            halted: twin.controller.is_halted(),
-            errors: Vec::new(),
-        }
+        CoreReport::of(machine, self.board.twin())
     }
 }
 
