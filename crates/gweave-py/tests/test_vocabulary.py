@@ -36,7 +36,17 @@ def declared(command: str) -> Dict[str, str]:
 # command -> (function, {flag: keyword, or "-" and the reason}, positional arguments)
 MAP = {
     "stats": ("stats", {"filament-diameter": "filament_diameter", "lenient": "lenient"}, ["path"]),
-    "check": ("check", {"bed": "bed", "machine": "machine", "max-feed": "max_feed", "strict": "strict"}, ["path"]),
+    "check": (
+        "check",
+        {
+            "bed": "bed",
+            "machine": "machine",
+            "max-feed": "max_feed",
+            "klipper-max-extrude-cross-section": "klipper_max_extrude_cross_section",
+            "strict": "strict",
+        },
+        ["path"],
+    ),
     "cat": ("cat", {**TARGET, "lenient": "lenient"}, ["path"]),
     "sim": ("sim", declared("sim"), ["path"]),
     "estimate": ("estimate", declared("estimate"), ["path"]),

@@ -59,14 +59,16 @@ fn run(args: Args) -> anyhow::Result<()> {
     if let Some(c) = args.hotend_c {
         board.shield_mut().plants[0].heater.set_temperature(c);
     }
-    let mut pty = PtyEndpoint::open(&args.pty).with_context(|| format!("opening {}", args.pty.display()))?;
-    eprintln!("gweave-board: {} on {}", args.elf.display(), args.pty.display());
     // Ctrl-C or a TERM ends the loop, so that the endpoint's drop removes the link (the
-    // default action killed the process and left the link behind).
+    // default action killed the process and left the link behind). Installed before the link
+    // exists: a signal sent the moment it appears (CI's test, on a loaded machine) found the
+    // default action still in place.
     let stop = Arc::new(AtomicBool::new(false));
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         signal_hook::flag::register(signal, Arc::clone(&stop)).context("installing the signal handler")?;
     }
+    let mut pty = PtyEndpoint::open(&args.pty).with_context(|| format!("opening {}", args.pty.display()))?;
+    eprintln!("gweave-board: {} on {}", args.elf.display(), args.pty.display());
     let start = Instant::now();
     let start_board_s = board.now_s();
     let mut buf = [0u8; 512];
